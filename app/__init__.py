@@ -1,0 +1,1 @@
+"""frictex entry points: the ``frictex`` command, replay, reports, the demo."""

@@ -1,0 +1,70 @@
+"""The ``frictex`` command.
+
+Each subcommand lives in its own module of ``app`` exposing
+``add_arguments(parser)`` and ``run(args) -> int``; the module is imported only
+when its subcommand runs, so ``frictex validate`` never loads OpenGL.
+Errors raised as ``ValueError`` (bad input: texture, trace, option) or ``OSError``
+(files, ports) become one line on stderr, ``frictex: error: ...``, and exit 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+#: subcommand -> (module in app/, one-line help)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "validate": ("app.cmd_validate", "check texture files; report every problem with file, line and field"),
+    "library": ("app.cmd_library", "list the bundled scenes and traces"),
+    "replay": ("app.cmd_replay", "run the haptic pipeline on a recorded trace, headless"),
+    "trace": ("app.cmd_trace", "synthesise or import touch traces"),
+    "sim-device": ("app.cmd_sim_device", "run a simulated plate microcontroller on a pseudo-terminal"),
+    "bench": ("app.cmd_bench", "measure speed: pipeline, link, visual layer, modal solves"),
+    "modes": ("app.cmd_modes", "natural frequencies, wavelengths and nodes of beams, plates and rings"),
+    "report": ("app.cmd_report", "speed against error over a matrix of scenes, motions and renderers"),
+    "demo": ("app.cmd_demo", "the live demo window (mouse or multi-touch as fingers)"),
+    "preview": ("app.cmd_preview", "render a scene and its friction map to a PNG"),
+}
+
+
+class CliError(ValueError):
+    """Bad command-line input (shown as one line, exit 2)."""
+
+
+def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.ArgumentParser]]:
+    parser = argparse.ArgumentParser(
+        prog="frictex",
+        description="Render textures on ultrasonic friction-modulation touchscreens.")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    subparsers = {}
+    for name, (_, help_text) in COMMANDS.items():
+        subparsers[name] = sub.add_parser(name, help=help_text, description=help_text)
+    return parser, subparsers
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run ``frictex`` with ``argv`` (default: sys.argv[1:]); return the exit code."""
+    argv = sys.argv[1:] if argv is None else argv
+    parser, subparsers = build_parser()
+    name = next((a for a in argv if not a.startswith("-")), None)
+    module = None
+    if name in COMMANDS:
+        module = importlib.import_module(COMMANDS[name][0])
+        module.add_arguments(subparsers[name])
+    args = parser.parse_args(argv)
+    if module is None:
+        parser.print_help()
+        return 2 if argv else 0
+    try:
+        return int(module.run(args) or 0)
+    except KeyboardInterrupt:
+        print("frictex: interrupted", file=sys.stderr)
+        return 130
+    except (ValueError, OSError) as exc:
+        print(f"frictex: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,207 @@
+"""Trace files: recorded touch samples as CSV.
+
+Grammar (DESIGN.md, "Trace files")::
+
+    file    := header NEWLINE { row NEWLINE }
+    header  := column { "," column }        # any order; names are case-sensitive
+    required columns: t_s, finger, x_mm, y_mm
+    optional columns: force_n (N, default 0.5), event (down | move | up)
+    extra columns are ignored; blank lines and lines starting with '#' are skipped.
+
+Rules checked here, once, at the boundary: numbers are finite, ``finger`` is a
+non-negative integer, time never goes backwards (equal times are allowed: real
+controllers re-report within the same timestamp), forces are >= 0, events are one of
+the three words. The first sample of a finger (or the first after its ``up``) is a
+``down`` whatever the file says. Errors raise :class:`TraceError` naming the file, the
+line and the column.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+DEFAULT_FORCE_N = 0.5
+REQUIRED = ("t_s", "finger", "x_mm", "y_mm")
+EVENTS = ("down", "move", "up")
+DOWN, MOVE, UP = 0, 1, 2
+
+
+class TraceError(ValueError):
+    """A trace file or trace data that cannot be used; the message says where and why."""
+
+
+@dataclass(frozen=True, eq=False)
+class Trace:
+    """Touch samples in time order; all arrays have the same length n.
+
+    t_s : float64 (n,) sample time (s), non-decreasing.
+    finger : int64 (n,) finger id (>= 0).
+    x_mm, y_mm : float64 (n,) position (mm, screen origin top-left, y down).
+    force_n : float64 (n,) normal force (N).
+    event : int8 (n,) DOWN, MOVE or UP.
+    """
+
+    t_s: np.ndarray
+    finger: np.ndarray
+    x_mm: np.ndarray
+    y_mm: np.ndarray
+    force_n: np.ndarray
+    event: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.t_s.size)
+
+    @property
+    def fingers(self) -> tuple[int, ...]:
+        return tuple(int(f) for f in np.unique(self.finger))
+
+    @property
+    def duration_s(self) -> float:
+        return float(self.t_s[-1] - self.t_s[0]) if len(self) else 0.0
+
+
+def make_trace(t_s, finger, x_mm, y_mm, force_n=None, event=None, where: str = "trace") -> Trace:
+    """Validate arrays and build a :class:`Trace` (events normalised: see module doc)."""
+    t = np.asarray(t_s, dtype=np.float64)
+    n = t.size
+    fing = np.asarray(finger)
+    x = np.asarray(x_mm, dtype=np.float64)
+    y = np.asarray(y_mm, dtype=np.float64)
+    f = np.full(n, DEFAULT_FORCE_N) if force_n is None else np.asarray(force_n, dtype=np.float64)
+    ev = np.full(n, MOVE, dtype=np.int8) if event is None else np.asarray(event, dtype=np.int8)
+    for name, arr in (("finger", fing), ("x_mm", x), ("y_mm", y), ("force_n", f), ("event", ev)):
+        if arr.shape != (n,):
+            raise TraceError(f"{where}: column {name} has shape {arr.shape}, expected ({n},)")
+    if n == 0:
+        raise TraceError(f"{where}: no samples (expected at least one row of t_s,finger,x_mm,y_mm)")
+    for name, arr in (("t_s", t), ("x_mm", x), ("y_mm", y), ("force_n", f)):
+        bad = ~np.isfinite(arr)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise TraceError(f"{where}: sample {i}: {name} is {arr[i]!r}, expected a finite number")
+    steps = np.diff(t)
+    if (steps < 0).any():
+        i = int(np.argmax(steps < 0)) + 1
+        raise TraceError(f"{where}: sample {i}: t_s goes back from {t[i - 1]!r} to {t[i]!r} s "
+                         "(time must not decrease)")
+    if (f < 0).any():
+        i = int(np.argmax(f < 0))
+        raise TraceError(f"{where}: sample {i}: force_n is {f[i]!r}, expected >= 0")
+    fing_f = np.asarray(fing, dtype=np.float64)
+    if (fing_f < 0).any() or (fing_f != np.floor(fing_f)).any():
+        i = int(np.argmax((fing_f < 0) | (fing_f != np.floor(fing_f))))
+        raise TraceError(f"{where}: sample {i}: finger is {fing[i]!r}, expected an integer >= 0")
+    if ((ev < DOWN) | (ev > UP)).any():
+        raise TraceError(f"{where}: event codes must be {DOWN}, {MOVE} or {UP}")
+    fing_i = fing_f.astype(np.int64)
+    ev = _normalise_events(fing_i, ev)
+    return Trace(t, fing_i, x, y, f, ev)
+
+
+def _normalise_events(finger: np.ndarray, event: np.ndarray) -> np.ndarray:
+    """Make the first sample of each finger, and the first after an ``up``, a ``down``."""
+    ev = event.copy()
+    for fid in np.unique(finger):
+        idx = np.flatnonzero(finger == fid)
+        e = ev[idx]
+        prev_up = np.concatenate(([True], e[:-1] == UP))
+        e[prev_up & (e != UP)] = DOWN
+        ev[idx] = e
+    return ev
+
+
+def _parse_float(text: str, path: str, line: int, column: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise TraceError(f"{path}:{line}: column {column}: {text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise TraceError(f"{path}:{line}: column {column}: {text!r} is not a finite number")
+    return value
+
+
+def read_trace(path: str | Path) -> Trace:
+    """Read and validate a trace CSV (see the module docstring for the grammar)."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise TraceError(f"{path}: no such trace file") from None
+    except UnicodeDecodeError as exc:
+        raise TraceError(f"{path}: not a text file ({exc.reason} at byte {exc.start})") from None
+    except OSError as exc:
+        raise TraceError(f"{path}: cannot read trace ({exc.strerror})") from None
+    return parse_trace(text, str(path))
+
+
+def parse_trace(text: str, where: str = "<trace>") -> Trace:
+    """Parse trace CSV text; ``where`` names the source in error messages."""
+    lines = [(i + 1, ln) for i, ln in enumerate(text.splitlines())
+             if ln.strip() and not ln.lstrip().startswith("#")]
+    if not lines:
+        raise TraceError(f"{where}: empty trace (expected a header line with {','.join(REQUIRED)})")
+    header_line, header = lines[0]
+    names = [h.strip() for h in next(csv.reader([header]))]
+    missing = [c for c in REQUIRED if c not in names]
+    if missing:
+        raise TraceError(f"{where}:{header_line}: header lacks column(s) {', '.join(missing)} "
+                         f"(got {','.join(names)}; required {','.join(REQUIRED)})")
+    col = {name: names.index(name) for name in names}
+    rows = list(csv.reader(io.StringIO("\n".join(ln for _, ln in lines[1:]))))
+    n = len(rows)
+    if n == 0:
+        raise TraceError(f"{where}: header but no samples")
+    t = np.empty(n)
+    finger = np.empty(n, dtype=np.int64)
+    x = np.empty(n)
+    y = np.empty(n)
+    force = np.full(n, DEFAULT_FORCE_N)
+    event = np.full(n, MOVE, dtype=np.int8)
+    has_force, has_event = "force_n" in col, "event" in col
+    for k, row in enumerate(rows):
+        line = lines[k + 1][0]
+        if len(row) < len(names):
+            raise TraceError(f"{where}:{line}: {len(row)} fields, expected {len(names)} "
+                             f"({','.join(names)})")
+        t[k] = _parse_float(row[col["t_s"]], where, line, "t_s")
+        fv = _parse_float(row[col["finger"]], where, line, "finger")
+        if fv < 0 or fv != int(fv):
+            raise TraceError(f"{where}:{line}: column finger: {row[col['finger']]!r} "
+                             "is not an integer >= 0")
+        finger[k] = int(fv)
+        x[k] = _parse_float(row[col["x_mm"]], where, line, "x_mm")
+        y[k] = _parse_float(row[col["y_mm"]], where, line, "y_mm")
+        if has_force and row[col["force_n"]].strip():
+            force[k] = _parse_float(row[col["force_n"]], where, line, "force_n")
+            if force[k] < 0:
+                raise TraceError(f"{where}:{line}: column force_n: {force[k]!r} N is negative")
+        if has_event and row[col["event"]].strip():
+            word = row[col["event"]].strip()
+            if word not in EVENTS:
+                raise TraceError(f"{where}:{line}: column event: {word!r} is not one of "
+                                 f"{', '.join(EVENTS)}")
+            event[k] = EVENTS.index(word)
+        if k and t[k] < t[k - 1]:
+            raise TraceError(f"{where}:{line}: t_s goes back from {t[k - 1]!r} to {t[k]!r} s "
+                             "(time must not decrease)")
+    return make_trace(t, finger, x, y, force, event, where)
+
+
+def format_trace(trace: Trace) -> str:
+    """The CSV text of a trace (all columns, full float64 precision via repr)."""
+    out = ["t_s,finger,x_mm,y_mm,force_n,event"]
+    for t, fid, x, y, f, e in zip(trace.t_s.tolist(), trace.finger.tolist(), trace.x_mm.tolist(),
+                                  trace.y_mm.tolist(), trace.force_n.tolist(), trace.event.tolist()):
+        out.append(f"{t!r},{fid},{x!r},{y!r},{f!r},{EVENTS[e]}")
+    return "\n".join(out) + "\n"
+
+
+def write_trace(path: str | Path, trace: Trace) -> None:
+    """Write a trace CSV that :func:`read_trace` reads back exactly."""
+    Path(path).write_text(format_trace(trace), encoding="utf-8")

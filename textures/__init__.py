@@ -1,0 +1,1 @@
+"""The texture file format, its validated scene model and the bundled library."""

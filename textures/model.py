@@ -1,0 +1,544 @@
+"""The validated scene: frozen dataclasses that the rest of frictex trusts.
+
+Everything here is in the units of DESIGN.md: positions in mm (origin top-left of the
+active area, x right, y down), angles in degrees, relative friction mu' = mu(w)/mu(0)
+in (0, 1] (seed 003, eq 1). Nothing here reads files; ``textures.loader`` builds these
+objects from TOML and checks every value once, so the methods below do not re-check.
+
+Every layer answers two vectorised questions at arrays of positions ``x, y`` (mm):
+
+- ``covers(x, y) -> bool array``: where the layer applies (its region, and for objects
+  their own support);
+- ``mu_at(x, y) -> float64 array``: the layer's mu' there (defined everywhere; callers
+  mask it with ``covers``).
+
+Periodic layers (gratings and waveforms) also give their single period for SHT
+synthesis (seed 003 section 4.4.2): ``axis`` (unit vector across the lines),
+``period_mm``, ``phase_at(x, y)`` in cycles and ``profile(phase)`` -> mu'.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+#: Spatial period (mm) at which ``render = "auto"`` switches from SHO to
+#: period synthesis: seed 003 section 6 puts the SHO/SHT boundary near
+#: 2 stimuli/cm, i.e. a 5 mm period.
+AUTO_BOUNDARY_MM = 5.0
+
+RENDER_MODES = ("sho", "sht", "hybrid")
+BLEND_MODES = ("multiply", "replace")
+
+RGB = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Display:
+    """The touchscreen's active area: size in mm and in pixels."""
+
+    width_mm: float
+    height_mm: float
+    width_px: int
+    height_px: int
+
+    @property
+    def px_per_mm(self) -> tuple[float, float]:
+        """Pixel density (px/mm) along x and y."""
+        return self.width_px / self.width_mm, self.height_px / self.height_mm
+
+
+@dataclass(frozen=True)
+class FrictionParams:
+    """Constants of the seed 003 friction model (eq 2).
+
+    ``b_per_um`` is the decay constant b (1/um); the asymptote is
+    ``asymptote_per_n * F_n`` (seed 003: 1.13 F_n). The model stops meaning anything
+    once that asymptote nears 1 (F_n near 0.885 N): ``asymptote_cap`` is the highest
+    asymptote frictex will use (see ``rendering.friction``).
+    """
+
+    b_per_um: float = 1.67
+    asymptote_per_n: float = 1.13
+    asymptote_cap: float = 0.95
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """A measured friction curve: mu' against amplitude at one or more normal forces.
+
+    ``mu[i][j]`` is mu' at ``forces_n[i]`` and ``amplitudes_um[j]``; each row starts
+    at amplitude 0 (mu' = 1) and decreases monotonically.
+    """
+
+    amplitudes_um: tuple[float, ...]
+    forces_n: tuple[float, ...]
+    mu: tuple[tuple[float, ...], ...]
+
+
+@dataclass(frozen=True)
+class DeviceProfile:
+    """Which actuation the scene is for, and the limits of that device.
+
+    ``profile`` names the actuation (``"plate-seed003"``: the single-mode glass plate
+    of seed 003, one channel). ``amplitude_limit_um`` is the zero-to-peak amplitude the
+    host never exceeds; ``normal_force_n`` the nominal finger force used where a trace
+    gives none and for ``frictex validate``'s reachability warnings.
+    """
+
+    profile: str = "plate-seed003"
+    amplitude_limit_um: float = 2.5
+    normal_force_n: float = 0.5
+    friction: FrictionParams = field(default_factory=FrictionParams)
+    calibration: Calibration | None = None
+
+
+@dataclass(frozen=True)
+class VisualHints:
+    """Colours (linear RGB, 0-1) the visual layer uses to draw a layer.
+
+    ``color_low`` is drawn where the layer's mu' is at its lowest (slippery),
+    ``color_high`` where it is highest; intermediate mu' blends between them.
+    """
+
+    color_low: RGB = (0.0, 0.0, 0.0)
+    color_high: RGB = (1.0, 1.0, 1.0)
+    outline: bool = False
+
+
+# ---------------------------------------------------------------------------
+# Regions
+
+
+def _rotate_into(x, y, cx: float, cy: float, angle_deg: float):
+    """Coordinates of (x, y) in a frame centred on (cx, cy) rotated by angle_deg."""
+    a = math.radians(angle_deg)
+    c, s = math.cos(a), math.sin(a)
+    dx = np.asarray(x, dtype=np.float64) - cx
+    dy = np.asarray(y, dtype=np.float64) - cy
+    return c * dx + s * dy, -s * dx + c * dy
+
+
+@dataclass(frozen=True)
+class RectRegion:
+    """A rectangle: top-left corner (x_mm, y_mm) before rotation, rotated about its centre."""
+
+    x_mm: float
+    y_mm: float
+    width_mm: float
+    height_mm: float
+    angle_deg: float = 0.0
+
+    @property
+    def center(self) -> tuple[float, float]:
+        return self.x_mm + self.width_mm / 2, self.y_mm + self.height_mm / 2
+
+    def signed_distance(self, x, y) -> np.ndarray:
+        """Signed distance (mm) to the boundary; negative inside."""
+        cx, cy = self.center
+        u, v = _rotate_into(x, y, cx, cy, self.angle_deg)
+        qx = np.abs(u) - self.width_mm / 2
+        qy = np.abs(v) - self.height_mm / 2
+        outside = np.hypot(np.maximum(qx, 0.0), np.maximum(qy, 0.0))
+        inside = np.minimum(np.maximum(qx, qy), 0.0)
+        return outside + inside
+
+    def contains(self, x, y) -> np.ndarray:
+        return self.signed_distance(x, y) <= 0.0
+
+
+@dataclass(frozen=True)
+class DiscRegion:
+    """A disc of centre (cx_mm, cy_mm) and radius radius_mm."""
+
+    cx_mm: float
+    cy_mm: float
+    radius_mm: float
+
+    def signed_distance(self, x, y) -> np.ndarray:
+        return np.hypot(np.asarray(x, dtype=np.float64) - self.cx_mm,
+                        np.asarray(y, dtype=np.float64) - self.cy_mm) - self.radius_mm
+
+    def contains(self, x, y) -> np.ndarray:
+        return self.signed_distance(x, y) <= 0.0
+
+
+Region = RectRegion | DiscRegion
+
+
+def _smoothstep_inside(distance, edge_mm: float) -> np.ndarray:
+    """Weight 1 inside, 0 outside a boundary at signed distance 0.
+
+    With ``edge_mm == 0`` the step is sharp; otherwise a raised-cosine ramp of
+    total width ``edge_mm`` centred on the boundary.
+    """
+    d = np.asarray(distance, dtype=np.float64)
+    if edge_mm <= 0.0:
+        return (d <= 0.0).astype(np.float64)
+    s = np.clip(0.5 - d / edge_mm, 0.0, 1.0)
+    return 0.5 - 0.5 * np.cos(np.pi * s)
+
+
+# ---------------------------------------------------------------------------
+# Layers
+
+
+@dataclass(frozen=True)
+class _LayerBase:
+    """Fields every layer has. ``render`` is already resolved (never "auto")."""
+
+    name: str
+    render: str
+    region: Region | None
+    blend: str
+    visual: VisualHints
+    fingers: str = "any"
+
+    def in_region(self, x, y) -> np.ndarray:
+        if self.region is None:
+            return np.ones(np.shape(x), dtype=bool)
+        return self.region.contains(x, y)
+
+    def covers(self, x, y) -> np.ndarray:
+        return self.in_region(x, y)
+
+    @property
+    def is_periodic(self) -> bool:
+        return False
+
+    @property
+    def mu_range(self) -> tuple[float, float]:
+        """The lowest and highest mu' the layer asks for."""
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class _PeriodicBase(_LayerBase):
+    """A spatially periodic layer: mu' depends on the phase across parallel lines.
+
+    ``angle_deg`` is the direction of the axis across the lines, from +x towards +y
+    (screen y points down); 0 gives vertical lines and friction varying with x.
+    Phase 0 is at ``offset_mm`` along the axis from the display origin.
+    """
+
+    period_mm: float = 1.0
+    angle_deg: float = 0.0
+    offset_mm: float = 0.0
+
+    @property
+    def is_periodic(self) -> bool:
+        return True
+
+    @property
+    def axis(self) -> tuple[float, float]:
+        a = math.radians(self.angle_deg)
+        return math.cos(a), math.sin(a)
+
+    def phase_at(self, x, y) -> np.ndarray:
+        """Spatial phase (cycles, unwrapped) at positions (x, y) mm."""
+        ax, ay = self.axis
+        s = ax * np.asarray(x, dtype=np.float64) + ay * np.asarray(y, dtype=np.float64)
+        return (s - self.offset_mm) / self.period_mm
+
+    def profile(self, phase) -> np.ndarray:
+        """mu' over one period at phase (cycles; any real, wrapped here)."""
+        raise NotImplementedError
+
+    def mu_at(self, x, y) -> np.ndarray:
+        return self.profile(self.phase_at(x, y))
+
+
+@dataclass(frozen=True)
+class Grating(_PeriodicBase):
+    """A two-level grating: ``mu_low`` for the first ``duty`` of each period (the
+    black line of seed 003 Fig. 6), ``mu_high`` for the rest.
+
+    ``edge = "square"`` steps at the line boundaries; ``"smooth"`` ramps over
+    ``edge_mm`` (raised cosine) centred on each boundary.
+    """
+
+    duty: float = 0.5
+    mu_low: float = 0.6
+    mu_high: float = 1.0
+    edge: str = "square"
+    edge_mm: float = 0.0
+
+    @property
+    def mu_range(self) -> tuple[float, float]:
+        return self.mu_low, self.mu_high
+
+    def profile(self, phase) -> np.ndarray:
+        p = np.mod(np.asarray(phase, dtype=np.float64), 1.0)
+        if self.edge == "square" or self.edge_mm <= 0.0:
+            low = p < self.duty
+        else:
+            # distance (mm) from the nearest edge, signed negative inside the low band
+            d_rise = (p - self.duty) * self.period_mm
+            d_fall = p * self.period_mm
+            dist = np.minimum(np.abs(d_rise), np.abs(d_fall))
+            dist = np.minimum(dist, np.abs(self.period_mm - d_fall))
+            inside = p < self.duty
+            signed = np.where(inside, -dist, dist)
+            w = _smoothstep_inside(signed, self.edge_mm)
+            return self.mu_high + (self.mu_low - self.mu_high) * w
+        return np.where(low, self.mu_low, self.mu_high)
+
+
+WAVE_SHAPES = ("sine", "square", "triangle", "sawtooth", "samples")
+
+
+@dataclass(frozen=True)
+class Waveform(_PeriodicBase):
+    """One period of a texture, replayed by SHT: a standard shape between
+    ``mu_min`` and ``mu_max``, or ``samples`` (mu' values over one period,
+    linearly interpolated and wrapped)."""
+
+    shape: str = "sine"
+    mu_min: float = 0.6
+    mu_max: float = 1.0
+    duty: float = 0.5
+    samples: tuple[float, ...] = ()
+
+    @property
+    def mu_range(self) -> tuple[float, float]:
+        if self.shape == "samples":
+            return min(self.samples), max(self.samples)
+        return self.mu_min, self.mu_max
+
+    def profile(self, phase) -> np.ndarray:
+        p = np.mod(np.asarray(phase, dtype=np.float64), 1.0)
+        if self.shape == "samples":
+            s = np.asarray(self.samples, dtype=np.float64)
+            n = s.size
+            grid = np.arange(n + 1) / n
+            return np.interp(p, grid, np.append(s, s[0]))
+        if self.shape == "sine":
+            u = 0.5 - 0.5 * np.cos(2 * np.pi * p)  # 0 at phase 0: starts at mu_max
+        elif self.shape == "square":
+            u = (p < self.duty).astype(np.float64)
+            u = 1.0 - u  # low friction for the first duty of the period
+        elif self.shape == "triangle":
+            u = 1.0 - 2.0 * np.minimum(p, 1.0 - p)
+        else:  # sawtooth: friction falls linearly over the period
+            u = 1.0 - p
+        return self.mu_min + (self.mu_max - self.mu_min) * u
+
+
+@dataclass(frozen=True)
+class Shape(_LayerBase):
+    """A single object for SHO: a region of friction ``mu`` with optional soft edges.
+
+    ``geometry`` is the object's outline (rectangle or disc). ``edge_mm`` > 0 ramps
+    mu' across the outline instead of stepping.
+    """
+
+    geometry: Region = None  # type: ignore[assignment]
+    mu: float = 0.6
+    edge_mm: float = 0.0
+
+    @property
+    def mu_range(self) -> tuple[float, float]:
+        return self.mu, 1.0
+
+    def _weight(self, x, y) -> np.ndarray:
+        return _smoothstep_inside(self.geometry.signed_distance(x, y), self.edge_mm)
+
+    def covers(self, x, y) -> np.ndarray:
+        reach = self.edge_mm / 2
+        return (self.geometry.signed_distance(x, y) <= reach) & self.in_region(x, y)
+
+    def mu_at(self, x, y) -> np.ndarray:
+        return 1.0 + (self.mu - 1.0) * self._weight(x, y)
+
+
+@dataclass(frozen=True)
+class Edge(_LayerBase):
+    """A straight edge through (x_mm, y_mm): friction ``mu`` on the side the normal
+    (at ``angle_deg`` from +x) points to, 1 on the other; ``edge_mm`` softens it."""
+
+    x_mm: float = 0.0
+    y_mm: float = 0.0
+    angle_deg: float = 0.0
+    mu: float = 0.6
+    edge_mm: float = 0.0
+
+    @property
+    def mu_range(self) -> tuple[float, float]:
+        return self.mu, 1.0
+
+    def _distance(self, x, y) -> np.ndarray:
+        a = math.radians(self.angle_deg)
+        return -(math.cos(a) * (np.asarray(x, dtype=np.float64) - self.x_mm)
+                 + math.sin(a) * (np.asarray(y, dtype=np.float64) - self.y_mm))
+
+    def mu_at(self, x, y) -> np.ndarray:
+        return 1.0 + (self.mu - 1.0) * _smoothstep_inside(self._distance(x, y), self.edge_mm)
+
+
+@dataclass(frozen=True)
+class Bump(_LayerBase):
+    """A gaussian bump in friction: mu' = 1 - (1 - mu) exp(-r^2 / (2 sigma^2)),
+    centred on (cx_mm, cy_mm); ``mu`` is mu' at the centre."""
+
+    cx_mm: float = 0.0
+    cy_mm: float = 0.0
+    sigma_mm: float = 5.0
+    mu: float = 0.6
+
+    @property
+    def mu_range(self) -> tuple[float, float]:
+        return self.mu, 1.0
+
+    def covers(self, x, y) -> np.ndarray:
+        r = np.hypot(np.asarray(x, dtype=np.float64) - self.cx_mm,
+                     np.asarray(y, dtype=np.float64) - self.cy_mm)
+        return (r <= 4.0 * self.sigma_mm) & self.in_region(x, y)
+
+    def mu_at(self, x, y) -> np.ndarray:
+        r2 = ((np.asarray(x, dtype=np.float64) - self.cx_mm) ** 2
+              + (np.asarray(y, dtype=np.float64) - self.cy_mm) ** 2)
+        return 1.0 - (1.0 - self.mu) * np.exp(-r2 / (2.0 * self.sigma_mm ** 2))
+
+
+@dataclass(frozen=True)
+class Line(_LayerBase):
+    """A straight line segment from (x0, y0) to (x1, y1), ``width_mm`` wide, of friction ``mu``."""
+
+    x0_mm: float = 0.0
+    y0_mm: float = 0.0
+    x1_mm: float = 0.0
+    y1_mm: float = 0.0
+    width_mm: float = 1.0
+    mu: float = 0.6
+    edge_mm: float = 0.0
+
+    @property
+    def mu_range(self) -> tuple[float, float]:
+        return self.mu, 1.0
+
+    def _signed_distance(self, x, y) -> np.ndarray:
+        px = np.asarray(x, dtype=np.float64) - self.x0_mm
+        py = np.asarray(y, dtype=np.float64) - self.y0_mm
+        dx, dy = self.x1_mm - self.x0_mm, self.y1_mm - self.y0_mm
+        length2 = dx * dx + dy * dy
+        t = np.clip((px * dx + py * dy) / length2, 0.0, 1.0) if length2 > 0 else 0.0
+        return np.hypot(px - t * dx, py - t * dy) - self.width_mm / 2
+
+    def covers(self, x, y) -> np.ndarray:
+        return (self._signed_distance(x, y) <= self.edge_mm / 2) & self.in_region(x, y)
+
+    def mu_at(self, x, y) -> np.ndarray:
+        return 1.0 + (self.mu - 1.0) * _smoothstep_inside(self._signed_distance(x, y), self.edge_mm)
+
+
+RASTER_MODES = ("stretch", "tile", "one-to-one")
+
+
+@dataclass(frozen=True, eq=False)
+class RasterMap(_LayerBase):
+    """A greyscale friction map placed like a sprite.
+
+    ``image`` holds grey levels in [0, 1] (row 0 at the top), as read from an 8- or
+    16-bit PNG; grey g maps linearly to mu' = mu_black + g (mu_white - mu_black)
+    (brighter = more friction, the convention of commercial friction displays).
+    The sprite's unrotated top-left is (x_mm, y_mm), its size width_mm x height_mm,
+    rotated by rotation_deg about its centre. ``mode``: ``stretch`` fills the sprite
+    with the image once; ``tile`` repeats tiles of tile_width_mm x tile_height_mm;
+    ``one-to-one`` draws one image pixel per display pixel (the loader sets the size
+    from the display's px/mm). Sampling is bilinear.
+    """
+
+    image: np.ndarray = None  # type: ignore[assignment]
+    image_path: Path | None = None
+    x_mm: float = 0.0
+    y_mm: float = 0.0
+    width_mm: float = 10.0
+    height_mm: float = 10.0
+    rotation_deg: float = 0.0
+    mode: str = "stretch"
+    tile_width_mm: float = 10.0
+    tile_height_mm: float = 10.0
+    mu_black: float = 0.6
+    mu_white: float = 1.0
+
+    @property
+    def mu_range(self) -> tuple[float, float]:
+        g = self.image
+        vals = (self.mu_black + float(g.min()) * (self.mu_white - self.mu_black),
+                self.mu_black + float(g.max()) * (self.mu_white - self.mu_black))
+        return min(vals), max(vals)
+
+    @property
+    def sprite(self) -> RectRegion:
+        return RectRegion(self.x_mm, self.y_mm, self.width_mm, self.height_mm, self.rotation_deg)
+
+    def covers(self, x, y) -> np.ndarray:
+        return self.sprite.contains(x, y) & self.in_region(x, y)
+
+    def _uv(self, x, y):
+        """Sprite coordinates in [0, 1) of the image (u across, v down)."""
+        cx, cy = self.sprite.center
+        u, v = _rotate_into(x, y, cx, cy, self.rotation_deg)
+        u = u + self.width_mm / 2
+        v = v + self.height_mm / 2
+        if self.mode == "tile":
+            return np.mod(u / self.tile_width_mm, 1.0), np.mod(v / self.tile_height_mm, 1.0)
+        return np.clip(u / self.width_mm, 0.0, 1.0), np.clip(v / self.height_mm, 0.0, 1.0)
+
+    def grey_at(self, x, y) -> np.ndarray:
+        """Bilinearly sampled grey level in [0, 1] at positions (x, y) mm."""
+        u, v = self._uv(x, y)
+        rows, cols = self.image.shape
+        fx = np.clip(u * cols - 0.5, 0.0, cols - 1.0)
+        fy = np.clip(v * rows - 0.5, 0.0, rows - 1.0)
+        x0 = np.floor(fx).astype(np.intp)
+        y0 = np.floor(fy).astype(np.intp)
+        x1 = np.minimum(x0 + 1, cols - 1)
+        y1 = np.minimum(y0 + 1, rows - 1)
+        tx, ty = fx - x0, fy - y0
+        g = self.image
+        top = g[y0, x0] * (1 - tx) + g[y0, x1] * tx
+        bottom = g[y1, x0] * (1 - tx) + g[y1, x1] * tx
+        return top * (1 - ty) + bottom * ty
+
+    def mu_at(self, x, y) -> np.ndarray:
+        return self.mu_black + self.grey_at(x, y) * (self.mu_white - self.mu_black)
+
+
+Layer = Grating | Waveform | Shape | Edge | Bump | Line | RasterMap
+
+
+@dataclass(frozen=True)
+class Scene:
+    """One texture file, validated: the display, the device and the layers in
+    drawing order (later layers on top)."""
+
+    format: int
+    name: str
+    description: str
+    display: Display
+    device: DeviceProfile
+    layers: tuple[Layer, ...]
+    source: Path | None = None
+
+    @property
+    def renderers_used(self) -> frozenset[str]:
+        """The render modes the scene's layers need (the pipeline builds only these)."""
+        return frozenset(layer.render for layer in self.layers)
+
+    @property
+    def grating_period_mm(self) -> float | None:
+        """The period of the scene's single periodic layer, if it has exactly one."""
+        periods = [layer.period_mm for layer in self.layers if layer.is_periodic]
+        return periods[0] if len(periods) == 1 else None
+
+
+def auto_render_mode(period_mm: float | None) -> str:
+    """The renderer ``render = "auto"`` picks: SHO for objects and coarse periods,
+    period synthesis at or below the seed 003 boundary (AUTO_BOUNDARY_MM)."""
+    if period_mm is None or period_mm > AUTO_BOUNDARY_MM:
+        return "sho"
+    return "sht"
