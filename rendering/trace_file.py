@@ -193,15 +193,17 @@ def parse_trace(text: str, where: str = "<trace>") -> Trace:
     return make_trace(t, finger, x, y, force, event, where)
 
 
-def format_trace(trace: Trace) -> str:
-    """The CSV text of a trace (all columns, full float64 precision via repr)."""
-    out = ["t_s,finger,x_mm,y_mm,force_n,event"]
+def format_trace(trace: Trace, comment: str | None = None) -> str:
+    """The CSV text of a trace (all columns, full float64 precision via repr),
+    after an optional ``# comment`` line."""
+    out = [f"# {line}" for line in comment.splitlines()] if comment else []
+    out.append("t_s,finger,x_mm,y_mm,force_n,event")
     for t, fid, x, y, f, e in zip(trace.t_s.tolist(), trace.finger.tolist(), trace.x_mm.tolist(),
                                   trace.y_mm.tolist(), trace.force_n.tolist(), trace.event.tolist()):
         out.append(f"{t!r},{fid},{x!r},{y!r},{f!r},{EVENTS[e]}")
     return "\n".join(out) + "\n"
 
 
-def write_trace(path: str | Path, trace: Trace) -> None:
+def write_trace(path: str | Path, trace: Trace, comment: str | None = None) -> None:
     """Write a trace CSV that :func:`read_trace` reads back exactly."""
-    Path(path).write_text(format_trace(trace), encoding="utf-8")
+    Path(path).write_text(format_trace(trace, comment), encoding="utf-8")

@@ -1,0 +1,183 @@
+"""The haptic pipeline: touch samples in, channel commands out, one call per block.
+
+Assembled from the scene (DESIGN.md, "Model only what a scene needs"): the tracker,
+one renderer per layer of the kind that layer asks for, composition, the device's
+friction model and its actuation; nothing else is built. The same object runs live
+(one block per call, paced by the wall or the device) and in replay (many blocks per
+call, as fast as it goes): a sample takes effect at the block boundary after its
+timestamp either way (see ``rendering.tracks``), so both give the same output.
+
+    pipeline = build_pipeline(scene, rate_hz=10_000.0, block_size=50)
+    state = pipeline.initial_state()
+    out, state = pipeline.process(block_index, samples, state, n_blocks=1)
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from device.actuation import SingleModeActuation
+from rendering.compose import compose
+from rendering.friction import ClampCounts, make_friction_model
+from rendering.sho import ShoRenderer
+from rendering.sht import ShtRenderer
+from rendering.trace_file import Trace
+from rendering.tracks import TrackerConfig, TrackerState, track
+from textures.model import Scene
+
+#: renderer names accepted by ``render_override`` and reported by ``frictex report``
+RENDERERS = ("sho-held", "sho-predicted", "sht", "hybrid")
+#: what a layer's ``render = "sho"`` means unless overridden
+DEFAULT_SHO = "sho-predicted"
+
+STAGES = ("tracking", "layers", "composition", "inversion", "actuation")
+
+
+@dataclass(frozen=True, eq=False)
+class BlockOutput:
+    """The pipeline's output for ``n`` samples; per-finger arrays are (F, n).
+
+    t_s : (n,) output times (s). finger_ids : the F finger ids.
+    contact : bool. x_mm, y_mm : the (predicted) position used. mu_target : composed mu'.
+    amplitude_um : vibration amplitude under each finger (um, zero-to-peak).
+    commands_um : (n, channels) channel commands (um). phases_rad : (n, channels) or None.
+    clamps : counts of the friction inversion's guards in this block.
+    """
+
+    index0: int
+    t_s: np.ndarray
+    finger_ids: tuple[int, ...]
+    contact: np.ndarray
+    x_mm: np.ndarray
+    y_mm: np.ndarray
+    mu_target: np.ndarray
+    amplitude_um: np.ndarray
+    commands_um: np.ndarray
+    phases_rad: np.ndarray | None
+    clamps: ClampCounts
+
+
+@dataclass(frozen=True)
+class PipelineState:
+    tracker: TrackerState
+    layers: tuple
+
+
+@dataclass
+class StageTimer:
+    """Accumulated compute time per stage (s), for benchmarks and summary.json."""
+
+    seconds: dict[str, float] = field(default_factory=lambda: {s: 0.0 for s in STAGES})
+    layer_seconds: dict[str, float] = field(default_factory=dict)
+
+
+def _layer_renderer(layer, mode: str, rate_hz: float):
+    if mode == "sho-held":
+        return ShoRenderer(layer, predicted=False)
+    if mode == "sho-predicted":
+        return ShoRenderer(layer, predicted=True)
+    if mode == "sht":
+        return ShtRenderer(layer, rate_hz)
+    if mode == "hybrid":
+        from rendering.hybrid import HybridRenderer  # built only for scenes that use it
+        return HybridRenderer(layer, rate_hz)
+    raise ValueError(f"unknown renderer {mode!r}; expected one of {', '.join(RENDERERS)}")
+
+
+def _layer_mode(layer, render_override: str | None, sho_variant: str) -> str:
+    """The renderer a layer gets: objects are always SHO; periodic layers follow the
+    override if any, else their file's choice."""
+    if not layer.is_periodic:
+        return sho_variant
+    mode = render_override or layer.render
+    return sho_variant if mode == "sho" else mode
+
+
+class Pipeline:
+    """The stages for one scene; see the module docstring."""
+
+    def __init__(self, scene: Scene, rate_hz: float = 10_000.0, block_size: int = 50,
+                 render_override: str | None = None, sho_variant: str = DEFAULT_SHO,
+                 t0_s: float = 0.0, tracker: TrackerConfig | None = None):
+        if rate_hz <= 0 or not np.isfinite(rate_hz):
+            raise ValueError(f"output rate {rate_hz!r} Hz: expected a positive number")
+        if block_size < 1:
+            raise ValueError(f"block size {block_size!r}: expected at least 1 sample")
+        if render_override not in (None, "sho", *RENDERERS):
+            raise ValueError(f"unknown renderer {render_override!r}; expected one of "
+                             f"sho, {', '.join(RENDERERS)}")
+        self.scene = scene
+        self.rate_hz = float(rate_hz)
+        self.block_size = int(block_size)
+        base = tracker or TrackerConfig()
+        self.tracker_config = TrackerConfig(**{**base.__dict__, "rate_hz": self.rate_hz,
+                                               "quantum": self.block_size, "t0_s": t0_s})
+        self.layer_modes = tuple(_layer_mode(layer, render_override, sho_variant)
+                                 for layer in scene.layers)
+        self.renderers = tuple(_layer_renderer(layer, mode, self.rate_hz)
+                               for layer, mode in zip(scene.layers, self.layer_modes))
+        self.blends = tuple(layer.blend for layer in scene.layers)
+        self.friction = make_friction_model(scene.device)
+        self.actuation = SingleModeActuation()
+        self.timer = StageTimer()
+
+    @property
+    def channels(self) -> tuple[str, ...]:
+        return self.actuation.channels
+
+    def initial_state(self) -> PipelineState:
+        return PipelineState(tracker=TrackerState(),
+                             layers=tuple(r.initial_state() for r in self.renderers))
+
+    def process(self, block_index: int, samples: Trace | None, state: PipelineState,
+                n_blocks: int = 1) -> tuple[BlockOutput, PipelineState]:
+        """Run ``n_blocks`` blocks starting at ``block_index`` (output index
+        ``block_index * block_size``) with the touch samples that take effect in them."""
+        clock = time.perf_counter
+        secs = self.timer.seconds
+        index0 = block_index * self.block_size
+        n = n_blocks * self.block_size
+
+        t = clock()
+        fingers, tracker_state = track(index0, n, samples, state.tracker, self.tracker_config)
+        t1 = clock()
+        secs["tracking"] += t1 - t
+
+        outputs, layer_states = [], []
+        for renderer, layer_state, layer in zip(self.renderers, state.layers, self.scene.layers):
+            t = clock()
+            mu, covers, new_state = renderer.render(fingers, layer_state)
+            outputs.append((mu, covers))
+            layer_states.append(new_state)
+            dt = clock() - t
+            secs["layers"] += dt
+            self.timer.layer_seconds[layer.name] = self.timer.layer_seconds.get(layer.name, 0.0) + dt
+
+        t = clock()
+        mu_target = compose(outputs, self.blends, fingers.contact)
+        t1 = clock()
+        secs["composition"] += t1 - t
+
+        wanted, clamps = self.friction.invert(mu_target, fingers.force)
+        t2 = clock()
+        secs["inversion"] += t2 - t1
+
+        primary = self.actuation.primary_finger(fingers.contact, fingers.touch_start)
+        commands, under, phases = self.actuation.command(wanted, primary)
+        secs["actuation"] += clock() - t2
+
+        out = BlockOutput(index0=index0, t_s=fingers.t_s, finger_ids=fingers.ids,
+                          contact=fingers.contact, x_mm=fingers.x_pred, y_mm=fingers.y_pred,
+                          mu_target=mu_target, amplitude_um=under, commands_um=commands,
+                          phases_rad=phases, clamps=clamps)
+        return out, PipelineState(tracker=tracker_state, layers=tuple(layer_states))
+
+
+def build_pipeline(scene: Scene, rate_hz: float = 10_000.0, block_size: int = 50,
+                   render_override: str | None = None, **kwargs) -> Pipeline:
+    """The pipeline for ``scene`` (see :class:`Pipeline`)."""
+    return Pipeline(scene, rate_hz=rate_hz, block_size=block_size,
+                    render_override=render_override, **kwargs)
