@@ -212,8 +212,9 @@ def _guarded_invert(model: FrictionModel, mu_target, normal_force_n) -> tuple[np
     counts.above_one = int(np.count_nonzero(mu > 1.0))
     mu = np.minimum(mu, 1.0)
     w = model._amplitude(mu, force, counts)
-    # unreachable: beyond the asymptote (nan/inf from eq 3) or beyond the amplifier limit
-    over = ~np.isfinite(w) | (w > model.limit_um)
+    # unreachable: beyond the asymptote (nan/inf from eq 3) or beyond the amplifier limit;
+    # a target computed from w = limit may come back a rounding error above it: not a clamp
+    over = ~np.isfinite(w) | (w > model.limit_um * (1.0 + 1e-12))
     counts.unreachable = int(np.count_nonzero(over & ~bad_mu))
     w = np.where(over, model.limit_um, w)
     return np.clip(w, 0.0, model.limit_um), counts

@@ -84,19 +84,19 @@ def make_trace(t_s, finger, x_mm, y_mm, force_n=None, event=None, where: str = "
         bad = ~np.isfinite(arr)
         if bad.any():
             i = int(np.argmax(bad))
-            raise TraceError(f"{where}: sample {i}: {name} is {arr[i]!r}, expected a finite number")
+            raise TraceError(f"{where}: sample {i}: {name} is {float(arr[i])!r}, expected a finite number")
     steps = np.diff(t)
     if (steps < 0).any():
         i = int(np.argmax(steps < 0)) + 1
-        raise TraceError(f"{where}: sample {i}: t_s goes back from {t[i - 1]!r} to {t[i]!r} s "
+        raise TraceError(f"{where}: sample {i}: t_s goes back from {float(t[i - 1])!r} to {float(t[i])!r} s "
                          "(time must not decrease)")
     if (f < 0).any():
         i = int(np.argmax(f < 0))
-        raise TraceError(f"{where}: sample {i}: force_n is {f[i]!r}, expected >= 0")
+        raise TraceError(f"{where}: sample {i}: force_n is {float(f[i])!r}, expected >= 0")
     fing_f = np.asarray(fing, dtype=np.float64)
     if (fing_f < 0).any() or (fing_f != np.floor(fing_f)).any():
         i = int(np.argmax((fing_f < 0) | (fing_f != np.floor(fing_f))))
-        raise TraceError(f"{where}: sample {i}: finger is {fing[i]!r}, expected an integer >= 0")
+        raise TraceError(f"{where}: sample {i}: finger is {fing[i].item()!r}, expected an integer >= 0")
     if ((ev < DOWN) | (ev > UP)).any():
         raise TraceError(f"{where}: event codes must be {DOWN}, {MOVE} or {UP}")
     fing_i = fing_f.astype(np.int64)
@@ -180,7 +180,7 @@ def parse_trace(text: str, where: str = "<trace>") -> Trace:
         if has_force and row[col["force_n"]].strip():
             force[k] = _parse_float(row[col["force_n"]], where, line, "force_n")
             if force[k] < 0:
-                raise TraceError(f"{where}:{line}: column force_n: {force[k]!r} N is negative")
+                raise TraceError(f"{where}:{line}: column force_n: {float(force[k])!r} N is negative")
         if has_event and row[col["event"]].strip():
             word = row[col["event"]].strip()
             if word not in EVENTS:
@@ -188,7 +188,7 @@ def parse_trace(text: str, where: str = "<trace>") -> Trace:
                                  f"{', '.join(EVENTS)}")
             event[k] = EVENTS.index(word)
         if k and t[k] < t[k - 1]:
-            raise TraceError(f"{where}:{line}: t_s goes back from {t[k - 1]!r} to {t[k]!r} s "
+            raise TraceError(f"{where}:{line}: t_s goes back from {float(t[k - 1])!r} to {float(t[k])!r} s "
                              "(time must not decrease)")
     return make_trace(t, finger, x, y, force, event, where)
 

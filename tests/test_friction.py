@@ -1,0 +1,126 @@
+"""Seed 003 friction model (eqs 2-3) and its inversion, including every hard case."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+from numpy.testing import assert_allclose
+
+from rendering.friction import (CalibratedFrictionModel, SeedFrictionModel, forward_mu,
+                                make_friction_model, mu_floor)
+from textures.model import Calibration, DeviceProfile, FrictionParams
+
+DEVICE = DeviceProfile(amplitude_limit_um=2.5, normal_force_n=0.5)
+MODEL = SeedFrictionModel(DEVICE)
+
+
+def test_forward_matches_seed_equation_2():
+    # eq 2 by hand: (1 - 1.13 F) exp(-1.67 w) + 1.13 F at F = 0.5 N, w = 1 um
+    expected = (1 - 0.565) * np.exp(-1.67) + 0.565
+    assert_allclose(forward_mu(1.0, 0.5, FrictionParams()), expected, rtol=1e-15)
+
+
+def test_inversion_matches_seed_equation_3():
+    mu = 0.7
+    expected = -1 / 1.67 * np.log((mu - 0.565) / (1 - 0.565))
+    w, counts = MODEL.invert(mu, 0.5)
+    assert_allclose(w, expected, rtol=1e-13)
+    assert counts.total == 0
+
+
+@settings(max_examples=300, derandomize=True, deadline=None)
+@given(w=st.floats(0.0, 2.5), force=st.floats(0.0, 0.8))
+def test_round_trip_on_reachable_range(w, force):
+    mu = MODEL.forward(w, force)
+    w_back, counts = MODEL.invert(mu, force)
+    assert abs(float(w_back) - w) <= 1e-9
+    assert counts.unreachable == 0
+
+
+def test_target_at_or_above_one_gives_zero():
+    w, counts = MODEL.invert(np.array([1.0, 1.0 + 1e-12, 1.7]), 0.5)
+    assert_allclose(w, 0.0, atol=0)
+    assert counts.above_one == 2  # exactly 1 is the plate at rest, not a clamp
+
+
+def test_target_below_asymptote_is_unreachable_and_counted():
+    w, counts = MODEL.invert(np.array([0.565, 0.3, 1e-9]), 0.5)
+    assert_allclose(w, 2.5)
+    assert counts.unreachable == 3
+
+
+def test_target_within_1e_12_of_asymptote_is_finite_and_clamped():
+    w, counts = MODEL.invert(np.array([0.565 + 1e-12, 0.565 + 1e-15]), 0.5)
+    assert np.all(np.isfinite(w)) and np.all(w == 2.5)
+    assert counts.unreachable == 2
+
+
+def test_target_between_limit_floor_and_asymptote_clamps_to_limit():
+    floor = float(MODEL.floor(0.5))
+    assert floor > 0.565
+    w, counts = MODEL.invert(np.array([floor + 1e-6, (floor + 0.565) / 2]), 0.5)
+    assert w[0] < 2.5 and w[1] == 2.5
+    assert counts.unreachable == 1
+
+
+def test_normal_force_near_zero_is_regular():
+    w, counts = MODEL.invert(0.5, np.array([0.0, 1e-300, 1e-9]))
+    expected = -np.log(0.5) / 1.67
+    assert_allclose(w, expected, rtol=1e-8)
+    assert counts.total == 0
+
+
+@pytest.mark.parametrize("force", [1 / 1.13, 0.9, 3.0, 1e6])
+def test_force_where_asymptote_reaches_one_uses_the_cap(force):
+    w, counts = MODEL.invert(np.array([0.97, 0.96, 0.5]), force)
+    assert np.all(np.isfinite(w)) and np.all((0 <= w) & (w <= 2.5))
+    assert counts.force_beyond_model == 3
+    # the capped model (A = 0.95) still orders targets: lower friction asks for more amplitude
+    assert w[0] < w[1] == 2.5 == w[2] or w[0] < w[1] <= w[2]
+    assert_allclose(MODEL.forward(w[0], force), 0.97, rtol=1e-12)
+
+
+def test_nan_and_inf_in():
+    w, counts = MODEL.invert(np.array([np.nan, np.inf, -np.inf, 0.8]),
+                             np.array([0.5, 0.5, 0.5, np.nan]))
+    assert np.all(np.isfinite(w)) and np.all((0 <= w) & (w <= 2.5))
+    assert w[0] == 0 and w[1] == 0 and w[2] == 0  # non-finite targets: plate off
+    assert counts.nonfinite_target == 3 and counts.bad_force == 1
+    assert_allclose(w[3], MODEL.invert(0.8, 0.5)[0])  # bad force -> nominal force
+
+
+def test_mu_floor_at_half_newton():
+    # seed 003: asymptote 1.13 * 0.5 = 0.565; the 2.5 um limit stops a little above it
+    assert mu_floor(DEVICE, 0.5) == pytest.approx(0.565 + 0.435 * np.exp(-1.67 * 2.5), rel=1e-12)
+
+
+CAL = Calibration(amplitudes_um=(0, 0.5, 1, 2, 3), forces_n=(0.3, 0.6),
+                  mu=((1, 0.8, 0.6, 0.45, 0.4), (1, 0.85, 0.7, 0.6, 0.58)))
+CAL_DEVICE = DeviceProfile(amplitude_limit_um=2.5, calibration=CAL)
+
+
+def test_calibration_interpolates_measured_points_exactly():
+    model = make_friction_model(CAL_DEVICE)
+    assert isinstance(model, CalibratedFrictionModel)
+    w, counts = model.invert(np.array([0.8, 0.6, 0.45, 0.85, 0.7]),
+                             np.array([0.3, 0.3, 0.3, 0.6, 0.6]))
+    assert_allclose(w, [0.5, 1.0, 2.0, 0.5, 1.0], atol=1e-12)
+    assert counts.total == 0
+
+
+@settings(max_examples=60, derandomize=True, deadline=None)
+@given(mu=st.floats(0.6, 1.0), force=st.floats(0.3, 0.6))
+def test_calibration_round_trip_and_monotone(mu, force):
+    model = make_friction_model(CAL_DEVICE)
+    w, counts = model.invert(mu, force)
+    assert 0 <= w <= 2.5
+    if counts.unreachable == 0:
+        assert_allclose(model.forward(w, force), mu, atol=1e-9)
+    w2, _ = model.invert(mu - 0.01, force)
+    assert w2 >= w
+
+
+def test_calibration_outside_measured_forces_is_counted():
+    model = make_friction_model(CAL_DEVICE)
+    w, counts = model.invert(np.array([0.8, 0.8]), np.array([0.1, 2.0]))
+    assert counts.force_beyond_model == 2
+    assert_allclose(w, [0.5, model.invert(0.8, 0.6)[0]], atol=1e-12)

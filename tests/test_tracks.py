@@ -1,0 +1,140 @@
+"""Finger tracking: velocity from noisy samples, prediction, touch events, hard cases."""
+
+import numpy as np
+from numpy.testing import assert_allclose
+
+from rendering.trace_file import DOWN, MOVE, UP, make_trace
+from rendering.tracks import TrackerConfig, TrackerState, apply_index, track
+
+CFG = TrackerConfig(rate_hz=10_000.0, quantum=50)
+
+
+def _run(trace, n_out, cfg=CFG):
+    return track(0, n_out, trace, TrackerState(), cfg)
+
+
+def _swipe(rate_hz=50.0, speed=40.0, duration=1.0, noise=0.0, seed=0):
+    t = np.arange(0, duration + 1e-12, 1 / rate_hz)
+    rng = np.random.default_rng(seed)
+    x = 10 + speed * t + rng.normal(0, noise, t.size)
+    return make_trace(t, np.zeros(t.size, int), x, np.full(t.size, 30.0))
+
+
+def test_constant_speed_velocity_and_prediction_are_exact():
+    trace = _swipe()
+    block, _ = _run(trace, 10_100)
+    live = block.contact[0] & (block.t_s > 0.1)
+    assert_allclose(block.vx[0, live], 40.0, rtol=1e-9)
+    # prediction between 50 Hz samples follows the true line exactly (after the fit fills)
+    assert_allclose(block.x_pred[0, live], 10 + 40.0 * block.t_s[live], atol=1e-9)
+    # held position lags by up to one touch period (20 ms = 0.8 mm) plus one block
+    lag = (10 + 40.0 * block.t_s[live]) - block.x_held[0, live]
+    assert lag.min() >= -1e-9 and lag.max() <= 40.0 * (0.02 + 0.005) + 1e-9
+
+
+def test_noisy_samples_give_a_sane_velocity():
+    trace = _swipe(rate_hz=120.0, noise=0.1, duration=2.0)
+    block, _ = _run(trace, 20_000)
+    live = block.contact[0] & (block.t_s > 0.1)
+    # a 50 ms line fit over 6 samples with 0.1 mm noise: error well under 10 mm/s
+    assert np.abs(block.vx[0, live] - 40.0).max() < 10.0
+
+
+def test_samples_take_effect_at_the_next_block_boundary():
+    cfg = TrackerConfig(rate_hz=1000.0, quantum=10)
+    assert list(apply_index(np.array([0.0, 0.001, 0.0099, 0.010, 0.0101]), cfg)) == [0, 10, 10, 10, 20]
+
+
+def test_duplicate_rereports_do_not_swing_the_velocity():
+    # refdata phone-two-finger-drag: the same position re-reported 0.57 ms later
+    t = np.repeat(np.arange(0, 1, 1 / 60), 2)
+    t[1::2] += 0.00057
+    x = np.repeat(10 + 50.0 * np.arange(0, 1, 1 / 60), 2)
+    trace = make_trace(t, np.zeros(t.size, int), x, np.full(t.size, 20.0))
+    block, _ = _run(trace, 10_000)
+    live = block.contact[0] & (block.t_s > 0.15)
+    assert np.abs(block.vx[0, live] - 50.0).max() < 5.0
+    assert np.all(np.isfinite(block.vx)) and np.all(np.isfinite(block.x_pred))
+
+
+def test_equal_timestamps_keep_finite_output():
+    t = np.array([0.0, 0.01, 0.01, 0.01, 0.02])
+    trace = make_trace(t, np.zeros(5, int), [0, 1, 1.5, 2, 3], np.zeros(5))
+    block, _ = _run(trace, 400)
+    for arr in (block.vx, block.vy, block.x_pred, block.y_pred):
+        assert np.all(np.isfinite(arr))
+
+
+def test_jump_is_a_lift_and_a_new_touch():
+    t = np.arange(0, 0.2, 0.02)
+    x = np.where(t < 0.1, 10 + 40 * t, 80 + 40 * t)  # 70 mm away in 20 ms
+    trace = make_trace(t, np.zeros(t.size, int), x, np.full(t.size, 30.0))
+    block, state = _run(trace, 2_000)
+    assert state.jumps == 1
+    assert len(np.unique(block.touch_id[0][block.contact[0]])) == 2
+    # the velocity restarts: never the 3500 mm/s the jump implies
+    assert np.abs(block.vx).max() < 100.0
+
+
+def test_zero_speed_and_reversal():
+    t = np.arange(0, 1.0, 0.01)
+    x = 30 + 20 * np.sin(2 * np.pi * 1.0 * t)  # reverses at 0.25 s and 0.75 s
+    x[60:] = x[60]  # then rests
+    trace = make_trace(t, np.zeros(t.size, int), x, np.full(t.size, 30.0))
+    block, _ = _run(trace, 10_000)
+    v_true = 2 * np.pi * 20 * np.cos(2 * np.pi * block.t_s)
+    moving = (block.t_s > 0.06) & (block.t_s < 0.55)
+    # a line fit lags by half its window; the sample is held up to one touch period and
+    # applied up to one block late: error <= peak acceleration x that lag
+    lag = CFG.velocity_window_s / 2 + 0.01 + CFG.quantum / CFG.rate_hz
+    accel = (2 * np.pi) ** 2 * 20
+    assert np.abs(block.vx[0, moving] - v_true[moving]).max() < accel * lag
+    resting = block.t_s > 0.7
+    assert np.abs(block.vx[0, resting]).max() < 1e-9
+
+
+def test_finger_that_stops_reporting_rests_after_the_horizon():
+    trace = _swipe(duration=0.2)
+    events = trace.event.copy()
+    events[-1] = MOVE  # never lifted: the screen just stops reporting
+    trace = make_trace(trace.t_s, trace.finger, trace.x_mm, trace.y_mm, trace.force_n, events)
+    block, _ = _run(trace, 5_000)
+    late = block.t_s > 0.2 + CFG.predict_horizon_s + 0.005
+    assert block.contact[0, late].all()
+    assert np.all(block.vx[0, late] == 0.0)
+    assert np.ptp(block.x_pred[0, late]) == 0.0
+
+
+def test_down_and_up():
+    t = np.array([0.0, 0.01, 0.02, 0.05, 0.06])
+    ev = np.array([DOWN, MOVE, UP, DOWN, UP], dtype=np.int8)
+    trace = make_trace(t, np.zeros(5, int), [0, 1, 2, 50, 51], np.zeros(5), None, ev)
+    block, _ = _run(trace, 1_000)
+    idx = np.arange(1_000)
+    contact = block.contact[0]
+    assert contact[0] and contact[199] and not contact[200] and not contact[499]
+    assert contact[500] and not contact[600]
+    assert block.touch_id[0, 500] == block.touch_id[0, 0] + 1
+    assert np.all(block.vx[0, ~contact] == 0)
+    del idx
+
+
+def test_out_of_order_live_samples_are_dropped_and_counted():
+    first = make_trace([0.0, 0.02], [0, 0], [0.0, 1.0], [0.0, 0.0])
+    _, state = track(0, 400, first, TrackerState(), CFG)
+    late = make_trace([0.01], [0], [99.0], [0.0])
+    block, state = track(400, 50, late, state, CFG)
+    assert state.out_of_order == 1
+    assert np.all(block.x_held[0] == 1.0)
+
+
+def test_two_fingers_are_tracked_independently():
+    t = np.repeat(np.arange(0, 0.5, 0.02), 2)
+    finger = np.tile([0, 1], t.size // 2)
+    x = np.where(finger == 0, 10 + 40 * t, 90 - 20 * t)
+    trace = make_trace(t, finger, x, np.full(t.size, 30.0))
+    block, _ = _run(trace, 5_000)
+    assert block.ids == (0, 1)
+    live = block.t_s > 0.1
+    assert_allclose(block.vx[0, live], 40.0, rtol=1e-9)
+    assert_allclose(block.vx[1, live], -20.0, rtol=1e-9)
