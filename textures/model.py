@@ -31,6 +31,12 @@ import numpy as np
 AUTO_BOUNDARY_MM = 5.0
 
 RENDER_MODES = ("sho", "sht", "hybrid")
+
+#: The actuation profiles a scene's ``[device] profile`` may name, with one line each.
+#: This is the one place to add a profile (later issues: beam, 2D plate, ring).
+DEVICE_PROFILES: dict[str, str] = {
+    "plate-seed003": "single-mode glass plate of seed 003, one channel",
+}
 BLEND_MODES = ("multiply", "replace")
 
 RGB = tuple[float, float, float]

@@ -1,0 +1,20 @@
+"""``frictex library``: the bundled scenes and traces, one line each."""
+
+from __future__ import annotations
+
+import argparse
+
+from textures.library import list_scenes, list_traces
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--paths", action="store_true", help="also print each file's path")
+
+
+def run(args: argparse.Namespace) -> int:
+    entries = list_scenes() + list_traces()
+    width = max((len(e.name) for e in entries), default=0)
+    for e in entries:
+        line = f"{e.name:<{width}}  {e.kind:<5}  {e.description}"
+        print(f"{line}  [{e.path}]" if args.paths else line)
+    return 0

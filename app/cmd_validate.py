@@ -1,0 +1,43 @@
+"""``frictex validate FILE...``: check texture files and report every problem.
+
+For each file: ``ok FILE (n layers)`` on stdout, or every problem as
+``FILE:line: field: message`` on stderr; warnings (legal but probably unintended, such
+as a mu' the device cannot reach at its nominal force) as ``FILE:line: warning: ...``.
+Exit 0 if every file is good (warnings allowed), 2 if any is bad.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from textures.errors import TextureError
+from textures.library import resolve_scene
+from textures.loader import check_scene
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("files", nargs="+", metavar="FILE",
+                        help="texture file (.toml), or a bundled scene name (see frictex library)")
+
+
+def run(args: argparse.Namespace) -> int:
+    bad = 0
+    for name in args.files:
+        try:
+            path = resolve_scene(name)
+        except TextureError as exc:
+            print(exc, file=sys.stderr)
+            bad += 1
+            continue
+        scene, problems, warnings = check_scene(path)
+        for problem in problems + warnings:
+            print(problem, file=sys.stderr)
+        if scene is None:
+            bad += 1
+        else:
+            n = len(scene.layers)
+            print(f"ok {path} ({n} layer{'s' * (n != 1)})")
+    if bad and len(args.files) > 1:
+        print(f"{bad} of {len(args.files)} files have problems", file=sys.stderr)
+    return 2 if bad else 0

@@ -1,0 +1,113 @@
+"""The bundled library: what it holds, that it is clean, and how names resolve."""
+
+import importlib.util
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+from PIL import Image
+
+from app.cli import main
+from textures import model
+from textures.errors import TextureError
+from textures.library import (LIBRARY_DIR, TRACES_DIR, list_scenes, list_traces, resolve_scene,
+                              resolve_trace)
+from textures.loader import check_scene, load_scene
+
+SCENES = ["composed-fine-grating-in-disc", "grating-0.6mm", "grating-15mm", "grating-5mm",
+          "objects-bump-edge-disc", "raster-map"]
+
+
+def test_the_library_holds_the_issue_scenes():
+    assert [e.name for e in list_scenes()] == SCENES
+    assert all(e.kind == "scene" and e.description for e in list_scenes())
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_every_bundled_scene_is_clean(name):
+    scene, problems, warnings = check_scene(resolve_scene(name))
+    assert problems == [] and warnings == []
+    assert scene.name == name
+    assert scene.display == model.Display(108.0, 64.8, 800, 480)
+
+
+@pytest.mark.parametrize("period, render", [(15.0, "sho"), (5.0, "sht"), (0.6, "sht")])
+def test_seed003_gratings(period, render):
+    scene = load_scene(resolve_scene(f"grating-{period:g}mm"))
+    (g,) = scene.layers
+    assert isinstance(g, model.Grating)
+    assert (g.period_mm, g.duty, g.angle_deg, g.mu_low, g.mu_high, g.edge) == (period, 0.5, 0.0, 0.6, 1.0, "square")
+    assert g.render == render
+    # black (low colour) exactly where the low-friction line is: the first half period
+    assert g.visual.color_low == (0.0, 0.0, 0.0) and g.visual.color_high == (1.0, 1.0, 1.0)
+    x = np.array([0.1, 0.49, 0.51, 0.9]) * period
+    assert g.mu_at(x, np.zeros(4)).tolist() == [0.6, 0.6, 1.0, 1.0]
+
+
+def test_objects_scene():
+    kinds = [type(layer).__name__ for layer in load_scene(resolve_scene("objects-bump-edge-disc")).layers]
+    assert kinds == ["Bump", "Shape", "Edge"]
+
+
+def test_composed_scene_puts_a_fine_texture_in_a_disc_on_a_coarse_object():
+    coarse, fine = load_scene(resolve_scene("composed-fine-grating-in-disc")).layers
+    assert coarse.render == "sho" and not coarse.is_periodic
+    assert fine.is_periodic and 0.6 <= fine.period_mm <= 1.0 and fine.render == "sht"
+    assert isinstance(fine.region, model.DiscRegion)
+    # the disc lies inside the coarse object
+    r = fine.region
+    angles = np.linspace(0, 2 * np.pi, 64)
+    assert coarse.covers(r.cx_mm + r.radius_mm * np.cos(angles), r.cy_mm + r.radius_mm * np.sin(angles)).all()
+
+
+def test_raster_png_is_what_its_script_makes():
+    spec = importlib.util.spec_from_file_location("make_raster_map", LIBRARY_DIR / "make_raster_map.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    with Image.open(LIBRARY_DIR / "raster-map.png") as image:
+        assert image.mode == "L"
+        stored = np.asarray(image)
+    assert np.array_equal(stored, script.grey_map())
+    (layer,) = load_scene(resolve_scene("raster-map")).layers
+    assert_allclose(layer.image, stored / 255.0, rtol=0, atol=0)
+
+
+def test_traces_are_listed_with_their_comment():
+    traces = list_traces()
+    assert {e.name for e in traces} == {p.stem for p in TRACES_DIR.glob("*.csv")}
+    for e in traces:
+        first = e.path.read_text(encoding="utf-8").splitlines()[0]
+        assert e.kind == "trace" and first == "# " + e.description
+
+
+def test_resolve_names_and_paths(tmp_path, monkeypatch):
+    assert resolve_scene("grating-5mm") == LIBRARY_DIR / "grating-5mm.toml"
+    assert resolve_scene("grating-5mm.toml") == LIBRARY_DIR / "grating-5mm.toml"
+    name = list_traces()[0].name
+    assert resolve_trace(name) == TRACES_DIR / f"{name}.csv"
+    # an existing path wins over a bundled name
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "grating-5mm.toml").write_text("x")
+    assert resolve_scene("grating-5mm.toml") == tmp_path.joinpath("grating-5mm.toml").relative_to(tmp_path)
+
+
+@pytest.mark.parametrize("call, name, pattern", [
+    (resolve_scene, "grating-5", r"grating-5: no such file, and no bundled scene of that name \(did you mean grating-5mm\?"),
+    (resolve_scene, "zzz", r"^zzz: no such file, and no bundled scene of that name \(frictex library lists them\)$"),
+    (resolve_scene, "sub/grating-5mm.toml", r"^sub/grating-5mm\.toml: no such file$"),
+    (resolve_trace, "swipe-40mms", r"no bundled trace of that name \(did you mean swipe-40mms-50hz\?"),
+])
+def test_unknown_names(call, name, pattern):
+    with pytest.raises(TextureError, match=pattern):
+        call(name)
+
+
+def test_library_command(capsys):
+    assert main(["library"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == len(SCENES) + len(list_traces())
+    first = lines[0].split()
+    assert first[:2] == ["composed-fine-grating-in-disc", "scene"]
+    assert any(line.split()[:2] == ["swipe-40mms-50hz", "trace"] for line in lines)
+    assert main(["library", "--paths"]) == 0
+    assert str(LIBRARY_DIR / "grating-5mm.toml") in capsys.readouterr().out

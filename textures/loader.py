@@ -1,0 +1,804 @@
+"""Texture files: TOML, one scene per file, checked once into ``textures.model.Scene``.
+
+Grammar (format 1). Units are in the key names; every key not marked *required* has the
+default shown. Layers are drawn and composed in file order (later on top).
+::
+
+    format = 1                        # required; the version of this grammar
+    name = "..."                      # default: the file name without .toml
+    description = "..."               # one line for `frictex library`; default ""
+
+    [display]                         # required: the touchscreen's active area
+    width_mm, height_mm               # required, > 0
+    width_px, height_px               # required integers >= 1 (visual layer, one-to-one maps)
+
+    [device]                          # optional table
+    profile = "plate-seed003"         # one of textures.model.DEVICE_PROFILES
+    amplitude_limit_um = 2.5          # > 0, zero-to-peak; the host never asks for more
+    normal_force_n = 0.5              # > 0; nominal force for warnings and force-less traces
+    [device.friction]                 # optional: seed 003 eq 2 constants
+    b_per_um = 1.67                   # > 0
+    asymptote_per_n = 1.13            # > 0 (asymptote A = asymptote_per_n * F_n)
+    asymptote_cap = 0.95              # in (0, 1); see rendering.friction
+    [device.calibration]              # optional measured table, replaces the model
+    amplitudes_um = [0, ...]          # >= 2 values, starting at 0, strictly increasing
+    forces_n = [...]                  # >= 1 value, >= 0, strictly increasing
+    mu = [[1, ...], ...]              # one row per force, one value per amplitude: each row
+                                      # starts at 1 and strictly decreases, values in (0, 1]
+
+    [[layer]]                         # one or more
+    type = "grating"                  # required: grating | waveform | rectangle | disc |
+                                      #   edge | bump | line | raster
+    name = "..."                      # unique in the file; default "<type>-<n>"
+    render = "auto"                   # sho | sht | hybrid | auto. auto: a periodic layer uses
+                                      #   textures.model.auto_render_mode(period_mm) (SHO above
+                                      #   5 mm, seed 003 section 6); objects and rasters use sho.
+                                      #   sht and hybrid need a periodic layer.
+    blend = "multiply"                # multiply | replace (opaque where the layer covers)
+    region = { x_mm, y_mm, width_mm, height_mm, angle_deg = 0 }   # optional rectangle, or
+    region = { cx_mm, cy_mm, radius_mm }                          # a disc; on the display
+    [layer.visual]                    # optional colours for the visual layer
+    color_low = "#000000"             # "#rrggbb" or "#rgb" (sRGB) where mu' is lowest
+    color_high = "#ffffff"            # ... where it is highest (stored as linear RGB)
+    outline = false
+
+Layer keys by type (mu' is relative friction in (0, 1]; positions in mm, angles in deg):
+
+- ``grating``: period_mm (> 0), duty = 0.5 (in (0, 1): the fraction at mu_low, the black
+  line), angle_deg = 0 (axis across the lines, 0 = vertical lines), offset_mm = 0,
+  mu_low (required), mu_high = 1 (>= mu_low), edge = "square" | "smooth",
+  edge_mm (smooth only: > 0, at most the narrower band).
+- ``waveform`` (one period for SHT): period_mm, angle_deg, offset_mm, shape = "sine" |
+  "square" | "triangle" | "sawtooth" | "samples"; standard shapes take mu_min (required)
+  and mu_max = 1, square also duty = 0.5; "samples" takes samples = [mu', ...] (>= 2
+  values over one period, linearly interpolated, wrapped) instead.
+- ``rectangle``: x_mm, y_mm (top-left before rotation), width_mm, height_mm, angle_deg = 0,
+  mu, edge_mm = 0 (soft edge, at most the shorter side).
+- ``disc``: cx_mm, cy_mm, radius_mm, mu, edge_mm = 0 (at most the diameter).
+- ``edge``: x_mm, y_mm (a point on the edge, on the display), angle_deg = 0 (the normal,
+  pointing to the side at mu), mu, edge_mm = 0.
+- ``bump`` (gaussian): cx_mm, cy_mm, sigma_mm, mu (at the centre).
+- ``line``: x0_mm, y0_mm, x1_mm, y1_mm (distinct ends), width_mm, mu, edge_mm = 0 (at most width_mm).
+- ``raster``: image (required; path relative to the TOML file; see ``textures.raster_io``
+  for the image kinds), mode = "stretch" | "tile" | "one-to-one", x_mm = 0, y_mm = 0
+  (sprite top-left before rotation), rotation_deg = 0, mu_black (required), mu_white = 1
+  (grey g gives mu_black + g (mu_white - mu_black)). stretch and tile need width_mm and
+  height_mm; tile also takes tile_width_mm / tile_height_mm (default: the image at the
+  display's pixel size); one-to-one takes neither (one image pixel per display pixel).
+
+Objects, points, regions and sprites must lie on the display. Every problem in a file is
+reported (not only the first) as ``file:line: field: message``; ``frictex validate`` also
+warns, without failing, where a layer asks for a mu' the device cannot reach at its
+nominal normal force (``rendering.friction.mu_floor``).
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+from textures import model
+from textures.errors import KeyPath, Locator, Problem, TextureError, field_name
+from textures.raster_io import read_grey
+
+FORMAT_VERSION = 1
+
+LAYER_TYPES = ("grating", "waveform", "rectangle", "disc", "edge", "bump", "line", "raster")
+PERIODIC_TYPES = ("grating", "waveform")
+RENDER_CHOICES = ("auto",) + model.RENDER_MODES
+
+REQUIRED = object()  # spec default: the key must be given
+_BAD = object()      # parsed value of a key that had a problem (already reported)
+
+_DEVICE = model.DeviceProfile()
+_FRICTION = model.FrictionParams()
+_VISUAL = model.VisualHints()
+
+
+@dataclass(frozen=True)
+class Num:
+    """A finite real number with optional bounds; ``unit`` is shown in messages."""
+
+    unit: str
+    default: Any = REQUIRED
+    gt: float | None = None
+    ge: float | None = None
+    lt: float | None = None
+    le: float | None = None
+
+
+@dataclass(frozen=True)
+class Int:
+    unit: str
+    default: Any = REQUIRED
+    ge: int | None = None
+
+
+@dataclass(frozen=True)
+class Choice:
+    options: tuple[str, ...]
+    default: Any = REQUIRED
+
+
+@dataclass(frozen=True)
+class Text:
+    default: Any = REQUIRED
+
+
+@dataclass(frozen=True)
+class Flag:
+    default: Any = REQUIRED
+
+
+@dataclass(frozen=True)
+class Colour:
+    default: Any = REQUIRED
+
+
+@dataclass(frozen=True)
+class NumList:
+    """A list of numbers, each checked like ``item``; at least ``min_len`` of them."""
+
+    item: Num
+    min_len: int = 1
+    default: Any = REQUIRED
+
+
+@dataclass(frozen=True)
+class Rows:
+    """A list of lists of numbers (a table), each checked like ``item``."""
+
+    item: Num
+    default: Any = REQUIRED
+
+
+Spec = Num | Int | Choice | Text | Flag | Colour | NumList | Rows
+
+MU = Num("relative friction mu'", gt=0.0, le=1.0)
+MU_HIGH = Num("relative friction mu'", default=1.0, gt=0.0, le=1.0)
+POS = Num("mm")
+SIZE = Num("mm", gt=0.0)
+ANGLE = Num("deg", default=0.0)
+EDGE_MM = Num("mm", default=0.0, ge=0.0)
+DUTY = Num("fraction of the period", default=0.5, gt=0.0, lt=1.0)
+
+TOP = {"format": Int("format version"), "name": Text(None), "description": Text("")}
+DISPLAY = {"width_mm": SIZE, "height_mm": SIZE,
+           "width_px": Int("px", ge=1), "height_px": Int("px", ge=1)}
+DEVICE = {"profile": Choice(tuple(model.DEVICE_PROFILES), _DEVICE.profile),
+          "amplitude_limit_um": Num("um zero-to-peak", _DEVICE.amplitude_limit_um, gt=0.0),
+          "normal_force_n": Num("N", _DEVICE.normal_force_n, gt=0.0)}
+FRICTION = {"b_per_um": Num("1/um", _FRICTION.b_per_um, gt=0.0),
+            "asymptote_per_n": Num("1/N", _FRICTION.asymptote_per_n, gt=0.0),
+            "asymptote_cap": Num("relative friction mu'", _FRICTION.asymptote_cap, gt=0.0, lt=1.0)}
+CALIBRATION = {"amplitudes_um": NumList(Num("um zero-to-peak", ge=0.0), min_len=2),
+               "forces_n": NumList(Num("N", ge=0.0)),
+               "mu": Rows(MU)}
+COMMON = {"type": Choice(LAYER_TYPES), "name": Text(None),
+          "render": Choice(RENDER_CHOICES, "auto"), "blend": Choice(model.BLEND_MODES, "multiply")}
+LAYER_TABLES = ("region", "visual")
+RECT_REGION = {"x_mm": POS, "y_mm": POS, "width_mm": SIZE, "height_mm": SIZE, "angle_deg": ANGLE}
+DISC_REGION = {"cx_mm": POS, "cy_mm": POS, "radius_mm": SIZE}
+VISUAL = {"color_low": Colour(_VISUAL.color_low), "color_high": Colour(_VISUAL.color_high),
+          "outline": Flag(_VISUAL.outline)}
+PERIODIC = {"period_mm": SIZE, "angle_deg": ANGLE, "offset_mm": Num("mm", 0.0)}
+LAYER_KEYS: dict[str, dict[str, Spec]] = {
+    "grating": {**PERIODIC, "duty": DUTY, "mu_low": MU, "mu_high": MU_HIGH,
+                "edge": Choice(("square", "smooth"), "square"), "edge_mm": EDGE_MM},
+    "waveform": {**PERIODIC, "shape": Choice(model.WAVE_SHAPES, "sine"),
+                 "mu_min": Num(MU.unit, None, gt=0.0, le=1.0), "mu_max": MU_HIGH, "duty": DUTY,
+                 "samples": NumList(MU, min_len=2, default=())},
+    "rectangle": {**RECT_REGION, "mu": MU, "edge_mm": EDGE_MM},
+    "disc": {**DISC_REGION, "mu": MU, "edge_mm": EDGE_MM},
+    "edge": {"x_mm": POS, "y_mm": POS, "angle_deg": ANGLE, "mu": MU, "edge_mm": EDGE_MM},
+    "bump": {"cx_mm": POS, "cy_mm": POS, "sigma_mm": SIZE, "mu": MU},
+    "line": {"x0_mm": POS, "y0_mm": POS, "x1_mm": POS, "y1_mm": POS, "width_mm": SIZE,
+             "mu": MU, "edge_mm": EDGE_MM},
+    "raster": {"image": Text(), "mode": Choice(model.RASTER_MODES, "stretch"),
+               "x_mm": Num("mm", 0.0), "y_mm": Num("mm", 0.0), "rotation_deg": ANGLE,
+               "width_mm": Num("mm", None, gt=0.0), "height_mm": Num("mm", None, gt=0.0),
+               "tile_width_mm": Num("mm", None, gt=0.0), "tile_height_mm": Num("mm", None, gt=0.0),
+               "mu_black": MU, "mu_white": MU_HIGH},
+}
+
+_NUMBER_WITH_UNIT = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s].*)?$")
+_HEX = re.compile(r"^#(?:[0-9a-fA-F]{3}|[0-9a-fA-F]{6})$")
+
+
+def _show(value) -> str:
+    """A value as the TOML author wrote it (short)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return '"' + (value if len(value) <= 40 else value[:37] + "...") + '"'
+    if isinstance(value, dict):
+        return "a table"
+    if isinstance(value, list):
+        text = "[" + ", ".join(_show(v) for v in value[:4]) + (", ...]" if len(value) > 4 else "]")
+        return text if len(text) <= 60 else f"a list of {len(value)} values"
+    return repr(value)
+
+
+def _kind(value) -> str:
+    """The TOML type and value, for 'expected X, got Y' messages."""
+    if isinstance(value, dict):
+        return "a table"
+    for types, name in ((bool, "the boolean"), (str, "the string"), ((int, float), "the number"),
+                        (list, "the list")):
+        if isinstance(value, types):
+            return f"{name} {_show(value)}"
+    return f"the date/time {value!s}"
+
+
+def _did_you_mean(word: str, options) -> str:
+    close = difflib.get_close_matches(word, list(options), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]}?)" if close else ""
+
+
+def _bounds_text(spec: Num) -> str:
+    lower = f"{'(' if spec.gt is not None else '['}{spec.gt if spec.gt is not None else spec.ge:g}"
+    upper = f"{spec.lt if spec.lt is not None else spec.le:g}{')' if spec.lt is not None else ']'}"
+    return f"{lower}, {upper}"
+
+
+def _srgb_to_linear(c: float) -> float:
+    """sRGB transfer function, inverted (IEC 61966-2-1)."""
+    return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
+
+
+class _Reader:
+    """Collects problems while turning parsed TOML into checked values."""
+
+    def __init__(self, label: str, locator: Locator | None):
+        self.label = label
+        self.locator = locator
+        self.problems: list[Problem] = []
+        self.warnings: list[Problem] = []
+
+    def report(self, path: KeyPath, message: str, warning: bool = False) -> object:
+        line = self.locator.line(path) if self.locator is not None else None
+        problem = Problem(self.label, line, field_name(path), message, warning)
+        (self.warnings if warning else self.problems).append(problem)
+        return _BAD
+
+    def table(self, value, path: KeyPath, spec: dict[str, Spec], tables=()) -> dict | None:
+        """Check that ``value`` is a table with only known keys; parse the ``spec`` keys.
+
+        Returns key -> value (defaults filled in, ``_BAD`` for problems), or None if
+        ``value`` is not a table. Keys in ``tables`` are allowed but left to the caller.
+        """
+        if not isinstance(value, dict):
+            self.report(path, f"expected a table, got {_kind(value)}")
+            return None
+        known = list(spec) + list(tables)
+        for key in value:
+            if key not in known:
+                self.report(path + (key,), f"unknown key{_did_you_mean(key, known)}; "
+                                           f"known here: {', '.join(known)}")
+        return {key: self.value(value[key], path + (key,), s) if key in value
+                else self.missing(path + (key,), s) for key, s in spec.items()}
+
+    def missing(self, path: KeyPath, spec: Spec):
+        if spec.default is REQUIRED:
+            return self.report(path, "missing (required)")
+        return spec.default
+
+    def value(self, value, path: KeyPath, spec: Spec):
+        if isinstance(spec, Num):
+            return self.number(value, path, spec)
+        if isinstance(spec, Int):
+            if isinstance(value, bool) or not isinstance(value, int):
+                return self.report(path, f"expected an integer ({spec.unit}), got {_kind(value)}")
+            if spec.ge is not None and value < spec.ge:
+                return self.report(path, f"{value} is not >= {spec.ge} ({spec.unit})")
+            return value
+        if isinstance(spec, Choice):
+            if not isinstance(value, str):
+                return self.report(path, f"expected one of {', '.join(spec.options)}, got {_kind(value)}")
+            if value not in spec.options:
+                return self.report(path, f"{_show(value)} is not one of {', '.join(spec.options)}"
+                                         f"{_did_you_mean(value, spec.options)}")
+            return value
+        if isinstance(spec, Text):
+            if not isinstance(value, str):
+                return self.report(path, f"expected a string, got {_kind(value)}")
+            return value
+        if isinstance(spec, Flag):
+            if not isinstance(value, bool):
+                return self.report(path, f"expected true or false, got {_kind(value)}")
+            return value
+        if isinstance(spec, Colour):
+            if not isinstance(value, str) or not _HEX.match(value):
+                return self.report(path, f'expected a colour "#rrggbb" or "#rgb", got {_kind(value)}')
+            digits = value[1:] if len(value) == 7 else "".join(2 * d for d in value[1:])
+            return tuple(_srgb_to_linear(int(digits[i:i + 2], 16) / 255.0) for i in (0, 2, 4))
+        if isinstance(spec, NumList):
+            return self.number_list(value, path, spec.item, spec.min_len)
+        return self.rows(value, path, spec.item)
+
+    def number(self, value, path: KeyPath, spec: Num):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            hint = ""
+            m = _NUMBER_WITH_UNIT.match(value) if isinstance(value, str) else None
+            if m:
+                key = next(p for p in reversed(path) if isinstance(p, str))
+                hint = (f"; write the number without quotes{' or units' if m.group(2) else ''}: "
+                        f"{key} = {m.group(1)}")
+            return self.report(path, f"expected a number ({spec.unit}), got {_kind(value)}{hint}")
+        v = float(value)
+        if not math.isfinite(v):
+            return self.report(path, f"{_show(value)} is not a finite number ({spec.unit})")
+        lower = spec.gt if spec.gt is not None else spec.ge
+        upper = spec.lt if spec.lt is not None else spec.le
+        bad_low = (spec.gt is not None and not v > spec.gt) or (spec.ge is not None and not v >= spec.ge)
+        bad_high = (spec.lt is not None and not v < spec.lt) or (spec.le is not None and not v <= spec.le)
+        if (bad_low or bad_high) and lower is not None and upper is not None:
+            return self.report(path, f"{_show(value)} is outside {_bounds_text(spec)} ({spec.unit})")
+        if bad_low:
+            op = ">" if spec.gt is not None else ">="
+            return self.report(path, f"{_show(value)} is not {op} {lower:g} ({spec.unit})")
+        if bad_high:
+            op = "<" if spec.lt is not None else "<="
+            return self.report(path, f"{_show(value)} is not {op} {upper:g} ({spec.unit})")
+        return v
+
+    def number_list(self, value, path: KeyPath, item: Num, min_len: int):
+        if not isinstance(value, list):
+            return self.report(path, f"expected a list of numbers ({item.unit}), got {_kind(value)}")
+        if len(value) < min_len:
+            return self.report(path, f"has {len(value)} value{'s' * (len(value) != 1)}, "
+                                     f"needs at least {min_len}")
+        out = [self.number(v, path + (i,), item) for i, v in enumerate(value)]
+        return _BAD if _BAD in out else tuple(out)
+
+    def rows(self, value, path: KeyPath, item: Num):
+        if not isinstance(value, list) or not all(isinstance(r, list) for r in value) or not value:
+            return self.report(path, f"expected a list of rows (lists of numbers), got {_kind(value)}")
+        out = [self.number_list(row, path + (i,), item, 1) for i, row in enumerate(value)]
+        return _BAD if _BAD in out else tuple(out)
+
+
+# ---------------------------------------------------------------------------
+# Sections
+
+
+def _display(r: _Reader, doc: dict) -> model.Display | None:
+    if "display" not in doc:
+        r.report(("display",), "missing [display] table (width_mm, height_mm, width_px, height_px)")
+        return None
+    v = r.table(doc["display"], ("display",), DISPLAY)
+    if v is None or _BAD in v.values():
+        return None
+    return model.Display(**v)
+
+
+def _device(r: _Reader, doc: dict) -> model.DeviceProfile | None:
+    raw = doc.get("device", {})
+    v = r.table(raw, ("device",), DEVICE, tables=("friction", "calibration"))
+    if v is None:
+        return None
+    friction = r.table(raw.get("friction", {}), ("device", "friction"), FRICTION)
+    calibration = None
+    if "calibration" in raw:
+        calibration = _calibration(r, raw["calibration"], ("device", "calibration"))
+    if friction is None or _BAD in friction.values() or _BAD in v.values() or calibration is _BAD:
+        return None
+    return model.DeviceProfile(friction=model.FrictionParams(**friction), calibration=calibration, **v)
+
+
+def _strictly_increasing(values) -> bool:
+    return all(b > a for a, b in zip(values, values[1:]))
+
+
+def _calibration(r: _Reader, raw, path: KeyPath):
+    v = r.table(raw, path, CALIBRATION)
+    if v is None or _BAD in v.values():
+        return _BAD
+    amps, forces, mu = v["amplitudes_um"], v["forces_n"], v["mu"]
+    ok = True
+    if amps[0] != 0.0:
+        r.report(path + ("amplitudes_um",), f"starts at {amps[0]:g}, expected 0 (um)")
+        ok = False
+    if not _strictly_increasing(amps):
+        r.report(path + ("amplitudes_um",), f"{_show(list(amps))} is not strictly increasing")
+        ok = False
+    if not _strictly_increasing(forces):
+        r.report(path + ("forces_n",), f"{_show(list(forces))} is not strictly increasing")
+        ok = False
+    if len(mu) != len(forces):
+        r.report(path + ("mu",), f"has {len(mu)} rows, expected one per force ({len(forces)})")
+        ok = False
+    for i, row in enumerate(mu):
+        where = path + ("mu",)
+        label = f"row {i + 1}"
+        if len(row) != len(amps):
+            r.report(where, f"{label} has {len(row)} values, expected one per amplitude ({len(amps)})")
+            ok = False
+        elif row[0] != 1.0:
+            r.report(where, f"{label} starts at {row[0]:g}, expected 1 (mu' at amplitude 0)")
+            ok = False
+        elif not _strictly_increasing([-m for m in row]):
+            r.report(where, f"{label} {_show(list(row))} is not strictly decreasing")
+            ok = False
+    if not ok:
+        return _BAD
+    return model.Calibration(amps, forces, mu)
+
+
+def _device_warnings(r: _Reader, device: model.DeviceProfile) -> None:
+    a = device.friction.asymptote_per_n * device.normal_force_n
+    if device.calibration is None and a >= device.friction.asymptote_cap:
+        r.report(("device", "normal_force_n"),
+                 f"{device.normal_force_n:g} N puts seed 003's asymptote (eq 2) at {a:.3g}, beyond "
+                 f"the model's cap {device.friction.asymptote_cap:g}: friction hardly changes there",
+                 warning=True)
+
+
+# ---------------------------------------------------------------------------
+# Geometry on the display
+
+
+def _span_problem(r: _Reader, path: KeyPath, what: str, xs, ys, display: model.Display) -> bool:
+    """Report (and return False) if the points (xs, ys) leave the display."""
+    tol = 1e-9 * max(display.width_mm, display.height_mm)
+    x0, x1, y0, y1 = min(xs), max(xs), min(ys), max(ys)
+    if x0 < -tol or y0 < -tol or x1 > display.width_mm + tol or y1 > display.height_mm + tol:
+        span = (f"x {x0:g} to {x1:g} mm, y {y0:g} to {y1:g} mm" if (x0, y0) != (x1, y1)
+                else f"({x0:g}, {y0:g}) mm")
+        r.report(path, f"{what} at {span} is off the display "
+                       f"(0 to {display.width_mm:g} mm by 0 to {display.height_mm:g} mm)")
+        return False
+    return True
+
+
+def _region_on_display(r: _Reader, path: KeyPath, region, display: model.Display, what: str) -> bool:
+    if isinstance(region, model.DiscRegion):
+        c, rad = (region.cx_mm, region.cy_mm), region.radius_mm
+        return _span_problem(r, path, what, (c[0] - rad, c[0] + rad), (c[1] - rad, c[1] + rad), display)
+    cx, cy = region.center
+    a = math.radians(region.angle_deg)
+    ca, sa = math.cos(a), math.sin(a)
+    corners = [(cx + ca * u - sa * v, cy + sa * u + ca * v)
+               for u in (-region.width_mm / 2, region.width_mm / 2)
+               for v in (-region.height_mm / 2, region.height_mm / 2)]
+    return _span_problem(r, path, what, [p[0] for p in corners], [p[1] for p in corners], display)
+
+
+def _region(r: _Reader, raw, path: KeyPath, display: model.Display | None):
+    if not isinstance(raw, dict):
+        return r.report(path, f"expected a table {{x_mm, y_mm, width_mm, height_mm}} or "
+                              f"{{cx_mm, cy_mm, radius_mm}}, got {_kind(raw)}")
+    disc_keys = [k for k in raw if k in DISC_REGION]
+    rect_keys = [k for k in raw if k in RECT_REGION]
+    if disc_keys and rect_keys:
+        return r.report(path, f"mixes rectangle keys ({', '.join(rect_keys)}) and disc keys "
+                              f"({', '.join(disc_keys)}); a region is one or the other")
+    spec = DISC_REGION if disc_keys else RECT_REGION
+    v = r.table(raw, path, spec)
+    if v is None or _BAD in v.values():
+        return _BAD
+    region = model.DiscRegion(**v) if disc_keys else model.RectRegion(**v)
+    if display is not None and not _region_on_display(r, path, region, display, "region"):
+        return _BAD
+    return region
+
+
+# ---------------------------------------------------------------------------
+# Layers: one builder per type, (reader, path, values, given keys, context) -> (layer, low key)
+
+
+@dataclass
+class _Context:
+    display: model.Display | None
+    base_dir: Path
+    common: dict  # name, render, blend, region, visual, resolved
+
+
+def _forbid(r: _Reader, path: KeyPath, given, keys, reason: str) -> bool:
+    """Report keys that make no sense here; True if none was given."""
+    extra = [k for k in keys if k in given]
+    for k in extra:
+        r.report(path + (k,), f"not used {reason}; remove it")
+    return not extra
+
+
+def _ordered(r: _Reader, path: KeyPath, low_key: str, high_key: str, v: dict) -> bool:
+    if v[low_key] > v[high_key]:
+        r.report(path + (low_key,), f"{v[low_key]:g} is above {high_key} {v[high_key]:g}")
+        return False
+    return True
+
+
+def _build_grating(r, path, v, given, ctx):
+    ok = _ordered(r, path, "mu_low", "mu_high", v)
+    narrow = min(v["duty"], 1.0 - v["duty"]) * v["period_mm"]
+    if v["edge"] == "square":
+        ok &= _forbid(r, path, given, ["edge_mm"], 'with edge = "square"')
+    elif v["edge_mm"] <= 0.0:
+        key = "edge_mm" if "edge_mm" in given else "edge"
+        r.report(path + (key,), f'edge = "smooth" needs edge_mm > 0 (the width of its ramps, mm), '
+                                f'got {v["edge_mm"]:g}')
+        ok = False
+    elif v["edge_mm"] > narrow:
+        r.report(path + ("edge_mm",), f"{v['edge_mm']:g} mm is wider than the narrower band "
+                                      f"({narrow:g} mm = min(duty, 1 - duty) x period_mm)")
+        ok = False
+    return (model.Grating(**ctx.common, **v), "mu_low") if ok else None
+
+
+def _build_waveform(r, path, v, given, ctx):
+    if v["shape"] == "samples":
+        ok = _forbid(r, path, given, ["mu_min", "mu_max", "duty"], 'with shape = "samples"')
+        if not v["samples"]:
+            r.report(path + ("samples",), 'missing: shape = "samples" needs samples = '
+                                    "[mu', ...] over one period")
+            ok = False
+        v = {k: x for k, x in v.items() if k not in ("mu_min", "mu_max", "duty")}
+        low_key = "samples"
+    else:
+        ok = _forbid(r, path, given, ["samples"], f'with shape = "{v["shape"]}"')
+        if v["shape"] != "square":
+            ok &= _forbid(r, path, given, ["duty"], f'with shape = "{v["shape"]}" (only "square")')
+        if v["mu_min"] is None:
+            r.report(path + ("mu_min",), "missing (required for a standard shape)")
+            ok = False
+        else:
+            ok &= _ordered(r, path, "mu_min", "mu_max", v)
+        low_key = "mu_min"
+    return (model.Waveform(**ctx.common, **v), low_key) if ok else None
+
+
+def _fits(r, path, key: str, edge_mm: float, limit: float, what: str) -> bool:
+    if edge_mm > limit:
+        r.report(path + (key,), f"{edge_mm:g} mm is more than {what} ({limit:g} mm): "
+                                f"mu' would never reach mu inside")
+        return False
+    return True
+
+
+def _on_display(r, path, ctx, what, xs, ys) -> bool:
+    return ctx.display is None or _span_problem(r, path, what, xs, ys, ctx.display)
+
+
+def _build_rectangle(r, path, v, given, ctx):
+    geometry = model.RectRegion(*(v[k] for k in RECT_REGION))
+    ok = _fits(r, path, "edge_mm", v["edge_mm"], min(v["width_mm"], v["height_mm"]), "the shorter side")
+    ok &= ctx.display is None or _region_on_display(r, path + ("x_mm",), geometry, ctx.display, "rectangle")
+    return (model.Shape(**ctx.common, geometry=geometry, mu=v["mu"], edge_mm=v["edge_mm"]), "mu") if ok else None
+
+
+def _build_disc(r, path, v, given, ctx):
+    geometry = model.DiscRegion(*(v[k] for k in DISC_REGION))
+    ok = _fits(r, path, "edge_mm", v["edge_mm"], 2 * v["radius_mm"], "the diameter")
+    ok &= ctx.display is None or _region_on_display(r, path + ("cx_mm",), geometry, ctx.display, "disc")
+    return (model.Shape(**ctx.common, geometry=geometry, mu=v["mu"], edge_mm=v["edge_mm"]), "mu") if ok else None
+
+
+def _build_edge(r, path, v, given, ctx):
+    ok = _on_display(r, path + ("x_mm",), ctx, "edge point", [v["x_mm"]], [v["y_mm"]])
+    return (model.Edge(**ctx.common, **v), "mu") if ok else None
+
+
+def _build_bump(r, path, v, given, ctx):
+    ok = _on_display(r, path + ("cx_mm",), ctx, "bump centre", [v["cx_mm"]], [v["cy_mm"]])
+    return (model.Bump(**ctx.common, **v), "mu") if ok else None
+
+
+def _build_line(r, path, v, given, ctx):
+    ok = True
+    if (v["x0_mm"], v["y0_mm"]) == (v["x1_mm"], v["y1_mm"]):
+        r.report(path + ("x0_mm",), f"line has zero length: both ends at ({v['x0_mm']:g}, {v['y0_mm']:g}) mm "
+                 f"(use a disc for a dot)")
+        ok = False
+    ok &= _fits(r, path, "edge_mm", v["edge_mm"], v["width_mm"], "width_mm")
+    ok &= _on_display(r, path + ("x0_mm",), ctx, "line", [v["x0_mm"], v["x1_mm"]], [v["y0_mm"], v["y1_mm"]])
+    return (model.Line(**ctx.common, **v), "mu") if ok else None
+
+
+def _build_raster(r, path, v, given, ctx):
+    mode = v["mode"]
+    ok = True
+    if mode == "one-to-one":
+        ok &= _forbid(r, path, given, ["width_mm", "height_mm", "tile_width_mm", "tile_height_mm"],
+                      'with mode = "one-to-one" (the size comes from the image and the display px/mm)')
+    else:
+        for key in ("width_mm", "height_mm"):
+            if v[key] is None:
+                r.report(path + (key,), f'missing (required with mode = "{mode}")')
+                ok = False
+        if mode == "stretch":
+            ok &= _forbid(r, path, given, ["tile_width_mm", "tile_height_mm"], 'with mode = "stretch"')
+    image_path = (ctx.base_dir / v["image"]).resolve() if v["image"] else None
+    grey = None
+    try:
+        if image_path is None:
+            raise TextureError("empty image path")
+        grey, _ = read_grey(image_path)
+    except (OSError, TextureError) as exc:
+        text = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        r.report(path + ("image",), f"{_show(v['image'])} ({image_path}): {text}")
+        ok = False
+    if not ok or ctx.display is None:
+        return None
+    px_x, px_y = ctx.display.px_per_mm
+    rows, cols = grey.shape
+    v = {**v, "image": grey, "image_path": image_path}
+    if mode == "one-to-one":
+        v["width_mm"], v["height_mm"] = cols / px_x, rows / px_y
+    v["tile_width_mm"] = v["tile_width_mm"] or cols / px_x
+    v["tile_height_mm"] = v["tile_height_mm"] or rows / px_y
+    layer = model.RasterMap(**ctx.common, **v)
+    if not _region_on_display(r, path + ("x_mm",), layer.sprite, ctx.display, "image sprite"):
+        return None
+    low_key = "mu_black" if v["mu_black"] <= v["mu_white"] else "mu_white"
+    return layer, low_key
+
+
+BUILDERS: dict[str, Callable] = {
+    "grating": _build_grating, "waveform": _build_waveform, "rectangle": _build_rectangle,
+    "disc": _build_disc, "edge": _build_edge, "bump": _build_bump, "line": _build_line,
+    "raster": _build_raster,
+}
+
+
+def _layer(r: _Reader, raw, index: int, display, base_dir: Path, names: dict):
+    """One [[layer]] -> (layer, key of its lowest mu') or None (problems reported)."""
+    path: KeyPath = ("layer", index)
+    if not isinstance(raw, dict):
+        r.report(path, f"expected a table, got {_kind(raw)}")
+        return None
+    if "type" not in raw:
+        r.report(path + ("type",), f"missing (required): one of {', '.join(LAYER_TYPES)}")
+        return None
+    kind = r.value(raw["type"], path + ("type",), COMMON["type"])
+    if kind is _BAD:
+        return None
+    v = r.table(raw, path, {**COMMON, **LAYER_KEYS[kind]}, tables=LAYER_TABLES)
+    region = _region(r, raw["region"], path + ("region",), display) if "region" in raw else None
+    visual = r.table(raw.get("visual", {}), path + ("visual",), VISUAL)
+    name = v["name"] if v["name"] is not None else f"{kind}-{index + 1}"
+    if name is not _BAD:
+        if not name.strip():
+            r.report(path + ("name",), 'is empty; give the layer a name or leave the key out')
+        elif name in names:
+            r.report(path + ("name",), f"{_show(name)} is already the name of layer[{names[name] + 1}]")
+        names.setdefault(name, index)
+    render = v["render"]
+    if render in ("sht", "hybrid") and kind not in PERIODIC_TYPES:
+        render = r.report(path + ("render",), f'"{render}" needs a periodic layer (grating or '
+                                               f'waveform); a {kind} renders with "sho" (or "auto")')
+    values = {k: v[k] for k in LAYER_KEYS[kind]}
+    if _BAD in values.values():
+        return None
+    common_ok = not (_BAD in (name, render, v["blend"], region) or visual is None
+                     or _BAD in visual.values())
+    if render == "auto":
+        render = model.auto_render_mode(values["period_mm"] if kind in PERIODIC_TYPES else None)
+    # with problems in the common keys the type's own checks still run (every problem
+    # is reported) on placeholder hints, and the layer is dropped afterwards
+    hints = model.VisualHints(**visual) if common_ok else model.VisualHints()
+    common = dict(name=name, render=render, blend=v["blend"], region=region, visual=hints)
+    built = BUILDERS[kind](r, path, values, set(raw), _Context(display, base_dir, common))
+    return built if common_ok else None
+
+
+def _layers(r: _Reader, doc: dict, display, base_dir: Path):
+    raw = doc.get("layer")
+    if raw is None:
+        r.report(("layer",), "no [[layer]] tables: a scene needs at least one layer")
+        return None
+    if not isinstance(raw, list) or not all(isinstance(x, dict) for x in raw):
+        r.report(("layer",), f"expected [[layer]] tables (an array of tables), got {_kind(raw)}; "
+                             f"start each layer with [[layer]]")
+        return None
+    names: dict[str, int] = {}
+    built = [_layer(r, item, i, display, base_dir, names) for i, item in enumerate(raw)]
+    return None if None in built else built
+
+
+def _reach_warnings(r: _Reader, device: model.DeviceProfile, built) -> None:
+    from rendering.friction import mu_floor
+
+    force = device.normal_force_n
+    floor = mu_floor(device, force)
+    source = ("the calibration table" if device.calibration is not None
+              else f"seed 003 eq 2, amplitude_limit_um {device.amplitude_limit_um:g}")
+    for index, (layer, low_key) in enumerate(built):
+        low = layer.mu_range[0]
+        if low < floor - 1e-12:
+            r.report(("layer", index, low_key),
+                     f"asks for mu' down to {low:.4g}, but the device reaches only {floor:.4g} at "
+                     f"the nominal {force:g} N ({source}); lower values will be clamped",
+                     warning=True)
+
+
+# ---------------------------------------------------------------------------
+# Entry points
+
+
+def _read_text(path: Path, r: _Reader) -> str | None:
+    try:
+        data = path.read_bytes()
+    except IsADirectoryError:
+        r.report((), "is a directory, expected a .toml texture file")
+        return None
+    except FileNotFoundError:
+        r.report((), "file not found")
+        return None
+    except OSError as exc:
+        r.report((), f"cannot read: {exc.strerror or exc}")
+        return None
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        r.report((), f"not UTF-8 text (byte {data[exc.start]:#04x} at offset {exc.start}); "
+                     f"TOML files are UTF-8")
+        return None
+
+
+_TOML_POSITION = re.compile(r"\s*\(at line (\d+), column (\d+)\)\s*$")
+
+
+def _parse_toml(text: str, r: _Reader) -> dict | None:
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        message = str(exc)
+        m = _TOML_POSITION.search(message)
+        line = int(m.group(1)) if m else None
+        if m:
+            message = f"{message[:m.start()]} (column {m.group(2)})"
+        r.problems.append(Problem(r.label, line, "TOML syntax", message))
+        return None
+
+
+def check_scene(path: str | Path) -> tuple[model.Scene | None, list[Problem], list[Problem]]:
+    """Read and check a texture file.
+
+    Returns ``(scene, problems, warnings)``: ``scene`` is None if there is any problem;
+    ``problems`` lists every problem found, ``warnings`` things that are legal but
+    probably not what the author wants (unreachable mu'). Never raises for bad input.
+    """
+    path = Path(path)
+    r = _Reader(str(path), None)
+    text = _read_text(path, r)
+    if text is None:
+        return None, r.problems, r.warnings
+    doc = _parse_toml(text, r)
+    if doc is None:
+        return None, r.problems, r.warnings
+    r.locator = Locator(text)
+    top = r.table(doc, (), TOP, tables=("display", "device", "layer"))
+    fmt = top["format"]
+    if fmt is not _BAD and fmt != FORMAT_VERSION:
+        newer = "is newer than this frictex reads" if fmt > FORMAT_VERSION else "is not a format"
+        r.report(("format",), f"{fmt} {newer}; this frictex reads format = {FORMAT_VERSION}")
+        return None, r.problems, r.warnings
+    name = top["name"] if top["name"] is not None else path.stem
+    display = _display(r, doc)
+    device = _device(r, doc)
+    built = _layers(r, doc, display, path.parent)
+    r.problems.sort(key=lambda p: p.line or 0)
+    if r.problems or display is None or device is None or built is None:
+        return None, r.problems, r.warnings
+    _device_warnings(r, device)
+    _reach_warnings(r, device, built)
+    scene = model.Scene(format=fmt, name=name, description=top["description"], display=display,
+                        device=device, layers=tuple(layer for layer, _ in built), source=path)
+    return scene, r.problems, r.warnings
+
+
+def load_scene(path: str | Path) -> model.Scene:
+    """The scene in a texture file; raises :class:`TextureError` listing every problem."""
+    scene, problems, _ = check_scene(path)
+    if scene is None:
+        raise TextureError(problems)
+    return scene
+
+
+__all__ = ["FORMAT_VERSION", "LAYER_TYPES", "TextureError", "check_scene", "load_scene"]
