@@ -1,0 +1,233 @@
+"""Modal inversion: wanted amplitudes under m fingers -> p modal amplitudes -> actuator commands.
+
+The forward model (seed 000, eq 7; seed 001, eqs 4-5) is ``W_f = Phi_f W_M`` with
+``Phi_f`` (m, p) the mode shapes at the fingers, and the actuators follow
+``c = A W_M`` (seed 000, eq 9: ``A = Phi_act``, the shapes at the actuators; seed 001's
+plate: ``A`` from the V_AC / V_BD wiring, see ``device.plate2d``). Seed 000, eq 10 is
+``c = A Phi_f^{-1} W_f``. Amplitudes are complex (magnitude um zero-to-peak, phase rad).
+
+Every method works from the SVD ``Phi_f = U diag(s) V^H`` (batched over any leading
+axes) and returns ``W_M = V g(s) U^H W_f`` for a gain ``g``:
+
+- ``"exact"``: g = 1/s, the inverse (m = p) or the minimum-norm pseudo-inverse
+  (p > m, seed 001). Singular values below 1e-12 s_max get g = 0 so the output stays
+  finite. Near a singular locus the commands grow without bound and flip sign across it.
+- ``"regularised"``: g = 1/s for s >= rcond s_max and s / (rcond s_max)^2 below, i.e.
+  exact where the problem is well conditioned and a gain that falls to 0 at a singular
+  locus. It is the only method whose commands are continuous as fingers cross a locus
+  (seed 001, eq 8; coincident fingers; a finger on a node): what cannot be controlled
+  there fades out instead of switching sign.
+- ``"bounded"``: least squares within the actuator limits, min ||Phi_f W_M - W_f||^2
+  subject to |c_j| <= limit_j (seed 001: the amplifiers saturate at 300 V peak-to-peak
+  near singular positions), by projected accelerated gradient (FISTA with restart) in
+  command space, started from the exact solution, which is returned as is when it is
+  within limits. The closest achievable amplitudes, but like every residual-optimal
+  method the commands jump across a singular locus.
+
+With limits, ``exact`` and ``regularised`` commands that exceed a limit are scaled down
+together (keeping their ratio and phases) until the largest reaches its limit. Every
+sample reports what was achieved under each finger (forward model of the commands) and
+the error; ``limited`` marks samples whose commands met a limit, ``capped`` those where
+a singular value was below the method's threshold. Singular loci are normal operation,
+never an error.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from device.beam import ModesError
+
+METHODS = ("exact", "regularised", "bounded")
+#: chosen by measurement (``frictex bench modal``, device/MODES.md)
+DEFAULT_METHOD = "regularised"
+#: regularisation threshold, relative to the largest singular value (device/MODES.md)
+DEFAULT_RCOND = 0.1
+#: singular values below this fraction of the largest are treated as zero by "exact"
+_EXACT_RCOND = 1e-12
+_FISTA_MAX_ITER = 3000
+_FISTA_TOL = 1e-13
+
+
+@dataclass(frozen=True, eq=False)
+class ModalSolution:
+    """The result of :func:`solve`; leading axes (...) are those of the inputs.
+
+    modal_um : complex128 (..., p)  modal amplitudes W_M (um).
+    commands_um : complex128 (..., q)  actuator commands c = A W_M (um zero-to-peak).
+    achieved_um : complex128 (..., m)  amplitudes under the fingers, Phi_f W_M (um).
+    error_um : float64 (..., m)  |achieved - wanted| (um).
+    limited : bool (...)  commands met an actuator limit (scaled or constrained).
+    capped : bool (...)  a singular value of Phi_f was below the method's threshold.
+    sigma_min_ratio : float64 (...)  smallest / largest singular value of Phi_f.
+    """
+
+    modal_um: np.ndarray
+    commands_um: np.ndarray
+    achieved_um: np.ndarray
+    error_um: np.ndarray
+    limited: np.ndarray
+    capped: np.ndarray
+    sigma_min_ratio: np.ndarray
+
+    def counts(self) -> dict[str, int]:
+        """How many samples met a limit and how many had their gain capped."""
+        return {"limited": int(np.count_nonzero(self.limited)),
+                "capped": int(np.count_nonzero(self.capped))}
+
+
+def forward(phi_fingers, modal_um) -> np.ndarray:
+    """Amplitudes under the fingers (..., m) = Phi_f (..., m, p) @ W_M (..., p) (seed 001, eq 5)."""
+    return np.einsum("...ij,...j->...i", phi_fingers, modal_um)
+
+
+def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=None,
+          limits_um=None, rcond: float = DEFAULT_RCOND) -> ModalSolution:
+    """Modal amplitudes and actuator commands giving ``wanted_um`` under the fingers.
+
+    Parameters
+    ----------
+    phi_fingers : array_like, float or complex, shape (..., m, p)
+        Mode shapes of the p modes at the m fingers (seed 001, eq 4), p >= m; leading
+        axes batch many finger configurations (e.g. a block of samples) in one call.
+    wanted_um : array_like, complex, shape (..., m)
+        Wanted amplitude under each finger (um zero-to-peak, phase in the argument);
+        broadcast against the leading axes of ``phi_fingers``.
+    method : {"exact", "regularised", "bounded"}
+        See the module docstring.
+    actuators : array_like, shape (q, p), optional
+        Modal amplitudes -> actuator commands (seed 000, eq 9); default identity, so
+        the commands are the modal amplitudes. ``"bounded"`` needs it square, invertible.
+    limits_um : float or array_like (q,), optional
+        Largest |command| of each actuator (um zero-to-peak); default none. Required by
+        ``"bounded"``.
+    rcond : float
+        ``"regularised"`` threshold relative to the largest singular value, in (0, 1).
+
+    Returns
+    -------
+    ModalSolution
+    """
+    if method not in METHODS:
+        raise ModesError(f"modal method must be one of {', '.join(METHODS)}, got {method!r}")
+    phi, wanted = _check_inputs(phi_fingers, wanted_um)
+    p = phi.shape[-1]
+    a = _check_actuators(actuators, p)
+    limits = _check_limits(limits_um, a.shape[0])
+    if method == "bounded" and (limits is None or a.shape[0] != p or np.linalg.cond(a) > 1e12):
+        raise ModesError(f"method 'bounded' needs limits_um and a square, invertible "
+                         f"(p, p) actuator matrix, got limits {limits_um!r} and actuators of shape {a.shape}")
+    if not (0 < rcond < 1):
+        raise ModesError(f"rcond must be in (0, 1), got {rcond!r}")
+
+    u, s, vh = np.linalg.svd(phi, full_matrices=False)
+    s_max = s[..., :1]
+    ratio = np.divide(s[..., -1], s_max[..., 0], out=np.zeros(s.shape[:-1]), where=s_max[..., 0] > 0)
+    threshold = (rcond if method == "regularised" else _EXACT_RCOND) * s_max
+    above = ((s >= threshold) if method == "regularised" else (s > threshold)) & (s > 0)
+    inverse = np.divide(1.0, s, out=np.zeros_like(s), where=above)
+    if method == "regularised":
+        inverse += np.divide(s, threshold ** 2, out=np.zeros_like(s),
+                             where=~above & (threshold > 0))
+    capped = ~np.all(above, axis=-1)
+    coeff = inverse * np.einsum("...ji,...j->...i", u.conj(), wanted)
+    modal = np.einsum("...ji,...j->...i", vh.conj(), coeff)
+    commands = modal @ a.T
+
+    limited = np.zeros(commands.shape[:-1], dtype=bool)
+    if limits is not None:
+        over = np.max(np.abs(commands) / limits, axis=-1)
+        limited = over > 1
+        scale = 1 / np.maximum(over, 1)
+        commands = commands * scale[..., None]
+        modal = modal * scale[..., None]
+        if method == "bounded" and np.any(limited):
+            a_inv = np.linalg.inv(a)
+            m_cmd = phi[limited] @ a_inv
+            commands[limited] = _bounded_commands(m_cmd, wanted[limited], commands[limited], limits)
+            modal[limited] = commands[limited] @ a_inv.T
+    achieved = forward(phi, modal)
+    return ModalSolution(modal, commands, achieved, np.abs(achieved - wanted),
+                         limited, capped, ratio)
+
+
+def _bounded_commands(m_cmd, wanted, start, limits) -> np.ndarray:
+    """min ||M c - w||^2 + eps ||c||^2 subject to |c_j| <= limits_j, for (k, m, q) M.
+
+    FISTA with gradient restart (O'Donoghue and Candes 2015); eps = 1e-12 ||M||^2 only
+    breaks ties where M is singular. Returns the best iterate per problem.
+    """
+    s_max = np.linalg.norm(m_cmd, ord=2, axis=(-2, -1))
+    eps = 1e-12 * s_max ** 2
+    step = (1 / (2 * (s_max ** 2 + eps)))[:, None]
+    mh = np.conj(np.swapaxes(m_cmd, -1, -2))
+
+    def objective(c):
+        r = np.einsum("kij,kj->ki", m_cmd, c) - wanted
+        return np.sum(np.abs(r) ** 2, axis=-1) + eps * np.sum(np.abs(c) ** 2, axis=-1)
+
+    def project(c):
+        mag = np.abs(c)
+        return c * np.minimum(1, limits / np.where(mag > 0, mag, 1))
+
+    c = y = start.copy()
+    t = np.ones(len(c))
+    best, best_obj = c.copy(), objective(c)
+    for _ in range(_FISTA_MAX_ITER):
+        grad = 2 * np.einsum("kij,kj->ki", mh, np.einsum("kij,kj->ki", m_cmd, y) - wanted) + 2 * eps[:, None] * y
+        c_new = project(y - step * grad)
+        restart = np.real(np.sum(np.conj(y - c_new) * (c_new - c), axis=-1)) > 0
+        t_new = np.where(restart, 1.0, (1 + np.sqrt(1 + 4 * t * t)) / 2)
+        momentum = np.where(restart, 0.0, (t - 1) / t_new)[:, None]
+        y = c_new + momentum * (c_new - c)
+        moved = np.max(np.abs(c_new - c))
+        c, t = c_new, t_new
+        obj = objective(c)
+        better = obj < best_obj
+        best[better], best_obj[better] = c[better], obj[better]
+        if moved < _FISTA_TOL * np.max(limits):
+            break
+    return best
+
+
+def _check_inputs(phi_fingers, wanted_um) -> tuple[np.ndarray, np.ndarray]:
+    phi = np.asarray(phi_fingers)
+    if phi.ndim < 2 or phi.shape[-2] < 1 or phi.shape[-1] < phi.shape[-2]:
+        raise ModesError(f"phi_fingers must have shape (..., m, p) with p >= m >= 1 "
+                         f"(fingers x modes), got {phi.shape}")
+    phi = phi.astype(np.complex128 if np.iscomplexobj(phi) else np.float64)
+    wanted = np.asarray(wanted_um, dtype=np.complex128)
+    if wanted.ndim < 1 or wanted.shape[-1] != phi.shape[-2]:
+        raise ModesError(f"wanted_um must have shape (..., m) with m = {phi.shape[-2]} "
+                         f"fingers, got {wanted.shape}")
+    batch = np.broadcast_shapes(phi.shape[:-2], wanted.shape[:-1])
+    phi = np.broadcast_to(phi, batch + phi.shape[-2:])
+    wanted = np.broadcast_to(wanted, batch + wanted.shape[-1:])
+    for name, arr in (("phi_fingers", phi), ("wanted_um", wanted)):
+        if not np.all(np.isfinite(arr)):
+            raise ModesError(f"{name} has non-finite values (first at index "
+                             f"{np.argwhere(~np.isfinite(arr))[0].tolist()}); expected finite numbers")
+    return phi, wanted
+
+
+def _check_actuators(actuators, p: int) -> np.ndarray:
+    if actuators is None:
+        return np.eye(p)
+    a = np.asarray(actuators)
+    if a.ndim != 2 or a.shape[1] != p or not np.all(np.isfinite(a)):
+        raise ModesError(f"actuators must be a finite (q, p) matrix with p = {p} modes, "
+                         f"got shape {a.shape}")
+    return a
+
+
+def _check_limits(limits_um, q: int) -> np.ndarray | None:
+    if limits_um is None:
+        return None
+    lim = np.broadcast_to(np.asarray(limits_um, dtype=np.float64), (q,)) if np.ndim(limits_um) == 0 \
+        else np.asarray(limits_um, dtype=np.float64)
+    if lim.shape != (q,) or not np.all(np.isfinite(lim) & (lim > 0)):
+        raise ModesError(f"limits_um must be one finite value > 0 or one per actuator "
+                         f"({q}), got {limits_um!r}")
+    return lim

@@ -1,0 +1,96 @@
+"""``frictex modes beam|plate|ring`` as a user runs it."""
+
+import json
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from app import cmd_modes
+from app.cli import main
+from device.beam import FreeFreeBeam
+
+SEED000 = ["--length-mm", "350", "--width-mm", "6", "--thickness-mm", "6",
+           "--youngs-gpa", "57", "--density", "2561"]
+
+
+def run_json(capsys, argv):
+    assert main(argv) == 0
+    return json.loads(capsys.readouterr().out)["modes"]
+
+
+def test_beam_json_example_from_the_issue(capsys):
+    modes = run_json(capsys, ["modes", "beam", *SEED000, "--orders", "16", "17", "--json"])
+    beam = FreeFreeBeam(350, 6, 6, 57, 2561)
+    assert [m["order"] for m in modes] == [16, 17]
+    assert set(modes[0]) == {"order", "frequency_hz", "wavelength_mm", "nodes_mm"}
+    for m in modes:
+        assert_allclose(m["frequency_hz"], beam.frequency_hz(m["order"]), rtol=1e-15)
+        assert_allclose(m["wavelength_mm"], beam.wavelength_mm(m["order"]), rtol=1e-15)
+        assert len(m["nodes_mm"]) == m["order"] + 1
+
+
+def test_beam_order_100_lists_101_nodes(capsys):
+    (mode,) = run_json(capsys, ["modes", "beam", "--orders", "100", "--json"])
+    assert len(mode["nodes_mm"]) == 101
+
+
+def test_timoshenko_is_lower_than_euler_bernoulli(capsys):
+    eb = run_json(capsys, ["modes", "beam", "--json"])
+    timo = run_json(capsys, ["modes", "beam", "--theory", "timoshenko", "--json"])
+    assert all(t["frequency_hz"] < e["frequency_hz"] for t, e in zip(timo, eb))
+
+
+def test_beam_table_and_plot(capsys, tmp_path):
+    png = tmp_path / "beam.png"
+    assert main(["modes", "beam", "--plot", str(png)]) == 0
+    out = capsys.readouterr().out
+    assert "euler-bernoulli" in out and "28526.3" in out and f"plot written to {png}" in out
+    assert png.stat().st_size > 10_000
+
+
+def test_plate_json_and_plot(capsys, tmp_path):
+    png = tmp_path / "plate.png"
+    modes = run_json(capsys, ["modes", "plate", "--youngs-gpa", "69", "--density", "2700",
+                              "--json", "--plot", str(png)][:-2])
+    assert [m["axis"] for m in modes] == ["x", "y"]
+    assert_allclose(modes[0]["nodes_mm"], 2 * np.arange(9) * 140 / 17)
+    assert main(["modes", "plate", "--youngs-gpa", "69", "--density", "2700", "--plot", str(png)]) == 0
+    assert png.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["modes", "beam", "--orders", "0"], "mode order must be an integer >= 1 (1 = first bending mode), got 0"),
+    (["modes", "beam", "--poisson", "0.6"], "poisson must be in (-1, 0.5), got 0.6"),
+    (["modes", "beam", "--theory", "timoshenko", "--orders", "95"], "Timoshenko cutoff"),
+    (["modes", "plate", "--youngs-gpa", "69", "--density", "2700", "--finger", "200", "5"],
+     "--finger 200 5 is outside the 140 x 140 mm plate"),
+    (["modes", "beam", "--plot", "/nonexistent-dir/x.png"], "No such file or directory"),
+])
+def test_bad_input_is_one_line_exit_2(capsys, argv, message):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("frictex: error: ") and message in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("argv", [["modes", "beam", "--length-mm", "-3"],
+                                  ["modes", "beam", "--orders", "x"],
+                                  ["modes", "plate"], ["modes"], ["modes", "disc"]])
+def test_argparse_rejections_exit_2(capsys, argv):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2
+    assert "error:" in capsys.readouterr().err
+
+
+def test_missing_structure_module_says_not_available(capsys, monkeypatch):
+    monkeypatch.setitem(cmd_modes.STRUCTURES, "ring", "app.modes_ring_not_installed")
+    assert main(["modes", "ring", "--anything"]) == 2
+    assert "modes ring: not available" in capsys.readouterr().err
+
+
+def test_help(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["modes", "beam", "--help"])
+    assert exc.value.code == 0
+    assert "--theory" in capsys.readouterr().out
