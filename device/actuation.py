@@ -1,16 +1,46 @@
-"""Actuation: from the vibration amplitude wanted under the fingers to channel commands.
+"""Actuation: from the vibration amplitude wanted under each finger to channel commands.
+
+Every actuation answers ``command(wanted_um, fingers) -> Actuated``: ``wanted_um`` (F, n)
+is the amplitude each finger's friction target asks for, ``fingers`` the tracks
+(positions, contact, when each touch began). Which actuation a scene gets is decided by
+its device profile (``make_actuation``), so a one-finger plate never builds modal
+matrices.
 
 A single-mode plate (seed 003: one resonance, 20 piezo motors driven together, one
 closed amplitude loop on the MCU) has one channel and gives every finger the same
 amplitude. With several fingers down it can serve only one: frictex serves the finger
 that has been touching longest (the first down), so a second finger landing does not
-snatch the texture from the first. Other fingers get the same amplitude, and the
-friction they actually feel is reported (``friction.csv`` per finger).
+snatch the texture from the first. Other fingers get the same amplitude, and what they
+get is reported as their achieved amplitude.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class Actuated:
+    """commands_um : (n, channels) amplitude per channel (um, zero-to-peak).
+    phases_rad : (n, channels) or None. achieved_um : (F, n) amplitude under each finger.
+    limited : number of samples where a channel limit changed the solution.
+    """
+
+    commands_um: np.ndarray
+    phases_rad: np.ndarray | None
+    achieved_um: np.ndarray
+    limited: int = 0
+
+
+def primary_finger(contact: np.ndarray, touch_start: np.ndarray) -> np.ndarray:
+    """Row index of the finger touching longest at each sample (F, n -> n), -1 where none."""
+    if contact.shape[0] == 0:
+        return np.full(contact.shape[1], -1)
+    key = np.where(contact, touch_start, np.inf)
+    row = np.argmin(key, axis=0)
+    return np.where(contact.any(axis=0), row, -1)
 
 
 class SingleModeActuation:
@@ -19,25 +49,17 @@ class SingleModeActuation:
     channels = ("ch0",)
     has_phases = False
 
-    def primary_finger(self, contact: np.ndarray, touch_start: np.ndarray) -> np.ndarray:
-        """Row index (F, n -> n) of the finger served at each sample, -1 where none touches.
-
-        ``touch_start`` holds, per finger and sample, the time (s) its current touch began.
-        """
-        if contact.shape[0] == 0:
-            return np.full(contact.shape[1], -1)
-        key = np.where(contact, touch_start, np.inf)
-        row = np.argmin(key, axis=0)
-        return np.where(contact.any(axis=0), row, -1)
-
-    def command(self, wanted_um: np.ndarray, primary: np.ndarray):
-        """Channel commands (n, 1) in um and the amplitude under every finger (F, n).
-
-        ``wanted_um`` (F, n) is the amplitude each finger's target asks for.
-        """
+    def command(self, wanted_um: np.ndarray, fingers) -> Actuated:
+        primary = primary_finger(fingers.contact, fingers.touch_start)
         n = wanted_um.shape[1]
         served = np.zeros(n)
         has = primary >= 0
         served[has] = wanted_um[primary[has], np.flatnonzero(has)]
-        under = np.broadcast_to(served, wanted_um.shape)
-        return served[:, None], under, None
+        return Actuated(served[:, None], None, np.broadcast_to(served, wanted_um.shape))
+
+
+def make_actuation(device):
+    """The actuation for a device profile (``textures.model.DeviceProfile``)."""
+    if device.profile == "plate-seed003":
+        return SingleModeActuation()
+    raise ValueError(f"device profile {device.profile!r} has no actuation")

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from device.actuation import SingleModeActuation
+from device.actuation import make_actuation
 from rendering.compose import compose
 from rendering.friction import ClampCounts, make_friction_model
 from rendering.sho import ShoRenderer
@@ -42,9 +42,11 @@ class BlockOutput:
 
     t_s : (n,) output times (s). finger_ids : the F finger ids.
     contact : bool. x_mm, y_mm : the (predicted) position used. mu_target : composed mu'.
-    amplitude_um : vibration amplitude under each finger (um, zero-to-peak).
+    wanted_um : amplitude each finger's target asks for (um, zero-to-peak).
+    amplitude_um : amplitude the actuation achieves under each finger (um, zero-to-peak).
     commands_um : (n, channels) channel commands (um). phases_rad : (n, channels) or None.
     clamps : counts of the friction inversion's guards in this block.
+    limited : samples where an actuator limit changed the actuation's solution.
     """
 
     index0: int
@@ -54,10 +56,12 @@ class BlockOutput:
     x_mm: np.ndarray
     y_mm: np.ndarray
     mu_target: np.ndarray
+    wanted_um: np.ndarray
     amplitude_um: np.ndarray
     commands_um: np.ndarray
     phases_rad: np.ndarray | None
     clamps: ClampCounts
+    limited: int = 0
 
 
 @dataclass(frozen=True)
@@ -121,7 +125,7 @@ class Pipeline:
                                for layer, mode in zip(scene.layers, self.layer_modes))
         self.blends = tuple(layer.blend for layer in scene.layers)
         self.friction = make_friction_model(scene.device)
-        self.actuation = SingleModeActuation()
+        self.actuation = make_actuation(scene.device)
         self.timer = StageTimer()
 
     @property
@@ -165,14 +169,14 @@ class Pipeline:
         t2 = clock()
         secs["inversion"] += t2 - t1
 
-        primary = self.actuation.primary_finger(fingers.contact, fingers.touch_start)
-        commands, under, phases = self.actuation.command(wanted, primary)
+        act = self.actuation.command(wanted, fingers)
         secs["actuation"] += clock() - t2
 
         out = BlockOutput(index0=index0, t_s=fingers.t_s, finger_ids=fingers.ids,
                           contact=fingers.contact, x_mm=fingers.x_pred, y_mm=fingers.y_pred,
-                          mu_target=mu_target, amplitude_um=under, commands_um=commands,
-                          phases_rad=phases, clamps=clamps)
+                          mu_target=mu_target, wanted_um=wanted, amplitude_um=act.achieved_um,
+                          commands_um=act.commands_um, phases_rad=act.phases_rad,
+                          clamps=clamps, limited=act.limited)
         return out, PipelineState(tracker=tracker_state, layers=tuple(layer_states))
 
 
