@@ -92,6 +92,7 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     commands = TableWriter(out_dir, "commands", _command_columns(pipeline), fmt)
     friction = TableWriter(out_dir, "friction", FRICTION_COLUMNS, fmt)
     clamps = None
+    errors = _AmplitudeErrors()
     max_amplitude = 0.0
     contact_samples = 0
     bar = _progress(total_blocks * block_size / rate_hz, progress)
@@ -112,6 +113,7 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
                 clamps = out.clamps
             else:
                 clamps.add(out.clamps)
+            errors.add(out)
             max_amplitude = max(max_amplitude, float(out.commands_um.max(initial=0.0)))
             contact_samples += int(out.contact.any(axis=0).sum())
             if sink is not None:
@@ -136,10 +138,33 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
 
     summary = _summary(scene, trace, trace_path, pipeline, state, clamps, fmt, files,
                        total_blocks, contact_samples, max_amplitude, sink)
+    summary["fingers"] = errors.report()
     summary["timings"] = _timings(pipeline, total_blocks * block_size / rate_hz,
                                   time.perf_counter() - wall0)
     (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
     return summary
+
+
+class _AmplitudeErrors:
+    """Per finger: how far the achieved amplitude was from the wanted one while touching."""
+
+    def __init__(self):
+        self.stats: dict[int, list] = {}  # finger id -> [contact samples, sum of squares, max]
+
+    def add(self, out) -> None:
+        err = np.where(out.contact, out.amplitude_um - out.wanted_um, 0.0)
+        for row, fid in enumerate(out.finger_ids):
+            s = self.stats.setdefault(fid, [0, 0.0, 0.0])
+            s[0] += int(out.contact[row].sum())
+            s[1] += float(np.sum(err[row] ** 2))
+            s[2] = max(s[2], float(np.abs(err[row]).max(initial=0.0)))
+
+    def report(self) -> dict:
+        """{finger: {contact_samples, amplitude_error_rms_um, amplitude_error_max_um}}."""
+        return {str(fid): {"contact_samples": n,
+                           "amplitude_error_rms_um": (sq / n) ** 0.5 if n else 0.0,
+                           "amplitude_error_max_um": mx}
+                for fid, (n, sq, mx) in sorted(self.stats.items())}
 
 
 def _slice_trace(trace: Trace, lo: int, hi: int) -> Trace:
