@@ -66,8 +66,14 @@ class Trace:
         return float(self.t_s[-1] - self.t_s[0]) if len(self) else 0.0
 
 
-def make_trace(t_s, finger, x_mm, y_mm, force_n=None, event=None, where: str = "trace") -> Trace:
-    """Validate arrays and build a :class:`Trace` (events normalised: see module doc)."""
+def make_trace(t_s, finger, x_mm, y_mm, force_n=None, event=None, where: str = "trace",
+               normalise: bool = True) -> Trace:
+    """Validate arrays and build a :class:`Trace`.
+
+    With ``normalise`` (a whole recording) events are normalised as the module doc says;
+    a batch of live samples continuing earlier ones passes ``normalise=False`` so that a
+    finger's first sample in the batch is not taken for a new touch.
+    """
     t = np.asarray(t_s, dtype=np.float64)
     n = t.size
     fing = np.asarray(finger)
@@ -100,7 +106,8 @@ def make_trace(t_s, finger, x_mm, y_mm, force_n=None, event=None, where: str = "
     if ((ev < DOWN) | (ev > UP)).any():
         raise TraceError(f"{where}: event codes must be {DOWN}, {MOVE} or {UP}")
     fing_i = fing_f.astype(np.int64)
-    ev = _normalise_events(fing_i, ev)
+    if normalise:
+        ev = _normalise_events(fing_i, ev)
     return Trace(t, fing_i, x, y, f, ev)
 
 

@@ -83,3 +83,11 @@ def test_cli_bad_trace_exits_2_with_one_line(tmp_path, capsys):
     code = main(["replay", str(scene), str(bad), "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err
     assert code == 2 and err.startswith("frictex: error: ") and err.count("\n") == 1
+
+
+def test_live_batches_keep_their_events():
+    from rendering.trace_file import make_trace
+    batch = make_trace([1.0, 1.01], [0, 0], [5.0, 6.0], [0.0, 0.0], event=[MOVE, MOVE],
+                       normalise=False)
+    assert batch.event.tolist() == [MOVE, MOVE]
+    assert make_trace([1.0], [0], [5.0], [0.0], event=[MOVE]).event.tolist() == [DOWN]

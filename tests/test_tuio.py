@@ -1,0 +1,200 @@
+"""TUIO 1.1 2Dcur: the OSC parser, the alive/set/fseq semantics and the UDP listener."""
+
+import math
+import socket
+import struct
+import time
+
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from rendering.trace_file import DOWN, MOVE, UP, TraceError
+from test_evdev_decode import check_event_sequence
+from rendering.tuio import OscError, TuioDecoder, TuioListener, parse_message, parse_packet
+
+
+# an OSC 1.0 encoder written from the specification, independent of the parser under test
+def osc_string(s: str) -> bytes:
+    b = s.encode() + b"\0"
+    return b + b"\0" * (-len(b) % 4)
+
+
+def osc_message(address: str, *args) -> bytes:
+    tags, data = ",", b""
+    for a in args:
+        if isinstance(a, str):
+            tags, data = tags + "s", data + osc_string(a)
+        elif isinstance(a, int):
+            tags, data = tags + "i", data + struct.pack(">i", a)
+        elif isinstance(a, float):
+            tags, data = tags + "f", data + struct.pack(">f", a)
+        else:
+            tags, data = tags + "b", data + struct.pack(">i", len(a)) + a + b"\0" * (-len(a) % 4)
+    return osc_string(address) + osc_string(tags) + data
+
+
+def osc_bundle(*elements: bytes) -> bytes:
+    return b"#bundle\0" + struct.pack(">Q", 1) + b"".join(struct.pack(">i", len(e)) + e for e in elements)
+
+
+def frame(fseq, alive, sets=(), source=None):
+    """A TUIO 1.1 2Dcur bundle: sets are (session, x, y)."""
+    msgs = [osc_message("/tuio/2Dcur", "source", source)] if source else []
+    msgs.append(osc_message("/tuio/2Dcur", "alive", *alive))
+    msgs += [osc_message("/tuio/2Dcur", "set", s, x, y, 0.0, 0.0, 0.0) for s, x, y in sets]
+    msgs.append(osc_message("/tuio/2Dcur", "fseq", fseq))
+    return osc_bundle(*msgs)
+
+
+def test_message_with_every_common_type():
+    data = (osc_string("/a/b") + osc_string(",ifsbhdTFN") + struct.pack(">i", -7)
+            + struct.pack(">f", 0.25) + osc_string("hey") + struct.pack(">i", 3) + b"xyz\0"
+            + struct.pack(">q", -2 ** 40) + struct.pack(">d", math.pi))
+    assert parse_message(data) == ("/a/b", [-7, 0.25, "hey", b"xyz", -2 ** 40, math.pi, True, False, None])
+
+
+def test_nested_bundles_flatten_in_order():
+    inner = osc_bundle(osc_message("/x", 1), osc_message("/y", 2))
+    assert parse_packet(osc_bundle(osc_message("/w", 0), inner)) == [("/w", [0]), ("/x", [1]), ("/y", [2])]
+
+
+@pytest.mark.parametrize("data, message", [
+    (b"/abc", "no NUL terminator"),
+    (osc_string("abc") + osc_string(",i") + b"\0\0\0\1", "does not start with '/'"),
+    (osc_string("/a"), "has no type tag string"),
+    (osc_string("/a") + osc_string("i"), "do not start with ','"),
+    (osc_string("/a") + osc_string(",i") + b"\0\0", r"'i' argument at byte 8 needs 4 bytes, only 2 left"),
+    (osc_string("/a") + osc_string(",q"), "type tag 'q' is not supported"),
+    (osc_string("/a") + osc_string(",b") + struct.pack(">i", -1), "blob size -1 is negative"),
+    (b"#bundle\0" + b"\0" * 8 + struct.pack(">i", 6) + b"\0" * 6, "has size 6"),
+    (b"#bundle\0\0\0", "bundle time tag"),
+    (osc_string("/\xe9") [:2] + b"\xff\0\0", "not UTF-8"),
+])
+def test_malformed_packets_raise_osc_errors(data, message):
+    with pytest.raises(OscError, match=message):
+        parse_packet(data)
+
+
+def test_osc_error_is_a_trace_error():
+    assert issubclass(OscError, TraceError) and issubclass(OscError, ValueError)
+
+
+_arg = st.one_of(st.integers(-2 ** 31, 2 ** 31 - 1), st.floats(width=32, allow_nan=False),
+                 st.text(st.characters(min_codepoint=1, max_codepoint=0x7FF), max_size=12),
+                 st.binary(max_size=9))
+_msg = st.tuples(st.text("abcxyz/", min_size=0, max_size=10).map(lambda s: "/" + s), st.lists(_arg, max_size=6))
+
+
+@settings(max_examples=150, derandomize=True, deadline=None)
+@given(st.lists(_msg, min_size=1, max_size=4), st.booleans())
+def test_parser_inverts_the_encoder(messages, bundled):
+    packets = [osc_message(a, *args) for a, args in messages]
+    data = osc_bundle(*packets) if bundled else packets[0]
+    expected = messages if bundled else messages[:1]
+    assert parse_packet(data) == [(a, list(args)) for a, args in expected]
+
+
+@settings(max_examples=300, derandomize=True, deadline=None)
+@given(st.binary(max_size=64) | st.lists(_msg, min_size=1, max_size=3).flatmap(
+    lambda ms: st.integers(0, 200).map(lambda cut: osc_bundle(*[osc_message(a, *x) for a, x in ms])[:cut])))
+def test_any_bytes_parse_or_raise_osc_error(data):
+    try:
+        parse_packet(data)
+    except OscError:
+        pass
+
+
+@settings(max_examples=150, derandomize=True, deadline=None)
+@given(st.lists(st.tuples(st.integers(-3, 8), st.lists(st.integers(0, 4), max_size=3),
+                          st.lists(st.tuples(st.integers(0, 5), st.floats(-0.5, 1.5), st.floats(0, 1)),
+                                   max_size=3)), max_size=10))
+def test_random_frames_give_consistent_samples(frames):
+    dec = TuioDecoder()
+    samples = [s for k, (fseq, alive, sets) in enumerate(frames)
+               for s in dec.feed(frame(fseq, alive, sets), float(k))]
+    check_event_sequence(samples)
+
+
+# -- 2Dcur semantics ------------------------------------------------------------------------
+def _short(samples):
+    return [(s.finger, round(s.x, 6), round(s.y, 6), s.event) for s in samples]
+
+
+def test_alive_set_fseq():
+    dec = TuioDecoder()
+    assert _short(dec.feed(frame(1, [7], [(7, 0.5, 0.25)]), 0.0)) == [(0, 0.5, 0.25, DOWN)]
+    assert _short(dec.feed(frame(2, [7, 9], [(7, 0.5, 0.3), (9, 0.1, 0.1)]), 0.01)) == \
+        [(0, 0.5, 0.3, MOVE), (1, 0.1, 0.1, DOWN)]
+    # 7 unmoved: no set, no sample; 9 moves
+    assert _short(dec.feed(frame(3, [7, 9], [(9, 0.2, 0.1)]), 0.02)) == [(1, 0.2, 0.1, MOVE)]
+    # 7 leaves the alive list: lifted where it was last seen; its id is reused
+    assert _short(dec.feed(frame(4, [9], []), 0.03)) == [(0, 0.5, 0.3, UP)]
+    assert _short(dec.feed(frame(5, [9, 11], [(11, 0.9, 0.9)]), 0.04)) == [(0, 0.9, 0.9, DOWN)]
+    assert dec.frames == 5 and dec.late == 0
+
+
+def test_late_frames_are_dropped_and_restarts_accepted():
+    dec = TuioDecoder()
+    dec.feed(frame(200, [1], [(1, 0.5, 0.5)]), 0.0)
+    assert dec.feed(frame(199, [1], [(1, 0.6, 0.5)]), 0.01) == [] and dec.late == 1
+    assert _short(dec.feed(frame(200, [1], [(1, 0.7, 0.5)]), 0.02)) == [(0, 0.7, 0.5, MOVE)]
+    # more than 100 frames back: the tracker restarted
+    assert _short(dec.feed(frame(3, [1], [(1, 0.8, 0.5)]), 0.03)) == [(0, 0.8, 0.5, MOVE)]
+    # fseq -1: always accepted
+    assert len(dec.feed(frame(-1, [1], [(1, 0.9, 0.5)]), 0.04)) == 1
+
+
+def test_sources_scope_session_ids_and_stray_sets_are_counted():
+    dec = TuioDecoder()
+    a = dec.feed(frame(1, [1], [(1, 0.1, 0.1)], source="tableA"), 0.0)
+    b = dec.feed(frame(1, [1], [(1, 0.9, 0.9), (2, 0.5, 0.5)], source="tableB"), 0.0)
+    assert [s.finger for s in a + b] == [0, 1] and dec.stray == 1
+    assert _short(dec.feed(frame(2, [], source="tableA"), 0.1)) == [(0, 0.1, 0.1, UP)]
+
+
+def test_bad_tuio_messages_change_nothing():
+    dec = TuioDecoder()
+    dec.feed(frame(1, [1], [(1, 0.1, 0.1)]), 0.0)
+    bad = osc_bundle(osc_message("/tuio/2Dcur", "alive"), osc_message("/tuio/2Dcur", "set", 1, "x", 0.5),
+                     osc_message("/tuio/2Dcur", "fseq", 2))
+    with pytest.raises(OscError, match=r"set: position is 'x', expected float"):
+        dec.feed(bad, 0.01)
+    with pytest.raises(OscError, match="position .* is not finite"):
+        dec.feed(frame(3, [1], [(1, math.nan, 0.5)]), 0.02)
+    assert dec.feed(frame(4, [1], []), 0.03) == []  # finger 1 still alive, nothing lifted
+    assert dec.feed(osc_message("/tuio/2Dobj", "alive"), 0.04) == []  # other profiles skipped
+
+
+# -- over real UDP --------------------------------------------------------------------------
+def test_listener_receives_udp_on_localhost():
+    clock = iter(range(100)).__next__
+    with TuioListener(0, width_mm=200.0, height_mm=100.0, host="127.0.0.1", clock=clock) as listener:
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx:
+            tx.sendto(frame(1, [3], [(3, 0.25, 0.5)]), ("127.0.0.1", listener.port))
+            tx.sendto(b"garbage", ("127.0.0.1", listener.port))
+            tx.sendto(frame(2, [], []), ("127.0.0.1", listener.port))
+            samples = []
+            deadline = time.monotonic() + 5.0
+            while len(samples) < 2 and time.monotonic() < deadline:
+                samples += listener.poll()
+                time.sleep(0.005)
+        assert [(s.t_s, s.finger, s.x_mm, s.y_mm, s.force_n, s.event) for s in samples] == \
+            [(0, 0, 50.0, 50.0, 0.5, DOWN), (2, 0, 50.0, 50.0, 0.5, UP)]
+        assert listener.bad_packets == 1 and "no NUL terminator" in listener.last_error
+
+
+def test_listener_queue_is_bounded():
+    with TuioListener(0, width_mm=1.0, height_mm=1.0, host="127.0.0.1", max_packets=2) as listener:
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx:
+            for k in range(6):
+                tx.sendto(frame(k + 1, [1], [(1, 0.5, 0.5)]), ("127.0.0.1", listener.port))
+            deadline = time.monotonic() + 5.0
+            while listener.dropped < 4 and time.monotonic() < deadline:
+                time.sleep(0.005)
+        assert listener.dropped == 4 and len(listener.poll()) == 2
+
+
+def test_listener_port_in_use_is_a_clear_error():
+    with TuioListener(0, width_mm=1.0, height_mm=1.0, host="127.0.0.1") as first:
+        with pytest.raises(OSError, match=rf"TUIO: cannot listen on UDP 127.0.0.1:{first.port}"):
+            TuioListener(first.port, width_mm=1.0, height_mm=1.0, host="127.0.0.1")
