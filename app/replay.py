@@ -57,7 +57,7 @@ FRICTION_COLUMNS = [("t_s", np.float64, "%.7f"), ("finger", np.int64, "%d"),
                     ("mu_target", np.float64, "%.6f"), ("amplitude_um", np.float64, "%.6f")]
 
 
-def _friction_rows(out) -> dict[str, np.ndarray]:
+def friction_rows(out) -> dict[str, np.ndarray]:
     """Rows (sample-major, then finger) for the fingers touching."""
     contact = out.contact.T  # (n, F)
     n, f = contact.shape
@@ -108,7 +108,7 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
                 if out.phases_rad is not None:
                     cols[f"{ch}_phase_rad"] = out.phases_rad[:, k]
             commands.write(cols)
-            friction.write(_friction_rows(out))
+            friction.write(friction_rows(out))
             if clamps is None:
                 clamps = out.clamps
             else:
@@ -133,8 +133,8 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     finally:
         if bar is not None:
             bar.close()
-    if frames is not None:
-        frames.close()
+        if frames is not None:
+            frames.close()
 
     summary = _summary(scene, trace, trace_path, pipeline, state, clamps, fmt, files,
                        total_blocks, contact_samples, max_amplitude, sink)

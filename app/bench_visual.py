@@ -1,0 +1,76 @@
+"""Bench section "visual": the visual layer offscreen (EGL) at 800x480 and 1920x1080.
+
+Figures: the static scene image (drawn once per scene: a 0.6 mm grating inside a disc
+composed with a 5 mm grating) and the per-frame cost of the overlay on top of it (two
+fingers with trails, the scope with 3 s of history, the status line), each frame
+finished on the GPU (``ctx.finish``), without and with reading the pixels back (what
+``--frames`` and screenshots pay).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import numpy as np
+
+from app.cmd_bench import Figure
+from rendering.visual.compositor import Compositor, FrameView
+from rendering.visual.context import OffscreenBackend, VisualError
+from rendering.visual.overlay import BlockRecord, OverlayState
+from textures.model import (DeviceProfile, DiscRegion, Display, Grating, Scene, VisualHints)
+
+SIZES = ((800, 480), (1920, 1080))
+
+
+def bench_scene() -> Scene:
+    coarse = Grating(name="coarse", render="sho", region=None, blend="multiply",
+                     visual=VisualHints((0.3, 0.3, 0.3), (1.0, 1.0, 1.0)), period_mm=5.0)
+    fine = Grating(name="fine", render="sht", region=DiscRegion(54.0, 32.4, 20.0), blend="multiply",
+                   visual=VisualHints(), period_mm=0.6, angle_deg=30.0)
+    return Scene(1, "bench", "", Display(108.0, 64.8, 800, 480), DeviceProfile(), (coarse, fine))
+
+
+def busy_overlay() -> OverlayState:
+    overlay = OverlayState()
+    t = np.arange(0.0, 3.0, 0.0005)
+    x = np.stack((20 + 20 * t, 80 - 15 * t))
+    y = np.stack((30 + 10 * np.sin(3 * t), 20 + 5 * t))
+    mu = np.stack((0.6 + 0.4 * (np.sin(200 * t) > 0), 0.8 + 0.1 * np.sin(20 * t)))
+    overlay.add(BlockRecord(t, (0, 1), np.ones((2, t.size), bool), x, y, mu, (1 - mu) * 4))
+    return overlay
+
+
+def run(quick: bool) -> list[Figure]:
+    frames = 20 if quick else 100
+    figures = []
+    scene = bench_scene()
+    view = FrameView(overlay=busy_overlay(), hover_mm=(50.0, 30.0),
+                     status=("bench | renderer: file | force 0.50 N | link: none",))
+    for size in SIZES:
+        label = f"{size[0]}x{size[1]}"
+        try:
+            backend = OffscreenBackend(size)
+        except VisualError as exc:
+            print(f"frictex: bench visual: not available ({exc})", file=sys.stderr)
+            return figures
+        t0 = time.perf_counter()
+        comp = Compositor(backend.ctx, scene, size)
+        figures.append(Figure("visual", f"static scene image {label}",
+                              (time.perf_counter() - t0) * 1e3, "ms (once per scene)"))
+        backend.use()
+        for read_back in (False, True):
+            comp.draw(view)  # warm-up: shaders, text textures
+            backend.ctx.finish()
+            t0 = time.perf_counter()
+            for _ in range(frames):
+                comp.draw(view)
+                if read_back:
+                    backend.read_rgb()
+                backend.ctx.finish()
+            per_frame = (time.perf_counter() - t0) / frames * 1e3
+            what = "frame + read back" if read_back else "frame"
+            figures.append(Figure("visual", f"{what} {label}", per_frame, "ms"))
+        comp.release()
+        backend.close()
+    return figures

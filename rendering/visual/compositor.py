@@ -1,0 +1,249 @@
+"""Draws a frame: the static scene texture, then trails, cursors, scope and text.
+
+The scene is rendered once per scene (``scene_image``) into a texture drawn 1:1 on
+the viewport's pixels; each frame only the overlay is rebuilt. All geometry arrives in
+frame pixels (float, y down) and one vertex shader maps it to clip space.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import moderngl
+import numpy as np
+
+from rendering.visual.overlay import OverlayState
+from rendering.visual.scene_image import scene_rgb, to_srgb8
+from rendering.visual.text import text_rgba, wrap
+from rendering.visual.viewport import Viewport, fit_viewport
+from textures.model import Scene
+
+_VERT_PX = """
+uniform vec2 u_frame;
+vec4 to_clip(vec2 px) { return vec4(px.x / u_frame.x * 2.0 - 1.0, 1.0 - px.y / u_frame.y * 2.0, 0.0, 1.0); }
+"""
+
+TEXTURED = ("""#version 330
+in vec2 in_px; in vec2 in_uv; out vec2 v_uv;""" + _VERT_PX + """
+void main() { v_uv = in_uv; gl_Position = to_clip(in_px); }""", """#version 330
+uniform sampler2D u_tex; in vec2 v_uv; out vec4 f_colour;
+void main() { f_colour = texture(u_tex, v_uv); }""")
+
+COLOURED = ("""#version 330
+in vec2 in_px; in vec4 in_rgba; out vec4 v_rgba;""" + _VERT_PX + """
+void main() { v_rgba = in_rgba; gl_Position = to_clip(in_px); }""", """#version 330
+in vec4 v_rgba; out vec4 f_colour;
+void main() { f_colour = v_rgba; }""")
+
+# A cursor is a quad around its centre; the fragment shader draws, from its distance to
+# the centre, a dark halo ring, a coloured ring and (if filled) a coloured dot: readable
+# on black, white and grey scenes, and anti-aliased over one pixel.
+CURSOR = ("""#version 330
+in vec2 in_px; in vec2 in_local; in float in_radius; in vec4 in_rgba; in float in_fill;
+out vec2 v_local; out float v_radius; out vec4 v_rgba; out float v_fill;""" + _VERT_PX + """
+void main() { v_local = in_local; v_radius = in_radius; v_rgba = in_rgba; v_fill = in_fill;
+              gl_Position = to_clip(in_px); }""", """#version 330
+in vec2 v_local; in float v_radius; in vec4 v_rgba; in float v_fill; out vec4 f_colour;
+float band(float d, float centre, float half_width) {
+    return clamp(half_width + 0.5 - abs(d - centre), 0.0, 1.0); }
+void main() {
+    float d = length(v_local);
+    float halo = band(d, v_radius, 2.5);
+    float ring = band(d, v_radius, 1.0);
+    float dot_ = v_fill * clamp(v_radius * 0.3 + 0.5 - d, 0.0, 1.0);
+    float c = max(ring, dot_);
+    float a = max(halo * 0.6, c) * v_rgba.a;
+    vec3 rgb = mix(vec3(0.0), v_rgba.rgb, c / max(max(halo * 0.6, c), 1e-6));
+    f_colour = vec4(rgb, a);
+}""")
+
+SCOPE_BG = (0.0, 0.0, 0.0, 0.85)
+BANNER_RGBA = {"stop": (0.75, 0.0, 0.0, 0.92), "error": (0.55, 0.05, 0.05, 0.92),
+               "info": (0.1, 0.1, 0.1, 0.85)}
+
+
+@dataclass
+class FrameView:
+    """What a frame shows besides the scene (all optional)."""
+
+    overlay: OverlayState | None = None
+    hover_mm: tuple[float, float] | None = None
+    show_scope: bool = True
+    amplitude_max_um: float = 2.5
+    status: tuple[str, ...] = ()
+    banner: str | None = None
+    banner_kind: str = "error"
+
+
+class Compositor:
+    """Draws ``scene`` and a :class:`FrameView` into the current framebuffer of ``ctx``."""
+
+    def __init__(self, ctx: moderngl.Context, scene: Scene, size: tuple[int, int],
+                 outlines: bool = False, supersample: int = 4):
+        self.ctx = ctx
+        self.outlines = outlines
+        self.supersample = supersample
+        self.textured = ctx.program(vertex_shader=TEXTURED[0], fragment_shader=TEXTURED[1])
+        self.coloured = ctx.program(vertex_shader=COLOURED[0], fragment_shader=COLOURED[1])
+        self.cursor = ctx.program(vertex_shader=CURSOR[0], fragment_shader=CURSOR[1])
+        self._buffers: dict[str, moderngl.Buffer] = {}
+        self._text_cache: dict[tuple, moderngl.Texture] = {}
+        self.scene = scene
+        self.size = (0, 0)
+        self.viewport: Viewport | None = None
+        self.scene_texture: moderngl.Texture | None = None
+        self.resize(size)
+
+    # -- static layer -------------------------------------------------------------------
+
+    def resize(self, size: tuple[int, int]) -> None:
+        """Fit the scene to a frame of ``size`` px (re-renders the scene texture if needed)."""
+        size = (int(size[0]), int(size[1]))
+        if size == self.size:
+            return
+        self.size = size
+        self.set_scene(self.scene)
+
+    def set_scene(self, scene: Scene, outlines: bool | None = None) -> None:
+        """Draw ``scene`` (once) into the static texture."""
+        self.scene = scene
+        if outlines is not None:
+            self.outlines = outlines
+        self.viewport = fit_viewport(scene.display, *self.size)
+        rgb = to_srgb8(scene_rgb(scene, self.viewport, self.supersample, self.outlines))
+        if self.scene_texture is not None:
+            self.scene_texture.release()
+        self.scene_texture = self.ctx.texture((self.viewport.width_px, self.viewport.height_px),
+                                              3, np.ascontiguousarray(rgb).tobytes(), alignment=1)
+        self.scene_texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+
+    # -- drawing helpers ----------------------------------------------------------------
+
+    def _buffer(self, key: str, data: np.ndarray) -> moderngl.Buffer:
+        raw = np.ascontiguousarray(data, dtype="f4").tobytes()
+        buf = self._buffers.get(key)
+        if buf is None or buf.size < len(raw):
+            if buf is not None:
+                buf.release()
+            buf = self.ctx.buffer(reserve=max(len(raw), 4096) * 2, dynamic=True)
+            self._buffers[key] = buf
+        buf.write(raw)
+        return buf
+
+    def _draw_texture(self, texture: moderngl.Texture, x: float, y: float) -> None:
+        w, h = texture.size
+        quad = np.array([[x, y, 0, 0], [x + w, y, 1, 0], [x, y + h, 0, 1],
+                         [x + w, y + h, 1, 1]], dtype=np.float64)
+        buf = self._buffer("quad", quad)
+        vao = self.ctx.vertex_array(self.textured, [(buf, "2f 2f", "in_px", "in_uv")])
+        texture.use(0)
+        self.textured["u_tex"] = 0
+        vao.render(moderngl.TRIANGLE_STRIP, vertices=4)
+        vao.release()
+
+    def _draw_triangles(self, key: str, tris: np.ndarray) -> None:
+        if len(tris) == 0:
+            return
+        buf = self._buffer(key, tris)
+        vao = self.ctx.vertex_array(self.coloured, [(buf, "2f 4f", "in_px", "in_rgba")])
+        vao.render(moderngl.TRIANGLES, vertices=len(tris))
+        vao.release()
+
+    def _draw_rect(self, x, y, w, h, rgba) -> None:
+        corners = np.array([[x, y], [x + w, y], [x, y + h], [x, y + h], [x + w, y], [x + w, y + h]])
+        self._draw_triangles("rect", np.column_stack((corners, np.tile(rgba, (6, 1)))))
+
+    def _draw_cursors(self, cursors: np.ndarray) -> None:
+        if len(cursors) == 0:
+            return
+        r = cursors[:, 2:3] + 4.0
+        local = np.array([[-1, -1], [1, -1], [-1, 1], [-1, 1], [1, -1], [1, 1]], dtype=np.float64)
+        verts = []
+        for c, reach in zip(cursors, r[:, 0]):
+            offs = local * reach
+            verts.append(np.column_stack((c[0] + offs[:, 0], c[1] + offs[:, 1], offs,
+                                          np.full(6, c[2]), np.tile(c[3:7], (6, 1)),
+                                          np.full(6, c[7]))))
+        buf = self._buffer("cursor", np.concatenate(verts))
+        vao = self.ctx.vertex_array(self.cursor, [(buf, "2f 2f 1f 4f 1f", "in_px", "in_local",
+                                                   "in_radius", "in_rgba", "in_fill")])
+        vao.render(moderngl.TRIANGLES, vertices=6 * len(cursors))
+        vao.release()
+
+    def _text(self, lines: tuple[str, ...], size_px: int, rgb=(255, 255, 255),
+              background=(0, 0, 0, 170)) -> moderngl.Texture:
+        key = (lines, size_px, rgb, background)
+        tex = self._text_cache.get(key)
+        if tex is None:
+            if len(self._text_cache) > 64:
+                for old in self._text_cache.values():
+                    old.release()
+                self._text_cache.clear()
+            img = text_rgba(lines, size_px, rgb, background)
+            tex = self.ctx.texture((img.shape[1], img.shape[0]), 4, img.tobytes(), alignment=1)
+            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            self._text_cache[key] = tex
+        return tex
+
+    # -- the frame ----------------------------------------------------------------------
+
+    def scope_rect(self) -> tuple[float, float, float, float]:
+        """The scope strip (x, y, w, h) px: the bottom of the frame."""
+        w, h = self.size
+        height = float(np.clip(0.26 * h, 90.0, 280.0))
+        return 0.0, h - height, float(w), height
+
+    def draw(self, view: FrameView | None = None) -> None:
+        """Draw the scene and ``view`` into the framebuffer in use."""
+        view = view or FrameView()
+        ctx = self.ctx
+        w, h = self.size
+        ctx.viewport = (0, 0, w, h)
+        ctx.disable(moderngl.DEPTH_TEST)
+        ctx.clear(0.12, 0.12, 0.12, 1.0)
+        for prog in (self.textured, self.coloured, self.cursor):
+            prog["u_frame"] = (float(w), float(h))
+        vp = self.viewport
+        ctx.disable(moderngl.BLEND)
+        self._draw_texture(self.scene_texture, vp.x0, vp.y0)
+        ctx.enable(moderngl.BLEND)
+        ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
+        font_px = int(np.clip(h / 45, 11, 22))
+        if view.overlay is not None:
+            self._draw_triangles("trail", view.overlay.trail_triangles(vp))
+        self._draw_cursors((view.overlay or OverlayState()).cursors(vp, view.hover_mm))
+        if view.show_scope and view.overlay is not None:
+            self._draw_scope(view, font_px)
+        if view.status:
+            self._draw_texture(self._text(tuple(view.status), font_px), 4, 4)
+        if view.banner:
+            lines = wrap(view.banner, font_px + 2, w - 40)
+            tex = self._text(lines, font_px + 2, background=(0, 0, 0, 0))
+            bh = tex.size[1] + 12
+            y = (h - bh) / 2 if view.banner_kind == "stop" else h * 0.12
+            self._draw_rect(0, y, w, bh, BANNER_RGBA.get(view.banner_kind, BANNER_RGBA["info"]))
+            self._draw_texture(tex, max(4.0, (w - tex.size[0]) / 2), y + 6)
+        ctx.disable(moderngl.BLEND)
+
+    def _draw_scope(self, view: FrameView, font_px: int) -> None:
+        x, y, w, h = self.scope_rect()
+        self._draw_rect(x, y, w, h, SCOPE_BG)
+        panel = (h - 6.0) / 2
+        for py0 in (y + 2.0, y + 4.0 + panel):
+            for frac in (0.0, 0.5, 1.0):
+                self._draw_rect(x, py0 + panel * frac - 0.5, w, 1.0, (1.0, 1.0, 1.0, 0.18))
+        self._draw_triangles("scope", view.overlay.scope_triangles((x, y, w, h), view.amplitude_max_um))
+        label_px = max(10, font_px - 2)
+        scope_s = view.overlay.scope_s
+        self._draw_texture(self._text(("mu' target (0 to 1)",), label_px, background=(0, 0, 0, 110)),
+                           x + 4, y + 4)
+        self._draw_texture(self._text((f"amplitude (0 to {view.amplitude_max_um:g} um, 0-peak)",),
+                                      label_px, background=(0, 0, 0, 110)), x + 4, y + 6 + panel)
+        tick = self._text((f"last {scope_s:g} s  |  now", ), label_px, background=(0, 0, 0, 110))
+        self._draw_texture(tick, x + w - tick.size[0] - 4, y + 4)
+
+    def release(self) -> None:
+        for obj in (*self._buffers.values(), *self._text_cache.values(), self.scene_texture,
+                    self.textured, self.coloured, self.cursor):
+            if obj is not None:
+                obj.release()

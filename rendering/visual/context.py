@@ -1,0 +1,193 @@
+"""OpenGL contexts to draw into, as interchangeable backends picked by name.
+
+- ``egl``: offscreen, no display needed (moderngl standalone context on EGL, Mesa's
+  llvmpipe in CI); draws into a framebuffer of any pixel size.
+- ``glfw``: a window (windowed or fullscreen on a chosen monitor) whose input
+  (cursor, buttons, wheel, keys) is forwarded to callbacks as backend-neutral values:
+  cursor positions in framebuffer pixels as floats (never truncated), key names as
+  lower-case strings ("space", "n", "up", ...).
+
+Both expose ``ctx``, ``size``, ``use()``, ``read_rgb()`` and ``close()``.
+"""
+
+from __future__ import annotations
+
+import os
+
+import moderngl
+import numpy as np
+
+
+class VisualError(OSError):
+    """The visual layer cannot run here (no display, no GL); the message says what is missing."""
+
+
+class NoDisplayError(VisualError):
+    """No display to open a window on."""
+
+
+def _read(fbo, size) -> np.ndarray:
+    w, h = size
+    data = np.frombuffer(fbo.read(components=3, alignment=1), dtype=np.uint8)
+    return data.reshape(h, w, 3)[::-1].copy()
+
+
+class OffscreenBackend:
+    """An EGL context and a framebuffer of ``size`` = (width, height) px."""
+
+    name = "egl"
+
+    def __init__(self, size: tuple[int, int], ctx: moderngl.Context | None = None):
+        try:
+            self.ctx = ctx or moderngl.create_standalone_context(backend="egl")
+        except Exception as exc:  # moderngl raises bare Exception when EGL is absent
+            raise VisualError(f"cannot create an offscreen OpenGL context with EGL ({exc}); "
+                              "install Mesa's EGL (Debian: libegl1 libegl-mesa0)") from None
+        self._owns_ctx = ctx is None
+        # framebuffer 0, bound before releasing ours: moderngl rebinds the previous
+        # framebuffer when it creates one, which fails if that one was released
+        self._default = self.ctx.detect_framebuffer(0)
+        self.size = (0, 0)
+        self.fbo = None
+        self.resize(size)
+
+    def resize(self, size: tuple[int, int]) -> None:
+        w, h = int(size[0]), int(size[1])
+        if w < 1 or h < 1:
+            raise ValueError(f"frame size {w}x{h} px: expected at least 1x1")
+        if self.fbo is not None:
+            self._default.use()
+            self.fbo.release()
+        self.size = (w, h)
+        self.fbo = self.ctx.simple_framebuffer((w, h), components=4)
+
+    def use(self) -> None:
+        self.fbo.use()
+
+    def read_rgb(self) -> np.ndarray:
+        """The framebuffer as sRGB uint8 (height, width, 3), row 0 at the top."""
+        return _read(self.fbo, self.size)
+
+    def close(self) -> None:
+        self._default.use()
+        self.fbo.release()
+        if self._owns_ctx:
+            self.ctx.release()
+
+
+def _key_names(glfw) -> dict[int, str]:
+    names = {getattr(glfw, f"KEY_{c}"): c.lower() for c in "ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789"}
+    names.update({glfw.KEY_SPACE: "space", glfw.KEY_ESCAPE: "escape", glfw.KEY_UP: "up",
+                  glfw.KEY_DOWN: "down", glfw.KEY_LEFT: "left", glfw.KEY_RIGHT: "right",
+                  glfw.KEY_TAB: "tab", glfw.KEY_F12: "f12", glfw.KEY_PAGE_UP: "page_up",
+                  glfw.KEY_PAGE_DOWN: "page_down"})
+    return names
+
+
+class GlfwBackend:
+    """A glfw window with an OpenGL 3.3 core context.
+
+    Callbacks (set as attributes, all optional): ``on_cursor(x_px, y_px)``,
+    ``on_button(pressed: bool)`` (left button), ``on_scroll(dy)``, ``on_key(name, shift)``.
+    """
+
+    name = "glfw"
+
+    def __init__(self, size: tuple[int, int], title: str = "frictex", fullscreen: bool = False,
+                 monitor: int = 0, vsync: bool = True):
+        import glfw
+        self._glfw = glfw
+        if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+            raise NoDisplayError("no display (DISPLAY and WAYLAND_DISPLAY are unset)")
+        if not glfw.init():
+            raise NoDisplayError(f"glfw cannot initialise on display {os.environ.get('DISPLAY')!r}")
+        monitors = glfw.get_monitors() or []
+        target = None
+        if fullscreen:
+            if not 0 <= monitor < len(monitors):
+                glfw.terminate()
+                raise VisualError(f"monitor {monitor}: this display has {len(monitors)} "
+                                  f"(expected 0..{len(monitors) - 1})")
+            target = monitors[monitor]
+            mode = glfw.get_video_mode(target)
+            size = (mode.size.width, mode.size.height)
+        glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 3)
+        glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)
+        glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
+        glfw.window_hint(glfw.OPENGL_FORWARD_COMPAT, True)
+        self.window = glfw.create_window(int(size[0]), int(size[1]), title, target, None)
+        if not self.window:
+            glfw.terminate()
+            raise VisualError("glfw could not create an OpenGL 3.3 core window on this display")
+        glfw.make_context_current(self.window)
+        glfw.swap_interval(1 if vsync else 0)
+        self.ctx = moderngl.create_context()
+        self.on_cursor = self.on_button = self.on_scroll = self.on_key = None
+        self._keys = _key_names(glfw)
+        glfw.set_cursor_pos_callback(self.window, self._cursor)
+        glfw.set_mouse_button_callback(self.window, self._button)
+        glfw.set_scroll_callback(self.window, self._scroll)
+        glfw.set_key_callback(self.window, self._key)
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return tuple(self._glfw.get_framebuffer_size(self.window))
+
+    def _scale(self) -> tuple[float, float]:
+        fw, fh = self.size
+        ww, wh = self._glfw.get_window_size(self.window)
+        return (fw / ww if ww else 1.0), (fh / wh if wh else 1.0)
+
+    def _cursor(self, _win, x, y):
+        if self.on_cursor:
+            sx, sy = self._scale()
+            self.on_cursor(float(x) * sx, float(y) * sy)
+
+    def _button(self, _win, button, action, _mods):
+        if self.on_button and button == self._glfw.MOUSE_BUTTON_LEFT:
+            self.on_button(action == self._glfw.PRESS)
+
+    def _scroll(self, _win, _dx, dy):
+        if self.on_scroll:
+            self.on_scroll(float(dy))
+
+    def _key(self, _win, key, _scancode, action, mods):
+        if self.on_key and action == self._glfw.PRESS and key in self._keys:
+            self.on_key(self._keys[key], bool(mods & self._glfw.MOD_SHIFT))
+
+    def cursor_px(self) -> tuple[float, float]:
+        x, y = self._glfw.get_cursor_pos(self.window)
+        sx, sy = self._scale()
+        return float(x) * sx, float(y) * sy
+
+    def use(self) -> None:
+        self.ctx.screen.use()
+        self.ctx.viewport = (0, 0, *self.size)
+
+    def poll(self) -> None:
+        self._glfw.poll_events()
+
+    def swap(self) -> None:
+        self._glfw.swap_buffers(self.window)
+
+    @property
+    def should_close(self) -> bool:
+        return bool(self._glfw.window_should_close(self.window))
+
+    def read_rgb(self) -> np.ndarray:
+        return _read(self.ctx.screen, self.size)
+
+    def close(self) -> None:
+        self.ctx.release()
+        self._glfw.destroy_window(self.window)
+        self._glfw.terminate()
+
+
+BACKENDS = {"egl": OffscreenBackend, "glfw": GlfwBackend}
+
+
+def open_backend(name: str, size: tuple[int, int], **options):
+    """The backend called ``name`` (see BACKENDS), opened at ``size`` (width, height) px."""
+    if name not in BACKENDS:
+        raise ValueError(f"unknown visual backend {name!r}; expected one of {', '.join(BACKENDS)}")
+    return BACKENDS[name](size, **options)

@@ -1,0 +1,180 @@
+"""What moves on top of the scene: finger cursors, their trails, the scope strip.
+
+:class:`OverlayState` keeps the recent history the haptic side produced (fed with
+:class:`BlockRecord` snapshots, decimated copies of ``rendering.pipeline.BlockOutput``)
+and turns it into vertex arrays in frame pixels for ``compositor``; it does no OpenGL,
+so its geometry is tested without a context.
+
+The scope shows, for the last ``scope_s`` seconds and per finger, the mu' target
+(upper panel, 0 to 1) and the vibration amplitude under the finger (lower panel,
+0 to the device's amplitude limit, um zero-to-peak); "now" is the right edge.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rendering.visual.viewport import Viewport
+
+#: cursor/trace colour per finger (sRGB, 0-1): finger k uses FINGER_RGB[k % len]
+FINGER_RGB = ((0.10, 0.60, 1.00), (1.00, 0.45, 0.10), (0.20, 0.80, 0.30),
+              (0.85, 0.25, 0.85), (0.95, 0.85, 0.10))
+CURSOR_RADIUS_MM = 4.0  # about a fingertip contact patch
+TRAIL_WIDTH_PX = 2.0
+SCOPE_LINE_PX = 1.5
+
+
+@dataclass(frozen=True, eq=False)
+class BlockRecord:
+    """A decimated copy of one block's output, safe to hand to another thread.
+
+    t_s : (m,) s. finger_ids : F ids. contact : bool (F, m). x_mm, y_mm : (F, m) mm.
+    mu_target : (F, m) mu'. amplitude_um : (F, m) um zero-to-peak.
+    """
+
+    t_s: np.ndarray
+    finger_ids: tuple[int, ...]
+    contact: np.ndarray
+    x_mm: np.ndarray
+    y_mm: np.ndarray
+    mu_target: np.ndarray
+    amplitude_um: np.ndarray
+
+
+def record_from_output(out, stride: int = 10, lo: int = 0, hi: int | None = None) -> BlockRecord:
+    """Every ``stride``-th sample of ``out`` (a pipeline BlockOutput) in [lo, hi), copied."""
+    s = slice(lo, hi, stride)
+    return BlockRecord(out.t_s[s].copy(), tuple(out.finger_ids), out.contact[:, s].copy(),
+                       out.x_mm[:, s].copy(), out.y_mm[:, s].copy(),
+                       out.mu_target[:, s].copy(), out.amplitude_um[:, s].copy())
+
+
+class _History:
+    """One finger's samples within the kept window (arrays grow by concatenation)."""
+
+    def __init__(self):
+        self.t = np.empty(0)
+        self.data = np.empty((5, 0))  # contact, x, y, mu, amplitude
+
+    def append(self, t, rows, keep_from_s: float):
+        self.t = np.concatenate((self.t, t))
+        self.data = np.concatenate((self.data, rows), axis=1)
+        k = np.searchsorted(self.t, keep_from_s)
+        self.t, self.data = self.t[k:], self.data[:, k:]
+
+
+class OverlayState:
+    """History of the fingers for the trails (``trail_s``) and the scope (``scope_s``)."""
+
+    def __init__(self, trail_s: float = 1.0, scope_s: float = 3.0):
+        self.trail_s = trail_s
+        self.scope_s = scope_s
+        self.now_s = 0.0
+        self.fingers: dict[int, _History] = {}
+
+    def add(self, record: BlockRecord) -> None:
+        if record.t_s.size == 0:
+            return
+        self.now_s = max(self.now_s, float(record.t_s[-1]))
+        keep = self.now_s - max(self.trail_s, self.scope_s)
+        for row, fid in enumerate(record.finger_ids):
+            rows = np.stack((record.contact[row].astype(np.float64), record.x_mm[row],
+                             record.y_mm[row], record.mu_target[row], record.amplitude_um[row]))
+            self.fingers.setdefault(fid, _History()).append(record.t_s, rows, keep)
+
+    def clear(self) -> None:
+        self.fingers.clear()
+
+    def current(self) -> list[tuple[int, float, float, bool]]:
+        """(finger id, x mm, y mm, touching) at the latest sample of each finger."""
+        out = []
+        for fid, h in sorted(self.fingers.items()):
+            if h.t.size and h.data[0, -1] > 0:
+                out.append((fid, float(h.data[1, -1]), float(h.data[2, -1]), True))
+        return out
+
+    # -- geometry in frame pixels -------------------------------------------------------
+
+    def trail_triangles(self, viewport: Viewport) -> np.ndarray:
+        """Triangles (k, 6) of x_px, y_px, r, g, b, a for the touching part of each trail,
+        fading out over ``trail_s``."""
+        parts = []
+        for fid, h in self.fingers.items():
+            keep = h.t >= self.now_s - self.trail_s
+            t, (contact, x, y) = h.t[keep], h.data[:3, keep]
+            if t.size < 2:
+                continue
+            px, py = viewport.to_px(x, y)
+            age = np.clip((self.now_s - t) / self.trail_s, 0.0, 1.0)
+            rgba = np.empty((t.size, 4))
+            rgba[:, :3] = FINGER_RGB[fid % len(FINGER_RGB)]
+            rgba[:, 3] = 0.9 * (1.0 - age)
+            joined = (contact[:-1] > 0) & (contact[1:] > 0)
+            parts.append(segment_triangles(np.column_stack((px, py)), rgba, TRAIL_WIDTH_PX, joined))
+        return np.concatenate(parts) if parts else np.empty((0, 6))
+
+    def cursors(self, viewport: Viewport, hover_mm: tuple[float, float] | None = None) -> np.ndarray:
+        """Cursor instances (k, 8): x_px, y_px, radius_px, r, g, b, a, filled. Touching
+        fingers are filled rings in their colour; the hover pointer a thin grey ring."""
+        radius = CURSOR_RADIUS_MM * min(viewport.px_per_mm)
+        rows = []
+        for fid, x, y, _ in self.current():
+            px, py = viewport.to_px(x, y)
+            rows.append((float(px), float(py), radius, *FINGER_RGB[fid % len(FINGER_RGB)], 1.0, 1.0))
+        if hover_mm is not None:
+            px, py = viewport.to_px(*hover_mm)
+            rows.append((float(px), float(py), radius, 0.6, 0.6, 0.6, 0.9, 0.0))
+        return np.array(rows, dtype=np.float64).reshape(-1, 8)
+
+    def scope_triangles(self, rect: tuple[float, float, float, float], amplitude_max_um: float,
+                        ) -> np.ndarray:
+        """Triangles (k, 6) for the scope traces in ``rect`` = (x, y, w, h) px: the upper
+        half plots mu' in [0, 1], the lower half amplitude in [0, amplitude_max_um]."""
+        x0, y0, w, h = rect
+        panel = (h - 6.0) / 2
+        parts = []
+        for fid, hist in self.fingers.items():
+            keep = hist.t >= self.now_s - self.scope_s
+            t = hist.t[keep]
+            if t.size < 2:
+                continue
+            px = x0 + w * (1.0 - (self.now_s - t) / self.scope_s)
+            mu = np.clip(hist.data[3, keep], 0.0, 1.0)
+            amp = np.clip(hist.data[4, keep] / amplitude_max_um, 0.0, 1.0)
+            rgba = np.empty((t.size, 4))
+            rgba[:, :3] = FINGER_RGB[fid % len(FINGER_RGB)]
+            rgba[:, 3] = 1.0
+            top = y0 + 2.0
+            bottom = y0 + 4.0 + panel
+            for values, py0 in ((mu, top), (amp, bottom)):
+                py = py0 + panel * (1.0 - values)
+                parts.append(segment_triangles(np.column_stack((px, py)), rgba, SCOPE_LINE_PX))
+        return np.concatenate(parts) if parts else np.empty((0, 6))
+
+
+def segment_triangles(points: np.ndarray, rgba: np.ndarray, width_px: float,
+                      keep: np.ndarray | None = None) -> np.ndarray:
+    """A polyline as independent quads, two triangles per segment.
+
+    Parameters
+    ----------
+    points : (N, 2) vertices (px). rgba : (N, 4) colour per vertex.
+    width_px : line width (px). keep : optional (N - 1,) bool, segments to draw.
+
+    Returns
+    -------
+    (6 * kept segments, 6) array of x, y, r, g, b, a.
+    """
+    p0, p1 = points[:-1], points[1:]
+    c0, c1 = rgba[:-1], rgba[1:]
+    d = p1 - p0
+    length = np.hypot(d[:, 0], d[:, 1])
+    ok = length > 1e-9 if keep is None else (length > 1e-9) & keep
+    p0, p1, c0, c1, d, length = p0[ok], p1[ok], c0[ok], c1[ok], d[ok], length[ok]
+    n = np.column_stack((-d[:, 1], d[:, 0])) / length[:, None] * (width_px / 2)
+    a, b, c, e = p0 + n, p0 - n, p1 + n, p1 - n
+    verts = np.stack((a, b, c, c, b, e), axis=1)  # (k, 6, 2)
+    cols = np.stack((c0, c0, c1, c1, c0, c1), axis=1)  # (k, 6, 4)
+    return np.concatenate((verts, cols), axis=2).reshape(-1, 6)

@@ -1,0 +1,46 @@
+"""Text as RGBA images (Pillow's bundled font), for the GL layer to draw as textures."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+from PIL import Image, ImageDraw, ImageFont
+
+
+@lru_cache(maxsize=8)
+def font(size_px: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
+    """Pillow's bundled scalable font at ``size_px``."""
+    return ImageFont.load_default(size=size_px)
+
+
+def text_rgba(lines: tuple[str, ...], size_px: int, rgb=(255, 255, 255),
+              background=(0, 0, 0, 170), pad_px: int = 4) -> np.ndarray:
+    """``lines`` drawn in ``rgb`` on a translucent box: uint8 (height, width, 4), row 0 on top."""
+    f = font(size_px)
+    probe = ImageDraw.Draw(Image.new("RGBA", (1, 1)))
+    line_h = int(round(size_px * 1.25))
+    width = max((int(np.ceil(probe.textlength(line, font=f))) for line in lines), default=0)
+    img = Image.new("RGBA", (width + 2 * pad_px, line_h * len(lines) + 2 * pad_px), background)
+    draw = ImageDraw.Draw(img)
+    for k, line in enumerate(lines):
+        draw.text((pad_px, pad_px + k * line_h), line, font=f, fill=(*rgb, 255))
+    return np.asarray(img)
+
+
+def wrap(text: str, size_px: int, width_px: float) -> tuple[str, ...]:
+    """``text`` split into lines no wider than ``width_px`` (words kept whole)."""
+    f = font(size_px)
+    probe = ImageDraw.Draw(Image.new("RGBA", (1, 1)))
+    lines: list[str] = []
+    for para in text.splitlines() or [""]:
+        line = ""
+        for word in para.split(" "):
+            candidate = f"{line} {word}" if line else word
+            if line and probe.textlength(candidate, font=f) > width_px:
+                lines.append(line)
+                line = word
+            else:
+                line = candidate
+        lines.append(line)
+    return tuple(lines)

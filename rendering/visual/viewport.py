@@ -1,0 +1,59 @@
+"""Where the scene's active area sits in a frame of pixels, and mm <-> pixel transforms.
+
+The active area (``Display.width_mm`` x ``height_mm``) is fitted inside the frame
+keeping its aspect ratio, centred, on whole pixels. Pixel coordinates are continuous:
+pixel column i spans [i, i + 1), so its centre is at i + 0.5. Nothing here truncates
+positions to integers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from textures.model import Display
+
+
+@dataclass(frozen=True)
+class Viewport:
+    """A frame of ``frame_w`` x ``frame_h`` px holding the active area at
+    (``x0``, ``y0``) px (top-left), ``width_px`` x ``height_px`` px in size, which
+    shows ``width_mm`` x ``height_mm`` of the screen."""
+
+    frame_w: int
+    frame_h: int
+    x0: int
+    y0: int
+    width_px: int
+    height_px: int
+    width_mm: float
+    height_mm: float
+
+    @property
+    def px_per_mm(self) -> tuple[float, float]:
+        """Pixel density (px/mm) of the drawn area along x and y."""
+        return self.width_px / self.width_mm, self.height_px / self.height_mm
+
+    def to_px(self, x_mm, y_mm) -> tuple[np.ndarray, np.ndarray]:
+        """Frame pixel coordinates (float, y down) of positions (mm)."""
+        sx, sy = self.px_per_mm
+        return (self.x0 + np.asarray(x_mm, dtype=np.float64) * sx,
+                self.y0 + np.asarray(y_mm, dtype=np.float64) * sy)
+
+    def to_mm(self, x_px, y_px) -> tuple[np.ndarray, np.ndarray]:
+        """Positions (mm) of frame pixel coordinates (float, y down)."""
+        sx, sy = self.px_per_mm
+        return ((np.asarray(x_px, dtype=np.float64) - self.x0) / sx,
+                (np.asarray(y_px, dtype=np.float64) - self.y0) / sy)
+
+
+def fit_viewport(display: Display, frame_w: int, frame_h: int) -> Viewport:
+    """The largest aspect-preserving placement of ``display``'s active area in a frame."""
+    if frame_w < 1 or frame_h < 1:
+        raise ValueError(f"frame size {frame_w}x{frame_h} px: expected at least 1x1")
+    scale = min(frame_w / display.width_mm, frame_h / display.height_mm)
+    w = max(1, min(frame_w, round(display.width_mm * scale)))
+    h = max(1, min(frame_h, round(display.height_mm * scale)))
+    return Viewport(frame_w, frame_h, (frame_w - w) // 2, (frame_h - h) // 2, w, h,
+                    display.width_mm, display.height_mm)

@@ -1,0 +1,56 @@
+"""Shared fixtures: one offscreen EGL context for all GL tests, and an Xvfb display.
+
+A GL test takes ``gl`` (the shared context); ``ctx.error`` is checked to be
+GL_NO_ERROR before and after each test so a test that leaves an error behind fails
+itself rather than the next one. Tests skip only when the library or binary they need
+is truly absent, and the skip names it.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+
+import pytest
+
+
+@pytest.fixture(scope="session")
+def _egl_context():
+    moderngl = pytest.importorskip("moderngl", reason="moderngl (Python package) not installed")
+    try:
+        ctx = moderngl.create_standalone_context(backend="egl")
+    except Exception as exc:  # moderngl raises bare Exception when libEGL is missing
+        pytest.skip(f"EGL (libEGL.so.1 with Mesa, Debian: libegl1 libegl-mesa0) unavailable: {exc}")
+    yield ctx
+    ctx.release()
+
+
+@pytest.fixture
+def gl(_egl_context):
+    """The shared EGL context; fails the test if GL errors are pending before or after."""
+    assert _egl_context.error == "GL_NO_ERROR", "a GL error was pending before this test"
+    yield _egl_context
+    assert _egl_context.error == "GL_NO_ERROR"
+
+
+@pytest.fixture(scope="session")
+def xvfb_display():
+    """A fresh Xvfb server on a free display number (Xvfb picks it: -displayfd)."""
+    binary = shutil.which("Xvfb")
+    if binary is None:
+        pytest.skip("Xvfb binary not installed (Debian: xvfb)")
+    read_fd, write_fd = os.pipe()
+    proc = subprocess.Popen([binary, "-displayfd", str(write_fd), "-screen", "0", "1024x768x24",
+                             "-nolisten", "tcp"], pass_fds=(write_fd,),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    os.close(write_fd)
+    with os.fdopen(read_fd) as pipe:
+        number = pipe.readline().strip()
+    if not number:
+        proc.kill()
+        proc.wait()
+        raise RuntimeError("Xvfb started but did not report a display number")
+    yield f":{number}"
+    proc.terminate()
+    proc.wait(timeout=10)

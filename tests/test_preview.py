@@ -1,0 +1,55 @@
+"""frictex preview (CLI, PNG content) and the replay frames writer."""
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from app.cli import main
+from app.frames import FrameWriter
+from app.replay import run_replay
+from scenes import grating_scene
+
+
+def test_preview_writes_scene_beside_its_friction_map(tmp_path, capsys):
+    out = tmp_path / "p.png"
+    assert main(["preview", "grating-5mm", "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "mu' 0.600 to 1.000" in printed and "800 x 480 px" in printed
+    img = np.asarray(Image.open(out).convert("RGB"))
+    assert img.shape[1] > 1000  # two panels side by side
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["preview", "no-such-scene", "-o", "x.png"], "no-such-scene"),
+    (["preview", "grating-5mm", "-o", "out.jpg"], "expected a .png"),
+    (["preview", "grating-5mm", "-o", "missing-dir/out.png"], "does not exist"),
+])
+def test_preview_bad_input_is_one_line_exit_2(tmp_path, monkeypatch, capsys, argv, message):
+    monkeypatch.chdir(tmp_path)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("frictex: error:") and message in err and err.count("\n") == 1
+
+
+def test_preview_size_is_validated(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["preview", "grating-5mm", "-o", "x.png", "--size", "800by480"])
+    assert exc.value.code == 2 and "WIDTHxHEIGHT" in capsys.readouterr().err
+
+
+def test_frames_follow_the_replayed_finger(gl, tmp_path):
+    scene = grating_scene(5.0)
+    frames = FrameWriter(tmp_path, scene, fps=20.0, size=(400, 240))
+    run_replay(scene, "swipe-40mms-50hz", tmp_path, progress=False, frames=frames)
+    files = sorted((tmp_path / "frames").glob("frame_*.png"))
+    import json
+    duration = json.loads((tmp_path / "summary.json").read_text())["output"]["duration_s"]
+    assert len(files) == int(np.floor(duration * 20.0 + 1e-9)) + 1
+    # the cursor (finger 0 is blue) moves right from frame to frame while the finger swipes
+    xs = []
+    for f in files[2:-2]:
+        rgb = np.asarray(Image.open(f).convert("RGB")).astype(int)
+        blue = (rgb[..., 2] > 200) & (rgb[..., 0] < 80)
+        cols = np.flatnonzero(blue[:150].any(axis=0))
+        xs.append(cols.mean())
+    assert (np.diff(xs) > 0).all()
