@@ -51,22 +51,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    sink = None
     frames = None
-    try:
-        if args.device is not None:
-            from device.link import open_sink
-            sink = open_sink(args.device, channels=1, rate_hz=args.rate, paced=True)
-        if args.frames is not None:
-            from app.frames import FrameWriter
-            frames = FrameWriter(args.out, args.scene, fps=args.frames, rate_hz=args.rate)
-        summary = run_replay(args.scene, args.trace, args.out, rate_hz=args.rate,
-                             fmt=args.format, sink=sink, block_size=args.block,
-                             render_override=args.renderer, progress=not args.quiet,
-                             frames=frames)
-    finally:
-        if sink is not None:
-            sink.close()
+    if args.frames is not None:
+        from app.frames import FrameWriter
+        frames = FrameWriter(args.out, args.scene, fps=args.frames, rate_hz=args.rate)
+    summary = run_replay(args.scene, args.trace, args.out, rate_hz=args.rate,
+                         fmt=args.format, device=args.device, block_size=args.block,
+                         render_override=args.renderer, progress=not args.quiet,
+                         frames=frames)
     if not args.quiet:
         out = summary["output"]
         timing = summary["timings"]

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from app.force_summary import ForceSummary
 from app.outputs import TableWriter
 from rendering.pipeline import STAGES, build_pipeline
 from rendering.trace_file import Trace, read_trace
@@ -69,13 +70,16 @@ def friction_rows(out) -> dict[str, np.ndarray]:
 
 
 def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv", sink=None,
-               block_size: int = 50, render_override: str | None = None,
+               device: str | None = None, block_size: int = 50, render_override: str | None = None,
                chunk_blocks: int = 200, progress: bool = True, frames=None) -> dict:
     """Replay ``trace`` (Trace or path/bundled name) on ``scene`` (Scene or path/name).
 
     Writes the outputs into ``out_dir`` (created if needed) and returns the summary
     (also written as ``summary.json``). ``sink``: an optional command sink (see
-    ``device.link.open_sink``) that receives every block. ``frames``: an optional object
+    ``device.link.open_sink``) that receives every block; the replay closes it (a paced
+    link drains first) before writing the summary, so its counters are final. ``device``:
+    instead of a sink, a link spec (``"sim"``, a port or a pyserial URL) opened here, paced,
+    with the channels and phases of the scene's actuation. ``frames``: an optional object
     with ``add(out)`` and ``close()`` receiving every chunk's output (PNG frames).
     """
     wall0 = time.perf_counter()
@@ -85,6 +89,10 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     t0 = float(trace.t_s[0])
     pipeline = build_pipeline(scene, rate_hz=rate_hz, block_size=block_size,
                               render_override=render_override, t0_s=t0)
+    if device is not None:
+        from device.link import open_sink
+        sink = open_sink(device, channels=len(pipeline.channels), rate_hz=rate_hz,
+                         phases=pipeline.actuation.has_phases, paced=True)
     applied = apply_index(trace.t_s, pipeline.tracker_config)
     total_blocks = int(applied[-1] // block_size) + 1
     state = pipeline.initial_state()
@@ -93,6 +101,7 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     friction = TableWriter(out_dir, "friction", FRICTION_COLUMNS, fmt)
     clamps = None
     errors = _AmplitudeErrors()
+    forces = ForceSummary()
     max_amplitude = 0.0
     contact_samples = 0
     bar = _progress(total_blocks * block_size / rate_hz, progress)
@@ -114,6 +123,7 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
             else:
                 clamps.add(out.clamps)
             errors.add(out)
+            forces.add(out)
             max_amplitude = max(max_amplitude, float(out.commands_um.max(initial=0.0)))
             contact_samples += int(out.contact.any(axis=0).sum())
             if sink is not None:
@@ -135,10 +145,14 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
             bar.close()
         if frames is not None:
             frames.close()
+        if sink is not None:
+            sink.close()
 
     summary = _summary(scene, trace, trace_path, pipeline, state, clamps, fmt, files,
                        total_blocks, contact_samples, max_amplitude, sink)
     summary["fingers"] = errors.report()
+    if forces.report() is not None:
+        summary["forces"] = forces.report()
     summary["timings"] = _timings(pipeline, total_blocks * block_size / rate_hz,
                                   time.perf_counter() - wall0)
     (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")

@@ -59,12 +59,19 @@ def test_npz_holds_the_same_columns_as_csv(tmp_path, human_trace):
 
 def test_a_failed_replay_leaves_no_partial_outputs(tmp_path, human_trace):
     class BrokenSink:
+        closed = False
+
         def send(self, index, amplitudes, phases):
             raise OSError("port vanished")
 
+        def close(self):
+            self.closed = True
+
+    sink = BrokenSink()
     with pytest.raises(OSError, match="port vanished"):
-        run_replay(grating_scene(5.0), human_trace, tmp_path, sink=BrokenSink(), progress=False)
+        run_replay(grating_scene(5.0), human_trace, tmp_path, sink=sink, progress=False)
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+    assert sink.closed
 
 
 def test_sink_receives_every_block_in_order(tmp_path, human_trace):
@@ -76,12 +83,16 @@ def test_sink_receives_every_block_in_order(tmp_path, human_trace):
             self.blocks.append((index, amplitudes.copy()))
 
         def status(self):
-            return {"state": "recorded", "blocks_sent": len(self.blocks)}
+            return {"state": "closed" if self.closed else "open", "blocks_sent": len(self.blocks)}
+
+        def close(self):
+            self.closed = True
 
     sink = Recorder()
+    sink.closed = False
     summary = run_replay(grating_scene(5.0), human_trace, tmp_path, sink=sink, progress=False)
     assert [i for i, _ in sink.blocks] == list(range(0, summary["output"]["samples"], 50))
     sent = np.concatenate([a[:, 0] for _, a in sink.blocks])
     written = _read_csv(tmp_path / "commands.csv")["ch0_um"]
     np.testing.assert_allclose(sent, written, atol=5e-7)
-    assert summary["device"] == {"state": "recorded", "blocks_sent": len(sink.blocks)}
+    assert summary["device"] == {"state": "closed", "blocks_sent": len(sink.blocks)}

@@ -1,0 +1,487 @@
+"""The host <-> microcontroller wire protocol (normative text: ``device/PROTOCOL.md``).
+
+Pure: messages are frozen dataclasses, :func:`encode` turns one into the bytes of a
+frame, :class:`Decoder` turns any byte stream back into frames and counts what it had
+to throw away. No I/O here; the link and the simulated device own their ports.
+
+Grammar of the byte stream (PROTOCOL.md section 2)::
+
+    stream  = { frame }
+    frame   = COBS(body) 0x00
+    body    = version:u8 type:u8 seq:u16 payload crc:u32      (little-endian)
+    crc     = CRC-32/ISO-HDLC (zlib.crc32) of version..payload
+
+Amplitudes travel as unsigned 16-bit fixed point, :data:`AMPLITUDE_STEP_UM` (1/4096 um)
+per count; phases as unsigned 16-bit fractions of a turn (2 pi / 65536 rad per count).
+"""
+
+from __future__ import annotations
+
+import struct
+import zlib
+from dataclasses import dataclass, field
+
+import numpy as np
+
+PROTOCOL_VERSION = 1
+#: one count of a wire amplitude (um, zero-to-peak)
+AMPLITUDE_STEP_UM = 1.0 / 4096.0
+#: largest wire amplitude (um)
+AMPLITUDE_MAX_UM = 65535 * AMPLITUDE_STEP_UM
+#: one count of a wire phase (rad)
+PHASE_STEP_RAD = 2.0 * np.pi / 65536.0
+#: largest body (version..crc) a receiver must accept, bytes
+MAX_BODY = 4096
+_HEADER = struct.Struct("<BBH")
+_CRC = struct.Struct("<I")
+_MIN_BODY = _HEADER.size + _CRC.size
+
+
+class LinkError(OSError):
+    """Root of the device link's errors: port, handshake, protocol."""
+
+
+class ProtocolError(LinkError):
+    """A message that cannot be put on the wire (value out of range, wrong shape)."""
+
+
+# ---------------------------------------------------------------------------- COBS
+
+def cobs_encode(data: bytes) -> bytes:
+    """Consistent Overhead Byte Stuffing: ``data`` without any zero byte (adds <= 1 + n/254)."""
+    out = bytearray()
+    for piece in data.split(b"\x00"):
+        while len(piece) >= 254:
+            out.append(255)
+            out += piece[:254]
+            piece = piece[254:]
+        out.append(len(piece) + 1)
+        out += piece
+    return bytes(out)
+
+
+def cobs_decode(data: bytes) -> bytes:
+    """Inverse of :func:`cobs_encode`; raises ValueError on a malformed block."""
+    out = bytearray()
+    i, n = 0, len(data)
+    while i < n:
+        code = data[i]
+        end = i + code
+        if code == 0 or end > n:
+            raise ValueError(f"COBS block code {code} at byte {i} of {n}")
+        out += data[i + 1:end]
+        if code < 255 and end < n:
+            out.append(0)
+        i = end
+    return bytes(out)
+
+
+# ---------------------------------------------------------------------------- fixed point
+
+def amplitude_to_wire(amplitudes_um: np.ndarray, limits_um: np.ndarray | None = None
+                      ) -> tuple[np.ndarray, int]:
+    """Amplitudes (um) to wire counts, clamped to [0, limit] per channel.
+
+    Parameters
+    ----------
+    amplitudes_um : (n, channels) float64, um zero-to-peak.
+    limits_um : (channels,) float64 or None
+        Upper limit per channel (um); None means the wire's own maximum.
+
+    Returns
+    -------
+    counts : (n, channels) uint16, round to nearest count (error <= step / 2).
+    clamped : number of values outside [0, limit] (non-finite values count and become 0).
+    """
+    a = np.asarray(amplitudes_um, dtype=np.float64)
+    top = np.full(a.shape[-1], AMPLITUDE_MAX_UM) if limits_um is None else \
+        np.minimum(np.asarray(limits_um, dtype=np.float64), AMPLITUDE_MAX_UM)
+    finite = np.isfinite(a)
+    safe = np.where(finite, a, 0.0)
+    clamped = int((~finite).sum() + (safe < 0.0).sum() + (safe > top).sum())
+    # floor the limit to a whole count so a clamped value never rounds above it
+    top_counts = np.floor(top / AMPLITUDE_STEP_UM + 1e-9)
+    counts = np.minimum(np.rint(np.clip(safe, 0.0, None) / AMPLITUDE_STEP_UM), top_counts)
+    return counts.astype(np.uint16), clamped
+
+
+def amplitude_from_wire(counts: np.ndarray) -> np.ndarray:
+    """Wire counts to amplitudes (um), float64, same shape."""
+    return np.asarray(counts, dtype=np.float64) * AMPLITUDE_STEP_UM
+
+
+def phase_to_wire(phases_rad: np.ndarray) -> np.ndarray:
+    """Phases (rad, any finite value) to uint16 fractions of a turn; non-finite become 0."""
+    p = np.asarray(phases_rad, dtype=np.float64)
+    p = np.where(np.isfinite(p), p, 0.0)
+    return (np.rint(np.mod(p, 2.0 * np.pi) / PHASE_STEP_RAD).astype(np.int64) % 65536
+            ).astype(np.uint16)
+
+
+def phase_from_wire(counts: np.ndarray) -> np.ndarray:
+    """Wire phases to rad in [0, 2 pi), float64."""
+    return np.asarray(counts, dtype=np.float64) * PHASE_STEP_RAD
+
+
+# ---------------------------------------------------------------------------- messages
+
+class DeviceState:
+    """Values of :attr:`Status.state` (PROTOCOL.md section 5)."""
+
+    IDLE, BUFFERING, PLAYING, DRAINING, SILENT = range(5)
+    NAMES = ("idle", "buffering", "playing", "draining", "silent")
+
+
+class ErrorCode:
+    """Values of :attr:`ErrorReport.code` (PROTOCOL.md section 4.7)."""
+
+    BAD_VERSION, NOT_READY, BAD_BLOCK, OVERFLOW, LATE = range(1, 6)
+    NAMES = {1: "bad_version", 2: "not_ready", 3: "bad_block", 4: "overflow", 5: "late"}
+
+
+@dataclass(frozen=True)
+class Hello:
+    """Host -> device: who are you? ``prefill``: samples to buffer before playing."""
+
+    TYPE = 0x01
+    prefill: int
+
+
+@dataclass(frozen=True)
+class Info:
+    """Device -> host: the answer to :class:`Hello`."""
+
+    TYPE = 0x81
+    channels: int
+    sample_rate_hz: float
+    limits_um: tuple[float, ...]
+    buffer_samples: int
+    watchdog_ms: int
+    ramp_ms: int
+    has_phases: bool = False
+    has_sensor: bool = False
+    has_force: bool = False
+    name: str = ""
+    protocol_version: int = PROTOCOL_VERSION
+
+
+@dataclass(frozen=True, eq=False)
+class Block:
+    """Host -> device: ``n`` samples for every channel, starting at sample ``start_index``.
+
+    ``amplitudes``: (n, channels) uint16 wire counts; ``phases``: same shape or None.
+    """
+
+    TYPE = 0x02
+    start_index: int
+    amplitudes: np.ndarray
+    phases: np.ndarray | None = None
+
+    def __eq__(self, other):
+        if not isinstance(other, Block):
+            return NotImplemented
+        same_phases = (self.phases is None and other.phases is None) or (
+            self.phases is not None and other.phases is not None
+            and np.array_equal(self.phases, other.phases))
+        return (self.start_index == other.start_index
+                and np.array_equal(self.amplitudes, other.amplitudes) and same_phases)
+
+
+@dataclass(frozen=True)
+class Heartbeat:
+    """Host -> device: I am alive; answer with a :class:`Status` echoing ``token``."""
+
+    TYPE = 0x03
+    token: int
+
+
+@dataclass(frozen=True)
+class Stop:
+    """Host -> device: stop. ``drain``: play what is buffered first, else ramp down now."""
+
+    TYPE = 0x04
+    drain: bool = False
+
+
+@dataclass(frozen=True)
+class Status:
+    """Device -> host: counters and state (answer to :class:`Heartbeat`)."""
+
+    TYPE = 0x82
+    echo: int
+    state: int
+    play_index: int
+    level: int
+    underruns: int = 0
+    crc_errors: int = 0
+    frames_ok: int = 0
+    lost_frames: int = 0
+    gap_samples: int = 0
+    late_samples: int = 0
+    overflow_samples: int = 0
+    watchdog_trips: int = 0
+    clamped: int = 0
+    measured_um: tuple[float, ...] | None = None
+    force_n: float | None = None
+
+
+@dataclass(frozen=True)
+class ErrorReport:
+    """Device -> host: something the host sent was refused."""
+
+    TYPE = 0x83
+    code: int
+    ref_seq: int
+    detail: int = 0
+    text: str = ""
+
+
+MESSAGES = (Hello, Info, Block, Heartbeat, Stop, Status, ErrorReport)
+_BY_TYPE = {m.TYPE: m for m in MESSAGES}
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One decoded frame: its sequence number and message."""
+
+    seq: int
+    message: object
+
+
+# ---------------------------------------------------------------------------- payloads
+
+_HELLO = struct.Struct("<I")
+_INFO = struct.Struct("<BBBIIHHB")  # version, channels, flags, rate_mHz, buffer, wd, ramp, namelen
+_BLOCK = struct.Struct("<QHBB")     # start_index, n, channels, flags
+_HEARTBEAT = struct.Struct("<I")
+_STOP = struct.Struct("<B")
+_STATUS = struct.Struct("<IBBQI10I")  # echo, state, flags, play_index, level, 9 counters, n_meas
+_ERROR = struct.Struct("<BHI")
+_U16 = np.dtype("<u2")
+_FLAG_PHASES, _FLAG_SENSOR, _FLAG_FORCE = 1, 2, 4
+#: payload bytes left for samples in one Block frame
+BLOCK_SAMPLE_BYTES = MAX_BODY - _MIN_BODY - _BLOCK.size
+
+
+def max_block_samples(channels: int, phases: bool) -> int:
+    """Largest ``n`` one Block frame can carry for ``channels`` channels."""
+    return BLOCK_SAMPLE_BYTES // (2 * channels * (2 if phases else 1))
+
+
+def _u16_limit(values_um) -> list[int]:
+    return [int(c) for c in amplitude_to_wire(np.array([values_um], dtype=np.float64))[0][0]]
+
+
+def _payload(msg) -> bytes:
+    if isinstance(msg, Hello):
+        return _HELLO.pack(msg.prefill)
+    if isinstance(msg, Info):
+        if len(msg.limits_um) != msg.channels:
+            raise ProtocolError(f"Info: {len(msg.limits_um)} limits for {msg.channels} channels")
+        name = msg.name.encode("utf-8")[:255]
+        flags = (_FLAG_PHASES * msg.has_phases | _FLAG_SENSOR * msg.has_sensor
+                 | _FLAG_FORCE * msg.has_force)
+        head = _INFO.pack(msg.protocol_version, msg.channels, flags,
+                          int(round(msg.sample_rate_hz * 1000.0)), msg.buffer_samples,
+                          msg.watchdog_ms, msg.ramp_ms, len(name))
+        return head + np.array(_u16_limit(msg.limits_um), dtype=_U16).tobytes() + name
+    if isinstance(msg, Block):
+        amps = np.asarray(msg.amplitudes)
+        if amps.ndim != 2 or amps.dtype != np.uint16 or amps.shape[1] < 1:
+            raise ProtocolError(f"Block amplitudes: got {amps.dtype} {amps.shape}, expected "
+                                "uint16 (n, channels)")
+        n, ch = amps.shape
+        flags = 0
+        body = amps.astype(_U16).tobytes()
+        if msg.phases is not None:
+            ph = np.asarray(msg.phases)
+            if ph.shape != amps.shape or ph.dtype != np.uint16:
+                raise ProtocolError(f"Block phases: got {ph.dtype} {ph.shape}, expected uint16 "
+                                    f"{amps.shape}")
+            flags = _FLAG_PHASES
+            body += ph.astype(_U16).tobytes()
+        if len(body) > BLOCK_SAMPLE_BYTES:
+            raise ProtocolError(f"Block of {n} samples x {ch} channels is {len(body)} bytes; at "
+                                f"most {BLOCK_SAMPLE_BYTES} fit in one frame")
+        return _BLOCK.pack(msg.start_index, n, ch, flags) + body
+    if isinstance(msg, Heartbeat):
+        return _HEARTBEAT.pack(msg.token)
+    if isinstance(msg, Stop):
+        return _STOP.pack(int(msg.drain))
+    if isinstance(msg, Status):
+        flags = (_FLAG_SENSOR * (msg.measured_um is not None)
+                 | _FLAG_FORCE * (msg.force_n is not None))
+        if msg.measured_um is not None and len(msg.measured_um) == 0:
+            raise ProtocolError("Status measured_um: empty; expected one value per channel or None")
+        counters = (msg.underruns, msg.crc_errors, msg.frames_ok, msg.lost_frames,
+                    msg.gap_samples, msg.late_samples, msg.overflow_samples,
+                    msg.watchdog_trips, msg.clamped)
+        # counters wrap at 2**32 on the wire (PROTOCOL.md 4.6)
+        out = _STATUS.pack(msg.echo, msg.state, flags, msg.play_index, msg.level,
+                           *(c & 0xFFFFFFFF for c in counters), len(msg.measured_um or ()))
+        if msg.measured_um is not None:
+            out += np.array(_u16_limit(msg.measured_um), dtype=_U16).tobytes()
+        if msg.force_n is not None:
+            out += struct.pack("<H", int(min(max(round(msg.force_n * 1000.0), 0), 65535)))
+        return out
+    return _ERROR.pack(msg.code, msg.ref_seq, msg.detail) + msg.text.encode("utf-8")[:200]
+
+
+def encode(msg, seq: int = 0, version: int = PROTOCOL_VERSION) -> bytes:
+    """The bytes of one frame carrying ``msg`` (COBS-stuffed, 0x00-terminated).
+
+    ``seq`` is taken modulo 2**16. Raises :class:`ProtocolError` for a value that does
+    not fit its field.
+    """
+    if not isinstance(msg, MESSAGES):
+        raise ProtocolError(f"cannot encode {type(msg).__name__}; expected one of "
+                            f"{', '.join(m.__name__ for m in MESSAGES)}")
+    try:
+        body = _HEADER.pack(version, msg.TYPE, seq & 0xFFFF) + _payload(msg)
+    except struct.error as exc:
+        raise ProtocolError(f"cannot encode {msg!r}: {exc}") from None
+    body += _CRC.pack(zlib.crc32(body))
+    if len(body) > MAX_BODY:
+        raise ProtocolError(f"{type(msg).__name__} frame is {len(body)} bytes; at most "
+                            f"{MAX_BODY}")
+    return cobs_encode(body) + b"\x00"
+
+
+def _parse(mtype: int, p: bytes):
+    """The message of type ``mtype`` in payload ``p``; ValueError/struct.error if malformed."""
+    if mtype == Hello.TYPE:
+        return Hello(*_HELLO.unpack(p))
+    if mtype == Info.TYPE:
+        version, ch, flags, rate, buf, wd, ramp, namelen = _INFO.unpack_from(p)
+        rest = p[_INFO.size:]
+        if ch < 1 or len(rest) != 2 * ch + namelen:
+            raise ValueError("Info length")
+        limits = amplitude_from_wire(np.frombuffer(rest[:2 * ch], dtype=_U16))
+        return Info(ch, rate / 1000.0, tuple(float(x) for x in limits), buf, wd, ramp,
+                    bool(flags & _FLAG_PHASES), bool(flags & _FLAG_SENSOR),
+                    bool(flags & _FLAG_FORCE), rest[2 * ch:].decode("utf-8"), version)
+    if mtype == Block.TYPE:
+        start, n, ch, flags = _BLOCK.unpack_from(p)
+        k = 2 if flags & _FLAG_PHASES else 1
+        data = p[_BLOCK.size:]
+        if ch < 1 or len(data) != 2 * n * ch * k:
+            raise ValueError("Block length")
+        words = np.frombuffer(data, dtype=_U16).astype(np.uint16)
+        amps = words[:n * ch].reshape(n, ch)
+        phases = words[n * ch:].reshape(n, ch) if k == 2 else None
+        return Block(start, amps, phases)
+    if mtype == Heartbeat.TYPE:
+        return Heartbeat(*_HEARTBEAT.unpack(p))
+    if mtype == Stop.TYPE:
+        (drain,) = _STOP.unpack(p)
+        return Stop(bool(drain))
+    if mtype == Status.TYPE:
+        echo, state, flags, play, level, *counters, n_meas = _STATUS.unpack_from(p)
+        rest = p[_STATUS.size:]
+        n_force = 2 if flags & _FLAG_FORCE else 0
+        if len(rest) != 2 * n_meas + n_force or bool(flags & _FLAG_SENSOR) != (n_meas > 0):
+            raise ValueError("Status length")
+        measured = None
+        if flags & _FLAG_SENSOR:
+            measured = tuple(float(x) for x in amplitude_from_wire(
+                np.frombuffer(rest[:2 * n_meas], dtype=_U16)))
+        force = struct.unpack("<H", rest[2 * n_meas:])[0] / 1000.0 if n_force else None
+        return Status(echo, state, play, level, *counters, measured_um=measured, force_n=force)
+    if mtype == ErrorReport.TYPE:
+        code, ref, detail = _ERROR.unpack_from(p)
+        return ErrorReport(code, ref, detail, p[_ERROR.size:].decode("utf-8"))
+    raise KeyError(mtype)
+
+
+# ---------------------------------------------------------------------------- decoder
+
+@dataclass
+class DecoderCounts:
+    """Why frames were thrown away (each thrown-away frame counts once)."""
+
+    frames_ok: int = 0
+    crc_errors: int = 0
+    cobs_errors: int = 0
+    short_frames: int = 0
+    oversize: int = 0
+    bad_version: int = 0
+    unknown_type: int = 0
+    bad_payload: int = 0
+    lost_frames: int = 0
+    last_bad_version: int | None = None
+
+    @property
+    def discarded(self) -> int:
+        """Frames thrown away for any reason: each one is a resynchronisation."""
+        return (self.crc_errors + self.cobs_errors + self.short_frames + self.oversize
+                + self.bad_version + self.unknown_type + self.bad_payload)
+
+
+@dataclass
+class Decoder:
+    """Incremental frame decoder: ``feed`` any chunks of the stream, get whole frames back.
+
+    A corrupted, truncated or foreign frame is counted in :attr:`counts` and dropped; the
+    next 0x00 starts a fresh frame, so the decoder resynchronises within one frame.
+    Sequence numbers that skip forward count as ``lost_frames``.
+    """
+
+    counts: DecoderCounts = field(default_factory=DecoderCounts)
+    _pending: bytearray = field(default_factory=bytearray)
+    _overflowed: bool = False
+    _next_seq: int | None = None
+
+    def feed(self, data: bytes) -> list[Frame]:
+        frames = []
+        pieces = bytes(data).split(b"\x00")
+        for i, piece in enumerate(pieces):
+            last = i == len(pieces) - 1
+            if not self._overflowed:
+                self._pending += piece
+                if len(self._pending) > MAX_BODY + MAX_BODY // 254 + 1:
+                    self._overflowed = True
+                    self._pending.clear()
+            if last:
+                break
+            if self._overflowed:
+                self.counts.oversize += 1
+                self._overflowed = False
+            elif self._pending:
+                frame = self._frame(bytes(self._pending))
+                if frame is not None:
+                    frames.append(frame)
+            self._pending.clear()
+        return frames
+
+    def _frame(self, stuffed: bytes) -> Frame | None:
+        c = self.counts
+        try:
+            body = cobs_decode(stuffed)
+        except ValueError:
+            c.cobs_errors += 1
+            return None
+        if len(body) < _MIN_BODY:
+            c.short_frames += 1
+            return None
+        if zlib.crc32(body[:-4]) != _CRC.unpack_from(body, len(body) - 4)[0]:
+            c.crc_errors += 1
+            return None
+        version, mtype, seq = _HEADER.unpack_from(body)
+        if version != PROTOCOL_VERSION:
+            c.bad_version += 1
+            c.last_bad_version = version
+            return None
+        if mtype not in _BY_TYPE:
+            c.unknown_type += 1
+            return None
+        try:
+            msg = _parse(mtype, body[_HEADER.size:-4])
+        except (ValueError, struct.error):
+            c.bad_payload += 1
+            return None
+        skipped = (seq - self._next_seq) & 0xFFFF if self._next_seq is not None else 0
+        if skipped < 0x8000:  # a jump backwards is the sender restarting, not a loss
+            c.lost_frames += skipped
+        self._next_seq = (seq + 1) & 0xFFFF
+        c.frames_ok += 1
+        return Frame(seq, msg)

@@ -1,0 +1,216 @@
+"""The host link over real pseudo-terminals: round trips, clamping, faults, unplugging."""
+
+import io
+import os
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from device import protocol as p
+from device.faults import Faults, Plug
+from device.link import CommandSink, LinkError, open_port, open_sink
+from device.simdevice import DeviceConfig, DeviceCore, open_pty, serve_pty
+
+STEP = p.AMPLITUDE_STEP_UM
+RATE = 10_000.0
+
+
+class Played:
+    def __init__(self):
+        self.index, self.values = [], []
+        self.t, self.setpoint = [], []
+
+    def log(self, index, values, phases):
+        self.index.append(index)
+        self.values.append(values)
+
+    def plate_log(self, t, state, setpoint, plate):
+        self.t.append(t)
+        self.setpoint.append(setpoint[:, 0])
+
+    def arrays(self):
+        if not self.index:
+            return np.zeros(0, dtype=np.int64), np.zeros((0, 1))
+        return np.concatenate(self.index), np.concatenate(self.values)
+
+
+@pytest.fixture
+def device():
+    """A simulated device served on a pty by a thread of this process (inspectable)."""
+    played = Played()
+    core = DeviceCore(DeviceConfig(limits_um=(3.0,)), log=played.log, plate_log=played.plate_log)
+    master, slave, path = open_pty()
+    quit_event = threading.Event()
+    thread = threading.Thread(target=serve_pty, args=(core, master),
+                              kwargs={"quit_event": quit_event}, daemon=True)
+    thread.start()
+    yield core, played, path
+    quit_event.set()
+    thread.join(timeout=2.0)
+    os.close(master)
+    os.close(slave)
+
+
+def _signal(n, seed=0):
+    rng = np.random.default_rng(seed)
+    return np.clip(1.5 + np.cumsum(rng.normal(0, 0.02, n)), 0.0, 2.9)[:, None]
+
+
+def test_sim_subprocess_round_trip_matches_the_commands(tmp_path):
+    log = tmp_path / "played.csv"
+    sig = _signal(6000)
+    sink = open_sink("sim", channels=1, rate_hz=RATE, paced=True, log_path=log)
+    assert sink.status()["state"] == "simulated"
+    for b in range(0, 6000, 50):
+        sink.send(b, sig[b:b + 50], None)
+    sink.close()
+    status = sink.status()
+    assert status["state"] == "closed"
+    played = np.loadtxt(log, delimiter=",", skiprows=1)
+    np.testing.assert_array_equal(played[:, 0], np.arange(6000))
+    np.testing.assert_allclose(played[:, 1], sig[:, 0], atol=STEP / 2 + 1e-9)
+    assert status["blocks_sent"] == 120 and status["dropped_blocks"] == 0
+    assert status["frames_sent"] > 120 and status["resyncs"] == 0
+    assert status["device"]["sample_rate_hz"] == RATE
+    assert 0 < status["latency_ms_p50"] <= status["latency_ms_p99"]
+    assert sink._process.returncode == 0  # the sim exited after the Stop
+
+
+def test_replay_streamed_to_the_sim_device_plays_commands_csv(tmp_path):
+    from app.replay import run_replay
+    from app.trace_synth import make_motion, sample
+    from scenes import grating_scene
+
+    trace = sample(make_motion("human", speed_mm_s=80.0, duration_s=1.5, seed=3), 120.0,
+                   noise_mm=0.05, seed=3)
+    sink = open_sink("sim", channels=1, rate_hz=RATE, paced=True, log_path=tmp_path / "p.csv")
+    try:
+        summary = run_replay(grating_scene(5.0, render="sht"), trace, tmp_path, sink=sink,
+                             progress=False)
+    finally:
+        sink.close()
+    commands = np.genfromtxt(tmp_path / "commands.csv", delimiter=",", names=True)
+    played = np.loadtxt(tmp_path / "p.csv", delimiter=",", skiprows=1)
+    assert commands["ch0_um"].max() > 0.5  # the texture did reach the plate
+    np.testing.assert_array_equal(played[:, 0], np.arange(len(commands)))
+    # fixed-point step / 2, plus the CSV's 1e-6 um rounding
+    np.testing.assert_allclose(played[:, 1], commands["ch0_um"], atol=STEP / 2 + 1e-6)
+    # summary.json holds the status at the end of the pipeline, blocks still queued
+    snapshot = summary["device"]
+    assert snapshot["blocks_sent"] + snapshot["queued_blocks"] == summary["counts"]["blocks"]
+    assert sink.status()["blocks_sent"] == summary["counts"]["blocks"]
+
+
+def test_host_clamps_to_the_declared_limit_and_counts(device):
+    core, played, path = device
+    with CommandSink(lambda: open_port(path), 1, RATE, paced=True) as sink:
+        assert sink.info.limits_um == (3.0,)
+        sink.send(0, np.array([[1.0], [3.5], [-1.0], [np.nan]] * 25), None)
+        sink.send(100, np.full((100, 1), 2.0), None)
+    status = sink.status()
+    index, values = played.arrays()
+    np.testing.assert_array_equal(index, np.arange(200))
+    assert values.max() == 3.0 and values.min() == 0.0
+    assert status["clamped_samples"] == 75 and status["device_clamped"] == 0
+
+
+def test_a_device_of_the_wrong_kind_is_refused(device):
+    _, _, path = device
+    with pytest.raises(LinkError, match="1 channel.*needs 2"):
+        CommandSink(lambda: open_port(path), 2, RATE)
+    with pytest.raises(LinkError, match="sample rate 10000 Hz, the pipeline runs at 8000 Hz"):
+        CommandSink(lambda: open_port(path), 1, 8000.0)
+
+
+def test_a_port_that_does_not_exist_or_does_not_answer_is_an_error():
+    with pytest.raises(LinkError, match="cannot open device port '/dev/nonexistent-frictex'"):
+        open_sink("/dev/nonexistent-frictex", 1, RATE)
+    with pytest.raises(LinkError, match="no answer to the handshake"):
+        open_sink("loop://", 1, RATE)
+
+
+def test_live_mode_never_blocks_and_counts_what_it_drops(device):
+    _, _, path = device
+    sink = CommandSink(lambda: open_port(path), 1, RATE, paced=False, queue_blocks=4)
+    t = time.perf_counter()
+    for b in range(200):  # 2 s of output handed over at once
+        sink.send(50 * b, np.ones((50, 1)), None)
+    assert time.perf_counter() - t < 1.0  # generous: the point is "does not wait 2 s"
+    sink.close()
+    status = sink.status()
+    assert status["dropped_blocks"] > 0
+    assert status["dropped_blocks"] + status["blocks_sent"] == 200
+
+
+def test_faults_on_the_wire_are_counted_and_never_played(device):
+    core, played, path = device
+    faults = Faults(flip=4e-4, drop=2e-4, garbage=2e-4, stall=0.005, stall_s=0.05)
+    plug = Plug(lambda: open_port(path), faults, seed=11)
+    sig = _signal(8000, seed=4)
+    sink = CommandSink(plug, 1, RATE, paced=False, stderr=io.StringIO())
+    t0 = time.perf_counter()
+    for b in range(0, 8000, 50):
+        while time.perf_counter() - t0 < b / RATE - 0.01:
+            time.sleep(0.001)
+        sink.send(b, sig[b:b + 50], None)
+    time.sleep(0.05)  # a last heartbeat round trip for the device's counters
+    status = sink.status()
+    sink.close()
+    index, values = played.arrays()
+    assert status["state"] == "connected"
+    assert len(index) > 4000  # most of it played despite damage and 50 ms stalls
+    np.testing.assert_allclose(values[:, 0], sig[index, 0], atol=STEP / 2)
+    assert np.all(np.diff(index) > 0)
+    assert core.decoder.counts.discarded > 0 and status["device_crc_errors"] > 0
+    assert status["resyncs"] > 0  # damage on the way back was caught by the host too
+
+
+def test_unplugging_drops_and_counts_then_reconnects(device):
+    core, played, path = device
+    plug = Plug(lambda: open_port(path))
+    err = io.StringIO()
+    sink = CommandSink(plug, 1, RATE, paced=True, stderr=err)
+    for b in range(0, 1000, 50):
+        sink.send(b, np.full((50, 1), 2.0), None)
+    plug.unplug()
+    time.sleep(0.15)  # longer than the watchdog and its ramp
+    assert sink.status()["state"] == "disconnected"
+    assert "link lost" in err.getvalue()
+    t = time.perf_counter()
+    sink.send(1000, np.full((50, 1), 2.0), None)  # paced, but must not wait for a dead port
+    assert time.perf_counter() - t < 0.5
+    assert core.counters.watchdog_trips >= 1 and np.all(core.setpoint == 0.0)
+    plug.plug()
+    deadline = time.monotonic() + 3.0
+    while sink.status()["state"] != "connected" and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert sink.status()["reconnects"] == 1 and "link back" in err.getvalue()
+    start = played.arrays()[0].size
+    for b in range(5000, 5500, 50):
+        sink.send(b, np.full((50, 1), 1.0), None)
+    sink.close()
+    status = sink.status()
+    index, values = played.arrays()
+    np.testing.assert_array_equal(index[start:], np.arange(5000, 5500))
+    np.testing.assert_allclose(values[start:, 0], 1.0)
+    assert status["dropped_blocks"] >= 1 and status["disconnects"] == 1
+
+
+def test_a_long_stall_lets_the_watchdog_zero_the_output(device):
+    core, played, path = device
+    plug = Plug(lambda: open_port(path))
+    sink = CommandSink(plug, 1, RATE, paced=True, stderr=io.StringIO())
+    sink.send(0, np.full((200, 1), 2.0), None)
+    time.sleep(0.01)
+    plug.port.faults = Faults(stall=1.0, stall_s=0.2)  # the next write hangs 200 ms
+    time.sleep(0.25)
+    plug.port.faults = Faults()
+    sink.close()
+    t = np.concatenate(played.t)
+    sp = np.concatenate(played.setpoint)
+    assert core.counters.watchdog_trips >= 1
+    assert np.any(sp[t > 0.02] == 0.0)  # silent during the stall
+    # the command is a constant 2 um: every fall is the ramp (20 ms = 200 ticks), no step
+    assert np.min(np.diff(sp)) >= -(2.0 / 200 + 1e-12)

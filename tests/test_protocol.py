@@ -1,0 +1,208 @@
+"""The wire protocol: COBS, CRC, every message round trip, any byte string, resync."""
+
+import re
+import zlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from device import protocol as p
+from device.faults import Faults, inject
+
+SETTINGS = settings(derandomize=True, max_examples=150, deadline=None)
+U16 = st.integers(0, 65535)
+U32 = st.integers(0, 2**32 - 1)
+
+
+def _limits(n):
+    # values that are whole wire counts, so the round trip is exact
+    return st.lists(st.integers(1, 65535).map(lambda c: c * p.AMPLITUDE_STEP_UM),
+                    min_size=n, max_size=n).map(tuple)
+
+
+@st.composite
+def blocks(draw):
+    ch = draw(st.integers(1, 4))
+    n = draw(st.integers(0, 60))
+    amps = np.array(draw(st.lists(U16, min_size=n * ch, max_size=n * ch)),
+                    dtype=np.uint16).reshape(n, ch)
+    phases = None
+    if draw(st.booleans()):
+        phases = np.array(draw(st.lists(U16, min_size=n * ch, max_size=n * ch)),
+                          dtype=np.uint16).reshape(n, ch)
+    return p.Block(draw(st.integers(0, 2**64 - 1)), amps, phases)
+
+
+@st.composite
+def infos(draw):
+    ch = draw(st.integers(1, 8))
+    return p.Info(ch, draw(st.integers(1, 4_000_000_000)) / 1000.0, draw(_limits(ch)),
+                  draw(U32), draw(U16), draw(U16), draw(st.booleans()), draw(st.booleans()),
+                  draw(st.booleans()), draw(st.text(max_size=20)))
+
+
+@st.composite
+def statuses(draw):
+    counters = draw(st.lists(U32, min_size=9, max_size=9))
+    measured = draw(st.none() | st.integers(1, 4).flatmap(_limits))
+    force = draw(st.none() | st.integers(0, 65535).map(lambda mn: mn / 1000.0))
+    return p.Status(draw(U32), draw(st.integers(0, 4)), draw(st.integers(0, 2**64 - 1)),
+                    draw(U32), *counters, measured_um=measured, force_n=force)
+
+
+MESSAGES = st.one_of(
+    st.builds(p.Hello, U32), infos(), blocks(), st.builds(p.Heartbeat, U32),
+    st.builds(p.Stop, st.booleans()), statuses(),
+    st.builds(p.ErrorReport, st.integers(0, 255), U16, U32, st.text(max_size=40)))
+
+
+@SETTINGS
+@given(st.binary(max_size=1200))
+def test_cobs_round_trip_has_no_zero_bytes(data):
+    stuffed = p.cobs_encode(data)
+    assert b"\x00" not in stuffed
+    assert len(stuffed) <= len(data) + 1 + len(data) // 254
+    assert p.cobs_decode(stuffed) == data
+
+
+def test_cobs_matches_the_published_examples():
+    # Cheshire & Baker (1999), and the Wikipedia table of COBS examples
+    assert p.cobs_encode(b"\x00") == b"\x01\x01"
+    assert p.cobs_encode(b"\x00\x00") == b"\x01\x01\x01"
+    assert p.cobs_encode(b"\x11\x22\x00\x33") == b"\x03\x11\x22\x02\x33"
+    assert p.cobs_encode(b"\x11\x00\x00\x00") == b"\x02\x11\x01\x01\x01"
+    assert p.cobs_decode(bytes(range(1, 255)).join([b"\xff", b""])) == bytes(range(1, 255))
+
+
+def test_crc_is_crc32_iso_hdlc():
+    assert zlib.crc32(b"123456789") == 0xCBF43926  # the check value PROTOCOL.md quotes
+
+
+@SETTINGS
+@given(MESSAGES, U16, st.lists(st.integers(1, 40), max_size=30))
+def test_every_message_round_trips_through_any_chunking(msg, seq, cuts):
+    data = p.encode(msg, seq)
+    assert data.endswith(b"\x00") and data.count(0) == 1
+    decoder = p.Decoder()
+    frames, pos = [], 0
+    for cut in cuts:
+        frames += decoder.feed(data[pos:pos + cut])
+        pos += cut
+    frames += decoder.feed(data[pos:])
+    assert frames == [p.Frame(seq, msg)]
+    assert decoder.counts.discarded == 0
+
+
+@SETTINGS
+@given(st.binary(max_size=3000), st.lists(st.integers(1, 500), max_size=10))
+def test_any_bytes_give_valid_frames_or_counted_errors(data, cuts):
+    decoder = p.Decoder()
+    frames, pos = [], 0
+    for cut in [*cuts, len(data)]:
+        frames += decoder.feed(data[pos:pos + cut])
+        pos += cut
+    assert all(isinstance(f.message, p.MESSAGES) for f in frames)
+    for f in frames:  # anything accepted is exactly what its bytes encode
+        assert p.Decoder().feed(p.encode(f.message, f.seq)) == [f]
+    terminated = [piece for piece in data.split(b"\x00")[:-1] if piece]
+    assert decoder.counts.frames_ok + decoder.counts.discarded == len(terminated)
+    assert decoder.counts.frames_ok == len(frames)
+
+
+def _stream(n):
+    rng = np.random.default_rng(7)
+    msgs = [p.Block(50 * k, rng.integers(0, 9000, (50, 1)).astype(np.uint16)) if k % 3
+            else p.Heartbeat(k) for k in range(n)]
+    return msgs, [p.encode(m, k) for k, m in enumerate(msgs)]
+
+
+@SETTINGS
+@given(st.integers(0, 2**32 - 1), st.sampled_from(["flip", "drop", "garbage"]))
+def test_decoder_resyncs_after_the_damaged_frame(seed, kind):
+    msgs, frames = _stream(40)
+    faults = Faults(**{kind: 0.004})
+    rng = np.random.default_rng(seed)
+    damaged = [inject(f, faults, rng) for f in frames]
+    # a frame survives if its own bytes are intact and the frame before ended cleanly
+    expect = [k for k, (f, d) in enumerate(zip(frames, damaged))
+              if f == d and (k == 0 or damaged[k - 1].endswith(b"\x00"))]
+    decoder = p.Decoder()
+    got = decoder.feed(b"".join(damaged))
+    assert [f.seq for f in got] == expect
+    assert all(f.message == msgs[f.seq] for f in got)
+    if len(expect) < len(frames):
+        assert decoder.counts.discarded >= 1
+    # lost frames are the holes in the sequence numbers between decoded frames
+    assert decoder.counts.lost_frames == (expect[-1] - expect[0] + 1 - len(expect) if expect else 0)
+
+
+def test_a_flipped_bit_is_a_crc_error_and_costs_one_frame():
+    msgs, frames = _stream(5)
+    bad = bytearray(frames[2])
+    bad[10] ^= 0x10 if bad[10] != 0x10 else 0x20  # never creates a zero byte
+    decoder = p.Decoder()
+    got = decoder.feed(b"".join([frames[0], frames[1], bytes(bad), frames[3], frames[4]]))
+    assert [f.seq for f in got] == [0, 1, 3, 4]
+    assert decoder.counts.crc_errors + decoder.counts.cobs_errors == 1
+    assert decoder.counts.lost_frames == 1
+
+
+def test_an_endless_frame_is_dropped_as_oversize_and_the_next_one_decodes():
+    decoder = p.Decoder()
+    assert decoder.feed(b"\x07" * (2 * p.MAX_BODY)) == []
+    got = decoder.feed(b"\x00" + p.encode(p.Heartbeat(3), 9))
+    assert got == [p.Frame(9, p.Heartbeat(3))]
+    assert decoder.counts.oversize == 1
+
+
+def test_a_frame_of_another_version_is_counted_and_remembered():
+    decoder = p.Decoder()
+    assert decoder.feed(p.encode(p.Heartbeat(1), 0, version=2)) == []
+    assert decoder.counts.bad_version == 1 and decoder.counts.last_bad_version == 2
+
+
+def test_amplitudes_quantise_to_half_a_step_and_clamp_with_a_count():
+    um = np.array([[0.0, 1.0], [1e-9, 2.49999], [3.0, 2.6], [-0.5, np.nan], [np.inf, 17.0]])
+    counts, clamped = p.amplitude_to_wire(um, np.array([2.5, 2.5]))
+    back = p.amplitude_from_wire(counts)
+    inside = np.array([[1, 1], [1, 1], [0, 0], [0, 0], [0, 0]], dtype=bool)
+    np.testing.assert_allclose(back[inside], um[inside], atol=p.AMPLITUDE_STEP_UM / 2)
+    assert clamped == 6
+    assert back.max() <= 2.5
+    np.testing.assert_array_equal(back[2], [2.5, 2.5])
+    np.testing.assert_array_equal(back[3], [0.0, 0.0])  # negative and NaN become 0
+    assert p.amplitude_to_wire(np.array([[20.0]]))[0][0, 0] == 65535
+
+
+def test_phases_wrap_to_one_turn_within_half_a_step():
+    rad = np.array([[-np.pi / 2, 0.0, 2 * np.pi - 1e-7, 7 * np.pi]])
+    back = p.phase_from_wire(p.phase_to_wire(rad))
+    err = np.angle(np.exp(1j * (back - rad)))
+    assert np.abs(err).max() <= p.PHASE_STEP_RAD / 2
+    assert back.min() >= 0 and back.max() < 2 * np.pi
+
+
+def test_encoding_refuses_what_does_not_fit():
+    with pytest.raises(p.ProtocolError, match=r"got float64 \(5, 1\), expected uint16"):
+        p.encode(p.Block(0, np.zeros((5, 1))))
+    too_many = p.max_block_samples(1, False) + 1
+    with pytest.raises(p.ProtocolError, match=f"Block of {too_many} samples"):
+        p.encode(p.Block(0, np.zeros((too_many, 1), dtype=np.uint16)))
+    with pytest.raises(p.ProtocolError, match="Hello"):
+        p.encode(p.Hello(-1))
+    with pytest.raises(p.ProtocolError, match="cannot encode str"):
+        p.encode("hello")
+    assert issubclass(p.ProtocolError, OSError)
+
+
+def test_the_worked_examples_in_protocol_md_are_what_encode_produces():
+    text = (Path(p.__file__).parent / "PROTOCOL.md").read_text(encoding="utf-8")
+    examples = re.findall(r"`encode\((.+?)\)`\s*->\s*`([0-9a-f ]+)`", text)
+    assert len(examples) >= 3
+    names = {m.__name__: m for m in p.MESSAGES} | {"np": np}
+    for call, hexbytes in examples:
+        msg_src, seq = call.rsplit(",", 1)
+        msg = eval(msg_src, names)  # noqa: S307 -- our own document
+        assert p.encode(msg, int(seq)).hex(" ") == hexbytes.strip(), call

@@ -1,0 +1,255 @@
+"""The simulated device's logic on a virtual clock: playing, jitter buffer, plate, watchdog."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from device import protocol as p
+from device.faults import Faults, inject
+from device.protocol import DeviceState as S
+from device.simdevice import DeviceConfig, DeviceCore
+
+RATE = 10_000.0
+STEP = p.AMPLITUDE_STEP_UM
+
+
+class Recorder:
+    """Collects the played log and the per-tick output of a DeviceCore."""
+
+    def __init__(self):
+        self.index, self.values, self.t, self.setpoint, self.plate = [], [], [], [], []
+
+    def log(self, index, values, phases):
+        self.index.append(index)
+        self.values.append(values)
+
+    def plate_log(self, t, state, setpoint, plate):
+        self.t.append(t)
+        self.setpoint.append(setpoint)
+        self.plate.append(plate)
+
+    def played(self):
+        if not self.index:
+            return np.zeros(0, dtype=np.int64), np.zeros((0, 1))
+        return np.concatenate(self.index), np.concatenate(self.values)
+
+    def ticks(self):
+        return np.concatenate(self.t), np.concatenate(self.setpoint), np.concatenate(self.plate)
+
+
+class Host:
+    """Frames from a test host, numbered like the real one."""
+
+    def __init__(self):
+        self.seq = 0
+
+    def __call__(self, msg) -> bytes:
+        self.seq += 1
+        return p.encode(msg, self.seq - 1)
+
+
+def make(config=DeviceConfig(), prefill=100):
+    rec = Recorder()
+    core = DeviceCore(config, log=rec.log, plate_log=rec.plate_log)
+    host = Host()
+    reply = p.Decoder().feed(core.receive(host(p.Hello(prefill)), 0.0))
+    assert [f.message for f in reply] == [config.info()]
+    return core, host, rec
+
+
+def block(start, um):
+    return p.Block(start, p.amplitude_to_wire(np.asarray(um, dtype=float).reshape(-1, 1))[0])
+
+
+def stream(core, host, signal, t_start=0.0, lead_s=0.02, block_n=50, heartbeat=True,
+           end_s=None):
+    """Send ``signal`` in blocks, each ``lead_s`` before it is due, and advance the clock."""
+    n = len(signal)
+    t = t_start
+    for b in range(0, n, block_n):
+        t = t_start + max(b / RATE - lead_s, 0.0)
+        core.advance_to(t)
+        core.receive(host(block(b, signal[b:b + block_n])), t)
+        if heartbeat:
+            core.receive(host(p.Heartbeat(b)), t)
+    end = t_start + n / RATE + 0.05 if end_s is None else end_s
+    while t < end:  # keep the host talking while the buffer plays out
+        t += 0.005
+        core.advance_to(t)
+        if heartbeat:
+            core.receive(host(p.Heartbeat(0)), t)
+    return t
+
+
+def test_played_samples_are_the_commanded_fixed_point_values():
+    core, host, rec = make()
+    signal = 1.5 + np.sin(np.arange(3000) / 37.0)
+    stream(core, host, signal)
+    index, values = rec.played()
+    np.testing.assert_array_equal(index, np.arange(3000))
+    np.testing.assert_allclose(values[:, 0], signal, atol=STEP / 2)
+    # the stream's end is the only time the buffer ran dry
+    assert core.counters.underruns == 1 and core.counters.gap_samples == 0
+    assert core.state == S.BUFFERING and core.counters.watchdog_trips == 0
+
+
+def test_plate_model_is_first_order_with_the_configured_bandwidth():
+    # steady state of a 400 Hz sine through a 400 Hz first-order loop: |H| = 1/sqrt(2),
+    # phase -45 deg (the model is prewarped to hit both exactly)
+    core, host, rec = make(DeviceConfig(bandwidth_hz=400.0, limits_um=(4.0,)))
+    k = np.arange(4000)
+    signal = 2.0 + 1.0 * np.sin(2 * np.pi * 400.0 * k / RATE)
+    stream(core, host, signal, end_s=0.4)
+    t, sp, plate = rec.ticks()
+    start = int(np.argmax(sp[:, 0] > 0))  # first tick played
+    y = plate[start + 2000:start + 3000, 0] - 2.0
+    u = sp[start + 2000:start + 3000, 0] - 2.0
+    gain = np.sqrt(2 * np.mean(y ** 2)) / np.sqrt(2 * np.mean(u ** 2))
+    assert gain == pytest.approx(1 / np.sqrt(2), rel=0.005)
+    lag = np.angle(np.sum(y * np.exp(-2j * np.pi * 400 * np.arange(1000) / RATE))
+                   / np.sum(u * np.exp(-2j * np.pi * 400 * np.arange(1000) / RATE)))
+    assert np.degrees(lag) == pytest.approx(-45.0, abs=0.5)
+
+
+def test_watchdog_ramps_to_zero_within_50_ms_of_host_silence():
+    core, host, rec = make()
+    signal = np.full(600, 2.0)  # 60 ms of 2 um, all sent up front
+    for b in range(0, 600, 50):
+        core.receive(host(block(b, signal[b:b + 50])), 0.0)
+    core.advance_to(0.200)  # the host never speaks again
+    t, sp, plate = rec.ticks()
+    assert core.counters.watchdog_trips == 1
+    assert core.state == S.SILENT and core.level == 0
+    assert sp[t < 0.024, 0].min() == pytest.approx(2.0)     # playing until the timeout
+    silent_from = 0.025 + 0.020
+    assert np.all(sp[t >= silent_from, 0] == 0.0)
+    assert np.all(np.diff(sp[(t >= 0.025), 0]) <= 0)        # a ramp, no step up
+    assert np.max(np.abs(np.diff(sp[:, 0]))) < 2.0 / 100    # no click: at most 1/200 per tick
+    assert plate[t >= 0.050, 0].max() < 0.01 * 2.0
+    index, _ = rec.played()
+    assert index.max() < 260                                 # the rest was flushed, not played
+
+
+def test_a_slow_host_underruns_but_loses_nothing():
+    core, host, rec = make()
+    signal = np.linspace(0.0, 3.0, 2000)
+    t = 0.0
+    for b in range(0, 2000, 50):
+        t += 0.007  # 7 ms per 5 ms block: the device runs dry again and again
+        core.advance_to(t)
+        core.receive(host(block(b, signal[b:b + 50])), t)
+    stream(core, host, np.zeros(0), t_start=t, end_s=t + 0.05)
+    index, values = rec.played()
+    np.testing.assert_array_equal(index, np.arange(2000))
+    np.testing.assert_allclose(values[:, 0], signal, atol=STEP / 2)
+    assert core.counters.underruns >= 5
+    assert core.counters.gap_samples == 0
+
+
+def test_a_lost_block_is_a_gap_that_holds_the_previous_value():
+    core, host, rec = make()
+    signal = np.arange(1000) / 500.0
+    for b in range(0, 1000, 50):
+        if b != 300:
+            core.receive(host(block(b, signal[b:b + 50])), 0.0)
+    stream(core, host, np.zeros(0), end_s=0.099)
+    index, values = rec.played()
+    expect = np.setdiff1d(np.arange(1000), np.arange(300, 350))
+    np.testing.assert_array_equal(index, expect)
+    assert core.counters.gap_samples == 50
+    _, sp, _ = rec.ticks()
+    np.testing.assert_allclose(sp[300:350, 0], signal[299], atol=STEP / 2)
+
+
+def test_late_overflowing_and_wrong_blocks_are_refused_and_counted():
+    core, host, rec = make(DeviceConfig(buffer_samples=256), prefill=10)
+    core.receive(host(block(0, np.ones(50))), 0.0)
+    core.advance_to(0.002)  # 20 played
+    replies = p.Decoder().feed(core.receive(host(block(10, np.ones(50))), 0.002)
+                               + core.receive(host(block(200, np.ones(100))), 0.002)
+                               + core.receive(host(p.Block(300, np.zeros((5, 2), np.uint16))),
+                                              0.002))
+    codes = [(f.message.code, f.message.detail) for f in replies]
+    assert codes == [(p.ErrorCode.LATE, 10), (p.ErrorCode.OVERFLOW, 24),
+                     (p.ErrorCode.BAD_BLOCK, 2)]
+    assert core.counters.late_samples == 10 and core.counters.overflow_samples == 24
+
+
+def test_blocks_before_hello_are_refused():
+    core = DeviceCore(DeviceConfig())
+    reply = p.Decoder().feed(core.receive(p.encode(block(0, np.ones(5)), 0), 0.0))
+    assert reply[0].message.code == p.ErrorCode.NOT_READY
+    assert core.level == 0
+
+
+def test_the_device_clamps_to_its_own_limit_whatever_arrives():
+    core, host, rec = make(DeviceConfig(limits_um=(1.0,)), prefill=1)
+    core.receive(host(block(0, [0.5, 3.0, 9.0])), 0.0)
+    core.advance_to(0.001)
+    _, values = rec.played()
+    np.testing.assert_allclose(values[:, 0], [0.5, 1.0, 1.0], atol=STEP / 2)
+    assert core.counters.clamped == 2
+
+
+def test_status_reports_measured_amplitude_and_force_when_sensors_exist():
+    core, host, rec = make(DeviceConfig(sensor=True, force_n=0.75), prefill=1)
+    core.receive(host(block(0, np.full(200, 2.0))), 0.0)
+    core.advance_to(0.015)
+    (frame,) = p.Decoder().feed(core.receive(host(p.Heartbeat(42)), 0.015))
+    st_ = frame.message
+    assert st_.echo == 42 and st_.force_n == 0.75
+    # after 150 ticks of a 2 um step the modelled plate has settled (tau = 0.4 ms)
+    assert st_.measured_um[0] == pytest.approx(2.0, abs=STEP)
+
+
+def test_drained_stop_plays_everything_then_finishes():
+    core, host, rec = make()
+    core.receive(host(block(0, np.full(500, 1.0))), 0.0)
+    core.receive(host(p.Stop(drain=True)), 0.0)
+    t = 0.0
+    while not core.finished and t < 1.0:
+        t += 0.005
+        core.receive(host(p.Heartbeat(0)), t)
+        core.advance_to(t)
+    assert core.finished
+    assert t == pytest.approx(0.05 + 0.02, abs=0.006)
+    index, _ = rec.played()
+    np.testing.assert_array_equal(index, np.arange(500))
+
+
+@settings(derandomize=True, max_examples=25, deadline=None)
+@given(st.lists(st.floats(0.0, 0.12), min_size=1, max_size=12))
+def test_advancing_the_clock_in_pieces_equals_one_advance(cuts):
+    def run(times):
+        core, host, rec = make()
+        core.receive(host(block(0, 1 + np.sin(np.arange(800) / 9.0))), 0.0)
+        for t in times:
+            core.advance_to(t)
+        return rec
+
+    whole = run([0.12])
+    split = run(sorted(cuts) + [0.12])
+    for a, b in zip(whole.ticks(), split.ticks()):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-15)
+    np.testing.assert_array_equal(whole.played()[0], split.played()[0])
+
+
+@settings(derandomize=True, max_examples=20, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_nothing_that_failed_its_check_is_played(seed):
+    core, host, rec = make()
+    rng = np.random.default_rng(seed)
+    signal = rng.uniform(0, 3.5, 4000)
+    faults = Faults(flip=0.0005, drop=0.0003, garbage=0.0003)
+    t = 0.0
+    for b in range(0, 4000, 50):
+        t = max(b / RATE - 0.01, 0.0)
+        core.advance_to(t)
+        core.receive(inject(host(block(b, signal[b:b + 50])) + host(p.Heartbeat(b)),
+                            faults, rng), t)
+    core.advance_to(t + 0.02)
+    index, values = rec.played()
+    np.testing.assert_allclose(values[:, 0], signal[index], atol=STEP / 2)
+    assert len(index) > 3000  # most blocks got through
+    assert core.decoder.counts.discarded > 0
+    assert len(np.unique(index)) == len(index)
