@@ -104,6 +104,7 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     forces = ForceSummary()
     max_amplitude = 0.0
     contact_samples = 0
+    limited = off_structure = 0
     bar = _progress(total_blocks * block_size / rate_hz, progress)
     try:
         for block in range(0, total_blocks, chunk_blocks):
@@ -126,6 +127,8 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
             forces.add(out)
             max_amplitude = max(max_amplitude, float(out.commands_um.max(initial=0.0)))
             contact_samples += int(out.contact.any(axis=0).sum())
+            limited += out.limited
+            off_structure += out.off_structure
             if sink is not None:
                 for b in range(nb):
                     s = slice(b * block_size, (b + 1) * block_size)
@@ -151,6 +154,13 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     summary = _summary(scene, trace, trace_path, pipeline, state, clamps, fmt, files,
                        total_blocks, contact_samples, max_amplitude, sink)
     summary["fingers"] = errors.report()
+    summary["counts"].update(actuator_limited=limited, off_structure=off_structure)
+    if limited:
+        summary["warnings"].append(f"{limited} samples hit an actuator limit (achieved amplitude "
+                                   "differs from the wanted one; see fingers)")
+    if off_structure:
+        summary["warnings"].append(f"{off_structure} finger samples were off the vibrating "
+                                   "structure and were held at its edge")
     if forces.report() is not None:
         summary["forces"] = forces.report()
     summary["timings"] = _timings(pipeline, total_blocks * block_size / rate_hz,

@@ -12,6 +12,10 @@ amplitude. With several fingers down it can serve only one: frictex serves the f
 that has been touching longest (the first down), so a second finger landing does not
 snatch the texture from the first. Other fingers get the same amplitude, and what they
 get is reported as their achieved amplitude.
+
+The modal profiles (a beam or a 2D plate with several modes) get
+``device.modal_actuation.ModalActuation``: one amplitude and phase per channel, a
+different amplitude under each finger.
 """
 
 from __future__ import annotations
@@ -26,12 +30,15 @@ class Actuated:
     """commands_um : (n, channels) amplitude per channel (um, zero-to-peak).
     phases_rad : (n, channels) or None. achieved_um : (F, n) amplitude under each finger.
     limited : number of samples where a channel limit changed the solution.
+    off_structure : finger samples whose position lay off the vibrating structure and
+    were held at its edge (modal actuation only).
     """
 
     commands_um: np.ndarray
     phases_rad: np.ndarray | None
     achieved_um: np.ndarray
     limited: int = 0
+    off_structure: int = 0
 
 
 def primary_finger(contact: np.ndarray, touch_start: np.ndarray) -> np.ndarray:
@@ -62,4 +69,11 @@ def make_actuation(device):
     """The actuation for a device profile (``textures.model.DeviceProfile``)."""
     if device.profile == "plate-seed003":
         return SingleModeActuation()
+    if device.structure is not None:
+        from device.modal_actuation import make_modal_actuation  # built only for modal scenes
+        return make_modal_actuation(device)
+    from textures.model import FORCE_PROFILES
+    if device.profile in FORCE_PROFILES:
+        from device.push_actuation import make_push_actuation  # travelling waves only
+        return make_push_actuation(device.profile)
     raise ValueError(f"device profile {device.profile!r} has no actuation")

@@ -25,6 +25,10 @@ shift phi (W_A = e^{j phi} W_B); +-90 degrees gives a pure travelling wave, 0 or
 standing wave, and the force on a still finger follows the ratio and reverses with the
 sign of phi (:func:`phase_shift_response`).
 
+Seed 004, Fig. 3c: the driving force of a travelling amplitude on a finger
+(:func:`driving_force`; here, not in ``rendering``, so that ``device`` never imports
+``rendering``).
+
 Seed 002, eq 6: the surface points' horizontal speed, S_h = pi W h omega / lambda
 (:func:`surface_speed_mm_s`).
 """
@@ -40,10 +44,19 @@ from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
 from device.beam import FreeFreeBeam, ModesError
 from device.ring import RingMode, RingResonator
-from rendering.tangential import DrivingForceParams, driving_force
+from textures.model import DrivingForceParams
 
 #: envelope samples per wavelength (the window min/max is then within ~1e-4 of exact)
 _SAMPLES_PER_WAVELENGTH = 512
+
+
+def driving_force(travelling_um, normal_force_n, params: DrivingForceParams) -> np.ndarray:
+    """F_p (N) = k_p F_n max(0, w_t - w_th) for a travelling amplitude w_t (um, zero-to-peak).
+
+    Seed 004, Fig. 3c. Arguments broadcast together.
+    """
+    drive = np.maximum(np.asarray(travelling_um, dtype=np.float64) - params.threshold_um, 0.0)
+    return params.slope_per_um * np.asarray(normal_force_n, dtype=np.float64) * drive
 
 
 def surface_speed_mm_s(w_um, thickness_mm: float, wavelength_mm: float, frequency_hz: float):
@@ -107,6 +120,10 @@ class TwoModeWave:
         low = minimum_filter1d(env, self.window, mode="nearest")
         high = maximum_filter1d(env, self.window, mode="nearest")
         return np.divide(low, high, out=np.zeros_like(low), where=high > 0)
+
+    def local_max(self, modal: np.ndarray) -> np.ndarray:
+        """Local envelope maximum on the grid (g,), um: max of |W| over the window of :meth:`local_ratio`."""
+        return maximum_filter1d(np.abs(self.field(modal)), self.window, mode="nearest")
 
     @property
     def window(self) -> int:
@@ -172,8 +189,7 @@ class BeamActuation:
 
     def gain_at(self, x_mm) -> np.ndarray:
         """Local envelope maximum per unit W (the same window as :meth:`ratio_at`)."""
-        env = np.abs(self.wave.field(self.wave.modal(1.0, 1)))
-        return np.interp(x_mm, self.wave.x_mm, maximum_filter1d(env, self.wave.window, mode="nearest"))
+        return np.interp(x_mm, self.wave.x_mm, self.wave.local_max(self.wave.modal(1.0, 1)))
 
 
 def phase_shift_response(wave: TwoModeWave, phase_rad, amplitude_um: float,

@@ -25,13 +25,13 @@ def compose(layer_outputs, blends, contact: np.ndarray, finger_masks=None) -> np
     layer_outputs : sequence of (mu, covers) pairs, in drawing order.
     blends : sequence of "multiply" | "replace", one per layer.
     contact : (F, n) bool, fingers touching.
-    finger_masks : optional sequence of (F,) bool per layer: which fingers the layer
-        applies to (None = all).
+    finger_masks : optional sequence, one per layer, of (F, n) bool: which fingers the
+        layer applies to at each sample (None = all); see ``rendering.finger_select``.
     """
     mu = np.ones(contact.shape)
     for k, ((layer_mu, covers), blend) in enumerate(zip(layer_outputs, blends)):
         if finger_masks is not None and finger_masks[k] is not None:
-            covers = covers & finger_masks[k][:, None]
+            covers = covers & finger_masks[k]
         if blend == "replace":
             mu = np.where(covers, layer_mu, mu)
         else:

@@ -21,17 +21,20 @@ import numpy as np
 
 from device.actuation import make_actuation
 from rendering.compose import compose
+from rendering.finger_select import finger_masks
 from rendering.friction import ClampCounts, make_friction_model
 from rendering.sho import ShoRenderer
 from rendering.sht import ShtRenderer
 from rendering.trace_file import Trace
 from rendering.tracks import TrackerConfig, TrackerState, track
-from textures.model import Scene
+from textures.model import FORCE_PROFILES, Scene
 
 #: renderer names accepted by ``render_override`` and reported by ``frictex report``
 RENDERERS = ("sho-held", "sho-predicted", "sht", "hybrid")
 #: what a layer's ``render = "sho"`` means unless overridden
 DEFAULT_SHO = "sho-predicted"
+#: friction inversions: the closed form (seed 003, eq 3) or a table built at scene load
+INVERSIONS = ("exact", "lut")
 
 STAGES = ("tracking", "layers", "composition", "inversion", "actuation")
 
@@ -47,6 +50,10 @@ class BlockOutput:
     commands_um : (n, channels) channel commands (um). phases_rad : (n, channels) or None.
     clamps : counts of the friction inversion's guards in this block.
     limited : samples where an actuator limit changed the actuation's solution.
+    off_structure : finger samples outside the vibrating structure (held at its edge).
+    forces : travelling-wave profiles only (else None): per finger the wanted and
+        achieved force vectors (N) and key-click button state per sample
+        (``rendering.force_layers.ForceBlock``).
     """
 
     index0: int
@@ -62,12 +69,15 @@ class BlockOutput:
     phases_rad: np.ndarray | None
     clamps: ClampCounts
     limited: int = 0
+    off_structure: int = 0
+    forces: object | None = None
 
 
 @dataclass(frozen=True)
 class PipelineState:
     tracker: TrackerState
     layers: tuple
+    forces: object | None = None  # rendering.force_layers.ForceState on force profiles
 
 
 @dataclass
@@ -105,7 +115,8 @@ class Pipeline:
 
     def __init__(self, scene: Scene, rate_hz: float = 10_000.0, block_size: int = 50,
                  render_override: str | None = None, sho_variant: str = DEFAULT_SHO,
-                 t0_s: float = 0.0, tracker: TrackerConfig | None = None):
+                 t0_s: float = 0.0, tracker: TrackerConfig | None = None,
+                 inversion: str = "exact"):
         if rate_hz <= 0 or not np.isfinite(rate_hz):
             raise ValueError(f"output rate {rate_hz!r} Hz: expected a positive number")
         if block_size < 1:
@@ -124,8 +135,19 @@ class Pipeline:
         self.renderers = tuple(_layer_renderer(layer, mode, self.rate_hz)
                                for layer, mode in zip(scene.layers, self.layer_modes))
         self.blends = tuple(layer.blend for layer in scene.layers)
+        self.selectors = tuple(layer.fingers for layer in scene.layers)
+        if inversion not in INVERSIONS:
+            raise ValueError(f"unknown inversion {inversion!r}; expected one of "
+                             f"{', '.join(INVERSIONS)}")
         self.friction = make_friction_model(scene.device)
+        if inversion == "lut":
+            from rendering.inversion_lut import LutFrictionModel
+            self.friction = LutFrictionModel(self.friction)
         self.actuation = make_actuation(scene.device)
+        self.forces = None
+        if scene.device.profile in FORCE_PROFILES:
+            from rendering.force_layers import ForceStage  # travelling-wave profiles only
+            self.forces = ForceStage(scene, self.rate_hz, self.actuation)
         self.timer = StageTimer()
 
     @property
@@ -134,7 +156,8 @@ class Pipeline:
 
     def initial_state(self) -> PipelineState:
         return PipelineState(tracker=TrackerState(),
-                             layers=tuple(r.initial_state() for r in self.renderers))
+                             layers=tuple(r.initial_state() for r in self.renderers),
+                             forces=self.forces.initial_state() if self.forces else None)
 
     def process(self, block_index: int, samples: Trace | None, state: PipelineState,
                 n_blocks: int = 1) -> tuple[BlockOutput, PipelineState]:
@@ -161,23 +184,32 @@ class Pipeline:
             self.timer.layer_seconds[layer.name] = self.timer.layer_seconds.get(layer.name, 0.0) + dt
 
         t = clock()
-        mu_target = compose(outputs, self.blends, fingers.contact)
+        mu_target = compose(outputs, self.blends, fingers.contact,
+                            finger_masks(self.selectors, fingers))
         t1 = clock()
         secs["composition"] += t1 - t
 
-        wanted, clamps = self.friction.invert(mu_target, fingers.force)
+        forces, force_state = None, state.forces
+        if self.forces is None:
+            wanted, clamps = self.friction.invert(mu_target, fingers.force)
+        else:  # inversion and actuation in one: the wave serves force targets
+            forces, act, wanted, clamps, force_state = self.forces.render(fingers, mu_target,
+                                                                          state.forces)
         t2 = clock()
         secs["inversion"] += t2 - t1
 
-        act = self.actuation.command(wanted, fingers)
+        if forces is None:
+            act = self.actuation.command(wanted, fingers)
         secs["actuation"] += clock() - t2
 
         out = BlockOutput(index0=index0, t_s=fingers.t_s, finger_ids=fingers.ids,
                           contact=fingers.contact, x_mm=fingers.x_pred, y_mm=fingers.y_pred,
                           mu_target=mu_target, wanted_um=wanted, amplitude_um=act.achieved_um,
                           commands_um=act.commands_um, phases_rad=act.phases_rad,
-                          clamps=clamps, limited=act.limited)
-        return out, PipelineState(tracker=tracker_state, layers=tuple(layer_states))
+                          clamps=clamps, limited=act.limited,
+                          off_structure=act.off_structure, forces=forces)
+        return out, PipelineState(tracker=tracker_state, layers=tuple(layer_states),
+                                  forces=force_state)
 
 
 def build_pipeline(scene: Scene, rate_hz: float = 10_000.0, block_size: int = 50,

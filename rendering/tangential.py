@@ -41,26 +41,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import lambertw
 
+from device.travelling import driving_force
 from rendering.friction import asymptote, forward_mu
-from textures.model import FrictionParams
-
-
-@dataclass(frozen=True)
-class DrivingForceParams:
-    """Constants of the tangential model (defaults: seed 004, Fig. 3c; seed 002 finger).
-
-    mu0 : friction coefficient of the finger on the plate at rest (F_f = mu0 F_n mu').
-    slope_per_um : k_p, driving force per um of travelling amplitude per N of normal
-        force (seed 004: 0.13 N/um at 1 N).
-    threshold_um : w_th, travelling amplitude below which there is no driving force
-        (seed 004: "near 1 um").
-    v_hold_mm_s : speed below which the finger's direction of motion is held.
-    """
-
-    mu0: float = 0.5
-    slope_per_um: float = 0.13
-    threshold_um: float = 1.0
-    v_hold_mm_s: float = 2.0
+from textures.model import DrivingForceParams, FrictionParams
 
 
 @dataclass(frozen=True)
@@ -89,15 +72,6 @@ class TangentialCommand:
     achieved_n: np.ndarray
     unreachable: np.ndarray
     nonfinite: np.ndarray
-
-
-def driving_force(travelling_um, normal_force_n, params: DrivingForceParams) -> np.ndarray:
-    """F_p (N) = k_p F_n max(0, w_t - w_th) for a travelling amplitude w_t (um, zero-to-peak).
-
-    Seed 004, Fig. 3c. Arguments broadcast together.
-    """
-    drive = np.maximum(np.asarray(travelling_um, dtype=np.float64) - params.threshold_um, 0.0)
-    return params.slope_per_um * np.asarray(normal_force_n, dtype=np.float64) * drive
 
 
 def _forces(w_um, normal_force_n, twr, friction: FrictionParams, params: DrivingForceParams):
@@ -165,9 +139,7 @@ def invert_tangential(target_n, velocity_mm_s, normal_force_n, twr, limit_um: fl
     n = target.shape[0]
     fn = np.broadcast_to(np.asarray(normal_force_n, dtype=np.float64), (n,))
     tau = np.broadcast_to(np.asarray(twr, dtype=np.float64), (n,))
-    v = np.asarray(velocity_mm_s, dtype=np.float64)
-    moving = np.isfinite(v) & (np.abs(v) >= params.v_hold_mm_s)
-    motion = _hold(np.where(moving, np.sign(v), 0), state.motion)
+    _, motion = finger_motion(velocity_mm_s, params.v_hold_mm_s, state.motion)
 
     nonfinite = ~np.isfinite(target)
     goal = np.where(nonfinite, params.mu0 * fn, target)
@@ -207,6 +179,24 @@ def invert_tangential(target_n, velocity_mm_s, normal_force_n, twr, limit_um: fl
                                 (below | above) & ~nonfinite, nonfinite)
     new_state = TangentialState(int(motion[-1]), int(direction[-1])) if n else state
     return command, new_state
+
+
+def finger_motion(velocity_mm_s, v_hold_mm_s: float, initial: int) -> tuple[np.ndarray, np.ndarray]:
+    """Which samples move, and the held direction of motion m (+1/-1) at each.
+
+    Parameters
+    ----------
+    velocity_mm_s : (n,) velocity along the wave axis (mm/s); NaN/inf counts as still.
+    v_hold_mm_s : speed below which the finger is still and m holds its last value.
+    initial : m before the first sample (+1 or -1).
+
+    Returns
+    -------
+    moving : bool (n,). motion : int64 (n,) of +1/-1.
+    """
+    v = np.asarray(velocity_mm_s, dtype=np.float64)
+    moving = np.isfinite(v) & (np.abs(v) >= v_hold_mm_s)
+    return moving, _hold(np.where(moving, np.sign(v), 0), initial)
 
 
 def _hold(values: np.ndarray, initial: int) -> np.ndarray:

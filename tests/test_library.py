@@ -14,21 +14,27 @@ from textures.library import (LIBRARY_DIR, TRACES_DIR, list_scenes, list_traces,
                               resolve_trace)
 from textures.loader import check_scene, load_scene
 
+# the scenes the haptic-core issue asks for, on seed 003's 5-inch screen
 SCENES = ["composed-fine-grating-in-disc", "grating-0.6mm", "grating-15mm", "grating-5mm",
           "objects-bump-edge-disc", "raster-map"]
 
 
 def test_the_library_holds_the_issue_scenes():
-    assert [e.name for e in list_scenes()] == SCENES
+    names = [e.name for e in list_scenes()]
+    assert names == sorted(names) and set(SCENES) <= set(names)
     assert all(e.kind == "scene" and e.description for e in list_scenes())
 
 
-@pytest.mark.parametrize("name", SCENES)
+@pytest.mark.parametrize("name", [e.name for e in list_scenes()])
 def test_every_bundled_scene_is_clean(name):
     scene, problems, warnings = check_scene(resolve_scene(name))
     assert problems == [] and warnings == []
     assert scene.name == name
-    assert scene.display == model.Display(108.0, 64.8, 800, 480)
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_core_scenes_are_for_seed003_screen(name):
+    assert load_scene(resolve_scene(name)).display == model.Display(108.0, 64.8, 800, 480)
 
 
 @pytest.mark.parametrize("period, render", [(15.0, "sho"), (5.0, "sht"), (0.6, "sht")])
@@ -105,7 +111,7 @@ def test_unknown_names(call, name, pattern):
 def test_library_command(capsys):
     assert main(["library"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert len(lines) == len(SCENES) + len(list_traces())
+    assert len(lines) == len(list_scenes()) + len(list_traces())
     first = lines[0].split()
     assert first[:2] == ["composed-fine-grating-in-disc", "scene"]
     assert any(line.split()[:2] == ["swipe-40mms-50hz", "trace"] for line in lines)

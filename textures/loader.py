@@ -13,8 +13,10 @@ default shown. Layers are drawn and composed in file order (later on top).
     width_px, height_px               # required integers >= 1 (visual layer, one-to-one maps)
 
     [device]                          # optional table
-    profile = "plate-seed003"         # one of textures.model.DEVICE_PROFILES
+    profile = "plate-seed003"         # one of textures.model.DEVICE_PROFILES: plate-seed003
+                                      #   (one channel), beam-seed000, plate-seed001 (modal)
     amplitude_limit_um = 2.5          # > 0, zero-to-peak; the host never asks for more
+                                      #   under a finger
     normal_force_n = 0.5              # > 0; nominal force for warnings and force-less traces
     [device.friction]                 # optional: seed 003 eq 2 constants
     b_per_um = 1.67                   # > 0
@@ -25,16 +27,53 @@ default shown. Layers are drawn and composed in file order (later on top).
     forces_n = [...]                  # >= 1 value, >= 0, strictly increasing
     mu = [[1, ...], ...]              # one row per force, one value per amplitude: each row
                                       # starts at 1 and strictly decreases, values in (0, 1]
+    [device.structure]                # modal profiles only; every key optional (defaults
+                                      #   from the papers, see textures.model)
+      # profile = "beam-seed000" (seed 000, Table I; the beam lies along display x):
+    length_mm = 350, width_mm = 6, thickness_mm = 6    # > 0
+    youngs_gpa = 57, density_kg_m3 = 2561              # > 0
+    poisson = 0.33                    # in (-1, 0.5)
+    theory = "euler-bernoulli"        # | "timoshenko"
+    orders = [16, 17]                 # distinct flexural mode orders >= 1, at most 26
+    actuators_mm = [60, 290]          # one per mode, on the beam (from its end x = 0)
+    x0_mm = 0                         # display x of the beam's end; the display's x span
+                                      #   must lie on the beam
+    channel_limit_um = 0.75           # > 0, per transducer, zero-to-peak
+    modes_file = "modes.csv"          # optional measured shapes (device.measured_modes,
+                                      #   path relative to this file): one column per mode,
+                                      #   replacing orders (do not give both)
+      # profile = "plate-seed001" (seed 001, section 4; channels V_AC, V_BD):
+    width_mm = 140, height_mm = 140, thickness_mm = 4, youngs_gpa = 57,
+    density_kg_m3 = 2561, poisson = 0.33
+    order = 8                         # k of seed 001 eq 6, integer >= 1
+    x0_mm = 0, y0_mm = 0              # display position of the plate's corner; the
+                                      #   display must lie on the plate
+    channel_limit_um                  # > 0; default: amplitude_limit_um
+      # both:
+    method = "regularised"            # exact | regularised | bounded (device.modal)
+    rcond = 0.1                       # in (0, 1), the regularisation threshold
+    [device.driving]                  # travelling-wave profiles only (travelling-beam-seed002,
+                                      #   ring-seed004): the driving-force model
+    mu0 = 0.5                         # > 0, friction coefficient at rest (F_f = mu0 F_n mu')
+    slope_per_um = 0.13               # > 0, N of drive per um per N of normal force (seed 004)
+    threshold_um = 1.0                # >= 0, travelling amplitude with no drive (seed 004)
+    v_hold_mm_s = 2.0                 # > 0, below this speed a finger is still
 
     [[layer]]                         # one or more
     type = "grating"                  # required: grating | waveform | rectangle | disc |
-                                      #   edge | bump | line | raster
+                                      #   edge | bump | line | raster | directional |
+                                      #   guidance | keyclick (the last three: force layers)
     name = "..."                      # unique in the file; default "<type>-<n>"
     render = "auto"                   # sho | sht | hybrid | auto. auto: a periodic layer uses
                                       #   textures.model.auto_render_mode(period_mm) (SHO above
                                       #   5 mm, seed 003 section 6); objects and rasters use sho.
                                       #   sht and hybrid need a periodic layer.
     blend = "multiply"                # multiply | replace (opaque where the layer covers)
+    fingers = "any"                   # which fingers feel the layer: "any" | "1" | "2" | ...
+                                      #   (1-based, in order of touch-down among the fingers
+                                      #   touching at that sample) | "left-most" |
+                                      #   "right-most" | "top-most" | "bottom-most" (evaluated
+                                      #   per output sample; y points down)
     region = { x_mm, y_mm, width_mm, height_mm, angle_deg = 0 }   # optional rectangle, or
     region = { cx_mm, cy_mm, radius_mm }                          # a disc; on the display
     [layer.visual]                    # optional colours for the visual layer
@@ -66,10 +105,26 @@ Layer keys by type (mu' is relative friction in (0, 1]; positions in mm, angles 
   height_mm; tile also takes tile_width_mm / tile_height_mm (default: the image at the
   display's pixel size); one-to-one takes neither (one image pixel per display pixel).
 
+Force layers (``textures.model.FORCE_LAYERS``; only on the travelling-wave profiles, whose
+waves run along display x; they take no ``blend``: see ``rendering.force_layers``):
+
+- ``directional``: angle_deg = 0 (the forward direction: 0 = +x, 180 = -x), and either
+  mu_forward and mu_backward (mu' in (0, 1] for each direction of travel) or
+  force_forward_n and force_backward_n (net tangential force in N, positive resisting
+  the finger; zero and negative allowed).
+- ``guidance``: x_mm, y_mm (target point, on the display), line = false (true: pull to
+  the line through the point at line_angle_deg = 90), gain_n_per_mm (> 0),
+  max_force_n (> 0).
+- ``keyclick`` (seed 004, Fig. 5): x_mm, y_mm, width_mm, height_mm (the button, on the
+  display), press_n = 0.5, click_n = 0.8, release_n = 0.4 (normal-force thresholds,
+  release_n < press_n < click_n), dwell_s = 0.01 (>= 0), force_n = 0.1 (push, N),
+  first_push = "+x" | "-x" (direction of the push before the click).
+
 Objects, points, regions and sprites must lie on the display. Every problem in a file is
 reported (not only the first) as ``file:line: field: message``; ``frictex validate`` also
 warns, without failing, where a layer asks for a mu' the device cannot reach at its
-nominal normal force (``rendering.friction.mu_floor``).
+nominal normal force (``rendering.friction.mu_floor``), and where a layer is for one
+finger on a one-channel device (which serves only the finger touching longest).
 """
 
 from __future__ import annotations
@@ -78,17 +133,21 @@ import difflib
 import math
 import re
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable
 
+from device.beam import THEORIES, ModesError
+from device.modal import METHODS
 from textures import model
 from textures.errors import KeyPath, Locator, Problem, TextureError, field_name
 from textures.raster_io import read_grey
 
 FORMAT_VERSION = 1
 
-LAYER_TYPES = ("grating", "waveform", "rectangle", "disc", "edge", "bump", "line", "raster")
+LAYER_TYPES = ("grating", "waveform", "rectangle", "disc", "edge", "bump", "line", "raster",
+               "directional", "guidance", "keyclick")
+FORCE_TYPES = ("directional", "guidance", "keyclick")
 PERIODIC_TYPES = ("grating", "waveform")
 RENDER_CHOICES = ("auto",) + model.RENDER_MODES
 
@@ -141,6 +200,13 @@ class Colour:
 
 
 @dataclass(frozen=True)
+class Selector:
+    """A layer's ``fingers`` selector (see ``rendering.finger_select``)."""
+
+    default: Any = REQUIRED
+
+
+@dataclass(frozen=True)
 class NumList:
     """A list of numbers, each checked like ``item``; at least ``min_len`` of them."""
 
@@ -157,7 +223,7 @@ class Rows:
     default: Any = REQUIRED
 
 
-Spec = Num | Int | Choice | Text | Flag | Colour | NumList | Rows
+Spec = Num | Int | Choice | Text | Flag | Colour | Selector | NumList | Rows
 
 MU = Num("relative friction mu'", gt=0.0, le=1.0)
 MU_HIGH = Num("relative friction mu'", default=1.0, gt=0.0, le=1.0)
@@ -179,8 +245,33 @@ FRICTION = {"b_per_um": Num("1/um", _FRICTION.b_per_um, gt=0.0),
 CALIBRATION = {"amplitudes_um": NumList(Num("um zero-to-peak", ge=0.0), min_len=2),
                "forces_n": NumList(Num("N", ge=0.0)),
                "mu": Rows(MU)}
+_BEAM = model.BeamStructure()
+_PLATE = model.PlateStructure()
+MATERIAL = {"youngs_gpa": Num("GPa", _BEAM.youngs_gpa, gt=0.0),
+            "density_kg_m3": Num("kg/m^3", _BEAM.density_kg_m3, gt=0.0),
+            "poisson": Num("Poisson's ratio", _BEAM.poisson, gt=-1.0, lt=0.5)}
+SOLVER = {"method": Choice(METHODS, _BEAM.method),
+          "rcond": Num("relative to the largest singular value", _BEAM.rcond, gt=0.0, lt=1.0)}
+STRUCTURES: dict[str, dict[str, Spec]] = {
+    "beam-seed000": {"length_mm": Num("mm", _BEAM.length_mm, gt=0.0),
+                     "width_mm": Num("mm", _BEAM.width_mm, gt=0.0),
+                     "thickness_mm": Num("mm", _BEAM.thickness_mm, gt=0.0), **MATERIAL,
+                     "theory": Choice(THEORIES, _BEAM.theory),
+                     "orders": NumList(Num("mode order", ge=1.0), default=_BEAM.orders),
+                     "actuators_mm": NumList(Num("mm"), default=_BEAM.actuators_mm),
+                     "x0_mm": Num("mm", _BEAM.x0_mm),
+                     "channel_limit_um": Num("um zero-to-peak", _BEAM.channel_limit_um, gt=0.0),
+                     **SOLVER, "modes_file": Text(None)},
+    "plate-seed001": {"width_mm": Num("mm", _PLATE.width_mm, gt=0.0),
+                      "height_mm": Num("mm", _PLATE.height_mm, gt=0.0),
+                      "thickness_mm": Num("mm", _PLATE.thickness_mm, gt=0.0), **MATERIAL,
+                      "order": Int("mode order k", _PLATE.order, ge=1),
+                      "x0_mm": Num("mm", _PLATE.x0_mm), "y0_mm": Num("mm", _PLATE.y0_mm),
+                      "channel_limit_um": Num("um zero-to-peak", None, gt=0.0), **SOLVER},
+}
 COMMON = {"type": Choice(LAYER_TYPES), "name": Text(None),
-          "render": Choice(RENDER_CHOICES, "auto"), "blend": Choice(model.BLEND_MODES, "multiply")}
+          "render": Choice(RENDER_CHOICES, "auto"), "blend": Choice(model.BLEND_MODES, "multiply"),
+          "fingers": Selector("any")}
 LAYER_TABLES = ("region", "visual")
 RECT_REGION = {"x_mm": POS, "y_mm": POS, "width_mm": SIZE, "height_mm": SIZE, "angle_deg": ANGLE}
 DISC_REGION = {"cx_mm": POS, "cy_mm": POS, "radius_mm": SIZE}
@@ -204,7 +295,22 @@ LAYER_KEYS: dict[str, dict[str, Spec]] = {
                "width_mm": Num("mm", None, gt=0.0), "height_mm": Num("mm", None, gt=0.0),
                "tile_width_mm": Num("mm", None, gt=0.0), "tile_height_mm": Num("mm", None, gt=0.0),
                "mu_black": MU, "mu_white": MU_HIGH},
+    "directional": {"angle_deg": ANGLE, "mu_forward": Num(MU.unit, None, gt=0.0, le=1.0),
+                    "mu_backward": Num(MU.unit, None, gt=0.0, le=1.0),
+                    "force_forward_n": Num("N, positive resisting the finger", None),
+                    "force_backward_n": Num("N, positive resisting the finger", None)},
+    "guidance": {"x_mm": POS, "y_mm": POS, "line": Flag(False), "line_angle_deg": Num("deg", 90.0),
+                 "gain_n_per_mm": Num("N/mm", gt=0.0), "max_force_n": Num("N", gt=0.0)},
+    "keyclick": {"x_mm": POS, "y_mm": POS, "width_mm": SIZE, "height_mm": SIZE,
+                 "press_n": Num("N", 0.5, gt=0.0), "click_n": Num("N", 0.8, gt=0.0),
+                 "release_n": Num("N", 0.4, ge=0.0), "dwell_s": Num("s", 0.01, ge=0.0),
+                 "force_n": Num("N", 0.1, gt=0.0), "first_push": Choice(("+x", "-x"), "+x")},
 }
+_DRIVING = model.DrivingForceParams()
+DRIVING = {"mu0": Num("friction coefficient", _DRIVING.mu0, gt=0.0),
+           "slope_per_um": Num("N per um per N", _DRIVING.slope_per_um, gt=0.0),
+           "threshold_um": Num("um zero-to-peak", _DRIVING.threshold_um, ge=0.0),
+           "v_hold_mm_s": Num("mm/s", _DRIVING.v_hold_mm_s, gt=0.0)}
 
 _NUMBER_WITH_UNIT = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s].*)?$")
 _HEX = re.compile(r"^#(?:[0-9a-fA-F]{3}|[0-9a-fA-F]{6})$")
@@ -317,9 +423,27 @@ class _Reader:
                 return self.report(path, f'expected a colour "#rrggbb" or "#rgb", got {_kind(value)}')
             digits = value[1:] if len(value) == 7 else "".join(2 * d for d in value[1:])
             return tuple(_srgb_to_linear(int(digits[i:i + 2], 16) / 255.0) for i in (0, 2, 4))
+        if isinstance(spec, Selector):
+            return self.selector(value, path)
         if isinstance(spec, NumList):
             return self.number_list(value, path, spec.item, spec.min_len)
         return self.rows(value, path, spec.item)
+
+    def selector(self, value, path: KeyPath):
+        words = ("any",) + model.POSITIONAL_SELECTORS
+        expected = f'one of {", ".join(words)} or a finger number "1", "2", ...'
+        if isinstance(value, int) and not isinstance(value, bool):
+            value = str(value)  # fingers = 2 means what fingers = "2" means
+        if not isinstance(value, str):
+            return self.report(path, f"expected {expected}, got {_kind(value)}")
+        if value in words:
+            return value
+        if value.isdigit() and value.isascii():
+            if int(value) < 1:
+                return self.report(path, f'{_show(value)}: finger numbers start at "1" '
+                                         f"(the finger touching longest)")
+            return str(int(value))
+        return self.report(path, f"{_show(value)} is not {expected}{_did_you_mean(value, words)}")
 
     def number(self, value, path: KeyPath, spec: Num):
         if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -377,18 +501,112 @@ def _display(r: _Reader, doc: dict) -> model.Display | None:
     return model.Display(**v)
 
 
-def _device(r: _Reader, doc: dict) -> model.DeviceProfile | None:
+def _device(r: _Reader, doc: dict, display, base_dir: Path) -> model.DeviceProfile | None:
     raw = doc.get("device", {})
-    v = r.table(raw, ("device",), DEVICE, tables=("friction", "calibration"))
+    v = r.table(raw, ("device",), DEVICE, tables=("friction", "calibration", "structure", "driving"))
     if v is None:
         return None
     friction = r.table(raw.get("friction", {}), ("device", "friction"), FRICTION)
     calibration = None
     if "calibration" in raw:
         calibration = _calibration(r, raw["calibration"], ("device", "calibration"))
-    if friction is None or _BAD in friction.values() or _BAD in v.values() or calibration is _BAD:
+    structure = None
+    if v["profile"] in STRUCTURES:
+        structure = _structure(r, v["profile"], raw.get("structure", {}), display, base_dir)
+    elif "structure" in raw and v["profile"] is not _BAD:
+        r.report(("device", "structure"), f"not used with profile {_show(v['profile'])}; only "
+                                          f"the modal profiles have one: "
+                                          f"{', '.join(model.MODAL_PROFILES)}")
+        structure = _BAD
+    if (friction is None or _BAD in friction.values() or _BAD in v.values()
+            or _BAD in (calibration, structure)):
         return None
-    return model.DeviceProfile(friction=model.FrictionParams(**friction), calibration=calibration, **v)
+    device = model.DeviceProfile(friction=model.FrictionParams(**friction), calibration=calibration,
+                                 structure=structure, **v)
+    if structure is not None and not _actuation_builds(r, device):
+        return None
+    return device
+
+
+def _structure(r: _Reader, profile: str, raw, display, base_dir: Path):
+    """``[device.structure]`` of a modal profile -> BeamStructure | PlateStructure, or _BAD."""
+    path: KeyPath = ("device", "structure")
+    v = r.table(raw, path, STRUCTURES[profile])
+    if v is None or _BAD in v.values():
+        return _BAD
+    if profile == "plate-seed001":
+        ok = _structure_holds_display(r, path, display, ("x0_mm", "width_mm", "width_mm"),
+                                      v["x0_mm"], v["width_mm"])
+        ok &= _structure_holds_display(r, path, display, ("y0_mm", "height_mm", "height_mm"),
+                                       v["y0_mm"], v["height_mm"])
+        return model.PlateStructure(**v) if ok else _BAD
+    ok = _structure_holds_display(r, path, display, ("x0_mm", "length_mm", "width_mm"),
+                                  v["x0_mm"], v["length_mm"])
+    orders, actuators = v["orders"], v["actuators_mm"]
+    if any(o != int(o) for o in orders) or len(set(orders)) != len(orders) or len(orders) > 26:
+        r.report(path + ("orders",), f"{_show(list(orders))}: expected distinct whole mode "
+                                     f"orders (at most 26)")
+        ok = False
+    modes = None
+    if v["modes_file"] is not None:
+        modes = _modes_table(r, path, v["modes_file"], raw, base_dir)
+        ok &= modes is not None
+    n_modes = len(modes.names) if modes is not None else len(orders)
+    if len(actuators) != n_modes:
+        r.report(path + ("actuators_mm",), f"has {len(actuators)} positions, expected one per mode "
+                                           f"({n_modes})")
+        ok = False
+    off = [a for a in actuators if not 0.0 <= a <= v["length_mm"]]
+    if off:
+        r.report(path + ("actuators_mm",), f"{off[0]:g} mm is off the {v['length_mm']:g} mm beam")
+        ok = False
+    if not ok:
+        return _BAD
+    modes_file = v.pop("modes_file")
+    modes_path = (base_dir / modes_file).resolve() if modes_file is not None else None
+    return model.BeamStructure(**{**v, "orders": tuple(int(o) for o in orders)},
+                               modes_path=modes_path, modes=modes)
+
+
+def _structure_holds_display(r: _Reader, path: KeyPath, display, keys, start: float, size: float) -> bool:
+    """Report (False) if the display's span along one axis leaves the structure."""
+    offset_key, size_key, display_key = keys
+    if display is None:
+        return True
+    extent = getattr(display, display_key)
+    if start <= 1e-9 and start + size >= extent - 1e-9:
+        return True
+    r.report(path + (offset_key,), f"the display's {display_key} (0 to {extent:g} mm) must lie on "
+                                   f"the structure, which spans {start:g} to {start + size:g} mm "
+                                   f"({offset_key} {start:g}, {size_key} {size:g})")
+    return False
+
+
+def _modes_table(r: _Reader, path: KeyPath, name: str, raw: dict, base_dir: Path):
+    from device.measured_modes import MeasuredModes
+
+    if "orders" in raw:
+        r.report(path + ("orders",), "not used with modes_file (the table's columns are the "
+                                     "modes); remove one of them")
+        return None
+    try:
+        return MeasuredModes.from_csv(base_dir / name)
+    except (OSError, ModesError) as exc:
+        text = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        r.report(path + ("modes_file",), f"{_show(name)} ({(base_dir / name).resolve()}): {text}")
+        return None
+
+
+def _actuation_builds(r: _Reader, device: model.DeviceProfile) -> bool:
+    """Build the modal actuation once (modes solved, actuator matrix checked)."""
+    from device.modal_actuation import make_modal_actuation
+
+    try:
+        make_modal_actuation(device)
+    except ModesError as exc:
+        r.report(("device", "structure"), str(exc))
+        return False
+    return True
 
 
 def _strictly_increasing(values) -> bool:
@@ -639,11 +857,100 @@ def _build_raster(r, path, v, given, ctx):
     return layer, low_key
 
 
+def _force_common(r, path, given) -> bool:
+    return _forbid(r, path, given, ["blend"], "on a force layer (mu' targets multiply, force "
+                                              "targets replace: rendering.force_layers)")
+
+
+def _build_directional(r, path, v, given, ctx):
+    ok = _force_common(r, path, given)
+    if abs(math.sin(math.radians(v["angle_deg"]))) > 1e-9:
+        r.report(path + ("angle_deg",), f"{v['angle_deg']:g} deg: the waves push only along x; "
+                                        f"expected 0 (forward = +x) or 180 (forward = -x)")
+        ok = False
+    pairs = {"mu": ("mu_forward", "mu_backward"), "force": ("force_forward_n", "force_backward_n")}
+    given_pairs = [kind for kind, keys in pairs.items() if any(k in given for k in keys)]
+    if len(given_pairs) != 1:
+        found = "both mu_* and force_*_n" if given_pairs else "neither"
+        r.report(path + ("type",), f"{found}: give mu_forward and mu_backward (mu') or "
+                                   f"force_forward_n and force_backward_n (N)")
+        return None
+    target = given_pairs[0]
+    for key in pairs[target]:
+        if v[key] is None:
+            r.report(path + (key,), f"missing (required with {' and '.join(pairs[target])})")
+            ok = False
+    if not ok:
+        return None
+    forward, backward = (v[k] for k in pairs[target])
+    layer = model.Directional(**ctx.common, angle_deg=v["angle_deg"], target=target,
+                              forward=forward, backward=backward)
+    return layer, pairs[target][0]
+
+
+def _build_guidance(r, path, v, given, ctx):
+    ok = _force_common(r, path, given)
+    if not v["line"]:
+        ok &= _forbid(r, path, given, ["line_angle_deg"], "with line = false (a point target)")
+    ok &= _on_display(r, path + ("x_mm",), ctx, "guidance target", [v["x_mm"]], [v["y_mm"]])
+    return (model.Guidance(**ctx.common, **v), "gain_n_per_mm") if ok else None
+
+
+def _build_keyclick(r, path, v, given, ctx):
+    ok = _force_common(r, path, given)
+    if not v["release_n"] < v["press_n"] < v["click_n"]:
+        r.report(path + ("press_n",), f"thresholds release_n {v['release_n']:g} < press_n "
+                                      f"{v['press_n']:g} < click_n {v['click_n']:g} (N) do not hold")
+        ok = False
+    geometry = model.RectRegion(v["x_mm"], v["y_mm"], v["width_mm"], v["height_mm"])
+    ok &= ctx.display is None or _region_on_display(r, path + ("x_mm",), geometry, ctx.display, "button")
+    if not ok:
+        return None
+    keys = ("press_n", "click_n", "release_n", "dwell_s", "force_n")
+    layer = model.KeyClick(**ctx.common, geometry=geometry, first_push=1 if v["first_push"] == "+x" else -1,
+                           **{k: v[k] for k in keys})
+    return layer, "force_n"
+
+
 BUILDERS: dict[str, Callable] = {
     "grating": _build_grating, "waveform": _build_waveform, "rectangle": _build_rectangle,
     "disc": _build_disc, "edge": _build_edge, "bump": _build_bump, "line": _build_line,
-    "raster": _build_raster,
+    "raster": _build_raster, "directional": _build_directional, "guidance": _build_guidance,
+    "keyclick": _build_keyclick,
 }
+
+
+def _force_device(r: _Reader, doc: dict, device, display, built):
+    """``[device.driving]`` and the force layers: only on a travelling-wave profile whose
+    surface holds the display. Returns the device with its driving model, or None."""
+    from device.push_actuation import SURFACE_LENGTH_MM
+
+    raw = doc.get("device", {})
+    force_profile = device is not None and device.profile in model.FORCE_PROFILES
+    if device is not None and not force_profile:
+        if isinstance(raw, dict) and "driving" in raw:
+            r.report(("device", "driving"), f"not used with profile {_show(device.profile)}, which "
+                                            f"cannot push; travelling-wave profiles: "
+                                            f"{', '.join(model.FORCE_PROFILES)}")
+        for index, (layer, _) in enumerate(built or ()):
+            if isinstance(layer, model.FORCE_LAYERS):
+                kind = type(layer).__name__.lower()
+                r.report(("layer", index, "type"),
+                         f'"{kind}" needs a travelling wave to push the finger; profile '
+                         f"{_show(device.profile)} only modulates friction (use one of "
+                         f"{', '.join(model.FORCE_PROFILES)})")
+        return device
+    if not force_profile:
+        return device
+    surface = SURFACE_LENGTH_MM[device.profile]
+    if display is not None and display.width_mm > surface + 1e-9:
+        r.report(("display", "width_mm"), f"{display.width_mm:g} mm is longer than the "
+                                          f"{surface:g} mm surface of {device.profile} (display "
+                                          f"x runs along it from its end)")
+    driving = r.table(raw.get("driving", {}), ("device", "driving"), DRIVING)
+    if driving is None or _BAD in driving.values():
+        return None
+    return replace(device, driving=model.DrivingForceParams(**driving))
 
 
 def _layer(r: _Reader, raw, index: int, display, base_dir: Path, names: dict):
@@ -675,14 +982,15 @@ def _layer(r: _Reader, raw, index: int, display, base_dir: Path, names: dict):
     values = {k: v[k] for k in LAYER_KEYS[kind]}
     if _BAD in values.values():
         return None
-    common_ok = not (_BAD in (name, render, v["blend"], region) or visual is None
+    common_ok = not (_BAD in (name, render, v["blend"], v["fingers"], region) or visual is None
                      or _BAD in visual.values())
     if render == "auto":
         render = model.auto_render_mode(values["period_mm"] if kind in PERIODIC_TYPES else None)
     # with problems in the common keys the type's own checks still run (every problem
     # is reported) on placeholder hints, and the layer is dropped afterwards
     hints = model.VisualHints(**visual) if common_ok else model.VisualHints()
-    common = dict(name=name, render=render, blend=v["blend"], region=region, visual=hints)
+    common = dict(name=name, render=render, blend=v["blend"], region=region, visual=hints,
+                  fingers=v["fingers"])
     built = BUILDERS[kind](r, path, values, set(raw), _Context(display, base_dir, common))
     return built if common_ok else None
 
@@ -699,6 +1007,18 @@ def _layers(r: _Reader, doc: dict, display, base_dir: Path):
     names: dict[str, int] = {}
     built = [_layer(r, item, i, display, base_dir, names) for i, item in enumerate(raw)]
     return None if None in built else built
+
+
+def _selector_warnings(r: _Reader, device: model.DeviceProfile, built) -> None:
+    if device.profile != "plate-seed003":
+        return
+    for index, (layer, _) in enumerate(built):
+        if layer.fingers != "any":
+            r.report(("layer", index, "fingers"),
+                     f"{_show(layer.fingers)} on profile {_show(device.profile)}: one channel "
+                     f"serves only the finger touching longest, so other fingers feel its "
+                     f"amplitude, not this layer (a modal profile gives each finger its own: "
+                     f"{', '.join(model.MODAL_PROFILES)})", warning=True)
 
 
 def _reach_warnings(r: _Reader, device: model.DeviceProfile, built) -> None:
@@ -781,13 +1101,15 @@ def check_scene(path: str | Path) -> tuple[model.Scene | None, list[Problem], li
         return None, r.problems, r.warnings
     name = top["name"] if top["name"] is not None else path.stem
     display = _display(r, doc)
-    device = _device(r, doc)
+    device = _device(r, doc, display, path.parent)
     built = _layers(r, doc, display, path.parent)
+    device = _force_device(r, doc, device, display, built)
     r.problems.sort(key=lambda p: p.line or 0)
     if r.problems or display is None or device is None or built is None:
         return None, r.problems, r.warnings
     _device_warnings(r, device)
     _reach_warnings(r, device, built)
+    _selector_warnings(r, device, built)
     scene = model.Scene(format=fmt, name=name, description=top["description"], display=display,
                         device=device, layers=tuple(layer for layer, _ in built), source=path)
     return scene, r.problems, r.warnings

@@ -25,6 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
+from device.modal import DEFAULT_METHOD, DEFAULT_RCOND
+
 #: Spatial period (mm) at which ``render = "auto"`` switches from SHO to
 #: period synthesis: seed 003 section 6 puts the SHO/SHT boundary near
 #: 2 stimuli/cm, i.e. a 5 mm period.
@@ -33,10 +35,27 @@ AUTO_BOUNDARY_MM = 5.0
 RENDER_MODES = ("sho", "sht", "hybrid")
 
 #: The actuation profiles a scene's ``[device] profile`` may name, with one line each.
-#: This is the one place to add a profile (later issues: beam, 2D plate, ring).
+#: This is the one place to add a profile.
 DEVICE_PROFILES: dict[str, str] = {
     "plate-seed003": "single-mode glass plate of seed 003, one channel",
+    "beam-seed000": "free-free aluminium beam of seed 000, modes 16 and 17, two actuators",
+    "plate-seed001": "2D plate of seed 001, X and Y modes, channels V_AC and V_BD",
+    "travelling-beam-seed002": "600 mm aluminium beam of seed 002, travelling wave from modes "
+                               "28 and 29, two actuators",
+    "ring-seed004": "Ultraloop ring of seed 004, degenerate 24th-order pair, phase-shift control",
 }
+#: The travelling-wave profiles (seed 002, seed 004): the only ones that can push a finger,
+#: so the only ones that accept force layers (:data:`FORCE_LAYERS`) and ``[device.driving]``.
+FORCE_PROFILES = ("travelling-beam-seed002", "ring-seed004")
+#: The profiles driven by modal control (seed 000 eq 10, seed 001 eqs 4-5); each has a
+#: ``[device.structure]`` table (:class:`BeamStructure` or :class:`PlateStructure`).
+MODAL_PROFILES = ("beam-seed000", "plate-seed001")
+
+#: ``fingers`` selectors of a layer besides "any" and finger numbers "1", "2", ...
+#: (1-based, in order of touch-down among the fingers touching at that sample).
+#: Positional selectors pick, at every output sample, the touching finger with the
+#: smallest x (left-most), largest x, smallest y (top-most, y points down) or largest y.
+POSITIONAL_SELECTORS = ("left-most", "right-most", "top-most", "bottom-most")
 BLEND_MODES = ("multiply", "replace")
 
 RGB = tuple[float, float, float]
@@ -73,6 +92,25 @@ class FrictionParams:
 
 
 @dataclass(frozen=True)
+class DrivingForceParams:
+    """Constants of the tangential model (defaults: seed 004, Fig. 3c; seed 002 finger).
+
+    mu0 : friction coefficient of the finger on the plate at rest (F_f = mu0 F_n mu').
+    slope_per_um : k_p, driving force per um of travelling amplitude per N of normal
+        force (seed 004: 0.13 N/um at 1 N), 1/um.
+    threshold_um : w_th, travelling amplitude below which there is no driving force
+        (seed 004: "near 1 um").
+    v_hold_mm_s : speed below which the finger's direction of motion is held, and below
+        which a finger counts as still (only the driving force acts on it).
+    """
+
+    mu0: float = 0.5
+    slope_per_um: float = 0.13
+    threshold_um: float = 1.0
+    v_hold_mm_s: float = 2.0
+
+
+@dataclass(frozen=True)
 class Calibration:
     """A measured friction curve: mu' against amplitude at one or more normal forces.
 
@@ -86,13 +124,78 @@ class Calibration:
 
 
 @dataclass(frozen=True)
+class BeamStructure:
+    """Seed 000's free-free beam for ``profile = "beam-seed000"``; defaults from its Table I.
+
+    Material and size as ``device.beam.FreeFreeBeam`` takes them; ``orders`` the
+    flexural modes driven (seed 000: 16 and 17); ``actuators_mm`` the transducer
+    positions along the beam, one per mode (seed 000 section III.C: 60 mm from each
+    end); ``x0_mm`` the display x of the beam's end x = 0 (the beam runs along the
+    display's x axis; display y is across the beam and does not enter its modes).
+    ``channel_limit_um`` the largest amplitude each transducer is asked for (um
+    zero-to-peak): seed 000 reached eq 14's 0.41 um at 160 V peak-to-peak and seed 001's
+    amplifiers stop at 300 V peak-to-peak, about 0.75 um. ``method`` and ``rcond`` are
+    ``device.modal.solve``'s. ``modes``: a measured mode table
+    (``device.measured_modes.MeasuredModes``, one column per mode) that replaces the
+    modelled shapes, read from ``modes_path``.
+    """
+
+    length_mm: float = 350.0
+    width_mm: float = 6.0
+    thickness_mm: float = 6.0
+    youngs_gpa: float = 57.0
+    density_kg_m3: float = 2561.0
+    poisson: float = 0.33
+    theory: str = "euler-bernoulli"
+    orders: tuple[int, ...] = (16, 17)
+    actuators_mm: tuple[float, ...] = (60.0, 290.0)
+    x0_mm: float = 0.0
+    channel_limit_um: float = 0.75
+    method: str = DEFAULT_METHOD
+    rcond: float = DEFAULT_RCOND
+    modes_path: Path | None = None
+    modes: object | None = None
+
+
+@dataclass(frozen=True)
+class PlateStructure:
+    """Seed 001's 2D plate for ``profile = "plate-seed001"``: modes X and Y of order k.
+
+    Size and order from seed 001 section 4 (140 x 140 x 4 mm, k = 8). Seed 001 does not
+    name the material: the default is seed 000's aluminium (Table I, same laboratory),
+    whose strip estimate (``device.plate2d``) gives 33.4 kHz against the 33.0 kHz seed 001
+    measured. (x0_mm, y0_mm) is the display position of the plate's corner (0, 0).
+    ``channel_limit_um``: largest |V_AC|, |V_BD| (um of modal amplitude, unit gain);
+    None means the device's ``amplitude_limit_um`` (seed 001 gives no figure for the plate).
+    """
+
+    width_mm: float = 140.0
+    height_mm: float = 140.0
+    thickness_mm: float = 4.0
+    youngs_gpa: float = 57.0
+    density_kg_m3: float = 2561.0
+    poisson: float = 0.33
+    order: int = 8
+    x0_mm: float = 0.0
+    y0_mm: float = 0.0
+    channel_limit_um: float | None = None
+    method: str = DEFAULT_METHOD
+    rcond: float = DEFAULT_RCOND
+
+
+StructureSpec = BeamStructure | PlateStructure
+
+
+@dataclass(frozen=True)
 class DeviceProfile:
     """Which actuation the scene is for, and the limits of that device.
 
     ``profile`` names the actuation (``"plate-seed003"``: the single-mode glass plate
-    of seed 003, one channel). ``amplitude_limit_um`` is the zero-to-peak amplitude the
-    host never exceeds; ``normal_force_n`` the nominal finger force used where a trace
-    gives none and for ``frictex validate``'s reachability warnings.
+    of seed 003, one channel; the modal profiles of :data:`MODAL_PROFILES`).
+    ``amplitude_limit_um`` is the zero-to-peak amplitude the host never asks for under a
+    finger; ``normal_force_n`` the nominal finger force used where a trace gives none and
+    for ``frictex validate``'s reachability warnings. ``structure`` describes the
+    vibrating structure of a modal profile (None for plate-seed003).
     """
 
     profile: str = "plate-seed003"
@@ -100,6 +203,9 @@ class DeviceProfile:
     normal_force_n: float = 0.5
     friction: FrictionParams = field(default_factory=FrictionParams)
     calibration: Calibration | None = None
+    structure: StructureSpec | None = None
+    #: the driving-force model of the travelling-wave profiles (:data:`FORCE_PROFILES`)
+    driving: DrivingForceParams = field(default_factory=DrivingForceParams)
 
 
 @dataclass(frozen=True)
@@ -514,7 +620,100 @@ class RasterMap(_LayerBase):
         return self.mu_black + self.grey_at(x, y) * (self.mu_white - self.mu_black)
 
 
-Layer = Grating | Waveform | Shape | Edge | Bump | Line | RasterMap
+# ---------------------------------------------------------------------------
+# Force layers (travelling-wave profiles only; rendered by ``rendering.force_layers``)
+
+
+@dataclass(frozen=True)
+class _ForceBase(_LayerBase):
+    """A layer whose target is a tangential force or a direction-dependent mu'.
+
+    To the friction path (renderers, composition, ``ideal_mu``) a force layer is neutral:
+    mu' = 1 with ``blend = "multiply"``; ``covers`` is where it acts.
+    """
+
+    @property
+    def mu_range(self) -> tuple[float, float]:
+        return 1.0, 1.0
+
+    def mu_at(self, x, y) -> np.ndarray:
+        return np.ones(np.broadcast(np.asarray(x), np.asarray(y)).shape)
+
+
+@dataclass(frozen=True)
+class Directional(_ForceBase):
+    """Different friction for each direction of travel along an axis (seed 002, eqs 7-8).
+
+    ``angle_deg`` (0 or 180: the waves run along the display's x axis) points the
+    forward direction. ``target = "mu"``: ``forward`` / ``backward`` are mu', the net
+    tangential force over mu0 F_n (a travelling wave reaches below any standing wave's
+    floor); ``target = "force"``: they are net tangential forces in N, positive resisting
+    the finger, zero or negative allowed (negative drags the finger along).
+    """
+
+    angle_deg: float = 0.0
+    target: str = "mu"
+    forward: float = 1.0
+    backward: float = 1.0
+
+    @property
+    def axis_sign(self) -> int:
+        """+1 if forward is +x, -1 if it is -x."""
+        return 1 if math.cos(math.radians(self.angle_deg)) > 0 else -1
+
+    def value(self, motion_x) -> np.ndarray:
+        """``forward`` where the finger moves forward (``motion_x`` +1/-1 along x), else ``backward``."""
+        return np.where(np.asarray(motion_x) * self.axis_sign > 0, self.forward, self.backward)
+
+
+@dataclass(frozen=True)
+class Guidance(_ForceBase):
+    """An active pull towards a target point (or line through it at ``line_angle_deg``):
+    gain_n_per_mm times the distance, at most max_force_n (N)."""
+
+    x_mm: float = 0.0
+    y_mm: float = 0.0
+    line: bool = False
+    line_angle_deg: float = 90.0
+    gain_n_per_mm: float = 0.01
+    max_force_n: float = 0.1
+
+    def pull(self, x, y) -> tuple[np.ndarray, np.ndarray]:
+        """The wanted force (N) on a finger at (x, y) mm, as (fx, fy) arrays."""
+        dx = self.x_mm - np.asarray(x, dtype=np.float64)
+        dy = self.y_mm - np.asarray(y, dtype=np.float64)
+        if self.line:  # towards the nearest point of the line: drop the along-line part
+            a = math.radians(self.line_angle_deg)
+            along = dx * math.cos(a) + dy * math.sin(a)
+            dx, dy = dx - along * math.cos(a), dy - along * math.sin(a)
+        dist = np.hypot(dx, dy)
+        scale = np.minimum(self.gain_n_per_mm, np.divide(self.max_force_n, dist, out=np.zeros_like(dist),
+                                                         where=dist > 0))
+        return scale * dx, scale * dy
+
+
+@dataclass(frozen=True)
+class KeyClick(_ForceBase):
+    """A key-click button (seed 004, Fig. 5): inside ``geometry``, a push of ``force_n``
+    (N) towards ``first_push`` (+1: +x) once the normal force reaches ``press_n``, reversed
+    when it reaches ``click_n``; released (reset) when it falls below ``release_n``.
+    Each change needs its condition held for ``dwell_s`` (``rendering.keyclick``)."""
+
+    geometry: RectRegion = None  # type: ignore[assignment]
+    press_n: float = 0.5
+    click_n: float = 0.8
+    release_n: float = 0.4
+    dwell_s: float = 0.01
+    force_n: float = 0.1
+    first_push: int = 1
+
+    def covers(self, x, y) -> np.ndarray:
+        return self.geometry.contains(x, y) & self.in_region(x, y)
+
+
+FORCE_LAYERS = (Directional, Guidance, KeyClick)
+
+Layer = Grating | Waveform | Shape | Edge | Bump | Line | RasterMap | Directional | Guidance | KeyClick
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,129 @@
+"""Force layers through the pipeline (seed 002 eqs 7-8, seed 004 Fig. 3-5): the forces
+recomputed from the channel commands alone are the forces each layer wanted."""
+
+import numpy as np
+from numpy.testing import assert_allclose, assert_array_equal
+
+from app.replay import _slice_trace
+from app.trace_synth import make_motion, sample
+from rendering.pipeline import build_pipeline
+from rendering.trace_file import make_trace
+from rendering.tracks import apply_index
+from textures.model import (DeviceProfile, Directional, Display, Guidance, Scene,
+                            VisualHints)
+
+RATE = 10_000.0
+KP, TH, MU0, K_A, B = 0.13, 1.0, 0.5, 1.13, 1.67   # seed 004 Fig. 3c; seed 003 eq 2
+RING_DISPLAY = Display(140.0, 30.0, 700, 150)
+BEAM_DISPLAY = Display(600.0, 6.0, 3000, 30)
+
+
+def layer(cls, **kw):
+    return cls(name=cls.__name__.lower(), render="sho", region=None, blend="multiply",
+               visual=VisualHints(), **kw)
+
+
+def scene(profile, display, *layers, limit=3.0):
+    return Scene(1, "t", "", display, DeviceProfile(profile=profile, amplitude_limit_um=limit),
+                 tuple(layers))
+
+
+def run(sc, trace, blocks_per_call=None):
+    """The pipeline over the trace, ``blocks_per_call`` blocks per call (as replay feeds it)."""
+    p = build_pipeline(sc, rate_hz=RATE, block_size=50, t0_s=float(trace.t_s[0]))
+    applied = apply_index(trace.t_s, p.tracker_config)
+    total = int(applied[-1] // 50) + 1
+    step = blocks_per_call or total
+    state, outs = p.initial_state(), []
+    for b in range(0, total, step):
+        nb = min(step, total - b)
+        lo, hi = np.searchsorted(applied, [b * 50, (b + nb) * 50])
+        chunk = _slice_trace(trace, lo, hi) if hi > lo else None
+        out, state = p.process(b, chunk, state, n_blocks=nb)
+        outs.append(out)
+    return p, outs
+
+
+def ring_forces_from_commands(p, out, fn, motion):
+    """F_t (N, resisting a finger moving ``motion``) from the ring's commands alone:
+    W_A = e^{j phi} W_B, d = sign * sign(sin phi) (seed 004, eq 1), then seed 002 eqs 7-8."""
+    w = out.commands_um[:, 1]
+    phi = out.phases_rad[:, 0] - out.phases_rad[:, 1]
+    d = p.actuation.wave.sign * np.sign(np.sin(phi))
+    tau = p.actuation.ratio_at(out.x_mm[0])
+    w = w * p.actuation.gain_at(out.x_mm[0])   # envelope under the finger (1.000x on the ring)
+    a = K_A * fn
+    friction = MU0 * fn * ((1 - a) * np.exp(-B * w) + a)
+    drive = KP * fn * np.maximum(tau * w - TH, 0.0)
+    return friction + motion * d * drive, d, drive
+
+
+def test_directional_net_force_differs_by_direction_as_asked():
+    sc = scene("ring-seed004", RING_DISPLAY,
+               layer(Directional, target="force", forward=0.03, backward=0.2))
+    trace = sample(make_motion("back-and-forth", speed_mm_s=40, duration_s=3.0, x0_mm=20,
+                               y0_mm=15, length_mm=100), 60.0)
+    p, (out,) = run(sc, trace)
+    motion = np.sign(np.gradient(out.x_mm[0]))
+    # away from the reversals and the touch-down (no velocity yet: a still finger)
+    steady = (np.abs(np.gradient(out.x_mm[0]) * RATE) > 30.0) & (out.t_s > 0.1)
+    for turn in np.flatnonzero(np.diff(motion)):   # the velocity fit lags a reversal
+        steady[max(turn - 200, 0):turn + 200] = False
+    f_t, _, drive = ring_forces_from_commands(p, out, 0.5, motion)
+    forward, backward = steady & (motion > 0), steady & (motion < 0)
+    assert forward.sum() > 4000 and backward.sum() > 4000
+    assert_allclose(f_t[forward], 0.03, atol=1e-9)
+    assert_allclose(f_t[backward], 0.2, atol=1e-9)
+    assert np.all(drive[forward] > 0.1)        # zero-ish net force needs the drive
+    assert_allclose(out.forces.achieved_n[0, steady, 0], -motion[steady] * f_t[steady], atol=1e-9)
+
+
+def test_guidance_pushes_a_still_finger_towards_the_target_with_the_drive_alone():
+    sc = scene("ring-seed004", RING_DISPLAY,
+               layer(Guidance, x_mm=70.0, y_mm=15.0, gain_n_per_mm=0.002, max_force_n=0.05))
+    n = 101
+    t = np.linspace(0.0, 1.0, n)
+    for x0, fn, sign in ((40.0, 0.5, 1.0), (120.0, 0.8, -1.0), (65.0, 0.5, 1.0)):
+        trace = make_trace(t, np.zeros(n), np.full(n, x0), np.full(n, 15.0), np.full(n, fn))
+        p, (out,) = run(sc, trace)
+        inside = out.contact[0]
+        want = min(0.002 * abs(70.0 - x0), 0.05)
+        _, d, drive = ring_forces_from_commands(p, out, fn, 1.0)
+        assert_allclose(drive[inside], want, rtol=1e-9)          # |P| = k_p F_n (tau W - w_th)
+        assert np.all(-d[inside] == sign)                          # wave runs against the push
+        assert out.forces.unreachable.sum() == 0
+        assert_allclose(out.forces.wanted_n[0, inside, 0], sign * want, rtol=1e-12)
+
+
+def test_finger_near_a_beam_end_is_not_promised_what_the_wave_cannot_give():
+    sc = scene("travelling-beam-seed002", BEAM_DISPLAY,
+               layer(Directional, target="mu", forward=0.5, backward=0.5))
+    trace = sample(make_motion("swipe", speed_mm_s=75, duration_s=4.0, x0_mm=2.0, y0_mm=3.0), 60.0)
+    p, (out,) = run(sc, trace)
+    f = out.forces
+    x = out.x_mm[0]
+    moving = out.contact[0] & (x > 3.0)
+    ratio = p.actuation.ratio_at(x)
+    end, mid = moving & (x < 40.0), moving & (x > 220.0)
+    assert f.unreachable[0, end].all() and not f.unreachable[0, mid].any()
+    assert out.clamps.unreachable == f.unreachable.sum() > 0
+    assert_allclose(f.achieved_n[0, mid, 0], -0.5 * MU0 * 0.5, atol=1e-9)
+    # near the end the wave stands (ratio < 0.3): the amplitude limit gives what it can,
+    # and what it gives is reported, not the target
+    assert ratio[end].max() < 0.3
+    assert np.all(-f.achieved_n[0, end, 0] > 0.125 + 1e-3)
+    assert_allclose(out.amplitude_um[0, end], 3.0, rtol=1e-9)
+
+
+def test_any_split_into_calls_gives_the_same_commands_and_forces():
+    sc = scene("ring-seed004", RING_DISPLAY,
+               layer(Directional, target="mu", forward=0.4, backward=0.9),
+               layer(Guidance, x_mm=70.0, y_mm=15.0, gain_n_per_mm=0.002, max_force_n=0.05))
+    trace = sample(make_motion("human", speed_mm_s=60, duration_s=2.0, area_mm=(140.0, 30.0),
+                               seed=4), 120.0, noise_mm=0.05)
+    _, whole = run(sc, trace)
+    _, parts = run(sc, trace, blocks_per_call=7)
+    for name in ("commands_um", "phases_rad"):
+        assert_array_equal(np.concatenate([getattr(o, name) for o in parts]), getattr(whole[0], name))
+    assert_array_equal(np.concatenate([o.forces.achieved_n for o in parts], axis=1),
+                       whole[0].forces.achieved_n)

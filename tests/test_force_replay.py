@@ -1,0 +1,75 @@
+"""Replays of the bundled force scenes, end to end through ``frictex replay``: phase
+columns in commands.csv, force figures in summary.json, the key-click flips once per
+press at the click force, and two replays are byte-identical."""
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+from app.cli import main
+from app.press_synth import PRESS_TRACE, press_trace
+from rendering.trace_file import format_trace, read_trace
+from textures.library import list_scenes, resolve_trace
+
+CASES = {
+    "keyclick-ring": "keyclick-press-100hz",
+    "directional-beam": "back-and-forth-beam-60mms-60hz",
+    "directional-ring": "back-and-forth-ring-40mms-60hz",
+    "guidance-ring": "back-and-forth-ring-40mms-60hz",
+}
+
+
+def replay(tmp_path, scene, trace, name="out"):
+    out = tmp_path / name
+    assert main(["replay", scene, trace, "--out", str(out)]) == 0
+    with (out / "commands.csv").open() as f:
+        rows = list(csv.reader(f))
+    table = np.array(rows[1:], dtype=np.float64)
+    return out, rows[0], table, json.loads((out / "summary.json").read_text())
+
+
+@pytest.mark.parametrize("scene", sorted(CASES))
+def test_bundled_force_scene_replays_with_phases_and_force_figures(tmp_path, scene):
+    out, header, table, summary = replay(tmp_path, scene, CASES[scene])
+    channels = summary["output"]["channels"]
+    assert header == ["t_s"] + [f"{c}_um" for c in channels] + [f"{c}_phase_rad" for c in channels]
+    assert np.isfinite(table).all() and table[:, 1:3].max() > 0.5
+    forces = summary["forces"]["0"]
+    assert forces["contact_samples"] == summary["counts"]["contact_samples"]
+    assert forces["unreachable_samples"] == summary["clamps"]["unreachable"]
+    assert forces["force_error_rms_n"] < 0.01 and forces["wanted_max_n"] > 0.03
+
+
+def test_keyclick_flips_once_per_press_at_the_click_force(tmp_path):
+    _, _, table, summary = replay(tmp_path, "keyclick-ring", "keyclick-press-100hz")
+    assert summary["forces"]["0"]["clicks"] == 3
+    t, w = table[:, 0], table[:, 1]
+    on = w > 0
+    shift = np.where(on, np.sign(np.sin(table[:, 3] - table[:, 4])), 0)
+    changes = np.flatnonzero(np.diff(shift))
+    steps = [(int(shift[i]), int(shift[i + 1])) for i in changes]
+    # each press: off -> push one way -> reversed -> off, nothing else (no flicker)
+    assert len(steps) == 9 and steps[0::3] == [(0, steps[0][1])] * 3
+    assert all(b == -a for (_, a), (_, b) in zip(steps[0::3], steps[1::3]))
+    trace = read_trace(resolve_trace("keyclick-press-100hz"))
+    for i in changes[1::3] + 1:        # the flips: the last 10 ms of force samples >= 0.8 N
+        recent = trace.force_n[(trace.t_s <= t[i]) & (trace.t_s > t[i] - 0.0151)]
+        assert recent.size >= 1 and np.all(recent >= 0.8)
+    for i in changes[0::3] + 1:        # wave on at 0.5 N
+        assert trace.force_n[np.searchsorted(trace.t_s, t[i], side="right") - 1] >= 0.5
+
+
+def test_two_replays_are_byte_identical(tmp_path):
+    a, *_ = replay(tmp_path, "guidance-ring", CASES["guidance-ring"], "a")
+    b, *_ = replay(tmp_path, "guidance-ring", CASES["guidance-ring"], "b")
+    for name in ("commands.csv", "friction.csv"):
+        assert (a / name).read_bytes() == (b / name).read_bytes()
+
+
+def test_bundled_press_trace_is_the_generator_output():
+    text = PRESS_TRACE.read_text(encoding="utf-8")
+    body = format_trace(press_trace(), comment="x").split("\n", 1)[1]
+    assert text.split("\n", 1)[1] == body
+    assert {"keyclick-ring", "directional-beam", "guidance-ring"} <= {e.name for e in list_scenes()}

@@ -1,0 +1,100 @@
+"""The bundled two-finger replay: seed 000's beam, two fingers crossing each other and the
+singular loci of det Phi, end to end through `frictex replay`."""
+
+import csv
+import importlib.util
+import json
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose
+
+from app.cli import main
+from device.beam import FreeFreeBeam
+from rendering.trace_file import format_trace, read_trace
+from textures.library import LIBRARY_DIR, resolve_trace
+
+SCENE, TRACE = "two-finger-beam-seed000", "two-fingers-crossing-50hz"
+BEAM = FreeFreeBeam(350, 6, 6, 57, 2561)
+LIMIT_UM = 0.75  # the scene's channel_limit_um
+
+
+@pytest.fixture(scope="module")
+def replayed(tmp_path_factory):
+    out = tmp_path_factory.mktemp("two-finger")
+    assert main(["replay", SCENE, TRACE, "--out", str(out)]) == 0
+    return out
+
+
+def read_columns(path):
+    with path.open() as f:
+        rows = list(csv.DictReader(f))
+    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+
+
+def test_commands_have_amplitude_and_phase_per_channel(replayed):
+    cmd = read_columns(replayed / "commands.csv")
+    assert list(cmd) == ["t_s", "xA_um", "xB_um", "xA_phase_rad", "xB_phase_rad"]
+    amps = np.stack([cmd["xA_um"], cmd["xB_um"]])
+    assert np.isfinite(amps).all() and amps.min() >= 0 and amps.max() <= LIMIT_UM + 1e-6
+    phases = np.stack([cmd["xA_phase_rad"], cmd["xB_phase_rad"]])
+    assert np.abs(phases).max() <= np.pi + 1e-6
+
+
+def test_summary_reports_each_fingers_amplitude_error(replayed):
+    summary = json.loads((replayed / "summary.json").read_text())
+    assert summary["scene"]["device"] == "beam-seed000"
+    assert summary["output"]["channels"] == ["xA", "xB"]
+    fingers = summary["fingers"]
+    assert set(fingers) == {"0", "1"}
+    # finger 0 touches 4.4 s, finger 1 4.0 s (10 kHz output)
+    assert fingers["0"]["contact_samples"] == 44000 and fingers["1"]["contact_samples"] == 40000
+    for f in fingers.values():
+        assert 0.01 < f["amplitude_error_rms_um"] < f["amplitude_error_max_um"] < 0.4
+
+
+def test_error_is_nil_where_phi_is_well_conditioned_and_large_near_the_loci(replayed):
+    """From friction.csv alone: recompute the wanted amplitude (seed 003 eq 3) and the
+    conditioning of Phi at the two fingers (seed 000's modes 16 and 17)."""
+    fr = read_columns(replayed / "friction.csv")
+    cmd = read_columns(replayed / "commands.csv")
+    t, finger = fr["t_s"], fr["finger"].astype(int)
+    a = 1.13 * 0.5
+    wanted = -np.log1p(-(1 - fr["mu_target"]) / (1 - a)) / 1.67
+    err = np.abs(fr["amplitude_um"] - wanted)
+    both_t = np.intersect1d(t[finger == 0], t[finger == 1])
+    rows0 = np.flatnonzero((finger == 0) & np.isin(t, both_t))
+    rows1 = np.flatnonzero((finger == 1) & np.isin(t, both_t))
+    phi = np.stack([BEAM.phi((16, 17), fr["x_mm"][rows0]), BEAM.phi((16, 17), fr["x_mm"][rows1])], -2)
+    s = np.linalg.svd(phi, compute_uv=False)
+    ratio = s[:, 1] / s[:, 0]
+    limited_t = cmd["t_s"][np.maximum(cmd["xA_um"], cmd["xB_um"]) > LIMIT_UM - 1e-6]
+    free = ~np.isin(both_t, limited_t)  # both files write t_s with the same format
+    pair_err = np.maximum(err[rows0], err[rows1])
+    assert (~free).any() and free.sum() > 10000
+    good = (ratio >= 0.1) & free       # exact region of the regularised inverse, within limits
+    assert pair_err[good].max() < 1e-5  # friction.csv keeps 6 decimals
+    near = ratio < 0.02                # the loci: fingers crossing, and seed 000's Fig. 8 lines
+    assert near.sum() > 500 and pair_err[near].mean() > 0.1
+    # single-finger samples (before finger 1 lands, after it lifts) are exact too
+    alone = ~np.isin(t, both_t)
+    assert alone.sum() == 4000 and err[alone].max() < 1e-5
+
+
+def test_replay_is_deterministic(replayed, tmp_path):
+    assert main(["replay", SCENE, TRACE, "--out", str(tmp_path)]) == 0
+    for name in ("commands.csv", "friction.csv"):
+        assert (tmp_path / name).read_bytes() == (replayed / name).read_bytes()
+
+
+def test_bundled_trace_is_what_its_script_makes():
+    spec = importlib.util.spec_from_file_location("make_two_finger_trace",
+                                                  LIBRARY_DIR / "make_two_finger_trace.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    path = resolve_trace(TRACE)
+    assert path.read_text() == format_trace(script.two_finger_trace(), script.description())
+    trace = read_trace(path)
+    x = {f: trace.x_mm[trace.finger == f] for f in (0, 1)}
+    assert x[0][0] < x[1][0] and x[0][-1] > x[1][-1]  # the fingers swap sides: they cross
+    assert_allclose(trace.t_s[trace.finger == 1][0], 0.2)
