@@ -30,7 +30,8 @@ finger does not leave SHT synthesising forever.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
+from operator import attrgetter
 
 import numpy as np
 
@@ -151,21 +152,19 @@ def _update_finger(fs: FingerState, t: float, x: float, y: float, force: float, 
                            xf=x, yf=y, vx=0.0, vy=0.0, force=force, t_down=t,
                            history=((t, x, y),))
     history = tuple(h for h in fs.history if h[0] >= t - cfg.velocity_window_s) + ((t, x, y),)
-    distinct = {h[0] for h in history}
-    if len(distinct) < 2:
+    if history[0][0] == t:  # one distinct time (times in the window never decrease)
         # too few samples in the window: the last two, if close enough in time
         recent = tuple(h for h in fs.history[-1:] if t - h[0] <= cfg.max_gap_s)
         history = recent + ((t, x, y),)
     xf, yf, vel = _fit(history, t, x, y)
     vx, vy = vel if vel is not None else (fs.vx, fs.vy)
     if event == UP:
-        return replace(fs, contact=False, t_sample=t, x=x, y=y, xf=x, yf=y, vx=0.0, vy=0.0,
-                       force=force, history=())
-    return replace(fs, t_sample=t, x=x, y=y, xf=xf, yf=yf, vx=vx, vy=vy, force=force,
-                   history=history)
+        return FingerState(False, fs.touch_id, t, x, y, x, y, 0.0, 0.0, force, fs.t_down, ())
+    return FingerState(fs.contact, fs.touch_id, t, x, y, xf, yf, vx, vy, force, fs.t_down, history)
 
 
 _FIELDS = ("contact", "touch_id", "t_sample", "x", "y", "xf", "yf", "vx", "vy", "force", "t_down")
+_GET_FIELDS = attrgetter(*_FIELDS)
 
 
 def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
@@ -192,24 +191,25 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
     updates: dict[int, list[tuple[int, FingerState]]] = {}
     if samples is not None and len(samples):
         applied = np.clip(apply_index(samples.t_s, config), index0, index0 + n - 1)
-        for k in range(len(samples)):
-            fid = int(samples.finger[k])
+        columns = (applied, samples.finger, samples.t_s, samples.x_mm, samples.y_mm,
+                   samples.force_n, samples.event)
+        # plain Python numbers: indexing numpy arrays one sample at a time is the slow part
+        for at, fid, t, x, y, force, event in zip(*(c.tolist() for c in columns)):
             fs = fingers.get(fid, FingerState())
-            fs = _update_finger(fs, float(samples.t_s[k]), float(samples.x_mm[k]),
-                                float(samples.y_mm[k]), float(samples.force_n[k]),
-                                int(samples.event[k]), config, counters)
+            fs = _update_finger(fs, t, x, y, force, event, config, counters)
             fingers[fid] = fs
-            updates.setdefault(fid, []).append((int(applied[k]), fs))
+            updates.setdefault(fid, []).append((at, fs))
     ids = tuple(sorted(fingers))
-    arrays = {name: np.empty((len(ids), n)) for name in _FIELDS}
+    values = np.empty((len(_FIELDS), len(ids), n))
     for row, fid in enumerate(ids):
         before = state.fingers.get(fid, FingerState())
         steps = [(index0 - 1, before)] + updates.get(fid, [])
-        at = np.array([s[0] for s in steps], dtype=np.int64)
-        seg = np.searchsorted(at, idx, side="right") - 1
-        for name in _FIELDS:
-            values = np.array([getattr(s[1], name) for s in steps], dtype=np.float64)
-            arrays[name][row] = values[seg]
+        # step j holds from its apply index to the next step's (a later step applied at
+        # the same index overrides it: a run of length 0)
+        starts = np.array([max(s[0] - index0, 0) for s in steps] + [n], dtype=np.int64)
+        table = np.array([_GET_FIELDS(s[1]) for s in steps], dtype=np.float64).T
+        values[:, row, :] = np.repeat(table, np.diff(starts), axis=1)
+    arrays = dict(zip(_FIELDS, values))
     contact = arrays["contact"] > 0.5
     since = t_out[None, :] - arrays["t_sample"]
     moving = contact & (since <= config.predict_horizon_s)

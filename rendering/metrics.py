@@ -1,0 +1,302 @@
+"""Accuracy of a rendering: the mu'(t) a finger got against the mu'*(t) it should have got.
+
+The reference mu'* is the scene evaluated on the finger's *true* path (``truth`` of
+``app.trace_synth``, sampled at a high rate, no noise); the rendered mu' is what the
+pipeline produced from the *sampled* trace, held between its output samples (the
+microcontroller plays each sample until the next one) and read on the reference's time
+grid. All three metrics use only the reference's contact time.
+
+Which metric matters for which layer
+------------------------------------
+- ``time_error`` (normalised RMS of mu' - mu'*): the strictest, phase and all. It is
+  what matters for objects and edges, whose friction must follow the finger exactly.
+  For fine textures it mostly measures spatial phase, which a finger cannot feel
+  (seed 003 section 6: participants did not notice a grating's phase once two periods
+  fit under the fingerpad, P < ~5 mm); there a renderer that gives up and outputs the
+  mean scores 1.0 and one with the right texture at a random phase scores ~1.4.
+- ``spectral_error`` (distance between short-time third-octave spectra, 10 Hz - 1 kHz):
+  what a texture feels like, phase ignored. It is the one that matters for fine
+  gratings and waveforms (P below ~5 mm): it catches aliasing (plain SHO at 50 Hz turns
+  a 66.7 Hz grating into 16.7 Hz, seed 003 section 4.4.1), lost bandwidth and smearing.
+- ``alignment_error_mm`` (distance along the path between matching friction steps):
+  what the eye checks, an edge felt where it is drawn. It matters for objects and coarse
+  gratings (P above ~5 mm), where plain SHT's accumulated phase error shows (seed 003
+  section 4.4.2). On fine gratings it is bounded by a quarter period and says little.
+
+Definitions (the functions below give the details): time error
+``rms(mu - mu*) / std(mu*)``; spectral error
+``||B - B*|| / ||B*||`` with B the magnitude per third-octave band and STFT frame;
+alignment error the mean, over steps of mu'* and over steps of mu', of the distance in mm
+of arc length to the nearest place where the other signal crosses the step's half-way
+level going the same way (capped at ``cap_mm``): symmetric, so a renderer that misses
+an edge and one that adds spurious edges (chatter) both pay.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import stft
+
+from rendering.compose import ideal_mu
+from rendering.trace_file import UP, Trace, TraceError
+
+#: tactile band (Hz) of the spectral error: from the lowest vibration frequency skin
+#: resolves as texture to the ~1 kHz where the Pacinian channel's sensitivity ends
+TACTILE_BAND_HZ = (10.0, 1000.0)
+#: STFT window (s): 10 Hz resolution, the band's lower edge
+SPECTRAL_WINDOW_S = 0.1
+#: spectra are compared in bands this fine (third octaves, ~26 % wide)
+BANDS_PER_OCTAVE = 3
+#: a friction step is a monotone change of at least this much mu' ...
+MIN_STEP = 0.05
+#: ... over at most this much path (mm): sharp edges and the soft edges of texture files
+MAX_STEP_WIDTH_MM = 2.0
+#: no step is matched to one further away than this (mm) along the path
+ALIGNMENT_CAP_MM = 10.0
+
+
+class MetricError(TraceError):
+    """Inputs an accuracy metric cannot be computed from (the message says which and why)."""
+
+
+@dataclass(frozen=True, eq=False)
+class Reference:
+    """The ideal rendering on the true path, on the true path's time grid (n samples).
+
+    t_s : (n,) s. x_mm, y_mm : (n,) true position. contact : (n,) bool.
+    s_mm : (n,) arc length along the true path (mm). mu : (n,) mu'* (1 out of contact).
+    rate_hz : the grid's sampling rate (Hz).
+    """
+
+    t_s: np.ndarray
+    x_mm: np.ndarray
+    y_mm: np.ndarray
+    contact: np.ndarray
+    s_mm: np.ndarray
+    mu: np.ndarray
+    rate_hz: float
+
+
+@dataclass(frozen=True)
+class Accuracy:
+    """The three metrics of one rendering (see the module docstring), and the step counts."""
+
+    time_error: float
+    spectral_error: float
+    alignment_error_mm: float
+    ideal_steps: int
+    rendered_steps: int
+
+
+def reference(scene, truth: Trace) -> Reference:
+    """mu'* of ``scene`` along the true path ``truth`` (one finger, uniform time grid).
+
+    Contact runs from the first sample up to, not including, the finger's ``up``
+    sample (as in the tracker).
+    """
+    if len(truth) < 2 or len(truth.fingers) != 1:
+        raise MetricError(f"true path: {len(truth)} samples of fingers {truth.fingers}; "
+                          "expected at least 2 samples of exactly one finger")
+    t = truth.t_s
+    steps = np.diff(t)
+    rate = 1.0 / float(np.median(steps))
+    if np.abs(steps * rate - 1.0).max() > 1e-6:
+        raise MetricError(f"true path: sample spacing varies from {steps.min():.3g} s to "
+                          f"{steps.max():.3g} s; expected a uniform grid")
+    contact = np.cumsum(truth.event == UP) == 0
+    s = np.concatenate(([0.0], np.cumsum(np.hypot(np.diff(truth.x_mm), np.diff(truth.y_mm)))))
+    mu = np.where(contact, ideal_mu(scene, truth.x_mm, truth.y_mm), 1.0)
+    return Reference(t, truth.x_mm, truth.y_mm, contact, s, mu, rate)
+
+
+def hold(t_out: np.ndarray, values: np.ndarray, t_query: np.ndarray, rate_hz: float) -> np.ndarray:
+    """Zero-order hold: ``values`` (n,) output at ``t_out`` (n,), uniform at ``rate_hz``,
+    read at times ``t_query`` (m,) s. Before the first output sample: mu' = 1 (plate at
+    rest); after the last: the last value."""
+    k = np.floor((np.asarray(t_query) - t_out[0]) * rate_hz + 1e-6).astype(np.int64)
+    held = np.asarray(values, dtype=np.float64)[np.clip(k, 0, t_out.size - 1)]
+    return np.where(k < 0, 1.0, held)
+
+
+def time_error(mu: np.ndarray, mu_ideal: np.ndarray, contact: np.ndarray) -> float:
+    """Normalised RMS error over contact time: ``rms(mu - mu*) / std(mu*)``.
+
+    Parameters
+    ----------
+    mu, mu_ideal : (n,) rendered and ideal mu'.
+    contact : (n,) bool, samples that count.
+
+    Returns
+    -------
+    float, dimensionless: 0 for a perfect rendering, 1 for a constant at the mean of
+    mu'*, ~sqrt(2) for the right signal at an unrelated phase.
+    """
+    a, b = mu[contact], mu_ideal[contact]
+    if b.size == 0 or np.ptp(b) == 0.0:
+        raise MetricError(f"ideal mu' is constant ({b[:1]}) over the {b.size} contact samples: "
+                          "the time error is undefined; expected a path that crosses the scene")
+    return float(np.sqrt(np.mean((a - b) ** 2)) / np.std(b))
+
+
+def _band_spectrogram(mu, contact, rate_hz, band_hz, window_s):
+    """Magnitude per third-octave band (rows) and STFT frame (columns)."""
+    x = np.where(contact, mu, 1.0)
+    nper = int(round(window_s * rate_hz))
+    if x.size < nper:
+        raise MetricError(f"{x.size} samples at {rate_hz:g} Hz are shorter than one "
+                          f"{window_s:g} s spectral window")
+    freq, _, z = stft(x, fs=rate_hz, window="hann", nperseg=nper, noverlap=nper // 2,
+                      detrend="constant", boundary=None, padded=False)
+    inside = (freq >= band_hz[0]) & (freq <= band_hz[1])
+    band = np.floor(BANDS_PER_OCTAVE * np.log2(freq[inside] / band_hz[0]) + 1e-9).astype(np.intp)
+    power = np.zeros((band.max() + 1, z.shape[1]))
+    np.add.at(power, band, np.abs(z[inside]) ** 2)
+    return np.sqrt(power)
+
+
+def spectral_error(mu: np.ndarray, mu_ideal: np.ndarray, contact: np.ndarray, rate_hz: float,
+                   band_hz: tuple[float, float] = TACTILE_BAND_HZ,
+                   window_s: float = SPECTRAL_WINDOW_S) -> float:
+    """Relative distance between the short-time band spectra of mu' and mu'*.
+
+    Both signals are set to 1 out of contact, cut into Hann windows of ``window_s`` (half
+    overlap, mean removed per window); each window's magnitude spectrum is summed (power)
+    into third-octave bands over ``band_hz``, about the finger's frequency resolution
+    (vibrotactile Weber fraction ~0.2-0.3), so a texture 5 % off in frequency is not
+    penalised as if it were a different texture. The error is
+    ``sqrt(sum (B - B*)^2) / sqrt(sum B*^2)`` over bands and windows. Phase is ignored:
+    a texture shifted in space costs ~0; a missing texture costs 1; energy in the wrong
+    bands costs up to ~1.4.
+
+    Parameters
+    ----------
+    mu, mu_ideal : (n,) rendered and ideal mu' on a uniform grid at ``rate_hz`` (Hz).
+    contact : (n,) bool.
+    band_hz : (low, high) Hz, inclusive; high must not exceed rate_hz / 2.
+    window_s : STFT window length (s).
+    """
+    if band_hz[1] > rate_hz / 2:
+        raise MetricError(f"band up to {band_hz[1]:g} Hz needs a grid above {2 * band_hz[1]:g} Hz; "
+                          f"got {rate_hz:g} Hz")
+    got = _band_spectrogram(mu, contact, rate_hz, band_hz, window_s)
+    want = _band_spectrogram(mu_ideal, contact, rate_hz, band_hz, window_s)
+    norm = float(np.sqrt(np.sum(want ** 2)))
+    if norm == 0.0:
+        raise MetricError(f"ideal mu' has no energy in {band_hz[0]:g}-{band_hz[1]:g} Hz: the "
+                          "spectral error is undefined; expected a path that crosses the scene")
+    return float(np.sqrt(np.sum((got - want) ** 2)) / norm)
+
+
+def find_steps(mu: np.ndarray, s_mm: np.ndarray, contact: np.ndarray, min_step: float = MIN_STEP,
+               max_width_mm: float = MAX_STEP_WIDTH_MM) -> tuple[np.ndarray, np.ndarray]:
+    """Friction steps of ``mu`` along the path (see :func:`_steps`): their positions
+    (mm of arc length) and directions (+1 friction rising, -1 falling)."""
+    pos, direction, _ = _steps(mu, s_mm, contact, min_step, max_width_mm)
+    return pos, direction
+
+
+def _steps(mu: np.ndarray, s_mm: np.ndarray, contact: np.ndarray, min_step: float = MIN_STEP,
+           max_width_mm: float = MAX_STEP_WIDTH_MM, tol: float = 1e-9
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Friction steps of ``mu`` along the path: monotone runs (within one contact
+    interval; samples held equal, as between the output samples of a slower renderer,
+    do not end a run) that change mu' by at least ``min_step`` over at most
+    ``max_width_mm`` of path.
+
+    Parameters
+    ----------
+    mu : (n,) mu'. s_mm : (n,) arc length (mm), non-decreasing. contact : (n,) bool.
+    tol : changes smaller than this are no change (rounding).
+
+    Returns
+    -------
+    position_mm : (k,) arc length of each step's centre of change (the |d mu'|-weighted
+        mean of the positions where mu' changes; the midpoint of a sharp step).
+    direction : (k,) +1 for friction rising, -1 falling.
+    level : (k,) mu' half way through each step.
+    """
+    d = np.diff(mu)
+    both = contact[1:] & contact[:-1]
+    moving = np.flatnonzero((np.abs(d) > tol) & both)  # samples held equal do not break a run
+    if moving.size == 0:
+        return np.empty(0), np.empty(0), np.empty(0)
+    sign = np.sign(d[moving])
+    interval = np.cumsum(~both)[moving]  # runs never span a lift
+    new = np.concatenate(([True], (sign[1:] != sign[:-1]) | (interval[1:] != interval[:-1])))
+    first = np.flatnonzero(new)
+    last = np.concatenate((first[1:], [moving.size])) - 1
+    start, end = moving[first], moving[last]
+    change = mu[end + 1] - mu[start]
+    width = s_mm[end + 1] - s_mm[start]
+    weight = np.abs(d[moving])
+    mid = 0.5 * (s_mm[moving] + s_mm[moving + 1])
+    centre = np.add.reduceat(weight * mid, first) / np.add.reduceat(weight, first)
+    keep = (np.abs(change) >= min_step) & (width <= max_width_mm)
+    level = 0.5 * (mu[start] + mu[end + 1])
+    return centre[keep], np.sign(change[keep]), level[keep]
+
+
+def _to_crossings(pos, direction, level, other, s_mm, contact, cap_mm):
+    """Distance (mm of path) from each step to the nearest place, within ``cap_mm``,
+    where ``other`` crosses the step's level going the same way (else ``cap_mm``)."""
+    out = np.full(pos.size, cap_mm)
+    lo = np.searchsorted(s_mm, pos - cap_mm)
+    hi = np.searchsorted(s_mm, pos + cap_mm, side="right")
+    for k in range(pos.size):
+        a, b = max(lo[k] - 1, 0), min(hi[k] + 1, s_mm.size)
+        x0, x1 = other[a:b - 1], other[a + 1:b]
+        if direction[k] > 0:
+            hit = (x0 < level[k]) & (x1 >= level[k])
+        else:
+            hit = (x0 > level[k]) & (x1 <= level[k])
+        hit &= contact[a:b - 1] & contact[a + 1:b]
+        i = np.flatnonzero(hit)
+        if i.size:
+            frac = (level[k] - x0[i]) / (x1[i] - x0[i])
+            where = s_mm[a + i] + frac * (s_mm[a + i + 1] - s_mm[a + i])
+            out[k] = min(float(np.abs(where - pos[k]).min()), cap_mm)
+    return out
+
+
+def alignment_error(mu: np.ndarray, mu_ideal: np.ndarray, s_mm: np.ndarray, contact: np.ndarray,
+                    cap_mm: float = ALIGNMENT_CAP_MM, **step_options) -> tuple[float, int, int]:
+    """Symmetric step alignment error (mm) along the path.
+
+    Every step of mu'* is matched to the nearest place where mu' crosses the step's
+    half-way level going the same way, and every step of mu' to the nearest such
+    crossing of mu'*; distances are arc length (mm), capped at ``cap_mm`` (also the cost
+    of a step with no such crossing). Crossings, not detected steps, are the partners, so
+    a soft edge rendered in fragments (a ramp read along a jittery prediction) is matched
+    fragment by fragment. The error is the mean of the two sides' mean distances (a side
+    without steps is left out), so missed and spurious steps both count.
+
+    Parameters
+    ----------
+    mu, mu_ideal, s_mm, contact : (n,) as in :func:`find_steps`.
+    step_options : ``min_step``, ``max_width_mm`` for :func:`find_steps`.
+
+    Returns
+    -------
+    (error_mm, ideal_steps, rendered_steps); 0 mm when neither signal has a step.
+    """
+    ideal = _steps(mu_ideal, s_mm, contact, **step_options)
+    rendered = _steps(mu, s_mm, contact, **step_options)
+    if ideal[0].size == 0 and rendered[0].size == 0:
+        return 0.0, 0, 0
+    to_rendered = _to_crossings(*ideal, mu, s_mm, contact, cap_mm)
+    to_ideal = _to_crossings(*rendered, mu_ideal, s_mm, contact, cap_mm)
+    means = [float(m.mean()) for m in (to_rendered, to_ideal) if m.size]
+    return float(np.mean(means)), int(ideal[0].size), int(rendered[0].size)
+
+
+def accuracy(ref: Reference, t_out: np.ndarray, mu_out: np.ndarray, out_rate_hz: float) -> Accuracy:
+    """All three metrics of a rendering ``mu_out`` (n,) output at ``t_out`` (n,) s, uniform
+    at ``out_rate_hz``, against ``ref`` (see the module docstring)."""
+    mu = hold(t_out, mu_out, ref.t_s, out_rate_hz)
+    mu = np.where(ref.contact, mu, 1.0)
+    align, n_ideal, n_rendered = alignment_error(mu, ref.mu, ref.s_mm, ref.contact)
+    return Accuracy(time_error=time_error(mu, ref.mu, ref.contact),
+                    spectral_error=spectral_error(mu, ref.mu, ref.contact, ref.rate_hz),
+                    alignment_error_mm=align, ideal_steps=n_ideal, rendered_steps=n_rendered)

@@ -1,0 +1,91 @@
+"""``frictex report``: the quick matrix's ranking claims, the hybrid's standing, the files."""
+
+import json
+
+import pytest
+
+from app.cli import main
+from app.report_claims import claims
+from app.report_matrix import Runner, matrix
+from app.report_output import pareto
+
+#: hybrid claims that do not hold on the quick matrix today (see the report's Claims
+#: section and the engineer's notes): a change may fix one, never add one
+KNOWN_SHORTFALLS = {
+    ("hybrid-best", "grating-5mm", "fast", "spectral_error"),
+    ("hybrid-best", "grating-0.6mm", "slow", "spectral_error"),
+    ("hybrid-best", "grating-0.6mm", "fast", "spectral_error"),
+    ("hybrid-best", "grating-0.6mm", "human", "time_error"),
+    ("hybrid-30", "grating-0.6mm", "human", "time_error"),
+}
+
+
+@pytest.fixture(scope="module")
+def grating_rows():
+    runner = Runner(live_s=0.02)
+    cases = [c for c in matrix(quick=True, scenes=("grating-15mm", "grating-5mm", "grating-0.6mm"))
+             if c.output_hz == 10_000.0 and c.inversion == "exact"]
+    return [runner.run(c) for c in cases]
+
+
+def test_plain_sho_against_sht_reproduces_seed_003(grating_rows):
+    """SHT beats SHO on the spectrum at 0.6 mm, SHO beats SHT on alignment at 15 mm, for
+    the constant-speed and human-like motions at 50 Hz."""
+    ranking = [c for c in claims(grating_rows) if c.group == "ranking"]
+    assert len(ranking) == 6
+    assert all(c.passed for c in ranking), [c.text for c in ranking if not c.passed]
+
+
+def test_hybrid_claims_hold_except_the_known_shortfalls(grating_rows):
+    hybrid = [c for c in claims(grating_rows) if c.group.startswith("hybrid")]
+    assert len(hybrid) == 2 * 27
+    failing = {(c.group, c.scene, c.motion, c.metric) for c in hybrid if not c.passed}
+    assert failing <= KNOWN_SHORTFALLS, failing - KNOWN_SHORTFALLS
+    # the alignment the eye checks is never worse than either, on any grating or motion
+    assert all(c.passed for c in hybrid if c.metric == "alignment_error_mm")
+
+
+def test_rows_have_the_documented_fields(grating_rows):
+    row = grating_rows[0]
+    for key in ("scene", "period_mm", "motion", "touch_hz", "renderer", "output_hz",
+                "time_error", "spectral_error", "alignment_error_mm", "cost_us_per_s"):
+        assert key in row
+    assert set(row["throughput"]) == {"replay_x_realtime", "live_block_p99_us", "latency_ms"}
+    assert {"tracking", "layer:lines", "composition", "inversion", "actuation"} <= set(row["stages_us_per_s"])
+    assert row["period_mm"] == 15.0
+    # latency: at most one 5 ms block of waiting plus the link's 20 ms buffer
+    assert 20.0 <= row["throughput"]["latency_ms"] <= 25.0
+
+
+def test_pareto_front():
+    pts = [(1.0, 5.0), (2.0, 3.0), (3.0, 3.0), (4.0, 1.0), (5.0, 2.0)]
+    assert pareto(pts) == [True, True, False, True, False]
+
+
+def test_report_writes_its_files(tmp_path, capsys):
+    out = tmp_path / "rep"
+    assert main(["report", "--quick", "--scenes", "grating-15mm", "--out", str(out),
+                 "--no-progress"]) == 0
+    doc = json.loads((out / "report.json").read_text())
+    assert {r["renderer"] for r in doc["rows"]} == {"sho-held", "sho-predicted", "sht", "hybrid"}
+    assert {r["output_hz"] for r in doc["rows"]} == {2000.0, 5000.0, 10_000.0, 20_000.0}
+    assert (out / "error_vs_cost.png").stat().st_size > 10_000
+    assert (out / "error_vs_period.png").stat().st_size > 10_000
+    assert "## Physical limits" in (out / "report.md").read_text()
+    assert "claims hold" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["report", "--scenes", "grating-7mm"], "--scenes: unknown scene(s) grating-7mm"),
+])
+def test_bad_input_is_one_line_and_exit_2(argv, message, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("frictex: error: ") and message in err and err.count("\n") == 1
+
+
+def test_out_that_is_a_file_is_refused(tmp_path, capsys):
+    f = tmp_path / "file"
+    f.write_text("x")
+    assert main(["report", "--quick", "--out", str(f)]) == 2
+    assert "exists and is not a folder" in capsys.readouterr().err
