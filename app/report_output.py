@@ -54,7 +54,7 @@ def _config_points(rows):
     for r in sweep:
         configs.setdefault(_config(r), []).append(r)
     return {name: {"cost": float(np.mean([r["cost_us_per_s"] for r in rs])),
-                   **{m: float(np.mean([r[m] for r in rs])) for m in METRICS}}
+                   **{m: _mean(r[m] for r in rs) for m in METRICS}}
             for name, rs in configs.items()}
 
 
@@ -115,8 +115,8 @@ def plot_period(rows, path: Path) -> None:
         return _empty(fig, path, plt)
     for ax, metric in zip(axes, METRICS):
         for name in renderers:
-            ys = [np.mean([r[metric] for r in base if r["renderer"] == name
-                           and r["period_mm"] == p] or [np.nan]) for p in periods]
+            ys = [_mean(r[metric] for r in base if r["renderer"] == name and r["period_mm"] == p)
+                  for p in periods]
             ax.plot(periods, ys, marker="o", label=name)
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -159,9 +159,20 @@ def _table(header, lines) -> list[str]:
 def _by_rate(rows, key, values, metric, **where):
     out = []
     for v in values:
-        sel = [r[metric] for r in rows if r[key] == v and all(r[k] == w for k, w in where.items())]
-        out.append(f"{np.mean(sel):.3f}" if sel else "-")
+        out.append(_fmt(_mean(r[metric] for r in rows
+                              if r[key] == v and all(r[k] == w for k, w in where.items()))))
     return out
+
+
+def _mean(values) -> float:
+    """Mean of the defined values (None: a metric with nothing to measure), NaN if none."""
+    defined = [v for v in values if v is not None]
+    return float(np.mean(defined)) if defined else float("nan")
+
+
+def _fmt(value) -> str:
+    """Three decimals; '-' where the metric is undefined."""
+    return "-" if value is None or np.isnan(value) else f"{value:.3f}"
 
 
 def write_markdown(doc: dict, path: Path, plots: list[str]) -> None:
@@ -187,7 +198,7 @@ def write_markdown(doc: dict, path: Path, plots: list[str]) -> None:
     base = [r for r in _grating_rows(rows) if r["output_hz"] == OUTPUT_HZ and r["inversion"] == "exact"]
     lines += _table(["scene", "motion", "renderer", "time", "spectral", "alignment mm", "cost us/s"],
                     [(r["scene"], r["motion"], r["renderer"], f"{r['time_error']:.3f}",
-                      f"{r['spectral_error']:.3f}", f"{r['alignment_error_mm']:.3f}",
+                      f"{r['spectral_error']:.3f}", _fmt(r['alignment_error_mm']),
                       f"{r['cost_us_per_s']:.0f}") for r in base])
     lines += ["", "## Other scenes", ""]
     other = [r for r in rows if r["scene"] not in GRATINGS and r["output_hz"] == OUTPUT_HZ
@@ -196,7 +207,7 @@ def write_markdown(doc: dict, path: Path, plots: list[str]) -> None:
                      "cost us/s"],
                     [(r["scene"], r["motion"], f"{r['touch_hz']:g}", r["renderer"],
                       f"{r['time_error']:.3f}", f"{r['spectral_error']:.3f}",
-                      f"{r['alignment_error_mm']:.3f}", f"{r['cost_us_per_s']:.0f}") for r in other])
+                      _fmt(r['alignment_error_mm']), f"{r['cost_us_per_s']:.0f}") for r in other])
     lines += ["", "## Throughput and latency (composed scene, one finger, 10 kHz)", ""]
     head = doc["headline"]
     lines += _table(["renderer/motion", "replay x real time", "live 5 ms block p99 us",

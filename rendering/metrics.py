@@ -85,7 +85,7 @@ class Accuracy:
 
     time_error: float
     spectral_error: float
-    alignment_error_mm: float
+    alignment_error_mm: float | None
     ideal_steps: int
     rendered_steps: int
 
@@ -279,12 +279,13 @@ def alignment_error(mu: np.ndarray, mu_ideal: np.ndarray, s_mm: np.ndarray, cont
 
     Returns
     -------
-    (error_mm, ideal_steps, rendered_steps); 0 mm when neither signal has a step.
+    (error_mm, ideal_steps, rendered_steps); error_mm is None when neither signal has a
+    step: there is nothing to align, and 0 would read as a perfect score.
     """
     ideal = _steps(mu_ideal, s_mm, contact, **step_options)
     rendered = _steps(mu, s_mm, contact, **step_options)
     if ideal[0].size == 0 and rendered[0].size == 0:
-        return 0.0, 0, 0
+        return None, 0, 0
     to_rendered = _to_crossings(*ideal, mu, s_mm, contact, cap_mm)
     to_ideal = _to_crossings(*rendered, mu_ideal, s_mm, contact, cap_mm)
     means = [float(m.mean()) for m in (to_rendered, to_ideal) if m.size]

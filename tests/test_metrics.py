@@ -128,7 +128,7 @@ def test_no_steps_anywhere_is_zero_and_missing_all_is_the_cap():
     contact = np.ones(s.size, bool)
     flat = np.ones(s.size)
     step = np.where(s < 5, 1.0, 0.6)
-    assert alignment_error(flat, flat, s, contact) == (0.0, 0, 0)
+    assert alignment_error(flat, flat, s, contact) == (None, 0, 0)  # nothing to align
     assert alignment_error(flat, step, s, contact, cap_mm=7.0) == (7.0, 1, 0)
 
 
