@@ -35,7 +35,7 @@ from operator import attrgetter
 
 import numpy as np
 
-from rendering.trace_file import DOWN, UP, Trace
+from rendering.trace_file import DOWN, MOVE, UP, Trace
 
 
 @dataclass(frozen=True)
@@ -113,54 +113,101 @@ def apply_index(t_s: np.ndarray, config: TrackerConfig) -> np.ndarray:
     return (np.ceil(pos - 1e-9).astype(np.int64)) * config.quantum
 
 
-def _fit(history, t_now: float, x_now: float, y_now: float):
-    """Least-squares line through (t, x) and (t, y): velocity and position at t_now."""
-    n = len(history)
-    if n < 2:
-        return x_now, y_now, None
-    st = sx = sy = stt = stx = sty = 0.0
-    for t, x, y in history:
-        dt = t - t_now
-        st += dt
-        sx += x
-        sy += y
-        stt += dt * dt
-        stx += dt * x
-        sty += dt * y
+def _line_fits(t, x, y, first):
+    """Least-squares lines through each sample's window: velocity and fitted position.
+
+    ``t, x, y`` (N,) hold a finger's samples; sample k's window is ``first[k] .. k``.
+    Windows are gathered into a padded (N, J) table, J the longest window, and summed
+    relative to the sample's own time, so nothing large cancels. Returns
+    ``(vx, vy, xf, yf, ok)``; ``ok`` is False where the window has one distinct time.
+    """
+    k = np.arange(t.size)
+    span = k - first
+    j = np.arange(int(span.max(initial=0)) + 1)
+    member = j[None, :] <= span[:, None]
+    g = np.where(member, k[:, None] - j[None, :], k[:, None])
+    dt = np.where(member, t[g] - t[:, None], 0.0)
+    wx = np.where(member, x[g], 0.0)
+    wy = np.where(member, y[g], 0.0)
+    n = member.sum(axis=1).astype(np.float64)
+    st, stt = dt.sum(axis=1), (dt * dt).sum(axis=1)
+    sx, sy = wx.sum(axis=1), wy.sum(axis=1)
+    stx, sty = (dt * wx).sum(axis=1), (dt * wy).sum(axis=1)
     denom = n * stt - st * st
-    if denom <= 1e-18:
-        return x_now, y_now, None
-    vx = (n * stx - st * sx) / denom
-    vy = (n * sty - st * sy) / denom
-    return (sx - vx * st) / n, (sy - vy * st) / n, (vx, vy)
+    ok = denom > 1e-18
+    safe = np.where(ok, denom, 1.0)
+    vx = np.where(ok, (n * stx - st * sx) / safe, 0.0)
+    vy = np.where(ok, (n * sty - st * sy) / safe, 0.0)
+    return vx, vy, np.where(ok, (sx - vx * st) / n, x), np.where(ok, (sy - vy * st) / n, y), ok
 
 
-def _update_finger(fs: FingerState, t: float, x: float, y: float, force: float, event: int,
-                   cfg: TrackerConfig, counters: dict) -> FingerState:
-    """The finger's state after one sample (events already normalised)."""
-    if fs.contact and t < fs.t_sample:
-        counters["out_of_order"] += 1
-        return fs
-    new_touch = event == DOWN or not fs.contact
-    if not new_touch and event != UP:
-        dist = math.hypot(x - fs.x, y - fs.y)
-        if dist > cfg.jump_min_mm and dist > cfg.jump_speed_mm_s * (t - fs.t_sample):
-            counters["jumps"] += 1
-            new_touch = True
-    if new_touch:
-        return FingerState(contact=event != UP, touch_id=fs.touch_id + 1, t_sample=t, x=x, y=y,
-                           xf=x, yf=y, vx=0.0, vy=0.0, force=force, t_down=t,
-                           history=((t, x, y),))
-    history = tuple(h for h in fs.history if h[0] >= t - cfg.velocity_window_s) + ((t, x, y),)
-    if history[0][0] == t:  # one distinct time (times in the window never decrease)
-        # too few samples in the window: the last two, if close enough in time
-        recent = tuple(h for h in fs.history[-1:] if t - h[0] <= cfg.max_gap_s)
-        history = recent + ((t, x, y),)
-    xf, yf, vel = _fit(history, t, x, y)
-    vx, vy = vel if vel is not None else (fs.vx, fs.vy)
-    if event == UP:
-        return FingerState(False, fs.touch_id, t, x, y, x, y, 0.0, 0.0, force, fs.t_down, ())
-    return FingerState(fs.contact, fs.touch_id, t, x, y, xf, yf, vx, vy, force, fs.t_down, history)
+def _last_true(mask: np.ndarray) -> np.ndarray:
+    """For each position, the index of the last True at or before it (-1 if none)."""
+    return np.maximum.accumulate(np.where(mask, np.arange(mask.size), -1))
+
+
+def _finger_steps(fs: FingerState, t, x, y, force, event, cfg: TrackerConfig, counters: dict):
+    """One finger's samples (in time order) applied to its state, all at once.
+
+    Returns the per-sample state after each kept sample (dict of arrays named as
+    ``_FIELDS``), the mask of kept samples, and the finger's state after the last one.
+    """
+    previous_t = np.maximum.accumulate(np.concatenate(([fs.t_sample], t[:-1])))
+    keep = t >= previous_t  # older than the finger's last sample: dropped
+    counters["out_of_order"] += int(np.count_nonzero(~keep))
+    t, x, y, force, event = t[keep], x[keep], y[keep], force[keep], event[keep]
+    if t.size == 0:
+        return None, keep, fs
+    contact_after = event != UP
+    t_prev = np.concatenate(([fs.t_sample], t[:-1]))
+    x_prev = np.concatenate(([fs.x], x[:-1]))
+    y_prev = np.concatenate(([fs.y], y[:-1]))
+    contact_prev = np.concatenate(([fs.contact], contact_after[:-1]))
+    dist = np.hypot(x - x_prev, y - y_prev)
+    jump = (contact_prev & (event == MOVE) & (dist > cfg.jump_min_mm)
+            & (dist > cfg.jump_speed_mm_s * (t - t_prev)))
+    counters["jumps"] += int(np.count_nonzero(jump))
+    new_touch = (event == DOWN) | ~contact_prev | jump
+    last_new = _last_true(new_touch)
+    touch_id = fs.touch_id + np.cumsum(new_touch)
+    t_down = np.where(last_new >= 0, t[np.maximum(last_new, 0)], fs.t_down)
+
+    # velocity windows over the touch's earlier samples (kept in the state) and these
+    h = len(fs.history) if fs.contact else 0
+    ht = np.array([s[0] for s in fs.history[:h]] + t.tolist())
+    hx = np.array([s[1] for s in fs.history[:h]] + x.tolist())
+    hy = np.array([s[2] for s in fs.history[:h]] + y.tolist())
+    g = h + np.arange(t.size)
+    touch_first = np.where(last_new >= 0, h + last_new, 0)
+    first = np.maximum(np.searchsorted(ht, t - cfg.velocity_window_s, side="left"), touch_first)
+    # one distinct time in the window: the previous sample of the touch, if recent enough
+    lone = ht[first] == t
+    prev_ok = (g - 1 >= touch_first) & (t - ht[np.maximum(g - 1, 0)] <= cfg.max_gap_s)
+    first = np.where(lone & prev_ok, g - 1, first)
+    vx, vy, xf, yf, ok = _line_fits(ht, hx, hy, np.concatenate((np.zeros(h, np.int64), first)))
+    vx, vy, xf, yf, ok = vx[h:], vy[h:], xf[h:], yf[h:], ok[h:]
+    # no fit: keep the touch's last velocity (0 from its first sample on)
+    source = _last_true(ok | new_touch)
+    carried = source >= 0
+    src = np.maximum(source, 0)
+    vx = np.where(carried, np.where(new_touch[src] & ~ok[src], 0.0, vx[src]), fs.vx)
+    vy = np.where(carried, np.where(new_touch[src] & ~ok[src], 0.0, vy[src]), fs.vy)
+    up = ~contact_after
+    steps = {"contact": contact_after.astype(np.float64), "touch_id": touch_id.astype(np.float64),
+             "t_sample": t, "x": x, "y": y, "xf": np.where(up, x, xf), "yf": np.where(up, y, yf),
+             "vx": np.where(up, 0.0, vx), "vy": np.where(up, 0.0, vy), "force": force,
+             "t_down": t_down}
+    last = t.size - 1
+    if up[last]:
+        history = ()
+    else:
+        lo = max(int(np.searchsorted(ht, t[last] - cfg.velocity_window_s)), int(touch_first[last]))
+        history = tuple(zip(ht[lo:].tolist(), hx[lo:].tolist(), hy[lo:].tolist()))
+    end = FingerState(bool(contact_after[last]), int(touch_id[last]), float(t[last]),
+                      float(x[last]), float(y[last]), float(steps["xf"][last]),
+                      float(steps["yf"][last]), float(steps["vx"][last]), float(steps["vy"][last]),
+                      float(force[last]), float(t_down[last]), history)
+    return steps, keep, end
 
 
 _FIELDS = ("contact", "touch_id", "t_sample", "x", "y", "xf", "yf", "vx", "vy", "force", "t_down")
@@ -187,27 +234,27 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
     t_out = config.t0_s + idx / config.rate_hz
     fingers = dict(state.fingers)
     counters = {"jumps": state.jumps, "out_of_order": state.out_of_order}
-    # per finger: list of (apply index, FingerState after the sample)
-    updates: dict[int, list[tuple[int, FingerState]]] = {}
+    # per finger: (apply indices, state columns after each of its samples)
+    updates: dict[int, tuple[np.ndarray, dict]] = {}
     if samples is not None and len(samples):
         applied = np.clip(apply_index(samples.t_s, config), index0, index0 + n - 1)
-        columns = (applied, samples.finger, samples.t_s, samples.x_mm, samples.y_mm,
-                   samples.force_n, samples.event)
-        # plain Python numbers: indexing numpy arrays one sample at a time is the slow part
-        for at, fid, t, x, y, force, event in zip(*(c.tolist() for c in columns)):
-            fs = fingers.get(fid, FingerState())
-            fs = _update_finger(fs, t, x, y, force, event, config, counters)
-            fingers[fid] = fs
-            updates.setdefault(fid, []).append((at, fs))
+        for fid in np.unique(samples.finger).tolist():
+            sel = samples.finger == fid
+            steps, keep, fingers[fid] = _finger_steps(
+                fingers.get(fid, FingerState()), samples.t_s[sel], samples.x_mm[sel],
+                samples.y_mm[sel], samples.force_n[sel], samples.event[sel], config, counters)
+            if steps is not None:
+                updates[fid] = (applied[sel][keep], steps)
     ids = tuple(sorted(fingers))
     values = np.empty((len(_FIELDS), len(ids), n))
     for row, fid in enumerate(ids):
-        before = state.fingers.get(fid, FingerState())
-        steps = [(index0 - 1, before)] + updates.get(fid, [])
+        before = np.array(_GET_FIELDS(state.fingers.get(fid, FingerState())), dtype=np.float64)
+        at, steps = updates.get(fid, (np.zeros(0, np.int64), None))
+        table = before[:, None] if steps is None else np.column_stack(
+            (before, np.array([steps[name] for name in _FIELDS])))
         # step j holds from its apply index to the next step's (a later step applied at
         # the same index overrides it: a run of length 0)
-        starts = np.array([max(s[0] - index0, 0) for s in steps] + [n], dtype=np.int64)
-        table = np.array([_GET_FIELDS(s[1]) for s in steps], dtype=np.float64).T
+        starts = np.concatenate(([0], at - index0, [n]))
         values[:, row, :] = np.repeat(table, np.diff(starts), axis=1)
     arrays = dict(zip(_FIELDS, values))
     contact = arrays["contact"] > 0.5
