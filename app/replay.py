@@ -213,7 +213,10 @@ def _summary(scene, trace, trace_path, pipeline, state, clamps, fmt, files, tota
     touch_hz = float(1.0 / np.median(steps)) if steps.size else None
     clamp_dict = clamps.as_dict()
     warnings = []
-    if clamp_dict["unreachable"]:
+    if clamp_dict["unreachable"] and pipeline.forces is not None:
+        warnings.append(f"{clamp_dict['unreachable']} samples asked for a tangential force out "
+                        "of the wave's reach and were clamped to the nearest reachable force")
+    elif clamp_dict["unreachable"]:
         warnings.append(f"{clamp_dict['unreachable']} target samples were below the lowest "
                         "reachable mu' and were clamped to the amplitude limit")
     if clamp_dict["force_beyond_model"]:
