@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
 #: subcommand -> (module in app/, one-line help)
@@ -58,6 +59,9 @@ def main(argv: list[str] | None = None) -> int:
         return 2 if argv else 0
     try:
         return int(module.run(args) or 0)
+    except BrokenPipeError:  # output piped into e.g. head, which stopped reading
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except KeyboardInterrupt:
         print("frictex: interrupted", file=sys.stderr)
         return 130
