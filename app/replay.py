@@ -1,7 +1,9 @@
 """Headless replay: a scene and a recorded trace through the whole pipeline, on a virtual clock.
 
 The output clock starts at the trace's first sample (t_s of output sample k is
-t0 + k / rate) and runs until one block after the last sample. Each pass processes
+t0 + k / rate) and runs until the block after the last sample. The trace is read in
+chunks and the outputs written in chunks, so memory stays bounded however long the
+trace (an hour at 10 kHz is 36 million command rows). Each pass processes
 ``chunk_blocks`` blocks at once (fast), but a touch sample still takes effect at the
 block boundary after it (see ``rendering.tracks``), so the result equals a live run
 block by block, and two replays of the same inputs are byte-identical (timings aside,
@@ -24,8 +26,9 @@ import numpy as np
 
 from app.force_summary import ForceSummary
 from app.outputs import TableWriter
+from rendering.friction import ClampCounts
 from rendering.pipeline import STAGES, build_pipeline
-from rendering.trace_file import Trace, read_trace
+from rendering.trace_file import Trace, iter_trace
 from rendering.tracks import apply_index
 from textures.model import Scene
 
@@ -37,12 +40,89 @@ def _load_inputs(scene, trace):
         from textures.library import resolve_scene
         from textures.loader import load_scene
         scene = load_scene(resolve_scene(scene))
-    trace_path = None
-    if not isinstance(trace, Trace):
-        from textures.library import resolve_trace
-        trace_path = resolve_trace(trace)
-        trace = read_trace(trace_path)
-    return scene, trace, trace_path
+    if isinstance(trace, Trace):
+        return scene, iter([trace]), None
+    from textures.library import resolve_trace
+    trace_path = resolve_trace(trace)
+    return scene, iter_trace(trace_path), trace_path
+
+
+class _TraceFeed:
+    """Touch samples from a stream of trace chunks, handed out by the blocks in which
+    they take effect; reads ahead only as far as the window asked for needs."""
+
+    def __init__(self, chunks):
+        self.chunks = chunks
+        self.pending: Trace | None = None
+        self.applied = np.zeros(0, dtype=np.int64)
+        self.config = None
+        self.ended = False
+        self.stats = _TraceStats()
+
+    def first_time(self) -> float:
+        self._read_more()
+        return float(self.pending.t_s[0])
+
+    def _read_more(self) -> None:
+        chunk = next(self.chunks, None)
+        if chunk is None:
+            self.ended = True
+            return
+        self.stats.add(chunk)
+        self.pending = chunk if self.pending is None else _join(self.pending, chunk)
+        if self.config is not None:
+            self.applied = apply_index(self.pending.t_s, self.config)
+
+    def start(self, tracker_config) -> None:
+        self.config = tracker_config
+        self.applied = apply_index(self.pending.t_s, tracker_config)
+
+    def take(self, end_index: int) -> Trace | None:
+        """The samples taking effect before output index ``end_index``."""
+        while not self.ended and (self.applied.size == 0 or self.applied[-1] < end_index):
+            self._read_more()
+        hi = int(np.searchsorted(self.applied, end_index))
+        if hi == 0:
+            return None
+        taken = _slice_trace(self.pending, 0, hi)
+        self.pending = _slice_trace(self.pending, hi, len(self.pending))
+        self.applied = self.applied[hi:]
+        return taken
+
+    @property
+    def done(self) -> bool:
+        return self.ended and self.applied.size == 0
+
+
+class _TraceStats:
+    """What the summary says about the trace, gathered chunk by chunk."""
+
+    MAX_STEPS = 100_000  # the touch rate is the median over the first steps
+
+    def __init__(self):
+        self.samples = 0
+        self.fingers: set[int] = set()
+        self.first_t = self.last_t = None
+        self.steps: list[np.ndarray] = []
+        self.n_steps = 0
+
+    def add(self, chunk: Trace) -> None:
+        times = chunk.t_s if self.last_t is None else np.concatenate(([self.last_t], chunk.t_s))
+        if self.n_steps < self.MAX_STEPS:
+            steps = np.diff(times)
+            steps = steps[steps > 0][: self.MAX_STEPS - self.n_steps]
+            self.steps.append(steps)
+            self.n_steps += steps.size
+        self.samples += len(chunk)
+        self.fingers.update(chunk.fingers)
+        self.first_t = float(chunk.t_s[0]) if self.first_t is None else self.first_t
+        self.last_t = float(chunk.t_s[-1])
+
+    def report(self, path) -> dict:
+        steps = np.concatenate(self.steps) if self.steps else np.zeros(0)
+        return {"path": str(path) if path else None, "samples": self.samples,
+                "fingers": sorted(self.fingers), "duration_s": self.last_t - self.first_t,
+                "touch_rate_hz": float(1.0 / np.median(steps)) if steps.size else None}
 
 
 def _command_columns(pipeline):
@@ -83,52 +163,36 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     with ``add(out)`` and ``close()`` receiving every chunk's output (PNG frames).
     """
     wall0 = time.perf_counter()
-    scene, trace, trace_path = _load_inputs(scene, trace)
+    scene, chunks, trace_path = _load_inputs(scene, trace)
+    feed = _TraceFeed(chunks)
+    t0 = feed.first_time()
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    t0 = float(trace.t_s[0])
     pipeline = build_pipeline(scene, rate_hz=rate_hz, block_size=block_size,
                               render_override=render_override, t0_s=t0)
     if device is not None:
         from device.link import open_sink
         sink = open_sink(device, channels=len(pipeline.channels), rate_hz=rate_hz,
                          phases=pipeline.actuation.has_phases, paced=True)
-    applied = apply_index(trace.t_s, pipeline.tracker_config)
-    total_blocks = int(applied[-1] // block_size) + 1
+    feed.start(pipeline.tracker_config)
     state = pipeline.initial_state()
-
     commands = TableWriter(out_dir, "commands", _command_columns(pipeline), fmt)
     friction = TableWriter(out_dir, "friction", FRICTION_COLUMNS, fmt)
-    clamps = None
-    errors = _AmplitudeErrors()
-    forces = ForceSummary()
-    max_amplitude = 0.0
-    contact_samples = 0
-    limited = off_structure = 0
-    bar = _progress(total_blocks * block_size / rate_hz, progress)
+    totals = _Totals()
+    bar = _progress(feed, rate_hz, progress)
+    block = 0
     try:
-        for block in range(0, total_blocks, chunk_blocks):
-            nb = min(chunk_blocks, total_blocks - block)
-            lo, hi = np.searchsorted(applied, [block * block_size, (block + nb) * block_size])
-            chunk = _slice_trace(trace, lo, hi) if hi > lo else None
-            out, state = pipeline.process(block, chunk, state, n_blocks=nb)
-            cols = {"t_s": out.t_s}
-            for k, ch in enumerate(pipeline.channels):
-                cols[f"{ch}_um"] = out.commands_um[:, k]
-                if out.phases_rad is not None:
-                    cols[f"{ch}_phase_rad"] = out.phases_rad[:, k]
-            commands.write(cols)
-            friction.write(friction_rows(out))
-            if clamps is None:
-                clamps = out.clamps
-            else:
-                clamps.add(out.clamps)
-            errors.add(out)
-            forces.add(out)
-            max_amplitude = max(max_amplitude, float(out.commands_um.max(initial=0.0)))
-            contact_samples += int(out.contact.any(axis=0).sum())
-            limited += out.limited
-            off_structure += out.off_structure
+        # until the block after the last sample: every sample takes effect, the last
+        # touch's end is in the output
+        while not feed.done:
+            samples = feed.take((block + chunk_blocks) * block_size)
+            nb = chunk_blocks
+            if feed.done and samples is not None:
+                last = int(apply_index(samples.t_s[-1:], pipeline.tracker_config)[0])
+                nb = last // block_size + 1 - block
+            out, state = pipeline.process(block, samples, state, n_blocks=nb)
+            _write(out, pipeline, commands, friction)
+            totals.add(out)
             if sink is not None:
                 for b in range(nb):
                     s = slice(b * block_size, (b + 1) * block_size)
@@ -138,6 +202,7 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
                 frames.add(out)
             if bar is not None:
                 bar.update(nb * block_size / rate_hz)
+            block += nb
         files = [commands.commit().name, friction.commit().name]
     except BaseException:
         commands.abort()
@@ -151,22 +216,45 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
         if sink is not None:
             sink.close()
 
-    summary = _summary(scene, trace, trace_path, pipeline, state, clamps, fmt, files,
-                       total_blocks, contact_samples, max_amplitude, sink)
-    summary["fingers"] = errors.report()
-    summary["counts"].update(actuator_limited=limited, off_structure=off_structure)
-    if limited:
-        summary["warnings"].append(f"{limited} samples hit an actuator limit (achieved amplitude "
-                                   "differs from the wanted one; see fingers)")
-    if off_structure:
-        summary["warnings"].append(f"{off_structure} finger samples were off the vibrating "
-                                   "structure and were held at its edge")
-    if forces.report() is not None:
-        summary["forces"] = forces.report()
-    summary["timings"] = _timings(pipeline, total_blocks * block_size / rate_hz,
+    summary = _summary(scene, feed.stats.report(trace_path), pipeline, state, totals, fmt,
+                       files, block, sink)
+    summary["timings"] = _timings(pipeline, block * block_size / rate_hz,
                                   time.perf_counter() - wall0)
     (out_dir / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
     return summary
+
+
+def _write(out, pipeline, commands: TableWriter, friction: TableWriter) -> None:
+    cols = {"t_s": out.t_s}
+    for k, ch in enumerate(pipeline.channels):
+        cols[f"{ch}_um"] = out.commands_um[:, k]
+    if out.phases_rad is not None:
+        for k, ch in enumerate(pipeline.channels):
+            cols[f"{ch}_phase_rad"] = out.phases_rad[:, k]
+    commands.write(cols)
+    friction.write(friction_rows(out))
+
+
+class _Totals:
+    """What the summary counts over the whole replay, block output by block output."""
+
+    def __init__(self):
+        self.clamps = ClampCounts()
+        self.errors = _AmplitudeErrors()
+        self.forces = ForceSummary()
+        self.max_amplitude = 0.0
+        self.contact_samples = 0
+        self.limited = 0
+        self.off_structure = 0
+
+    def add(self, out) -> None:
+        self.clamps.add(out.clamps)
+        self.errors.add(out)
+        self.forces.add(out)
+        self.max_amplitude = max(self.max_amplitude, float(out.commands_um.max(initial=0.0)))
+        self.contact_samples += int(out.contact.any(axis=0).sum())
+        self.limited += out.limited
+        self.off_structure += out.off_structure
 
 
 class _AmplitudeErrors:
@@ -191,27 +279,33 @@ class _AmplitudeErrors:
                 for fid, (n, sq, mx) in sorted(self.stats.items())}
 
 
+def _join(a: Trace, b: Trace) -> Trace:
+    return Trace(*(np.concatenate((getattr(a, n), getattr(b, n)))
+                   for n in ("t_s", "finger", "x_mm", "y_mm", "force_n", "event")))
+
+
 def _slice_trace(trace: Trace, lo: int, hi: int) -> Trace:
     return Trace(trace.t_s[lo:hi], trace.finger[lo:hi], trace.x_mm[lo:hi], trace.y_mm[lo:hi],
                  trace.force_n[lo:hi], trace.event[lo:hi])
 
 
-def _progress(total_s: float, enabled: bool):
-    """A progress bar (seconds of output) on stderr for replays longer than 30 s."""
-    if not enabled or total_s < 30.0:
+def _progress(feed: _TraceFeed, rate_hz: float, enabled: bool):
+    """A progress bar (seconds of output) on stderr for long replays: when the trace's
+    first chunk already spans 30 s or more, or does not hold the whole trace."""
+    if not enabled:
+        return None
+    span = float(feed.pending.t_s[-1] - feed.pending.t_s[0])
+    if span < 30.0 and feed.ended:
         return None
     from tqdm import tqdm
-    return tqdm(total=round(total_s, 3), unit="s", desc="replay", disable=None,
-                bar_format="{l_bar}{bar}| {n:.0f}/{total:.0f} s of output [{elapsed}<{remaining}]")
+    return tqdm(unit="s", desc="replay", disable=None,
+                bar_format="{desc}: {n:.0f} s of output [{elapsed}, {rate_fmt}]")
 
 
-def _summary(scene, trace, trace_path, pipeline, state, clamps, fmt, files, total_blocks,
-             contact_samples, max_amplitude, sink) -> dict:
+def _summary(scene, trace_report, pipeline, state, totals: _Totals, fmt, files, total_blocks,
+             sink) -> dict:
     n_out = total_blocks * pipeline.block_size
-    steps = np.diff(trace.t_s)
-    steps = steps[steps > 0]
-    touch_hz = float(1.0 / np.median(steps)) if steps.size else None
-    clamp_dict = clamps.as_dict()
+    clamp_dict = totals.clamps.as_dict()
     warnings = []
     if clamp_dict["unreachable"] and pipeline.forces is not None:
         warnings.append(f"{clamp_dict['unreachable']} samples asked for a tangential force out "
@@ -234,18 +328,26 @@ def _summary(scene, trace, trace_path, pipeline, state, clamps, fmt, files, tota
                   "layers": [{"name": layer.name, "type": type(layer).__name__.lower(),
                               "renderer": mode}
                              for layer, mode in zip(scene.layers, pipeline.layer_modes)]},
-        "trace": {"path": str(trace_path) if trace_path else None, "samples": len(trace),
-                  "fingers": list(trace.fingers), "duration_s": trace.duration_s,
-                  "touch_rate_hz": touch_hz},
+        "trace": trace_report,
         "output": {"rate_hz": pipeline.rate_hz, "block_size": pipeline.block_size,
                    "samples": n_out, "duration_s": n_out / pipeline.rate_hz,
                    "channels": list(pipeline.channels), "format": fmt, "files": files},
-        "counts": {"blocks": total_blocks, "contact_samples": contact_samples,
+        "counts": {"blocks": total_blocks, "contact_samples": totals.contact_samples,
                    "jumps": state.tracker.jumps, "out_of_order": state.tracker.out_of_order,
-                   "max_amplitude_um": max_amplitude},
+                   "max_amplitude_um": totals.max_amplitude,
+                   "actuator_limited": totals.limited, "off_structure": totals.off_structure},
         "clamps": clamp_dict,
         "warnings": warnings,
+        "fingers": totals.errors.report(),
     }
+    if totals.limited:
+        warnings.append(f"{totals.limited} samples hit an actuator limit (achieved amplitude "
+                        "differs from the wanted one; see fingers)")
+    if totals.off_structure:
+        warnings.append(f"{totals.off_structure} finger samples were off the vibrating "
+                        "structure and were held at its edge")
+    if totals.forces.report() is not None:
+        summary["forces"] = totals.forces.report()
     if sink is not None:
         summary["device"] = sink.status()
     return summary

@@ -19,7 +19,6 @@ line and the column.
 from __future__ import annotations
 
 import csv
-import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -111,15 +110,25 @@ def make_trace(t_s, finger, x_mm, y_mm, force_n=None, event=None, where: str = "
     return Trace(t, fing_i, x, y, f, ev)
 
 
-def _normalise_events(finger: np.ndarray, event: np.ndarray) -> np.ndarray:
-    """Make the first sample of each finger, and the first after an ``up``, a ``down``."""
+def _normalise_events(finger: np.ndarray, event: np.ndarray,
+                      down: set[int] | None = None) -> np.ndarray:
+    """Make the first sample of each finger, and the first after an ``up``, a ``down``.
+
+    ``down`` (updated in place) holds the fingers touching before these samples, for a
+    trace read in chunks; None means none are.
+    """
+    down = set() if down is None else down
     ev = event.copy()
-    for fid in np.unique(finger):
+    for fid in np.unique(finger).tolist():
         idx = np.flatnonzero(finger == fid)
         e = ev[idx]
-        prev_up = np.concatenate(([True], e[:-1] == UP))
+        prev_up = np.concatenate(([fid not in down], e[:-1] == UP))
         e[prev_up & (e != UP)] = DOWN
         ev[idx] = e
+        if e[-1] == UP:
+            down.discard(fid)
+        else:
+            down.add(fid)
     return ev
 
 
@@ -133,71 +142,123 @@ def _parse_float(text: str, path: str, line: int, column: str) -> float:
     return value
 
 
-def read_trace(path: str | Path) -> Trace:
-    """Read and validate a trace CSV (see the module docstring for the grammar)."""
+class _RowParser:
+    """Data rows to arrays, chunk by chunk, carrying across chunks what spans them:
+    the last time (time must not decrease) and which fingers are touching."""
+
+    def __init__(self, names: list[str], where: str):
+        self.names = names
+        self.where = where
+        self.col = {name: names.index(name) for name in names}
+        self.last_t = -math.inf
+        self.down: set[int] = set()
+
+    def parse(self, numbered_rows: list[tuple[int, list[str]]]) -> Trace:
+        where, col = self.where, self.col
+        n = len(numbered_rows)
+        t = np.empty(n)
+        finger = np.empty(n, dtype=np.int64)
+        x = np.empty(n)
+        y = np.empty(n)
+        force = np.full(n, DEFAULT_FORCE_N)
+        event = np.full(n, MOVE, dtype=np.int8)
+        has_force, has_event = "force_n" in col, "event" in col
+        last_t = self.last_t
+        for k, (line, row) in enumerate(numbered_rows):
+            if len(row) < len(self.names):
+                raise TraceError(f"{where}:{line}: {len(row)} fields, expected {len(self.names)} "
+                                 f"({','.join(self.names)})")
+            t[k] = _parse_float(row[col["t_s"]], where, line, "t_s")
+            fv = _parse_float(row[col["finger"]], where, line, "finger")
+            if fv < 0 or fv != int(fv):
+                raise TraceError(f"{where}:{line}: column finger: {row[col['finger']]!r} "
+                                 "is not an integer >= 0")
+            finger[k] = int(fv)
+            x[k] = _parse_float(row[col["x_mm"]], where, line, "x_mm")
+            y[k] = _parse_float(row[col["y_mm"]], where, line, "y_mm")
+            if has_force and row[col["force_n"]].strip():
+                force[k] = _parse_float(row[col["force_n"]], where, line, "force_n")
+                if force[k] < 0:
+                    raise TraceError(f"{where}:{line}: column force_n: {float(force[k])!r} N "
+                                     "is negative")
+            if has_event and row[col["event"]].strip():
+                word = row[col["event"]].strip()
+                if word not in EVENTS:
+                    raise TraceError(f"{where}:{line}: column event: {word!r} is not one of "
+                                     f"{', '.join(EVENTS)}")
+                event[k] = EVENTS.index(word)
+            if t[k] < last_t:
+                raise TraceError(f"{where}:{line}: t_s goes back from {float(last_t)!r} to "
+                                 f"{float(t[k])!r} s (time must not decrease)")
+            last_t = t[k]
+        self.last_t = last_t
+        trace = make_trace(t, finger, x, y, force, event, where, normalise=False)
+        return Trace(trace.t_s, trace.finger, trace.x_mm, trace.y_mm, trace.force_n,
+                     _normalise_events(trace.finger, trace.event, self.down))
+
+
+def _chunks(lines, where: str, chunk_rows: int):
+    """Traces of at most ``chunk_rows`` samples from an iterable of text lines."""
+    parser = None
+    batch: list[tuple[int, list[str]]] = []
+    samples = 0
+    for number, text in enumerate(lines, start=1):
+        if not text.strip() or text.lstrip().startswith("#"):
+            continue
+        if parser is None:
+            names = [h.strip() for h in next(csv.reader([text]))]
+            missing = [c for c in REQUIRED if c not in names]
+            if missing:
+                raise TraceError(f"{where}:{number}: header lacks column(s) {', '.join(missing)} "
+                                 f"(got {','.join(names)}; required {','.join(REQUIRED)})")
+            parser = _RowParser(names, where)
+            continue
+        batch.append((number, next(csv.reader([text]))))
+        if len(batch) == chunk_rows:
+            samples += len(batch)
+            yield parser.parse(batch)
+            batch = []
+    if parser is None:
+        raise TraceError(f"{where}: empty trace (expected a header line with {','.join(REQUIRED)})")
+    if batch:
+        samples += len(batch)
+        yield parser.parse(batch)
+    if samples == 0:
+        raise TraceError(f"{where}: header but no samples")
+
+
+def iter_trace(path: str | Path, chunk_rows: int = 65_536):
+    """Read and validate a trace CSV in chunks of ``chunk_rows`` samples (a generator of
+    :class:`Trace`), so that a trace of any length is read in bounded memory."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        with open(path, encoding="utf-8", newline="") as fh:
+            yield from _chunks(fh, str(path), chunk_rows)
     except FileNotFoundError:
         raise TraceError(f"{path}: no such trace file") from None
+    except IsADirectoryError:
+        raise TraceError(f"{path}: is a folder, not a trace file") from None
     except UnicodeDecodeError as exc:
         raise TraceError(f"{path}: not a text file ({exc.reason} at byte {exc.start})") from None
     except OSError as exc:
         raise TraceError(f"{path}: cannot read trace ({exc.strerror})") from None
-    return parse_trace(text, str(path))
+
+
+def concat_traces(chunks) -> Trace:
+    """One :class:`Trace` from consecutive chunks."""
+    chunks = list(chunks)
+    return Trace(*(np.concatenate([getattr(c, name) for c in chunks])
+                   for name in ("t_s", "finger", "x_mm", "y_mm", "force_n", "event")))
+
+
+def read_trace(path: str | Path) -> Trace:
+    """Read and validate a whole trace CSV (see the module docstring for the grammar)."""
+    return concat_traces(iter_trace(path))
 
 
 def parse_trace(text: str, where: str = "<trace>") -> Trace:
     """Parse trace CSV text; ``where`` names the source in error messages."""
-    lines = [(i + 1, ln) for i, ln in enumerate(text.splitlines())
-             if ln.strip() and not ln.lstrip().startswith("#")]
-    if not lines:
-        raise TraceError(f"{where}: empty trace (expected a header line with {','.join(REQUIRED)})")
-    header_line, header = lines[0]
-    names = [h.strip() for h in next(csv.reader([header]))]
-    missing = [c for c in REQUIRED if c not in names]
-    if missing:
-        raise TraceError(f"{where}:{header_line}: header lacks column(s) {', '.join(missing)} "
-                         f"(got {','.join(names)}; required {','.join(REQUIRED)})")
-    col = {name: names.index(name) for name in names}
-    rows = list(csv.reader(io.StringIO("\n".join(ln for _, ln in lines[1:]))))
-    n = len(rows)
-    if n == 0:
-        raise TraceError(f"{where}: header but no samples")
-    t = np.empty(n)
-    finger = np.empty(n, dtype=np.int64)
-    x = np.empty(n)
-    y = np.empty(n)
-    force = np.full(n, DEFAULT_FORCE_N)
-    event = np.full(n, MOVE, dtype=np.int8)
-    has_force, has_event = "force_n" in col, "event" in col
-    for k, row in enumerate(rows):
-        line = lines[k + 1][0]
-        if len(row) < len(names):
-            raise TraceError(f"{where}:{line}: {len(row)} fields, expected {len(names)} "
-                             f"({','.join(names)})")
-        t[k] = _parse_float(row[col["t_s"]], where, line, "t_s")
-        fv = _parse_float(row[col["finger"]], where, line, "finger")
-        if fv < 0 or fv != int(fv):
-            raise TraceError(f"{where}:{line}: column finger: {row[col['finger']]!r} "
-                             "is not an integer >= 0")
-        finger[k] = int(fv)
-        x[k] = _parse_float(row[col["x_mm"]], where, line, "x_mm")
-        y[k] = _parse_float(row[col["y_mm"]], where, line, "y_mm")
-        if has_force and row[col["force_n"]].strip():
-            force[k] = _parse_float(row[col["force_n"]], where, line, "force_n")
-            if force[k] < 0:
-                raise TraceError(f"{where}:{line}: column force_n: {float(force[k])!r} N is negative")
-        if has_event and row[col["event"]].strip():
-            word = row[col["event"]].strip()
-            if word not in EVENTS:
-                raise TraceError(f"{where}:{line}: column event: {word!r} is not one of "
-                                 f"{', '.join(EVENTS)}")
-            event[k] = EVENTS.index(word)
-        if k and t[k] < t[k - 1]:
-            raise TraceError(f"{where}:{line}: t_s goes back from {float(t[k - 1])!r} to {float(t[k])!r} s "
-                             "(time must not decrease)")
-    return make_trace(t, finger, x, y, force, event, where)
+    return concat_traces(_chunks(text.splitlines(), where, 65_536))
 
 
 def format_trace(trace: Trace, comment: str | None = None) -> str:

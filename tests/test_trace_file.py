@@ -91,3 +91,19 @@ def test_live_batches_keep_their_events():
                        normalise=False)
     assert batch.event.tolist() == [MOVE, MOVE]
     assert make_trace([1.0], [0], [5.0], [0.0], event=[MOVE]).event.tolist() == [DOWN]
+
+
+def test_chunked_reading_equals_whole_and_checks_across_chunks(tmp_path):
+    from rendering.trace_file import concat_traces, iter_trace
+    path = tmp_path / "t.csv"
+    path.write_text("t_s,finger,x_mm,y_mm,event\n" + "".join(
+        f"{k * 0.01},{k % 2},{k},{k},{'up' if k in (5, 6) else 'move'}\n" for k in range(20)))
+    whole = read_trace(path)
+    chunked = concat_traces(iter_trace(path, chunk_rows=3))
+    for name in ("t_s", "finger", "x_mm", "event"):
+        assert np.array_equal(getattr(whole, name), getattr(chunked, name))
+    # finger 1 lifts at row 5, finger 0 at row 6: their next samples are downs
+    assert chunked.event[7] == DOWN and chunked.event[8] == DOWN and chunked.event[9] == MOVE
+    path.write_text("t_s,finger,x_mm,y_mm\n0,0,0,0\n0.02,0,0,0\n0.01,0,0,0\n")
+    with pytest.raises(TraceError, match=r"t\.csv:4: t_s goes back"):
+        list(iter_trace(path, chunk_rows=2))
