@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 
 from app.cmd_replay import positive_float
+from app.press_synth import press_trace
 from app.trace_synth import MOTIONS, make_motion, sample, truth
 from rendering.trace_file import write_trace
 
@@ -18,7 +19,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="trace_command", metavar="ACTION", required=True)
     synth = sub.add_parser("synth", help="write a synthetic trace",
                            description="Write a synthetic touch trace (CSV).")
-    synth.add_argument("motion", choices=MOTIONS)
+    synth.add_argument("motion", choices=(*MOTIONS, "press"),
+                       help="a finger path, or 'press': a still finger pressing (normal force "
+                            "rising to --peaks and back, for key-click scenes)")
     synth.add_argument("-o", "--out", required=True, metavar="FILE", help="trace CSV to write")
     synth.add_argument("--rate", type=positive_float, default=50.0, metavar="HZ",
                        help="touch sampling rate (default 50 Hz, seed 003's screen)")
@@ -37,7 +40,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="position noise (standard deviation)")
     synth.add_argument("--jitter", type=float, default=0.0, metavar="S",
                        help="timestamp jitter (standard deviation)")
-    synth.add_argument("--force", type=float, default=0.5, metavar="N", help="normal force")
+    synth.add_argument("--force", type=float, default=0.5, metavar="N",
+                       help="normal force (press: the force at touch-down)")
+    synth.add_argument("--peaks", type=float, nargs="+", default=[1.0, 0.95, 1.1], metavar="N",
+                       help="press: peak normal force of each press (default 1.0 0.95 1.1)")
+    synth.add_argument("--force-noise", type=float, default=0.03, metavar="N",
+                       help="press: force sensor noise, standard deviation (default 0.03 N)")
     synth.add_argument("--seed", type=int, default=0, help="random seed (human motion, noise)")
     synth.add_argument("--truth", metavar="FILE", help="also write the true path here")
     synth.add_argument("--truth-rate", type=positive_float, default=10_000.0, metavar="HZ")
@@ -57,13 +65,31 @@ def _provenance(args: argparse.Namespace) -> str:
             f"--jitter {args.jitter:g} --force {args.force:g} --seed {args.seed})")
 
 
+def _press_provenance(args: argparse.Namespace) -> str:
+    peaks = " ".join(f"{p:g}" for p in args.peaks)
+    return (f"{len(args.peaks)} presses of a still finger at ({args.x0:g}, {args.y0:g}) mm, "
+            f"force {args.force:g} N to peaks {peaks} N and back, noise {args.force_noise:g} N, "
+            f"sampled at {args.rate:g} Hz (frictex trace synth press --rate {args.rate:g} "
+            f"--x0 {args.x0:g} --y0 {args.y0:g} --force {args.force:g} --peaks {peaks} "
+            f"--force-noise {args.force_noise:g} --seed {args.seed})")
+
+
 def run(args: argparse.Namespace) -> int:
     if args.trace_command == "import":
         from app.trace_import import run_import
         return run_import(args)
-    for name in ("noise", "jitter", "force"):
+    for name in ("noise", "jitter", "force", "force_noise"):
         if getattr(args, name) < 0:
-            raise ValueError(f"--{name} {getattr(args, name)} must be >= 0")
+            raise ValueError(f"--{name.replace('_', '-')} {getattr(args, name)} must be >= 0")
+    if args.motion == "press":
+        if args.truth:
+            raise ValueError("--truth: a press does not move; its trace is its true path")
+        trace = press_trace(peaks_n=args.peaks, x_mm=args.x0, y_mm=args.y0, rate_hz=args.rate,
+                            touch_n=args.force, noise_n=args.force_noise, seed=args.seed)
+        write_trace(args.out, trace, comment=_press_provenance(args))
+        print(f"wrote {len(trace)} samples ({trace.duration_s:.3f} s at {args.rate:g} Hz) "
+              f"to {args.out}")
+        return 0
     motion = make_motion(args.motion, speed_mm_s=args.speed, duration_s=args.duration,
                          x0_mm=args.x0, y0_mm=args.y0, angle_deg=args.angle,
                          length_mm=args.length, radius_mm=args.radius, seed=args.seed)

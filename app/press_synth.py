@@ -7,22 +7,15 @@ over the same time and lifts; a pause separates presses. Gaussian force noise of
 sensor would report it. Deterministic for a given seed.
 
 The bundled ``textures/library/traces/keyclick-press-100hz.csv`` is this module's
-default output (``PRESS_TRACE``); regenerate it with::
-
-    .venv/bin/python -m app.press_synth
+default output; its first line gives the ``frictex trace synth press`` command that
+makes it again.
 """
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
-from rendering.trace_file import DOWN, MOVE, UP, Trace, make_trace, write_trace
-
-PRESS_TRACE = Path(__file__).resolve().parent.parent / "textures" / "library" / "traces" / \
-    "keyclick-press-100hz.csv"
+from rendering.trace_file import DOWN, MOVE, UP, Trace, make_trace
 
 
 def press_trace(peaks_n=(1.0, 0.95, 1.1), x_mm: float = 70.0, y_mm: float = 15.0,
@@ -60,21 +53,3 @@ def press_trace(peaks_n=(1.0, 0.95, 1.1), x_mm: float = 70.0, y_mm: float = 15.0
 
 def _min_jerk(u: np.ndarray) -> np.ndarray:
     return 10 * u**3 - 15 * u**4 + 6 * u**5
-
-
-def main(argv: list[str] | None = None) -> int:
-    args = sys.argv[1:] if argv is None else argv
-    out = Path(args[0]) if args else PRESS_TRACE
-    try:
-        write_trace(out, press_trace(), comment="three presses of a still finger at (70, 15) mm, "
-                    "force 0.1 N to peaks 1.0, 0.95, 1.1 N and back over 0.6 s, noise 0.03 N, "
-                    "sampled at 100 Hz (python -m app.press_synth)")
-    except OSError as exc:
-        print(f"press_synth: error: {out}: {exc.strerror or exc}", file=sys.stderr)
-        return 2
-    print(f"wrote {out}")
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

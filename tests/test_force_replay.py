@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 from app.cli import main
-from app.press_synth import PRESS_TRACE, press_trace
-from rendering.trace_file import format_trace, read_trace
+from rendering.trace_file import read_trace
 from textures.library import list_scenes, resolve_trace
 
 CASES = {
@@ -68,8 +67,5 @@ def test_two_replays_are_byte_identical(tmp_path):
         assert (a / name).read_bytes() == (b / name).read_bytes()
 
 
-def test_bundled_press_trace_is_the_generator_output():
-    text = PRESS_TRACE.read_text(encoding="utf-8")
-    body = format_trace(press_trace(), comment="x").split("\n", 1)[1]
-    assert text.split("\n", 1)[1] == body
+def test_bundled_force_scenes_exist():
     assert {"keyclick-ring", "directional-beam", "guidance-ring"} <= {e.name for e in list_scenes()}
