@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from app.report_claims import GRATINGS, METRICS, OUTPUT_HZ, TOUCH_HZ, claims
+from app.report_claims import GRATINGS, METRICS, OUTPUT_HZ, PHASE_UNFELT, TOUCH_HZ, claims
 
 REPORT_VERSION = 1
 PLATE_LOOP_HZ = 400.0  # seed 003, Fig. 3b: the amplitude loop's -3 dB bandwidth
@@ -192,7 +192,10 @@ def write_markdown(doc: dict, path: Path, plots: list[str]) -> None:
         ok = sum(c["passed"] for c in cs)
         lines.append(f"**{group}**: {ok} of {len(cs)} hold.")
         lines += [f"- {'PASS' if c['passed'] else 'FAIL'} {c['scene']}, {c['motion']}, "
-                  f"{c['metric']}: {c['text']}" for c in cs if not c["passed"] or group == "ranking"]
+                  f"{c['metric']}: {c['text']}"
+                  + ("" if c["passed"] or (c["scene"], c["metric"]) not in PHASE_UNFELT
+                     else f" ({PHASE_UNFELT[c['scene'], c['metric']]})")
+                  for c in cs if not c["passed"] or group == "ranking"]
         lines.append("")
     lines += ["## Gratings at 50 Hz touch, 10 kHz output", ""]
     base = [r for r in _grating_rows(rows) if r["output_hz"] == OUTPUT_HZ and r["inversion"] == "exact"]

@@ -7,7 +7,7 @@ from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose
 
 from app.trace_synth import make_motion, sample
-from rendering.hybrid import SLIP, HybridRenderer, slew_offset
+from rendering.hybrid import SLIP, VELOCITY_NOISE_MM_S, HybridRenderer, slew_offset, smooth_rate
 from rendering.metrics import accuracy, reference
 from rendering.pipeline import build_pipeline
 from rendering.tracks import FingerBlock, apply_index
@@ -97,19 +97,20 @@ def test_slew_offset_closed_form_against_a_sample_by_sample_loop():
     bounds = np.concatenate(([0], bounds))
     target = rng.uniform(-3, 3, bounds.size)
     restart = rng.random(bounds.size) < 0.1
+    snap = rng.random(bounds.size) < 0.2
     lock = 0.05
-    got, end = slew_offset(bounds, target, restart, fast, slow, 0.3, lock)
+    got, end = slew_offset(bounds, target, restart, snap, fast, slow, 0.3, lock)
     off, seg, expected = 0.3, -1, []
     for i in range(n + 1):
         if i > 0:  # the allowance of sample i - 1 -> i, towards the current target
             err = (target[seg] - off + 0.5) % 1.0 - 0.5
-            if abs(err) > lock:
+            if abs(err) > lock + 1e-12:  # rounding must not keep it in the fast mode
                 off += np.copysign(min(fast[i] - fast[i - 1], abs(err) - lock), err)
             else:
                 off += np.copysign(min(slow[i] - slow[i - 1], abs(err)), err)
         if i < n and seg + 1 < bounds.size and bounds[seg + 1] == i:
             seg += 1
-            if restart[seg]:
+            if restart[seg] or (snap[seg] and abs((target[seg] - off + 0.5) % 1.0 - 0.5) > lock):
                 off = target[seg]
         if i < n:
             expected.append(off)
@@ -117,6 +118,41 @@ def test_slew_offset_closed_form_against_a_sample_by_sample_loop():
     # they may differ by one sample's slow allowance (< 1e-3)
     assert_allclose(got, expected, atol=1e-3)
     assert abs(((end - off) + 0.5) % 1.0 - 0.5) < 1e-3
+
+
+def test_velocity_noise_is_averaged_and_accelerations_are_followed():
+    """Estimates scattered by less than VELOCITY_NOISE_MM_S move the smoothed rate half
+    way; a jump larger than that is taken at once; a new touch starts afresh."""
+    period = 0.6
+    speeds = np.array([0.0, 20.0, 24.0, 18.0, 40.0, 40.0, 22.0])  # mm/s, one estimate each
+    assert 40.0 - 20.0 > VELOCITY_NOISE_MM_S > 24.0 - 18.0
+    rate = np.repeat(speeds / period, 10)
+    restart = np.zeros(rate.size, dtype=bool)
+    restart[60] = True
+    got, end = smooth_rate(rate, restart, period, None)
+    # by hand: 0 | 20 | 20 + (24-20)/2 = 22 | 22 + (18-22)/2 = 20 | 40 (jump) | 40 | 22 (new touch)
+    assert_allclose(got * period, np.repeat([0.0, 20.0, 22.0, 20.0, 40.0, 40.0, 22.0], 10), rtol=1e-12)
+    assert_allclose(end * period, 22.0, rtol=1e-12)
+    # carried into a second call: the same as one call
+    first, carry = smooth_rate(rate[:25], restart[:25], period, None)
+    second, _ = smooth_rate(rate[25:], restart[25:], period, (rate[24], carry))
+    assert_allclose(np.concatenate((first, second)), got, rtol=1e-12)
+
+
+def test_a_swipe_starts_at_the_measured_phase_once_its_velocity_is_known():
+    """Before the second touch sample the velocity is unknown (0): at the first estimate
+    the finger has already moved 2.4 mm (half a 5 mm period). The hybrid starts its
+    synthesis where the finger then is, instead of slewing half a period in."""
+    layer = grating_scene(5.0).layers[0]
+    r = HybridRenderer(layer, RATE)
+    n = 400
+    t = np.arange(n) / RATE
+    known = t >= 0.02
+    x_held = np.where(known, 12.4, 10.0)
+    x_pred = np.where(known, 12.4 + 120.0 * (t - 0.02), 10.0)
+    mu, _, _ = r.render(_block(x_pred, np.where(known, 120.0, 0.0), x_held=x_held), r.initial_state())
+    assert_allclose(mu[0, known], layer.mu_at(x_pred[known], 30.0))
+    assert_allclose(mu[0, ~known], layer.mu_at(10.0, 30.0))
 
 
 def test_coarse_grating_stays_aligned_where_sht_drifts():

@@ -9,12 +9,10 @@ from app.report_claims import claims
 from app.report_matrix import Runner, matrix
 from app.report_output import pareto
 
-#: hybrid claims that do not hold on the quick matrix today (see the report's Claims
-#: section and the engineer's notes): a change may fix one, never add one
+#: the one hybrid target that does not hold: time error on the 0.6 mm grating under the
+#: human-like motion, a phase no finger feels and no renderer gets right while the finger
+#: moves (the numbers are in rendering/hybrid.py's docstring); any other miss fails
 KNOWN_SHORTFALLS = {
-    ("hybrid-best", "grating-5mm", "fast", "spectral_error"),
-    ("hybrid-best", "grating-0.6mm", "slow", "spectral_error"),
-    ("hybrid-best", "grating-0.6mm", "fast", "spectral_error"),
     ("hybrid-best", "grating-0.6mm", "human", "time_error"),
     ("hybrid-30", "grating-0.6mm", "human", "time_error"),
 }
@@ -41,8 +39,9 @@ def test_hybrid_claims_hold_except_the_known_shortfalls(grating_rows):
     assert len(hybrid) == 2 * 27
     failing = {(c.group, c.scene, c.motion, c.metric) for c in hybrid if not c.passed}
     assert failing <= KNOWN_SHORTFALLS, failing - KNOWN_SHORTFALLS
-    # the alignment the eye checks is never worse than either, on any grating or motion
-    assert all(c.passed for c in hybrid if c.metric == "alignment_error_mm")
+    # the alignment the eye checks and the spectrum the finger feels are never worse than
+    # either, on any grating or motion
+    assert all(c.passed for c in hybrid if c.metric != "time_error")
 
 
 def test_rows_have_the_documented_fields(grating_rows):

@@ -43,10 +43,15 @@ def test_grating_fields_and_profile(tmp_path):
     assert_allclose(g.mu_at(x, np.zeros_like(x)), [0.6, 0.6, 1.0, 1.0, 0.6, 1.0], rtol=0, atol=0)
 
 
-@pytest.mark.parametrize("period, expected", [(15.0, "sho"), (5.0, "sht"), (0.6, "sht"), (5.01, "sho")])
-def test_auto_render_follows_the_5mm_boundary(tmp_path, period, expected):
+@pytest.mark.parametrize("period", [15.0, 5.01, 5.0, 0.6])
+def test_auto_render_picks_the_hybrid_for_every_period(tmp_path, period):
     g = only_layer(tmp_path, f'type = "grating"\nperiod_mm = {period}\nmu_low = 0.6\n')
-    assert g.render == expected
+    assert g.render == "hybrid"
+
+
+def test_auto_render_picks_sho_for_an_object(tmp_path):
+    g = only_layer(tmp_path, 'type = "disc"\ncx_mm = 50\ncy_mm = 30\nradius_mm = 10\nmu = 0.7\n')
+    assert g.render == "sho"
 
 
 def test_explicit_render_is_kept(tmp_path):
@@ -124,7 +129,7 @@ def test_waveform_samples_and_shapes(tmp_path):
     assert_allclose(w.profile(np.array([0.0, 0.125, 0.5, 1.5])), [1.0, 0.9, 0.6, 0.6], atol=1e-15)
     sq = only_layer(tmp_path, 'type = "waveform"\nshape = "square"\nperiod_mm = 0.8\nduty = 0.3\n'
                               'mu_min = 0.7\nmu_max = 0.9\n')
-    assert (sq.shape, sq.duty, sq.mu_min, sq.mu_max, sq.render) == ("square", 0.3, 0.7, 0.9, "sht")
+    assert (sq.shape, sq.duty, sq.mu_min, sq.mu_max, sq.render) == ("square", 0.3, 0.7, 0.9, "hybrid")
 
 
 def test_region_rect_and_disc(tmp_path):

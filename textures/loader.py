@@ -64,10 +64,11 @@ default shown. Layers are drawn and composed in file order (later on top).
                                       #   edge | bump | line | raster | directional |
                                       #   guidance | keyclick (the last three: force layers)
     name = "..."                      # unique in the file; default "<type>-<n>"
-    render = "auto"                   # sho | sht | hybrid | auto. auto: a periodic layer uses
-                                      #   textures.model.auto_render_mode(period_mm) (SHO above
-                                      #   5 mm, seed 003 section 6); objects and rasters use sho.
-                                      #   sht and hybrid need a periodic layer.
+    render = "auto"                   # sho | sht | hybrid | auto. auto: periodic layers use
+                                      #   the hybrid (textures.model.auto_render_mode: it beats
+                                      #   SHO and SHT on seed 003's gratings, frictex report);
+                                      #   objects and rasters use sho. sht and hybrid need a
+                                      #   periodic layer.
     blend = "multiply"                # multiply | replace (opaque where the layer covers)
     fingers = "any"                   # which fingers feel the layer: "any" | "1" | "2" | ...
                                       #   (1-based, in order of touch-down among the fingers
