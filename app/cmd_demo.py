@@ -1,8 +1,10 @@
-"""``frictex demo [SCENE]``: the live demo window; the mouse is a finger.
+"""``frictex demo [SCENE]``: the live demo window; the mouse, or a touch screen, gives the fingers.
 
 With no SCENE the window cycles through the bundled scenes (N / B). The haptic
 pipeline runs on its own thread at block cadence (``app.haptic_thread``), the window
-on the main thread (``app.demo_loop``). ``--record DIR`` writes what was sent
+on the main thread (``app.demo_loop``). ``--input`` picks the fingers: the mouse, the
+mouse and a follower finger, a TUIO tracker over UDP, or a Linux evdev touch screen.
+``--record DIR`` writes what was sent
 (``commands.csv``, ``friction.csv`` as in a replay), ``events.csv`` and ``summary.json``.
 
 Without a display: ``frictex demo`` says so and exits 2; ``--headless`` (or
@@ -14,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import queue
 import sys
 import threading
@@ -23,9 +26,48 @@ from app.cmd_preview import frame_size
 from app.cmd_replay import positive_float, positive_int
 from app.outputs import TableWriter
 from app.replay import FRICTION_COLUMNS, friction_rows
+from rendering.tuio import TUIO_PORT
 from rendering.visual.context import NoDisplayError, open_backend
+from rendering.visual.viewport import MIN_FRAME, default_frame_size
 
 HEADLESS_TRACE = "swipe-40mms-50hz"
+INPUT_KINDS = ("mouse", "follow", "tuio", "evdev")
+FOLLOW_OFFSET_MM = 30.0  # the follower finger's offset along x
+
+
+def input_option(text: str) -> tuple[str, object]:
+    """argparse type for ``--input``: (kind, argument): ("mouse", None), ("follow",
+    offset mm), ("tuio", UDP port), ("evdev", device path)."""
+    kind, colon, arg = text.partition(":")
+    if kind not in INPUT_KINDS:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected mouse, follow[:OFFSET_MM], "
+                                         "tuio[:PORT] or evdev:PATH")
+    if kind == "mouse":
+        if colon:
+            raise argparse.ArgumentTypeError(f"{text!r}: mouse takes no argument")
+        return kind, None
+    if kind == "evdev":
+        if not arg:
+            raise argparse.ArgumentTypeError(f"{text!r}: expected evdev:PATH "
+                                             "(e.g. evdev:/dev/input/event5)")
+        return kind, arg
+    if kind == "follow":
+        try:
+            offset = float(arg) if colon else FOLLOW_OFFSET_MM
+        except ValueError:
+            offset = float("nan")
+        if not (math.isfinite(offset) and offset != 0.0):
+            raise argparse.ArgumentTypeError(f"{text!r}: expected follow:OFFSET_MM, a non-zero "
+                                             "number of mm (e.g. follow:30)")
+        return kind, offset
+    try:
+        port = int(arg) if colon else TUIO_PORT
+    except ValueError:
+        port = -1
+    if not 0 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected tuio:PORT, a UDP port 0 to 65535 "
+                                         "(0: any free port)")
+    return kind, port
 RECORD_QUEUE = 4000  # blocks (20 s at 5 ms) the writer may fall behind before dropping
 
 
@@ -35,7 +77,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--fullscreen", action="store_true", help="fullscreen on --monitor")
     parser.add_argument("--monitor", type=int, default=0, metavar="N", help="monitor for --fullscreen (default 0)")
     parser.add_argument("--size", type=frame_size, default=None, metavar="WxH",
-                        help="window size in px (default: the scene's display size)")
+                        help="window size in px (default: the scene's display size, at least "
+                             f"{MIN_FRAME[0]}x{MIN_FRAME[1]})")
     parser.add_argument("--renderer", choices=("sho", "sht", "hybrid"), default=None,
                         help="start with every periodic layer rendered this way (R cycles it live)")
     parser.add_argument("--device", metavar="sim|PORT", default=None,
@@ -45,6 +88,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="output sample rate (default 10000 Hz)")
     parser.add_argument("--block", type=positive_int, default=50, metavar="N",
                         help="block size in output samples (default 50 = 5 ms at 10 kHz)")
+    parser.add_argument("--input", type=input_option, default=("mouse", None),
+                        metavar="mouse|follow[:MM]|tuio[:PORT]|evdev:PATH",
+                        help="where the fingers come from: 'mouse' (default; finger 0 while the "
+                             "left button is held), 'follow' (the mouse is finger 0 and finger 1 "
+                             f"follows it MM mm to the right along x, default {FOLLOW_OFFSET_MM:g}; "
+                             "seed 001's two-finger test), 'tuio' (TUIO 1.1 cursors on UDP PORT, "
+                             f"default {TUIO_PORT}, 0: any free port), 'evdev' (a Linux multi-touch "
+                             "device such as /dev/input/event5 spanning the scene's display). With "
+                             "tuio and evdev the mouse only hovers and every finger gets the force "
+                             "set with the wheel")
     parser.add_argument("--record", metavar="DIR", default=None,
                         help="write commands.csv, friction.csv, events.csv and summary.json to DIR")
     parser.add_argument("--screenshots", metavar="DIR", default=".",
@@ -64,10 +117,13 @@ class Recorder:
     """Writes each block's commands and friction rows on its own thread; the haptic
     thread only enqueues (a full queue drops the block, counted in ``dropped``)."""
 
-    def __init__(self, out_dir: Path, channels: tuple[str, ...]):
+    def __init__(self, out_dir: Path, channels: tuple[str, ...], phases: bool = False):
         out_dir.mkdir(parents=True, exist_ok=True)
         self.channels = channels
+        self.phases = phases
         cols = [("t_s", float, "%.7f")] + [(f"{ch}_um", float, "%.6f") for ch in channels]
+        if phases:
+            cols += [(f"{ch}_phase_rad", float, "%.6f") for ch in channels]
         self.commands = TableWriter(out_dir, "commands", cols, "csv")
         self.friction = TableWriter(out_dir, "friction", FRICTION_COLUMNS, "csv")
         self.queue: queue.Queue = queue.Queue(RECORD_QUEUE)
@@ -86,6 +142,9 @@ class Recorder:
             out, commands = item
             cols = {"t_s": out.t_s}
             cols.update({f"{ch}_um": commands[:, k] for k, ch in enumerate(self.channels)})
+            if self.phases:
+                cols.update({f"{ch}_phase_rad": out.phases_rad[:, k]
+                             for k, ch in enumerate(self.channels)})
             self.commands.write(cols)
             self.friction.write(friction_rows(out))
 
@@ -126,16 +185,52 @@ def run_headless(args, reason: str | None = None) -> int:
     return 0
 
 
+def open_source(kind: str, arg):
+    """The touch source of ``--input`` (None for the mouse kinds), positions normalised to
+    0..1 of the active area."""
+    if kind == "tuio":
+        from rendering.tuio import TuioListener
+        source = TuioListener(arg, width_mm=1.0, height_mm=1.0)
+        print(f"demo: listening for TUIO 1.1 cursors on UDP port {source.port}", flush=True)
+        return source
+    if kind == "evdev":
+        from rendering.evdev_decode import ScreenSpec
+        from rendering.evdev_live import EvdevReader
+        try:
+            return EvdevReader(arg, ScreenSpec(width_mm=1.0, height_mm=1.0))
+        except ValueError as exc:  # no axis ranges: a file, a pipe, not a touch screen
+            raise ValueError(f"evdev:{arg} is not a multi-touch device reporting its axis ranges "
+                             f"({exc}); the demo takes them from the device (a recording can be "
+                             "converted with 'frictex trace import' and replayed)") from None
+    return None
+
+
+def input_name(kind: str, arg) -> str:
+    """``--input`` as the status line and the summary show it."""
+    if kind == "follow":
+        return f"follow {arg:g} mm"
+    return kind if arg is None else f"{kind} {':' if kind == 'tuio' else ''}{arg}"
+
+
 def run(args: argparse.Namespace) -> int:
+    kind, arg = args.input
     if args.headless:
+        if kind != "mouse":
+            raise ValueError(f"--input {input_name(kind, arg)}: --headless replays a bundled "
+                             "trace and takes no live input")
         return run_headless(args)
     paths, index = _playlist(args.scene)
     scene = _load(paths[index])
-    size = args.size or (scene.display.width_px, scene.display.height_px)
+    size = args.size or default_frame_size(scene.display)
+    source = open_source(kind, arg)  # a bad --input fails before a window opens
     try:
         backend = open_backend("glfw", size, title=f"frictex demo: {scene.name}",
                                fullscreen=args.fullscreen, monitor=args.monitor)
-    except NoDisplayError as exc:
+    except BaseException as exc:
+        if source is not None:
+            source.close()
+        if not isinstance(exc, NoDisplayError):
+            raise
         if args.headless_fallback:
             return run_headless(args, reason=str(exc))
         raise NoDisplayError(f"{exc}: the demo needs a window. Without a display run "
@@ -149,16 +244,21 @@ def run(args: argparse.Namespace) -> int:
     sink = recorder = haptic = loop = None
     record = Path(args.record) if args.record else None
     try:
+        haptic = HapticThread(scene, args.rate, args.block, args.renderer)
+        pipeline = haptic.pipeline
         if args.device is not None:
             from device.link import open_sink
-            sink = open_sink(args.device, channels=1, rate_hz=args.rate, paced=False)
-        haptic = HapticThread(scene, args.rate, args.block, args.renderer, sink=sink)
+            sink = open_sink(args.device, channels=len(pipeline.channels), rate_hz=args.rate,
+                             phases=pipeline.actuation.has_phases, paced=False)
+            haptic.sink = sink
         if record is not None:
-            recorder = Recorder(record, haptic.pipeline.channels)
+            recorder = Recorder(record, pipeline.channels, pipeline.actuation.has_phases)
             haptic.recorder = recorder
         loop = DemoLoop(backend, haptic, paths, index, scene, _load, Path(args.screenshots),
                         events_path=record / "events.csv" if record else None,
-                        link_name="none" if sink is None else "starting")
+                        link_name="none" if sink is None else "starting",
+                        follow_mm=arg if kind == "follow" else None, source=source,
+                        input_name=input_name(kind, arg))
         haptic.start()
         loop.run(args.duration)
     finally:
@@ -172,7 +272,9 @@ def run(args: argparse.Namespace) -> int:
         if sink is not None:
             sink.close()
         if loop is not None:
-            loop.close()
+            loop.close()  # closes the touch source too
+        elif source is not None:
+            source.close()
         backend.close()
     summary = _summary(haptic, loop, recorder, link)
     if record is not None:
@@ -190,5 +292,6 @@ def _summary(haptic, loop, recorder, link) -> dict:
             "dropped_touches": st.dropped_touches, "dropped_snapshots": st.dropped_snapshots,
             "dropped_record_blocks": recorder.dropped if recorder else 0, "ramps": st.ramps,
             "clamps": st.clamps.as_dict(), "clamps_total": st.clamps.total,
+            "input": loop.input_name,
             "frames": loop.frames, "frame_ms_mean": loop.frame_seconds / max(loop.frames, 1) * 1e3,
             "screenshots": [str(p) for p in loop.screenshots], "link": link}

@@ -1,8 +1,15 @@
 """The demo's window loop (main thread): input -> haptic thread, snapshots -> frames.
 
 Backend-neutral: it drives any ``rendering.visual.context`` backend that has input
-callbacks, ``poll()``, ``swap()`` and ``should_close`` (the glfw window). The mouse is
-finger 0 (left button held = touching; the wheel or up/down set the normal force).
+callbacks, ``poll()``, ``swap()`` and ``should_close`` (the glfw window).
+
+Touch input (``--input``): ``mouse``, the mouse is finger 0 (left button held =
+touching); ``follow``, the mouse is finger 0 and finger 1 follows it at a fixed offset
+along x (seed 001's way of testing two-finger control with one hand); a touch source
+(TUIO, evdev: any object with ``poll() -> list[TouchSample]`` in positions normalised to
+0..1 of the active area, stamped on ``time.monotonic``), polled once per frame, never
+blocking, whose fingers keep the source's ids (small integers, reused after a lift);
+the mouse then only hovers. The wheel or up/down set the normal force of every finger.
 Keys: N / B next / previous scene, R cycles the renderer (as the file says, SHO, SHT,
 hybrid), S scope, O outlines, P screenshot, SPACE emergency stop (latched; SPACE
 again resumes, ramped), Q / Escape quit.
@@ -22,15 +29,18 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from app.haptic_thread import EVENTS
 from rendering.visual.compositor import Compositor, FrameView
+from rendering.visual.modal_view import modal_envelope
 from rendering.visual.overlay import OverlayState
 
 RENDERER_CYCLE = (None, "sho", "sht", "hybrid")
 FORCE_STEP_N = 0.05
 FORCE_RANGE_N = (0.05, 2.0)
 RELOAD_POLL_S = 0.25
+ENVELOPE_S = 0.2  # a modal device's |W| is redrawn from the latest commands 5 times a second
 FRAME_S = 1.0 / 60.0
-KEYS_HELP = ("drag: touch | wheel, up/down: force | N/B: scene | R: renderer | S: scope | "
+KEYS_HELP = ("wheel, up/down: force | N/B: scene | R: renderer | S: scope | "
              "O: outlines | P: screenshot | SPACE: emergency stop | Q: quit")
 
 
@@ -45,7 +55,8 @@ class DemoLoop:
     """See the module docstring. ``load(path) -> Scene`` raises ValueError on a bad file."""
 
     def __init__(self, backend, haptic, playlist: list[Path], index: int, scene, load,
-                 screenshot_dir: Path, events_path: Path | None = None, link_name: str = "none"):
+                 screenshot_dir: Path, events_path: Path | None = None, link_name: str = "none",
+                 follow_mm: float | None = None, source=None, input_name: str = "mouse"):
         self.backend = backend
         self.haptic = haptic
         self.playlist = playlist
@@ -54,12 +65,17 @@ class DemoLoop:
         self.load = load
         self.screenshot_dir = screenshot_dir
         self.link_name = link_name
+        self.follow_mm = follow_mm
+        self.source = source
+        self.input_name = input_name
         self.compositor = Compositor(backend.ctx, scene, backend.size)
         self.overlay = OverlayState()
         self.force_n = scene.device.normal_force_n
         self.renderer = haptic.render_override
         self.touching = False
         self.hover_px: tuple[float, float] | None = None
+        self._presses: list[bool] = []  # left button presses (True) and releases since the frame
+        self._sent: tuple | None = None  # (pointer px, force N) of the last mouse sample
         self.show_scope = True
         self.outlines = False
         self.error: str | None = None
@@ -70,6 +86,7 @@ class DemoLoop:
         self.frames = 0
         self.frame_seconds = 0.0
         self._mtime = _mtime(self.playlist[self.index])
+        self._set_envelope(scene, haptic.pipeline.actuation)
         self._next_poll = 0.0
         self._events = open(events_path, "a", encoding="utf-8") if events_path else None
         if self._events is not None and self._events.tell() == 0:
@@ -91,28 +108,67 @@ class DemoLoop:
         x, y = self.compositor.viewport.to_mm(*self.hover_px)
         return float(x), float(y)
 
+    def _mouse_touch(self, event: str) -> None:
+        """The mouse's finger 0 (and in follow mode finger 1, ``follow_mm`` to its right)."""
+        x, y = self._mm()
+        code, t = EVENTS[event], self.haptic.now()  # one stamp: the fingers move as one
+        self.haptic.touch_at(t, 0, x, y, self.force_n, code)
+        if self.follow_mm is not None:
+            self.haptic.touch_at(t, 1, x + self.follow_mm, y, self.force_n, code)
+        self._sent = (self.hover_px, self.force_n)
+
+    # The callbacks only note what happened; flush_mouse() turns it into at most one
+    # sample per finger and frame, stamped then. Stamping each event as it is handled
+    # would crowd a frame's worth of motion into microseconds when the window is late
+    # (events arrive in bursts), and the tracker would see the finger fly.
+
     def on_cursor(self, x_px: float, y_px: float) -> None:
         self.hover_px = (x_px, y_px)
-        if self.touching:
-            self.haptic.touch(0, *self._mm(), self.force_n, "move")
 
     def on_button(self, pressed: bool) -> None:
         if self.hover_px is None:
             self.hover_px = self.backend.cursor_px()
-        if pressed and not self.touching:
-            self.touching = True
-            self.haptic.touch(0, *self._mm(), self.force_n, "down")
-        elif not pressed and self.touching:
-            self.touching = False
-            self.haptic.touch(0, *self._mm(), self.force_n, "up")
+        self._presses.append(pressed)
 
     def on_scroll(self, dy: float) -> None:
         self.set_force(self.force_n + FORCE_STEP_N * dy)
 
     def set_force(self, force_n: float) -> None:
         self.force_n = float(np.clip(force_n, *FORCE_RANGE_N))
-        if self.touching and self.hover_px is not None:
-            self.haptic.touch(0, *self._mm(), self.force_n, "move")
+
+    def flush_mouse(self) -> None:
+        """The mouse's touches since the last call: presses and releases in order, then a
+        move if the pointer or the force changed."""
+        presses, self._presses = self._presses, []
+        if self.source is not None:
+            return  # a touch screen drives the fingers; its emulated mouse must not add one
+        for pressed in presses:
+            if pressed != self.touching:
+                self.touching = pressed
+                self._mouse_touch("down" if pressed else "up")
+        if self.touching and self._sent != (self.hover_px, self.force_n):
+            self._mouse_touch("move")
+
+    def poll_source(self) -> int:
+        """Hand the touch source's new samples to the haptic thread, in mm on its clock,
+        at the current normal force (TUIO cursors carry none); returns how many."""
+        if self.source is None:
+            return 0
+        try:
+            samples = self.source.poll()
+        except (OSError, ValueError) as exc:  # unplugged, or a device speaking nonsense
+            self.error = f"touch input {self.input_name} stopped, the mouse touches now: {exc}"
+            self.log("input-failed", str(exc))
+            self.source.close()
+            self.source = None
+            return 0
+        if samples:
+            shift = self.haptic.now() - time.monotonic()
+            d = self.scene.display
+            for s in samples:
+                self.haptic.touch_at(s.t_s + shift, s.finger, s.x_mm * d.width_mm,
+                                     s.y_mm * d.height_mm, self.force_n, s.event)
+        return len(samples)
 
     def on_key(self, name: str, shift: bool) -> None:
         if name == "space":
@@ -148,15 +204,16 @@ class DemoLoop:
         """Hand ``scene`` with ``renderer`` to the haptic thread and redraw; on error keep
         the current one and show why."""
         try:
-            self.haptic.switch(scene, renderer)
+            pipeline = self.haptic.switch(scene, renderer)
         except (ValueError, OSError, ModuleNotFoundError) as exc:
             self.error = f"{event} failed (keeping {self.scene.name}, {self.renderer or 'file'}): {exc}"
             self.log(f"{event}-failed", str(exc))
             return False
-        self.log(event, detail)  # before redrawing the scene image, which takes a while
+        self.log(event, detail)  # before redrawing the scene image
         if scene is not self.scene:
             self.compositor.set_scene(scene)
             self.overlay.clear()
+            self._set_envelope(scene, pipeline.actuation)
         self.scene, self.renderer, self.error = scene, renderer, None
         return True
 
@@ -189,6 +246,21 @@ class DemoLoop:
             return
         self._apply(scene, self.renderer, "reload", scene.name)
 
+    def _set_envelope(self, scene, actuation) -> None:
+        self.envelope = modal_envelope(scene, actuation)
+        self.envelope_now = None
+        self.envelope_scale_um = scene.device.amplitude_limit_um
+        self._next_envelope = 0.0
+
+    def update_envelope(self, now: float) -> None:
+        """A modal device's |W| from the latest commands, every ENVELOPE_S; its scale
+        grows (never shrinks, within a scene) to the largest |W| seen."""
+        if self.envelope is None or now < self._next_envelope:
+            return
+        self._next_envelope = now + ENVELOPE_S
+        self.envelope_now = self.envelope.at(self.overlay.commands, self.overlay.current())
+        self.envelope_scale_um = max(self.envelope_scale_um, self.envelope_now.peak_um)
+
     # -- frames -------------------------------------------------------------------------
 
     def drain(self) -> None:
@@ -208,7 +280,12 @@ class DemoLoop:
         first = (f"{self.scene.name} ({self.index + 1}/{len(self.playlist)}) | renderer: "
                  f"{self.renderer or 'file'} | force {self.force_n:.2f} N | link: {state}{frames} | "
                  f"clamps {st.get('clamps', 0)} | deadline misses {st.get('deadline_misses', 0)}")
-        return (first, KEYS_HELP)
+        fingers = len(self.overlay.current())
+        touch = ("drag: touch" if self.follow_mm is None
+                 else f"drag: two fingers, the second {self.follow_mm:g} mm to the right")
+        if self.source is not None:
+            touch = "touch the screen"
+        return (first, f"input: {self.input_name} ({touch}; {fingers} touching)", KEYS_HELP)
 
     def draw(self) -> None:
         self.compositor.resize(self.backend.size)
@@ -221,7 +298,8 @@ class DemoLoop:
         self.compositor.draw(FrameView(
             overlay=self.overlay, hover_mm=hover, show_scope=self.show_scope,
             amplitude_max_um=self.scene.device.amplitude_limit_um, status=self.status_lines(),
-            banner=banner, banner_kind=kind))
+            banner=banner, banner_kind=kind, envelope=self.envelope_now,
+            envelope_scale_um=self.envelope_scale_um))
 
     def screenshot(self) -> Path:
         self.screenshot_dir.mkdir(parents=True, exist_ok=True)
@@ -240,8 +318,11 @@ class DemoLoop:
             if self.haptic.error is not None:
                 raise RuntimeError(f"haptic thread stopped: {self.haptic.error!r}")
             self.backend.poll()
+            self.flush_mouse()
+            self.poll_source()
             self.check_reload(t)
             self.drain()
+            self.update_envelope(t)
             self.draw()
             if self.screenshot_pending:
                 self.screenshot_pending = False
@@ -256,6 +337,10 @@ class DemoLoop:
                 time.sleep(FRAME_S - spent)
 
     def close(self) -> None:
+        """Release the GL objects, the touch source (the loop owns it) and the events file."""
+        if self.source is not None:
+            self.source.close()
+            self.source = None
         self.compositor.release()
         if self._events is not None:
             self._events.close()

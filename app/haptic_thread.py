@@ -16,6 +16,8 @@ emergency stop itself is immediate: while it is set every sample sent is 0 um.
 
 Touch samples carry times on this thread's clock (``now()``, s since start). A sample
 is used from the first block boundary at or after its time (``rendering.tracks``).
+Samples from several fingers and sources (the mouse, a TUIO or evdev touch screen) may
+be queued one after another; their stamps never go back (``touch_at``).
 """
 
 from __future__ import annotations
@@ -86,6 +88,7 @@ class HapticThread(threading.Thread):
         self.stats = HapticStats()
         self._quit = threading.Event()
         self._pending: list[tuple] = []
+        self._last_stamp = 0.0
         self.render_override = render_override
         self.pipeline = build_pipeline(scene, rate_hz, block_size, render_override)
         self.state = self.pipeline.initial_state()
@@ -100,20 +103,39 @@ class HapticThread(threading.Thread):
         return self.clock() - self.t0
 
     def touch(self, finger: int, x_mm: float, y_mm: float, force_n: float, event: str) -> None:
-        """Queue a touch sample stamped now; never blocks (a full queue drops it, counted)."""
+        """Queue a touch sample stamped now (``event``: "down", "move" or "up")."""
+        self.touch_at(self.now(), finger, x_mm, y_mm, force_n, EVENTS[event])
+
+    def touch_at(self, t_s: float, finger: int, x_mm: float, y_mm: float, force_n: float,
+                 event: int) -> None:
+        """Queue a touch sample stamped ``t_s`` (s, this thread's clock; ``event`` a
+        ``rendering.trace_file`` code), moved into [the last stamp, now]: a live batch must
+        not go back in time, and a sample from the future would wait. Never blocks (a full
+        queue drops the sample, counted). Call it from one thread (the window's)."""
+        t = max(min(float(t_s), self.now()), self._last_stamp)
+        self._last_stamp = t
         try:
-            self.touches.put_nowait((self.now(), finger, x_mm, y_mm, force_n, EVENTS[event]))
+            self.touches.put_nowait((t, finger, x_mm, y_mm, force_n, event))
         except queue.Full:
             self.stats.dropped_touches += 1
 
-    def switch(self, scene=None, render_override: str | None | bool = False) -> None:
+    def switch(self, scene=None, render_override: str | None | bool = False):
         """Change scene and/or renderer (False: keep the current one). The pipeline is
-        built here, on the caller's thread (errors raise here: nothing changes), and
-        taken over, crossfaded, at the next block."""
+        built here, on the caller's thread (errors raise here: nothing changes), returned,
+        and taken over, crossfaded, at the next block."""
         override = self.render_override if render_override is False else render_override
         pipeline = build_pipeline(scene or self.pipeline.scene, self.rate_hz, self.block_size,
                                   override)
+        old = self.pipeline
+        if ((self.sink is not None or self.recorder is not None)
+                and (pipeline.channels, pipeline.actuation.has_phases)
+                != (old.channels, old.actuation.has_phases)):
+            raise ValueError(f"{pipeline.scene.name} drives channels {', '.join(pipeline.channels)} "
+                             f"({pipeline.scene.device.profile}); the link and recording were opened "
+                             f"for {', '.join(old.channels)} ({old.scene.device.profile}): start "
+                             "the demo on that scene instead")
         self.commands.put_nowait((pipeline, override))
+        return pipeline
 
     def stop(self) -> None:
         self._quit.set()
@@ -152,7 +174,7 @@ class HapticThread(threading.Thread):
                 self.recorder(out, commands)
             self.stats.clamps.add(out.clamps)
             self.stats.blocks += 1
-            self._publish(k, out, stopped)
+            self._publish(k, out, commands, stopped)
             late = self.clock() - (start + self.block_s)
             self.stats.worst_lateness_s = max(self.stats.worst_lateness_s, late)
             if self.clock() > start + max(self.block_s, DEADLINE_S):
@@ -186,23 +208,26 @@ class HapticThread(threading.Thread):
         if change is None:
             out, self.state = self.pipeline.process(k, samples, self.state)
             return out, out.commands_um
-        # crossfade: both pipelines run this block from the same finger tracks
+        # crossfade: both pipelines run this block from the same finger tracks (another
+        # device, with other channels, ramps up from 0 instead)
         new, self.render_override = change
         new_state = PipelineState(tracker=self.state.tracker, layers=new.initial_state().layers)
         old_out, _ = self.pipeline.process(k, samples, self.state)
         out, self.state = new.process(k, samples, new_state)
+        same_device = new.channels == self.pipeline.channels
         self.pipeline = new
         fade = np.linspace(0.0, 1.0, self.block_size + 1)[1:, None]
         self.stats.ramps += 1
-        return out, old_out.commands_um * (1.0 - fade) + out.commands_um * fade
+        before = old_out.commands_um * (1.0 - fade) if same_device else 0.0
+        return out, before + out.commands_um * fade
 
-    def _publish(self, k: int, out, stopped: bool) -> None:
+    def _publish(self, k: int, out, commands, stopped: bool) -> None:
         if self.sink is not None and k % LINK_STATUS_EVERY == 0:
             self._link = self.sink.status()
         status = {"blocks": self.stats.blocks, "deadline_misses": self.stats.deadline_misses,
                   "clamps": self.stats.clamps.total, "estop": stopped,
                   "renderer": self.render_override or "file", "link": self._link}
-        snap = Snapshot(record_from_output(out, self.stride), status)
+        snap = Snapshot(record_from_output(out, self.stride, commands_um=commands), status)
         try:
             self.snapshots.put_nowait(snap)
         except queue.Full:

@@ -1,8 +1,11 @@
-"""Draws a frame: the static scene texture, then trails, cursors, scope and text.
+"""Draws a frame: the static scene texture, then trails, cursors, the device panels
+(``device_panels``), the scope and text.
 
 The scene is rendered once per scene (``scene_image``) into a texture drawn 1:1 on
 the viewport's pixels; each frame only the overlay is rebuilt. All geometry arrives in
-frame pixels (float, y down) and one vertex shader maps it to clip space.
+frame pixels (float, y down) and one vertex shader maps it to clip space; the drawing
+primitives (``draw_triangles``, ``draw_rect``, ``draw_texture``, ``draw_cursors``,
+``text``) are public for the panels.
 """
 
 from __future__ import annotations
@@ -12,7 +15,9 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from rendering.visual.overlay import OverlayState
+from rendering.visual.device_panels import DevicePanels
+from rendering.visual.modal_view import Envelope
+from rendering.visual.overlay import FINGER_RGB, OverlayState
 from rendering.visual.scene_image import scene_rgb, to_srgb8
 from rendering.visual.text import text_rgba, wrap
 from rendering.visual.viewport import Viewport, fit_viewport
@@ -73,6 +78,9 @@ class FrameView:
     status: tuple[str, ...] = ()
     banner: str | None = None
     banner_kind: str = "error"
+    #: |W| of a modal device (``modal_view.ModalEnvelope.at``) and its full scale (um)
+    envelope: Envelope | None = None
+    envelope_scale_um: float = 1.0
 
 
 class Compositor:
@@ -88,6 +96,8 @@ class Compositor:
         self.cursor = ctx.program(vertex_shader=CURSOR[0], fragment_shader=CURSOR[1])
         self._buffers: dict[str, moderngl.Buffer] = {}
         self._text_cache: dict[tuple, moderngl.Texture] = {}
+        self.panels = DevicePanels(self)
+        self.status_bottom = 4.0  # px: below the status lines of the last frame drawn
         self.scene = scene
         self.size = (0, 0)
         self.viewport: Viewport | None = None
@@ -116,6 +126,7 @@ class Compositor:
         self.scene_texture = self.ctx.texture((self.viewport.width_px, self.viewport.height_px),
                                               3, np.ascontiguousarray(rgb).tobytes(), alignment=1)
         self.scene_texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+        self.panels.set_scene(scene)
 
     # -- drawing helpers ----------------------------------------------------------------
 
@@ -130,8 +141,9 @@ class Compositor:
         buf.write(raw)
         return buf
 
-    def _draw_texture(self, texture: moderngl.Texture, x: float, y: float) -> None:
-        w, h = texture.size
+    def draw_texture(self, texture: moderngl.Texture, x: float, y: float,
+                      size: tuple[float, float] | None = None) -> None:
+        w, h = size or texture.size
         quad = np.array([[x, y, 0, 0], [x + w, y, 1, 0], [x, y + h, 0, 1],
                          [x + w, y + h, 1, 1]], dtype=np.float64)
         buf = self._buffer("quad", quad)
@@ -141,7 +153,7 @@ class Compositor:
         vao.render(moderngl.TRIANGLE_STRIP, vertices=4)
         vao.release()
 
-    def _draw_triangles(self, key: str, tris: np.ndarray) -> None:
+    def draw_triangles(self, key: str, tris: np.ndarray) -> None:
         if len(tris) == 0:
             return
         buf = self._buffer(key, tris)
@@ -149,11 +161,11 @@ class Compositor:
         vao.render(moderngl.TRIANGLES, vertices=len(tris))
         vao.release()
 
-    def _draw_rect(self, x, y, w, h, rgba) -> None:
+    def draw_rect(self, x, y, w, h, rgba) -> None:
         corners = np.array([[x, y], [x + w, y], [x, y + h], [x, y + h], [x + w, y], [x + w, y + h]])
-        self._draw_triangles("rect", np.column_stack((corners, np.tile(rgba, (6, 1)))))
+        self.draw_triangles("rect", np.column_stack((corners, np.tile(rgba, (6, 1)))))
 
-    def _draw_cursors(self, cursors: np.ndarray) -> None:
+    def draw_cursors(self, cursors: np.ndarray) -> None:
         if len(cursors) == 0:
             return
         r = cursors[:, 2:3] + 4.0
@@ -170,7 +182,7 @@ class Compositor:
         vao.render(moderngl.TRIANGLES, vertices=6 * len(cursors))
         vao.release()
 
-    def _text(self, lines: tuple[str, ...], size_px: int, rgb=(255, 255, 255),
+    def text(self, lines: tuple[str, ...], size_px: int, rgb=(255, 255, 255),
               background=(0, 0, 0, 170)) -> moderngl.Texture:
         key = (lines, size_px, rgb, background)
         tex = self._text_cache.get(key)
@@ -205,44 +217,69 @@ class Compositor:
             prog["u_frame"] = (float(w), float(h))
         vp = self.viewport
         ctx.disable(moderngl.BLEND)
-        self._draw_texture(self.scene_texture, vp.x0, vp.y0)
+        self.draw_texture(self.scene_texture, vp.x0, vp.y0)
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
-        font_px = int(np.clip(h / 45, 11, 22))
+        font_px = self.font_px
+        status = None
+        if view.status:
+            status = self.text(sum((wrap(line, font_px, w - 16) for line in view.status), ()), font_px)
+        self.status_bottom = 4.0 + (status.size[1] if status is not None else 0.0)
+        overlay = view.overlay or OverlayState()
         if view.overlay is not None:
-            self._draw_triangles("trail", view.overlay.trail_triangles(vp))
-        self._draw_cursors((view.overlay or OverlayState()).cursors(vp, view.hover_mm))
+            self.draw_triangles("trail", view.overlay.trail_triangles(vp))
+        self.draw_cursors(overlay.cursors(vp, view.hover_mm))
+        self.panels.draw(overlay, view.envelope, view.envelope_scale_um)
         if view.show_scope and view.overlay is not None:
             self._draw_scope(view, font_px)
-        if view.status:
-            self._draw_texture(self._text(tuple(view.status), font_px), 4, 4)
+        if status is not None:
+            self.draw_texture(status, 4, 4)
         if view.banner:
             lines = wrap(view.banner, font_px + 2, w - 40)
-            tex = self._text(lines, font_px + 2, background=(0, 0, 0, 0))
+            tex = self.text(lines, font_px + 2, background=(0, 0, 0, 0))
             bh = tex.size[1] + 12
             y = (h - bh) / 2 if view.banner_kind == "stop" else h * 0.12
-            self._draw_rect(0, y, w, bh, BANNER_RGBA.get(view.banner_kind, BANNER_RGBA["info"]))
-            self._draw_texture(tex, max(4.0, (w - tex.size[0]) / 2), y + 6)
+            self.draw_rect(0, y, w, bh, BANNER_RGBA.get(view.banner_kind, BANNER_RGBA["info"]))
+            self.draw_texture(tex, max(4.0, (w - tex.size[0]) / 2), y + 6)
         ctx.disable(moderngl.BLEND)
 
     def _draw_scope(self, view: FrameView, font_px: int) -> None:
         x, y, w, h = self.scope_rect()
-        self._draw_rect(x, y, w, h, SCOPE_BG)
+        self.draw_rect(x, y, w, h, SCOPE_BG)
         panel = (h - 6.0) / 2
         for py0 in (y + 2.0, y + 4.0 + panel):
             for frac in (0.0, 0.5, 1.0):
-                self._draw_rect(x, py0 + panel * frac - 0.5, w, 1.0, (1.0, 1.0, 1.0, 0.18))
-        self._draw_triangles("scope", view.overlay.scope_triangles((x, y, w, h), view.amplitude_max_um))
-        label_px = max(10, font_px - 2)
+                self.draw_rect(x, py0 + panel * frac - 0.5, w, 1.0, (1.0, 1.0, 1.0, 0.18))
+        self.draw_triangles("scope", view.overlay.scope_triangles((x, y, w, h), view.amplitude_max_um))
+        label_px = self.label_px
         scope_s = view.overlay.scope_s
-        self._draw_texture(self._text(("mu' target (0 to 1)",), label_px, background=(0, 0, 0, 110)),
+        self.draw_texture(self.text(("mu' target (0 to 1)",), label_px, background=(0, 0, 0, 110)),
                            x + 4, y + 4)
-        self._draw_texture(self._text((f"amplitude (0 to {view.amplitude_max_um:g} um, 0-peak)",),
+        self.draw_texture(self.text((f"amplitude (0 to {view.amplitude_max_um:g} um, 0-peak)",),
                                       label_px, background=(0, 0, 0, 110)), x + 4, y + 6 + panel)
-        tick = self._text((f"last {scope_s:g} s  |  now", ), label_px, background=(0, 0, 0, 110))
-        self._draw_texture(tick, x + w - tick.size[0] - 4, y + 4)
+        tick = self.text((f"last {scope_s:g} s  |  now", ), label_px, background=(0, 0, 0, 110))
+        right = x + w - tick.size[0] - 4
+        self.draw_texture(tick, right, y + 4)
+        for fid in sorted(view.overlay.fingers, reverse=True):  # legend: one colour per finger
+            rgb = tuple(int(round(255 * c)) for c in FINGER_RGB[fid % len(FINGER_RGB)])
+            tex = self.text((f"finger {fid}",), label_px, rgb=rgb, background=(0, 0, 0, 110))
+            right -= tex.size[0] + 4
+            self.draw_texture(tex, right, y + 4)
+
+    # -- text sizes ---------------------------------------------------------------------
+
+    @property
+    def font_px(self) -> int:
+        """Text size (px) of the status lines and banners, from the frame's height."""
+        return int(np.clip(self.size[1] / 45, 11, 22))
+
+    @property
+    def label_px(self) -> int:
+        """Text size (px) of the scope's and panels' labels."""
+        return max(10, self.font_px - 2)
 
     def release(self) -> None:
+        self.panels.release()
         for obj in (*self._buffers.values(), *self._text_cache.values(), self.scene_texture,
                     self.textured, self.coloured, self.cursor):
             if obj is not None:

@@ -1,4 +1,5 @@
-"""What moves on top of the scene: finger cursors, their trails, the scope strip.
+"""What moves on top of the scene: finger cursors, their trails, the scope strip, and
+for the devices that push a finger (seeds 002, 004) the force on each finger as an arrow.
 
 :class:`OverlayState` keeps the recent history the haptic side produced (fed with
 :class:`BlockRecord` snapshots, decimated copies of ``rendering.pipeline.BlockOutput``)
@@ -16,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rendering.keyclick import IDLE
 from rendering.visual.viewport import Viewport
 
 #: cursor/trace colour per finger (sRGB, 0-1): finger k uses FINGER_RGB[k % len]
@@ -32,6 +34,10 @@ class BlockRecord:
 
     t_s : (m,) s. finger_ids : F ids. contact : bool (F, m). x_mm, y_mm : (F, m) mm.
     mu_target : (F, m) mu'. amplitude_um : (F, m) um zero-to-peak.
+    commands_um : (m, q) channel commands sent (um zero-to-peak); phases_rad : (m, q) rad
+    or None. force_n, wanted_force_n : (F, m, 2) achieved and wanted force on each finger
+    (N, display x and y) or None. button : (F, m) key-click state of each finger's button
+    (``rendering.keyclick`` IDLE, ON, CLICKED) or None (no button in the scene).
     """
 
     t_s: np.ndarray
@@ -41,14 +47,31 @@ class BlockRecord:
     y_mm: np.ndarray
     mu_target: np.ndarray
     amplitude_um: np.ndarray
+    commands_um: np.ndarray | None = None
+    phases_rad: np.ndarray | None = None
+    force_n: np.ndarray | None = None
+    wanted_force_n: np.ndarray | None = None
+    button: np.ndarray | None = None
 
 
-def record_from_output(out, stride: int = 10, lo: int = 0, hi: int | None = None) -> BlockRecord:
-    """Every ``stride``-th sample of ``out`` (a pipeline BlockOutput) in [lo, hi), copied."""
+def record_from_output(out, stride: int = 10, lo: int = 0, hi: int | None = None,
+                       commands_um: np.ndarray | None = None) -> BlockRecord:
+    """Every ``stride``-th sample of ``out`` (a pipeline BlockOutput) in [lo, hi), copied;
+    ``commands_um``: what was sent if not ``out.commands_um`` (an emergency stop, a ramp)."""
     s = slice(lo, hi, stride)
+    commands = out.commands_um if commands_um is None else commands_um
+
+    def take(a, axis):
+        return None if a is None else np.array(a[(slice(None),) * axis + (s,)])
+
+    forces = out.forces
     return BlockRecord(out.t_s[s].copy(), tuple(out.finger_ids), out.contact[:, s].copy(),
                        out.x_mm[:, s].copy(), out.y_mm[:, s].copy(),
-                       out.mu_target[:, s].copy(), out.amplitude_um[:, s].copy())
+                       out.mu_target[:, s].copy(), out.amplitude_um[:, s].copy(),
+                       take(commands, 0), take(out.phases_rad, 0),
+                       None if forces is None else take(forces.achieved_n, 1),
+                       None if forces is None else take(forces.wanted_n, 1),
+                       None if forces is None else take(forces.button, 1))
 
 
 class _History:
@@ -73,6 +96,13 @@ class OverlayState:
         self.scope_s = scope_s
         self.now_s = 0.0
         self.fingers: dict[int, _History] = {}
+        #: at the latest sample: channel commands (q,) complex (um, phase), or None
+        self.commands: np.ndarray | None = None
+        #: at the latest sample, per touching finger id: (achieved, wanted) force (N, (2,))
+        self.forces: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        #: the key-click state at the latest sample (None: no button in the scene, or no
+        #: block seen yet)
+        self.button: int | None = None
 
     def add(self, record: BlockRecord) -> None:
         if record.t_s.size == 0:
@@ -83,9 +113,20 @@ class OverlayState:
             rows = np.stack((record.contact[row].astype(np.float64), record.x_mm[row],
                              record.y_mm[row], record.mu_target[row], record.amplitude_um[row]))
             self.fingers.setdefault(fid, _History()).append(record.t_s, rows, keep)
+        if record.commands_um is not None:
+            phase = 0.0 if record.phases_rad is None else record.phases_rad[-1]
+            self.commands = record.commands_um[-1] * np.exp(1j * phase)
+        if record.button is not None:  # the furthest any finger got (0 with no finger)
+            self.button = int(record.button[:, -1].max(initial=IDLE))
+        self.forces = {}
+        if record.force_n is not None:
+            for row, fid in enumerate(record.finger_ids):
+                if record.contact[row, -1]:
+                    self.forces[fid] = (record.force_n[row, -1], record.wanted_force_n[row, -1])
 
     def clear(self) -> None:
         self.fingers.clear()
+        self.commands, self.forces, self.button = None, {}, None
 
     def current(self) -> list[tuple[int, float, float, bool]]:
         """(finger id, x mm, y mm, touching) at the latest sample of each finger."""
@@ -152,6 +193,40 @@ class OverlayState:
                 py = py0 + panel * (1.0 - values)
                 parts.append(segment_triangles(np.column_stack((px, py)), rgba, SCOPE_LINE_PX))
         return np.concatenate(parts) if parts else np.empty((0, 6))
+
+
+    def force_arrows(self, viewport: Viewport, px_per_n: float) -> np.ndarray:
+        """Triangles (k, 6) of the force on each touching finger, from its centre, ``px_per_n``
+        px long per N: the achieved force solid in the finger's colour, the wanted one a
+        thin white line (where they differ, the device could not give what the scene asked)."""
+        parts = []
+        for fid, x, y, _ in self.current():
+            if fid not in self.forces:
+                continue
+            px, py = viewport.to_px(x, y)
+            achieved, wanted = self.forces[fid]
+            rgb = FINGER_RGB[fid % len(FINGER_RGB)]
+            parts.append(arrow_triangles((px, py), wanted * px_per_n, (1.0, 1.0, 1.0, 0.8), 1.5))
+            parts.append(arrow_triangles((px, py), achieved * px_per_n, (*rgb, 1.0), 4.0))
+        return np.concatenate(parts) if parts else np.empty((0, 6))
+
+
+def arrow_triangles(origin, vector_px, rgba, width_px: float) -> np.ndarray:
+    """An arrow from ``origin`` (px) along ``vector_px`` (2,): a shaft ``width_px`` wide and
+    a head 3 widths wide (triangles (k, 6) of x, y, r, g, b, a; none for a null vector)."""
+    vector = np.asarray(vector_px, dtype=np.float64)
+    length = float(np.hypot(*vector))
+    if length < 0.5:
+        return np.empty((0, 6))
+    unit = vector / length
+    normal = np.array([-unit[1], unit[0]])
+    head = min(length, 4.0 * width_px)
+    tip = np.asarray(origin, dtype=np.float64) + vector
+    base = tip - unit * head
+    colour = np.tile(rgba, (2, 1))
+    shaft = segment_triangles(np.array([origin, base]), colour, width_px)
+    wings = np.array([tip, base + normal * 1.5 * width_px, base - normal * 1.5 * width_px])
+    return np.concatenate((shaft, np.column_stack((wings, np.tile(rgba, (3, 1))))))
 
 
 def segment_triangles(points: np.ndarray, rgba: np.ndarray, width_px: float,

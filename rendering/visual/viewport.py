@@ -57,3 +57,12 @@ def fit_viewport(display: Display, frame_w: int, frame_h: int) -> Viewport:
     h = max(1, min(frame_h, round(display.height_mm * scale)))
     return Viewport(frame_w, frame_h, (frame_w - w) // 2, (frame_h - h) // 2, w, h,
                     display.width_mm, display.height_mm)
+
+
+#: smallest default frame (px): room for the status lines, the scope and a device panel
+MIN_FRAME = (640, 480)
+
+
+def default_frame_size(display: Display) -> tuple[int, int]:
+    """The display's own pixel size, at least MIN_FRAME (a thin beam is letterboxed)."""
+    return max(display.width_px, MIN_FRAME[0]), max(display.height_px, MIN_FRAME[1])
