@@ -57,11 +57,13 @@ class SingleModeActuation:
     has_phases = False
 
     def command(self, wanted_um: np.ndarray, fingers) -> Actuated:
-        primary = primary_finger(fingers.contact, fingers.touch_start)
-        n = wanted_um.shape[1]
-        served = np.zeros(n)
-        has = primary >= 0
-        served[has] = wanted_um[primary[has], np.flatnonzero(has)]
+        if wanted_um.shape[0] == 1:  # one finger: served whenever it touches
+            served = np.where(fingers.contact[0], wanted_um[0], 0.0)
+        else:
+            primary = primary_finger(fingers.contact, fingers.touch_start)
+            served = np.zeros(wanted_um.shape[1])
+            has = primary >= 0
+            served[has] = wanted_um[primary[has], np.flatnonzero(has)]
         return Actuated(served[:, None], None, np.broadcast_to(served, wanted_um.shape))
 
 

@@ -7,7 +7,8 @@ plate: ``A`` from the V_AC / V_BD wiring, see ``device.plate2d``). Seed 000, eq 
 ``c = A Phi_f^{-1} W_f``. Amplitudes are complex (magnitude um zero-to-peak, phase rad).
 
 Every method works from the SVD ``Phi_f = U diag(s) V^H`` (batched over any leading
-axes) and returns ``W_M = V g(s) U^H W_f`` for a gain ``g``:
+axes) and returns ``W_M = V g(s) U^H W_f`` for a gain ``g`` (``exact`` and
+``regularised`` in closed form for real 2 x 2 ``Phi_f``, the two-mode devices):
 
 - ``"exact"``: g = 1/s, the inverse (m = p) or the minimum-norm pseudo-inverse
   (p > m, seed 001). Singular values below 1e-12 s_max get g = 0 so the output stays
@@ -79,8 +80,23 @@ class ModalSolution:
 
 
 def forward(phi_fingers, modal_um) -> np.ndarray:
-    """Amplitudes under the fingers (..., m) = Phi_f (..., m, p) @ W_M (..., p) (seed 001, eq 5)."""
-    return np.einsum("...ij,...j->...i", phi_fingers, modal_um)
+    """Amplitudes under the fingers (..., m) = Phi_f (..., m, p) @ W_M (..., p) (seed 001, eq 5).
+
+    Also any matrix applied to a batch of vectors (leading axes broadcast)."""
+    phi, modal = np.asarray(phi_fingers), np.asarray(modal_um)
+    # a sum over the few modes, term by term: several times faster than einsum here
+    out = phi[..., 0] * modal[..., None, 0]
+    for j in range(1, phi.shape[-1]):
+        out = out + phi[..., j] * modal[..., None, j]
+    return out
+
+
+def magnitude(z) -> np.ndarray:
+    """|z| of complex amplitudes as sqrt(re^2 + im^2): within an ulp or two of ``np.abs``,
+    which goes through scalar ``hypot`` and is ~10x slower (amplitudes in um never
+    over- or underflow when squared)."""
+    z = np.asarray(z)
+    return np.sqrt(z.real * z.real + z.imag * z.imag)
 
 
 def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=None,
@@ -122,23 +138,20 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
     if not (0 < rcond < 1):
         raise ModesError(f"rcond must be in (0, 1), got {rcond!r}")
 
-    u, s, vh = np.linalg.svd(phi, full_matrices=False)
-    s_max = s[..., :1]
-    ratio = np.divide(s[..., -1], s_max[..., 0], out=np.zeros(s.shape[:-1]), where=s_max[..., 0] > 0)
-    threshold = (rcond if method == "regularised" else _EXACT_RCOND) * s_max
-    above = ((s >= threshold) if method == "regularised" else (s > threshold)) & (s > 0)
-    inverse = np.divide(1.0, s, out=np.zeros_like(s), where=above)
-    if method == "regularised":
-        inverse += np.divide(s, threshold ** 2, out=np.zeros_like(s),
-                             where=~above & (threshold > 0))
-    capped = ~np.all(above, axis=-1)
-    coeff = inverse * np.einsum("...ji,...j->...i", u.conj(), wanted)
-    modal = np.einsum("...ji,...j->...i", vh.conj(), coeff)
-    commands = modal @ a.T
+    threshold = rcond if method == "regularised" else _EXACT_RCOND
+    # "bounded" keeps LAPACK's start: its iterations amplify last-bit differences where
+    # the least-squares problem is flat
+    closed = phi.shape[-2:] == (2, 2) and not np.iscomplexobj(phi) and method != "bounded"
+    modal, capped, ratio = (_gains_2x2 if closed else _gains_svd)(
+        phi, wanted, threshold, regularised=method == "regularised")
+    commands = forward(a, modal)  # c = A W_M; no BLAS call for a few modes
 
     limited = np.zeros(commands.shape[:-1], dtype=bool)
     if limits is not None:
-        over = np.max(np.abs(commands) / limits, axis=-1)
+        ratios = magnitude(commands) / limits
+        over = ratios[..., 0]  # the largest ratio, column by column (max along a short
+        for j in range(1, ratios.shape[-1]):  # last axis is the slow case of np.max)
+            over = np.maximum(over, ratios[..., j])
         limited = over > 1
         scale = 1 / np.maximum(over, 1)
         commands = commands * scale[..., None]
@@ -149,8 +162,72 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
             commands[limited] = _bounded_commands(m_cmd, wanted[limited], commands[limited], limits)
             modal[limited] = commands[limited] @ a_inv.T
     achieved = forward(phi, modal)
-    return ModalSolution(modal, commands, achieved, np.abs(achieved - wanted),
+    return ModalSolution(modal, commands, achieved, magnitude(achieved - wanted),
                          limited, capped, ratio)
+
+
+def _gains_svd(phi, wanted, rcond: float, regularised: bool):
+    """``W_M = V g(s) U^H W_f`` from the batched SVD (module docstring); any (..., m, p).
+
+    Returns ``(modal, capped, sigma_min_ratio)`` as :class:`ModalSolution` names them.
+    """
+    u, s, vh = np.linalg.svd(phi, full_matrices=False)
+    s_max = s[..., :1]
+    ratio = np.divide(s[..., -1], s_max[..., 0], out=np.zeros(s.shape[:-1]), where=s_max[..., 0] > 0)
+    threshold = rcond * s_max
+    above = ((s >= threshold) if regularised else (s > threshold)) & (s > 0)
+    inverse = np.divide(1.0, s, out=np.zeros_like(s), where=above)
+    if regularised:
+        inverse += np.divide(s, threshold ** 2, out=np.zeros_like(s),
+                             where=~above & (threshold > 0))
+    capped = ~np.all(above, axis=-1)
+    coeff = inverse * np.einsum("...ji,...j->...i", u.conj(), wanted)
+    modal = np.einsum("...ji,...j->...i", vh.conj(), coeff)
+    return modal, capped, ratio
+
+
+def _gains_2x2(phi, wanted, rcond: float, regularised: bool):
+    """:func:`_gains_svd` in closed form for real 2 x 2 ``Phi_f`` (two modes, two fingers
+    or one finger and a zero row): the same ``V g(s) U^T`` without a LAPACK call per matrix.
+
+    Singular values: with E = (a + d)/2, F = (a - d)/2, G = (c + b)/2, H = (c - b)/2 of
+    Phi = [[a, b], [c, d]], s1 = Q + R and s2 = |Q - R|, Q = |(E, H)|, R = |(F, G)|.
+    Where every gain is 1/s the result is the inverse, adj(Phi) W_f / det. Elsewhere the
+    gain is 1/s1 on the first singular pair and s2 / t^2 ("regularised", t the threshold)
+    or 0 ("exact") on the second: with A = Phi^T Phi (eigenvalues s1^2 > s2^2) that is
+    ``h(A) Phi^T W_f`` for h(s^2) = g(s)/s, and on two eigenvalues h(A) = alpha I + beta A
+    (Lagrange interpolation; s1^2 - s2^2 = 4 Q R is at least 0.99 s1^2 there, since
+    s2 < t = 0.1 s1 with the default threshold). Agreement with LAPACK: 1e-15 relative
+    for the inverse (times the condition number, as for any solve), 1e-13 in the
+    regularised zone, where alpha and beta A cancel by up to 1/rcond^2 = 100
+    (tests/test_speedups.py).
+    """
+    batch = phi.shape[:-2]
+    phi, wanted = phi.reshape(-1, 2, 2), wanted.reshape(-1, 2)
+    a, b, c, d = phi[:, 0, 0], phi[:, 0, 1], phi[:, 1, 0], phi[:, 1, 1]
+    q = np.sqrt(((a + d) / 2) ** 2 + ((c - b) / 2) ** 2)
+    r = np.sqrt(((a - d) / 2) ** 2 + ((c + b) / 2) ** 2)
+    s1, s2 = q + r, np.abs(q - r)
+    threshold = rcond * s1
+    full = ((s2 >= threshold) if regularised else (s2 > threshold)) & (s2 > 0)
+    ratio = np.divide(s2, s1, out=np.zeros(s1.shape), where=s1 > 0)
+    # the real gain matrix G, W_M = G W_f: the inverse where every gain is 1/s
+    inv_det = np.divide(1.0, a * d - b * c, out=np.zeros(a.shape), where=full)
+    g = [[d * inv_det, -b * inv_det], [-c * inv_det, a * inv_det]]
+    rest = ~full & (s1 > 0)
+    if np.any(rest):  # h(A) Phi^T = alpha Phi^T + beta Phi^T (Phi Phi^T)
+        b00, b01, b11 = a * a + b * b, a * c + b * d, c * c + d * d
+        with np.errstate(divide="ignore", invalid="ignore"):  # s1 = 0 or full: not kept
+            lam1 = s1 * s1
+            h2 = 1.0 / (threshold * threshold) if regularised else 0.0
+            beta = (1.0 / lam1 - h2) / (4.0 * q * r)
+            alpha = 1.0 / lam1 - beta * lam1
+            for i, (x0, x1) in enumerate(((a, c), (b, d))):  # rows of Phi^T
+                g[i][0] = np.where(rest, alpha * x0 + beta * (x0 * b00 + x1 * b01), g[i][0])
+                g[i][1] = np.where(rest, alpha * x1 + beta * (x0 * b01 + x1 * b11), g[i][1])
+    w0, w1 = wanted[:, 0], wanted[:, 1]
+    modal = np.stack((g[0][0] * w0 + g[0][1] * w1, g[1][0] * w0 + g[1][1] * w1), axis=-1)
+    return modal.reshape(batch + (2,)), (~full).reshape(batch), ratio.reshape(batch)
 
 
 def _bounded_commands(m_cmd, wanted, start, limits) -> np.ndarray:

@@ -19,7 +19,7 @@ Per block, vectorised over all samples (one batched ``device.modal.solve``):
    so the padded system has exactly the solution of the m x p one (m <= p): one batched
    solve covers every count of fingers, including none (all commands 0).
 3. Commands ``c = A W_M`` are complex: channel amplitude |c| (um zero-to-peak) and
-   phase arg(c) (rad). Channels meeting their limit are scaled as ``device.modal``
+   phase arg(c) (rad; 0 for a zero command). Channels meeting their limit are scaled as ``device.modal``
    documents and counted (``limited``).
 4. Achieved amplitude under every finger touching, served or not, is |Phi(x) W_M| (the
    forward model, seed 001 eq 5); 0 for fingers not touching.
@@ -38,7 +38,7 @@ import numpy as np
 
 from device.actuation import Actuated
 from device.beam import FreeFreeBeam, ModesError
-from device.modal import solve
+from device.modal import forward, magnitude, solve
 from device.plate2d import ACTUATOR_NAMES, ACTUATORS, Plate2D
 from rendering.finger_select import touch_rank
 
@@ -117,18 +117,22 @@ class ModalActuation:
         x, y, off = self.structure_position(fingers.x_pred, fingers.y_pred)
         phi_all = self.shapes(x, y)                                     # (F, n, p)
         rank = touch_rank(contact, fingers.touch_start)                 # (F, n)
-        f_idx, k_idx = np.nonzero(contact & (rank < p))
-        rows = rank[f_idx, k_idx]
         phi = np.zeros((n, p, p))
         wanted = np.zeros((n, p))
-        phi[k_idx, rows] = phi_all[f_idx, k_idx]
-        wanted[k_idx, rows] = wanted_um[f_idx, k_idx]
+        served = contact & (rank < p)
+        for f in range(contact.shape[0]):  # finger f fills row rank[f] where it is served
+            for row in range(p):
+                at = served[f] & (rank[f] == row)
+                np.copyto(phi[:, row, :], phi_all[f], where=at[:, None])
+                np.copyto(wanted[:, row], wanted_um[f], where=at)
         sol = solve(phi, wanted, self.method, actuators=self.actuators, limits_um=self.limits_um,
                     rcond=self.rcond)
-        achieved = np.abs(np.einsum("fnp,np->fn", phi_all, sol.modal_um))
+        achieved = magnitude(forward(np.swapaxes(phi_all, 0, 1), sol.modal_um)).T
         # the solver scales to the limits; this only removes its last-bit rounding above them
-        amplitude = np.minimum(np.abs(sol.commands_um), self.limits_um)
-        return Actuated(commands_um=amplitude, phases_rad=np.angle(sol.commands_um),
+        amplitude = np.minimum(magnitude(sol.commands_um), self.limits_um)
+        # + 0.0 turns -0.0 into 0.0: a zero command has phase 0, whatever the sign of
+        # the zeros the solve happened to produce
+        return Actuated(commands_um=amplitude, phases_rad=np.angle(sol.commands_um + 0.0),
                         achieved_um=np.where(contact, achieved, 0.0),
                         limited=int(np.count_nonzero(sol.limited)),
                         off_structure=int(np.count_nonzero(off & contact)))

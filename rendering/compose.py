@@ -33,10 +33,11 @@ def compose(layer_outputs, blends, contact: np.ndarray, finger_masks=None) -> np
         if finger_masks is not None and finger_masks[k] is not None:
             covers = covers & finger_masks[k]
         if blend == "replace":
-            mu = np.where(covers, layer_mu, mu)
+            np.copyto(mu, layer_mu, where=covers)
         else:
-            mu = np.where(covers, mu * layer_mu, mu)
-    return np.where(contact, mu, 1.0)
+            np.multiply(mu, layer_mu, out=mu, where=covers)
+    np.copyto(mu, 1.0, where=~contact)
+    return mu
 
 
 def ideal_mu(scene, x, y) -> np.ndarray:

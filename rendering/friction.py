@@ -108,8 +108,8 @@ class SeedFrictionModel:
         return self.forward(self.limit_um, normal_force_n)
 
     def _amplitude(self, mu, force, counts: ClampCounts) -> np.ndarray:
-        a, beyond = asymptote(force, self.params)
-        counts.force_beyond_model += int(np.count_nonzero(beyond))
+        a, beyond = asymptote(force, self.params)  # force may be one value for all of mu
+        counts.force_beyond_model += int(np.count_nonzero(np.broadcast_to(beyond, mu.shape)))
         reduction = (1.0 - mu) / (1.0 - a)  # in [0, 1) where reachable
         with np.errstate(divide="ignore", invalid="ignore"):
             w = -np.log1p(-np.minimum(reduction, 1.0)) / self.params.b_per_um
@@ -158,7 +158,7 @@ class CalibratedFrictionModel:
         return lo, hi, weight
 
     def _amplitude(self, mu, force, counts: ClampCounts) -> np.ndarray:
-        lo, hi, weight = self._blend(force, counts)
+        lo, hi, weight = self._blend(np.broadcast_to(force, mu.shape), counts)
         per_row = np.stack([inverse(mu) for inverse in self._inverse_rows])
         per_row = np.where(np.isnan(per_row), np.inf, per_row)  # below a row's range: unreachable
         w_lo = np.take_along_axis(per_row, lo[None], 0)[0]
@@ -203,20 +203,28 @@ def _guarded_invert(model: FrictionModel, mu_target, normal_force_n) -> tuple[np
     counts = ClampCounts()
     mu, force = np.broadcast_arrays(np.asarray(mu_target, dtype=np.float64),
                                     np.asarray(normal_force_n, dtype=np.float64))
-    bad_mu = ~np.isfinite(mu)
-    bad_force = ~np.isfinite(force) | (force < 0.0)
-    counts.nonfinite_target = int(np.count_nonzero(bad_mu))
-    counts.bad_force = int(np.count_nonzero(bad_force))
-    force = np.where(bad_force, model.nominal_force_n, force)
-    mu = np.where(bad_mu, 1.0, mu)
+    f_lo, f_hi = force.min(initial=np.inf), force.max(initial=-np.inf)
+    # the usual block: finite targets (their sum is finite) and one good force for all
+    if np.isfinite(mu.sum()) and f_lo == f_hi and 0.0 <= f_lo < np.inf:
+        bad_mu = None
+        force = f_lo
+    else:
+        bad_mu = ~np.isfinite(mu)
+        bad_force = ~np.isfinite(force) | (force < 0.0)
+        counts.nonfinite_target = int(np.count_nonzero(bad_mu))
+        counts.bad_force = int(np.count_nonzero(bad_force))
+        force = np.where(bad_force, model.nominal_force_n, force)
+        mu = np.where(bad_mu, 1.0, mu)
     counts.above_one = int(np.count_nonzero(mu > 1.0))
     mu = np.minimum(mu, 1.0)
     w = model._amplitude(mu, force, counts)
     # unreachable: beyond the asymptote (nan/inf from eq 3) or beyond the amplifier limit;
     # a target computed from w = limit may come back a rounding error above it: not a clamp
-    over = ~np.isfinite(w) | (w > model.limit_um * (1.0 + 1e-12))
-    counts.unreachable = int(np.count_nonzero(over & ~bad_mu))
-    w = np.where(over, model.limit_um, w)
+    top = model.limit_um * (1.0 + 1e-12)
+    if not w.max(initial=0.0) <= top:  # some w is nan, inf or beyond the limit
+        over = ~np.isfinite(w) | (w > top)
+        counts.unreachable = int(np.count_nonzero(over if bad_mu is None else over & ~bad_mu))
+        w = np.where(over, model.limit_um, w)
     return np.clip(w, 0.0, model.limit_um), counts
 
 

@@ -27,4 +27,5 @@ class ShoRenderer:
     def render(self, block: FingerBlock, state=None):
         """mu' (F, n) and coverage (F, n) of the layer under each finger."""
         x, y = (block.x_pred, block.y_pred) if self.predicted else (block.x_held, block.y_held)
-        return self.layer.mu_at(x, y), self.layer.covers(x, y), state
+        mu, covers = self.layer.mu_and_covers(x, y)
+        return mu, covers, state

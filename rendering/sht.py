@@ -43,16 +43,18 @@ def integrate_phase(rate_cycles: np.ndarray, dt_s: float, touch_id: np.ndarray,
     phase : (n,) phase at each sample. carry : phase after the last sample, in [0, 1).
     """
     n = rate_cycles.size
-    inc = rate_cycles * dt_s
-    before = np.concatenate(([0.0], np.cumsum(inc)))  # phase before sample k, relative
+    before = np.empty(n + 1)  # phase before sample k, relative to the call's start
+    before[0] = 0.0
+    np.cumsum(rate_cycles * dt_s, out=before[1:])
     prev_id, prev_phase = start if start is not None else (None, 0.0)
-    reset = np.empty(n, dtype=bool)
-    reset[0] = touch_id[0] != prev_id
-    reset[1:] = touch_id[1:] != touch_id[:-1]
-    last_reset = np.maximum.accumulate(np.where(reset, np.arange(n), -1))
-    base = np.where(last_reset >= 0, before[np.maximum(last_reset, 0)], -prev_phase)
+    # the phase restarts where the touch changes: from there on it is measured from the
+    # phase before that sample (its base); the base is constant between restarts
+    restarts = np.flatnonzero(touch_id[1:] != touch_id[:-1]) + 1
+    first = 0.0 if touch_id[0] != prev_id else -prev_phase  # before[0] is 0
+    bases = np.concatenate(([first], before[restarts]))
+    base = np.repeat(bases, np.diff(np.concatenate(([0], restarts, [n]))))
     phase = before[:n] - base
-    end = before[n] - base[-1]
+    end = before[n] - bases[-1]
     return phase, float(np.mod(end, 1.0))
 
 

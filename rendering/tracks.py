@@ -77,7 +77,11 @@ class TrackerState:
     out_of_order: int = 0
 
 
-@dataclass(frozen=True, eq=False)
+#: the per-sample arrays of a :class:`FingerBlock`, each (F, n)
+BLOCK_FIELDS = ("contact", "touch_id", "x_held", "y_held", "x_pred", "y_pred", "vx", "vy",
+                "force", "touch_start")
+
+
 class FingerBlock:
     """Tracks for ``n`` output samples; per-finger arrays have shape (F, n), F = len(ids).
 
@@ -86,21 +90,38 @@ class FingerBlock:
     x_held, y_held : last measured position (mm). x_pred, y_pred : predicted position (mm).
     vx, vy : velocity estimate (mm/s), 0 when not touching or resting.
     force : normal force (N). touch_start : time (s) the current touch began.
+
+    Built with every array given as a keyword, or by :meth:`lazy` with a function that
+    makes an array from its name on first access: a stage that never reads a field
+    (SHO never reads the velocity, plain SHT never the held position) never pays for it.
+    Read-only.
     """
 
-    index0: int
-    t_s: np.ndarray
-    ids: tuple[int, ...]
-    contact: np.ndarray
-    touch_id: np.ndarray
-    x_held: np.ndarray
-    y_held: np.ndarray
-    x_pred: np.ndarray
-    y_pred: np.ndarray
-    vx: np.ndarray
-    vy: np.ndarray
-    force: np.ndarray
-    touch_start: np.ndarray
+    def __init__(self, index0: int, t_s: np.ndarray, ids: tuple[int, ...], **arrays):
+        if set(arrays) != set(BLOCK_FIELDS):
+            raise TypeError(f"FingerBlock needs the arrays {', '.join(BLOCK_FIELDS)}; got "
+                            f"{', '.join(sorted(arrays)) or 'none'}")
+        self._init(index0, t_s, ids, arrays, None)
+
+    @classmethod
+    def lazy(cls, index0: int, t_s: np.ndarray, ids: tuple[int, ...], make) -> "FingerBlock":
+        """A block whose arrays are made by ``make(name)`` when first read."""
+        block = cls.__new__(cls)
+        block._init(index0, t_s, ids, {}, make)
+        return block
+
+    def _init(self, index0, t_s, ids, arrays, make):
+        self.__dict__.update(arrays, index0=index0, t_s=t_s, ids=ids, _make=make)
+
+    def __getattr__(self, name):  # only called for arrays not made yet
+        make = self.__dict__.get("_make")
+        if make is None or name not in BLOCK_FIELDS:
+            raise AttributeError(f"FingerBlock has no attribute {name!r}")
+        value = self.__dict__[name] = make(name)
+        return value
+
+    def __setattr__(self, name, value):
+        raise AttributeError(f"FingerBlock is read-only (tried to set {name!r})")
 
     @property
     def n(self) -> int:
@@ -246,28 +267,65 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
             if steps is not None:
                 updates[fid] = (applied[sel][keep], steps)
     ids = tuple(sorted(fingers))
-    values = np.empty((len(_FIELDS), len(ids), n))
-    for row, fid in enumerate(ids):
+    rows = []
+    for fid in ids:
         before = np.array(_GET_FIELDS(state.fingers.get(fid, FingerState())), dtype=np.float64)
         at, steps = updates.get(fid, (np.zeros(0, np.int64), None))
         table = before[:, None] if steps is None else np.column_stack(
             (before, np.array([steps[name] for name in _FIELDS])))
         # step j holds from its apply index to the next step's (a later step applied at
         # the same index overrides it: a run of length 0)
-        starts = np.concatenate(([0], at - index0, [n]))
-        values[:, row, :] = np.repeat(table, np.diff(starts), axis=1)
-    arrays = dict(zip(_FIELDS, values))
-    contact = arrays["contact"] > 0.5
-    since = t_out[None, :] - arrays["t_sample"]
-    moving = contact & (since <= config.predict_horizon_s)
-    ahead = np.clip(since, 0.0, config.predict_horizon_s)
-    vx = np.where(moving, arrays["vx"], 0.0)
-    vy = np.where(moving, arrays["vy"], 0.0)
-    block = FingerBlock(
-        index0=index0, t_s=t_out, ids=ids, contact=contact,
-        touch_id=arrays["touch_id"].astype(np.int64),
-        x_held=arrays["x"], y_held=arrays["y"],
-        x_pred=np.where(contact, arrays["xf"] + arrays["vx"] * ahead, arrays["x"]),
-        y_pred=np.where(contact, arrays["yf"] + arrays["vy"] * ahead, arrays["y"]),
-        vx=vx, vy=vy, force=arrays["force"], touch_start=arrays["t_down"])
+        rows.append((table, np.diff(np.concatenate(([0], at - index0, [n])))))
+    block = FingerBlock.lazy(index0, t_out, ids, _BlockArrays(t_out, rows, config).make)
     return block, TrackerState(fingers=fingers, **counters)
+
+
+#: FingerBlock arrays read straight from a state column (the column's name)
+_HELD = {"x_held": "x", "y_held": "y", "force": "force", "touch_start": "t_down"}
+
+
+class _BlockArrays:
+    """The arrays of a :class:`FingerBlock`, made on demand from each finger's
+    piecewise-constant state columns (one ``np.repeat`` per column and finger)."""
+
+    def __init__(self, t_out: np.ndarray, rows, config: TrackerConfig):
+        self.t_out = t_out
+        self.rows = rows  # per finger: (state table (len(_FIELDS), k), run lengths (k,))
+        self.config = config
+        self.cache: dict[str, np.ndarray] = {}
+
+    def column(self, name: str) -> np.ndarray:
+        """State column ``name`` at every output sample, float64 (F, n)."""
+        if name not in self.cache:
+            k = _FIELDS.index(name)
+            out = np.empty((len(self.rows), self.t_out.size))
+            for row, (table, runs) in enumerate(self.rows):
+                out[row] = np.repeat(table[k], runs)
+            self.cache[name] = out
+        return self.cache[name]
+
+    def motion(self):
+        """(contact, moving, ahead): touching; touching and sampled within the prediction
+        horizon; time (s) since the sample, clipped to [0, horizon]."""
+        if "ahead" not in self.cache:
+            horizon = self.config.predict_horizon_s
+            contact = self.column("contact") > 0.5
+            since = self.t_out[None, :] - self.column("t_sample")
+            self.cache["contact_bool"] = contact
+            self.cache["moving"] = contact & (since <= horizon)
+            self.cache["ahead"] = np.clip(since, 0.0, horizon, out=since)
+        return self.cache["contact_bool"], self.cache["moving"], self.cache["ahead"]
+
+    def make(self, name: str) -> np.ndarray:
+        if name in _HELD:
+            return self.column(_HELD[name])
+        if name == "touch_id":
+            return self.column("touch_id").astype(np.int64)
+        if name == "contact":
+            return self.column("contact") > 0.5
+        contact, moving, ahead = self.motion()
+        if name in ("vx", "vy"):
+            return np.where(moving, self.column(name), 0.0)
+        axis = name[0]  # x_pred, y_pred
+        return np.where(contact, self.column(axis + "f") + self.column("v" + axis) * ahead,
+                        self.column(axis))
