@@ -91,7 +91,8 @@ class _Finger:
     """One finger between calls: its touch, phase_v carry and offset (cycles, in [0, 1)),
     the target offset of its last measurement (cycles), that measurement (held x, held y,
     the tracker's phase rate) to tell whether the next call starts with a new one, the
-    smoothed phase rate (cycles/s) and the tracker's speed (mm/s) at the last sample."""
+    smoothed phase rate (cycles/s) and |vx| + |vy| (mm/s) at the last sample (only ever
+    compared with 0: at rest or moving)."""
 
     touch: int
     phase: float
@@ -254,7 +255,8 @@ class HybridRenderer:
             target = (self.layer.phase_at(block.x_pred[row, bounds], block.y_pred[row, bounds])
                       - phase_v[bounds])
             # synthesis starts where the finger is: at touch-down and when it starts from rest
-            speed = np.hypot(block.vx[row], block.vy[row])
+            # only ever compared with 0: |vx| + |vy| is zero exactly when the speed is
+            speed = np.abs(block.vx[row]) + np.abs(block.vy[row])
             was_still = np.concatenate(([0.0 if before is None else before.speed], speed[:-1])) == 0.0
             flags = restart[bounds]
             starts = was_still[bounds] & (speed[bounds] > 0.0)
