@@ -205,15 +205,17 @@ class HapticThread(threading.Thread):
                 return latest
 
     def _process(self, k, samples, change):
+        # a device with force sensors measures the normal force itself (key-click scenes)
+        force = self.sink.device_force_n() if self.sink is not None else None
         if change is None:
-            out, self.state = self.pipeline.process(k, samples, self.state)
+            out, self.state = self.pipeline.process(k, samples, self.state, normal_force_n=force)
             return out, out.commands_um
         # crossfade: both pipelines run this block from the same finger tracks (another
         # device, with other channels, ramps up from 0 instead)
         new, self.render_override = change
         new_state = PipelineState(tracker=self.state.tracker, layers=new.initial_state().layers)
-        old_out, _ = self.pipeline.process(k, samples, self.state)
-        out, self.state = new.process(k, samples, new_state)
+        old_out, _ = self.pipeline.process(k, samples, self.state, normal_force_n=force)
+        out, self.state = new.process(k, samples, new_state, normal_force_n=force)
         same_device = new.channels == self.pipeline.channels
         self.pipeline = new
         fade = np.linspace(0.0, 1.0, self.block_size + 1)[1:, None]

@@ -322,6 +322,14 @@ class CommandSink:
                     self._count("dropped_blocks")
                     return
 
+    def device_force_n(self) -> float | None:
+        """The normal force (N) the device's force sensors last reported, or None if it
+        has none (or has not reported yet). Cheap: the haptic thread asks every block."""
+        st = self._status
+        if self.info is None or not self.info.has_force or st is None:
+            return None
+        return st.force_n
+
     def status(self) -> dict:
         """JSON-able counters: see PROTOCOL.md section 6 for their meaning."""
         with self._lock:

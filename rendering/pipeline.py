@@ -160,9 +160,16 @@ class Pipeline:
                              forces=self.forces.initial_state() if self.forces else None)
 
     def process(self, block_index: int, samples: Trace | None, state: PipelineState,
-                n_blocks: int = 1) -> tuple[BlockOutput, PipelineState]:
+                n_blocks: int = 1, normal_force_n: float | None = None
+                ) -> tuple[BlockOutput, PipelineState]:
         """Run ``n_blocks`` blocks starting at ``block_index`` (output index
-        ``block_index * block_size``) with the touch samples that take effect in them."""
+        ``block_index * block_size``) with the touch samples that take effect in them.
+
+        ``normal_force_n``: the normal force (N) the device's force sensors measure now
+        (seed 003's plate has four under its corners), used instead of the samples' force
+        for the fingers touching. Sensors under the plate measure the total: with several
+        fingers down it is shared equally among them.
+        """
         clock = time.perf_counter
         secs = self.timer.seconds
         index0 = block_index * self.block_size
@@ -170,6 +177,10 @@ class Pipeline:
 
         t = clock()
         fingers, tracker_state = track(index0, n, samples, state.tracker, self.tracker_config)
+        if normal_force_n is not None:
+            touching = fingers.contact
+            share = normal_force_n / np.maximum(touching.sum(axis=0), 1)
+            fingers = fingers.with_force(np.where(touching, share, fingers.force))
         t1 = clock()
         secs["tracking"] += t1 - t
 

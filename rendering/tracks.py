@@ -127,6 +127,15 @@ class FingerBlock:
     def n(self) -> int:
         return int(self.t_s.size)
 
+    def with_force(self, force: np.ndarray) -> "FingerBlock":
+        """The same tracks with the normal force (F, n) replaced, e.g. by what a device's
+        force sensors measured."""
+        made = {k: v for k, v in self.__dict__.items() if k in BLOCK_FIELDS}
+        made["force"] = force
+        block = FingerBlock.__new__(FingerBlock)
+        block._init(self.index0, self.t_s, self.ids, made, self.__dict__.get("_make"))
+        return block
+
 
 def apply_index(t_s: np.ndarray, config: TrackerConfig) -> np.ndarray:
     """Output index from which each sample is used: the next block boundary at or after it."""
