@@ -56,22 +56,29 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_import_arguments(imp)
 
 
+PATH_OPTIONS = ("rate", "speed", "duration", "x0", "y0", "angle", "length", "radius", "noise",
+                "jitter", "force", "seed")
+PRESS_OPTIONS = ("rate", "x0", "y0", "force", "peaks", "force_noise", "seed")
+
+
+def _synth_command(args: argparse.Namespace, options) -> str:
+    """The ``frictex trace synth`` command that makes this trace again."""
+    def value(v):
+        return " ".join(f"{p:g}" for p in v) if isinstance(v, list) else f"{v:g}"
+    flags = " ".join(f"--{name.replace('_', '-')} {value(getattr(args, name))}" for name in options)
+    return f"frictex trace synth {args.motion} {flags}"
+
+
 def _provenance(args: argparse.Namespace) -> str:
-    """The comment line a synthetic trace starts with: how to make it again."""
-    return (f"{args.motion} at {args.speed:g} mm/s, sampled at {args.rate:g} Hz "
-            f"(frictex trace synth {args.motion} --rate {args.rate:g} --speed {args.speed:g} "
-            f"--duration {args.duration:g} --x0 {args.x0:g} --y0 {args.y0:g} --angle {args.angle:g} "
-            f"--length {args.length:g} --radius {args.radius:g} --noise {args.noise:g} "
-            f"--jitter {args.jitter:g} --force {args.force:g} --seed {args.seed})")
-
-
-def _press_provenance(args: argparse.Namespace) -> str:
-    peaks = " ".join(f"{p:g}" for p in args.peaks)
-    return (f"{len(args.peaks)} presses of a still finger at ({args.x0:g}, {args.y0:g}) mm, "
-            f"force {args.force:g} N to peaks {peaks} N and back, noise {args.force_noise:g} N, "
-            f"sampled at {args.rate:g} Hz (frictex trace synth press --rate {args.rate:g} "
-            f"--x0 {args.x0:g} --y0 {args.y0:g} --force {args.force:g} --peaks {peaks} "
-            f"--force-noise {args.force_noise:g} --seed {args.seed})")
+    """The comment line a synthetic trace starts with: what it is, how to make it again."""
+    if args.motion == "press":
+        peaks = " ".join(f"{p:g}" for p in args.peaks)
+        what = (f"{len(args.peaks)} presses of a still finger at ({args.x0:g}, {args.y0:g}) mm, "
+                f"force {args.force:g} N to peaks {peaks} N and back, noise "
+                f"{args.force_noise:g} N, sampled at {args.rate:g} Hz")
+        return f"{what} ({_synth_command(args, PRESS_OPTIONS)})"
+    what = f"{args.motion} at {args.speed:g} mm/s, sampled at {args.rate:g} Hz"
+    return f"{what} ({_synth_command(args, PATH_OPTIONS)})"
 
 
 def run(args: argparse.Namespace) -> int:
@@ -86,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError("--truth: a press does not move; its trace is its true path")
         trace = press_trace(peaks_n=args.peaks, x_mm=args.x0, y_mm=args.y0, rate_hz=args.rate,
                             touch_n=args.force, noise_n=args.force_noise, seed=args.seed)
-        write_trace(args.out, trace, comment=_press_provenance(args))
+        write_trace(args.out, trace, comment=_provenance(args))
         print(f"wrote {len(trace)} samples ({trace.duration_s:.3f} s at {args.rate:g} Hz) "
               f"to {args.out}")
         return 0
