@@ -77,5 +77,5 @@ def make_actuation(device):
     from textures.model import FORCE_PROFILES
     if device.profile in FORCE_PROFILES:
         from device.push_actuation import make_push_actuation  # travelling waves only
-        return make_push_actuation(device.profile)
+        return make_push_actuation(device.profile, device.amplitude_limit_um)
     raise ValueError(f"device profile {device.profile!r} has no actuation")

@@ -43,6 +43,10 @@ class PushActuation:
 
     wave : the two modes on the surface. unit_refs : (3, 2) complex channel references
         for W = 1 and d = -1, 0, +1. x0_mm : structure x at display x = 0.
+    limit_um : the largest channel command (um zero-to-peak). The references at the
+        actuators are not W itself (on the beam, |W_A| reaches 1.16 W): where one would
+        pass the limit both are scaled down together, so the wave keeps its shape and
+        direction and only its amplitude drops (counted as ``limited``).
     """
 
     channels: tuple[str, ...]
@@ -51,13 +55,15 @@ class PushActuation:
     x0_mm: float
     ratio_table: np.ndarray
     gain_table: np.ndarray
+    limit_um: float
     has_phases = True
 
     @classmethod
-    def build(cls, channels, wave: TwoModeWave, unit_refs, x0_mm: float) -> "PushActuation":
+    def build(cls, channels, wave: TwoModeWave, unit_refs, x0_mm: float,
+              limit_um: float) -> "PushActuation":
         travelling = wave.modal(1.0, 1)
         return cls(tuple(channels), wave, np.asarray(unit_refs, dtype=np.complex128), float(x0_mm),
-                   wave.local_ratio(travelling), wave.local_max(travelling))
+                   wave.local_ratio(travelling), wave.local_max(travelling), float(limit_um))
 
     def ratio_at(self, x_mm) -> np.ndarray:
         """Local travelling-wave ratio tau in [0, 1] at display positions ``x_mm`` (any shape)."""
@@ -69,14 +75,23 @@ class PushActuation:
         return np.interp(np.asarray(x_mm, dtype=np.float64) + self.x0_mm, self.wave.x_mm,
                          self.gain_table)
 
-    def drive(self, amplitude_um: np.ndarray, direction: np.ndarray, fingers) -> Actuated:
+    def within_limit(self, amplitude_um: np.ndarray, direction: np.ndarray):
+        """W scaled down where a channel command would pass ``limit_um``, and how many
+        samples were: ``(amplitude_um (n,), limited)``."""
+        unit_peak = np.abs(self.unit_refs).max(axis=1)[np.asarray(direction, dtype=np.int64) + 1]
+        allowed = self.limit_um / unit_peak
+        return np.minimum(amplitude_um, allowed), int(np.count_nonzero(amplitude_um > allowed))
+
+    def drive(self, amplitude_um: np.ndarray, direction: np.ndarray, fingers,
+              limited: int = 0) -> Actuated:
         """Channel commands for a wave of amplitude W and direction d per sample.
 
         Parameters
         ----------
-        amplitude_um : (n,) W (um zero-to-peak), >= 0.
+        amplitude_um : (n,) W (um zero-to-peak), >= 0, already :meth:`within_limit`.
         direction : (n,) int, -1 / 0 / +1.
         fingers : the block's tracks (``rendering.tracks.FingerBlock``).
+        limited : how many samples :meth:`within_limit` scaled down (reported).
 
         Returns
         -------
@@ -85,20 +100,24 @@ class PushActuation:
         """
         refs = amplitude_um[:, None] * self.unit_refs[np.asarray(direction, dtype=np.int64) + 1]
         achieved = np.where(fingers.contact, amplitude_um * self.gain_at(fingers.x_pred), 0.0)
-        return Actuated(np.abs(refs), np.angle(refs), achieved)
+        # within_limit already holds them there; this only removes last-bit rounding
+        commands = np.minimum(np.abs(refs), self.limit_um)
+        return Actuated(commands, np.angle(refs), achieved, limited=limited)
 
 
-def make_push_actuation(profile: str) -> PushActuation:
-    """The actuation of a travelling-wave profile (one of ``SURFACE_LENGTH_MM``)."""
+def make_push_actuation(profile: str, limit_um: float) -> PushActuation:
+    """The actuation of a travelling-wave profile (one of ``SURFACE_LENGTH_MM``), its
+    channel commands limited to ``limit_um`` (um zero-to-peak)."""
     if profile == "travelling-beam-seed002":
         wave = beam_wave(FreeFreeBeam(600.0, 6.0, 6.0, 69.0, 2700.0), 28)
         beam = BeamActuation(wave, (19.0, 581.0))
         refs = [beam.references(1.0, d) for d in _DIRECTIONS]
-        return PushActuation.build(("actuator1", "actuator2"), wave, refs, 0.0)
+        return PushActuation.build(("actuator1", "actuator2"), wave, refs, 0.0, limit_um)
     if profile == "ring-seed004":
         ring = RingResonator(140.0, 50.0, 2.75, 30.0, 69.0, 2680.0)
         wave = ring_wave(ring, 24)
         refs = [wave.modal(1.0, d) for d in _DIRECTIONS]
-        return PushActuation.build(("mode_sym", "mode_asym"), wave, refs, -ring.length_mm / 2)
+        return PushActuation.build(("mode_sym", "mode_asym"), wave, refs, -ring.length_mm / 2,
+                                   limit_um)
     raise ValueError(f"device profile {profile!r} has no travelling-wave actuation; expected one "
                      f"of {', '.join(SURFACE_LENGTH_MM)}")

@@ -146,7 +146,8 @@ class ForceStage:
         wave_dir = np.ones(n, dtype=np.int8)
         wave[served] = wanted_um[primary[served], cols] / gain[primary[served], cols]
         wave_dir[served] = direction[primary[served], cols]
-        act = self.actuation.drive(wave, wave_dir, fingers)
+        wave, limited = self.actuation.within_limit(wave, wave_dir)
+        act = self.actuation.drive(wave, wave_dir, fingers, limited)
 
         local = wave * gain
         sliding = tangential_force(local, wave_dir, motion, fn, tau, self.device.friction, self.params)

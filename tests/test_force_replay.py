@@ -17,6 +17,8 @@ CASES = {
     "directional-beam": "back-and-forth-beam-60mms-60hz",
     "directional-ring": "back-and-forth-ring-40mms-60hz",
     "guidance-ring": "back-and-forth-ring-40mms-60hz",
+    "keyclick-beam": "keyclick-press-beam-100hz",
+    "guidance-beam": "back-and-forth-beam-60mms-60hz",
 }
 
 

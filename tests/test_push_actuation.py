@@ -14,8 +14,8 @@ from device.push_actuation import make_push_actuation
 from device.travelling import BeamActuation, beam_wave
 from textures.model import DeviceProfile
 
-BEAM = make_push_actuation("travelling-beam-seed002")
-RING = make_push_actuation("ring-seed004")
+BEAM = make_push_actuation("travelling-beam-seed002", 1e9)  # limits tested on their own
+RING = make_push_actuation("ring-seed004", 1e9)
 
 
 def fingers(x):
@@ -67,4 +67,18 @@ def test_make_actuation_dispatches_the_force_profiles():
     act = make_actuation(DeviceProfile(profile="ring-seed004"))
     assert act.channels == ("mode_sym", "mode_asym") and act.has_phases
     with pytest.raises(ValueError, match="'plate-seed003' has no travelling-wave actuation"):
-        make_push_actuation("plate-seed003")
+        make_push_actuation("plate-seed003", 3.0)
+
+
+def test_channel_commands_never_pass_the_limit_and_keep_the_wave_shape():
+    beam = make_push_actuation("travelling-beam-seed002", 3.0)
+    w = np.linspace(0.0, 5.0, 101)
+    d = np.ones(w.size, dtype=np.int8)
+    wave, limited = beam.within_limit(w, d)
+    fingers = SimpleNamespace(contact=np.zeros((0, w.size), bool), x_pred=np.zeros((0, w.size)))
+    act = beam.drive(wave, d, fingers, limited)
+    assert act.commands_um.max() <= 3.0 and np.isclose(act.commands_um.max(), 3.0)
+    assert act.limited == limited == int(np.count_nonzero(wave < w))
+    unit = np.abs(beam.unit_refs[2])
+    np.testing.assert_allclose(act.commands_um[1:] / wave[1:, None], np.broadcast_to(unit, (100, 2)),
+                               rtol=1e-12)  # scaled together: the same travelling wave
