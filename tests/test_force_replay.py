@@ -43,8 +43,9 @@ def test_bundled_force_scene_replays_with_phases_and_force_figures(tmp_path, sce
     assert forces["force_error_rms_n"] < 0.01 and forces["wanted_max_n"] > 0.03
 
 
-def test_keyclick_flips_once_per_press_at_the_click_force(tmp_path):
-    _, _, table, summary = replay(tmp_path, "keyclick-ring", "keyclick-press-100hz")
+@pytest.mark.parametrize("scene", ["keyclick-ring", "keyclick-beam"])
+def test_keyclick_flips_once_per_press_at_the_click_force(tmp_path, scene):
+    _, _, table, summary = replay(tmp_path, scene, CASES[scene])
     assert summary["forces"]["0"]["clicks"] == 3
     t, w = table[:, 0], table[:, 1]
     on = w > 0
@@ -54,7 +55,7 @@ def test_keyclick_flips_once_per_press_at_the_click_force(tmp_path):
     # each press: off -> push one way -> reversed -> off, nothing else (no flicker)
     assert len(steps) == 9 and steps[0::3] == [(0, steps[0][1])] * 3
     assert all(b == -a for (_, a), (_, b) in zip(steps[0::3], steps[1::3]))
-    trace = read_trace(resolve_trace("keyclick-press-100hz"))
+    trace = read_trace(resolve_trace(CASES[scene]))
     for i in changes[1::3] + 1:        # the flips: the last 10 ms of force samples >= 0.8 N
         recent = trace.force_n[(trace.t_s <= t[i]) & (trace.t_s > t[i] - 0.0151)]
         assert recent.size >= 1 and np.all(recent >= 0.8)
