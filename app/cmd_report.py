@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import os
 import time
+from dataclasses import asdict
 from pathlib import Path
 
 from app import report_matrix as rm
@@ -52,7 +53,9 @@ def run(args: argparse.Namespace) -> int:
                 "block_s": rm.BLOCK_S, "motions": rm.MOTIONS,
                 "lut_max_error_um": lut.max_error_um(),
                 "cpu_count": os.cpu_count(), "wall_s": time.perf_counter() - wall}
-    doc = ro.write_json(rows, out / "report.json", args.quick, settings)
+    from app import bench_modal
+    modal = [asdict(f) for f in bench_modal.run(args.quick)]
+    doc = ro.write_json(rows, out / "report.json", args.quick, settings, modal)
     plots = ["error_vs_cost.png", "error_vs_period.png"]
     ro.plot_cost(rows, out / plots[0])
     ro.plot_period(rows, out / plots[1])

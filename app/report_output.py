@@ -142,10 +142,12 @@ def headline(rows) -> dict:
     return out
 
 
-def write_json(rows, path: Path, quick: bool, settings: dict) -> dict:
+def write_json(rows, path: Path, quick: bool, settings: dict, modal: list[dict]) -> dict:
+    """``modal``: the speed and error figures of each modal inversion method
+    (``app.bench_modal``), under the key ``modal_inversion``."""
     doc = {"report_version": REPORT_VERSION, "quick": quick, "settings": settings,
            "rows": rows, "claims": [asdict(c) for c in claims(rows)],
-           "headline": headline(rows)}
+           "headline": headline(rows), "modal_inversion": modal}
     path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
     return doc
 
@@ -260,5 +262,12 @@ def write_markdown(doc: dict, path: Path, plots: list[str]) -> None:
                     + [("inversion us/s", *[
                         f"{np.mean([r['stages_us_per_s']['inversion'] for r in inv if r['inversion'] == n]):.0f}"
                         for n in names])])
+    lines += ["", "## Modal inversion (two fingers, seed 000 beam)", "",
+              "Each method of device/modal.py on seed 000's beam (modes 16, 17; actuator "
+              "limit 0.75 um), two fingers at random and near-singular (within 0.5 mm) "
+              "positions; the default, regularised, is the one that stays continuous across "
+              "a singular locus (app/bench_modal.py says how each figure is made):", ""]
+    lines += _table(["figure", "value", "unit"],
+                    [(f["label"], f"{f['value']:.4g}", f["unit"]) for f in doc["modal_inversion"]])
     lines += ["", "## Plots", ""] + [f"![{p}]({p})" for p in plots]
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")

@@ -72,6 +72,14 @@ def test_report_writes_its_files(tmp_path, capsys):
     assert (out / "error_vs_period.png").stat().st_size > 10_000
     assert "## Physical limits" in (out / "report.md").read_text()
     assert "claims hold" in capsys.readouterr().out
+    # issue 5: each modal inversion method's speed and error, measured
+    modal = {f["label"]: f["value"] for f in doc["modal_inversion"]}
+    for method in ("exact", "regularised", "bounded"):
+        assert modal[f"{method} random: time per sample (blocks of 50)"] > 0
+        assert 0 <= modal[f"{method} near-singular: mean error"] < 0.5
+    # the default stays continuous across a singular locus; the exact inverse jumps
+    assert (modal["regularised: largest command step, finger b crossing a in 1 um steps"]
+            < 0.01 < modal["exact: largest command step, finger b crossing a in 1 um steps"])
 
 
 @pytest.mark.parametrize("argv, message", [
