@@ -1,8 +1,9 @@
 """``frictex demo [SCENE]``: the live demo window; the mouse, or a touch screen, gives the fingers.
 
 With no SCENE the window cycles through the bundled scenes (N / B). The haptic
-pipeline runs on its own thread at block cadence (``app.haptic_thread``), the window
-on the main thread (``app.demo_loop``). ``--input`` picks the fingers: the mouse, the
+pipeline runs at block cadence in its own process (``app.haptic_process``; ``--haptic
+thread``: on a thread of the window's process, ``app.haptic_thread``), the window on
+the main thread (``app.demo_loop``). ``--input`` picks the fingers: the mouse, the
 mouse and a follower finger, a TUIO tracker over UDP, or a Linux evdev touch screen.
 ``--record DIR`` writes what was sent
 (``commands.csv``, ``friction.csv`` as in a replay), ``events.csv`` and ``summary.json``.
@@ -18,7 +19,6 @@ import argparse
 import json
 import math
 import queue
-import sys
 import threading
 from pathlib import Path
 
@@ -98,6 +98,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "device such as /dev/input/event5 spanning the scene's display). With "
                              "tuio and evdev the mouse only hovers and every finger gets the force "
                              "set with the wheel")
+    parser.add_argument("--haptic", choices=("process", "thread"), default="process",
+                        help="where the haptic pipeline runs: its own process (default: the "
+                             "window's GL calls cannot delay it) or a thread of the window's "
+                             "process (for debugging; misses deadlines on a software renderer)")
     parser.add_argument("--record", metavar="DIR", default=None,
                         help="write commands.csv, friction.csv, events.csv and summary.json to DIR")
     parser.add_argument("--screenshots", metavar="DIR", default=".",
@@ -153,6 +157,62 @@ class Recorder:
         self.thread.join()
         self.commands.commit()
         self.friction.commit()
+
+
+def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | None,
+                device: str | None, record: Path | None, **queues):
+    """A :class:`HapticThread` (not started) for ``scene`` with its link (``--device``) and
+    recorder (``--record``), and ``finish() -> (link status, dropped record blocks)``,
+    which stops the thread and closes them. ``queues``: HapticThread's ``estop``,
+    ``touches``, ``snapshots``."""
+    from app.haptic_thread import HapticThread
+    haptic = HapticThread(scene, rate_hz, block_size, render_override, **queues)
+    pipeline = haptic.pipeline
+    if device is not None:
+        from device.link import open_sink
+        haptic.sink = open_sink(device, channels=len(pipeline.channels), rate_hz=rate_hz,
+                                phases=pipeline.actuation.has_phases, paced=False)
+    try:
+        if record is not None:
+            haptic.recorder = Recorder(record, pipeline.channels, pipeline.actuation.has_phases)
+    except BaseException:
+        if haptic.sink is not None:
+            haptic.sink.close()
+        raise
+
+    def finish():
+        haptic.stop()
+        if haptic.is_alive():
+            haptic.join(timeout=2.0)
+        if haptic.recorder is not None:
+            haptic.recorder.close()
+        link = haptic.sink.status() if haptic.sink is not None else {"state": "none"}
+        if haptic.sink is not None:
+            haptic.sink.close()
+        return link, haptic.recorder.dropped if haptic.recorder is not None else 0
+
+    return haptic, finish
+
+
+def _start_haptic(args, scene, scene_path: Path, record: Path | None):
+    """The haptic side of ``--haptic``, started, and its ``finish()`` (as open_haptic's)."""
+    if args.haptic == "thread":
+        from app.haptic_thread import shorten_switch_interval
+        shorten_switch_interval(args.block / args.rate)
+        haptic, finish = open_haptic(scene, args.rate, args.block, args.renderer, args.device,
+                                     record)
+        haptic.start()
+        return haptic, finish
+    from app.haptic_process import HapticConfig, HapticProcess, yield_to_haptic
+    haptic = HapticProcess(scene, HapticConfig(scene_path, args.rate, args.block, args.renderer,
+                                               args.device, record))
+    yield_to_haptic()  # after the child started: it keeps its priority
+
+    def finish():
+        haptic.stop()
+        return haptic.link, haptic.dropped_records
+
+    return haptic, finish
 
 
 def _playlist(scene_arg):
@@ -236,61 +296,50 @@ def run(args: argparse.Namespace) -> int:
         raise NoDisplayError(f"{exc}: the demo needs a window. Without a display run "
                              "'frictex demo --headless' (replays a bundled trace, writes frames) "
                              "or 'frictex replay SCENE TRACE --out DIR'") from None
+    from app.cpu_steal import StealMeter
     from app.demo_loop import DemoLoop
-    from app.haptic_thread import HapticThread
-    # the haptic thread must get the GIL back within a fraction of a block, not after
-    # the default 5 ms switch interval (a whole block at 10 kHz / 50 samples)
-    sys.setswitchinterval(min(sys.getswitchinterval(), 0.25 * args.block / args.rate))
-    sink = recorder = haptic = loop = None
+    finish = loop = None
     record = Path(args.record) if args.record else None
+    link = {"state": "none"}
+    dropped_records = 0
+    steal = StealMeter()
     try:
-        haptic = HapticThread(scene, args.rate, args.block, args.renderer)
-        pipeline = haptic.pipeline
-        if args.device is not None:
-            from device.link import open_sink
-            sink = open_sink(args.device, channels=len(pipeline.channels), rate_hz=args.rate,
-                             phases=pipeline.actuation.has_phases, paced=False)
-            haptic.sink = sink
-        if record is not None:
-            recorder = Recorder(record, pipeline.channels, pipeline.actuation.has_phases)
-            haptic.recorder = recorder
+        haptic, finish = _start_haptic(args, scene, paths[index], record)
         loop = DemoLoop(backend, haptic, paths, index, scene, _load, Path(args.screenshots),
                         events_path=record / "events.csv" if record else None,
-                        link_name="none" if sink is None else "starting",
+                        link_name="none" if args.device is None else "starting",
                         follow_mm=arg if kind == "follow" else None, source=source,
                         input_name=input_name(kind, arg))
-        haptic.start()
         loop.run(args.duration)
     finally:
-        if haptic is not None:
-            haptic.stop()
-            if haptic.is_alive():
-                haptic.join(timeout=2.0)
-        if recorder is not None:
-            recorder.close()
-        link = sink.status() if sink is not None else {"state": "none"}
-        if sink is not None:
-            sink.close()
-        if loop is not None:
-            loop.close()  # closes the touch source too
-        elif source is not None:
-            source.close()
-        backend.close()
-    summary = _summary(haptic, loop, recorder, link)
+        try:
+            if finish is not None:
+                link, dropped_records = finish()
+        finally:
+            if loop is not None:
+                loop.close()  # closes the touch source too
+            elif source is not None:
+                source.close()
+            backend.close()
+    summary = _summary(haptic.stats, haptic.block_s, loop, dropped_records, link)
+    summary["haptic"] = args.haptic
+    summary["cpu_steal_pct"] = steal.percent()
     if record is not None:
         (record / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    stolen = ("" if summary["cpu_steal_pct"] is None
+              else f" (CPU steal by a VM host meanwhile: {summary['cpu_steal_pct']:.0f} %)")
     print(f"demo: {summary['blocks']} blocks ({summary['output_s']:.1f} s of output), "
-          f"{summary['deadline_misses']} deadline misses, {summary['clamps_total']} clamped samples, "
+          f"{summary['deadline_misses']} deadline misses{stolen if summary['deadline_misses'] else ''}, "
+          f"{summary['clamps_total']} clamped samples, "
           f"{summary['frames']} frames ({summary['frame_ms_mean']:.1f} ms mean), link: {link['state']}")
     return 0
 
 
-def _summary(haptic, loop, recorder, link) -> dict:
-    st = haptic.stats
-    return {"blocks": st.blocks, "output_s": st.blocks * haptic.block_s,
+def _summary(st, block_s: float, loop, dropped_records: int, link) -> dict:
+    return {"blocks": st.blocks, "output_s": st.blocks * block_s,
             "deadline_misses": st.deadline_misses, "worst_lateness_ms": st.worst_lateness_s * 1e3,
             "dropped_touches": st.dropped_touches, "dropped_snapshots": st.dropped_snapshots,
-            "dropped_record_blocks": recorder.dropped if recorder else 0, "ramps": st.ramps,
+            "dropped_record_blocks": dropped_records, "ramps": st.ramps,
             "clamps": st.clamps.as_dict(), "clamps_total": st.clamps.total,
             "input": loop.input_name,
             "frames": loop.frames, "frame_ms_mean": loop.frame_seconds / max(loop.frames, 1) * 1e3,

@@ -1,4 +1,7 @@
-"""The demo's window loop (main thread): input -> haptic thread, snapshots -> frames.
+"""The demo's window loop (main thread): input -> haptic side, snapshots -> frames.
+
+The haptic side is an ``app.haptic_thread.HapticThread`` or an
+``app.haptic_process.HapticProcess`` (same interface).
 
 Backend-neutral: it drives any ``rendering.visual.context`` backend that has input
 callbacks, ``poll()``, ``swap()`` and ``should_close`` (the glfw window).
@@ -316,7 +319,7 @@ class DemoLoop:
             if duration_s is not None and t - start >= duration_s:
                 break
             if self.haptic.error is not None:
-                raise RuntimeError(f"haptic thread stopped: {self.haptic.error!r}")
+                raise RuntimeError(f"haptic output stopped: {self.haptic.error}")
             self.backend.poll()
             self.flush_mouse()
             self.poll_source()

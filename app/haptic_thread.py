@@ -23,6 +23,7 @@ be queued one after another; their stamps never go back (``touch_at``).
 from __future__ import annotations
 
 import queue
+import sys
 import threading
 import time
 from dataclasses import dataclass, field
@@ -40,6 +41,12 @@ SNAPSHOT_QUEUE = 256
 DEADLINE_S = 0.010  # = device.link.PREFILL_S, not imported: the link is optional
 LINK_STATUS_EVERY = 20  # blocks between two sink.status() calls
 EVENTS = {"down": DOWN, "move": MOVE, "up": UP}
+
+
+def shorten_switch_interval(block_s: float) -> None:
+    """Let the haptic thread get the GIL back within a quarter of a block (``block_s``,
+    s), not after Python's default 5 ms switch interval (a whole block at 10 kHz / 50)."""
+    sys.setswitchinterval(min(sys.getswitchinterval(), 0.25 * block_s))
 
 
 @dataclass(frozen=True)
@@ -62,17 +69,50 @@ class HapticStats:
     clamps: ClampCounts = field(default_factory=ClampCounts)
 
 
-class HapticThread(threading.Thread):
+class TouchInput:
+    """The window's side of the touch queue: ``now()``, ``touch``, ``touch_at``.
+
+    Needs ``clock``, ``t0`` (the output clock's start on ``clock``), ``touches`` (a
+    queue), ``stats`` (a :class:`HapticStats`) and ``_last_stamp`` (s, initially 0).
+    """
+
+    def now(self) -> float:
+        """Seconds on the haptic output clock."""
+        return self.clock() - self.t0
+
+    def touch(self, finger: int, x_mm: float, y_mm: float, force_n: float, event: str) -> None:
+        """Queue a touch sample stamped now (``event``: "down", "move" or "up")."""
+        self.touch_at(self.now(), finger, x_mm, y_mm, force_n, EVENTS[event])
+
+    def touch_at(self, t_s: float, finger: int, x_mm: float, y_mm: float, force_n: float,
+                 event: int) -> None:
+        """Queue a touch sample stamped ``t_s`` (s, the output clock; ``event`` a
+        ``rendering.trace_file`` code), moved into [the last stamp, now]: a live batch must
+        not go back in time, and a sample from the future would wait. Never blocks (a full
+        queue drops the sample, counted). Call it from one thread (the window's)."""
+        t = max(min(float(t_s), self.now()), self._last_stamp)
+        self._last_stamp = t
+        try:
+            self.touches.put_nowait((t, finger, x_mm, y_mm, force_n, event))
+        except queue.Full:
+            self.stats.dropped_touches += 1
+
+
+class HapticThread(TouchInput, threading.Thread):
     """Runs ``build_pipeline(scene, ...)`` live; see the module docstring.
 
     ``sink``: optional command sink (``device.link.open_sink(..., paced=False)``).
     ``recorder``: optional callable ``recorder(out, commands_um)`` called with each
     block's output and the commands actually sent (must not block).
+    ``estop``, ``touches``, ``snapshots``: the emergency stop event and the touch and
+    snapshot queues, when another process holds their other ends (``app.haptic_process``);
+    by default the thread makes its own.
     """
 
     def __init__(self, scene, rate_hz: float = 10_000.0, block_size: int = 50,
                  render_override: str | None = None, sink=None, recorder=None,
-                 clock=time.perf_counter, snapshot_stride: int = 10):
+                 clock=time.perf_counter, snapshot_stride: int = 10, estop=None,
+                 touches=None, snapshots=None):
         super().__init__(name="frictex-haptic", daemon=True)
         self.rate_hz = float(rate_hz)
         self.block_size = int(block_size)
@@ -81,10 +121,10 @@ class HapticThread(threading.Thread):
         self.sink = sink
         self.recorder = recorder
         self.stride = snapshot_stride
-        self.touches: queue.Queue = queue.Queue(TOUCH_QUEUE)
+        self.touches = queue.Queue(TOUCH_QUEUE) if touches is None else touches
         self.commands: queue.Queue = queue.Queue(COMMAND_QUEUE)
-        self.snapshots: queue.Queue = queue.Queue(SNAPSHOT_QUEUE)
-        self.estop = threading.Event()
+        self.snapshots = queue.Queue(SNAPSHOT_QUEUE) if snapshots is None else snapshots
+        self.estop = threading.Event() if estop is None else estop
         self.stats = HapticStats()
         self._quit = threading.Event()
         self._pending: list[tuple] = []
@@ -97,27 +137,6 @@ class HapticThread(threading.Thread):
         self._link = {"state": "none"}
 
     # -- called from other threads ------------------------------------------------------
-
-    def now(self) -> float:
-        """Seconds on this thread's output clock."""
-        return self.clock() - self.t0
-
-    def touch(self, finger: int, x_mm: float, y_mm: float, force_n: float, event: str) -> None:
-        """Queue a touch sample stamped now (``event``: "down", "move" or "up")."""
-        self.touch_at(self.now(), finger, x_mm, y_mm, force_n, EVENTS[event])
-
-    def touch_at(self, t_s: float, finger: int, x_mm: float, y_mm: float, force_n: float,
-                 event: int) -> None:
-        """Queue a touch sample stamped ``t_s`` (s, this thread's clock; ``event`` a
-        ``rendering.trace_file`` code), moved into [the last stamp, now]: a live batch must
-        not go back in time, and a sample from the future would wait. Never blocks (a full
-        queue drops the sample, counted). Call it from one thread (the window's)."""
-        t = max(min(float(t_s), self.now()), self._last_stamp)
-        self._last_stamp = t
-        try:
-            self.touches.put_nowait((t, finger, x_mm, y_mm, force_n, event))
-        except queue.Full:
-            self.stats.dropped_touches += 1
 
     def switch(self, scene=None, render_override: str | None | bool = False):
         """Change scene and/or renderer (False: keep the current one). The pipeline is
@@ -140,6 +159,10 @@ class HapticThread(threading.Thread):
     def stop(self) -> None:
         self._quit.set()
 
+    def start(self) -> None:
+        self.t0 = self.clock()  # the output clock starts with the thread
+        super().start()
+
     # -- the thread ---------------------------------------------------------------------
 
     def run(self) -> None:
@@ -149,7 +172,6 @@ class HapticThread(threading.Thread):
             self.error = exc
 
     def _loop(self) -> None:
-        self.t0 = self.clock()  # the output clock starts with the thread
         k = 0
         gain = 0.0 if self.estop.is_set() else 1.0
         while not self._quit.is_set():

@@ -1,6 +1,7 @@
 """``frictex demo --input``: two fingers from one mouse (follow), TUIO cursors over real
 UDP, and the option's bad values; checked against what the demo recorded (--record)."""
 
+import json
 import socket
 import time
 
@@ -25,10 +26,12 @@ def fingers(rec):
     return {f: np.array(v) for f, v in by.items()}
 
 
-def test_follow_mode_adds_a_second_finger_30_mm_to_the_right(xvfb_display, xdotool, tmp_path):
+@pytest.mark.parametrize("haptic", ["process", "thread"])
+def test_follow_mode_adds_a_second_finger_30_mm_to_the_right(xvfb_display, xdotool, tmp_path,
+                                                              haptic):
     rec = tmp_path / "rec"
     proc = start_demo(xvfb_display, tmp_path, grating_file(tmp_path)[0], rec,
-                      "--input", "follow", "--duration", "5")
+                      "--input", "follow", "--duration", "5", "--haptic", haptic)
     try:
         win = focus_window(xvfb_display)
         wait_first_frame(proc, rec)
@@ -40,6 +43,9 @@ def test_follow_mode_adds_a_second_finger_30_mm_to_the_right(xvfb_display, xdoto
         xdo(xvfb_display, "mouseup", "1")
     finally:
         finish(proc)
+    summary = json.loads((rec / "summary.json").read_text())
+    assert summary["haptic"] == haptic
+    assert summary["cpu_steal_pct"] is None or 0.0 <= summary["cpu_steal_pct"] <= 100.0
     f = fingers(rec)
     assert sorted(f) == [0, 1]
     t0, t1 = f[0][:, 0], f[1][:, 0]
