@@ -175,3 +175,32 @@ def test_button_state_follows_the_normal_force_and_is_framed_in_its_colour(gl, f
     edge = from_srgb8(rgb[int(y1) - 2:int(y1) + 2, int(x0) + 20])  # the frame's bottom side
     expect = {IDLE: (0.45, 0.45, 0.45), ON: (0.95, 0.6, 0.05), CLICKED: (0.1, 0.75, 0.25)}[state]
     assert np.abs(edge - np.array(expect) ** 2.2).sum(axis=1).min() < 0.1
+
+
+def test_labels_that_change_every_frame_survive_the_text_cache(gl):
+    """The |W| labels under the fingers change with every frame; a demo ran 1000s of
+    frames. Once more texts were made than the cache keeps, the cache released textures
+    made earlier in the same frame and still to be drawn (a crash in the demo). Now the
+    frame with the 200th distinct label draws the same as a fresh compositor's."""
+    from dataclasses import replace
+    scene = load_scene(resolve_scene("two-finger-beam-seed000"))
+    pipe, out = run_pipeline(scene, [(100.0, 3.0), (230.0, 3.0)])
+    overlay = OverlayState()
+    overlay.add(record_from_output(out, stride=10))
+    env = modal_envelope(scene, pipe.actuation).at(overlay.commands, overlay.current())
+    size = (1400, 480)
+    backend = OffscreenBackend(size, ctx=gl)
+    comp = Compositor(gl, scene, size)
+    backend.use()
+    for k in range(200):
+        fingers = tuple((fid, x, y, 0.01 * k + 0.001 * fid) for fid, x, y, _ in env.fingers)
+        view = FrameView(overlay=overlay, status=(f"frame {k}",), envelope=replace(env, fingers=fingers),
+                         envelope_scale_um=1.0)
+        comp.draw(view)
+    long_run = backend.read_rgb()
+    comp.release()
+    fresh = Compositor(gl, scene, size)
+    fresh.draw(view)
+    assert np.array_equal(backend.read_rgb(), long_run)
+    fresh.release()
+    backend.close()

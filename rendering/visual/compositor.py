@@ -10,6 +10,7 @@ primitives (``draw_triangles``, ``draw_rect``, ``draw_texture``, ``draw_cursors`
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import moderngl
@@ -63,6 +64,7 @@ void main() {
 }""")
 
 SCOPE_BG = (0.0, 0.0, 0.0, 0.85)
+TEXT_CACHE = 64  # text textures kept between frames (a frame draws about 20)
 BANNER_RGBA = {"stop": (0.75, 0.0, 0.0, 0.92), "error": (0.55, 0.05, 0.05, 0.92),
                "info": (0.1, 0.1, 0.1, 0.85)}
 
@@ -95,7 +97,7 @@ class Compositor:
         self.coloured = ctx.program(vertex_shader=COLOURED[0], fragment_shader=COLOURED[1])
         self.cursor = ctx.program(vertex_shader=CURSOR[0], fragment_shader=CURSOR[1])
         self._buffers: dict[str, moderngl.Buffer] = {}
-        self._text_cache: dict[tuple, moderngl.Texture] = {}
+        self._text_cache: OrderedDict[tuple, moderngl.Texture] = OrderedDict()
         self.panels = DevicePanels(self)
         self.status_bottom = 4.0  # px: below the status lines of the last frame drawn
         self.scene = scene
@@ -184,18 +186,23 @@ class Compositor:
 
     def text(self, lines: tuple[str, ...], size_px: int, rgb=(255, 255, 255),
               background=(0, 0, 0, 170)) -> moderngl.Texture:
+        """The texture of ``lines`` of text (cached; valid until the next frame starts)."""
         key = (lines, size_px, rgb, background)
         tex = self._text_cache.get(key)
-        if tex is None:
-            if len(self._text_cache) > 64:
-                for old in self._text_cache.values():
-                    old.release()
-                self._text_cache.clear()
+        if tex is not None:
+            self._text_cache.move_to_end(key)
+        else:
             img = text_rgba(lines, size_px, rgb, background)
             tex = self.ctx.texture((img.shape[1], img.shape[0]), 4, img.tobytes(), alignment=1)
             tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
             self._text_cache[key] = tex
         return tex
+
+    def _trim_text_cache(self) -> None:
+        """Release the least recently used texts beyond TEXT_CACHE. Only between frames:
+        a text made earlier in a frame may still be waiting to be drawn."""
+        while len(self._text_cache) > TEXT_CACHE:
+            self._text_cache.popitem(last=False)[1].release()
 
     # -- the frame ----------------------------------------------------------------------
 
@@ -208,6 +215,7 @@ class Compositor:
     def draw(self, view: FrameView | None = None) -> None:
         """Draw the scene and ``view`` into the framebuffer in use."""
         view = view or FrameView()
+        self._trim_text_cache()
         ctx = self.ctx
         w, h = self.size
         ctx.viewport = (0, 0, w, h)
