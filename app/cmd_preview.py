@@ -88,6 +88,9 @@ def write_preview(scene, out: Path, size: tuple[int, int] | None = None,
     bar = fig.colorbar(shown, ax=right, shrink=0.9)
     bar.set_label("mu' = mu(w) / mu(0)")
     bar.ax.axhline(floor, color="red", linewidth=2)
+    # a tick label next to the floor's would print over it
+    bar.set_ticks([t for t in bar.get_ticks()
+                   if vmin <= t <= 1.0 and abs(t - floor) > 0.08 * (1.0 - vmin)])
     bar.ax.text(1.05, floor, f" floor\n {floor:.2f}\n @{scene.device.normal_force_n:g} N",
                 transform=bar.ax.get_yaxis_transform(), color="red", fontsize=8, va="center")
     layers = "; ".join(f"{layer.name} ({type(layer).__name__.lower()}, {layer.render}"

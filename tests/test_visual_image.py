@@ -119,3 +119,55 @@ def test_letterboxed_fullscreen_grating_keeps_its_period():
     expect = dense_mean(layer, (np.arange(vp.width_px) + 0.5) / vp.px_per_mm[0],
                         np.full(vp.width_px, 10.0), (1 / vp.px_per_mm[0], 1 / vp.px_per_mm[1]), 64)
     assert_allclose(row, 0.0 + (expect - 0.6) / 0.4, atol=2e-3)
+
+
+# -- force layers' marks (rendering.visual.force_marks) ----------------------------------
+
+def _marks(scene, size=(1400, 300)):
+    """(mask of pixels mostly in the mark colour, viewport) of ``scene`` drawn at ``size``."""
+    from rendering.visual.force_marks import MARK_RGB
+    vp = fit_viewport(scene.display, *size)
+    rgb = scene_rgb(scene, vp)
+    return np.linalg.norm(rgb - MARK_RGB, axis=-1) < 0.1, vp
+
+
+def test_guidance_line_is_drawn_where_the_pull_points():
+    scene = load_scene(resolve_scene("guidance-ring"))
+    mask, vp = _marks(scene)
+    cols = np.nonzero(mask)[1]
+    target_px = vp.to_px(70.0, 0.0)[0] - vp.x0
+    assert cols.size > 100 and abs(cols.mean() + 0.5 - target_px) < 1.0
+    # and the pull of the layer itself is zero on that line, away from it on either side
+    layer = next(layer for layer in scene.layers if layer.name == "centre-line")
+    fx, _ = layer.pull(np.array([60.0, 70.0, 80.0]), np.array([15.0, 15.0, 15.0]))
+    assert fx[0] > 0 and fx[1] == 0 and fx[2] < 0
+    # a target point: a ring of RING_MM around it
+    from rendering.visual.force_marks import RING_MM
+    point = replace(layer, line=False, x_mm=40.0, y_mm=12.0)
+    mask, vp = _marks(replace(scene, layers=(scene.layers[0], point)))
+    rows, cols = np.nonzero(mask)
+    x_mm, y_mm = vp.to_mm(cols + 0.5 + vp.x0, rows + 0.5 + vp.y0)
+    r = np.hypot(x_mm - 40.0, y_mm - 12.0)
+    ring = r > 1.0
+    assert abs(np.median(r[ring]) - RING_MM) < 0.5 / min(vp.px_per_mm)
+    assert abs(x_mm.mean() - 40.0) < 0.1 and abs(y_mm.mean() - 12.0) < 0.1
+
+
+@pytest.mark.parametrize("forward, backward, glide", [(0.03, 0.2, 1), (0.2, 0.03, -1)])
+def test_directional_chevrons_point_the_way_the_finger_glides(forward, backward, glide):
+    from rendering.visual.force_marks import CHEVRON_MM
+    scene = load_scene(resolve_scene("directional-ring"))
+    layer = replace(scene.layers[0], forward=forward, backward=backward)
+    mask, vp = _marks(replace(scene, layers=(layer,)))
+    rows, cols = np.nonzero(mask)
+    x_mm, y_mm = vp.to_mm(cols + 0.5 + vp.x0, rows + 0.5 + vp.y0)
+    middle = 15.0
+    tips = x_mm[np.abs(y_mm - middle) < 0.3]
+    arms = x_mm[np.abs(np.abs(y_mm - middle) - 0.75 * CHEVRON_MM) < 0.3]
+    # the tip of the chevron near x = 60 mm, and its arms behind it (against the glide)
+    tip = tips[np.abs(tips - 60.0) < 3.0].mean()
+    arm = arms[np.abs(arms - 60.0) < 5.0].mean()
+    assert abs(tip - 60.0) < 0.5
+    assert np.sign(tip - arm) == glide and abs(abs(tip - arm) - 0.75 * CHEVRON_MM) < 0.5
+    same = replace(layer, forward=0.1, backward=0.1)
+    assert not _marks(replace(scene, layers=(same,)))[0].any()

@@ -24,7 +24,8 @@ white (mu' = 1, neutral under multiply). Colours are linear RGB; :func:`to_srgb8
 encodes them for the screen and PNG files.
 
 Outlines (``visual.outline`` in the file, or ``outlines=True`` for every layer with a
-region or a shape) are drawn 1.5 px wide on the boundary's signed distance.
+region or a shape) are drawn 1.5 px wide on the boundary's signed distance; force
+layers' targets and directions on top (``force_marks``).
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from rendering.visual.force_marks import draw_force_marks, has_marks
 from rendering.visual.viewport import Viewport
 from textures.model import (Bump, Directional, DiscRegion, Edge, Guidance, KeyClick, Line,
                             RasterMap, Scene, Shape)
@@ -324,6 +326,8 @@ def scene_rgb(scene: Scene, viewport: Viewport, supersample: int = 4,
         rgb[rough] = _supersampled(scene, *np.nonzero(rough), sx, sy, supersample)
     if outlines or any(layer.visual.outline for layer in scene.layers):
         rgb = _draw_outlines(scene, rgb, xs, ys, sx, sy, outlines)
+    if has_marks(scene):
+        rgb = draw_force_marks(scene, rgb, xs, ys, (sx, sy))
     return rgb
 
 
