@@ -61,12 +61,14 @@ def focus_window(display) -> str:
     return win
 
 
-def wait_first_frame(proc, rec):
-    """Input is stamped when the loop handles it: start once it is drawing frames."""
+def wait_event(proc, rec, kind="first-frame", count=1):
+    """Wait until events.csv holds ``count`` events ``kind``. Input is stamped when the
+    loop handles it, so start once it is drawing frames ("first-frame"); a screenshot is
+    written after the frame that follows the key, so wait for it before the next key."""
     deadline = time.monotonic() + 20
-    while "first-frame" not in ((rec / "events.csv").read_text()
-                                if (rec / "events.csv").exists() else ""):
-        assert time.monotonic() < deadline and proc.poll() is None, "no first frame"
+    path = rec / "events.csv"
+    while sum(1 for e in (read_csv(path) if path.exists() else []) if e["event"] == kind) < count:
+        assert time.monotonic() < deadline and proc.poll() is None, f"no {kind} event"
         time.sleep(0.05)
 
 
@@ -89,7 +91,7 @@ def test_demo_window_touch_estop_reload_and_broken_edit(xvfb_display, xdotool, t
                       "--screenshots", str(shots))
     try:
         win = focus_window(xvfb_display)
-        wait_first_frame(proc, rec)
+        wait_event(proc, rec)
 
         def stroke(x_from, x_to, y=240):
             xdo(xvfb_display, "mousemove", "--window", win, str(x_from), str(y))
@@ -101,6 +103,7 @@ def test_demo_window_touch_estop_reload_and_broken_edit(xvfb_display, xdotool, t
 
         stroke(100, 700)
         xdo(xvfb_display, "key", "p")  # screenshot of the scene
+        wait_event(proc, rec, "screenshot")
         xdo(xvfb_display, "mousemove", "--window", win, "100", "240")
         xdo(xvfb_display, "mousedown", "1")
         xdo(xvfb_display, "key", "space")  # emergency stop while touching

@@ -11,7 +11,7 @@ import pytest
 from app.cli import main
 from app.cmd_demo import input_option
 from test_demo import (finish, focus_window, grating_file, off_edges, read_csv,  # noqa: F401
-                       start_demo, wait_first_frame, xdo, xdotool)  # (xdotool is a fixture)
+                       start_demo, wait_event, xdo, xdotool)  # (xdotool is a fixture)
 from test_tuio import frame
 
 PX_PER_MM = 800 / 108.0  # an 800x480 window on the 108 x 64.8 mm display
@@ -34,7 +34,7 @@ def test_follow_mode_adds_a_second_finger_30_mm_to_the_right(xvfb_display, xdoto
                       "--input", "follow", "--duration", "5", "--haptic", haptic)
     try:
         win = focus_window(xvfb_display)
-        wait_first_frame(proc, rec)
+        wait_event(proc, rec)
         xdo(xvfb_display, "mousemove", "--window", win, "100", "240")
         xdo(xvfb_display, "mousedown", "1")
         for x in np.linspace(100, 500, 20):
@@ -71,7 +71,7 @@ def test_tuio_cursors_over_udp_drive_two_fingers(xvfb_display, tmp_path):
         line = proc.stdout.readline()
         assert "listening for TUIO" in line, line
         port = int(line.split()[-1])
-        wait_first_frame(proc, rec)
+        wait_event(proc, rec)
         fseq = 1
         # session 7 swipes right along y = 0.25 of the height; session 9 holds still low
         for k in range(60):
