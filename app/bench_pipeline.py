@@ -46,9 +46,7 @@ def run(quick: bool) -> list[Figure]:
 
 
 def _stage_figures(pipeline, duration: float, label: str) -> list[Figure]:
-    """Compute per stage and per layer (us per second of output). A tracker array is
-    made when a stage first reads it (``rendering.tracks.FingerBlock``), so part of the
-    tracking cost shows under the first layer that reads it."""
+    """Compute per stage and per layer (us per second of output)."""
     stages = dict(pipeline.timer.seconds)
     stages.pop("layers")
     stages.update({f"layer {k}": v for k, v in pipeline.timer.layer_seconds.items()})

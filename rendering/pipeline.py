@@ -149,6 +149,21 @@ class Pipeline:
             from rendering.force_layers import ForceStage  # travelling-wave profiles only
             self.forces = ForceStage(scene, self.rate_hz, self.actuation)
         self.timer = StageTimer()
+        self._warm_up()
+        self.timer = StageTimer()
+
+    def _warm_up(self) -> None:
+        """Run one block with a touch at the display's centre and discard it.
+
+        The per-sample kernels (numba, compiled once and cached on disk) are loaded into
+        the process on their first call, ~0.2 s in a fresh process: that belongs to
+        loading the scene, not to the first live block or a timed replay.
+        """
+        from rendering.trace_file import DOWN, MOVE, make_trace
+        t0 = self.tracker_config.t0_s
+        cx, cy = self.scene.display.width_mm / 2, self.scene.display.height_mm / 2
+        touch = make_trace([t0, t0 + 1e-3], [0, 0], [cx, cx + 0.01], [cy, cy], event=[DOWN, MOVE])
+        self.process(0, touch, self.initial_state(), n_blocks=2)
 
     @property
     def channels(self) -> tuple[str, ...]:

@@ -16,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from rendering.tracks import FingerBlock
 
@@ -42,20 +43,32 @@ def integrate_phase(rate_cycles: np.ndarray, dt_s: float, touch_id: np.ndarray,
     -------
     phase : (n,) phase at each sample. carry : phase after the last sample, in [0, 1).
     """
-    n = rate_cycles.size
-    before = np.empty(n + 1)  # phase before sample k, relative to the call's start
-    before[0] = 0.0
-    np.cumsum(rate_cycles * dt_s, out=before[1:])
-    prev_id, prev_phase = start if start is not None else (None, 0.0)
-    # the phase restarts where the touch changes: from there on it is measured from the
-    # phase before that sample (its base); the base is constant between restarts
-    restarts = np.flatnonzero(touch_id[1:] != touch_id[:-1]) + 1
-    first = 0.0 if touch_id[0] != prev_id else -prev_phase  # before[0] is 0
-    bases = np.concatenate(([first], before[restarts]))
-    base = np.repeat(bases, np.diff(np.concatenate(([0], restarts, [n]))))
-    phase = before[:n] - base
-    end = before[n] - bases[-1]
-    return phase, float(np.mod(end, 1.0))
+    rate = np.ascontiguousarray(rate_cycles, dtype=np.float64)
+    phase = np.empty(rate.size)
+    prev_id, prev_phase = start if start is not None else (0, 0.0)
+    carry = phase_kernel(rate, float(dt_s), np.ascontiguousarray(touch_id, dtype=np.int64),
+                         start is not None, int(prev_id), float(prev_phase), phase)
+    return phase, carry
+
+
+@njit(cache=True)
+def phase_kernel(rate, dt_s, touch, has_start, prev_id, prev_phase, phase):
+    """:func:`integrate_phase`'s loop, writing ``phase`` (n,) and returning the carry.
+
+    The phase before sample k is the running sum of ``rate * dt_s`` over the samples
+    before it (the same sums, in the same order, as ``np.cumsum``) minus the sum at the
+    touch's first sample in this call; a touch carried in from the previous call
+    (``has_start`` and the same ``prev_id``) starts at ``prev_phase`` instead.
+    """
+    n = rate.size
+    base = -prev_phase if has_start and n > 0 and touch[0] == prev_id else 0.0
+    acc = 0.0  # sum of rate * dt before sample k
+    for k in range(n):
+        if k > 0 and touch[k] != touch[k - 1]:
+            base = acc
+        phase[k] = acc - base
+        acc += rate[k] * dt_s
+    return (acc - base) % 1.0
 
 
 class ShtRenderer:

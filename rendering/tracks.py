@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 from operator import attrgetter
 
 import numpy as np
+from numba import njit
 
 from rendering.trace_file import DOWN, MOVE, UP, Trace
 
@@ -91,34 +92,19 @@ class FingerBlock:
     vx, vy : velocity estimate (mm/s), 0 when not touching or resting.
     force : normal force (N). touch_start : time (s) the current touch began.
 
-    Built with every array given as a keyword, or by :meth:`lazy` with a function that
-    makes an array from its name on first access: a stage that never reads a field
-    (SHO never reads the velocity, plain SHT never the held position) never pays for it.
-    Read-only.
+    Built with every array given as a keyword; ``track`` makes all of them in one
+    compiled pass (``_expand``), a few microseconds per 5 ms block, which is less than
+    making only the ones a stage reads with numpy would cost. Read-only.
     """
 
     def __init__(self, index0: int, t_s: np.ndarray, ids: tuple[int, ...], **arrays):
         if set(arrays) != set(BLOCK_FIELDS):
             raise TypeError(f"FingerBlock needs the arrays {', '.join(BLOCK_FIELDS)}; got "
                             f"{', '.join(sorted(arrays)) or 'none'}")
-        self._init(index0, t_s, ids, arrays, None)
+        self.__dict__.update(arrays, index0=index0, t_s=t_s, ids=ids)
 
-    @classmethod
-    def lazy(cls, index0: int, t_s: np.ndarray, ids: tuple[int, ...], make) -> "FingerBlock":
-        """A block whose arrays are made by ``make(name)`` when first read."""
-        block = cls.__new__(cls)
-        block._init(index0, t_s, ids, {}, make)
-        return block
-
-    def _init(self, index0, t_s, ids, arrays, make):
-        self.__dict__.update(arrays, index0=index0, t_s=t_s, ids=ids, _make=make)
-
-    def __getattr__(self, name):  # only called for arrays not made yet
-        make = self.__dict__.get("_make")
-        if make is None or name not in BLOCK_FIELDS:
-            raise AttributeError(f"FingerBlock has no attribute {name!r}")
-        value = self.__dict__[name] = make(name)
-        return value
+    def __getattr__(self, name):  # only called for names that are not there
+        raise AttributeError(f"FingerBlock has no attribute {name!r}")
 
     def __setattr__(self, name, value):
         raise AttributeError(f"FingerBlock is read-only (tried to set {name!r})")
@@ -130,11 +116,9 @@ class FingerBlock:
     def with_force(self, force: np.ndarray) -> "FingerBlock":
         """The same tracks with the normal force (F, n) replaced, e.g. by what a device's
         force sensors measured."""
-        made = {k: v for k, v in self.__dict__.items() if k in BLOCK_FIELDS}
-        made["force"] = force
-        block = FingerBlock.__new__(FingerBlock)
-        block._init(self.index0, self.t_s, self.ids, made, self.__dict__.get("_make"))
-        return block
+        arrays = {name: getattr(self, name) for name in BLOCK_FIELDS}
+        arrays["force"] = force
+        return FingerBlock(self.index0, self.t_s, self.ids, **arrays)
 
 
 def apply_index(t_s: np.ndarray, config: TrackerConfig) -> np.ndarray:
@@ -143,101 +127,197 @@ def apply_index(t_s: np.ndarray, config: TrackerConfig) -> np.ndarray:
     return (np.ceil(pos - 1e-9).astype(np.int64)) * config.quantum
 
 
-def _line_fits(t, x, y, first):
-    """Least-squares lines through each sample's window: velocity and fitted position.
-
-    ``t, x, y`` (N,) hold a finger's samples; sample k's window is ``first[k] .. k``.
-    Windows are gathered into a padded (N, J) table, J the longest window, and summed
-    relative to the sample's own time, so nothing large cancels. Returns
-    ``(vx, vy, xf, yf, ok)``; ``ok`` is False where the window has one distinct time.
-    """
-    k = np.arange(t.size)
-    span = k - first
-    j = np.arange(int(span.max(initial=0)) + 1)
-    member = j[None, :] <= span[:, None]
-    g = np.where(member, k[:, None] - j[None, :], k[:, None])
-    dt = np.where(member, t[g] - t[:, None], 0.0)
-    wx = np.where(member, x[g], 0.0)
-    wy = np.where(member, y[g], 0.0)
-    n = member.sum(axis=1).astype(np.float64)
-    st, stt = dt.sum(axis=1), (dt * dt).sum(axis=1)
-    sx, sy = wx.sum(axis=1), wy.sum(axis=1)
-    stx, sty = (dt * wx).sum(axis=1), (dt * wy).sum(axis=1)
-    denom = n * stt - st * st
-    ok = denom > 1e-18
-    safe = np.where(ok, denom, 1.0)
-    vx = np.where(ok, (n * stx - st * sx) / safe, 0.0)
-    vy = np.where(ok, (n * sty - st * sy) / safe, 0.0)
-    return vx, vy, np.where(ok, (sx - vx * st) / n, x), np.where(ok, (sy - vy * st) / n, y), ok
-
-
-def _last_true(mask: np.ndarray) -> np.ndarray:
-    """For each position, the index of the last True at or before it (-1 if none)."""
-    return np.maximum.accumulate(np.where(mask, np.arange(mask.size), -1))
-
-
 def _finger_steps(fs: FingerState, t, x, y, force, event, cfg: TrackerConfig, counters: dict):
     """One finger's samples (in time order) applied to its state, all at once.
 
-    Returns the per-sample state after each kept sample (dict of arrays named as
+    Returns the state after each kept sample ((len(_FIELDS), m) float64, rows named by
     ``_FIELDS``), the mask of kept samples, and the finger's state after the last one.
     """
-    previous_t = np.maximum.accumulate(np.concatenate(([fs.t_sample], t[:-1])))
-    keep = t >= previous_t  # older than the finger's last sample: dropped
-    counters["out_of_order"] += int(np.count_nonzero(~keep))
-    t, x, y, force, event = t[keep], x[keep], y[keep], force[keep], event[keep]
-    if t.size == 0:
-        return None, keep, fs
-    contact_after = event != UP
-    t_prev = np.concatenate(([fs.t_sample], t[:-1]))
-    x_prev = np.concatenate(([fs.x], x[:-1]))
-    y_prev = np.concatenate(([fs.y], y[:-1]))
-    contact_prev = np.concatenate(([fs.contact], contact_after[:-1]))
-    dist = np.hypot(x - x_prev, y - y_prev)
-    jump = (contact_prev & (event == MOVE) & (dist > cfg.jump_min_mm)
-            & (dist > cfg.jump_speed_mm_s * (t - t_prev)))
-    counters["jumps"] += int(np.count_nonzero(jump))
-    new_touch = (event == DOWN) | ~contact_prev | jump
-    last_new = _last_true(new_touch)
-    touch_id = fs.touch_id + np.cumsum(new_touch)
-    t_down = np.where(last_new >= 0, t[np.maximum(last_new, 0)], fs.t_down)
-
-    # velocity windows over the touch's earlier samples (kept in the state) and these
     h = len(fs.history) if fs.contact else 0
-    ht = np.array([s[0] for s in fs.history[:h]] + t.tolist())
-    hx = np.array([s[1] for s in fs.history[:h]] + x.tolist())
-    hy = np.array([s[2] for s in fs.history[:h]] + y.tolist())
-    g = h + np.arange(t.size)
-    touch_first = np.where(last_new >= 0, h + last_new, 0)
-    first = np.maximum(np.searchsorted(ht, t - cfg.velocity_window_s, side="left"), touch_first)
-    # one distinct time in the window: the previous sample of the touch, if recent enough
-    lone = ht[first] == t
-    prev_ok = (g - 1 >= touch_first) & (t - ht[np.maximum(g - 1, 0)] <= cfg.max_gap_s)
-    first = np.where(lone & prev_ok, g - 1, first)
-    vx, vy, xf, yf, ok = _line_fits(ht, hx, hy, np.concatenate((np.zeros(h, np.int64), first)))
-    vx, vy, xf, yf, ok = vx[h:], vy[h:], xf[h:], yf[h:], ok[h:]
-    # no fit: keep the touch's last velocity (0 from its first sample on)
-    source = _last_true(ok | new_touch)
-    carried = source >= 0
-    src = np.maximum(source, 0)
-    vx = np.where(carried, np.where(new_touch[src] & ~ok[src], 0.0, vx[src]), fs.vx)
-    vy = np.where(carried, np.where(new_touch[src] & ~ok[src], 0.0, vy[src]), fs.vy)
-    up = ~contact_after
-    steps = {"contact": contact_after.astype(np.float64), "touch_id": touch_id.astype(np.float64),
-             "t_sample": t, "x": x, "y": y, "xf": np.where(up, x, xf), "yf": np.where(up, y, yf),
-             "vx": np.where(up, 0.0, vx), "vy": np.where(up, 0.0, vy), "force": force,
-             "t_down": t_down}
-    last = t.size - 1
-    if up[last]:
-        history = ()
-    else:
-        lo = max(int(np.searchsorted(ht, t[last] - cfg.velocity_window_s)), int(touch_first[last]))
-        history = tuple(zip(ht[lo:].tolist(), hx[lo:].tolist(), hy[lo:].tolist()))
-    end = FingerState(bool(contact_after[last]), int(touch_id[last]), float(t[last]),
-                      float(x[last]), float(y[last]), float(steps["xf"][last]),
-                      float(steps["yf"][last]), float(steps["vx"][last]), float(steps["vy"][last]),
-                      float(force[last]), float(t_down[last]), history)
-    return steps, keep, end
+    history = np.array(fs.history[:h], dtype=np.float64).reshape(h, 3)
+    keep, table, dropped, jumps, lo, window = _steps_kernel(
+        (fs.contact, fs.touch_id, fs.t_sample, fs.x, fs.y, fs.vx, fs.vy, fs.t_down), history,
+        np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(x, dtype=np.float64),
+        np.ascontiguousarray(y, dtype=np.float64), np.ascontiguousarray(force, dtype=np.float64),
+        np.ascontiguousarray(event, dtype=np.int8),
+        (cfg.velocity_window_s, cfg.max_gap_s, cfg.jump_speed_mm_s, cfg.jump_min_mm))
+    counters["out_of_order"] += dropped
+    counters["jumps"] += jumps
+    if table.shape[1] == 0:
+        return None, keep, fs
+    last = table[:, -1].tolist()
+    end = FingerState(last[0] > 0.5, int(last[1]), *last[2:],
+                      tuple(map(tuple, window[lo:].tolist())) if lo >= 0 else ())
+    return table, keep, end
+
+
+@njit(cache=True)
+def _steps_kernel(fs, history, t, x, y, force, event, cfg):
+    """:func:`_finger_steps` in one compiled pass.
+
+    fs : the finger's (contact, touch_id, t_sample, x, y, vx, vy, t_down) before the
+    samples; history : (h, 3) its touch's (t, x, y) within the velocity window (h = 0 if
+    not touching); t, x, y, force, event : its samples (s, mm, mm, N, event code);
+    cfg : (velocity_window_s, max_gap_s, jump_speed_mm_s, jump_min_mm).
+
+    Returns ``(keep, table, dropped, jumps, lo, window)``: the kept samples, the state
+    after each kept sample (len(_FIELDS), m), the counts of dropped (out of order)
+    samples and of jumps, and the rows ``window[lo:]`` ((t, x, y), history then kept
+    samples) to carry as the touch's history (lo = -1: the finger lifted).
+
+    Velocity: a least-squares line through each sample's window (the touch's samples of
+    the last ``velocity_window_s``, at least the previous sample of the touch if it is
+    recent enough), summed relative to the sample's own time so nothing large cancels.
+    The sums are those of a padded (rows, J) table summed along its rows by numpy
+    (:func:`_pairwise`; J the longest window among the history and the samples).
+    """
+    fs_contact, fs_touch, fs_t, fs_x, fs_y, fs_vx, fs_vy, fs_t_down = fs
+    window_s, max_gap, jump_speed, jump_min = cfg
+    m_all = t.size
+    keep = np.empty(m_all, dtype=np.bool_)
+    latest = fs_t
+    for i in range(m_all):  # older than the finger's last sample: dropped
+        keep[i] = t[i] >= latest
+        latest = max(latest, t[i])
+    idx = np.flatnonzero(keep)
+    m, h = idx.size, history.shape[0]
+    table = np.empty((11, m))
+    if m == 0:
+        return keep, table, m_all, 0, -1, np.empty((0, 3))
+    # (t, x, y) of the touch's earlier samples and of these
+    win = np.empty((h + m, 3))
+    win[:h] = history
+    new_touch = np.empty(m, dtype=np.bool_)
+    touch_first = np.empty(m, dtype=np.int64)
+    jumps = 0
+    t_prev, x_prev, y_prev, contact_prev = fs_t, fs_x, fs_y, fs_contact
+    touch, t_down, last_new = fs_touch, fs_t_down, -1
+    for k in range(m):
+        i = idx[k]
+        win[h + k, 0], win[h + k, 1], win[h + k, 2] = t[i], x[i], y[i]
+        dist = np.hypot(x[i] - x_prev, y[i] - y_prev)
+        jump = (contact_prev and event[i] == MOVE and dist > jump_min
+                and dist > jump_speed * (t[i] - t_prev))
+        if jump:
+            jumps += 1
+        new_touch[k] = event[i] == DOWN or not contact_prev or jump
+        if new_touch[k]:
+            touch += 1
+            t_down, last_new = t[i], k
+        touch_first[k] = h + last_new if last_new >= 0 else 0
+        contact_prev = event[i] != UP
+        t_prev, x_prev, y_prev = t[i], x[i], y[i]
+        table[0, k], table[1, k], table[2, k] = 1.0 if contact_prev else 0.0, touch, t[i]
+        table[3, k], table[4, k], table[9, k], table[10, k] = x[i], y[i], force[i], t_down
+    # each kept sample's window first[k] .. h + k
+    first = np.empty(m, dtype=np.int64)
+    longest = h - 1  # history rows' windows (their fits are not used) pad the table too
+    for k in range(m):
+        g = h + k
+        tk = win[g, 0]
+        f = max(np.searchsorted(win[:, 0], tk - window_s), touch_first[k])
+        # one distinct time in the window: the previous sample of the touch, if recent enough
+        if win[f, 0] == tk and g - 1 >= touch_first[k] and tk - win[max(g - 1, 0), 0] <= max_gap:
+            f = g - 1
+        first[k] = f
+        longest = max(longest, g - f)
+    width = max(longest, 0) + 1
+    pad = np.zeros((6, width))
+    source_v = np.empty(2)  # the velocity carried where no fit is possible
+    source_v[0], source_v[1] = fs_vx, fs_vy
+    for k in range(m):
+        g = h + k
+        span = g - first[k]
+        pad[:] = 0.0
+        for j in range(span + 1):
+            dt = win[g - j, 0] - win[g, 0]
+            pad[0, j], pad[1, j] = dt, dt * dt
+            pad[2, j], pad[3, j] = win[g - j, 1], win[g - j, 2]
+            pad[4, j], pad[5, j] = dt * win[g - j, 1], dt * win[g - j, 2]
+        n = float(span + 1)
+        st, stt = _pairwise(pad[0], 0, width), _pairwise(pad[1], 0, width)
+        sx, sy = _pairwise(pad[2], 0, width), _pairwise(pad[3], 0, width)
+        stx, sty = _pairwise(pad[4], 0, width), _pairwise(pad[5], 0, width)
+        denom = n * stt - st * st
+        ok = denom > 1e-18
+        vx = (n * stx - st * sx) / denom if ok else 0.0
+        vy = (n * sty - st * sy) / denom if ok else 0.0
+        xf = (sx - vx * st) / n if ok else win[g, 1]
+        yf = (sy - vy * st) / n if ok else win[g, 2]
+        # no fit: keep the touch's last velocity (0 from its first sample on)
+        if ok:
+            source_v[0], source_v[1] = vx, vy
+        elif new_touch[k]:
+            source_v[0], source_v[1] = 0.0, 0.0
+        up = table[0, k] == 0.0
+        table[5, k] = win[g, 1] if up else xf
+        table[6, k] = win[g, 2] if up else yf
+        table[7, k] = 0.0 if up else source_v[0]
+        table[8, k] = 0.0 if up else source_v[1]
+    lo = -1
+    if table[0, m - 1] != 0.0:
+        last_t = win[h + m - 1, 0]
+        lo = max(np.searchsorted(win[:, 0], last_t - window_s), touch_first[m - 1])
+    return keep, table, m_all - m, jumps, lo, win
+
+
+@njit(cache=True)
+def _pairwise(a, lo, n):
+    """Sum of ``a[lo:lo + n]`` in the order numpy's ``sum`` adds a contiguous row
+    (pairwise: 8 running sums for up to 128 values, halves above), so that the sums
+    are those of the table summation this kernel replaced, to the last bit. The halving
+    runs on an explicit stack: numba's cache does not keep recursive functions safely."""
+    if n <= 128:
+        return _block_sum(a, lo, n)
+    frames = np.empty((64, 3), dtype=np.int64)  # (lo, n, children summed); depth ~log2(n)
+    sums = np.empty(64)
+    top, count = 1, 0
+    frames[0, 0], frames[0, 1], frames[0, 2] = lo, n, 0
+    while top > 0:
+        top -= 1
+        f_lo, f_n, done = frames[top, 0], frames[top, 1], frames[top, 2]
+        if f_n <= 128:
+            sums[count] = _block_sum(a, f_lo, f_n)
+            count += 1
+        elif done:
+            sums[count - 2] += sums[count - 1]
+            count -= 1
+        else:
+            half = f_n // 2
+            half -= half % 8
+            frames[top, 2] = 1
+            frames[top + 1, 0], frames[top + 1, 1], frames[top + 1, 2] = f_lo, half, 0
+            frames[top + 2, 0], frames[top + 2, 1], frames[top + 2, 2] = f_lo + half, f_n - half, 0
+            top += 3
+    return sums[0]
+
+
+@njit(cache=True)
+def _block_sum(a, lo, n):
+    """numpy's pairwise sum of up to 128 contiguous values (see :func:`_pairwise`)."""
+    if n < 8:
+        res = -0.0
+        for i in range(lo, lo + n):
+            res += a[i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    while i < n - n % 8:
+        r0 += a[lo + i]
+        r1 += a[lo + i + 1]
+        r2 += a[lo + i + 2]
+        r3 += a[lo + i + 3]
+        r4 += a[lo + i + 4]
+        r5 += a[lo + i + 5]
+        r6 += a[lo + i + 6]
+        r7 += a[lo + i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
 
 
 _FIELDS = ("contact", "touch_id", "t_sample", "x", "y", "xf", "yf", "vx", "vy", "force", "t_down")
@@ -265,7 +345,7 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
     fingers = dict(state.fingers)
     counters = {"jumps": state.jumps, "out_of_order": state.out_of_order}
     # per finger: (apply indices, state columns after each of its samples)
-    updates: dict[int, tuple[np.ndarray, dict]] = {}
+    updates: dict[int, tuple[np.ndarray, np.ndarray]] = {}
     if samples is not None and len(samples):
         applied = np.clip(apply_index(samples.t_s, config), index0, index0 + n - 1)
         for fid in np.unique(samples.finger).tolist():
@@ -276,65 +356,64 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
             if steps is not None:
                 updates[fid] = (applied[sel][keep], steps)
     ids = tuple(sorted(fingers))
-    rows = []
+    tables, runs = [], []
     for fid in ids:
-        before = np.array(_GET_FIELDS(state.fingers.get(fid, FingerState())), dtype=np.float64)
-        at, steps = updates.get(fid, (np.zeros(0, np.int64), None))
-        table = before[:, None] if steps is None else np.column_stack(
-            (before, np.array([steps[name] for name in _FIELDS])))
+        before = _GET_FIELDS(state.fingers.get(fid, FingerState()))
+        at, steps = updates.get(fid, (None, None))
+        if steps is None:
+            tables.append(np.array(before, dtype=np.float64)[:, None])
+            runs.append(np.array([n], dtype=np.int64))
+            continue
+        tables.append(np.column_stack((before, steps)))
         # step j holds from its apply index to the next step's (a later step applied at
         # the same index overrides it: a run of length 0)
-        rows.append((table, np.diff(np.concatenate(([0], at - index0, [n])))))
-    block = FingerBlock.lazy(index0, t_out, ids, _BlockArrays(t_out, rows, config).make)
+        runs.append(np.diff(np.concatenate(([0], at - index0, [n]))))
+    table = np.concatenate(tables, axis=1) if tables else np.zeros((len(_FIELDS), 0))
+    arrays = _expand(table, np.concatenate(runs) if runs else np.zeros(0, np.int64),
+                     np.array([t.shape[1] for t in tables], dtype=np.int64), t_out,
+                     float(config.predict_horizon_s))
+    block = FingerBlock(index0, t_out, ids, **dict(zip(BLOCK_FIELDS, arrays)))
     return block, TrackerState(fingers=fingers, **counters)
 
 
-#: FingerBlock arrays read straight from a state column (the column's name)
-_HELD = {"x_held": "x", "y_held": "y", "force": "force", "touch_start": "t_down"}
+@njit(cache=True)
+def _expand(table, runs, steps, t_out, horizon):
+    """The arrays of a :class:`FingerBlock` (in ``BLOCK_FIELDS`` order, each (F, n)) from
+    each finger's piecewise-constant state columns.
 
-
-class _BlockArrays:
-    """The arrays of a :class:`FingerBlock`, made on demand from each finger's
-    piecewise-constant state columns (one ``np.repeat`` per column and finger)."""
-
-    def __init__(self, t_out: np.ndarray, rows, config: TrackerConfig):
-        self.t_out = t_out
-        self.rows = rows  # per finger: (state table (len(_FIELDS), k), run lengths (k,))
-        self.config = config
-        self.cache: dict[str, np.ndarray] = {}
-
-    def column(self, name: str) -> np.ndarray:
-        """State column ``name`` at every output sample, float64 (F, n)."""
-        if name not in self.cache:
-            k = _FIELDS.index(name)
-            out = np.empty((len(self.rows), self.t_out.size))
-            for row, (table, runs) in enumerate(self.rows):
-                out[row] = np.repeat(table[k], runs)
-            self.cache[name] = out
-        return self.cache[name]
-
-    def motion(self):
-        """(contact, moving, ahead): touching; touching and sampled within the prediction
-        horizon; time (s) since the sample, clipped to [0, horizon]."""
-        if "ahead" not in self.cache:
-            horizon = self.config.predict_horizon_s
-            contact = self.column("contact") > 0.5
-            since = self.t_out[None, :] - self.column("t_sample")
-            self.cache["contact_bool"] = contact
-            self.cache["moving"] = contact & (since <= horizon)
-            self.cache["ahead"] = np.clip(since, 0.0, horizon, out=since)
-        return self.cache["contact_bool"], self.cache["moving"], self.cache["ahead"]
-
-    def make(self, name: str) -> np.ndarray:
-        if name in _HELD:
-            return self.column(_HELD[name])
-        if name == "touch_id":
-            return self.column("touch_id").astype(np.int64)
-        if name == "contact":
-            return self.column("contact") > 0.5
-        contact, moving, ahead = self.motion()
-        if name in ("vx", "vy"):
-            return np.where(moving, self.column(name), 0.0)
-        axis = name[0]  # x_pred, y_pred
-        return np.where(contact, self.column(axis + "f") + self.column("v" + axis) * ahead,
-                        self.column(axis))
+    table : (len(_FIELDS), k) float64, the state after each step, the fingers' steps one
+    after the other; runs : (k,) number of output samples each step holds for;
+    steps : (F,) number of steps of each finger; t_out : (n,) output times (s);
+    horizon : ``predict_horizon_s``. Velocity and prediction: a finger sampled within
+    the horizon moves at its fitted velocity from its fitted position; past it, it rests
+    where it was predicted at the horizon (velocity 0).
+    """
+    f_n, n = steps.size, t_out.size
+    contact = np.empty((f_n, n), dtype=np.bool_)
+    touch_id = np.empty((f_n, n), dtype=np.int64)
+    x_held, y_held = np.empty((f_n, n)), np.empty((f_n, n))
+    x_pred, y_pred = np.empty((f_n, n)), np.empty((f_n, n))
+    vx, vy = np.empty((f_n, n)), np.empty((f_n, n))
+    force, touch_start = np.empty((f_n, n)), np.empty((f_n, n))
+    s = 0
+    for f in range(f_n):
+        start = 0
+        for _ in range(steps[f]):
+            touching = table[0, s] > 0.5
+            touch, t_sample, x, y = np.int64(table[1, s]), table[2, s], table[3, s], table[4, s]
+            xf, yf, vxs, vys = table[5, s], table[6, s], table[7, s], table[8, s]
+            for k in range(start, start + runs[s]):
+                since = t_out[k] - t_sample
+                ahead = min(max(since, 0.0), horizon)
+                moving = touching and since <= horizon
+                contact[f, k] = touching
+                touch_id[f, k] = touch
+                x_held[f, k], y_held[f, k] = x, y
+                x_pred[f, k] = xf + vxs * ahead if touching else x
+                y_pred[f, k] = yf + vys * ahead if touching else y
+                vx[f, k] = vxs if moving else 0.0
+                vy[f, k] = vys if moving else 0.0
+                force[f, k], touch_start[f, k] = table[9, s], table[10, s]
+            start += runs[s]
+            s += 1
+    return contact, touch_id, x_held, y_held, x_pred, y_pred, vx, vy, force, touch_start

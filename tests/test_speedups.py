@@ -241,7 +241,7 @@ def test_single_finger_actuation_equals_the_primary_finger_rule():
     assert_array_equal(act.commands_um[:, 0], np.where(primary == 0, wanted[0], 0.0))
 
 
-def test_lazy_finger_block_makes_each_array_once_and_is_read_only():
+def test_finger_block_holds_every_array_once_and_is_read_only():
     trace = sample(make_motion("human", speed_mm_s=60.0, duration_s=0.5, seed=3), 120.0,
                    noise_mm=0.05, seed=1)
     block, _ = track(0, 5000, trace, TrackerState(), TrackerConfig())
@@ -257,3 +257,18 @@ def test_lazy_finger_block_makes_each_array_once_and_is_read_only():
         block.speed
     with pytest.raises(TypeError, match="x_pred"):
         FingerBlock(0, block.t_s, block.ids, contact=block.contact)
+
+
+@SETTINGS
+@given(st.integers(1, 400), st.integers(1, 300), st.integers(0, 2**32 - 1))
+def test_tracker_window_sums_are_numpys_row_sums(width, used, seed):
+    """The tracker's compiled line fits add each window in the order numpy's ``sum``
+    adds a padded table row (pairwise), so velocities keep every bit of the table
+    summation: values of mixed sign and size, rows padded with zeros."""
+    from rendering.tracks import _pairwise
+    rng = np.random.default_rng(seed)
+    row = np.zeros(width)
+    k = min(used, width)
+    row[:k] = rng.standard_normal(k) * 10.0 ** rng.integers(-6, 6, k)
+    table = np.stack([row, row[::-1]])
+    assert [_pairwise(r, 0, width) for r in table] == table.sum(axis=1).tolist()
