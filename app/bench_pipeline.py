@@ -47,14 +47,22 @@ def run(quick: bool) -> list[Figure]:
 
 def _stage_figures(pipeline, duration: float, label: str) -> list[Figure]:
     """Compute per stage and per layer (us per second of output)."""
+    return [Figure("pipeline", f"  {name}, {label}", us, "us/s")
+            for name, us in stage_costs(pipeline, duration).items()]
+
+
+def stage_costs(pipeline, duration: float) -> dict[str, float]:
+    """Compute per stage and per layer of ``pipeline``'s runs so far (us per second of
+    ``duration`` s of output)."""
     stages = dict(pipeline.timer.seconds)
     stages.pop("layers")
     stages.update({f"layer {k}": v for k, v in pipeline.timer.layer_seconds.items()})
-    return [Figure("pipeline", f"  {name}, {label}", s / duration * 1e6, "us/s")
-            for name, s in stages.items()]
+    return {name: s / duration * 1e6 for name, s in stages.items()}
 
 
-def _modal_replay() -> list[Figure]:
+def modal_throughput() -> dict:
+    """Headless replay of two fingers with modal actuation (seed 000's beam, the bundled
+    two-finger trace, 10 kHz): ``replay_x_realtime`` and ``stages_us_per_s``."""
     from rendering.trace_file import read_trace
     from textures.library import resolve_trace
     trace = read_trace(resolve_trace(MODAL_TRACE))
@@ -62,6 +70,14 @@ def _modal_replay() -> list[Figure]:
                               t0_s=float(trace.t_s[0]))
     duration = trace.duration_s
     _, seconds = run_blocks(pipeline, trace, 200, duration)
-    label = "two fingers, modal beam (seed 000)"
-    return [Figure("pipeline", f"replay, {label}", duration / float(seconds.sum()), "x real time"),
-            *_stage_figures(pipeline, duration, "modal")]
+    return {"scene": MODAL_SCENE, "trace": MODAL_TRACE, "output_hz": RATE_HZ,
+            "replay_x_realtime": duration / float(seconds.sum()),
+            "stages_us_per_s": stage_costs(pipeline, duration)}
+
+
+def _modal_replay() -> list[Figure]:
+    modal = modal_throughput()
+    return [Figure("pipeline", "replay, two fingers, modal beam (seed 000)",
+                   modal["replay_x_realtime"], "x real time"),
+            *(Figure("pipeline", f"  {name}, modal", us, "us/s")
+              for name, us in modal["stages_us_per_s"].items())]

@@ -54,8 +54,13 @@ def run(args: argparse.Namespace) -> int:
                 "lut_max_error_um": lut.max_error_um(),
                 "cpu_count": os.cpu_count(), "wall_s": time.perf_counter() - wall}
     from app import bench_modal
+    from app import report_seeds
+    from app.bench_pipeline import modal_throughput
     modal = [asdict(f) for f in bench_modal.run(args.quick)]
-    doc = ro.write_json(rows, out / "report.json", args.quick, settings, modal)
+    seeds = report_seeds.scatter(report_seeds.QUICK_SEEDS if args.quick else report_seeds.SEEDS,
+                                 [s for s in args.scenes if s in report_seeds.GRATINGS])
+    doc = ro.write_json(rows, out / "report.json", args.quick, settings, modal,
+                        modal_throughput(), seeds)
     plots = ["error_vs_cost.png", "error_vs_period.png"]
     ro.plot_cost(rows, out / plots[0])
     ro.plot_period(rows, out / plots[1])

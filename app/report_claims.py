@@ -27,8 +27,8 @@ PHASE_UNFELT = {("grating-0.6mm", "time_error"): (
     "expected: on a 0.6 mm grating the time error measures a spatial phase no finger feels "
     "(seed 003 section 6) and no renderer gets right while the finger moves (50 Hz samples, "
     "0.05 mm noise and up to 20 ms of extrapolation put it 0.1-0.3 mm off, a third of a "
-    "period); plain SHO scores lower only by reading the resting finger during pauses, and "
-    "following every measurement (sho-predicted) would trade the clean spectrum for it")}
+    "period); which renderer scores lowest depends on the draw of the strokes, see the seed "
+    "scatter below")}
 
 
 @dataclass(frozen=True)

@@ -162,13 +162,14 @@ def _link_buffer_s() -> float:
 class Runner:
     """Runs cases, caching the traces and references they share."""
 
-    def __init__(self, live_s: float = 1.0):
+    def __init__(self, live_s: float = 1.0, motions: dict | None = None):
         self.live_s = live_s
+        self.motions = MOTIONS if motions is None else motions
         self._refs: dict = {}
         self._traces: dict = {}
 
     def _motion(self, name: str):
-        return make_motion(**MOTIONS[name])
+        return make_motion(**self.motions[name])
 
     def reference(self, scene_name: str, motion_name: str):
         key = (scene_name, motion_name)

@@ -7,7 +7,8 @@ from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose
 
 from app.trace_synth import make_motion, sample
-from rendering.hybrid import SLIP, VELOCITY_NOISE_MM_S, HybridRenderer, slew_offset, smooth_rate
+from rendering.hybrid import (LOCK_MM, RELOCK_MM_S, SLIP, VELOCITY_NOISE_MM_S, HybridRenderer,
+                              slew_offset, smooth_rate)
 from rendering.metrics import accuracy, reference
 from rendering.pipeline import build_pipeline
 from rendering.tracks import FingerBlock, apply_index
@@ -63,6 +64,24 @@ def test_a_still_finger_gets_no_correction():
     held = np.repeat([10.0, 10.2, 10.4, 10.1], 50)
     mu, _, _ = r.render(_block(held, np.zeros(200), index0=100), state)
     assert np.ptp(mu) == 0.0 and mu[0, 0] == layer.mu_at(10.0, 30.0)
+
+
+def test_a_lost_lock_under_a_crawling_finger_is_worked_off_at_the_relock_speed():
+    """The finger crawls at 1 mm/s (a screen still reporting a resting finger); the
+    measurements put it 1 mm on from where the phase is, across a 15 mm grating's line
+    (7.5 mm). Bounded by the finger's own speed the phase would reach the line after
+    0.26 s (0.5 mm at 1.9 mm/s); at SLIP x RELOCK_MM_S the error is worked off within
+    0.9 mm / 18 mm/s = 50 ms, and then the finger feels the band it is seen on."""
+    layer = grating_scene(15.0).layers[0]
+    r = HybridRenderer(layer, RATE)
+    _, _, state = r.render(_block(np.full(100, 7.0), np.full(100, 1.0)), r.initial_state())
+    n = 2000
+    mu, _, _ = r.render(_block(np.full(n, 8.0), np.full(n, 1.0), index0=100), state)
+    crossed = np.flatnonzero(mu[0] == layer.mu_at(8.0, 30.0))[0] / RATE
+    relock_s = (1.0 - LOCK_MM) / (SLIP * RELOCK_MM_S)  # worked off down to the lock
+    assert mu[0, 0] == layer.mu_at(7.0, 30.0)
+    assert relock_s * 0.45 < crossed < relock_s  # the line (0.5 mm on) is met half way
+    assert (mu[0, int(relock_s * RATE):] == layer.mu_at(8.0, 30.0)).all()
 
 
 def test_correction_never_exceeds_slip_times_the_finger_phase_rate():
