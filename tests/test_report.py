@@ -56,6 +56,13 @@ def test_rows_have_the_documented_fields(grating_rows):
     assert 20.0 <= row["throughput"]["latency_ms"] <= 25.0
 
 
+def test_seed_scatter_counts_hybrid_wins_per_draw():
+    from app.report_seeds import _wins
+    per = {"hybrid": {"m": [1.0, 2.0, None, 0.5]}, "sho-held": {"m": [1.0, 1.0, 3.0, None]},
+           "sht": {"m": [2.0, 3.0, 1.0, None]}}
+    assert _wins(per, "m") == 3  # ties win; an undefined hybrid value or no rival: a win
+
+
 def test_pareto_front():
     pts = [(1.0, 5.0), (2.0, 3.0), (3.0, 3.0), (4.0, 1.0), (5.0, 2.0)]
     assert pareto(pts) == [True, True, False, True, False]
@@ -70,7 +77,14 @@ def test_report_writes_its_files(tmp_path, capsys):
     assert {r["output_hz"] for r in doc["rows"]} == {2000.0, 5000.0, 10_000.0, 20_000.0}
     assert (out / "error_vs_cost.png").stat().st_size > 10_000
     assert (out / "error_vs_period.png").stat().st_size > 10_000
-    assert "## Physical limits" in (out / "report.md").read_text()
+    markdown = (out / "report.md").read_text()
+    assert "## Physical limits" in markdown and "## Seed scatter" in markdown
+    # two fingers with modal actuation: measured, with its stages
+    assert doc["modal_replay"]["replay_x_realtime"] > 0
+    assert doc["modal_replay"]["stages_us_per_s"]["actuation"] > 0
+    scatter = doc["seed_scatter"]
+    assert scatter["seeds"] == [1, 2, 3, 4] and set(scatter["values"]) == {"grating-15mm"}
+    assert all(len(v) == 4 for per in scatter["values"]["grating-15mm"].values() for v in per.values())
     assert "claims hold" in capsys.readouterr().out
     # issue 5: each modal inversion method's speed and error, measured
     modal = {f["label"]: f["value"] for f in doc["modal_inversion"]}
