@@ -163,6 +163,17 @@ def test_trail_only_joins_samples_in_contact():
     assert (tris[:, 5] > 0).all() and (tris[:, 5] <= 0.9).all()
 
 
+def test_trail_breaks_where_the_finger_lifts_and_lands_within_a_block():
+    """An up and a down handled in one block leave contact on throughout (the tracker
+    restarts the touch): the 60 mm in 1 ms between them is not drawn as a stroke."""
+    ov = OverlayState(trail_s=1.0)
+    t = np.arange(6) * 1e-3
+    x = np.array([90.0, 90.05, 90.1, 30.0, 30.05, 30.1])
+    ov.add(_record(t, x, np.full(6, 5.0), [True] * 6))
+    tris = ov.trail_triangles(fit_viewport(DISPLAY, 800, 480))
+    assert tris.shape == (4 * 6, 6)  # segments 0-1, 1-2, 3-4 and 4-5
+
+
 def test_segment_triangles_have_the_requested_width():
     tris = segment_triangles(np.array([[0.0, 0.0], [10.0, 0.0]]), np.ones((2, 4)), 3.0)
     assert_allclose(np.sort(np.unique(tris[:, 1])), [-1.5, 1.5])

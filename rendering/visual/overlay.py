@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rendering.keyclick import IDLE
+from rendering.tracks import TrackerConfig
 from rendering.visual.viewport import Viewport
 
 #: cursor/trace colour per finger (sRGB, 0-1): finger k uses FINGER_RGB[k % len]
@@ -26,6 +27,9 @@ FINGER_RGB = ((0.10, 0.60, 1.00), (1.00, 0.45, 0.10), (0.20, 0.80, 0.30),
 CURSOR_RADIUS_MM = 4.0  # about a fingertip contact patch
 TRAIL_WIDTH_PX = 2.0
 SCOPE_LINE_PX = 1.5
+#: a trail step faster than this (mm/s) is a lift and a touch elsewhere within one
+#: block (the tracker restarts the touch; rendering.tracks), not a stroke: not joined
+TRAIL_BREAK_MM_S = TrackerConfig.jump_speed_mm_s
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,7 +144,7 @@ class OverlayState:
 
     def trail_triangles(self, viewport: Viewport) -> np.ndarray:
         """Triangles (k, 6) of x_px, y_px, r, g, b, a for the touching part of each trail,
-        fading out over ``trail_s``."""
+        fading out over ``trail_s``; broken where the finger lifted or jumped."""
         parts = []
         for fid, h in self.fingers.items():
             keep = h.t >= self.now_s - self.trail_s
@@ -153,6 +157,7 @@ class OverlayState:
             rgba[:, :3] = FINGER_RGB[fid % len(FINGER_RGB)]
             rgba[:, 3] = 0.9 * (1.0 - age)
             joined = (contact[:-1] > 0) & (contact[1:] > 0)
+            joined &= np.hypot(np.diff(x), np.diff(y)) <= TRAIL_BREAK_MM_S * np.diff(t)
             parts.append(segment_triangles(np.column_stack((px, py)), rgba, TRAIL_WIDTH_PX, joined))
         return np.concatenate(parts) if parts else np.empty((0, 6))
 
