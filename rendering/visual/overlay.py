@@ -27,9 +27,10 @@ FINGER_RGB = ((0.10, 0.60, 1.00), (1.00, 0.45, 0.10), (0.20, 0.80, 0.30),
 CURSOR_RADIUS_MM = 4.0  # about a fingertip contact patch
 TRAIL_WIDTH_PX = 2.0
 SCOPE_LINE_PX = 1.5
-#: a trail step faster than this (mm/s) is a lift and a touch elsewhere within one
-#: block (the tracker restarts the touch; rendering.tracks), not a stroke: not joined
-TRAIL_BREAK_MM_S = TrackerConfig.jump_speed_mm_s
+#: a trail step longer than this (mm) and faster than this (mm/s) is a lift and a touch
+#: elsewhere within one block, not a stroke: not joined (the tracker's jump rule,
+#: rendering.tracks; shorter steps are the prediction catching up with a new sample)
+TRAIL_BREAK_MM, TRAIL_BREAK_MM_S = TrackerConfig.jump_min_mm, TrackerConfig.jump_speed_mm_s
 
 
 @dataclass(frozen=True, eq=False)
@@ -157,7 +158,8 @@ class OverlayState:
             rgba[:, :3] = FINGER_RGB[fid % len(FINGER_RGB)]
             rgba[:, 3] = 0.9 * (1.0 - age)
             joined = (contact[:-1] > 0) & (contact[1:] > 0)
-            joined &= np.hypot(np.diff(x), np.diff(y)) <= TRAIL_BREAK_MM_S * np.diff(t)
+            step = np.hypot(np.diff(x), np.diff(y))
+            joined &= (step <= TRAIL_BREAK_MM) | (step <= TRAIL_BREAK_MM_S * np.diff(t))
             parts.append(segment_triangles(np.column_stack((px, py)), rgba, TRAIL_WIDTH_PX, joined))
         return np.concatenate(parts) if parts else np.empty((0, 6))
 
