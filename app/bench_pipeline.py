@@ -40,15 +40,14 @@ def run(quick: bool) -> list[Figure]:
         _, per_block = run_blocks(live, trace, 1, duration)
         figures.append(Figure("pipeline", f"live 5 ms block p99, {label}",
                               float(np.percentile(per_block, 99) * 1e6), "us"))
-        figures += _stage_figures(replay, duration, label)
+        figures += _stage_figures(stage_costs(replay, duration), label)
     figures += _modal_replay()
     return figures
 
 
-def _stage_figures(pipeline, duration: float, label: str) -> list[Figure]:
-    """Compute per stage and per layer (us per second of output)."""
-    return [Figure("pipeline", f"  {name}, {label}", us, "us/s")
-            for name, us in stage_costs(pipeline, duration).items()]
+def _stage_figures(costs: dict[str, float], label: str) -> list[Figure]:
+    """One figure per stage of ``costs`` (``stage_costs``)."""
+    return [Figure("pipeline", f"  {name}, {label}", us, "us/s") for name, us in costs.items()]
 
 
 def stage_costs(pipeline, duration: float) -> dict[str, float]:
@@ -79,5 +78,4 @@ def _modal_replay() -> list[Figure]:
     modal = modal_throughput()
     return [Figure("pipeline", "replay, two fingers, modal beam (seed 000)",
                    modal["replay_x_realtime"], "x real time"),
-            *(Figure("pipeline", f"  {name}, modal", us, "us/s")
-              for name, us in modal["stages_us_per_s"].items())]
+            *_stage_figures(modal["stages_us_per_s"], "modal")]
