@@ -20,10 +20,11 @@ axes) and returns ``W_M = V g(s) U^H W_f`` for a gain ``g`` (``exact`` and
   there fades out instead of switching sign.
 - ``"bounded"``: least squares within the actuator limits, min ||Phi_f W_M - W_f||^2
   subject to |c_j| <= limit_j (seed 001: the amplifiers saturate at 300 V peak-to-peak
-  near singular positions), by projected accelerated gradient (FISTA with restart) in
-  command space, started from the exact solution, which is returned as is when it is
-  within limits. The closest achievable amplitudes, but like every residual-optimal
-  method the commands jump across a singular locus.
+  near singular positions): exactly, by active sets, for two actuators
+  (``device.bounded_two``); else by projected accelerated gradient (FISTA with restart)
+  in command space, started from the exact solution. The exact solution is returned as
+  is when it is within limits. The closest achievable amplitudes, but like every
+  residual-optimal method the commands jump across a singular locus.
 
 With limits, ``exact`` and ``regularised`` commands that exceed a limit are scaled down
 together (keeping their ratio and phases) until the largest reaches its limit. Every
@@ -40,6 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from device.beam import ModesError
+from device.bounded_two import bounded_two
 
 METHODS = ("exact", "regularised", "bounded")
 #: chosen by measurement (``frictex bench modal``, device/MODES.md)
@@ -159,7 +161,8 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
         if method == "bounded" and np.any(limited):
             a_inv = np.linalg.inv(a)
             m_cmd = phi[limited] @ a_inv
-            commands[limited] = _bounded_commands(m_cmd, wanted[limited], commands[limited], limits)
+            commands[limited] = (bounded_two(m_cmd, wanted[limited], limits) if a.shape[0] == 2
+                                 else _bounded_commands(m_cmd, wanted[limited], commands[limited], limits))
             modal[limited] = commands[limited] @ a_inv.T
     achieved = forward(phi, modal)
     return ModalSolution(modal, commands, achieved, magnitude(achieved - wanted),
