@@ -29,10 +29,6 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
-class CliError(ValueError):
-    """Bad command-line input (shown as one line, exit 2)."""
-
-
 def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.ArgumentParser]]:
     parser = argparse.ArgumentParser(
         prog="frictex",

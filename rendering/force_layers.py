@@ -111,7 +111,7 @@ class ForceStage:
         bad = contact & ~(np.isfinite(fn) & (fn >= 0))
         clamps.bad_force = int(bad.sum())
         fn = np.where(bad, self.device.normal_force_n, np.where(contact, fn, 0.0))
-        x, y = fingers.x_pred, fingers.y_pred
+        x = fingers.x_pred
         tau = np.where(contact, self.actuation.ratio_at(x), 0.0)
         gain = np.where(contact, self.actuation.gain_at(x), 1.0)
 

@@ -16,9 +16,8 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from pathlib import Path
 
-from rendering.evdev_decode import AbsInfo, Event, read_text
+from rendering.evdev_decode import AbsInfo, Event
 from rendering.trace_file import TraceError
 
 _EVENT = re.compile(r"^E:\s+(?P<t>\d+\.\d+)\s+(?P<type>[0-9a-fA-F]{1,4})\s+(?P<code>[0-9a-fA-F]{1,4})"
@@ -65,8 +64,3 @@ def parse_evemu(text: str, where: str = "<evemu>") -> EvemuRecording:
             raise TraceError(f"{where}:{number}: {line[:60]!r} is not an evemu line "
                              "(expected '# comment', 'N:', 'I:', 'P:', 'B:', 'A:', 'L:', 'S:' or 'E:')")
     return EvemuRecording(events, absinfo, name)
-
-
-def read_evemu(path: str | Path) -> EvemuRecording:
-    """Read an evemu recording file (see :func:`parse_evemu`)."""
-    return parse_evemu(read_text(path, "evemu recording"), str(path))

@@ -9,8 +9,6 @@ samples (see ``rendering.tracks``).
 
 from __future__ import annotations
 
-import numpy as np
-
 from rendering.tracks import FingerBlock
 
 
