@@ -81,11 +81,14 @@ def plot_cost(rows, path: Path) -> None:
     for ax, metric in zip(axes, METRICS):
         xy = [(points[n]["cost"], points[n][metric]) for n in names]
         front = pareto(xy)
+        labelled = 0
         for (x, y), n, f in zip(xy, names, front):
             ax.scatter(x, y, s=28, c=colours[n.split()[0]], marker="s" if "lut" in n else "o",
                        edgecolors="k" if f else "none", zorder=3)
-            if f:  # label the front only; the legend names the colours
-                ax.annotate(n, (x, y), fontsize=6, xytext=(3, 3), textcoords="offset points")
+            if f:  # label the front only (staggered: its points crowd); the legend names colours
+                ax.annotate(n, (x, y), fontsize=6, xytext=(3, 3 + 9 * (labelled % 3)),
+                            textcoords="offset points")
+                labelled += 1
         fx = sorted((p for p, f in zip(xy, front) if f))
         ax.step([p[0] for p in fx], [p[1] for p in fx], where="post", c="k", lw=0.8,
                 label="Pareto front")
