@@ -110,22 +110,24 @@ def _solve_one(m, w, limits, out):
     if abs(c0) <= limits[0] * _FEASIBLE and abs(c1) <= limits[1] * _FEASIBLE:
         out[0], out[1] = c0, c1
         return  # an unconstrained optimum within the limits
-    # one limit active (j), the other command (o) free
+    # one limit active (j), the other command (o) free; with G = M^H M and h = M^H w:
+    # z = (P m_j)^H (P w) = h_j - G_jo h_o / G_oo, |P m_j|^2 = G_jj - |G_jo|^2 / G_oo
     for j in range(2):
         o = 1 - j
-        mo = m[:, o]
-        norm_o = _dot(mo, mo).real
-        pj = m[:, j].copy()
-        pw = w.copy()
+        if j == 0:
+            g_jj, norm_o, g_jo, h_j, h_o = g00, g11, g01, h0, h1
+        else:
+            g_jj, norm_o, g_jo, h_j, h_o = g11, g00, g01.conjugate(), h1, h0
         if norm_o > 0.0:
-            pj -= mo * (_dot(mo, pj) / norm_o)
-            pw -= mo * (_dot(mo, pw) / norm_o)
-        z = _dot(pj, pw)
+            z = h_j - g_jo * h_o / norm_o
+            weight = g_jj - (g_jo.real * g_jo.real + g_jo.imag * g_jo.imag) / norm_o
+        else:
+            z, weight = h_j, g_jj
         cj = _on_circle(z, limits[j])
-        co = _dot(mo, w - m[:, j] * cj) / norm_o if norm_o > 0.0 else 0j
+        co = (h_o - g_jo.conjugate() * cj) / norm_o if norm_o > 0.0 else 0j
         if abs(co) <= limits[o] * _FEASIBLE:
             c = (cj, co) if j == 0 else (co, cj)
-            if abs(z) >= limits[j] * _dot(pj, pj).real:
+            if abs(z) >= limits[j] * weight:
                 # the limit holds c_j back (multiplier >= 0): the KKT point, optimal
                 out[0], out[1] = c[0], c[1]
                 return
@@ -134,41 +136,42 @@ def _solve_one(m, w, limits, out):
                 best = value
                 out[0], out[1] = c[0], c[1]
     # both limits active: search the second command's phase
-    theta = _best_phase(m, w, limits)
+    theta = _best_phase(m, w, limits, h0, g01)
     c1 = complex(math.cos(theta), math.sin(theta)) * limits[1]
-    c0 = _on_circle(_dot(m[:, 0], w - m[:, 1] * c1), limits[0])
+    c0 = _on_circle(h0 - g01 * c1, limits[0])
     value = _residual(m, w, c0, c1)
     if value < best:
         out[0], out[1] = c0, c1
 
 
 @njit(cache=True)
-def _torus(m, w, limits, theta):
-    """Residual with |c_2| = L_2 at phase theta and c_1 = L_1 at its best phase."""
+def _torus(m, w, limits, h0, g01, theta):
+    """Residual with |c_2| = L_2 at phase theta and c_1 = L_1 at its best phase, the
+    argument of m_1^H (w - m_2 c_2) = h_0 - G_01 c_2."""
     c1 = complex(math.cos(theta), math.sin(theta)) * limits[1]
-    c0 = _on_circle(_dot(m[:, 0], w - m[:, 1] * c1), limits[0])
+    c0 = _on_circle(h0 - g01 * c1, limits[0])
     return _residual(m, w, c0, c1)
 
 
 @njit(cache=True)
-def _best_phase(m, w, limits):
+def _best_phase(m, w, limits, h0, g01):
     step = 2.0 * math.pi / GRID
     best_i, best = 0, math.inf
     for i in range(GRID):
-        value = _torus(m, w, limits, i * step)
+        value = _torus(m, w, limits, h0, g01, i * step)
         if value < best:
             best_i, best = i, value
     lo, hi = (best_i - 1) * step, (best_i + 1) * step
     a = hi - _GOLDEN * (hi - lo)
     b = lo + _GOLDEN * (hi - lo)
-    fa, fb = _torus(m, w, limits, a), _torus(m, w, limits, b)
+    fa, fb = _torus(m, w, limits, h0, g01, a), _torus(m, w, limits, h0, g01, b)
     while hi - lo > THETA_TOL:
         if fa < fb:
             hi, b, fb = b, a, fa
             a = hi - _GOLDEN * (hi - lo)
-            fa = _torus(m, w, limits, a)
+            fa = _torus(m, w, limits, h0, g01, a)
         else:
             lo, a, fa = a, b, fb
             b = lo + _GOLDEN * (hi - lo)
-            fb = _torus(m, w, limits, b)
+            fb = _torus(m, w, limits, h0, g01, b)
     return 0.5 * (lo + hi)
