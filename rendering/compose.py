@@ -26,7 +26,7 @@ def compose(layer_outputs, blends, contact: np.ndarray, finger_masks=None) -> np
     blends : sequence of "multiply" | "replace", one per layer.
     contact : (F, n) bool, fingers touching.
     finger_masks : optional sequence, one per layer, of (F, n) bool: which fingers the
-        layer applies to at each sample (None = all); see ``rendering.finger_select``.
+        layer applies to at each sample (None = all); see ``rendering.tracking.finger_select``.
     """
     mu = np.ones(contact.shape)
     for k, ((layer_mu, covers), blend) in enumerate(zip(layer_outputs, blends)):

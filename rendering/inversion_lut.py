@@ -13,7 +13,7 @@ Error (linear interpolation, step h = r_max / (N - 1)): at most
 :meth:`LutFrictionModel.max_error_um` measures it against the exact inversion on a
 dense grid; ``frictex report`` reports the resulting friction error beside the exact one.
 
-Same guards and counts as ``rendering.friction`` (targets above 1, unreachable targets,
+Same guards and counts as ``device.friction`` (targets above 1, unreachable targets,
 forces beyond the model); a block with a non-finite target or a bad force takes the
 exact path, which handles and counts those.
 """
@@ -22,14 +22,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from rendering.friction import ClampCounts, SeedFrictionModel, asymptote
+from device.friction import ClampCounts, SeedFrictionModel, asymptote
 
 #: table size: 4096 points keep the interpolation error near 1e-5 of the range
 TABLE_SIZE = 4096
 
 
 class LutFrictionModel:
-    """Table-driven inversion of a :class:`~rendering.friction.SeedFrictionModel`."""
+    """Table-driven inversion of a :class:`~device.friction.SeedFrictionModel`."""
 
     def __init__(self, exact, size: int = TABLE_SIZE):
         if not isinstance(exact, SeedFrictionModel):
@@ -58,7 +58,7 @@ class LutFrictionModel:
 
     def invert(self, mu_target, normal_force_n) -> tuple[np.ndarray, ClampCounts]:
         """Amplitude (um, in [0, limit]) for ``mu_target`` at ``normal_force_n``; see
-        ``rendering.friction.SeedFrictionModel.invert`` for the guards and counts."""
+        ``device.friction.SeedFrictionModel.invert`` for the guards and counts."""
         mu, force = np.broadcast_arrays(np.asarray(mu_target, dtype=np.float64),
                                         np.asarray(normal_force_n, dtype=np.float64))
         f_lo, f_hi = force.min(initial=np.inf), force.max(initial=-np.inf)

@@ -1,7 +1,7 @@
 """Accuracy of a rendering: the mu'(t) a finger got against the mu'*(t) it should have got.
 
 The reference mu'* is the scene evaluated on the finger's *true* path (``truth`` of
-``app.trace_synth``, sampled at a high rate, no noise); the rendered mu' is what the
+``rendering.input.trace_synth``, sampled at a high rate, no noise); the rendered mu' is what the
 pipeline produced from the *sampled* trace, held between its output samples (the
 microcontroller plays each sample until the next one) and read on the reference's time
 grid. All three metrics use only the reference's contact time.
@@ -40,7 +40,7 @@ import numpy as np
 from scipy.signal import stft
 
 from rendering.compose import ideal_mu
-from rendering.trace_file import UP, Trace, TraceError
+from rendering.input.trace_file import UP, Trace, TraceError
 
 #: tactile band (Hz) of the spectral error: from the lowest vibration frequency skin
 #: resolves as texture to the ~1 kHz where the Pacinian channel's sensitivity ends

@@ -5,7 +5,7 @@ one renderer per layer of the kind that layer asks for, composition, the device'
 friction model and its actuation; nothing else is built. The same object runs live
 (one block per call, paced by the wall or the device) and in replay (many blocks per
 call, as fast as it goes): a sample takes effect at the block boundary after its
-timestamp either way (see ``rendering.tracks``), so both give the same output.
+timestamp either way (see ``rendering.tracking.tracks``), so both give the same output.
 
     pipeline = build_pipeline(scene, rate_hz=10_000.0, block_size=50)
     state = pipeline.initial_state()
@@ -19,15 +19,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from device.actuation import make_actuation
+from device.actuation.factory import make_actuation
 from rendering.compose import compose
-from rendering.finger_select import finger_masks
-from rendering.friction import ClampCounts, make_friction_model
-from rendering.sho import ShoRenderer
-from rendering.sht import ShtRenderer
-from rendering.trace_file import Trace
-from rendering.tracks import TrackerConfig, TrackerState, track
-from textures.model import FORCE_PROFILES, Scene
+from rendering.tracking.finger_select import finger_masks
+from device.friction import ClampCounts, make_friction_model
+from rendering.layers.sho import ShoRenderer
+from rendering.layers.sht import ShtRenderer
+from rendering.input.trace_file import Trace
+from rendering.tracking.tracks import TrackerConfig, TrackerState, track
+from device.profile import FORCE_PROFILES
+from textures.model import Scene
 
 #: renderer names accepted by ``render_override`` and reported by ``frictex report``
 RENDERERS = ("sho-held", "sho-predicted", "sht", "hybrid")
@@ -53,7 +54,7 @@ class BlockOutput:
     off_structure : finger samples outside the vibrating structure (held at its edge).
     forces : travelling-wave profiles only (else None): per finger the wanted and
         achieved force vectors (N) and key-click button state per sample
-        (``rendering.force_layers.ForceBlock``).
+        (``rendering.layers.force_layers.ForceBlock``).
     """
 
     index0: int
@@ -77,7 +78,7 @@ class BlockOutput:
 class PipelineState:
     tracker: TrackerState
     layers: tuple
-    forces: object | None = None  # rendering.force_layers.ForceState on force profiles
+    forces: object | None = None  # rendering.layers.force_layers.ForceState on force profiles
 
 
 @dataclass
@@ -96,7 +97,7 @@ def _layer_renderer(layer, mode: str, rate_hz: float):
     if mode == "sht":
         return ShtRenderer(layer, rate_hz)
     if mode == "hybrid":
-        from rendering.hybrid import HybridRenderer  # built only for scenes that use it
+        from rendering.layers.hybrid import HybridRenderer  # built only for scenes that use it
         return HybridRenderer(layer, rate_hz)
     raise ValueError(f"unknown renderer {mode!r}; expected one of {', '.join(RENDERERS)}")
 
@@ -146,7 +147,7 @@ class Pipeline:
         self.actuation = make_actuation(scene.device)
         self.forces = None
         if scene.device.profile in FORCE_PROFILES:
-            from rendering.force_layers import ForceStage  # travelling-wave profiles only
+            from rendering.layers.force_layers import ForceStage  # travelling-wave profiles only
             self.forces = ForceStage(scene, self.rate_hz, self.actuation)
         self.timer = StageTimer()
         self._warm_up()
@@ -159,7 +160,7 @@ class Pipeline:
         the process on their first call, ~0.2 s in a fresh process: that belongs to
         loading the scene, not to the first live block or a timed replay.
         """
-        from rendering.trace_file import DOWN, MOVE, make_trace
+        from rendering.input.trace_file import DOWN, MOVE, make_trace
         t0 = self.tracker_config.t0_s
         cx, cy = self.scene.display.width_mm / 2, self.scene.display.height_mm / 2
         touch = make_trace([t0, t0 + 1e-3], [0, 0], [cx, cx + 0.01], [cy, cy], event=[DOWN, MOVE])

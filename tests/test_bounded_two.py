@@ -1,12 +1,12 @@
-"""The exact two-actuator bounded solver (device.bounded_two) against the projected-gradient
+"""The exact two-actuator bounded solver (device.actuation.bounded_two) against the projected-gradient
 solver it replaces and an independent constrained optimiser, on random and hard problems."""
 
 import numpy as np
 from hypothesis import given, settings, strategies as st
 from scipy.optimize import minimize
 
-from device.bounded_two import bounded_two
-from device.modal import _bounded_commands
+from device.actuation.bounded_two import bounded_two
+from device.actuation.modal import _bounded_commands
 
 SETTINGS = settings(derandomize=True, max_examples=80, deadline=None)
 

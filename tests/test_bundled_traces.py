@@ -2,7 +2,7 @@
 
 import pytest
 
-from app.cli import main
+from app.commands.cli import main
 from textures.library import list_traces, resolve_trace
 
 SYNTHETIC = [e.name for e in list_traces()

@@ -2,7 +2,7 @@
 
 import pytest
 
-from app.cli import main
+from app.commands.cli import main
 from textures.library import LIBRARY_DIR
 
 HEAD = "format = 1\n[display]\nwidth_mm = 108.0\nheight_mm = 64.8\nwidth_px = 800\nheight_px = 480\n"

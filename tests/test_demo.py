@@ -49,7 +49,7 @@ def grating_file(tmp_path):
 
 def start_demo(display, cwd, scene_file, rec, *args):
     """``frictex demo`` in an 800x480 window on ``display``, recording into ``rec``."""
-    return subprocess.Popen([sys.executable, "-u", "-m", "app.cli", "demo", str(scene_file),
+    return subprocess.Popen([sys.executable, "-u", "-m", "app.commands.cli", "demo", str(scene_file),
                              "--record", str(rec), "--size", "800x480", *args],
                             env={**os.environ, "DISPLAY": display}, cwd=cwd,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

@@ -8,8 +8,8 @@ import time
 import numpy as np
 import pytest
 
-from app.cli import main
-from app.cmd_demo import input_option
+from app.commands.cli import main
+from app.commands.demo import input_option
 from test_demo import (finish, focus_window, grating_file, off_edges, read_csv,  # noqa: F401
                        start_demo, wait_event, xdo, xdotool)  # (xdotool is a fixture)
 from test_tuio import frame
@@ -156,10 +156,10 @@ def test_source_samples_reach_the_haptic_thread_in_mm_with_the_set_force(gl, tmp
     """What an evdev or TUIO source hands the loop (normalised positions, source clock)
     arrives as mm of the scene's display, on the haptic clock, at the force set with the
     wheel; a source that fails is closed, shown, and the mouse takes over."""
-    from app.demo_loop import DemoLoop
-    from app.haptic_thread import HapticThread
-    from rendering.evdev_decode import TouchSample
-    from rendering.trace_file import DOWN, MOVE
+    from app.live.demo_loop import DemoLoop
+    from app.live.haptic_thread import HapticThread
+    from rendering.input.evdev_decode import TouchSample
+    from rendering.input.trace_file import DOWN, MOVE
     from rendering.visual.context import OffscreenBackend
     from textures.loader import load_scene
     from textures.library import resolve_scene
@@ -198,9 +198,9 @@ def test_mouse_events_of_a_frame_make_one_sample_per_finger(gl, tmp_path):
     """A late frame handles a burst of pointer events at once: they must become one sample
     per finger, stamped when the frame handles them, not a finger flying through several
     positions within microseconds (which the tracker would take for a huge velocity)."""
-    from app.demo_loop import DemoLoop
-    from app.haptic_thread import HapticThread
-    from rendering.trace_file import DOWN, MOVE, UP
+    from app.live.demo_loop import DemoLoop
+    from app.live.haptic_thread import HapticThread
+    from rendering.input.trace_file import DOWN, MOVE, UP
     from rendering.visual.context import OffscreenBackend
     from textures.library import resolve_scene
     from textures.loader import load_scene

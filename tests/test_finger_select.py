@@ -8,7 +8,8 @@ from hypothesis.extra.numpy import arrays
 from numpy.testing import assert_array_equal
 
 from rendering.compose import compose
-from rendering.finger_select import finger_masks, touch_rank
+from device.actuation.base import touch_rank
+from rendering.tracking.finger_select import finger_masks
 
 INF = np.inf
 

@@ -8,8 +8,8 @@ import json
 import numpy as np
 import pytest
 
-from app.cli import main
-from rendering.trace_file import read_trace
+from app.commands.cli import main
+from rendering.input.trace_file import read_trace
 from textures.library import list_scenes, resolve_trace
 
 CASES = {

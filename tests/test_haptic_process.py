@@ -11,7 +11,7 @@ import time
 import numpy as np
 import pytest
 
-from app.haptic_process import HapticConfig, HapticProcess
+from app.live.haptic_process import HapticConfig, HapticProcess
 from textures.library import resolve_scene
 from textures.loader import load_scene
 
@@ -97,7 +97,7 @@ def test_link_failure_in_the_child_comes_back_as_oserror(tmp_path):
 
 PARENT = """
 import sys, time
-from app.haptic_process import HapticConfig, HapticProcess
+from app.live.haptic_process import HapticConfig, HapticProcess
 from textures.library import resolve_scene
 from textures.loader import load_scene
 path = resolve_scene("grating-5mm")

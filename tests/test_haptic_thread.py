@@ -5,7 +5,7 @@ import time
 import numpy as np
 import pytest
 
-from app.haptic_thread import HapticThread
+from app.live.haptic_thread import HapticThread
 from textures.library import resolve_scene
 from textures.loader import load_scene
 

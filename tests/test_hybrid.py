@@ -6,12 +6,12 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose
 
-from app.trace_synth import make_motion, sample
-from rendering.hybrid import (LOCK_MM, RELOCK_MM_S, SLIP, VELOCITY_NOISE_MM_S, HybridRenderer,
+from rendering.input.trace_synth import make_motion, sample
+from rendering.layers.hybrid import (LOCK_MM, RELOCK_MM_S, SLIP, VELOCITY_NOISE_MM_S, HybridRenderer,
                               slew_offset, smooth_rate)
 from rendering.metrics import accuracy, reference
 from rendering.pipeline import build_pipeline
-from rendering.tracks import FingerBlock, apply_index
+from rendering.tracking.tracks import FingerBlock, apply_index
 from scenes import grating_scene
 
 RATE = 10_000.0
@@ -37,7 +37,7 @@ def _run(scene, trace, mode, splits=()):
     state, outs = p.initial_state(), []
     for lo, hi in zip(bounds[:-1], bounds[1:]):
         a, b = np.searchsorted(applied, [lo * p.block_size, hi * p.block_size])
-        from app.report_matrix import _slice
+        from app.measure.report_matrix import _slice
         out, state = p.process(lo, _slice(trace, a, b), state, n_blocks=hi - lo)
         outs.append(out)
     return np.concatenate([o.mu_target for o in outs], axis=1)

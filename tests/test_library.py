@@ -7,7 +7,7 @@ import pytest
 from numpy.testing import assert_allclose
 from PIL import Image
 
-from app.cli import main
+from app.commands.cli import main
 from textures import model
 from textures.errors import TextureError
 from textures.library import (LIBRARY_DIR, TRACES_DIR, list_scenes, list_traces, resolve_scene,

@@ -8,10 +8,10 @@ import time
 import numpy as np
 import pytest
 
-from device import protocol as p
-from device.faults import Faults, Plug
-from device.link import CommandSink, LinkError, open_port, open_sink
-from device.simdevice import DeviceConfig, DeviceCore, open_pty, serve_pty
+from device.link import protocol as p
+from device.link.faults import Faults, Plug
+from device.link.host import CommandSink, LinkError, open_port, open_sink
+from device.link.simdevice import DeviceConfig, DeviceCore, open_pty, serve_pty
 
 STEP = p.AMPLITUDE_STEP_UM
 RATE = 10_000.0
@@ -79,8 +79,8 @@ def test_sim_subprocess_round_trip_matches_the_commands(tmp_path):
 
 
 def test_replay_streamed_to_the_sim_device_plays_commands_csv(tmp_path):
-    from app.replay import run_replay
-    from app.trace_synth import make_motion, sample
+    from app.engine.replay import run_replay
+    from rendering.input.trace_synth import make_motion, sample
     from scenes import grating_scene
 
     trace = sample(make_motion("human", speed_mm_s=80.0, duration_s=1.5, seed=3), 120.0,

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from app.trace_synth import make_motion, truth
+from rendering.input.trace_synth import make_motion, truth
 from rendering.metrics import (MetricError, accuracy, alignment_error, find_steps, hold,
                                reference, spectral_error, time_error)
 from scenes import disc_scene, grating_scene

@@ -7,16 +7,16 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from device.actuation import SingleModeActuation
-from device.beam import FreeFreeBeam
-from device.modal_actuation import ModalActuation, make_modal_actuation
-from device.plate2d import ACTUATORS, Plate2D
+from device.actuation.base import SingleModeActuation
+from device.structures.beam import FreeFreeBeam
+from device.actuation.modal_actuation import ModalActuation, make_modal_actuation
+from device.structures.plate2d import ACTUATORS, Plate2D
 from rendering.pipeline import build_pipeline
-from rendering.trace_file import make_trace
-from rendering.tracks import apply_index
+from rendering.input.trace_file import make_trace
+from rendering.tracking.tracks import apply_index
 from scenes import grating_scene
-from textures.model import (BeamStructure, DeviceProfile, Display, PlateStructure, RectRegion,
-                            Scene, Shape, VisualHints)
+from device.profile import BeamStructure, DeviceProfile, PlateStructure
+from textures.model import Display, RectRegion, Scene, Shape, VisualHints
 
 BEAM = FreeFreeBeam(350, 6, 6, 57, 2561)          # seed 000, Table I
 ORDERS = (16, 17)

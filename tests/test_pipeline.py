@@ -5,9 +5,9 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose
 
-from app.trace_synth import make_motion, sample
+from rendering.input.trace_synth import make_motion, sample
 from rendering.pipeline import build_pipeline
-from rendering.tracks import apply_index
+from rendering.tracking.tracks import apply_index
 from scenes import disc_scene, grating_scene
 
 
@@ -21,7 +21,7 @@ def _run(scene, trace, mode=None, rate=10_000.0, splits=None):
         if hi <= lo:
             continue
         a, b = np.searchsorted(applied, [lo * p.block_size, hi * p.block_size])
-        from app.replay import _slice_trace
+        from app.engine.replay import _slice_trace
         chunk = _slice_trace(trace, a, b) if b > a else None
         out, state = p.process(lo, chunk, state, n_blocks=hi - lo)
         outs.append(out)

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from app.cli import main
-from app.frames import FrameWriter
-from app.replay import run_replay
+from app.commands.cli import main
+from app.engine.frames import FrameWriter
+from app.engine.replay import run_replay
 from scenes import grating_scene
 
 

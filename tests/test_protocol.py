@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from device import protocol as p
-from device.faults import Faults, inject
+from device.link import protocol as p
+from device.link.faults import Faults, inject
 
 SETTINGS = settings(derandomize=True, max_examples=150, deadline=None)
 U16 = st.integers(0, 65535)
@@ -198,7 +198,7 @@ def test_encoding_refuses_what_does_not_fit():
 
 
 def test_the_worked_examples_in_protocol_md_are_what_encode_produces():
-    text = (Path(p.__file__).parent / "PROTOCOL.md").read_text(encoding="utf-8")
+    text = (Path(p.__file__).parents[1] / "PROTOCOL.md").read_text(encoding="utf-8")
     examples = re.findall(r"`encode\((.+?)\)`\s*->\s*`([0-9a-f ]+)`", text)
     assert len(examples) >= 3
     names = {m.__name__: m for m in p.MESSAGES} | {"np": np}

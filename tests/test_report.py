@@ -4,14 +4,14 @@ import json
 
 import pytest
 
-from app.cli import main
-from app.report_claims import claims
-from app.report_matrix import Runner, matrix
-from app.report_output import pareto
+from app.commands.cli import main
+from app.measure.report_claims import claims
+from app.measure.report_matrix import Runner, matrix
+from app.measure.report_output import pareto
 
 #: the one hybrid target that does not hold: time error on the 0.6 mm grating under the
 #: human-like motion, a phase no finger feels and no renderer gets right while the finger
-#: moves (the numbers are in rendering/hybrid.py's docstring); any other miss fails
+#: moves (the numbers are in rendering/layers/hybrid.py's docstring); any other miss fails
 KNOWN_SHORTFALLS = {
     ("hybrid-best", "grating-0.6mm", "human", "time_error"),
     ("hybrid-30", "grating-0.6mm", "human", "time_error"),
@@ -57,7 +57,7 @@ def test_rows_have_the_documented_fields(grating_rows):
 
 
 def test_seed_scatter_counts_hybrid_wins_per_draw():
-    from app.report_seeds import _wins
+    from app.measure.report_seeds import _wins
     per = {"hybrid": {"m": [1.0, 2.0, None, 0.5]}, "sho-held": {"m": [1.0, 1.0, 3.0, None]},
            "sht": {"m": [2.0, 3.0, 1.0, None]}}
     assert _wins(per, "m") == 3  # ties win; an undefined hybrid value or no rival: a win

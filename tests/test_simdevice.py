@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from device import protocol as p
-from device.faults import Faults, inject
-from device.protocol import DeviceState as S
-from device.simdevice import DeviceConfig, DeviceCore
+from device.link import protocol as p
+from device.link.faults import Faults, inject
+from device.link.protocol import DeviceState as S
+from device.link.simdevice import DeviceConfig, DeviceCore
 
 RATE = 10_000.0
 STEP = p.AMPLITUDE_STEP_UM

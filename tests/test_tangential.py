@@ -6,10 +6,10 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 
-from rendering.friction import forward_mu
-from rendering.tangential import (DrivingForceParams, TangentialState, invert_tangential,
+from device.friction import forward_mu
+from rendering.layers.tangential import (DrivingForceParams, TangentialState, invert_tangential,
                                   tangential_force)
-from textures.model import FrictionParams
+from device.profile import FrictionParams
 
 FRICTION = FrictionParams()
 PARAMS = DrivingForceParams()

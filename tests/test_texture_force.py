@@ -5,9 +5,10 @@ import re
 
 import pytest
 
-from app.cli import main
+from app.commands.cli import main
 from textures.loader import check_scene
-from textures.model import Directional, DrivingForceParams, Guidance, KeyClick
+from device.profile import DrivingForceParams
+from textures.model import Directional, Guidance, KeyClick
 
 HEAD = """\
 format = 1

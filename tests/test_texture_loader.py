@@ -7,6 +7,7 @@ import pytest
 from numpy.testing import assert_allclose
 from PIL import Image
 
+from device import profile as profiles
 from textures import model
 from textures.errors import TextureError
 from textures.loader import check_scene, load_scene
@@ -64,7 +65,7 @@ def test_defaults(tmp_path):
                                        'sigma_mm = 4\nmu = 0.7\n', name="my-bump.toml"))
     assert scene.name == "my-bump"
     assert scene.description == ""
-    assert scene.device == model.DeviceProfile()
+    assert scene.device == profiles.DeviceProfile()
     layer = scene.layers[0]
     assert (layer.name, layer.render, layer.blend, layer.region) == ("bump-1", "sho", "multiply", None)
     assert layer.visual == model.VisualHints()
@@ -184,7 +185,7 @@ mu_low = 0.6
 """
     device = load_scene(write(tmp_path, body)).device
     assert (device.amplitude_limit_um, device.normal_force_n) == (3.0, 0.4)
-    assert device.friction == model.FrictionParams(b_per_um=2.0, asymptote_per_n=1.0)
+    assert device.friction == profiles.FrictionParams(b_per_um=2.0, asymptote_per_n=1.0)
     assert device.calibration.forces_n == (0.3, 0.6)
     assert device.calibration.mu[1] == (1.0, 0.85, 0.7, 0.6, 0.58)
 

@@ -5,11 +5,11 @@ import re
 import numpy as np
 import pytest
 
-from app.cli import main
-from device.beam import FreeFreeBeam
-from device.modal_actuation import ModalActuation
+from app.commands.cli import main
+from device.structures.beam import FreeFreeBeam
+from device.actuation.modal_actuation import ModalActuation
 from rendering.pipeline import build_pipeline
-from textures import model
+from device import profile as profiles
 from textures.library import resolve_scene
 from textures.loader import check_scene, load_scene
 
@@ -53,10 +53,10 @@ def only_problem(problems, field, pattern):
 
 def test_bundled_two_finger_scenes_load_with_the_papers_structures():
     beam = load_scene(resolve_scene("two-finger-beam-seed000"))
-    assert beam.device.structure == model.BeamStructure()  # the file writes the defaults out
+    assert beam.device.structure == profiles.BeamStructure()  # the file writes the defaults out
     assert [layer.fingers for layer in beam.layers] == ["1", "2"]
     plate = load_scene(resolve_scene("two-finger-plate-seed001"))
-    assert plate.device.structure == model.PlateStructure()
+    assert plate.device.structure == profiles.PlateStructure()
     assert [layer.fingers for layer in plate.layers] == ["left-most", "right-most"]
     for scene in (beam, plate):
         assert isinstance(build_pipeline(scene).actuation, ModalActuation)
@@ -70,7 +70,7 @@ def test_validate_passes_on_the_new_scenes(capsys):
 def test_defaults_fill_an_empty_structure_table(tmp_path):
     scene, problems, warnings = check(tmp_path)
     assert problems == [] and warnings == []
-    assert scene.device.structure == model.BeamStructure()
+    assert scene.device.structure == profiles.BeamStructure()
     assert scene.device.structure.orders == (16, 17) and scene.device.structure.channel_limit_um == 0.75
 
 

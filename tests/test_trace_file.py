@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from app.cli import main
-from rendering.trace_file import DOWN, MOVE, UP, TraceError, format_trace, parse_trace, read_trace
+from app.commands.cli import main
+from rendering.input.trace_file import DOWN, MOVE, UP, TraceError, format_trace, parse_trace, read_trace
 
 
 def test_minimal_trace_defaults():
@@ -86,7 +86,7 @@ def test_cli_bad_trace_exits_2_with_one_line(tmp_path, capsys):
 
 
 def test_live_batches_keep_their_events():
-    from rendering.trace_file import make_trace
+    from rendering.input.trace_file import make_trace
     batch = make_trace([1.0, 1.01], [0, 0], [5.0, 6.0], [0.0, 0.0], event=[MOVE, MOVE],
                        normalise=False)
     assert batch.event.tolist() == [MOVE, MOVE]
@@ -94,7 +94,7 @@ def test_live_batches_keep_their_events():
 
 
 def test_chunked_reading_equals_whole_and_checks_across_chunks(tmp_path):
-    from rendering.trace_file import concat_traces, iter_trace
+    from rendering.input.trace_file import concat_traces, iter_trace
     path = tmp_path / "t.csv"
     path.write_text("t_s,finger,x_mm,y_mm,event\n" + "".join(
         f"{k * 0.01},{k % 2},{k},{k},{'up' if k in (5, 6) else 'move'}\n" for k in range(20)))

@@ -8,9 +8,9 @@ import time
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from rendering.trace_file import DOWN, MOVE, UP, TraceError
+from rendering.input.trace_file import DOWN, MOVE, UP, TraceError
 from test_evdev_decode import check_event_sequence
-from rendering.tuio import OscError, TuioDecoder, TuioListener, parse_message, parse_packet
+from rendering.input.tuio import OscError, TuioDecoder, TuioListener, parse_message, parse_packet
 
 
 # an OSC 1.0 encoder written from the specification, independent of the parser under test

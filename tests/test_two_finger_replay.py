@@ -2,17 +2,17 @@
 singular loci of det Phi, end to end through `frictex replay`."""
 
 import csv
-import importlib.util
 import json
 
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from app.cli import main
-from device.beam import FreeFreeBeam
-from rendering.trace_file import format_trace, read_trace
-from textures.library import LIBRARY_DIR, resolve_trace
+from app.commands.cli import main
+from device.structures.beam import FreeFreeBeam
+from rendering.input.trace_file import format_trace, read_trace
+from rendering.input.two_finger_trace import description, two_finger_trace
+from textures.library import resolve_trace
 
 SCENE, TRACE = "two-finger-beam-seed000", "two-fingers-crossing-50hz"
 BEAM = FreeFreeBeam(350, 6, 6, 57, 2561)
@@ -88,12 +88,8 @@ def test_replay_is_deterministic(replayed, tmp_path):
 
 
 def test_bundled_trace_is_what_its_script_makes():
-    spec = importlib.util.spec_from_file_location("make_two_finger_trace",
-                                                  LIBRARY_DIR / "make_two_finger_trace.py")
-    script = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(script)
     path = resolve_trace(TRACE)
-    assert path.read_text() == format_trace(script.two_finger_trace(), script.description())
+    assert path.read_text() == format_trace(two_finger_trace(), description())
     trace = read_trace(path)
     x = {f: trace.x_mm[trace.finger == f] for f in (0, 1)}
     assert x[0][0] < x[1][0] and x[0][-1] > x[1][-1]  # the fingers swap sides: they cross

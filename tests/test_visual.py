@@ -10,7 +10,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from rendering.pipeline import build_pipeline
-from rendering.trace_file import make_trace
+from rendering.input.trace_file import make_trace
 from rendering.visual.compositor import Compositor, FrameView
 from rendering.visual.context import OffscreenBackend
 from rendering.visual.overlay import FINGER_RGB, BlockRecord, OverlayState, segment_triangles

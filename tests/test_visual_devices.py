@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from rendering.keyclick import CLICKED, IDLE, ON
+from rendering.layers.keyclick import CLICKED, IDLE, ON
 from rendering.pipeline import build_pipeline
-from rendering.trace_file import make_trace
+from rendering.input.trace_file import make_trace
 from rendering.visual.compositor import Compositor, FrameView
 from rendering.visual.device_panels import FORCE_ARROW_MM, force_scale_n
 from rendering.visual.context import OffscreenBackend

@@ -14,8 +14,8 @@ from rendering.visual.viewport import fit_viewport
 from scenes import DISPLAY
 from textures.library import resolve_scene
 from textures.loader import load_scene
-from textures.model import (DeviceProfile, DiscRegion, Display, Grating, Scene, VisualHints,
-                            Waveform)
+from device.profile import DeviceProfile
+from textures.model import DiscRegion, Display, Grating, Scene, VisualHints, Waveform
 
 
 def dense_mean(layer, x, y, cell, n=300):

@@ -13,7 +13,7 @@ default shown. Layers are drawn and composed in file order (later on top).
     width_px, height_px               # required integers >= 1 (visual layer, one-to-one maps)
 
     [device]                          # optional table
-    profile = "plate-seed003"         # one of textures.model.DEVICE_PROFILES: plate-seed003
+    profile = "plate-seed003"         # one of device.profile.DEVICE_PROFILES: plate-seed003
                                       #   (one channel), beam-seed000, plate-seed001 (modal)
     amplitude_limit_um = 2.5          # > 0, zero-to-peak; the host never asks for more
                                       #   under a finger
@@ -21,7 +21,7 @@ default shown. Layers are drawn and composed in file order (later on top).
     [device.friction]                 # optional: seed 003 eq 2 constants
     b_per_um = 1.67                   # > 0
     asymptote_per_n = 1.13            # > 0 (asymptote A = asymptote_per_n * F_n)
-    asymptote_cap = 0.95              # in (0, 1); see rendering.friction
+    asymptote_cap = 0.95              # in (0, 1); see device.friction
     [device.calibration]              # optional measured table, replaces the model
     amplitudes_um = [0, ...]          # >= 2 values, starting at 0, strictly increasing
     forces_n = [...]                  # >= 1 value, >= 0, strictly increasing
@@ -39,7 +39,7 @@ default shown. Layers are drawn and composed in file order (later on top).
     x0_mm = 0                         # display x of the beam's end; the display's x span
                                       #   must lie on the beam
     channel_limit_um = 0.75           # > 0, per transducer, zero-to-peak
-    modes_file = "modes.csv"          # optional measured shapes (device.measured_modes,
+    modes_file = "modes.csv"          # optional measured shapes (device.structures.measured_modes,
                                       #   path relative to this file): one column per mode,
                                       #   replacing orders (do not give both)
       # profile = "plate-seed001" (seed 001, section 4; channels V_AC, V_BD):
@@ -50,7 +50,7 @@ default shown. Layers are drawn and composed in file order (later on top).
                                       #   display must lie on the plate
     channel_limit_um                  # > 0; default: amplitude_limit_um
       # both:
-    method = "regularised"            # exact | regularised | bounded (device.modal)
+    method = "regularised"            # exact | regularised | bounded (device.actuation.modal)
     rcond = 0.1                       # in (0, 1), the regularisation threshold
     [device.driving]                  # travelling-wave profiles only (travelling-beam-seed002,
                                       #   ring-seed004): the driving-force model
@@ -107,7 +107,7 @@ Layer keys by type (mu' is relative friction in (0, 1]; positions in mm, angles 
   display's pixel size); one-to-one takes neither (one image pixel per display pixel).
 
 Force layers (``textures.model.FORCE_LAYERS``; only on the travelling-wave profiles, whose
-waves run along display x; they take no ``blend``: see ``rendering.force_layers``):
+waves run along display x; they take no ``blend``: see ``rendering.layers.force_layers``):
 
 - ``directional``: angle_deg = 0 (the forward direction: 0 = +x, 180 = -x), and either
   mu_forward and mu_backward (mu' in (0, 1] for each direction of travel) or
@@ -124,7 +124,7 @@ waves run along display x; they take no ``blend``: see ``rendering.force_layers`
 Objects, points, regions and sprites must lie on the display. Every problem in a file is
 reported (not only the first) as ``file:line: field: message``; ``frictex validate`` also
 warns, without failing, where a layer asks for a mu' the device cannot reach at its
-nominal normal force (``rendering.friction.mu_floor``), and where a layer is for one
+nominal normal force (``device.friction.mu_floor``), and where a layer is for one
 finger on a one-channel device (which serves only the finger touching longest).
 """
 
@@ -138,8 +138,9 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable
 
-from device.beam import THEORIES, ModesError
-from device.modal import METHODS
+from device.structures.beam import THEORIES, ModesError
+from device.actuation.modal import METHODS
+from device import profile as profiles
 from textures import model
 from textures.errors import KeyPath, Locator, Problem, TextureError, field_name
 from textures.raster_io import read_grey
@@ -155,8 +156,8 @@ RENDER_CHOICES = ("auto",) + model.RENDER_MODES
 REQUIRED = object()  # spec default: the key must be given
 _BAD = object()      # parsed value of a key that had a problem (already reported)
 
-_DEVICE = model.DeviceProfile()
-_FRICTION = model.FrictionParams()
+_DEVICE = profiles.DeviceProfile()
+_FRICTION = profiles.FrictionParams()
 _VISUAL = model.VisualHints()
 
 
@@ -202,7 +203,7 @@ class Colour:
 
 @dataclass(frozen=True)
 class Selector:
-    """A layer's ``fingers`` selector (see ``rendering.finger_select``)."""
+    """A layer's ``fingers`` selector (see ``rendering.tracking.finger_select``)."""
 
     default: Any = REQUIRED
 
@@ -237,7 +238,7 @@ DUTY = Num("fraction of the period", default=0.5, gt=0.0, lt=1.0)
 TOP = {"format": Int("format version"), "name": Text(None), "description": Text("")}
 DISPLAY = {"width_mm": SIZE, "height_mm": SIZE,
            "width_px": Int("px", ge=1), "height_px": Int("px", ge=1)}
-DEVICE = {"profile": Choice(tuple(model.DEVICE_PROFILES), _DEVICE.profile),
+DEVICE = {"profile": Choice(tuple(profiles.DEVICE_PROFILES), _DEVICE.profile),
           "amplitude_limit_um": Num("um zero-to-peak", _DEVICE.amplitude_limit_um, gt=0.0),
           "normal_force_n": Num("N", _DEVICE.normal_force_n, gt=0.0)}
 FRICTION = {"b_per_um": Num("1/um", _FRICTION.b_per_um, gt=0.0),
@@ -246,8 +247,8 @@ FRICTION = {"b_per_um": Num("1/um", _FRICTION.b_per_um, gt=0.0),
 CALIBRATION = {"amplitudes_um": NumList(Num("um zero-to-peak", ge=0.0), min_len=2),
                "forces_n": NumList(Num("N", ge=0.0)),
                "mu": Rows(MU)}
-_BEAM = model.BeamStructure()
-_PLATE = model.PlateStructure()
+_BEAM = profiles.BeamStructure()
+_PLATE = profiles.PlateStructure()
 MATERIAL = {"youngs_gpa": Num("GPa", _BEAM.youngs_gpa, gt=0.0),
             "density_kg_m3": Num("kg/m^3", _BEAM.density_kg_m3, gt=0.0),
             "poisson": Num("Poisson's ratio", _BEAM.poisson, gt=-1.0, lt=0.5)}
@@ -307,7 +308,7 @@ LAYER_KEYS: dict[str, dict[str, Spec]] = {
                  "release_n": Num("N", 0.4, ge=0.0), "dwell_s": Num("s", 0.01, ge=0.0),
                  "force_n": Num("N", 0.1, gt=0.0), "first_push": Choice(("+x", "-x"), "+x")},
 }
-_DRIVING = model.DrivingForceParams()
+_DRIVING = profiles.DrivingForceParams()
 DRIVING = {"mu0": Num("friction coefficient", _DRIVING.mu0, gt=0.0),
            "slope_per_um": Num("N per um per N", _DRIVING.slope_per_um, gt=0.0),
            "threshold_um": Num("um zero-to-peak", _DRIVING.threshold_um, ge=0.0),
@@ -502,7 +503,7 @@ def _display(r: _Reader, doc: dict) -> model.Display | None:
     return model.Display(**v)
 
 
-def _device(r: _Reader, doc: dict, display, base_dir: Path) -> model.DeviceProfile | None:
+def _device(r: _Reader, doc: dict, display, base_dir: Path) -> profiles.DeviceProfile | None:
     raw = doc.get("device", {})
     v = r.table(raw, ("device",), DEVICE, tables=("friction", "calibration", "structure", "driving"))
     if v is None:
@@ -517,12 +518,12 @@ def _device(r: _Reader, doc: dict, display, base_dir: Path) -> model.DeviceProfi
     elif "structure" in raw and v["profile"] is not _BAD:
         r.report(("device", "structure"), f"not used with profile {_show(v['profile'])}; only "
                                           f"the modal profiles have one: "
-                                          f"{', '.join(model.MODAL_PROFILES)}")
+                                          f"{', '.join(profiles.MODAL_PROFILES)}")
         structure = _BAD
     if (friction is None or _BAD in friction.values() or _BAD in v.values()
             or _BAD in (calibration, structure)):
         return None
-    device = model.DeviceProfile(friction=model.FrictionParams(**friction), calibration=calibration,
+    device = profiles.DeviceProfile(friction=profiles.FrictionParams(**friction), calibration=calibration,
                                  structure=structure, **v)
     if structure is not None and not _actuation_builds(r, device):
         return None
@@ -540,7 +541,7 @@ def _structure(r: _Reader, profile: str, raw, display, base_dir: Path):
                                       v["x0_mm"], v["width_mm"])
         ok &= _structure_holds_display(r, path, display, ("y0_mm", "height_mm", "height_mm"),
                                        v["y0_mm"], v["height_mm"])
-        return model.PlateStructure(**v) if ok else _BAD
+        return profiles.PlateStructure(**v) if ok else _BAD
     ok = _structure_holds_display(r, path, display, ("x0_mm", "length_mm", "width_mm"),
                                   v["x0_mm"], v["length_mm"])
     orders, actuators = v["orders"], v["actuators_mm"]
@@ -565,7 +566,7 @@ def _structure(r: _Reader, profile: str, raw, display, base_dir: Path):
         return _BAD
     modes_file = v.pop("modes_file")
     modes_path = (base_dir / modes_file).resolve() if modes_file is not None else None
-    return model.BeamStructure(**{**v, "orders": tuple(int(o) for o in orders)},
+    return profiles.BeamStructure(**{**v, "orders": tuple(int(o) for o in orders)},
                                modes_path=modes_path, modes=modes)
 
 
@@ -584,7 +585,7 @@ def _structure_holds_display(r: _Reader, path: KeyPath, display, keys, start: fl
 
 
 def _modes_table(r: _Reader, path: KeyPath, name: str, raw: dict, base_dir: Path):
-    from device.measured_modes import MeasuredModes
+    from device.structures.measured_modes import MeasuredModes
 
     if "orders" in raw:
         r.report(path + ("orders",), "not used with modes_file (the table's columns are the "
@@ -598,9 +599,9 @@ def _modes_table(r: _Reader, path: KeyPath, name: str, raw: dict, base_dir: Path
         return None
 
 
-def _actuation_builds(r: _Reader, device: model.DeviceProfile) -> bool:
+def _actuation_builds(r: _Reader, device: profiles.DeviceProfile) -> bool:
     """Build the modal actuation once (modes solved, actuator matrix checked)."""
-    from device.modal_actuation import make_modal_actuation
+    from device.actuation.modal_actuation import make_modal_actuation
 
     try:
         make_modal_actuation(device)
@@ -646,10 +647,10 @@ def _calibration(r: _Reader, raw, path: KeyPath):
             ok = False
     if not ok:
         return _BAD
-    return model.Calibration(amps, forces, mu)
+    return profiles.Calibration(amps, forces, mu)
 
 
-def _device_warnings(r: _Reader, device: model.DeviceProfile) -> None:
+def _device_warnings(r: _Reader, device: profiles.DeviceProfile) -> None:
     a = device.friction.asymptote_per_n * device.normal_force_n
     if device.calibration is None and a >= device.friction.asymptote_cap:
         r.report(("device", "normal_force_n"),
@@ -860,7 +861,7 @@ def _build_raster(r, path, v, given, ctx):
 
 def _force_common(r, path, given) -> bool:
     return _forbid(r, path, given, ["blend"], "on a force layer (mu' targets multiply, force "
-                                              "targets replace: rendering.force_layers)")
+                                              "targets replace: rendering.layers.force_layers)")
 
 
 def _build_directional(r, path, v, given, ctx):
@@ -924,22 +925,22 @@ BUILDERS: dict[str, Callable] = {
 def _force_device(r: _Reader, doc: dict, device, display, built):
     """``[device.driving]`` and the force layers: only on a travelling-wave profile whose
     surface holds the display. Returns the device with its driving model, or None."""
-    from device.push_actuation import SURFACE_LENGTH_MM
+    from device.actuation.push_actuation import SURFACE_LENGTH_MM
 
     raw = doc.get("device", {})
-    force_profile = device is not None and device.profile in model.FORCE_PROFILES
+    force_profile = device is not None and device.profile in profiles.FORCE_PROFILES
     if device is not None and not force_profile:
         if isinstance(raw, dict) and "driving" in raw:
             r.report(("device", "driving"), f"not used with profile {_show(device.profile)}, which "
                                             f"cannot push; travelling-wave profiles: "
-                                            f"{', '.join(model.FORCE_PROFILES)}")
+                                            f"{', '.join(profiles.FORCE_PROFILES)}")
         for index, (layer, _) in enumerate(built or ()):
             if isinstance(layer, model.FORCE_LAYERS):
                 kind = type(layer).__name__.lower()
                 r.report(("layer", index, "type"),
                          f'"{kind}" needs a travelling wave to push the finger; profile '
                          f"{_show(device.profile)} only modulates friction (use one of "
-                         f"{', '.join(model.FORCE_PROFILES)})")
+                         f"{', '.join(profiles.FORCE_PROFILES)})")
         return device
     if not force_profile:
         return device
@@ -951,7 +952,7 @@ def _force_device(r: _Reader, doc: dict, device, display, built):
     driving = r.table(raw.get("driving", {}), ("device", "driving"), DRIVING)
     if driving is None or _BAD in driving.values():
         return None
-    return replace(device, driving=model.DrivingForceParams(**driving))
+    return replace(device, driving=profiles.DrivingForceParams(**driving))
 
 
 def _layer(r: _Reader, raw, index: int, display, base_dir: Path, names: dict):
@@ -1010,7 +1011,7 @@ def _layers(r: _Reader, doc: dict, display, base_dir: Path):
     return None if None in built else built
 
 
-def _selector_warnings(r: _Reader, device: model.DeviceProfile, built) -> None:
+def _selector_warnings(r: _Reader, device: profiles.DeviceProfile, built) -> None:
     if device.profile != "plate-seed003":
         return
     for index, (layer, _) in enumerate(built):
@@ -1019,11 +1020,11 @@ def _selector_warnings(r: _Reader, device: model.DeviceProfile, built) -> None:
                      f"{_show(layer.fingers)} on profile {_show(device.profile)}: one channel "
                      f"serves only the finger touching longest, so other fingers feel its "
                      f"amplitude, not this layer (a modal profile gives each finger its own: "
-                     f"{', '.join(model.MODAL_PROFILES)})", warning=True)
+                     f"{', '.join(profiles.MODAL_PROFILES)})", warning=True)
 
 
-def _reach_warnings(r: _Reader, device: model.DeviceProfile, built) -> None:
-    from rendering.friction import mu_floor
+def _reach_warnings(r: _Reader, device: profiles.DeviceProfile, built) -> None:
+    from device.friction import mu_floor
 
     force = device.normal_force_n
     floor = mu_floor(device, force)

@@ -21,31 +21,14 @@ synthesis (seed 003 section 4.4.2): ``axis`` (unit vector across the lines),
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from device.modal import DEFAULT_METHOD, DEFAULT_RCOND
+from device.profile import DeviceProfile
 
 RENDER_MODES = ("sho", "sht", "hybrid")
-
-#: The actuation profiles a scene's ``[device] profile`` may name, with one line each.
-#: This is the one place to add a profile.
-DEVICE_PROFILES: dict[str, str] = {
-    "plate-seed003": "single-mode glass plate of seed 003, one channel",
-    "beam-seed000": "free-free aluminium beam of seed 000, modes 16 and 17, two actuators",
-    "plate-seed001": "2D plate of seed 001, X and Y modes, channels V_AC and V_BD",
-    "travelling-beam-seed002": "600 mm aluminium beam of seed 002, travelling wave from modes "
-                               "28 and 29, two actuators",
-    "ring-seed004": "Ultraloop ring of seed 004, degenerate 24th-order pair, phase-shift control",
-}
-#: The travelling-wave profiles (seed 002, seed 004): the only ones that can push a finger,
-#: so the only ones that accept force layers (:data:`FORCE_LAYERS`) and ``[device.driving]``.
-FORCE_PROFILES = ("travelling-beam-seed002", "ring-seed004")
-#: The profiles driven by modal control (seed 000 eq 10, seed 001 eqs 4-5); each has a
-#: ``[device.structure]`` table (:class:`BeamStructure` or :class:`PlateStructure`).
-MODAL_PROFILES = ("beam-seed000", "plate-seed001")
 
 #: ``fingers`` selectors of a layer besides "any" and finger numbers "1", "2", ...
 #: (1-based, in order of touch-down among the fingers touching at that sample).
@@ -70,138 +53,6 @@ class Display:
     def px_per_mm(self) -> tuple[float, float]:
         """Pixel density (px/mm) along x and y."""
         return self.width_px / self.width_mm, self.height_px / self.height_mm
-
-
-@dataclass(frozen=True)
-class FrictionParams:
-    """Constants of the seed 003 friction model (eq 2).
-
-    ``b_per_um`` is the decay constant b (1/um); the asymptote is
-    ``asymptote_per_n * F_n`` (seed 003: 1.13 F_n). The model stops meaning anything
-    once that asymptote nears 1 (F_n near 0.885 N): ``asymptote_cap`` is the highest
-    asymptote frictex will use (see ``rendering.friction``).
-    """
-
-    b_per_um: float = 1.67
-    asymptote_per_n: float = 1.13
-    asymptote_cap: float = 0.95
-
-
-@dataclass(frozen=True)
-class DrivingForceParams:
-    """Constants of the tangential model (defaults: seed 004, Fig. 3c; seed 002 finger).
-
-    mu0 : friction coefficient of the finger on the plate at rest (F_f = mu0 F_n mu').
-    slope_per_um : k_p, driving force per um of travelling amplitude per N of normal
-        force (seed 004: 0.13 N/um at 1 N), 1/um.
-    threshold_um : w_th, travelling amplitude below which there is no driving force
-        (seed 004: "near 1 um").
-    v_hold_mm_s : speed below which the finger's direction of motion is held, and below
-        which a finger counts as still (only the driving force acts on it).
-    """
-
-    mu0: float = 0.5
-    slope_per_um: float = 0.13
-    threshold_um: float = 1.0
-    v_hold_mm_s: float = 2.0
-
-
-@dataclass(frozen=True)
-class Calibration:
-    """A measured friction curve: mu' against amplitude at one or more normal forces.
-
-    ``mu[i][j]`` is mu' at ``forces_n[i]`` and ``amplitudes_um[j]``; each row starts
-    at amplitude 0 (mu' = 1) and decreases monotonically.
-    """
-
-    amplitudes_um: tuple[float, ...]
-    forces_n: tuple[float, ...]
-    mu: tuple[tuple[float, ...], ...]
-
-
-@dataclass(frozen=True)
-class BeamStructure:
-    """Seed 000's free-free beam for ``profile = "beam-seed000"``; defaults from its Table I.
-
-    Material and size as ``device.beam.FreeFreeBeam`` takes them; ``orders`` the
-    flexural modes driven (seed 000: 16 and 17); ``actuators_mm`` the transducer
-    positions along the beam, one per mode (seed 000 section III.C: 60 mm from each
-    end); ``x0_mm`` the display x of the beam's end x = 0 (the beam runs along the
-    display's x axis; display y is across the beam and does not enter its modes).
-    ``channel_limit_um`` the largest amplitude each transducer is asked for (um
-    zero-to-peak): seed 000 reached eq 14's 0.41 um at 160 V peak-to-peak and seed 001's
-    amplifiers stop at 300 V peak-to-peak, about 0.75 um. ``method`` and ``rcond`` are
-    ``device.modal.solve``'s. ``modes``: a measured mode table
-    (``device.measured_modes.MeasuredModes``, one column per mode) that replaces the
-    modelled shapes, read from ``modes_path``.
-    """
-
-    length_mm: float = 350.0
-    width_mm: float = 6.0
-    thickness_mm: float = 6.0
-    youngs_gpa: float = 57.0
-    density_kg_m3: float = 2561.0
-    poisson: float = 0.33
-    theory: str = "euler-bernoulli"
-    orders: tuple[int, ...] = (16, 17)
-    actuators_mm: tuple[float, ...] = (60.0, 290.0)
-    x0_mm: float = 0.0
-    channel_limit_um: float = 0.75
-    method: str = DEFAULT_METHOD
-    rcond: float = DEFAULT_RCOND
-    modes_path: Path | None = None
-    modes: object | None = None
-
-
-@dataclass(frozen=True)
-class PlateStructure:
-    """Seed 001's 2D plate for ``profile = "plate-seed001"``: modes X and Y of order k.
-
-    Size and order from seed 001 section 4 (140 x 140 x 4 mm, k = 8). Seed 001 does not
-    name the material: the default is seed 000's aluminium (Table I, same laboratory),
-    whose strip estimate (``device.plate2d``) gives 33.4 kHz against the 33.0 kHz seed 001
-    measured. (x0_mm, y0_mm) is the display position of the plate's corner (0, 0).
-    ``channel_limit_um``: largest |V_AC|, |V_BD| (um of modal amplitude, unit gain);
-    None means the device's ``amplitude_limit_um`` (seed 001 gives no figure for the plate).
-    """
-
-    width_mm: float = 140.0
-    height_mm: float = 140.0
-    thickness_mm: float = 4.0
-    youngs_gpa: float = 57.0
-    density_kg_m3: float = 2561.0
-    poisson: float = 0.33
-    order: int = 8
-    x0_mm: float = 0.0
-    y0_mm: float = 0.0
-    channel_limit_um: float | None = None
-    method: str = DEFAULT_METHOD
-    rcond: float = DEFAULT_RCOND
-
-
-StructureSpec = BeamStructure | PlateStructure
-
-
-@dataclass(frozen=True)
-class DeviceProfile:
-    """Which actuation the scene is for, and the limits of that device.
-
-    ``profile`` names the actuation (``"plate-seed003"``: the single-mode glass plate
-    of seed 003, one channel; the modal profiles of :data:`MODAL_PROFILES`).
-    ``amplitude_limit_um`` is the zero-to-peak amplitude the host never asks for under a
-    finger; ``normal_force_n`` the nominal finger force used where a trace gives none and
-    for ``frictex validate``'s reachability warnings. ``structure`` describes the
-    vibrating structure of a modal profile (None for plate-seed003).
-    """
-
-    profile: str = "plate-seed003"
-    amplitude_limit_um: float = 2.5
-    normal_force_n: float = 0.5
-    friction: FrictionParams = field(default_factory=FrictionParams)
-    calibration: Calibration | None = None
-    structure: StructureSpec | None = None
-    #: the driving-force model of the travelling-wave profiles (:data:`FORCE_PROFILES`)
-    driving: DrivingForceParams = field(default_factory=DrivingForceParams)
 
 
 @dataclass(frozen=True)
@@ -656,7 +507,7 @@ class RasterMap(_LayerBase):
 
 
 # ---------------------------------------------------------------------------
-# Force layers (travelling-wave profiles only; rendered by ``rendering.force_layers``)
+# Force layers (travelling-wave profiles only; rendered by ``rendering.layers.force_layers``)
 
 
 @dataclass(frozen=True)
@@ -732,7 +583,7 @@ class KeyClick(_ForceBase):
     """A key-click button (seed 004, Fig. 5): inside ``geometry``, a push of ``force_n``
     (N) towards ``first_push`` (+1: +x) once the normal force reaches ``press_n``, reversed
     when it reaches ``click_n``; released (reset) when it falls below ``release_n``.
-    Each change needs its condition held for ``dwell_s`` (``rendering.keyclick``)."""
+    Each change needs its condition held for ``dwell_s`` (``rendering.layers.keyclick``)."""
 
     geometry: RectRegion = None  # type: ignore[assignment]
     press_n: float = 0.5
@@ -783,7 +634,7 @@ def auto_render_mode(period_mm: float | None) -> str:
     ``frictex report`` measures the hybrid against SHO and SHT on seed 003's 15, 5 and
     0.6 mm gratings (50 Hz touch, constant-speed and human-like strokes): it is no worse
     than the better of the two on every grating, motion and metric but one (time error on
-    the 0.6 mm grating, a phase no finger feels: see ``rendering.hybrid``), so seed 003's
+    the 0.6 mm grating, a phase no finger feels: see ``rendering.layers.hybrid``), so seed 003's
     SHO/SHT boundary near 5 mm (section 6) no longer decides anything.
     """
     return "sho" if period_mm is None else "hybrid"

@@ -13,11 +13,12 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from rendering.keyclick import CLICKED, IDLE, ON
+from rendering.layers.keyclick import CLICKED, IDLE, ON
 from rendering.visual.modal_view import Envelope, heat_rgb
 from rendering.visual.overlay import FINGER_RGB, OverlayState, arrow_triangles, segment_triangles
 from rendering.visual.scene_image import to_srgb8
-from textures.model import FORCE_PROFILES, Directional, Guidance, KeyClick, Scene
+from device.profile import FORCE_PROFILES
+from textures.model import Directional, Guidance, KeyClick, Scene
 
 PANEL_BG = (0.0, 0.0, 0.0, 0.8)
 FORCE_ARROW_MM = 20.0  # on screen, the arrow of the scene's largest force

@@ -1,6 +1,6 @@
 """The vibration of a modal device under the fingers, live: seed 000's beam, seed 001's plate.
 
-A modal actuation (``device.modal_actuation``) sends channel commands c = A W_M, with A the
+A modal actuation (``device.actuation.modal_actuation``) sends channel commands c = A W_M, with A the
 actuator matrix (q channels x p modes) and W_M the complex modal amplitudes (seed 000
 eq 9). The window recovers W_M = A^+ c from the latest commands sent and draws the
 superposed amplitude |W(x)| = |sum_k Phi_k(x) W_M,k| (seed 000 eq 3, seed 001 eq 5):
@@ -16,7 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from textures.model import BeamStructure, PlateStructure, Scene
+from device.profile import BeamStructure, PlateStructure
+from textures.model import Scene
 
 BEAM_SAMPLES = 512  # points along the display's width
 PLATE_CELLS = 64  # heat-map cells along the plate's longer side
@@ -50,7 +51,7 @@ class ModalEnvelope:
     Parameters
     ----------
     scene : a scene whose device profile is modal (``BeamStructure`` or ``PlateStructure``).
-    actuation : its ``device.modal_actuation.ModalActuation``.
+    actuation : its ``device.actuation.modal_actuation.ModalActuation``.
     """
 
     def __init__(self, scene: Scene, actuation):

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rendering.keyclick import IDLE
-from rendering.tracks import TrackerConfig
+from rendering.layers.keyclick import IDLE
+from rendering.tracking.tracks import TrackerConfig
 from rendering.visual.viewport import Viewport
 
 #: cursor/trace colour per finger (sRGB, 0-1): finger k uses FINGER_RGB[k % len]
@@ -29,7 +29,7 @@ TRAIL_WIDTH_PX = 2.0
 SCOPE_LINE_PX = 1.5
 #: a trail step longer than this (mm) and faster than this (mm/s) is a lift and a touch
 #: elsewhere within one block, not a stroke: not joined (the tracker's jump rule,
-#: rendering.tracks; shorter steps are the prediction catching up with a new sample)
+#: rendering.tracking.tracks; shorter steps are the prediction catching up with a new sample)
 TRAIL_BREAK_MM, TRAIL_BREAK_MM_S = TrackerConfig.jump_min_mm, TrackerConfig.jump_speed_mm_s
 
 
@@ -42,7 +42,7 @@ class BlockRecord:
     commands_um : (m, q) channel commands sent (um zero-to-peak); phases_rad : (m, q) rad
     or None. force_n, wanted_force_n : (F, m, 2) achieved and wanted force on each finger
     (N, display x and y) or None. button : (F, m) key-click state of each finger's button
-    (``rendering.keyclick`` IDLE, ON, CLICKED) or None (no button in the scene).
+    (``rendering.layers.keyclick`` IDLE, ON, CLICKED) or None (no button in the scene).
     """
 
     t_s: np.ndarray

@@ -1,0 +1,70 @@
+"""The ``frictex`` command.
+
+Each subcommand lives in its own module of ``app`` exposing
+``add_arguments(parser)`` and ``run(args) -> int``; the module is imported only
+when its subcommand runs, so ``frictex validate`` never loads OpenGL.
+Errors raised as ``ValueError`` (bad input: texture, trace, option) or ``OSError``
+(files, ports) become one line on stderr, ``frictex: error: ...``, and exit 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import sys
+
+#: subcommand -> (module in app/, one-line help)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "validate": ("app.commands.validate", "check texture files; report every problem with file, line and field"),
+    "library": ("app.commands.library", "list the bundled scenes and traces"),
+    "replay": ("app.commands.replay", "run the haptic pipeline on a recorded trace, headless"),
+    "trace": ("app.commands.trace", "synthesise or import touch traces"),
+    "sim-device": ("app.commands.sim_device", "run a simulated plate microcontroller on a pseudo-terminal"),
+    "bench": ("app.commands.bench", "measure speed: pipeline, link, visual layer, modal solves"),
+    "modes": ("app.commands.modes", "natural frequencies, wavelengths and nodes of beams, plates and rings"),
+    "report": ("app.commands.report", "speed against error over a matrix of scenes, motions and renderers"),
+    "demo": ("app.commands.demo", "the live demo window (mouse or multi-touch as fingers)"),
+    "preview": ("app.commands.preview", "render a scene and its friction map to a PNG"),
+}
+
+
+def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.ArgumentParser]]:
+    parser = argparse.ArgumentParser(
+        prog="frictex",
+        description="Render textures on ultrasonic friction-modulation touchscreens.")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    subparsers = {}
+    for name, (_, help_text) in COMMANDS.items():
+        subparsers[name] = sub.add_parser(name, help=help_text, description=help_text)
+    return parser, subparsers
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run ``frictex`` with ``argv`` (default: sys.argv[1:]); return the exit code."""
+    argv = sys.argv[1:] if argv is None else argv
+    parser, subparsers = build_parser()
+    name = next((a for a in argv if not a.startswith("-")), None)
+    module = None
+    if name in COMMANDS:
+        module = importlib.import_module(COMMANDS[name][0])
+        module.add_arguments(subparsers[name])
+    args = parser.parse_args(argv)
+    if module is None:
+        parser.print_help()
+        return 2 if argv else 0
+    try:
+        return int(module.run(args) or 0)
+    except BrokenPipeError:  # output piped into e.g. head, which stopped reading
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    except KeyboardInterrupt:
+        print("frictex: interrupted", file=sys.stderr)
+        return 130
+    except (ValueError, OSError) as exc:
+        print(f"frictex: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

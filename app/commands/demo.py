@@ -1,0 +1,265 @@
+"""``frictex demo [SCENE]``: the live demo window; the mouse, or a touch screen, gives the fingers.
+
+With no SCENE the window cycles through the bundled scenes (N / B). The haptic
+pipeline runs at block cadence in its own process (``app.live.haptic_process``; ``--haptic
+thread``: on a thread of the window's process, ``app.live.haptic_thread``), the window on
+the main thread (``app.live.demo_loop``). ``--input`` picks the fingers: the mouse, the
+mouse and a follower finger, a TUIO tracker over UDP, or a Linux evdev touch screen.
+``--record DIR`` writes what was sent
+(``commands.csv``, ``friction.csv`` as in a replay), ``events.csv`` and ``summary.json``.
+
+Without a display: ``frictex demo`` says so and exits 2; ``--headless`` (or
+``--headless-fallback`` when no display is found) replays the bundled swipe trace on
+the scene instead and writes its outputs and PNG frames to ``--out``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+from app.commands.preview import frame_size
+from app.commands.argtypes import positive_float, positive_int
+from rendering.input.tuio import TUIO_PORT
+from rendering.visual.context import NoDisplayError, open_backend
+from rendering.visual.viewport import MIN_FRAME, default_frame_size
+
+HEADLESS_TRACE = "swipe-40mms-50hz"
+INPUT_KINDS = ("mouse", "follow", "tuio", "evdev")
+FOLLOW_OFFSET_MM = 30.0  # the follower finger's offset along x
+
+
+def input_option(text: str) -> tuple[str, object]:
+    """argparse type for ``--input``: (kind, argument): ("mouse", None), ("follow",
+    offset mm), ("tuio", UDP port), ("evdev", device path)."""
+    kind, colon, arg = text.partition(":")
+    if kind not in INPUT_KINDS:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected mouse, follow[:OFFSET_MM], "
+                                         "tuio[:PORT] or evdev:PATH")
+    if kind == "mouse":
+        if colon:
+            raise argparse.ArgumentTypeError(f"{text!r}: mouse takes no argument")
+        return kind, None
+    if kind == "evdev":
+        if not arg:
+            raise argparse.ArgumentTypeError(f"{text!r}: expected evdev:PATH "
+                                             "(e.g. evdev:/dev/input/event5)")
+        return kind, arg
+    if kind == "follow":
+        try:
+            offset = float(arg) if colon else FOLLOW_OFFSET_MM
+        except ValueError:
+            offset = float("nan")
+        if not (math.isfinite(offset) and offset != 0.0):
+            raise argparse.ArgumentTypeError(f"{text!r}: expected follow:OFFSET_MM, a non-zero "
+                                             "number of mm (e.g. follow:30)")
+        return kind, offset
+    try:
+        port = int(arg) if colon else TUIO_PORT
+    except ValueError:
+        port = -1
+    if not 0 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected tuio:PORT, a UDP port 0 to 65535 "
+                                         "(0: any free port)")
+    return kind, port
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("scene", nargs="?", default=None,
+                        help="texture file (.toml) or bundled scene name; default: the bundled playlist")
+    parser.add_argument("--fullscreen", action="store_true", help="fullscreen on --monitor")
+    parser.add_argument("--monitor", type=int, default=0, metavar="N", help="monitor for --fullscreen (default 0)")
+    parser.add_argument("--size", type=frame_size, default=None, metavar="WxH",
+                        help="window size in px (default: the scene's display size, at least "
+                             f"{MIN_FRAME[0]}x{MIN_FRAME[1]})")
+    parser.add_argument("--renderer", choices=("sho", "sht", "hybrid"), default=None,
+                        help="start with every periodic layer rendered this way (R cycles it live)")
+    parser.add_argument("--device", metavar="sim|PORT", default=None,
+                        help="stream the commands: 'sim' starts a simulated device, otherwise a "
+                             "serial port or pyserial URL (default: no link)")
+    parser.add_argument("--rate", type=positive_float, default=10_000.0, metavar="HZ",
+                        help="output sample rate (default 10000 Hz)")
+    parser.add_argument("--block", type=positive_int, default=50, metavar="N",
+                        help="block size in output samples (default 50 = 5 ms at 10 kHz)")
+    parser.add_argument("--input", type=input_option, default=("mouse", None),
+                        metavar="mouse|follow[:MM]|tuio[:PORT]|evdev:PATH",
+                        help="where the fingers come from: 'mouse' (default; finger 0 while the "
+                             "left button is held), 'follow' (the mouse is finger 0 and finger 1 "
+                             f"follows it MM mm to the right along x, default {FOLLOW_OFFSET_MM:g}; "
+                             "seed 001's two-finger test), 'tuio' (TUIO 1.1 cursors on UDP PORT, "
+                             f"default {TUIO_PORT}, 0: any free port), 'evdev' (a Linux multi-touch "
+                             "device such as /dev/input/event5 spanning the scene's display). With "
+                             "tuio and evdev the mouse only hovers and every finger gets the force "
+                             "set with the wheel")
+    parser.add_argument("--haptic", choices=("process", "thread"), default="process",
+                        help="where the haptic pipeline runs: its own process (default: the "
+                             "window's GL calls cannot delay it) or a thread of the window's "
+                             "process (for debugging; misses deadlines on a software renderer)")
+    parser.add_argument("--record", metavar="DIR", default=None,
+                        help="write commands.csv, friction.csv, events.csv and summary.json to DIR")
+    parser.add_argument("--screenshots", metavar="DIR", default=".",
+                        help="folder for screenshots taken with P (default: current folder)")
+    parser.add_argument("--duration", type=positive_float, default=None, metavar="S",
+                        help="close the window after S seconds (default: run until closed)")
+    mode = parser.add_mutually_exclusive_group()
+    mode.add_argument("--headless", action="store_true",
+                      help="no window: replay the bundled trace on the scene into --out, with frames")
+    mode.add_argument("--headless-fallback", action="store_true",
+                      help="open the window if a display exists, else behave as --headless")
+    parser.add_argument("--out", metavar="DIR", default="frictex-demo-out",
+                        help="output folder for --headless (default: frictex-demo-out)")
+
+
+def _start_haptic(args, scene, scene_path: Path, record: Path | None):
+    """The haptic side of ``--haptic``, started, and its ``finish()`` (as open_haptic's)."""
+    if args.haptic == "thread":
+        from app.live.haptic_thread import shorten_switch_interval
+        shorten_switch_interval(args.block / args.rate)
+        from app.live.haptic_setup import open_haptic
+        haptic, finish = open_haptic(scene, args.rate, args.block, args.renderer, args.device,
+                                     record)
+        haptic.start()
+        return haptic, finish
+    from app.live.haptic_process import HapticConfig, HapticProcess, yield_to_haptic
+    haptic = HapticProcess(scene, HapticConfig(scene_path, args.rate, args.block, args.renderer,
+                                               args.device, record))
+    yield_to_haptic()  # after the child started: it keeps its priority
+
+    def finish():
+        haptic.stop()
+        return haptic.link, haptic.dropped_records
+
+    return haptic, finish
+
+
+def _playlist(scene_arg):
+    from textures.library import list_scenes, resolve_scene
+    if scene_arg is not None:
+        return [resolve_scene(scene_arg)], 0
+    paths = [entry.path for entry in list_scenes()]
+    if not paths:
+        raise ValueError("no bundled scenes found; give a texture file")
+    return paths, 0
+
+
+def _load(path):
+    from textures.loader import load_scene
+    return load_scene(path)
+
+
+def run_headless(args, reason: str | None = None) -> int:
+    from app.engine.frames import FrameWriter
+    from app.engine.replay import run_replay
+    paths, index = _playlist(args.scene)
+    scene = _load(paths[index])
+    if reason:
+        print(f"frictex demo: {reason}; running headless instead")
+    frames = FrameWriter(args.out, scene, fps=30.0, rate_hz=args.rate)
+    summary = run_replay(scene, HEADLESS_TRACE, args.out, rate_hz=args.rate, block_size=args.block,
+                         render_override=args.renderer, progress=False, frames=frames)
+    print(f"replayed {HEADLESS_TRACE} on {scene.name}: {summary['output']['samples']} output samples, "
+          f"{frames.count} frames in {Path(args.out) / 'frames'}; outputs in {args.out}")
+    return 0
+
+
+def open_source(kind: str, arg):
+    """The touch source of ``--input`` (None for the mouse kinds), positions normalised to
+    0..1 of the active area."""
+    if kind == "tuio":
+        from rendering.input.tuio import TuioListener
+        source = TuioListener(arg, width_mm=1.0, height_mm=1.0)
+        print(f"demo: listening for TUIO 1.1 cursors on UDP port {source.port}", flush=True)
+        return source
+    if kind == "evdev":
+        from rendering.input.evdev_decode import ScreenSpec
+        from rendering.input.evdev_live import EvdevReader
+        try:
+            return EvdevReader(arg, ScreenSpec(width_mm=1.0, height_mm=1.0))
+        except ValueError as exc:  # no axis ranges: a file, a pipe, not a touch screen
+            raise ValueError(f"evdev:{arg} is not a multi-touch device reporting its axis ranges "
+                             f"({exc}); the demo takes them from the device (a recording can be "
+                             "converted with 'frictex trace import' and replayed)") from None
+    return None
+
+
+def input_name(kind: str, arg) -> str:
+    """``--input`` as the status line and the summary show it."""
+    if kind == "follow":
+        return f"follow {arg:g} mm"
+    return kind if arg is None else f"{kind} {':' if kind == 'tuio' else ''}{arg}"
+
+
+def run(args: argparse.Namespace) -> int:
+    kind, arg = args.input
+    if args.headless:
+        if kind != "mouse":
+            raise ValueError(f"--input {input_name(kind, arg)}: --headless replays a bundled "
+                             "trace and takes no live input")
+        return run_headless(args)
+    paths, index = _playlist(args.scene)
+    scene = _load(paths[index])
+    size = args.size or default_frame_size(scene.display)
+    source = open_source(kind, arg)  # a bad --input fails before a window opens
+    try:
+        backend = open_backend("glfw", size, title=f"frictex demo: {scene.name}",
+                               fullscreen=args.fullscreen, monitor=args.monitor)
+    except BaseException as exc:
+        if source is not None:
+            source.close()
+        if not isinstance(exc, NoDisplayError):
+            raise
+        if args.headless_fallback:
+            return run_headless(args, reason=str(exc))
+        raise NoDisplayError(f"{exc}: the demo needs a window. Without a display run "
+                             "'frictex demo --headless' (replays a bundled trace, writes frames) "
+                             "or 'frictex replay SCENE TRACE --out DIR'") from None
+    from app.live.cpu_steal import StealMeter
+    from app.live.demo_loop import DemoLoop
+    finish = loop = None
+    record = Path(args.record) if args.record else None
+    link = {"state": "none"}
+    dropped_records = 0
+    steal = StealMeter()
+    try:
+        haptic, finish = _start_haptic(args, scene, paths[index], record)
+        loop = DemoLoop(backend, haptic, paths, index, scene, _load, Path(args.screenshots),
+                        events_path=record / "events.csv" if record else None,
+                        link_name="none" if args.device is None else "starting",
+                        follow_mm=arg if kind == "follow" else None, source=source,
+                        input_name=input_name(kind, arg))
+        loop.run(args.duration)
+    finally:
+        try:
+            if finish is not None:
+                link, dropped_records = finish()
+        finally:
+            if loop is not None:
+                loop.close()  # closes the touch source too
+            elif source is not None:
+                source.close()
+            backend.close()
+    summary = _summary(haptic.stats, haptic.block_s, loop, dropped_records, link)
+    summary["haptic"] = args.haptic
+    summary["cpu_steal_pct"] = steal.percent()
+    if record is not None:
+        (record / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    stolen = ("" if summary["cpu_steal_pct"] is None
+              else f" (CPU steal by a VM host meanwhile: {summary['cpu_steal_pct']:.0f} %)")
+    print(f"demo: {summary['blocks']} blocks ({summary['output_s']:.1f} s of output), "
+          f"{summary['deadline_misses']} deadline misses{stolen if summary['deadline_misses'] else ''}, "
+          f"{summary['clamps_total']} clamped samples, "
+          f"{summary['frames']} frames ({summary['frame_ms_mean']:.1f} ms mean), link: {link['state']}")
+    return 0
+
+
+def _summary(st, block_s: float, loop, dropped_records: int, link) -> dict:
+    return {"blocks": st.blocks, "output_s": st.blocks * block_s,
+            "deadline_misses": st.deadline_misses, "worst_lateness_ms": st.worst_lateness_s * 1e3,
+            "dropped_touches": st.dropped_touches, "dropped_snapshots": st.dropped_snapshots,
+            "dropped_record_blocks": dropped_records, "ramps": st.ramps,
+            "clamps": st.clamps.as_dict(), "clamps_total": st.clamps.total,
+            "input": loop.input_name,
+            "frames": loop.frames, "frame_ms_mean": loop.frame_seconds / max(loop.frames, 1) * 1e3,
+            "screenshots": [str(p) for p in loop.screenshots], "link": link}

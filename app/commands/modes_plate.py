@@ -1,0 +1,78 @@
+"""2D plate with X and Y modes of order k (seed 001, eqs 2, 6 and 8).
+
+Mode shapes sin(lambda_k x / a) and sin(lambda_k y / b), lambda_k = (2k + 1) pi / 2;
+frequencies from the plate equation at that wavenumber (a strip estimate). Four
+actuators wired as V_AC and V_BD: mode X follows V_AC + V_BD, mode Y V_AC - V_BD.
+Seed 001 does not name the plate's material, so --youngs-gpa and --density are required.
+--plot maps both shapes and det Phi over the second finger's position for the first
+finger at --finger (seed 001, Fig. 1).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from app.commands.modes_output import add_output_arguments, print_modes, save_figure
+from app.commands.argtypes import positive_float
+from device.structures.beam import ModesError
+from device.structures.plate2d import AXES, Plate2D
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--width-mm", type=positive_float, default=140.0, help="side a along x (default 140)")
+    parser.add_argument("--height-mm", type=positive_float, default=140.0, help="side b along y (default 140)")
+    parser.add_argument("--thickness-mm", type=positive_float, default=4.0, help="thickness h (default 4)")
+    parser.add_argument("--youngs-gpa", type=positive_float, required=True, help="Young's modulus E in GPa")
+    parser.add_argument("--density", type=positive_float, required=True, help="density in kg/m^3")
+    parser.add_argument("--poisson", type=float, default=0.33, help="Poisson's ratio (default 0.33)")
+    parser.add_argument("--order", type=int, default=8, metavar="K",
+                        help="k of seed 001 eq 6 (default 8, the paper's prototype)")
+    parser.add_argument("--finger", type=float, nargs=2, metavar=("X_MM", "Y_MM"),
+                        help="first finger for the det Phi map (default 0.25 a, 0.5 b as Fig. 1)")
+    add_output_arguments(parser)
+
+
+def run(args: argparse.Namespace) -> int:
+    plate = Plate2D(args.width_mm, args.height_mm, args.thickness_mm, args.youngs_gpa,
+                    args.density, poisson=args.poisson, order=args.order)
+    finger = args.finger or (0.25 * plate.width_mm, 0.5 * plate.height_mm)
+    if not (0 <= finger[0] <= plate.width_mm and 0 <= finger[1] <= plate.height_mm):
+        raise ModesError(f"--finger {finger[0]:g} {finger[1]:g} is outside the "
+                         f"{plate.width_mm:g} x {plate.height_mm:g} mm plate")
+    modes = [{"axis": axis, "order": plate.order, "frequency_hz": plate.frequency_hz(axis),
+              "wavelength_mm": plate.wavelength_mm(axis), "nodes_mm": plate.nodes_mm(axis).tolist()}
+             for axis in AXES]
+    title = (f"plate {plate.width_mm:g} x {plate.height_mm:g} x {plate.thickness_mm:g} mm, "
+             f"E {plate.youngs_gpa:g} GPa, rho {plate.density_kg_m3:g} kg/m^3, k = {plate.order}")
+    print_modes(title, modes, args.json)
+    if args.plot:
+        save_figure(_plot(plate, finger, title), args.plot)
+    return 0
+
+
+def _plot(plate: Plate2D, finger, title: str):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    x = np.linspace(0, plate.width_mm, 281)
+    y = np.linspace(0, plate.height_mm, 281)
+    xx, yy = np.meshgrid(x, y)
+    phi = plate.phi(xx, yy)
+    det = plate.det(finger[0], finger[1], xx, yy)
+    extent = (0, plate.width_mm, plate.height_mm, 0)  # y down, as on the screen
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.6))
+    panels = ((phi[..., 0], "mode X"), (phi[..., 1], "mode Y"),
+              (det, f"det Phi, finger 1 at ({finger[0]:g}, {finger[1]:g}) mm"))
+    for ax, (img, name) in zip(axes, panels):
+        lim = np.max(np.abs(img)) or 1.0
+        im = ax.imshow(img, extent=extent, cmap="RdBu", vmin=-lim, vmax=lim)
+        ax.contour(xx, yy, img, levels=[0.0], colors="k", linewidths=0.5)
+        ax.set(xlabel="x (mm)", ylabel="y (mm)", title=name)
+        fig.colorbar(im, ax=ax, shrink=0.8)
+    axes[2].plot(*finger, "o", color="gold", markeredgecolor="k")
+    fig.suptitle(title + " (black: zero lines)")
+    fig.tight_layout()
+    return fig

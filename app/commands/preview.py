@@ -1,0 +1,116 @@
+"""``frictex preview SCENE -o out.png``: the scene as the demo draws it, beside its
+friction map (mu' as an image with a colour bar), in one PNG.
+
+The left panel is the visual layer's static image (``rendering.visual.scene_image``,
+the same pixels the demo window shows); the right panel is mu' composed from the
+layers (``rendering.compose.ideal_mu``: what a perfect renderer gives a finger there),
+averaged over each pixel. The colour bar marks the lowest mu' the device reaches at
+the scene's nominal normal force: targets below it will be clamped.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from rendering.compose import ideal_mu
+from device.friction import mu_floor
+from rendering.visual.scene_image import scene_rgb, to_srgb8
+from rendering.visual.viewport import fit_viewport
+
+
+def frame_size(text: str) -> tuple[int, int]:
+    """argparse type for ``WIDTHxHEIGHT`` in pixels."""
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not WIDTHxHEIGHT (e.g. 800x480)") from None
+    if not (1 <= w <= 8192 and 1 <= h <= 8192):
+        raise argparse.ArgumentTypeError(f"{text!r}: width and height must be 1 to 8192 px")
+    return w, h
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("scene", help="texture file (.toml) or bundled scene name (see frictex library)")
+    parser.add_argument("-o", "--out", required=True, metavar="PNG", help="output image (.png)")
+    parser.add_argument("--size", type=frame_size, default=None, metavar="WxH",
+                        help="pixel size of the scene panel (default: the scene's display size)")
+    parser.add_argument("--outlines", action="store_true", help="outline every region and object")
+
+
+def load(scene_name: str):
+    from textures.library import resolve_scene
+    from textures.loader import load_scene
+    return load_scene(resolve_scene(scene_name))
+
+
+def mu_map(scene, viewport, supersample: int = 3) -> np.ndarray:
+    """mu' (height_px, width_px) averaged over ``supersample**2`` points per pixel."""
+    sx, sy = viewport.px_per_mm
+    cols = np.arange(viewport.width_px, dtype=np.float64)
+    rows = np.arange(viewport.height_px, dtype=np.float64)
+    acc = np.zeros((viewport.height_px, viewport.width_px))
+    offsets = (np.arange(supersample) + 0.5) / supersample
+    for oy in offsets:
+        for ox in offsets:
+            xx, yy = np.broadcast_arrays(((cols + ox) / sx)[None, :], ((rows + oy) / sy)[:, None])
+            acc += ideal_mu(scene, xx, yy)
+    return acc / supersample ** 2
+
+
+def write_preview(scene, out: Path, size: tuple[int, int] | None = None,
+                  outlines: bool = False) -> dict:
+    """Render the preview PNG of ``scene`` into ``out``; return what it shows (mu' range, floor)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    d = scene.display
+    viewport = fit_viewport(d, *(size or (d.width_px, d.height_px)))
+    image = to_srgb8(scene_rgb(scene, viewport, outlines=outlines))
+    mu = mu_map(scene, viewport)
+    floor = mu_floor(scene.device, scene.device.normal_force_n)
+    extent = (0.0, d.width_mm, d.height_mm, 0.0)
+    fig = Figure(figsize=(13.0, 13.0 * d.height_mm / d.width_mm / 2 + 1.4), dpi=110,
+                 layout="constrained")
+    FigureCanvasAgg(fig)
+    left, right = fig.subplots(1, 2)
+    left.imshow(image, extent=extent, interpolation="antialiased")
+    left.set_title(f"{scene.name}: as drawn ({viewport.width_px} x {viewport.height_px} px)")
+    vmin = min(float(mu.min()), floor) - 0.02
+    shown = right.imshow(mu, extent=extent, cmap="viridis", vmin=vmin, vmax=1.0,
+                         interpolation="antialiased")
+    right.set_title("friction map: target mu' (1 = plate at rest)")
+    for ax in (left, right):
+        ax.set_xlabel("x (mm)")
+        ax.set_ylabel("y (mm)")
+    bar = fig.colorbar(shown, ax=right, shrink=0.9)
+    bar.set_label("mu' = mu(w) / mu(0)")
+    bar.ax.axhline(floor, color="red", linewidth=2)
+    # a tick label next to the floor's would print over it
+    bar.set_ticks([t for t in bar.get_ticks()
+                   if vmin <= t <= 1.0 and abs(t - floor) > 0.08 * (1.0 - vmin)])
+    bar.ax.text(1.05, floor, f" floor\n {floor:.2f}\n @{scene.device.normal_force_n:g} N",
+                transform=bar.ax.get_yaxis_transform(), color="red", fontsize=8, va="center")
+    layers = "; ".join(f"{layer.name} ({type(layer).__name__.lower()}, {layer.render}"
+                       + (f", {layer.period_mm:g} mm" if layer.is_periodic else "") + ")"
+                       for layer in scene.layers)
+    fig.suptitle(f"layers: {layers}", fontsize=9)
+    fig.savefig(out)
+    return {"mu_min": float(mu.min()), "mu_max": float(mu.max()), "floor": floor,
+            "size": (viewport.width_px, viewport.height_px)}
+
+
+def run(args: argparse.Namespace) -> int:
+    out = Path(args.out)
+    if out.suffix.lower() != ".png":
+        raise ValueError(f"output {str(out)!r}: expected a .png file name")
+    if not out.parent.is_dir():
+        raise OSError(f"output folder {str(out.parent)!r} does not exist")
+    scene = load(args.scene)
+    info = write_preview(scene, out, args.size, args.outlines)
+    print(f"wrote {out}: {scene.name}, scene panel {info['size'][0]} x {info['size'][1]} px, "
+          f"mu' {info['mu_min']:.3f} to {info['mu_max']:.3f} (device floor {info['floor']:.3f} "
+          f"at {scene.device.normal_force_n:g} N)")
+    return 0

@@ -1,0 +1,72 @@
+"""``frictex report``: speed against error over a matrix of scenes, motions, touch rates
+and renderer configurations (see ``app.measure.report_matrix`` for what a row measures,
+``app.measure.report_output`` for the files and ``app.measure.report_claims`` for the checked targets).
+
+    frictex report --quick --out report/     # CI: under a minute
+    frictex report --out report/             # the full matrix
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+from dataclasses import asdict
+from pathlib import Path
+
+from app.measure import report_matrix as rm
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--out", default="report", metavar="DIR",
+                        help="folder for report.md, report.json and the plots (default: report)")
+    parser.add_argument("--quick", action="store_true",
+                        help="the small matrix (50 Hz touch, three motions): under a minute")
+    parser.add_argument("--scenes", nargs="+", metavar="NAME", default=list(rm.SCENES),
+                        help=f"bundled scenes to include (default: {' '.join(rm.SCENES)})")
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def run(args: argparse.Namespace) -> int:
+    unknown = [s for s in args.scenes if s not in rm.SCENES]
+    if unknown:
+        raise ValueError(f"--scenes: unknown scene(s) {', '.join(unknown)}; expected some of "
+                         f"{', '.join(rm.SCENES)}")
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {out}: exists and is not a folder")
+    out.mkdir(parents=True, exist_ok=True)  # fail now, not after the matrix has run
+    from tqdm import tqdm
+
+    from app.measure import report_output as ro
+    from device.friction import make_friction_model
+    from rendering.inversion_lut import LutFrictionModel
+
+    cases = rm.matrix(args.quick, tuple(args.scenes))
+    runner = rm.Runner(live_s=0.5 if args.quick else 2.0)
+    wall = time.perf_counter()
+    rows = []
+    for case in tqdm(cases, desc="report", unit="case", disable=args.no_progress or None):
+        rows.append(runner.run(case))
+    lut = LutFrictionModel(make_friction_model(rm.load(args.scenes[0]).device))
+    settings = {"reference_hz": rm.REFERENCE_HZ, "touch_noise_mm": rm.TOUCH_NOISE_MM,
+                "block_s": rm.BLOCK_S, "motions": rm.MOTIONS,
+                "lut_max_error_um": lut.max_error_um(),
+                "cpu_count": os.cpu_count(), "wall_s": time.perf_counter() - wall}
+    from app.measure import bench_modal
+    from app.measure import report_seeds
+    from app.measure.bench_pipeline import modal_throughput
+    modal = [asdict(f) for f in bench_modal.run(args.quick)]
+    seeds = report_seeds.scatter(report_seeds.QUICK_SEEDS if args.quick else report_seeds.SEEDS,
+                                 [s for s in args.scenes if s in report_seeds.GRATINGS])
+    doc = ro.write_json(rows, out / "report.json", args.quick, settings, modal,
+                        modal_throughput(), seeds)
+    plots = ["error_vs_cost.png", "error_vs_period.png"]
+    ro.plot_cost(rows, out / plots[0])
+    ro.plot_period(rows, out / plots[1])
+    ro.write_markdown(doc, out / "report.md", plots)
+    failed = [c for c in doc["claims"] if not c["passed"]]
+    print(f"frictex report: {len(rows)} rows in {settings['wall_s']:.1f} s; "
+          f"{len(doc['claims']) - len(failed)} of {len(doc['claims'])} claims hold; "
+          f"wrote {out / 'report.md'}, {out / 'report.json'}, {', '.join(plots)}")
+    return 0

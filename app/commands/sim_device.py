@@ -1,0 +1,77 @@
+"""``frictex sim-device``: a simulated plate microcontroller on a pseudo-terminal.
+
+Prints the pty's path as the first line on stdout, then speaks the device side of
+``device/PROTOCOL.md`` until a host's Stop has played out or Ctrl-C.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from app.commands.argtypes import positive_float, positive_int
+from device.link.simdevice import DeviceConfig, DeviceCore, open_pty, played_log, plate_log, serve_pty
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--channels", type=positive_int, default=1, metavar="N", help="actuator channels (default 1)")
+    parser.add_argument("--rate", type=positive_float, default=10_000.0, metavar="HZ",
+                        help="sample rate the device plays at (default 10000 Hz, seed 003)")
+    parser.add_argument("--limit", type=positive_float, action="append", metavar="UM",
+                        help="amplitude limit in um zero-to-peak, declared to the host; once for "
+                             "all channels or once per channel (default 4.0)")
+    parser.add_argument("--buffer", type=positive_int, default=4096, metavar="N",
+                        help="jitter-buffer capacity in samples (default 4096)")
+    parser.add_argument("--bandwidth", type=positive_float, default=400.0, metavar="HZ",
+                        help="-3 dB bandwidth of the modelled amplitude loop (default 400 Hz, "
+                             "seed 003 Fig. 3b)")
+    parser.add_argument("--watchdog-ms", type=positive_int, default=25, metavar="MS",
+                        help="host silence that trips the watchdog (default 25 ms; with the ramp "
+                             "at most 50 ms)")
+    parser.add_argument("--ramp-ms", type=positive_int, default=20, metavar="MS",
+                        help="ramp to zero after a trip or a stop (default 20 ms)")
+    parser.add_argument("--phases", action="store_true", help="accept a phase per channel")
+    parser.add_argument("--sensor", action="store_true",
+                        help="report the modelled plate amplitude as 'measured'")
+    parser.add_argument("--force", type=float, default=None, metavar="N",
+                        help="report this normal force (N) from a simulated force sensor")
+    parser.add_argument("--log", metavar="CSV", default=None,
+                        help="write every played sample: index,ch0_um,... (fixed-point values)")
+    parser.add_argument("--plate-log", metavar="CSV", default=None,
+                        help="write every tick: t_s,state,ch<k>_setpoint_um,ch<k>_plate_um")
+    parser.add_argument("--parent-pid", type=positive_int, default=None, help=argparse.SUPPRESS)
+
+
+def run(args: argparse.Namespace) -> int:
+    limits = tuple(args.limit) if args.limit else (4.0,)
+    config = DeviceConfig(channels=args.channels, rate_hz=args.rate, limits_um=limits,
+                          buffer_samples=args.buffer, bandwidth_hz=args.bandwidth,
+                          watchdog_ms=args.watchdog_ms, ramp_ms=args.ramp_ms,
+                          phases=args.phases, sensor=args.sensor, force_n=args.force)
+    logs = []
+    core = DeviceCore(config)
+    try:
+        if args.log:
+            core.log, csv = played_log(args.log, config.channels, config.phases)
+            logs.append(csv)
+        if args.plate_log:
+            core.plate_log, csv = plate_log(args.plate_log, config.channels)
+            logs.append(csv)
+        master, slave, path = open_pty()
+        print(path, flush=True)
+        print(f"frictex sim-device: {config.channels} channel(s) at {config.rate_hz:g} Hz on "
+              f"{path}; Ctrl-C to quit", file=sys.stderr)
+        try:
+            serve_pty(core, master, parent_pid=args.parent_pid)
+        finally:
+            os.close(master)
+            os.close(slave)
+    finally:
+        for csv in logs:
+            csv.close()
+    k = core.counters
+    print(f"frictex sim-device: played {k.played_samples} samples; {k.underruns} underruns, "
+          f"{core.decoder.counts.discarded} bad frames, {k.watchdog_trips} watchdog trips",
+          file=sys.stderr)
+    return 0

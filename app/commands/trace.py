@@ -1,0 +1,111 @@
+"""``frictex trace synth|import``: make touch traces.
+
+``synth`` writes a synthetic motion sampled like a touch screen (and, with
+``--truth``, the true path at a high rate beside it, for accuracy checks); ``import``
+converts recordings of real touch screens to the trace CSV.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from app.commands.argtypes import positive_float
+from rendering.input.press_synth import press_trace
+from rendering.input.trace_synth import MOTIONS, make_motion, sample, truth
+from rendering.input.trace_file import write_trace
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    sub = parser.add_subparsers(dest="trace_command", metavar="ACTION", required=True)
+    synth = sub.add_parser("synth", help="write a synthetic trace",
+                           description="Write a synthetic touch trace (CSV).")
+    synth.add_argument("motion", choices=(*MOTIONS, "press"),
+                       help="a finger path, or 'press': a still finger pressing (normal force "
+                            "rising to --peaks and back, for key-click scenes)")
+    synth.add_argument("-o", "--out", required=True, metavar="FILE", help="trace CSV to write")
+    synth.add_argument("--rate", type=positive_float, default=50.0, metavar="HZ",
+                       help="touch sampling rate (default 50 Hz, seed 003's screen)")
+    synth.add_argument("--speed", type=positive_float, default=40.0, metavar="MM_S",
+                       help="finger speed (human: typical peak speed), default 40 mm/s")
+    synth.add_argument("--duration", type=positive_float, default=2.0, metavar="S")
+    synth.add_argument("--x0", type=float, default=14.0, metavar="MM", help="start x")
+    synth.add_argument("--y0", type=float, default=32.4, metavar="MM", help="start y")
+    synth.add_argument("--angle", type=float, default=0.0, metavar="DEG",
+                       help="direction of travel, from +x towards +y")
+    synth.add_argument("--length", type=positive_float, default=80.0, metavar="MM",
+                       help="stroke length for back-and-forth")
+    synth.add_argument("--radius", type=positive_float, default=20.0, metavar="MM",
+                       help="circle radius")
+    synth.add_argument("--noise", type=float, default=0.0, metavar="MM",
+                       help="position noise (standard deviation)")
+    synth.add_argument("--jitter", type=float, default=0.0, metavar="S",
+                       help="timestamp jitter (standard deviation)")
+    synth.add_argument("--force", type=float, default=0.5, metavar="N",
+                       help="normal force (press: the force at touch-down)")
+    synth.add_argument("--peaks", type=float, nargs="+", default=[1.0, 0.95, 1.1], metavar="N",
+                       help="press: peak normal force of each press (default 1.0 0.95 1.1)")
+    synth.add_argument("--force-noise", type=float, default=0.03, metavar="N",
+                       help="press: force sensor noise, standard deviation (default 0.03 N)")
+    synth.add_argument("--seed", type=int, default=0, help="random seed (human motion, noise)")
+    synth.add_argument("--truth", metavar="FILE", help="also write the true path here")
+    synth.add_argument("--truth-rate", type=positive_float, default=10_000.0, metavar="HZ")
+    imp = sub.add_parser("import", help="convert a touch recording to a trace CSV",
+                         description="Convert a recording (Android getevent -lt, evemu, "
+                                     "trace CSV) to a frictex trace CSV.")
+    from rendering.input.trace_import import add_import_arguments
+    add_import_arguments(imp)
+
+
+PATH_OPTIONS = ("rate", "speed", "duration", "x0", "y0", "angle", "length", "radius", "noise",
+                "jitter", "force", "seed")
+PRESS_OPTIONS = ("rate", "x0", "y0", "force", "peaks", "force_noise", "seed")
+
+
+def _synth_command(args: argparse.Namespace, options) -> str:
+    """The ``frictex trace synth`` command that makes this trace again."""
+    def value(v):
+        return " ".join(f"{p:g}" for p in v) if isinstance(v, list) else f"{v:g}"
+    flags = " ".join(f"--{name.replace('_', '-')} {value(getattr(args, name))}" for name in options)
+    return f"frictex trace synth {args.motion} {flags}"
+
+
+def _provenance(args: argparse.Namespace) -> str:
+    """The comment line a synthetic trace starts with: what it is, how to make it again."""
+    if args.motion == "press":
+        peaks = " ".join(f"{p:g}" for p in args.peaks)
+        what = (f"{len(args.peaks)} presses of a still finger at ({args.x0:g}, {args.y0:g}) mm, "
+                f"force {args.force:g} N to peaks {peaks} N and back, noise "
+                f"{args.force_noise:g} N, sampled at {args.rate:g} Hz")
+        return f"{what} ({_synth_command(args, PRESS_OPTIONS)})"
+    what = f"{args.motion} at {args.speed:g} mm/s, sampled at {args.rate:g} Hz"
+    return f"{what} ({_synth_command(args, PATH_OPTIONS)})"
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.trace_command == "import":
+        from rendering.input.trace_import import run_import
+        return run_import(args)
+    for name in ("noise", "jitter", "force", "force_noise"):
+        if getattr(args, name) < 0:
+            raise ValueError(f"--{name.replace('_', '-')} {getattr(args, name)} must be >= 0")
+    if args.motion == "press":
+        if args.truth:
+            raise ValueError("--truth: a press does not move; its trace is its true path")
+        trace = press_trace(peaks_n=args.peaks, x_mm=args.x0, y_mm=args.y0, rate_hz=args.rate,
+                            touch_n=args.force, noise_n=args.force_noise, seed=args.seed)
+        write_trace(args.out, trace, comment=_provenance(args))
+        print(f"wrote {len(trace)} samples ({trace.duration_s:.3f} s at {args.rate:g} Hz) "
+              f"to {args.out}")
+        return 0
+    motion = make_motion(args.motion, speed_mm_s=args.speed, duration_s=args.duration,
+                         x0_mm=args.x0, y0_mm=args.y0, angle_deg=args.angle,
+                         length_mm=args.length, radius_mm=args.radius, seed=args.seed)
+    trace = sample(motion, args.rate, noise_mm=args.noise, jitter_s=args.jitter,
+                   force_n=args.force, seed=args.seed)
+    write_trace(args.out, trace, comment=_provenance(args))
+    print(f"wrote {len(trace)} samples ({trace.duration_s:.3f} s at {args.rate:g} Hz) to {args.out}")
+    if args.truth:
+        true = truth(motion, args.truth_rate, force_n=args.force)
+        write_trace(args.truth, true)
+        print(f"wrote the true path ({len(true)} samples at {args.truth_rate:g} Hz) to {args.truth}")
+    return 0

@@ -1,0 +1,95 @@
+"""PNG frames of the visual layer during a replay (``frictex replay ... --frames FPS``).
+
+A :class:`FrameWriter` receives the replay's pipeline output chunk by chunk
+(``add(out)``) and, at every frame time t0 + j / fps, draws the scene with the fingers,
+their trails and the scope as they were at that instant into
+``DIR/frames/frame_00000.png``, ``frame_00001.png``, ... Offscreen (EGL): no display
+needed. ``ffmpeg -framerate FPS -i DIR/frames/frame_%05d.png out.mp4`` makes a video.
+Modal devices show |W| from the commands of each frame's instant, devices that push a
+finger its force and their buttons' state, as in the demo window.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from device.actuation.factory import make_actuation
+from rendering.visual.compositor import Compositor, FrameView
+from rendering.visual.modal_view import modal_envelope
+from rendering.visual.context import OffscreenBackend
+from rendering.visual.overlay import OverlayState, record_from_output
+from rendering.visual.viewport import default_frame_size
+from textures.model import Scene
+
+
+class FrameWriter:
+    """Writes frames at ``fps`` into ``out_dir/frames`` (see the module docstring).
+
+    ``scene``: a Scene, or a texture file path / bundled scene name. ``size``: frame
+    (width, height) px, default the scene's display size (at least ``MIN_FRAME``).
+    """
+
+    def __init__(self, out_dir, scene, fps: float, rate_hz: float = 10_000.0,
+                 size: tuple[int, int] | None = None):
+        if not fps > 0 or not np.isfinite(fps):
+            raise ValueError(f"frame rate {fps!r} fps: expected a positive number")
+        if not isinstance(scene, Scene):
+            from textures.library import resolve_scene
+            from textures.loader import load_scene
+            scene = load_scene(resolve_scene(scene))
+        self.scene = scene
+        self.fps = float(fps)
+        self.folder = Path(out_dir) / "frames"
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.size = size or default_frame_size(scene.display)
+        self.backend = OffscreenBackend(self.size)
+        self.compositor = Compositor(self.backend.ctx, scene, self.size)
+        self.overlay = OverlayState()
+        self.envelope = modal_envelope(scene, make_actuation(scene.device))
+        self.envelope_scale_um = scene.device.amplitude_limit_um
+        self.stride = max(1, int(rate_hz / 2000.0))  # 2 kHz is plenty for the scope
+        self.t_first: float | None = None
+        self.count = 0
+
+    def _frame_time(self, j: int) -> float:
+        return self.t_first + j / self.fps
+
+    def add(self, out) -> None:
+        """Feed one chunk of pipeline output; writes every frame whose time it reaches."""
+        t = out.t_s
+        if self.t_first is None:
+            self.t_first = float(t[0])
+        lo = 0
+        while self._frame_time(self.count) <= t[-1]:
+            hi = int(np.searchsorted(t, self._frame_time(self.count), side="right"))
+            if hi > lo:
+                self.overlay.add(record_from_output(out, self.stride, lo, hi))
+                lo = hi
+            self._write(out, hi - 1)
+        if lo < t.size:
+            self.overlay.add(record_from_output(out, self.stride, lo, None))
+
+    def _write(self, out, i: int) -> None:
+        touching = [f"finger {fid}: mu' {out.mu_target[row, i]:.3f}, "
+                    f"{out.amplitude_um[row, i]:.2f} um" for row, fid in enumerate(out.finger_ids)
+                    if out.contact[row, i]]
+        status = (f"{self.scene.name} | replay t = {self._frame_time(self.count):.3f} s | "
+                  + ("; ".join(touching) or "no finger touching"),)
+        envelope = None
+        if self.envelope is not None:
+            envelope = self.envelope.at(self.overlay.commands, self.overlay.current())
+            self.envelope_scale_um = max(self.envelope_scale_um, envelope.peak_um)
+        self.backend.use()
+        self.compositor.draw(FrameView(overlay=self.overlay, status=status,
+                                       amplitude_max_um=self.scene.device.amplitude_limit_um,
+                                       envelope=envelope, envelope_scale_um=self.envelope_scale_um))
+        path = self.folder / f"frame_{self.count:05d}.png"
+        Image.fromarray(self.backend.read_rgb()).save(path)
+        self.count += 1
+
+    def close(self) -> None:
+        self.compositor.release()
+        self.backend.close()

@@ -1,0 +1,255 @@
+"""The live haptic pipeline in a child process, so that the window's GL calls cannot
+starve it.
+
+moderngl holds the GIL for the whole of each GL call; on a software renderer (Mesa
+llvmpipe) a frame's calls take 10-25 ms, longer than a block's 10 ms deadline, so a
+haptic *thread* in the window's process misses deadlines while the window draws. Here
+the child runs the same :class:`app.live.haptic_thread.HapticThread` (plus a small bridge
+thread for scene switches and shutdown); the window talks to it through bounded
+``multiprocessing`` queues that never block it (touches: a full queue drops the sample,
+counted; snapshots: the child drops the oldest, counted) and an ``mp.Event`` for the
+emergency stop, which the child reads at every block.
+
+The link (``--device``) and the recording (``--record``) are opened in the child, which
+sends: the status with every snapshot, and the final stats and link status when it stops.
+A scene switch sends the scene's file and the renderer; the child loads and builds it,
+and an error comes back as a message (the old scene stays). The child stops when asked,
+when its haptic thread fails, or when the window's process is gone.
+
+Both processes stamp with ``time.perf_counter`` (on Linux CLOCK_MONOTONIC, one clock for
+the whole machine), so the window's ``now()`` is the child's output clock.
+"""
+
+from __future__ import annotations
+
+import gc
+import multiprocessing as mp
+import os
+import queue
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from app.live.haptic_thread import (COMMAND_QUEUE, SNAPSHOT_QUEUE, TOUCH_QUEUE, HapticStats,
+                               TouchInput, shorten_switch_interval)
+from device.actuation.factory import make_actuation
+
+WINDOW_NICE = 10  # how much lower than the haptic child the window's threads run
+START_TIMEOUT_S = 60.0  # spawn, imports, scene load and build, link handshake
+SWITCH_TIMEOUT_S = 30.0  # a modal scene's build
+STOP_TIMEOUT_S = 30.0  # the recording's queued blocks are written before the child says done
+PARENT_CHECK_S = 0.2  # how often the idle bridge looks whether the window's process lives
+
+
+class HapticProcessError(OSError):
+    """The haptic child process did not start, answer or stop as expected."""
+
+
+@dataclass(frozen=True)
+class HapticConfig:
+    """What the child needs to build its pipeline, link and recorder (units as in
+    ``HapticThread``; ``device``: ``--device`` spec or None; ``record``: folder or None)."""
+
+    scene_path: Path
+    rate_hz: float
+    block_size: int
+    render_override: str | None
+    device: str | None
+    record: Path | None
+
+
+@dataclass(frozen=True)
+class PipelineInfo:
+    """What the window needs of the child's pipeline: its channels and an actuation for
+    the modal envelope view (``device.actuation.factory.make_actuation`` of the scene's device)."""
+
+    channels: tuple[str, ...]
+    actuation: object
+
+
+class HapticProcess(TouchInput):
+    """The demo's haptic side in a child process, with :class:`HapticThread`'s interface
+    as the window uses it: ``now``, ``touch``, ``touch_at``, ``switch``, ``estop``,
+    ``snapshots``, ``error``, ``stop``, ``stats``, ``render_override``, ``pipeline``.
+
+    Starts the child and waits until it runs; a failure to load the scene or open the
+    link comes back as ValueError / OSError with the child's message.
+    """
+
+    def __init__(self, scene, config: HapticConfig, clock=time.perf_counter):
+        ctx = mp.get_context("spawn")  # not fork: the window's process has GL and threads
+        self.clock = clock
+        self.block_s = config.block_size / config.rate_hz
+        self.render_override = config.render_override
+        self.scene = scene
+        self.estop = ctx.Event()
+        self.touches = ctx.Queue(TOUCH_QUEUE)
+        self.snapshots = ctx.Queue(SNAPSHOT_QUEUE)
+        self._requests = ctx.Queue(COMMAND_QUEUE)
+        self._replies = ctx.Queue()
+        self.stats = HapticStats()
+        self.link: dict = {"state": "none"}
+        self.dropped_records = 0
+        self._last_stamp = 0.0
+        self._error: str | None = None
+        self._done = False
+        self._proc = ctx.Process(target=serve, name="frictex-haptic", daemon=True,
+                                 args=(config, self.estop, self.touches, self.snapshots,
+                                       self._requests, self._replies))
+        self._proc.start()
+        reply = self._wait("ready", START_TIMEOUT_S)
+        if reply[0] == "failed":
+            self._proc.join(timeout=STOP_TIMEOUT_S)
+            raise (OSError if reply[1] == "OSError" else ValueError)(reply[2])
+        self.t0 = reply[1]
+        self.pipeline = PipelineInfo(reply[2], make_actuation(scene.device))
+
+    @property
+    def error(self) -> str | None:
+        """Why the child stopped on its own (None while it runs)."""
+        self._poll(0.0)
+        if self._error is None and not self._done and not self._proc.is_alive():
+            self._error = f"haptic process exited with code {self._proc.exitcode}"
+        return self._error
+
+    def switch(self, scene=None, render_override: str | None | bool = False) -> PipelineInfo:
+        """Change scene and/or renderer (False: keep the current renderer), as
+        ``HapticThread.switch``: the child loads ``scene.source`` and builds it (the
+        window waits for its answer, the haptic output does not); errors raise ValueError
+        with the child's message, and nothing changes."""
+        override = self.render_override if render_override is False else render_override
+        new = scene is not None and scene is not self.scene
+        if new and scene.source is None:
+            raise ValueError(f"scene {scene.name} has no file: the haptic process loads "
+                             "scenes from their files")
+        self._requests.put(("switch", str(scene.source) if new else None, override),
+                           timeout=SWITCH_TIMEOUT_S)
+        reply = self._wait("switched", SWITCH_TIMEOUT_S)
+        if reply[1] is not None:
+            raise ValueError(reply[1])
+        if new:
+            self.scene = scene
+            self.pipeline = PipelineInfo(reply[2], make_actuation(scene.device))
+        self.render_override = override
+        return self.pipeline
+
+    def stop(self) -> None:
+        """Stop the child and collect its final ``stats``, ``link`` status and
+        ``dropped_records`` (the child's dropped touches add to the window's); raises
+        HapticProcessError (an OSError) if it ended without reporting them."""
+        if self._proc.is_alive() and not self._done:
+            try:
+                self._requests.put(("stop",), timeout=1.0)
+                self._wait("done", STOP_TIMEOUT_S)
+            except (HapticProcessError, queue.Full):
+                pass  # it hung or died: terminated below, and said so
+        self._proc.join(timeout=2.0)
+        if self._proc.is_alive():
+            self._proc.terminate()
+            self._proc.join()
+        for q in (self.touches, self.snapshots, self._requests, self._replies):
+            q.cancel_join_thread()  # a full queue must not hold the window at exit
+            q.close()
+        if not self._done:
+            raise HapticProcessError(f"haptic process ended (exit code {self._proc.exitcode}) "
+                                     "without reporting its stats and link status")
+
+    def _wait(self, kind: str, timeout_s: float) -> tuple:
+        """The child's next reply of ``kind`` (or its failure); other replies are noted."""
+        deadline = time.monotonic() + timeout_s
+        while True:
+            reply = self._poll(min(0.1, max(deadline - time.monotonic(), 0.0)), want=kind)
+            if reply is not None:
+                return reply
+            if self._error is not None:
+                raise HapticProcessError(f"haptic process failed: {self._error}")
+            if not self._proc.is_alive() and self._replies.empty():
+                raise HapticProcessError(f"haptic process exited with code {self._proc.exitcode} "
+                                         f"while the window waited for {kind!r}")
+            if time.monotonic() > deadline:
+                raise HapticProcessError(f"haptic process did not answer {kind!r} "
+                                         f"within {timeout_s:g} s")
+
+    def _poll(self, timeout_s: float, want: str | None = None) -> tuple | None:
+        """Handle the replies waiting (the first up to ``timeout_s``); return the first
+        of kind ``want`` (a start failure counts as an answer to "ready")."""
+        block = timeout_s > 0
+        while True:
+            try:
+                reply = self._replies.get(block, timeout_s) if block else self._replies.get_nowait()
+            except queue.Empty:
+                return None
+            block = False
+            if reply[0] == "error":
+                self._error = reply[1]
+            elif reply[0] == "done":
+                self._done = True
+                dropped_here = self.stats.dropped_touches
+                self.stats, self.link, self.dropped_records = reply[1:]
+                self.stats.dropped_touches += dropped_here
+            if reply[0] == want or (want == "ready" and reply[0] == "failed"):
+                return reply
+
+
+def yield_to_haptic(increment: int = WINDOW_NICE) -> int | None:
+    """Lower the priority of every thread of this (the window's) process by ``increment``
+    nice steps, and of the threads it starts later, which inherit it; returns the new
+    nice value, or None where the system has no per-thread priorities.
+
+    On two cores the window's software renderer (llvmpipe runs a thread per core) and
+    the haptic child compete; at equal priority the child waited up to 20 ms for a core
+    while a frame was drawn. Any user may lower their own priority, and the window
+    only needs what the child leaves (a few percent of a core)."""
+    try:
+        tasks = os.listdir("/proc/self/task")
+        for tid in map(int, tasks):
+            os.setpriority(os.PRIO_PROCESS, tid,
+                           min(os.getpriority(os.PRIO_PROCESS, tid) + increment, 19))
+        return os.getpriority(os.PRIO_PROCESS, 0)
+    except (OSError, AttributeError):
+        return None
+
+
+def serve(config: HapticConfig, estop, touches, snapshots, requests, replies) -> None:
+    """The child process: build, run, answer switches, stop (see the module docstring)."""
+    from app.live.haptic_setup import open_haptic  # the thread mode's own setup, in this process
+    from textures.loader import load_scene
+    shorten_switch_interval(config.block_size / config.rate_hz)
+    try:
+        haptic, finish = open_haptic(load_scene(config.scene_path), config.rate_hz,
+                                     config.block_size, config.render_override, config.device,
+                                     config.record, estop=estop, touches=touches,
+                                     snapshots=snapshots)
+    except (ValueError, OSError, ModuleNotFoundError) as exc:
+        replies.put(("failed", "OSError" if isinstance(exc, OSError) else "ValueError", str(exc)))
+        return
+    # the built pipeline lives until the next switch: keep it out of the cyclic
+    # collector's scans (a full collection of it took 15-30 ms, three blocks, here)
+    gc.freeze()
+    haptic.start()
+    replies.put(("ready", haptic.t0, haptic.pipeline.channels))
+    parent = mp.parent_process()
+    try:
+        while haptic.error is None and parent.is_alive():
+            try:
+                request = requests.get(timeout=PARENT_CHECK_S)
+            except queue.Empty:
+                continue
+            if request[0] == "stop":
+                break
+            replies.put(("switched", *_switch(haptic, load_scene, *request[1:])))
+        if haptic.error is not None:
+            replies.put(("error", repr(haptic.error)))
+    finally:
+        link, dropped_records = finish()
+        replies.put(("done", haptic.stats, link, dropped_records))
+
+
+def _switch(haptic, load_scene, path: str | None, override) -> tuple:
+    """(error message or None, the pipeline's channels) of switching ``haptic``."""
+    try:
+        pipeline = haptic.switch(load_scene(path) if path is not None else None, override)
+    except (ValueError, OSError, ModuleNotFoundError) as exc:
+        return str(exc), None
+    gc.freeze()  # as at the start
+    return None, pipeline.channels

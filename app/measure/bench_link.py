@@ -1,0 +1,49 @@
+"""``frictex bench link``: the host link to a simulated device through a real pseudo-terminal.
+
+Two runs against a ``frictex sim-device`` subprocess, paced by the device as in replay
+(timed from the first block until the device has played the last and stopped):
+at the seed 003 rate (10 kHz, blocks of 50) for host CPU per second of output and the
+heartbeat round trip; and at 1 MHz (the device's clock no longer limits) for the sustained
+frame and block rates the link itself manages.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from app.measure.figure import Figure
+from device.link.host import open_sink
+
+BLOCK = 50
+
+
+def _stream(rate_hz: float, seconds: float) -> tuple[dict, float, float]:
+    """Stream ``seconds`` of output; returns (status, wall s, host CPU s)."""
+    n_blocks = int(seconds * rate_hz / BLOCK)
+    block = np.abs(np.sin(np.arange(BLOCK) / 7.0))[:, None] * 2.0
+    sink = open_sink("sim", channels=1, rate_hz=rate_hz, paced=True)
+    try:
+        wall0, cpu0 = time.perf_counter(), time.process_time()
+        for b in range(n_blocks):
+            sink.send(b * BLOCK, block, None)
+    finally:
+        sink.close()  # drains: the device has played everything when it returns
+    wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
+    return sink.status(), wall, cpu
+
+
+def run(quick: bool) -> list[Figure]:
+    seconds = 1.0 if quick else 5.0
+    status, wall, cpu = _stream(10_000.0, seconds)
+    figs = [Figure("link", "host CPU per s of output (10 kHz)", cpu / seconds * 1e3, "ms/s"),
+            Figure("link", "heartbeat round trip p50", status["latency_ms_p50"], "ms"),
+            Figure("link", "heartbeat round trip p99", status["latency_ms_p99"], "ms"),
+            Figure("link", "underruns at 10 kHz", float(status["underruns"] or 0), "count")]
+    fast, wall, _ = _stream(1_000_000.0, seconds / 5)
+    figs += [Figure("link", "sustained frames/s (1 MHz device)", fast["frames_sent"] / wall, "1/s"),
+             Figure("link", "sustained blocks/s (1 MHz device)", fast["blocks_sent"] / wall, "1/s"),
+             Figure("link", "sustained samples/s (1 MHz device)",
+                    fast["blocks_sent"] * BLOCK / wall, "1/s")]
+    return figs

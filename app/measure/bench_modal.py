@@ -1,0 +1,69 @@
+"""Bench section "modal": speed and error of each modal inversion method (device.actuation.modal).
+
+Seed 000's beam (modes 16 and 17, actuators 60 mm from each end), wanted amplitudes
+uniform in 0..0.5 um under two fingers (seed 000 eq 14 asks 0.4 um under one finger and
+a node under the other), actuator limit 0.75 um zero-to-peak (seed 000: 160 V peak-to-peak
+gave eq 14's 0.41 um; seed 001's amplifiers stop at 300 V peak-to-peak). Finger pairs:
+random over the beam, and near-singular (finger b within 0.5 mm of finger a). For each
+method: time per sample in blocks of 50 (one batched call), mean and worst error under
+the fingers, the share of samples that met a limit, and the largest command step when
+finger b crosses finger a in 1 um steps (continuity across a singular locus).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from app.measure.figure import Figure
+from device.structures.beam import FreeFreeBeam
+from device.actuation.modal import DEFAULT_RCOND, METHODS, solve
+
+ORDERS = (16, 17)
+LIMIT_UM = 0.75
+BLOCK = 50
+
+
+def _phi(beam, xa, xb):
+    return np.stack([beam.phi(ORDERS, xa), beam.phi(ORDERS, xb)], axis=-2)
+
+
+def run(quick: bool) -> list[Figure]:
+    beam = FreeFreeBeam(350, 6, 6, 57, 2561)
+    act = beam.phi(ORDERS, np.array([60.0, 290.0]))
+    rng = np.random.default_rng(0)
+    n = 500 if quick else 5000
+    xa = rng.uniform(0, 350, n)
+    cases = {"random": (xa, rng.uniform(0, 350, n)),
+             "near-singular": (xa, np.clip(xa + rng.uniform(-0.5, 0.5, n), 0, 350))}
+    wanted = rng.uniform(0, 0.5, (n, 2)).astype(np.complex128)
+    sweep_b = np.linspace(115.0, 125.0, 10001)
+    sweep_phi = _phi(beam, np.full_like(sweep_b, 120.0), sweep_b)
+    figures = []
+    for method in METHODS:
+        kwargs = dict(actuators=act, limits_um=LIMIT_UM)
+        for case, (a, b) in cases.items():
+            phi = _phi(beam, a, b)
+            solve(phi[:BLOCK], wanted[:BLOCK], method, **kwargs)  # compiled kernels loaded
+            start = time.perf_counter()
+            sols = [solve(phi[i:i + BLOCK], wanted[i:i + BLOCK], method, **kwargs)
+                    for i in range(0, n, BLOCK)]
+            per_sample = (time.perf_counter() - start) / n
+            err = np.concatenate([s.error_um for s in sols])
+            limited = np.concatenate([s.limited for s in sols])
+            figures += [
+                Figure("modal", f"{method} {case}: time per sample (blocks of {BLOCK})", per_sample * 1e6, "us"),
+                Figure("modal", f"{method} {case}: mean error", float(np.mean(err)), "um"),
+                Figure("modal", f"{method} {case}: worst error", float(np.max(err)), "um"),
+                Figure("modal", f"{method} {case}: samples at a limit", 100 * float(np.mean(limited)), "%"),
+            ]
+        steps = solve(sweep_phi, [0.4, 0.0], method, **kwargs).commands_um
+        figures.append(Figure("modal", f"{method}: largest command step, finger b crossing a "
+                                       f"in 1 um steps", float(np.max(np.abs(np.diff(steps, axis=0)))), "um"))
+    for rcond in (0.03, DEFAULT_RCOND, 0.3):
+        a, b = cases["random"]
+        sol = solve(_phi(beam, a, b), wanted, "regularised", rcond=rcond, actuators=act, limits_um=LIMIT_UM)
+        figures.append(Figure("modal", f"regularised rcond={rcond:g} random: mean error",
+                              float(np.mean(sol.error_um)), "um"))
+    return figures

@@ -1,0 +1,104 @@
+"""Bench section "visual": the visual layer offscreen (EGL) at 800x480 and 1920x1080.
+
+Figures: the static scene image (drawn once per scene switch or reload, what a visitor
+waits for: image, sRGB encoding and texture upload, with no table cached from an
+earlier draw; best of 3, or 1 with ``--quick``) for a 0.6 mm grating at 30 degrees
+inside a disc composed with a 5 mm grating, and at 1920x1080 for every bundled scene;
+the per-frame cost of the overlay on top of it (two
+fingers with trails, the scope with 3 s of history, the status line), each frame
+finished on the GPU (``ctx.finish``), without and with reading the pixels back (what
+``--frames`` and screenshots pay).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import numpy as np
+
+from app.measure.figure import Figure
+from rendering.visual.compositor import Compositor, FrameView
+from rendering.visual import scene_image
+from rendering.visual.context import OffscreenBackend, VisualError
+from rendering.visual.overlay import BlockRecord, OverlayState
+from device.profile import DeviceProfile
+from textures.model import DiscRegion, Display, Grating, Scene, VisualHints
+
+SIZES = ((800, 480), (1920, 1080))
+
+
+def bench_scene() -> Scene:
+    coarse = Grating(name="coarse", render="sho", region=None, blend="multiply",
+                     visual=VisualHints((0.3, 0.3, 0.3), (1.0, 1.0, 1.0)), period_mm=5.0)
+    fine = Grating(name="fine", render="sht", region=DiscRegion(54.0, 32.4, 20.0), blend="multiply",
+                   visual=VisualHints(), period_mm=0.6, angle_deg=30.0)
+    return Scene(1, "bench", "", Display(108.0, 64.8, 800, 480), DeviceProfile(), (coarse, fine))
+
+
+def busy_overlay() -> OverlayState:
+    overlay = OverlayState()
+    t = np.arange(0.0, 3.0, 0.0005)
+    x = np.stack((20 + 20 * t, 80 - 15 * t))
+    y = np.stack((30 + 10 * np.sin(3 * t), 20 + 5 * t))
+    mu = np.stack((0.6 + 0.4 * (np.sin(200 * t) > 0), 0.8 + 0.1 * np.sin(20 * t)))
+    overlay.add(BlockRecord(t, (0, 1), np.ones((2, t.size), bool), x, y, mu, (1 - mu) * 4))
+    return overlay
+
+
+def scene_ms(comp: Compositor, scene: Scene, repeats: int) -> float:
+    """Milliseconds ``comp`` takes to draw ``scene`` into its static texture, cold (no
+    cached table), best of ``repeats`` (the CPU is shared: the best run is the cost)."""
+    best = float("inf")
+    for _ in range(repeats):
+        scene_image.clear_tables()
+        t0 = time.perf_counter()
+        comp.set_scene(scene)
+        best = min(best, time.perf_counter() - t0)
+    return best * 1e3
+
+
+def bundled_scene_figures(comp: Compositor, label: str, repeats: int) -> list[Figure]:
+    from textures.library import list_scenes
+    from textures.loader import load_scene
+    return [Figure("visual", f"static image {entry.path.stem} {label}",
+                   scene_ms(comp, load_scene(entry.path), repeats), "ms (once per scene)")
+            for entry in list_scenes()]
+
+
+def run(quick: bool) -> list[Figure]:
+    frames = 20 if quick else 100
+    repeats = 1 if quick else 3
+    figures = []
+    scene = bench_scene()
+    view = FrameView(overlay=busy_overlay(), hover_mm=(50.0, 30.0),
+                     status=("bench | renderer: file | force 0.50 N | link: none",))
+    for size in SIZES:
+        label = f"{size[0]}x{size[1]}"
+        try:
+            backend = OffscreenBackend(size)
+        except VisualError as exc:
+            print(f"frictex: bench visual: not available ({exc})", file=sys.stderr)
+            return figures
+        comp = Compositor(backend.ctx, scene, size)
+        figures.append(Figure("visual", f"static scene image {label}",
+                              scene_ms(comp, scene, repeats), "ms (once per scene)"))
+        if size == SIZES[-1]:
+            figures.extend(bundled_scene_figures(comp, label, repeats))
+            comp.set_scene(scene)
+        backend.use()
+        for read_back in (False, True):
+            comp.draw(view)  # warm-up: shaders, text textures
+            backend.ctx.finish()
+            t0 = time.perf_counter()
+            for _ in range(frames):
+                comp.draw(view)
+                if read_back:
+                    backend.read_rgb()
+                backend.ctx.finish()
+            per_frame = (time.perf_counter() - t0) / frames * 1e3
+            what = "frame + read back" if read_back else "frame"
+            figures.append(Figure("visual", f"{what} {label}", per_frame, "ms"))
+        comp.release()
+        backend.close()
+    return figures

@@ -1,0 +1,238 @@
+"""The measurements behind ``frictex report``: one row per (scene, motion, touch rate,
+renderer configuration), each with accuracy (``rendering.metrics``) and cost.
+
+A row renders one synthetic finger motion (``rendering.input.trace_synth``) sampled like a touch
+screen at ``touch_hz`` (with 0.05 mm position noise, a good capacitive controller) and
+compares the friction the finger gets (mu' of the friction model at the commanded
+amplitude, so the inversion's error counts) with the scene on the true path.
+
+Costs are compute time per second of output, per stage (tracking, each layer,
+composition, inversion, actuation, link encode); ``replay_x_realtime`` counts the
+pipeline stages only (a headless replay sends nothing); ``live_block_p99_us`` is the
+99th percentile of one 5 ms block's compute when the same trace is fed block by block,
+as the live haptic thread does; ``latency_ms`` is the longest wait of a touch sample for
+the block that first uses it, plus the link's jitter buffer (``device.link.host.TARGET_S``).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from rendering.input.trace_synth import make_motion, sample, truth
+from rendering.metrics import MetricError, accuracy, reference
+from rendering.pipeline import build_pipeline
+from rendering.input.trace_file import Trace
+from rendering.tracking.tracks import apply_index
+
+#: bundled scenes of the matrix: the seed 003 gratings, one object scene, one composed
+SCENES = ("grating-15mm", "grating-5mm", "grating-0.6mm", "objects-bump-edge-disc",
+          "composed-fine-grating-in-disc")
+#: finger motions: name -> make_motion arguments (mm, s, mm/s); the swipes run from 10 to
+#: 94 mm, clear across every edge of the bundled scenes (the last at 90 mm)
+MOTIONS = {
+    "slow": dict(kind="swipe", speed_mm_s=20.0, duration_s=4.2, x0_mm=10.0),
+    "fast": dict(kind="swipe", speed_mm_s=120.0, duration_s=0.7, x0_mm=10.0),
+    "reversing": dict(kind="back-and-forth", speed_mm_s=60.0, duration_s=3.0, x0_mm=30.0,
+                      length_mm=45.0),
+    "human": dict(kind="human", speed_mm_s=60.0, duration_s=4.0, seed=7),
+}
+TOUCH_HZ = (50.0, 120.0, 240.0)
+RENDERERS = ("sho-held", "sho-predicted", "sht", "hybrid")
+OUTPUT_HZ = (2000.0, 5000.0, 10_000.0, 20_000.0)
+INVERSIONS = ("exact", "lut")
+#: one block of output (s): the live haptic thread's block
+BLOCK_S = 0.005
+#: the reference grid (Hz): at least the highest output rate
+REFERENCE_HZ = 20_000.0
+#: position noise of the sampled traces (mm, standard deviation)
+TOUCH_NOISE_MM = 0.05
+
+
+@dataclass(frozen=True)
+class Case:
+    """One row's inputs."""
+
+    scene: str
+    motion: str
+    touch_hz: float
+    renderer: str
+    output_hz: float
+    inversion: str = "exact"
+
+
+def matrix(quick: bool, scenes=SCENES) -> list[Case]:
+    """The cases of the full or quick matrix.
+
+    Full: every scene x motion x touch rate x renderer at 10 kHz, exact inversion; plus,
+    at 50 Hz, every other output rate and the LUT inversion. Quick: 50 Hz, the
+    constant-speed and human motions, 10 kHz; the human motion also at 120 and 240 Hz;
+    and on the gratings, for the human motion, the output-rate and inversion sweep.
+    Renderers that cannot differ on a scene (SHT and hybrid on a scene without periodic
+    layers) are left out.
+    """
+    cases = []
+    for scene in scenes:
+        renderers = RENDERERS if _has_periodic(scene) else RENDERERS[:2]
+        for motion in MOTIONS:
+            if quick and motion == "reversing":
+                continue
+            for touch in TOUCH_HZ:
+                if quick and touch != 50.0 and motion != "human":
+                    continue
+                cases += [Case(scene, motion, touch, r, 10_000.0) for r in renderers]
+            if quick and (motion != "human" or not scene.startswith("grating")):
+                continue
+            for r in renderers:
+                cases += [Case(scene, motion, 50.0, r, hz) for hz in OUTPUT_HZ if hz != 10_000.0]
+                cases.append(Case(scene, motion, 50.0, r, 10_000.0, "lut"))
+    return cases
+
+
+def _has_periodic(scene_name: str) -> bool:
+    return any(layer.is_periodic for layer in load(scene_name).layers)
+
+
+_SCENE_CACHE: dict = {}
+
+
+def load(scene_name: str):
+    """A bundled scene by name (loaded once per process)."""
+    if scene_name not in _SCENE_CACHE:
+        from textures.library import resolve_scene
+        from textures.loader import load_scene
+        _SCENE_CACHE[scene_name] = load_scene(resolve_scene(scene_name))
+    return _SCENE_CACHE[scene_name]
+
+
+def _slice(trace: Trace, lo: int, hi: int) -> Trace | None:
+    if hi <= lo:
+        return None
+    return Trace(trace.t_s[lo:hi], trace.finger[lo:hi], trace.x_mm[lo:hi], trace.y_mm[lo:hi],
+                 trace.force_n[lo:hi], trace.event[lo:hi])
+
+
+def _pipeline(scene, case: Case):
+    block = max(1, int(round(case.output_hz * BLOCK_S)))
+    sho_variant = "sho-held" if case.renderer == "sho-held" else "sho-predicted"
+    return build_pipeline(scene, rate_hz=case.output_hz, block_size=block,
+                          render_override=case.renderer, sho_variant=sho_variant,
+                          inversion=case.inversion)
+
+
+def run_blocks(pipeline, trace: Trace, blocks_per_call: int, duration_s: float):
+    """Run ``trace`` through ``pipeline`` from t = 0 for ``duration_s`` of output.
+
+    Returns (outputs, per-call compute seconds).
+    """
+    applied = apply_index(trace.t_s, pipeline.tracker_config)
+    total = int(np.ceil(duration_s * pipeline.rate_hz / pipeline.block_size))
+    state = pipeline.initial_state()
+    outs, seconds = [], []
+    for b in range(0, total, blocks_per_call):
+        nb = min(blocks_per_call, total - b)
+        lo, hi = np.searchsorted(applied, [b * pipeline.block_size, (b + nb) * pipeline.block_size])
+        t = time.perf_counter()
+        out, state = pipeline.process(b, _slice(trace, lo, hi), state, n_blocks=nb)
+        seconds.append(time.perf_counter() - t)
+        outs.append(out)
+    return outs, np.array(seconds)
+
+
+def _encode_seconds(commands_um: np.ndarray, block: int) -> float | None:
+    """Compute time (s) to put these commands on the wire, block by block."""
+    try:
+        from device.link.protocol import Block, amplitude_to_wire, encode
+    except ImportError:
+        return None
+    t = time.perf_counter()
+    for k in range(0, commands_um.shape[0], block):
+        counts, _ = amplitude_to_wire(commands_um[k:k + block])
+        encode(Block(k, counts), seq=k // block)
+    return time.perf_counter() - t
+
+
+def _link_buffer_s() -> float:
+    from device.link.host import TARGET_S
+    return TARGET_S
+
+
+class Runner:
+    """Runs cases, caching the traces and references they share."""
+
+    def __init__(self, live_s: float = 1.0, motions: dict | None = None):
+        self.live_s = live_s
+        self.motions = MOTIONS if motions is None else motions
+        self._refs: dict = {}
+        self._traces: dict = {}
+
+    def _motion(self, name: str):
+        return make_motion(**self.motions[name])
+
+    def reference(self, scene_name: str, motion_name: str):
+        key = (scene_name, motion_name)
+        if key not in self._refs:
+            self._refs[key] = reference(load(scene_name), truth(self._motion(motion_name), REFERENCE_HZ))
+        return self._refs[key]
+
+    def trace(self, motion_name: str, touch_hz: float) -> Trace:
+        key = (motion_name, touch_hz)
+        if key not in self._traces:
+            self._traces[key] = sample(self._motion(motion_name), touch_hz,
+                                       noise_mm=TOUCH_NOISE_MM, seed=11)
+        return self._traces[key]
+
+    def run(self, case: Case) -> dict:
+        """The row for ``case`` (see the module docstring and ``app.commands.report``)."""
+        scene = load(case.scene)
+        trace = self.trace(case.motion, case.touch_hz)
+        ref = self.reference(case.scene, case.motion)
+        duration = float(ref.t_s[-1]) + 1.0 / ref.rate_hz
+
+        pipeline = _pipeline(scene, case)
+        outs, _ = run_blocks(pipeline, trace, 200, duration)
+        t_out = np.concatenate([o.t_s for o in outs])
+        row = outs[0].finger_ids.index(int(trace.finger[0]))
+        amplitude = np.concatenate([o.amplitude_um[row] for o in outs])
+        commands = np.concatenate([o.commands_um for o in outs])
+        felt = pipeline.friction.forward(amplitude, float(trace.force_n[0]))
+        try:
+            acc = accuracy(ref, t_out, felt, pipeline.rate_hz)
+        except MetricError as exc:
+            raise MetricError(f"report case {case}: {exc}") from None
+        output_s = t_out.size / pipeline.rate_hz
+        stages = {name: s for name, s in pipeline.timer.seconds.items() if name != "layers"}
+        for name, s in pipeline.timer.layer_seconds.items():
+            stages[f"layer:{name}"] = s
+        compute = sum(stages.values())
+        encode = _encode_seconds(commands, pipeline.block_size)
+        if encode is not None:
+            stages["link_encode"] = encode
+
+        live = _pipeline(scene, case)
+        live_s = min(self.live_s, duration)
+        _, per_block = run_blocks(live, trace, 1, live_s)
+        applied_t = apply_index(trace.t_s, pipeline.tracker_config) / pipeline.rate_hz
+        wait_s = float(np.max(applied_t - trace.t_s))
+
+        clamps = None
+        for o in outs:
+            clamps = o.clamps if clamps is None else (clamps.add(o.clamps) or clamps)
+        return {
+            "scene": case.scene, "period_mm": scene.grating_period_mm, "motion": case.motion,
+            "touch_hz": case.touch_hz, "renderer": case.renderer, "output_hz": case.output_hz,
+            "inversion": case.inversion,
+            "time_error": acc.time_error, "spectral_error": acc.spectral_error,
+            "alignment_error_mm": acc.alignment_error_mm,
+            "steps": {"ideal": acc.ideal_steps, "rendered": acc.rendered_steps},
+            "cost_us_per_s": compute / output_s * 1e6,
+            "stages_us_per_s": {k: v / output_s * 1e6 for k, v in stages.items()},
+            "throughput": {
+                "replay_x_realtime": output_s / compute,
+                "live_block_p99_us": float(np.percentile(per_block, 99) * 1e6),
+                "latency_ms": (wait_s + _link_buffer_s()) * 1e3,
+            },
+            "clamps": clamps.as_dict(),
+        }

@@ -1,0 +1,323 @@
+"""Modal inversion: wanted amplitudes under m fingers -> p modal amplitudes -> actuator commands.
+
+The forward model (seed 000, eq 7; seed 001, eqs 4-5) is ``W_f = Phi_f W_M`` with
+``Phi_f`` (m, p) the mode shapes at the fingers, and the actuators follow
+``c = A W_M`` (seed 000, eq 9: ``A = Phi_act``, the shapes at the actuators; seed 001's
+plate: ``A`` from the V_AC / V_BD wiring, see ``device.structures.plate2d``). Seed 000, eq 10 is
+``c = A Phi_f^{-1} W_f``. Amplitudes are complex (magnitude um zero-to-peak, phase rad).
+
+Every method works from the SVD ``Phi_f = U diag(s) V^H`` (batched over any leading
+axes) and returns ``W_M = V g(s) U^H W_f`` for a gain ``g`` (``exact`` and
+``regularised`` in closed form for real 2 x 2 ``Phi_f``, the two-mode devices):
+
+- ``"exact"``: g = 1/s, the inverse (m = p) or the minimum-norm pseudo-inverse
+  (p > m, seed 001). Singular values below 1e-12 s_max get g = 0 so the output stays
+  finite. Near a singular locus the commands grow without bound and flip sign across it.
+- ``"regularised"``: g = 1/s for s >= rcond s_max and s / (rcond s_max)^2 below, i.e.
+  exact where the problem is well conditioned and a gain that falls to 0 at a singular
+  locus. It is the only method whose commands are continuous as fingers cross a locus
+  (seed 001, eq 8; coincident fingers; a finger on a node): what cannot be controlled
+  there fades out instead of switching sign.
+- ``"bounded"``: least squares within the actuator limits, min ||Phi_f W_M - W_f||^2
+  subject to |c_j| <= limit_j (seed 001: the amplifiers saturate at 300 V peak-to-peak
+  near singular positions): exactly, by active sets, for two actuators
+  (``device.actuation.bounded_two``); else by projected accelerated gradient (FISTA with restart)
+  in command space, started from the exact solution. The exact solution is returned as
+  is when it is within limits. The closest achievable amplitudes, but like every
+  residual-optimal method the commands jump across a singular locus.
+
+With limits, ``exact`` and ``regularised`` commands that exceed a limit are scaled down
+together (keeping their ratio and phases) until the largest reaches its limit. Every
+sample reports what was achieved under each finger (forward model of the commands) and
+the error; ``limited`` marks samples whose commands met a limit, ``capped`` those where
+a singular value was below the method's threshold. Singular loci are normal operation,
+never an error.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from device.structures.beam import ModesError
+from device.actuation.bounded_two import bounded_two
+
+METHODS = ("exact", "regularised", "bounded")
+#: chosen by measurement (``frictex bench modal``, device/MODES.md)
+DEFAULT_METHOD = "regularised"
+#: regularisation threshold, relative to the largest singular value (device/MODES.md)
+DEFAULT_RCOND = 0.1
+#: singular values below this fraction of the largest are treated as zero by "exact"
+_EXACT_RCOND = 1e-12
+_FISTA_MAX_ITER = 3000
+_FISTA_TOL = 1e-13
+
+
+@dataclass(frozen=True, eq=False)
+class ModalSolution:
+    """The result of :func:`solve`; leading axes (...) are those of the inputs.
+
+    modal_um : complex128 (..., p)  modal amplitudes W_M (um).
+    commands_um : complex128 (..., q)  actuator commands c = A W_M (um zero-to-peak).
+    achieved_um : complex128 (..., m)  amplitudes under the fingers, Phi_f W_M (um).
+    error_um : float64 (..., m)  |achieved - wanted| (um).
+    limited : bool (...)  commands met an actuator limit (scaled or constrained).
+    capped : bool (...)  a singular value of Phi_f was below the method's threshold.
+    sigma_min_ratio : float64 (...)  smallest / largest singular value of Phi_f.
+    """
+
+    modal_um: np.ndarray
+    commands_um: np.ndarray
+    achieved_um: np.ndarray
+    error_um: np.ndarray
+    limited: np.ndarray
+    capped: np.ndarray
+    sigma_min_ratio: np.ndarray
+
+    def counts(self) -> dict[str, int]:
+        """How many samples met a limit and how many had their gain capped."""
+        return {"limited": int(np.count_nonzero(self.limited)),
+                "capped": int(np.count_nonzero(self.capped))}
+
+
+def forward(phi_fingers, modal_um) -> np.ndarray:
+    """Amplitudes under the fingers (..., m) = Phi_f (..., m, p) @ W_M (..., p) (seed 001, eq 5).
+
+    Also any matrix applied to a batch of vectors (leading axes broadcast)."""
+    phi, modal = np.asarray(phi_fingers), np.asarray(modal_um)
+    # a sum over the few modes, term by term: several times faster than einsum here
+    out = phi[..., 0] * modal[..., None, 0]
+    for j in range(1, phi.shape[-1]):
+        out = out + phi[..., j] * modal[..., None, j]
+    return out
+
+
+def magnitude(z) -> np.ndarray:
+    """|z| of complex amplitudes as sqrt(re^2 + im^2): within an ulp or two of ``np.abs``,
+    which goes through scalar ``hypot`` and is ~10x slower (amplitudes in um never
+    over- or underflow when squared)."""
+    z = np.asarray(z)
+    return np.sqrt(z.real * z.real + z.imag * z.imag)
+
+
+def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=None,
+          limits_um=None, rcond: float = DEFAULT_RCOND) -> ModalSolution:
+    """Modal amplitudes and actuator commands giving ``wanted_um`` under the fingers.
+
+    Parameters
+    ----------
+    phi_fingers : array_like, float or complex, shape (..., m, p)
+        Mode shapes of the p modes at the m fingers (seed 001, eq 4), p >= m; leading
+        axes batch many finger configurations (e.g. a block of samples) in one call.
+    wanted_um : array_like, complex, shape (..., m)
+        Wanted amplitude under each finger (um zero-to-peak, phase in the argument);
+        broadcast against the leading axes of ``phi_fingers``.
+    method : {"exact", "regularised", "bounded"}
+        See the module docstring.
+    actuators : array_like, shape (q, p), optional
+        Modal amplitudes -> actuator commands (seed 000, eq 9); default identity, so
+        the commands are the modal amplitudes. ``"bounded"`` needs it square, invertible.
+    limits_um : float or array_like (q,), optional
+        Largest |command| of each actuator (um zero-to-peak); default none. Required by
+        ``"bounded"``.
+    rcond : float
+        ``"regularised"`` threshold relative to the largest singular value, in (0, 1).
+
+    Returns
+    -------
+    ModalSolution
+    """
+    if method not in METHODS:
+        raise ModesError(f"modal method must be one of {', '.join(METHODS)}, got {method!r}")
+    phi, wanted = _check_inputs(phi_fingers, wanted_um)
+    p = phi.shape[-1]
+    a = _check_actuators(actuators, p)
+    limits = _check_limits(limits_um, a.shape[0])
+    if method == "bounded" and (limits is None or a.shape[0] != p or np.linalg.cond(a) > 1e12):
+        raise ModesError(f"method 'bounded' needs limits_um and a square, invertible "
+                         f"(p, p) actuator matrix, got limits {limits_um!r} and actuators of shape {a.shape}")
+    if not (0 < rcond < 1):
+        raise ModesError(f"rcond must be in (0, 1), got {rcond!r}")
+
+    threshold = rcond if method == "regularised" else _EXACT_RCOND
+    # "bounded" keeps LAPACK's start: its iterations amplify last-bit differences where
+    # the least-squares problem is flat
+    closed = phi.shape[-2:] == (2, 2) and not np.iscomplexobj(phi) and method != "bounded"
+    modal, capped, ratio = (_gains_2x2 if closed else _gains_svd)(
+        phi, wanted, threshold, regularised=method == "regularised")
+    commands = forward(a, modal)  # c = A W_M; no BLAS call for a few modes
+
+    limited = np.zeros(commands.shape[:-1], dtype=bool)
+    if limits is not None:
+        ratios = magnitude(commands) / limits
+        over = ratios[..., 0]  # the largest ratio, column by column (max along a short
+        for j in range(1, ratios.shape[-1]):  # last axis is the slow case of np.max)
+            over = np.maximum(over, ratios[..., j])
+        limited = over > 1
+        scale = 1 / np.maximum(over, 1)
+        commands = commands * scale[..., None]
+        modal = modal * scale[..., None]
+        if method == "bounded" and np.any(limited):
+            a_inv = np.linalg.inv(a)
+            m_cmd = phi[limited] @ a_inv
+            commands[limited] = (bounded_two(m_cmd, wanted[limited], limits) if a.shape[0] == 2
+                                 else _bounded_commands(m_cmd, wanted[limited], commands[limited], limits))
+            modal[limited] = commands[limited] @ a_inv.T
+    achieved = forward(phi, modal)
+    return ModalSolution(modal, commands, achieved, magnitude(achieved - wanted),
+                         limited, capped, ratio)
+
+
+def _gains_svd(phi, wanted, rcond: float, regularised: bool):
+    """``W_M = V g(s) U^H W_f`` from the batched SVD (module docstring); any (..., m, p).
+
+    Returns ``(modal, capped, sigma_min_ratio)`` as :class:`ModalSolution` names them.
+    """
+    u, s, vh = np.linalg.svd(phi, full_matrices=False)
+    s_max = s[..., :1]
+    ratio = np.divide(s[..., -1], s_max[..., 0], out=np.zeros(s.shape[:-1]), where=s_max[..., 0] > 0)
+    threshold = rcond * s_max
+    above = ((s >= threshold) if regularised else (s > threshold)) & (s > 0)
+    inverse = np.divide(1.0, s, out=np.zeros_like(s), where=above)
+    if regularised:
+        inverse += np.divide(s, threshold ** 2, out=np.zeros_like(s),
+                             where=~above & (threshold > 0))
+    capped = ~np.all(above, axis=-1)
+    coeff = inverse * np.einsum("...ji,...j->...i", u.conj(), wanted)
+    modal = np.einsum("...ji,...j->...i", vh.conj(), coeff)
+    return modal, capped, ratio
+
+
+def _gains_2x2(phi, wanted, rcond: float, regularised: bool):
+    """:func:`_gains_svd` in closed form for real 2 x 2 ``Phi_f`` (two modes, two fingers
+    or one finger and a zero row): the same ``V g(s) U^T`` without a LAPACK call per matrix.
+
+    Singular values: with E = (a + d)/2, F = (a - d)/2, G = (c + b)/2, H = (c - b)/2 of
+    Phi = [[a, b], [c, d]], s1 = Q + R and s2 = |Q - R|, Q = |(E, H)|, R = |(F, G)|.
+    Where every gain is 1/s the result is the inverse, adj(Phi) W_f / det. Elsewhere the
+    gain is 1/s1 on the first singular pair and s2 / t^2 ("regularised", t the threshold)
+    or 0 ("exact") on the second: with A = Phi^T Phi (eigenvalues s1^2 > s2^2) that is
+    ``h(A) Phi^T W_f`` for h(s^2) = g(s)/s, and on two eigenvalues h(A) = alpha I + beta A
+    (Lagrange interpolation; s1^2 - s2^2 = 4 Q R is at least 0.99 s1^2 there, since
+    s2 < t = 0.1 s1 with the default threshold). Agreement with LAPACK: 1e-15 relative
+    for the inverse (times the condition number, as for any solve), 1e-13 in the
+    regularised zone, where alpha and beta A cancel by up to 1/rcond^2 = 100
+    (tests/test_speedups.py).
+    """
+    batch = phi.shape[:-2]
+    phi, wanted = phi.reshape(-1, 2, 2), wanted.reshape(-1, 2)
+    a, b, c, d = phi[:, 0, 0], phi[:, 0, 1], phi[:, 1, 0], phi[:, 1, 1]
+    q = np.sqrt(((a + d) / 2) ** 2 + ((c - b) / 2) ** 2)
+    r = np.sqrt(((a - d) / 2) ** 2 + ((c + b) / 2) ** 2)
+    s1, s2 = q + r, np.abs(q - r)
+    threshold = rcond * s1
+    full = ((s2 >= threshold) if regularised else (s2 > threshold)) & (s2 > 0)
+    ratio = np.divide(s2, s1, out=np.zeros(s1.shape), where=s1 > 0)
+    # the real gain matrix G, W_M = G W_f: the inverse where every gain is 1/s
+    inv_det = np.divide(1.0, a * d - b * c, out=np.zeros(a.shape), where=full)
+    g = [[d * inv_det, -b * inv_det], [-c * inv_det, a * inv_det]]
+    rest = ~full & (s1 > 0)
+    if np.any(rest):  # h(A) Phi^T = alpha Phi^T + beta Phi^T (Phi Phi^T)
+        b00, b01, b11 = a * a + b * b, a * c + b * d, c * c + d * d
+        with np.errstate(divide="ignore", invalid="ignore"):  # s1 = 0 or full: not kept
+            lam1 = s1 * s1
+            h2 = 1.0 / (threshold * threshold) if regularised else 0.0
+            beta = (1.0 / lam1 - h2) / (4.0 * q * r)
+            alpha = 1.0 / lam1 - beta * lam1
+            for i, (x0, x1) in enumerate(((a, c), (b, d))):  # rows of Phi^T
+                g[i][0] = np.where(rest, alpha * x0 + beta * (x0 * b00 + x1 * b01), g[i][0])
+                g[i][1] = np.where(rest, alpha * x1 + beta * (x0 * b01 + x1 * b11), g[i][1])
+    w0, w1 = wanted[:, 0], wanted[:, 1]
+    modal = np.stack((g[0][0] * w0 + g[0][1] * w1, g[1][0] * w0 + g[1][1] * w1), axis=-1)
+    return modal.reshape(batch + (2,)), (~full).reshape(batch), ratio.reshape(batch)
+
+
+def _bounded_commands(m_cmd, wanted, start, limits) -> np.ndarray:
+    """min ||M c - w||^2 + eps ||c||^2 subject to |c_j| <= limits_j, for (k, m, q) M.
+
+    FISTA with gradient restart (O'Donoghue and Candes 2015); eps = 1e-12 ||M||^2 only
+    breaks ties where M is singular. Each problem stops on its own, once the gradient
+    mapping bounds its distance to the optimum (2 L / mu times the last step, L and mu the
+    objective's smoothness and strong convexity) below ``_FISTA_TOL`` of the largest limit:
+    a step-size test alone stops flat problems up to cond(M)^2 times too early, and a
+    shared test would make one problem's answer depend on the others in its batch.
+    Returns the best iterate per problem.
+    """
+    s = np.linalg.svd(m_cmd, compute_uv=False)
+    s_max, s_min = s[:, 0], s[:, -1] if m_cmd.shape[-2] >= m_cmd.shape[-1] else np.zeros(len(s))
+    eps = 1e-12 * s_max ** 2
+    lipschitz, convexity = 2 * (s_max ** 2 + eps), 2 * (s_min ** 2 + eps)
+    step = (1 / lipschitz)[:, None]
+    bound = 2 * lipschitz / convexity  # distance to the optimum per unit of step
+    mh = np.conj(np.swapaxes(m_cmd, -1, -2))
+
+    def objective(c):
+        r = np.einsum("kij,kj->ki", m_cmd, c) - wanted
+        return np.sum(np.abs(r) ** 2, axis=-1) + eps * np.sum(np.abs(c) ** 2, axis=-1)
+
+    def project(c):
+        mag = np.abs(c)
+        return c * np.minimum(1, limits / np.where(mag > 0, mag, 1))
+
+    c = y = start.copy()
+    t = np.ones(len(c))
+    best, best_obj = c.copy(), objective(c)
+    active = np.ones(len(c), dtype=bool)
+    for _ in range(_FISTA_MAX_ITER):
+        grad = 2 * np.einsum("kij,kj->ki", mh, np.einsum("kij,kj->ki", m_cmd, y) - wanted) + 2 * eps[:, None] * y
+        c_new = project(y - step * grad)
+        restart = np.real(np.sum(np.conj(y - c_new) * (c_new - c), axis=-1)) > 0
+        t_new = np.where(restart, 1.0, (1 + np.sqrt(1 + 4 * t * t)) / 2)
+        momentum = np.where(restart, 0.0, (t - 1) / t_new)[:, None]
+        y_new = c_new + momentum * (c_new - c)
+        active &= bound * np.max(np.abs(y - c_new), axis=-1) >= _FISTA_TOL * np.max(limits)
+        keep = active[:, None]
+        c, y, t = np.where(keep, c_new, c), np.where(keep, y_new, y), np.where(active, t_new, t)
+        obj = objective(c_new)
+        better = obj < best_obj
+        best[better], best_obj[better] = c_new[better], obj[better]
+        if not np.any(active):
+            break
+    return best
+
+
+def _check_inputs(phi_fingers, wanted_um) -> tuple[np.ndarray, np.ndarray]:
+    phi = np.asarray(phi_fingers)
+    if phi.ndim < 2 or phi.shape[-2] < 1 or phi.shape[-1] < phi.shape[-2]:
+        raise ModesError(f"phi_fingers must have shape (..., m, p) with p >= m >= 1 "
+                         f"(fingers x modes), got {phi.shape}")
+    phi = phi.astype(np.complex128 if np.iscomplexobj(phi) else np.float64)
+    wanted = np.asarray(wanted_um, dtype=np.complex128)
+    if wanted.ndim < 1 or wanted.shape[-1] != phi.shape[-2]:
+        raise ModesError(f"wanted_um must have shape (..., m) with m = {phi.shape[-2]} "
+                         f"fingers, got {wanted.shape}")
+    batch = np.broadcast_shapes(phi.shape[:-2], wanted.shape[:-1])
+    phi = np.broadcast_to(phi, batch + phi.shape[-2:])
+    wanted = np.broadcast_to(wanted, batch + wanted.shape[-1:])
+    for name, arr in (("phi_fingers", phi), ("wanted_um", wanted)):
+        if not np.all(np.isfinite(arr)):
+            raise ModesError(f"{name} has non-finite values (first at index "
+                             f"{np.argwhere(~np.isfinite(arr))[0].tolist()}); expected finite numbers")
+    return phi, wanted
+
+
+def _check_actuators(actuators, p: int) -> np.ndarray:
+    if actuators is None:
+        return np.eye(p)
+    a = np.asarray(actuators)
+    if a.ndim != 2 or a.shape[1] != p or not np.all(np.isfinite(a)):
+        raise ModesError(f"actuators must be a finite (q, p) matrix with p = {p} modes, "
+                         f"got shape {a.shape}")
+    return a
+
+
+def _check_limits(limits_um, q: int) -> np.ndarray | None:
+    if limits_um is None:
+        return None
+    lim = np.broadcast_to(np.asarray(limits_um, dtype=np.float64), (q,)) if np.ndim(limits_um) == 0 \
+        else np.asarray(limits_um, dtype=np.float64)
+    if lim.shape != (q,) or not np.all(np.isfinite(lim) & (lim > 0)):
+        raise ModesError(f"limits_um must be one finite value > 0 or one per actuator "
+                         f"({q}), got {limits_um!r}")
+    return lim

@@ -1,0 +1,184 @@
+"""Modal actuation: wanted amplitudes under the fingers -> modal amplitudes -> channel commands.
+
+For the modal profiles (``device.profile.MODAL_PROFILES``): seed 000's beam (two
+flexural modes, two transducers, eq 10: ``c = Phi_act Phi_f^{-1} W_f``) and seed 001's
+2D plate (X and Y modes, channels V_AC and V_BD; eqs 4-5 for m fingers and p modes).
+Everything that does not depend on the fingers is built once, at scene load: the mode
+shapes (modelled or measured), the actuator matrix (shapes at the transducers, or the
+plate's wiring) and the channel limits.
+
+Per block, vectorised over all samples (one batched ``device.actuation.modal.solve``):
+
+1. Finger positions on the display -> structure coordinates (beam: x along its length
+   from its end; plate: x, y from its corner). Positions off the structure (a predicted
+   position overshooting the display) are held at its edge and counted (``off_structure``).
+2. The fingers touching are numbered in order of touch-down (``device.actuation.base.
+   touch_rank``); the p longest-touching are served (p = number of modes). Their rows
+   of Phi_f, in that order, fill a p x p system whose remaining rows are zero. A zero row
+   adds a zero singular value, which every method of ``device.actuation.modal`` ignores (gain 0),
+   so the padded system has exactly the solution of the m x p one (m <= p): one batched
+   solve covers every count of fingers, including none (all commands 0).
+3. Commands ``c = A W_M`` are complex: channel amplitude |c| (um zero-to-peak) and
+   phase arg(c) (rad; 0 for a zero command). Channels meeting their limit are scaled as ``device.actuation.modal``
+   documents and counted (``limited``).
+4. Achieved amplitude under every finger touching, served or not, is |Phi(x) W_M| (the
+   forward model, seed 001 eq 5); 0 for fingers not touching.
+
+Wanted amplitudes are taken with phase 0 under every finger, as in seed 000's worked
+example (eqs 12-14).
+"""
+
+from __future__ import annotations
+
+import math
+import string
+from collections.abc import Callable
+
+import numpy as np
+
+from device.actuation.base import Actuated, touch_rank
+from device.structures.beam import FreeFreeBeam, ModesError
+from device.actuation.modal import forward, magnitude, solve
+from device.structures.plate2d import ACTUATOR_NAMES, ACTUATORS, Plate2D
+
+#: largest condition number accepted for the actuator matrix (an actuator on a node of a
+#: driven mode cannot excite it: seed 000 section V)
+MAX_ACTUATOR_CONDITION = 1e6
+
+
+class ModalActuation:
+    """Modal control of p modes through q channels (see the module docstring).
+
+    Parameters
+    ----------
+    shapes : callable (x, y) -> float64 (..., p)
+        Mode shapes at structure coordinates ``x``, ``y`` (mm, same shape), already
+        within the structure.
+    bounds : ((x_min, x_max), (y_min, y_max))
+        The structure's extent in its own coordinates (mm); positions are clipped to it.
+    offset_mm : (x0, y0)
+        Display position of the structure's origin: structure = display - offset.
+    actuators : (q, p) array
+        Modal amplitudes -> channel commands (seed 000 eq 9).
+    channels : q channel names.
+    limits_um : (q,) largest |command| of each channel (um zero-to-peak).
+    method, rcond : passed to ``device.actuation.modal.solve``.
+    """
+
+    has_phases = True
+
+    def __init__(self, shapes: Callable, bounds, offset_mm, actuators, channels, limits_um,
+                 method: str, rcond: float):
+        self.shapes = shapes
+        self.bounds = tuple(tuple(float(v) for v in b) for b in bounds)
+        self.offset_mm = tuple(float(v) for v in offset_mm)
+        self.actuators = np.asarray(actuators, dtype=np.float64)
+        self.channels = tuple(channels)
+        self.limits_um = np.broadcast_to(np.asarray(limits_um, dtype=np.float64), (len(self.channels),))
+        self.method = method
+        self.rcond = float(rcond)
+        self.n_modes = self.actuators.shape[1]
+        cond = np.linalg.cond(self.actuators)
+        if self.actuators.shape[0] != len(self.channels) or not cond < MAX_ACTUATOR_CONDITION:
+            raise ModesError(f"actuator matrix {self.actuators.round(4).tolist()} (channels "
+                             f"{', '.join(self.channels)}) has condition number {cond:.3g}; expected "
+                             f"one channel per row and below {MAX_ACTUATOR_CONDITION:g} (is an "
+                             f"actuator on a node of a driven mode?)")
+
+    def structure_position(self, x_mm, y_mm) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Display positions (mm) -> structure coordinates clipped to it, and where clipped."""
+        (x_lo, x_hi), (y_lo, y_hi) = self.bounds
+        x = np.asarray(x_mm, dtype=np.float64) - self.offset_mm[0]
+        y = np.asarray(y_mm, dtype=np.float64) - self.offset_mm[1]
+        xc, yc = np.clip(x, x_lo, x_hi), np.clip(y, y_lo, y_hi)
+        return xc, yc, (xc != x) | (yc != y)
+
+    def command(self, wanted_um: np.ndarray, fingers) -> Actuated:
+        """Channel commands for a block; see the module docstring.
+
+        Parameters
+        ----------
+        wanted_um : float64 (F, n)
+            Amplitude each finger's friction target asks for (um zero-to-peak).
+        fingers : rendering.tracking.tracks.FingerBlock
+            Uses contact, x_pred, y_pred and touch_start, all (F, n).
+
+        Returns
+        -------
+        Actuated
+            commands_um, phases_rad (n, q); achieved_um (F, n); ``limited`` samples
+            whose commands met a channel limit; ``off_structure`` finger samples held
+            at the structure's edge.
+        """
+        contact = fingers.contact
+        n = contact.shape[1]
+        p = self.n_modes
+        x, y, off = self.structure_position(fingers.x_pred, fingers.y_pred)
+        phi_all = self.shapes(x, y)                                     # (F, n, p)
+        rank = touch_rank(contact, fingers.touch_start)                 # (F, n)
+        phi = np.zeros((n, p, p))
+        wanted = np.zeros((n, p))
+        served = contact & (rank < p)
+        for f in range(contact.shape[0]):  # finger f fills row rank[f] where it is served
+            for row in range(p):
+                at = served[f] & (rank[f] == row)
+                np.copyto(phi[:, row, :], phi_all[f], where=at[:, None])
+                np.copyto(wanted[:, row], wanted_um[f], where=at)
+        sol = solve(phi, wanted, self.method, actuators=self.actuators, limits_um=self.limits_um,
+                    rcond=self.rcond)
+        achieved = magnitude(forward(np.swapaxes(phi_all, 0, 1), sol.modal_um)).T
+        # the solver scales to the limits; this only removes its last-bit rounding above them
+        amplitude = np.minimum(magnitude(sol.commands_um), self.limits_um)
+        # + 0.0 turns -0.0 into 0.0: a zero command has phase 0, whatever the sign of
+        # the zeros the solve happened to produce
+        return Actuated(commands_um=amplitude, phases_rad=np.angle(sol.commands_um + 0.0),
+                        achieved_um=np.where(contact, achieved, 0.0),
+                        limited=int(np.count_nonzero(sol.limited)),
+                        off_structure=int(np.count_nonzero(off & contact)))
+
+
+def beam_actuation(spec, amplitude_limit_um: float) -> ModalActuation:
+    """The actuation for ``profile = "beam-seed000"`` (``device.profile.BeamStructure``).
+
+    Shapes from the measured table if the spec has one, else from the free-free beam
+    model; the actuator matrix is the shapes at the transducers (seed 000, eq 9).
+    """
+    if spec.modes is not None:
+        table = spec.modes
+        span = (float(table.positions_mm[0]), float(table.positions_mm[-1]))
+
+        def shapes(x, y):
+            return table.phi(x)
+    else:
+        beam = FreeFreeBeam(spec.length_mm, spec.width_mm, spec.thickness_mm, spec.youngs_gpa,
+                            spec.density_kg_m3, theory=spec.theory, poisson=spec.poisson)
+        for order in spec.orders:
+            beam.frequency_hz(order)  # solves each mode once, here; refuses bad orders
+        span = (0.0, beam.length_mm)
+
+        def shapes(x, y):
+            return beam.phi(spec.orders, x)
+    positions = np.asarray(spec.actuators_mm, dtype=np.float64)
+    actuators = shapes(positions, np.zeros_like(positions))
+    names = tuple(f"x{letter}" for letter in string.ascii_uppercase[:len(positions)])
+    return ModalActuation(shapes, (span, (-math.inf, math.inf)), (spec.x0_mm, 0.0), actuators,
+                          names, spec.channel_limit_um, spec.method, spec.rcond)
+
+
+def plate_actuation(spec, amplitude_limit_um: float) -> ModalActuation:
+    """The actuation for ``profile = "plate-seed001"`` (``device.profile.PlateStructure``):
+    shapes of seed 001 eq 6, channels V_AC and V_BD (section 4.1)."""
+    plate = Plate2D(spec.width_mm, spec.height_mm, spec.thickness_mm, spec.youngs_gpa,
+                    spec.density_kg_m3, poisson=spec.poisson, order=spec.order)
+    limit = spec.channel_limit_um if spec.channel_limit_um is not None else amplitude_limit_um
+    return ModalActuation(plate.phi, ((0.0, plate.width_mm), (0.0, plate.height_mm)),
+                          (spec.x0_mm, spec.y0_mm), ACTUATORS, ACTUATOR_NAMES, limit,
+                          spec.method, spec.rcond)
+
+
+BUILDERS = {"beam-seed000": beam_actuation, "plate-seed001": plate_actuation}
+
+
+def make_modal_actuation(device) -> ModalActuation:
+    """The modal actuation of a device profile (``device.profile.DeviceProfile``)."""
+    return BUILDERS[device.profile](device.structure, device.amplitude_limit_um)

@@ -1,0 +1,395 @@
+"""A simulated plate microcontroller: the device side of ``device/PROTOCOL.md``.
+
+:class:`DeviceCore` is the firmware's logic on a virtual clock (pure apart from the
+optional log writers): it decodes the host's frames, keeps received samples in a jitter
+buffer indexed by sample number, plays one sample per tick at its sample rate, models
+the plate's closed amplitude loop as a first-order low pass (seed 003, Fig. 3b: 400 Hz
+bandwidth; bilinear transform prewarped at the bandwidth), and enforces the watchdog: no valid frame for ``watchdog_ms`` and the
+output ramps to zero within ``ramp_ms`` and the buffer is flushed.
+
+:func:`serve_pty` binds a core to a pseudo-terminal and the wall clock; ``frictex
+sim-device`` runs it.
+
+Played-sample log (CSV, ``--log``): ``index,ch0_um,...[,ch0_phase_rad,...]``, one row per
+sample actually played from a valid frame (exactly the commanded fixed-point values,
+before the plate model). Plate log (``--plate-log``): ``t_s,state,ch0_setpoint_um,...,
+ch0_plate_um,...``, one row per tick.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import select
+import sys
+import time
+import tty
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.signal import lfilter
+
+from device.link import protocol as p
+from device.link.protocol import DeviceState as S
+
+
+@dataclass(frozen=True)
+class DeviceConfig:
+    """What the simulated device is (all of it is declared in its Info answer).
+
+    limits_um : per-channel amplitude limit (um zero-to-peak); one value means all channels.
+    buffer_samples : jitter-buffer capacity (samples per channel).
+    bandwidth_hz : -3 dB bandwidth of the modelled amplitude loop.
+    force_n : normal force reported by a simulated force sensor (N), None for no sensor.
+    """
+
+    channels: int = 1
+    rate_hz: float = 10_000.0
+    limits_um: tuple[float, ...] = (4.0,)
+    buffer_samples: int = 4096
+    bandwidth_hz: float = 400.0
+    watchdog_ms: int = 25
+    ramp_ms: int = 20
+    phases: bool = False
+    sensor: bool = False
+    force_n: float | None = None
+    name: str = "frictex sim-device"
+
+    def __post_init__(self):
+        checks = [(self.channels >= 1, "channels", "at least 1"),
+                  (0 < self.rate_hz < 4e6, "rate_hz", "in (0, 4e6) Hz"),
+                  (len(self.limits_um) in (1, self.channels), "limits_um",
+                   f"1 or {self.channels} values"),
+                  (all(0 < x <= p.AMPLITUDE_MAX_UM for x in self.limits_um), "limits_um",
+                   f"in (0, {p.AMPLITUDE_MAX_UM:.4f}] um"),
+                  (self.buffer_samples >= 2, "buffer_samples", "at least 2"),
+                  (0 < self.bandwidth_hz < self.rate_hz / 2, "bandwidth_hz",
+                   "positive and below half the sample rate"),
+                  (1 <= self.watchdog_ms <= 49, "watchdog_ms", "in [1, 49] ms"),
+                  (0 <= self.ramp_ms <= 50 - self.watchdog_ms, "ramp_ms",
+                   f"in [0, {50 - self.watchdog_ms}] ms: watchdog_ms + ramp_ms must not "
+                   "exceed 50 ms (PROTOCOL.md 5.3)"),
+                  (self.force_n is None or 0 <= self.force_n <= 65.0, "force_n", "in [0, 65] N")]
+        for ok, name, expected in checks:
+            if not ok:
+                raise ValueError(f"sim-device {name} = {getattr(self, name)!r}: expected {expected}")
+
+    @property
+    def limits(self) -> np.ndarray:
+        return np.broadcast_to(np.asarray(self.limits_um, dtype=np.float64), (self.channels,))
+
+    def info(self) -> p.Info:
+        return p.Info(self.channels, self.rate_hz, tuple(float(x) for x in self.limits),
+                      self.buffer_samples, self.watchdog_ms, self.ramp_ms, self.phases,
+                      self.sensor, self.force_n is not None, self.name)
+
+
+@dataclass
+class Counters:
+    underruns: int = 0
+    gap_samples: int = 0
+    late_samples: int = 0
+    overflow_samples: int = 0
+    watchdog_trips: int = 0
+    clamped: int = 0
+    played_samples: int = 0
+
+
+@dataclass
+class DeviceCore:
+    """The device's logic on a virtual clock (see the module docstring).
+
+    Drive it with :meth:`receive` (bytes from the host at time ``t_s``; returns bytes to
+    send back) and :meth:`advance_to` (play every tick up to time ``t_s``). ``log`` and
+    ``plate_log`` are optional callables receiving the played samples and the per-tick
+    output (see :class:`CsvLog`).
+    """
+
+    config: DeviceConfig = field(default_factory=DeviceConfig)
+    log: object = None
+    plate_log: object = None
+
+    def __post_init__(self):
+        c = self.config
+        self.decoder = p.Decoder()
+        self.counters = Counters()
+        self.state = S.IDLE
+        self._cap = c.buffer_samples
+        self._amp = np.zeros((self._cap, c.channels), dtype=np.uint16)
+        self._phase = np.zeros((self._cap, c.channels), dtype=np.uint16)
+        self._filled = np.zeros(self._cap, dtype=bool)
+        self.level = 0
+        self.play_index = 0
+        self._origin_set = False
+        self.prefill = 1
+        self.tick = 0
+        self._last_rx_tick: int | None = None
+        self._wd_ticks = max(1, math.ceil(c.watchdog_ms * 1e-3 * c.rate_hz))
+        self._ramp_ticks = max(1, math.ceil(c.ramp_ms * 1e-3 * c.rate_hz))
+        self.setpoint = np.zeros(c.channels)  # um, what the loop is told to produce now
+        self._ramp_from = np.zeros(c.channels)
+        self._ramp_pos = self._ramp_ticks      # ticks into the current ramp (done)
+        # bilinear transform prewarped at the bandwidth: -3 dB and -45 deg exactly at f_c
+        w = math.tan(math.pi * c.bandwidth_hz / c.rate_hz)
+        self._b = np.array([w, w]) / (1.0 + w)
+        self._a = np.array([1.0, (w - 1.0) / (1.0 + w)])
+        self._zi = np.zeros((c.channels, 1))
+        self.plate_um = np.zeros(c.channels)
+        self.stopped = False                   # a Stop finished: output is zero
+        self._tx_seq = 0
+
+    # ------------------------------------------------------------------ host -> device
+    def receive(self, data: bytes, t_s: float) -> bytes:
+        """Handle bytes from the host arriving at ``t_s``; returns the reply bytes."""
+        out = bytearray()
+        for frame in self.decoder.feed(data):
+            self._last_rx_tick = max(self.tick, int(t_s * self.config.rate_hz))
+            reply = self._handle(frame)
+            if reply is not None:
+                out += p.encode(reply, self._tx_seq)
+                self._tx_seq += 1
+        return bytes(out)
+
+    def _handle(self, frame: p.Frame):
+        msg = frame.message
+        if isinstance(msg, p.Hello):
+            self._flush()
+            self._origin_set = False
+            self.prefill = int(min(max(msg.prefill, 1), self._cap // 4))
+            self.state = S.BUFFERING
+            self.stopped = False
+            return self.config.info()
+        if isinstance(msg, p.Heartbeat):
+            if self.state == S.SILENT and not self.stopped:
+                self.state = S.BUFFERING  # the host is back after a watchdog trip
+            return self.status(msg.token)
+        if isinstance(msg, p.Stop):
+            if msg.drain and self.level:
+                self.state = S.DRAINING
+            else:
+                self._silence()
+                self.stopped = True
+            return self.status(0)
+        if isinstance(msg, p.Block):
+            return self._block(frame.seq, msg)
+        return None  # device-to-host messages echoed back at us: ignore
+
+    def _block(self, seq: int, msg: p.Block):
+        c = self.config
+        if self.state == S.IDLE or self.stopped:
+            return p.ErrorReport(p.ErrorCode.NOT_READY, seq, 0, "block before Hello")
+        n, ch = msg.amplitudes.shape
+        if ch != c.channels or (msg.phases is not None) != c.phases:
+            return p.ErrorReport(p.ErrorCode.BAD_BLOCK, seq, ch,
+                                 f"block has {ch} channels, phases={msg.phases is not None}; "
+                                 f"device has {c.channels}, phases={c.phases}")
+        if self.state == S.SILENT:
+            self.state = S.BUFFERING
+        start = msg.start_index
+        if not self._origin_set:  # the first block of a session sets the clock's origin
+            self.play_index = start
+        elif self.level == 0 and self.state == S.BUFFERING and start > self.play_index:
+            self.counters.gap_samples += start - self.play_index
+            self.play_index = start
+        self._origin_set = True
+        top = np.floor(c.limits / p.AMPLITUDE_STEP_UM + 1e-9).astype(np.uint16)
+        amps = msg.amplitudes
+        over = amps > top
+        if over.any():  # the host must clamp; the device checks anyway
+            self.counters.clamped += int(over.sum())
+            amps = np.minimum(amps, top)
+        idx = start + np.arange(n)
+        late = idx < self.play_index
+        beyond = idx >= self.play_index + self._cap
+        keep = ~(late | beyond)
+        self.counters.late_samples += int(late.sum())
+        self.counters.overflow_samples += int(beyond.sum())
+        slots = idx[keep] % self._cap
+        self.level += int((~self._filled[slots]).sum())
+        self._filled[slots] = True
+        self._amp[slots] = amps[keep]
+        if msg.phases is not None:
+            self._phase[slots] = msg.phases[keep]
+        if self.state == S.BUFFERING and self.level >= self.prefill:
+            self.state = S.PLAYING
+        if beyond.any():
+            return p.ErrorReport(p.ErrorCode.OVERFLOW, seq, int(beyond.sum()),
+                                 f"{int(beyond.sum())} samples beyond the buffer")
+        if late.any():
+            return p.ErrorReport(p.ErrorCode.LATE, seq, int(late.sum()),
+                                 f"{int(late.sum())} samples arrived after their time")
+        return None
+
+    def status(self, echo: int) -> p.Status:
+        """The device's current :class:`Status` (``echo``: the heartbeat token)."""
+        d, k = self.decoder.counts, self.counters
+        force = self.config.force_n
+        return p.Status(echo & 0xFFFFFFFF, self.state, self.play_index, self.level,
+                        k.underruns, d.discarded, d.frames_ok, d.lost_frames, k.gap_samples,
+                        k.late_samples, k.overflow_samples, k.watchdog_trips, k.clamped,
+                        tuple(self.plate_um) if self.config.sensor else None,
+                        force)
+
+    @property
+    def finished(self) -> bool:
+        """A Stop has completed and the output has ramped to zero."""
+        return self.stopped and self.state == S.SILENT and self._ramp_pos >= self._ramp_ticks
+
+    # ------------------------------------------------------------------ the clock
+    def _flush(self):
+        self._filled[:] = False
+        self.level = 0
+
+    def _silence(self):
+        """Start ramping the output to zero; drop everything buffered."""
+        self._flush()
+        self.state = S.SILENT
+        self._ramp_from = self.setpoint.copy()
+        self._ramp_pos = 0
+
+    def advance_to(self, t_s: float) -> None:
+        """Play every tick up to (not including) tick ``floor(t_s * rate)``."""
+        end = int(t_s * self.config.rate_hz)
+        while self.tick < end:
+            n = end - self.tick
+            if self.state != S.SILENT and self._last_rx_tick is not None:
+                deadline = self._last_rx_tick + self._wd_ticks
+                if self.tick >= deadline:
+                    self.counters.watchdog_trips += 1
+                    self._silence()
+                    continue
+                n = min(n, deadline - self.tick)
+            self._run(min(n, self._cap))
+
+    def _run(self, n: int) -> None:
+        c = self.config
+        sp = np.empty((n, c.channels))
+        if self.state == S.SILENT:
+            k = self._ramp_pos + np.arange(1, n + 1)
+            frac = np.clip(1.0 - k / self._ramp_ticks, 0.0, 1.0)
+            sp[:] = frac[:, None] * self._ramp_from
+            self._ramp_pos = min(self._ramp_pos + n, self._ramp_ticks)
+        elif self.state in (S.PLAYING, S.DRAINING):
+            self._play(sp)
+        else:
+            sp[:] = self.setpoint  # IDLE/BUFFERING hold the last value (a step is a click)
+        self.setpoint = sp[-1].copy()
+        plate, self._zi = lfilter(self._b, self._a, sp, axis=0, zi=self._zi.T)
+        self._zi = self._zi.T
+        self.plate_um = plate[-1].copy()
+        if self.plate_log is not None:
+            self.plate_log((self.tick + np.arange(n)) / c.rate_hz, self.state, sp, plate)
+        self.tick += n
+
+    def _play(self, sp: np.ndarray) -> None:
+        n = len(sp)
+        idx = self.play_index + np.arange(n)
+        slots = idx % self._cap
+        has = self._filled[slots]
+        count = np.cumsum(has)
+        if count[-1] >= self.level:  # the buffer runs dry inside this run
+            used = int(np.argmax(count >= self.level)) + 1 if self.level else 0
+        else:
+            used = n
+        has[used:] = False
+        played = np.flatnonzero(has)
+        # hold the previous value across gaps and after the last played sample
+        last = np.maximum.accumulate(np.where(has, np.arange(n), -1))
+        values = p.amplitude_from_wire(self._amp[slots])
+        sp[:] = np.where((last >= 0)[:, None], values[np.maximum(last, 0)], self.setpoint)
+        self.counters.gap_samples += used - len(played)
+        self.counters.played_samples += len(played)
+        if self.log is not None and len(played):
+            phases = p.phase_from_wire(self._phase[slots[played]]) if self.config.phases else None
+            self.log(idx[played], values[played], phases)
+        self._filled[slots[:used]] = False
+        self.level -= len(played)
+        self.play_index += used
+        if used < n:
+            if self.state == S.DRAINING:
+                self._silence()
+                self.stopped = True
+            else:
+                self.counters.underruns += 1
+                self.state = S.BUFFERING
+
+
+class CsvLog:
+    """Append-only CSV writer for the played-sample or plate log (see module docstring)."""
+
+    def __init__(self, path, header: list[str]):
+        self._fh = open(path, "w", encoding="ascii", newline="\n")
+        self._fh.write(",".join(header) + "\n")
+
+    def rows(self, columns: list[np.ndarray], formats: list[str]) -> None:
+        table = np.column_stack(columns)
+        np.savetxt(self._fh, table, fmt=formats, delimiter=",")
+
+    def close(self) -> None:
+        self._fh.close()
+
+
+def played_log(path, channels: int, phases: bool):
+    """A ``log`` callable for :class:`DeviceCore` writing ``path``; returns (callable, CsvLog)."""
+    names = [f"ch{k}_um" for k in range(channels)]
+    if phases:
+        names += [f"ch{k}_phase_rad" for k in range(channels)]
+    csv = CsvLog(path, ["index", *names])
+    fmts = ["%d"] + ["%.9f"] * len(names)
+
+    def write(index, values, phase_values):
+        cols = [index, values] + ([phase_values] if phase_values is not None else [])
+        csv.rows(cols, fmts)
+    return write, csv
+
+
+def plate_log(path, channels: int):
+    """A ``plate_log`` callable for :class:`DeviceCore`; returns (callable, CsvLog)."""
+    csv = CsvLog(path, ["t_s", "state", *[f"ch{k}_setpoint_um" for k in range(channels)],
+                        *[f"ch{k}_plate_um" for k in range(channels)]])
+    fmts = ["%.6f", "%d"] + ["%.9f"] * (2 * channels)
+
+    def write(t, state, setpoint, plate):
+        csv.rows([t, np.full(len(t), state), setpoint, plate], fmts)
+    return write, csv
+
+
+def open_pty() -> tuple[int, int, str]:
+    """A raw pseudo-terminal: (master fd, slave fd, slave path)."""
+    master, slave = os.openpty()
+    tty.setraw(slave)
+    os.set_blocking(master, False)
+    return master, slave, os.ttyname(slave)
+
+
+def serve_pty(core: DeviceCore, master: int, *, poll_s: float = 0.001,
+              exit_on_stop: bool = True, parent_pid: int | None = None,
+              quit_event=None, clock=time.monotonic) -> None:
+    """Run ``core`` on the pty ``master`` in real time until a Stop completes.
+
+    Received bytes are handled before the clock advances, so a sim process that was
+    descheduled does not mistake its own sleep for host silence. Replies that do not fit
+    the pty's buffer are dropped (a UART does not wait either). ``parent_pid``: also stop
+    when that process is gone. ``quit_event``: a ``threading.Event`` that stops it too.
+    """
+    t0 = clock()
+    while True:
+        ready, _, _ = select.select([master], [], [], poll_s)
+        now = clock() - t0
+        if ready:
+            try:
+                data = os.read(master, 65536)
+            except (BlockingIOError, OSError):
+                data = b""  # EIO: no host has the slave open right now
+            reply = core.receive(data, now) if data else b""
+            if reply:
+                try:
+                    os.write(master, reply)
+                except (BlockingIOError, OSError):
+                    pass
+        core.advance_to(now)
+        if (exit_on_stop and core.finished) or (quit_event is not None and quit_event.is_set()):
+            return
+        if parent_pid is not None and os.getppid() != parent_pid:
+            print("frictex sim-device: parent process gone; stopping", file=sys.stderr)
+            return

@@ -1,0 +1,488 @@
+"""Linux evdev multi-touch events to touch samples, and device units to screen mm.
+
+Input: a stream of evdev events ``(t_s, type, code, value)`` in the order the kernel
+sent them (from a recording or a live device). Output: :class:`RawSample` per contact
+per frame, in device units, with ``down`` / ``move`` / ``up`` events and stable finger
+ids (the smallest integer >= 0 not held by another contact; reused after a lift).
+
+Grammar of the stream (Linux ``Documentation/input/multi-touch-protocol.rst``)::
+
+    stream   := { frame } [ partial ]
+    frame    := { event } SYN_REPORT          # time of the frame = time of its SYN_REPORT
+    protocol A: frame := { contact } SYN_REPORT
+                contact := { ABS_MT_* } SYN_MT_REPORT   # full state of every contact, every frame;
+                an empty frame (lone SYN_MT_REPORT, or BTN_TOUCH 0) lifts every contact
+    protocol B: frame := { ABS_MT_SLOT n | ABS_MT_TRACKING_ID id | ABS_MT_* } SYN_REPORT
+                slots keep their values; only changed axes are sent; TRACKING_ID -1 lifts
+
+The protocol is recognised from the stream itself: a frame holding SYN_MT_REPORT is
+protocol A, a frame with ABS_MT_SLOT, or with MT axes but no SYN_MT_REPORT, is protocol B.
+A stream that mixes them is an error. Protocol A contacts carrying ABS_MT_TRACKING_ID are
+matched by it; contacts without one are matched to the previous frame's contacts by least
+total distance (matching by order would swap two fingers when the first one lifts).
+
+Samples are never invented or merged: every contact reported in a protocol A frame gives a
+sample, including a finger re-reported unmoved 0.6 ms after another one moved (refdata
+phone-two-finger-drag); smoothing that is the tracker's job (``rendering/tracking/tracks.py``).
+A protocol B slot gives a sample in each frame where one of its values changed.
+SYN_DROPPED (the kernel's buffer overran) discards events up to the next SYN_REPORT and is
+counted; contacts without a known position are not emitted and are counted.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterable, NamedTuple
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from rendering.input.trace_file import DEFAULT_FORCE_N, DOWN, MOVE, UP, Trace, TraceError, make_trace
+
+EV_SYN, EV_KEY, EV_ABS = 0x00, 0x01, 0x03
+SYN_REPORT, SYN_MT_REPORT, SYN_DROPPED = 0x00, 0x02, 0x03
+BTN_TOUCH = 0x14A
+ABS_MT_SLOT = 0x2F
+ABS_MT_TOUCH_MAJOR = 0x30
+ABS_MT_POSITION_X = 0x35
+ABS_MT_POSITION_Y = 0x36
+ABS_MT_TRACKING_ID = 0x39
+ABS_MT_PRESSURE = 0x3A
+#: MT axes a contact's state is made of (what makes a protocol B frame recognisable)
+MT_AXES = (ABS_MT_TOUCH_MAJOR, ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_TRACKING_ID,
+           ABS_MT_PRESSURE)
+#: more simultaneous contacts (protocol B slots) than any touch screen reports
+MAX_CONTACTS = 64
+
+
+class Event(NamedTuple):
+    """One evdev event. ``line`` is where it came from (0: unknown), for error messages."""
+
+    t_s: float
+    type: int
+    code: int
+    value: int
+    line: int = 0
+
+
+class AbsInfo(NamedTuple):
+    """An absolute axis as the kernel describes it (``struct input_absinfo``, evemu ``A:``).
+
+    minimum, maximum : range of values (device units). resolution : units per mm (0: unknown).
+    """
+
+    minimum: int
+    maximum: int
+    resolution: int = 0
+
+
+class RawSample(NamedTuple):
+    """One contact in one frame, in device units (counts); ``nan`` where the device did not say."""
+
+    t_s: float
+    finger: int
+    x: float
+    y: float
+    pressure: float
+    touch_major: float
+    event: int
+
+
+class TouchSample(NamedTuple):
+    """One contact in one frame on the screen: mm, N, s (what live sources hand the demo)."""
+
+    t_s: float
+    finger: int
+    x_mm: float
+    y_mm: float
+    force_n: float
+    event: int
+
+
+def signed32(value: int) -> int:
+    """A 32-bit field as the kernel's ``__s32`` (``ffffffff`` -> -1)."""
+    value &= 0xFFFFFFFF
+    return value - (1 << 32) if value & 0x80000000 else value
+
+
+class _Contact:
+    """Axis values of one contact (a protocol B slot, or a protocol A report)."""
+
+    __slots__ = ("tracking_id", "x", "y", "pressure", "touch_major", "changed", "new")
+
+    def __init__(self) -> None:
+        self.tracking_id = -1
+        self.x = self.y = self.pressure = self.touch_major = math.nan
+        self.changed = False
+        self.new = False
+
+    def set_axis(self, code: int, value: int) -> None:
+        if code == ABS_MT_POSITION_X:
+            self.x = float(value)
+        elif code == ABS_MT_POSITION_Y:
+            self.y = float(value)
+        elif code == ABS_MT_PRESSURE:
+            self.pressure = float(value)
+        elif code == ABS_MT_TOUCH_MAJOR:
+            self.touch_major = float(value)
+        self.changed = True
+
+    @property
+    def placed(self) -> bool:
+        return not (math.isnan(self.x) or math.isnan(self.y))
+
+
+class EvdevDecoder:
+    """Incremental decoder: ``feed(events)`` returns the samples of the frames completed.
+
+    Feeding a stream in any number of pieces gives the same samples as feeding it whole.
+    Counters (read them after feeding): ``frames``, ``dropped`` (SYN_DROPPED), ``unplaced``
+    (contacts without X and Y, not emitted). ``protocol`` is ``"A"``, ``"B"`` or None.
+
+    Parameters
+    ----------
+    where : str
+        Names the source in error messages (a file name).
+    """
+
+    def __init__(self, where: str = "<events>") -> None:
+        self.where = where
+        self.protocol: str | None = None
+        self.frames = 0
+        self.dropped = 0
+        self.unplaced = 0
+        self._frame: list[Event] = []
+        self._skipping = False
+        self._t_last = -math.inf
+        self._slots: dict[int, _Contact] = {}
+        self._slot = 0
+        self._fingers: dict[object, int] = {}  # contact key -> finger id
+        self._last: dict[object, _Contact] = {}  # protocol A: contacts of the previous frame
+        self._next_key = 0
+
+    @property
+    def pending(self) -> int:
+        """Events buffered after the last SYN_REPORT (an incomplete frame)."""
+        return len(self._frame)
+
+    def _error(self, ev: Event, message: str) -> TraceError:
+        at = f"{self.where}:{ev.line}" if ev.line else self.where
+        return TraceError(f"{at}: {message}")
+
+    def feed(self, events: Iterable[Event]) -> list[RawSample]:
+        """Decode events; return the samples of every frame they complete, in time order."""
+        out: list[RawSample] = []
+        for ev in events:
+            ev = Event(*ev)
+            if ev.type == EV_SYN and ev.code == SYN_DROPPED:
+                self.dropped += 1
+                self._frame.clear()
+                self._skipping = True
+            elif ev.type == EV_SYN and ev.code == SYN_REPORT:
+                if not self._skipping:
+                    self._end_frame(ev, out)
+                self._frame.clear()
+                self._skipping = False
+            elif not self._skipping and ev.type in (EV_SYN, EV_KEY, EV_ABS):
+                self._frame.append(ev)
+        return out
+
+    def _end_frame(self, syn: Event, out: list[RawSample]) -> None:
+        if not math.isfinite(syn.t_s):
+            raise self._error(syn, f"time {syn.t_s!r} s is not a finite number")
+        if syn.t_s < self._t_last:
+            raise self._error(syn, f"time goes back from {self._t_last!r} to {syn.t_s!r} s "
+                                   "(events must be in the order the kernel sent them)")
+        self._t_last = syn.t_s
+        has_mt_report = any(e.type == EV_SYN and e.code == SYN_MT_REPORT for e in self._frame)
+        has_slot = any(e.type == EV_ABS and e.code == ABS_MT_SLOT for e in self._frame)
+        has_axes = any(e.type == EV_ABS and e.code in MT_AXES for e in self._frame)
+        if has_mt_report and has_slot:
+            raise self._error(syn, "frame mixes SYN_MT_REPORT (protocol A) and ABS_MT_SLOT "
+                                   "(protocol B)")
+        kind = "A" if has_mt_report else "B" if (has_slot or has_axes) else None
+        if kind and self.protocol and kind != self.protocol:
+            raise self._error(syn, f"frame uses multitouch protocol {kind} but the stream so far "
+                                   f"used protocol {self.protocol}")
+        self.protocol = self.protocol or kind
+        self.frames += 1
+        if self.protocol == "A":
+            self._frame_a(syn, out)
+        elif self.protocol == "B":
+            self._frame_b(syn.t_s, out)
+
+    # -- finger ids -------------------------------------------------------------------------
+    def _finger(self, key: object) -> int:
+        if key not in self._fingers:
+            used = set(self._fingers.values())
+            self._fingers[key] = next(i for i in range(len(used) + 1) if i not in used)
+        return self._fingers[key]
+
+    def _emit(self, out: list, t: float, key: object, c: _Contact, event: int) -> None:
+        out.append(RawSample(t, self._finger(key), c.x, c.y, c.pressure, c.touch_major, event))
+        if event == UP:
+            del self._fingers[key]
+
+    # -- protocol A ---------------------------------------------------------------------------
+    def _frame_a(self, syn: Event, out: list[RawSample]) -> None:
+        t = syn.t_s
+        reports: list[_Contact] = []
+        cur = _Contact()
+        lift_all = False
+        for ev in self._frame:
+            if ev.type == EV_SYN and ev.code == SYN_MT_REPORT:
+                lift_all |= not cur.changed
+                if cur.changed:
+                    reports.append(cur)
+                cur = _Contact()
+            elif ev.type == EV_ABS and ev.code == ABS_MT_TRACKING_ID:
+                cur.tracking_id = ev.value
+                cur.changed = True
+            elif ev.type == EV_ABS and ev.code in MT_AXES:
+                cur.set_axis(ev.code, ev.value)
+            elif ev.type == EV_KEY and ev.code == BTN_TOUCH and ev.value == 0:
+                lift_all = True
+        if cur.changed:  # axes after the last SYN_MT_REPORT: a contact left unclosed
+            reports.append(cur)
+        placed = [c for c in reports if c.placed]
+        self.unplaced += len(reports) - len(placed)
+        if not placed and not lift_all:
+            return  # a frame of other events (ABS_MISC, MSC_TIMESTAMP): contacts unchanged
+        if len(placed) > MAX_CONTACTS:
+            raise self._error(syn, f"frame at {t!r} s reports {len(placed)} contacts "
+                                   f"(at most {MAX_CONTACTS} expected)")
+        current = self._match_a(syn, placed)
+        for key, c in self._last.items():
+            if key not in current:
+                self._emit(out, t, key, c, UP)
+        for key, c in current.items():
+            self._emit(out, t, key, c, MOVE if key in self._last else DOWN)
+        self._last = current
+
+    def _match_a(self, syn: Event, reports: list[_Contact]) -> dict[object, _Contact]:
+        """Key every contact of this frame: by tracking id, or by least distance to the last frame."""
+        current: dict[object, _Contact] = {}
+        anonymous = []
+        for c in reports:
+            if c.tracking_id < 0:
+                anonymous.append(c)
+                continue
+            key = ("id", c.tracking_id)
+            if key in current:
+                raise self._error(syn, f"frame at {syn.t_s!r} s reports tracking id "
+                                       f"{c.tracking_id} twice (expected one report per contact)")
+            current[key] = c
+        previous = [k for k in self._last if k[0] == "anon"]
+        if anonymous and previous:
+            cost = np.array([[math.hypot(c.x - self._last[k].x, c.y - self._last[k].y)
+                              for k in previous] for c in anonymous])
+            rows, cols = linear_sum_assignment(cost)
+            for r, col in zip(rows.tolist(), cols.tolist()):
+                current[previous[col]] = anonymous[r]
+            matched = set(rows.tolist())
+            anonymous = [c for i, c in enumerate(anonymous) if i not in matched]
+        for c in anonymous:
+            current[("anon", self._next_key)] = c
+            self._next_key += 1
+        return current
+
+    # -- protocol B ---------------------------------------------------------------------------
+    def _frame_b(self, t: float, out: list[RawSample]) -> None:
+        for ev in self._frame:
+            if ev.type != EV_ABS:
+                continue
+            if ev.code == ABS_MT_SLOT:
+                if not 0 <= ev.value < MAX_CONTACTS:
+                    raise self._error(ev, f"ABS_MT_SLOT {ev.value} is out of range "
+                                          f"(expected 0..{MAX_CONTACTS - 1})")
+                self._slot = ev.value
+                continue
+            if ev.code not in MT_AXES:
+                continue
+            slot = self._slots.setdefault(self._slot, _Contact())
+            if ev.code == ABS_MT_TRACKING_ID:
+                if slot.tracking_id >= 0 and ev.value != slot.tracking_id:
+                    self._lift_slot(t, self._slot, slot, out)
+                if ev.value >= 0 and ev.value != slot.tracking_id:
+                    slot.tracking_id, slot.new, slot.changed = ev.value, True, True
+            else:
+                slot.set_axis(ev.code, ev.value)
+        for number, slot in sorted(self._slots.items()):
+            if slot.tracking_id < 0 or not slot.changed:
+                continue
+            if not slot.placed:
+                self.unplaced += 1
+                continue
+            self._emit(out, t, ("slot", number, slot.tracking_id), slot,
+                       DOWN if slot.new else MOVE)
+            slot.new = slot.changed = False
+
+    def _lift_slot(self, t: float, number: int, slot: _Contact, out: list[RawSample]) -> None:
+        key = ("slot", number, slot.tracking_id)
+        if key in self._fingers:  # it was emitted; a contact never placed just vanishes
+            self._emit(out, t, key, slot, UP)
+        slot.tracking_id, slot.new, slot.changed = -1, False, False
+
+
+def decode_all(events: Iterable[Event], where: str) -> tuple[list[RawSample], EvdevDecoder]:
+    """Decode a whole recording; events after the last SYN_REPORT are left in ``pending``."""
+    decoder = EvdevDecoder(where)
+    return decoder.feed(events), decoder
+
+
+@dataclass(frozen=True)
+class AxisMap:
+    """Device units ``lo..hi`` onto screen ``0..size_mm`` (reversed when ``flip``)."""
+
+    lo: float
+    hi: float
+    size_mm: float
+    flip: bool = False
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.lo) and math.isfinite(self.hi) and self.hi > self.lo):
+            raise TraceError(f"axis range {self.lo!r}..{self.hi!r}: expected finite MIN < MAX")
+        if not (math.isfinite(self.size_mm) and self.size_mm > 0):
+            raise TraceError(f"screen size {self.size_mm!r} mm: expected a finite size > 0")
+
+    def mm(self, value: np.ndarray) -> np.ndarray:
+        """Position (mm) of device values; shape kept."""
+        u = (np.asarray(value, dtype=np.float64) - self.lo) / (self.hi - self.lo)
+        return (1.0 - u if self.flip else u) * self.size_mm
+
+
+@dataclass(frozen=True)
+class ScreenMap:
+    """Device samples to screen samples.
+
+    x, y : the screen axes; with ``swap_xy`` the screen x axis reads the device's y
+        values (so ``x.lo..x.hi`` is then a range of device y).
+    pressure_n : newtons per pressure unit; None: every sample gets ``force_n``.
+    force_n : normal force (N) when pressure is not mapped.
+    """
+
+    x: AxisMap
+    y: AxisMap
+    swap_xy: bool = False
+    pressure_n: float | None = None
+    force_n: float = DEFAULT_FORCE_N
+
+    def arrays(self, samples: list[RawSample], where: str = "samples") -> dict[str, np.ndarray]:
+        """Columns of a trace: t_s, finger, x_mm, y_mm, force_n, event; each shape (n,)."""
+        a = np.array([s[:5] for s in samples], dtype=np.float64).reshape(-1, 5)
+        dev_x, dev_y = (a[:, 3], a[:, 2]) if self.swap_xy else (a[:, 2], a[:, 3])
+        if self.pressure_n is None:
+            force = np.full(len(samples), self.force_n)
+        else:
+            force = a[:, 4] * self.pressure_n
+            if np.isnan(force).any():
+                i = int(np.argmax(np.isnan(force)))
+                raise TraceError(f"{where}: sample {i} at {a[i, 0]!r} s has no pressure, but a "
+                                 "pressure scale was given (expected ABS_MT_PRESSURE on every contact)")
+        return {"t_s": a[:, 0], "finger": a[:, 1].astype(np.int64), "x_mm": self.x.mm(dev_x),
+                "y_mm": self.y.mm(dev_y), "force_n": force,
+                "event": np.array([s.event for s in samples], dtype=np.int8)}
+
+    def trace(self, samples: list[RawSample], where: str = "samples") -> Trace:
+        """A validated :class:`Trace` of the samples (positions in mm, forces in N)."""
+        return make_trace(where=where, **self.arrays(samples, where))
+
+    def touches(self, samples: list[RawSample]) -> list[TouchSample]:
+        """The samples on the screen, one :class:`TouchSample` each (for live sources)."""
+        if not samples:
+            return []
+        cols = self.arrays(samples)
+        return [TouchSample(*row) for row in zip(cols["t_s"].tolist(), cols["finger"].tolist(),
+                                                 cols["x_mm"].tolist(), cols["y_mm"].tolist(),
+                                                 cols["force_n"].tolist(), cols["event"].tolist())]
+
+
+def _axis_map(axis: str, size_option: str, size_mm: float | None, flip: bool,
+              given: tuple[float, float] | None, absinfo: AbsInfo | None,
+              observed: tuple[float, float] | None) -> tuple[AxisMap, list[str]]:
+    """The map of device axis ``axis`` (see :func:`screen_map`) and its warnings."""
+    warnings = []
+    if given is not None:
+        lo, hi = given
+        if not hi > lo:
+            raise TraceError(f"--{axis}-range {lo:g} {hi:g}: expected MIN < MAX (device counts)")
+    elif absinfo is not None and absinfo.maximum > absinfo.minimum:
+        lo, hi = absinfo.minimum, absinfo.maximum
+    elif observed is not None and observed[1] > observed[0]:
+        lo, hi = observed
+        warnings.append(f"device {axis} range unknown: using the observed {lo:g}..{hi:g} "
+                        f"(positions stretch to the screen edges; give --{axis}-range MIN MAX)")
+    else:
+        seen = f" (the recording only shows {axis} = {observed[0]:g})" if observed else ""
+        raise TraceError(f"device {axis} range unknown{seen}: give --{axis}-range MIN MAX")
+    if size_mm is None:
+        if absinfo is None or absinfo.resolution <= 0:
+            raise TraceError(f"screen size along device {axis} unknown (the device gives no "
+                             f"resolution): give {size_option}")
+        size_mm = (hi - lo) / absinfo.resolution
+    return AxisMap(float(lo), float(hi), float(size_mm), flip), warnings
+
+
+@dataclass(frozen=True)
+class ScreenSpec:
+    """What the user says about a touch screen.
+
+    width_mm, height_mm : screen size along its x (right) and y (down); None: from the
+        device resolution. x_range, y_range : device X / Y counts spanning the screen (the
+        device's own axes, before ``swap_xy``); None: from the device, else observed.
+    swap_xy : device X runs along screen y. flip_x, flip_y : screen axes run against the device.
+    pressure_n : N per pressure unit (None: constant ``force_n``, N).
+    """
+
+    width_mm: float | None = None
+    height_mm: float | None = None
+    x_range: tuple[float, float] | None = None
+    y_range: tuple[float, float] | None = None
+    swap_xy: bool = False
+    flip_x: bool = False
+    flip_y: bool = False
+    pressure_n: float | None = None
+    force_n: float = DEFAULT_FORCE_N
+
+
+def screen_map(spec: ScreenSpec, absinfo: dict[int, AbsInfo],
+               observed: dict[int, tuple[float, float]] | None = None) -> tuple[ScreenMap, list[str]]:
+    """The device-to-screen map from what is known, best first, and the warnings to show.
+
+    Each device axis range is the user's (``spec``), else the device's (``absinfo``, keyed
+    by ABS_MT_POSITION_X / _Y), else the ``observed`` min..max of the recording with a
+    warning; each size is the user's, else the range over the device resolution (units/mm).
+    """
+    observed = observed or {}
+    sw = spec.swap_xy
+    dev_x, wx = _axis_map("x", "--height-mm" if sw else "--width-mm",
+                          spec.height_mm if sw else spec.width_mm, spec.flip_y if sw else spec.flip_x,
+                          spec.x_range, absinfo.get(ABS_MT_POSITION_X), observed.get(ABS_MT_POSITION_X))
+    dev_y, wy = _axis_map("y", "--width-mm" if sw else "--height-mm",
+                          spec.width_mm if sw else spec.height_mm, spec.flip_x if sw else spec.flip_y,
+                          spec.y_range, absinfo.get(ABS_MT_POSITION_Y), observed.get(ABS_MT_POSITION_Y))
+    screen_x, screen_y = (dev_y, dev_x) if sw else (dev_x, dev_y)
+    return ScreenMap(screen_x, screen_y, sw, spec.pressure_n, spec.force_n), wx + wy
+
+
+def observed_ranges(samples: list[RawSample]) -> dict[int, tuple[float, float]]:
+    """Min..max of the samples' device X and Y, keyed by ABS_MT_POSITION_X / _Y."""
+    xs = [s.x for s in samples]
+    ys = [s.y for s in samples]
+    return {ABS_MT_POSITION_X: (min(xs), max(xs)), ABS_MT_POSITION_Y: (min(ys), max(ys))} if samples else {}
+
+
+def read_text(path: str | Path, what: str) -> str:
+    """The text of a recording; missing, unreadable or binary files raise :class:`TraceError`."""
+    path = Path(path)
+    try:
+        return path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise TraceError(f"{path}: no such {what} file") from None
+    except UnicodeDecodeError as exc:
+        raise TraceError(f"{path}: not a text file ({exc.reason} at byte {exc.start}); "
+                         f"expected a {what} text recording") from None
+    except OSError as exc:
+        raise TraceError(f"{path}: cannot read {what} file ({exc.strerror})") from None

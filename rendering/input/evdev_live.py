@@ -1,0 +1,118 @@
+"""A live Linux input device (``/dev/input/eventN``) as a touch source for the demo.
+
+The device is read non-blocking: :meth:`EvdevReader.poll` returns at once with the samples
+of the frames completed since the last call. Bytes are ``struct input_event`` records::
+
+    struct input_event { struct timeval time; __u16 type; __u16 code; __s32 value; };
+    # native layout: "llHHi" (24 bytes on 64-bit Linux, 16 on 32-bit)
+
+A record split across two reads (a pipe, or a short read) is kept until it is whole.
+The axis ranges come from the device (``EVIOCGABS``) unless given; on something that is
+not an evdev device (a pipe, a file of packed events) they must be given. The reader asks
+the kernel for ``CLOCK_MONOTONIC`` timestamps (``EVIOCSCLOCKID``), the clock of
+``time.monotonic()``; where that is refused the events keep the device's clock.
+"""
+
+from __future__ import annotations
+
+import errno
+import fcntl
+import os
+import struct
+import time
+from pathlib import Path
+
+from rendering.input.evdev_decode import (ABS_MT_POSITION_X, ABS_MT_POSITION_Y, AbsInfo, EvdevDecoder,
+                                    Event, ScreenSpec, TouchSample, screen_map)
+
+INPUT_EVENT = struct.Struct("llHHi")
+_ABSINFO = struct.Struct("6i")  # value, minimum, maximum, fuzz, flat, resolution
+_READ_BYTES = INPUT_EVENT.size * 512
+
+
+def _ioc(direction: int, number: int, size: int) -> int:
+    """Linux ``_IOC('E', number, size)``; direction 1 = write, 2 = read."""
+    return (direction << 30) | (size << 16) | (ord("E") << 8) | number
+
+
+def eviocgabs(code: int) -> int:
+    """The ``EVIOCGABS(code)`` request number."""
+    return _ioc(2, 0x40 + code, _ABSINFO.size)
+
+
+EVIOCSCLOCKID = _ioc(1, 0xA0, 4)
+
+
+def unpack_events(data: bytes) -> tuple[list[Event], bytes]:
+    """Whole ``input_event`` records of ``data`` (times in s) and the incomplete rest."""
+    n = len(data) // INPUT_EVENT.size
+    events = [Event(sec + usec * 1e-6, etype, code, value)
+              for sec, usec, etype, code, value in INPUT_EVENT.iter_unpack(data[:n * INPUT_EVENT.size])]
+    return events, data[n * INPUT_EVENT.size:]
+
+
+def read_absinfo(fd: int, code: int) -> AbsInfo | None:
+    """The device's range of axis ``code``, or None when ``fd`` is not an evdev device."""
+    try:
+        raw = fcntl.ioctl(fd, eviocgabs(code), bytes(_ABSINFO.size))
+    except OSError:
+        return None
+    _, lo, hi, _, _, res = _ABSINFO.unpack(raw)
+    return AbsInfo(lo, hi, res)
+
+
+class EvdevReader:
+    """Non-blocking multi-touch reader: ``poll()`` -> list of :class:`TouchSample` (mm, N, s).
+
+    Parameters
+    ----------
+    path : the device (``/dev/input/event5``), or any readable file of packed events.
+    spec : screen size, ranges and orientation; what it leaves out comes from the device
+        (ranges and resolution); without a device (a pipe) ranges and sizes must be given.
+    """
+
+    def __init__(self, path: str | Path, spec: ScreenSpec = ScreenSpec()) -> None:
+        self.path = str(path)
+        try:
+            self._fd = os.open(self.path, os.O_RDONLY | os.O_NONBLOCK)
+        except OSError as exc:
+            hint = " (add yourself to the 'input' group)" if exc.errno == errno.EACCES else ""
+            raise OSError(f"{self.path}: cannot open input device ({exc.strerror}){hint}") from None
+        try:
+            try:
+                fcntl.ioctl(self._fd, EVIOCSCLOCKID, struct.pack("i", time.CLOCK_MONOTONIC))
+            except OSError:
+                pass  # not an evdev device, or an old kernel: keep the device's clock
+            absinfo = {code: info for code in (ABS_MT_POSITION_X, ABS_MT_POSITION_Y)
+                       if (info := read_absinfo(self._fd, code)) is not None}
+            self.screen, _ = screen_map(spec, absinfo)
+        except Exception:
+            os.close(self._fd)
+            raise
+        self.decoder = EvdevDecoder(self.path)
+        self._rest = b""
+
+    def poll(self) -> list[TouchSample]:
+        """Samples of the frames completed since the last call; never blocks."""
+        chunks = []
+        while True:
+            try:
+                data = os.read(self._fd, _READ_BYTES)
+            except BlockingIOError:
+                break
+            except OSError as exc:
+                raise OSError(f"{self.path}: read failed ({exc.strerror})") from None
+            if not data:
+                break  # end of a file or pipe
+            chunks.append(data)
+        events, self._rest = unpack_events(self._rest + b"".join(chunks))
+        return self.screen.touches(self.decoder.feed(events))
+
+    def close(self) -> None:
+        os.close(self._fd)
+
+    def __enter__(self) -> EvdevReader:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

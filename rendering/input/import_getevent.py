@@ -1,0 +1,111 @@
+"""Android ``getevent -lt`` logs to evdev events.
+
+Grammar (one event per line; ``-l`` prints names, without it the fields are hex)::
+
+    line    := "[" SPACES seconds "." micros "]" [ device ":" ] type code value
+    type    := EV_ABS | EV_SYN | ... | 4 hex digits
+    code    := ABS_MT_POSITION_X | SYN_REPORT | ... | 4 hex digits
+    value   := 8 hex digits (a 32-bit field: ffffffff is -1) | DOWN | UP | REPEAT
+    skipped := blank lines, "add device N: path", "  name: ...", "could not ..." lines
+
+Codes frictex does not use (ABS_MISC, KEY_*) are kept with code -1, which the decoder
+ignores. A log holding several devices needs ``device`` to pick one. The log does not
+record the axis ranges (``getevent -p`` prints them): the importer must be told them.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from rendering.input.evdev_decode import (ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_PRESSURE,
+                                    ABS_MT_SLOT, ABS_MT_TOUCH_MAJOR, ABS_MT_TRACKING_ID,
+                                    BTN_TOUCH, EV_ABS, EV_KEY, EV_SYN, SYN_DROPPED,
+                                    SYN_MT_REPORT, SYN_REPORT, Event, read_text, signed32)
+from rendering.input.trace_file import TraceError
+
+TYPES = {"EV_SYN": EV_SYN, "EV_KEY": EV_KEY, "EV_REL": 0x02, "EV_ABS": EV_ABS, "EV_MSC": 0x04,
+         "EV_SW": 0x05, "EV_LED": 0x11, "EV_SND": 0x12, "EV_REP": 0x14, "EV_FF": 0x15,
+         "EV_PWR": 0x16, "EV_FF_STATUS": 0x17}
+CODES = {"SYN_REPORT": SYN_REPORT, "SYN_CONFIG": 0x01, "SYN_MT_REPORT": SYN_MT_REPORT,
+         "SYN_DROPPED": SYN_DROPPED, "BTN_TOUCH": BTN_TOUCH, "ABS_MT_SLOT": ABS_MT_SLOT,
+         "ABS_MT_TOUCH_MAJOR": ABS_MT_TOUCH_MAJOR, "ABS_MT_POSITION_X": ABS_MT_POSITION_X,
+         "ABS_MT_POSITION_Y": ABS_MT_POSITION_Y, "ABS_MT_TRACKING_ID": ABS_MT_TRACKING_ID,
+         "ABS_MT_PRESSURE": ABS_MT_PRESSURE}
+VALUES = {"UP": 0, "DOWN": 1, "REPEAT": 2}
+
+_LINE = re.compile(r"^\s*\[\s*(?P<t>\d+\.\d+)\s*\]\s+(?:(?P<dev>/\S+):\s+)?"
+                   r"(?P<type>\S+)\s+(?P<code>\S+)\s+(?P<value>\S+)\s*$")
+_UNTIMED = re.compile(r"^\s*(?:/\S+:\s+)?(EV_[A-Z_]+|[0-9a-f]{4})\s+\S+\s+\S+\s*$")
+_HEADER = ("add device", "name:", "could not", "version", "events:", "input props:",
+           "location:", "id:", "bus ")
+_HEX4 = re.compile(r"^[0-9a-fA-F]{4}$")
+_HEX8 = re.compile(r"^[0-9a-fA-F]{1,8}$")
+
+
+def _number(token: str, names: dict[str, int], where: str, line: int, field: str) -> int:
+    if token in names:
+        return names[token]
+    if _HEX4.match(token):
+        return int(token, 16)
+    if field == "type":
+        raise TraceError(f"{where}:{line}: event type {token!r} is not known "
+                         f"(expected EV_ABS, EV_SYN, ... or 4 hex digits)")
+    return -1  # a code frictex does not use (ABS_MISC, KEY_VOLUMEUP, ...)
+
+
+def parse_getevent(text: str, where: str = "<getevent>", device: str | None = None) -> list[Event]:
+    """Events of a ``getevent -lt`` log (see the module docstring for the grammar).
+
+    Parameters
+    ----------
+    text : the log.
+    where : names the source in error messages.
+    device : keep only this device's lines (``/dev/input/event2``); required when the log
+        holds events of several devices.
+
+    Returns
+    -------
+    list of :class:`~rendering.input.evdev_decode.Event`, times in s, ``line`` 1-based.
+    """
+    events: list[Event] = []
+    devices: dict[str, int] = {}
+    for number, raw in enumerate(text.splitlines(), start=1):
+        stripped = raw.strip()
+        if not stripped or stripped.startswith(_HEADER):
+            continue
+        m = _LINE.match(raw)
+        if m is None:
+            if _UNTIMED.match(raw):
+                raise TraceError(f"{where}:{number}: event without a timestamp: record with "
+                                 "'getevent -lt' (the -t adds '[ seconds.micros]')")
+            raise TraceError(f"{where}:{number}: {stripped[:60]!r} is not a getevent -lt line "
+                             "(expected '[ seconds.micros] EV_TYPE CODE VALUE')")
+        dev = m["dev"] or ""
+        devices.setdefault(dev, number)
+        if device is not None and dev != device:
+            continue
+        etype = _number(m["type"], TYPES, where, number, "type")
+        code = _number(m["code"], CODES, where, number, "code")
+        token = m["value"]
+        if token in VALUES:
+            value = VALUES[token]
+        elif _HEX8.match(token):
+            value = signed32(int(token, 16))
+        else:
+            raise TraceError(f"{where}:{number}: value {token!r} is not 8 hex digits "
+                             "(or DOWN / UP / REPEAT)")
+        events.append(Event(float(m["t"]), etype, code, value, number))
+    named = sorted(d for d in devices if d)
+    if device is not None and device not in devices:
+        raise TraceError(f"{where}: no events of device {device!r} "
+                         f"(the log has {', '.join(named) or 'no device names'})")
+    if device is None and len(devices) > 1:
+        raise TraceError(f"{where}: events of {len(devices)} devices ({', '.join(named)}); "
+                         "choose one with --device")
+    return events
+
+
+def read_getevent(path: str | Path, device: str | None = None) -> list[Event]:
+    """Read a ``getevent -lt`` log file (see :func:`parse_getevent`)."""
+    return parse_getevent(read_text(path, "getevent log"), str(path), device)

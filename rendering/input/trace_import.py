@@ -1,0 +1,220 @@
+"""``frictex trace import``: recordings of real touch screens to the trace CSV.
+
+Inputs: Android ``getevent -lt`` logs, evemu recordings (both Linux evdev multi-touch,
+protocol A or B, decoded by ``rendering.input.evdev_decode``) and trace CSVs (validated and
+rewritten). Device counts become mm through the axis ranges (options, else the evemu
+``A:`` header, else the observed min..max with a warning) and the screen size (options,
+else the evemu resolution). The output adds ``pressure`` and ``touch_major`` columns
+(device units) when the recording has them; the trace reader ignores them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from rendering.input.evdev_decode import (AbsInfo, Event, RawSample, ScreenSpec, decode_all, observed_ranges,
+                                    read_text, screen_map)
+from rendering.input.import_evemu import parse_evemu
+from rendering.input.import_getevent import parse_getevent
+from rendering.input.trace_file import DEFAULT_FORCE_N, UP, Trace, TraceError, format_trace, read_trace
+
+FORMATS = ("auto", "getevent", "evemu", "csv")
+
+EPILOG = """\
+ranges and sizes: --x-range and --y-range are in the device's counts along its own X and Y
+(before --swap-xy); --width-mm and --height-mm are the screen's size along its x (right) and
+y (down). getevent logs do not record the ranges ('getevent -p' on the device prints them).
+Example, the Samsung Galaxy S phone of the Android refdata (0..1023 digitizer, 4.0-inch
+480x800 screen, about 52 x 87 mm):
+  frictex trace import phone-two-finger-drag.txt -o drag.csv \\
+      --x-range 0 1023 --y-range 0 1023 --width-mm 52 --height-mm 87
+"""
+
+
+def _finite(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return value
+
+
+def _positive(text: str) -> float:
+    value = _finite(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"{text!r} must be > 0")
+    return value
+
+
+def _non_negative(text: str) -> float:
+    value = _finite(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r} must be >= 0")
+    return value
+
+
+def add_import_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options of ``frictex trace import``."""
+    parser.epilog = EPILOG
+    parser.formatter_class = argparse.RawDescriptionHelpFormatter
+    parser.add_argument("input", metavar="INPUT", help="recording to convert")
+    parser.add_argument("-o", "--out", required=True, metavar="OUT.csv", help="trace CSV to write")
+    parser.add_argument("--format", choices=FORMATS, default="auto",
+                        help="input format (default: recognised from the content)")
+    parser.add_argument("--x-range", nargs=2, type=_finite, metavar=("MIN", "MAX"),
+                        help="device X counts that span the screen (default: evemu header, "
+                             "else the observed range, with a warning)")
+    parser.add_argument("--y-range", nargs=2, type=_finite, metavar=("MIN", "MAX"),
+                        help="device Y counts that span the screen")
+    parser.add_argument("--width-mm", type=_positive, metavar="W",
+                        help="screen width (mm; default: from the evemu resolution)")
+    parser.add_argument("--height-mm", type=_positive, metavar="H",
+                        help="screen height (mm; default: from the evemu resolution)")
+    parser.add_argument("--swap-xy", action="store_true",
+                        help="device X runs along the screen's y (rotated screen)")
+    parser.add_argument("--flip-x", action="store_true", help="screen x runs against the device axis")
+    parser.add_argument("--flip-y", action="store_true", help="screen y runs against the device axis")
+    parser.add_argument("--pressure-scale", type=_positive, metavar="N_PER_UNIT",
+                        help="normal force = ABS_MT_PRESSURE x this (N); default: every "
+                             "sample gets --force")
+    parser.add_argument("--force", type=_non_negative, default=DEFAULT_FORCE_N, metavar="N",
+                        help=f"normal force when pressure is not mapped (default {DEFAULT_FORCE_N} N)")
+    parser.add_argument("--device", metavar="PATH",
+                        help="getevent log with several devices: keep this one (/dev/input/eventN)")
+    parser.add_argument("--keep-time", action="store_true",
+                        help="keep the recording's clock (default: the first sample is at t = 0 s)")
+
+
+def detect_format(path: Path, text: str) -> str:
+    """``getevent``, ``evemu`` or ``csv``, from the first meaningful line of ``text``."""
+    for line in text.splitlines():
+        s = line.strip()
+        if not s:
+            continue
+        if s.startswith("# EVEMU") or s[:2] in ("N:", "I:", "E:", "A:"):
+            return "evemu"
+        if s.startswith("[") or s.startswith("add device"):
+            return "getevent"
+        if s.startswith("#"):
+            continue
+        if "t_s" in s.split(","):
+            return "csv"
+        break
+    raise TraceError(f"{path}: format not recognised (expected a getevent -lt log, an evemu "
+                     "recording or a trace CSV); give --format")
+
+
+def _extra_columns(trace_csv: str, samples: list[RawSample]) -> str:
+    """Add the pressure and touch_major columns the recording has to the trace CSV text."""
+    cols = [(name, i) for name, i in (("pressure", 4), ("touch_major", 5))
+            if any(not math.isnan(s[i]) for s in samples)]
+    if not cols:
+        return trace_csv
+    lines = trace_csv.splitlines()
+    header = next(i for i, ln in enumerate(lines) if not ln.startswith("#"))
+    lines[header] += "".join(f",{name}" for name, _ in cols)
+    for k, s in enumerate(samples, start=header + 1):
+        lines[k] += "".join("," if math.isnan(s[i]) else f",{s[i]:g}" for _, i in cols)
+    return "\n".join(lines) + "\n"
+
+
+def _write(out: str, text: str) -> None:
+    try:
+        Path(out).write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise OSError(f"{out}: cannot write the trace ({exc.strerror})") from None
+
+
+def _pair(values: list[float] | None) -> tuple[float, float] | None:
+    return None if values is None else (values[0], values[1])
+
+
+def _copy_csv(path: Path, args: argparse.Namespace) -> int:
+    """A trace CSV in: validate it and write it back out."""
+    mapping = [o for o in ("x_range", "y_range", "width_mm", "height_mm", "swap_xy", "flip_x",
+                           "flip_y", "pressure_scale", "device", "keep_time")
+               if getattr(args, o) not in (None, False)]
+    if mapping:
+        raise TraceError(f"--{mapping[0].replace('_', '-')} does not apply to a trace CSV "
+                         "(it is already in mm and s)")
+    trace = read_trace(path)
+    _write(args.out, format_trace(trace, comment=f"imported from {path}"))
+    print(f"wrote {len(trace)} samples, {len(trace.fingers)} finger(s), "
+          f"{trace.duration_s:.3f} s, to {args.out}")
+    return 0
+
+
+def _events(path: Path, text: str, fmt: str, device: str | None) -> tuple[list[Event], dict[int, AbsInfo]]:
+    """The evdev events of a getevent or evemu recording, and the axis ranges it states."""
+    if fmt == "getevent":
+        return parse_getevent(text, str(path), device), {}
+    if device is not None:
+        raise TraceError("--device applies to getevent logs; an evemu recording holds one device")
+    recording = parse_evemu(text, str(path))
+    return recording.events, recording.absinfo
+
+
+def run_import(args: argparse.Namespace) -> int:
+    """Convert ``args.input`` to the trace CSV ``args.out``; print a summary; return 0."""
+    path = Path(args.input)
+    text = read_text(path, "recording")
+    fmt = detect_format(path, text) if args.format == "auto" else args.format
+    if fmt == "csv":
+        return _copy_csv(path, args)
+    events, absinfo = _events(path, text, fmt, args.device)
+    samples, decoder = decode_all(events, str(path))
+    if not samples:
+        raise TraceError(f"{path}: no touches found ({len(events)} events, {decoder.frames} frames; "
+                         "expected ABS_MT_* contacts)")
+    spec = ScreenSpec(args.width_mm, args.height_mm, _pair(args.x_range), _pair(args.y_range),
+                      args.swap_xy, args.flip_x, args.flip_y, args.pressure_scale, args.force)
+    screen, warnings = screen_map(spec, absinfo, observed_ranges(samples))
+    t0 = samples[0].t_s
+    if not args.keep_time:
+        # both formats stamp whole microseconds: rounding gives back the exact decimal difference
+        samples = [s._replace(t_s=round(s.t_s - t0, 6)) for s in samples]
+    trace = screen.trace(samples, str(path))
+    outside = int(np.count_nonzero((trace.x_mm < 0) | (trace.x_mm > screen.x.size_mm)
+                                   | (trace.y_mm < 0) | (trace.y_mm > screen.y.size_mm)))
+    if outside:
+        warnings.append(f"{outside} of {len(trace)} samples fall outside the "
+                        f"{screen.x.size_mm:g} x {screen.y.size_mm:g} mm screen (check the ranges)")
+    if decoder.dropped:
+        warnings.append(f"{decoder.dropped} SYN_DROPPED: the kernel lost events there")
+    if decoder.unplaced:
+        warnings.append(f"{decoder.unplaced} contact reports without a position were left out")
+    if decoder.pending:
+        warnings.append(f"{decoder.pending} events after the last SYN_REPORT (an unfinished "
+                        "frame) were left out")
+    comment = (f"imported from {path} ({fmt}, multitouch protocol {decoder.protocol}); "
+               f"recording clock at the first sample: {t0!r} s"
+               f"{'' if args.keep_time else ' (shifted to t = 0)'}; x {screen.x.lo:g}..{screen.x.hi:g} "
+               f"-> 0..{screen.x.size_mm:g} mm, y {screen.y.lo:g}..{screen.y.hi:g} -> "
+               f"0..{screen.y.size_mm:g} mm{', axes swapped' if args.swap_xy else ''}")
+    _write(args.out, _extra_columns(format_trace(trace, comment), samples))
+    for w in warnings:
+        print(f"frictex: warning: {w}", file=sys.stderr)
+    most = _most_down(trace)
+    print(f"wrote {len(trace)} samples, {len(trace.fingers)} finger id(s) (at most {most} down "
+          f"at once), {trace.duration_s:.3f} s, protocol {decoder.protocol}, to {args.out}")
+    return 0
+
+
+def _most_down(trace: Trace) -> int:
+    """The largest number of fingers touching at the same time."""
+    down: set[int] = set()
+    most = 0
+    for f, e in zip(trace.finger.tolist(), trace.event.tolist()):
+        if e == UP:
+            down.discard(f)
+        else:
+            down.add(f)
+        most = max(most, len(down))
+    return most

@@ -1,0 +1,137 @@
+"""Synthetic finger motions: continuous paths, sampled like a touch screen would.
+
+Each motion is a continuous path p(t) (mm) over [0, duration]; ``sample`` reads it at
+a touch screen's rate with optional timestamp jitter and position noise (what the
+pipeline sees), ``truth`` reads it at a high rate without noise (what accuracy checks
+compare against). A finger touches at t = 0 and lifts at the end.
+
+Motions:
+- ``swipe``: constant speed along a straight line.
+- ``back-and-forth``: constant speed between two ends, reversing instantly.
+- ``circle``: constant speed around a circle.
+- ``human``: strokes between random waypoints with a minimum-jerk speed profile
+  (Flash & Hogan 1985, the standard model of human reaching), random peak speeds and
+  pauses with the finger resting.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rendering.input.trace_file import DOWN, MOVE, UP, Trace, make_trace
+
+MOTIONS = ("swipe", "back-and-forth", "circle", "human")
+
+
+@dataclass(frozen=True)
+class Motion:
+    """A continuous path: knots of a piecewise definition and the duration (s)."""
+
+    kind: str
+    duration_s: float
+    params: dict
+
+    def position(self, t) -> tuple[np.ndarray, np.ndarray]:
+        """Position (mm) at times ``t`` (s), clamped to [0, duration]."""
+        t = np.clip(np.asarray(t, dtype=np.float64), 0.0, self.duration_s)
+        p = self.params
+        if self.kind == "swipe":
+            return p["x0"] + p["vx"] * t, p["y0"] + p["vy"] * t
+        if self.kind == "back-and-forth":
+            period = 2.0 * p["length"] / p["speed"]
+            u = np.mod(t, period) / period
+            s = p["length"] * (1.0 - np.abs(1.0 - 2.0 * u))  # triangle wave 0..length..0
+            return p["x0"] + p["ux"] * s, p["y0"] + p["uy"] * s
+        if self.kind == "circle":
+            a = p["a0"] + p["speed"] / p["radius"] * t
+            return p["cx"] + p["radius"] * np.cos(a), p["cy"] + p["radius"] * np.sin(a)
+        return _min_jerk(t, p["knots_t"], p["knots_x"], p["knots_y"])
+
+
+def _min_jerk(t, knots_t, knots_x, knots_y):
+    """Piecewise minimum-jerk interpolation between rest points (zero speed at knots)."""
+    kt = np.asarray(knots_t)
+    seg = np.clip(np.searchsorted(kt, t, side="right") - 1, 0, kt.size - 2)
+    span = kt[seg + 1] - kt[seg]
+    tau = np.where(span > 0, (t - kt[seg]) / np.where(span > 0, span, 1.0), 1.0)
+    s = 10 * tau**3 - 15 * tau**4 + 6 * tau**5
+    kx, ky = np.asarray(knots_x), np.asarray(knots_y)
+    return kx[seg] + (kx[seg + 1] - kx[seg]) * s, ky[seg] + (ky[seg + 1] - ky[seg]) * s
+
+
+def make_motion(kind: str, *, speed_mm_s: float = 40.0, duration_s: float = 2.0,
+                x0_mm: float = 14.0, y0_mm: float = 32.4, angle_deg: float = 0.0,
+                length_mm: float = 80.0, radius_mm: float = 20.0,
+                area_mm: tuple[float, float] = (108.0, 64.8), seed: int = 0) -> Motion:
+    """A motion of the given kind (see the module docstring); units mm, s, mm/s."""
+    if kind not in MOTIONS:
+        raise ValueError(f"unknown motion {kind!r}; expected one of {', '.join(MOTIONS)}")
+    if speed_mm_s <= 0 or duration_s <= 0:
+        raise ValueError(f"speed {speed_mm_s} mm/s and duration {duration_s} s must be > 0")
+    a = np.radians(angle_deg)
+    ux, uy = float(np.cos(a)), float(np.sin(a))
+    if kind == "swipe":
+        return Motion(kind, duration_s, dict(x0=x0_mm, y0=y0_mm, vx=speed_mm_s * ux,
+                                             vy=speed_mm_s * uy))
+    if kind == "back-and-forth":
+        return Motion(kind, duration_s, dict(x0=x0_mm, y0=y0_mm, ux=ux, uy=uy,
+                                             length=length_mm, speed=speed_mm_s))
+    if kind == "circle":
+        return Motion(kind, duration_s, dict(cx=x0_mm + radius_mm, cy=y0_mm, radius=radius_mm,
+                                             speed=speed_mm_s, a0=np.pi))
+    return _human_motion(speed_mm_s, duration_s, area_mm, seed)
+
+
+def _human_motion(speed_mm_s: float, duration_s: float, area_mm, seed: int) -> Motion:
+    """Strokes of 15-60 mm at peak speeds around ``speed_mm_s`` (x0.5-x1.8), with pauses."""
+    rng = np.random.default_rng(seed)
+    w, h = area_mm
+    margin = 8.0
+    knots_t, knots_x, knots_y = [0.0], [w * 0.3], [h * 0.5]
+    while knots_t[-1] < duration_s:
+        angle = rng.uniform(-np.pi, np.pi) if rng.random() < 0.3 else rng.choice([0.0, np.pi])
+        dist = rng.uniform(15.0, 60.0)
+        x = float(np.clip(knots_x[-1] + dist * np.cos(angle), margin, w - margin))
+        y = float(np.clip(knots_y[-1] + dist * np.sin(angle), margin, h - margin))
+        length = float(np.hypot(x - knots_x[-1], y - knots_y[-1]))
+        peak = speed_mm_s * rng.uniform(0.5, 1.8)
+        move_s = max(1.875 * length / peak, 0.05)  # min-jerk peak speed = 1.875 * mean speed
+        knots_t.append(knots_t[-1] + move_s)
+        knots_x.append(x)
+        knots_y.append(y)
+        if rng.random() < 0.4:  # pause, finger resting
+            knots_t.append(knots_t[-1] + rng.uniform(0.1, 0.5))
+            knots_x.append(x)
+            knots_y.append(y)
+    return Motion("human", duration_s, dict(knots_t=knots_t, knots_x=knots_x, knots_y=knots_y))
+
+
+def sample(motion: Motion, rate_hz: float, *, noise_mm: float = 0.0, jitter_s: float = 0.0,
+           force_n: float = 0.5, seed: int = 0, finger: int = 0) -> Trace:
+    """The motion as a touch screen at ``rate_hz`` reports it (down first, up last).
+
+    ``noise_mm``: standard deviation of position noise; ``jitter_s``: standard deviation
+    of timestamp jitter (kept monotonic).
+    """
+    if rate_hz <= 0:
+        raise ValueError(f"sampling rate {rate_hz} Hz must be > 0")
+    rng = np.random.default_rng(seed + 1)
+    n = int(np.floor(motion.duration_s * rate_hz)) + 1
+    t = np.arange(n) / rate_hz
+    if jitter_s > 0:
+        t = np.maximum.accumulate(np.clip(t + rng.normal(0, jitter_s, n), 0, motion.duration_s))
+    x, y = motion.position(t)
+    if noise_mm > 0:
+        x = x + rng.normal(0, noise_mm, n)
+        y = y + rng.normal(0, noise_mm, n)
+    event = np.full(n, MOVE, dtype=np.int8)
+    event[0] = DOWN
+    event[-1] = UP
+    return make_trace(t, np.full(n, finger), x, y, np.full(n, force_n), event)
+
+
+def truth(motion: Motion, rate_hz: float = 10_000.0, force_n: float = 0.5) -> Trace:
+    """The motion's true path at a high rate, no noise (for accuracy checks)."""
+    return sample(motion, rate_hz, force_n=force_n)

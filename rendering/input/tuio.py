@@ -1,0 +1,298 @@
+"""TUIO 1.1 cursors (``/tuio/2Dcur``) over UDP/OSC to touch samples.
+
+OSC 1.0 wire grammar (all fields big-endian, everything padded to 4 bytes)::
+
+    packet  := message | bundle
+    bundle  := "#bundle\\0" timetag(8) { size(int32) packet(size bytes) }
+    message := address(string) typetags(string ",...") { argument }
+    string  := bytes "\\0" padding-to-4
+    argument: i int32 | f float32 | s S string | b int32-size bytes padding | h int64
+              | d float64 | t timetag(uint64) | c char(int32) | r rgba(4) | m midi(4)
+              | T true | F false | N nil | I infinitum (no bytes)
+
+TUIO 1.1 2Dcur profile (Kaltenbrunner et al., "TUIO: A protocol for table-top tangible user
+interfaces", 2005; TUIO 1.1 specification): one bundle per frame, holding
+
+    /tuio/2Dcur source s               (optional: which tracker; scopes the session ids)
+    /tuio/2Dcur alive i...             (session ids touching now; those missing have lifted)
+    /tuio/2Dcur set s x y X Y m        (session id, position 0..1 from the top-left, velocity, accel.)
+    /tuio/2Dcur fseq f                 (frame number; ends the frame)
+
+A frame whose fseq is lower than the last one from its source, by at most 100, arrived
+late (UDP reorders) and is dropped, as the TUIO reference client does; fseq <= 0 is always
+accepted. Positions are normalised; :class:`TuioListener` maps them to the display's mm.
+TUIO 1.1 carries no usable time, so samples are stamped with their arrival time.
+"""
+
+from __future__ import annotations
+
+import math
+import queue
+import socket
+import struct
+import threading
+import time
+from typing import Callable
+
+from rendering.input.evdev_decode import AxisMap, RawSample, ScreenMap, TouchSample
+from rendering.input.trace_file import DEFAULT_FORCE_N, DOWN, MOVE, UP, TraceError
+
+TUIO_PORT = 3333
+_MAX_DEPTH = 8
+#: accepted late-frame jump: an fseq this much below the last one is a tracker restart
+_FSEQ_RESTART = 100
+
+
+class OscError(TraceError):
+    """A malformed OSC packet or TUIO message; the message says where in the packet."""
+
+
+def _string(data: bytes, pos: int) -> tuple[str, int]:
+    end = data.find(b"\0", pos)
+    if end < 0:
+        raise OscError(f"OSC string at byte {pos} has no NUL terminator")
+    try:
+        text = data[pos:end].decode("utf-8")
+    except UnicodeDecodeError:
+        raise OscError(f"OSC string at byte {pos} is not UTF-8: {data[pos:end][:20]!r}") from None
+    return text, (end + 4) & ~3
+
+
+def _take(data: bytes, pos: int, n: int, what: str) -> bytes:
+    if pos + n > len(data):
+        raise OscError(f"OSC {what} at byte {pos} needs {n} bytes, only {len(data) - pos} left")
+    return data[pos:pos + n]
+
+
+_FIXED = {"i": ">i", "f": ">f", "h": ">q", "d": ">d", "t": ">Q", "c": ">i"}
+_EMPTY = {"T": True, "F": False, "N": None, "I": math.inf}
+
+
+def parse_message(data: bytes) -> tuple[str, list]:
+    """One OSC message: ``(address, arguments)`` (see the module grammar)."""
+    address, pos = _string(data, 0)
+    if not address.startswith("/"):
+        raise OscError(f"OSC address {address[:40]!r} does not start with '/'")
+    if pos >= len(data):
+        raise OscError(f"OSC message {address} has no type tag string (expected ',...')")
+    tags, pos = _string(data, pos)
+    if not tags.startswith(","):
+        raise OscError(f"OSC message {address}: type tags {tags[:20]!r} do not start with ','")
+    args: list = []
+    for tag in tags[1:]:
+        if tag in _FIXED:
+            fmt = _FIXED[tag]
+            size = struct.calcsize(fmt)
+            args.append(struct.unpack(fmt, _take(data, pos, size, f"'{tag}' argument"))[0])
+            pos += size
+        elif tag in "sS":
+            text, pos = _string(data, pos)
+            args.append(text)
+        elif tag == "b":
+            (size,) = struct.unpack(">i", _take(data, pos, 4, "blob size"))
+            if size < 0:
+                raise OscError(f"OSC message {address}: blob size {size} is negative")
+            args.append(_take(data, pos + 4, size, "blob"))
+            pos += 4 + ((size + 3) & ~3)
+        elif tag in "rm":
+            args.append(_take(data, pos, 4, f"'{tag}' argument"))
+            pos += 4
+        elif tag in _EMPTY:
+            args.append(_EMPTY[tag])
+        else:
+            raise OscError(f"OSC message {address}: type tag {tag!r} is not supported "
+                           "(expected one of i f s S b h d t c r m T F N I)")
+    if pos > len(data):
+        raise OscError(f"OSC message {address}: arguments run past the end of the packet")
+    return address, args
+
+
+def parse_packet(data: bytes, depth: int = 0) -> list[tuple[str, list]]:
+    """All messages of an OSC packet (bundles flattened, in order)."""
+    if depth > _MAX_DEPTH:
+        raise OscError(f"OSC bundles nested more than {_MAX_DEPTH} deep")
+    if not data.startswith(b"#bundle\0"):
+        return [parse_message(data)]
+    _take(data, 8, 8, "bundle time tag")
+    pos, out = 16, []
+    while pos < len(data):
+        (size,) = struct.unpack(">i", _take(data, pos, 4, "bundle element size"))
+        if size <= 0 or size % 4:
+            raise OscError(f"OSC bundle element at byte {pos} has size {size} "
+                           "(expected a positive multiple of 4)")
+        out.extend(parse_packet(_take(data, pos + 4, size, "bundle element"), depth + 1))
+        pos += 4 + size
+    return out
+
+
+class TuioDecoder:
+    """Incremental 2Dcur decoder: ``feed(packet, t_s)`` returns the samples of the frames it ends.
+
+    Samples are :class:`RawSample` with x, y normalised to 0..1 (TUIO's units) and no
+    pressure. Counters: ``frames``, ``late`` (late frames dropped), ``stray`` (set
+    messages for sessions not alive, ignored).
+    """
+
+    def __init__(self) -> None:
+        self.frames = self.late = self.stray = 0
+        self._fseq: dict[str, int] = {}
+        self._alive: dict[str, set[int]] = {}
+        self._pending_alive: dict[str, set[int] | None] = {}
+        self._pending_set: dict[str, dict[int, tuple[float, float]]] = {}
+        self._pos: dict[tuple[str, int], tuple[float, float]] = {}  # emitted, touching
+        self._fingers: dict[tuple[str, int], int] = {}
+
+    def feed(self, packet: bytes, t_s: float) -> list[RawSample]:
+        """Decode one UDP datagram received at ``t_s`` (s); a bad packet changes nothing."""
+        out: list[RawSample] = []
+        for command, source, value in _commands(parse_packet(packet)):
+            if command == "alive":
+                self._pending_alive[source] = value
+            elif command == "set":
+                self._pending_set.setdefault(source, {})[value[0]] = value[1:]
+            else:
+                self._commit(source, value, t_s, out)
+        return out
+
+    def _commit(self, source: str, fseq: int, t: float, out: list[RawSample]) -> None:
+        alive = self._pending_alive.pop(source, None)
+        sets = self._pending_set.pop(source, {})
+        last = self._fseq.get(source)
+        if fseq > 0 and last is not None and fseq < last and last - fseq <= _FSEQ_RESTART:
+            self.late += 1
+            return
+        if fseq > 0:
+            self._fseq[source] = fseq
+        self.frames += 1
+        if alive is None:
+            alive = self._alive.get(source, set())
+        self._alive[source] = alive
+        for key in [k for k in self._pos if k[0] == source and k[1] not in alive]:
+            x, y = self._pos.pop(key)
+            out.append(RawSample(t, self._fingers.pop(key), x, y, math.nan, math.nan, UP))
+        for sid, (x, y) in sets.items():
+            if sid not in alive:
+                self.stray += 1
+                continue
+            key = (source, sid)
+            event = MOVE if key in self._pos else DOWN
+            if key not in self._fingers:
+                used = set(self._fingers.values())
+                self._fingers[key] = next(i for i in range(len(used) + 1) if i not in used)
+            self._pos[key] = (x, y)
+            out.append(RawSample(t, self._fingers[key], x, y, math.nan, math.nan, event))
+
+
+def _commands(messages: list[tuple[str, list]]) -> list[tuple[str, str, object]]:
+    """The 2Dcur commands of a packet, checked: (``alive``, source, ids), (``set``, source,
+    (id, x, y)), (``fseq``, source, frame). Other addresses are other TUIO profiles or other
+    OSC traffic, and are skipped."""
+    out: list[tuple[str, str, object]] = []
+    source = ""
+    for address, args in messages:
+        if address != "/tuio/2Dcur" or not args:
+            continue
+        command = args[0]
+        if command == "source":
+            source = _arg(args, 1, str, "source")
+        elif command == "alive":
+            out.append(("alive", source, {_arg(args, i, int, "session id") for i in range(1, len(args))}))
+        elif command == "set":
+            sid = _arg(args, 1, int, "session id")
+            x, y = (_arg(args, i, float, "position") for i in (2, 3))
+            if not (math.isfinite(x) and math.isfinite(y)):
+                raise OscError(f"/tuio/2Dcur set {sid}: position ({x!r}, {y!r}) is not finite")
+            out.append(("set", source, (sid, x, y)))
+        elif command == "fseq":
+            out.append(("fseq", source, _arg(args, 1, int, "frame number")))
+    return out
+
+
+def _arg(args: list, i: int, kind: type, what: str):
+    """Argument i of a 2Dcur message, as ``kind`` (an OSC int is accepted as a float)."""
+    if i >= len(args):
+        raise OscError(f"/tuio/2Dcur {args[0]}: missing {what} (argument {i})")
+    value = args[i]
+    if isinstance(value, bool) or not isinstance(value, (int, float) if kind is float else kind):
+        raise OscError(f"/tuio/2Dcur {args[0]}: {what} is {value!r}, expected {kind.__name__}")
+    return kind(value)
+
+
+class TuioListener:
+    """Receives TUIO on a UDP port in a thread; :meth:`poll` returns the new touch samples.
+
+    The thread only queues datagrams (bounded queue; overflow is counted in ``dropped``);
+    decoding happens in :meth:`poll`, on the caller's thread. Malformed packets are counted
+    in ``bad_packets`` (last message in ``last_error``), never raised.
+
+    Parameters
+    ----------
+    port : UDP port (TUIO's default 3333; 0 picks a free one, see ``.port``).
+    width_mm, height_mm : display size the normalised TUIO coordinates span (mm).
+    host : address to bind.
+    force_n : normal force given to every sample (N); TUIO 1.1 cursors carry none.
+    max_packets : queue bound.
+    clock : time source for arrival stamps (s).
+    """
+
+    def __init__(self, port: int = TUIO_PORT, *, width_mm: float, height_mm: float,
+                 host: str = "0.0.0.0", force_n: float = DEFAULT_FORCE_N, max_packets: int = 1024,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self.screen = ScreenMap(AxisMap(0.0, 1.0, width_mm), AxisMap(0.0, 1.0, height_mm),
+                                force_n=force_n)
+        self.decoder = TuioDecoder()
+        self.dropped = self.bad_packets = 0
+        self.last_error: str | None = None
+        self._clock = clock
+        self._queue: queue.Queue[tuple[float, bytes]] = queue.Queue(max_packets)
+        self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            self._sock.bind((host, port))
+        except OSError as exc:
+            self._sock.close()
+            raise OSError(f"TUIO: cannot listen on UDP {host}:{port} ({exc.strerror})") from None
+        self._sock.settimeout(0.05)
+        self.port = self._sock.getsockname()[1]
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._receive, name=f"tuio-{self.port}", daemon=True)
+        self._thread.start()
+
+    def _receive(self) -> None:
+        while not self._stop.is_set():
+            try:
+                data = self._sock.recv(65536)
+            except socket.timeout:
+                continue
+            except OSError:
+                return
+            try:
+                self._queue.put_nowait((self._clock(), data))
+            except queue.Full:
+                self.dropped += 1
+
+    def poll(self) -> list[TouchSample]:
+        """Samples of the frames received since the last call (mm, N, s), in order."""
+        raw: list[RawSample] = []
+        while True:
+            try:
+                t, data = self._queue.get_nowait()
+            except queue.Empty:
+                break
+            try:
+                raw.extend(self.decoder.feed(data, t))
+            except OscError as exc:
+                self.bad_packets += 1
+                self.last_error = str(exc)
+        return self.screen.touches(raw)
+
+    def close(self) -> None:
+        """Stop the thread and release the port."""
+        self._stop.set()
+        self._thread.join()
+        self._sock.close()
+
+    def __enter__(self) -> TuioListener:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,375 @@
+"""The hybrid renderer: SHT's synthesis, phase-locked to the measured position.
+
+Seed 003 (section 6) leaves as future work "a joint control strategy unifying the
+advantages of SHO and SHT". SHO (section 4.4.1) is aligned with what the screen shows
+but, read at the touch rate, cannot render texture frequencies above half that rate;
+SHT (section 4.4.2) synthesises the texture at the finger's speed with full bandwidth,
+but its spatial phase starts anywhere at touch-down and drifts with every velocity
+error, which the eye sees on coarse gratings.
+
+The hybrid's phase (cycles) is a velocity integral plus an offset::
+
+    phase(t) = phase_v(t) + offset(t),   phase_v = integral of v_s / period dt
+
+(``rendering.layers.sht.integrate_phase``, restarted at each touch), with ``v_s`` the
+tracker's velocity along the texture's axis, smoothed (:func:`smooth_rate`): a new
+estimate that differs from the current one by less than ``VELOCITY_NOISE_MM_S`` (the
+scatter a 50 ms line fit through 0.05 mm touch noise gives between successive 50 Hz
+samples, ~2.5 mm/s rms, times three) is noise and is averaged in with weight
+``SMOOTH``; a larger change is a real acceleration and is taken at once. SHT's
+frequency jitters with every estimate (9 % rms at 20 mm/s); the hybrid's less, so on
+constant-speed strokes its spectrum is cleaner than SHT's, and the lag the averaging
+could add is the phase lock's to remove.
+
+At touch-down, and at the first measurement after the tracker knew no velocity (the
+start of a swipe, before two samples exist; a finger that rested past the prediction
+horizon), the offset puts the phase at the spatial phase of the measured position: the
+finger has just started from rest, and synthesis starts where it is. At every other
+new touch measurement the *error* ``layer.phase_at(x_pred, y_pred) - phase`` is taken
+(the shorter way round the cycle) and the offset works it off, in general never faster
+than ``SLIP`` times the phase rate of the finger's own motion, i.e. the texture slides
+over the glass at most 0.9 times as fast as the finger moves, so the phase does not run
+backwards (no spurious edges from prediction errors, which SHO-predicted shows as
+chatter):
+
+- an error larger than ``LOCK_MM`` is a lost lock (a reversal the velocity fit has not
+  caught up with, or a stop it overshot: a 50 ms line fit lags a decelerating finger):
+  it is worked off down to ``LOCK_MM`` whatever the texture, and at no less than
+  ``SLIP * RELOCK_MM_S`` (18 mm/s) while the finger moves at all. Below that speed the
+  phase may run backwards: a finger that crawls or rests (the screen still reporting
+  it) 0.5 mm past a 15 mm grating's line would otherwise feel the wrong band for as
+  long as it stays (0.6 s in one of the report's seed-scatter draws), the error the eye
+  catches first;
+- within ``LOCK_MM`` the error is worked off only where the lines pass slower than
+  ``EVENT_HZ`` (coarse gratings, slow strokes, the ends of strokes): there each edge is
+  felt as an event and its place is what matters. Where the texture is a vibration in
+  the tactile band, a residual error under ``LOCK_MM`` is left alone, because correcting it
+  would frequency-modulate the texture, while its phase cannot be felt (seed 003 section
+  6: phase goes unnoticed once two periods fit under the fingerpad);
+- a resting finger gets no correction at all: no texture appears under a still finger.
+
+So the hybrid has SHT's bandwidth on fine textures and SHO's alignment on coarse ones.
+
+The error is taken once per measurement and the offset ramps towards it at the bounded
+rate, computed in closed form per measurement. The whole per-finger recurrence
+(smoothing, phase integration, measurements, slew) is one compiled pass over the block
+(numba, ``_hybrid_row``): a Python loop per measurement, or some sixty numpy passes,
+cost several times more at 10 kHz and dominated a 5 ms live block.
+
+What it cannot do (measured by ``frictex report``, 50 Hz touch, human-like motion):
+reliably beat plain SHO's or SHT's time error on the 0.6 mm grating. There the time
+error measures a phase the finger cannot feel (seed 003 section 6), and while the finger
+moves every renderer's phase is as good as random: 50 Hz samples with 0.05 mm noise,
+extrapolated over up to 20 ms of a minimum-jerk stroke, are 0.1-0.3 mm off, a third of
+a period or more, and a finger resting within 0.05 mm of a line is on either side of it
+by chance. Over eight draws of the human-like strokes (``app.measure.report_seeds``) the three
+renderers score 1.22 (hybrid), 1.25 (SHO) and 1.30 (SHT) on average (sqrt(2) = 1.41
+for the right texture at an unrelated phase), each the best in some draws; the
+matrix's draw (seed 7) is one where SHO is (1.16 against the hybrid's 1.22). On the
+same grating the hybrid's spectrum is about SHT's (0.51 against 0.49 on average, the
+lock's small frequency corrections), far below SHO's 0.98; on the 5 and 15 mm gratings
+it is the best renderer in 47 of the 48 (draw, metric) cells.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from rendering.layers.sht import phase_kernel
+from rendering.tracking.tracks import FingerBlock
+
+#: fastest correction, as a fraction of the finger's own phase rate (below 1: the phase
+#: does not run backwards), but see RELOCK_MM_S
+SLIP = 0.9
+#: a phase error beyond this (mm) is a lost lock, corrected whatever the texture
+LOCK_MM = 0.1
+#: a lost lock is worked off at least at SLIP times this speed (mm/s) while the finger
+#: moves, however slowly
+RELOCK_MM_S = 20.0
+#: temporal frequency (Hz) below which lines are events, not vibration: the tactile band's
+#: lower edge (rendering.metrics.TACTILE_BAND_HZ)
+EVENT_HZ = 10.0
+#: velocity changes (mm/s) smaller than this between two estimates are touch noise ...
+VELOCITY_NOISE_MM_S = 8.0
+#: ... and are averaged in with this weight (1 would be SHT's unsmoothed velocity)
+SMOOTH = 0.5
+
+
+@dataclass(frozen=True)
+class _Finger:
+    """One finger between calls: its touch, phase_v carry and offset (cycles, in [0, 1)),
+    the target offset of its last measurement (cycles), that measurement (held x, held y,
+    the tracker's phase rate) to tell whether the next call starts with a new one, the
+    smoothed phase rate (cycles/s) and |vx| + |vy| (mm/s) at the last sample (only ever
+    compared with 0: at rest or moving)."""
+
+    touch: int
+    phase: float
+    offset: float
+    target: float
+    measured: tuple[float, float, float]
+    smoothed: float
+    speed: float
+
+
+@dataclass(frozen=True)
+class HybridState:
+    """Per finger id: its :class:`_Finger` record."""
+
+    fingers: dict[int, _Finger]
+
+
+def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, snap: np.ndarray,
+                fast: np.ndarray, slow: np.ndarray, start: float, lock: float
+                ) -> tuple[np.ndarray, float]:
+    """Offset (cycles) following a piecewise-constant target at a bounded rate.
+
+    Parameters
+    ----------
+    bounds : (k,) increasing sample indices, the first 0, where the target takes a new value.
+    target : (k,) target offset (cycles) from each bound on; only its value mod 1 matters.
+    restart : (k,) bool, bounds where the offset jumps to the target (touch-down).
+    snap : (k,) bool, bounds where it jumps to the target if the error exceeds ``lock``
+        (the finger starts from rest: nothing slides under it to slew against).
+    fast, slow : (n + 1,) non-decreasing correction allowances (cycles) accumulated before
+        each sample and, last, after the last one: while the error exceeds ``lock`` the
+        offset may move by ``fast[j] - fast[i]`` between samples i and j, within ``lock``
+        by the ``slow`` difference.
+    start : offset before the first sample (cycles), used unless ``restart[0]``.
+    lock : error (cycles) down to which the ``fast`` allowance applies.
+
+    Returns
+    -------
+    offset : (n,) offset at each sample (cycles, not wrapped).
+    end : offset after the last sample, wrapped to [0, 1).
+    """
+    fast = np.ascontiguousarray(fast, dtype=np.float64)
+    offset = np.empty(fast.size - 1)
+    end = _slew_kernel(np.ascontiguousarray(bounds, dtype=np.int64),
+                       np.ascontiguousarray(target, dtype=np.float64),
+                       np.ascontiguousarray(restart, dtype=np.bool_),
+                       np.ascontiguousarray(snap, dtype=np.bool_), fast,
+                       np.ascontiguousarray(slow, dtype=np.float64), float(start), float(lock),
+                       offset)
+    return offset, end
+
+
+@njit(cache=True)
+def _slew_kernel(bounds, target, restart, snap, fast, slow, start, lock, offset):
+    """:func:`slew_offset` in one pass: writes ``offset`` (n,), returns the wrapped end.
+
+    Per segment (bounds[k] to the next bound) the error ``gap`` to its target is taken at
+    its first sample; ``far = |gap| - lock`` of it (if positive) is worked off at the
+    ``fast`` allowance, the rest at the ``slow`` one from index ``switch`` on, the first
+    allowance index where the fast part is done.
+    """
+    k_n = bounds.size
+    n = fast.size - 1
+    base = gap = far = 0.0
+    b = switch = 0
+    value = start
+    for k in range(k_n):
+        d = target[k]
+        if restart[k]:
+            value = d
+        elif k > 0:  # where the previous segment got to by this bound
+            value = base + math.copysign(_worked_off(fast, slow, b, bounds[k], far, gap), gap)
+        g = (d - value + 0.5) % 1.0 - 0.5
+        if snap[k] and abs(g) > lock:
+            value, g = d, 0.0
+        base, gap, far, b = value, g, max(abs(g) - lock, 0.0), bounds[k]
+        switch = min(np.searchsorted(fast, fast[b] + far), n)
+        rest = abs(g) - far
+        for i in range(b, bounds[k + 1] if k + 1 < k_n else n):
+            worked = min(fast[i] - fast[b], far) + min(max(slow[i] - slow[switch], 0.0), rest)
+            offset[i] = base + math.copysign(worked, g)
+    return (base + math.copysign(_worked_off(fast, slow, b, n, far, gap), gap)) % 1.0
+
+
+@njit(cache=True)
+def _worked_off(fast, slow, b, i, far, gap):
+    """Correction (cycles, >= 0) of the segment starting at ``b`` by allowance index ``i``."""
+    quick = fast[i] - fast[b]
+    if quick < far:
+        return quick
+    switch = b if far == 0.0 else min(np.searchsorted(fast, fast[b] + far), fast.size - 1)
+    return far + min(max(slow[i] - slow[switch], 0.0), abs(gap) - far)
+
+
+def smooth_rate(rate: np.ndarray, restart: np.ndarray, period_mm: float,
+                start: tuple[float, float] | None, noise_mm_s: float = VELOCITY_NOISE_MM_S,
+                weight: float = SMOOTH) -> tuple[np.ndarray, float]:
+    """The tracker's phase rate with its estimate-to-estimate noise averaged out.
+
+    At every new estimate (a sample where ``rate`` changes) the smoothed rate moves
+    ``weight`` of the way to it if the two differ by less than ``noise_mm_s`` (along the
+    texture's axis), else takes it: a real acceleration is followed at once. A new touch
+    and a rate of 0 (no velocity known, finger resting) start afresh.
+
+    Parameters
+    ----------
+    rate : (n,) the tracker's phase rate (cycles/s).
+    restart : (n,) bool, samples where a new touch starts.
+    period_mm : the texture's period (mm), to compare rates as speeds.
+    start : (last tracker rate, smoothed rate) carried from the previous call, or None.
+    noise_mm_s : speed difference (mm/s) below which a change is noise.
+    weight : weight of a new estimate that is noise, in (0, 1].
+
+    Returns
+    -------
+    smoothed : (n,) cycles/s. end : smoothed rate after the last sample.
+    """
+    rate = np.ascontiguousarray(rate, dtype=np.float64)
+    smoothed = np.empty(rate.size)
+    last, value = start if start is not None else (0.0, 0.0)
+    end = _smooth_kernel(rate, np.ascontiguousarray(restart, dtype=np.bool_),
+                         noise_mm_s / period_mm, start is not None, float(last), float(value),
+                         float(weight), smoothed)
+    return smoothed, end
+
+
+@njit(cache=True)
+def _smooth_kernel(rate, restart, limit, has_start, last, value, weight, smoothed):
+    """:func:`smooth_rate`'s loop (``limit`` in cycles/s): writes ``smoothed``, returns
+    the smoothed rate after the last sample."""
+    for k in range(rate.size):
+        r = rate[k]
+        if restart[k] or (r != last if k == 0 else r != rate[k - 1]) or (k == 0 and not has_start):
+            if restart[k] or r == 0.0 or value == 0.0 or abs(r - value) >= limit:
+                value = r
+            else:
+                value += weight * (r - value)
+        smoothed[k] = value
+    return value
+
+
+@njit(cache=True)
+def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, has_before, before, axis,
+                layer_phase, limits, phase):
+    """One finger's phase (cycles) for :meth:`HybridRenderer.render`, written to ``phase``.
+
+    touch : (n,) int64; vx, vy, x_held, y_held, x_pred, y_pred : (n,) float64, the
+    finger's tracks. before : the carried :class:`_Finger` fields (touch, phase, offset,
+    target, measured x, measured y, measured rate, smoothed, speed), used if
+    ``has_before``. axis : (ax, ay). layer_phase : (offset_mm, period_mm), so that
+    ``(ax x + ay y - offset_mm) / period_mm`` is ``layer.phase_at(x, y)``. limits :
+    (dt_s, slip, lock, event_hz, relock rate (cycles/s), noise limit (cycles/s),
+    smoothing weight).
+
+    Returns the new carried fields in ``before``'s order.
+    """
+    n = touch.size
+    ax, ay = axis
+    offset_mm, period = layer_phase
+    dt_s, slip, lock, event_hz, relock, noise, weight = limits
+    b_touch, b_phase, b_offset, b_target, b_x, b_y, b_rate, b_smoothed, b_speed = before
+    restart = np.empty(n, dtype=np.bool_)
+    measured = np.empty(n)  # the tracker's phase rate (cycles/s)
+    for k in range(n):
+        restart[k] = touch[k] != (b_touch if k == 0 else touch[k - 1]) or (k == 0 and not has_before)
+        measured[k] = (vx[k] * ax + vy[k] * ay) / period
+    rate = np.empty(n)
+    smoothed = _smooth_kernel(measured, restart, noise, has_before, b_rate, b_smoothed,
+                              weight, rate)
+    carry = phase_kernel(rate, dt_s, touch, has_before, int(b_touch), b_phase, phase)
+    # a new measurement: a new touch, or the tracker's held sample or velocity changes;
+    # synthesis starts where the finger is at touch-down and when it starts from rest
+    bounds = np.empty(n + 1, dtype=np.int64)
+    target = np.empty(n + 1)
+    flags = np.zeros(n + 1, dtype=np.bool_)
+    starts = np.zeros(n + 1, dtype=np.bool_)
+    k_n = 0
+    if not has_before:
+        new0 = True
+    else:
+        new0 = restart[0] or x_held[0] != b_x or y_held[0] != b_y or measured[0] != b_rate
+    if not new0:  # the previous call's measurement holds
+        bounds[0], target[0] = 0, b_target
+        k_n = 1
+    speed_before = b_speed if has_before else 0.0
+    for k in range(n):
+        speed = abs(vx[k]) + abs(vy[k])  # only compared with 0: zero exactly when the speed is
+        if k == 0:
+            new = new0
+        else:
+            new = (restart[k] or x_held[k] != x_held[k - 1] or y_held[k] != y_held[k - 1]
+                   or measured[k] != measured[k - 1])
+        if new:
+            bounds[k_n] = k
+            target[k_n] = (ax * x_pred[k] + ay * y_pred[k] - offset_mm) / period - phase[k]
+            flags[k_n] = restart[k]
+            starts[k_n] = speed_before == 0.0 and speed > 0.0
+            k_n += 1
+        speed_before = speed
+    # correction allowances: SLIP times the distance travelled (cycles; beyond the lock,
+    # at least SLIP times relock cycles/s while the finger moves), and the part of it
+    # where the lines pass slower than event_hz
+    fast = np.empty(n + 1)
+    slow = np.empty(n + 1)
+    scale = slip * dt_s
+    fast[0] = slow[0] = 0.0
+    acc_fast = acc_slow = 0.0
+    for k in range(n):
+        r = abs(rate[k])
+        acc_fast += max(r, relock) if r > 0.0 else 0.0
+        acc_slow += r * (1.0 if r < event_hz else 0.0)
+        fast[k + 1] = acc_fast * scale
+        slow[k + 1] = acc_slow * scale
+    offset = np.empty(n)
+    end = _slew_kernel(bounds[:k_n], target[:k_n], flags[:k_n], starts[:k_n], fast, slow,
+                       b_offset if has_before else 0.0, lock, offset)
+    for k in range(n):
+        phase[k] += offset[k]
+    return (touch[n - 1], carry, end, target[k_n - 1] % 1.0, x_held[n - 1], y_held[n - 1],
+            measured[n - 1], smoothed, speed_before)
+
+
+#: the carried fields of :func:`_hybrid_row` for a finger seen for the first time
+_NO_FINGER = (0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+class HybridRenderer:
+    """Phase-locked period synthesis of one periodic layer (grating or waveform)."""
+
+    def __init__(self, layer, rate_hz: float, slip: float = SLIP, lock_mm: float = LOCK_MM,
+                 event_hz: float = EVENT_HZ):
+        if not 0.0 < slip < 1.0:
+            raise ValueError(f"hybrid slip {slip!r}: expected a fraction in (0, 1) of the "
+                             "finger's speed")
+        self.layer = layer
+        self.dt_s = 1.0 / rate_hz
+        self.axis = layer.axis
+        self.slip = float(slip)
+        self.lock = lock_mm / layer.period_mm
+        self.event_hz = float(event_hz)
+
+    def initial_state(self) -> HybridState:
+        return HybridState(fingers={})
+
+    def render(self, block: FingerBlock, state: HybridState):
+        """mu' (F, n) and coverage (F, n) under each finger, and the new state."""
+        phase = np.empty((len(block.ids), block.n))
+        carried = dict(state.fingers)
+        layer_phase = (float(self.layer.offset_mm), float(self.layer.period_mm))
+        limits = (self.dt_s, self.slip, self.lock, self.event_hz,
+                  RELOCK_MM_S / self.layer.period_mm, VELOCITY_NOISE_MM_S / self.layer.period_mm,
+                  SMOOTH)
+        rows = [np.ascontiguousarray(getattr(block, name), dtype=np.float64)
+                for name in ("vx", "vy", "x_held", "y_held", "x_pred", "y_pred")]
+        touch = np.ascontiguousarray(block.touch_id, dtype=np.int64)
+        for row, fid in enumerate(block.ids):
+            before = carried.get(fid)
+            fields = _NO_FINGER if before is None else (
+                before.touch, before.phase, before.offset, before.target, *before.measured,
+                before.smoothed, before.speed)
+            end = _hybrid_row(touch[row], *(a[row] for a in rows), before is not None, fields,
+                              self.axis, layer_phase, limits, phase[row])
+            carried[fid] = _Finger(touch=int(end[0]), phase=end[1], offset=end[2], target=end[3],
+                                   measured=end[4:7], smoothed=end[7], speed=end[8])
+        mu = self.layer.profile(phase)
+        covers = self.layer.covers(block.x_pred, block.y_pred)
+        return mu, covers, HybridState(fingers=carried)

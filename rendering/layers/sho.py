@@ -1,0 +1,29 @@
+"""SHO, the surface haptic object (seed 003, section 4.4.1): mu' read from the map at
+the finger's position, sampled only where fingers are.
+
+Two variants: ``held`` uses the last measured position until the next touch sample
+arrives (the seed's plain scheme: at 50 Hz it can only render up to 25 Hz, section
+4.4.1); ``predicted`` extrapolates the position at the estimated velocity between
+samples (see ``rendering.tracking.tracks``).
+"""
+
+from __future__ import annotations
+
+from rendering.tracking.tracks import FingerBlock
+
+
+class ShoRenderer:
+    """Position-map rendering of one layer. Stateless: ``render`` returns state unchanged."""
+
+    def __init__(self, layer, predicted: bool):
+        self.layer = layer
+        self.predicted = predicted
+
+    def initial_state(self):
+        return None
+
+    def render(self, block: FingerBlock, state=None):
+        """mu' (F, n) and coverage (F, n) of the layer under each finger."""
+        x, y = (block.x_pred, block.y_pred) if self.predicted else (block.x_held, block.y_held)
+        mu, covers = self.layer.mu_and_covers(x, y)
+        return mu, covers, state
