@@ -4,7 +4,6 @@ recomputed from the channel commands alone are the forces each layer wanted."""
 import numpy as np
 from numpy.testing import assert_allclose, assert_array_equal
 
-from app.engine.replay import _slice_trace
 from rendering.input.trace_synth import make_motion, sample
 from rendering.pipeline import build_pipeline
 from rendering.input.trace_file import make_trace
@@ -38,7 +37,7 @@ def run(sc, trace, blocks_per_call=None):
     for b in range(0, total, step):
         nb = min(step, total - b)
         lo, hi = np.searchsorted(applied, [b * 50, (b + nb) * 50])
-        chunk = _slice_trace(trace, lo, hi) if hi > lo else None
+        chunk = trace.slice(lo, hi) if hi > lo else None
         out, state = p.process(b, chunk, state, n_blocks=nb)
         outs.append(out)
     return p, outs

@@ -37,8 +37,7 @@ def _run(scene, trace, mode, splits=()):
     state, outs = p.initial_state(), []
     for lo, hi in zip(bounds[:-1], bounds[1:]):
         a, b = np.searchsorted(applied, [lo * p.block_size, hi * p.block_size])
-        from app.measure.report_matrix import _slice
-        out, state = p.process(lo, _slice(trace, a, b), state, n_blocks=hi - lo)
+        out, state = p.process(lo, trace.slice(a, b) if b > a else None, state, n_blocks=hi - lo)
         outs.append(out)
     return np.concatenate([o.mu_target for o in outs], axis=1)
 

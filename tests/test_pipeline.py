@@ -21,8 +21,7 @@ def _run(scene, trace, mode=None, rate=10_000.0, splits=None):
         if hi <= lo:
             continue
         a, b = np.searchsorted(applied, [lo * p.block_size, hi * p.block_size])
-        from app.engine.replay import _slice_trace
-        chunk = _slice_trace(trace, a, b) if b > a else None
+        chunk = trace.slice(a, b) if b > a else None
         out, state = p.process(lo, chunk, state, n_blocks=hi - lo)
         outs.append(out)
     return outs

@@ -64,6 +64,18 @@ class Trace:
     def duration_s(self) -> float:
         return float(self.t_s[-1] - self.t_s[0]) if len(self) else 0.0
 
+    def slice(self, lo: int, hi: int) -> "Trace":
+        """Samples ``lo`` to ``hi`` (exclusive), as views of these arrays."""
+        return Trace(*(getattr(self, name)[lo:hi] for name in _COLUMNS))
+
+    def then(self, later: "Trace") -> "Trace":
+        """These samples followed by ``later``'s (which continue them in time)."""
+        return Trace(*(np.concatenate((getattr(self, name), getattr(later, name)))
+                       for name in _COLUMNS))
+
+
+_COLUMNS = ("t_s", "finger", "x_mm", "y_mm", "force_n", "event")
+
 
 def make_trace(t_s, finger, x_mm, y_mm, force_n=None, event=None, where: str = "trace",
                normalise: bool = True) -> Trace:
