@@ -32,7 +32,7 @@ def test_warning_does_not_fail(files, capsys):
     assert main(["validate", str(low)]) == 0
     out, err = capsys.readouterr()
     assert out == f"ok {low} (1 layer)\n"
-    assert err.startswith(f"{low}:12: warning: layer[1].mu: asks for mu' down to 0.3, but the device "
+    assert err.startswith(f"frictex: warning: {low}:12: layer[1].mu: asks for mu' down to 0.3, but the device "
                           f"reaches only 0.5717 at the nominal 0.5 N")
     assert err.count("\n") == 1
 
@@ -43,8 +43,8 @@ def test_bad_file_lists_every_problem_and_exits_2(files, capsys):
     out, err = capsys.readouterr()
     assert out == ""
     assert err.splitlines() == [
-        f"{bad}:5: display.width_px: -800 is not >= 1 (px)",
-        f"{bad}:12: layer[1].mu: 1.5 is outside (0, 1] (relative friction mu')",
+        f"frictex: error: {bad}:5: display.width_px: -800 is outside [1, 16384] (px)",
+        f"frictex: error: {bad}:12: layer[1].mu: 1.5 is outside (0, 1] (relative friction mu')",
     ]
 
 
@@ -55,8 +55,9 @@ def test_several_files_and_bundled_names(files, capsys, tmp_path):
     out, err = capsys.readouterr()
     assert out.splitlines() == [f"ok {good} (1 layer)", f"ok {LIBRARY_DIR / 'grating-5mm.toml'} (1 layer)",
                                 f"ok {low} (1 layer)"]
-    assert f"{missing}: no such file\n" in err
-    assert err.splitlines()[-1] == "2 of 5 files have problems"
+    assert f"frictex: error: {missing}: no such file\n" in err
+    assert err.splitlines()[-1] == "frictex: error: 2 of 5 files have problems"
+    assert all(line.startswith("frictex: ") for line in err.splitlines())
 
 
 def test_help_and_usage(capsys):

@@ -61,8 +61,14 @@ def test_the_base_file_is_good(tmp_path):
 
 # (line of GOOD to replace, replacement, expected line, field, message pattern)
 CASES = [
-    ("period_mm", "period_mm = -5.0", "period_mm", "layer[1].period_mm", r"^-5\.0 is not > 0 \(mm\)$"),
-    ("period_mm", "period_mm = 0", "period_mm", "layer[1].period_mm", r"^0 is not > 0 \(mm\)$"),
+    ("period_mm", "period_mm = -5.0", "period_mm", "layer[1].period_mm", r"^-5\.0 is outside \[0\.01, 10000\] \(mm\)$"),
+    ("period_mm", "period_mm = 0", "period_mm", "layer[1].period_mm", r"^0 is outside \[0\.01, 10000\] \(mm\)$"),
+    ("period_mm", "period_mm = 1e308", "period_mm", "layer[1].period_mm",
+     r"^1e\+308 is outside \[0\.01, 10000\] \(mm\)$"),
+    ("period_mm", "period_mm = 1e-300", "period_mm", "layer[1].period_mm",
+     r"^1e-300 is outside \[0\.01, 10000\] \(mm\)$"),
+    ("period_mm", "period_mm = inf", "period_mm", "layer[1].period_mm", r"^inf is not a finite number"),
+    ("period_mm", "period_mm = nan", "period_mm", "layer[1].period_mm", r"^nan is not a finite number"),
     ("period_mm", "period_mm = nan", "period_mm", "layer[1].period_mm", r"nan is not a finite number"),
     ("period_mm", "period_mm = inf", "period_mm", "layer[1].period_mm", r"inf is not a finite number"),
     ("period_mm", 'period_mm = "5 mm"', "period_mm", "layer[1].period_mm",
@@ -103,10 +109,14 @@ CASES = [
     ("color_low", 'color_low = "black"', "color_low", "layer[2].visual.color_low", r'expected a colour "#rrggbb"'),
     ("color_low", 'colour_low = "#000"', "color_low", "layer[2].visual.colour_low", r"did you mean color_low\?"),
     ("width_px", "width_px = 800.5", "width_px", "display.width_px", r"expected an integer \(px\), got the number 800\.5"),
-    ("width_px", "width_px = 0", "width_px", "display.width_px", r"0 is not >= 1 \(px\)"),
-    ("height_mm", "height_mm = -64.8", "height_mm", "display.height_mm", r"-64\.8 is not > 0 \(mm\)"),
+    ("width_px", "width_px = 0", "width_px", "display.width_px", r"0 is outside \[1, 16384\] \(px\)"),
+    ("width_px", "width_px = 100000000000000000000000000", "width_px", "display.width_px",
+     r"^100000000000000000000000000 is outside \[1, 16384\] \(px\)$"),
+    ("width_px", "width_px = 1e26", "width_px", "display.width_px",
+     r"expected an integer \(px\), got the number 1e\+26"),
+    ("height_mm", "height_mm = -64.8", "height_mm", "display.height_mm", r"-64\.8 is outside \[0\.001, 10000\] \(mm\)"),
     ("amplitude_limit_um", "amplitude_limit_um = 0", "amplitude_limit_um", "device.amplitude_limit_um",
-     r"0 is not > 0 \(um zero-to-peak\)"),
+     r"0 is outside \(0, 100\] \(um zero-to-peak\)"),
     ("amplitude_limit_um", 'profile = "beam"', "amplitude_limit_um", "device.profile",
      r'"beam" is not one of plate-seed003'),
     ("normal_force_n", "normal_force = 0.5", "normal_force_n", "device.normal_force",
@@ -115,6 +125,9 @@ CASES = [
     ("format", "format = 0", "format", "format", r"0 is not a format"),
     ("format", 'format = "1"', "format", "format", r'expected an integer \(format version\), got the string "1"'),
     ("name", "name = 3", "name", "name", r"expected a string, got the number 3"),
+    ("name", r'name = "a\u0000b"', "name", "name",
+     r"^holds the control character '\\x00' at character 2; expected one line of text$"),
+    ("name", 'name = "' + "n" * 201 + '"', "name", "name", r"^is 201 characters long; expected at most 200$"),
     ("name", 'nmae = "x"', "name", "nmae", r"did you mean name\?"),
 ]
 
@@ -182,8 +195,10 @@ def test_file_level_problems(tmp_path, text, line, field, pattern):
 
 def test_unreadable_files(tmp_path):
     missing = tmp_path / "nope.toml"
-    assert [str(p) for p in check_scene(missing)[1]] == [f"{missing}: file not found"]
-    assert [p.message for p in check_scene(tmp_path)[1]] == ["is a directory, expected a .toml texture file"]
+    assert [str(p) for p in check_scene(missing)[1]] == [
+        f"{missing}: No such file or directory; expected a .toml texture file"]
+    assert [p.message for p in check_scene(tmp_path)[1]] == [
+        "is a folder, not a file; expected a .toml texture file"]
     binary = tmp_path / "bin.toml"
     binary.write_bytes(b"format = 1\n\xff\xfe")
     assert [p.message for p in check_scene(binary)[1]] == [
@@ -192,7 +207,7 @@ def test_unreadable_files(tmp_path):
 
 @pytest.mark.parametrize("content, pattern", [
     (b"not a png", r"not an image Pillow can read"),
-    (None, r"No such file or directory"),
+    (None, r"map\.png: No such file or directory; expected 8- or 16-bit greyscale PNG"),
 ])
 def test_bad_raster_image(tmp_path, content, pattern):
     if content is not None:

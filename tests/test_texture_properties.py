@@ -88,11 +88,11 @@ def grating_text(values: dict) -> str:
 
 
 grating_values = st.fixed_dictionaries({
-    "period_mm": st.floats(1e-3, 1e3),
+    "period_mm": st.floats(0.01, 1e3),
     "duty": st.floats(0.0, 1.0, exclude_min=True, exclude_max=True),
     "mu_low": st.floats(0.0, 1.0, exclude_min=True),
     "mu_high": st.floats(0.0, 1.0, exclude_min=True),
-    "angle_deg": st.floats(-720, 720),
+    "angle_deg": st.floats(-360, 360),
     "offset_mm": st.floats(-1e3, 1e3),
 }).map(lambda v: {**v, "mu_low": min(v["mu_low"], v["mu_high"]),
                   "mu_high": max(v["mu_low"], v["mu_high"])})
@@ -112,7 +112,10 @@ def test_valid_gratings_load_exactly(tmp_path, values):
 
 
 bad_values = st.one_of(
-    st.tuples(st.just("period_mm"), st.floats(max_value=0.0)),
+    st.tuples(st.just("period_mm"), st.one_of(st.floats(max_value=0.01, exclude_max=True),
+                                              st.floats(min_value=1e4, exclude_min=True))),
+    st.tuples(st.just("angle_deg"), st.one_of(st.floats(max_value=-360, exclude_max=True),
+                                              st.floats(min_value=360, exclude_min=True))),
     st.tuples(st.just("duty"), st.one_of(st.floats(max_value=0.0), st.floats(min_value=1.0))),
     st.tuples(st.just("mu_low"), st.one_of(st.floats(max_value=0.0), st.floats(min_value=1.0, exclude_min=True))),
     st.tuples(st.sampled_from(sorted(GRATING_LINES)), st.sampled_from([math.nan, math.inf, -math.inf])),

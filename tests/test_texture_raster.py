@@ -70,7 +70,7 @@ def test_not_an_image_and_too_big(tmp_path, monkeypatch):
     junk.write_bytes(b"\x89PNG but not really")
     with pytest.raises(TextureError, match=r"not an image Pillow can read"):
         read_grey(junk)
-    with pytest.raises(FileNotFoundError):
+    with pytest.raises(TextureError, match=r"none\.png: No such file or directory; expected 8- or 16-bit"):
         read_grey(tmp_path / "none.png")
     monkeypatch.setattr(raster_io, "MAX_PIXELS", 10)
     with pytest.raises(TextureError, match=r"image is 4 x 3 px, more than the 10 px frictex reads"):

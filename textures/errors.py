@@ -1,10 +1,11 @@
 """Problems found in texture files, where they are, and the package's exception root.
 
 A :class:`Problem` names the file, the line and the field (``layer[2].period_mm``) and
-says what is wrong; ``str(problem)`` is the one-line form ``frictex validate`` prints::
+says what is wrong; ``str(problem)`` is the one-line form ``frictex validate`` prints
+after ``frictex: error:`` (or ``frictex: warning:``)::
 
-    grating.toml:14: layer[2].period_mm: -5.0 is not > 0 (mm)
-    grating.toml:9: warning: layer[1].mu_low: 0.4 is below ...
+    grating.toml:14: layer[2].period_mm: -5.0 is outside [0.01, 10000] (mm)
+    grating.toml:9: layer[1].mu_low: asks for mu' down to 0.4, but the device ...
 
 ``tomllib`` gives no line numbers for values, so :class:`Locator` rebuilds a map from
 key paths to lines by scanning the source text: ``[table]`` and ``[[array]]`` headers,
@@ -52,9 +53,8 @@ class Problem:
 
     def __str__(self) -> str:
         where = f"{self.file}:{self.line}:" if self.line is not None else f"{self.file}:"
-        kind = " warning:" if self.warning else ""
         field = f" {self.field}:" if self.field else ""
-        return f"{where}{kind}{field} {self.message}"
+        return f"{where}{field} {self.message}"
 
 
 class TextureError(ValueError):
@@ -103,19 +103,20 @@ def _split_key(dotted: str) -> list[str]:
     return parts
 
 
-def _scan_value(text: str, depth: int, in_string: str | None) -> tuple[int, str | None]:
+def bracket_peak(text: str, depth: int, in_string: str | None) -> tuple[int, str | None, int]:
     """Carry bracket depth and multi-line-string state across ``text`` (one line).
 
-    Comments, single-line strings and brackets inside strings are skipped.
+    Comments, single-line strings and brackets inside strings are skipped. Returns the
+    depth and string state after the line, and the deepest the line went.
     """
-    i, n = 0, len(text)
+    i, n, peak = 0, len(text), depth
     while i < n:
         if in_string is not None:
             end = text.find(in_string, i)
             while end > 0 and in_string == '"""' and _escaped(text, end):
                 end = text.find(in_string, end + 1)
             if end < 0:
-                return depth, in_string
+                return depth, in_string, peak
             i, in_string = end + 3, None
             continue
         ch = text[i]
@@ -127,8 +128,9 @@ def _scan_value(text: str, depth: int, in_string: str | None) -> tuple[int, str 
             i = _string_end(text, i)
         else:
             depth += (ch in "[{") - (ch in "]}")
+            peak = max(peak, depth)
             i += 1
-    return depth, in_string
+    return depth, in_string, peak
 
 
 def _escaped(text: str, pos: int) -> bool:
@@ -160,7 +162,7 @@ class Locator:
         depth, in_string = 0, None
         for number, line in enumerate(text.splitlines(), start=1):
             if depth > 0 or in_string is not None:
-                depth, in_string = _scan_value(line, depth, in_string)
+                depth, in_string, _ = bracket_peak(line, depth, in_string)
                 continue
             if m := _ARRAY_HEADER.match(line):
                 keys = _split_key(m.group(1))
@@ -176,7 +178,7 @@ class Locator:
                 for key in _split_key(m.group(1)):
                     path = path + (key,)
                     self._lines.setdefault(path, number)
-                depth, in_string = _scan_value(m.group(2), 0, None)
+                depth, in_string, _ = bracket_peak(m.group(2), 0, None)
 
     @staticmethod
     def _resolve(keys: list[str], arrays: dict[KeyPath, int]) -> KeyPath:

@@ -2,13 +2,21 @@
 ``textures/library/traces/*.csv``.
 
 Commands take either a path or a bundled name (``grating-5mm`` or ``grating-5mm.toml``);
-a path that exists wins over a bundled name. A scene's one-line description is its
-``description`` key; a trace's is its first line, a ``# ...`` comment.
+a path that exists (or is a symbolic link, even a broken one) wins over a bundled name.
+A scene's one-line description is its ``description`` key; a trace's is its first line, a
+``# ...`` comment.
+
+Every file frictex reads goes through :func:`file_problem` first: it looks at the path with
+``os.stat`` and never opens anything but a regular file, so a FIFO, a device, a folder or a
+symbolic link loop is refused with a sentence instead of hanging or raising.
 """
 
 from __future__ import annotations
 
 import difflib
+import errno
+import os
+import stat
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +35,39 @@ class Entry:
     kind: str
     path: Path
     description: str
+
+
+_SPECIAL = ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),
+            (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
+def file_problem(path: str | Path, max_bytes: int | None = None) -> str | None:
+    """Why ``path`` cannot be read as a regular file of at most ``max_bytes``, or None.
+
+    Looks with ``os.stat`` only (never opens the path): reading a FIFO or a terminal
+    would block, and reading a device can have effects. The answer is a phrase to put
+    after the file name, e.g. ``"is a FIFO (named pipe), not a regular file"``.
+    """
+    try:
+        info = os.stat(path)
+    except FileNotFoundError as exc:
+        return ("is a symbolic link to a missing file" if os.path.islink(path)
+                else exc.strerror)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "is a symbolic link loop (a link that leads back to itself)"
+        return f"cannot be read ({exc.strerror or exc})"
+    except ValueError:  # an embedded NUL: no such path can exist
+        return "is not a valid path (it holds a NUL character)"
+    if stat.S_ISDIR(info.st_mode):
+        return "is a folder, not a file"
+    if not stat.S_ISREG(info.st_mode):
+        kind = next((name for test, name in _SPECIAL if test(info.st_mode)), "a special file")
+        return f"is {kind}, not a regular file (frictex reads only regular files)"
+    if max_bytes is not None and info.st_size > max_bytes:
+        return (f"is {info.st_size:,} bytes, more than the {max_bytes:,} bytes frictex reads "
+                f"for such a file")
+    return None
 
 
 def _scene_description(path: Path) -> str:
@@ -61,7 +102,7 @@ def list_traces() -> list[Entry]:
 
 def _resolve(name_or_path: str | Path, folder: Path, suffix: str, kind: str) -> Path:
     path = Path(name_or_path)
-    if path.exists():
+    if path.exists() or path.is_symlink():
         return path
     name = str(name_or_path)
     if path.name != name:

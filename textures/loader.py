@@ -130,10 +130,14 @@ finger on a one-channel device (which serves only the finger touching longest).
 
 from __future__ import annotations
 
+import codecs
 import difflib
 import math
+import os
 import re
+import sys
 import tomllib
+import unicodedata
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable
@@ -142,7 +146,8 @@ from device.structures.beam import THEORIES, ModesError
 from device.actuation.modal import METHODS
 from device import profile as profiles
 from textures import model
-from textures.errors import KeyPath, Locator, Problem, TextureError, field_name
+from textures.errors import KeyPath, Locator, Problem, TextureError, bracket_peak, field_name
+from textures.library import file_problem
 from textures.raster_io import read_grey
 
 FORMAT_VERSION = 1
@@ -178,6 +183,7 @@ class Int:
     unit: str
     default: Any = REQUIRED
     ge: int | None = None
+    le: int | None = None
 
 
 @dataclass(frozen=True)
@@ -188,7 +194,12 @@ class Choice:
 
 @dataclass(frozen=True)
 class Text:
+    """A string of at most ``max_len`` characters; ``lines``: may hold line breaks and tabs.
+    Other control characters (NUL, escape, ...) are refused everywhere."""
+
     default: Any = REQUIRED
+    max_len: int = 200
+    lines: bool = False
 
 
 @dataclass(frozen=True)
@@ -227,25 +238,42 @@ class Rows:
 
 Spec = Num | Int | Choice | Text | Flag | Colour | Selector | NumList | Rows
 
+#: Sensible ranges (texture files are written by hand; a value beyond these is a typo or a
+#: wrong unit, and refusing it keeps every later stage finite):
+MAX_MM = 1e4           # 10 m: larger than any touchscreen or vibrating structure
+MIN_SIZE_MM = 1e-3     # 1 um: smaller than any feature a fingertip can feel
+MIN_PERIOD_MM = 0.01   # 10 um: seed 003's finest gratings are 0.6 mm
+MAX_ANGLE_DEG = 360.0
+MAX_FORCE_N = 100.0    # a fingertip presses with 0.1 to 5 N
+MAX_UM = 100.0         # plates vibrate at a few um
+MAX_PX = 16_384        # display pixels per side
+MAX_MODE_ORDER = 100
+#: Any other number: at most this in magnitude.
+MAX_MAGNITUDE = 1e6
+
 MU = Num("relative friction mu'", gt=0.0, le=1.0)
 MU_HIGH = Num("relative friction mu'", default=1.0, gt=0.0, le=1.0)
-POS = Num("mm")
-SIZE = Num("mm", gt=0.0)
-ANGLE = Num("deg", default=0.0)
-EDGE_MM = Num("mm", default=0.0, ge=0.0)
+POS = Num("mm", ge=-MAX_MM, le=MAX_MM)
+SIZE = Num("mm", ge=MIN_SIZE_MM, le=MAX_MM)
+PERIOD = Num("mm", ge=MIN_PERIOD_MM, le=MAX_MM)
+ANGLE = Num("deg", default=0.0, ge=-MAX_ANGLE_DEG, le=MAX_ANGLE_DEG)
+EDGE_MM = Num("mm", default=0.0, ge=0.0, le=MAX_MM)
+UM = Num("um zero-to-peak", gt=0.0, le=MAX_UM)
+FORCE = Num("N", gt=0.0, le=MAX_FORCE_N)
 DUTY = Num("fraction of the period", default=0.5, gt=0.0, lt=1.0)
 
-TOP = {"format": Int("format version"), "name": Text(None), "description": Text("")}
+TOP = {"format": Int("format version"), "name": Text(None),
+       "description": Text("", max_len=10_000, lines=True)}
 DISPLAY = {"width_mm": SIZE, "height_mm": SIZE,
-           "width_px": Int("px", ge=1), "height_px": Int("px", ge=1)}
+           "width_px": Int("px", ge=1, le=MAX_PX), "height_px": Int("px", ge=1, le=MAX_PX)}
 DEVICE = {"profile": Choice(tuple(profiles.DEVICE_PROFILES), _DEVICE.profile),
-          "amplitude_limit_um": Num("um zero-to-peak", _DEVICE.amplitude_limit_um, gt=0.0),
-          "normal_force_n": Num("N", _DEVICE.normal_force_n, gt=0.0)}
+          "amplitude_limit_um": replace(UM, default=_DEVICE.amplitude_limit_um),
+          "normal_force_n": replace(FORCE, default=_DEVICE.normal_force_n)}
 FRICTION = {"b_per_um": Num("1/um", _FRICTION.b_per_um, gt=0.0),
             "asymptote_per_n": Num("1/N", _FRICTION.asymptote_per_n, gt=0.0),
             "asymptote_cap": Num("relative friction mu'", _FRICTION.asymptote_cap, gt=0.0, lt=1.0)}
-CALIBRATION = {"amplitudes_um": NumList(Num("um zero-to-peak", ge=0.0), min_len=2),
-               "forces_n": NumList(Num("N", ge=0.0)),
+CALIBRATION = {"amplitudes_um": NumList(Num("um zero-to-peak", ge=0.0, le=MAX_UM), min_len=2),
+               "forces_n": NumList(Num("N", ge=0.0, le=MAX_FORCE_N)),
                "mu": Rows(MU)}
 _BEAM = profiles.BeamStructure()
 _PLATE = profiles.PlateStructure()
@@ -255,21 +283,23 @@ MATERIAL = {"youngs_gpa": Num("GPa", _BEAM.youngs_gpa, gt=0.0),
 SOLVER = {"method": Choice(METHODS, _BEAM.method),
           "rcond": Num("relative to the largest singular value", _BEAM.rcond, gt=0.0, lt=1.0)}
 STRUCTURES: dict[str, dict[str, Spec]] = {
-    "beam-seed000": {"length_mm": Num("mm", _BEAM.length_mm, gt=0.0),
-                     "width_mm": Num("mm", _BEAM.width_mm, gt=0.0),
-                     "thickness_mm": Num("mm", _BEAM.thickness_mm, gt=0.0), **MATERIAL,
+    "beam-seed000": {"length_mm": replace(SIZE, default=_BEAM.length_mm),
+                     "width_mm": replace(SIZE, default=_BEAM.width_mm),
+                     "thickness_mm": replace(SIZE, default=_BEAM.thickness_mm), **MATERIAL,
                      "theory": Choice(THEORIES, _BEAM.theory),
-                     "orders": NumList(Num("mode order", ge=1.0), default=_BEAM.orders),
-                     "actuators_mm": NumList(Num("mm"), default=_BEAM.actuators_mm),
-                     "x0_mm": Num("mm", _BEAM.x0_mm),
-                     "channel_limit_um": Num("um zero-to-peak", _BEAM.channel_limit_um, gt=0.0),
-                     **SOLVER, "modes_file": Text(None)},
-    "plate-seed001": {"width_mm": Num("mm", _PLATE.width_mm, gt=0.0),
-                      "height_mm": Num("mm", _PLATE.height_mm, gt=0.0),
-                      "thickness_mm": Num("mm", _PLATE.thickness_mm, gt=0.0), **MATERIAL,
-                      "order": Int("mode order k", _PLATE.order, ge=1),
-                      "x0_mm": Num("mm", _PLATE.x0_mm), "y0_mm": Num("mm", _PLATE.y0_mm),
-                      "channel_limit_um": Num("um zero-to-peak", None, gt=0.0), **SOLVER},
+                     "orders": NumList(Num("mode order", ge=1.0, le=MAX_MODE_ORDER),
+                                       default=_BEAM.orders),
+                     "actuators_mm": NumList(POS, default=_BEAM.actuators_mm),
+                     "x0_mm": replace(POS, default=_BEAM.x0_mm),
+                     "channel_limit_um": replace(UM, default=_BEAM.channel_limit_um),
+                     **SOLVER, "modes_file": Text(None, max_len=1000)},
+    "plate-seed001": {"width_mm": replace(SIZE, default=_PLATE.width_mm),
+                      "height_mm": replace(SIZE, default=_PLATE.height_mm),
+                      "thickness_mm": replace(SIZE, default=_PLATE.thickness_mm), **MATERIAL,
+                      "order": Int("mode order k", _PLATE.order, ge=1, le=MAX_MODE_ORDER),
+                      "x0_mm": replace(POS, default=_PLATE.x0_mm),
+                      "y0_mm": replace(POS, default=_PLATE.y0_mm),
+                      "channel_limit_um": replace(UM, default=None), **SOLVER},
 }
 COMMON = {"type": Choice(LAYER_TYPES), "name": Text(None),
           "render": Choice(RENDER_CHOICES, "auto"), "blend": Choice(model.BLEND_MODES, "multiply"),
@@ -279,7 +309,7 @@ RECT_REGION = {"x_mm": POS, "y_mm": POS, "width_mm": SIZE, "height_mm": SIZE, "a
 DISC_REGION = {"cx_mm": POS, "cy_mm": POS, "radius_mm": SIZE}
 VISUAL = {"color_low": Colour(_VISUAL.color_low), "color_high": Colour(_VISUAL.color_high),
           "outline": Flag(_VISUAL.outline)}
-PERIODIC = {"period_mm": SIZE, "angle_deg": ANGLE, "offset_mm": Num("mm", 0.0)}
+PERIODIC = {"period_mm": PERIOD, "angle_deg": ANGLE, "offset_mm": replace(POS, default=0.0)}
 LAYER_KEYS: dict[str, dict[str, Spec]] = {
     "grating": {**PERIODIC, "duty": DUTY, "mu_low": MU, "mu_high": MU_HIGH,
                 "edge": Choice(("square", "smooth"), "square"), "edge_mm": EDGE_MM},
@@ -292,26 +322,31 @@ LAYER_KEYS: dict[str, dict[str, Spec]] = {
     "bump": {"cx_mm": POS, "cy_mm": POS, "sigma_mm": SIZE, "mu": MU},
     "line": {"x0_mm": POS, "y0_mm": POS, "x1_mm": POS, "y1_mm": POS, "width_mm": SIZE,
              "mu": MU, "edge_mm": EDGE_MM},
-    "raster": {"image": Text(), "mode": Choice(model.RASTER_MODES, "stretch"),
-               "x_mm": Num("mm", 0.0), "y_mm": Num("mm", 0.0), "rotation_deg": ANGLE,
-               "width_mm": Num("mm", None, gt=0.0), "height_mm": Num("mm", None, gt=0.0),
-               "tile_width_mm": Num("mm", None, gt=0.0), "tile_height_mm": Num("mm", None, gt=0.0),
+    "raster": {"image": Text(max_len=1000), "mode": Choice(model.RASTER_MODES, "stretch"),
+               "x_mm": replace(POS, default=0.0), "y_mm": replace(POS, default=0.0),
+               "rotation_deg": ANGLE, "width_mm": replace(SIZE, default=None),
+               "height_mm": replace(SIZE, default=None),
+               "tile_width_mm": replace(SIZE, default=None),
+               "tile_height_mm": replace(SIZE, default=None),
                "mu_black": MU, "mu_white": MU_HIGH},
     "directional": {"angle_deg": ANGLE, "mu_forward": Num(MU.unit, None, gt=0.0, le=1.0),
                     "mu_backward": Num(MU.unit, None, gt=0.0, le=1.0),
-                    "force_forward_n": Num("N, positive resisting the finger", None),
-                    "force_backward_n": Num("N, positive resisting the finger", None)},
-    "guidance": {"x_mm": POS, "y_mm": POS, "line": Flag(False), "line_angle_deg": Num("deg", 90.0),
-                 "gain_n_per_mm": Num("N/mm", gt=0.0), "max_force_n": Num("N", gt=0.0)},
+                    "force_forward_n": Num("N, positive resisting the finger", None,
+                                           ge=-MAX_FORCE_N, le=MAX_FORCE_N),
+                    "force_backward_n": Num("N, positive resisting the finger", None,
+                                            ge=-MAX_FORCE_N, le=MAX_FORCE_N)},
+    "guidance": {"x_mm": POS, "y_mm": POS, "line": Flag(False), "line_angle_deg": replace(ANGLE, default=90.0),
+                 "gain_n_per_mm": Num("N/mm", gt=0.0), "max_force_n": FORCE},
     "keyclick": {"x_mm": POS, "y_mm": POS, "width_mm": SIZE, "height_mm": SIZE,
-                 "press_n": Num("N", 0.5, gt=0.0), "click_n": Num("N", 0.8, gt=0.0),
-                 "release_n": Num("N", 0.4, ge=0.0), "dwell_s": Num("s", 0.01, ge=0.0),
-                 "force_n": Num("N", 0.1, gt=0.0), "first_push": Choice(("+x", "-x"), "+x")},
+                 "press_n": replace(FORCE, default=0.5), "click_n": replace(FORCE, default=0.8),
+                 "release_n": Num("N", 0.4, ge=0.0, le=MAX_FORCE_N),
+                 "dwell_s": Num("s", 0.01, ge=0.0), "force_n": replace(FORCE, default=0.1),
+                 "first_push": Choice(("+x", "-x"), "+x")},
 }
 _DRIVING = profiles.DrivingForceParams()
 DRIVING = {"mu0": Num("friction coefficient", _DRIVING.mu0, gt=0.0),
            "slope_per_um": Num("N per um per N", _DRIVING.slope_per_um, gt=0.0),
-           "threshold_um": Num("um zero-to-peak", _DRIVING.threshold_um, ge=0.0),
+           "threshold_um": Num("um zero-to-peak", _DRIVING.threshold_um, ge=0.0, le=MAX_UM),
            "v_hold_mm_s": Num("mm/s", _DRIVING.v_hold_mm_s, gt=0.0)}
 
 _NUMBER_WITH_UNIT = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s].*)?$")
@@ -402,6 +437,9 @@ class _Reader:
         if isinstance(spec, Int):
             if isinstance(value, bool) or not isinstance(value, int):
                 return self.report(path, f"expected an integer ({spec.unit}), got {_kind(value)}")
+            if spec.ge is not None and spec.le is not None and not spec.ge <= value <= spec.le:
+                return self.report(path, f"{_show(value)} is outside [{spec.ge}, {spec.le}] "
+                                         f"({spec.unit})")
             if spec.ge is not None and value < spec.ge:
                 return self.report(path, f"{value} is not >= {spec.ge} ({spec.unit})")
             return value
@@ -413,9 +451,7 @@ class _Reader:
                                          f"{_did_you_mean(value, spec.options)}")
             return value
         if isinstance(spec, Text):
-            if not isinstance(value, str):
-                return self.report(path, f"expected a string, got {_kind(value)}")
-            return value
+            return self.text(value, path, spec)
         if isinstance(spec, Flag):
             if not isinstance(value, bool):
                 return self.report(path, f"expected true or false, got {_kind(value)}")
@@ -431,6 +467,20 @@ class _Reader:
             return self.number_list(value, path, spec.item, spec.min_len)
         return self.rows(value, path, spec.item)
 
+    def text(self, value, path: KeyPath, spec: Text):
+        if not isinstance(value, str):
+            return self.report(path, f"expected a string, got {_kind(value)}")
+        allowed = "\t\n\r" if spec.lines else ""
+        bad = next((c for c in value if unicodedata.category(c) == "Cc" and c not in allowed), None)
+        if bad is not None:
+            where = f"at character {value.index(bad) + 1}"
+            return self.report(path, f"holds the control character {bad!r} {where}; expected "
+                                     f"{'text' if spec.lines else 'one line of text'}")
+        if len(value) > spec.max_len:
+            return self.report(path, f"is {len(value):,} characters long; expected at most "
+                                     f"{spec.max_len:,}")
+        return value
+
     def selector(self, value, path: KeyPath):
         words = ("any",) + model.POSITIONAL_SELECTORS
         expected = f'one of {", ".join(words)} or a finger number "1", "2", ...'
@@ -441,10 +491,13 @@ class _Reader:
         if value in words:
             return value
         if value.isdigit() and value.isascii():
-            if int(value) < 1:
+            digits = value.lstrip("0")
+            if not digits:
                 return self.report(path, f'{_show(value)}: finger numbers start at "1" '
                                          f"(the finger touching longest)")
-            return str(int(value))
+            if len(digits) > 2:
+                return self.report(path, f'{_show(value)}: finger numbers go up to "99"')
+            return digits
         return self.report(path, f"{_show(value)} is not {expected}{_did_you_mean(value, words)}")
 
     def number(self, value, path: KeyPath, spec: Num):
@@ -461,6 +514,9 @@ class _Reader:
             return self.report(path, f"{_show(value)} is not a finite number ({spec.unit})")
         lower = spec.gt if spec.gt is not None else spec.ge
         upper = spec.lt if spec.lt is not None else spec.le
+        if (lower is None or upper is None) and abs(v) > MAX_MAGNITUDE:
+            return self.report(path, f"{_show(value)} is beyond {MAX_MAGNITUDE:g} in magnitude "
+                                     f"({spec.unit}); no sensible value is that large")
         bad_low = (spec.gt is not None and not v > spec.gt) or (spec.ge is not None and not v >= spec.ge)
         bad_high = (spec.lt is not None and not v < spec.lt) or (spec.le is not None and not v <= spec.le)
         if (bad_low or bad_high) and lower is not None and upper is not None:
@@ -565,7 +621,7 @@ def _structure(r: _Reader, profile: str, raw, display, base_dir: Path):
     if not ok:
         return _BAD
     modes_file = v.pop("modes_file")
-    modes_path = (base_dir / modes_file).resolve() if modes_file is not None else None
+    modes_path = _real_path(base_dir, modes_file) if modes_file is not None else None
     return profiles.BeamStructure(**{**v, "orders": tuple(int(o) for o in orders)},
                                modes_path=modes_path, modes=modes)
 
@@ -591,12 +647,22 @@ def _modes_table(r: _Reader, path: KeyPath, name: str, raw: dict, base_dir: Path
         r.report(path + ("orders",), "not used with modes_file (the table's columns are the "
                                      "modes); remove one of them")
         return None
+    modes_path = _real_path(base_dir, name)
+    problem = file_problem(modes_path, MAX_FILE_BYTES)
     try:
-        return MeasuredModes.from_csv(base_dir / name)
+        if problem is not None:
+            raise ModesError(problem)
+        return MeasuredModes.from_csv(modes_path)
     except (OSError, ModesError) as exc:
         text = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
-        r.report(path + ("modes_file",), f"{_show(name)} ({(base_dir / name).resolve()}): {text}")
+        r.report(path + ("modes_file",), f"{_show(name)} ({modes_path}): {text}")
         return None
+
+
+def _real_path(base_dir: Path, name: str) -> Path:
+    """``name`` relative to the texture file's folder, links followed as far as they go
+    (``Path.resolve`` raises on a link loop; ``os.path.realpath`` stops there)."""
+    return Path(os.path.realpath(base_dir / name))
 
 
 def _actuation_builds(r: _Reader, device: profiles.DeviceProfile) -> bool:
@@ -833,15 +899,17 @@ def _build_raster(r, path, v, given, ctx):
                 ok = False
         if mode == "stretch":
             ok &= _forbid(r, path, given, ["tile_width_mm", "tile_height_mm"], 'with mode = "stretch"')
-    image_path = (ctx.base_dir / v["image"]).resolve() if v["image"] else None
+    image_path = _real_path(ctx.base_dir, v["image"]) if v["image"] else None
     grey = None
     try:
         if image_path is None:
             raise TextureError("empty image path")
         grey, _ = read_grey(image_path)
-    except (OSError, TextureError) as exc:
-        text = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
-        r.report(path + ("image",), f"{_show(v['image'])} ({image_path}): {text}")
+    except OSError as exc:
+        r.report(path + ("image",), f"{_show(v['image'])}: {image_path}: {exc.strerror or exc}")
+        ok = False
+    except TextureError as exc:  # its message starts with the image's path
+        r.report(path + ("image",), f"{_show(v['image'])}: {exc}")
         ok = False
     if not ok or ctx.display is None:
         return None
@@ -1043,32 +1111,54 @@ def _reach_warnings(r: _Reader, device: profiles.DeviceProfile, built) -> None:
 # Entry points
 
 
+#: Largest texture file read (bytes): scenes are a few kB; a long ``samples`` list fits.
+MAX_FILE_BYTES = 1 << 20
+#: Deepest nesting of arrays and inline tables accepted (the grammar needs 3: rows of a
+#: calibration table inside [device.calibration]).
+MAX_NESTING = 16
+
+
 def _read_text(path: Path, r: _Reader) -> str | None:
+    """The file's text: a regular UTF-8 file (a leading BOM is dropped) without NULs."""
+    problem = file_problem(path, MAX_FILE_BYTES)
+    if problem is not None:
+        r.report((), f"{problem}; expected a .toml texture file")
+        return None
     try:
         data = path.read_bytes()
-    except IsADirectoryError:
-        r.report((), "is a directory, expected a .toml texture file")
-        return None
-    except FileNotFoundError:
-        r.report((), "file not found")
-        return None
     except OSError as exc:
         r.report((), f"cannot read: {exc.strerror or exc}")
         return None
-    try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        r.report((), f"not UTF-8 text (byte {data[exc.start]:#04x} at offset {exc.start}); "
-                     f"TOML files are UTF-8")
+    if data.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        r.report((), "is UTF-16 text (it starts with a UTF-16 byte order mark); save it as "
+                     "UTF-8: TOML files are UTF-8")
         return None
+    if data.startswith(codecs.BOM_UTF8):
+        data = data[len(codecs.BOM_UTF8):]
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        r.problems.append(Problem(r.label, line, "", f"not UTF-8 text (byte {data[exc.start]:#04x} "
+                                                     f"at offset {exc.start}); TOML files are UTF-8"))
+        return None
+    if "\0" in text:
+        line = text.count("\n", 0, text.index("\0")) + 1
+        r.problems.append(Problem(r.label, line, "", "holds a NUL character: binary content, "
+                                                     "expected TOML text"))
+        return None
+    return text
 
 
 _TOML_POSITION = re.compile(r"\s*\(at line (\d+), column (\d+)\)\s*$")
+_LONG_DIGITS = re.compile(r"\d{%d,}" % (sys.get_int_max_str_digits() or 4300))
 
 
 def _parse_toml(text: str, r: _Reader) -> dict | None:
+    too_deep = (f"arrays or inline tables nested more than {MAX_NESTING} deep; a texture "
+                f"file needs at most 3 levels")
     try:
-        return tomllib.loads(text)
+        doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         message = str(exc)
         m = _TOML_POSITION.search(message)
@@ -1077,6 +1167,43 @@ def _parse_toml(text: str, r: _Reader) -> dict | None:
             message = f"{message[:m.start()]} (column {m.group(2)})"
         r.problems.append(Problem(r.label, line, "TOML syntax", message))
         return None
+    except RecursionError:
+        r.problems.append(Problem(r.label, _deepest_line(text), "TOML syntax", too_deep))
+        return None
+    except ValueError:  # tomllib reads integers through int(), which refuses very long ones
+        m = _LONG_DIGITS.search(text)
+        line = text.count("\n", 0, m.start()) + 1 if m else None
+        r.problems.append(Problem(r.label, line, "TOML syntax",
+                                  f"a number with {len(m.group()) if m else 'too many'} digits; "
+                                  f"expected a number of at most 20 digits"))
+        return None
+    if _depth(doc) > MAX_NESTING:
+        r.problems.append(Problem(r.label, _deepest_line(text), "TOML syntax", too_deep))
+        return None
+    return doc
+
+
+def _depth(doc) -> int:
+    """How deep tables and arrays nest in parsed TOML (the document itself is 1)."""
+    deepest, stack = 0, [(doc, 1)]
+    while stack:
+        value, depth = stack.pop()
+        deepest = max(deepest, depth)
+        if deepest > MAX_NESTING:
+            break
+        children = value.values() if isinstance(value, dict) else value
+        stack.extend((v, depth + 1) for v in children if isinstance(v, (dict, list)))
+    return deepest
+
+
+def _deepest_line(text: str) -> int | None:
+    """The first line where brackets and braces open more than MAX_NESTING deep."""
+    depth, in_string = 0, None
+    for number, line in enumerate(text.splitlines(), start=1):
+        depth, in_string, peak = bracket_peak(line, depth, in_string)
+        if peak > MAX_NESTING:
+            return number
+    return None
 
 
 def check_scene(path: str | Path) -> tuple[model.Scene | None, list[Problem], list[Problem]]:

@@ -17,15 +17,20 @@ Row 0 is the top of the image (screen y points down).
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from textures.errors import TextureError
+from textures.library import file_problem
 
-#: Largest image accepted (pixels): a friction map is sampled at finger positions only,
-#: and a 16 Mpx float64 map already takes 128 MB.
+#: Largest image accepted (pixels), checked from the file's header before any pixel is
+#: decoded: a friction map is sampled at finger positions only, and a 16 Mpx float64
+#: map already takes 128 MB.
 MAX_PIXELS = 16_000_000
+#: Largest image file read (bytes): a 16 Mpx 16-bit RGBA PNG stored uncompressed.
+MAX_FILE_BYTES = 128 << 20
 
 _REC601 = np.array([0.299, 0.587, 0.114])
 
@@ -48,25 +53,40 @@ def read_grey(path: str | Path) -> tuple[np.ndarray, str]:
 
     Raises
     ------
-    OSError if the file cannot be read; TextureError if it is not a usable image.
+    OSError if the file cannot be read; TextureError if it is not a usable image: not a
+    regular file (checked before opening: a FIFO would block), larger than
+    ``MAX_FILE_BYTES``, more than ``MAX_PIXELS`` (from the header, before decoding),
+    corrupt or truncated.
     """
     from PIL import Image, UnidentifiedImageError
 
     path = Path(path)
+    problem = file_problem(path, MAX_FILE_BYTES)
+    if problem is not None:
+        raise TextureError(f"{path}: {problem}; expected {ACCEPTED}")
     try:
-        with Image.open(path) as image:
-            image.load()
-            size = image.size
-            if size[0] * size[1] > MAX_PIXELS:
-                raise TextureError(f"{path}: image is {size[0]} x {size[1]} px, more than "
-                                   f"the {MAX_PIXELS:,} px frictex reads; scale it down")
-            if size[0] == 0 or size[1] == 0:
-                raise TextureError(f"{path}: image is empty ({size[0]} x {size[1]} px)")
-            return _to_grey(image, path)
+        with warnings.catch_warnings():
+            # Pillow's own bomb guard warns from 89 Mpx; the header check below refuses
+            # anything over MAX_PIXELS first, with a sentence instead of a warning
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            with Image.open(path) as image:
+                width, height = image.size
+                if width * height > MAX_PIXELS:
+                    raise TextureError(f"{path}: image is {width} x {height} px, more than the "
+                                       f"{MAX_PIXELS:,} px frictex reads; scale it down")
+                if width == 0 or height == 0:
+                    raise TextureError(f"{path}: image is empty ({width} x {height} px)")
+                image.load()
+                return _to_grey(image, path)
     except UnidentifiedImageError:
         raise TextureError(f"{path}: not an image Pillow can read; expected {ACCEPTED}") from None
     except Image.DecompressionBombError as exc:
         raise TextureError(f"{path}: {exc}") from None
+    except (TextureError, MemoryError):
+        raise
+    except Exception as exc:  # noqa: BLE001 - decoders raise anything on a corrupt file
+        raise TextureError(f"{path}: corrupt image, decoding failed ({type(exc).__name__}: "
+                           f"{exc}); expected {ACCEPTED}") from None
 
 
 def _to_grey(image, path: Path) -> tuple[np.ndarray, str]:

@@ -21,15 +21,31 @@ from rendering.visual.scene_image import scene_rgb, to_srgb8
 from rendering.visual.viewport import fit_viewport
 
 
+#: Largest scene panel (px per side): ``--size`` up to this; by default the display's own
+#: pixel size, scaled down to fit it.
+MAX_PANEL_PX = 4096
+DEFAULT_MAX_PANEL_PX = 2048
+#: Rows of the friction map computed at once (bounds memory for any panel size).
+ROWS_PER_PASS = 256
+
+
 def frame_size(text: str) -> tuple[int, int]:
     """argparse type for ``WIDTHxHEIGHT`` in pixels."""
     try:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not WIDTHxHEIGHT (e.g. 800x480)") from None
-    if not (1 <= w <= 8192 and 1 <= h <= 8192):
-        raise argparse.ArgumentTypeError(f"{text!r}: width and height must be 1 to 8192 px")
+    if not (1 <= w <= MAX_PANEL_PX and 1 <= h <= MAX_PANEL_PX):
+        raise argparse.ArgumentTypeError(f"{text!r}: width and height must be 1 to "
+                                         f"{MAX_PANEL_PX} px")
     return w, h
+
+
+def default_size(display) -> tuple[int, int]:
+    """The display's pixel size, scaled down to at most DEFAULT_MAX_PANEL_PX per side."""
+    w, h = display.width_px, display.height_px
+    scale = min(1.0, DEFAULT_MAX_PANEL_PX / max(w, h))
+    return max(1, round(w * scale)), max(1, round(h * scale))
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -47,16 +63,20 @@ def load(scene_name: str):
 
 
 def mu_map(scene, viewport, supersample: int = 3) -> np.ndarray:
-    """mu' (height_px, width_px) averaged over ``supersample**2`` points per pixel."""
+    """mu' (height_px, width_px) averaged over ``supersample**2`` points per pixel,
+    ``ROWS_PER_PASS`` rows at a time."""
     sx, sy = viewport.px_per_mm
     cols = np.arange(viewport.width_px, dtype=np.float64)
-    rows = np.arange(viewport.height_px, dtype=np.float64)
     acc = np.zeros((viewport.height_px, viewport.width_px))
     offsets = (np.arange(supersample) + 0.5) / supersample
-    for oy in offsets:
-        for ox in offsets:
-            xx, yy = np.broadcast_arrays(((cols + ox) / sx)[None, :], ((rows + oy) / sy)[:, None])
-            acc += ideal_mu(scene, xx, yy)
+    for start in range(0, viewport.height_px, ROWS_PER_PASS):
+        rows = np.arange(start, min(start + ROWS_PER_PASS, viewport.height_px), dtype=np.float64)
+        band = acc[start:start + rows.size]
+        for oy in offsets:
+            for ox in offsets:
+                xx, yy = np.broadcast_arrays(((cols + ox) / sx)[None, :],
+                                             ((rows + oy) / sy)[:, None])
+                band += ideal_mu(scene, xx, yy)
     return acc / supersample ** 2
 
 
@@ -67,13 +87,14 @@ def write_preview(scene, out: Path, size: tuple[int, int] | None = None,
     from matplotlib.figure import Figure
 
     d = scene.display
-    viewport = fit_viewport(d, *(size or (d.width_px, d.height_px)))
+    viewport = fit_viewport(d, *(size or default_size(d)))
     image = to_srgb8(scene_rgb(scene, viewport, outlines=outlines))
     mu = mu_map(scene, viewport)
     floor = mu_floor(scene.device, scene.device.normal_force_n)
     extent = (0.0, d.width_mm, d.height_mm, 0.0)
-    fig = Figure(figsize=(13.0, 13.0 * d.height_mm / d.width_mm / 2 + 1.4), dpi=110,
-                 layout="constrained")
+    # a display far taller than wide would ask for a figure metres high
+    aspect = min(d.height_mm / d.width_mm, 4.0)
+    fig = Figure(figsize=(13.0, 13.0 * aspect / 2 + 1.4), dpi=110, layout="constrained")
     FigureCanvasAgg(fig)
     left, right = fig.subplots(1, 2)
     left.imshow(image, extent=extent, interpolation="antialiased")

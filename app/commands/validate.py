@@ -1,9 +1,10 @@
 """``frictex validate FILE...``: check texture files and report every problem.
 
-For each file: ``ok FILE (n layers)`` on stdout, or every problem as
-``FILE:line: field: message`` on stderr; warnings (legal but probably unintended, such
-as a mu' the device cannot reach at its nominal force) as ``FILE:line: warning: ...``.
-Exit 0 if every file is good (warnings allowed), 2 if any is bad.
+For each file: ``ok FILE (n layers)`` on stdout, or every problem as one line on stderr,
+``frictex: error: FILE:LINE: field: message`` (the README's form for every error);
+warnings (legal but probably unintended, such as a mu' the device cannot reach at its
+nominal force) as ``frictex: warning: FILE:LINE: field: message``. Exit 0 if every file
+is good (warnings allowed), 2 if any is bad.
 """
 
 from __future__ import annotations
@@ -27,17 +28,19 @@ def run(args: argparse.Namespace) -> int:
         try:
             path = resolve_scene(name)
         except TextureError as exc:
-            print(exc, file=sys.stderr)
+            print(f"frictex: error: {exc}", file=sys.stderr)
             bad += 1
             continue
         scene, problems, warnings = check_scene(path)
-        for problem in problems + warnings:
-            print(problem, file=sys.stderr)
+        for problem in problems:
+            print(f"frictex: error: {problem}", file=sys.stderr)
+        for warning in warnings:
+            print(f"frictex: warning: {warning}", file=sys.stderr)
         if scene is None:
             bad += 1
         else:
             n = len(scene.layers)
             print(f"ok {path} ({n} layer{'s' * (n != 1)})")
     if bad and len(args.files) > 1:
-        print(f"{bad} of {len(args.files)} files have problems", file=sys.stderr)
+        print(f"frictex: error: {bad} of {len(args.files)} files have problems", file=sys.stderr)
     return 2 if bad else 0
