@@ -7,6 +7,7 @@ import sys
 
 from app.commands.argtypes import positive_float, positive_int
 from app.engine.replay import run_replay
+from app.engine.tables import FORMATS
 from rendering.pipeline import RENDERERS
 
 
@@ -19,8 +20,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--block", type=positive_int, default=50, metavar="N",
                         help="block size in output samples: touch samples take effect at "
                              "block boundaries, as live (default 50 = 5 ms at 10 kHz)")
-    parser.add_argument("--format", choices=("csv", "npz"), default="csv",
-                        help="csv (default) or npz (one array per column; for long replays)")
+    parser.add_argument("--format", choices=FORMATS, default="csv",
+                        help="csv (default), npz (one array per column) or parquet (columnar, "
+                             "compressed; pandas and polars open it): the two faster for "
+                             "long replays")
     parser.add_argument("--renderer", choices=("sho", *RENDERERS), default=None,
                         help="render every periodic layer this way instead of as its file says")
     parser.add_argument("--device", metavar="sim|PORT", default=None,
@@ -47,7 +50,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"replayed {summary['trace']['samples']} touch samples -> {out['samples']} output "
               f"samples ({out['duration_s']:.3f} s at {out['rate_hz']:g} Hz) in {args.out}: "
               f"{', '.join(out['files'])}, summary.json; {clamps} clamped; "
-              f"{timing['x_realtime']:.0f}x real time")
+              f"{timing['x_realtime_end_to_end']:.0f}x real time end to end "
+              f"({timing['x_realtime_compute']:.0f}x compute only)")
         for warning in summary["warnings"]:
             print(f"frictex: warning: {warning}", file=sys.stderr)
     return 0

@@ -1,13 +1,20 @@
-"""Streaming writers for replay outputs: CSV or NPZ tables written chunk by chunk.
+"""Output tables written from column arrays, in bounded memory, all or nothing.
 
-Memory stays bounded whatever the length of the replay: each chunk of rows is written
-as it comes. Files are written under a temporary name and renamed only by
-:meth:`TableWriter.commit`, so an interrupted replay never leaves a file that looks
-complete; :meth:`TableWriter.abort` removes the partial file.
+A :class:`TableWriter` takes chunks of rows (one 1-D array per column), gathers them
+into batches of about :data:`BATCH_ROWS` rows and writes each batch at once. The file is written under ``<name>.partial`` and renamed only by
+:meth:`TableWriter.commit`, so an interrupted run never leaves a file that looks
+complete; :meth:`TableWriter.abort` removes what was written.
 
-NPZ: numpy's ``.npz`` is a zip of ``.npy`` files. Columns are streamed to raw temporary
-files and, at commit, each is copied into the zip behind its ``.npy`` header (known only
-then, with the final row count), so ``np.load(path)[column]`` reads them back.
+Formats:
+
+- ``csv``: a header line, then one line per row; each float column has a fixed number
+  of decimals (its ``%.Nf`` format), byte for byte Python's ``"%.Nf" % value``
+  (``app.engine.csv_text``).
+- ``npz``: numpy's zip of ``.npy`` arrays, one per column. Columns are streamed to raw
+  files beside the output and copied into the zip by the kernel at commit (the ``.npy``
+  header holds the row count, known only at the end).
+- ``parquet``: Apache Parquet, one row group per batch, zstd-compressed; pandas, polars
+  and pyarrow open it directly.
 """
 
 from __future__ import annotations
@@ -19,71 +26,131 @@ from pathlib import Path
 
 import numpy as np
 
+from app.engine.csv_text import rows_text
+
+FORMATS = ("csv", "npz", "parquet")
+#: rows gathered before a batch is written (bounded memory: ~50 MB for six columns)
+BATCH_ROWS = 1 << 20
+
 
 class TableWriter:
-    """Rows of named columns, appended in chunks, to ``<stem>.csv`` or ``<stem>.npz``.
+    """Rows of named columns, appended in chunks, to ``<stem>.<fmt>`` in ``out_dir``.
 
-    ``columns``: (name, numpy dtype, CSV %-format) triples.
+    ``columns``: (name, numpy dtype, CSV %-format) triples; the %-format is ``%d`` for
+    integer columns and ``%.Nf`` for float columns.
     """
 
     def __init__(self, out_dir: Path, stem: str, columns, fmt: str):
-        if fmt not in ("csv", "npz"):
-            raise ValueError(f"output format {fmt!r}: expected csv or npz")
+        if fmt not in FORMATS:
+            raise ValueError(f"output format {fmt!r}: expected one of {', '.join(FORMATS)}")
         self.fmt = fmt
         self.columns = list(columns)
         self.path = Path(out_dir) / f"{stem}.{fmt}"
         self.partial = self.path.with_name(self.path.name + ".partial")
         self.rows = 0
-        if fmt == "csv":
-            self._fh = open(self.partial, "w", encoding="ascii", newline="\n")
-            self._fh.write(",".join(name for name, _, _ in self.columns) + "\n")
-            self._row_format = ",".join(f for _, _, f in self.columns) + "\n"
-        else:
-            self._raw = {name: open(self._raw_path(name), "wb") for name, _, _ in self.columns}
-
-    def _raw_path(self, name: str) -> Path:
-        return self.path.with_name(f"{self.path.name}.{name}.raw")
+        self._pending: list[dict[str, np.ndarray]] = []
+        self._pending_rows = 0
+        self._out = _OPENERS[fmt](self)
 
     def write(self, chunk: dict[str, np.ndarray]) -> None:
         """Append rows: one equal-length 1-D array per column."""
         n = len(next(iter(chunk.values())))
         if n == 0:
             return
-        if self.fmt == "csv":
-            # one % per row is what np.savetxt does too; zip keeps it to a single pass
-            cols = [chunk[name].tolist() for name, _, _ in self.columns]
-            self._fh.write("".join(self._row_format % row for row in zip(*cols)))
-        else:
-            for name, dtype, _ in self.columns:
-                self._raw[name].write(np.ascontiguousarray(chunk[name], dtype=dtype).tobytes())
+        self._pending.append({name: np.asarray(chunk[name], dtype=dtype)
+                              for name, dtype, _ in self.columns})
+        self._pending_rows += n
         self.rows += n
+        if self._pending_rows >= BATCH_ROWS:
+            self._flush()
+
+    def _flush(self) -> None:
+        if not self._pending:
+            return
+        batch = {name: np.concatenate([c[name] for c in self._pending])
+                 for name, _, _ in self.columns}
+        self._pending, self._pending_rows = [], 0
+        self._out.write(batch)
 
     def commit(self) -> Path:
         """Finish the file and move it into place; returns its path."""
-        if self.fmt == "csv":
-            self._fh.close()
-        else:
-            for fh in self._raw.values():
-                fh.close()
-            with zipfile.ZipFile(self.partial, "w", compression=zipfile.ZIP_STORED,
-                                 allowZip64=True) as zf:
-                for name, dtype, _ in self.columns:
-                    header = {"descr": np.lib.format.dtype_to_descr(np.dtype(dtype)),
-                              "fortran_order": False, "shape": (self.rows,)}
-                    with zf.open(f"{name}.npy", "w", force_zip64=True) as member:
-                        np.lib.format.write_array_header_2_0(member, header)
-                        with open(self._raw_path(name), "rb") as raw:
-                            shutil.copyfileobj(raw, member, 1 << 20)
-                    os.remove(self._raw_path(name))
+        self._flush()
+        self._out.close()
         os.replace(self.partial, self.path)
         return self.path
 
     def abort(self) -> None:
         """Close and delete everything written so far."""
-        if self.fmt == "csv":
-            self._fh.close()
-        else:
-            for name, fh in self._raw.items():
-                fh.close()
-                self._raw_path(name).unlink(missing_ok=True)
+        self._pending = []
+        self._out.discard()
         self.partial.unlink(missing_ok=True)
+
+
+class _Csv:
+    def __init__(self, table: TableWriter):
+        self.columns = table.columns
+        self.fh = open(table.partial, "wb")
+        self.fh.write((",".join(name for name, _, _ in self.columns) + "\n").encode("ascii"))
+
+    def write(self, batch: dict[str, np.ndarray]) -> None:
+        self.fh.write(rows_text([batch[name] for name, _, _ in self.columns],
+                                [fmt for _, _, fmt in self.columns]))
+
+    def close(self) -> None:
+        self.fh.close()
+
+    discard = close
+
+
+class _Npz:
+    def __init__(self, table: TableWriter):
+        self.table = table
+        self.raw = {name: open(self._raw_path(name), "wb") for name, _, _ in table.columns}
+
+    def _raw_path(self, name: str) -> Path:
+        return self.table.path.with_name(f"{self.table.path.name}.{name}.raw")
+
+    def write(self, batch: dict[str, np.ndarray]) -> None:
+        for name, fh in self.raw.items():
+            fh.write(np.ascontiguousarray(batch[name]).data)
+
+    def close(self) -> None:
+        for fh in self.raw.values():
+            fh.close()
+        with zipfile.ZipFile(self.table.partial, "w", compression=zipfile.ZIP_STORED,
+                             allowZip64=True) as zf:
+            for name, dtype, _ in self.table.columns:
+                header = {"descr": np.lib.format.dtype_to_descr(np.dtype(dtype)),
+                          "fortran_order": False, "shape": (self.table.rows,)}
+                with zf.open(f"{name}.npy", "w", force_zip64=True) as member:
+                    np.lib.format.write_array_header_2_0(member, header)
+                    with open(self._raw_path(name), "rb") as raw:
+                        shutil.copyfileobj(raw, member, 1 << 22)
+                os.remove(self._raw_path(name))
+
+    def discard(self) -> None:
+        for name, fh in self.raw.items():
+            fh.close()
+            self._raw_path(name).unlink(missing_ok=True)
+
+
+class _Parquet:
+    def __init__(self, table: TableWriter):
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+        self.schema = pa.schema([(name, pa.from_numpy_dtype(np.dtype(dtype)))
+                                 for name, dtype, _ in table.columns])
+        self.writer = pq.ParquetWriter(table.partial, self.schema, compression="zstd")
+        self.pa = pa
+
+    def write(self, batch: dict[str, np.ndarray]) -> None:
+        arrays = [self.pa.array(batch[field.name]) for field in self.schema]
+        self.writer.write_table(self.pa.Table.from_arrays(arrays, schema=self.schema))
+
+    def close(self) -> None:
+        self.writer.close()
+
+    discard = close
+
+
+_OPENERS = {"csv": _Csv, "npz": _Npz, "parquet": _Parquet}

@@ -1,13 +1,16 @@
-"""The live haptic pipeline on its own thread, paced by the wall clock, block by block.
+"""The live haptic pipeline on its own thread, block by block, on the run engine.
 
-At the start of block k (wall time t0 + k * block / rate) the thread drains its
-bounded input queues (touch samples, commands), runs the pipeline for that block,
-sends the commands to the sink and hands a decimated snapshot to the window through
-another bounded queue. It never waits on the window: a full snapshot queue drops the
-oldest snapshot (counted). The device starts playing a stream once its jitter buffer
-holds ``DEADLINE_S`` (the link's 10 ms prefill, ``device.link.host.PREFILL_S``), so block k
+The thread runs ``app.engine.driver.drive`` with the live touch queue as its source
+(``app.engine.sources.QueueSource``), :class:`LiveStage` (the pipeline, scene switches
+and the emergency stop) and as sinks the device link, the recording and the window's
+snapshots. Its clock (``app.engine.clocks``) is the wall clock: block k starts at
+t0 + k * block / rate; the device starts playing a stream once its jitter buffer holds
+``DEADLINE_S`` (the link's 10 ms prefill, ``device.link.host.PREFILL_S``), so block k
 is due ``DEADLINE_S`` after its start; one sent later is a deadline miss (counted, with
-the worst lateness past the block's own end), and the thread catches up without sleeping.
+the worst lateness past the block's own end), and the thread catches up without
+sleeping. With ``pacing="device"`` the device's own sample clock paces the blocks
+instead (each wait bounded). The thread never waits on the window: a full snapshot
+queue drops the oldest snapshot (counted).
 
 Changes between blocks ramp across one block (STYLE.md 5): a scene or renderer switch
 crossfades the old pipeline's commands into the new one's (the new pipeline takes over
@@ -30,9 +33,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from app.engine.clocks import DevicePacedClock, WallClock
+from app.engine.driver import drive
+from app.engine.sinks import LinkSink
+from app.engine.sources import QueueSource
 from device.friction import ClampCounts
+from rendering.input.trace_file import DOWN, MOVE, UP
 from rendering.pipeline import PipelineState, build_pipeline
-from rendering.input.trace_file import DOWN, MOVE, UP, make_trace
 from rendering.visual.overlay import BlockRecord, record_from_output
 
 TOUCH_QUEUE = 4096
@@ -98,21 +105,112 @@ class TouchInput:
             self.stats.dropped_touches += 1
 
 
+class LiveStage:
+    """The live pipeline: scene and renderer switches crossfaded across one block, the
+    emergency stop (immediate: 0 um while set; resuming ramps from 0 over a block), the
+    normal force the device measures, and the clamp counts (STYLE.md 5)."""
+
+    def __init__(self, pipeline, estop, stats: "HapticStats"):
+        self.pipeline = pipeline
+        self.state = pipeline.initial_state()
+        self.estop = estop
+        self.stats = stats
+        self.changes: queue.Queue = queue.Queue(COMMAND_QUEUE)
+        self.render_override = None
+        self.device_force = None  # callable -> N or None, when a link measures it
+        self.stopped = estop.is_set()
+        self._gain = 0.0 if self.stopped else 1.0
+
+    def process(self, k: int, samples, n: int):
+        out, commands = self._run(k, samples, self._latest_change())
+        self.stopped = self.estop.is_set()
+        if self.stopped:
+            commands = np.zeros_like(commands)
+        elif self._gain < 1.0:
+            commands = commands * np.linspace(self._gain, 1.0, commands.shape[0] + 1)[1:, None]
+            self.stats.ramps += 1
+        self._gain = 0.0 if self.stopped else 1.0
+        self.stats.clamps.add(out.clamps)
+        self.stats.blocks += 1
+        return out, commands
+
+    def _latest_change(self):
+        latest = None
+        while True:
+            try:
+                latest = self.changes.get_nowait()
+            except queue.Empty:
+                return latest
+
+    def _run(self, k, samples, change):
+        force = None if self.device_force is None else self.device_force()
+        if change is None:
+            out, self.state = self.pipeline.process(k, samples, self.state, normal_force_n=force)
+            return out, out.commands_um
+        # crossfade: both pipelines run this block from the same finger tracks (another
+        # device, with other channels, ramps up from 0 instead)
+        new, self.render_override = change
+        new_state = PipelineState(tracker=self.state.tracker, layers=new.initial_state().layers)
+        old_out, _ = self.pipeline.process(k, samples, self.state, normal_force_n=force)
+        out, self.state = new.process(k, samples, new_state, normal_force_n=force)
+        same_device = new.channels == self.pipeline.channels
+        self.pipeline = new
+        fade = np.linspace(0.0, 1.0, out.commands_um.shape[0] + 1)[1:, None]
+        self.stats.ramps += 1
+        before = old_out.commands_um * (1.0 - fade) if same_device else 0.0
+        return out, before + out.commands_um * fade
+
+
+class SnapshotSink:
+    """Hands the window a decimated record of every block with the counters, through a
+    bounded queue that drops the oldest snapshot when full (counted)."""
+
+    def __init__(self, haptic: "HapticThread"):
+        self.haptic = haptic
+        self._link = {"state": "none"}
+
+    def write(self, out, commands_um) -> None:
+        h = self.haptic
+        if h.sink is not None and h.stats.blocks % LINK_STATUS_EVERY == 1:
+            self._link = h.sink.status()
+        status = {"blocks": h.stats.blocks, "deadline_misses": h.wall.stats.misses,
+                  "clamps": h.stats.clamps.total, "estop": h.stage.stopped,
+                  "renderer": h.stage.render_override or "file", "link": self._link}
+        snap = Snapshot(record_from_output(out, h.stride, commands_um=commands_um), status)
+        try:
+            h.snapshots.put_nowait(snap)
+        except queue.Full:
+            h.stats.dropped_snapshots += 1
+            try:
+                h.snapshots.get_nowait()
+                h.snapshots.put_nowait(snap)
+            except (queue.Empty, queue.Full):
+                pass
+
+    def commit(self) -> None:
+        """Nothing to finish."""
+
+    abort = commit
+
+
 class HapticThread(TouchInput, threading.Thread):
     """Runs ``build_pipeline(scene, ...)`` live; see the module docstring.
 
-    ``sink``: optional command sink (``device.link.host.open_sink(..., paced=False)``).
-    ``recorder``: optional callable ``recorder(out, commands_um)`` called with each
-    block's output and the commands actually sent (must not block).
-    ``estop``, ``touches``, ``snapshots``: the emergency stop event and the touch and
-    snapshot queues, when another process holds their other ends (``app.live.haptic_process``);
-    by default the thread makes its own.
+    ``sink``: optional device link (``device.link.host.open_sink(..., paced=False)``),
+    closed by the thread when it stops. ``recorder``: optional sink
+    (``app.engine.sinks``) receiving each block's output and the commands actually sent,
+    committed when the thread stops (``app.live.haptic_setup``: a table sink on a thread
+    of its own). ``estop``, ``touches``, ``snapshots``: the emergency stop event and the
+    touch and snapshot queues, when another process holds their other ends
+    (``app.live.haptic_process``); by default the thread makes its own. ``clock`` and
+    ``sleep``: the wall clock (s) and how to wait on it, injectable for tests.
+    ``pacing``: "wall", or "device" (the link's room paces the blocks; needs ``sink``).
     """
 
     def __init__(self, scene, rate_hz: float = 10_000.0, block_size: int = 50,
                  render_override: str | None = None, sink=None, recorder=None,
                  clock=time.perf_counter, snapshot_stride: int = 10, estop=None,
-                 touches=None, snapshots=None):
+                 touches=None, snapshots=None, sleep=time.sleep, pacing: str = "wall"):
         super().__init__(name="frictex-haptic", daemon=True)
         self.rate_hz = float(rate_hz)
         self.block_size = int(block_size)
@@ -121,20 +219,25 @@ class HapticThread(TouchInput, threading.Thread):
         self.sink = sink
         self.recorder = recorder
         self.stride = snapshot_stride
+        self.pacing = pacing
         self.touches = queue.Queue(TOUCH_QUEUE) if touches is None else touches
-        self.commands: queue.Queue = queue.Queue(COMMAND_QUEUE)
         self.snapshots = queue.Queue(SNAPSHOT_QUEUE) if snapshots is None else snapshots
         self.estop = threading.Event() if estop is None else estop
         self.stats = HapticStats()
         self._quit = threading.Event()
-        self._pending: list[tuple] = []
         self._last_stamp = 0.0
         self.render_override = render_override
-        self.pipeline = build_pipeline(scene, rate_hz, block_size, render_override)
-        self.state = self.pipeline.initial_state()
-        self.t0 = clock()
+        self.stage = LiveStage(build_pipeline(scene, rate_hz, block_size, render_override),
+                               self.estop, self.stats)
+        self.stage.render_override = render_override
+        self.wall = WallClock(self.block_s, DEADLINE_S, now=clock, sleep=sleep)
+        self.t0 = self.wall.t0
         self.error: BaseException | None = None
-        self._link = {"state": "none"}
+
+    @property
+    def pipeline(self):
+        """The pipeline running now (the last switch's once it has taken over)."""
+        return self.stage.pipeline
 
     # -- called from other threads ------------------------------------------------------
 
@@ -153,111 +256,35 @@ class HapticThread(TouchInput, threading.Thread):
                              f"({pipeline.scene.device.profile}); the link and recording were opened "
                              f"for {', '.join(old.channels)} ({old.scene.device.profile}): start "
                              "the demo on that scene instead")
-        self.commands.put_nowait((pipeline, override))
+        self.stage.changes.put_nowait((pipeline, override))
+        self.render_override = override
         return pipeline
 
     def stop(self) -> None:
         self._quit.set()
 
     def start(self) -> None:
-        self.t0 = self.clock()  # the output clock starts with the thread
+        self.wall.restart()  # the output clock starts with the thread
+        self.t0 = self.wall.t0
         super().start()
 
     # -- the thread ---------------------------------------------------------------------
 
     def run(self) -> None:
+        sinks = [SnapshotSink(self)]
+        clock = self.wall
+        if self.sink is not None:
+            self.stage.device_force = self.sink.device_force_n
+            sinks.insert(0, LinkSink(self.sink, self.block_size))
+            if self.pacing == "device":
+                clock = DevicePacedClock(self.sink)
+        if self.recorder is not None:
+            sinks.append(self.recorder)
         try:
-            self._loop()
+            drive(self.stage, QueueSource(self.touches, self.block_s), sinks, clock,
+                  stop=self._quit.is_set)
         except BaseException as exc:  # reported by the window; output stops
             self.error = exc
-
-    def _loop(self) -> None:
-        k = 0
-        gain = 0.0 if self.estop.is_set() else 1.0
-        while not self._quit.is_set():
-            start = self.t0 + k * self.block_s
-            wait = start - self.clock()
-            if wait > 0:
-                time.sleep(wait)
-            samples = self._drain_touches(k * self.block_s)
-            out, commands = self._process(k, samples, self._drain_commands())
-            stopped = self.estop.is_set()
-            target = 0.0 if stopped else 1.0
-            if stopped:
-                commands = np.zeros_like(commands)
-            elif gain < 1.0:
-                ramp = np.linspace(gain, 1.0, self.block_size + 1)[1:, None]
-                commands = commands * ramp
-                self.stats.ramps += 1
-            gain = target
-            if self.sink is not None:
-                self.sink.send(k * self.block_size, commands, out.phases_rad)
-            if self.recorder is not None:
-                self.recorder(out, commands)
-            self.stats.clamps.add(out.clamps)
-            self.stats.blocks += 1
-            self._publish(k, out, commands, stopped)
-            late = self.clock() - (start + self.block_s)
-            self.stats.worst_lateness_s = max(self.stats.worst_lateness_s, late)
-            if self.clock() > start + max(self.block_s, DEADLINE_S):
-                self.stats.deadline_misses += 1
-            k += 1
-
-    def _drain_touches(self, block_start_s: float):
-        """Touch samples stamped at or before the block start (later ones wait)."""
-        while True:
-            try:
-                self._pending.append(self.touches.get_nowait())
-            except queue.Empty:
-                break
-        due = [s for s in self._pending if s[0] <= block_start_s]
-        if not due:
-            return None
-        self._pending = self._pending[len(due):]
-        t, finger, x, y, force, event = (np.array(c) for c in zip(*due))
-        return make_trace(t, finger, x, y, force, event, where="live touch", normalise=False)
-
-    def _drain_commands(self):
-        """The latest pipeline asked for since the last block, or None."""
-        latest = None
-        while True:
-            try:
-                latest = self.commands.get_nowait()
-            except queue.Empty:
-                return latest
-
-    def _process(self, k, samples, change):
-        # a device with force sensors measures the normal force itself (key-click scenes)
-        force = self.sink.device_force_n() if self.sink is not None else None
-        if change is None:
-            out, self.state = self.pipeline.process(k, samples, self.state, normal_force_n=force)
-            return out, out.commands_um
-        # crossfade: both pipelines run this block from the same finger tracks (another
-        # device, with other channels, ramps up from 0 instead)
-        new, self.render_override = change
-        new_state = PipelineState(tracker=self.state.tracker, layers=new.initial_state().layers)
-        old_out, _ = self.pipeline.process(k, samples, self.state, normal_force_n=force)
-        out, self.state = new.process(k, samples, new_state, normal_force_n=force)
-        same_device = new.channels == self.pipeline.channels
-        self.pipeline = new
-        fade = np.linspace(0.0, 1.0, self.block_size + 1)[1:, None]
-        self.stats.ramps += 1
-        before = old_out.commands_um * (1.0 - fade) if same_device else 0.0
-        return out, before + out.commands_um * fade
-
-    def _publish(self, k: int, out, commands, stopped: bool) -> None:
-        if self.sink is not None and k % LINK_STATUS_EVERY == 0:
-            self._link = self.sink.status()
-        status = {"blocks": self.stats.blocks, "deadline_misses": self.stats.deadline_misses,
-                  "clamps": self.stats.clamps.total, "estop": stopped,
-                  "renderer": self.render_override or "file", "link": self._link}
-        snap = Snapshot(record_from_output(out, self.stride, commands_um=commands), status)
-        try:
-            self.snapshots.put_nowait(snap)
-        except queue.Full:
-            self.stats.dropped_snapshots += 1
-            try:
-                self.snapshots.get_nowait()
-                self.snapshots.put_nowait(snap)
-            except (queue.Empty, queue.Full):
-                pass
+        finally:
+            self.stats.deadline_misses = self.wall.stats.misses
+            self.stats.worst_lateness_s = self.wall.stats.worst_lateness_s

@@ -1,0 +1,84 @@
+"""The one block loop: a source's touch samples through a pipeline into sinks, on a clock.
+
+Replay, the live haptic loop, the report and the benches all run here; only the source
+(``app.engine.sources``), the clock (``app.engine.clocks``) and the sinks
+(``app.engine.sinks``) differ (DESIGN.md, "One pipeline, one driver")::
+
+    blocks = drive(PipelineStage(pipeline), TraceSource(chunks), [TableSink(...)],
+                   VirtualClock(), chunk_blocks=200)
+
+Each step runs up to ``chunk_blocks`` blocks in one pipeline call (replay: fast; live:
+1). A sample still takes effect at the block boundary after it, so the result does not
+depend on ``chunk_blocks``. After the last block every sink is committed; if anything
+raises (a source, the pipeline, a sink, a commit, Ctrl-C) every sink not yet committed
+is aborted and the error propagates: a run writes complete outputs or none.
+"""
+
+from __future__ import annotations
+
+import time
+
+
+class PipelineStage:
+    """A pipeline with its state carried between calls; the commands sent are its own.
+
+    ``normal_force_n``: optional callable returning the measured normal force (N) for the
+    next block, or None (then the trace's force is used).
+    """
+
+    def __init__(self, pipeline, normal_force_n=None):
+        self.pipeline = pipeline
+        self.state = pipeline.initial_state()
+        self.normal_force_n = normal_force_n
+
+    def process(self, k: int, samples, n: int):
+        force = None if self.normal_force_n is None else self.normal_force_n()
+        out, self.state = self.pipeline.process(k, samples, self.state, n_blocks=n,
+                                                normal_force_n=force)
+        return out, out.commands_um
+
+
+class RunTimer:
+    """Wall time (s) spent in each part of the loop: reading input, computing, writing."""
+
+    def __init__(self):
+        self.seconds = {"read": 0.0, "compute": 0.0, "write": 0.0, "commit": 0.0}
+
+
+def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,
+          timer: RunTimer | None = None) -> int:
+    """Run until ``source.done`` (or ``stop()`` is true); returns the number of blocks run.
+
+    ``stage.process(k, samples, n) -> (out, commands_um)``; ``source.take(k, n) ->
+    (samples, n_run)``; ``sink.write(out, commands_um)``, ``sink.commit()``,
+    ``sink.abort()``; ``clock.wait(k)``, ``clock.finished(k, n)``.
+    """
+    timer = RunTimer() if timer is None else timer
+    seconds = timer.seconds
+    k = 0
+    pending = list(sinks)
+    try:
+        while not source.done and not (stop is not None and stop()):
+            clock.wait(k)
+            t0 = time.perf_counter()
+            samples, n = source.take(k, chunk_blocks)
+            t1 = time.perf_counter()
+            out, commands = stage.process(k, samples, n)
+            t2 = time.perf_counter()
+            for sink in sinks:
+                sink.write(out, commands)
+            clock.finished(k, n)
+            seconds["read"] += t1 - t0
+            seconds["compute"] += t2 - t1
+            seconds["write"] += time.perf_counter() - t2
+            k += n
+        t3 = time.perf_counter()
+        while pending:
+            pending[0].commit()
+            pending.pop(0)
+        seconds["commit"] += time.perf_counter() - t3
+    except BaseException:
+        for sink in pending:
+            sink.abort()
+        raise
+    return k

@@ -1,0 +1,148 @@
+"""A run's ``summary.json``: counts, clamps, warnings, per-finger errors and timings.
+
+:class:`Totals` is a sink (``app.engine.sinks``) that counts over every block output;
+:func:`summary` turns the counts into the document, :func:`timings` the run's seconds
+into real-time factors. Real-time factors say what they count: ``x_realtime_end_to_end``
+is output seconds over the whole run's wall time (reading the trace, computing, writing
+every output, committing); ``x_realtime_compute`` over the pipeline's compute alone.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from app.engine.force_summary import ForceSummary
+from device.friction import ClampCounts
+from rendering.pipeline import STAGES
+
+SUMMARY_VERSION = 2
+
+
+class Totals:
+    """What the summary counts over a run, block output by block output (a sink)."""
+
+    def __init__(self):
+        self.clamps = ClampCounts()
+        self.errors = AmplitudeErrors()
+        self.forces = ForceSummary()
+        self.max_amplitude = 0.0
+        self.contact_samples = 0
+        self.limited = 0
+        self.off_structure = 0
+
+    def write(self, out, commands_um) -> None:
+        self.clamps.add(out.clamps)
+        self.errors.add(out)
+        self.forces.add(out)
+        self.max_amplitude = max(self.max_amplitude, float(commands_um.max(initial=0.0)))
+        self.contact_samples += int(out.contact.any(axis=0).sum())
+        self.limited += out.limited
+        self.off_structure += out.off_structure
+
+    def commit(self) -> None:
+        """Counts are final as they are."""
+
+    abort = commit
+
+
+class AmplitudeErrors:
+    """Per finger: how far the achieved amplitude was from the wanted one while touching."""
+
+    def __init__(self):
+        self.stats: dict[int, list] = {}  # finger id -> [contact samples, sum of squares, max]
+
+    def add(self, out) -> None:
+        err = np.where(out.contact, out.amplitude_um - out.wanted_um, 0.0)
+        for row, fid in enumerate(out.finger_ids):
+            s = self.stats.setdefault(fid, [0, 0.0, 0.0])
+            s[0] += int(out.contact[row].sum())
+            s[1] += float(np.sum(err[row] ** 2))
+            s[2] = max(s[2], float(np.abs(err[row]).max(initial=0.0)))
+
+    def report(self) -> dict:
+        """{finger: {contact_samples, amplitude_error_rms_um, amplitude_error_max_um}}."""
+        return {str(fid): {"contact_samples": n,
+                           "amplitude_error_rms_um": (sq / n) ** 0.5 if n else 0.0,
+                           "amplitude_error_max_um": mx}
+                for fid, (n, sq, mx) in sorted(self.stats.items())}
+
+
+def warnings_of(pipeline, tracker, totals: Totals) -> list[str]:
+    """One sentence per thing the pipeline changed or could not do."""
+    clamps = totals.clamps.as_dict()
+    warnings = []
+    if clamps["unreachable"] and pipeline.forces is not None:
+        warnings.append(f"{clamps['unreachable']} samples asked for a tangential force out "
+                        "of the wave's reach and were clamped to the nearest reachable force")
+    elif clamps["unreachable"]:
+        warnings.append(f"{clamps['unreachable']} target samples were below the lowest "
+                        "reachable mu' and were clamped to the amplitude limit")
+    if clamps["force_beyond_model"]:
+        warnings.append(f"{clamps['force_beyond_model']} samples had a normal force beyond "
+                        "the friction model's range (asymptote capped)")
+    if tracker.jumps:
+        warnings.append(f"{tracker.jumps} finger jumps were treated as lift and touch")
+    if tracker.out_of_order:
+        warnings.append(f"{tracker.out_of_order} out-of-order touch samples were dropped")
+    if totals.limited:
+        warnings.append(f"{totals.limited} samples hit an actuator limit (achieved amplitude "
+                        "differs from the wanted one; see fingers)")
+    if totals.off_structure:
+        warnings.append(f"{totals.off_structure} finger samples were off the vibrating "
+                        "structure and were held at its edge")
+    return warnings
+
+
+def summary(scene, trace_report: dict, pipeline, tracker, totals: Totals, fmt: str,
+            files: list[str], blocks: int) -> dict:
+    """The summary document (without ``timings``, ``device`` and run-level warnings)."""
+    n_out = blocks * pipeline.block_size
+    doc = {
+        "summary_version": SUMMARY_VERSION,
+        "scene": {"name": scene.name,
+                  "path": str(scene.source) if scene.source else None,
+                  "device": scene.device.profile,
+                  "layers": [{"name": layer.name, "type": type(layer).__name__.lower(),
+                              "renderer": mode}
+                             for layer, mode in zip(scene.layers, pipeline.layer_modes)]},
+        "trace": trace_report,
+        "output": {"rate_hz": pipeline.rate_hz, "block_size": pipeline.block_size,
+                   "samples": n_out, "duration_s": n_out / pipeline.rate_hz,
+                   "channels": list(pipeline.channels), "format": fmt, "files": files},
+        "counts": {"blocks": blocks, "contact_samples": totals.contact_samples,
+                   "jumps": tracker.jumps, "out_of_order": tracker.out_of_order,
+                   "max_amplitude_um": totals.max_amplitude,
+                   "actuator_limited": totals.limited, "off_structure": totals.off_structure},
+        "clamps": totals.clamps.as_dict(),
+        "warnings": warnings_of(pipeline, tracker, totals),
+        "fingers": totals.errors.report(),
+    }
+    forces = totals.forces.report()
+    if forces is not None:
+        doc["forces"] = forces
+    return doc
+
+
+def timings(pipeline, output_s: float, loop_seconds: dict, wall_s: float) -> dict:
+    """``timings``: wall and compute seconds and both real-time factors (see module doc)."""
+    stages = dict(pipeline.timer.seconds)
+    compute = sum(stages.values())
+    return {"wall_s": wall_s, "compute_s": compute,
+            "x_realtime_end_to_end": output_s / wall_s if wall_s > 0 else None,
+            "x_realtime_compute": output_s / compute if compute > 0 else None,
+            "loop_s": dict(loop_seconds),
+            "stages_s": {s: stages[s] for s in STAGES},
+            "layers_s": dict(pipeline.timer.layer_seconds)}
+
+
+def finite_json(value):
+    """``value`` with every non-finite float replaced by None (JSON has no inf or NaN)."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: finite_json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [finite_json(v) for v in value]
+    return value
