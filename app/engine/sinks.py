@@ -111,6 +111,21 @@ class FrameSink:
     abort = commit
 
 
+class MemorySink:
+    """Keeps every block output in a list (measurements and tests of short runs)."""
+
+    def __init__(self):
+        self.outs: list = []
+
+    def write(self, out, commands_um) -> None:
+        self.outs.append(out)
+
+    def commit(self) -> None:
+        """The list is the result."""
+
+    abort = commit
+
+
 class ProgressSink:
     """A progress bar on stderr counting seconds of output (tqdm)."""
 

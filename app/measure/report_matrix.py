@@ -21,6 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from app.engine.clocks import VirtualClock
+from app.engine.driver import PipelineStage, drive
+from app.engine.sinks import MemorySink
+from app.engine.sources import TraceSource
 from rendering.input.trace_synth import make_motion, sample, truth
 from rendering.metrics import MetricError, accuracy, reference
 from rendering.pipeline import build_pipeline
@@ -107,13 +111,6 @@ def load(scene_name: str):
     return _SCENE_CACHE[scene_name]
 
 
-def _slice(trace: Trace, lo: int, hi: int) -> Trace | None:
-    if hi <= lo:
-        return None
-    return Trace(trace.t_s[lo:hi], trace.finger[lo:hi], trace.x_mm[lo:hi], trace.y_mm[lo:hi],
-                 trace.force_n[lo:hi], trace.event[lo:hi])
-
-
 def _pipeline(scene, case: Case):
     block = max(1, int(round(case.output_hz * BLOCK_S)))
     sho_variant = "sho-held" if case.renderer == "sho-held" else "sho-predicted"
@@ -122,23 +119,32 @@ def _pipeline(scene, case: Case):
                           inversion=case.inversion)
 
 
+class TimedStage(PipelineStage):
+    """A pipeline stage that keeps each call's compute time (s)."""
+
+    def __init__(self, pipeline):
+        super().__init__(pipeline)
+        self.seconds: list[float] = []
+
+    def process(self, k, samples, n):
+        t = time.perf_counter()
+        result = super().process(k, samples, n)
+        self.seconds.append(time.perf_counter() - t)
+        return result
+
+
 def run_blocks(pipeline, trace: Trace, blocks_per_call: int, duration_s: float):
-    """Run ``trace`` through ``pipeline`` from t = 0 for ``duration_s`` of output.
+    """Run ``trace`` through ``pipeline`` from t = 0 for ``duration_s`` of output, on the
+    run engine with a virtual clock, ``blocks_per_call`` blocks per pipeline call.
 
     Returns (outputs, per-call compute seconds).
     """
-    applied = apply_index(trace.t_s, pipeline.tracker_config)
-    total = int(np.ceil(duration_s * pipeline.rate_hz / pipeline.block_size))
-    state = pipeline.initial_state()
-    outs, seconds = [], []
-    for b in range(0, total, blocks_per_call):
-        nb = min(blocks_per_call, total - b)
-        lo, hi = np.searchsorted(applied, [b * pipeline.block_size, (b + nb) * pipeline.block_size])
-        t = time.perf_counter()
-        out, state = pipeline.process(b, _slice(trace, lo, hi), state, n_blocks=nb)
-        seconds.append(time.perf_counter() - t)
-        outs.append(out)
-    return outs, np.array(seconds)
+    stage = TimedStage(pipeline)
+    source = TraceSource(iter([trace]), until_s=duration_s)
+    source.start(pipeline.tracker_config)
+    outputs = MemorySink()
+    drive(stage, source, [outputs], VirtualClock(), chunk_blocks=blocks_per_call)
+    return outputs.outs, np.array(stage.seconds)
 
 
 def _encode_seconds(commands_um: np.ndarray, block: int) -> float | None:
