@@ -5,7 +5,8 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from app.commands.cli import main
-from rendering.input.trace_file import DOWN, MOVE, UP, TraceError, format_trace, parse_trace, read_trace
+from rendering.input.trace_file import (DOWN, MOVE, UP, TraceError, concat_traces, format_trace,
+                                        parse_trace, read_trace)
 
 
 def test_minimal_trace_defaults():
@@ -30,11 +31,23 @@ def test_first_sample_after_up_is_a_down():
     ("t_s,finger,x_mm,y_mm\n", "header but no samples"),
     ("t_s,finger,x_mm,y_mm\n0,0,abc,1\n", r"<t>:2: column x_mm: 'abc' is not a number"),
     ("t_s,finger,x_mm,y_mm\n0,0,nan,1\n", "not a finite number"),
-    ("t_s,finger,x_mm,y_mm\n1,0,0,0\n0.5,0,0,0\n", r"<t>:3: t_s goes back from 1.0 to 0.5"),
-    ("t_s,finger,x_mm,y_mm\n0,-1,0,0\n", "finger: '-1' is not an integer >= 0"),
+    ("t_s,finger,x_mm,y_mm\n0,-1,0,0\n",
+     r"^<t>:2: column finger: '-1' is not an integer from 0 to 2147483647 \(32-bit ids"),
+    ("t_s,finger,x_mm,y_mm\n0,1e20,0,0\n", r"^<t>:2: column finger: '1e20' is not an integer from 0"),
+    ("t_s,finger,x_mm,y_mm\n0,9223372036854775807,0,0\n", r"^<t>:2: column finger: '9223372036854775807'"),
+    ("t_s,finger,x_mm,y_mm\n1e308,0,0,0\n", r"^<t>:2: column t_s: '1e308' is not a number from -1e\+10 to 1e\+10 s$"),
+    ("t_s,finger,x_mm,y_mm\n0,0,1e308,0\n", r"^<t>:2: column x_mm: '1e308' is not a number from -100000 to 100000 mm$"),
+    ("t_s,finger,x_mm,y_mm\n0,0,0,-1e6\n", r"^<t>:2: column y_mm: '-1e6' is not a number from -100000 to 100000 mm$"),
+    ("t_s,finger,x_mm,y_mm\n0,0,0,inf\n", r"^<t>:2: column y_mm: 'inf' is not a finite number$"),
+    ("t_s,finger,x_mm,y_mm,force_n\n0,0,0,0,1e4\n", r"^<t>:2: column force_n: '1e4' is not a number from 0 to 1000 N$"),
     ("t_s,finger,x_mm,y_mm\n0,1.5,0,0\n", "finger: '1.5' is not an integer"),
     ("t_s,finger,x_mm,y_mm\n0,0,0\n", "3 fields, expected 4"),
-    ("t_s,finger,x_mm,y_mm,force_n\n0,0,0,0,-2\n", "force_n: -2.0 N is negative"),
+    ("t_s,finger,x_mm,y_mm,force_n\n0,0,0,0,-2\n", r"^<t>:2: column force_n: '-2' is not a number from 0 to 1000 N$"),
+    ("t_s,finger,x_mm,y_mm\n0,0,0," + "9" * 5000 + "\n", r"^<t>:2: line longer than 4096 bytes"),
+    ("t_s,finger,x_mm,y_mm\n0,0\x00,0,0\n", r"^<t>:2: binary content \(a NUL byte at column 4\)"),
+    ("t_s,finger,x_mm,y_mm\n" + "".join(f"0,{k},0,0\n" for k in range(21)),
+     r"^<t>:22: 21 fingers touch at once \(finger 20 comes down while the others have no up "
+     r"event\); at most 20 are accepted$"),
     ("t_s,finger,x_mm,y_mm,event\n0,0,0,0,press\n", "'press' is not one of down, move, up"),
 ])
 def test_bad_traces_get_one_line_errors(text, message):
@@ -43,15 +56,18 @@ def test_bad_traces_get_one_line_errors(text, message):
 
 
 def test_missing_and_binary_files(tmp_path):
-    with pytest.raises(TraceError, match="no such trace file"):
+    with pytest.raises(TraceError, match=r"nope\.csv: No such file or directory; expected a trace CSV"):
         read_trace(tmp_path / "nope.csv")
     binary = tmp_path / "bin.csv"
-    binary.write_bytes(b"\xff\xfe\x00\x81")
-    with pytest.raises(TraceError, match="not a text file"):
+    binary.write_bytes(b"t_s,finger,x_mm,y_mm\n0,0,\x81,0\n")
+    with pytest.raises(TraceError, match=r"bin\.csv:2: not UTF-8 text \(byte 0x81 at column 5\)"):
+        read_trace(binary)
+    binary.write_bytes("t_s,finger,x_mm,y_mm\n".encode("utf-16"))
+    with pytest.raises(TraceError, match=r"bin\.csv: UTF-16 text .*save it as UTF-8"):
         read_trace(binary)
 
 
-finite = st.floats(-1e6, 1e6, allow_nan=False)
+finite = st.floats(-1e5, 1e5, allow_nan=False)
 
 
 @settings(max_examples=50, derandomize=True, deadline=None)
@@ -105,5 +121,82 @@ def test_chunked_reading_equals_whole_and_checks_across_chunks(tmp_path):
     # finger 1 lifts at row 5, finger 0 at row 6: their next samples are downs
     assert chunked.event[7] == DOWN and chunked.event[8] == DOWN and chunked.event[9] == MOVE
     path.write_text("t_s,finger,x_mm,y_mm\n0,0,0,0\n0.02,0,0,0\n0.01,0,0,0\n")
-    with pytest.raises(TraceError, match=r"t\.csv:4: t_s goes back"):
-        list(iter_trace(path, chunk_rows=2))
+    with pytest.raises(TraceError, match=r"t\.csv:4: t_s goes back from 0.02 to 0.01 s \(time "
+                                         r"must not decrease with --strict\)"):
+        list(iter_trace(path, chunk_rows=2, strict=True))
+
+
+# ---------------------------------------------------------------------------
+# Time that goes back (issue 14, 4d): sorted within the tolerance, dropped beyond it
+
+
+def test_bom_at_the_start_is_dropped():
+    tr = parse_trace("\ufefft_s,finger,x_mm,y_mm\n0,0,1,2\n")
+    assert tr.x_mm.tolist() == [1.0]
+
+
+def test_interleaved_fingers_are_sorted_into_time_order(tmp_path):
+    from rendering.input.trace_file import iter_trace
+    path = tmp_path / "t.csv"
+    # finger 1's sample at 8 ms is logged after finger 0's at 10 ms (2 ms back)
+    path.write_text("t_s,finger,x_mm,y_mm\n0,0,0,0\n0.010,0,1,0\n0.008,1,5,5\n0.010,1,6,5\n"
+                    "0.020,0,2,0\n")
+    reader = iter_trace(path)
+    tr = concat_traces(reader)
+    assert tr.t_s.tolist() == [0.0, 0.008, 0.010, 0.010, 0.020]
+    assert tr.finger.tolist() == [0, 1, 0, 1, 0]  # equal times keep their file order
+    assert tr.x_mm.tolist() == [0.0, 5.0, 1.0, 6.0, 2.0]
+    assert tr.event.tolist() == [DOWN, DOWN, MOVE, MOVE, MOVE]
+    assert reader.order.as_dict() == {"tolerance_s": 0.005, "reordered": 1, "dropped": 0}
+    assert reader.order.warnings() == [
+        "1 touch samples were up to 5 ms earlier than the sample before them and were sorted "
+        "into time order"]
+
+
+def test_samples_further_back_are_dropped_and_counted(tmp_path):
+    from rendering.input.trace_file import iter_trace
+    path = tmp_path / "t.csv"
+    path.write_text("t_s,finger,x_mm,y_mm\n0,0,0,0\n0.1,0,1,0\n0.05,0,9,9\n0.09,0,9,9\n0.2,0,2,0\n")
+    reader = iter_trace(path)
+    tr = concat_traces(reader)
+    assert tr.t_s.tolist() == [0.0, 0.1, 0.2] and tr.x_mm.tolist() == [0.0, 1.0, 2.0]
+    assert reader.order.as_dict() == {"tolerance_s": 0.005, "reordered": 0, "dropped": 2}
+    assert reader.order.warnings() == [
+        "2 touch samples went back in time by more than 5 ms and were dropped (the first at "
+        "line 4; --strict refuses such a trace)"]
+    with pytest.raises(TraceError, match=r"t\.csv:4: t_s goes back from 0\.1 to 0\.05 s"):
+        read_trace(path, strict=True)
+
+
+def _reference_order(times, tolerance):
+    """Indices of the rows kept, in output order, and (reordered, dropped): written from
+    the rule, one row at a time, independently of the chunked reader."""
+    latest, kept, reordered, dropped = -np.inf, [], 0, 0
+    for i, t in enumerate(times):
+        if t >= latest:
+            latest = t
+        elif t >= latest - tolerance:
+            reordered += 1
+        else:
+            dropped += 1
+            continue
+        kept.append(i)
+    kept.sort(key=lambda i: times[i])  # list.sort is stable
+    return kept, reordered, dropped
+
+
+@settings(max_examples=80, derandomize=True, deadline=None)
+@given(steps=st.lists(st.sampled_from([0.0, 0.001, 0.004, 0.005, 0.01, -0.001, -0.003,
+                                       -0.005, -0.0051, -0.02]), min_size=1, max_size=40),
+       chunk_rows=st.integers(1, 9))
+def test_chunked_reordering_matches_the_rule(tmp_path_factory, steps, chunk_rows):
+    from rendering.input.trace_file import iter_trace
+    times = np.round(np.cumsum([1.0] + steps), 6).tolist()
+    path = tmp_path_factory.mktemp("order") / "t.csv"
+    path.write_text("t_s,finger,x_mm,y_mm\n" + "".join(
+        f"{t!r},{i % 3},{float(i)!r},0\n" for i, t in enumerate(times)))
+    reader = iter_trace(path, chunk_rows=chunk_rows)
+    tr = concat_traces(reader)
+    kept, reordered, dropped = _reference_order(times, 0.005)
+    assert tr.x_mm.tolist() == [float(i) for i in kept]
+    assert (reader.order.reordered, reader.order.dropped) == (reordered, dropped)

@@ -31,6 +31,7 @@ counted; contacts without a known position are not emitted and are counted.
 
 from __future__ import annotations
 
+import codecs
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,6 +41,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from rendering.input.trace_file import DEFAULT_FORCE_N, DOWN, MOVE, UP, Trace, TraceError, make_trace
+from textures.library import file_problem
 
 EV_SYN, EV_KEY, EV_ABS = 0x00, 0x01, 0x03
 SYN_REPORT, SYN_MT_REPORT, SYN_DROPPED = 0x00, 0x02, 0x03
@@ -474,15 +476,32 @@ def observed_ranges(samples: list[RawSample]) -> dict[int, tuple[float, float]]:
     return {ABS_MT_POSITION_X: (min(xs), max(xs)), ABS_MT_POSITION_Y: (min(ys), max(ys))} if samples else {}
 
 
+#: Largest recording read (bytes): its events are held in memory (about 150 bytes each),
+#: and half an hour of two fingers at 120 Hz is about 20 MB of getevent log.
+MAX_RECORDING_BYTES = 64 << 20
+
+
 def read_text(path: str | Path, what: str) -> str:
-    """The text of a recording; missing, unreadable or binary files raise :class:`TraceError`."""
+    """The text of a recording (UTF-8, a leading BOM dropped); a file that is missing, not a
+    regular file (checked before opening), larger than MAX_RECORDING_BYTES, not UTF-8 or
+    binary raises :class:`TraceError`."""
     path = Path(path)
+    problem = file_problem(path, MAX_RECORDING_BYTES)
+    if problem is not None:
+        raise TraceError(f"{path}: {problem}; expected a text {what}")
     try:
-        return path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise TraceError(f"{path}: no such {what} file") from None
-    except UnicodeDecodeError as exc:
-        raise TraceError(f"{path}: not a text file ({exc.reason} at byte {exc.start}); "
-                         f"expected a {what} text recording") from None
+        data = path.read_bytes()
     except OSError as exc:
-        raise TraceError(f"{path}: cannot read {what} file ({exc.strerror})") from None
+        raise TraceError(f"{path}: cannot read {what} file ({exc.strerror or exc})") from None
+    if data.startswith(codecs.BOM_UTF8):
+        data = data[len(codecs.BOM_UTF8):]
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise TraceError(f"{path}:{line}: not UTF-8 text (byte {data[exc.start]:#04x}); "
+                         f"expected a text {what}") from None
+    if "\0" in text:
+        line = text.count("\n", 0, text.index("\0")) + 1
+        raise TraceError(f"{path}:{line}: binary content (a NUL byte); expected a text {what}")
+    return text

@@ -17,12 +17,14 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
-from rendering.input.evdev_decode import AbsInfo, Event
+from rendering.input.evdev_decode import AbsInfo, Event, signed32
 from rendering.input.trace_file import TraceError
 
-_EVENT = re.compile(r"^E:\s+(?P<t>\d+\.\d+)\s+(?P<type>[0-9a-fA-F]{1,4})\s+(?P<code>[0-9a-fA-F]{1,4})"
-                    r"\s+(?P<value>-?\d+)\s*(?:#.*)?$")
-_ABS = re.compile(r"^A:\s+(?P<code>[0-9a-fA-F]{1,2})\s+(?P<nums>-?\d+(?:\s+-?\d+){3,4})\s*(?:#.*)?$")
+# values are the kernel's __s32 (at most 10 digits); times whole seconds and microseconds
+_EVENT = re.compile(r"^E:\s+(?P<t>\d{1,12}\.\d{1,9})\s+(?P<type>[0-9a-fA-F]{1,4})\s+"
+                    r"(?P<code>[0-9a-fA-F]{1,4})\s+(?P<value>-?\d{1,10})\s*(?:#.*)?$")
+_ABS = re.compile(r"^A:\s+(?P<code>[0-9a-fA-F]{1,2})\s+(?P<nums>-?\d{1,10}(?:\s+-?\d{1,10}){3,4})"
+                  r"\s*(?:#.*)?$")
 _HEADER_TAGS = ("N:", "I:", "P:", "B:", "L:", "S:")
 
 
@@ -50,13 +52,13 @@ def parse_evemu(text: str, where: str = "<evemu>") -> EvemuRecording:
                 raise TraceError(f"{where}:{number}: {line[:60]!r} is not an evemu event "
                                  "(expected 'E: seconds.micros TYPE CODE VALUE', type and code in hex)")
             events.append(Event(float(m["t"]), int(m["type"], 16), int(m["code"], 16),
-                                int(m["value"]), number))
+                                signed32(int(m["value"])), number))
         elif line.startswith("A:"):
             m = _ABS.match(line)
             if m is None:
                 raise TraceError(f"{where}:{number}: {line[:60]!r} is not an evemu axis line "
                                  "(expected 'A: CODE MIN MAX FUZZ FLAT [RESOLUTION]')")
-            nums = [int(v) for v in m["nums"].split()]
+            nums = [signed32(int(v)) for v in m["nums"].split()]
             absinfo[int(m["code"], 16)] = AbsInfo(nums[0], nums[1], nums[4] if len(nums) > 4 else 0)
         elif line.startswith("N:"):
             name = line[2:].strip()

@@ -34,7 +34,7 @@ CODES = {"SYN_REPORT": SYN_REPORT, "SYN_CONFIG": 0x01, "SYN_MT_REPORT": SYN_MT_R
          "ABS_MT_PRESSURE": ABS_MT_PRESSURE}
 VALUES = {"UP": 0, "DOWN": 1, "REPEAT": 2}
 
-_LINE = re.compile(r"^\s*\[\s*(?P<t>\d+\.\d+)\s*\]\s+(?:(?P<dev>/\S+):\s+)?"
+_LINE = re.compile(r"^\s*\[\s*(?P<t>\d{1,12}\.\d{1,9})\s*\]\s+(?:(?P<dev>/\S+):\s+)?"
                    r"(?P<type>\S+)\s+(?P<code>\S+)\s+(?P<value>\S+)\s*$")
 _UNTIMED = re.compile(r"^\s*(?:/\S+:\s+)?(EV_[A-Z_]+|[0-9a-f]{4})\s+\S+\s+\S+\s*$")
 _HEADER = ("add device", "name:", "could not", "version", "events:", "input props:",

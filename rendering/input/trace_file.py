@@ -2,33 +2,63 @@
 
 Grammar (DESIGN.md, "Trace files")::
 
-    file    := header NEWLINE { row NEWLINE }
+    file    := [BOM] header NEWLINE { row NEWLINE }   # UTF-8; a leading UTF-8 BOM is dropped
     header  := column { "," column }        # any order; names are case-sensitive
     required columns: t_s, finger, x_mm, y_mm
     optional columns: force_n (N, default 0.5), event (down | move | up)
-    extra columns are ignored; blank lines and lines starting with '#' are skipped.
+    extra columns are ignored; blank lines and lines starting with '#' are skipped;
+    a line holds at most MAX_LINE_BYTES bytes.
 
-Rules checked here, once, at the boundary: numbers are finite, ``finger`` is a
-non-negative integer, time never goes backwards (equal times are allowed: real
-controllers re-report within the same timestamp), forces are >= 0, events are one of
-the three words. The first sample of a finger (or the first after its ``up``) is a
-``down`` whatever the file says. Errors raise :class:`TraceError` naming the file, the
-line and the column.
+Rules checked here, once, at the boundary (every error names the file, the line and the
+column, shows the value and what was expected):
+
+- numbers are finite and within stated ranges, so that nothing later can overflow:
+  |t_s| <= MAX_TIME_S (1e10 s: Unix times fit), |x_mm|, |y_mm| <= MAX_COORD_MM (1e5 mm),
+  0 <= force_n <= MAX_FORCE_N (1000 N); ``finger`` is an integer id from 0 to
+  MAX_FINGER_ID (2^31 - 1, the range of Linux tracking ids);
+- events are one of the three words; the first sample of a finger (or the first after
+  its ``up``) is a ``down`` whatever the file says; at most MAX_TOUCHING (20) fingers
+  touch at once (a finger touches from its down to its up);
+- time order. Real logs interleave two fingers' events and so step back a little:
+  samples up to REORDER_TOLERANCE_S (5 ms) earlier than the latest time before them are
+  moved into time order (a stable sort: equal times keep their file order); samples
+  further back are dropped. Both are counted (:class:`TimeOrder`) for the replay's
+  summary. ``strict=True`` refuses any step back instead.
+
+Only regular files are opened (``textures.library.file_problem``): a FIFO or a device
+is refused before anything blocks.
 """
 
 from __future__ import annotations
 
+import codecs
 import csv
+import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from textures.library import file_problem
+
 DEFAULT_FORCE_N = 0.5
 REQUIRED = ("t_s", "finger", "x_mm", "y_mm")
 EVENTS = ("down", "move", "up")
 DOWN, MOVE, UP = 0, 1, 2
+
+MAX_TIME_S = 1e10
+MAX_COORD_MM = 1e5
+MAX_FORCE_N = 1e3
+MAX_FINGER_ID = 2**31 - 1
+MAX_TOUCHING = 20
+MAX_LINE_BYTES = 4096
+REORDER_TOLERANCE_S = 0.005
+
+#: column -> (lowest, highest, unit) accepted
+RANGES = {"t_s": (-MAX_TIME_S, MAX_TIME_S, "s"), "x_mm": (-MAX_COORD_MM, MAX_COORD_MM, "mm"),
+          "y_mm": (-MAX_COORD_MM, MAX_COORD_MM, "mm"), "force_n": (0.0, MAX_FORCE_N, "N"),
+          "finger": (0, MAX_FINGER_ID, "finger id")}
 
 
 class TraceError(ValueError):
@@ -79,11 +109,13 @@ _COLUMNS = ("t_s", "finger", "x_mm", "y_mm", "force_n", "event")
 
 def make_trace(t_s, finger, x_mm, y_mm, force_n=None, event=None, where: str = "trace",
                normalise: bool = True) -> Trace:
-    """Validate arrays and build a :class:`Trace`.
+    """Validate arrays and build a :class:`Trace` (the module docstring's rules; time
+    must not decrease).
 
-    With ``normalise`` (a whole recording) events are normalised as the module doc says;
-    a batch of live samples continuing earlier ones passes ``normalise=False`` so that a
-    finger's first sample in the batch is not taken for a new touch.
+    With ``normalise`` (a whole recording) events are normalised and the fingers touching
+    at once counted, as the module doc says; a batch of live samples continuing earlier
+    ones passes ``normalise=False`` so that a finger's first sample in the batch is not
+    taken for a new touch.
     """
     t = np.asarray(t_s, dtype=np.float64)
     n = t.size
@@ -97,75 +129,166 @@ def make_trace(t_s, finger, x_mm, y_mm, force_n=None, event=None, where: str = "
             raise TraceError(f"{where}: column {name} has shape {arr.shape}, expected ({n},)")
     if n == 0:
         raise TraceError(f"{where}: no samples (expected at least one row of t_s,finger,x_mm,y_mm)")
-    for name, arr in (("t_s", t), ("x_mm", x), ("y_mm", y), ("force_n", f)):
-        bad = ~np.isfinite(arr)
+    fing_f = np.asarray(fing, dtype=np.float64)
+    for name, arr in (("t_s", t), ("x_mm", x), ("y_mm", y), ("force_n", f), ("finger", fing_f)):
+        lo, hi, unit = RANGES[name]
+        bad = ~((arr >= lo) & (arr <= hi))  # NaN fails both
         if bad.any():
             i = int(np.argmax(bad))
-            raise TraceError(f"{where}: sample {i}: {name} is {float(arr[i])!r}, expected a finite number")
+            raise TraceError(f"{where}: sample {i}: {name} is {arr[i].item()!r}, expected "
+                             f"{_range_text(name)}")
+    if (fing_f != np.floor(fing_f)).any():
+        i = int(np.argmax(fing_f != np.floor(fing_f)))
+        raise TraceError(f"{where}: sample {i}: finger is {fing[i].item()!r}, expected "
+                         f"{_range_text('finger')}")
     steps = np.diff(t)
     if (steps < 0).any():
         i = int(np.argmax(steps < 0)) + 1
         raise TraceError(f"{where}: sample {i}: t_s goes back from {float(t[i - 1])!r} to {float(t[i])!r} s "
                          "(time must not decrease)")
-    if (f < 0).any():
-        i = int(np.argmax(f < 0))
-        raise TraceError(f"{where}: sample {i}: force_n is {float(f[i])!r}, expected >= 0")
-    fing_f = np.asarray(fing, dtype=np.float64)
-    if (fing_f < 0).any() or (fing_f != np.floor(fing_f)).any():
-        i = int(np.argmax((fing_f < 0) | (fing_f != np.floor(fing_f))))
-        raise TraceError(f"{where}: sample {i}: finger is {fing[i].item()!r}, expected an integer >= 0")
     if ((ev < DOWN) | (ev > UP)).any():
         raise TraceError(f"{where}: event codes must be {DOWN}, {MOVE} or {UP}")
     fing_i = fing_f.astype(np.int64)
     if normalise:
-        ev = _normalise_events(fing_i, ev)
+        ev = _normalise_events(fing_i, ev, set(), where)
     return Trace(t, fing_i, x, y, f, ev)
 
 
-def _normalise_events(finger: np.ndarray, event: np.ndarray,
-                      down: set[int] | None = None) -> np.ndarray:
-    """Make the first sample of each finger, and the first after an ``up``, a ``down``.
+def _range_text(name: str) -> str:
+    lo, hi, unit = RANGES[name]
+    if name == "finger":
+        return f"an integer from 0 to {MAX_FINGER_ID} (32-bit ids, as Linux tracking ids)"
+    return f"a number from {lo:g} to {hi:g} {unit}"
 
-    ``down`` (updated in place) holds the fingers touching before these samples, for a
-    trace read in chunks; None means none are.
+
+def _touch_steps(finger: np.ndarray, event: np.ndarray, down: set[int]) -> tuple[np.ndarray, np.ndarray]:
+    """Normalised events and the number of fingers touching after each sample.
+
+    A finger's first sample, or its first after an ``up``, becomes a ``down`` (unless it
+    is itself an ``up``). ``down`` (updated in place) holds the fingers touching before
+    these samples, for a trace read in chunks.
     """
-    down = set() if down is None else down
     ev = event.copy()
+    change = np.zeros(ev.size, dtype=np.int64)
+    before = len(down)
     for fid in np.unique(finger).tolist():
         idx = np.flatnonzero(finger == fid)
         e = ev[idx]
-        prev_up = np.concatenate(([fid not in down], e[:-1] == UP))
-        e[prev_up & (e != UP)] = DOWN
+        lifted = np.concatenate(([fid not in down], e[:-1] == UP))
+        starts = lifted & (e != UP)
+        e[starts] = DOWN
         ev[idx] = e
+        change[idx] = starts.astype(np.int64) - (~lifted & (e == UP))
         if e[-1] == UP:
             down.discard(fid)
         else:
             down.add(fid)
+    return ev, before + np.cumsum(change)
+
+
+def _normalise_events(finger: np.ndarray, event: np.ndarray, down: set[int], where: str,
+                      lines: np.ndarray | None = None) -> np.ndarray:
+    """:func:`_touch_steps`' events; TraceError where more than MAX_TOUCHING fingers touch."""
+    ev, touching = _touch_steps(finger, event, down)
+    if touching.size and touching.max() > MAX_TOUCHING:
+        i = int(np.argmax(touching > MAX_TOUCHING))
+        place = f"{where}:{lines[i]}" if lines is not None else f"{where}: sample {i}"
+        raise TraceError(f"{place}: {int(touching[i])} fingers touch at once (finger "
+                         f"{int(finger[i])} comes down while the others have no up event); "
+                         f"at most {MAX_TOUCHING} are accepted")
     return ev
 
 
-def _parse_float(text: str, path: str, line: int, column: str) -> float:
+def most_touching(trace: Trace) -> int:
+    """The largest number of fingers touching at the same time."""
+    return int(_touch_steps(trace.finger, trace.event, set())[1].max(initial=0))
+
+
+@dataclass
+class TimeOrder:
+    """What reading a trace did about time going back (counts grow as chunks are read).
+
+    tolerance_s : samples at most this much earlier than the latest time before them were
+        moved into time order (``reordered``); samples further back were ``dropped``
+        (the first at line ``first_dropped_line``).
+    """
+
+    tolerance_s: float = REORDER_TOLERANCE_S
+    reordered: int = 0
+    dropped: int = 0
+    first_dropped_line: int | None = None
+
+    def as_dict(self) -> dict:
+        """``{"tolerance_s", "reordered", "dropped"}`` for ``summary.json``."""
+        return {"tolerance_s": self.tolerance_s, "reordered": self.reordered,
+                "dropped": self.dropped}
+
+    def warnings(self) -> list[str]:
+        """One sentence per thing done, for the replay's summary (empty if time never went back)."""
+        out = []
+        if self.reordered:
+            out.append(f"{self.reordered} touch samples were up to {self.tolerance_s * 1e3:g} ms "
+                       f"earlier than the sample before them and were sorted into time order")
+        if self.dropped:
+            out.append(f"{self.dropped} touch samples went back in time by more than "
+                       f"{self.tolerance_s * 1e3:g} ms and were dropped (the first at line "
+                       f"{self.first_dropped_line}; --strict refuses such a trace)")
+        return out
+
+
+def _parse_number(text: str, path: str, line: int, column: str) -> float:
+    """A field as a float within ``RANGES[column]``."""
     try:
         value = float(text)
     except ValueError:
-        raise TraceError(f"{path}:{line}: column {column}: {text!r} is not a number") from None
+        raise TraceError(f"{path}:{line}: column {column}: {_short(text)} is not a number") from None
+    lo, hi, _ = RANGES[column]
     if not math.isfinite(value):
-        raise TraceError(f"{path}:{line}: column {column}: {text!r} is not a finite number")
+        raise TraceError(f"{path}:{line}: column {column}: {_short(text)} is not a finite number")
+    if not lo <= value <= hi or (column == "finger" and value != int(value)):
+        raise TraceError(f"{path}:{line}: column {column}: {_short(text)} is not "
+                         f"{_range_text(column)}")
     return value
 
 
-class _RowParser:
-    """Data rows to arrays, chunk by chunk, carrying across chunks what spans them:
-    the last time (time must not decrease) and which fingers are touching."""
+def _short(text: str) -> str:
+    return repr(text if len(text) <= 40 else text[:37] + "...")
 
-    def __init__(self, names: list[str], where: str):
+
+class _RowParser:
+    """Data rows to time-ordered traces, chunk by chunk, carrying across chunks what
+    spans them: the latest time, the samples still within the reordering tolerance of
+    it (a later row may belong before them), and which fingers are touching."""
+
+    def __init__(self, names: list[str], where: str, order: TimeOrder, strict: bool):
         self.names = names
         self.where = where
         self.col = {name: names.index(name) for name in names}
-        self.last_t = -math.inf
+        self.order = order
+        self.strict = strict
+        self.latest = -math.inf
+        self.held: list[np.ndarray] | None = None  # t, finger, x, y, force, event, line
         self.down: set[int] = set()
 
-    def parse(self, numbered_rows: list[tuple[int, list[str]]]) -> Trace:
+    def parse(self, numbered_rows: list[tuple[int, list[str]]], final: bool = False) -> Trace | None:
+        """The rows' samples that no later row can precede (all of them if ``final``),
+        in time order; None if there are none yet."""
+        cols = self._rows(numbered_rows)
+        if self.held is not None:
+            cols = [np.concatenate(pair) for pair in zip(self.held, cols)]
+        order = np.argsort(cols[0], kind="stable")
+        cols = [c[order] for c in cols]
+        cut = cols[0].size if final else int(np.searchsorted(
+            cols[0], self.latest - self.order.tolerance_s, side="right"))
+        self.held = [c[cut:] for c in cols]
+        if cut == 0:
+            return None
+        t, finger, x, y, force, event, lines = (c[:cut] for c in cols)
+        trace = make_trace(t, finger, x, y, force, event, self.where, normalise=False)
+        return Trace(trace.t_s, trace.finger, trace.x_mm, trace.y_mm, trace.force_n,
+                     _normalise_events(trace.finger, trace.event, self.down, self.where, lines))
+
+    def _rows(self, numbered_rows) -> list[np.ndarray]:
         where, col = self.where, self.col
         n = len(numbered_rows)
         t = np.empty(n)
@@ -174,86 +297,145 @@ class _RowParser:
         y = np.empty(n)
         force = np.full(n, DEFAULT_FORCE_N)
         event = np.full(n, MOVE, dtype=np.int8)
+        lines = np.empty(n, dtype=np.int64)
+        keep = np.ones(n, dtype=bool)
         has_force, has_event = "force_n" in col, "event" in col
-        last_t = self.last_t
+        tolerance = self.order.tolerance_s
         for k, (line, row) in enumerate(numbered_rows):
             if len(row) < len(self.names):
                 raise TraceError(f"{where}:{line}: {len(row)} fields, expected {len(self.names)} "
                                  f"({','.join(self.names)})")
-            t[k] = _parse_float(row[col["t_s"]], where, line, "t_s")
-            fv = _parse_float(row[col["finger"]], where, line, "finger")
-            if fv < 0 or fv != int(fv):
-                raise TraceError(f"{where}:{line}: column finger: {row[col['finger']]!r} "
-                                 "is not an integer >= 0")
-            finger[k] = int(fv)
-            x[k] = _parse_float(row[col["x_mm"]], where, line, "x_mm")
-            y[k] = _parse_float(row[col["y_mm"]], where, line, "y_mm")
+            lines[k] = line
+            t[k] = _parse_number(row[col["t_s"]], where, line, "t_s")
+            finger[k] = int(_parse_number(row[col["finger"]], where, line, "finger"))
+            x[k] = _parse_number(row[col["x_mm"]], where, line, "x_mm")
+            y[k] = _parse_number(row[col["y_mm"]], where, line, "y_mm")
             if has_force and row[col["force_n"]].strip():
-                force[k] = _parse_float(row[col["force_n"]], where, line, "force_n")
-                if force[k] < 0:
-                    raise TraceError(f"{where}:{line}: column force_n: {float(force[k])!r} N "
-                                     "is negative")
+                force[k] = _parse_number(row[col["force_n"]], where, line, "force_n")
             if has_event and row[col["event"]].strip():
                 word = row[col["event"]].strip()
                 if word not in EVENTS:
-                    raise TraceError(f"{where}:{line}: column event: {word!r} is not one of "
+                    raise TraceError(f"{where}:{line}: column event: {_short(word)} is not one of "
                                      f"{', '.join(EVENTS)}")
                 event[k] = EVENTS.index(word)
-            if t[k] < last_t:
-                raise TraceError(f"{where}:{line}: t_s goes back from {float(last_t)!r} to "
-                                 f"{float(t[k])!r} s (time must not decrease)")
-            last_t = t[k]
-        self.last_t = last_t
-        trace = make_trace(t, finger, x, y, force, event, where, normalise=False)
-        return Trace(trace.t_s, trace.finger, trace.x_mm, trace.y_mm, trace.force_n,
-                     _normalise_events(trace.finger, trace.event, self.down))
+            if t[k] >= self.latest:
+                self.latest = t[k]
+            elif self.strict:
+                raise TraceError(f"{where}:{line}: t_s goes back from {float(self.latest)!r} to "
+                                 f"{float(t[k])!r} s (time must not decrease with --strict)")
+            elif t[k] >= self.latest - tolerance:
+                self.order.reordered += 1
+            else:
+                keep[k] = False
+                self.order.dropped += 1
+                if self.order.first_dropped_line is None:
+                    self.order.first_dropped_line = line
+        return [a[keep] for a in (t, finger, x, y, force, event, lines)]
 
 
-def _chunks(lines, where: str, chunk_rows: int):
-    """Traces of at most ``chunk_rows`` samples from an iterable of text lines."""
+def _lines(fh, where: str):
+    """(line number, text) of a binary file: UTF-8, a leading BOM dropped, lines of at
+    most MAX_LINE_BYTES, no NUL bytes."""
+    for number in range(1, 2**62):
+        raw = fh.readline(MAX_LINE_BYTES + 1)
+        if not raw:
+            return
+        if number == 1:
+            if raw.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+                raise TraceError(f"{where}: UTF-16 text (it starts with a UTF-16 byte order "
+                                 f"mark); save it as UTF-8: trace files are UTF-8 CSV")
+            if raw.startswith(codecs.BOM_UTF8):
+                raw = raw[len(codecs.BOM_UTF8):]
+        if len(raw) > MAX_LINE_BYTES:
+            raise TraceError(f"{where}:{number}: line longer than {MAX_LINE_BYTES} bytes; "
+                             f"expected CSV rows of a few numbers")
+        nul = raw.find(0)
+        if nul >= 0:
+            raise TraceError(f"{where}:{number}: binary content (a NUL byte at column "
+                             f"{nul + 1}); expected CSV text")
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise TraceError(f"{where}:{number}: not UTF-8 text (byte {raw[exc.start]:#04x} at "
+                             f"column {exc.start + 1}); trace files are UTF-8 CSV") from None
+        yield number, text
+
+
+def _fields(text: str, where: str, number: int) -> list[str]:
+    try:
+        return next(csv.reader([text]))
+    except csv.Error as exc:
+        raise TraceError(f"{where}:{number}: not a CSV row ({exc})") from None
+
+
+def _chunks(lines, where: str, chunk_rows: int, order: TimeOrder, strict: bool):
+    """Traces of about ``chunk_rows`` samples from (number, text) lines."""
     parser = None
     batch: list[tuple[int, list[str]]] = []
     samples = 0
-    for number, text in enumerate(lines, start=1):
+    for number, text in lines:
         if not text.strip() or text.lstrip().startswith("#"):
             continue
         if parser is None:
-            names = [h.strip() for h in next(csv.reader([text]))]
+            names = [h.strip() for h in _fields(text, where, number)]
             missing = [c for c in REQUIRED if c not in names]
             if missing:
                 raise TraceError(f"{where}:{number}: header lacks column(s) {', '.join(missing)} "
-                                 f"(got {','.join(names)}; required {','.join(REQUIRED)})")
-            parser = _RowParser(names, where)
+                                 f"(got {_short(','.join(names))}; required {','.join(REQUIRED)})")
+            parser = _RowParser(names, where, order, strict)
             continue
-        batch.append((number, next(csv.reader([text]))))
+        batch.append((number, _fields(text, where, number)))
         if len(batch) == chunk_rows:
-            samples += len(batch)
-            yield parser.parse(batch)
+            chunk = parser.parse(batch)
             batch = []
+            if chunk is not None:
+                samples += len(chunk)
+                yield chunk
     if parser is None:
         raise TraceError(f"{where}: empty trace (expected a header line with {','.join(REQUIRED)})")
-    if batch:
-        samples += len(batch)
-        yield parser.parse(batch)
+    chunk = parser.parse(batch, final=True)
+    if chunk is not None:
+        samples += len(chunk)
+        yield chunk
     if samples == 0:
         raise TraceError(f"{where}: header but no samples")
 
 
-def iter_trace(path: str | Path, chunk_rows: int = 65_536):
-    """Read and validate a trace CSV in chunks of ``chunk_rows`` samples (a generator of
-    :class:`Trace`), so that a trace of any length is read in bounded memory."""
-    path = Path(path)
-    try:
-        with open(path, encoding="utf-8", newline="") as fh:
-            yield from _chunks(fh, str(path), chunk_rows)
-    except FileNotFoundError:
-        raise TraceError(f"{path}: no such trace file") from None
-    except IsADirectoryError:
-        raise TraceError(f"{path}: is a folder, not a trace file") from None
-    except UnicodeDecodeError as exc:
-        raise TraceError(f"{path}: not a text file ({exc.reason} at byte {exc.start})") from None
-    except OSError as exc:
-        raise TraceError(f"{path}: cannot read trace ({exc.strerror})") from None
+class TraceReader:
+    """A trace CSV read and validated in chunks of about ``chunk_rows`` samples: an
+    iterator of :class:`Trace`, so that a trace of any length is read in bounded memory.
+
+    ``order`` (:class:`TimeOrder`) counts the samples sorted or dropped because time went
+    back; it is final once the iterator is exhausted. ``strict`` refuses any step back.
+    """
+
+    def __init__(self, path: str | Path, chunk_rows: int = 65_536, strict: bool = False,
+                 tolerance_s: float = REORDER_TOLERANCE_S):
+        self.path = Path(path)
+        self.order = TimeOrder(tolerance_s)
+        self._chunks = self._read(chunk_rows, strict)
+
+    def __iter__(self) -> "TraceReader":
+        return self
+
+    def __next__(self) -> Trace:
+        return next(self._chunks)
+
+    def _read(self, chunk_rows: int, strict: bool):
+        path = self.path
+        problem = file_problem(path)
+        if problem is not None:
+            raise TraceError(f"{path}: {problem}; expected a trace CSV file")
+        try:
+            with open(path, "rb") as fh:
+                yield from _chunks(_lines(fh, str(path)), str(path), chunk_rows, self.order, strict)
+        except OSError as exc:
+            raise TraceError(f"{path}: cannot read trace ({exc.strerror or exc})") from None
+
+
+def iter_trace(path: str | Path, chunk_rows: int = 65_536, strict: bool = False) -> TraceReader:
+    """Read and validate a trace CSV in chunks (see :class:`TraceReader`)."""
+    return TraceReader(path, chunk_rows, strict)
 
 
 def concat_traces(chunks) -> Trace:
@@ -263,14 +445,15 @@ def concat_traces(chunks) -> Trace:
                    for name in ("t_s", "finger", "x_mm", "y_mm", "force_n", "event")))
 
 
-def read_trace(path: str | Path) -> Trace:
+def read_trace(path: str | Path, strict: bool = False) -> Trace:
     """Read and validate a whole trace CSV (see the module docstring for the grammar)."""
-    return concat_traces(iter_trace(path))
+    return concat_traces(iter_trace(path, strict=strict))
 
 
-def parse_trace(text: str, where: str = "<trace>") -> Trace:
+def parse_trace(text: str, where: str = "<trace>", strict: bool = False) -> Trace:
     """Parse trace CSV text; ``where`` names the source in error messages."""
-    return concat_traces(_chunks(text.splitlines(), where, 65_536))
+    lines = _lines(io.BytesIO(text.encode("utf-8")), where)
+    return concat_traces(_chunks(lines, where, 65_536, TimeOrder(), strict))
 
 
 def format_trace(trace: Trace, comment: str | None = None) -> str:

@@ -21,7 +21,8 @@ from rendering.input.evdev_decode import (AbsInfo, Event, RawSample, ScreenSpec,
                                     read_text, screen_map)
 from rendering.input.import_evemu import parse_evemu
 from rendering.input.import_getevent import parse_getevent
-from rendering.input.trace_file import DEFAULT_FORCE_N, UP, Trace, TraceError, format_trace, read_trace
+from rendering.input.trace_file import (DEFAULT_FORCE_N, TraceError, concat_traces, format_trace,
+                                        iter_trace, most_touching)
 
 FORMATS = ("auto", "getevent", "evemu", "csv")
 
@@ -144,8 +145,11 @@ def _copy_csv(path: Path, args: argparse.Namespace) -> int:
     if mapping:
         raise TraceError(f"--{mapping[0].replace('_', '-')} does not apply to a trace CSV "
                          "(it is already in mm and s)")
-    trace = read_trace(path)
+    reader = iter_trace(path)
+    trace = concat_traces(reader)
     _write(args.out, format_trace(trace, comment=f"imported from {path}"))
+    for w in reader.order.warnings():
+        print(f"frictex: warning: {w}", file=sys.stderr)
     print(f"wrote {len(trace)} samples, {len(trace.fingers)} finger(s), "
           f"{trace.duration_s:.3f} s, to {args.out}")
     return 0
@@ -201,20 +205,8 @@ def run_import(args: argparse.Namespace) -> int:
     _write(args.out, _extra_columns(format_trace(trace, comment), samples))
     for w in warnings:
         print(f"frictex: warning: {w}", file=sys.stderr)
-    most = _most_down(trace)
+    most = most_touching(trace)
     print(f"wrote {len(trace)} samples, {len(trace.fingers)} finger id(s) (at most {most} down "
           f"at once), {trace.duration_s:.3f} s, protocol {decoder.protocol}, to {args.out}")
     return 0
 
-
-def _most_down(trace: Trace) -> int:
-    """The largest number of fingers touching at the same time."""
-    down: set[int] = set()
-    most = 0
-    for f, e in zip(trace.finger.tolist(), trace.event.tolist()):
-        if e == UP:
-            down.discard(f)
-        else:
-            down.add(f)
-        most = max(most, len(down))
-    return most
