@@ -43,19 +43,36 @@ def infos(draw):
                   draw(st.booleans()), draw(st.text(max_size=20)))
 
 
+U64 = st.integers(0, 2**64 - 1)
+
+
 @st.composite
 def statuses(draw):
+    """A Status; with the version 2 accounting fields or (a version 1 Status) without."""
     counters = draw(st.lists(U32, min_size=9, max_size=9))
     measured = draw(st.none() | st.integers(1, 4).flatmap(_limits))
     force = draw(st.none() | st.integers(0, 65535).map(lambda mn: mn / 1000.0))
-    return p.Status(draw(U32), draw(st.integers(0, 4)), draw(st.integers(0, 2**64 - 1)),
-                    draw(U32), *counters, measured_um=measured, force_n=force)
+    accounting = draw(st.none() | st.tuples(U64, U32, U32, U32)) or (None,) * 4
+    return p.Status(draw(U32), draw(st.integers(0, 4)), draw(U64), draw(U32), *counters,
+                    measured_um=measured, force_n=force, buffer_end=accounting[0],
+                    played_samples=accounting[1], flushed_samples=accounting[2],
+                    flushes=accounting[3])
 
 
 MESSAGES = st.one_of(
     st.builds(p.Hello, U32), infos(), blocks(), st.builds(p.Heartbeat, U32),
     st.builds(p.Stop, st.booleans()), statuses(),
-    st.builds(p.ErrorReport, st.integers(0, 255), U16, U32, st.text(max_size=40)))
+    st.builds(p.ErrorReport, st.integers(0, 255), U16, U32, st.text(max_size=40)),
+    st.builds(p.Flushed, st.integers(0, 255), U64, U32, U32))
+
+
+def _version(msg, draw_one: bool) -> int:
+    """The versions a message exists in: Flushed and accounted Statuses only in 2."""
+    if isinstance(msg, p.Flushed) or (isinstance(msg, p.Status) and msg.accounted):
+        return 2
+    if isinstance(msg, p.Status):
+        return 1
+    return 2 if draw_one else 1
 
 
 @SETTINGS
@@ -81,9 +98,10 @@ def test_crc_is_crc32_iso_hdlc():
 
 
 @SETTINGS
-@given(MESSAGES, U16, st.lists(st.integers(1, 40), max_size=30))
-def test_every_message_round_trips_through_any_chunking(msg, seq, cuts):
-    data = p.encode(msg, seq)
+@given(MESSAGES, U16, st.lists(st.integers(1, 40), max_size=30), st.booleans())
+def test_every_message_round_trips_through_any_chunking(msg, seq, cuts, newest):
+    version = _version(msg, newest)
+    data = p.encode(msg, seq, version)
     assert data.endswith(b"\x00") and data.count(0) == 1
     decoder = p.Decoder()
     frames, pos = [], 0
@@ -91,8 +109,39 @@ def test_every_message_round_trips_through_any_chunking(msg, seq, cuts):
         frames += decoder.feed(data[pos:pos + cut])
         pos += cut
     frames += decoder.feed(data[pos:])
-    assert frames == [p.Frame(seq, msg)]
+    assert frames == [p.Frame(seq, msg, version)]
     assert decoder.counts.discarded == 0
+
+
+def test_version_2_status_carries_the_accounting_after_the_version_1_fields():
+    st_ = p.Status(7, 2, 2**64 - 1, 100, *range(1, 10), buffer_end=2**63, played_samples=5,
+                   flushed_samples=6, flushes=2)
+    v1 = p.cobs_decode(p.encode(st_, 0, 1)[:-1])
+    v2 = p.cobs_decode(p.encode(st_, 0, 2)[:-1])
+    # the version 2 payload is the version 1 one (n_measured 0, no sensors) plus
+    # buffer_end:u64 played:u32 flushed:u32 flushes:u32, then the CRC
+    assert v1[0] == 1 and v2[0] == 2
+    assert v2[4:-4] == v1[4:-4] + (2**63).to_bytes(8, "little") + bytes(
+        [5, 0, 0, 0, 6, 0, 0, 0, 2, 0, 0, 0])
+    (frame,) = p.Decoder().feed(p.encode(st_, 0, 1))
+    assert frame.version == 1 and frame.message.buffer_end is None
+    assert not frame.message.accounted
+
+
+def test_a_version_1_receiver_drops_version_2_frames_and_flushed_needs_version_2():
+    old = p.Decoder(max_version=1)
+    assert old.feed(p.encode(p.Heartbeat(1), 0, 2)) == []
+    assert old.counts.bad_version == 1 and old.counts.last_bad_version == 2
+    assert old.feed(p.encode(p.Heartbeat(1), 1, 1)) == [p.Frame(1, p.Heartbeat(1), 1)]
+    with pytest.raises(p.ProtocolError, match="Flushed does not exist in protocol version 1"):
+        p.encode(p.Flushed(1, 0, 0, 1), 0, 1)
+    with pytest.raises(p.ProtocolError, match="version 2 needs buffer_end"):
+        p.encode(p.Status(0, 0, 0, 0), 0, 2)
+    # a Flushed type byte in a version 1 frame is an unknown type there
+    body = bytes([1, p.Flushed.TYPE, 0, 0]) + bytes(17)
+    frame = p.cobs_encode(body + zlib.crc32(body).to_bytes(4, "little")) + b"\x00"
+    decoder = p.Decoder()
+    assert decoder.feed(frame) == [] and decoder.counts.unknown_type == 1
 
 
 @SETTINGS
@@ -105,7 +154,7 @@ def test_any_bytes_give_valid_frames_or_counted_errors(data, cuts):
         pos += cut
     assert all(isinstance(f.message, p.MESSAGES) for f in frames)
     for f in frames:  # anything accepted is exactly what its bytes encode
-        assert p.Decoder().feed(p.encode(f.message, f.seq)) == [f]
+        assert p.Decoder().feed(p.encode(f.message, f.seq, f.version)) == [f]
     terminated = [piece for piece in data.split(b"\x00")[:-1] if piece]
     assert decoder.counts.frames_ok + decoder.counts.discarded == len(terminated)
     assert decoder.counts.frames_ok == len(frames)
@@ -159,8 +208,8 @@ def test_an_endless_frame_is_dropped_as_oversize_and_the_next_one_decodes():
 
 def test_a_frame_of_another_version_is_counted_and_remembered():
     decoder = p.Decoder()
-    assert decoder.feed(p.encode(p.Heartbeat(1), 0, version=2)) == []
-    assert decoder.counts.bad_version == 1 and decoder.counts.last_bad_version == 2
+    assert decoder.feed(p.encode(p.Heartbeat(1), 0, version=3)) == []
+    assert decoder.counts.bad_version == 1 and decoder.counts.last_bad_version == 3
 
 
 def test_amplitudes_quantise_to_half_a_step_and_clamp_with_a_count():
@@ -199,10 +248,9 @@ def test_encoding_refuses_what_does_not_fit():
 
 def test_the_worked_examples_in_protocol_md_are_what_encode_produces():
     text = (Path(p.__file__).parents[1] / "PROTOCOL.md").read_text(encoding="utf-8")
-    examples = re.findall(r"`encode\((.+?)\)`\s*->\s*`([0-9a-f ]+)`", text)
-    assert len(examples) >= 3
-    names = {m.__name__: m for m in p.MESSAGES} | {"np": np}
+    examples = re.findall(r"`(encode\(.+?\))`\s*->\s*`([0-9a-f ]+)`", text)
+    assert len(examples) >= 6
+    names = {m.__name__: m for m in p.MESSAGES} | {"np": np, "encode": p.encode}
     for call, hexbytes in examples:
-        msg_src, seq = call.rsplit(",", 1)
-        msg = eval(msg_src, names)  # noqa: S307 -- our own document
-        assert p.encode(msg, int(seq)).hex(" ") == hexbytes.strip(), call
+        frame = eval(call, names)  # noqa: S307 -- our own document
+        assert frame.hex(" ") == hexbytes.strip(), call

@@ -1,17 +1,35 @@
-"""``frictex sim-device``: a simulated plate microcontroller on a pseudo-terminal.
+"""``frictex sim-device``: a simulated plate microcontroller on a pseudo-terminal or TCP.
 
-Prints the pty's path as the first line on stdout, then speaks the device side of
-``device/PROTOCOL.md`` until a host's Stop has played out or Ctrl-C.
+Prints where a host reaches it as the first line on stdout (the pty's path, or
+``socket://HOST:PORT`` with ``--tcp``), then speaks the device side of
+``device/PROTOCOL.md`` to host after host until Ctrl-C (or, with ``--once``, until the
+first host's Stop has played out).
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
+import threading
 
 from app.commands.argtypes import positive_float, positive_int
-from device.link.simdevice import DeviceConfig, DeviceCore, open_pty, played_log, plate_log, serve_pty
+from device.link.simdevice import (DeviceConfig, DeviceCore, open_listener, open_pty,
+                                   played_log, plate_log, serve, socket_url)
+
+
+def _tcp_address(text: str) -> tuple[str, int]:
+    """``PORT`` or ``HOST:PORT`` (port 0: any free port)."""
+    host, _, port = text.rpartition(":")
+    try:
+        number = int(port)
+    except ValueError:
+        number = -1
+    if not 0 <= number <= 65535:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected PORT or HOST:PORT, port in "
+                                         "0..65535 (0: any free port)")
+    return host or "127.0.0.1", number
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -40,6 +58,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="write every played sample: index,ch0_um,... (fixed-point values)")
     parser.add_argument("--plate-log", metavar="CSV", default=None,
                         help="write every tick: t_s,state,ch<k>_setpoint_um,ch<k>_plate_um")
+    parser.add_argument("--tcp", type=_tcp_address, default=None, metavar="[HOST:]PORT",
+                        help="listen on TCP instead of a pty (host default 127.0.0.1; port 0: "
+                             "any free port); hosts open the printed socket:// URL")
+    parser.add_argument("--protocol", type=int, choices=(1, 2), default=2,
+                        help="newest protocol version to speak (default 2; 1 acts as a "
+                             "version-1 firmware)")
+    parser.add_argument("--once", action="store_true",
+                        help="exit once the first host's Stop has played out (default: serve "
+                             "host after host until Ctrl-C)")
     parser.add_argument("--parent-pid", type=positive_int, default=None, help=argparse.SUPPRESS)
 
 
@@ -48,9 +75,12 @@ def run(args: argparse.Namespace) -> int:
     config = DeviceConfig(channels=args.channels, rate_hz=args.rate, limits_um=limits,
                           buffer_samples=args.buffer, bandwidth_hz=args.bandwidth,
                           watchdog_ms=args.watchdog_ms, ramp_ms=args.ramp_ms,
-                          phases=args.phases, sensor=args.sensor, force_n=args.force)
+                          phases=args.phases, sensor=args.sensor, force_n=args.force,
+                          protocol_version=args.protocol)
     logs = []
     core = DeviceCore(config)
+    quit_event = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: quit_event.set())
     try:
         if args.log:
             core.log, csv = played_log(args.log, config.channels, config.phases)
@@ -58,15 +88,7 @@ def run(args: argparse.Namespace) -> int:
         if args.plate_log:
             core.plate_log, csv = plate_log(args.plate_log, config.channels)
             logs.append(csv)
-        master, slave, path = open_pty()
-        print(path, flush=True)
-        print(f"frictex sim-device: {config.channels} channel(s) at {config.rate_hz:g} Hz on "
-              f"{path}; Ctrl-C to quit", file=sys.stderr)
-        try:
-            serve_pty(core, master, parent_pid=args.parent_pid)
-        finally:
-            os.close(master)
-            os.close(slave)
+        _serve(core, args, quit_event)
     finally:
         for csv in logs:
             csv.close()
@@ -75,3 +97,29 @@ def run(args: argparse.Namespace) -> int:
           f"{core.decoder.counts.discarded} bad frames, {k.watchdog_trips} watchdog trips",
           file=sys.stderr)
     return 0
+
+
+def _serve(core: DeviceCore, args: argparse.Namespace, quit_event: threading.Event) -> None:
+    """Open the pty or the TCP listener, say where, and serve until told to stop."""
+    options = {"exit_on_stop": args.once, "parent_pid": args.parent_pid,
+               "quit_event": quit_event}
+    if args.tcp is not None:
+        listener = open_listener(*args.tcp)
+        where, close = socket_url(listener), listener.close
+        target = {"listener": listener}
+    else:
+        master, slave, where = open_pty()
+        target = {"master": master}
+
+        def close():
+            os.close(master)
+            os.close(slave)
+    print(where, flush=True)
+    print(f"frictex sim-device: {core.config.channels} channel(s) at {core.config.rate_hz:g} Hz "
+          f"on {where}; Ctrl-C to quit", file=sys.stderr)
+    try:
+        serve(core, **target, **options)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        close()

@@ -13,6 +13,11 @@ Grammar of the byte stream (PROTOCOL.md section 2)::
 
 Amplitudes travel as unsigned 16-bit fixed point, :data:`AMPLITUDE_STEP_UM` (1/4096 um)
 per count; phases as unsigned 16-bit fractions of a turn (2 pi / 65536 rad per count).
+
+Versions: a frame's ``version`` byte selects the payload layouts. Version 2 adds the
+buffer-accounting fields to :class:`Status` and the :class:`Flushed` message; every other
+payload is the same in both. :func:`encode` writes the version asked for; a
+:class:`Decoder` accepts versions 1 to its ``max_version``.
 """
 
 from __future__ import annotations
@@ -23,7 +28,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-PROTOCOL_VERSION = 1
+#: the newest version this module speaks (it speaks every version from 1)
+PROTOCOL_VERSION = 2
+#: sample numbers are u64 and wrap modulo this (PROTOCOL.md 4.3)
+INDEX_MODULUS = 2 ** 64
 #: one count of a wire amplitude (um, zero-to-peak)
 AMPLITUDE_STEP_UM = 1.0 / 4096.0
 #: largest wire amplitude (um)
@@ -132,6 +140,12 @@ class DeviceState:
     NAMES = ("idle", "buffering", "playing", "draining", "silent")
 
 
+class FlushCause:
+    """Values of :attr:`Flushed.cause` (PROTOCOL.md section 4.8)."""
+
+    WATCHDOG = 1
+
+
 class ErrorCode:
     """Values of :attr:`ErrorReport.code` (PROTOCOL.md section 4.7)."""
 
@@ -205,7 +219,13 @@ class Stop:
 
 @dataclass(frozen=True)
 class Status:
-    """Device -> host: counters and state (answer to :class:`Heartbeat`)."""
+    """Device -> host: counters and state (answer to :class:`Heartbeat`).
+
+    The last four fields are in version 2 frames only (None when decoded from version 1):
+    ``buffer_end`` is one past the highest sample number held (``play_index`` when the
+    buffer is empty); ``played_samples``, ``flushed_samples`` and ``flushes`` count since
+    the last Hello.
+    """
 
     TYPE = 0x82
     echo: int
@@ -223,6 +243,28 @@ class Status:
     clamped: int = 0
     measured_um: tuple[float, ...] | None = None
     force_n: float | None = None
+    buffer_end: int | None = None
+    played_samples: int | None = None
+    flushed_samples: int | None = None
+    flushes: int | None = None
+
+    @property
+    def accounted(self) -> bool:
+        """Whether this Status carries the version 2 buffer accounting."""
+        return self.buffer_end is not None
+
+
+@dataclass(frozen=True)
+class Flushed:
+    """Device -> host (version 2): the device discarded its buffer (``cause``, see
+    :class:`FlushCause`) and will play ``play_index`` next; ``flushed``: samples discarded
+    by this flush; ``flushes``: flushes since the last Hello, this one included."""
+
+    TYPE = 0x84
+    cause: int
+    play_index: int
+    flushed: int
+    flushes: int
 
 
 @dataclass(frozen=True)
@@ -236,16 +278,19 @@ class ErrorReport:
     text: str = ""
 
 
-MESSAGES = (Hello, Info, Block, Heartbeat, Stop, Status, ErrorReport)
+MESSAGES = (Hello, Info, Block, Heartbeat, Stop, Status, ErrorReport, Flushed)
+#: message types by the first version that has them
+_SINCE = {Flushed: 2}
 _BY_TYPE = {m.TYPE: m for m in MESSAGES}
 
 
 @dataclass(frozen=True)
 class Frame:
-    """One decoded frame: its sequence number and message."""
+    """One decoded frame: its sequence number, message and the version it was sent in."""
 
     seq: int
     message: object
+    version: int = PROTOCOL_VERSION
 
 
 # ---------------------------------------------------------------------------- payloads
@@ -256,6 +301,8 @@ _BLOCK = struct.Struct("<QHBB")     # start_index, n, channels, flags
 _HEARTBEAT = struct.Struct("<I")
 _STOP = struct.Struct("<B")
 _STATUS = struct.Struct("<IBBQI10I")  # echo, state, flags, play_index, level, 9 counters, n_meas
+_STATUS_V2 = struct.Struct("<QIII")   # buffer_end, played, flushed, flushes
+_FLUSHED = struct.Struct("<BQII")
 _ERROR = struct.Struct("<BHI")
 _U16 = np.dtype("<u2")
 _FLAG_PHASES, _FLAG_SENSOR, _FLAG_FORCE = 1, 2, 4
@@ -272,7 +319,7 @@ def _u16_limit(values_um) -> list[int]:
     return [int(c) for c in amplitude_to_wire(np.array([values_um], dtype=np.float64))[0][0]]
 
 
-def _payload(msg) -> bytes:
+def _payload(msg, version: int) -> bytes:
     if isinstance(msg, Hello):
         return _HELLO.pack(msg.prefill)
     if isinstance(msg, Info):
@@ -319,25 +366,39 @@ def _payload(msg) -> bytes:
         # counters wrap at 2**32 on the wire (PROTOCOL.md 4.6)
         out = _STATUS.pack(msg.echo, msg.state, flags, msg.play_index, msg.level,
                            *(c & 0xFFFFFFFF for c in counters), len(msg.measured_um or ()))
+        if version >= 2:
+            extra = (msg.buffer_end, msg.played_samples, msg.flushed_samples, msg.flushes)
+            if None in extra:
+                raise ProtocolError("Status in version 2 needs buffer_end, played_samples, "
+                                    "flushed_samples and flushes; got None")
+            out += _STATUS_V2.pack(extra[0], *(c & 0xFFFFFFFF for c in extra[1:]))
         if msg.measured_um is not None:
             out += np.array(_u16_limit(msg.measured_um), dtype=_U16).tobytes()
         if msg.force_n is not None:
             out += struct.pack("<H", int(min(max(round(msg.force_n * 1000.0), 0), 65535)))
         return out
+    if isinstance(msg, Flushed):
+        return _FLUSHED.pack(msg.cause, msg.play_index, msg.flushed & 0xFFFFFFFF,
+                             msg.flushes & 0xFFFFFFFF)
     return _ERROR.pack(msg.code, msg.ref_seq, msg.detail) + msg.text.encode("utf-8")[:200]
 
 
 def encode(msg, seq: int = 0, version: int = PROTOCOL_VERSION) -> bytes:
     """The bytes of one frame carrying ``msg`` (COBS-stuffed, 0x00-terminated).
 
-    ``seq`` is taken modulo 2**16. Raises :class:`ProtocolError` for a value that does
-    not fit its field.
+    ``seq`` is taken modulo 2**16; ``version`` selects the payload layouts (1, or the
+    newest for anything else, so tests can write frames of versions nobody speaks).
+    Raises :class:`ProtocolError` for a value that does not fit its field or a message
+    that ``version`` does not have.
     """
     if not isinstance(msg, MESSAGES):
         raise ProtocolError(f"cannot encode {type(msg).__name__}; expected one of "
                             f"{', '.join(m.__name__ for m in MESSAGES)}")
+    if version < _SINCE.get(type(msg), 1):
+        raise ProtocolError(f"{type(msg).__name__} does not exist in protocol version "
+                            f"{version}; it needs version {_SINCE[type(msg)]}")
     try:
-        body = _HEADER.pack(version, msg.TYPE, seq & 0xFFFF) + _payload(msg)
+        body = _HEADER.pack(version, msg.TYPE, seq & 0xFFFF) + _payload(msg, version)
     except struct.error as exc:
         raise ProtocolError(f"cannot encode {msg!r}: {exc}") from None
     body += _CRC.pack(zlib.crc32(body))
@@ -347,8 +408,9 @@ def encode(msg, seq: int = 0, version: int = PROTOCOL_VERSION) -> bytes:
     return cobs_encode(body) + b"\x00"
 
 
-def _parse(mtype: int, p: bytes):
-    """The message of type ``mtype`` in payload ``p``; ValueError/struct.error if malformed."""
+def _parse(mtype: int, p: bytes, version: int):
+    """The message of type ``mtype`` in payload ``p`` of a ``version`` frame; ValueError or
+    struct.error if malformed."""
     if mtype == Hello.TYPE:
         return Hello(*_HELLO.unpack(p))
     if mtype == Info.TYPE:
@@ -378,6 +440,12 @@ def _parse(mtype: int, p: bytes):
     if mtype == Status.TYPE:
         echo, state, flags, play, level, *counters, n_meas = _STATUS.unpack_from(p)
         rest = p[_STATUS.size:]
+        extra = {}
+        if version >= 2:
+            values = _STATUS_V2.unpack_from(rest)
+            extra = dict(zip(("buffer_end", "played_samples", "flushed_samples", "flushes"),
+                             values))
+            rest = rest[_STATUS_V2.size:]
         n_force = 2 if flags & _FLAG_FORCE else 0
         if len(rest) != 2 * n_meas + n_force or bool(flags & _FLAG_SENSOR) != (n_meas > 0):
             raise ValueError("Status length")
@@ -386,7 +454,10 @@ def _parse(mtype: int, p: bytes):
             measured = tuple(float(x) for x in amplitude_from_wire(
                 np.frombuffer(rest[:2 * n_meas], dtype=_U16)))
         force = struct.unpack("<H", rest[2 * n_meas:])[0] / 1000.0 if n_force else None
-        return Status(echo, state, play, level, *counters, measured_um=measured, force_n=force)
+        return Status(echo, state, play, level, *counters, measured_um=measured, force_n=force,
+                      **extra)
+    if mtype == Flushed.TYPE:
+        return Flushed(*_FLUSHED.unpack(p))
     if mtype == ErrorReport.TYPE:
         code, ref, detail = _ERROR.unpack_from(p)
         return ErrorReport(code, ref, detail, p[_ERROR.size:].decode("utf-8"))
@@ -423,9 +494,11 @@ class Decoder:
 
     A corrupted, truncated or foreign frame is counted in :attr:`counts` and dropped; the
     next 0x00 starts a fresh frame, so the decoder resynchronises within one frame.
-    Sequence numbers that skip forward count as ``lost_frames``.
+    Sequence numbers that skip forward count as ``lost_frames``. Frames of versions 1 to
+    ``max_version`` are accepted.
     """
 
+    max_version: int = PROTOCOL_VERSION
     counts: DecoderCounts = field(default_factory=DecoderCounts)
     _pending: bytearray = field(default_factory=bytearray)
     _overflowed: bool = False
@@ -467,15 +540,15 @@ class Decoder:
             c.crc_errors += 1
             return None
         version, mtype, seq = _HEADER.unpack_from(body)
-        if version != PROTOCOL_VERSION:
+        if not 1 <= version <= self.max_version:
             c.bad_version += 1
             c.last_bad_version = version
             return None
-        if mtype not in _BY_TYPE:
+        if mtype not in _BY_TYPE or version < _SINCE.get(_BY_TYPE[mtype], 1):
             c.unknown_type += 1
             return None
         try:
-            msg = _parse(mtype, body[_HEADER.size:-4])
+            msg = _parse(mtype, body[_HEADER.size:-4], version)
         except (ValueError, struct.error):
             c.bad_payload += 1
             return None
@@ -484,4 +557,4 @@ class Decoder:
             c.lost_frames += skipped
         self._next_seq = (seq + 1) & 0xFFFF
         c.frames_ok += 1
-        return Frame(seq, msg)
+        return Frame(seq, msg, version)

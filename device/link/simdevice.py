@@ -7,8 +7,9 @@ the plate's closed amplitude loop as a first-order low pass (seed 003, Fig. 3b: 
 bandwidth; bilinear transform prewarped at the bandwidth), and enforces the watchdog: no valid frame for ``watchdog_ms`` and the
 output ramps to zero within ``ramp_ms`` and the buffer is flushed.
 
-:func:`serve_pty` binds a core to a pseudo-terminal and the wall clock; ``frictex
-sim-device`` runs it.
+:func:`serve` binds a core to the wall clock and to a pseudo-terminal or a TCP listener,
+host after host; ``frictex sim-device`` runs it. The core answers each frame in the
+protocol version the frame was sent in (up to ``DeviceConfig.protocol_version``).
 
 Played-sample log (CSV, ``--log``): ``index,ch0_um,...[,ch0_phase_rad,...]``, one row per
 sample actually played from a valid frame (exactly the commanded fixed-point values,
@@ -21,6 +22,7 @@ from __future__ import annotations
 import math
 import os
 import select
+import socket
 import sys
 import time
 import tty
@@ -54,6 +56,7 @@ class DeviceConfig:
     sensor: bool = False
     force_n: float | None = None
     name: str = "frictex sim-device"
+    protocol_version: int = p.PROTOCOL_VERSION
 
     def __post_init__(self):
         checks = [(self.channels >= 1, "channels", "at least 1"),
@@ -69,7 +72,9 @@ class DeviceConfig:
                   (0 <= self.ramp_ms <= 50 - self.watchdog_ms, "ramp_ms",
                    f"in [0, {50 - self.watchdog_ms}] ms: watchdog_ms + ramp_ms must not "
                    "exceed 50 ms (PROTOCOL.md 5.3)"),
-                  (self.force_n is None or 0 <= self.force_n <= 65.0, "force_n", "in [0, 65] N")]
+                  (self.force_n is None or 0 <= self.force_n <= 65.0, "force_n", "in [0, 65] N"),
+                  (1 <= self.protocol_version <= p.PROTOCOL_VERSION, "protocol_version",
+                   f"in [1, {p.PROTOCOL_VERSION}]")]
         for ok, name, expected in checks:
             if not ok:
                 raise ValueError(f"sim-device {name} = {getattr(self, name)!r}: expected {expected}")
@@ -81,11 +86,13 @@ class DeviceConfig:
     def info(self) -> p.Info:
         return p.Info(self.channels, self.rate_hz, tuple(float(x) for x in self.limits),
                       self.buffer_samples, self.watchdog_ms, self.ramp_ms, self.phases,
-                      self.sensor, self.force_n is not None, self.name)
+                      self.sensor, self.force_n is not None, self.name, self.protocol_version)
 
 
 @dataclass
 class Counters:
+    """Cumulative since power-up (Status version 1 counters, plus ``played_samples``)."""
+
     underruns: int = 0
     gap_samples: int = 0
     late_samples: int = 0
@@ -96,11 +103,26 @@ class Counters:
 
 
 @dataclass
+class SessionCounters:
+    """Since the last Hello (Status version 2 accounting)."""
+
+    played: int = 0
+    flushed: int = 0
+    flushes: int = 0
+
+
+def _signed_offset(index: int, origin: int) -> int:
+    """``index - origin`` modulo 2**64, as a signed 64-bit number (PROTOCOL.md 4.3)."""
+    return (index - origin + 2 ** 63) % p.INDEX_MODULUS - 2 ** 63
+
+
+@dataclass
 class DeviceCore:
     """The device's logic on a virtual clock (see the module docstring).
 
     Drive it with :meth:`receive` (bytes from the host at time ``t_s``; returns bytes to
-    send back) and :meth:`advance_to` (play every tick up to time ``t_s``). ``log`` and
+    send back) and :meth:`advance_to` (play every tick up to time ``t_s``; returns bytes
+    the device sends on its own, a Flushed after a watchdog trip). ``log`` and
     ``plate_log`` are optional callables receiving the played samples and the per-tick
     output (see :class:`CsvLog`).
     """
@@ -111,15 +133,20 @@ class DeviceCore:
 
     def __post_init__(self):
         c = self.config
-        self.decoder = p.Decoder()
+        self.decoder = p.Decoder(max_version=c.protocol_version)
         self.counters = Counters()
+        self.session = SessionCounters()
         self.state = S.IDLE
         self._cap = c.buffer_samples
+        # a ring: the sample at play_index sits in slot _head, the one after in _head + 1...
         self._amp = np.zeros((self._cap, c.channels), dtype=np.uint16)
         self._phase = np.zeros((self._cap, c.channels), dtype=np.uint16)
         self._filled = np.zeros(self._cap, dtype=bool)
+        self._head = 0
+        self._end = 0              # one past the furthest sample held, relative to play_index
         self.level = 0
-        self.play_index = 0
+        self.play_index = 0        # modulo 2**64
+        self.host_version = 1      # version of the last valid frame from the host
         self._origin_set = False
         self.prefill = 1
         self.tick = 0
@@ -144,16 +171,23 @@ class DeviceCore:
         out = bytearray()
         for frame in self.decoder.feed(data):
             self._last_rx_tick = max(self.tick, int(t_s * self.config.rate_hz))
+            self.host_version = frame.version
             reply = self._handle(frame)
             if reply is not None:
-                out += p.encode(reply, self._tx_seq)
-                self._tx_seq += 1
+                out += self._encode(reply)
         return bytes(out)
+
+    def _encode(self, msg) -> bytes:
+        """A frame in the version the host last spoke."""
+        data = p.encode(msg, self._tx_seq, self.host_version)
+        self._tx_seq += 1
+        return data
 
     def _handle(self, frame: p.Frame):
         msg = frame.message
         if isinstance(msg, p.Hello):
             self._flush()
+            self.session = SessionCounters()
             self._origin_set = False
             self.prefill = int(min(max(msg.prefill, 1), self._cap // 4))
             self.state = S.BUFFERING
@@ -167,6 +201,7 @@ class DeviceCore:
             if msg.drain and self.level:
                 self.state = S.DRAINING
             else:
+                self._count_flush()
                 self._silence()
                 self.stopped = True
             return self.status(0)
@@ -185,12 +220,13 @@ class DeviceCore:
                                  f"device has {c.channels}, phases={c.phases}")
         if self.state == S.SILENT:
             self.state = S.BUFFERING
-        start = msg.start_index
         if not self._origin_set:  # the first block of a session sets the clock's origin
-            self.play_index = start
-        elif self.level == 0 and self.state == S.BUFFERING and start > self.play_index:
-            self.counters.gap_samples += start - self.play_index
-            self.play_index = start
+            self.play_index = msg.start_index
+        ahead = _signed_offset(msg.start_index, self.play_index)
+        if self.level == 0 and self.state == S.BUFFERING and ahead > 0:
+            self.counters.gap_samples += ahead
+            self.play_index = msg.start_index
+            ahead = 0
         self._origin_set = True
         top = np.floor(c.limits / p.AMPLITUDE_STEP_UM + 1e-9).astype(np.uint16)
         amps = msg.amplitudes
@@ -198,18 +234,21 @@ class DeviceCore:
         if over.any():  # the host must clamp; the device checks anyway
             self.counters.clamped += int(over.sum())
             amps = np.minimum(amps, top)
-        idx = start + np.arange(n)
-        late = idx < self.play_index
-        beyond = idx >= self.play_index + self._cap
+        # offsets from the play position; anything this far out is late or beyond anyway
+        rel = min(max(ahead, -2 ** 40), 2 ** 40) + np.arange(n, dtype=np.int64)
+        late = rel < 0
+        beyond = rel >= self._cap
         keep = ~(late | beyond)
         self.counters.late_samples += int(late.sum())
         self.counters.overflow_samples += int(beyond.sum())
-        slots = idx[keep] % self._cap
+        slots = (self._head + rel[keep]) % self._cap
         self.level += int((~self._filled[slots]).sum())
         self._filled[slots] = True
         self._amp[slots] = amps[keep]
         if msg.phases is not None:
             self._phase[slots] = msg.phases[keep]
+        if keep.any():
+            self._end = max(self._end, int(rel[keep][-1]) + 1)
         if self.state == S.BUFFERING and self.level >= self.prefill:
             self.state = S.PLAYING
         if beyond.any():
@@ -222,13 +261,18 @@ class DeviceCore:
 
     def status(self, echo: int) -> p.Status:
         """The device's current :class:`Status` (``echo``: the heartbeat token)."""
-        d, k = self.decoder.counts, self.counters
+        d, k, s = self.decoder.counts, self.counters, self.session
         force = self.config.force_n
         return p.Status(echo & 0xFFFFFFFF, self.state, self.play_index, self.level,
                         k.underruns, d.discarded, d.frames_ok, d.lost_frames, k.gap_samples,
                         k.late_samples, k.overflow_samples, k.watchdog_trips, k.clamped,
                         tuple(self.plate_um) if self.config.sensor else None,
-                        force)
+                        force, self.buffer_end, s.played, s.flushed, s.flushes)
+
+    @property
+    def buffer_end(self) -> int:
+        """One past the furthest sample held (``play_index`` when empty), modulo 2**64."""
+        return (self.play_index + self._end) % p.INDEX_MODULUS
 
     @property
     def finished(self) -> bool:
@@ -239,6 +283,14 @@ class DeviceCore:
     def _flush(self):
         self._filled[:] = False
         self.level = 0
+        self._end = 0
+
+    def _count_flush(self) -> int:
+        """Count a flush that discards what the host sent (trip, Stop without drain)."""
+        flushed = self.level
+        self.session.flushed += flushed
+        self.session.flushes += 1
+        return flushed
 
     def _silence(self):
         """Start ramping the output to zero; drop everything buffered."""
@@ -247,8 +299,10 @@ class DeviceCore:
         self._ramp_from = self.setpoint.copy()
         self._ramp_pos = 0
 
-    def advance_to(self, t_s: float) -> None:
-        """Play every tick up to (not including) tick ``floor(t_s * rate)``."""
+    def advance_to(self, t_s: float) -> bytes:
+        """Play every tick up to (not including) tick ``floor(t_s * rate)``; returns the
+        frames the device sends on its own meanwhile (version 2: Flushed after a trip)."""
+        out = bytearray()
         end = int(t_s * self.config.rate_hz)
         while self.tick < end:
             n = end - self.tick
@@ -256,10 +310,15 @@ class DeviceCore:
                 deadline = self._last_rx_tick + self._wd_ticks
                 if self.tick >= deadline:
                     self.counters.watchdog_trips += 1
+                    flushed = self._count_flush()
                     self._silence()
+                    if self.host_version >= 2:
+                        out += self._encode(p.Flushed(p.FlushCause.WATCHDOG, self.play_index,
+                                                      flushed, self.session.flushes))
                     continue
                 n = min(n, deadline - self.tick)
             self._run(min(n, self._cap))
+        return bytes(out)
 
     def _run(self, n: int) -> None:
         c = self.config
@@ -283,8 +342,8 @@ class DeviceCore:
 
     def _play(self, sp: np.ndarray) -> None:
         n = len(sp)
-        idx = self.play_index + np.arange(n)
-        slots = idx % self._cap
+        idx = np.uint64(self.play_index) + np.arange(n, dtype=np.uint64)  # wraps at 2**64
+        slots = (self._head + np.arange(n)) % self._cap
         has = self._filled[slots]
         count = np.cumsum(has)
         if count[-1] >= self.level:  # the buffer runs dry inside this run
@@ -299,12 +358,15 @@ class DeviceCore:
         sp[:] = np.where((last >= 0)[:, None], values[np.maximum(last, 0)], self.setpoint)
         self.counters.gap_samples += used - len(played)
         self.counters.played_samples += len(played)
+        self.session.played += len(played)
         if self.log is not None and len(played):
             phases = p.phase_from_wire(self._phase[slots[played]]) if self.config.phases else None
             self.log(idx[played], values[played], phases)
         self._filled[slots[:used]] = False
         self.level -= len(played)
-        self.play_index += used
+        self.play_index = (self.play_index + used) % p.INDEX_MODULUS
+        self._head = (self._head + used) % self._cap
+        self._end = max(self._end - used, 0) if self.level else 0
         if used < n:
             if self.state == S.DRAINING:
                 self._silence()
@@ -362,34 +424,90 @@ def open_pty() -> tuple[int, int, str]:
     return master, slave, os.ttyname(slave)
 
 
-def serve_pty(core: DeviceCore, master: int, *, poll_s: float = 0.001,
-              exit_on_stop: bool = True, parent_pid: int | None = None,
-              quit_event=None, clock=time.monotonic) -> None:
-    """Run ``core`` on the pty ``master`` in real time until a Stop completes.
+def open_listener(host: str = "127.0.0.1", port: int = 0) -> socket.socket:
+    """A listening TCP socket (``port`` 0: any free port); its URL is :func:`socket_url`."""
+    listener = socket.create_server((host, port))
+    listener.setblocking(False)
+    return listener
 
-    Received bytes are handled before the clock advances, so a sim process that was
-    descheduled does not mistake its own sleep for host silence. Replies that do not fit
-    the pty's buffer are dropped (a UART does not wait either). ``parent_pid``: also stop
-    when that process is gone. ``quit_event``: a ``threading.Event`` that stops it too.
+
+def socket_url(listener: socket.socket) -> str:
+    """The pyserial URL a host opens to reach ``listener``."""
+    host, port = listener.getsockname()[:2]
+    return f"socket://{host}:{port}"
+
+
+def _read(conn) -> bytes | None:
+    """What a host sent; b"" if nothing, None if it hung up (a TCP peer closed)."""
+    try:
+        if isinstance(conn, socket.socket):
+            return conn.recv(65536) or None
+        return os.read(conn, 65536)
+    except (BlockingIOError, InterruptedError):
+        return b""
+    except ConnectionError:
+        return None
+    except OSError:
+        return b""  # a pty with no host on its slave side: EIO until one opens it
+
+
+def _write(conn, data: bytes) -> None:
+    """Send, dropping what does not fit (a UART does not wait either)."""
+    try:
+        if isinstance(conn, socket.socket):
+            conn.send(data)
+        else:
+            os.write(conn, data)
+    except OSError:
+        pass
+
+
+def serve(core: DeviceCore, master: int | None = None, listener: socket.socket | None = None,
+          *, poll_s: float = 0.001, exit_on_stop: bool = False, parent_pid: int | None = None,
+          quit_event=None, clock=time.monotonic) -> int:
+    """Run ``core`` in real time on the pty ``master`` or on TCP connections to
+    ``listener``, host after host, until ``quit_event`` is set, ``parent_pid`` is gone, or
+    (``exit_on_stop``) a host's Stop has played out. Returns the number of TCP hosts served.
+
+    A newly accepted TCP host replaces the current one (a host that reconnects may not
+    have been seen to hang up yet). Received bytes are handled before the clock advances,
+    so a sim process that was descheduled does not mistake its own sleep for host silence.
     """
     t0 = clock()
-    while True:
-        ready, _, _ = select.select([master], [], [], poll_s)
-        now = clock() - t0
-        if ready:
-            try:
-                data = os.read(master, 65536)
-            except (BlockingIOError, OSError):
-                data = b""  # EIO: no host has the slave open right now
-            reply = core.receive(data, now) if data else b""
-            if reply:
+    conn = master
+    hosts = 0
+    try:
+        while True:
+            watch = [x for x in (conn, listener) if x is not None]
+            ready, _, _ = select.select(watch, [], [], poll_s)
+            now = clock() - t0
+            if listener is not None and listener in ready:
                 try:
-                    os.write(master, reply)
-                except (BlockingIOError, OSError):
-                    pass
-        core.advance_to(now)
-        if (exit_on_stop and core.finished) or (quit_event is not None and quit_event.is_set()):
-            return
-        if parent_pid is not None and os.getppid() != parent_pid:
-            print("frictex sim-device: parent process gone; stopping", file=sys.stderr)
-            return
+                    accepted, _ = listener.accept()
+                except (BlockingIOError, InterruptedError):
+                    accepted = None
+                if accepted is not None:
+                    if isinstance(conn, socket.socket):
+                        conn.close()
+                    accepted.setblocking(False)
+                    accepted.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+                    conn, hosts = accepted, hosts + 1
+            out = b""
+            if conn is not None and conn in ready:
+                data = _read(conn)
+                if data is None:
+                    conn.close()
+                    conn = None
+                elif data:
+                    out = core.receive(data, now)
+            out += core.advance_to(now)
+            if out and conn is not None:
+                _write(conn, out)
+            if (exit_on_stop and core.finished) or (quit_event is not None and quit_event.is_set()):
+                return hosts
+            if parent_pid is not None and os.getppid() != parent_pid:
+                print("frictex sim-device: parent process gone; stopping", file=sys.stderr)
+                return hosts
+    finally:
+        if isinstance(conn, socket.socket):
+            conn.close()

@@ -1,0 +1,211 @@
+"""What the host knows of the device's buffer: pacing estimate and where each sample went.
+
+Pure bookkeeping for :class:`~device.link.host.CommandSink`, on times and counts it is
+given (no clock, no I/O), so tests drive it directly.
+
+Both halves rest on one fact of the byte stream: frames arrive in the order they were
+written. A Heartbeat written after block B reaches the device after B, so the Status
+answering it describes a buffer that already holds B (or lost it). The host remembers,
+per heartbeat, how far it had sent (its *mark*); a Status is read against its mark.
+
+Sample numbers are the host's (unbounded integers from the caller); the device's are
+modulo 2**64 and are mapped back with :func:`unwrap`.
+"""
+
+from __future__ import annotations
+
+import collections
+from dataclasses import dataclass
+
+from device.link.protocol import INDEX_MODULUS, DeviceState
+
+#: why a commanded sample was never played (``CommandSink.status()["unplayed_by_cause"]``)
+CAUSES = ("disconnected", "queue_full", "stalled", "flushed", "late", "overflow", "lost")
+_HOST_CAUSES = CAUSES[:3]
+_COUNTER_WRAP = 2 ** 32
+
+
+def unwrap(device_index: int, near: int) -> int:
+    """The host sample number congruent to ``device_index`` modulo 2**64 nearest ``near``."""
+    offset = (device_index - near + INDEX_MODULUS // 2) % INDEX_MODULUS - INDEX_MODULUS // 2
+    return near + offset
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """The device's buffer as of host time ``t_s`` (s): it plays ``play_index`` next and
+    holds samples up to ``end`` (exclusive); ``playing``: its clock advances
+    ``play_index``; ``mark_end``: how far the host had sent when the device's report left
+    it (anything sent beyond is still on its way)."""
+
+    t_s: float
+    play_index: int
+    end: int
+    playing: bool
+    mark_end: int
+
+    @classmethod
+    def from_status(cls, st, t_s: float, mark_end: int) -> Snapshot:
+        """From a Status answering a heartbeat sent when the host had sent up to
+        ``mark_end``; version 1 Statuses lack ``buffer_end`` and give ``play + level``."""
+        play = unwrap(st.play_index, mark_end)
+        end = unwrap(st.buffer_end, mark_end) if st.accounted else play + st.level
+        return cls(t_s, play, max(end, play),
+                   st.state in (DeviceState.PLAYING, DeviceState.DRAINING), mark_end)
+
+    @classmethod
+    def flushed(cls, play_index: int, t_s: float, sent_end: int) -> Snapshot:
+        """After a Flushed message: empty at ``play_index``; what was sent before it
+        arrived is taken as flushed (an underestimate of the level at worst, which
+        the next Status corrects)."""
+        play = unwrap(play_index, sent_end)
+        return cls(t_s, play, play, False, sent_end)
+
+    def level(self, now_s: float, rate_hz: float, sent_end: int) -> tuple[int, int]:
+        """(estimated play index now, estimated buffer end) given the host has sent up to
+        ``sent_end``."""
+        end = max(self.end, sent_end) if sent_end > self.mark_end else self.end
+        played = self.play_index
+        if self.playing:
+            played += int(max(now_s - self.t_s, 0.0) * rate_hz)
+        return min(played, end), end
+
+    def room(self, now_s: float, rate_hz: float, sent_end: int, start: int, n: int,
+             target: int) -> bool:
+        """Would block ``[start, start + n)`` keep the buffer at or below ``target``
+        samples? An empty buffer takes any block (the device jumps to a block ahead)."""
+        played, end = self.level(now_s, rate_hz, sent_end)
+        return end <= played or start + n - played <= target
+
+
+def _delta(new: int, old: int) -> int:
+    """Increase of a device counter that wraps at 2**32."""
+    return (new - old) % _COUNTER_WRAP
+
+
+class _Session:
+    """One handshake's worth of samples sent, read against the device's counters."""
+
+    def __init__(self):
+        self.sent = 0
+        self.first = None           # the first Status: the counters' baseline
+        self.totals = collections.Counter()
+        self.prev = None
+        self.level = 0
+        self.sent_at_mark = 0
+        self.accounted = True
+
+    def status(self, st, sent_at_mark: int) -> None:
+        if self.first is None:
+            self.first = self.prev = st
+        fields = {"late": "late_samples", "overflow": "overflow_samples"}
+        if st.accounted:
+            fields |= {"played": "played_samples", "flushed": "flushed_samples"}
+        else:
+            self.accounted = False
+        for key, name in fields.items():
+            self.totals[key] += _delta(getattr(st, name), getattr(self.prev, name) or 0)
+        self.prev = st
+        self.level = st.level
+        self.sent_at_mark = sent_at_mark
+
+    def lost(self, final: bool) -> int:
+        """Sent but not accounted for; ``final``: the session is over, so samples still
+        held or in flight at the last Status count too (their fate is unknown)."""
+        if not self.accounted:
+            return 0
+        t = self.totals
+        settled = t["played"] + t["flushed"] + t["late"] + t["overflow"]
+        if final:
+            return max(self.sent - settled, 0)
+        return max(self.sent_at_mark - settled - self.level, 0)
+
+
+class Ledger:
+    """Where every commanded sample went (PROTOCOL.md section 6, "unplayed samples").
+
+    ``commanded = played + unplayed + pending``, pending being samples queued, in flight
+    or buffered whose fate is not known yet (0 once the link has closed after a drained
+    Stop). Host causes are exact; device causes come from the device's counters read
+    against the host's marks; ``lost`` is the rest (corrupted or dropped on the wire,
+    refused, or in flight when a link failed or was reset). With a version 1 device,
+    ``played``, ``flushed`` and ``lost`` are unknown (None).
+    """
+
+    def __init__(self):
+        self.commanded = 0
+        self.host = collections.Counter()
+        self.done = collections.Counter()
+        self.partial = False
+        self._session: _Session | None = None
+
+    def command(self, n: int) -> None:
+        """``n`` samples handed to ``send``."""
+        self.commanded += n
+
+    def drop(self, cause: str, n: int) -> None:
+        """``n`` samples the host dropped for ``cause`` (one of the host causes)."""
+        assert cause in _HOST_CAUSES, cause
+        self.host[cause] += n
+
+    def start_session(self) -> None:
+        """A handshake completed: the device's since-Hello counters start from zero."""
+        self.end_session()
+        self._session = _Session()
+
+    def sent(self, n: int) -> None:
+        """``n`` samples written to the device in the current session."""
+        self._session.sent += n
+
+    def mark(self) -> int:
+        """Samples sent in this session so far (taken when a heartbeat goes out)."""
+        return self._session.sent if self._session is not None else 0
+
+    @property
+    def reporting(self) -> bool:
+        """A Status has arrived in the current session (its counters have a baseline)."""
+        return self._session is not None and self._session.first is not None
+
+    def status(self, st, mark: int) -> None:
+        """A Status answering a heartbeat whose :meth:`mark` was ``mark``."""
+        if self._session is not None:
+            self._session.status(st, mark)
+
+    def end_session(self) -> None:
+        """The session ended (link lost, reset or closed): settle it."""
+        s = self._session
+        if s is None:
+            return
+        self.partial |= not s.accounted
+        self.done.update(s.totals)
+        self.done["lost"] += s.lost(final=True)
+        self._session = None
+
+    def _device(self) -> collections.Counter:
+        out = collections.Counter(self.done)
+        s = self._session
+        if s is not None:
+            out.update(s.totals)
+            out["lost"] += s.lost(final=False)
+        return out
+
+    def breakdown(self) -> dict[str, int | None]:
+        """Unplayed samples by cause (None: not reported by a version 1 device)."""
+        device = self._device()
+        partial = self.partial or (self._session is not None and not self._session.accounted)
+        out = {cause: self.host[cause] for cause in _HOST_CAUSES}
+        for cause in ("flushed", "late", "overflow", "lost"):
+            out[cause] = None if partial and cause in ("flushed", "lost") else device[cause]
+        return out
+
+    @property
+    def played(self) -> int | None:
+        """Samples the device confirmed playing (None with a version 1 device)."""
+        device = self._device()
+        partial = self.partial or (self._session is not None and not self._session.accounted)
+        return None if partial else device["played"]
+
+    @property
+    def unplayed(self) -> int:
+        """Commanded samples known not to have played (the known causes summed)."""
+        return sum(v for v in self.breakdown().values() if v is not None)
