@@ -1218,6 +1218,9 @@ def check_scene(path: str | Path) -> tuple[model.Scene | None, list[Problem], li
     text = _read_text(path, r)
     if text is None:
         return None, r.problems, r.warnings
+    if not text.strip():
+        r.report((), "is empty; expected a texture file (format = 1, [display], [[layer]])")
+        return None, r.problems, r.warnings
     doc = _parse_toml(text, r)
     if doc is None:
         return None, r.problems, r.warnings
