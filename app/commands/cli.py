@@ -19,6 +19,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "validate": ("app.commands.validate", "check texture files; report every problem with file, line and field"),
     "library": ("app.commands.library", "list the bundled scenes and traces"),
     "replay": ("app.commands.replay", "run the haptic pipeline on a recorded trace, headless"),
+    "batch": ("app.commands.batch", "replay many (scene, trace, renderer) jobs over the cores or a Dask cluster"),
     "trace": ("app.commands.trace", "synthesise or import touch traces"),
     "sim-device": ("app.commands.sim_device", "run a simulated plate microcontroller on a pseudo-terminal"),
     "bench": ("app.commands.bench", "measure speed: pipeline, link, visual layer, modal solves"),

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from app.commands.argtypes import positive_float, positive_int
+from app.commands.argtypes import fault_plan, positive_float, positive_int, share
 from app.engine.replay import run_replay
 from app.engine.tables import FORMATS
 from rendering.pipeline import RENDERERS
@@ -29,6 +29,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--device", metavar="sim|PORT", default=None,
                         help="also stream the commands to a device: 'sim' starts a simulated "
                              "one, otherwise a serial port or pyserial URL")
+    parser.add_argument("--faults", metavar="SPEC", type=fault_plan, default=None,
+                        help="with --device: inject link faults, e.g. 'corrupt=0.001,"
+                             "stall=0.2@1.5,trip@3,unplug=2@4' (grammar: device/link/faults.py)")
+    parser.add_argument("--max-unplayed", type=share, default=0.01, metavar="SHARE",
+                        help="with --device: exit 1 when more than this share of the "
+                             "commanded samples never played on the device (default 0.01)")
+    parser.add_argument("--strict", action="store_true",
+                        help="refuse a trace whose time goes back (default: samples up to "
+                             "5 ms back are sorted into order, further back dropped, counted)")
     parser.add_argument("--frames", type=positive_float, default=None, metavar="FPS",
                         help="also write PNG frames of the visual layer at FPS into DIR/frames")
     parser.add_argument("--quiet", action="store_true", help="no progress bar, no summary line")
@@ -42,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
     summary = run_replay(args.scene, args.trace, args.out, rate_hz=args.rate,
                          fmt=args.format, device=args.device, block_size=args.block,
                          render_override=args.renderer, progress=not args.quiet,
-                         frames=frames)
+                         frames=frames, strict=args.strict, faults=args.faults)
     if not args.quiet:
         out = summary["output"]
         timing = summary["timings"]
@@ -50,8 +59,16 @@ def run(args: argparse.Namespace) -> int:
         print(f"replayed {summary['trace']['samples']} touch samples -> {out['samples']} output "
               f"samples ({out['duration_s']:.3f} s at {out['rate_hz']:g} Hz) in {args.out}: "
               f"{', '.join(out['files'])}, summary.json; {clamps} clamped; "
-              f"{timing['x_realtime_end_to_end']:.0f}x real time end to end "
-              f"({timing['x_realtime_compute']:.0f}x compute only)")
+              f"{timing['x_realtime_end_to_end']:.3g}x real time end to end "
+              f"({timing['x_realtime_compute']:.3g}x compute only)")
         for warning in summary["warnings"]:
             print(f"frictex: warning: {warning}", file=sys.stderr)
+    device = summary.get("device")
+    if device is not None and device.get("commanded_samples"):
+        lost = device["unplayed_samples"] / device["commanded_samples"]
+        if lost > args.max_unplayed:
+            print(f"frictex: error: {lost:.2%} of the commanded samples never played on the "
+                  f"device (limit {args.max_unplayed:.2%}, --max-unplayed); outputs in "
+                  f"{args.out}", file=sys.stderr)
+            return 1
     return 0

@@ -15,10 +15,6 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-#: widest text of one value: sign, 20 digits, point, decimals (at most 15), comma
-_MAX_WIDTH = 40
-
-
 def rows_text(columns: list[np.ndarray], formats: list[str]) -> bytes:
     """The CSV lines (``\\n``-terminated, no header) of equal-length columns.
 
@@ -29,20 +25,23 @@ def rows_text(columns: list[np.ndarray], formats: list[str]) -> bytes:
     units = np.empty((ncol, n), dtype=np.int64)
     decimals = np.empty(ncol, dtype=np.int64)
     negative = np.zeros((ncol, n), dtype=np.bool_)
+    width = 1  # bytes a row may take: the newline, then per column the widest value
     special_at, special_text = [], []
     for j, (values, fmt) in enumerate(zip(columns, formats)):
         if fmt == "%d":
             decimals[j] = -1
             units[j] = values
+            width += 2 + _digits(np.abs(values).max(initial=0))  # comma, sign, digits
             continue
         digits = int(fmt[2:-1])
         decimals[j] = digits
-        scaled = np.abs(values) * float(10 ** digits)
-        with np.errstate(invalid="ignore"):
+        with np.errstate(over="ignore", invalid="ignore"):  # inf and NaN are undecided
+            scaled = np.abs(values) * float(10 ** digits)
             undecided = ~(scaled < 2.0 ** 53) | (
                 np.abs(scaled - np.floor(scaled) - 0.5) <= 4.0 * np.spacing(scaled))
         units[j] = np.where(undecided, 0.0, np.rint(scaled))
         negative[j] = np.signbit(values)
+        width += 3 + digits + _digits(units[j].max(initial=0) // 10 ** digits)
         for i in np.flatnonzero(undecided).tolist():
             special_at.append(i * ncol + j)
             special_text.append((fmt % values[i]).encode("ascii"))
@@ -52,9 +51,14 @@ def rows_text(columns: list[np.ndarray], formats: list[str]) -> bytes:
     offsets = np.zeros(len(texts) + 1, dtype=np.int64)
     offsets[1:] = np.cumsum([len(t) for t in texts])
     blob = np.frombuffer(b"".join(texts), dtype=np.uint8) if texts else np.zeros(0, np.uint8)
-    out = np.empty(n * ncol * _MAX_WIDTH + sum(len(t) for t in texts), dtype=np.uint8)
+    out = np.empty(n * width + int(offsets[-1]), dtype=np.uint8)
     used = _write_rows(units, decimals, negative, at, offsets, blob, out)
     return out[:used].tobytes()
+
+
+def _digits(value) -> int:
+    """Decimal digits of a whole number >= 0."""
+    return len(str(int(value)))
 
 
 @njit(cache=True, nogil=True)

@@ -35,8 +35,13 @@ from textures.model import Scene
 OUTPUT_STEMS = ("commands", "friction")
 
 
-def load_inputs(scene, trace):
-    """(Scene, iterator of trace chunks, trace path or None) from objects, paths or names."""
+def load_inputs(scene, trace, strict: bool = False):
+    """(Scene, iterator of trace chunks, trace path or None) from objects, paths or names.
+
+    A trace file's iterator (``rendering.input.trace_file.TraceReader``) counts, in its
+    ``order``, the samples it sorted or dropped where time went back; ``strict`` refuses
+    such a trace instead.
+    """
     if not isinstance(scene, Scene):
         from textures.library import resolve_scene
         from textures.loader import load_scene
@@ -45,7 +50,7 @@ def load_inputs(scene, trace):
         return scene, iter([trace]), None
     from textures.library import resolve_trace
     trace_path = resolve_trace(trace)
-    return scene, iter_trace(trace_path), trace_path
+    return scene, iter_trace(trace_path, strict=strict), trace_path
 
 
 def clear_outputs(out_dir: Path) -> None:
@@ -58,7 +63,8 @@ def clear_outputs(out_dir: Path) -> None:
 
 def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv", sink=None,
                device: str | None = None, block_size: int = 50, render_override: str | None = None,
-               chunk_blocks: int = 200, progress: bool = True, frames=None) -> dict:
+               chunk_blocks: int = 200, progress: bool = True, frames=None, strict: bool = False,
+               faults=None) -> dict:
     """Replay ``trace`` (Trace or path/bundled name) on ``scene`` (Scene or path/name).
 
     Writes the outputs into ``out_dir`` (created if needed) and returns the summary
@@ -66,12 +72,14 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     (``device.link.host.open_sink(..., paced=True)``) that receives every block and, by
     waiting for the device's room, paces the run; the replay closes it (draining first) before writing the summary, so its
     counters are final. ``device``: instead of a link, a spec (``"sim"``, a port or a
-    pyserial URL) opened here with the channels and phases of the scene's actuation.
-    ``frames``: an optional ``app.engine.frames.FrameWriter``.
+    pyserial URL) opened here with the channels and phases of the scene's actuation,
+    with ``faults`` (``device.link.faults.FaultPlan``) injected if given. ``frames``: an
+    optional ``app.engine.frames.FrameWriter``. ``strict``: refuse a trace whose time
+    goes back (else sorted or dropped, counted and warned about).
     """
     wall0 = time.perf_counter()
     timer = RunTimer()
-    scene, chunks, trace_path = load_inputs(scene, trace)
+    scene, chunks, trace_path = load_inputs(scene, trace, strict)
     source = TraceSource(chunks)
     t0 = source.first_time()
     out_dir = Path(out_dir)
@@ -82,7 +90,7 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     if device is not None:
         from device.link.host import open_sink
         sink = open_sink(device, channels=len(pipeline.channels), rate_hz=rate_hz,
-                         phases=pipeline.actuation.has_phases, paced=True)
+                         phases=pipeline.actuation.has_phases, paced=True, faults=faults)
     source.start(pipeline.tracker_config)
     totals = Totals()
     sinks = [totals]
@@ -101,12 +109,28 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     output_s = blocks * block_size / rate_hz
     doc = summary(scene, source.stats.report(trace_path), pipeline, stage.state.tracker, totals,
                   fmt, tables.files, blocks)
+    order = getattr(chunks, "order", None)
+    if order is not None:
+        doc["trace"]["time_order"] = order.as_dict()
+        doc["warnings"] += order.warnings()
     if sink is not None:
         doc["device"] = sink.status()
+        doc["warnings"] += device_warnings(doc["device"])
     doc["timings"] = timings(pipeline, output_s, timer.seconds, time.perf_counter() - wall0)
     text = json.dumps(finite_json(doc), indent=2, allow_nan=False) + "\n"
     (out_dir / "summary.json").write_text(text, encoding="utf-8")
     return doc
+
+
+def device_warnings(status: dict) -> list[str]:
+    """What the device never played, by cause (``device.link.host.CommandSink.status``)."""
+    commanded, unplayed = status.get("commanded_samples", 0), status.get("unplayed_samples", 0)
+    if not unplayed:
+        return []
+    causes = ", ".join(f"{n} {cause.replace('_', ' ')}"
+                       for cause, n in status.get("unplayed_by_cause", {}).items() if n)
+    return [f"{unplayed} of {commanded} commanded samples ({unplayed / commanded:.2%}) were "
+            f"never played by the device ({causes})"]
 
 
 def _long(source: TraceSource) -> bool:

@@ -1,0 +1,64 @@
+"""``frictex batch MANIFEST --out DIR``: many replays, over this machine's cores or a cluster.
+
+The manifest's grammar is in ``app.engine.batch``. Exit status: 0 every job finished,
+1 some jobs failed (each is listed with its error, and in ``DIR/batch.csv``), 2 the
+manifest or an option is bad (nothing ran).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from app.commands.argtypes import positive_int
+from app.engine.batch import (default_workers, read_manifest, run_dask, run_local,
+                              write_results)
+from rendering.pipeline import RENDERERS
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("manifest", help="CSV of jobs: scene,trace[,renderer][,rate_hz]"
+                                         "[,block][,format][,name] (see README)")
+    parser.add_argument("--out", required=True, metavar="DIR",
+                        help="output folder: one subfolder per job, and batch.csv")
+    parser.add_argument("--jobs", type=positive_int, default=None, metavar="N",
+                        help="replays at once on this machine (default: its cores)")
+    parser.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                        help="run on a Dask cluster (e.g. tcp://10.0.0.5:8786) instead; needs "
+                             "pip install 'frictex[cluster]' and the files at the same paths "
+                             "on every worker")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def run(args: argparse.Namespace) -> int:
+    jobs = read_manifest(Path(args.manifest), ("sho", *RENDERERS))
+    out_dir = Path(args.out)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    from tqdm import tqdm
+    bar = tqdm(total=len(jobs), desc="batch", unit="job", disable=True if args.quiet else None)
+
+    def done(row: dict) -> None:
+        bar.update(1)
+        if row["status"] != "ok":
+            bar.write(f"frictex: job {row['name']} failed: {row['error']}", file=sys.stderr)
+
+    try:
+        if args.scheduler is not None:
+            rows = run_dask(jobs, out_dir.resolve(), args.scheduler, done)
+        else:
+            rows = run_local(jobs, out_dir, args.jobs or default_workers(), done)
+    finally:
+        bar.close()
+    table = write_results(out_dir, rows)
+    failed = [row for row in rows if row["status"] != "ok"]
+    output_s = sum(row["output_s"] for row in rows)
+    wall_s = sum(row["wall_s"] for row in rows)
+    if not args.quiet:
+        print(f"{len(rows) - len(failed)} of {len(rows)} jobs finished ({output_s:.1f} s of "
+              f"output, {wall_s:.1f} s of job time); results in {table}")
+    if failed:
+        print(f"frictex: error: {len(failed)} of {len(rows)} jobs failed: "
+              + "; ".join(f"{row['name']}: {row['error']}" for row in failed), file=sys.stderr)
+        return 1
+    return 0

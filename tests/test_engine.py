@@ -1,0 +1,176 @@
+"""The run engine: replay, the live thread and the report through one driver.
+
+Expectations are computed here independently: the pipeline run in one call over the
+whole trace, and its rows formatted with Python's %-formatting (the tables' definition).
+"""
+
+import time
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+from app.engine.clocks import VirtualClock
+from app.engine.driver import PipelineStage, drive
+from app.engine.replay import run_replay
+from app.engine.sinks import MemorySink
+from app.engine.sources import TraceSource
+from app.measure.report_matrix import run_blocks
+from rendering.input.trace_file import read_trace
+from rendering.pipeline import build_pipeline
+from rendering.tracking.tracks import apply_index
+from textures.library import resolve_scene, resolve_trace
+from textures.loader import load_scene
+
+SCENE, TRACE = "composed-fine-grating-in-disc", "circle-30mms-60hz"
+
+
+def one_call(scene, trace, rate_hz=10_000.0, block=50):
+    """The pipeline over the whole trace in a single call: to the block after the last sample."""
+    pipeline = build_pipeline(scene, rate_hz, block, t0_s=float(trace.t_s[0]))
+    last = int(apply_index(trace.t_s[-1:], pipeline.tracker_config)[0])
+    out, _ = pipeline.process(0, trace, pipeline.initial_state(), n_blocks=last // block + 1)
+    return pipeline, out
+
+
+def expected_friction_csv(out) -> bytes:
+    rows = []
+    for i in range(out.t_s.size):
+        for f, fid in enumerate(out.finger_ids):
+            if out.contact[f, i]:
+                rows.append("%.7f,%d,%.4f,%.4f,%.6f,%.6f\n" % (
+                    out.t_s[i], fid, out.x_mm[f, i], out.y_mm[f, i], out.mu_target[f, i],
+                    out.amplitude_um[f, i]))
+    return ("t_s,finger,x_mm,y_mm,mu_target,amplitude_um\n" + "".join(rows)).encode()
+
+
+def expected_commands_csv(out) -> bytes:
+    lines = ["t_s,ch0_um\n"] + ["%.7f,%.6f\n" % (t, c) for t, c in
+                                zip(out.t_s.tolist(), out.commands_um[:, 0].tolist())]
+    return "".join(lines).encode()
+
+
+@pytest.fixture(scope="module")
+def reference():
+    scene = load_scene(resolve_scene(SCENE))
+    trace = read_trace(resolve_trace(TRACE))
+    return scene, trace, one_call(scene, trace)[1]
+
+
+def test_replay_csv_is_the_pipeline_run_formatted(tmp_path, reference):
+    scene, trace, out = reference
+    summary = run_replay(scene, trace, tmp_path, progress=False)
+    assert (tmp_path / "commands.csv").read_bytes() == expected_commands_csv(out)
+    assert (tmp_path / "friction.csv").read_bytes() == expected_friction_csv(out)
+    timings = summary["timings"]
+    assert timings["x_realtime_end_to_end"] < timings["x_realtime_compute"]
+    assert set(timings["loop_s"]) == {"read", "compute", "write", "commit"}
+
+
+@pytest.mark.parametrize("fmt", ["npz", "parquet"])
+def test_binary_tables_hold_the_pipeline_run_exactly(tmp_path, reference, fmt):
+    scene, trace, out = reference
+    run_replay(scene, trace, tmp_path, fmt=fmt, progress=False)
+    load = np.load if fmt == "npz" else (lambda p: pq.read_table(p).to_pydict())
+    commands = load(tmp_path / f"commands.{fmt}")
+    friction = load(tmp_path / f"friction.{fmt}")
+    np.testing.assert_array_equal(np.asarray(commands["ch0_um"]), out.commands_um[:, 0])
+    np.testing.assert_array_equal(np.asarray(commands["t_s"]), out.t_s)
+    touching = out.contact[0]
+    np.testing.assert_array_equal(np.asarray(friction["amplitude_um"]), out.amplitude_um[0, touching])
+    assert np.asarray(friction["finger"]).dtype == np.int64
+
+
+class FailsAt:
+    """A device link whose port vanishes at the n-th block."""
+
+    def __init__(self, n):
+        self.n, self.sent, self.closed = n, 0, False
+
+    def send(self, index, amplitudes, phases):
+        self.sent += 1
+        if self.sent == self.n:
+            raise OSError("port vanished")
+
+    def close(self):
+        self.closed = True
+
+
+def test_an_error_mid_run_leaves_no_outputs_not_even_old_ones(tmp_path, reference):
+    """The sinks are all or nothing: an error at block 300 (after several table batches
+    were gathered) removes every partial file, and an earlier run's outputs in the same
+    folder are gone too (they would look like this run's)."""
+    scene, trace, _ = reference
+    run_replay(scene, trace, tmp_path, progress=False)
+    assert (tmp_path / "summary.json").exists()
+    link = FailsAt(300)
+    with pytest.raises(OSError, match="port vanished"):
+        run_replay(scene, trace, tmp_path, sink=link, progress=False, chunk_blocks=7)
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+    assert link.closed and link.sent == 300
+
+
+@pytest.mark.parametrize("chunk", [1, 13, 200])
+def test_blocks_per_call_do_not_change_the_result(reference, chunk):
+    scene, trace, out = reference
+    pipeline = build_pipeline(scene, 10_000.0, 50, t0_s=float(trace.t_s[0]))
+    source = TraceSource(iter([trace]))
+    source.first_time()
+    source.start(pipeline.tracker_config)
+    memory = MemorySink()
+    blocks = drive(PipelineStage(pipeline), source, [memory], VirtualClock(), chunk_blocks=chunk)
+    assert blocks * 50 == out.t_s.size
+    np.testing.assert_array_equal(np.concatenate([o.commands_um for o in memory.outs]),
+                                  out.commands_um)
+
+
+def test_the_report_loop_is_the_same_run(reference):
+    """``report_matrix.run_blocks`` (the report's and the bench's loop, on the driver)
+    gives the one-call result over the span it is asked for, live (1 block a call) too."""
+    scene, trace, _ = reference
+    shifted = trace.slice(0, len(trace))
+    t0 = float(trace.t_s[0])
+    pipeline, out = one_call(scene, trace)
+    for per_call in (1, 200):
+        fresh = build_pipeline(scene, 10_000.0, 50, t0_s=t0)
+        outs, seconds = run_blocks(fresh, shifted, per_call, out.t_s.size / 10_000.0 + t0)
+        got = np.concatenate([o.commands_um for o in outs])
+        np.testing.assert_array_equal(got, out.commands_um[:got.shape[0]])
+        assert len(seconds) == len(outs)
+
+
+def test_live_thread_on_the_device_paced_clock_with_the_simulated_device(tmp_path):
+    """The live path, paced by a simulated device's own clock: every block the thread
+    computed was sent, and the device's log holds exactly the commands sent, at their
+    output indices (what does not depend on how the scheduler runs us)."""
+    from app.live.haptic_thread import HapticThread
+    from device.link.host import open_sink
+    scene = load_scene(resolve_scene("grating-5mm"))
+    log = tmp_path / "played.csv"
+    link = open_sink("sim", channels=1, rate_hz=10_000.0, paced=True, log_path=log)
+    sent_commands = []
+
+    class Keep(MemorySink):
+        def write(self, out, commands_um):
+            super().write(out, commands_um)
+            sent_commands.append(commands_um.copy())
+
+    thread = HapticThread(scene, sink=link, recorder=Keep(), pacing="device")
+    thread.start()
+    thread.touch(0, 20.0, 32.4, 0.5, "down")
+    deadline = time.monotonic() + 30.0
+    while thread.stats.blocks < 120 and time.monotonic() < deadline and thread.error is None:
+        thread.touch(0, 20.0 + 0.2 * thread.stats.blocks, 32.4, 0.5, "move")
+        time.sleep(0.01)
+    thread.stop()
+    thread.join(timeout=30.0)
+    assert not thread.is_alive() and thread.error is None
+    status = link.status()
+    assert status["state"] == "closed"  # the driver committed the link sink: drained, closed
+    commands = np.concatenate(sent_commands)[:, 0]
+    played = np.loadtxt(log, delimiter=",", skiprows=1, ndmin=2)
+    index = played[:, 0].astype(np.int64)
+    assert status["commanded_samples"] == commands.size
+    assert status["played_samples"] + status["unplayed_samples"] == commands.size
+    assert played.shape[0] == status["played_samples"]
+    np.testing.assert_allclose(played[:, 1], commands[index], atol=1e-4)  # wire resolution
