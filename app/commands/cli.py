@@ -27,6 +27,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "report": ("app.commands.report", "speed against error over a matrix of scenes, motions and renderers"),
     "demo": ("app.commands.demo", "the live demo window (mouse or multi-touch as fingers)"),
     "preview": ("app.commands.preview", "render a scene and its friction map to a PNG"),
+    "warm": ("app.commands.warm", "compile the pipeline's kernels now (setup does this once)"),
 }
 
 

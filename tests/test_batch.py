@@ -1,0 +1,111 @@
+"""frictex batch: a manifest of replays over the cores or a Dask cluster on loopback."""
+
+import csv
+
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from app.commands.cli import main
+from app.engine.batch import ManifestError, read_manifest
+from rendering.pipeline import RENDERERS
+
+MANIFEST = """# a study's trials
+scene,trace,renderer,name
+grating-5mm,swipe-40mms-50hz,,five
+grating-0.6mm,swipe-40mms-50hz,sht,fine
+grating-5mm,no-such-trace.csv,,broken
+"""
+
+
+def rows(path):
+    with open(path, newline="") as fh:
+        return {r["name"]: r for r in csv.DictReader(fh)}
+
+
+def test_a_broken_job_is_named_and_the_others_complete(tmp_path, capsys):
+    manifest = tmp_path / "m.csv"
+    manifest.write_text(MANIFEST)
+    assert main(["batch", str(manifest), "--out", str(tmp_path / "out"), "--jobs", "2",
+                 "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "frictex: error: 1 of 3 jobs failed: broken: no-such-trace.csv" in err
+    results = rows(tmp_path / "out" / "batch.csv")
+    assert {n: r["status"] for n, r in results.items()} == {"five": "ok", "fine": "ok",
+                                                             "broken": "failed"}
+    for name in ("five", "fine"):
+        assert (tmp_path / "out" / name / "summary.json").exists()
+        assert float(results[name]["output_s"]) == pytest.approx(2.005)
+    assert not (tmp_path / "out" / "broken").exists()
+
+
+def test_jobs_give_what_single_replays_give(tmp_path):
+    manifest = tmp_path / "m.csv"
+    manifest.write_text("scene,trace,renderer\ngrating-0.6mm,swipe-40mms-50hz,sht\n")
+    assert main(["batch", str(manifest), "--out", str(tmp_path / "b"), "--jobs", "1",
+                 "--quiet"]) == 0
+    assert main(["replay", "grating-0.6mm", "swipe-40mms-50hz", "--renderer", "sht",
+                 "--out", str(tmp_path / "r"), "--quiet"]) == 0
+    job = tmp_path / "b" / "0000-grating-0.6mm-swipe-40mms-50hz"
+    for name in ("commands.csv", "friction.csv"):
+        assert (job / name).read_bytes() == (tmp_path / "r" / name).read_bytes()
+
+
+def test_the_same_batch_on_a_dask_cluster_on_loopback(tmp_path):
+    distributed = pytest.importorskip("distributed", reason="dask.distributed is not installed "
+                                      "(pip install 'frictex[cluster]')")
+    manifest = tmp_path / "m.csv"
+    manifest.write_text(MANIFEST)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  host="127.0.0.1", dashboard_address=None) as cluster:
+        code = main(["batch", str(manifest), "--out", str(tmp_path / "out"),
+                     "--scheduler", cluster.scheduler_address, "--quiet"])
+    assert code == 1
+    results = rows(tmp_path / "out" / "batch.csv")
+    assert [results[n]["status"] for n in ("five", "fine", "broken")] == ["ok", "ok", "failed"]
+    assert main(["replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(tmp_path / "r"),
+                 "--quiet"]) == 0
+    assert ((tmp_path / "out" / "five" / "friction.csv").read_bytes()
+            == (tmp_path / "r" / "friction.csv").read_bytes())
+
+
+def test_an_unreachable_scheduler_is_one_line(tmp_path, capsys):
+    pytest.importorskip("distributed", reason="dask.distributed is not installed")
+    manifest = tmp_path / "m.csv"
+    manifest.write_text(MANIFEST)
+    assert main(["batch", str(manifest), "--out", str(tmp_path / "o"),
+                 "--scheduler", "tcp://127.0.0.1:9"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("frictex: error: cannot reach the Dask scheduler")
+
+
+@pytest.mark.parametrize("text, message", [
+    ("", "no header and no jobs"),
+    ("scene,trace\n", "a header but no jobs"),
+    ("scene,colour\ngrating-5mm,red\n", "header scene,colour"),
+    ("scene,trace,renderer\ngrating-5mm,swipe-40mms-50hz,fastest\n", "renderer 'fastest'"),
+    ("scene,trace,rate_hz\ngrating-5mm,swipe-40mms-50hz,-3\n", "rate_hz '-3'"),
+    ("scene,trace,rate_hz\ngrating-5mm,swipe-40mms-50hz,nan\n", "rate_hz 'nan'"),
+    ("scene,trace,format\ngrating-5mm,swipe-40mms-50hz,xlsx\n", "format 'xlsx'"),
+    ("scene,trace,name\na,b,x\nc,d,x\n", "name 'x' is used by an earlier job"),
+    ("scene,trace,name\na,b,../escape\n", "expected a plain folder name"),
+    ("scene,trace\na\n", "1 fields, expected 2"),
+])
+def test_bad_manifests_name_the_line(tmp_path, capsys, text, message):
+    manifest = tmp_path / "m.csv"
+    manifest.write_text(text)
+    assert main(["batch", str(manifest), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"frictex: error: {manifest}") and message in err[0]
+
+
+@settings(max_examples=150, deadline=None, derandomize=True)
+@given(st.text(alphabet=st.sampled_from("scenetracrdmfo_,.#\n\"'x0123456789-"), max_size=200))
+def test_any_manifest_text_is_jobs_or_one_clear_error(tmp_path_factory, text):
+    path = tmp_path_factory.mktemp("m") / "m.csv"
+    path.write_text(text)
+    try:
+        jobs = read_manifest(path, ("sho", *RENDERERS))
+    except ManifestError as exc:
+        assert str(exc).startswith(str(path)) and "\n" not in str(exc)
+    else:
+        assert jobs and len({j.name for j in jobs}) == len(jobs)

@@ -1,0 +1,33 @@
+"""After setup (``frictex warm``) no run compiles a kernel: every numba kernel a replay
+calls is loaded from the cache (numba's own hit and miss counters, in a fresh process)."""
+
+import json
+import subprocess
+import sys
+
+PROBE = r"""
+import gc, json, sys
+from numba.core.registry import CPUDispatcher
+from app.commands.cli import main
+for scene, trace in [("composed-fine-grating-in-disc", "circle-30mms-60hz"),
+                     ("two-finger-beam-seed000", "two-fingers-crossing-50hz"),
+                     ("keyclick-ring", "keyclick-press-100hz")]:
+    for fmt in ("csv", "parquet"):
+        assert main(["replay", scene, trace, "--out", sys.argv[1], "--format", fmt,
+                     "--quiet"]) == 0
+ours = [d for d in gc.get_objects() if isinstance(d, CPUDispatcher)
+        and d.py_func.__module__.split(".")[0] in ("app", "rendering", "device")]
+print(json.dumps({"hits": sum(sum(d.stats.cache_hits.values()) for d in ours),
+                  "misses": [f"{d.py_func.__module__}.{d.py_func.__name__}" for d in ours
+                             if d.stats.cache_misses]}))
+"""
+
+
+def test_a_replay_after_setup_compiles_nothing(tmp_path):
+    done = subprocess.run([sys.executable, "-c", PROBE, str(tmp_path)], capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    counts = json.loads(done.stdout.strip().splitlines()[-1])
+    assert counts["misses"] == [], ("kernels compiled during a run (setup runs `frictex warm`; "
+                                    f"run it after changing a kernel): {counts['misses']}")
+    assert counts["hits"] >= 4  # the tracker, a renderer, the CSV writer at least
