@@ -2,6 +2,9 @@
 
 import io
 import os
+import socket
+import subprocess
+import sys
 import threading
 import time
 
@@ -9,8 +12,8 @@ import numpy as np
 import pytest
 
 from device.link import protocol as p
-from device.link.faults import Faults, Plug
-from device.link.host import CommandSink, LinkError, open_port, open_sink
+from device.link.faults import TRIP_S, Event, Faults, Plug, Schedule
+from device.link.host import CommandSink, LinkError, LinkStalled, open_port, open_sink
 from device.link.simdevice import DeviceConfig, DeviceCore, open_pty, serve
 
 STEP = p.AMPLITUDE_STEP_UM
@@ -36,21 +39,58 @@ class Played:
         return np.concatenate(self.index), np.concatenate(self.values)
 
 
-@pytest.fixture
-def device():
-    """A simulated device served on a pty by a thread of this process (inspectable)."""
+def _serve_device(config):
+    """A simulated device served on a pty by a thread of this process (inspectable);
+    returns (core, played, path, stop)."""
     played = Played()
-    core = DeviceCore(DeviceConfig(limits_um=(3.0,)), log=played.log, plate_log=played.plate_log)
+    core = DeviceCore(config, log=played.log, plate_log=played.plate_log)
     master, slave, path = open_pty()
     quit_event = threading.Event()
     thread = threading.Thread(target=serve, args=(core, master),
                               kwargs={"quit_event": quit_event}, daemon=True)
     thread.start()
+
+    def stop():
+        if not quit_event.is_set():
+            quit_event.set()
+            thread.join(timeout=2.0)
+            os.close(master)
+            os.close(slave)
+    return core, played, path, stop
+
+
+@pytest.fixture
+def device():
+    core, played, path, stop = _serve_device(DeviceConfig(limits_um=(3.0,)))
     yield core, played, path
-    quit_event.set()
-    thread.join(timeout=2.0)
-    os.close(master)
-    os.close(slave)
+    stop()
+
+
+@pytest.fixture
+def stoppable_device(request):
+    """Like ``device``, with its stop function; ``indirect`` param: a DeviceConfig."""
+    config = getattr(request, "param", DeviceConfig())
+    core, played, path, stop = _serve_device(config)
+    yield core, played, path, stop
+    stop()
+
+
+def _within(seconds, fn, *args):
+    """Run ``fn`` in a thread; fail if it has not returned after ``seconds`` (a hang)."""
+    result = {}
+
+    def run():
+        try:
+            result["value"] = fn(*args)
+        except BaseException as exc:  # noqa: BLE001 -- handed to the test
+            result["error"] = exc
+    worker = threading.Thread(target=run, daemon=True)
+    worker.start()
+    worker.join(timeout=seconds)
+    assert not worker.is_alive(), f"still running after {seconds} s: a hang"
+    if "error" in result:
+        raise result["error"]
+    return result.get("value")
 
 
 def _signal(n, seed=0):
@@ -218,3 +258,166 @@ def test_a_long_stall_lets_the_watchdog_zero_the_output(device):
     assert np.any(sp[t > 0.02] == 0.0)  # silent during the stall
     # the command is a constant 2 um: every fall is the ramp (20 ms = 200 ticks), no step
     assert np.min(np.diff(sp)) >= -(2.0 / 200 + 1e-12)
+
+
+def _accounted(status, played_index, commanded):
+    """Every commanded sample is played or counted unplayed, and the device's own log
+    agrees: what the host says played did play, and nothing that did not play is missing
+    from the unplayed count."""
+    assert status["commanded_samples"] == commanded
+    assert status["played_samples"] + status["unplayed_samples"] == commanded
+    assert sum(status["unplayed_by_cause"].values()) == status["unplayed_samples"]
+    lost = status["unplayed_by_cause"]["lost"]
+    assert status["played_samples"] <= len(played_index) <= status["played_samples"] + lost
+    assert commanded - len(played_index) <= status["unplayed_samples"]
+
+
+def _paced_stream(sink, sig, starve_at=(), starve_s=0.15):
+    """Send ``sig`` in blocks of 50; at the given blocks hold the lock the link thread
+    needs for ``starve_s`` (nothing reaches the device: its watchdog trips)."""
+    for k, b in enumerate(range(0, len(sig), 50)):
+        if k in starve_at:
+            with sink._cond:
+                time.sleep(starve_s)
+        sink.send(b, sig[b:b + 50], None)
+    sink.close()
+
+
+def test_a_starved_link_thread_trips_the_watchdog_and_the_stream_goes_on(device):
+    """Starvation made deterministic: the test holds the lock every step of the link
+    thread takes, so not a byte goes out for 150 ms (after block 80 the queue is full
+    and the thread has been streaming)."""
+    core, played, path = device
+    err = io.StringIO()
+    sig = _signal(12000, seed=5)
+    sink = CommandSink(lambda: open_port(path), 1, RATE, paced=True, stderr=err)
+    _within(60.0, _paced_stream, sink, sig, (80, 140, 200))
+    status = sink.status()
+    index, values = played.arrays()
+    assert core.counters.watchdog_trips >= 3 and status["device_flushes"] >= 3
+    assert status["unplayed_by_cause"]["flushed"] == core.session.flushed
+    assert status["played_samples"] == core.session.played == len(index)
+    _accounted(status, index, 12000)
+    assert status["stalls"] == 0 and status["failure"] is None
+    assert np.all(np.diff(index.astype(np.int64)) > 0)
+    np.testing.assert_allclose(values[:, 0], sig[index.astype(np.int64), 0], atol=STEP / 2)
+
+
+def test_blocks_lost_before_a_trip_are_not_waited_for(device):
+    """The hang of issue 15: the last blocks before a silence never arrive, the device
+    runs dry and trips, and the host believed it held 20 ms more than it did. The
+    device's report (buffer_end, Flushed) re-bases the host; the lost samples count."""
+    core, played, path = device
+    schedule = Schedule((Event("trip", 0.3, TRIP_S), Event("trip", 0.7, TRIP_S)))
+    plug = Plug(lambda: open_port(path), schedule=schedule)
+    sig = _signal(12000, seed=7)
+    sink = CommandSink(plug, 1, RATE, paced=True, stderr=io.StringIO())
+    _within(60.0, _paced_stream, sink, sig)
+    status = sink.status()
+    index, _ = played.arrays()
+    assert core.counters.watchdog_trips >= 2
+    assert status["unplayed_by_cause"]["lost"] > 0   # swallowed on the wire
+    assert status["played_samples"] == len(index) == core.session.played
+    _accounted(status, index, 12000)
+    assert index.max() > 11000 and status["stalls"] == 0
+
+
+def test_heavy_corruption_never_hangs_and_every_sample_is_counted(device):
+    core, played, path = device
+    plug = Plug(lambda: open_port(path), Faults(flip=2e-3, drop=1e-3, garbage=1e-3), seed=3)
+    sig = _signal(10000, seed=6)
+    sink = CommandSink(plug, 1, RATE, paced=True, stderr=io.StringIO())
+    _within(60.0, _paced_stream, sink, sig)
+    status = sink.status()
+    index, values = played.arrays()
+    _accounted(status, index, 10000)
+    assert status["resyncs"] > 0 and status["device_crc_errors"] > 0
+    np.testing.assert_allclose(values[:, 0], sig[index.astype(np.int64), 0], atol=STEP / 2)
+
+
+def test_a_device_that_stops_answering_ends_in_link_stalled(stoppable_device):
+    core, played, path, stop = stoppable_device
+    err = io.StringIO()
+    sink = CommandSink(lambda: open_port(path), 1, RATE, paced=True, stderr=err,
+                       stall_s=0.2, max_stalls=3)
+
+    def stream_until_it_fails():
+        for b in range(0, 10**7, 50):
+            if b == 2000:
+                stop()  # the device dies; its pty stays openable, nothing answers
+            sink.send(b, np.ones((50, 1)), None)
+    with pytest.raises(LinkStalled, match="through 3 waits of 0.2 s in a row; giving up"):
+        _within(60.0, stream_until_it_fails)
+    assert issubclass(LinkStalled, LinkError)
+    assert sink.status()["state"] == "failed"
+    assert "stall 1 of 3 in a row" in err.getvalue()
+    with pytest.raises(LinkStalled):  # and ever after
+        sink.send(10**7, np.ones((50, 1)), None)
+    _within(30.0, sink.close)
+    status = sink.status()
+    assert status["state"] == "closed"
+    assert status["played_samples"] + status["unplayed_samples"] == status["commanded_samples"]
+
+
+def test_wait_for_room_is_bounded_and_counts_a_stall(stoppable_device):
+    core, played, path, stop = stoppable_device
+    err = io.StringIO()
+    sink = CommandSink(lambda: open_port(path), 1, RATE, paced=True, queue_blocks=2,
+                       stderr=err)
+    assert _within(10.0, sink.wait_for_room, 1.0)
+    stop()
+    sink.send(0, np.ones((50, 1)), None)
+    sink.send(50, np.ones((50, 1)), None)
+    # a dead device: the queue never frees up, or the link drops; either way False
+    assert _within(10.0, sink.wait_for_room, 0.3) is False
+    assert sink.status()["stalls"] == 1 and "stall 1 of 5" in err.getvalue()
+    _within(30.0, sink.close)
+
+
+@pytest.mark.parametrize("stoppable_device", [DeviceConfig(protocol_version=1)], indirect=True)
+def test_a_version_1_device_is_paced_through_a_trip_with_partial_accounting(stoppable_device):
+    core, played, path, _ = stoppable_device
+    sink = CommandSink(lambda: open_port(path), 1, RATE, paced=True, stderr=io.StringIO())
+    _within(60.0, _paced_stream, sink, _signal(6000), (40,))
+    status = sink.status()
+    assert status["protocol_version"] == 1 and core.counters.watchdog_trips >= 1
+    assert status["played_samples"] is None
+    assert status["unplayed_by_cause"]["flushed"] is None
+    assert status["unplayed_by_cause"]["lost"] is None
+    assert played.arrays()[0].max() > 5000  # it resumed after the trip
+
+
+def test_block_indices_past_2_63_and_across_the_wrap_reach_the_device(device):
+    core, played, path = device
+    with CommandSink(lambda: open_port(path), 1, RATE, paced=True) as sink:
+        for b in range(0, 400, 50):
+            sink.send(2**64 - 200 + b, np.full((50, 1), 1.0), None)
+    index, _ = played.arrays()
+    expect = [(2**64 - 200 + k) % 2**64 for k in range(400)]
+    assert [int(i) for i in index] == expect
+    assert sink.status()["unplayed_samples"] == 0
+
+
+def test_sim_device_serves_host_after_host_over_tcp_with_nodelay(tmp_path):
+    log = tmp_path / "played.csv"
+    proc = subprocess.Popen([sys.executable, "-m", "app.commands.cli", "sim-device", "--tcp",
+                             "0", "--log", str(log)], stdout=subprocess.PIPE, text=True,
+                            stderr=subprocess.PIPE)
+    try:
+        url = proc.stdout.readline().strip()
+        assert url.startswith("socket://127.0.0.1:")
+        port = open_port(url)
+        assert port._socket.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY) == 1
+        port.close()
+        for host in range(3):  # each closes with a Stop; the next one still gets served
+            with CommandSink(lambda: open_port(url), 1, RATE, paced=True) as sink:
+                for b in range(0, 500, 50):
+                    sink.send(1000 * host + b, np.full((50, 1), 1.0 + host), None)
+            assert sink.status()["played_samples"] == 500
+    finally:
+        proc.terminate()
+        _, stderr = proc.communicate(timeout=10)
+    assert proc.returncode == 0 and "played 1500 samples" in stderr
+    index = np.loadtxt(log, delimiter=",", skiprows=1)[:, 0]
+    np.testing.assert_array_equal(index, np.concatenate([np.arange(500) + 1000 * h
+                                                         for h in range(3)]))

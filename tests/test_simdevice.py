@@ -253,3 +253,77 @@ def test_nothing_that_failed_its_check_is_played(seed):
     assert len(index) > 3000  # most blocks got through
     assert core.decoder.counts.discarded > 0
     assert len(np.unique(index)) == len(index)
+
+
+@settings(derandomize=True, max_examples=40, deadline=None)
+@given(st.integers(0, 2**64 - 1), st.integers(1, 400))
+def test_any_u64_start_index_plays_on_across_the_wrap(start, n_blocks_samples):
+    """Sample numbers are u64 and wrap (PROTOCOL.md 4.3): block indices of 2**63 and
+    more, and streams crossing 2**64, play in order and never raise."""
+    core, host, rec = make(prefill=10)
+    n = 50 * (n_blocks_samples // 50 + 2)
+    signal = np.linspace(0.1, 3.0, n)
+    for b in range(0, n, 50):
+        core.receive(host(block((start + b) % 2**64, signal[b:b + 50])), 0.0)
+    stream(core, host, np.zeros(0), end_s=n / RATE + 0.01)
+    index, values = rec.played()
+    expect = (start + np.arange(n, dtype=object)) % 2**64
+    assert [int(i) for i in index] == list(expect)
+    np.testing.assert_allclose(values[:, 0], signal, atol=STEP / 2)
+    assert core.counters.late_samples == core.counters.overflow_samples == 0
+
+
+def test_a_block_far_from_the_play_position_is_late_or_beyond_never_an_error():
+    core, host, rec = make(prefill=10)
+    core.receive(host(block(2**63 + 5, np.ones(50))), 0.0)   # sets the origin
+    replies = p.Decoder().feed(core.receive(host(block(5, np.ones(50))), 0.0)
+                               + core.receive(host(block(2**63 + 2**62, np.ones(50))), 0.0))
+    # 5 - (2**63 + 5) = -2**63: before the play position; +2**62: beyond the buffer
+    assert [f.message.code for f in replies] == [p.ErrorCode.LATE, p.ErrorCode.OVERFLOW]
+    assert core.play_index == 2**63 + 5
+
+
+def test_a_watchdog_trip_is_reported_with_where_the_device_restarts():
+    core, host, rec = make()
+    for b in range(0, 600, 50):
+        core.receive(host(block(b, np.full(50, 2.0))), 0.0)
+    out = core.advance_to(0.100)  # the host never speaks again: trip at 25 ms
+    (frame,) = p.Decoder().feed(out)
+    flushed = frame.message
+    assert frame.version == 2 and isinstance(flushed, p.Flushed)
+    assert flushed.cause == p.FlushCause.WATCHDOG and flushed.flushes == 1
+    # played from the first block until the trip, the rest of the 600 flushed
+    played = core.session.played
+    assert played == len(rec.played()[0]) and flushed.flushed == 600 - played
+    assert flushed.play_index == played  # where it stopped, and will restart
+    (reply,) = p.Decoder().feed(core.receive(host(p.Heartbeat(9)), 0.1))
+    st_ = reply.message
+    assert (st_.buffer_end, st_.level, st_.state) == (played, 0, S.BUFFERING)
+    assert st_.played_samples + st_.flushed_samples + st_.level == 600
+    assert st_.flushes == 1 and st_.watchdog_trips == 1
+
+
+def test_a_version_1_host_only_ever_sees_version_1_frames():
+    core = DeviceCore(DeviceConfig())
+    old = p.Decoder(max_version=1)
+    seq = iter(range(100))
+
+    def v1(msg):
+        return p.encode(msg, next(seq), version=1)
+    replies = old.feed(core.receive(v1(p.Hello(10)), 0.0))
+    assert replies[0].message.protocol_version == 2  # it says what it speaks
+    for b in range(0, 300, 50):
+        replies += old.feed(core.receive(v1(block(b, np.ones(50))), 0.0))
+    replies += old.feed(core.advance_to(0.1))   # a trip: no Flushed for a version 1 host
+    replies += old.feed(core.receive(v1(p.Heartbeat(3)), 0.1))
+    assert old.counts.discarded == 0
+    assert [type(f.message) for f in replies] == [p.Info, p.Status]
+    assert not replies[-1].message.accounted and replies[-1].message.watchdog_trips == 1
+
+
+def test_a_version_1_device_declares_1_and_drops_version_2_frames():
+    core = DeviceCore(DeviceConfig(protocol_version=1))
+    (info,) = p.Decoder().feed(core.receive(p.encode(p.Hello(10), 0, version=1), 0.0))
+    assert info.message.protocol_version == 1
+    assert core.receive(p.encode(p.Heartbeat(1), 1, version=2), 0.0) == b""
+    assert core.decoder.counts.bad_version == 1

@@ -163,10 +163,10 @@ class CommandSink:
                            min(int(TARGET_S * info.sample_rate_hz), info.buffer_samples // 2))
         self._heartbeat_s = max(info.watchdog_ms / 5.0, 1.0) * 1e-3
         self._marks.clear()
-        self._snapshot = None
-        self._ledger.start_session()
         self._last_rx = self._last_progress = time.monotonic()
         with self._cond:
+            self._snapshot = None
+            self._ledger.start_session()
             self._connected = True
             self._cond.notify_all()
 
@@ -243,8 +243,8 @@ class CommandSink:
             pass
         self._port = None
         self._counts["disconnects"] += 1
-        self._ledger.end_session()
         with self._cond:
+            self._ledger.end_session()
             self._connected = False
             self._drop_queued("disconnected")
         self._warn(f"link lost ({self.last_error}); output continues without it, reconnecting")
@@ -261,7 +261,8 @@ class CommandSink:
         """Handshake again on the same port (the device restarts its buffer)."""
         self._counts["recoveries"] += 1
         self._warn(f"{reason}; handshaking again")
-        self._ledger.end_session()
+        with self._cond:
+            self._ledger.end_session()
         try:
             self._start_session(self._port, self._handshake(self._port))
         except (LinkError, OSError, serial.SerialException) as exc:
@@ -351,8 +352,9 @@ class CommandSink:
             if mark is not None:
                 sent_t, sent_end, ledger_mark = mark
                 self._rtt_ms.append((now - sent_t) * 1e3)
-                self._snapshot = Snapshot.from_status(msg, 0.5 * (now + sent_t), sent_end)
-                self._ledger.status(msg, ledger_mark)
+                with self._cond:
+                    self._snapshot = Snapshot.from_status(msg, 0.5 * (now + sent_t), sent_end)
+                    self._ledger.status(msg, ledger_mark)
         elif isinstance(msg, p.Flushed):
             self._counts["device_flushes"] += 1
             self._snapshot = Snapshot.flushed(msg.play_index, now, self._sent_end)
@@ -393,7 +395,8 @@ class CommandSink:
                     break
         except (OSError, serial.SerialException) as exc:
             self.last_error = f"{type(exc).__name__}: {exc}"
-        self._ledger.end_session()
+        with self._cond:
+            self._ledger.end_session()
 
     def _drain_s(self) -> float:
         """Time for a drained Stop to play out: what may be buffered, the ramp, a margin."""

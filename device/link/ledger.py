@@ -145,7 +145,8 @@ class Ledger:
 
     def drop(self, cause: str, n: int) -> None:
         """``n`` samples the host dropped for ``cause`` (one of the host causes)."""
-        assert cause in _HOST_CAUSES, cause
+        if cause not in _HOST_CAUSES:
+            raise ValueError(f"cause {cause!r}: the host drops for {', '.join(_HOST_CAUSES)}")
         self.host[cause] += n
 
     def start_session(self) -> None:
