@@ -17,6 +17,7 @@ from app.measure.figure import Figure
 #: section name -> module
 SECTIONS = {
     "pipeline": "app.measure.bench_pipeline",
+    "replay": "app.measure.bench_replay",
     "link": "app.measure.bench_link",
     "visual": "app.measure.bench_visual",
     "modal": "app.measure.bench_modal",

@@ -34,7 +34,8 @@ def run(quick: bool) -> list[Figure]:
                                 render_override=renderer)
         _, seconds = run_blocks(replay, trace, 200, duration)
         compute = float(seconds.sum())
-        figures.append(Figure("pipeline", f"replay, {label}", duration / compute, "x real time"))
+        figures.append(Figure("pipeline", f"replay compute only, {label}", duration / compute,
+                              "x real time"))
         live = build_pipeline(load(SCENE), rate_hz=RATE_HZ, block_size=BLOCK,
                               render_override=renderer)
         _, per_block = run_blocks(live, trace, 1, duration)
@@ -76,6 +77,6 @@ def modal_throughput() -> dict:
 
 def _modal_replay() -> list[Figure]:
     modal = modal_throughput()
-    return [Figure("pipeline", "replay, two fingers, modal beam (seed 000)",
+    return [Figure("pipeline", "replay compute only, two fingers, modal beam (seed 000)",
                    modal["replay_x_realtime"], "x real time"),
             *_stage_figures(modal["stages_us_per_s"], "modal")]

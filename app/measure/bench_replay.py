@@ -1,0 +1,122 @@
+"""``frictex bench replay``: replays end to end, each in a fresh process as a user runs it.
+
+- One finger, composed scene, 10 kHz, human-like strokes at 60 Hz (600 s; 60 s with
+  ``--quick``), in each output format: the run's own real-time factor end to end
+  (reading the trace, computing, writing and committing every output, from
+  ``summary.json``), the compute-only factor beside it, the whole process's wall time
+  (interpreter start and imports too) and its peak memory. The same at a tenth of the
+  length shows whether memory depends on the trace's length.
+- Two fingers with modal actuation (seed 000's beam): the bundled crossing trace repeated
+  to 88 s (22 s quick), CSV.
+- A one-second replay: the whole process's wall time (what a user waits).
+- A batch of one-minute jobs (64; 16 quick) on all cores against the same batch run one
+  job after another (``--jobs 1``): jobs per second of each, and their ratio.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from app.measure.figure import Figure
+from rendering.input.trace_file import Trace, read_trace, write_trace
+from rendering.input.trace_synth import make_motion, sample
+from textures.library import resolve_trace
+
+SCENE = "composed-fine-grating-in-disc"
+MODAL_SCENE, MODAL_TRACE = "two-finger-beam-seed000", "two-fingers-crossing-50hz"
+
+
+def _frictex(*args: str) -> tuple[float, int, int]:
+    """Run ``frictex ARGS`` in a fresh process: (wall s, peak memory KiB, exit code)."""
+    start = time.perf_counter()
+    proc = subprocess.Popen([sys.executable, "-m", "app.commands.cli", *args],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    return time.perf_counter() - start, usage.ru_maxrss, proc.returncode
+
+
+def _human(duration_s: float) -> Trace:
+    return sample(make_motion("human", speed_mm_s=60.0, duration_s=duration_s, seed=7), 60.0,
+                  noise_mm=0.05, seed=1)
+
+
+def _repeated(trace: Trace, times: int, gap_s: float = 0.5) -> Trace:
+    """``trace`` played ``times`` times, each start ``gap_s`` after the last one's end."""
+    period = trace.duration_s + gap_s
+    parts = [Trace(trace.t_s + k * period, trace.finger, trace.x_mm, trace.y_mm,
+                   trace.force_n, trace.event) for k in range(times)]
+    whole = parts[0]
+    for part in parts[1:]:
+        whole = whole.then(part)
+    return whole
+
+
+def _replay_figures(tmp: Path, label: str, scene: str, trace_path: Path, fmt: str,
+                    duration_s: float) -> list[Figure]:
+    out = tmp / f"out-{label}-{fmt}"
+    wall, peak_kib, code = _frictex("replay", scene, str(trace_path), "--out", str(out),
+                                    "--format", fmt, "--quiet")
+    if code != 0:
+        return [Figure("replay", f"{label} {fmt}: replay failed (exit {code})", float("nan"), "")]
+    timings = json.loads((out / "summary.json").read_text())["timings"]
+    return [Figure("replay", f"{label} {fmt}, end to end (read, compute, write)",
+                   timings["x_realtime_end_to_end"], "x real time"),
+            Figure("replay", f"{label} {fmt}, compute only", timings["x_realtime_compute"],
+                   "x real time"),
+            Figure("replay", f"{label} {fmt}, whole process (start, imports too)",
+                   duration_s / wall, "x real time"),
+            Figure("replay", f"{label} {fmt}, peak memory", peak_kib / 1024, "MiB")]
+
+
+def _batch_figures(tmp: Path, jobs: int) -> list[Figure]:
+    trace_path = tmp / "minute.csv"
+    write_trace(trace_path, _human(60.0))
+    manifest = tmp / "batch.csv"
+    manifest.write_text("scene,trace\n" + f"{SCENE},{trace_path}\n" * jobs)
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    rates = {}
+    for workers in (1, cores):
+        wall, _, code = _frictex("batch", str(manifest), "--out", str(tmp / f"b{workers}"),
+                                 "--jobs", str(workers), "--quiet")
+        rates[workers] = jobs / wall if code == 0 else float("nan")
+    return [Figure("replay", f"batch of {jobs} one-minute jobs, one after another",
+                   rates[1], "jobs/s"),
+            Figure("replay", f"batch of {jobs} one-minute jobs, {cores} at once", rates[cores],
+                   "jobs/s"),
+            Figure("replay", f"batch throughput, {cores} cores against one after another",
+                   rates[cores] / rates[1], "x")]
+
+
+def run(quick: bool) -> list[Figure]:
+    long_s = 60.0 if quick else 600.0
+    figures = []
+    with tempfile.TemporaryDirectory(prefix="frictex-bench-") as name:
+        tmp = Path(name)
+        for duration in (long_s, long_s / 10):
+            path = tmp / f"human-{duration:g}.csv"
+            write_trace(path, _human(duration))
+            for fmt in ("csv", "npz", "parquet"):
+                figures += _replay_figures(tmp, f"one finger {duration:g} s", SCENE, path, fmt,
+                                           duration)
+        two = _repeated(read_trace(resolve_trace(MODAL_TRACE)), 5 if quick else 20)
+        path = tmp / "two-fingers.csv"
+        write_trace(path, two)
+        figures += _replay_figures(tmp, f"two fingers modal {two.duration_s:.0f} s", MODAL_SCENE,
+                                   path, "csv", two.duration_s)
+        one = tmp / "one-second.csv"
+        write_trace(one, _human(1.0))
+        walls = [_frictex("replay", SCENE, str(one), "--out", str(tmp / "one"), "--quiet")[0]
+                 for _ in range(5)]
+        figures.append(Figure("replay", "one-second replay, whole process (median of 5)",
+                              float(np.median(walls)), "s"))
+        figures += _batch_figures(tmp, 16 if quick else 64)
+    return figures

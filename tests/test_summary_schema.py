@@ -1,0 +1,50 @@
+"""app/engine/SUMMARY.md documents every key a replay's summary.json holds, and no other."""
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from app.commands.cli import main
+
+DOC = Path(__file__).resolve().parents[1] / "app" / "engine" / "SUMMARY.md"
+#: objects whose keys are data (finger ids, layer names) or documented elsewhere
+OPEN = ("fingers", "forces", "device", "timings.layers_s", "timings.loop_s",
+        "timings.stages_s", "trace.time_order")
+
+
+def documented() -> set[str]:
+    return set(re.findall(r"^\| `([a-z0-9_.]+)` \|", DOC.read_text(encoding="utf-8"), re.M))
+
+
+def keys(doc: dict, prefix: str = "") -> set[str]:
+    found = set()
+    for key, value in doc.items():
+        path = f"{prefix}{key}"
+        found.add(path)
+        if isinstance(value, dict) and path not in OPEN:
+            found |= keys(value, path + ".")
+    return found
+
+
+@pytest.fixture(scope="module")
+def summaries(tmp_path_factory):
+    runs = [("grating-5mm", "swipe-40mms-50hz"), ("keyclick-ring", "keyclick-press-100hz")]
+    docs = []
+    for scene, trace in runs:
+        out = tmp_path_factory.mktemp("s")
+        assert main(["replay", scene, trace, "--out", str(out), "--quiet"]) == 0
+        text = (out / "summary.json").read_text()
+        docs.append(json.loads(text))
+    return docs
+
+
+def test_every_key_written_is_documented(summaries):
+    written = set().union(*(keys(doc) for doc in summaries))
+    assert written - documented() == set()
+
+
+def test_every_documented_key_is_written(summaries):
+    written = set().union(*(keys(doc) for doc in summaries)) | {"device"}  # --device only
+    assert documented() - written == set()
