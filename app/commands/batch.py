@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import argparse
 import sys
+from functools import partial
 from pathlib import Path
 
 from app.commands.argtypes import positive_int
-from app.engine.batch import (default_workers, read_manifest, run_dask, run_local,
-                              write_results)
+from app.engine.batch import read_manifest, run_job, write_results
+from app.engine.fanout import default_workers, fan_out
 from rendering.pipeline import RENDERERS
 
 
@@ -44,10 +45,9 @@ def run(args: argparse.Namespace) -> int:
             bar.write(f"frictex: job {row['name']} failed: {row['error']}", file=sys.stderr)
 
     try:
-        if args.scheduler is not None:
-            rows = run_dask(jobs, out_dir.resolve(), args.scheduler, done)
-        else:
-            rows = run_local(jobs, out_dir, args.jobs or default_workers(), done)
+        rows = fan_out(partial(run_job, out_dir=str(out_dir.resolve())), jobs,
+                       workers=args.jobs or default_workers(), scheduler=args.scheduler,
+                       on_done=done)
     finally:
         bar.close()
     table = write_results(out_dir, rows)

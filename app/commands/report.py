@@ -12,8 +12,11 @@ import argparse
 import os
 import time
 from dataclasses import asdict
+from functools import partial
 from pathlib import Path
 
+from app.commands.argtypes import positive_int
+from app.engine.fanout import default_workers, fan_out
 from app.measure import report_matrix as rm
 
 
@@ -24,6 +27,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="the small matrix (50 Hz touch, three motions): under a minute")
     parser.add_argument("--scenes", nargs="+", metavar="NAME", default=list(rm.SCENES),
                         help=f"bundled scenes to include (default: {' '.join(rm.SCENES)})")
+    parser.add_argument("--jobs", type=positive_int, default=None, metavar="N",
+                        help="cases at once over this machine's cores (default: all of them; "
+                             "report.json records it: timing figures measured N at a time)")
+    parser.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                        help="run the matrix on a Dask cluster instead (pip install "
+                             "'frictex[cluster]')")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -43,16 +52,20 @@ def run(args: argparse.Namespace) -> int:
     from rendering.inversion_lut import LutFrictionModel
 
     cases = rm.matrix(args.quick, tuple(args.scenes))
-    runner = rm.Runner(live_s=0.5 if args.quick else 2.0)
     wall = time.perf_counter()
-    rows = []
-    for case in tqdm(cases, desc="report", unit="case", disable=args.no_progress or None):
-        rows.append(runner.run(case))
+    jobs = args.jobs or default_workers()
+    bar = tqdm(total=len(cases), desc="report", unit="case", disable=args.no_progress or None)
+    try:
+        rows = fan_out(partial(rm.run_case, live_s=0.5 if args.quick else 2.0), cases,
+                       workers=jobs, scheduler=args.scheduler, on_done=lambda row: bar.update(1))
+    finally:
+        bar.close()
     lut = LutFrictionModel(make_friction_model(rm.load(args.scenes[0]).device))
     settings = {"reference_hz": rm.REFERENCE_HZ, "touch_noise_mm": rm.TOUCH_NOISE_MM,
                 "block_s": rm.BLOCK_S, "motions": rm.MOTIONS,
                 "lut_max_error_um": lut.max_error_um(),
-                "cpu_count": os.cpu_count(), "wall_s": time.perf_counter() - wall}
+                "cpu_count": os.cpu_count(), "jobs": None if args.scheduler else jobs,
+                "scheduler": args.scheduler, "wall_s": time.perf_counter() - wall}
     from app.measure import bench_modal
     from app.measure import report_seeds
     from app.measure.bench_pipeline import modal_throughput

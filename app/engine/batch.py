@@ -133,7 +133,8 @@ def _resolve(spec: str, base: Path) -> str:
 
 def run_job(job: Job, out_dir: str) -> dict:
     """Replay one job into ``out_dir/job.name``; never raises for the job's own errors:
-    returns its result row (``status`` "ok" or "failed" with the error)."""
+    returns its result row (``status`` "ok" or "failed" with the error). Run the jobs of a
+    batch with ``app.engine.fanout.fan_out(functools.partial(run_job, out_dir=...), jobs)``."""
     from app.engine.replay import run_replay
     start = time.perf_counter()
     row = {"job": job.index, "name": job.name, "status": "ok", "error": "", "output_s": 0.0,
@@ -149,45 +150,6 @@ def run_job(job: Job, out_dir: str) -> dict:
                    x_realtime_end_to_end=doc["timings"]["x_realtime_end_to_end"] or 0.0,
                    clamps=sum(doc["clamps"].values()), warnings=len(doc["warnings"]))
     row["wall_s"] = time.perf_counter() - start
-    return row
-
-
-def run_local(jobs: list[Job], out_dir: Path, workers: int, on_done) -> list[dict]:
-    """Run ``jobs`` over ``workers`` processes of this machine (1: in this process);
-    ``on_done(row)`` is called as each finishes. Returns the rows in job order."""
-    if workers == 1:
-        return [_note(run_job(job, str(out_dir)), on_done) for job in jobs]
-    import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-    rows = []
-    with ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn")) as pool:
-        futures = [pool.submit(run_job, job, str(out_dir)) for job in jobs]
-        for future in as_completed(futures):
-            rows.append(_note(future.result(), on_done))
-    return sorted(rows, key=lambda r: r["job"])
-
-
-def run_dask(jobs: list[Job], out_dir: Path, address: str, on_done) -> list[dict]:
-    """Run ``jobs`` on the Dask cluster whose scheduler is at ``address``; its workers
-    need frictex installed and ``out_dir`` and the jobs' files at the same paths."""
-    try:
-        from distributed import Client, as_completed
-    except ImportError:
-        raise OSError("--scheduler needs dask.distributed: pip install 'frictex[cluster]'") from None
-    try:
-        client = Client(address, timeout=10)
-    except (OSError, TimeoutError) as exc:
-        raise OSError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
-    try:
-        futures = client.map(run_job, jobs, out_dir=str(out_dir), pure=False)
-        rows = [_note(f.result(), on_done) for f in as_completed(futures)]
-    finally:
-        client.close()
-    return sorted(rows, key=lambda r: r["job"])
-
-
-def _note(row: dict, on_done) -> dict:
-    on_done(row)
     return row
 
 
@@ -208,12 +170,3 @@ def write_results(out_dir: Path, rows: list[dict]) -> Path:
 
 def _cell(value):
     return f"{value:.4f}" if isinstance(value, float) else value
-
-
-def default_workers() -> int:
-    """The cores this process may use."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:
-        return os.cpu_count() or 1
-

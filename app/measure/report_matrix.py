@@ -242,3 +242,15 @@ class Runner:
             },
             "clamps": clamps.as_dict(),
         }
+
+
+_RUNNERS: dict = {}
+
+
+def run_case(case: Case, live_s: float = 1.0, motions: dict | None = None) -> dict:
+    """``Runner(live_s, motions).run(case)`` with one runner per process and settings, so
+    that cases fanned out over processes (``app.engine.fanout``) share its caches."""
+    key = (live_s, None if motions is None else tuple(sorted(motions)))
+    if key not in _RUNNERS:
+        _RUNNERS[key] = Runner(live_s=live_s, motions=motions)
+    return _RUNNERS[key].run(case)
