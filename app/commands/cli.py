@@ -31,10 +31,29 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse, but a bad command line is one line on stderr, ``frictex: error: ...``
+    (exit 2), as every other error; ``--help`` still shows the usage."""
+
+    def error(self, message: str):
+        self.exit(2, f"frictex: error: {self.prog.removeprefix('frictex ')}: {message}\n"
+                     if self.prog != "frictex" else f"frictex: error: {message}\n")
+
+
+def version() -> str:
+    """The installed frictex's version."""
+    from importlib.metadata import PackageNotFoundError, version as installed
+    try:
+        return installed("frictex")
+    except PackageNotFoundError:
+        return "unknown (not installed)"
+
+
 def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.ArgumentParser]]:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="frictex",
         description="Render textures on ultrasonic friction-modulation touchscreens.")
+    parser.add_argument("--version", action="version", version=f"frictex {version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     subparsers = {}
     for name, (_, help_text) in COMMANDS.items():

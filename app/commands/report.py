@@ -4,12 +4,17 @@ and renderer configurations (see ``app.measure.report_matrix`` for what a row me
 
     frictex report --quick --out report/     # CI: under a minute
     frictex report --out report/             # the full matrix
+
+Exit status: 0 the report was written (whatever its claims say: report.md lists each
+claim as holding or not); with ``--strict``, 1 when any claim does not hold; 2 bad
+options.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import sys
 import time
 from dataclasses import asdict
 from functools import partial
@@ -33,6 +38,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scheduler", metavar="ADDRESS", default=None,
                         help="run the matrix on a Dask cluster instead (pip install "
                              "'frictex[cluster]')")
+    parser.add_argument("--strict", action="store_true",
+                        help="exit 1 when any claim does not hold (default: exit 0 once the "
+                             "report is written)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -82,4 +90,10 @@ def run(args: argparse.Namespace) -> int:
     print(f"frictex report: {len(rows)} rows in {settings['wall_s']:.1f} s; "
           f"{len(doc['claims']) - len(failed)} of {len(doc['claims'])} claims hold; "
           f"wrote {out / 'report.md'}, {out / 'report.json'}, {', '.join(plots)}")
+    if failed and args.strict:
+        print(f"frictex: error: {len(failed)} claims do not hold (--strict): "
+              + "; ".join(f"{c['scene']} {c['motion']} {c['metric']}: {c['text']}"
+                          for c in failed[:3]) + ("; ..." if len(failed) > 3 else ""),
+              file=sys.stderr)
+        return 1
     return 0
