@@ -226,20 +226,19 @@ def test_unplugging_drops_and_counts_then_reconnects(device):
     plug.plug()
     assert sink.wait_for_room(3.0)  # the link comes back within the bound
     assert sink.status()["reconnects"] == 1 and "link back" in err.getvalue()
-    start = played.arrays()[0].size
     for b in range(5000, 5500, 50):
         sink.send(b, np.full((50, 1), 1.0), None)
     sink.close()
     status = sink.status()
     index, values = played.arrays()
-    np.testing.assert_array_equal(index[start:], np.arange(5000, 5500))
-    np.testing.assert_allclose(values[start:, 0], 1.0)
+    # paced blocks still queued at the unplug went out after the reconnect, then these
+    np.testing.assert_array_equal(index[-500:], np.arange(5000, 5500))
+    np.testing.assert_allclose(values[-500:, 0], 1.0)
+    assert np.all(np.diff(index.astype(np.int64)) > 0) and np.all(index[:-500] < 1000)
     assert status["disconnects"] == 1
     # every commanded sample is played or counted: the device's own log says which played
-    assert status["commanded_samples"] == 1550
-    assert status["played_samples"] == len(index)
-    assert status["unplayed_samples"] == 1550 - len(index)
-    assert status["unplayed_by_cause"]["disconnected"] >= 50
+    _accounted(status, index, 1550)
+    assert status["unplayed_by_cause"]["disconnected"] == 50
 
 
 def test_a_long_stall_lets_the_watchdog_zero_the_output(device):

@@ -19,8 +19,8 @@ a lost block or a reconnect the host never waits for samples the device no longe
 
 Every wait is bounded. The thread re-handshakes when the device says nothing valid for
 ``SILENCE_S`` or takes no block for that long; if the port fails (USB unplugged) it says
-so once on stderr, drops and counts what it cannot send, and reopens the port until it
-returns. A caller's wait (``send`` paced, ``wait_for_room``, ``close``) longer than
+so once on stderr and reopens the port until it returns (live: queued blocks are dropped
+and counted; paced: they wait, within the stall bound, and go out after). A caller's wait (``send`` paced, ``wait_for_room``, ``close``) longer than
 ``stall_s`` is a *stall*: a warning on stderr, the block dropped (counted), the stream
 going on; ``max_stalls`` stalls in a row with nothing sent between them raise
 :class:`LinkStalled`, and so does every later call.
@@ -56,6 +56,8 @@ READ_WAIT_S = 0.002
 #: a connected device that sends nothing valid, or takes no block while blocks wait, for
 #: this long is handshaken again (s)
 SILENCE_S = 0.5
+#: a gap this long between two turns of the link thread means the host was starved (s)
+STARVED_S = 0.1
 #: default bound of one caller's wait on the device (s), and stalls in a row before
 #: LinkStalled
 STALL_S = 1.0
@@ -246,7 +248,8 @@ class CommandSink:
         with self._cond:
             self._ledger.end_session()
             self._connected = False
-            self._drop_queued("disconnected")
+            if not self.paced:  # live blocks go stale; paced ones go out on reconnecting
+                self._drop_queued("disconnected")
         self._warn(f"link lost ({self.last_error}); output continues without it, reconnecting")
 
     def _drop_queued(self, cause: str) -> None:
@@ -286,8 +289,12 @@ class CommandSink:
 
     def _loop(self) -> None:
         next_hb = next_try = 0.0
+        last = time.monotonic()
         while not self._closing.is_set():
             now = time.monotonic()
+            if now - last > STARVED_S:  # this thread did not run: not the device's silence
+                self._last_rx = self._last_progress = now
+            last = now
             if self._port is None:
                 if now >= next_try:
                     next_try = now + RECONNECT_PERIOD_S

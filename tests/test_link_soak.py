@@ -1,0 +1,165 @@
+"""Device streaming under injected faults and a host process that is stopped outright.
+
+Each run is a child process (this file, run as a script) streaming a paced signal to a
+``frictex sim-device`` over a pty or ``socket://``, with ``--faults``-style injection
+(corruption, drops, link-thread stalls, watchdog trips, unplugging); the test stops the
+child with SIGSTOP for fractions of a second and resumes it (SIGCONT), so the host is
+starved deterministically while the device keeps its own clock. Every run must end (exit
+0, or 3 for LinkStalled) within a bound, and account for every sample: what the device's
+own log says it played, and what the host counts as unplayed, add up.
+
+The default suite runs two short runs; ``FRICTEX_SOAK=1`` runs the 50-run sweep (about
+7 minutes; ``pytest -s`` prints one line per run).
+"""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+RATE = 10_000.0
+BLOCK = 50
+STALLED_EXIT = 3
+
+
+def child(transport: str, seconds: float, spec: str, log_path: str) -> int:
+    """Stream ``seconds`` of a paced signal; print "ready", then the final link status."""
+    from device.link.faults import parse_faults
+    from device.link.host import LinkStalled, open_sink
+
+    sink = open_sink("sim" if transport == "pty" else "sim:tcp", 1, RATE, paced=True,
+                     log_path=log_path, faults=parse_faults(spec) if spec else None)
+    print("ready", flush=True)
+    n = int(seconds * RATE)
+    signal_um = (1.5 + np.sin(np.arange(n) / 37.0))[:, None]
+    code = 0
+    try:
+        for b in range(0, n, BLOCK):
+            sink.send(b, signal_um[b:b + BLOCK], None)
+    except LinkStalled:
+        code = STALLED_EXIT
+    finally:
+        sink.close()
+    print(json.dumps(sink.status()), flush=True)
+    return code
+
+
+def run(tmp_path: Path, transport: str, seconds: float, spec: str,
+        stops: list[tuple[float, float]]) -> dict:
+    """One child run with SIGSTOP pauses at (start s, duration s) after it is ready;
+    returns what the test checks. Fails if the run outlives its bound (a hang)."""
+    log = tmp_path / f"played-{transport}-{abs(hash(spec)) % 10**8}.csv"
+    proc = subprocess.Popen([sys.executable, __file__, transport, repr(seconds), spec, str(log)],
+                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=os.environ | {"PYTHONPATH": str(ROOT)})
+    # faults that hold the stream back, the pauses, and generous slack for a busy machine
+    bound = 3 * seconds + sum(d for _, d in stops) + _held(spec) + 40.0
+    try:
+        assert proc.stdout.readline().strip() == "ready", proc.stderr.read()
+        t0 = time.monotonic()
+        for at, duration in stops:
+            time.sleep(max(t0 + at - time.monotonic(), 0.0))
+            os.kill(proc.pid, signal.SIGSTOP)
+            time.sleep(duration)
+            os.kill(proc.pid, signal.SIGCONT)
+        out, err = proc.communicate(timeout=bound)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        pytest.fail(f"{transport} run with faults {spec!r} did not end within {bound:.0f} s")
+    wall = time.monotonic() - t0
+    assert proc.returncode in (0, STALLED_EXIT), err
+    status = json.loads(out.strip().splitlines()[-1])
+    rows = np.loadtxt(log, delimiter=",", skiprows=1, ndmin=2)
+    index = rows[:, 0].astype(np.int64) if rows.size else np.zeros(0, dtype=np.int64)
+    return {"code": proc.returncode, "status": status, "index": index,
+            "commanded": int(seconds * RATE), "wall_s": wall, "stderr": err}
+
+
+def _held(spec: str) -> float:
+    """Seconds the spec's stalls and unplugs can hold the stream back."""
+    from device.link.faults import parse_faults
+    return sum(e.duration_s for e in parse_faults(spec).events) if spec else 0.0
+
+
+def check(result: dict) -> None:
+    """Every commanded sample played or counted; the device's log agrees with the host."""
+    st, index, commanded = result["status"], result["index"], result["commanded"]
+    assert st["commanded_samples"] == commanded
+    assert st["played_samples"] + st["unplayed_samples"] == commanded
+    assert sum(st["unplayed_by_cause"].values()) == st["unplayed_samples"]
+    lost = st["unplayed_by_cause"]["lost"]
+    assert st["played_samples"] <= len(index) <= st["played_samples"] + lost
+    assert commanded - len(index) <= st["unplayed_samples"]
+    assert np.all(np.diff(index) > 0) and (index.size == 0 or index.max() < commanded)
+    if result["code"] == STALLED_EXIT:
+        assert st["failure"] and "giving up" in result["stderr"]
+
+
+def describe(transport, spec, stops, result) -> str:
+    st = result["status"]
+    return (f"{transport:3s} exit {result['code']} {result['wall_s']:5.1f} s  trips "
+            f"{st.get('watchdog_trips')}  recoveries {st['recoveries']}  reconnects "
+            f"{st['reconnects']}  stalls {st['stalls']}  unplayed {st['unplayed_samples']}"
+            f"/{st['commanded_samples']} {st['unplayed_by_cause']}  faults {spec!r} "
+            f"stops {stops}")
+
+
+@pytest.mark.parametrize("transport", ["pty", "tcp"])
+def test_a_stopped_host_under_faults_finishes_and_counts_every_sample(tmp_path, transport):
+    spec = "corrupt=0.0005,drop=0.0002,stall=0.2@0.8,trip@1.6,unplug=0.4@2.2,seed=1"
+    stops = [(0.4, 0.3), (1.9, 0.2)]
+    result = run(tmp_path, transport, 3.0, spec, stops)
+    print(describe(transport, spec, stops, result))
+    check(result)
+    st = result["status"]
+    assert result["code"] == 0
+    assert st["watchdog_trips"] >= 1 and st["reconnects"] >= 1 and st["disconnects"] >= 1
+    assert len(result["index"]) > 0.5 * result["commanded"]  # it resumed each time
+
+
+def sweep(k: int) -> tuple[str, float, str, list[tuple[float, float]]]:
+    """Run ``k`` of the 50: transport, seconds, faults and pauses, varied by ``k``."""
+    rng = np.random.default_rng(1000 + k)
+    seconds = 5.0
+    items = [f"corrupt={rng.choice([0.0, 1e-4, 5e-4, 2e-3]):g}",
+             f"drop={rng.choice([0.0, 1e-4, 5e-4]):g}",
+             f"garbage={rng.choice([0.0, 1e-4]):g}", f"seed={k}"]
+    for _ in range(rng.integers(1, 4)):
+        items.append(f"stall={rng.uniform(0.03, 0.4):.3f}@{rng.uniform(0.2, seconds):.2f}")
+    for _ in range(rng.integers(1, 3)):
+        items.append(f"trip@{rng.uniform(0.2, seconds):.2f}")
+    if k % 3 != 2:
+        items.append(f"unplug={rng.uniform(0.1, 1.5):.2f}@{rng.uniform(0.5, seconds):.2f}")
+    stops = sorted((round(float(rng.uniform(0.2, seconds)), 2),
+                    round(float(rng.uniform(0.05, 0.5)), 2))
+                   for _ in range(rng.integers(2, 5)))
+    return ("pty" if k % 2 == 0 else "tcp"), seconds, ",".join(items), stops
+
+
+@pytest.mark.skipif(os.environ.get("FRICTEX_SOAK") != "1",
+                    reason="the 50-run soak takes about 7 minutes; set FRICTEX_SOAK=1 to run it")
+def test_soak_50_runs_no_hang_every_sample_counted(tmp_path):
+    results = []
+    for k in range(50):
+        transport, seconds, spec, stops = sweep(k)
+        result = run(tmp_path, transport, seconds, spec, stops)
+        print(describe(transport, spec, stops, result), flush=True)
+        check(result)
+        results.append(result)
+    shares = [r["status"]["unplayed_samples"] / r["commanded"] for r in results]
+    print(f"50 runs: {sum(r['code'] == 0 for r in results)} finished, "
+          f"{sum(r['code'] == STALLED_EXIT for r in results)} gave up (LinkStalled), 0 hangs; "
+          f"longest {max(r['wall_s'] for r in results):.1f} s; unplayed share median "
+          f"{np.median(shares):.4f}, max {max(shares):.4f}")
+
+
+if __name__ == "__main__":
+    sys.exit(child(sys.argv[1], float(sys.argv[2]), sys.argv[3], sys.argv[4]))
