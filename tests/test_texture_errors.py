@@ -162,7 +162,8 @@ def test_every_problem_is_collected(tmp_path):
 
 
 @pytest.mark.parametrize("text, line, field, pattern", [
-    ("", None, "format", r"missing \(required\)"),
+    ("", None, "", r"^is empty; expected a texture file \(format = 1, \[display\], \[\[layer\]\]\)$"),
+    ("# only a comment\n", None, "format", r"missing \(required\)"),
     ("format = 1\n", None, "display", r"missing \[display\] table"),
     ("format = 1\n[display\n", 2, "TOML syntax", r"Expected '\]' at the end of a table declaration \(column \d+\)"),
     ("format = 1\nx = \n", 2, "TOML syntax", r"Invalid value \(column 5\)"),

@@ -27,14 +27,15 @@ def field_name(path: KeyPath) -> str:
     """The field as a user reads it: ``("layer", 1, "period_mm")`` -> ``layer[2].period_mm``.
 
     Array indices are shown 1-based: ``layer[1]`` is the first ``[[layer]]`` in the file.
-    The empty path (the file as a whole) gives "".
+    The empty path (the file as a whole) gives "". Keys longer than 40 characters are
+    shortened (an unknown key can be as long as the file).
     """
     out = ""
     for part in path:
         if isinstance(part, int):
             out += f"[{part + 1}]"
         else:
-            out += ("." if out else "") + part
+            out += ("." if out else "") + (part if len(part) <= 40 else part[:37] + "...")
     return out
 
 

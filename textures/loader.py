@@ -9,15 +9,15 @@ default shown. Layers are drawn and composed in file order (later on top).
     description = "..."               # one line for `frictex library`; default ""
 
     [display]                         # required: the touchscreen's active area
-    width_mm, height_mm               # required, > 0
-    width_px, height_px               # required integers >= 1 (visual layer, one-to-one maps)
+    width_mm, height_mm               # required, 0.001 to 10000
+    width_px, height_px               # required integers 1 to 16384 (visual layer, one-to-one maps)
 
     [device]                          # optional table
     profile = "plate-seed003"         # one of device.profile.DEVICE_PROFILES: plate-seed003
                                       #   (one channel), beam-seed000, plate-seed001 (modal)
-    amplitude_limit_um = 2.5          # > 0, zero-to-peak; the host never asks for more
+    amplitude_limit_um = 2.5          # > 0, <= 100, zero-to-peak; the host never asks for more
                                       #   under a finger
-    normal_force_n = 0.5              # > 0; nominal force for warnings and force-less traces
+    normal_force_n = 0.5              # > 0, <= 100; nominal force for warnings and force-less traces
     [device.friction]                 # optional: seed 003 eq 2 constants
     b_per_um = 1.67                   # > 0
     asymptote_per_n = 1.13            # > 0 (asymptote A = asymptote_per_n * F_n)
@@ -34,7 +34,7 @@ default shown. Layers are drawn and composed in file order (later on top).
     youngs_gpa = 57, density_kg_m3 = 2561              # > 0
     poisson = 0.33                    # in (-1, 0.5)
     theory = "euler-bernoulli"        # | "timoshenko"
-    orders = [16, 17]                 # distinct flexural mode orders >= 1, at most 26
+    orders = [16, 17]                 # distinct flexural mode orders 1 to 100, at most 26 of them
     actuators_mm = [60, 290]          # one per mode, on the beam (from its end x = 0)
     x0_mm = 0                         # display x of the beam's end; the display's x span
                                       #   must lie on the beam
@@ -45,7 +45,7 @@ default shown. Layers are drawn and composed in file order (later on top).
       # profile = "plate-seed001" (seed 001, section 4; channels V_AC, V_BD):
     width_mm = 140, height_mm = 140, thickness_mm = 4, youngs_gpa = 57,
     density_kg_m3 = 2561, poisson = 0.33
-    order = 8                         # k of seed 001 eq 6, integer >= 1
+    order = 8                         # k of seed 001 eq 6, integer 1 to 100
     x0_mm = 0, y0_mm = 0              # display position of the plate's corner; the
                                       #   display must lie on the plate
     channel_limit_um                  # > 0; default: amplitude_limit_um
@@ -59,7 +59,7 @@ default shown. Layers are drawn and composed in file order (later on top).
     threshold_um = 1.0                # >= 0, travelling amplitude with no drive (seed 004)
     v_hold_mm_s = 2.0                 # > 0, below this speed a finger is still
 
-    [[layer]]                         # one or more
+    [[layer]]                         # one to 32
     type = "grating"                  # required: grating | waveform | rectangle | disc |
                                       #   edge | bump | line | raster | directional |
                                       #   guidance | keyclick (the last three: force layers)
@@ -84,7 +84,7 @@ default shown. Layers are drawn and composed in file order (later on top).
 
 Layer keys by type (mu' is relative friction in (0, 1]; positions in mm, angles in deg):
 
-- ``grating``: period_mm (> 0), duty = 0.5 (in (0, 1): the fraction at mu_low, the black
+- ``grating``: period_mm (0.01 to 10000), duty = 0.5 (in (0, 1): the fraction at mu_low, the black
   line), angle_deg = 0 (axis across the lines, 0 = vertical lines), offset_mm = 0,
   mu_low (required), mu_high = 1 (>= mu_low), edge = "square" | "smooth",
   edge_mm (smooth only: > 0, at most the narrower band).
@@ -120,6 +120,15 @@ waves run along display x; they take no ``blend``: see ``rendering.layers.force_
   display), press_n = 0.5, click_n = 0.8, release_n = 0.4 (normal-force thresholds,
   release_n < press_n < click_n), dwell_s = 0.01 (>= 0), force_n = 0.1 (push, N),
   first_push = "+x" | "-x" (direction of the push before the click).
+
+Limits, so that every later stage stays finite and bounded (a value beyond them is a typo
+or a wrong unit): lengths and positions within +-10000 mm, sizes (widths, radii, sigma)
+from 0.001 mm, periods from 0.01 mm; angles -360 to 360 deg; forces at most 100 N;
+amplitudes at most 100 um; any other number at most 1e6 in magnitude. Strings hold no
+control characters (``description`` may hold line breaks and tabs); names at most 200
+characters, paths 1000. A file is UTF-8 (a leading byte order mark is dropped), at most
+1 MiB, a regular file (never a FIFO or a device: checked before opening), with arrays and
+inline tables nested at most 16 deep.
 
 Objects, points, regions and sprites must lie on the display. Every problem in a file is
 reported (not only the first) as ``file:line: field: message``; ``frictex validate`` also
@@ -248,6 +257,7 @@ MAX_FORCE_N = 100.0    # a fingertip presses with 0.1 to 5 N
 MAX_UM = 100.0         # plates vibrate at a few um
 MAX_PX = 16_384        # display pixels per side
 MAX_MODE_ORDER = 100
+MAX_LAYERS = 32
 #: Any other number: at most this in magnitude.
 MAX_MAGNITUDE = 1e6
 
@@ -1073,6 +1083,10 @@ def _layers(r: _Reader, doc: dict, display, base_dir: Path):
     if not isinstance(raw, list) or not all(isinstance(x, dict) for x in raw):
         r.report(("layer",), f"expected [[layer]] tables (an array of tables), got {_kind(raw)}; "
                              f"start each layer with [[layer]]")
+        return None
+    if len(raw) > MAX_LAYERS:
+        r.report(("layer",), f"{len(raw)} [[layer]] tables; a scene holds at most {MAX_LAYERS} "
+                             f"(every layer is evaluated for every finger at every output sample)")
         return None
     names: dict[str, int] = {}
     built = [_layer(r, item, i, display, base_dir, names) for i, item in enumerate(raw)]
