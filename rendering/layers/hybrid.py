@@ -15,18 +15,38 @@ The hybrid's phase (cycles) is a velocity integral plus an offset::
 tracker's velocity along the texture's axis, smoothed (:func:`smooth_rate`): a new
 estimate that differs from the current one by less than ``VELOCITY_NOISE_MM_S`` (the
 scatter a 50 ms line fit through 0.05 mm touch noise gives between successive 50 Hz
-samples, ~2.5 mm/s rms, times three) is noise and is averaged in with weight
+samples, ~2.5 mm/s rms, times 1.6) is noise and is averaged in with weight
 ``SMOOTH``; a larger change is a real acceleration and is taken at once. SHT's
 frequency jitters with every estimate (9 % rms at 20 mm/s); the hybrid's less, so on
-constant-speed strokes its spectrum is cleaner than SHT's, and the lag the averaging
-could add is the phase lock's to remove.
+constant-speed strokes its spectrum is cleaner than SHT's. A wider noise band (8 mm/s,
+three times the scatter) smoothed constant-speed strokes a little more but averaged away
+real accelerations of human strokes (up to 400 mm/s^2 look like noise at 50 Hz): over 16
+human-like draws the 0.6 mm grating's spectral error was 0.487 with it, 0.476 with 4 mm/s.
+
+Coarse layers (period at least ``COARSE_MM``) are position-locked: at each new
+measurement of a moving finger any error ahead, in the finger's direction, and an error
+up to ``BACK_MM`` behind are taken at once; synthesis fills in between samples. There
+the touch noise and the 50 Hz prediction error (0.05-0.3 mm) are a few per cent of a
+period at most, so a jump is a small shift of an edge, while slewing it off left the
+rendered phase 0.2-0.6 mm behind the finger through every acceleration of a 60 mm/s
+stroke: over 16 human-like draws the 15 mm grating's time error was 0.213 slewed and
+0.172 locked (SHO-predicted: 0.171). A jump ahead never adds an edge (the phase skips
+forward); a jump back can cross a line the phase passed a moment early and adds an
+edge pair a few ms apart, as SHO-predicted does; the price, measured on the same draws,
+is the alignment error (0.41 mm against the slewed 0.25 mm; SHO-predicted 0.39 mm).
+Forbidding jumps back over a line kept the alignment (0.23 mm) but gave back most of
+the time error (0.196) and cost the 5 mm grating's spectrum (0.277). On a fine layer
+the same jumps would be a third of a period: there the slew below stays (locking them
+doubled the 0.6 mm grating's spectral error on a constant-speed swipe, 0.12 to 0.24).
+``rendering/RENDERERS.md`` states the finger model behind the prediction.
 
 At touch-down, and at the first measurement after the tracker knew no velocity (the
 start of a swipe, before two samples exist; a finger that rested past the prediction
 horizon), the offset puts the phase at the spatial phase of the measured position: the
 finger has just started from rest, and synthesis starts where it is. At every other
 new touch measurement the *error* ``layer.phase_at(x_pred, y_pred) - phase`` is taken
-(the shorter way round the cycle) and the offset works it off, in general never faster
+(the shorter way round the cycle; on coarse layers less the part the position lock
+above takes at once) and the offset works it off, in general never faster
 than ``SLIP`` times the phase rate of the finger's own motion, i.e. the texture slides
 over the glass at most 0.9 times as fast as the finger moves, so the phase does not run
 backwards (no spurious edges from prediction errors, which SHO-predicted shows as
@@ -56,19 +76,14 @@ rate, computed in closed form per measurement. The whole per-finger recurrence
 (numba, ``_hybrid_row``): a Python loop per measurement, or some sixty numpy passes,
 cost several times more at 10 kHz and dominated a 5 ms live block.
 
-What it cannot do (measured by ``frictex report``, 50 Hz touch, human-like motion):
-reliably beat plain SHO's or SHT's time error on the 0.6 mm grating. There the time
-error measures a phase the finger cannot feel (seed 003 section 6), and while the finger
-moves every renderer's phase is as good as random: 50 Hz samples with 0.05 mm noise,
-extrapolated over up to 20 ms of a minimum-jerk stroke, are 0.1-0.3 mm off, a third of
-a period or more, and a finger resting within 0.05 mm of a line is on either side of it
-by chance. Over eight draws of the human-like strokes (``app.measure.report_seeds``) the three
-renderers score 1.22 (hybrid), 1.25 (SHO) and 1.30 (SHT) on average (sqrt(2) = 1.41
-for the right texture at an unrelated phase), each the best in some draws; the
-matrix's draw (seed 7) is one where SHO is (1.16 against the hybrid's 1.22). On the
-same grating the hybrid's spectrum is about SHT's (0.51 against 0.49 on average, the
-lock's small frequency corrections), far below SHO's 0.98; on the 5 and 15 mm gratings
-it is the best renderer in 47 of the 48 (draw, metric) cells.
+What it cannot do (``frictex report`` and ``rendering/RENDERERS.md``, 50 Hz touch,
+human-like motion): get the 0.6 mm grating's phase right while the finger moves. There
+the time error measures a phase the finger cannot feel (seed 003 section 6): 50 Hz
+samples with 0.05 mm noise, extrapolated over up to 20 ms of a minimum-jerk stroke, are
+0.1-0.3 mm off, a third of a period or more. On that grating the hybrid's spectrum is
+about SHT's (0.476 against 0.465 over 16 draws, the lock's small frequency corrections),
+far below SHO's 0.97; on the 15 and 5 mm gratings it scores what SHO-predicted scores
+(within 0.003 on both metrics) and far better than plain SHO and SHT.
 """
 
 from __future__ import annotations
@@ -94,9 +109,13 @@ RELOCK_MM_S = 20.0
 #: lower edge (rendering.metrics.TACTILE_BAND_HZ)
 EVENT_HZ = 10.0
 #: velocity changes (mm/s) smaller than this between two estimates are touch noise ...
-VELOCITY_NOISE_MM_S = 8.0
+VELOCITY_NOISE_MM_S = 4.0
 #: ... and are averaged in with this weight (1 would be SHT's unsmoothed velocity)
 SMOOTH = 0.5
+#: layers of at least this period (mm) are position-locked (see the module docstring) ...
+COARSE_MM = 2.0
+#: ... where an error against the finger's direction up to this (mm) is taken at once
+BACK_MM = 1.0
 
 
 @dataclass(frozen=True)
@@ -124,7 +143,8 @@ class HybridState:
 
 
 def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, snap: np.ndarray,
-                fast: np.ndarray, slow: np.ndarray, start: float, lock: float
+                fast: np.ndarray, slow: np.ndarray, start: float, lock: float,
+                jump: np.ndarray | None = None, back: float = 0.0
                 ) -> tuple[np.ndarray, float]:
     """Offset (cycles) following a piecewise-constant target at a bounded rate.
 
@@ -141,6 +161,11 @@ def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, sna
         by the ``slow`` difference.
     start : offset before the first sample (cycles), used unless ``restart[0]``.
     lock : error (cycles) down to which the ``fast`` allowance applies.
+    jump : (k,) the position lock (see the module docstring) at each bound: +1 or -1, the
+        direction (phase rate's sign) the finger moves in, 0 where it does not apply; an
+        error that way is taken at once, one the other way if at most ``back``.
+        None: nowhere.
+    back : largest error (cycles) against the finger's direction taken at once.
 
     Returns
     -------
@@ -154,12 +179,13 @@ def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, sna
                        np.ascontiguousarray(restart, dtype=np.bool_),
                        np.ascontiguousarray(snap, dtype=np.bool_), fast,
                        np.ascontiguousarray(slow, dtype=np.float64), float(start), float(lock),
-                       offset)
+                       np.zeros(len(bounds)) if jump is None
+                       else np.ascontiguousarray(jump, dtype=np.float64), float(back), offset)
     return offset, end
 
 
 @njit(cache=True)
-def _slew_kernel(bounds, target, restart, snap, fast, slow, start, lock, offset):
+def _slew_kernel(bounds, target, restart, snap, fast, slow, start, lock, jump, back, offset):
     """:func:`slew_offset` in one pass: writes ``offset`` (n,), returns the wrapped end.
 
     Per segment (bounds[k] to the next bound) the error ``gap`` to its target is taken at
@@ -179,7 +205,8 @@ def _slew_kernel(bounds, target, restart, snap, fast, slow, start, lock, offset)
         elif k > 0:  # where the previous segment got to by this bound
             value = base + math.copysign(_worked_off(fast, slow, b, bounds[k], far, gap), gap)
         g = (d - value + 0.5) % 1.0 - 0.5
-        if snap[k] and abs(g) > lock:
+        if (snap[k] and abs(g) > lock) or (jump[k] != 0.0 and (
+                g * jump[k] > 0.0 or abs(g) <= back)):
             value, g = d, 0.0
         base, gap, far, b = value, g, max(abs(g) - lock, 0.0), bounds[k]
         switch = min(np.searchsorted(fast, fast[b] + far), n)
@@ -258,14 +285,14 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, has_before, befor
     ``has_before``. axis : (ax, ay). layer_phase : (offset_mm, period_mm), so that
     ``(ax x + ay y - offset_mm) / period_mm`` is ``layer.phase_at(x, y)``. limits :
     (dt_s, slip, lock, event_hz, relock rate (cycles/s), noise limit (cycles/s),
-    smoothing weight).
+    smoothing weight, position-locked (bool), largest jump back (cycles)).
 
     Returns the new carried fields in ``before``'s order.
     """
     n = touch.size
     ax, ay = axis
     offset_mm, period = layer_phase
-    dt_s, slip, lock, event_hz, relock, noise, weight = limits
+    dt_s, slip, lock, event_hz, relock, noise, weight, locked, back = limits
     b_touch, b_phase, b_offset, b_target, b_x, b_y, b_rate, b_smoothed, b_speed = before
     restart = np.empty(n, dtype=np.bool_)
     measured = np.empty(n)  # the tracker's phase rate (cycles/s)
@@ -282,6 +309,7 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, has_before, befor
     target = np.empty(n + 1)
     flags = np.zeros(n + 1, dtype=np.bool_)
     starts = np.zeros(n + 1, dtype=np.bool_)
+    jump = np.zeros(n + 1)
     k_n = 0
     if not has_before:
         new0 = True
@@ -289,6 +317,7 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, has_before, befor
         new0 = restart[0] or x_held[0] != b_x or y_held[0] != b_y or measured[0] != b_rate
     if not new0:  # the previous call's measurement holds
         bounds[0], target[0] = 0, b_target
+        jump[0] = math.copysign(1.0, b_rate) if locked and b_speed > 0.0 else 0.0
         k_n = 1
     speed_before = b_speed if has_before else 0.0
     for k in range(n):
@@ -303,6 +332,7 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, has_before, befor
             target[k_n] = (ax * x_pred[k] + ay * y_pred[k] - offset_mm) / period - phase[k]
             flags[k_n] = restart[k]
             starts[k_n] = speed_before == 0.0 and speed > 0.0
+            jump[k_n] = math.copysign(1.0, rate[k]) if locked and speed > 0.0 else 0.0
             k_n += 1
         speed_before = speed
     # correction allowances: SLIP times the distance travelled (cycles; beyond the lock,
@@ -321,7 +351,7 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, has_before, befor
         slow[k + 1] = acc_slow * scale
     offset = np.empty(n)
     end = _slew_kernel(bounds[:k_n], target[:k_n], flags[:k_n], starts[:k_n], fast, slow,
-                       b_offset if has_before else 0.0, lock, offset)
+                       b_offset if has_before else 0.0, lock, jump[:k_n], back, offset)
     for k in range(n):
         phase[k] += offset[k]
     return (touch[n - 1], carry, end, target[k_n - 1] % 1.0, x_held[n - 1], y_held[n - 1],
@@ -345,6 +375,7 @@ class HybridRenderer:
         self.axis = layer.axis
         self.slip = float(slip)
         self.lock = lock_mm / layer.period_mm
+        self.locked = layer.period_mm >= COARSE_MM
         self.event_hz = float(event_hz)
 
     def initial_state(self) -> HybridState:
@@ -357,7 +388,7 @@ class HybridRenderer:
         layer_phase = (float(self.layer.offset_mm), float(self.layer.period_mm))
         limits = (self.dt_s, self.slip, self.lock, self.event_hz,
                   RELOCK_MM_S / self.layer.period_mm, VELOCITY_NOISE_MM_S / self.layer.period_mm,
-                  SMOOTH)
+                  SMOOTH, self.locked, BACK_MM / self.layer.period_mm)
         rows = [np.ascontiguousarray(getattr(block, name), dtype=np.float64)
                 for name in ("vx", "vy", "x_held", "y_held", "x_pred", "y_pred")]
         touch = np.ascontiguousarray(block.touch_id, dtype=np.int64)
