@@ -53,3 +53,26 @@ def test_frames_follow_the_replayed_finger(gl, tmp_path):
         cols = np.flatnonzero(blue[:150].any(axis=0))
         xs.append(cols.mean())
     assert (np.diff(xs) > 0).all()
+
+
+def test_default_panel_is_the_display_size_scaled_to_fit_2048_px():
+    from types import SimpleNamespace
+
+    from app.commands.preview import default_size
+    assert default_size(SimpleNamespace(width_px=800, height_px=480)) == (800, 480)
+    assert default_size(SimpleNamespace(width_px=16384, height_px=4096)) == (2048, 512)
+    assert default_size(SimpleNamespace(width_px=3, height_px=16384)) == (1, 2048)
+
+
+def test_friction_map_in_row_bands_equals_one_pass(monkeypatch):
+    from app.commands import preview
+    from rendering.visual.viewport import fit_viewport
+    scene = grating_scene(5.0)
+    viewport = fit_viewport(scene.display, 90, 54)
+    monkeypatch.setattr(preview, "ROWS_PER_PASS", 10_000)
+    whole = preview.mu_map(scene, viewport)
+    monkeypatch.setattr(preview, "ROWS_PER_PASS", 7)
+    banded = preview.mu_map(scene, viewport)
+    assert banded.shape == (54, 90)
+    np.testing.assert_array_equal(banded, whole)
+    assert whole.min() == pytest.approx(0.6) and whole.max() == pytest.approx(1.0)
