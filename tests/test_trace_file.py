@@ -200,3 +200,24 @@ def test_chunked_reordering_matches_the_rule(tmp_path_factory, steps, chunk_rows
     kept, reordered, dropped = _reference_order(times, 0.005)
     assert tr.x_mm.tolist() == [float(i) for i in kept]
     assert (reader.order.reordered, reader.order.dropped) == (reordered, dropped)
+
+
+def test_rows_held_for_reordering_are_bounded(tmp_path, monkeypatch):
+    from rendering.input import trace_file
+    from rendering.input.trace_file import iter_trace
+    path = tmp_path / "t.csv"
+    # 12 rows at one time, read 3 at a time, at most 3 held back: a later row 1 ms
+    # earlier can no longer go before the ones handed out, and is dropped
+    path.write_text("t_s,finger,x_mm,y_mm\n" + "1.0,0,0,0\n" * 12 + "0.999,0,9,9\n1.0,0,1,1\n")
+    monkeypatch.setattr(trace_file, "MAX_HELD_ROWS", 3)
+    reader = iter_trace(path, chunk_rows=3)
+    chunks = list(reader)
+    assert max(len(c) for c in chunks) <= 6
+    tr = concat_traces(chunks)
+    assert tr.x_mm.tolist() == [0.0] * 12 + [1.0]
+    assert (reader.order.reordered, reader.order.dropped) == (0, 1)
+    # with room to hold them all, the same row is within the tolerance and sorted in
+    monkeypatch.setattr(trace_file, "MAX_HELD_ROWS", 65_536)
+    whole = iter_trace(path, chunk_rows=3)
+    assert concat_traces(whole).x_mm.tolist() == [9.0] + [0.0] * 12 + [1.0]
+    assert (whole.order.reordered, whole.order.dropped) == (1, 0)

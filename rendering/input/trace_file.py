@@ -22,8 +22,10 @@ column, shows the value and what was expected):
 - time order. Real logs interleave two fingers' events and so step back a little:
   samples up to REORDER_TOLERANCE_S (5 ms) earlier than the latest time before them are
   moved into time order (a stable sort: equal times keep their file order); samples
-  further back are dropped. Both are counted (:class:`TimeOrder`) for the replay's
-  summary. ``strict=True`` refuses any step back instead.
+  further back are dropped (so are samples that would go before the MAX_HELD_ROWS rows
+  a reader holds back, in a file crowding more rows than that into 5 ms). Both are
+  counted (:class:`TimeOrder`) for the replay's summary. ``strict=True`` refuses any step
+  back instead.
 
 Only regular files are opened (``textures.library.file_problem``): a FIFO or a device
 is refused before anything blocks.
@@ -54,6 +56,9 @@ MAX_FINGER_ID = 2**31 - 1
 MAX_TOUCHING = 20
 MAX_LINE_BYTES = 4096
 REORDER_TOLERANCE_S = 0.005
+#: Rows held back at most while waiting for rows that may go before them (memory bound
+#: for a file whose rows crowd into one tolerance window; a 1 kHz screen puts 5 there).
+MAX_HELD_ROWS = 65_536
 
 #: column -> (lowest, highest, unit) accepted
 RANGES = {"t_s": (-MAX_TIME_S, MAX_TIME_S, "s"), "x_mm": (-MAX_COORD_MM, MAX_COORD_MM, "mm"),
@@ -258,15 +263,19 @@ def _short(text: str) -> str:
 class _RowParser:
     """Data rows to time-ordered traces, chunk by chunk, carrying across chunks what
     spans them: the latest time, the samples still within the reordering tolerance of
-    it (a later row may belong before them), and which fingers are touching."""
+    it (a later row may belong before them; at most ``max_held``, so that memory stays
+    bounded even if a whole file shares one time), and which fingers are touching."""
 
-    def __init__(self, names: list[str], where: str, order: TimeOrder, strict: bool):
+    def __init__(self, names: list[str], where: str, order: TimeOrder, strict: bool,
+                 max_held: int):
         self.names = names
         self.where = where
         self.col = {name: names.index(name) for name in names}
         self.order = order
         self.strict = strict
+        self.max_held = max_held
         self.latest = -math.inf
+        self.released = -math.inf  # the latest time handed out: nothing may come before it
         self.held: list[np.ndarray] | None = None  # t, finger, x, y, force, event, line
         self.down: set[int] = set()
 
@@ -278,11 +287,12 @@ class _RowParser:
             cols = [np.concatenate(pair) for pair in zip(self.held, cols)]
         order = np.argsort(cols[0], kind="stable")
         cols = [c[order] for c in cols]
-        cut = cols[0].size if final else int(np.searchsorted(
-            cols[0], self.latest - self.order.tolerance_s, side="right"))
+        cut = cols[0].size if final else max(cols[0].size - self.max_held, int(np.searchsorted(
+            cols[0], self.latest - self.order.tolerance_s, side="right")))
         self.held = [c[cut:] for c in cols]
         if cut == 0:
             return None
+        self.released = float(cols[0][cut - 1])
         t, finger, x, y, force, event, lines = (c[:cut] for c in cols)
         trace = make_trace(t, finger, x, y, force, event, self.where, normalise=False)
         return Trace(trace.t_s, trace.finger, trace.x_mm, trace.y_mm, trace.force_n,
@@ -323,7 +333,7 @@ class _RowParser:
             elif self.strict:
                 raise TraceError(f"{where}:{line}: t_s goes back from {float(self.latest)!r} to "
                                  f"{float(t[k])!r} s (time must not decrease with --strict)")
-            elif t[k] >= self.latest - tolerance:
+            elif t[k] >= max(self.latest - tolerance, self.released):
                 self.order.reordered += 1
             else:
                 keep[k] = False
@@ -382,7 +392,7 @@ def _chunks(lines, where: str, chunk_rows: int, order: TimeOrder, strict: bool):
             if missing:
                 raise TraceError(f"{where}:{number}: header lacks column(s) {', '.join(missing)} "
                                  f"(got {_short(','.join(names))}; required {','.join(REQUIRED)})")
-            parser = _RowParser(names, where, order, strict)
+            parser = _RowParser(names, where, order, strict, MAX_HELD_ROWS)
             continue
         batch.append((number, _fields(text, where, number)))
         if len(batch) == chunk_rows:
