@@ -18,11 +18,18 @@ Where the model stops being usable, frictex decides as follows (each case counte
 - target at or below the lowest reachable mu' (the asymptote A, or mu'(limit) if the
   amplifier limit comes first, including targets within 1e-12 of A where eq 3 diverges):
   w = limit, counted as ``unreachable``.
-- A reaches ``asymptote_cap`` (default 0.95, i.e. F_n >= 0.84 N with seed 003's k): the
-  fitted model would soon predict no modulation at all (A = 1 at 0.885 N) or friction
-  *rising* with amplitude (A > 1), which no ultrasonic plate shows. frictex evaluates the
-  model at A = cap instead (a heavy press still gets the strongest reduction the model
-  allows, never a sign flip) and counts ``force_beyond_model``.
+- A within ``ASYMPTOTE_MARGIN`` of 1 or beyond (F_n >= 0.885 N with seed 003's k): the
+  model predicts no modulation at all (A = 1) or friction *rising* with amplitude
+  (A > 1), which no ultrasonic plate shows. Below that the model is used as it stands
+  (at 0.85 N, A = 0.9605, target 0.99 gives eq 3's 0.175 um). At and beyond it frictex
+  evaluates the model at its edge, A = 1 - ``ASYMPTOTE_MARGIN``, the limit the valid
+  model tends to: every target below 1 is out of reach and gets the full amplitude (a
+  heavy press still gets the strongest reduction, never a sign flip), and each such
+  sample is counted as ``force_beyond_model`` (not also as ``unreachable``; a target
+  of 1 there is w = 0, exact whatever A, and not counted). The margin is where eq 3 stops being
+  computable: a target's rounding (eps = 1.1e-16) moves w by eps / (b (mu' - A)), with
+  mu' - A <= 1 - A, i.e. up to 7e-8 um at 1 - A = 1e-9.
+  (``FrictionParams.asymptote_cap`` is not used: the model's own bound A < 1 is.)
 - normal force NaN/inf or negative: the nominal force of the device is used, counted as
   ``bad_force``. A force near 0 is fine: A -> 0 and the model is regular.
 - target NaN/inf: w = 0 (the safe side), counted as ``nonfinite_target``.
@@ -69,18 +76,25 @@ class ClampCounts:
         return sum(self.as_dict().values())
 
 
-def asymptote(normal_force_n, params: FrictionParams) -> tuple[np.ndarray, np.ndarray]:
-    """The model's asymptote A = k F_n (seed 003, eq 2), capped at ``params.asymptote_cap``.
+#: the model holds for A < 1 (seed 003, eq 2); within this of 1 eq 3 is not computable
+#: (see the module docstring)
+ASYMPTOTE_MARGIN = 1e-9
 
-    Returns ``(A, beyond)`` where ``beyond`` marks forces whose uncapped A reached the cap.
+
+def asymptote(normal_force_n, params: FrictionParams) -> tuple[np.ndarray, np.ndarray]:
+    """The model's asymptote A = k F_n (seed 003, eq 2), at most 1 - ``ASYMPTOTE_MARGIN``.
+
+    Returns ``(A, beyond)`` where ``beyond`` marks forces where the model does not hold
+    (A = k F_n >= 1 - ``ASYMPTOTE_MARGIN``).
     """
     a = params.asymptote_per_n * np.asarray(normal_force_n, dtype=np.float64)
-    beyond = a >= params.asymptote_cap
-    return np.minimum(a, params.asymptote_cap), beyond
+    edge = 1.0 - ASYMPTOTE_MARGIN
+    beyond = a >= edge
+    return np.minimum(a, edge), beyond
 
 
 def forward_mu(w_um, normal_force_n, params: FrictionParams) -> np.ndarray:
-    """mu'(w) of seed 003, eq 2, with the asymptote capped as documented above.
+    """mu'(w) of seed 003, eq 2 (beyond the model's force range, at its edge: see above).
 
     Parameters
     ----------
@@ -110,10 +124,13 @@ class SeedFrictionModel:
 
     def _amplitude(self, mu, force, counts: ClampCounts) -> np.ndarray:
         a, beyond = asymptote(force, self.params)  # force may be one value for all of mu
-        counts.force_beyond_model += int(np.count_nonzero(np.broadcast_to(beyond, mu.shape)))
         reduction = (1.0 - mu) / (1.0 - a)  # in [0, 1) where reachable
         with np.errstate(divide="ignore", invalid="ignore"):
             w = -np.log1p(-np.minimum(reduction, 1.0)) / self.params.b_per_um
+        if np.any(beyond):  # asks for a reduction where the model does not hold
+            out = beyond & (mu < 1.0)
+            counts.force_beyond_model += int(np.count_nonzero(out))
+            w = np.where(out, self.limit_um, w)
         return w  # may be inf exactly at the asymptote; the caller clamps
 
     def invert(self, mu_target, normal_force_n) -> tuple[np.ndarray, ClampCounts]:

@@ -13,8 +13,8 @@ Error (linear interpolation, step h = r_max / (N - 1)): at most
 :meth:`LutFrictionModel.max_error_um` measures it against the exact inversion on a
 dense grid; ``frictex report`` reports the resulting friction error beside the exact one.
 
-Same guards and counts as ``device.friction`` (targets above 1, unreachable targets,
-forces beyond the model); a block with a non-finite target or a bad force takes the
+Same guards and counts as ``device.friction`` (targets above 1, unreachable targets);
+a block with a non-finite target, a bad force or a force beyond the model takes the
 exact path, which handles and counts those.
 """
 
@@ -65,13 +65,11 @@ class LutFrictionModel:
         # one cheap pass: the sum of finite targets is finite (else the exact path decides)
         if mu.size == 0 or not (np.isfinite(mu.sum()) and f_lo >= 0.0 and np.isfinite(f_hi)):
             return self.exact.invert(mu, force)
+        # one force for the block (the usual case): a scalar asymptote
+        a, beyond = asymptote(f_lo if f_lo == f_hi else force, self.params)
+        if np.any(beyond):  # a heavy press: the exact path decides and counts
+            return self.exact.invert(mu, force)
         counts = ClampCounts()
-        if f_lo == f_hi:  # one force for the block (the usual case): scalar asymptote
-            a, beyond = asymptote(f_lo, self.params)
-            counts.force_beyond_model = mu.size if beyond else 0
-        else:
-            a, beyond = asymptote(force, self.params)
-            counts.force_beyond_model = int(np.count_nonzero(beyond))
         x = (1.0 - mu) * (self._scale / (1.0 - a))  # r in table steps
         top = self._w.size - 1
         counts.above_one = int(np.count_nonzero(x < 0.0))

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
-from numpy.testing import assert_allclose
+from numpy.testing import assert_allclose, assert_array_equal
 
 from device.friction import (CalibratedFrictionModel, SeedFrictionModel, forward_mu,
                                 make_friction_model, mu_floor)
@@ -69,14 +69,39 @@ def test_normal_force_near_zero_is_regular():
     assert counts.total == 0
 
 
+@pytest.mark.parametrize("force, mu", [(0.85, 0.99), (0.8407, 0.99), (0.88, 0.999)])
+def test_model_holds_up_to_its_asymptote_reaching_one(force, mu):
+    """Seed 003's model holds for A = 1.13 F_n < 1 (F_n < 0.885 N): eq 3 there, no clamp.
+    At 0.85 N a target of 0.99 is 0.175 um (a cap at A = 0.95 gave 0.134 um)."""
+    a = 1.13 * force
+    expected = -np.log((mu - a) / (1 - a)) / 1.67  # eq 3
+    w, counts = MODEL.invert(np.array([mu]), force)
+    assert_allclose(w, expected, rtol=1e-12)
+    assert counts.total == 0
+    assert_allclose(MODEL.forward(w, force), mu, rtol=1e-13)
+    if force == 0.85:
+        assert abs(float(w[0]) - 0.175) < 5e-4
+
+
+def test_model_holds_within_a_nanometre_of_its_bound():
+    """1 - A = 2e-9, inside the model (margin 1e-9): a target half way down its tiny range
+    is ln 2 / b, to the rounding eq 3 has there (eps / (b (mu' - A)) ~ 7e-8 um)."""
+    force = (1 - 2e-9) / 1.13
+    a = 1.13 * force
+    mu = 1 - (1 - a) / 2
+    w, counts = MODEL.invert(np.array([mu]), force)
+    assert_allclose(w, np.log(2) / 1.67, atol=1e-6)
+    assert counts.total == 0
+
+
 @pytest.mark.parametrize("force", [1 / 1.13, 0.9, 3.0, 1e6])
-def test_force_where_asymptote_reaches_one_uses_the_cap(force):
-    w, counts = MODEL.invert(np.array([0.97, 0.96, 0.5]), force)
-    assert np.all(np.isfinite(w)) and np.all((0 <= w) & (w <= 2.5))
-    assert counts.force_beyond_model == 3
-    # the capped model (A = 0.95) still orders targets: lower friction asks for more amplitude
-    assert w[0] < w[1] == 2.5 == w[2] or w[0] < w[1] <= w[2]
-    assert_allclose(MODEL.forward(w[0], force), 0.97, rtol=1e-12)
+def test_force_where_asymptote_reaches_one_is_beyond_the_model_and_counted(force):
+    """A >= 1: no reduction is reachable; targets below 1 get the full amplitude (the
+    limit the valid model tends to, never a sign flip), counted as beyond the model
+    only; a target of 1 is w = 0 and no clamp."""
+    w, counts = MODEL.invert(np.array([1.0, 0.97, 0.5]), force)
+    assert_array_equal(w, [0.0, 2.5, 2.5])
+    assert counts.force_beyond_model == 2 and counts.total == 2
 
 
 def test_nan_and_inf_in():
