@@ -221,3 +221,16 @@ def test_rows_held_for_reordering_are_bounded(tmp_path, monkeypatch):
     whole = iter_trace(path, chunk_rows=3)
     assert concat_traces(whole).x_mm.tolist() == [9.0] + [0.0] * 12 + [1.0]
     assert (whole.order.reordered, whole.order.dropped) == (1, 0)
+
+
+@pytest.mark.parametrize("rows, message", [
+    ("0,0,0,0,move\n0,0,nan,0,slide\n", r"<t>:3: column x_mm: 'nan'"),
+    ("0,0,0,0,slide\n0,0,nan,0,move\n", r"<t>:2: column event: 'slide'"),
+    ("1,0,0,0,move\n0.5,0,0,0,move\n0,0,nan,0,move\n", r"<t>:3: t_s goes back from 1\.0 to 0\.5"),
+    ("1,0,0,0,move\n0.5,0,0,0,slide\n", r"<t>:3: column event: 'slide'"),  # values first
+    ("1,0,0,0,move\n1,0,0,0,slide\n0.5,0,0,0,move\n", r"<t>:3: column event: 'slide'"),
+    ("1,0,inf,0,move\n0.5,0,0,0,move\n", r"<t>:2: column x_mm: 'inf' is not a finite number"),
+])
+def test_the_first_problem_in_file_order_is_reported(rows, message):
+    with pytest.raises(TraceError, match=message):
+        parse_trace("t_s,finger,x_mm,y_mm,event\n" + rows, "<t>", strict=True)

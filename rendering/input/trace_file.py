@@ -299,48 +299,89 @@ class _RowParser:
                      _normalise_events(trace.finger, trace.event, self.down, self.where, lines))
 
     def _rows(self, numbered_rows) -> list[np.ndarray]:
-        where, col = self.where, self.col
-        n = len(numbered_rows)
-        t = np.empty(n)
-        finger = np.empty(n, dtype=np.int64)
-        x = np.empty(n)
-        y = np.empty(n)
+        """Columns of the rows kept (time order decided, not yet sorted): t, finger, x, y,
+        force, event, line. Values are parsed per row and range-checked per column; the
+        first problem in file order is the one reported."""
+        col, width, n = self.col, len(self.names), len(numbered_rows)
+        t, fv, x, y = (np.empty(n) for _ in range(4))
         force = np.full(n, DEFAULT_FORCE_N)
         event = np.full(n, MOVE, dtype=np.int8)
-        lines = np.empty(n, dtype=np.int64)
-        keep = np.ones(n, dtype=bool)
-        has_force, has_event = "force_n" in col, "event" in col
-        tolerance = self.order.tolerance_s
+        lines = np.array([line for line, _ in numbered_rows], dtype=np.int64)
+        i_t, i_f, i_x, i_y = (col[name] for name in REQUIRED)
+        i_force, i_event = col.get("force_n"), col.get("event")
         for k, (line, row) in enumerate(numbered_rows):
-            if len(row) < len(self.names):
-                raise TraceError(f"{where}:{line}: {len(row)} fields, expected {len(self.names)} "
-                                 f"({','.join(self.names)})")
-            lines[k] = line
-            t[k] = _parse_number(row[col["t_s"]], where, line, "t_s")
-            finger[k] = int(_parse_number(row[col["finger"]], where, line, "finger"))
-            x[k] = _parse_number(row[col["x_mm"]], where, line, "x_mm")
-            y[k] = _parse_number(row[col["y_mm"]], where, line, "y_mm")
-            if has_force and row[col["force_n"]].strip():
-                force[k] = _parse_number(row[col["force_n"]], where, line, "force_n")
-            if has_event and row[col["event"]].strip():
-                word = row[col["event"]].strip()
-                if word not in EVENTS:
-                    raise TraceError(f"{where}:{line}: column event: {_short(word)} is not one of "
-                                     f"{', '.join(EVENTS)}")
-                event[k] = EVENTS.index(word)
-            if t[k] >= self.latest:
-                self.latest = t[k]
-            elif self.strict:
-                raise TraceError(f"{where}:{line}: t_s goes back from {float(self.latest)!r} to "
-                                 f"{float(t[k])!r} s (time must not decrease with --strict)")
-            elif t[k] >= max(self.latest - tolerance, self.released):
-                self.order.reordered += 1
-            else:
-                keep[k] = False
-                self.order.dropped += 1
-                if self.order.first_dropped_line is None:
-                    self.order.first_dropped_line = line
-        return [a[keep] for a in (t, finger, x, y, force, event, lines)]
+            try:
+                if len(row) < width:
+                    raise ValueError
+                t[k], fv[k], x[k], y[k] = float(row[i_t]), float(row[i_f]), float(row[i_x]), float(row[i_y])
+                if i_force is not None and row[i_force].strip():
+                    force[k] = float(row[i_force])
+                if i_event is not None and row[i_event].strip():
+                    event[k] = EVENTS.index(row[i_event].strip())
+            except ValueError:
+                self._check_values(numbered_rows[:k], t[:k], fv[:k], x[:k], y[:k], force[:k])
+                self._time_order(t[:k], lines[:k])
+                self._row_problem(line, row)
+        first_bad = self._check_values(numbered_rows, t, fv, x, y, force, raise_now=False)
+        self._time_order(t[:first_bad], lines[:first_bad])
+        if first_bad < n:
+            self._row_problem(*numbered_rows[first_bad])
+        keep = self._keep(t, lines)
+        return [a[keep] for a in (t, fv.astype(np.int64), x, y, force, event, lines)]
+
+    def _check_values(self, numbered_rows, t, fv, x, y, force, raise_now: bool = True) -> int:
+        """Index of the first row with a value out of its range (``len(t)`` if none);
+        with ``raise_now``, that row's TraceError instead."""
+        bad = np.zeros(t.size, dtype=bool)
+        for name, arr in (("t_s", t), ("finger", fv), ("x_mm", x), ("y_mm", y), ("force_n", force)):
+            lo, hi, _ = RANGES[name]
+            bad |= ~((arr >= lo) & (arr <= hi))  # NaN fails both
+        bad |= fv != np.floor(fv)
+        first = int(np.argmax(bad)) if bad.any() else t.size
+        if raise_now and first < t.size:
+            self._row_problem(*numbered_rows[first])
+        return first
+
+    def _row_problem(self, line: int, row: list[str]):
+        """Raise the TraceError of a row known to hold a problem."""
+        where = self.where
+        if len(row) < len(self.names):
+            raise TraceError(f"{where}:{line}: {len(row)} fields, expected {len(self.names)} "
+                             f"({','.join(self.names)})")
+        for name in ("t_s", "finger", "x_mm", "y_mm", "force_n"):
+            if name in self.col and (name != "force_n" or row[self.col[name]].strip()):
+                _parse_number(row[self.col[name]], where, line, name)
+        word = row[self.col["event"]].strip()
+        raise TraceError(f"{where}:{line}: column event: {_short(word)} is not one of "
+                         f"{', '.join(EVENTS)}")
+
+    def _time_order(self, t: np.ndarray, lines: np.ndarray) -> None:
+        """With ``strict``, raise at the first row earlier than a row before it."""
+        if not self.strict or t.size == 0:
+            return
+        before = np.maximum.accumulate(np.concatenate(([self.latest], t)))[:-1]
+        back = t < before
+        if back.any():
+            i = int(np.argmax(back))
+            raise TraceError(f"{self.where}:{lines[i]}: t_s goes back from {float(before[i])!r} "
+                             f"to {float(t[i])!r} s (time must not decrease with --strict)")
+
+    def _keep(self, t: np.ndarray, lines: np.ndarray) -> np.ndarray:
+        """Which rows are kept: those at most the tolerance earlier than the latest time
+        before them (and not before what was handed out); counts the rest as dropped."""
+        before = np.maximum.accumulate(np.concatenate(([self.latest], t)))[:-1]
+        back = t < before
+        keep = t >= np.maximum(before - self.order.tolerance_s, self.released)
+        keep |= ~back
+        self.order.reordered += int(np.count_nonzero(back & keep))
+        dropped = np.flatnonzero(~keep)
+        if dropped.size:
+            self.order.dropped += int(dropped.size)
+            if self.order.first_dropped_line is None:
+                self.order.first_dropped_line = int(lines[dropped[0]])
+        if t.size:
+            self.latest = max(self.latest, float(t.max()))
+        return keep
 
 
 def _lines(fh, where: str):
