@@ -74,6 +74,43 @@ def test_envelope_is_the_time_domain_peak_and_ratio_falls_towards_the_ends():
     assert_allclose(ACT.gain_at(300.0), 1.0, atol=0.01)
 
 
+def test_ratio_is_pointwise_exact_against_the_two_wave_model():
+    """Seed 002, eq 4 on the beam's modes 28-29: at mid-span the symmetric and the
+    antisymmetric mode are in exact spatial quadrature, so the wave is purely travelling
+    (tau = 1, where a half-wavelength min/max window read 0.984). Away from it they drift
+    by delta = (beta_B - beta_A)(x - L/2); splitting each mode's cosine into its two
+    travelling halves gives |F| ~ sqrt(1 + cos delta), |B| ~ sqrt(1 - cos delta), so
+    tau = (|F| - |B|) / (|F| + |B|) = (1 - |sin delta|) / |cos delta| (while cos delta > 0)."""
+    assert abs(float(ACT.ratio_at(300.0)) - 1.0) < 1e-9
+    dbeta = 2 * math.pi * (1 / BEAM.wavelength_mm(29) - 1 / BEAM.wavelength_mm(28))
+    x = np.linspace(100.0, 500.0, 81)  # clear of the end terms (below e^{-beta 100 mm} = 2e-7)
+    delta = dbeta * (x - 300.0)
+    assert np.all(np.cos(delta) > 0)
+    expected = (1 - np.abs(np.sin(delta))) / np.abs(np.cos(delta))
+    assert_allclose(ACT.ratio_at(x), expected, atol=5e-5)  # the table's linear interpolation
+    on = (WAVE.x_mm >= 100.0) & (WAVE.x_mm <= 500.0)  # on the grid itself, no interpolation
+    d = dbeta * (WAVE.x_mm[on] - 300.0)
+    assert_allclose(WAVE.local_ratio(WAVE.modal(1.0, 1))[on],
+                    (1 - np.abs(np.sin(d))) / np.abs(np.cos(d)), atol=1e-6)
+
+
+def test_ring_ratio_from_its_cos_and_sin_modes():
+    """On the ring's straight part psi_A = cos(k_A x), psi_B = sin(k_B x) (seed 004); with
+    W_A = s j, W_B = 1 the parts towards +x and -x are, by hand,
+    F = (s j e^{-j k_A x} + j e^{-j k_B x}) / 2 and B = (s j e^{j k_A x} - j e^{j k_B x}) / 2
+    (cos = (e^{jkx} + e^{-jkx}) / 2, sin = (e^{jkx} - e^{-jkx}) / 2j)."""
+    k_a, k_b = RING_WAVE.wavenumbers
+    s = RING_WAVE.sign
+    x = RING_WAVE.x_mm
+    forward = (s * 1j * np.exp(-1j * k_a * x) + 1j * np.exp(-1j * k_b * x)) / 2
+    backward = (s * 1j * np.exp(1j * k_a * x) - 1j * np.exp(1j * k_b * x)) / 2
+    got_f, got_b = RING_WAVE.travelling_parts(RING_WAVE.modal(1.0, 1))
+    assert_allclose(np.abs(got_f), np.abs(forward), atol=1e-9)
+    assert_allclose(np.abs(got_b), np.abs(backward), atol=1e-9)
+    tau = np.abs(np.abs(forward) - np.abs(backward)) / (np.abs(forward) + np.abs(backward))
+    assert_allclose(RING_WAVE.local_ratio(RING_WAVE.modal(1.0, 1)), tau, atol=1e-9)
+
+
 def test_phase_shift_sets_ratio_and_force_direction_on_the_ring():
     phase = np.radians([-180, -135, -90, -45, 0, 45, 90, 135, 180])
     ratio, force = phase_shift_response(RING_WAVE, phase, 3.0, 1.0, DrivingForceParams())

@@ -13,12 +13,25 @@ alone gives a standing wave of the same peak amplitude (seed 002, section 5).
 Two adjacent modes of a finite beam have different wavenumbers, so they stay in
 quadrature only near mid-span: the field is a pure travelling wave there and turns into
 a standing wave towards the ends. The local travelling-wave ratio is seed 004's
-(Fig. 4): the minimum over the maximum of the vibration envelope |W(x)|, here over a
-window of half a wavelength centred on x (clipped at the ends): the envelope of a
-locally travelling-plus-standing wave has period lambda/2, so that is the shortest
-window that holds both its minimum and its maximum. A field
-F e^{-jkx} + B e^{jkx} has ratio (|F| - |B|) / (|F| + |B|): a pure travelling wave of
-amplitude |F| - |B| (the window minimum) on top of a standing wave.
+(Fig. 4): the minimum over the maximum of the vibration envelope. A field
+F e^{-jkx} + B e^{jkx} has envelope between ||F| - |B|| and |F| + |B|, so ratio
+tau = ||F| - |B|| / (|F| + |B|): a pure travelling wave of amplitude ||F| - |B|| on top of
+a standing wave. F and B are read pointwise from the two modes' complex amplitudes
+(:meth:`TwoModeWave.travelling_parts`). Each mode shape is locally a propagating cosine,
+psi_n = cos(k_n x + theta_n) = (e^{-j(k_n x + theta_n)} + e^{j(k_n x + theta_n)}) / 2,
+whose parts travelling towards +x and -x are (psi_n + j psi_n' / k_n) / 2 and
+(psi_n - j psi_n' / k_n) / 2; summed over the modes with their amplitudes (eq 1)::
+
+    F(x) = 1/2 sum_n W_n (psi_n(x) + j psi_n'(x) / k_n)
+    B(x) = 1/2 sum_n W_n (psi_n(x) - j psi_n'(x) / k_n)
+
+With eq 4 (W_A = +-j W_B) and two modes in spatial quadrature (psi_A = cos, psi_B = sin
+at one k) one part vanishes: tau = 1, the pure travelling wave. Where the beam's modes
+drift out of quadrature by delta = (k_B - k_A)(x - L/2), tau = (1 - |sin delta|) / |cos delta|.
+(A min/max of |W| over a half-wavelength window, used before, read 0.984 at mid-span
+where tau is exactly 1: the window spans envelope that belongs to neighbouring points.)
+The end (evanescent) terms of the beam's shapes, below e^{-beta x} away from the ends,
+are read as if propagating; there tau is near 0 anyway.
 
 Seed 004 (eq 1, Fig. 4): on the ring the two degenerate modes are driven with a phase
 shift phi (W_A = e^{j phi} W_B); +-90 degrees gives a pure travelling wave, 0 or 180 a
@@ -40,14 +53,15 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import maximum_filter1d, minimum_filter1d
 
 from device.structures.beam import FreeFreeBeam, ModesError
 from device.structures.ring import RingMode, RingResonator
 from device.profile import DrivingForceParams
 
-#: envelope samples per wavelength (the window min/max is then within ~1e-4 of exact)
+#: grid samples per wavelength (ratio and gain tables are read between them linearly)
 _SAMPLES_PER_WAVELENGTH = 512
+#: step of the slopes' five-point difference, in wavelengths (error ~ (2 pi h)^4 / 30 ~ 5e-11)
+_SLOPE_STEP = 1e-3
 
 
 def driving_force(travelling_um, normal_force_n, params: DrivingForceParams) -> np.ndarray:
@@ -76,28 +90,38 @@ class TwoModeWave:
     """Two mode shapes sampled on the touch surface, scaled to unit propagating amplitude.
 
     shapes_at : x_mm (any shape) -> float64 (..., 2), psi_A and psi_B at x.
-    x_mm : float64 (g,) uniform grid along the surface (mm); shapes : (g, 2) on it.
+    x_mm : float64 (g,) uniform grid along the surface (mm); shapes : (g, 2) on it;
+    slopes : (g, 2) d psi / dx on it (1/mm).
     wavelength_mm : the waves' (mean) wavelength.
+    wavenumbers : (k_A, k_B), each mode's wavenumber 2 pi / lambda_n (rad/mm).
     sign : +1 or -1, the sign s for which W_A = s j W_B travels towards +x.
     """
 
     shapes_at: Callable[[np.ndarray], np.ndarray]
     x_mm: np.ndarray
     shapes: np.ndarray
+    slopes: np.ndarray
     wavelength_mm: float
+    wavenumbers: tuple[float, float]
     sign: int
 
     @classmethod
     def from_shapes(cls, shapes_at: Callable[[np.ndarray], np.ndarray], x_mm: np.ndarray,
-                    wavelength_mm: float) -> "TwoModeWave":
-        """Sample ``shapes_at`` on ``x_mm``; the direction sign is read from the phase slope mid-grid."""
-        wave = cls(shapes_at, x_mm, shapes_at(x_mm), wavelength_mm, 1)
+                    wavelengths_mm: tuple[float, float]) -> "TwoModeWave":
+        """Sample ``shapes_at`` and its slope on ``x_mm``; the direction sign is read from
+        the phase slope mid-grid."""
+        wavelength = 0.5 * (wavelengths_mm[0] + wavelengths_mm[1])
+        h = _SLOPE_STEP * wavelength
+        slopes = (8 * (shapes_at(x_mm + h) - shapes_at(x_mm - h))
+                  - (shapes_at(x_mm + 2 * h) - shapes_at(x_mm - 2 * h))) / (12 * h)
+        k = (2 * math.pi / wavelengths_mm[0], 2 * math.pi / wavelengths_mm[1])
+        wave = cls(shapes_at, x_mm, shapes_at(x_mm), slopes, wavelength, k, 1)
         mid = x_mm.size // 2
-        eighth = int(round(wavelength_mm / 8 / (x_mm[1] - x_mm[0])))
+        eighth = int(round(wavelength / 8 / (x_mm[1] - x_mm[0])))
         field = wave.field(wave.modal(1.0, 1))
         # e^{-jkx} (towards +x) has a phase falling with x
         turn = np.angle(field[mid + eighth] / field[mid])
-        return cls(shapes_at, x_mm, wave.shapes, wavelength_mm, 1 if turn < 0 else -1)
+        return cls(shapes_at, x_mm, wave.shapes, slopes, wavelength, k, 1 if turn < 0 else -1)
 
     def modal(self, amplitude_um, direction) -> np.ndarray:
         """Modal amplitudes (..., 2) complex (um) for amplitude W and direction (-1, 0, +1).
@@ -114,21 +138,28 @@ class TwoModeWave:
         shapes = self.shapes if x_mm is None else self.shapes_at(np.asarray(x_mm, dtype=np.float64))
         return np.tensordot(np.asarray(modal), shapes, axes=([-1], [-1]))
 
+    def travelling_parts(self, modal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Complex amplitudes (um) of the parts travelling towards +x (F) and -x (B) at
+        each grid point, ``(F, B)`` each (..., g), from ``modal`` (..., 2) (see the module
+        docstring: F, B = 1/2 sum_n W_n (psi_n +- j psi_n' / k_n))."""
+        k = np.asarray(self.wavenumbers)
+        turned = 1j * self.slopes / k  # j psi_n' / k_n, (g, 2)
+        forward = 0.5 * np.tensordot(np.asarray(modal), self.shapes + turned, axes=([-1], [-1]))
+        backward = 0.5 * np.tensordot(np.asarray(modal), self.shapes - turned, axes=([-1], [-1]))
+        return forward, backward
+
     def local_ratio(self, modal: np.ndarray) -> np.ndarray:
-        """Local travelling-wave ratio on the grid (g,): min / max of |W| over half a wavelength."""
-        env = np.abs(self.field(modal))
-        low = minimum_filter1d(env, self.window, mode="nearest")
-        high = maximum_filter1d(env, self.window, mode="nearest")
-        return np.divide(low, high, out=np.zeros_like(low), where=high > 0)
+        """Local travelling-wave ratio on the grid (g,): ||F| - |B|| / (|F| + |B|) (0 where
+        the field vanishes)."""
+        forward, backward = (np.abs(p) for p in self.travelling_parts(modal))
+        total = forward + backward
+        return np.divide(np.abs(forward - backward), total, out=np.zeros_like(total),
+                         where=total > 0)
 
     def local_max(self, modal: np.ndarray) -> np.ndarray:
-        """Local envelope maximum on the grid (g,), um: max of |W| over the window of :meth:`local_ratio`."""
-        return maximum_filter1d(np.abs(self.field(modal)), self.window, mode="nearest")
-
-    @property
-    def window(self) -> int:
-        """Grid points in half a wavelength (odd, so the window is centred)."""
-        return int(round(self.wavelength_mm / 2 / (self.x_mm[1] - self.x_mm[0]))) | 1
+        """Local envelope maximum on the grid (g,), um: |F| + |B|."""
+        forward, backward = (np.abs(p) for p in self.travelling_parts(modal))
+        return forward + backward
 
 
 def beam_wave(beam: FreeFreeBeam, order_a: int) -> TwoModeWave:
@@ -138,24 +169,24 @@ def beam_wave(beam: FreeFreeBeam, order_a: int) -> TwoModeWave:
     at mid-span, where the end (evanescent) terms are below e^{-beta L/2}.
     """
     orders = (order_a, order_a + 1)
-    wavelength = 0.5 * (beam.wavelength_mm(orders[0]) + beam.wavelength_mm(orders[1]))
-    n = int(math.ceil(beam.length_mm / wavelength * _SAMPLES_PER_WAVELENGTH)) + 1
+    wavelengths = (beam.wavelength_mm(orders[0]), beam.wavelength_mm(orders[1]))
+    n = int(math.ceil(beam.length_mm / min(wavelengths) * _SAMPLES_PER_WAVELENGTH)) + 1
     x = np.linspace(0.0, beam.length_mm, n)
     mid = beam.length_mm / 2
     scale = np.array([math.hypot(float(beam.shape(o, mid)),
                                  float(beam.shape(o, mid + beam.wavelength_mm(o) / 4)))
                       for o in orders])
-    return TwoModeWave.from_shapes(lambda xs: beam.phi(orders, xs) / scale, x, wavelength)
+    return TwoModeWave.from_shapes(lambda xs: beam.phi(orders, xs) / scale, x, wavelengths)
 
 
 def ring_wave(ring: RingResonator, order: int) -> TwoModeWave:
     """The symmetric (A) and asymmetric (B) modes of ``order`` on a straight part (seed 004)."""
     modes: tuple[RingMode, RingMode] = ring.pair(order)
-    wavelength = 0.5 * (modes[0].wavelength_mm + modes[1].wavelength_mm)
-    n = int(math.ceil(ring.length_mm / wavelength * _SAMPLES_PER_WAVELENGTH)) + 1
+    wavelengths = (modes[0].wavelength_mm, modes[1].wavelength_mm)
+    n = int(math.ceil(ring.length_mm / min(wavelengths) * _SAMPLES_PER_WAVELENGTH)) + 1
     x = np.linspace(-ring.length_mm / 2, ring.length_mm / 2, n)
     return TwoModeWave.from_shapes(
-        lambda xs: np.stack([ring.straight_shape(m, xs) for m in modes], axis=-1), x, wavelength)
+        lambda xs: np.stack([ring.straight_shape(m, xs) for m in modes], axis=-1), x, wavelengths)
 
 
 @dataclass(frozen=True, eq=False)
@@ -188,7 +219,7 @@ class BeamActuation:
         return np.interp(x_mm, self.wave.x_mm, self.wave.local_ratio(self.wave.modal(1.0, 1)))
 
     def gain_at(self, x_mm) -> np.ndarray:
-        """Local envelope maximum per unit W (the same window as :meth:`ratio_at`)."""
+        """Local envelope maximum |F| + |B| per unit W at positions ``x_mm``."""
         return np.interp(x_mm, self.wave.x_mm, self.wave.local_max(self.wave.modal(1.0, 1)))
 
 
