@@ -102,6 +102,26 @@ def _image(create: Callable[[Path], None], command: str = "validate"):
     return make
 
 
+BEAM = ('format = 1\n[display]\nwidth_mm = 108.0\nheight_mm = 6\nwidth_px = 800\nheight_px = 48\n'
+        '[device]\nprofile = "beam-seed000"\n[device.structure]\nmodes_file = "modes.csv"\n'
+        'actuators_mm = [60, 290]\n[[layer]]\ntype = "bump"\ncx_mm = 50\ncy_mm = 3\n'
+        'sigma_mm = 2\nmu = 0.7\n')
+
+
+def _modes(text: str | bytes | None = None, create: Callable[[Path], None] | None = None):
+    """A beam scene whose measured mode table (``modes_file``) is hostile."""
+    def make(folder: Path):
+        table = folder / "modes.csv"
+        if create is not None:
+            create(table)
+        else:
+            (table.write_bytes if isinstance(text, bytes) else table.write_text)(text)
+        scene = folder / "beam.toml"
+        scene.write_text(BEAM)
+        return ["validate", str(scene)], "modes.csv"
+    return make
+
+
 def _trace(text: str | bytes | None = None, create: Callable[[Path], None] | None = None):
     def make(folder: Path):
         path = folder / "hostile.csv"
@@ -191,6 +211,10 @@ CASES = [
     Case("image 12000 x 12000 px", _image(lambda p: p.write_bytes(_png(12000, 12000, 4)))),
     Case("image 12000 x 12000 px, replay", _image(lambda p: p.write_bytes(_png(12000, 12000, 4)),
                                                   "replay")),
+    # measured mode tables
+    Case("modes table is a FIFO", _modes(create=os.mkfifo)),
+    Case("modes table binary", _modes(BINARY[128:])),
+    Case("modes table 1e308", _modes("x_mm,A,B\n0,0,1\n100,1e308,0\n200,1,1\n350,0,1\n")),
     # trace files
     Case("trace is a FIFO", _trace(create=os.mkfifo)),
     Case("trace is a folder", _trace(create=os.mkdir)),

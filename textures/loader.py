@@ -151,6 +151,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable
 
+import numpy as np
+
 from device.structures.beam import THEORIES, ModesError
 from device.actuation.modal import METHODS
 from device import profile as profiles
@@ -662,9 +664,16 @@ def _modes_table(r: _Reader, path: KeyPath, name: str, raw: dict, base_dir: Path
     try:
         if problem is not None:
             raise ModesError(problem)
-        return MeasuredModes.from_csv(modes_path)
-    except (OSError, ModesError) as exc:
+        # the table's reader checks its grammar; binary content and values that overflow
+        # the spline fit come out as ValueError or (with errstate) FloatingPointError
+        with np.errstate(all="raise"):
+            return MeasuredModes.from_csv(modes_path)
+    except (OSError, ModesError, ValueError, FloatingPointError) as exc:
         text = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        if isinstance(exc, UnicodeDecodeError):
+            text = f"not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start})"
+        elif isinstance(exc, FloatingPointError):
+            text = f"deflections too large to fit splines through ({exc})"
         r.report(path + ("modes_file",), f"{_show(name)} ({modes_path}): {text}")
         return None
 
