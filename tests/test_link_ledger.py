@@ -4,7 +4,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from device.link import protocol as p
-from device.link.ledger import Ledger, Snapshot, unwrap
+from device.link.ledger import Ledger, Pacing, Snapshot, unwrap
 from device.link.protocol import DeviceState as S
 
 RATE = 10_000.0
@@ -27,21 +27,26 @@ def test_unwrap_is_the_congruent_number_nearest_the_reference(device_index, near
     assert -2**63 <= got - near < 2**63
 
 
+PACING = Pacing(RATE, target=200, prefill=100, window=2048)
+
+
 def test_after_a_watchdog_flush_the_empty_buffer_takes_the_next_block():
     # the host sent up to 1200; the device flushed 200 samples and waits at 1000
     for st_ in (status(1000, 0, S.BUFFERING, end=1000), status(1000, 0, S.BUFFERING)):
-        snap = Snapshot.from_status(st_, t_s=0.0, mark_end=1200)
-        assert snap.room(1.0, RATE, 1200, 1200, 50, target=200)
-    # the same sent position with the samples still held: 1250 - 1000 > 200, wait
-    held = Snapshot.from_status(status(1000, 200, S.BUFFERING, end=1200), 0.0, 1200)
-    assert not held.room(1.0, RATE, 1200, 1200, 50, target=200)
+        snap = Snapshot.from_status(st_, t_s=0.0, mark_end=1200, mark_count=1200)
+        assert snap.room(PACING, 1.0, 1200, 1200, 1200, 50)
+    # the same sent position with the samples still held (and playing): 1250 - 1000 > 200
+    held = Snapshot.from_status(status(1000, 200, S.PLAYING, end=1200), 0.0, 1200, 1200)
+    assert not held.room(PACING, 0.0, 1200, 1200, 1200, 50)
 
 
 def test_a_playing_device_drains_at_its_rate_from_the_report():
-    snap = Snapshot.from_status(status(1000, 200, end=1200), t_s=10.0, mark_end=1200)
+    snap = Snapshot.from_status(status(1000, 200, end=1200), t_s=10.0, mark_end=1200,
+                                mark_count=1200)
     # 5 ms at 10 kHz: 50 played, so 1250 - 1050 = 200 samples would be held
-    assert snap.room(10.005, RATE, 1200, 1200, 50, target=200)
-    assert not snap.room(10.005, RATE, 1200, 1200, 50, target=199)
+    assert snap.room(PACING, 10.005, 1200, 1200, 1200, 50)
+    tighter = Pacing(RATE, target=199, prefill=100, window=2048)
+    assert not snap.room(tighter, 10.005, 1200, 1200, 1200, 50)
     assert snap.level(10.005, RATE, 1200) == (1050, 1200)
     # it never plays past what it holds
     assert snap.level(99.0, RATE, 1200) == (1200, 1200)
@@ -49,16 +54,29 @@ def test_a_playing_device_drains_at_its_rate_from_the_report():
 
 def test_blocks_sent_after_the_heartbeat_are_in_flight_not_lost():
     # the Status says empty, but 200 samples went out after its heartbeat
-    snap = Snapshot.from_status(status(1000, 0, S.BUFFERING, end=1000), 0.0, mark_end=1000)
+    snap = Snapshot.from_status(status(1000, 0, S.PLAYING, end=1000), 0.0, mark_end=1000,
+                                mark_count=1000)
     assert snap.level(0.0, RATE, 1200) == (1000, 1200)
-    assert not snap.room(0.0, RATE, 1200, 1200, 50, target=200)
-    assert snap.room(0.0, RATE, 1000, 1000, 50, target=200)
+    assert not snap.room(PACING, 0.0, 1200, 1200, 1200, 50)
+    assert snap.room(PACING, 0.0, 1000, 1000, 1000, 50)
+
+
+def test_a_device_short_of_its_prefill_across_a_hole_gets_blocks_within_the_window():
+    """Blocks 1050..1400 were lost on the wire: the device holds 50 samples (1000..1050),
+    below its prefill of 100, and waits; the host's next block starts at 1400. Held to
+    the target the host would wait too (1450 - 1000 > 200): the old deadlock."""
+    snap = Snapshot.from_status(status(1000, 50, S.BUFFERING, end=1050), 0.0, 1400, 1400)
+    assert snap.room(PACING, 0.0, 1400, 1400, 1400, 50)
+    # once 50 more are on their way it has its prefill: back to the target
+    assert not snap.room(PACING, 0.0, 1450, 1450, 1450, 50)
+    # and never beyond the window, where the device would refuse it (overflow)
+    assert not snap.room(PACING, 0.0, 1400, 1400, 3100, 50)
 
 
 def test_a_flushed_message_empties_the_buffer_at_the_restart_index():
-    snap = Snapshot.flushed(2**64 - 5, t_s=3.0, sent_end=2**64 + 100)
+    snap = Snapshot.flushed(2**64 - 5, t_s=3.0, sent_end=2**64 + 100, sent_count=500)
     assert snap.play_index == snap.end == 2**64 - 5  # mapped onto the host's numbering
-    assert snap.room(3.0, RATE, 2**64 + 100, 2**64 + 100, 50, target=200)
+    assert snap.room(PACING, 3.0, 2**64 + 100, 500, 2**64 + 100, 50)
 
 
 def test_the_ledger_settles_every_commanded_sample():

@@ -327,3 +327,51 @@ def test_a_version_1_device_declares_1_and_drops_version_2_frames():
     assert info.message.protocol_version == 1
     assert core.receive(p.encode(p.Heartbeat(1), 1, version=2), 0.0) == b""
     assert core.decoder.counts.bad_version == 1
+
+
+@st.composite
+def host_traffic(draw):
+    """A random session of valid host frames (any u64 block index, right or wrong
+    shapes) with clock advances between them."""
+    steps = []
+    for _ in range(draw(st.integers(1, 25))):
+        kind = draw(st.sampled_from(["hello", "block", "block", "block", "heartbeat", "stop",
+                                     "wait"]))
+        if kind == "hello":
+            steps.append(p.Hello(draw(st.integers(0, 2**32 - 1))))
+        elif kind == "block":
+            n = draw(st.integers(0, 80))
+            ch = draw(st.sampled_from([1, 1, 2]))
+            amps = np.full((n, ch), draw(st.integers(0, 65535)), dtype=np.uint16)
+            phases = amps.copy() if draw(st.booleans()) else None
+            steps.append(p.Block(draw(st.integers(0, 2**64 - 1)
+                                      | st.integers(2**63 - 100, 2**63 + 100)
+                                      | st.integers(2**64 - 100, 2**64 - 1)), amps, phases))
+        elif kind == "heartbeat":
+            steps.append(p.Heartbeat(draw(st.integers(0, 2**32 - 1))))
+        elif kind == "stop":
+            steps.append(p.Stop(draw(st.booleans())))
+        else:
+            steps.append(draw(st.floats(0.0, 0.1)))
+    return steps
+
+
+@settings(derandomize=True, max_examples=150, deadline=None)
+@given(host_traffic(), st.sampled_from([1, 2]))
+def test_no_valid_host_traffic_makes_the_device_fail(steps, version):
+    core = DeviceCore(DeviceConfig(buffer_samples=512))
+    decoder = p.Decoder()
+    t = 0.0
+    for seq, step in enumerate(steps):
+        if isinstance(step, float):
+            t += step
+            replies = decoder.feed(core.advance_to(t))
+        else:
+            replies = decoder.feed(core.receive(p.encode(step, seq, version), t))
+        assert decoder.counts.discarded == 0
+        assert all(f.version == version for f in replies)
+        st_ = core.status(0)
+        if version == 2:
+            assert 0 <= st_.buffer_end < 2**64 and 0 <= core.level <= 512
+            ahead = (st_.buffer_end - st_.play_index) % 2**64
+            assert core.level <= ahead <= 512

@@ -20,10 +20,11 @@ a lost block or a reconnect the host never waits for samples the device no longe
 Every wait is bounded. The thread re-handshakes when the device says nothing valid for
 ``SILENCE_S`` or takes no block for that long; if the port fails (USB unplugged) it says
 so once on stderr and reopens the port until it returns (live: queued blocks are dropped
-and counted; paced: they wait, within the stall bound, and go out after). A caller's wait (``send`` paced, ``wait_for_room``, ``close``) longer than
-``stall_s`` is a *stall*: a warning on stderr, the block dropped (counted), the stream
-going on; ``max_stalls`` stalls in a row with nothing sent between them raise
-:class:`LinkStalled`, and so does every later call.
+and counted; paced: they wait, within the stall bound, and go out after). A caller's
+wait (``send`` paced, ``wait_for_room``, ``close``) longer than ``stall_s`` is a *stall*:
+a warning on stderr, the block dropped (counted), the stream going on; ``max_stalls``
+stalls in a row with nothing sent between them raise :class:`LinkStalled`, and so does
+every later call.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ import collections
 import os
 import select
 import socket
+import struct
 import subprocess
 import sys
 import threading
@@ -40,9 +42,16 @@ from dataclasses import asdict
 
 import numpy as np
 import serial
+from serial.urlhandler import protocol_socket
+
+try:
+    import fcntl
+    import termios
+except ImportError:  # Windows: in_waiting stays pyserial's (0 or 1)
+    fcntl = termios = None
 
 from device.link import protocol as p
-from device.link.ledger import Ledger, Snapshot
+from device.link.ledger import Ledger, Pacing, Snapshot
 from device.link.protocol import DeviceState, LinkError
 
 #: jitter-buffer prefill asked of the device, and the level paced sending keeps (s)
@@ -70,20 +79,36 @@ class LinkStalled(LinkError):
     """The device took nothing through ``max_stalls`` bounded waits in a row."""
 
 
-def open_port(spec: str):
-    """Open a pyserial port or URL, non-blocking reads; raises :class:`LinkError`.
+class _TcpPort(protocol_socket.Serial):
+    """pyserial's ``socket://`` port with TCP_NODELAY (without it small frames wait for
+    the peer's delayed ACK, tens of ms, longer than the device's watchdog), and an
+    ``in_waiting`` that counts the bytes waiting (pyserial's says 0 or 1, so draining
+    ``in_waiting`` bytes would read one byte per call and fall behind the device)."""
 
-    ``socket://`` links get TCP_NODELAY: without it small frames wait for the peer's
-    delayed ACK (tens of ms), longer than the device's watchdog.
-    """
+    def open(self):
+        super().open()
+        self._socket.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+
+    @property
+    def in_waiting(self) -> int:
+        if fcntl is None or not self.is_open:
+            return super().in_waiting
+        return struct.unpack("i", fcntl.ioctl(self._socket, termios.FIONREAD, b"\0" * 4))[0]
+
+
+def open_port(spec: str):
+    """Open a pyserial port or URL, reads waiting at most ``READ_WAIT_S``; raises
+    :class:`LinkError`. ``socket://`` URLs get a :class:`_TcpPort`."""
+    options = {"baudrate": 921_600, "timeout": READ_WAIT_S, "write_timeout": 0.5}
     try:
-        port = serial.serial_for_url(spec, baudrate=921_600, timeout=READ_WAIT_S,
-                                     write_timeout=0.5)
+        if spec.startswith("socket://"):
+            port = _TcpPort(None, **options)
+            port.port = spec
+            port.open()
+        else:
+            port = serial.serial_for_url(spec, **options)
     except (serial.SerialException, ValueError, OSError) as exc:
         raise LinkError(f"cannot open device port {spec!r}: {exc}") from None
-    sock = getattr(port, "_socket", None)  # pyserial's socket:// handler
-    if isinstance(sock, socket.socket):
-        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
     return port
 
 
@@ -159,10 +184,11 @@ class CommandSink:
         self.info = info
         self.version = min(info.protocol_version, p.PROTOCOL_VERSION)
         self._limits = np.asarray(info.limits_um[:self.channels], dtype=np.float64)
-        self._prefill = max(1, min(int(PREFILL_S * info.sample_rate_hz),
-                                   info.buffer_samples // 4))
-        self._target = max(self._prefill + 1,
+        prefill = max(1, min(int(PREFILL_S * info.sample_rate_hz), info.buffer_samples // 4))
+        self._target = max(prefill + 1,
                            min(int(TARGET_S * info.sample_rate_hz), info.buffer_samples // 2))
+        self._pacing = Pacing(info.sample_rate_hz, self._target, prefill,
+                              info.buffer_samples // 2)
         self._heartbeat_s = max(info.watchdog_ms / 5.0, 1.0) * 1e-3
         self._marks.clear()
         self._last_rx = self._last_progress = time.monotonic()
@@ -319,7 +345,12 @@ class CommandSink:
         if now - self._last_rx > SILENCE_S:
             self._resync(f"no valid frame from the device for {now - self._last_rx:.2f} s")
         elif self._queue and now - self._last_progress > SILENCE_S:
-            self._resync(f"device took no block for {now - self._last_progress:.2f} s")
+            snap, start = self._snapshot, self._queue[0][0]
+            where = ("no Status yet" if snap is None else
+                     f"device at {snap.play_index}, holding {snap.held} up to {snap.end}, "
+                     f"{'playing' if snap.playing else 'waiting'}; next block {start}")
+            self._resync(f"device took no block for {now - self._last_progress:.2f} s "
+                         f"({where})")
 
     def _service(self, heartbeat: bool) -> None:
         port = self._port
@@ -333,8 +364,8 @@ class CommandSink:
             while self._queue and len(out) < 4096 and self._ledger.reporting:
                 start, counts, phases = self._queue[0]
                 if self.paced and not self._snapshot.room(
-                        time.monotonic(), self.rate_hz, self._sent_end, start, len(counts),
-                        self._target):
+                        self._pacing, time.monotonic(), self._sent_end, self._ledger.mark(),
+                        start, len(counts)):
                     break
                 self._queue.popleft()
                 out += self._frame(p.Block(start % p.INDEX_MODULUS, counts, phases))
@@ -360,11 +391,14 @@ class CommandSink:
                 sent_t, sent_end, ledger_mark = mark
                 self._rtt_ms.append((now - sent_t) * 1e3)
                 with self._cond:
-                    self._snapshot = Snapshot.from_status(msg, 0.5 * (now + sent_t), sent_end)
+                    self._snapshot = Snapshot.from_status(msg, 0.5 * (now + sent_t), sent_end,
+                                                          ledger_mark)
                     self._ledger.status(msg, ledger_mark)
         elif isinstance(msg, p.Flushed):
             self._counts["device_flushes"] += 1
-            self._snapshot = Snapshot.flushed(msg.play_index, now, self._sent_end)
+            with self._cond:
+                self._snapshot = Snapshot.flushed(msg.play_index, now, self._sent_end,
+                                                  self._ledger.mark())
         elif isinstance(msg, p.ErrorReport):
             self._errors[p.ErrorCode.NAMES.get(msg.code, "other")] += 1
 

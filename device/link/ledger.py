@@ -32,34 +32,51 @@ def unwrap(device_index: int, near: int) -> int:
 
 
 @dataclass(frozen=True)
+class Pacing:
+    """A paced host's limits, in samples at ``rate_hz``: keep at most ``target`` buffered;
+    a device that waits for ``prefill`` samples (BUFFERING) gets blocks up to ``window``
+    ahead of its play position, so it reaches its prefill across holes left by lost
+    blocks (frames arrive in order and are never resent: a hole stays a hole)."""
+
+    rate_hz: float
+    target: int
+    prefill: int
+    window: int
+
+
+@dataclass(frozen=True)
 class Snapshot:
-    """The device's buffer as of host time ``t_s`` (s): it plays ``play_index`` next and
-    holds samples up to ``end`` (exclusive); ``playing``: its clock advances
-    ``play_index``; ``mark_end``: how far the host had sent when the device's report left
-    it (anything sent beyond is still on its way)."""
+    """The device's buffer as of host time ``t_s`` (s): it plays ``play_index`` next,
+    holds ``held`` samples up to ``end`` (exclusive); ``playing``: its clock advances
+    ``play_index``. ``mark_end`` / ``mark_count``: how far the host had sent (sample
+    number after the last, samples this session) when the device's report left it;
+    anything sent beyond is still on its way."""
 
     t_s: float
     play_index: int
     end: int
+    held: int
     playing: bool
     mark_end: int
+    mark_count: int
 
     @classmethod
-    def from_status(cls, st, t_s: float, mark_end: int) -> Snapshot:
-        """From a Status answering a heartbeat sent when the host had sent up to
-        ``mark_end``; version 1 Statuses lack ``buffer_end`` and give ``play + level``."""
+    def from_status(cls, st, t_s: float, mark_end: int, mark_count: int) -> Snapshot:
+        """From a Status answering a heartbeat sent at mark (``mark_end``,
+        ``mark_count``); version 1 Statuses lack ``buffer_end`` and give ``play + level``."""
         play = unwrap(st.play_index, mark_end)
         end = unwrap(st.buffer_end, mark_end) if st.accounted else play + st.level
-        return cls(t_s, play, max(end, play),
-                   st.state in (DeviceState.PLAYING, DeviceState.DRAINING), mark_end)
+        return cls(t_s, play, max(end, play), st.level,
+                   st.state in (DeviceState.PLAYING, DeviceState.DRAINING), mark_end,
+                   mark_count)
 
     @classmethod
-    def flushed(cls, play_index: int, t_s: float, sent_end: int) -> Snapshot:
+    def flushed(cls, play_index: int, t_s: float, sent_end: int, sent_count: int) -> Snapshot:
         """After a Flushed message: empty at ``play_index``; what was sent before it
         arrived is taken as flushed (an underestimate of the level at worst, which
         the next Status corrects)."""
         play = unwrap(play_index, sent_end)
-        return cls(t_s, play, play, False, sent_end)
+        return cls(t_s, play, play, 0, False, sent_end, sent_count)
 
     def level(self, now_s: float, rate_hz: float, sent_end: int) -> tuple[int, int]:
         """(estimated play index now, estimated buffer end) given the host has sent up to
@@ -70,12 +87,18 @@ class Snapshot:
             played += int(max(now_s - self.t_s, 0.0) * rate_hz)
         return min(played, end), end
 
-    def room(self, now_s: float, rate_hz: float, sent_end: int, start: int, n: int,
-             target: int) -> bool:
-        """Would block ``[start, start + n)`` keep the buffer at or below ``target``
-        samples? An empty buffer takes any block (the device jumps to a block ahead)."""
-        played, end = self.level(now_s, rate_hz, sent_end)
-        return end <= played or start + n - played <= target
+    def room(self, pacing: Pacing, now_s: float, sent_end: int, sent_count: int, start: int,
+             n: int) -> bool:
+        """May block ``[start, start + n)`` go out? Yes if the estimated buffer is empty
+        (the device jumps to a block ahead), if the buffer stays at or below the target,
+        or if the device waits for its prefill (counting what is on its way) and the
+        block lands within the window."""
+        played, end = self.level(now_s, pacing.rate_hz, sent_end)
+        if end <= played or start + n - played <= pacing.target:
+            return True
+        starving = (not self.playing
+                    and self.held + sent_count - self.mark_count < pacing.prefill)
+        return starving and start + n - played <= pacing.window
 
 
 def _delta(new: int, old: int) -> int:
