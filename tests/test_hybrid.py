@@ -68,38 +68,38 @@ def test_a_still_finger_gets_no_correction():
 
 def test_a_lost_lock_under_a_crawling_finger_is_worked_off_at_the_relock_speed():
     """The finger crawls forward at 1 mm/s (a screen still reporting a resting finger);
-    the measurements put it 1.5 mm back from where the phase is (more than the position
+    the measurements put it 3 mm back from where the phase is (more than the position
     lock takes at once), across a 15 mm grating's line (7.5 mm). Bounded by the finger's
     own speed the phase would need 0.5 mm / 0.9 mm/s = 0.56 s to get back over the line;
-    at SLIP x RELOCK_MM_S it is there after 0.5 mm / 18 mm/s = 28 ms and the error is
-    worked off down to the lock within 1.4 mm / 18 mm/s = 78 ms."""
+    at SLIP x RELOCK_MM_S it is there after 0.5 mm / 17 mm/s = 29 ms and the error is
+    worked off down to the lock within 2.9 mm / 17 mm/s = 0.17 s."""
     layer = grating_scene(15.0).layers[0]
-    assert 1.5 > BACK_MM
+    assert 3.0 > BACK_MM
     r = HybridRenderer(layer, RATE)
     _, _, state = r.render(_block(np.full(100, 8.0), np.full(100, 1.0)), r.initial_state())
     n = 2000
-    mu, _, _ = r.render(_block(np.full(n, 6.5), np.full(n, 1.0), index0=100), state)
-    crossed = np.flatnonzero(mu[0] == layer.mu_at(6.5, 30.0))[0] / RATE
+    mu, _, _ = r.render(_block(np.full(n, 5.0), np.full(n, 1.0), index0=100), state)
+    crossed = np.flatnonzero(mu[0] == layer.mu_at(5.0, 30.0))[0] / RATE
     # the phase moves back at SLIP x RELOCK less the finger's own 1 mm/s forward
     line_s = 0.5 / (SLIP * RELOCK_MM_S - 1.0)
-    relock_s = (1.5 - LOCK_MM) / (SLIP * RELOCK_MM_S - 1.0)
+    relock_s = (3.0 - LOCK_MM) / (SLIP * RELOCK_MM_S - 1.0)
     assert mu[0, 0] == layer.mu_at(8.0, 30.0)
     assert abs(crossed - line_s) < 2e-3
-    assert (mu[0, int(relock_s * RATE) + 1:] == layer.mu_at(6.5, 30.0)).all()
+    assert (mu[0, int(relock_s * RATE) + 1:] == layer.mu_at(5.0, 30.0)).all()
 
 
 def test_coarse_layers_take_small_errors_and_errors_ahead_at_once():
     """Position lock on a 15 mm grating, the finger moving at 40 mm/s across the line at
     7.5 mm: a measurement 0.8 mm or 3 mm ahead of the phase is taken at once, so is one
-    0.8 mm behind (within BACK_MM); one 1.5 mm behind is not (slewed); the fine 0.6 mm
+    1.5 mm behind (within BACK_MM); one 3 mm behind is not (slewed); the fine 0.6 mm
     grating takes no error at once."""
     coarse, fine = grating_scene(15.0).layers[0], grating_scene(0.6).layers[0]
-    assert 0.8 < BACK_MM < 1.5 and 15.0 >= COARSE_MM > 0.6
+    assert 1.5 < BACK_MM < 3.0 and 15.0 >= COARSE_MM > 0.6
     t = np.arange(400) / RATE
     # (layer, start, jump, taken): the phase reaches start + 0.8 mm, the measurement says
     # start + 0.8 + jump, in the other band (or half period) from it
     for layer, start, jump, taken in ((coarse, 6.2, 0.8, True), (coarse, 6.2, 3.0, True),
-                                      (coarse, 7.1, -0.8, True), (coarse, 7.2, -1.5, False),
+                                      (coarse, 7.8, -1.5, True), (coarse, 9.5, -3.0, False),
                                       (fine, 6.2, 0.25, False)):
         assert layer.mu_at(start + 0.8, 30.0) != layer.mu_at(start + 0.8 + jump, 30.0)
         r = HybridRenderer(layer, RATE)
@@ -108,7 +108,9 @@ def test_coarse_layers_take_small_errors_and_errors_ahead_at_once():
         x = start + 40.0 * t[200:] + jump
         mu, _, _ = r.render(_block(x, np.full(200, 40.0), x_held=np.full(200, x[0]), index0=200),
                             state)
-        assert np.array_equal(mu[0], layer.mu_at(x, 30.0)) == taken, (layer.period_mm, jump)
+        # taken: the measured band from the first sample (one sample of rounding at the line)
+        wrong = np.count_nonzero(mu[0] != layer.mu_at(x, 30.0))
+        assert (wrong <= 1) if taken else (wrong > 20), (layer.period_mm, jump, wrong)
 
 
 def test_correction_never_exceeds_slip_times_the_finger_phase_rate():

@@ -12,6 +12,14 @@ Motions:
 - ``human``: strokes between random waypoints with a minimum-jerk speed profile
   (Flash & Hogan 1985, the standard model of human reaching), random peak speeds and
   pauses with the finger resting.
+- ``human-varied``: the ways people explore a texture, drawn one after another:
+  strokes whose speed varies within the stroke (a minimum-jerk profile with a ripple,
+  still never backwards), slow creeping (2-5 mm/s), fast flicks (200-500 mm/s peaks),
+  reversals (a stroke straight back, no pause), circular arcs, and pauses. Each part
+  starts and ends at rest, as minimum-jerk movements do.
+
+``sample`` can add what real controllers do to the timing: jitter of the timestamps
+and dropped samples (``drop``, the share of samples the screen never reports).
 """
 
 from __future__ import annotations
@@ -22,7 +30,10 @@ import numpy as np
 
 from rendering.input.trace_file import DOWN, MOVE, UP, Trace, make_trace
 
-MOTIONS = ("swipe", "back-and-forth", "circle", "human")
+MOTIONS = ("swipe", "back-and-forth", "circle", "human", "human-varied")
+#: segment kinds of ``human-varied`` and their draw probabilities
+SEGMENTS = {"stroke": 0.3, "varying": 0.2, "creep": 0.1, "flick": 0.1, "reversal": 0.1,
+            "arc": 0.1, "pause": 0.1}
 
 
 @dataclass(frozen=True)
@@ -47,6 +58,8 @@ class Motion:
         if self.kind == "circle":
             a = p["a0"] + p["speed"] / p["radius"] * t
             return p["cx"] + p["radius"] * np.cos(a), p["cy"] + p["radius"] * np.sin(a)
+        if self.kind == "human-varied":
+            return _segments(t, p["segments"])
         return _min_jerk(t, p["knots_t"], p["knots_x"], p["knots_y"])
 
 
@@ -59,6 +72,31 @@ def _min_jerk(t, knots_t, knots_x, knots_y):
     s = 10 * tau**3 - 15 * tau**4 + 6 * tau**5
     kx, ky = np.asarray(knots_x), np.asarray(knots_y)
     return kx[seg] + (kx[seg + 1] - kx[seg]) * s, ky[seg] + (ky[seg + 1] - ky[seg]) * s
+
+
+def _progress(tau, ripple: float, cycles: float):
+    """Minimum-jerk progress 0 -> 1 over tau in [0, 1], plus ``ripple`` times
+    sin(2 pi cycles tau) tau^3 (1 - tau)^3, whose slope is at most
+    ripple (pi cycles / 2 + 3) tau^2 (1 - tau)^2: below the minimum-jerk slope
+    30 tau^2 (1 - tau)^2 while ``ripple < 30 / (pi cycles / 2 + 3)``, so it never runs back."""
+    s = 10 * tau**3 - 15 * tau**4 + 6 * tau**5
+    return s + ripple * np.sin(2 * np.pi * cycles * tau) * (tau * (1 - tau)) ** 3
+
+
+def _segments(t, segments):
+    """Position (mm) at times ``t`` of a list of segments ``(t0, t1, kind, params)``,
+    ``kind`` "line" (x0, y0, x1, y1, ripple, cycles) or "arc" (cx, cy, radius, a0, a1)."""
+    x, y = np.empty(t.shape), np.empty(t.shape)
+    for i, (t0, t1, kind, q) in enumerate(segments):
+        sel = (t >= t0) & ((t < t1) | (i == len(segments) - 1))
+        tau = np.clip((t[sel] - t0) / (t1 - t0), 0.0, 1.0)
+        if kind == "line":
+            u = _progress(tau, q[4], q[5])
+            x[sel], y[sel] = q[0] + (q[2] - q[0]) * u, q[1] + (q[3] - q[1]) * u
+        else:
+            a = q[3] + (q[4] - q[3]) * _progress(tau, 0.0, 0.0)
+            x[sel], y[sel] = q[0] + q[2] * np.cos(a), q[1] + q[2] * np.sin(a)
+    return x, y
 
 
 def make_motion(kind: str, *, speed_mm_s: float = 40.0, duration_s: float = 2.0,
@@ -81,7 +119,9 @@ def make_motion(kind: str, *, speed_mm_s: float = 40.0, duration_s: float = 2.0,
     if kind == "circle":
         return Motion(kind, duration_s, dict(cx=x0_mm + radius_mm, cy=y0_mm, radius=radius_mm,
                                              speed=speed_mm_s, a0=np.pi))
-    return _human_motion(speed_mm_s, duration_s, area_mm, seed)
+    if kind == "human":
+        return _human_motion(speed_mm_s, duration_s, area_mm, seed)
+    return _varied_motion(speed_mm_s, duration_s, area_mm, seed)
 
 
 def _human_motion(speed_mm_s: float, duration_s: float, area_mm, seed: int) -> Motion:
@@ -108,20 +148,90 @@ def _human_motion(speed_mm_s: float, duration_s: float, area_mm, seed: int) -> M
     return Motion("human", duration_s, dict(knots_t=knots_t, knots_x=knots_x, knots_y=knots_y))
 
 
+def _varied_motion(speed_mm_s: float, duration_s: float, area_mm, seed: int) -> Motion:
+    """Segments drawn from ``SEGMENTS`` until ``duration_s`` (speeds scale with
+    ``speed_mm_s``, the typical stroke's peak; creeping and flicks have their own)."""
+    rng = np.random.default_rng(seed)
+    w, h = area_mm
+    margin = 8.0
+    kinds, weights = zip(*SEGMENTS.items())
+    x, y, t = w * 0.3, h * 0.5, 0.0
+    segments = []
+
+    def inside(length, angle):
+        return (float(np.clip(x + length * np.cos(angle), margin, w - margin)),
+                float(np.clip(y + length * np.sin(angle), margin, h - margin)))
+
+    def line(length, peak, angle, ripple=0.0, cycles=0.0):
+        nonlocal x, y, t
+        x1, y1 = inside(length, angle)
+        if np.hypot(x1 - x, y1 - y) < 0.5 * length:  # against an edge: turn round
+            x1, y1 = inside(length, angle + np.pi)
+        move_s = max(1.875 * float(np.hypot(x1 - x, y1 - y)) / peak, 0.04)
+        segments.append((t, t + move_s, "line", (x, y, x1, y1, ripple, cycles)))
+        x, y, t = x1, y1, t + move_s
+
+    while t < duration_s:
+        kind = kinds[rng.choice(len(kinds), p=np.array(weights) / sum(weights))]
+        angle = rng.uniform(-np.pi, np.pi) if rng.random() < 0.3 else rng.choice([0.0, np.pi])
+        peak = speed_mm_s * rng.uniform(0.5, 1.8)
+        if kind == "stroke":
+            line(rng.uniform(15.0, 60.0), peak, angle)
+        elif kind == "varying":
+            cycles = float(rng.integers(1, 4))
+            line(rng.uniform(25.0, 60.0), peak, angle,
+                 0.8 * 30.0 / (np.pi * cycles / 2 + 3) * rng.choice([-1.0, 1.0]), cycles)
+        elif kind == "creep":
+            line(rng.uniform(1.0, 4.0), rng.uniform(2.0, 5.0) * 1.875, angle)
+        elif kind == "flick":
+            line(rng.uniform(15.0, 40.0), rng.uniform(200.0, 500.0), angle)
+        elif kind == "reversal":
+            length = rng.uniform(10.0, 40.0)
+            x0, y0 = x, y
+            line(length, peak, angle)
+            line(float(np.hypot(x - x0, y - y0)), peak, float(np.arctan2(y0 - y, x0 - x)))
+        elif kind == "arc":
+            radius = rng.uniform(8.0, 20.0)
+            sweep = rng.uniform(0.5, 1.5) * 2 * np.pi * rng.choice([-1.0, 1.0])
+            a0 = rng.uniform(-np.pi, np.pi)
+            cx = float(np.clip(x - radius * np.cos(a0), margin + radius, w - margin - radius))
+            cy = float(np.clip(y - radius * np.sin(a0), margin + radius, h - margin - radius))
+            # start on the circle (a short line there if the centre had to move in)
+            sx, sy = cx + radius * np.cos(a0), cy + radius * np.sin(a0)
+            if np.hypot(sx - x, sy - y) > 1e-9:
+                line(float(np.hypot(sx - x, sy - y)), peak, float(np.arctan2(sy - y, sx - x)))
+            move_s = max(1.875 * radius * abs(sweep) / max(peak, 40.0), 0.1)
+            segments.append((t, t + move_s, "arc", (cx, cy, radius, a0, a0 + sweep)))
+            x, y, t = cx + radius * np.cos(a0 + sweep), cy + radius * np.sin(a0 + sweep), t + move_s
+        else:  # pause, finger resting
+            rest = rng.uniform(0.1, 0.5)
+            segments.append((t, t + rest, "line", (x, y, x, y, 0.0, 0.0)))
+            t += rest
+    return Motion("human-varied", duration_s, dict(segments=segments))
+
+
 def sample(motion: Motion, rate_hz: float, *, noise_mm: float = 0.0, jitter_s: float = 0.0,
-           force_n: float = 0.5, seed: int = 0, finger: int = 0) -> Trace:
+           drop: float = 0.0, force_n: float = 0.5, seed: int = 0, finger: int = 0) -> Trace:
     """The motion as a touch screen at ``rate_hz`` reports it (down first, up last).
 
     ``noise_mm``: standard deviation of position noise; ``jitter_s``: standard deviation
-    of timestamp jitter (kept monotonic).
+    of timestamp jitter (kept monotonic); ``drop``: share of samples in [0, 1) the screen
+    never reports (drawn independently; the first and the last are always kept).
     """
     if rate_hz <= 0:
         raise ValueError(f"sampling rate {rate_hz} Hz must be > 0")
+    if not 0.0 <= drop < 1.0:
+        raise ValueError(f"drop {drop!r}: expected a share of samples in [0, 1)")
     rng = np.random.default_rng(seed + 1)
     n = int(np.floor(motion.duration_s * rate_hz)) + 1
     t = np.arange(n) / rate_hz
     if jitter_s > 0:
         t = np.maximum.accumulate(np.clip(t + rng.normal(0, jitter_s, n), 0, motion.duration_s))
+    if drop > 0:
+        kept = rng.random(n) >= drop
+        kept[0] = kept[-1] = True
+        t = t[kept]
+        n = t.size
     x, y = motion.position(t)
     if noise_mm > 0:
         x = x + rng.normal(0, noise_mm, n)
