@@ -174,3 +174,81 @@ def test_live_thread_on_the_device_paced_clock_with_the_simulated_device(tmp_pat
     assert status["played_samples"] + status["unplayed_samples"] == commands.size
     assert played.shape[0] == status["played_samples"]
     np.testing.assert_allclose(played[:, 1], commands[index], atol=1e-4)  # wire resolution
+
+
+def stroke(t0, x0, n=20, step_s=0.02, speed=40.0):
+    """One finger down at t0, moving at ``speed`` mm/s, up after n samples (rows)."""
+    rows = []
+    for i in range(n):
+        event = "down" if i == 0 else ("up" if i == n - 1 else "move")
+        rows.append(f"{t0 + i * step_s!r},0,{x0 + speed * i * step_s!r},32.4,0.5,{event}")
+    return rows
+
+
+def write_csv(path, rows):
+    path.write_text("t_s,finger,x_mm,y_mm,force_n,event\n" + "\n".join(rows) + "\n")
+    return path
+
+
+def test_a_long_gap_is_a_lift_and_its_silence_is_not_written(tmp_path):
+    """Two strokes 1e9 s apart (a clock that jumped): written in full they would be 10^13
+    rows. The gap is skipped (0.1 s kept each side), and the second stroke's commands are
+    what the same stroke gives replayed alone."""
+    scene = load_scene(resolve_scene("grating-5mm"))
+    both = write_csv(tmp_path / "both.csv", stroke(0.0, 20.0) + stroke(1e9, 20.0))
+    alone = write_csv(tmp_path / "alone.csv", stroke(1e9, 20.0))
+    doc = run_replay(scene, str(both), tmp_path / "both", progress=False)
+    assert doc["trace"]["gaps"] == {"limit_s": 5.0, "count": 1, "skipped_s": pytest.approx(1e9, rel=1e-9)}
+    assert any("taken as lifts" in w for w in doc["warnings"])
+    run_replay(scene, str(alone), tmp_path / "alone", progress=False)
+    got = np.loadtxt(tmp_path / "both" / "commands.csv", delimiter=",", skiprows=1)
+    ref = np.loadtxt(tmp_path / "alone" / "commands.csv", delimiter=",", skiprows=1)
+    first = 0.38 + 0.1  # the first stroke (0.38 s) and the kept 0.1 s after it
+    assert got.shape[0] == doc["output"]["samples"]
+    assert got.shape[0] < (first + 0.1 + ref.shape[0] / 1e4 + 0.02) * 1e4
+    np.testing.assert_array_equal(got[-ref.shape[0]:, 1], ref[:, 1])
+    assert np.all(np.diff(got[:, 0]) > 0)  # time runs forward, jumping once
+
+
+def test_a_finger_held_over_a_long_gap_is_lifted_at_its_start(tmp_path):
+    """No up before the gap: the finger is lifted where the gap starts (not held touching
+    for the whole gap), and touches again with the next sample."""
+    rows = stroke(0.0, 20.0)[:-1] + [r.replace(",move", ",move") for r in stroke(60.0, 40.0)[1:]]
+    trace = write_csv(tmp_path / "held.csv", rows)
+    doc = run_replay(load_scene(resolve_scene("grating-5mm")), str(trace), tmp_path / "o",
+                     progress=False, max_gap_s=5.0)
+    friction = np.loadtxt(tmp_path / "o" / "friction.csv", delimiter=",", skiprows=1)
+    assert doc["trace"]["gaps"]["count"] == 1
+    assert friction[:, 0].max() > 60.0 and not np.any((friction[:, 0] > 1.0) & (friction[:, 0] < 59.0))
+
+
+def test_outputs_that_would_not_fit_the_disk_are_refused_before_writing(tmp_path, monkeypatch, capsys):
+    """The outputs' size is estimated from the trace before anything is written."""
+    import shutil
+    from collections import namedtuple
+
+    from app.commands.cli import main
+    usage = namedtuple("usage", "total used free")
+    monkeypatch.setattr(shutil, "disk_usage", lambda path: usage(10 << 30, 0, 100 << 20))
+    assert main(["replay", SCENE, TRACE, "--out", str(tmp_path / "fits"), "--quiet"]) == 0
+    assert main(["replay", SCENE, TRACE, "--out", str(tmp_path / "big"), "--rate", "1e6"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "the outputs (5.0001 s at 1e+06 Hz" in err[0] and "is free" in err[0]
+    assert sorted(p.name for p in (tmp_path / "big").iterdir()) == []
+
+
+def test_a_disk_filling_up_mid_run_fails_loudly_and_leaves_nothing(tmp_path, monkeypatch):
+    """Free space is checked before every batch: a run that outgrows the disk stops with
+    one clear error, not a half-written file."""
+    import shutil
+    from collections import namedtuple
+
+    from app.engine import tables
+    usage = namedtuple("usage", "total used free")
+    free = iter([1 << 40] * 3 + [1 << 20] * 100)  # plenty for the estimate, then full
+    monkeypatch.setattr(shutil, "disk_usage", lambda path: usage(1 << 41, 0, next(free)))
+    monkeypatch.setattr(tables, "BATCH_ROWS", 5000)
+    scene = load_scene(resolve_scene(SCENE))
+    with pytest.raises(OSError, match=r"the next \d+ rows of .* need about"):
+        run_replay(scene, resolve_trace(TRACE), tmp_path, progress=False)
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

@@ -11,7 +11,7 @@ from app.commands.cli import main
 DOC = Path(__file__).resolve().parents[1] / "app" / "engine" / "SUMMARY.md"
 #: objects whose keys are data (finger ids, layer names) or documented elsewhere
 OPEN = ("fingers", "forces", "device", "timings.layers_s", "timings.loop_s",
-        "timings.stages_s", "trace.time_order")
+        "timings.stages_s", "trace.time_order", "trace.gaps")
 
 
 def documented() -> set[str]:

@@ -43,3 +43,16 @@ def fault_plan(text: str):
         return parse_faults(text)
     except ValueError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+#: output sample rates a pipeline may run at (Hz): seed 003's link runs at 10 kHz
+OUTPUT_RATES_HZ = (100.0, 1e6)
+
+
+def output_rate(text: str) -> float:
+    """An output sample rate (Hz) within :data:`OUTPUT_RATES_HZ`."""
+    value = positive_float(text)
+    low, high = OUTPUT_RATES_HZ
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(f"{text!r} Hz: expected {low:g} to {high:g} Hz")
+    return value

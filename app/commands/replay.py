@@ -5,8 +5,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from app.commands.argtypes import fault_plan, positive_float, positive_int, share
+from app.commands.argtypes import fault_plan, output_rate, positive_float, positive_int, share
 from app.engine.replay import run_replay
+from app.engine.sources import MAX_GAP_S
 from app.engine.tables import FORMATS
 from rendering.pipeline import RENDERERS
 
@@ -15,7 +16,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scene", help="texture file (.toml) or bundled scene name (see frictex library)")
     parser.add_argument("trace", help="trace CSV or bundled trace name (see frictex library)")
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    parser.add_argument("--rate", type=positive_float, default=10_000.0, metavar="HZ",
+    parser.add_argument("--rate", type=output_rate, default=10_000.0, metavar="HZ",
                         help="output sample rate (default 10000 Hz, the seed 003 link)")
     parser.add_argument("--block", type=positive_int, default=50, metavar="N",
                         help="block size in output samples: touch samples take effect at "
@@ -35,6 +36,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--max-unplayed", type=share, default=0.01, metavar="SHARE",
                         help="with --device: exit 1 when more than this share of the "
                              "commanded samples never played on the device (default 0.01)")
+    parser.add_argument("--max-gap", type=positive_float, default=MAX_GAP_S, metavar="S",
+                        help=f"a gap between touch samples longer than this is a lift; its "
+                             f"silence is not written (default {MAX_GAP_S:g} s)")
     parser.add_argument("--strict", action="store_true",
                         help="refuse a trace whose time goes back (default: samples up to "
                              "5 ms back are sorted into order, further back dropped, counted)")
@@ -51,7 +55,8 @@ def run(args: argparse.Namespace) -> int:
     summary = run_replay(args.scene, args.trace, args.out, rate_hz=args.rate,
                          fmt=args.format, device=args.device, block_size=args.block,
                          render_override=args.renderer, progress=not args.quiet,
-                         frames=frames, strict=args.strict, faults=args.faults)
+                         frames=frames, strict=args.strict, faults=args.faults,
+                         max_gap_s=args.max_gap)
     if not args.quiet:
         out = summary["output"]
         timing = summary["timings"]

@@ -47,18 +47,21 @@ class RunTimer:
 
 def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,
           timer: RunTimer | None = None) -> int:
-    """Run until ``source.done`` (or ``stop()`` is true); returns the number of blocks run.
+    """Run until ``source.done`` (or ``stop()`` is true); returns the number of blocks run
+    (skipped gaps not counted).
 
-    ``stage.process(k, samples, n) -> (out, commands_um)``; ``source.take(k, n) ->
+    ``stage.process(k, samples, n) -> (out, commands_um)``; ``source.resume_at(k)`` (the
+    block to run next: ``k``, or later past a skipped gap), ``source.take(k, n) ->
     (samples, n_run)``; ``sink.write(out, commands_um)``, ``sink.commit()``,
     ``sink.abort()``; ``clock.wait(k)``, ``clock.finished(k, n)``.
     """
     timer = RunTimer() if timer is None else timer
     seconds = timer.seconds
-    k = 0
+    k = run = 0
     pending = list(sinks)
     try:
         while not source.done and not (stop is not None and stop()):
+            k = source.resume_at(k)
             clock.wait(k)
             t0 = time.perf_counter()
             samples, n = source.take(k, chunk_blocks)
@@ -72,6 +75,7 @@ def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,
             seconds["compute"] += t2 - t1
             seconds["write"] += time.perf_counter() - t2
             k += n
+            run += n
         t3 = time.perf_counter()
         while pending:
             pending[0].commit()
@@ -81,4 +85,4 @@ def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,
         for sink in pending:
             sink.abort()
         raise
-    return k
+    return run

@@ -24,11 +24,12 @@ from pathlib import Path
 
 from app.engine.clocks import VirtualClock
 from app.engine.driver import PipelineStage, RunTimer, drive
-from app.engine.sinks import FrameSink, LinkSink, ProgressSink, TableSink
-from app.engine.sources import TraceSource
+from app.engine.sinks import (FRICTION_COLUMNS, FrameSink, LinkSink, ProgressSink, TableSink,
+                              command_columns)
+from app.engine.sources import MAX_GAP_S, TraceSource
 from app.engine.summary import Totals, finite_json, summary, timings
-from app.engine.tables import FORMATS
-from rendering.input.trace_file import Trace, iter_trace
+from app.engine.tables import FORMATS, check_room, row_bytes
+from rendering.input.trace_file import Trace, iter_trace, most_touching
 from rendering.pipeline import build_pipeline
 from textures.model import Scene
 
@@ -64,7 +65,7 @@ def clear_outputs(out_dir: Path) -> None:
 def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv", sink=None,
                device: str | None = None, block_size: int = 50, render_override: str | None = None,
                chunk_blocks: int = 200, progress: bool = True, frames=None, strict: bool = False,
-               faults=None) -> dict:
+               faults=None, max_gap_s: float = MAX_GAP_S) -> dict:
     """Replay ``trace`` (Trace or path/bundled name) on ``scene`` (Scene or path/name).
 
     Writes the outputs into ``out_dir`` (created if needed) and returns the summary
@@ -75,12 +76,14 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     pyserial URL) opened here with the channels and phases of the scene's actuation,
     with ``faults`` (``device.link.faults.FaultPlan``) injected if given. ``frames``: an
     optional ``app.engine.frames.FrameWriter``. ``strict``: refuse a trace whose time
-    goes back (else sorted or dropped, counted and warned about).
+    goes back (else sorted or dropped, counted and warned about). ``max_gap_s``: a longer
+    gap between touch samples is a lift, and its silence is skipped
+    (``app.engine.sources``).
     """
     wall0 = time.perf_counter()
     timer = RunTimer()
     scene, chunks, trace_path = load_inputs(scene, trace, strict)
-    source = TraceSource(chunks)
+    source = TraceSource(chunks, max_gap_s=max_gap_s)
     t0 = source.first_time()
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -92,6 +95,8 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
         sink = open_sink(device, channels=len(pipeline.channels), rate_hz=rate_hz,
                          phases=pipeline.actuation.has_phases, paced=True, faults=faults)
     source.start(pipeline.tracker_config)
+    if source.ended:  # the whole trace is read: the outputs' size is known before writing
+        _check_outputs_fit(out_dir, source, pipeline, fmt)
     totals = Totals()
     sinks = [totals]
     if sink is not None:  # a paced link: its send waits (bounded) for the device's room
@@ -113,6 +118,8 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     if order is not None:
         doc["trace"]["time_order"] = order.as_dict()
         doc["warnings"] += order.warnings()
+    doc["trace"]["gaps"] = source.gaps.as_dict()
+    doc["warnings"] += source.gaps.warnings()
     if sink is not None:
         doc["device"] = sink.status()
         doc["warnings"] += device_warnings(doc["device"])
@@ -120,6 +127,18 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     text = json.dumps(finite_json(doc), indent=2, allow_nan=False) + "\n"
     (out_dir / "summary.json").write_text(text, encoding="utf-8")
     return doc
+
+
+def _check_outputs_fit(out_dir: Path, source: TraceSource, pipeline, fmt: str) -> None:
+    """Refuse, before writing anything, outputs that would not fit the disk."""
+    trace = source.pending
+    output_s = trace.duration_s - source.gaps.skipped_s + 2 * pipeline.block_size / pipeline.rate_hz
+    samples = output_s * pipeline.rate_hz
+    fingers = max(1, most_touching(trace))
+    need = samples * (row_bytes(command_columns(pipeline.channels, pipeline.actuation.has_phases), fmt)
+                      + fingers * row_bytes(FRICTION_COLUMNS, fmt))
+    check_room(out_dir, need, f"the outputs ({output_s:.6g} s at {pipeline.rate_hz:g} Hz, "
+                              f"up to {fingers} fingers, {fmt})")
 
 
 def device_warnings(status: dict) -> list[str]:

@@ -9,6 +9,13 @@ effect in them (a sample takes effect at the first block boundary at or after it
 
 A trace source ends with the block after its last sample (so every sample, and the
 last touch's end, is in the output); a live source runs until the driver is stopped.
+
+Gaps. A recorded trace may stop reporting for a long time (a log paused, a clock that
+jumped). A gap longer than ``max_gap_s`` between two samples is taken as a lift: every
+finger touching is lifted where the gap starts, and the output skips from
+:data:`GAP_KEEP_S` after the gap's start to :data:`GAP_KEEP_S` before its end
+(``source.resume_at(k)`` tells the driver; ``t_s`` jumps there). Counted in
+``source.gaps``.
 """
 
 from __future__ import annotations
@@ -17,8 +24,32 @@ import queue
 
 import numpy as np
 
-from rendering.input.trace_file import Trace, make_trace
+from rendering.input.trace_file import UP, Trace, make_trace
 from rendering.tracking.tracks import apply_index
+
+#: default longest gap between touch samples that is output as it is (s)
+MAX_GAP_S = 5.0
+#: output kept on each side of a longer gap (s): the lift, and the touch after it
+GAP_KEEP_S = 0.1
+
+
+class Gaps:
+    """Gaps between touch samples longer than ``limit_s``, taken as lifts and skipped."""
+
+    def __init__(self, limit_s: float):
+        self.limit_s = limit_s
+        self.count = 0
+        self.skipped_s = 0.0
+
+    def as_dict(self) -> dict:
+        return {"limit_s": self.limit_s, "count": self.count, "skipped_s": self.skipped_s}
+
+    def warnings(self) -> list[str]:
+        if not self.count:
+            return []
+        return [f"{self.count} gaps of more than {self.limit_s:g} s between touch samples were "
+                f"taken as lifts; {self.skipped_s:.6g} s of output there were skipped (t_s "
+                f"jumps)"]
 
 
 class TraceSource:
@@ -29,9 +60,14 @@ class TraceSource:
     block after the last sample (a synthetic motion scored over a fixed span).
     """
 
-    def __init__(self, chunks, until_s: float | None = None):
+    def __init__(self, chunks, until_s: float | None = None, max_gap_s: float | None = MAX_GAP_S):
         self.chunks = chunks
         self.until_s = until_s
+        self.gaps = Gaps(max_gap_s)
+        self._down: set[int] = set()  # fingers touching after the last sample read
+        self._last_t: float | None = None
+        self._last_xy: dict[int, tuple] = {}  # finger -> (x_mm, y_mm, force_n) last read
+        self._gap_times: list[tuple[float, float]] = []  # long gaps (start s, end s) ahead
         self.pending: Trace | None = None
         self.applied = np.zeros(0, dtype=np.int64)
         self.config = None
@@ -49,9 +85,12 @@ class TraceSource:
         return float(self.pending.t_s[0])
 
     def start(self, tracker_config) -> None:
-        """Begin handing out samples for a pipeline with this tracker configuration."""
+        """Begin handing out samples for a pipeline with this tracker configuration
+        (after reading one chunk more: ``ended`` then says whether the whole trace is in)."""
         self.config = tracker_config
         self.first_time()
+        if not self.ended:
+            self._read_more()
         self.applied = apply_index(self.pending.t_s, tracker_config)
         if self.until_s is not None:
             quantum = tracker_config.quantum
@@ -64,12 +103,65 @@ class TraceSource:
             self.ended = True
             return
         self.stats.add(chunk)
+        chunk = self._lift_at_gaps(chunk)
         self.pending = chunk if self.pending is None else self.pending.then(chunk)
         if self.config is not None:
             self.applied = apply_index(self.pending.t_s, self.config)
 
+    def _lift_at_gaps(self, chunk: Trace) -> Trace:
+        """``chunk`` with an up for every finger touching where a long gap starts."""
+        limit = self.gaps.limit_s
+        times = chunk.t_s if self._last_t is None else np.concatenate(([self._last_t], chunk.t_s))
+        starts = np.flatnonzero(np.diff(times) > limit) if limit is not None else []
+        offset = 0 if self._last_t is None else 1
+        pieces, lo = [], 0
+        for g in starts:
+            at = g - offset  # the chunk's sample before the gap (-1: the previous chunk's)
+            down = _down_after(self._down, chunk.slice(0, at + 1))
+            t_gap = float(times[g])
+            if down:
+                ids = np.array(sorted(down))
+                prev = chunk.slice(0, at + 1) if at >= 0 else None
+                pieces.append(chunk.slice(lo, at + 1))
+                pieces.append(_ups(ids, t_gap, prev, self._last_xy))
+                lo = at + 1
+            self.gaps.count += 1
+            self.gaps.skipped_s += max(0.0, float(times[g + 1]) - t_gap - 2 * GAP_KEEP_S)
+            self._gap_times.append((t_gap, float(times[g + 1])))
+        if pieces:
+            pieces.append(chunk.slice(lo, len(chunk)))
+            chunk = pieces[0]
+            for piece in pieces[1:]:
+                chunk = chunk.then(piece)
+        self._down = _down_after(self._down, chunk)
+        self._last_t = float(chunk.t_s[-1])
+        self._last_xy = {int(f): (float(x), float(y), float(fn))
+                         for f, x, y, fn in zip(chunk.finger, chunk.x_mm, chunk.y_mm, chunk.force_n)}
+        return chunk
+
+    def resume_at(self, k: int) -> int:
+        """The block to run next, ``k`` unless an idle stretch of a long gap starts there."""
+        if self.config is None or not self._gap_times:
+            return k
+        quantum = self.config.quantum
+        keep = int(np.ceil(GAP_KEEP_S * self.config.rate_hz / quantum))
+        while self._gap_times:
+            start, end = apply_index(np.array(self._gap_times[0]), self.config) // quantum
+            if k < start + keep:
+                return k
+            self._gap_times.pop(0)
+            if k < end - keep:
+                self.next_index = (end - keep) * quantum
+                return int(end - keep)
+        return k
+
     def take(self, k: int, n: int) -> tuple[Trace | None, int]:
         block = self.config.quantum
+        if self._gap_times:  # never run past the start of a skipped stretch
+            keep = int(np.ceil(GAP_KEEP_S * self.config.rate_hz / block))
+            start = int(apply_index(np.array([self._gap_times[0][0]]), self.config)[0]) // block
+            if k < start + keep:
+                n = min(n, start + keep - k)
         end = (k + n) * block
         while not self.ended and (self.applied.size == 0 or self.applied[-1] < end):
             self._read_more()
@@ -93,6 +185,28 @@ class TraceSource:
         if self.end_index is not None:
             return self.next_index >= self.end_index
         return self.ended and self.applied.size == 0
+
+
+def _down_after(down: set[int], samples: Trace) -> set[int]:
+    """The fingers touching after ``samples``, given those touching before."""
+    down = set(down)
+    if len(samples) == 0:
+        return down
+    for f in np.unique(samples.finger).tolist():
+        last = samples.event[samples.finger == f][-1]
+        (down.discard if last == UP else down.add)(f)
+    return down
+
+
+def _ups(ids: np.ndarray, t_s: float, before: Trace | None, last_xy: dict) -> Trace:
+    """An up at ``t_s`` for each finger of ``ids``, where it was last seen."""
+    where = dict(last_xy)
+    if before is not None:
+        for f, x, y, fn in zip(before.finger.tolist(), before.x_mm, before.y_mm, before.force_n):
+            where[f] = (float(x), float(y), float(fn))
+    x, y, force = (np.array([where[int(f)][k] for f in ids]) for k in range(3))
+    return Trace(np.full(ids.size, t_s), ids.astype(np.int64), x, y, force,
+                 np.full(ids.size, UP, dtype=np.int8))
 
 
 class TraceStats:
@@ -151,3 +265,7 @@ class QueueSource:
         self._pending = self._pending[len(due):]
         t, finger, x, y, force, event = (np.array(c) for c in zip(*due))
         return make_trace(t, finger, x, y, force, event, where="live touch", normalise=False), n
+
+    def resume_at(self, k: int) -> int:
+        """Live time never skips."""
+        return k

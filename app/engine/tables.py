@@ -23,6 +23,7 @@ Formats:
 
 from __future__ import annotations
 
+import errno
 import os
 import shutil
 import zipfile
@@ -36,6 +37,35 @@ from app.engine.csv_text import rows_text
 FORMATS = ("csv", "npz", "parquet")
 #: rows gathered before a batch is written (memory: ~13 MB a batch for six columns)
 BATCH_ROWS = 1 << 18
+#: free space a batch must leave on the output's file system (bytes)
+RESERVE_BYTES = 64 << 20
+
+
+def row_bytes(columns, fmt: str) -> int:
+    """Bytes one row of ``columns`` takes at most in ``fmt``, for values of up to four
+    integer digits (CSV), or exactly (npz; Parquet takes no more)."""
+    if fmt != "csv":
+        return sum(np.dtype(dtype).itemsize for _, dtype, _ in columns)
+    return sum(3 if f == "%d" else 7 + int(f[2:-1]) for _, _, f in columns)
+
+
+def check_room(out_dir: Path, need_bytes: float, what: str) -> None:
+    """Raise a one-line OSError (ENOSPC) unless ``out_dir``'s file system has room for
+    ``need_bytes`` more and :data:`RESERVE_BYTES` to spare."""
+    free = shutil.disk_usage(out_dir).free
+    if need_bytes + RESERVE_BYTES > free:
+        full = OSError(f"{out_dir}: {what} need about {_size(need_bytes)} and {_size(free)} "
+                       f"is free (a margin of {_size(RESERVE_BYTES)} kept); free some space, "
+                       f"write elsewhere, or use --format parquet")
+        full.errno = errno.ENOSPC
+        raise full
+
+
+def _size(n: float) -> str:
+    for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
+        if n < 1000 or unit == "PB":
+            return f"{n:.3g} {unit}"
+        n /= 1000
 
 
 class TableWriter:
@@ -74,6 +104,8 @@ class TableWriter:
     def _flush(self) -> None:
         self._wait_written()  # raises the writer's error, if any
         if self._pending:
+            check_room(self.path.parent, self._pending_rows * row_bytes(self.columns, self.fmt),
+                       f"the next {self._pending_rows} rows of {self.path.name}")
             self._writing = self._thread.submit(self._write_batch, self._pending)
             self._pending, self._pending_rows = [], 0
 
