@@ -105,7 +105,7 @@ def test_a_trace_read_in_small_chunks_replays_identically(tmp_path, monkeypatch)
 
     trace = "two-fingers-crossing-50hz"
     run_replay("two-finger-beam-seed000", trace, tmp_path / "whole", progress=False)
-    monkeypatch.setattr(replay_module, "iter_trace", lambda path: iter_trace(path, chunk_rows=7))
+    monkeypatch.setattr(replay_module, "iter_trace", lambda path, strict=False: iter_trace(path, chunk_rows=7, strict=strict))
     run_replay("two-finger-beam-seed000", trace, tmp_path / "chunked", progress=False)
     for name in ("commands.csv", "friction.csv"):
         assert (tmp_path / "whole" / name).read_bytes() == (tmp_path / "chunked" / name).read_bytes()
