@@ -20,8 +20,6 @@ from pathlib import Path
 from struct import pack
 from typing import Callable
 
-import pytest
-
 ROOT = Path(__file__).resolve().parents[1]
 ADDRESS_SPACE = 1 << 30
 TIMEOUT_S = 60.0

@@ -329,8 +329,13 @@ def test_cli_errors_are_one_line_exit_2(tmp_path, capsys):
         assert err.startswith("frictex: error: ") and err.count("\n") == 1, err
     bad.write_bytes(b"\xff\xfe\x00")
     assert main(["trace", "import", str(bad), "-o", str(tmp_path / "o.csv")]) == 2
-    assert capsys.readouterr().err == (f"frictex: error: {bad}:1: not UTF-8 text (byte 0xff); "
-                                       f"expected a text recording\n")
+    assert capsys.readouterr().err == (f"frictex: error: {bad}: is UTF-16 text (it starts with a "
+                                       f"UTF-16 byte order mark); save it as UTF-8; expected a "
+                                       f"text recording\n")
+    bad.write_bytes(b"[ 1.0] EV_SYN SYN_REPORT 00000000\n[ 2.0] EV_\xff\n")
+    assert main(["trace", "import", str(bad), "-o", str(tmp_path / "o.csv")]) == 2
+    assert capsys.readouterr().err == (f"frictex: error: {bad}:2: not UTF-8 text (byte 0xff at "
+                                       f"offset 44); expected a text recording\n")
     with pytest.raises(SystemExit) as exc:
         main(["trace", "import", str(bad), "-o", "x.csv", "--width-mm", "-3"])
     assert exc.value.code == 2 and "'-3' must be > 0" in capsys.readouterr().err

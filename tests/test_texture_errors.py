@@ -203,7 +203,7 @@ def test_unreadable_files(tmp_path):
     binary = tmp_path / "bin.toml"
     binary.write_bytes(b"format = 1\n\xff\xfe")
     assert [p.message for p in check_scene(binary)[1]] == [
-        "not UTF-8 text (byte 0xff at offset 11); TOML files are UTF-8"]
+        "not UTF-8 text (byte 0xff at offset 11); expected a .toml texture file"]
 
 
 @pytest.mark.parametrize("content, pattern", [

@@ -13,6 +13,7 @@ symbolic link loop is refused with a sentence instead of hanging or raising.
 
 from __future__ import annotations
 
+import codecs
 import difflib
 import errno
 import os
@@ -68,6 +69,43 @@ def file_problem(path: str | Path, max_bytes: int | None = None) -> str | None:
         return (f"is {info.st_size:,} bytes, more than the {max_bytes:,} bytes frictex reads "
                 f"for such a file")
     return None
+
+
+class UnreadableText(ValueError):
+    """Why a file cannot be read as UTF-8 text; ``line`` (1-based) where that applies."""
+
+    def __init__(self, message: str, line: int | None = None):
+        super().__init__(message)
+        self.line = line
+
+
+def read_utf8(path: str | Path, max_bytes: int) -> str:
+    """The text of a regular UTF-8 file of at most ``max_bytes`` (a leading BOM dropped).
+
+    Raises :class:`UnreadableText` for anything else: not a regular file (checked before
+    opening), too large, UTF-16, bytes that are not UTF-8, NUL bytes (binary content).
+    """
+    problem = file_problem(path, max_bytes)
+    if problem is not None:
+        raise UnreadableText(problem)
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise UnreadableText(f"cannot be read ({exc.strerror or exc})") from None
+    if data.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        raise UnreadableText("is UTF-16 text (it starts with a UTF-16 byte order mark); save "
+                             "it as UTF-8")
+    if data.startswith(codecs.BOM_UTF8):
+        data = data[len(codecs.BOM_UTF8):]
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise UnreadableText(f"not UTF-8 text (byte {data[exc.start]:#04x} at offset {exc.start})",
+                             data.count(b"\n", 0, exc.start) + 1) from None
+    nul = text.find("\0")
+    if nul >= 0:
+        raise UnreadableText("holds a NUL byte: binary content", text.count("\n", 0, nul) + 1)
+    return text
 
 
 def _scene_description(path: Path) -> str:

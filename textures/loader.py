@@ -139,7 +139,6 @@ finger on a one-channel device (which serves only the finger touching longest).
 
 from __future__ import annotations
 
-import codecs
 import difflib
 import math
 import os
@@ -158,7 +157,7 @@ from device.actuation.modal import METHODS
 from device import profile as profiles
 from textures import model
 from textures.errors import KeyPath, Locator, Problem, TextureError, bracket_peak, field_name
-from textures.library import file_problem
+from textures.library import UnreadableText, file_problem, read_utf8
 from textures.raster_io import read_grey
 
 FORMAT_VERSION = 1
@@ -1142,35 +1141,12 @@ MAX_NESTING = 16
 
 
 def _read_text(path: Path, r: _Reader) -> str | None:
-    """The file's text: a regular UTF-8 file (a leading BOM is dropped) without NULs."""
-    problem = file_problem(path, MAX_FILE_BYTES)
-    if problem is not None:
-        r.report((), f"{problem}; expected a .toml texture file")
-        return None
+    """The file's text (``textures.library.read_utf8``), or None with the problem reported."""
     try:
-        data = path.read_bytes()
-    except OSError as exc:
-        r.report((), f"cannot read: {exc.strerror or exc}")
+        return read_utf8(path, MAX_FILE_BYTES)
+    except UnreadableText as exc:
+        r.problems.append(Problem(r.label, exc.line, "", f"{exc}; expected a .toml texture file"))
         return None
-    if data.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
-        r.report((), "is UTF-16 text (it starts with a UTF-16 byte order mark); save it as "
-                     "UTF-8: TOML files are UTF-8")
-        return None
-    if data.startswith(codecs.BOM_UTF8):
-        data = data[len(codecs.BOM_UTF8):]
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        r.problems.append(Problem(r.label, line, "", f"not UTF-8 text (byte {data[exc.start]:#04x} "
-                                                     f"at offset {exc.start}); TOML files are UTF-8"))
-        return None
-    if "\0" in text:
-        line = text.count("\n", 0, text.index("\0")) + 1
-        r.problems.append(Problem(r.label, line, "", "holds a NUL character: binary content, "
-                                                     "expected TOML text"))
-        return None
-    return text
 
 
 _TOML_POSITION = re.compile(r"\s*\(at line (\d+), column (\d+)\)\s*$")

@@ -31,7 +31,6 @@ counted; contacts without a known position are not emitted and are counted.
 
 from __future__ import annotations
 
-import codecs
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,7 +40,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from rendering.input.trace_file import DEFAULT_FORCE_N, DOWN, MOVE, UP, Trace, TraceError, make_trace
-from textures.library import file_problem
+from textures.library import UnreadableText, read_utf8
 
 EV_SYN, EV_KEY, EV_ABS = 0x00, 0x01, 0x03
 SYN_REPORT, SYN_MT_REPORT, SYN_DROPPED = 0x00, 0x02, 0x03
@@ -482,26 +481,10 @@ MAX_RECORDING_BYTES = 64 << 20
 
 
 def read_text(path: str | Path, what: str) -> str:
-    """The text of a recording (UTF-8, a leading BOM dropped); a file that is missing, not a
-    regular file (checked before opening), larger than MAX_RECORDING_BYTES, not UTF-8 or
-    binary raises :class:`TraceError`."""
-    path = Path(path)
-    problem = file_problem(path, MAX_RECORDING_BYTES)
-    if problem is not None:
-        raise TraceError(f"{path}: {problem}; expected a text {what}")
+    """The text of a recording (``textures.library.read_utf8``: a regular UTF-8 file of at
+    most MAX_RECORDING_BYTES); anything else raises :class:`TraceError`."""
     try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise TraceError(f"{path}: cannot read {what} file ({exc.strerror or exc})") from None
-    if data.startswith(codecs.BOM_UTF8):
-        data = data[len(codecs.BOM_UTF8):]
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        raise TraceError(f"{path}:{line}: not UTF-8 text (byte {data[exc.start]:#04x}); "
-                         f"expected a text {what}") from None
-    if "\0" in text:
-        line = text.count("\n", 0, text.index("\0")) + 1
-        raise TraceError(f"{path}:{line}: binary content (a NUL byte); expected a text {what}")
-    return text
+        return read_utf8(path, MAX_RECORDING_BYTES)
+    except UnreadableText as exc:
+        where = f"{path}:{exc.line}" if exc.line is not None else f"{path}"
+        raise TraceError(f"{where}: {exc}; expected a text {what}") from None
