@@ -1,5 +1,10 @@
 """The live demo under Xvfb, driven by xdotool: touch, screenshots, emergency stop,
-live reload and a broken edit; checked against what it recorded (--record)."""
+live reload and a broken edit; checked against what it recorded (--record).
+
+Nothing here depends on how fast the machine is: the test waits for the demo to confirm
+each step in events.csv (a finger down or up reaching the output, the output stopping,
+resuming or switching scene, a screenshot written) before the next, ends the demo with
+Q, and checks the output against the times the output itself reports."""
 
 import csv
 import json
@@ -48,9 +53,11 @@ def grating_file(tmp_path):
 
 
 def start_demo(display, cwd, scene_file, rec, *args):
-    """``frictex demo`` in an 800x480 window on ``display``, recording into ``rec``."""
+    """``frictex demo`` in its default window (the scene's 800 x 480 px at the top left,
+    the scope under it) on ``display``, recording into ``rec``; --duration is only a
+    safety net: the tests end it with Q."""
     return subprocess.Popen([sys.executable, "-u", "-m", "app.commands.cli", "demo", str(scene_file),
-                             "--record", str(rec), "--size", "800x480", *args],
+                             "--record", str(rec), "--duration", "300", *args],
                             env={**os.environ, "DISPLAY": display}, cwd=cwd,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
@@ -61,21 +68,48 @@ def focus_window(display) -> str:
     return win
 
 
-def wait_event(proc, rec, kind="first-frame", count=1):
-    """Wait until events.csv holds ``count`` events ``kind``. Input is stamped when the
-    loop handles it, so start once it is drawing frames ("first-frame"); a screenshot is
-    written after the frame that follows the key, so wait for it before the next key."""
-    deadline = time.monotonic() + 20
+def events_of(rec, kind):
     path = rec / "events.csv"
-    while sum(1 for e in (read_csv(path) if path.exists() else []) if e["event"] == kind) < count:
-        assert time.monotonic() < deadline and proc.poll() is None, f"no {kind} event"
-        time.sleep(0.05)
+    return [e for e in (read_csv(path) if path.exists() else []) if e["event"] == kind]
+
+
+def wait_event(proc, rec, kind="first-frame", count=1):
+    """Wait until events.csv holds ``count`` events ``kind`` (however long the machine
+    takes, within a generous bound); returns the last of them."""
+    deadline = time.monotonic() + 120
+    while len(found := events_of(rec, kind)) < count:
+        assert proc.poll() is None, f"the demo exited before {count} {kind} events"
+        assert time.monotonic() < deadline, f"no {kind} event #{count}"
+        time.sleep(0.02)
+    return found[count - 1]
+
+
+def drag(display, win, proc, rec, points, strokes_before, hold=None):
+    """Press at the first of ``points`` (px), move through them, release; waits for the
+    output to see the finger down and, after the release, up (so every position moved
+    through reached it). ``hold``: called while the button is held, after the first move."""
+    (x0, y0), rest = points[0], points[1:]
+    xdo(display, "mousemove", "--window", win, str(int(x0)), str(int(y0)))
+    xdo(display, "mousedown", "1")
+    wait_event(proc, rec, "finger-down", strokes_before + 1)
+    for k, (x, y) in enumerate(rest):
+        xdo(display, "mousemove", "--window", win, str(int(x)), str(int(y)))
+        if k == 0 and hold is not None:
+            hold()
+    xdo(display, "mouseup", "1")
+    wait_event(proc, rec, "finger-up", strokes_before + 1)
+
+
+def quit_demo(display, proc) -> str:
+    """Q, then wait for the demo to exit 0; its stdout."""
+    xdo(display, "key", "q")
+    return finish(proc)
 
 
 def finish(proc) -> str:
-    """Wait for the demo to end by itself (--duration); it must exit 0. Its stdout."""
+    """Wait for the demo to end; it must exit 0. Its stdout."""
     try:
-        out, err = proc.communicate(timeout=30)
+        out, err = proc.communicate(timeout=120)
     finally:
         if proc.poll() is None:
             proc.kill()
@@ -87,81 +121,82 @@ def finish(proc) -> str:
 def test_demo_window_touch_estop_reload_and_broken_edit(xvfb_display, xdotool, tmp_path):
     scene_file, text = grating_file(tmp_path)
     rec, shots = tmp_path / "rec", tmp_path / "shots"
-    proc = start_demo(xvfb_display, tmp_path, scene_file, rec, "--duration", "12",
-                      "--screenshots", str(shots))
+    proc = start_demo(xvfb_display, tmp_path, scene_file, rec, "--screenshots", str(shots))
+    stroke = [(x, 240) for x in np.linspace(100, 700, 25)]
     try:
         win = focus_window(xvfb_display)
         wait_event(proc, rec)
-
-        def stroke(x_from, x_to, y=240):
-            xdo(xvfb_display, "mousemove", "--window", win, str(x_from), str(y))
-            xdo(xvfb_display, "mousedown", "1")
-            for x in np.linspace(x_from, x_to, 25):
-                xdo(xvfb_display, "mousemove", "--window", win, str(int(x)), str(y))
-                time.sleep(0.01)
-            xdo(xvfb_display, "mouseup", "1")
-
-        stroke(100, 700)
+        drag(xvfb_display, win, proc, rec, stroke, 0)
         xdo(xvfb_display, "key", "p")  # screenshot of the scene
         wait_event(proc, rec, "screenshot")
-        xdo(xvfb_display, "mousemove", "--window", win, "100", "240")
-        xdo(xvfb_display, "mousedown", "1")
-        xdo(xvfb_display, "key", "space")  # emergency stop while touching
-        for x in range(100, 400, 20):
-            xdo(xvfb_display, "mousemove", "--window", win, str(x), "240")
-            time.sleep(0.01)
-        xdo(xvfb_display, "key", "space")
-        xdo(xvfb_display, "mouseup", "1")
+
+        def stop_while_touching():
+            xdo(xvfb_display, "key", "space")
+            wait_event(proc, rec, "output-stop")
+            for x in range(120, 400, 20):
+                xdo(xvfb_display, "mousemove", "--window", win, str(x), "240")
+            xdo(xvfb_display, "key", "space")
+            wait_event(proc, rec, "output-resume")
+
+        drag(xvfb_display, win, proc, rec, [(100, 240), (110, 240), (400, 240)], 1,
+             hold=stop_while_touching)
         scene_file.write_text(text.replace("mu_low = 0.6", "mu_low = 0.3"))
-        time.sleep(0.8)  # polled every 0.25 s
-        stroke(100, 700)
+        wait_event(proc, rec, "output-switch")  # polled every 0.25 s, then switched
+        drag(xvfb_display, win, proc, rec, stroke, 2)
         scene_file.write_text(text.replace("period_mm = 5", "period_mm = -5"))
-        time.sleep(0.8)
+        wait_event(proc, rec, "reload-failed")
         xdo(xvfb_display, "key", "p")  # screenshot with the error shown
-        stroke(100, 700)
+        wait_event(proc, rec, "screenshot", 2)
+        drag(xvfb_display, win, proc, rec, stroke, 3)
     finally:
-        finish(proc)
+        quit_demo(xvfb_display, proc)
 
     events = read_csv(rec / "events.csv")
-    kinds = [e["event"] for e in events]
-    assert kinds == ["first-frame", "screenshot", "estop", "estop-release", "reload",
-                     "reload-failed", "screenshot"]
-    events = events[1:]
-    assert "period_mm" in events[4]["detail"]
-    t_stop, t_release, t_reload, t_broken = (float(events[i]["t_s"]) for i in (1, 2, 3, 4))
+    window = [e["event"] for e in events if not e["event"].startswith(("finger-", "output-"))]
+    assert window == ["first-frame", "screenshot", "estop", "estop-release", "reload",
+                      "reload-failed", "screenshot"]
+    t_of = {e["event"]: float(e["t_s"]) for e in events}  # each of these happens once
+    assert "period_mm" in next(e["detail"] for e in events if e["event"] == "reload-failed")
 
     rows = read_csv(rec / "friction.csv")
     t = np.array([float(r["t_s"]) for r in rows])
     x = np.array([float(r["x_mm"]) for r in rows])
     y = np.array([float(r["y_mm"]) for r in rows])
     mu = np.array([float(r["mu_target"]) for r in rows])
-    # the pointer's path: row 240 of an 800x480 window showing 108 x 64.8 mm
+    # the pointer's path: row 240 of the 800 x 480 px showing 108 x 64.8 mm
     px_per_mm = 800 / 108.0
     assert np.abs(y - 240 / px_per_mm).max() < 0.2
     assert x.min() < 110 / px_per_mm and x.max() > 690 / px_per_mm
-    # SHO: mu' is the grating at the finger's position (period 5 mm, first half low)
+    # SHO: mu' is the grating at the finger's position (period 5 mm, first half low);
+    # the new scene shapes the output from the block the output reports it switched at
     low = np.mod(x / 5.0, 1.0) < 0.5
-    # the new scene takes over at the block after the switch; the event is logged just
-    # after it, on another thread: leave a margin around that instant
-    before = t < t_reload - 0.1
-    before &= off_edges(x)
+    t_switch = t_of["output-switch"]
+    before = (t < t_switch) & off_edges(x)
+    assert before.sum() > 1000
     np.testing.assert_array_equal(mu[before], np.where(low[before], 0.6, 1.0))
-    after = t > t_reload + 0.1
-    assert np.isin(np.round(mu[after], 6), [0.3, 1.0]).all()  # the broken edit kept mu_low 0.3
-    assert (np.round(mu[t > t_broken + 0.1], 6) == 0.3).any()
+    after = t >= t_switch
+    assert after.sum() > 1000 and np.isin(np.round(mu[after], 6), [0.3, 1.0]).all()
+    assert (np.round(mu[t > t_of["reload-failed"]], 6) == 0.3).any()  # kept mu_low 0.3
 
     cmd = read_csv(rec / "commands.csv")
     ct = np.array([float(r["t_s"]) for r in cmd])
     amp = np.array([float(r[list(r)[1]]) for r in cmd])
-    assert amp[ct < t_stop].max() > 0.5
-    stopped = (ct > t_stop + BLOCK_S) & (ct < t_release)
-    assert stopped.sum() > 10 and (amp[stopped] == 0.0).all()
-    assert amp[ct > t_release + BLOCK_S].max() > 0.5
+    t_on, t_off = t_of["output-stop"], t_of["output-resume"]
+    # the output never runs ahead of the clock: it stops within a block of the key
+    assert t_on < t_of["estop"] + BLOCK_S and t_off < t_of["estop-release"] + BLOCK_S
+    assert amp[ct < t_on].max() > 0.5
+    stopped = (ct >= t_on) & (ct < t_off)
+    assert stopped.sum() >= 50 and (amp[stopped] == 0.0).all()
+    assert amp[ct >= t_off].max() > 0.5
 
     summary = json.loads((rec / "summary.json").read_text())
-    assert summary["frames"] > 30 and isinstance(summary["deadline_misses"], int)
+    assert summary["frames"] >= 2 and isinstance(summary["deadline_misses"], int)
+    assert [c["event"] for c in summary["output_changes"]] == ["output-stop", "output-resume",
+                                                               "output-switch"]
+    assert summary["output_changes"][0]["t_s"] == pytest.approx(t_on, abs=1e-6)
     shots_taken = sorted(shots.glob("*.png"))
-    assert len(shots_taken) == 2
+    assert [p.name for p in shots_taken] == ["frictex-grating-5mm-000.png",
+                                               "frictex-grating-5mm-001.png"]
     from PIL import Image
     first = np.asarray(Image.open(shots_taken[0]).convert("RGB")).astype(int)
     second = np.asarray(Image.open(shots_taken[1]).convert("RGB")).astype(int)

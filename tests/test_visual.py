@@ -180,24 +180,72 @@ def test_segment_triangles_have_the_requested_width():
     assert_allclose(np.sort(np.unique(tris[:, 0])), [0.0, 10.0])
 
 
-def test_scope_plots_mu_and_amplitude_at_their_scaled_heights(gl):
+def scope_layout(frame_h):
+    """The scope's layout restated from its specification: a strip 22 % of the frame's
+    height (100 to 220 px) at the bottom; two plots, each under a title row 1.25 label
+    lines + 10 px high (labels 2 px under the status font, frame height / 45 within 11
+    to 22 px); 1 px rules; values 4 px inside each plot's edges."""
+    strip = min(max(round(0.22 * frame_h), 100), 220)
+    label = max(10, int(min(max(frame_h / 45, 11), 22)) - 2)
+    row = round(label * 1.25) + 10
+    top = frame_h - strip
+    plot_h = (strip - 2 * row - 3) / 2
+    mu_plot = (top + 1 + row, plot_h)
+    amp_plot = (top + 2 + 2 * row + plot_h, plot_h)
+    return top, row, mu_plot, amp_plot
+
+
+def value_row(plot, v):
+    y, h = plot
+    return y + 4 + (h - 8) * (1 - v)
+
+
+def blue_rows(column):
+    """Centres (px) of the runs of finger 0's blue in a column of linear RGB."""
+    blue = np.flatnonzero((column[:, 2] > 0.6) & (column[:, 0] < 0.2))
+    rows = np.split(blue, np.flatnonzero(np.diff(blue) > 1) + 1)
+    return sorted(r.mean() + 0.5 for r in rows if r.size)
+
+
+@pytest.mark.parametrize("mu, amp_um, frame_h", [(0.25, 2.0, 400), (1.0, 2.5, 615),
+                                                  (0.0, 0.0, 1080)])
+def test_scope_plots_mu_and_amplitude_at_their_scaled_heights(gl, mu, amp_um, frame_h):
+    """Traces at their values, inside their plots (full scale and zero 4 px off the
+    edges, so mu' = 1 is not on a rule); the scene fitted above the strip."""
+    assert FINGER_RGB[0][2] > 0.6  # the colour the check looks for
     scene = grating_scene(5.0, mu_low=1.0)
     ov = OverlayState(scope_s=3.0)
     t = np.linspace(0.0, 3.0, 301)
     ov.add(_record(t, np.full(301, 10.0), np.full(301, 10.0), np.ones(301, bool),
-                   mu=np.full(301, 0.25), amp=np.full(301, 2.0)))
-    size = (400, 400)
-    view = FrameView(overlay=ov, amplitude_max_um=2.5)
-    rgb, _ = render(gl, scene, size=size, view=view)
-    h = np.clip(0.26 * 400, 90, 280)  # the strip: bottom 26 % of the frame, 90 to 280 px
-    y0 = 400 - h
-    panel = (h - 6.0) / 2
-    expect_mu_y = y0 + 2.0 + panel * (1 - 0.25)
-    expect_amp_y = y0 + 4.0 + panel + panel * (1 - 2.0 / 2.5)
-    column = from_srgb8(rgb[:, 200, :])
-    blue = np.flatnonzero((column[:, 2] > 0.6) & (column[:, 0] < 0.2))
-    rows = np.split(blue, np.flatnonzero(np.diff(blue) > 1) + 1)
-    centres = sorted(r.mean() + 0.5 for r in rows if r.size)
+                   mu=np.full(301, mu), amp=np.full(301, amp_um)))
+    rgb, vp = render(gl, scene, size=(400, frame_h), view=FrameView(overlay=ov, amplitude_max_um=2.5))
+    top, row, mu_plot, amp_plot = scope_layout(frame_h)
+    assert vp.y0 + vp.height_px <= top  # the scene is above the strip, not under it
+    centres = blue_rows(from_srgb8(rgb[:, 120, :]))  # left of the legend (finger 0 in blue)
     assert len(centres) == 2
-    assert_allclose(centres, [expect_mu_y, expect_amp_y], atol=0.75)
-    assert FINGER_RGB[0][2] > 0.6  # the colour the check looks for
+    expect = [value_row(mu_plot, mu), value_row(amp_plot, amp_um / 2.5)]
+    assert_allclose(centres, expect, atol=0.75)
+    rules = [top + 0.5, mu_plot[0] - 0.5, amp_plot[0] - 0.5]  # the strip's and the plots' tops
+    assert min(abs(c - r) for c in centres for r in rules) >= 3.0
+
+
+def test_scope_labels_sit_in_title_rows_no_trace_crosses(gl):
+    """Traces over the whole range (a sweep of mu' and amplitude from 0 to full scale
+    and past it) never enter the title rows, where the labels are."""
+    scene = grating_scene(5.0, mu_low=1.0)
+    ov = OverlayState(scope_s=3.0)
+    t = np.linspace(0.0, 3.0, 601)
+    sweep = np.abs(np.sin(t * 7.0)) * 1.3  # past full scale: clipped to it
+    ov.add(_record(t, np.full(601, 10.0), np.full(601, 10.0), np.ones(601, bool),
+                   mu=sweep, amp=sweep * 2.5))
+    rgb, _ = render(gl, scene, size=(800, 480), view=FrameView(overlay=ov, amplitude_max_um=2.5))
+    top, row, mu_plot, amp_plot = scope_layout(480)
+    lin = from_srgb8(rgb)
+    blue = ((lin[..., 2] > 0.6) & (lin[..., 0] < 0.2))[:, :400]  # left of the legend
+    for title_top in (top + 1, mu_plot[0] + mu_plot[1] + 1):
+        assert not blue[int(title_top):int(title_top + row - 1)].any()
+    plots = blue[int(mu_plot[0]):].any(axis=1)
+    assert plots.sum() > 2 * 0.5 * mu_plot[1]  # the traces are drawn, over both plots
+    white = (lin[..., 0] > 0.6) & (lin[..., 1] > 0.6) & (lin[..., 2] > 0.6)
+    for title_top in (top + 1, mu_plot[0] + mu_plot[1] + 1):  # the labels are there
+        assert white[int(title_top):int(title_top + row - 1), :200].sum() > 50

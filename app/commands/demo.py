@@ -4,9 +4,11 @@ With no SCENE the window cycles through the bundled scenes (N / B). The haptic
 pipeline runs at block cadence in its own process (``app.live.haptic_process``; ``--haptic
 thread``: on a thread of the window's process, ``app.live.haptic_thread``), the window on
 the main thread (``app.live.demo_loop``). ``--input`` picks the fingers: the mouse, the
-mouse and a follower finger, a TUIO tracker over UDP, or a Linux evdev touch screen.
+mouse and a follower finger, a TUIO tracker over UDP, or a Linux evdev touch screen
+(read by the haptic side as its samples arrive, not by the window).
 ``--record DIR`` writes what was sent
 (``commands.csv``, ``friction.csv`` as in a replay), ``events.csv`` and ``summary.json``.
+``--faults SPEC`` injects link faults on ``--device`` (as ``frictex replay --faults``).
 
 Without a display: ``frictex demo`` says so and exits 2; ``--headless`` (or
 ``--headless-fallback`` when no display is found) replays the bundled swipe trace on
@@ -21,13 +23,14 @@ import math
 from pathlib import Path
 
 from app.commands.preview import frame_size
-from app.commands.argtypes import positive_float, positive_int
+from app.commands.argtypes import fault_plan, output_rate, positive_float, positive_int
 from rendering.input.tuio import TUIO_PORT
 from rendering.visual.context import NoDisplayError, open_backend
 from rendering.visual.viewport import MIN_FRAME, default_frame_size
 
 HEADLESS_TRACE = "swipe-40mms-50hz"
 INPUT_KINDS = ("mouse", "follow", "tuio", "evdev")
+TOUCH_SCREENS = ("tuio", "evdev")  # read by the haptic side (app.live.touch_pump)
 FOLLOW_OFFSET_MM = 30.0  # the follower finger's offset along x
 
 
@@ -79,7 +82,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--device", metavar="sim|PORT", default=None,
                         help="stream the commands: 'sim' starts a simulated device, otherwise a "
                              "serial port or pyserial URL (default: no link)")
-    parser.add_argument("--rate", type=positive_float, default=10_000.0, metavar="HZ",
+    parser.add_argument("--faults", metavar="SPEC", type=fault_plan, default=None,
+                        help="with --device: inject link faults, e.g. 'corrupt=0.001,"
+                             "stall=0.2@1.5,trip@3,unplug=2@4' (grammar: device/link/faults.py)")
+    parser.add_argument("--rate", type=output_rate, default=10_000.0, metavar="HZ",
                         help="output sample rate (default 10000 Hz)")
     parser.add_argument("--block", type=positive_int, default=50, metavar="N",
                         help="block size in output samples (default 50 = 5 ms at 10 kHz)")
@@ -113,18 +119,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _start_haptic(args, scene, scene_path: Path, record: Path | None):
-    """The haptic side of ``--haptic``, started, and its ``finish()`` (as open_haptic's)."""
+    """The haptic side of ``--haptic``, started with its link and touch screen, and its
+    ``finish()`` (as open_haptic's). A touch screen that cannot be opened raises here."""
+    kind, arg = args.input
+    touch = (kind, arg) if kind in TOUCH_SCREENS else None
     if args.haptic == "thread":
-        from app.live.haptic_thread import shorten_switch_interval
-        shorten_switch_interval(args.block / args.rate)
         from app.live.haptic_setup import open_haptic
+        from app.live.haptic_thread import shorten_switch_interval
+        from app.live.touch_pump import open_source
+        shorten_switch_interval(args.block / args.rate)
         haptic, finish = open_haptic(scene, args.rate, args.block, args.renderer, args.device,
-                                     record)
+                                     record, faults=args.faults,
+                                     source=None if touch is None else open_source(*touch))
         haptic.start()
         return haptic, finish
     from app.live.haptic_process import HapticConfig, HapticProcess, yield_to_haptic
     haptic = HapticProcess(scene, HapticConfig(scene_path, args.rate, args.block, args.renderer,
-                                               args.device, record))
+                                               args.device, record, touch, args.faults))
     yield_to_haptic()  # after the child started: it keeps its priority
 
     def finish():
@@ -164,26 +175,6 @@ def run_headless(args, reason: str | None = None) -> int:
     return 0
 
 
-def open_source(kind: str, arg):
-    """The touch source of ``--input`` (None for the mouse kinds), positions normalised to
-    0..1 of the active area."""
-    if kind == "tuio":
-        from rendering.input.tuio import TuioListener
-        source = TuioListener(arg, width_mm=1.0, height_mm=1.0)
-        print(f"demo: listening for TUIO 1.1 cursors on UDP port {source.port}", flush=True)
-        return source
-    if kind == "evdev":
-        from rendering.input.evdev_decode import ScreenSpec
-        from rendering.input.evdev_live import EvdevReader
-        try:
-            return EvdevReader(arg, ScreenSpec(width_mm=1.0, height_mm=1.0))
-        except ValueError as exc:  # no axis ranges: a file, a pipe, not a touch screen
-            raise ValueError(f"evdev:{arg} is not a multi-touch device reporting its axis ranges "
-                             f"({exc}); the demo takes them from the device (a recording can be "
-                             "converted with 'frictex trace import' and replayed)") from None
-    return None
-
-
 def input_name(kind: str, arg) -> str:
     """``--input`` as the status line and the summary show it."""
     if kind == "follow":
@@ -198,48 +189,48 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--input {input_name(kind, arg)}: --headless replays a bundled "
                              "trace and takes no live input")
         return run_headless(args)
+    if args.faults is not None and args.device is None:
+        raise ValueError("--faults needs --device: the faults are injected on the link to it")
     paths, index = _playlist(args.scene)
     scene = _load(paths[index])
     size = args.size or default_frame_size(scene.display)
-    source = open_source(kind, arg)  # a bad --input fails before a window opens
-    try:
-        backend = open_backend("glfw", size, title=f"frictex demo: {scene.name}",
-                               fullscreen=args.fullscreen, monitor=args.monitor)
-    except BaseException as exc:
-        if source is not None:
-            source.close()
-        if not isinstance(exc, NoDisplayError):
-            raise
-        if args.headless_fallback:
-            return run_headless(args, reason=str(exc))
-        raise NoDisplayError(f"{exc}: the demo needs a window. Without a display run "
-                             "'frictex demo --headless' (replays a bundled trace, writes frames) "
-                             "or 'frictex replay SCENE TRACE --out DIR'") from None
+    record = Path(args.record) if args.record else None
     from app.live.cpu_steal import StealMeter
     from app.live.demo_loop import DemoLoop
-    finish = loop = None
-    record = Path(args.record) if args.record else None
+    # first the haptic side: a bad --input or --device fails before a window opens
+    haptic, finish = _start_haptic(args, scene, paths[index], record)
+    loop = backend = no_display = None
     link = {"state": "none"}
     dropped_records = 0
     steal = StealMeter()
     try:
-        haptic, finish = _start_haptic(args, scene, paths[index], record)
-        loop = DemoLoop(backend, haptic, paths, index, scene, _load, Path(args.screenshots),
-                        events_path=record / "events.csv" if record else None,
-                        link_name="none" if args.device is None else "starting",
-                        follow_mm=arg if kind == "follow" else None, source=source,
-                        input_name=input_name(kind, arg))
-        loop.run(args.duration)
+        try:
+            backend = open_backend("glfw", size, title=f"frictex demo: {scene.name}",
+                                   fullscreen=args.fullscreen, monitor=args.monitor, vsync=False)
+        except NoDisplayError as exc:
+            if not args.headless_fallback:
+                raise NoDisplayError(f"{exc}: the demo needs a window. Without a display run "
+                                     "'frictex demo --headless' (replays a bundled trace, "
+                                     "writes frames) or 'frictex replay SCENE TRACE --out DIR'"
+                                     ) from None
+            no_display = str(exc)
+        else:
+            loop = DemoLoop(backend, haptic, paths, index, scene, _load, Path(args.screenshots),
+                            events_path=record / "events.csv" if record else None,
+                            link_name="none" if args.device is None else "starting",
+                            follow_mm=arg if kind == "follow" else None,
+                            touch_screen=kind in TOUCH_SCREENS, input_name=input_name(kind, arg))
+            loop.run(args.duration)
     finally:
         try:
-            if finish is not None:
-                link, dropped_records = finish()
+            link, dropped_records = finish()
         finally:
             if loop is not None:
-                loop.close()  # closes the touch source too
-            elif source is not None:
-                source.close()
-            backend.close()
+                loop.close()
+            if backend is not None:
+                backend.close()
+    if no_display is not None:
+        return run_headless(args, reason=no_display)
     summary = _summary(haptic.stats, haptic.block_s, loop, dropped_records, link)
     summary["haptic"] = args.haptic
     summary["cpu_steal_pct"] = steal.percent()
@@ -260,6 +251,7 @@ def _summary(st, block_s: float, loop, dropped_records: int, link) -> dict:
             "dropped_touches": st.dropped_touches, "dropped_snapshots": st.dropped_snapshots,
             "dropped_record_blocks": dropped_records, "ramps": st.ramps,
             "clamps": st.clamps.as_dict(), "clamps_total": st.clamps.total,
+            "output_changes": [{"t_s": t, "event": e, "detail": d} for t, e, d in st.applied],
             "input": loop.input_name,
             "frames": loop.frames, "frame_ms_mean": loop.frame_seconds / max(loop.frames, 1) * 1e3,
             "screenshots": [str(p) for p in loop.screenshots], "link": link}

@@ -4,28 +4,41 @@ The haptic side is an ``app.live.haptic_thread.HapticThread`` or an
 ``app.live.haptic_process.HapticProcess`` (same interface).
 
 Backend-neutral: it drives any ``rendering.visual.context`` backend that has input
-callbacks, ``poll()``, ``swap()`` and ``should_close`` (the glfw window).
+callbacks, ``wait_events(timeout_s)``, ``swap()`` and ``should_close`` (the glfw window).
+
+Input is pumped apart from drawing: between two frames the loop waits for window
+events (``wait_events``, woken by the next event or by the next frame's due time) and
+hands the mouse to the haptic side as soon as the events are handled, so a finger
+waits for at most the frame being drawn, never for the next one; a slow frame delays
+the next frame, not the input handled before it. A frame is drawn every ``FRAME_S``
+at most. Window events that arrived together (the window was busy) make one sample
+per finger and button change, stamped when handled: stamping each event as it is
+handled would crowd them into microseconds, and the tracker would see the finger fly.
 
 Touch input (``--input``): ``mouse``, the mouse is finger 0 (left button held =
 touching); ``follow``, the mouse is finger 0 and finger 1 follows it at a fixed offset
-along x (seed 001's way of testing two-finger control with one hand); a touch source
-(TUIO, evdev: any object with ``poll() -> list[TouchSample]`` in positions normalised to
-0..1 of the active area, stamped on ``time.monotonic``), polled once per frame, never
-blocking, whose fingers keep the source's ids (small integers, reused after a lift);
-the mouse then only hovers. The wheel or up/down set the normal force of every finger.
-Keys: N / B next / previous scene, R cycles the renderer (as the file says, SHO, SHT,
-hybrid), S scope, O outlines, P screenshot, SPACE emergency stop (latched; SPACE
-again resumes, ramped), Q / Escape quit.
+along x (seed 001's way of testing two-finger control with one hand); a touch screen
+(TUIO, evdev) is read by the haptic side itself (``app.live.touch_pump``), not here:
+the mouse then only hovers, and a touch screen that fails is shown and the mouse
+takes over. The wheel or up/down set the normal force of every finger. Keys: N / B
+next / previous scene, R cycles the renderer (as the file says, SHO, SHT, hybrid), S
+scope, O outlines, P screenshot (numbered after those already in the folder, never
+overwriting one), SPACE emergency stop (latched; SPACE again resumes, ramped), Q /
+Escape quit.
 
 The scene file is polled for changes; a good edit reloads (haptics crossfade in one
 block), a bad one keeps the last good scene and shows its error on screen.
 Events are appended to ``events.csv`` (t_s on the haptic clock, event, detail) when a
-record folder is given.
+record folder is given: what the window did when it did it (keys, scene loads,
+screenshots), and what the output did when it did it, at the output time of the
+first block it shaped (``output-stop``, ``output-resume``, ``output-switch``,
+``finger-down``, ``finger-up``; read from the haptic side's snapshots).
 """
 
 from __future__ import annotations
 
 import queue
+import re
 import time
 from pathlib import Path
 
@@ -54,12 +67,29 @@ def _mtime(path: Path) -> float | None:
         return None
 
 
+def next_screenshot(folder: Path, stem: str):
+    """A new file ``<stem>-NNN.png`` in ``folder``, numbered one past the highest there,
+    created exclusively (another demo writing there at once cannot take the same
+    name): (path, binary file open for writing)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    pattern = re.compile(re.escape(stem) + r"-(\d+)\.png")
+    taken = [int(m.group(1)) for p in folder.iterdir() if (m := pattern.fullmatch(p.name))]
+    n = max(taken, default=-1) + 1
+    while True:
+        path = folder / f"{stem}-{n:03d}.png"
+        try:
+            return path, open(path, "xb")
+        except FileExistsError:
+            n += 1
+
+
 class DemoLoop:
     """See the module docstring. ``load(path) -> Scene`` raises ValueError on a bad file."""
 
     def __init__(self, backend, haptic, playlist: list[Path], index: int, scene, load,
                  screenshot_dir: Path, events_path: Path | None = None, link_name: str = "none",
-                 follow_mm: float | None = None, source=None, input_name: str = "mouse"):
+                 follow_mm: float | None = None, touch_screen: bool = False,
+                 input_name: str = "mouse"):
         self.backend = backend
         self.haptic = haptic
         self.playlist = playlist
@@ -69,7 +99,7 @@ class DemoLoop:
         self.screenshot_dir = screenshot_dir
         self.link_name = link_name
         self.follow_mm = follow_mm
-        self.source = source
+        self.touch_screen = touch_screen
         self.input_name = input_name
         self.compositor = Compositor(backend.ctx, scene, backend.size)
         self.overlay = OverlayState()
@@ -77,7 +107,10 @@ class DemoLoop:
         self.renderer = haptic.render_override
         self.touching = False
         self.hover_px: tuple[float, float] | None = None
-        self._presses: list[bool] = []  # left button presses (True) and releases since the frame
+        #: window events since the last flush: (None: a move, True: press, False: release,
+        #: pointer px then)
+        self._pending: list[tuple[bool | None, tuple[float, float]]] = []
+        self._flushed_at: float | None = None  # haptic clock (s)
         self._sent: tuple | None = None  # (pointer px, force N) of the last mouse sample
         self.show_scope = True
         self.outlines = False
@@ -91,6 +124,8 @@ class DemoLoop:
         self._mtime = _mtime(self.playlist[self.index])
         self._set_envelope(scene, haptic.pipeline.actuation)
         self._next_poll = 0.0
+        self._applied_seen = 0  # output changes (stats.applied) already logged
+        self._contact: dict[int, bool] = {}  # finger id: touching, at the last snapshot
         self._events = open(events_path, "a", encoding="utf-8") if events_path else None
         if self._events is not None and self._events.tell() == 0:
             self._events.write("t_s,event,detail\n")
@@ -101,83 +136,92 @@ class DemoLoop:
 
     # -- input --------------------------------------------------------------------------
 
-    def log(self, event: str, detail: str = "") -> None:
+    def log(self, event: str, detail: str = "", t_s: float | None = None) -> None:
+        """Append an event at ``t_s`` (s, haptic clock; default now) to events.csv."""
         if self._events is not None:
             quoted = '"' + detail.replace('"', "'").replace("\n", " ") + '"'
-            self._events.write(f"{self.haptic.now():.6f},{event},{quoted}\n")
+            t = self.haptic.now() if t_s is None else t_s
+            self._events.write(f"{t:.6f},{event},{quoted}\n")
             self._events.flush()
 
-    def _mm(self) -> tuple[float, float]:
-        x, y = self.compositor.viewport.to_mm(*self.hover_px)
+    def _mm(self, px: tuple[float, float]) -> tuple[float, float]:
+        x, y = self.compositor.viewport.to_mm(*px)
         return float(x), float(y)
 
-    def _mouse_touch(self, event: str) -> None:
-        """The mouse's finger 0 (and in follow mode finger 1, ``follow_mm`` to its right)."""
-        x, y = self._mm()
-        code, t = EVENTS[event], self.haptic.now()  # one stamp: the fingers move as one
+    def _mouse_touch(self, event: str, px: tuple[float, float], t_s: float) -> None:
+        """The mouse's finger 0 at ``px`` at ``t_s`` (haptic clock; in follow mode with
+        finger 1, ``follow_mm`` to its right, at the same instant)."""
+        x, y = self._mm(px)
+        code, t = EVENTS[event], t_s
         self.haptic.touch_at(t, 0, x, y, self.force_n, code)
         if self.follow_mm is not None:
             self.haptic.touch_at(t, 1, x + self.follow_mm, y, self.force_n, code)
-        self._sent = (self.hover_px, self.force_n)
+        self._sent = (px, self.force_n)
 
-    # The callbacks only note what happened; flush_mouse() turns it into at most one
-    # sample per finger and frame, stamped then. Stamping each event as it is handled
-    # would crowd a frame's worth of motion into microseconds when the window is late
-    # (events arrive in bursts), and the tracker would see the finger fly.
+    # The callbacks only note what happened, in order; flush_mouse(), after each batch of
+    # window events, turns it into samples (see the module docstring).
 
     def on_cursor(self, x_px: float, y_px: float) -> None:
         self.hover_px = (x_px, y_px)
+        self._pending.append((None, self.hover_px))
 
     def on_button(self, pressed: bool) -> None:
         if self.hover_px is None:
             self.hover_px = self.backend.cursor_px()
-        self._presses.append(pressed)
+        self._pending.append((pressed, self.hover_px))
 
     def on_scroll(self, dy: float) -> None:
         self.set_force(self.force_n + FORCE_STEP_N * dy)
 
     def set_force(self, force_n: float) -> None:
+        """The normal force (N) of the mouse's fingers and of a touch screen's."""
         self.force_n = float(np.clip(force_n, *FORCE_RANGE_N))
+        self.haptic.touch_force.value = self.force_n
 
     def flush_mouse(self) -> None:
-        """The mouse's touches since the last call: presses and releases in order, then a
-        move if the pointer or the force changed."""
-        presses, self._presses = self._presses, []
-        if self.source is not None:
+        """The mouse's touches since the last call, in order: a down or up at each
+        button change, a move at each pointer position while touching, a move when the
+        force changed. They are stamped evenly over the time since the last call (when
+        they arrived, as far as this thread can tell), so a batch the window handles
+        late keeps its path and its pace."""
+        pending, self._pending = self._pending, []
+        now = self.haptic.now()
+        since = now if self._flushed_at is None else self._flushed_at
+        self._flushed_at = now
+        if self.touch_screen:
             return  # a touch screen drives the fingers; its emulated mouse must not add one
-        for pressed in presses:
-            if pressed != self.touching:
-                self.touching = pressed
-                self._mouse_touch("down" if pressed else "up")
-        if self.touching and self._sent != (self.hover_px, self.force_n):
-            self._mouse_touch("move")
+        samples, touching = [], self.touching
+        for pressed, px in pending:
+            if pressed is None:
+                if touching:
+                    samples.append(("move", px))
+            elif pressed != touching:
+                touching = pressed
+                samples.append(("down" if pressed else "up", px))
+        if touching:
+            samples.append(("move", self.hover_px))  # the last position, at the force set now
+        self.touching = touching
+        kept, last = [], self._sent
+        for event, px in samples:
+            if event != "move" or (px, self.force_n) != last:  # a move nowhere new: none
+                kept.append((event, px))
+                last = (px, self.force_n)
+        for i, (event, px) in enumerate(kept):
+            self._mouse_touch(event, px, since + (now - since) * (i + 1) / len(kept))
 
-    def poll_source(self) -> int:
-        """Hand the touch source's new samples to the haptic thread, in mm on its clock,
-        at the current normal force (TUIO cursors carry none); returns how many."""
-        if self.source is None:
-            return 0
-        try:
-            samples = self.source.poll()
-        except (OSError, ValueError) as exc:  # unplugged, or a device speaking nonsense
-            self.error = f"touch input {self.input_name} stopped, the mouse touches now: {exc}"
-            self.log("input-failed", str(exc))
-            self.source.close()
-            self.source = None
-            return 0
-        if samples:
-            shift = self.haptic.now() - time.monotonic()
-            d = self.scene.display
-            for s in samples:
-                self.haptic.touch_at(s.t_s + shift, s.finger, s.x_mm * d.width_mm,
-                                     s.y_mm * d.height_mm, self.force_n, s.event)
-        return len(samples)
+    def check_input(self) -> None:
+        """A touch screen that failed: say so, and let the mouse touch from now on."""
+        failure = self.haptic.input_error()
+        if failure is not None:
+            self.error = f"touch input {self.input_name} stopped, the mouse touches now: {failure}"
+            self.log("input-failed", failure)
+            self.touch_screen = False
 
     def on_key(self, name: str, shift: bool) -> None:
-        if name == "space":
+        if name == "space":  # logged after: the output changes no later than a block on
             if self.haptic.estop.is_set():
-                self.log("estop-release")  # logged first: output may resume right after
                 self.haptic.estop.clear()
+                self.log("estop-release")
             else:
                 self.haptic.estop.set()
                 self.log("estop")
@@ -267,6 +311,8 @@ class DemoLoop:
     # -- frames -------------------------------------------------------------------------
 
     def drain(self) -> None:
+        """Take the haptic side's snapshots: the overlay's history, the status, and the
+        output's changes and touches logged at their output times."""
         while True:
             try:
                 snap = self.haptic.snapshots.get_nowait()
@@ -274,6 +320,30 @@ class DemoLoop:
                 return
             self.overlay.add(snap.record)
             self.status = snap.status
+            self._log_applied(*snap.status.get("applied", (0, ())))
+            self._log_contacts(snap.record)
+
+    def _log_applied(self, count: int, latest: tuple) -> None:
+        """Stops, resumes and switches not logged yet (``latest``: the last of ``count``)."""
+        for i, (t, event, detail) in enumerate(latest, start=count - len(latest)):
+            if i >= self._applied_seen:
+                self.log(event, detail, t)
+        self._applied_seen = max(self._applied_seen, count)
+
+    def _log_contacts(self, record) -> None:
+        """finger-down and finger-up where a finger's contact changes in ``record``."""
+        if record.t_s.size == 0:
+            return
+        for row, fid in enumerate(record.finger_ids):
+            states = np.concatenate(([self._contact.get(fid, False)], record.contact[row]))
+            for i in np.flatnonzero(states[1:] != states[:-1]):
+                self.log("finger-down" if states[i + 1] else "finger-up",
+                         f"finger {fid} at {record.x_mm[row, i]:.2f}, {record.y_mm[row, i]:.2f} mm",
+                         float(record.t_s[i]))
+            self._contact[fid] = bool(states[-1])
+        for fid in [f for f, on in self._contact.items() if on and f not in record.finger_ids]:
+            self.log("finger-up", f"finger {fid}", float(record.t_s[0]))
+            self._contact[fid] = False
 
     def status_lines(self) -> tuple[str, ...]:
         st = self.status
@@ -286,7 +356,7 @@ class DemoLoop:
         fingers = len(self.overlay.current())
         touch = ("drag: touch" if self.follow_mm is None
                  else f"drag: two fingers, the second {self.follow_mm:g} mm to the right")
-        if self.source is not None:
+        if self.touch_screen:
             touch = "touch the screen"
         return (first, f"input: {self.input_name} ({touch}; {fingers} touching)", KEYS_HELP)
 
@@ -297,7 +367,7 @@ class DemoLoop:
             banner, kind = "EMERGENCY STOP: output is 0 um. SPACE resumes.", "stop"
         else:
             banner, kind = self.error, "error"
-        hover = self._mm() if self.hover_px is not None and not self.touching else None
+        hover = self._mm(self.hover_px) if self.hover_px is not None and not self.touching else None
         self.compositor.draw(FrameView(
             overlay=self.overlay, hover_mm=hover, show_scope=self.show_scope,
             amplitude_max_um=self.scene.device.amplitude_limit_um, status=self.status_lines(),
@@ -305,45 +375,50 @@ class DemoLoop:
             envelope_scale_um=self.envelope_scale_um))
 
     def screenshot(self) -> Path:
-        self.screenshot_dir.mkdir(parents=True, exist_ok=True)
-        path = self.screenshot_dir / f"frictex-{self.scene.name}-{len(self.screenshots):03d}.png"
-        Image.fromarray(self.backend.read_rgb()).save(path)
+        """The frame drawn last, as a new PNG in the screenshot folder (never overwriting)."""
+        path, f = next_screenshot(self.screenshot_dir, f"frictex-{self.scene.name}")
+        with f:
+            Image.fromarray(self.backend.read_rgb()).save(f, format="PNG")
         self.screenshots.append(path)
         self.log("screenshot", str(path))
         return path
 
+    def frame(self, now: float) -> None:
+        """Draw and show one frame (``now``: s on the loop's clock)."""
+        self.check_reload(now)
+        self.drain()
+        self.update_envelope(now)
+        self.draw()
+        if self.screenshot_pending:
+            self.screenshot_pending = False
+            print(f"screenshot: {self.screenshot()}")
+        self.backend.swap()
+        if self.frames == 0:
+            self.log("first-frame", self.scene.name)
+        self.frames += 1
+
     def run(self, duration_s: float | None = None, clock=time.perf_counter) -> None:
+        """Pump input and draw frames until closed, Q, or ``duration_s`` (s on ``clock``)."""
         start = clock()
+        next_frame = start
         while not (self.quit or self.backend.should_close):
-            t = clock()
-            if duration_s is not None and t - start >= duration_s:
+            now = clock()
+            if duration_s is not None and now - start >= duration_s:
                 break
             if self.haptic.error is not None:
                 raise RuntimeError(f"haptic output stopped: {self.haptic.error}")
-            self.backend.poll()
+            if now >= next_frame:
+                self.check_input()
+                self.frame(now)
+                done = clock()
+                self.frame_seconds += done - now
+                next_frame = max(next_frame + FRAME_S, done)  # late: no burst of frames after
+            self.backend.wait_events(max(0.0, next_frame - clock()))
             self.flush_mouse()
-            self.poll_source()
-            self.check_reload(t)
             self.drain()
-            self.update_envelope(t)
-            self.draw()
-            if self.screenshot_pending:
-                self.screenshot_pending = False
-                print(f"screenshot: {self.screenshot()}")
-            self.backend.swap()
-            if self.frames == 0:
-                self.log("first-frame", self.scene.name)
-            self.frames += 1
-            spent = clock() - t
-            self.frame_seconds += spent
-            if spent < FRAME_S:
-                time.sleep(FRAME_S - spent)
 
     def close(self) -> None:
-        """Release the GL objects, the touch source (the loop owns it) and the events file."""
-        if self.source is not None:
-            self.source.close()
-            self.source = None
+        """Release the GL objects and the events file."""
         self.compositor.release()
         if self._events is not None:
             self._events.close()

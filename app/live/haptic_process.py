@@ -10,8 +10,12 @@ thread for scene switches and shutdown); the window talks to it through bounded
 counted; snapshots: the child drops the oldest, counted) and an ``mp.Event`` for the
 emergency stop, which the child reads at every block.
 
-The link (``--device``) and the recording (``--record``) are opened in the child, which
-sends: the status with every snapshot, and the final stats and link status when it stops.
+The link (``--device``), the recording (``--record``) and a touch screen (``--input tuio``
+or ``evdev``: read by a thread of the child, ``app.live.touch_pump``, so that its
+samples reach the pipeline as they arrive however slow the window's frames are) are
+opened in the child, which sends: the status with every snapshot, a touch screen's
+failure, and the final stats and link status when it stops. The force the wheel sets
+for a touch screen's fingers is a shared ``mp.Value``.
 A scene switch sends the scene's file and the renderer; the child loads and builds it,
 and an error comes back as a message (the old scene stays). The child stops when asked,
 when its haptic thread fails, or when the window's process is gone.
@@ -47,8 +51,10 @@ class HapticProcessError(OSError):
 
 @dataclass(frozen=True)
 class HapticConfig:
-    """What the child needs to build its pipeline, link and recorder (units as in
-    ``HapticThread``; ``device``: ``--device`` spec or None; ``record``: folder or None)."""
+    """What the child needs to build its pipeline, link, recorder and touch screen (units
+    as in ``HapticThread``; ``device``: ``--device`` spec or None; ``record``: folder or
+    None; ``touch_input``: ("tuio", port) or ("evdev", path) or None; ``faults``: a
+    ``device.link.faults.FaultPlan`` for the link, or None)."""
 
     scene_path: Path
     rate_hz: float
@@ -56,6 +62,8 @@ class HapticConfig:
     render_override: str | None
     device: str | None
     record: Path | None
+    touch_input: tuple | None = None
+    faults: object = None
 
 
 @dataclass(frozen=True)
@@ -70,10 +78,11 @@ class PipelineInfo:
 class HapticProcess(TouchInput):
     """The demo's haptic side in a child process, with :class:`HapticThread`'s interface
     as the window uses it: ``now``, ``touch``, ``touch_at``, ``switch``, ``estop``,
-    ``snapshots``, ``error``, ``stop``, ``stats``, ``render_override``, ``pipeline``.
+    ``snapshots``, ``error``, ``input_error``, ``touch_force``, ``stop``, ``stats``,
+    ``render_override``, ``pipeline``.
 
-    Starts the child and waits until it runs; a failure to load the scene or open the
-    link comes back as ValueError / OSError with the child's message.
+    Starts the child and waits until it runs; a failure to load the scene, open the
+    link or the touch screen comes back as ValueError / OSError with the child's message.
     """
 
     def __init__(self, scene, config: HapticConfig, clock=time.perf_counter):
@@ -83,6 +92,7 @@ class HapticProcess(TouchInput):
         self.render_override = config.render_override
         self.scene = scene
         self.estop = ctx.Event()
+        self.touch_force = ctx.Value("d", scene.device.normal_force_n, lock=False)
         self.touches = ctx.Queue(TOUCH_QUEUE)
         self.snapshots = ctx.Queue(SNAPSHOT_QUEUE)
         self._requests = ctx.Queue(COMMAND_QUEUE)
@@ -92,10 +102,11 @@ class HapticProcess(TouchInput):
         self.dropped_records = 0
         self._last_stamp = 0.0
         self._error: str | None = None
+        self._input_error: str | None = None
         self._done = False
         self._proc = ctx.Process(target=serve, name="frictex-haptic", daemon=True,
                                  args=(config, self.estop, self.touches, self.snapshots,
-                                       self._requests, self._replies))
+                                       self._requests, self._replies, self.touch_force))
         self._proc.start()
         reply = self._wait("ready", START_TIMEOUT_S)
         if reply[0] == "failed":
@@ -111,6 +122,12 @@ class HapticProcess(TouchInput):
         if self._error is None and not self._done and not self._proc.is_alive():
             self._error = f"haptic process exited with code {self._proc.exitcode}"
         return self._error
+
+    def input_error(self) -> str | None:
+        """Why the child's touch screen stopped (once; None while it works or without one)."""
+        self._poll(0.0)
+        error, self._input_error = self._input_error, None
+        return error
 
     def switch(self, scene=None, render_override: str | None | bool = False) -> PipelineInfo:
         """Change scene and/or renderer (False: keep the current renderer), as
@@ -182,6 +199,8 @@ class HapticProcess(TouchInput):
             block = False
             if reply[0] == "error":
                 self._error = reply[1]
+            elif reply[0] == "input-failed":
+                self._input_error = reply[1]
             elif reply[0] == "done":
                 self._done = True
                 dropped_here = self.stats.dropped_touches
@@ -210,17 +229,22 @@ def yield_to_haptic(increment: int = WINDOW_NICE) -> int | None:
         return None
 
 
-def serve(config: HapticConfig, estop, touches, snapshots, requests, replies) -> None:
+def serve(config: HapticConfig, estop, touches, snapshots, requests, replies,
+          touch_force) -> None:
     """The child process: build, run, answer switches, stop (see the module docstring)."""
     from app.live.haptic_setup import open_haptic  # the thread mode's own setup, in this process
+    from app.live.touch_pump import open_source
     from textures.loader import load_scene
     shorten_switch_interval(config.block_size / config.rate_hz)
     try:
-        haptic, finish = open_haptic(load_scene(config.scene_path), config.rate_hz,
-                                     config.block_size, config.render_override, config.device,
-                                     config.record, estop=estop, touches=touches,
-                                     snapshots=snapshots)
-    except (ValueError, OSError, ModuleNotFoundError) as exc:
+        scene = load_scene(config.scene_path)
+        source = None if config.touch_input is None else open_source(*config.touch_input)
+        haptic, finish = open_haptic(scene, config.rate_hz, config.block_size,
+                                     config.render_override, config.device, config.record,
+                                     faults=config.faults, source=source, estop=estop,
+                                     touches=touches, snapshots=snapshots,
+                                     touch_force=touch_force)
+    except (ValueError, OSError, ModuleNotFoundError) as exc:  # open_haptic closed the source
         replies.put(("failed", "OSError" if isinstance(exc, OSError) else "ValueError", str(exc)))
         return
     # the built pipeline lives until the next switch: keep it out of the cyclic
@@ -231,6 +255,8 @@ def serve(config: HapticConfig, estop, touches, snapshots, requests, replies) ->
     parent = mp.parent_process()
     try:
         while haptic.error is None and parent.is_alive():
+            if (failure := haptic.input_error()) is not None:
+                replies.put(("input-failed", failure))
             try:
                 request = requests.get(timeout=PARENT_CHECK_S)
             except queue.Empty:

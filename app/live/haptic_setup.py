@@ -1,5 +1,6 @@
-"""The live haptic thread with its link (``--device``) and recording (``--record``), set up
-and torn down together; used by the demo in thread mode and by the haptic child process."""
+"""The live haptic thread with its link (``--device``, with ``--faults`` injected), its
+recording (``--record``) and its touch screen (``--input tuio|evdev``), set up and torn
+down together; used by the demo in thread mode and by the haptic child process."""
 
 from __future__ import annotations
 
@@ -12,30 +13,44 @@ JOIN_TIMEOUT_S = 5.0  # the thread commits its sinks (drains the link, writes th
 
 
 def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | None,
-                device: str | None, record: Path | None, **queues):
-    """A :class:`HapticThread` (not started) for ``scene`` with its link (``--device``) and
-    recorder (``--record``: the replay's tables, written on a thread of their own), and
-    ``finish() -> (link status, dropped record blocks)``, which stops the thread; the
-    thread closes the link and commits the recording as it ends. ``queues``:
-    HapticThread's ``estop``, ``touches``, ``snapshots``."""
+                device: str | None, record: Path | None, *, faults=None, source=None,
+                **queues):
+    """A :class:`HapticThread` (not started) for ``scene`` with its link (``--device``;
+    ``faults``: a ``device.link.faults.FaultPlan`` injected on it), recorder
+    (``--record``: the replay's tables, written on a thread of their own) and touch
+    screen (``source``: ``app.live.touch_pump.open_source``, pumped from the thread's
+    start; closed here if setting up fails), and ``finish() -> (link status, dropped record blocks)``, which stops the
+    touch screen and the thread; the thread closes the link and commits the recording
+    as it ends. ``queues``: HapticThread's ``estop``, ``touches``, ``snapshots``,
+    ``touch_force``."""
     from app.live.haptic_thread import HapticThread
-    haptic = HapticThread(scene, rate_hz, block_size, render_override, **queues)
-    pipeline = haptic.pipeline
-    if device is not None:
-        from device.link.host import open_sink
-        haptic.sink = open_sink(device, channels=len(pipeline.channels), rate_hz=rate_hz,
-                                phases=pipeline.actuation.has_phases, paced=False)
+    from app.live.touch_pump import TouchPump
+    haptic = None
     try:
+        haptic = HapticThread(scene, rate_hz, block_size, render_override, **queues)
+        pipeline = haptic.pipeline
+        if source is not None:
+            haptic.pump = TouchPump(source, haptic, lambda: haptic.pipeline.scene.display,
+                                    lambda: haptic.touch_force.value)
+        if device is not None:
+            from device.link.host import open_sink
+            haptic.sink = open_sink(device, channels=len(pipeline.channels), rate_hz=rate_hz,
+                                    phases=pipeline.actuation.has_phases, paced=False,
+                                    faults=faults)
         if record is not None:
             record.mkdir(parents=True, exist_ok=True)
             tables = TableSink(record, pipeline.channels, pipeline.actuation.has_phases, "csv")
             haptic.recorder = ThreadedSink(tables, RECORD_QUEUE, name="frictex-recorder")
     except BaseException:
-        if haptic.sink is not None:
+        if haptic is not None and haptic.sink is not None:
             haptic.sink.close()
+        if source is not None:
+            source.close()  # the pump never started: it is the source's only owner
         raise
 
     def finish():
+        if haptic.pump is not None:
+            haptic.pump.stop()
         haptic.stop()
         if haptic.is_alive():
             haptic.join(timeout=JOIN_TIMEOUT_S)

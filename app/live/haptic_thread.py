@@ -15,12 +15,17 @@ queue drops the oldest snapshot (counted).
 Changes between blocks ramp across one block (STYLE.md 5): a scene or renderer switch
 crossfades the old pipeline's commands into the new one's (the new pipeline takes over
 the old one's finger tracks), resuming after an emergency stop ramps from 0. The
-emergency stop itself is immediate: while it is set every sample sent is 0 um.
+emergency stop itself is immediate: while it is set every sample sent is 0 um. Each
+stop, resume and switch as it took effect on the output is kept in ``stats.applied``
+(output time of its first block, kind, detail) and the latest reach the window with
+every snapshot, so the demo logs when the output changed, not when a key was pressed.
 
 Touch samples carry times on this thread's clock (``now()``, s since start). A sample
 is used from the first block boundary at or after its time (``rendering.tracking.tracks``).
 Samples from several fingers and sources (the mouse, a TUIO or evdev touch screen) may
-be queued one after another; their stamps never go back (``touch_at``).
+be queued one after another; their stamps never go back (``touch_at``). A touch screen
+(``pump``: ``app.live.touch_pump.TouchPump``) feeds the queue from a thread of its own
+as its samples arrive, whatever the window is doing.
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ import sys
 import threading
 import time
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -47,6 +53,7 @@ COMMAND_QUEUE = 64
 SNAPSHOT_QUEUE = 256
 DEADLINE_S = 0.010  # = device.link.host.PREFILL_S, not imported: the link is optional
 LINK_STATUS_EVERY = 20  # blocks between two sink.status() calls
+APPLIED_IN_STATUS = 8  # the latest stops, resumes and switches each snapshot carries
 EVENTS = {"down": DOWN, "move": MOVE, "up": UP}
 
 
@@ -74,6 +81,9 @@ class HapticStats:
     dropped_records: int = 0
     ramps: int = 0
     clamps: ClampCounts = field(default_factory=ClampCounts)
+    #: (output time s of the first block it shaped, "output-stop" | "output-resume" |
+    #: "output-switch", detail) in the order they took effect
+    applied: list = field(default_factory=list)
 
 
 class TouchInput:
@@ -122,8 +132,15 @@ class LiveStage:
         self._gain = 0.0 if self.stopped else 1.0
 
     def process(self, k: int, samples, n: int):
-        out, commands = self._run(k, samples, self._latest_change())
-        self.stopped = self.estop.is_set()
+        change = self._latest_change()
+        out, commands = self._run(k, samples, change)
+        t = float(out.t_s[0])
+        if change is not None:
+            self.stats.applied.append((t, "output-switch",
+                                       f"{change[0].scene.name}, {change[1] or 'file'}"))
+        was_stopped, self.stopped = self.stopped, self.estop.is_set()
+        if self.stopped != was_stopped:
+            self.stats.applied.append((t, "output-stop" if self.stopped else "output-resume", ""))
         if self.stopped:
             commands = np.zeros_like(commands)
         elif self._gain < 1.0:
@@ -173,9 +190,11 @@ class SnapshotSink:
         h = self.haptic
         if h.sink is not None and h.stats.blocks % LINK_STATUS_EVERY == 1:
             self._link = h.sink.status()
+        applied = h.stats.applied
         status = {"blocks": h.stats.blocks, "deadline_misses": h.wall.stats.misses,
                   "clamps": h.stats.clamps.total, "estop": h.stage.stopped,
-                  "renderer": h.stage.render_override or "file", "link": self._link}
+                  "renderer": h.stage.render_override or "file", "link": self._link,
+                  "applied": (len(applied), tuple(applied[-APPLIED_IN_STATUS:]))}
         snap = Snapshot(record_from_output(out, h.stride, commands_um=commands_um), status)
         try:
             h.snapshots.put_nowait(snap)
@@ -205,12 +224,17 @@ class HapticThread(TouchInput, threading.Thread):
     (``app.live.haptic_process``); by default the thread makes its own. ``clock`` and
     ``sleep``: the wall clock (s) and how to wait on it, injectable for tests.
     ``pacing``: "wall", or "device" (the link's room paces the blocks; needs ``sink``).
+    ``touch_force``: what a touch screen's samples press with (``.value``, N; TUIO and
+    many touch screens report none), set by the window's wheel; by default the
+    scene's normal force. ``pump``: a touch screen's :class:`app.live.touch_pump.
+    TouchPump` feeding this thread, started with it (``app.live.haptic_setup``).
     """
 
     def __init__(self, scene, rate_hz: float = 10_000.0, block_size: int = 50,
                  render_override: str | None = None, sink=None, recorder=None,
                  clock=time.perf_counter, snapshot_stride: int = 10, estop=None,
-                 touches=None, snapshots=None, sleep=time.sleep, pacing: str = "wall"):
+                 touches=None, snapshots=None, sleep=time.sleep, pacing: str = "wall",
+                 touch_force=None):
         super().__init__(name="frictex-haptic", daemon=True)
         self.rate_hz = float(rate_hz)
         self.block_size = int(block_size)
@@ -233,6 +257,9 @@ class HapticThread(TouchInput, threading.Thread):
         self.wall = WallClock(self.block_s, DEADLINE_S, now=clock, sleep=sleep)
         self.t0 = self.wall.t0
         self.error: BaseException | None = None
+        self.touch_force = (SimpleNamespace(value=scene.device.normal_force_n)
+                            if touch_force is None else touch_force)
+        self.pump = None
 
     @property
     def pipeline(self):
@@ -263,10 +290,16 @@ class HapticThread(TouchInput, threading.Thread):
     def stop(self) -> None:
         self._quit.set()
 
+    def input_error(self) -> str | None:
+        """Why the touch screen stopped (once; None while it works or without one)."""
+        return None if self.pump is None else self.pump.take_error()
+
     def start(self) -> None:
         self.wall.restart()  # the output clock starts with the thread
         self.t0 = self.wall.t0
         super().start()
+        if self.pump is not None:
+            self.pump.start()
 
     # -- the thread ---------------------------------------------------------------------
 

@@ -1,7 +1,8 @@
 """A live Linux input device (``/dev/input/eventN``) as a touch source for the demo.
 
 The device is read non-blocking: :meth:`EvdevReader.poll` returns at once with the samples
-of the frames completed since the last call. Bytes are ``struct input_event`` records::
+of the frames completed since the last call; :meth:`EvdevReader.wait` blocks until
+there is something to read. Bytes are ``struct input_event`` records::
 
     struct input_event { struct timeval time; __u16 type; __u16 code; __s32 value; };
     # native layout: "llHHi" (24 bytes on 64-bit Linux, 16 on 32-bit)
@@ -18,6 +19,7 @@ from __future__ import annotations
 import errno
 import fcntl
 import os
+import select
 import struct
 import time
 from pathlib import Path
@@ -91,6 +93,15 @@ class EvdevReader:
             raise
         self.decoder = EvdevDecoder(self.path)
         self._rest = b""
+        self._ended = False  # the last read found the end of a file or of a pipe's writers
+
+    def wait(self, timeout_s: float) -> bool:
+        """Block until the device has bytes to read, at most ``timeout_s`` s; True if it
+        has. At the end of a file (always "readable") it sleeps ``timeout_s`` instead."""
+        if self._ended:
+            time.sleep(timeout_s)
+            return False
+        return bool(select.select([self._fd], [], [], timeout_s)[0])
 
     def poll(self) -> list[TouchSample]:
         """Samples of the frames completed since the last call; never blocks."""
@@ -99,9 +110,11 @@ class EvdevReader:
             try:
                 data = os.read(self._fd, _READ_BYTES)
             except BlockingIOError:
+                self._ended = False
                 break
             except OSError as exc:
                 raise OSError(f"{self.path}: read failed ({exc.strerror})") from None
+            self._ended = not data
             if not data:
                 break  # end of a file or pipe
             chunks.append(data)

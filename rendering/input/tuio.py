@@ -221,9 +221,11 @@ def _arg(args: list, i: int, kind: type, what: str):
 class TuioListener:
     """Receives TUIO on a UDP port in a thread; :meth:`poll` returns the new touch samples.
 
-    The thread only queues datagrams (bounded queue; overflow is counted in ``dropped``);
-    decoding happens in :meth:`poll`, on the caller's thread. Malformed packets are counted
-    in ``bad_packets`` (last message in ``last_error``), never raised.
+    The thread only stamps datagrams as they arrive and queues them (bounded queue;
+    overflow is counted in ``dropped``); decoding happens in :meth:`poll`, on the
+    caller's thread, which may block in :meth:`wait` until a datagram is there.
+    Malformed packets are counted in ``bad_packets`` (last message in ``last_error``),
+    never raised.
 
     Parameters
     ----------
@@ -245,6 +247,7 @@ class TuioListener:
         self.last_error: str | None = None
         self._clock = clock
         self._queue: queue.Queue[tuple[float, bytes]] = queue.Queue(max_packets)
+        self._ready = threading.Event()
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
             self._sock.bind((host, port))
@@ -269,9 +272,16 @@ class TuioListener:
                 self._queue.put_nowait((self._clock(), data))
             except queue.Full:
                 self.dropped += 1
+            self._ready.set()
+
+    def wait(self, timeout_s: float) -> bool:
+        """Block until a datagram arrived since the last :meth:`poll`, at most
+        ``timeout_s`` s; True if one did."""
+        return self._ready.wait(timeout_s)
 
     def poll(self) -> list[TouchSample]:
         """Samples of the frames received since the last call (mm, N, s), in order."""
+        self._ready.clear()  # before draining: a datagram queued meanwhile sets it again
         raw: list[RawSample] = []
         while True:
             try:

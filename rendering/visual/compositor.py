@@ -1,6 +1,10 @@
 """Draws a frame: the static scene texture, then trails, cursors, the device panels
 (``device_panels``), the scope and text.
 
+The scope, when shown, has a strip of its own at the bottom of the frame and the scene
+is fitted above it (``viewport.frame_layout``): the scope never covers the scene, and
+its labels sit in title rows of their own, never under a trace.
+
 The scene is rendered once per scene (``scene_image``) into a texture drawn 1:1 on
 the viewport's pixels; each frame only the overlay is rebuilt. All geometry arrives in
 frame pixels (float, y down) and one vertex shader maps it to clip space; the drawing
@@ -18,10 +22,10 @@ import numpy as np
 
 from rendering.visual.device_panels import DevicePanels
 from rendering.visual.modal_view import Envelope
-from rendering.visual.overlay import FINGER_RGB, OverlayState
+from rendering.visual.overlay import FINGER_RGB, OverlayState, plot_y
 from rendering.visual.scene_image import scene_rgb, to_srgb8
 from rendering.visual.text import text_rgba, wrap
-from rendering.visual.viewport import Viewport, fit_viewport
+from rendering.visual.viewport import Viewport, frame_layout
 from textures.model import Scene
 
 _VERT_PX = """
@@ -63,7 +67,9 @@ void main() {
     f_colour = vec4(rgb, a);
 }""")
 
-SCOPE_BG = (0.0, 0.0, 0.0, 0.85)
+SCOPE_BG = (0.05, 0.05, 0.05, 1.0)
+SCOPE_GRID = (1.0, 1.0, 1.0, 0.18)  # at 0, half and full scale of each plot
+SCOPE_RULE = (1.0, 1.0, 1.0, 0.45)  # the edges of the strip and between the two plots
 TEXT_CACHE = 64  # text textures kept between frames (a frame draws about 20)
 BANNER_RGBA = {"stop": (0.75, 0.0, 0.0, 0.92), "error": (0.55, 0.05, 0.05, 0.92),
                "info": (0.1, 0.1, 0.1, 0.85)}
@@ -86,12 +92,17 @@ class FrameView:
 
 
 class Compositor:
-    """Draws ``scene`` and a :class:`FrameView` into the current framebuffer of ``ctx``."""
+    """Draws ``scene`` and a :class:`FrameView` into the current framebuffer of ``ctx``.
+
+    ``scope``: lay the frame out for the scope strip at first (a frame drawn with or
+    without it lays the frame out again, re-rendering the scene if it moved).
+    """
 
     def __init__(self, ctx: moderngl.Context, scene: Scene, size: tuple[int, int],
-                 outlines: bool = False, supersample: int = 4):
+                 outlines: bool = False, supersample: int = 4, scope: bool = True):
         self.ctx = ctx
         self.outlines = outlines
+        self.scope = scope
         self.supersample = supersample
         self.textured = ctx.program(vertex_shader=TEXTURED[0], fragment_shader=TEXTURED[1])
         self.coloured = ctx.program(vertex_shader=COLOURED[0], fragment_shader=COLOURED[1])
@@ -103,6 +114,7 @@ class Compositor:
         self.scene = scene
         self.size = (0, 0)
         self.viewport: Viewport | None = None
+        self._scope_rect: tuple[float, float, float, float] | None = None
         self.scene_texture: moderngl.Texture | None = None
         self.resize(size)
 
@@ -121,7 +133,7 @@ class Compositor:
         self.scene = scene
         if outlines is not None:
             self.outlines = outlines
-        self.viewport = fit_viewport(scene.display, *self.size)
+        self.viewport, self._scope_rect = frame_layout(scene.display, *self.size, self.scope)
         rgb = to_srgb8(scene_rgb(scene, self.viewport, self.supersample, self.outlines))
         if self.scene_texture is not None:
             self.scene_texture.release()
@@ -206,15 +218,37 @@ class Compositor:
 
     # -- the frame ----------------------------------------------------------------------
 
+    def _set_scope(self, scope: bool) -> None:
+        """Lay the frame out with or without the scope strip; the scene is drawn again
+        only if it moved."""
+        if scope == self.scope:
+            return
+        self.scope = scope
+        viewport = self.viewport
+        self.viewport, self._scope_rect = frame_layout(self.scene.display, *self.size, scope)
+        if self.viewport != viewport:
+            self.set_scene(self.scene)
+
     def scope_rect(self) -> tuple[float, float, float, float]:
-        """The scope strip (x, y, w, h) px: the bottom of the frame."""
-        w, h = self.size
-        height = float(np.clip(0.26 * h, 90.0, 280.0))
-        return 0.0, h - height, float(w), height
+        """The scope strip (x, y, w, h) px at the bottom of the frame (height 0 when the
+        frame is laid out without it)."""
+        if self._scope_rect is None:
+            w, h = self.size
+            return 0.0, float(h), float(w), 0.0
+        return self._scope_rect
+
+    def scope_plots(self) -> tuple[tuple[float, float, float, float], ...]:
+        """The scope's two plots (x, y, w, h) px, mu' above amplitude, each under a
+        title row of its own (``label_row_px`` high) that holds its labels."""
+        x, y, w, h = self.scope_rect()
+        row = self.label_row_px
+        plot_h = max((h - 2.0 * row - 3.0) / 2.0, 1.0)
+        return ((x, y + 1.0 + row, w, plot_h), (x, y + 2.0 + 2.0 * row + plot_h, w, plot_h))
 
     def draw(self, view: FrameView | None = None) -> None:
         """Draw the scene and ``view`` into the framebuffer in use."""
         view = view or FrameView()
+        self._set_scope(view.show_scope and view.overlay is not None)
         self._trim_text_cache()
         ctx = self.ctx
         w, h = self.size
@@ -254,25 +288,30 @@ class Compositor:
     def _draw_scope(self, view: FrameView, font_px: int) -> None:
         x, y, w, h = self.scope_rect()
         self.draw_rect(x, y, w, h, SCOPE_BG)
-        panel = (h - 6.0) / 2
-        for py0 in (y + 2.0, y + 4.0 + panel):
-            for frac in (0.0, 0.5, 1.0):
-                self.draw_rect(x, py0 + panel * frac - 0.5, w, 1.0, (1.0, 1.0, 1.0, 0.18))
-        self.draw_triangles("scope", view.overlay.scope_triangles((x, y, w, h), view.amplitude_max_um))
-        label_px = self.label_px
-        scope_s = view.overlay.scope_s
-        self.draw_texture(self.text(("mu' target (0 to 1)",), label_px, background=(0, 0, 0, 110)),
-                           x + 4, y + 4)
-        self.draw_texture(self.text((f"amplitude (0 to {view.amplitude_max_um:g} um, 0-peak)",),
-                                      label_px, background=(0, 0, 0, 110)), x + 4, y + 6 + panel)
-        tick = self.text((f"last {scope_s:g} s  |  now", ), label_px, background=(0, 0, 0, 110))
-        right = x + w - tick.size[0] - 4
-        self.draw_texture(tick, right, y + 4)
+        plots = self.scope_plots()
+        for px, py, pw, ph in plots:
+            self.draw_rect(px, py - 1.0, pw, 1.0, SCOPE_RULE)  # under the title row
+            for level in plot_y((0.0, 0.5, 1.0), (px, py, pw, ph)):
+                self.draw_rect(px, level - 0.5, pw, 1.0, SCOPE_GRID)
+        self.draw_rect(x, y, w, 1.0, SCOPE_RULE)
+        self.draw_triangles("scope", view.overlay.scope_triangles(plots, view.amplitude_max_um))
+        label_px, row = self.label_px, self.label_row_px
+        titles = ("mu' target (0 to 1)",
+                  f"amplitude (0 to {view.amplitude_max_um:g} um, 0-peak)")
+        right = x + w - 4
+        for (px, py, _, _), title in zip(plots, titles):
+            tex = self.text((title,), label_px, background=(0, 0, 0, 0))
+            self.draw_texture(tex, px + 4, py - row + (row - tex.size[1]) / 2)
+        tick = self.text((f"last {view.overlay.scope_s:g} s  |  now",), label_px,
+                         background=(0, 0, 0, 0))
+        top = plots[0][1] - row
+        right -= tick.size[0]
+        self.draw_texture(tick, right, top + (row - tick.size[1]) / 2)
         for fid in sorted(view.overlay.fingers, reverse=True):  # legend: one colour per finger
             rgb = tuple(int(round(255 * c)) for c in FINGER_RGB[fid % len(FINGER_RGB)])
-            tex = self.text((f"finger {fid}",), label_px, rgb=rgb, background=(0, 0, 0, 110))
+            tex = self.text((f"finger {fid}",), label_px, rgb=rgb, background=(0, 0, 0, 0))
             right -= tex.size[0] + 4
-            self.draw_texture(tex, right, y + 4)
+            self.draw_texture(tex, right, top + (row - tex.size[1]) / 2)
 
     # -- text sizes ---------------------------------------------------------------------
 
@@ -285,6 +324,11 @@ class Compositor:
     def label_px(self) -> int:
         """Text size (px) of the scope's and panels' labels."""
         return max(10, self.font_px - 2)
+
+    @property
+    def label_row_px(self) -> float:
+        """Height (px) of a row of labels (``text.text_rgba``: 1.25 lines and 4 px pads)."""
+        return round(self.label_px * 1.25) + 10.0
 
     def release(self) -> None:
         self.panels.release()

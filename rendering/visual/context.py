@@ -87,6 +87,10 @@ def _key_names(glfw) -> dict[int, str]:
 class GlfwBackend:
     """A glfw window with an OpenGL 3.3 core context.
 
+    ``vsync``: swap buffers on the display's refresh (then ``swap`` may wait up to a
+    refresh period); the demo paces its own frames and leaves it off, so that the
+    thread handling input never waits on the display.
+
     Callbacks (set as attributes, all optional): ``on_cursor(x_px, y_px)``,
     ``on_button(pressed: bool)`` (left button), ``on_scroll(dy)``, ``on_key(name, shift)``.
     """
@@ -164,8 +168,13 @@ class GlfwBackend:
         self.ctx.screen.use()
         self.ctx.viewport = (0, 0, *self.size)
 
-    def poll(self) -> None:
-        self._glfw.poll_events()
+    def wait_events(self, timeout_s: float) -> None:
+        """Handle the window's events, waiting for one at most ``timeout_s`` s (0: only
+        those already there). The Python GIL is free while it waits."""
+        if timeout_s > 0.0:
+            self._glfw.wait_events_timeout(timeout_s)
+        else:
+            self._glfw.poll_events()
 
     def swap(self) -> None:
         self._glfw.swap_buffers(self.window)

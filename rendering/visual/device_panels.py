@@ -57,8 +57,8 @@ class DevicePanels:
 
     @property
     def row_px(self) -> float:
-        """Height (px) of a row of labels (``text.text_rgba``: 1.25 lines and 4 px pads)."""
-        return round(self.comp.label_px * 1.25) + 10.0
+        """Height (px) of a row of labels (the compositor's)."""
+        return self.comp.label_row_px
 
     def draw(self, overlay: OverlayState, envelope: Envelope | None, envelope_scale_um: float) -> None:
         """Buttons, force arrows and |W|, as the scene's device has them."""

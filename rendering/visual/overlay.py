@@ -7,8 +7,10 @@ and turns it into vertex arrays in frame pixels for ``compositor``; it does no O
 so its geometry is tested without a context.
 
 The scope shows, for the last ``scope_s`` seconds and per finger, the mu' target
-(upper panel, 0 to 1) and the vibration amplitude under the finger (lower panel,
-0 to the device's amplitude limit, um zero-to-peak); "now" is the right edge.
+(upper plot, 0 to 1) and the vibration amplitude under the finger (lower plot,
+0 to the device's amplitude limit, um zero-to-peak); "now" is the right edge. Each
+plot keeps ``SCOPE_PAD_PX`` free above its full scale and below its zero, so a trace
+at mu' = 1 or at the limit is never drawn on the plot's edge.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ FINGER_RGB = ((0.10, 0.60, 1.00), (1.00, 0.45, 0.10), (0.20, 0.80, 0.30),
 CURSOR_RADIUS_MM = 4.0  # about a fingertip contact patch
 TRAIL_WIDTH_PX = 2.0
 SCOPE_LINE_PX = 1.5
+SCOPE_PAD_PX = 4.0  # between a plot's edge and its full scale (or zero) line
 #: a trail step longer than this (mm) and faster than this (mm/s) is a lift and a touch
 #: elsewhere within one block, not a stroke: not joined (the tracker's jump rule,
 #: rendering.tracking.tracks; shorter steps are the prediction catching up with a new sample)
@@ -176,31 +179,27 @@ class OverlayState:
             rows.append((float(px), float(py), radius, 0.6, 0.6, 0.6, 0.9, 0.0))
         return np.array(rows, dtype=np.float64).reshape(-1, 8)
 
-    def scope_triangles(self, rect: tuple[float, float, float, float], amplitude_max_um: float,
-                        ) -> np.ndarray:
-        """Triangles (k, 6) for the scope traces in ``rect`` = (x, y, w, h) px: the upper
-        half plots mu' in [0, 1], the lower half amplitude in [0, amplitude_max_um]."""
-        x0, y0, w, h = rect
-        panel = (h - 6.0) / 2
+    def scope_triangles(self, plots, amplitude_max_um: float) -> np.ndarray:
+        """Triangles (k, 6) for the scope traces: ``plots`` = (mu' plot, amplitude plot),
+        each (x, y, w, h) px; mu' in [0, 1] and amplitude in [0, amplitude_max_um] at
+        the heights :func:`plot_y` gives."""
         parts = []
         for fid, hist in self.fingers.items():
             keep = hist.t >= self.now_s - self.scope_s
             t = hist.t[keep]
             if t.size < 2:
                 continue
-            px = x0 + w * (1.0 - (self.now_s - t) / self.scope_s)
-            mu = np.clip(hist.data[3, keep], 0.0, 1.0)
-            amp = np.clip(hist.data[4, keep] / amplitude_max_um, 0.0, 1.0)
+            mu = hist.data[3, keep]
+            amp = hist.data[4, keep] / amplitude_max_um
             rgba = np.empty((t.size, 4))
             rgba[:, :3] = FINGER_RGB[fid % len(FINGER_RGB)]
             rgba[:, 3] = 1.0
-            top = y0 + 2.0
-            bottom = y0 + 4.0 + panel
-            for values, py0 in ((mu, top), (amp, bottom)):
-                py = py0 + panel * (1.0 - values)
-                parts.append(segment_triangles(np.column_stack((px, py)), rgba, SCOPE_LINE_PX))
+            for values, rect in zip((mu, amp), plots):
+                x0, _, w, _ = rect
+                px = x0 + w * (1.0 - (self.now_s - t) / self.scope_s)
+                parts.append(segment_triangles(np.column_stack((px, plot_y(values, rect))),
+                                               rgba, SCOPE_LINE_PX))
         return np.concatenate(parts) if parts else np.empty((0, 6))
-
 
     def force_arrows(self, viewport: Viewport, px_per_n: float) -> np.ndarray:
         """Triangles (k, 6) of the force on each touching finger, from its centre, ``px_per_n``
@@ -216,6 +215,15 @@ class OverlayState:
             parts.append(arrow_triangles((px, py), wanted * px_per_n, (1.0, 1.0, 1.0, 0.8), 1.5))
             parts.append(arrow_triangles((px, py), achieved * px_per_n, (*rgb, 1.0), 4.0))
         return np.concatenate(parts) if parts else np.empty((0, 6))
+
+
+def plot_y(values, rect) -> np.ndarray:
+    """Heights (px) of ``values`` (clipped to [0, 1]: 1 is full scale) in a scope plot
+    ``rect`` = (x, y, w, h) px: full scale ``SCOPE_PAD_PX`` below its top edge, zero as
+    far above its bottom edge."""
+    _, y, _, h = rect
+    v = np.clip(np.asarray(values, dtype=np.float64), 0.0, 1.0)
+    return y + SCOPE_PAD_PX + (h - 2.0 * SCOPE_PAD_PX) * (1.0 - v)
 
 
 def arrow_triangles(origin, vector_px, rgba, width_px: float) -> np.ndarray:

@@ -8,7 +8,7 @@ positions to integers.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -61,8 +61,32 @@ def fit_viewport(display: Display, frame_w: int, frame_h: int) -> Viewport:
 
 #: smallest default frame (px): room for the status lines, the scope and a device panel
 MIN_FRAME = (640, 480)
+#: the scope strip's height: this share of the frame's height, within SCOPE_PX
+SCOPE_SHARE, SCOPE_PX = 0.22, (100, 220)
+
+
+def scope_height(frame_h: int) -> int:
+    """Height (px) of the scope strip at the bottom of a frame ``frame_h`` px high."""
+    return int(round(np.clip(SCOPE_SHARE * frame_h, *SCOPE_PX)))
+
+
+def frame_layout(display: Display, frame_w: int, frame_h: int, scope: bool,
+                 ) -> tuple[Viewport, tuple[float, float, float, float] | None]:
+    """Where the active area and the scope strip go in a frame: with ``scope`` the
+    strip (x, y, w, h px) takes the bottom ``scope_height`` px and the active area is
+    fitted above it, never under it (in a frame too low for both, each gets half);
+    without, the active area is fitted to the whole frame and the strip is None."""
+    if not scope:
+        return fit_viewport(display, frame_w, frame_h), None
+    strip = min(scope_height(frame_h), frame_h // 2)
+    above = fit_viewport(display, frame_w, max(frame_h - strip, 1))
+    return replace(above, frame_h=frame_h), (0.0, float(frame_h - strip), float(frame_w), float(strip))
 
 
 def default_frame_size(display: Display) -> tuple[int, int]:
-    """The display's own pixel size, at least MIN_FRAME (a thin beam is letterboxed)."""
-    return max(display.width_px, MIN_FRAME[0]), max(display.height_px, MIN_FRAME[1])
+    """A frame showing the display at its own pixel size above the scope strip, at
+    least MIN_FRAME (a thin beam is letterboxed)."""
+    h = max(display.height_px, 1)
+    while h - scope_height(h) < display.height_px:
+        h += 1
+    return max(display.width_px, MIN_FRAME[0]), max(h, MIN_FRAME[1])

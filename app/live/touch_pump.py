@@ -1,0 +1,107 @@
+"""A touch screen (TUIO over UDP, a Linux evdev device) feeding the haptic side from a
+thread of its own, sample by sample as they arrive, so that neither the window's frames
+nor its input handling delay a finger.
+
+A source is any object with ``wait(timeout_s)`` (return when samples may be ready, or
+after ``timeout_s`` s), ``poll() -> list[TouchSample]`` (never blocking; positions
+normalised to 0..1 of the active area, stamped on ``time.monotonic``: TUIO at arrival,
+evdev by the kernel) and ``close()``. The pump maps the positions to mm of the scene
+shown now and moves the stamps to the haptic output clock; the haptic side runs a
+sample from the first block boundary after it is queued (``app.live.haptic_thread``).
+In the demo's default process mode the pump runs in the haptic child process, which
+the window's GL calls cannot hold up; in thread mode, beside the haptic thread.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+
+WAIT_S = 0.05  # longest wait for the source before looking whether to stop (s)
+
+
+def open_source(kind: str, arg):
+    """The touch source of the demo's ``--input`` ("tuio": UDP port, "evdev": device
+    path), positions normalised to 0..1 of the active area. Raises OSError or
+    ValueError (one line) when it cannot be opened."""
+    if kind == "tuio":
+        from rendering.input.tuio import TuioListener
+        source = TuioListener(arg, width_mm=1.0, height_mm=1.0)
+        print(f"demo: listening for TUIO 1.1 cursors on UDP port {source.port}", flush=True)
+        return source
+    if kind == "evdev":
+        from rendering.input.evdev_decode import ScreenSpec
+        from rendering.input.evdev_live import EvdevReader
+        try:
+            return EvdevReader(arg, ScreenSpec(width_mm=1.0, height_mm=1.0))
+        except ValueError as exc:  # no axis ranges: a file, a pipe, not a touch screen
+            raise ValueError(f"evdev:{arg} is not a multi-touch device reporting its axis ranges "
+                             f"({exc}); the demo takes them from the device (a recording can be "
+                             "converted with 'frictex trace import' and replayed)") from None
+    raise ValueError(f"input {kind!r} has no touch source (expected tuio or evdev)")
+
+
+class TouchPump(threading.Thread):
+    """Moves a touch source's samples into a haptic side's touch queue as they arrive.
+
+    Parameters
+    ----------
+    source : see the module docstring; the pump owns it and closes it when it stops.
+    haptic : the haptic side's touch input (``now()`` s, ``touch_at``).
+    display : callable returning the ``Display`` of the scene shown now (mm).
+    force_n : callable returning the normal force (N) every sample gets.
+    clock : the sources' clock (s), ``time.monotonic``.
+
+    A source that fails (unplugged, speaking nonsense) is closed and the reason kept
+    for :meth:`take_error`; the pump ends.
+    """
+
+    def __init__(self, source, haptic, display, force_n, clock=time.monotonic):
+        super().__init__(name="frictex-touch", daemon=True)
+        self.source = source
+        self.haptic = haptic
+        self.display = display
+        self.force_n = force_n
+        self.clock = clock
+        self.samples = 0
+        self.error: str | None = None
+        self._reported = False
+        self._quit = threading.Event()
+
+    def forward(self, samples) -> int:
+        """Queue ``samples`` on the haptic side in mm, on its clock; returns how many."""
+        if not samples:
+            return 0
+        shift = self.haptic.now() - self.clock()
+        d = self.display()
+        force = float(self.force_n())
+        for s in samples:
+            self.haptic.touch_at(s.t_s + shift, s.finger, s.x_mm * d.width_mm,
+                                 s.y_mm * d.height_mm, force, s.event)
+        self.samples += len(samples)
+        return len(samples)
+
+    def run(self) -> None:
+        try:
+            while not self._quit.is_set():
+                self.source.wait(WAIT_S)
+                self.forward(self.source.poll())
+        except (OSError, ValueError) as exc:
+            self.error = str(exc)
+        finally:
+            self.source.close()
+
+    def take_error(self) -> str | None:
+        """Why the source stopped, the first time it is asked; else None."""
+        if self.error is None or self._reported:
+            return None
+        self._reported = True
+        return self.error
+
+    def stop(self) -> None:
+        """Stop the thread (it closes the source); a pump never started closes it here."""
+        self._quit.set()
+        if self.is_alive():
+            self.join()
+        elif self.ident is None:
+            self.source.close()
