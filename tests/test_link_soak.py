@@ -119,7 +119,7 @@ def test_a_stopped_host_under_faults_finishes_and_counts_every_sample(tmp_path, 
     st = result["status"]
     assert result["code"] == 0
     assert st["watchdog_trips"] >= 1 and st["reconnects"] >= 1 and st["disconnects"] >= 1
-    assert len(result["index"]) > 0.5 * result["commanded"]  # it resumed each time
+    assert np.any(result["index"] > 0.9 * result["commanded"])  # it went on to the end
 
 
 def sweep(k: int) -> tuple[str, float, str, list[tuple[float, float]]]:

@@ -75,6 +75,10 @@ MAX_STALLS = 5
 STOP_MARGIN_S = 0.5
 
 
+_COUNTS = ("frames_sent", "blocks_sent", "heartbeats", "retries", "reconnects", "disconnects",
+           "recoveries", "stalls", "device_flushes", "clamped_samples", "dropped_blocks")
+
+
 class LinkStalled(LinkError):
     """The device took nothing through ``max_stalls`` bounded waits in a row."""
 
@@ -148,8 +152,9 @@ class CommandSink:
         self._connected = False
         self._failure: LinkStalled | None = None
         self._stalls_in_row = 0
-        self._counts = collections.Counter()
-        self._errors = collections.Counter()
+        # every key up front: status() copies these while the thread counts
+        self._counts = collections.Counter(dict.fromkeys(_COUNTS, 0))
+        self._errors = collections.Counter(dict.fromkeys([*p.ErrorCode.NAMES.values(), "other"], 0))
         self._ledger = Ledger()
         self._rtt_ms: collections.deque = collections.deque(maxlen=4096)
         self._marks: dict[int, tuple[float, int, int]] = {}   # token -> (t, sent_end, mark)
@@ -173,13 +178,13 @@ class CommandSink:
     def _connect(self) -> None:
         port = self._opener()
         try:
-            self._start_session(port, self._handshake(port))
+            self._start_session(self._handshake(port))
         except BaseException:
             port.close()
             raise
         self._port = port
 
-    def _start_session(self, port, info: p.Info) -> None:
+    def _start_session(self, info: p.Info) -> None:
         self._check(info)
         self.info = info
         self.version = min(info.protocol_version, p.PROTOCOL_VERSION)
@@ -293,7 +298,7 @@ class CommandSink:
         with self._cond:
             self._ledger.end_session()
         try:
-            self._start_session(self._port, self._handshake(self._port))
+            self._start_session(self._handshake(self._port))
         except (LinkError, OSError, serial.SerialException) as exc:
             self._lost(exc)
 
@@ -599,7 +604,7 @@ class CommandSink:
             "played_samples": played,
             "unplayed_samples": sum(v for v in breakdown.values() if v is not None),
             "unplayed_by_cause": breakdown,
-            "device_errors": dict(self._errors),
+            "device_errors": {k: v for k, v in dict(self._errors).items() if v},
             "latency_ms_p50": float(np.percentile(rtt, 50)) if rtt.size else None,
             "latency_ms_p99": float(np.percentile(rtt, 99)) if rtt.size else None,
             "last_error": self.last_error,
