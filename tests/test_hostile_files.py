@@ -67,11 +67,23 @@ class Case:
     make: Callable[[Path], tuple[list[str], str]]
 
 
-def _texture(text: str | bytes, name: str = "hostile.toml"):
+Content = str | bytes | Callable[[Path], None]
+
+
+def _put(path: Path, content: Content) -> None:
+    """Write text or bytes at ``path``, or make it with ``content(path)`` (a FIFO, a link)."""
+    if callable(content):
+        content(path)
+    elif isinstance(content, bytes):
+        path.write_bytes(content)
+    else:
+        path.write_text(content)
+
+
+def _texture(content: Content):
     def make(folder: Path):
-        path = folder / name
-        (path.write_bytes if isinstance(text, bytes) else path.write_text)(text)
-        return ["validate", str(path)], name
+        _put(folder / "hostile.toml", content)
+        return ["validate", str(folder / "hostile.toml")], "hostile.toml"
     return make
 
 
@@ -106,40 +118,28 @@ BEAM = ('format = 1\n[display]\nwidth_mm = 108.0\nheight_mm = 6\nwidth_px = 800\
         'sigma_mm = 2\nmu = 0.7\n')
 
 
-def _modes(text: str | bytes | None = None, create: Callable[[Path], None] | None = None):
+def _modes(content: Content):
     """A beam scene whose measured mode table (``modes_file``) is hostile."""
     def make(folder: Path):
-        table = folder / "modes.csv"
-        if create is not None:
-            create(table)
-        else:
-            (table.write_bytes if isinstance(text, bytes) else table.write_text)(text)
-        scene = folder / "beam.toml"
-        scene.write_text(BEAM)
-        return ["validate", str(scene)], "modes.csv"
+        _put(folder / "modes.csv", content)
+        (folder / "beam.toml").write_text(BEAM)
+        return ["validate", str(folder / "beam.toml")], "modes.csv"
     return make
 
 
-def _trace(text: str | bytes | None = None, create: Callable[[Path], None] | None = None):
+def _trace(content: Content):
     def make(folder: Path):
-        path = folder / "hostile.csv"
-        if create is not None:
-            create(path)
-        else:
-            (path.write_bytes if isinstance(text, bytes) else path.write_text)(text)
-        return ["replay", "grating-5mm", str(path), "--out", str(folder / "out"), "--quiet",
-                "--rate", "1000"], "hostile.csv"
+        _put(folder / "hostile.csv", content)
+        return ["replay", "grating-5mm", str(folder / "hostile.csv"), "--out", str(folder / "out"),
+                "--quiet", "--rate", "1000"], "hostile.csv"
     return make
 
 
-def _recording(text: str | bytes | None = None, create: Callable[[Path], None] | None = None):
+def _recording(content: Content):
     def make(folder: Path):
-        path = folder / "hostile.txt"
-        if create is not None:
-            create(path)
-        else:
-            (path.write_bytes if isinstance(text, bytes) else path.write_text)(text)
-        return ["trace", "import", str(path), "-o", str(folder / "o.csv")], "hostile.txt"
+        _put(folder / "hostile.txt", content)
+        return ["trace", "import", str(folder / "hostile.txt"), "-o", str(folder / "o.csv")], \
+            "hostile.txt"
     return make
 
 
@@ -210,14 +210,14 @@ CASES = [
     Case("image 12000 x 12000 px, replay", _image(lambda p: p.write_bytes(_png(12000, 12000, 4)),
                                                   "replay")),
     # measured mode tables
-    Case("modes table is a FIFO", _modes(create=os.mkfifo)),
+    Case("modes table is a FIFO", _modes(os.mkfifo)),
     Case("modes table binary", _modes(BINARY[128:])),
     Case("modes table 1e308", _modes("x_mm,A,B\n0,0,1\n100,1e308,0\n200,1,1\n350,0,1\n")),
     # trace files
-    Case("trace is a FIFO", _trace(create=os.mkfifo)),
-    Case("trace is a folder", _trace(create=os.mkdir)),
-    Case("trace is a symlink loop", _trace(create=_loop)),
-    Case("trace is /dev/zero", _trace(create=_to_dev_zero)),
+    Case("trace is a FIFO", _trace(os.mkfifo)),
+    Case("trace is a folder", _trace(os.mkdir)),
+    Case("trace is a symlink loop", _trace(_loop)),
+    Case("trace is /dev/zero", _trace(_to_dev_zero)),
     Case("trace empty", _trace("")),
     Case("trace header only", _trace(TRACE_HEAD)),
     Case("trace binary", _trace(BINARY)),
@@ -244,7 +244,7 @@ CASES = [
     Case("trace unknown event", _trace(_rows("0.01,0,10,10,0.5,slide\n"))),
     Case("trace NUL byte", _trace(_rows("0.01,0,1\0,10,0.5,move\n"))),
     # recordings for trace import
-    Case("recording is a FIFO", _recording(create=os.mkfifo)),
+    Case("recording is a FIFO", _recording(os.mkfifo)),
     Case("recording binary", _recording(BINARY)),
     Case("recording evemu value of 30 digits", _recording(EVEMU + "E: 0.000001 0003 0035 "
                                                           + "9" * 30 + "\n")),

@@ -66,6 +66,13 @@ def mutate(data: bytes, kind: str, where: float, arg: int) -> bytes:
     return data[:m.start()] + HOSTILE_NUMBERS[arg] + data[m.end():]
 
 
+def mutated(source: Path, changes) -> bytes:
+    data = source.read_bytes()
+    for change in changes:
+        data = mutate(data, *change)
+    return data
+
+
 def run(argv: list[str]) -> tuple[int, list[str]]:
     """``frictex argv`` in process: (exit code, stderr lines); RuntimeWarnings fail."""
     err = io.StringIO()
@@ -102,9 +109,7 @@ def check_replay(argv: list[str], out: Path) -> None:
 @given(index=st.integers(0, len(SCENES) - 1), changes=st.lists(mutation, min_size=1, max_size=3))
 def test_mutated_scenes_validate_and_replay_cleanly(index, changes):
     source = SCENES[index]
-    data = source.read_bytes()
-    for change in changes:
-        data = mutate(data, *change)
+    data = mutated(source, changes)
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         for image in LIBRARY_DIR.glob("*.png"):  # rasters are found next to the scene
@@ -124,9 +129,7 @@ def test_mutated_scenes_validate_and_replay_cleanly(index, changes):
 @given(index=st.integers(0, len(TRACES) - 1), changes=st.lists(mutation, min_size=1, max_size=3))
 def test_mutated_traces_replay_cleanly(index, changes):
     source = TRACES[index]
-    data = source.read_bytes()
-    for change in changes:
-        data = mutate(data, *change)
+    data = mutated(source, changes)
     with tempfile.TemporaryDirectory() as folder:
         trace = Path(folder) / source.name
         trace.write_bytes(data)
