@@ -166,7 +166,12 @@ def _link_buffer_s() -> float:
 
 
 class Runner:
-    """Runs cases, caching the traces and references they share."""
+    """Runs cases, caching the traces and references they share.
+
+    ``motions``: name -> ``make_motion`` arguments, optionally with ``"sampling"``: the
+    ``sample`` keywords for that motion's touch trace (``seed``, ``jitter_s``, ``drop``;
+    default seed 11, no jitter, no drops; the noise is always ``TOUCH_NOISE_MM``).
+    """
 
     def __init__(self, live_s: float = 1.0, motions: dict | None = None):
         self.live_s = live_s
@@ -175,7 +180,7 @@ class Runner:
         self._traces: dict = {}
 
     def _motion(self, name: str):
-        return make_motion(**self.motions[name])
+        return make_motion(**{k: v for k, v in self.motions[name].items() if k != "sampling"})
 
     def reference(self, scene_name: str, motion_name: str):
         key = (scene_name, motion_name)
@@ -186,8 +191,9 @@ class Runner:
     def trace(self, motion_name: str, touch_hz: float) -> Trace:
         key = (motion_name, touch_hz)
         if key not in self._traces:
+            sampling = {"seed": 11, **self.motions[motion_name].get("sampling", {})}
             self._traces[key] = sample(self._motion(motion_name), touch_hz,
-                                       noise_mm=TOUCH_NOISE_MM, seed=11)
+                                       noise_mm=TOUCH_NOISE_MM, **sampling)
         return self._traces[key]
 
     def run(self, case: Case) -> dict:

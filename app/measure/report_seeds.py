@@ -1,75 +1,89 @@
-"""How much of a claim is the draw: the seed 003 gratings under human-like motions drawn
-with several seeds (``rendering.input.trace_synth``'s ``human`` strokes; the matrix uses one, seed 7).
+"""The draws behind ``frictex report``'s claims: the seed 003 gratings under many
+independent draws of finger motion, every renderer on the same draws.
 
-Each seed is a different stroke pattern (pauses, reversals, speeds), sampled at 50 Hz
-with the matrix's touch noise and rendered at 10 kHz, exact inversion, by plain SHO
-(sho-held), SHT and the hybrid. The report shows each metric's mean and range over the
-seeds, and in how many seeds the hybrid is no worse than the better of SHO and SHT: a
-claim that holds in some draws and not others is about the draw, not the renderer.
+Three kinds of motion, each drawn ``n`` times (16; 8 with ``--quick``), sampled at
+50 Hz with the matrix's 0.05 mm touch noise and rendered at 10 kHz, exact inversion:
+
+- ``human``: human-like strokes (``rendering.input.trace_synth``): draw k uses the
+  minimum-jerk strokes and pauses of ``human`` for odd k and the ``human-varied`` mix
+  (speed rippling within strokes, creeping, flicks, reversals, arcs, pauses) for even k,
+  motion seed k; the touch trace has 2 ms timestamp jitter (standard deviation) and
+  drops 5 % of the samples, as real controllers do;
+- ``slow`` and ``fast``: the matrix's constant-speed swipes (20 and 120 mm/s), draw k
+  with its own touch noise.
+
+Draw k of every renderer renders the same trace, so claims compare renderers paired by
+draw (``app.measure.report_claims``).
 """
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
+from app.engine.fanout import fan_out
 from app.measure.report_claims import GRATINGS, METRICS, OUTPUT_HZ, TOUCH_HZ
-from app.measure.report_matrix import MOTIONS, Case, Runner
+from app.measure.report_matrix import MOTIONS, Case, run_case
 
-RENDERERS = ("sho-held", "sht", "hybrid")
-SEEDS = tuple(range(1, 9))
-QUICK_SEEDS = SEEDS[:4]
+#: renderers compared on every draw; ``auto`` picks the hybrid for periodic layers
+RENDERERS = ("sho-held", "sho-predicted", "sht", "hybrid")
+DRAWS = 16
+QUICK_DRAWS = 8
+#: motion kinds of the draws
+KINDS = ("human", "slow", "fast")
+#: timing faults of the human-like draws' touch traces
+JITTER_S = 0.002
+DROP = 0.05
 
 
-def motions(seeds) -> dict:
-    """make_motion arguments per motion name ``human-seed<k>``."""
-    return {f"human-seed{k}": {**MOTIONS["human"], "seed": k} for k in seeds}
+def motions(n: int) -> dict:
+    """``make_motion`` arguments (with their ``sampling``) per draw name ``<kind>-<k>``."""
+    out = {}
+    for k in range(1, n + 1):
+        out[f"human-{k}"] = {**MOTIONS["human"], "kind": "human" if k % 2 else "human-varied",
+                             "seed": k, "sampling": {"seed": 1000 + k, "jitter_s": JITTER_S,
+                                                     "drop": DROP}}
+        for kind in ("slow", "fast"):
+            out[f"{kind}-{k}"] = {**MOTIONS[kind], "sampling": {"seed": 1000 + k}}
+    return out
 
 
-def scatter(seeds=SEEDS, scenes=tuple(GRATINGS)) -> dict:
-    """Per grating, renderer and metric the values over ``seeds``; per grating and metric
-    the number of seeds where the hybrid is no worse than the better of SHO and SHT.
+def draws(n: int, scenes=tuple(GRATINGS), workers: int = 1, scheduler: str | None = None) -> dict:
+    """Every renderer on ``n`` draws of each kind, per grating in ``scenes``.
 
-    Returns ``{"seeds": [...], "values": {scene: {renderer: {metric: [...]}}},
-    "hybrid_best": {scene: {metric: wins}}}`` (alignment error None where undefined).
+    Returns ``{"n": n, "kinds": [...], "renderers": [...], "values": {scene: {kind:
+    {renderer: {metric: [value per draw]}}}}}`` (alignment error None where undefined).
     """
-    runner = Runner(live_s=0.01, motions=motions(seeds))
+    spec = motions(n)
+    cases = [Case(scene, f"{kind}-{k}", TOUCH_HZ, renderer, OUTPUT_HZ)
+             for scene in scenes for kind in KINDS for k in range(1, n + 1)
+             for renderer in RENDERERS]
+    rows = fan_out(partial(run_case, live_s=0.005, motions=spec), cases, workers=workers,
+                   scheduler=scheduler)
     values: dict = {}
-    for scene in scenes:
-        per = values.setdefault(scene, {})
-        for renderer in RENDERERS:
-            rows = [runner.run(Case(scene, name, TOUCH_HZ, renderer, OUTPUT_HZ))
-                    for name in runner.motions]
-            per[renderer] = {m: [r[m] for r in rows] for m in METRICS}
-    wins = {scene: {m: _wins(per, m) for m in METRICS} for scene, per in values.items()}
-    return {"seeds": list(seeds), "values": values, "hybrid_best": wins}
-
-
-def _wins(per: dict, metric: str) -> int:
-    """Seeds where the hybrid's ``metric`` is at most the better of SHO's and SHT's (an
-    undefined alignment error, no step to match in any of the three, counts as a win)."""
-    wins = 0
-    for h, a, b in zip(*(per[r][metric] for r in ("hybrid", "sho-held", "sht"))):
-        defined = [v for v in (a, b) if v is not None]
-        wins += h is None or not defined or h <= min(defined)
-    return wins
+    for case, row in zip(cases, rows):
+        kind = case.motion.rsplit("-", 1)[0]
+        per = values.setdefault(case.scene, {}).setdefault(kind, {}).setdefault(
+            case.renderer, {m: [] for m in METRICS})
+        for m in METRICS:
+            per[m].append(row[m])
+    return {"n": n, "kinds": list(KINDS), "renderers": list(RENDERERS), "values": values}
 
 
 def summary_lines(doc: dict) -> list[str]:
-    """The report.md section for :func:`scatter`'s result."""
-    n = len(doc["seeds"])
-    lines = ["## Seed scatter (human-like motion, 50 Hz, 10 kHz)", "",
-             f"The matrix's human-like motion is one draw (seed 7). Here the same kind of strokes "
-             f"drawn with seeds {doc['seeds'][0]}-{doc['seeds'][-1]}: mean (min-max) of each "
-             "metric, and in how many seeds the hybrid is no worse than the better of SHO and "
-             "SHT.", "",
-             "| scene | renderer | time | spectral | alignment mm |", "|---|---|---|---|---|"]
-    for scene, per in doc["values"].items():
-        for renderer, metrics in per.items():
-            lines.append(f"| {scene} | {renderer} | "
-                         + " | ".join(_spread(metrics[m]) for m in METRICS) + " |")
-        wins = doc["hybrid_best"][scene]
-        lines.append(f"| {scene} | hybrid no worse, seeds | "
-                     + " | ".join(f"{wins[m]} of {n}" for m in METRICS) + " |")
+    """The report.md table of :func:`draws`: each metric's mean (min-max) over the draws."""
+    lines = [f"## Draws (50 Hz touch, 10 kHz output, {doc['n']} draws of each kind)", "",
+             "Every claim above is computed on these draws, paired by draw (see "
+             "app/measure/report_seeds.py for how they are made): mean (min-max) of each "
+             "metric.", "",
+             "| scene | motion | renderer | time | spectral | alignment mm |",
+             "|---|---|---|---|---|---|"]
+    for scene, kinds in doc["values"].items():
+        for kind, per in kinds.items():
+            for renderer, metrics in per.items():
+                lines.append(f"| {scene} | {kind} | {renderer} | "
+                             + " | ".join(_spread(metrics[m]) for m in METRICS) + " |")
     return lines + [""]
 
 

@@ -1,0 +1,217 @@
+"""``frictex report --real DIR``: real touch recordings replayed through every renderer.
+
+Every recording under DIR (recursively) is replayed: trace CSVs as they are, Android
+``getevent -lt`` logs and evemu recordings through ``frictex trace import``. A log does
+not record its screen's size, so its observed range is mapped onto the scene's display
+(the touches are replayed on the scene, at the scene's scale). Each recording runs on
+each seed 003 grating of the report with every renderer (50 Hz is the recordings' own
+rate here: 67-105 Hz), 10 kHz output, exact inversion.
+
+No true path exists for a recording, so what is scored is what can be:
+
+- continuity: the largest step of the output amplitude between two output samples
+  (um) while a finger stays down (a grating's own edge is a full step), and chatter: a
+  step followed within ``CHATTER_S`` by one back the other way, an edge felt twice;
+  counted on gratings whose own edges never come that close (half a period at
+  ``FAST_MM_S``: the 15 and 5 mm gratings, not the 0.6 mm one);
+- clamps: the friction inversion's guards that acted, and the tracker's jumps (a finger
+  moving faster than a finger can) and dropped out-of-order samples;
+- agreement between renderers: the spectral distance of each renderer's mu'(t) from the
+  hybrid's (``rendering.metrics.spectral_error``, phase ignored), per finger;
+- finger-role stability: with two or more fingers down, how often the positional
+  selector ``left-most`` hands its role to another finger, per second, with the default
+  hysteresis and without any (``rendering.tracking.finger_select``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from app.measure.report_matrix import load, run_blocks
+from rendering.input.trace_file import TraceError, make_trace, read_trace
+from rendering.input.trace_import import add_import_arguments, detect_format, run_import
+from rendering.metrics import MetricError, spectral_error
+from rendering.pipeline import build_pipeline
+from rendering.tracking.finger_select import HYSTERESIS_MM, SelectionState, select_fingers
+from rendering.tracking.tracks import TrackerConfig, TrackerState, track
+
+RENDERERS = ("sho-held", "sho-predicted", "sht", "hybrid")
+OUTPUT_HZ = 10_000.0
+#: recordings larger than this (bytes) are left out (a report is not a bulk converter)
+MAX_BYTES = 8 << 20
+#: a step back within this (s) of a step is chatter ...
+CHATTER_S = 0.01
+#: ... where a step is an amplitude change of at least this (um) from one sample to the next
+STEP_UM = 0.1
+#: a fast stroke (mm/s), for which gratings chatter can be told from texture
+FAST_MM_S = 250.0
+
+
+def recordings(folder: Path) -> list[Path]:
+    """The files under ``folder`` that look like touch recordings (sorted)."""
+    if not folder.is_dir():
+        raise ValueError(f"--real {folder}: not a folder; expected a folder of touch "
+                         "recordings (getevent logs, evemu recordings or trace CSVs)")
+    found = []
+    for path in sorted(p for p in folder.rglob("*") if p.is_file()):
+        if path.stat().st_size > MAX_BYTES:
+            continue
+        head = path.read_text(encoding="utf-8", errors="replace")[:4096]
+        try:
+            detect_format(path, head)
+        except TraceError:
+            continue
+        found.append(path)
+    if not found:
+        raise ValueError(f"--real {folder}: no touch recordings found (getevent logs, evemu "
+                         "recordings or trace CSVs)")
+    return found
+
+
+def load_recording(path: Path, width_mm: float, height_mm: float):
+    """The recording as a trace starting at t = 0 (logs mapped onto width x height mm)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "trace.csv"
+        parser = argparse.ArgumentParser()
+        add_import_arguments(parser)
+        args = parser.parse_args([str(path), "-o", str(out), "--width-mm", str(width_mm),
+                                  "--height-mm", str(height_mm)])
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            run_import(args)
+        trace = read_trace(out)
+    return make_trace(trace.t_s - trace.t_s[0], trace.finger, trace.x_mm, trace.y_mm,
+                      trace.force_n, trace.event)
+
+
+def _steps(amplitude: np.ndarray, contact: np.ndarray) -> tuple[float, int]:
+    """The largest amplitude step (um) between output samples while a finger stays down,
+    and the chatter count (see the module docstring)."""
+    both = contact[:, 1:] & contact[:, :-1]
+    d = np.where(both, np.diff(amplitude, axis=1), 0.0)
+    chatter = 0
+    for row in d:
+        k = np.flatnonzero(np.abs(row) >= STEP_UM)
+        back = (np.diff(k) <= CHATTER_S * OUTPUT_HZ) & (np.sign(row[k[1:]]) != np.sign(row[k[:-1]]))
+        chatter += int(np.count_nonzero(back))
+    return float(np.abs(d).max(initial=0.0)), chatter
+
+
+def _role_swaps(trace, hysteresis_mm: float) -> tuple[int, float]:
+    """Hand-overs of ``left-most`` while two or more fingers are down, and that time (s)."""
+    cfg = TrackerConfig(rate_hz=OUTPUT_HZ)
+    fingers, _ = track(0, int((trace.duration_s + 0.05) * OUTPUT_HZ) + 1, trace, TrackerState(), cfg)
+    many = fingers.contact.sum(axis=0) >= 2
+    if not many.any():
+        return 0, 0.0
+    left = select_fingers(["left-most"], fingers, SelectionState(), hysteresis_mm)[0][0]
+    holder = np.argmax(left, axis=0)[many]
+    runs = np.flatnonzero(np.diff(np.flatnonzero(many)) > 1)  # separate stretches of many
+    changes = np.diff(holder) != 0
+    changes[runs] = False
+    return int(np.count_nonzero(changes)), float(many.sum() / OUTPUT_HZ)
+
+
+def replay(path: Path, scene_name: str) -> dict:
+    """The figures of the module docstring for one recording on one scene."""
+    scene = load(scene_name)
+    trace = load_recording(path, scene.display.width_mm, scene.display.height_mm)
+    duration = trace.duration_s + 0.05
+    out: dict = {"recording": path.name, "scene": scene_name, "samples": len(trace),
+                 "fingers": len(trace.fingers), "duration_s": trace.duration_s, "renderers": {}}
+    mu_by = {}
+    for renderer in RENDERERS:
+        pipeline = build_pipeline(scene, rate_hz=OUTPUT_HZ, block_size=50,
+                                  render_override=renderer,
+                                  sho_variant="sho-held" if renderer == "sho-held" else "sho-predicted")
+        outs, _ = run_blocks(pipeline, trace, 200, duration)
+        contact = np.concatenate([o.contact for o in outs], axis=1)
+        amplitude = np.concatenate([o.amplitude_um for o in outs], axis=1)
+        mu_by[renderer] = (np.concatenate([o.mu_target for o in outs], axis=1), contact)
+        largest, chatter = _steps(amplitude, contact)
+        if not scene.grating_period_mm or scene.grating_period_mm / 2 < CHATTER_S * FAST_MM_S:
+            chatter = None
+        clamps = None
+        for o in outs:
+            clamps = o.clamps if clamps is None else (clamps.add(o.clamps) or clamps)
+        out["renderers"][renderer] = {
+            "largest_step_um": largest, "chatter": chatter,
+            "clamps": clamps.total, "finite": bool(np.isfinite(amplitude).all())}
+    for renderer in RENDERERS:
+        out["renderers"][renderer]["spectral_distance_from_hybrid"] = _agreement(
+            *mu_by[renderer], mu_by["hybrid"][0])
+    tracker = TrackerConfig(rate_hz=OUTPUT_HZ)
+    _, state = track(0, int(duration * OUTPUT_HZ), trace, TrackerState(), tracker)
+    out["tracker"] = {"jumps": state.jumps, "out_of_order": state.out_of_order}
+    swaps, many_s = _role_swaps(trace, HYSTERESIS_MM)
+    plain, _ = _role_swaps(trace, 0.0)
+    out["roles"] = {"two_or_more_s": many_s, "left_most_swaps": swaps,
+                    "left_most_swaps_without_hysteresis": plain}
+    return out
+
+
+def _agreement(mu: np.ndarray, contact: np.ndarray, reference: np.ndarray) -> float | None:
+    """Mean over fingers of the spectral distance of ``mu`` from ``reference`` (None where
+    no finger has enough contact or texture to compare)."""
+    values = []
+    for row in range(mu.shape[0]):
+        try:
+            values.append(spectral_error(mu[row], reference[row], contact[row], OUTPUT_HZ))
+        except MetricError:
+            continue
+    return float(np.mean(values)) if values else None
+
+
+def real_section(folder: Path, scenes) -> dict:
+    """Every recording under ``folder`` on every scene: ``{"folder", "runs": [...],
+    "skipped": [{"recording", "reason"}]}`` (a recording that cannot be imported, e.g. a
+    single touch whose log does not show the axis ranges, is listed with the reason)."""
+    runs, skipped = [], []
+    for path in recordings(folder):
+        try:
+            runs += [replay(path, scene) for scene in scenes]
+        except TraceError as exc:
+            skipped.append({"recording": path.name, "reason": str(exc).splitlines()[0]})
+    return {"folder": str(folder), "runs": runs, "skipped": skipped}
+
+
+def summary_lines(doc: dict) -> list[str]:
+    """The report.md section for :func:`real_section`."""
+    lines = [f"## Real recordings ({doc['folder']})", "",
+             "Each recording replayed on each grating by every renderer (10 kHz, exact "
+             "inversion); logs mapped onto the scene's display. No true path exists, so: the "
+             "largest step of the output amplitude while a finger stays down (um; a grating "
+             f"edge is a full step), chatter (a step undone within {CHATTER_S * 1e3:g} ms: an "
+             "edge felt twice), clamps counted by the inversion, the spectral distance of mu'(t) "
+             "from the hybrid's (phase ignored; 0 = the same texture), and how often "
+             f"'left-most' changed finger with two or more down ({HYSTERESIS_MM:g} mm "
+             "hysteresis / none).", "",
+             "| recording | scene | renderer | largest step um | chatter | clamps | "
+             "distance from hybrid |", "|---|---|---|---|---|---|---|"]
+    for run in doc["runs"]:
+        for renderer, r in run["renderers"].items():
+            dist = r["spectral_distance_from_hybrid"]
+            lines.append(f"| {run['recording']} | {run['scene']} | {renderer} | "
+                         f"{r['largest_step_um']:.3f} | {'-' if r['chatter'] is None else r['chatter']} | "
+                         f"{r['clamps']} | "
+                         f"{'-' if dist is None else f'{dist:.3f}'} |")
+    lines += ["", "| recording | fingers | s with 2+ down | left-most swaps | without hysteresis "
+              "| tracker jumps | out of order |", "|---|---|---|---|---|---|---|"]
+    seen = set()
+    for run in doc["runs"]:
+        if run["recording"] in seen:
+            continue
+        seen.add(run["recording"])
+        roles, tr = run["roles"], run["tracker"]
+        lines.append(f"| {run['recording']} | {run['fingers']} | {roles['two_or_more_s']:.2f} | "
+                     f"{roles['left_most_swaps']} | {roles['left_most_swaps_without_hysteresis']} "
+                     f"| {tr['jumps']} | {tr['out_of_order']} |")
+    if doc["skipped"]:
+        lines += ["", "Not replayed: " + "; ".join(f"{s['recording']} ({s['reason']})"
+                                                   for s in doc["skipped"]) + "."]
+    return lines + [""]
