@@ -106,6 +106,10 @@ def test_device_counters_that_wrap_at_2_32_still_add_up():
     led.sent(30)
     led.status(status(30, 0, S.BUFFERING, end=30, played=20), mark=30)
     assert led.played == 30 and led.unplayed == 0
+    # a counter that goes back restarted (a device that reset it): counted from 0
+    led.sent(40)
+    led.status(status(70, 0, S.BUFFERING, end=70, played=15), mark=70)
+    assert led.played == 45
 
 
 def test_a_version_1_device_leaves_played_flushed_and_lost_unknown():

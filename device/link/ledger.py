@@ -102,8 +102,10 @@ class Snapshot:
 
 
 def _delta(new: int, old: int) -> int:
-    """Increase of a device counter that wraps at 2**32."""
-    return (new - old) % _COUNTER_WRAP
+    """Increase of a device counter that wraps at 2**32. A counter that went back (a
+    "wrap" of 2**31 or more, which no device plays between two Statuses) restarted."""
+    step = (new - old) % _COUNTER_WRAP
+    return new if step >= _COUNTER_WRAP // 2 else step
 
 
 class _Session:
