@@ -56,6 +56,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_import_arguments(imp)
 
 
+#: Accepted ranges of the synth options (lowest, highest, unit): a value beyond them is a
+#: typo, and would overflow or exhaust memory further on.
+LIMITS = {"rate": (0.0, 1e5, "Hz"), "truth_rate": (0.0, 1e6, "Hz"), "duration": (0.0, 1e5, "s"),
+          "speed": (0.0, 1e4, "mm/s"), "x0": (-1e5, 1e5, "mm"), "y0": (-1e5, 1e5, "mm"),
+          "angle": (-360.0, 360.0, "deg"), "length": (0.0, 1e5, "mm"), "radius": (0.0, 1e5, "mm"),
+          "noise": (0.0, 1e3, "mm"), "jitter": (0.0, 1.0, "s"), "force": (0.0, 1e3, "N"),
+          "force_noise": (0.0, 100.0, "N"), "peaks": (0.0, 1e3, "N")}
+#: Most samples a synthetic trace (or its true path) may hold.
+MAX_SAMPLES = 10_000_000
+
 PATH_OPTIONS = ("rate", "speed", "duration", "x0", "y0", "angle", "length", "radius", "noise",
                 "jitter", "force", "seed")
 PRESS_OPTIONS = ("rate", "x0", "y0", "force", "peaks", "force_noise", "seed")
@@ -81,13 +91,26 @@ def _provenance(args: argparse.Namespace) -> str:
     return f"{what} ({_synth_command(args, PATH_OPTIONS)})"
 
 
+def _check_limits(args: argparse.Namespace) -> None:
+    """ValueError for a synth option outside LIMITS, or a trace of more than MAX_SAMPLES."""
+    for name, (lo, hi, unit) in LIMITS.items():
+        values = getattr(args, name)
+        for value in values if isinstance(values, list) else [values]:
+            if not lo <= value <= hi:
+                raise ValueError(f"--{name.replace('_', '-')} {value:g}: expected {lo:g} to "
+                                 f"{hi:g} {unit}")
+    rates = [("--rate", args.rate)] + ([("--truth-rate", args.truth_rate)] if args.truth else [])
+    for option, rate in rates:
+        if rate * args.duration > MAX_SAMPLES:
+            raise ValueError(f"{option} {rate:g} Hz over --duration {args.duration:g} s is "
+                             f"{rate * args.duration:,.0f} samples; at most {MAX_SAMPLES:,}")
+
+
 def run(args: argparse.Namespace) -> int:
     if args.trace_command == "import":
         from rendering.input.trace_import import run_import
         return run_import(args)
-    for name in ("noise", "jitter", "force", "force_noise"):
-        if getattr(args, name) < 0:
-            raise ValueError(f"--{name.replace('_', '-')} {getattr(args, name)} must be >= 0")
+    _check_limits(args)
     if args.motion == "press":
         if args.truth:
             raise ValueError("--truth: a press does not move; its trace is its true path")

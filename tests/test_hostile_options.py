@@ -1,0 +1,20 @@
+"""Out-of-range options of ``frictex trace synth``: one line, exit 2, nothing written
+(they overflowed or tried to allocate terabytes)."""
+
+import pytest
+
+from app.commands.cli import main
+
+
+@pytest.mark.parametrize("options, message", [
+    (["--duration", "1e9"], "--duration 1e+09: expected 0 to 100000 s"),
+    (["--speed", "1e308"], "--speed 1e+308: expected 0 to 10000 mm/s"),
+    (["--x0", "nan"], "--x0 nan: expected -100000 to 100000 mm"),
+    (["--noise", "-1"], "--noise -1: expected 0 to 1000 mm"),
+    (["--rate", "1000", "--duration", "20000"],
+     "--rate 1000 Hz over --duration 20000 s is 20,000,000 samples; at most 10,000,000"),
+])
+def test_synth_options_out_of_range_are_one_line(tmp_path, capsys, options, message):
+    assert main(["trace", "synth", "swipe", "-o", str(tmp_path / "s.csv"), *options]) == 2
+    assert capsys.readouterr().err == f"frictex: error: {message}\n"
+    assert not (tmp_path / "s.csv").exists()
