@@ -252,3 +252,41 @@ def test_a_disk_filling_up_mid_run_fails_loudly_and_leaves_nothing(tmp_path, mon
     with pytest.raises(OSError, match=r"the next \d+ rows of .* need about"):
         run_replay(scene, resolve_trace(TRACE), tmp_path, progress=False)
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def taps(n_touch, same_id):
+    """``n_touch`` strokes one after another, each with its own id unless ``same_id``."""
+    from rendering.input.trace_file import Trace
+    t, f, x, ev = [], [], [], []
+    for k in range(n_touch):
+        for i in range(8):
+            t.append(k * 0.2 + i / 60)
+            f.append(0 if same_id else k)
+            x.append(20.0 + (k % 50) + 0.5 * i)
+            ev.append(0 if i == 0 else (2 if i == 7 else 1))
+    t = np.array(t)
+    return Trace(t, np.array(f, np.int64), np.array(x), np.full(t.size, 32.4),
+                 np.full(t.size, 0.5), np.array(ev, np.int8))
+
+
+def test_cost_follows_the_fingers_touching_not_the_ids_ever_seen():
+    """Android's tracking ids grow with every touch: 300 touches one after another with
+    300 ids give the commands of the same touches with one id, and no block carries more
+    than the one finger touching (a lifted finger is forgotten once its lift is out)."""
+    scene = load_scene(resolve_scene(SCENE))
+    runs = {}
+    for same in (True, False):
+        trace = taps(300, same)
+        pipeline = build_pipeline(scene, 10_000.0, 50, t0_s=0.0)
+        source = TraceSource(iter([trace]))
+        source.first_time()
+        source.start(pipeline.tracker_config)
+        memory = MemorySink()
+        stage = PipelineStage(pipeline)
+        drive(stage, source, [memory], VirtualClock(), chunk_blocks=1)
+        runs[same] = memory.outs
+        assert max(len(o.finger_ids) for o in memory.outs) == 1
+        assert len(stage.state.tracker.fingers) == 0  # all lifted at the end
+    # a re-touch of the same id and a new id take rounding-different paths (1e-15 um)
+    np.testing.assert_allclose(np.concatenate([o.commands_um for o in runs[True]]),
+                               np.concatenate([o.commands_um for o in runs[False]]), atol=1e-12)

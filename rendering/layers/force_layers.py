@@ -115,7 +115,9 @@ class ForceStage:
         tau = np.where(contact, self.actuation.ratio_at(x), 0.0)
         gain = np.where(contact, self.actuation.gain_at(x), 1.0)
 
-        tangential, buttons = dict(state.tangential), dict(state.buttons)
+        present = set(fingers.ids)  # a finger that lifted and left the tracks is forgotten
+        tangential = {fid: s for fid, s in state.tangential.items() if fid in present}
+        buttons = {key: s for key, s in state.buttons.items() if key[1] in present}
         wanted_um = np.zeros((count, n))
         direction = np.ones((count, n), dtype=np.int8)
         moving = np.zeros((count, n), dtype=bool)

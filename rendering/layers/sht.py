@@ -85,7 +85,7 @@ class ShtRenderer:
     def render(self, block: FingerBlock, state: ShtState):
         """mu' (F, n) and coverage (F, n) under each finger, and the new state."""
         mu = np.empty((len(block.ids), block.n))
-        carried = dict(state.phase)
+        carried = {fid: state.phase[fid] for fid in block.ids if fid in state.phase}
         ax, ay = self.axis
         for row, fid in enumerate(block.ids):
             rate = (block.vx[row] * ax + block.vy[row] * ay) / self.layer.period_mm

@@ -355,7 +355,11 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
                 samples.y_mm[sel], samples.force_n[sel], samples.event[sel], config, counters)
             if steps is not None:
                 updates[fid] = (applied[sel][keep], steps)
-    ids = tuple(sorted(fingers))
+    # the fingers touching when the block starts and those sampled in it; a finger that
+    # lifted is forgotten once its lift is out, so the cost follows the fingers touching
+    # at once, not every id a recording ever used
+    sampled = set() if samples is None or not len(samples) else set(np.unique(samples.finger).tolist())
+    ids = tuple(sorted(sampled | set(state.fingers)))
     tables, runs = [], []
     for fid in ids:
         before = _GET_FIELDS(state.fingers.get(fid, FingerState()))
@@ -373,7 +377,8 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
                      np.array([t.shape[1] for t in tables], dtype=np.int64), t_out,
                      float(config.predict_horizon_s))
     block = FingerBlock(index0, t_out, ids, **dict(zip(BLOCK_FIELDS, arrays)))
-    return block, TrackerState(fingers=fingers, **counters)
+    touching = {fid: s for fid, s in fingers.items() if s.contact}
+    return block, TrackerState(fingers=touching, **counters)
 
 
 @njit(cache=True)
