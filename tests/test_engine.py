@@ -172,7 +172,10 @@ def test_live_thread_on_the_device_paced_clock_with_the_simulated_device(tmp_pat
     index = played[:, 0].astype(np.int64)
     assert status["commanded_samples"] == commands.size
     assert status["played_samples"] + status["unplayed_samples"] == commands.size
-    assert played.shape[0] == status["played_samples"]
+    # the host never claims a sample played that was not (across a reconnect under load it
+    # may count as lost some that did play: the safe side)
+    assert status["played_samples"] <= played.shape[0] <= commands.size
+    assert np.unique(index).size == index.size and index.max() < commands.size
     np.testing.assert_allclose(played[:, 1], commands[index], atol=1e-4)  # wire resolution
 
 

@@ -73,9 +73,14 @@ class FingerState:
 
 @dataclass(frozen=True)
 class TrackerState:
+    """The fingers touching (a lifted finger is forgotten), the guards' counts, and the
+    largest touch id issued: a finger the tracker does not know starts from it, so a
+    touch id is never reused by the same finger id (layers key their state on both)."""
+
     fingers: dict[int, FingerState] = field(default_factory=dict)
     jumps: int = 0
     out_of_order: int = 0
+    touches: int = 0
 
 
 #: the per-sample arrays of a :class:`FingerBlock`, each (F, n)
@@ -351,7 +356,7 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
         for fid in np.unique(samples.finger).tolist():
             sel = samples.finger == fid
             steps, keep, fingers[fid] = _finger_steps(
-                fingers.get(fid, FingerState()), samples.t_s[sel], samples.x_mm[sel],
+                fingers.get(fid, FingerState(touch_id=state.touches)), samples.t_s[sel], samples.x_mm[sel],
                 samples.y_mm[sel], samples.force_n[sel], samples.event[sel], config, counters)
             if steps is not None:
                 updates[fid] = (applied[sel][keep], steps)
@@ -362,7 +367,7 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
     ids = tuple(sorted(sampled | set(state.fingers)))
     tables, runs = [], []
     for fid in ids:
-        before = _GET_FIELDS(state.fingers.get(fid, FingerState()))
+        before = _GET_FIELDS(state.fingers.get(fid, FingerState(touch_id=state.touches)))
         at, steps = updates.get(fid, (None, None))
         if steps is None:
             tables.append(np.array(before, dtype=np.float64)[:, None])
@@ -378,7 +383,8 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
                      float(config.predict_horizon_s))
     block = FingerBlock(index0, t_out, ids, **dict(zip(BLOCK_FIELDS, arrays)))
     touching = {fid: s for fid, s in fingers.items() if s.contact}
-    return block, TrackerState(fingers=touching, **counters)
+    touches = max([state.touches, *(s.touch_id for s in fingers.values())])
+    return block, TrackerState(fingers=touching, touches=touches, **counters)
 
 
 @njit(cache=True)
