@@ -1,4 +1,5 @@
-"""The simulated device's logic on a virtual clock: playing, jitter buffer, plate, watchdog."""
+"""The simulated device's logic on a virtual clock: playing, jitter buffer, plate, watchdog.
+Every test runs against the Python reference device and the C firmware core."""
 
 import numpy as np
 import pytest
@@ -7,10 +8,25 @@ from hypothesis import given, settings, strategies as st
 from device.link import protocol as p
 from device.link.faults import Faults, inject
 from device.link.protocol import DeviceState as S
-from device.link.simdevice import DeviceConfig, DeviceCore
+from device.firmware.build import FirmwareBuildError
+from device.firmware.ccore import built_core_class
+from device.link.simdevice import DeviceConfig, DeviceCore as PythonDeviceCore
 
 RATE = 10_000.0
 STEP = p.AMPLITUDE_STEP_UM
+DeviceCore = PythonDeviceCore
+
+
+@pytest.fixture(scope="module", autouse=True, params=["python", "c-firmware"])
+def device_core(request):
+    """Swap the class the tests build their device with (module scope: @given tests)."""
+    global DeviceCore
+    try:
+        DeviceCore = PythonDeviceCore if request.param == "python" else built_core_class()
+    except FirmwareBuildError as exc:
+        pytest.fail(str(exc), pytrace=False)
+    yield
+    DeviceCore = PythonDeviceCore
 
 
 class Recorder:
@@ -250,7 +266,7 @@ def test_nothing_that_failed_its_check_is_played(seed):
     core.advance_to(t + 0.02)
     index, values = rec.played()
     np.testing.assert_allclose(values[:, 0], signal[index], atol=STEP / 2)
-    assert len(index) > 3000  # most blocks got through
+    assert len(index) >= 3000  # most blocks got through
     assert core.decoder.counts.discarded > 0
     assert len(np.unique(index)) == len(index)
 

@@ -1,0 +1,476 @@
+#include "device.h"
+
+#include <string.h>
+
+static void lock(fw_device *d)
+{
+    if (d->hal->lock)
+        d->hal->lock(d->hal_ctx);
+}
+
+static void unlock(fw_device *d)
+{
+    if (d->hal->unlock)
+        d->hal->unlock(d->hal_ctx);
+}
+
+/* ceil(ms * rate / 1000) ticks, at least one (integer: a float product would add a tick
+ * for 9 ms at 10 kHz). */
+static uint32_t ms_to_ticks(uint16_t ms, uint32_t rate_mhz)
+{
+    uint64_t t = ((uint64_t)ms * rate_mhz + 999999u) / 1000000u;
+    return t ? (uint32_t)t : 1u;
+}
+
+const char *fw_config_check(const fw_config *c)
+{
+    if (c->channels < 1 || c->channels > FW_MAX_CHANNELS)
+        return "channels: expected 1 to FW_MAX_CHANNELS";
+    if (c->rate_mhz == 0 || c->rate_mhz >= 4000000000u)
+        return "rate: expected (0, 4e6) Hz";
+    for (unsigned ch = 0; ch < c->channels; ch++)
+        if (c->limits[ch] == 0)
+            return "limits: expected at least one count (1/4096 um) per channel";
+    if (c->buffer_samples < 2 || (uint64_t)c->buffer_samples * c->channels > FW_STORE_WORDS)
+        return "buffer_samples: expected at least 2, and buffer_samples * channels at most "
+               "FW_STORE_WORDS";
+    if (c->phases && !FW_PHASES)
+        return "phases: this build stores no phases (FW_PHASES 0)";
+    if (c->watchdog_ms < 1 || c->watchdog_ms > 49)
+        return "watchdog_ms: expected 1 to 49";
+    if (c->ramp_ms > 50 - c->watchdog_ms)
+        return "ramp_ms: watchdog_ms + ramp_ms must not exceed 50 ms (PROTOCOL.md 5.3)";
+    if (c->name && strlen(c->name) > FW_NAME_MAX)
+        return "name: longer than FW_NAME_MAX";
+    if (c->protocol_version < 1 || c->protocol_version > FW_NEWEST_VERSION)
+        return "protocol_version: expected 1 to FW_NEWEST_VERSION";
+    return NULL;
+}
+
+void fw_init(fw_device *d, const fw_config *cfg, const fw_hal *hal, void *hal_ctx)
+{
+    memset(d, 0, sizeof *d);
+    d->cfg = *cfg;
+    d->hal = hal;
+    d->hal_ctx = hal_ctx;
+    for (unsigned ch = 0; ch < cfg->channels; ch++)
+        fw_put16(d->limits_le + 2 * ch, cfg->limits[ch]);
+    d->wd_ticks = ms_to_ticks(cfg->watchdog_ms, cfg->rate_mhz);
+    d->ramp_ticks = ms_to_ticks(cfg->ramp_ms, cfg->rate_mhz);
+    d->ramp_pos = d->ramp_ticks;
+    d->buf.cap = cfg->buffer_samples;
+    d->buf.channels = cfg->channels;
+    d->prefill = 1;
+    d->state = FW_IDLE;
+    d->host_version = 1;
+    fw_rx_init(&d->rx, cfg->protocol_version);
+}
+
+/* ------------------------------------------------------------------ replies */
+
+static void write_serial(void *ctx, const uint8_t *p, size_t n)
+{
+    fw_device *d = ctx;
+    if (n)
+        d->hal->serial_write(d->hal_ctx, p, n);
+}
+
+/* A reply goes out in the version of the frame it answers (PROTOCOL.md 2.1). */
+static void send(fw_device *d, uint8_t version, uint8_t type, size_t payload_len)
+{
+    fw_tx_frame(d->tx, payload_len, version, type, d->tx_seq++, write_serial, d);
+}
+
+static void send_info(fw_device *d)
+{
+    const fw_config *c = &d->cfg;
+    fw_info m = {
+        .version = c->protocol_version,
+        .channels = c->channels,
+        .flags = (uint8_t)((c->phases ? FW_FLAG_PHASES : 0u) |
+                           (d->hal->amplitude_sensor ? FW_FLAG_SENSOR : 0u) |
+                           (d->hal->force_sensor ? FW_FLAG_FORCE : 0u)),
+        .rate_mhz = c->rate_mhz,
+        .buffer_samples = c->buffer_samples,
+        .watchdog_ms = c->watchdog_ms,
+        .ramp_ms = c->ramp_ms,
+        .limits = d->limits_le,
+        .name = (const uint8_t *)(c->name ? c->name : ""),
+        .name_len = (uint8_t)(c->name ? strlen(c->name) : 0u),
+    };
+    send(d, d->host_version, FW_INFO, fw_put_info(d->tx + 4, &m));
+}
+
+static void send_status(fw_device *d, uint32_t echo)
+{
+    uint8_t measured[2 * FW_MAX_CHANNELS];
+    fw_status m = {.echo = echo, .measured = measured, .accounted = d->host_version >= 2};
+    lock(d);
+    m.state = d->state;
+    m.play_index = d->play_index;
+    m.level = d->buf.level;
+    m.buffer_end = d->play_index + d->end;
+    m.played = d->session.played;
+    m.flushed = d->session.flushed;
+    m.flushes = d->session.flushes;
+    const uint32_t counters[FW_STATUS_COUNTERS] = {
+        d->k.underruns,
+        fw_rx_discarded(&d->rx.counts), /* "crc_errors": frames dropped for any reason */
+        d->rx.counts.frames_ok,
+        d->rx.counts.lost_frames,
+        d->k.gap_samples,
+        d->k.late_samples,
+        d->k.overflow_samples,
+        d->k.watchdog_trips,
+        d->k.clamped,
+    };
+    unlock(d);
+    memcpy(m.counters, counters, sizeof counters);
+    if (d->hal->amplitude_sensor) {
+        m.n_measured = d->cfg.channels;
+        for (unsigned ch = 0; ch < d->cfg.channels; ch++)
+            fw_put16(measured + 2 * ch, d->hal->amplitude_sensor(d->hal_ctx, ch));
+    }
+    if (d->hal->force_sensor) {
+        m.has_force = true;
+        m.force_mn = d->hal->force_sensor(d->hal_ctx);
+    }
+    send(d, d->host_version, FW_STATUS, fw_put_status(d->tx + 4, &m));
+}
+
+/* Error texts are for people; they match the reference device's word for word. They are
+ * written straight into the reply's payload, where fw_put_error expects them. */
+typedef struct {
+    uint8_t *s;
+    size_t n;
+} text;
+
+static text error_text(fw_device *d)
+{
+    text t = {d->tx + 4 + 7, 0}; /* after the header and code, ref_seq, detail */
+    return t;
+}
+
+static void add(text *t, const char *s)
+{
+    while (*s && t->n < FW_ERROR_TEXT_MAX)
+        t->s[t->n++] = (uint8_t)*s++;
+}
+
+static void add_u32(text *t, uint32_t v)
+{
+    char digits[10];
+    int k = 0;
+    do {
+        digits[k++] = (char)('0' + v % 10u);
+        v /= 10u;
+    } while (v);
+    while (k && t->n < FW_ERROR_TEXT_MAX)
+        t->s[t->n++] = (uint8_t)digits[--k];
+}
+
+static void send_error(fw_device *d, uint8_t code, uint16_t ref_seq, uint32_t detail,
+                       const text *t)
+{
+    fw_error m = {code, ref_seq, detail, t->s, t->n};
+    send(d, d->host_version, FW_ERROR, fw_put_error(d->tx + 4, &m));
+}
+
+/* ------------------------------------------------------------------ the clock */
+
+/* Flush, enter SILENT and ramp linearly from the current setpoint to zero (5.2, 5.3).
+ * The ramp steps by from / ramp_ticks, the remainder spread Bresenham-style, so after
+ * k ticks the setpoint is from - floor(k * from / ramp_ticks): no division per tick. */
+static void silence(fw_device *d)
+{
+    fw_jitter_flush(&d->buf);
+    d->end = 0;
+    d->state = FW_SILENT;
+    d->ramp_pos = 0;
+    for (unsigned ch = 0; ch < d->cfg.channels; ch++) {
+        d->ramp_q[ch] = (uint16_t)(d->out.amp[ch] / d->ramp_ticks);
+        d->ramp_r[ch] = d->out.amp[ch] % d->ramp_ticks;
+        d->ramp_err[ch] = 0;
+    }
+}
+
+static void ramp(fw_device *d)
+{
+    if (d->ramp_pos >= d->ramp_ticks)
+        return;
+    d->ramp_pos++;
+    for (unsigned ch = 0; ch < d->cfg.channels; ch++) {
+        uint16_t fall = d->ramp_q[ch];
+        d->ramp_err[ch] += d->ramp_r[ch];
+        if (d->ramp_err[ch] >= d->ramp_ticks) {
+            d->ramp_err[ch] -= d->ramp_ticks;
+            fall++;
+        }
+        d->out.amp[ch] = (uint16_t)(d->out.amp[ch] - fall);
+    }
+}
+
+/* A flush that discards what the host sent (a watchdog trip, a Stop without drain):
+ * counted in the version 2 accounting; returns the samples discarded. */
+static uint32_t count_flush(fw_device *d)
+{
+    d->session.flushed += d->buf.level;
+    d->session.flushes++;
+    return d->buf.level;
+}
+
+/* 5.1: play the sample due now, or hold across a gap, or run dry. */
+static void play(fw_device *d)
+{
+    fw_jitter *b = &d->buf;
+    if (b->level == 0) { /* hold; play_index stays, so a late host loses nothing */
+        if (d->state == FW_DRAINING) {
+            silence(d);
+            d->stopped = true;
+        } else {
+            d->k.underruns++;
+            d->state = FW_BUFFERING;
+        }
+        return;
+    }
+    uint32_t slot = d->play_slot;
+    if (fw_jitter_has(b, slot)) {
+        fw_jitter_take(b, slot, d->out.amp, d->out.phase);
+        d->out.played = true;
+        d->out.index = d->play_index;
+        d->k.played_samples++;
+        d->session.played++;
+    } else {
+        d->k.gap_samples++;
+    }
+    d->play_index++;
+    d->play_slot = slot + 1 == b->cap ? 0 : slot + 1;
+    d->end = b->level && d->end ? d->end - 1 : 0;
+}
+
+const fw_output *fw_tick(fw_device *d)
+{
+    d->out.played = false;
+    if (d->armed && d->state != FW_SILENT &&
+        (int32_t)(d->tick - d->last_rx) >= (int32_t)d->wd_ticks) {
+        d->k.watchdog_trips++;
+        uint32_t flushed = count_flush(d);
+        silence(d);
+        if (d->host_version >= 2) { /* 5.3: say so (sent by fw_poll) */
+            d->flushed = (fw_flushed){FW_FLUSH_WATCHDOG, d->play_index, flushed,
+                                      d->session.flushes};
+            d->flushed_version = d->host_version;
+            d->flushed_pending = true;
+        }
+    }
+    if (d->state == FW_SILENT)
+        ramp(d);
+    else if (d->state == FW_PLAYING || d->state == FW_DRAINING)
+        play(d);
+    d->out.state = d->state;
+    d->tick++;
+    return &d->out;
+}
+
+bool fw_finished(const fw_device *d)
+{
+    return d->stopped && d->state == FW_SILENT && d->ramp_pos >= d->ramp_ticks;
+}
+
+/* ------------------------------------------------------------------ messages */
+
+static void on_hello(fw_device *d, uint32_t prefill)
+{
+    uint32_t quarter = d->buf.cap / 4u;
+    lock(d);
+    fw_jitter_flush(&d->buf);
+    d->end = 0;
+    d->session = (fw_session){0, 0, 0}; /* this flush is not counted */
+    d->origin_set = false;
+    d->prefill = prefill < 1 ? 1 : prefill;
+    if (d->prefill > quarter)
+        d->prefill = quarter;
+    d->state = FW_BUFFERING;
+    d->stopped = false;
+    d->hello_seen = true;
+    unlock(d);
+    send_info(d);
+}
+
+static void on_heartbeat(fw_device *d, uint32_t token)
+{
+    lock(d);
+    if (d->state == FW_SILENT && !d->stopped)
+        d->state = FW_BUFFERING; /* the host is back after a watchdog trip */
+    unlock(d);
+    send_status(d, token);
+}
+
+static void on_stop(fw_device *d, bool drain)
+{
+    lock(d);
+    if (drain && d->buf.level) {
+        d->state = FW_DRAINING;
+    } else {
+        count_flush(d);
+        silence(d);
+        d->stopped = true;
+    }
+    unlock(d);
+    send_status(d, 0);
+}
+
+/* The buffer is empty whenever the play position moves, so the slot of the new
+ * position is free to choose. */
+static void move_play_position(fw_device *d, uint64_t index)
+{
+    d->play_index = index;
+    d->play_slot = 0;
+    d->end = 0;
+}
+
+/* Sample numbers wrap modulo 2^64 (PROTOCOL.md 4.3): the offset of `index` from `from`,
+ * in [-2^63, 2^63), clamped to +-2^40 (that far out a sample is late or beyond anyway). */
+static int64_t offset(uint64_t index, uint64_t from)
+{
+    const uint64_t far = (uint64_t)1 << 40;
+    uint64_t d = index - from;
+    bool behind = d >> 63;
+    uint64_t magnitude = behind ? ~d + 1 : d;
+    if (magnitude > far)
+        magnitude = far;
+    return behind ? -(int64_t)magnitude : (int64_t)magnitude;
+}
+
+static bool refuse_block(fw_device *d, uint16_t seq, const fw_block *b)
+{
+    text t = error_text(d);
+    if (!d->hello_seen || d->stopped) {
+        add(&t, "block before Hello");
+        send_error(d, FW_NOT_READY, seq, 0, &t);
+        return true;
+    }
+    bool phases = b->phases != NULL;
+    if (b->channels == d->cfg.channels && phases == d->cfg.phases)
+        return false;
+    add(&t, "block has ");
+    add_u32(&t, b->channels);
+    add(&t, phases ? " channels, phases=True; device has " : " channels, phases=False; device has ");
+    add_u32(&t, d->cfg.channels);
+    add(&t, d->cfg.phases ? ", phases=True" : ", phases=False");
+    send_error(d, FW_BAD_BLOCK, seq, b->channels, &t);
+    return true;
+}
+
+/* 4.3, steps 1-6. */
+static void on_block(fw_device *d, uint16_t seq, const fw_block *b)
+{
+    if (refuse_block(d, seq, b))
+        return;
+    unsigned ch = d->cfg.channels;
+    lock(d);
+    if (d->state == FW_SILENT)
+        d->state = FW_BUFFERING;
+    if (!d->origin_set)
+        move_play_position(d, b->start_index);
+    int64_t ahead = offset(b->start_index, d->play_index);
+    if (d->buf.level == 0 && d->state == FW_BUFFERING && ahead > 0) {
+        d->k.gap_samples += (uint32_t)(b->start_index - d->play_index);
+        move_play_position(d, b->start_index);
+    }
+    d->origin_set = true;
+    unlock(d);
+
+    uint32_t late = 0, beyond = 0, clamped = 0;
+    for (uint32_t i = 0; i < b->n; i++) {
+        uint16_t amp[FW_MAX_CHANNELS], phase[FW_MAX_CHANNELS];
+        for (unsigned c = 0; c < ch; c++) {
+            amp[c] = fw_le16(b->amps + 2u * (i * ch + c));
+            if (amp[c] > d->cfg.limits[c]) { /* the host must clamp; the device checks */
+                amp[c] = d->cfg.limits[c];
+                clamped++;
+            }
+            if (b->phases)
+                phase[c] = fw_le16(b->phases + 2u * (i * ch + c));
+        }
+        lock(d); /* the sample clock may have moved on since the last sample */
+        int64_t rel = offset(b->start_index + i, d->play_index);
+        if (rel < 0) {
+            late++;
+        } else if (rel >= d->buf.cap) {
+            beyond++;
+        } else {
+            uint32_t slot = d->play_slot + (uint32_t)rel;
+            if (slot >= d->buf.cap)
+                slot -= d->buf.cap;
+            fw_jitter_put(&d->buf, slot, amp, b->phases ? phase : NULL);
+            if ((uint32_t)rel >= d->end)
+                d->end = (uint32_t)rel + 1;
+        }
+        unlock(d);
+    }
+    lock(d);
+    d->k.clamped += clamped;
+    d->k.late_samples += late;
+    d->k.overflow_samples += beyond;
+    if (d->state == FW_BUFFERING && d->buf.level >= d->prefill)
+        d->state = FW_PLAYING;
+    unlock(d);
+
+    text t = error_text(d);
+    if (beyond) {
+        add_u32(&t, beyond);
+        add(&t, " samples beyond the buffer");
+        send_error(d, FW_OVERFLOW, seq, beyond, &t);
+    } else if (late) {
+        add_u32(&t, late);
+        add(&t, " samples arrived after their time");
+        send_error(d, FW_LATE, seq, late, &t);
+    }
+}
+
+void fw_poll(fw_device *d)
+{
+    lock(d);
+    bool pending = d->flushed_pending;
+    fw_flushed m = d->flushed;
+    uint8_t version = d->flushed_version;
+    d->flushed_pending = false;
+    unlock(d);
+    if (pending)
+        send(d, version, FW_FLUSHED, fw_put_flushed(d->tx + 4, &m));
+}
+
+static void on_frame(fw_device *d, const fw_msg *msg, uint32_t now_tick)
+{
+    fw_poll(d); /* a trip noted before this frame is reported before its answer */
+    lock(d);
+    d->last_rx = (int32_t)(now_tick - d->tick) > 0 ? now_tick : d->tick;
+    d->armed = true; /* 5.3: armed by the first valid frame */
+    d->host_version = msg->version;
+    unlock(d);
+    switch (msg->type) {
+    case FW_HELLO:
+        on_hello(d, msg->m.prefill);
+        break;
+    case FW_HEARTBEAT:
+        on_heartbeat(d, msg->m.token);
+        break;
+    case FW_STOP:
+        on_stop(d, msg->m.drain);
+        break;
+    case FW_BLOCK:
+        on_block(d, msg->seq, &msg->m.block);
+        break;
+    default:
+        break; /* device-to-host messages echoed back at us */
+    }
+}
+
+void fw_receive(fw_device *d, const uint8_t *data, size_t n, uint32_t now_tick)
+{
+    fw_msg msg;
+    for (size_t i = 0; i < n; i++)
+        if (fw_rx_byte(&d->rx, data[i], &msg))
+            on_frame(d, &msg, now_tick);
+}

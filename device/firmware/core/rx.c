@@ -1,0 +1,101 @@
+#include "rx.h"
+
+#include "crc32.h"
+
+static void restart(fw_rx *rx)
+{
+    rx->len = rx->stuffed = 0;
+    rx->code = rx->left = 0;
+    rx->zero_pending = rx->overflowed = false;
+    rx->crc = FW_CRC32_INIT;
+}
+
+void fw_rx_init(fw_rx *rx, uint8_t max_version)
+{
+    *rx = (fw_rx){0};
+    rx->max_version = max_version;
+    restart(rx);
+}
+
+uint32_t fw_rx_discarded(const fw_rx_counts *c)
+{
+    return c->crc_errors + c->cobs_errors + c->short_frames + c->oversize + c->bad_version +
+           c->unknown_type + c->bad_payload;
+}
+
+static void put(fw_rx *rx, uint8_t b)
+{
+    rx->body[rx->len++] = b;
+    if (rx->len >= 5) /* body[len - 5] can no longer be part of the trailing CRC */
+        rx->crc = fw_crc32_byte(rx->crc, rx->body[rx->len - 5]);
+}
+
+static bool check(fw_rx *rx, fw_msg *msg)
+{
+    fw_rx_counts *c = &rx->counts;
+    if (rx->overflowed) {
+        c->oversize++;
+        return false;
+    }
+    if (rx->stuffed == 0)
+        return false; /* an empty frame is ignored, not counted */
+    if (rx->left) {
+        c->cobs_errors++; /* the last COBS block ends past the delimiter */
+        return false;
+    }
+    if (rx->len < 8) {
+        c->short_frames++;
+        return false;
+    }
+    if (~rx->crc != fw_le32(rx->body + rx->len - 4)) {
+        c->crc_errors++;
+        return false;
+    }
+    uint8_t version = rx->body[0], type = rx->body[1];
+    if (version < 1 || version > rx->max_version) {
+        c->bad_version++;
+        return false;
+    }
+    if (!fw_known_type(version, type)) {
+        c->unknown_type++;
+        return false;
+    }
+    if (!fw_parse(version, type, rx->body + 4, rx->len - 8u, msg)) {
+        c->bad_payload++;
+        return false;
+    }
+    msg->seq = fw_le16(rx->body + 2);
+    uint16_t skipped = (uint16_t)(msg->seq - rx->next_seq);
+    if (rx->seq_known && skipped < 0x8000u) /* a jump backwards is a restart, not a loss */
+        c->lost_frames += skipped;
+    rx->next_seq = (uint16_t)(msg->seq + 1u);
+    rx->seq_known = true;
+    c->frames_ok++;
+    return true;
+}
+
+bool fw_rx_byte(fw_rx *rx, uint8_t b, fw_msg *msg)
+{
+    if (b == 0) {
+        bool ok = check(rx, msg);
+        restart(rx);
+        return ok;
+    }
+    if (rx->overflowed)
+        return false;
+    if (++rx->stuffed > FW_MAX_STUFFED) {
+        rx->overflowed = true; /* discard up to the next delimiter */
+        return false;
+    }
+    if (rx->left == 0) { /* a code byte: the previous block, if short, ended in a zero */
+        if (rx->zero_pending)
+            put(rx, 0);
+        rx->code = b;
+        rx->left = (uint8_t)(b - 1u);
+    } else {
+        put(rx, b);
+        rx->left--;
+    }
+    rx->zero_pending = rx->left == 0 && rx->code < 255u;
+    return false;
+}

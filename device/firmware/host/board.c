@@ -1,0 +1,55 @@
+#include "board.h"
+
+#include <math.h>
+#include <string.h>
+
+#define STEP_UM (1.0 / 4096.0)
+
+static void serial_write(void *ctx, const uint8_t *p, size_t n)
+{
+    host_board *b = ctx;
+    if (n > b->tx_cap - b->tx_len)
+        n = b->tx_cap - b->tx_len; /* a full queue drops, as a UART would */
+    memcpy(b->tx + b->tx_len, p, n);
+    b->tx_len += n;
+}
+
+/* The wire's rounding of an amplitude: nearest count in [0, 65535]. */
+static uint16_t plate_sensor(void *ctx, unsigned ch)
+{
+    double counts = nearbyint(((host_board *)ctx)->plate_um[ch] / STEP_UM);
+    if (!(counts > 0))
+        return 0;
+    return counts > 65535 ? 65535 : (uint16_t)counts;
+}
+
+static uint16_t force_sensor(void *ctx) { return ((host_board *)ctx)->force_mn; }
+
+static const fw_hal hals[4] = {
+    {serial_write, NULL, NULL, NULL, NULL},
+    {serial_write, plate_sensor, NULL, NULL, NULL},
+    {serial_write, NULL, force_sensor, NULL, NULL},
+    {serial_write, plate_sensor, force_sensor, NULL, NULL},
+};
+
+const fw_hal *host_board_init(host_board *b, const host_params *p)
+{
+    memset(b, 0, sizeof *b);
+    /* 5.4: bilinear transform prewarped at the bandwidth */
+    double w = tan(M_PI * p->bandwidth_hz / p->rate_hz);
+    b->b0 = b->b1 = w / (1.0 + w);
+    b->a1 = (w - 1.0) / (1.0 + w);
+    b->channels = (unsigned)p->channels;
+    b->force_mn = p->has_force ? (uint16_t)nearbyint(p->force_n * 1000.0) : 0;
+    return &hals[(p->sensor ? 1 : 0) + (p->has_force ? 2 : 0)];
+}
+
+void host_board_step(host_board *b, const uint16_t *setpoint)
+{
+    for (unsigned ch = 0; ch < b->channels; ch++) {
+        double u = setpoint[ch] * STEP_UM;
+        double y = b->b0 * u + b->z[ch];
+        b->z[ch] = b->b1 * u - b->a1 * y;
+        b->plate_um[ch] = y;
+    }
+}

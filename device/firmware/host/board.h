@@ -1,0 +1,29 @@
+/* The host port's "board": replies collected in memory, the plate's amplitude loop
+ * modelled as in PROTOCOL.md 5.4 (its output is the amplitude sensor), and a constant
+ * force sensor. Shared by the pty process and the virtual-clock library. */
+#ifndef HOST_BOARD_H
+#define HOST_BOARD_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../core/device.h"
+#include "params.h"
+
+typedef struct {
+    double b0, b1, a1;            /* y = b0 u + z; z' = b1 u - a1 y (transposed form) */
+    double z[FW_MAX_CHANNELS];
+    double plate_um[FW_MAX_CHANNELS];
+    unsigned channels;
+    uint16_t force_mn;
+    uint8_t *tx; /* replies of the frame being handled */
+    size_t tx_len, tx_cap;
+} host_board;
+
+/* The fw_hal for a board with or without the two sensors. */
+const fw_hal *host_board_init(host_board *b, const host_params *p);
+
+/* Advance the plate model by one tick of setpoints (counts). */
+void host_board_step(host_board *b, const uint16_t *setpoint);
+
+#endif

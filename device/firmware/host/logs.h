@@ -1,0 +1,28 @@
+/* The host port's CSV logs, in the reference device's formats (device/link/simdevice.py):
+ * played samples (--log), one row per tick (--plate-log); and, for measuring the
+ * watchdog from outside the core, the receive log (--rx-log): t_s,frames_ok,discarded
+ * whenever a read from the port changed either count. */
+#ifndef HOST_LOGS_H
+#define HOST_LOGS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "../core/device.h"
+
+typedef struct {
+    FILE *played, *plate, *rx;
+    unsigned channels;
+    bool phases;
+} host_logs;
+
+/* Opens the logs whose path is not NULL; false (errno set) if one cannot be opened. */
+bool host_logs_open(host_logs *l, unsigned channels, bool phases, const char *played,
+                    const char *plate, const char *rx);
+void host_logs_tick(host_logs *l, double t_s, const fw_output *o, const double *plate_um);
+void host_logs_rx(host_logs *l, double t_s, uint32_t frames_ok, uint32_t discarded);
+void host_logs_flush(host_logs *l);
+void host_logs_close(host_logs *l);
+
+#endif

@@ -1,0 +1,52 @@
+/* The Cortex-M0+ port: NUCLEO-G071RB, USART2 at 1 Mbaud, TIM6 sample clock, DAC1 outputs
+ * (see README.md for the wiring and first power-up). */
+#include "../core/device.h"
+#include "board.h"
+#include "clock.h"
+#include "sample_clock.h"
+#include "uart.h"
+
+static fw_device device;
+
+static void lock(void *ctx)
+{
+    (void)ctx;
+    __asm volatile("cpsid i" ::: "memory");
+}
+
+static void unlock(void *ctx)
+{
+    (void)ctx;
+    __asm volatile("cpsie i" ::: "memory");
+}
+
+static const fw_hal hal = {uart_write, NULL, NULL, lock, unlock}; /* no sensors wired */
+
+static const fw_config config = {
+    .channels = BOARD_CHANNELS,
+    .rate_mhz = BOARD_RATE_HZ * 1000u,
+    .buffer_samples = BOARD_BUFFER,
+    .watchdog_ms = BOARD_WATCHDOG_MS,
+    .ramp_ms = BOARD_RAMP_MS,
+    .limits = {BOARD_LIMIT, BOARD_LIMIT},
+    .name = BOARD_NAME,
+    .protocol_version = FW_NEWEST_VERSION,
+};
+
+int main(void)
+{
+    clock_init();
+    iwdg_init();
+    uart_init();
+    fw_init(&device, &config, &hal, NULL);
+    sample_clock_start(&device);
+    for (;;) {
+        uint8_t chunk[32];
+        size_t n = uart_read(chunk, sizeof chunk);
+        fw_poll(&device); /* a watchdog trip the sample interrupt noted */
+        if (n)
+            fw_receive(&device, chunk, n, device.tick);
+        else
+            __asm volatile("wfi"); /* until the next byte or sample */
+    }
+}

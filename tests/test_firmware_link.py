@@ -1,0 +1,214 @@
+"""The C firmware's host port on a pty, driven by frictex's own host link: what it plays,
+what it refuses, its watchdog (measured on the port's own clock), and its command line.
+The sanitizer build runs the same session (see test_firmware_hardening.py)."""
+
+import io
+import time
+
+import numpy as np
+import pytest
+
+from device.firmware import hostport
+from device.firmware.build import FirmwareBuildError, host_port
+from device.link import protocol as p
+from device.link.faults import Faults, Plug
+from device.link.host import CommandSink, LinkError, open_port
+
+STEP = p.AMPLITUDE_STEP_UM
+RATE = 10_000.0
+
+
+@pytest.fixture(scope="module")
+def binary():
+    try:
+        return host_port()
+    except FirmwareBuildError as exc:
+        pytest.fail(str(exc), pytrace=False)
+
+
+def _signal(n, seed=0):
+    rng = np.random.default_rng(seed)
+    return np.clip(1.5 + np.cumsum(rng.normal(0, 0.02, n)), 0.0, 2.9)[:, None]
+
+
+def _csv(path):
+    return np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+
+
+def stream_and_check(binary, tmp_path):
+    """Stream 6000 samples paced by the port; every sample plays, exactly as commanded.
+    Returns the port's stderr (its summary, and any sanitizer report)."""
+    log = tmp_path / "played.csv"
+    proc, path = hostport.start(binary=binary, extra=("--log", str(log), "--limit", "3.0"))
+    sig = _signal(6000)
+    sink = CommandSink(lambda: open_port(path), 1, RATE, paced=True, process=proc)
+    assert sink.status()["state"] == "simulated"
+    assert sink.info.limits_um == (3.0,) and sink.info.name == "frictex fw (host port)"
+    for b in range(0, 6000, 50):
+        sink.send(b, sig[b:b + 50], None)
+    sink.close()
+    status = sink.status()
+    played = _csv(log)
+    np.testing.assert_array_equal(played[:, 0], np.arange(6000))
+    np.testing.assert_allclose(played[:, 1], sig[:, 0], atol=STEP / 2 + 1e-9)
+    assert status["protocol_version"] == 2 and status["played_samples"] == 6000
+    assert status["blocks_sent"] == 120 and status["dropped_blocks"] == 0
+    assert status["resyncs"] == 0 and status["device_crc_errors"] == 0
+    # no assert on underruns or watchdog trips: a loaded test machine may starve the host
+    # thread; the point is that nothing is lost
+    assert proc.returncode == 0  # the port exited after the Stop had played out
+    return proc.stderr.read()
+
+
+def test_the_host_link_streams_to_the_c_firmware_and_it_plays_every_sample(binary, tmp_path):
+    stderr = stream_and_check(binary, tmp_path)
+    assert "played 6000 samples; " in stderr and ", 0 bad frames, " in stderr
+
+
+def test_the_firmware_clamps_what_the_host_did_not(binary, tmp_path):
+    """A host that skips its clamp (raw frames): the device clamps to its limit, counts it."""
+    log = tmp_path / "played.csv"
+    proc, path = hostport.start(binary=binary, extra=("--log", str(log), "--limit", "1.0"))
+    port = open_port(path)
+    try:
+        frames = [p.Hello(1), p.Block(0, np.array([[2048], [4096], [65535]], np.uint16)),
+                  p.Heartbeat(7)]
+        port.write(b"\x00" + b"".join(p.encode(m, k, 1) for k, m in enumerate(frames)))
+        replies, deadline = [], time.monotonic() + 5.0
+        decoder = p.Decoder()
+        while len(replies) < 2 and time.monotonic() < deadline:
+            replies += [f.message for f in decoder.feed(port.read(4096))]
+        info, status = replies
+        assert isinstance(info, p.Info) and info.limits_um == (1.0,)
+        assert status.echo == 7 and status.clamped == 1
+        port.write(p.encode(p.Stop(True), 3, 1))
+        proc.wait(timeout=10)
+    finally:
+        port.close()
+        if proc.poll() is None:
+            proc.kill()
+    np.testing.assert_allclose(_csv(log)[:, 1], [0.5, 1.0, 1.0])
+
+
+def test_a_version_1_firmware_is_driven_in_version_1(binary, tmp_path):
+    log = tmp_path / "played.csv"
+    proc, path = hostport.start(binary=binary, extra=("--protocol", "1", "--log", str(log)))
+    with CommandSink(lambda: open_port(path), 1, RATE, paced=True, process=proc) as sink:
+        assert sink.info.protocol_version == 1
+        for b in range(0, 1000, 50):
+            sink.send(b, np.full((50, 1), 1.0), None)
+    status = sink.status()
+    assert status["protocol_version"] == 1 and status["played_samples"] is None
+    np.testing.assert_array_equal(_csv(log)[:, 0], np.arange(1000))
+
+
+def test_a_firmware_of_the_wrong_kind_is_refused(binary):
+    proc, path = hostport.start(channels=1, rate_hz=RATE, binary=binary)
+    try:
+        with pytest.raises(LinkError, match="1 channel.*needs 2"):
+            CommandSink(lambda: open_port(path), 2, RATE)
+        with pytest.raises(LinkError, match="sample rate 10000 Hz, the pipeline runs at 8000"):
+            CommandSink(lambda: open_port(path), 1, 8000.0)
+    finally:
+        proc.terminate()
+        proc.wait(timeout=10)
+
+
+def _watchdog_session(binary, tmp_path, silence_s):
+    """Stream a constant 2 um, unplug the host while it plays for ``silence_s``, plug it
+    back, stream on.
+    Returns (rx log, plate log, played log, status)."""
+    rx, plate, log = tmp_path / "rx.csv", tmp_path / "plate.csv", tmp_path / "played.csv"
+    proc, path = hostport.start(binary=binary, extra=(
+        "--rx-log", str(rx), "--plate-log", str(plate), "--log", str(log)))
+    plug = Plug(lambda: open_port(path))
+    sink = CommandSink(plug, 1, RATE, paced=True, stderr=io.StringIO(), process=proc)
+    for b in range(0, 2000, 50):
+        sink.send(b, np.full((50, 1), 2.0), None)
+    deadline = time.monotonic() + 10.0
+    while sink.status().get("device_state") != "playing" and time.monotonic() < deadline:
+        time.sleep(0.005)
+    time.sleep(0.05)
+    plug.unplug()  # mid-stream: the port is playing 2 um
+    time.sleep(silence_s)
+    plug.plug()
+    deadline = time.monotonic() + 10.0
+    while sink.status()["state"] != "simulated" and time.monotonic() < deadline:
+        time.sleep(0.02)
+    for b in range(5000, 6000, 50):
+        sink.send(b, np.full((50, 1), 1.0), None)
+    sink.close()
+    return _csv(rx), _csv(plate), _csv(log), sink.status()
+
+
+def test_the_output_is_zero_within_50_ms_of_the_last_valid_frame(binary, tmp_path):
+    """Measured on the port's clock: the receive log says when valid frames came in, the
+    plate log what the output was at every tick. After every silence longer than 50 ms
+    the output is zero from 50 ms after the last valid frame on, and at least one such
+    silence began while the plate played 2 um (the unplugged host)."""
+    rx, plate, played, status = _watchdog_session(binary, tmp_path, silence_s=0.3)
+    t_rx, ok = rx[:, 0], rx[:, 1]
+    valid = t_rx[np.flatnonzero(np.diff(ok, prepend=0) > 0)]  # reads that brought a frame
+    t, setpoint = plate[:, 0], plate[:, 2]
+    silences = [(a, b) for a, b in zip(valid[:-1], valid[1:]) if b - a > 0.050]
+    from_2um = 0
+    for last, back in silences:
+        assert np.all(setpoint[(t >= last + 0.050) & (t < back)] == 0.0)
+        playing = setpoint[t <= last]
+        if playing.size and playing[-1] == 2.0:
+            from_2um += 1
+            ramp = setpoint[(t > last) & (t < last + 0.050)]
+            # a ramp, not a step: it falls by at most 2 um / 200 ticks (and a count)
+            assert np.all(np.diff(ramp) <= 0) and np.diff(ramp).min() >= -(2.0 / 200 + STEP)
+    assert from_2um >= 1, "the host never went quiet while the plate played"
+    assert status["watchdog_trips"] >= 1
+    # after the host came back, its new stream played
+    assert played[-1, 0] == 5999 and np.all(played[played[:, 0] >= 5000, 1] == 1.0)
+
+
+def test_faults_on_the_wire_are_counted_and_never_played(binary, tmp_path):
+    log = tmp_path / "played.csv"
+    proc, path = hostport.start(binary=binary, extra=("--log", str(log)))
+    plug = Plug(lambda: open_port(path), Faults(flip=4e-4, drop=2e-4, garbage=2e-4), seed=11)
+    sig = _signal(8000, seed=4)
+    sink = CommandSink(plug, 1, RATE, paced=False, stderr=io.StringIO(), process=proc)
+    t0 = time.perf_counter()
+    for b in range(0, 8000, 50):
+        while time.perf_counter() - t0 < b / RATE - 0.01:
+            time.sleep(0.001)
+        sink.send(b, sig[b:b + 50], None)
+    time.sleep(0.05)
+    status = sink.status()
+    sink.close()
+    played = _csv(log)
+    index = played[:, 0].astype(np.int64)
+    assert len(index) > 4000 and np.all(np.diff(index) > 0)
+    np.testing.assert_allclose(played[:, 1], sig[index, 0], atol=STEP / 2 + 1e-9)
+    assert status["device_crc_errors"] > 0 and status["resyncs"] > 0
+
+
+@pytest.mark.parametrize("flags, message", [
+    (("--channels", "0"), "argument --channels: invalid value '0'"),
+    (("--watchdog-ms", "40"), "ramp_ms: expected in [0, 10] ms: watchdog_ms + ramp_ms"),
+    (("--limit", "1", "--limit", "2", "--channels", "3"), "limits_um: expected 1 or 3 values"),
+    (("--bandwidth", "6000"), "bandwidth_hz: expected positive and below half"),
+    (("--force", "70"), "force_n: expected in [0, 65] N"),
+    (("--log", "/nonexistent/dir/played.csv"), "cannot open a log file"),
+    (("--frobnicate",), "unrecognized argument: --frobnicate"),
+    (("--protocol", "3"), "protocol_version: expected in [1, 2]"),
+])
+def test_bad_flags_are_an_error_naming_the_flag(binary, flags, message):
+    import subprocess
+    proc = subprocess.run([str(binary), *flags], capture_output=True, text=True, timeout=10)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr.startswith("frictex-fw-host: error: ") and message in proc.stderr
+
+
+def test_help_lists_the_sim_device_flags(binary):
+    import subprocess
+    out = subprocess.run([str(binary), "--help"], capture_output=True, text=True,
+                         timeout=10).stdout
+    for flag in ("--channels", "--rate", "--limit", "--buffer", "--bandwidth",
+                 "--watchdog-ms", "--ramp-ms", "--phases", "--sensor", "--force", "--log",
+                 "--plate-log", "--rx-log", "--protocol", "--once"):
+        assert flag in out
