@@ -52,6 +52,19 @@ def test_a_playing_device_drains_at_its_rate_from_the_report():
     assert snap.level(99.0, RATE, 1200) == (1200, 1200)
 
 
+def test_without_fresh_reports_nothing_goes_beyond_the_window():
+    """A device reported playing at 1000 and then fell silent: the host streams on at
+    the device's rate, but never past play + window, where the device would overflow."""
+    snap = Snapshot.from_status(status(1000, 200, end=1200), t_s=0.0, mark_end=1200,
+                                mark_count=1200)
+    sent = 1200
+    for k in range(200):  # 2 s of 10 ms turns with no new Status
+        while snap.room(PACING, k * 0.01, sent, sent, sent, 50):
+            sent += 50
+    assert sent - 1000 <= PACING.window
+    assert sent - 1000 > PACING.window - 50
+
+
 def test_blocks_sent_after_the_heartbeat_are_in_flight_not_lost():
     # the Status says empty, but 200 samples went out after its heartbeat
     snap = Snapshot.from_status(status(1000, 0, S.PLAYING, end=1000), 0.0, mark_end=1000,

@@ -78,13 +78,16 @@ class Snapshot:
         play = unwrap(play_index, sent_end)
         return cls(t_s, play, play, 0, False, sent_end, sent_count)
 
-    def level(self, now_s: float, rate_hz: float, sent_end: int) -> tuple[int, int]:
+    def level(self, now_s: float, rate_hz: float, sent_end: int,
+              horizon: int | None = None) -> tuple[int, int]:
         """(estimated play index now, estimated buffer end) given the host has sent up to
-        ``sent_end``."""
+        ``sent_end``; the play index is extrapolated at most ``horizon`` samples past the
+        report (None: no limit)."""
         end = max(self.end, sent_end) if sent_end > self.mark_end else self.end
         played = self.play_index
         if self.playing:
-            played += int(max(now_s - self.t_s, 0.0) * rate_hz)
+            ahead = int(max(now_s - self.t_s, 0.0) * rate_hz)
+            played += ahead if horizon is None else min(ahead, horizon)
         return min(played, end), end
 
     def room(self, pacing: Pacing, now_s: float, sent_end: int, sent_count: int, start: int,
@@ -92,8 +95,11 @@ class Snapshot:
         """May block ``[start, start + n)`` go out? Yes if the estimated buffer is empty
         (the device jumps to a block ahead), if the buffer stays at or below the target,
         or if the device waits for its prefill (counting what is on its way) and the
-        block lands within the window."""
-        played, end = self.level(now_s, pacing.rate_hz, sent_end)
+        block lands within the window. Without fresh reports nothing goes out beyond the
+        window past the last reported play index: a device that stopped (or whose
+        reports are lost) is never overfilled."""
+        played, end = self.level(now_s, pacing.rate_hz, sent_end,
+                                 horizon=pacing.window - pacing.target)
         if end <= played or start + n - played <= pacing.target:
             return True
         starving = (not self.playing
