@@ -10,6 +10,7 @@ import csv
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -58,7 +59,8 @@ def start_demo(display, cwd, scene_file, rec, *args):
     safety net: the tests end it with Q."""
     return subprocess.Popen([sys.executable, "-u", "-m", "app.commands.cli", "demo", str(scene_file),
                              "--record", str(rec), "--duration", "300", *args],
-                            env={**os.environ, "DISPLAY": display}, cwd=cwd,
+                            env={**os.environ, "DISPLAY": display, "PYTHONFAULTHANDLER": "1"},
+                            cwd=cwd,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -107,13 +109,20 @@ def quit_demo(display, proc) -> str:
 
 
 def finish(proc) -> str:
-    """Wait for the demo to end; it must exit 0. Its stdout."""
+    """Wait for the demo to end; it must exit 0. Its stdout. One that hangs is stopped
+    with SIGABRT, which makes it print every thread's stack (faulthandler) for the
+    failure message."""
     try:
         out, err = proc.communicate(timeout=120)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
+    except subprocess.TimeoutExpired:
+        proc.send_signal(signal.SIGABRT)
+        try:
+            _, err = proc.communicate(timeout=30)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+        pytest.fail(f"the demo did not exit within 120 s after Q; its threads:\n{err[-8000:]}")
     assert proc.returncode == 0, err
     return out
 

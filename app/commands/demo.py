@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import threading
 from pathlib import Path
 
 from app.commands.preview import frame_size
@@ -133,10 +134,9 @@ def _start_haptic(args, scene, scene_path: Path, record: Path | None):
                                      source=None if touch is None else open_source(*touch))
         haptic.start()
         return haptic, finish
-    from app.live.haptic_process import HapticConfig, HapticProcess, yield_to_haptic
+    from app.live.haptic_process import HapticConfig, HapticProcess
     haptic = HapticProcess(scene, HapticConfig(scene_path, args.rate, args.block, args.renderer,
                                                args.device, record, touch, args.faults))
-    yield_to_haptic()  # after the child started: it keeps its priority
 
     def finish():
         haptic.stop()
@@ -215,6 +215,10 @@ def run(args: argparse.Namespace) -> int:
                                      ) from None
             no_display = str(exc)
         else:
+            if args.haptic == "process":  # the renderer's threads (llvmpipe's, started with
+                # the window, and the render thread) yield to the child; input does not
+                from app.live.haptic_process import yield_to_haptic
+                yield_to_haptic(keep=(threading.get_native_id(),))
             loop = DemoLoop(backend, haptic, paths, index, scene, _load, Path(args.screenshots),
                             events_path=record / "events.csv" if record else None,
                             link_name="none" if args.device is None else "starting",
@@ -233,6 +237,7 @@ def run(args: argparse.Namespace) -> int:
         return run_headless(args, reason=no_display)
     summary = _summary(haptic.stats, haptic.block_s, loop, dropped_records, link)
     summary["haptic"] = args.haptic
+    summary["clock_origin_s"] = haptic.t0  # output time 0 on CLOCK_MONOTONIC (time.monotonic)
     summary["cpu_steal_pct"] = steal.percent()
     if record is not None:
         (record / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")

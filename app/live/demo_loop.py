@@ -4,16 +4,19 @@ The haptic side is an ``app.live.haptic_thread.HapticThread`` or an
 ``app.live.haptic_process.HapticProcess`` (same interface).
 
 Backend-neutral: it drives any ``rendering.visual.context`` backend that has input
-callbacks, ``wait_events(timeout_s)``, ``swap()`` and ``should_close`` (the glfw window).
+callbacks, ``wait_events(timeout_s)``, ``wake()``, ``make_current()``,
+``release_context()``, ``swap()`` and ``should_close`` (the glfw window).
 
-Input is pumped apart from drawing: between two frames the loop waits for window
-events (``wait_events``, woken by the next event or by the next frame's due time) and
-hands the mouse to the haptic side as soon as the events are handled, so a finger
-waits for at most the frame being drawn, never for the next one; a slow frame delays
-the next frame, not the input handled before it. A frame is drawn every ``FRAME_S``
-at most. Window events that arrived together (the window was busy) make one sample
-per finger and button change, stamped when handled: stamping each event as it is
-handled would crowd them into microseconds, and the tracker would see the finger fly.
+Input and drawing run on two threads, so that a slow frame delays drawing, never the
+finger. The main thread (where the window's events arrive) only waits for events and
+hands the mouse to the haptic side as soon as they are handled; the emergency stop,
+quitting and the force act there too. A render thread holds the GL context and draws a
+frame every ``FRAME_S`` at most (a late frame is followed by the next at once, not by a
+burst); the keys that change what is drawn (scene, renderer, scope, outlines,
+screenshot) are queued to it. On Mesa's llvmpipe under load a frame took 100-870 ms;
+the input thread waits meanwhile in the window system, without the GIL, and runs as
+soon as an event comes. Events handled together (the input thread was held up) keep
+their order and path, stamped evenly over the time they arrived in (``flush_mouse``).
 
 Touch input (``--input``): ``mouse``, the mouse is finger 0 (left button held =
 touching); ``follow``, the mouse is finger 0 and finger 1 follows it at a fixed offset
@@ -39,6 +42,7 @@ from __future__ import annotations
 
 import queue
 import re
+import threading
 import time
 from pathlib import Path
 
@@ -56,6 +60,7 @@ FORCE_RANGE_N = (0.05, 2.0)
 RELOAD_POLL_S = 0.25
 ENVELOPE_S = 0.2  # a modal device's |W| is redrawn from the latest commands 5 times a second
 FRAME_S = 1.0 / 60.0
+INPUT_WAKE_S = 0.05  # longest the input thread waits for an event before looking at the time
 KEYS_HELP = ("wheel, up/down: force | N/B: scene | R: renderer | S: scope | "
              "O: outlines | P: screenshot | SPACE: emergency stop | Q: quit")
 
@@ -124,6 +129,10 @@ class DemoLoop:
         self._mtime = _mtime(self.playlist[self.index])
         self._set_envelope(scene, haptic.pipeline.actuation)
         self._next_poll = 0.0
+        self._keys: queue.SimpleQueue = queue.SimpleQueue()  # for the render thread
+        self._log_lock = threading.Lock()  # both threads log
+        self._stop = threading.Event()
+        self.render_error: BaseException | None = None
         self._applied_seen = 0  # output changes (stats.applied) already logged
         self._contact: dict[int, bool] = {}  # finger id: touching, at the last snapshot
         self._events = open(events_path, "a", encoding="utf-8") if events_path else None
@@ -140,9 +149,10 @@ class DemoLoop:
         """Append an event at ``t_s`` (s, haptic clock; default now) to events.csv."""
         if self._events is not None:
             quoted = '"' + detail.replace('"', "'").replace("\n", " ") + '"'
-            t = self.haptic.now() if t_s is None else t_s
-            self._events.write(f"{t:.6f},{event},{quoted}\n")
-            self._events.flush()
+            with self._log_lock:
+                t = self.haptic.now() if t_s is None else t_s
+                self._events.write(f"{t:.6f},{event},{quoted}\n")
+                self._events.flush()
 
     def _mm(self, px: tuple[float, float]) -> tuple[float, float]:
         x, y = self.compositor.viewport.to_mm(*px)
@@ -218,6 +228,8 @@ class DemoLoop:
             self.touch_screen = False
 
     def on_key(self, name: str, shift: bool) -> None:
+        """The emergency stop, quitting and the force act at once; the other keys change
+        what is drawn and go to the render thread (:meth:`handle_key`)."""
         if name == "space":  # logged after: the output changes no later than a block on
             if self.haptic.estop.is_set():
                 self.haptic.estop.clear()
@@ -227,7 +239,16 @@ class DemoLoop:
                 self.log("estop")
         elif name in ("q", "escape"):
             self.quit = True
-        elif name in ("n", "b", "tab", "page_down", "page_up"):
+        elif name == "up":
+            self.set_force(self.force_n + FORCE_STEP_N)
+        elif name == "down":
+            self.set_force(self.force_n - FORCE_STEP_N)
+        else:
+            self._keys.put((name, shift))
+
+    def handle_key(self, name: str, shift: bool) -> None:
+        """A key that changes what is drawn (on the thread holding the GL context)."""
+        if name in ("n", "b", "tab", "page_down", "page_up"):
             step = -1 if name in ("b", "page_up") or (name == "tab" and shift) else 1
             self.select((self.index + step) % len(self.playlist))
         elif name == "r":
@@ -240,10 +261,6 @@ class DemoLoop:
             self.compositor.set_scene(self.scene, outlines=self.outlines)
         elif name in ("p", "f12"):
             self.screenshot_pending = True
-        elif name == "up":
-            self.set_force(self.force_n + FORCE_STEP_N)
-        elif name == "down":
-            self.set_force(self.force_n - FORCE_STEP_N)
 
     # -- scenes -------------------------------------------------------------------------
 
@@ -398,24 +415,50 @@ class DemoLoop:
         self.frames += 1
 
     def run(self, duration_s: float | None = None, clock=time.perf_counter) -> None:
-        """Pump input and draw frames until closed, Q, or ``duration_s`` (s on ``clock``)."""
+        """Pump input on this thread and draw on a render thread until the window
+        closes, Q, ``duration_s`` (s on ``clock``) or a failure (raised here)."""
         start = clock()
-        next_frame = start
-        while not (self.quit or self.backend.should_close):
-            now = clock()
-            if duration_s is not None and now - start >= duration_s:
-                break
-            if self.haptic.error is not None:
-                raise RuntimeError(f"haptic output stopped: {self.haptic.error}")
-            if now >= next_frame:
+        self.backend.release_context()
+        renderer = threading.Thread(target=self._render, args=(clock,), name="frictex-render",
+                                    daemon=True)
+        renderer.start()
+        try:
+            while not (self.quit or self.backend.should_close or self.render_error is not None):
+                if duration_s is not None and clock() - start >= duration_s:
+                    break
+                self.backend.wait_events(INPUT_WAKE_S)
+                self.flush_mouse()
+        finally:
+            self._stop.set()
+            renderer.join()
+            self.backend.make_current()
+        if self.render_error is not None:
+            raise self.render_error
+
+    def _render(self, clock) -> None:
+        """The render thread: keys, then a frame whenever one is due."""
+        self.backend.make_current()
+        try:
+            next_frame = clock()
+            while not self._stop.is_set():
+                if self.haptic.error is not None:
+                    raise RuntimeError(f"haptic output stopped: {self.haptic.error}")
+                while not self._keys.empty():
+                    self.handle_key(*self._keys.get())
+                now = clock()
+                if now < next_frame:
+                    self._stop.wait(next_frame - now)
+                    continue
                 self.check_input()
                 self.frame(now)
                 done = clock()
                 self.frame_seconds += done - now
-                next_frame = max(next_frame + FRAME_S, done)  # late: no burst of frames after
-            self.backend.wait_events(max(0.0, next_frame - clock()))
-            self.flush_mouse()
-            self.drain()
+                next_frame = max(next_frame + FRAME_S, done)
+        except BaseException as exc:  # raised again by run() on the input thread
+            self.render_error = exc
+            self.backend.wake()
+        finally:
+            self.backend.release_context()
 
     def close(self) -> None:
         """Release the GL objects and the events file."""

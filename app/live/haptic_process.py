@@ -117,7 +117,9 @@ class HapticProcess(TouchInput):
 
     @property
     def error(self) -> str | None:
-        """Why the child stopped on its own (None while it runs)."""
+        """Why the child stopped on its own (None while it runs, and after a clean stop)."""
+        if self._done:
+            return self._error
         self._poll(0.0)
         if self._error is None and not self._done and not self._proc.is_alive():
             self._error = f"haptic process exited with code {self._proc.exitcode}"
@@ -210,21 +212,25 @@ class HapticProcess(TouchInput):
                 return reply
 
 
-def yield_to_haptic(increment: int = WINDOW_NICE) -> int | None:
-    """Lower the priority of every thread of this (the window's) process by ``increment``
-    nice steps, and of the threads it starts later, which inherit it; returns the new
-    nice value, or None where the system has no per-thread priorities.
+def yield_to_haptic(increment: int = WINDOW_NICE, keep: tuple[int, ...] = ()) -> int | None:
+    """Lower the priority of the threads of this (the window's) process, but those whose
+    native ids are in ``keep``, by ``increment`` nice steps (threads they start later
+    inherit it); returns how many were lowered, or None where the system has no
+    per-thread priorities.
 
     On two cores the window's software renderer (llvmpipe runs a thread per core) and
     the haptic child compete; at equal priority the child waited up to 20 ms for a core
-    while a frame was drawn. Any user may lower their own priority, and the window
-    only needs what the child leaves (a few percent of a core)."""
+    while a frame was drawn. Any user may lower their own priority, and the renderer
+    only needs what the child leaves (a few percent of a core). The demo keeps its input
+    thread (``keep``): it mostly sleeps, and a finger must not wait for a core."""
     try:
-        tasks = os.listdir("/proc/self/task")
-        for tid in map(int, tasks):
-            os.setpriority(os.PRIO_PROCESS, tid,
-                           min(os.getpriority(os.PRIO_PROCESS, tid) + increment, 19))
-        return os.getpriority(os.PRIO_PROCESS, 0)
+        lowered = 0
+        for tid in map(int, os.listdir("/proc/self/task")):
+            if tid not in keep:
+                os.setpriority(os.PRIO_PROCESS, tid,
+                               min(os.getpriority(os.PRIO_PROCESS, tid) + increment, 19))
+                lowered += 1
+        return lowered
     except (OSError, AttributeError):
         return None
 

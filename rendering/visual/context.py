@@ -93,6 +93,10 @@ class GlfwBackend:
 
     Callbacks (set as attributes, all optional): ``on_cursor(x_px, y_px)``,
     ``on_button(pressed: bool)`` (left button), ``on_scroll(dy)``, ``on_key(name, shift)``.
+    Events are handled, and callbacks called, on the thread that created the window
+    (``wait_events``); the GL context may be handed to another thread
+    (``release_context`` here, ``make_current`` there), which may ``swap``, ``wake``
+    the event thread and read ``size`` (kept from the window's resize events).
     """
 
     name = "glfw"
@@ -127,15 +131,16 @@ class GlfwBackend:
         glfw.swap_interval(1 if vsync else 0)
         self.ctx = moderngl.create_context()
         self.on_cursor = self.on_button = self.on_scroll = self.on_key = None
+        self.size = tuple(glfw.get_framebuffer_size(self.window))
         self._keys = _key_names(glfw)
         glfw.set_cursor_pos_callback(self.window, self._cursor)
         glfw.set_mouse_button_callback(self.window, self._button)
         glfw.set_scroll_callback(self.window, self._scroll)
         glfw.set_key_callback(self.window, self._key)
+        glfw.set_framebuffer_size_callback(self.window, self._resized)
 
-    @property
-    def size(self) -> tuple[int, int]:
-        return tuple(self._glfw.get_framebuffer_size(self.window))
+    def _resized(self, _win, width, height):
+        self.size = (int(width), int(height))
 
     def _scale(self) -> tuple[float, float]:
         fw, fh = self.size
@@ -178,6 +183,18 @@ class GlfwBackend:
 
     def swap(self) -> None:
         self._glfw.swap_buffers(self.window)
+
+    def make_current(self) -> None:
+        """Make the GL context current on the calling thread."""
+        self._glfw.make_context_current(self.window)
+
+    def release_context(self) -> None:
+        """Detach the GL context from the calling thread (another may take it)."""
+        self._glfw.make_context_current(None)
+
+    def wake(self) -> None:
+        """End a ``wait_events`` in progress (from any thread)."""
+        self._glfw.post_empty_event()
 
     @property
     def should_close(self) -> bool:

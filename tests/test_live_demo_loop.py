@@ -1,0 +1,214 @@
+"""The demo's window loop with a window the test drives: input is handed to the haptic
+side by the input thread however long a frame takes (here: forever); a batch of events
+handled late keeps its order, its path and its pace; a touch screen's failure hands
+the fingers to the mouse; screenshots never overwrite."""
+
+import queue
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from app.live.demo_loop import DemoLoop, next_screenshot
+from app.live.haptic_thread import HapticThread
+from rendering.input.trace_file import DOWN, MOVE, UP
+from rendering.visual.context import OffscreenBackend
+from textures.library import resolve_scene
+from textures.loader import load_scene
+
+SIZE = (800, 615)  # the default frame: the 800 x 480 px scene above the scope
+PX_PER_MM = 800 / 108.0
+
+
+class ScriptedWindow(OffscreenBackend):
+    """An offscreen frame with the window interface for one-thread tests (no events)."""
+
+    def __init__(self, ctx):
+        super().__init__(SIZE, ctx=ctx)
+        self.on_cursor = self.on_button = self.on_scroll = self.on_key = None
+
+    def cursor_px(self):
+        return (0.0, 0.0)
+
+
+class StuckFrame(Exception):
+    """Ends a frame that never finished."""
+
+
+class StuckWindow(ScriptedWindow):
+    """A window whose first frame never finishes (``use`` blocks until ``unstick``,
+    then raises StuckFrame) while the test feeds it events from another thread:
+    ``wait_events`` delivers them as they come."""
+
+    def __init__(self, ctx):
+        super().__init__(ctx)
+        self.inbox = queue.Queue()
+        self.drawing, self._unstick = threading.Event(), threading.Event()
+        self.should_close = False
+
+    def wait_events(self, timeout_s):
+        try:
+            kind, *args = self.inbox.get(timeout=timeout_s)
+        except queue.Empty:
+            return
+        if kind != "wake":
+            {"cursor": self.on_cursor, "button": self.on_button, "key": self.on_key}[kind](*args)
+
+    def use(self):
+        self.drawing.set()
+        self._unstick.wait()
+        raise StuckFrame
+
+    def unstick(self):
+        self._unstick.set()
+
+    def make_current(self):
+        """The test's GL context stays on the test's thread: nothing is drawn elsewhere."""
+
+    release_context = make_current
+
+    def wake(self):
+        self.inbox.put(("wake",))
+
+
+def wait_for(condition, what):
+    deadline = time.monotonic() + 120.0  # a bound for a broken loop, not a timing
+    while not condition():
+        assert time.monotonic() < deadline, what
+        time.sleep(0.005)
+
+
+def test_a_frame_that_never_ends_holds_up_neither_the_finger_nor_the_stop(gl, tmp_path):
+    """While the render thread is stuck in a frame, the input thread still hands every
+    pointer position of a stroke to the haptic side, in order, and the emergency stop
+    acts; the frame's failure then comes out of run()."""
+    scene = load_scene(resolve_scene("grating-5mm"))
+    window = StuckWindow(gl)
+    haptic = HapticThread(scene)  # not started: its queue is read here
+    loop = DemoLoop(window, haptic, [resolve_scene("grating-5mm")], 0, scene, load_scene, tmp_path)
+    raised = []
+
+    def run():
+        try:
+            loop.run()
+        except StuckFrame as exc:
+            raised.append(exc)
+
+    runner = threading.Thread(target=run)
+    runner.start()
+    xs = [100.0 + 6 * k for k in range(50)]
+    try:
+        wait_for(window.drawing.is_set, "the first frame never started")
+        window.inbox.put(("cursor", xs[0], 240.0))
+        window.inbox.put(("button", True))
+        for x in xs[1:]:
+            window.inbox.put(("cursor", x, 240.0))
+        window.inbox.put(("button", False))
+        window.inbox.put(("key", "space", False))
+        wait_for(haptic.estop.is_set, "the emergency stop waited for the frame")
+        touches = [haptic.touches.get(timeout=120.0) for _ in range(51)]
+        assert loop.frames == 0  # all that while, the first frame was not done
+    finally:
+        window.unstick()
+        runner.join()
+        loop.close()
+        window.close()
+    assert len(raised) == 1  # run() raised the frame's failure
+    assert [q[5] for q in touches] == [DOWN] + [MOVE] * 49 + [UP]
+    np.testing.assert_allclose([q[2] * PX_PER_MM for q in touches], xs + [xs[-1]], atol=1e-9)
+    t = [q[0] for q in touches]
+    assert t == sorted(t)
+
+
+def test_a_late_batch_is_spread_over_the_time_it_covers(gl, tmp_path):
+    """Events handled together (the window was drawing) keep their order and path and
+    are stamped evenly over the time since the previous batch, not all at one instant."""
+    scene = load_scene(resolve_scene("grating-5mm"))
+    clock = [1.0]
+    window = ScriptedWindow(gl)
+    haptic = HapticThread(scene, clock=lambda: clock[0])
+    loop = DemoLoop(window, haptic, [resolve_scene("grating-5mm")], 0, scene, load_scene,
+                    tmp_path, follow_mm=30.0)
+    try:
+        loop.flush_mouse()  # the previous batch, at haptic time 0
+        clock[0] += 0.2
+        loop.on_cursor(100.0, 240.0)
+        loop.on_button(True)
+        for x in (120.0, 140.0, 160.0):
+            loop.on_cursor(x, 240.0)
+        loop.on_button(False)
+        loop.flush_mouse()
+        got = [haptic.touches.get_nowait() for _ in range(haptic.touches.qsize())]
+    finally:
+        loop.close()
+        window.close()
+    # finger 0 and its follower 30 mm to the right, at the same instants
+    assert [(q[1], round(q[2] * PX_PER_MM, 6), q[5]) for q in got[::2]] == [
+        (0, 100.0, DOWN), (0, 120.0, MOVE), (0, 140.0, MOVE), (0, 160.0, MOVE), (0, 160.0, UP)]
+    assert [q[2] - p[2] for p, q in zip(got[::2], got[1::2])] == pytest.approx([30.0] * 5)
+    assert [q[0] for q in got[1::2]] == [q[0] for q in got[::2]]
+    np.testing.assert_allclose([q[0] for q in got[::2]], [0.04, 0.08, 0.12, 0.16, 0.2])
+
+
+def test_force_changes_while_still_make_a_sample_and_reach_a_touch_screen(gl, tmp_path):
+    scene = load_scene(resolve_scene("grating-5mm"))
+    window = ScriptedWindow(gl)
+    haptic = HapticThread(scene)
+    loop = DemoLoop(window, haptic, [resolve_scene("grating-5mm")], 0, scene, load_scene, tmp_path)
+    try:
+        loop.on_cursor(100.0, 240.0)
+        loop.on_button(True)
+        loop.flush_mouse()
+        loop.flush_mouse()  # nothing moved: nothing sent
+        assert haptic.touches.qsize() == 1
+        loop.set_force(0.9)
+        loop.flush_mouse()
+        assert haptic.touches.qsize() == 2
+        assert [haptic.touches.get_nowait()[4] for _ in range(2)] == [0.5, 0.9]
+        assert haptic.touch_force.value == 0.9  # what a touch screen's fingers press with
+    finally:
+        loop.close()
+        window.close()
+
+
+def test_a_failed_touch_screen_hands_the_fingers_to_the_mouse(gl, tmp_path):
+    scene = load_scene(resolve_scene("grating-5mm"))
+    window = ScriptedWindow(gl)
+    haptic = HapticThread(scene)
+    failures = ["read failed (No such device)"]
+    haptic.input_error = lambda: failures.pop() if failures else None
+    loop = DemoLoop(window, haptic, [resolve_scene("grating-5mm")], 0, scene, load_scene,
+                    tmp_path, touch_screen=True, input_name="evdev test", events_path=tmp_path / "e.csv")
+    try:
+        loop.on_cursor(100.0, 240.0)
+        loop.on_button(True)  # the touch screen's emulated mouse does not add a finger
+        loop.flush_mouse()
+        assert haptic.touches.empty()
+        loop.on_button(False)
+        loop.check_input()
+        assert "evdev test stopped" in loop.error and "No such device" in loop.error
+        loop.on_button(True)  # now the mouse touches
+        loop.flush_mouse()
+        assert haptic.touches.get_nowait()[1] == 0
+    finally:
+        loop.close()
+        window.close()
+    assert "input-failed" in (tmp_path / "e.csv").read_text()
+
+
+def test_screenshots_are_numbered_after_those_in_the_folder(tmp_path):
+    for name in ("frictex-a-000.png", "frictex-a-007.png", "frictex-a-x.png", "frictex-b-020.png",
+                 "frictex-a-012.txt"):
+        (tmp_path / name).write_bytes(b"earlier")
+    paths = []
+    for _ in range(2):
+        path, f = next_screenshot(tmp_path, "frictex-a")
+        with f:
+            f.write(b"new")
+        paths.append(path.name)
+    assert paths == ["frictex-a-008.png", "frictex-a-009.png"]
+    assert (tmp_path / "frictex-a-007.png").read_bytes() == b"earlier"
+    path, f = next_screenshot(tmp_path / "new" / "folder", "frictex-a")
+    f.close()
+    assert path.name == "frictex-a-000.png"

@@ -1,0 +1,157 @@
+"""Touch screens feed the haptic side from a thread of their own (``app.live.touch_pump``):
+positions to mm of the scene shown now, stamps to the haptic clock, the force the wheel
+set; a failing source is closed and reported once; in the haptic child process, TUIO
+cursors reach the pipeline with no window involved at all."""
+
+import queue
+import socket
+import time
+
+import numpy as np
+import pytest
+
+from app.live.haptic_process import HapticConfig, HapticProcess
+from app.live.haptic_thread import HapticThread
+from app.live.touch_pump import TouchPump, open_source
+from rendering.input.evdev_decode import TouchSample
+from rendering.input.trace_file import DOWN, MOVE, UP
+from test_tuio import frame
+from textures.library import resolve_scene
+from textures.loader import load_scene
+
+WAIT_S = 120.0  # bound of waits on real threads and processes: only a broken one reaches it
+
+
+class ScriptedSource:
+    """A source handing out one scripted batch per poll (an exception is raised)."""
+
+    def __init__(self, batches):
+        self.batches = list(batches)
+        self.closed = 0
+
+    def wait(self, timeout_s):
+        return bool(self.batches)
+
+    def poll(self):
+        if not self.batches:
+            return []
+        batch = self.batches.pop(0)
+        if isinstance(batch, Exception):
+            raise batch
+        return batch
+
+    def close(self):
+        self.closed += 1
+
+
+def test_samples_reach_the_haptic_queue_in_mm_on_its_clock_with_the_set_force():
+    scene = load_scene(resolve_scene("grating-5mm"))  # 108 x 64.8 mm
+    now = [50.0]
+    haptic = HapticThread(scene, clock=lambda: now[0])  # output clock: 0 at 50 s
+    now[0] = 52.0  # haptic.now() = 2.0 s
+    source_clock = lambda: 1000.0  # the sources' clock reads 1000 s at that instant
+    haptic.touch_force.value = 0.8
+    pump = TouchPump(ScriptedSource([]), haptic, lambda: scene.display,
+                     lambda: haptic.touch_force.value, clock=source_clock)
+    n = pump.forward([TouchSample(999.98, 3, 0.25, 0.5, 0.5, DOWN),
+                      TouchSample(999.99, 3, 0.5, 0.5, 0.5, MOVE)])
+    queued = [haptic.touches.get_nowait() for _ in range(2)]
+    assert n == 2 and pump.samples == 2 and haptic.touches.empty()
+    np.testing.assert_allclose([q[0] for q in queued], [1.98, 1.99], atol=1e-9)
+    assert [q[1:] for q in queued] == [(3, 27.0, 32.4, 0.8, DOWN), (3, 54.0, 32.4, 0.8, MOVE)]
+
+
+def test_positions_follow_the_scene_shown_now():
+    plate = load_scene(resolve_scene("grating-5mm"))
+    beam = load_scene(resolve_scene("two-finger-beam-seed000"))  # 350 x 6 mm
+    shown = [plate]
+    haptic = HapticThread(plate)
+    pump = TouchPump(ScriptedSource([]), haptic, lambda: shown[0].display, lambda: 0.5)
+    pump.forward([TouchSample(0.0, 0, 0.5, 0.5, 0.5, DOWN)])
+    shown[0] = beam
+    pump.forward([TouchSample(0.0, 0, 0.5, 0.5, 0.5, UP)])
+    got = [haptic.touches.get_nowait()[2:4] for _ in range(2)]
+    assert got == [(54.0, 32.4), (175.0, 3.0)]
+
+
+def test_a_failing_source_is_closed_and_reported_once():
+    scene = load_scene(resolve_scene("grating-5mm"))
+    haptic = HapticThread(scene)
+    source = ScriptedSource([[TouchSample(time.monotonic(), 0, 0.5, 0.5, 0.5, DOWN)],
+                             OSError("read failed (No such device)")])
+    haptic.pump = TouchPump(source, haptic, lambda: scene.display, lambda: 0.5)
+    haptic.pump.start()
+    haptic.pump.join(WAIT_S)
+    assert not haptic.pump.is_alive() and source.closed == 1
+    assert haptic.touches.get_nowait()[1:4] == (0, 54.0, 32.4)
+    assert haptic.input_error() == "read failed (No such device)"
+    assert haptic.input_error() is None  # once
+    haptic.pump.stop()
+    assert source.closed == 1
+
+
+def test_a_pump_never_started_closes_its_source_when_stopped():
+    source = ScriptedSource([])
+    TouchPump(source, None, None, None).stop()
+    assert source.closed == 1
+
+
+def test_open_source_refuses_what_is_not_a_touch_screen(tmp_path):
+    fifo = tmp_path / "events"
+    import os
+    os.mkfifo(fifo)
+    with pytest.raises(ValueError, match=r"evdev:.*events is not a multi-touch device"):
+        open_source("evdev", str(fifo))
+    with pytest.raises(ValueError, match="has no touch source"):
+        open_source("mouse", None)
+
+
+def free_udp_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_tuio_reaches_the_child_pipeline_with_no_window(tmp_path):
+    """The child listens for TUIO itself: the window's side (this test) only reads
+    snapshots; the finger appears at the sent position, and lifts."""
+    path = resolve_scene("grating-5mm")
+    port = free_udp_port()
+    haptic = HapticProcess(load_scene(path), HapticConfig(path, 10_000.0, 50, "sho", None, None,
+                                                          ("tuio", port)))
+    snaps = []
+
+    def until(done):
+        deadline = time.monotonic() + WAIT_S
+        while not done():
+            assert time.monotonic() < deadline and haptic.error is None
+            try:
+                snaps.append(haptic.snapshots.get(timeout=0.05))
+            except queue.Empty:
+                pass
+
+    def contact():
+        return [r for r in (s.record for s in snaps) if r.contact.size and r.contact[0].any()]
+
+    try:
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx:
+            tx.sendto(frame(1, [5], [(5, 0.25, 0.5)]), ("127.0.0.1", port))
+            until(lambda: len(contact()) >= 3)
+            touched = contact()
+            tx.sendto(frame(2, []), ("127.0.0.1", port))
+            until(lambda: snaps[-1].record.contact.size == 0
+                  or not snaps[-1].record.contact[0, -1])
+    finally:
+        haptic.stop()
+    x = np.concatenate([r.x_mm[0][r.contact[0]] for r in touched])
+    y = np.concatenate([r.y_mm[0][r.contact[0]] for r in touched])
+    np.testing.assert_allclose(x, 27.0, atol=1e-4)  # float32 on the wire
+    np.testing.assert_allclose(y, 32.4, atol=1e-4)
+    assert haptic.error is None and haptic.stats.dropped_touches == 0
+
+
+def test_a_touch_screen_that_cannot_open_fails_the_child_start(tmp_path):
+    path = resolve_scene("grating-5mm")
+    with pytest.raises(OSError, match="no-such-device: cannot open input device"):
+        HapticProcess(load_scene(path), HapticConfig(path, 10_000.0, 50, None, None, None,
+                                                     ("evdev", str(tmp_path / "no-such-device"))))
