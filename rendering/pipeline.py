@@ -90,6 +90,9 @@ class StageTimer:
 
 
 def _layer_renderer(layer, mode: str, rate_hz: float):
+    kind = getattr(layer, "renderer_kind", None)  # layers that render motion or events
+    if kind is not None:
+        return _authored_renderer(kind, layer, rate_hz)
     if mode == "sho-held":
         return ShoRenderer(layer, predicted=False)
     if mode == "sho-predicted":
@@ -100,6 +103,18 @@ def _layer_renderer(layer, mode: str, rate_hz: float):
         from rendering.layers.hybrid import HybridRenderer  # built only for scenes that use it
         return HybridRenderer(layer, rate_hz)
     raise ValueError(f"unknown renderer {mode!r}; expected one of {', '.join(RENDERERS)}")
+
+
+def _authored_renderer(kind: str, layer, rate_hz: float):
+    """The renderer of a height, recorded-texture or clip layer (built only if used)."""
+    if kind == "height":
+        from rendering.layers.height import HeightRenderer
+        return HeightRenderer(layer, rate_hz)
+    if kind == "ar":
+        from rendering.layers.ar_texture import ArTextureRenderer
+        return ArTextureRenderer(layer, rate_hz)
+    from rendering.layers.clips import ClipRenderer
+    return ClipRenderer(layer, rate_hz)
 
 
 def _layer_mode(layer, render_override: str | None, sho_variant: str) -> str:

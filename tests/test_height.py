@@ -1,0 +1,191 @@
+"""Height layers: shapes felt by their slope (textures.heights, rendering.layers.height)."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+from numpy.testing import assert_allclose
+from PIL import Image
+
+from device.profile import DeviceProfile
+from rendering.input.trace_file import DOWN, MOVE, UP, make_trace
+from rendering.pipeline import build_pipeline
+from rendering.tracking.tracks import apply_index
+from scenes import DISPLAY
+from textures.errors import TextureError
+from textures.heights import (ButtonRim, GaussianBump, HeightLayer, HeightMap, Ridge, Step,
+                              read_height_png)
+from textures.model import Scene, VisualHints
+
+RATE = 10_000.0
+CX, CY, SIGMA, H = 54.0, 32.4, 5.0, 1.0
+
+
+def _layer(shape, **kw):
+    return HeightLayer(name="h", render="sho", region=None, blend="multiply",
+                       visual=VisualHints(), shape=shape, **kw)
+
+
+def _bump_layer(**kw):
+    return _layer(GaussianBump(CX, CY, SIGMA, H), **kw)
+
+
+def _run_trace(layer, t, x, y, events):
+    """mu' and x position of finger 0 at every output sample of the trace."""
+    scene = Scene(1, "h", "", DISPLAY, DeviceProfile(), (layer,))
+    trace = make_trace(t, np.zeros(len(t), int), x, y, event=events)
+    p = build_pipeline(scene, rate_hz=RATE, t0_s=float(t[0]))
+    applied = apply_index(trace.t_s, p.tracker_config)
+    n_blocks = int(applied[-1] // p.block_size) + 1
+    out, _ = p.process(0, trace, p.initial_state(), n_blocks=n_blocks)
+    return out.mu_target[0], out.x_mm[0], out.contact[0]
+
+
+def _swipe(layer, speed, x0, x1, touch_hz=100.0):
+    n = int(round(abs(x1 - x0) / speed * touch_hz)) + 1
+    t = np.arange(n) / touch_hz
+    x = x0 + np.sign(x1 - x0) * speed * t
+    ev = np.full(n, MOVE)
+    ev[0], ev[-1] = DOWN, UP
+    mu, xs, contact = _run_trace(layer, t, x, np.full(n, CY), ev)
+    # steady part: the tracker's velocity fit window (50 ms) full, finger not lifted
+    steady = contact & (np.abs(xs - x0) > speed * 0.1) & (np.abs(xs - x1) > 1.0)
+    return mu[steady], xs[steady]
+
+
+def _expected_signed(x, direction, layer):
+    """mu' from the slope of the gaussian along +-x, written out from the documented law."""
+    slope = direction * (-H * (x - CX) / SIGMA ** 2 * np.exp(-(x - CX) ** 2 / (2 * SIGMA ** 2)))
+    up, down = layer.mu_max - layer.mu_rest, layer.mu_rest - layer.mu_min
+    return np.where(slope >= 0, layer.mu_rest + up * np.tanh(layer.gain * slope / up),
+                    layer.mu_rest + down * np.tanh(layer.gain * slope / down))
+
+
+def test_swipe_over_a_bump_rises_before_the_crest_and_falls_after():
+    layer = _bump_layer()
+    speed = 100.0
+    mu, x = _swipe(layer, speed, 14.0, 94.0)
+    assert_allclose(mu, _expected_signed(x, +1, layer), atol=1e-6)
+    climbing = (x > CX - 3 * SIGMA) & (x < CX - 0.5)
+    descending = (x > CX + 0.5) & (x < CX + 3 * SIGMA)
+    assert (mu[climbing] > layer.mu_rest).all() and (mu[descending] < layer.mu_rest).all()
+    # steepest climb at x = cx - sigma, steepest descent at cx + sigma
+    assert abs(x[np.argmax(mu)] - (CX - SIGMA)) < 0.05
+    assert abs(x[np.argmin(mu)] - (CX + SIGMA)) < 0.05
+    # the stated bound: gain * max|h''| * v / rate, max|h''| = H / sigma^2 on the path
+    bound = layer.gain * H / SIGMA ** 2 * speed / RATE
+    assert np.abs(np.diff(mu)).max() <= bound * 1.001
+    assert np.abs(np.diff(mu)).max() > 0.5 * bound  # the bound is close, not vacuous
+
+
+def test_reversed_swipe_mirrors_the_slope():
+    layer = _bump_layer()
+    mu_f, x_f = _swipe(layer, 60.0, 14.0, 94.0)
+    mu_r, x_r = _swipe(layer, 60.0, 94.0, 14.0)
+    order = np.argsort(x_r)
+    grid = np.linspace(CX - 15, CX + 15, 301)
+    fwd = np.interp(grid, x_f, mu_f) - layer.mu_rest
+    rev = np.interp(grid, x_r[order], mu_r[order]) - layer.mu_rest
+    off_crest = np.abs(grid - CX) > 0.2  # at the crest both are mu_rest up to rounding
+    assert (np.sign(fwd[off_crest]) == -np.sign(rev[off_crest])).all()
+    assert_allclose(rev, _expected_signed(grid, -1, layer) - layer.mu_rest, atol=1e-6)
+
+
+def test_a_finger_at_rest_on_the_flank_feels_no_slope():
+    layer = _bump_layer()
+    t = np.arange(0, 0.5, 0.01)
+    x = np.full(t.size, CX - SIGMA)  # the steepest point
+    ev = np.full(t.size, MOVE)
+    ev[0] = DOWN
+    mu, _, contact = _run_trace(layer, t, x, np.full(t.size, CY), ev)
+    assert contact.any()
+    assert_allclose(mu[contact], layer.mu_rest, atol=1e-12)  # the fit of still samples: |v| ~ 1e-13
+
+
+def test_magnitude_rendering_is_the_same_both_ways_and_never_below_rest():
+    layer = _bump_layer(rendering="magnitude", mu_rest=0.7)
+    mu_f, x_f = _swipe(layer, 60.0, 14.0, 94.0)
+    mu_r, x_r = _swipe(layer, 60.0, 94.0, 14.0)
+    order = np.argsort(x_r)
+    grid = np.linspace(CX - 15, CX + 15, 301)
+    off_crest = np.abs(grid - CX) > 0.2  # |grad h| has a kink at the crest
+    assert_allclose(np.interp(grid, x_f, mu_f)[off_crest],
+                    np.interp(grid, x_r[order], mu_r[order])[off_crest], atol=1e-6)
+    assert mu_f.min() >= layer.mu_rest
+    gradient = H * np.abs(x_f - CX) / SIGMA ** 2 * np.exp(-(x_f - CX) ** 2 / (2 * SIGMA ** 2))
+    up = layer.mu_max - layer.mu_rest
+    assert_allclose(mu_f, layer.mu_rest + up * np.tanh(layer.gain * gradient / up), atol=1e-6)
+
+
+@given(st.floats(-1e6, 1e6, allow_nan=False))
+@settings(derandomize=True, max_examples=200)
+def test_mu_stays_within_its_limits_whatever_the_slope(s):
+    layer = _bump_layer(mu_rest=0.75, mu_min=0.5, mu_max=0.95)
+    mu = float(layer.mu_of_slope(s))
+    assert 0.5 <= mu <= 0.95
+    assert (mu > 0.75) == (s > 0 and layer.gain * s / 0.2 > 1e-17)
+
+
+def test_gain_is_the_slope_of_mu_at_flat_ground():
+    layer = _bump_layer(gain=1.7)
+    eps = 1e-7
+    assert_allclose((layer.mu_of_slope(eps) - layer.mu_of_slope(-eps)) / (2 * eps), 1.7, rtol=1e-6)
+
+
+SHAPES = [
+    GaussianBump(50.0, 30.0, 4.0, 0.8),
+    GaussianBump(50.0, 30.0, 4.0, -0.5),
+    Ridge(50.0, 30.0, 30.0, 6.0, 0.7),
+    Step(50.0, 30.0, 120.0, 0.4, 2.0),
+    ButtonRim(50.0, 30.0, 10.0, 3.0, 0.6),
+]
+
+
+@pytest.mark.parametrize("shape", SHAPES, ids=lambda s: type(s).__name__)
+@given(st.floats(30.0, 70.0), st.floats(10.0, 50.0))
+@settings(derandomize=True, max_examples=100, deadline=None)
+def test_gradient_is_the_derivative_of_the_height(shape, x, y):
+    e = 1e-6
+
+    def h(px, py):
+        return float(shape.height_and_gradient(np.array([px]), np.array([py]))[0][0])
+
+    _, gx, gy = shape.height_and_gradient(np.array([x]), np.array([y]))
+    # one-sided differences: at a kink (chamfer or rim ends) the gradient is either side's
+    for g, (dx, dy) in ((gx[0], (e, 0.0)), (gy[0], (0.0, e))):
+        ahead = (h(x + dx, y + dy) - h(x, y)) / e
+        behind = (h(x, y) - h(x - dx, y - dy)) / e
+        assert min(abs(g - ahead), abs(g - behind)) < 1e-4
+
+
+def test_analytic_heights_at_known_points():
+    ridge = Ridge(0.0, 0.0, 0.0, 4.0, 1.0)  # runs along x: height varies with y
+    assert_allclose(ridge.height_and_gradient(np.array([5.0]), np.array([1.0]))[0], 0.5)
+    assert_allclose(ridge.height_and_gradient(np.array([5.0]), np.array([1.0]))[2], -math.pi / 4)
+    step = Step(10.0, 0.0, 0.0, 0.5, 1.0)
+    h, gx, gy = step.height_and_gradient(np.array([9.0, 10.0, 11.0]), np.zeros(3))
+    assert_allclose(h, [0.0, 0.25, 0.5])
+    assert_allclose(gx, [0.0, 0.5, 0.0])
+    button = ButtonRim(0.0, 0.0, 10.0, 2.0, 1.0)
+    h, gx, _ = button.height_and_gradient(np.array([0.0, 5.0, 9.0, 10.0, 12.0]), np.zeros(5))
+    assert_allclose(h, [1.0, 1.0, 0.5, 0.0, 0.0], atol=1e-12)
+    assert_allclose(gx[2], -math.pi / 4)
+
+
+def test_height_map_from_a_16_bit_png(tmp_path):
+    cols, rows = 64, 16
+    ramp = np.tile(np.arange(cols) * 1000, (rows, 1)).astype(np.uint16)  # 1000 levels per px
+    path = tmp_path / "ramp.png"
+    Image.fromarray(ramp).save(path)
+    heights = read_height_png(path, max_height_mm=2.0)
+    assert_allclose(heights[0, 1], 2.0 * 1000 / 65535)
+    hmap = HeightMap(heights, 10.0, 20.0, 32.0, 8.0)  # 0.5 mm per pixel
+    h, gx, gy = hmap.height_and_gradient(np.array([20.0, 5.0]), np.array([24.0, 24.0]))
+    assert_allclose(gx[0], 2.0 * 1000 / 65535 / 0.5, rtol=1e-9)
+    assert_allclose(gy[0], 0.0, atol=1e-12)
+    assert gx[1] == 0.0  # outside the sprite: flat
+    eight = tmp_path / "eight.png"
+    Image.fromarray(np.zeros((4, 4), np.uint8)).save(eight)
+    with pytest.raises(TextureError, match="16-bit"):
+        read_height_png(eight, 1.0)

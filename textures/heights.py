@@ -1,0 +1,262 @@
+"""Heights (mm) felt by their slope: analytic shapes, 16-bit height maps, and the height layer.
+
+A flat friction display cannot raise the surface; it renders a shape through the
+lateral-force illusion (Robles-De-La-Torre and Hayward, Nature 412:445, 2001): sliding
+over a real bump, the finger is opposed by a force that grows with the slope while it
+climbs and assists it while it descends, and subjects perceive a bump from that force
+alone, even on a flat or hollow surface. Kim, Israr and Poupyrev (UIST 2013, "Tactile
+rendering of 3D features on touch surfaces") map the local gradient of a virtual
+surface to the lateral friction force of an electrovibration display. The slope is
+rendered by ``rendering.layers.height``; here are the heights and the mapping from slope
+to mu'.
+
+Every shape answers ``height_and_gradient(x, y) -> (h, dh/dx, dh/dy)`` (mm, and mm per
+mm) at arrays of positions (mm), and ``support(x, y)``: where its gradient can be
+non-zero (for drawing and bounds; the layer itself covers its whole region).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import ClassVar
+
+import numpy as np
+
+from textures.errors import TextureError
+from textures.model import _LayerBase, _hypot, _rotate_into
+from textures.raster_io import read_grey
+
+HEIGHT_RENDERINGS = ("slope", "magnitude")
+
+
+def _cosine_fall(u, du_dx, du_dy, height_mm: float):
+    """A raised-cosine fall from ``height_mm`` at u <= 0 to 0 at u >= 1, and its gradient
+    given u's gradient: h = H (1 + cos(pi u)) / 2 on [0, 1]."""
+    uc = np.clip(u, 0.0, 1.0)
+    h = height_mm * 0.5 * (1.0 + np.cos(np.pi * uc))
+    slope = np.where((u > 0.0) & (u < 1.0), -height_mm * 0.5 * np.pi * np.sin(np.pi * uc), 0.0)
+    return h, slope * du_dx, slope * du_dy
+
+
+@dataclass(frozen=True)
+class GaussianBump:
+    """h = H exp(-r^2 / (2 sigma^2)) about (cx_mm, cy_mm); a negative H is a dip.
+    Steepest slope H / sigma * exp(-1/2) at r = sigma."""
+
+    cx_mm: float
+    cy_mm: float
+    sigma_mm: float
+    height_mm: float
+
+    def height_and_gradient(self, x, y):
+        dx = np.asarray(x, dtype=np.float64) - self.cx_mm
+        dy = np.asarray(y, dtype=np.float64) - self.cy_mm
+        h = self.height_mm * np.exp(-(dx * dx + dy * dy) / (2.0 * self.sigma_mm ** 2))
+        k = -h / self.sigma_mm ** 2
+        return h, k * dx, k * dy
+
+    def support(self, x, y):
+        return _hypot(np.asarray(x, dtype=np.float64) - self.cx_mm,
+                      np.asarray(y, dtype=np.float64) - self.cy_mm) <= 4.0 * self.sigma_mm
+
+
+@dataclass(frozen=True)
+class Ridge:
+    """A straight ridge through (x_mm, y_mm) running at ``angle_deg`` from +x: a raised
+    cosine across it, H on the centre line falling to 0 at width_mm / 2 on either side.
+    Steepest slope pi H / width_mm."""
+
+    x_mm: float
+    y_mm: float
+    angle_deg: float
+    width_mm: float
+    height_mm: float
+
+    def _across(self, x, y):
+        """Distance (mm) from the centre line, and the unit normal (nx, ny)."""
+        a = math.radians(self.angle_deg)
+        nx, ny = -math.sin(a), math.cos(a)
+        d = nx * (np.asarray(x, dtype=np.float64) - self.x_mm) + ny * (np.asarray(y, dtype=np.float64) - self.y_mm)
+        return d, nx, ny
+
+    def height_and_gradient(self, x, y):
+        d, nx, ny = self._across(x, y)
+        half = self.width_mm / 2
+        u = np.abs(d) / half
+        sign = np.sign(d)
+        return _cosine_fall(u, sign * nx / half, sign * ny / half, self.height_mm)
+
+    def support(self, x, y):
+        return np.abs(self._across(x, y)[0]) <= self.width_mm / 2
+
+
+@dataclass(frozen=True)
+class Step:
+    """A step along the line through (x_mm, y_mm): 0 on one side, H on the side the
+    normal at ``angle_deg`` from +x points to, joined by a flat chamfer ``chamfer_mm``
+    wide centred on the line (slope H / chamfer_mm; a vertical step has no finite slope)."""
+
+    x_mm: float
+    y_mm: float
+    angle_deg: float
+    height_mm: float
+    chamfer_mm: float
+
+    def _along_normal(self, x, y):
+        a = math.radians(self.angle_deg)
+        nx, ny = math.cos(a), math.sin(a)
+        d = nx * (np.asarray(x, dtype=np.float64) - self.x_mm) + ny * (np.asarray(y, dtype=np.float64) - self.y_mm)
+        return d, nx, ny
+
+    def height_and_gradient(self, x, y):
+        d, nx, ny = self._along_normal(x, y)
+        u = d / self.chamfer_mm + 0.5
+        on = (u > 0.0) & (u < 1.0)
+        slope = np.where(on, self.height_mm / self.chamfer_mm, 0.0)
+        return self.height_mm * np.clip(u, 0.0, 1.0), slope * nx, slope * ny
+
+    def support(self, x, y):
+        return np.abs(self._along_normal(x, y)[0]) <= self.chamfer_mm / 2
+
+
+@dataclass(frozen=True)
+class ButtonRim:
+    """A round button: a plateau of height H out to radius_mm - rim_mm, then a rounded
+    rim (raised cosine) falling to 0 at radius_mm. Steepest slope pi H / (2 rim_mm)."""
+
+    cx_mm: float
+    cy_mm: float
+    radius_mm: float
+    rim_mm: float
+    height_mm: float
+
+    def height_and_gradient(self, x, y):
+        dx = np.asarray(x, dtype=np.float64) - self.cx_mm
+        dy = np.asarray(y, dtype=np.float64) - self.cy_mm
+        r = _hypot(dx, dy)
+        inv = np.divide(1.0, r * self.rim_mm, out=np.zeros_like(r), where=r > 0)
+        u = (r - (self.radius_mm - self.rim_mm)) / self.rim_mm
+        return _cosine_fall(u, dx * inv, dy * inv, self.height_mm)
+
+    def support(self, x, y):
+        return _hypot(np.asarray(x, dtype=np.float64) - self.cx_mm,
+                      np.asarray(y, dtype=np.float64) - self.cy_mm) <= self.radius_mm
+
+
+@dataclass(frozen=True, eq=False)
+class HeightMap:
+    """A height map placed on the display like a raster sprite (unrotated): pixel value
+    v of a 16-bit PNG gives h = v / 65535 * max_height_mm. Height and gradient are
+    sampled bilinearly from the map and its central differences (mm per mm, with the
+    sprite's pixel size); outside the sprite the height is that of the nearest edge."""
+
+    heights_mm: np.ndarray
+    x_mm: float
+    y_mm: float
+    width_mm: float
+    height_mm: float
+    _grad: tuple = field(init=False, repr=False)
+
+    def __post_init__(self):
+        rows, cols = self.heights_mm.shape
+        spacing = (self.height_mm / rows, self.width_mm / cols)
+        gy, gx = (np.gradient(self.heights_mm, *spacing) if min(rows, cols) > 1
+                  else (np.zeros_like(self.heights_mm),) * 2)
+        object.__setattr__(self, "_grad", (gx, gy))
+
+    def _sample(self, x, y, planes):
+        rows, cols = self.heights_mm.shape
+        u = (np.asarray(x, dtype=np.float64) - self.x_mm) / self.width_mm
+        v = (np.asarray(y, dtype=np.float64) - self.y_mm) / self.height_mm
+        fx = np.clip(u * cols - 0.5, 0.0, cols - 1.0)
+        fy = np.clip(v * rows - 0.5, 0.0, rows - 1.0)
+        x0 = np.floor(fx).astype(np.intp)
+        y0 = np.floor(fy).astype(np.intp)
+        x1, y1 = np.minimum(x0 + 1, cols - 1), np.minimum(y0 + 1, rows - 1)
+        tx, ty = fx - x0, fy - y0
+        out = []
+        for g in planes:
+            top = g[y0, x0] * (1 - tx) + g[y0, x1] * tx
+            bottom = g[y1, x0] * (1 - tx) + g[y1, x1] * tx
+            out.append(top * (1 - ty) + bottom * ty)
+        return out
+
+    def height_and_gradient(self, x, y):
+        inside = self.support(x, y)
+        h, gx, gy = self._sample(x, y, (self.heights_mm, *self._grad))
+        return h, np.where(inside, gx, 0.0), np.where(inside, gy, 0.0)
+
+    def support(self, x, y):
+        x = np.asarray(x, dtype=np.float64)
+        y = np.asarray(y, dtype=np.float64)
+        return ((x >= self.x_mm) & (x <= self.x_mm + self.width_mm)
+                & (y >= self.y_mm) & (y <= self.y_mm + self.height_mm))
+
+
+def read_height_png(path: str | Path, max_height_mm: float) -> np.ndarray:
+    """Heights (mm), float64 (rows, cols), from a 16-bit greyscale PNG: value v gives
+    v / 65535 * max_height_mm. Read by ``textures.raster_io.read_grey`` (its size and
+    file checks apply). An 8-bit image is refused: 256 levels make a staircase whose
+    slope is zero or a spike, which this rendering would feel as clicks."""
+    grey, kind = read_grey(path)
+    if kind != "16-bit greyscale":
+        raise TextureError(f"{path}: height maps must be 16-bit greyscale PNGs, got {kind}; "
+                           f"8-bit levels make slopes of zero or spikes")
+    return grey * max_height_mm
+
+
+HeightShape = GaussianBump | Ridge | Step | ButtonRim | HeightMap
+
+
+@dataclass(frozen=True)
+class HeightLayer(_LayerBase):
+    """A height felt by its slope (``rendering.layers.height``).
+
+    The slope s is dimensionless (mm of height per mm travelled). ``rendering``:
+
+    - ``"slope"`` (signed, the lateral-force illusion): s is the height's derivative
+      along the finger's direction of motion, positive climbing;
+    - ``"magnitude"`` (Kim et al. 2013's unsigned rendering): s = |grad h|, the same
+      whichever way the finger crosses.
+
+    Either way s is scaled by min(1, speed / v_fade_mm_s), so a finger at rest feels no
+    slope and a starting finger feels it grow with its speed. mu' then follows a soft
+    saturation about ``mu_rest`` (mu' on flat ground, at rest, or outside the shape)::
+
+        mu' = mu_rest + (mu_max - mu_rest) tanh(gain s / (mu_max - mu_rest))   s >= 0
+        mu' = mu_rest + (mu_rest - mu_min) tanh(gain s / (mu_rest - mu_min))   s < 0
+
+    so d mu'/d s = ``gain`` at s = 0, and mu' never leaves [mu_min, mu_max] (no clamp
+    needed). ``mu_rest`` < 1 is what leaves room to raise friction while climbing; the
+    layer covers its whole region (the display by default) at mu_rest, so that nothing
+    steps at the edge of the shape.
+    """
+
+    renderer_kind: ClassVar[str] = "height"
+
+    shape: HeightShape = None  # type: ignore[assignment]
+    rendering: str = "slope"
+    gain: float = 2.0
+    mu_rest: float = 0.8
+    mu_min: float = 0.6
+    mu_max: float = 1.0
+    v_fade_mm_s: float = 10.0
+
+    @property
+    def mu_range(self) -> tuple[float, float]:
+        return self.mu_min, self.mu_max
+
+    def mu_at(self, x, y) -> np.ndarray:
+        """mu' felt by a finger at rest: ``mu_rest`` everywhere."""
+        return np.full(np.broadcast(np.asarray(x), np.asarray(y)).shape, self.mu_rest)
+
+    def mu_of_slope(self, slope) -> np.ndarray:
+        """mu' for slope s (the class docstring's saturation)."""
+        s = np.asarray(slope, dtype=np.float64)
+        up = self.mu_max - self.mu_rest
+        down = self.mu_rest - self.mu_min
+        span = np.where(s >= 0.0, up, down)
+        safe = np.where(span > 0.0, span, 1.0)
+        return self.mu_rest + np.where(span > 0.0, span * np.tanh(self.gain * s / safe), 0.0)
