@@ -213,3 +213,44 @@ def test_demo_window_touch_estop_reload_and_broken_edit(xvfb_display, xdotool, t
     assert (row < 30).sum() > 200 and (row > 225).sum() > 200  # black and white lines
     red = (second[..., 0] > 100) & (second[..., 1] < 40) & (second[..., 2] < 40)
     assert red.sum() > 800 * 20  # the error banner across the window
+
+
+def test_window_keeps_running_while_the_device_is_unplugged(xvfb_display, xdotool, tmp_path):
+    """--faults on the demo: the simulated device is unplugged from 0.3 s after the link
+    opens until long after the test ends. The window keeps taking touches and keys
+    (each confirmed by the demo), quits at once on Q, and the summary counts what the
+    device never got."""
+    scene_file, _ = grating_file(tmp_path)
+    rec, shots = tmp_path / "rec", tmp_path / "shots"
+    proc = start_demo(xvfb_display, tmp_path, scene_file, rec, "--screenshots", str(shots),
+                      "--device", "sim", "--faults", "unplug=600@0.3")
+    stroke = [(x, 240) for x in np.linspace(100, 700, 10)]
+    try:
+        win = focus_window(xvfb_display)
+        wait_event(proc, rec)
+        for k in range(3):
+            drag(xvfb_display, win, proc, rec, stroke, k)
+            xdo(xvfb_display, "key", "p")
+            wait_event(proc, rec, "screenshot", k + 1)
+    finally:
+        quit_demo(xvfb_display, proc)
+    link = json.loads((rec / "summary.json").read_text())["link"]
+    assert link["disconnects"] >= 1 and link["dropped_blocks"] > 0
+    assert link["unplayed_samples"] > 0
+    rows = read_csv(rec / "friction.csv")
+    assert len({r["t_s"] for r in rows}) > 100  # the pipeline kept computing the touches
+
+
+def test_faults_without_a_device_is_one_line_exit_2(capsys):
+    from app.commands.cli import main
+    assert main(["demo", "grating-5mm", "--faults", "trip@1"]) == 2
+    err = capsys.readouterr().err
+    assert err == "frictex: error: --faults needs --device: the faults are injected on the link to it\n"
+
+
+def test_bad_faults_spec_is_one_line_exit_2(capsys):
+    from app.commands.cli import main
+    with pytest.raises(SystemExit) as exc:
+        main(["demo", "grating-5mm", "--device", "sim", "--faults", "wobble=3"])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and err.startswith("frictex: error:") and err.count("\n") == 1

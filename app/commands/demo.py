@@ -215,8 +215,10 @@ def run(args: argparse.Namespace) -> int:
                                      ) from None
             no_display = str(exc)
         else:
-            if args.haptic == "process":  # the renderer's threads (llvmpipe's, started with
-                # the window, and the render thread) yield to the child; input does not
+            if args.haptic == "process":  # llvmpipe's threads, started with the window,
+                # yield to the child; this thread (input) does not, nor the render thread
+                # it starts, which mostly waits on llvmpipe and holds the GIL the input
+                # thread needs: niced, it could be descheduled holding it)
                 from app.live.haptic_process import yield_to_haptic
                 yield_to_haptic(keep=(threading.get_native_id(),))
             loop = DemoLoop(backend, haptic, paths, index, scene, _load, Path(args.screenshots),
