@@ -1,0 +1,146 @@
+"""Effect clips: shapes of mu' against time, and their triggers' timing (rendering.layers.clips)."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+from numpy.testing import assert_allclose
+
+from device.profile import DeviceProfile
+from rendering.input.trace_file import DOWN, MOVE, UP, make_trace
+from rendering.pipeline import build_pipeline
+from scenes import DISPLAY
+from textures.clips import Clip, ClipEvent, ClipLayer
+from textures.model import DiscRegion, RectRegion, Scene, VisualHints
+
+RATE, BLOCK = 10_000.0, 50
+
+
+def _layer(clip, trigger="down", region=None, **kw):
+    return ClipLayer(name="c", render="sho", region=region, blend="multiply",
+                     visual=VisualHints(), clip=clip, trigger=trigger, **kw)
+
+
+TICK = Clip((ClipEvent("transient", 0.0, intensity=0.8, sharpness=0.0),), depth=0.5)
+
+
+def test_a_tick_is_a_hann_pulse_of_30_ms_at_sharpness_0():
+    mu, clipped = TICK.sample(RATE)
+    k = np.arange(mu.size)
+    expected = 1.0 - 0.5 * 0.8 * np.sin(np.pi * np.minimum(k / RATE, 0.03) / 0.03) ** 2
+    assert_allclose(mu, expected, atol=1e-12)
+    assert mu.size == 301 and clipped == 0 and mu[-1] == 1.0
+
+
+def test_sharper_ticks_are_shorter():
+    sharp = Clip((ClipEvent("transient", 0.0, sharpness=1.0),), depth=0.5)
+    assert (sharp.sample(RATE)[0] < 1.0).sum() == pytest.approx(0.005 * RATE, abs=2)
+
+
+def test_a_smooth_ramp_follows_its_envelope():
+    ramp = Clip((ClipEvent("continuous", 0.01, 1.0, 0.0, 0.1, ((0.0, 0.0), (0.1, 1.0))),), 0.4)
+    mu, _ = ramp.sample(RATE)
+    t = np.arange(mu.size) / RATE
+    expected = 1.0 - 0.4 * np.clip((t - 0.01) / 0.1, 0.0, 1.0) * ((t >= 0.01) & (t <= 0.11 + 1e-12))
+    assert_allclose(mu, expected, atol=1e-9)
+
+
+def test_sharpness_sets_the_carrier_and_levels_that_add_past_1_are_counted():
+    buzz = Clip((ClipEvent("continuous", 0.0, 1.0, 1.0, 1.0),), depth=0.3)
+    mu, _ = buzz.sample(RATE)
+    spectrum = np.abs(np.fft.rfft(mu[:10_000] - mu[:10_000].mean()))
+    assert np.argmax(spectrum) == 250  # 1 Hz bins: the 250 Hz carrier
+    both = Clip((ClipEvent("continuous", 0.0, 0.7, 0.0, 0.01), ClipEvent("continuous", 0.0, 0.7, 0.0, 0.01)), 0.3)
+    mu, clipped = both.sample(RATE)
+    assert mu.min() == pytest.approx(0.7) and clipped == 101
+
+
+def _scene(*layers):
+    return Scene(1, "clips", "", DISPLAY, DeviceProfile(), layers)
+
+
+def _replay(scene, trace, splits=()):
+    p = build_pipeline(scene, rate_hz=RATE, block_size=BLOCK, t0_s=0.0)
+    total = int(math.ceil(trace.t_s[-1] * RATE / BLOCK)) + 2
+    bounds = [0, *sorted({s for s in splits if 0 < s < total}), total]
+    applied = np.ceil(trace.t_s * RATE / BLOCK - 1e-9) * BLOCK  # next block boundary at or after
+    state = p.initial_state()
+    mu = np.ones((int(trace.finger.max()) + 1, total * BLOCK))  # 1 where a finger is absent
+    for lo, hi in zip(bounds[:-1], bounds[1:]):
+        a, b = np.searchsorted(applied, [lo * BLOCK, hi * BLOCK])
+        out, state = p.process(lo, trace.slice(a, b) if b > a else None, state, n_blocks=hi - lo)
+        for row, fid in enumerate(out.finger_ids):
+            mu[fid, lo * BLOCK: hi * BLOCK] = out.mu_target[row]
+    return mu
+
+
+def _first_use(t_s):
+    """Output index from which a touch sample at t_s is used: the next block boundary."""
+    return int(math.ceil(round(t_s * RATE, 9) / BLOCK)) * BLOCK
+
+
+def test_touch_down_inside_starts_the_clip_on_the_next_output_sample():
+    clip_mu, _ = TICK.sample(RATE)
+    layer = _layer(TICK, region=DiscRegion(50.0, 30.0, 10.0))
+    trace = make_trace([0.0123, 0.03, 0.06, 0.1], [0] * 4, [52.0] * 4, [30.0] * 4,
+                       event=[DOWN, MOVE, MOVE, UP])
+    mu = _replay(_scene(layer), trace)[0]
+    k = _first_use(0.0123)
+    assert (mu[: k + 1] == 1.0).all()
+    assert_allclose(mu[k + 1: k + 1 + clip_mu.size], clip_mu)
+    outside = make_trace([0.0123, 0.1], [0, 0], [70.0, 70.0], [30.0, 30.0], event=[DOWN, UP])
+    assert (_replay(_scene(layer), outside) == 1.0).all()
+
+
+def _crossing_trace():
+    """One finger: down at x = 20.013, a swipe over x = 50 at 100 mm/s, a press through 1 N."""
+    t = np.arange(0.0, 0.8, 0.01) + 0.0037
+    x = np.minimum(20.013 + 100.0 * (t - t[0]), 80.0)
+    force = np.where(t > 0.6, 1.5, 0.5)
+    ev = np.full(t.size, MOVE)
+    ev[0], ev[-1] = DOWN, UP
+    return make_trace(t, np.zeros(t.size, int), x, np.full(t.size, 30.0), force, ev)
+
+
+def test_crossing_an_edge_and_pressing_through_a_threshold():
+    trace = _crossing_trace()
+    clip_mu, _ = TICK.sample(RATE)
+    edge = _layer(TICK, "edge", x_mm=50.0, y_mm=0.0, angle_deg=0.0)
+    mu = _replay(_scene(edge), trace)[0]
+    # the predicted position (exact at constant speed) reaches 50 mm at t0 + 0.29987 s:
+    # the crossing is the first output sample at or past it
+    k = int(math.ceil((trace.t_s[0] + (50.0 - 20.013) / 100.0) * RATE))
+    assert (mu[: k + 1] == 1.0).all()
+    assert_allclose(mu[k + 1: k + 1 + clip_mu.size], clip_mu)
+    press = _layer(TICK, "force", force_n=1.0)
+    mu = _replay(_scene(press), trace)[0]
+    first_above = float(trace.t_s[np.flatnonzero(trace.force_n >= 1.0)[0]])
+    k = _first_use(first_above)
+    assert (mu[: k + 1] == 1.0).all()
+    assert_allclose(mu[k + 1: k + 1 + clip_mu.size], clip_mu)
+
+
+def test_a_lift_inside_plays_under_the_finger_still_touching():
+    layer = _layer(TICK, "lift", region=RectRegion(0.0, 0.0, 40.0, 64.8))
+    t = [0.001, 0.002, 0.05, 0.0871, 0.2]
+    trace = make_trace(t, [0, 1, 0, 0, 1], [20.0, 80.0, 20.0, 20.0, 80.0], [30.0] * 5,
+                       event=[DOWN, DOWN, MOVE, UP, UP])
+    mu = _replay(_scene(layer), trace)
+    k = _first_use(0.0871)  # finger 0's last output sample touching is k - 1
+    clip_mu, _ = TICK.sample(RATE)
+    assert (mu[1, : k + 1] == 1.0).all()
+    assert_allclose(mu[1, k + 1: k + 1 + clip_mu.size], clip_mu)
+
+
+@given(st.lists(st.integers(1, 200), max_size=6))
+@settings(derandomize=True, max_examples=25, deadline=None)
+def test_any_split_into_blocks_gives_the_same_output(splits):
+    """Live runs one block per call, replay many: the clips land on the same samples."""
+    trace = _crossing_trace()
+    scene = _scene(_layer(TICK, "edge", x_mm=50.0, angle_deg=0.0),
+                   _layer(Clip((ClipEvent("continuous", 0.0, 1.0, 0.6, 0.05),), 0.3), "force",
+                          force_n=1.0))
+    whole = _replay(scene, trace)
+    assert_allclose(_replay(scene, trace, splits), whole, rtol=0, atol=0)
+    assert (whole < 1.0).any()

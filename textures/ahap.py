@@ -1,0 +1,200 @@
+"""Clips from Apple Haptic and Audio Pattern (AHAP) files: JSON in, ``textures.clips.Clip`` out.
+
+What is read (every other key is ignored; times in s)::
+
+    {"Version": 1.0,
+     "Pattern": [
+       {"Event": {"Time": 0.0, "EventType": "HapticTransient" | "HapticContinuous",
+                  "EventDuration": 0.5,            # HapticContinuous only, > 0
+                  "EventParameters": [{"ParameterID": "HapticIntensity", "ParameterValue": 0.8},
+                                      ... "HapticSharpness" (0-1), "AttackTime",
+                                      "DecayTime", "ReleaseTime" (>= 0 s), "Sustained" (0/1)]}},
+       {"ParameterCurve": {"ParameterID": "HapticIntensityControl" | "HapticSharpnessControl",
+                           "Time": 0.0,
+                           "ParameterCurveControlPoints": [{"Time": 0.0, "ParameterValue": 1.0}, ...]}},
+       {"Parameter": {"ParameterID": ..., "Time": 0.0, "ParameterValue": 0.5}}]}
+
+Mapping onto a friction display (``textures.clips`` says how a clip plays):
+
+- intensity (0-1) is the share of the clip's ``depth`` (the largest drop in mu');
+- sharpness (0-1) is spectral content: a transient's pulse shortens from 30 ms to 5 ms,
+  a continuous event's carrier rises from none (a smooth drop) to 250 Hz;
+- a continuous event's envelope: a linear attack over AttackTime from 0 to full, then
+  full to the end (Sustained, the default) or a linear decay to 0 over DecayTime (not
+  Sustained), and a linear release to 0 over the last ReleaseTime;
+- HapticIntensityControl (0-1) multiplies every event's intensity, HapticSharpnessControl
+  (-1 to 1) is added to every event's sharpness; a ``Parameter`` is a curve of one point
+  (held until the next point of the same control). Points of one control from several
+  curves are merged in time order.
+
+Audio events and other parameters have no friction meaning: they are skipped and listed
+in the returned notes. Every problem is reported with its place in the file, e.g.
+``clip.ahap: Pattern[2].Event.EventParameters[0]: HapticIntensity is 1.5, expected 0 to 1``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from textures.clips import MAX_CLIP_S, Clip, ClipEvent
+from textures.errors import TextureError
+from textures.library import UnreadableText, read_utf8
+
+MAX_AHAP_BYTES = 1 << 20
+MAX_ITEMS = 10_000  # pattern entries, curve points
+
+_EVENT_PARAMS = {  # id: (lowest, highest)
+    "HapticIntensity": (0.0, 1.0), "HapticSharpness": (0.0, 1.0), "AttackTime": (0.0, MAX_CLIP_S),
+    "DecayTime": (0.0, MAX_CLIP_S), "ReleaseTime": (0.0, MAX_CLIP_S), "Sustained": (0.0, 1.0)}
+_CONTROLS = {"HapticIntensityControl": (0.0, 1.0), "HapticSharpnessControl": (-1.0, 1.0)}
+
+
+class _Reader:
+    """Typed access to parsed JSON with the path of each value for messages."""
+
+    def __init__(self, where: str):
+        self.where = where
+
+    def fail(self, path: str, message: str):
+        raise TextureError(f"{self.where}: {path}: {message}")
+
+    def number(self, obj: dict, key: str, path: str, lo: float, hi: float,
+               default: float | None = None) -> float:
+        if key not in obj:
+            if default is None:
+                self.fail(path, f"missing {key}")
+            return default
+        v = obj[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            self.fail(path, f"{key} is {json.dumps(v)[:40]}, expected a number from {lo:g} to {hi:g}")
+        if not lo <= v <= hi:
+            self.fail(path, f"{key} is {v:g}, expected {lo:g} to {hi:g}")
+        return float(v)
+
+    def table(self, v, path: str) -> dict:
+        if not isinstance(v, dict):
+            self.fail(path, f"expected an object, got {type(v).__name__}")
+        return v
+
+    def array(self, v, path: str) -> list:
+        if not isinstance(v, list):
+            self.fail(path, f"expected an array, got {type(v).__name__}")
+        if len(v) > MAX_ITEMS:
+            self.fail(path, f"{len(v)} entries, at most {MAX_ITEMS} are read")
+        return v
+
+
+def _envelope(params: dict, duration: float) -> tuple[tuple[float, float], ...]:
+    attack = min(params.get("AttackTime", 0.0), duration)
+    release = min(params.get("ReleaseTime", 0.0), duration - attack)
+    points = [(0.0, 0.0 if attack > 0 else 1.0), (attack, 1.0)]
+    if params.get("Sustained", 1.0) < 0.5:
+        decay = params.get("DecayTime", 0.0)
+        end = min(attack + decay, duration)
+        points.append((end, max(0.0, 1.0 - (end - attack) / decay) if decay > 0 else 0.0))
+        points.append((duration, 0.0))
+    else:
+        points += [(duration - release, 1.0), (duration, 0.0 if release > 0 else 1.0)]
+    return tuple(points)
+
+
+def _event(r: _Reader, ev: dict, path: str, notes: list) -> ClipEvent | None:
+    kind = ev.get("EventType")
+    if kind not in ("HapticTransient", "HapticContinuous"):
+        if isinstance(kind, str) and kind.startswith("Audio"):
+            notes.append(f"{path}: {kind} skipped (no friction meaning)")
+            return None
+        r.fail(path, f"EventType is {json.dumps(kind)[:40]}, expected HapticTransient or "
+                     f"HapticContinuous")
+    time_s = r.number(ev, "Time", path, 0.0, MAX_CLIP_S)
+    params = {}
+    plist = r.array(ev.get("EventParameters", []), f"{path}.EventParameters")
+    for k, p in enumerate(plist):
+        ppath = f"{path}.EventParameters[{k}]"
+        p = r.table(p, ppath)
+        pid = p.get("ParameterID")
+        if pid not in _EVENT_PARAMS:
+            notes.append(f"{ppath}: parameter {pid!r} skipped")
+            continue
+        lo, hi = _EVENT_PARAMS[pid]
+        value = p.get("ParameterValue")
+        if pid == "Sustained" and isinstance(value, bool):
+            value = float(value)
+        params[pid] = r.number({pid: value}, pid, ppath, lo, hi)
+    intensity = params.get("HapticIntensity", 1.0)
+    sharpness = params.get("HapticSharpness", 0.5)
+    if kind == "HapticTransient":
+        return ClipEvent("transient", time_s, intensity, sharpness)
+    duration = r.number(ev, "EventDuration", path, 1e-6, MAX_CLIP_S)
+    if time_s + duration > MAX_CLIP_S:
+        r.fail(path, f"ends at {time_s + duration:g} s; clips last at most {MAX_CLIP_S:g} s")
+    return ClipEvent("continuous", time_s, intensity, sharpness, duration,
+                     _envelope(params, duration))
+
+
+def _control_points(r: _Reader, entry: dict, key: str, path: str, notes: list):
+    """(control id, [(t, value), ...]) of a ParameterCurve or Parameter, or None if skipped."""
+    pid = entry.get("ParameterID")
+    if pid not in _CONTROLS:
+        notes.append(f"{path}: {key} {pid!r} skipped")
+        return None
+    lo, hi = _CONTROLS[pid]
+    t0 = r.number(entry, "Time", path, 0.0, MAX_CLIP_S)
+    if key == "Parameter":
+        return pid, [(t0, r.number(entry, "ParameterValue", path, lo, hi))]
+    points = []
+    cpath = f"{path}.ParameterCurveControlPoints"
+    for k, p in enumerate(r.array(entry.get("ParameterCurveControlPoints"), cpath)):
+        ppath = f"{cpath}[{k}]"
+        p = r.table(p, ppath)
+        t = t0 + r.number(p, "Time", ppath, 0.0, MAX_CLIP_S)
+        if points and t < points[-1][0]:
+            r.fail(ppath, f"Time goes back ({t - t0:g} s after {points[-1][0] - t0:g} s)")
+        points.append((t, r.number(p, "ParameterValue", ppath, lo, hi)))
+    return pid, points
+
+
+def parse_ahap(text: str, depth: float, where: str = "AHAP") -> tuple[Clip, list[str]]:
+    """A clip (and notes on what was skipped) from AHAP JSON text; ``depth`` is the
+    drop in mu' at full intensity, in (0, 1). Raises TextureError (one line) on any
+    problem."""
+    r = _Reader(where)
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise TextureError(f"{where}:{exc.lineno}: not JSON ({exc.msg})") from None
+    except RecursionError:
+        raise TextureError(f"{where}: JSON nested too deeply") from None
+    doc = r.table(doc, "top level")
+    events, curves, notes = [], {"HapticIntensityControl": [], "HapticSharpnessControl": []}, []
+    for k, item in enumerate(r.array(doc.get("Pattern"), "Pattern")):
+        path = f"Pattern[{k}]"
+        item = r.table(item, path)
+        if "Event" in item:
+            ev = _event(r, r.table(item["Event"], f"{path}.Event"), f"{path}.Event", notes)
+            if ev is not None:
+                events.append(ev)
+            continue
+        key = next((k2 for k2 in ("ParameterCurve", "Parameter") if k2 in item), None)
+        if key is None:
+            r.fail(path, f"expected Event, ParameterCurve or Parameter, got {sorted(item)[:3]}")
+        got = _control_points(r, r.table(item[key], f"{path}.{key}"), key, f"{path}.{key}", notes)
+        if got is not None:
+            curves[got[0]].extend(got[1])
+    if not events:
+        r.fail("Pattern", "no haptic events")
+    return Clip(tuple(events), depth,
+                tuple(sorted(curves["HapticIntensityControl"], key=lambda p: p[0])),
+                tuple(sorted(curves["HapticSharpnessControl"], key=lambda p: p[0]))), notes
+
+
+def read_ahap(path: str | Path, depth: float) -> tuple[Clip, list[str]]:
+    """``parse_ahap`` on a file (a regular UTF-8 file of at most 1 MiB)."""
+    try:
+        text = read_utf8(path, MAX_AHAP_BYTES)
+    except UnreadableText as exc:
+        line = f":{exc.line}" if exc.line else ""
+        raise TextureError(f"{path}{line}: {exc}") from None
+    return parse_ahap(text, depth, str(path))

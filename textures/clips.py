@@ -1,0 +1,148 @@
+"""Effect clips: mu' against time, started by touch events (``rendering.layers.clips``).
+
+A clip is a list of events on its own time axis (s, 0 = the first output sample after
+the trigger), each contributing a level in [0, 1] at every output sample; the levels add,
+and mu' = 1 - depth * min(1, sum) (samples where the sum passed 1 are counted).
+
+- ``transient`` (a tick): a Hann pulse sin^2(pi t / T) of peak ``intensity``, T from
+  sharpness: T = 30 ms at sharpness 0 down to 5 ms at sharpness 1 (sharper, shorter,
+  more high-frequency content).
+- ``continuous`` (envelopes, ramps): ``intensity`` times an envelope, piecewise linear
+  through (t, level) breakpoints relative to the event's start, times a carrier
+  c = (1 + cos(2 pi phi)) / 2 whose frequency follows sharpness: f = 250 Hz * sharpness
+  (0: a smooth drop with no vibration; 1: 250 Hz, near the skin's most sensitive band);
+  phi is integrated sample by sample so the carrier never jumps when f changes.
+
+Clip-wide curves (AHAP's dynamic parameters): ``intensity_curve`` multiplies every
+event's intensity, ``sharpness_curve`` is added to every event's sharpness (then clipped
+to [0, 1]); both are piecewise linear through (t, value) points and hold their end
+values outside them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from textures.model import _LayerBase
+
+CLIP_TRIGGERS = ("down", "lift", "edge", "force")
+EVENT_KINDS = ("transient", "continuous")
+TRANSIENT_S = (0.030, 0.005)  # pulse length at sharpness 0 and at sharpness 1
+CARRIER_MAX_HZ = 250.0
+#: longest clip (s): its samples are computed once, at the pipeline's output rate
+MAX_CLIP_S = 60.0
+
+Points = tuple[tuple[float, float], ...]
+
+
+@dataclass(frozen=True)
+class ClipEvent:
+    """One event of a clip. Times in s from the clip's start; intensity and sharpness
+    in [0, 1]; ``envelope`` (continuous only) as (t from the event's start, level in
+    [0, 1]) breakpoints, default flat at 1 over ``duration_s``."""
+
+    kind: str
+    time_s: float
+    intensity: float = 1.0
+    sharpness: float = 0.5
+    duration_s: float = 0.0
+    envelope: Points = ()
+
+    @property
+    def end_s(self) -> float:
+        if self.kind == "transient":
+            return self.time_s + _transient_length(self.sharpness)
+        return self.time_s + self.duration_s
+
+
+def _transient_length(sharpness: float) -> float:
+    return TRANSIENT_S[0] + (TRANSIENT_S[1] - TRANSIENT_S[0]) * sharpness
+
+
+def _curve(points: Points, t: np.ndarray, default: float) -> np.ndarray:
+    if not points:
+        return np.full(t.shape, default)
+    ts, vs = zip(*points)
+    return np.interp(t, ts, vs)
+
+
+@dataclass(frozen=True)
+class Clip:
+    """A clip of mu' against time; see the module docstring. ``depth``: the drop in mu'
+    at full level, in (0, 1)."""
+
+    events: tuple[ClipEvent, ...]
+    depth: float = 0.5
+    intensity_curve: Points = ()
+    sharpness_curve: Points = ()
+
+    @property
+    def duration_s(self) -> float:
+        return max((e.end_s for e in self.events), default=0.0)
+
+    def sample(self, rate_hz: float) -> tuple[np.ndarray, int]:
+        """mu' at t = k / rate_hz, k = 0 .. ceil(duration * rate) (the last sample back at
+        1 once every event has ended), and how many samples the level sum clipped at 1."""
+        n = int(math.ceil(self.duration_s * rate_hz)) + 1
+        t = np.arange(n) / rate_hz
+        gain = _curve(self.intensity_curve, t, 1.0)
+        shift = _curve(self.sharpness_curve, t, 0.0)
+        total = np.zeros(n)
+        for e in self.events:
+            rel = t - e.time_s
+            if e.kind == "transient":
+                at = float(_curve(self.sharpness_curve, np.array(e.time_s), 0.0))
+                length = _transient_length(float(np.clip(e.sharpness + at, 0.0, 1.0)))
+                on = (rel >= 0.0) & (rel <= length)
+                level = np.where(on, np.sin(np.pi * np.clip(rel, 0.0, length) / length) ** 2, 0.0)
+            else:
+                on = (rel >= 0.0) & (rel <= e.duration_s)
+                env = e.envelope or ((0.0, 1.0), (e.duration_s, 1.0))
+                freq = CARRIER_MAX_HZ * np.clip(e.sharpness + shift, 0.0, 1.0)
+                step = np.where(on, freq, 0.0) / rate_hz
+                phase = np.cumsum(step) - step  # cycles before each sample: 0 on the first
+                carrier = 0.5 + 0.5 * np.cos(2.0 * np.pi * phase)
+                level = np.where(on, _curve(env, rel, 0.0) * carrier, 0.0)
+            total += e.intensity * gain * level
+        clipped = int((total > 1.0).sum())
+        return 1.0 - self.depth * np.minimum(total, 1.0), clipped
+
+
+@dataclass(frozen=True)
+class ClipLayer(_LayerBase):
+    """A clip played under every touching finger when its trigger fires.
+
+    ``trigger``: ``down`` / ``lift`` (a touch begins / ends inside the layer's region),
+    ``edge`` (a touching finger crosses the line through (x_mm, y_mm) whose normal is at
+    ``angle_deg`` from +x, either way, inside the region), ``force`` (a touching
+    finger's normal force rises through ``force_n``, inside the region). The clip starts
+    on the output sample after the event; a new event restarts it. A one-channel plate
+    vibrates under every finger at once, so the clip is felt by all fingers touching.
+    Statically (drawn, or for a finger with nothing playing) the layer is mu' = 1.
+    """
+
+    renderer_kind: ClassVar[str] = "clip"
+
+    clip: Clip = None  # type: ignore[assignment]
+    trigger: str = "down"
+    x_mm: float = 0.0
+    y_mm: float = 0.0
+    angle_deg: float = 0.0
+    force_n: float = 1.0
+
+    @property
+    def mu_range(self) -> tuple[float, float]:
+        return 1.0 - self.clip.depth, 1.0
+
+    def mu_at(self, x, y) -> np.ndarray:
+        return np.ones(np.broadcast(np.asarray(x), np.asarray(y)).shape)
+
+    def side(self, x, y) -> np.ndarray:
+        """True on the side of the edge line the normal points to (``edge`` trigger)."""
+        a = math.radians(self.angle_deg)
+        return (math.cos(a) * (np.asarray(x, dtype=np.float64) - self.x_mm)
+                + math.sin(a) * (np.asarray(y, dtype=np.float64) - self.y_mm)) >= 0.0
