@@ -79,6 +79,7 @@ class PipelineState:
     tracker: TrackerState
     layers: tuple
     forces: object | None = None  # rendering.layers.force_layers.ForceState on force profiles
+    control: object | None = None  # rendering.control.loop.ControlState with the loop on
 
 
 @dataclass
@@ -132,7 +133,7 @@ class Pipeline:
     def __init__(self, scene: Scene, rate_hz: float = 10_000.0, block_size: int = 50,
                  render_override: str | None = None, sho_variant: str = DEFAULT_SHO,
                  t0_s: float = 0.0, tracker: TrackerConfig | None = None,
-                 inversion: str = "exact"):
+                 inversion: str = "exact", control: str = "open"):
         if rate_hz <= 0 or not np.isfinite(rate_hz):
             raise ValueError(f"output rate {rate_hz!r} Hz: expected a positive number")
         if block_size < 1:
@@ -160,6 +161,10 @@ class Pipeline:
             from rendering.inversion_lut import LutFrictionModel
             self.friction = LutFrictionModel(self.friction)
         self.actuation = make_actuation(scene.device)
+        self.control = None  # closed-loop friction (rendering.control.loop), not open loop
+        if control != "open":
+            from rendering.control.loop import ClosedLoop
+            self.control = ClosedLoop(scene.device, self.rate_hz, self.block_size, control)
         self.forces = None
         if scene.device.profile in FORCE_PROFILES:
             from rendering.layers.force_layers import ForceStage  # travelling-wave profiles only
@@ -188,10 +193,11 @@ class Pipeline:
     def initial_state(self) -> PipelineState:
         return PipelineState(tracker=TrackerState(),
                              layers=tuple(r.initial_state() for r in self.renderers),
-                             forces=self.forces.initial_state() if self.forces else None)
+                             forces=self.forces.initial_state() if self.forces else None,
+                             control=self.control.initial_state() if self.control else None)
 
     def process(self, block_index: int, samples: Trace | None, state: PipelineState,
-                n_blocks: int = 1, normal_force_n: float | None = None
+                n_blocks: int = 1, normal_force_n: float | None = None, report=None
                 ) -> tuple[BlockOutput, PipelineState]:
         """Run ``n_blocks`` blocks starting at ``block_index`` (output index
         ``block_index * block_size``) with the touch samples that take effect in them.
@@ -199,7 +205,8 @@ class Pipeline:
         ``normal_force_n``: the normal force (N) the device's force sensors measure now
         (seed 003's plate has four under its corners), used instead of the samples' force
         for the fingers touching. Sensors under the plate measure the total: with several
-        fingers down it is shared equally among them.
+        fingers down it is shared equally among them. ``report``: the device's force report
+        for the previous block (``rendering.control.loop.ForceReport``) when the loop is on.
         """
         clock = time.perf_counter
         secs = self.timer.seconds
@@ -231,8 +238,11 @@ class Pipeline:
         t1 = clock()
         secs["composition"] += t1 - t
 
-        forces, force_state = None, state.forces
-        if self.forces is None:
+        forces, force_state, control_state = None, state.forces, state.control
+        if self.control is not None:
+            wanted, clamps, control_state = self.control.invert(mu_target, fingers,
+                                                                state.control, report)
+        elif self.forces is None:
             wanted, clamps = self.friction.invert(mu_target, fingers.force)
         else:  # inversion and actuation in one: the wave serves force targets
             forces, act, wanted, clamps, force_state = self.forces.render(fingers, mu_target,
@@ -251,7 +261,7 @@ class Pipeline:
                           clamps=clamps, limited=act.limited,
                           off_structure=act.off_structure, forces=forces)
         return out, PipelineState(tracker=tracker_state, layers=tuple(layer_states),
-                                  forces=force_state)
+                                  forces=force_state, control=control_state)
 
 
 def build_pipeline(scene: Scene, rate_hz: float = 10_000.0, block_size: int = 50,

@@ -1,0 +1,86 @@
+"""A simulated finger on the plate, run by the engine: the device side of a closed loop.
+
+``FingerSink`` takes each block's commands to the simulated plate and finger
+(``device.finger.FingerPlant``) and keeps what the sensors report for the next block;
+``LoopStage`` runs the pipeline with that report (the loop's measurement) and the
+measured normal force (open and closed loop alike: frictex reads the normal force from
+the device either way). One run::
+
+    sink = FingerSink(plant, speed_of, force_of)
+    drive(LoopStage(pipeline, sink), source, [sink], VirtualClock())
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from device.finger import FingerPlant, rest_mu, true_mu
+from rendering.control.loop import ForceReport
+
+
+class FingerSink:
+    """The plate under one finger. ``speed_of(t_s)``, ``force_of(t_s)``: the finger's true
+    sliding speed (mm/s) and normal force (N) at output times (arrays (n,)).
+
+    Keeps per touching sample: target mu', delivered mu', the finger's lowest reachable
+    mu' (amplitude limit), true speed, lateral force at the finger (N), time (s).
+    """
+
+    def __init__(self, plant: FingerPlant, speed_of, force_of, sensor_dead_after_s=None):
+        self.plant = plant
+        self.state = plant.initial_state()
+        self.speed_of = speed_of
+        self.force_of = force_of
+        self.dead_after_s = sensor_dead_after_s
+        self.report: ForceReport | None = None
+        self.rows: dict[str, list] = {k: [] for k in ("t", "target", "delivered", "floor",
+                                                       "speed", "force", "mu0")}
+
+    def write(self, out, commands_um) -> None:
+        t = out.t_s
+        touching = out.contact.any(axis=0)
+        speed = np.where(touching, self.speed_of(t), 0.0)
+        force = np.where(touching, self.force_of(t), 0.0)
+        block, self.state = self.plant.step(out.index0, commands_um[:, 0], speed, force,
+                                            self.state)
+        dead = self.dead_after_s is not None and t.size and t[0] >= self.dead_after_s
+        self.report = None if dead else ForceReport(out.index0, block.lateral_n, block.normal_n)
+        if touching.any():
+            row = int(np.argmax(out.contact.any(axis=1)))
+            keep = touching
+            finger = self.plant.finger
+            self.rows["t"].append(t[keep])
+            self.rows["target"].append(out.mu_target[row][keep])
+            self.rows["delivered"].append(block.delivered_mu[keep])
+            self.rows["floor"].append(true_mu(self.plant.limit_um, force[keep], speed[keep],
+                                              t[keep], finger))
+            self.rows["speed"].append(speed[keep])
+            self.rows["force"].append(force[keep])
+            self.rows["mu0"].append(rest_mu(t[keep], finger))
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        return {k: np.concatenate(v) if v else np.zeros(0) for k, v in self.rows.items()}
+
+    def commit(self) -> None:
+        """Nothing to finalise."""
+
+    def abort(self) -> None:
+        """Nothing to undo."""
+
+
+class LoopStage:
+    """The pipeline fed with ``sink``'s last force report (see the module docstring)."""
+
+    def __init__(self, pipeline, sink: FingerSink):
+        self.pipeline = pipeline
+        self.sink = sink
+        self.state = pipeline.initial_state()
+
+    def process(self, k: int, samples, n: int):
+        report = self.sink.report
+        normal = None
+        if report is not None and report.normal_n.size and report.normal_n.mean() > 0.05:
+            normal = float(report.normal_n.mean())
+        out, self.state = self.pipeline.process(k, samples, self.state, n_blocks=n,
+                                                normal_force_n=normal, report=report)
+        return out, out.commands_um

@@ -1,0 +1,116 @@
+"""Fit seed 003's friction model to measured points, or tabulate them where it does not fit.
+
+A point is (w, F_n, mu'): plate amplitude (um), normal force (N), measured relative
+friction. Seed 003, eq 2: ``mu'(w) = (1 - k F_n) exp(-b w) + k F_n``; the fit finds
+(b, k) by bounded least squares. If its residual RMS stays above ``MODEL_TOLERANCE``
+the model does not describe this plate and finger, and :func:`fit_points` also builds a
+calibration table (``device.profile.Calibration``) from the points: binned means along
+amplitude, one row at the points' median force, made strictly decreasing.
+
+:func:`device_toml` writes the result as the ``[device]`` section of a texture file
+(the grammar of ``textures.loader``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from device.friction import forward_mu
+from device.profile import Calibration, FrictionParams
+
+#: residual RMS (mu') above which the closed-form model is said not to fit
+MODEL_TOLERANCE = 0.02
+#: bounds of the fit: b (1/um), k (1/N)
+B_BOUNDS = (0.05, 20.0)
+K_BOUNDS = (0.0, 5.0)
+#: amplitude bins of a calibration table
+TABLE_BINS = 12
+
+
+def model_jacobian(w_um, normal_n, b_per_um: float, k_per_n: float) -> np.ndarray:
+    """d mu' / d(b, k) of seed 003, eq 2, shape (n, 2); arrays (n,)."""
+    e = np.exp(-b_per_um * w_um)
+    return np.stack([-(1.0 - k_per_n * normal_n) * w_um * e, normal_n * (1.0 - e)], axis=1)
+
+
+@dataclass(frozen=True)
+class Fit:
+    """A fit's outcome: the constants, the residual RMS (mu') and the point count;
+    ``calibration`` is a table when the model does not fit (else None)."""
+
+    params: FrictionParams
+    residual_rms: float
+    n_points: int
+    calibration: Calibration | None = None
+
+    @property
+    def fits(self) -> bool:
+        return self.residual_rms <= MODEL_TOLERANCE
+
+
+def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> Fit:
+    """Least-squares (b, k) of seed 003, eq 2 on the points; arrays (n,), n >= 3.
+
+    Raises ValueError when there are too few finite points or no amplitude above 0.
+    """
+    w, f, m = (np.asarray(a, dtype=np.float64).ravel() for a in (w_um, normal_n, mu))
+    good = np.isfinite(w) & np.isfinite(f) & np.isfinite(m) & (w >= 0) & (f > 0)
+    w, f, m = w[good], f[good], m[good]
+    if w.size < 3 or not np.any(w > 0):
+        raise ValueError(f"{w.size} usable calibration points with {np.count_nonzero(w > 0)} "
+                         f"above 0 um: expected at least 3, some with the plate vibrating")
+
+    def residual(theta):
+        return forward_mu(w, f, FrictionParams(theta[0], theta[1])) - m
+
+    def jac(theta):
+        return model_jacobian(w, f, theta[0], theta[1])
+
+    x0 = np.clip([start.b_per_um, start.asymptote_per_n],
+                 [B_BOUNDS[0], K_BOUNDS[0]], [B_BOUNDS[1], K_BOUNDS[1]])
+    sol = least_squares(residual, x0, jac=jac, bounds=([B_BOUNDS[0], K_BOUNDS[0]],
+                                                       [B_BOUNDS[1], K_BOUNDS[1]]))
+    params = FrictionParams(b_per_um=float(sol.x[0]), asymptote_per_n=float(sol.x[1]))
+    rms = float(np.sqrt(np.mean(sol.fun ** 2)))
+    table = None if rms <= MODEL_TOLERANCE else _table(w, f, m)
+    return Fit(params=params, residual_rms=rms, n_points=int(w.size), calibration=table)
+
+
+def _table(w: np.ndarray, f: np.ndarray, m: np.ndarray) -> Calibration | None:
+    """One-row table at the median force: mean mu' per amplitude bin, strictly decreasing."""
+    edges = np.linspace(0.0, w.max(), TABLE_BINS + 1)
+    centres, means = [0.0], [1.0]
+    for lo, hi in zip(edges[1:-1], edges[2:]):
+        inside = (w > lo) & (w <= hi)
+        if np.count_nonzero(inside) >= 3:
+            centres.append(float(w[inside].mean()))
+            means.append(float(m[inside].mean()))
+    if len(centres) < 2:
+        return None
+    mu = np.minimum.accumulate(np.clip(means, 1e-3, 1.0))
+    mu = mu - 1e-6 * np.arange(mu.size)  # strictly decreasing, as the table format asks
+    return Calibration(amplitudes_um=tuple(centres), forces_n=(float(np.median(f)),),
+                       mu=(tuple(float(x) for x in mu),))
+
+
+def device_toml(fit: Fit, amplitude_limit_um: float, normal_force_n: float,
+                profile: str = "plate-seed003") -> str:
+    """The ``[device]`` section (text) a texture file can use for this calibration."""
+    lines = ["[device]", f'profile = "{profile}"',
+             f"amplitude_limit_um = {amplitude_limit_um:.6g}",
+             f"normal_force_n = {normal_force_n:.6g}",
+             f"[device.friction]        # seed 003 eq 2, fitted: residual RMS {fit.residual_rms:.4f} "
+             f"over {fit.n_points} points",
+             f"b_per_um = {fit.params.b_per_um:.6g}",
+             f"asymptote_per_n = {fit.params.asymptote_per_n:.6g}"]
+    if fit.calibration is not None:
+        cal = fit.calibration
+        lines += ["[device.calibration]     # the model does not fit: measured table",
+                  "amplitudes_um = [" + ", ".join(f"{a:.6g}" for a in cal.amplitudes_um) + "]",
+                  "forces_n = [" + ", ".join(f"{x:.6g}" for x in cal.forces_n) + "]",
+                  "mu = [" + ", ".join("[" + ", ".join(f"{x:.8g}" for x in row) + "]"
+                                       for row in cal.mu) + "]"]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,280 @@
+"""Closed-loop friction on seed 003's plate: feed-forward, feedback, adaptation, fallback.
+
+Per block, for the one finger touching (the plate's sensors measure the total force, so
+with several fingers down the loop holds its state and the block is fed forward only):
+
+1. **Measure.** The device's force report for the previous block gives the ratio
+   F_t / F_n. The friction at rest mu0 is its mean where the plate has been still long
+   enough for the sensor to see it (``Chain`` of the commanded amplitude below
+   ``still_um``) while the finger slides; the measured relative friction is
+   mu'_m = F_t / (F_n mu0) (seed 003, eq 1).
+2. **Feedback** on the depth of modulation: the reduction asked, 1 - mu'_target, passed
+   through the same chain, against the reduction measured, 1 - mu'_m, gives the block's
+   delivered/asked ratio g (least squares over the block). An integrator on the log of a
+   gain c, ``log c <- log c - ki log g``, makes the feed-forward ask for
+   ``1 - c (1 - mu'_target)``. In the log domain the loop gain is ``ki`` whatever the
+   finger (g = G c for a finger G times more or less slippery than the model), which is
+   what the margins of ``rendering.control.margins`` are stated for.
+   Anti-windup: c does not grow in a block where the amplitude limit cut the command,
+   nor move at all while the finger rests (no sliding, no friction to measure); it
+   stays within ``[1/4, 4]``.
+3. **Feed-forward** through seed 003's inverse (eq 3, ``device.friction``), with the
+   device's constants (``closed``) or their online estimate (``adaptive``,
+   ``rendering.control.adapt``: RLS on points where the amplitude has been steady for
+   ``settle_s``).
+4. **Fallback.** A report that is late by more than ``stale_s`` (stale), reaches the
+   sensor's full scale (saturated), or is not a finger (non-finite, F_n below
+   ``min_normal_n`` while touching, F_t / F_n outside [-``max_ratio`` / 10, ``max_ratio``]) drops the loop
+   to open loop with the latest model and c = 1; said once (``messages``) and counted
+   (``fallbacks``, ``fallback_samples``). The loop resumes after ``recover_s`` of good
+   reports. A dead sensor is open loop after at most ``stale_s`` plus one block.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from device.finger import SensorParams
+from device.friction import SeedFrictionModel
+from device.profile import DeviceProfile
+from rendering.control.adapt import Rls, RlsState
+from rendering.control.chain import Chain, ChainState
+from rendering.control.margins import KI
+
+#: control modes: open loop (the pipeline's inversion), feedback on the device's model,
+#: feedback on the model adapted online
+CONTROL_MODES = ("open", "closed", "adaptive")
+
+
+@dataclass(frozen=True, eq=False)
+class ForceReport:
+    """What the device's force sensors measured over output samples ``index0 ..
+    index0 + m - 1``: lateral (tangential) and normal force (N), each (m,)."""
+
+    index0: int
+    lateral_n: np.ndarray
+    normal_n: np.ndarray
+
+
+@dataclass(frozen=True)
+class LoopConfig:
+    """The loop's constants (module docstring); units s, um, N, mm/s."""
+
+    ki: float = KI
+    log_c_max: float = math.log(4.0)
+    slide_mm_s: float = 5.0
+    still_um: float = 0.005
+    still_seen: float = 0.01
+    mu0_tau_s: float = 0.3
+    min_still: int = 10
+    min_reduction: float = 0.02
+    stale_s: float = 0.02
+    recover_s: float = 0.1
+    min_normal_n: float = 0.05
+    max_ratio: float = 3.0
+    settle_s: float = 0.01
+    decimate: int = 10
+    sensor: SensorParams = field(default_factory=SensorParams)
+    rls: Rls = field(default_factory=Rls)
+
+
+@dataclass(frozen=True, eq=False)
+class Sent:
+    """What the loop asked for in its last block (the report that comes back pairs with
+    it sample by sample): output index, amplitude (um), target mu', speed (mm/s),
+    whether the limit cut it, and whether it was a one-finger block."""
+
+    index0: int
+    w_um: np.ndarray
+    target: np.ndarray
+    speed: np.ndarray
+    cut: np.ndarray
+    single: bool
+
+
+@dataclass(frozen=True)
+class ControlState:
+    """Everything the loop carries between blocks (module docstring)."""
+
+    log_c: float
+    rls: RlsState
+    mu0: float = math.nan
+    asked: ChainState = ChainState()
+    moving: ChainState = ChainState()
+    steady: int = 0
+    last_w: float = 0.0
+    sent: Sent | None = None
+    since_report_s: float = 0.0
+    good_s: float = 0.0
+    fallback: bool = False
+    fallbacks: int = 0
+    fallback_samples: int = 0
+    updates: int = 0
+    messages: tuple[str, ...] = ()
+
+
+class ClosedLoop:
+    """The loop for one device at ``rate_hz`` with blocks of ``block_size`` samples."""
+
+    def __init__(self, device: DeviceProfile, rate_hz: float, block_size: int,
+                 mode: str = "adaptive", config: LoopConfig = LoopConfig()):
+        if mode not in CONTROL_MODES[1:]:
+            raise ValueError(f"control mode {mode!r}: the loop runs {', '.join(CONTROL_MODES[1:])}")
+        if device.calibration is not None or device.profile != "plate-seed003":
+            raise ValueError(f"closed-loop control needs profile plate-seed003 with seed 003's "
+                             f"model; got {device.profile!r}"
+                             f"{' with a calibration table' if device.calibration else ''}")
+        self.device = device
+        self.mode = mode
+        self.rate_hz = float(rate_hz)
+        self.block_s = block_size / self.rate_hz
+        self.config = replace(config, rls=replace(config.rls, block_s=self.block_s))
+        self.chain = Chain(config.sensor, rate_hz)
+        self.limit_um = float(device.amplitude_limit_um)
+        self._models: dict = {}
+
+    def initial_state(self) -> ControlState:
+        return ControlState(log_c=0.0, rls=self.config.rls.initial_state(self.device.friction),
+                            asked=self.chain.initial_state(), moving=self.chain.initial_state())
+
+    def _model(self, state: ControlState) -> SeedFrictionModel:
+        params = state.rls.params if self.mode == "adaptive" else self.device.friction
+        key = (params.b_per_um, params.asymptote_per_n)
+        if key not in self._models:
+            if len(self._models) > 64:
+                self._models.clear()
+            self._models[key] = SeedFrictionModel(replace(self.device, friction=params))
+        return self._models[key]
+
+    def invert(self, mu_target: np.ndarray, fingers, state: ControlState,
+               report: ForceReport | None):
+        """Amplitudes for this block: (wanted_um (F, n), clamps, state after).
+
+        ``fingers``: the tracker's block (contact, force, vx, vy, (F, n)); ``report``: the
+        device's force report for the previous block, or None if none arrived.
+        """
+        state = self._learn(state, report)
+        contact = fingers.contact
+        touching = contact.any(axis=1)
+        single = bool(touching.sum() == 1)
+        closed = single and not state.fallback and math.isfinite(state.mu0)
+        c = math.exp(state.log_c) if closed else 1.0
+        reduction = np.maximum(1.0 - mu_target, 0.0)
+        asked = np.where(mu_target < 1.0, 1.0 - c * reduction, mu_target)
+        model = self._model(state)
+        wanted, clamps = model.invert(asked, fingers.force)
+        wanted = np.where(contact, wanted, 0.0)
+        n = mu_target.shape[1]
+        if state.fallback:
+            state = replace(state, fallback_samples=state.fallback_samples + n)
+        row = int(np.argmax(touching)) if touching.any() else 0
+        w = wanted[row] if touching.any() else np.zeros(n)
+        speed = np.hypot(fingers.vx[row], fingers.vy[row]) if touching.any() else np.zeros(n)
+        target = mu_target[row] if touching.any() else np.ones(n)
+        cut = (w >= self.limit_um * (1.0 - 1e-9)) & (target < 1.0)
+        sent = Sent(index0=int(fingers.index0), w_um=w, target=target, speed=speed, cut=cut,
+                    single=single)
+        return wanted, clamps, replace(state, sent=sent)
+
+    def _learn(self, state: ControlState, report: ForceReport | None) -> ControlState:
+        """Fold the previous block's report into the state (module docstring, 1, 2, 4)."""
+        sent = state.sent
+        if sent is None:
+            return state
+        cfg = self.config
+        n = sent.w_um.size
+        ref, asked = self.chain.run(np.where(sent.target < 1.0, 1.0 - sent.target, 0.0), state.asked)
+        moving_in = (sent.w_um > cfg.still_um).astype(np.float64)
+        seen, moving = self.chain.run(moving_in, state.moving)
+        steady, last_w, runs = _steady_runs(sent.w_um, state.steady, state.last_w)
+        state = replace(state, asked=asked, moving=moving, steady=steady, last_w=last_w)
+        fresh = report is not None and report.index0 == sent.index0 and report.lateral_n.size == n
+        if not fresh:
+            return self._bad(state, "stale", stale=True)
+        lat = np.asarray(report.lateral_n, dtype=np.float64)
+        nor = np.asarray(report.normal_n, dtype=np.float64)
+        touching = sent.single and bool(sent.target.size)
+        problem = _problem(lat, nor, touching, cfg)
+        if problem:
+            return self._bad(state, problem, stale=False)
+        state = replace(state, since_report_s=0.0, good_s=state.good_s + self.block_s)
+        if state.fallback and state.good_s >= cfg.recover_s:
+            state = replace(state, fallback=False)
+        sliding = sent.single & (sent.speed >= cfg.slide_mm_s) & (nor >= cfg.min_normal_n)
+        if not sent.single or not sliding.any():
+            return state  # at rest or several fingers: nothing to learn, nothing to wind up
+        ratio = lat / np.maximum(nor, cfg.min_normal_n)
+        still = sliding & (seen < cfg.still_seen)
+        mu0 = state.mu0
+        if np.count_nonzero(still) >= cfg.min_still:
+            m = float(ratio[still].mean())
+            alpha = -math.expm1(-np.count_nonzero(still) / (self.rate_hz * cfg.mu0_tau_s))
+            mu0 = m if not math.isfinite(mu0) else mu0 + alpha * (m - mu0)
+            state = replace(state, mu0=mu0)
+        if not math.isfinite(mu0) or state.fallback:
+            return state
+        measured = ratio / mu0
+        red = np.where(sliding, ref, 0.0)
+        power = float(red @ red)
+        if power >= np.count_nonzero(sliding) * cfg.min_reduction ** 2:
+            g = float(red @ np.where(sliding, 1.0 - measured, 0.0)) / power
+            step = -cfg.ki * math.log(max(g, 0.05))
+            if step > 0 and np.count_nonzero(sent.cut) > 0.1 * n:
+                step = 0.0  # anti-windup: the limit already cuts what is asked
+            log_c = float(np.clip(state.log_c + step, -cfg.log_c_max, cfg.log_c_max))
+            state = replace(state, log_c=log_c, updates=state.updates + 1)
+        if self.mode == "adaptive":
+            settled = sliding & (runs >= cfg.settle_s * self.rate_hz + self.chain.lag_samples) & \
+                (sent.w_um > 0.05)
+            pick = np.flatnonzero(settled)[::cfg.decimate]
+            if pick.size:
+                rls = cfg.rls.update(state.rls, sent.w_um[pick], nor[pick], measured[pick])
+                state = replace(state, rls=rls)
+        return state
+
+    def _bad(self, state: ControlState, problem: str, stale: bool) -> ControlState:
+        since = state.since_report_s + self.block_s if stale else state.since_report_s
+        state = replace(state, since_report_s=since, good_s=0.0)
+        if stale and since <= self.config.stale_s:
+            return state
+        if state.fallback:
+            return state
+        messages = state.messages
+        if not messages:
+            messages = (f"closed loop: force signal {problem}; open loop with the latest model "
+                        f"until the signal is good for {self.config.recover_s:g} s",)
+        return replace(state, fallback=True, fallbacks=state.fallbacks + 1, messages=messages)
+
+
+def _problem(lat: np.ndarray, nor: np.ndarray, touching: bool, cfg: LoopConfig) -> str:
+    """Why a report is not a finger ("" if it is); see the module docstring, 4."""
+    if not (np.isfinite(lat).all() and np.isfinite(nor).all()):
+        return "not finite"
+    top = 0.999 * cfg.sensor.full_scale_n
+    if np.abs(lat).max(initial=0.0) >= top or np.abs(nor).max(initial=0.0) >= top:
+        return "saturated"
+    if touching:
+        if nor.mean() < cfg.min_normal_n:
+            return "implausible (no normal force under a finger)"
+        ratio = lat.mean() / nor.mean()  # a finger at rest reads noise around 0
+        if not -cfg.max_ratio / 10 <= ratio <= cfg.max_ratio:
+            return f"implausible (F_t / F_n = {ratio:.3g})"
+    return ""
+
+
+def _steady_runs(w: np.ndarray, steady0: int, last_w: float) -> tuple[int, float, np.ndarray]:
+    """Samples each amplitude has been held (within 1 nm), carried across blocks.
+
+    Returns (run length after the block, last amplitude, run length at each sample (n,)).
+    """
+    if w.size == 0:
+        return steady0, last_w, np.zeros(0, dtype=np.int64)
+    prev = np.concatenate([[last_w], w[:-1]])
+    change = np.abs(w - prev) > 1e-3
+    idx = np.arange(w.size)
+    start = np.maximum.accumulate(np.where(change, idx, -1))
+    runs = np.where(start >= 0, idx - start, idx + steady0 + 1)
+    return int(runs[-1]), float(w[-1]), runs
