@@ -28,6 +28,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("app.commands.demo", "the live demo window (mouse or multi-touch as fingers)"),
     "preview": ("app.commands.preview", "render a scene and its friction map to a PNG"),
     "warm": ("app.commands.warm", "compile the pipeline's kernels now (setup does this once)"),
+    "calibrate": ("app.commands.calibrate", "fit the friction model to a finger on a plate (simulated or real)"),
 }
 
 
