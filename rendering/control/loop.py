@@ -4,9 +4,11 @@ Per block, for the one finger touching (the plate's sensors measure the total fo
 with several fingers down the loop holds its state and the block is fed forward only):
 
 1. **Measure.** The device's force report for the previous block gives the ratio
-   F_t / F_n. The friction at rest mu0 is its mean where the plate has been still long
+   F_t / F_n. The friction at rest mu0 is its level where the plate has been still long
    enough for the sensor to see it (``Chain`` of the commanded amplitude below
-   ``still_um``) while the finger slides; the measured relative friction is
+   ``still_um``) while the finger slides (median over the block, and a speed of at least
+   ``slide_mm_s``: the tracker sees a stop late, and a stuck finger reads no friction);
+   the measured relative friction is
    mu'_m = F_t / (F_n mu0) (seed 003, eq 1).
 2. **Feedback** on the depth of modulation: the reduction asked, 1 - mu'_target, passed
    through the same chain, against the reduction measured, 1 - mu'_m, gives the block's
@@ -65,7 +67,7 @@ class LoopConfig:
 
     ki: float = KI
     log_c_max: float = math.log(4.0)
-    slide_mm_s: float = 5.0
+    slide_mm_s: float = 20.0
     still_um: float = 0.005
     still_seen: float = 0.01
     mu0_tau_s: float = 0.3
@@ -210,7 +212,7 @@ class ClosedLoop:
         still = sliding & (seen < cfg.still_seen)
         mu0 = state.mu0
         if np.count_nonzero(still) >= cfg.min_still:
-            m = float(ratio[still].mean())
+            m = float(np.median(ratio[still]))  # robust to a stop the tracker sees late
             alpha = -math.expm1(-np.count_nonzero(still) / (self.rate_hz * cfg.mu0_tau_s))
             mu0 = m if not math.isfinite(mu0) else mu0 + alpha * (m - mu0)
             state = replace(state, mu0=mu0)

@@ -1,0 +1,79 @@
+"""The friction loop (rendering/control) with the simulated finger on the run engine."""
+
+import cmath
+import math
+
+import numpy as np
+import pytest
+
+from app.measure.report_closed_loop import BLOCK, RATE_HZ, Run, simulate
+from device.finger import draw_finger, rest_mu
+from rendering.control.loop import LoopConfig
+from rendering.control.margins import gain_phase_margins
+
+
+@pytest.mark.parametrize("ki,delay", [(0.3, 0), (0.3, 2), (0.1, 5)])
+def test_margins_match_a_frequency_scan(ki, delay):
+    w = np.linspace(1e-4, math.pi, 200_001)
+    loop = ki * np.exp(-1j * w * delay) / (np.exp(1j * w) - 1)
+    phase = np.unwrap(np.angle(loop))
+    at180 = np.argmin(np.abs(phase + math.pi))
+    crossover = np.argmin(np.abs(np.abs(loop) - 1))
+    gm, pm = gain_phase_margins(ki, delay)
+    assert math.isclose(gm, 1 / abs(loop[at180]), rel_tol=1e-3)
+    assert math.isclose(pm, math.degrees(math.pi + phase[crossover]), abs_tol=0.1)
+
+
+def test_loop_replay_is_deterministic_for_a_fixed_finger():
+    a, sa = simulate(Run("grating-15mm", 2, "adaptive", 1.5))
+    b, sb = simulate(Run("grating-15mm", 2, "adaptive", 1.5))
+    np.testing.assert_array_equal(a.arrays()["delivered"], b.arrays()["delivered"])
+    assert sa.control.log_c == sb.control.log_c and sa.control.rls == sb.control.rls
+
+
+def test_a_dead_sensor_falls_back_within_the_stale_time():
+    dead_at = 1.0
+    sink, state = simulate(Run("grating-15mm", 2, "closed", 1.6, sensor_dead_after_s=dead_at))
+    control = state.control
+    assert control.fallbacks == 1 and len(control.messages) == 1
+    assert "stale" in control.messages[0]
+    # everything from the first block past stale_s + one block is open loop
+    block_s = BLOCK / RATE_HZ
+    bound = LoopConfig().stale_s + 2 * block_s
+    run_after = 1.6 - dead_at
+    assert control.fallback_samples >= (run_after - bound) * RATE_HZ - BLOCK
+
+
+def test_a_finger_at_rest_does_not_wind_the_integrator_up():
+    """The trace holds still on a low-friction line: no sliding, so no update at all."""
+    from app.engine.clocks import VirtualClock
+    from app.engine.driver import drive
+    from app.engine.sources import TraceSource
+    from app.measure.closed_loop_sim import FingerSink, LoopStage
+    from app.measure.report_matrix import load
+    from device.finger import FingerPlant
+    from rendering.input.trace_file import DOWN, MOVE, make_trace
+    from rendering.pipeline import build_pipeline
+    scene = load("grating-15mm")
+    t = np.arange(0, 2.0, 0.02)
+    trace = make_trace(t, np.zeros(t.size, dtype=int), np.full(t.size, 3.0),
+                       np.full(t.size, 30.0), event=[DOWN] + [MOVE] * (t.size - 1))
+    pipeline = build_pipeline(scene, rate_hz=RATE_HZ, block_size=BLOCK, control="closed")
+    plant = FingerPlant(draw_finger(3), RATE_HZ, 2.5, seed=3)
+    sink = FingerSink(plant, lambda s: np.zeros(np.size(s)), lambda s: np.full(np.size(s), 0.5))
+    stage = LoopStage(pipeline, sink)
+    source = TraceSource(iter([trace]), until_s=2.0)
+    source.start(pipeline.tracker_config)
+    drive(stage, source, [sink], VirtualClock())
+    control = stage.state.control
+    assert sink.arrays()["target"].min() < 1.0  # it was asked for a reduction
+    assert control.log_c == 0.0 and control.updates == 0 and control.fallbacks == 0
+
+
+def test_the_friction_at_rest_tracks_a_known_drift():
+    """Finger 3's mu0 rises by moisture during the run; the estimate follows it."""
+    sink, state = simulate(Run("grating-15mm", 3, "closed", 6.0))
+    truth = float(rest_mu(6.0, draw_finger(3)))
+    start = float(rest_mu(0.0, draw_finger(3)))
+    assert truth > start * 1.005  # a drift that is there
+    assert abs(state.control.mu0 / truth - 1) < 0.02
