@@ -1,0 +1,195 @@
+"""Recorded textures (textures.hatt, rendering.layers.ar_texture): spectra against models
+built in the test, interpolation, resampling, file parsing."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+from numpy.testing import assert_allclose
+from scipy.signal import welch
+
+from rendering.layers.ar_texture import ArTextureRenderer
+from rendering.tracking.tracks import BLOCK_FIELDS, FingerBlock
+from textures.errors import TextureError
+from textures.hatt import (ArTextureLayer, lsf_to_poly, model_from_coefficients, parse_hatt_xml,
+                           poly_to_lsf)
+from textures.model import VisualHints
+
+RATE = 10_000.0
+GAIN = 0.02
+
+
+def _resonator(f_hz, r, rate=RATE):
+    """A(z) with a pole pair at f_hz, radius r: a spectral peak there."""
+    w = 2 * np.pi * f_hz / rate
+    return np.array([1.0, -2 * r * np.cos(w), r * r])
+
+
+def _ar(*peaks):
+    a = np.ones(1)
+    for f, r in peaks:
+        a = np.convolve(a, _resonator(f, r))
+    return a
+
+
+# four models at the corners of force-speed space, two triangles
+SPEEDS = [20.0, 200.0, 20.0, 200.0]
+FORCES = [0.2, 0.2, 2.0, 2.0]
+TRIANGLES = [[0, 1, 2], [1, 3, 2]]
+COEFFS = [_ar((80, 0.95), (400, 0.93)), _ar((150, 0.96), (600, 0.94)),
+          _ar((60, 0.9), (250, 0.95)), _ar((300, 0.95), (700, 0.92))]
+VARIANCES = [1e-6, 2e-6, 0.5e-6, 1.5e-6]  # outputs of std 0.1 to 0.5
+
+
+def _model():
+    return model_from_coefficients(SPEEDS, FORCES, TRIANGLES, COEFFS, VARIANCES)
+
+
+def _layer(**kw):
+    return ArTextureLayer(name="t", render="sho", region=None, blend="multiply",
+                          visual=VisualHints(), model=_model(), gain=GAIN, **kw)
+
+
+def _psd(a, variance, f, rate=RATE):
+    """One-sided PSD (units^2/Hz) of y[n] = -sum a_k y[n-k] + e[n], written out."""
+    k = np.arange(len(a))
+    response = np.exp(-2j * np.pi * np.outer(f, k) / rate) @ np.asarray(a)
+    return 2.0 * variance / (rate * np.abs(response) ** 2)
+
+
+def _block(index0, n, speed, force, touch=1, rate=RATE):
+    full = lambda v: np.full((1, n), v, dtype=np.float64)  # noqa: E731
+    arrays = dict(contact=np.ones((1, n), bool), touch_id=np.full((1, n), touch, np.int64),
+                  x_held=full(50.0), y_held=full(30.0), x_pred=full(50.0), y_pred=full(30.0),
+                  vx=full(speed), vy=full(0.0), force=full(force), touch_start=full(0.0))
+    assert set(arrays) == set(BLOCK_FIELDS)
+    return FingerBlock(index0, (index0 + np.arange(n)) / rate, (0,), **arrays)
+
+
+def _synthesise(renderer, speed, force, seconds, rate=RATE, block=5000):
+    state, out = renderer.initial_state(), []
+    for k in range(int(seconds * rate) // block):
+        mu, covers, state = renderer.render(_block(k * block, block, speed, force, rate=rate), state)
+        assert covers.all()
+        out.append(mu[0])
+    return np.concatenate(out), state
+
+
+def _db_error(mu, expected_psd_fn, rate=RATE):
+    f, p = welch(mu - mu.mean(), fs=rate, nperseg=int(rate / 10))
+    band = (f >= 20) & (f <= 800)
+    return np.abs(10 * np.log10(p[band] / expected_psd_fn(f[band])))
+
+
+@pytest.mark.parametrize("vertex", [0, 1, 3])
+def test_spectrum_at_a_vertex_matches_its_model_within_1_db(vertex):
+    renderer = ArTextureRenderer(_layer(), RATE)
+    mu, state = _synthesise(renderer, SPEEDS[vertex], FORCES[vertex], 60.0)
+    assert state.limited == 0 and np.isfinite(mu).all()
+    err = _db_error(mu, lambda f: GAIN ** 2 * _psd(COEFFS[vertex], VARIANCES[vertex], f))
+    assert err.max() < 1.0, f"worst {err.max():.2f} dB"
+
+
+def test_interpolation_is_barycentric_on_lsfs_and_continuous():
+    model = _model()
+    # inside triangle 0: weights from the triangle's own affine map, computed here
+    s, f = 65.0, 0.65
+    w1 = (s - 20.0) / 180.0
+    w2 = (f - 0.2) / 1.8
+    w = np.array([1 - w1 - w2, w1, w2])
+    poly, var = model.at(s, f)
+    lsfs = np.array([poly_to_lsf(COEFFS[i]) for i in (0, 1, 2)])
+    assert_allclose(poly, lsf_to_poly(w @ lsfs), atol=1e-12)
+    assert_allclose(var, w @ np.array(VARIANCES[:3]), rtol=1e-12)
+    # along an edge from vertex 0 to vertex 1 the spectrum moves by small steps
+    freqs = np.linspace(20, 800, 200)
+    spectra = [10 * np.log10(_psd(*model.at(sp, 0.2), freqs)) for sp in np.linspace(20, 200, 401)]
+    steps = np.abs(np.diff(spectra, axis=0)).max()
+    assert steps < 0.5
+    assert_allclose(spectra[0], 10 * np.log10(_psd(COEFFS[0], VARIANCES[0], freqs)), atol=1e-6)
+    assert_allclose(spectra[-1], 10 * np.log10(_psd(COEFFS[1], VARIANCES[1], freqs)), atol=1e-6)
+
+
+def test_synthesis_between_vertices_follows_the_blended_model():
+    renderer = ArTextureRenderer(_layer(), RATE)
+    s, f = 110.0, 1.1
+    mu, _ = _synthesise(renderer, s, f, 60.0)
+    poly, var = _model().at(s, f)
+    assert _db_error(mu, lambda fr: GAIN ** 2 * _psd(poly, var, fr)).max() < 1.0
+
+
+def test_a_model_resampled_to_5_khz_keeps_its_spectrum():
+    renderer = ArTextureRenderer(_layer(), 5_000.0)
+    mu, _ = _synthesise(renderer, SPEEDS[0], FORCES[0], 60.0, rate=5_000.0)
+    err = _db_error(mu, lambda f: GAIN ** 2 * _psd(COEFFS[0], VARIANCES[0], f), rate=5_000.0)
+    assert err.max() < 1.0, f"worst {err.max():.2f} dB"
+
+
+def test_a_finger_at_rest_feels_the_mean_only():
+    renderer = ArTextureRenderer(_layer(v_rest_mm_s=2.0), RATE)
+    mu, _, _ = renderer.render(_block(0, 500, 1.0, 0.5), renderer.initial_state())
+    assert (mu == 0.8).all()
+
+
+def test_limits_are_applied_and_counted():
+    renderer = ArTextureRenderer(_layer(mu_min=0.79, mu_max=0.81), RATE)
+    mu, state = _synthesise(renderer, 100.0, 1.0, 1.0)
+    assert mu.min() == 0.79 and mu.max() == 0.81
+    assert state.limited == int(((mu == 0.79) | (mu == 0.81)).sum()) > 0
+
+
+@given(st.lists(st.integers(1, 1999), max_size=5, unique=True))
+@settings(derandomize=True, max_examples=20, deadline=None)
+def test_any_split_into_blocks_gives_the_same_texture(cuts):
+    renderer = ArTextureRenderer(_layer(), RATE)
+    whole, _, _ = renderer.render(_block(0, 2000, 120.0, 0.8), renderer.initial_state())
+    bounds = [0, *sorted(cuts), 2000]
+    state, parts = renderer.initial_state(), []
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        mu, _, state = renderer.render(_block(a, b - a, 120.0, 0.8), state)
+        parts.append(mu)
+    assert_allclose(np.concatenate(parts, axis=1), whole, rtol=0, atol=1e-12)
+
+
+def _xml(coeffs=COEFFS, extra="", tri=((1, 2, 3), (2, 4, 3))):
+    models = "".join(
+        f"<model><ARlsf>{''.join(f'<value>{float(w)!r}</value>' for w in poly_to_lsf(a))}</ARlsf>"
+        f"<var>{float(v)!r}</var><speedMod>{s!r}</speedMod><forceMod>{f!r}</forceMod></model>"
+        for a, v, s, f in zip(coeffs, VARIANCES, SPEEDS, FORCES))
+    values = lambda xs: "".join(f"<value>{float(x)!r}</value>" for x in xs)  # noqa: E731
+    tris = "".join(f"<tri>{values(t)}</tri>" for t in tri)
+    return (f"<?xml version='1.0'?>\n<modelSet><mu>0.3</mu><numMod>4</numMod><numTri>2</numTri>"
+            f"<maxSpeed>200</maxSpeed><maxForce>2</maxForce><speedList>{values(SPEEDS)}</speedList>"
+            f"<forceList>{values(FORCES)}</forceList>{tris}<numARCoeff>4</numARCoeff>{extra}"
+            f"{models}</modelSet>")
+
+
+def test_the_toolkit_xml_form_reads_into_the_same_model():
+    model = parse_hatt_xml(_xml())
+    for s, f in ((20.0, 0.2), (110.0, 1.1), (190.0, 1.9)):
+        assert_allclose(model.at(s, f)[0], _model().at(s, f)[0], atol=1e-12)
+
+
+@pytest.mark.parametrize("text, message", [
+    (_xml(extra="<numMACoeff>3</numMACoeff>"), "ARMA models"),
+    ("<!DOCTYPE x [<!ENTITY a 'b'>]>" + _xml(), "DOCTYPE or ENTITY"),
+    (_xml(tri=((1, 2, 5),)), "vertex numbers must be integers 1 to 4"),
+    (_xml(tri=((1, 2, 2),)), "degenerate"),
+    (_xml()[:-20], r"HaTT model:2: not well-formed XML"),
+    (_xml().replace("<var>1e-06</var>", "<var>nan</var>"), "<var> missing or not a finite number"),
+    (_xml(coeffs=[COEFFS[0][:3]] + COEFFS[1:]), "model 1: ARlsf must be 4 increasing values"),
+])
+def test_bad_model_files_are_one_line_errors(text, message):
+    with pytest.raises(TextureError, match=message) as info:
+        parse_hatt_xml(text)
+    assert "\n" not in str(info.value)
+
+
+@given(st.lists(st.floats(-0.95, 0.95), min_size=1, max_size=24))
+@settings(derandomize=True, max_examples=100)
+def test_lsf_round_trip(reflections):
+    a = np.ones(1)
+    for k in reflections:  # a stable polynomial from reflection coefficients
+        a = np.append(a, 0.0) + k * np.append(a, 0.0)[::-1]
+    lsf = poly_to_lsf(a)
+    assert lsf.size == len(reflections) and (np.diff(lsf) > 0).all()
+    assert_allclose(lsf_to_poly(lsf), a, atol=1e-8)

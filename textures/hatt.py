@@ -1,0 +1,316 @@
+"""Data-driven texture models in the form of the Penn Haptic Texture Toolkit (HaTT).
+
+Culbertson, Lopez Delgado and Kuchenbecker (IEEE Haptics Symposium 2014, "One hundred
+data-driven haptic texture models and open-source methods for rendering on 3D
+objects") model a texture's recorded tool acceleration as a piecewise autoregressive
+process: one AR model per segment of the recording, stored at the normal force and
+scanning speed of that segment, the models joined by a Delaunay triangulation of
+force-speed space. To render, the measured (speed, force) is located in a triangle,
+the three vertex models are blended with barycentric weights -- their line spectral
+frequencies (LSF), which keep the blended filter stable, and their variances -- and the
+blended filter is driven with white Gaussian noise of the blended variance:
+
+    y[n] = -sum_k a_k y[n-k] + e[n],   e ~ N(0, variance),   A(z) = 1 + sum_k a_k z^-k
+
+so y has the two-sided power spectral density S(f) = variance / (fs |A(e^{j 2 pi f / fs})|^2)
+(units^2 per Hz; HaTT's unit is m/s^2). The models were made at fs = 10 kHz; the toolkit
+provides a way to resample them for other rates. frictex resamples each vertex model
+from its exact spectrum: S(f) up to the lower of the two Nyquist frequencies (nothing
+above), its autocorrelation at the new rate, and a Levinson-Durbin fit of order 4p
+(``TextureModel.resampled``): an AR(p) process seen at another rate is not AR(p), and a
+fit of order p misses the spectrum by 2.5 dB where 4p stays within 0.1 dB (test models,
+10 to 5 kHz). This is frictex's own procedure, not a copy of the toolkit's MATLAB code.
+
+Files: the toolkit's XML model files (``<modelSet>``: ``numMod``, ``numTri``,
+``maxSpeed``, ``maxForce``, ``speedList``/``forceList`` of ``<value>``, one ``<tri>`` of
+three 1-based ``<value>`` vertex numbers per triangle, ``numARCoeff``, and per
+``<model>``: ``ARlsf`` values, ``var``, ``speedMod``, ``forceMod``), read by
+:func:`read_hatt_xml`; speeds in mm/s and forces in N as the toolkit stores them. ARMA
+models (``numMACoeff`` > 0) are refused. frictex ships none of the toolkit's data: its
+licence is for non-commercial research only; users bring their own files.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import ClassVar
+
+import numpy as np
+
+from textures.errors import TextureError
+from textures.library import UnreadableText, read_utf8
+from textures.model import _LayerBase
+
+HATT_RATE_HZ = 10_000.0
+MAX_HATT_BYTES = 8 << 20
+MAX_ORDER = 100
+MAX_MODELS = 2_000
+
+
+# ---------------------------------------------------------------------------
+# AR polynomials and line spectral frequencies
+
+
+def poly_to_lsf(a) -> np.ndarray:
+    """Line spectral frequencies (rad, increasing, in (0, pi)) of a minimum-phase
+    A(z) = [1, a_1 .. a_p]: the angles of the roots of P(z) = A(z) + z^-(p+1) A(1/z) and
+    Q(z) = A(z) - z^-(p+1) A(1/z) in (0, pi); they interlace, P's first."""
+    a = np.asarray(a, dtype=np.float64)
+    ext = np.append(a, 0.0)
+    angles = []
+    for poly in (ext + ext[::-1], ext - ext[::-1]):
+        w = np.angle(np.roots(poly))
+        angles.append(w[(w > 1e-9) & (w < np.pi - 1e-9)])
+    return np.sort(np.concatenate(angles))
+
+
+def lsf_to_poly(lsf) -> np.ndarray:
+    """A(z) = [1, a_1 .. a_p] from p line spectral frequencies (the inverse of
+    :func:`poly_to_lsf`): P's roots are the odd-numbered LSFs, Q's the even ones, with
+    the trivial roots at z = -1 (P, p even) or z = +1 and -1 (Q, p odd) and z = +1 (Q, p even)."""
+    w = np.asarray(lsf, dtype=np.float64)
+    p = w.size
+    polys = []
+    for roots in (w[0::2], w[1::2]):
+        poly = np.ones(1)
+        for c in np.cos(roots):
+            poly = np.convolve(poly, (1.0, -2.0 * c, 1.0))
+        polys.append(poly)
+    if p % 2 == 0:
+        P, Q = np.convolve(polys[0], (1.0, 1.0)), np.convolve(polys[1], (1.0, -1.0))
+    else:
+        P, Q = polys[0], np.convolve(polys[1], (1.0, 0.0, -1.0))
+    return ((P + Q) / 2.0)[: p + 1]
+
+
+def ar_psd(a, variance: float, f_hz, rate_hz: float) -> np.ndarray:
+    """Two-sided power spectral density (units^2/Hz) of the AR process at f_hz."""
+    a = np.asarray(a, dtype=np.float64)
+    z = np.exp(-2j * np.pi * np.outer(np.asarray(f_hz, dtype=np.float64) / rate_hz,
+                                      np.arange(a.size)))
+    return variance / (rate_hz * np.abs(z @ a) ** 2)
+
+
+def levinson(r: np.ndarray, order: int) -> tuple[np.ndarray, float]:
+    """AR coefficients [1, a_1 .. a_order] and innovation variance from autocorrelations r[0..order]."""
+    a = np.zeros(order + 1)
+    a[0] = 1.0
+    err = float(r[0])
+    for k in range(1, order + 1):
+        acc = r[k] + np.dot(a[1:k], r[k - 1:0:-1])
+        refl = -acc / err
+        a[1:k] = a[1:k] + refl * a[k - 1:0:-1]
+        a[k] = refl
+        err *= 1.0 - refl * refl
+    return a, err
+
+
+# ---------------------------------------------------------------------------
+# The model
+
+
+@dataclass(frozen=True, eq=False)
+class TextureModel:
+    """AR models at the vertices of a force-speed triangulation (see the module docstring).
+
+    speeds_mm_s, forces_n : (M,) vertex positions. triangles : (T, 3) 0-based vertex
+    indices. lsf : (M, p) line spectral frequencies (rad). variances : (M,) innovation
+    variances. rate_hz : the rate the models were made at.
+    """
+
+    speeds_mm_s: np.ndarray
+    forces_n: np.ndarray
+    triangles: np.ndarray
+    lsf: np.ndarray
+    variances: np.ndarray
+    rate_hz: float = HATT_RATE_HZ
+    _tri: tuple = field(init=False, repr=False)
+
+    def __post_init__(self):
+        # per triangle: vertex 0 and the inverse of the 2x2 edge matrix, for barycentrics
+        # (a degenerate triangle gives inf: parse_hatt_xml refuses it)
+        s, f = self.speeds_mm_s[self.triangles], self.forces_n[self.triangles]
+        a, b = s[:, 1] - s[:, 0], s[:, 2] - s[:, 0]
+        c, d = f[:, 1] - f[:, 0], f[:, 2] - f[:, 0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = np.stack([np.stack([d, -b], -1), np.stack([-c, a], -1)], 1) / (a * d - b * c)[:, None, None]
+        object.__setattr__(self, "_tri", (s[:, 0], f[:, 0], inv))
+
+    @property
+    def order(self) -> int:
+        return int(self.lsf.shape[1])
+
+    @property
+    def scale(self) -> tuple[float, float]:
+        """Largest vertex speed and force: barycentrics are taken in space scaled by them."""
+        return float(self.speeds_mm_s.max()), float(self.forces_n.max())
+
+    def weights(self, speed_mm_s: float, force_n: float) -> tuple[np.ndarray, np.ndarray]:
+        """The three vertices (indices) and barycentric weights of (speed, force). Outside
+        the triangulation: the triangle it is least outside of, negative weights set to 0
+        and the rest renormalised (the nearest edge or vertex, continuously)."""
+        s0, f0, inv = self._tri
+        d = np.stack([speed_mm_s - s0, force_n - f0], -1)
+        uv = np.einsum("tij,tj->ti", inv, d)
+        bary = np.column_stack([1.0 - uv.sum(1), uv])
+        t = int(np.argmax(bary.min(1)))
+        w = np.maximum(bary[t], 0.0)
+        return self.triangles[t], w / w.sum()
+
+    def at(self, speed_mm_s: float, force_n: float) -> tuple[np.ndarray, float]:
+        """AR polynomial [1, a_1 .. a_p] and variance blended at (speed, force)."""
+        idx, w = self.weights(speed_mm_s, force_n)
+        return lsf_to_poly(w @ self.lsf[idx]), float(w @ self.variances[idx])
+
+    def resampled(self, rate_hz: float, grid: int = 1 << 14) -> "TextureModel":
+        """The same textures as AR models at ``rate_hz`` (see the module docstring)."""
+        if rate_hz == self.rate_hz:
+            return self
+        f = np.fft.fftfreq(grid, 1.0 / rate_hz)
+        order = min(4 * self.order, MAX_ORDER)
+        band = np.abs(f) < min(rate_hz, self.rate_hz) / 2
+        lsf, var = [], []
+        for w, v in zip(self.lsf, self.variances):
+            s = np.where(band, ar_psd(lsf_to_poly(w), v, np.abs(f), self.rate_hz), 0.0)
+            s += 1e-9 * s.max()  # an empty band above the old Nyquist: keep Levinson regular
+            r = np.fft.ifft(s).real * rate_hz
+            a, err = levinson(r, order)
+            lsf.append(poly_to_lsf(a))
+            var.append(err)
+        return TextureModel(self.speeds_mm_s, self.forces_n, self.triangles, np.array(lsf),
+                            np.array(var), float(rate_hz))
+
+
+def model_from_coefficients(speeds_mm_s, forces_n, triangles, coefficients, variances,
+                            rate_hz: float = HATT_RATE_HZ) -> TextureModel:
+    """A model from AR polynomials (rows [1, a_1 .. a_p]) instead of LSFs."""
+    return TextureModel(np.asarray(speeds_mm_s, dtype=np.float64), np.asarray(forces_n, dtype=np.float64),
+                        np.asarray(triangles, dtype=np.intp),
+                        np.array([poly_to_lsf(a) for a in coefficients]),
+                        np.asarray(variances, dtype=np.float64), rate_hz)
+
+
+# ---------------------------------------------------------------------------
+# The toolkit's XML files
+
+
+def _values(node, where: str, what: str) -> np.ndarray:
+    if node is None:
+        raise TextureError(f"{where}: missing <{what}>")
+    out = []
+    for v in node.findall("value"):
+        try:
+            x = float((v.text or "").strip())
+        except ValueError:
+            raise TextureError(f"{where}: <{what}> value {v.text!r} is not a number") from None
+        if not math.isfinite(x):
+            raise TextureError(f"{where}: <{what}> value {v.text!r} is not finite")
+        out.append(x)
+    return np.array(out)
+
+
+def _scalar(root, tag: str, where: str) -> float:
+    node = root.find(tag)
+    try:
+        x = float((node.text or "").strip()) if node is not None else None
+    except ValueError:
+        x = None
+    if x is None or not math.isfinite(x):
+        raise TextureError(f"{where}: <{tag}> missing or not a finite number")
+    return x
+
+
+def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
+    """A :class:`TextureModel` from the text of a toolkit XML file (module docstring)."""
+    if re.search(r"<!(DOCTYPE|ENTITY)", text):
+        raise TextureError(f"{where}: DOCTYPE or ENTITY declarations are not accepted in a model file")
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as exc:
+        raise TextureError(f"{where}:{exc.position[0]}: not well-formed XML ({exc})") from None
+    if root.tag != "modelSet":
+        raise TextureError(f"{where}: top element is <{root.tag}>, expected <modelSet>")
+    if root.find("numMACoeff") is not None and _scalar(root, "numMACoeff", where) > 0:
+        raise TextureError(f"{where}: ARMA models (numMACoeff > 0) are not supported; "
+                           f"frictex renders the toolkit's AR models")
+    speeds = _values(root.find("speedList"), where, "speedList")
+    forces = _values(root.find("forceList"), where, "forceList")
+    models = root.findall("model")
+    m = len(models)
+    if not 3 <= m <= MAX_MODELS or speeds.size != m or forces.size != m:
+        raise TextureError(f"{where}: {m} <model>, {speeds.size} speeds and {forces.size} forces; "
+                           f"expected the same number, 3 to {MAX_MODELS}")
+    order = int(_scalar(root, "numARCoeff", where))
+    if not 1 <= order <= MAX_ORDER:
+        raise TextureError(f"{where}: numARCoeff is {order}, expected 1 to {MAX_ORDER}")
+    lsf, var = [], []
+    for k, node in enumerate(models):
+        here = f"{where}: model {k + 1}"
+        w = _values(node.find("ARlsf"), here, "ARlsf")
+        if w.size != order or not ((w > 0) & (w < np.pi)).all() or (np.diff(w) <= 0).any():
+            raise TextureError(f"{here}: ARlsf must be {order} increasing values in (0, pi)")
+        v = _scalar(node, "var", here)
+        if v < 0:
+            raise TextureError(f"{here}: var is {v:g}, expected >= 0")
+        sp, fo = _scalar(node, "speedMod", here), _scalar(node, "forceMod", here)
+        if not (np.isclose(sp, speeds[k]) and np.isclose(fo, forces[k])):
+            raise TextureError(f"{here}: speedMod/forceMod ({sp:g}, {fo:g}) differ from the "
+                               f"speedList/forceList entry ({speeds[k]:g}, {forces[k]:g})")
+        lsf.append(w)
+        var.append(v)
+    tris = [_values(t, where, "tri") for t in root.findall("tri")]
+    if not tris or any(t.size != 3 for t in tris):
+        raise TextureError(f"{where}: expected <tri> elements of three vertex numbers")
+    tri = np.array(tris)
+    if (tri != np.round(tri)).any() or tri.min() < 1 or tri.max() > m:
+        raise TextureError(f"{where}: <tri> vertex numbers must be integers 1 to {m}")
+    model = TextureModel(speeds, forces, tri.astype(np.intp) - 1, np.array(lsf), np.array(var))
+    if not np.isfinite(model._tri[2]).all():
+        raise TextureError(f"{where}: a <tri> triangle is degenerate (its vertices are in a line)")
+    return model
+
+
+def read_hatt_xml(path: str | Path) -> TextureModel:
+    """:func:`parse_hatt_xml` on a file (regular UTF-8, at most 8 MiB)."""
+    try:
+        text = read_utf8(path, MAX_HATT_BYTES)
+    except UnreadableText as exc:
+        line = f":{exc.line}" if exc.line else ""
+        raise TextureError(f"{path}{line}: {exc}") from None
+    return parse_hatt_xml(text, str(path))
+
+
+# ---------------------------------------------------------------------------
+# The layer
+
+
+@dataclass(frozen=True)
+class ArTextureLayer(_LayerBase):
+    """A recorded texture synthesised from the finger's speed and normal force
+    (``rendering.layers.ar_texture``): mu' = mu_mean + gain * y, y the model's output
+    (m/s^2 for the toolkit's models), limited to [mu_min, mu_max] (limited samples are
+    counted in the renderer's state). Below ``v_rest_mm_s`` the texture is silent
+    (mu' = mu_mean): a still finger on a real texture feels no vibration. ``seed``
+    makes the noise, and so every replay, reproducible."""
+
+    renderer_kind: ClassVar[str] = "ar"
+
+    model: TextureModel = None  # type: ignore[assignment]
+    mu_mean: float = 0.8
+    gain: float = 0.02
+    mu_min: float = 0.6
+    mu_max: float = 1.0
+    v_rest_mm_s: float = 2.0
+    seed: int = 0
+
+    @property
+    def mu_range(self) -> tuple[float, float]:
+        return self.mu_min, self.mu_max
+
+    def mu_at(self, x, y) -> np.ndarray:
+        """mu' under a finger at rest: ``mu_mean``."""
+        return np.full(np.broadcast(np.asarray(x), np.asarray(y)).shape, self.mu_mean)
