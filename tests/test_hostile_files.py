@@ -162,6 +162,11 @@ CASES = [
     # texture files: structure, size, encoding
     Case("toml nested arrays 3000 deep", _texture("a = " + _nested("[", "]", 3000) + "\n")),
     Case("toml nested inline tables 3000 deep", _texture("a = " + _nested("{b=", "}", 3000) + "\n")),
+    Case("toml dotted key of 300,000 parts", _texture("a" + ".a" * 300_000 + " = 1\n" + HEAD)),
+    Case("toml quoted dotted key of 17 parts", _texture(".".join(['"k"'] * 17) + " = 1\n" + HEAD)),
+    Case("toml inline table of 60,000 keys", _texture(
+        "x = {" + ", ".join(f"k{i} = 1" for i in range(60_000)) + "}\n" + HEAD
+        + GRATING.format(period=5))),
     Case("toml nested arrays 40 deep", _texture("a = " + _nested("[", "]", 40) + "\n")),
     Case("toml file of 3 MiB", _texture(HEAD + "#" * (3 << 20) + "\n")),
     Case("toml name of 500 kB on one line", _texture('name = "' + "x" * 500_000 + '"\n' + HEAD

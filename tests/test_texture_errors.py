@@ -265,3 +265,19 @@ def test_fuzz_truncated_and_junk(tmp_path, cut, junk):
     path = tmp_path / "g.toml"
     path.write_bytes(GOOD.encode()[:cut] + junk)
     _assert_well_formed(path, check_scene(path))
+
+
+def test_problems_listed_per_file_are_bounded(tmp_path):
+    text = GOOD + "".join(f"[t{i}]\n" for i in range(150))
+    _, problems, _ = check(tmp_path, text)
+    assert len(problems) == 101
+    assert [p.field for p in problems[1:]] == [f"t{i}" for i in range(100)]
+    assert str(problems[0]) == f"{tmp_path / 't.toml'}: more than 100 problems; the rest are not listed"
+
+
+def test_dotted_keys_nest_at_most_16_deep(tmp_path):
+    _, problems, _ = check(tmp_path, "a" + ".b" * 16 + " = 1\n" + GOOD)
+    assert [(p.line, p.field) for p in problems] == [(1, "TOML syntax")]
+    assert problems[0].message.startswith("arrays, inline tables or dotted keys nested more than 16")
+    _, problems, _ = check(tmp_path, "a" + ".b" * 15 + " = 1\n" + GOOD)
+    assert [(p.line, p.field) for p in problems] == [(1, "a")]  # 16 parts: only unknown

@@ -415,9 +415,14 @@ class _Reader:
         self.warnings: list[Problem] = []
 
     def report(self, path: KeyPath, message: str, warning: bool = False) -> object:
-        line = self.locator.line(path) if self.locator is not None else None
-        problem = Problem(self.label, line, field_name(path), message, warning)
-        (self.warnings if warning else self.problems).append(problem)
+        found = self.warnings if warning else self.problems
+        if len(found) < MAX_PROBLEMS:
+            line = self.locator.line(path) if self.locator is not None else None
+            found.append(Problem(self.label, line, field_name(path), message, warning))
+        elif len(found) == MAX_PROBLEMS:
+            found.append(Problem(self.label, None, "", f"more than {MAX_PROBLEMS} "
+                                                       f"{'warnings' if warning else 'problems'}; "
+                                                       f"the rest are not listed", warning))
         return _BAD
 
     def table(self, value, path: KeyPath, spec: dict[str, Spec], tables=()) -> dict | None:
@@ -431,6 +436,8 @@ class _Reader:
             return None
         known = list(spec) + list(tables)
         for key in value:
+            if len(self.problems) > MAX_PROBLEMS:
+                break  # no more are listed; spare the spelling suggestions
             if key not in known:
                 self.report(path + (key,), f"unknown key{_did_you_mean(key, known)}; "
                                            f"known here: {', '.join(known)}")
@@ -1138,6 +1145,8 @@ MAX_FILE_BYTES = 1 << 20
 #: Deepest nesting of arrays and inline tables accepted (the grammar needs 3: rows of a
 #: calibration table inside [device.calibration]).
 MAX_NESTING = 16
+#: Problems (and warnings) listed per file at most: beyond, the file is not a texture file.
+MAX_PROBLEMS = 100
 
 
 def _read_text(path: Path, r: _Reader) -> str | None:
@@ -1154,8 +1163,14 @@ _LONG_DIGITS = re.compile(r"\d{%d,}" % (sys.get_int_max_str_digits() or 4300))
 
 
 def _parse_toml(text: str, r: _Reader) -> dict | None:
-    too_deep = (f"arrays or inline tables nested more than {MAX_NESTING} deep; a texture "
-                f"file needs at most 3 levels")
+    too_deep = (f"arrays, inline tables or dotted keys nested more than {MAX_NESTING} deep; "
+                f"a texture file needs at most 4 levels")
+    # checked before parsing: tomllib recurses on brackets and takes quadratic time on
+    # long dotted keys (a 20,000-part key: 9 s)
+    deep = _deepest_line(text)
+    if deep is not None:
+        r.problems.append(Problem(r.label, deep, "TOML syntax", too_deep))
+        return None
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -1166,8 +1181,8 @@ def _parse_toml(text: str, r: _Reader) -> dict | None:
             message = f"{message[:m.start()]} (column {m.group(2)})"
         r.problems.append(Problem(r.label, line, "TOML syntax", message))
         return None
-    except RecursionError:
-        r.problems.append(Problem(r.label, _deepest_line(text), "TOML syntax", too_deep))
+    except RecursionError:  # should the bracket scan above ever miss a nesting
+        r.problems.append(Problem(r.label, None, "TOML syntax", too_deep))
         return None
     except ValueError:  # tomllib reads integers through int(), which refuses very long ones
         m = _LONG_DIGITS.search(text)
@@ -1195,14 +1210,26 @@ def _depth(doc) -> int:
     return deepest
 
 
+_KEY_PART = r"""(?:[A-Za-z0-9_-]++|"[^"\n]*+"|'[^'\n]*+')"""
+#: a dotted key of more than MAX_NESTING parts (possessive, and starting only where a key
+#: can start, so that the search stays linear on any text)
+_LONG_DOTTED = re.compile(rf"(?<![A-Za-z0-9_-]){_KEY_PART}(?:\s*+\.\s*+{_KEY_PART}){{{MAX_NESTING},}}")
+
+
 def _deepest_line(text: str) -> int | None:
-    """The first line where brackets and braces open more than MAX_NESTING deep."""
+    """The first line where brackets and braces open more than MAX_NESTING deep, or that
+    holds a dotted key of more parts than that (outside strings, or inside a string that
+    looks like one: a false alarm only for a string of 17 dot-separated words)."""
+    long_key = _LONG_DOTTED.search(text)
+    key_line = text.count("\n", 0, long_key.start()) + 1 if long_key else None
     depth, in_string = 0, None
     for number, line in enumerate(text.splitlines(), start=1):
+        if number == key_line:
+            return number
         depth, in_string, peak = bracket_peak(line, depth, in_string)
         if peak > MAX_NESTING:
             return number
-    return None
+    return key_line
 
 
 def check_scene(path: str | Path) -> tuple[model.Scene | None, list[Problem], list[Problem]]:
