@@ -137,7 +137,8 @@ def test_correction_never_exceeds_slip_times_the_finger_phase_rate():
 
 
 def test_slew_offset_closed_form_against_a_sample_by_sample_loop():
-    """The vectorised fill equals the obvious per-sample recurrence."""
+    """The vectorised fill equals the obvious per-sample recurrence, position lock
+    (jumps ahead of the finger's direction, and back up to ``back``) included."""
     rng = np.random.default_rng(5)
     n = 3000
     fast = np.concatenate(([0.0], np.cumsum(rng.uniform(0, 2e-3, n))))
@@ -148,7 +149,9 @@ def test_slew_offset_closed_form_against_a_sample_by_sample_loop():
     restart = rng.random(bounds.size) < 0.1
     snap = rng.random(bounds.size) < 0.2
     lock = 0.05
-    got, end = slew_offset(bounds, target, restart, snap, fast, slow, 0.3, lock)
+    jump = rng.choice([-1.0, 0.0, 1.0], bounds.size)
+    back = 0.1
+    got, end = slew_offset(bounds, target, restart, snap, fast, slow, 0.3, lock, jump, back)
     off, seg, expected = 0.3, -1, []
     for i in range(n + 1):
         if i > 0:  # the allowance of sample i - 1 -> i, towards the current target
@@ -159,7 +162,9 @@ def test_slew_offset_closed_form_against_a_sample_by_sample_loop():
                 off += np.copysign(min(slow[i] - slow[i - 1], abs(err)), err)
         if i < n and seg + 1 < bounds.size and bounds[seg + 1] == i:
             seg += 1
-            if restart[seg] or (snap[seg] and abs((target[seg] - off + 0.5) % 1.0 - 0.5) > lock):
+            err = (target[seg] - off + 0.5) % 1.0 - 0.5
+            if (restart[seg] or (snap[seg] and abs(err) > lock)
+                    or (jump[seg] != 0 and (err * jump[seg] > 0 or abs(err) <= back))):
                 off = target[seg]
         if i < n:
             expected.append(off)
