@@ -234,3 +234,35 @@ def test_rows_held_for_reordering_are_bounded(tmp_path, monkeypatch):
 def test_the_first_problem_in_file_order_is_reported(rows, message):
     with pytest.raises(TraceError, match=message):
         parse_trace("t_s,finger,x_mm,y_mm,event\n" + rows, "<t>", strict=True)
+
+
+def _reference_touches(fingers, events, down):
+    """Events and fingers touching after each sample, one sample at a time from the rule
+    (a finger's first sample, or its first after an up, is a down unless it is an up)."""
+    down, out, touching = set(down), [], []
+    for f, e in zip(fingers, events):
+        if f not in down and e != UP:
+            e = DOWN
+        if e == UP:
+            down.discard(f)
+        else:
+            down.add(f)
+        out.append(e)
+        touching.append(len(down))
+    return out, touching, down
+
+
+@settings(max_examples=100, derandomize=True, deadline=None)
+@given(samples=st.lists(st.tuples(st.integers(0, 6), st.sampled_from([DOWN, MOVE, UP])),
+                        max_size=40),
+       down=st.sets(st.integers(0, 6), max_size=3))
+def test_event_normalisation_and_touch_count_follow_the_rule(samples, down):
+    from rendering.input.trace_file import _touch_steps
+    fingers = np.array([f for f, _ in samples], dtype=np.int64)
+    events = np.array([e for _, e in samples], dtype=np.int8)
+    carried = set(down)
+    got_events, got_touching = _touch_steps(fingers, events, carried)
+    want_events, want_touching, want_down = _reference_touches(fingers.tolist(), events.tolist(), down)
+    assert got_events.tolist() == want_events
+    assert got_touching.tolist() == want_touching
+    assert carried == want_down

@@ -173,18 +173,26 @@ def _touch_steps(finger: np.ndarray, event: np.ndarray, down: set[int]) -> tuple
     is itself an ``up``). ``down`` (updated in place) holds the fingers touching before
     these samples, for a trace read in chunks.
     """
-    ev = event.copy()
-    change = np.zeros(ev.size, dtype=np.int64)
     before = len(down)
-    for fid in np.unique(finger).tolist():
-        idx = np.flatnonzero(finger == fid)
-        e = ev[idx]
-        lifted = np.concatenate(([fid not in down], e[:-1] == UP))
-        starts = lifted & (e != UP)
-        e[starts] = DOWN
-        ev[idx] = e
-        change[idx] = starts.astype(np.int64) - (~lifted & (e == UP))
-        if e[-1] == UP:
+    # each finger's samples side by side (stable: in time order), so that "the finger's
+    # previous sample" is the one before in this order: n log n, however many ids
+    order = np.argsort(finger, kind="stable")
+    f, e = finger[order], event[order].copy()
+    first = np.ones(f.size, dtype=bool)
+    first[1:] = f[1:] != f[:-1]
+    lifted = np.empty(f.size, dtype=bool)
+    lifted[1:] = e[:-1] == UP
+    lifted[first] = ~np.isin(f[first], np.fromiter(down, dtype=np.int64, count=len(down)))
+    starts = lifted & (e != UP)
+    e[starts] = DOWN
+    ev = np.empty_like(e)
+    ev[order] = e
+    change = np.empty(f.size, dtype=np.int64)
+    change[order] = starts.astype(np.int64) - (~lifted & (e == UP))
+    last = np.ones(f.size, dtype=bool)
+    last[:-1] = first[1:]
+    for fid, lifts in zip(f[last].tolist(), (e[last] == UP).tolist()):
+        if lifts:
             down.discard(fid)
         else:
             down.add(fid)
