@@ -339,3 +339,18 @@ def test_cli_errors_are_one_line_exit_2(tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["trace", "import", str(bad), "-o", "x.csv", "--width-mm", "-3"])
     assert exc.value.code == 2 and "'-3' must be > 0" in capsys.readouterr().err
+
+
+def test_csv_import_sorts_time_that_steps_back_and_says_so(tmp_path, capsys):
+    src = tmp_path / "in.csv"
+    src.write_text("t_s,finger,x_mm,y_mm\n0,0,0,0\n0.010,0,1,0\n0.008,1,5,5\n0.5,0,2,0\n0.3,0,9,9\n")
+    out = tmp_path / "out.csv"
+    assert main(["trace", "import", str(src), "-o", str(out)]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert err == ["frictex: warning: 1 touch samples were up to 5 ms earlier than the sample "
+                   "before them and were sorted into time order",
+                   "frictex: warning: 1 touch samples went back in time by more than 5 ms and "
+                   "were dropped (the first at line 6; --strict refuses such a trace)"]
+    written = read_trace(out)
+    assert written.t_s.tolist() == [0.0, 0.008, 0.010, 0.5]
+    assert written.finger.tolist() == [0, 1, 0, 0]
