@@ -43,7 +43,7 @@ def test_bad_file_lists_every_problem_and_exits_2(files, capsys):
     out, err = capsys.readouterr()
     assert out == ""
     assert err.splitlines() == [
-        f"frictex: error: {bad}:5: display.width_px: -800 is outside [1, 16384] (px)",
+        f"frictex: error: {bad}:5: display.width_px: -800 is outside [1, 8192] (px)",
         f"frictex: error: {bad}:12: layer[1].mu: 1.5 is outside (0, 1] (relative friction mu')",
     ]
 

@@ -10,7 +10,7 @@ default shown. Layers are drawn and composed in file order (later on top).
 
     [display]                         # required: the touchscreen's active area
     width_mm, height_mm               # required, 0.001 to 10000
-    width_px, height_px               # required integers 1 to 16384 (visual layer, one-to-one maps)
+    width_px, height_px               # required integers 1 to 8192 (visual layer, one-to-one maps)
 
     [device]                          # optional table
     profile = "plate-seed003"         # one of device.profile.DEVICE_PROFILES: plate-seed003
@@ -256,7 +256,7 @@ MIN_PERIOD_MM = 0.01   # 10 um: seed 003's finest gratings are 0.6 mm
 MAX_ANGLE_DEG = 360.0
 MAX_FORCE_N = 100.0    # a fingertip presses with 0.1 to 5 N
 MAX_UM = 100.0         # plates vibrate at a few um
-MAX_PX = 16_384        # display pixels per side
+MAX_PX = 8192          # display pixels per side (an 8K screen has 7680)
 MAX_MODE_ORDER = 100
 MAX_LAYERS = 32
 #: Any other number: at most this in magnitude.
