@@ -193,3 +193,13 @@ def test_lsf_round_trip(reflections):
     lsf = poly_to_lsf(a)
     assert lsf.size == len(reflections) and (np.diff(lsf) > 0).all()
     assert_allclose(lsf_to_poly(lsf), a, atol=1e-8)
+
+
+def test_the_noise_is_standard_white_and_keyed_by_touch():
+    from rendering.layers.ar_texture import gaussian_noise
+
+    z = gaussian_noise(0, 0, 1, 0, 200_000)
+    assert abs(z.mean()) < 0.01 and abs(z.std() - 1.0) < 0.01
+    assert abs(np.corrcoef(z[:-1], z[1:])[0, 1]) < 0.01
+    assert_allclose(gaussian_noise(0, 0, 1, 1000, 10), z[1000:1010], rtol=0, atol=0)
+    assert abs(np.corrcoef(z[:10_000], gaussian_noise(0, 0, 2, 0, 10_000))[0, 1]) < 0.05

@@ -40,6 +40,7 @@ from pathlib import Path
 from typing import ClassVar
 
 import numpy as np
+from numba import njit
 
 from textures.errors import TextureError
 from textures.library import UnreadableText, read_utf8
@@ -68,23 +69,36 @@ def poly_to_lsf(a) -> np.ndarray:
     return np.sort(np.concatenate(angles))
 
 
+@njit(cache=True)
 def lsf_to_poly(lsf) -> np.ndarray:
     """A(z) = [1, a_1 .. a_p] from p line spectral frequencies (the inverse of
     :func:`poly_to_lsf`): P's roots are the odd-numbered LSFs, Q's the even ones, with
     the trivial roots at z = -1 (P, p even) or z = +1 and -1 (Q, p odd) and z = +1 (Q, p even)."""
-    w = np.asarray(lsf, dtype=np.float64)
-    p = w.size
-    polys = []
-    for roots in (w[0::2], w[1::2]):
-        poly = np.ones(1)
-        for c in np.cos(roots):
-            poly = np.convolve(poly, (1.0, -2.0 * c, 1.0))
-        polys.append(poly)
-    if p % 2 == 0:
-        P, Q = np.convolve(polys[0], (1.0, 1.0)), np.convolve(polys[1], (1.0, -1.0))
-    else:
-        P, Q = polys[0], np.convolve(polys[1], (1.0, 0.0, -1.0))
-    return ((P + Q) / 2.0)[: p + 1]
+    p = lsf.size
+    halves = []
+    for first in (0, 1):
+        poly = np.zeros(p + 2)
+        poly[0] = 1.0
+        degree = 0
+        for k in range(first, p, 2):  # multiply by 1 - 2 cos(w) z^-1 + z^-2
+            c = -2.0 * np.cos(lsf[k])
+            for d in range(degree + 2, 1, -1):
+                poly[d] += c * poly[d - 1] + poly[d - 2]
+            poly[1] += c * poly[0]
+            degree += 2
+        halves.append(poly)
+    P, Q = halves
+    # the trivial factors: P (1 + z^-1) and Q (1 - z^-1) for p even, Q (1 - z^-2) for p odd
+    a = np.empty(p + 1)
+    for d in range(p + 1):
+        if p % 2 == 0:
+            pd = P[d] + (P[d - 1] if d > 0 else 0.0)
+            qd = Q[d] - (Q[d - 1] if d > 0 else 0.0)
+        else:
+            pd = P[d]
+            qd = Q[d] - (Q[d - 2] if d > 1 else 0.0)
+        a[d] = (pd + qd) / 2.0
+    return a
 
 
 def ar_psd(a, variance: float, f_hz, rate_hz: float) -> np.ndarray:
@@ -107,6 +121,36 @@ def levinson(r: np.ndarray, order: int) -> tuple[np.ndarray, float]:
         a[k] = refl
         err *= 1.0 - refl * refl
     return a, err
+
+
+@njit(cache=True)
+def _barycentric(s0, f0, inv, speed, force):
+    """(triangle, weights (3,)) of (speed, force); see ``TextureModel.weights``."""
+    best, best_t = -np.inf, 0
+    w = np.zeros(3)
+    for t in range(s0.size):
+        ds, df = speed - s0[t], force - f0[t]
+        u = inv[t, 0, 0] * ds + inv[t, 0, 1] * df
+        v = inv[t, 1, 0] * ds + inv[t, 1, 1] * df
+        lowest = min(1.0 - u - v, u, v)
+        if lowest > best:
+            best, best_t = lowest, t
+            w[0], w[1], w[2] = 1.0 - u - v, u, v
+    w = np.maximum(w, 0.0)
+    return best_t, w / w.sum()
+
+
+@njit(cache=True)
+def blend_at(s0, f0, inv, triangles, lsf, variances, speed, force):
+    """The toolkit's blend at (speed, force): barycentric weights on the three vertices'
+    LSFs and variances. Returns (A(z) = [1, a_1 .. a_p], variance)."""
+    t, w = _barycentric(s0, f0, inv, speed, force)
+    mixed = np.zeros(lsf.shape[1])
+    variance = 0.0
+    for k in range(3):
+        mixed += w[k] * lsf[triangles[t, k]]
+        variance += w[k] * variances[triangles[t, k]]
+    return lsf_to_poly(mixed), variance
 
 
 # ---------------------------------------------------------------------------
@@ -154,17 +198,18 @@ class TextureModel:
         the triangulation: the triangle it is least outside of, negative weights set to 0
         and the rest renormalised (the nearest edge or vertex, continuously)."""
         s0, f0, inv = self._tri
-        d = np.stack([speed_mm_s - s0, force_n - f0], -1)
-        uv = np.einsum("tij,tj->ti", inv, d)
-        bary = np.column_stack([1.0 - uv.sum(1), uv])
-        t = int(np.argmax(bary.min(1)))
-        w = np.maximum(bary[t], 0.0)
-        return self.triangles[t], w / w.sum()
+        t, w = _barycentric(s0, f0, inv, float(speed_mm_s), float(force_n))
+        return self.triangles[t], w
+
+    @property
+    def arrays(self) -> tuple:
+        """What :func:`blend_at` needs, in its order."""
+        s0, f0, inv = self._tri
+        return s0, f0, inv, self.triangles, self.lsf, self.variances
 
     def at(self, speed_mm_s: float, force_n: float) -> tuple[np.ndarray, float]:
         """AR polynomial [1, a_1 .. a_p] and variance blended at (speed, force)."""
-        idx, w = self.weights(speed_mm_s, force_n)
-        return lsf_to_poly(w @ self.lsf[idx]), float(w @ self.variances[idx])
+        return blend_at(*self.arrays, float(speed_mm_s), float(force_n))
 
     def resampled(self, rate_hz: float, grid: int = 1 << 14) -> "TextureModel":
         """The same textures as AR models at ``rate_hz`` (see the module docstring)."""

@@ -229,7 +229,8 @@ class HeightLayer(_LayerBase):
         mu' = mu_rest + (mu_rest - mu_min) tanh(gain s / (mu_rest - mu_min))   s < 0
 
     so d mu'/d s = ``gain`` at s = 0, and mu' never leaves [mu_min, mu_max] (no clamp
-    needed). ``mu_rest`` < 1 is what leaves room to raise friction while climbing; the
+    needed); mu_min < mu_rest < mu_max (the loader checks it; the magnitude rendering
+    never uses the lower branch, so mu_min = mu_rest is allowed there). ``mu_rest`` < 1 is what leaves room to raise friction while climbing; the
     layer covers its whole region (the display by default) at mu_rest, so that nothing
     steps at the edge of the shape.
     """
@@ -255,8 +256,6 @@ class HeightLayer(_LayerBase):
     def mu_of_slope(self, slope) -> np.ndarray:
         """mu' for slope s (the class docstring's saturation)."""
         s = np.asarray(slope, dtype=np.float64)
-        up = self.mu_max - self.mu_rest
-        down = self.mu_rest - self.mu_min
-        span = np.where(s >= 0.0, up, down)
-        safe = np.where(span > 0.0, span, 1.0)
-        return self.mu_rest + np.where(span > 0.0, span * np.tanh(self.gain * s / safe), 0.0)
+        span = np.where(s >= 0.0, self.mu_max - self.mu_rest, self.mu_rest - self.mu_min)
+        # a zero span (mu_rest at a limit) gives 0 * tanh(+-big) = 0 there, never NaN
+        return self.mu_rest + span * np.tanh(self.gain * s / np.maximum(span, 1e-300))

@@ -21,19 +21,22 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from rendering.tracking.tracks import FingerBlock
+
+TRIGGER_CODES = {"down": 0, "lift": 1, "edge": 2, "force": 3}
 
 
 @dataclass(frozen=True)
 class FingerPrev:
-    """One finger's last output sample."""
+    """One finger's last output sample: touching, touch id, inside the region, and the
+    trigger's flag (edge: on the normal's side; force: at or above the threshold)."""
 
     contact: bool = False
     touch_id: int = -1
-    x: float = 0.0
-    y: float = 0.0
-    force: float = 0.0
+    inside: bool = False
+    flag: bool = False
 
 
 @dataclass(frozen=True)
@@ -45,12 +48,41 @@ class ClipState:
     fingers: dict = field(default_factory=dict)
 
 
-def _previous(row: np.ndarray, first) -> np.ndarray:
-    """The array shifted one sample later, ``first`` at sample 0."""
-    out = np.empty_like(row)
-    out[0] = first
-    out[1:] = row[:-1]
-    return out
+@njit(cache=True)
+def _fired(trigger, contact, touch_id, inside, flag, prev_contact, prev_touch, prev_inside,
+           prev_flag):
+    """bool (n,): the trigger fires for some finger at each sample (module docstring)."""
+    fingers, n = contact.shape
+    fired = np.zeros(n, dtype=np.bool_)
+    for i in range(fingers):
+        c0, t0, in0, f0 = prev_contact[i], prev_touch[i], prev_inside[i], prev_flag[i]
+        for j in range(n):
+            c, t, inn, f = contact[i, j], touch_id[i, j], inside[i, j], flag[i, j]
+            same = c and c0 and t == t0
+            if trigger == 0:
+                event = c and not same and inn
+            elif trigger == 1:
+                event = c0 and not same and in0
+            elif trigger == 2:
+                event = same and f != f0 and inn
+            else:
+                event = same and f and not f0 and inn
+            fired[j] |= event
+            c0, t0, in0, f0 = c, t, inn, f
+    return fired
+
+
+@njit(cache=True)
+def _play(fired, index0, start, samples, mu, playing):
+    """Fill mu and playing (n,) from the clip started at output index ``start`` (-1:
+    none); an event at sample j restarts it at j + 1. Returns the start after the block."""
+    for j in range(fired.size):
+        offset = index0 + j - start
+        playing[j] = start >= 0 and offset < samples.size
+        mu[j] = samples[offset] if playing[j] else 1.0
+        if fired[j]:
+            start = index0 + j + 1
+    return start
 
 
 class ClipRenderer:
@@ -58,51 +90,35 @@ class ClipRenderer:
 
     def __init__(self, layer, rate_hz: float):
         self.layer = layer
+        self.trigger = TRIGGER_CODES[layer.trigger]
         self.samples, self.clipped = layer.clip.sample(rate_hz)
 
     def initial_state(self) -> ClipState:
         return ClipState()
 
-    def _events(self, block: FingerBlock, i: int, prev: FingerPrev) -> np.ndarray:
-        """bool (n,): the trigger fires for finger row i at each sample."""
+    def _flag(self, block: FingerBlock) -> np.ndarray:
         layer = self.layer
-        c, tid = block.contact[i], block.touch_id[i]
-        x, y = block.x_pred[i], block.y_pred[i]
-        c0 = _previous(c, prev.contact)
-        same = c & c0 & (tid == _previous(tid, prev.touch_id))
-        if layer.trigger == "down":
-            return c & ~same & layer.in_region(x, y)
-        if layer.trigger == "lift":
-            x0, y0 = _previous(x, prev.x), _previous(y, prev.y)
-            return c0 & ~same & layer.in_region(x0, y0)
         if layer.trigger == "edge":
-            side = layer.side(x, y)
-            return same & (side != layer.side(_previous(x, prev.x), _previous(y, prev.y))) \
-                & layer.in_region(x, y)
-        f = block.force[i]
-        with np.errstate(invalid="ignore"):
-            above = f >= layer.force_n
-            was = _previous(f, prev.force) >= layer.force_n
-        return same & above & ~was & layer.in_region(x, y)
+            return layer.side(block.x_pred, block.y_pred)
+        if layer.trigger == "force":
+            with np.errstate(invalid="ignore"):
+                return block.force >= layer.force_n
+        return np.zeros(block.contact.shape, dtype=bool)
 
     def render(self, block: FingerBlock, state: ClipState):
         """mu' (F, n) and coverage (F, n): the clip under every touching finger while it plays."""
-        n = block.n
-        fired = np.zeros(n, dtype=bool)
-        fingers = {}
-        for i, fid in enumerate(block.ids):
-            fired |= self._events(block, i, state.fingers.get(fid, FingerPrev()))
-            fingers[fid] = FingerPrev(bool(block.contact[i, -1]), int(block.touch_id[i, -1]),
-                                      float(block.x_pred[i, -1]), float(block.y_pred[i, -1]),
-                                      float(block.force[i, -1]))
-        index = block.index0 + np.arange(n)
-        marks = np.where(fired, index + 1, -1)
-        latest = np.maximum.accumulate(marks)
-        start = np.maximum(_previous(latest, -1), state.start)  # an event starts the next sample
-        offset = index - start
-        playing = (start >= 0) & (offset < self.samples.size)
-        mu_row = np.where(playing, self.samples[np.clip(offset, 0, self.samples.size - 1)], 1.0)
+        inside = self.layer.in_region(block.x_pred, block.y_pred)
+        flag = self._flag(block)
+        prev = [state.fingers.get(fid, FingerPrev()) for fid in block.ids]
+        fired = _fired(self.trigger, block.contact, block.touch_id, inside, flag,
+                       np.array([p.contact for p in prev], dtype=bool),
+                       np.array([p.touch_id for p in prev], dtype=np.int64),
+                       np.array([p.inside for p in prev], dtype=bool),
+                       np.array([p.flag for p in prev], dtype=bool))
+        mu_row, playing = np.empty(block.n), np.empty(block.n, dtype=bool)
+        start = _play(fired, block.index0, state.start, self.samples, mu_row, playing)
+        fingers = {fid: FingerPrev(bool(block.contact[i, -1]), int(block.touch_id[i, -1]),
+                                   bool(inside[i, -1]), bool(flag[i, -1]))
+                   for i, fid in enumerate(block.ids)}
         covers = block.contact & playing
-        new_start = max(state.start, int(latest[-1]))
-        return (np.broadcast_to(mu_row, covers.shape), covers,
-                ClipState(start=new_start, fingers=fingers))
+        return np.broadcast_to(mu_row, covers.shape), covers, ClipState(start, fingers)
