@@ -34,25 +34,44 @@ def test_measured_force_is_shared_among_the_touching_fingers():
 
 def test_live_demo_uses_a_simulated_force_sensor():
     """The sim device reports 0.8 N; the touch says 0.1 N. At 0.8 N seed 003's asymptote
-    is 0.904, so mu' 0.7 is out of reach: the plate goes to its limit (counted)."""
+    is 0.904, so mu' 0.7 is out of reach: the plate goes to its limit (counted). The
+    thread runs on a clock the test drives (sleeping advances it), so 0.3 s of output is
+    0.3 s however busy the machine is."""
     proc, path = start_sim_device(1, 10_000.0, extra=("--force", "0.8"))
     sink = CommandSink(lambda: open_port(path), 1, 10_000.0, paced=False, label="sim",
                        process=proc)
-    outs = []
-    thread = HapticThread(grating_scene(5.0, mu_low=0.7), sink=sink,
-                          recorder=lambda out, commands: outs.append(commands))
+    sent = []
+
+    class Keep:
+        def write(self, out, commands_um):
+            sent.append(commands_um.copy())
+
+        def commit(self):
+            pass
+
+        abort = commit
+
+    now = [0.0]
+    holder = {}
+
+    def sleep(dt):
+        now[0] += dt
+        if now[0] >= 0.3:
+            holder["thread"].stop()
+
     try:
-        deadline = time.monotonic() + 5.0
+        deadline = time.monotonic() + 10.0
         while sink.device_force_n() is None and time.monotonic() < deadline:
             time.sleep(0.01)
         assert sink.device_force_n() == 0.8
-        thread.start()
-        thread.touch(0, 1.0, 30.0, 0.1, "down")
-        time.sleep(0.2)
+        thread = HapticThread(grating_scene(5.0, mu_low=0.7), sink=sink, recorder=Keep(),
+                              clock=lambda: now[0], sleep=sleep)
+        holder["thread"] = thread
+        thread.touch_at(0.0, 0, 1.0, 30.0, 0.1, 0)
+        thread.run()  # the loop in this thread: closes the link when it stops
     finally:
-        thread.stop()
-        thread.join(timeout=2)
         sink.close()
-    commands = np.concatenate(outs)[-500:, 0]
+    assert thread.error is None
+    commands = np.concatenate(sent)[-500:, 0]
     assert_allclose(commands, 2.5)
     assert thread.stats.clamps.unreachable > 0

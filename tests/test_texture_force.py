@@ -114,4 +114,4 @@ def test_validate_command_exits_2_with_one_line_per_problem(tmp_path, capsys):
     path.write_text(HEAD.format(width=108, profile="plate-seed003") + LAYERS, encoding="utf-8")
     assert main(["validate", str(path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 3 and all(line.startswith(str(path)) for line in err)
+    assert len(err) == 3 and all(line.startswith(f"frictex: error: {path}") for line in err)
