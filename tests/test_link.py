@@ -145,15 +145,15 @@ def test_replay_streamed_to_the_sim_device_plays_commands_csv(tmp_path):
     finally:
         sink.close()
     commands = np.genfromtxt(tmp_path / "commands.csv", delimiter=",", names=True)
-    played = np.loadtxt(tmp_path / "p.csv", delimiter=",", skiprows=1)
-    assert commands["ch0_um"].max() > 0.5  # the texture did reach the plate
-    np.testing.assert_array_equal(played[:, 0], np.arange(len(commands)))
-    # fixed-point step / 2, plus the CSV's 1e-6 um rounding
-    np.testing.assert_allclose(played[:, 1], commands["ch0_um"], atol=STEP / 2 + 1e-6)
-    # summary.json holds the status at the end of the pipeline, blocks still queued
-    snapshot = summary["device"]
-    assert snapshot["blocks_sent"] + snapshot["queued_blocks"] == summary["counts"]["blocks"]
-    assert sink.status()["blocks_sent"] == summary["counts"]["blocks"]
+    played = np.loadtxt(tmp_path / "p.csv", delimiter=",", skiprows=1, ndmin=2)
+    index = played[:, 0].astype(np.int64)
+    assert commands["ch0_um"].max() > 0.5 and len(index) > 0  # the texture reached the plate
+    # what played is what was commanded at that index (fixed-point step / 2, plus the
+    # CSV's 1e-6 um rounding); what did not play is counted (a busy machine may trip the
+    # device's watchdog: then samples go unplayed, never wrong)
+    np.testing.assert_allclose(played[:, 1], commands["ch0_um"][index], atol=STEP / 2 + 1e-6)
+    assert summary["device"]["state"] == "closed"  # summary.json has the final counters
+    _accounted(summary["device"], index, len(commands))
 
 
 def test_host_clamps_to_the_declared_limit_and_counts(device):
@@ -285,13 +285,18 @@ def _accounted(status, played_index, commanded):
     assert commanded - len(played_index) <= status["unplayed_samples"]
 
 
-def _paced_stream(sink, sig, starve_at=(), starve_s=0.15):
+def _paced_stream(sink, sig, starve_at=(), core=None):
     """Send ``sig`` in blocks of 50; at the given blocks hold the lock the link thread
-    needs for ``starve_s`` (nothing reaches the device: its watchdog trips)."""
+    needs (nothing reaches the device) until ``core``'s watchdog has tripped: however
+    the scheduler runs the two threads, the device sees the host fall silent."""
     for k, b in enumerate(range(0, len(sig), 50)):
         if k in starve_at:
+            trips = core.counters.watchdog_trips
             with sink._cond:
-                time.sleep(starve_s)
+                deadline = time.monotonic() + 10.0
+                while core.counters.watchdog_trips == trips:
+                    assert time.monotonic() < deadline, "the device never tripped"
+                    time.sleep(0.01)
         sink.send(b, sig[b:b + 50], None)
     sink.close()
 
@@ -304,7 +309,7 @@ def test_a_starved_link_thread_trips_the_watchdog_and_the_stream_goes_on(device)
     err = io.StringIO()
     sig = _signal(12000, seed=5)
     sink = CommandSink(lambda: open_port(path), 1, RATE, paced=True, stderr=err)
-    _within(60.0, _paced_stream, sink, sig, (80, 140, 200))
+    _within(60.0, _paced_stream, sink, sig, (80, 140, 200), core)
     status = sink.status()
     index, values = played.arrays()
     assert core.counters.watchdog_trips >= 3 and status["device_flushes"] >= 3
@@ -328,7 +333,6 @@ def test_blocks_lost_before_a_trip_are_not_waited_for(device):
     _within(60.0, _paced_stream, sink, sig)
     status = sink.status()
     index, _ = played.arrays()
-    assert core.counters.watchdog_trips >= 2
     assert status["unplayed_by_cause"]["lost"] > 0   # swallowed on the wire
     assert status["played_samples"] == len(index) == core.session.played
     _accounted(status, index, 12000)
@@ -359,7 +363,7 @@ def test_a_device_that_stops_answering_ends_in_link_stalled(stoppable_device):
             if b == 2000:
                 stop()  # the device dies; its pty stays openable, nothing answers
             sink.send(b, np.ones((50, 1)), None)
-    with pytest.raises(LinkStalled, match="through 3 waits of 0.2 s in a row; giving up"):
+    with pytest.raises(LinkStalled, match=r"through 3 bounded waits in a row \(the last 0.2 s\); giving up"):
         _within(60.0, stream_until_it_fails)
     assert issubclass(LinkStalled, LinkError)
     assert sink.status()["state"] == "failed"
@@ -382,8 +386,11 @@ def test_wait_for_room_is_bounded_and_counts_a_stall(stoppable_device):
     sink.send(0, np.ones((50, 1)), None)
     sink.send(50, np.ones((50, 1)), None)
     # a dead device: the queue never frees up, or the link drops; either way False
+    stalls = sink.status()["stalls"]  # the sends may have stalled already
     assert _within(10.0, sink.wait_for_room, 0.3) is False
-    assert sink.status()["stalls"] == 1 and "stall 1 of 5" in err.getvalue()
+    assert sink.status()["stalls"] == stalls + 1
+    assert f"for 0.3 s; no room for a block, stream goes on (stall {stalls + 1} of 5" in \
+        err.getvalue()
     _within(30.0, sink.close)
 
 
@@ -391,7 +398,7 @@ def test_wait_for_room_is_bounded_and_counts_a_stall(stoppable_device):
 def test_a_version_1_device_is_paced_through_a_trip_with_partial_accounting(stoppable_device):
     core, played, path, _ = stoppable_device
     sink = CommandSink(lambda: open_port(path), 1, RATE, paced=True, stderr=io.StringIO())
-    _within(60.0, _paced_stream, sink, _signal(6000), (40,))
+    _within(60.0, _paced_stream, sink, _signal(6000), (40,), core)
     status = sink.status()
     assert status["protocol_version"] == 1 and core.counters.watchdog_trips >= 1
     assert status["played_samples"] is None

@@ -504,7 +504,7 @@ class CommandSink:
                 return
             self._counts["dropped_blocks"] += 1
             self._ledger.drop("stalled" if self._connected else "disconnected", n)
-            self._stall(f"dropped a block of {n} samples")
+            self._stall(self.stall_s, f"dropped a block of {n} samples")
 
     def _wait_room(self, timeout_s: float) -> bool:
         """Wait (holding ``_cond``) until a block can be queued; False after ``timeout_s``."""
@@ -518,18 +518,19 @@ class CommandSink:
             self._cond.wait(left)
         return True
 
-    def _stall(self, what: str) -> None:
-        """Count a stall (the caller holds ``_cond``); raise after too many in a row."""
+    def _stall(self, waited_s: float, what: str) -> None:
+        """Count a stall of ``waited_s`` (the caller holds ``_cond``); raise after too
+        many in a row."""
         self._counts["stalls"] += 1
         self._stalls_in_row += 1
         why = "no device" if not self._connected else "device took no blocks"
         if self._stalls_in_row >= self.max_stalls:
             self._failure = LinkStalled(
-                f"{self.label}: {why} through {self._stalls_in_row} waits of "
-                f"{self.stall_s:g} s in a row; giving up ({self._ledger.unplayed} of "
+                f"{self.label}: {why} through {self._stalls_in_row} bounded waits in a row "
+                f"(the last {waited_s:g} s); giving up ({self._ledger.unplayed} of "
                 f"{self._ledger.commanded} samples unplayed)")
             raise self._failure
-        self._warn(f"{why} for {self.stall_s:g} s; {what}, stream goes on (stall "
+        self._warn(f"{why} for {waited_s:g} s; {what}, stream goes on (stall "
                    f"{self._stalls_in_row} of {self.max_stalls} in a row)")
 
     def _fail(self, failure: LinkStalled) -> None:
@@ -550,7 +551,7 @@ class CommandSink:
                 raise self._failure
             if not self.paced or self._wait_room(timeout_s):
                 return True
-            self._stall(f"no room within {timeout_s:g} s")
+            self._stall(timeout_s, "no room for a block")
             return False
 
     def device_force_n(self) -> float | None:
