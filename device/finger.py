@@ -148,6 +148,19 @@ def true_mu(w_um, normal_n, speed_mm_s, t_s, finger: FingerParams) -> np.ndarray
     return (1.0 - a) * np.exp(-b * np.asarray(w_um, dtype=np.float64)) + a  # seed 003, eq 2
 
 
+def true_amplitude(mu, normal_n, speed_mm_s, t_s, finger: FingerParams, limit_um: float
+                   ) -> np.ndarray:
+    """The amplitude (um, in [0, limit]) giving this finger mu' (seed 003, eq 3 with its
+    own constants): what a controller knowing the finger exactly would ask for."""
+    m = moisture(t_s, finger)
+    a = np.minimum(finger.k_per_n * (1.0 + finger.k_drift * m) * np.asarray(normal_n), 0.98)
+    b = finger.b_per_um / (1.0 + np.abs(np.asarray(speed_mm_s)) / finger.v_c_mm_s)
+    reduction = np.clip((1.0 - np.asarray(mu, dtype=np.float64)) / (1.0 - a), 0.0, 1.0)
+    with np.errstate(divide="ignore"):
+        w = -np.log1p(-reduction) / b
+    return np.minimum(w, limit_um)
+
+
 def rest_mu(t_s, finger: FingerParams) -> np.ndarray:
     """Friction coefficient at rest mu0(t) (module docstring, step 3)."""
     return finger.mu0 * (1.0 + finger.mu0_drift * moisture(t_s, finger))
@@ -196,7 +209,7 @@ class FingerPlant:
         self.rate_hz = float(rate_hz)
         self.limit_um = float(limit_um)
         self.seed = int(seed)
-        self._plate = pole(sensor.plate_bw_hz, rate_hz)
+        self.plate_pole = pole(sensor.plate_bw_hz, rate_hz)
         self._skin = pole(sensor.skin_bw_hz, rate_hz)
         self._sensor = pole(sensor.sensor_bw_hz, rate_hz)
         self.delay_samples = int(round(sensor.sensor_delay_s * rate_hz))
@@ -210,7 +223,7 @@ class FingerPlant:
         cmd = np.clip(np.nan_to_num(np.asarray(commands_um, dtype=np.float64)), 0.0, self.limit_um)
         n = cmd.size
         t = (index0 + np.arange(n)) / self.rate_hz
-        w, zp = lowpass(cmd, self._plate, state.plate)
+        w, zp = lowpass(cmd, self.plate_pole, state.plate)
         speed = np.abs(np.asarray(speed_mm_s, dtype=np.float64))
         force = np.maximum(np.asarray(normal_n, dtype=np.float64), 0.0)
         mu = true_mu(w, force, speed, t, self.finger)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from device.finger import FingerPlant, rest_mu, true_mu
+from device.finger import FingerPlant, lowpass, rest_mu, true_amplitude, true_mu
 from rendering.control.loop import ForceReport
 
 
@@ -22,8 +22,10 @@ class FingerSink:
     """The plate under one finger. ``speed_of(t_s)``, ``force_of(t_s)``: the finger's true
     sliding speed (mm/s) and normal force (N) at output times (arrays (n,)).
 
-    Keeps per touching sample: target mu', delivered mu', the finger's lowest reachable
-    mu' (amplitude limit), true speed, lateral force at the finger (N), time (s).
+    Keeps per touching sample: target mu', delivered mu', ``best``: what a controller
+    knowing this finger exactly would deliver through the plate's amplitude loop (the
+    finger's own inverse of the target, clipped to the limit, through the loop's
+    low-pass), true speed and normal force, mu0 (the finger's friction at rest), time (s).
     """
 
     def __init__(self, plant: FingerPlant, speed_of, force_of, sensor_dead_after_s=None):
@@ -33,8 +35,9 @@ class FingerSink:
         self.force_of = force_of
         self.dead_after_s = sensor_dead_after_s
         self.report: ForceReport | None = None
-        self.rows: dict[str, list] = {k: [] for k in ("t", "target", "delivered", "floor",
+        self.rows: dict[str, list] = {k: [] for k in ("t", "target", "delivered", "best",
                                                        "speed", "force", "mu0")}
+        self._ideal = 0.0  # the ideal controller's plate amplitude (um) after the last block
 
     def write(self, out, commands_um) -> None:
         t = out.t_s
@@ -45,15 +48,19 @@ class FingerSink:
                                             self.state)
         dead = self.dead_after_s is not None and t.size and t[0] >= self.dead_after_s
         self.report = None if dead else ForceReport(out.index0, block.lateral_n, block.normal_n)
+        finger = self.plant.finger
+        row = int(np.argmax(out.contact.any(axis=1))) if touching.any() else 0
+        target = out.mu_target[row] if touching.any() else np.ones(t.size)
+        ideal = np.where(touching, true_amplitude(target, force, speed, t, finger,
+                                                  self.plant.limit_um), 0.0)
+        ideal, self._ideal = lowpass(ideal, self.plant.plate_pole, self._ideal)
         if touching.any():
-            row = int(np.argmax(out.contact.any(axis=1)))
             keep = touching
-            finger = self.plant.finger
             self.rows["t"].append(t[keep])
-            self.rows["target"].append(out.mu_target[row][keep])
+            self.rows["target"].append(target[keep])
             self.rows["delivered"].append(block.delivered_mu[keep])
-            self.rows["floor"].append(true_mu(self.plant.limit_um, force[keep], speed[keep],
-                                              t[keep], finger))
+            self.rows["best"].append(true_mu(ideal[keep], force[keep], speed[keep], t[keep],
+                                             finger))
             self.rows["speed"].append(speed[keep])
             self.rows["force"].append(force[keep])
             self.rows["mu0"].append(rest_mu(t[keep], finger))

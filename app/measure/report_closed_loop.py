@@ -12,10 +12,11 @@ Measured, over the samples where the finger touches and slides (>= 5 mm/s):
 
 - ``rms``: RMS of delivered mu' (what the simulated finger gets) minus the target mu'
   (the pipeline's composed target at that sample);
-- ``rms_reachable``: the same against the best the plate can deliver: the target clipped
-  to the lowest mu' this finger can get at the amplitude limit at that moment, through the
-  plate's 400 Hz amplitude loop (seed 003, Fig. 3b) -- the part no controller of the
-  amplitude command can fix removed; the ratios of the targets are judged on this one;
+- ``rms_reachable``: the same against the best the plate can deliver: what a controller
+  knowing this finger exactly delivers (its own inverse of the target, clipped to the
+  amplitude limit, through the plate's 400 Hz amplitude loop of seed 003, Fig. 3b) --
+  the part no controller of the amplitude command can fix removed; the ratios of the
+  targets are judged on this one;
 - ``noise``: the lateral force noise the loop adds (N RMS): the delivered friction force
   of the run against the same run with a noiseless sensor, adaptive mode only, as a
   fraction of the mean friction force, against the Weber fraction 0.11 for detecting a
@@ -36,7 +37,7 @@ from app.engine.driver import drive
 from app.engine.sources import TraceSource
 from app.measure.closed_loop_sim import FingerSink, LoopStage
 from app.measure.report_matrix import load
-from device.finger import FingerPlant, SensorParams, draw_finger, lowpass, pole, true_mu
+from device.finger import FingerPlant, SensorParams, draw_finger, true_mu
 from device.friction import forward_mu
 from rendering.control.margins import margins
 from rendering.input.trace_synth import make_motion, sample, truth
@@ -105,12 +106,8 @@ def score(run: Run) -> dict:
     a = sink.arrays()
     slide = a["speed"] >= SLIDING_MM_S
     err = a["delivered"][slide] - a["target"][slide]
-    best = lowpass(np.maximum(a["target"], a["floor"]), pole(SensorParams().plate_bw_hz, RATE_HZ),
-                   1.0)[0]
-    reach = a["delivered"][slide] - best[slide]
-    out = {"rms": _rms(err), "rms_reachable": _rms(reach),
-           "unreachable_share": float(np.mean(a["target"][slide] < a["floor"][slide]))
-           if slide.any() else 0.0}
+    reach = a["delivered"][slide] - a["best"][slide]
+    out = {"rms": _rms(err), "rms_reachable": _rms(reach)}
     control = state.control
     if control is not None:
         out.update(fallbacks=control.fallbacks, log_c=control.log_c, mu0_estimate=control.mu0,

@@ -12,7 +12,9 @@ with several fingers down the loop holds its state and the block is fed forward 
    mu'_m = F_t / (F_n mu0) (seed 003, eq 1).
 2. **Feedback** on the depth of modulation: the reduction asked, 1 - mu'_target, passed
    through the same chain, against the reduction measured, 1 - mu'_m, gives the block's
-   delivered/asked ratio g (least squares over the block). An integrator on the log of a
+   delivered/asked ratio g (the median over the samples asking for at least
+   ``min_reduction``, leaving out samples reading mu'_m < ``min_mu``: no finger of the
+   model gets that low, a finger that stuck does). An integrator on the log of a
    gain c, ``log c <- log c - ki log g``, makes the feed-forward ask for
    ``1 - c (1 - mu'_target)``. In the log domain the loop gain is ``ki`` whatever the
    finger (g = G c for a finger G times more or less slippery than the model), which is
@@ -73,6 +75,7 @@ class LoopConfig:
     mu0_tau_s: float = 0.3
     min_still: int = 10
     min_reduction: float = 0.02
+    min_mu: float = 0.15
     stale_s: float = 0.02
     recover_s: float = 0.1
     min_normal_n: float = 0.05
@@ -219,11 +222,12 @@ class ClosedLoop:
         if not math.isfinite(mu0) or state.fallback:
             return state
         measured = ratio / mu0
-        red = np.where(sliding, ref, 0.0)
-        power = float(red @ red)
-        if power >= np.count_nonzero(sliding) * cfg.min_reduction ** 2:
-            g = float(red @ np.where(sliding, 1.0 - measured, 0.0)) / power
-            step = -cfg.ki * math.log(max(g, 0.05))
+        sliding &= measured >= cfg.min_mu  # a finger that stuck reads friction near 0
+        asked_here = sliding & (ref >= cfg.min_reduction)
+        if np.count_nonzero(asked_here) >= cfg.min_still:
+            # median of per-sample delivered/asked: robust to the few samples of a stop
+            g = float(np.median((1.0 - measured[asked_here]) / ref[asked_here]))
+            step = -cfg.ki * math.log(min(max(g, 0.25), 4.0))
             if step > 0 and np.count_nonzero(sent.cut) > 0.1 * n:
                 step = 0.0  # anti-windup: the limit already cuts what is asked
             log_c = float(np.clip(state.log_c + step, -cfg.log_c_max, cfg.log_c_max))
