@@ -23,9 +23,10 @@ from textures.library import resolve_scene
 BLOCK_S = 50 / 10_000.0
 
 
-def xdo(display, *args):
+def xdo(display, *args, timeout_s=120):
+    """xdotool on ``display``; its output. The bound is for a broken X server only."""
     return subprocess.run(["xdotool", *args], env={**os.environ, "DISPLAY": display},
-                          check=True, capture_output=True, text=True, timeout=20).stdout.strip()
+                          check=True, capture_output=True, text=True, timeout=timeout_s).stdout.strip()
 
 
 def read_csv(path):
@@ -56,15 +57,20 @@ def grating_file(tmp_path):
 def start_demo(display, cwd, scene_file, rec, *args):
     """``frictex demo`` in its default window (the scene's 800 x 480 px at the top left,
     the scope under it) on ``display``, recording into ``rec``; --duration is only a
-    safety net: the tests end it with Q."""
-    return subprocess.Popen([sys.executable, "-u", "-m", "app.commands.cli", "demo", str(scene_file),
-                             "--record", str(rec), "--duration", "300", *args],
-                            env={**os.environ, "DISPLAY": display, "PYTHONFAULTHANDLER": "1"},
-                            cwd=cwd,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    safety net: the tests end it with Q. Its stderr goes to ``demo-stderr.txt`` beside
+    ``rec`` (a pipe would stay open as long as its children, the haptic process and a
+    simulated device, if it were killed)."""
+    with open(rec.parent / "demo-stderr.txt", "w") as err:
+        proc = subprocess.Popen([sys.executable, "-u", "-m", "app.commands.cli", "demo",
+                                 str(scene_file), "--record", str(rec), "--duration", "300", *args],
+                                env={**os.environ, "DISPLAY": display, "PYTHONFAULTHANDLER": "1"},
+                                cwd=cwd, stdout=subprocess.PIPE, stderr=err, text=True)
+    proc.stderr_path = rec.parent / "demo-stderr.txt"
+    return proc
 
 
 def focus_window(display) -> str:
+    """The demo's window, focused (waits until it is shown, however long that takes)."""
     win = xdo(display, "search", "--sync", "--onlyvisible", "--name", "frictex demo").split()[0]
     xdo(display, "windowfocus", "--sync", win)  # no window manager: focus it
     return win
@@ -113,17 +119,20 @@ def finish(proc) -> str:
     with SIGABRT, which makes it print every thread's stack (faulthandler) for the
     failure message."""
     try:
-        out, err = proc.communicate(timeout=120)
+        proc.wait(timeout=120)
     except subprocess.TimeoutExpired:
         proc.send_signal(signal.SIGABRT)
         try:
-            _, err = proc.communicate(timeout=30)
+            proc.wait(timeout=30)
         finally:
             if proc.poll() is None:
                 proc.kill()
                 proc.wait()
+        err = proc.stderr_path.read_text()
         pytest.fail(f"the demo did not exit within 120 s after Q; its threads:\n{err[-8000:]}")
-    assert proc.returncode == 0, err
+    out = proc.stdout.read()
+    proc.stdout.close()
+    assert proc.returncode == 0, proc.stderr_path.read_text()
     return out
 
 

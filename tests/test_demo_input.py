@@ -89,12 +89,13 @@ def test_tuio_cursors_over_udp_drive_two_fingers(xvfb_display, xdotool, tmp_path
     assert sorted(f) == [0, 1]  # TUIO sessions 7 and 9 as fingers 0 and 1
     swipe, still = f[0], f[1]
     np.testing.assert_allclose(swipe[:, 2], 0.25 * 64.8, atol=1e-4)  # float32 on the wire
-    # 0.1 to 0.7 of the width, left to right: the tracker's constant-velocity prediction
-    # (60 ms horizon) may overshoot the last sample by ~4 mm at the nominal pace; the
-    # pace itself is the sender's and the scheduler's, so it is not checked
+    # 0.1 to 0.7 of the width, left to right. How far the tracker's constant-velocity
+    # prediction overshoots the last sample depends on the pace the frames arrived at,
+    # which is the sender's and the scheduler's (frames arriving in a burst look fast):
+    # not checked here
     x = swipe[:, 1]
-    assert x.min() < 0.1 * 108.0 + 1.0 and 0.7 * 108.0 - 1.0 < x.max() < 0.7 * 108.0 + 6.0
-    assert x[-1] > x[0] + 0.5 * 108.0
+    assert x.min() < 0.1 * 108.0 + 1.0 and x.max() > 0.7 * 108.0 - 1.0
+    assert x[0] < 0.1 * 108.0 + 1.0 and x[-1] > 0.5 * 108.0
     np.testing.assert_allclose(still[:, 1:3], np.tile([0.8 * 108.0, 0.75 * 64.8], (len(still), 1)),
                                atol=1e-4)
     assert still[-1, 0] > swipe[-1, 0]  # held after the other lifted
