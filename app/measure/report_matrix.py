@@ -147,6 +147,21 @@ def run_blocks(pipeline, trace: Trace, blocks_per_call: int, duration_s: float):
     return outputs.outs, np.array(stage.seconds)
 
 
+def stack_fingers(outs, field: str, fill) -> tuple[list[int], np.ndarray]:
+    """A per-finger output field over consecutive blocks: the finger ids any block has,
+    and (F, n) values, ``fill`` where a block does not carry a finger (one that lifted
+    and was forgotten, or not down yet)."""
+    ids = sorted({fid for o in outs for fid in o.finger_ids})
+    parts = []
+    for o in outs:
+        values = getattr(o, field)
+        block = np.full((len(ids), o.t_s.size), fill, dtype=values.dtype)
+        for row, fid in enumerate(o.finger_ids):
+            block[ids.index(fid)] = values[row]
+        parts.append(block)
+    return ids, np.concatenate(parts, axis=1)
+
+
 def _encode_seconds(commands_um: np.ndarray, block: int) -> float | None:
     """Compute time (s) to put these commands on the wire, block by block."""
     try:
@@ -206,8 +221,8 @@ class Runner:
         pipeline = _pipeline(scene, case)
         outs, _ = run_blocks(pipeline, trace, 200, duration)
         t_out = np.concatenate([o.t_s for o in outs])
-        row = outs[0].finger_ids.index(int(trace.finger[0]))
-        amplitude = np.concatenate([o.amplitude_um[row] for o in outs])
+        ids, amplitudes = stack_fingers(outs, "amplitude_um", 0.0)
+        amplitude = amplitudes[ids.index(int(trace.finger[0]))]
         commands = np.concatenate([o.commands_um for o in outs])
         felt = pipeline.friction.forward(amplitude, float(trace.force_n[0]))
         try:

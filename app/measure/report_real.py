@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from app.measure.report_matrix import load, run_blocks
+from app.measure.report_matrix import load, run_blocks, stack_fingers
 from rendering.input.trace_file import TraceError, make_trace, read_trace
 from rendering.input.trace_import import add_import_arguments, detect_format, run_import
 from rendering.metrics import MetricError, spectral_error
@@ -89,20 +89,6 @@ def load_recording(path: Path, width_mm: float, height_mm: float):
                       trace.force_n, trace.event)
 
 
-def _stack(outs, field: str, fill) -> np.ndarray:
-    """A per-finger output field over all blocks, (F, n) for every finger id any block
-    has (a block without a finger fills its row with ``fill``)."""
-    ids = sorted({fid for o in outs for fid in o.finger_ids})
-    parts = []
-    for o in outs:
-        values = getattr(o, field)
-        block = np.full((len(ids), o.t_s.size), fill, dtype=values.dtype)
-        for row, fid in enumerate(o.finger_ids):
-            block[ids.index(fid)] = values[row]
-        parts.append(block)
-    return np.concatenate(parts, axis=1)
-
-
 def _steps(amplitude: np.ndarray, contact: np.ndarray) -> tuple[float, int]:
     """The largest amplitude step (um) between output samples while a finger stays down,
     and the chatter count (see the module docstring)."""
@@ -144,9 +130,9 @@ def replay(path: Path, scene_name: str) -> dict:
                                   render_override=renderer,
                                   sho_variant="sho-held" if renderer == "sho-held" else "sho-predicted")
         outs, _ = run_blocks(pipeline, trace, 200, duration)
-        contact = _stack(outs, "contact", False)
-        amplitude = _stack(outs, "amplitude_um", 0.0)
-        mu_by[renderer] = (_stack(outs, "mu_target", 1.0), contact)
+        contact = stack_fingers(outs, "contact", False)[1]
+        amplitude = stack_fingers(outs, "amplitude_um", 0.0)[1]
+        mu_by[renderer] = (stack_fingers(outs, "mu_target", 1.0)[1], contact)
         largest, chatter = _steps(amplitude, contact)
         if not scene.grating_period_mm or scene.grating_period_mm / 2 < CHATTER_S * FAST_MM_S:
             chatter = None
