@@ -23,7 +23,11 @@ def test_rls_converges_to_the_constants_of_exact_points():
         w = rng.uniform(0.1, 2.5, 5)
         f = rng.uniform(0.4, 0.6, 5)
         mu = (1 - k * f) * np.exp(-b * w) + k * f
-        state = rls.update(state, w, f, mu)
+        bh, kh = state.theta
+        e = np.exp(-bh * w)
+        model = (1 - kh * f) * e + kh * f
+        jac = np.stack([-(1 - kh * f) * w * e, f * (1 - e)], axis=1)  # d mu' / d(b, k)
+        state = rls.update(state, jac, mu - model)
     assert math.isclose(state.theta[0], b, rel_tol=1e-3)
     assert math.isclose(state.theta[1], k, rel_tol=1e-3)
 
@@ -31,7 +35,7 @@ def test_rls_converges_to_the_constants_of_exact_points():
 def test_rls_without_points_keeps_its_estimate():
     rls = Rls()
     state = rls.initial_state(FrictionParams(b_per_um=1.4, asymptote_per_n=0.9))
-    after = rls.update(state, np.zeros(0), np.zeros(0), np.zeros(0))
+    after = rls.update(state, np.zeros((0, 2)), np.zeros(0))
     assert after.theta == (1.4, 0.9)
 
 

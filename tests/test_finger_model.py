@@ -6,7 +6,7 @@ import numpy as np
 from hypothesis import given, settings, strategies as st
 
 from device.finger import (RANGES, FingerParams, FingerPlant, SensorParams, draw_finger,
-                           moisture, rest_mu, true_mu)
+                           moisture, rest_mu, true_amplitude, true_mu)
 
 
 def test_true_mu_is_seed_003_eq_2_without_drift_or_speed():
@@ -79,3 +79,12 @@ def test_split_blocks_equal_one_block(cuts):
     for name in ("amplitude_um", "delivered_mu", "lateral_n", "normal_n"):
         np.testing.assert_allclose(np.concatenate([getattr(p, name) for p in parts]),
                                    getattr(whole, name), rtol=1e-10, atol=1e-15)
+
+
+def test_true_amplitude_inverts_true_mu():
+    finger = draw_finger(6)
+    w = np.array([0.0, 0.3, 1.1, 2.0])
+    mu = true_mu(w, 0.5, 40.0, 3.0, finger)
+    np.testing.assert_allclose(true_amplitude(mu, 0.5, 40.0, 3.0, finger, 2.5), w, atol=1e-9)
+    # below this finger's floor: the limit
+    assert true_amplitude(0.0, 0.5, 40.0, 3.0, finger, 2.5) == 2.5

@@ -2,8 +2,8 @@
 
 Seed 003, eq 2 is linearised around the current estimate at each update (an extended
 RLS): with the Jacobian J of mu' with respect to (b, k) (``device.calibration_fit.
-model_jacobian``) and the residual r = measured mu' - model mu', one block's points
-update the estimate in information form::
+model_jacobian``) and the residual r = measured mu' - model mu' (the caller passes both
+through the sensor chain), one block's points update the estimate in information form::
 
     P^-1 <- lam P^-1 + (1 - lam) P0^-1 + J^T J / s^2,   theta <- theta + P J^T r / s^2
 
@@ -18,8 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from device.calibration_fit import B_BOUNDS, K_BOUNDS, model_jacobian
-from device.friction import forward_mu
+from device.calibration_fit import B_BOUNDS, K_BOUNDS
 from device.profile import FrictionParams
 
 
@@ -50,15 +49,14 @@ class Rls:
         return RlsState(theta=(start.b_per_um, start.asymptote_per_n),
                         info=((float(i0[0]), 0.0), (0.0, float(i0[1]))))
 
-    def update(self, state: RlsState, w_um, normal_n, mu) -> RlsState:
-        """One block's points (arrays (m,), m may be 0): the state after them."""
+    def update(self, state: RlsState, jac: np.ndarray, resid: np.ndarray) -> RlsState:
+        """One block's points: Jacobian (m, 2) of mu' in (b, k) and residual (m,)
+        measured - model (m may be 0); returns the state after them."""
         lam = float(np.exp(-self.block_s / self.memory_s))
         # forgetting toward the prior's information keeps P bounded when points stop
         info = lam * np.array(state.info) + (1.0 - lam) * np.diag(1.0 / np.square(self.prior_sd))
         theta = np.array(state.theta)
-        if np.size(w_um):
-            jac = model_jacobian(w_um, normal_n, theta[0], theta[1])
-            resid = mu - forward_mu(w_um, normal_n, state.params)
+        if resid.size:
             s2 = self.noise_sd ** 2
             info = info + jac.T @ jac / s2
             theta = theta + np.linalg.solve(info, jac.T @ resid / s2)

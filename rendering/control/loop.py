@@ -24,8 +24,9 @@ with several fingers down the loop holds its state and the block is fed forward 
    stays within ``[1/4, 4]``.
 3. **Feed-forward** through seed 003's inverse (eq 3, ``device.friction``), with the
    device's constants (``closed``) or their online estimate (``adaptive``,
-   ``rendering.control.adapt``: RLS on points where the amplitude has been steady for
-   ``settle_s``).
+   ``rendering.control.adapt``: RLS on every ``decimate``-th sliding sample, the model's
+   mu' and its Jacobian passed through the same chain as the reference, so that the
+   plate loop's, the fingertip's and the sensor's lags cancel).
 4. **Fallback.** A report that is late by more than ``stale_s`` (stale), reaches the
    sensor's full scale (saturated), or is not a finger (non-finite, F_n below
    ``min_normal_n`` while touching, F_t / F_n outside [-``max_ratio`` / 10, ``max_ratio``]) drops the loop
@@ -42,7 +43,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from device.finger import SensorParams
-from device.friction import SeedFrictionModel
+from device.calibration_fit import model_jacobian
+from device.friction import SeedFrictionModel, forward_mu
 from device.profile import DeviceProfile
 from rendering.control.adapt import Rls, RlsState
 from rendering.control.chain import Chain, ChainState
@@ -80,7 +82,6 @@ class LoopConfig:
     recover_s: float = 0.1
     min_normal_n: float = 0.05
     max_ratio: float = 3.0
-    settle_s: float = 0.01
     decimate: int = 10
     sensor: SensorParams = field(default_factory=SensorParams)
     rls: Rls = field(default_factory=Rls)
@@ -109,8 +110,7 @@ class ControlState:
     mu0: float = math.nan
     asked: ChainState = ChainState()
     moving: ChainState = ChainState()
-    steady: int = 0
-    last_w: float = 0.0
+    model: tuple[ChainState, ...] = ()
     sent: Sent | None = None
     since_report_s: float = 0.0
     good_s: float = 0.0
@@ -194,8 +194,11 @@ class ClosedLoop:
         ref, asked = self.chain.run(np.where(sent.target < 1.0, 1.0 - sent.target, 0.0), state.asked)
         moving_in = (sent.w_um > cfg.still_um).astype(np.float64)
         seen, moving = self.chain.run(moving_in, state.moving)
-        steady, last_w, runs = _steady_runs(sent.w_um, state.steady, state.last_w)
-        state = replace(state, asked=asked, moving=moving, steady=steady, last_w=last_w)
+        state = replace(state, asked=asked, moving=moving)
+        predicted = None
+        if self.mode == "adaptive":  # the model's mu' and Jacobian as the sensor sees them
+            predicted, model_chains = self._predict(state, sent.w_um, report)
+            state = replace(state, model=model_chains)
         fresh = report is not None and report.index0 == sent.index0 and report.lateral_n.size == n
         if not fresh:
             return self._bad(state, "stale", stale=True)
@@ -232,14 +235,27 @@ class ClosedLoop:
                 step = 0.0  # anti-windup: the limit already cuts what is asked
             log_c = float(np.clip(state.log_c + step, -cfg.log_c_max, cfg.log_c_max))
             state = replace(state, log_c=log_c, updates=state.updates + 1)
-        if self.mode == "adaptive":
-            settled = sliding & (runs >= cfg.settle_s * self.rate_hz + self.chain.lag_samples) & \
-                (sent.w_um > 0.05)
-            pick = np.flatnonzero(settled)[::cfg.decimate]
-            if pick.size:
-                rls = cfg.rls.update(state.rls, sent.w_um[pick], nor[pick], measured[pick])
-                state = replace(state, rls=rls)
+        if predicted is not None:  # one RLS step (module docstring, 3)
+            pick = np.flatnonzero(sliding)[::cfg.decimate]
+            model, jac = predicted
+            rls = cfg.rls.update(state.rls, jac[pick], measured[pick] - model[pick])
+            state = replace(state, rls=rls)
         return state
+
+    def _predict(self, state: ControlState, w_um: np.ndarray, report: ForceReport | None):
+        """((mu' (n,), Jacobian (n, 2)) of the current model through the chain, chain states)
+        for the amplitudes sent; the normal force is the report's (else the device's)."""
+        normal = (np.asarray(report.normal_n, dtype=np.float64)
+                  if report is not None and report.normal_n.size == w_um.size
+                  else np.full(w_um.size, self.device.normal_force_n))
+        theta = state.rls.theta
+        model = forward_mu(w_um, normal, state.rls.params)
+        jac = model_jacobian(w_um, normal, theta[0], theta[1])
+        chains = state.model or (self.chain.initial_state(1.0), self.chain.initial_state(),
+                                 self.chain.initial_state())
+        seen = [self.chain.run(x, c) for x, c in zip((model, jac[:, 0], jac[:, 1]), chains)]
+        predicted = (seen[0][0], np.stack([seen[1][0], seen[2][0]], axis=1))
+        return predicted, tuple(c for _, c in seen)
 
     def _bad(self, state: ControlState, problem: str, stale: bool) -> ControlState:
         since = state.since_report_s + self.block_s if stale else state.since_report_s
@@ -270,17 +286,3 @@ def _problem(lat: np.ndarray, nor: np.ndarray, touching: bool, cfg: LoopConfig) 
             return f"implausible (F_t / F_n = {ratio:.3g})"
     return ""
 
-
-def _steady_runs(w: np.ndarray, steady0: int, last_w: float) -> tuple[int, float, np.ndarray]:
-    """Samples each amplitude has been held (within 1 nm), carried across blocks.
-
-    Returns (run length after the block, last amplitude, run length at each sample (n,)).
-    """
-    if w.size == 0:
-        return steady0, last_w, np.zeros(0, dtype=np.int64)
-    prev = np.concatenate([[last_w], w[:-1]])
-    change = np.abs(w - prev) > 1e-3
-    idx = np.arange(w.size)
-    start = np.maximum.accumulate(np.where(change, idx, -1))
-    runs = np.where(start >= 0, idx - start, idx + steady0 + 1)
-    return int(runs[-1]), float(w[-1]), runs
