@@ -189,3 +189,19 @@ def test_height_map_from_a_16_bit_png(tmp_path):
     Image.fromarray(np.zeros((4, 4), np.uint8)).save(eight)
     with pytest.raises(TextureError, match="16-bit"):
         read_height_png(eight, 1.0)
+
+
+def test_relief_is_lit_from_the_top_left_where_the_haptics_put_the_slopes():
+    layer = _bump_layer()
+    mid = (layer.mu_min + layer.mu_max) / 2
+    d = SIGMA / np.sqrt(2)  # the steepest ring, on the light's diagonal
+    lit, shaded, far = layer.relief_mu(np.array([CX - d, CX + d, CX + 40]),
+                                       np.array([CY - d, CY + d, CY]))
+    assert lit > mid > shaded and far == pytest.approx(mid)
+    # Lambert shading of the exaggerated normal, written out: n = (-5 gx, -5 gy, 1) / |n|
+    g = H / SIGMA * np.exp(-0.5)  # |grad h| on the steepest ring
+    gx = gy = g / np.sqrt(2)
+    n = np.array([5 * gx, 5 * gy, 1.0]) / np.sqrt(50 * g * g / 2 + 1)  # facing the light
+    light = np.array([-1.0, -1.0, np.sqrt(2)]) / 2
+    expected = mid + (n @ (light * [-1, -1, 1]) - light[2]) * (layer.mu_max - layer.mu_min)
+    assert lit == pytest.approx(expected)

@@ -29,6 +29,10 @@ from textures.model import _LayerBase, _hypot, _rotate_into
 from textures.raster_io import read_grey
 
 HEIGHT_RENDERINGS = ("slope", "magnitude")
+#: shaded relief for the visual layer: light from the top-left of the screen, 45 deg up,
+#: heights exaggerated this many times (screen shapes are a few tenths of a mm high)
+RELIEF_LIGHT = np.array([-1.0, -1.0, math.sqrt(2.0)]) / 2.0
+RELIEF_EXAGGERATION = 5.0
 
 
 def _cosine_fall(u, du_dx, du_dy, height_mm: float):
@@ -252,6 +256,17 @@ class HeightLayer(_LayerBase):
     def mu_at(self, x, y) -> np.ndarray:
         """mu' felt by a finger at rest: ``mu_rest`` everywhere."""
         return np.full(np.broadcast(np.asarray(x), np.asarray(y)).shape, self.mu_rest)
+
+    def relief_mu(self, x, y) -> np.ndarray:
+        """Shaded relief for drawing, as a mu' in [mu_min, mu_max] (so the layer's colours
+        apply): Lambert shading of the exaggerated height under ``RELIEF_LIGHT``, flat
+        ground half way, from the same gradients the haptics use."""
+        _, gx, gy = self.shape.height_and_gradient(x, y)
+        gx, gy = RELIEF_EXAGGERATION * gx, RELIEF_EXAGGERATION * gy
+        lx, ly, lz = RELIEF_LIGHT
+        shade = (-gx * lx - gy * ly + lz) / np.sqrt(gx * gx + gy * gy + 1.0)
+        u = np.clip(0.5 + (shade - lz), 0.0, 1.0)
+        return self.mu_min + u * (self.mu_max - self.mu_min)
 
     def mu_of_slope(self, slope) -> np.ndarray:
         """mu' for slope s (the class docstring's saturation)."""
