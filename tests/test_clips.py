@@ -89,6 +89,7 @@ def test_touch_down_inside_starts_the_clip_on_the_next_output_sample():
     k = _first_use(0.0123)
     assert (mu[: k + 1] == 1.0).all()
     assert_allclose(mu[k + 1: k + 1 + clip_mu.size], clip_mu)
+    assert 0 < (k + 1) - 0.0123 * RATE <= BLOCK + 1  # live: within one block of the touch
     outside = make_trace([0.0123, 0.1], [0, 0], [70.0, 70.0], [30.0, 30.0], event=[DOWN, UP])
     assert (_replay(_scene(layer), outside) == 1.0).all()
 

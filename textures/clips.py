@@ -23,11 +23,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import ClassVar
-
 import numpy as np
 
-from textures.model import _LayerBase
+from textures.dynamic import DynamicLayer
 
 CLIP_TRIGGERS = ("down", "lift", "edge", "force")
 EVENT_KINDS = ("transient", "continuous")
@@ -113,7 +111,7 @@ class Clip:
 
 
 @dataclass(frozen=True)
-class ClipLayer(_LayerBase):
+class ClipLayer(DynamicLayer):
     """A clip played under every touching finger when its trigger fires.
 
     ``trigger``: ``down`` / ``lift`` (a touch begins / ends inside the layer's region),
@@ -125,7 +123,7 @@ class ClipLayer(_LayerBase):
     Statically (drawn, or for a finger with nothing playing) the layer is mu' = 1.
     """
 
-    renderer_kind: ClassVar[str] = "clip"
+    renderer_kind = "clip"
 
     clip: Clip = None  # type: ignore[assignment]
     trigger: str = "down"
@@ -138,8 +136,9 @@ class ClipLayer(_LayerBase):
     def mu_range(self) -> tuple[float, float]:
         return 1.0 - self.clip.depth, 1.0
 
-    def mu_at(self, x, y) -> np.ndarray:
-        return np.ones(np.broadcast(np.asarray(x), np.asarray(y)).shape)
+    @property
+    def rest_mu(self) -> float:
+        return 1.0
 
     def side(self, x, y) -> np.ndarray:
         """True on the side of the edge line the normal points to (``edge`` trigger)."""

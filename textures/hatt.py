@@ -37,14 +37,13 @@ import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import ClassVar
 
 import numpy as np
 from numba import njit
 
 from textures.errors import TextureError
 from textures.library import UnreadableText, read_utf8
-from textures.model import _LayerBase
+from textures.dynamic import DynamicLayer
 
 HATT_RATE_HZ = 10_000.0
 MAX_HATT_BYTES = 8 << 20
@@ -334,7 +333,7 @@ def read_hatt_xml(path: str | Path) -> TextureModel:
 
 
 @dataclass(frozen=True)
-class ArTextureLayer(_LayerBase):
+class ArTextureLayer(DynamicLayer):
     """A recorded texture synthesised from the finger's speed and normal force
     (``rendering.layers.ar_texture``): mu' = mu_mean + gain * y, y the model's output
     (m/s^2 for the toolkit's models), limited to [mu_min, mu_max] (limited samples are
@@ -342,7 +341,7 @@ class ArTextureLayer(_LayerBase):
     (mu' = mu_mean): a still finger on a real texture feels no vibration. ``seed``
     makes the noise, and so every replay, reproducible."""
 
-    renderer_kind: ClassVar[str] = "ar"
+    renderer_kind = "ar"
 
     model: TextureModel = None  # type: ignore[assignment]
     mu_mean: float = 0.8
@@ -356,6 +355,6 @@ class ArTextureLayer(_LayerBase):
     def mu_range(self) -> tuple[float, float]:
         return self.mu_min, self.mu_max
 
-    def mu_at(self, x, y) -> np.ndarray:
-        """mu' under a finger at rest: ``mu_mean``."""
-        return np.full(np.broadcast(np.asarray(x), np.asarray(y)).shape, self.mu_mean)
+    @property
+    def rest_mu(self) -> float:
+        return self.mu_mean

@@ -20,12 +20,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import ClassVar
-
 import numpy as np
 
+from textures.dynamic import DynamicLayer
 from textures.errors import TextureError
-from textures.model import _LayerBase, _hypot, _rotate_into
+from textures.model import _hypot
 from textures.raster_io import read_grey
 
 HEIGHT_RENDERINGS = ("slope", "magnitude")
@@ -33,6 +32,13 @@ HEIGHT_RENDERINGS = ("slope", "magnitude")
 #: heights exaggerated this many times (screen shapes are a few tenths of a mm high)
 RELIEF_LIGHT = np.array([-1.0, -1.0, math.sqrt(2.0)]) / 2.0
 RELIEF_EXAGGERATION = 5.0
+
+
+def _from_centre(x, y, cx: float, cy: float):
+    """Offsets (dx, dy) and distance r (mm) of positions from a centre."""
+    dx = np.asarray(x, dtype=np.float64) - cx
+    dy = np.asarray(y, dtype=np.float64) - cy
+    return dx, dy, _hypot(dx, dy)
 
 
 def _cosine_fall(u, du_dx, du_dy, height_mm: float):
@@ -55,15 +61,13 @@ class GaussianBump:
     height_mm: float
 
     def height_and_gradient(self, x, y):
-        dx = np.asarray(x, dtype=np.float64) - self.cx_mm
-        dy = np.asarray(y, dtype=np.float64) - self.cy_mm
-        h = self.height_mm * np.exp(-(dx * dx + dy * dy) / (2.0 * self.sigma_mm ** 2))
+        dx, dy, r = _from_centre(x, y, self.cx_mm, self.cy_mm)
+        h = self.height_mm * np.exp(-r * r / (2.0 * self.sigma_mm ** 2))
         k = -h / self.sigma_mm ** 2
         return h, k * dx, k * dy
 
     def support(self, x, y):
-        return _hypot(np.asarray(x, dtype=np.float64) - self.cx_mm,
-                      np.asarray(y, dtype=np.float64) - self.cy_mm) <= 4.0 * self.sigma_mm
+        return _from_centre(x, y, self.cx_mm, self.cy_mm)[2] <= 4.0 * self.sigma_mm
 
 
 @dataclass(frozen=True)
@@ -137,16 +141,13 @@ class ButtonRim:
     height_mm: float
 
     def height_and_gradient(self, x, y):
-        dx = np.asarray(x, dtype=np.float64) - self.cx_mm
-        dy = np.asarray(y, dtype=np.float64) - self.cy_mm
-        r = _hypot(dx, dy)
+        dx, dy, r = _from_centre(x, y, self.cx_mm, self.cy_mm)
         inv = np.divide(1.0, r * self.rim_mm, out=np.zeros_like(r), where=r > 0)
         u = (r - (self.radius_mm - self.rim_mm)) / self.rim_mm
         return _cosine_fall(u, dx * inv, dy * inv, self.height_mm)
 
     def support(self, x, y):
-        return _hypot(np.asarray(x, dtype=np.float64) - self.cx_mm,
-                      np.asarray(y, dtype=np.float64) - self.cy_mm) <= self.radius_mm
+        return _from_centre(x, y, self.cx_mm, self.cy_mm)[2] <= self.radius_mm
 
 
 @dataclass(frozen=True, eq=False)
@@ -215,7 +216,7 @@ HeightShape = GaussianBump | Ridge | Step | ButtonRim | HeightMap
 
 
 @dataclass(frozen=True)
-class HeightLayer(_LayerBase):
+class HeightLayer(DynamicLayer):
     """A height felt by its slope (``rendering.layers.height``).
 
     The slope s is dimensionless (mm of height per mm travelled). ``rendering``:
@@ -234,12 +235,12 @@ class HeightLayer(_LayerBase):
 
     so d mu'/d s = ``gain`` at s = 0, and mu' never leaves [mu_min, mu_max] (no clamp
     needed); mu_min < mu_rest < mu_max (the loader checks it; the magnitude rendering
-    never uses the lower branch, so mu_min = mu_rest is allowed there). ``mu_rest`` < 1 is what leaves room to raise friction while climbing; the
-    layer covers its whole region (the display by default) at mu_rest, so that nothing
+    never uses the lower branch, so mu_min = mu_rest is allowed there). ``mu_rest`` < 1 is
+    what leaves room to raise friction while climbing; the layer covers its whole region (the display by default) at mu_rest, so that nothing
     steps at the edge of the shape.
     """
 
-    renderer_kind: ClassVar[str] = "height"
+    renderer_kind = "height"
 
     shape: HeightShape = None  # type: ignore[assignment]
     rendering: str = "slope"
@@ -253,9 +254,9 @@ class HeightLayer(_LayerBase):
     def mu_range(self) -> tuple[float, float]:
         return self.mu_min, self.mu_max
 
-    def mu_at(self, x, y) -> np.ndarray:
-        """mu' felt by a finger at rest: ``mu_rest`` everywhere."""
-        return np.full(np.broadcast(np.asarray(x), np.asarray(y)).shape, self.mu_rest)
+    @property
+    def rest_mu(self) -> float:
+        return self.mu_rest
 
     def relief_mu(self, x, y) -> np.ndarray:
         """Shaded relief for drawing, as a mu' in [mu_min, mu_max] (so the layer's colours
