@@ -77,3 +77,26 @@ def test_the_friction_at_rest_tracks_a_known_drift():
     start = float(rest_mu(0.0, draw_finger(3)))
     assert truth > start * 1.005  # a drift that is there
     assert abs(state.control.mu0 / truth - 1) < 0.02
+
+
+@pytest.mark.parametrize("fault,said", [(lambda r: (r.lateral_n * 0, r.normal_n * 0), "implausible"),
+                                        (lambda r: (r.lateral_n + 10.0, r.normal_n), "saturated"),
+                                        (lambda r: (r.lateral_n * np.nan, r.normal_n), "not finite")])
+def test_a_sensor_that_goes_bad_falls_back_at_the_next_block(monkeypatch, fault, said):
+    """Reports from 1.0 s on are zeros, beyond full scale, or NaN: open loop from the block
+    after the first bad report, said once."""
+    from app.measure import closed_loop_sim
+    from rendering.control.loop import ForceReport
+    write = closed_loop_sim.FingerSink.write
+
+    def faulty(self, out, commands_um):
+        write(self, out, commands_um)
+        if out.t_s[0] >= 1.0 and self.report is not None:
+            lat, nor = fault(self.report)
+            self.report = ForceReport(self.report.index0, lat, nor)
+
+    monkeypatch.setattr(closed_loop_sim.FingerSink, "write", faulty)
+    _, state = simulate(Run("grating-15mm", 2, "closed", 1.5))
+    control = state.control
+    assert control.fallbacks == 1 and said in control.messages[0]
+    assert control.fallback_samples >= 0.5 * RATE_HZ - 2 * BLOCK
