@@ -41,6 +41,15 @@ def _from_centre(x, y, cx: float, cy: float):
     return dx, dy, _hypot(dx, dy)
 
 
+def _along(x, y, x0: float, y0: float, normal_deg: float):
+    """Signed distance (mm) of positions from the line through (x0, y0) whose unit normal
+    (nx, ny) is at ``normal_deg`` from +x, positive on the normal's side; and the normal."""
+    a = math.radians(normal_deg)
+    nx, ny = math.cos(a), math.sin(a)
+    d = nx * (np.asarray(x, dtype=np.float64) - x0) + ny * (np.asarray(y, dtype=np.float64) - y0)
+    return d, nx, ny
+
+
 def _cosine_fall(u, du_dx, du_dy, height_mm: float):
     """A raised-cosine fall from ``height_mm`` at u <= 0 to 0 at u >= 1, and its gradient
     given u's gradient: h = H (1 + cos(pi u)) / 2 on [0, 1]."""
@@ -84,10 +93,7 @@ class Ridge:
 
     def _across(self, x, y):
         """Distance (mm) from the centre line, and the unit normal (nx, ny)."""
-        a = math.radians(self.angle_deg)
-        nx, ny = -math.sin(a), math.cos(a)
-        d = nx * (np.asarray(x, dtype=np.float64) - self.x_mm) + ny * (np.asarray(y, dtype=np.float64) - self.y_mm)
-        return d, nx, ny
+        return _along(x, y, self.x_mm, self.y_mm, self.angle_deg + 90.0)
 
     def height_and_gradient(self, x, y):
         d, nx, ny = self._across(x, y)
@@ -113,10 +119,7 @@ class Step:
     chamfer_mm: float
 
     def _along_normal(self, x, y):
-        a = math.radians(self.angle_deg)
-        nx, ny = math.cos(a), math.sin(a)
-        d = nx * (np.asarray(x, dtype=np.float64) - self.x_mm) + ny * (np.asarray(y, dtype=np.float64) - self.y_mm)
-        return d, nx, ny
+        return _along(x, y, self.x_mm, self.y_mm, self.angle_deg)
 
     def height_and_gradient(self, x, y):
         d, nx, ny = self._along_normal(x, y)
