@@ -50,10 +50,11 @@ MODES = ("open", "closed", "adaptive")
 RATE_HZ = 5000.0
 BLOCK = 25
 FINGERS = 20
-DURATION_S = 20.0
-QUICK_DURATION_S = 6.0
+DURATION_S = 10.0
+QUICK_DURATION_S = 4.0
 #: the adaptation study: each finger slides this long (s) over this scene, loop adapting
 ADAPT_S = 60.0
+QUICK_ADAPT_S = 20.0
 ADAPT_SCENE = "objects-bump-edge-disc"
 #: Gueorguiev et al. 2017: Weber fraction for a change of friction
 WEBER_FRACTION = 0.11
@@ -170,6 +171,13 @@ def measure(fingers: int = FINGERS, duration_s: float = DURATION_S, workers: int
                                  "gap_max": max(gaps), "gap_median": float(np.median(gaps)),
                                  "gaps": gaps}
     return section
+
+
+def section(quick: bool, workers: int = 1) -> dict:
+    """The section for ``frictex report`` (``--quick``: shorter runs, same population)."""
+    if quick:
+        return measure(FINGERS, QUICK_DURATION_S, workers, adapt_s=QUICK_ADAPT_S)
+    return measure(FINGERS, DURATION_S, workers)
 
 
 def summarise(values: dict, fingers: int, duration_s: float) -> dict:
