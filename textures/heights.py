@@ -32,6 +32,9 @@ HEIGHT_RENDERINGS = ("slope", "magnitude")
 #: heights exaggerated this many times (screen shapes are a few tenths of a mm high)
 RELIEF_LIGHT = np.array([-1.0, -1.0, math.sqrt(2.0)]) / 2.0
 RELIEF_EXAGGERATION = 5.0
+#: drawn level per unit of Lambert shade about flat ground's: a slope facing away from the
+#: light (shade 0) draws at 0.5 - 0.7 * 0.707 = 0.005 of the colour range, never clipped
+RELIEF_CONTRAST = 0.7
 
 
 def _from_centre(x, y, cx: float, cy: float):
@@ -269,7 +272,7 @@ class HeightLayer(DynamicLayer):
         gx, gy = RELIEF_EXAGGERATION * gx, RELIEF_EXAGGERATION * gy
         lx, ly, lz = RELIEF_LIGHT
         shade = (-gx * lx - gy * ly + lz) / np.sqrt(gx * gx + gy * gy + 1.0)
-        u = np.clip(0.5 + (shade - lz), 0.0, 1.0)
+        u = np.clip(0.5 + RELIEF_CONTRAST * (shade - lz), 0.0, 1.0)
         return self.mu_min + u * (self.mu_max - self.mu_min)
 
     def mu_of_slope(self, slope) -> np.ndarray:
