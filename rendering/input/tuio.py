@@ -21,7 +21,9 @@ interfaces", 2005; TUIO 1.1 specification): one bundle per frame, holding
 A frame whose fseq is lower than the last one from its source, by at most 100, arrived
 late (UDP reorders) and is dropped, as the TUIO reference client does; fseq <= 0 is always
 accepted. Positions are normalised; :class:`TuioListener` maps them to the display's mm.
-TUIO 1.1 carries no usable time, so samples are stamped with their arrival time.
+TUIO 1.1 carries no usable time, so samples are stamped with their arrival time: the
+kernel's receive time of the datagram (``SO_TIMESTAMPNS``) where the system gives it,
+so that a receiving thread held up (a busy machine, the GIL) does not delay the stamp.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ import math
 import queue
 import socket
 import struct
+import sys
 import threading
 import time
 from typing import Callable
@@ -218,6 +221,24 @@ def _arg(args: list, i: int, kind: type, what: str):
     return kind(value)
 
 
+#: Linux's SO_TIMESTAMPNS (asm-generic/socket.h; Python's socket module lacks it): the
+#: kernel's receive time of each datagram, a struct timespec of two native longs
+_SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35 if sys.platform.startswith("linux") else None)
+_TIMESPEC = struct.Struct("@ll")
+_STAMP_SPACE = socket.CMSG_SPACE(_TIMESPEC.size)
+
+
+def _age_s(ancillary) -> float:
+    """How long (s) a datagram waited since the kernel received it, from its
+    ``SCM_TIMESTAMPNS`` (wall clock) message; 0 without one (or if the wall clock was
+    set back meanwhile)."""
+    for level, kind, data in ancillary:  # Linux: SCM_TIMESTAMPNS is SO_TIMESTAMPNS
+        if level == socket.SOL_SOCKET and kind == _SO_TIMESTAMPNS and len(data) >= _TIMESPEC.size:
+            sec, nsec = _TIMESPEC.unpack(data[:_TIMESPEC.size])
+            return max(time.time_ns() - (sec * 1_000_000_000 + nsec), 0) * 1e-9
+    return 0.0
+
+
 class TuioListener:
     """Receives TUIO on a UDP port in a thread; :meth:`poll` returns the new touch samples.
 
@@ -255,6 +276,8 @@ class TuioListener:
             self._sock.close()
             raise OSError(f"TUIO: cannot listen on UDP {host}:{port} ({exc.strerror})") from None
         self._sock.settimeout(0.05)
+        if _SO_TIMESTAMPNS is not None:
+            self._sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
         self.port = self._sock.getsockname()[1]
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._receive, name=f"tuio-{self.port}", daemon=True)
@@ -263,13 +286,13 @@ class TuioListener:
     def _receive(self) -> None:
         while not self._stop.is_set():
             try:
-                data = self._sock.recv(65536)
+                data, ancillary, _, _ = self._sock.recvmsg(65536, _STAMP_SPACE)
             except socket.timeout:
                 continue
             except OSError:
                 return
             try:
-                self._queue.put_nowait((self._clock(), data))
+                self._queue.put_nowait((self._clock() - _age_s(ancillary), data))
             except queue.Full:
                 self.dropped += 1
             self._ready.set()
