@@ -234,7 +234,7 @@ def test_outputs_that_would_not_fit_the_disk_are_refused_before_writing(tmp_path
     usage = namedtuple("usage", "total used free")
     monkeypatch.setattr(shutil, "disk_usage", lambda path: usage(10 << 30, 0, 100 << 20))
     assert main(["replay", SCENE, TRACE, "--out", str(tmp_path / "fits"), "--quiet"]) == 0
-    assert main(["replay", SCENE, TRACE, "--out", str(tmp_path / "big"), "--rate", "1e6"]) == 2
+    assert main(["replay", SCENE, TRACE, "--out", str(tmp_path / "big"), "--rate", "1e6"]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "the outputs (5.0001 s at 1e+06 Hz" in err[0] and "is free" in err[0]
     assert sorted(p.name for p in (tmp_path / "big").iterdir()) == []
@@ -293,3 +293,18 @@ def test_cost_follows_the_fingers_touching_not_the_ids_ever_seen():
     # a re-touch of the same id and a new id take rounding-different paths (1e-15 um)
     np.testing.assert_allclose(np.concatenate([o.commands_um for o in runs[True]]),
                                np.concatenate([o.commands_um for o in runs[False]]), atol=1e-12)
+
+
+@pytest.mark.parametrize("make, code", [
+    (lambda: __import__("device.link.host", fromlist=["LinkStalled"]).LinkStalled("stalled"), 1),
+    (lambda: OSError(28, "No space left on device"), 1),
+    (lambda: OSError(2, "No such file or directory"), 2),
+    (lambda: ValueError("bad trace"), 2),
+])
+def test_exit_status_says_bad_input_or_a_run_that_could_not_finish(monkeypatch, capsys, make, code):
+    from app.commands import cli, library
+    def fail(args):
+        raise make()
+    monkeypatch.setattr(library, "run", fail)
+    assert cli.main(["library"]) == code
+    assert capsys.readouterr().err.startswith("frictex: error:")

@@ -4,12 +4,14 @@ Each subcommand lives in its own module of ``app`` exposing
 ``add_arguments(parser)`` and ``run(args) -> int``; the module is imported only
 when its subcommand runs, so ``frictex validate`` never loads OpenGL.
 Errors raised as ``ValueError`` (bad input: texture, trace, option) or ``OSError``
-(files, ports) become one line on stderr, ``frictex: error: ...``, and exit 2.
+(files, ports) become one line on stderr, ``frictex: error: ...``, and exit 2; a run that
+could not finish (the device stopped taking data, the disk filled up) exits 1.
 """
 
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import os
 import sys
@@ -21,7 +23,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "replay": ("app.commands.replay", "run the haptic pipeline on a recorded trace, headless"),
     "batch": ("app.commands.batch", "replay many (scene, trace, renderer) jobs over the cores or a Dask cluster"),
     "trace": ("app.commands.trace", "synthesise or import touch traces"),
-    "sim-device": ("app.commands.sim_device", "run a simulated plate microcontroller on a pseudo-terminal"),
+    "sim-device": ("app.commands.sim_device", "run a simulated plate microcontroller on a pseudo-terminal or TCP"),
     "bench": ("app.commands.bench", "measure speed: pipeline, link, visual layer, modal solves"),
     "modes": ("app.commands.modes", "natural frequencies, wavelengths and nodes of beams, plates and rings"),
     "report": ("app.commands.report", "speed against error over a matrix of scenes, motions and renderers"),
@@ -85,7 +87,16 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     except (ValueError, OSError) as exc:
         print(f"frictex: error: {exc}", file=sys.stderr)
-        return 2
+        return 1 if run_failed(exc) else 2
+
+
+def run_failed(exc: BaseException) -> bool:
+    """True for errors of a run that could not finish (a device that stopped taking data,
+    a disk that filled up): exit 1; anything else is bad input: exit 2."""
+    if isinstance(exc, OSError) and exc.errno == errno.ENOSPC:
+        return True
+    from device.link.host import LinkStalled  # on the error path only: no cost to a run
+    return isinstance(exc, LinkStalled)
 
 
 if __name__ == "__main__":
