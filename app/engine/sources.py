@@ -24,7 +24,7 @@ import queue
 
 import numpy as np
 
-from rendering.input.trace_file import UP, Trace, make_trace
+from rendering.input.trace_file import UP, Trace, concat_traces, make_trace
 from rendering.tracking.tracks import apply_index
 
 #: default longest gap between touch samples that is output as it is (s)
@@ -104,7 +104,7 @@ class TraceSource:
             return
         self.stats.add(chunk)
         chunk = self._lift_at_gaps(chunk)
-        self.pending = chunk if self.pending is None else self.pending.then(chunk)
+        self.pending = chunk if self.pending is None else concat_traces([self.pending, chunk])
         if self.config is not None:
             self.applied = apply_index(self.pending.t_s, self.config)
 
@@ -130,9 +130,7 @@ class TraceSource:
             self._gap_times.append((t_gap, float(times[g + 1])))
         if pieces:
             pieces.append(chunk.slice(lo, len(chunk)))
-            chunk = pieces[0]
-            for piece in pieces[1:]:
-                chunk = chunk.then(piece)
+            chunk = concat_traces(pieces)
         self._down = _down_after(self._down, chunk)
         self._last_t = float(chunk.t_s[-1])
         self._last_xy = {int(f): (float(x), float(y), float(fn))

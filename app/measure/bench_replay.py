@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from app.measure.figure import Figure
-from rendering.input.trace_file import Trace, read_trace, write_trace
+from rendering.input.trace_file import Trace, concat_traces, read_trace, write_trace
 from rendering.input.trace_synth import make_motion, sample
 from textures.library import resolve_trace
 
@@ -52,12 +52,8 @@ def _human(duration_s: float) -> Trace:
 def _repeated(trace: Trace, times: int, gap_s: float = 0.5) -> Trace:
     """``trace`` played ``times`` times, each start ``gap_s`` after the last one's end."""
     period = trace.duration_s + gap_s
-    parts = [Trace(trace.t_s + k * period, trace.finger, trace.x_mm, trace.y_mm,
-                   trace.force_n, trace.event) for k in range(times)]
-    whole = parts[0]
-    for part in parts[1:]:
-        whole = whole.then(part)
-    return whole
+    return concat_traces([Trace(trace.t_s + k * period, trace.finger, trace.x_mm, trace.y_mm,
+                                trace.force_n, trace.event) for k in range(times)])
 
 
 def _replay_figures(tmp: Path, label: str, scene: str, trace_path: Path, fmt: str,

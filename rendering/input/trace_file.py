@@ -103,11 +103,6 @@ class Trace:
         """Samples ``lo`` to ``hi`` (exclusive), as views of these arrays."""
         return Trace(*(getattr(self, name)[lo:hi] for name in _COLUMNS))
 
-    def then(self, later: "Trace") -> "Trace":
-        """These samples followed by ``later``'s (which continue them in time)."""
-        return Trace(*(np.concatenate((getattr(self, name), getattr(later, name)))
-                       for name in _COLUMNS))
-
 
 _COLUMNS = ("t_s", "finger", "x_mm", "y_mm", "force_n", "event")
 
@@ -500,8 +495,7 @@ def iter_trace(path: str | Path, chunk_rows: int = 65_536, strict: bool = False)
 def concat_traces(chunks) -> Trace:
     """One :class:`Trace` from consecutive chunks."""
     chunks = list(chunks)
-    return Trace(*(np.concatenate([getattr(c, name) for c in chunks])
-                   for name in ("t_s", "finger", "x_mm", "y_mm", "force_n", "event")))
+    return Trace(*(np.concatenate([getattr(c, name) for c in chunks]) for name in _COLUMNS))
 
 
 def read_trace(path: str | Path, strict: bool = False) -> Trace:
