@@ -1,6 +1,5 @@
 """The friction loop (rendering/control) with the simulated finger on the run engine."""
 
-import cmath
 import math
 
 import numpy as np
@@ -28,13 +27,15 @@ def test_loop_replay_is_deterministic_for_a_fixed_finger():
     a, sa = simulate(Run("grating-15mm", 2, "adaptive", 1.5))
     b, sb = simulate(Run("grating-15mm", 2, "adaptive", 1.5))
     np.testing.assert_array_equal(a.arrays()["delivered"], b.arrays()["delivered"])
-    assert sa.control.log_c == sb.control.log_c and sa.control.rls == sb.control.rls
+    assert 0.0 < a.max_command_um <= 2.5  # never beyond the device's limit
+    assert sa.state.control.log_c == sb.state.control.log_c
+    assert sa.state.control.rls == sb.state.control.rls
 
 
 def test_a_dead_sensor_falls_back_within_the_stale_time():
     dead_at = 1.0
-    sink, state = simulate(Run("grating-15mm", 2, "closed", 1.6, sensor_dead_after_s=dead_at))
-    control = state.control
+    sink, stage = simulate(Run("grating-15mm", 2, "closed", 1.6, sensor_dead_after_s=dead_at))
+    control = stage.state.control
     assert control.fallbacks == 1 and len(control.messages) == 1
     assert "stale" in control.messages[0]
     # everything from the first block past stale_s + one block is open loop
@@ -72,11 +73,11 @@ def test_a_finger_at_rest_does_not_wind_the_integrator_up():
 
 def test_the_friction_at_rest_tracks_a_known_drift():
     """Finger 3's mu0 rises by moisture during the run; the estimate follows it."""
-    sink, state = simulate(Run("grating-15mm", 3, "closed", 6.0))
+    sink, stage = simulate(Run("grating-15mm", 3, "closed", 6.0))
     truth = float(rest_mu(6.0, draw_finger(3)))
     start = float(rest_mu(0.0, draw_finger(3)))
     assert truth > start * 1.005  # a drift that is there
-    assert abs(state.control.mu0 / truth - 1) < 0.02
+    assert abs(stage.state.control.mu0 / truth - 1) < 0.02
 
 
 @pytest.mark.parametrize("fault,said", [(lambda r: (r.lateral_n * 0, r.normal_n * 0), "implausible"),
@@ -96,7 +97,7 @@ def test_a_sensor_that_goes_bad_falls_back_at_the_next_block(monkeypatch, fault,
             self.report = ForceReport(self.report.index0, lat, nor)
 
     monkeypatch.setattr(closed_loop_sim.FingerSink, "write", faulty)
-    _, state = simulate(Run("grating-15mm", 2, "closed", 1.5))
-    control = state.control
+    _, stage = simulate(Run("grating-15mm", 2, "closed", 1.5))
+    control = stage.state.control
     assert control.fallbacks == 1 and said in control.messages[0]
     assert control.fallback_samples >= 0.5 * RATE_HZ - 2 * BLOCK

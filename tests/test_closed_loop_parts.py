@@ -62,13 +62,13 @@ def test_chain_is_three_poles_and_a_delay_and_splits_exactly():
 def test_the_loop_needs_seed_003s_plate():
     with pytest.raises(ValueError, match="plate-seed003"):
         ClosedLoop(DeviceProfile(profile="beam-seed000"), 10_000.0, 50)
-    with pytest.raises(ValueError, match="control mode"):
+    with pytest.raises(ValueError, match="control mode .open.: expected one of open, closed"):
         ClosedLoop(DeviceProfile(), 10_000.0, 50, mode="open")
 
 
 def _fake(rms):
     return {"rms": rms * 1.5, "rms_reachable": rms, "fallbacks": 0, "noise_fraction": 0.01,
-            "adapted_gap": 0.03}
+            "adapted_gap": 0.03, "max_command_um": 2.0, "growth": 0.5}
 
 
 def test_section_tables_and_gains(tmp_path):
@@ -86,3 +86,12 @@ def test_section_tables_and_gains(tmp_path):
     assert "| grating-15mm | closed |" in text and "gain margin" in text
     write(section, tmp_path)
     assert json.loads((tmp_path / "closed_loop.json").read_text())["fingers"] == 2
+
+
+def test_oscillation_growth_sees_a_growing_alternation():
+    from app.measure.report_closed_loop import oscillation_growth
+    k = np.arange(200)
+    growing = 0.01 * (-1.0) ** k * 1.02 ** k
+    settling = 0.01 * (-1.0) ** k * 0.98 ** k
+    assert oscillation_growth(growing) > 1.0 > oscillation_growth(settling)
+    assert oscillation_growth(np.zeros(10)) == 0.0

@@ -38,9 +38,11 @@ class FingerSink:
         self.rows: dict[str, list] = {k: [] for k in ("t", "target", "delivered", "best",
                                                        "speed", "force", "mu0")}
         self._ideal = 0.0  # the ideal controller's plate amplitude (um) after the last block
+        self.max_command_um = 0.0
 
     def write(self, out, commands_um) -> None:
         t = out.t_s
+        self.max_command_um = max(self.max_command_um, float(np.max(commands_um, initial=0.0)))
         touching = out.contact.any(axis=0)
         speed = np.where(touching, self.speed_of(t), 0.0)
         force = np.where(touching, self.force_of(t), 0.0)
@@ -82,6 +84,7 @@ class LoopStage:
         self.pipeline = pipeline
         self.sink = sink
         self.state = pipeline.initial_state()
+        self.log_c: list[float] = []  # the loop's gain after each block (loop modes)
 
     def process(self, k: int, samples, n: int):
         report = self.sink.report
@@ -90,4 +93,6 @@ class LoopStage:
             normal = float(report.normal_n.mean())
         out, self.state = self.pipeline.process(k, samples, self.state, n_blocks=n,
                                                 normal_force_n=normal, report=report)
+        if self.state.control is not None:
+            self.log_c.append(self.state.control.log_c)
         return out, out.commands_um

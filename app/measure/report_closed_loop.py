@@ -21,6 +21,8 @@ Measured, over the samples where the finger touches and slides (>= 5 mm/s):
   of the run against the same run with a noiseless sensor, adaptive mode only, as a
   fraction of the mean friction force, against the Weber fraction 0.11 for detecting a
   change of friction (Gueorguiev et al., J. R. Soc. Interface 14 (2017) 20170641);
+- ``growth``: the loop's log-gain steps late in the run against early (a growing
+  oscillation shows as > 1); ``max_command_um``: the largest amplitude commanded;
 - ``adapted_gap``: after the adaptive run, seed 003's eq 2 with the adapted (b, k)
   against the true finger at the run's end, over the amplitudes 0..limit (relative RMS);
   the adaptation study runs each finger ``ADAPT_S`` on ``ADAPT_SCENE`` (whose bump asks
@@ -88,7 +90,7 @@ def finger_speed(motion):
 
 
 def simulate(run: Run):
-    """Run one (scene, finger, mode); returns (FingerSink, pipeline state after)."""
+    """Run one (scene, finger, mode); returns (FingerSink, LoopStage after the run)."""
     scene = load(run.scene)
     motion = make_motion("human", speed_mm_s=60.0, duration_s=run.duration_s, seed=run.finger)
     trace = sample(motion, 50.0, noise_mm=0.05, seed=100 + run.finger)
@@ -103,21 +105,22 @@ def simulate(run: Run):
     source = TraceSource(iter([trace]), until_s=run.duration_s)
     source.start(pipeline.tracker_config)
     drive(stage, source, [sink], VirtualClock(), chunk_blocks=1)
-    return sink, stage.state
+    return sink, stage
 
 
 def score(run: Run) -> dict:
     """The measurements of one run (module docstring)."""
-    sink, state = simulate(run)
+    sink, stage = simulate(run)
     a = sink.arrays()
     slide = a["speed"] >= SLIDING_MM_S
     err = a["delivered"][slide] - a["target"][slide]
     reach = a["delivered"][slide] - a["best"][slide]
-    out = {"rms": _rms(err), "rms_reachable": _rms(reach)}
-    control = state.control
+    out = {"rms": _rms(err), "rms_reachable": _rms(reach), "max_command_um": sink.max_command_um}
+    control = stage.state.control
     if control is not None:
         out.update(fallbacks=control.fallbacks, log_c=control.log_c, mu0_estimate=control.mu0,
-                   b_per_um=control.rls.theta[0], k_per_n=control.rls.theta[1])
+                   b_per_um=control.rls.theta[0], k_per_n=control.rls.theta[1],
+                   growth=oscillation_growth(np.array(stage.log_c)))
         if run.mode == "adaptive":
             out["adapted_gap"] = adapted_gap(run, control.rls.params, float(a["t"][-1]))
             if not run.noiseless:
@@ -145,8 +148,18 @@ def adapted_gap(run: Run, params, t_s: float) -> float:
 
 def adaptation(run: Run) -> float:
     """The adapted model's gap to the true finger (:func:`adapted_gap`) after ``run``."""
-    sink, state = simulate(run)
-    return adapted_gap(run, state.control.rls.params, float(sink.arrays()["t"][-1]))
+    sink, stage = simulate(run)
+    return adapted_gap(run, stage.state.control.rls.params, float(sink.arrays()["t"][-1]))
+
+
+def oscillation_growth(log_c: np.ndarray) -> float:
+    """RMS block-to-block step of the loop's log gain over the run's second half against
+    its first half: above 1 with alternating steps would be a growing oscillation (0 when
+    the loop never moved)."""
+    steps = np.diff(log_c)
+    half = steps.size // 2
+    early, late = _rms(steps[:half]), _rms(steps[half:])
+    return late / early if early > 0 else 0.0
 
 
 def _rms(x: np.ndarray) -> float:
@@ -189,7 +202,10 @@ def summarise(values: dict, fingers: int, duration_s: float) -> dict:
             rms = np.array([r["rms_reachable"] for r in results])
             row[mode] = {"rms_reachable_pop": _rms(rms), "worst": float(rms.max()),
                          "rms_pop": _rms(np.array([r["rms"] for r in results])),
-                         "fallbacks": int(sum(r.get("fallbacks", 0) for r in results))}
+                         "fallbacks": int(sum(r.get("fallbacks", 0) for r in results)),
+                         "max_command_um": max(r["max_command_um"] for r in results)}
+            if mode != "open":
+                row[mode]["growth_max"] = max(r["growth"] for r in results)
             if mode == "adaptive":
                 row[mode]["noise_fraction_max"] = max(r["noise_fraction"] for r in results)
                 row[mode]["adapted_gap_max"] = max(r["adapted_gap"] for r in results)
@@ -212,15 +228,18 @@ def markdown(section: dict) -> str:
              f"of human-like sliding each, {section['rate_hz']:g} Hz in blocks of {section['block']}. "
              "RMS error of delivered mu' against the reachable target, over the population "
              "(RMS of per-finger RMS); worst finger; gain against open loop.", "",
-             "| scene | mode | RMS | worst | gain | fallbacks | noise / friction (max) | adapted model gap (max) |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+             "| scene | mode | RMS | worst | gain | raw RMS | max um | step growth (max) | fallbacks "
+             "| noise / friction (max) | adapted model gap (max) |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for scene, row in section["scenes"].items():
         for mode, r in row.items():
             gain = f"{r['gain_vs_open']:.1f}x" if "gain_vs_open" in r else ""
             noise = f"{r['noise_fraction_max']:.3f}" if "noise_fraction_max" in r else ""
             gap = f"{r['adapted_gap_max']:.3f}" if "adapted_gap_max" in r else ""
+            growth = f"{r['growth_max']:.2f}" if "growth_max" in r else ""
             lines.append(f"| {scene} | {mode} | {r['rms_reachable_pop']:.4f} | {r['worst']:.4f} | "
-                         f"{gain} | {r['fallbacks']} | {noise} | {gap} |")
+                         f"{gain} | {r['rms_pop']:.4f} | {r['max_command_um']:.3f} | {growth} | "
+                         f"{r['fallbacks']} | {noise} | {gap} |")
     if "adaptation" in section:
         ad = section["adaptation"]
         lines += ["", f"Adaptation: after {ad['duration_s']:g} s on {ad['scene']}, seed 003's "

@@ -127,7 +127,8 @@ class ClosedLoop:
     def __init__(self, device: DeviceProfile, rate_hz: float, block_size: int,
                  mode: str = "adaptive", config: LoopConfig = LoopConfig()):
         if mode not in CONTROL_MODES[1:]:
-            raise ValueError(f"control mode {mode!r}: the loop runs {', '.join(CONTROL_MODES[1:])}")
+            raise ValueError(f"control mode {mode!r}: expected one of {', '.join(CONTROL_MODES)} "
+                             f"(open loop builds no loop)")
         if device.calibration is not None or device.profile != "plate-seed003":
             raise ValueError(f"closed-loop control needs profile plate-seed003 with seed 003's "
                              f"model; got {device.profile!r}"
