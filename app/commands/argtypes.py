@@ -45,14 +45,16 @@ def fault_plan(text: str):
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+def bounded(kind, low, high, unit: str):
+    """An argparse type: ``kind(text)`` (int or float) within [low, high] ``unit``."""
+    def parse(text: str):
+        value = positive_int(text) if kind is int else positive_float(text)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{text!r} {unit}: expected {low:g} to {high:g}")
+        return value
+    return parse
+
+
 #: output sample rates a pipeline may run at (Hz): seed 003's link runs at 10 kHz
 OUTPUT_RATES_HZ = (100.0, 1e6)
-
-
-def output_rate(text: str) -> float:
-    """An output sample rate (Hz) within :data:`OUTPUT_RATES_HZ`."""
-    value = positive_float(text)
-    low, high = OUTPUT_RATES_HZ
-    if not low <= value <= high:
-        raise argparse.ArgumentTypeError(f"{text!r} Hz: expected {low:g} to {high:g} Hz")
-    return value
+output_rate = bounded(float, *OUTPUT_RATES_HZ, "Hz")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from app.commands.argtypes import fault_plan, output_rate, positive_float, positive_int, share
+from app.commands.argtypes import bounded, fault_plan, output_rate, positive_float, share
 from app.engine.replay import run_replay
 from app.engine.sources import MAX_GAP_S
 from app.engine.tables import FORMATS
@@ -18,7 +18,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder")
     parser.add_argument("--rate", type=output_rate, default=10_000.0, metavar="HZ",
                         help="output sample rate (default 10000 Hz, the seed 003 link)")
-    parser.add_argument("--block", type=positive_int, default=50, metavar="N",
+    parser.add_argument("--block", type=bounded(int, 1, 100_000, "samples"), default=50,
+                        metavar="N",
                         help="block size in output samples: touch samples take effect at "
                              "block boundaries, as live (default 50 = 5 ms at 10 kHz)")
     parser.add_argument("--format", choices=FORMATS, default="csv",
@@ -42,7 +43,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--strict", action="store_true",
                         help="refuse a trace whose time goes back (default: samples up to "
                              "5 ms back are sorted into order, further back dropped, counted)")
-    parser.add_argument("--frames", type=positive_float, default=None, metavar="FPS",
+    parser.add_argument("--frames", type=bounded(float, 0.01, 1000.0, "frames/s"), default=None,
+                        metavar="FPS",
                         help="also write PNG frames of the visual layer at FPS into DIR/frames")
     parser.add_argument("--quiet", action="store_true", help="no progress bar, no summary line")
 
