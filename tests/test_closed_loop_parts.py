@@ -42,12 +42,16 @@ def test_rls_without_points_keeps_its_estimate():
 def test_chain_is_three_poles_and_a_delay_and_splits_exactly():
     rate = 10_000.0
     chain = Chain(SensorParams(), rate)
-    x = np.zeros(200)
-    x[0] = 1.0
-    whole, _ = chain.run(x, chain.initial_state())
-    a, s = chain.run(x[:77], chain.initial_state())
-    b, _ = chain.run(x[77:], s)
-    np.testing.assert_allclose(np.concatenate([a, b]), whole, rtol=1e-12, atol=1e-18)
+    x = np.zeros((2, 200))
+    x[0, 0] = 1.0
+    x[1] = 2.0  # a row at rest at its level stays there
+    start = chain.initial_state([0.0, 2.0])
+    rows, _ = chain.run(x, start)
+    np.testing.assert_allclose(rows[1], 2.0, rtol=1e-12)
+    a, s = chain.run(x[:, :77], start)
+    b, _ = chain.run(x[:, 77:], s)
+    np.testing.assert_allclose(np.concatenate([a, b], axis=1), rows, rtol=1e-12, atol=1e-18)
+    whole = rows[0]
     # independent: convolve the three one-pole impulse responses, then delay
     n = np.arange(200)
     h = np.array([1.0])

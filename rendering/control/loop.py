@@ -108,9 +108,7 @@ class ControlState:
     log_c: float
     rls: RlsState
     mu0: float = math.nan
-    asked: ChainState = ChainState()
-    moving: ChainState = ChainState()
-    model: tuple[ChainState, ...] = ()
+    chain: ChainState | None = None
     sent: Sent | None = None
     since_report_s: float = 0.0
     good_s: float = 0.0
@@ -143,8 +141,10 @@ class ClosedLoop:
         self._models: dict = {}
 
     def initial_state(self) -> ControlState:
+        # chain rows: reduction asked, plate moving, and (adaptive) the model's mu', d/db, d/dk
+        rows = [0.0, 0.0] + ([1.0, 0.0, 0.0] if self.mode == "adaptive" else [])
         return ControlState(log_c=0.0, rls=self.config.rls.initial_state(self.device.friction),
-                            asked=self.chain.initial_state(), moving=self.chain.initial_state())
+                            chain=self.chain.initial_state(rows))
 
     def _model(self, state: ControlState) -> SeedFrictionModel:
         params = state.rls.params if self.mode == "adaptive" else self.device.friction
@@ -174,8 +174,6 @@ class ClosedLoop:
         wanted, clamps = model.invert(asked, fingers.force)
         wanted = np.where(contact, wanted, 0.0)
         n = mu_target.shape[1]
-        if state.fallback:
-            state = replace(state, fallback_samples=state.fallback_samples + n)
         row = int(np.argmax(touching)) if touching.any() else 0
         w = wanted[row] if touching.any() else np.zeros(n)
         speed = np.hypot(fingers.vx[row], fingers.vy[row]) if touching.any() else np.zeros(n)
@@ -183,7 +181,8 @@ class ClosedLoop:
         cut = (w >= self.limit_um * (1.0 - 1e-9)) & (target < 1.0)
         sent = Sent(index0=int(fingers.index0), w_um=w, target=target, speed=speed, cut=cut,
                     single=single)
-        return wanted, clamps, replace(state, sent=sent)
+        held = state.fallback_samples + (n if state.fallback else 0)
+        return wanted, clamps, replace(state, sent=sent, fallback_samples=held)
 
     def _learn(self, state: ControlState, report: ForceReport | None) -> ControlState:
         """Fold the previous block's report into the state (module docstring, 1, 2, 4)."""
@@ -192,39 +191,40 @@ class ClosedLoop:
             return state
         cfg = self.config
         n = sent.w_um.size
-        ref, asked = self.chain.run(np.where(sent.target < 1.0, 1.0 - sent.target, 0.0), state.asked)
-        moving_in = (sent.w_um > cfg.still_um).astype(np.float64)
-        seen, moving = self.chain.run(moving_in, state.moving)
-        state = replace(state, asked=asked, moving=moving)
-        predicted = None
-        if self.mode == "adaptive":  # the model's mu' and Jacobian as the sensor sees them
-            predicted, model_chains = self._predict(state, sent.w_um, report)
-            state = replace(state, model=model_chains)
         fresh = report is not None and report.index0 == sent.index0 and report.lateral_n.size == n
+        rows = [np.where(sent.target < 1.0, 1.0 - sent.target, 0.0),
+                (sent.w_um > cfg.still_um).astype(np.float64)]
+        if self.mode == "adaptive":  # the model's mu' and Jacobian as the sensor sees them
+            normal = (np.asarray(report.normal_n, dtype=np.float64) if fresh
+                      else np.full(n, self.device.normal_force_n))
+            b, k = state.rls.theta
+            rows += [forward_mu(sent.w_um, normal, state.rls.params),
+                     *model_jacobian(sent.w_um, normal, b, k).T]
+        seen, chain = self.chain.run(np.stack(rows), state.chain)
         if not fresh:
-            return self._bad(state, "stale", stale=True)
+            return self._bad(replace(state, chain=chain), "stale", stale=True)
         lat = np.asarray(report.lateral_n, dtype=np.float64)
         nor = np.asarray(report.normal_n, dtype=np.float64)
-        touching = sent.single and bool(sent.target.size)
-        problem = _problem(lat, nor, touching, cfg)
+        problem = _problem(lat, nor, sent.single and bool(n), cfg)
         if problem:
-            return self._bad(state, problem, stale=False)
-        state = replace(state, since_report_s=0.0, good_s=state.good_s + self.block_s)
-        if state.fallback and state.good_s >= cfg.recover_s:
-            state = replace(state, fallback=False)
+            return self._bad(replace(state, chain=chain), problem, stale=False)
+        good_s = state.good_s + self.block_s
+        fallback = state.fallback and good_s < cfg.recover_s
+        changes = dict(chain=chain, since_report_s=0.0, good_s=good_s, fallback=fallback)
         sliding = sent.single & (sent.speed >= cfg.slide_mm_s) & (nor >= cfg.min_normal_n)
         if not sent.single or not sliding.any():
-            return state  # at rest or several fingers: nothing to learn, nothing to wind up
+            return replace(state, **changes)  # at rest or several fingers: nothing to learn
+        ref = seen[0]
         ratio = lat / np.maximum(nor, cfg.min_normal_n)
-        still = sliding & (seen < cfg.still_seen)
+        still = sliding & (seen[1] < cfg.still_seen)
         mu0 = state.mu0
         if np.count_nonzero(still) >= cfg.min_still:
             m = float(np.median(ratio[still]))  # robust to a stop the tracker sees late
             alpha = -math.expm1(-np.count_nonzero(still) / (self.rate_hz * cfg.mu0_tau_s))
             mu0 = m if not math.isfinite(mu0) else mu0 + alpha * (m - mu0)
-            state = replace(state, mu0=mu0)
-        if not math.isfinite(mu0) or state.fallback:
-            return state
+            changes["mu0"] = mu0
+        if not math.isfinite(mu0) or fallback:
+            return replace(state, **changes)
         measured = ratio / mu0
         sliding &= measured >= cfg.min_mu  # a finger that stuck reads friction near 0
         asked_here = sliding & (ref >= cfg.min_reduction)
@@ -234,29 +234,13 @@ class ClosedLoop:
             step = -cfg.ki * math.log(min(max(g, 0.25), 4.0))
             if step > 0 and np.count_nonzero(sent.cut) > 0.1 * n:
                 step = 0.0  # anti-windup: the limit already cuts what is asked
-            log_c = float(np.clip(state.log_c + step, -cfg.log_c_max, cfg.log_c_max))
-            state = replace(state, log_c=log_c, updates=state.updates + 1)
-        if predicted is not None:  # one RLS step (module docstring, 3)
+            changes["log_c"] = float(np.clip(state.log_c + step, -cfg.log_c_max, cfg.log_c_max))
+            changes["updates"] = state.updates + 1
+        if self.mode == "adaptive":  # one RLS step (module docstring, 3)
             pick = np.flatnonzero(sliding)[::cfg.decimate]
-            model, jac = predicted
-            rls = cfg.rls.update(state.rls, jac[pick], measured[pick] - model[pick])
-            state = replace(state, rls=rls)
-        return state
-
-    def _predict(self, state: ControlState, w_um: np.ndarray, report: ForceReport | None):
-        """((mu' (n,), Jacobian (n, 2)) of the current model through the chain, chain states)
-        for the amplitudes sent; the normal force is the report's (else the device's)."""
-        normal = (np.asarray(report.normal_n, dtype=np.float64)
-                  if report is not None and report.normal_n.size == w_um.size
-                  else np.full(w_um.size, self.device.normal_force_n))
-        theta = state.rls.theta
-        model = forward_mu(w_um, normal, state.rls.params)
-        jac = model_jacobian(w_um, normal, theta[0], theta[1])
-        chains = state.model or (self.chain.initial_state(1.0), self.chain.initial_state(),
-                                 self.chain.initial_state())
-        seen = [self.chain.run(x, c) for x, c in zip((model, jac[:, 0], jac[:, 1]), chains)]
-        predicted = (seen[0][0], np.stack([seen[1][0], seen[2][0]], axis=1))
-        return predicted, tuple(c for _, c in seen)
+            changes["rls"] = cfg.rls.update(state.rls, seen[3:, pick].T,
+                                            measured[pick] - seen[2, pick])
+        return replace(state, **changes)
 
     def _bad(self, state: ControlState, problem: str, stale: bool) -> ControlState:
         since = state.since_report_s + self.block_s if stale else state.since_report_s
