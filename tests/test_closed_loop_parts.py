@@ -71,7 +71,8 @@ def test_the_loop_needs_seed_003s_plate():
 
 
 def _fake(rms):
-    return {"rms": rms * 1.5, "rms_reachable": rms, "fallbacks": 0, "noise_fraction": 0.01,
+    return {"rms": rms * 1.5, "rms_reachable": rms, "rms_settled": rms / 2, "fallbacks": 0,
+            "noise_fraction": 0.01,
             "adapted_gap": 0.03, "max_command_um": 2.0, "growth": 0.5}
 
 
