@@ -47,8 +47,6 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
-from scipy.optimize import brentq
 
 from device.profile import Calibration, DeviceProfile, FrictionParams
 
@@ -146,6 +144,9 @@ class CalibratedFrictionModel:
     """A measured calibration table, inverted by monotone (PCHIP) interpolation."""
 
     def __init__(self, device: DeviceProfile):
+        # scipy only for scenes with a calibration table (importing it costs 0.3-0.6 s)
+        from scipy.interpolate import PchipInterpolator
+        from scipy.optimize import brentq
         cal: Calibration = device.calibration
         self.limit_um = float(device.amplitude_limit_um)
         self.nominal_force_n = float(device.normal_force_n)
@@ -193,6 +194,7 @@ class CalibratedFrictionModel:
 
     def forward(self, w_um, normal_force_n) -> np.ndarray:
         """mu' at ``w_um``: the inverse of :meth:`invert` (solved per element; not for hot paths)."""
+        from scipy.optimize import brentq
         w_b, f_b = np.broadcast_arrays(np.asarray(w_um, dtype=np.float64),
                                        np.asarray(normal_force_n, dtype=np.float64))
         out = np.empty(w_b.shape)

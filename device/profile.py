@@ -11,7 +11,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from device.actuation.modal import DEFAULT_METHOD, DEFAULT_RCOND
+
+#: How the modal profiles turn wanted amplitudes into actuator commands
+#: (``device.actuation.modal.solve``).
+METHODS = ("exact", "regularised", "bounded")
+#: chosen by measurement (``frictex bench modal``, device/MODES.md)
+DEFAULT_METHOD = "regularised"
+#: regularisation threshold, relative to the largest singular value (device/MODES.md)
+DEFAULT_RCOND = 0.1
 
 #: The actuation profiles a scene's ``[device] profile`` may name, with one line each.
 #: This is the one place to add a profile.
@@ -26,6 +33,8 @@ DEVICE_PROFILES: dict[str, str] = {
 #: The travelling-wave profiles (seed 002, seed 004): the only ones that can push a finger,
 #: so the only ones that accept force layers (:data:`FORCE_LAYERS`) and ``[device.driving]``.
 FORCE_PROFILES = ("travelling-beam-seed002", "ring-seed004")
+#: touch-surface length along x (mm) of each travelling-wave profile: the display must fit on it
+SURFACE_LENGTH_MM = {"travelling-beam-seed002": 600.0, "ring-seed004": 140.0}
 #: The profiles driven by modal control (seed 000 eq 10, seed 001 eqs 4-5); each has a
 #: ``[device.structure]`` table (:class:`BeamStructure` or :class:`PlateStructure`).
 MODAL_PROFILES = ("beam-seed000", "plate-seed001")

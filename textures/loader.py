@@ -153,8 +153,8 @@ from typing import Any, Callable
 import numpy as np
 
 from device.structures.beam import THEORIES, ModesError
-from device.actuation.modal import METHODS
 from device import profile as profiles
+from device.profile import METHODS
 from textures import model
 from textures.errors import KeyPath, Locator, Problem, TextureError, bracket_peak, field_name
 from textures.library import UnreadableText, file_problem, read_utf8
@@ -1018,8 +1018,6 @@ BUILDERS: dict[str, Callable] = {
 def _force_device(r: _Reader, doc: dict, device, display, built):
     """``[device.driving]`` and the force layers: only on a travelling-wave profile whose
     surface holds the display. Returns the device with its driving model, or None."""
-    from device.actuation.push_actuation import SURFACE_LENGTH_MM
-
     raw = doc.get("device", {})
     force_profile = device is not None and device.profile in profiles.FORCE_PROFILES
     if device is not None and not force_profile:
@@ -1037,7 +1035,7 @@ def _force_device(r: _Reader, doc: dict, device, display, built):
         return device
     if not force_profile:
         return device
-    surface = SURFACE_LENGTH_MM[device.profile]
+    surface = profiles.SURFACE_LENGTH_MM[device.profile]
     if display is not None and display.width_mm > surface + 1e-9:
         r.report(("display", "width_mm"), f"{display.width_mm:g} mm is longer than the "
                                           f"{surface:g} mm surface of {device.profile} (display "

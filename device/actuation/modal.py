@@ -42,12 +42,8 @@ import numpy as np
 
 from device.structures.beam import ModesError
 from device.actuation.bounded_two import bounded_two
+from device.profile import DEFAULT_METHOD, DEFAULT_RCOND, METHODS
 
-METHODS = ("exact", "regularised", "bounded")
-#: chosen by measurement (``frictex bench modal``, device/MODES.md)
-DEFAULT_METHOD = "regularised"
-#: regularisation threshold, relative to the largest singular value (device/MODES.md)
-DEFAULT_RCOND = 0.1
 #: singular values below this fraction of the largest are treated as zero by "exact"
 _EXACT_RCOND = 1e-12
 _FISTA_MAX_ITER = 3000

@@ -26,13 +26,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from device.profile import SURFACE_LENGTH_MM
 from device.actuation.base import Actuated
 from device.structures.beam import FreeFreeBeam
 from device.structures.ring import RingResonator
 from device.actuation.travelling import BeamActuation, TwoModeWave, beam_wave, ring_wave
-
-#: touch-surface length along x (mm) per profile: the display must fit on it
-SURFACE_LENGTH_MM = {"travelling-beam-seed002": 600.0, "ring-seed004": 140.0}
 
 _DIRECTIONS = (-1, 0, 1)
 

@@ -46,7 +46,6 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from scipy.optimize import brentq
 
 THEORIES = ("euler-bernoulli", "timoshenko")
 
@@ -176,6 +175,7 @@ class FreeFreeBeam:
         xs = np.linspace(0.0, length, n_samples)
         ws = _deflection(mode, xs, length)
         change = np.flatnonzero(np.signbit(ws[:-1]) != np.signbit(ws[1:]))
+        from scipy.optimize import brentq  # beam scenes only: scipy's import is 0.3-0.6 s
         nodes = [brentq(lambda x: float(_deflection(mode, np.float64(x), length)),
                         xs[i], xs[i + 1], xtol=1e-15, rtol=4 * np.finfo(float).eps)
                  for i in change]
@@ -259,6 +259,7 @@ def _mode(beam: FreeFreeBeam, order: int) -> _Mode:
     def det(beta_l: float) -> float:
         return float(np.linalg.det(beam._end_matrix(beta_l / length)))
 
+    from scipy.optimize import brentq  # beam scenes only: scipy's import is 0.3-0.6 s
     beta_l = brentq(det, lo, hi, xtol=1e-14, rtol=4 * np.finfo(float).eps)
     beta = beta_l / length
     omega, alpha, _ = beam._dispersion(beta)
