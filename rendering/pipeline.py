@@ -133,7 +133,7 @@ class Pipeline:
     def __init__(self, scene: Scene, rate_hz: float = 10_000.0, block_size: int = 50,
                  render_override: str | None = None, sho_variant: str = DEFAULT_SHO,
                  t0_s: float = 0.0, tracker: TrackerConfig | None = None,
-                 inversion: str = "exact", control: str = "open"):
+                 inversion: str = "exact", control: str | None = None):
         if rate_hz <= 0 or not np.isfinite(rate_hz):
             raise ValueError(f"output rate {rate_hz!r} Hz: expected a positive number")
         if block_size < 1:
@@ -162,6 +162,7 @@ class Pipeline:
             self.friction = LutFrictionModel(self.friction)
         self.actuation = make_actuation(scene.device)
         self.control = None  # closed-loop friction (rendering.control.loop), not open loop
+        control = scene.control if control is None else control  # the file's, or overridden
         if control != "open":
             from rendering.control.loop import ClosedLoop
             self.control = ClosedLoop(scene.device, self.rate_hz, self.block_size, control)

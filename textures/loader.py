@@ -7,6 +7,9 @@ default shown. Layers are drawn and composed in file order (later on top).
     format = 1                        # required; the version of this grammar
     name = "..."                      # default: the file name without .toml
     description = "..."               # one line for `frictex library`; default ""
+    control = "open"                  # | "closed" | "adaptive": friction control (closed
+                                      #   loop on the lateral force; plate-seed003 with
+                                      #   seed 003's model only)
 
     [display]                         # required: the touchscreen's active area
     width_mm, height_mm               # required, 0.001 to 10000
@@ -274,7 +277,8 @@ FORCE = Num("N", gt=0.0, le=MAX_FORCE_N)
 DUTY = Num("fraction of the period", default=0.5, gt=0.0, lt=1.0)
 
 TOP = {"format": Int("format version"), "name": Text(None),
-       "description": Text("", max_len=10_000, lines=True)}
+       "description": Text("", max_len=10_000, lines=True),
+       "control": Choice(model.CONTROL_MODES, "open")}
 DISPLAY = {"width_mm": SIZE, "height_mm": SIZE,
            "width_px": Int("px", ge=1, le=MAX_PX), "height_px": Int("px", ge=1, le=MAX_PX)}
 DEVICE = {"profile": Choice(tuple(profiles.DEVICE_PROFILES), _DEVICE.profile),
@@ -1266,8 +1270,14 @@ def check_scene(path: str | Path) -> tuple[model.Scene | None, list[Problem], li
     _device_warnings(r, device)
     _reach_warnings(r, device, built)
     _selector_warnings(r, device, built)
+    if top["control"] != "open" and (device.profile != "plate-seed003"
+                                     or device.calibration is not None):
+        r.report(("control",), f"{top['control']!r} needs profile = \"plate-seed003\" with seed "
+                               f"003's model (no [device.calibration]); expected \"open\" here")
+        return None, r.problems, r.warnings
     scene = model.Scene(format=fmt, name=name, description=top["description"], display=display,
-                        device=device, layers=tuple(layer for layer, _ in built), source=path)
+                        device=device, layers=tuple(layer for layer, _ in built), source=path,
+                        control=top["control"])
     return scene, r.problems, r.warnings
 
 

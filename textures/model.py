@@ -605,7 +605,7 @@ Layer = Grating | Waveform | Shape | Edge | Bump | Line | RasterMap | Directiona
 @dataclass(frozen=True)
 class Scene:
     """One texture file, validated: the display, the device and the layers in
-    drawing order (later layers on top)."""
+    drawing order (later layers on top). ``control``: one of :data:`CONTROL_MODES`."""
 
     format: int
     name: str
@@ -614,6 +614,7 @@ class Scene:
     device: DeviceProfile
     layers: tuple[Layer, ...]
     source: Path | None = None
+    control: str = "open"
 
     @property
     def renderers_used(self) -> frozenset[str]:
@@ -625,6 +626,12 @@ class Scene:
         """The period of the scene's single periodic layer, if it has exactly one."""
         periods = [layer.period_mm for layer in self.layers if layer.is_periodic]
         return periods[0] if len(periods) == 1 else None
+
+
+#: friction control modes (``rendering.control.loop``): open loop (the inverse model
+#: alone), feedback on the device's model, feedback on the model adapted online; the loop
+#: modes need a plate-seed003 device with seed 003's model and the lateral force sensed
+CONTROL_MODES = ("open", "closed", "adaptive")
 
 
 def auto_render_mode(period_mm: float | None) -> str:

@@ -49,10 +49,8 @@ from device.profile import DeviceProfile
 from rendering.control.adapt import Rls, RlsState
 from rendering.control.chain import Chain, ChainState
 from rendering.control.margins import KI
+from textures.model import CONTROL_MODES
 
-#: control modes: open loop (the pipeline's inversion), feedback on the device's model,
-#: feedback on the model adapted online
-CONTROL_MODES = ("open", "closed", "adaptive")
 
 
 @dataclass(frozen=True, eq=False)
