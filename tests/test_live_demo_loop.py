@@ -10,8 +10,9 @@ import time
 import numpy as np
 import pytest
 
-from app.live.demo_loop import DemoLoop, next_screenshot
+from app.live.demo_loop import DemoLoop, HapticStopped, next_screenshot
 from app.live.haptic_thread import HapticThread
+from device.link.host import LinkStalled
 from rendering.input.trace_file import DOWN, MOVE, UP
 from rendering.visual.context import OffscreenBackend
 from textures.library import resolve_scene
@@ -212,3 +213,28 @@ def test_screenshots_are_numbered_after_those_in_the_folder(tmp_path):
     path, f = next_screenshot(tmp_path / "new" / "folder", "frictex-a")
     f.close()
     assert path.name == "frictex-a-000.png"
+
+
+@pytest.mark.parametrize("error, raised, message", [
+    (LinkStalled("sim: device took no blocks through 5 waits"), LinkStalled, "took no blocks"),
+    (ZeroDivisionError("float division by zero"), HapticStopped,
+     "haptic output stopped: float division by zero"),
+])
+def test_a_stopped_haptic_side_ends_the_loop_with_a_one_line_error(gl, tmp_path, error, raised,
+                                                                     message):
+    """A device that stopped taking data ends the demo as it ends a replay (LinkStalled:
+    the command's one-line error, exit 1); anything else as an OSError saying so."""
+    scene = load_scene(resolve_scene("grating-5mm"))
+    window = StuckWindow(gl)
+    window.unstick()
+    haptic = HapticThread(scene)
+    haptic.error = error
+    loop = DemoLoop(window, haptic, [resolve_scene("grating-5mm")], 0, scene, load_scene, tmp_path)
+    try:
+        with pytest.raises(raised, match=message):
+            loop.run()
+    finally:
+        loop.close()
+        window.close()
+    assert loop.frames == 0
+    assert issubclass(raised, OSError)  # frictex: error: ..., never a traceback

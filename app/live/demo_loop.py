@@ -88,6 +88,20 @@ def next_screenshot(folder: Path, stem: str):
             n += 1
 
 
+class HapticStopped(OSError):
+    """The haptic side stopped for a reason that is neither a device's nor a file's."""
+
+
+def output_stopped(error) -> BaseException:
+    """What the demo raises when its haptic side stopped with ``error`` (an exception,
+    or the child process's message): a device that stopped taking data stays itself
+    (``LinkError``, an OSError: the command's one-line error and exit status), anything
+    else says the output stopped."""
+    if isinstance(error, (OSError, ValueError)):
+        return error
+    return HapticStopped(f"haptic output stopped: {error}")
+
+
 class DemoLoop:
     """See the module docstring. ``load(path) -> Scene`` raises ValueError on a bad file."""
 
@@ -441,8 +455,8 @@ class DemoLoop:
         try:
             next_frame = clock()
             while not self._stop.is_set():
-                if self.haptic.error is not None:
-                    raise RuntimeError(f"haptic output stopped: {self.haptic.error}")
+                if (error := self.haptic.error) is not None:
+                    raise output_stopped(error)
                 while not self._keys.empty():
                     self.handle_key(*self._keys.get())
                 now = clock()

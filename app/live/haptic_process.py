@@ -29,6 +29,7 @@ from __future__ import annotations
 import gc
 import multiprocessing as mp
 import os
+import pickle
 import queue
 import time
 from dataclasses import dataclass
@@ -101,7 +102,7 @@ class HapticProcess(TouchInput):
         self.link: dict = {"state": "none"}
         self.dropped_records = 0
         self._last_stamp = 0.0
-        self._error: str | None = None
+        self._error: BaseException | None = None
         self._input_error: str | None = None
         self._done = False
         self._proc = ctx.Process(target=serve, name="frictex-haptic", daemon=True,
@@ -116,13 +117,15 @@ class HapticProcess(TouchInput):
         self.pipeline = PipelineInfo(reply[2], make_actuation(scene.device))
 
     @property
-    def error(self) -> str | None:
-        """Why the child stopped on its own (None while it runs, and after a clean stop)."""
+    def error(self) -> BaseException | None:
+        """Why the child stopped on its own, the exception its haptic thread ended with
+        (None while it runs, and after a clean stop)."""
         if self._done:
             return self._error
         self._poll(0.0)
         if self._error is None and not self._done and not self._proc.is_alive():
-            self._error = f"haptic process exited with code {self._proc.exitcode}"
+            self._error = HapticProcessError(f"haptic process exited with code "
+                                             f"{self._proc.exitcode}")
         return self._error
 
     def input_error(self) -> str | None:
@@ -271,10 +274,20 @@ def serve(config: HapticConfig, estop, touches, snapshots, requests, replies,
                 break
             replies.put(("switched", *_switch(haptic, load_scene, *request[1:])))
         if haptic.error is not None:
-            replies.put(("error", repr(haptic.error)))
+            replies.put(("error", _sendable(haptic.error)))
     finally:
         link, dropped_records = finish()
         replies.put(("done", haptic.stats, link, dropped_records))
+
+
+def _sendable(exc: BaseException) -> BaseException:
+    """``exc`` if it survives pickling (a LinkStalled does: the window exits as a replay
+    would), else a RuntimeError saying what it was."""
+    try:
+        pickle.loads(pickle.dumps(exc))
+        return exc
+    except Exception:  # any exception a foreign __reduce__ may raise
+        return RuntimeError(repr(exc))
 
 
 def _switch(haptic, load_scene, path: str | None, override) -> tuple:
