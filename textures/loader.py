@@ -109,6 +109,30 @@ Layer keys by type (mu' is relative friction in (0, 1]; positions in mm, angles 
   height_mm; tile also takes tile_width_mm / tile_height_mm (default: the image at the
   display's pixel size); one-to-one takes neither (one image pixel per display pixel).
 
+Shapes, recorded textures and effect clips (textures/AUTHORING.md says what each renders):
+
+- ``height`` (felt by its slope: ``textures.heights``): shape = "bump" | "ridge" | "step" |
+  "button" | "map" (required); rise_mm (required, -100 to 100: the height, negative a dip;
+  for a map the height at white). bump: cx_mm, cy_mm, sigma_mm. ridge: x_mm, y_mm (on the
+  crest), angle_deg = 0 (the way it runs), width_mm. step: x_mm, y_mm, angle_deg = 0 (the
+  normal, pointing up), chamfer_mm. button: cx_mm, cy_mm, radius_mm, rim_mm (< radius_mm).
+  map: image (16-bit greyscale PNG, path relative to this file), x_mm = 0, y_mm = 0,
+  width_mm, height_mm. All: rendering = "slope" | "magnitude", gain = 2 (mu' per unit
+  slope, > 0), mu_rest = 0.8, mu_min = 0.6, mu_max = 1 (mu_min < mu_rest < mu_max;
+  "magnitude" allows mu_min = mu_rest), v_fade_mm_s = 10 (> 0).
+- ``recorded`` (a Penn Haptic Texture Toolkit model: ``textures.hatt``): model (required: the
+  toolkit's XML model file, path relative to this file), mu_mean = 0.8, gain = 0.02 (mu'
+  per m/s^2 of the model's output, > 0), mu_min = 0.6, mu_max = 1 (mu_min < mu_mean <
+  mu_max), v_rest_mm_s = 2 (>= 0), seed = 0 (integer 0 to 2147483647).
+- ``clip`` (mu' against time: ``textures.clips``): trigger = "down" | "lift" | "edge" |
+  "force" (required; down and lift: inside ``region``, the whole display without one);
+  edge: x_mm, y_mm (a point on the line), angle_deg = 0 (its normal); force: force_n.
+  depth = 0.4 (the drop in mu' at full level, in (0, 1)); clip = "tick" | "ramp" |
+  "envelope" | "ahap" (required). tick: intensity = 1, sharpness = 0.5. ramp:
+  duration_s, level_from = 0, level_to = 1, sharpness = 0. envelope: times_s (from 0,
+  increasing), levels (0 to 1, one per time), intensity = 1, sharpness = 0. ahap: file
+  (AHAP JSON, path relative to this file; ``textures.ahap``). Clips last at most 60 s.
+
 Force layers (``textures.model.FORCE_LAYERS``; only on the travelling-wave profiles, whose
 waves run along display x; they take no ``blend``: see ``rendering.layers.force_layers``):
 
@@ -159,6 +183,10 @@ from device.structures.beam import THEORIES, ModesError
 from device import profile as profiles
 from device.profile import METHODS
 from textures import model
+from textures.ahap import read_ahap
+from textures.clips import CLIP_TRIGGERS, MAX_CLIP_S, Clip, ClipEvent, ClipLayer
+from textures.heights import (HEIGHT_RENDERINGS, ButtonRim, GaussianBump, HeightLayer, HeightMap,
+                              Ridge, Step, read_height_png)
 from textures.errors import KeyPath, Locator, Problem, TextureError, bracket_peak, field_name
 from textures.library import UnreadableText, file_problem, read_utf8
 from textures.raster_io import read_grey
@@ -166,7 +194,7 @@ from textures.raster_io import read_grey
 FORMAT_VERSION = 1
 
 LAYER_TYPES = ("grating", "waveform", "rectangle", "disc", "edge", "bump", "line", "raster",
-               "directional", "guidance", "keyclick")
+               "directional", "guidance", "keyclick", "height", "recorded", "clip")
 FORCE_TYPES = ("directional", "guidance", "keyclick")
 PERIODIC_TYPES = ("grating", "waveform")
 RENDER_CHOICES = ("auto",) + model.RENDER_MODES
@@ -358,6 +386,46 @@ LAYER_KEYS: dict[str, dict[str, Spec]] = {
                  "dwell_s": Num("s", 0.01, ge=0.0), "force_n": replace(FORCE, default=0.1),
                  "first_push": Choice(("+x", "-x"), "+x")},
 }
+_OPTIONAL_POS = replace(POS, default=None)
+_OPTIONAL_SIZE = replace(SIZE, default=None)
+#: the keys each height shape takes (besides rise_mm and the rendering keys)
+HEIGHT_SHAPES = {"bump": ("cx_mm", "cy_mm", "sigma_mm"),
+                 "ridge": ("x_mm", "y_mm", "angle_deg", "width_mm"),
+                 "step": ("x_mm", "y_mm", "angle_deg", "chamfer_mm"),
+                 "button": ("cx_mm", "cy_mm", "radius_mm", "rim_mm"),
+                 "map": ("image", "x_mm", "y_mm", "width_mm", "height_mm")}
+#: the keys each clip shape takes (besides depth)
+CLIP_SHAPES = {"tick": ("intensity", "sharpness"),
+               "ramp": ("duration_s", "level_from", "level_to", "sharpness"),
+               "envelope": ("times_s", "levels", "intensity", "sharpness"),
+               "ahap": ("file",)}
+LEVEL = Num("level, 0 to 1", ge=0.0, le=1.0)
+LAYER_KEYS["height"] = {
+    "shape": Choice(tuple(HEIGHT_SHAPES)), "rise_mm": Num("mm", ge=-100.0, le=100.0),
+    **{k: _OPTIONAL_POS for k in ("cx_mm", "cy_mm", "x_mm", "y_mm")},
+    **{k: _OPTIONAL_SIZE for k in ("sigma_mm", "width_mm", "height_mm", "chamfer_mm",
+                                   "radius_mm", "rim_mm")},
+    "angle_deg": ANGLE, "image": Text(None, max_len=1000),
+    "rendering": Choice(HEIGHT_RENDERINGS, "slope"),
+    "gain": Num("mu' per unit slope", 2.0, gt=0.0), "mu_rest": replace(MU, default=0.8),
+    "mu_min": replace(MU, default=0.6), "mu_max": MU_HIGH,
+    "v_fade_mm_s": Num("mm/s", 10.0, gt=0.0)}
+LAYER_KEYS["recorded"] = {
+    "model": Text(max_len=1000), "mu_mean": replace(MU, default=0.8),
+    "gain": Num("mu' per m/s^2", 0.02, gt=0.0), "mu_min": replace(MU, default=0.6),
+    "mu_max": MU_HIGH, "v_rest_mm_s": Num("mm/s", 2.0, ge=0.0),
+    "seed": Int("noise seed", 0, ge=0, le=2**31 - 1)}
+LAYER_KEYS["clip"] = {
+    "trigger": Choice(CLIP_TRIGGERS), "x_mm": _OPTIONAL_POS, "y_mm": _OPTIONAL_POS,
+    "angle_deg": ANGLE, "force_n": replace(FORCE, default=None),
+    "depth": Num("drop in mu' at full level", 0.4, gt=0.0, lt=1.0),
+    "clip": Choice(tuple(CLIP_SHAPES)), "intensity": replace(LEVEL, default=1.0),
+    "sharpness": replace(LEVEL, default=None),
+    "duration_s": Num("s", None, gt=0.0, le=MAX_CLIP_S),
+    "level_from": replace(LEVEL, default=0.0), "level_to": replace(LEVEL, default=1.0),
+    "times_s": NumList(Num("s", ge=0.0, le=MAX_CLIP_S), min_len=2, default=None),
+    "levels": NumList(LEVEL, min_len=2, default=None), "file": Text(None, max_len=1000)}
+
 _DRIVING = profiles.DrivingForceParams()
 DRIVING = {"mu0": Num("friction coefficient", _DRIVING.mu0, gt=0.0),
            "slope_per_um": Num("N per um per N", _DRIVING.slope_per_um, gt=0.0),
@@ -1011,11 +1079,140 @@ def _build_keyclick(r, path, v, given, ctx):
     return layer, "force_n"
 
 
+def _chosen_keys(r, path, v, given, table: dict, choice_key: str, optional=()) -> bool:
+    """Keys of the chosen variant (``table[v[choice_key]]``) without a default are
+    required unless ``optional``; keys only other variants take are refused."""
+    choice = v[choice_key]
+    ok = True
+    for key in table[choice]:
+        if v[key] is None and key not in optional:
+            r.report(path + (key,), f'missing (required with {choice_key} = "{choice}")')
+            ok = False
+    others = {k for keys in table.values() for k in keys} - set(table[choice])
+    return _forbid(r, path, given, sorted(others), f'with {choice_key} = "{choice}"') and ok
+
+
+def _file_read(r, path, key, name, ctx, reader):
+    """``reader(path)`` of the file ``name`` relative to the texture file, or None (reported)."""
+    file_path = _real_path(ctx.base_dir, name) if name else None
+    try:
+        if file_path is None:
+            raise TextureError("empty path")
+        return reader(file_path)
+    except OSError as exc:
+        r.report(path + (key,), f"{_show(name)}: {file_path}: {exc.strerror or exc}")
+    except TextureError as exc:  # its message starts with the file's path
+        r.report(path + (key,), f"{_show(name)}: {exc}")
+    return None
+
+
+def _build_height(r, path, v, given, ctx):
+    kind = v["shape"]
+    ok = _chosen_keys(r, path, v, given, HEIGHT_SHAPES, "shape",
+                      optional=("x_mm", "y_mm") if kind == "map" else ())
+    low = "<=" if v["rendering"] == "magnitude" else "<"
+    if not ((v["mu_min"] <= v["mu_rest"] if low == "<=" else v["mu_min"] < v["mu_rest"])
+            and v["mu_rest"] < v["mu_max"]):
+        r.report(path + ("mu_rest",), f"mu_min {v['mu_min']:g} {low} mu_rest {v['mu_rest']:g} "
+                                      f"< mu_max {v['mu_max']:g} does not hold")
+        ok = False
+    if not ok:
+        return None
+    if kind == "bump":
+        shape = GaussianBump(v["cx_mm"], v["cy_mm"], v["sigma_mm"], v["rise_mm"])
+        ok = _on_display(r, path + ("cx_mm",), ctx, "bump centre", [v["cx_mm"]], [v["cy_mm"]])
+    elif kind == "ridge":
+        shape = Ridge(v["x_mm"], v["y_mm"], v["angle_deg"], v["width_mm"], v["rise_mm"])
+        ok = _on_display(r, path + ("x_mm",), ctx, "ridge point", [v["x_mm"]], [v["y_mm"]])
+    elif kind == "step":
+        shape = Step(v["x_mm"], v["y_mm"], v["angle_deg"], v["rise_mm"], v["chamfer_mm"])
+        ok = _on_display(r, path + ("x_mm",), ctx, "step point", [v["x_mm"]], [v["y_mm"]])
+    elif kind == "button":
+        if not v["rim_mm"] < v["radius_mm"]:
+            r.report(path + ("rim_mm",), f"{v['rim_mm']:g} mm is not below radius_mm {v['radius_mm']:g}")
+            return None
+        shape = ButtonRim(v["cx_mm"], v["cy_mm"], v["radius_mm"], v["rim_mm"], v["rise_mm"])
+        ok = ctx.display is None or _region_on_display(
+            r, path + ("cx_mm",), model.DiscRegion(v["cx_mm"], v["cy_mm"], v["radius_mm"]),
+            ctx.display, "button")
+    else:
+        x, y = v["x_mm"] or 0.0, v["y_mm"] or 0.0
+        sprite = model.RectRegion(x, y, v["width_mm"], v["height_mm"])
+        ok = ctx.display is None or _region_on_display(r, path + ("x_mm",), sprite, ctx.display,
+                                                        "height map")
+        heights = _file_read(r, path, "image", v["image"], ctx,
+                             lambda f: read_height_png(f, v["rise_mm"]))
+        if heights is None:
+            return None
+        shape = HeightMap(heights, x, y, v["width_mm"], v["height_mm"])
+    keys = ("rendering", "gain", "mu_rest", "mu_min", "mu_max", "v_fade_mm_s")
+    return (HeightLayer(**ctx.common, shape=shape, **{k: v[k] for k in keys}), "mu_min") if ok else None
+
+
+def _build_recorded(r, path, v, given, ctx):
+    if not v["mu_min"] < v["mu_mean"] < v["mu_max"]:
+        r.report(path + ("mu_mean",), f"mu_min {v['mu_min']:g} < mu_mean {v['mu_mean']:g} < "
+                                      f"mu_max {v['mu_max']:g} does not hold")
+        return None
+    from textures.hatt import ArTextureLayer, read_hatt_xml  # numba: only for scenes that use it
+
+    texture = _file_read(r, path, "model", v["model"], ctx, read_hatt_xml)
+    if texture is None:
+        return None
+    return ArTextureLayer(**ctx.common, **{**v, "model": texture}), "mu_min"
+
+
+def _clip_shape(r, path, v, ctx) -> Clip | None:
+    kind, depth = v["clip"], v["depth"]
+    sharp = v["sharpness"] if v["sharpness"] is not None else (0.5 if kind == "tick" else 0.0)
+    if kind == "tick":
+        return Clip((ClipEvent("transient", 0.0, v["intensity"], sharp),), depth)
+    if kind == "ramp":
+        envelope = ((0.0, v["level_from"]), (v["duration_s"], v["level_to"]))
+        return Clip((ClipEvent("continuous", 0.0, 1.0, sharp, v["duration_s"], envelope),), depth)
+    if kind == "envelope":
+        times, levels = v["times_s"], v["levels"]
+        if len(times) != len(levels) or times[0] != 0.0 or not _strictly_increasing(times):
+            r.report(path + ("times_s",), f"{_show(list(times))}: expected times from 0, strictly "
+                                          f"increasing, one per level ({len(levels)})")
+            return None
+        return Clip((ClipEvent("continuous", 0.0, v["intensity"], sharp, times[-1],
+                               tuple(zip(times, levels))),), depth)
+    got = _file_read(r, path, "file", v["file"], ctx, lambda f: read_ahap(f, depth))
+    if got is None:
+        return None
+    clip, notes = got
+    for note in notes[:3]:
+        r.report(path + ("file",), note, warning=True)
+    return clip
+
+
+def _build_clip(r, path, v, given, ctx):
+    ok = _chosen_keys(r, path, v, given, CLIP_SHAPES, "clip", optional=("sharpness",))
+    trigger = v["trigger"]
+    needs = {"edge": ("x_mm", "y_mm"), "force": ("force_n",)}.get(trigger, ())
+    for key in needs:
+        if v[key] is None:
+            r.report(path + (key,), f'missing (required with trigger = "{trigger}")')
+            ok = False
+    unused = [k for k in ("x_mm", "y_mm", "angle_deg", "force_n") if k not in needs
+              and not (k == "angle_deg" and trigger == "edge")]
+    ok &= _forbid(r, path, given, unused, f'with trigger = "{trigger}"')
+    if ok and trigger == "edge":
+        ok = _on_display(r, path + ("x_mm",), ctx, "edge point", [v["x_mm"]], [v["y_mm"]])
+    clip = _clip_shape(r, path, v, ctx) if ok else None
+    if clip is None:
+        return None
+    place = {k: v[k] for k in ("x_mm", "y_mm", "angle_deg", "force_n") if v[k] is not None}
+    return ClipLayer(**ctx.common, clip=clip, trigger=trigger, **place), "depth"
+
+
 BUILDERS: dict[str, Callable] = {
     "grating": _build_grating, "waveform": _build_waveform, "rectangle": _build_rectangle,
     "disc": _build_disc, "edge": _build_edge, "bump": _build_bump, "line": _build_line,
     "raster": _build_raster, "directional": _build_directional, "guidance": _build_guidance,
-    "keyclick": _build_keyclick,
+    "keyclick": _build_keyclick, "height": _build_height, "recorded": _build_recorded,
+    "clip": _build_clip,
 }
 
 

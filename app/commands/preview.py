@@ -6,6 +6,11 @@ the same pixels the demo window shows); the right panel is mu' composed from the
 layers (``rendering.compose.ideal_mu``: what a perfect renderer gives a finger there),
 averaged over each pixel. The colour bar marks the lowest mu' the device reaches at
 the scene's nominal normal force: targets below it will be clamped.
+
+Layers whose mu' depends on motion or time are shown as follows (and said so in the
+title): a height layer as a finger sliding towards +x feels it (climbing flanks above
+its rest level, descending ones below); a recorded texture at its mean; a clip at rest
+(mu' 1) in the map, with its trigger, length and deepest mu' in the title.
 """
 
 from __future__ import annotations
@@ -16,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from rendering.compose import ideal_mu
+from rendering.layers.height import slope_along_motion
 from device.friction import mu_floor
 from rendering.visual.scene_image import scene_rgb, to_srgb8
 from rendering.visual.viewport import fit_viewport
@@ -62,6 +68,47 @@ def load(scene_name: str):
     return load_scene(resolve_scene(scene_name))
 
 
+class _MovingRight:
+    """A height layer as ``ideal_mu`` sees it in the preview: felt sliding towards +x
+    (above ``v_fade_mm_s``), instead of at rest."""
+
+    def __init__(self, layer):
+        self.layer = layer
+        self.blend = layer.blend
+
+    def covers(self, x, y):
+        return self.layer.covers(x, y)
+
+    def mu_at(self, x, y):
+        layer = self.layer
+        _, gx, gy = layer.shape.height_and_gradient(x, y)
+        speed = 2.0 * layer.v_fade_mm_s
+        return layer.mu_of_slope(slope_along_motion(gx, gy, speed, 0.0, layer.v_fade_mm_s,
+                                                    layer.rendering == "slope"))
+
+
+def as_previewed(scene):
+    """The scene with its height layers felt sliding towards +x (see the module docstring)."""
+    from dataclasses import replace
+    return replace(scene, layers=tuple(_MovingRight(layer) if getattr(layer, "renderer_kind", None)
+                                       == "height" else layer for layer in scene.layers))
+
+
+def _layer_note(layer) -> str:
+    """How the title describes a layer."""
+    kind = getattr(layer, "renderer_kind", None)
+    if kind == "height":
+        return f"{layer.name} (height {type(layer.shape).__name__.lower()}, felt moving +x)"
+    if kind == "ar":
+        return f"{layer.name} (recorded texture, shown at its mean {layer.mu_mean:g})"
+    if kind == "clip":
+        lo = 1.0 - layer.clip.depth
+        return (f"{layer.name} (clip on {layer.trigger}: {layer.clip.duration_s * 1e3:.0f} ms, "
+                f"mu' down to {lo:.2f}; not in the map)")
+    return (f"{layer.name} ({type(layer).__name__.lower()}, {layer.render}"
+            + (f", {layer.period_mm:g} mm" if layer.is_periodic else "") + ")")
+
+
 def mu_map(scene, viewport, supersample: int = 3) -> np.ndarray:
     """mu' (height_px, width_px) averaged over ``supersample**2`` points per pixel,
     ``ROWS_PER_PASS`` rows at a time."""
@@ -89,7 +136,7 @@ def write_preview(scene, out: Path, size: tuple[int, int] | None = None,
     d = scene.display
     viewport = fit_viewport(d, *(size or default_size(d)))
     image = to_srgb8(scene_rgb(scene, viewport, outlines=outlines))
-    mu = mu_map(scene, viewport)
+    mu = mu_map(as_previewed(scene), viewport)
     floor = mu_floor(scene.device, scene.device.normal_force_n)
     extent = (0.0, d.width_mm, d.height_mm, 0.0)
     # a display far taller than wide would ask for a figure metres high
@@ -114,9 +161,7 @@ def write_preview(scene, out: Path, size: tuple[int, int] | None = None,
                    if vmin <= t <= 1.0 and abs(t - floor) > 0.08 * (1.0 - vmin)])
     bar.ax.text(1.05, floor, f" floor\n {floor:.2f}\n @{scene.device.normal_force_n:g} N",
                 transform=bar.ax.get_yaxis_transform(), color="red", fontsize=8, va="center")
-    layers = "; ".join(f"{layer.name} ({type(layer).__name__.lower()}, {layer.render}"
-                       + (f", {layer.period_mm:g} mm" if layer.is_periodic else "") + ")"
-                       for layer in scene.layers)
+    layers = "; ".join(_layer_note(layer) for layer in scene.layers)
     fig.suptitle(f"layers: {layers}", fontsize=9)
     fig.savefig(out)
     return {"mu_min": float(mu.min()), "mu_max": float(mu.max()), "floor": floor,
