@@ -142,19 +142,22 @@ def true_mu(w_um, normal_n, speed_mm_s, t_s, finger: FingerParams) -> np.ndarray
     w_um : plate amplitude (um). normal_n : normal force (N). speed_mm_s : sliding speed.
     t_s : simulation time (s). Returns mu' in (0, 1].
     """
+    a, b = _constants(normal_n, speed_mm_s, t_s, finger)
+    return (1.0 - a) * np.exp(-b * np.asarray(w_um, dtype=np.float64)) + a  # seed 003, eq 2
+
+
+def _constants(normal_n, speed_mm_s, t_s, finger: FingerParams):
+    """This finger's asymptote A and decay b (1/um) now (module docstring, step 2)."""
     m = moisture(t_s, finger)
     a = np.minimum(finger.k_per_n * (1.0 + finger.k_drift * m) * np.asarray(normal_n), 0.98)
-    b = finger.b_per_um / (1.0 + np.abs(np.asarray(speed_mm_s)) / finger.v_c_mm_s)
-    return (1.0 - a) * np.exp(-b * np.asarray(w_um, dtype=np.float64)) + a  # seed 003, eq 2
+    return a, finger.b_per_um / (1.0 + np.abs(np.asarray(speed_mm_s)) / finger.v_c_mm_s)
 
 
 def true_amplitude(mu, normal_n, speed_mm_s, t_s, finger: FingerParams, limit_um: float
                    ) -> np.ndarray:
     """The amplitude (um, in [0, limit]) giving this finger mu' (seed 003, eq 3 with its
     own constants): what a controller knowing the finger exactly would ask for."""
-    m = moisture(t_s, finger)
-    a = np.minimum(finger.k_per_n * (1.0 + finger.k_drift * m) * np.asarray(normal_n), 0.98)
-    b = finger.b_per_um / (1.0 + np.abs(np.asarray(speed_mm_s)) / finger.v_c_mm_s)
+    a, b = _constants(normal_n, speed_mm_s, t_s, finger)
     reduction = np.clip((1.0 - np.asarray(mu, dtype=np.float64)) / (1.0 - a), 0.0, 1.0)
     with np.errstate(divide="ignore"):
         w = -np.log1p(-reduction) / b
