@@ -57,3 +57,9 @@ def test_an_ahap_problem_names_the_file_line_and_json_place(tmp_path):
     _, problems, _ = check_scene(write(tmp_path, CLIP + 'trigger = "down"\nclip = "ahap"\nfile = "bad.ahap"\n'))
     assert len(problems) == 1 and problems[0].line == 11
     assert "Pattern[0].Event.EventParameters[0]: HapticIntensity is 2" in str(problems[0])
+
+
+def test_a_bad_trigger_and_a_bad_shape_are_both_reported(tmp_path):
+    body = CLIP + 'trigger = "force"\nclip = "envelope"\ntimes_s = [0.1, 0.2]\nlevels = [1, 0]\n'
+    _, problems, _ = check_scene(write(tmp_path, body))
+    assert [(p.line, p.field) for p in problems] == [(7, "layer[1].force_n"), (11, "layer[1].times_s")]

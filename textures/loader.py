@@ -24,7 +24,6 @@ default shown. Layers are drawn and composed in file order (later on top).
     [device.friction]                 # optional: seed 003 eq 2 constants
     b_per_um = 1.67                   # > 0
     asymptote_per_n = 1.13            # > 0 (asymptote A = asymptote_per_n * F_n)
-    asymptote_cap = 0.95              # in (0, 1); see device.friction
     [device.calibration]              # optional measured table, replaces the model
     amplitudes_um = [0, ...]          # >= 2 values, starting at 0, strictly increasing
     forces_n = [...]                  # >= 1 value, >= 0, strictly increasing
@@ -181,6 +180,7 @@ import numpy as np
 
 from device.structures.beam import THEORIES, ModesError
 from device import profile as profiles
+from device.friction import ASYMPTOTE_MARGIN
 from device.profile import METHODS
 from textures import model
 from textures.ahap import read_ahap
@@ -313,8 +313,7 @@ DEVICE = {"profile": Choice(tuple(profiles.DEVICE_PROFILES), _DEVICE.profile),
           "amplitude_limit_um": replace(UM, default=_DEVICE.amplitude_limit_um),
           "normal_force_n": replace(FORCE, default=_DEVICE.normal_force_n)}
 FRICTION = {"b_per_um": Num("1/um", _FRICTION.b_per_um, gt=0.0),
-            "asymptote_per_n": Num("1/N", _FRICTION.asymptote_per_n, gt=0.0),
-            "asymptote_cap": Num("relative friction mu'", _FRICTION.asymptote_cap, gt=0.0, lt=1.0)}
+            "asymptote_per_n": Num("1/N", _FRICTION.asymptote_per_n, gt=0.0)}
 CALIBRATION = {"amplitudes_um": NumList(Num("um zero-to-peak", ge=0.0, le=MAX_UM), min_len=2),
                "forces_n": NumList(Num("N", ge=0.0, le=MAX_FORCE_N)),
                "mu": Rows(MU)}
@@ -815,10 +814,10 @@ def _calibration(r: _Reader, raw, path: KeyPath):
 
 def _device_warnings(r: _Reader, device: profiles.DeviceProfile) -> None:
     a = device.friction.asymptote_per_n * device.normal_force_n
-    if device.calibration is None and a >= device.friction.asymptote_cap:
+    if device.calibration is None and a >= 1.0 - ASYMPTOTE_MARGIN:
         r.report(("device", "normal_force_n"),
-                 f"{device.normal_force_n:g} N puts seed 003's asymptote (eq 2) at {a:.3g}, beyond "
-                 f"the model's cap {device.friction.asymptote_cap:g}: friction hardly changes there",
+                 f"{device.normal_force_n:g} N puts seed 003's asymptote (eq 2) at {a:.3g}: the "
+                 f"model does not hold there (it needs A < 1) and friction cannot be modulated",
                  warning=True)
 
 
@@ -1188,7 +1187,8 @@ def _clip_shape(r, path, v, ctx) -> Clip | None:
 
 
 def _build_clip(r, path, v, given, ctx):
-    ok = _chosen_keys(r, path, v, given, CLIP_SHAPES, "clip", optional=("sharpness",))
+    shape_ok = _chosen_keys(r, path, v, given, CLIP_SHAPES, "clip", optional=("sharpness",))
+    ok = True
     trigger = v["trigger"]
     needs = {"edge": ("x_mm", "y_mm"), "force": ("force_n",)}.get(trigger, ())
     for key in needs:
@@ -1200,8 +1200,8 @@ def _build_clip(r, path, v, given, ctx):
     ok &= _forbid(r, path, given, unused, f'with trigger = "{trigger}"')
     if ok and trigger == "edge":
         ok = _on_display(r, path + ("x_mm",), ctx, "edge point", [v["x_mm"]], [v["y_mm"]])
-    clip = _clip_shape(r, path, v, ctx) if ok else None
-    if clip is None:
+    clip = _clip_shape(r, path, v, ctx) if shape_ok else None  # its problems too
+    if clip is None or not ok:
         return None
     place = {k: v[k] for k in ("x_mm", "y_mm", "angle_deg", "force_n") if v[k] is not None}
     return ClipLayer(**ctx.common, clip=clip, trigger=trigger, **place), "depth"
