@@ -29,7 +29,6 @@ Where the model stops being usable, frictex decides as follows (each case counte
   of 1 there is w = 0, exact whatever A, and not counted). The margin is where eq 3 stops being
   computable: a target's rounding (eps = 1.1e-16) moves w by eps / (b (mu' - A)), with
   mu' - A <= 1 - A, i.e. up to 7e-8 um at 1 - A = 1e-9.
-  (``FrictionParams.asymptote_cap`` is not used: the model's own bound A < 1 is.)
 - normal force NaN/inf or negative: the nominal force of the device is used, counted as
   ``bad_force``. A force near 0 is fine: A -> 0 and the model is regular.
 - target NaN/inf: w = 0 (the safe side), counted as ``nonfinite_target``.

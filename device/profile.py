@@ -45,14 +45,13 @@ class FrictionParams:
     """Constants of the seed 003 friction model (eq 2).
 
     ``b_per_um`` is the decay constant b (1/um); the asymptote is
-    ``asymptote_per_n * F_n`` (seed 003: 1.13 F_n). The model stops meaning anything
-    once that asymptote nears 1 (F_n near 0.885 N): ``asymptote_cap`` is the highest
-    asymptote frictex will use (see ``device.friction``).
+    ``asymptote_per_n * F_n`` (seed 003: 1.13 F_n). The model holds while that
+    asymptote is below 1 (F_n < 0.885 N with seed 003's constants); ``device.friction``
+    says what frictex does beyond.
     """
 
     b_per_um: float = 1.67
     asymptote_per_n: float = 1.13
-    asymptote_cap: float = 0.95
 
 
 @dataclass(frozen=True)

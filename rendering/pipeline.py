@@ -21,7 +21,7 @@ import numpy as np
 
 from device.actuation.factory import make_actuation
 from rendering.compose import compose
-from rendering.tracking.finger_select import finger_masks
+from rendering.tracking.finger_select import SelectionState, select_fingers
 from device.friction import ClampCounts, make_friction_model
 from rendering.layers.sho import ShoRenderer
 from rendering.layers.sht import ShtRenderer
@@ -80,6 +80,8 @@ class PipelineState:
     layers: tuple
     forces: object | None = None  # rendering.layers.force_layers.ForceState on force profiles
     control: object | None = None  # rendering.control.loop.ControlState with the loop on
+    #: who holds each layer's positional finger role (left-most, ...), across blocks
+    selection: SelectionState = field(default_factory=SelectionState)
 
 
 @dataclass
@@ -234,8 +236,8 @@ class Pipeline:
             self.timer.layer_seconds[layer.name] = self.timer.layer_seconds.get(layer.name, 0.0) + dt
 
         t = clock()
-        mu_target = compose(outputs, self.blends, fingers.contact,
-                            finger_masks(self.selectors, fingers))
+        masks, selection = select_fingers(self.selectors, fingers, state.selection)
+        mu_target = compose(outputs, self.blends, fingers.contact, masks)
         t1 = clock()
         secs["composition"] += t1 - t
 
@@ -262,7 +264,7 @@ class Pipeline:
                           clamps=clamps, limited=act.limited,
                           off_structure=act.off_structure, forces=forces)
         return out, PipelineState(tracker=tracker_state, layers=tuple(layer_states),
-                                  forces=force_state, control=control_state)
+                                  forces=force_state, control=control_state, selection=selection)
 
 
 def build_pipeline(scene: Scene, rate_hz: float = 10_000.0, block_size: int = 50,

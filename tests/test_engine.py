@@ -308,3 +308,29 @@ def test_exit_status_says_bad_input_or_a_run_that_could_not_finish(monkeypatch, 
     monkeypatch.setattr(library, "run", fail)
     assert cli.main(["library"]) == code
     assert capsys.readouterr().err.startswith("frictex: error:")
+
+
+def test_finger_roles_hold_across_blocks_as_in_one_call():
+    """Positional roles (left-most ...) have hysteresis: who holds a role is carried from
+    block to block, so live (one block a call) gives what one long call gives."""
+    scene = load_scene(resolve_scene("two-finger-plate-seed001"))
+    t = np.arange(0.0, 1.0, 0.02)
+    rows = []
+    for f, (x0, dx, y) in enumerate(((40.0, 60.0, 75.0), (100.0, -60.0, 45.0))):
+        for i, ti in enumerate(t):
+            rows.append((ti, f, x0 + dx * ti, y, 0 if i == 0 else (2 if i == t.size - 1 else 1)))
+    rows.sort(key=lambda r: (r[0], r[1]))
+    from rendering.input.trace_file import Trace
+    a = np.array(rows)
+    trace = Trace(a[:, 0], a[:, 1].astype(np.int64), a[:, 2], a[:, 3], np.full(len(rows), 0.5),
+                  a[:, 4].astype(np.int8))
+    results = {}
+    for chunk in (1, 400):
+        pipeline = build_pipeline(scene, 10_000.0, 50, render_override="sho-predicted")
+        source = TraceSource(iter([trace]))
+        source.first_time()
+        source.start(pipeline.tracker_config)
+        memory = MemorySink()
+        drive(PipelineStage(pipeline), source, [memory], VirtualClock(), chunk_blocks=chunk)
+        results[chunk] = np.concatenate([o.mu_target for o in memory.outs], axis=1)
+    np.testing.assert_array_equal(results[1], results[400])

@@ -7,10 +7,12 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
+
 from device.actuation.base import SingleModeActuation
 from device.structures.beam import FreeFreeBeam
 from device.actuation.modal_actuation import ModalActuation, make_modal_actuation
 from device.structures.plate2d import ACTUATORS, Plate2D
+from rendering.tracking.finger_select import HYSTERESIS_MM
 from rendering.pipeline import build_pipeline
 from rendering.input.trace_file import make_trace
 from rendering.tracking.tracks import apply_index
@@ -222,7 +224,8 @@ def test_bundled_plate_scene_gives_the_left_finger_the_grating_as_fingers_cross(
     both = out.contact.all(axis=0)
     left = np.argmin(out.x_mm, axis=0)
     assert set(left[both]) == {0, 1}  # each finger is the left one for a while
-    cols = np.flatnonzero(both & (np.abs(out.x_mm[0] - out.x_mm[1]) > 1e-9))
+    # the left-most role changes hands once the other finger is HYSTERESIS_MM beyond
+    cols = np.flatnonzero(both & (np.abs(out.x_mm[0] - out.x_mm[1]) > HYSTERESIS_MM))
     x_left, y_left = out.x_mm[left[cols], cols], out.y_mm[left[cols], cols]
     assert_allclose(out.mu_target[left[cols], cols], grating.mu_at(x_left, y_left), rtol=1e-12)
     assert_allclose(out.mu_target[1 - left[cols], cols], slippery.mu, rtol=1e-12)

@@ -224,8 +224,11 @@ def test_inversion_with_one_force_equals_per_sample_forces(force):
     assert_array_equal(w1, w2[:-1])
     assert w2[-1] == 0.0
     assert c1.as_dict() == c2.as_dict()
-    assert c1.unreachable > 0 and c1.above_one > 0
-    assert c1.force_beyond_model == (mu.size if force * 1.13 >= 0.95 else 0)
+    assert c1.above_one > 0
+    if 1.13 * force >= 1.0 - 1e-9:  # seed 003's model does not hold (A >= 1)
+        assert c1.force_beyond_model == np.count_nonzero(mu < 1.0) and c1.unreachable == 0
+    else:  # within it (0.87 N: A = 0.983), targets below the floor are out of reach
+        assert c1.force_beyond_model == 0 and c1.unreachable > 0
 
 
 def test_single_finger_actuation_equals_the_primary_finger_rule():

@@ -81,7 +81,8 @@ def warnings_of(pipeline, tracker, totals: Totals) -> list[str]:
                         "reachable mu' and were clamped to the amplitude limit")
     if clamps["force_beyond_model"]:
         warnings.append(f"{clamps['force_beyond_model']} samples had a normal force beyond "
-                        "the friction model's range (asymptote capped)")
+                        "seed 003's friction model, whose asymptote 1.13 F_n reaches 1 there (full "
+                        "amplitude was commanded)")
     if tracker.jumps:
         warnings.append(f"{tracker.jumps} finger jumps were treated as lift and touch")
     if tracker.out_of_order:
