@@ -639,9 +639,9 @@ def auto_render_mode(period_mm: float | None) -> str:
     maps), the hybrid for every periodic layer whatever its period.
 
     ``frictex report`` measures the hybrid against SHO and SHT on seed 003's 15, 5 and
-    0.6 mm gratings (50 Hz touch, constant-speed and human-like strokes): it is no worse
-    than the better of the two on every grating, motion and metric but one (time error on
-    the 0.6 mm grating, a phase no finger feels: see ``rendering.layers.hybrid``), so seed 003's
-    SHO/SHT boundary near 5 mm (section 6) no longer decides anything.
+    0.6 mm gratings over paired draws of human-like strokes and constant-speed swipes,
+    and states which of its claims hold with 95 % confidence; what the hybrid does
+    between touch samples, and what it costs (edges re-crossed on coarse gratings), is in
+    ``rendering/RENDERERS.md``.
     """
     return "sho" if period_mm is None else "hybrid"
