@@ -94,8 +94,10 @@ def run(args: argparse.Namespace) -> int:
     if real_dir is not None:
         from app.measure.report_real import real_section
         real = real_section(real_dir, gratings)
+    from app.measure.bench_replay import end_to_end
     doc = ro.write_json(rows, out / "report.json", args.quick, settings, modal,
-                        modal_throughput(), draws, real)
+                        modal_throughput(), draws, real,
+                        end_to_end(20.0 if args.quick else 120.0))
     plots = ["error_vs_cost.png", "error_vs_period.png"]
     ro.plot_cost(rows, out / plots[0])
     ro.plot_period(rows, out / plots[1])

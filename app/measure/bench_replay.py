@@ -56,21 +56,43 @@ def _repeated(trace: Trace, times: int, gap_s: float = 0.5) -> Trace:
                                 trace.force_n, trace.event) for k in range(times)])
 
 
-def _replay_figures(tmp: Path, label: str, scene: str, trace_path: Path, fmt: str,
-                    duration_s: float) -> list[Figure]:
-    out = tmp / f"out-{label}-{fmt}"
+def replay_process(tmp: Path, scene: str, trace_path: Path, fmt: str) -> dict | None:
+    """One ``frictex replay`` in a fresh process: its summary's real-time factors (end to
+    end, compute only), the whole process's wall time (s) and peak memory (MiB); None if
+    it failed."""
+    out = tmp / f"out-{trace_path.stem}-{fmt}"
     wall, peak_kib, code = _frictex("replay", scene, str(trace_path), "--out", str(out),
                                     "--format", fmt, "--quiet")
     if code != 0:
-        return [Figure("replay", f"{label} {fmt}: replay failed (exit {code})", float("nan"), "")]
+        return None
     timings = json.loads((out / "summary.json").read_text())["timings"]
+    return {"x_realtime_end_to_end": timings["x_realtime_end_to_end"],
+            "x_realtime_compute": timings["x_realtime_compute"],
+            "process_wall_s": wall, "peak_mib": peak_kib / 1024}
+
+
+def end_to_end(duration_s: float, formats=("csv", "npz", "parquet")) -> dict:
+    """``replay_process`` of the composed scene on a human-like trace of ``duration_s``,
+    per output format (``frictex report`` states these beside its compute-only figures)."""
+    with tempfile.TemporaryDirectory(prefix="frictex-e2e-") as name:
+        path = Path(name) / f"human-{duration_s:g}.csv"
+        write_trace(path, _human(duration_s))
+        return {"scene": SCENE, "duration_s": duration_s,
+                "formats": {fmt: replay_process(Path(name), SCENE, path, fmt) for fmt in formats}}
+
+
+def _replay_figures(tmp: Path, label: str, scene: str, trace_path: Path, fmt: str,
+                    duration_s: float) -> list[Figure]:
+    got = replay_process(tmp, scene, trace_path, fmt)
+    if got is None:
+        return [Figure("replay", f"{label} {fmt}: replay failed", float("nan"), "")]
     return [Figure("replay", f"{label} {fmt}, end to end (read, compute, write)",
-                   timings["x_realtime_end_to_end"], "x real time"),
-            Figure("replay", f"{label} {fmt}, compute only", timings["x_realtime_compute"],
+                   got["x_realtime_end_to_end"], "x real time"),
+            Figure("replay", f"{label} {fmt}, compute only", got["x_realtime_compute"],
                    "x real time"),
             Figure("replay", f"{label} {fmt}, whole process (start, imports too)",
-                   duration_s / wall, "x real time"),
-            Figure("replay", f"{label} {fmt}, peak memory", peak_kib / 1024, "MiB")]
+                   duration_s / got["process_wall_s"], "x real time"),
+            Figure("replay", f"{label} {fmt}, peak memory", got["peak_mib"], "MiB")]
 
 
 def _batch_figures(tmp: Path, jobs: int) -> list[Figure]:

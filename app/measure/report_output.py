@@ -152,17 +152,19 @@ def headline(rows) -> dict:
 
 
 def write_json(rows, path: Path, quick: bool, settings: dict, modal: list[dict],
-               modal_replay: dict, draws: dict, real: dict | None = None) -> dict:
+               modal_replay: dict, draws: dict, real: dict | None = None,
+               end_to_end: dict | None = None) -> dict:
     """``modal``: the speed and error figures of each modal inversion method
     (``app.measure.bench_modal``), under the key ``modal_inversion``; ``modal_replay``: two fingers
     with modal actuation in headless replay (``app.measure.bench_pipeline.modal_throughput``);
     ``draws``: the gratings under independent draws of motion (``app.measure.report_seeds``),
     on which the claims are computed; ``real``: the replayed real recordings
-    (``app.measure.report_real``), or None."""
+    (``app.measure.report_real``), or None; ``end_to_end``: whole replays in fresh
+    processes per output format (``app.measure.bench_replay.end_to_end``)."""
     doc = {"report_version": REPORT_VERSION, "quick": quick, "settings": settings,
            "rows": rows, "claims": [asdict(c) for c in claims(draws)],
            "headline": headline(rows), "modal_replay": modal_replay,
-           "draws": draws, "real": real, "modal_inversion": modal}
+           "draws": draws, "real": real, "modal_inversion": modal, "end_to_end": end_to_end}
     path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
     return doc
 
@@ -236,7 +238,7 @@ def write_markdown(doc: dict, path: Path, plots: list[str]) -> None:
                       _fmt(r['alignment_error_mm']), f"{r['cost_us_per_s']:.0f}") for r in other])
     lines += ["", "## Throughput and latency (composed scene, one finger, 10 kHz)", ""]
     head = doc["headline"]
-    lines += _table(["renderer/motion", "replay x real time", "live 5 ms block p99 us",
+    lines += _table(["renderer/motion", "replay x real time, compute only", "live 5 ms block p99 us",
                      "latency ms", "cost us/s"],
                     [(k, f"{v['replay_x_realtime']:.0f}", f"{v['live_block_p99_us']:.0f}",
                       f"{v['latency_ms']:.1f}", f"{v['cost_us_per_s']:.0f}") for k, v in head.items()])
@@ -245,10 +247,22 @@ def write_markdown(doc: dict, path: Path, plots: list[str]) -> None:
         lines += ["", "Per-stage cost (us per second of output) for the first of these: "
                   + ", ".join(f"{k} {v:.0f}" for k, v in stages.items())
                   + ". Replay counts the pipeline stages; link encode is what a live link adds."]
+    e2e = doc.get("end_to_end")
+    if e2e:
+        done = {fmt: got for fmt, got in e2e["formats"].items() if got is not None}
+        lines += ["", f"End to end ({e2e['scene']}, a {e2e['duration_s']:g} s human-like trace, "
+                  "each a fresh `frictex replay` process: reading the trace, computing, writing "
+                  "every output): " + "; ".join(
+                      f"{fmt} {got['x_realtime_end_to_end']:.0f}x real time (compute only "
+                      f"{got['x_realtime_compute']:.0f}x; whole process with start-up "
+                      f"{e2e['duration_s'] / got['process_wall_s']:.0f}x, peak "
+                      f"{got['peak_mib']:.0f} MiB)" for fmt, got in done.items())
+                  + (f"; failed: {', '.join(sorted(set(e2e['formats']) - set(done)))}"
+                     if len(done) < len(e2e["formats"]) else "") + "."]
     modal = doc["modal_replay"]
     lines += ["", f"Two fingers with modal actuation ({modal['scene']}, trace {modal['trace']}, "
               f"{modal['output_hz'] / 1e3:g} kHz): replay {modal['replay_x_realtime']:.0f}x real "
-              "time; per stage (us per second of output): "
+              "time, compute only; per stage (us per second of output): "
               + ", ".join(f"{k} {v:.0f}" for k, v in modal["stages_us_per_s"].items()) + "."]
     lines += ["", "Targets: replay >= 1000x real time, live p99 <= 500 us (10 % of a 5 ms block); "
               "two fingers with modal actuation >= 200x real time in replay. "
