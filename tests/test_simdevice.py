@@ -11,6 +11,7 @@ from device.link.protocol import DeviceState as S
 from device.firmware.build import FirmwareBuildError
 from device.firmware.ccore import built_core_class
 from device.link.simdevice import DeviceConfig, DeviceCore as PythonDeviceCore
+from device_recorder import Recorder
 
 RATE = 10_000.0
 STEP = p.AMPLITUDE_STEP_UM
@@ -27,30 +28,6 @@ def device_core(request):
         pytest.fail(str(exc), pytrace=False)
     yield
     DeviceCore = PythonDeviceCore
-
-
-class Recorder:
-    """Collects the played log and the per-tick output of a DeviceCore."""
-
-    def __init__(self):
-        self.index, self.values, self.t, self.setpoint, self.plate = [], [], [], [], []
-
-    def log(self, index, values, phases):
-        self.index.append(index)
-        self.values.append(values)
-
-    def plate_log(self, t, state, setpoint, plate):
-        self.t.append(t)
-        self.setpoint.append(setpoint)
-        self.plate.append(plate)
-
-    def played(self):
-        if not self.index:
-            return np.zeros(0, dtype=np.int64), np.zeros((0, 1))
-        return np.concatenate(self.index), np.concatenate(self.values)
-
-    def ticks(self):
-        return np.concatenate(self.t), np.concatenate(self.setpoint), np.concatenate(self.plate)
 
 
 class Host:
