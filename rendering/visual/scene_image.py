@@ -37,6 +37,7 @@ import numpy as np
 
 from rendering.visual.force_marks import draw_force_marks, has_marks
 from rendering.visual.viewport import Viewport
+from textures.heights import HeightLayer
 from textures.model import (Bump, Directional, DiscRegion, Edge, Guidance, KeyClick, Line,
                             RasterMap, Scene, Shape)
 
@@ -159,6 +160,8 @@ def layer_mu(layer, x, y, cell_mm: tuple[float, float] | None = None,
              pixel_mm: tuple[float, float] | None = None) -> np.ndarray:
     """mu' of a layer at (x, y) mm; for a periodic layer and a cell of ``cell_mm`` =
     (width, height) mm, its exact average over the cell (:func:`periodic_mean`)."""
+    if isinstance(layer, HeightLayer):  # shaded relief: a height has no mu' at rest to draw
+        return layer.relief_mu(x, y)
     if cell_mm is None or not layer.is_periodic:
         return layer.mu_at(x, y)
     return periodic_mean(layer, x, y, cell_mm, pixel_mm)
