@@ -93,9 +93,13 @@ def test_tuio_cursors_over_udp_drive_two_fingers(xvfb_display, xdotool, tmp_path
     # prediction overshoots the last sample depends on the pace the frames arrived at,
     # which is the sender's and the scheduler's (frames arriving in a burst look fast):
     # not checked here
+    # TUIO sends the whole state in every UDP frame so that a lost or late frame costs
+    # nothing: under a CPU hog the first one or two frames (1.8 mm of the swipe each) may
+    # not be the touch-down, so the start is checked to within three frames
     x = swipe[:, 1]
-    assert x.min() < 0.1 * 108.0 + 1.0 and x.max() > 0.7 * 108.0 - 1.0
-    assert x[0] < 0.1 * 108.0 + 1.0 and x[-1] > 0.5 * 108.0
+    start = 0.1 * 108.0 + 3 * 0.6 * 108.0 / 59
+    assert x.min() < start + 1.0 and x.max() > 0.7 * 108.0 - 1.0
+    assert x[0] < start + 1.0 and x[-1] > 0.5 * 108.0
     np.testing.assert_allclose(still[:, 1:3], np.tile([0.8 * 108.0, 0.75 * 64.8], (len(still), 1)),
                                atol=1e-4)
     assert still[-1, 0] > swipe[-1, 0]  # held after the other lifted
