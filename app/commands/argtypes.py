@@ -58,3 +58,13 @@ def bounded(kind, low, high, unit: str):
 #: output sample rates a pipeline may run at (Hz): seed 003's link runs at 10 kHz
 OUTPUT_RATES_HZ = (100.0, 1e6)
 output_rate = bounded(float, *OUTPUT_RATES_HZ, "Hz")
+
+
+def add_link_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--device`` and ``--faults``, as every command that streams to a device takes them."""
+    parser.add_argument("--device", metavar="sim|PORT", default=None,
+                        help="stream the commands to a device: 'sim' starts a simulated one, "
+                             "otherwise a serial port or pyserial URL (default: no link)")
+    parser.add_argument("--faults", metavar="SPEC", type=fault_plan, default=None,
+                        help="with --device: inject link faults, e.g. 'corrupt=0.001,"
+                             "stall=0.2@1.5,trip@3,unplug=2@4' (grammar: device/link/faults.py)")

@@ -24,7 +24,7 @@ import threading
 from pathlib import Path
 
 from app.commands.preview import frame_size
-from app.commands.argtypes import fault_plan, output_rate, positive_float, positive_int
+from app.commands.argtypes import add_link_arguments, output_rate, positive_float, positive_int
 from rendering.input.tuio import TUIO_PORT
 from rendering.visual.context import NoDisplayError, open_backend
 from rendering.visual.viewport import MIN_FRAME, default_frame_size
@@ -80,12 +80,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              f"{MIN_FRAME[0]}x{MIN_FRAME[1]})")
     parser.add_argument("--renderer", choices=("sho", "sht", "hybrid"), default=None,
                         help="start with every periodic layer rendered this way (R cycles it live)")
-    parser.add_argument("--device", metavar="sim|PORT", default=None,
-                        help="stream the commands: 'sim' starts a simulated device, otherwise a "
-                             "serial port or pyserial URL (default: no link)")
-    parser.add_argument("--faults", metavar="SPEC", type=fault_plan, default=None,
-                        help="with --device: inject link faults, e.g. 'corrupt=0.001,"
-                             "stall=0.2@1.5,trip@3,unplug=2@4' (grammar: device/link/faults.py)")
+    add_link_arguments(parser)
     parser.add_argument("--rate", type=output_rate, default=10_000.0, metavar="HZ",
                         help="output sample rate (default 10000 Hz)")
     parser.add_argument("--block", type=positive_int, default=50, metavar="N",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from app.commands.argtypes import bounded, fault_plan, output_rate, positive_float, share
+from app.commands.argtypes import add_link_arguments, bounded, output_rate, positive_float, share
 from app.engine.replay import run_replay
 from app.engine.sources import MAX_GAP_S
 from app.engine.tables import FORMATS
@@ -28,12 +28,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "long replays")
     parser.add_argument("--renderer", choices=("sho", *RENDERERS), default=None,
                         help="render every periodic layer this way instead of as its file says")
-    parser.add_argument("--device", metavar="sim|PORT", default=None,
-                        help="also stream the commands to a device: 'sim' starts a simulated "
-                             "one, otherwise a serial port or pyserial URL")
-    parser.add_argument("--faults", metavar="SPEC", type=fault_plan, default=None,
-                        help="with --device: inject link faults, e.g. 'corrupt=0.001,"
-                             "stall=0.2@1.5,trip@3,unplug=2@4' (grammar: device/link/faults.py)")
+    add_link_arguments(parser)
     parser.add_argument("--max-unplayed", type=share, default=0.01, metavar="SHARE",
                         help="with --device: exit 1 when more than this share of the "
                              "commanded samples never played on the device (default 0.01)")
