@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import assume, given, settings, strategies as st
 
 from app.commands.cli import main
 from rendering.input.trace_file import (DOWN, MOVE, UP, TraceError, concat_traces, format_trace,
@@ -266,3 +266,22 @@ def test_event_normalisation_and_touch_count_follow_the_rule(samples, down):
     assert got_events.tolist() == want_events
     assert got_touching.tolist() == want_touching
     assert carried == want_down
+
+
+@settings(max_examples=400, derandomize=True, deadline=None)
+@given(text=st.text(alphabet=st.sampled_from(list('ab,1 .\r\t"e-')), min_size=1, max_size=14),
+       end=st.sampled_from(["\n", "\r\n", ""]))
+def test_fields_split_a_line_as_the_csv_module_does(text, end):
+    import csv
+    from rendering.input.trace_file import _fields
+    line = text + end
+    assume(line.strip())  # blank lines are skipped before a line is split
+    try:
+        want = next(csv.reader([line]), [])
+    except csv.Error:
+        want = None
+    try:
+        got = _fields(line, "<t>", 1)
+    except TraceError:
+        got = None
+    assert got == want

@@ -48,6 +48,7 @@ DEFAULT_FORCE_N = 0.5
 REQUIRED = ("t_s", "finger", "x_mm", "y_mm")
 EVENTS = ("down", "move", "up")
 DOWN, MOVE, UP = 0, 1, 2
+_EVENT_CODES = {word: code for code, word in enumerate(EVENTS)}
 
 MAX_TIME_S = 1e10
 MAX_COORD_MM = 1e5
@@ -303,34 +304,60 @@ class _RowParser:
 
     def _rows(self, numbered_rows) -> list[np.ndarray]:
         """Columns of the rows kept (time order decided, not yet sorted): t, finger, x, y,
-        force, event, line. Values are parsed per row and range-checked per column; the
-        first problem in file order is the one reported."""
-        col, width, n = self.col, len(self.names), len(numbered_rows)
-        t, fv, x, y = (np.empty(n) for _ in range(4))
-        force = np.full(n, DEFAULT_FORCE_N)
-        event = np.full(n, MOVE, dtype=np.int8)
-        lines = np.array([line for line, _ in numbered_rows], dtype=np.int64)
-        i_t, i_f, i_x, i_y = (col[name] for name in REQUIRED)
-        i_force, i_event = col.get("force_n"), col.get("event")
-        for k, (line, row) in enumerate(numbered_rows):
-            try:
-                if len(row) < width:
-                    raise ValueError
-                t[k], fv[k], x[k], y[k] = float(row[i_t]), float(row[i_f]), float(row[i_x]), float(row[i_y])
-                if i_force is not None and row[i_force].strip():
-                    force[k] = float(row[i_force])
-                if i_event is not None and row[i_event].strip():
-                    event[k] = EVENTS.index(row[i_event].strip())
-            except ValueError:
-                self._check_values(numbered_rows[:k], t[:k], fv[:k], x[:k], y[:k], force[:k])
-                self._time_order(t[:k], lines[:k])
-                self._row_problem(line, row)
+        force, event, line. Values are parsed column by column and range-checked per
+        column; the first problem in file order is the one reported (found row by row,
+        only when a column does not parse)."""
+        col, n = self.col, len(numbered_rows)
+        lines = np.fromiter((line for line, _ in numbered_rows), dtype=np.int64, count=n)
+        rows = [row for _, row in numbered_rows]
+        try:
+            t, fv, x, y, force, event = self._columns(rows)
+        except (ValueError, IndexError, KeyError):
+            self._first_row_problem(numbered_rows)
         first_bad = self._check_values(numbered_rows, t, fv, x, y, force, raise_now=False)
         self._time_order(t[:first_bad], lines[:first_bad])
         if first_bad < n:
             self._row_problem(*numbered_rows[first_bad])
         keep = self._keep(t, lines)
         return [a[keep] for a in (t, fv.astype(np.int64), x, y, force, event, lines)]
+
+    def _columns(self, rows: list[list[str]]) -> tuple[np.ndarray, ...]:
+        """t, finger, x, y, force, event of well-formed rows (``float`` on each field, as
+        the row-by-row check does); raises ValueError, IndexError or KeyError on the
+        first field that is not (the caller then finds and reports it)."""
+        col, n = self.col, len(rows)
+        if n and min(map(len, rows)) < len(self.names):
+            raise IndexError
+        t, fv, x, y = (np.fromiter(map(float, (row[col[name]] for row in rows)),
+                                   dtype=np.float64, count=n) for name in REQUIRED)
+        force = np.full(n, DEFAULT_FORCE_N)
+        if "force_n" in col:
+            i = col["force_n"]
+            given = [k for k, row in enumerate(rows) if row[i].strip()]
+            force[given] = np.fromiter(map(float, (rows[k][i] for k in given)),
+                                       dtype=np.float64, count=len(given))
+        event = np.full(n, MOVE, dtype=np.int8)
+        if "event" in col:
+            i = col["event"]
+            words = [row[i].strip() for row in rows]
+            given = [k for k, word in enumerate(words) if word]
+            event[given] = [_EVENT_CODES[words[k]] for k in given]
+        return t, fv, x, y, force, event
+
+    def _first_row_problem(self, numbered_rows) -> None:
+        """Raise the TraceError of the first row in file order that holds a problem: a
+        short row, a field that is not a number or an event, or (before it) a value out
+        of range or a step back in time under ``strict``."""
+        for k, (line, row) in enumerate(numbered_rows):
+            try:
+                self._columns([row])
+            except (ValueError, IndexError, KeyError):
+                head = numbered_rows[:k]
+                if head:
+                    t, fv, x, y, force, _ = self._columns([r for _, r in head])
+                    self._check_values(head, t, fv, x, y, force)
+                    self._time_order(t, np.array([ln for ln, _ in head], dtype=np.int64))
+                self._row_problem(line, row)
 
     def _check_values(self, numbered_rows, t, fv, x, y, force, raise_now: bool = True) -> int:
         """Index of the first row with a value out of its range (``len(t)`` if none);
@@ -416,6 +443,10 @@ def _lines(fh, where: str):
 
 
 def _fields(text: str, where: str, number: int) -> list[str]:
+    """The CSV fields of one line (without its line break)."""
+    body = text.rstrip("\r\n")
+    if '"' not in body and "\r" not in body:  # no quoting: what the csv module splits
+        return body.split(",")
     try:
         return next(csv.reader([text]))
     except csv.Error as exc:
