@@ -29,8 +29,11 @@ scope, O outlines, P screenshot (numbered after those already in the folder, nev
 overwriting one), SPACE emergency stop (latched; SPACE again resumes, ramped), Q /
 Escape quit.
 
-The scene file is polled for changes; a good edit reloads (haptics crossfade in one
-block), a bad one keeps the last good scene and shows its error on screen.
+The scene's texture file and every file it names (raster images, height-map PNGs,
+recorded-texture models, AHAP clips, measured mode tables: ``textures.references``)
+are polled for changes (``app.live.watch``); a change to any of them reloads the scene
+(haptics crossfade in one block), and a bad edit keeps the last good scene and shows
+its error on screen.
 Events are appended to ``events.csv`` (t_s on the haptic clock, event, detail) when a
 record folder is given: what the window did when it did it (keys, scene loads,
 screenshots), and what the output did when it did it, at the output time of the
@@ -50,9 +53,12 @@ import numpy as np
 from PIL import Image
 
 from app.live.haptic_thread import EVENTS
+from app.live.watch import FileWatch
 from rendering.visual.compositor import Compositor, FrameView
 from rendering.visual.modal_view import modal_envelope
 from rendering.visual.overlay import OverlayState
+from textures.errors import TextureError
+from textures.references import referenced_files
 
 RENDERER_CYCLE = (None, "sho", "sht", "hybrid")
 FORCE_STEP_N = 0.05
@@ -63,13 +69,6 @@ FRAME_S = 1.0 / 60.0
 INPUT_WAKE_S = 0.05  # longest the input thread waits for an event before looking at the time
 KEYS_HELP = ("wheel, up/down: force | N/B: scene | R: renderer | S: scope | "
              "O: outlines | P: screenshot | SPACE: emergency stop | Q: quit")
-
-
-def _mtime(path: Path) -> float | None:
-    try:
-        return path.stat().st_mtime_ns
-    except OSError:
-        return None
 
 
 def next_screenshot(folder: Path, stem: str):
@@ -140,7 +139,8 @@ class DemoLoop:
         self.screenshots: list[Path] = []
         self.frames = 0
         self.frame_seconds = 0.0
-        self._mtime = _mtime(self.playlist[self.index])
+        self.files = FileWatch()
+        self._watch(self.playlist[self.index])
         self._set_envelope(scene, haptic.pipeline.actuation)
         self._next_poll = 0.0
         self._keys: queue.SimpleQueue = queue.SimpleQueue()  # for the render thread
@@ -305,24 +305,39 @@ class DemoLoop:
             return
         if self._apply(scene, self.renderer, "scene", scene.name):
             self.index = index
-            self._mtime = _mtime(path)
+            self.files = FileWatch()
+            self._watch(path)
+
+    def _watch(self, path: Path) -> None:
+        """Watch the texture file at ``path`` and the files it names now (an edit may
+        name others); if it cannot be read as TOML, what was watched stays watched."""
+        try:
+            named = referenced_files(path)
+        except TextureError:
+            named = self.files.paths
+        self.files.watch((Path(path), *named))
 
     def check_reload(self, now: float) -> None:
+        """Every RELOAD_POLL_S (s on the loop's clock): if the scene's texture file or
+        a file it names changed, load the scene again; a good load is applied, a bad one
+        keeps the last good scene and shows why. A texture file that is not there (an
+        editor between deleting and writing it) is waited for."""
         if now < self._next_poll:
             return
         self._next_poll = now + RELOAD_POLL_S
-        path = self.playlist[self.index]
-        mtime = _mtime(path)
-        if mtime is None or mtime == self._mtime:
+        changed = self.files.changed()
+        path = Path(self.playlist[self.index])
+        if not changed or self.files.stamps.get(path) is None:
             return
-        self._mtime = mtime
+        self._watch(path)
+        what = ", ".join(p.name for p in changed)
         try:
             scene = self.load(path)
         except (ValueError, OSError) as exc:
-            self.error = f"reload failed, keeping the last good scene: {exc}"
+            self.error = f"reload failed ({what} changed), keeping the last good scene: {exc}"
             self.log("reload-failed", str(exc))
             return
-        self._apply(scene, self.renderer, "reload", scene.name)
+        self._apply(scene, self.renderer, "reload", f"{scene.name} ({what} changed)")
 
     def _set_envelope(self, scene, actuation) -> None:
         self.envelope = modal_envelope(scene, actuation)
