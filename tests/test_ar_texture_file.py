@@ -1,12 +1,15 @@
-"""Recorded-texture layers in texture files: the toolkit's XML models, line-located errors."""
+"""Recorded-texture layers in texture files: the toolkit's XML models in their published
+form (units, sample rate, 1-based triangles, the sign of A(z)), line-located errors."""
 
+import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from test_ar_texture import _model, _xml
+from rendering.layers.ar_texture import ArTextureRenderer
+from test_ar_texture import _db_error, _model, _synthesise, _xml
 from test_texture_loader import write
 from textures.errors import TextureError
-from textures.hatt import ArTextureLayer
+from textures.hatt import ArTextureLayer, parse_hatt_xml
 from textures.loader import load_scene
 
 BODY = '[[layer]]\ntype = "recorded"\nmodel = "wood.xml"\ngain = 0.03\n'
@@ -30,3 +33,108 @@ def test_problems_are_reported_at_their_line(tmp_path, xml, extra, message):
         (tmp_path / "wood.xml").write_text(xml, encoding="utf-8")
     with pytest.raises(TextureError, match=message):
         load_scene(write(tmp_path, BODY + extra))
+
+
+# -- the published file form ---------------------------------------------------------------
+#
+# A model written as the toolkit writes its files (units, SampleRate, 1-based <tri>, per
+# model ARcoeff = [1, a_1 .. a_p] and its ARlsf), from LSFs chosen here; its A(z) and its
+# spectrum are computed here from the LSFs, independently of textures.hatt.
+
+PEAKS = [((80, 0.95), (400, 0.93)), ((150, 0.96), (600, 0.94)),  # (Hz, pole radius)
+         ((60, 0.9), (250, 0.95)), ((300, 0.95), (700, 0.92))]     # two resonances per vertex
+SPEEDS, FORCES = [20.0, 250.0, 20.0, 250.0], [0.2, 0.2, 3.0, 3.0]
+VARS = [1e-6, 2e-6, 0.5e-6, 1.5e-6]
+
+
+def _lsf(peaks, rate):
+    """The LSFs of the vertex model with pole pairs at ``peaks``, rounded as the toolkit
+    writes them (6 decimals): the angles in (0, pi) of the roots of A(z) +- z^-5 A(1/z)."""
+    a = np.ones(1)
+    for f, r in peaks:
+        a = np.convolve(a, [1.0, -2 * r * np.cos(2 * np.pi * f / rate), r * r])
+    ext = np.append(a, 0.0)
+    w = np.angle(np.concatenate([np.roots(ext + ext[::-1]), np.roots(ext - ext[::-1])]))
+    return np.round(np.sort(w[(w > 1e-9) & (w < np.pi - 1e-9)]), 6)
+
+
+def _poly(lsf):
+    """A(z) = [1, a_1 .. a_4] of even-order LSFs, written out: P(z) = (1 + z^-1) times the
+    sections 1 - 2 cos(w) z^-1 + z^-2 of the 1st and 3rd LSFs, Q(z) = (1 - z^-1) times
+    those of the 2nd and 4th, A = (P + Q) / 2 (its z^-5 term cancels)."""
+    p, q = np.array([1.0, 1.0]), np.array([1.0, -1.0])
+    for w in lsf[0::2]:
+        p = np.convolve(p, [1.0, -2 * np.cos(w), 1.0])
+    for w in lsf[1::2]:
+        q = np.convolve(q, [1.0, -2 * np.cos(w), 1.0])
+    a = (p + q) / 2
+    assert abs(a[-1]) < 1e-12
+    return a[:-1]
+
+
+def _spectrum(lsf, variance, f, rate):
+    """One-sided PSD (units^2/Hz) of y[n] + sum_k a_k y[n-k] = e[n], var(e) = variance."""
+    a = _poly(lsf)
+    response = np.exp(-2j * np.pi * np.outer(f, np.arange(a.size)) / rate) @ a
+    return 2 * variance / (rate * np.abs(response) ** 2)
+
+
+def published_xml(rate=10_000.0, rate_tag=True, speed_unit="mm/s", sign=1.0, extra=""):
+    speed_scale = 1e-3 if speed_unit == "m/s" else 1.0
+    values = lambda xs, fmt="{:.6f}": "".join(f"<value>{fmt.format(x)}</value>" for x in xs)  # noqa: E731
+    models = ""
+    for k, (peaks, var, s, f) in enumerate(zip(PEAKS, VARS, SPEEDS, FORCES), start=1):
+        lsf = _lsf(peaks, rate)
+        coeff = _poly(lsf) * np.r_[1.0, np.full(4, sign)]
+        models += (f"<model><modNum>{k}</modNum><ARcoeff>{values(coeff, '{:.20f}')}</ARcoeff>"
+                   f"<ARlsf>{values(lsf)}</ARlsf><var>{var:.10f}</var>"
+                   f"<speedMod>{s * speed_scale:.6f}</speedMod><forceMod>{f:.6f}</forceMod></model>")
+    tris = "".join(f'<tri type="array">{values(t, "{}")}</tri>' for t in ((1, 2, 3), (2, 4, 3)))
+    return (f'<?xml version="1.0" encoding="utf-8"?>\n<modelSet texture="1"><material>test</material>'
+            f"<AccelUnits>m/s^2</AccelUnits><SpeedUnits>{speed_unit}</SpeedUnits><ForceUnits>N</ForceUnits>"
+            + (f"<SampleRate>{rate:g}</SampleRate>" if rate_tag else "")
+            + f"<mu>0.3</mu><numMod>4</numMod><numTri>2</numTri><maxSpeed>{250 * speed_scale:.6f}</maxSpeed>"
+            f"<maxForce>3</maxForce><speedList type=\"array\">{values(np.array(SPEEDS) * speed_scale)}"
+            f"</speedList><forceList type=\"array\">{values(FORCES)}</forceList>{tris}"
+            f"<numARCoeff>4</numARCoeff><numMACoeff>0</numMACoeff>{extra}{models}</modelSet>")
+
+
+@pytest.mark.parametrize("vertex", [0, 1, 3])
+def test_a_published_form_model_renders_each_vertex_spectrum_within_1_db(tmp_path, vertex):
+    """Through the texture file: at each vertex's speed and force the synthesised mu'
+    has gain^2 times that vertex's spectrum (20-800 Hz), which fixes the sign convention
+    (the other sign mirrors the peaks about fs/4) and the vertex numbering (read from 0,
+    the numbers would pick another vertex's peaks)."""
+    (tmp_path / "wood.xml").write_text(published_xml(), encoding="utf-8")
+    layer = load_scene(write(tmp_path, BODY)).layers[0]
+    mu, state = _synthesise(ArTextureRenderer(layer, 10_000.0), SPEEDS[vertex], FORCES[vertex], 60.0)
+    assert state.limited == 0 and np.isfinite(mu).all()
+    err = _db_error(mu, lambda f: 0.03 ** 2 * _spectrum(_lsf(PEAKS[vertex], 1e4), VARS[vertex], f, 1e4))
+    assert err.max() < 1.0, f"worst {err.max():.2f} dB"
+
+
+def test_the_sample_rate_and_speed_unit_a_file_states_are_used(tmp_path):
+    """A model made at 5 kHz with speeds in m/s: read at 5 kHz (rendered at 10 kHz its
+    peaks stay at the same Hz) and at the speeds in mm/s; without SampleRate, 10 kHz."""
+    model = parse_hatt_xml(published_xml(rate=5_000.0, speed_unit="m/s"))
+    assert model.rate_hz == 5_000.0
+    assert_allclose(model.speeds_mm_s, SPEEDS, atol=1e-9)
+    assert parse_hatt_xml(published_xml(rate_tag=False)).rate_hz == 10_000.0
+    (tmp_path / "wood.xml").write_text(published_xml(rate=5_000.0), encoding="utf-8")
+    layer = load_scene(write(tmp_path, BODY)).layers[0]
+    mu, _ = _synthesise(ArTextureRenderer(layer, 10_000.0), SPEEDS[1], FORCES[1], 60.0)
+    err = _db_error(mu, lambda f: 0.03 ** 2 * _spectrum(_lsf(PEAKS[1], 5e3), VARS[1], f, 5e3))
+    assert err.max() < 1.0, f"worst {err.max():.2f} dB"
+
+
+@pytest.mark.parametrize("text, message", [
+    (published_xml(sign=-1.0), r"model 1: ARcoeff is not the A\(z\) = 1 \+ sum a_k z\^-k of its ARlsf"),
+    (published_xml().replace("<SpeedUnits>mm/s", "<SpeedUnits>in/s"), r"<SpeedUnits> is 'in/s', expected one of mm/s, m/s"),
+    (published_xml().replace("<ForceUnits>N", "<ForceUnits>lbf"), r"<ForceUnits> is 'lbf'"),
+    (published_xml(rate=10.0), r"<SampleRate> is 10 Hz, expected 100 to 1e\+06"),
+    (published_xml().replace("<numMACoeff>0", "<numMACoeff>17"), r"ARMA models .*resampled for its 1 kHz renderer"),
+])
+def test_a_file_against_the_published_form_is_one_line_error(text, message):
+    with pytest.raises(TextureError, match=message) as info:
+        parse_hatt_xml(text, "wood.xml")
+    assert "\n" not in str(info.value) and str(info.value).startswith("wood.xml: ")

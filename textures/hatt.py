@@ -13,21 +13,59 @@ blended filter is driven with white Gaussian noise of the blended variance:
     y[n] = -sum_k a_k y[n-k] + e[n],   e ~ N(0, variance),   A(z) = 1 + sum_k a_k z^-k
 
 so y has the two-sided power spectral density S(f) = variance / (fs |A(e^{j 2 pi f / fs})|^2)
-(units^2 per Hz; HaTT's unit is m/s^2). The models were made at fs = 10 kHz; the toolkit
-provides a way to resample them for other rates. frictex resamples each vertex model
-from its exact spectrum: S(f) up to the lower of the two Nyquist frequencies (nothing
+(units^2 per Hz; HaTT's unit is m/s^2).
+
+The file form, as the toolkit's own renderer reads it: its C++ sources (Penn Haptic
+Texture Toolkit, 2013: ``autoGenHashMatrix.cpp`` reads a file, ``AccSynthHashMatrix.cpp``
+blends, the demo's ``vibrations()`` synthesises) and its model files, as published in
+the toolkit's MLHD port (github.com/ralee9/PennHaTT_MLHD, ``src/`` and ``build/XML/``)::
+
+    <modelSet>
+      <SpeedUnits>mm/s</SpeedUnits> <ForceUnits>N</ForceUnits>
+      <AccelUnits>m/s^2</AccelUnits> <SampleRate>1000</SampleRate>   (Hz)
+      <numMod>M</numMod> <numTri>T</numTri> <maxSpeed>..</maxSpeed> <maxForce>..</maxForce>
+      <speedList><value>..</value> x M</speedList> <forceList>.. x M</forceList>
+      <tri><value>i</value><value>j</value><value>k</value></tri> x T   (1-based)
+      <numARCoeff>p</numARCoeff> <numMACoeff>0</numMACoeff>
+      <model> x M: <ARcoeff>1, a_1 .. a_p</ARcoeff> <ARlsf>p values (rad)</ARlsf>
+                   <var>..</var> <speedMod>..</speedMod> <forceMod>..</forceMod>
+
+- speeds in mm/s (the demo multiplies the tool's m/s by 1000 "because texture models
+  are in mm/s"), normal forces in N, the output in m/s^2; the files say so;
+- ``<tri>``: model numbers counted from 1 (the renderer reads model ``t - 1``);
+- ``<ARlsf>``: the line spectral frequencies of A(z); the renderer blends them with
+  barycentric weights, rebuilds A(z) = [1, a_1 .. a_p] (the 1st, 3rd, ... LSFs are the
+  roots of the sum polynomial) and runs ``output = sum_i -a_i y[n-i] + excitation``:
+  the convention above, A(z) with a +. ``<ARcoeff>`` is the same A(z) written out:
+  in the toolkit's Book model, a_1 = -1.337, and frictex's A(z) from its ARlsf
+  matches the file's ARcoeff to 4e-6 (the LSFs are written with 6 decimals);
+- ``<var>``: the variance of the white Gaussian excitation (the renderer draws it with
+  standard deviation sqrt(var)), blended with the same weights.
+
+frictex reads ``SampleRate`` (10 kHz, the rate of the recordings, when a file has
+none), checks the unit elements a file has (speeds in mm/s or m/s, forces in N,
+acceleration in m/s^2: the layer's gain is per m/s^2) and, where a model has
+``ARcoeff``, that it is the A(z) of its ``ARlsf`` (within 1e-3 of its largest
+coefficient: a file written with the other sign convention differs by about 2 |a_1|).
+ARMA models (``numMACoeff`` > 0) are refused: the toolkit's models resampled for its
+1 kHz renderer are ARMA (``MAlsf``, ``gain``), and frictex synthesises AR models only.
+
+The rate: the paper describes resampling the models for rates other than the 10 kHz of
+the recordings. frictex resamples each vertex model to its output rate from the
+model's exact spectrum: S(f) up to the lower of the two Nyquist frequencies (nothing
 above), its autocorrelation at the new rate, and a Levinson-Durbin fit of order 4p
 (``TextureModel.resampled``): an AR(p) process seen at another rate is not AR(p), and a
-fit of order p misses the spectrum by 2.5 dB where 4p stays within 0.1 dB (test models,
-10 to 5 kHz). This is frictex's own procedure, not a copy of the toolkit's MATLAB code.
+fit of order p misses the spectrum by 2.5 dB where 4p stays within 0.1 dB (test
+models, 10 to 5 kHz). This is frictex's own procedure, not a copy of the toolkit's
+MATLAB code.
 
-Files: the toolkit's XML model files (``<modelSet>``: ``numMod``, ``numTri``,
-``maxSpeed``, ``maxForce``, ``speedList``/``forceList`` of ``<value>``, one ``<tri>`` of
-three 1-based ``<value>`` vertex numbers per triangle, ``numARCoeff``, and per
-``<model>``: ``ARlsf`` values, ``var``, ``speedMod``, ``forceMod``), read by
-:func:`read_hatt_xml`; speeds in mm/s and forces in N as the toolkit stores them. ARMA
-models (``numMACoeff`` > 0) are refused. frictex ships none of the toolkit's data: its
-licence is for non-commercial research only; users bring their own files.
+Outside the triangulation the toolkit saturates speed and force at ``maxSpeed`` and
+``maxForce``; frictex takes the triangle the point is least outside of, its negative
+weights set to 0 (``TextureModel.weights``): both continuous, the same inside.
+
+Other elements (``mu``, ``material``, pictures) are ignored. frictex ships none of the
+toolkit's data: its licence is for non-commercial research only; users bring their
+own files.
 """
 
 from __future__ import annotations
@@ -46,6 +84,11 @@ from textures.library import UnreadableText, read_utf8
 from textures.dynamic import DynamicLayer
 
 HATT_RATE_HZ = 10_000.0
+RATE_RANGE_HZ = (100.0, 1e6)
+#: the unit elements a file may have: {element: {unit: factor to frictex's unit}}
+UNITS = {"SpeedUnits": {"mm/s": 1.0, "m/s": 1000.0}, "ForceUnits": {"N": 1.0},
+         "AccelUnits": {"m/s^2": 1.0, "m/s2": 1.0}}
+ARCOEFF_TOLERANCE = 1e-3
 MAX_HATT_BYTES = 8 << 20
 MAX_ORDER = 100
 MAX_MODELS = 2_000
@@ -187,11 +230,6 @@ class TextureModel:
     def order(self) -> int:
         return int(self.lsf.shape[1])
 
-    @property
-    def scale(self) -> tuple[float, float]:
-        """Largest vertex speed and force: barycentrics are taken in space scaled by them."""
-        return float(self.speeds_mm_s.max()), float(self.forces_n.max())
-
     def weights(self, speed_mm_s: float, force_n: float) -> tuple[np.ndarray, np.ndarray]:
         """The three vertices (indices) and barycentric weights of (speed, force). Outside
         the triangulation: the triangle it is least outside of, negative weights set to 0
@@ -279,9 +317,21 @@ def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
     if root.tag != "modelSet":
         raise TextureError(f"{where}: top element is <{root.tag}>, expected <modelSet>")
     if root.find("numMACoeff") is not None and _scalar(root, "numMACoeff", where) > 0:
-        raise TextureError(f"{where}: ARMA models (numMACoeff > 0) are not supported; "
+        raise TextureError(f"{where}: ARMA models (numMACoeff > 0) are not supported (the "
+                           f"toolkit's models resampled for its 1 kHz renderer are ARMA); "
                            f"frictex renders the toolkit's AR models")
-    speeds = _values(root.find("speedList"), where, "speedList")
+    scale = {}
+    for tag, known in UNITS.items():
+        node = root.find(tag)
+        unit = (node.text or "").strip() if node is not None else next(iter(known))
+        if unit not in known:
+            raise TextureError(f"{where}: <{tag}> is {unit!r}, expected one of {', '.join(known)}")
+        scale[tag] = known[unit]
+    rate = _scalar(root, "SampleRate", where) if root.find("SampleRate") is not None else HATT_RATE_HZ
+    if not RATE_RANGE_HZ[0] <= rate <= RATE_RANGE_HZ[1]:
+        raise TextureError(f"{where}: <SampleRate> is {rate:g} Hz, expected {RATE_RANGE_HZ[0]:g} "
+                           f"to {RATE_RANGE_HZ[1]:g}")
+    speeds = _values(root.find("speedList"), where, "speedList") * scale["SpeedUnits"]
     forces = _values(root.find("forceList"), where, "forceList")
     models = root.findall("model")
     m = len(models)
@@ -297,10 +347,22 @@ def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
         w = _values(node.find("ARlsf"), here, "ARlsf")
         if w.size != order or not ((w > 0) & (w < np.pi)).all() or (np.diff(w) <= 0).any():
             raise TextureError(f"{here}: ARlsf must be {order} increasing values in (0, pi)")
+        coeff = node.find("ARcoeff")
+        if coeff is not None:
+            written = _values(coeff, here, "ARcoeff")
+            rebuilt = lsf_to_poly(w)
+            gap = (np.abs(written - rebuilt).max() / max(1.0, np.abs(rebuilt).max())
+                   if written.size == order + 1 else math.inf)
+            if not gap <= ARCOEFF_TOLERANCE:
+                raise TextureError(f"{here}: ARcoeff is not the A(z) = 1 + sum a_k z^-k of its "
+                                   f"ARlsf ({written.size} values, largest difference {gap:.3g} of the "
+                                   f"largest coefficient); "
+                                   f"expected [1, a_1 .. a_{order}]")
         v = _scalar(node, "var", here)
         if v < 0:
             raise TextureError(f"{here}: var is {v:g}, expected >= 0")
-        sp, fo = _scalar(node, "speedMod", here), _scalar(node, "forceMod", here)
+        sp = _scalar(node, "speedMod", here) * scale["SpeedUnits"]
+        fo = _scalar(node, "forceMod", here)
         if not (np.isclose(sp, speeds[k]) and np.isclose(fo, forces[k])):
             raise TextureError(f"{here}: speedMod/forceMod ({sp:g}, {fo:g}) differ from the "
                                f"speedList/forceList entry ({speeds[k]:g}, {forces[k]:g})")
@@ -312,7 +374,7 @@ def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
     tri = np.array(tris)
     if (tri != np.round(tri)).any() or tri.min() < 1 or tri.max() > m:
         raise TextureError(f"{where}: <tri> vertex numbers must be integers 1 to {m}")
-    model = TextureModel(speeds, forces, tri.astype(np.intp) - 1, np.array(lsf), np.array(var))
+    model = TextureModel(speeds, forces, tri.astype(np.intp) - 1, np.array(lsf), np.array(var), rate)
     if not np.isfinite(model._tri[2]).all():
         raise TextureError(f"{where}: a <tri> triangle is degenerate (its vertices are in a line)")
     return model
