@@ -77,26 +77,27 @@ def stream(core, host, signal, lead_s=0.02, block_n=50):
     keep_alive(core, host, t, len(signal) / RATE + 0.05)
 
 
-def test_blocks_before_hello_are_refused_even_after_a_watchdog_trip():
-    """PROTOCOL.md 4.3 step 1: NOT_READY before the first Hello, whatever the state."""
-    core = CDeviceCore(config())
-    host = Host()
-    core.receive(host(p.Heartbeat(1)), 0.0)  # arms the watchdog
-    core.advance_to(0.1)
-    assert core.state == S.SILENT
-    core.receive(host(p.Heartbeat(2)), 0.1)  # back to buffering...
-    (reply,) = p.Decoder().feed(core.receive(host(block(0, np.ones(5))), 0.1))
-    assert reply.message.code == p.ErrorCode.NOT_READY and core.level == 0  # ...not ready
-
-
 # ---------------------------------------------------------------------------- differential
+
+class PatternSensor:
+    """Lateral and normal force readings that differ tick by tick (a pure function of the
+    tick, so the C core can be handed them ahead), covering the i16 range and halves of
+    a count, so the means and their rounding are exercised."""
+
+    def read(self, tick0, setpoint_um):
+        t = tick0 + np.arange(len(setpoint_um))
+        lateral = ((t * 7919) % 65536 - 32768) * p.FORCE_STEP_N
+        normal = ((t * 104729) % 4001 - 1000) * p.FORCE_STEP_N + 0.5 * p.FORCE_STEP_N * (t % 3 == 0)
+        return lateral, normal
+
 
 def _session(cls, seed, cfg, version):
     """Random traffic in ``version`` with faults on the wire, late and early blocks, host
     stalls that trip the watchdog, a Stop; returns (every decoded frame the device sent,
     played, setpoints, counters)."""
     rec = Recorder()
-    core = cls(cfg, log=rec.log, plate_log=rec.plate_log)
+    sensor = PatternSensor() if cfg.force_reports else None
+    core = cls(cfg, log=rec.log, plate_log=rec.plate_log, sensor=sensor)
     rng = np.random.default_rng(seed)
     host = Host(version)
     sent = []
@@ -133,13 +134,14 @@ def _session(cls, seed, cfg, version):
     return sent, (index, values), rec.ticks()[1], counters
 
 
-@pytest.mark.parametrize("version, seed", [(1, 0), (1, 1), (2, 2), (2, 3), (2, 4)])
+@pytest.mark.parametrize("version, seed", [(1, 0), (1, 1), (2, 2), (2, 3), (2, 4), (3, 5),
+                                           (3, 6)])
 def test_same_traffic_same_frames_and_samples_as_the_python_reference(version, seed):
     """Agreement frame for frame (Info, Status with its version 2 accounting, Error,
-    Flushed) on everything but one thing: the C ramps to zero in whole counts where the
-    reference ramps in floats, so a measured amplitude during a ramp may differ by one
-    count."""
-    cfg = config(limits_um=(3.0,), sensor=True, force_n=0.5)
+    Flushed, ForceReport with the same tick-by-tick sensor readings) on everything but
+    one thing: the C ramps to zero in whole counts where the reference ramps in floats,
+    so a measured amplitude during a ramp may differ by one count."""
+    cfg = config(limits_um=(3.0,), sensor=True, force_n=0.5, lateral_n=0.0)
     py, c = (_session(cls, seed, cfg, version) for cls in (DeviceCore, CDeviceCore))
     assert len(py[0]) == len(c[0]) > 100
     for (va, a), (vb, b) in zip(py[0], c[0]):
@@ -151,7 +153,12 @@ def test_same_traffic_same_frames_and_samples_as_the_python_reference(version, s
         else:
             assert a == b
     flushed = sum(isinstance(m, p.Flushed) for _, m in c[0])
-    assert flushed == (c[3]["watchdog_trips"] if version == 2 else 0)
+    assert flushed == (c[3]["watchdog_trips"] if version >= 2 else 0)
+    reports = [m for _, m in c[0] if isinstance(m, p.ForceReport)]
+    if version == 3:
+        assert len(reports) > 50  # a report per 4 ms while playing
+    else:
+        assert reports == []
     np.testing.assert_array_equal(py[1][0], c[1][0])
     np.testing.assert_array_equal(py[1][1], c[1][1])
     np.testing.assert_allclose(py[2], c[2], atol=STEP)

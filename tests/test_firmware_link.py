@@ -51,7 +51,7 @@ def stream_and_check(binary, tmp_path):
     played = _csv(log)
     np.testing.assert_array_equal(played[:, 0], np.arange(6000))
     np.testing.assert_allclose(played[:, 1], sig[:, 0], atol=STEP / 2 + 1e-9)
-    assert status["protocol_version"] == 2 and status["played_samples"] == 6000
+    assert status["protocol_version"] == 3 and status["played_samples"] == 6000
     assert status["blocks_sent"] == 120 and status["dropped_blocks"] == 0
     assert status["resyncs"] == 0 and status["device_crc_errors"] == 0
     # no assert on underruns or watchdog trips: a loaded test machine may starve the host
@@ -195,7 +195,9 @@ def test_faults_on_the_wire_are_counted_and_never_played(binary, tmp_path):
     (("--force", "70"), "force_n: expected in [0, 65] N"),
     (("--log", "/nonexistent/dir/played.csv"), "cannot open a log file"),
     (("--frobnicate",), "unrecognized argument: --frobnicate"),
-    (("--protocol", "3"), "protocol_version: expected in [1, 2]"),
+    (("--protocol", "4"), "protocol_version: expected in [1, 3]"),
+    (("--lateral", "9"), "lateral_n: expected in [-8, 8] N"),
+    (("--lateral", "1", "--protocol", "2"), "protocol_version: expected 3 for force reports"),
 ])
 def test_bad_flags_are_an_error_naming_the_flag(binary, flags, message):
     import subprocess
@@ -209,6 +211,26 @@ def test_help_lists_the_sim_device_flags(binary):
     out = subprocess.run([str(binary), "--help"], capture_output=True, text=True,
                          timeout=10).stdout
     for flag in ("--channels", "--rate", "--limit", "--buffer", "--bandwidth",
-                 "--watchdog-ms", "--ramp-ms", "--phases", "--sensor", "--force", "--log",
+                 "--watchdog-ms", "--ramp-ms", "--phases", "--sensor", "--force", "--lateral",
+                 "--log",
                  "--plate-log", "--rx-log", "--protocol", "--once"):
         assert flag in out
+
+
+def test_the_host_link_reads_the_firmwares_force_reports(binary):
+    """A version 3 host and the C host port with a lateral force sensor: the link keeps
+    its ForceReports as per-sample forces by sample number (PROTOCOL.md 4.9, 6.5)."""
+    proc, path = hostport.start(binary=binary, extra=("--lateral", "0.3", "--force", "0.5"))
+    sink = CommandSink(lambda: open_port(path), 1, RATE, paced=True, process=proc)
+    try:
+        assert sink.info.has_force_reports and sink.force_report() is None
+        for b in range(0, 3000, 50):
+            sink.send(b, np.full((50, 1), 1.0), None)
+    finally:
+        sink.close()
+    latest = sink.force_report()
+    assert latest.lateral_n.size == 40 and latest.index0 % 40 == 0
+    assert set(latest.lateral_n) == {1229 / 4096} and set(latest.normal_n) == {0.5}
+    window = sink.force_report(1000, 100)
+    assert window.index0 == 1000 and window.lateral_n.size == 100
+    assert sink.status()["force_reports"] >= 3000 // 40 - 3

@@ -59,20 +59,35 @@ def statuses(draw):
                     flushes=accounting[3])
 
 
+I16 = st.integers(-32768, 32767)
+
+
+@st.composite
+def force_reports(draw):
+    """A ForceReport whose values are whole wire counts (an exact round trip)."""
+    count = draw(st.integers(1, p.FORCE_PAIRS_MAX))
+    values = st.lists(I16.map(lambda c: c * p.FORCE_STEP_N), min_size=count, max_size=count)
+    return p.ForceReport(draw(U64), draw(st.integers(1, 65535)), tuple(draw(values)),
+                         tuple(draw(values)))
+
+
 MESSAGES = st.one_of(
     st.builds(p.Hello, U32), infos(), blocks(), st.builds(p.Heartbeat, U32),
     st.builds(p.Stop, st.booleans()), statuses(),
     st.builds(p.ErrorReport, st.integers(0, 255), U16, U32, st.text(max_size=40)),
-    st.builds(p.Flushed, st.integers(0, 255), U64, U32, U32))
+    st.builds(p.Flushed, st.integers(0, 255), U64, U32, U32), force_reports())
 
 
 def _version(msg, draw_one: bool) -> int:
-    """The versions a message exists in: Flushed and accounted Statuses only in 2."""
+    """A version the message exists in: Flushed and accounted Statuses from 2 (drawn 2 or
+    3), ForceReport only in 3, a Status without accounting only in 1, the rest 1 or 3."""
+    if isinstance(msg, p.ForceReport):
+        return 3
     if isinstance(msg, p.Flushed) or (isinstance(msg, p.Status) and msg.accounted):
-        return 2
+        return 3 if draw_one else 2
     if isinstance(msg, p.Status):
         return 1
-    return 2 if draw_one else 1
+    return 3 if draw_one else 1
 
 
 @SETTINGS
@@ -208,8 +223,8 @@ def test_an_endless_frame_is_dropped_as_oversize_and_the_next_one_decodes():
 
 def test_a_frame_of_another_version_is_counted_and_remembered():
     decoder = p.Decoder()
-    assert decoder.feed(p.encode(p.Heartbeat(1), 0, version=3)) == []
-    assert decoder.counts.bad_version == 1 and decoder.counts.last_bad_version == 3
+    assert decoder.feed(p.encode(p.Heartbeat(1), 0, version=4)) == []
+    assert decoder.counts.bad_version == 1 and decoder.counts.last_bad_version == 4
 
 
 def test_amplitudes_quantise_to_half_a_step_and_clamp_with_a_count():
@@ -254,3 +269,92 @@ def test_the_worked_examples_in_protocol_md_are_what_encode_produces():
     for call, hexbytes in examples:
         frame = eval(call, names)  # noqa: S307 -- our own document
         assert frame.hex(" ") == hexbytes.strip(), call
+
+
+# ---------------------------------------------------------------------------- force reports
+
+def test_the_largest_frame_is_4113_stuffed_bytes_and_4114_with_its_delimiter():
+    """PROTOCOL.md 2: COBS adds one byte per 254 and one more to a body without zeros."""
+    body = bytes(range(1, 256)) * 16 + bytes(range(1, 17))
+    assert len(body) == p.MAX_BODY
+    assert len(p.cobs_encode(body)) == p.MAX_STUFFED == 4096 + 16 + 1 == 4113
+    text = (Path(p.__file__).parents[1] / "PROTOCOL.md").read_text(encoding="utf-8")
+    assert "at most 4113 bytes before its\n  delimiter, 4114 with it" in text
+
+
+def test_force_report_layout_is_the_documented_one():
+    """PROTOCOL.md 4.9: start u64, decimation u16, count u8, then (lateral, normal) i16
+    pairs of 1/4096 N, little-endian."""
+    msg = p.ForceReport(2**64 - 2, 4, (1.0, -8.0), (0.5, 7.0))
+    body = p.cobs_decode(p.encode(msg, 3, 3)[:-1])
+    assert body[:4] == bytes([3, 0x85, 3, 0])
+    payload = body[4:-4]
+    assert payload[:11] == (2**64 - 2).to_bytes(8, "little") + bytes([4, 0, 2])
+    pairs = np.frombuffer(payload[11:], dtype="<i2").reshape(2, 2)
+    np.testing.assert_array_equal(pairs, [[4096, 2048], [-32768, 28672]])
+
+
+def test_forces_quantise_to_half_a_count_and_clip_to_the_i16_range():
+    f = np.array([0.0, 1e-5, -1e-4, 2.5, 7.9998, 9.0, -8.0, -9.0, np.nan, np.inf])
+    counts = p.force_to_wire(f)
+    assert counts.dtype == np.int16
+    np.testing.assert_array_equal(counts, [0, 0, 0, 10240, 32767, 32767, -32768, -32768, 0, 0])
+    inside = np.abs(f) < 7.99
+    assert np.all(np.abs(p.force_from_wire(counts)[inside] - f[inside]) <= p.FORCE_STEP_N / 2)
+
+
+def test_force_reports_exist_from_version_3_and_need_one_to_255_values():
+    msg = p.ForceReport(0, 4, (0.0,), (0.0,))
+    for version in (1, 2):
+        with pytest.raises(p.ProtocolError, match="ForceReport does not exist in protocol "
+                                                  f"version {version}; it needs version 3"):
+            p.encode(msg, 0, version)
+    for bad, match in [(p.ForceReport(0, 4, (), ()), "0 lateral and 0 normal"),
+                       (p.ForceReport(0, 4, (0.0,) * 256, (0.0,) * 256), "256 lateral"),
+                       (p.ForceReport(0, 4, (0.0, 0.0), (0.0,)), "2 lateral and 1 normal"),
+                       (p.ForceReport(0, 0, (0.0,), (0.0,)), "decimation 0")]:
+        with pytest.raises(p.ProtocolError, match=match):
+            p.encode(bad, 0, 3)
+    # a version 2 receiver (a version 2 host) drops a version 3 frame, counted
+    old = p.Decoder(max_version=2)
+    assert old.feed(p.encode(msg, 0, 3)) == [] and old.counts.bad_version == 1
+    # the type byte in a version 2 frame is an unknown type there
+    body = bytes([2, p.ForceReport.TYPE, 0, 0]) + p.cobs_decode(p.encode(msg, 0, 3)[:-1])[4:-4]
+    frame = p.cobs_encode(body + zlib.crc32(body).to_bytes(4, "little")) + b"\x00"
+    decoder = p.Decoder()
+    assert decoder.feed(frame) == [] and decoder.counts.unknown_type == 1
+
+
+def test_info_flag_bit_3_announces_force_reports_and_older_hosts_ignore_it():
+    info = p.Info(1, 10_000.0, (4.0,), 4096, 25, 20, has_force_reports=True, name="x")
+    (frame,) = p.Decoder().feed(p.encode(info, 0, 1))
+    assert frame.message.has_force_reports
+    flags = p.cobs_decode(p.encode(info, 0, 1)[:-1])[4 + 2]
+    assert flags == 0b1000
+
+
+@SETTINGS
+@given(st.lists(force_reports(), min_size=1, max_size=6), st.lists(st.integers(1, 300),
+                                                                    max_size=40),
+       st.integers(0, 2**32 - 1))
+def test_force_reports_survive_any_rechunking_and_damage_costs_only_the_damaged(msgs, cuts,
+                                                                                seed):
+    """Re-chunked at random, every report decodes; with bits flipped on the wire, every
+    report whose bytes (and the delimiter before) survived decodes exactly, the rest are
+    counted drops, never a wrong report."""
+    frames = [p.encode(m, k, 3) for k, m in enumerate(msgs)]
+    data = b"".join(frames)
+    decoder, got, pos = p.Decoder(), [], 0
+    for cut in [*cuts, len(data)]:
+        got += decoder.feed(data[pos:pos + cut])
+        pos += cut
+    assert [f.message for f in got] == msgs and decoder.counts.discarded == 0
+    rng = np.random.default_rng(seed)
+    damaged = [inject(f, Faults(flip=0.002), rng) for f in frames]
+    expect = [k for k, (f, d) in enumerate(zip(frames, damaged))
+              if f == d and (k == 0 or damaged[k - 1].endswith(b"\x00"))]
+    decoder = p.Decoder()
+    got = decoder.feed(b"".join(damaged))
+    assert [f.seq for f in got] == expect
+    assert all(f.message == msgs[f.seq] for f in got)
+    assert (decoder.counts.discarded >= 1) == (len(expect) < len(frames))

@@ -175,6 +175,45 @@ def test_blocks_before_hello_are_refused():
     assert core.level == 0
 
 
+def test_blocks_before_hello_are_refused_even_after_a_watchdog_trip():
+    """PROTOCOL.md 4.3 step 1: NOT_READY before the first Hello, whatever the state."""
+    core = DeviceCore(DeviceConfig())
+    host = Host()
+    core.receive(host(p.Heartbeat(1)), 0.0)  # arms the watchdog
+    core.advance_to(0.1)
+    assert core.state == S.SILENT
+    core.receive(host(p.Heartbeat(2)), 0.1)  # back to buffering...
+    (reply,) = p.Decoder().feed(core.receive(host(block(0, np.ones(5))), 0.1))
+    assert reply.message.code == p.ErrorCode.NOT_READY and core.level == 0  # ...not ready
+
+
+@pytest.mark.parametrize("watchdog_ms, rate_hz, ticks", [(9, 10_000.0, 90), (25, 10_000.0, 250),
+                                                          (7, 3_333.0, 24), (1, 300.0, 1)])
+def test_the_watchdog_counts_integer_ticks_of_the_declared_rate(watchdog_ms, rate_hz, ticks):
+    """PROTOCOL.md 5.3: ceil(ms * rate_mHz / 10^6) ticks (9 ms * 10 kHz in floats is
+    90.00000000000001, one tick more)."""
+    assert ticks == -(-watchdog_ms * round(rate_hz * 1000) // 1_000_000)
+    core = DeviceCore(DeviceConfig(rate_hz=rate_hz, watchdog_ms=watchdog_ms, ramp_ms=0,
+                                   bandwidth_hz=rate_hz / 10))
+    core.receive(Host()(p.Heartbeat(1)), 0.0)  # the frame arrives at tick 0
+    core.advance_to((ticks + 0.5) / rate_hz)   # ticks 0 .. ticks - 1 ran
+    assert core.state == S.IDLE and core.counters.watchdog_trips == 0
+    core.advance_to((ticks + 1.5) / rate_hz)   # tick `ticks`: silent for that many
+    assert core.state == S.SILENT and core.counters.watchdog_trips == 1
+
+
+def test_the_device_clamps_to_exactly_the_limit_it_declares():
+    """3.0002 um is 12288.8 counts: declared and enforced are both 12288 (floored: never
+    above the configured limit)."""
+    core, host, rec = make(DeviceConfig(limits_um=(3.0002,)), prefill=1)
+    assert core.config.info().limits_um == (12288 * STEP,)
+    wire = np.array([[12288], [12289], [12290]], dtype=np.uint16)
+    core.receive(host(p.Block(0, wire)), 0.0)
+    core.advance_to(0.001)
+    np.testing.assert_array_equal(rec.played()[1][:, 0], [12288 * STEP] * 3)
+    assert core.counters.clamped == 2
+
+
 def test_the_device_clamps_to_its_own_limit_whatever_arrives():
     core, host, rec = make(DeviceConfig(limits_um=(1.0,)), prefill=1)
     core.receive(host(block(0, [0.5, 3.0, 9.0])), 0.0)
@@ -283,7 +322,7 @@ def test_a_watchdog_trip_is_reported_with_where_the_device_restarts():
     out = core.advance_to(0.100)  # the host never speaks again: trip at 25 ms
     (frame,) = p.Decoder().feed(out)
     flushed = frame.message
-    assert frame.version == 2 and isinstance(flushed, p.Flushed)
+    assert frame.version == p.PROTOCOL_VERSION and isinstance(flushed, p.Flushed)
     assert flushed.cause == p.FlushCause.WATCHDOG and flushed.flushes == 1
     # played from the first block until the trip, the rest of the 600 flushed
     played = core.session.played
@@ -304,7 +343,7 @@ def test_a_version_1_host_only_ever_sees_version_1_frames():
     def v1(msg):
         return p.encode(msg, next(seq), version=1)
     replies = old.feed(core.receive(v1(p.Hello(10)), 0.0))
-    assert replies[0].message.protocol_version == 2  # it says what it speaks
+    assert replies[0].message.protocol_version == 3  # it says what it speaks
     for b in range(0, 300, 50):
         replies += old.feed(core.receive(v1(block(b, np.ones(50))), 0.0))
     replies += old.feed(core.advance_to(0.1))   # a trip: no Flushed for a version 1 host
@@ -350,9 +389,9 @@ def host_traffic(draw):
 
 
 @settings(derandomize=True, max_examples=150, deadline=None)
-@given(host_traffic(), st.sampled_from([1, 2]))
+@given(host_traffic(), st.sampled_from([1, 2, 3]))
 def test_no_valid_host_traffic_makes_the_device_fail(steps, version):
-    core = DeviceCore(DeviceConfig(buffer_samples=512))
+    core = DeviceCore(DeviceConfig(buffer_samples=512, lateral_n=0.25, force_n=0.5))
     decoder = p.Decoder()
     t = 0.0
     for seq, step in enumerate(steps):
@@ -364,7 +403,77 @@ def test_no_valid_host_traffic_makes_the_device_fail(steps, version):
         assert decoder.counts.discarded == 0
         assert all(f.version == version for f in replies)
         st_ = core.status(0)
-        if version == 2:
+        if version >= 2:
             assert 0 <= st_.buffer_end < 2**64 and 0 <= core.level <= 512
             ahead = (st_.buffer_end - st_.play_index) % 2**64
             assert core.level <= ahead <= 512
+
+
+# ---------------------------------------------------------------------------- force reports
+
+V3 = 3
+
+
+def _reports(data: bytes) -> list:
+    return [f.message for f in p.Decoder().feed(data) if isinstance(f.message, p.ForceReport)]
+
+
+def test_force_reports_carry_the_sensor_over_each_played_sample_range():
+    """PROTOCOL.md 4.9: 10 values of 4 samples a report, consecutive sample numbers, the
+    constant sensor's values in whole counts (0.3 N lateral is 1228.8 counts: 1229)."""
+    cfg = DeviceConfig(lateral_n=0.3, force_n=0.5)
+    core, host, rec = make(cfg, prefill=1)
+    assert core.config.info().has_force_reports
+    core.receive(host(block(0, np.full(400, 1.0))), 0.0)
+    out = core.advance_to(0.02)
+    core.receive(host(p.Heartbeat(1)), 0.02)  # no watchdog trip
+    reports = _reports(out + core.advance_to(0.0305))  # 305 ticks played
+    assert [r.start_index for r in reports] == list(range(0, 280, 40))  # 7 complete
+    for r in reports:
+        assert r.decimation == 4 and len(r.lateral_n) == 10
+        assert set(r.lateral_n) == {1229 * p.FORCE_STEP_N} and set(r.normal_n) == {0.5}
+
+
+def test_a_version_2_host_gets_no_force_reports_and_a_stop_in_playing_drops_the_partial():
+    cfg = DeviceConfig(lateral_n=0.3, force_n=0.5)
+    core = DeviceCore(cfg)
+    old = p.Decoder(max_version=2)
+    seq = iter(range(100))
+
+    def v2(msg):
+        return p.encode(msg, next(seq), version=1 if isinstance(msg, p.Hello) else 2)
+    old.feed(core.receive(v2(p.Hello(1)), 0.0))
+    old.feed(core.receive(v2(block(0, np.full(400, 1.0))), 0.0))
+    assert [f.message for f in old.feed(core.advance_to(0.02))] == []
+    assert old.counts.discarded == 0
+    # the same device, now driven by a version 3 host: reports from the first tick after
+    host = Host()
+    host.seq = 50
+    core.receive(p.encode(p.Heartbeat(1), 50, V3), 0.02)
+    reports = _reports(core.advance_to(0.03))
+    assert [r.start_index for r in reports] == [200, 240]  # built since 200, sent in v3
+
+
+def test_ticks_that_do_not_play_restart_the_report():
+    """An underrun (the buffer ran dry at 30) drops the 30-sample partial report; the next
+    one starts where playing resumes."""
+    core, host, rec = make(DeviceConfig(lateral_n=-1.0), prefill=1)
+    core.receive(host(block(0, np.full(30, 1.0))), 0.0)
+    assert _reports(core.advance_to(0.01)) == []
+    assert core.counters.underruns == 1
+    core.receive(host(block(30, np.full(100, 1.0))), 0.01)
+    reports = _reports(core.advance_to(0.02))
+    assert [r.start_index for r in reports] == [30, 70]
+    assert set(reports[0].lateral_n) == {-1.0} and set(reports[0].normal_n) == {0.0}
+
+
+def test_without_a_lateral_sensor_there_is_no_flag_and_no_report():
+    core, host, rec = make(DeviceConfig(force_n=0.5), prefill=1)
+    assert not core.config.info().has_force_reports
+    core.receive(host(block(0, np.full(400, 1.0))), 0.0)
+    assert _reports(core.advance_to(0.05)) == []
+
+
+def test_force_reports_need_protocol_version_3():
+    with pytest.raises(ValueError, match="protocol_version = 2: expected 3 for force reports"):
+        DeviceConfig(lateral_n=0.1, protocol_version=2)

@@ -54,6 +54,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="report the modelled plate amplitude as 'measured'")
     parser.add_argument("--force", type=float, default=None, metavar="N",
                         help="report this normal force (N) from a simulated force sensor")
+    parser.add_argument("--lateral", type=float, default=None, metavar="N",
+                        help="send force reports (protocol 3) of this constant lateral force "
+                             "(N) and the --force normal force (0 without)")
+    parser.add_argument("--finger", type=int, default=None, metavar="SEED",
+                        help="send force reports (protocol 3) from a simulated finger, person "
+                             "SEED (>= 0) of device.finger's population, sliding at "
+                             "--finger-speed and pressing with --force (default 0.5 N): "
+                             "friction of the played amplitude by seed 003's model with that "
+                             "person's constants and drift, seen by a 1 kHz sensor with 2 mN "
+                             "lateral and 5 mN normal noise (device/finger.py)")
+    parser.add_argument("--finger-speed", type=float, default=100.0, metavar="MM_S",
+                        help="sliding speed of the --finger (default 100 mm/s)")
     parser.add_argument("--log", metavar="CSV", default=None,
                         help="write every played sample: index,ch0_um,... (fixed-point values)")
     parser.add_argument("--plate-log", metavar="CSV", default=None,
@@ -61,9 +73,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--tcp", type=_tcp_address, default=None, metavar="[HOST:]PORT",
                         help="listen on TCP instead of a pty (host default 127.0.0.1; port 0: "
                              "any free port); hosts open the printed socket:// URL")
-    parser.add_argument("--protocol", type=int, choices=(1, 2), default=2,
-                        help="newest protocol version to speak (default 2; 1 acts as a "
-                             "version-1 firmware)")
+    parser.add_argument("--protocol", type=int, choices=(1, 2, 3), default=3,
+                        help="newest protocol version to speak (default 3; 1 and 2 act as "
+                             "firmware of that version)")
     parser.add_argument("--once", action="store_true",
                         help="exit once the first host's Stop has played out (default: serve "
                              "host after host until Ctrl-C)")
@@ -76,7 +88,8 @@ def run(args: argparse.Namespace) -> int:
                           buffer_samples=args.buffer, bandwidth_hz=args.bandwidth,
                           watchdog_ms=args.watchdog_ms, ramp_ms=args.ramp_ms,
                           phases=args.phases, sensor=args.sensor, force_n=args.force,
-                          protocol_version=args.protocol)
+                          protocol_version=args.protocol, lateral_n=args.lateral,
+                          finger=args.finger, finger_speed_mm_s=args.finger_speed)
     logs = []
     core = DeviceCore(config)
     quit_event = threading.Event()

@@ -6,7 +6,9 @@ what that class offers (``receive``, ``advance_to``, ``status``, ``state``, ``le
 ``play_index``, ``buffer_end``, ``counters``, ``session``, ``decoder.counts``,
 ``setpoint``, ``plate_um``, ``finished``), so one test suite runs against both. It drives
 ``build/host/libfwsim.so`` (``host/sim_lib.c``): the same core and plate model as the pty
-host port.
+host port. Its lateral force sensor reads, per tick, what the Python ``sensor`` reads
+(a constant for ``DeviceConfig.lateral_n``); the board has no simulated finger, so a
+sensor that reads the setpoints (``DeviceConfig.finger``) is refused.
 """
 
 from __future__ import annotations
@@ -43,7 +45,8 @@ def _load(path: Path):
                         ("buffer_samples", ctypes.c_ulong), ("bandwidth_hz", ctypes.c_double),
                         ("watchdog_ms", ctypes.c_ulong), ("ramp_ms", ctypes.c_ulong),
                         ("phases", ctypes.c_bool), ("sensor", ctypes.c_bool),
-                        ("has_force", ctypes.c_bool), ("force_n", ctypes.c_double),
+                        ("has_force", ctypes.c_bool), ("has_lateral", ctypes.c_bool),
+                        ("force_n", ctypes.c_double), ("lateral_n", ctypes.c_double),
                         ("name", ctypes.c_char_p), ("protocol_version", ctypes.c_ulong)]
 
         lib.fwsim_size.restype = ctypes.c_size_t
@@ -54,7 +57,7 @@ def _load(path: Path):
                                       ctypes.c_double, ctypes.c_void_p, ctypes.c_size_t]
         lib.fwsim_advance.restype = ctypes.c_size_t
         lib.fwsim_advance.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_size_t] + [
-            ctypes.c_void_p] * 6
+            ctypes.c_void_p] * 7
         lib.fwsim_counters.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
         lib.fwsim_poll.restype = ctypes.c_size_t
         lib.fwsim_poll.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t]
@@ -65,7 +68,8 @@ def _load(path: Path):
 class CDeviceCore:
     """The C core with the interface of the reference ``DeviceCore`` (see module docstring)."""
 
-    def __init__(self, config, log=None, plate_log=None, *, library: Path | None = None):
+    def __init__(self, config, log=None, plate_log=None, sensor=None, *,
+                 library: Path | None = None):
         if library is None:
             from device.firmware.build import sim_library
             library = sim_library()
@@ -73,6 +77,10 @@ class CDeviceCore:
         self.config = config
         self.log = log
         self.plate_log = plate_log
+        if config.finger is not None and sensor is None:
+            raise ValueError("the C core's host board has no simulated finger; give it a "
+                             "sensor that does not read the setpoints")
+        self.sensor = (sensor or config.force_sensor()) if config.force_reports else None
         limits = tuple(config.limits_um)
         self._name = config.name.encode("utf-8")  # the core keeps a pointer to it
         params = params_type(
@@ -80,7 +88,8 @@ class CDeviceCore:
             buffer_samples=config.buffer_samples, bandwidth_hz=config.bandwidth_hz,
             watchdog_ms=config.watchdog_ms, ramp_ms=config.ramp_ms, phases=config.phases,
             sensor=config.sensor, has_force=config.force_n is not None,
-            force_n=config.force_n or 0.0, name=self._name,
+            has_lateral=config.force_reports, force_n=config.force_n or 0.0,
+            lateral_n=config.lateral_n or 0.0, name=self._name,
             protocol_version=config.protocol_version)
         for i, x in enumerate(limits[:len(params.limits_um)]):
             params.limits_um[i] = x
@@ -94,6 +103,7 @@ class CDeviceCore:
         self._buf = (np.empty((_CHUNK, ch), np.uint16), np.empty((_CHUNK, ch)),
                      np.empty(_CHUNK, np.uint8), np.empty(_CHUNK, np.uint8),
                      np.empty(_CHUNK, np.uint64), np.empty((_CHUNK, ch), np.uint16))
+        self._forces = np.zeros((_CHUNK, 2), np.int16)
 
     def _values(self) -> dict:
         out = (ctypes.c_uint64 * len(_VALUES))()
@@ -153,16 +163,28 @@ class CDeviceCore:
 
     def advance_to(self, t_s: float) -> bytes:
         """Play every tick up to (not including) tick ``floor(t_s * rate)``; returns the
-        frames the device sends on its own meanwhile (a Flushed after a watchdog trip)."""
+        frames the device sends on its own meanwhile (a Flushed after a watchdog trip,
+        ForceReports)."""
         sp, plate, state, played, index, phase = self._buf
         rate = self.config.rate_hz
+        end = int(t_s * rate)
+        said = bytearray()
+        poll = ctypes.create_string_buffer(1024)
         while True:
             t0 = self._values()["tick"]
-            n = self._lib.fwsim_advance(self._mem, t_s, _CHUNK, *(b.ctypes.data for b in self._buf))
+            forces = None
+            if self.sensor is not None:
+                m = min(max(end - t0, 0), _CHUNK)
+                lateral, normal = self.sensor.read(t0, np.zeros((m, self.config.channels)))
+                self._forces[:m, 0] = p.force_to_wire(lateral)
+                self._forces[:m, 1] = p.force_to_wire(normal)
+                forces = self._forces.ctypes.data
+            n = self._lib.fwsim_advance(self._mem, t_s, _CHUNK,
+                                        *(b.ctypes.data for b in self._buf), forces)
+            k = self._lib.fwsim_poll(self._mem, poll, len(poll))
+            said += poll.raw[:k]
             if n == 0:
-                out = ctypes.create_string_buffer(256)
-                n = self._lib.fwsim_poll(self._mem, out, len(out))
-                return out.raw[:n]
+                return bytes(said)
             um = p.amplitude_from_wire(sp[:n])
             self.setpoint = um[-1].copy()
             self.plate_um = plate[n - 1].copy()

@@ -5,6 +5,7 @@
     sink.send(start_index, amplitudes_um, None)   # (n, channels) um, per block
     sink.status()                                  # JSON-able counters
     sink.unplayed_share()                          # commanded samples that never played
+    sink.force_report()                            # latest lateral/normal force, or None
     sink.close()                                   # drains, sends Stop; the sim exits
 
 One thread owns the port (pyserial: a device path, ``COM3``, ``socket://``, ``loop://``...);
@@ -16,6 +17,8 @@ device declared (counted). The thread heartbeats every ``watchdog_ms / 5`` and r
 Status against how far it had sent when the heartbeat left (``device.link.ledger``), so
 its estimate of the device's buffer is re-based on every answer: after a watchdog trip,
 a lost block or a reconnect the host never waits for samples the device no longer has.
+A version 3 device with a lateral force sensor streams ForceReports; the host keeps the
+last second of them by sample number (:meth:`CommandSink.force_report`).
 
 Every wait is bounded. The thread re-handshakes when the device says nothing valid for
 ``SILENCE_S`` or takes no block for that long; if the port fails (USB unplugged) it says
@@ -51,6 +54,7 @@ except ImportError:  # Windows: in_waiting stays pyserial's (0 or 1)
     fcntl = termios = None
 
 from device.link import protocol as p
+from device.link.forces import ForceHistory, ForceReport, per_sample
 from device.link.ledger import Ledger, Pacing, Snapshot
 from device.link.protocol import DeviceState, LinkError
 
@@ -76,7 +80,8 @@ STOP_MARGIN_S = 0.5
 
 
 _COUNTS = ("frames_sent", "blocks_sent", "heartbeats", "retries", "reconnects", "disconnects",
-           "recoveries", "stalls", "device_flushes", "clamped_samples", "dropped_blocks")
+           "recoveries", "stalls", "device_flushes", "clamped_samples", "dropped_blocks",
+           "force_reports")
 
 
 class LinkStalled(LinkError):
@@ -162,6 +167,8 @@ class CommandSink:
         self._seq = 0
         self._decoder = p.Decoder()
         self._status: p.Status | None = None
+        self._forces = ForceHistory()
+        self._forces_lock = threading.Lock()
         self._snapshot: Snapshot | None = None
         self._sent_end = 0            # host index after the last sample sent
         self._last_rx = self._last_progress = time.monotonic()
@@ -205,24 +212,35 @@ class CommandSink:
 
     def _handshake(self, port) -> p.Info:
         """Send Hello (in a version 1 frame: every device answers it) until Info comes
-        back; the device flushes its buffer and restarts its counters on Hello."""
+        back; the device flushes its buffer and restarts its counters on Hello.
+
+        If a session is open (a recovery or a reconnect), settle it first: Stop without
+        drain and a Heartbeat go out before the first Hello, so the Status answering
+        that Heartbeat (read here, before the Info) counts every sample of the session as
+        played, flushed, refused or lost; nothing plays between it and the Hello.
+        """
         decoder = p.Decoder()
         deadline = time.monotonic() + HANDSHAKE_TIMEOUT_S
+        settle = b""
+        if self._ledger.reporting:
+            settle = self._frame(p.Stop(drain=False)) + self._heartbeat()
         tries = 0
         while time.monotonic() < deadline:
             if tries:
                 self._counts["retries"] += 1
             tries += 1
             # a leading delimiter ends whatever partial frame the device was holding
-            port.write(b"\x00" + self._frame(p.Hello(int(PREFILL_S * self.rate_hz)), 1))
+            port.write(b"\x00" + settle
+                       + self._frame(p.Hello(int(PREFILL_S * self.rate_hz)), 1))
+            settle = b""
             until = min(deadline, time.monotonic() + HANDSHAKE_RETRY_S)
             while time.monotonic() < until:
                 for frame in decoder.feed(self._read(port)):
                     if isinstance(frame.message, p.Info):
                         self._decoder = decoder
                         return frame.message
-                    if isinstance(frame.message, p.ErrorReport):
-                        self._errors[p.ErrorCode.NAMES.get(frame.message.code, "other")] += 1
+                    if isinstance(frame.message, (p.ErrorReport, p.Status)):
+                        self._handle(frame.message)
         bad = decoder.counts.last_bad_version
         if bad is not None:
             raise LinkError(f"{self.label}: device speaks protocol version {bad}; this host "
@@ -276,8 +294,7 @@ class CommandSink:
             pass
         self._port = None
         self._counts["disconnects"] += 1
-        with self._cond:
-            self._ledger.end_session()
+        with self._cond:  # the session is settled by the next handshake, or by close
             self._connected = False
             if not self.paced:  # live blocks go stale; paced ones go out on reconnecting
                 self._drop_queued("disconnected")
@@ -295,8 +312,6 @@ class CommandSink:
         """Handshake again on the same port (the device restarts its buffer)."""
         self._counts["recoveries"] += 1
         self._warn(f"{reason}; handshaking again")
-        with self._cond:
-            self._ledger.end_session()
         try:
             self._start_session(self._handshake(self._port))
         except (LinkError, OSError, serial.SerialException) as exc:
@@ -404,6 +419,12 @@ class CommandSink:
             with self._cond:
                 self._snapshot = Snapshot.flushed(msg.play_index, now, self._sent_end,
                                                   self._ledger.mark())
+        elif isinstance(msg, p.ForceReport):
+            if self.info is not None and self.info.has_force_reports:
+                self._counts["force_reports"] += 1
+                report = per_sample(msg, self._sent_end)
+                with self._forces_lock:
+                    self._forces.add(report)
         elif isinstance(msg, p.ErrorReport):
             self._errors[p.ErrorCode.NAMES.get(msg.code, "other")] += 1
 
@@ -415,6 +436,7 @@ class CommandSink:
         if port is None:
             with self._cond:
                 self._drop_queued("disconnected")
+                self._ledger.end_session()
             return
         try:
             with self._cond:
@@ -562,6 +584,25 @@ class CommandSink:
             return None
         return st.force_n
 
+    def force_report(self, index0: int | None = None, n: int | None = None
+                     ) -> ForceReport | None:
+        """Lateral and normal force (N) per output sample, from the device's ForceReports
+        (PROTOCOL.md 4.9), as the closed loop reads them (``index0``, ``lateral_n`` (m,),
+        ``normal_n`` (m,)).
+
+        Without arguments: the latest report the device sent (m = its decimation times
+        its values; 40 samples from the reference device). With ``index0`` and ``n``: the
+        forces over exactly samples ``index0 .. index0 + n - 1`` if the reports of the
+        last second cover all of them, else None. None as well when the device announces
+        no lateral force sensor (a version 1 or 2 device, or Info flags bit 3 clear) or
+        has sent no report yet. Cheap and never blocks on the link: the haptic thread may
+        ask every block.
+        """
+        with self._forces_lock:
+            if index0 is None:
+                return self._forces.latest()
+            return self._forces.window(int(index0), int(n))
+
     def unplayed_share(self) -> float:
         """Commanded samples known never to have played, as a share of all commanded (0
         when nothing was commanded). Final once :meth:`close` has returned."""
@@ -597,6 +638,7 @@ class CommandSink:
             "retries": c["retries"], "reconnects": c["reconnects"],
             "disconnects": c["disconnects"], "recoveries": c["recoveries"],
             "stalls": c["stalls"], "device_flushes": c["device_flushes"],
+            "force_reports": c["force_reports"],
             "resyncs": self._decoder.counts.discarded,
             "crc_errors": self._decoder.counts.crc_errors,
             "lost_frames_from_device": self._decoder.counts.lost_frames,

@@ -14,10 +14,13 @@ Grammar of the byte stream (PROTOCOL.md section 2)::
 Amplitudes travel as unsigned 16-bit fixed point, :data:`AMPLITUDE_STEP_UM` (1/4096 um)
 per count; phases as unsigned 16-bit fractions of a turn (2 pi / 65536 rad per count).
 
+Forces travel as signed 16-bit fixed point, :data:`FORCE_STEP_N` (1/4096 N) per count.
+
 Versions: a frame's ``version`` byte selects the payload layouts. Version 2 adds the
-buffer-accounting fields to :class:`Status` and the :class:`Flushed` message; every other
-payload is the same in both. :func:`encode` writes the version asked for; a
-:class:`Decoder` accepts versions 1 to its ``max_version``.
+buffer-accounting fields to :class:`Status` and the :class:`Flushed` message; version 3
+adds the :class:`ForceReport` message (lateral and normal force); every other payload is
+the same in all three. :func:`encode` writes the version asked for; a :class:`Decoder`
+accepts versions 1 to its ``max_version``.
 """
 
 from __future__ import annotations
@@ -29,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 #: the newest version this module speaks (it speaks every version from 1)
-PROTOCOL_VERSION = 2
+PROTOCOL_VERSION = 3
 #: sample numbers are u64 and wrap modulo this (PROTOCOL.md 4.3)
 INDEX_MODULUS = 2 ** 64
 #: one count of a wire amplitude (um, zero-to-peak)
@@ -38,8 +41,14 @@ AMPLITUDE_STEP_UM = 1.0 / 4096.0
 AMPLITUDE_MAX_UM = 65535 * AMPLITUDE_STEP_UM
 #: one count of a wire phase (rad)
 PHASE_STEP_RAD = 2.0 * np.pi / 65536.0
+#: one count of a wire force in a ForceReport (N)
+FORCE_STEP_N = 1.0 / 4096.0
+#: ForceReport values per message, at most
+FORCE_PAIRS_MAX = 255
 #: largest body (version..crc) a receiver must accept, bytes
 MAX_BODY = 4096
+#: largest COBS-stuffed frame before its 0x00 delimiter, bytes (4113; 4114 with it)
+MAX_STUFFED = MAX_BODY + MAX_BODY // 254 + 1
 _HEADER = struct.Struct("<BBH")
 _CRC = struct.Struct("<I")
 _MIN_BODY = _HEADER.size + _CRC.size
@@ -118,6 +127,19 @@ def amplitude_from_wire(counts: np.ndarray) -> np.ndarray:
     return np.asarray(counts, dtype=np.float64) * AMPLITUDE_STEP_UM
 
 
+def force_to_wire(force_n) -> np.ndarray:
+    """Forces (N) to int16 wire counts of :data:`FORCE_STEP_N`, round to nearest, clipped
+    to [-32768, 32767] counts (-8 N to 8 N minus one count); non-finite values become 0."""
+    f = np.asarray(force_n, dtype=np.float64)
+    f = np.where(np.isfinite(f), f, 0.0)
+    return np.clip(np.rint(f / FORCE_STEP_N), -32768, 32767).astype(np.int16)
+
+
+def force_from_wire(counts) -> np.ndarray:
+    """Wire force counts to N, float64, same shape."""
+    return np.asarray(counts, dtype=np.float64) * FORCE_STEP_N
+
+
 def phase_to_wire(phases_rad: np.ndarray) -> np.ndarray:
     """Phases (rad, any finite value) to uint16 fractions of a turn; non-finite become 0."""
     p = np.asarray(phases_rad, dtype=np.float64)
@@ -177,6 +199,7 @@ class Info:
     has_force: bool = False
     name: str = ""
     protocol_version: int = PROTOCOL_VERSION
+    has_force_reports: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -268,6 +291,20 @@ class Flushed:
 
 
 @dataclass(frozen=True)
+class ForceReport:
+    """Device -> host (version 3): lateral and normal force (N) measured while samples
+    ``start_index .. start_index + decimation * len(lateral_n) - 1`` played; value ``k`` is
+    the mean over samples ``start_index + k * decimation`` onwards (``decimation`` of them).
+    Values are whole multiples of :data:`FORCE_STEP_N` after a round trip."""
+
+    TYPE = 0x85
+    start_index: int
+    decimation: int
+    lateral_n: tuple[float, ...]
+    normal_n: tuple[float, ...]
+
+
+@dataclass(frozen=True)
 class ErrorReport:
     """Device -> host: something the host sent was refused."""
 
@@ -278,9 +315,9 @@ class ErrorReport:
     text: str = ""
 
 
-MESSAGES = (Hello, Info, Block, Heartbeat, Stop, Status, ErrorReport, Flushed)
+MESSAGES = (Hello, Info, Block, Heartbeat, Stop, Status, ErrorReport, Flushed, ForceReport)
 #: message types by the first version that has them
-_SINCE = {Flushed: 2}
+_SINCE = {Flushed: 2, ForceReport: 3}
 _BY_TYPE = {m.TYPE: m for m in MESSAGES}
 
 
@@ -304,8 +341,10 @@ _STATUS = struct.Struct("<IBBQI10I")  # echo, state, flags, play_index, level, 9
 _STATUS_V2 = struct.Struct("<QIII")   # buffer_end, played, flushed, flushes
 _FLUSHED = struct.Struct("<BQII")
 _ERROR = struct.Struct("<BHI")
+_FORCES = struct.Struct("<QHB")     # start_index, decimation, count; then count x (i16, i16)
 _U16 = np.dtype("<u2")
-_FLAG_PHASES, _FLAG_SENSOR, _FLAG_FORCE = 1, 2, 4
+_I16 = np.dtype("<i2")
+_FLAG_PHASES, _FLAG_SENSOR, _FLAG_FORCE, _FLAG_FORCE_REPORTS = 1, 2, 4, 8
 #: payload bytes left for samples in one Block frame
 BLOCK_SAMPLE_BYTES = MAX_BODY - _MIN_BODY - _BLOCK.size
 
@@ -327,7 +366,7 @@ def _payload(msg, version: int) -> bytes:
             raise ProtocolError(f"Info: {len(msg.limits_um)} limits for {msg.channels} channels")
         name = msg.name.encode("utf-8")[:255]
         flags = (_FLAG_PHASES * msg.has_phases | _FLAG_SENSOR * msg.has_sensor
-                 | _FLAG_FORCE * msg.has_force)
+                 | _FLAG_FORCE * msg.has_force | _FLAG_FORCE_REPORTS * msg.has_force_reports)
         head = _INFO.pack(msg.protocol_version, msg.channels, flags,
                           int(round(msg.sample_rate_hz * 1000.0)), msg.buffer_samples,
                           msg.watchdog_ms, msg.ramp_ms, len(name))
@@ -380,6 +419,15 @@ def _payload(msg, version: int) -> bytes:
     if isinstance(msg, Flushed):
         return _FLUSHED.pack(msg.cause, msg.play_index, msg.flushed & 0xFFFFFFFF,
                              msg.flushes & 0xFFFFFFFF)
+    if isinstance(msg, ForceReport):
+        count = len(msg.lateral_n)
+        if not 1 <= count <= FORCE_PAIRS_MAX or len(msg.normal_n) != count:
+            raise ProtocolError(f"ForceReport: {count} lateral and {len(msg.normal_n)} normal "
+                                f"values; expected the same number, 1 to {FORCE_PAIRS_MAX}")
+        if not 1 <= msg.decimation <= 65535:
+            raise ProtocolError(f"ForceReport decimation {msg.decimation}: expected 1 to 65535")
+        pairs = np.column_stack([force_to_wire(msg.lateral_n), force_to_wire(msg.normal_n)])
+        return _FORCES.pack(msg.start_index, msg.decimation, count) + pairs.astype(_I16).tobytes()
     return _ERROR.pack(msg.code, msg.ref_seq, msg.detail) + msg.text.encode("utf-8")[:200]
 
 
@@ -421,7 +469,8 @@ def _parse(mtype: int, p: bytes, version: int):
         limits = amplitude_from_wire(np.frombuffer(rest[:2 * ch], dtype=_U16))
         return Info(ch, rate / 1000.0, tuple(float(x) for x in limits), buf, wd, ramp,
                     bool(flags & _FLAG_PHASES), bool(flags & _FLAG_SENSOR),
-                    bool(flags & _FLAG_FORCE), rest[2 * ch:].decode("utf-8"), version)
+                    bool(flags & _FLAG_FORCE), rest[2 * ch:].decode("utf-8"), version,
+                    bool(flags & _FLAG_FORCE_REPORTS))
     if mtype == Block.TYPE:
         start, n, ch, flags = _BLOCK.unpack_from(p)
         k = 2 if flags & _FLAG_PHASES else 1
@@ -458,6 +507,13 @@ def _parse(mtype: int, p: bytes, version: int):
                       **extra)
     if mtype == Flushed.TYPE:
         return Flushed(*_FLUSHED.unpack(p))
+    if mtype == ForceReport.TYPE:
+        start, decimation, count = _FORCES.unpack_from(p)
+        if count < 1 or decimation < 1 or len(p) != _FORCES.size + 4 * count:
+            raise ValueError("ForceReport length")
+        pairs = force_from_wire(np.frombuffer(p[_FORCES.size:], dtype=_I16).reshape(count, 2))
+        return ForceReport(start, decimation, tuple(float(x) for x in pairs[:, 0]),
+                           tuple(float(x) for x in pairs[:, 1]))
     if mtype == ErrorReport.TYPE:
         code, ref, detail = _ERROR.unpack_from(p)
         return ErrorReport(code, ref, detail, p[_ERROR.size:].decode("utf-8"))
@@ -511,7 +567,7 @@ class Decoder:
             last = i == len(pieces) - 1
             if not self._overflowed:
                 self._pending += piece
-                if len(self._pending) > MAX_BODY + MAX_BODY // 254 + 1:
+                if len(self._pending) > MAX_STUFFED:
                     self._overflowed = True
                     self._pending.clear()
             if last:

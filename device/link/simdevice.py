@@ -4,8 +4,10 @@
 optional log writers): it decodes the host's frames, keeps received samples in a jitter
 buffer indexed by sample number, plays one sample per tick at its sample rate, models
 the plate's closed amplitude loop as a first-order low pass (seed 003, Fig. 3b: 400 Hz
-bandwidth; bilinear transform prewarped at the bandwidth), and enforces the watchdog: no valid frame for ``watchdog_ms`` and the
-output ramps to zero within ``ramp_ms`` and the buffer is flushed.
+bandwidth; bilinear transform prewarped at the bandwidth), enforces the watchdog (no valid
+frame for ``watchdog_ms`` and the output ramps to zero within ``ramp_ms`` and the buffer is
+flushed) and, with a force sensor (``device.link.simsensor``), reports the lateral and
+normal force in ForceReport messages to a version 3 host.
 
 :func:`serve` binds a core to the wall clock and to a pseudo-terminal or a TCP listener,
 host after host; ``frictex sim-device`` runs it. The core answers each frame in the
@@ -33,6 +35,7 @@ from scipy.signal import lfilter
 
 from device.link import protocol as p
 from device.link.protocol import DeviceState as S
+from device.link.simsensor import FINGER_FORCE_N, ConstantSensor, FingerSensor, ForceWindows
 
 
 @dataclass(frozen=True)
@@ -40,9 +43,15 @@ class DeviceConfig:
     """What the simulated device is (all of it is declared in its Info answer).
 
     limits_um : per-channel amplitude limit (um zero-to-peak); one value means all channels.
+        The device declares and clamps to it floored to a whole wire count (:attr:`limit_counts`).
     buffer_samples : jitter-buffer capacity (samples per channel).
     bandwidth_hz : -3 dB bandwidth of the modelled amplitude loop.
     force_n : normal force reported by a simulated force sensor (N), None for no sensor.
+    lateral_n : a constant lateral force (N) in force reports (normal: ``force_n`` or 0).
+    finger : force reports from a simulated finger, person ``finger`` of
+        ``device.finger.draw_finger``, sliding at ``finger_speed_mm_s`` and pressing with
+        ``force_n`` (default 0.5 N) (``device.link.simsensor.FingerSensor``).
+    force_decimation, force_pairs : ticks averaged per reported value, values per report.
     """
 
     channels: int = 1
@@ -57,6 +66,11 @@ class DeviceConfig:
     force_n: float | None = None
     name: str = "frictex sim-device"
     protocol_version: int = p.PROTOCOL_VERSION
+    lateral_n: float | None = None
+    finger: int | None = None
+    finger_speed_mm_s: float = 100.0
+    force_decimation: int = 4
+    force_pairs: int = 10
 
     def __post_init__(self):
         checks = [(self.channels >= 1, "channels", "at least 1"),
@@ -74,19 +88,60 @@ class DeviceConfig:
                    "exceed 50 ms (PROTOCOL.md 5.3)"),
                   (self.force_n is None or 0 <= self.force_n <= 65.0, "force_n", "in [0, 65] N"),
                   (1 <= self.protocol_version <= p.PROTOCOL_VERSION, "protocol_version",
-                   f"in [1, {p.PROTOCOL_VERSION}]")]
+                   f"in [1, {p.PROTOCOL_VERSION}]"),
+                  (self.lateral_n is None or abs(self.lateral_n) <= 8.0, "lateral_n",
+                   "in [-8, 8] N"),
+                  (self.finger is None or self.finger >= 0, "finger", "a seed >= 0"),
+                  (self.lateral_n is None or self.finger is None, "lateral_n",
+                   "None with a simulated finger (it makes the lateral force)"),
+                  (0 <= self.finger_speed_mm_s <= 1e4, "finger_speed_mm_s", "in [0, 1e4] mm/s"),
+                  (1 <= self.force_decimation <= 65535, "force_decimation", "in [1, 65535]"),
+                  (1 <= self.force_pairs <= p.FORCE_PAIRS_MAX, "force_pairs",
+                   f"in [1, {p.FORCE_PAIRS_MAX}]"),
+                  (not self.force_reports or self.protocol_version >= 3, "protocol_version",
+                   "3 for force reports (lateral_n or finger)")]
         for ok, name, expected in checks:
             if not ok:
                 raise ValueError(f"sim-device {name} = {getattr(self, name)!r}: expected {expected}")
 
     @property
+    def limit_counts(self) -> np.ndarray:
+        """Per-channel limit in wire counts, floored (never above ``limits_um``): what the
+        device declares in Info and clamps to."""
+        um = np.broadcast_to(np.asarray(self.limits_um, dtype=np.float64), (self.channels,))
+        return np.floor(um / p.AMPLITUDE_STEP_UM + 1e-9).astype(np.uint16)
+
+    @property
     def limits(self) -> np.ndarray:
-        return np.broadcast_to(np.asarray(self.limits_um, dtype=np.float64), (self.channels,))
+        """The declared per-channel limits (um), whole wire counts."""
+        return p.amplitude_from_wire(self.limit_counts)
+
+    @property
+    def force_reports(self) -> bool:
+        """Whether the device has a lateral force sensor (sends ForceReports)."""
+        return self.lateral_n is not None or self.finger is not None
+
+    def ticks(self, ms: int) -> int:
+        """``ms`` in ticks of the sample clock: ceil(ms * rate_mHz / 10^6), at least 1, in
+        integers on the declared rate (PROTOCOL.md 5.3), as the firmware counts."""
+        rate_mhz = int(round(self.rate_hz * 1000.0))
+        return max(1, -(-ms * rate_mhz // 1_000_000))
+
+    def force_sensor(self):
+        """The simulated sensor behind the force reports, or None (``simsensor``)."""
+        if self.finger is not None:
+            normal = FINGER_FORCE_N if self.force_n is None else self.force_n
+            return FingerSensor(self.finger, self.rate_hz, float(self.limits[0]),
+                                self.finger_speed_mm_s, normal)
+        if self.lateral_n is not None:
+            return ConstantSensor(self.lateral_n, self.force_n or 0.0)
+        return None
 
     def info(self) -> p.Info:
         return p.Info(self.channels, self.rate_hz, tuple(float(x) for x in self.limits),
                       self.buffer_samples, self.watchdog_ms, self.ramp_ms, self.phases,
-                      self.sensor, self.force_n is not None, self.name, self.protocol_version)
+                      self.sensor, self.force_n is not None, self.name, self.protocol_version,
+                      self.force_reports)
 
 
 @dataclass
@@ -122,14 +177,16 @@ class DeviceCore:
 
     Drive it with :meth:`receive` (bytes from the host at time ``t_s``; returns bytes to
     send back) and :meth:`advance_to` (play every tick up to time ``t_s``; returns bytes
-    the device sends on its own, a Flushed after a watchdog trip). ``log`` and
-    ``plate_log`` are optional callables receiving the played samples and the per-tick
-    output (see :class:`CsvLog`).
+    the device sends on its own: a Flushed after a watchdog trip, ForceReports). ``log``
+    and ``plate_log`` are optional callables receiving the played samples and the per-tick
+    output (see :class:`CsvLog`). ``sensor``: the force sensor (``simsensor``; default:
+    the one ``config`` describes).
     """
 
     config: DeviceConfig = field(default_factory=DeviceConfig)
     log: object = None
     plate_log: object = None
+    sensor: object = None
 
     def __post_init__(self):
         c = self.config
@@ -147,12 +204,14 @@ class DeviceCore:
         self.level = 0
         self.play_index = 0        # modulo 2**64
         self.host_version = 1      # version of the last valid frame from the host
+        self.hello_seen = False
         self._origin_set = False
         self.prefill = 1
         self.tick = 0
         self._last_rx_tick: int | None = None
-        self._wd_ticks = max(1, math.ceil(c.watchdog_ms * 1e-3 * c.rate_hz))
-        self._ramp_ticks = max(1, math.ceil(c.ramp_ms * 1e-3 * c.rate_hz))
+        self._wd_ticks = c.ticks(c.watchdog_ms)
+        self._ramp_ticks = c.ticks(c.ramp_ms)
+        self._top = c.limit_counts
         self.setpoint = np.zeros(c.channels)  # um, what the loop is told to produce now
         self._ramp_from = np.zeros(c.channels)
         self._ramp_pos = self._ramp_ticks      # ticks into the current ramp (done)
@@ -164,6 +223,9 @@ class DeviceCore:
         self.plate_um = np.zeros(c.channels)
         self.stopped = False                   # a Stop finished: output is zero
         self._tx_seq = 0
+        if self.sensor is None and c.force_reports:
+            self.sensor = c.force_sensor()
+        self._windows = ForceWindows(c.force_decimation, c.force_pairs)
 
     # ------------------------------------------------------------------ host -> device
     def receive(self, data: bytes, t_s: float) -> bytes:
@@ -192,6 +254,7 @@ class DeviceCore:
             self.prefill = int(min(max(msg.prefill, 1), self._cap // 4))
             self.state = S.BUFFERING
             self.stopped = False
+            self.hello_seen = True
             return self.config.info()
         if isinstance(msg, p.Heartbeat):
             if self.state == S.SILENT and not self.stopped:
@@ -211,7 +274,7 @@ class DeviceCore:
 
     def _block(self, seq: int, msg: p.Block):
         c = self.config
-        if self.state == S.IDLE or self.stopped:
+        if not self.hello_seen or self.stopped:
             return p.ErrorReport(p.ErrorCode.NOT_READY, seq, 0, "block before Hello")
         n, ch = msg.amplitudes.shape
         if ch != c.channels or (msg.phases is not None) != c.phases:
@@ -228,12 +291,11 @@ class DeviceCore:
             self.play_index = msg.start_index
             ahead = 0
         self._origin_set = True
-        top = np.floor(c.limits / p.AMPLITUDE_STEP_UM + 1e-9).astype(np.uint16)
         amps = msg.amplitudes
-        over = amps > top
+        over = amps > self._top
         if over.any():  # the host must clamp; the device checks anyway
             self.counters.clamped += int(over.sum())
-            amps = np.minimum(amps, top)
+            amps = np.minimum(amps, self._top)
         # offsets from the play position; anything this far out is late or beyond anyway
         rel = min(max(ahead, -2 ** 40), 2 ** 40) + np.arange(n, dtype=np.int64)
         late = rel < 0
@@ -317,19 +379,23 @@ class DeviceCore:
                                                       flushed, self.session.flushes))
                     continue
                 n = min(n, deadline - self.tick)
-            self._run(min(n, self._cap))
+            for report in self._run(min(n, self._cap)):
+                if self.host_version >= 3:
+                    out += self._encode(report)
         return bytes(out)
 
-    def _run(self, n: int) -> None:
+    def _run(self, n: int) -> list:
+        """Run ``n`` ticks; returns the ForceReports they complete."""
         c = self.config
         sp = np.empty((n, c.channels))
+        first, advanced = self.play_index, 0
         if self.state == S.SILENT:
             k = self._ramp_pos + np.arange(1, n + 1)
             frac = np.clip(1.0 - k / self._ramp_ticks, 0.0, 1.0)
             sp[:] = frac[:, None] * self._ramp_from
             self._ramp_pos = min(self._ramp_pos + n, self._ramp_ticks)
         elif self.state in (S.PLAYING, S.DRAINING):
-            self._play(sp)
+            advanced = self._play(sp)
         else:
             sp[:] = self.setpoint  # IDLE/BUFFERING hold the last value (a step is a click)
         self.setpoint = sp[-1].copy()
@@ -338,9 +404,17 @@ class DeviceCore:
         self.plate_um = plate[-1].copy()
         if self.plate_log is not None:
             self.plate_log((self.tick + np.arange(n)) / c.rate_hz, self.state, sp, plate)
+        reports = []
+        if self.sensor is not None:
+            lateral, normal = self.sensor.read(self.tick, sp)
+            reports = self._windows.add(first, lateral[:advanced], normal[:advanced])
+            if advanced < n:  # the play position stopped: the report being built is dropped
+                self._windows.reset()
         self.tick += n
+        return reports
 
-    def _play(self, sp: np.ndarray) -> None:
+    def _play(self, sp: np.ndarray) -> int:
+        """Play ``len(sp)`` ticks into ``sp``; returns how many advanced the play index."""
         n = len(sp)
         idx = np.uint64(self.play_index) + np.arange(n, dtype=np.uint64)  # wraps at 2**64
         slots = (self._head + np.arange(n)) % self._cap
@@ -374,6 +448,7 @@ class DeviceCore:
             else:
                 self.counters.underruns += 1
                 self.state = S.BUFFERING
+        return used
 
 
 class CsvLog:

@@ -63,6 +63,7 @@ void fw_init(fw_device *d, const fw_config *cfg, const fw_hal *hal, void *hal_ct
     d->prefill = 1;
     d->state = FW_IDLE;
     d->host_version = 1;
+    d->force_decimation = cfg->force_decimation ? cfg->force_decimation : 4u;
     fw_rx_init(&d->rx, cfg->protocol_version);
 }
 
@@ -89,7 +90,10 @@ static void send_info(fw_device *d)
         .channels = c->channels,
         .flags = (uint8_t)((c->phases ? FW_FLAG_PHASES : 0u) |
                            (d->hal->amplitude_sensor ? FW_FLAG_SENSOR : 0u) |
-                           (d->hal->force_sensor ? FW_FLAG_FORCE : 0u)),
+                           (d->hal->force_sensor ? FW_FLAG_FORCE : 0u) |
+                           (d->hal->force_pair && c->protocol_version >= 3
+                                ? FW_FLAG_FORCE_REPORTS
+                                : 0u)),
         .rate_mhz = c->rate_mhz,
         .buffer_samples = c->buffer_samples,
         .watchdog_ms = c->watchdog_ms,
@@ -219,8 +223,9 @@ static uint32_t count_flush(fw_device *d)
     return d->buf.level;
 }
 
-/* 5.1: play the sample due now, or hold across a gap, or run dry. */
-static void play(fw_device *d)
+/* 5.1: play the sample due now, or hold across a gap, or run dry; true if the play
+ * position advanced. */
+static bool play(fw_device *d)
 {
     fw_jitter *b = &d->buf;
     if (b->level == 0) { /* hold; play_index stays, so a late host loses nothing */
@@ -231,7 +236,7 @@ static void play(fw_device *d)
             d->k.underruns++;
             d->state = FW_BUFFERING;
         }
-        return;
+        return false;
     }
     uint32_t slot = d->play_slot;
     if (fw_jitter_has(b, slot)) {
@@ -246,6 +251,57 @@ static void play(fw_device *d)
     d->play_index++;
     d->play_slot = slot + 1 == b->cap ? 0 : slot + 1;
     d->end = b->level && d->end ? d->end - 1 : 0;
+    return true;
+}
+
+/* floor((sum + n / 2) / n): the mean rounded half up, as the reference device does. */
+static int16_t mean(int32_t sum, uint16_t n)
+{
+    int32_t a = sum + n / 2;
+    int32_t q = a / n; /* C truncates towards zero ... */
+    if (a % n && a < 0)
+        q--; /* ... the mean floors */
+    return (int16_t)q;
+}
+
+/* 4.9: one reading per tick that played (or gapped) sample `index`; a tick that did not
+ * advance, or one that played another sample than the next, drops the report being
+ * built. A complete report waits for fw_poll (version 3 hosts only). */
+static void sense(fw_device *d, bool advanced, uint64_t index)
+{
+    fw_force_build *f = &d->force;
+    if (!advanced) {
+        f->open = false;
+        return;
+    }
+    int16_t v[2];
+    d->hal->force_pair(d->hal_ctx, v);
+    if (!f->open || index != f->next) {
+        f->open = true;
+        f->start = index;
+        f->count = 0;
+        f->ticks = 0;
+        f->sum[0] = f->sum[1] = 0;
+    }
+    f->next = index + 1u;
+    f->sum[0] += v[0];
+    f->sum[1] += v[1];
+    if (++f->ticks < d->force_decimation)
+        return;
+    for (unsigned k = 0; k < 2; k++)
+        fw_put16(f->pairs + 4u * f->count + 2u * k, (uint16_t)mean(f->sum[k], f->ticks));
+    f->sum[0] = f->sum[1] = 0;
+    f->ticks = 0;
+    if (++f->count < FW_FORCE_PAIRS)
+        return;
+    if (d->host_version >= 3) {
+        d->force_pending_start = f->start;
+        memcpy(d->force_pending_pairs, f->pairs, sizeof f->pairs);
+        d->force_version = d->host_version;
+        d->force_pending = true;
+    }
+    f->count = 0;
+    f->start += (uint64_t)FW_FORCE_PAIRS * d->force_decimation;
 }
 
 const fw_output *fw_tick(fw_device *d)
@@ -263,10 +319,14 @@ const fw_output *fw_tick(fw_device *d)
             d->flushed_pending = true;
         }
     }
+    bool advanced = false;
+    uint64_t index = d->play_index;
     if (d->state == FW_SILENT)
         ramp(d);
     else if (d->state == FW_PLAYING || d->state == FW_DRAINING)
-        play(d);
+        advanced = play(d);
+    if (d->hal->force_pair)
+        sense(d, advanced, index);
     d->out.state = d->state;
     d->tick++;
     return &d->out;
@@ -436,9 +496,18 @@ void fw_poll(fw_device *d)
     fw_flushed m = d->flushed;
     uint8_t version = d->flushed_version;
     d->flushed_pending = false;
+    bool forces = d->force_pending;
+    uint8_t pairs[sizeof d->force_pending_pairs];
+    fw_force f = {d->force_pending_start, d->force_decimation, FW_FORCE_PAIRS, pairs};
+    uint8_t force_version = d->force_version;
+    if (forces)
+        memcpy(pairs, d->force_pending_pairs, sizeof pairs);
+    d->force_pending = false;
     unlock(d);
     if (pending)
         send(d, version, FW_FLUSHED, fw_put_flushed(d->tx + 4, &m));
+    if (forces)
+        send(d, force_version, FW_FORCE, fw_put_force(d->tx + 4, &f));
 }
 
 static void on_frame(fw_device *d, const fw_msg *msg, uint32_t now_tick)

@@ -24,6 +24,7 @@ typedef struct {
     uint16_t limits[FW_MAX_CHANNELS]; /* amplitude limit per channel, counts */
     const char *name;
     uint8_t protocol_version; /* newest version spoken, 1 to FW_NEWEST_VERSION */
+    uint16_t force_decimation; /* ticks per ForceReport value (4.9); 0: 4 */
 } fw_config;
 
 /* What one tick produced: the setpoints to put on the outputs now. */
@@ -50,8 +51,18 @@ typedef struct {
  * channel measured, or an Info with the longest name (PROTOCOL.md 4.2, 4.6, 4.7). */
 #define FW_BIGGER(a, b) ((a) > (b) ? (a) : (b))
 #define FW_TX_PAYLOAD_MAX                                                                     \
-    FW_BIGGER(7u + FW_ERROR_TEXT_MAX,                                                         \
+    FW_BIGGER(FW_BIGGER(7u + FW_ERROR_TEXT_MAX, 11u + 4u * FW_FORCE_PAIRS),                   \
               FW_BIGGER(80u + 2u * FW_MAX_CHANNELS, 16u + 2u * FW_MAX_CHANNELS + FW_NAME_MAX))
+
+/* The ForceReport being built from the force_pair hook (PROTOCOL.md 4.9). */
+typedef struct {
+    bool open;               /* a report is being built from sample start ... */
+    uint64_t start, next;    /* ... and the next tick must play sample next to go on */
+    int32_t sum[2];          /* lateral, normal counts of the current value */
+    uint16_t ticks;          /* ticks summed into it */
+    uint8_t count;           /* values complete */
+    uint8_t pairs[4u * FW_FORCE_PAIRS];
+} fw_force_build;
 
 typedef struct {
     fw_config cfg;
@@ -76,6 +87,12 @@ typedef struct {
     bool flushed_pending; /* a watchdog trip to report (fw_poll sends it) */
     uint8_t flushed_version;
     fw_flushed flushed;
+    uint16_t force_decimation;
+    fw_force_build force;
+    bool force_pending; /* a complete report to send (fw_poll sends it; a newer replaces it) */
+    uint8_t force_version;
+    uint64_t force_pending_start;
+    uint8_t force_pending_pairs[4u * FW_FORCE_PAIRS];
     uint32_t ramp_pos;                   /* ticks into the ramp to zero */
     uint16_t ramp_q[FW_MAX_CHANNELS];    /* per tick the ramp falls by q ... */
     uint32_t ramp_r[FW_MAX_CHANNELS];    /* ... plus r / ramp_ticks (accumulated in err) */
@@ -94,9 +111,11 @@ void fw_init(fw_device *d, const fw_config *cfg, const fw_hal *hal, void *hal_ct
  * arrived now). Replies go out through hal->serial_write. */
 void fw_receive(fw_device *d, const uint8_t *data, size_t n, uint32_t now_tick);
 
-/* Send what the device says on its own: a Flushed after a watchdog trip (PROTOCOL.md 4.8).
- * fw_tick() only notes it (it may run in an interrupt): call this from the main loop
- * after ticks. fw_receive calls it before answering a frame, so it is never late. */
+/* Send what the device says on its own: a Flushed after a watchdog trip (PROTOCOL.md 4.8),
+ * then a ForceReport (4.9). fw_tick() only notes them (it may run in an interrupt): call
+ * this from the main loop after ticks, at least once per report (FW_FORCE_PAIRS *
+ * force_decimation ticks), or a newer report replaces the one waiting. fw_receive calls
+ * it before answering a frame, so it is never late. */
 void fw_poll(fw_device *d);
 
 /* One tick of the sample clock (PROTOCOL.md 5): returns the setpoints for the outputs. */

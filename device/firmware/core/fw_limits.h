@@ -23,6 +23,12 @@
 #define FW_MAX_STUFFED (FW_MAX_BODY + FW_MAX_BODY / 254u + 1u)
 #define FW_RX_CAPACITY (FW_MAX_STUFFED - 1u)
 
+/* Values per ForceReport (PROTOCOL.md 4.9): one report every FW_FORCE_PAIRS *
+ * force_decimation samples. */
+#ifndef FW_FORCE_PAIRS
+#define FW_FORCE_PAIRS 10
+#endif
+
 /* Longest device name the Info answer carries. */
 #define FW_NAME_MAX 32u
 

@@ -20,6 +20,11 @@ typedef struct {
      * in one thread. Held for a few dozen instructions at a time. */
     void (*lock)(void *ctx);
     void (*unlock)(void *ctx);
+    /* Lateral and normal force now, counts of 1/4096 N (PROTOCOL.md 4.9): out[0] lateral,
+     * out[1] normal. Called by fw_tick() (in the sample interrupt) on every tick that
+     * advances the play position: a conversion result read, nothing slower. NULL: no
+     * lateral force sensor (Info flags bit 3 off, no ForceReports). */
+    void (*force_pair)(void *ctx, int16_t out[2]);
 } fw_hal;
 
 #endif

@@ -10,6 +10,7 @@
 #define STATUS_V2 20u  /* buffer_end played flushed flushes, after n_measured */
 #define ERROR_HEAD 7u   /* code ref_seq detail */
 #define FLUSHED_LEN 17u /* cause play_index flushed flushes */
+#define FORCE_HEAD 11u  /* start_index decimation count, then count x (i16, i16) */
 
 uint32_t fw_le32(const uint8_t *p)
 {
@@ -122,10 +123,21 @@ static bool parse_flushed(const uint8_t *p, size_t n, fw_flushed *m)
     return true;
 }
 
+static bool parse_force(const uint8_t *p, size_t n, fw_force *m)
+{
+    if (n < FORCE_HEAD)
+        return false;
+    m->start_index = fw_le64(p);
+    m->decimation = fw_le16(p + 8);
+    m->count = p[10];
+    m->pairs = p + FORCE_HEAD;
+    return m->count >= 1 && m->decimation >= 1 && n - FORCE_HEAD == 4u * m->count;
+}
+
 bool fw_known_type(uint8_t version, uint8_t type)
 {
     return (type >= FW_HELLO && type <= FW_STOP) || (type >= FW_INFO && type <= FW_ERROR) ||
-           (type == FW_FLUSHED && version >= 2);
+           (type == FW_FLUSHED && version >= 2) || (type == FW_FORCE && version >= 3);
 }
 
 bool fw_parse(uint8_t version, uint8_t type, const uint8_t *p, size_t n, fw_msg *out)
@@ -152,6 +164,8 @@ bool fw_parse(uint8_t version, uint8_t type, const uint8_t *p, size_t n, fw_msg 
         return parse_error(p, n, &out->m.error);
     case FW_FLUSHED:
         return parse_flushed(p, n, &out->m.flushed);
+    case FW_FORCE:
+        return parse_force(p, n, &out->m.force);
     default:
         return false;
     }
@@ -213,4 +227,12 @@ size_t fw_put_flushed(uint8_t *out, const fw_flushed *m)
     out[0] = m->cause;
     fw_put32(fw_put32(fw_put64(out + 1, m->play_index), m->flushed), m->flushes);
     return FLUSHED_LEN;
+}
+
+size_t fw_put_force(uint8_t *out, const fw_force *m)
+{
+    uint8_t *p = fw_put16(fw_put64(out, m->start_index), m->decimation);
+    *p++ = m->count;
+    memmove(p, m->pairs, 4u * m->count); /* the values may already be in place */
+    return FORCE_HEAD + 4u * m->count;
 }

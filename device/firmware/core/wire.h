@@ -9,11 +9,12 @@
 #include <stdint.h>
 
 /* Versions 1 to FW_NEWEST_VERSION are spoken (PROTOCOL.md 2.1). */
-#define FW_NEWEST_VERSION 2u
+#define FW_NEWEST_VERSION 3u
 
 enum fw_type {
     FW_HELLO = 0x01, FW_BLOCK = 0x02, FW_HEARTBEAT = 0x03, FW_STOP = 0x04,
     FW_INFO = 0x81, FW_STATUS = 0x82, FW_ERROR = 0x83, FW_FLUSHED = 0x84, /* version 2 */
+    FW_FORCE = 0x85, /* version 3 */
 };
 
 enum fw_state { FW_IDLE, FW_BUFFERING, FW_PLAYING, FW_DRAINING, FW_SILENT };
@@ -28,6 +29,7 @@ enum fw_error_code {
 #define FW_FLAG_PHASES 0x01u
 #define FW_FLAG_SENSOR 0x02u
 #define FW_FLAG_FORCE 0x04u
+#define FW_FLAG_FORCE_REPORTS 0x08u /* Info only: the device sends ForceReports (4.9) */
 
 #define FW_ERROR_TEXT_MAX 200u
 #define FW_STATUS_COUNTERS 9
@@ -73,6 +75,15 @@ typedef struct {
     uint32_t flushed, flushes;
 } fw_flushed;
 
+/* ForceReport (PROTOCOL.md 4.9): count values of decimation samples from start_index;
+ * pairs: count x (lateral, normal) LE i16, counts of 1/4096 N. */
+typedef struct {
+    uint64_t start_index;
+    uint16_t decimation;
+    uint8_t count;
+    const uint8_t *pairs;
+} fw_force;
+
 typedef struct {
     uint8_t code;
     uint16_t ref_seq;
@@ -94,6 +105,7 @@ typedef struct {
         fw_status status;
         fw_error error;
         fw_flushed flushed;
+        fw_force force;
     } m;
 } fw_msg;
 
@@ -104,7 +116,7 @@ uint8_t *fw_put16(uint8_t *p, uint16_t v);
 uint8_t *fw_put32(uint8_t *p, uint32_t v);
 uint8_t *fw_put64(uint8_t *p, uint64_t v);
 
-/* Whether `type` exists in protocol `version` (Flushed only from version 2). */
+/* Whether `type` exists in protocol `version` (Flushed from version 2, ForceReport 3). */
 bool fw_known_type(uint8_t version, uint8_t type);
 
 /* Parse the payload of a known message of `type` in a `version` frame; false if the
@@ -113,10 +125,11 @@ bool fw_parse(uint8_t version, uint8_t type, const uint8_t *p, size_t n, fw_msg 
 
 /* Payload writers for what a device sends; each returns the bytes written. Worst case:
  * Info 16 + 2 * channels + name_len, Status 80 + 2 * n_measured, Error 7 + 200,
- * Flushed 17. */
+ * Flushed 17, ForceReport 11 + 4 * count. */
 size_t fw_put_info(uint8_t *out, const fw_info *m);
 size_t fw_put_status(uint8_t *out, const fw_status *m);
 size_t fw_put_error(uint8_t *out, const fw_error *m);
 size_t fw_put_flushed(uint8_t *out, const fw_flushed *m);
+size_t fw_put_force(uint8_t *out, const fw_force *m);
 
 #endif

@@ -25,12 +25,20 @@ static uint16_t plate_sensor(void *ctx, unsigned ch)
 
 static uint16_t force_sensor(void *ctx) { return ((host_board *)ctx)->force_mn; }
 
-static const fw_hal hals[4] = {
-    {serial_write, NULL, NULL, NULL, NULL},
-    {serial_write, plate_sensor, NULL, NULL, NULL},
-    {serial_write, NULL, force_sensor, NULL, NULL},
-    {serial_write, plate_sensor, force_sensor, NULL, NULL},
-};
+static void force_pair(void *ctx, int16_t out[2])
+{
+    const host_board *b = ctx;
+    const int16_t *v = b->forces_now ? b->forces_now : b->forces;
+    out[0] = v[0];
+    out[1] = v[1];
+}
+
+/* N to counts of 1/4096 N, nearest, within int16 (the wire's force_to_wire). */
+static int16_t force_counts(double n)
+{
+    double c = nearbyint(n * 4096.0);
+    return (int16_t)(c > 32767 ? 32767 : c < -32768 ? -32768 : c);
+}
 
 const fw_hal *host_board_init(host_board *b, const host_params *p)
 {
@@ -41,7 +49,12 @@ const fw_hal *host_board_init(host_board *b, const host_params *p)
     b->a1 = (w - 1.0) / (1.0 + w);
     b->channels = (unsigned)p->channels;
     b->force_mn = p->has_force ? (uint16_t)nearbyint(p->force_n * 1000.0) : 0;
-    return &hals[(p->sensor ? 1 : 0) + (p->has_force ? 2 : 0)];
+    b->forces[0] = force_counts(p->lateral_n);
+    b->forces[1] = force_counts(p->has_force ? p->force_n : 0.0);
+    b->hal = (fw_hal){serial_write, p->sensor ? plate_sensor : NULL,
+                      p->has_force ? force_sensor : NULL, NULL, NULL,
+                      p->has_lateral ? force_pair : NULL};
+    return &b->hal;
 }
 
 void host_board_step(host_board *b, const uint16_t *setpoint)

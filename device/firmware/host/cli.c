@@ -10,7 +10,8 @@
 static const char usage[] =
     "usage: " PROG " [--channels N] [--rate HZ] [--limit UM]... [--buffer N]\n"
     "       [--bandwidth HZ] [--watchdog-ms MS] [--ramp-ms MS] [--phases] [--sensor]\n"
-    "       [--force N] [--log CSV] [--plate-log CSV] [--rx-log CSV] [--protocol {1,2}]\n"
+    "       [--force N] [--lateral N] [--log CSV] [--plate-log CSV] [--rx-log CSV]\n"
+    "       [--protocol {1,2,3}]\n"
     "       [--once]\n"
     "\n"
     "The frictex reference firmware's core on a pseudo-terminal: prints the pty's path as\n"
@@ -28,16 +29,18 @@ static const char usage[] =
     "  --phases          accept a phase per channel\n"
     "  --sensor          report the modelled plate amplitude as 'measured'\n"
     "  --force N         report this normal force (N) from a simulated force sensor\n"
+    "  --lateral N       send ForceReports (protocol 3) of this lateral force (N) and the\n"
+    "                    --force normal force (0 without), 4 samples a value, 10 a report\n"
     "  --log CSV         write every played sample: index,ch0_um,...\n"
     "  --plate-log CSV   write every tick: t_s,state,ch<k>_setpoint_um,ch<k>_plate_um\n"
     "  --rx-log CSV      write t_s,frames_ok,discarded whenever a read changed them\n"
-    "  --protocol V      newest protocol version to speak (default 2; 1 acts as a\n"
-    "                    version-1 firmware)\n"
+    "  --protocol V      newest protocol version to speak (default 3; 1 and 2 act as\n"
+    "                    firmware of that version)\n"
     "  --once            exit once the first host's Stop has played out\n";
 
 /* Flags that take a value, each between spaces (see flag_key). */
 static const char valued[] = " --channels --rate --limit --buffer --bandwidth --watchdog-ms "
-                             "--ramp-ms --force --log --plate-log --rx-log --protocol "
+                             "--ramp-ms --force --lateral --log --plate-log --rx-log --protocol "
                              "--parent-pid ";
 
 static const char *flag_key(const char *flag)
@@ -135,6 +138,9 @@ int host_cli_parse(int argc, char **argv, host_cli *out)
         } else if (!strcmp(flag, "--force")) {
             rc = number(flag, value, &p->force_n, 0);
             p->has_force = true;
+        } else if (!strcmp(flag, "--lateral")) {
+            rc = number(flag, value, &p->lateral_n, 0);
+            p->has_lateral = true;
         } else if (!strcmp(flag, "--log")) {
             out->played_log = value;
         } else if (!strcmp(flag, "--plate-log")) {

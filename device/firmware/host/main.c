@@ -116,13 +116,13 @@ int main(int argc, char **argv)
                 bad = bad2;
             }
         }
+        board.tx_len = 0;
         for (; tick < now_tick; tick++) {
             const fw_output *o = fw_tick(&device);
             host_board_step(&board, o->amp);
             host_logs_tick(&logs, tick / rate, o, board.plate_um);
+            fw_poll(&device); /* every report, however many ticks this turn runs */
         }
-        board.tx_len = 0;
-        fw_poll(&device);
         if (board.tx_len && write(master, tx, board.tx_len) < 0) {
             /* as above */
         }

@@ -59,6 +59,10 @@ const char *host_params_to_config(const host_params *p, fw_config *cfg)
         snprintf(range, sizeof range, "in [1, %u]", FW_NEWEST_VERSION);
         return fail("protocol_version", range);
     }
+    if (p->has_lateral && !(p->lateral_n >= -8.0 && p->lateral_n <= 8.0))
+        return fail("lateral_n", "in [-8, 8] N");
+    if (p->has_lateral && p->protocol_version < 3)
+        return fail("protocol_version", "3 for force reports (lateral_n)");
 
     *cfg = (fw_config){
         .channels = (uint8_t)p->channels,
@@ -69,6 +73,7 @@ const char *host_params_to_config(const host_params *p, fw_config *cfg)
         .ramp_ms = (uint16_t)p->ramp_ms,
         .name = p->name ? p->name : "frictex fw (host port)",
         .protocol_version = (uint8_t)p->protocol_version,
+        .force_decimation = 4,
     };
     for (unsigned ch = 0; ch < p->channels; ch++) {
         double um = p->limits_um[p->n_limits == 1 ? 0 : ch];

@@ -15,8 +15,9 @@ typedef struct {
     unsigned long buffer_samples;
     double bandwidth_hz;
     unsigned long watchdog_ms, ramp_ms;
-    bool phases, sensor, has_force;
+    bool phases, sensor, has_force, has_lateral;
     double force_n;
+    double lateral_n; /* constant lateral force in ForceReports, if has_lateral */
     const char *name; /* NULL: "frictex fw (host port)" */
     unsigned long protocol_version; /* newest spoken */
 } host_params;

@@ -43,17 +43,23 @@ size_t fwsim_receive(fwsim *s, const uint8_t *data, size_t n, double t_s, uint8_
     return s->board.tx_len;
 }
 
-/* Run ticks up to (not including) floor(t_s * rate), at most max of them; per tick it
+/* Run ticks up to (not including) floor(t_s * rate), at most max of them, stopping
+ * after a tick that left something for fwsim_poll (a Flushed, a ForceReport); per tick it
  * writes the setpoints (channels counts), the plate (channels um), the state, whether a
- * sample was played and its index, and the phases. Returns the ticks run. */
+ * sample was played and its index, and the phases. forces: NULL, or (lateral, normal)
+ * counts per tick for the lateral force sensor. Returns the ticks run. */
 size_t fwsim_advance(fwsim *s, double t_s, size_t max, uint16_t *setpoint, double *plate,
-                     uint8_t *state, uint8_t *played, uint64_t *index, uint16_t *phase)
+                     uint8_t *state, uint8_t *played, uint64_t *index, uint16_t *phase,
+                     const int16_t *forces)
 {
     uint64_t end = (uint64_t)(t_s * s->rate_hz);
     unsigned ch = s->dev.cfg.channels;
     size_t k = 0;
-    for (; k < max && s->tick < end; k++, s->tick++) {
+    bool said = false;
+    for (; k < max && s->tick < end && !said; k++, s->tick++) {
+        s->board.forces_now = forces ? forces + 2 * k : NULL;
         const fw_output *o = fw_tick(&s->dev);
+        said = s->dev.flushed_pending || s->dev.force_pending;
         host_board_step(&s->board, o->amp);
         memcpy(setpoint + k * ch, o->amp, 2 * ch);
         memcpy(phase + k * ch, o->phase, 2 * ch);
@@ -62,6 +68,7 @@ size_t fwsim_advance(fwsim *s, double t_s, size_t max, uint16_t *setpoint, doubl
         played[k] = o->played;
         index[k] = o->index;
     }
+    s->board.forces_now = NULL;
     return k;
 }
 

@@ -32,6 +32,13 @@ static void u16s(const uint8_t *le, size_t n)
         out(i ? ",%u" : "%u", fw_le16(le + 2 * i));
 }
 
+/* Every second LE i16 of `pairs` from `first` on: one column of a ForceReport. */
+static void i16s(const uint8_t *pairs, size_t count, unsigned first)
+{
+    for (size_t i = 0; i < count; i++)
+        out(i ? ",%d" : "%d", (int16_t)fw_le16(pairs + 4 * i + 2 * first));
+}
+
 static void hex(const uint8_t *p, size_t n)
 {
     for (size_t i = 0; i < n; i++)
@@ -65,10 +72,10 @@ static void render(const fw_msg *m)
     case FW_INFO: {
         const fw_info *i = &m->m.info;
         out("info version=%u channels=%u phases=%d sensor=%d force=%d rate_mhz=%" PRIu32
-            " buffer=%" PRIu32 " watchdog_ms=%u ramp_ms=%u limits=",
+            " buffer=%" PRIu32 " watchdog_ms=%u ramp_ms=%u force_reports=%d limits=",
             i->version, i->channels, !!(i->flags & FW_FLAG_PHASES),
             !!(i->flags & FW_FLAG_SENSOR), !!(i->flags & FW_FLAG_FORCE), i->rate_mhz,
-            i->buffer_samples, i->watchdog_ms, i->ramp_ms);
+            i->buffer_samples, i->watchdog_ms, i->ramp_ms, !!(i->flags & FW_FLAG_FORCE_REPORTS));
         u16s(i->limits, i->channels);
         out(" name=");
         hex(i->name, i->name_len);
@@ -100,6 +107,13 @@ static void render(const fw_msg *m)
         out("flushed cause=%u play=%" PRIu64 " flushed=%" PRIu32 " flushes=%" PRIu32,
             m->m.flushed.cause, m->m.flushed.play_index, m->m.flushed.flushed,
             m->m.flushed.flushes);
+        break;
+    case FW_FORCE:
+        out("force start=%" PRIu64 " decimation=%u lateral=", m->m.force.start_index,
+            m->m.force.decimation);
+        i16s(m->m.force.pairs, m->m.force.count, 0);
+        out(" normal=");
+        i16s(m->m.force.pairs, m->m.force.count, 1);
         break;
     case FW_ERROR:
         out("error code=%u ref=%u detail=%" PRIu32 " text=", m->m.error.code,
@@ -141,6 +155,9 @@ static bool reencode(const fw_msg *m)
         break;
     case FW_FLUSHED:
         n = fw_put_flushed(body + 4, &m->m.flushed);
+        break;
+    case FW_FORCE:
+        n = fw_put_force(body + 4, &m->m.force);
         break;
     default:
         return false;

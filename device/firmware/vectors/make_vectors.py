@@ -1,4 +1,4 @@
-"""Write ``frames.json``: byte streams and what a receiver of protocol versions 1 and 2
+"""Write ``frames.json``: byte streams and what a receiver of protocol versions 1 to 3
 makes of them.
 
 Run once from the repository root (``python device/firmware/vectors/make_vectors.py``);
@@ -29,7 +29,7 @@ if str(ROOT) not in sys.path:
 
 from device.link import protocol as p  # noqa: E402
 
-NEWEST = 2  # the newest version the firmware speaks
+NEWEST = 3  # the newest version the firmware speaks
 OUT = Path(__file__).with_name("frames.json")
 _DROPS = {"cobs_errors": "cobs", "short_frames": "short", "crc_errors": "crc",
           "bad_version": "version", "unknown_type": "type", "bad_payload": "payload",
@@ -64,7 +64,8 @@ def render(msg) -> str:
                 f"phases={int(msg.has_phases)} sensor={int(msg.has_sensor)} "
                 f"force={int(msg.has_force)} rate_mhz={round(msg.sample_rate_hz * 1000)} "
                 f"buffer={msg.buffer_samples} watchdog_ms={msg.watchdog_ms} "
-                f"ramp_ms={msg.ramp_ms} limits={limits} name={msg.name.encode().hex()}")
+                f"ramp_ms={msg.ramp_ms} force_reports={int(msg.has_force_reports)} "
+                f"limits={limits} name={msg.name.encode().hex()}")
     if isinstance(msg, p.Status):
         counters = _u16s([msg.underruns, msg.crc_errors, msg.frames_ok, msg.lost_frames,
                           msg.gap_samples, msg.late_samples, msg.overflow_samples,
@@ -80,6 +81,10 @@ def render(msg) -> str:
     if isinstance(msg, p.Flushed):
         return (f"flushed cause={msg.cause} play={msg.play_index} flushed={msg.flushed} "
                 f"flushes={msg.flushes}")
+    if isinstance(msg, p.ForceReport):
+        return (f"force start={msg.start_index} decimation={msg.decimation} "
+                f"lateral={','.join(str(round(x * 4096)) for x in msg.lateral_n)} "
+                f"normal={','.join(str(round(x * 4096)) for x in msg.normal_n)}")
     if isinstance(msg, p.ErrorReport):
         return (f"error code={msg.code} ref={msg.ref_seq} detail={msg.detail} "
                 f"text={msg.text.encode().hex()}")
@@ -122,6 +127,13 @@ def _block(start, amps, phases=None):
     return p.Block(start, a, ph)
 
 
+def _force(start, decimation, lateral_counts, normal_counts):
+    """A ForceReport from wire counts."""
+    return p.ForceReport(start, decimation,
+                         tuple(float(c) * p.FORCE_STEP_N for c in lateral_counts),
+                         tuple(float(c) * p.FORCE_STEP_N for c in normal_counts))
+
+
 def _info(ch=1, **kw):
     args = dict(channels=ch, sample_rate_hz=10_000.0, limits_um=(4.0,) * ch,
                 buffer_samples=4096, watchdog_ms=25, ramp_ms=20, name="frictex sim-device")
@@ -153,6 +165,7 @@ def valid_messages():
     yield "info 3ch sensors", _info(3, limits_um=(1.0, 2.5, 15.0), has_phases=True,
                                     has_sensor=True, has_force=True, name="plaque µ 三"), 1
     yield "info 8ch no name", _info(8, sample_rate_hz=4_000_000.0, name=""), 2
+    yield "info force reports", _info(has_force=True, has_force_reports=True), 3
     yield "status plain", p.Status(0, 1, 0, 0), 0
     yield "status full", p.Status(42, 2, 2**63 + 5, 150, *range(1, 10),
                                   measured_um=(2.0, 0.5), force_n=0.75), 1
@@ -165,6 +178,10 @@ def valid_messages():
                                      flushed_samples=5, flushes=2), 4
     yield "flushed", p.Flushed(1, 2**63 + 1, 150, 3), 5
     yield "flushed other cause", p.Flushed(200, 0, 0, 2**32 - 1), 6
+    yield "force report", _force(1000, 4, [-32768, -1, 0, 1, 32767], [2048, 0, -5, 7, 1]), 7
+    yield "force report one value", _force(2**64 - 1, 65535, [3], [-4]), 8
+    yield "force report largest", _force(2**63, 1, np.arange(255) * 257 - 32768,
+                                         np.arange(255)[::-1] * 3), 9
     yield "error late", p.ErrorReport(5, 77, 10, "10 samples arrived after their time"), 3
     yield "error empty text", p.ErrorReport(2, 0, 0, ""), 4
     yield "error 200 bytes", p.ErrorReport(3, 1, 2, "x" * 200), 5
@@ -192,12 +209,20 @@ def damaged_streams(rng):
     yield "cobs code past end", bytes([0x20, 1, 3, 0, 0]) + b"\x00"
     yield "short body", p.cobs_encode(bytes([1, 3, 0, 0, 1, 2, 3])) + b"\x00"
     yield "empty frames ignored", b"\x00\x00" + hb + b"\x00"
-    yield "version 3", raw_frame(_body(p.Heartbeat.TYPE, b"\1\0\0\0", version=3))
+    yield "version 4", raw_frame(_body(p.Heartbeat.TYPE, b"\1\0\0\0", version=4))
+    yield "heartbeat in version 3", raw_frame(_body(p.Heartbeat.TYPE, b"\1\0\0\0", version=3))
     yield "heartbeat in version 2", raw_frame(_body(p.Heartbeat.TYPE, b"\1\0\0\0", version=2))
     yield "version 0", raw_frame(_body(p.Heartbeat.TYPE, b"\1\0\0\0", version=0))
     yield "type 0x05", raw_frame(_body(0x05, b"\1\0\0\0"))
     yield "type 0x84 in version 1", raw_frame(_body(0x84, bytes(17)))
-    yield "type 0x85 in version 2", raw_frame(_body(0x85, bytes(17), version=2))
+    yield "type 0x85 in version 2", raw_frame(_body(0x85, bytes(15), version=2))
+    yield "type 0x86 in version 3", raw_frame(_body(0x86, bytes(15), version=3))
+    yield "force 0 values", raw_frame(_body(0x85, bytes(10) + b"\0", version=3))
+    yield "force decimation 0", raw_frame(_body(0x85, bytes(10) + b"\1" + bytes(4), version=3))
+    yield "force one byte short", raw_frame(_body(0x85, b"\0" * 8 + b"\1\0\2" + bytes(7),
+                                                  version=3))
+    yield "force one byte long", raw_frame(_body(0x85, b"\0" * 8 + b"\1\0\1" + bytes(5),
+                                                 version=3))
     yield "flushed 16 bytes", raw_frame(_body(0x84, bytes(16), version=2))
     yield "flushed 18 bytes", raw_frame(_body(0x84, bytes(18), version=2))
     yield "status v2 without accounting", raw_frame(_body(p.Status.TYPE, bytes(58), version=2))
@@ -253,7 +278,7 @@ def damaged_streams(rng):
 
 
 def _random_message(rng):
-    kind = rng.integers(0, 8)
+    kind = rng.integers(0, 9)
     u32 = lambda: int(rng.integers(0, 2**32))  # noqa: E731
     if kind == 0:
         return p.Hello(u32())
@@ -281,15 +306,22 @@ def _random_message(rng):
                         flushed_samples=accounting[2], flushes=accounting[3])
     if kind == 6:
         return p.Flushed(int(rng.integers(0, 256)), int(rng.integers(0, 2**63)), u32(), u32())
+    if kind == 7:
+        count = int(rng.integers(1, 30))
+        return _force(int(rng.integers(0, 2**63)), int(rng.integers(1, 65536)),
+                      rng.integers(-32768, 32768, count), rng.integers(-32768, 32768, count))
     return p.ErrorReport(int(rng.integers(1, 6)), int(rng.integers(0, 65536)), u32(),
                          "".join(chr(int(c)) for c in rng.integers(32, 0x3000, 12)))
 
 
 def _versions(msg) -> tuple[int, ...]:
-    """The versions a message can be sent in: a Status's layout says which; Flushed is 2."""
+    """The versions a message can be sent in: a Status's layout says which; Flushed is 2
+    and 3, ForceReport 3."""
     if isinstance(msg, p.Status):
-        return (2,) if msg.accounted else (1,)
-    return (2,) if isinstance(msg, p.Flushed) else (1, 2)
+        return (2, 3) if msg.accounted else (1,)
+    if isinstance(msg, p.ForceReport):
+        return (3,)
+    return (2, 3) if isinstance(msg, p.Flushed) else (1, 2, 3)
 
 
 def _version(msg, rng) -> int:
