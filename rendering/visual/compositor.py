@@ -3,7 +3,9 @@
 
 The scope, when shown, has a strip of its own at the bottom of the frame and the scene
 is fitted above it (``viewport.frame_layout``): the scope never covers the scene, and
-its labels sit in title rows of their own, never under a trace.
+its labels sit in title rows of their own, never under a trace. A device panel that
+needs a place of its own (a plate's |W| heat map) has a column at the right of the
+frame (``DevicePanels.column_px``), and the scene is fitted beside it.
 
 The scene is rendered once per scene (``scene_image``) into a texture drawn 1:1 on
 the viewport's pixels; each frame only the overlay is rebuilt. All geometry arrives in
@@ -133,7 +135,8 @@ class Compositor:
         self.scene = scene
         if outlines is not None:
             self.outlines = outlines
-        self.viewport, self._scope_rect = frame_layout(scene.display, *self.size, self.scope)
+        self.viewport, self._scope_rect = frame_layout(scene.display, *self.size, self.scope,
+                                                       self.panels.column_px(scene, self.size))
         rgb = to_srgb8(scene_rgb(scene, self.viewport, self.supersample, self.outlines))
         if self.scene_texture is not None:
             self.scene_texture.release()
@@ -225,7 +228,8 @@ class Compositor:
             return
         self.scope = scope
         viewport = self.viewport
-        self.viewport, self._scope_rect = frame_layout(self.scene.display, *self.size, scope)
+        self.viewport, self._scope_rect = frame_layout(self.scene.display, *self.size, scope,
+                                                       self.panels.column_px(self.scene, self.size))
         if self.viewport != viewport:
             self.set_scene(self.scene)
 

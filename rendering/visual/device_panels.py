@@ -1,8 +1,10 @@
 """What the visual layer shows of the device itself, drawn with a ``Compositor``'s primitives.
 
 - A modal device (seed 000's beam, seed 001's plate; ``modal_view``): the vibration
-  amplitude |W| along the beam, a curve in a strip under it, or over the plate, a heat-map
-  inset at the top right; each finger marked in its colour, with |W| under it.
+  amplitude |W| along the beam, a curve in a strip under it, or over the plate, a heat
+  map in a column of its own at the right of the frame (``column_px``: the compositor
+  fits the scene beside it, so it never covers the scene or a finger); each finger
+  marked in its colour, with |W| under it, in rows of their own above and below the map.
 - A device that pushes a finger (seeds 002, 004): the force on each finger as an arrow
   (achieved solid, wanted thin) and the arrow's N scale; each key-click button framed and
   labelled in the colour of its state (seed 004 Fig. 5: idle, wave on, clicked).
@@ -16,11 +18,15 @@ import numpy as np
 from rendering.layers.keyclick import CLICKED, IDLE, ON
 from rendering.visual.modal_view import Envelope, heat_rgb
 from rendering.visual.overlay import FINGER_RGB, OverlayState, arrow_triangles, segment_triangles
+from rendering.visual import viewport
 from rendering.visual.scene_image import to_srgb8
-from device.profile import FORCE_PROFILES
+from device.profile import FORCE_PROFILES, PlateStructure
 from textures.model import Directional, Guidance, KeyClick, Scene
 
 PANEL_BG = (0.0, 0.0, 0.0, 0.8)
+PANEL_MARGIN_PX = 8.0
+#: a plate's heat map panel: this share of the frame's height, within PLATE_PANEL_PX
+PLATE_PANEL_SHARE, PLATE_PANEL_PX = 0.32, (120.0, 300.0)
 FORCE_ARROW_MM = 20.0  # on screen, the arrow of the scene's largest force
 BUTTON_LOOK = {IDLE: ("idle", (0.45, 0.45, 0.45, 0.95)), ON: ("wave on", (0.95, 0.6, 0.05, 0.95)),
                CLICKED: ("clicked", (0.1, 0.75, 0.25, 0.95))}
@@ -44,6 +50,13 @@ def force_scale_n(scene: Scene) -> float | None:
     return max(sizes)
 
 
+def default_frame_size(scene: Scene) -> tuple[int, int]:
+    """The default frame for ``scene``: its display at its own pixel size above the scope
+    strip and beside the column its panels need (``DevicePanels.column_px``)."""
+    size = viewport.default_frame_size(scene.display)
+    return viewport.default_frame_size(scene.display, DevicePanels.column_px(scene, size))
+
+
 class DevicePanels:
     """The device panels of ``comp``'s scene (``comp``: a ``compositor.Compositor``)."""
 
@@ -54,6 +67,16 @@ class DevicePanels:
 
     def set_scene(self, scene: Scene) -> None:
         self.force_scale_n = force_scale_n(scene)
+
+    @staticmethod
+    def column_px(scene: Scene, size: tuple[int, int]) -> int:
+        """Width (px) of the column the panels need at the right of a frame of ``size``:
+        a plate's heat map and its margins; 0 for other devices (a beam's |W| has a
+        strip under or over it)."""
+        if not isinstance(scene.device.structure, PlateStructure):
+            return 0
+        side = np.clip(PLATE_PANEL_SHARE * size[1], *PLATE_PANEL_PX)
+        return int(round(side + 2 * PANEL_MARGIN_PX))
 
     @property
     def row_px(self) -> float:
@@ -109,12 +132,16 @@ class DevicePanels:
     def envelope_rect(self, kind: str) -> tuple[float, float, float, float]:
         """Where |W| is drawn (x, y, w, h) px: for a beam a strip as wide as the display,
         under it if there is room above the scope, else over it; for a plate a square
-        inset at the top right, under the status lines."""
+        panel in the column at the right of the frame (``column_px``), under the status
+        lines, as high as the column leaves room for."""
         comp = self.comp
         vp, (w, h) = comp.viewport, comp.size
         if kind == "plate":
-            side = float(np.clip(0.32 * min(w, h), 120.0, 300.0))
-            return w - side - 8.0, comp.status_bottom + 4.0, side, side
+            left = float(w - min(self.column_px(comp.scene, comp.size), w // 2))  # as frame_layout
+            top = comp.status_bottom + 4.0
+            room = comp.scope_rect()[1] - PANEL_MARGIN_PX - top
+            side = max(min(w - left - 2 * PANEL_MARGIN_PX, room), 1.0)
+            return left + PANEL_MARGIN_PX, top, side, side
         scope_top = comp.scope_rect()[1]
         below = vp.y0 + vp.height_px + 4.0
         height = min(160.0, scope_top - below - 4.0)

@@ -70,23 +70,26 @@ def scope_height(frame_h: int) -> int:
     return int(round(np.clip(SCOPE_SHARE * frame_h, *SCOPE_PX)))
 
 
-def frame_layout(display: Display, frame_w: int, frame_h: int, scope: bool,
+def frame_layout(display: Display, frame_w: int, frame_h: int, scope: bool, side_px: int = 0,
                  ) -> tuple[Viewport, tuple[float, float, float, float] | None]:
     """Where the active area and the scope strip go in a frame: with ``scope`` the
     strip (x, y, w, h px) takes the bottom ``scope_height`` px and the active area is
     fitted above it, never under it (in a frame too low for both, each gets half);
-    without, the active area is fitted to the whole frame and the strip is None."""
-    if not scope:
-        return fit_viewport(display, frame_w, frame_h), None
-    strip = min(scope_height(frame_h), frame_h // 2)
-    above = fit_viewport(display, frame_w, max(frame_h - strip, 1))
-    return replace(above, frame_h=frame_h), (0.0, float(frame_h - strip), float(frame_w), float(strip))
+    without, the strip is None. ``side_px``: a column that wide at the right of the
+    frame, above the strip, is kept for a device panel (at most half the frame) and the
+    active area is fitted beside it, never under it."""
+    strip = min(scope_height(frame_h), frame_h // 2) if scope else 0
+    side = min(max(int(side_px), 0), frame_w // 2)
+    area = fit_viewport(display, max(frame_w - side, 1), max(frame_h - strip, 1))
+    rect = (0.0, float(frame_h - strip), float(frame_w), float(strip)) if scope else None
+    return replace(area, frame_w=frame_w, frame_h=frame_h), rect
 
 
-def default_frame_size(display: Display) -> tuple[int, int]:
-    """A frame showing the display at its own pixel size above the scope strip, at
-    least MIN_FRAME (a thin beam is letterboxed)."""
+def default_frame_size(display: Display, side_px: int = 0) -> tuple[int, int]:
+    """A frame showing the display at its own pixel size above the scope strip (and
+    beside a panel column ``side_px`` wide), at least MIN_FRAME (a thin beam is
+    letterboxed)."""
     h = max(display.height_px, 1)
     while h - scope_height(h) < display.height_px:
         h += 1
-    return max(display.width_px, MIN_FRAME[0]), max(h, MIN_FRAME[1])
+    return max(display.width_px + max(int(side_px), 0), MIN_FRAME[0]), max(h, MIN_FRAME[1])
