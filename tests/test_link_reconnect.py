@@ -1,0 +1,143 @@
+"""A recovery or a reconnect settles the session it ends: samples the device played since
+the last Status the host read count as played, never as lost (PROTOCOL.md 6.1, 6.3).
+
+The device is the Python reference core behind an in-process port (no pty, no second
+process); the test decides when its reply line goes dead and when the cable is pulled,
+and the port decides, from what the host writes, when they come back, so the recovery and
+the reconnect happen whatever the scheduler does. What is asserted holds for any timing:
+the host's played count equals the samples the device logged, and nothing is lost.
+"""
+
+import io
+import threading
+import time
+
+import numpy as np
+import pytest
+import serial
+
+from device.link import protocol as p
+from device.link.host import READ_WAIT_S, CommandSink
+from device.link.simdevice import DeviceConfig, DeviceCore
+from device_recorder import Recorder
+
+RATE = 10_000.0
+
+
+class Line:
+    """A device core behind a pyserial-like port. Its clock is the wall clock (advanced
+    whenever the host reads or writes). ``mute()``: the device's replies are lost until
+    the host writes a Hello. ``unplug()``: every call fails, and the first reopen after
+    it too (the port comes back on the second)."""
+
+    def __init__(self, core):
+        self.core = core
+        self.t0 = time.monotonic()
+        self.pending = bytearray()
+        self.lock = threading.Lock()
+        self.muted = self.unplugged = False
+        self.failed_opens = 0
+        self.played_at_mute = self.played_at_hello = None
+        self._watch = p.Decoder()
+        self.timeout = READ_WAIT_S
+
+    def _played(self) -> int:
+        return self.core.counters.played_samples
+
+    def played(self) -> int:
+        with self.lock:
+            return self._played()
+
+    def mute(self):
+        with self.lock:
+            self.muted = True
+            self.played_at_mute = self._played()
+
+    def unplug(self):
+        with self.lock:
+            self.unplugged = True
+            self.played_at_mute = self._played()
+
+    def open(self):
+        with self.lock:
+            if self.unplugged:
+                self.failed_opens += 1
+                if self.failed_opens < 2:
+                    raise serial.SerialException("could not open port: unplugged (test)")
+                self.unplugged = False
+            self.pending.clear()
+        return self
+
+    def _advance(self):
+        out = self.core.advance_to(time.monotonic() - self.t0)
+        if not self.muted:
+            self.pending += out
+
+    def _check(self):
+        if self.unplugged:
+            raise serial.SerialException("device unplugged (test)")
+
+    def write(self, data: bytes) -> int:
+        with self.lock:
+            self._check()
+            self._advance()
+            hello = any(isinstance(f.message, p.Hello) for f in self._watch.feed(data))
+            if hello and self.played_at_hello is None and self.played_at_mute is not None:
+                self.played_at_hello = self._played()
+            if hello:
+                self.muted = False
+            reply = self.core.receive(data, time.monotonic() - self.t0)
+            if not self.muted:
+                self.pending += reply
+        return len(data)
+
+    def read(self, size: int = 1) -> bytes:
+        with self.lock:
+            self._check()
+            self._advance()
+            data = bytes(self.pending[:size])
+            del self.pending[:size]
+        if not data:
+            time.sleep(self.timeout)
+        return data
+
+    @property
+    def in_waiting(self) -> int:
+        with self.lock:
+            self._check()
+            return len(self.pending)
+
+    def close(self):
+        pass
+
+
+@pytest.mark.parametrize("fault", ["recovery", "reconnect"])
+def test_samples_played_before_a_recovery_or_reconnect_are_played_not_lost(fault):
+    rec = Recorder()
+    line = Line(DeviceCore(DeviceConfig(), log=rec.log))
+    sink = CommandSink(line.open, 1, RATE, paced=True, stall_s=5.0, stderr=io.StringIO())
+    signal = 1.0 + 0.5 * np.sin(np.arange(8000) / 50.0)
+    faulted = False
+    try:
+        for b in range(0, len(signal), 50):
+            # well into the stream, the device playing (the queue holds at most 3200
+            # samples, so the loop cannot end before 4800 have played)
+            if not faulted and line.played() >= 1000:
+                line.mute() if fault == "recovery" else line.unplug()
+                faulted = True
+            sink.send(b, signal[b:b + 50, None])
+    finally:
+        sink.close()
+    assert faulted
+    status = sink.status()
+    index, values = rec.played()
+    # the fault happened, and the device played samples the host had not seen reported
+    assert status["recoveries" if fault == "recovery" else "reconnects"] == 1
+    assert line.played_at_hello > line.played_at_mute
+    # every sample the device played is counted played, once; nothing was lost on the wire
+    assert len(np.unique(index)) == len(index)
+    np.testing.assert_allclose(values[:, 0], signal[index], atol=p.AMPLITUDE_STEP_UM / 2)
+    assert status["played_samples"] == len(index)
+    assert status["unplayed_by_cause"]["lost"] == 0
+    assert status["commanded_samples"] == len(signal)
+    assert status["played_samples"] + status["unplayed_samples"] == len(signal)
