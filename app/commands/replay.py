@@ -61,8 +61,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"replayed {summary['trace']['samples']} touch samples -> {out['samples']} output "
               f"samples ({out['duration_s']:.3f} s at {out['rate_hz']:g} Hz) in {args.out}: "
               f"{', '.join(out['files'])}, summary.json; {clamps} clamped; "
-              f"{timing['x_realtime_end_to_end']:.3g}x real time end to end "
-              f"({timing['x_realtime_compute']:.3g}x compute only)")
+              f"{timing['x_realtime_end_to_end']:.3g}x real time end to end (read, compute, "
+              f"write; {timing['x_realtime_with_setup']:.3g}x with the {timing['setup_s']:.2f} s "
+              f"start-up, {timing['x_realtime_compute']:.3g}x compute only)")
         for warning in summary["warnings"]:
             print(f"frictex: warning: {warning}", file=sys.stderr)
     device = summary.get("device")

@@ -33,6 +33,10 @@ def command_columns(channels: tuple[str, ...], phases: bool) -> list[tuple]:
 
 def friction_rows(out) -> dict[str, np.ndarray]:
     """``friction`` table rows of a block output: sample-major, then finger, touching only."""
+    if out.contact.shape[0] == 1 and out.contact.all():  # one finger, down throughout
+        return {"t_s": out.t_s, "finger": np.full(out.t_s.size, out.finger_ids[0], np.int64),
+                "x_mm": out.x_mm[0], "y_mm": out.y_mm[0], "mu_target": out.mu_target[0],
+                "amplitude_um": out.amplitude_um[0]}
     contact = out.contact.T  # (n, F)
     n, f = contact.shape
     ids = np.broadcast_to(np.array(out.finger_ids, dtype=np.int64), (n, f))

@@ -3,8 +3,10 @@
 :class:`Totals` is a sink (``app.engine.sinks``) that counts over every block output;
 :func:`summary` turns the counts into the document, :func:`timings` the run's seconds
 into real-time factors. Real-time factors say what they count: ``x_realtime_end_to_end``
-is output seconds over the whole run's wall time (reading the trace, computing, writing
-every output, committing); ``x_realtime_compute`` over the pipeline's compute alone.
+is output seconds over the wall time of reading the trace, computing, writing every
+output and committing; ``x_realtime_with_setup`` over the whole run's wall time, start-up
+too (loading the scene, loading the pipeline's compiled kernels: ``setup_s``);
+``x_realtime_compute`` over the pipeline's compute alone.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from app.engine.force_summary import ForceSummary
 from device.friction import ClampCounts
 from rendering.pipeline import STAGES
 
-SUMMARY_VERSION = 2
+SUMMARY_VERSION = 3
 
 
 class Totals:
@@ -126,12 +128,16 @@ def summary(scene, trace_report: dict, pipeline, tracker, totals: Totals, fmt: s
     return doc
 
 
-def timings(pipeline, output_s: float, loop_seconds: dict, wall_s: float) -> dict:
-    """``timings``: wall and compute seconds and both real-time factors (see module doc)."""
+def timings(pipeline, output_s: float, loop_seconds: dict, wall_s: float,
+            setup_s: float = 0.0) -> dict:
+    """``timings``: wall, start-up and compute seconds and the real-time factors (see the
+    module doc)."""
     stages = dict(pipeline.timer.seconds)
     compute = sum(stages.values())
-    return {"wall_s": wall_s, "compute_s": compute,
-            "x_realtime_end_to_end": output_s / wall_s if wall_s > 0 else None,
+    run_s = wall_s - setup_s
+    return {"wall_s": wall_s, "setup_s": setup_s, "compute_s": compute,
+            "x_realtime_end_to_end": output_s / run_s if run_s > 0 else None,
+            "x_realtime_with_setup": output_s / wall_s if wall_s > 0 else None,
             "x_realtime_compute": output_s / compute if compute > 0 else None,
             "loop_s": dict(loop_seconds),
             "stages_s": {s: stages[s] for s in STAGES},
