@@ -61,21 +61,37 @@ def _digits(value) -> int:
     return len(str(int(value)))
 
 
+#: "00" to "99" as ASCII bytes: two digits per division when writing a number
+_PAIRS = np.frombuffer("".join(f"{k:02d}" for k in range(100)).encode("ascii"), dtype=np.uint8)
+#: 10**k for k = 0 .. 18 (int64)
+_POWERS = np.array([10 ** k for k in range(19)], dtype=np.int64)
+
+
 @njit(cache=True, nogil=True)
 def _write_uint(out, pos, value, min_digits):
     """Decimal digits of ``value`` >= 0, left-padded with zeros to ``min_digits``."""
     digits = 1
-    probe = value
-    while probe >= 10:
-        probe //= 10
+    while digits < 19 and value >= _POWERS[digits]:
         digits += 1
     if digits < min_digits:
         digits = min_digits
     end = pos + digits
-    k = end - 1
-    while k >= pos:
-        out[k] = 48 + value % 10
-        value //= 10
+    k = end
+    while value >= 100:
+        pair = value % 100
+        value //= 100
+        out[k - 1] = _PAIRS[2 * pair + 1]
+        out[k - 2] = _PAIRS[2 * pair]
+        k -= 2
+    if value >= 10:
+        out[k - 1] = _PAIRS[2 * value + 1]
+        out[k - 2] = _PAIRS[2 * value]
+        k -= 2
+    else:
+        out[k - 1] = 48 + value
+        k -= 1
+    while k > pos:  # zero padding
+        out[k - 1] = 48
         k -= 1
     return end
 
@@ -108,14 +124,12 @@ def _write_rows(units, decimals, negative, special_at, offsets, blob, out):
             if negative[j, i]:
                 out[pos] = 45
                 pos += 1
-            scale = 1
-            for _ in range(d):
-                scale *= 10
-            pos = _write_uint(out, pos, value // scale, 1)
+            whole = value // _POWERS[d]
+            pos = _write_uint(out, pos, whole, 1)
             if d:
                 out[pos] = 46  # .
                 pos += 1
-                pos = _write_uint(out, pos, value % scale, d)
+                pos = _write_uint(out, pos, value - whole * _POWERS[d], d)
         out[pos] = 10
         pos += 1
     return pos
