@@ -27,7 +27,8 @@ from app.commands.preview import frame_size
 from app.commands.argtypes import add_link_arguments, output_rate, positive_float, positive_int
 from rendering.input.tuio import TUIO_PORT
 from rendering.visual.context import NoDisplayError, open_backend
-from rendering.visual.viewport import MIN_FRAME, default_frame_size
+from rendering.visual.device_panels import default_frame_size
+from rendering.visual.viewport import MIN_FRAME
 
 HEADLESS_TRACE = "swipe-40mms-50hz"
 INPUT_KINDS = ("mouse", "follow", "tuio", "evdev")
@@ -188,7 +189,7 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--faults needs --device: the faults are injected on the link to it")
     paths, index = _playlist(args.scene)
     scene = _load(paths[index])
-    size = args.size or default_frame_size(scene.display)
+    size = args.size or default_frame_size(scene)
     record = Path(args.record) if args.record else None
     from app.live.cpu_steal import StealMeter
     from app.live.demo_loop import DemoLoop

@@ -21,7 +21,7 @@ from rendering.visual.compositor import Compositor, FrameView
 from rendering.visual.modal_view import modal_envelope
 from rendering.visual.context import OffscreenBackend
 from rendering.visual.overlay import OverlayState, record_from_output
-from rendering.visual.viewport import default_frame_size
+from rendering.visual.device_panels import default_frame_size
 from textures.model import Scene
 
 
@@ -44,7 +44,7 @@ class FrameWriter:
         self.fps = float(fps)
         self.folder = Path(out_dir) / "frames"
         self.folder.mkdir(parents=True, exist_ok=True)
-        self.size = size or default_frame_size(scene.display)
+        self.size = size or default_frame_size(scene)
         self.backend = OffscreenBackend(self.size)
         self.compositor = Compositor(self.backend.ctx, scene, self.size)
         self.overlay = OverlayState()
