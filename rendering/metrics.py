@@ -30,6 +30,17 @@ alignment error the mean, over steps of mu'* and over steps of mu', of the dista
 of arc length to the nearest place where the other signal crosses the step's half-way
 level going the same way (capped at ``cap_mm``): symmetric, so a renderer that misses
 an edge and one that adds spurious edges (chatter) both pay.
+
+Chatter (:func:`chatter`, for a periodic layer: a grating's axis and period) counts
+edges felt twice: a friction step of mu' undone by the next step (the other way, back
+across the first one's half-way level) within ``CHATTER_S``, while the finger, along
+the layer's axis, stayed within a quarter period (the same edge, not the next one half
+a period on) and did not itself turn back (a reversal: the finger moved back at least
+``hysteresis_mm`` from its furthest point, within ``CHATTER_S`` of the pair). An edge
+crossed three times (early, back, again) counts 2. Against the true path
+(:func:`accuracy` with ``layer``) the finger's motion is the true one; on a recording
+(``app.measure.report_real``) the tracker's (reversals: in the measured samples). The definition needs no true signal, so
+the true path's own crossings are never chatter (a test checks it).
 """
 
 from __future__ import annotations
@@ -37,6 +48,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from scipy.signal import stft
 
 from rendering.compose import ideal_mu
@@ -55,6 +67,19 @@ MIN_STEP = 0.05
 MAX_STEP_WIDTH_MM = 2.0
 #: no step is matched to one further away than this (mm) along the path
 ALIGNMENT_CAP_MM = 10.0
+#: a step undone within this (s) is chatter (see the module docstring): at 50 Hz touch a
+#: lock correction comes at most one touch interval and one 5 ms block after the step
+#: it undoes (25 ms)
+CHATTER_S = 0.03
+#: a finger's motion reverses when it moves back this far (mm) from its furthest point:
+#: on a true path (no noise) any turn; measured positions need ``REVERSAL_MEASURED_MM``
+REVERSAL_TRUE_MM = 1e-3
+#: ... four times a touch screen's 0.05 mm noise (standard deviation)
+REVERSAL_MEASURED_MM = 0.2
+#: chatter is counted on layers of at least this period (mm), whose edges are felt as
+#: events (the hybrid's coarse layers, ``rendering.layers.hybrid.COARSE_MM``); on finer
+#: ones successive edges are texture
+CHATTER_PERIOD_MM = 2.0
 
 
 class MetricError(TraceError):
@@ -88,6 +113,7 @@ class Accuracy:
     alignment_error_mm: float | None
     ideal_steps: int
     rendered_steps: int
+    chatter: int | None = None
 
 
 def reference(scene, truth: Trace) -> Reference:
@@ -292,12 +318,112 @@ def alignment_error(mu: np.ndarray, mu_ideal: np.ndarray, s_mm: np.ndarray, cont
     return float(np.mean(means)), int(ideal[0].size), int(rendered[0].size)
 
 
-def accuracy(ref: Reference, t_out: np.ndarray, mu_out: np.ndarray, out_rate_hz: float) -> Accuracy:
+def turns(along_mm: np.ndarray, contact: np.ndarray, hysteresis_mm: float) -> np.ndarray:
+    """Indices where the motion along an axis turns back: the furthest point before the
+    position has come back at least ``hysteresis_mm`` (mm) from it, within one contact
+    interval (a zigzag with that threshold; a new contact starts without a direction)."""
+    return _turns_kernel(np.ascontiguousarray(along_mm, dtype=np.float64),
+                         np.ascontiguousarray(contact, dtype=np.bool_), float(hysteresis_mm))
+
+
+@njit(cache=True)
+def _turns_kernel(x, contact, h):
+    out = np.empty(x.size, dtype=np.int64)
+    count = 0
+    direction = 0
+    hi = lo = 0.0
+    i_hi = i_lo = 0
+    for i in range(x.size):
+        if not contact[i]:
+            direction = 0
+            continue
+        if direction == 0 and (i == 0 or not contact[i - 1]):
+            hi = lo = x[i]
+            i_hi = i_lo = i
+            continue
+        if direction >= 0 and x[i] > hi:
+            hi, i_hi = x[i], i
+        if direction <= 0 and x[i] < lo:
+            lo, i_lo = x[i], i
+        if direction >= 0 and x[i] <= hi - h:
+            if direction > 0:
+                out[count] = i_hi
+                count += 1
+            direction, lo, i_lo = -1, x[i], i
+        elif direction <= 0 and x[i] >= lo + h:
+            if direction < 0:
+                out[count] = i_lo
+                count += 1
+            direction, hi, i_hi = 1, x[i], i
+    return out[:count]
+
+
+def chatter(mu: np.ndarray, t_s: np.ndarray, along_mm: np.ndarray, contact: np.ndarray,
+            period_mm: float, hysteresis_mm: float, window_s: float = CHATTER_S,
+            min_step: float = MIN_STEP, tol: float = 1e-9,
+            turning_mm: np.ndarray | None = None) -> int:
+    """Edges felt twice (see the module docstring): the number of friction steps of
+    ``mu`` that undo the step before them.
+
+    Parameters
+    ----------
+    mu : (n,) rendered mu'. t_s : (n,) s, increasing. contact : (n,) bool.
+    along_mm : (n,) the finger's position along the layer's axis (mm), where the two
+        steps are compared: the true path against a reference; on a recording the
+        tracker's prediction (samples 10-20 ms apart may straddle two edges).
+    turning_mm : (n,) the positions its reversals are found in (default ``along_mm``):
+        on a recording the measured ones (a prediction overshoots and comes back at
+        every sample of a finger that slows down).
+    period_mm : the layer's period (mm); the same edge is within a quarter of it.
+    hysteresis_mm : how far back (mm) the finger must move for a reversal (:func:`turns`).
+    window_s : a step undone within this (s) counts. min_step : smallest step (mu').
+    tol : changes smaller than this are no change (rounding).
+    """
+    d = np.diff(mu)
+    both = contact[1:] & contact[:-1]
+    moving = np.flatnonzero((np.abs(d) > tol) & both)
+    if moving.size < 2:
+        return 0
+    sign = np.sign(d[moving])
+    interval = np.cumsum(~both)[moving]
+    new = np.concatenate(([True], (sign[1:] != sign[:-1]) | (interval[1:] != interval[:-1])))
+    first = np.flatnonzero(new)
+    last = np.concatenate((first[1:], [moving.size])) - 1
+    start, end = moving[first], moving[last] + 1
+    keep = np.abs(mu[end] - mu[start]) >= min_step
+    start, end, interval = start[keep], end[keep], interval[first][keep]
+    weight = np.abs(d[moving])
+    centre = np.add.reduceat(weight * moving, first)[keep] / np.add.reduceat(weight, first)[keep]
+    at = np.clip(np.rint(centre).astype(np.int64), 0, mu.size - 1)
+    when, where = t_s[at], along_mm[at]
+    level = 0.5 * (mu[start] + mu[end])
+    lo, hi = np.minimum(mu[start], mu[end]), np.maximum(mu[start], mu[end])
+    turn_t = t_s[turns(along_mm if turning_mm is None else turning_mm, contact, hysteresis_mm)]
+    count = 0
+    for k in range(1, when.size):
+        if (interval[k] != interval[k - 1] or when[k] - when[k - 1] > window_s
+                or np.sign(mu[end[k]] - mu[start[k]]) == np.sign(mu[end[k - 1]] - mu[start[k - 1]])
+                or not lo[k] < level[k - 1] < hi[k]
+                or abs(where[k] - where[k - 1]) >= period_mm / 4):
+            continue
+        a, b = np.searchsorted(turn_t, [when[k - 1] - window_s, when[k] + window_s])
+        count += int(b == a)
+    return count
+
+
+def accuracy(ref: Reference, t_out: np.ndarray, mu_out: np.ndarray, out_rate_hz: float,
+             layer=None) -> Accuracy:
     """All three metrics of a rendering ``mu_out`` (n,) output at ``t_out`` (n,) s, uniform
-    at ``out_rate_hz``, against ``ref`` (see the module docstring)."""
+    at ``out_rate_hz``, against ``ref`` (see the module docstring); with ``layer`` (a
+    periodic layer: ``axis``, ``period_mm``) also its chatter along the true path."""
     mu = hold(t_out, mu_out, ref.t_s, out_rate_hz)
     mu = np.where(ref.contact, mu, 1.0)
     align, n_ideal, n_rendered = alignment_error(mu, ref.mu, ref.s_mm, ref.contact)
+    doubled = None
+    if layer is not None:
+        along = layer.axis[0] * ref.x_mm + layer.axis[1] * ref.y_mm
+        doubled = chatter(mu, ref.t_s, along, ref.contact, layer.period_mm, REVERSAL_TRUE_MM)
     return Accuracy(time_error=time_error(mu, ref.mu, ref.contact),
                     spectral_error=spectral_error(mu, ref.mu, ref.contact, ref.rate_hz),
-                    alignment_error_mm=align, ideal_steps=n_ideal, rendered_steps=n_rendered)
+                    alignment_error_mm=align, ideal_steps=n_ideal, rendered_steps=n_rendered,
+                    chatter=doubled)

@@ -10,6 +10,7 @@ from hypothesis import given, settings, strategies as st
 
 from rendering.input.trace_synth import Motion, make_motion, sample, truth
 from rendering.layers.hybrid import SLIP, HybridRenderer
+from rendering.metrics import accuracy, reference
 from rendering.tracking.tracks import TrackerConfig, TrackerState, track
 from scenes import grating_scene
 from textures.model import VisualHints, Waveform
@@ -126,3 +127,42 @@ def test_a_varying_stroke_never_runs_backwards():
         for sign in (1.0, -1.0):
             u = _progress(tau, sign * ripple, cycles)
             assert np.all(np.diff(u) >= -1e-15) and u[0] == 0.0 and abs(u[-1] - 1.0) < 1e-12
+
+
+def _felt(layer, motion, duration_s, seed):
+    """The hybrid's mu' and its accuracy (with chatter) for ``motion`` sampled at 50 Hz with
+    0.05 mm noise (draw ``seed``), against the true path."""
+    fingers = _tracks(sample(motion, 50.0, noise_mm=0.05, seed=seed), duration_s)
+    r = HybridRenderer(layer, RATE)
+    mu, _, _ = r.render(fingers, r.initial_state())
+    scene = grating_scene(layer.period_mm)
+    return accuracy(reference(scene, truth(motion, RATE)), fingers.t_s, mu[0], RATE, layer=layer)
+
+
+@pytest.mark.parametrize("period", [15.0, 5.0])
+@pytest.mark.parametrize("speed", [20.0, 60.0])
+def test_a_noisy_constant_speed_swipe_never_feels_an_edge_twice(period, speed):
+    """A swipe from 10.6 to 68.6 mm (no line within 0.5 mm of either end) sampled at
+    50 Hz with 0.05 mm noise, 8 draws of the noise: the true path never turns back, so no
+    edge may be crossed back (chatter 0), and the hybrid renders exactly the true path's
+    edges (as many steps)."""
+    motion = make_motion("swipe", speed_mm_s=speed, duration_s=58.0 / speed, x0_mm=10.6)
+    layer = grating_scene(period).layers[0]
+    for seed in range(8):
+        acc = _felt(layer, motion, 58.0 / speed, seed)
+        assert acc.chatter == 0, (seed, acc)
+        assert acc.rendered_steps == acc.ideal_steps, (seed, acc)
+
+
+@pytest.mark.parametrize("period", [15.0, 5.0])
+def test_a_true_reversal_is_felt_at_exactly_the_true_crossings(period):
+    """Out from 19.2 mm, turning 0.3 mm past the line at 45 mm, and back (minimum jerk,
+    no pause), 50 Hz with 0.05 mm noise, 8 draws: the hybrid crosses each line as often
+    as the finger does (4 lines each way on the 15 mm grating, 11 on the 5 mm one) and no
+    edge is undone that the finger did not undo itself."""
+    motion = _line((0.0, 0.6, 19.2, 45.3), (0.6, 1.2, 45.3, 19.2))
+    layer = grating_scene(period).layers[0]
+    for seed in range(8):
+        acc = _felt(layer, motion, 1.2, seed)
+        assert acc.ideal_steps == (8 if period == 15.0 else 22)
+        assert acc.chatter == 0 and acc.rendered_steps == acc.ideal_steps, (seed, acc)

@@ -35,21 +35,36 @@ def test_every_recording_replays_finite_and_unclamped(section):
 
 
 def test_renderers_agree_where_they_should(section):
-    """On real strokes the hybrid renders the 5 mm grating much as SHO-predicted does
-    (the same locked position: spectral distance under 0.25, under 0.05 in most) and far
-    from plain SHT, whose phase starts anywhere at each touch; its edge pairs (chatter)
-    are about SHO-predicted's (within 10 % and 2), more than SHT's, which never jumps
-    (see rendering/RENDERERS.md)."""
+    """On real strokes the hybrid renders the 5 mm grating near SHO-predicted (the same
+    locked position: spectral distance under 0.3, median under 0.15; what remains is
+    SHO-predicted's own edges felt twice, which the hybrid holds instead: 0.013 median
+    before it did) and on every recording nearer it than plain SHT, whose phase starts
+    anywhere at each touch (over 0.3 on most)."""
     moving = [run for run in section["runs"]
               if run["renderers"]["sht"]["spectral_distance_from_hybrid"] is not None]
     assert len(moving) >= 10
     near = [run["renderers"]["sho-predicted"]["spectral_distance_from_hybrid"] for run in moving]
-    assert max(near) < 0.25 and np.median(near) < 0.05
-    assert sum(run["renderers"]["sht"]["spectral_distance_from_hybrid"] > 0.3
-               for run in moving) >= 0.8 * len(moving)
-    for run in section["runs"]:
-        r = run["renderers"]
-        assert r["hybrid"]["chatter"] <= 1.1 * r["sho-predicted"]["chatter"] + 2, run["recording"]
+    assert max(near) < 0.3 and np.median(near) < 0.15
+    far = [run["renderers"]["sht"]["spectral_distance_from_hybrid"] for run in moving]
+    assert all(a < b for a, b in zip(near, far))
+    assert sum(d > 0.3 for d in far) >= 0.8 * len(moving)
+
+
+def test_the_hybrid_feels_fewer_edges_twice_than_sho_predicted(section):
+    """Chatter (rendering.metrics.chatter: an edge crossed back within 30 ms while the
+    finger, as measured, did not turn back). SHO-predicted reads the map at a prediction
+    that jumps back at every touch sample of a finger slower than predicted; the hybrid
+    holds its phase instead (rendering.layers.hybrid.HOLD_S): on the tablet drags (one
+    and two fingers) it feels no edge twice, where SHO-predicted feels 10 and 20, and on
+    no recording does it feel more than SHO-predicted."""
+    runs = {run["recording"]: run["renderers"] for run in section["runs"]}
+    for name in ("tablet-single-drag.txt", "tablet-two-finger-drag.txt"):
+        assert runs[name]["hybrid"]["chatter"] == 0
+        assert runs[name]["sho-predicted"]["chatter"] >= 10
+    for name, r in runs.items():
+        assert r["hybrid"]["chatter"] <= r["sho-predicted"]["chatter"], name
+    assert (sum(r["hybrid"]["chatter"] for r in runs.values())
+            < 0.6 * sum(r["sho-predicted"]["chatter"] for r in runs.values()))
 
 
 def test_two_finger_roles_are_stable_on_both_devices(section):

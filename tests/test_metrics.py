@@ -5,8 +5,9 @@ import pytest
 from numpy.testing import assert_allclose
 
 from rendering.input.trace_synth import make_motion, truth
-from rendering.metrics import (MetricError, accuracy, alignment_error, find_steps, hold,
-                               reference, spectral_error, time_error)
+from rendering.metrics import (CHATTER_S, REVERSAL_MEASURED_MM, REVERSAL_TRUE_MM, MetricError,
+                               accuracy, alignment_error, chatter, find_steps, hold, reference,
+                               spectral_error, time_error, turns)
 from scenes import disc_scene, grating_scene
 
 RATE = 20_000.0
@@ -159,3 +160,71 @@ def test_undefined_cases_raise_with_the_reason():
         spectral_error(ref.mu, ref.mu, ref.contact, RATE)
     with pytest.raises(MetricError, match="needs a grid above 2000 Hz; got 1000 Hz"):
         spectral_error(ref.mu, ref.mu, ref.contact, 1000.0)
+
+
+def _grating_line(x, period=15.0, y=30.0):
+    return grating_scene(period).layers[0].mu_at(x, np.full(x.size, y))
+
+
+def test_chatter_counts_each_step_that_undoes_the_one_before():
+    """A 40 mm/s swipe over the 15 mm grating, rendered with every edge felt three times
+    (the ideal edge, back 5 ms later, forward again 2 ms after that): each edge adds two
+    steps undone within CHATTER_S while the finger went on; the ideal itself has none."""
+    scene = grating_scene(15.0)
+    ref = _swipe_ref(scene)
+    edges = np.flatnonzero(np.diff(ref.mu) != 0)
+    doubled = ref.mu.copy()
+    for k in edges:  # 100 samples = 5 ms at 20 kHz
+        doubled[k + 101:k + 141] = ref.mu[k]
+    args = (ref.t_s, ref.x_mm, ref.contact, 15.0, REVERSAL_TRUE_MM)
+    assert edges.size == 10
+    assert chatter(ref.mu, *args) == 0
+    assert chatter(doubled, *args) == 2 * edges.size
+    # undone after 40 ms (outside CHATTER_S), then forward 2 ms later: only that counts
+    late = ref.mu.copy()
+    for k in edges:
+        late[k + 801:k + 841] = ref.mu[k]
+    assert 800 / RATE > CHATTER_S
+    assert chatter(late, *args) == edges.size
+
+
+def test_a_true_reversal_across_an_edge_is_not_chatter():
+    """The finger turns 0.1 mm past the 15 mm grating's line at 7.5 mm and comes back:
+    the true path crosses the line twice 5 ms apart, an edge the finger itself undid.
+    The same mu' along a path that never turns back is chatter."""
+    t = np.arange(4000) / RATE
+    x = 7.6 - 40.0 * np.abs(t - 0.1)
+    contact = np.ones(t.size, bool)
+    mu = _grating_line(x)
+    assert np.count_nonzero(np.diff(mu)) == 2
+    assert chatter(mu, t, x, contact, 15.0, REVERSAL_TRUE_MM) == 0
+    onward = 3.6 + 40.0 * t
+    assert chatter(mu, t, onward, contact, 15.0, REVERSAL_TRUE_MM) == 1
+
+
+def test_the_next_edge_soon_after_is_not_chatter():
+    """250 mm/s over the 5 mm grating: an edge every 10 ms, each the other way, within
+    CHATTER_S; the finger moved half a period between them, so none is an edge undone."""
+    t = np.arange(8000) / RATE
+    x = 10.0 + 250.0 * t
+    mu = _grating_line(x, 5.0)
+    assert 2.5 / 250.0 < CHATTER_S
+    assert chatter(mu, t, x, np.ones(t.size, bool), 5.0, REVERSAL_TRUE_MM) == 0
+
+
+def test_turns_ignore_noise_within_the_hysteresis_and_find_each_reversal():
+    """Measured positions (50 Hz, 0.05 mm noise, held between samples) of a constant-speed
+    swipe turn nowhere with REVERSAL_MEASURED_MM; a path out and back turns once, at its
+    furthest sample; a lift forgets the direction."""
+    rng = np.random.default_rng(3)
+    t = np.arange(40_000) / RATE
+    held = np.floor(t * 50.0) / 50.0
+    contact = np.ones(t.size, bool)
+    x = 10.0 + 20.0 * held + rng.normal(0.0, 0.05, 100)[np.floor(t * 50.0).astype(int)]
+    assert turns(x, contact, REVERSAL_MEASURED_MM).size == 0
+    out_back = 10.0 + 20.0 * (1.0 - np.abs(held - 1.0))
+    got = turns(out_back, contact, REVERSAL_MEASURED_MM)
+    assert got.size == 1 and out_back[got[0]] == out_back.max() and t[got[0]] == 1.0
+    lifted = contact.copy()
+    lifted[19_000:21_000] = False  # the turn happens while lifted: no reversal seen
+    assert turns(out_back, lifted, REVERSAL_MEASURED_MM).size == 0

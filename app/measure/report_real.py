@@ -10,10 +10,11 @@ rate here: 67-105 Hz), 10 kHz output, exact inversion.
 No true path exists for a recording, so what is scored is what can be:
 
 - continuity: the largest step of the output amplitude between two output samples
-  (um) while a finger stays down (a grating's own edge is a full step), and chatter: a
-  step followed within ``CHATTER_S`` by one back the other way, an edge felt twice;
-  counted on gratings whose own edges never come that close (half a period at
-  ``FAST_MM_S``: the 15 and 5 mm gratings, not the 0.6 mm one);
+  (um) while a finger stays down (a grating's own edge is a full step), and chatter:
+  edges felt twice, ``rendering.metrics.chatter`` (a step of mu' undone within
+  ``CHATTER_S`` while the finger, as tracked, stayed within a quarter period and, as
+  measured, did not turn back by ``REVERSAL_MEASURED_MM``), on gratings whose edges are
+  events, not texture (period at least ``CHATTER_PERIOD_MM``: the 15 and 5 mm gratings);
 - clamps: the friction inversion's guards that acted, and the tracker's jumps (a finger
   moving faster than a finger can) and dropped out-of-order samples;
 - agreement between renderers: the spectral distance of each renderer's mu'(t) from the
@@ -36,7 +37,8 @@ import numpy as np
 from app.measure.report_matrix import load, run_blocks, stack_fingers
 from rendering.input.trace_file import TraceError, make_trace, read_trace
 from rendering.input.trace_import import add_import_arguments, detect_format, run_import
-from rendering.metrics import MetricError, spectral_error
+from rendering.metrics import (CHATTER_PERIOD_MM, CHATTER_S, REVERSAL_MEASURED_MM,
+                               MetricError, chatter, spectral_error)
 from rendering.pipeline import build_pipeline
 from rendering.tracking.finger_select import HYSTERESIS_MM, SelectionState, select_fingers
 from rendering.tracking.tracks import TrackerConfig, TrackerState, track
@@ -45,12 +47,6 @@ RENDERERS = ("sho-held", "sho-predicted", "sht", "hybrid")
 OUTPUT_HZ = 10_000.0
 #: recordings larger than this (bytes) are left out (a report is not a bulk converter)
 MAX_BYTES = 8 << 20
-#: a step back within this (s) of a step is chatter ...
-CHATTER_S = 0.01
-#: ... where a step is an amplitude change of at least this (um) from one sample to the next
-STEP_UM = 0.1
-#: a fast stroke (mm/s), for which gratings chatter can be told from texture
-FAST_MM_S = 250.0
 
 
 def recordings(folder: Path) -> list[Path]:
@@ -89,17 +85,28 @@ def load_recording(path: Path, width_mm: float, height_mm: float):
                       trace.force_n, trace.event)
 
 
-def _steps(amplitude: np.ndarray, contact: np.ndarray) -> tuple[float, int]:
-    """The largest amplitude step (um) between output samples while a finger stays down,
-    and the chatter count (see the module docstring)."""
+def _largest_step(amplitude: np.ndarray, contact: np.ndarray) -> float:
+    """The largest amplitude step (um) between output samples while a finger stays down."""
     both = contact[:, 1:] & contact[:, :-1]
-    d = np.where(both, np.diff(amplitude, axis=1), 0.0)
-    chatter = 0
-    for row in d:
-        k = np.flatnonzero(np.abs(row) >= STEP_UM)
-        back = (np.diff(k) <= CHATTER_S * OUTPUT_HZ) & (np.sign(row[k[1:]]) != np.sign(row[k[:-1]]))
-        chatter += int(np.count_nonzero(back))
-    return float(np.abs(d).max(initial=0.0)), chatter
+    return float(np.abs(np.where(both, np.diff(amplitude, axis=1), 0.0)).max(initial=0.0))
+
+
+def _measured(trace, ids: list[int], n: int):
+    """Each finger's tracks on the output grid (a FingerBlock) and its rows in the
+    order of ``ids``."""
+    fingers, _ = track(0, n, trace, TrackerState(), TrackerConfig(rate_hz=OUTPUT_HZ))
+    return fingers, [fingers.ids.index(fid) for fid in ids]
+
+
+def _chatter(mu: np.ndarray, contact: np.ndarray, measured, layer) -> int:
+    """Edges felt twice over every finger (``rendering.metrics.chatter``): where the
+    steps are, the tracker's predicted position; its reversals, in the measured one."""
+    fingers, rows = measured
+    (ax, ay), t = layer.axis, np.arange(mu.shape[1]) / OUTPUT_HZ
+    return sum(chatter(mu[k], t, ax * fingers.x_pred[row] + ay * fingers.y_pred[row],
+                       contact[k], layer.period_mm, REVERSAL_MEASURED_MM,
+                       turning_mm=ax * fingers.x_held[row] + ay * fingers.y_held[row])
+               for k, row in enumerate(rows))
 
 
 def _role_swaps(trace, hysteresis_mm: float) -> tuple[int, float]:
@@ -125,22 +132,26 @@ def replay(path: Path, scene_name: str) -> dict:
     out: dict = {"recording": path.name, "scene": scene_name, "samples": len(trace),
                  "fingers": len(trace.fingers), "duration_s": trace.duration_s, "renderers": {}}
     mu_by = {}
+    layer = next((lay for lay in scene.layers if lay.is_periodic), None)
+    measured = None
     for renderer in RENDERERS:
         pipeline = build_pipeline(scene, rate_hz=OUTPUT_HZ, block_size=50,
                                   render_override=renderer,
                                   sho_variant="sho-held" if renderer == "sho-held" else "sho-predicted")
         outs, _ = run_blocks(pipeline, trace, 200, duration)
-        contact = stack_fingers(outs, "contact", False)[1]
+        ids, contact = stack_fingers(outs, "contact", False)
         amplitude = stack_fingers(outs, "amplitude_um", 0.0)[1]
-        mu_by[renderer] = (stack_fingers(outs, "mu_target", 1.0)[1], contact)
-        largest, chatter = _steps(amplitude, contact)
-        if not scene.grating_period_mm or scene.grating_period_mm / 2 < CHATTER_S * FAST_MM_S:
-            chatter = None
+        mu = stack_fingers(outs, "mu_target", 1.0)[1]
+        mu_by[renderer] = (mu, contact)
+        if measured is None:
+            measured = _measured(trace, ids, mu.shape[1])
+        doubled = (_chatter(mu, contact, measured, layer)
+                   if layer is not None and layer.period_mm >= CHATTER_PERIOD_MM else None)
         clamps = None
         for o in outs:
             clamps = o.clamps if clamps is None else (clamps.add(o.clamps) or clamps)
         out["renderers"][renderer] = {
-            "largest_step_um": largest, "chatter": chatter,
+            "largest_step_um": _largest_step(amplitude, contact), "chatter": doubled,
             "clamps": clamps.total, "finite": bool(np.isfinite(amplitude).all())}
     for renderer in RENDERERS:
         out["renderers"][renderer]["spectral_distance_from_hybrid"] = _agreement(
@@ -186,8 +197,10 @@ def summary_lines(doc: dict) -> list[str]:
              "Each recording replayed on each grating by every renderer (10 kHz, exact "
              "inversion); logs mapped onto the scene's display. No true path exists, so: the "
              "largest step of the output amplitude while a finger stays down (um; a grating "
-             f"edge is a full step), chatter (a step undone within {CHATTER_S * 1e3:g} ms: an "
-             "edge felt twice), clamps counted by the inversion, the spectral distance of mu'(t) "
+             f"edge is a full step), chatter (a step of mu' undone within {CHATTER_S * 1e3:g} ms "
+             "while the finger, as tracked, stayed within a quarter period and did not turn "
+             f"back by {REVERSAL_MEASURED_MM:g} mm: an edge felt twice; rendering/metrics.py), "
+             "clamps counted by the inversion, the spectral distance of mu'(t) "
              "from the hybrid's (phase ignored; 0 = the same texture), and how often "
              f"'left-most' changed finger with two or more down ({HYSTERESIS_MM:g} mm "
              "hysteresis / none).", "",

@@ -35,6 +35,9 @@ KINDS = ("human", "slow", "fast")
 #: timing faults of the human-like draws' touch traces
 JITTER_S = 0.002
 DROP = 0.05
+#: what each draw keeps: the claims' metrics and the edges felt twice
+#: (``rendering.metrics.chatter``)
+DRAW_METRICS = (*METRICS, "chatter")
 
 
 def motions(n: int) -> dict:
@@ -65,8 +68,8 @@ def draws(n: int, scenes=tuple(GRATINGS), workers: int = 1, scheduler: str | Non
     for case, row in zip(cases, rows):
         kind = case.motion.rsplit("-", 1)[0]
         per = values.setdefault(case.scene, {}).setdefault(kind, {}).setdefault(
-            case.renderer, {m: [] for m in METRICS})
-        for m in METRICS:
+            case.renderer, {m: [] for m in DRAW_METRICS})
+        for m in DRAW_METRICS:
             per[m].append(row[m])
     return {"n": n, "kinds": list(KINDS), "renderers": list(RENDERERS), "values": values}
 
@@ -76,14 +79,17 @@ def summary_lines(doc: dict) -> list[str]:
     lines = [f"## Draws (50 Hz touch, 10 kHz output, {doc['n']} draws of each kind)", "",
              "Every claim above is computed on these draws, paired by draw (see "
              "app/measure/report_seeds.py for how they are made): mean (min-max) of each "
-             "metric.", "",
-             "| scene | motion | renderer | time | spectral | alignment mm |",
-             "|---|---|---|---|---|---|"]
+             "metric; chatter: edges felt twice (rendering/metrics.py), total over the "
+             "draws, on the 15 and 5 mm gratings.", "",
+             "| scene | motion | renderer | time | spectral | alignment mm | chatter |",
+             "|---|---|---|---|---|---|---|"]
     for scene, kinds in doc["values"].items():
         for kind, per in kinds.items():
             for renderer, metrics in per.items():
+                doubled = [v for v in metrics.get("chatter", []) if v is not None]
                 lines.append(f"| {scene} | {kind} | {renderer} | "
-                             + " | ".join(_spread(metrics[m]) for m in METRICS) + " |")
+                             + " | ".join(_spread(metrics[m]) for m in METRICS)
+                             + f" | {sum(doubled) if doubled else '-'} |")
     return lines + [""]
 
 

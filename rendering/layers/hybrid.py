@@ -127,8 +127,11 @@ VELOCITY_NOISE_MM_S = 6.0
 SMOOTH = 0.5
 #: layers of at least this period (mm) are position-locked (see the module docstring) ...
 COARSE_MM = 2.0
-#: ... where an error against the finger's direction up to this (mm) is taken at once
+#: ... where an error against the finger's direction up to this (mm) is taken at once,
 BACK_MM = 2.0
+#: ... unless the finger's own motion covers it within this (s): then the phase holds
+#: still until the finger has caught up (no edge crossed back, see the module docstring)
+HOLD_S = 0.02
 
 
 @dataclass(frozen=True)
@@ -136,8 +139,9 @@ class _Finger:
     """One finger between calls: its touch, phase_v carry and offset (cycles, in [0, 1)),
     the target offset of its last measurement (cycles), that measurement (held x, held y,
     the tracker's phase rate) to tell whether the next call starts with a new one, the
-    smoothed phase rate (cycles/s) and |vx| + |vy| (mm/s) at the last sample (only ever
-    compared with 0: at rest or moving)."""
+    smoothed phase rate (cycles/s), |vx| + |vy| (mm/s) at the last sample (only ever
+    compared with 0: at rest or moving), and 1.0 if the last measurement's error is
+    being held (see ``HOLD_S``), else 0.0."""
 
     touch: int
     phase: float
@@ -146,6 +150,7 @@ class _Finger:
     measured: tuple[float, float, float]
     smoothed: float
     speed: float
+    held: float
 
 
 @dataclass(frozen=True)
@@ -157,7 +162,8 @@ class HybridState:
 
 def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, snap: np.ndarray,
                 fast: np.ndarray, slow: np.ndarray, start: float, lock: float,
-                jump: np.ndarray | None = None, back: float = 0.0
+                jump: np.ndarray | None = None, back: float = 0.0,
+                hold: np.ndarray | None = None, travel: np.ndarray | None = None
                 ) -> tuple[np.ndarray, float]:
     """Offset (cycles) following a piecewise-constant target at a bounded rate.
 
@@ -179,6 +185,12 @@ def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, sna
         error that way is taken at once, one the other way if at most ``back``.
         None: nowhere.
     back : largest error (cycles) against the finger's direction taken at once.
+    hold : (k,) at each bound the largest error (cycles) against the finger's direction
+        that is held instead (taken before ``back``): the offset follows the ``travel``
+        allowance, so that the phase stands still until the finger has caught up.
+        None: nowhere.
+    travel : (n + 1,) the finger's own phase travel (cycles) accumulated before each
+        sample and, last, after the last one; needed with ``hold``.
 
     Returns
     -------
@@ -193,46 +205,67 @@ def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, sna
                        np.ascontiguousarray(snap, dtype=np.bool_), fast,
                        np.ascontiguousarray(slow, dtype=np.float64), float(start), float(lock),
                        np.zeros(len(bounds)) if jump is None
-                       else np.ascontiguousarray(jump, dtype=np.float64), float(back), offset)
-    return offset, end
+                       else np.ascontiguousarray(jump, dtype=np.float64), float(back),
+                       np.zeros(len(bounds)) if hold is None
+                       else np.ascontiguousarray(hold, dtype=np.float64),
+                       np.zeros(fast.size) if travel is None
+                       else np.ascontiguousarray(travel, dtype=np.float64), False, offset)
+    return offset, end[0]
 
 
 @njit(cache=True)
-def _slew_kernel(bounds, target, restart, snap, fast, slow, start, lock, jump, back, offset):
-    """:func:`slew_offset` in one pass: writes ``offset`` (n,), returns the wrapped end.
+def _slew_kernel(bounds, target, restart, snap, fast, slow, start, lock, jump, back, hold,
+                 travel, held_before, offset):
+    """:func:`slew_offset` in one pass: writes ``offset`` (n,), returns the wrapped end
+    and whether the last segment is held.
 
     Per segment (bounds[k] to the next bound) the error ``gap`` to its target is taken at
-    its first sample; ``far = |gap| - lock`` of it (if positive) is worked off at the
-    ``fast`` allowance, the rest at the ``slow`` one from index ``switch`` on, the first
-    allowance index where the fast part is done.
+    its first sample; a held gap is worked off at the ``travel`` allowance; otherwise
+    ``far = |gap| - lock`` of it (if positive) at the ``fast`` allowance, the rest at the
+    ``slow`` one from index ``switch`` on, the first allowance index where the fast part
+    is done. ``held_before``: the first segment continues a held one (the previous
+    call's last; its ``jump`` is 0, so nothing is decided again).
     """
     k_n = bounds.size
     n = fast.size - 1
     base = gap = far = 0.0
     b = switch = 0
+    held = False
     value = start
     for k in range(k_n):
         d = target[k]
         if restart[k]:
             value = d
         elif k > 0:  # where the previous segment got to by this bound
-            value = base + math.copysign(_worked_off(fast, slow, b, bounds[k], far, gap), gap)
+            value = base + math.copysign(
+                _worked_off(fast, slow, travel, b, bounds[k], far, gap, held), gap)
         g = (d - value + 0.5) % 1.0 - 0.5
-        if (snap[k] and abs(g) > lock) or (jump[k] != 0.0 and (
-                g * jump[k] > 0.0 or abs(g) <= back)):
+        held = held_before and k == 0 and not restart[k]
+        if (snap[k] and abs(g) > lock) or (jump[k] != 0.0 and g * jump[k] > 0.0):
             value, g = d, 0.0
-        base, gap, far, b = value, g, max(abs(g) - lock, 0.0), bounds[k]
+        elif jump[k] != 0.0 and abs(g) <= hold[k]:
+            held = True
+        elif jump[k] != 0.0 and abs(g) <= back:
+            value, g = d, 0.0
+        base, gap, b = value, g, bounds[k]
+        far = 0.0 if held else max(abs(g) - lock, 0.0)
         switch = min(np.searchsorted(fast, fast[b] + far), n)
         rest = abs(g) - far
         for i in range(b, bounds[k + 1] if k + 1 < k_n else n):
-            worked = min(fast[i] - fast[b], far) + min(max(slow[i] - slow[switch], 0.0), rest)
+            if held:
+                worked = min(travel[i] - travel[b], rest)
+            else:
+                worked = min(fast[i] - fast[b], far) + min(max(slow[i] - slow[switch], 0.0), rest)
             offset[i] = base + math.copysign(worked, g)
-    return (base + math.copysign(_worked_off(fast, slow, b, n, far, gap), gap)) % 1.0
+    wrapped = (base + math.copysign(_worked_off(fast, slow, travel, b, n, far, gap, held), gap)) % 1.0
+    return wrapped, held
 
 
 @njit(cache=True)
-def _worked_off(fast, slow, b, i, far, gap):
+def _worked_off(fast, slow, travel, b, i, far, gap, held):
     """Correction (cycles, >= 0) of the segment starting at ``b`` by allowance index ``i``."""
+    if held:
+        return min(travel[i] - travel[b], abs(gap))
     quick = fast[i] - fast[b]
     if quick < far:
         return quick
@@ -294,19 +327,19 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, has_before, befor
 
     touch : (n,) int64; vx, vy, x_held, y_held, x_pred, y_pred : (n,) float64, the
     finger's tracks. before : the carried :class:`_Finger` fields (touch, phase, offset,
-    target, measured x, measured y, measured rate, smoothed, speed), used if
+    target, measured x, measured y, measured rate, smoothed, speed, held), used if
     ``has_before``. axis : (ax, ay). layer_phase : (offset_mm, period_mm), so that
     ``(ax x + ay y - offset_mm) / period_mm`` is ``layer.phase_at(x, y)``. limits :
     (dt_s, slip, lock, event_hz, relock rate (cycles/s), noise limit (cycles/s),
-    smoothing weight, position-locked (bool), largest jump back (cycles)).
+    smoothing weight, position-locked (bool), largest jump back (cycles), hold (s)).
 
     Returns the new carried fields in ``before``'s order.
     """
     n = touch.size
     ax, ay = axis
     offset_mm, period = layer_phase
-    dt_s, slip, lock, event_hz, relock, noise, weight, locked, back = limits
-    b_touch, b_phase, b_offset, b_target, b_x, b_y, b_rate, b_smoothed, b_speed = before
+    dt_s, slip, lock, event_hz, relock, noise, weight, locked, back, hold_s = limits
+    b_touch, b_phase, b_offset, b_target, b_x, b_y, b_rate, b_smoothed, b_speed, b_held = before
     restart = np.empty(n, dtype=np.bool_)
     measured = np.empty(n)  # the tracker's phase rate (cycles/s)
     for k in range(n):
@@ -323,14 +356,14 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, has_before, befor
     flags = np.zeros(n + 1, dtype=np.bool_)
     starts = np.zeros(n + 1, dtype=np.bool_)
     jump = np.zeros(n + 1)
+    hold = np.zeros(n + 1)
     k_n = 0
     if not has_before:
         new0 = True
     else:
         new0 = restart[0] or x_held[0] != b_x or y_held[0] != b_y or measured[0] != b_rate
-    if not new0:  # the previous call's measurement holds
+    if not new0:  # the previous call's measurement holds, and what was decided at it
         bounds[0], target[0] = 0, b_target
-        jump[0] = math.copysign(1.0, b_rate) if locked and b_speed > 0.0 else 0.0
         k_n = 1
     speed_before = b_speed if has_before else 0.0
     for k in range(n):
@@ -346,33 +379,38 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, has_before, befor
             flags[k_n] = restart[k]
             starts[k_n] = speed_before == 0.0 and speed > 0.0
             jump[k_n] = math.copysign(1.0, rate[k]) if locked and speed > 0.0 else 0.0
+            hold[k_n] = abs(rate[k]) * hold_s if locked and speed > 0.0 else 0.0
             k_n += 1
         speed_before = speed
     # correction allowances: SLIP times the distance travelled (cycles; beyond the lock,
-    # at least SLIP times relock cycles/s while the finger moves), and the part of it
-    # where the lines pass slower than event_hz
+    # at least SLIP times relock cycles/s while the finger moves), the part of it where
+    # the lines pass slower than event_hz, and the distance travelled itself (a hold)
     fast = np.empty(n + 1)
     slow = np.empty(n + 1)
+    travel = np.empty(n + 1)
     scale = slip * dt_s
-    fast[0] = slow[0] = 0.0
-    acc_fast = acc_slow = 0.0
+    fast[0] = slow[0] = travel[0] = 0.0
+    acc_fast = acc_slow = acc_travel = 0.0
     for k in range(n):
         r = abs(rate[k])
         acc_fast += max(r, relock) if r > 0.0 else 0.0
         acc_slow += r * (1.0 if r < event_hz else 0.0)
+        acc_travel += r
         fast[k + 1] = acc_fast * scale
         slow[k + 1] = acc_slow * scale
+        travel[k + 1] = acc_travel * dt_s
     offset = np.empty(n)
-    end = _slew_kernel(bounds[:k_n], target[:k_n], flags[:k_n], starts[:k_n], fast, slow,
-                       b_offset if has_before else 0.0, lock, jump[:k_n], back, offset)
+    end, held = _slew_kernel(bounds[:k_n], target[:k_n], flags[:k_n], starts[:k_n], fast, slow,
+                             b_offset if has_before else 0.0, lock, jump[:k_n], back,
+                             hold[:k_n], travel, not new0 and b_held != 0.0, offset)
     for k in range(n):
         phase[k] += offset[k]
     return (touch[n - 1], carry, end, target[k_n - 1] % 1.0, x_held[n - 1], y_held[n - 1],
-            measured[n - 1], smoothed, speed_before)
+            measured[n - 1], smoothed, speed_before, 1.0 if held else 0.0)
 
 
 #: the carried fields of :func:`_hybrid_row` for a finger seen for the first time
-_NO_FINGER = (0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+_NO_FINGER = (0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 class HybridRenderer:
@@ -401,7 +439,7 @@ class HybridRenderer:
         layer_phase = (float(self.layer.offset_mm), float(self.layer.period_mm))
         limits = (self.dt_s, self.slip, self.lock, self.event_hz,
                   RELOCK_MM_S / self.layer.period_mm, VELOCITY_NOISE_MM_S / self.layer.period_mm,
-                  SMOOTH, self.locked, BACK_MM / self.layer.period_mm)
+                  SMOOTH, self.locked, BACK_MM / self.layer.period_mm, HOLD_S)
         rows = [np.ascontiguousarray(getattr(block, name), dtype=np.float64)
                 for name in ("vx", "vy", "x_held", "y_held", "x_pred", "y_pred")]
         touch = np.ascontiguousarray(block.touch_id, dtype=np.int64)
@@ -409,11 +447,12 @@ class HybridRenderer:
             before = carried.get(fid)
             fields = _NO_FINGER if before is None else (
                 before.touch, before.phase, before.offset, before.target, *before.measured,
-                before.smoothed, before.speed)
+                before.smoothed, before.speed, before.held)
             end = _hybrid_row(touch[row], *(a[row] for a in rows), before is not None, fields,
                               self.axis, layer_phase, limits, phase[row])
             carried[fid] = _Finger(touch=int(end[0]), phase=end[1], offset=end[2], target=end[3],
-                                   measured=end[4:7], smoothed=end[7], speed=end[8])
+                                   measured=end[4:7], smoothed=end[7], speed=end[8],
+                                   held=end[9])
         mu = self.layer.profile(phase)
         covers = self.layer.covers(block.x_pred, block.y_pred)
         return mu, covers, HybridState(fingers=carried)
