@@ -320,13 +320,12 @@ const fw_output *fw_tick(fw_device *d)
         }
     }
     bool advanced = false;
-    uint64_t index = d->play_index;
     if (d->state == FW_SILENT)
         ramp(d);
     else if (d->state == FW_PLAYING || d->state == FW_DRAINING)
         advanced = play(d);
-    if (d->hal->force_pair)
-        sense(d, advanced, index);
+    if (d->hal->force_pair) /* the sample just played (or gapped) is play_index - 1 */
+        sense(d, advanced, d->play_index - advanced);
     d->out.state = d->state;
     d->tick++;
     return &d->out;

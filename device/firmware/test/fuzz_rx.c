@@ -43,8 +43,16 @@ static uint16_t force(void *ctx)
     return 750;
 }
 
-static const fw_hal hal = {serial_write, sensor, force, NULL, NULL};
 static uint32_t now;
+
+static void force_pair(void *ctx, int16_t out[2])
+{
+    (void)ctx;
+    out[0] = (int16_t)(uint16_t)(now * 7919u); /* the whole i16 range, tick by tick */
+    out[1] = (int16_t)(uint16_t)(now * 31u);
+}
+
+static const fw_hal hal = {serial_write, sensor, force, NULL, NULL, force_pair};
 
 #define CHECK(cond)                                                                           \
     do {                                                                                      \
