@@ -204,6 +204,9 @@ class CommandSink:
         self._heartbeat_s = max(info.watchdog_ms / 5.0, 1.0) * 1e-3
         self._marks.clear()
         self._last_rx = self._last_progress = time.monotonic()
+        if not info.has_force_reports:
+            with self._forces_lock:
+                self._forces = ForceHistory()
         with self._cond:
             self._snapshot = None
             self._ledger.start_session()
