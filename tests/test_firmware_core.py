@@ -13,7 +13,6 @@ from device.firmware.build import FirmwareBuildError, sim_library
 from device.firmware.ccore import CDeviceCore
 from device.link import protocol as p
 from device.link.faults import Faults, inject
-from device.link.protocol import DeviceState as S
 from device.link.simdevice import DeviceConfig, DeviceCore
 from device_recorder import Recorder
 

@@ -10,7 +10,7 @@ from app.commands.cli import main
 from device.finger import draw_finger
 from device.link import protocol as p
 from device.link.forces import ForceHistory, per_sample
-from device.link.host import CommandSink, open_port, start_sim_device
+from device.link.host import CommandSink, open_port, open_sink, start_sim_device
 from device.link.simdevice import DeviceConfig, DeviceCore
 
 RATE = 10_000.0
@@ -130,8 +130,7 @@ def test_a_device_without_the_capability_streams_as_before_with_no_lateral_force
 
 
 def test_sim_device_finger_reports_reach_the_host():
-    proc, path = start_sim_device(1, RATE, extra=("--finger", "3", "--force", "0.5"))
-    sink = CommandSink(lambda: open_port(path), 1, RATE, paced=True, process=proc)
+    sink = open_sink("sim", 1, RATE, paced=True, sim_args=("--finger", "3", "--force", "0.5"))
     try:
         assert sink.info.has_force_reports and sink.info.protocol_version == 3
         _stream(sink, 4000)

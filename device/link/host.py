@@ -744,7 +744,7 @@ def start_sim_device(channels: int, rate_hz: float, *, phases: bool = False, log
 def open_sink(spec: str, channels: int, rate_hz: float, *, phases: bool = False,
               log_path=None, paced: bool = False, queue_blocks: int = 64, faults=None,
               stderr=sys.stderr, stall_s: float = STALL_S,
-              max_stalls: int = MAX_STALLS) -> CommandSink:
+              max_stalls: int = MAX_STALLS, sim_args: tuple[str, ...] = ()) -> CommandSink:
     """Open the link to the device named by ``spec`` and handshake.
 
     Parameters
@@ -760,6 +760,8 @@ def open_sink(spec: str, channels: int, rate_hz: float, *, phases: bool = False,
         on this link, or None.
     stall_s, max_stalls : bound of one wait on the device (s), stalls in a row before
         :class:`LinkStalled`.
+    sim_args : more ``frictex sim-device`` flags for ``"sim"`` / ``"sim:tcp"``, e.g.
+        ``("--finger", "3")`` for lateral force reports from a simulated finger.
 
     Raises :class:`LinkError` (an OSError) if the port cannot be opened or the device does
     not answer or does not fit the pipeline.
@@ -769,10 +771,11 @@ def open_sink(spec: str, channels: int, rate_hz: float, *, phases: bool = False,
     proc = None
     if spec in ("sim", "sim:tcp"):
         proc, path = start_sim_device(channels, rate_hz, phases=phases, log_path=log_path,
-                                      tcp=spec == "sim:tcp")
+                                      tcp=spec == "sim:tcp", extra=tuple(sim_args))
         label = f"sim {path}"
-    elif log_path is not None:
-        raise ValueError("log_path is for the simulated device only (spec 'sim' or 'sim:tcp')")
+    elif log_path is not None or sim_args:
+        raise ValueError("log_path and sim_args are for the simulated device only (spec "
+                         "'sim' or 'sim:tcp')")
     else:
         path = label = spec
 
