@@ -38,9 +38,10 @@ the layer's axis, stayed within a quarter period (the same edge, not the next on
 a period on) and did not itself turn back (a reversal: the finger moved back at least
 ``hysteresis_mm`` from its furthest point, within ``CHATTER_S`` of the pair). An edge
 crossed three times (early, back, again) counts 2. Against the true path
-(:func:`accuracy` with ``layer``) the finger's motion is the true one; on a recording
-(``app.measure.report_real``) the tracker's (reversals: in the measured samples). The definition needs no true signal, so
-the true path's own crossings are never chatter (a test checks it).
+(:func:`accuracy` with ``layer``) the finger's motion is the true one, and the ideal
+mu'* never chatters (a finger crosses an edge back only by turning back); on a
+recording (``app.measure.report_real``) it is the tracker's (reversals: in the measured
+samples).
 """
 
 from __future__ import annotations
