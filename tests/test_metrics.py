@@ -1,9 +1,13 @@
 """Accuracy metrics on constructed cases whose answers are known in closed form."""
 
+import dataclasses
+
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose
 
+from rendering.input.trace_file import UP
 from rendering.input.trace_synth import make_motion, truth
 from rendering.metrics import (CHATTER_S, REVERSAL_MEASURED_MM, REVERSAL_TRUE_MM, MetricError,
                                accuracy, alignment_error, chatter, find_steps, hold, reference,
@@ -228,3 +232,20 @@ def test_turns_ignore_noise_within_the_hysteresis_and_find_each_reversal():
     lifted = contact.copy()
     lifted[19_000:21_000] = False  # the turn happens while lifted: no reversal seen
     assert turns(out_back, lifted, REVERSAL_MEASURED_MM).size == 0
+
+
+@settings(max_examples=12, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 10_000), period=st.sampled_from([15.0, 5.0, 2.0]),
+       angle=st.sampled_from([0.0, 30.0, 90.0]))
+def test_the_true_path_never_chatters(seed, period, angle):
+    """The ideal mu'* along a true path of the varied human-like mix (reversals, arcs,
+    flicks, creeping, pauses), on a grating at any angle: every edge it crosses back, the
+    finger crossed back by turning along the axis, so none is chatter."""
+    scene = grating_scene(period)
+    layer = dataclasses.replace(scene.layers[0], angle_deg=angle)
+    path = truth(make_motion("human-varied", speed_mm_s=60.0, duration_s=3.0, seed=seed), RATE)
+    contact = np.cumsum(path.event == UP) == 0
+    mu = np.where(contact, layer.mu_at(path.x_mm, path.y_mm), 1.0)
+    along = layer.axis[0] * path.x_mm + layer.axis[1] * path.y_mm
+    assert np.count_nonzero(np.diff(mu)) > 0
+    assert chatter(mu, path.t_s, along, contact, period, REVERSAL_TRUE_MM) == 0
