@@ -19,7 +19,8 @@ def _rows():
 
 def test_the_vectors_cover_every_message_and_every_reason_to_drop_a_frame():
     text = " | ".join(r["expect"] for r in _rows())
-    for word in ("hello", "block", "heartbeat", "stop", "info", "status", "error"):
+    for word in ("hello", "block", "heartbeat", "stop", "info", "status", "error", "flushed",
+                 "force"):
         assert f" {word} " in text
     for reason in ("cobs", "short", "crc", "version", "type", "payload", "oversize"):
         assert f"drop {reason} |" in text
