@@ -1,5 +1,6 @@
 """Trace CSV: the grammar, its errors, and exact round trips."""
 
+import io
 import numpy as np
 import pytest
 from hypothesis import assume, given, settings, strategies as st
@@ -284,4 +285,55 @@ def test_fields_split_a_line_as_the_csv_module_does(text, end):
         got = _fields(line, "<t>", 1)
     except TraceError:
         got = None
+    assert got == want
+
+
+def _reference_lines(data: bytes, where: str, limit: int):
+    """Lines as a line-at-a-time reader gives them (the rule of ``_lines``, written out):
+    (number, text without its break) until the first line that is too long (``limit``
+    bytes with its break), holds a NUL or is not UTF-8, which ends in its TraceError
+    message; a UTF-8 BOM at the start is dropped, a UTF-16 one refused."""
+    import codecs
+    out, fh = [], io.BytesIO(data)
+    for number in range(1, 10**9):
+        raw = fh.readline()
+        if not raw:
+            return out, None
+        if number == 1:
+            if raw.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+                return out, f"{where}: UTF-16 text"
+            if raw.startswith(codecs.BOM_UTF8):
+                raw = raw[3:]
+            if not raw:  # a file of a BOM alone has no lines
+                return out, None
+        if len(raw) > limit:
+            return out, f"{where}:{number}: line longer than {limit} bytes"
+        if raw.find(0) >= 0:
+            return out, f"{where}:{number}: binary content (a NUL byte at column {raw.find(0) + 1})"
+        try:
+            text = raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            return out, f"{where}:{number}: not UTF-8 text (byte {raw[exc.start]:#04x} at column {exc.start + 1})"
+        out.append((number, text[:-1] if text.endswith("\n") else text))
+
+
+@settings(max_examples=400, derandomize=True, deadline=None)
+@given(data=st.lists(st.sampled_from([b"a", b",", b"\n", b"\r", b"\0", b"\xff", b"\xc3\xa9",
+                                      b"\xe2", b"\xef\xbb\xbf", b"\xff\xfe", b"12345678"]),
+                     max_size=30).map(b"".join),
+       block=st.integers(1, 12), limit=st.integers(2, 12))
+def test_lines_read_in_blocks_as_line_by_line(data, block, limit):
+    from unittest import mock
+    from rendering.input import trace_file
+    want, problem = _reference_lines(data, "<t>", limit)
+    got = []
+    with mock.patch.object(trace_file, "_READ_BYTES", block), \
+            mock.patch.object(trace_file, "MAX_LINE_BYTES", limit):
+        try:
+            for item in trace_file._lines(io.BytesIO(data), "<t>"):
+                got.append(item)
+        except TraceError as exc:
+            assert problem is not None and str(exc).startswith(problem), (str(exc), problem)
+        else:
+            assert problem is None, problem
     assert got == want

@@ -414,32 +414,81 @@ class _RowParser:
         return keep
 
 
+#: bytes read from a trace file at a time
+_READ_BYTES = 1 << 20
+
+
 def _lines(fh, where: str):
-    """(line number, text) of a binary file: UTF-8, a leading BOM dropped, lines of at
-    most MAX_LINE_BYTES, no NUL bytes."""
-    for number in range(1, 2**62):
-        raw = fh.readline(MAX_LINE_BYTES + 1)
-        if not raw:
+    """(line number, text without its line break) of a binary file: UTF-8, a leading BOM
+    dropped, lines of at most MAX_LINE_BYTES (the line break included), no NUL bytes.
+
+    Read in blocks of whole lines, each block checked and decoded at once; the lines
+    before a problem are handed out before the problem's error.
+    """
+    number, rest = 0, _without_bom(fh.read(len(codecs.BOM_UTF8)), where)
+    while True:
+        block = fh.read(_READ_BYTES)
+        data = rest + block if rest else block
+        cut = data.rfind(b"\n") + 1 if block else len(data)
+        if block and cut == 0 and len(data) <= MAX_LINE_BYTES:
+            rest = data  # a line longer than a block so far: read on
+            continue
+        chunk, rest = (data[:cut], data[cut:]) if cut else (data, b"")
+        if not chunk:
             return
-        if number == 1:
-            if raw.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
-                raise TraceError(f"{where}: UTF-16 text (it starts with a UTF-16 byte order "
-                                 f"mark); save it as UTF-8: trace files are UTF-8 CSV")
-            if raw.startswith(codecs.BOM_UTF8):
-                raw = raw[len(codecs.BOM_UTF8):]
-        if len(raw) > MAX_LINE_BYTES:
-            raise TraceError(f"{where}:{number}: line longer than {MAX_LINE_BYTES} bytes; "
-                             f"expected CSV rows of a few numbers")
-        nul = raw.find(0)
-        if nul >= 0:
-            raise TraceError(f"{where}:{number}: binary content (a NUL byte at column "
-                             f"{nul + 1}); expected CSV text")
-        try:
-            text = raw.decode("utf-8")
-        except UnicodeDecodeError as exc:
-            raise TraceError(f"{where}:{number}: not UTF-8 text (byte {raw[exc.start]:#04x} at "
-                             f"column {exc.start + 1}); trace files are UTF-8 CSV") from None
-        yield number, text
+        ended = chunk.endswith(b"\n")
+        raws = (chunk[:-1] if ended else chunk).split(b"\n")
+        bad = _first_bad_line(chunk, raws, ended)
+        good = b"\n".join(raws[:bad]).decode("utf-8") if bad else ""
+        for k, text in enumerate(good.split("\n") if bad else ()):
+            yield number + k + 1, text
+        if bad < len(raws):
+            _line_problem(raws[bad], number + bad + 1, where, ended or bad < len(raws) - 1)
+        number += len(raws)
+
+
+def _without_bom(head: bytes, where: str) -> bytes:
+    """The file's first bytes without a UTF-8 BOM; a UTF-16 one is refused."""
+    if head.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        raise TraceError(f"{where}: UTF-16 text (it starts with a UTF-16 byte order "
+                         f"mark); save it as UTF-8: trace files are UTF-8 CSV")
+    return head[len(codecs.BOM_UTF8):] if head.startswith(codecs.BOM_UTF8) else head
+
+
+def _first_bad_line(chunk: bytes, raws: list[bytes], ended: bool) -> int:
+    """Index in ``raws`` (the lines of ``chunk``, without line breaks) of the first line
+    too long, holding a NUL byte or not UTF-8; ``len(raws)`` if none."""
+    bad = len(raws)
+    longest = max(map(len, raws))
+    if longest >= MAX_LINE_BYTES:
+        last_limit = MAX_LINE_BYTES if ended else MAX_LINE_BYTES + 1  # its break counts
+        bad = next((k for k, raw in enumerate(raws)
+                    if len(raw) >= (MAX_LINE_BYTES if k < len(raws) - 1 else last_limit)), bad)
+    nul = chunk.find(0)
+    if nul >= 0:
+        bad = min(bad, chunk.count(b"\n", 0, nul))
+    try:
+        chunk.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        bad = min(bad, chunk.count(b"\n", 0, exc.start))
+    return bad
+
+
+def _line_problem(raw: bytes, number: int, where: str, had_break: bool):
+    """Raise the error of a line known to be too long, binary or not UTF-8."""
+    if len(raw) + had_break > MAX_LINE_BYTES:
+        raise TraceError(f"{where}:{number}: line longer than {MAX_LINE_BYTES} bytes; "
+                         f"expected CSV rows of a few numbers")
+    nul = raw.find(0)
+    if nul >= 0:
+        raise TraceError(f"{where}:{number}: binary content (a NUL byte at column "
+                         f"{nul + 1}); expected CSV text")
+    try:
+        raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise TraceError(f"{where}:{number}: not UTF-8 text (byte {raw[exc.start]:#04x} at "
+                         f"column {exc.start + 1}); trace files are UTF-8 CSV") from None
+    raise AssertionError(f"line {number} has no problem")
 
 
 def _fields(text: str, where: str, number: int) -> list[str]:
