@@ -1,12 +1,12 @@
 """Parts of the friction loop: RLS adaptation, the sensor chain, the report section's tables."""
 
-import json
 import math
 
 import numpy as np
 import pytest
+from numpy.testing import assert_allclose
 
-from app.measure.report_closed_loop import markdown, summarise, write
+from app.measure.report_closed_loop import claims, markdown, summarise
 from device.profile import DeviceProfile, FrictionParams
 from rendering.control.adapt import Rls
 from rendering.control.chain import Chain
@@ -70,33 +70,66 @@ def test_the_loop_needs_seed_003s_plate():
         ClosedLoop(DeviceProfile(), 10_000.0, 50, mode="open")
 
 
-def _fake(rms):
-    return {"rms": rms * 1.5, "rms_reachable": rms, "rms_settled": rms / 2, "fallbacks": 0,
-            "noise_fraction": 0.01,
-            "adapted_gap": 0.03, "max_command_um": 2.0, "growth": 0.5}
+def _fake(rms, swings=2):
+    return {"rms": rms * 1.5, "rms_reachable": rms, "rms_after_mu0": rms / 2, "fallbacks": 0,
+            "noise_fraction": 0.01, "adapted_gap": 0.03, "max_command_um": 2.0,
+            "swings": swings, "first_mu0_s": 0.25,
+            "cumulative": (np.linspace(0, rms ** 2 * 1000, 101), np.linspace(0, 1000, 101))}
 
 
-def test_section_tables_and_gains(tmp_path):
-    values = {"grating-15mm": {"open": [_fake(0.04), _fake(0.03)],
-                               "closed": [_fake(0.01), _fake(0.002)],
-                               "adaptive": [_fake(0.004), _fake(0.004)]}}
-    section = summarise(values, fingers=2, duration_s=1.0)
+OPEN = [0.04, 0.03, 0.05, 0.02, 0.04, 0.06]
+
+
+def _section(closed, adaptive, swings=2):
+    values = {"grating-15mm": {"open": [_fake(r) for r in OPEN],
+                               "closed": [_fake(r, swings) for r in closed],
+                               "adaptive": [_fake(r) for r in adaptive]}}
+    return summarise(values, fingers=len(OPEN), duration_s=1.0)
+
+
+def test_section_tables_gains_and_claims():
+    closed = [0.004, 0.003, 0.01, 0.002, 0.004, 0.006]
+    section = _section(closed, [r / 2 for r in OPEN])
     row = section["scenes"]["grating-15mm"]
-    open_pop = math.sqrt((0.04 ** 2 + 0.03 ** 2) / 2)
-    closed_pop = math.sqrt((0.01 ** 2 + 0.002 ** 2) / 2)
+    open_pop = math.sqrt(np.mean(np.square(OPEN)))
+    closed_pop = math.sqrt(np.mean(np.square(closed)))
     assert math.isclose(row["closed"]["gain_vs_open"], open_pop / closed_pop, rel_tol=1e-12)
-    assert math.isclose(row["adaptive"]["gain_vs_open"], open_pop / 0.004, rel_tol=1e-12)
+    assert math.isclose(row["adaptive"]["gain_vs_open"], 2.0, rel_tol=1e-12)
     assert row["closed"]["worst"] == 0.01 and row["closed"]["worst_improves"]
-    text = markdown(section)
-    assert "| grating-15mm | closed |" in text and "gain margin" in text
-    write(section, tmp_path)
-    assert json.loads((tmp_path / "closed_loop.json").read_text())["fingers"] == 2
+    # from mu0 on (block 50 of 100): open loop over the same samples, finger by finger
+    assert_allclose(row["closed"]["per_finger"]["open_rms_after_mu0"], OPEN, rtol=1e-12)
+    assert math.isclose(row["closed"]["gain_after_mu0"], open_pop / closed_pop * 2, rel_tol=1e-12)
+    text = "\n".join(markdown(section))
+    assert "| grating-15mm | closed |" in text and "gain margin 7.90" in text
+    found = {(c.group, c.metric): c for c in claims(section)}
+    # 5x on the 15 mm grating: per finger d = MSE closed - MSE open / 25, by hand
+    d = np.square(closed) - np.square(OPEN) / 25
+    half = 2.570582 * d.std(ddof=1) / math.sqrt(6)  # t(0.975, 5)
+    rms = found[("closed loop: RMS error", "rms_reachable, closed")]
+    assert math.isclose(rms.mean, d.mean(), rel_tol=1e-12)
+    assert math.isclose(rms.high, d.mean() + half, rel_tol=1e-5)
+    assert rms.passed == (d.mean() + half < 0) and rms.n == 6
+    # adaptive only halves the error: a 5x cut is not shown
+    assert not found[("closed loop: RMS error", "rms_reachable, adaptive")].passed
+    assert found[("closed loop: worst finger", "worst rms_reachable, closed")].passed
+    assert found[("closed loop: amplitude limit", "max_command_um")].passed
+    assert found[("closed loop: no growing oscillation", "swings")].passed
+    assert found[("closed loop: added noise", "noise_fraction")].passed
+    # a run with a growing oscillation fails the claim
+    shaky = claims(_section(closed, closed, swings=40))
+    assert not [c for c in shaky if c.metric == "swings"][0].passed
 
 
-def test_oscillation_growth_sees_a_growing_alternation():
-    from app.measure.report_closed_loop import oscillation_growth
+def test_gain_swings_see_an_oscillation_that_grows_or_holds():
+    from app.measure.report_closed_loop import SWING, gain_swings
     k = np.arange(200)
     growing = 0.01 * (-1.0) ** k * 1.02 ** k
-    settling = 0.01 * (-1.0) ** k * 0.98 ** k
-    assert oscillation_growth(growing) > 1.0 > oscillation_growth(settling)
-    assert oscillation_growth(np.zeros(10)) == 0.0
+    big = np.flatnonzero(np.abs(np.diff(growing)) > np.log1p(SWING))
+    assert gain_swings(growing) == big.size > 50  # every swing past 25 %, to the end
+    held = np.clip(growing, -0.5, 0.5)  # at a clamp it holds
+    assert gain_swings(held) == np.count_nonzero(np.abs(np.diff(held)) > np.log1p(SWING))
+    assert gain_swings(0.5 * (-1.0) ** k * 0.4 ** k) < 6  # it settles
+    assert gain_swings(0.5 * (-1.0) ** k * 0.9 ** k) >= 6  # it rings: counted too
+    assert gain_swings(np.zeros(10)) == 0
+    noise = np.cumsum(np.random.default_rng(0).normal(0, 0.02, 2000))  # a damped loop's moves
+    assert gain_swings(noise) < 6

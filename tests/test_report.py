@@ -116,6 +116,17 @@ def test_report_writes_its_files(tmp_path, capsys):
     # the default stays continuous across a singular locus; the exact inverse jumps
     assert (modal["regularised: largest command step, finger b crossing a in 1 um steps"]
             < 0.01 < modal["exact: largest command step, finger b crossing a in 1 um steps"])
+    # issue 16: the closed-loop section on the scenes chosen, its claims in the list
+    loop = doc["closed_loop"]
+    assert set(loop["scenes"]) == {"grating-15mm"} and "adaptation" not in loop
+    assert set(loop["scenes"]["grating-15mm"]) == {"open", "closed", "adaptive"}
+    assert len(loop["scenes"]["grating-15mm"]["open"]["per_finger"]["rms_reachable"]) == 20
+    groups = {c["group"] for c in doc["claims"] if c["group"].startswith("closed loop")}
+    assert groups == {"closed loop: RMS error", "closed loop: worst finger",
+                      "closed loop: amplitude limit", "closed loop: no growing oscillation",
+                      "closed loop: added noise"}
+    assert "## Closed-loop friction" in markdown and "![closed_loop.png]" in markdown
+    assert (out / "closed_loop.png").stat().st_size > 10_000
 
 
 @pytest.mark.parametrize("argv, message", [

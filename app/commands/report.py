@@ -1,6 +1,8 @@
 """``frictex report``: speed against error over a matrix of scenes, motions, touch rates
 and renderer configurations (see ``app.measure.report_matrix`` for what a row measures,
-``app.measure.report_output`` for the files and ``app.measure.report_claims`` for the checked targets).
+``app.measure.report_output`` for the files and ``app.measure.report_claims`` for the checked targets),
+and closed-loop friction over a simulated population of fingers on the chosen scenes it
+covers (``app.measure.report_closed_loop``), fanned out the same way.
 
     frictex report --quick --out report/     # CI: under a minute
     frictex report --out report/             # the full matrix
@@ -94,13 +96,18 @@ def run(args: argparse.Namespace) -> int:
     if real_dir is not None:
         from app.measure.report_real import real_section
         real = real_section(real_dir, gratings)
+    closed_loop = _closed_loop(args, jobs)
     from app.measure.bench_replay import end_to_end
     doc = ro.write_json(rows, out / "report.json", args.quick, settings, modal,
                         modal_throughput(), draws, real,
-                        end_to_end(20.0 if args.quick else 120.0))
+                        end_to_end(20.0 if args.quick else 120.0), closed_loop)
     plots = ["error_vs_cost.png", "error_vs_period.png"]
     ro.plot_cost(rows, out / plots[0])
     ro.plot_period(rows, out / plots[1])
+    if closed_loop is not None:
+        from app.measure.report_closed_loop import plot as plot_loop
+        plots.append("closed_loop.png")
+        plot_loop(closed_loop, out / plots[-1])
     ro.write_markdown(doc, out / "report.md", plots)
     failed = [c for c in doc["claims"] if not c["passed"]]
     print(f"frictex report: {len(rows)} rows in {settings['wall_s']:.1f} s; "
@@ -113,3 +120,20 @@ def run(args: argparse.Namespace) -> int:
               file=sys.stderr)
         return 1
     return 0
+
+
+def _closed_loop(args: argparse.Namespace, jobs: int) -> dict | None:
+    """The closed-loop section on the chosen scenes it covers (None if it covers none),
+    fanned out like the matrix."""
+    from tqdm import tqdm
+
+    from app.measure import report_closed_loop as rcl
+    if not any(s in rcl.SCENES for s in args.scenes):
+        return None
+    bar = tqdm(total=rcl.runs_in(args.quick, args.scenes), desc="closed loop", unit="run",
+               disable=args.no_progress or None)
+    try:
+        return rcl.section(args.quick, workers=jobs, scenes=args.scenes,
+                           scheduler=args.scheduler, on_done=lambda result: bar.update(1))
+    finally:
+        bar.close()

@@ -85,6 +85,7 @@ class LoopStage:
         self.sink = sink
         self.state = pipeline.initial_state()
         self.log_c: list[float] = []  # the loop's gain after each block (loop modes)
+        self.first_mu0_s: float | None = None  # output time (s) the loop first knew mu0
 
     def process(self, k: int, samples, n: int):
         report = self.sink.report
@@ -93,6 +94,9 @@ class LoopStage:
             normal = float(report.normal_n.mean())
         out, self.state = self.pipeline.process(k, samples, self.state, n_blocks=n,
                                                 normal_force_n=normal, report=report)
-        if self.state.control is not None:
-            self.log_c.append(self.state.control.log_c)
+        control = self.state.control
+        if control is not None:
+            self.log_c.append(control.log_c)
+            if self.first_mu0_s is None and np.isfinite(control.mu0):
+                self.first_mu0_s = float(out.t_s[0])
         return out, out.commands_um

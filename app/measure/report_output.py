@@ -5,11 +5,13 @@
     {"report_version": 2, "quick": bool, "settings": {...}, "rows": [row, ...],
      "claims": [{"group", "scene", "motion", "metric", "text", "mean", "low", "high", "n",
                  "passed"}, ...],
-     "draws": {...}, "headline": {...}}
+     "draws": {...}, "headline": {...}, "closed_loop": {...} or null}
 
 Claims are computed on ``draws`` (``app.measure.report_seeds``), paired by draw, with a
 95 % interval (``app.measure.report_claims``); ``passed`` is true only where the interval
-excludes a loss.
+excludes a loss. ``closed_loop`` (``app.measure.report_closed_loop``): open loop,
+closed loop and closed loop with adaptation over a simulated population of fingers;
+its claims (groups "closed loop: ...") are in the same list, paired per finger.
 
 Each row (see ``app.measure.report_matrix``) has ``scene``, ``period_mm`` (null for scenes that
 are not one grating), ``motion``, ``touch_hz``, ``renderer``, ``output_hz``,
@@ -153,18 +155,25 @@ def headline(rows) -> dict:
 
 def write_json(rows, path: Path, quick: bool, settings: dict, modal: list[dict],
                modal_replay: dict, draws: dict, real: dict | None = None,
-               end_to_end: dict | None = None) -> dict:
+               end_to_end: dict | None = None, closed_loop: dict | None = None) -> dict:
     """``modal``: the speed and error figures of each modal inversion method
     (``app.measure.bench_modal``), under the key ``modal_inversion``; ``modal_replay``: two fingers
     with modal actuation in headless replay (``app.measure.bench_pipeline.modal_throughput``);
     ``draws``: the gratings under independent draws of motion (``app.measure.report_seeds``),
     on which the claims are computed; ``real``: the replayed real recordings
     (``app.measure.report_real``), or None; ``end_to_end``: whole replays in fresh
-    processes per output format (``app.measure.bench_replay.end_to_end``)."""
+    processes per output format (``app.measure.bench_replay.end_to_end``); ``closed_loop``:
+    the closed-loop section (``app.measure.report_closed_loop``), whose claims join the
+    list, or None."""
+    found = claims(draws)
+    if closed_loop is not None:
+        from app.measure.report_closed_loop import claims as loop_claims
+        found += loop_claims(closed_loop)
     doc = {"report_version": REPORT_VERSION, "quick": quick, "settings": settings,
-           "rows": rows, "claims": [asdict(c) for c in claims(draws)],
+           "rows": rows, "claims": [asdict(c) for c in found],
            "headline": headline(rows), "modal_replay": modal_replay,
-           "draws": draws, "real": real, "modal_inversion": modal, "end_to_end": end_to_end}
+           "draws": draws, "real": real, "modal_inversion": modal, "end_to_end": end_to_end,
+           "closed_loop": closed_loop}
     path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
     return doc
 
@@ -207,7 +216,10 @@ def write_markdown(doc: dict, path: Path, plots: list[str]) -> None:
               f"Each claim compares renderers on the same {doc['draws']['n']} draws of each "
               "motion (paired by draw): the mean difference and its 95 % interval. A claim "
               "**holds** only where the interval excludes a loss; otherwise it is **not "
-              "shown** (the draws do not settle it). " + NOT_CLAIMED, ""]
+              "shown** (the draws do not settle it). " + NOT_CLAIMED
+              + (" The groups 'closed loop: ...' compare friction control modes on the same "
+                 "simulated fingers, paired by finger (section Closed-loop friction)."
+                 if doc.get("closed_loop") is not None else ""), ""]
     groups: dict[str, list] = {}
     for c in doc["claims"]:
         groups.setdefault(c["group"], []).append(c)
@@ -311,5 +323,8 @@ def write_markdown(doc: dict, path: Path, plots: list[str]) -> None:
               "a singular locus (app/measure/bench_modal.py says how each figure is made):", ""]
     lines += _table(["figure", "value", "unit"],
                     [(f["label"], f"{f['value']:.4g}", f["unit"]) for f in doc["modal_inversion"]])
+    if doc.get("closed_loop") is not None:
+        from app.measure.report_closed_loop import markdown as loop_lines
+        lines += ["", *loop_lines(doc["closed_loop"])[:-1]]
     lines += ["", "## Plots", ""] + [f"![{p}]({p})" for p in plots]
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
