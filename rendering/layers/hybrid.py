@@ -231,7 +231,7 @@ def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, sna
     return offset, end[0]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _slew_kernel(bounds, target, restart, snap, fast, slow, start, lock, jump, back, hold,
                  travel, held_before, offset):
     """:func:`slew_offset` in one pass: writes ``offset`` (n,), returns the wrapped end
@@ -279,7 +279,7 @@ def _slew_kernel(bounds, target, restart, snap, fast, slow, start, lock, jump, b
     return wrapped, held
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _worked_off(fast, slow, travel, b, i, far, gap, held):
     """Correction (cycles, >= 0) of the segment starting at ``b`` by allowance index ``i``."""
     if held:
@@ -323,7 +323,7 @@ def smooth_rate(rate: np.ndarray, restart: np.ndarray, period_mm: float,
     return smoothed, end
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _smooth_kernel(rate, restart, limit, has_start, last, value, weight, smoothed):
     """:func:`smooth_rate`'s loop (``limit`` in cycles/s): writes ``smoothed``, returns
     the smoothed rate after the last sample."""
@@ -338,7 +338,7 @@ def _smooth_kernel(rate, restart, limit, has_start, last, value, weight, smoothe
     return value
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, has_before, before, axis,
                 layer_phase, limits, phase):
     """One finger's phase (cycles) for :meth:`HybridRenderer.render`, written to ``phase``.

@@ -51,7 +51,7 @@ def integrate_phase(rate_cycles: np.ndarray, dt_s: float, touch_id: np.ndarray,
     return phase, carry
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def phase_kernel(rate, dt_s, touch, has_start, prev_id, prev_phase, phase):
     """:func:`integrate_phase`'s loop, writing ``phase`` (n,) and returning the carry.
 

@@ -45,7 +45,7 @@ class SelectionState:
     holders: dict[int, tuple[int, int]] = field(default_factory=dict)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _roles(contact, key, rank, start, hysteresis, holder):
     """Row holding the role at each sample, written to ``holder`` (n,), -1 where no
     finger touches. key : (F, n), smaller is more extreme; rank : (F, n) touch rank for

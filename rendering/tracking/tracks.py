@@ -156,7 +156,7 @@ def _finger_steps(fs: FingerState, t, x, y, force, event, cfg: TrackerConfig, co
     return table, keep, end
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _steps_kernel(fs, history, t, x, y, force, event, cfg):
     """:func:`_finger_steps` in one compiled pass.
 
@@ -266,7 +266,7 @@ def _steps_kernel(fs, history, t, x, y, force, event, cfg):
     return keep, table, m_all - m, jumps, lo, win
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _pairwise(a, lo, n):
     """Sum of ``a[lo:lo + n]`` in the order numpy's ``sum`` adds a contiguous row
     (pairwise: 8 running sums for up to 128 values, halves above), so that the sums
@@ -297,7 +297,7 @@ def _pairwise(a, lo, n):
     return sums[0]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _block_sum(a, lo, n):
     """numpy's pairwise sum of up to 128 contiguous values (see :func:`_pairwise`)."""
     if n < 8:
@@ -387,7 +387,7 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
     return block, TrackerState(fingers=touching, touches=touches, **counters)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _expand(table, runs, steps, t_out, horizon):
     """The arrays of a :class:`FingerBlock` (in ``BLOCK_FIELDS`` order, each (F, n)) from
     each finger's piecewise-constant state columns.
