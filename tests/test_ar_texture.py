@@ -170,7 +170,7 @@ def test_the_toolkit_xml_form_reads_into_the_same_model():
 
 
 @pytest.mark.parametrize("text, message", [
-    (_xml(extra="<numMACoeff>3</numMACoeff>"), "ARMA models"),
+    (_xml(extra="<numMACoeff>3</numMACoeff>"), "model 1: <gain> missing"),
     ("<!DOCTYPE x [<!ENTITY a 'b'>]>" + _xml(), "DOCTYPE or ENTITY"),
     (_xml(tri=((1, 2, 5),)), "vertex numbers must be integers 1 to 4"),
     (_xml(tri=((1, 2, 2),)), "degenerate"),

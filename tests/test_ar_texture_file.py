@@ -24,7 +24,7 @@ def test_a_toolkit_model_file_loads(tmp_path):
 
 @pytest.mark.parametrize("xml, extra, message", [
     (None, "", r"scene\.toml:9: layer\[1\]\.model: \"wood\.xml\""),
-    (_xml(extra="<numMACoeff>2</numMACoeff>"), "", r"scene\.toml:9: layer\[1\]\.model: .*ARMA models"),
+    (_xml(extra="<numMACoeff>2</numMACoeff>"), "", r"scene\.toml:9: layer\[1\]\.model: .*<gain> missing"),
     (_xml(), "mu_mean = 0.5\n", r"scene\.toml:11: layer\[1\]\.mu_mean: mu_min 0\.6 < mu_mean 0\.5"),
     (_xml(), "seed = -1\n", r"scene\.toml:11: layer\[1\]\.seed"),
 ])
@@ -79,15 +79,22 @@ def _spectrum(lsf, variance, f, rate):
     return 2 * variance / (rate * np.abs(response) ** 2)
 
 
-def published_xml(rate=10_000.0, rate_tag=True, speed_unit="mm/s", sign=1.0, extra=""):
+def published_xml(rate=10_000.0, rate_tag=True, speed_unit="mm/s", sign=1.0, extra="", ma=None):
+    """The test's model as the toolkit writes a file; ``ma``: (Hz, radius) of a zero pair
+    of every vertex's B(z) and ``gain`` (an ARMA model, as the toolkit's 1 kHz files)."""
     speed_scale = 1e-3 if speed_unit == "m/s" else 1.0
     values = lambda xs, fmt="{:.6f}": "".join(f"<value>{fmt.format(x)}</value>" for x in xs)  # noqa: E731
     models = ""
     for k, (peaks, var, s, f) in enumerate(zip(PEAKS, VARS, SPEEDS, FORCES), start=1):
         lsf = _lsf(peaks, rate)
         coeff = _poly(lsf) * np.r_[1.0, np.full(4, sign)]
+        moving = ""
+        if ma is not None:
+            (zero, gain), mlsf = ma, _lsf([ma[0]], rate)
+            moving = (f"<MAcoeff>{values(_poly(mlsf), '{:.20f}')}</MAcoeff><MAlsf>{values(mlsf)}"
+                      f"</MAlsf><gain>{gain:.6f}</gain>")
         models += (f"<model><modNum>{k}</modNum><ARcoeff>{values(coeff, '{:.20f}')}</ARcoeff>"
-                   f"<ARlsf>{values(lsf)}</ARlsf><var>{var:.10f}</var>"
+                   f"<ARlsf>{values(lsf)}</ARlsf>{moving}<var>{var:.10f}</var>"
                    f"<speedMod>{s * speed_scale:.6f}</speedMod><forceMod>{f:.6f}</forceMod></model>")
     tris = "".join(f'<tri type="array">{values(t, "{}")}</tri>' for t in ((1, 2, 3), (2, 4, 3)))
     return (f'<?xml version="1.0" encoding="utf-8"?>\n<modelSet texture="1"><material>test</material>'
@@ -96,7 +103,8 @@ def published_xml(rate=10_000.0, rate_tag=True, speed_unit="mm/s", sign=1.0, ext
             + f"<mu>0.3</mu><numMod>4</numMod><numTri>2</numTri><maxSpeed>{250 * speed_scale:.6f}</maxSpeed>"
             f"<maxForce>3</maxForce><speedList type=\"array\">{values(np.array(SPEEDS) * speed_scale)}"
             f"</speedList><forceList type=\"array\">{values(FORCES)}</forceList>{tris}"
-            f"<numARCoeff>4</numARCoeff><numMACoeff>0</numMACoeff>{extra}{models}</modelSet>")
+            f"<numARCoeff>4</numARCoeff><numMACoeff>{0 if ma is None else 2}</numMACoeff>{extra}"
+            f"{models}</modelSet>")
 
 
 @pytest.mark.parametrize("vertex", [0, 1, 3])
@@ -132,9 +140,33 @@ def test_the_sample_rate_and_speed_unit_a_file_states_are_used(tmp_path):
     (published_xml().replace("<SpeedUnits>mm/s", "<SpeedUnits>in/s"), r"<SpeedUnits> is 'in/s', expected one of mm/s, m/s"),
     (published_xml().replace("<ForceUnits>N", "<ForceUnits>lbf"), r"<ForceUnits> is 'lbf'"),
     (published_xml(rate=10.0), r"<SampleRate> is 10 Hz, expected 100 to 1e\+06"),
-    (published_xml().replace("<numMACoeff>0", "<numMACoeff>17"), r"ARMA models .*resampled for its 1 kHz renderer"),
+    (published_xml(ma=((300, 0.8), 1.5)).replace("gain>", "gaim>"), r"model 1: <gain> missing"),
+    (published_xml(ma=((300, 0.8), 1.5)).replace("<numMACoeff>2", "<numMACoeff>3"),
+     r"model 1: MAlsf must be 3 increasing values"),
 ])
 def test_a_file_against_the_published_form_is_one_line_error(text, message):
     with pytest.raises(TextureError, match=message) as info:
         parse_hatt_xml(text, "wood.xml")
     assert "\n" not in str(info.value) and str(info.value).startswith("wood.xml: ")
+
+
+def test_an_arma_model_renders_its_spectrum_within_1_db(tmp_path):
+    """ARMA, as the toolkit's resampled files are: y = gain B(z) / A(z) e (its renderer
+    adds gain * (e[n] + sum b_i e[n-i])). The spectrum var gain^2 |B|^2 / (fs |A|^2),
+    computed here, has a notch at the zero (300 Hz) that an AR model of the same order
+    could not make; frictex's AR(100) fit renders it within 1 dB over 20-800 Hz."""
+    zero, gain = (300.0, 0.8), 1.5
+    (tmp_path / "wood.xml").write_text(published_xml(ma=(zero, gain)), encoding="utf-8")
+    layer = load_scene(write(tmp_path, BODY)).layers[0]
+    mu, state = _synthesise(ArTextureRenderer(layer, 10_000.0), SPEEDS[1], FORCES[1], 60.0)
+    assert state.limited == 0
+
+    def expected(f):
+        b = _poly(_lsf([zero], 1e4))
+        response = np.exp(-2j * np.pi * np.outer(f, np.arange(3)) / 1e4) @ b
+        return 0.03 ** 2 * gain ** 2 * np.abs(response) ** 2 * _spectrum(_lsf(PEAKS[1], 1e4), VARS[1], f, 1e4)
+
+    err = _db_error(mu, expected)
+    assert err.max() < 1.0, f"worst {err.max():.2f} dB"
+    without_b = _db_error(mu, lambda f: 0.03 ** 2 * gain ** 2 * _spectrum(_lsf(PEAKS[1], 1e4), VARS[1], f, 1e4))
+    assert without_b.max() > 3.0  # the zeros shaped it

@@ -26,6 +26,11 @@ from numba import njit
 from rendering.tracking.tracks import FingerBlock
 from textures.hatt import blend_at
 
+# The kernels below are cached by numba (cache=True) with textures.hatt's blend_at and
+# lsf_to_poly compiled into them, and numba's cache notices changes to this file only:
+# after changing those functions, change this file too (the LSF conversion's rewrite on
+# the unit circle did not reach the renderer until this comment was added).
+
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _M1, _M2 = np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB)
 _S30, _S27, _S31, _S11 = np.uint64(30), np.uint64(27), np.uint64(31), np.uint64(11)
