@@ -27,8 +27,8 @@ RATE = 10_000.0
 class Line:
     """A device core behind a pyserial-like port. Its clock is the wall clock (advanced
     whenever the host reads or writes). ``mute()``: the device's replies are lost until
-    the host writes a Hello. ``unplug()``: every call fails, and the first reopen after
-    it too (the port comes back on the second)."""
+    the host handshakes again (writes a Hello). ``unplug()``: every call fails, and the
+    first reopen after it too (the port comes back on the second)."""
 
     def __init__(self, core):
         self.core = core
@@ -37,7 +37,7 @@ class Line:
         self.lock = threading.Lock()
         self.muted = self.unplugged = False
         self.failed_opens = 0
-        self.played_at_mute = self.played_at_hello = None
+        self.played_at_mute = self.played_at_recovery = None
         self._watch = p.Decoder()
         self.timeout = READ_WAIT_S
 
@@ -82,9 +82,8 @@ class Line:
             self._check()
             self._advance()
             hello = any(isinstance(f.message, p.Hello) for f in self._watch.feed(data))
-            if hello and self.played_at_hello is None and self.played_at_mute is not None:
-                self.played_at_hello = self._played()
-            if hello:
+            if hello and self.played_at_recovery is None and self.played_at_mute is not None:
+                self.played_at_recovery = self._played()
                 self.muted = False
             reply = self.core.receive(data, time.monotonic() - self.t0)
             if not self.muted:
@@ -133,7 +132,7 @@ def test_samples_played_before_a_recovery_or_reconnect_are_played_not_lost(fault
     index, values = rec.played()
     # the fault happened, and the device played samples the host had not seen reported
     assert status["recoveries" if fault == "recovery" else "reconnects"] == 1
-    assert line.played_at_hello > line.played_at_mute
+    assert line.played_at_recovery > line.played_at_mute
     # every sample the device played is counted played, once; nothing was lost on the wire
     assert len(np.unique(index)) == len(index)
     np.testing.assert_allclose(values[:, 0], signal[index], atol=p.AMPLITUDE_STEP_UM / 2)

@@ -217,25 +217,26 @@ class CommandSink:
         """Send Hello (in a version 1 frame: every device answers it) until Info comes
         back; the device flushes its buffer and restarts its counters on Hello.
 
-        If a session is open (a recovery or a reconnect), settle it first: Stop without
-        drain and a Heartbeat go out before the first Hello, so the Status answering
-        that Heartbeat (read here, before the Info) counts every sample of the session as
-        played, flushed, refused or lost; nothing plays between it and the Hello.
+        If a session is open (a recovery or a reconnect), a Heartbeat goes out just before
+        the Hello, in the same write (again with each resent Hello until it is answered):
+        the Status answering it (read here, before the Info) settles the session with the
+        device's counters as of the Hello (PROTOCOL.md 6.1).
         """
         decoder = p.Decoder()
         deadline = time.monotonic() + HANDSHAKE_TIMEOUT_S
-        settle = b""
-        if self._ledger.reporting:
-            settle = self._frame(p.Stop(drain=False)) + self._heartbeat()
+        settling = None  # token of that Heartbeat; _handle pops it from _marks when answered
         tries = 0
         while time.monotonic() < deadline:
             if tries:
                 self._counts["retries"] += 1
             tries += 1
+            settle = b""
+            if self._ledger.reporting and (settling is None or settling in self._marks):
+                settle = self._heartbeat()
+                settling = self._token
             # a leading delimiter ends whatever partial frame the device was holding
             port.write(b"\x00" + settle
                        + self._frame(p.Hello(int(PREFILL_S * self.rate_hz)), 1))
-            settle = b""
             until = min(deadline, time.monotonic() + HANDSHAKE_RETRY_S)
             while time.monotonic() < until:
                 for frame in decoder.feed(self._read(port)):

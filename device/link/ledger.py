@@ -159,9 +159,9 @@ class Ledger:
     or buffered whose fate is not known yet (0 once the link has closed after a drained
     Stop). Host causes are exact; device causes come from the device's counters read
     against the host's marks; ``lost`` is the rest (corrupted or dropped on the wire,
-    refused, or held or in flight when a session ended without a Status settling it: the
-    host sends Stop and a Heartbeat before the Hello that ends one, so a device that
-    answers settles it exactly). With a version 1 device,
+    refused, or held or in flight when a session ended: the host sends a Heartbeat just
+    before the Hello that ends one, so samples played up to that Hello count as played).
+    With a version 1 device,
     ``played``, ``flushed`` and ``lost`` are unknown (None).
     """
 
