@@ -22,16 +22,18 @@ Measured, over the samples where the finger touches and slides (>= 5 mm/s):
   ``NOISE_SCENES`` only, as a
   fraction of the mean friction force, against the Weber fraction 0.11 for detecting a
   change of friction (Gueorguiev et al., J. R. Soc. Interface 14 (2017) 20170641);
-- ``swings``: the longest run of successive swings of the loop's log gain (its
-  moves between turning points) each over a 25 % change of the gain and at least half
-  the one before: an oscillation that grows, holds or rings (dies out slower than
-  halving each swing), which an unstable loop keeps up
-  at its clamp (tens of swings; ``tests/test_closed_loop.py`` runs one 1.5x past the
-  gain margin), where a damped loop's gain moves by a few percent per block;
-  ``max_command_um``: the largest amplitude commanded;
+- ``swings``: the longest run of successive swings of the loop's log gain (its moves
+  between turning points) each over a 25 % change of the gain and at least half the one
+  before: an oscillation that grows, holds or rings (dies out slower than halving each
+  swing), which an unstable loop keeps up at its clamp (tens of swings;
+  ``tests/test_closed_loop.py`` runs one 1.5x past the gain margin), where a damped
+  loop's gain moves by a few percent per block; ``max_command_um``: the largest
+  amplitude commanded;
 - ``first_mu0_s``: when the loop first measured mu0 (the plate still under a sliding
   finger; until then it is open loop, having nothing to compare with), and
-  ``rms_after_mu0``: the reachable RMS from then on;
+  ``rms_after_mu0``: the reachable RMS from then on, beside open loop's over the same
+  samples of the same finger (``cumulative``: an open run's squared error so far at
+  each block, kept out of the JSON);
 - ``adapted_gap``: after the adaptive run, seed 003's eq 2 with the adapted (b, k)
   against the true finger at the run's end, over the amplitudes 0..limit (relative RMS);
   the adaptation study runs each finger ``ADAPT_S`` on ``ADAPT_SCENE`` (whose bump asks
