@@ -21,7 +21,6 @@ SECTIONS = {
     "link": "app.measure.bench_link",
     "visual": "app.measure.bench_visual",
     "modal": "app.measure.bench_modal",
-    "closed-loop": "app.measure.bench_closed_loop",
 }
 
 
