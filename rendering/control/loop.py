@@ -16,9 +16,11 @@ with several fingers down the loop holds its state and the block is fed forward 
    ``min_reduction``, leaving out samples reading mu'_m < ``min_mu``: no finger of the
    model gets that low, a finger that stuck does). An integrator on the log of a
    gain c, ``log c <- log c - ki log g``, makes the feed-forward ask for
-   ``1 - c (1 - mu'_target)``. In the log domain the loop gain is ``ki`` whatever the
-   finger (g = G c for a finger G times more or less slippery than the model), which is
-   what the margins of ``rendering.control.margins`` are stated for.
+   ``1 - c (1 - mu'_target)``. In the log domain the loop gain is ``ki`` for a finger
+   G times more or less slippery than the model (g = G c), ``s ki`` for one whose
+   reduction grows s times as fast with the reduction asked; the margins of
+   ``rendering.control.margins`` (with the sensor chain's and the report's delays) say
+   how large s may be.
    Anti-windup: c does not grow in a block where the amplitude limit cut the command,
    nor move at all while the finger rests (no sliding, no friction to measure); it
    stays within ``[1/4, 4]``.
