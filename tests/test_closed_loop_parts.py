@@ -133,3 +133,16 @@ def test_gain_swings_see_an_oscillation_that_grows_or_holds():
     assert gain_swings(np.zeros(10)) == 0
     noise = np.cumsum(np.random.default_rng(0).normal(0, 0.02, 2000))  # a damped loop's moves
     assert gain_swings(noise) < 6
+
+
+def test_population_slopes_against_the_closed_form():
+    """R = (1 - A)(1 - exp(-b w)), so d log R / dw = b / (exp(b w) - 1) whatever A: the
+    slope factor is that of the finger's b (speed-reduced) over the model's."""
+    from app.measure.report_closed_loop import population_slopes
+    from device.finger import draw_finger
+    finger = draw_finger(1)
+    w = np.linspace(0.01, 2.5, 250)[:, None]
+    b = finger.b_per_um / (1 + np.linspace(0.0, 200.0, 11)[None, :] / finger.v_c_mm_s)
+    s = (b / np.expm1(b * w)) / (1.67 / np.expm1(1.67 * w))
+    lo, hi = population_slopes(1, FrictionParams(), 2.5)
+    assert_allclose([lo, hi], [s.min(), s.max()], rtol=1e-6)

@@ -318,9 +318,32 @@ def summarise(values: dict, fingers: int, duration_s: float) -> dict:
                     row[mode]["rms_reachable_pop"], 1e-12)
                 row[mode]["worst_improves"] = row[mode]["worst"] < row["open"]["worst"]
         scenes[scene] = row
+    device = load(SCENES[0]).device
     return {"fingers": fingers, "duration_s": duration_s, "rate_hz": RATE_HZ,
             "block": BLOCK, "weber_fraction": WEBER_FRACTION,
-            "margins": margins(rate_hz=RATE_HZ, block=BLOCK), "scenes": scenes}
+            "margins": margins(rate_hz=RATE_HZ, block=BLOCK),
+            "slope_range": population_slopes(fingers, device.friction,
+                                             device.amplitude_limit_um),
+            "scenes": scenes}
+
+
+def population_slopes(fingers: int, params, limit_um: float) -> tuple[float, float]:
+    """The range of s = d log R_finger / d log R_model (``rendering.control.margins``: the
+    factor a finger puts on the loop gain) over fingers 1..``fingers``, amplitudes up to
+    ``limit_um``, normal forces 0.3-0.75 N, speeds 0-200 mm/s, at the run's start and
+    after 60 s of moisture; R = 1 - mu', derivatives by central differences (1e-5 um)."""
+    w = np.linspace(0.01, limit_um, 250)[:, None, None]
+    force = np.linspace(0.3, 0.75, 10)[None, :, None]
+    speed = np.linspace(0.0, 200.0, 11)[None, None, :]
+    h = 1e-5
+
+    def log_slope(mu):  # d log R / dw
+        return (np.log1p(-mu(w + h)) - np.log1p(-mu(w - h))) / (2 * h)
+
+    model = log_slope(lambda x: forward_mu(x, force, params))
+    slopes = [log_slope(lambda x: true_mu(x, force, speed, t, draw_finger(f))) / model
+              for f in range(1, fingers + 1) for t in (0.0, 60.0)]
+    return float(min(s.min() for s in slopes)), float(max(s.max() for s in slopes))
 
 
 def claims(section: dict) -> list[Claim]:
@@ -398,6 +421,7 @@ def markdown(section: dict) -> list[str]:
     """The section's lines for report.md (its claims are in the report's list)."""
     m = section["margins"]
     live = m["live"][0]
+    lo, hi = section["slope_range"]
     lines = ["## Closed-loop friction", "",
              f"{section['fingers']} simulated fingers (device/finger.py), {section['duration_s']:g} s "
              f"of human-like sliding each, {section['rate_hz']:g} Hz in blocks of {section['block']} "
@@ -445,9 +469,17 @@ def markdown(section: dict) -> list[str]:
                   f"{m['gain_margin']:.2f}, phase margin {m['phase_margin_deg']:.0f} deg, delay "
                   f"margin {m['delay_margin_blocks']:.1f} blocks. With a report "
                   f"{live['delay_blocks']} blocks late: gain margin {live['gain_margin']:.2f}, "
-                  f"phase margin {live['phase_margin_deg']:.0f} deg. A finger whose friction "
-                  "falls s times faster with the amplitude than the model's multiplies the loop "
-                  "gain by s: the gain margin is the largest s the loop tolerates. Noise "
+                  f"phase margin {live['phase_margin_deg']:.0f} deg. A finger whose reduction "
+                  "of friction grows s times as fast as the model's multiplies the loop gain by "
+                  "s, so the gain margin is the largest s the loop tolerates; over this "
+                  f"population s ranges {lo:.2f}-{hi:.2f} (every amplitude to the limit, "
+                  "0.3-0.75 N, 0-200 mm/s, dry and after 60 s of moisture): "
+                  + ("covered" if hi < m["gain_margin"] else "NOT covered")
+                  + " with the report before the next block; with a report "
+                  f"{live['delay_blocks']} blocks late "
+                  + ("covered" if hi < live["gain_margin"] else
+                     f"not (ki would have to be at most {m['ki'] * live['gain_margin'] / hi:.3f})")
+                  + ". Noise "
                   f"threshold: Weber fraction {section['weber_fraction']:g} for a change of "
                   "friction (Gueorguiev et al., J. R. Soc. Interface 2017).", ""]
     return lines
