@@ -236,6 +236,15 @@ def test_a_high_order_model_refitted_at_a_higher_rate_keeps_its_spectrum(rate, b
     assert np.abs(err).max() < bound_db, f"worst {np.abs(err).max():.2f} dB"
 
 
+def test_a_silent_vertex_is_refitted_silent():
+    """The toolkit's zero-speed vertices have var 0: refitted at another rate they stay
+    silent and finite (the fit of a zero spectrum divided by zero)."""
+    model = model_from_coefficients(SPEEDS, FORCES, TRIANGLES, COEFFS, [0.0] + VARIANCES[1:])
+    refit = model.resampled(5_000.0)
+    assert np.isfinite(refit.lsf).all() and refit.variances[0] == 0.0
+    assert (refit.variances[1:] > 0).all()
+
+
 def test_an_a_whose_lsfs_rounding_hides_is_refused():
     a = np.ones(1)
     for _ in range(13):
