@@ -4,7 +4,7 @@ and renderer configurations (see ``app.measure.report_matrix`` for what a row me
 and closed-loop friction over a simulated population of fingers on the chosen scenes it
 covers (``app.measure.report_closed_loop``), fanned out the same way.
 
-    frictex report --quick --out report/     # CI: under a minute
+    frictex report --quick --out report/     # CI: a few minutes on one core
     frictex report --out report/             # the full matrix
 
 Exit status: 0 the report was written (whatever its claims say: report.md lists each
@@ -31,7 +31,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", default="report", metavar="DIR",
                         help="folder for report.md, report.json and the plots (default: report)")
     parser.add_argument("--quick", action="store_true",
-                        help="the small matrix (50 Hz touch, three motions): under a minute")
+                        help="the small matrix (50 Hz touch, three motions) and 4 s closed-loop "
+                             "runs: a few minutes on one core")
     parser.add_argument("--scenes", nargs="+", metavar="NAME", default=list(rm.SCENES),
                         help=f"bundled scenes to include (default: {' '.join(rm.SCENES)})")
     parser.add_argument("--jobs", type=positive_int, default=None, metavar="N",
