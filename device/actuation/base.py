@@ -23,6 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,13 +56,25 @@ def touch_rank(contact: np.ndarray, touch_start: np.ndarray) -> np.ndarray:
         0 for the finger touching longest, 1 for the next, ...; -1 where not touching.
         Equal start times are ordered by row.
     """
-    f = contact.shape[0]
-    key = np.where(contact, touch_start, np.inf)
-    before = key[None, :, :] < key[:, None, :]                          # [i, j]: j before i
-    lower_row = np.arange(f)[None, :] < np.arange(f)[:, None]
-    before |= (key[None, :, :] == key[:, None, :]) & lower_row[:, :, None]
-    rank = np.count_nonzero(before & contact[None, :, :], axis=1)
-    return np.where(contact, rank, -1)
+    return _touch_rank(np.asarray(contact, dtype=np.bool_), np.asarray(touch_start, dtype=np.float64))
+
+
+@njit(cache=True, nogil=True)
+def _touch_rank(contact, touch_start):
+    """:func:`touch_rank`: finger f's rank counts the fingers j touching with an earlier
+    start, or the same start and j < f."""
+    f_count, n = contact.shape
+    rank = np.full((f_count, n), -1, dtype=np.int64)
+    for i in range(n):
+        for f in range(f_count):
+            if contact[f, i]:
+                r = 0
+                for j in range(f_count):
+                    if contact[j, i] and (touch_start[j, i] < touch_start[f, i]
+                                          or (touch_start[j, i] == touch_start[f, i] and j < f)):
+                        r += 1
+                rank[f, i] = r
+    return rank
 
 
 def primary_finger(contact: np.ndarray, touch_start: np.ndarray) -> np.ndarray:

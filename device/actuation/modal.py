@@ -39,6 +39,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from device.structures.beam import ModesError
 from device.actuation.bounded_two import bounded_two
@@ -82,11 +83,32 @@ def forward(phi_fingers, modal_um) -> np.ndarray:
 
     Also any matrix applied to a batch of vectors (leading axes broadcast)."""
     phi, modal = np.asarray(phi_fingers), np.asarray(modal_um)
-    # a sum over the few modes, term by term: several times faster than einsum here
-    out = phi[..., 0] * modal[..., None, 0]
-    for j in range(1, phi.shape[-1]):
-        out = out + phi[..., j] * modal[..., None, j]
-    return out
+    if np.iscomplexobj(phi):  # numpy's SIMD complex products fuse their roundings: kept
+        out = phi[..., 0] * modal[..., None, 0]
+        for j in range(1, phi.shape[-1]):
+            out = out + phi[..., j] * modal[..., None, j]
+        return out
+    batch = np.broadcast_shapes(phi.shape[:-2], modal.shape[:-1])
+    m, p = phi.shape[-2:]
+    phi3 = (phi.reshape(1, m, p) if phi.ndim == 2
+            else np.broadcast_to(phi, batch + (m, p)).reshape(-1, m, p))
+    modal2 = np.broadcast_to(modal, batch + (p,)).reshape(-1, p)
+    out = np.empty((modal2.shape[0], m), dtype=np.result_type(phi, modal))
+    _forward_kernel(phi3, modal2, out)
+    return out.reshape(batch + (m,))
+
+
+@njit(cache=True, nogil=True)
+def _forward_kernel(phi, modal, out):
+    """out[k] = phi[k or 0] @ modal[k] for real phi, summed over the modes in order; a
+    real factor enters a complex product as x + 0j, as in numpy."""
+    for k in range(out.shape[0]):
+        kp = 0 if phi.shape[0] == 1 else k
+        for i in range(out.shape[1]):
+            acc = phi[kp, i, 0] * modal[k, 0]
+            for j in range(1, phi.shape[2]):
+                acc = acc + phi[kp, i, j] * modal[k, j]
+            out[k, i] = acc
 
 
 def magnitude(z) -> np.ndarray:
@@ -94,7 +116,17 @@ def magnitude(z) -> np.ndarray:
     which goes through scalar ``hypot`` and is ~10x slower (amplitudes in um never
     over- or underflow when squared)."""
     z = np.asarray(z)
-    return np.sqrt(z.real * z.real + z.imag * z.imag)
+    if not np.iscomplexobj(z):
+        return np.sqrt(z * z + 0.0)
+    out = np.empty(z.shape)
+    _magnitude_kernel(z.reshape(-1), out.reshape(-1))
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _magnitude_kernel(z, out):
+    for i in range(z.size):
+        out[i] = np.sqrt(z[i].real * z[i].real + z[i].imag * z[i].imag)
 
 
 def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=None,
@@ -146,14 +178,7 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
 
     limited = np.zeros(commands.shape[:-1], dtype=bool)
     if limits is not None:
-        ratios = magnitude(commands) / limits
-        over = ratios[..., 0]  # the largest ratio, column by column (max along a short
-        for j in range(1, ratios.shape[-1]):  # last axis is the slow case of np.max)
-            over = np.maximum(over, ratios[..., j])
-        limited = over > 1
-        scale = 1 / np.maximum(over, 1)
-        commands = commands * scale[..., None]
-        modal = modal * scale[..., None]
+        commands, modal, limited = _scale_to_limits(commands, modal, limits)
         if method == "bounded" and np.any(limited):
             a_inv = np.linalg.inv(a)
             m_cmd = phi[limited] @ a_inv
@@ -163,6 +188,42 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
     achieved = forward(phi, modal)
     return ModalSolution(modal, commands, achieved, magnitude(achieved - wanted),
                          limited, capped, ratio)
+
+
+def _scale_to_limits(commands, modal, limits):
+    """Commands and modal amplitudes scaled by 1 / max(1, max_j |c_j| / limit_j), and
+    where that was below 1 (module docstring); any leading axes."""
+    batch = commands.shape[:-1]
+    c = np.ascontiguousarray(commands, dtype=np.complex128).reshape(-1, commands.shape[-1])
+    w = np.ascontiguousarray(modal, dtype=np.complex128).reshape(-1, modal.shape[-1])
+    c_out, w_out, limited = np.empty_like(c), np.empty_like(w), np.empty(len(c), dtype=np.bool_)
+    _scale_kernel(c, w, limits, c_out, w_out, limited)
+    return (c_out.reshape(batch + c.shape[-1:]), w_out.reshape(batch + w.shape[-1:]),
+            limited.reshape(batch))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _scale_kernel(commands, modal, limits, c_out, w_out, limited):
+    """:func:`_scale_to_limits` in one pass: the numpy operations it replaced, in their
+    order (np.maximum's NaN rule; the real scale enters complex products as s + 0j)."""
+    for k in range(commands.shape[0]):
+        over = 0.0
+        for j in range(commands.shape[1]):
+            c = commands[k, j]
+            ratio = np.sqrt(c.real * c.real + c.imag * c.imag) / limits[j]
+            over = ratio if j == 0 else _maximum(over, ratio)
+        limited[k] = over > 1
+        scale = complex(1 / _maximum(over, 1.0), 0.0)
+        for j in range(commands.shape[1]):
+            c_out[k, j] = commands[k, j] * scale
+        for j in range(modal.shape[1]):
+            w_out[k, j] = modal[k, j] * scale
+
+
+@njit(cache=True, nogil=True)
+def _maximum(a, b):
+    """np.maximum of two floats: the larger, or NaN if either is."""
+    return a if (a >= b or a != a) else b
 
 
 def _gains_svd(phi, wanted, rcond: float, regularised: bool):
@@ -202,31 +263,47 @@ def _gains_2x2(phi, wanted, rcond: float, regularised: bool):
     (tests/test_speedups.py).
     """
     batch = phi.shape[:-2]
-    phi, wanted = phi.reshape(-1, 2, 2), wanted.reshape(-1, 2)
-    a, b, c, d = phi[:, 0, 0], phi[:, 0, 1], phi[:, 1, 0], phi[:, 1, 1]
-    q = np.sqrt(((a + d) / 2) ** 2 + ((c - b) / 2) ** 2)
-    r = np.sqrt(((a - d) / 2) ** 2 + ((c + b) / 2) ** 2)
-    s1, s2 = q + r, np.abs(q - r)
-    threshold = rcond * s1
-    full = ((s2 >= threshold) if regularised else (s2 > threshold)) & (s2 > 0)
-    ratio = np.divide(s2, s1, out=np.zeros(s1.shape), where=s1 > 0)
-    # the real gain matrix G, W_M = G W_f: the inverse where every gain is 1/s
-    inv_det = np.divide(1.0, a * d - b * c, out=np.zeros(a.shape), where=full)
-    g = [[d * inv_det, -b * inv_det], [-c * inv_det, a * inv_det]]
-    rest = ~full & (s1 > 0)
-    if np.any(rest):  # h(A) Phi^T = alpha Phi^T + beta Phi^T (Phi Phi^T)
-        b00, b01, b11 = a * a + b * b, a * c + b * d, c * c + d * d
-        with np.errstate(divide="ignore", invalid="ignore"):  # s1 = 0 or full: not kept
+    modal, capped, ratio = _gains_2x2_kernel(phi.reshape(-1, 2, 2), wanted.reshape(-1, 2),
+                                             rcond, regularised)
+    return modal.reshape(batch + (2,)), capped.reshape(batch), ratio.reshape(batch)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _gains_2x2_kernel(phi, wanted, rcond, regularised):
+    """:func:`_gains_2x2` on (k, 2, 2) and (k, 2), one pass; the numpy operations it
+    replaced, in their order (``W_M = G W_f`` as complex products, G + 0j)."""
+    k = phi.shape[0]
+    modal = np.empty((k, 2), dtype=np.complex128)
+    capped = np.empty(k, dtype=np.bool_)
+    ratio = np.zeros(k)
+    for i in range(k):
+        a, b, c, d = phi[i, 0, 0], phi[i, 0, 1], phi[i, 1, 0], phi[i, 1, 1]
+        e, h = (a + d) / 2, (c - b) / 2
+        f, g = (a - d) / 2, (c + b) / 2
+        q = np.sqrt(e * e + h * h)
+        r = np.sqrt(f * f + g * g)
+        s1, s2 = q + r, abs(q - r)
+        threshold = rcond * s1
+        full = ((s2 >= threshold) if regularised else (s2 > threshold)) and s2 > 0
+        if s1 > 0:
+            ratio[i] = s2 / s1
+        inv_det = 1.0 / (a * d - b * c) if full else 0.0
+        g00, g01, g10, g11 = d * inv_det, -b * inv_det, -c * inv_det, a * inv_det
+        if not full and s1 > 0:  # h(A) Phi^T = alpha Phi^T + beta Phi^T (Phi Phi^T)
+            b00, b01, b11 = a * a + b * b, a * c + b * d, c * c + d * d
             lam1 = s1 * s1
             h2 = 1.0 / (threshold * threshold) if regularised else 0.0
             beta = (1.0 / lam1 - h2) / (4.0 * q * r)
             alpha = 1.0 / lam1 - beta * lam1
-            for i, (x0, x1) in enumerate(((a, c), (b, d))):  # rows of Phi^T
-                g[i][0] = np.where(rest, alpha * x0 + beta * (x0 * b00 + x1 * b01), g[i][0])
-                g[i][1] = np.where(rest, alpha * x1 + beta * (x0 * b01 + x1 * b11), g[i][1])
-    w0, w1 = wanted[:, 0], wanted[:, 1]
-    modal = np.stack((g[0][0] * w0 + g[0][1] * w1, g[1][0] * w0 + g[1][1] * w1), axis=-1)
-    return modal.reshape(batch + (2,)), (~full).reshape(batch), ratio.reshape(batch)
+            g00 = alpha * a + beta * (a * b00 + c * b01)
+            g01 = alpha * c + beta * (a * b01 + c * b11)
+            g10 = alpha * b + beta * (b * b00 + d * b01)
+            g11 = alpha * d + beta * (b * b01 + d * b11)
+        w0, w1 = wanted[i, 0], wanted[i, 1]
+        modal[i, 0] = complex(g00, 0.0) * w0 + complex(g01, 0.0) * w1
+        modal[i, 1] = complex(g10, 0.0) * w0 + complex(g11, 0.0) * w1
+        capped[i] = not full
+    return modal, capped, ratio
 
 
 def _bounded_commands(m_cmd, wanted, start, limits) -> np.ndarray:

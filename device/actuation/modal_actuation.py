@@ -35,6 +35,7 @@ import string
 from collections.abc import Callable
 
 import numpy as np
+from numba import njit
 
 from device.actuation.base import Actuated, touch_rank
 from device.structures.beam import FreeFreeBeam, ModesError
@@ -111,19 +112,11 @@ class ModalActuation:
             at the structure's edge.
         """
         contact = fingers.contact
-        n = contact.shape[1]
         p = self.n_modes
         x, y, off = self.structure_position(fingers.x_pred, fingers.y_pred)
         phi_all = self.shapes(x, y)                                     # (F, n, p)
         rank = touch_rank(contact, fingers.touch_start)                 # (F, n)
-        phi = np.zeros((n, p, p))
-        wanted = np.zeros((n, p))
-        served = contact & (rank < p)
-        for f in range(contact.shape[0]):  # finger f fills row rank[f] where it is served
-            for row in range(p):
-                at = served[f] & (rank[f] == row)
-                np.copyto(phi[:, row, :], phi_all[f], where=at[:, None])
-                np.copyto(wanted[:, row], wanted_um[f], where=at)
+        phi, wanted = _serve_rows(phi_all, np.asarray(wanted_um, dtype=np.float64), rank, p)
         sol = solve(phi, wanted, self.method, actuators=self.actuators, limits_um=self.limits_um,
                     rcond=self.rcond)
         achieved = magnitude(forward(np.swapaxes(phi_all, 0, 1), sol.modal_um)).T
@@ -135,6 +128,22 @@ class ModalActuation:
                         achieved_um=np.where(contact, achieved, 0.0),
                         limited=int(np.count_nonzero(sol.limited)),
                         off_structure=int(np.count_nonzero(off & contact)))
+
+
+@njit(cache=True, nogil=True)
+def _serve_rows(phi_all, wanted_um, rank, p):
+    """The padded p x p systems (n, p, p) and wanted amplitudes (n, p): finger f fills
+    row rank[f] where 0 <= rank[f] < p (step 2 of the module docstring); other rows 0."""
+    f_count, n = rank.shape
+    phi = np.zeros((n, p, p))
+    wanted = np.zeros((n, p))
+    for f in range(f_count):
+        for i in range(n):
+            row = rank[f, i]
+            if 0 <= row < p:
+                phi[i, row, :] = phi_all[f, i, :]
+                wanted[i, row] = wanted_um[f, i]
+    return phi, wanted
 
 
 def beam_actuation(spec, amplitude_limit_um: float) -> ModalActuation:

@@ -46,6 +46,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from numba import njit
 
 THEORIES = ("euler-bernoulli", "timoshenko")
 
@@ -159,12 +160,12 @@ class FreeFreeBeam:
         ndarray of float64, shape of ``x_mm``
             Deflection, unit RMS over the length ((1/L) int W^2 dx = 1), W(0) > 0.
         """
-        mode = _mode(self, check_order(order))
-        return _deflection(mode, np.asarray(x_mm, dtype=np.float64) * 1e-3, self.length_mm * 1e-3)
+        return self.phi((order,), x_mm)[..., 0]
 
     def phi(self, orders, x_mm) -> np.ndarray:
         """Modal matrix: shapes of ``orders`` (p,) at ``x_mm`` (any shape) -> (..., p) float64."""
-        return np.stack([self.shape(o, x_mm) for o in orders], axis=-1)
+        modes = [_mode(self, check_order(o)) for o in orders]
+        return _deflections(modes, np.asarray(x_mm, dtype=np.float64) * 1e-3, self.length_mm * 1e-3)
 
     def nodes_mm(self, order: int) -> np.ndarray:
         """All n + 1 node positions (mm, increasing) of mode ``order`` = n."""
@@ -244,10 +245,49 @@ class FreeFreeBeam:
 
 
 def _deflection(mode: _Mode, x_m: np.ndarray, length_m: float) -> np.ndarray:
-    a, b, c, d = mode.coef
-    bx = mode.beta * x_m
-    return (a * np.exp(-mode.alpha * x_m) + b * np.exp(-mode.alpha * (length_m - x_m))
-            + c * np.cos(bx) + d * np.sin(bx))
+    """W(x) of one mode at ``x_m`` (m, any shape; module docstring)."""
+    return _deflections((mode,), x_m, length_m)[..., 0]
+
+
+def _deflections(modes, x_m, length_m: float) -> np.ndarray:
+    """W(x) of each of ``modes`` (p) at ``x_m`` (m, any shape) -> (..., p).
+
+    Two compiled passes around one ``np.exp`` of every exponent: numpy's SIMD exp
+    differs from libm's in the last bit for a few % of arguments, and these are the
+    values numpy has always given here. numpy's float64 sin and cos are libm's, which
+    the compiled pass calls too (tests/test_speedups.py checks both bit for bit).
+    """
+    x = np.asarray(x_m, dtype=np.float64)
+    flat = x.reshape(-1)
+    exps = np.exp(_exponents(flat, np.array([m.alpha for m in modes]), length_m))
+    out = _combine(flat, np.array([m.beta for m in modes]), np.array([m.coef for m in modes]), exps)
+    return out.reshape(x.shape + (len(modes),))
+
+
+@njit(cache=True, nogil=True)
+def _exponents(x, alpha, length):
+    """(2p, N): -alpha x and -alpha (L - x) of each mode."""
+    out = np.empty((2 * alpha.size, x.size))
+    for k in range(alpha.size):
+        neg = -alpha[k]
+        for i in range(x.size):
+            out[2 * k, i] = neg * x[i]
+            out[2 * k + 1, i] = neg * (length - x[i])
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _combine(x, beta, coef, exps):
+    """(N, p): a e^(-alpha x) + b e^(-alpha (L - x)) + c cos(beta x) + d sin(beta x),
+    summed in that order, from the exponentials ``exps`` of :func:`_exponents`."""
+    out = np.empty((x.size, beta.size))
+    for k in range(beta.size):
+        a, b, c, d = coef[k, 0], coef[k, 1], coef[k, 2], coef[k, 3]
+        for i in range(x.size):
+            bx = beta[k] * x[i]
+            out[i, k] = (a * exps[2 * k, i] + b * exps[2 * k + 1, i]
+                         + c * math.cos(bx) + d * math.sin(bx))
+    return out
 
 
 @lru_cache(maxsize=4096)

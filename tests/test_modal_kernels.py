@@ -1,0 +1,240 @@
+"""The compiled kernels of the modal actuation (issue 13) against the numpy formulas they
+replaced, written out here: bit for bit, signed zeros included (the replay outputs must
+stay byte-identical), on random, near-singular and degenerate inputs."""
+
+import numpy as np
+from hypothesis import given, settings, strategies as st
+from hypothesis.extra.numpy import arrays
+
+from device.actuation.base import touch_rank
+from device.actuation.modal import _gains_2x2, _scale_to_limits, forward, magnitude, solve
+from device.actuation.modal_actuation import _serve_rows
+from device.structures.beam import FreeFreeBeam, _mode
+
+SETTINGS = settings(derandomize=True, max_examples=80, deadline=None)
+SEED000 = FreeFreeBeam(350, 6, 6, 57, 2561)
+
+
+def assert_same_bits(got, want):
+    got, want = np.asarray(got), np.asarray(want)
+    assert got.shape == want.shape and got.dtype == want.dtype, (got.shape, got.dtype, want.shape, want.dtype)
+    size = want.dtype.itemsize
+    bad = np.ascontiguousarray(got).view(np.uint8).reshape(got.shape + (size,)) \
+        != np.ascontiguousarray(want).view(np.uint8).reshape(want.shape + (size,))
+    assert not bad.any(), f"{np.count_nonzero(bad.any(axis=-1))} values differ, first {np.argwhere(bad.any(axis=-1))[0]}"
+
+
+# --- beam mode shapes ------------------------------------------------------------------
+
+def numpy_deflection(beam, order, x_mm):
+    mode, length, x = _mode(beam, order), beam.length_mm * 1e-3, np.asarray(x_mm, float) * 1e-3
+    a, b, c, d = mode.coef
+    bx = mode.beta * x
+    return (a * np.exp(-mode.alpha * x) + b * np.exp(-mode.alpha * (length - x))
+            + c * np.cos(bx) + d * np.sin(bx))
+
+
+positions = arrays(np.float64, st.integers(1, 300), elements=st.floats(0, 350))
+
+
+@SETTINGS
+@given(x=positions, theory=st.sampled_from(["euler-bernoulli", "timoshenko"]),
+       orders=st.lists(st.integers(1, 20), min_size=1, max_size=3))
+def test_beam_shapes_are_numpys_bit_for_bit(x, theory, orders):
+    beam = FreeFreeBeam(350, 6, 6, 57, 2561, theory=theory)
+    want = np.stack([numpy_deflection(beam, o, x) for o in orders], axis=-1)
+    assert_same_bits(beam.phi(orders, x), want)
+
+
+def test_beam_shapes_at_nodes_ends_and_many_positions():
+    """The nodes (W = 0 to round-off, where a finger cannot be controlled), the ends, a
+    (k, F) array and a scalar; 1e5 random positions cover exp's SIMD path."""
+    x = np.concatenate([SEED000.nodes_mm(16), SEED000.nodes_mm(17), [0.0, 350.0],
+                        np.random.default_rng(5).uniform(0, 350, 100_000)])
+    for orders in ((16, 17), (17,)):
+        want = np.stack([numpy_deflection(SEED000, o, x) for o in orders], axis=-1)
+        assert_same_bits(SEED000.phi(orders, x), want)
+        even = x.size // 2 * 2
+        assert_same_bits(SEED000.phi(orders, x[:even].reshape(-1, 2)), want[:even].reshape(-1, 2, len(orders)))
+    assert_same_bits(SEED000.shape(16, 120.0), numpy_deflection(SEED000, 16, 120.0))
+    assert np.abs(SEED000.phi((16,), SEED000.nodes_mm(16))).max() < 1e-12
+
+
+# --- the 2 x 2 gains ---------------------------------------------------------------------
+
+def numpy_gains_2x2(phi, wanted, rcond, regularised):
+    a, b, c, d = phi[:, 0, 0], phi[:, 0, 1], phi[:, 1, 0], phi[:, 1, 1]
+    q = np.sqrt(((a + d) / 2) ** 2 + ((c - b) / 2) ** 2)
+    r = np.sqrt(((a - d) / 2) ** 2 + ((c + b) / 2) ** 2)
+    s1, s2 = q + r, np.abs(q - r)
+    threshold = rcond * s1
+    full = ((s2 >= threshold) if regularised else (s2 > threshold)) & (s2 > 0)
+    ratio = np.divide(s2, s1, out=np.zeros(s1.shape), where=s1 > 0)
+    inv_det = np.divide(1.0, a * d - b * c, out=np.zeros(a.shape), where=full)
+    g = [[d * inv_det, -b * inv_det], [-c * inv_det, a * inv_det]]
+    rest = ~full & (s1 > 0)
+    b00, b01, b11 = a * a + b * b, a * c + b * d, c * c + d * d
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        lam1 = s1 * s1
+        h2 = 1.0 / (threshold * threshold) if regularised else 0.0
+        beta = (1.0 / lam1 - h2) / (4.0 * q * r)
+        alpha = 1.0 / lam1 - beta * lam1
+        for i, (x0, x1) in enumerate(((a, c), (b, d))):
+            g[i][0] = np.where(rest, alpha * x0 + beta * (x0 * b00 + x1 * b01), g[i][0])
+            g[i][1] = np.where(rest, alpha * x1 + beta * (x0 * b01 + x1 * b11), g[i][1])
+    w0, w1 = wanted[:, 0], wanted[:, 1]
+    modal = np.stack((g[0][0] * w0 + g[0][1] * w1, g[1][0] * w0 + g[1][1] * w1), axis=-1)
+    return modal, ~full, ratio
+
+
+finite = st.floats(-10, 10, allow_nan=False, width=64)
+
+
+@st.composite
+def systems(draw):
+    """(k, 2, 2) Phi and (k, 2) complex wanted: random rows, nearly parallel rows (a
+    relative gap down to 1e-16), a zero row (one finger lifted), zero entries (fingers
+    on nodes) and the zero matrix."""
+    k = draw(st.integers(1, 40))
+    phi = draw(arrays(np.float64, (k, 2, 2), elements=finite))
+    gap = draw(arrays(np.float64, (k, 1), elements=st.floats(-1, 1))) * \
+        10.0 ** -draw(arrays(np.float64, (k, 1), elements=st.floats(0, 16)))
+    kind = draw(arrays(np.int64, k, elements=st.integers(0, 4)))
+    phi[kind == 1, 1] = phi[kind == 1, 0] * (1 + gap[kind == 1])
+    phi[kind == 2, 1] = 0.0
+    phi[kind == 3, :, draw(st.integers(0, 1))] = 0.0
+    phi[kind == 4] = 0.0
+    wanted = draw(arrays(np.float64, (k, 2), elements=finite)) \
+        + 1j * draw(arrays(np.float64, (k, 2), elements=finite))
+    return phi, wanted
+
+
+@SETTINGS
+@given(system=systems(), regularised=st.booleans(), rcond=st.sampled_from([1e-12, 0.1, 0.3]))
+def test_gains_2x2_are_the_numpy_formula_bit_for_bit(system, regularised, rcond):
+    phi, wanted = system
+    for got, want in zip(_gains_2x2(phi, wanted, rcond, regularised),
+                         numpy_gains_2x2(phi, wanted, rcond, regularised)):
+        assert_same_bits(got, want)
+
+
+# --- forward, magnitude, limits -------------------------------------------------------------
+
+def numpy_forward(phi, modal):
+    out = phi[..., 0] * modal[..., None, 0]
+    for j in range(1, phi.shape[-1]):
+        out = out + phi[..., j] * modal[..., None, j]
+    return out
+
+
+@SETTINGS
+@given(system=systems(), real_phi=st.booleans(), shared=st.booleans())
+def test_forward_and_magnitude_are_the_numpy_formulas_bit_for_bit(system, real_phi, shared):
+    phi, modal = system
+    if not real_phi:
+        phi = phi + 1j * phi[:, ::-1]
+    if shared:  # one matrix for the whole batch, as c = A W_M
+        phi = phi[0]
+    assert_same_bits(forward(phi, modal), numpy_forward(phi, modal))
+    assert_same_bits(forward(phi, modal.real), numpy_forward(phi, modal.real))
+    z = numpy_forward(phi, modal)
+    assert_same_bits(magnitude(z), np.sqrt(z.real * z.real + z.imag * z.imag))
+    assert_same_bits(magnitude(z.real), np.sqrt(z.real * z.real + np.zeros(z.shape)))
+    swapped = np.swapaxes(np.stack([phi, phi * 2]) if shared else phi[None], 0, 1)  # a strided view
+    assert_same_bits(forward(swapped, modal[:swapped.shape[0]]), numpy_forward(swapped, modal[:swapped.shape[0]]))
+
+
+def numpy_scale(commands, modal, limits):
+    ratios = np.sqrt(commands.real * commands.real + commands.imag * commands.imag) / limits
+    over = ratios[..., 0]
+    for j in range(1, ratios.shape[-1]):
+        over = np.maximum(over, ratios[..., j])
+    scale = 1 / np.maximum(over, 1)
+    return commands * scale[..., None], modal * scale[..., None], over > 1
+
+
+@SETTINGS
+@given(system=systems(), limits=arrays(np.float64, 2, elements=st.floats(1e-3, 10)))
+def test_scaling_to_the_limits_is_the_numpy_formula_bit_for_bit(system, limits):
+    phi, modal = system
+    commands = numpy_forward(phi, modal)
+    for got, want in zip(_scale_to_limits(commands, modal, limits), numpy_scale(commands, modal, limits)):
+        assert_same_bits(got, want)
+
+
+def test_scaling_keeps_the_nan_rule_of_np_maximum():
+    """A NaN ratio (an infinite command over an infinite limit cannot occur in solve, so
+    the kernel is driven directly) keeps NaN as np.maximum does, wherever it is."""
+    commands = np.array([[np.inf, 1.0], [1.0, np.inf], [0.5, 0.2]], complex)
+    limits = np.array([np.inf, np.inf])
+    with np.errstate(invalid="ignore"):
+        want_all = numpy_scale(commands, commands, limits)
+    for got, want in zip(_scale_to_limits(commands, commands, limits), want_all):
+        assert_same_bits(got, want)
+
+
+# --- touch order and the padded systems -----------------------------------------------------
+
+def numpy_touch_rank(contact, touch_start):
+    f = contact.shape[0]
+    key = np.where(contact, touch_start, np.inf)
+    before = key[None, :, :] < key[:, None, :]
+    lower_row = np.arange(f)[None, :] < np.arange(f)[:, None]
+    before |= (key[None, :, :] == key[:, None, :]) & lower_row[:, :, None]
+    rank = np.count_nonzero(before & contact[None, :, :], axis=1)
+    return np.where(contact, rank, -1)
+
+
+@st.composite
+def fingers(draw):
+    f, n = draw(st.integers(0, 4)), draw(st.integers(0, 30))
+    contact = draw(arrays(np.bool_, (f, n)))
+    start = draw(arrays(np.float64, (f, n), elements=st.sampled_from([0.0, 0.5, 1.0, 2.0, np.nan])))
+    return contact, start
+
+
+@SETTINGS
+@given(fingers())
+def test_touch_rank_is_the_numpy_formula(fing):
+    contact, start = fing
+    assert_same_bits(touch_rank(contact, start), numpy_touch_rank(contact, start))
+    assert_same_bits(touch_rank(contact.T.copy().T, start.T.copy().T), numpy_touch_rank(contact, start))
+
+
+@SETTINGS
+@given(fing=fingers(), p=st.integers(1, 3))
+def test_padded_systems_are_the_numpy_fill(fing, p):
+    """Finger f fills row rank[f] where served; a lifted finger leaves its row zero."""
+    contact, start = fing
+    f, n = contact.shape
+    rng = np.random.default_rng(f * 100 + n)
+    phi_all, wanted_um = rng.normal(size=(f, n, p)), rng.uniform(0, 1, (f, n))
+    rank = numpy_touch_rank(contact, start)
+    phi, wanted = np.zeros((n, p, p)), np.zeros((n, p))
+    served = contact & (rank < p)
+    for i in range(f):
+        for row in range(p):
+            at = served[i] & (rank[i] == row)
+            np.copyto(phi[:, row, :], phi_all[i], where=at[:, None])
+            np.copyto(wanted[:, row], wanted_um[i], where=at)
+    got = _serve_rows(phi_all, wanted_um, touch_rank(contact, start), p)
+    assert_same_bits(got[0], phi)
+    assert_same_bits(got[1], wanted)
+
+
+def test_solve_on_seed000_fingers_crossing_keeps_its_answers():
+    """Two fingers on seed 000's beam, one crossing the other (a singular locus) and then
+    lifted (a zero row): solve's closed form gives the numpy formula's amplitudes."""
+    xb = np.linspace(100.0, 140.0, 4001)
+    phi = np.stack([np.broadcast_to(SEED000.phi((16, 17), np.array([120.0])), (xb.size, 2)),
+                    SEED000.phi((16, 17), xb)], axis=-2)
+    phi[::3, 1] = 0.0
+    wanted = np.where(np.arange(xb.size)[:, None] % 3 == 0, [0.4, 0.0], [0.4, 0.1]).astype(complex)
+    sol = solve(phi, wanted, "regularised", limits_um=0.75)
+    modal, capped, ratio = numpy_gains_2x2(phi, wanted, 0.1, True)
+    commands, modal, limited = numpy_scale(modal, modal, np.array([0.75, 0.75]))
+    assert_same_bits(sol.modal_um, modal)
+    assert_same_bits(sol.commands_um, commands)
+    assert_same_bits(sol.limited, limited)
+    assert_same_bits(sol.capped, capped)
+    assert_same_bits(sol.achieved_um, numpy_forward(phi, modal))
