@@ -6,10 +6,18 @@ with several fingers down the loop holds its state and the block is fed forward 
 1. **Measure.** The device's force report for the previous block gives the ratio
    F_t / F_n. The friction at rest mu0 is its level where the plate has been still long
    enough for the sensor to see it (``Chain`` of the commanded amplitude below
-   ``still_um``) while the finger slides (median over the block, and a speed of at least
-   ``slide_mm_s``: the tracker sees a stop late, and a stuck finger reads no friction);
-   the measured relative friction is
-   mu'_m = F_t / (F_n mu0) (seed 003, eq 1).
+   ``still_um``) while the finger slides (median over the block of the samples at a
+   speed of at least ``slide_mm_s`` reading a ratio of at least ``min_rest_mu``: the
+   tracker sees a stop late, and a stuck finger reads no friction); the measured
+   relative friction is mu'_m = F_t / (F_n mu0) (seed 003, eq 1).
+   Until mu0 has been measured the loop has nothing to compare with, and a plate moving
+   under a finger hides mu0. So from touch-down until then (once per session: mu0 is
+   kept), the plate stays still while the tracker sees the finger slower than
+   ``probe_mm_s`` -- as a stroke starts -- and the first estimate is the ratio's median
+   over the second half of a block whose two halves agree within ``settled`` (the
+   fingertip has finished rising into sliding), among still samples at ``creep_mm_s``
+   or faster reading at least ``min_rest_mu``. Without it, a finger whose stroke starts
+   on a reduced band is open loop until it first crosses an unreduced one.
 2. **Feedback** on the depth of modulation: the reduction asked, 1 - mu'_target, passed
    through the same chain, against the reduction measured, 1 - mu'_m, gives the block's
    delivered/asked ratio g (the median over the samples asking for at least
@@ -71,7 +79,11 @@ class LoopConfig:
 
     ki: float = KI
     log_c_max: float = math.log(4.0)
-    slide_mm_s: float = 20.0
+    slide_mm_s: float = 5.0
+    probe_mm_s: float = 8.0
+    creep_mm_s: float = 2.0
+    min_rest_mu: float = 0.1
+    settled: float = 0.03
     still_um: float = 0.005
     still_seen: float = 0.01
     mu0_tau_s: float = 0.3
@@ -170,6 +182,11 @@ class ClosedLoop:
         c = math.exp(state.log_c) if closed else 1.0
         reduction = np.maximum(1.0 - mu_target, 0.0)
         asked = np.where(mu_target < 1.0, 1.0 - c * reduction, mu_target)
+        if single and not state.fallback and not math.isfinite(state.mu0):
+            # probe (module docstring, 1): the plate still while the finger starts to slide
+            r0 = int(np.argmax(touching))
+            slow = np.hypot(fingers.vx[r0], fingers.vy[r0]) < self.config.probe_mm_s
+            asked[r0] = np.where(slow, np.maximum(asked[r0], 1.0), asked[r0])
         model = self._model(state)
         wanted, clamps = model.invert(asked, fingers.force)
         wanted = np.where(contact, wanted, 0.0)
@@ -212,11 +229,21 @@ class ClosedLoop:
         fallback = state.fallback and good_s < cfg.recover_s
         changes = dict(chain=chain, since_report_s=0.0, good_s=good_s, fallback=fallback)
         sliding = sent.single & (sent.speed >= cfg.slide_mm_s) & (nor >= cfg.min_normal_n)
+        ratio = lat / np.maximum(nor, cfg.min_normal_n)
+        still = sliding & (seen[1] < cfg.still_seen) & (ratio >= cfg.min_rest_mu)
+        if not math.isfinite(state.mu0) and sent.single:  # the first estimate (docstring, 1)
+            still = (seen[1] < cfg.still_seen) & (nor >= cfg.min_normal_n) & (
+                sent.speed >= cfg.creep_mm_s) & (ratio >= cfg.min_rest_mu)
+            late = np.arange(n) >= n // 2
+            a, b = ratio[still & ~late], ratio[still & late]
+            if min(a.size, b.size) >= cfg.min_still // 2:
+                ma, mb = float(np.median(a)), float(np.median(b))
+                if abs(mb - ma) <= cfg.settled * mb:  # not the fingertip's rise into sliding
+                    changes["mu0"] = mb
+            return replace(state, **changes)
         if not sent.single or not sliding.any():
             return replace(state, **changes)  # at rest or several fingers: nothing to learn
         ref = seen[0]
-        ratio = lat / np.maximum(nor, cfg.min_normal_n)
-        still = sliding & (seen[1] < cfg.still_seen)
         mu0 = state.mu0
         if np.count_nonzero(still) >= cfg.min_still:
             m = float(np.median(ratio[still]))  # robust to a stop the tracker sees late
