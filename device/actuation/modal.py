@@ -36,6 +36,7 @@ never an error.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -92,23 +93,29 @@ def forward(phi_fingers, modal_um) -> np.ndarray:
     m, p = phi.shape[-2:]
     phi3 = (phi.reshape(1, m, p) if phi.ndim == 2
             else np.broadcast_to(phi, batch + (m, p)).reshape(-1, m, p))
-    modal2 = np.broadcast_to(modal, batch + (p,)).reshape(-1, p)
-    out = np.empty((modal2.shape[0], m), dtype=np.result_type(phi, modal))
+    modal2 = np.broadcast_to(modal.astype(np.complex128, copy=False), batch + (p,)).reshape(-1, p)
+    out = np.empty((modal2.shape[0], m), dtype=np.complex128)
     _forward_kernel(phi3, modal2, out)
-    return out.reshape(batch + (m,))
+    out = out.reshape(batch + (m,))
+    # real amplitudes: the real parts are the real products, signed zeros included
+    return out if np.iscomplexobj(modal) else out.real.copy()
 
 
 @njit(cache=True, nogil=True)
 def _forward_kernel(phi, modal, out):
-    """out[k] = phi[k or 0] @ modal[k] for real phi, summed over the modes in order; a
-    real factor enters a complex product as x + 0j, as in numpy."""
+    """out[k] = phi[k or 0] @ modal[k] for real phi (:func:`_forward_row`)."""
     for k in range(out.shape[0]):
-        kp = 0 if phi.shape[0] == 1 else k
-        for i in range(out.shape[1]):
-            acc = phi[kp, i, 0] * modal[k, 0]
-            for j in range(1, phi.shape[2]):
-                acc = acc + phi[kp, i, j] * modal[k, j]
-            out[k, i] = acc
+        _forward_row(phi, 0 if phi.shape[0] == 1 else k, modal, k, out)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _forward_row(phi, kp, modal, k, out):
+    """out[k] = phi[kp] @ modal[k] (real phi, complex modal), summed over the modes in order."""
+    for i in range(out.shape[1]):
+        acc = _times_real(modal[k, 0], phi[kp, i, 0])
+        for j in range(1, phi.shape[2]):
+            acc = acc + _times_real(modal[k, j], phi[kp, i, j])
+        out[k, i] = acc
 
 
 def magnitude(z) -> np.ndarray:
@@ -126,7 +133,22 @@ def magnitude(z) -> np.ndarray:
 @njit(cache=True, nogil=True)
 def _magnitude_kernel(z, out):
     for i in range(z.size):
-        out[i] = np.sqrt(z[i].real * z[i].real + z[i].imag * z[i].imag)
+        out[i] = _abs(z[i])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _times_real(z, x):
+    """z x for complex z and real x as numpy computes it, x entering as x + 0j (the zero
+    products only decide the signs of zeros; numba's own complex product is slower). Only
+    a product that underflows (below 1e-308) can differ: numpy's SIMD product fuses its
+    roundings and may give that zero the other sign."""
+    return complex(z.real * x - z.imag * 0.0, z.real * 0.0 + z.imag * x)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _abs(z):
+    """:func:`magnitude` of one complex number."""
+    return math.sqrt(z.real * z.real + z.imag * z.imag)
 
 
 def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=None,
@@ -174,6 +196,9 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
     closed = phi.shape[-2:] == (2, 2) and not np.iscomplexobj(phi) and method != "bounded"
     modal, capped, ratio = (_gains_2x2 if closed else _gains_svd)(
         phi, wanted, threshold, regularised=method == "regularised")
+    if method != "bounded" and not np.iscomplexobj(phi):
+        commands, modal, achieved, error, limited = _finish(phi, wanted, modal, a, limits)
+        return ModalSolution(modal, commands, achieved, error, limited, capped, ratio)
     commands = forward(a, modal)  # c = A W_M; no BLAS call for a few modes
 
     limited = np.zeros(commands.shape[:-1], dtype=bool)
@@ -190,37 +215,71 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
                          limited, capped, ratio)
 
 
+def _finish(phi, wanted, modal, a, limits):
+    """The end of :func:`solve` for real ``phi`` and methods but ``"bounded"``, in one
+    compiled pass: c = A W_M, both scaled to the limits (if any), achieved = Phi_f W_M
+    and |achieved - wanted|, each as :func:`forward`, :func:`_scale_to_limits` and
+    :func:`magnitude` compute it. Returns (commands, modal, achieved, error, limited)."""
+    batch = modal.shape[:-1]
+    m, p = phi.shape[-2:]
+    modal2 = np.ascontiguousarray(modal, dtype=np.complex128).reshape(-1, p)
+    k = modal2.shape[0]
+    out = (np.empty((k, a.shape[0]), dtype=np.complex128), modal2.copy(),
+           np.empty((k, m), dtype=np.complex128), np.empty((k, m)), np.zeros(k, dtype=np.bool_))
+    _finish_kernel(np.broadcast_to(phi, batch + (m, p)).reshape(-1, m, p),
+                   np.broadcast_to(wanted, batch + (m,)).reshape(-1, m), a.reshape((1,) + a.shape),
+                   np.empty(0) if limits is None else limits, *out)
+    return tuple(x.reshape(batch + x.shape[1:]) for x in out)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _finish_kernel(phi, wanted, a, limits, commands, modal, achieved, error, limited):
+    """:func:`_finish`; ``modal`` is scaled in place, no limits if ``limits`` is empty."""
+    for k in range(modal.shape[0]):
+        _forward_row(a, 0, modal, k, commands)
+        if limits.size:
+            limited[k] = _scale_row(commands, modal, limits, k)
+        _forward_row(phi, k, modal, k, achieved)
+        for i in range(achieved.shape[1]):
+            error[k, i] = _abs(achieved[k, i] - wanted[k, i])
+
+
 def _scale_to_limits(commands, modal, limits):
     """Commands and modal amplitudes scaled by 1 / max(1, max_j |c_j| / limit_j), and
     where that was below 1 (module docstring); any leading axes."""
     batch = commands.shape[:-1]
     c = np.ascontiguousarray(commands, dtype=np.complex128).reshape(-1, commands.shape[-1])
     w = np.ascontiguousarray(modal, dtype=np.complex128).reshape(-1, modal.shape[-1])
-    c_out, w_out, limited = np.empty_like(c), np.empty_like(w), np.empty(len(c), dtype=np.bool_)
-    _scale_kernel(c, w, limits, c_out, w_out, limited)
-    return (c_out.reshape(batch + c.shape[-1:]), w_out.reshape(batch + w.shape[-1:]),
-            limited.reshape(batch))
+    c, w, limited = c.copy(), w.copy(), np.empty(len(c), dtype=np.bool_)
+    _scale_kernel(c, w, limits, limited)
+    return c.reshape(batch + c.shape[-1:]), w.reshape(batch + w.shape[-1:]), limited.reshape(batch)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _scale_kernel(commands, modal, limits, c_out, w_out, limited):
-    """:func:`_scale_to_limits` in one pass: the numpy operations it replaced, in their
-    order (np.maximum's NaN rule; the real scale enters complex products as s + 0j)."""
+def _scale_kernel(commands, modal, limits, limited):
+    """:func:`_scale_to_limits` in place, row by row (:func:`_scale_row`)."""
     for k in range(commands.shape[0]):
-        over = 0.0
-        for j in range(commands.shape[1]):
-            c = commands[k, j]
-            ratio = np.sqrt(c.real * c.real + c.imag * c.imag) / limits[j]
-            over = ratio if j == 0 else _maximum(over, ratio)
-        limited[k] = over > 1
-        scale = complex(1 / _maximum(over, 1.0), 0.0)
-        for j in range(commands.shape[1]):
-            c_out[k, j] = commands[k, j] * scale
-        for j in range(modal.shape[1]):
-            w_out[k, j] = modal[k, j] * scale
+        limited[k] = _scale_row(commands, modal, limits, k)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _scale_row(commands, modal, limits, k):
+    """Scale row k of ``commands`` and ``modal`` in place by 1 / max(1, max_j |c_j| / limit_j);
+    True if that was below 1. numpy's operations in their order (np.maximum's NaN rule;
+    the real scale enters complex products as s + 0j)."""
+    over = 0.0
+    for j in range(commands.shape[1]):
+        ratio = _abs(commands[k, j]) / limits[j]
+        over = ratio if j == 0 else _maximum(over, ratio)
+    scale = 1 / _maximum(over, 1.0)
+    for j in range(commands.shape[1]):
+        commands[k, j] = _times_real(commands[k, j], scale)
+    for j in range(modal.shape[1]):
+        modal[k, j] = _times_real(modal[k, j], scale)
+    return over > 1
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _maximum(a, b):
     """np.maximum of two floats: the larger, or NaN if either is."""
     return a if (a >= b or a != a) else b
@@ -300,8 +359,8 @@ def _gains_2x2_kernel(phi, wanted, rcond, regularised):
             g10 = alpha * b + beta * (b * b00 + d * b01)
             g11 = alpha * d + beta * (b * b01 + d * b11)
         w0, w1 = wanted[i, 0], wanted[i, 1]
-        modal[i, 0] = complex(g00, 0.0) * w0 + complex(g01, 0.0) * w1
-        modal[i, 1] = complex(g10, 0.0) * w0 + complex(g11, 0.0) * w1
+        modal[i, 0] = _times_real(w0, g00) + _times_real(w1, g01)
+        modal[i, 1] = _times_real(w0, g10) + _times_real(w1, g11)
         capped[i] = not full
     return modal, capped, ratio
 

@@ -255,7 +255,7 @@ def _deflections(modes, x_m, length_m: float) -> np.ndarray:
     Two compiled passes around one ``np.exp`` of every exponent: numpy's SIMD exp
     differs from libm's in the last bit for a few % of arguments, and these are the
     values numpy has always given here. numpy's float64 sin and cos are libm's, which
-    the compiled pass calls too (tests/test_speedups.py checks both bit for bit).
+    the compiled pass calls too (tests/test_modal_kernels.py checks both bit for bit).
     """
     x = np.asarray(x_m, dtype=np.float64)
     flat = x.reshape(-1)
