@@ -30,7 +30,8 @@ Measured, over the samples where the finger touches and slides (>= 5 mm/s):
   loop's gain moves by a few percent per block; ``max_command_um``: the largest
   amplitude commanded;
 - ``first_mu0_s``: when the loop first measured mu0 (the plate still under a sliding
-  finger; until then it is open loop, having nothing to compare with), and
+  finger; until then it has nothing to compare with: ``rendering.control.loop`` holds
+  the plate still while the finger starts to slide, and is open loop otherwise), and
   ``rms_after_mu0``: the reachable RMS from then on, beside open loop's over the same
   samples of the same finger (``cumulative``: an open run's squared error so far at
   each block, kept out of the JSON);
@@ -431,7 +432,8 @@ def markdown(section: dict) -> list[str]:
              "finger's RMS); gain: open loop's RMS over this one's. 'From mu0 on': the same from "
              "the block the loop first measured the finger's friction at rest (the plate still "
              "under a sliding finger), open loop over the same samples of the same finger: "
-             "before that the loop has nothing to compare with and is open loop; 'mu0 found': when that happened (median, "
+             "before that the loop has nothing to compare with (it holds the plate still as "
+             "the finger starts to slide, and is open loop otherwise); 'mu0 found': when that happened (median, "
              "latest). Gain swings: the longest run of swings of the loop's gain over "
              f"{SWING:.0%}, each at least half the one before ({OSCILLATION_STEPS} or more "
              "would be an oscillation that grows, holds or rings).", "",
