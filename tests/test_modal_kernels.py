@@ -48,9 +48,12 @@ def test_beam_shapes_are_numpys_bit_for_bit(x, theory, orders):
 
 def test_beam_shapes_at_nodes_ends_and_many_positions():
     """The nodes (W = 0 to round-off, where a finger cannot be controlled), the ends, a
-    (k, F) array and a scalar; 1e5 random positions cover exp's SIMD path."""
-    x = np.concatenate([SEED000.nodes_mm(16), SEED000.nodes_mm(17), [0.0, 350.0],
-                        np.random.default_rng(5).uniform(0, 350, 100_000)])
+    (k, F) array and a scalar; 1e5 random positions cover exp's SIMD path; runs of a held
+    position (copied, not recomputed) and -0.0 next to 0.0 (equal, not the same bits)."""
+    rng = np.random.default_rng(5)
+    x = np.concatenate([SEED000.nodes_mm(16), SEED000.nodes_mm(17), [0.0, 350.0, -0.0, 0.0, -0.0],
+                        np.repeat(rng.uniform(0, 350, 1000), rng.integers(1, 5, 1000)),
+                        rng.uniform(0, 350, 100_000)])
     for orders in ((16, 17), (17,)):
         want = np.stack([numpy_deflection(SEED000, o, x) for o in orders], axis=-1)
         assert_same_bits(SEED000.phi(orders, x), want)

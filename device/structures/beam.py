@@ -279,11 +279,15 @@ def _exponents(x, alpha, length):
 @njit(cache=True, nogil=True)
 def _combine(x, beta, coef, exps):
     """(N, p): a e^(-alpha x) + b e^(-alpha (L - x)) + c cos(beta x) + d sin(beta x),
-    summed in that order, from the exponentials ``exps`` of :func:`_exponents`."""
+    summed in that order, from the exponentials ``exps`` of :func:`_exponents`; a
+    position equal to the one before (same bits) copies its row."""
     out = np.empty((x.size, beta.size))
     for k in range(beta.size):
         a, b, c, d = coef[k, 0], coef[k, 1], coef[k, 2], coef[k, 3]
         for i in range(x.size):
+            if i > 0 and x[i] == x[i - 1] and math.copysign(1.0, x[i]) == math.copysign(1.0, x[i - 1]):
+                out[i, k] = out[i - 1, k]  # a finger held still: sin and cos are most of the cost
+                continue
             bx = beta[k] * x[i]
             out[i, k] = (a * exps[2 * k, i] + b * exps[2 * k + 1, i]
                          + c * math.cos(bx) + d * math.sin(bx))
