@@ -128,7 +128,7 @@ def test_a_sensor_that_goes_bad_falls_back_at_the_next_block(monkeypatch, fault,
     """Reports from 1.0 s on are zeros, beyond full scale, or NaN: open loop from the block
     after the first bad report, said once."""
     from app.measure import closed_loop_sim
-    from rendering.control.loop import ForceReport
+    from device.link.forces import ForceReport
     write = closed_loop_sim.FingerSink.write
 
     def faulty(self, out, commands_um):

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from device.finger import FingerPlant, lowpass, rest_mu, true_amplitude, true_mu
-from rendering.control.loop import ForceReport
+from device.link.forces import ForceReport
 
 
 class FingerSink:

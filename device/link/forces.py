@@ -25,8 +25,8 @@ HISTORY_SAMPLES = 10_000
 class ForceReport:
     """What the device's force sensors measured over output samples ``index0 ..
     index0 + m - 1``: lateral (tangential) and normal force (N), each (m,) float64.
-
-    The same fields as ``rendering.control.loop.ForceReport``, which the closed loop reads.
+    What the closed loop (``rendering.control.loop``) reads, from a device or a simulated
+    finger.
     """
 
     index0: int

@@ -53,6 +53,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from device.finger import SensorParams
+from device.link.forces import ForceReport
 from device.calibration_fit import model_jacobian
 from device.friction import SeedFrictionModel, forward_mu
 from device.profile import DeviceProfile
@@ -61,16 +62,6 @@ from rendering.control.chain import Chain, ChainState
 from rendering.control.margins import KI
 from textures.model import CONTROL_MODES
 
-
-
-@dataclass(frozen=True, eq=False)
-class ForceReport:
-    """What the device's force sensors measured over output samples ``index0 ..
-    index0 + m - 1``: lateral (tangential) and normal force (N), each (m,)."""
-
-    index0: int
-    lateral_n: np.ndarray
-    normal_n: np.ndarray
 
 
 @dataclass(frozen=True)
