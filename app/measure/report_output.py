@@ -15,7 +15,8 @@ its claims (groups "closed loop: ...") are in the same list, paired per finger.
 
 Each row (see ``app.measure.report_matrix``) has ``scene``, ``period_mm`` (null for scenes that
 are not one grating), ``motion``, ``touch_hz``, ``renderer``, ``output_hz``,
-``inversion``, ``time_error``, ``spectral_error``, ``alignment_error_mm``,
+``inversion``, ``time_error``, ``spectral_error``, ``alignment_error_mm``, ``chatter``
+(edges felt twice, ``rendering.metrics.chatter``; on the 15 and 5 mm gratings, else null),
 ``cost_us_per_s``, ``stages_us_per_s`` and ``throughput`` (``replay_x_realtime``,
 ``live_block_p99_us``, ``latency_ms``).
 """
