@@ -8,7 +8,7 @@ from hypothesis.extra.numpy import arrays
 
 from device.actuation.base import touch_rank
 from device.actuation.modal import _gains_2x2, _scale_to_limits, forward, magnitude, solve
-from device.actuation.modal_actuation import _serve_rows
+from device.actuation.modal_actuation import _achieved, _serve_rows
 from device.structures.beam import FreeFreeBeam, _mode
 
 SETTINGS = settings(derandomize=True, max_examples=80, deadline=None)
@@ -265,3 +265,17 @@ def test_solve_is_the_numpy_chain_bit_for_bit(system, method, actuators, limits)
                       (sol.error_um, np.sqrt((achieved - wanted).real ** 2 + (achieved - wanted).imag ** 2)),
                       (sol.limited, limited), (sol.capped, capped), (sol.sigma_min_ratio, ratio)):
         assert_same_bits(got, want)
+
+
+@SETTINGS
+@given(fing=fingers(), p=st.integers(1, 3), scale=st.sampled_from([0.0, 1e-90, 1.0, 1e90]))
+def test_achieved_amplitudes_are_the_numpy_formula(fing, p, scale):
+    """|Phi(x_f) W_M| under every finger touching, 0 under a lifted one."""
+    contact, _ = fing
+    f, n = contact.shape
+    rng = np.random.default_rng(f * 10 + n + p)
+    phi_all = rng.normal(size=(f, n, p)) * np.where(rng.random((f, n, p)) < 0.2, 0.0, 1.0)
+    modal = (rng.normal(size=(n, p)) + 1j * rng.normal(size=(n, p))) * scale
+    z = numpy_forward(np.swapaxes(phi_all, 0, 1), modal)
+    want = np.where(contact, np.sqrt(z.real * z.real + z.imag * z.imag).T, 0.0)
+    assert_same_bits(_achieved(phi_all, modal, contact), want)

@@ -110,12 +110,18 @@ def _forward_kernel(phi, modal, out):
 
 @njit(cache=True, nogil=True, inline="always")
 def _forward_row(phi, kp, modal, k, out):
-    """out[k] = phi[kp] @ modal[k] (real phi, complex modal), summed over the modes in order."""
+    """out[k] = phi[kp] @ modal[k] (real phi, complex modal)."""
     for i in range(out.shape[1]):
-        acc = _times_real(modal[k, 0], phi[kp, i, 0])
-        for j in range(1, phi.shape[2]):
-            acc = acc + _times_real(modal[k, j], phi[kp, i, j])
-        out[k, i] = acc
+        out[k, i] = _combination(phi[kp, i], modal, k)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _combination(row, modal, k):
+    """row @ modal[k] for a real row, summed over the modes in order, as numpy sums it."""
+    acc = _times_real(modal[k, 0], row[0])
+    for j in range(1, row.shape[0]):
+        acc = acc + _times_real(modal[k, j], row[j])
+    return acc
 
 
 def magnitude(z) -> np.ndarray:

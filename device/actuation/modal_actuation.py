@@ -39,7 +39,7 @@ from numba import njit
 
 from device.actuation.base import Actuated, touch_rank
 from device.structures.beam import FreeFreeBeam, ModesError
-from device.actuation.modal import forward, magnitude, solve
+from device.actuation.modal import _abs, _combination, magnitude, solve
 from device.structures.plate2d import ACTUATOR_NAMES, ACTUATORS, Plate2D
 
 #: largest condition number accepted for the actuator matrix (an actuator on a node of a
@@ -114,18 +114,17 @@ class ModalActuation:
         contact = fingers.contact
         p = self.n_modes
         x, y, off = self.structure_position(fingers.x_pred, fingers.y_pred)
-        phi_all = self.shapes(x, y)                                     # (F, n, p)
+        phi_all = np.asarray(self.shapes(x, y), dtype=np.float64)        # (F, n, p)
         rank = touch_rank(contact, fingers.touch_start)                 # (F, n)
         phi, wanted = _serve_rows(phi_all, np.asarray(wanted_um, dtype=np.float64), rank, p)
         sol = solve(phi, wanted, self.method, actuators=self.actuators, limits_um=self.limits_um,
                     rcond=self.rcond)
-        achieved = magnitude(forward(np.swapaxes(phi_all, 0, 1), sol.modal_um)).T
         # the solver scales to the limits; this only removes its last-bit rounding above them
         amplitude = np.minimum(magnitude(sol.commands_um), self.limits_um)
         # + 0.0 turns -0.0 into 0.0: a zero command has phase 0, whatever the sign of
         # the zeros the solve happened to produce
         return Actuated(commands_um=amplitude, phases_rad=np.angle(sol.commands_um + 0.0),
-                        achieved_um=np.where(contact, achieved, 0.0),
+                        achieved_um=_achieved(phi_all, sol.modal_um, contact),
                         limited=int(np.count_nonzero(sol.limited)),
                         off_structure=int(np.count_nonzero(off & contact)))
 
@@ -144,6 +143,19 @@ def _serve_rows(phi_all, wanted_um, rank, p):
                 phi[i, row, :] = phi_all[f, i, :]
                 wanted[i, row] = wanted_um[f, i]
     return phi, wanted
+
+
+@njit(cache=True, nogil=True)
+def _achieved(phi_all, modal, contact):
+    """|Phi(x_f) W_M| under each finger (F, n) where touching, else 0 (step 4 of the module
+    docstring), as ``device.actuation.modal.forward`` and ``magnitude`` compute it."""
+    f_count, n = contact.shape
+    out = np.zeros((f_count, n))
+    for f in range(f_count):
+        for i in range(n):
+            if contact[f, i]:
+                out[f, i] = _abs(_combination(phi_all[f, i], modal, i))
+    return out
 
 
 def beam_actuation(spec, amplitude_limit_um: float) -> ModalActuation:
