@@ -7,7 +7,7 @@ from hypothesis import given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
 from device.actuation.base import touch_rank
-from device.actuation.modal import _gains_2x2, _scale_to_limits, forward, magnitude, solve
+from device.actuation.modal import _gains_2x2, _gains_svd, _scale_to_limits, forward, magnitude, solve
 from device.actuation.modal_actuation import _achieved, _serve_rows
 from device.structures.beam import FreeFreeBeam, _mode
 
@@ -279,3 +279,21 @@ def test_achieved_amplitudes_are_the_numpy_formula(fing, p, scale):
     z = numpy_forward(np.swapaxes(phi_all, 0, 1), modal)
     want = np.where(contact, np.sqrt(z.real * z.real + z.imag * z.imag).T, 0.0)
     assert_same_bits(_achieved(phi_all, modal, contact), want)
+
+
+@SETTINGS
+@given(phi=arrays(np.float64, (6, 2, 3), elements=finite), wanted=arrays(np.float64, (6, 2), elements=finite),
+       actuators=arrays(np.float64, (4, 3), elements=st.floats(-2, 2)).filter(lambda a: np.linalg.matrix_rank(a) == 3),
+       limits=st.none() | arrays(np.float64, 4, elements=st.floats(1e-3, 10)))
+def test_solve_with_more_modes_than_fingers_is_the_numpy_chain(phi, wanted, actuators, limits):
+    """Three modes under two fingers (the SVD path), four channels: the same compiled end."""
+    modal, capped, ratio = _gains_svd(phi, wanted.astype(complex), 0.1, True)
+    commands = numpy_forward(actuators, modal)
+    limited = np.zeros(len(phi), bool)
+    if limits is not None:
+        commands, modal, limited = numpy_scale(commands, modal, limits)
+    achieved = numpy_forward(phi, modal)
+    sol = solve(phi, wanted, "regularised", actuators=actuators, limits_um=limits)
+    for got, want in ((sol.modal_um, modal), (sol.commands_um, commands), (sol.achieved_um, achieved),
+                      (sol.limited, limited), (sol.capped, capped)):
+        assert_same_bits(got, want)
