@@ -1,7 +1,7 @@
 """``frictex warm``: compile the pipeline's kernels now, once per install.
 
-The per-sample kernels (tracking, SHT phase, the hybrid, bounded modal solves, the CSV
-writer) are compiled by numba on first use and cached beside their sources; setup runs
+The per-sample kernels (tracking, SHT phase, the hybrid, modal actuation, height layers
+and effect clips, the CSV writer) are compiled by numba on first use and cached beside their sources; setup runs
 this so that no replay, demo or test pays the compilation. It replays a short synthetic
 stroke on one bundled scene of each kind of device into a temporary folder, in every
 output format.
@@ -15,7 +15,8 @@ import time
 
 #: one scene per kind of actuation and renderer the kernels serve
 SCENES = ("composed-fine-grating-in-disc", "grating-5mm", "two-finger-beam-seed000",
-          "two-finger-plate-seed001", "directional-beam", "keyclick-ring")
+          "two-finger-plate-seed001", "directional-beam", "keyclick-ring", "height-button",
+          "slider-clips")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
