@@ -295,6 +295,30 @@ def test_cost_follows_the_fingers_touching_not_the_ids_ever_seen():
                                np.concatenate([o.commands_um for o in runs[False]]), atol=1e-12)
 
 
+def test_long_calls_cut_where_a_new_finger_id_would_be_one_too_many():
+    """A replay's calls span thousands of blocks; with a new id per touch each would carry
+    a row per id it saw. The source ends a call before the first id beyond
+    ``IDS_PER_TOUCHING`` times the fingers touching at once: 300 taps, 300 ids, calls of up
+    to 2000 blocks see at most 2 ids (3 rows with a finger still down from before), and the
+    commands equal a run of one block per call."""
+    from app.engine.sources import IDS_PER_TOUCHING
+    scene = load_scene(resolve_scene(SCENE))
+    runs = {}
+    for chunk in (1, 2000):
+        pipeline = build_pipeline(scene, 10_000.0, 50, t0_s=0.0)
+        source = TraceSource(iter([taps(300, False)]))
+        source.first_time()
+        source.start(pipeline.tracker_config)
+        memory = MemorySink()
+        drive(PipelineStage(pipeline), source, [memory], VirtualClock(), chunk_blocks=chunk)
+        runs[chunk] = memory.outs
+    assert source.max_new_ids == IDS_PER_TOUCHING
+    assert max(len(o.finger_ids) for o in runs[2000]) <= IDS_PER_TOUCHING + 1
+    assert len(runs[2000]) < len(runs[1]) / 10
+    long, short = (np.concatenate([o.commands_um for o in runs[c]]) for c in (2000, 1))
+    assert np.abs(long - short).max() <= 1e-12, np.abs(long - short).max()
+
+
 @pytest.mark.parametrize("make, code", [
     (lambda: __import__("device.link.host", fromlist=["LinkStalled"]).LinkStalled("stalled"), 1),
     (lambda: OSError(28, "No space left on device"), 1),

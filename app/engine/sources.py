@@ -24,13 +24,15 @@ import queue
 
 import numpy as np
 
-from rendering.input.trace_file import UP, Trace, concat_traces, make_trace
+from rendering.input.trace_file import UP, Trace, concat_traces, make_trace, most_touching
 from rendering.tracking.tracks import apply_index
 
 #: default longest gap between touch samples that is output as it is (s)
 MAX_GAP_S = 5.0
 #: output kept on each side of a longer gap (s): the lift, and the touch after it
 GAP_KEEP_S = 0.1
+#: finger ids a pipeline call may see, per finger the trace has touching at once at most
+IDS_PER_TOUCHING = 2
 
 
 class Gaps:
@@ -72,6 +74,7 @@ class TraceSource:
         self.applied = np.zeros(0, dtype=np.int64)
         self.config = None
         self.ended = False
+        self.max_new_ids = IDS_PER_TOUCHING  # set from the trace by ``start``
         self.end_index: int | None = None
         self.next_index = 0
         self.stats = TraceStats()
@@ -92,6 +95,7 @@ class TraceSource:
         if not self.ended:
             self._read_more()
         self.applied = apply_index(self.pending.t_s, tracker_config)
+        self.max_new_ids = IDS_PER_TOUCHING * max(1, most_touching(self.pending))
         if self.until_s is not None:
             quantum = tracker_config.quantum
             span = (self.until_s - tracker_config.t0_s) * tracker_config.rate_hz / quantum
@@ -164,6 +168,11 @@ class TraceSource:
         while not self.ended and (self.applied.size == 0 or self.applied[-1] < end):
             self._read_more()
         hi = int(np.searchsorted(self.applied, end))
+        cut = self._new_id_cut(hi)
+        if cut is not None:  # end before the first finger id too many (one block at least)
+            n = max(1, cut // block - k)
+            end = (k + n) * block
+            hi = int(np.searchsorted(self.applied, end))
         taken = self.pending.slice(0, hi) if hi else None
         if hi:
             self.pending = self.pending.slice(hi, len(self.pending))
@@ -177,6 +186,17 @@ class TraceSource:
             n_run = n
         self.next_index = (k + n_run) * block
         return taken, n_run
+
+    def _new_id_cut(self, hi: int) -> int | None:
+        """Output index at which the first of ``pending[:hi]``'s samples of a finger id
+        beyond the first :attr:`max_new_ids` takes effect, or None. A pipeline call's
+        arrays have a row per finger id it sees, so a log whose touches each bring a new
+        id (Android's tracking ids) would otherwise cost per call what its ids, not its
+        fingers, add up to."""
+        ids, first = np.unique(self.pending.finger[:hi], return_index=True)
+        if ids.size <= self.max_new_ids:
+            return None
+        return int(self.applied[np.sort(first)[self.max_new_ids]])
 
     @property
     def done(self) -> bool:
