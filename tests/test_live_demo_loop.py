@@ -108,7 +108,7 @@ def test_a_frame_that_never_ends_holds_up_neither_the_finger_nor_the_stop(gl, tm
         window.inbox.put(("button", False))
         window.inbox.put(("key", "space", False))
         wait_for(haptic.estop.is_set, "the emergency stop waited for the frame")
-        touches = [haptic.touches.get(timeout=120.0) for _ in range(51)]
+        touches = [haptic.touches.get(timeout=120.0)[0] for _ in range(51)]  # one finger an item
         assert loop.frames == 0  # all that while, the first frame was not done
     finally:
         window.unstick()
@@ -140,7 +140,7 @@ def test_a_late_batch_is_spread_over_the_time_it_covers(gl, tmp_path):
             loop.on_cursor(x, 240.0)
         loop.on_button(False)
         loop.flush_mouse()
-        got = [haptic.touches.get_nowait() for _ in range(haptic.touches.qsize())]
+        got = [sample for _ in range(haptic.touches.qsize()) for sample in haptic.touches.get_nowait()]
     finally:
         loop.close()
         window.close()
@@ -166,7 +166,7 @@ def test_force_changes_while_still_make_a_sample_and_reach_a_touch_screen(gl, tm
         loop.set_force(0.9)
         loop.flush_mouse()
         assert haptic.touches.qsize() == 2
-        assert [haptic.touches.get_nowait()[4] for _ in range(2)] == [0.5, 0.9]
+        assert [haptic.touches.get_nowait()[0][4] for _ in range(2)] == [0.5, 0.9]
         assert haptic.touch_force.value == 0.9  # what a touch screen's fingers press with
     finally:
         loop.close()
@@ -191,7 +191,7 @@ def test_a_failed_touch_screen_hands_the_fingers_to_the_mouse(gl, tmp_path):
         assert "evdev test stopped" in loop.error and "No such device" in loop.error
         loop.on_button(True)  # now the mouse touches
         loop.flush_mouse()
-        assert haptic.touches.get_nowait()[1] == 0
+        assert haptic.touches.get_nowait()[0][1] == 0
     finally:
         loop.close()
         window.close()

@@ -55,7 +55,7 @@ def test_samples_reach_the_haptic_queue_in_mm_on_its_clock_with_the_set_force():
                      lambda: haptic.touch_force.value, clock=source_clock)
     n = pump.forward([TouchSample(999.98, 3, 0.25, 0.5, 0.5, DOWN),
                       TouchSample(999.99, 3, 0.5, 0.5, 0.5, MOVE)])
-    queued = [haptic.touches.get_nowait() for _ in range(2)]
+    queued = [haptic.touches.get_nowait()[0] for _ in range(2)]  # one sample an item
     assert n == 2 and pump.samples == 2 and haptic.touches.empty()
     np.testing.assert_allclose([q[0] for q in queued], [1.98, 1.99], atol=1e-9)
     assert [q[1:] for q in queued] == [(3, 27.0, 32.4, 0.8, DOWN), (3, 54.0, 32.4, 0.8, MOVE)]
@@ -70,7 +70,7 @@ def test_positions_follow_the_scene_shown_now():
     pump.forward([TouchSample(0.0, 0, 0.5, 0.5, 0.5, DOWN)])
     shown[0] = beam
     pump.forward([TouchSample(0.0, 0, 0.5, 0.5, 0.5, UP)])
-    got = [haptic.touches.get_nowait()[2:4] for _ in range(2)]
+    got = [haptic.touches.get_nowait()[0][2:4] for _ in range(2)]
     assert got == [(54.0, 32.4), (175.0, 3.0)]
 
 
@@ -83,7 +83,7 @@ def test_a_failing_source_is_closed_and_reported_once():
     haptic.pump.start()
     haptic.pump.join(WAIT_S)
     assert not haptic.pump.is_alive() and source.closed == 1
-    assert haptic.touches.get_nowait()[1:4] == (0, 54.0, 32.4)
+    assert haptic.touches.get_nowait()[0][1:4] == (0, 54.0, 32.4)
     assert haptic.input_error() == "read failed (No such device)"
     assert haptic.input_error() is None  # once
     haptic.pump.stop()

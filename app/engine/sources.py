@@ -259,9 +259,10 @@ class TraceStats:
 
 
 class QueueSource:
-    """Live touch samples from a queue of ``(t_s, finger, x_mm, y_mm, force_n, event)``
-    tuples stamped on the output clock (s since the run's start); a sample is handed out
-    with the first block starting at or after its stamp. Never ends by itself."""
+    """Live touch samples from a queue whose items are lists of ``(t_s, finger, x_mm,
+    y_mm, force_n, event)`` tuples stamped on the output clock (s since the run's start;
+    the samples of one item arrive together); a sample is handed out with the first block
+    starting at or after its stamp. Never ends by itself."""
 
     done = False
 
@@ -273,7 +274,7 @@ class QueueSource:
     def take(self, k: int, n: int) -> tuple[Trace | None, int]:
         while True:
             try:
-                self._pending.append(self.touches.get_nowait())
+                self._pending.extend(self.touches.get_nowait())
             except queue.Empty:
                 break
         start_s = k * self.block_s

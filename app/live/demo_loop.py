@@ -176,10 +176,11 @@ class DemoLoop:
         """The mouse's finger 0 at ``px`` at ``t_s`` (haptic clock; in follow mode with
         finger 1, ``follow_mm`` to its right, at the same instant)."""
         x, y = self._mm(px)
-        code, t = EVENTS[event], t_s
-        self.haptic.touch_at(t, 0, x, y, self.force_n, code)
+        code = EVENTS[event]
+        fingers = [(0, x, y, self.force_n, code)]
         if self.follow_mm is not None:
-            self.haptic.touch_at(t, 1, x + self.follow_mm, y, self.force_n, code)
+            fingers.append((1, x + self.follow_mm, y, self.force_n, code))
+        self.haptic.touches_at(t_s, fingers)
         self._sent = (px, self.force_n)
 
     # The callbacks only note what happened, in order; flush_mouse(), after each batch of

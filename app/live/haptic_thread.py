@@ -107,12 +107,19 @@ class TouchInput:
         ``rendering.input.trace_file`` code), moved into [the last stamp, now]: a live batch must
         not go back in time, and a sample from the future would wait. Never blocks (a full
         queue drops the sample, counted). Call it from one thread (the window's)."""
+        self.touches_at(t_s, [(finger, x_mm, y_mm, force_n, event)])
+
+    def touches_at(self, t_s: float, fingers) -> None:
+        """:meth:`touch_at` for several fingers at one instant, ``fingers`` a list of
+        ``(finger, x_mm, y_mm, force_n, event)``: one stamp and one queue item, so the
+        haptic side takes them in the same block however the window's thread is scheduled
+        (follow mode's second finger came a block late under a CPU hog)."""
         t = max(min(float(t_s), self.now()), self._last_stamp)
         self._last_stamp = t
         try:
-            self.touches.put_nowait((t, finger, x_mm, y_mm, force_n, event))
+            self.touches.put_nowait([(t, *finger) for finger in fingers])
         except queue.Full:
-            self.stats.dropped_touches += 1
+            self.stats.dropped_touches += len(fingers)
 
 
 class LiveStage:
