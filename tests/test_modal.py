@@ -158,3 +158,22 @@ def test_all_zero_shapes_give_zero_not_nan():
 def test_bad_inputs(kwargs, match):
     with pytest.raises(ModesError, match=match):
         solve(**kwargs)
+
+
+@pytest.mark.parametrize("method", ["exact", "regularised", "bounded"])
+@pytest.mark.parametrize("real_phi", [True, False])
+def test_complex_and_integer_actuator_matrices(method, real_phi):
+    """A complex actuator matrix (a phased drive) on real or complex Phi_f: c = A W_M to
+    round-off, within the limits, and the same answer whatever the dtype of Phi_f; an
+    integer matrix is the float64 one (the compiled real-Phi_f end once failed on both)."""
+    phi = PHI_FINGERS if real_phi else PHI_FINGERS + 0j
+    act = np.array([[1, 1j], [0, 1]])
+    sol = solve(phi, [0.4, 0.1], method, actuators=act, limits_um=0.3)
+    assert_allclose(sol.commands_um, sol.modal_um @ act.T, atol=1e-15)
+    assert np.abs(sol.commands_um).max() <= 0.3 * (1 + 1e-12)
+    other = solve(PHI_FINGERS + 0j if real_phi else PHI_FINGERS, [0.4, 0.1], method,
+                  actuators=act, limits_um=0.3)
+    assert_allclose(sol.commands_um, other.commands_um, atol=1e-15)
+    ints = solve(phi, [0.4, 0.1], method, actuators=[[1, 0], [1, 2]], limits_um=2)
+    floats = solve(phi, [0.4, 0.1], method, actuators=[[1.0, 0.0], [1.0, 2.0]], limits_um=2)
+    assert_allclose(ints.commands_um, floats.commands_um, rtol=0, atol=0)

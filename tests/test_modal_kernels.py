@@ -145,9 +145,16 @@ def test_forward_and_magnitude_are_the_numpy_formulas_bit_for_bit(system, real_p
     assert_same_bits(forward(phi, modal.real), numpy_forward(phi, modal.real))
     z = numpy_forward(phi, modal)
     assert_same_bits(magnitude(z), np.sqrt(z.real * z.real + z.imag * z.imag))
+    # real: np.abs, the same bits as sqrt(x^2) while x^2 does not underflow (all drawn here)
     assert_same_bits(magnitude(z.real), np.sqrt(z.real * z.real + np.zeros(z.shape)))
     swapped = np.swapaxes(np.stack([phi, phi * 2]) if shared else phi[None], 0, 1)  # a strided view
     assert_same_bits(forward(swapped, modal[:swapped.shape[0]]), numpy_forward(swapped, modal[:swapped.shape[0]]))
+
+
+def test_magnitude_of_real_amplitudes_is_exact_where_squares_underflow_or_overflow():
+    x = np.array([1e-160, -3e-200, 5e-324, -0.0, 2e200, -np.inf, 7])
+    assert_same_bits(magnitude(x), np.array([1e-160, 3e-200, 5e-324, 0.0, 2e200, np.inf, 7.0]))
+    assert_same_bits(magnitude(np.array([-3, 4])), np.array([3.0, 4.0]))
 
 
 def numpy_scale(commands, modal, limits):
