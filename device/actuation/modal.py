@@ -160,6 +160,43 @@ def _abs(z):
     return math.sqrt(z.real * z.real + z.imag * z.imag)
 
 
+def achieved_magnitude(phi_all, modal, contact) -> np.ndarray:
+    """|Phi(x_f) W_M| under each finger where touching, else 0, as :func:`forward` and
+    :func:`magnitude` compute it (bit for bit).
+
+    Parameters
+    ----------
+    phi_all : float64 (F, n, p)
+        Mode shapes of the p modes at each finger's position, sample by sample.
+    modal : complex128 (n, p)
+        Modal amplitudes W_M of each sample (um).
+    contact : bool (F, n)
+        Where the finger touches.
+
+    Returns
+    -------
+    float64 (F, n)
+        Amplitude under each finger (um zero-to-peak).
+    """
+    return _achieved_kernel(np.asarray(phi_all, dtype=np.float64),
+                            np.asarray(modal, dtype=np.complex128), np.asarray(contact, dtype=np.bool_))
+
+
+# here, not in its caller's module: numba's cache checks only the file of the cached
+# function, so a kernel elsewhere inlining _abs / _combination would run stale code
+# after an edit to this file
+@njit(cache=True, nogil=True)
+def _achieved_kernel(phi_all, modal, contact):
+    """:func:`achieved_magnitude`."""
+    f_count, n = contact.shape
+    out = np.zeros((f_count, n))
+    for f in range(f_count):
+        for i in range(n):
+            if contact[f, i]:
+                out[f, i] = _abs(_combination(phi_all[f, i], modal, i))
+    return out
+
+
 def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=None,
           limits_um=None, rcond: float = DEFAULT_RCOND) -> ModalSolution:
     """Modal amplitudes and actuator commands giving ``wanted_um`` under the fingers.

@@ -39,7 +39,7 @@ from numba import njit
 
 from device.actuation.base import Actuated, touch_rank
 from device.structures.beam import FreeFreeBeam, ModesError
-from device.actuation.modal import _abs, _combination, magnitude, solve
+from device.actuation.modal import achieved_magnitude, magnitude, solve
 from device.structures.plate2d import ACTUATOR_NAMES, ACTUATORS, Plate2D
 
 #: largest condition number accepted for the actuator matrix (an actuator on a node of a
@@ -124,11 +124,15 @@ class ModalActuation:
         # + 0.0 turns -0.0 into 0.0: a zero command has phase 0, whatever the sign of
         # the zeros the solve happened to produce
         return Actuated(commands_um=amplitude, phases_rad=np.angle(sol.commands_um + 0.0),
-                        achieved_um=_achieved(phi_all, sol.modal_um, contact),
+                        achieved_um=achieved_magnitude(phi_all, sol.modal_um, contact),
                         limited=int(np.count_nonzero(sol.limited)),
                         off_structure=int(np.count_nonzero(off & contact)))
 
 
+# compiled kernels cached here call no compiled function of another module: numba's cache
+# checks only this file, so one inlining another module's helpers (modal.py's _abs,
+# _combination) would keep running the old code after that module changed; those live
+# in modal.py (achieved_magnitude)
 @njit(cache=True, nogil=True)
 def _serve_rows(phi_all, wanted_um, rank, p):
     """The padded p x p systems (n, p, p) and wanted amplitudes (n, p): finger f fills
@@ -143,19 +147,6 @@ def _serve_rows(phi_all, wanted_um, rank, p):
                 phi[i, row, :] = phi_all[f, i, :]
                 wanted[i, row] = wanted_um[f, i]
     return phi, wanted
-
-
-@njit(cache=True, nogil=True)
-def _achieved(phi_all, modal, contact):
-    """|Phi(x_f) W_M| under each finger (F, n) where touching, else 0 (step 4 of the module
-    docstring), as ``device.actuation.modal.forward`` and ``magnitude`` compute it."""
-    f_count, n = contact.shape
-    out = np.zeros((f_count, n))
-    for f in range(f_count):
-        for i in range(n):
-            if contact[f, i]:
-                out[f, i] = _abs(_combination(phi_all[f, i], modal, i))
-    return out
 
 
 def beam_actuation(spec, amplitude_limit_um: float) -> ModalActuation:
