@@ -170,3 +170,39 @@ def test_an_arma_model_renders_its_spectrum_within_1_db(tmp_path):
     assert err.max() < 1.0, f"worst {err.max():.2f} dB"
     without_b = _db_error(mu, lambda f: 0.03 ** 2 * gain ** 2 * _spectrum(_lsf(PEAKS[1], 1e4), VARS[1], f, 1e4))
     assert without_b.max() > 3.0  # the zeros shaped it
+
+
+def _no_lsf(a):
+    raise ValueError("found 3 line spectral frequencies of an order-4 A(z), expected 4: ...")
+
+
+def test_a_failed_ar_fit_names_the_file_in_validate(tmp_path, monkeypatch, capsys):
+    """poly_to_lsf's ValueError from the AR fit of an ARMA model (parse) is a TextureError
+    naming the model file and the model: one line from ``frictex validate``, exit 2."""
+    from app.commands.cli import main
+    (tmp_path / "wood.xml").write_text(published_xml(ma=((300, 0.8), 1.5)), encoding="utf-8")
+    scene = write(tmp_path, BODY)
+    monkeypatch.setattr("textures.hatt.poly_to_lsf", _no_lsf)
+    with pytest.raises(TextureError, match=r"scene\.toml:9: layer\[1\]\.model: .*wood\.xml: model 1: "
+                                           r"its ARMA model has no AR\(100\) fit: found 3"):
+        load_scene(scene)
+    capsys.readouterr()
+    assert main(["validate", str(scene)]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("frictex: error: ") and "wood.xml: model 1" in err[0], err
+
+
+def test_a_failed_resampling_names_the_file_in_replay(tmp_path, monkeypatch, capsys):
+    """The same from the fit that resamples a 5 kHz model to the 10 kHz output, when the
+    renderer is built: ``frictex replay`` prints one line naming the file, exit 2."""
+    from app.commands.cli import main
+    (tmp_path / "wood.xml").write_text(published_xml(rate=5_000.0), encoding="utf-8")
+    scene = write(tmp_path, BODY)
+    model = load_scene(scene).layers[0].model
+    monkeypatch.setattr("textures.hatt.poly_to_lsf", _no_lsf)
+    with pytest.raises(TextureError, match=r"wood\.xml: model 1: its AR\(16\) fit at 10000 Hz failed"):
+        model.resampled(10_000.0)
+    capsys.readouterr()
+    assert main(["replay", str(scene), "swipe-40mms-50hz", "--out", str(tmp_path / "r"), "--quiet"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("frictex: error: ") and "wood.xml: model 1" in err[0], err

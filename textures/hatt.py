@@ -273,7 +273,8 @@ class TextureModel:
 
     speeds_mm_s, forces_n : (M,) vertex positions. triangles : (T, 3) 0-based vertex
     indices. lsf : (M, p) line spectral frequencies (rad). variances : (M,) innovation
-    variances. rate_hz : the rate the models were made at.
+    variances. rate_hz : the rate the models were made at (Hz). source : where the model
+    came from (its file's path), for error messages.
     """
 
     speeds_mm_s: np.ndarray
@@ -282,6 +283,7 @@ class TextureModel:
     lsf: np.ndarray
     variances: np.ndarray
     rate_hz: float = HATT_RATE_HZ
+    source: str = "HaTT model"
     _tri: tuple = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -317,16 +319,25 @@ class TextureModel:
         return blend_at(*self.arrays, float(speed_mm_s), float(force_n))
 
     def resampled(self, rate_hz: float) -> "TextureModel":
-        """The same textures as AR models at ``rate_hz`` (see the module docstring)."""
+        """The same textures as AR models at ``rate_hz`` (Hz; see the module docstring).
+
+        Raises TextureError naming :attr:`source` and the model where a fit has no line
+        spectral frequencies (:func:`poly_to_lsf`)."""
         if rate_hz == self.rate_hz:
             return self
         order = min(4 * self.order, MAX_ORDER)
-        fits = [fit_ar(lambda f, a=lsf_to_poly(w): ar_psd(a, 1.0, f, self.rate_hz), self.rate_hz,
-                       rate_hz, order) for w in self.lsf]
+        fits = []
+        for k, w in enumerate(self.lsf):
+            try:
+                fits.append(fit_ar(lambda f, a=lsf_to_poly(w): ar_psd(a, 1.0, f, self.rate_hz),
+                                   self.rate_hz, rate_hz, order))
+            except ValueError as exc:
+                raise TextureError(f"{self.source}: model {k + 1}: its AR({order}) fit at "
+                                   f"{rate_hz:g} Hz failed: {exc}") from None
         return TextureModel(self.speeds_mm_s, self.forces_n, self.triangles,
                             np.array([lsf for lsf, _ in fits]),
                             np.array([gain * v for (_, gain), v in zip(fits, self.variances)]),
-                            float(rate_hz))
+                            float(rate_hz), self.source)
 
 
 def fit_ar(psd, from_rate_hz: float, rate_hz: float, order: int, grid: int = 1 << 14,
@@ -448,8 +459,11 @@ def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
         if ma_order:  # y = gain B(z) / A(z) e: its AR(MAX_ORDER) fit (module docstring)
             gain = _scalar(node, "gain", here)
             b, a = lsf_to_poly(_polynomial(node, here, "MA", ma_order)), lsf_to_poly(w)
-            w, shape = fit_ar(lambda f: ar_psd(a, 1.0, f, rate) * response2(b, f, rate),
-                              rate, rate, MAX_ORDER)
+            try:
+                w, shape = fit_ar(lambda f: ar_psd(a, 1.0, f, rate) * response2(b, f, rate),
+                                  rate, rate, MAX_ORDER)
+            except ValueError as exc:
+                raise TextureError(f"{here}: its ARMA model has no AR({MAX_ORDER}) fit: {exc}") from None
             v *= gain * gain * shape
         sp = _scalar(node, "speedMod", here) * scale["SpeedUnits"]
         fo = _scalar(node, "forceMod", here)
@@ -464,7 +478,8 @@ def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
     tri = np.array(tris)
     if (tri != np.round(tri)).any() or tri.min() < 1 or tri.max() > m:
         raise TextureError(f"{where}: <tri> vertex numbers must be integers 1 to {m}")
-    model = TextureModel(speeds, forces, tri.astype(np.intp) - 1, np.array(lsf), np.array(var), rate)
+    model = TextureModel(speeds, forces, tri.astype(np.intp) - 1, np.array(lsf), np.array(var), rate,
+                         where)
     if not np.isfinite(model._tri[2]).all():
         raise TextureError(f"{where}: a <tri> triangle is degenerate (its vertices are in a line)")
     return model
