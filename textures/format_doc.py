@@ -78,6 +78,10 @@ def _kind(spec) -> str:
 def _table(title: str, specs: dict) -> list[str]:
     lines = [f"## {title}", "", "| key | value | range | default |", "|---|---|---|---|"]
     for key, spec in specs.items():
+        if isinstance(spec, L.Retired):
+            lines.append(f"| `{key}` | no longer used: accepted, ignored, with a warning ({spec.why}) "
+                         f"| - | - |")
+            continue
         inner = spec.item if isinstance(spec, (L.NumList, L.Rows)) else spec
         lines.append(f"| `{key}` | {_kind(spec)} | {_range(inner) or '-'} | {_default(spec)} |")
     return lines + [""]

@@ -277,7 +277,16 @@ class Rows:
     default: Any = REQUIRED
 
 
-Spec = Num | Int | Choice | Text | Flag | Colour | Selector | NumList | Rows
+@dataclass(frozen=True)
+class Retired:
+    """A key an earlier release documented and this one no longer uses: accepted with any
+    value and ignored, with one warning saying ``why`` (format 1 files written for that
+    release keep loading)."""
+
+    why: str
+
+
+Spec = Num | Int | Choice | Text | Flag | Colour | Selector | NumList | Rows | Retired
 
 #: Sensible ranges (texture files are written by hand; a value beyond these is a typo or a
 #: wrong unit, and refusing it keeps every later stage finite):
@@ -313,7 +322,11 @@ DEVICE = {"profile": Choice(tuple(profiles.DEVICE_PROFILES), _DEVICE.profile),
           "amplitude_limit_um": replace(UM, default=_DEVICE.amplitude_limit_um),
           "normal_force_n": replace(FORCE, default=_DEVICE.normal_force_n)}
 FRICTION = {"b_per_um": Num("1/um", _FRICTION.b_per_um, gt=0.0),
-            "asymptote_per_n": Num("1/N", _FRICTION.asymptote_per_n, gt=0.0)}
+            "asymptote_per_n": Num("1/N", _FRICTION.asymptote_per_n, gt=0.0),
+            # was a cap on seed 003's asymptote (relative friction, default 0.95)
+            "asymptote_cap": Retired("the friction model holds up to an asymptote of 1 "
+                                     "(seed 003, eq 2) and frictex warns where a force takes "
+                                     "it there; delete the key")}
 CALIBRATION = {"amplitudes_um": NumList(Num("um zero-to-peak", ge=0.0, le=MAX_UM), min_len=2),
                "forces_n": NumList(Num("N", ge=0.0, le=MAX_FORCE_N)),
                "mu": Rows(MU)}
@@ -512,8 +525,12 @@ class _Reader:
             if key not in known:
                 self.report(path + (key,), f"unknown key{_did_you_mean(key, known)}; "
                                            f"known here: {', '.join(known)}")
+        for key, s in spec.items():
+            if isinstance(s, Retired) and key in value:
+                self.report(path + (key,), f"no longer used, ignored: {s.why}", warning=True)
         return {key: self.value(value[key], path + (key,), s) if key in value
-                else self.missing(path + (key,), s) for key, s in spec.items()}
+                else self.missing(path + (key,), s) for key, s in spec.items()
+                if not isinstance(s, Retired)}
 
     def missing(self, path: KeyPath, spec: Spec):
         if spec.default is REQUIRED:
