@@ -182,3 +182,62 @@ def test_version_2_accounts_for_every_stored_sample_and_reports_a_trip():
             status.buffer_end) == (350, 250, 1, 0, 350)
 
 
+
+
+class CountingSensor(PatternSensor):
+    """PatternSensor counting the ticks read."""
+
+    def __init__(self):
+        self.ticks_read = 0
+
+    def read(self, tick0, setpoint_um):
+        self.ticks_read += len(setpoint_um)
+        return super().read(tick0, setpoint_um)
+
+
+def _reports(cls, cfg, sensor):
+    core, host = cls(cfg, sensor=sensor), Host(version=3)  # reports are version 3
+    said = list(p.Decoder().feed(core.receive(host(p.Hello(100)), 0.0)))
+    t = 0.0
+    for b in range(0, 2000, 50):
+        t = max(b / RATE - 0.02, 0.0)
+        said += p.Decoder().feed(core.advance_to(t))
+        core.receive(host(block(b, np.full(50, 1.0))), t)
+        core.receive(host(p.Heartbeat(b)), t)
+    while t < 0.5:
+        t += 0.005
+        said += p.Decoder().feed(core.advance_to(t))
+        core.receive(host(p.Heartbeat(0)), t)
+    return [f.message for f in said if isinstance(f.message, p.ForceReport)], core
+
+
+@pytest.mark.parametrize("cls", [DeviceCore, CDeviceCore])
+def test_a_sensor_is_ignored_unless_the_device_announces_force_reports(cls):
+    """Info without ForceReports (no lateral_n, no finger): an explicit sensor is never
+    read and no ForceReport is sent, by either core; with them announced, it is read."""
+    sensor = CountingSensor()
+    cfg = config(limits_um=(3.0,), protocol_version=3)
+    assert not cfg.force_reports and not cfg.info().has_force_reports
+    reports, _ = _reports(cls, cfg, sensor)
+    assert (reports, sensor.ticks_read) == ([], 0)
+    reports, _ = _reports(cls, dataclasses.replace(cfg, lateral_n=0.0), sensor)
+    assert len(reports) > 0 and sensor.ticks_read > 0
+
+
+def test_the_c_core_reads_the_sensor_about_once_per_tick():
+    """The C core reads ahead at most one report's span (force_decimation * force_pairs
+    = 40 ticks) and plays only what it read: advanced 40 ms (400 ticks) at a time, each
+    tick is read about once (re-reads where a pass ends at a report), not the rest of
+    the call's ticks on every pass (one pass per report: about 5.5 times)."""
+    sensor = CountingSensor()
+    cfg = config(limits_um=(3.0,), protocol_version=3, lateral_n=0.0, watchdog_ms=49, ramp_ms=1)
+    core, host = CDeviceCore(cfg, sensor=sensor), Host(version=3)
+    said = list(p.Decoder().feed(core.receive(host(p.Hello(100)), 0.0)))
+    t = 0.0
+    for b in range(0, 4000, 400):
+        core.receive(host(block(b, np.full(400, 1.0))), t)
+        core.receive(host(p.Heartbeat(b)), t)
+        t += 0.04
+        said += p.Decoder().feed(core.advance_to(t))
+    assert sum(isinstance(f.message, p.ForceReport) for f in said) >= 90
+    assert core.tick <= sensor.ticks_read <= 1.5 * core.tick, (sensor.ticks_read, core.tick)

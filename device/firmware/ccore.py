@@ -66,7 +66,14 @@ def _load(path: Path):
 
 
 class CDeviceCore:
-    """The C core with the interface of the reference ``DeviceCore`` (see module docstring)."""
+    """The C core with the interface of the reference ``DeviceCore`` (see module docstring).
+
+    ``sensor`` (used only when ``config.force_reports``, as ``DeviceCore`` does) must be a
+    pure function of the tick: :meth:`advance_to` reads it one report's span
+    (``force_decimation * force_pairs`` ticks) ahead of the core and plays at most those
+    ticks per pass; ticks a pass does not reach (it ends at each completed report) are
+    read again on the next.
+    """
 
     def __init__(self, config, log=None, plate_log=None, sensor=None, *,
                  library: Path | None = None):
@@ -80,7 +87,12 @@ class CDeviceCore:
         if config.finger is not None and sensor is None:
             raise ValueError("the C core's host board has no simulated finger; give it a "
                              "sensor that does not read the setpoints")
-        self.sensor = (sensor or config.force_sensor()) if config.force_reports else None
+        # as DeviceCore: a sensor is read only if Info announces ForceReports
+        self.sensor = None if not config.force_reports else \
+            (config.force_sensor() if sensor is None else sensor)
+        #: ticks read ahead of the core, and played, per pass: fwsim_advance returns after
+        #: every completed report, so a pass rarely uses more than one report's span
+        self._ahead = max(1, min(config.force_decimation * config.force_pairs, _CHUNK))
         limits = tuple(config.limits_um)
         self._name = config.name.encode("utf-8")  # the core keeps a pointer to it
         params = params_type(
@@ -172,14 +184,14 @@ class CDeviceCore:
         poll = ctypes.create_string_buffer(1024)
         while True:
             t0 = self._values()["tick"]
-            forces = None
-            if self.sensor is not None:
-                m = min(max(end - t0, 0), _CHUNK)
-                lateral, normal = self.sensor.read(t0, np.zeros((m, self.config.channels)))
-                self._forces[:m, 0] = p.force_to_wire(lateral)
-                self._forces[:m, 1] = p.force_to_wire(normal)
+            forces, most = None, _CHUNK
+            if self.sensor is not None:  # the pass plays only the ticks read
+                most = min(max(end - t0, 0), self._ahead)
+                lateral, normal = self.sensor.read(t0, np.zeros((most, self.config.channels)))
+                self._forces[:most, 0] = p.force_to_wire(lateral)
+                self._forces[:most, 1] = p.force_to_wire(normal)
                 forces = self._forces.ctypes.data
-            n = self._lib.fwsim_advance(self._mem, t_s, _CHUNK,
+            n = self._lib.fwsim_advance(self._mem, t_s, most,
                                         *(b.ctypes.data for b in self._buf), forces)
             k = self._lib.fwsim_poll(self._mem, poll, len(poll))
             said += poll.raw[:k]

@@ -180,7 +180,8 @@ class DeviceCore:
     the device sends on its own: a Flushed after a watchdog trip, ForceReports). ``log``
     and ``plate_log`` are optional callables receiving the played samples and the per-tick
     output (see :class:`CsvLog`). ``sensor``: the force sensor (``simsensor``; default:
-    the one ``config`` describes).
+    the one ``config`` describes); used only when ``config.force_reports`` (the device's
+    Info announces ForceReports), else ignored, as the C core does.
     """
 
     config: DeviceConfig = field(default_factory=DeviceConfig)
@@ -223,7 +224,9 @@ class DeviceCore:
         self.plate_um = np.zeros(c.channels)
         self.stopped = False                   # a Stop finished: output is zero
         self._tx_seq = 0
-        if self.sensor is None and c.force_reports:
+        if not c.force_reports:
+            self.sensor = None  # Info announces no ForceReports: none is sent
+        elif self.sensor is None:
             self.sensor = c.force_sensor()
         self._windows = ForceWindows(c.force_decimation, c.force_pairs)
 
