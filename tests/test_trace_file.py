@@ -337,3 +337,14 @@ def test_lines_read_in_blocks_as_line_by_line(data, block, limit):
         else:
             assert problem is None, problem
     assert got == want
+
+
+def test_a_row_search_that_finds_no_problem_says_so():
+    """_first_row_problem always raises: rows that fail together but pass one by one (a
+    parser bug, not a bad file) are an AssertionError naming the lines, never a return
+    that would leave the columns unset (an UnboundLocalError later)."""
+    from rendering.input.trace_file import TimeOrder, _RowParser
+    parser = _RowParser(["t_s", "finger", "x_mm", "y_mm"], "good.csv", TimeOrder(), False, 100)
+    rows = [(2, ["0.0", "1", "3", "4"]), (3, ["0.1", "1", "3", "4"])]
+    with pytest.raises(AssertionError, match="good.csv: rows 2 to 3"):
+        parser._first_row_problem(rows)

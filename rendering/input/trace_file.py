@@ -39,6 +39,7 @@ import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NoReturn
 
 import numpy as np
 
@@ -344,7 +345,7 @@ class _RowParser:
             event[given] = [_EVENT_CODES[words[k]] for k in given]
         return t, fv, x, y, force, event
 
-    def _first_row_problem(self, numbered_rows) -> None:
+    def _first_row_problem(self, numbered_rows) -> NoReturn:
         """Raise the TraceError of the first row in file order that holds a problem: a
         short row, a field that is not a number or an event, or (before it) a value out
         of range or a step back in time under ``strict``."""
@@ -358,6 +359,9 @@ class _RowParser:
                     self._check_values(head, t, fv, x, y, force)
                     self._time_order(t, np.array([ln for ln, _ in head], dtype=np.int64))
                 self._row_problem(line, row)
+        # the rows failed together but none alone: a bug here, not a bad file
+        raise AssertionError(f"{self.where}: rows {numbered_rows[0][0]} to {numbered_rows[-1][0]} "
+                             f"failed to parse together, but no row has a problem")
 
     def _check_values(self, numbered_rows, t, fv, x, y, force, raise_now: bool = True) -> int:
         """Index of the first row with a value out of its range (``len(t)`` if none);
