@@ -21,6 +21,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 import numpy as np
+from numba import njit
 
 from textures.dynamic import DynamicLayer
 from textures.errors import TextureError
@@ -55,11 +56,22 @@ def _along(x, y, x0: float, y0: float, normal_deg: float):
 
 def _cosine_fall(u, du_dx, du_dy, height_mm: float):
     """A raised-cosine fall from ``height_mm`` at u <= 0 to 0 at u >= 1, and its gradient
-    given u's gradient: h = H (1 + cos(pi u)) / 2 on [0, 1]."""
-    uc = np.clip(u, 0.0, 1.0)
-    h = height_mm * 0.5 * (1.0 + np.cos(np.pi * uc))
-    slope = np.where((u > 0.0) & (u < 1.0), -height_mm * 0.5 * np.pi * np.sin(np.pi * uc), 0.0)
-    return h, slope * du_dx, slope * du_dy
+    given u's gradient (arrays of one shape): h = H (1 + cos(pi u)) / 2 on [0, 1]."""
+    h, gx, gy = _cosine_fall_kernel(u.ravel(), du_dx.ravel(), du_dy.ravel(), height_mm)
+    return h.reshape(u.shape), gx.reshape(u.shape), gy.reshape(u.shape)
+
+
+@njit(cache=True, nogil=True)
+def _cosine_fall_kernel(u, du_dx, du_dy, height_mm):
+    """:func:`_cosine_fall` on (m,) arrays, one pass."""
+    h, gx, gy = np.empty(u.size), np.empty(u.size), np.empty(u.size)
+    for i in range(u.size):
+        uc = 0.0 if u[i] < 0.0 else (1.0 if u[i] > 1.0 else u[i])  # NaN stays NaN
+        h[i] = height_mm * 0.5 * (1.0 + np.cos(np.pi * uc))
+        on = 0.0 < u[i] < 1.0
+        slope = -height_mm * 0.5 * np.pi * np.sin(np.pi * uc) if on else 0.0
+        gx[i], gy[i] = slope * du_dx[i], slope * du_dy[i]
+    return h, gx, gy
 
 
 @dataclass(frozen=True)
@@ -168,42 +180,51 @@ class HeightMap:
     y_mm: float
     width_mm: float
     height_mm: float
-    _grad: tuple = field(init=False, repr=False)
+    _planes: np.ndarray = field(init=False, repr=False)  # (3, rows, cols): h, dh/dx, dh/dy
 
     def __post_init__(self):
         rows, cols = self.heights_mm.shape
         spacing = (self.height_mm / rows, self.width_mm / cols)
         gy, gx = (np.gradient(self.heights_mm, *spacing) if min(rows, cols) > 1
                   else (np.zeros_like(self.heights_mm),) * 2)
-        object.__setattr__(self, "_grad", (gx, gy))
-
-    def _sample(self, x, y, planes):
-        rows, cols = self.heights_mm.shape
-        u = (np.asarray(x, dtype=np.float64) - self.x_mm) / self.width_mm
-        v = (np.asarray(y, dtype=np.float64) - self.y_mm) / self.height_mm
-        fx = np.clip(u * cols - 0.5, 0.0, cols - 1.0)
-        fy = np.clip(v * rows - 0.5, 0.0, rows - 1.0)
-        x0 = np.floor(fx).astype(np.intp)
-        y0 = np.floor(fy).astype(np.intp)
-        x1, y1 = np.minimum(x0 + 1, cols - 1), np.minimum(y0 + 1, rows - 1)
-        tx, ty = fx - x0, fy - y0
-        out = []
-        for g in planes:
-            top = g[y0, x0] * (1 - tx) + g[y0, x1] * tx
-            bottom = g[y1, x0] * (1 - tx) + g[y1, x1] * tx
-            out.append(top * (1 - ty) + bottom * ty)
-        return out
+        object.__setattr__(self, "_planes", np.stack((self.heights_mm, gx, gy)))
 
     def height_and_gradient(self, x, y):
-        inside = self.support(x, y)
-        h, gx, gy = self._sample(x, y, (self.heights_mm, *self._grad))
-        return h, np.where(inside, gx, 0.0), np.where(inside, gy, 0.0)
+        x, y = np.broadcast_arrays(np.asarray(x, dtype=np.float64),
+                                   np.asarray(y, dtype=np.float64))
+        out = _sample_map(self._planes, x.ravel(), y.ravel(),
+                          (self.x_mm, self.y_mm, self.width_mm, self.height_mm))
+        return out[0].reshape(x.shape), out[1].reshape(x.shape), out[2].reshape(x.shape)
 
     def support(self, x, y):
         x = np.asarray(x, dtype=np.float64)
         y = np.asarray(y, dtype=np.float64)
         return ((x >= self.x_mm) & (x <= self.x_mm + self.width_mm)
                 & (y >= self.y_mm) & (y <= self.y_mm + self.height_mm))
+
+
+@njit(cache=True, nogil=True)
+def _sample_map(planes, x, y, placement):
+    """(3, m) height (mm) and gradient (mm per mm) at positions (x, y) (mm, (m,)) of a
+    :class:`HeightMap` whose ``planes`` are (h, dh/dx, dh/dy), each (rows, cols), placed
+    at ``placement`` = (x_mm, y_mm, width_mm, height_mm): bilinear between pixel centres,
+    clamped to the edge pixels; outside the sprite the gradient is 0."""
+    x_mm, y_mm, width_mm, height_mm = placement
+    _, rows, cols = planes.shape
+    out = np.empty((3, x.size))
+    for i in range(x.size):
+        fx = min(max((x[i] - x_mm) / width_mm * cols - 0.5, 0.0), cols - 1.0)
+        fy = min(max((y[i] - y_mm) / height_mm * rows - 0.5, 0.0), rows - 1.0)
+        x0, y0 = int(np.floor(fx)), int(np.floor(fy))
+        x1, y1 = min(x0 + 1, cols - 1), min(y0 + 1, rows - 1)
+        tx, ty = fx - x0, fy - y0
+        inside = (x_mm <= x[i] <= x_mm + width_mm) and (y_mm <= y[i] <= y_mm + height_mm)
+        for p in range(3):
+            g = planes[p]
+            top = g[y0, x0] * (1 - tx) + g[y0, x1] * tx
+            bottom = g[y1, x0] * (1 - tx) + g[y1, x1] * tx
+            out[p, i] = top * (1 - ty) + bottom * ty if p == 0 or inside else 0.0
+    return out
 
 
 def read_height_png(path: str | Path, max_height_mm: float) -> np.ndarray:
@@ -278,6 +299,21 @@ class HeightLayer(DynamicLayer):
     def mu_of_slope(self, slope) -> np.ndarray:
         """mu' for slope s (the class docstring's saturation)."""
         s = np.asarray(slope, dtype=np.float64)
-        span = np.where(s >= 0.0, self.mu_max - self.mu_rest, self.mu_rest - self.mu_min)
-        # a zero span (mu_rest at a limit) gives 0 * tanh(+-big) = 0 there, never NaN
-        return self.mu_rest + span * np.tanh(self.gain * s / np.maximum(span, 1e-300))
+        span, mu = _saturation(s.ravel(), self.mu_max - self.mu_rest,
+                               self.mu_rest - self.mu_min, self.gain)
+        np.tanh(mu, out=mu)  # numpy's, not libm's (a kernel's): they differ in the last digit
+        mu *= span
+        mu += self.mu_rest
+        return mu.reshape(s.shape)
+
+
+@njit(cache=True, nogil=True)
+def _saturation(s, up, down, gain):
+    """The span (``up`` for s >= 0, else ``down``) and the tanh argument gain s / span of
+    :meth:`HeightLayer.mu_of_slope`, for (m,) slopes s. A zero span (mu_rest at a limit)
+    is taken as 1e-300, so 0 * tanh(+-big) = 0 there, never NaN."""
+    span, arg = np.empty(s.size), np.empty(s.size)
+    for i in range(s.size):
+        span[i] = up if s[i] >= 0.0 else down
+        arg[i] = gain * s[i] / max(span[i], 1e-300)
+    return span, arg

@@ -19,6 +19,7 @@ samples are computed once, at the output rate, when the renderer is built.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -28,15 +29,15 @@ from rendering.tracking.tracks import FingerBlock
 TRIGGER_CODES = {"down": 0, "lift": 1, "edge": 2, "force": 3}
 
 
-@dataclass(frozen=True)
-class FingerPrev:
+class FingerPrev(NamedTuple):
     """One finger's last output sample: touching, touch id, inside the region, and the
-    trigger's flag (edge: on the normal's side; force: at or above the threshold)."""
+    trigger's flag (edge: on the normal's side; force: at or above the threshold); the
+    three truths as 0 or 1, so that the fingers' rows make one int64 array."""
 
-    contact: bool = False
+    contact: int = 0
     touch_id: int = -1
-    inside: bool = False
-    flag: bool = False
+    inside: int = 0
+    flag: int = 0
 
 
 @dataclass(frozen=True)
@@ -48,14 +49,16 @@ class ClipState:
     fingers: dict = field(default_factory=dict)
 
 
-@njit(cache=True)
-def _fired(trigger, contact, touch_id, inside, flag, prev_contact, prev_touch, prev_inside,
-           prev_flag):
-    """bool (n,): the trigger fires for some finger at each sample (module docstring)."""
+@njit(cache=True, nogil=True)
+def _fired(trigger, contact, touch_id, inside, flag, prev):
+    """bool (n,): the trigger fires for some finger at each sample (module docstring);
+    and each finger's last sample, both (F, 4) int64 rows as :class:`FingerPrev`:
+    ``prev`` before the block, the returned one after it."""
     fingers, n = contact.shape
     fired = np.zeros(n, dtype=np.bool_)
+    last = np.empty((fingers, 4), dtype=np.int64)
     for i in range(fingers):
-        c0, t0, in0, f0 = prev_contact[i], prev_touch[i], prev_inside[i], prev_flag[i]
+        c0, t0, in0, f0 = prev[i, 0] != 0, prev[i, 1], prev[i, 2] != 0, prev[i, 3] != 0
         for j in range(n):
             c, t, inn, f = contact[i, j], touch_id[i, j], inside[i, j], flag[i, j]
             same = c and c0 and t == t0
@@ -69,10 +72,11 @@ def _fired(trigger, contact, touch_id, inside, flag, prev_contact, prev_touch, p
                 event = same and f and not f0 and inn
             fired[j] |= event
             c0, t0, in0, f0 = c, t, inn, f
-    return fired
+        last[i, 0], last[i, 1], last[i, 2], last[i, 3] = c0, t0, in0, f0
+    return fired, last
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _play(fired, index0, start, samples, mu, playing):
     """Fill mu and playing (n,) from the clip started at output index ``start`` (-1:
     none); an event at sample j restarts it at j + 1. Returns the start after the block."""
@@ -109,16 +113,13 @@ class ClipRenderer:
         """mu' (F, n) and coverage (F, n): the clip under every touching finger while it plays."""
         inside = self.layer.in_region(block.x_pred, block.y_pred)
         flag = self._flag(block)
-        prev = [state.fingers.get(fid, FingerPrev()) for fid in block.ids]
-        fired = _fired(self.trigger, block.contact, block.touch_id, inside, flag,
-                       np.array([p.contact for p in prev], dtype=bool),
-                       np.array([p.touch_id for p in prev], dtype=np.int64),
-                       np.array([p.inside for p in prev], dtype=bool),
-                       np.array([p.flag for p in prev], dtype=bool))
+        prev = np.array([state.fingers.get(fid, FingerPrev()) for fid in block.ids],
+                        dtype=np.int64).reshape(len(block.ids), 4)
+        fired, last = _fired(self.trigger, block.contact, block.touch_id, inside, flag, prev)
         mu_row, playing = np.empty(block.n), np.empty(block.n, dtype=bool)
         start = _play(fired, block.index0, state.start, self.samples, mu_row, playing)
-        fingers = {fid: FingerPrev(bool(block.contact[i, -1]), int(block.touch_id[i, -1]),
-                                   bool(inside[i, -1]), bool(flag[i, -1]))
-                   for i, fid in enumerate(block.ids)}
+        fingers = {fid: FingerPrev(*row) for fid, row in zip(block.ids, last.tolist())}
         covers = block.contact & playing
-        return np.broadcast_to(mu_row, covers.shape), covers, ClipState(start, fingers)
+        mu = np.empty(covers.shape)
+        mu[:] = mu_row
+        return mu, covers, ClipState(start, fingers)

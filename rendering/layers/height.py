@@ -23,6 +23,7 @@ Stateless: the slope depends on this sample's position and velocity only.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from rendering.tracking.tracks import FingerBlock
 
@@ -37,10 +38,27 @@ def slope_along_motion(gx, gy, vx, vy, v_fade_mm_s: float, signed: bool) -> np.n
     v_fade_mm_s : below this speed the slope is scaled by speed / v_fade_mm_s (> 0).
     signed : the directional derivative along the motion; else |grad h| (unsigned).
     """
-    speed = np.sqrt(vx * vx + vy * vy)
-    if signed:
-        return (gx * vx + gy * vy) / np.maximum(speed, v_fade_mm_s)
-    return np.sqrt(gx * gx + gy * gy) * np.minimum(speed / v_fade_mm_s, 1.0)
+    arrays = [np.asarray(a, dtype=np.float64) for a in (gx, gy, vx, vy)]
+    if len({a.shape for a in arrays}) > 1:
+        arrays = np.broadcast_arrays(*arrays)
+    shape = arrays[0].shape
+    return _slope_kernel(*(a.ravel() for a in arrays), v_fade_mm_s, signed).reshape(shape)
+
+
+@njit(cache=True, nogil=True)
+def _slope_kernel(gx, gy, vx, vy, v_fade_mm_s, signed):
+    """:func:`slope_along_motion` on (m,) arrays, one pass (NaN propagates as numpy's
+    ``maximum`` and ``minimum`` would)."""
+    out = np.empty(gx.size)
+    for i in range(gx.size):
+        speed = np.sqrt(vx[i] * vx[i] + vy[i] * vy[i])
+        if signed:
+            out[i] = (gx[i] * vx[i] + gy[i] * vy[i]) / (speed if not speed < v_fade_mm_s
+                                                           else v_fade_mm_s)
+        else:
+            fade = speed / v_fade_mm_s
+            out[i] = np.sqrt(gx[i] * gx[i] + gy[i] * gy[i]) * (fade if not fade > 1.0 else 1.0)
+    return out
 
 
 class HeightRenderer:

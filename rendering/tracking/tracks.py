@@ -351,10 +351,11 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
     counters = {"jumps": state.jumps, "out_of_order": state.out_of_order}
     # per finger: (apply indices, state columns after each of its samples)
     updates: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-    if samples is not None and len(samples):
+    sampled = sorted(set(samples.finger.tolist())) if samples is not None else []
+    if sampled:
         applied = np.clip(apply_index(samples.t_s, config), index0, index0 + n - 1)
-        for fid in np.unique(samples.finger).tolist():
-            sel = samples.finger == fid
+        for fid in sampled:
+            sel = slice(None) if len(sampled) == 1 else samples.finger == fid
             steps, keep, fingers[fid] = _finger_steps(
                 fingers.get(fid, FingerState(touch_id=state.touches)), samples.t_s[sel], samples.x_mm[sel],
                 samples.y_mm[sel], samples.force_n[sel], samples.event[sel], config, counters)
@@ -363,8 +364,7 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
     # the fingers touching when the block starts and those sampled in it; a finger that
     # lifted is forgotten once its lift is out, so the cost follows the fingers touching
     # at once, not every id a recording ever used
-    sampled = set() if samples is None or not len(samples) else set(np.unique(samples.finger).tolist())
-    ids = tuple(sorted(sampled | set(state.fingers)))
+    ids = tuple(sorted(set(sampled) | set(state.fingers)))
     tables, runs = [], []
     for fid in ids:
         before = _GET_FIELDS(state.fingers.get(fid, FingerState(touch_id=state.touches)))
