@@ -9,7 +9,7 @@ from hypothesis import given, settings, strategies as st
 from app.commands.cli import main
 from device.finger import draw_finger
 from device.link import protocol as p
-from device.link.forces import ForceHistory, per_sample
+from device.link.forces import ForceHistory, ForceReport, per_sample
 from device.link.host import CommandSink, open_port, open_sink, start_sim_device
 from device.link.simdevice import DeviceConfig, DeviceCore
 
@@ -103,6 +103,51 @@ def test_the_history_keeps_the_last_second_of_samples():
         history.add(per_sample(p.ForceReport(40 * k, 4, (0.1,) * 10, (0.5,) * 10), 0))
     assert history.window(40 * 7, 120) is not None
     assert history.window(40 * 6, 40) is None  # dropped: older than the last 100 samples
+
+
+def _scan_window(reports, index0, n):
+    """ForceHistory.window as it was: every kept report in arrival order, the newer
+    overwriting the older."""
+    lateral, normal = np.full(n, np.nan), np.full(n, np.nan)
+    for r in reports:
+        lo, hi = max(r.index0, index0), min(r.index0 + r.lateral_n.size, index0 + n)
+        if lo < hi:
+            lateral[lo - index0:hi - index0] = r.lateral_n[lo - r.index0:hi - r.index0]
+            normal[lo - index0:hi - index0] = r.normal_n[lo - r.index0:hi - r.index0]
+    return None if np.isnan(lateral).any() else (lateral, normal)
+
+
+@settings(derandomize=True, max_examples=200, deadline=None)
+@given(st.data())
+def test_the_window_is_the_scan_of_every_kept_report(data):
+    """Random report sets (in order, with gaps and overlaps, of mixed lengths, and now
+    and then a start going back, as after a device restart) and ranges: the window is
+    the one the scan of every kept report (the previous implementation) gives, bit for
+    bit, None included; the kept reports are those the old deque kept."""
+    keep = data.draw(st.integers(1, 300))
+    history, kept, held = ForceHistory(keep=keep), [], 0
+    rng = np.random.default_rng(data.draw(st.integers(0, 2**32 - 1)))
+    start = data.draw(st.integers(-1000, 1000))
+    for _ in range(data.draw(st.integers(1, 150))):  # > 64 dropped: the lists are cut
+        start += data.draw(st.sampled_from([0, 40, 40, 40, 40, 37, 45, 80, -20, -500]))
+        size = data.draw(st.sampled_from([40, 40, 40, 4, 1, 120]))
+        report = ForceReport(start, rng.normal(size=size), rng.normal(size=size))
+        history.add(report)
+        kept.append(report)
+        held += size
+        while held - kept[0].lateral_n.size >= keep:
+            held -= kept.pop(0).lateral_n.size
+        assert history.latest() is kept[-1]
+        for _ in range(3):
+            index0 = data.draw(st.integers(start - 400, start + 100))
+            n = data.draw(st.integers(0, 300))
+            got, want = history.window(index0, n), _scan_window(kept, index0, n) if n else None
+            if want is None:
+                assert got is None
+            else:
+                assert got.index0 == index0
+                np.testing.assert_array_equal(got.lateral_n, want[0])
+                np.testing.assert_array_equal(got.normal_n, want[1])
 
 
 def _stream(sink, n=2000):

@@ -9,7 +9,7 @@ and cuts out any range of samples they cover.
 
 from __future__ import annotations
 
-import collections
+import bisect
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,34 +44,62 @@ def per_sample(msg: p.ForceReport, near: int) -> ForceReport:
 
 
 class ForceHistory:
-    """The last ``keep`` samples' worth of reports, newest last."""
+    """The last ``keep`` samples' worth of reports, newest last.
+
+    Reports normally arrive in order of their first sample: :meth:`window` then finds
+    the few that can overlap a range by bisection on their starts, instead of looking at
+    every report kept (about 250 at 10 kHz). While any kept report starts before the
+    one kept before it (a device that restarted its numbering), it looks at all of them.
+    """
 
     def __init__(self, keep: int = HISTORY_SAMPLES):
         self.keep = int(keep)
-        self._reports: collections.deque[ForceReport] = collections.deque()
+        # kept: [_head:] of both lists, oldest first; the popped prefix is cut now and then
+        self._reports: list[ForceReport] = []
+        self._starts: list[int] = []
+        self._head = 0
         self._held = 0
+        self._descents = 0  # kept neighbours whose start goes back
+        self._longest = 0   # samples of the longest report ever added
 
     def add(self, report: ForceReport) -> None:
+        if len(self._starts) > self._head and report.index0 < self._starts[-1]:
+            self._descents += 1
         self._reports.append(report)
+        self._starts.append(report.index0)
         self._held += report.lateral_n.size
-        while self._held - self._reports[0].lateral_n.size >= self.keep:
-            self._held -= self._reports.popleft().lateral_n.size
+        self._longest = max(self._longest, report.lateral_n.size)
+        while self._held - self._reports[self._head].lateral_n.size >= self.keep:
+            h = self._head
+            if self._starts[h + 1] < self._starts[h]:
+                self._descents -= 1
+            self._held -= self._reports[h].lateral_n.size
+            self._head += 1
+        if self._head > 64 and 2 * self._head > len(self._reports):
+            del self._reports[:self._head], self._starts[:self._head]
+            self._head = 0
 
     def latest(self) -> ForceReport | None:
-        return self._reports[-1] if self._reports else None
+        return self._reports[-1] if len(self._reports) > self._head else None
 
     def window(self, index0: int, n: int) -> ForceReport | None:
         """The forces over samples ``index0 .. index0 + n - 1``, or None unless the kept
         reports cover every one of them (where reports overlap, the newer wins)."""
         if n < 1:
             return None
+        if self._descents:
+            lo, hi = self._head, len(self._reports)
+        else:  # those starting in (index0 - longest, index0 + n), in arrival order
+            lo = bisect.bisect_right(self._starts, index0 - self._longest, self._head)
+            hi = bisect.bisect_left(self._starts, index0 + n, lo)
         lateral = np.full(n, np.nan)
         normal = np.full(n, np.nan)
-        for r in self._reports:
-            lo, hi = max(r.index0, index0), min(r.index0 + r.lateral_n.size, index0 + n)
-            if lo < hi:
-                lateral[lo - index0:hi - index0] = r.lateral_n[lo - r.index0:hi - r.index0]
-                normal[lo - index0:hi - index0] = r.normal_n[lo - r.index0:hi - r.index0]
+        for k in range(lo, hi):
+            r = self._reports[k]
+            lo_, hi_ = max(r.index0, index0), min(r.index0 + r.lateral_n.size, index0 + n)
+            if lo_ < hi_:
+                lateral[lo_ - index0:hi_ - index0] = r.lateral_n[lo_ - r.index0:hi_ - r.index0]
+                normal[lo_ - index0:hi_ - index0] = r.normal_n[lo_ - r.index0:hi_ - r.index0]
         if np.isnan(lateral).any():
             return None
         return ForceReport(index0, lateral, normal)
