@@ -55,6 +55,10 @@ class BlockOutput:
     forces : travelling-wave profiles only (else None): per finger the wanted and
         achieved force vectors (N) and key-click button state per sample
         (``rendering.layers.force_layers.ForceBlock``).
+    sample_ids : (F, n) int64 finger id of every sample, where a row passes from one
+        finger to another within the call (a trace source reuses the rows of lifted
+        fingers: ``app.engine.finger_slots``); else None, and row r is ``finger_ids[r]``
+        throughout. Read per finger with :meth:`segments`.
     """
 
     index0: int
@@ -72,6 +76,26 @@ class BlockOutput:
     limited: int = 0
     off_structure: int = 0
     forces: object | None = None
+    sample_ids: np.ndarray | None = None
+
+    def segments(self):
+        """``(row, finger id, lo, hi)``: samples ``lo .. hi - 1`` of ``row`` belong to
+        that finger (one per row unless :attr:`sample_ids` says otherwise)."""
+        n = self.t_s.size
+        if self.sample_ids is None:
+            return [(row, fid, 0, n) for row, fid in enumerate(self.finger_ids)]
+        found = []
+        for row, ids in enumerate(self.sample_ids):
+            cuts = [0, *(np.flatnonzero(ids[1:] != ids[:-1]) + 1).tolist(), n]
+            found += [(row, int(ids[lo]), lo, hi) for lo, hi in zip(cuts[:-1], cuts[1:])]
+        return found
+
+    def ids_per_sample(self) -> np.ndarray:
+        """(F, n) int64 finger id of every sample."""
+        if self.sample_ids is not None:
+            return self.sample_ids
+        return np.repeat(np.array(self.finger_ids, dtype=np.int64)[:, None], self.t_s.size,
+                         axis=1)
 
 
 @dataclass(frozen=True)

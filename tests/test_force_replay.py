@@ -72,3 +72,21 @@ def test_two_replays_are_byte_identical(tmp_path):
 
 def test_bundled_force_scenes_exist():
     assert {"keyclick-ring", "directional-beam", "guidance-ring"} <= {e.name for e in list_scenes()}
+
+
+def test_keyclick_presses_with_a_new_finger_id_each_are_counted_per_id(tmp_path):
+    """Android gives each press its own tracking id: the replay runs them on one reused
+    row (``app.engine.finger_slots``), and the summary still counts one click for each
+    id, with commands byte-identical to the same presses under one id."""
+    from dataclasses import replace
+
+    from rendering.input.trace_file import DOWN, write_trace
+    trace = read_trace(resolve_trace(CASES["keyclick-ring"]))
+    assert set(trace.finger.tolist()) == {0}
+    renamed = replace(trace, finger=100 + np.cumsum(trace.event == DOWN).astype(np.int64))
+    write_trace(tmp_path / "ids.csv", renamed)
+    out_one, _, _, one = replay(tmp_path, "keyclick-ring", CASES["keyclick-ring"], "one")
+    out_ids, _, _, ids = replay(tmp_path, "keyclick-ring", str(tmp_path / "ids.csv"), "ids")
+    assert {fid: f["clicks"] for fid, f in ids["forces"].items()} == {"101": 1, "102": 1, "103": 1}
+    assert sorted(ids["fingers"]) == ["101", "102", "103"]
+    assert (out_ids / "commands.csv").read_bytes() == (out_one / "commands.csv").read_bytes()

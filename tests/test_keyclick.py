@@ -42,7 +42,7 @@ def test_one_flip_per_press_matching_the_reference_machine():
     dwell = 100  # 10 ms at 10 kHz: one touch sample must confirm
     states, clicks, _ = button_states(force, inside, PRESS, CLICK, RELEASE, dwell)
     assert_array_equal(states, reference(force, inside, dwell))
-    assert clicks == 3                                   # three presses in the trace
+    assert clicks.sum() == 3                                   # three presses in the trace
     flips = np.flatnonzero(np.diff(states.astype(int)) > 0)
     changes = np.flatnonzero(np.diff(states.astype(int)))
     # each press: idle -> on -> clicked -> idle, nothing else (no flicker)
@@ -61,14 +61,14 @@ def test_a_single_noisy_sample_does_not_click_or_release():
     force[1000:1050] = 0.9    # a 5 ms spike past the click threshold
     force[2000:2050] = 0.3    # a 5 ms dip below release
     states, clicks, _ = button_states(force, np.ones(3000, bool), PRESS, CLICK, RELEASE, 100)
-    assert clicks == 0 and np.all(states[100:] == ON)
+    assert clicks.sum() == 0 and np.all(states[100:] == ON)
 
 
 def test_fast_press_clicks_once_and_leaving_the_button_releases():
     force = np.concatenate([np.zeros(200), np.full(800, 1.0), np.full(400, 1.0)])
     inside = np.concatenate([np.ones(1000, bool), np.zeros(400, bool)])
     states, clicks, _ = button_states(force, inside, PRESS, CLICK, RELEASE, 50)
-    assert clicks == 1
+    assert clicks.sum() == 1
     assert states[249] == CLICKED and states[248] == IDLE  # both thresholds confirmed together
     assert states[1049] == IDLE and states[1048] == CLICKED
 
@@ -76,7 +76,7 @@ def test_fast_press_clicks_once_and_leaving_the_button_releases():
 def test_nan_force_counts_as_no_press():
     force = np.full(500, np.nan)
     states, clicks, _ = button_states(force, np.ones(500, bool), PRESS, CLICK, RELEASE, 1)
-    assert clicks == 0 and np.all(states == IDLE)
+    assert clicks.sum() == 0 and np.all(states == IDLE)
 
 
 @settings(derandomize=True, max_examples=25, deadline=None)
@@ -86,10 +86,10 @@ def test_any_split_gives_the_same_states(cuts):
     inside = np.ones(t.size, bool)
     whole, clicks, _ = button_states(force, inside, PRESS, CLICK, RELEASE, 100)
     edges = [0, *sorted(c for c in cuts if c < t.size), t.size]
-    state, parts, total = None, [], 0
+    state, parts, flips = None, [], []
     for a, b in zip(edges, edges[1:]):
         s, c, state = button_states(force[a:b], inside[a:b], PRESS, CLICK, RELEASE, 100, state)
         parts.append(s)
-        total += c
+        flips.append(c)
     assert_array_equal(np.concatenate(parts), whole)
-    assert total == clicks
+    assert_array_equal(np.concatenate(flips), clicks)

@@ -52,7 +52,7 @@ def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,
 
     ``stage.process(k, samples, n) -> (out, commands_um)``; ``source.resume_at(k)`` (the
     block to run next: ``k``, or later past a skipped gap), ``source.take(k, n) ->
-    (samples, n_run)``; ``sink.write(out, commands_um)``, ``sink.commit()``,
+    (samples, n_run)``, ``source.label(out)`` (the output with the source's finger ids); ``sink.write(out, commands_um)``, ``sink.commit()``,
     ``sink.abort()``; ``clock.wait(k)``, ``clock.finished(k, n)``.
     """
     timer = RunTimer() if timer is None else timer
@@ -67,6 +67,7 @@ def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,
             samples, n = source.take(k, chunk_blocks)
             t1 = time.perf_counter()
             out, commands = stage.process(k, samples, n)
+            out = source.label(out)
             t2 = time.perf_counter()
             for sink in sinks:
                 sink.write(out, commands)

@@ -23,14 +23,14 @@ class ForceSummary:
         if forces is None:
             return
         err = np.where(out.contact, forces.achieved_n[..., 0] - forces.wanted_n[..., 0], 0.0)
-        for row, fid in enumerate(out.finger_ids):
+        for row, fid, lo, hi in out.segments():
             s = self.stats.setdefault(fid, [0, 0.0, 0.0, 0, 0, 0.0])
-            s[0] += int(out.contact[row].sum())
-            s[1] += float(np.sum(err[row] ** 2))
-            s[2] = max(s[2], float(np.abs(err[row]).max(initial=0.0)))
-            s[3] += int(forces.unreachable[row].sum())
-            s[4] += forces.clicks.get(fid, 0)
-            s[5] = max(s[5], float(np.abs(forces.wanted_n[row, :, 0]).max(initial=0.0)))
+            s[0] += int(out.contact[row, lo:hi].sum())
+            s[1] += float(np.sum(err[row, lo:hi] ** 2))
+            s[2] = max(s[2], float(np.abs(err[row, lo:hi]).max(initial=0.0)))
+            s[3] += int(forces.unreachable[row, lo:hi].sum())
+            s[4] += int(forces.clicks[row, lo:hi].sum())
+            s[5] = max(s[5], float(np.abs(forces.wanted_n[row, lo:hi, 0]).max(initial=0.0)))
 
     def report(self) -> dict | None:
         """{finger: {contact_samples, force_error_rms_n, force_error_max_n, wanted_max_n,

@@ -63,18 +63,26 @@ class FrameWriter:
         if self.t_first is None:
             self.t_first = float(t[0])
         lo = 0
+        # a row that passes to another finger starts a new record there: trails per finger
+        changes = sorted({lo for _, _, lo, _ in out.segments()} - {0})
         while self._frame_time(self.count) <= t[-1]:
             hi = int(np.searchsorted(t, self._frame_time(self.count), side="right"))
             if hi > lo:
-                self.overlay.add(record_from_output(out, self.stride, lo, hi))
+                self._records(out, lo, hi, changes)
                 lo = hi
             self._write(out, hi - 1)
         if lo < t.size:
-            self.overlay.add(record_from_output(out, self.stride, lo, None))
+            self._records(out, lo, t.size, changes)
+
+    def _records(self, out, lo: int, hi: int, changes: list[int]) -> None:
+        cuts = [lo, *(c for c in changes if lo < c < hi), hi]
+        for a, b in zip(cuts[:-1], cuts[1:]):
+            self.overlay.add(record_from_output(out, self.stride, a, b))
 
     def _write(self, out, i: int) -> None:
         touching = [f"finger {fid}: mu' {out.mu_target[row, i]:.3f}, "
-                    f"{out.amplitude_um[row, i]:.2f} um" for row, fid in enumerate(out.finger_ids)
+                    f"{out.amplitude_um[row, i]:.2f} um"
+                    for row, fid in enumerate(out.ids_per_sample()[:, i].tolist())
                     if out.contact[row, i]]
         status = (f"{self.scene.name} | replay t = {self._frame_time(self.count):.3f} s | "
                   + ("; ".join(touching) or "no finger touching"),)

@@ -32,18 +32,21 @@ def command_columns(channels: tuple[str, ...], phases: bool) -> list[tuple]:
 
 
 def friction_rows(out) -> dict[str, np.ndarray]:
-    """``friction`` table rows of a block output: sample-major, then finger, touching only."""
+    """``friction`` table rows of a block output: sample-major, then finger id, touching
+    only."""
     if out.contact.shape[0] == 1 and out.contact.all():  # one finger, down throughout
-        return {"t_s": out.t_s, "finger": np.full(out.t_s.size, out.finger_ids[0], np.int64),
+        return {"t_s": out.t_s, "finger": out.ids_per_sample()[0],
                 "x_mm": out.x_mm[0], "y_mm": out.y_mm[0], "mu_target": out.mu_target[0],
                 "amplitude_um": out.amplitude_um[0]}
-    contact = out.contact.T  # (n, F)
-    n, f = contact.shape
-    ids = np.broadcast_to(np.array(out.finger_ids, dtype=np.int64), (n, f))
-    t = np.broadcast_to(out.t_s[:, None], (n, f))
-    return {"t_s": t[contact], "finger": ids[contact], "x_mm": out.x_mm.T[contact],
-            "y_mm": out.y_mm.T[contact], "mu_target": out.mu_target.T[contact],
-            "amplitude_um": out.amplitude_um.T[contact]}
+    ids = out.ids_per_sample()
+    columns = (out.contact, ids, out.x_mm, out.y_mm, out.mu_target, out.amplitude_um)
+    if ids.shape[0] > 1 and (np.diff(ids, axis=0) < 0).any():  # reused rows: by id again
+        order = np.argsort(ids, axis=0, kind="stable")
+        columns = tuple(np.take_along_axis(c, order, axis=0) for c in columns)
+    contact, ids, x, y, mu, amplitude = (c.T for c in columns)  # (n, F)
+    t = np.broadcast_to(out.t_s[:, None], contact.shape)
+    return {"t_s": t[contact], "finger": ids[contact], "x_mm": x[contact], "y_mm": y[contact],
+            "mu_target": mu[contact], "amplitude_um": amplitude[contact]}
 
 
 class TableSink:

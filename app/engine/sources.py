@@ -10,6 +10,11 @@ effect in them (a sample takes effect at the first block boundary at or after it
 A trace source ends with the block after its last sample (so every sample, and the
 last touch's end, is in the output); a live source runs until the driver is stopped.
 
+Finger ids. A trace source hands the pipeline slots, not the recording's finger ids: a
+touch takes the row of a finger that lifted (``app.engine.finger_slots``), so a call's
+rows follow the fingers touching at once, however many ids a log has used;
+``source.label(out)`` puts the recording's ids back on the output.
+
 Gaps. A recorded trace may stop reporting for a long time (a log paused, a clock that
 jumped). A gap longer than ``max_gap_s`` between two samples is taken as a lift: every
 finger touching is lifted where the gap starts, and the output skips from
@@ -24,15 +29,14 @@ import queue
 
 import numpy as np
 
-from rendering.input.trace_file import UP, Trace, concat_traces, make_trace, most_touching
+from app.engine.finger_slots import FingerSlots
+from rendering.input.trace_file import UP, Trace, concat_traces, make_trace
 from rendering.tracking.tracks import apply_index
 
 #: default longest gap between touch samples that is output as it is (s)
 MAX_GAP_S = 5.0
 #: output kept on each side of a longer gap (s): the lift, and the touch after it
 GAP_KEEP_S = 0.1
-#: finger ids a pipeline call may see, per finger the trace has touching at once at most
-IDS_PER_TOUCHING = 2
 
 
 class Gaps:
@@ -74,7 +78,7 @@ class TraceSource:
         self.applied = np.zeros(0, dtype=np.int64)
         self.config = None
         self.ended = False
-        self.max_new_ids = IDS_PER_TOUCHING  # set from the trace by ``start``
+        self.slots = FingerSlots()
         self.end_index: int | None = None
         self.next_index = 0
         self.stats = TraceStats()
@@ -95,7 +99,6 @@ class TraceSource:
         if not self.ended:
             self._read_more()
         self.applied = apply_index(self.pending.t_s, tracker_config)
-        self.max_new_ids = IDS_PER_TOUCHING * max(1, most_touching(self.pending))
         if self.until_s is not None:
             quantum = tracker_config.quantum
             span = (self.until_s - tracker_config.t0_s) * tracker_config.rate_hz / quantum
@@ -168,13 +171,10 @@ class TraceSource:
         while not self.ended and (self.applied.size == 0 or self.applied[-1] < end):
             self._read_more()
         hi = int(np.searchsorted(self.applied, end))
-        cut = self._new_id_cut(hi)
-        if cut is not None:  # end before the first finger id too many (one block at least)
-            n = max(1, cut // block - k)
-            end = (k + n) * block
-            hi = int(np.searchsorted(self.applied, end))
-        taken = self.pending.slice(0, hi) if hi else None
+        taken = None
         if hi:
+            taken = self.slots.assign(self.pending.slice(0, hi),
+                                      np.maximum(self.applied[:hi], k * block))
             self.pending = self.pending.slice(hi, len(self.pending))
             self.applied = self.applied[hi:]
         if self.end_index is not None:
@@ -187,16 +187,9 @@ class TraceSource:
         self.next_index = (k + n_run) * block
         return taken, n_run
 
-    def _new_id_cut(self, hi: int) -> int | None:
-        """Output index at which the first of ``pending[:hi]``'s samples of a finger id
-        beyond the first :attr:`max_new_ids` takes effect, or None. A pipeline call's
-        arrays have a row per finger id it sees, so a log whose touches each bring a new
-        id (Android's tracking ids) would otherwise cost per call what its ids, not its
-        fingers, add up to."""
-        ids, first = np.unique(self.pending.finger[:hi], return_index=True)
-        if ids.size <= self.max_new_ids:
-            return None
-        return int(self.applied[np.sort(first)[self.max_new_ids]])
+    def label(self, out):
+        """``out`` with the recording's finger ids (module docstring)."""
+        return self.slots.label(out)
 
     @property
     def done(self) -> bool:
@@ -288,3 +281,7 @@ class QueueSource:
     def resume_at(self, k: int) -> int:
         """Live time never skips."""
         return k
+
+    def label(self, out):
+        """Live fingers keep their own ids: ``out`` as it is."""
+        return out

@@ -57,11 +57,11 @@ class AmplitudeErrors:
 
     def add(self, out) -> None:
         err = np.where(out.contact, out.amplitude_um - out.wanted_um, 0.0)
-        for row, fid in enumerate(out.finger_ids):
+        for row, fid, lo, hi in out.segments():
             s = self.stats.setdefault(fid, [0, 0.0, 0.0])
-            s[0] += int(out.contact[row].sum())
-            s[1] += float(np.sum(err[row] ** 2))
-            s[2] = max(s[2], float(np.abs(err[row]).max(initial=0.0)))
+            s[0] += int(out.contact[row, lo:hi].sum())
+            s[1] += float(np.sum(err[row, lo:hi] ** 2))
+            s[2] = max(s[2], float(np.abs(err[row, lo:hi]).max(initial=0.0)))
 
     def report(self) -> dict:
         """{finger: {contact_samples, amplitude_error_rms_um, amplitude_error_max_um}}."""

@@ -153,13 +153,14 @@ def stack_fingers(outs, field: str, fill) -> tuple[list[int], np.ndarray]:
     """A per-finger output field over consecutive blocks: the finger ids any block has,
     and (F, n) values, ``fill`` where a block does not carry a finger (one that lifted
     and was forgotten, or not down yet)."""
-    ids = sorted({fid for o in outs for fid in o.finger_ids})
+    segments = [o.segments() for o in outs]
+    ids = sorted({fid for found in segments for _, fid, _, _ in found})
     parts = []
-    for o in outs:
+    for o, found in zip(outs, segments):
         values = getattr(o, field)
         block = np.full((len(ids), o.t_s.size), fill, dtype=values.dtype)
-        for row, fid in enumerate(o.finger_ids):
-            block[ids.index(fid)] = values[row]
+        for row, fid, lo, hi in found:
+            block[ids.index(fid), lo:hi] = values[row, lo:hi]
         parts.append(block)
     return ids, np.concatenate(parts, axis=1)
 

@@ -52,7 +52,7 @@ class ForceBlock:
     unreachable : bool, wanted forces out of the wave's reach there (clamped, counted).
     button : int8 key-click state (0 idle, 1 on, 2 clicked; the highest over the
         buttons), or None if the scene has no key-click.
-    clicks : finger id -> phase flips in this block.
+    clicks : int (F, n), phase flips (a key-click's idle/on -> clicked) at each sample.
     wave_um : (n,) wave amplitude W (um zero-to-peak); direction : (n,) int8 d.
     ratio : (F, n) local travelling-wave ratio under each finger.
     """
@@ -61,7 +61,7 @@ class ForceBlock:
     achieved_n: np.ndarray
     unreachable: np.ndarray
     button: np.ndarray | None
-    clicks: dict[int, int]
+    clicks: np.ndarray
     wave_um: np.ndarray
     direction: np.ndarray
     ratio: np.ndarray
@@ -126,7 +126,7 @@ class ForceStage:
         target_t = np.zeros((count, n))
         unreachable = np.zeros((count, n), dtype=bool)
         button = np.zeros((count, n), dtype=np.int8) if self.has_buttons else None
-        clicks: dict[int, int] = {}
+        clicks = np.zeros((count, n), dtype=np.int64)
         for row, fid in enumerate(fingers.ids):
             t_state = tangential.get(fid, TangentialState())
             moving[row], motion[row] = finger_motion(fingers.vx[row], self.params.v_hold_mm_s,
@@ -189,7 +189,7 @@ class ForceStage:
                 states, flips, buttons[key] = button_states(
                     fn, covers, layer.press_n, layer.click_n, layer.release_n,
                     max(1, int(round(layer.dwell_s * self.rate_hz))), buttons.get(key))
-                clicks[fid] = clicks.get(fid, 0) + flips
+                clicks[row] += flips
                 sign = np.where(states == 2, -1.0, np.where(states == 1, 1.0, 0.0))
                 push_x += sign * layer.first_push * layer.force_n
                 button[row] = np.maximum(button[row], states)

@@ -55,7 +55,7 @@ def _flip_flop(set_: np.ndarray, reset: np.ndarray, initial: bool) -> np.ndarray
 
 def button_states(force_n: np.ndarray, inside: np.ndarray, press_n: float, click_n: float,
                   release_n: float, dwell: int, state: ButtonState | None = None
-                  ) -> tuple[np.ndarray, int, ButtonState]:
+                  ) -> tuple[np.ndarray, np.ndarray, ButtonState]:
     """States (0 idle, 1 on, 2 clicked) of one finger on one button over a block.
 
     Parameters
@@ -68,7 +68,7 @@ def button_states(force_n: np.ndarray, inside: np.ndarray, press_n: float, click
 
     Returns
     -------
-    states : int8 (n,). clicks : number of idle/on -> clicked transitions in the block.
+    states : int8 (n,). clicks : bool (n,), an idle/on -> clicked transition at the sample.
     new_state : to pass to the next block.
     """
     state = state or ButtonState()
@@ -85,7 +85,7 @@ def button_states(force_n: np.ndarray, inside: np.ndarray, press_n: float, click
     states = np.where(clicked, CLICKED, np.where(pressed, ON, IDLE)).astype(np.int8)
     rising = np.diff(np.concatenate(([state.clicked], clicked)).astype(np.int8)) > 0
     if f.size == 0:
-        return states, 0, state
+        return states, rising, state
     new = ButtonState(bool(pressed[-1]), bool(clicked[-1]),
                       tuple(int(min(r[-1], dwell)) for r in runs))
-    return states, int(rising.sum()), new
+    return states, rising, new

@@ -65,15 +65,17 @@ class BlockRecord:
 def record_from_output(out, stride: int = 10, lo: int = 0, hi: int | None = None,
                        commands_um: np.ndarray | None = None) -> BlockRecord:
     """Every ``stride``-th sample of ``out`` (a pipeline BlockOutput) in [lo, hi), copied;
-    ``commands_um``: what was sent if not ``out.commands_um`` (an emergency stop, a ramp)."""
+    ``commands_um``: what was sent if not ``out.commands_um`` (an emergency stop, a ramp).
+    The rows carry their finger ids at ``lo`` (a caller cuts where a row changes finger)."""
     s = slice(lo, hi, stride)
+    ids = out.finger_ids if out.sample_ids is None else out.sample_ids[:, lo].tolist()
     commands = out.commands_um if commands_um is None else commands_um
 
     def take(a, axis):
         return None if a is None else np.array(a[(slice(None),) * axis + (s,)])
 
     forces = out.forces
-    return BlockRecord(out.t_s[s].copy(), tuple(out.finger_ids), out.contact[:, s].copy(),
+    return BlockRecord(out.t_s[s].copy(), tuple(ids), out.contact[:, s].copy(),
                        out.x_mm[:, s].copy(), out.y_mm[:, s].copy(),
                        out.mu_target[:, s].copy(), out.amplitude_um[:, s].copy(),
                        take(commands, 0), take(out.phases_rad, 0),

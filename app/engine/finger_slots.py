@@ -1,0 +1,95 @@
+"""A recording's finger ids onto pipeline rows (slots) that lifted fingers give back.
+
+Android gives every touch a new tracking id. A pipeline call has a row per finger id
+it sees, so a log of 1,000 touches one at a time would cost per call what its ids add
+up to, not what its fingers touching at once do (issue 15). :class:`FingerSlots` hands
+each touch the lowest slot whose last finger lifted in an earlier block than the touch
+begins, or a new slot if none is free (within one block a touch's first sample may come
+before another finger's lift: in one row, that lift would end the touch). To the pipeline
+a slot touched again is a finger touching again: a new touch, with a new touch id and
+fresh per-touch state, as a new finger id gets.
+
+The outputs carry the recording's ids again: :meth:`FingerSlots.label` gives each
+output row its finger id, and where a row passes from one finger to the next within a
+call, the id of every sample (``BlockOutput.sample_ids``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from rendering.input.trace_file import UP, Trace
+
+
+class FingerSlots:
+    """Slots for the touches of one trace, handed out in time order."""
+
+    def __init__(self):
+        self._slot_of: dict[int, int] = {}  # finger id touching (no up yet) -> its slot
+        self._free_from: list[float] = []  # per slot: first output index a touch may take it
+        self._changes: list[tuple[int, int, int]] = []  # (output index, slot, id) to label
+        self._id_of: dict[int, int] = {}  # slot -> finger id it carries (labelled so far)
+
+    def assign(self, samples: Trace, applied: np.ndarray) -> Trace:
+        """``samples`` (the next consecutive ones of the trace) with each finger id
+        replaced by its slot; ``applied``: their output indices (``apply_index``)."""
+        finger = samples.finger
+        n = finger.size
+        order = np.argsort(finger, kind="stable")
+        ids, up, at = finger[order], samples.event[order] == UP, applied[order]
+        # a touch: one id's consecutive samples up to and including an up
+        begins = np.ones(n, dtype=bool)
+        begins[1:] = (ids[1:] != ids[:-1]) | up[:-1]
+        starts = np.flatnonzero(begins)
+        ends = np.append(starts[1:], n)
+        first_at = np.minimum.reduceat(at, starts)
+        last_at = np.maximum.reduceat(at, starts)
+        slots = np.empty(starts.size, dtype=np.int64)
+        for s in np.argsort(order[starts], kind="stable").tolist():  # touches in time order
+            fid = int(ids[starts[s]])
+            slot = self._slot_of.pop(fid, None)
+            if slot is None:
+                slot = self._free_slot(int(first_at[s]))
+                self._changes.append((int(first_at[s]), slot, fid))
+            if up[ends[s] - 1]:  # free from the block after the lift's
+                self._free_from[slot] = int(last_at[s]) + 1
+            else:
+                self._slot_of[fid] = slot
+                self._free_from[slot] = np.inf
+            slots[s] = slot
+        renamed = np.empty(n, dtype=np.int64)
+        renamed[order] = np.repeat(slots, ends - starts)
+        return replace(samples, finger=renamed)
+
+    def _free_slot(self, index: int) -> int:
+        for slot, free_from in enumerate(self._free_from):
+            if free_from <= index:
+                return slot
+        self._free_from.append(np.inf)
+        return len(self._free_from) - 1
+
+    def label(self, out):
+        """``out`` (a ``rendering.pipeline.BlockOutput`` whose rows are slots) with the
+        recording's finger ids: ``finger_ids`` each row's id at the call's first sample,
+        and ``sample_ids`` (F, n) where a row carries more than one id in the call."""
+        index0, n = out.index0, out.t_s.size
+        due = [c for c in self._changes if c[0] < index0 + n]
+        if due:
+            self._changes = self._changes[len(due):]
+        rows = {slot: row for row, slot in enumerate(out.finger_ids)}
+        sample_ids = None
+        for at, slot, fid in due:
+            row = rows.get(slot)
+            if row is not None and at > index0:  # the row changes finger within the call
+                if sample_ids is None:
+                    sample_ids = np.array([[self._id_of.get(s, s)] for s in out.finger_ids],
+                                          dtype=np.int64).repeat(n, axis=1)
+                sample_ids[row, at - index0:] = fid
+            elif sample_ids is not None and row is not None:
+                sample_ids[row] = fid
+            self._id_of[slot] = fid
+        if sample_ids is not None:
+            return replace(out, finger_ids=tuple(sample_ids[:, 0].tolist()), sample_ids=sample_ids)
+        return replace(out, finger_ids=tuple(self._id_of.get(s, s) for s in out.finger_ids))
