@@ -80,3 +80,20 @@ def test_the_panel_never_covers_the_scene_and_its_labels_are_off_the_map(gl, pla
     assert hy >= y + row and hy + hh <= y + h - row + 1e-9  # ... clear of its label rows
     if size == default_frame_size(scene):
         assert (vp.width_px, vp.height_px) == (560, 560)  # the plate at its own pixel size
+
+
+@pytest.mark.parametrize("frame", [(1200, 700), (500, 700), (300, 200), (41, 90)])
+@pytest.mark.parametrize("side_px", [0, 180, 400, 10_000])
+@pytest.mark.parametrize("scope", [True, False])
+def test_the_layout_returns_the_column_beside_the_scene_and_above_the_strip(frame, side_px, scope):
+    """frame_layout's column (the device panel's, ``envelope_rect`` reads its left edge):
+    at the right of the frame, ``side_px`` wide but at most half the frame, above the
+    scope strip, and the scene fitted left of it."""
+    from rendering.visual.viewport import frame_layout
+    scene = load_scene(resolve_scene("two-finger-plate-seed001"))
+    w, h = frame
+    vp, strip, column = frame_layout(scene.display, w, h, scope, side_px)
+    x, y, cw, ch = column
+    assert (x + cw, y, cw) == (w, 0.0, min(side_px, w // 2))
+    assert ch == (strip[1] if scope else h)
+    assert vp.x0 + vp.width_px <= x + 1e-9

@@ -117,6 +117,7 @@ class Compositor:
         self.size = (0, 0)
         self.viewport: Viewport | None = None
         self._scope_rect: tuple[float, float, float, float] | None = None
+        self._column_rect: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
         self.scene_texture: moderngl.Texture | None = None
         self.resize(size)
 
@@ -135,8 +136,8 @@ class Compositor:
         self.scene = scene
         if outlines is not None:
             self.outlines = outlines
-        self.viewport, self._scope_rect = frame_layout(scene.display, *self.size, self.scope,
-                                                       self.panels.column_px(scene, self.size))
+        self.viewport, self._scope_rect, self._column_rect = frame_layout(
+            scene.display, *self.size, self.scope, self.panels.column_px(scene, self.size))
         rgb = to_srgb8(scene_rgb(scene, self.viewport, self.supersample, self.outlines))
         if self.scene_texture is not None:
             self.scene_texture.release()
@@ -228,10 +229,15 @@ class Compositor:
             return
         self.scope = scope
         viewport = self.viewport
-        self.viewport, self._scope_rect = frame_layout(self.scene.display, *self.size, scope,
-                                                       self.panels.column_px(self.scene, self.size))
+        self.viewport, self._scope_rect, self._column_rect = frame_layout(
+            self.scene.display, *self.size, scope, self.panels.column_px(self.scene, self.size))
         if self.viewport != viewport:
             self.set_scene(self.scene)
+
+    def column_rect(self) -> tuple[float, float, float, float]:
+        """The device panel column (x, y, w, h) px at the right of the frame, above the
+        scope strip (``viewport.frame_layout``; 0 px wide when the scene needs none)."""
+        return self._column_rect
 
     def scope_rect(self) -> tuple[float, float, float, float]:
         """The scope strip (x, y, w, h) px at the bottom of the frame (height 0 when the

@@ -137,7 +137,7 @@ class DevicePanels:
         comp = self.comp
         vp, (w, h) = comp.viewport, comp.size
         if kind == "plate":
-            left = float(w - min(self.column_px(comp.scene, comp.size), w // 2))  # as frame_layout
+            left = comp.column_rect()[0]
             top = comp.status_bottom + 4.0
             room = comp.scope_rect()[1] - PANEL_MARGIN_PX - top
             side = max(min(w - left - 2 * PANEL_MARGIN_PX, room), 1.0)

@@ -71,18 +71,27 @@ def scope_height(frame_h: int) -> int:
 
 
 def frame_layout(display: Display, frame_w: int, frame_h: int, scope: bool, side_px: int = 0,
-                 ) -> tuple[Viewport, tuple[float, float, float, float] | None]:
-    """Where the active area and the scope strip go in a frame: with ``scope`` the
-    strip (x, y, w, h px) takes the bottom ``scope_height`` px and the active area is
-    fitted above it, never under it (in a frame too low for both, each gets half);
-    without, the strip is None. ``side_px``: a column that wide at the right of the
-    frame, above the strip, is kept for a device panel (at most half the frame) and the
-    active area is fitted beside it, never under it."""
+                 ) -> tuple[Viewport, tuple[float, float, float, float] | None,
+                            tuple[float, float, float, float]]:
+    """Where the active area, the scope strip and the panel column go in a frame.
+
+    With ``scope`` the strip (x, y, w, h px) takes the bottom ``scope_height`` px and the
+    active area is fitted above it, never under it (in a frame too low for both, each
+    gets half); without, the strip is None. ``side_px``: a column that wide at the right
+    of the frame, above the strip, is kept for a device panel (at most half the frame)
+    and the active area is fitted beside it, never under it.
+
+    Returns
+    -------
+    (viewport, strip, column)
+        ``column`` is the kept column (x, y, w, h px), 0 px wide when none is asked for.
+    """
     strip = min(scope_height(frame_h), frame_h // 2) if scope else 0
     side = min(max(int(side_px), 0), frame_w // 2)
     area = fit_viewport(display, max(frame_w - side, 1), max(frame_h - strip, 1))
     rect = (0.0, float(frame_h - strip), float(frame_w), float(strip)) if scope else None
-    return replace(area, frame_w=frame_w, frame_h=frame_h), rect
+    column = (float(frame_w - side), 0.0, float(side), float(frame_h - strip))
+    return replace(area, frame_w=frame_w, frame_h=frame_h), rect, column
 
 
 def default_frame_size(display: Display, side_px: int = 0) -> tuple[int, int]:
