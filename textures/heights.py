@@ -45,33 +45,46 @@ def _from_centre(x, y, cx: float, cy: float):
     return dx, dy, _hypot(dx, dy)
 
 
+def _normal(normal_deg: float) -> tuple[float, float]:
+    """The unit vector (nx, ny) at ``normal_deg`` from +x."""
+    a = math.radians(normal_deg)
+    return math.cos(a), math.sin(a)
+
+
 def _along(x, y, x0: float, y0: float, normal_deg: float):
     """Signed distance (mm) of positions from the line through (x0, y0) whose unit normal
-    (nx, ny) is at ``normal_deg`` from +x, positive on the normal's side; and the normal."""
-    a = math.radians(normal_deg)
-    nx, ny = math.cos(a), math.sin(a)
-    d = nx * (np.asarray(x, dtype=np.float64) - x0) + ny * (np.asarray(y, dtype=np.float64) - y0)
-    return d, nx, ny
+    is at ``normal_deg`` from +x, positive on the normal's side."""
+    nx, ny = _normal(normal_deg)
+    return nx * (np.asarray(x, dtype=np.float64) - x0) + ny * (np.asarray(y, dtype=np.float64) - y0)
 
 
-def _cosine_fall(u, du_dx, du_dy, height_mm: float):
-    """A raised-cosine fall from ``height_mm`` at u <= 0 to 0 at u >= 1, and its gradient
-    given u's gradient (arrays of one shape): h = H (1 + cos(pi u)) / 2 on [0, 1]."""
-    h, gx, gy = _cosine_fall_kernel(u.ravel(), du_dx.ravel(), du_dy.ravel(), height_mm)
-    return h.reshape(u.shape), gx.reshape(u.shape), gy.reshape(u.shape)
+def _flat(x, y):
+    """Positions (mm) as two float64 (m,) arrays of their broadcast shape, and the shape."""
+    x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+    if x.shape != y.shape:
+        x, y = np.broadcast_arrays(x, y)
+    return x.ravel(), y.ravel(), x.shape
+
+
+def _shaped(planes: np.ndarray, shape) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(h, dh/dx, dh/dy) of the positions' ``shape`` from a kernel's (3, m) planes."""
+    return planes[0].reshape(shape), planes[1].reshape(shape), planes[2].reshape(shape)
 
 
 @njit(cache=True, nogil=True)
-def _cosine_fall_kernel(u, du_dx, du_dy, height_mm):
-    """:func:`_cosine_fall` on (m,) arrays, one pass."""
-    h, gx, gy = np.empty(u.size), np.empty(u.size), np.empty(u.size)
-    for i in range(u.size):
-        uc = 0.0 if u[i] < 0.0 else (1.0 if u[i] > 1.0 else u[i])  # NaN stays NaN
-        h[i] = height_mm * 0.5 * (1.0 + np.cos(np.pi * uc))
-        on = 0.0 < u[i] < 1.0
-        slope = -height_mm * 0.5 * np.pi * np.sin(np.pi * uc) if on else 0.0
-        gx[i], gy[i] = slope * du_dx[i], slope * du_dy[i]
-    return h, gx, gy
+def _cosine_fall(u, height_mm):
+    """A raised-cosine fall from ``height_mm`` at u <= 0 to 0 at u >= 1: the height
+    h = H (1 + cos(pi u)) / 2 on [0, 1] (mm) and dh/du (NaN stays NaN)."""
+    uc = 0.0 if u < 0.0 else (1.0 if u > 1.0 else u)
+    h = height_mm * 0.5 * (1.0 + np.cos(np.pi * uc))
+    slope = -height_mm * 0.5 * np.pi * np.sin(np.pi * uc) if 0.0 < u < 1.0 else 0.0
+    return h, slope
+
+
+@njit(cache=True, nogil=True)
+def _sign(d):
+    """numpy's sign: -1, 0 (also for -0) or 1; NaN stays NaN."""
+    return 1.0 if d > 0.0 else (-1.0 if d < 0.0 else (0.0 if d == 0.0 else d))
 
 
 @dataclass(frozen=True)
@@ -106,19 +119,28 @@ class Ridge:
     width_mm: float
     height_mm: float
 
-    def _across(self, x, y):
-        """Distance (mm) from the centre line, and the unit normal (nx, ny)."""
-        return _along(x, y, self.x_mm, self.y_mm, self.angle_deg + 90.0)
-
     def height_and_gradient(self, x, y):
-        d, nx, ny = self._across(x, y)
-        half = self.width_mm / 2
-        u = np.abs(d) / half
-        sign = np.sign(d)
-        return _cosine_fall(u, sign * nx / half, sign * ny / half, self.height_mm)
+        x, y, shape = _flat(x, y)
+        line = (self.x_mm, self.y_mm, *_normal(self.angle_deg + 90.0))
+        return _shaped(_ridge(x, y, line, self.width_mm / 2, self.height_mm), shape)
 
     def support(self, x, y):
-        return np.abs(self._across(x, y)[0]) <= self.width_mm / 2
+        d = _along(x, y, self.x_mm, self.y_mm, self.angle_deg + 90.0)
+        return np.abs(d) <= self.width_mm / 2
+
+
+@njit(cache=True, nogil=True)
+def _ridge(x, y, line, half, height_mm):
+    """(3, m) height and gradient of a :class:`Ridge` of half width ``half`` (mm) whose
+    centre line passes through (x0, y0) with unit normal (nx, ny), ``line``."""
+    x0, y0, nx, ny = line
+    out = np.empty((3, x.size))
+    for i in range(x.size):
+        d = nx * (x[i] - x0) + ny * (y[i] - y0)
+        sign = _sign(d)
+        h, slope = _cosine_fall(abs(d) / half, height_mm)
+        out[0, i], out[1, i], out[2, i] = h, slope * (sign * nx / half), slope * (sign * ny / half)
+    return out
 
 
 @dataclass(frozen=True)
@@ -133,18 +155,29 @@ class Step:
     height_mm: float
     chamfer_mm: float
 
-    def _along_normal(self, x, y):
-        return _along(x, y, self.x_mm, self.y_mm, self.angle_deg)
-
     def height_and_gradient(self, x, y):
-        d, nx, ny = self._along_normal(x, y)
-        u = d / self.chamfer_mm + 0.5
-        on = (u > 0.0) & (u < 1.0)
-        slope = np.where(on, self.height_mm / self.chamfer_mm, 0.0)
-        return self.height_mm * np.clip(u, 0.0, 1.0), slope * nx, slope * ny
+        x, y, shape = _flat(x, y)
+        line = (self.x_mm, self.y_mm, *_normal(self.angle_deg))
+        return _shaped(_step(x, y, line, self.chamfer_mm, self.height_mm), shape)
 
     def support(self, x, y):
-        return np.abs(self._along_normal(x, y)[0]) <= self.chamfer_mm / 2
+        d = _along(x, y, self.x_mm, self.y_mm, self.angle_deg)
+        return np.abs(d) <= self.chamfer_mm / 2
+
+
+@njit(cache=True, nogil=True)
+def _step(x, y, line, chamfer_mm, height_mm):
+    """(3, m) height and gradient of a :class:`Step` on the line through (x0, y0) with
+    unit normal (nx, ny), ``line``."""
+    x0, y0, nx, ny = line
+    rise = height_mm / chamfer_mm
+    out = np.empty((3, x.size))
+    for i in range(x.size):
+        u = (nx * (x[i] - x0) + ny * (y[i] - y0)) / chamfer_mm + 0.5
+        slope = rise if 0.0 < u < 1.0 else 0.0
+        out[0, i] = height_mm * (0.0 if u < 0.0 else (1.0 if u > 1.0 else u))
+        out[1, i], out[2, i] = slope * nx, slope * ny
+    return out
 
 
 @dataclass(frozen=True)
@@ -159,13 +192,27 @@ class ButtonRim:
     height_mm: float
 
     def height_and_gradient(self, x, y):
-        dx, dy, r = _from_centre(x, y, self.cx_mm, self.cy_mm)
-        inv = np.divide(1.0, r * self.rim_mm, out=np.zeros_like(r), where=r > 0)
-        u = (r - (self.radius_mm - self.rim_mm)) / self.rim_mm
-        return _cosine_fall(u, dx * inv, dy * inv, self.height_mm)
+        x, y, shape = _flat(x, y)
+        return _shaped(_button(x, y, (self.cx_mm, self.cy_mm), self.radius_mm, self.rim_mm,
+                               self.height_mm), shape)
 
     def support(self, x, y):
         return _from_centre(x, y, self.cx_mm, self.cy_mm)[2] <= self.radius_mm
+
+
+@njit(cache=True, nogil=True)
+def _button(x, y, centre, radius_mm, rim_mm, height_mm):
+    """(3, m) height and gradient of a :class:`ButtonRim` about ``centre`` (mm)."""
+    cx, cy = centre
+    plateau = radius_mm - rim_mm
+    out = np.empty((3, x.size))
+    for i in range(x.size):
+        dx, dy = x[i] - cx, y[i] - cy
+        r = np.sqrt(dx * dx + dy * dy)
+        inv = 1.0 / (r * rim_mm) if r > 0 else 0.0
+        h, slope = _cosine_fall((r - plateau) / rim_mm, height_mm)
+        out[0, i], out[1, i], out[2, i] = h, slope * (dx * inv), slope * (dy * inv)
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,11 +237,9 @@ class HeightMap:
         object.__setattr__(self, "_planes", np.stack((self.heights_mm, gx, gy)))
 
     def height_and_gradient(self, x, y):
-        x, y = np.broadcast_arrays(np.asarray(x, dtype=np.float64),
-                                   np.asarray(y, dtype=np.float64))
-        out = _sample_map(self._planes, x.ravel(), y.ravel(),
-                          (self.x_mm, self.y_mm, self.width_mm, self.height_mm))
-        return out[0].reshape(x.shape), out[1].reshape(x.shape), out[2].reshape(x.shape)
+        x, y, shape = _flat(x, y)
+        placement = (self.x_mm, self.y_mm, self.width_mm, self.height_mm)
+        return _shaped(_sample_map(self._planes, x, y, placement), shape)
 
     def support(self, x, y):
         x = np.asarray(x, dtype=np.float64)

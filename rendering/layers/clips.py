@@ -89,6 +89,21 @@ def _play(fired, index0, start, samples, mu, playing):
     return start
 
 
+@njit(cache=True, nogil=True)
+def _render_block(trigger, contact, touch_id, inside, flag, prev, index0, start, samples):
+    """One block of the layer: mu' and coverage (F, n), the clip's start after the block
+    and each finger's last sample (:func:`_fired`, :func:`_play`)."""
+    fired, last = _fired(trigger, contact, touch_id, inside, flag, prev)
+    fingers, n = contact.shape
+    mu_row, playing = np.empty(n), np.empty(n, dtype=np.bool_)
+    start = _play(fired, index0, start, samples, mu_row, playing)
+    mu, covers = np.empty((fingers, n)), np.empty((fingers, n), dtype=np.bool_)
+    for i in range(fingers):
+        for j in range(n):
+            mu[i, j], covers[i, j] = mu_row[j], contact[i, j] and playing[j]
+    return mu, covers, start, last
+
+
 class ClipRenderer:
     """Renders one ``ClipLayer``; see the module docstring."""
 
@@ -115,11 +130,8 @@ class ClipRenderer:
         flag = self._flag(block)
         prev = np.array([state.fingers.get(fid, FingerPrev()) for fid in block.ids],
                         dtype=np.int64).reshape(len(block.ids), 4)
-        fired, last = _fired(self.trigger, block.contact, block.touch_id, inside, flag, prev)
-        mu_row, playing = np.empty(block.n), np.empty(block.n, dtype=bool)
-        start = _play(fired, block.index0, state.start, self.samples, mu_row, playing)
+        mu, covers, start, last = _render_block(self.trigger, block.contact, block.touch_id,
+                                                inside, flag, prev, block.index0, state.start,
+                                                self.samples)
         fingers = {fid: FingerPrev(*row) for fid, row in zip(block.ids, last.tolist())}
-        covers = block.contact & playing
-        mu = np.empty(covers.shape)
-        mu[:] = mu_row
         return mu, covers, ClipState(start, fingers)

@@ -73,7 +73,9 @@ class HeightRenderer:
 
     def render(self, block: FingerBlock, state=None):
         """mu' (F, n) and coverage (F, n) of the layer under each finger."""
-        layer = self.layer
-        _, gx, gy = layer.shape.height_and_gradient(block.x_pred, block.y_pred)
-        s = slope_along_motion(gx, gy, block.vx, block.vy, layer.v_fade_mm_s, self.signed)
-        return layer.mu_of_slope(s), layer.covers(block.x_pred, block.y_pred), state
+        layer, x, y = self.layer, block.x_pred, block.y_pred
+        _, gx, gy = layer.shape.height_and_gradient(x, y)
+        # slope_along_motion's kernel: the block's arrays already share one shape
+        s = _slope_kernel(gx.ravel(), gy.ravel(), block.vx.ravel(), block.vy.ravel(),
+                          layer.v_fade_mm_s, self.signed)
+        return layer.mu_of_slope(s).reshape(x.shape), layer.covers(x, y), state
