@@ -221,10 +221,9 @@ class ClosedLoop:
         changes = dict(chain=chain, since_report_s=0.0, good_s=good_s, fallback=fallback)
         sliding = sent.single & (sent.speed >= cfg.slide_mm_s) & (nor >= cfg.min_normal_n)
         ratio = lat / np.maximum(nor, cfg.min_normal_n)
-        still = sliding & (seen[1] < cfg.still_seen) & (ratio >= cfg.min_rest_mu)
+        quiet = (seen[1] < cfg.still_seen) & (ratio >= cfg.min_rest_mu)  # the plate seen still
         if not math.isfinite(state.mu0) and sent.single:  # the first estimate (docstring, 1)
-            still = (seen[1] < cfg.still_seen) & (nor >= cfg.min_normal_n) & (
-                sent.speed >= cfg.creep_mm_s) & (ratio >= cfg.min_rest_mu)
+            still = quiet & (nor >= cfg.min_normal_n) & (sent.speed >= cfg.creep_mm_s)
             late = np.arange(n) >= n // 2
             a, b = ratio[still & ~late], ratio[still & late]
             if min(a.size, b.size) >= cfg.min_still // 2:
@@ -234,6 +233,7 @@ class ClosedLoop:
             return replace(state, **changes)
         if not sent.single or not sliding.any():
             return replace(state, **changes)  # at rest or several fingers: nothing to learn
+        still = sliding & quiet
         ref = seen[0]
         mu0 = state.mu0
         if np.count_nonzero(still) >= cfg.min_still:
