@@ -120,6 +120,30 @@ def test_section_tables_gains_and_claims():
     assert not [c for c in shaky if c.metric == "swings"][0].passed
 
 
+def test_fingers_without_mu0_are_left_out_of_the_figures_from_mu0_on():
+    """A finger whose loop never found mu0 has no 'from mu0 on' figure (None, not 0): the
+    population RMS and the gain over open loop are those of the other fingers, and the
+    table says how many were kept."""
+    closed = [0.004, 0.003, 0.01, 0.002, 0.004, 0.006]
+    values = {"grating-15mm": {"open": [_fake(r) for r in OPEN],
+                               "closed": [_fake(r) for r in closed]}}
+    for k in (1, 4):
+        values["grating-15mm"]["closed"][k].update(first_mu0_s=None, rms_after_mu0=None)
+    row = summarise(values, fingers=len(OPEN), duration_s=1.0)["scenes"]["grating-15mm"]["closed"]
+    kept = [0, 2, 3, 5]
+    closed_pop = math.sqrt(np.mean(np.square(np.array(closed)[kept] / 2)))
+    open_pop = math.sqrt(np.mean(np.square(np.array(OPEN)[kept])))
+    assert row["mu0_missing"] == 2
+    assert math.isclose(row["rms_after_mu0_pop"], closed_pop, rel_tol=1e-12)
+    assert math.isclose(row["gain_after_mu0"], open_pop / closed_pop, rel_tol=1e-12)
+    assert row["per_finger"]["open_rms_after_mu0"][1] is None
+    section = summarise(values, fingers=len(OPEN), duration_s=1.0)
+    line = [x for x in markdown(section) if x.startswith("| grating-15mm | closed |")][0]
+    assert f"{closed_pop:.4f} (4 of 6 fingers)" in line
+    everyone = _section(closed, closed)["scenes"]["grating-15mm"]["closed"]
+    assert everyone["mu0_missing"] == 0
+
+
 def test_gain_swings_see_an_oscillation_that_grows_or_holds():
     from app.measure.report_closed_loop import SWING, gain_swings
     k = np.arange(200)

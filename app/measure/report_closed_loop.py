@@ -34,7 +34,8 @@ Measured, over the samples where the finger touches and slides (>= 5 mm/s):
   the plate still while the finger starts to slide, and is open loop otherwise), and
   ``rms_after_mu0``: the reachable RMS from then on, beside open loop's over the same
   samples of the same finger (``cumulative``: an open run's squared error so far at
-  each block, kept out of the JSON);
+  each block, kept out of the JSON); None for a finger whose loop never found mu0, which
+  the "from mu0 on" figures leave out (``mu0_missing`` counts them), as ``paired`` does;
 - ``adapted_gap``: after the adaptive run, seed 003's eq 2 with the adapted (b, k)
   against the true finger at the run's end, over the amplitudes 0..limit (relative RMS);
   the adaptation study runs each finger ``ADAPT_S`` on ``ADAPT_SCENE`` (whose bump asks
@@ -121,13 +122,22 @@ def finger_speed(motion):
     return lambda t: np.interp(t, path.t_s, speed)
 
 
-def simulate(run: Run):
-    """Run one (scene, finger, mode); returns (FingerSink, LoopStage after the run)."""
+def simulate(run: Run, loop_config=None):
+    """Run one (scene, finger, mode); returns (FingerSink, LoopStage after the run).
+
+    ``loop_config``: a ``rendering.control.loop.LoopConfig`` for the loop modes (gains,
+    thresholds) in place of the defaults the pipeline builds its loop with."""
     scene = load(run.scene)
     motion = make_motion("human", speed_mm_s=60.0, duration_s=run.duration_s, seed=run.finger)
     trace = sample(motion, 50.0, noise_mm=0.05, seed=100 + run.finger)
     pipeline = build_pipeline(scene, rate_hz=RATE_HZ, block_size=BLOCK, render_override="hybrid",
                               control=run.mode)
+    if loop_config is not None:
+        if pipeline.control is None:
+            raise ValueError(f"loop_config needs a loop mode, got mode {run.mode!r}")
+        from rendering.control.loop import ClosedLoop  # the loop is pure: its state is apart
+        pipeline.control = ClosedLoop(scene.device, pipeline.rate_hz, pipeline.block_size,
+                                      run.mode, loop_config)
     sensor = SensorParams(lateral_noise_n=0.0, normal_noise_n=0.0) if run.noiseless else SensorParams()
     plant = FingerPlant(draw_finger(run.finger), RATE_HZ, scene.device.amplitude_limit_um,
                         sensor=sensor, seed=run.finger)
@@ -155,11 +165,11 @@ def score(run: Run) -> dict:
     control = stage.state.control
     if control is not None:
         known = stage.first_mu0_s
-        after = a["t"][slide] >= (known if known is not None else np.inf)
+        after = a["t"][slide] >= (known if known is not None else np.inf)  # none without mu0
         out.update(fallbacks=control.fallbacks, log_c=control.log_c, mu0_estimate=control.mu0,
                    b_per_um=control.rls.theta[0], k_per_n=control.rls.theta[1],
                    swings=gain_swings(np.array(stage.log_c)),
-                   first_mu0_s=known, rms_after_mu0=_rms(reach[after]))
+                   first_mu0_s=known, rms_after_mu0=_rms(reach[after]) if known is not None else None)
         if run.mode == "adaptive":
             out["adapted_gap"] = adapted_gap(run, control.rls.params, float(a["t"][-1]))
             if run.noise:
@@ -211,12 +221,10 @@ def gain_swings(log_c: np.ndarray) -> int:
     return int(longest)
 
 
-def _window_rms(cumulative, t0_s: float | None) -> float:
-    """RMS of an open-loop run's error from block time ``t0_s`` on (``score``'s
+def _window_rms(cumulative, t0_s: float) -> float:
+    """RMS of an open-loop run's error from block time ``t0_s`` (s) on (``score``'s
     ``cumulative``: squared error summed and samples counted up to each block)."""
     sse, count = cumulative
-    if t0_s is None:
-        return 0.0
     k = min(int(round(t0_s * RATE_HZ / BLOCK)), sse.size - 1)
     n = count[-1] - count[k]
     return float(np.sqrt((sse[-1] - sse[k]) / n)) if n > 0 else 0.0
@@ -297,13 +305,18 @@ def summarise(values: dict, fingers: int, duration_s: float) -> dict:
                 per["first_mu0_s"] = [r["first_mu0_s"] for r in results]
                 known = [t for t in per["first_mu0_s"] if t is not None]
                 r_mode["swings_max"] = max(per["swings"])
-                r_mode["rms_after_mu0_pop"] = _rms(np.array(per["rms_after_mu0"]))
+                # "from mu0 on": only the fingers whose loop found mu0
+                after = [x for x in per["rms_after_mu0"] if x is not None]
+                r_mode["mu0_missing"] = len(results) - len(after)
+                r_mode["rms_after_mu0_pop"] = _rms(np.array(after)) if after else None
                 if "open" in modes:  # open loop over the same samples, finger by finger
                     per["open_rms_after_mu0"] = [
-                        _window_rms(o["cumulative"], t) for o, t in zip(modes["open"],
-                                                                         per["first_mu0_s"])]
-                    r_mode["gain_after_mu0"] = _rms(np.array(per["open_rms_after_mu0"])) / max(
-                        r_mode["rms_after_mu0_pop"], 1e-12)
+                        _window_rms(o["cumulative"], t) if t is not None else None
+                        for o, t in zip(modes["open"], per["first_mu0_s"])]
+                    if after:
+                        opened = [x for x in per["open_rms_after_mu0"] if x is not None]
+                        r_mode["gain_after_mu0"] = _rms(np.array(opened)) / max(
+                            r_mode["rms_after_mu0_pop"], 1e-12)
                 r_mode["first_mu0_s_median"] = float(np.median(known)) if known else None
                 r_mode["first_mu0_s_max"] = max(known) if len(known) == len(results) else None
             if mode == "adaptive":
@@ -433,8 +446,9 @@ def markdown(section: dict) -> list[str]:
              "the block the loop first measured the finger's friction at rest (the plate still "
              "under a sliding finger), open loop over the same samples of the same finger: "
              "before that the loop has nothing to compare with (it holds the plate still as "
-             "the finger starts to slide, and is open loop otherwise); 'mu0 found': when that happened (median, "
-             "latest). Gain swings: the longest run of swings of the loop's gain over "
+             "the finger starts to slide, and is open loop otherwise); fingers whose loop never "
+             "measured it are left out of both figures ('k of N fingers' where any was); 'mu0 "
+             "found': when that happened (median, latest). Gain swings: the longest run of swings of the loop's gain over "
              f"{SWING:.0%}, each at least half the one before ({OSCILLATION_STEPS} or more "
              "would be an oscillation that grows, holds or rings).", "",
              "| scene | mode | RMS | gain | worst | RMS from mu0 on | gain from mu0 on | "
@@ -446,7 +460,12 @@ def markdown(section: dict) -> list[str]:
             gain = f"{r['gain_vs_open']:.2f}x" if "gain_vs_open" in r else ""
             noise = f"{r['noise_fraction_max']:.3f}" if "noise_fraction_max" in r else ""
             gap = f"{r['adapted_gap_max']:.3f}" if "adapted_gap_max" in r else ""
-            after = f"{r['rms_after_mu0_pop']:.4f}" if "rms_after_mu0_pop" in r else ""
+            after = ""
+            if r.get("rms_after_mu0_pop") is not None:
+                after = f"{r['rms_after_mu0_pop']:.4f}"
+            if r.get("mu0_missing"):
+                kept = len(r["per_finger"]["rms_reachable"]) - r["mu0_missing"]
+                after = f"{after} ({kept} of {kept + r['mu0_missing']} fingers)".lstrip()
             found = (f"{r['first_mu0_s_median']:.2f}, {r['first_mu0_s_max']:.2f}"
                      if r.get("first_mu0_s_max") is not None else
                      ("not in every run" if "first_mu0_s_max" in r else ""))
