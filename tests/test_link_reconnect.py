@@ -114,7 +114,8 @@ class Line:
 def test_samples_played_before_a_recovery_or_reconnect_are_played_not_lost(fault):
     rec = Recorder()
     line = Line(DeviceCore(DeviceConfig(), log=rec.log))
-    sink = CommandSink(line.open, 1, RATE, paced=True, stall_s=5.0, stderr=io.StringIO())
+    said = io.StringIO()
+    sink = CommandSink(line.open, 1, RATE, paced=True, stall_s=5.0, stderr=said)
     signal = 1.0 + 0.5 * np.sin(np.arange(8000) / 50.0)
     faulted = False
     try:
@@ -130,8 +131,14 @@ def test_samples_played_before_a_recovery_or_reconnect_are_played_not_lost(fault
     assert faulted
     status = sink.status()
     index, values = rec.played()
-    # the fault happened, and the device played samples the host had not seen reported
-    assert status["recoveries" if fault == "recovery" else "reconnects"] == 1
+    # the fault happened, and the device played samples the host had not seen reported.
+    # At least once: the host's watch is on the wall clock (SILENCE_S, HANDSHAKE_TIMEOUT_S),
+    # so a link thread starved that long (a CPU hog) resyncs or reconnects once more, and
+    # what follows holds for any number of them
+    count = status["recoveries" if fault == "recovery" else "reconnects"]
+    assert count >= 1, said.getvalue()
+    reason = "no valid frame from the device" if fault == "recovery" else "link lost"
+    assert reason in said.getvalue(), said.getvalue()
     assert line.played_at_recovery > line.played_at_mute
     # every sample the device played is counted played, once; nothing was lost on the wire
     # but, when the cable is pulled, the block the link thread was writing just then (where
