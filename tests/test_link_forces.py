@@ -175,6 +175,14 @@ def test_a_device_without_the_capability_streams_as_before_with_no_lateral_force
 
 
 def test_sim_device_finger_reports_reach_the_host():
+    """The ``frictex sim-device --finger`` process's reports reach the host and read back.
+
+    The device plays on the wall clock: a host starved past its 25 ms watchdog (a CPU
+    hog) makes it drop the report being built and restart at the next sample, which may
+    be anywhere. So what is asserted holds however the scheduler behaves: reports of 40
+    samples with the finger's friction, each read back as sent, and the run of them that
+    ends at the latest (one report at least; all ~100 when nothing starved) read back as
+    one window. The windows themselves are property-tested above, deterministically."""
     sink = open_sink("sim", 1, RATE, paced=True, sim_args=("--finger", "3", "--force", "0.5"))
     try:
         assert sink.info.has_force_reports and sink.info.protocol_version == 3
@@ -182,13 +190,17 @@ def test_sim_device_finger_reports_reach_the_host():
     finally:
         sink.close()
     latest = sink.force_report()
-    assert latest.lateral_n.size == 40 and latest.index0 % 40 == 0
+    assert latest is not None and latest.lateral_n.size == 40
     ratio = latest.lateral_n.mean() / latest.normal_n.mean()  # mu0 mu': person 3's friction
     f = draw_finger(3)
     assert 0.2 * f.mu0 < ratio < 1.05 * f.mu0 * (1 + f.mu0_drift)
-    window = sink.force_report(latest.index0 - 400, 440)
-    assert window is not None and window.lateral_n.size == 440
-    assert sink.status()["force_reports"] >= 4000 // 40 - 3
+    k = 0  # reports contiguous before the latest
+    while sink.force_report(latest.index0 - 40 * (k + 1), 40 * (k + 2)) is not None:
+        k += 1
+    window = sink.force_report(latest.index0 - 40 * k, 40 * (k + 1))
+    np.testing.assert_array_equal(window.lateral_n[-40:], latest.lateral_n)
+    np.testing.assert_array_equal(window.normal_n[-40:], latest.normal_n)
+    assert sink.status()["force_reports"] >= k + 1
 
 
 @pytest.mark.parametrize("argv, message", [
