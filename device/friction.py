@@ -124,7 +124,7 @@ class SeedFrictionModel:
         reduction = (1.0 - mu) / (1.0 - a)  # in [0, 1) where reachable
         with np.errstate(divide="ignore", invalid="ignore"):
             w = -np.log1p(-np.minimum(reduction, 1.0)) / self.params.b_per_um
-        if np.any(beyond):  # asks for a reduction where the model does not hold
+        if beyond.any():  # asks for a reduction where the model does not hold
             out = beyond & (mu < 1.0)
             counts.force_beyond_model += int(np.count_nonzero(out))
             w = np.where(out, self.limit_um, w)
@@ -220,8 +220,10 @@ FrictionModel = SeedFrictionModel | CalibratedFrictionModel
 def _guarded_invert(model: FrictionModel, mu_target, normal_force_n) -> tuple[np.ndarray, ClampCounts]:
     """The hard-case guards shared by every model (see the module docstring)."""
     counts = ClampCounts()
-    mu, force = np.broadcast_arrays(np.asarray(mu_target, dtype=np.float64),
-                                    np.asarray(normal_force_n, dtype=np.float64))
+    mu = np.asarray(mu_target, dtype=np.float64)
+    force = np.asarray(normal_force_n, dtype=np.float64)
+    if mu.shape != force.shape:  # broadcast_arrays costs microseconds even when they match
+        mu, force = np.broadcast_arrays(mu, force)
     f_lo, f_hi = force.min(initial=np.inf), force.max(initial=-np.inf)
     # the usual block: finite targets (their sum is finite) and one good force for all
     if np.isfinite(mu.sum()) and f_lo == f_hi and 0.0 <= f_lo < np.inf:

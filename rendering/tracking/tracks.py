@@ -353,7 +353,7 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
     updates: dict[int, tuple[np.ndarray, np.ndarray]] = {}
     sampled = sorted(set(samples.finger.tolist())) if samples is not None else []
     if sampled:
-        applied = np.clip(apply_index(samples.t_s, config), index0, index0 + n - 1)
+        applied = np.minimum(np.maximum(apply_index(samples.t_s, config), index0), index0 + n - 1)
         for fid in sampled:
             sel = slice(None) if len(sampled) == 1 else samples.finger == fid
             steps, keep, fingers[fid] = _finger_steps(
@@ -365,26 +365,38 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
     # lifted is forgotten once its lift is out, so the cost follows the fingers touching
     # at once, not every id a recording ever used
     ids = tuple(sorted(set(sampled) | set(state.fingers)))
-    tables, runs = [], []
-    for fid in ids:
-        before = _GET_FIELDS(state.fingers.get(fid, FingerState(touch_id=state.touches)))
-        at, steps = updates.get(fid, (None, None))
-        if steps is None:
-            tables.append(np.array(before, dtype=np.float64)[:, None])
-            runs.append(np.array([n], dtype=np.int64))
-            continue
-        tables.append(np.column_stack((before, steps)))
-        # step j holds from its apply index to the next step's (a later step applied at
-        # the same index overrides it: a run of length 0)
-        runs.append(np.diff(np.concatenate(([0], at - index0, [n]))))
-    table = np.concatenate(tables, axis=1) if tables else np.zeros((len(_FIELDS), 0))
-    arrays = _expand(table, np.concatenate(runs) if runs else np.zeros(0, np.int64),
-                     np.array([t.shape[1] for t in tables], dtype=np.int64), t_out,
-                     float(config.predict_horizon_s))
+    table, runs, steps = _step_table(ids, state, updates, index0, n)
+    arrays = _expand(table, runs, steps, t_out, float(config.predict_horizon_s))
     block = FingerBlock(index0, t_out, ids, **dict(zip(BLOCK_FIELDS, arrays)))
     touching = {fid: s for fid, s in fingers.items() if s.contact}
     touches = max([state.touches, *(s.touch_id for s in fingers.values())])
     return block, TrackerState(fingers=touching, touches=touches, **counters)
+
+
+def _step_table(ids, state: TrackerState, updates: dict, index0: int, n: int):
+    """:func:`_expand`'s ``table``, ``runs`` and ``steps`` for the fingers ``ids``: each
+    finger's state when the block starts, then its ``updates`` (apply indices, state
+    columns) if any."""
+    counts = [1 + (updates[fid][1].shape[1] if fid in updates else 0) for fid in ids]
+    table = np.empty((len(_FIELDS), sum(counts)))
+    runs = np.empty(sum(counts), dtype=np.int64)
+    col = 0
+    for fid, count in zip(ids, counts):
+        known = state.fingers.get(fid)
+        table[:, col] = _GET_FIELDS(FingerState(touch_id=state.touches) if known is None else known)
+        if count == 1:
+            runs[col] = n
+        else:
+            at, steps = updates[fid]
+            table[:, col + 1:col + count] = steps
+            # step j holds from its apply index to the next step's (a later step applied at
+            # the same index overrides it: a run of length 0)
+            edges = at - index0
+            runs[col] = edges[0]
+            runs[col + 1:col + count - 1] = edges[1:] - edges[:-1]
+            runs[col + count - 1] = n - edges[-1]
+        col += count
+    return table, runs, np.array(counts, dtype=np.int64)
 
 
 @njit(cache=True, nogil=True)
