@@ -53,11 +53,11 @@ def _slope_kernel(gx, gy, vx, vy, v_fade_mm_s, signed):
     for i in range(gx.size):
         speed = np.sqrt(vx[i] * vx[i] + vy[i] * vy[i])
         if signed:
-            out[i] = (gx[i] * vx[i] + gy[i] * vy[i]) / (speed if not speed < v_fade_mm_s
-                                                           else v_fade_mm_s)
+            along = gx[i] * vx[i] + gy[i] * vy[i]
+            out[i] = along / (v_fade_mm_s if speed < v_fade_mm_s else speed)
         else:
             fade = speed / v_fade_mm_s
-            out[i] = np.sqrt(gx[i] * gx[i] + gy[i] * gy[i]) * (fade if not fade > 1.0 else 1.0)
+            out[i] = np.sqrt(gx[i] * gx[i] + gy[i] * gy[i]) * (1.0 if fade > 1.0 else fade)
     return out
 
 
