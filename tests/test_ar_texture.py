@@ -264,7 +264,7 @@ def test_an_a_whose_lsfs_rounding_hides_is_refused():
 
 
 def test_the_noise_is_standard_white_and_keyed_by_touch():
-    from rendering.layers.ar_texture import gaussian_noise
+    from textures.ar_synthesis import gaussian_noise
 
     z = gaussian_noise(0, 0, 1, 0, 200_000)
     assert abs(z.mean()) < 0.01 and abs(z.std() - 1.0) < 0.01

@@ -86,8 +86,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from numba import njit
 
+from textures.ar_synthesis import barycentric, blend_at, lsf_to_poly
 from textures.errors import TextureError
 from textures.library import UnreadableText, read_utf8
 from textures.dynamic import DynamicLayer
@@ -172,43 +172,6 @@ def poly_to_lsf(a) -> np.ndarray:
     return np.sort((lo + hi) / 2)
 
 
-@njit(cache=True)
-def lsf_to_poly(lsf) -> np.ndarray:
-    """A(z) = [1, a_1 .. a_p] from p line spectral frequencies (the inverse of
-    :func:`poly_to_lsf`): P's roots are the 1st, 3rd, ... LSFs, Q's the others, with the
-    trivial roots at z = -1 (P) and z = +1 (Q) for p even, z = +1 and -1 (Q) for p odd.
-    P and Q are evaluated as products of their sections at n > p + 1 points of the unit
-    circle, A = (P + Q) / 2 there, and its coefficients are the inverse DFT."""
-    p = lsf.size
-    n = 8
-    while n < p + 2:
-        n *= 2
-    twiddle = np.exp(2j * np.pi * np.arange(n) / n)  # e^(j 2 pi i / n)
-    cos_w = -2.0 * np.cos(lsf)
-    values = np.empty(n, dtype=np.complex128)
-    for i in range(n):
-        z1 = np.conj(twiddle[i])  # z^-1 at w = 2 pi i / n
-        z2 = z1 * z1
-        pv, qv = 1.0 + 0.0j, 1.0 + 0.0j
-        for k in range(0, p, 2):
-            pv *= 1.0 + cos_w[k] * z1 + z2
-        for k in range(1, p, 2):
-            qv *= 1.0 + cos_w[k] * z1 + z2
-        if p % 2 == 0:
-            pv *= 1.0 + z1
-            qv *= 1.0 - z1
-        else:
-            qv *= 1.0 - z2
-        values[i] = (pv + qv) / 2.0
-    a = np.empty(p + 1)
-    for d in range(p + 1):
-        acc = 0.0 + 0.0j
-        for i in range(n):
-            acc += values[i] * twiddle[(i * d) % n]
-        a[d] = acc.real / n
-    return a
-
-
 def response2(c, f_hz, rate_hz: float) -> np.ndarray:
     """|C(e^(j 2 pi f / fs))|^2 of the polynomial c = [c_0 .. c_n] in z^-1, at f_hz."""
     return np.abs(_on_circle(c, 2 * np.pi * np.asarray(f_hz, dtype=np.float64) / rate_hz)) ** 2
@@ -233,34 +196,6 @@ def levinson(r: np.ndarray, order: int) -> tuple[np.ndarray, float]:
     return a, err
 
 
-@njit(cache=True)
-def _barycentric(s0, f0, inv, speed, force):
-    """(triangle, weights (3,)) of (speed, force); see ``TextureModel.weights``."""
-    best, best_t = -np.inf, 0
-    w = np.zeros(3)
-    for t in range(s0.size):
-        ds, df = speed - s0[t], force - f0[t]
-        u = inv[t, 0, 0] * ds + inv[t, 0, 1] * df
-        v = inv[t, 1, 0] * ds + inv[t, 1, 1] * df
-        lowest = min(1.0 - u - v, u, v)
-        if lowest > best:
-            best, best_t = lowest, t
-            w[0], w[1], w[2] = 1.0 - u - v, u, v
-    w = np.maximum(w, 0.0)
-    return best_t, w / w.sum()
-
-
-@njit(cache=True)
-def blend_at(s0, f0, inv, triangles, lsf, variances, speed, force):
-    """The toolkit's blend at (speed, force): barycentric weights on the three vertices'
-    LSFs and variances. Returns (A(z) = [1, a_1 .. a_p], variance)."""
-    t, w = _barycentric(s0, f0, inv, speed, force)
-    mixed = np.zeros(lsf.shape[1])
-    variance = 0.0
-    for k in range(3):
-        mixed += w[k] * lsf[triangles[t, k]]
-        variance += w[k] * variances[triangles[t, k]]
-    return lsf_to_poly(mixed), variance
 
 
 # ---------------------------------------------------------------------------
@@ -305,7 +240,7 @@ class TextureModel:
         the triangulation: the triangle it is least outside of, negative weights set to 0
         and the rest renormalised (the nearest edge or vertex, continuously)."""
         s0, f0, inv = self._tri
-        t, w = _barycentric(s0, f0, inv, float(speed_mm_s), float(force_n))
+        t, w = barycentric(s0, f0, inv, float(speed_mm_s), float(force_n))
         return self.triangles[t], w
 
     @property

@@ -1,0 +1,165 @@
+"""An AR texture model's compiled kernels: the blend at a speed and force, line spectral
+frequencies to A(z), and the noise-driven all-pole synthesis of one finger's output.
+
+They are one module because numba's on-disk cache (``cache=True``) is keyed on the
+cached function's own file: a kernel that compiles in a jitted function of another
+module would keep running that function's old code after it changed
+(``tests/test_numba_cache.py``). ``textures.hatt`` builds and fits models with them;
+``rendering.layers.ar_texture`` renders with :func:`render_finger`.
+
+The noise of output sample k is a function of (seed, finger id, touch id, k) only (a
+counter hashed by the splitmix64 finaliser into two uniforms, then Box-Muller), so live
+and replay, and any split into blocks, give the same texture.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_M1, _M2 = np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB)
+_S30, _S27, _S31, _S11 = np.uint64(30), np.uint64(27), np.uint64(31), np.uint64(11)
+_TWO, _ONE = np.uint64(2), np.uint64(1)
+
+
+@njit(cache=True)
+def lsf_to_poly(lsf) -> np.ndarray:
+    """A(z) = [1, a_1 .. a_p] from p line spectral frequencies (the inverse of
+    :func:`poly_to_lsf`): P's roots are the 1st, 3rd, ... LSFs, Q's the others, with the
+    trivial roots at z = -1 (P) and z = +1 (Q) for p even, z = +1 and -1 (Q) for p odd.
+    P and Q are evaluated as products of their sections at n > p + 1 points of the unit
+    circle, A = (P + Q) / 2 there, and its coefficients are the inverse DFT."""
+    p = lsf.size
+    n = 8
+    while n < p + 2:
+        n *= 2
+    twiddle = np.exp(2j * np.pi * np.arange(n) / n)  # e^(j 2 pi i / n)
+    cos_w = -2.0 * np.cos(lsf)
+    values = np.empty(n, dtype=np.complex128)
+    for i in range(n):
+        z1 = np.conj(twiddle[i])  # z^-1 at w = 2 pi i / n
+        z2 = z1 * z1
+        pv, qv = 1.0 + 0.0j, 1.0 + 0.0j
+        for k in range(0, p, 2):
+            pv *= 1.0 + cos_w[k] * z1 + z2
+        for k in range(1, p, 2):
+            qv *= 1.0 + cos_w[k] * z1 + z2
+        if p % 2 == 0:
+            pv *= 1.0 + z1
+            qv *= 1.0 - z1
+        else:
+            qv *= 1.0 - z2
+        values[i] = (pv + qv) / 2.0
+    a = np.empty(p + 1)
+    for d in range(p + 1):
+        acc = 0.0 + 0.0j
+        for i in range(n):
+            acc += values[i] * twiddle[(i * d) % n]
+        a[d] = acc.real / n
+    return a
+
+
+@njit(cache=True)
+def barycentric(s0, f0, inv, speed, force):
+    """(triangle, weights (3,)) of (speed, force); see ``TextureModel.weights``."""
+    best, best_t = -np.inf, 0
+    w = np.zeros(3)
+    for t in range(s0.size):
+        ds, df = speed - s0[t], force - f0[t]
+        u = inv[t, 0, 0] * ds + inv[t, 0, 1] * df
+        v = inv[t, 1, 0] * ds + inv[t, 1, 1] * df
+        lowest = min(1.0 - u - v, u, v)
+        if lowest > best:
+            best, best_t = lowest, t
+            w[0], w[1], w[2] = 1.0 - u - v, u, v
+    w = np.maximum(w, 0.0)
+    return best_t, w / w.sum()
+
+
+@njit(cache=True)
+def blend_at(s0, f0, inv, triangles, lsf, variances, speed, force):
+    """The toolkit's blend at (speed, force): barycentric weights on the three vertices'
+    LSFs and variances. Returns (A(z) = [1, a_1 .. a_p], variance)."""
+    t, w = barycentric(s0, f0, inv, speed, force)
+    mixed = np.zeros(lsf.shape[1])
+    variance = 0.0
+    for k in range(3):
+        mixed += w[k] * lsf[triangles[t, k]]
+        variance += w[k] * variances[triangles[t, k]]
+    return lsf_to_poly(mixed), variance
+
+
+@njit(cache=True)
+def _mix(x):
+    """The splitmix64 finaliser: a uint64 hashed to a well-spread uint64."""
+    x = (x ^ (x >> _S30)) * _M1
+    x = (x ^ (x >> _S27)) * _M2
+    return x ^ (x >> _S31)
+
+
+@njit(cache=True)
+def _normal(key, index):
+    """A standard normal sample, a function of (key, index) only."""
+    c = np.uint64(key) + np.uint64(index) * _TWO * _GOLDEN  # (int64 + uint64 is float64 in numba)
+    u1 = (np.float64(_mix(c) >> _S11) + 0.5) * 2.0 ** -53
+    u2 = (np.float64(_mix(c + _GOLDEN) >> _S11) + 0.5) * 2.0 ** -53
+    return np.sqrt(-2.0 * np.log(u1)) * np.cos(2.0 * np.pi * u2)
+
+
+@njit(cache=True)
+def _synthesise(poly, scale, key, index0, history, out):
+    """out[j] = scale * noise(index0 + j) - sum_k poly[k] out[j - k] (poly[0] = 1), the
+    earlier outputs taken from ``history`` (most recent first, updated in place)."""
+    p = poly.size - 1
+    for j in range(out.size):
+        acc = scale * _normal(key, index0 + j)
+        for k in range(p):
+            acc -= poly[k + 1] * history[k]
+        for k in range(p - 1, 0, -1):
+            history[k] = history[k - 1]
+        if p > 0:
+            history[0] = acc
+        out[j] = acc
+
+
+@njit(cache=True)
+def noise_key(seed, finger, touch):
+    """The noise stream of one touch of one finger (uint64)."""
+    return _mix(np.uint64(seed) * _GOLDEN + np.uint64(finger) * _M1 + np.uint64(touch) * _M2)
+
+
+def gaussian_noise(seed: int, finger: int, touch: int, index0: int, n: int) -> np.ndarray:
+    """The standard normal samples of output indices index0 .. index0 + n - 1."""
+    out = np.empty(n)
+    _synthesise(np.ones(1), 1.0, noise_key(seed, finger, touch), index0, np.zeros(0), out)
+    return out
+
+
+@njit(cache=True)
+def render_finger(contact, touch_id, vx, vy, force, v_rest, seed, finger, index0, model,
+                   touch, history, y):
+    """Model output y (n,) of one finger row; see the module docstring. ``touch`` and
+    ``history`` (most recent first) come from the previous block; returns the touch id
+    after the block (``history`` is updated in place)."""
+    s0, f0, inv, triangles, lsf, variances = model
+    n = y.size
+    a = 0
+    while a < n:
+        speed = np.sqrt(vx[a] ** 2 + vy[a] ** 2)
+        b = a + 1  # the run of samples with this touch, speed and force
+        while (b < n and touch_id[b] == touch_id[a] and contact[b] == contact[a]
+               and vx[b] == vx[a] and vy[b] == vy[a] and force[b] == force[a]):
+            b += 1
+        moving = contact[a] and speed >= v_rest
+        if touch_id[a] != touch or not moving:
+            touch = touch_id[a]
+            history[:] = 0.0
+        if moving:
+            poly, variance = blend_at(s0, f0, inv, triangles, lsf, variances, speed, force[a])
+            _synthesise(poly / poly[0], np.sqrt(variance), noise_key(seed, finger, touch),
+                        index0 + a, history, y[a:b])
+        else:
+            y[a:b] = 0.0
+        a = b
+    return touch
