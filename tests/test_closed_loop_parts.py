@@ -1,12 +1,14 @@
 """Parts of the friction loop: RLS adaptation, the sensor chain, the report section's tables."""
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
 from app.measure.report_closed_loop import claims, markdown, summarise
+from device.link.forces import ForceReport
 from device.profile import DeviceProfile, FrictionParams
 from rendering.control.adapt import Rls
 from rendering.control.chain import Chain
@@ -170,3 +172,63 @@ def test_population_slopes_against_the_closed_form():
     s = (b / np.expm1(b * w)) / (1.67 / np.expm1(1.67 * w))
     lo, hi = population_slopes(1, FrictionParams(), 2.5)
     assert_allclose([lo, hi], [s.min(), s.max()], rtol=1e-6)
+
+
+N_BLOCK = 25
+
+
+def _block(index0, speed_mm_s, target=0.6, force_n=0.5):
+    """One finger touching for a block of N_BLOCK samples at a tracker speed (mm/s)."""
+    ones = np.ones((1, N_BLOCK))
+    fingers = SimpleNamespace(contact=ones > 0, force=force_n * ones, vx=speed_mm_s * ones,
+                              vy=0.0 * ones, index0=index0)
+    return np.full((1, N_BLOCK), target), fingers
+
+
+def _report(index0, ratio, force_n=0.5):
+    """A force report whose lateral / normal force reads ``ratio`` (scalar or (N_BLOCK,))."""
+    normal = np.full(N_BLOCK, force_n)
+    return ForceReport(index0, np.broadcast_to(ratio, (N_BLOCK,)) * normal, normal)
+
+
+def _step(loop, state, k, speed, report):
+    target, fingers = _block(k * N_BLOCK, speed)
+    wanted, _, state = loop.invert(target, fingers, state, report)
+    return wanted[0], state
+
+
+def test_the_probe_holds_the_plate_still_while_the_report_shows_the_finger_sliding():
+    """The tracker lags a stroke's start: once the force report shows the finger sliding
+    on the still plate, the plate stays still for up to ``probe_s`` whatever speed the
+    tracker reads, and is modulated after that if mu0 has not settled."""
+    loop = ClosedLoop(DeviceProfile(), 5000.0, N_BLOCK, mode="closed")
+    w, state = _step(loop, loop.initial_state(), 0, 0.0, None)  # slow: held still
+    assert not w.any()
+    # no sign of sliding in the report: a fast tracker ends the probe at once
+    w_fast, _ = _step(loop, state, 1, 10.0, _report(0, 0.0))
+    assert w_fast.min() > 0.0
+    # the report rises into sliding, never settling: held for probe_s, then released
+    rising = np.concatenate([np.zeros(N_BLOCK // 2), np.full(N_BLOCK - N_BLOCK // 2, 0.5)])
+    held = []
+    for k in range(1, 7):
+        unsettled = rising if k == 1 else np.where(np.arange(N_BLOCK) < N_BLOCK // 2, 0.4, 0.6)
+        w, state = _step(loop, state, k, 10.0, _report((k - 1) * N_BLOCK, unsettled))
+        held.append(not w.any())
+    assert not math.isfinite(state.mu0)
+    blocks = round(loop.config.probe_s / loop.block_s)
+    assert held == [True] * blocks + [False] * (6 - blocks)
+
+
+@pytest.mark.parametrize("speed, moves", [(1.0, True), (0.3, False)])
+def test_feedback_acts_from_the_trackers_first_sight_of_motion(speed, moves):
+    """At a stroke's start the tracker reads a few mm/s while the finger already slides:
+    mu0 is measured and the gain corrected from ``creep_mm_s`` on, not below it."""
+    loop = ClosedLoop(DeviceProfile(), 5000.0, N_BLOCK, mode="closed")
+    state = loop.initial_state()
+    _, state = _step(loop, state, 0, speed, None)  # plate held still
+    _, state = _step(loop, state, 1, speed, _report(0, 0.8))  # settled: mu0 = 0.8
+    assert math.isfinite(state.mu0) == moves
+    # the finger gets twice the reduction asked: delivered mu' 0.2 (reduction 0.8 > 0.4)
+    for k in range(2, 4):
+        _, state = _step(loop, state, k, speed, _report((k - 1) * N_BLOCK, 0.8 * 0.2))
+    assert (state.log_c < 0.0) == moves

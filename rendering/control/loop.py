@@ -17,13 +17,22 @@ with several fingers down the loop holds its state and the block is fed forward 
    over the second half of a block whose two halves agree within ``settled`` (the
    fingertip has finished rising into sliding), among still samples at ``creep_mm_s``
    or faster reading at least ``min_rest_mu``. Without it, a finger whose stroke starts
-   on a reduced band is open loop until it first crosses an unreduced one.
+   on a reduced band is open loop until it first crosses an unreduced one. The tracker
+   (a 50 Hz touch trace) lags a stroke's start by tens of ms: it read 1.5 mm/s while
+   the finger slid at 10-16 mm/s (finger 9 of the report's population on grating-15mm),
+   or jumps past ``probe_mm_s`` a block after the force report first shows sliding.
+   So ``creep_mm_s`` only asks that the tracker has seen the finger move, and once a
+   report shows the finger sliding on the still plate (at least ``min_still`` / 2 still
+   samples of its second half reading ``min_rest_mu`` or more) the plate stays still
+   for up to ``probe_s`` (``probing_s`` counts it) whatever the tracker's speed, so
+   that the ratio can settle.
 2. **Feedback** on the depth of modulation: the reduction asked, 1 - mu'_target, passed
    through the same chain, against the reduction measured, 1 - mu'_m, gives the block's
    delivered/asked ratio g (the median over the samples asking for at least
-   ``min_reduction``, leaving out samples reading mu'_m < ``min_mu``: no finger of the
-   model gets that low, a finger that stuck does). An integrator on the log of a
-   gain c, ``log c <- log c - ki log g``, makes the feed-forward ask for
+   ``min_reduction`` at a tracker speed of at least ``creep_mm_s``, leaving out samples
+   reading mu'_m < ``min_mu``: no finger of the model gets that low, a finger that stuck
+   does). An integrator on the log of a gain c, ``log c <- log c - ki log g``, makes
+   the feed-forward ask for
    ``1 - c (1 - mu'_target)``. In the log domain the loop gain is ``ki`` for a finger
    G times more or less slippery than the model (g = G c), ``s ki`` for one whose
    reduction grows s times as fast with the reduction asked; the margins of
@@ -72,7 +81,8 @@ class LoopConfig:
     log_c_max: float = math.log(4.0)
     slide_mm_s: float = 5.0
     probe_mm_s: float = 8.0
-    creep_mm_s: float = 2.0
+    probe_s: float = 0.015
+    creep_mm_s: float = 0.5
     min_rest_mu: float = 0.1
     settled: float = 0.03
     still_um: float = 0.005
@@ -115,6 +125,7 @@ class ControlState:
     sent: Sent | None = None
     since_report_s: float = 0.0
     good_s: float = 0.0
+    probing_s: float = 0.0
     fallback: bool = False
     fallbacks: int = 0
     fallback_samples: int = 0
@@ -177,7 +188,8 @@ class ClosedLoop:
             # probe (module docstring, 1): the plate still while the finger starts to slide
             r0 = int(np.argmax(touching))
             slow = np.hypot(fingers.vx[r0], fingers.vy[r0]) < self.config.probe_mm_s
-            asked[r0] = np.where(slow, np.maximum(asked[r0], 1.0), asked[r0])
+            hold = slow | self._probing(state)
+            asked[r0] = np.where(hold, np.maximum(asked[r0], 1.0), asked[r0])
         model = self._model(state)
         wanted, clamps = model.invert(asked, fingers.force)
         wanted = np.where(contact, wanted, 0.0)
@@ -191,6 +203,12 @@ class ClosedLoop:
                     single=single)
         held = state.fallback_samples + (n if state.fallback else 0)
         return wanted, clamps, replace(state, sent=sent, fallback_samples=held)
+
+    def _probing(self, state: ControlState) -> bool:
+        """Whether the probe holds the plate still whatever the tracker's speed (module
+        docstring, 1): the force report shows the finger sliding on the still plate
+        (``probing_s`` > 0) for less than ``probe_s`` so far."""
+        return 0.0 < state.probing_s < self.config.probe_s + 0.5 * self.block_s
 
     def _learn(self, state: ControlState, report: ForceReport | None) -> ControlState:
         """Fold the previous block's report into the state (module docstring, 1, 2, 4)."""
@@ -220,6 +238,7 @@ class ClosedLoop:
         fallback = state.fallback and good_s < cfg.recover_s
         changes = dict(chain=chain, since_report_s=0.0, good_s=good_s, fallback=fallback)
         sliding = sent.single & (sent.speed >= cfg.slide_mm_s) & (nor >= cfg.min_normal_n)
+        moving = sent.single & (sent.speed >= cfg.creep_mm_s) & (nor >= cfg.min_normal_n)
         ratio = lat / np.maximum(nor, cfg.min_normal_n)
         quiet = (seen[1] < cfg.still_seen) & (ratio >= cfg.min_rest_mu)  # the plate seen still
         if not math.isfinite(state.mu0) and sent.single:  # the first estimate (docstring, 1)
@@ -230,8 +249,10 @@ class ClosedLoop:
                 ma, mb = float(np.median(a)), float(np.median(b))
                 if abs(mb - ma) <= cfg.settled * mb:  # not the fingertip's rise into sliding
                     changes["mu0"] = mb
+            rising = quiet[late].sum() >= cfg.min_still // 2  # sliding on the still plate
+            changes["probing_s"] = state.probing_s + self.block_s if rising else 0.0
             return replace(state, **changes)
-        if not sent.single or not sliding.any():
+        if not sent.single or not moving.any():
             return replace(state, **changes)  # at rest or several fingers: nothing to learn
         still = sliding & quiet
         ref = seen[0]
@@ -245,7 +266,9 @@ class ClosedLoop:
             return replace(state, **changes)
         measured = ratio / mu0
         sliding &= measured >= cfg.min_mu  # a finger that stuck reads friction near 0
-        asked_here = sliding & (ref >= cfg.min_reduction)
+        # feedback from the tracker's first sight of motion: at a stroke's start it lags
+        # the finger by tens of ms; a stuck finger reads friction near 0 (min_mu)
+        asked_here = moving & (measured >= cfg.min_mu) & (ref >= cfg.min_reduction)
         if np.count_nonzero(asked_here) >= cfg.min_still:
             # median of per-sample delivered/asked: robust to the few samples of a stop
             g = float(np.median((1.0 - measured[asked_here]) / ref[asked_here]))
