@@ -146,8 +146,11 @@ def test_forward_and_magnitude_are_the_numpy_formulas_bit_for_bit(system, real_p
     assert_same_bits(forward(phi, modal.real), numpy_forward(phi, modal.real))
     z = numpy_forward(phi, modal)
     assert_same_bits(magnitude(z), np.sqrt(z.real * z.real + z.imag * z.imag))
-    # real: np.abs, the same bits as sqrt(x^2) while x^2 does not underflow (all drawn here)
-    assert_same_bits(magnitude(z.real), np.sqrt(z.real * z.real + np.zeros(z.shape)))
+    # real: np.abs, the same bits as sqrt(x^2) wherever x^2 neither under- nor overflows
+    # (the others: test_magnitude_of_real_amplitudes_is_exact_where_squares_underflow_...)
+    x = z.real
+    normal = (np.abs(x) > 1.5e-154) & (np.abs(x) < 1.3e154)
+    assert_same_bits(magnitude(x)[normal], np.sqrt(x * x)[normal])
     swapped = np.swapaxes(np.stack([phi, phi * 2]) if shared else phi[None], 0, 1)  # a strided view
     assert_same_bits(forward(swapped, modal[:swapped.shape[0]]), numpy_forward(swapped, modal[:swapped.shape[0]]))
 
