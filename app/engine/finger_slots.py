@@ -74,22 +74,19 @@ class FingerSlots:
         """``out`` (a ``rendering.pipeline.BlockOutput`` whose rows are slots) with the
         recording's finger ids: ``finger_ids`` each row's id at the call's first sample,
         and ``sample_ids`` (F, n) where a row carries more than one id in the call."""
-        index0, n = out.index0, out.t_s.size
-        due = [c for c in self._changes if c[0] < index0 + n]
-        if due:
-            self._changes = self._changes[len(due):]
-        rows = {slot: row for row, slot in enumerate(out.finger_ids)}
-        sample_ids = None
-        for at, slot, fid in due:
-            row = rows.get(slot)
-            if row is not None and at > index0:  # the row changes finger within the call
-                if sample_ids is None:
-                    sample_ids = np.array([[self._id_of.get(s, s)] for s in out.finger_ids],
-                                          dtype=np.int64).repeat(n, axis=1)
-                sample_ids[row, at - index0:] = fid
-            elif sample_ids is not None and row is not None:
-                sample_ids[row] = fid
+        index0, end = out.index0, out.index0 + out.t_s.size
+        due = sorted(c for c in self._changes if c[0] < end)
+        self._changes = [c for c in self._changes if c[0] >= end]
+        for _, slot, fid in (c for c in due if c[0] <= index0):
             self._id_of[slot] = fid
-        if sample_ids is not None:
-            return replace(out, finger_ids=tuple(sample_ids[:, 0].tolist()), sample_ids=sample_ids)
-        return replace(out, finger_ids=tuple(self._id_of.get(s, s) for s in out.finger_ids))
+        inside = [c for c in due if c[0] > index0]  # a row changes finger within the call
+        labelled = replace(out, finger_ids=tuple(self._id_of.get(s, s) for s in out.finger_ids))
+        if not inside:
+            return labelled
+        sample_ids = labelled.ids_per_sample()  # a new (F, n) array
+        rows = {slot: row for row, slot in enumerate(out.finger_ids)}
+        for at, slot, fid in inside:
+            if slot in rows:
+                sample_ids[rows[slot], at - index0:] = fid
+            self._id_of[slot] = fid
+        return replace(labelled, sample_ids=sample_ids)
