@@ -289,7 +289,7 @@ def test_fields_split_a_line_as_the_csv_module_does(text, end):
 
 
 def _reference_lines(data: bytes, where: str, limit: int):
-    """Lines as a line-at-a-time reader gives them (the rule of ``_lines``, written out):
+    """Lines as a line-at-a-time reader gives them (the rule of ``_blocks``, written out):
     (number, text without its break) until the first line that is too long (``limit``
     bytes with its break), holds a NUL or is not UTF-8, which ends in its TraceError
     message; a UTF-8 BOM at the start is dropped, a UTF-16 one refused."""
@@ -330,8 +330,10 @@ def test_lines_read_in_blocks_as_line_by_line(data, block, limit):
     with mock.patch.object(trace_file, "_READ_BYTES", block), \
             mock.patch.object(trace_file, "MAX_LINE_BYTES", limit):
         try:
-            for item in trace_file._lines(io.BytesIO(data), "<t>"):
-                got.append(item)
+            for first, block, count in trace_file._blocks(io.BytesIO(data), "<t>"):
+                texts = block.decode("utf-8").split("\n")
+                assert len(texts) == count
+                got += [(first + k, text) for k, text in enumerate(texts)]
         except TraceError as exc:
             assert problem is not None and str(exc).startswith(problem), (str(exc), problem)
         else:
@@ -348,3 +350,112 @@ def test_a_row_search_that_finds_no_problem_says_so():
     rows = [(2, ["0.0", "1", "3", "4"]), (3, ["0.1", "1", "3", "4"])]
     with pytest.raises(AssertionError, match="good.csv: rows 2 to 3"):
         parser._first_row_problem(rows)
+
+
+# ---------------------------------------------------------------------------
+# Plain blocks parsed at once (Arrow's CSV reader) read exactly as line by line
+
+
+def _read_both_ways(text: str, chunk_rows: int = 65_536):
+    """(what reading ``text`` gives line by line, what it gives with every block tried as a
+    plain block): each a tuple of the trace's columns or the TraceError's message."""
+    from rendering.input import trace_file
+
+    def read():
+        try:
+            blocks = trace_file._blocks(io.BytesIO(text.encode("utf-8")), "<t>")
+            tr = concat_traces(trace_file._chunks(blocks, "<t>", chunk_rows,
+                                                  trace_file.TimeOrder(), False))
+        except TraceError as exc:
+            return str(exc)
+        return tuple(getattr(tr, name).tolist() for name in trace_file._COLUMNS)
+
+    from unittest import mock
+    with mock.patch.object(trace_file, "_PLAIN_MIN_LINES", 10**9):
+        by_line = read()
+    with mock.patch.object(trace_file, "_PLAIN_MIN_LINES", 1):
+        at_once = read()
+    return by_line, at_once
+
+
+_number = st.one_of(st.floats(0, 100).map(repr), st.integers(0, 9).map(str))
+_row_fields = st.tuples(_number, _number, _number, _number, _number,
+                        st.sampled_from(["move", "down", "up"])).map(list)
+# field texts near the edges of what float() and Arrow's parser take, and event words
+_odd_number = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True).map(repr),
+    st.text(alphabet="0123456789+-.eE_ naifINF\t\u00a0\u0663", min_size=0, max_size=8),
+)
+_odd_word = st.sampled_from([" up ", "up\t", "\u00a0up", "", "press", "Move", "0.0"])
+
+
+@settings(max_examples=400, derandomize=True, deadline=None)
+@given(rows=st.lists(_row_fields, min_size=1, max_size=3),
+       odd_number=st.none() | st.tuples(st.integers(0, 2), st.integers(0, 4), _odd_number),
+       odd_word=st.none() | st.tuples(st.integers(0, 2), _odd_word),
+       header=st.permutations(["t_s", "finger", "x_mm", "y_mm", "force_n", "event"]))
+def test_a_plain_block_parses_to_the_same_values_or_error_as_line_by_line(rows, odd_number,
+                                                                          odd_word, header):
+    """Arrow takes a subset of the numbers float() takes, to the same doubles; anything
+    else (and an unknown event word) makes the block fall back to line by line, which
+    names the problem: the trace or the error is the same either way. Rows hold fields
+    in the order t_s, finger, x_mm, y_mm, force_n, event, written in ``header``'s order."""
+    if odd_number is not None:
+        row, column, text = odd_number
+        rows[row % len(rows)][column] = text
+    if odd_word is not None:
+        row, text = odd_word
+        rows[row % len(rows)][5] = text
+    names = ["t_s", "finger", "x_mm", "y_mm", "force_n", "event"]
+    text = ",".join(header) + "\n" + "".join(
+        ",".join(row[names.index(name)] for name in header) + "\n" for row in rows)
+    by_line, at_once = _read_both_ways(text)
+    assert repr(at_once) == repr(by_line)  # repr: NaN equals NaN, and -0.0 differs from 0.0
+
+
+_row = st.builds(lambda t, f, x: f"{t!r},{f},{x!r},1.5", st.floats(0, 100), st.integers(0, 3),
+                 st.floats(-1e3, 1e3))
+_odd_line = st.sampled_from(["", " ", "# a comment", "\"0.5\",0,1,2", "0.5,0,1,2\r", "0.5,0,1",
+                             "0.5,0,1,2,extra", "#0.5,0,1,2"])
+
+
+@settings(max_examples=300, derandomize=True, deadline=None)
+@given(rows=st.lists(_row, min_size=1, max_size=8),
+       odd=st.lists(st.tuples(st.integers(0, 8), _odd_line), max_size=2),
+       note=st.sampled_from([None, "n", "#n", '"1,2,3,4,5,6"']), chunk_rows=st.integers(1, 5))
+def test_blocks_with_comments_blanks_quotes_and_ragged_rows_read_as_line_by_line(
+        rows, odd, note, chunk_rows):
+    """Comments, blank lines, quoted fields, carriage returns, short and long rows and
+    time going back, in any mix and any chunk size, with an extra first column or not
+    (quoted, its commas must not shift the others): the same trace or error."""
+    for at, line in odd:
+        rows.insert(at % (len(rows) + 1), line)
+    header = "t_s,finger,x_mm,y_mm"
+    if note is not None:  # every line gets the extra column, comments and blanks too
+        header, rows = "note," + header, [f"{note},{row}" for row in rows]
+    text = header + "\n" + "\n".join(rows) + "\n"
+    by_line, at_once = _read_both_ways(text, chunk_rows)
+    assert repr(at_once) == repr(by_line)
+
+
+def test_a_long_plain_trace_is_parsed_at_once_and_reads_as_line_by_line(tmp_path, monkeypatch):
+    """A trace of several read blocks (the size replays meet) takes the plain path, with
+    the line numbers of its errors right."""
+    from rendering.input import trace_file
+    n = 3 * trace_file._PLAIN_MIN_LINES
+    k = np.arange(n)
+    text = "t_s,finger,x_mm,y_mm,force_n,event\n" + "".join(
+        f"{t!r},0,{x!r},2.5,0.5,move\n" for t, x in zip((k / 60).tolist(), (k % 97 * 0.37).tolist()))
+    calls = []
+    real = trace_file._plain_columns
+    monkeypatch.setattr(trace_file, "_READ_BYTES", 1 << 18)
+    monkeypatch.setattr(trace_file, "_plain_columns",
+                        lambda *a: calls.append(real(*a) is not None) or real(*a))
+    by_line, at_once = _read_both_ways(text)
+    assert at_once == by_line and len(at_once[0]) == n
+    assert sum(calls) >= 1  # at least one block of >= _PLAIN_MIN_LINES lines went at once
+    bad = text.split("\n")
+    bad[n - 5] = bad[n - 5].replace("0.5,move", "-0.5,move")
+    by_line, at_once = _read_both_ways("\n".join(bad))
+    assert at_once == by_line == (f"<t>:{n - 4}: column force_n: '-0.5' is not a number from "
+                                  f"0 to 1000 N")

@@ -39,7 +39,7 @@ import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import NoReturn
+from typing import Callable, NoReturn
 
 import numpy as np
 
@@ -284,10 +284,10 @@ class _RowParser:
         self.held: list[np.ndarray] | None = None  # t, finger, x, y, force, event, line
         self.down: set[int] = set()
 
-    def parse(self, numbered_rows: list[tuple[int, list[str]]], final: bool = False) -> Trace | None:
-        """The rows' samples that no later row can precede (all of them if ``final``),
-        in time order; None if there are none yet."""
-        cols = self._rows(numbered_rows)
+    def parse(self, batch: list["_Rows"], final: bool = False) -> Trace | None:
+        """The samples of ``batch`` (consecutive rows, in file order) that no later row can
+        precede (all of them if ``final``), in time order; None if there are none yet."""
+        cols = self._rows(batch)
         if self.held is not None:
             cols = [np.concatenate(pair) for pair in zip(self.held, cols)]
         order = np.argsort(cols[0], kind="stable")
@@ -303,22 +303,22 @@ class _RowParser:
         return Trace(trace.t_s, trace.finger, trace.x_mm, trace.y_mm, trace.force_n,
                      _normalise_events(trace.finger, trace.event, self.down, self.where, lines))
 
-    def _rows(self, numbered_rows) -> list[np.ndarray]:
+    def _rows(self, batch: list["_Rows"]) -> list[np.ndarray]:
         """Columns of the rows kept (time order decided, not yet sorted): t, finger, x, y,
         force, event, line. Values are parsed column by column and range-checked per
         column; the first problem in file order is the one reported (found row by row,
         only when a column does not parse)."""
-        col, n = self.col, len(numbered_rows)
-        lines = np.fromiter((line for line, _ in numbered_rows), dtype=np.int64, count=n)
-        rows = [row for _, row in numbered_rows]
+        batch = batch or [_Rows(np.zeros(0, dtype=np.int64), None, list)]
+        lines = np.concatenate([piece.lines for piece in batch])
         try:
-            t, fv, x, y, force, event = self._columns(rows)
+            parts = [piece.columns or self._columns(piece.fields()) for piece in batch]
         except (ValueError, IndexError, KeyError):
-            self._first_row_problem(numbered_rows)
-        first_bad = self._check_values(numbered_rows, t, fv, x, y, force, raise_now=False)
+            self._first_row_problem(_numbered_rows(batch))
+        t, fv, x, y, force, event = (np.concatenate(part) for part in zip(*parts))
+        first_bad = self._first_bad_value(t, fv, x, y, force)
         self._time_order(t[:first_bad], lines[:first_bad])
-        if first_bad < n:
-            self._row_problem(*numbered_rows[first_bad])
+        if first_bad < t.size:
+            self._row_problem(*_numbered_rows(batch)[first_bad])
         keep = self._keep(t, lines)
         return [a[keep] for a in (t, fv.astype(np.int64), x, y, force, event, lines)]
 
@@ -356,25 +356,24 @@ class _RowParser:
                 head = numbered_rows[:k]
                 if head:
                     t, fv, x, y, force, _ = self._columns([r for _, r in head])
-                    self._check_values(head, t, fv, x, y, force)
+                    first_bad = self._first_bad_value(t, fv, x, y, force)
+                    if first_bad < k:
+                        self._row_problem(*head[first_bad])
                     self._time_order(t, np.array([ln for ln, _ in head], dtype=np.int64))
                 self._row_problem(line, row)
         # the rows failed together but none alone: a bug here, not a bad file
         raise AssertionError(f"{self.where}: rows {numbered_rows[0][0]} to {numbered_rows[-1][0]} "
                              f"failed to parse together, but no row has a problem")
 
-    def _check_values(self, numbered_rows, t, fv, x, y, force, raise_now: bool = True) -> int:
-        """Index of the first row with a value out of its range (``len(t)`` if none);
-        with ``raise_now``, that row's TraceError instead."""
+    @staticmethod
+    def _first_bad_value(t, fv, x, y, force) -> int:
+        """Index of the first row with a value out of its range (``len(t)`` if none)."""
         bad = np.zeros(t.size, dtype=bool)
         for name, arr in (("t_s", t), ("finger", fv), ("x_mm", x), ("y_mm", y), ("force_n", force)):
             lo, hi, _ = RANGES[name]
             bad |= ~((arr >= lo) & (arr <= hi))  # NaN fails both
         bad |= fv != np.floor(fv)
-        first = int(np.argmax(bad)) if bad.any() else t.size
-        if raise_now and first < t.size:
-            self._row_problem(*numbered_rows[first])
-        return first
+        return int(np.argmax(bad)) if bad.any() else t.size
 
     def _row_problem(self, line: int, row: list[str]):
         """Raise the TraceError of a row known to hold a problem."""
@@ -422,12 +421,13 @@ class _RowParser:
 _READ_BYTES = 1 << 20
 
 
-def _lines(fh, where: str):
-    """(line number, text without its line break) of a binary file: UTF-8, a leading BOM
-    dropped, lines of at most MAX_LINE_BYTES (the line break included), no NUL bytes.
+def _blocks(fh, where: str):
+    """The lines of a binary file in blocks: (number of the block's first line, the
+    block's lines joined by b"\\n" without their breaks, how many lines). UTF-8, a leading
+    BOM dropped, lines of at most MAX_LINE_BYTES (the line break included), no NUL bytes.
 
-    Read in blocks of whole lines, each block checked and decoded at once; the lines
-    before a problem are handed out before the problem's error.
+    Each block is read and checked at once; the lines before a problem are handed out
+    before the problem's error.
     """
     number, rest = 0, _without_bom(fh.read(len(codecs.BOM_UTF8)), where)
     while True:
@@ -443,9 +443,8 @@ def _lines(fh, where: str):
         ended = chunk.endswith(b"\n")
         raws = (chunk[:-1] if ended else chunk).split(b"\n")
         bad = _first_bad_line(chunk, raws, ended)
-        good = b"\n".join(raws[:bad]).decode("utf-8") if bad else ""
-        for k, text in enumerate(good.split("\n") if bad else ()):
-            yield number + k + 1, text
+        if bad:
+            yield number + 1, b"\n".join(raws[:bad]), bad
         if bad < len(raws):
             _line_problem(raws[bad], number + bad + 1, where, ended or bad < len(raws) - 1)
         number += len(raws)
@@ -506,26 +505,108 @@ def _fields(text: str, where: str, number: int) -> list[str]:
         raise TraceError(f"{where}:{number}: not a CSV row ({exc})") from None
 
 
-def _chunks(lines, where: str, chunk_rows: int, order: TimeOrder, strict: bool):
-    """Traces of about ``chunk_rows`` samples from (number, text) lines."""
+@dataclass(frozen=True, eq=False)
+class _Rows:
+    """Consecutive data rows of a trace file.
+
+    lines : int64 (n,) their line numbers.
+    columns : (t, finger, x, y, force, event) parsed at once from a plain block, or None.
+    fields : a function giving each row's fields (for a plain block, split only when a
+        row's problem is to be named).
+    """
+
+    lines: np.ndarray
+    columns: tuple | None
+    fields: Callable[[], list[list[str]]]
+
+    def split(self, k: int) -> tuple["_Rows", "_Rows"]:
+        """The first ``k`` rows and the rest."""
+        halves = []
+        for part in (slice(0, k), slice(k, None)):
+            cols = None if self.columns is None else tuple(c[part] for c in self.columns)
+            halves.append(_Rows(self.lines[part], cols, lambda part=part: self.fields()[part]))
+        return halves[0], halves[1]
+
+
+def _numbered_rows(batch: list[_Rows]) -> list[tuple[int, list[str]]]:
+    """(line number, fields) of every row of ``batch``."""
+    return [pair for piece in batch for pair in zip(piece.lines.tolist(), piece.fields())]
+
+
+#: a block of fewer lines is split line by line: for a small file, importing pyarrow
+#: (about 0.1 s) would cost more than its parser saves (about 4 us a line)
+_PLAIN_MIN_LINES = 8192
+
+
+def _plain_columns(data: bytes, count: int, col: dict[str, int], width: int) -> tuple | None:
+    """(t, finger, x, y, force, event) of ``count`` lines of data rows (``data``, joined by
+    newlines), parsed at once by Arrow's CSV reader when the block is plain: no quotes,
+    comments, carriage returns or blank lines, every row of ``width`` fields, every
+    number a float Arrow parses and every event word known. None otherwise: the caller
+    then splits the rows line by line, which names any problem.
+
+    Arrow accepts a subset of what ``float`` does and gives the same value (the correctly
+    rounded double; ``tests/test_trace_file.py`` checks it), so a block parses here to
+    the same columns as line by line.
+    """
+    if count < _PLAIN_MIN_LINES or any(mark in data for mark in (b'"', b"#", b"\r")):
+        return None
+    if data.split(b"\n", 1)[0].count(b",") + 1 < width:  # Arrow holds the rest to the first row's width
+        return None
+    import pyarrow as pa
+    from pyarrow import csv as pa_csv
+    names = list(REQUIRED) + [c for c in ("force_n", "event") if c in col]
+    types = {f"f{col[name]}": pa.dictionary(pa.int32(), pa.string()) if name == "event"
+             else pa.float64() for name in names}
+    try:
+        table = pa_csv.read_csv(
+            pa.py_buffer(data + b"\n"),  # Arrow needs a line break to see a row's end
+            read_options=pa_csv.ReadOptions(autogenerate_column_names=True, use_threads=False,
+                                            block_size=len(data) + 2),
+            parse_options=pa_csv.ParseOptions(quote_char=False, escape_char=False,
+                                              ignore_empty_lines=False),
+            convert_options=pa_csv.ConvertOptions(column_types=types, include_columns=list(types),
+                                                  null_values=[], strings_can_be_null=False,
+                                                  check_utf8=False))
+    except pa.ArrowInvalid:  # a blank line or a ragged row, a number or text it refuses
+        return None
+    t, fv, x, y = (table.column(f"f{col[name]}").to_numpy() for name in REQUIRED)
+    force = (table.column(f"f{col['force_n']}").to_numpy() if "force_n" in col
+             else np.full(count, DEFAULT_FORCE_N))
+    event = np.full(count, MOVE, dtype=np.int8)
+    if "event" in col:
+        codes = []
+        for part in table.column(f"f{col['event']}").chunks:
+            words = [word.strip() for word in part.dictionary.to_pylist()]
+            if not set(words) <= set(EVENTS) | {""}:
+                return None
+            lookup = np.array([_EVENT_CODES.get(word, MOVE) for word in words], dtype=np.int8)
+            codes.append(lookup[part.indices.to_numpy()])
+        event = np.concatenate(codes)
+    return tuple(np.array(c, dtype=np.float64) for c in (t, fv, x, y, force)) + (event,)
+
+
+def _chunks(blocks, where: str, chunk_rows: int, order: TimeOrder, strict: bool):
+    """Traces of about ``chunk_rows`` samples from :func:`_blocks`' blocks of lines."""
     parser = None
-    batch: list[tuple[int, list[str]]] = []
-    samples = 0
-    for number, text in lines:
-        if not text.strip() or text.lstrip().startswith("#"):
-            continue
+    batch: list[_Rows] = []
+    held = samples = 0
+    for first, data, count in blocks:
         if parser is None:
-            names = [h.strip() for h in _fields(text, where, number)]
-            missing = [c for c in REQUIRED if c not in names]
-            if missing:
-                raise TraceError(f"{where}:{number}: header lacks column(s) {', '.join(missing)} "
-                                 f"(got {_short(','.join(names))}; required {','.join(REQUIRED)})")
-            parser = _RowParser(names, where, order, strict, MAX_HELD_ROWS)
-            continue
-        batch.append((number, _fields(text, where, number)))
-        if len(batch) == chunk_rows:
-            chunk = parser.parse(batch)
-            batch = []
+            parser, skipped = _header(data, first, where, order, strict)
+            if parser is None:
+                continue
+            data = data.split(b"\n", skipped)[-1] if skipped < count else b""
+            first, count = first + skipped, count - skipped
+            if not count:
+                continue
+        piece = _block_rows(data, first, count, parser, where)
+        batch.append(piece)
+        held += piece.lines.size
+        while held >= chunk_rows:
+            head, batch = _take(batch, chunk_rows)
+            held -= chunk_rows
+            chunk = parser.parse(head)
             if chunk is not None:
                 samples += len(chunk)
                 yield chunk
@@ -537,6 +618,49 @@ def _chunks(lines, where: str, chunk_rows: int, order: TimeOrder, strict: bool):
         yield chunk
     if samples == 0:
         raise TraceError(f"{where}: header but no samples")
+
+
+def _header(data: bytes, first: int, where: str, order: TimeOrder, strict: bool):
+    """(the parser of the header line among a block's lines, how many lines up to and
+    including it), or (None, 0) if the block has only blank and comment lines."""
+    for k, text in enumerate(data.decode("utf-8").split("\n")):
+        if not text.strip() or text.lstrip().startswith("#"):
+            continue
+        names = [h.strip() for h in _fields(text, where, first + k)]
+        missing = [c for c in REQUIRED if c not in names]
+        if missing:
+            raise TraceError(f"{where}:{first + k}: header lacks column(s) {', '.join(missing)} "
+                             f"(got {_short(','.join(names))}; required {','.join(REQUIRED)})")
+        return _RowParser(names, where, order, strict, MAX_HELD_ROWS), k + 1
+    return None, 0
+
+
+def _block_rows(data: bytes, first: int, count: int, parser: "_RowParser", where: str) -> _Rows:
+    """The data rows of a block of ``count`` lines from line ``first``: parsed at once if
+    the block is plain (:func:`_plain_columns`), else split line by line skipping blank
+    and comment lines."""
+    columns = _plain_columns(data, count, parser.col, len(parser.names))
+    if columns is not None:
+        lines = np.arange(first, first + count, dtype=np.int64)
+        return _Rows(lines, columns, lambda: [text.split(",") for text in data.decode("utf-8").split("\n")])
+    numbered = [(first + k, _fields(text, where, first + k))
+                for k, text in enumerate(data.decode("utf-8").split("\n"))
+                if text.strip() and not text.lstrip().startswith("#")]
+    lines = np.fromiter((line for line, _ in numbered), dtype=np.int64, count=len(numbered))
+    return _Rows(lines, None, lambda: [row for _, row in numbered])
+
+
+def _take(batch: list[_Rows], n: int) -> tuple[list[_Rows], list[_Rows]]:
+    """The first ``n`` rows of ``batch`` and the rest."""
+    head, rest = [], list(batch)
+    while n:
+        piece = rest.pop(0)
+        if piece.lines.size > n:
+            piece, after = piece.split(n)
+            rest.insert(0, after)
+        head.append(piece)
+        n -= piece.lines.size
+    return head, rest
 
 
 class TraceReader:
@@ -566,7 +690,7 @@ class TraceReader:
             raise TraceError(f"{path}: {problem}; expected a trace CSV file")
         try:
             with open(path, "rb") as fh:
-                yield from _chunks(_lines(fh, str(path)), str(path), chunk_rows, self.order, strict)
+                yield from _chunks(_blocks(fh, str(path)), str(path), chunk_rows, self.order, strict)
         except OSError as exc:
             raise TraceError(f"{path}: cannot read trace ({exc.strerror or exc})") from None
 
@@ -589,8 +713,8 @@ def read_trace(path: str | Path, strict: bool = False) -> Trace:
 
 def parse_trace(text: str, where: str = "<trace>", strict: bool = False) -> Trace:
     """Parse trace CSV text; ``where`` names the source in error messages."""
-    lines = _lines(io.BytesIO(text.encode("utf-8")), where)
-    return concat_traces(_chunks(lines, where, 65_536, TimeOrder(), strict))
+    blocks = _blocks(io.BytesIO(text.encode("utf-8")), where)
+    return concat_traces(_chunks(blocks, where, 65_536, TimeOrder(), strict))
 
 
 def format_trace(trace: Trace, comment: str | None = None) -> str:
