@@ -62,18 +62,20 @@ def touch_rank(contact: np.ndarray, touch_start: np.ndarray) -> np.ndarray:
 @njit(cache=True, nogil=True)
 def _touch_rank(contact, touch_start):
     """:func:`touch_rank`: finger f's rank counts the fingers j touching with an earlier
-    start, or the same start and j < f."""
+    start, or the same start and j < f; one pair of fingers at a time, so that the loop
+    over the samples has no branch (and vectorises)."""
     f_count, n = contact.shape
-    rank = np.full((f_count, n), -1, dtype=np.int64)
-    for i in range(n):
-        for f in range(f_count):
-            if contact[f, i]:
-                r = 0
-                for j in range(f_count):
-                    if contact[j, i] and (touch_start[j, i] < touch_start[f, i]
-                                          or (touch_start[j, i] == touch_start[f, i] and j < f)):
-                        r += 1
-                rank[f, i] = r
+    rank = np.zeros((f_count, n), dtype=np.int64)
+    for f in range(f_count):
+        for j in range(f_count):
+            if j != f:
+                tie = j < f
+                for i in range(n):
+                    rank[f, i] += contact[j, i] & ((touch_start[j, i] < touch_start[f, i])
+                                                   | (tie & (touch_start[j, i] == touch_start[f, i])))
+        for i in range(n):
+            if not contact[f, i]:
+                rank[f, i] = -1
     return rank
 
 

@@ -160,41 +160,141 @@ def _abs(z):
     return math.sqrt(z.real * z.real + z.imag * z.imag)
 
 
-def achieved_magnitude(phi_all, modal, contact) -> np.ndarray:
+def achieved_magnitude(phi, where, modal) -> np.ndarray:
     """|Phi(x_f) W_M| under each finger where touching, else 0, as :func:`forward` and
     :func:`magnitude` compute it (bit for bit).
 
     Parameters
     ----------
-    phi_all : float64 (F, n, p)
-        Mode shapes of the p modes at each finger's position, sample by sample.
+    phi : float64 (k, p)
+        Mode shapes of the p modes at the k finger samples touching.
+    where : int64 (F, n)
+        Row of ``phi`` of each finger and sample; -1 where the finger does not touch.
     modal : complex128 (n, p)
         Modal amplitudes W_M of each sample (um).
-    contact : bool (F, n)
-        Where the finger touches.
 
     Returns
     -------
     float64 (F, n)
         Amplitude under each finger (um zero-to-peak).
     """
-    return _achieved_kernel(np.asarray(phi_all, dtype=np.float64),
-                            np.asarray(modal, dtype=np.complex128), np.asarray(contact, dtype=np.bool_))
+    out = np.zeros(np.shape(where))
+    _achieved_kernel(np.asarray(phi, dtype=np.float64), np.asarray(where, dtype=np.int64),
+                     np.asarray(modal, dtype=np.complex128), out)
+    return out
 
 
 # here, not in its caller's module: numba's cache checks only the file of the cached
 # function, so a kernel elsewhere inlining _abs / _combination would run stale code
 # after an edit to this file
 @njit(cache=True, nogil=True)
-def _achieved_kernel(phi_all, modal, contact):
-    """:func:`achieved_magnitude`."""
-    f_count, n = contact.shape
-    out = np.zeros((f_count, n))
-    for f in range(f_count):
-        for i in range(n):
-            if contact[f, i]:
-                out[f, i] = _abs(_combination(phi_all[f, i], modal, i))
-    return out
+def _achieved_kernel(phi, where, modal, out):
+    """:func:`achieved_magnitude` into ``out`` (zeros), sample by sample."""
+    for i in range(where.shape[1]):
+        _achieved_at(phi, where, modal, i, out)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _achieved_at(phi, where, modal, i, out):
+    """out[f, i] = |phi[where[f, i]] @ modal[i]| for every finger f touching at sample i."""
+    for f in range(where.shape[0]):
+        row = where[f, i]
+        if row >= 0:
+            out[f, i] = _abs(_combination(phi[row], modal, i))
+
+
+def serve_two_modes(phi, where, served, wanted_um, actuators, limits_um, rcond: float,
+                    regularised: bool):
+    """Two modes through q channels, sample by sample, in one compiled pass.
+
+    For each sample the padded 2 x 2 system (``device.actuation.modal_actuation``, step 2:
+    row r holds the shapes and wanted amplitude of the finger ``served[i, r]``, zeros
+    where none), then what :func:`solve` returns for it with method ``"exact"`` or
+    ``"regularised"`` (the closed form of :func:`_gains_2x2`, c = A W_M, both scaled to
+    the limits), |c| clipped to the limits, and :func:`achieved_magnitude` under every
+    finger touching; each bit for bit as those compute it.
+
+    Parameters
+    ----------
+    phi : float64 (k, 2)
+        Mode shapes at the k finger samples touching.
+    where : int64 (F, n)
+        Row of ``phi`` of each finger and sample; -1 where the finger does not touch.
+    served : int64 (n, 2)
+        Finger (row of ``where``) whose shapes fill row r of sample i's system; -1: a zero row.
+    wanted_um : float64 (F, n)
+        Wanted amplitude under each finger (um zero-to-peak, phase 0).
+    actuators : float64 (q, 2)
+        Modal amplitudes -> channel commands (seed 000, eq 9).
+    limits_um : float64 (q,)
+        Largest |command| of each channel (um zero-to-peak), > 0.
+    rcond : float
+        The singular-value threshold :func:`solve` applies for the method (relative).
+    regularised : bool
+        Method ``"regularised"`` (else ``"exact"``).
+
+    Returns
+    -------
+    tuple or None
+        amplitude float64 (n, q) (um, |c| at most its limit); commands complex128 (n, q)
+        (um; +0.0 for a zero part, so that a zero command has phase 0); achieved float64
+        (F, n) (um, 0 where not touching); how many samples met a limit. None where a
+        served shape or wanted amplitude is not finite (what :func:`solve` refuses).
+    """
+    n, q = served.shape[0], len(limits_um)
+    modal = np.empty((n, 2), dtype=np.complex128)
+    commands = np.empty((n, q), dtype=np.complex128)
+    amplitude = np.empty((n, q))
+    achieved = np.zeros(np.shape(where))
+    limited = _two_modes_kernel(phi, where, served, wanted_um, actuators.reshape((1,) + actuators.shape),
+                                limits_um, rcond, regularised, modal, commands, amplitude, achieved)
+    return None if limited < 0 else (amplitude, commands, achieved, limited)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _two_modes_kernel(phi, where, served, wanted, actuators, limits, rcond, regularised,
+                      modal, commands, amplitude, achieved):
+    """:func:`serve_two_modes` into its output arrays; returns the count of samples that
+    met a limit, or -1 at the first sample whose system is not finite.
+
+    Where every |c_j| is within its limit the scale is exactly 1 (|c_j| <= L_j gives
+    |c_j| / L_j <= 1 after rounding) and is not applied: times 1 + 0j changes at most the
+    signs of zeros (finite c_j, hence finite W_M), which neither |.| nor the + 0.0 that
+    follows can see. That spares most samples two square roots and three divisions."""
+    limited = 0
+    for i in range(served.shape[0]):
+        a, b, w0, finite0 = _served_row(phi, where, served, wanted, i, 0)
+        c, d, w1, finite1 = _served_row(phi, where, served, wanted, i, 1)
+        if not (finite0 and finite1):
+            return -1
+        modal[i, 0], modal[i, 1], _, _, _ = _gains_2x2_one(a, b, c, d, w0, w1, rcond, regularised)
+        _forward_row(actuators, 0, modal, i, commands)
+        within = True
+        for j in range(commands.shape[1]):
+            amplitude[i, j] = _abs(commands[i, j])
+            within = within and amplitude[i, j] <= limits[j]
+        if not within:  # NaN included
+            if _scale_row(commands, modal, limits, i):
+                limited += 1
+            for j in range(commands.shape[1]):
+                amplitude[i, j] = _minimum(_abs(commands[i, j]), limits[j])
+        for j in range(commands.shape[1]):
+            z = commands[i, j]
+            commands[i, j] = complex(z.real + 0.0, z.imag + 0.0)
+        _achieved_at(phi, where, modal, i, achieved)
+    return limited
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _served_row(phi, where, served, wanted, i, r):
+    """Row r of sample i's padded system: the two shapes and wanted amplitude (+ 0j) of
+    the finger serving it, zeros if none; and whether the three are finite."""
+    f = served[i, r]
+    if f < 0:
+        return 0.0, 0.0, 0j, True
+    k = where[f, i]
+    x, y, w = phi[k, 0], phi[k, 1], wanted[f, i]
+    return x, y, complex(w, 0.0), math.isfinite(x) and math.isfinite(y) and math.isfinite(w)
 
 
 def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=None,
@@ -225,19 +325,9 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
     -------
     ModalSolution
     """
-    if method not in METHODS:
-        raise ModesError(f"modal method must be one of {', '.join(METHODS)}, got {method!r}")
     phi, wanted = _check_inputs(phi_fingers, wanted_um)
-    p = phi.shape[-1]
-    a = _check_actuators(actuators, p)
-    limits = _check_limits(limits_um, a.shape[0])
-    if method == "bounded" and (limits is None or a.shape[0] != p or np.linalg.cond(a) > 1e12):
-        raise ModesError(f"method 'bounded' needs limits_um and a square, invertible "
-                         f"(p, p) actuator matrix, got limits {limits_um!r} and actuators of shape {a.shape}")
-    if not (0 < rcond < 1):
-        raise ModesError(f"rcond must be in (0, 1), got {rcond!r}")
-
-    threshold = rcond if method == "regularised" else _EXACT_RCOND
+    a, limits = check_settings(method, actuators, limits_um, rcond, phi.shape[-1])
+    threshold = gain_threshold(method, rcond)
     # "bounded" keeps LAPACK's start: its iterations amplify last-bit differences where
     # the least-squares problem is flat
     closed = phi.shape[-2:] == (2, 2) and not np.iscomplexobj(phi) and method != "bounded"
@@ -260,6 +350,28 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
     achieved = forward(phi, modal)
     return ModalSolution(modal, commands, achieved, magnitude(achieved - wanted),
                          limited, capped, ratio)
+
+
+def check_settings(method: str, actuators, limits_um, rcond: float, p: int):
+    """The checks :func:`solve` makes of its settings for p modes (a ``ModesError`` naming
+    the bad one); returns the actuator matrix (q, p) and the limits (q,) or None as it
+    uses them."""
+    if method not in METHODS:
+        raise ModesError(f"modal method must be one of {', '.join(METHODS)}, got {method!r}")
+    a = _check_actuators(actuators, p)
+    limits = _check_limits(limits_um, a.shape[0])
+    if method == "bounded" and (limits is None or a.shape[0] != p or np.linalg.cond(a) > 1e12):
+        raise ModesError(f"method 'bounded' needs limits_um and a square, invertible "
+                         f"(p, p) actuator matrix, got limits {limits_um!r} and actuators of shape {a.shape}")
+    if not (0 < rcond < 1):
+        raise ModesError(f"rcond must be in (0, 1), got {rcond!r}")
+    return a, limits
+
+
+def gain_threshold(method: str, rcond: float) -> float:
+    """Singular values below this fraction of the largest get less than 1/s as gain
+    (module docstring): ``rcond`` for "regularised", 1e-12 otherwise."""
+    return rcond if method == "regularised" else _EXACT_RCOND
 
 
 def _finish(phi, wanted, modal, a, limits):
@@ -332,6 +444,12 @@ def _maximum(a, b):
     return a if (a >= b or a != a) else b
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _minimum(a, b):
+    """np.minimum of two floats: the smaller, or NaN if either is."""
+    return a if (a <= b or a != a) else b
+
+
 def _gains_svd(phi, wanted, rcond: float, regularised: bool):
     """``W_M = V g(s) U^H W_f`` from the batched SVD (module docstring); any (..., m, p).
 
@@ -376,40 +494,48 @@ def _gains_2x2(phi, wanted, rcond: float, regularised: bool):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _gains_2x2_kernel(phi, wanted, rcond, regularised):
-    """:func:`_gains_2x2` on (k, 2, 2) and (k, 2), one pass; the numpy operations it
-    replaced, in their order (``W_M = G W_f`` as complex products, G + 0j)."""
+    """:func:`_gains_2x2` on (k, 2, 2) and (k, 2), one pass (:func:`_gains_2x2_one`)."""
     k = phi.shape[0]
     modal = np.empty((k, 2), dtype=np.complex128)
     capped = np.empty(k, dtype=np.bool_)
     ratio = np.zeros(k)
     for i in range(k):
-        a, b, c, d = phi[i, 0, 0], phi[i, 0, 1], phi[i, 1, 0], phi[i, 1, 1]
-        e, h = (a + d) / 2, (c - b) / 2
-        f, g = (a - d) / 2, (c + b) / 2
-        q = np.sqrt(e * e + h * h)
-        r = np.sqrt(f * f + g * g)
-        s1, s2 = q + r, abs(q - r)
-        threshold = rcond * s1
-        full = ((s2 >= threshold) if regularised else (s2 > threshold)) and s2 > 0
+        modal[i, 0], modal[i, 1], full, s1, s2 = _gains_2x2_one(
+            phi[i, 0, 0], phi[i, 0, 1], phi[i, 1, 0], phi[i, 1, 1], wanted[i, 0], wanted[i, 1],
+            rcond, regularised)
         if s1 > 0:
             ratio[i] = s2 / s1
-        inv_det = 1.0 / (a * d - b * c) if full else 0.0
-        g00, g01, g10, g11 = d * inv_det, -b * inv_det, -c * inv_det, a * inv_det
-        if not full and s1 > 0:  # h(A) Phi^T = alpha Phi^T + beta Phi^T (Phi Phi^T)
-            b00, b01, b11 = a * a + b * b, a * c + b * d, c * c + d * d
-            lam1 = s1 * s1
-            h2 = 1.0 / (threshold * threshold) if regularised else 0.0
-            beta = (1.0 / lam1 - h2) / (4.0 * q * r)
-            alpha = 1.0 / lam1 - beta * lam1
-            g00 = alpha * a + beta * (a * b00 + c * b01)
-            g01 = alpha * c + beta * (a * b01 + c * b11)
-            g10 = alpha * b + beta * (b * b00 + d * b01)
-            g11 = alpha * d + beta * (b * b01 + d * b11)
-        w0, w1 = wanted[i, 0], wanted[i, 1]
-        modal[i, 0] = _times_real(w0, g00) + _times_real(w1, g01)
-        modal[i, 1] = _times_real(w0, g10) + _times_real(w1, g11)
         capped[i] = not full
     return modal, capped, ratio
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _gains_2x2_one(a, b, c, d, w0, w1, rcond, regularised):
+    """W_M = G W_f of one real system [[a, b], [c, d]] and complex wanted (w0, w1) (um);
+    the numpy operations :func:`_gains_2x2` replaced, in their order (complex products,
+    G + 0j). Returns (W_M0, W_M1, full, s1, s2): full where every gain is 1/s, and the
+    singular values s1 >= s2."""
+    e, h = (a + d) / 2, (c - b) / 2
+    f, g = (a - d) / 2, (c + b) / 2
+    q = np.sqrt(e * e + h * h)
+    r = np.sqrt(f * f + g * g)
+    s1, s2 = q + r, abs(q - r)
+    threshold = rcond * s1
+    full = ((s2 >= threshold) if regularised else (s2 > threshold)) and s2 > 0
+    inv_det = 1.0 / (a * d - b * c) if full else 0.0
+    g00, g01, g10, g11 = d * inv_det, -b * inv_det, -c * inv_det, a * inv_det
+    if not full and s1 > 0:  # h(A) Phi^T = alpha Phi^T + beta Phi^T (Phi Phi^T)
+        b00, b01, b11 = a * a + b * b, a * c + b * d, c * c + d * d
+        lam1 = s1 * s1
+        h2 = 1.0 / (threshold * threshold) if regularised else 0.0
+        beta = (1.0 / lam1 - h2) / (4.0 * q * r)
+        alpha = 1.0 / lam1 - beta * lam1
+        g00 = alpha * a + beta * (a * b00 + c * b01)
+        g01 = alpha * c + beta * (a * b01 + c * b11)
+        g10 = alpha * b + beta * (b * b00 + d * b01)
+        g11 = alpha * d + beta * (b * b01 + d * b11)
+    return (_times_real(w0, g00) + _times_real(w1, g01), _times_real(w0, g10) + _times_real(w1, g11),
+            full, s1, s2)
 
 
 def _bounded_commands(m_cmd, wanted, start, limits) -> np.ndarray:

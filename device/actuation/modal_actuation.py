@@ -7,11 +7,14 @@ Everything that does not depend on the fingers is built once, at scene load: the
 shapes (modelled or measured), the actuator matrix (shapes at the transducers, or the
 plate's wiring) and the channel limits.
 
-Per block, vectorised over all samples (one batched ``device.actuation.modal.solve``):
+Per block, vectorised over all samples: compiled passes, and for two modes with a
+closed-form method ("exact", "regularised") steps 2-4 in one (``device.actuation.modal.
+serve_two_modes``); otherwise one batched ``device.actuation.modal.solve``:
 
 1. Finger positions on the display -> structure coordinates (beam: x along its length
    from its end; plate: x, y from its corner). Positions off the structure (a predicted
    position overshooting the display) are held at its edge and counted (``off_structure``).
+   The mode shapes are evaluated there for the finger samples touching only.
 2. The fingers touching are numbered in order of touch-down (``device.actuation.base.
    touch_rank``); the p longest-touching are served (p = number of modes). Their rows
    of Phi_f, in that order, fill a p x p system whose remaining rows are zero. A zero row
@@ -39,7 +42,8 @@ from numba import njit
 
 from device.actuation.base import Actuated, touch_rank
 from device.structures.beam import FreeFreeBeam, ModesError
-from device.actuation.modal import achieved_magnitude, magnitude, solve
+from device.actuation.modal import (achieved_magnitude, check_settings, gain_threshold, magnitude,
+                                    serve_two_modes, solve)
 from device.structures.plate2d import ACTUATOR_NAMES, ACTUATORS, Plate2D
 
 #: largest condition number accepted for the actuator matrix (an actuator on a node of a
@@ -73,12 +77,17 @@ class ModalActuation:
         self.shapes = shapes
         self.bounds = tuple(tuple(float(v) for v in b) for b in bounds)
         self.offset_mm = tuple(float(v) for v in offset_mm)
-        self.actuators = np.asarray(actuators, dtype=np.float64)
         self.channels = tuple(channels)
-        self.limits_um = np.broadcast_to(np.asarray(limits_um, dtype=np.float64), (len(self.channels),))
         self.method = method
         self.rcond = float(rcond)
-        self.n_modes = self.actuators.shape[1]
+        self.n_modes = np.shape(actuators)[1]
+        self.actuators, self.limits_um = check_settings(
+            method, np.asarray(actuators, dtype=np.float64),
+            np.ascontiguousarray(np.broadcast_to(np.asarray(limits_um, dtype=np.float64), (len(self.channels),))),
+            self.rcond, self.n_modes)
+        self.threshold = gain_threshold(method, self.rcond)
+        # two modes and a closed-form method: one compiled pass per block (serve_two_modes)
+        self.closed_form = self.n_modes == 2 and method != "bounded"
         cond = np.linalg.cond(self.actuators)
         if self.actuators.shape[0] != len(self.channels) or not cond < MAX_ACTUATOR_CONDITION:
             raise ModesError(f"actuator matrix {self.actuators.round(4).tolist()} (channels "
@@ -87,12 +96,19 @@ class ModalActuation:
                              f"actuator on a node of a driven mode?)")
 
     def structure_position(self, x_mm, y_mm) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Display positions (mm) -> structure coordinates clipped to it, and where clipped."""
+        """Display positions (mm, broadcast together) -> structure coordinates clipped to
+        it (mm), and where clipped."""
+        shape = np.broadcast_shapes(np.shape(x_mm), np.shape(y_mm))
+        # writable C arrays, as the pipeline's: the kernel compiled at setup serves both
+        x, y = (np.array(np.broadcast_to(v, shape), dtype=np.float64).reshape(1, -1) for v in (x_mm, y_mm))
+        xs, ys, clipped, _ = self._on_structure(x, y, np.ones(x.shape, dtype=np.bool_))
+        return xs.reshape(shape), ys.reshape(shape), clipped.reshape(shape)
+
+    def _on_structure(self, x_mm, y_mm, contact):
+        """:func:`_touching_positions` with this structure's offset and extent."""
         (x_lo, x_hi), (y_lo, y_hi) = self.bounds
-        x = np.asarray(x_mm, dtype=np.float64) - self.offset_mm[0]
-        y = np.asarray(y_mm, dtype=np.float64) - self.offset_mm[1]
-        xc, yc = np.clip(x, x_lo, x_hi), np.clip(y, y_lo, y_hi)
-        return xc, yc, (xc != x) | (yc != y)
+        return _touching_positions(x_mm, y_mm, contact, self.offset_mm[0], self.offset_mm[1],
+                                   x_lo, x_hi, y_lo, y_hi)
 
     def command(self, wanted_um: np.ndarray, fingers) -> Actuated:
         """Channel commands for a block; see the module docstring.
@@ -111,42 +127,104 @@ class ModalActuation:
             whose commands met a channel limit; ``off_structure`` finger samples held
             at the structure's edge.
         """
-        contact = fingers.contact
-        p = self.n_modes
-        x, y, off = self.structure_position(fingers.x_pred, fingers.y_pred)
-        phi_all = np.asarray(self.shapes(x, y), dtype=np.float64)        # (F, n, p)
-        rank = touch_rank(contact, fingers.touch_start)                 # (F, n)
-        phi, wanted = _serve_rows(phi_all, np.asarray(wanted_um, dtype=np.float64), rank, p)
-        sol = solve(phi, wanted, self.method, actuators=self.actuators, limits_um=self.limits_um,
+        contact = np.ascontiguousarray(fingers.contact, dtype=np.bool_)
+        x, y, clipped, where = self._on_structure(np.ascontiguousarray(fingers.x_pred, dtype=np.float64),
+                                                  np.ascontiguousarray(fingers.y_pred, dtype=np.float64),
+                                                  contact)
+        phi = np.ascontiguousarray(self.shapes(x, y), dtype=np.float64)  # (k, p) where touching
+        served = _served_fingers(touch_rank(contact, fingers.touch_start), self.n_modes)
+        wanted = np.ascontiguousarray(wanted_um, dtype=np.float64)
+        solved = (serve_two_modes(phi, where, served, wanted, self.actuators, self.limits_um,
+                                  self.threshold, self.method == "regularised")
+                  if self.closed_form else None)
+        amplitude, commands, achieved, limited = solved or self._solve(phi, where, served, wanted)
+        return Actuated(commands_um=amplitude, phases_rad=np.angle(commands), achieved_um=achieved,
+                        limited=limited, off_structure=int(np.count_nonzero(clipped)))
+
+    def _solve(self, phi, where, served, wanted):
+        """Steps 2-4 of the module docstring through ``device.actuation.modal.solve``: any
+        number of modes and every method. Returns what ``serve_two_modes`` does."""
+        phi_f, wanted_f = _serve_rows(phi, where, served, wanted)
+        sol = solve(phi_f, wanted_f, self.method, actuators=self.actuators, limits_um=self.limits_um,
                     rcond=self.rcond)
         # the solver scales to the limits; this only removes its last-bit rounding above them
         amplitude = np.minimum(magnitude(sol.commands_um), self.limits_um)
         # + 0.0 turns -0.0 into 0.0: a zero command has phase 0, whatever the sign of
         # the zeros the solve happened to produce
-        return Actuated(commands_um=amplitude, phases_rad=np.angle(sol.commands_um + 0.0),
-                        achieved_um=achieved_magnitude(phi_all, sol.modal_um, contact),
-                        limited=int(np.count_nonzero(sol.limited)),
-                        off_structure=int(np.count_nonzero(off & contact)))
+        return (amplitude, sol.commands_um + 0.0, achieved_magnitude(phi, where, sol.modal_um),
+                int(np.count_nonzero(sol.limited)))
 
 
 # compiled kernels cached here call no compiled function of another module: numba's cache
 # checks only this file, so one inlining another module's helpers (modal.py's _abs,
 # _combination) would keep running the old code after that module changed; those live
-# in modal.py (achieved_magnitude)
+# in modal.py (achieved_magnitude, serve_two_modes)
 @njit(cache=True, nogil=True)
-def _serve_rows(phi_all, wanted_um, rank, p):
-    """The padded p x p systems (n, p, p) and wanted amplitudes (n, p): finger f fills
-    row rank[f] where 0 <= rank[f] < p (step 2 of the module docstring); other rows 0."""
+def _touching_positions(x_mm, y_mm, contact, x0, y0, x_lo, x_hi, y_lo, y_hi):
+    """Step 1 of the module docstring for the finger samples touching.
+
+    x_mm, y_mm : float64 (F, n) display positions (mm); contact : bool (F, n).
+    Returns x, y (k,) structure coordinates (mm) of the k samples touching (finger by
+    finger), clipped to [x_lo, x_hi] x [y_lo, y_hi] as np.clip clips; clipped (k,) bool,
+    where that moved them; where (F, n) int64, each sample's index in those, -1 where
+    not touching.
+    """
+    f_count, n = contact.shape
+    k = 0
+    for f in range(f_count):
+        for i in range(n):
+            k += contact[f, i]
+    x, y = np.empty(k), np.empty(k)
+    clipped = np.empty(k, dtype=np.bool_)
+    where = np.full((f_count, n), -1, dtype=np.int64)
+    k = 0
+    for f in range(f_count):
+        for i in range(n):
+            if contact[f, i]:
+                xf, yf = x_mm[f, i] - x0, y_mm[f, i] - y0
+                x[k], y[k] = _clip(xf, x_lo, x_hi), _clip(yf, y_lo, y_hi)
+                clipped[k] = x[k] != xf or y[k] != yf
+                where[f, i] = k
+                k += 1
+    return x, y, clipped, where
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _clip(v, lo, hi):
+    """np.clip of one float: lo below it, hi above it, else v itself (its signed zero, NaN)."""
+    v = lo if v < lo else v
+    return hi if v > hi else v
+
+
+@njit(cache=True, nogil=True)
+def _served_fingers(rank, p):
+    """(n, p) int64: the finger (row of ``rank``) that fills row r of each sample's padded
+    system, the one with rank r (step 2 of the module docstring); -1 for a zero row."""
     f_count, n = rank.shape
-    phi = np.zeros((n, p, p))
-    wanted = np.zeros((n, p))
+    served = np.full((n, p), -1, dtype=np.int64)
     for f in range(f_count):
         for i in range(n):
             row = rank[f, i]
             if 0 <= row < p:
-                phi[i, row, :] = phi_all[f, i, :]
+                served[i, row] = f
+    return served
+
+
+@njit(cache=True, nogil=True)
+def _serve_rows(phi, where, served, wanted_um):
+    """The padded p x p systems (n, p, p) and wanted amplitudes (n, p): row r of sample i
+    holds the shapes (``phi[where[f, i]]``) and wanted amplitude of finger f = served[i, r],
+    zeros where served[i, r] is -1."""
+    n, p = served.shape
+    phi_f = np.zeros((n, p, p))
+    wanted = np.zeros((n, p))
+    for i in range(n):
+        for row in range(p):
+            f = served[i, row]
+            if f >= 0:
+                phi_f[i, row, :] = phi[where[f, i], :]
                 wanted[i, row] = wanted_um[f, i]
-    return phi, wanted
+    return phi_f, wanted
 
 
 def beam_actuation(spec, amplitude_limit_um: float) -> ModalActuation:
