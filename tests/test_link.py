@@ -271,9 +271,10 @@ def test_unplugging_drops_and_counts_then_reconnects(device):
     # (a trip on a starved host may flush some of either: counted below)
     in_order_within(index, np.concatenate([np.arange(1000), np.arange(5000, 5500)]))
     after = index >= 5000
-    assert after.any() and np.all(values[after, 0] == 1.0)
+    assert np.all(values[after, 0] == 1.0)
     if core.counters.watchdog_trips == trips:  # no trip after the reconnect: all played
         np.testing.assert_array_equal(index[after], np.arange(5000, 5500))
+    # else a host starved after the reconnect let the watchdog flush some or all of them
     assert status["disconnects"] == 1
     # every commanded sample is played or counted: the device's own log says which played
     accounted(status, index, 1550)

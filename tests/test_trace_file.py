@@ -3,7 +3,7 @@
 import io
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings, strategies as st
+from hypothesis import assume, example, given, settings, strategies as st
 
 from app.commands.cli import main
 from rendering.input.trace_file import (DOWN, MOVE, UP, TraceError, concat_traces, format_trace,
@@ -371,7 +371,7 @@ def _read_both_ways(text: str, chunk_rows: int = 65_536):
         return tuple(getattr(tr, name).tolist() for name in trace_file._COLUMNS)
 
     from unittest import mock
-    with mock.patch.object(trace_file, "_PLAIN_MIN_LINES", 10**9):
+    with mock.patch.object(trace_file, "_plain_columns", lambda *args: None):
         by_line = read()
     with mock.patch.object(trace_file, "_PLAIN_MIN_LINES", 1):
         at_once = read()
@@ -390,6 +390,10 @@ _odd_word = st.sampled_from([" up ", "up\t", "\u00a0up", "", "press", "Move", "0
 
 
 @settings(max_examples=400, derandomize=True, deadline=None)
+@example(rows=[["0.5", "0", "1", "2", "0.5", "move"]], odd_number=None, odd_word=(0, "press"),
+         header=["t_s", "finger", "x_mm", "y_mm", "force_n", "event"])
+@example(rows=[["0.5", "0", "1", "2", "0.5", "move"]], odd_number=(0, 2, "1_0"), odd_word=None,
+         header=["t_s", "finger", "x_mm", "y_mm", "force_n", "event"])
 @given(rows=st.lists(_row_fields, min_size=1, max_size=3),
        odd_number=st.none() | st.tuples(st.integers(0, 2), st.integers(0, 4), _odd_number),
        odd_word=st.none() | st.tuples(st.integers(0, 2), _odd_word),
@@ -420,6 +424,11 @@ _odd_line = st.sampled_from(["", " ", "# a comment", "\"0.5\",0,1,2", "0.5,0,1,2
 
 
 @settings(max_examples=300, derandomize=True, deadline=None)
+@example(rows=["0.5,0,1,2", "0.6,0,1,2"], odd=[(1, "")], note=None, chunk_rows=5)  # blank line
+@example(rows=["0.5,0,1,2", "0.6,0,1,2"], odd=[(2, "")], note=None, chunk_rows=5)  # last line
+@example(rows=["0.5,0,1,2", "0.6,0,1,2"], odd=[], note="#n", chunk_rows=5)
+@example(rows=["0.5,0,1,2", "0.6,0,1,2"], odd=[], note='"1,2,3,4,5,6"', chunk_rows=5)
+@example(rows=["0.5,0,1,2", "0.6,0,1,2"], odd=[(0, "0.5,0,1")], note=None, chunk_rows=5)
 @given(rows=st.lists(_row, min_size=1, max_size=8),
        odd=st.lists(st.tuples(st.integers(0, 8), _odd_line), max_size=2),
        note=st.sampled_from([None, "n", "#n", '"1,2,3,4,5,6"']), chunk_rows=st.integers(1, 5))

@@ -29,7 +29,7 @@ from app.engine.sinks import (FRICTION_COLUMNS, FrameSink, LinkSink, ProgressSin
                               command_columns)
 from app.engine.sources import MAX_GAP_S, TraceSource
 from app.engine.summary import Totals, finite_json, summary, timings
-from app.engine.tables import FORMATS, check_room, row_bytes
+from app.engine.tables import FORMATS, check_room, load_writer, row_bytes
 from rendering.input.trace_file import Trace, iter_trace, most_touching
 from rendering.pipeline import build_pipeline
 from textures.model import Scene
@@ -88,6 +88,7 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     wall0 = time.perf_counter()
     timer = RunTimer()
     scene, chunks, trace_path = load_inputs(scene, trace, strict)
+    load_writer(fmt)
     source = TraceSource(chunks, max_gap_s=max_gap_s)
     read0 = time.perf_counter()
     t0 = source.first_time()

@@ -140,8 +140,11 @@ class TraceSource:
             chunk = concat_traces(pieces)
         self._down = _down_after(self._down, chunk)
         self._last_t = float(chunk.t_s[-1])
-        self._last_xy = {int(f): (float(x), float(y), float(fn))
-                         for f, x, y, fn in zip(chunk.finger, chunk.x_mm, chunk.y_mm, chunk.force_n)}
+        ids, from_end = np.unique(chunk.finger[::-1], return_index=True)
+        last = len(chunk) - 1 - from_end  # each finger's last sample
+        self._last_xy = {f: (x, y, fn) for f, x, y, fn in zip(
+            ids.tolist(), chunk.x_mm[last].tolist(), chunk.y_mm[last].tolist(),
+            chunk.force_n[last].tolist())}
         return chunk
 
     def resume_at(self, k: int) -> int:

@@ -46,6 +46,13 @@ BATCH_ROWS = 1 << 18
 RESERVE_BYTES = 64 << 20
 
 
+def load_writer(fmt: str) -> None:
+    """Import the library that writes ``fmt`` now (pyarrow for Parquet, 0.1-0.2 s), as
+    part of a run's start-up like its kernels, rather than inside its first write."""
+    if fmt == "parquet":
+        import pyarrow.parquet  # noqa: F401
+
+
 def row_bytes(columns, fmt: str) -> int:
     """Bytes one row of ``columns`` takes at most in ``fmt``, for values of up to four
     integer digits (CSV), or exactly (npz; Parquet takes no more)."""

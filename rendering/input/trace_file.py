@@ -37,6 +37,7 @@ import codecs
 import csv
 import io
 import math
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, NoReturn
@@ -533,8 +534,8 @@ def _numbered_rows(batch: list[_Rows]) -> list[tuple[int, list[str]]]:
     return [pair for piece in batch for pair in zip(piece.lines.tolist(), piece.fields())]
 
 
-#: a block of fewer lines is split line by line: for a small file, importing pyarrow
-#: (about 0.1 s) would cost more than its parser saves (about 4 us a line)
+#: until pyarrow is imported, a block of fewer lines is split line by line: for a small
+#: file, importing it (about 0.1 s) would cost more than its parser saves (4 us a line)
 _PLAIN_MIN_LINES = 8192
 
 
@@ -549,7 +550,9 @@ def _plain_columns(data: bytes, count: int, col: dict[str, int], width: int) -> 
     rounded double; ``tests/test_trace_file.py`` checks it), so a block parses here to
     the same columns as line by line.
     """
-    if count < _PLAIN_MIN_LINES or any(mark in data for mark in (b'"', b"#", b"\r")):
+    if count < _PLAIN_MIN_LINES and "pyarrow" not in sys.modules:
+        return None
+    if any(mark in data for mark in (b'"', b"#", b"\r")):
         return None
     if data.split(b"\n", 1)[0].count(b",") + 1 < width:  # Arrow holds the rest to the first row's width
         return None
