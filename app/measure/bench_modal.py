@@ -7,22 +7,31 @@ gave eq 14's 0.41 um; seed 001's amplifiers stop at 300 V peak-to-peak). Finger 
 random over the beam, and near-singular (finger b within 0.5 mm of finger a). For each
 method: time per sample in blocks of 50 (one batched call), mean and worst error under
 the fingers, the share of samples that met a limit, and the largest command step when
-finger b crosses finger a in 1 um steps (continuity across a singular locus).
+finger b crosses finger a in 1 um steps (continuity across a singular locus). Then the
+whole modal actuation of the bundled beam scene (``ModalActuation.command``: positions,
+shapes, touch order, inversion, commands, achieved amplitudes) on two fingers, one
+sweeping across the other, in blocks of ``ACTUATION_BLOCK`` samples as replay batches them.
 """
 
 from __future__ import annotations
 
 import time
+from types import SimpleNamespace
 
 import numpy as np
 
 from app.measure.figure import Figure
+from device.actuation.factory import make_actuation
+from textures.library import resolve_scene
+from textures.loader import load_scene
 from device.structures.beam import FreeFreeBeam
 from device.actuation.modal import DEFAULT_RCOND, METHODS, solve
 
 ORDERS = (16, 17)
 LIMIT_UM = 0.75
 BLOCK = 50
+#: samples per ModalActuation.command call (replay runs up to 500 blocks of 50 at once)
+ACTUATION_BLOCK = 25_000
 
 
 def _phi(beam, xa, xb):
@@ -66,4 +75,25 @@ def run(quick: bool) -> list[Figure]:
         sol = solve(_phi(beam, a, b), wanted, "regularised", rcond=rcond, actuators=act, limits_um=LIMIT_UM)
         figures.append(Figure("modal", f"regularised rcond={rcond:g} random: mean error",
                               float(np.mean(sol.error_um)), "um"))
-    return figures
+    return figures + [_actuation_time(4 if quick else 40)]
+
+
+def _actuation_time(blocks: int) -> Figure:
+    """Time per output sample of the bundled beam scene's ModalActuation.command over
+    ``blocks`` blocks: finger a from 100 to 120 mm, finger b from 260 to 100 mm across it
+    (and the singular loci on the way), both lifted for 2 % of each block, wanted
+    amplitudes 0.15 um and 0.1 +- 0.1 um (about a quarter of the samples meet a limit)."""
+    actuation = make_actuation(load_scene(resolve_scene("two-finger-beam-seed000")).device)
+    t = np.linspace(0.0, 1.0, ACTUATION_BLOCK)
+    contact = np.ones((2, t.size), dtype=bool)
+    contact[:, 9000:9500] = False
+    fingers = SimpleNamespace(contact=contact, touch_start=np.array([[0.0], [0.2]]) * np.ones((2, t.size)),
+                              x_pred=np.stack([100.0 + 20 * t, 260.0 - 160 * t]), y_pred=np.full((2, t.size), 3.0))
+    wanted = np.stack([np.full(t.size, 0.15), 0.1 + 0.1 * np.sin(40 * t)])
+    actuation.command(wanted, fingers)  # compiled kernels loaded
+    start = time.perf_counter()
+    for _ in range(blocks):
+        actuation.command(wanted, fingers)
+    per_sample = (time.perf_counter() - start) / (blocks * t.size)
+    return Figure("modal", f"actuation (ModalActuation.command), two fingers on the beam scene: "
+                           f"time per sample (blocks of {ACTUATION_BLOCK})", per_sample * 1e6, "us")
