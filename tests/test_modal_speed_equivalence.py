@@ -6,12 +6,14 @@ np.minimum, np.angle. Bit for bit: the replay outputs must stay byte-identical."
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 from hypothesis import given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
 from device.actuation.modal import magnitude, solve
 from device.actuation.modal_actuation import beam_actuation, plate_actuation
 from device.profile import BeamStructure, PlateStructure
+from device.structures.beam import ModesError
 from test_modal_kernels import assert_same_bits, numpy_forward, numpy_touch_rank
 
 SETTINGS = settings(derandomize=True, max_examples=60, deadline=None)
@@ -119,3 +121,12 @@ def test_structure_position_is_np_clip(x):
     for g, w in zip(got, (want_x, want_y, (want_x != x) | (want_y != y))):
         assert_same_bits(g, w)
     assert_same_bits(act.structure_position(x[:, None], 70.0)[1], np.full((x.size, 1), 70.0))
+
+
+def test_a_non_finite_wanted_amplitude_is_refused_as_solve_refuses_it():
+    """The compiled pass hands a system it cannot take back to solve, whose error names it."""
+    fingers = SimpleNamespace(contact=np.ones((2, 3), bool), touch_start=np.zeros((2, 3)),
+                              x_pred=np.array([[120.0] * 3, [250.0] * 3]), y_pred=np.full((2, 3), 3.0))
+    wanted = np.array([[0.1, np.nan, 0.1], [0.1, 0.1, 0.1]])
+    with pytest.raises(ModesError, match=r"wanted_um has non-finite values \(first at index \[1, 0\]\)"):
+        ACTUATIONS["beam regularised"].command(wanted, fingers)
