@@ -235,6 +235,17 @@ class _PeriodicBase(_LayerBase):
     def mu_at(self, x, y) -> np.ndarray:
         return self.profile(self.phase_at(x, y))
 
+    def profile_where(self, phase: np.ndarray, covers: np.ndarray) -> np.ndarray:
+        """:meth:`profile` where ``covers`` (bool, ``phase``'s shape), 1 elsewhere: a
+        renderer's mu' outside the layer is never composed, so it is not computed (a
+        finger is outside a small region most of the time)."""
+        if covers.all():
+            return self.profile(phase)
+        mu = np.ones(phase.shape)
+        if covers.any():
+            mu[covers] = self.profile(phase[covers])
+        return mu
+
 
 @dataclass(frozen=True)
 class Grating(_PeriodicBase):

@@ -496,7 +496,8 @@ class HybridRenderer:
         return HybridState(fingers={})
 
     def render(self, block: FingerBlock, state: HybridState):
-        """mu' (F, n) and coverage (F, n) under each finger, and the new state."""
+        """mu' (F, n) and coverage (F, n) under each finger (mu' 1 where the layer does
+        not cover), and the new state."""
         phase = np.empty((len(block.ids), block.n))
         carried = dict(state.fingers)
         layer_phase = (float(self.layer.offset_mm), float(self.layer.period_mm))
@@ -516,6 +517,5 @@ class HybridRenderer:
             carried[fid] = _Finger(touch=int(end[0]), phase=end[1], offset=end[2], target=end[3],
                                    measured=end[4:7], smoothed=end[7], speed=end[8],
                                    held=end[9])
-        mu = self.layer.profile(phase)
         covers = self.layer.covers(block.x_pred, block.y_pred)
-        return mu, covers, HybridState(fingers=carried)
+        return self.layer.profile_where(phase, covers), covers, HybridState(fingers=carried)

@@ -40,14 +40,15 @@ class ShtRenderer:
         return ShtState(phase={})
 
     def render(self, block: FingerBlock, state: ShtState):
-        """mu' (F, n) and coverage (F, n) under each finger, and the new state."""
-        mu = np.empty((len(block.ids), block.n))
+        """mu' (F, n) and coverage (F, n) under each finger (mu' 1 where the layer does
+        not cover), and the new state."""
+        phase = np.empty((len(block.ids), block.n))
         carried = {fid: state.phase[fid] for fid in block.ids if fid in state.phase}
         ax, ay = self.axis
         for row, fid in enumerate(block.ids):
             rate = (block.vx[row] * ax + block.vy[row] * ay) / self.layer.period_mm
-            phase, carry = integrate_phase(rate, self.dt_s, block.touch_id[row], carried.get(fid))
+            phase[row], carry = integrate_phase(rate, self.dt_s, block.touch_id[row],
+                                                carried.get(fid))
             carried[fid] = (int(block.touch_id[row, -1]), carry)
-            mu[row] = self.layer.profile(phase)
         covers = self.layer.covers(block.x_pred, block.y_pred)
-        return mu, covers, ShtState(phase=carried)
+        return self.layer.profile_where(phase, covers), covers, ShtState(phase=carried)
