@@ -146,12 +146,16 @@ def _layers():
 
 
 def test_mu_and_covers_equals_mu_at_and_covers():
+    """Where the layer covers (all that is composed) mu' is mu_at's; outside, mu_at's or
+    1 (not computed)."""
     rng = np.random.default_rng(5)
     x, y = rng.uniform(0, 60, (2, 3, 4000))
     for layer in _layers():
         mu, covers = layer.mu_and_covers(x, y)
-        assert_array_equal(mu, layer.mu_at(x, y))
         assert_array_equal(covers, layer.covers(x, y))
+        assert 0 < covers.sum() < covers.size
+        assert_array_equal(mu[covers], layer.mu_at(x, y)[covers])
+        assert np.all((mu == layer.mu_at(x, y)) | (mu == 1.0))
 
 
 def test_distances_against_hypot_and_the_rotation_formula():
@@ -275,3 +279,13 @@ def test_tracker_window_sums_are_numpys_row_sums(width, used, seed):
     row[:k] = rng.standard_normal(k) * 10.0 ** rng.integers(-6, 6, k)
     table = np.stack([row, row[::-1]])
     assert [_pairwise(r, 0, width) for r in table] == table.sum(axis=1).tolist()
+
+
+def test_a_periodic_profile_where_covered_is_the_profile_there_and_1_elsewhere():
+    rng = np.random.default_rng(7)
+    phase = rng.uniform(-50, 50, (2, 3000))
+    for layer in [lay for lay in _layers() if lay.is_periodic]:
+        for covers in (rng.uniform(size=phase.shape) < 0.3, np.ones(phase.shape, bool),
+                       np.zeros(phase.shape, bool)):
+            mu = layer.profile_where(phase, covers)
+            assert_array_equal(mu, np.where(covers, layer.profile(phase), 1.0))

@@ -140,6 +140,18 @@ class DiscRegion:
 Region = RectRegion | DiscRegion
 
 
+def _where_covered(mu_of, values: np.ndarray, covers: np.ndarray) -> np.ndarray:
+    """``mu_of(values)`` (an elementwise mu') where ``covers`` (bool, ``values``' shape), 1
+    elsewhere: a renderer's mu' outside its layer is never composed (``rendering.compose``),
+    so it is not computed; a finger is outside a small region most of the time."""
+    if covers.all():
+        return mu_of(values)
+    mu = np.ones(values.shape)
+    if covers.any():
+        mu[covers] = mu_of(values[covers])
+    return mu
+
+
 def _wrap(phase) -> np.ndarray:
     """Phase (cycles) wrapped to [0, 1): ``np.mod(phase, 1.0)`` bit for bit (both round
     the same exact value once), at a fraction of its cost."""
@@ -236,15 +248,8 @@ class _PeriodicBase(_LayerBase):
         return self.profile(self.phase_at(x, y))
 
     def profile_where(self, phase: np.ndarray, covers: np.ndarray) -> np.ndarray:
-        """:meth:`profile` where ``covers`` (bool, ``phase``'s shape), 1 elsewhere: a
-        renderer's mu' outside the layer is never composed, so it is not computed (a
-        finger is outside a small region most of the time)."""
-        if covers.all():
-            return self.profile(phase)
-        mu = np.ones(phase.shape)
-        if covers.any():
-            mu[covers] = self.profile(phase[covers])
-        return mu
+        """:meth:`profile` where ``covers`` (bool, ``phase``'s shape), 1 elsewhere."""
+        return _where_covered(self.profile, phase, covers)
 
 
 @dataclass(frozen=True)
@@ -339,8 +344,10 @@ class _Outlined(_LayerBase):
         return self._mu(self._signed_distance(x, y))
 
     def mu_and_covers(self, x, y) -> tuple[np.ndarray, np.ndarray]:
+        """mu' where the layer covers (1 elsewhere) and the cover."""
         d = self._signed_distance(x, y)
-        return self._mu(d), self._covers(d, x, y)
+        covers = self._covers(d, x, y)
+        return _where_covered(self._mu, d, covers), covers
 
     def _covers(self, distance, x, y) -> np.ndarray:
         return (distance <= self.edge_mm / 2) & self.in_region(x, y)
