@@ -11,7 +11,8 @@ Every layer answers two vectorised questions at arrays of positions ``x, y`` (mm
   their own support);
 - ``mu_at(x, y) -> float64 array``: the layer's mu' there (defined everywhere; callers
   mask it with ``covers``);
-- ``mu_and_covers(x, y)``: both at once, sharing the geometry (the renderers' hot path).
+- ``mu_and_covers(x, y)``: both at once, sharing the geometry (the renderers' hot path);
+  its mu' may be 1 where the layer does not cover (it is not composed there).
 
 Periodic layers (gratings and waveforms) also give their single period for SHT
 synthesis (seed 003 section 4.4.2): ``axis`` (unit vector across the lines),
@@ -199,7 +200,8 @@ class _LayerBase:
         return self.in_region(x, y)
 
     def mu_and_covers(self, x, y) -> tuple[np.ndarray, np.ndarray]:
-        """``(mu_at(x, y), covers(x, y))``; layers override it to share work between them."""
+        """``(mu_at(x, y), covers(x, y))``; layers override it to share work between them
+        (and may give mu' 1 where they do not cover)."""
         return self.mu_at(x, y), self.covers(x, y)
 
     @property
