@@ -50,6 +50,18 @@ def test_jobs_give_what_single_replays_give(tmp_path):
         assert (job / name).read_bytes() == (tmp_path / "r" / name).read_bytes()
 
 
+def test_jobs_at_once_give_what_jobs_one_after_another_give(tmp_path):
+    manifest = tmp_path / "m.csv"
+    manifest.write_text(MANIFEST.replace("no-such-trace.csv", "swipe-40mms-50hz"))
+    for jobs in ("1", "2"):
+        assert main(["batch", str(manifest), "--out", str(tmp_path / jobs), "--jobs", jobs,
+                     "--quiet"]) == 0
+    for name in ("five", "fine", "broken"):
+        for table in ("commands.csv", "friction.csv"):
+            assert ((tmp_path / "2" / name / table).read_bytes()
+                    == (tmp_path / "1" / name / table).read_bytes())
+
+
 def test_the_same_batch_on_a_dask_cluster_on_loopback(tmp_path):
     distributed = pytest.importorskip("distributed", reason="dask.distributed is not installed "
                                       "(pip install 'frictex[cluster]')")
