@@ -45,6 +45,9 @@ def friction_rows(out) -> dict[str, np.ndarray]:
         columns = tuple(np.take_along_axis(c, order, axis=0) for c in columns)
     contact, ids, x, y, mu, amplitude = (c.T for c in columns)  # (n, F)
     t = np.broadcast_to(out.t_s[:, None], contact.shape)
+    if contact.all():  # every finger down throughout: all rows, read in order (2x faster)
+        return {"t_s": t.ravel(), "finger": ids.ravel(), "x_mm": x.ravel(), "y_mm": y.ravel(),
+                "mu_target": mu.ravel(), "amplitude_um": amplitude.ravel()}
     return {"t_s": t[contact], "finger": ids[contact], "x_mm": x[contact], "y_mm": y[contact],
             "mu_target": mu[contact], "amplitude_um": amplitude[contact]}
 

@@ -8,7 +8,7 @@
   (interpreter start and imports too) and its peak memory. The same at a tenth of the
   length shows whether memory depends on the trace's length.
 - Two fingers with modal actuation (seed 000's beam): the bundled crossing trace repeated
-  to 88 s (22 s quick), CSV.
+  to 98 s (24 s quick), CSV and Parquet.
 - A one-second replay: the whole process's wall time (what a user waits).
 - A batch of one-minute jobs (64; 16 quick) on all cores against the same batch run one
   job after another (``--jobs 1``): jobs per second of each, and their ratio (two runs
@@ -158,8 +158,9 @@ def run(quick: bool) -> list[Figure]:
         two = _repeated(read_trace(resolve_trace(MODAL_TRACE)), 5 if quick else 20)
         path = tmp / "two-fingers.csv"
         write_trace(path, two)
-        figures += _replay_figures(tmp, f"two fingers modal {two.duration_s:.0f} s", MODAL_SCENE,
-                                   path, "csv", two.duration_s)
+        for fmt in ("csv", "parquet"):
+            figures += _replay_figures(tmp, f"two fingers modal {two.duration_s:.0f} s",
+                                       MODAL_SCENE, path, fmt, two.duration_s)
         one = tmp / "one-second.csv"
         write_trace(one, _human(1.0))
         walls = [_frictex("replay", SCENE, str(one), "--out", str(tmp / "one"), "--quiet")[0]
