@@ -15,8 +15,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-def rows_text(columns: list[np.ndarray], formats: list[str]) -> bytes:
-    """The CSV lines (``\\n``-terminated, no header) of equal-length columns.
+def rows_text(columns: list[np.ndarray], formats: list[str]) -> memoryview:
+    """The CSV lines (``\\n``-terminated, no header) of equal-length columns, as a view of
+    the buffer the kernel wrote them into (a copy into ``bytes`` took a fifth of the time).
 
     ``formats[j]`` is ``"%d"`` (int64 column) or ``"%.Nf"`` (float64 column, 0 <= N <= 15).
     """
@@ -53,7 +54,7 @@ def rows_text(columns: list[np.ndarray], formats: list[str]) -> bytes:
     blob = np.frombuffer(b"".join(texts), dtype=np.uint8) if texts else np.zeros(0, np.uint8)
     out = np.empty(n * width + int(offsets[-1]), dtype=np.uint8)
     used = _write_rows(units, decimals, negative, at, offsets, blob, out)
-    return out[:used].tobytes()
+    return memoryview(out[:used])
 
 
 def _digits(value) -> int:
