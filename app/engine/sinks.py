@@ -34,10 +34,6 @@ def command_columns(channels: tuple[str, ...], phases: bool) -> list[tuple]:
 def friction_rows(out) -> dict[str, np.ndarray]:
     """``friction`` table rows of a block output: sample-major, then finger id, touching
     only."""
-    if out.contact.shape[0] == 1 and out.contact.all():  # one finger, down throughout
-        return {"t_s": out.t_s, "finger": out.ids_per_sample()[0],
-                "x_mm": out.x_mm[0], "y_mm": out.y_mm[0], "mu_target": out.mu_target[0],
-                "amplitude_um": out.amplitude_um[0]}
     ids = out.ids_per_sample()
     columns = (out.contact, ids, out.x_mm, out.y_mm, out.mu_target, out.amplitude_um)
     if ids.shape[0] > 1 and (np.diff(ids, axis=0) < 0).any():  # reused rows: by id again
@@ -45,7 +41,7 @@ def friction_rows(out) -> dict[str, np.ndarray]:
         columns = tuple(np.take_along_axis(c, order, axis=0) for c in columns)
     contact, ids, x, y, mu, amplitude = (c.T for c in columns)  # (n, F)
     t = np.broadcast_to(out.t_s[:, None], contact.shape)
-    if contact.all():  # every finger down throughout: all rows, read in order (2x faster)
+    if contact.all():  # every finger down throughout: all rows in order (views for one finger)
         return {"t_s": t.ravel(), "finger": ids.ravel(), "x_mm": x.ravel(), "y_mm": y.ravel(),
                 "mu_target": mu.ravel(), "amplitude_um": amplitude.ravel()}
     return {"t_s": t[contact], "finger": ids[contact], "x_mm": x[contact], "y_mm": y[contact],

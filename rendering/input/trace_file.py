@@ -642,13 +642,16 @@ def _block_rows(data: bytes, first: int, count: int, parser: "_RowParser", where
     """The data rows of a block of ``count`` lines from line ``first``: parsed at once if
     the block is plain (:func:`_plain_columns`), else split line by line skipping blank
     and comment lines."""
-    columns = _plain_columns(data, count, parser.col, len(parser.names))
-    if columns is not None:
-        lines = np.arange(first, first + count, dtype=np.int64)
-        return _Rows(lines, columns, lambda: [text.split(",") for text in data.decode("utf-8").split("\n")])
-    numbered = [(first + k, _fields(text, where, first + k))
+    def split_rows():  # (line number, fields) of the data rows
+        return [(first + k, _fields(text, where, first + k))
                 for k, text in enumerate(data.decode("utf-8").split("\n"))
                 if text.strip() and not text.lstrip().startswith("#")]
+
+    columns = _plain_columns(data, count, parser.col, len(parser.names))
+    if columns is not None:  # every line a row: split only to name a row's problem
+        lines = np.arange(first, first + count, dtype=np.int64)
+        return _Rows(lines, columns, lambda: [row for _, row in split_rows()])
+    numbered = split_rows()
     lines = np.fromiter((line for line, _ in numbered), dtype=np.int64, count=len(numbered))
     return _Rows(lines, None, lambda: [row for _, row in numbered])
 
