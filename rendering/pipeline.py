@@ -159,7 +159,7 @@ class Pipeline:
     def __init__(self, scene: Scene, rate_hz: float = 10_000.0, block_size: int = 50,
                  render_override: str | None = None, sho_variant: str = DEFAULT_SHO,
                  t0_s: float = 0.0, tracker: TrackerConfig | None = None,
-                 inversion: str = "exact", control: str | None = None):
+                 inversion: str = "exact", control: str | None = None, loop_config=None):
         if rate_hz <= 0 or not np.isfinite(rate_hz):
             raise ValueError(f"output rate {rate_hz!r} Hz: expected a positive number")
         if block_size < 1:
@@ -190,8 +190,12 @@ class Pipeline:
         self.control = None  # closed-loop friction (rendering.control.loop), not open loop
         control = scene.control if control is None else control  # the file's, or overridden
         if control != "open":
-            from rendering.control.loop import ClosedLoop
-            self.control = ClosedLoop(scene.device, self.rate_hz, self.block_size, control)
+            from rendering.control.loop import ClosedLoop, LoopConfig
+            self.control = ClosedLoop(scene.device, self.rate_hz, self.block_size, control,
+                                      loop_config or LoopConfig())
+        elif loop_config is not None:
+            raise ValueError("a loop configuration needs a loop: control 'closed' or "
+                             "'adaptive', not open loop")
         self.forces = None
         if scene.device.profile in FORCE_PROFILES:
             from rendering.layers.force_layers import ForceStage  # travelling-wave profiles only
@@ -224,16 +228,18 @@ class Pipeline:
                              control=self.control.initial_state() if self.control else None)
 
     def process(self, block_index: int, samples: Trace | None, state: PipelineState,
-                n_blocks: int = 1, normal_force_n: float | None = None, report=None
-                ) -> tuple[BlockOutput, PipelineState]:
+                n_blocks: int = 1, normal_force_n: float | None = None,
+                force_reports=None) -> tuple[BlockOutput, PipelineState]:
         """Run ``n_blocks`` blocks starting at ``block_index`` (output index
         ``block_index * block_size``) with the touch samples that take effect in them.
 
         ``normal_force_n``: the normal force (N) the device's force sensors measure now
         (seed 003's plate has four under its corners), used instead of the samples' force
         for the fingers touching. Sensors under the plate measure the total: with several
-        fingers down it is shared equally among them. ``report``: the device's force report
-        for the previous block (``rendering.control.loop.ForceReport``) when the loop is on.
+        fingers down it is shared equally among them. ``force_reports``: when the loop is
+        on, ``force_reports(index0, n)`` gives the device's force reports over output samples
+        ``index0 .. index0 + n - 1`` once they have come (``rendering.control.loop``), or
+        None; None for a device without force reports.
         """
         clock = time.perf_counter
         secs = self.timer.seconds
@@ -268,7 +274,8 @@ class Pipeline:
         forces, force_state, control_state = None, state.forces, state.control
         if self.control is not None:
             wanted, clamps, control_state = self.control.invert(mu_target, fingers,
-                                                                state.control, report)
+                                                                state.control,
+                                                                force_reports)
         elif self.forces is None:
             wanted, clamps = self.friction.invert(mu_target, fingers.force)
         else:  # inversion and actuation in one: the wave serves force targets

@@ -126,7 +126,8 @@ def test_section_tables_gains_and_claims():
     assert_allclose(row["closed"]["per_finger"]["open_rms_after_mu0"], OPEN, rtol=1e-12)
     assert math.isclose(row["closed"]["gain_after_mu0"], open_pop / closed_pop * 2, rel_tol=1e-12)
     text = "\n".join(markdown(section))
-    assert "| grating-15mm | closed |" in text and "gain margin 7.90" in text
+    assert "| grating-15mm | closed |" in text and "gain margin 8.00" in text
+    assert "covered at every delay" in text  # s up to 7.37 against a margin of 8
     found = {(c.group, c.metric): c for c in claims(section)}
     # 5x on the 15 mm grating: per finger d = MSE closed - MSE open / 25, by hand
     d = np.square(closed) - np.square(OPEN) / 25
@@ -141,6 +142,7 @@ def test_section_tables_gains_and_claims():
     assert found[("closed loop: amplitude limit", "max_command_um")].passed
     assert found[("closed loop: no growing oscillation", "swings")].passed
     assert found[("closed loop: added noise", "noise_fraction")].passed
+    assert found[("closed loop: stability margin", "gain margin / steepest s")].passed
     # a run with a growing oscillation fails the claim
     shaky = claims(_section(closed, closed, swings=40))
     assert not [c for c in shaky if c.metric == "swings"][0].passed
@@ -216,8 +218,12 @@ def _report(index0, ratio, force_n=0.5):
 
 
 def _step(loop, state, k, speed, report):
+    """Block ``k`` with ``report`` (or None) the only force report come so far."""
     target, fingers = _block(k * N_BLOCK, speed)
-    wanted, _, state = loop.invert(target, fingers, state, report)
+
+    def reports(index0, n):
+        return report if report is not None and (index0, n) == (report.index0, N_BLOCK) else None
+    wanted, _, state = loop.invert(target, fingers, state, reports)
     return wanted[0], state
 
 
@@ -256,3 +262,80 @@ def test_feedback_acts_from_the_trackers_first_sight_of_motion(speed, moves):
     for k in range(2, 4):
         _, state = _step(loop, state, k, speed, _report((k - 1) * N_BLOCK, 0.8 * 0.2))
     assert (state.log_c < 0.0) == moves
+
+
+def _run_late(delay, blocks, lost=()):
+    """Blocks 0..``blocks``-1 at 1 mm/s (the tracker sees a stroke start); the report of block j (mu0 0.8, then the
+    finger gets twice the reduction asked: ratio 0.8 * 0.2) reaches the loop ``delay``
+    blocks after block j ends, except those of the blocks in ``lost``, which never come.
+    Returns the loop and its state after each block."""
+    from device.link.forces import ForceHistory
+    loop = ClosedLoop(DeviceProfile(), 5000.0, N_BLOCK, mode="closed")
+    state, history, states = loop.initial_state(), ForceHistory(), []
+    for k in range(blocks):
+        j = k - 1 - delay  # the block whose report has just come
+        if j >= 0 and j not in lost:
+            history.add(_report(j * N_BLOCK, 0.8 if j == 0 else 0.8 * 0.2))
+        target, fingers = _block(k * N_BLOCK, 1.0)
+        _, _, state = loop.invert(target, fingers, state, history.window)
+        states.append(state)
+    return loop, states
+
+
+@pytest.mark.parametrize("delay", [1, 3, 6])
+def test_late_reports_pair_with_their_own_blocks_and_slow_the_gain(delay):
+    """The same reports ``delay`` blocks later: the loop measures the delay, learns the
+    same things from them, ``delay`` blocks later, each gain step scaled by the gain
+    scheduled for that delay against none (the first step's g is the same)."""
+    from rendering.control.margins import scheduled_ki
+    now_loop, now = _run_late(0, 12)
+    late_loop, late = _run_late(delay, 12 + delay)
+    assert late[-1].delay_blocks == delay and now[-1].delay_blocks == 0
+    assert late[-1].fallbacks == 0 and not late[-1].pending[:-(delay + 1)]
+    assert late[-1].mu0 == now[-1].mu0 == 0.8
+    first = next(k for k, s in enumerate(now) if s.log_c != 0.0)
+    assert late[first + delay - 1].log_c == 0.0  # nothing learnt before its report came
+    ratio = late[first + delay].log_c / now[first].log_c
+    ki = [scheduled_ki(d, SensorParams(), 5000.0, N_BLOCK) for d in (0, delay)]
+    assert math.isclose(ratio, ki[1] / ki[0], rel_tol=1e-12)
+    assert late_loop.ki_by_delay[delay] == ki[1] < ki[0] == now_loop.ki_by_delay[0]
+
+
+def test_a_report_that_never_comes_is_given_up_after_max_wait_and_the_rest_pair():
+    """Block 4's report is lost: the loop waits ``max_wait_s`` for it (later blocks'
+    reports wait behind it, in order), then folds it as missed, and pairs the rest; one
+    missed block is shorter than ``stale_s``: no fallback."""
+    loop, states = _run_late(2, 40, lost={4})
+    wait_blocks = round(loop.config.max_wait_s / loop.block_s)
+    given_up = next(k for k, s in enumerate(states) if all(p.index0 != 4 * N_BLOCK
+                                                          for p in s.pending) and k > 4)
+    assert given_up == 4 + 2 + wait_blocks  # the first block more than max_wait_s past its end
+    assert states[given_up - 1].pending[0].index0 == 4 * N_BLOCK
+    assert len(states[given_up].pending) == 3  # the rest paired at once: 2 late + this one
+    assert states[-1].fallbacks == 0 and states[-1].since_report_s == 0.0
+
+
+def test_without_force_reports_the_loop_is_open_loop_and_says_why():
+    """A device without force reports (``force_reports`` None): every block is missed at
+    once (nothing will come); open loop from ``stale_s`` on, said once."""
+    loop = ClosedLoop(DeviceProfile(), 5000.0, N_BLOCK, mode="closed")
+    state = loop.initial_state()
+    for k in range(40):
+        target, fingers = _block(k * N_BLOCK, 10.0)
+        _, _, state = loop.invert(target, fingers, state, None)
+    assert state.fallback and state.fallbacks == 1
+    assert state.messages == ("closed loop: force signal absent (no force reports: no "
+                              "device, or one without a lateral force sensor); open loop with "
+                              "the latest model until the signal is good for 0.1 s",)
+    assert len(state.pending) == 1  # the block just sent
+    # open loop from the block after missed reports first add up to more than stale_s
+    assert state.fallback_samples == (40 - round(loop.config.stale_s / loop.block_s) - 1) * N_BLOCK
+
+
+@pytest.mark.parametrize("field,value", [("min_still", 1), ("stale_s", 0.0), ("ki", -0.1),
+                                         ("min_mu", 1.5), ("max_wait_s", float("nan")),
+                                         ("decimate", 0)])
+def test_a_bad_loop_configuration_is_refused_with_its_name(field, value):
+    from rendering.control.loop import LoopConfig
+    with pytest.raises(ValueError, match=f"loop configuration: {field} = "):
+        LoopConfig(**{field: value})

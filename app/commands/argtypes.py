@@ -61,10 +61,33 @@ output_rate = bounded(float, *OUTPUT_RATES_HZ, "Hz")
 
 
 def add_link_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--device`` and ``--faults``, as every command that streams to a device takes them."""
+    """``--device``, ``--faults``, ``--sim-finger`` and ``--control``, as every command
+    that streams to a device takes them."""
+    from textures.model import CONTROL_MODES
     parser.add_argument("--device", metavar="sim|PORT", default=None,
                         help="stream the commands to a device: 'sim' starts a simulated one, "
                              "otherwise a serial port or pyserial URL (default: no link)")
     parser.add_argument("--faults", metavar="SPEC", type=fault_plan, default=None,
                         help="with --device: inject link faults, e.g. 'corrupt=0.001,"
                              "stall=0.2@1.5,trip@3,unplug=2@4' (grammar: device/link/faults.py)")
+    parser.add_argument("--sim-finger", type=int, default=None, metavar="N",
+                        help="with --device sim: the simulated device reports the lateral and "
+                             "normal force of person N of the simulated finger population "
+                             "(device/finger.py), sliding at 100 mm/s with 0.5 N")
+    parser.add_argument("--control", choices=CONTROL_MODES, default=None,
+                        help="friction control instead of the scene file's: open loop, closed "
+                             "on the device's measured friction, or closed and adapting the "
+                             "friction model (needs a device with force reports, e.g. "
+                             "--device sim --sim-finger 3; rendering/control/loop.py)")
+
+
+def sim_device_args(args: argparse.Namespace) -> tuple[str, ...]:
+    """``frictex sim-device`` flags from ``--sim-finger`` (refused without ``--device sim``)."""
+    if args.sim_finger is None:
+        return ()
+    if args.sim_finger < 0:
+        raise ValueError(f"--sim-finger {args.sim_finger}: expected a person number >= 0")
+    if args.device not in ("sim", "sim:tcp"):
+        raise ValueError(f"--sim-finger {args.sim_finger}: needs --device sim (a simulated "
+                         f"device), got --device {args.device}")
+    return ("--finger", str(args.sim_finger))

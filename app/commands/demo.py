@@ -24,7 +24,8 @@ import threading
 from pathlib import Path
 
 from app.commands.preview import frame_size
-from app.commands.argtypes import add_link_arguments, output_rate, positive_float, positive_int
+from app.commands.argtypes import (add_link_arguments, output_rate, positive_float, positive_int,
+                                   sim_device_args)
 from rendering.input.tuio import TUIO_PORT
 from rendering.visual.context import NoDisplayError, open_backend
 from rendering.visual.device_panels import default_frame_size
@@ -127,12 +128,14 @@ def _start_haptic(args, scene, scene_path: Path, record: Path | None):
         shorten_switch_interval(args.block / args.rate)
         haptic, finish = open_haptic(scene, args.rate, args.block, args.renderer, args.device,
                                      record, faults=args.faults,
-                                     source=None if touch is None else open_source(*touch))
+                                     source=None if touch is None else open_source(*touch),
+                                     control=args.control, sim_args=sim_device_args(args))
         haptic.start()
         return haptic, finish
     from app.live.haptic_process import HapticConfig, HapticProcess
     haptic = HapticProcess(scene, HapticConfig(scene_path, args.rate, args.block, args.renderer,
-                                               args.device, record, touch, args.faults))
+                                               args.device, record, touch, args.faults,
+                                               args.control, sim_device_args(args)))
 
     def finish():
         haptic.stop()
@@ -165,7 +168,8 @@ def run_headless(args, reason: str | None = None) -> int:
         print(f"frictex demo: {reason}; running headless instead")
     frames = FrameWriter(args.out, scene, fps=30.0, rate_hz=args.rate)
     summary = run_replay(scene, HEADLESS_TRACE, args.out, rate_hz=args.rate, block_size=args.block,
-                         render_override=args.renderer, progress=False, frames=frames)
+                         render_override=args.renderer, progress=False, frames=frames,
+                         control=args.control)
     print(f"replayed {HEADLESS_TRACE} on {scene.name}: {summary['output']['samples']} output samples, "
           f"{frames.count} frames in {Path(args.out) / 'frames'}; outputs in {args.out}")
     return 0
@@ -245,6 +249,11 @@ def run(args: argparse.Namespace) -> int:
           f"{summary['deadline_misses']} deadline misses{stolen if summary['deadline_misses'] else ''}, "
           f"{summary['clamps_total']} clamped samples, "
           f"{summary['frames']} frames ({summary['frame_ms_mean']:.1f} ms mean), link: {link['state']}")
+    loop = summary["control"]
+    if loop is not None:
+        print(f"demo: {loop['mode']} loop, force reports up to {loop['report_delay_blocks']} "
+              f"blocks late (gain {loop['ki']:.3g} per block), {loop['updates']} gain updates, "
+              f"{loop['fallbacks']} fallbacks to open loop ({loop['fallback_samples']} samples)")
     return 0
 
 
@@ -257,4 +266,5 @@ def _summary(st, block_s: float, loop, dropped_records: int, link) -> dict:
             "output_changes": [{"t_s": t, "event": e, "detail": d} for t, e, d in st.applied],
             "input": loop.input_name,
             "frames": loop.frames, "frame_ms_mean": loop.frame_seconds / max(loop.frames, 1) * 1e3,
-            "screenshots": [str(p) for p in loop.screenshots], "link": link}
+            "screenshots": [str(p) for p in loop.screenshots], "link": link,
+            "control": st.control}

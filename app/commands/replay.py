@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from app.commands.argtypes import add_link_arguments, bounded, output_rate, positive_float, share
+from app.commands.argtypes import (add_link_arguments, bounded, output_rate, positive_float,
+                                   share, sim_device_args)
 from app.engine.replay import run_replay
 from app.engine.sources import MAX_GAP_S
 from app.engine.tables import FORMATS
@@ -53,7 +54,8 @@ def run(args: argparse.Namespace) -> int:
                          fmt=args.format, device=args.device, block_size=args.block,
                          render_override=args.renderer, progress=not args.quiet,
                          frames=frames, strict=args.strict, faults=args.faults,
-                         max_gap_s=args.max_gap)
+                         max_gap_s=args.max_gap, control=args.control,
+                         sim_args=sim_device_args(args))
     if not args.quiet:
         out = summary["output"]
         timing = summary["timings"]
@@ -64,6 +66,12 @@ def run(args: argparse.Namespace) -> int:
               f"{timing['x_realtime_end_to_end']:.3g}x real time end to end (read, compute, "
               f"write; {timing['x_realtime_with_setup']:.3g}x with the {timing['setup_s']:.2f} s "
               f"start-up, {timing['x_realtime_compute']:.3g}x compute only)")
+        loop = summary.get("control")
+        if loop is not None:
+            print(f"{loop['mode']} loop: force reports up to {loop['report_delay_blocks']} "
+                  f"blocks late (gain {loop['ki']:.3g} per block), {loop['updates']} gain "
+                  f"updates, gain {loop['gain']:.3f} at the end, {loop['fallbacks']} "
+                  f"fallbacks to open loop ({loop['fallback_samples']} samples)")
         for warning in summary["warnings"]:
             print(f"frictex: warning: {warning}", file=sys.stderr)
     device = summary.get("device")

@@ -23,18 +23,21 @@ class PipelineStage:
     """A pipeline with its state carried between calls; the commands sent are its own.
 
     ``normal_force_n``: optional callable returning the measured normal force (N) for the
-    next block, or None (then the trace's force is used).
+    next block, or None (then the trace's force is used). ``force_reports``: the device's
+    force reports for the friction loop (``Pipeline.process``), or None.
     """
 
-    def __init__(self, pipeline, normal_force_n=None):
+    def __init__(self, pipeline, normal_force_n=None, force_reports=None):
         self.pipeline = pipeline
         self.state = pipeline.initial_state()
         self.normal_force_n = normal_force_n
+        self.force_reports = force_reports
 
     def process(self, k: int, samples, n: int):
         force = None if self.normal_force_n is None else self.normal_force_n()
         out, self.state = self.pipeline.process(k, samples, self.state, n_blocks=n,
-                                                normal_force_n=force)
+                                                normal_force_n=force,
+                                                force_reports=self.force_reports)
         return out, out.commands_um
 
 

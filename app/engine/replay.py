@@ -39,6 +39,10 @@ OUTPUT_STEMS = ("commands", "friction")
 #: measured on the composed scene, 10-min trace, idle machine: compute 0.52 s at 10,000,
 #: 0.37 s at 50,000, 0.67 s at 200,000 (per-call overhead against the cache)
 CHUNK_SAMPLES = 50_000
+#: blocks the link may hold for the device when the friction loop is on: the host stays
+#: this close to the device's play position, so a block's force report comes back a
+#: few blocks after it is computed (``rendering.control.loop``'s ``max_wait_s``)
+LOOP_QUEUE_BLOCKS = 2
 
 
 def load_inputs(scene, trace, strict: bool = False):
@@ -70,7 +74,8 @@ def clear_outputs(out_dir: Path) -> None:
 def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv", sink=None,
                device: str | None = None, block_size: int = 50, render_override: str | None = None,
                chunk_blocks: int | None = None, progress: bool = True, frames=None, strict: bool = False,
-               faults=None, max_gap_s: float = MAX_GAP_S) -> dict:
+               faults=None, max_gap_s: float = MAX_GAP_S, control: str | None = None,
+               sim_args: tuple[str, ...] = ()) -> dict:
     """Replay ``trace`` (Trace or path/bundled name) on ``scene`` (Scene or path/name).
 
     Writes the outputs into ``out_dir`` (created if needed) and returns the summary
@@ -83,7 +88,13 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     optional ``app.engine.frames.FrameWriter``. ``strict``: refuse a trace whose time
     goes back (else sorted or dropped, counted and warned about). ``max_gap_s``: a longer
     gap between touch samples is a lift, and its silence is skipped
-    (``app.engine.sources``).
+    (``app.engine.sources``). ``control``: the friction loop's mode (open, closed,
+    adaptive) instead of the scene file's; with the loop on, one block per pipeline call
+    (the loop acts once a block) and, streaming to a device, the link's queue kept to
+    :data:`LOOP_QUEUE_BLOCKS` so that the device's force reports come back within the
+    loop's wait (``rendering.control.loop``); the summary gets a ``control`` section.
+    ``sim_args``: more ``frictex sim-device`` flags for ``device="sim"`` (e.g. a
+    simulated finger's force reports: ``("--finger", "3")``).
     """
     wall0 = time.perf_counter()
     timer = RunTimer()
@@ -98,12 +109,17 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     clear_outputs(out_dir)
     build0 = time.perf_counter()
     pipeline = build_pipeline(scene, rate_hz=rate_hz, block_size=block_size,
-                              render_override=render_override, t0_s=t0)
+                              render_override=render_override, t0_s=t0, control=control)
     setup_s = read0 - wall0 + time.perf_counter() - build0  # scene and kernels loaded
+    looped = pipeline.control is not None
     if device is not None:
         from device.link.host import open_sink
         sink = open_sink(device, channels=len(pipeline.channels), rate_hz=rate_hz,
-                         phases=pipeline.actuation.has_phases, paced=True, faults=faults)
+                         phases=pipeline.actuation.has_phases, paced=True, faults=faults,
+                         sim_args=tuple(sim_args),
+                         **({"queue_blocks": LOOP_QUEUE_BLOCKS} if looped else {}))
+    elif sim_args:
+        raise ValueError("sim_args are for a simulated device (device 'sim')")
     read0 = time.perf_counter()
     source.start(pipeline.tracker_config)
     timer.seconds["read"] += time.perf_counter() - read0
@@ -120,10 +136,14 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     # last: its files become final only once the link has drained and the frames are out
     tables = TableSink(out_dir, pipeline.channels, pipeline.actuation.has_phases, fmt)
     sinks.append(tables)
-    if chunk_blocks is None:
+    if looped:
+        chunk_blocks = 1
+    elif chunk_blocks is None:
         fingers = max(1, most_touching(source.pending)) if source.pending is not None else 1
         chunk_blocks = max(1, CHUNK_SAMPLES // (block_size * fingers))
     stage = PipelineStage(pipeline)
+    if looped and sink is not None:  # the loop reads the device's forces
+        stage = PipelineStage(pipeline, sink.device_force_n, sink.force_report)
     blocks = drive(stage, source, sinks, VirtualClock(), chunk_blocks=chunk_blocks, timer=timer)
 
     output_s = blocks * block_size / rate_hz
@@ -133,6 +153,9 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     if order is not None:
         doc["trace"]["time_order"] = order.as_dict()
         doc["warnings"] += order.warnings()
+    if looped:
+        doc["control"] = pipeline.control.report(stage.state.control)
+        doc["warnings"] += doc["control"]["messages"]
     doc["trace"]["gaps"] = source.gaps.as_dict()
     doc["warnings"] += source.gaps.warnings()
     if sink is not None:

@@ -55,7 +55,8 @@ class HapticConfig:
     """What the child needs to build its pipeline, link, recorder and touch screen (units
     as in ``HapticThread``; ``device``: ``--device`` spec or None; ``record``: folder or
     None; ``touch_input``: ("tuio", port) or ("evdev", path) or None; ``faults``: a
-    ``device.link.faults.FaultPlan`` for the link, or None)."""
+    ``device.link.faults.FaultPlan`` for the link, or None; ``control``: the friction
+    loop's mode instead of the scene file's; ``sim_args``: ``frictex sim-device`` flags)."""
 
     scene_path: Path
     rate_hz: float
@@ -65,6 +66,8 @@ class HapticConfig:
     record: Path | None
     touch_input: tuple | None = None
     faults: object = None
+    control: str | None = None
+    sim_args: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -251,6 +254,7 @@ def serve(config: HapticConfig, estop, touches, snapshots, requests, replies,
         haptic, finish = open_haptic(scene, config.rate_hz, config.block_size,
                                      config.render_override, config.device, config.record,
                                      faults=config.faults, source=source, estop=estop,
+                                     control=config.control, sim_args=config.sim_args,
                                      touches=touches, snapshots=snapshots,
                                      touch_force=touch_force)
     except (ValueError, OSError, ModuleNotFoundError) as exc:  # open_haptic closed the source

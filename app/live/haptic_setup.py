@@ -14,20 +14,22 @@ JOIN_TIMEOUT_S = 5.0  # the thread commits its sinks (drains the link, writes th
 
 def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | None,
                 device: str | None, record: Path | None, *, faults=None, source=None,
-                **queues):
+                control: str | None = None, sim_args: tuple[str, ...] = (), **queues):
     """A :class:`HapticThread` (not started) for ``scene`` with its link (``--device``;
     ``faults``: a ``device.link.faults.FaultPlan`` injected on it), recorder
     (``--record``: the replay's tables, written on a thread of their own) and touch
     screen (``source``: ``app.live.touch_pump.open_source``, pumped from the thread's
     start; closed here if setting up fails), and ``finish() -> (link status, dropped record blocks)``, which stops the
     touch screen and the thread; the thread closes the link and commits the recording
-    as it ends. ``queues``: HapticThread's ``estop``, ``touches``, ``snapshots``,
-    ``touch_force``."""
+    as it ends. ``control``: the friction loop's mode instead of the scene file's;
+    ``sim_args``: more ``frictex sim-device`` flags for ``device`` "sim". ``queues``:
+    HapticThread's ``estop``, ``touches``, ``snapshots``, ``touch_force``."""
     from app.live.haptic_thread import HapticThread
     from app.live.touch_pump import TouchPump
     haptic = None
     try:
-        haptic = HapticThread(scene, rate_hz, block_size, render_override, **queues)
+        haptic = HapticThread(scene, rate_hz, block_size, render_override, control=control,
+                              **queues)
         pipeline = haptic.pipeline
         if source is not None:
             haptic.pump = TouchPump(source, haptic, lambda: haptic.pipeline.scene.display,
@@ -36,7 +38,7 @@ def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | N
             from device.link.host import open_sink
             haptic.sink = open_sink(device, channels=len(pipeline.channels), rate_hz=rate_hz,
                                     phases=pipeline.actuation.has_phases, paced=False,
-                                    faults=faults)
+                                    faults=faults, sim_args=tuple(sim_args))
         if record is not None:
             record.mkdir(parents=True, exist_ok=True)
             tables = TableSink(record, pipeline.channels, pipeline.actuation.has_phases, "csv")

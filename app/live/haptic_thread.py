@@ -81,6 +81,8 @@ class HapticStats:
     dropped_records: int = 0
     ramps: int = 0
     clamps: ClampCounts = field(default_factory=ClampCounts)
+    #: the friction loop's figures when the thread stopped (``ClosedLoop.report``), or None
+    control: dict | None = None
     #: (output time s of the first block it shaped, "output-stop" | "output-resume" |
     #: "output-switch", detail) in the order they took effect
     applied: list = field(default_factory=list)
@@ -125,7 +127,9 @@ class TouchInput:
 class LiveStage:
     """The live pipeline: scene and renderer switches crossfaded across one block, the
     emergency stop (immediate: 0 um while set; resuming ramps from 0 over a block), the
-    normal force the device measures, and the clamp counts (STYLE.md 5)."""
+    normal force and the force reports the device measures (the friction loop's; what
+    the loop says is written to stderr once, as it happens), and the clamp counts
+    (STYLE.md 5)."""
 
     def __init__(self, pipeline, estop, stats: "HapticStats"):
         self.pipeline = pipeline
@@ -135,6 +139,8 @@ class LiveStage:
         self.changes: queue.Queue = queue.Queue(COMMAND_QUEUE)
         self.render_override = None
         self.device_force = None  # callable -> N or None, when a link measures it
+        self.force_reports = None  # callable (index0, n) -> ForceReport or None, from a link
+        self._said = 0  # the loop's messages written so far
         self.stopped = estop.is_set()
         self._gain = 0.0 if self.stopped else 1.0
 
@@ -156,6 +162,11 @@ class LiveStage:
         self._gain = 0.0 if self.stopped else 1.0
         self.stats.clamps.add(out.clamps)
         self.stats.blocks += 1
+        control = self.state.control
+        if control is not None and len(control.messages) > self._said:
+            for message in control.messages[self._said:]:
+                print(f"frictex: {message}", file=sys.stderr)
+            self._said = len(control.messages)
         return out, commands
 
     def _latest_change(self):
@@ -168,15 +179,19 @@ class LiveStage:
 
     def _run(self, k, samples, change):
         force = None if self.device_force is None else self.device_force()
+        measured = {"normal_force_n": force, "force_reports": self.force_reports}
         if change is None:
-            out, self.state = self.pipeline.process(k, samples, self.state, normal_force_n=force)
+            out, self.state = self.pipeline.process(k, samples, self.state, **measured)
             return out, out.commands_um
         # crossfade: both pipelines run this block from the same finger tracks (another
         # device, with other channels, ramps up from 0 instead)
         new, self.render_override = change
-        new_state = PipelineState(tracker=self.state.tracker, layers=new.initial_state().layers)
-        old_out, _ = self.pipeline.process(k, samples, self.state, normal_force_n=force)
-        out, self.state = new.process(k, samples, new_state, normal_force_n=force)
+        fresh = new.initial_state()  # its own layers, wave forces and loop, from rest
+        new_state = PipelineState(tracker=self.state.tracker, layers=fresh.layers,
+                                  forces=fresh.forces, control=fresh.control)
+        old_out, _ = self.pipeline.process(k, samples, self.state, **measured)
+        out, self.state = new.process(k, samples, new_state, **measured)
+        self._said = 0
         same_device = new.channels == self.pipeline.channels
         self.pipeline = new
         fade = np.linspace(0.0, 1.0, out.commands_um.shape[0] + 1)[1:, None]
@@ -231,6 +246,8 @@ class HapticThread(TouchInput, threading.Thread):
     (``app.live.haptic_process``); by default the thread makes its own. ``clock`` and
     ``sleep``: the wall clock (s) and how to wait on it, injectable for tests.
     ``pacing``: "wall", or "device" (the link's room paces the blocks; needs ``sink``).
+    ``control``: the friction loop's mode instead of each scene file's (None: the file's);
+    the loop reads the link's force reports.
     ``touch_force``: what a touch screen's samples press with (``.value``, N; TUIO and
     many touch screens report none), set by the window's wheel; by default the
     scene's normal force. ``pump``: a touch screen's :class:`app.live.touch_pump.
@@ -241,7 +258,7 @@ class HapticThread(TouchInput, threading.Thread):
                  render_override: str | None = None, sink=None, recorder=None,
                  clock=time.perf_counter, snapshot_stride: int = 10, estop=None,
                  touches=None, snapshots=None, sleep=time.sleep, pacing: str = "wall",
-                 touch_force=None):
+                 touch_force=None, control: str | None = None):
         super().__init__(name="frictex-haptic", daemon=True)
         self.rate_hz = float(rate_hz)
         self.block_size = int(block_size)
@@ -258,8 +275,9 @@ class HapticThread(TouchInput, threading.Thread):
         self._quit = threading.Event()
         self._last_stamp = 0.0
         self.render_override = render_override
-        self.stage = LiveStage(build_pipeline(scene, rate_hz, block_size, render_override),
-                               self.estop, self.stats)
+        self.control = control
+        self.stage = LiveStage(build_pipeline(scene, rate_hz, block_size, render_override,
+                                              control=control), self.estop, self.stats)
         self.stage.render_override = render_override
         self.wall = WallClock(self.block_s, DEADLINE_S, now=clock, sleep=sleep)
         self.t0 = self.wall.t0
@@ -281,7 +299,7 @@ class HapticThread(TouchInput, threading.Thread):
         and taken over, crossfaded, at the next block."""
         override = self.render_override if render_override is False else render_override
         pipeline = build_pipeline(scene or self.pipeline.scene, self.rate_hz, self.block_size,
-                                  override)
+                                  override, control=self.control)
         old = self.pipeline
         if ((self.sink is not None or self.recorder is not None)
                 and (pipeline.channels, pipeline.actuation.has_phases)
@@ -315,6 +333,7 @@ class HapticThread(TouchInput, threading.Thread):
         clock = self.wall
         if self.sink is not None:
             self.stage.device_force = self.sink.device_force_n
+            self.stage.force_reports = self.sink.force_report
             sinks.insert(0, LinkSink(self.sink, self.block_size))
             if self.pacing == "device":
                 clock = DevicePacedClock(self.sink)
@@ -326,5 +345,7 @@ class HapticThread(TouchInput, threading.Thread):
         except BaseException as exc:  # reported by the window; output stops
             self.error = exc
         finally:
+            loop, state = self.stage.pipeline.control, self.stage.state.control
+            self.stats.control = None if loop is None else loop.report(state)
             self.stats.deadline_misses = self.wall.stats.misses
             self.stats.worst_lateness_s = self.wall.stats.worst_lateness_s

@@ -4,7 +4,10 @@ Two runs against a ``frictex sim-device`` subprocess, paced by the device as in 
 (timed from the first block until the device has played the last and stopped):
 at the seed 003 rate (10 kHz, blocks of 50) for host CPU per second of output and the
 heartbeat round trip; and at 1 MHz (the device's clock no longer limits) for the sustained
-frame and block rates the link itself manages.
+frame and block rates the link itself manages. A third run, live (the wall clock paces
+the blocks, as the demo's haptic thread does), to a device whose simulated finger sends
+force reports: how many blocks after a block ends its report is in the host's hands
+(``rendering.control.loop``'s delay D; the report's closed-loop section simulates it).
 """
 
 from __future__ import annotations
@@ -34,6 +37,30 @@ def _stream(rate_hz: float, seconds: float) -> tuple[dict, float, float]:
     return sink.status(), wall, cpu
 
 
+def _report_delays(seconds: float, rate_hz: float = 10_000.0) -> np.ndarray:
+    """Live blocks to a simulated finger for ``seconds``: for each block, the whole blocks
+    from its end to the first block computed with its force report come (the first
+    tenth left out: the device's prefill)."""
+    sink = open_sink("sim", channels=1, rate_hz=rate_hz, paced=False, sim_args=("--finger", "3"))
+    block = np.full((BLOCK, 1), 1.0)
+    delays, pending = [], []
+    n_blocks = int(seconds * rate_hz / BLOCK)
+    try:
+        t0 = time.perf_counter()
+        for b in range(n_blocks):
+            while time.perf_counter() < t0 + b * BLOCK / rate_hz:
+                time.sleep(2e-4)
+            now = b * BLOCK
+            come = [i for i in pending if sink.force_report(i, BLOCK) is not None]
+            delays += [(now - i - BLOCK) // BLOCK for i in come]
+            pending = [i for i in pending if i not in come]
+            sink.send(now, block, None)
+            pending.append(now)
+    finally:
+        sink.close()
+    return np.array(delays[n_blocks // 10:], dtype=float)
+
+
 def run(quick: bool) -> list[Figure]:
     seconds = 1.0 if quick else 5.0
     status, wall, cpu = _stream(10_000.0, seconds)
@@ -46,4 +73,9 @@ def run(quick: bool) -> list[Figure]:
              Figure("link", "sustained blocks/s (1 MHz device)", fast["blocks_sent"] / wall, "1/s"),
              Figure("link", "sustained samples/s (1 MHz device)",
                     fast["blocks_sent"] * BLOCK / wall, "1/s")]
+    delays = _report_delays(seconds)
+    figs += [Figure("link", "force report delay p50 (live, 5 ms blocks)",
+                    float(np.percentile(delays, 50)), "blocks"),
+             Figure("link", "force report delay max (live, 5 ms blocks)",
+                    float(delays.max()), "blocks")]
     return figs

@@ -1,21 +1,25 @@
 """A simulated finger on the plate, run by the engine: the device side of a closed loop.
 
 ``FingerSink`` takes each block's commands to the simulated plate and finger
-(``device.finger.FingerPlant``) and keeps what the sensors report for the next block;
-``LoopStage`` runs the pipeline with that report (the loop's measurement) and the
-measured normal force (open and closed loop alike: frictex reads the normal force from
-the device either way). One run::
+(``device.finger.FingerPlant``) and keeps what the sensors report; ``LoopStage`` hands
+each report to the pipeline's loop ``report_delay_blocks`` blocks after the block it
+measures (0: before the next block; a link's reports come later) and runs the pipeline
+with the reports come so far (the loop's measurement) and the latest one's normal force
+(open and closed loop alike: frictex reads the normal force from the device either
+way). One run::
 
     sink = FingerSink(plant, speed_of, force_of)
-    drive(LoopStage(pipeline, sink), source, [sink], VirtualClock())
+    drive(LoopStage(pipeline, sink, report_delay_blocks=4), source, [sink], VirtualClock())
 """
 
 from __future__ import annotations
 
+from collections import deque
+
 import numpy as np
 
 from device.finger import FingerPlant, lowpass, rest_mu, true_amplitude, true_mu
-from device.link.forces import ForceReport
+from device.link.forces import ForceHistory, ForceReport
 
 
 class FingerSink:
@@ -67,6 +71,11 @@ class FingerSink:
             self.rows["force"].append(force[keep])
             self.rows["mu0"].append(rest_mu(t[keep], finger))
 
+    def take_report(self) -> ForceReport | None:
+        """The report of the last block written (once; None if the sensor is dead)."""
+        report, self.report = self.report, None
+        return report
+
     def arrays(self) -> dict[str, np.ndarray]:
         return {k: np.concatenate(v) if v else np.zeros(0) for k, v in self.rows.items()}
 
@@ -78,22 +87,32 @@ class FingerSink:
 
 
 class LoopStage:
-    """The pipeline fed with ``sink``'s last force report (see the module docstring)."""
+    """The pipeline fed with ``sink``'s force reports, each ``report_delay_blocks`` blocks
+    after the block it measures (see the module docstring)."""
 
-    def __init__(self, pipeline, sink: FingerSink):
+    def __init__(self, pipeline, sink: FingerSink, report_delay_blocks: int = 0):
         self.pipeline = pipeline
         self.sink = sink
+        self.report_delay_blocks = int(report_delay_blocks)
         self.state = pipeline.initial_state()
+        self.history = ForceHistory()
+        self._in_flight: deque = deque()  # (first block that sees it, report), in order
         self.log_c: list[float] = []  # the loop's gain after each block (loop modes)
         self.first_mu0_s: float | None = None  # output time (s) the loop first knew mu0
 
     def process(self, k: int, samples, n: int):
-        report = self.sink.report
+        report = self.sink.take_report()
+        if report is not None:
+            self._in_flight.append((k + self.report_delay_blocks, report))
+        while self._in_flight and self._in_flight[0][0] <= k:
+            self.history.add(self._in_flight.popleft()[1])
+        latest = self.history.latest()
         normal = None
-        if report is not None and report.normal_n.size and report.normal_n.mean() > 0.05:
-            normal = float(report.normal_n.mean())
+        if latest is not None and latest.normal_n.size and latest.normal_n.mean() > 0.05:
+            normal = float(latest.normal_n.mean())
         out, self.state = self.pipeline.process(k, samples, self.state, n_blocks=n,
-                                                normal_force_n=normal, report=report)
+                                                normal_force_n=normal,
+                                                force_reports=self.history.window)
         control = self.state.control
         if control is not None:
             self.log_c.append(control.log_c)

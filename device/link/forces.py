@@ -92,14 +92,16 @@ class ForceHistory:
         else:  # those starting in (index0 - longest, index0 + n), in arrival order
             lo = bisect.bisect_right(self._starts, index0 - self._longest, self._head)
             hi = bisect.bisect_left(self._starts, index0 + n, lo)
-        lateral = np.full(n, np.nan)
-        normal = np.full(n, np.nan)
+        lateral = np.empty(n)
+        normal = np.empty(n)
+        covered = np.zeros(n, dtype=bool)  # not NaN as the mark: a sensor may send NaN
         for k in range(lo, hi):
             r = self._reports[k]
             lo_, hi_ = max(r.index0, index0), min(r.index0 + r.lateral_n.size, index0 + n)
             if lo_ < hi_:
                 lateral[lo_ - index0:hi_ - index0] = r.lateral_n[lo_ - r.index0:hi_ - r.index0]
                 normal[lo_ - index0:hi_ - index0] = r.normal_n[lo_ - r.index0:hi_ - r.index0]
-        if np.isnan(lateral).any():
+                covered[lo_ - index0:hi_ - index0] = True
+        if not covered.all():
             return None
         return ForceReport(index0, lateral, normal)

@@ -3,7 +3,19 @@
 Per block, for the one finger touching (the plate's sensors measure the total force, so
 with several fingers down the loop holds its state and the block is fed forward only):
 
-1. **Measure.** The device's force report for the previous block gives the ratio
+0. **Pair.** A device's force reports come back late: a real plate's link plays a block
+   about 10 ms after it is sent and reports its forces in windows of a few ms, so a
+   block's report reaches the host several blocks later. Every block sent is kept
+   (``ControlState.pending``) until the reports cover all of its samples
+   (``forces(index0, n)``: ``device.link.host.CommandSink.force_report`` on a link,
+   ``device.link.forces.ForceHistory.window`` in simulation); blocks are folded in order,
+   oldest first, each with its own report, and one whose report has not come
+   ``max_wait_s`` after its end is folded as missed (stale, 4). The delay D, in whole
+   blocks between a block's end and the block being computed when its report is folded,
+   is measured; the integrator's gain ``ki`` is ``rendering.control.margins``'
+   ``scheduled_ki`` at the largest D seen (``delay_blocks``), so that its stated gain
+   margin holds at the delay the loop actually has.
+1. **Measure.** The device's force report for a block sent gives the ratio
    F_t / F_n. The friction at rest mu0 is its level where the plate has been still long
    enough for the sensor to see it (``Chain`` of the commanded amplitude below
    ``still_um``) while the finger slides (median over the block of the samples at a
@@ -46,12 +58,13 @@ with several fingers down the loop holds its state and the block is fed forward 
    ``rendering.control.adapt``: RLS on every ``decimate``-th sliding sample, the model's
    mu' and its Jacobian passed through the same chain as the reference, so that the
    plate loop's, the fingertip's and the sensor's lags cancel).
-4. **Fallback.** A report that is late by more than ``stale_s`` (stale), reaches the
+4. **Fallback.** Reports missed for more than ``stale_s`` of blocks (stale), one that reaches the
    sensor's full scale (saturated), or is not a finger (non-finite, F_n below
    ``min_normal_n`` while touching, F_t / F_n outside [-``max_ratio`` / 10, ``max_ratio``]) drops the loop
    to open loop with the latest model and c = 1; said once (``messages``) and counted
    (``fallbacks``, ``fallback_samples``). The loop resumes after ``recover_s`` of good
-   reports. A dead sensor is open loop after at most ``stale_s`` plus one block.
+   reports. A dead sensor is open loop after at most ``max_wait_s`` + ``stale_s`` plus
+   one block.
 """
 
 from __future__ import annotations
@@ -68,16 +81,20 @@ from device.friction import SeedFrictionModel, forward_mu
 from device.profile import DeviceProfile
 from rendering.control.adapt import Rls, RlsState
 from rendering.control.chain import Chain, ChainState
-from rendering.control.margins import KI
+from rendering.control.margins import COVER_SLOPE, scheduled_ki
 from textures.model import CONTROL_MODES
 
 
 
 @dataclass(frozen=True)
 class LoopConfig:
-    """The loop's constants (module docstring); units s, um, N, mm/s."""
+    """The loop's constants (module docstring); units s, um, N, mm/s. ``ki``: the
+    integrator's gain per block, or None to schedule it on the measured report delay
+    (``rendering.control.margins.scheduled_ki`` with ``cover_slope``)."""
 
-    ki: float = KI
+    ki: float | None = None
+    cover_slope: float = COVER_SLOPE
+    max_wait_s: float = 0.05
     log_c_max: float = math.log(4.0)
     slide_mm_s: float = 5.0
     probe_mm_s: float = 8.0
@@ -99,10 +116,32 @@ class LoopConfig:
     sensor: SensorParams = field(default_factory=SensorParams)
     rls: Rls = field(default_factory=Rls)
 
+    def __post_init__(self):
+        positive = ("cover_slope", "slide_mm_s", "probe_mm_s", "probe_s", "creep_mm_s",
+                    "still_um", "mu0_tau_s", "stale_s", "recover_s", "min_normal_n",
+                    "max_ratio", "log_c_max")
+        bad = [f"{name} = {getattr(self, name)!r} (expected a finite value > 0)"
+               for name in positive
+               if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0)]
+        fractions = ("min_rest_mu", "settled", "still_seen", "min_reduction", "min_mu")
+        bad += [f"{name} = {getattr(self, name)!r} (expected 0 to 1)" for name in fractions
+                if not 0.0 <= getattr(self, name) <= 1.0]
+        if self.ki is not None and not (math.isfinite(self.ki) and self.ki > 0):
+            bad.append(f"ki = {self.ki!r} (expected None or a finite value > 0)")
+        if not (math.isfinite(self.max_wait_s) and self.max_wait_s >= 0):
+            bad.append(f"max_wait_s = {self.max_wait_s!r} (expected a finite value >= 0)")
+        if not (isinstance(self.min_still, int) and self.min_still >= 2):
+            bad.append(f"min_still = {self.min_still!r} (expected an integer >= 2: the "
+                       "first estimate takes the median of min_still // 2 samples)")
+        if not (isinstance(self.decimate, int) and self.decimate >= 1):
+            bad.append(f"decimate = {self.decimate!r} (expected an integer >= 1)")
+        if bad:
+            raise ValueError("loop configuration: " + "; ".join(bad))
+
 
 @dataclass(frozen=True, eq=False)
 class Sent:
-    """What the loop asked for in its last block (the report that comes back pairs with
+    """What the loop asked for in a block sent (the report that comes back pairs with
     it sample by sample): output index, amplitude (um), target mu', speed (mm/s),
     whether the limit cut it, and whether it was a one-finger block."""
 
@@ -122,7 +161,8 @@ class ControlState:
     rls: RlsState
     mu0: float = math.nan
     chain: ChainState | None = None
-    sent: Sent | None = None
+    pending: tuple[Sent, ...] = ()
+    delay_blocks: int = 0
     since_report_s: float = 0.0
     good_s: float = 0.0
     probing_s: float = 0.0
@@ -151,6 +191,13 @@ class ClosedLoop:
         self.block_s = block_size / self.rate_hz
         self.config = replace(config, rls=replace(config.rls, block_s=self.block_s))
         self.chain = Chain(config.sensor, rate_hz)
+        self.block_size = int(block_size)
+        self.wait_samples = config.max_wait_s * self.rate_hz
+        #: the integrator's gain for reports 0, 1, ... blocks late (module docstring, 0)
+        self.ki_by_delay = tuple(
+            config.ki if config.ki is not None else
+            scheduled_ki(d, config.sensor, self.rate_hz, self.block_size, config.cover_slope)
+            for d in range(int(config.max_wait_s / self.block_s + 1e-9) + 1))
         self.limit_um = float(device.amplitude_limit_um)
         self._model_of = (device.friction, SeedFrictionModel(device))  # (params, its model)
 
@@ -170,14 +217,15 @@ class ClosedLoop:
             self._model_of = (params, SeedFrictionModel(self.device, params))
         return self._model_of[1]
 
-    def invert(self, mu_target: np.ndarray, fingers, state: ControlState,
-               report: ForceReport | None):
+    def invert(self, mu_target: np.ndarray, fingers, state: ControlState, forces=None):
         """Amplitudes for this block: (wanted_um (F, n), clamps, state after).
 
-        ``fingers``: the tracker's block (contact, force, vx, vy, (F, n)); ``report``: the
-        device's force report for the previous block, or None if none arrived.
+        ``fingers``: the tracker's block (contact, force, vx, vy, (F, n)); ``forces``:
+        ``forces(index0, n) -> ForceReport | None``, the device's forces over output
+        samples ``index0 .. index0 + n - 1`` if its reports have covered them so far, or
+        None for a device without force reports (module docstring, 0).
         """
-        state = self._learn(state, report)
+        state = self._pair(state, int(fingers.index0), forces)
         contact = fingers.contact
         touching = contact.any(axis=1)
         single = bool(touching.sum() == 1)
@@ -205,7 +253,37 @@ class ClosedLoop:
         sent = Sent(index0=int(fingers.index0), w_um=w, target=target, speed=speed, cut=cut,
                     single=single)
         held = state.fallback_samples + (n if state.fallback else 0)
-        return wanted, clamps, replace(state, sent=sent, fallback_samples=held)
+        return wanted, clamps, replace(state, pending=state.pending + (sent,),
+                                       fallback_samples=held)
+
+    def _pair(self, state: ControlState, now: int, forces) -> ControlState:
+        """Fold the blocks sent whose reports have come, oldest first, and any whose report
+        is more than ``max_wait_s`` late as missed (module docstring, 0); ``now``: the
+        output index of the block being computed."""
+        while state.pending:
+            sent = state.pending[0]
+            n = sent.w_um.size
+            late = now - (sent.index0 + n)  # samples from its end to now
+            report = None if forces is None else forces(sent.index0, n)
+            if report is None and forces is not None and late <= self.wait_samples:
+                break  # without force reports nothing will come: missed at once
+            delay = min(max(late, 0) // self.block_size, len(self.ki_by_delay) - 1)
+            state = self._learn(replace(state, pending=state.pending[1:]), sent, report,
+                                delay, "stale" if forces is not None else
+                                "absent (no force reports: no device, or one without a lateral force "
+                                "sensor)")
+        return state
+
+    def report(self, state: ControlState) -> dict:
+        """The loop's figures after a run, for a summary (JSON-able): mode, the largest
+        report delay seen (blocks) and the gain scheduled for it, the gain c and mu0
+        where the run ended, gain updates, fallbacks, samples fed forward open loop
+        while fallen back, and what the loop said."""
+        return {"mode": self.mode, "report_delay_blocks": state.delay_blocks,
+                "ki": self.ki_by_delay[state.delay_blocks], "gain": math.exp(state.log_c),
+                "mu0": state.mu0 if math.isfinite(state.mu0) else None,
+                "updates": state.updates, "fallbacks": state.fallbacks,
+                "fallback_samples": state.fallback_samples, "messages": list(state.messages)}
 
     def _probing(self, state: ControlState) -> bool:
         """Whether the probe holds the plate still whatever the tracker's speed (module
@@ -213,11 +291,10 @@ class ClosedLoop:
         (``probing_s`` > 0) for less than ``probe_s`` so far."""
         return 0.0 < state.probing_s < self.config.probe_s + 0.5 * self.block_s
 
-    def _learn(self, state: ControlState, report: ForceReport | None) -> ControlState:
-        """Fold the previous block's report into the state (module docstring, 1, 2, 4)."""
-        sent = state.sent
-        if sent is None:
-            return state
+    def _learn(self, state: ControlState, sent: Sent, report: ForceReport | None,
+               delay: int, missed: str) -> ControlState:
+        """Fold block ``sent``'s report (None: missed, for the reason ``missed``),
+        ``delay`` blocks late, into the state (module docstring, 1, 2, 4)."""
         cfg = self.config
         n = sent.w_um.size
         fresh = report is not None and report.index0 == sent.index0 and report.lateral_n.size == n
@@ -231,7 +308,7 @@ class ClosedLoop:
                      *model_jacobian(sent.w_um, normal, b, k).T]
         seen, chain = self.chain.run(np.stack(rows), state.chain)
         if not fresh:
-            return self._bad(replace(state, chain=chain), "stale", stale=True)
+            return self._bad(replace(state, chain=chain), missed, stale=True)
         lat = np.asarray(report.lateral_n, dtype=np.float64)
         nor = np.asarray(report.normal_n, dtype=np.float64)
         problem = _problem(lat, nor, sent.single and bool(n), cfg)
@@ -239,7 +316,9 @@ class ClosedLoop:
             return self._bad(replace(state, chain=chain), problem, stale=False)
         good_s = state.good_s + self.block_s
         fallback = state.fallback and good_s < cfg.recover_s
-        changes = dict(chain=chain, since_report_s=0.0, good_s=good_s, fallback=fallback)
+        delay = max(state.delay_blocks, delay)
+        changes = dict(chain=chain, since_report_s=0.0, good_s=good_s, fallback=fallback,
+                       delay_blocks=delay)
         if not sent.single:
             return replace(state, **changes)  # several fingers: nothing to learn
         pressed = nor >= cfg.min_normal_n
@@ -279,7 +358,7 @@ class ClosedLoop:
         if np.count_nonzero(asked_here) >= cfg.min_still:
             # median of per-sample delivered/asked: robust to the few samples of a stop
             g = _median((1.0 - measured[asked_here]) / ref[asked_here])
-            step = -cfg.ki * math.log(min(max(g, 0.25), 4.0))
+            step = -self.ki_by_delay[delay] * math.log(min(max(g, 0.25), 4.0))
             if step > 0 and np.count_nonzero(sent.cut) > 0.1 * n:
                 step = 0.0  # anti-windup: the limit already cuts what is asked
             changes["log_c"] = min(max(state.log_c + step, -cfg.log_c_max), cfg.log_c_max)
