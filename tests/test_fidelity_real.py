@@ -35,16 +35,17 @@ def test_every_recording_replays_finite_and_unclamped(section):
 
 
 def test_renderers_agree_where_they_should(section):
-    """On real strokes the hybrid renders the 5 mm grating near SHO-predicted (the same
-    locked position: spectral distance under 0.3, median under 0.15; what remains is
-    SHO-predicted's own edges felt twice, which the hybrid holds instead: 0.013 median
-    before it did) and on every recording nearer it than plain SHT, whose phase starts
-    anywhere at each touch (over 0.3 on most)."""
+    """On real strokes the hybrid renders the 5 mm grating nearer SHO-predicted than
+    plain SHT on every recording (SHT's phase starts anywhere at each touch: over 0.3 on
+    most). Both lock to the finger's position, but the hybrid's comes from its own finger
+    filter (rendering.layers.finger_filter), not the tracker's line, and it holds the
+    edges SHO-predicted feels twice: spectral distance median 0.20, at most 0.57
+    (phone-single-drag; 0.3 and 0.15 when the hybrid read the tracker's position)."""
     moving = [run for run in section["runs"]
               if run["renderers"]["sht"]["spectral_distance_from_hybrid"] is not None]
     assert len(moving) >= 10
     near = [run["renderers"]["sho-predicted"]["spectral_distance_from_hybrid"] for run in moving]
-    assert max(near) < 0.3 and np.median(near) < 0.15
+    assert max(near) < 0.6 and np.median(near) < 0.25
     far = [run["renderers"]["sht"]["spectral_distance_from_hybrid"] for run in moving]
     assert all(a < b for a, b in zip(near, far))
     assert sum(d > 0.3 for d in far) >= 0.8 * len(moving)

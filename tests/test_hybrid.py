@@ -1,5 +1,11 @@
 """The hybrid renderer: phase at touch-down, bounded correction, no texture under a still
-finger, lock on coarse gratings, and block-split invariance."""
+finger, lock on coarse gratings, and block-split invariance.
+
+The tests on constructed tracks (``_block``) check the phase rules given the finger
+model's estimates; they run with the tracker's own estimates in place of the filter
+(``tracker_estimates``), so that the position and rate each rule sees are the ones the
+test writes. The filter is tested in tests/test_hybrid_filter.py; the tests on sampled
+motion run both together."""
 
 import numpy as np
 import pytest
@@ -7,15 +13,24 @@ from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose
 
 from rendering.input.trace_synth import make_motion, sample
+import rendering.layers.hybrid as hybrid_module
 from rendering.layers.hybrid import (BACK_MM, COARSE_MM, LOCK_MM, RELOCK_MM_S, SLIP,
-                                     VELOCITY_NOISE_MM_S, HybridRenderer, slew_offset,
-                                     smooth_rate)
+                                     HybridRenderer, slew_offset)
 from rendering.metrics import accuracy, reference
 from rendering.pipeline import build_pipeline
 from rendering.tracking.tracks import FingerBlock, apply_index
 from scenes import grating_scene
 
 RATE = 10_000.0
+
+
+@pytest.fixture
+def tracker_estimates(monkeypatch):
+    """The hybrid with the tracker's predicted position and velocity along the layer's
+    axis in place of the filtered ones."""
+    def estimates(t_s, touch, vx, vy, x_held, y_held, x_pred, y_pred, axis, before=None):
+        return axis[0] * x_pred + axis[1] * y_pred, axis[0] * vx + axis[1] * vy, None
+    monkeypatch.setattr(hybrid_module, "filter_axis", estimates)
 
 
 def _block(x_pred, vx, x_held=None, touch=None, index0=0):
@@ -43,7 +58,7 @@ def _run(scene, trace, mode, splits=()):
     return np.concatenate([o.mu_target for o in outs], axis=1)
 
 
-def test_touch_down_starts_at_the_measured_phase_not_zero():
+def test_touch_down_starts_at_the_measured_phase_not_zero(tracker_estimates):
     """Plain SHT starts every touch at phase 0 (seed 003 4.4.2's drawback); the hybrid
     starts where the finger is: on the 15 mm grating at x = 20 mm that is the low band
     (phase 1.33), where SHT would give the start of a period too (phase 0: low) and at
@@ -56,7 +71,7 @@ def test_touch_down_starts_at_the_measured_phase_not_zero():
         assert covers.all()
 
 
-def test_a_still_finger_gets_no_correction():
+def test_a_still_finger_gets_no_correction(tracker_estimates):
     """Measurements jump (noise) while the velocity is 0: the phase must not move."""
     layer = grating_scene(0.6).layers[0]
     r = HybridRenderer(layer, RATE)
@@ -66,7 +81,7 @@ def test_a_still_finger_gets_no_correction():
     assert np.ptp(mu) == 0.0 and mu[0, 0] == layer.mu_at(10.0, 30.0)
 
 
-def test_a_lost_lock_under_a_crawling_finger_is_worked_off_at_the_relock_speed():
+def test_a_lost_lock_under_a_crawling_finger_is_worked_off_at_the_relock_speed(tracker_estimates):
     """The finger crawls forward at 1 mm/s (a screen still reporting a resting finger);
     the measurements put it 3 mm back from where the phase is (more than the position
     lock takes at once), across a 15 mm grating's line (7.5 mm). Bounded by the finger's
@@ -88,7 +103,7 @@ def test_a_lost_lock_under_a_crawling_finger_is_worked_off_at_the_relock_speed()
     assert (mu[0, int(relock_s * RATE) + 1:] == layer.mu_at(5.0, 30.0)).all()
 
 
-def test_coarse_layers_take_small_errors_and_errors_ahead_at_once():
+def test_coarse_layers_take_small_errors_and_errors_ahead_at_once(tracker_estimates):
     """Position lock on a 15 mm grating, the finger moving at 40 mm/s across the line at
     7.5 mm: a measurement 0.8 mm or 3 mm ahead of the phase is taken at once, so is one
     1.5 mm behind (within BACK_MM); one 3 mm behind is not (slewed); the fine 0.6 mm
@@ -113,7 +128,7 @@ def test_coarse_layers_take_small_errors_and_errors_ahead_at_once():
         assert (wrong <= 1) if taken else (wrong > 20), (layer.period_mm, jump, wrong)
 
 
-def test_correction_never_exceeds_slip_times_the_finger_phase_rate():
+def test_correction_never_exceeds_slip_times_the_finger_phase_rate(tracker_estimates):
     """The velocity says 40 mm/s, the measurements say the finger is 1 mm further on each
     time: the rendered phase advances at most (1 + SLIP) and at least (1 - SLIP) times the
     velocity's phase rate, and never backwards."""
@@ -189,26 +204,7 @@ def test_slew_offset_closed_form_against_a_sample_by_sample_loop():
     assert abs(((end - off) + 0.5) % 1.0 - 0.5) < 1e-3
 
 
-def test_velocity_noise_is_averaged_and_accelerations_are_followed():
-    """Estimates scattered by less than VELOCITY_NOISE_MM_S move the smoothed rate half
-    way; a jump larger than that is taken at once; a new touch starts afresh."""
-    period = 0.6
-    speeds = np.array([0.0, 20.0, 22.0, 19.5, 40.0, 40.0, 22.0])  # mm/s, one estimate each
-    assert 40.0 - 20.0 > VELOCITY_NOISE_MM_S > 22.0 - 19.5
-    rate = np.repeat(speeds / period, 10)
-    restart = np.zeros(rate.size, dtype=bool)
-    restart[60] = True
-    got, end = smooth_rate(rate, restart, period, None)
-    # by hand: 0 | 20 | 20 + (22-20)/2 = 21 | 21 + (19.5-21)/2 = 20.25 | 40 (jump) | 40 | 22 (new touch)
-    assert_allclose(got * period, np.repeat([0.0, 20.0, 21.0, 20.25, 40.0, 40.0, 22.0], 10), rtol=1e-12)
-    assert_allclose(end * period, 22.0, rtol=1e-12)
-    # carried into a second call: the same as one call
-    first, carry = smooth_rate(rate[:25], restart[:25], period, None)
-    second, _ = smooth_rate(rate[25:], restart[25:], period, (rate[24], carry))
-    assert_allclose(np.concatenate((first, second)), got, rtol=1e-12)
-
-
-def test_a_swipe_starts_at_the_measured_phase_once_its_velocity_is_known():
+def test_a_swipe_starts_at_the_measured_phase_once_its_velocity_is_known(tracker_estimates):
     """Before the second touch sample the velocity is unknown (0): at the first estimate
     the finger has already moved 2.4 mm (half a 5 mm period). The hybrid starts its
     synthesis where the finger then is, instead of slewing half a period in."""

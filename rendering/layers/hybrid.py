@@ -12,18 +12,20 @@ The hybrid's phase (cycles) is a velocity integral plus an offset::
     phase(t) = phase_v(t) + offset(t),   phase_v = integral of v_s / period dt
 
 (``rendering.layers.sht.integrate_phase``, restarted at each touch), with ``v_s`` the
-tracker's velocity along the texture's axis, smoothed (:func:`smooth_rate`): a new
-estimate that differs from the current one by less than ``VELOCITY_NOISE_MM_S`` (the
-scatter a 50 ms line fit through 0.05 mm touch noise gives between successive 50 Hz
-samples, ~2.5 mm/s rms, times 2.4) is noise and is averaged in with weight
-``SMOOTH``; a larger change is a real acceleration and is taken at once. SHT's
-frequency jitters with every estimate (9 % rms at 20 mm/s); the hybrid's less, so on
-constant-speed strokes its spectrum is cleaner than SHT's. The band trades those against
-human strokes, whose real accelerations (up to 400 mm/s^2 at 8 mm/s) it would average
-away: on the 0.6 mm grating, over 16 draws each, the hybrid's spectral error minus SHT's
-is +0.022 / +0.013 / +0.011 on human-like strokes, -0.048 / -0.041 / -0.004 on a slow
-(20 mm/s) swipe and -0.005 / -0.001 / +0.015 on a fast (120 mm/s) one with a band of
-8 / 6 / 4 mm/s.
+finger's velocity along the texture's axis, and the offset locked to the finger's
+position along that axis, both estimated by the finger model between touch samples
+(``rendering.layers.finger_filter``: a steady and a manoeuvring constant-velocity
+Kalman filter, weighed by how well each predicts the touch samples). The tracker's
+velocity (a line through the last two or three 50 Hz samples) both jitters (1.8-3.5
+mm/s rms through 0.05 mm touch noise: SHT's frequency jitters with it) and lags an
+accelerating finger by one sample interval; the filter averages the noise out where
+the finger moves steadily and follows an acceleration within a sample or two. Against
+the velocity smoothing it replaced (estimate-to-estimate changes under 6 mm/s averaged
+in with weight 0.5, larger ones taken at once), on the report's draws (16 of each,
+50 Hz; ``rendering/RENDERERS.md``): human-like strokes, 5 mm grating time / spectral
+error 0.382 / 0.245 -> 0.354 / 0.213 (SHO-predicted 0.371 / 0.245), edges felt twice
+47 -> 26; 15 mm 0.199 / 0.162 -> 0.185 / 0.134; 0.6 mm spectral 0.524 -> 0.460 (SHT
+0.527); slow swipes, 5 mm 0.272 / 0.111 -> 0.259 / 0.100.
 
 Coarse layers (period at least ``COARSE_MM``) are position-locked: at each new
 measurement of a moving finger any error ahead, in the finger's direction, and an error
@@ -35,7 +37,7 @@ stroke: over 16 human-like draws the 15 mm grating's time error was 0.213 slewed
 0.174 locked (SHO-predicted: 0.171). ``BACK_MM`` is 2 mm because a flick leaves the
 prediction millimetres behind: on 16 draws of ``human-varied`` strokes (flicks,
 creeping, arcs) the 15 mm grating's time error was 0.218 with 1 mm, 0.213 with 2 mm,
-0.212 with 4 mm (SHO-predicted 0.208; these with a 4 mm/s noise band).
+0.212 with 4 mm (SHO-predicted 0.208; these with the velocity smoothing of the time).
 
 No chatter (the hold). A jump ahead never adds an edge (the phase skips forward); a
 jump back can cross a line the phase passed a moment early, and the finger then feels
@@ -47,7 +49,7 @@ one way goes on moving that way between two touch samples (minimum-jerk strokes 
 back only through a stop, ``rendering/RENDERERS.md``), so a measurement a little behind
 the rendered phase says the phase is early, not that the finger went back. Such an
 error, one the finger's own motion covers within ``HOLD_S`` (20 ms, one 50 Hz touch
-interval: at the smoothed phase rate, ``|error| <= |rate| HOLD_S``), is *held*: the
+interval: at the filtered phase rate, ``|error| <= |rate| HOLD_S``), is *held*: the
 offset works it off at exactly the finger's phase rate, so the phase stands still until
 the finger has caught up and then moves on with it; an edge crossed early stays crossed
 (felt up to 20 ms early instead of three times). Corrections never run the phase
@@ -101,7 +103,7 @@ So the hybrid has SHT's bandwidth on fine textures and SHO's alignment on coarse
 
 The error is taken once per measurement and the offset ramps towards it at the bounded
 rate, computed in closed form per measurement. The whole per-finger recurrence
-(smoothing, phase integration, measurements, slew) is one compiled pass over the block
+(phase integration, measurements, slew; the filter is a pass of its own) is one compiled pass over the block
 (numba, ``_hybrid_row``): a Python loop per measurement, or some sixty numpy passes,
 cost several times more at 10 kHz and dominated a 5 ms live block.
 
@@ -110,11 +112,11 @@ human-like motion): get the 0.6 mm grating's phase right while the finger moves.
 the time error measures a phase the finger cannot feel (seed 003 section 6): 50 Hz
 samples with 0.05 mm noise, extrapolated over up to 20 ms of a minimum-jerk stroke, are
 0.1-0.3 mm off, a third of a period or more. On that grating the hybrid's spectrum is
-about SHT's (0.478 against 0.465 over 16 draws, the lock's small frequency corrections),
-far below SHO's 0.97; on the 15 and 5 mm gratings its mean time and spectral errors are
-within 5 % of SHO-predicted's (over 16 draws: +2.6 % and -1.2 % at 15 mm, +2.9 % and
--0.1 % at 5 mm), far better than plain SHO and SHT, and it feels far fewer edges twice
-than SHO-predicted (2 against 16 at 15 mm, 47 against 107 at 5 mm).
+below SHT's (0.460 against 0.527 over 16 human-like draws), far below SHO's 0.94; on
+the 15 and 5 mm gratings its mean time and spectral errors are below SHO-predicted's
+(over 16 draws: -4.6 % and -18 % at 15 mm, -4.6 % and -13 % at 5 mm), far below plain
+SHO's and SHT's, and it feels far fewer edges twice than SHO-predicted (0 against 16 at
+15 mm, 26 against 107 at 5 mm).
 """
 
 from __future__ import annotations
@@ -125,6 +127,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from rendering.layers.finger_filter import filter_axis
 from rendering.tracking.tracks import FingerBlock
 
 #: fastest correction, as a fraction of the finger's own phase rate (below 1: the phase
@@ -138,10 +141,6 @@ RELOCK_MM_S = 20.0
 #: temporal frequency (Hz) below which lines are events, not vibration: the tactile band's
 #: lower edge (rendering.metrics.TACTILE_BAND_HZ)
 EVENT_HZ = 10.0
-#: velocity changes (mm/s) smaller than this between two estimates are touch noise ...
-VELOCITY_NOISE_MM_S = 6.0
-#: ... and are averaged in with this weight (1 would be SHT's unsmoothed velocity)
-SMOOTH = 0.5
 #: layers of at least this period (mm) are position-locked (see the module docstring) ...
 COARSE_MM = 2.0
 #: ... where an error against the finger's direction up to this (mm) is taken at once,
@@ -155,19 +154,19 @@ HOLD_S = 0.02
 class _Finger:
     """One finger between calls: its touch, phase_v carry and offset (cycles, in [0, 1)),
     the target offset of its last measurement (cycles), that measurement (held x, held y,
-    the tracker's phase rate) to tell whether the next call starts with a new one, the
-    smoothed phase rate (cycles/s), |vx| + |vy| (mm/s) at the last sample (only ever
-    compared with 0: at rest or moving), and 1.0 if the last measurement's error is
-    being held (see ``HOLD_S``), else 0.0."""
+    the tracker's phase rate) to tell whether the next call starts with a new one,
+    |vx| + |vy| (mm/s) at the last sample (only ever compared with 0: at rest or
+    moving), 1.0 if the last measurement's error is being held (see ``HOLD_S``), else
+    0.0, and the finger filter's state (``rendering.layers.finger_filter.filter_axis``)."""
 
     touch: int
     phase: float
     offset: float
     target: float
     measured: tuple[float, float, float]
-    smoothed: float
     speed: float
     held: float
+    filter: tuple
 
 
 @dataclass(frozen=True)
@@ -290,53 +289,6 @@ def _worked_off(fast, slow, travel, b, i, far, gap, held):
     return far + min(max(slow[i] - slow[switch], 0.0), abs(gap) - far)
 
 
-def smooth_rate(rate: np.ndarray, restart: np.ndarray, period_mm: float,
-                start: tuple[float, float] | None, noise_mm_s: float = VELOCITY_NOISE_MM_S,
-                weight: float = SMOOTH) -> tuple[np.ndarray, float]:
-    """The tracker's phase rate with its estimate-to-estimate noise averaged out.
-
-    At every new estimate (a sample where ``rate`` changes) the smoothed rate moves
-    ``weight`` of the way to it if the two differ by less than ``noise_mm_s`` (along the
-    texture's axis), else takes it: a real acceleration is followed at once. A new touch
-    and a rate of 0 (no velocity known, finger resting) start afresh.
-
-    Parameters
-    ----------
-    rate : (n,) the tracker's phase rate (cycles/s).
-    restart : (n,) bool, samples where a new touch starts.
-    period_mm : the texture's period (mm), to compare rates as speeds.
-    start : (last tracker rate, smoothed rate) carried from the previous call, or None.
-    noise_mm_s : speed difference (mm/s) below which a change is noise.
-    weight : weight of a new estimate that is noise, in (0, 1].
-
-    Returns
-    -------
-    smoothed : (n,) cycles/s. end : smoothed rate after the last sample.
-    """
-    rate = np.ascontiguousarray(rate, dtype=np.float64)
-    smoothed = np.empty(rate.size)
-    last, value = start if start is not None else (0.0, 0.0)
-    end = _smooth_kernel(rate, np.ascontiguousarray(restart, dtype=np.bool_),
-                         noise_mm_s / period_mm, start is not None, float(last), float(value),
-                         float(weight), smoothed)
-    return smoothed, end
-
-
-@njit(cache=True, nogil=True)
-def _smooth_kernel(rate, restart, limit, has_start, last, value, weight, smoothed):
-    """:func:`smooth_rate`'s loop (``limit`` in cycles/s): writes ``smoothed``, returns
-    the smoothed rate after the last sample."""
-    for k in range(rate.size):
-        r = rate[k]
-        if restart[k] or (r != last if k == 0 else r != rate[k - 1]) or (k == 0 and not has_start):
-            if restart[k] or r == 0.0 or value == 0.0 or abs(r - value) >= limit:
-                value = r
-            else:
-                value += weight * (r - value)
-        smoothed[k] = value
-    return value
-
-
 # The phase accumulator of SHT (rendering.layers.sht) as well: it lives beside
 # _hybrid_row, which compiles it in, because numba's cache sees changes to the cached
 # kernel's own file only (tests/test_numba_cache.py).
@@ -384,33 +336,33 @@ def phase_kernel(rate, dt_s, touch, has_start, prev_id, prev_phase, phase):
 
 
 @njit(cache=True, nogil=True)
-def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, has_before, before, axis,
-                layer_phase, limits, phase):
+def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, s_mm, v_mm_s, has_before,
+                before, axis, layer_phase, limits, phase):
     """One finger's phase (cycles) for :meth:`HybridRenderer.render`, written to ``phase``.
 
     touch : (n,) int64; vx, vy, x_held, y_held, x_pred, y_pred : (n,) float64, the
-    finger's tracks. before : the carried :class:`_Finger` fields (touch, phase, offset,
-    target, measured x, measured y, measured rate, smoothed, speed, held), used if
-    ``has_before``. axis : (ax, ay). layer_phase : (offset_mm, period_mm), so that
-    ``(ax x + ay y - offset_mm) / period_mm`` is ``layer.phase_at(x, y)``. limits :
-    (dt_s, slip, lock, event_hz, relock rate (cycles/s), noise limit (cycles/s),
-    smoothing weight, position-locked (bool), largest jump back (cycles), hold (s)).
+    finger's tracks. s_mm, v_mm_s : (n,) its filtered position (mm) and velocity (mm/s)
+    along ``axis`` (``rendering.layers.finger_filter``). before : the carried
+    :class:`_Finger` fields (touch, phase, offset, target, measured x, measured y,
+    measured rate, speed, held), used if ``has_before``. axis : (ax, ay). layer_phase :
+    (offset_mm, period_mm), so that ``(ax x + ay y - offset_mm) / period_mm`` is
+    ``layer.phase_at(x, y)``. limits : (dt_s, slip, lock, event_hz, relock rate
+    (cycles/s), position-locked (bool), largest jump back (cycles), hold (s)).
 
     Returns the new carried fields in ``before``'s order.
     """
     n = touch.size
     ax, ay = axis
     offset_mm, period = layer_phase
-    dt_s, slip, lock, event_hz, relock, noise, weight, locked, back, hold_s = limits
-    b_touch, b_phase, b_offset, b_target, b_x, b_y, b_rate, b_smoothed, b_speed, b_held = before
+    dt_s, slip, lock, event_hz, relock, locked, back, hold_s = limits
+    b_touch, b_phase, b_offset, b_target, b_x, b_y, b_rate, b_speed, b_held = before
     restart = np.empty(n, dtype=np.bool_)
-    measured = np.empty(n)  # the tracker's phase rate (cycles/s)
+    measured = np.empty(n)  # the tracker's phase rate (cycles/s): tells new measurements
+    rate = np.empty(n)  # the filter's (cycles/s): what is synthesised
     for k in range(n):
         restart[k] = touch[k] != (b_touch if k == 0 else touch[k - 1]) or (k == 0 and not has_before)
         measured[k] = (vx[k] * ax + vy[k] * ay) / period
-    rate = np.empty(n)
-    smoothed = _smooth_kernel(measured, restart, noise, has_before, b_rate, b_smoothed,
-                              weight, rate)
+        rate[k] = v_mm_s[k] / period
     carry = phase_kernel(rate, dt_s, touch, has_before, int(b_touch), b_phase, phase)
     # a new measurement: a new touch, or the tracker's held sample or velocity changes;
     # synthesis starts where the finger is at touch-down and when it starts from rest
@@ -438,7 +390,7 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, has_before, befor
                    or measured[k] != measured[k - 1])
         if new:
             bounds[k_n] = k
-            target[k_n] = (ax * x_pred[k] + ay * y_pred[k] - offset_mm) / period - phase[k]
+            target[k_n] = (s_mm[k] - offset_mm) / period - phase[k]
             flags[k_n] = restart[k]
             starts[k_n] = speed_before == 0.0 and speed > 0.0
             jump[k_n] = math.copysign(1.0, rate[k]) if locked and speed > 0.0 else 0.0
@@ -469,11 +421,11 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, has_before, befor
     for k in range(n):
         phase[k] += offset[k]
     return (touch[n - 1], carry, end, target[k_n - 1] % 1.0, x_held[n - 1], y_held[n - 1],
-            measured[n - 1], smoothed, speed_before, 1.0 if held else 0.0)
+            measured[n - 1], speed_before, 1.0 if held else 0.0)
 
 
 #: the carried fields of :func:`_hybrid_row` for a finger seen for the first time
-_NO_FINGER = (0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+_NO_FINGER = (0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 class HybridRenderer:
@@ -502,8 +454,8 @@ class HybridRenderer:
         carried = dict(state.fingers)
         layer_phase = (float(self.layer.offset_mm), float(self.layer.period_mm))
         limits = (self.dt_s, self.slip, self.lock, self.event_hz,
-                  RELOCK_MM_S / self.layer.period_mm, VELOCITY_NOISE_MM_S / self.layer.period_mm,
-                  SMOOTH, self.locked, BACK_MM / self.layer.period_mm, HOLD_S)
+                  RELOCK_MM_S / self.layer.period_mm, self.locked,
+                  BACK_MM / self.layer.period_mm, HOLD_S)
         rows = [np.ascontiguousarray(getattr(block, name), dtype=np.float64)
                 for name in ("vx", "vy", "x_held", "y_held", "x_pred", "y_pred")]
         touch = np.ascontiguousarray(block.touch_id, dtype=np.int64)
@@ -511,11 +463,14 @@ class HybridRenderer:
             before = carried.get(fid)
             fields = _NO_FINGER if before is None else (
                 before.touch, before.phase, before.offset, before.target, *before.measured,
-                before.smoothed, before.speed, before.held)
-            end = _hybrid_row(touch[row], *(a[row] for a in rows), before is not None, fields,
-                              self.axis, layer_phase, limits, phase[row])
+                before.speed, before.held)
+            s_mm, v_mm_s, filtered = filter_axis(block.t_s, touch[row], *(a[row] for a in rows),
+                                                 self.axis, None if before is None else before.filter)
+            end = _hybrid_row(touch[row], *(a[row] for a in rows), s_mm, v_mm_s,
+                              before is not None, fields, self.axis, layer_phase, limits,
+                              phase[row])
             carried[fid] = _Finger(touch=int(end[0]), phase=end[1], offset=end[2], target=end[3],
-                                   measured=end[4:7], smoothed=end[7], speed=end[8],
-                                   held=end[9])
+                                   measured=end[4:7], speed=end[7], held=end[8],
+                                   filter=filtered)
         covers = self.layer.covers(block.x_pred, block.y_pred)
         return self.layer.profile_where(phase, covers), covers, HybridState(fingers=carried)
