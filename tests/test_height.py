@@ -205,3 +205,54 @@ def test_relief_is_lit_from_the_top_left_where_the_haptics_put_the_slopes():
     light = np.array([-1.0, -1.0, np.sqrt(2)]) / 2
     expected = mid + 0.7 * (n @ (light * [-1, -1, 1]) - light[2]) * (layer.mu_max - layer.mu_min)
     assert lit == pytest.approx(expected)
+
+
+def _ripple_map() -> HeightMap:
+    y, x = np.mgrid[0:24, 0:40]
+    return HeightMap(0.3 + 0.1 * np.sin(x / 3.0) * np.cos(y / 4.0), 30.0, 18.0, 40.0, 24.0)
+
+
+def _grid_with_edges():
+    """Positions over the shapes, on their edges (rims, chamfer ends, centres) and off them."""
+    rng = np.random.default_rng(3)
+    x, y = rng.uniform(20.0, 80.0, 4000), rng.uniform(5.0, 55.0, 4000)
+    edges_x = np.array([50.0, 53.0, 57.0, 60.0, 50.0 + 1e-300, 30.0, 70.0, 49.0, 51.0, 1e6])
+    edges_y = np.array([30.0, 30.0, 30.0, 30.0, 30.0, 18.0, 42.0, 30.0, 30.0, 30.0])
+    return np.concatenate([x, edges_x]), np.concatenate([y, edges_y])
+
+
+@pytest.mark.parametrize("shape", [*SHAPES, _ripple_map()], ids=lambda s: type(s).__name__)
+def test_gradient_alone_is_the_gradient_of_height_and_gradient_bit_for_bit(shape):
+    x, y = _grid_with_edges()
+    _, gx, gy = shape.height_and_gradient(x, y)
+    alone = shape.gradient(x.reshape(2, -1), y.reshape(2, -1))
+    assert alone[0].shape == (2, x.size // 2)
+    for a, b in zip(alone, (gx, gy)):
+        assert a.ravel().tobytes() == b.tobytes()  # signed zeros too
+
+
+@pytest.mark.parametrize("rendering", ["slope", "magnitude"])
+@pytest.mark.parametrize("shape", [*SHAPES, _ripple_map()], ids=lambda s: type(s).__name__)
+def test_renderer_is_the_saturation_of_the_slope_bit_for_bit(shape, rendering):
+    """The renderer gives mu_rest where the slope is 0 without the saturation, and runs the
+    rest through it: the same mu' as the saturation of every slope."""
+    from rendering.layers.height import HeightRenderer, slope_along_motion
+    from rendering.tracking.tracks import BLOCK_FIELDS, FingerBlock
+    x, y = _grid_with_edges()
+    n = x.size // 2
+    rng = np.random.default_rng(4)
+    vx, vy = rng.normal(0.0, 80.0, x.size), rng.normal(0.0, 80.0, x.size)
+    vx[::7], vy[::7] = 0.0, 0.0  # at rest
+    vx[1::11], vy[1::11] = 3.0, -4.0  # below v_fade
+    vx[2::13] = -0.0
+    arrays = {name: np.zeros((2, n)) for name in BLOCK_FIELDS}
+    arrays.update(contact=np.ones((2, n), bool), x_pred=x.reshape(2, n), y_pred=y.reshape(2, n),
+                  vx=vx.reshape(2, n), vy=vy.reshape(2, n))
+    block = FingerBlock(0, np.arange(n) / RATE, (0, 1), **arrays)
+    layer = _layer(shape, rendering=rendering, mu_rest=0.8 if rendering == "slope" else 0.6)
+    mu, covers, _ = HeightRenderer(layer).render(block)
+    _, gx, gy = shape.height_and_gradient(x, y)
+    s = slope_along_motion(gx, gy, vx, vy, layer.v_fade_mm_s, rendering == "slope")
+    assert (s == 0.0).any() and (s != 0.0).any()
+    assert mu.shape == (2, n) and covers.all()
+    assert mu.ravel().tobytes() == layer.mu_of_slope(s).tobytes()

@@ -11,8 +11,10 @@ rendered by ``rendering.layers.height``; here are the heights and the mapping fr
 to mu'.
 
 Every shape answers ``height_and_gradient(x, y) -> (h, dh/dx, dh/dy)`` (mm, and mm per
-mm) at arrays of positions (mm), and ``support(x, y)``: where its gradient can be
-non-zero (for drawing and bounds; the layer itself covers its whole region).
+mm) at arrays of positions (mm), ``gradient(x, y) -> (dh/dx, dh/dy)`` (the same
+gradient without computing the height: what the haptics and the relief use), and
+``support(x, y)``: where its gradient can be non-zero (for drawing and bounds; the
+layer itself covers its whole region).
 """
 
 from __future__ import annotations
@@ -66,19 +68,44 @@ def _flat(x, y):
     return x.ravel(), y.ravel(), x.shape
 
 
-def _shaped(planes: np.ndarray, shape) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(h, dh/dx, dh/dy) of the positions' ``shape`` from a kernel's (3, m) planes."""
-    return planes[0].reshape(shape), planes[1].reshape(shape), planes[2].reshape(shape)
+class _Planes:
+    """A shape computed by its ``_fill(x, y, out)``: positions (mm) as two float64 (m,)
+    arrays, ``out`` the (3, m) planes (h, dh/dx, dh/dy) or, without the height, the
+    (2, m) planes (dh/dx, dh/dy); the kernels compute the height only when there is a row
+    for it (row 0, above the gradient's two)."""
+
+    def _evaluate(self, x, y, with_height: bool) -> tuple[np.ndarray, ...]:
+        x, y, shape = _flat(x, y)
+        out = np.empty((3 if with_height else 2, x.size))
+        self._fill(x, y, out)
+        return tuple(plane.reshape(shape) for plane in out)
+
+    def height_and_gradient(self, x, y):
+        return self._evaluate(x, y, True)
+
+    def gradient(self, x, y):
+        return self._evaluate(x, y, False)
 
 
 @njit(cache=True, nogil=True)
-def _cosine_fall(u, height_mm):
+def _cosine_height(u, height_mm):
     """A raised-cosine fall from ``height_mm`` at u <= 0 to 0 at u >= 1: the height
-    h = H (1 + cos(pi u)) / 2 on [0, 1] (mm) and dh/du (NaN stays NaN)."""
+    h = H (1 + cos(pi u)) / 2 on [0, 1] (mm; NaN stays NaN)."""
     uc = 0.0 if u < 0.0 else (1.0 if u > 1.0 else u)
-    h = height_mm * 0.5 * (1.0 + np.cos(np.pi * uc))
-    slope = -height_mm * 0.5 * np.pi * np.sin(np.pi * uc) if 0.0 < u < 1.0 else 0.0
-    return h, slope
+    return height_mm * 0.5 * (1.0 + np.cos(np.pi * uc))
+
+
+@njit(cache=True, nogil=True)
+def _cosine_slopes(u, height_mm, out):
+    """Multiply the gradient planes ``out[-2:]`` (``_Planes``), each (m,), by dh/du of
+    :func:`_cosine_height` at u (m,) where 0 < u < 1 (elsewhere the slope is 0: the
+    caller has put 0 times the factor there). The sine is taken at those samples only:
+    in a loop over every sample the compiler vectorises it and computes it for all."""
+    g = out.shape[0] - 2
+    on = np.nonzero((0.0 < u) & (u < 1.0))[0]
+    for i in on:
+        slope = -height_mm * 0.5 * np.pi * np.sin(np.pi * u[i])
+        out[g, i], out[g + 1, i] = slope * out[g, i], slope * out[g + 1, i]
 
 
 @njit(cache=True, nogil=True)
@@ -88,7 +115,7 @@ def _sign(d):
 
 
 @dataclass(frozen=True)
-class GaussianBump:
+class GaussianBump(_Planes):
     """h = H exp(-r^2 / (2 sigma^2)) about (cx_mm, cy_mm); a negative H is a dip.
     Steepest slope H / sigma * exp(-1/2) at r = sigma."""
 
@@ -97,18 +124,44 @@ class GaussianBump:
     sigma_mm: float
     height_mm: float
 
-    def height_and_gradient(self, x, y):
-        dx, dy, r = _from_centre(x, y, self.cx_mm, self.cy_mm)
-        h = self.height_mm * np.exp(-r * r / (2.0 * self.sigma_mm ** 2))
-        k = -h / self.sigma_mm ** 2
-        return h, k * dx, k * dy
+    def _fill(self, x, y, out):
+        centre, variance = (self.cx_mm, self.cy_mm), self.sigma_mm ** 2
+        gauss = _bump_exponent(x, y, centre, 2.0 * variance)
+        np.exp(gauss, out=gauss)  # numpy's, not libm's (a kernel's): they differ in the last digit
+        _bump(x, y, centre, self.height_mm, variance, gauss, out)
 
     def support(self, x, y):
         return _from_centre(x, y, self.cx_mm, self.cy_mm)[2] <= 4.0 * self.sigma_mm
 
 
+@njit(cache=True, nogil=True)
+def _bump_exponent(x, y, centre, two_variance):
+    """-r^2 / (2 sigma^2) (m,) at positions (x, y) (mm, (m,)) about ``centre`` (mm)."""
+    cx, cy = centre
+    out = np.empty(x.size)
+    for i in range(x.size):
+        dx, dy = x[i] - cx, y[i] - cy
+        r = np.sqrt(dx * dx + dy * dy)
+        out[i] = -r * r / two_variance
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _bump(x, y, centre, height_mm, variance, gauss, out):
+    """Fill the planes (``_Planes``) of a :class:`GaussianBump` about ``centre`` (mm) from
+    ``gauss`` = exp(-r^2 / (2 sigma^2)) (m,): h = H gauss, grad h = -h / sigma^2 (dx, dy)."""
+    cx, cy = centre
+    g = out.shape[0] - 2  # the row of dh/dx; the height is row 0 above it, if there
+    for i in range(x.size):
+        h = height_mm * gauss[i]
+        k = -h / variance
+        out[g, i], out[g + 1, i] = k * (x[i] - cx), k * (y[i] - cy)
+        if g:
+            out[0, i] = h
+
+
 @dataclass(frozen=True)
-class Ridge:
+class Ridge(_Planes):
     """A straight ridge through (x_mm, y_mm) running at ``angle_deg`` from +x: a raised
     cosine across it, H on the centre line falling to 0 at width_mm / 2 on either side.
     Steepest slope pi H / width_mm."""
@@ -119,10 +172,9 @@ class Ridge:
     width_mm: float
     height_mm: float
 
-    def height_and_gradient(self, x, y):
-        x, y, shape = _flat(x, y)
+    def _fill(self, x, y, out):
         line = (self.x_mm, self.y_mm, *_normal(self.angle_deg + 90.0))
-        return _shaped(_ridge(x, y, line, self.width_mm / 2, self.height_mm), shape)
+        _ridge(x, y, line, self.width_mm / 2, self.height_mm, out)
 
     def support(self, x, y):
         d = _along(x, y, self.x_mm, self.y_mm, self.angle_deg + 90.0)
@@ -130,21 +182,28 @@ class Ridge:
 
 
 @njit(cache=True, nogil=True)
-def _ridge(x, y, line, half, height_mm):
-    """(3, m) height and gradient of a :class:`Ridge` of half width ``half`` (mm) whose
+def _ridge(x, y, line, half, height_mm, out):
+    """Fill the planes (``_Planes``) of a :class:`Ridge` of half width ``half`` (mm) whose
     centre line passes through (x0, y0) with unit normal (nx, ny), ``line``."""
     x0, y0, nx, ny = line
-    out = np.empty((3, x.size))
+    g = out.shape[0] - 2  # the row of dh/dx; the height is row 0 above it, if there
+    u = np.empty(x.size)
     for i in range(x.size):
         d = nx * (x[i] - x0) + ny * (y[i] - y0)
         sign = _sign(d)
-        h, slope = _cosine_fall(abs(d) / half, height_mm)
-        out[0, i], out[1, i], out[2, i] = h, slope * (sign * nx / half), slope * (sign * ny / half)
-    return out
+        u[i] = abs(d) / half
+        ax, ay = sign * nx / half, sign * ny / half  # grad h = dh/du (ax, ay)
+        if 0.0 < u[i] < 1.0:  # times dh/du in _cosine_slopes
+            out[g, i], out[g + 1, i] = ax, ay
+        else:  # dh/du is 0: signed zeros (NaN for a NaN position)
+            out[g, i], out[g + 1, i] = 0.0 * ax, 0.0 * ay
+        if g:
+            out[0, i] = _cosine_height(u[i], height_mm)
+    _cosine_slopes(u, height_mm, out)
 
 
 @dataclass(frozen=True)
-class Step:
+class Step(_Planes):
     """A step along the line through (x_mm, y_mm): 0 on one side, H on the side the
     normal at ``angle_deg`` from +x points to, joined by a flat chamfer ``chamfer_mm``
     wide centred on the line (slope H / chamfer_mm; a vertical step has no finite slope)."""
@@ -155,10 +214,9 @@ class Step:
     height_mm: float
     chamfer_mm: float
 
-    def height_and_gradient(self, x, y):
-        x, y, shape = _flat(x, y)
+    def _fill(self, x, y, out):
         line = (self.x_mm, self.y_mm, *_normal(self.angle_deg))
-        return _shaped(_step(x, y, line, self.chamfer_mm, self.height_mm), shape)
+        _step(x, y, line, self.chamfer_mm, self.height_mm, out)
 
     def support(self, x, y):
         d = _along(x, y, self.x_mm, self.y_mm, self.angle_deg)
@@ -166,22 +224,22 @@ class Step:
 
 
 @njit(cache=True, nogil=True)
-def _step(x, y, line, chamfer_mm, height_mm):
-    """(3, m) height and gradient of a :class:`Step` on the line through (x0, y0) with
+def _step(x, y, line, chamfer_mm, height_mm, out):
+    """Fill the planes (``_Planes``) of a :class:`Step` on the line through (x0, y0) with
     unit normal (nx, ny), ``line``."""
     x0, y0, nx, ny = line
     rise = height_mm / chamfer_mm
-    out = np.empty((3, x.size))
+    g = out.shape[0] - 2  # the row of dh/dx; the height is row 0 above it, if there
     for i in range(x.size):
         u = (nx * (x[i] - x0) + ny * (y[i] - y0)) / chamfer_mm + 0.5
         slope = rise if 0.0 < u < 1.0 else 0.0
-        out[0, i] = height_mm * (0.0 if u < 0.0 else (1.0 if u > 1.0 else u))
-        out[1, i], out[2, i] = slope * nx, slope * ny
-    return out
+        out[g, i], out[g + 1, i] = slope * nx, slope * ny
+        if g:
+            out[0, i] = height_mm * (0.0 if u < 0.0 else (1.0 if u > 1.0 else u))
 
 
 @dataclass(frozen=True)
-class ButtonRim:
+class ButtonRim(_Planes):
     """A round button: a plateau of height H out to radius_mm - rim_mm, then a rounded
     rim (raised cosine) falling to 0 at radius_mm. Steepest slope pi H / (2 rim_mm)."""
 
@@ -191,32 +249,37 @@ class ButtonRim:
     rim_mm: float
     height_mm: float
 
-    def height_and_gradient(self, x, y):
-        x, y, shape = _flat(x, y)
-        return _shaped(_button(x, y, (self.cx_mm, self.cy_mm), self.radius_mm, self.rim_mm,
-                               self.height_mm), shape)
+    def _fill(self, x, y, out):
+        _button(x, y, (self.cx_mm, self.cy_mm), self.radius_mm, self.rim_mm, self.height_mm, out)
 
     def support(self, x, y):
         return _from_centre(x, y, self.cx_mm, self.cy_mm)[2] <= self.radius_mm
 
 
 @njit(cache=True, nogil=True)
-def _button(x, y, centre, radius_mm, rim_mm, height_mm):
-    """(3, m) height and gradient of a :class:`ButtonRim` about ``centre`` (mm)."""
+def _button(x, y, centre, radius_mm, rim_mm, height_mm, out):
+    """Fill the planes (``_Planes``) of a :class:`ButtonRim` about ``centre`` (mm)."""
     cx, cy = centre
     plateau = radius_mm - rim_mm
-    out = np.empty((3, x.size))
+    g = out.shape[0] - 2  # the row of dh/dx; the height is row 0 above it, if there
+    u = np.empty(x.size)
     for i in range(x.size):
         dx, dy = x[i] - cx, y[i] - cy
         r = np.sqrt(dx * dx + dy * dy)
         inv = 1.0 / (r * rim_mm) if r > 0 else 0.0
-        h, slope = _cosine_fall((r - plateau) / rim_mm, height_mm)
-        out[0, i], out[1, i], out[2, i] = h, slope * (dx * inv), slope * (dy * inv)
-    return out
+        u[i] = (r - plateau) / rim_mm
+        ax, ay = dx * inv, dy * inv  # grad h = dh/du (ax, ay)
+        if 0.0 < u[i] < 1.0:  # times dh/du in _cosine_slopes
+            out[g, i], out[g + 1, i] = ax, ay
+        else:  # dh/du is 0: signed zeros (NaN for a NaN position)
+            out[g, i], out[g + 1, i] = 0.0 * ax, 0.0 * ay
+        if g:
+            out[0, i] = _cosine_height(u[i], height_mm)
+    _cosine_slopes(u, height_mm, out)
 
 
 @dataclass(frozen=True, eq=False)
-class HeightMap:
+class HeightMap(_Planes):
     """A height map placed on the display like a raster sprite (unrotated): pixel value
     v of a 16-bit PNG gives h = v / 65535 * max_height_mm. Height and gradient are
     sampled bilinearly from the map and its central differences (mm per mm, with the
@@ -236,10 +299,9 @@ class HeightMap:
                   else (np.zeros_like(self.heights_mm),) * 2)
         object.__setattr__(self, "_planes", np.stack((self.heights_mm, gx, gy)))
 
-    def height_and_gradient(self, x, y):
-        x, y, shape = _flat(x, y)
+    def _fill(self, x, y, out):
         placement = (self.x_mm, self.y_mm, self.width_mm, self.height_mm)
-        return _shaped(_sample_map(self._planes, x, y, placement), shape)
+        _sample_map(self._planes[3 - out.shape[0]:], x, y, placement, out)
 
     def support(self, x, y):
         x = np.asarray(x, dtype=np.float64)
@@ -249,14 +311,15 @@ class HeightMap:
 
 
 @njit(cache=True, nogil=True)
-def _sample_map(planes, x, y, placement):
-    """(3, m) height (mm) and gradient (mm per mm) at positions (x, y) (mm, (m,)) of a
-    :class:`HeightMap` whose ``planes`` are (h, dh/dx, dh/dy), each (rows, cols), placed
-    at ``placement`` = (x_mm, y_mm, width_mm, height_mm): bilinear between pixel centres,
-    clamped to the edge pixels; outside the sprite the gradient is 0."""
+def _sample_map(planes, x, y, placement, out):
+    """Fill the planes (``_Planes``) of a :class:`HeightMap`, height (mm) and gradient (mm
+    per mm) at positions (x, y) (mm, (m,)), from its ``planes``, the same rows each
+    (rows, cols), placed at ``placement`` = (x_mm, y_mm, width_mm, height_mm): bilinear
+    between pixel centres, clamped to the edge pixels; outside the sprite the gradient
+    is 0."""
     x_mm, y_mm, width_mm, height_mm = placement
-    _, rows, cols = planes.shape
-    out = np.empty((3, x.size))
+    n_planes, rows, cols = planes.shape
+    h = n_planes - 2  # planes before the gradient's two: the height, if there
     for i in range(x.size):
         fx = min(max((x[i] - x_mm) / width_mm * cols - 0.5, 0.0), cols - 1.0)
         fy = min(max((y[i] - y_mm) / height_mm * rows - 0.5, 0.0), rows - 1.0)
@@ -264,12 +327,11 @@ def _sample_map(planes, x, y, placement):
         x1, y1 = min(x0 + 1, cols - 1), min(y0 + 1, rows - 1)
         tx, ty = fx - x0, fy - y0
         inside = (x_mm <= x[i] <= x_mm + width_mm) and (y_mm <= y[i] <= y_mm + height_mm)
-        for p in range(3):
+        for p in range(n_planes):
             g = planes[p]
             top = g[y0, x0] * (1 - tx) + g[y0, x1] * tx
             bottom = g[y1, x0] * (1 - tx) + g[y1, x1] * tx
-            out[p, i] = top * (1 - ty) + bottom * ty if p == 0 or inside else 0.0
-    return out
+            out[p, i] = top * (1 - ty) + bottom * ty if p < h or inside else 0.0
 
 
 def read_height_png(path: str | Path, max_height_mm: float) -> np.ndarray:
@@ -334,7 +396,7 @@ class HeightLayer(DynamicLayer):
         """Shaded relief for drawing, as a mu' in [mu_min, mu_max] (so the layer's colours
         apply): Lambert shading of the exaggerated height under ``RELIEF_LIGHT``, flat
         ground half way, from the same gradients the haptics use."""
-        _, gx, gy = self.shape.height_and_gradient(x, y)
+        gx, gy = self.shape.gradient(x, y)
         gx, gy = RELIEF_EXAGGERATION * gx, RELIEF_EXAGGERATION * gy
         lx, ly, lz = RELIEF_LIGHT
         shade = (-gx * lx - gy * ly + lz) / np.sqrt(gx * gx + gy * gy + 1.0)

@@ -17,7 +17,9 @@ mu' = ``layer.mu_of_slope(s)``. Along the finger's path s changes by at most
 gain * max|d2h/du2| * |v| / rate_hz (plus what a change of the velocity estimate at a
 touch sample adds: gain * |grad h| * |dv| / max(|v|, v_fade)).
 
-Stateless: the slope depends on this sample's position and velocity only.
+Stateless: the slope depends on this sample's position and velocity only. Where s is 0
+(flat ground, a finger at rest, motion along a contour) mu' is mu_rest exactly, and only
+the other samples go through the saturation.
 """
 
 from __future__ import annotations
@@ -46,19 +48,50 @@ def slope_along_motion(gx, gy, vx, vy, v_fade_mm_s: float, signed: bool) -> np.n
 
 
 @njit(cache=True, nogil=True)
+def _slope(gx, gy, vx, vy, speed, v_fade_mm_s, signed):
+    """:func:`slope_along_motion` of one sample whose ``speed`` is |(vx, vy)| (mm/s); NaN
+    propagates as numpy's ``maximum`` and ``minimum`` would."""
+    if signed:
+        along = gx * vx + gy * vy
+        if along == 0.0:  # neither product is NaN, so neither is speed: along / it is along
+            return along
+        return along / (v_fade_mm_s if speed < v_fade_mm_s else speed)
+    fade = speed / v_fade_mm_s
+    return np.sqrt(gx * gx + gy * gy) * (1.0 if fade > 1.0 else fade)
+
+
+@njit(cache=True, nogil=True)
 def _slope_kernel(gx, gy, vx, vy, v_fade_mm_s, signed):
-    """:func:`slope_along_motion` on (m,) arrays, one pass (NaN propagates as numpy's
-    ``maximum`` and ``minimum`` would)."""
+    """:func:`slope_along_motion` on (m,) arrays, one pass."""
     out = np.empty(gx.size)
     for i in range(gx.size):
         speed = np.sqrt(vx[i] * vx[i] + vy[i] * vy[i])
-        if signed:
-            along = gx[i] * vx[i] + gy[i] * vy[i]
-            out[i] = along / (v_fade_mm_s if speed < v_fade_mm_s else speed)
-        else:
-            fade = speed / v_fade_mm_s
-            out[i] = np.sqrt(gx[i] * gx[i] + gy[i] * gy[i]) * (1.0 if fade > 1.0 else fade)
+        out[i] = _slope(gx[i], gy[i], vx[i], vy[i], speed, v_fade_mm_s, signed)
     return out
+
+
+@njit(cache=True, nogil=True)
+def _sloped(gx, gy, vx, vy, v_fade_mm_s, signed, mu_rest):
+    """The slopes of :func:`slope_along_motion` on (m,) arrays, sorted out: mu' (m,) with
+    ``mu_rest`` where the slope is 0 (its mu' exactly, whatever the sign of the zero; the
+    other samples are left to fill), the indices of the others (k,) and their slopes (k,).
+    A finger's speed is computed once per change of its velocity estimate (the tracker
+    changes it at touch samples only)."""
+    m = gx.size
+    mu, sloped, slopes = np.empty(m), np.empty(m, dtype=np.int64), np.empty(m)
+    k = 0
+    wx, wy, speed = np.nan, np.nan, np.nan  # speed = |(wx, wy)|
+    for i in range(m):
+        if vx[i] != wx or vy[i] != wy:  # always true for NaN: recomputed, NaN
+            wx, wy = vx[i], vy[i]
+            speed = np.sqrt(wx * wx + wy * wy)
+        s = _slope(gx[i], gy[i], vx[i], vy[i], speed, v_fade_mm_s, signed)
+        if s == 0.0:
+            mu[i] = mu_rest
+        else:
+            sloped[k], slopes[k] = i, s
+            k += 1
+    return mu, sloped[:k], slopes[:k]
 
 
 class HeightRenderer:
@@ -74,8 +107,12 @@ class HeightRenderer:
     def render(self, block: FingerBlock, state=None):
         """mu' (F, n) and coverage (F, n) of the layer under each finger."""
         layer, x, y = self.layer, block.x_pred, block.y_pred
-        _, gx, gy = layer.shape.height_and_gradient(x, y)
-        # slope_along_motion's kernel: the block's arrays already share one shape
-        s = _slope_kernel(gx.ravel(), gy.ravel(), block.vx.ravel(), block.vy.ravel(),
-                          layer.v_fade_mm_s, self.signed)
-        return layer.mu_of_slope(s).reshape(x.shape), layer.covers(x, y), state
+        gx, gy = layer.shape.gradient(x, y)
+        # the block's arrays already share one shape
+        mu, sloped, s = _sloped(gx.ravel(), gy.ravel(), block.vx.ravel(), block.vy.ravel(),
+                                layer.v_fade_mm_s, self.signed, layer.mu_rest)
+        if sloped.size == mu.size:  # the slope is nowhere 0 (a finger sliding on a bump)
+            mu = layer.mu_of_slope(s)
+        elif sloped.size:
+            mu[sloped] = layer.mu_of_slope(s)
+        return mu.reshape(x.shape), layer.covers(x, y), state
