@@ -58,13 +58,14 @@ with several fingers down the loop holds its state and the block is fed forward 
    ``rendering.control.adapt``: RLS on every ``decimate``-th sliding sample, the model's
    mu' and its Jacobian passed through the same chain as the reference, so that the
    plate loop's, the fingertip's and the sensor's lags cancel).
-4. **Fallback.** Reports missed for more than ``stale_s`` of blocks (stale), one that reaches the
-   sensor's full scale (saturated), or is not a finger (non-finite, F_n below
-   ``min_normal_n`` while touching, F_t / F_n outside [-``max_ratio`` / 10, ``max_ratio``]) drops the loop
-   to open loop with the latest model and c = 1; said once (``messages``) and counted
-   (``fallbacks``, ``fallback_samples``). The loop resumes after ``recover_s`` of good
-   reports. A dead sensor is open loop after at most ``max_wait_s`` + ``stale_s`` plus
-   one block.
+4. **Fallback.** Reports missed for more than ``stale_s`` of blocks in a row (stale;
+   without force reports at all, ``forces`` None, every block is missed at once:
+   absent), a report that reaches the sensor's full scale (saturated), or one that is
+   not a finger (non-finite, F_n below ``min_normal_n`` while touching, F_t / F_n
+   outside [-``max_ratio`` / 10, ``max_ratio``]) drops the loop to open loop with the
+   latest model and c = 1; said once (``messages``) and counted (``fallbacks``,
+   ``fallback_samples``). The loop resumes after ``recover_s`` of good reports. A dead
+   sensor is open loop after at most ``max_wait_s`` + ``stale_s`` plus one block.
 """
 
 from __future__ import annotations
