@@ -21,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from rendering.tracking.tracks import FingerBlock
 from textures.ar_synthesis import render_finger
@@ -49,18 +50,30 @@ class ArTextureRenderer:
     def render(self, block: FingerBlock, state: ArState):
         """mu' (F, n) and coverage (F, n) of the layer under each finger."""
         layer = self.layer
-        raw = np.full(block.contact.shape, layer.mu_mean)
-        fingers = {}
-        y = np.empty(block.n)
+        mu = np.empty(block.contact.shape)
+        fingers, limited = {}, state.limited
         for i, fid in enumerate(block.ids):
             touch, history = state.fingers.get(fid, (-1, np.zeros(self.order)))
             history = history.copy()  # the state passed in stays as it was
             touch = render_finger(block.contact[i], block.touch_id[i], block.vx[i], block.vy[i],
                                    block.force[i], layer.v_rest_mm_s, layer.seed, fid,
-                                   block.index0, self.arrays, touch, history, y)
+                                   block.index0, self.arrays, touch, history, mu[i])
             fingers[fid] = (int(touch), history)
-            raw[i] += layer.gain * y
-        mu = np.clip(raw, layer.mu_min, layer.mu_max)
-        limited = state.limited + int((mu != raw).sum())
+            limited += _limit(mu[i], layer.mu_mean, layer.gain, layer.mu_min, layer.mu_max)
         covers = layer.covers(block.x_pred, block.y_pred)
         return mu, covers, ArState(fingers, limited)
+
+
+@njit(cache=True, nogil=True)
+def _limit(y, mu_mean, gain, mu_min, mu_max):
+    """The model's output y (n,) turned into mu' in place: mu_mean + gain y, limited to
+    [mu_min, mu_max] as numpy's ``clip`` (NaN stays NaN). Returns how many samples the
+    limits changed (NaN counts)."""
+    limited = 0
+    for j in range(y.size):
+        raw = mu_mean + gain * y[j]
+        mu = mu_min if raw < mu_min else raw
+        mu = mu_max if mu > mu_max else mu
+        limited += not mu == raw
+        y[j] = mu
+    return limited
