@@ -145,3 +145,61 @@ def test_any_split_into_blocks_gives_the_same_output(splits):
     whole = _replay(scene, trace)
     assert_allclose(_replay(scene, trace, splits), whole, rtol=0, atol=0)
     assert (whole < 1.0).any()
+
+
+def _one_sample_at_a_time(trigger, contact, touch_id, inside, flag, prev, index0, start, samples):
+    """The renderer's block, sample by sample from the module docstring's rules: mu',
+    coverage, the clip's start after the block and each finger's last sample."""
+    fingers, n = contact.shape
+    mu, covers = np.ones((fingers, n)), np.zeros((fingers, n), bool)
+    last = [tuple(int(v) for v in row) for row in prev]
+    for j in range(n):
+        fired = False
+        for i in range(fingers):
+            c0, t0, in0, f0 = (bool(last[i][0]), last[i][1], bool(last[i][2]), bool(last[i][3]))
+            c, t, inn, f = (bool(contact[i, j]), int(touch_id[i, j]), bool(inside[i, j]),
+                            bool(flag[i, j]))
+            same = c and c0 and t == t0
+            fired |= (c and not same and inn, c0 and not same and in0, same and f != f0 and inn,
+                      same and f and not f0 and inn)[trigger]
+            last[i] = (int(c), t, int(inn), int(f))
+        if start >= 0 and index0 + j - start < samples.size:
+            mu[:, j], covers[:, j] = samples[index0 + j - start], contact[:, j]
+        if fired:
+            start = index0 + j + 1
+    return mu, covers, start, np.array(last, dtype=np.int64).reshape(fingers, 4)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_a_block_is_the_clip_played_sample_by_sample(seed):
+    """Events anywhere (restarts while playing, on a block's first and last samples), a
+    clip started in an earlier block, one to three fingers."""
+    from rendering.layers.clips import _render_block
+    rng = np.random.default_rng(seed)
+    fingers, n = int(rng.integers(1, 4)), int(rng.integers(1, 300))
+    rate = rng.choice([0.002, 0.02, 0.2])  # how often the inputs change
+    change = lambda: rng.random((fingers, n)) < rate  # noqa: E731
+    contact = np.cumsum(change(), axis=1) % 2 == 0
+    touch_id = np.cumsum(change(), axis=1) + 10 * np.arange(fingers)[:, None]
+    inside, flag = np.cumsum(change(), axis=1) % 2 == 0, np.cumsum(change(), axis=1) % 2 == 1
+    prev = np.column_stack([rng.integers(0, 2, fingers), rng.integers(-1, 2, fingers),
+                            rng.integers(0, 2, fingers), rng.integers(0, 2, fingers)])
+    samples = rng.uniform(0.5, 1.0, int(rng.integers(1, 400)))
+    index0 = int(rng.integers(0, 1000))
+    start = int(rng.choice([-1, index0, index0 - rng.integers(0, 500)]))
+    for trigger in range(4):
+        args = (trigger, contact, touch_id, inside, flag, prev.astype(np.int64), index0, start,
+                samples)
+        got, want = _render_block(*args), _one_sample_at_a_time(*args)
+        assert got[0].tobytes() == want[0].tobytes() and (got[1] == want[1]).all()
+        assert got[2] == want[2] and (got[3] == want[3]).all()
+
+
+def test_the_edge_side_is_the_sign_of_the_distance_to_the_line():
+    layer = _layer(TICK, "edge", x_mm=50.0, y_mm=30.0, angle_deg=120.0)
+    rng = np.random.default_rng(5)
+    x, y = rng.uniform(0.0, 100.0, (3, 400)), rng.uniform(0.0, 60.0, 400)
+    a = math.radians(120.0)
+    distance = math.cos(a) * (x - 50.0) + math.sin(a) * (y - 30.0)
+    assert (layer.side(x, y) == (distance >= 0.0)).all() and layer.side(x, y).shape == (3, 400)
+    assert layer.side(50.0, 30.0).shape == () and layer.side(50.0, 30.0)  # on the line

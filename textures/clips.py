@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 import numpy as np
+from numba import njit
 
 from textures.dynamic import DynamicLayer
 
@@ -141,7 +142,20 @@ class ClipLayer(DynamicLayer):
         return 1.0
 
     def side(self, x, y) -> np.ndarray:
-        """True on the side of the edge line the normal points to (``edge`` trigger)."""
+        """True on the side of the edge line the normal points to (``edge`` trigger), at
+        positions x, y (mm, broadcast together)."""
         a = math.radians(self.angle_deg)
-        return (math.cos(a) * (np.asarray(x, dtype=np.float64) - self.x_mm)
-                + math.sin(a) * (np.asarray(y, dtype=np.float64) - self.y_mm)) >= 0.0
+        x, y = np.broadcast_arrays(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64))
+        line = (self.x_mm, self.y_mm, math.cos(a), math.sin(a))
+        return _side(x.ravel(), y.ravel(), line).reshape(x.shape)
+
+
+@njit(cache=True, nogil=True)
+def _side(x, y, line):
+    """(m,) bool: nx (x - x0) + ny (y - y0) >= 0 at positions (x, y) (mm, (m,)) for the
+    line through (x0, y0) with unit normal (nx, ny), ``line``; one pass."""
+    x0, y0, nx, ny = line
+    out = np.empty(x.size, dtype=np.bool_)
+    for i in range(x.size):
+        out[i] = nx * (x[i] - x0) + ny * (y[i] - y0) >= 0.0
+    return out

@@ -77,30 +77,26 @@ def _fired(trigger, contact, touch_id, inside, flag, prev):
 
 
 @njit(cache=True, nogil=True)
-def _play(fired, index0, start, samples, mu, playing):
-    """Fill mu and playing (n,) from the clip started at output index ``start`` (-1:
-    none); an event at sample j restarts it at j + 1. Returns the start after the block."""
-    for j in range(fired.size):
-        offset = index0 + j - start
-        playing[j] = start >= 0 and offset < samples.size
-        mu[j] = samples[offset] if playing[j] else 1.0
-        if fired[j]:
-            start = index0 + j + 1
-    return start
-
-
-@njit(cache=True, nogil=True)
 def _render_block(trigger, contact, touch_id, inside, flag, prev, index0, start, samples):
     """One block of the layer: mu' and coverage (F, n), the clip's start after the block
-    and each finger's last sample (:func:`_fired`, :func:`_play`)."""
+    and each finger's last sample (:func:`_fired`). The clip started at output index
+    ``start`` (-1: none) plays under every touching finger; an event at sample j restarts
+    it at j + 1. Between events the clip's samples are copied as one slice."""
     fired, last = _fired(trigger, contact, touch_id, inside, flag, prev)
     fingers, n = contact.shape
-    mu_row, playing = np.empty(n), np.empty(n, dtype=np.bool_)
-    start = _play(fired, index0, start, samples, mu_row, playing)
-    mu, covers = np.empty((fingers, n)), np.empty((fingers, n), dtype=np.bool_)
-    for i in range(fingers):
-        for j in range(n):
-            mu[i, j], covers[i, j] = mu_row[j], contact[i, j] and playing[j]
+    mu, covers = np.ones((fingers, n)), np.zeros((fingers, n), dtype=np.bool_)
+    events = np.nonzero(fired)[0]
+    j = 0  # samples j .. end - 1 play from ``start``
+    for k in range(events.size + 1):
+        end = events[k] + 1 if k < events.size else n
+        stop = min(end, start - index0 + samples.size)  # the clip's end
+        if start >= 0 and stop > j:
+            for i in range(fingers):
+                mu[i, j:stop] = samples[index0 + j - start:index0 + stop - start]
+                covers[i, j:stop] = contact[i, j:stop]
+        if k < events.size:
+            start = index0 + end
+        j = end
     return mu, covers, start, last
 
 
