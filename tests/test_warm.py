@@ -15,9 +15,10 @@ for scene, trace in [("composed-fine-grating-in-disc", "circle-30mms-60hz"),
     for fmt in ("csv", "parquet"):
         assert main(["replay", scene, trace, "--out", sys.argv[1], "--format", fmt,
                      "--quiet"]) == 0
-from app.commands.warm import recorded_texture_scene
+from app.commands.warm import height_shapes_scene, recorded_texture_scene
 from app.engine.replay import run_replay
-run_replay(recorded_texture_scene(), "circle-30mms-60hz", sys.argv[1], progress=False)
+for scene in (height_shapes_scene(), recorded_texture_scene()):
+    run_replay(scene, "circle-30mms-60hz", sys.argv[1], progress=False)
 ours = [d for d in gc.get_objects() if isinstance(d, CPUDispatcher)
         and d.py_func.__module__.split(".")[0] in ("app", "rendering", "textures", "device")]
 print(json.dumps({"hits": sum(sum(d.stats.cache_hits.values()) for d in ours),

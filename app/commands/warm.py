@@ -4,8 +4,8 @@ The per-sample kernels (tracking, SHT phase, the hybrid, modal actuation, height
 recorded textures and effect clips, the CSV writer) are compiled by numba on first use
 and cached beside their sources; setup runs this so that no replay, demo or test pays
 the compilation. It replays a short synthetic stroke on one bundled scene of each kind
-of device into a temporary folder, in every output format, and on a scene with a
-recorded texture.
+of device into a temporary folder, in every output format, on a scene with a height
+layer of every shape and on a scene with a recorded texture.
 """
 
 from __future__ import annotations
@@ -45,6 +45,28 @@ def recorded_texture_scene():
     return replace(scene, layers=(*scene.layers, layer))
 
 
+def height_shapes_scene():
+    """grating-5mm with a height layer of every shape on top (the bundled height scenes
+    have a bump, a ridge and a button; each shape has its own kernels)."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from textures.heights import ButtonRim, GaussianBump, HeightLayer, HeightMap, Ridge, Step
+    from textures.library import resolve_scene
+    from textures.loader import load_scene
+    from textures.model import VisualHints
+
+    rows, cols = np.mgrid[0:16, 0:32]
+    shapes = (GaussianBump(30.0, 32.4, 8.0, 1.0), Ridge(54.0, 32.4, 90.0, 6.0, 0.8),
+              Step(70.0, 32.4, 0.0, 0.3, 2.0), ButtonRim(80.0, 32.4, 12.0, 4.0, 0.5),
+              HeightMap(0.1 * np.sin(cols / 3.0) * np.cos(rows / 4.0), 0.0, 0.0, 108.0, 64.8))
+    scene = load_scene(resolve_scene("grating-5mm"))
+    layers = tuple(HeightLayer(name=f"height-{k}", render="sho", region=None, blend="multiply",
+                               visual=VisualHints(), shape=shape) for k, shape in enumerate(shapes))
+    return replace(scene, layers=(*scene.layers, *layers))
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quiet", action="store_true", help="print nothing")
 
@@ -62,8 +84,8 @@ def run(args: argparse.Namespace) -> int:
                 for fmt in FORMATS if k == 0 and renderer is None else ("csv",):
                     run_replay(scene, sample(motion, 60.0, noise_mm=0.05, seed=2), tmp,
                                fmt=fmt, render_override=renderer, progress=False)
-        run_replay(recorded_texture_scene(), sample(motion, 60.0, noise_mm=0.05, seed=2), tmp,
-                   progress=False)
+        for scene in (height_shapes_scene(), recorded_texture_scene()):
+            run_replay(scene, sample(motion, 60.0, noise_mm=0.05, seed=2), tmp, progress=False)
     if not args.quiet:
         print(f"frictex: kernels compiled and cached ({time.perf_counter() - start:.1f} s)")
     return 0
