@@ -132,7 +132,8 @@ def noise_key(seed, finger, touch):
 def gaussian_noise(seed: int, finger: int, touch: int, index0: int, n: int) -> np.ndarray:
     """The standard normal samples of output indices index0 .. index0 + n - 1."""
     out = np.empty(n)
-    _synthesise(np.ones(1), 1.0, noise_key(seed, finger, touch), index0, np.zeros(0), out)
+    key = np.uint64(noise_key(seed, finger, touch))  # a Python int: 2^63 and up fail as int64
+    _synthesise(np.ones(1), 1.0, key, index0, np.zeros(0), out)
     return out
 
 
