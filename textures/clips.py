@@ -145,7 +145,9 @@ class ClipLayer(DynamicLayer):
         """True on the side of the edge line the normal points to (``edge`` trigger), at
         positions x, y (mm, broadcast together)."""
         a = math.radians(self.angle_deg)
-        x, y = np.broadcast_arrays(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64))
+        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+        if x.shape != y.shape:
+            x, y = np.broadcast_arrays(x, y)
         line = (self.x_mm, self.y_mm, math.cos(a), math.sin(a))
         return _side(x.ravel(), y.ravel(), line).reshape(x.shape)
 
