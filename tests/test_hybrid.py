@@ -7,6 +7,8 @@ model's estimates; they run with the tracker's own estimates in place of the fil
 test writes. The filter is tested in tests/test_hybrid_filter.py; the tests on sampled
 motion run both together."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -14,8 +16,8 @@ from numpy.testing import assert_allclose
 
 from rendering.input.trace_synth import make_motion, sample
 import rendering.layers.hybrid as hybrid_module
-from rendering.layers.hybrid import (BACK_MM, COARSE_MM, LOCK_MM, RELOCK_MM_S, SLIP,
-                                     HybridRenderer, slew_offset)
+from rendering.layers.hybrid import (BACK_MM, COARSE_MM, GATE_SIGMAS, LOCK_MM, RELOCK_MM_S,
+                                     SLIP, HybridRenderer, slew_offset)
 from rendering.metrics import accuracy, reference
 from rendering.pipeline import build_pipeline
 from rendering.tracking.tracks import FingerBlock, apply_index
@@ -24,13 +26,34 @@ from scenes import grating_scene
 RATE = 10_000.0
 
 
+def _use_tracker_estimates(monkeypatch, sd_mm):
+    """Make the hybrid take the tracker's predicted position and velocity along the
+    layer's axis as the filtered ones, with ``sd_mm`` (mm) as the standard deviation of
+    every position correction."""
+    def estimates(t_s, touch, vx, vy, x_held, y_held, x_pred, y_pred, axis, before=None):
+        return (axis[0] * x_pred + axis[1] * y_pred, axis[0] * vx + axis[1] * vy,
+                np.full(len(t_s), sd_mm), None)
+    monkeypatch.setattr(hybrid_module, "filter_axis", estimates)
+
+
 @pytest.fixture
 def tracker_estimates(monkeypatch):
-    """The hybrid with the tracker's predicted position and velocity along the layer's
-    axis in place of the filtered ones."""
-    def estimates(t_s, touch, vx, vy, x_held, y_held, x_pred, y_pred, axis, before=None):
-        return axis[0] * x_pred + axis[1] * y_pred, axis[0] * vx + axis[1] * vy, None
-    monkeypatch.setattr(hybrid_module, "filter_axis", estimates)
+    """The hybrid on the tracker's estimates, with no uncertainty of its own (the
+    lost-lock threshold is ``LOCK_MM``)."""
+    _use_tracker_estimates(monkeypatch, 0.0)
+
+
+def _sawtooth(period_mm):
+    """A waveform layer whose mu' reads the rendered phase back: 1 - phase mod 1."""
+    from textures.model import VisualHints, Waveform
+    return Waveform(name="saw", render="hybrid", region=None, blend="multiply",
+                    visual=VisualHints(), period_mm=period_mm, shape="sawtooth", mu_min=0.0,
+                    mu_max=1.0)
+
+
+def _wrapped(cycles):
+    """Phase differences (cycles) the shorter way round, in [-0.5, 0.5)."""
+    return (np.asarray(cycles) + 0.5) % 1.0 - 0.5
 
 
 def _block(x_pred, vx, x_held=None, touch=None, index0=0):
@@ -141,14 +164,36 @@ def test_correction_never_exceeds_slip_times_the_finger_phase_rate(tracker_estim
     x_pred = held + 40.0 * (t - np.floor(t * 50) / 50)
     block = _block(x_pred, np.full(n, 40.0), x_held=held)
     # read the phase back through a sawtooth waveform: mu' = 1 - phase mod 1 (see model)
-    from textures.model import VisualHints, Waveform
-    saw = Waveform(name="saw", render="hybrid", region=None, blend="multiply", visual=VisualHints(),
-                   period_mm=1.5, shape="sawtooth", mu_min=0.0, mu_max=1.0)
-    mu, _, _ = HybridRenderer(saw, RATE).render(block, r.initial_state())
+    mu, _, _ = HybridRenderer(_sawtooth(1.5), RATE).render(block, r.initial_state())
     step = np.mod(-np.diff(mu[0]), 1.0)  # phase increments (cycles per sample)
     rate = 40.0 / 1.5 / RATE
     assert step.max() <= (1 + SLIP) * rate * (1 + 1e-9)
     assert step.min() >= (1 - SLIP) * rate * (1 - 1e-9)
+
+
+@pytest.mark.parametrize("gap_mm, sd_mm", [(0.15, 0.08), (0.28, 0.08), (0.15, 0.0)])
+def test_a_lost_lock_is_a_gap_beyond_the_filters_own_uncertainty(monkeypatch, gap_mm, sd_mm):
+    """A 120 mm/s finger on a 0.6 mm texture (200 Hz), rendered exactly where it is;
+    then a measurement puts it ``gap_mm`` further on. With the filter's position
+    correction of standard deviation 0.08 mm (a steady swipe's at 50 Hz), the gate is
+    max(LOCK_MM, 2.576 x 0.08) = 0.206 mm: a 0.15 mm gap is what the filter's own
+    noise explains and is left alone (no frequency modulation), a 0.28 mm one is a lost
+    lock, worked off at SLIP times the finger's phase rate down to the gate, i.e.
+    gap(t) = max(gap - SLIP v t, gate); with no uncertainty (sd 0) the gate is LOCK_MM
+    and the 0.15 mm gap is a lost lock too."""
+    _use_tracker_estimates(monkeypatch, sd_mm)
+    layer, v = _sawtooth(0.6), 120.0
+    gate = max(LOCK_MM, GATE_SIGMAS * sd_mm)
+    r = HybridRenderer(layer, RATE)
+    t = np.arange(400) / RATE
+    _, _, state = r.render(_block(10.0 + v * t[:200], np.full(200, v)), r.initial_state())
+    x = 10.0 + v * t[200:] + gap_mm
+    mu, _, _ = r.render(_block(x, np.full(200, v), x_held=np.full(200, x[0]), index0=200), state)
+    rendered = 1.0 - mu[0]  # the sawtooth's phase mod 1
+    left = -_wrapped(rendered - layer.phase_at(x, 30.0)) * layer.period_mm  # mm behind
+    after = t[200:] - t[200]
+    want = gap_mm if gap_mm <= gate else np.maximum(gap_mm - SLIP * v * after, gate)
+    assert_allclose(left, want, rtol=0, atol=1e-9)
 
 
 def test_slew_offset_closed_form_against_a_sample_by_sample_loop():
@@ -165,10 +210,10 @@ def test_slew_offset_closed_form_against_a_sample_by_sample_loop():
     target = rng.uniform(-3, 3, bounds.size)
     restart = rng.random(bounds.size) < 0.1
     snap = rng.random(bounds.size) < 0.2
-    lock = 0.05
     jump = rng.choice([-1.0, 0.0, 1.0], bounds.size)
     back = 0.1
     hold = rng.choice([0.0, 0.3], bounds.size)
+    lock = rng.choice([0.05, 0.12], bounds.size)  # per measurement (the filter's gate)
     got, end = slew_offset(bounds, target, restart, snap, fast, slow, 0.3, lock, jump, back,
                            hold, travel)
     off, seg, held, expected = 0.3, -1, False, []
@@ -178,15 +223,15 @@ def test_slew_offset_closed_form_against_a_sample_by_sample_loop():
             err = (target[seg] - off + 0.5) % 1.0 - 0.5
             if held:
                 off += np.copysign(min(travel[i] - travel[i - 1], abs(err)), err)
-            elif abs(err) > lock + 1e-12:  # rounding must not keep it in the fast mode
-                off += np.copysign(min(fast[i] - fast[i - 1], abs(err) - lock), err)
+            elif abs(err) > lock[seg] + 1e-12:  # rounding must not keep it in the fast mode
+                off += np.copysign(min(fast[i] - fast[i - 1], abs(err) - lock[seg]), err)
             else:
                 off += np.copysign(min(slow[i] - slow[i - 1], abs(err)), err)
         if i < n and seg + 1 < bounds.size and bounds[seg + 1] == i:
             seg += 1
             err = (target[seg] - off + 0.5) % 1.0 - 0.5
             held = False
-            if (restart[seg] or (snap[seg] and abs(err) > lock)
+            if (restart[seg] or (snap[seg] and abs(err) > lock[seg])
                     or (jump[seg] != 0 and err * jump[seg] > 0)):
                 off = target[seg]
             elif jump[seg] != 0 and abs(err) <= hold[seg]:
@@ -202,6 +247,21 @@ def test_slew_offset_closed_form_against_a_sample_by_sample_loop():
     # they may differ by one sample's slow allowance (< 1e-3)
     assert_allclose(got, expected, atol=1e-3)
     assert abs(((end - off) + 0.5) % 1.0 - 0.5) < 1e-3
+
+
+def test_a_noise_free_constant_speed_swipe_gets_no_correction():
+    """The finger filter on a noise-free 120 mm/s swipe, 50 Hz, on a 0.6 mm texture: the
+    filter is exact from the second touch sample on, so every gap is 0 and the rendered
+    phase is the true position's at every output sample from then on."""
+    layer = _sawtooth(0.6)
+    motion = make_motion("swipe", speed_mm_s=120.0, duration_s=0.6, x0_mm=10.0)
+    trace = sample(motion, 50.0)
+    mu = _run(replace(grating_scene(0.6), layers=(layer,)), trace, "hybrid")[0]
+    t = np.arange(mu.size) / RATE
+    known = (t >= 0.025) & (t < 0.55)  # the second sample takes effect from the next block
+    x_true, y_true = motion.position(t[known])
+    assert_allclose(_wrapped(1.0 - mu[known] - layer.phase_at(x_true, y_true)), 0.0,
+                    rtol=0, atol=1e-9)
 
 
 def test_a_swipe_starts_at_the_measured_phase_once_its_velocity_is_known(tracker_estimates):

@@ -30,7 +30,7 @@ def test_a_constant_speed_swipe_sampled_at_50_hz_is_predicted_exactly():
     velocity 60 mm/s; the tracker's line and the filter's model are both exact there."""
     motion = make_motion("swipe", speed_mm_s=60.0, duration_s=1.0, x0_mm=10.0)
     t_s, rows = _tracks(sample(motion, 50.0), 0.9)
-    s, v, _ = filter_axis(t_s, *rows, (1.0, 0.0))
+    s, v, _, _ = filter_axis(t_s, *rows, (1.0, 0.0))
     known = t_s >= 0.025  # the second sample (20 ms) is used from the next 5 ms block
     x_true, _ = motion.position(t_s)
     assert_allclose(s[known], x_true[known], rtol=0, atol=1e-9)
@@ -39,13 +39,17 @@ def test_a_constant_speed_swipe_sampled_at_50_hz_is_predicted_exactly():
 
 def _imm_by_the_book(times, z, v0, q, stay, r):
     """Blom and Bar-Shalom's IMM with two constant-velocity models, in matrix form:
-    the (s, v) estimate after each measurement z[k] at times[k]."""
+    the (s, v) estimate after each measurement z[k] at times[k], and the standard
+    deviation of its position correction (0 at the first): from the models' predicted
+    positions and variances weighted by their prior chances, moment-matched to one
+    Gaussian of variance P, the correction P / (P + r) times the innovation."""
     x = [np.array([z[0], v0]) for _ in q]
     p = [np.diag([r, V0_MM_S ** 2]) for _ in q]
     mu = np.array([0.5, 0.5])
     trans = np.array([[stay, 1 - stay], [1 - stay, stay]])  # trans[i, j]: i then j
     h = np.array([[1.0, 0.0]])
     out = [np.array([z[0], v0])]
+    sd = [0.0]
     for k in range(1, len(z)):
         d = times[k] - times[k - 1]
         c = trans.T @ mu
@@ -55,9 +59,11 @@ def _imm_by_the_book(times, z, v0, q, stay, r):
               for j in range(2)]
         f = np.array([[1.0, d], [0.0, 1.0]])
         like = np.empty(2)
+        predicted = []
         for j in range(2):
             qm = q[j] * np.array([[d ** 3 / 3, d ** 2 / 2], [d ** 2 / 2, d]])
             xp, pp = f @ x0[j], f @ p0[j] @ f.T + qm
+            predicted.append((xp[0], pp[0, 0]))
             s_var = (h @ pp @ h.T)[0, 0] + r
             gain = (pp @ h.T)[:, 0] / s_var
             innovation = z[k] - xp[0]
@@ -66,7 +72,10 @@ def _imm_by_the_book(times, z, v0, q, stay, r):
             like[j] = norm.pdf(innovation, scale=np.sqrt(s_var))
         mu = like * c / np.sum(like * c)
         out.append(mu[0] * x[0] + mu[1] * x[1])
-    return np.array(out)
+        mean = sum(c[j] * predicted[j][0] for j in range(2))
+        var = sum(c[j] * (predicted[j][1] + (predicted[j][0] - mean) ** 2) for j in range(2))
+        sd.append(var / (var + r) * np.sqrt(var + r))
+    return np.array(out), np.array(sd)
 
 
 def _measured(seed, n_meas=40):
@@ -90,9 +99,11 @@ def _measured(seed, n_meas=40):
 
 def test_the_filter_is_the_textbook_imm_and_predicts_at_its_velocity_between():
     t_s, rows, starts, times, z, v_tracker = _measured(3)
-    s, v, _ = filter_axis(t_s, *rows, (0.0, 1.0))
-    book = _imm_by_the_book(times, z, v_tracker[0], (Q_STEADY, Q_MANOEUVRE), STAY, R_MM2)
+    s, v, sd, _ = filter_axis(t_s, *rows, (0.0, 1.0))
+    book, book_sd = _imm_by_the_book(times, z, v_tracker[0], (Q_STEADY, Q_MANOEUVRE), STAY,
+                                     R_MM2)
     assert_allclose(s[starts], book[:, 0], rtol=1e-10, atol=1e-10)
+    assert_allclose(sd[starts], book_sd, rtol=1e-10, atol=1e-12)
     assert_allclose(v[starts], book[:, 1], rtol=1e-10, atol=1e-10)
     # between measurements: constant velocity from the last estimate
     k = np.arange(t_s.size)
@@ -101,12 +112,42 @@ def test_the_filter_is_the_textbook_imm_and_predicts_at_its_velocity_between():
                     atol=1e-10)
 
 
+def test_the_correction_deviates_as_much_as_the_filter_says():
+    """The filter's ``sd`` is what its corrections scatter by when fingers move as its
+    model says. One model (both q equal: the IMM is one Kalman filter, its sd does not
+    depend on the data), 4000 draws of a finger started where the touch-down measurement
+    and the tracker's velocity say, within their stated errors, then driven by white
+    acceleration of density q, measured every 20 ms with 0.05 mm noise: at each
+    measurement the correction (updated less predicted position) has the standard
+    deviation ``sd`` says, within 5 % (the sampling error of 4000 draws is 1.1 %)."""
+    rng = np.random.default_rng(11)
+    q, d, n_meas, draws = 3.0e3, 0.02, 8, 4000
+    cov = q * np.array([[d ** 3 / 3, d ** 2 / 2], [d ** 2 / 2, d]])
+    t_s = np.arange(n_meas) * d
+    v_tracker = 60.0
+    corrections, sds = np.empty((draws, n_meas - 1)), None
+    for k in range(draws):
+        x = np.array([rng.normal(0.0, np.sqrt(R_MM2)), v_tracker + rng.normal(0.0, V0_MM_S)])
+        z = np.empty(n_meas)
+        z[0] = 0.0  # the finger is x[0] from where it was measured
+        for i in range(1, n_meas):
+            x = np.array([x[0] + d * x[1], x[1]]) + rng.multivariate_normal([0.0, 0.0], cov)
+            z[i] = x[0] + rng.normal(0.0, np.sqrt(R_MM2))
+        ones, zeros = np.ones(n_meas), np.zeros(n_meas)
+        rows = [ones.astype(np.int64), np.full(n_meas, v_tracker), zeros, z, zeros, z, zeros]
+        s, v, sd, _ = filter_axis(t_s, *rows, (1.0, 0.0), q=(q, q))
+        corrections[k] = s[1:] - (s[:-1] + v[:-1] * d)
+        sds = sd[1:]
+    assert_allclose(corrections.std(axis=0), sds, rtol=0.05)
+    assert (sds > 0.0).all()
+
+
 def test_any_split_into_calls_equals_one_call():
     t_s, rows, *_ = _measured(8)
-    whole_s, whole_v, _ = filter_axis(t_s, *rows, (0.0, 1.0))
+    whole_s, whole_v, _, _ = filter_axis(t_s, *rows, (0.0, 1.0))
     parts_s, parts_v, carry = [], [], None
     for lo, hi in zip([0, 1, 333, 4000, 4001], [1, 333, 4000, 4001, t_s.size]):
-        s, v, carry = filter_axis(t_s[lo:hi], *(a[lo:hi] for a in rows), (0.0, 1.0), carry)
+        s, v, _, carry = filter_axis(t_s[lo:hi], *(a[lo:hi] for a in rows), (0.0, 1.0), carry)
         parts_s.append(s)
         parts_v.append(v)
     assert_allclose(np.concatenate(parts_s), whole_s, rtol=1e-12, atol=1e-12)
@@ -121,7 +162,7 @@ def test_a_steady_swipe_gets_less_velocity_noise_than_the_tracker():
     tracker, filtered = [], []
     for seed in range(4):
         t_s, rows = _tracks(sample(motion, 50.0, noise_mm=0.05, seed=seed), 0.7)
-        _, v, _ = filter_axis(t_s, *rows, (1.0, 0.0))
+        _, v, _, _ = filter_axis(t_s, *rows, (1.0, 0.0))
         late = t_s > 0.2
         tracker.append(rows[1][late] - 120.0)
         filtered.append(v[late] - 120.0)
@@ -140,7 +181,7 @@ def test_a_stop_is_not_overshot_by_more_than_half_a_millimetre():
     for seed in range(6):
         motion = make_motion("human", speed_mm_s=80.0, duration_s=1.2, seed=seed)
         t_s, rows = _tracks(sample(motion, 50.0, noise_mm=0.05, seed=seed), 1.15)
-        s, _, _ = filter_axis(t_s, *rows, (1.0, 0.0))
+        s, _, _, _ = filter_axis(t_s, *rows, (1.0, 0.0))
         path = truth(motion, RATE)
         x_true = np.interp(t_s, path.t_s, path.x_mm)
         knots_t = np.asarray(motion.params["knots_t"])

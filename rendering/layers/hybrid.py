@@ -83,21 +83,38 @@ over the glass at most 0.9 times as fast as the finger moves, so the phase does 
 backwards (no spurious edges from prediction errors, which SHO-predicted shows as
 chatter):
 
-- an error larger than ``LOCK_MM`` is a lost lock (a reversal the velocity fit has not
-  caught up with, or a stop it overshot: a 50 ms line fit lags a decelerating finger):
-  it is worked off down to ``LOCK_MM`` whatever the texture, and at no less than
-  ``SLIP * RELOCK_MM_S`` (18 mm/s) while the finger moves at all. Below that speed the
+- an error larger than ``LOCK_MM`` and than ``GATE_SIGMAS`` standard deviations of the
+  finger filter's own position correction at that measurement (``finger_filter``'s
+  ``sd``: the textbook 99 % validation gate, |innovation| > 2.576 sqrt(P + r), stated
+  for the correction P / (P + r) x innovation) is a lost lock (a reversal the velocity
+  fit has not caught up with, or a stop it overshot: a 50 ms line fit lags a
+  decelerating finger). A smaller one is what the filter's own noise explains (its
+  estimate moves by as much from sample to sample while the lock holds): correcting it
+  at up to 0.9 times the phase rate frequency-modulates a fine texture (a burst near
+  twice its frequency early in every touch, where the gate is widest) for a phase the
+  finger does not feel. A lost lock is worked off down to that threshold whatever the
+  texture, and at no less than ``SLIP * RELOCK_MM_S`` (18 mm/s) while the finger moves
+  at all. Below that speed the
   phase may run backwards: a finger that crawls or rests (the screen still reporting
   it) 0.5 mm past a 15 mm grating's line would otherwise feel the wrong band for as
   long as it stays (0.6 s in one of the report's seed-scatter draws), the error the eye
   catches first;
-- within ``LOCK_MM`` the error is worked off only where the lines pass slower than
+- within that threshold the error is worked off only where the lines pass slower than
   ``EVENT_HZ`` (coarse gratings, slow strokes, the ends of strokes): there each edge is
   felt as an event and its place is what matters. Where the texture is a vibration in
-  the tactile band, a residual error under ``LOCK_MM`` is left alone, because correcting it
+  the tactile band, a residual error under the threshold is left alone, because correcting it
   would frequency-modulate the texture, while its phase cannot be felt (seed 003 section
   6: phase goes unnoticed once two periods fit under the fingerpad);
 - a resting finger gets no correction at all: no texture appears under a still finger.
+
+The gate is 0.2 mm on a steady 50 Hz swipe, 0.35-0.48 mm in its first samples, and on
+human-like strokes 0.26 mm typically, up to 0.65, so on a 0.6 mm grating (no error
+exceeds 0.3 mm the shorter way round) a lock is seldom found lost: on the report's
+draws its spectral error fell on every kind of motion (fast swipes 0.131 -> 0.122, SHT
+0.133), and its phase, which no finger feels there, wandered further (time error 1.20
+-> 1.29 on human-like strokes, 0.61 -> 0.89 on slow swipes; alignment 0.15 -> 0.17 and
+0.03 -> 0.06 mm). Coarse layers take or hold their errors by the position lock above
+before this rule is reached: their figures did not change (``rendering/RENDERERS.md``).
 
 So the hybrid has SHT's bandwidth on fine textures and SHO's alignment on coarse ones.
 
@@ -112,7 +129,7 @@ human-like motion): get the 0.6 mm grating's phase right while the finger moves.
 the time error measures a phase the finger cannot feel (seed 003 section 6): 50 Hz
 samples with 0.05 mm noise, extrapolated over up to 20 ms of a minimum-jerk stroke, are
 0.1-0.3 mm off, a third of a period or more. On that grating the hybrid's spectrum is
-below SHT's (0.460 against 0.527 over 16 human-like draws), far below SHO's 0.94; on
+below SHT's (0.447 against 0.527 over 16 human-like draws), far below SHO's 0.94; on
 the 15 and 5 mm gratings its mean time and spectral errors are below SHO-predicted's
 (over 16 draws: -4.6 % and -18 % at 15 mm, -4.6 % and -13 % at 5 mm), far below plain
 SHO's and SHT's, and it feels far fewer edges twice than SHO-predicted (0 against 16 at
@@ -133,8 +150,14 @@ from rendering.tracking.tracks import FingerBlock
 #: fastest correction, as a fraction of the finger's own phase rate (below 1: the phase
 #: does not run backwards), but see RELOCK_MM_S
 SLIP = 0.9
-#: a phase error beyond this (mm) is a lost lock, corrected whatever the texture
+#: a phase error beyond this (mm) is a lost lock, corrected whatever the texture, if it
+#: is also beyond what the finger filter's own uncertainty explains (see GATE_SIGMAS)
 LOCK_MM = 0.1
+#: ... that is, beyond this many standard deviations of the filter's position correction
+#: at the measurement (``rendering.layers.finger_filter.filter_axis``, ``sd``): the 99 %
+#: point of a normal error either way, sqrt of chi-square's with one degree of freedom
+#: (6.635), the usual validation gate of a tracking filter
+GATE_SIGMAS = 2.576
 #: a lost lock is worked off at least at SLIP times this speed (mm/s) while the finger
 #: moves, however slowly
 RELOCK_MM_S = 20.0
@@ -177,7 +200,7 @@ class HybridState:
 
 
 def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, snap: np.ndarray,
-                fast: np.ndarray, slow: np.ndarray, start: float, lock: float,
+                fast: np.ndarray, slow: np.ndarray, start: float, lock: float | np.ndarray,
                 jump: np.ndarray | None = None, back: float = 0.0,
                 hold: np.ndarray | None = None, travel: np.ndarray | None = None
                 ) -> tuple[np.ndarray, float]:
@@ -195,7 +218,8 @@ def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, sna
         offset may move by ``fast[j] - fast[i]`` between samples i and j, within ``lock``
         by the ``slow`` difference.
     start : offset before the first sample (cycles), used unless ``restart[0]``.
-    lock : error (cycles) down to which the ``fast`` allowance applies.
+    lock : error (cycles) down to which the ``fast`` allowance applies: one for every
+        bound, or (k,) one per bound.
     jump : (k,) the position lock (see the module docstring) at each bound: +1 or -1, the
         direction (phase rate's sign) the finger moves in, 0 where it does not apply; an
         error that way is taken at once, one the other way if at most ``back``.
@@ -219,7 +243,9 @@ def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, sna
                        np.ascontiguousarray(target, dtype=np.float64),
                        np.ascontiguousarray(restart, dtype=np.bool_),
                        np.ascontiguousarray(snap, dtype=np.bool_), fast,
-                       np.ascontiguousarray(slow, dtype=np.float64), float(start), float(lock),
+                       np.ascontiguousarray(slow, dtype=np.float64), float(start),
+                       np.ascontiguousarray(np.broadcast_to(np.asarray(lock, dtype=np.float64),
+                                                            (len(bounds),))),
                        np.zeros(len(bounds)) if jump is None
                        else np.ascontiguousarray(jump, dtype=np.float64), float(back),
                        np.zeros(len(bounds)) if hold is None
@@ -239,8 +265,8 @@ def _slew_kernel(bounds, target, restart, snap, fast, slow, start, lock, jump, b
     its first sample; a held gap is worked off at the ``travel`` allowance; otherwise
     ``far = |gap| - lock`` of it (if positive) at the ``fast`` allowance, the rest at the
     ``slow`` one from index ``switch`` on, the first allowance index where the fast part
-    is done. ``held_before``: the first segment continues a held one (the previous
-    call's last; its ``jump`` is 0, so nothing is decided again).
+    is done; ``lock`` (k,) is the segment's. ``held_before``: the first segment continues
+    a held one (the previous call's last; its ``jump`` is 0, so nothing is decided again).
     """
     k_n = bounds.size
     n = fast.size - 1
@@ -257,14 +283,14 @@ def _slew_kernel(bounds, target, restart, snap, fast, slow, start, lock, jump, b
                 _worked_off(fast, slow, travel, b, bounds[k], far, gap, held), gap)
         g = (d - value + 0.5) % 1.0 - 0.5
         held = held_before and k == 0 and not restart[k]
-        if (snap[k] and abs(g) > lock) or (jump[k] != 0.0 and g * jump[k] > 0.0):
+        if (snap[k] and abs(g) > lock[k]) or (jump[k] != 0.0 and g * jump[k] > 0.0):
             value, g = d, 0.0
         elif jump[k] != 0.0 and abs(g) <= hold[k]:
             held = True
         elif jump[k] != 0.0 and abs(g) <= back:
             value, g = d, 0.0
         base, gap, b = value, g, bounds[k]
-        far = 0.0 if held else max(abs(g) - lock, 0.0)
+        far = 0.0 if held else max(abs(g) - lock[k], 0.0)
         switch = min(np.searchsorted(fast, fast[b] + far), n)
         rest = abs(g) - far
         for i in range(b, bounds[k + 1] if k + 1 < k_n else n):
@@ -336,25 +362,28 @@ def phase_kernel(rate, dt_s, touch, has_start, prev_id, prev_phase, phase):
 
 
 @njit(cache=True, nogil=True)
-def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, s_mm, v_mm_s, has_before,
-                before, axis, layer_phase, limits, phase):
+def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, s_mm, v_mm_s, sd_mm,
+                has_before, before, axis, layer_phase, limits, phase):
     """One finger's phase (cycles) for :meth:`HybridRenderer.render`, written to ``phase``.
 
     touch : (n,) int64; vx, vy, x_held, y_held, x_pred, y_pred : (n,) float64, the
     finger's tracks. s_mm, v_mm_s : (n,) its filtered position (mm) and velocity (mm/s)
-    along ``axis`` (``rendering.layers.finger_filter``). before : the carried
+    along ``axis`` (``rendering.layers.finger_filter``), and the standard deviation (mm)
+    of its last position correction (its ``sd``). before : the carried
     :class:`_Finger` fields (touch, phase, offset, target, measured x, measured y,
     measured rate, speed, held), used if ``has_before``. axis : (ax, ay). layer_phase :
     (offset_mm, period_mm), so that ``(ax x + ay y - offset_mm) / period_mm`` is
-    ``layer.phase_at(x, y)``. limits : (dt_s, slip, lock, event_hz, relock rate
-    (cycles/s), position-locked (bool), largest jump back (cycles), hold (s)).
+    ``layer.phase_at(x, y)``. limits : (dt_s, slip, lock (cycles), event_hz, relock rate
+    (cycles/s), position-locked (bool), largest jump back (cycles), hold (s), gate
+    (standard deviations of ``sd_mm``)); a measurement's lost-lock threshold is the
+    larger of lock and the gate.
 
     Returns the new carried fields in ``before``'s order.
     """
     n = touch.size
     ax, ay = axis
     offset_mm, period = layer_phase
-    dt_s, slip, lock, event_hz, relock, locked, back, hold_s = limits
+    dt_s, slip, lock, event_hz, relock, locked, back, hold_s, gate = limits
     b_touch, b_phase, b_offset, b_target, b_x, b_y, b_rate, b_speed, b_held = before
     restart = np.empty(n, dtype=np.bool_)
     measured = np.empty(n)  # the tracker's phase rate (cycles/s): tells new measurements
@@ -372,6 +401,7 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, s_mm, v_mm_s, has
     starts = np.zeros(n + 1, dtype=np.bool_)
     jump = np.zeros(n + 1)
     hold = np.zeros(n + 1)
+    locks = np.empty(n + 1)
     k_n = 0
     if not has_before:
         new0 = True
@@ -379,6 +409,7 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, s_mm, v_mm_s, has
         new0 = restart[0] or x_held[0] != b_x or y_held[0] != b_y or measured[0] != b_rate
     if not new0:  # the previous call's measurement holds, and what was decided at it
         bounds[0], target[0] = 0, b_target
+        locks[0] = max(lock, gate * sd_mm[0] / period)
         k_n = 1
     speed_before = b_speed if has_before else 0.0
     for k in range(n):
@@ -395,6 +426,7 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, s_mm, v_mm_s, has
             starts[k_n] = speed_before == 0.0 and speed > 0.0
             jump[k_n] = math.copysign(1.0, rate[k]) if locked and speed > 0.0 else 0.0
             hold[k_n] = abs(rate[k]) * hold_s if locked and speed > 0.0 else 0.0
+            locks[k_n] = max(lock, gate * sd_mm[k] / period)
             k_n += 1
         speed_before = speed
     # correction allowances: SLIP times the distance travelled (cycles; beyond the lock,
@@ -416,7 +448,7 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, s_mm, v_mm_s, has
         travel[k + 1] = acc_travel * dt_s
     offset = np.empty(n)
     end, held = _slew_kernel(bounds[:k_n], target[:k_n], flags[:k_n], starts[:k_n], fast, slow,
-                             b_offset if has_before else 0.0, lock, jump[:k_n], back,
+                             b_offset if has_before else 0.0, locks[:k_n], jump[:k_n], back,
                              hold[:k_n], travel, not new0 and b_held != 0.0, offset)
     for k in range(n):
         phase[k] += offset[k]
@@ -455,7 +487,7 @@ class HybridRenderer:
         layer_phase = (float(self.layer.offset_mm), float(self.layer.period_mm))
         limits = (self.dt_s, self.slip, self.lock, self.event_hz,
                   RELOCK_MM_S / self.layer.period_mm, self.locked,
-                  BACK_MM / self.layer.period_mm, HOLD_S)
+                  BACK_MM / self.layer.period_mm, HOLD_S, GATE_SIGMAS)
         rows = [np.ascontiguousarray(getattr(block, name), dtype=np.float64)
                 for name in ("vx", "vy", "x_held", "y_held", "x_pred", "y_pred")]
         touch = np.ascontiguousarray(block.touch_id, dtype=np.int64)
@@ -464,9 +496,10 @@ class HybridRenderer:
             fields = _NO_FINGER if before is None else (
                 before.touch, before.phase, before.offset, before.target, *before.measured,
                 before.speed, before.held)
-            s_mm, v_mm_s, filtered = filter_axis(block.t_s, touch[row], *(a[row] for a in rows),
-                                                 self.axis, None if before is None else before.filter)
-            end = _hybrid_row(touch[row], *(a[row] for a in rows), s_mm, v_mm_s,
+            s_mm, v_mm_s, sd_mm, filtered = filter_axis(
+                block.t_s, touch[row], *(a[row] for a in rows), self.axis,
+                None if before is None else before.filter)
+            end = _hybrid_row(touch[row], *(a[row] for a in rows), s_mm, v_mm_s, sd_mm,
                               before is not None, fields, self.axis, layer_phase, limits,
                               phase[row])
             carried[fid] = _Finger(touch=int(end[0]), phase=end[1], offset=end[2], target=end[3],
