@@ -273,3 +273,20 @@ def test_the_noise_is_standard_white_and_keyed_by_touch():
     assert abs(np.corrcoef(z[:10_000], gaussian_noise(0, 0, 2, 0, 10_000))[0, 1]) < 0.05
     # keys are uint64: half of them do not fit an int64 (seed 1's, unlike seed 0's)
     assert np.isfinite(gaussian_noise(1, 0, 1, 0, 10)).all()
+
+
+def test_the_noise_is_normal_out_to_its_tails():
+    """The ziggurat's layers, wedges and tail: the distribution (Kolmogorov-Smirnov) and
+    the share beyond 2, 3, r = 3.654 (where the tail method takes over) and 4 sigma,
+    each within 4 binomial standard deviations of the normal's."""
+    from scipy import stats
+
+    from textures.ar_synthesis import gaussian_noise
+
+    n = 4_000_000
+    z = gaussian_noise(7, 2, 5, 0, n)
+    assert stats.kstest(z, "norm").pvalue > 0.01
+    for a in (2.0, 3.0, 3.6541528853610088, 4.0):
+        p = 2 * stats.norm.sf(a)
+        assert abs((np.abs(z) > a).sum() - n * p) < 4 * np.sqrt(n * p * (1 - p))
+    assert abs(stats.skew(z)) < 0.005 and abs(stats.kurtosis(z)) < 0.01
