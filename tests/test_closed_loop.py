@@ -157,7 +157,7 @@ def test_a_loop_past_its_gain_margin_is_seen_oscillating():
     assert gain_swings(np.array(stage.log_c)) < OSCILLATION_STEPS
     row = margins((REPORT_DELAY_BLOCKS,), SensorParams(), RATE_HZ, BLOCK)["rows"][0]
     ki = row["ki"] * row["gain_margin"] * 1.5
-    _, stage = simulate(Run("grating-15mm", 4, "closed", 2.0), loop_config=LoopConfig(ki=ki))
+    _, stage = simulate(Run("grating-15mm", 4, "closed", 3.0), loop_config=LoopConfig(ki=ki))
     assert set(stage.pipeline.control.ki_by_delay) == {ki}
     assert gain_swings(np.array(stage.log_c)) >= 2 * OSCILLATION_STEPS
 

@@ -264,13 +264,14 @@ def test_feedback_acts_from_the_trackers_first_sight_of_motion(speed, moves):
     assert (state.log_c < 0.0) == moves
 
 
-def _run_late(delay, blocks, lost=()):
+def _run_late(delay, blocks, lost=(), **config):
     """Blocks 0..``blocks``-1 at 1 mm/s (the tracker sees a stroke start); the report of block j (mu0 0.8, then the
     finger gets twice the reduction asked: ratio 0.8 * 0.2) reaches the loop ``delay``
     blocks after block j ends, except those of the blocks in ``lost``, which never come.
-    Returns the loop and its state after each block."""
+    ``config``: LoopConfig fields. Returns the loop and its state after each block."""
     from device.link.forces import ForceHistory
-    loop = ClosedLoop(DeviceProfile(), 5000.0, N_BLOCK, mode="closed")
+    from rendering.control.loop import LoopConfig
+    loop = ClosedLoop(DeviceProfile(), 5000.0, N_BLOCK, mode="closed", config=LoopConfig(**config))
     state, history, states = loop.initial_state(), ForceHistory(), []
     for k in range(blocks):
         j = k - 1 - delay  # the block whose report has just come
@@ -285,20 +286,39 @@ def _run_late(delay, blocks, lost=()):
 @pytest.mark.parametrize("delay", [1, 3, 6])
 def test_late_reports_pair_with_their_own_blocks_and_slow_the_gain(delay):
     """The same reports ``delay`` blocks later: the loop measures the delay, learns the
-    same things from them, ``delay`` blocks later, each gain step scaled by the gain
-    scheduled for that delay against none (the first step's g is the same)."""
+    same things from them, ``delay`` blocks later, each integrator step scaled by the
+    gain scheduled for that delay against none (the first step's g is the same; the
+    first measurement's start of the gain is off here: ``first_step`` 0)."""
     from rendering.control.margins import scheduled_ki
-    now_loop, now = _run_late(0, 12)
-    late_loop, late = _run_late(delay, 12 + delay)
+    now_loop, now = _run_late(0, 12, first_step=0.0)
+    late_loop, late = _run_late(delay, 12 + delay, first_step=0.0)
     assert late[-1].delay_blocks == delay and now[-1].delay_blocks == 0
     assert late[-1].fallbacks == 0 and not late[-1].pending[:-(delay + 1)]
     assert late[-1].mu0 == now[-1].mu0 == 0.8
+    # the first step from the same block (the second asked with mu0 known; the plate
+    # is held still until mu0 is, ``delay`` blocks longer here), its report later
     first = next(k for k, s in enumerate(now) if s.log_c != 0.0)
-    assert late[first + delay - 1].log_c == 0.0  # nothing learnt before its report came
-    ratio = late[first + delay].log_c / now[first].log_c
+    late_first = next(k for k, s in enumerate(late) if s.log_c != 0.0)
+    assert late_first >= first + delay
+    ratio = late[late_first].log_c / now[first].log_c
     ki = [scheduled_ki(d, SensorParams(), 5000.0, N_BLOCK) for d in (0, delay)]
     assert math.isclose(ratio, ki[1] / ki[0], rel_tol=1e-12)
     assert late_loop.ki_by_delay[delay] == ki[1] < ki[0] == now_loop.ki_by_delay[0]
+
+
+@pytest.mark.parametrize("delay", [0, 3])
+def test_the_first_measurement_starts_the_gain_and_blocks_in_flight_are_not_fed_back(delay):
+    """The first measurement moves log c all the way to log c_sent - log g (g: the block's
+    delivered / asked reduction, here 0.8 / the reference), once; the ``delay`` blocks
+    asked with the old gain and still on their way are then not fed back, so the gain
+    holds until the first block asked with the new one comes back."""
+    loop, states = _run_late(delay, 20 + delay)
+    jump = next(k for k, s in enumerate(states) if s.updates)
+    assert states[jump].log_c < 0.0 and states[jump - 1].log_c == 0.0
+    held = [s.log_c for s in states[jump:jump + delay + 1]]
+    assert held == [states[jump].log_c] * (delay + 1)
+    assert states[jump + delay + 1].log_c != states[jump].log_c
+    assert states[jump + delay + 1].updates == 2
 
 
 def test_a_report_that_never_comes_is_given_up_after_max_wait_and_the_rest_pair():

@@ -36,7 +36,9 @@ with several fingers down the loop holds its state and the block is fed forward 
    So ``creep_mm_s`` only asks that the tracker has seen the finger move, and once a
    report shows the finger sliding on the still plate (at least ``min_still`` / 2 still
    samples of its second half reading ``min_rest_mu`` or more) the plate stays still
-   for up to ``probe_s`` (``probing_s`` counts it) whatever the tracker's speed, so
+   until ``probe_s`` after the end of the first block whose report showed it
+   (``probe_from``: its output index; the time counts on the output clock, so a report
+   that comes late does not hold the plate longer) whatever the tracker's speed, so
    that the ratio can settle.
 2. **Feedback** on the depth of modulation: the reduction asked, 1 - mu'_target, passed
    through the same chain, against the reduction measured, 1 - mu'_m, gives the block's
@@ -49,7 +51,16 @@ with several fingers down the loop holds its state and the block is fed forward 
    G times more or less slippery than the model (g = G c), ``s ki`` for one whose
    reduction grows s times as fast with the reduction asked; the margins of
    ``rendering.control.margins`` (with the sensor chain's and the report's delays) say
-   how large s may be.
+   how large s may be. The first measurement starts the gain instead of stepping it:
+   ``log c`` moves ``first_step`` of the way to where it would have put g at 1 for a
+   finger with s = 1 (``log c_sent - log g``, c_sent the gain the measured block was
+   asked with), once per session; the blocks already on their way were asked with the
+   old gain, so they are not fed back (``fed_from``). An integrator scheduled for a
+   late report needs tens of blocks to get there, and the error of a whole session's
+   start is spent meanwhile. It is one step, not a loop, so it cannot oscillate; a
+   finger with s > 1 overshoots it, and the integrator takes that back.
+   Where the probe held the plate still there is nothing asked to compare with: those
+   samples are no reduction asked.
    Anti-windup: c does not grow in a block where the amplitude limit cut the command,
    nor move at all while the finger rests (no sliding, no friction to measure); it
    stays within ``[1/4, 4]``.
@@ -94,6 +105,7 @@ class LoopConfig:
     (``rendering.control.margins.scheduled_ki`` with ``cover_slope``)."""
 
     ki: float | None = None
+    first_step: float = 1.0
     cover_slope: float = COVER_SLOPE
     max_wait_s: float = 0.05
     log_c_max: float = math.log(4.0)
@@ -127,6 +139,8 @@ class LoopConfig:
         fractions = ("min_rest_mu", "settled", "still_seen", "min_reduction", "min_mu")
         bad += [f"{name} = {getattr(self, name)!r} (expected 0 to 1)" for name in fractions
                 if not 0.0 <= getattr(self, name) <= 1.0]
+        if not 0.0 <= self.first_step <= 1.0:
+            bad.append(f"first_step = {self.first_step!r} (expected 0 to 1)")
         if self.ki is not None and not (math.isfinite(self.ki) and self.ki > 0):
             bad.append(f"ki = {self.ki!r} (expected None or a finite value > 0)")
         if not (math.isfinite(self.max_wait_s) and self.max_wait_s >= 0):
@@ -143,10 +157,12 @@ class LoopConfig:
 @dataclass(frozen=True, eq=False)
 class Sent:
     """What the loop asked for in a block sent (the report that comes back pairs with
-    it sample by sample): output index, amplitude (um), target mu', speed (mm/s),
-    whether the limit cut it, and whether it was a one-finger block."""
+    it sample by sample): output index, amplitude (um), target mu' (1 where the probe
+    held the plate still), speed (mm/s), whether the limit cut it, and whether it was a
+    one-finger block."""
 
     index0: int
+    log_c: float
     w_um: np.ndarray
     target: np.ndarray
     speed: np.ndarray
@@ -164,9 +180,10 @@ class ControlState:
     chain: ChainState | None = None
     pending: tuple[Sent, ...] = ()
     delay_blocks: int = 0
+    fed_from: int = 0
     since_report_s: float = 0.0
     good_s: float = 0.0
-    probing_s: float = 0.0
+    probe_from: int | None = None
     fallback: bool = False
     fallbacks: int = 0
     fallback_samples: int = 0
@@ -238,7 +255,9 @@ class ClosedLoop:
             # probe (module docstring, 1): the plate still while the finger starts to slide
             r0 = int(np.argmax(touching))
             slow = np.hypot(fingers.vx[r0], fingers.vy[r0]) < self.config.probe_mm_s
-            hold = slow | self._probing(state)
+            # once a report has shown the finger sliding on the still plate, only the
+            # probe's window holds it: the blocks held since are on their way back
+            hold = (slow & (state.probe_from is None)) | self._probing(state, int(fingers.index0))
             asked[r0] = np.where(hold, np.maximum(asked[r0], 1.0), asked[r0])
         model = self._model(state)
         wanted, clamps = model.invert(asked, fingers.force)
@@ -246,13 +265,16 @@ class ClosedLoop:
         n = mu_target.shape[1]
         if touching.any():
             row = int(np.argmax(touching))
-            w, target = wanted[row], mu_target[row]
+            # the feedback compares with the reduction asked of the plate: none where the
+            # probe held it still (a report that comes late would otherwise read the
+            # probe as a finger that gets no reduction, and wind the gain up)
+            w, target = wanted[row], np.where(asked[row] >= 1.0, 1.0, mu_target[row])
             speed = np.hypot(fingers.vx[row], fingers.vy[row])
         else:
             w, target, speed = np.zeros(n), np.ones(n), np.zeros(n)
         cut = (w >= self.limit_um * (1.0 - 1e-9)) & (target < 1.0)
-        sent = Sent(index0=int(fingers.index0), w_um=w, target=target, speed=speed, cut=cut,
-                    single=single)
+        sent = Sent(index0=int(fingers.index0), log_c=math.log(c), w_um=w, target=target,
+                    speed=speed, cut=cut, single=single)
         held = state.fallback_samples + (n if state.fallback else 0)
         return wanted, clamps, replace(state, pending=state.pending + (sent,),
                                        fallback_samples=held)
@@ -270,7 +292,7 @@ class ClosedLoop:
                 break  # without force reports nothing will come: missed at once
             delay = min(max(late, 0) // self.block_size, len(self.ki_by_delay) - 1)
             state = self._learn(replace(state, pending=state.pending[1:]), sent, report,
-                                delay, "stale" if forces is not None else
+                                delay, now, "stale" if forces is not None else
                                 "absent (no force reports: no device, or one without a lateral force "
                                 "sensor)")
         return state
@@ -286,16 +308,21 @@ class ClosedLoop:
                 "updates": state.updates, "fallbacks": state.fallbacks,
                 "fallback_samples": state.fallback_samples, "messages": list(state.messages)}
 
-    def _probing(self, state: ControlState) -> bool:
+    def _probing(self, state: ControlState, now: int) -> bool:
         """Whether the probe holds the plate still whatever the tracker's speed (module
         docstring, 1): the force report shows the finger sliding on the still plate
-        (``probing_s`` > 0) for less than ``probe_s`` so far."""
-        return 0.0 < state.probing_s < self.config.probe_s + 0.5 * self.block_s
+        (``probe_from``) and less than ``probe_s`` has passed since that block ended;
+        ``now``: the output index of the block being computed."""
+        if state.probe_from is None:
+            return False
+        ended = state.probe_from + self.block_size
+        return now < ended + self.config.probe_s * self.rate_hz - 0.5 * self.block_size
 
     def _learn(self, state: ControlState, sent: Sent, report: ForceReport | None,
-               delay: int, missed: str) -> ControlState:
+               delay: int, now: int, missed: str) -> ControlState:
         """Fold block ``sent``'s report (None: missed, for the reason ``missed``),
-        ``delay`` blocks late, into the state (module docstring, 1, 2, 4)."""
+        ``delay`` blocks late, into the state (module docstring, 1, 2, 4); ``now``: the
+        output index of the next block to be sent."""
         cfg = self.config
         n = sent.w_um.size
         fresh = report is not None and report.index0 == sent.index0 and report.lateral_n.size == n
@@ -335,7 +362,8 @@ class ClosedLoop:
                 if abs(mb - ma) <= cfg.settled * mb:  # not the fingertip's rise into sliding
                     changes["mu0"] = mb
             rising = quiet[late].sum() >= cfg.min_still // 2  # sliding on the still plate
-            changes["probing_s"] = state.probing_s + self.block_s if rising else 0.0
+            first = sent.index0 if state.probe_from is None else state.probe_from
+            changes["probe_from"] = first if rising else None
             return replace(state, **changes)
         if not moving.any():
             return replace(state, **changes)  # at rest: nothing to learn
@@ -356,14 +384,19 @@ class ClosedLoop:
         # feedback from the tracker's first sight of motion: at a stroke's start it lags
         # the finger by tens of ms
         asked_here = moving & grip & (ref >= cfg.min_reduction)
-        if np.count_nonzero(asked_here) >= cfg.min_still:
+        if np.count_nonzero(asked_here) >= cfg.min_still and sent.index0 >= state.fed_from:
             # median of per-sample delivered/asked: robust to the few samples of a stop
             g = _median((1.0 - measured[asked_here]) / ref[asked_here])
-            step = -self.ki_by_delay[delay] * math.log(min(max(g, 0.25), 4.0))
+            error = math.log(min(max(g, 0.25), 4.0))
+            first = state.updates == 0  # the first measurement starts the gain (docstring, 2)
+            step = (cfg.first_step * (sent.log_c - error - state.log_c) if first
+                    else -self.ki_by_delay[delay] * error)
             if step > 0 and np.count_nonzero(sent.cut) > 0.1 * n:
                 step = 0.0  # anti-windup: the limit already cuts what is asked
             changes["log_c"] = min(max(state.log_c + step, -cfg.log_c_max), cfg.log_c_max)
             changes["updates"] = state.updates + 1
+            if first and step:
+                changes["fed_from"] = now  # blocks on their way were asked with the old gain
         if self.mode == "adaptive":  # one RLS step (module docstring, 3)
             pick = np.flatnonzero(sliding & grip)[::cfg.decimate]
             changes["rls"] = cfg.rls.update(state.rls, seen[3:, pick].T,
