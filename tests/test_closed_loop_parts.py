@@ -359,3 +359,25 @@ def test_a_bad_loop_configuration_is_refused_with_its_name(field, value):
     from rendering.control.loop import LoopConfig
     with pytest.raises(ValueError, match=f"loop configuration: {field} = "):
         LoopConfig(**{field: value})
+
+
+def test_a_lost_report_does_not_slow_the_gain_for_good():
+    """The blocks that wait behind a lost report keep the delay their own reports came
+    with: the loop's delay (and so its gain) is that of the reports, not of the wait."""
+    _, states = _run_late(2, 40, lost={4})
+    assert states[-1].delay_blocks == 2
+
+
+def test_a_block_played_at_zero_is_not_fed_back():
+    """An emergency stop zeroes a block after the loop asked for it: the report of a
+    still plate must not read as a finger that got no reduction (winding the gain up)."""
+    from device.link.forces import ForceHistory
+    loop = ClosedLoop(DeviceProfile(), 5000.0, N_BLOCK, mode="closed")
+    state, history = loop.initial_state(), ForceHistory()
+    for k in range(30):
+        if k >= 1:  # mu0 0.8 on the first block; then a finger the stop leaves unreduced
+            history.add(_report((k - 1) * N_BLOCK, 0.8))
+        target, fingers = _block(k * N_BLOCK, 1.0)
+        _, _, state = loop.invert(target, fingers, state, history.window)
+        state = loop.played(state, 0.0)
+    assert state.mu0 == 0.8 and state.log_c == 0.0 and state.updates == 0

@@ -125,7 +125,7 @@ def test_report_writes_its_files(tmp_path, capsys):
     groups = {c["group"] for c in doc["claims"] if c["group"].startswith("closed loop")}
     assert groups == {"closed loop: RMS error", "closed loop: worst finger",
                       "closed loop: amplitude limit", "closed loop: no growing oscillation",
-                      "closed loop: added noise"}
+                      "closed loop: added noise", "closed loop: stability margin"}
     assert "## Closed-loop friction" in markdown and "![closed_loop.png]" in markdown
     assert (out / "closed_loop.png").stat().st_size > 10_000
 

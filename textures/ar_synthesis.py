@@ -149,7 +149,9 @@ def _normal(key, index):
     if u < _ZIG_K[layer]:
         x = np.float64(u) * _ZIG_W[layer]
         return -x if (bits >> _S8) & _ONE else x
-    return _normal_edge(c + _GOLDEN, bits)
+    # the edge's further bits from a hashed start: c + G, c + 2G, ... would run into the
+    # next samples' own counters (c + 2G is sample index + 1's) and tie them together
+    return _normal_edge(_mix(c + _GOLDEN), bits)
 
 
 @njit(cache=True)

@@ -126,10 +126,11 @@ def _start_haptic(args, scene, scene_path: Path, record: Path | None):
         from app.live.haptic_thread import shorten_switch_interval
         from app.live.touch_pump import open_source
         shorten_switch_interval(args.block / args.rate)
+        sim_args = sim_device_args(args)  # refused before the touch screen is opened
         haptic, finish = open_haptic(scene, args.rate, args.block, args.renderer, args.device,
                                      record, faults=args.faults,
                                      source=None if touch is None else open_source(*touch),
-                                     control=args.control, sim_args=sim_device_args(args))
+                                     control=args.control, sim_args=sim_args)
         haptic.start()
         return haptic, finish
     from app.live.haptic_process import HapticConfig, HapticProcess

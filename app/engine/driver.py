@@ -41,6 +41,12 @@ class PipelineStage:
         return out, out.commands_um
 
 
+def force_reports_of(link):
+    """``link.force_report`` for the friction loop, or None for a link whose device
+    announces no lateral force sensor (the loop then says the signal is absent)."""
+    return link.force_report if link.info.has_force_reports else None
+
+
 class RunTimer:
     """Wall time (s) spent in each part of the loop: reading input, computing, writing."""
 

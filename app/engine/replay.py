@@ -24,7 +24,7 @@ import time
 from pathlib import Path
 
 from app.engine.clocks import VirtualClock
-from app.engine.driver import PipelineStage, RunTimer, drive
+from app.engine.driver import PipelineStage, RunTimer, drive, force_reports_of
 from app.engine.sinks import (FRICTION_COLUMNS, FrameSink, LinkSink, ProgressSink, TableSink,
                               command_columns)
 from app.engine.sources import MAX_GAP_S, TraceSource
@@ -93,6 +93,7 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     (the loop acts once a block) and, streaming to a device, the link's queue kept to
     :data:`LOOP_QUEUE_BLOCKS` so that the device's force reports come back within the
     loop's wait (``rendering.control.loop``); the summary gets a ``control`` section.
+    A ``sink`` passed in must then be a link (``device.link.host.CommandSink``).
     ``sim_args``: more ``frictex sim-device`` flags for ``device="sim"`` (e.g. a
     simulated finger's force reports: ``("--finger", "3")``).
     """
@@ -143,7 +144,7 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
         chunk_blocks = max(1, CHUNK_SAMPLES // (block_size * fingers))
     stage = PipelineStage(pipeline)
     if looped and sink is not None:  # the loop reads the device's forces
-        stage = PipelineStage(pipeline, sink.device_force_n, sink.force_report)
+        stage = PipelineStage(pipeline, sink.device_force_n, force_reports_of(sink))
     blocks = drive(stage, source, sinks, VirtualClock(), chunk_blocks=chunk_blocks, timer=timer)
 
     output_s = blocks * block_size / rate_hz

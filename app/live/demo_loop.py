@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import queue
 import re
+import sys
 import threading
 import time
 from pathlib import Path
@@ -371,10 +372,13 @@ class DemoLoop:
             self._log_contacts(snap.record)
 
     def _log_applied(self, count: int, latest: tuple) -> None:
-        """Stops, resumes and switches not logged yet (``latest``: the last of ``count``)."""
+        """Stops, resumes, switches and the friction loop's messages not logged yet
+        (``latest``: the last of ``count``)."""
         for i, (t, event, detail) in enumerate(latest, start=count - len(latest)):
             if i >= self._applied_seen:
                 self.log(event, detail, t)
+                if event == "loop":  # the friction loop fell back or recovered: say so
+                    print(f"frictex: {detail}", file=sys.stderr)
         self._applied_seen = max(self._applied_seen, count)
 
     def _log_contacts(self, record) -> None:

@@ -34,13 +34,13 @@ import queue
 import sys
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from types import SimpleNamespace
 
 import numpy as np
 
 from app.engine.clocks import DevicePacedClock, WallClock
-from app.engine.driver import drive
+from app.engine.driver import drive, force_reports_of
 from app.engine.sinks import LinkSink
 from app.engine.sources import QueueSource
 from device.friction import ClampCounts
@@ -84,7 +84,8 @@ class HapticStats:
     #: the friction loop's figures when the thread stopped (``ClosedLoop.report``), or None
     control: dict | None = None
     #: (output time s of the first block it shaped, "output-stop" | "output-resume" |
-    #: "output-switch", detail) in the order they took effect
+    #: "output-switch" | "loop" (what the friction loop said), detail) in the order they
+    #: took effect
     applied: list = field(default_factory=list)
 
 
@@ -127,9 +128,10 @@ class TouchInput:
 class LiveStage:
     """The live pipeline: scene and renderer switches crossfaded across one block, the
     emergency stop (immediate: 0 um while set; resuming ramps from 0 over a block), the
-    normal force and the force reports the device measures (the friction loop's; what
-    the loop says is written to stderr once, as it happens), and the clamp counts
-    (STYLE.md 5)."""
+    normal force and the force reports the device measures (the friction loop's: it is
+    told what the plate played where a stop, ramp or crossfade changed the commands, and
+    what it says goes to ``stats.applied`` as a "loop" event for the window), and the
+    clamp counts (STYLE.md 5)."""
 
     def __init__(self, pipeline, estop, stats: "HapticStats"):
         self.pipeline = pipeline
@@ -146,7 +148,7 @@ class LiveStage:
 
     def process(self, k: int, samples, n: int):
         change = self._latest_change()
-        out, commands = self._run(k, samples, change)
+        out, commands, played = self._run(k, samples, change)
         t = float(out.t_s[0])
         if change is not None:
             self.stats.applied.append((t, "output-switch",
@@ -156,16 +158,21 @@ class LiveStage:
             self.stats.applied.append((t, "output-stop" if self.stopped else "output-resume", ""))
         if self.stopped:
             commands = np.zeros_like(commands)
+            played = 0.0
         elif self._gain < 1.0:
-            commands = commands * np.linspace(self._gain, 1.0, commands.shape[0] + 1)[1:, None]
+            ramp = np.linspace(self._gain, 1.0, commands.shape[0] + 1)[1:]
+            commands = commands * ramp[:, None]
+            played = played * ramp
             self.stats.ramps += 1
         self._gain = 0.0 if self.stopped else 1.0
         self.stats.clamps.add(out.clamps)
         self.stats.blocks += 1
-        control = self.state.control
-        if control is not None and len(control.messages) > self._said:
-            for message in control.messages[self._said:]:
-                print(f"frictex: {message}", file=sys.stderr)
+        loop, control = self.pipeline.control, self.state.control
+        if loop is not None:
+            # the loop compares its reports with what the plate played, not what it asked
+            self.state = replace(self.state, control=loop.played(control, played))
+            for message in control.messages[self._said:]:  # the window logs them
+                self.stats.applied.append((t, "loop", message))
             self._said = len(control.messages)
         return out, commands
 
@@ -182,7 +189,7 @@ class LiveStage:
         measured = {"normal_force_n": force, "force_reports": self.force_reports}
         if change is None:
             out, self.state = self.pipeline.process(k, samples, self.state, **measured)
-            return out, out.commands_um
+            return out, out.commands_um, 1.0
         # crossfade: both pipelines run this block from the same finger tracks (another
         # device, with other channels, ramps up from 0 instead)
         new, self.render_override = change
@@ -197,7 +204,7 @@ class LiveStage:
         fade = np.linspace(0.0, 1.0, out.commands_um.shape[0] + 1)[1:, None]
         self.stats.ramps += 1
         before = old_out.commands_um * (1.0 - fade) if same_device else 0.0
-        return out, before + out.commands_um * fade
+        return out, before + out.commands_um * fade, fade[:, 0]
 
 
 class SnapshotSink:
@@ -333,7 +340,7 @@ class HapticThread(TouchInput, threading.Thread):
         clock = self.wall
         if self.sink is not None:
             self.stage.device_force = self.sink.device_force_n
-            self.stage.force_reports = self.sink.force_report
+            self.stage.force_reports = force_reports_of(self.sink)
             sinks.insert(0, LinkSink(self.sink, self.block_size))
             if self.pacing == "device":
                 clock = DevicePacedClock(self.sink)

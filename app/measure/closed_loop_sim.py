@@ -5,8 +5,8 @@
 each report to the pipeline's loop ``report_delay_blocks`` blocks after the block it
 measures (0: before the next block; a link's reports come later) and runs the pipeline
 with the reports come so far (the loop's measurement) and the latest one's normal force
-(open and closed loop alike: frictex reads the normal force from the device either
-way). One run::
+(open and closed loop alike, as the live demo reads a device's normal force either way;
+a replay to a device reads it with the loop on). One run::
 
     sink = FingerSink(plant, speed_of, force_of)
     drive(LoopStage(pipeline, sink, report_delay_blocks=4), source, [sink], VirtualClock())

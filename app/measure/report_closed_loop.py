@@ -426,8 +426,9 @@ def claims(section: dict) -> list[Claim]:
     out.append(Claim(
         "closed loop: stability margin", "all", "human", "gain margin / steepest s",
         f"the gain scheduled on the report's delay (0-{rows[-1]['delay_blocks']} blocks) "
-        f"keeps a gain margin of at least {least:.2f}, above the population's steepest s "
-        f"{steepest:.2f}", least - steepest, least - steepest, least - steepest, len(rows),
+        f"keeps a gain margin of at least {least:.2f} (by design: COVER_SLOPE), above the "
+        f"population's steepest s {steepest:.2f} (computed from the fingers, "
+        f"population_slopes)", least - steepest, least - steepest, least - steepest, len(rows),
         bool(steepest < least)))
     ad = section.get("adaptation")
     if ad:

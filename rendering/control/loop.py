@@ -147,8 +147,8 @@ class LoopConfig:
             bad.append(f"first_step = {self.first_step!r} (expected 0 to 1)")
         if self.ki is not None and not (math.isfinite(self.ki) and self.ki > 0):
             bad.append(f"ki = {self.ki!r} (expected None or a finite value > 0)")
-        if not (math.isfinite(self.max_wait_s) and self.max_wait_s >= 0):
-            bad.append(f"max_wait_s = {self.max_wait_s!r} (expected a finite value >= 0)")
+        if not 0.0 <= self.max_wait_s <= 0.5:  # a link's reports keep 1 s of samples
+            bad.append(f"max_wait_s = {self.max_wait_s!r} (expected 0 to 0.5 s)")
         if not (isinstance(self.min_still, int) and self.min_still >= 2):
             bad.append(f"min_still = {self.min_still!r} (expected an integer >= 2: the "
                        "first estimate takes the median of min_still // 2 samples)")
@@ -161,9 +161,10 @@ class LoopConfig:
 @dataclass(frozen=True, eq=False)
 class Sent:
     """What the loop asked for in a block sent (the report that comes back pairs with
-    it sample by sample): output index, amplitude (um), target mu' (1 where the probe
-    held the plate still), speed (mm/s), whether the limit cut it, and whether it was a
-    one-finger block."""
+    it sample by sample): output index, the log gain it was asked with, amplitude (um),
+    target mu' (1 where the probe held the plate still), speed (mm/s), whether the limit
+    cut it, whether it was a one-finger block, and how many blocks late its report came
+    (None until it has)."""
 
     index0: int
     log_c: float
@@ -172,6 +173,7 @@ class Sent:
     speed: np.ndarray
     cut: np.ndarray
     single: bool
+    arrived: int | None = None
 
 
 @dataclass(frozen=True)
@@ -285,22 +287,40 @@ class ClosedLoop:
                                        fallback_samples=held)
 
     def _pair(self, state: ControlState, now: int, forces) -> ControlState:
-        """Fold the blocks sent whose reports have come, oldest first, and any whose report
-        is more than ``max_wait_s`` late as missed (module docstring, 0); ``now``: the
-        output index of the block being computed."""
+        """Note each block's delay as its reports first cover it, then fold the blocks
+        sent whose reports have come, oldest first, and any whose report is more than
+        ``max_wait_s`` late as missed (module docstring, 0); ``now``: the output index of
+        the block being computed. A block folded behind a missed one keeps the delay
+        its own report came with, so one lost report does not slow the gain for good."""
+        if forces is not None:
+            state = replace(state, pending=tuple(
+                sent if sent.arrived is not None or forces(sent.index0, sent.w_um.size) is None
+                else replace(sent, arrived=min(max(now - sent.index0 - sent.w_um.size, 0)
+                                               // self.block_size, len(self.ki_by_delay) - 1))
+                for sent in state.pending))
         while state.pending:
             sent = state.pending[0]
-            n = sent.w_um.size
-            late = now - (sent.index0 + n)  # samples from its end to now
-            report = None if forces is None else forces(sent.index0, n)
-            if report is None and forces is not None and late <= self.wait_samples:
-                break  # without force reports nothing will come: missed at once
-            delay = min(max(late, 0) // self.block_size, len(self.ki_by_delay) - 1)
+            late = now - (sent.index0 + sent.w_um.size)  # samples from its end to now
+            if sent.arrived is None and forces is not None and late <= self.wait_samples:
+                break  # still on its way
+            report = None if sent.arrived is None else forces(sent.index0, sent.w_um.size)
             state = self._learn(replace(state, pending=state.pending[1:]), sent, report,
-                                delay, now, "stale" if forces is not None else
-                                "absent (no force reports: no device, or one without a lateral force "
-                                "sensor)")
+                                sent.arrived or 0, now, "stale" if forces is not None else
+                                "absent (no force reports: no device, or one without a "
+                                "lateral force sensor)")
         return state
+
+    def played(self, state: ControlState, gain) -> ControlState:
+        """The block just sent played at ``gain`` (scalar or (n,)) times its amplitude
+        (an emergency stop: 0; a ramp or crossfade: rising): its report then shows what
+        the plate did, not what the loop asked, so the feedback leaves it out (no
+        reduction asked) and the chain sees the amplitude played."""
+        sent = state.pending[-1] if state.pending else None
+        if sent is None or np.all(np.asarray(gain) == 1.0):
+            return state
+        sent = replace(sent, w_um=sent.w_um * gain, target=np.ones_like(sent.target),
+                       cut=np.zeros_like(sent.cut))
+        return replace(state, pending=state.pending[:-1] + (sent,))
 
     def report(self, state: ControlState) -> dict:
         """The loop's figures after a run, for a summary (JSON-able): mode, the largest
@@ -393,7 +413,8 @@ class ClosedLoop:
             # median of per-sample delivered/asked: robust to the few samples of a stop
             g = _median((1.0 - measured[asked_here]) / ref[asked_here])
             error = math.log(min(max(g, 0.25), 4.0))
-            first = state.updates == 0  # the first measurement starts the gain (docstring, 2)
+            # the first measurement starts the gain (module docstring, 2)
+            first = state.updates == 0 and self.first_step > 0
             step = (self.first_step * (sent.log_c - error - state.log_c) if first
                     else -self.ki_by_delay[delay] * error)
             if step > 0 and np.count_nonzero(sent.cut) > 0.1 * n:

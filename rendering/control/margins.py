@@ -37,8 +37,9 @@ import numpy as np
 from device.finger import SensorParams
 from rendering.control.chain import Chain
 
-#: the integrator's gain per block, at most (reached only with the report before the
-#: next block at 5 kHz, where the cover asks for 0.296)
+#: the integrator's gain per block, at most: the cover asks for less at every delay with
+#: 5 ms blocks (0.296 at 5 kHz, 0.269 at 10 kHz with the report before the next block);
+#: the cap binds only for a faster chain of blocks
 KI_MAX = 0.3
 #: the loop-gain factor s every scheduled gain tolerates: the steepest finger of the
 #: report's population reaches s = 7.37 (``app.measure.report_closed_loop``'s

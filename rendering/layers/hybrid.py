@@ -1,4 +1,4 @@
-"""The hybrid renderer: SHT's synthesis, phase-locked to the measured position.
+"""The hybrid renderer: SHT's synthesis, phase-locked to the finger filter's position.
 
 Seed 003 (section 6) leaves as future work "a joint control strategy unifying the
 advantages of SHO and SHT". SHO (section 4.4.1) is aligned with what the screen shows
@@ -25,7 +25,8 @@ in with weight 0.5, larger ones taken at once), on the report's draws (16 of eac
 50 Hz; ``rendering/RENDERERS.md``): human-like strokes, 5 mm grating time / spectral
 error 0.382 / 0.245 -> 0.354 / 0.213 (SHO-predicted 0.371 / 0.245), edges felt twice
 47 -> 26; 15 mm 0.199 / 0.162 -> 0.185 / 0.134; 0.6 mm spectral 0.524 -> 0.460 (SHT
-0.527); slow swipes, 5 mm 0.272 / 0.111 -> 0.259 / 0.100.
+0.527; before the lost-lock gate below: 0.447 with it); slow swipes, 5 mm 0.272 / 0.111
+-> 0.259 / 0.100.
 
 Coarse layers (period at least ``COARSE_MM``) are position-locked: at each new
 measurement of a moving finger any error ahead, in the finger's direction, and an error
@@ -75,7 +76,8 @@ At touch-down, and at the first measurement after the tracker knew no velocity (
 start of a swipe, before two samples exist; a finger that rested past the prediction
 horizon), the offset puts the phase at the spatial phase of the measured position: the
 finger has just started from rest, and synthesis starts where it is. At every other
-new touch measurement the *error* ``layer.phase_at(x_pred, y_pred) - phase`` is taken
+new touch measurement the *error* between the spatial phase of the filter's position
+along the layer's axis (``s_mm``) and ``phase`` is taken
 (the shorter way round the cycle; on coarse layers less the part the position lock
 above takes at once) and the offset works it off, in general never faster
 than ``SLIP`` times the phase rate of the finger's own motion, i.e. the texture slides
@@ -129,7 +131,7 @@ human-like motion): get the 0.6 mm grating's phase right while the finger moves.
 the time error measures a phase the finger cannot feel (seed 003 section 6): 50 Hz
 samples with 0.05 mm noise, extrapolated over up to 20 ms of a minimum-jerk stroke, are
 0.1-0.3 mm off, a third of a period or more. On that grating the hybrid's spectrum is
-below SHT's (0.447 against 0.527 over 16 human-like draws), far below SHO's 0.94; on
+below SHT's (0.447 against 0.527 over 16 human-like draws, with the lost-lock gate), far below SHO's 0.94; on
 the 15 and 5 mm gratings its mean time and spectral errors are below SHO-predicted's
 (over 16 draws: -4.6 % and -18 % at 15 mm, -4.6 % and -13 % at 5 mm), far below plain
 SHO's and SHT's, and it feels far fewer edges twice than SHO-predicted (0 against 16 at
