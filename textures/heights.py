@@ -181,6 +181,20 @@ class Ridge(_Planes):
         return np.abs(d) <= self.width_mm / 2
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _cosine_sample(out, g, i, u, ax, ay, height_mm):
+    """Sample ``i`` of a raised-cosine shape at ``u`` (0 to 1 across its flank) whose
+    grad u is (ax, ay) per mm: grad h = dh/du (ax, ay), the dh/du factor applied later
+    by ``_cosine_slopes`` (signed zeros off the flank, NaN for a NaN position), and the
+    height in row 0 when ``g`` (the row of dh/dx) leaves room for it."""
+    if 0.0 < u < 1.0:
+        out[g, i], out[g + 1, i] = ax, ay
+    else:
+        out[g, i], out[g + 1, i] = 0.0 * ax, 0.0 * ay
+    if g:
+        out[0, i] = _cosine_height(u, height_mm)
+
+
 @njit(cache=True, nogil=True)
 def _ridge(x, y, line, half, height_mm, out):
     """Fill the planes (``_Planes``) of a :class:`Ridge` of half width ``half`` (mm) whose
@@ -192,13 +206,7 @@ def _ridge(x, y, line, half, height_mm, out):
         d = nx * (x[i] - x0) + ny * (y[i] - y0)
         sign = _sign(d)
         u[i] = abs(d) / half
-        ax, ay = sign * nx / half, sign * ny / half  # grad h = dh/du (ax, ay)
-        if 0.0 < u[i] < 1.0:  # times dh/du in _cosine_slopes
-            out[g, i], out[g + 1, i] = ax, ay
-        else:  # dh/du is 0: signed zeros (NaN for a NaN position)
-            out[g, i], out[g + 1, i] = 0.0 * ax, 0.0 * ay
-        if g:
-            out[0, i] = _cosine_height(u[i], height_mm)
+        _cosine_sample(out, g, i, u[i], sign * nx / half, sign * ny / half, height_mm)
     _cosine_slopes(u, height_mm, out)
 
 
@@ -268,13 +276,7 @@ def _button(x, y, centre, radius_mm, rim_mm, height_mm, out):
         r = np.sqrt(dx * dx + dy * dy)
         inv = 1.0 / (r * rim_mm) if r > 0 else 0.0
         u[i] = (r - plateau) / rim_mm
-        ax, ay = dx * inv, dy * inv  # grad h = dh/du (ax, ay)
-        if 0.0 < u[i] < 1.0:  # times dh/du in _cosine_slopes
-            out[g, i], out[g + 1, i] = ax, ay
-        else:  # dh/du is 0: signed zeros (NaN for a NaN position)
-            out[g, i], out[g + 1, i] = 0.0 * ax, 0.0 * ay
-        if g:
-            out[0, i] = _cosine_height(u[i], height_mm)
+        _cosine_sample(out, g, i, u[i], dx * inv, dy * inv, height_mm)
     _cosine_slopes(u, height_mm, out)
 
 

@@ -81,7 +81,7 @@ class _MovingRight:
 
     def mu_at(self, x, y):
         layer = self.layer
-        _, gx, gy = layer.shape.height_and_gradient(x, y)
+        gx, gy = layer.shape.gradient(x, y)
         speed = 2.0 * layer.v_fade_mm_s
         return layer.mu_of_slope(slope_along_motion(gx, gy, speed, 0.0, layer.v_fade_mm_s,
                                                     layer.rendering == "slope"))
