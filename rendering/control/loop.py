@@ -163,8 +163,7 @@ class Sent:
     """What the loop asked for in a block sent (the report that comes back pairs with
     it sample by sample): output index, the log gain it was asked with, amplitude (um),
     target mu' (1 where the probe held the plate still), speed (mm/s), whether the limit
-    cut it, whether it was a one-finger block, and how many blocks late its report came
-    (None until it has)."""
+    cut it, and whether it was a one-finger block."""
 
     index0: int
     log_c: float
@@ -173,7 +172,6 @@ class Sent:
     speed: np.ndarray
     cut: np.ndarray
     single: bool
-    arrived: int | None = None
 
 
 @dataclass(frozen=True)
@@ -287,25 +285,24 @@ class ClosedLoop:
                                        fallback_samples=held)
 
     def _pair(self, state: ControlState, now: int, forces) -> ControlState:
-        """Note each block's delay as its reports first cover it, then fold the blocks
-        sent whose reports have come, oldest first, and any whose report is more than
-        ``max_wait_s`` late as missed (module docstring, 0); ``now``: the output index of
-        the block being computed. A block folded behind a missed one keeps the delay
-        its own report came with, so one lost report does not slow the gain for good."""
-        if forces is not None:
-            state = replace(state, pending=tuple(
-                sent if sent.arrived is not None or forces(sent.index0, sent.w_um.size) is None
-                else replace(sent, arrived=min(max(now - sent.index0 - sent.w_um.size, 0)
-                                               // self.block_size, len(self.ki_by_delay) - 1))
-                for sent in state.pending))
+        """Fold the blocks sent whose reports have come, oldest first, and any whose report
+        is more than ``max_wait_s`` late as missed (module docstring, 0); ``now``: the
+        output index of the block being computed. The blocks folded behind a missed one
+        waited for it, not for their reports: their wait is not taken as the delay, so
+        one lost report does not slow the gain for good."""
+        behind_missed = False
         while state.pending:
             sent = state.pending[0]
-            late = now - (sent.index0 + sent.w_um.size)  # samples from its end to now
-            if sent.arrived is None and forces is not None and late <= self.wait_samples:
+            n = sent.w_um.size
+            late = now - (sent.index0 + n)  # samples from its end to now
+            report = None if forces is None else forces(sent.index0, n)
+            if report is None and forces is not None and late <= self.wait_samples:
                 break  # still on its way
-            report = None if sent.arrived is None else forces(sent.index0, sent.w_um.size)
+            delay = (state.delay_blocks if behind_missed else
+                     min(max(late, 0) // self.block_size, len(self.ki_by_delay) - 1))
+            behind_missed = behind_missed or report is None
             state = self._learn(replace(state, pending=state.pending[1:]), sent, report,
-                                sent.arrived or 0, now, "stale" if forces is not None else
+                                delay, now, "stale" if forces is not None else
                                 "absent (no force reports: no device, or one without a "
                                 "lateral force sensor)")
         return state
