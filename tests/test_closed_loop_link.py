@@ -85,7 +85,9 @@ def test_the_live_thread_reads_the_links_force_reports():
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["--sim-finger", "3"], "--sim-finger 3: needs --device sim"),
+    (["--sim-finger", "3"], "--sim-finger 3: needs --device sim (a simulated device); no "
+                            "--device was given"),
+    (["--sim-finger", "3", "--device", "/dev/null"], "got --device /dev/null"),
     (["--sim-finger", "-1", "--device", "sim"], "--sim-finger -1: expected a person number >= 0"),
 ])
 def test_sim_finger_needs_the_simulated_device(argv, message, tmp_path, capsys):

@@ -88,6 +88,7 @@ def sim_device_args(args: argparse.Namespace) -> tuple[str, ...]:
     if args.sim_finger < 0:
         raise ValueError(f"--sim-finger {args.sim_finger}: expected a person number >= 0")
     if args.device not in ("sim", "sim:tcp"):
+        given = f"got --device {args.device}" if args.device else "no --device was given"
         raise ValueError(f"--sim-finger {args.sim_finger}: needs --device sim (a simulated "
-                         f"device), got --device {args.device}")
+                         f"device); {given}")
     return ("--finger", str(args.sim_finger))
