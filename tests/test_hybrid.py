@@ -129,15 +129,16 @@ def test_a_lost_lock_under_a_crawling_finger_is_worked_off_at_the_relock_speed(t
 def test_coarse_layers_take_small_errors_and_errors_ahead_at_once(tracker_estimates):
     """Position lock on a 15 mm grating, the finger moving at 40 mm/s across the line at
     7.5 mm: a measurement 0.8 mm or 3 mm ahead of the phase is taken at once, so is one
-    1.5 mm behind (within BACK_MM); one 3 mm behind is not (slewed); the fine 0.6 mm
-    grating takes no error at once."""
+    1.5 mm behind (within BACK_MM) but for the 0.8 mm the finger covers within HOLD_S
+    (held: the phase, 0.7 mm back, short of the line, waits for it); one 3 mm behind is
+    not (slewed); the fine 0.6 mm grating takes no error at once."""
     coarse, fine = grating_scene(15.0).layers[0], grating_scene(0.6).layers[0]
     assert 1.5 < BACK_MM < 3.0 and 15.0 >= COARSE_MM > 0.6
     t = np.arange(400) / RATE
     # (layer, start, jump, taken): the phase reaches start + 0.8 mm, the measurement says
     # start + 0.8 + jump, in the other band (or half period) from it
     for layer, start, jump, taken in ((coarse, 6.2, 0.8, True), (coarse, 6.2, 3.0, True),
-                                      (coarse, 7.8, -1.5, True), (coarse, 9.5, -3.0, False),
+                                      (coarse, 6.9, -1.5, True), (coarse, 9.5, -3.0, False),
                                       (fine, 6.2, 0.25, False)):
         assert layer.mu_at(start + 0.8, 30.0) != layer.mu_at(start + 0.8 + jump, 30.0)
         r = HybridRenderer(layer, RATE)
@@ -199,7 +200,8 @@ def test_a_lost_lock_is_a_gap_beyond_the_filters_own_uncertainty(monkeypatch, ga
 def test_slew_offset_closed_form_against_a_sample_by_sample_loop():
     """The vectorised fill equals the obvious per-sample recurrence, position lock
     (jumps ahead of the finger's direction, and back up to ``back``) and hold (an error
-    behind up to ``hold`` worked off at the ``travel`` allowance) included."""
+    behind up to ``hold`` worked off at the ``travel`` allowance, the part of one up to
+    ``back`` beyond it taken at once) included."""
     rng = np.random.default_rng(5)
     n = 3000
     fast = np.concatenate(([0.0], np.cumsum(rng.uniform(0, 2e-3, n))))
@@ -234,12 +236,11 @@ def test_slew_offset_closed_form_against_a_sample_by_sample_loop():
             if (restart[seg] or (snap[seg] and abs(err) > lock[seg])
                     or (jump[seg] != 0 and err * jump[seg] > 0)):
                 off = target[seg]
-            elif jump[seg] != 0 and abs(err) <= hold[seg]:
+            elif jump[seg] != 0 and abs(err) <= max(hold[seg], back):
+                excess = np.copysign(max(abs(err) - hold[seg], 0.0), err)
+                off += excess
                 held = True
-                decided["held"] += 1
-            elif jump[seg] != 0 and abs(err) <= back:
-                off = target[seg]
-                decided["taken"] += 1
+                decided["taken" if excess else "held"] += 1
         if i < n:
             expected.append(off)
     assert decided["held"] >= 3 and decided["taken"] >= 1  # every branch is exercised

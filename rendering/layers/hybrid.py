@@ -58,9 +58,17 @@ backwards except on a lost lock: a larger error behind (the finger stopped short
 where the velocity fit carried the phase, crawls, or turned back: a reversal is the
 error growing faster than the finger's own speed can cover) is taken at once up to
 ``BACK_MM`` or worked off at the relock speed below, because there the finger will not
-get to the phase soon. Measured on the report's draws (8 of each, 50 Hz, 0.05 mm noise;
-without the hold -> with it): edges felt twice on a 20 mm/s swipe, 15 mm 20 -> 0, 5 mm
-46 -> 0; on human-like strokes 15 mm 4 -> 0, 5 mm 59 -> 19 (the rest at flick stops,
+get to the phase soon. Taken at once is the part beyond what the finger covers within
+``HOLD_S``; that part is held as above, so the phase goes back only to where the finger
+will be one touch interval on. Taking all of it made the rule jump at the hold's edge:
+an error 5 um beyond it undid the edge the finger was 0.2 mm from (the out-and-back
+stroke of ``tests/test_fidelity_motion.py``, draw 4: at 0.52 s the filter's velocity
+fell from 31 to 14.6 mm/s, 0.292 mm in 20 ms, against an error of 0.297 mm; the line
+at 45 mm was felt early, undone and felt again 15 ms later). On the report's
+human-like draws (16) this took the 5 mm grating's edges felt twice from 26 to 17,
+time / spectral error 0.354 / 0.213 -> 0.356 / 0.212; nothing else changed. Measured
+on the report's draws (8 of each, 50 Hz, 0.05 mm noise; without the hold -> with it):
+edges felt twice on a 20 mm/s swipe, 15 mm 20 -> 0, 5 mm 46 -> 0; on human-like strokes 15 mm 4 -> 0, 5 mm 59 -> 19 (the rest at flick stops,
 where the error outgrows 20 ms of the lagging velocity fit; SHO-predicted 4 and 58); the
 slow swipe's alignment error 0.35 -> 0.035 mm (15 mm) and 0.15 -> 0.07 mm (5 mm). The
 price is the time the early band is felt: human-like time error 0.188 -> 0.189 (15 mm)
@@ -133,9 +141,9 @@ samples with 0.05 mm noise, extrapolated over up to 20 ms of a minimum-jerk stro
 0.1-0.3 mm off, a third of a period or more. On that grating the hybrid's spectrum is
 below SHT's (0.447 against 0.527 over 16 human-like draws, with the lost-lock gate), far below SHO's 0.94; on
 the 15 and 5 mm gratings its mean time and spectral errors are below SHO-predicted's
-(over 16 draws: -4.6 % and -18 % at 15 mm, -4.6 % and -13 % at 5 mm), far below plain
+(over 16 draws: -4.6 % and -18 % at 15 mm, -4.0 % and -13 % at 5 mm), far below plain
 SHO's and SHT's, and it feels far fewer edges twice than SHO-predicted (0 against 16 at
-15 mm, 26 against 107 at 5 mm).
+15 mm, 17 against 107 at 5 mm).
 """
 
 from __future__ import annotations
@@ -228,8 +236,9 @@ def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, sna
         None: nowhere.
     back : largest error (cycles) against the finger's direction taken at once.
     hold : (k,) at each bound the largest error (cycles) against the finger's direction
-        that is held instead (taken before ``back``): the offset follows the ``travel``
-        allowance, so that the phase stands still until the finger has caught up.
+        that is held instead: the offset follows the ``travel`` allowance, so that the
+        phase stands still until the finger has caught up; of a larger one up to
+        ``back`` the part beyond ``hold`` is taken at once and the rest held.
         None: nowhere.
     travel : (n + 1,) the finger's own phase travel (cycles) accumulated before each
         sample and, last, after the last one; needed with ``hold``.
@@ -264,7 +273,8 @@ def _slew_kernel(bounds, target, restart, snap, fast, slow, start, lock, jump, b
     and whether the last segment is held.
 
     Per segment (bounds[k] to the next bound) the error ``gap`` to its target is taken at
-    its first sample; a held gap is worked off at the ``travel`` allowance; otherwise
+    its first sample, less at once the part of one behind beyond ``hold`` (up to ``back``);
+    a held gap is worked off at the ``travel`` allowance; otherwise
     ``far = |gap| - lock`` of it (if positive) at the ``fast`` allowance, the rest at the
     ``slow`` one from index ``switch`` on, the first allowance index where the fast part
     is done; ``lock`` (k,) is the segment's. ``held_before``: the first segment continues
@@ -287,10 +297,9 @@ def _slew_kernel(bounds, target, restart, snap, fast, slow, start, lock, jump, b
         held = held_before and k == 0 and not restart[k]
         if (snap[k] and abs(g) > lock[k]) or (jump[k] != 0.0 and g * jump[k] > 0.0):
             value, g = d, 0.0
-        elif jump[k] != 0.0 and abs(g) <= hold[k]:
-            held = True
-        elif jump[k] != 0.0 and abs(g) <= back:
-            value, g = d, 0.0
+        elif jump[k] != 0.0 and abs(g) <= max(hold[k], back):  # behind: beyond the hold at once
+            excess = math.copysign(max(abs(g) - hold[k], 0.0), g)
+            value, g, held = value + excess, g - excess, True
         base, gap, b = value, g, bounds[k]
         far = 0.0 if held else max(abs(g) - lock[k], 0.0)
         switch = min(np.searchsorted(fast, fast[b] + far), n)
