@@ -68,7 +68,8 @@ at 45 mm was felt early, undone and felt again 15 ms later). On the report's
 human-like draws (16) this took the 5 mm grating's edges felt twice from 26 to 17,
 time / spectral error 0.354 / 0.213 -> 0.356 / 0.212; nothing else changed. Measured
 on the report's draws (8 of each, 50 Hz, 0.05 mm noise; without the hold -> with it):
-edges felt twice on a 20 mm/s swipe, 15 mm 20 -> 0, 5 mm 46 -> 0; on human-like strokes 15 mm 4 -> 0, 5 mm 59 -> 19 (the rest at flick stops,
+edges felt twice on a 20 mm/s swipe, 15 mm 20 -> 0, 5 mm 46 -> 0; on human-like strokes
+15 mm 4 -> 0, 5 mm 59 -> 19 (the rest at flick stops,
 where the error outgrows 20 ms of the lagging velocity fit; SHO-predicted 4 and 58); the
 slow swipe's alignment error 0.35 -> 0.035 mm (15 mm) and 0.15 -> 0.07 mm (5 mm). The
 price is the time the early band is felt: human-like time error 0.188 -> 0.189 (15 mm)
