@@ -162,15 +162,15 @@ class LiveStage:
         elif self._gain < 1.0:
             ramp = np.linspace(self._gain, 1.0, commands.shape[0] + 1)[1:]
             commands = commands * ramp[:, None]
-            played = played * ramp
+            played = ramp if played is None else played * ramp
             self.stats.ramps += 1
         self._gain = 0.0 if self.stopped else 1.0
         self.stats.clamps.add(out.clamps)
         self.stats.blocks += 1
         loop, control = self.pipeline.control, self.state.control
         if loop is not None:
-            # the loop compares its reports with what the plate played, not what it asked
-            self.state = replace(self.state, control=loop.played(control, played))
+            if played is not None:  # the plate played other than the loop asked
+                self.state = replace(self.state, control=loop.played(control, played))
             for message in control.messages[self._said:]:  # the window logs them
                 self.stats.applied.append((t, "loop", message))
             self._said = len(control.messages)
@@ -185,11 +185,13 @@ class LiveStage:
                 return latest
 
     def _run(self, k, samples, change):
+        """(output, commands, the gain per sample the new pipeline's commands were
+        crossfaded in with, or None when they go out as computed)."""
         force = None if self.device_force is None else self.device_force()
         measured = {"normal_force_n": force, "force_reports": self.force_reports}
         if change is None:
             out, self.state = self.pipeline.process(k, samples, self.state, **measured)
-            return out, out.commands_um, 1.0
+            return out, out.commands_um, None
         # crossfade: both pipelines run this block from the same finger tracks (another
         # device, with other channels, ramps up from 0 instead)
         new, self.render_override = change

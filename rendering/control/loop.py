@@ -312,9 +312,9 @@ class ClosedLoop:
         (an emergency stop: 0; a ramp or crossfade: rising): its report then shows what
         the plate did, not what the loop asked, so the feedback leaves it out (no
         reduction asked) and the chain sees the amplitude played."""
-        sent = state.pending[-1] if state.pending else None
-        if sent is None or np.all(np.asarray(gain) == 1.0):
+        if not state.pending:
             return state
+        sent = state.pending[-1]
         sent = replace(sent, w_um=sent.w_um * gain, target=np.ones_like(sent.target),
                        cut=np.zeros_like(sent.cut))
         return replace(state, pending=state.pending[:-1] + (sent,))
