@@ -95,3 +95,38 @@ def test_sim_finger_needs_the_simulated_device(argv, message, tmp_path, capsys):
                  *argv]) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_the_live_stage_tells_the_loop_what_an_emergency_stop_played():
+    """A block the emergency stop zeroed is kept by the loop as played at 0 um with no
+    reduction asked (so its report of a still plate is not read as a slippery finger),
+    where the block before it, mid-band, asked for a reduction."""
+    import threading
+    from app.live.haptic_thread import HapticStats, LiveStage
+    from rendering.pipeline import build_pipeline
+    from textures.library import resolve_scene
+    from textures.loader import load_scene
+    pipeline = build_pipeline(load_scene(resolve_scene("grating-15mm")), RATE, 50,
+                              control="closed")
+    estop = threading.Event()
+    stage = LiveStage(pipeline, estop, HapticStats())
+    swipe = _swipe(0.5)
+    block_s = 50 / RATE
+    asking = False
+    for k in range(100):  # slide until the loop asks for a reduction, then stop
+        if asking:
+            estop.set()
+        take = (swipe.t_s >= k * block_s) & (swipe.t_s < (k + 1) * block_s)
+        rows = np.flatnonzero(take)
+        samples = None if not rows.size else make_trace(
+            swipe.t_s[rows], swipe.finger[rows], swipe.x_mm[rows], swipe.y_mm[rows],
+            event=swipe.event[rows])
+        _, commands = stage.process(k, samples, 1)
+        sent = stage.state.control.pending[-1]
+        if asking:
+            break
+        asking = bool((sent.target < 1.0).any() and sent.w_um.any())
+    # the stop came mid-band (7.5 mm at 100 mm/s is 15 blocks): the loop would have
+    # asked again; it keeps what played
+    assert asking and not commands.any()
+    assert not sent.w_um.any() and (sent.target == 1.0).all()
