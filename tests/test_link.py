@@ -272,9 +272,13 @@ def test_unplugging_drops_and_counts_then_reconnects(device):
     in_order_within(index, np.concatenate([np.arange(1000), np.arange(5000, 5500)]))
     after = index >= 5000
     assert np.all(values[after, 0] == 1.0)
-    if core.counters.watchdog_trips == trips:  # no trip after the reconnect: all played
+    # a close that saw no block go out for stall_s gave up on the rest, said so, counted it
+    gave_up = status["unplayed_by_cause"]["stalled"]
+    assert (gave_up > 0) == ("while closing" in err.getvalue())
+    if core.counters.watchdog_trips == trips and not gave_up:  # all played
         np.testing.assert_array_equal(index[after], np.arange(5000, 5500))
-    # else a host starved after the reconnect let the watchdog flush some or all of them
+    # else a host starved after the reconnect let the watchdog flush some or all of them,
+    # or starved the close past stall_s (seen in CI under load: 450 of 500 given up)
     assert status["disconnects"] == 1
     # every commanded sample is played or counted: the device's own log says which played
     accounted(status, index, 1550)
