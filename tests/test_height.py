@@ -1,6 +1,7 @@
 """Height layers: shapes felt by their slope (textures.heights, rendering.layers.height)."""
 
 import math
+from dataclasses import astuple
 
 import numpy as np
 import pytest
@@ -14,8 +15,8 @@ from rendering.pipeline import build_pipeline
 from rendering.tracking.tracks import apply_index
 from scenes import DISPLAY
 from textures.errors import TextureError
-from textures.heights import (ButtonRim, GaussianBump, HeightLayer, HeightMap, Ridge, Step,
-                              read_height_png)
+from textures.heights import (ButtonRim, GaussianBump, HeightLayer, HeightMap,
+                              Ridge, Step, read_height_png)
 from textures.model import Scene, VisualHints
 
 RATE = 10_000.0
@@ -255,4 +256,68 @@ def test_renderer_is_the_saturation_of_the_slope_bit_for_bit(shape, rendering):
     s = slope_along_motion(gx, gy, vx, vy, layer.v_fade_mm_s, rendering == "slope")
     assert (s == 0.0).any() and (s != 0.0).any()
     assert mu.shape == (2, n) and covers.all()
+    assert mu.ravel().tobytes() == layer.mu_of_slope(s).tobytes()
+
+
+BANDED = [shape for shape in SHAPES if shape.slope_band is not None]
+
+
+def _around_band_edges(shape, rng):
+    """Positions on, just inside and just outside the edges of where a shape's slope is
+    (from its parameters, not its band), at random places along them, and random positions
+    over the display."""
+    band = shape.slope_band
+    edges = {Ridge: lambda s: (-s.width_mm / 2, s.width_mm / 2),
+             Step: lambda s: (-s.chamfer_mm / 2, s.chamfer_mm / 2),
+             ButtonRim: lambda s: (s.radius_mm - s.rim_mm, s.radius_mm)}[type(shape)](shape)
+    d = (np.array(edges)[:, None] + np.array([-1e-9, -1e-15, 0.0, 1e-15, 1e-9])).ravel()
+    d = np.concatenate([d, np.nextafter(d, np.inf), np.nextafter(d, -np.inf)])
+    d = np.repeat(d, 40)
+    along = rng.uniform(-30.0, 30.0, d.size)
+    if band.ring:
+        angle = rng.uniform(0.0, 2 * np.pi, d.size)
+        x, y = band.x0_mm + d * np.cos(angle), band.y0_mm + d * np.sin(angle)
+    else:
+        x = band.x0_mm + d * band.nx - along * band.ny
+        y = band.y0_mm + d * band.ny + along * band.nx
+    return (np.concatenate([x, rng.uniform(0.0, 110.0, 4000)]),
+            np.concatenate([y, rng.uniform(0.0, 70.0, 4000)]))
+
+
+@pytest.mark.parametrize("shape", BANDED, ids=lambda s: type(s).__name__)
+def test_outside_its_slope_band_a_shape_is_flat(shape):
+    from rendering.layers.height import _band_samples
+    x, y = _around_band_edges(shape, np.random.default_rng(5))
+    x, y = np.append(x, [np.nan, np.inf, -np.inf, 50.0]), np.append(y, [30.0, 30.0, 1.0, np.inf])
+    at = _band_samples(x, y, np.zeros(x.size), np.zeros(x.size), *astuple(shape.slope_band))
+    outside = np.ones(x.size, bool)
+    outside[at] = False
+    gx, gy = shape.gradient(x, y)
+    assert outside.sum() > 1000 and (~outside).sum() > 500
+    assert np.all(gx[outside] == 0.0) and np.all(gy[outside] == 0.0)  # NaN fails too
+    assert ((gx != 0.0) & ~np.isnan(gx))[~outside].any()  # the band is where slopes are
+
+
+@pytest.mark.parametrize("rendering", ["slope", "magnitude"])
+@pytest.mark.parametrize("shape", BANDED, ids=lambda s: type(s).__name__)
+def test_renderer_skips_the_band_outside_bit_for_bit(shape, rendering):
+    """Around the band's edges, at positions and velocities that are not finite, the
+    renderer gives what the saturation of every sample's slope gives."""
+    from rendering.layers.height import HeightRenderer, slope_along_motion
+    from rendering.tracking.tracks import BLOCK_FIELDS, FingerBlock
+    rng = np.random.default_rng(6)
+    x, y = _around_band_edges(shape, rng)
+    x[:12], y[:12] = [np.nan, np.inf, -np.inf, 50.0] * 3, [30.0, 30.0, 1.0, np.inf] * 3
+    vx, vy = rng.normal(0.0, 80.0, x.size), rng.normal(0.0, 80.0, x.size)
+    vx[::7], vy[::7] = 0.0, 0.0
+    vx[3::50], vy[5::50], vx[7::50] = np.nan, np.inf, -np.inf  # on and off the band
+    n = x.size
+    arrays = {name: np.zeros((1, n)) for name in BLOCK_FIELDS}
+    arrays.update(contact=np.ones((1, n), bool), x_pred=x[None], y_pred=y[None],
+                  vx=vx[None], vy=vy[None])
+    layer = _layer(shape, rendering=rendering, mu_rest=0.8 if rendering == "slope" else 0.6)
+    mu, _, _ = HeightRenderer(layer).render(FingerBlock(0, np.arange(n) / RATE, (0,), **arrays))
+    gx, gy = shape.gradient(x, y)
+    s = slope_along_motion(gx, gy, vx, vy, layer.v_fade_mm_s, rendering == "slope")
+    assert np.isnan(mu).any() and (s != 0.0).sum() > 100 and (s == 0.0).sum() > 1000
     assert mu.ravel().tobytes() == layer.mu_of_slope(s).tobytes()

@@ -14,7 +14,9 @@ Every shape answers ``height_and_gradient(x, y) -> (h, dh/dx, dh/dy)`` (mm, and 
 mm) at arrays of positions (mm), ``gradient(x, y) -> (dh/dx, dh/dy)`` (the same
 gradient without computing the height: what the haptics and the relief use), and
 ``support(x, y)``: where its gradient can be non-zero (for drawing and bounds; the
-layer itself covers its whole region).
+layer itself covers its whole region). A shape whose gradient is 0 away from a strip or
+a ring also has a ``slope_band`` (:class:`SlopeBand`), so that a renderer can skip the
+samples outside it; the others have ``slope_band = None``.
 """
 
 from __future__ import annotations
@@ -38,6 +40,36 @@ RELIEF_EXAGGERATION = 5.0
 #: drawn level per unit of Lambert shade about flat ground's: a slope facing away from the
 #: light (shade 0) draws at 0.5 - 0.7 * 0.707 = 0.005 of the colour range, never clipped
 RELIEF_CONTRAST = 0.7
+
+
+#: a :class:`SlopeBand` is widened by this fraction of its width (plus 1e-9 mm) on either
+#: side: a band test rounds differently from the shape's kernel near the edge, and the
+#: samples it lets in for nothing get their exact (zero) gradient from the kernel
+BAND_MARGIN = 1e-6
+
+
+@dataclass(frozen=True)
+class SlopeBand:
+    """Where a shape's gradient can be non-zero: positions whose distance d (mm) is within
+    [lo_mm, hi_mm], d the distance from (x0_mm, y0_mm) if ``ring``, else the signed
+    distance nx (x - x0_mm) + ny (y - y0_mm) from the line through that point with unit
+    normal (nx, ny). Outside it the gradient is exactly 0 (a signed zero); a position
+    whose d is not finite counts as inside. Made by :func:`_band`."""
+
+    ring: bool
+    x0_mm: float
+    y0_mm: float
+    nx: float
+    ny: float
+    lo_mm: float
+    hi_mm: float
+
+
+def _band(ring: bool, x0: float, y0: float, nx: float, ny: float, lo: float,
+          hi: float) -> SlopeBand:
+    """The :class:`SlopeBand` of d in (lo, hi) (mm), widened by ``BAND_MARGIN``."""
+    pad = BAND_MARGIN * (hi - lo) + 1e-9
+    return SlopeBand(ring, x0, y0, nx, ny, lo - pad, hi + pad)
 
 
 def _from_centre(x, y, cx: float, cy: float):
@@ -130,6 +162,9 @@ class GaussianBump(_Planes):
         np.exp(gauss, out=gauss)  # numpy's, not libm's (a kernel's): they differ in the last digit
         _bump(x, y, centre, self.height_mm, variance, gauss, out)
 
+    #: a gaussian's slope is non-zero everywhere
+    slope_band = None
+
     def support(self, x, y):
         return _from_centre(x, y, self.cx_mm, self.cy_mm)[2] <= 4.0 * self.sigma_mm
 
@@ -175,6 +210,11 @@ class Ridge(_Planes):
     def _fill(self, x, y, out):
         line = (self.x_mm, self.y_mm, *_normal(self.angle_deg + 90.0))
         _ridge(x, y, line, self.width_mm / 2, self.height_mm, out)
+
+    @property
+    def slope_band(self) -> SlopeBand:
+        half = self.width_mm / 2
+        return _band(False, self.x_mm, self.y_mm, *_normal(self.angle_deg + 90.0), -half, half)
 
     def support(self, x, y):
         d = _along(x, y, self.x_mm, self.y_mm, self.angle_deg + 90.0)
@@ -226,6 +266,11 @@ class Step(_Planes):
         line = (self.x_mm, self.y_mm, *_normal(self.angle_deg))
         _step(x, y, line, self.chamfer_mm, self.height_mm, out)
 
+    @property
+    def slope_band(self) -> SlopeBand:
+        half = self.chamfer_mm / 2
+        return _band(False, self.x_mm, self.y_mm, *_normal(self.angle_deg), -half, half)
+
     def support(self, x, y):
         d = _along(x, y, self.x_mm, self.y_mm, self.angle_deg)
         return np.abs(d) <= self.chamfer_mm / 2
@@ -259,6 +304,11 @@ class ButtonRim(_Planes):
 
     def _fill(self, x, y, out):
         _button(x, y, (self.cx_mm, self.cy_mm), self.radius_mm, self.rim_mm, self.height_mm, out)
+
+    @property
+    def slope_band(self) -> SlopeBand:
+        return _band(True, self.cx_mm, self.cy_mm, 0.0, 0.0, self.radius_mm - self.rim_mm,
+                     self.radius_mm)
 
     def support(self, x, y):
         return _from_centre(x, y, self.cx_mm, self.cy_mm)[2] <= self.radius_mm
@@ -304,6 +354,9 @@ class HeightMap(_Planes):
     def _fill(self, x, y, out):
         placement = (self.x_mm, self.y_mm, self.width_mm, self.height_mm)
         _sample_map(self._planes[3 - out.shape[0]:], x, y, placement, out)
+
+    #: a map's slopes are anywhere in its sprite, which usually fills the display
+    slope_band = None
 
     def support(self, x, y):
         x = np.asarray(x, dtype=np.float64)

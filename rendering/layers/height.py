@@ -19,10 +19,14 @@ touch sample adds: gain * |grad h| * |dv| / max(|v|, v_fade)).
 
 Stateless: the slope depends on this sample's position and velocity only. Where s is 0
 (flat ground, a finger at rest, motion along a contour) mu' is mu_rest exactly, and only
-the other samples go through the saturation.
+the other samples go through the saturation. A shape with a ``slope_band`` (a ridge, a
+step, a button's rim) has a gradient of exactly 0 outside it, so there mu' is mu_rest
+without evaluating the shape (unless the velocity is not finite: 0 times it is NaN).
 """
 
 from __future__ import annotations
+
+from dataclasses import astuple
 
 import numpy as np
 from numba import njit
@@ -94,25 +98,49 @@ def _sloped(gx, gy, vx, vy, v_fade_mm_s, signed, mu_rest):
     return mu, sloped[:k], slopes[:k]
 
 
+@njit(cache=True, nogil=True)
+def _band_samples(x, y, vx, vy, ring, x0, y0, nx, ny, lo, hi):
+    """Indices (k,) of the samples among positions (x, y) (mm, (m,)) and velocities (vx,
+    vy) (mm/s, (m,)) that must be evaluated for a shape with that ``SlopeBand``
+    (``textures.heights``, its fields in order): those in the band (a distance that is not
+    finite counts as in) and those whose velocity is not finite."""
+    at = np.empty(x.size, dtype=np.int64)
+    k = 0
+    for i in range(x.size):
+        dx, dy = x[i] - x0, y[i] - y0
+        d = np.sqrt(dx * dx + dy * dy) if ring else nx * dx + ny * dy
+        if lo <= d <= hi or not abs(d) < np.inf or not abs(vx[i]) + abs(vy[i]) < np.inf:
+            at[k] = i
+            k += 1
+    return at[:k]
+
+
 class HeightRenderer:
     """Renders one ``HeightLayer`` from positions and velocities; see the module docstring."""
 
     def __init__(self, layer, rate_hz: float = 10_000.0):
         self.layer = layer
         self.signed = layer.rendering == "slope"
+        band = layer.shape.slope_band
+        self.band = None if band is None else astuple(band)
 
     def initial_state(self):
         return None
 
     def render(self, block: FingerBlock, state=None):
         """mu' (F, n) and coverage (F, n) of the layer under each finger."""
-        layer, x, y = self.layer, block.x_pred, block.y_pred
-        gx, gy = layer.shape.gradient(x, y)
+        layer, shape = self.layer, block.x_pred.shape
         # the block's arrays already share one shape
-        mu, sloped, s = _sloped(gx.ravel(), gy.ravel(), block.vx.ravel(), block.vy.ravel(),
-                                layer.v_fade_mm_s, self.signed, layer.mu_rest)
+        x, y, vx, vy = (a.ravel() for a in (block.x_pred, block.y_pred, block.vx, block.vy))
+        if self.band is not None:
+            at = _band_samples(x, y, vx, vy, *self.band)
+            x, y, vx, vy = x[at], y[at], vx[at], vy[at]
+        gx, gy = layer.shape.gradient(x, y)
+        mu, sloped, s = _sloped(gx, gy, vx, vy, layer.v_fade_mm_s, self.signed, layer.mu_rest)
+        if self.band is not None:
+            mu, sloped = np.full(block.x_pred.size, layer.mu_rest), at[sloped]
         if sloped.size == mu.size:  # the slope is nowhere 0 (a finger sliding on a bump)
             mu = layer.mu_of_slope(s)
         elif sloped.size:
             mu[sloped] = layer.mu_of_slope(s)
-        return mu.reshape(x.shape), layer.covers(x, y), state
+        return mu.reshape(shape), layer.covers(block.x_pred, block.y_pred), state
