@@ -123,8 +123,18 @@ class SeedFrictionModel:
     def _amplitude(self, mu, force, counts: ClampCounts) -> np.ndarray:
         a, beyond = asymptote(force, self.params)  # force may be one value for all of mu
         reduction = (1.0 - mu) / (1.0 - a)  # in [0, 1) where reachable
+        # unreachable targets get eq 3's log1p(-1) = -inf without numpy's log1p, which takes
+        # 10x as long over -1 as over a finite result
+        unreachable = reduction >= 1.0
         with np.errstate(divide="ignore", invalid="ignore"):
-            w = -np.log1p(-np.minimum(reduction, 1.0)) / self.params.b_per_um
+            if unreachable.all():
+                log = np.full(np.shape(reduction), -np.inf)
+            elif unreachable.any():
+                log = np.log1p(-np.where(unreachable, 0.0, reduction))
+                log = np.where(unreachable, -np.inf, log)
+            else:
+                log = np.log1p(-reduction)
+            w = -log / self.params.b_per_um
         if beyond.any():  # asks for a reduction where the model does not hold
             out = beyond & (mu < 1.0)
             counts.force_beyond_model += int(np.count_nonzero(out))

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 
-from device.friction import (CalibratedFrictionModel, SeedFrictionModel, forward_mu,
+from device.friction import (CalibratedFrictionModel, ClampCounts, SeedFrictionModel, forward_mu,
                                 make_friction_model, mu_floor)
 from device.profile import Calibration, DeviceProfile, FrictionParams
 
@@ -149,3 +149,22 @@ def test_calibration_outside_measured_forces_is_counted():
     w, counts = model.invert(np.array([0.8, 0.8]), np.array([0.1, 2.0]))
     assert counts.force_beyond_model == 2
     assert_allclose(w, [0.5, model.invert(0.8, 0.6)[0]], atol=1e-12)
+
+
+def test_amplitude_is_equation_3_bit_for_bit_with_unreachable_targets_among_them():
+    """Unreachable targets skip log1p(-1) (slow in numpy) and still give eq 3's inf."""
+    mu = np.concatenate([np.linspace(-0.5, 1.0, 3001), [0.565, np.nextafter(0.565, 1.0),
+                                                          np.nan, -0.0]])
+    force = np.concatenate([np.full(mu.size - 4, 0.5), [0.5, 0.5, 0.5, 0.9]])
+    params = DEVICE.friction
+    a = np.minimum(params.asymptote_per_n * force, 1.0 - 1e-9)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        eq3 = -np.log1p(-np.minimum((1.0 - mu) / (1.0 - a), 1.0)) / params.b_per_um
+    eq3 = np.where((a == 1.0 - 1e-9) & (mu < 1.0), DEVICE.amplitude_limit_um, eq3)  # beyond
+    cases = ((mu, force, eq3), (mu[:2000], 0.5, eq3[:2000]), (mu[:500], 0.5, eq3[:500]),
+             (mu[2800:2810], 0.5, eq3[2800:2810]), (mu[-4], 0.5, eq3[-4]),
+             (mu[1600], 0.5, eq3[1600]))
+    assert np.isinf(eq3).sum() > 1000
+    for m, f, expected in cases:  # some, all and none unreachable
+        w = MODEL._amplitude(m, f, ClampCounts())
+        assert np.asarray(w).tobytes() == np.asarray(expected).tobytes()
