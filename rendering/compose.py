@@ -32,11 +32,16 @@ def compose(layer_outputs, blends, contact: np.ndarray, finger_masks=None) -> np
     for k, ((layer_mu, covers), blend) in enumerate(zip(layer_outputs, blends)):
         if finger_masks is not None and finger_masks[k] is not None:
             covers = covers & finger_masks[k]
+        # numpy's masked loops take 2.5x as long as plain ones, even with every sample in
+        where = True if covers.all() else covers
+        if where is covers and not covers.any():
+            continue
         if blend == "replace":
-            np.copyto(mu, layer_mu, where=covers)
+            np.copyto(mu, layer_mu, where=where)
         else:
-            np.multiply(mu, layer_mu, out=mu, where=covers)
-    np.copyto(mu, 1.0, where=~contact)
+            np.multiply(mu, layer_mu, out=mu, where=where)
+    if not contact.all():
+        np.copyto(mu, 1.0, where=~contact)
     return mu
 
 

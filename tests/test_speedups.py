@@ -203,18 +203,24 @@ def test_integrate_phase_equals_a_sample_by_sample_loop(runs, start):
     assert abs((carry - expected_carry + 0.5) % 1.0 - 0.5) < 1e-12
 
 
-def test_compose_in_place_equals_the_where_formula():
+@pytest.mark.parametrize("touching", [0.8, 1.0])
+def test_compose_in_place_equals_the_where_formula(touching):
+    """Layers covering some samples, all of them (a plain product) or none (skipped)."""
     rng = np.random.default_rng(7)
     shape = (3, 500)
-    outputs = [(rng.uniform(0.3, 1.0, shape), rng.random(shape) < 0.6) for _ in range(4)]
-    blends = ["multiply", "replace", "multiply", "replace"]
-    masks = [None, rng.random(shape) < 0.5, None, rng.random(shape) < 0.5]
-    contact = rng.random(shape) < 0.8
+    covering = [1.0, 0.6, 0.6, 1.0, 0.6, 0.6, 0.0, 0.0, 0.02]
+    outputs = [(rng.uniform(0.3, 1.0, shape), rng.random(shape) < f) for f in covering]
+    blends = ["replace", "multiply", "replace", "multiply", "multiply", "replace", "multiply",
+              "replace", "multiply"]
+    masks = [None, None, rng.random(shape) < 0.5, None, None, rng.random(shape) < 0.5, None,
+             None, None]
+    contact = rng.random(shape) < touching
     mu = np.ones(shape)
     for (m, c), blend, mask in zip(outputs, blends, masks):
         c = c if mask is None else c & mask
         mu = np.where(c, m, mu) if blend == "replace" else np.where(c, mu * m, mu)
-    assert_array_equal(compose(outputs, blends, contact, masks), np.where(contact, mu, 1.0))
+    composed = compose(outputs, blends, contact, masks)
+    assert composed.tobytes() == np.where(contact, mu, 1.0).tobytes()
 
 
 @pytest.mark.parametrize("force", [0.5, 0.87, 1.2])
