@@ -321,3 +321,24 @@ def test_renderer_skips_the_band_outside_bit_for_bit(shape, rendering):
     s = slope_along_motion(gx, gy, vx, vy, layer.v_fade_mm_s, rendering == "slope")
     assert np.isnan(mu).any() and (s != 0.0).sum() > 100 and (s == 0.0).sum() > 1000
     assert mu.ravel().tobytes() == layer.mu_of_slope(s).tobytes()
+
+
+@pytest.mark.parametrize("signed", [True, False])
+def test_slope_is_the_documented_formula_bit_for_bit(signed):
+    """The slope kernel (one vectorised pass) against the module docstring's formula in numpy,
+    at rest, below and above v_fade, signed zeros, NaN and infinities."""
+    from rendering.layers.height import slope_along_motion
+    rng = np.random.default_rng(8)
+    special = np.array([0.0, -0.0, np.nan, np.inf, -np.inf, 1e-300, 3.0, -1e300])
+    gx, gy, vx, vy = (np.concatenate([rng.normal(0.0, scale, 3000), rng.choice(special, 1000)])
+                      for scale in (0.3, 0.3, 40.0, 40.0))
+    vx[:500], vy[:500] = 0.0, 0.0
+    with np.errstate(invalid="ignore", over="ignore"):
+        speed = np.sqrt(vx * vx + vy * vy)
+        if signed:
+            expected = (gx * vx + gy * vy) / np.maximum(speed, 10.0)
+        else:
+            expected = np.sqrt(gx * gx + gy * gy) * np.minimum(1.0, speed / 10.0)
+    s = slope_along_motion(gx, gy, vx, vy, 10.0, signed)
+    assert np.isnan(s).any() and (s == 0.0).sum() > 500 and np.signbit(s[s == 0.0]).any() == signed
+    assert s.tobytes() == expected.tobytes()

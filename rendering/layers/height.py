@@ -51,51 +51,22 @@ def slope_along_motion(gx, gy, vx, vy, v_fade_mm_s: float, signed: bool) -> np.n
     return _slope_kernel(*(a.ravel() for a in arrays), v_fade_mm_s, signed).reshape(shape)
 
 
-@njit(cache=True, nogil=True)
-def _slope(gx, gy, vx, vy, speed, v_fade_mm_s, signed):
-    """:func:`slope_along_motion` of one sample whose ``speed`` is |(vx, vy)| (mm/s); NaN
-    propagates as numpy's ``maximum`` and ``minimum`` would."""
-    if signed:
-        along = gx * vx + gy * vy
-        if along == 0.0:  # neither product is NaN, so neither is speed: along / it is along
-            return along
-        return along / (v_fade_mm_s if speed < v_fade_mm_s else speed)
-    fade = speed / v_fade_mm_s
-    return np.sqrt(gx * gx + gy * gy) * (1.0 if fade > 1.0 else fade)
-
-
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _slope_kernel(gx, gy, vx, vy, v_fade_mm_s, signed):
-    """:func:`slope_along_motion` on (m,) arrays, one pass."""
+    """:func:`slope_along_motion` on (m,) arrays, one pass without a branch per sample,
+    which the compiler vectorises (numpy's error model: no test of each divisor for 0,
+    none is). NaN propagates as numpy's ``maximum`` and ``minimum`` would."""
     out = np.empty(gx.size)
-    for i in range(gx.size):
-        speed = np.sqrt(vx[i] * vx[i] + vy[i] * vy[i])
-        out[i] = _slope(gx[i], gy[i], vx[i], vy[i], speed, v_fade_mm_s, signed)
+    if signed:
+        for i in range(gx.size):
+            speed = np.sqrt(vx[i] * vx[i] + vy[i] * vy[i])
+            along = gx[i] * vx[i] + gy[i] * vy[i]
+            out[i] = along / (v_fade_mm_s if speed < v_fade_mm_s else speed)
+    else:
+        for i in range(gx.size):
+            fade = np.sqrt(vx[i] * vx[i] + vy[i] * vy[i]) / v_fade_mm_s
+            out[i] = np.sqrt(gx[i] * gx[i] + gy[i] * gy[i]) * (1.0 if fade > 1.0 else fade)
     return out
-
-
-@njit(cache=True, nogil=True)
-def _sloped(gx, gy, vx, vy, v_fade_mm_s, signed, mu_rest):
-    """The slopes of :func:`slope_along_motion` on (m,) arrays, sorted out: mu' (m,) with
-    ``mu_rest`` where the slope is 0 (its mu' exactly, whatever the sign of the zero; the
-    other samples are left to fill), the indices of the others (k,) and their slopes (k,).
-    A finger's speed is computed once per change of its velocity estimate (the tracker
-    changes it at touch samples only)."""
-    m = gx.size
-    mu, sloped, slopes = np.empty(m), np.empty(m, dtype=np.int64), np.empty(m)
-    k = 0
-    wx, wy, speed = np.nan, np.nan, np.nan  # speed = |(wx, wy)|
-    for i in range(m):
-        if vx[i] != wx or vy[i] != wy:  # always true for NaN: recomputed, NaN
-            wx, wy = vx[i], vy[i]
-            speed = np.sqrt(wx * wx + wy * wy)
-        s = _slope(gx[i], gy[i], vx[i], vy[i], speed, v_fade_mm_s, signed)
-        if s == 0.0:
-            mu[i] = mu_rest
-        else:
-            sloped[k], slopes[k] = i, s
-            k += 1
-    return mu, sloped[:k], slopes[:k]
 
 
 @njit(cache=True, nogil=True)
@@ -129,18 +100,19 @@ class HeightRenderer:
 
     def render(self, block: FingerBlock, state=None):
         """mu' (F, n) and coverage (F, n) of the layer under each finger."""
-        layer, shape = self.layer, block.x_pred.shape
+        layer = self.layer
         # the block's arrays already share one shape
         x, y, vx, vy = (a.ravel() for a in (block.x_pred, block.y_pred, block.vx, block.vy))
-        if self.band is not None:
-            at = _band_samples(x, y, vx, vy, *self.band)
+        at = None if self.band is None else _band_samples(x, y, vx, vy, *self.band)
+        if at is not None:
             x, y, vx, vy = x[at], y[at], vx[at], vy[at]
         gx, gy = layer.shape.gradient(x, y)
-        mu, sloped, s = _sloped(gx, gy, vx, vy, layer.v_fade_mm_s, self.signed, layer.mu_rest)
-        if self.band is not None:
-            mu, sloped = np.full(block.x_pred.size, layer.mu_rest), at[sloped]
-        if sloped.size == mu.size:  # the slope is nowhere 0 (a finger sliding on a bump)
+        s = _slope_kernel(gx, gy, vx, vy, layer.v_fade_mm_s, self.signed)
+        sloped = s != 0.0  # NaN too
+        if at is None and sloped.all():  # a finger sliding on a bump: no sample at rest
             mu = layer.mu_of_slope(s)
-        elif sloped.size:
-            mu[sloped] = layer.mu_of_slope(s)
-        return mu.reshape(shape), layer.covers(block.x_pred, block.y_pred), state
+        else:  # mu_rest where the slope is 0, whatever the sign of the zero
+            mu = np.full(block.x_pred.size, layer.mu_rest)
+            where = np.flatnonzero(sloped)
+            mu[where if at is None else at[where]] = layer.mu_of_slope(s[where])
+        return mu.reshape(block.x_pred.shape), layer.covers(block.x_pred, block.y_pred), state
