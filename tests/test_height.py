@@ -342,3 +342,28 @@ def test_slope_is_the_documented_formula_bit_for_bit(signed):
     s = slope_along_motion(gx, gy, vx, vy, 10.0, signed)
     assert np.isnan(s).any() and (s == 0.0).sum() > 500 and np.signbit(s[s == 0.0]).any() == signed
     assert s.tobytes() == expected.tobytes()
+
+
+def test_height_map_is_bilinear_between_pixel_centres_bit_for_bit():
+    """The map kernel against its docstring in numpy: clamped to the edge pixels, gradient
+    0 outside the sprite (positions on, inside and outside its edges)."""
+    hmap = _ripple_map()
+    rng = np.random.default_rng(9)
+    x = np.concatenate([rng.uniform(20.0, 80.0, 3000), [30.0, 70.0, 29.999, 70.001, 50.0]])
+    y = np.concatenate([rng.uniform(10.0, 50.0, 3000), [18.0, 42.0, 30.0, 30.0, 42.000001]])
+    planes = np.stack([hmap.heights_mm, *np.gradient(hmap.heights_mm, 1.0, 1.0)[::-1]])
+    rows, cols = hmap.heights_mm.shape
+    fx = np.minimum(np.maximum((x - 30.0) / 40.0 * cols - 0.5, 0.0), cols - 1.0)
+    fy = np.minimum(np.maximum((y - 18.0) / 24.0 * rows - 0.5, 0.0), rows - 1.0)
+    x0, y0 = np.floor(fx).astype(int), np.floor(fy).astype(int)
+    x1, y1 = np.minimum(x0 + 1, cols - 1), np.minimum(y0 + 1, rows - 1)
+    tx, ty = fx - x0, fy - y0
+    inside = (x >= 30.0) & (x <= 70.0) & (y >= 18.0) & (y <= 42.0)
+    assert 0 < inside.sum() < x.size
+    for k, got in enumerate(hmap.height_and_gradient(x, y)):
+        g = planes[k]
+        top = g[y0, x0] * (1 - tx) + g[y0, x1] * tx
+        bottom = g[y1, x0] * (1 - tx) + g[y1, x1] * tx
+        expected = top * (1 - ty) + bottom * ty
+        expected = expected if k == 0 else np.where(inside, expected, 0.0)
+        assert got.tobytes() == expected.tobytes()
