@@ -92,6 +92,8 @@ class ForceHistory:
         else:  # those starting in (index0 - longest, index0 + n), in arrival order
             lo = bisect.bisect_right(self._starts, index0 - self._longest, self._head)
             hi = bisect.bisect_left(self._starts, index0 + n, lo)
+        if lo == hi:
+            return None  # not come yet: the loop asks for every block sent until it has
         lateral = np.empty(n)
         normal = np.empty(n)
         covered = np.zeros(n, dtype=bool)  # not NaN as the mark: a sensor may send NaN

@@ -15,6 +15,7 @@ the points do not excite (a grating asks for one amplitude only) stays near the 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -49,6 +50,11 @@ class Rls:
         return RlsState(theta=(start.b_per_um, start.asymptote_per_n),
                         info=((float(i0[0]), 0.0), (0.0, float(i0[1]))))
 
+    @cached_property
+    def _forgetting(self) -> float:
+        """lam, the weight of the information so far after one block (module docstring)."""
+        return float(np.exp(-self.block_s / self.memory_s))
+
     def update(self, state: RlsState, jac: np.ndarray, resid: np.ndarray) -> RlsState:
         """One block's points: Jacobian (m, 2) of mu' in (b, k) and residual (m,)
         measured - model (m may be 0); returns the state after them.
@@ -58,7 +64,7 @@ class Rls:
         smallest, 1 / max(``prior_sd``)^2 (4 with the defaults), since forgetting mixes
         it with the prior's and the points only add J^T J / s^2.
         """
-        lam = float(np.exp(-self.block_s / self.memory_s))
+        lam = self._forgetting
         # forgetting toward the prior's information keeps P bounded when points stop
         (i00, i01), (_, i11) = state.info  # symmetric
         sb, sk = self.prior_sd
@@ -68,9 +74,10 @@ class Rls:
         b, k = state.theta
         if resid.size:
             s2 = self.noise_sd ** 2
-            (j00, j01), (_, j11) = (jac.T @ jac / s2).tolist()
-            i00, i01, i11 = i00 + j00, i01 + j01, i11 + j11
-            db, dk = _solve_spd(i00, i01, i11, *(jac.T @ resid / s2).tolist())
+            (j00, j01), (_, j11) = (jac.T @ jac).tolist()
+            i00, i01, i11 = i00 + j00 / s2, i01 + j01 / s2, i11 + j11 / s2
+            r0, r1 = (jac.T @ resid).tolist()
+            db, dk = _solve_spd(i00, i01, i11, r0 / s2, r1 / s2)
             b, k = b + db, k + dk
         return RlsState(theta=(min(max(b, B_BOUNDS[0]), B_BOUNDS[1]),
                                min(max(k, K_BOUNDS[0]), K_BOUNDS[1])),

@@ -13,7 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import lfilter, lfilter_zi
+from numba import njit
+from scipy.signal import lfilter_zi
 
 from device.finger import SensorParams, pole
 
@@ -37,9 +38,12 @@ class Chain:
             self.b = np.convolve(self.b, [1.0 - p])
             self.a = np.convolve(self.a, [1.0, -p])
         self._zi = lfilter_zi(self.b, self.a)
+        self._b = np.zeros(self.a.size)  # b padded to a's length, as lfilter runs it
+        self._b[:self.b.size] = self.b
         self.delay = int(round(sensor.sensor_delay_s * rate_hz))
         #: total group delay at low frequency (samples): one pole adds p / (1 - p)
         self.lag_samples = self.delay + sum(p / (1.0 - p) for p in poles)
+        self.run(np.zeros((1, 1)), self.initial_state([0.0]))  # load the kernel now
 
     def initial_state(self, values) -> ChainState:
         """Each row at rest at its value in ``values`` (k,)."""
@@ -48,7 +52,31 @@ class Chain:
 
     def run(self, x: np.ndarray, state: ChainState) -> tuple[np.ndarray, ChainState]:
         """Filter the rows of ``x`` (k, n) from ``state``; returns (y (k, n), state after)."""
-        y, zi = lfilter(self.b, self.a, x, axis=1, zi=state.zi)
-        line = np.concatenate([state.delay, y], axis=1)
-        n = x.shape[1]
-        return line[:, :n], ChainState(zi=zi, delay=line[:, n:])
+        y, zi, delay = _run(self._b, self.a, np.ascontiguousarray(x, dtype=np.float64),
+                            state.zi, state.delay)
+        return y, ChainState(zi=zi, delay=delay)
+
+
+@njit(cache=True, nogil=True)
+def _run(b, a, x, zi, delay):
+    """:meth:`Chain.run`'s filter and delay line. The filter is scipy's ``lfilter``
+    (direct form II transposed, ``a[0]`` = 1) in its own order of operations, so that
+    its output is lfilter's to the bit; it runs here to leave out lfilter's call
+    overhead (15-20 us a block, more than the filtering)."""
+    k, n = x.shape
+    m = a.size - 1
+    d = delay.shape[1]
+    line = np.empty((k, d + n))
+    zi_out = np.empty((k, m))
+    for r in range(k):
+        z = zi[r].copy()
+        line[r, :d] = delay[r]
+        for i in range(n):
+            xi = x[r, i]
+            yi = z[0] + b[0] * xi
+            for j in range(m - 1):
+                z[j] = z[j + 1] + xi * b[j + 1] - yi * a[j + 1]
+            z[m - 1] = xi * b[m] - yi * a[m]
+            line[r, d + i] = yi
+        zi_out[r] = z
+    return line[:, :n].copy(), zi_out, line[:, n:].copy()
