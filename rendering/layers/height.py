@@ -69,21 +69,19 @@ def _slope_kernel(gx, gy, vx, vy, v_fade_mm_s, signed):
     return out
 
 
-@njit(cache=True, nogil=True)
-def _band_samples(x, y, vx, vy, ring, x0, y0, nx, ny, lo, hi):
-    """Indices (k,) of the samples among positions (x, y) (mm, (m,)) and velocities (vx,
-    vy) (mm/s, (m,)) that must be evaluated for a shape with that ``SlopeBand``
+@njit(cache=True, nogil=True, error_model="numpy")
+def _in_band(x, y, vx, vy, ring, x0, y0, nx, ny, lo, hi):
+    """bool (m,): the samples among positions (x, y) (mm, (m,)) and velocities (vx, vy)
+    (mm/s, (m,)) that must be evaluated for a shape with that ``SlopeBand``
     (``textures.heights``, its fields in order): those in the band (a distance that is not
-    finite counts as in) and those whose velocity is not finite."""
-    at = np.empty(x.size, dtype=np.int64)
-    k = 0
+    finite counts as in) and those whose velocity is not finite. A mask, not indices: a
+    loop that stores an index only for some samples took twice as long on a ring."""
+    out = np.empty(x.size, dtype=np.bool_)
     for i in range(x.size):
         dx, dy = x[i] - x0, y[i] - y0
         d = np.sqrt(dx * dx + dy * dy) if ring else nx * dx + ny * dy
-        if lo <= d <= hi or not abs(d) < np.inf or not abs(vx[i]) + abs(vy[i]) < np.inf:
-            at[k] = i
-            k += 1
-    return at[:k]
+        out[i] = lo <= d <= hi or not abs(d) < np.inf or not abs(vx[i]) + abs(vy[i]) < np.inf
+    return out
 
 
 class HeightRenderer:
@@ -103,8 +101,9 @@ class HeightRenderer:
         layer = self.layer
         # the block's arrays already share one shape
         x, y, vx, vy = (a.ravel() for a in (block.x_pred, block.y_pred, block.vx, block.vy))
-        at = None if self.band is None else _band_samples(x, y, vx, vy, *self.band)
-        if at is not None:
+        at = None
+        if self.band is not None:
+            at = np.flatnonzero(_in_band(x, y, vx, vy, *self.band))
             x, y, vx, vy = x[at], y[at], vx[at], vy[at]
         gx, gy = layer.shape.gradient(x, y)
         s = _slope_kernel(gx, gy, vx, vy, layer.v_fade_mm_s, self.signed)
