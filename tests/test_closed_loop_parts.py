@@ -11,9 +11,10 @@ from app.measure.report_closed_loop import claims, markdown, summarise
 from device.link.forces import ForceReport
 from device.profile import DeviceProfile, FrictionParams
 from rendering.control.adapt import Rls, _solve_spd
+from rendering.control.block_stats import chain_input, median
 from rendering.control.chain import Chain
 from device.finger import SensorParams
-from rendering.control.loop import ClosedLoop, _median
+from rendering.control.loop import ClosedLoop
 
 
 def test_rls_converges_to_the_constants_of_exact_points():
@@ -62,7 +63,37 @@ def test_median_is_numpys_to_the_bit(size):
     rng = np.random.default_rng(size)
     for _ in range(100):
         x = rng.normal(size=size) * 10.0 ** rng.uniform(-6, 6)
-        assert np.float64(_median(x)).tobytes() == np.median(x).tobytes()
+        assert np.float64(median(x)).tobytes() == np.median(x).tobytes()
+
+
+def test_chain_is_scipys_lfilter_and_a_delay_to_the_bit():
+    from scipy.signal import lfilter
+    chain = Chain(SensorParams(), 10_000.0)
+    rng = np.random.default_rng(3)
+    state = chain.initial_state([0.0, 1.0, 0.3])
+    zi, delay = state.zi, state.delay
+    for n in rng.integers(1, 80, size=200):
+        x = rng.normal(size=(3, n)) * 10.0 ** rng.uniform(-3, 3)
+        y, state = chain.run(x, state)
+        filtered, zi = lfilter(chain.b, chain.a, x, axis=1, zi=zi)
+        line = np.concatenate([delay, filtered], axis=1)
+        delay = line[:, n:]
+        assert y.tobytes() == line[:, :n].tobytes()
+        assert state.zi.tobytes() == zi.tobytes() and state.delay.tobytes() == delay.tobytes()
+
+
+def test_chain_input_is_the_models_mu_and_jacobian_to_the_bit():
+    from device.calibration_fit import model_jacobian
+    from device.friction import ASYMPTOTE_MARGIN, forward_mu
+    rng = np.random.default_rng(4)
+    w, target = rng.uniform(0.0, 2.5, 50), rng.uniform(0.2, 1.2, 50)
+    normal = rng.uniform(0.1, 1.2, 50)  # past the model's edge (1.13 F_n >= 1) too
+    b, k = 1.7, 1.1
+    rows = chain_input(target, w, 0.005, normal, np.exp(-b * w), k, 1.0 - ASYMPTOTE_MARGIN)
+    expected = np.stack([np.where(target < 1.0, 1.0 - target, 0.0), (w > 0.005) * 1.0,
+                         forward_mu(w, normal, FrictionParams(b, k)),
+                         *model_jacobian(w, normal, b, k).T])
+    assert rows.tobytes() == expected.tobytes()
 
 
 def test_chain_is_three_poles_and_a_delay_and_splits_exactly():

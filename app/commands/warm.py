@@ -1,11 +1,12 @@
 """``frictex warm``: compile the pipeline's kernels now, once per install.
 
 The per-sample kernels (tracking, SHT phase, the hybrid, modal actuation, height layers,
-recorded textures and effect clips, the CSV writer) are compiled by numba on first use
-and cached beside their sources; setup runs this so that no replay, demo or test pays
-the compilation. It replays a short synthetic stroke on one bundled scene of each kind
-of device into a temporary folder, in every output format, on a scene with a height
-layer of every shape and on a scene with a recorded texture.
+recorded textures and effect clips, the friction loop, the CSV writer) are compiled by
+numba on first use and cached beside their sources; setup runs this so that no replay,
+demo or test pays the compilation. It replays a short synthetic stroke on one bundled
+scene of each kind of device into a temporary folder, in every output format, on a
+scene with a height layer of every shape, on a scene with a recorded texture and with
+the friction loop on.
 """
 
 from __future__ import annotations
@@ -86,6 +87,8 @@ def run(args: argparse.Namespace) -> int:
                                fmt=fmt, render_override=renderer, progress=False)
         for scene in (height_shapes_scene(), recorded_texture_scene()):
             run_replay(scene, sample(motion, 60.0, noise_mm=0.05, seed=2), tmp, progress=False)
+        run_replay("grating-15mm", sample(motion, 60.0, noise_mm=0.05, seed=2), tmp,
+                   control="adaptive", progress=False)  # the friction loop's kernels
     if not args.quiet:
         print(f"frictex: kernels compiled and cached ({time.perf_counter() - start:.1f} s)")
     return 0

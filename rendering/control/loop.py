@@ -92,14 +92,16 @@ import numpy as np
 
 from device.finger import SensorParams
 from device.link.forces import ForceReport
-from device.calibration_fit import model_jacobian
-from device.friction import SeedFrictionModel, forward_mu
+from device.friction import ASYMPTOTE_MARGIN, SeedFrictionModel
 from device.profile import DeviceProfile
 from rendering.control.adapt import Rls, RlsState
+from rendering.control.block_stats import (chain_input, feed_forward, feedback_stats,
+                                           report_peak, rest_stats, sent_rows)
 from rendering.control.chain import Chain, ChainState
 from rendering.control.margins import COVER_SLOPE, scheduled_ki
 from textures.model import CONTROL_MODES
 
+_NONE = np.zeros(0)  # chain_input's model rows left out (closed mode)
 
 
 @dataclass(frozen=True)
@@ -222,7 +224,26 @@ class ClosedLoop:
             scheduled_ki(d, config.sensor, self.rate_hz, self.block_size, config.cover_slope)
             for d in range(int(config.max_wait_s / self.block_s + 1e-9) + 1))
         self.limit_um = float(device.amplitude_limit_um)
-        self._model_of = (device.friction, SeedFrictionModel(device))  # (params, its model)
+        self._cut_um = self.limit_um * (1.0 - 1e-9)  # a command at the limit: cut by it
+        friction = device.friction
+        #: (b, k), the model of those constants
+        self._model_of = ((friction.b_per_um, friction.asymptote_per_n), SeedFrictionModel(device))
+        self._load_kernels()
+
+    def _load_kernels(self) -> None:
+        """Call the kernels that read a report once, on a block of zeros: numba loads them
+        from its cache on their first call (or compiles them), which belongs to building
+        the loop, not to the first block whose report comes back (the pipeline's warm-up
+        block has no report). The arguments have the types the loop passes."""
+        cfg, z = self.config, np.zeros(self.block_size)
+        seen = np.zeros((5 if self.mode == "adaptive" else 2, self.block_size))
+        report_peak(z, z)
+        ratio, *_ = rest_stats(z, z, z, seen[1], cfg.min_normal_n, cfg.creep_mm_s,
+                               cfg.slide_mm_s, cfg.still_seen, cfg.min_rest_mu,
+                               cfg.min_still // 2, True)
+        feedback_stats(ratio, 1.0, z, z, seen, z > 0.0, cfg.min_normal_n, cfg.creep_mm_s,
+                       cfg.slide_mm_s, cfg.min_mu, cfg.min_reduction, cfg.min_still,
+                       cfg.decimate)
 
     def initial_state(self) -> ControlState:
         # chain rows: reduction asked, plate moving, and (adaptive) the model's mu', d/db, d/dk
@@ -235,9 +256,8 @@ class ClosedLoop:
         estimate's, built once per estimate."""
         if self.mode != "adaptive":
             return self._model_of[1]
-        params = state.rls.params
-        if params != self._model_of[0]:
-            self._model_of = (params, SeedFrictionModel(self.device, params))
+        if state.rls.theta != self._model_of[0]:
+            self._model_of = (state.rls.theta, SeedFrictionModel(self.device, state.rls.params))
         return self._model_of[1]
 
     def invert(self, mu_target: np.ndarray, fingers, state: ControlState, forces=None):
@@ -248,51 +268,45 @@ class ClosedLoop:
         samples ``index0 .. index0 + n - 1`` if its reports have covered them so far, or
         None for a device without force reports (module docstring, 0).
         """
-        state = self._pair(state, int(fingers.index0), forces)
+        state, pending = self._pair(state, int(fingers.index0), forces)
         contact = fingers.contact
-        touching = contact.any(axis=1)
-        single = bool(touching.sum() == 1)
-        closed = single and not state.fallback and math.isfinite(state.mu0)
-        c = math.exp(state.log_c) if closed else 1.0
-        reduction = np.maximum(1.0 - mu_target, 0.0)
-        asked = np.where(mu_target < 1.0, 1.0 - c * reduction, mu_target)
+        gain = math.exp(state.log_c) if not state.fallback and math.isfinite(state.mu0) else 1.0
+        asked, count, row = feed_forward(mu_target, contact, gain)
+        single = count == 1
+        c = gain if single else 1.0  # the gain asked with: 1 with several fingers down
         if single and not state.fallback and not math.isfinite(state.mu0):
             # probe (module docstring, 1): the plate still while the finger starts to slide
-            r0 = int(np.argmax(touching))
-            slow = np.hypot(fingers.vx[r0], fingers.vy[r0]) < self.config.probe_mm_s
+            slow = np.hypot(fingers.vx[row], fingers.vy[row]) < self.config.probe_mm_s
             # once a report has shown the finger sliding on the still plate, only the
             # probe's window holds it: the blocks held since are on their way back
             hold = (slow & (state.probe_from is None)) | self._probing(state, int(fingers.index0))
-            asked[r0] = np.where(hold, np.maximum(asked[r0], 1.0), asked[r0])
-        model = self._model(state)
-        wanted, clamps = model.invert(asked, fingers.force)
-        wanted = np.where(contact, wanted, 0.0)
+            asked[row] = np.where(hold, np.maximum(asked[row], 1.0), asked[row])
+        wanted, clamps = self._model(state).invert(asked, fingers.force)
+        # the feedback compares with the reduction asked of the plate: none where the
+        # probe held it still (a report that comes late would otherwise read the
+        # probe as a finger that gets no reduction, and wind the gain up)
+        wanted, target, cut = sent_rows(wanted, contact, asked, mu_target, row, self._cut_um)
         n = mu_target.shape[1]
-        if touching.any():
-            row = int(np.argmax(touching))
-            # the feedback compares with the reduction asked of the plate: none where the
-            # probe held it still (a report that comes late would otherwise read the
-            # probe as a finger that gets no reduction, and wind the gain up)
-            w, target = wanted[row], np.where(asked[row] >= 1.0, 1.0, mu_target[row])
-            speed = np.hypot(fingers.vx[row], fingers.vy[row])
+        if count:
+            w, speed = wanted[row], np.hypot(fingers.vx[row], fingers.vy[row])
         else:
-            w, target, speed = np.zeros(n), np.ones(n), np.zeros(n)
-        cut = (w >= self.limit_um * (1.0 - 1e-9)) & (target < 1.0)
+            w, speed = np.zeros(n), np.zeros(n)
         sent = Sent(index0=int(fingers.index0), log_c=math.log(c), w_um=w, target=target,
                     speed=speed, cut=cut, single=single)
         held = state.fallback_samples + (n if state.fallback else 0)
-        return wanted, clamps, replace(state, pending=state.pending + (sent,),
-                                       fallback_samples=held)
+        return wanted, clamps, replace(state, pending=pending + (sent,), fallback_samples=held)
 
-    def _pair(self, state: ControlState, now: int, forces) -> ControlState:
+    def _pair(self, state: ControlState, now: int,
+              forces) -> tuple[ControlState, tuple[Sent, ...]]:
         """Fold the blocks sent whose reports have come, oldest first, and any whose report
         is more than ``max_wait_s`` late as missed (module docstring, 0); ``now``: the
         output index of the block being computed. The blocks folded behind a missed one
         waited for it, not for their reports: their wait is not taken as the delay, so
-        one lost report does not slow the gain for good."""
+        one lost report does not slow the gain for good. Returns the state after them
+        and the blocks still pending (the state's ``pending`` left for the caller to set)."""
         behind_missed = False
-        while state.pending:
-            sent = state.pending[0]
+        pending, folded = state.pending, 0
+        for sent in pending:
             n = sent.w_um.size
             late = now - (sent.index0 + n)  # samples from its end to now
             report = None if forces is None else forces(sent.index0, n)
@@ -301,11 +315,12 @@ class ClosedLoop:
             delay = (state.delay_blocks if behind_missed else
                      min(max(late, 0) // self.block_size, len(self.ki_by_delay) - 1))
             behind_missed = behind_missed or report is None
-            state = self._learn(replace(state, pending=state.pending[1:]), sent, report,
-                                delay, now, "stale" if forces is not None else
+            folded += 1
+            state = self._learn(state, sent, report, delay, now,
+                                "stale" if forces is not None else
                                 "absent (no force reports: no device, or one without a "
                                 "lateral force sensor)")
-        return state
+        return state, pending[folded:]
 
     def played(self, state: ControlState, gain) -> ControlState:
         """The block just sent played at ``gain`` (scalar or (n,)) times its amplitude
@@ -348,15 +363,15 @@ class ClosedLoop:
         cfg = self.config
         n = sent.w_um.size
         fresh = report is not None and report.index0 == sent.index0 and report.lateral_n.size == n
-        rows = [np.where(sent.target < 1.0, 1.0 - sent.target, 0.0),
-                (sent.w_um > cfg.still_um).astype(np.float64)]
         if self.mode == "adaptive":  # the model's mu' and Jacobian as the sensor sees them
             normal = (np.asarray(report.normal_n, dtype=np.float64) if fresh
                       else np.full(n, self.device.normal_force_n))
             b, k = state.rls.theta
-            rows += [forward_mu(sent.w_um, normal, state.rls.params),
-                     *model_jacobian(sent.w_um, normal, b, k).T]
-        seen, chain = self.chain.run(np.stack(rows), state.chain)
+            rows = chain_input(sent.target, sent.w_um, cfg.still_um, normal,
+                               np.exp(-b * sent.w_um), k, 1.0 - ASYMPTOTE_MARGIN)
+        else:
+            rows = chain_input(sent.target, sent.w_um, cfg.still_um, _NONE, _NONE, 0.0, 1.0)
+        seen, chain = self.chain.run(rows, state.chain)
         if not fresh:
             return self._bad(replace(state, chain=chain), missed, stale=True)
         lat = np.asarray(report.lateral_n, dtype=np.float64)
@@ -371,59 +386,48 @@ class ClosedLoop:
                        delay_blocks=delay)
         if not sent.single:
             return replace(state, **changes)  # several fingers: nothing to learn
-        pressed = nor >= cfg.min_normal_n
-        moving = (sent.speed >= cfg.creep_mm_s) & pressed
-        ratio = lat / np.maximum(nor, cfg.min_normal_n)
-        quiet = (seen[1] < cfg.still_seen) & (ratio >= cfg.min_rest_mu)  # the plate seen still
-        if not math.isfinite(state.mu0):  # the first estimate (docstring, 1)
-            still = quiet & moving
-            late = np.arange(n) >= n // 2
-            a, b = ratio[still & ~late], ratio[still & late]
-            if min(a.size, b.size) >= cfg.min_still // 2:
-                ma, mb = _median(a), _median(b)
-                if abs(mb - ma) <= cfg.settled * mb:  # not the fingertip's rise into sliding
-                    changes["mu0"] = mb
-            rising = quiet[late].sum() >= cfg.min_still // 2  # sliding on the still plate
+        first_estimate = not math.isfinite(state.mu0)
+        ratio, *rest = rest_stats(lat, nor, sent.speed, seen[1], cfg.min_normal_n,
+                                  cfg.creep_mm_s, cfg.slide_mm_s, cfg.still_seen,
+                                  cfg.min_rest_mu, cfg.min_still // 2, first_estimate)
+        if first_estimate:  # (docstring, 1)
+            early, late, quiet_late = rest  # the halves' medians (nan: too few samples)
+            if math.isfinite(late) and abs(late - early) <= cfg.settled * late:
+                changes["mu0"] = late  # not the fingertip's rise into sliding
+            rising = quiet_late >= cfg.min_still // 2  # sliding on the still plate
             first = sent.index0 if state.probe_from is None else state.probe_from
             changes["probe_from"] = first if rising else None
             return replace(state, **changes)
-        if not moving.any():
+        moving, count, m = rest
+        if not moving:
             return replace(state, **changes)  # at rest: nothing to learn
-        sliding = (sent.speed >= cfg.slide_mm_s) & pressed
-        still = sliding & quiet
-        ref = seen[0]
         mu0 = state.mu0
-        count = np.count_nonzero(still)
-        if count >= cfg.min_still:
-            m = _median(ratio[still])  # robust to a stop the tracker sees late
+        if count >= cfg.min_still:  # m: a median, robust to a stop the tracker sees late
             alpha = -math.expm1(-count / (self.rate_hz * cfg.mu0_tau_s))
             mu0 = m if not math.isfinite(mu0) else mu0 + alpha * (m - mu0)
             changes["mu0"] = mu0
         if not math.isfinite(mu0) or fallback:
             return replace(state, **changes)
-        measured = ratio / mu0
-        grip = measured >= cfg.min_mu  # a finger that stuck reads friction near 0
         # feedback from the tracker's first sight of motion: at a stroke's start it lags
-        # the finger by tens of ms
-        asked_here = moving & grip & (ref >= cfg.min_reduction)
-        if np.count_nonzero(asked_here) >= cfg.min_still and sent.index0 >= state.fed_from:
-            # median of per-sample delivered/asked: robust to the few samples of a stop
-            g = _median((1.0 - measured[asked_here]) / ref[asked_here])
+        # the finger by tens of ms; a finger that stuck reads friction near 0 (min_mu)
+        asked, g, cut, jac, resid = feedback_stats(
+            ratio, mu0, nor, sent.speed, seen, sent.cut, cfg.min_normal_n, cfg.creep_mm_s,
+            cfg.slide_mm_s, cfg.min_mu, cfg.min_reduction, cfg.min_still, cfg.decimate)
+        if asked >= cfg.min_still and sent.index0 >= state.fed_from:
+            # g: median of per-sample delivered/asked, robust to the few samples of a stop
             error = math.log(min(max(g, 0.25), 4.0))
             # the first measurement starts the gain (module docstring, 2)
             first = state.updates == 0 and self.first_step > 0
             step = (self.first_step * (sent.log_c - error - state.log_c) if first
                     else -self.ki_by_delay[delay] * error)
-            if step > 0 and np.count_nonzero(sent.cut) > 0.1 * n:
+            if step > 0 and cut > 0.1 * n:
                 step = 0.0  # anti-windup: the limit already cuts what is asked
             changes["log_c"] = min(max(state.log_c + step, -cfg.log_c_max), cfg.log_c_max)
             changes["updates"] = state.updates + 1
             if first and step:
                 changes["fed_from"] = now  # blocks on their way were asked with the old gain
         if self.mode == "adaptive":  # one RLS step (module docstring, 3)
-            pick = np.flatnonzero(sliding & grip)[::cfg.decimate]
-            changes["rls"] = cfg.rls.update(state.rls, seen[3:, pick].T,
-                                            measured[pick] - seen[2, pick])
+            changes["rls"] = cfg.rls.update(state.rls, jac, resid)
         return replace(state, **changes)
 
     def _bad(self, state: ControlState, problem: str, stale: bool) -> ControlState:
@@ -442,10 +446,10 @@ class ClosedLoop:
 
 def _problem(lat: np.ndarray, nor: np.ndarray, touching: bool, cfg: LoopConfig) -> str:
     """Why a report is not a finger ("" if it is); see the module docstring, 4."""
-    peaks = float(np.abs(lat).max(initial=0.0)), float(np.abs(nor).max(initial=0.0))
-    if not (math.isfinite(peaks[0]) and math.isfinite(peaks[1])):  # max passes nan and inf on
+    peak = report_peak(lat, nor)
+    if not math.isfinite(peak):
         return "not finite"
-    if max(peaks) >= 0.999 * cfg.sensor.full_scale_n:
+    if peak >= 0.999 * cfg.sensor.full_scale_n:
         return "saturated"
     if touching:
         mean_nor = float(nor.sum()) / nor.size  # as ndarray.mean, without its overhead
@@ -456,11 +460,3 @@ def _problem(lat: np.ndarray, nor: np.ndarray, touching: bool, cfg: LoopConfig) 
             return f"implausible (F_t / F_n = {ratio:.3g})"
     return ""
 
-
-def _median(x: np.ndarray) -> float:
-    """``np.median`` of a non-empty finite 1-d array, to the bit, without its overhead
-    (11 us against 1.3 us on 30 samples): the middle of the sorted values, or the mean
-    of the middle two."""
-    s = np.sort(x)
-    half = s.size // 2
-    return float(s[half]) if s.size % 2 else float((s[half - 1] + s[half]) / 2.0)
