@@ -19,6 +19,8 @@ import sys
 import threading
 from typing import NoReturn
 
+from app.engine.heap import keep_freed_memory
+
 #: subcommand -> (module in app/, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
     "validate": ("app.commands.validate", "check texture files; report every problem with file, line and field"),
@@ -69,6 +71,7 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
 
 def main(argv: list[str] | None = None) -> int:
     """Run ``frictex`` with ``argv`` (default: sys.argv[1:]); return the exit code."""
+    keep_freed_memory()  # a replay's blocks would fault their pages in again every call
     argv = sys.argv[1:] if argv is None else argv
     parser, subparsers = build_parser()
     name = next((a for a in argv if not a.startswith("-")), None)
