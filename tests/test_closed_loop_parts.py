@@ -412,3 +412,29 @@ def test_a_block_played_at_zero_is_not_fed_back():
         _, _, state = loop.invert(target, fingers, state, history.window)
         state = loop.played(state, 0.0)
     assert state.mu0 == 0.8 and state.log_c == 0.0 and state.updates == 0
+
+
+@pytest.mark.parametrize("target, held_again", [(0.6, False), (0.95, True)])
+def test_a_tracker_that_read_the_finger_fast_has_released_the_probe(target, held_again):
+    """At a stroke's start the tracker's speed flickers around ``probe_mm_s``: after it
+    has read the finger fast once, a slow reading holds the plate again only where the
+    reduction withheld (1 - target) is at most ``rehold_reduction``, not on a band that
+    asks for a deep one (the finger would feel the whole reduction go)."""
+    loop = ClosedLoop(DeviceProfile(), 5000.0, N_BLOCK, mode="closed")
+
+    def block(k, speed, state):
+        mu, fingers = _block(k * N_BLOCK, speed, target=target)
+        wanted, _, state = loop.invert(mu, fingers, state, lambda index0, n: None)
+        return wanted[0], state
+    w, state = block(0, 1.0, loop.initial_state())
+    assert not w.any()  # slow from touch-down: the probe holds the plate still
+    w, state = block(1, 10.0, state)
+    assert w.min() > 0.0 and state.probe_released
+    w, state = block(2, 1.0, state)  # slow again, no report yet
+    assert (not w.any()) == held_again
+    # within one block: slow samples before the first fast one are still held
+    speed = np.where(np.arange(N_BLOCK) < 10, 1.0, 10.0)
+    mu, fingers = _block(0, 0.0, target=target)
+    fingers.vx = speed[None, :]
+    wanted, _, state = loop.invert(mu, fingers, loop.initial_state(), lambda index0, n: None)
+    assert not wanted[0, :10].any() and wanted[0, 10:].min() > 0.0 and state.probe_released
