@@ -69,7 +69,7 @@ def _slope_kernel(gx, gy, vx, vy, v_fade_mm_s, signed):
     return out
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True)
 def _in_band(x, y, vx, vy, ring, x0, y0, nx, ny, lo, hi):
     """bool (m,): the samples among positions (x, y) (mm, (m,)) and velocities (vx, vy)
     (mm/s, (m,)) that must be evaluated for a shape with that ``SlopeBand``
