@@ -438,3 +438,37 @@ def test_a_tracker_that_read_the_finger_fast_has_released_the_probe(target, held
     fingers.vx = speed[None, :]
     wanted, _, state = loop.invert(mu, fingers, loop.initial_state(), lambda index0, n: None)
     assert not wanted[0, :10].any() and wanted[0, 10:].min() > 0.0 and state.probe_released
+
+
+def test_the_gain_follows_a_finger_whose_reduction_depends_on_its_speed():
+    """A finger that gets G(v) times the reduction asked, G = 1 at 20 mm/s and 0.5 at
+    120 mm/s (it slides faster, it gets less), strokes alternating between the two: the
+    gain learns both, c(v) = 1 / G(v) within 3 %, where one gain for every speed would
+    sit between them; at each step the gain at the block's speed moves as the scalar
+    integrator's would (normalised LMS)."""
+    loop = ClosedLoop(DeviceProfile(), 5000.0, N_BLOCK, mode="closed")
+    mu0, target = 0.8, 0.9  # twice its reduction is within the plate's reach
+    fraction = {1.0: 1.0, 20.0: 1.0, 120.0: 0.5}
+    state = loop.initial_state()
+    sent = {}  # block -> (speed, gain asked with)
+    for k in range(1200):
+        speed = 1.0 if k < 2 else 20.0 if (k // 40) % 2 == 0 else 120.0  # held, then strokes
+        report = None
+        if k >= 1:
+            v, c = sent[k - 1]
+            held = c is None  # the probe held the plate still: the finger reads mu0
+            ratio = mu0 if held else mu0 * (1.0 - fraction[v] * c * (1.0 - target))
+            report = _report((k - 1) * N_BLOCK, ratio)
+        before = state
+        mu, fingers = _block(k * N_BLOCK, speed, target=target)
+        _, _, state = loop.invert(mu, fingers, state, lambda index0, n, r=report: (
+            r if r is not None and index0 == r.index0 and n == N_BLOCK else None))
+        if state.updates > before.updates > 0:  # a feedback step: at the measured speed
+            v = sent[k - 1][0]  # the gain moved by the scalar step, elsewhere otherwise
+            moved = loop._log_gain(state, v) - loop._log_gain(before, v)
+            assert abs(moved) <= loop.ki_by_delay[state.delay_blocks] * math.log(4.0) + 1e-12
+        known = math.isfinite(state.mu0)
+        sent[k] = (speed, math.exp(loop._log_gain(state, speed)) if known else None)
+    assert state.updates > 500
+    for v in (20.0, 120.0):
+        assert_allclose(math.exp(loop._log_gain(state, v)), 1.0 / fraction[v], rtol=0.03)
