@@ -290,3 +290,27 @@ def test_the_noise_is_normal_out_to_its_tails():
         p = 2 * stats.norm.sf(a)
         assert abs((np.abs(z) > a).sum() - n * p) < 4 * np.sqrt(n * p * (1 - p))
     assert abs(stats.skew(z)) < 0.005 and abs(stats.kurtosis(z)) < 0.01
+
+
+@pytest.mark.parametrize("order", [0, 1, 2, 4, 7])
+def test_synthesis_is_the_direct_form_recursion_bit_for_bit(order):
+    """The compiled all-pole filter against its docstring's recursion in plain Python, in
+    blocks of 0, 1, 2 and 57 samples with the history carried."""
+    from textures.ar_synthesis import _normal, _synthesise
+    rng = np.random.default_rng(order)
+    poly = np.concatenate([[1.0], rng.uniform(-0.4, 0.4, order)])
+    history = rng.normal(0.0, 1e-3, order)
+    past, expected, got, index = list(history), [], [], 11
+    for n in (0, 1, 2, 57, 1, 57):
+        out = np.empty(n)
+        _synthesise(poly, 0.01, np.uint64(77), index, history, out)
+        got.append(out)
+        for j in range(index, index + n):
+            acc = 0.01 * _normal(np.uint64(77), j)
+            for k in range(order):
+                acc -= poly[k + 1] * past[k]
+            past = [acc, *past[:-1]] if order else past
+            expected.append(acc)
+        index += n
+    assert np.concatenate(got).tobytes() == np.array(expected).tobytes()
+    assert history.tobytes() == np.array(past).tobytes()

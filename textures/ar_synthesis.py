@@ -183,17 +183,25 @@ def _normal_edge(state, bits):
 @njit(cache=True)
 def _synthesise(poly, scale, key, index0, history, out):
     """out[j] = scale * noise(index0 + j) - sum_k poly[k] out[j - k] (poly[0] = 1), the
-    earlier outputs taken from ``history`` (most recent first, updated in place)."""
+    earlier outputs taken from ``history`` (most recent first, updated in place). The
+    newest output, which each sample's sum waits for first, stays in a register: through
+    ``history`` it waited for its store too (a quarter more time per sample)."""
     p = poly.size - 1
+    newest = history[0] if p > 0 else 0.0
     for j in range(out.size):
         acc = scale * _normal(key, index0 + j)
-        for k in range(p):
-            acc -= poly[k + 1] * history[k]
-        for k in range(p - 1, 0, -1):
-            history[k] = history[k - 1]
         if p > 0:
-            history[0] = acc
+            acc -= poly[1] * newest
+        for k in range(1, p):
+            acc -= poly[k + 1] * history[k]
+        for k in range(p - 1, 1, -1):
+            history[k] = history[k - 1]
+        if p > 1:
+            history[1] = newest
+        newest = acc
         out[j] = acc
+    if p > 0:
+        history[0] = newest
 
 
 @njit(cache=True)
