@@ -174,7 +174,7 @@ def _one_sample_at_a_time(trigger, contact, touch_id, inside, flag, prev, index0
 def test_a_block_is_the_clip_played_sample_by_sample(seed):
     """Events anywhere (restarts while playing, on a block's first and last samples), a
     clip started in an earlier block, one to three fingers."""
-    from rendering.layers.clips import _render_block
+    from rendering.layers.clips import render_block
     rng = np.random.default_rng(seed)
     fingers, n = int(rng.integers(1, 4)), int(rng.integers(1, 300))
     rate = rng.choice([0.002, 0.02, 0.2])  # how often the inputs change
@@ -190,7 +190,8 @@ def test_a_block_is_the_clip_played_sample_by_sample(seed):
     for trigger in range(4):
         args = (trigger, contact, touch_id, inside, flag, prev.astype(np.int64), index0, start,
                 samples)
-        got, want = _render_block(*args), _one_sample_at_a_time(*args)
+        idle = (np.ones(contact.shape), np.zeros(contact.shape, bool))
+        got, want = render_block(*args, idle), _one_sample_at_a_time(*args)
         assert got[0].tobytes() == want[0].tobytes() and (got[1] == want[1]).all()
         assert got[2] == want[2] and (got[3] == want[3]).all()
 
@@ -203,3 +204,22 @@ def test_the_edge_side_is_the_sign_of_the_distance_to_the_line():
     distance = math.cos(a) * (x - 50.0) + math.sin(a) * (y - 30.0)
     assert (layer.side(x, y) == (distance >= 0.0)).all() and layer.side(x, y).shape == (3, 400)
     assert layer.side(50.0, 30.0).shape == () and layer.side(50.0, 30.0)  # on the line
+
+
+@pytest.mark.parametrize("ends_in_block", [True, False])
+def test_a_clip_from_an_earlier_block_plays_to_its_last_sample_and_no_further(ends_in_block):
+    """No event in the block: the clip's last sample still plays on its first sample; one
+    that ended just before gives the idle block itself."""
+    from rendering.layers.clips import render_block
+    samples, index0, n = np.linspace(0.5, 0.9, 10), 100, 30
+    contact, touch_id = np.ones((1, n), bool), np.full((1, n), 5)
+    start = index0 - 9 if ends_in_block else index0 - 10
+    idle = (np.ones((1, n)), np.zeros((1, n), bool))
+    mu, covers, after, _ = render_block(0, contact, touch_id, contact, ~contact,
+                                        np.array([[1, 5, 1, 0]]), index0, start, samples, idle)
+    assert after == start
+    if ends_in_block:
+        assert mu[0, 0] == samples[-1] and (mu[0, 1:] == 1.0).all()
+        assert covers[0, 0] and not covers[0, 1:].any()
+    else:
+        assert mu is idle[0] and covers is idle[1]

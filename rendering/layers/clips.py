@@ -76,13 +76,23 @@ def _fired(trigger, contact, touch_id, inside, flag, prev):
     return fired, last
 
 
-@njit(cache=True, nogil=True)
-def _render_block(trigger, contact, touch_id, inside, flag, prev, index0, start, samples):
+def render_block(trigger, contact, touch_id, inside, flag, prev, index0, start, samples, idle):
     """One block of the layer: mu' and coverage (F, n), the clip's start after the block
     and each finger's last sample (:func:`_fired`). The clip started at output index
     ``start`` (-1: none) plays under every touching finger; an event at sample j restarts
-    it at j + 1. Between events the clip's samples are copied as one slice."""
+    it at j + 1. ``idle``: the (mu', coverage) of a block where the clip does not play
+    (all 1, all False), returned as they are if so."""
     fired, last = _fired(trigger, contact, touch_id, inside, flag, prev)
+    if not fired.any() and not (start >= 0 and start + samples.size > index0):
+        return *idle, start, last
+    return *_play(fired, contact, index0, start, samples), last
+
+
+@njit(cache=True, nogil=True)
+def _play(fired, contact, index0, start, samples):
+    """mu' and coverage (F, n) of a block where the trigger ``fired`` (n,) and the clip's
+    start after it (:func:`render_block`). Between events the clip's samples are copied
+    as one slice."""
     fingers, n = contact.shape
     mu, covers = np.ones((fingers, n)), np.zeros((fingers, n), dtype=np.bool_)
     events = np.nonzero(fired)[0]
@@ -97,7 +107,7 @@ def _render_block(trigger, contact, touch_id, inside, flag, prev, index0, start,
         if k < events.size:
             start = index0 + end
         j = end
-    return mu, covers, start, last
+    return mu, covers, start
 
 
 class ClipRenderer:
@@ -107,6 +117,16 @@ class ClipRenderer:
         self.layer = layer
         self.trigger = TRIGGER_CODES[layer.trigger]
         self.samples, self.clipped = layer.clip.sample(rate_hz)
+        self._idle = None  # (mu', coverage) of a block where nothing plays, read-only
+
+    def _idle_block(self, shape) -> tuple[np.ndarray, np.ndarray]:
+        """All 1 and all False in ``shape``, made once per shape (most blocks play nothing,
+        and filling them took half the layer's time)."""
+        if self._idle is None or self._idle[0].shape != shape:
+            self._idle = (np.ones(shape), np.zeros(shape, dtype=bool))
+            for a in self._idle:
+                a.flags.writeable = False
+        return self._idle
 
     def initial_state(self) -> ClipState:
         return ClipState()
@@ -126,8 +146,8 @@ class ClipRenderer:
         flag = self._flag(block)
         prev = np.array([state.fingers.get(fid, FingerPrev()) for fid in block.ids],
                         dtype=np.int64).reshape(len(block.ids), 4)
-        mu, covers, start, last = _render_block(self.trigger, block.contact, block.touch_id,
-                                                inside, flag, prev, block.index0, state.start,
-                                                self.samples)
+        mu, covers, start, last = render_block(self.trigger, block.contact, block.touch_id,
+                                               inside, flag, prev, block.index0, state.start,
+                                               self.samples, self._idle_block(block.contact.shape))
         fingers = {fid: FingerPrev(*row) for fid, row in zip(block.ids, last.tolist())}
         return mu, covers, ClipState(start, fingers)
