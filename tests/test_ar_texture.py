@@ -314,3 +314,23 @@ def test_synthesis_is_the_direct_form_recursion_bit_for_bit(order):
         index += n
     assert np.concatenate(got).tobytes() == np.array(expected).tobytes()
     assert history.tobytes() == np.array(past).tobytes()
+
+
+def test_a_blend_is_the_numpy_blend_of_lsfs_bit_for_bit():
+    """blend_at (kept twiddles, no temporaries) against the blend written in numpy, and
+    lsf_to_poly with and without the twiddles handed in, orders 1 to 15."""
+    from textures.ar_synthesis import barycentric, blend_at, twiddles
+    rng = np.random.default_rng(12)
+    for order in range(1, 16):
+        lsf = np.sort(rng.uniform(0.05, 3.0, (4, order)), axis=1)
+        assert lsf_to_poly(lsf[0]).tobytes() == lsf_to_poly(lsf[0], twiddles(order)).tobytes()
+    model = _model().resampled(RATE)
+    s0, f0, inv, triangles, lsfs, variances, twiddle = model.arrays
+    for speed, force in rng.uniform([0.0, 0.0], [250.0, 3.0], (50, 2)):
+        t, w = barycentric(s0, f0, inv, speed, force)
+        mixed, variance = np.zeros(lsfs.shape[1]), 0.0
+        for k in range(3):
+            mixed += w[k] * lsfs[triangles[t, k]]
+            variance += w[k] * variances[triangles[t, k]]
+        poly, got_variance = blend_at(*model.arrays, speed, force)
+        assert poly.tobytes() == lsf_to_poly(mixed).tobytes() and got_variance == variance

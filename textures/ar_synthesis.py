@@ -31,17 +31,28 @@ _TWO, _ONE = np.uint64(2), np.uint64(1)
 
 
 @njit(cache=True)
-def lsf_to_poly(lsf) -> np.ndarray:
+def twiddles(order):
+    """e^(j 2 pi i / n), i = 0 .. n - 1, at the n points :func:`lsf_to_poly` evaluates an
+    A(z) of that order: the smallest power of 2 from 8 above order + 1."""
+    n = 8
+    while n < order + 2:
+        n *= 2
+    return np.exp(2j * np.pi * np.arange(n) / n)
+
+
+@njit(cache=True)
+def lsf_to_poly(lsf, twiddle=None) -> np.ndarray:
     """A(z) = [1, a_1 .. a_p] from p line spectral frequencies (the inverse of
     :func:`poly_to_lsf`): P's roots are the 1st, 3rd, ... LSFs, Q's the others, with the
     trivial roots at z = -1 (P) and z = +1 (Q) for p even, z = +1 and -1 (Q) for p odd.
     P and Q are evaluated as products of their sections at n > p + 1 points of the unit
-    circle, A = (P + Q) / 2 there, and its coefficients are the inverse DFT."""
+    circle, A = (P + Q) / 2 there, and its coefficients are the inverse DFT. ``twiddle``:
+    ``twiddles(lsf.size)``, if the caller keeps it (a model's blends are computed per run
+    of samples, and the exponentials were a third of a blend's time)."""
     p = lsf.size
-    n = 8
-    while n < p + 2:
-        n *= 2
-    twiddle = np.exp(2j * np.pi * np.arange(n) / n)  # e^(j 2 pi i / n)
+    if twiddle is None:
+        twiddle = twiddles(p)
+    n = twiddle.size
     cos_w = -2.0 * np.cos(lsf)
     values = np.empty(n, dtype=np.complex128)
     for i in range(n):
@@ -85,16 +96,19 @@ def barycentric(s0, f0, inv, speed, force):
 
 
 @njit(cache=True)
-def blend_at(s0, f0, inv, triangles, lsf, variances, speed, force):
+def blend_at(s0, f0, inv, triangles, lsf, variances, twiddle, speed, force):
     """The toolkit's blend at (speed, force): barycentric weights on the three vertices'
-    LSFs and variances. Returns (A(z) = [1, a_1 .. a_p], variance)."""
+    LSFs and variances (``twiddle``: ``twiddles(lsf.shape[1])``). Returns (A(z) = [1, a_1
+    .. a_p], variance)."""
     t, w = barycentric(s0, f0, inv, speed, force)
     mixed = np.zeros(lsf.shape[1])
     variance = 0.0
     for k in range(3):
-        mixed += w[k] * lsf[triangles[t, k]]
+        row = lsf[triangles[t, k]]
+        for i in range(mixed.size):  # numpy's mixed += w[k] * row, without its temporary
+            mixed[i] += w[k] * row[i]
         variance += w[k] * variances[triangles[t, k]]
-    return lsf_to_poly(mixed), variance
+    return lsf_to_poly(mixed, twiddle), variance
 
 
 @njit(cache=True)
@@ -224,7 +238,7 @@ def render_finger(contact, touch_id, vx, vy, force, v_rest, seed, finger, index0
     """Model output y (n,) of one finger row; see the module docstring. ``touch`` and
     ``history`` (most recent first) come from the previous block; returns the touch id
     after the block (``history`` is updated in place)."""
-    s0, f0, inv, triangles, lsf, variances = model
+    s0, f0, inv, triangles, lsf, variances, twiddle = model
     n = y.size
     a = 0
     while a < n:
@@ -238,7 +252,8 @@ def render_finger(contact, touch_id, vx, vy, force, v_rest, seed, finger, index0
             touch = touch_id[a]
             history[:] = 0.0
         if moving:
-            poly, variance = blend_at(s0, f0, inv, triangles, lsf, variances, speed, force[a])
+            poly, variance = blend_at(s0, f0, inv, triangles, lsf, variances, twiddle, speed,
+                                      force[a])
             _synthesise(poly / poly[0], np.sqrt(variance), noise_key(seed, finger, touch),
                         index0 + a, history, y[a:b])
         else:

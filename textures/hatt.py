@@ -87,7 +87,7 @@ from pathlib import Path
 
 import numpy as np
 
-from textures.ar_synthesis import barycentric, blend_at, lsf_to_poly
+from textures.ar_synthesis import barycentric, blend_at, lsf_to_poly, twiddles
 from textures.errors import TextureError
 from textures.library import UnreadableText, read_utf8
 from textures.dynamic import DynamicLayer
@@ -247,7 +247,7 @@ class TextureModel:
     def arrays(self) -> tuple:
         """What :func:`blend_at` needs, in its order."""
         s0, f0, inv = self._tri
-        return s0, f0, inv, self.triangles, self.lsf, self.variances
+        return s0, f0, inv, self.triangles, self.lsf, self.variances, twiddles(self.lsf.shape[1])
 
     def at(self, speed_mm_s: float, force_n: float) -> tuple[np.ndarray, float]:
         """AR polynomial [1, a_1 .. a_p] and variance blended at (speed, force)."""
