@@ -5,7 +5,7 @@ from dataclasses import astuple
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import example, given, settings, strategies as st
 from numpy.testing import assert_allclose
 from PIL import Image
 
@@ -120,12 +120,18 @@ def test_magnitude_rendering_is_the_same_both_ways_and_never_below_rest():
 
 
 @given(st.floats(-1e6, 1e6, allow_nan=False))
+@example(1.097e-18)  # a change of mu' below rounding: the old expectation's failure
 @settings(derandomize=True, max_examples=200)
 def test_mu_stays_within_its_limits_whatever_the_slope(s):
     layer = _bump_layer(mu_rest=0.75, mu_min=0.5, mu_max=0.95)
     mu = float(layer.mu_of_slope(s))
     assert 0.5 <= mu <= 0.95
-    assert (mu > 0.75) == (s > 0 and layer.gain * s / 0.2 > 1e-17)
+    # climbing raises friction, descending lowers it: wherever the change of mu' (about
+    # gain * s) is above rounding at 0.75 (half an ulp, 5.6e-17), and never the other way
+    assert mu <= 0.75 or s > 0
+    assert mu >= 0.75 or s < 0
+    if abs(layer.gain * s) > 1e-15:
+        assert (mu > 0.75) == (s > 0)
 
 
 def test_gain_is_the_slope_of_mu_at_flat_ground():
