@@ -7,6 +7,8 @@
   compute-only factor beside them, the whole process's wall time
   (interpreter start and imports too) and its peak memory. The same at a tenth of the
   length shows whether memory depends on the trace's length.
+- The same strokes on ``app.measure.bench_pipeline``'s scene with every kind of issue-18
+  layer (five height layers, a recorded texture, four clips), CSV and Parquet.
 - Two fingers with modal actuation (seed 000's beam): the bundled crossing trace repeated
   to 98 s (24 s quick), CSV and Parquet.
 - A one-second replay: the whole process's wall time (what a user waits).
@@ -33,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from app.measure.bench_pipeline import new_layer_scene
 from app.measure.figure import Figure
 from rendering.input.trace_file import Trace, concat_traces, read_trace, write_trace
 from rendering.input.trace_synth import make_motion, sample
@@ -155,6 +158,14 @@ def run(quick: bool) -> list[Figure]:
             for fmt in ("csv", "npz", "parquet"):
                 figures += _replay_figures(tmp, f"one finger {duration:g} s", SCENE, path, fmt,
                                            duration)
+        layers = tmp / "every-layer"
+        layers.mkdir()
+        new_layer_scene(layers)  # writes scene.toml and its files there
+        path = tmp / f"every-layer-{long_s:g}.csv"
+        write_trace(path, _human(long_s))
+        for fmt in ("csv", "parquet"):
+            figures += _replay_figures(tmp, f"every issue-18 layer {long_s:g} s",
+                                       str(layers / "scene.toml"), path, fmt, long_s)
         two = _repeated(read_trace(resolve_trace(MODAL_TRACE)), 5 if quick else 20)
         path = tmp / "two-fingers.csv"
         write_trace(path, two)
