@@ -46,6 +46,7 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 
 import numpy as np
+from numba import njit
 
 from device.profile import Calibration, DeviceProfile, FrictionParams
 
@@ -235,6 +236,10 @@ def _guarded_invert(model: FrictionModel, mu_target, normal_force_n) -> tuple[np
     force = np.asarray(normal_force_n, dtype=np.float64)
     if mu.shape != force.shape:  # broadcast_arrays costs microseconds even when they match
         mu, force = np.broadcast_arrays(mu, force)
+    if type(model) is SeedFrictionModel and mu.size:
+        w = _seed_invert(model, mu, force, counts)
+        if w is not None:
+            return w, counts
     f_lo, f_hi = force.min(initial=np.inf), force.max(initial=-np.inf)
     # the usual block: finite targets (their sum is finite) and one good force for all
     if np.isfinite(mu.sum()) and f_lo == f_hi and 0.0 <= f_lo < np.inf:
@@ -258,6 +263,68 @@ def _guarded_invert(model: FrictionModel, mu_target, normal_force_n) -> tuple[np
         counts.unreachable = int(np.count_nonzero(over if bad_mu is None else over & ~bad_mu))
         w = np.where(over, model.limit_um, w)
     return np.clip(w, 0.0, model.limit_um), counts
+
+
+def _seed_invert(model: SeedFrictionModel, mu, force, counts: ClampCounts):
+    """:func:`_guarded_invert` of seed 003's model for the usual block, in two compiled
+    passes about numpy's log1p (so every result is the same to the bit as the general
+    path's, which :func:`_guarded_invert` takes for the rest): finite targets and one
+    force for all, within the model's range. None (``counts`` untouched) for any other
+    block."""
+    mu_flat, force_flat = mu.ravel(), force.ravel()
+    params = model.params
+    edge = 1.0 - ASYMPTOTE_MARGIN
+    arg, above_one = _seed_reductions(mu_flat, force_flat, params.asymptote_per_n, edge)
+    if above_one < 0:
+        return None
+    np.log1p(arg, out=arg)
+    a = params.asymptote_per_n * force_flat[0]
+    counts.above_one = above_one
+    counts.unreachable = _seed_amplitudes(arg, mu_flat, 1.0 - a, params.b_per_um,
+                                          model.limit_um, model.limit_um * (1.0 + 1e-12))
+    return arg.reshape(mu.shape)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _seed_reductions(mu, force, k_per_n, edge):
+    """log1p's argument -(1 - min(mu', 1)) / (1 - A) (m,) of eq 3 at targets ``mu``
+    (m,), with A = k F_n, 0 where the target is unreachable ((1 - mu') / (1 - A) >= 1),
+    and how many targets are above 1; that count is -1 (nothing else computed) unless
+    every target is finite and every force is the same, finite, >= 0, with
+    A < ``edge``."""
+    arg = np.empty(mu.size)
+    f = force[0]
+    a = k_per_n * f
+    if not (0.0 <= f < np.inf and a < edge):
+        return arg, -1
+    span = 1.0 - a
+    above = 0
+    for i in range(mu.size):
+        m = mu[i]
+        if force[i] != f or not abs(m) < np.inf:
+            return arg, -1
+        if m > 1.0:
+            above += 1
+            m = 1.0
+        r = (1.0 - m) / span
+        arg[i] = 0.0 if r >= 1.0 else -r
+    return arg, above
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _seed_amplitudes(log, mu, span, b, limit, top):
+    """Eq 3's w = -log / b in place over ``log`` (m,), log1p of :func:`_seed_reductions`'s
+    arguments, at the limit where the target ``mu`` is unreachable or w is beyond ``top``
+    (returns how many), else clipped to [0, limit]."""
+    over = 0
+    for i in range(mu.size):
+        m = mu[i] if mu[i] <= 1.0 else 1.0
+        w = -log[i] / b
+        if (1.0 - m) / span >= 1.0 or not w <= top:
+            over += 1
+            w = limit
+        log[i] = limit if w > limit else (0.0 if w < 0.0 else w)
+    return over
 
 
 def make_friction_model(device: DeviceProfile) -> FrictionModel:

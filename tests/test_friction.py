@@ -168,3 +168,36 @@ def test_amplitude_is_equation_3_bit_for_bit_with_unreachable_targets_among_them
     for m, f, expected in cases:  # some, all and none unreachable
         w = MODEL._amplitude(m, f, ClampCounts())
         assert np.asarray(w).tobytes() == np.asarray(expected).tobytes()
+
+
+class _GeneralPath(SeedFrictionModel):
+    """Seed 003's model, taken through the general guards (the compiled path is for
+    ``SeedFrictionModel`` itself only)."""
+
+
+@pytest.mark.parametrize("force", [0.5, 0.0, 0.3, 0.884, 0.9, np.nan, -1.0, "mixed"])
+def test_compiled_inversion_is_the_general_path_bit_for_bit(force):
+    """The usual block's two compiled passes about numpy's log1p give the general path's
+    amplitudes (signed zeros too) and counts: targets above 1, at 1, reachable, near the
+    floor and the asymptote, unreachable; and blocks it hands back (a force that is not
+    one finite value >= 0 within the model, targets that are not finite)."""
+    rng = np.random.default_rng(11)
+    a = 1.13 * 0.5
+    mu = np.concatenate([rng.uniform(0.0, 1.2, 3000), [1.0, 1.0 + 1e-16, 0.999999999999, a,
+                                                       a + 1e-13, a - 1e-13, 0.58, 0.5801, 0.0]])
+    for targets in (mu, mu[mu < 1.0], np.full(50, 1.0), np.append(mu, np.nan),
+                    np.append(mu, np.inf)):
+        if force == "mixed":
+            forces = np.where(np.arange(targets.size) % 2, 0.5, 0.4)
+        else:
+            forces = np.full(targets.size, force)
+        for shape in ((targets.size,), (1, targets.size)):
+            m, f = targets.reshape(shape), forces.reshape(shape)
+            w, counts = MODEL.invert(m, f)
+            w_ref, counts_ref = _GeneralPath(DEVICE).invert(m, f)
+            assert w.shape == w_ref.shape and w.dtype == w_ref.dtype
+            assert w.tobytes() == w_ref.tobytes()
+            assert counts == counts_ref
+    # the usual block does reach the limit and the clip to it, and counts both
+    w, counts = MODEL.invert(mu, np.full(mu.size, 0.5))
+    assert counts.unreachable > 100 and counts.above_one > 100 and (w == 2.5).sum() > 100
