@@ -66,15 +66,16 @@ with several fingers down the loop holds its state and the block is fed forward 
    any steady speed. On the report's population (reports 3 blocks late) a gain that
    does not follow the speed left grating-15mm at 4.75x (closed; 5.16x with it),
    grating-5mm 4.64x (5.03x); with fingers whose reduction does not depend on speed the
-   same loop reached 6.51x on grating-15mm. In the log domain the loop gain is ``ki`` for a finger
-   G times more or less slippery than the model (g = G c), ``s ki`` for one whose
-   reduction grows s times as fast with the reduction asked; the margins of
+   same loop reached 6.51x on grating-15mm. In the log domain the loop gain is ``ki``
+   for a finger G times more or less slippery than the model (g = G c), ``s ki`` for
+   one whose reduction grows s times as fast with the reduction asked; the margins of
    ``rendering.control.margins`` (with the sensor chain's and the report's delays) say
    how large s may be. The first measurement starts the gain instead of stepping it:
    ``log c`` at the block's speed moves ``first_step`` of the way (through ``log_c``)
-   to where it would have put g at 1 for a finger with s = 1 (``log c_sent - log g``, c_sent the gain the measured block was
-   asked with), once per session; the blocks already on their way were asked with the
-   old gain, so they are not fed back (``fed_from``). An integrator scheduled for a
+   to where it would have put g at 1 for a finger with s = 1 (``log c_sent - log g``,
+   c_sent the gain the measured block was asked with), once per session; the blocks
+   already on their way were asked with the old gain, so they are not fed back
+   (``fed_from``). An integrator scheduled for a
    late report needs tens of blocks to get there, and the error of a whole session's
    start is spent meanwhile. It is one step, not a loop, so it cannot oscillate; a
    finger with s > 1 overshoots it, and the integrator takes that back. Closed mode
@@ -164,7 +165,8 @@ class LoopConfig:
         bad = [f"{name} = {getattr(self, name)!r} (expected a finite value > 0)"
                for name in positive
                if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0)]
-        fractions = ("rehold_reduction", "min_rest_mu", "settled", "still_seen", "min_reduction", "min_mu")
+        fractions = ("rehold_reduction", "min_rest_mu", "settled", "still_seen",
+                     "min_reduction", "min_mu")
         bad += [f"{name} = {getattr(self, name)!r} (expected 0 to 1)" for name in fractions
                 if not 0.0 <= getattr(self, name) <= 1.0]
         if not 0.0 <= self.first_step <= 1.0:
@@ -294,15 +296,21 @@ class ClosedLoop:
         """
         state, pending = self._pair(state, int(fingers.index0), forces)
         contact = fingers.contact
+        # the tracker's speed (mm/s) of the first finger touching: the loop's, if it is alone
+        touching = contact.any(axis=1)
+        first = int(np.argmax(touching)) if touching.any() else None
+        n = mu_target.shape[1]
+        speed = (np.hypot(fingers.vx[first], fingers.vy[first]) if first is not None
+                 else np.zeros(n))
         gain = 1.0
         if not state.fallback and math.isfinite(state.mu0):
-            gain = math.exp(self._log_gain(state, _mean_speed(fingers, contact)))
+            gain = math.exp(self._log_gain(state, float(np.mean(speed))))
         asked, count, row = feed_forward(mu_target, contact, gain)
         single = count == 1
         c = gain if single else 1.0  # the gain asked with: 1 with several fingers down
         if single and not state.fallback and not math.isfinite(state.mu0):
             # probe (module docstring, 1): the plate still while the finger starts to slide
-            slow = np.hypot(fingers.vx[row], fingers.vy[row]) < self.config.probe_mm_s
+            slow = speed < self.config.probe_mm_s
             # released once the tracker has read the finger fast: slow again (its noise, a
             # pause) holds the plate only where what the hold withholds is not felt
             unreleased = (np.cumsum(~slow) == 0) & (not state.probe_released)
@@ -317,11 +325,7 @@ class ClosedLoop:
         # probe held it still (a report that comes late would otherwise read the
         # probe as a finger that gets no reduction, and wind the gain up)
         wanted, target, cut = sent_rows(wanted, contact, asked, mu_target, row, self._cut_um)
-        n = mu_target.shape[1]
-        if count:
-            w, speed = wanted[row], np.hypot(fingers.vx[row], fingers.vy[row])
-        else:
-            w, speed = np.zeros(n), np.zeros(n)
+        w = wanted[row] if count else np.zeros(n)
         sent = Sent(index0=int(fingers.index0), log_c=math.log(c), w_um=w, target=target,
                     speed=speed, cut=cut, single=single)
         held = state.fallback_samples + (n if state.fallback else 0)
@@ -374,7 +378,8 @@ class ClosedLoop:
     def report(self, state: ControlState) -> dict:
         """The loop's figures after a run, for a summary (JSON-able): mode, the largest
         report delay seen (blocks) and the gain scheduled for it, the gain c and mu0
-        where the run ended (at rest, and its log's slope per ``speed_ref_mm_s``), gain updates, fallbacks, samples fed forward open loop
+        where the run ended (at rest, and its log's slope per ``speed_ref_mm_s``), gain
+        updates, fallbacks, samples fed forward open loop
         while fallen back, and what the loop said."""
         return {"mode": self.mode, "report_delay_blocks": state.delay_blocks,
                 "ki": self.ki_by_delay[state.delay_blocks], "gain": math.exp(state.log_c),
@@ -486,16 +491,6 @@ class ClosedLoop:
             messages = (f"closed loop: force signal {problem}; open loop with the latest model "
                         f"until the signal is good for {self.config.recover_s:g} s",)
         return replace(state, fallback=True, fallbacks=state.fallbacks + 1, messages=messages)
-
-
-def _mean_speed(fingers, contact: np.ndarray) -> float:
-    """The tracker's mean speed (mm/s) over the block of the one finger touching (0 with
-    none or several: the gain is 1 there anyway)."""
-    touching = contact.any(axis=1)
-    if touching.sum() != 1:
-        return 0.0
-    row = int(np.argmax(touching))
-    return float(np.mean(np.hypot(fingers.vx[row], fingers.vy[row])))
 
 
 def _problem(lat: np.ndarray, nor: np.ndarray, touching: bool, cfg: LoopConfig) -> str:
