@@ -159,7 +159,7 @@ def test_demo_window_touch_estop_reload_and_broken_edit(xvfb_display, xdotool, t
         drag(xvfb_display, win, proc, rec, [(100, 240), (110, 240), (400, 240)], 1,
              hold=stop_while_touching)
         scene_file.write_text(text.replace("mu_low = 0.6", "mu_low = 0.3"))
-        wait_event(proc, rec, "output-switch")  # polled every 0.25 s, then switched
+        wait_event(proc, rec, "output-switch")  # seen, held still for a poll, then switched
         drag(xvfb_display, win, proc, rec, stroke, 2)
         scene_file.write_text(text.replace("period_mm = 5", "period_mm = -5"))
         wait_event(proc, rec, "reload-failed")

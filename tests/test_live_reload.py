@@ -155,23 +155,61 @@ def test_the_list_is_complete_and_each_file_on_it_is_needed(tmp_path, own):
 
 
 def test_a_file_watch_sees_edits_renames_over_appearing_and_vanishing(tmp_path):
+    """Each change is reported at the second look that finds it, once and in watch order."""
     a, b = tmp_path / "a", tmp_path / "b"
     a.write_text("one")
     os.utime(a, ns=(5, 5))
     watch = FileWatch([a, b])
     assert watch.changed() == []
+
+    def settled():
+        first = watch.changed()
+        return first, watch.changed(), watch.changed()
+
     os.utime(a, ns=(6, 6))
-    assert watch.changed() == [a] and watch.changed() == []
+    assert settled() == ([], [a], [])
     b.write_text("new")
-    assert watch.changed() == [b]
+    assert settled() == ([], [b], [])
     (tmp_path / "c").write_text("two")  # renamed over it: same size and time, a new inode
     os.utime(tmp_path / "c", ns=(6, 6))
     os.replace(tmp_path / "c", a)
-    assert watch.changed() == [a]
+    assert settled() == ([], [a], [])
     a.unlink()
-    assert watch.changed() == [a] and watch.stamps[a] is None
+    assert settled() == ([], [a], []) and watch.stamps[a] is None
     watch.watch([b])
     assert watch.paths == (b,) and watch.changed() == []
+
+
+def test_a_file_watch_waits_for_a_file_being_written_to_hold_still(tmp_path):
+    """Truncated, then written: the empty file seen in between is never reported; a file
+    changed back to what was last reported before it settled is not reported at all."""
+    a = tmp_path / "a"
+    a.write_text("first")
+    os.utime(a, ns=(5, 5))
+    watch = FileWatch([a])
+    a.write_text("")  # the editor has truncated it
+    os.utime(a, ns=(6, 6))
+    assert watch.changed() == []
+    a.write_text("second")  # and written it
+    os.utime(a, ns=(7, 7))
+    assert watch.changed() == []
+    assert watch.changed() == [a] and watch.stamps[a][1] == len("second")
+    a.write_text("third")
+    os.utime(a, ns=(8, 8))
+    assert watch.changed() == []
+    a.write_text("second")
+    os.utime(a, ns=(7, 7))  # back to the stamp last reported
+    assert watch.changed() == [] and watch.changed() == []
+
+
+def test_a_file_watch_keeps_an_unreported_change_across_watch(tmp_path):
+    a, b = tmp_path / "a", tmp_path / "b"
+    a.write_text("one")
+    watch = FileWatch([a])
+    a.write_text("three")
+    assert watch.changed() == []
+    watch.watch([a, b])  # what the demo does after each reload
+    assert watch.changed() == [a]
 
 
 # -- the demo loop ----------------------------------------------------------------------------
@@ -188,10 +226,12 @@ def demo(gl, tmp_path):
                     events_path=tmp_path / "events.csv")
     clock = [0.0]
 
-    def poll(step=RELOAD_POLL_S):
-        """Move the loop's clock on by ``step`` (s) and let it look at its files."""
-        clock[0] += step
-        loop.check_reload(clock[0])
+    def poll(step=RELOAD_POLL_S, looks=2):
+        """Move the loop's clock on by ``step`` (s) ``looks`` times, letting it look at its
+        files each time: by default a change is seen, then found to have held still."""
+        for _ in range(looks):
+            clock[0] += step
+            loop.check_reload(clock[0])
 
     loop.check_reload(0.0)
     yield loop, files, poll
@@ -210,11 +250,12 @@ def test_each_named_file_reloads_the_scene_and_a_bad_edit_keeps_the_last_good_on
         (tmp_path / n).resolve() for n in ("maps/relief.png", "wood.xml", "tap.ahap")))
     first = loop.scene
 
-    # the height map: a steeper ramp, seen at the next poll and not before
+    # the height map: a steeper ramp, seen at the next poll, loaded at the one after
     files.write("maps/relief.png", _ramp(3000))
-    poll(RELOAD_POLL_S / 2)
+    poll(RELOAD_POLL_S / 2, looks=1)
+    poll(RELOAD_POLL_S / 2, looks=1)
     assert loop.scene is first
-    poll(RELOAD_POLL_S / 2)
+    poll(looks=1)
     heights = _layer(loop.scene, HeightLayer).shape.heights_mm
     assert_allclose(heights[0, :3], np.array([0, 3000, 6000]) / 65535)
     assert loop.error is None and "relief.png changed" in _events(tmp_path, "reload")[-1]
@@ -270,6 +311,24 @@ def test_a_file_named_by_a_failed_edit_is_watched_until_it_is_mended(demo, tmp_p
     files.write("new.ahap", _ahap(0.3))
     poll()
     assert loop.error is None and _layer(loop.scene, ClipLayer).clip.events[0].intensity == 0.3
+
+
+def test_a_texture_file_caught_half_written_is_not_loaded(demo, tmp_path):
+    """An editor that truncates the file, then writes it: a poll in between sees an empty
+    file, which is neither loaded nor shown as an error; the written file is."""
+    loop, files, poll = demo
+    first = loop.scene
+    files.write("scene.toml", "")
+    poll(looks=1)
+    files.write("scene.toml", HEAD + LAYERS.replace("rise_mm = 1.0", "rise_mm = 2.0"))
+    poll(looks=1)
+    assert loop.scene is first and loop.error is None
+    poll(looks=1)
+    assert loop.scene is not first and loop.error is None
+    assert _events(tmp_path, "reload-failed") == []
+    files.write("scene.toml", "")  # emptied and left so: that is an edit, shown as one
+    poll()
+    assert "is empty" in loop.error and len(_events(tmp_path, "reload-failed")) == 1
 
 
 def test_a_texture_file_being_saved_is_waited_for(demo, tmp_path):

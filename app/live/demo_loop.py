@@ -64,7 +64,7 @@ from textures.references import referenced_files
 RENDERER_CYCLE = (None, "sho", "sht", "hybrid")
 FORCE_STEP_N = 0.05
 FORCE_RANGE_N = (0.05, 2.0)
-RELOAD_POLL_S = 0.25
+RELOAD_POLL_S = 0.15  # an edit is applied once it has held still for a poll: 0.15-0.3 s after saving
 ENVELOPE_S = 0.2  # a modal device's |W| is redrawn from the latest commands 5 times a second
 FRAME_S = 1.0 / 60.0
 INPUT_WAKE_S = 0.05  # longest the input thread waits for an event before looking at the time
@@ -321,7 +321,8 @@ class DemoLoop:
 
     def check_reload(self, now: float) -> None:
         """Every RELOAD_POLL_S (s on the loop's clock): if the scene's texture file or
-        a file it names changed, load the scene again; a good load is applied, a bad one
+        a file it names changed and has since held still for a poll (a file caught
+        half-written is not loaded), load the scene again; a good load is applied, a bad one
         keeps the last good scene and shows why. A texture file that is not there (an
         editor between deleting and writing it) is waited for."""
         if now < self._next_poll:

@@ -1,10 +1,13 @@
-"""Which of a set of files changed since the last look (polled; no threads, no waits).
+"""Which of a set of files changed and then held still (polled; no threads, no waits).
 
 A file's stamp is its modification time (ns), size and inode, or None while it cannot be
 stat'ed: an edit in place, a save by renaming a new file over the old one, a file
-appearing and one vanishing all change it. Polling is the caller's: it calls
-:meth:`FileWatch.changed` when it wants (the demo: every ``RELOAD_POLL_S`` on its clock),
-so a test drives it with the files and the times it sets.
+appearing and one vanishing all change it. A new stamp is reported only once a second
+look finds it unchanged: an editor that truncates a file and then writes it can be
+caught in between, and the empty file it leaves for that moment is not the edit.
+Polling is the caller's: it calls :meth:`FileWatch.changed` when it wants (the demo:
+every ``RELOAD_POLL_S`` on its clock), so a test drives it with the files and the
+times it sets.
 """
 
 from __future__ import annotations
@@ -26,11 +29,13 @@ def stamp(path: Path) -> Stamp:
 
 
 class FileWatch:
-    """The stamps of ``paths`` as last seen; ``stat`` gives a path's stamp."""
+    """``stamps``: each watched path's stamp as last reported; ``stat`` gives a path's
+    stamp now."""
 
     def __init__(self, paths: Iterable[Path] = (), stat: Callable[[Path], Stamp] = stamp):
         self.stat = stat
         self.stamps: dict[Path, Stamp] = {}
+        self._looked: dict[Path, Stamp] = {}  # each path's stamp at the last look
         self.watch(paths)
 
     @property
@@ -38,19 +43,22 @@ class FileWatch:
         return tuple(self.stamps)
 
     def watch(self, paths: Iterable[Path]) -> None:
-        """Watch ``paths`` from now on: a file already watched keeps the stamp it was
-        last seen with (a change not yet reported stays to be reported), a new one is
-        stamped now."""
-        self.stamps = {Path(p): self.stamps[Path(p)] if Path(p) in self.stamps else self.stat(Path(p))
-                       for p in paths}
+        """Watch ``paths`` from now on: a file already watched keeps its stamps (a change
+        not yet reported stays to be reported), a new one is stamped now."""
+        paths = [Path(p) for p in paths]
+        now = {p: self.stat(p) for p in paths if p not in self.stamps}
+        self.stamps = {p: self.stamps[p] if p in self.stamps else now[p] for p in paths}
+        self._looked = {p: self._looked[p] if p in self._looked else now[p] for p in paths}
 
     def changed(self) -> list[Path]:
-        """The watched files whose stamp differs from the last look, in watch order;
-        their new stamps are taken."""
+        """The watched files, in watch order, whose stamp differs from the one last
+        reported and is the same as at the previous look (a change held still for one
+        look); their new stamps are taken as reported."""
         moved = []
-        for path, seen in self.stamps.items():
-            now = self.stat(path)
-            if now != seen:
+        for path, reported in self.stamps.items():
+            now, before = self.stat(path), self._looked[path]
+            self._looked[path] = now
+            if now != reported and now == before:
                 self.stamps[path] = now
                 moved.append(path)
         return moved
