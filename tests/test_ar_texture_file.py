@@ -90,7 +90,7 @@ def published_xml(rate=10_000.0, rate_tag=True, speed_unit="mm/s", sign=1.0, ext
         coeff = _poly(lsf) * np.r_[1.0, np.full(4, sign)]
         moving = ""
         if ma is not None:
-            (zero, gain), mlsf = ma, _lsf([ma[0]], rate)
+            gain, mlsf = ma[1], _lsf([ma[0]], rate)
             moving = (f"<MAcoeff>{values(_poly(mlsf), '{:.20f}')}</MAcoeff><MAlsf>{values(mlsf)}"
                       f"</MAlsf><gain>{gain:.6f}</gain>")
         models += (f"<model><modNum>{k}</modNum><ARcoeff>{values(coeff, '{:.20f}')}</ARcoeff>"

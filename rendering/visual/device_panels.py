@@ -135,7 +135,7 @@ class DevicePanels:
         panel in the column at the right of the frame (``column_px``), under the status
         lines, as high as the column leaves room for."""
         comp = self.comp
-        vp, (w, h) = comp.viewport, comp.size
+        vp, (w, _) = comp.viewport, comp.size
         if kind == "plate":
             left = comp.column_rect()[0]
             top = comp.status_bottom + 4.0
