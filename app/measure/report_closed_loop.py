@@ -519,9 +519,15 @@ def markdown(section: dict) -> list[str]:
     return lines
 
 
+#: the plot's lowest loop RMS: a finger whose loop delivers what is reachable to within
+#: this (a ten-thousandth of mu', a thousandth of the Weber fraction) is drawn at it
+PLOT_FLOOR = 1e-4
+
+
 def plot(section: dict, path) -> None:
     """Each finger's RMS, closed and adaptive against open loop, one panel per scene,
-    with the target's line (RMS open / T)."""
+    with the target's line (RMS open / T); a loop RMS under ``PLOT_FLOOR`` is drawn at
+    it, as a triangle pointing down."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -531,11 +537,18 @@ def plot(section: dict, path) -> None:
     for ax, (scene, row) in zip(axes[0], scenes.items()):
         x = np.array(row["open"]["per_finger"]["rms_reachable"])
         for k, mode in enumerate(m for m in ("closed", "adaptive") if m in row):
-            ax.scatter(x, row[mode]["per_finger"]["rms_reachable"], s=18, c=f"C{k}", label=mode)
+            y = np.array(row[mode]["per_finger"]["rms_reachable"])
+            low = y < PLOT_FLOOR
+            ax.scatter(x[~low], y[~low], s=18, c=f"C{k}", label=mode)
+            if low.any():
+                ax.scatter(x[low], np.full(int(low.sum()), PLOT_FLOOR), s=24, c=f"C{k}",
+                           marker="v", label=f"{mode}, under {PLOT_FLOOR:g} (drawn at it)")
         span = np.array([x.min() / 2, x.max() * 2])
-        ax.plot(span, span, c="k", lw=0.8, label="no change")
-        ax.plot(span, span / TARGETS[scene], c="k", lw=0.8, ls="--",
-                label=f"target: open / {TARGETS[scene]:g}")
+        target = TARGETS[scene]
+        ax.plot(span, span, c="k", lw=0.8,
+                label="no change" + (" (the target)" if target == 1 else ""))
+        if target != 1:
+            ax.plot(span, span / target, c="k", lw=0.8, ls="--", label=f"target: open / {target:g}")
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("open loop RMS (per finger)")
