@@ -472,3 +472,18 @@ def test_the_gain_follows_a_finger_whose_reduction_depends_on_its_speed():
     assert state.updates > 500
     for v in (20.0, 120.0):
         assert_allclose(math.exp(loop._log_gain(state, v)), 1.0 / fraction[v], rtol=0.03)
+
+
+def test_the_adaptation_study_is_the_object_scenes_adaptive_runs_when_as_long():
+    """Same fingers, same length: the study's gaps are those runs' own, not run again;
+    a study of another length is run apart and gives its own gaps."""
+    from app.measure.report_closed_loop import ADAPT_SCENE, measure, score, Run
+    done = []
+    section = measure(fingers=2, duration_s=0.4, scenes=(ADAPT_SCENE,), adapt_s=0.4,
+                      on_done=lambda *_: done.append(1))
+    assert len(done) == 2 * 3  # open, closed, adaptive for each finger, nothing more
+    alone = [score(Run(ADAPT_SCENE, f, "adaptive", 0.4))["adapted_gap"] for f in (1, 2)]
+    assert section["adaptation"]["gaps"] == alone and section["adaptation"]["duration_s"] == 0.4
+    longer = measure(fingers=2, duration_s=0.4, scenes=(ADAPT_SCENE,), adapt_s=0.6)
+    assert len(longer["adaptation"]["gaps"]) == 2
+    assert longer["adaptation"]["gaps"] != alone

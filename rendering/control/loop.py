@@ -29,7 +29,10 @@ with several fingers down the loop holds its state and the block is fed forward 
    over the second half of a block whose two halves agree within ``settled`` (the
    fingertip has finished rising into sliding), among still samples at ``creep_mm_s``
    or faster reading at least ``min_rest_mu``. Without it, a finger whose stroke starts
-   on a reduced band is open loop until it first crosses an unreduced one. The tracker
+   on a reduced band is open loop until it first crosses an unreduced one (tried:
+   holding from the start only where the hold is not felt, as after the release below,
+   found mu0 at 0.32 s instead of 0.095 s, median over the report's population in 10 s
+   runs, and left grating-15mm at 2.99x instead of 5.16x). The tracker
    (a 50 Hz touch trace) lags a stroke's start by tens of ms: it read 1.5 mm/s while
    the finger slid at 10-16 mm/s (finger 9 of the report's population on grating-15mm),
    or jumps past ``probe_mm_s`` a block after the force report first shows sliding.
@@ -46,8 +49,8 @@ with several fingers down the loop holds its state and the block is fed forward 
    is at most ``rehold_reduction`` (0.11: the Weber fraction for a change of friction,
    Gueorguiev et al., J. R. Soc. Interface 14 (2017) 20170641, so a hold the finger does
    not feel). A hold taken up again on a reduced band costs more than the open loop it
-   saves: on the report's population (reports 3 blocks late) such holds were 46 % of
-   the closed loop's squared error on grating-15mm (closed 4.26x -> 4.75x without them,
+   saves: on the report's population (10 s runs, reports 3 blocks late) such holds were
+   46 % of the closed loop's squared error on grating-15mm (closed 4.26x -> 4.75x without them,
    grating-5mm 4.20x -> 4.64x, the object scene 3.48x either way).
 2. **Feedback** on the depth of modulation: the reduction asked, 1 - mu'_target, passed
    through the same chain, against the reduction measured, 1 - mu'_m, gives the block's
@@ -63,8 +66,8 @@ with several fingers down the loop holds its state and the block is fed forward 
    is spread over the two as normalised LMS, ``(log_c, log_c_slope) += step (1, p) /
    (1 + p^2)`` with p = v / ``speed_ref_mm_s`` of the measured block: at that speed the
    gain moves by exactly ``step``, the scalar integrator's, so the margins below hold at
-   any steady speed. On the report's population (reports 3 blocks late) a gain that
-   does not follow the speed left grating-15mm at 4.75x (closed; 5.16x with it),
+   any steady speed. On the report's population (10 s runs, reports 3 blocks late) a
+   gain that does not follow the speed left grating-15mm at 4.75x (closed; 5.16x with it),
    grating-5mm 4.64x (5.03x); with fingers whose reduction does not depend on speed the
    same loop reached 6.51x on grating-15mm. In the log domain the loop gain is ``ki``
    for a finger G times more or less slippery than the model (g = G c), ``s ki`` for
@@ -80,8 +83,8 @@ with several fingers down the loop holds its state and the block is fed forward 
    start is spent meanwhile. It is one step, not a loop, so it cannot oscillate; a
    finger with s > 1 overshoots it, and the integrator takes that back. Closed mode
    only: in adaptive mode the model fitted to the same reports corrects the
-   feed-forward too, and the two together overshoot (the report's population, reports
-   3 blocks late: adaptive 4.08x -> 3.77x on grating-15mm, 3.83x -> 2.88x on the
+   feed-forward too, and the two together overshoot (the report's population, 10 s
+   runs, reports 3 blocks late: adaptive 4.08x -> 3.77x on grating-15mm, 3.83x -> 2.88x on the
    object scene with it; closed 3.86x -> 4.26x and 3.60x -> 3.48x).
    Where the probe held the plate still there is nothing asked to compare with: those
    samples are no reduction asked.
