@@ -1,13 +1,18 @@
-"""Calibration: the fit (device/calibration_fit.py) and ``frictex calibrate`` on the simulated plate."""
+"""Calibration: the fit (device/calibration_fit.py), the protocol over a link
+(device/calibration_run.py) and ``frictex calibrate`` on the simulated device."""
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from app.commands.cli import main
 from device.calibration_fit import fit_points
+from device.calibration_run import Sweep, run_sweep
 from device.finger import draw_finger, moisture
+from device.link.forces import ForceReport
+from device.link.host import start_sim_device
 
 
 def test_fit_recovers_constants_of_exact_points():
@@ -35,39 +40,110 @@ def test_too_few_points_is_a_clear_error():
         fit_points([0.0, 0.0], [0.5, 0.5], [1.0, 1.0])
 
 
+class ModelLink:
+    """A paced link to a plate whose finger follows seed 003's eq 2 exactly (b, k), its
+    friction at rest rising linearly with time, its reports coming one block late."""
+
+    def __init__(self, b, k, normal_n=0.5, drift_per_s=0.02, gap=None):
+        self.info = SimpleNamespace(has_force_reports=True, limits_um=(2.5,))
+        self.rate_hz, self.label = 10_000.0, "model"
+        self.b, self.k, self.normal_n, self.drift = b, k, normal_n, drift_per_s
+        self.gap = gap  # (first, last) samples that never played: the plate at rest
+        self.w = np.zeros(0)
+
+    def send(self, index0, amplitudes):
+        assert index0 == self.w.size
+        self.w = np.concatenate([self.w, amplitudes[:, 0]])
+
+    def force_report(self, index0, n):
+        if index0 + n > self.w.size - 50:
+            return None
+        w = self.w[index0:index0 + n].copy()
+        i = np.arange(index0, index0 + n)
+        if self.gap is not None:
+            w[(i >= self.gap[0]) & (i <= self.gap[1])] = 0.0
+        kf = self.k * self.normal_n
+        mu = (1 - kf) * np.exp(-self.b * w) + kf
+        mu0 = 0.6 * (1 + self.drift * i / self.rate_hz)
+        return ForceReport(index0, mu0 * mu * self.normal_n, np.full(n, self.normal_n))
+
+
+def test_the_sweep_gives_eq_2s_points_with_a_linear_drift_cancelled():
+    """Independent of the fit: each point is eq 2 at its level, to the drift's rounding."""
+    w, normal, mu = run_sweep(ModelLink(1.4, 0.8), Sweep())
+    kf = 0.8 * 0.5
+    expected = (1 - kf) * np.exp(-1.4 * w) + kf
+    assert_allclose = np.testing.assert_allclose
+    assert_allclose(w, Sweep().levels)
+    assert_allclose(normal, 0.5)
+    # the median of a linearly rising ratio is its middle; the rests' mean is the middle
+    # of the rests on either side, the same time: the drift cancels to first order
+    assert_allclose(mu, expected, rtol=1e-3)
+    fit = fit_points(w, normal, mu)
+    assert abs(fit.params.b_per_um / 1.4 - 1) < 0.01 and abs(fit.params.asymptote_per_n / 0.8 - 1) < 0.01
+
+
+def test_a_short_gap_in_a_step_moves_its_point_little():
+    per = 5000
+    gap = (3 * per + 3000, 3 * per + 3400)  # 40 ms of the plate at rest in level 2's step
+    w, _, mu = run_sweep(ModelLink(1.4, 0.8, drift_per_s=0.0, gap=gap), Sweep())
+    kf = 0.8 * 0.5
+    np.testing.assert_allclose(mu, (1 - kf) * np.exp(-1.4 * w) + kf, rtol=1e-12)
+
+
+def test_a_device_without_force_reports_or_a_lower_limit_is_refused():
+    link = ModelLink(1.4, 0.8)
+    link.info.has_force_reports = False
+    with pytest.raises(ValueError, match="sends no force reports"):
+        run_sweep(link, Sweep())
+    link = ModelLink(1.4, 0.8)
+    link.info.limits_um = (2.0,)
+    with pytest.raises(ValueError, match="limit 2 um is below the sweep's 2.4 um"):
+        run_sweep(link, Sweep())
+
+
 def test_calibrate_recovers_the_simulated_finger_within_5_percent(tmp_path, capsys):
+    """Through the simulated device's link and force reports, as on a plate; the section
+    written is one the loader accepts."""
+    from textures.loader import load_scene
     out = tmp_path / "device.toml"
-    assert main(["calibrate", "--device", "sim", "--finger", "4", "--out", str(out)]) == 0
+    assert main(["calibrate", "--device", "sim", "--finger", "4", "--out", str(out),
+                 "--plot", str(tmp_path / "fit.png")]) == 0
     text = out.read_text()
     b = float(text.split("b_per_um = ")[1].split()[0])
     k = float(text.split("asymptote_per_n = ")[1].split()[0])
     finger = draw_finger(4)
-    seconds = float(capsys.readouterr().out.split(" s of sliding")[0].split()[-1])
+    printed = capsys.readouterr()
+    seconds = float(printed.out.split(" s of sliding")[0].split()[-1])
     assert seconds < 30.0
+    assert "calibrating: step 25/25" in printed.err
     # the finger's effective constants at the protocol's 60 mm/s, mid-run
     b_true = finger.b_per_um / (1 + 60.0 / finger.v_c_mm_s)
     k_true = finger.k_per_n * (1 + finger.k_drift * moisture(seconds / 2, finger))
     assert abs(b / b_true - 1) < 0.05
     assert abs(k / k_true - 1) < 0.05
-    assert text.startswith("[device]\n")
-
-
-def test_calibrate_writes_a_device_section_the_loader_accepts(tmp_path):
-    from textures.loader import load_scene
-    out = tmp_path / "device.toml"
-    assert main(["calibrate", "--device", "sim", "--finger", "2", "--out", str(out),
-                 "--plot", str(tmp_path / "fit.png")]) == 0
+    assert text.startswith("[device]\n") and "amplitude_limit_um = 2.5\n" in text
     scene = tmp_path / "scene.toml"
     scene.write_text('format = 1\nname = "c"\n[display]\nwidth_mm = 100.0\nheight_mm = 60.0\n'
-                     'width_px = 100\nheight_px = 60\n' + out.read_text() +
+                     'width_px = 100\nheight_px = 60\n' + text +
                      '[[layer]]\ntype = "disc"\nname = "d"\ncx_mm = 50.0\ncy_mm = 30.0\n'
                      'radius_mm = 10.0\nmu = 0.8\n')
-    fitted = float(out.read_text().split("b_per_um = ")[1].split()[0])
-    assert load_scene(scene).device.friction.b_per_um == fitted
+    assert load_scene(scene).device.friction.b_per_um == b
     assert (tmp_path / "fit.png").stat().st_size > 0
 
 
 def test_a_port_is_a_one_line_error(capsys, tmp_path):
     assert main(["calibrate", "--device", "/dev/ttyUSB9", "--out", str(tmp_path / "x")]) == 2
-    err = capsys.readouterr().err
-    assert err.startswith("frictex: error: calibrate:") and err.count("\n") == 1
+    err = capsys.readouterr().err.splitlines()
+    assert err[-1].startswith("frictex: error: ") and "/dev/ttyUSB9" in err[-1]
+    assert not (tmp_path / "x").exists()
+
+
+def test_a_device_without_a_force_sensor_is_a_one_line_error(capsys, tmp_path):
+    proc, path = start_sim_device(1, 10_000.0)  # no --finger: no force reports
+    try:
+        assert main(["calibrate", "--device", path, "--out", str(tmp_path / "x")]) == 2
+    finally:
+        proc.wait(timeout=10)
+    err = capsys.readouterr().err.splitlines()
+    assert err[-1].startswith(f"frictex: error: {path}: the device sends no force reports")

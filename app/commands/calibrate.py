@@ -1,13 +1,15 @@
 """``frictex calibrate``: fit seed 003's friction model to a finger on a plate.
 
 The user slides a finger while the plate steps through amplitudes
-(``device.calibration_run``); frictex fits (b, k) of seed 003's eq 2
-(``device.calibration_fit``), prints the fit and its residual, writes the ``[device]``
-section a texture file can use and plots the measured points against the fitted curve.
+(``device.calibration_run``, streamed over the device's link and read back from its
+force reports); frictex fits (b, k) of seed 003's eq 2 (``device.calibration_fit``),
+prints the fit and its residual, writes the ``[device]`` section a texture file can use
+and plots the measured points against the fitted curve.
 
-``--device sim`` runs the protocol on the simulated finger of ``device.finger``
-(``--finger N``: person N of the simulated population; 0: seed 003's own constants). A
-serial port needs the lateral force on the wire, which the protocol does not carry yet.
+``--device`` takes what ``replay --device`` takes: ``sim`` starts ``frictex sim-device``
+with a simulated finger (``--finger N``: person N of ``device.finger``'s population,
+sliding and pressing as the protocol asks); a serial port or pyserial URL is a plate,
+which must announce force reports (PROTOCOL.md 4.9).
 """
 
 from __future__ import annotations
@@ -20,17 +22,19 @@ import numpy as np
 
 from device.calibration_fit import device_toml, fit_points
 from device.calibration_run import Sweep, run_sweep
-from device.finger import FingerParams, FingerPlant, draw_finger
 
-RATE_HZ = 5000.0
-LIMIT_UM = 2.5
+#: the plate's sample rate (Hz, seed 003) and the simulated plate's amplitude limit (um)
+RATE_HZ = 10_000.0
+SIM_LIMIT_UM = 2.5
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--device", required=True, metavar="sim|PORT",
-                        help="the plate: 'sim' (simulated finger) or a serial port")
+                        help="the plate: 'sim' (a simulated device with a simulated finger), "
+                             "or a serial port or pyserial URL, as for replay --device")
     parser.add_argument("--finger", type=int, default=1, metavar="N",
-                        help="simulated person N (0: seed 003's constants; default 1)")
+                        help="with --device sim: the simulated finger, person N (>= 0) of "
+                             "device/finger.py's population (default 1)")
     parser.add_argument("--out", type=Path, default=Path("calibration.toml"),
                         help="where to write the [device] section (default calibration.toml)")
     parser.add_argument("--plot", type=Path, default=None,
@@ -38,27 +42,36 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _progress(done: int, total: int) -> None:
-    print(f"\rcalibrating: step {done}/{total}", end="" if done < total else "\n",
-          file=sys.stderr, flush=True)
+    """One line per step where stderr is a file or a pipe, one line redrawn on a terminal."""
+    text = f"calibrating: step {done}/{total}"
+    if sys.stderr.isatty():
+        print("\r" + text, end="" if done < total else "\n", file=sys.stderr, flush=True)
+    else:
+        print(text, file=sys.stderr, flush=True)
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.device != "sim":
-        raise ValueError(f"calibrate: device {args.device!r}: only 'sim' can be calibrated; a "
-                         f"serial device must report the lateral force, which device/PROTOCOL.md "
-                         f"does not carry yet")
+    from device.link.host import open_sink  # with the command: its imports stay out of --help
     if args.finger < 0:
         raise ValueError(f"calibrate: --finger {args.finger}: expected 0 or a positive person number")
-    finger = FingerParams() if args.finger == 0 else draw_finger(args.finger)
     sweep = Sweep()
-    plant = FingerPlant(finger, RATE_HZ, LIMIT_UM, seed=args.finger)
-    w, normal, mu = run_sweep(plant, sweep, on_step=_progress)
+    sim = args.device in ("sim", "sim:tcp")
+    sim_args = (("--finger", str(args.finger), "--finger-speed", f"{sweep.speed_mm_s:g}",
+                 "--force", f"{sweep.force_n:g}", "--limit", f"{SIM_LIMIT_UM:g}") if sim else ())
+    print(f"slide a finger at about {sweep.speed_mm_s:g} mm/s, pressing about "
+          f"{sweep.force_n:g} N, for {sweep.duration_s:g} s", file=sys.stderr)
+    link = open_sink(args.device, channels=1, rate_hz=RATE_HZ, paced=True, sim_args=sim_args)
+    try:
+        w, normal, mu = run_sweep(link, sweep, on_step=_progress)
+        limit_um = min(link.info.limits_um)
+    finally:
+        link.close()
     fit = fit_points(w, normal, mu)
     print(f"{fit.n_points} points in {sweep.duration_s:g} s of sliding; seed 003 eq 2 fit: "
           f"b = {fit.params.b_per_um:.4f} /um, k = {fit.params.asymptote_per_n:.4f} /N, "
           f"residual RMS {fit.residual_rms:.5f} (mu')"
           + ("" if fit.fits else "; the model does not fit: calibration table written"))
-    args.out.write_text(device_toml(fit, LIMIT_UM, sweep.force_n))
+    args.out.write_text(device_toml(fit, limit_um, sweep.force_n))
     print(f"wrote {args.out}")
     if args.plot is not None:
         _plot(args.plot, w, normal, mu, fit)
