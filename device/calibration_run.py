@@ -2,16 +2,21 @@
 plate steps through amplitudes, and the points (w, F_n, mu') come out for
 ``device.calibration_fit``.
 
-The plate alternates rest and each of ``levels`` amplitudes, ``step_s`` each; the first
+Once a finger presses on the plate (the device's reports show a normal force), the plate
+alternates rest and each of ``levels`` amplitudes, ``step_s`` each; the first
 ``settle_share`` of a step is discarded (plate loop, fingertip and sensor settling). The
 forces are the device's own force reports (PROTOCOL.md 4.9) over each step's kept
-samples, read through ``device.link.host.CommandSink.force_report``: the same code
-calibrates the simulated device (``frictex sim-device --finger N``) and a plate that
-announces a lateral force sensor. A step's ratio is the median of F_t / F_n over its
-kept samples, so a short gap in the stream (an underrun: the plate at rest meanwhile)
-moves it little. The friction at rest mu0 is the mean ratio of the rest steps on each
-side of an amplitude step, so the slow moisture drift cancels; mu' = F_t / (F_n mu0)
-(seed 003, eq 1).
+samples, read through ``device.link.host.CommandSink``: the same code calibrates the
+simulated device (``frictex sim-device --finger N``) and a plate that announces a lateral
+force sensor. A device drops the report it was building when it underruns, and a host
+must not count on every report arriving: a step whose reports cover at least
+``MIN_COVERED`` of its kept samples is taken over those, once the reports have gone
+``LATE_SAMPLES`` past it. A step's ratio is the median of F_t / F_n over its samples. The
+friction at rest mu0 is the mean ratio of the rest steps on each side of an amplitude
+step, so the slow moisture drift cancels; mu' = F_t / (F_n mu0) (seed 003, eq 1).
+
+Reports are read between the blocks sent, so each is read well within the second of
+them the link keeps (the link's queue and the device's buffer hold well under a second).
 """
 
 from __future__ import annotations
@@ -26,10 +31,17 @@ from device.link.host import LinkStalled
 #: samples per block sent (5 ms at 10 kHz)
 BLOCK_SAMPLES = 50
 #: how long (s) a step's reports may take beyond the time the device needs to play what
-#: is queued before it (the link's queue and the device's buffer: under 1 s)
+#: is queued before it
 REPORT_WAIT_S = 2.0
 #: smallest normal force (N) a finger on the plate gives
 MIN_NORMAL_N = 0.05
+#: least share of a step's kept samples its reports must cover
+MIN_COVERED = 0.8
+#: samples the device's reports must have gone past a step before the ones it lacks are
+#: given up (a report spans 40 samples on the reference device; they come in order)
+LATE_SAMPLES = 200
+#: how long (s) the sweep waits for a finger to press on the plate before it starts
+TOUCH_WAIT_S = 30.0
 
 
 @dataclass(frozen=True)
@@ -57,65 +69,98 @@ class Sweep:
 
 
 def run_sweep(link, sweep: Sweep, on_step=None):
-    """Stream the protocol to ``link`` (a paced ``CommandSink``, one channel) from sample
-    0 on and read the forces back; returns the points (w_um, normal_n, mu) as arrays.
+    """Wait for a finger, stream the protocol to ``link`` (a paced ``CommandSink``, one
+    channel) and read the forces back; returns the points (w_um, normal_n, mu) as arrays.
 
     ``on_step(done, total)`` is called as each step's forces have come (progress).
     Raises ValueError for a device that cannot be calibrated (no force reports, a limit
-    below the sweep's levels) and ``LinkStalled`` when a step's reports do not come.
+    below the sweep's levels) or no finger on the plate, and ``LinkStalled`` when a
+    step's reports do not come or cover too little of it.
     """
     info = link.info
     if info is None or not info.has_force_reports:
         raise ValueError(f"{link.label}: the device sends no force reports (PROTOCOL.md "
                          f"4.9: a version 3 device with a lateral force sensor); it cannot "
                          f"be calibrated")
-    if max(sweep.levels) > min(info.limits_um):
-        raise ValueError(f"{link.label}: the device's amplitude limit {min(info.limits_um):g} "
+    if max(sweep.levels) > info.limits_um[0]:
+        raise ValueError(f"{link.label}: the device's amplitude limit {info.limits_um[0]:g} "
                          f"um is below the sweep's {max(sweep.levels):g} um")
     per = int(round(sweep.step_s * link.rate_hz))
     kept = per - int(per * sweep.settle_share)
     steps = sweep.amplitudes()
+    start = _wait_for_finger(link)
     ratios, normals = [], []
 
     def window(k: int) -> tuple[int, int]:
-        return (k + 1) * per - kept, kept
+        return start + (k + 1) * per - kept, kept
 
-    def take(k: int, report) -> None:
-        normal = float(np.median(report.normal_n))
+    def take(k: int, forces) -> None:
+        lateral, normal_n = forces
+        normal = float(np.median(normal_n))
         if not normal >= MIN_NORMAL_N:
             raise ValueError(f"{link.label}: normal force {normal:.3g} N during step {k + 1}: "
-                             f"no finger on the plate (slide a finger through the whole sweep)")
-        ratios.append(float(np.median(report.lateral_n / report.normal_n)))
+                             f"the finger lifted (slide it through the whole sweep)")
+        ratios.append(float(np.median(lateral / normal_n)))
         normals.append(normal)
         if on_step is not None:
             on_step(k + 1, len(steps))
 
-    # a step's reports are read as soon as they have come, between the blocks sent: the
-    # link keeps the last second of them
     for k, w in enumerate(steps):
         for lo in range(0, per, BLOCK_SAMPLES):
-            link.send(k * per + lo, np.full((min(BLOCK_SAMPLES, per - lo), 1), w))
-            while len(ratios) < k:
-                report = link.force_report(*window(len(ratios)))
-                if report is None:
-                    break
-                take(len(ratios), report)
-    link.send(len(steps) * per, np.zeros((BLOCK_SAMPLES, 1)))  # the plate back at rest
+            link.send(start + k * per + lo, np.full((min(BLOCK_SAMPLES, per - lo), 1), w))
+            while len(ratios) < k and (forces := _step_forces(link, *window(len(ratios)),
+                                                              len(ratios))) is not None:
+                take(len(ratios), forces)
+    # the plate back at rest, for long enough that the reports go past the last step
+    end = start + len(steps) * per
+    for lo in range(0, 2 * LATE_SAMPLES, BLOCK_SAMPLES):
+        link.send(end + lo, np.zeros((BLOCK_SAMPLES, 1)))
+    deadline = time.monotonic() + 2 * sweep.step_s + REPORT_WAIT_S
     while len(ratios) < len(steps):
-        take(len(ratios), _wait_report(link, *window(len(ratios)), sweep.step_s))
+        forces = _step_forces(link, *window(len(ratios)), len(ratios))
+        if forces is not None:
+            take(len(ratios), forces)
+        elif time.monotonic() > deadline:
+            i0, n = window(len(ratios))
+            raise LinkStalled(f"{link.label}: no force reports for samples {i0} to "
+                              f"{i0 + n - 1} after {2 * sweep.step_s + REPORT_WAIT_S:g} s; "
+                              f"the device stopped taking data or reporting")
+        else:
+            time.sleep(0.005)
     ratios, normals = np.array(ratios), np.array(normals)
     rest = 0.5 * (ratios[0:-1:2] + ratios[2::2])
     return np.array(sweep.levels), normals[1::2], ratios[1::2] / rest
 
 
-def _wait_report(link, index0: int, n: int, step_s: float):
-    """The forces over samples ``index0 .. index0 + n - 1``, waiting for their reports at
-    most the time to play a step and the queue before it plus ``REPORT_WAIT_S``."""
-    deadline = time.monotonic() + 2 * step_s + REPORT_WAIT_S
-    while (report := link.force_report(index0, n)) is None:
+def _step_forces(link, index0: int, n: int, k: int):
+    """(lateral, normal) of step ``k``'s samples ``index0 .. index0 + n - 1``: all of them
+    once reported; those reported once the reports have gone ``LATE_SAMPLES`` past them
+    (the rest were dropped); None while they may still come."""
+    whole = link.force_report(index0, n)
+    if whole is not None:
+        return whole.lateral_n, whole.normal_n
+    latest = link.force_report()
+    if latest is None or latest.index0 < index0 + n + LATE_SAMPLES:
+        return None
+    lateral, normal = link.forces_covered(index0, n)
+    if lateral.size < MIN_COVERED * n:
+        raise LinkStalled(f"{link.label}: the device's reports cover {lateral.size} of step "
+                          f"{k + 1}'s {n} samples (it drops a report when it underruns); "
+                          f"calibrate again with the host less busy")
+    return lateral, normal
+
+
+def _wait_for_finger(link) -> int:
+    """Keep the plate at rest until the device's reports show a finger pressing (at most
+    ``TOUCH_WAIT_S``); returns the next sample to send."""
+    deadline = time.monotonic() + TOUCH_WAIT_S
+    index = 0
+    while True:
+        latest = link.force_report()
+        if latest is not None and float(np.median(latest.normal_n)) >= MIN_NORMAL_N:
+            return index
         if time.monotonic() > deadline:
-            raise LinkStalled(f"{link.label}: no force reports for samples {index0} to "
-                              f"{index0 + n - 1} after {2 * step_s + REPORT_WAIT_S:g} s; "
-                              f"the device stopped taking data or reporting")
-        time.sleep(0.005)
-    return report
+            raise ValueError(f"{link.label}: no finger on the plate after {TOUCH_WAIT_S:g} s "
+                             f"(normal force below {MIN_NORMAL_N:g} N); touch it and slide")
+        link.send(index, np.zeros((BLOCK_SAMPLES, 1)))  # paced: waits for the device's room
+        index += BLOCK_SAMPLES

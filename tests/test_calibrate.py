@@ -12,7 +12,7 @@ from device.calibration_fit import fit_points
 from device.calibration_run import Sweep, run_sweep
 from device.finger import draw_finger, moisture
 from device.link.forces import ForceReport
-from device.link.host import start_sim_device
+from device.link.host import LinkStalled, start_sim_device
 
 
 def test_fit_recovers_constants_of_exact_points():
@@ -42,30 +42,41 @@ def test_too_few_points_is_a_clear_error():
 
 class ModelLink:
     """A paced link to a plate whose finger follows seed 003's eq 2 exactly (b, k), its
-    friction at rest rising linearly with time, its reports coming one block late."""
+    friction at rest rising linearly with time, its reports coming one block late;
+    ``dropped``: (first, last) samples whose reports the device dropped (an underrun)."""
 
-    def __init__(self, b, k, normal_n=0.5, drift_per_s=0.02, gap=None):
+    def __init__(self, b, k, normal_n=0.5, drift_per_s=0.02, dropped=None):
         self.info = SimpleNamespace(has_force_reports=True, limits_um=(2.5,))
         self.rate_hz, self.label = 10_000.0, "model"
         self.b, self.k, self.normal_n, self.drift = b, k, normal_n, drift_per_s
-        self.gap = gap  # (first, last) samples that never played: the plate at rest
+        self.dropped = dropped
         self.w = np.zeros(0)
 
     def send(self, index0, amplitudes):
         assert index0 == self.w.size
         self.w = np.concatenate([self.w, amplitudes[:, 0]])
 
-    def force_report(self, index0, n):
-        if index0 + n > self.w.size - 50:
-            return None
-        w = self.w[index0:index0 + n].copy()
+    def _forces(self, index0, n):
         i = np.arange(index0, index0 + n)
-        if self.gap is not None:
-            w[(i >= self.gap[0]) & (i <= self.gap[1])] = 0.0
         kf = self.k * self.normal_n
-        mu = (1 - kf) * np.exp(-self.b * w) + kf
+        mu = (1 - kf) * np.exp(-self.b * self.w[index0:index0 + n]) + kf
         mu0 = 0.6 * (1 + self.drift * i / self.rate_hz)
-        return ForceReport(index0, mu0 * mu * self.normal_n, np.full(n, self.normal_n))
+        reported = np.ones(n, bool) if self.dropped is None else ~(
+            (i >= self.dropped[0]) & (i <= self.dropped[1]))
+        return mu0 * mu * self.normal_n, np.full(n, self.normal_n), reported
+
+    def force_report(self, index0=None, n=None):
+        played = self.w.size - 50
+        if index0 is None:
+            return ForceReport(played - 40, *self._forces(played - 40, 40)[:2]) if played >= 40 else None
+        if index0 + n > played:
+            return None
+        lateral, normal, reported = self._forces(index0, n)
+        return ForceReport(index0, lateral, normal) if reported.all() else None
+
+    def forces_covered(self, index0, n):
+        lateral, normal, reported = self._forces(index0, min(n, self.w.size - 50 - index0))
+        return lateral[reported], normal[reported]
 
 
 def test_the_sweep_gives_eq_2s_points_with_a_linear_drift_cancelled():
@@ -83,12 +94,19 @@ def test_the_sweep_gives_eq_2s_points_with_a_linear_drift_cancelled():
     assert abs(fit.params.b_per_um / 1.4 - 1) < 0.01 and abs(fit.params.asymptote_per_n / 0.8 - 1) < 0.01
 
 
-def test_a_short_gap_in_a_step_moves_its_point_little():
-    per = 5000
-    gap = (3 * per + 3000, 3 * per + 3400)  # 40 ms of the plate at rest in level 2's step
-    w, _, mu = run_sweep(ModelLink(1.4, 0.8, drift_per_s=0.0, gap=gap), Sweep())
+def test_reports_a_device_dropped_are_done_without_or_refuse_the_step():
+    """An underrun drops a report: a step missing a tenth of its reports is taken over the
+    rest (eq 2 exactly, no drift); one missing over a fifth is refused, naming it."""
+    per, kept = 5000, 3000
+    start = 100  # after the two blocks of rest the wait for a finger sends
+    step = 3  # the second level's step
+    first = start + (step + 1) * per - kept
     kf = 0.8 * 0.5
+    w, _, mu = run_sweep(ModelLink(1.4, 0.8, drift_per_s=0.0,
+                                   dropped=(first + 1000, first + 1299)), Sweep())
     np.testing.assert_allclose(mu, (1 - kf) * np.exp(-1.4 * w) + kf, rtol=1e-12)
+    with pytest.raises(LinkStalled, match="cover 2000 of step 4's 3000 samples"):
+        run_sweep(ModelLink(1.4, 0.8, dropped=(first, first + 999)), Sweep())
 
 
 def test_a_device_without_force_reports_or_a_lower_limit_is_refused():
@@ -97,7 +115,7 @@ def test_a_device_without_force_reports_or_a_lower_limit_is_refused():
     with pytest.raises(ValueError, match="sends no force reports"):
         run_sweep(link, Sweep())
     link = ModelLink(1.4, 0.8)
-    link.info.limits_um = (2.0,)
+    link.info.limits_um = (2.0, 4.0)  # only channel 0 is driven
     with pytest.raises(ValueError, match="limit 2 um is below the sweep's 2.4 um"):
         run_sweep(link, Sweep())
 
@@ -135,15 +153,26 @@ def test_calibrate_recovers_the_simulated_finger_within_5_percent(tmp_path, caps
 def test_a_port_is_a_one_line_error(capsys, tmp_path):
     assert main(["calibrate", "--device", "/dev/ttyUSB9", "--out", str(tmp_path / "x")]) == 2
     err = capsys.readouterr().err.splitlines()
-    assert err[-1].startswith("frictex: error: ") and "/dev/ttyUSB9" in err[-1]
+    assert len(err) == 1 and err[0].startswith("frictex: error: ") and "/dev/ttyUSB9" in err[0]
     assert not (tmp_path / "x").exists()
+
+
+def test_no_finger_on_the_plate_is_said_after_the_wait(monkeypatch):
+    import device.calibration_run as run
+    monkeypatch.setattr(run, "TOUCH_WAIT_S", 0.05)
+    link = ModelLink(1.4, 0.8, normal_n=0.0)
+    with pytest.raises(ValueError, match="no finger on the plate after 0.05 s"):
+        run_sweep(link, Sweep())
 
 
 def test_a_device_without_a_force_sensor_is_a_one_line_error(capsys, tmp_path):
     proc, path = start_sim_device(1, 10_000.0)  # no --finger: no force reports
     try:
         assert main(["calibrate", "--device", path, "--out", str(tmp_path / "x")]) == 2
+        proc.wait(timeout=10)  # --once: it ends when the host closes the link
     finally:
-        proc.wait(timeout=10)
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(timeout=10)
     err = capsys.readouterr().err.splitlines()
     assert err[-1].startswith(f"frictex: error: {path}: the device sends no force reports")

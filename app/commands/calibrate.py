@@ -58,12 +58,13 @@ def run(args: argparse.Namespace) -> int:
     sim = args.device in ("sim", "sim:tcp")
     sim_args = (("--finger", str(args.finger), "--finger-speed", f"{sweep.speed_mm_s:g}",
                  "--force", f"{sweep.force_n:g}", "--limit", f"{SIM_LIMIT_UM:g}") if sim else ())
-    print(f"slide a finger at about {sweep.speed_mm_s:g} mm/s, pressing about "
-          f"{sweep.force_n:g} N, for {sweep.duration_s:g} s", file=sys.stderr)
     link = open_sink(args.device, channels=1, rate_hz=RATE_HZ, paced=True, sim_args=sim_args)
     try:
+        print(f"{link.label}: slide a finger at about {sweep.speed_mm_s:g} mm/s, pressing "
+              f"about {sweep.force_n:g} N, for {sweep.duration_s:g} s (the sweep starts at "
+              f"the touch)", file=sys.stderr)
         w, normal, mu = run_sweep(link, sweep, on_step=_progress)
-        limit_um = min(link.info.limits_um)
+        limit_um = link.info.limits_um[0]
     finally:
         link.close()
     fit = fit_points(w, normal, mu)

@@ -321,8 +321,9 @@ class DemoLoop:
 
     def check_reload(self, now: float) -> None:
         """Every RELOAD_POLL_S (s on the loop's clock): if the scene's texture file or
-        a file it names changed and has since held still for a poll (a file caught
-        half-written is not loaded), load the scene again; a good load is applied, a bad one
+        a file it names changed and has since held still for a poll (a save caught between
+        truncating and writing is not loaded, unless the writing waits a whole poll), load
+        the scene again; a good load is applied, a bad one
         keeps the last good scene and shows why. A texture file that is not there (an
         editor between deleting and writing it) is waited for."""
         if now < self._next_poll:

@@ -275,9 +275,9 @@ def measure(fingers: int = FINGERS, duration_s: float = DURATION_S, workers: int
 def _study_is_main(duration_s: float, adapt_s: float, fingers: int,
                    adapt_fingers: int | None) -> bool:
     """Whether the adaptation study's runs are the main adaptive runs on ``ADAPT_SCENE``
-    (same fingers, same length, no noise rerun there): then they are not run twice."""
-    return (adapt_s == duration_s and adapt_fingers in (None, fingers)
-            and ADAPT_SCENE not in NOISE_SCENES)
+    (same fingers, same length; a noise rerun beside a run does not change it): then
+    they are not run twice."""
+    return adapt_s == duration_s and adapt_fingers in (None, fingers)
 
 
 def _job(run: Run):

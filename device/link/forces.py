@@ -85,6 +85,24 @@ class ForceHistory:
     def window(self, index0: int, n: int) -> ForceReport | None:
         """The forces over samples ``index0 .. index0 + n - 1``, or None unless the kept
         reports cover every one of them (where reports overlap, the newer wins)."""
+        got = self._gather(index0, n)
+        if got is None or not got[2].all():
+            return None
+        return ForceReport(index0, got[0], got[1])
+
+    def covered(self, index0: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """(lateral, normal) forces (N) of those of samples ``index0 .. index0 + n - 1``
+        the kept reports cover, in sample order (a device drops the report it was building
+        when it underruns, PROTOCOL.md 4.9); empty arrays if none."""
+        got = self._gather(index0, n)
+        if got is None:
+            return np.zeros(0), np.zeros(0)
+        lateral, normal, covered = got
+        return lateral[covered], normal[covered]
+
+    def _gather(self, index0: int, n: int):
+        """(lateral, normal, covered) over samples ``index0 .. index0 + n - 1``, each (n,),
+        or None when no kept report reaches into them."""
         if n < 1:
             return None
         if self._descents:
@@ -104,6 +122,4 @@ class ForceHistory:
                 lateral[lo_ - index0:hi_ - index0] = r.lateral_n[lo_ - r.index0:hi_ - r.index0]
                 normal[lo_ - index0:hi_ - index0] = r.normal_n[lo_ - r.index0:hi_ - r.index0]
                 covered[lo_ - index0:hi_ - index0] = True
-        if not covered.all():
-            return None
-        return ForceReport(index0, lateral, normal)
+        return lateral, normal, covered

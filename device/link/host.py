@@ -607,6 +607,13 @@ class CommandSink:
                 return self._forces.latest()
             return self._forces.window(int(index0), int(n))
 
+    def forces_covered(self, index0: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """(lateral, normal) forces (N) of those of samples ``index0 .. index0 + n - 1``
+        the reports of the last second cover, in sample order (``ForceHistory.covered``:
+        a device drops a report when it underruns); empty arrays if none. Never blocks."""
+        with self._forces_lock:
+            return self._forces.covered(int(index0), int(n))
+
     def unplayed_share(self) -> float:
         """Commanded samples known never to have played, as a share of all commanded (0
         when nothing was commanded). Final once :meth:`close` has returned."""
