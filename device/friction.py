@@ -128,13 +128,7 @@ class SeedFrictionModel:
         # 10x as long over -1 as over a finite result
         unreachable = reduction >= 1.0
         with np.errstate(divide="ignore", invalid="ignore"):
-            if unreachable.all():
-                log = np.full(np.shape(reduction), -np.inf)
-            elif unreachable.any():
-                log = np.log1p(-np.where(unreachable, 0.0, reduction))
-                log = np.where(unreachable, -np.inf, log)
-            else:
-                log = np.log1p(-reduction)
+            log = np.where(unreachable, -np.inf, np.log1p(-np.where(unreachable, 0.0, reduction)))
             w = -log / self.params.b_per_um
         if beyond.any():  # asks for a reduction where the model does not hold
             out = beyond & (mu < 1.0)
