@@ -79,6 +79,8 @@ def test_tables_hold_every_row_across_batches(tmp_path, monkeypatch, fmt):
         assert path.read_bytes() == header + python_rows(
             [want[n] for n, _, _ in COLUMNS], [f for _, _, f in COLUMNS])
         return
+    if fmt == "parquet":  # required columns: no value is ever missing
+        assert [f.nullable for f in pq.read_schema(path)] == [False] * len(COLUMNS)
     got = np.load(path) if fmt == "npz" else pq.read_table(path).to_pydict()
     for name, dtype, _ in COLUMNS:
         assert np.asarray(got[name]).dtype == dtype

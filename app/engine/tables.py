@@ -21,8 +21,10 @@ Formats:
   format 2.8: the bytes of each value in separate streams, which the compressor then
   finds alike: the 10-min replay's friction table 135 -> 83 MB and 0.38 -> 0.30 s of
   writer CPU against plain encoding), the finger column dictionary-encoded (dictionary
-  encoding the float columns tripled the write time for 10 % in size); pandas, polars,
-  pyarrow and DuckDB open it directly.
+  encoding the float columns tripled the write time for 10 % in size). Every column is
+  declared required (not nullable), as no value is ever missing: the writer then encodes
+  no definition levels (the every-layer scene's 10-min friction table, 6 million rows:
+  0.32 -> 0.23 s of writer CPU). pandas, polars, pyarrow and DuckDB open it directly.
 """
 
 from __future__ import annotations
@@ -203,8 +205,8 @@ class _Parquet:
     def __init__(self, table: TableWriter):
         import pyarrow as pa
         import pyarrow.parquet as pq
-        self.schema = pa.schema([(name, pa.from_numpy_dtype(np.dtype(dtype)))
-                                 for name, dtype, _ in table.columns])
+        self.schema = pa.schema([pa.field(name, pa.from_numpy_dtype(np.dtype(dtype)),
+                                          nullable=False) for name, dtype, _ in table.columns])
         floats = [name for name, dtype, _ in table.columns if np.dtype(dtype).kind == "f"]
         self.writer = pq.ParquetWriter(table.partial, self.schema, compression="snappy",
                                        use_dictionary=["finger"], use_byte_stream_split=floats)
