@@ -241,10 +241,11 @@ def test_gradient_alone_is_the_gradient_of_height_and_gradient_bit_for_bit(shape
 @pytest.mark.parametrize("rendering", ["slope", "magnitude"])
 @pytest.mark.parametrize("shape", [*SHAPES, _ripple_map()], ids=lambda s: type(s).__name__)
 def test_renderer_is_the_saturation_of_the_slope_bit_for_bit(shape, rendering):
-    """The renderer gives mu_rest where the slope is 0 without the saturation, and runs the
-    rest through it: the same mu' as the saturation of every slope."""
-    from rendering.layers.height import HeightRenderer, slope_along_motion
+    """The renderer, slope and saturation in one pass, gives the saturation of every
+    sample's slope (mu_rest where it is 0, whatever the zero's sign)."""
+    from rendering.layers.height import HeightRenderer
     from rendering.tracking.tracks import BLOCK_FIELDS, FingerBlock
+    from textures.heights import slope_along_motion
     x, y = _grid_with_edges()
     n = x.size // 2
     rng = np.random.default_rng(4)
@@ -310,8 +311,9 @@ def test_outside_its_slope_band_a_shape_is_flat(shape):
 def test_renderer_skips_the_band_outside_bit_for_bit(shape, rendering):
     """Around the band's edges, at positions and velocities that are not finite, the
     renderer gives what the saturation of every sample's slope gives."""
-    from rendering.layers.height import HeightRenderer, slope_along_motion
+    from rendering.layers.height import HeightRenderer
     from rendering.tracking.tracks import BLOCK_FIELDS, FingerBlock
+    from textures.heights import slope_along_motion
     rng = np.random.default_rng(6)
     x, y = _around_band_edges(shape, rng)
     x[:12], y[:12] = [np.nan, np.inf, -np.inf, 50.0] * 3, [30.0, 30.0, 1.0, np.inf] * 3
@@ -334,7 +336,7 @@ def test_renderer_skips_the_band_outside_bit_for_bit(shape, rendering):
 def test_slope_is_the_documented_formula_bit_for_bit(signed):
     """The slope kernel (one vectorised pass) against the module docstring's formula in numpy,
     at rest, below and above v_fade, signed zeros, NaN and infinities."""
-    from rendering.layers.height import slope_along_motion
+    from textures.heights import slope_along_motion
     rng = np.random.default_rng(8)
     special = np.array([0.0, -0.0, np.nan, np.inf, -np.inf, 1e-300, 3.0, -1e300])
     gx, gy, vx, vy = (np.concatenate([rng.normal(0.0, scale, 3000), rng.choice(special, 1000)])
@@ -349,6 +351,24 @@ def test_slope_is_the_documented_formula_bit_for_bit(signed):
     s = slope_along_motion(gx, gy, vx, vy, 10.0, signed)
     assert np.isnan(s).any() and (s == 0.0).sum() > 500 and np.signbit(s[s == 0.0]).any() == signed
     assert s.tobytes() == expected.tobytes()
+
+
+@pytest.mark.parametrize("mu_min", [0.6, 0.75])
+def test_saturation_is_the_documented_formula_bit_for_bit(mu_min):
+    """mu_of_slope against the HeightLayer docstring's saturation in numpy, at signed zeros,
+    tiny, huge, infinite and NaN slopes, also with mu_rest at mu_min (a zero span)."""
+    layer = _layer(GaussianBump(50.0, 30.0, 8.0, 1.0), rendering="magnitude" if mu_min == 0.75
+                   else "slope", mu_rest=0.75, mu_min=mu_min, gain=1.7)
+    rng = np.random.default_rng(10)
+    special = np.array([0.0, -0.0, np.nan, np.inf, -np.inf, 5e-324, -5e-324, 1e-300, -1e300])
+    s = np.concatenate([rng.normal(0.0, 0.2, 3000), rng.choice(special, 1000)])
+    up, down = layer.mu_max - layer.mu_rest, layer.mu_rest - layer.mu_min
+    span = np.where(s >= 0.0, up, down)
+    with np.errstate(invalid="ignore", over="ignore"):
+        expected = layer.mu_rest + span * np.tanh(layer.gain * s / np.maximum(span, 1e-300))
+    mu = layer.mu_of_slope(s)
+    assert np.isnan(mu).any() and (mu == layer.mu_rest).sum() > 200
+    assert mu.tobytes() == expected.tobytes()
 
 
 def test_height_map_is_bilinear_between_pixel_centres_bit_for_bit():

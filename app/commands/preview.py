@@ -21,7 +21,6 @@ from pathlib import Path
 import numpy as np
 
 from rendering.compose import ideal_mu
-from rendering.layers.height import slope_along_motion
 from device.friction import mu_floor
 from rendering.visual.scene_image import scene_rgb, to_srgb8
 from rendering.visual.viewport import fit_viewport
@@ -83,8 +82,7 @@ class _MovingRight:
         layer = self.layer
         gx, gy = layer.shape.gradient(x, y)
         speed = 2.0 * layer.v_fade_mm_s
-        return layer.mu_of_slope(slope_along_motion(gx, gy, speed, 0.0, layer.v_fade_mm_s,
-                                                    layer.rendering == "slope"))
+        return layer.mu_of_motion(gx, gy, speed, 0.0)
 
 
 def as_previewed(scene):

@@ -11,15 +11,16 @@ climbs and lowers it while it descends:
     s = (grad h . v) / max(|v|, v_fade)        (signed, "slope")
     s = |grad h| min(1, |v| / v_fade)         ("magnitude", Kim et al.'s unsigned form)
 
-with v the tracker's velocity estimate (mm/s) and grad h taken at the predicted position;
-mu' = ``layer.mu_of_slope(s)``. Along the finger's path s changes by at most
+with v the tracker's velocity estimate (mm/s) and grad h taken at the predicted position
+(``textures.heights.slope_along_motion``), and mu' the layer's saturation of s
+(``HeightLayer.mu_of_motion``: both in one pass). Along the finger's path s changes by at most
 |d2h/du2| |v| / rate per output sample, so a step in mu' is bounded by
 gain * max|d2h/du2| * |v| / rate_hz (plus what a change of the velocity estimate at a
 touch sample adds: gain * |grad h| * |dv| / max(|v|, v_fade)).
 
 Stateless: the slope depends on this sample's position and velocity only. Where s is 0
-(flat ground, a finger at rest, motion along a contour) mu' is mu_rest exactly, and only
-the other samples go through the saturation. A shape with a ``slope_band`` (a ridge, a
+(flat ground, a finger at rest, motion along a contour) mu' is mu_rest exactly
+(mu_rest + span tanh(+-0)). A shape with a ``slope_band`` (a ridge, a
 step, a button's rim) has a gradient of exactly 0 outside it, so there mu' is mu_rest
 without evaluating the shape (unless the velocity is not finite: 0 times it is NaN).
 """
@@ -32,41 +33,6 @@ import numpy as np
 from numba import njit
 
 from rendering.tracking.tracks import FingerBlock
-
-
-def slope_along_motion(gx, gy, vx, vy, v_fade_mm_s: float, signed: bool) -> np.ndarray:
-    """The slope a moving finger feels (dimensionless), faded to 0 at rest.
-
-    Parameters
-    ----------
-    gx, gy : height gradient (mm per mm), any broadcastable shape.
-    vx, vy : finger velocity (mm/s).
-    v_fade_mm_s : below this speed the slope is scaled by speed / v_fade_mm_s (> 0).
-    signed : the directional derivative along the motion; else |grad h| (unsigned).
-    """
-    arrays = [np.asarray(a, dtype=np.float64) for a in (gx, gy, vx, vy)]
-    if len({a.shape for a in arrays}) > 1:
-        arrays = np.broadcast_arrays(*arrays)
-    shape = arrays[0].shape
-    return _slope_kernel(*(a.ravel() for a in arrays), v_fade_mm_s, signed).reshape(shape)
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _slope_kernel(gx, gy, vx, vy, v_fade_mm_s, signed):
-    """:func:`slope_along_motion` on (m,) arrays, one pass without a branch per sample,
-    which the compiler vectorises (numpy's error model: no test of each divisor for 0,
-    none is). NaN propagates as numpy's ``maximum`` and ``minimum`` would."""
-    out = np.empty(gx.size)
-    if signed:
-        for i in range(gx.size):
-            speed = np.sqrt(vx[i] * vx[i] + vy[i] * vy[i])
-            along = gx[i] * vx[i] + gy[i] * vy[i]
-            out[i] = along / (v_fade_mm_s if speed < v_fade_mm_s else speed)
-    else:
-        for i in range(gx.size):
-            fade = np.sqrt(vx[i] * vx[i] + vy[i] * vy[i]) / v_fade_mm_s
-            out[i] = np.sqrt(gx[i] * gx[i] + gy[i] * gy[i]) * (1.0 if fade > 1.0 else fade)
-    return out
 
 
 @njit(cache=True, nogil=True)
@@ -89,7 +55,6 @@ class HeightRenderer:
 
     def __init__(self, layer, rate_hz: float = 10_000.0):
         self.layer = layer
-        self.signed = layer.rendering == "slope"
         band = layer.shape.slope_band
         self.band = None if band is None else astuple(band)
 
@@ -106,12 +71,8 @@ class HeightRenderer:
             at = np.flatnonzero(_in_band(x, y, vx, vy, *self.band))
             x, y, vx, vy = x[at], y[at], vx[at], vy[at]
         gx, gy = layer.shape.gradient(x, y)
-        s = _slope_kernel(gx, gy, vx, vy, layer.v_fade_mm_s, self.signed)
-        sloped = s != 0.0  # NaN too
-        if at is None and sloped.all():  # a finger sliding on a bump: no sample at rest
-            mu = layer.mu_of_slope(s)
-        else:  # mu_rest where the slope is 0, whatever the sign of the zero
-            mu = np.full(block.x_pred.size, layer.mu_rest)
-            where = np.flatnonzero(sloped)
-            mu[where if at is None else at[where]] = layer.mu_of_slope(s[where])
+        mu = layer.mu_of_motion(gx, gy, vx, vy)
+        if at is not None:  # mu_rest outside the band
+            mu, inside = np.full(block.x_pred.size, layer.mu_rest), mu
+            mu[at] = inside
         return mu.reshape(block.x_pred.shape), layer.covers(block.x_pred, block.y_pred), state
