@@ -6,9 +6,9 @@ over a real bump, the finger is opposed by a force that grows with the slope whi
 climbs and assists it while it descends, and subjects perceive a bump from that force
 alone, even on a flat or hollow surface. Kim, Israr and Poupyrev (UIST 2013, "Tactile
 rendering of 3D features on touch surfaces") map the local gradient of a virtual
-surface to the lateral friction force of an electrovibration display. The slope is
-rendered by ``rendering.layers.height``; here are the heights and the mapping from slope
-to mu'.
+surface to the lateral friction force of an electrovibration display. Here are the
+heights, the slope a moving finger feels (``slope_along_motion``) and the layer's mapping
+from slope to mu'; ``rendering.layers.height`` renders them under each finger.
 
 Every shape answers ``height_and_gradient(x, y) -> (h, dh/dx, dh/dy)`` (mm, and mm per
 mm) at arrays of positions (mm), ``gradient(x, y) -> (dh/dx, dh/dy)`` (the same

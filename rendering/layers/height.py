@@ -12,17 +12,17 @@ climbs and lowers it while it descends:
     s = |grad h| min(1, |v| / v_fade)         ("magnitude", Kim et al.'s unsigned form)
 
 with v the tracker's velocity estimate (mm/s) and grad h taken at the predicted position
-(``textures.heights.slope_along_motion``), and mu' the layer's saturation of s
-(``HeightLayer.mu_of_motion``: both in one pass). Along the finger's path s changes by at most
+(``textures.heights.slope_along_motion``), and mu' the layer's saturation of s (both in
+one pass: ``HeightLayer.mu_of_motion``). Along the finger's path s changes by at most
 |d2h/du2| |v| / rate per output sample, so a step in mu' is bounded by
 gain * max|d2h/du2| * |v| / rate_hz (plus what a change of the velocity estimate at a
 touch sample adds: gain * |grad h| * |dv| / max(|v|, v_fade)).
 
 Stateless: the slope depends on this sample's position and velocity only. Where s is 0
 (flat ground, a finger at rest, motion along a contour) mu' is mu_rest exactly
-(mu_rest + span tanh(+-0)). A shape with a ``slope_band`` (a ridge, a
-step, a button's rim) has a gradient of exactly 0 outside it, so there mu' is mu_rest
-without evaluating the shape (unless the velocity is not finite: 0 times it is NaN).
+(mu_rest + span tanh(+-0)). A shape with a ``slope_band`` (a ridge, a step, a button's
+rim) has a gradient of exactly 0 outside it, so there mu' is mu_rest without evaluating
+the shape (unless the velocity is not finite: 0 times it is NaN).
 """
 
 from __future__ import annotations
