@@ -56,6 +56,8 @@ def test_a_height_map_from_a_16_bit_png_and_an_8_bit_one_refused(tmp_path):
     Image.fromarray(np.zeros((4, 4), np.uint8)).save(tmp_path / "eight.png")
     _, problems, _ = check_scene(write(tmp_path, body.replace("ramp.png", "eight.png")))
     assert len(problems) == 1 and problems[0].line == 10 and "16-bit" in str(problems[0])
+    _, problems, _ = check_scene(write(tmp_path, body.replace("ramp.png", "missing.png")))
+    assert len(problems) == 1 and "expected 16-bit greyscale PNG" in str(problems[0])
 
 
 def test_preview_shows_a_height_as_felt_sliding_towards_plus_x(tmp_path):

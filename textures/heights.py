@@ -33,6 +33,8 @@ from textures.model import _hypot
 from textures.raster_io import read_grey
 
 HEIGHT_RENDERINGS = ("slope", "magnitude")
+#: the image a height map takes, for error messages
+HEIGHT_PNG = "16-bit greyscale PNG (height = value / 65535 x rise_mm)"
 #: shaded relief for the visual layer: light from the top-left of the screen, 45 deg up,
 #: heights exaggerated this many times (screen shapes are a few tenths of a mm high)
 RELIEF_LIGHT = np.array([-1.0, -1.0, math.sqrt(2.0)]) / 2.0
@@ -407,7 +409,7 @@ def read_height_png(path: str | Path, max_height_mm: float) -> np.ndarray:
     v / 65535 * max_height_mm. Read by ``textures.raster_io.read_grey`` (its size and
     file checks apply). An 8-bit image is refused: 256 levels make a staircase whose
     slope is zero or a spike, which this rendering would feel as clicks."""
-    grey, kind = read_grey(path)
+    grey, kind = read_grey(path, HEIGHT_PNG)
     if kind != "16-bit greyscale":
         raise TextureError(f"{path}: height maps must be 16-bit greyscale PNGs, got {kind}; "
                            f"8-bit levels make slopes of zero or spikes")

@@ -39,12 +39,13 @@ _REC601 = np.array([0.299, 0.587, 0.114])
 ACCEPTED = "8- or 16-bit greyscale PNG (colour is converted to Rec. 601 luma)"
 
 
-def read_grey(path: str | Path) -> tuple[np.ndarray, str]:
+def read_grey(path: str | Path, expected: str = ACCEPTED) -> tuple[np.ndarray, str]:
     """Read an image file as grey levels.
 
     Parameters
     ----------
     path : the image file (PNG; any format Pillow reads is accepted).
+    expected : what the caller takes, said by the errors (default :data:`ACCEPTED`).
 
     Returns
     -------
@@ -63,7 +64,7 @@ def read_grey(path: str | Path) -> tuple[np.ndarray, str]:
     path = Path(path)
     problem = file_problem(path, MAX_FILE_BYTES)
     if problem is not None:
-        raise TextureError(f"{path}: {problem}; expected {ACCEPTED}")
+        raise TextureError(f"{path}: {problem}; expected {expected}")
     try:
         with warnings.catch_warnings():
             # Pillow's own bomb guard warns from 89 Mpx; the header check below refuses
@@ -77,19 +78,19 @@ def read_grey(path: str | Path) -> tuple[np.ndarray, str]:
                 if width == 0 or height == 0:
                     raise TextureError(f"{path}: image is empty ({width} x {height} px)")
                 image.load()
-                return _to_grey(image, path)
+                return _to_grey(image, path, expected)
     except UnidentifiedImageError:
-        raise TextureError(f"{path}: not an image Pillow can read; expected {ACCEPTED}") from None
+        raise TextureError(f"{path}: not an image Pillow can read; expected {expected}") from None
     except Image.DecompressionBombError as exc:
         raise TextureError(f"{path}: {exc}") from None
     except (TextureError, MemoryError):
         raise
     except Exception as exc:  # noqa: BLE001 - decoders raise anything on a corrupt file
         raise TextureError(f"{path}: corrupt image, decoding failed ({type(exc).__name__}: "
-                           f"{exc}); expected {ACCEPTED}") from None
+                           f"{exc}); expected {expected}") from None
 
 
-def _to_grey(image, path: Path) -> tuple[np.ndarray, str]:
+def _to_grey(image, path: Path, expected: str) -> tuple[np.ndarray, str]:
     mode = image.mode
     if mode in ("LA", "RGBA", "PA"):
         alpha = np.asarray(image.getchannel("A"))
@@ -115,4 +116,4 @@ def _to_grey(image, path: Path) -> tuple[np.ndarray, str]:
     if mode == "RGB":
         rgb = np.asarray(image, dtype=np.float64)
         return rgb @ _REC601 / 255.0, "RGB as Rec. 601 luma"
-    raise TextureError(f"{path}: image mode {mode} is not supported; expected {ACCEPTED}")
+    raise TextureError(f"{path}: image mode {mode} is not supported; expected {expected}")
