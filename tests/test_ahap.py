@@ -56,6 +56,47 @@ def test_a_not_sustained_event_decays_after_its_attack():
     assert_allclose(clip.events[0].envelope, ((0.0, 0.0), (0.1, 1.0), (0.3, 0.0), (1.0, 0.0)))
 
 
+def _level(clip, t_s):
+    """The clip's level sum at times t_s (s), from its mu'."""
+    mu, _ = clip.sample(RATE)
+    return (1.0 - mu[np.round(np.asarray(t_s) * RATE).astype(int)]) / clip.depth
+
+
+def _control(pid, time, value=None, points=None):
+    if points is None:
+        return {"Parameter": {"ParameterID": pid, "Time": time, "ParameterValue": value}}
+    return {"ParameterCurve": {"ParameterID": pid, "Time": time, "ParameterCurveControlPoints": [
+        {"Time": t, "ParameterValue": v} for t, v in points]}}
+
+
+def test_a_parameter_holds_until_the_next_of_its_control():
+    clip, _ = parse_ahap(_doc(_event("HapticContinuous", 0.0, 2.0, HapticSharpness=0.0),
+                              _control("HapticIntensityControl", 0.0, 0.2),
+                              _control("HapticIntensityControl", 1.0, 1.0)), depth=0.5)
+    assert_allclose(_level(clip, [0.0, 0.5, 0.999, 1.0, 1.5]), [0.2, 0.2, 0.2, 1.0, 1.0])
+
+
+def test_a_later_curve_takes_over_from_an_earlier_one():
+    """A ramp from 1 to 0 over 1 s, taken over at 0.5 s by a Parameter of 0.8, then by a
+    curve from 0.4 up to 0.6 over 0.2 s starting at 1.2 s."""
+    clip, _ = parse_ahap(_doc(_event("HapticContinuous", 0.0, 2.0, HapticSharpness=0.0),
+                              _control("HapticIntensityControl", 1.2, points=[(0.0, 0.4), (0.2, 0.6)]),
+                              _control("HapticIntensityControl", 0.0, points=[(0.0, 1.0), (1.0, 0.0)]),
+                              _control("HapticIntensityControl", 0.5, 0.8)), depth=0.5)
+    assert_allclose(_level(clip, [0.0, 0.25, 0.4999, 0.5, 1.0, 1.1999, 1.2, 1.3, 1.9]),
+                    [1.0, 0.75, 0.5001, 0.8, 0.8, 0.8, 0.4, 0.5, 0.6], atol=1e-9)
+
+
+def test_a_transient_plays_its_whole_pulse_at_the_sharpness_the_curve_gives_it():
+    """Sharpness 1 (5 ms) lowered by the control to 0: a whole 30 ms pulse, back at 1."""
+    clip, _ = parse_ahap(_doc(_event("HapticTransient", 0.0, HapticSharpness=1.0),
+                              _control("HapticSharpnessControl", 0.0, -1.0)), depth=0.5)
+    mu, _ = clip.sample(RATE)
+    t = np.arange(mu.size) / RATE
+    assert clip.duration_s == pytest.approx(0.030) and mu.size == 301 and mu[-1] == 1.0
+    assert_allclose(mu, 1.0 - 0.5 * np.sin(np.pi * t / 0.030) ** 2, atol=1e-12)
+
+
 def test_read_ahap_from_a_file(tmp_path):
     path = tmp_path / "tick.ahap"
     path.write_text(_doc(_event("HapticTransient", 0.0)), encoding="utf-8")
@@ -77,6 +118,18 @@ def test_read_ahap_from_a_file(tmp_path):
                                         {"Time": 0.2, "ParameterValue": 0.0}]}}),
      r"ParameterCurveControlPoints\[1\]: Time goes back"),
     (_doc(_event("HapticTransient", float("1e9"))), r"Time is 1e\+09, expected 0 to 60"),
+    ('{"Pattern": [{"Event": {"Time": 1' + "0" * 400 + ', "EventType": "HapticTransient"}}]}',
+     r"Pattern\[0\]\.Event: Time is 1000000000.*, expected a number from 0 to 60"),
+    ('{"Pattern": [{"Event": {"Time": 1' + "0" * 5000 + ', "EventType": "HapticTransient"}}]}',
+     r"AHAP: not JSON that can be read \(Exceeds the limit"),
+    (_doc({"Event": {"Time": 0.0, "EventType": "HapticTransient", "EventParameters": [
+        {"ParameterID": ["HapticIntensity"], "ParameterValue": 1.0}]}}),
+     r"EventParameters\[0\]: ParameterID is \[\"HapticIntensity\"\], expected a string"),
+    (_doc(_event("HapticTransient", 0.0), {"Parameter": {"ParameterID": {"a": 1}, "Time": 0.0}}),
+     r"Pattern\[1\]\.Parameter: ParameterID is \{\"a\": 1\}, expected a string"),
+    (_doc(_event("HapticTransient", 0.0), _control("HapticSharpnessControl", 0.0, points=[])),
+     r"ParameterCurveControlPoints: no control points"),
+    (_doc(*[_event("HapticContinuous", 0.0, 59.0)] * 11), r"Pattern: the events play for 649 s"),
 ])
 def test_bad_files_get_one_line_errors_that_say_where(text, message):
     with pytest.raises(TextureError, match=message) as info:
@@ -106,4 +159,4 @@ def test_any_json_is_a_clip_or_a_texture_error(doc):
     except TextureError:
         return
     mu, _ = clip.sample(1000.0)
-    assert np.isfinite(mu).all() and (mu >= 0.5).all() and (mu <= 1.0).all()
+    assert np.isfinite(mu).all() and (mu >= 0.5).all() and (mu <= 1.0).all() and mu[-1] == 1.0

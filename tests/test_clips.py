@@ -42,8 +42,16 @@ def test_a_smooth_ramp_follows_its_envelope():
     ramp = Clip((ClipEvent("continuous", 0.01, 1.0, 0.0, 0.1, ((0.0, 0.0), (0.1, 1.0))),), 0.4)
     mu, _ = ramp.sample(RATE)
     t = np.arange(mu.size) / RATE
-    expected = 1.0 - 0.4 * np.clip((t - 0.01) / 0.1, 0.0, 1.0) * ((t >= 0.01) & (t <= 0.11 + 1e-12))
+    played = (t - 0.01 >= 0.0) & (t - 0.01 < 0.1)  # an event plays for [start, start + length)
+    expected = 1.0 - 0.4 * np.clip((t - 0.01) / 0.1, 0.0, 1.0) * played
     assert_allclose(mu, expected, atol=1e-9)
+    assert mu[-1] == 1.0 and played.sum() == 1000
+
+
+def test_a_held_event_of_a_whole_number_of_samples_ends_back_at_1():
+    held = Clip((ClipEvent("continuous", 0.0, 1.0, 0.0, 0.5),), 0.5)
+    mu, _ = held.sample(RATE)
+    assert mu.size == 5001 and (mu[:5000] == 0.5).all() and mu[-1] == 1.0
 
 
 def test_sharpness_sets_the_carrier_and_levels_that_add_past_1_are_counted():
@@ -53,7 +61,7 @@ def test_sharpness_sets_the_carrier_and_levels_that_add_past_1_are_counted():
     assert np.argmax(spectrum) == 250  # 1 Hz bins: the 250 Hz carrier
     both = Clip((ClipEvent("continuous", 0.0, 0.7, 0.0, 0.01), ClipEvent("continuous", 0.0, 0.7, 0.0, 0.01)), 0.3)
     mu, clipped = both.sample(RATE)
-    assert mu.min() == pytest.approx(0.7) and clipped == 101
+    assert mu.min() == pytest.approx(0.7) and clipped == 100  # 10 ms at 10 kHz
 
 
 def _scene(*layers):

@@ -23,9 +23,10 @@ Mapping onto a friction display (``textures.clips`` says how a clip plays):
   full to the end (Sustained, the default) or a linear decay to 0 over DecayTime (not
   Sustained), and a linear release to 0 over the last ReleaseTime;
 - HapticIntensityControl (0-1) multiplies every event's intensity, HapticSharpnessControl
-  (-1 to 1) is added to every event's sharpness; a ``Parameter`` is a curve of one point
-  (held until the next point of the same control). Points of one control from several
-  curves are merged in time order.
+  (-1 to 1) is added to every event's sharpness. Each ParameterCurve or Parameter of a
+  control holds from its Time until the next one of that control begins, which takes over
+  with a step: a curve is linear between its points and held at its last, a Parameter is
+  held at its value.
 
 Audio events and other parameters have no friction meaning: they are skipped and listed
 in the returned notes. Every problem is reported with its place in the file, e.g.
@@ -38,12 +39,17 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
+
 from textures.clips import MAX_CLIP_S, Clip, ClipEvent
 from textures.errors import TextureError
 from textures.library import UnreadableText, read_utf8
 
 MAX_AHAP_BYTES = 1 << 20
 MAX_ITEMS = 10_000  # pattern entries, curve points
+#: the events of one clip play for at most this long in total (s): a clip is computed
+#: sample by sample over each event, once, when the scene is built
+MAX_EVENTS_S = 10 * MAX_CLIP_S
 
 _EVENT_PARAMS = {  # id: (lowest, highest)
     "HapticIntensity": (0.0, 1.0), "HapticSharpness": (0.0, 1.0), "AttackTime": (0.0, MAX_CLIP_S),
@@ -67,11 +73,18 @@ class _Reader:
                 self.fail(path, f"missing {key}")
             return default
         v = obj[key]
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not _finite(v):
             self.fail(path, f"{key} is {json.dumps(v)[:40]}, expected a number from {lo:g} to {hi:g}")
         if not lo <= v <= hi:
             self.fail(path, f"{key} is {v:g}, expected {lo:g} to {hi:g}")
         return float(v)
+
+    def name(self, obj: dict, key: str, path: str):
+        """``obj[key]`` if it is a string or absent (None); anything else fails."""
+        v = obj.get(key)
+        if v is not None and not isinstance(v, str):
+            self.fail(path, f"{key} is {json.dumps(v)[:40]}, expected a string")
+        return v
 
     def table(self, v, path: str) -> dict:
         if not isinstance(v, dict):
@@ -84,6 +97,13 @@ class _Reader:
         if len(v) > MAX_ITEMS:
             self.fail(path, f"{len(v)} entries, at most {MAX_ITEMS} are read")
         return v
+
+
+def _finite(v: int | float) -> bool:
+    try:
+        return math.isfinite(v)
+    except OverflowError:  # an integer too big for a float
+        return False
 
 
 def _envelope(params: dict, duration: float) -> tuple[tuple[float, float], ...]:
@@ -114,7 +134,7 @@ def _event(r: _Reader, ev: dict, path: str, notes: list) -> ClipEvent | None:
     for k, p in enumerate(plist):
         ppath = f"{path}.EventParameters[{k}]"
         p = r.table(p, ppath)
-        pid = p.get("ParameterID")
+        pid = r.name(p, "ParameterID", ppath)
         if pid not in _EVENT_PARAMS:
             notes.append(f"{ppath}: parameter {pid!r} skipped")
             continue
@@ -135,15 +155,16 @@ def _event(r: _Reader, ev: dict, path: str, notes: list) -> ClipEvent | None:
 
 
 def _control_points(r: _Reader, entry: dict, key: str, path: str, notes: list):
-    """(control id, [(t, value), ...]) of a ParameterCurve or Parameter, or None if skipped."""
-    pid = entry.get("ParameterID")
+    """(control id, (start s, [(t, value), ...])) of a ParameterCurve or Parameter, or None
+    if skipped."""
+    pid = r.name(entry, "ParameterID", path)
     if pid not in _CONTROLS:
         notes.append(f"{path}: {key} {pid!r} skipped")
         return None
     lo, hi = _CONTROLS[pid]
     t0 = r.number(entry, "Time", path, 0.0, MAX_CLIP_S)
     if key == "Parameter":
-        return pid, [(t0, r.number(entry, "ParameterValue", path, lo, hi))]
+        return pid, (t0, [(t0, r.number(entry, "ParameterValue", path, lo, hi))])
     points = []
     cpath = f"{path}.ParameterCurveControlPoints"
     for k, p in enumerate(r.array(entry.get("ParameterCurveControlPoints"), cpath)):
@@ -153,7 +174,29 @@ def _control_points(r: _Reader, entry: dict, key: str, path: str, notes: list):
         if points and t < points[-1][0]:
             r.fail(ppath, f"Time goes back ({t - t0:g} s after {points[-1][0] - t0:g} s)")
         points.append((t, r.number(p, "ParameterValue", ppath, lo, hi)))
-    return pid, points
+    if not points:
+        r.fail(cpath, "no control points")
+    return pid, (t0, points)
+
+
+def _control_curve(entries: list) -> tuple[tuple[float, float], ...]:
+    """One control's (t, value) points from its entries (start s, points), each holding
+    from its start until the next entry's (a later one takes over; at equal starts the
+    later in the file): a curve held at its first value from its start and at its last to
+    the next start, or cut there; a step between entries (two points at one time)."""
+    entries = sorted(entries, key=lambda entry: entry[0])
+    out = []
+    for j, (start, points) in enumerate(entries):
+        end = entries[j + 1][0] if j + 1 < len(entries) else math.inf
+        points = [(start, points[0][1])] + points if points[0][0] > start else points
+        kept = [p for p in points if p[0] < end]
+        if not kept:  # taken over where it starts
+            continue
+        if end < math.inf:
+            ts, vs = zip(*points)
+            kept.append((end, float(np.interp(end, ts, vs))))
+        out += kept
+    return tuple(out)
 
 
 def parse_ahap(text: str, depth: float, where: str = "AHAP") -> tuple[Clip, list[str]]:
@@ -167,6 +210,8 @@ def parse_ahap(text: str, depth: float, where: str = "AHAP") -> tuple[Clip, list
         raise TextureError(f"{where}:{exc.lineno}: not JSON ({exc.msg})") from None
     except RecursionError:
         raise TextureError(f"{where}: JSON nested too deeply") from None
+    except ValueError as exc:  # an integer of more digits than Python converts
+        raise TextureError(f"{where}: not JSON that can be read ({str(exc).split(';')[0]})") from None
     doc = r.table(doc, "top level")
     events, curves, notes = [], {"HapticIntensityControl": [], "HapticSharpnessControl": []}, []
     for k, item in enumerate(r.array(doc.get("Pattern"), "Pattern")):
@@ -182,12 +227,16 @@ def parse_ahap(text: str, depth: float, where: str = "AHAP") -> tuple[Clip, list
             r.fail(path, f"expected Event, ParameterCurve or Parameter, got {sorted(item)[:3]}")
         got = _control_points(r, r.table(item[key], f"{path}.{key}"), key, f"{path}.{key}", notes)
         if got is not None:
-            curves[got[0]].extend(got[1])
+            curves[got[0]].append(got[1])
     if not events:
         r.fail("Pattern", "no haptic events")
-    return Clip(tuple(events), depth,
-                tuple(sorted(curves["HapticIntensityControl"], key=lambda p: p[0])),
-                tuple(sorted(curves["HapticSharpnessControl"], key=lambda p: p[0]))), notes
+    clip = Clip(tuple(events), depth, _control_curve(curves["HapticIntensityControl"]),
+                _control_curve(curves["HapticSharpnessControl"]))
+    playing = sum(clip.event_length_s(e) for e in events)
+    if playing > MAX_EVENTS_S:
+        r.fail("Pattern", f"the events play for {playing:g} s in total; a clip's play for at "
+                          f"most {MAX_EVENTS_S:g} s")
+    return clip, notes
 
 
 def read_ahap(path: str | Path, depth: float) -> tuple[Clip, list[str]]:

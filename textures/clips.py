@@ -15,8 +15,9 @@ and mu' = 1 - depth * min(1, sum) (samples where the sum passed 1 are counted).
 
 Clip-wide curves (AHAP's dynamic parameters): ``intensity_curve`` multiplies every
 event's intensity, ``sharpness_curve`` is added to every event's sharpness (then clipped
-to [0, 1]); both are piecewise linear through (t, value) points and hold their end
-values outside them.
+to [0, 1]; a transient takes the curve's value where it starts, for its whole pulse);
+both are piecewise linear through (t, value) points (two points at one time: a step) and
+hold their end values outside them.
 """
 
 from __future__ import annotations
@@ -51,12 +52,6 @@ class ClipEvent:
     duration_s: float = 0.0
     envelope: Points = ()
 
-    @property
-    def end_s(self) -> float:
-        if self.kind == "transient":
-            return self.time_s + _transient_length(self.sharpness)
-        return self.time_s + self.duration_s
-
 
 def _transient_length(sharpness: float) -> float:
     return TRANSIENT_S[0] + (TRANSIENT_S[1] - TRANSIENT_S[0]) * sharpness
@@ -79,34 +74,46 @@ class Clip:
     intensity_curve: Points = ()
     sharpness_curve: Points = ()
 
+    def event_length_s(self, e: ClipEvent) -> float:
+        """How long event ``e`` plays (s): a continuous event its duration, a transient its
+        pulse at its sharpness plus the sharpness curve's value where it starts."""
+        if e.kind != "transient":
+            return e.duration_s
+        shift = float(_curve(self.sharpness_curve, np.array(e.time_s), 0.0))
+        return _transient_length(min(max(e.sharpness + shift, 0.0), 1.0))
+
     @property
     def duration_s(self) -> float:
-        return max((e.end_s for e in self.events), default=0.0)
+        return max((e.time_s + self.event_length_s(e) for e in self.events), default=0.0)
 
     def sample(self, rate_hz: float) -> tuple[np.ndarray, int]:
-        """mu' at t = k / rate_hz, k = 0 .. ceil(duration * rate) (the last sample back at
-        1 once every event has ended), and how many samples the level sum clipped at 1."""
+        """mu' at t = k / rate_hz, k = 0 .. ceil(duration * rate), and how many samples the
+        level sum clipped at 1. An event plays on the samples with time_s <= t < time_s +
+        its length, so the last sample is back at 1. Each event is computed over its own
+        samples only: the cost is the events' total length, not their number times the
+        clip's."""
         n = int(math.ceil(self.duration_s * rate_hz)) + 1
         t = np.arange(n) / rate_hz
         gain = _curve(self.intensity_curve, t, 1.0)
         shift = _curve(self.sharpness_curve, t, 0.0)
         total = np.zeros(n)
         for e in self.events:
-            rel = t - e.time_s
+            length = self.event_length_s(e)
+            # its samples found by search (one more at the end for rounding), then tested
+            lo = int(np.searchsorted(t, e.time_s, "left"))
+            hi = min(n, int(np.searchsorted(t, e.time_s + length, "right")) + 1)
+            rel = t[lo:hi] - e.time_s
+            on = (rel >= 0.0) & (rel < length)
             if e.kind == "transient":
-                at = float(_curve(self.sharpness_curve, np.array(e.time_s), 0.0))
-                length = _transient_length(float(np.clip(e.sharpness + at, 0.0, 1.0)))
-                on = (rel >= 0.0) & (rel <= length)
                 level = np.where(on, np.sin(np.pi * np.clip(rel, 0.0, length) / length) ** 2, 0.0)
             else:
-                on = (rel >= 0.0) & (rel <= e.duration_s)
                 env = e.envelope or ((0.0, 1.0), (e.duration_s, 1.0))
-                freq = CARRIER_MAX_HZ * np.clip(e.sharpness + shift, 0.0, 1.0)
+                freq = CARRIER_MAX_HZ * np.clip(e.sharpness + shift[lo:hi], 0.0, 1.0)
                 step = np.where(on, freq, 0.0) / rate_hz
                 phase = np.cumsum(step) - step  # cycles before each sample: 0 on the first
                 carrier = 0.5 + 0.5 * np.cos(2.0 * np.pi * phase)
                 level = np.where(on, _curve(env, rel, 0.0) * carrier, 0.0)
-            total += e.intensity * gain * level
+            total[lo:hi] += e.intensity * gain[lo:hi] * level
         clipped = int((total > 1.0).sum())
         return 1.0 - self.depth * np.minimum(total, 1.0), clipped
 
