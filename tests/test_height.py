@@ -214,6 +214,28 @@ def test_relief_is_lit_from_the_top_left_where_the_haptics_put_the_slopes():
     assert lit == pytest.approx(expected)
 
 
+def test_a_one_row_map_has_its_slope_along_the_row():
+    """A 1 x 40 ramp is felt along x (its central differences), flat across; a 40 x 1 one
+    along y."""
+    ramp = np.arange(40) * 0.05  # 0.05 mm per 1 mm pixel
+    x, y = np.array([15.0, 25.0]), np.array([10.5, 10.5])
+    _, gx, gy = HeightMap(ramp[None, :], 0.0, 10.0, 40.0, 1.0).height_and_gradient(x, y)
+    assert_allclose(gx, 0.05) and assert_allclose(gy, 0.0)
+    _, gx, gy = HeightMap(ramp[:, None], 10.0, 0.0, 1.0, 40.0).height_and_gradient(y, x)
+    assert_allclose(gx, 0.0) and assert_allclose(gy, 0.05)
+
+
+def test_a_map_at_a_position_that_is_not_a_number_is_nan_high_and_flat():
+    """A NaN position reads no pixel (the kernel's index would be undefined): height NaN,
+    gradient 0, as outside the sprite; infinities read the edge pixels."""
+    hmap = _ripple_map()
+    x, y = np.array([np.nan, 50.0, np.nan, np.inf, -np.inf]), np.array([30.0, np.nan, np.nan, 30.0, 30.0])
+    h, gx, gy = hmap.height_and_gradient(x, y)
+    assert np.isnan(h[:3]).all() and np.isfinite(h[3:]).all()
+    assert (gx == 0.0).all() and (gy == 0.0).all()
+    assert (hmap.gradient(x, y)[0] == 0.0).all()
+
+
 def _ripple_map() -> HeightMap:
     y, x = np.mgrid[0:24, 0:40]
     return HeightMap(0.3 + 0.1 * np.sin(x / 3.0) * np.cos(y / 4.0), 30.0, 18.0, 40.0, 24.0)
@@ -353,22 +375,28 @@ def test_slope_is_the_documented_formula_bit_for_bit(signed):
     assert s.tobytes() == expected.tobytes()
 
 
-@pytest.mark.parametrize("mu_min", [0.6, 0.75])
-def test_saturation_is_the_documented_formula_bit_for_bit(mu_min):
-    """mu_of_slope against the HeightLayer docstring's saturation in numpy, at signed zeros,
-    tiny, huge, infinite and NaN slopes, also with mu_rest at mu_min (a zero span)."""
-    layer = _layer(GaussianBump(50.0, 30.0, 8.0, 1.0), rendering="magnitude" if mu_min == 0.75
-                   else "slope", mu_rest=0.75, mu_min=mu_min, gain=1.7)
+@pytest.mark.parametrize("mu_min, mu_rest, mu_max", [(0.6, 0.75, 1.0), (0.75, 0.75, 1.0),
+                                                    (0.01, 0.08, 0.21)])
+def test_saturation_is_the_documented_formula_bit_for_bit(mu_min, mu_rest, mu_max):
+    """mu_of_slope against the HeightLayer docstring's saturation in numpy, held to [mu_min,
+    mu_max], at signed zeros, tiny, huge, infinite and NaN slopes; also with mu_rest at
+    mu_min (a zero span) and with limits the sum rounds one ulp past at tanh = +-1."""
+    layer = _layer(GaussianBump(50.0, 30.0, 8.0, 1.0), rendering="magnitude"
+                   if mu_min == mu_rest else "slope", mu_rest=mu_rest, mu_min=mu_min,
+                   mu_max=mu_max, gain=1.7)
     rng = np.random.default_rng(10)
     special = np.array([0.0, -0.0, np.nan, np.inf, -np.inf, 5e-324, -5e-324, 1e-300, -1e300])
     s = np.concatenate([rng.normal(0.0, 0.2, 3000), rng.choice(special, 1000)])
-    up, down = layer.mu_max - layer.mu_rest, layer.mu_rest - layer.mu_min
+    up, down = mu_max - mu_rest, mu_rest - mu_min
     span = np.where(s >= 0.0, up, down)
     with np.errstate(invalid="ignore", over="ignore"):
-        expected = layer.mu_rest + span * np.tanh(layer.gain * s / np.maximum(span, 1e-300))
+        formula = mu_rest + span * np.tanh(layer.gain * s / np.maximum(span, 1e-300))
     mu = layer.mu_of_slope(s)
-    assert np.isnan(mu).any() and (mu == layer.mu_rest).sum() > 200
-    assert mu.tobytes() == expected.tobytes()
+    assert np.isnan(mu).any() and (mu == mu_rest).sum() > 200
+    assert mu.tobytes() == np.clip(formula, mu_min, mu_max).tobytes()
+    if mu_rest == 0.08:  # the limits this test is about: the sum rounds past both
+        assert np.nanmax(formula) > mu_max and np.nanmin(formula) < mu_min
+        assert np.nanmax(mu) == mu_max and np.nanmin(mu) == mu_min
 
 
 def test_height_map_is_bilinear_between_pixel_centres_bit_for_bit():

@@ -349,8 +349,9 @@ class HeightMap(_Planes):
     def __post_init__(self):
         rows, cols = self.heights_mm.shape
         spacing = (self.height_mm / rows, self.width_mm / cols)
-        gy, gx = (np.gradient(self.heights_mm, *spacing) if min(rows, cols) > 1
-                  else (np.zeros_like(self.heights_mm),) * 2)
+        gy, gx = (np.gradient(self.heights_mm, step, axis=axis) if size > 1  # else flat
+                  else np.zeros_like(self.heights_mm)
+                  for axis, (size, step) in enumerate(zip((rows, cols), spacing)))
         object.__setattr__(self, "_planes", np.stack((self.heights_mm, gx, gy)))
 
     def _fill(self, x, y, out):
@@ -373,7 +374,7 @@ def _sample_map(planes, x, y, placement, out):
     per mm) at positions (x, y) (mm, (m,)), from its ``planes``, the same rows each
     (rows, cols), placed at ``placement`` = (x_mm, y_mm, width_mm, height_mm): bilinear
     between pixel centres, clamped to the edge pixels; outside the sprite the gradient
-    is 0."""
+    is 0 (at a NaN position too, where the height is NaN)."""
     x_mm, y_mm, width_mm, height_mm = placement
     n_planes, rows, cols = planes.shape
     g = n_planes - 2  # the plane of dh/dx; the height is plane 0 before it, if there
@@ -385,6 +386,11 @@ def _sample_map(planes, x, y, placement, out):
         pixel_y[i] = min(max((y[i] - y_mm) / height_mm * rows - 0.5, 0.0), rows - 1.0)
     for i in range(x.size):
         fx, fy = pixel_x[i], pixel_y[i]
+        if not (fx == fx and fy == fy):  # a NaN position has no pixel (as an index: UB)
+            if g:
+                out[0, i] = np.nan
+            out[g, i], out[g + 1, i] = 0.0, 0.0  # not inside the sprite
+            continue
         x0, y0 = int(np.floor(fx)), int(np.floor(fy))
         corners = (x0, min(x0 + 1, cols - 1), y0, min(y0 + 1, rows - 1), fx - x0, fy - y0)
         inside = (x_mm <= x[i] <= x_mm + width_mm) and (y_mm <= y[i] <= y_mm + height_mm)
@@ -437,11 +443,12 @@ class HeightLayer(DynamicLayer):
         mu' = mu_rest + (mu_max - mu_rest) tanh(gain s / (mu_max - mu_rest))   s >= 0
         mu' = mu_rest + (mu_rest - mu_min) tanh(gain s / (mu_rest - mu_min))   s < 0
 
-    so d mu'/d s = ``gain`` at s = 0, and mu' never leaves [mu_min, mu_max] (no clamp
-    needed); mu_min < mu_rest < mu_max (the loader checks it; the magnitude rendering
-    never uses the lower branch, so mu_min = mu_rest is allowed there). ``mu_rest`` < 1 is
-    what leaves room to raise friction while climbing; the layer covers its whole region (the display by default) at mu_rest, so that nothing
-    steps at the edge of the shape.
+    so d mu'/d s = ``gain`` at s = 0, and mu' never leaves [mu_min, mu_max] (a clamp
+    only takes back the ulp the sum can round past them at tanh = +-1); mu_min < mu_rest <
+    mu_max (the loader checks it; the magnitude rendering never uses the lower branch, so
+    mu_min = mu_rest is allowed there). ``mu_rest`` < 1 is what leaves room to raise
+    friction while climbing; the layer covers its whole region (the display by default) at
+    mu_rest, so that nothing steps at the edge of the shape.
     """
 
     renderer_kind = "height"
@@ -494,7 +501,7 @@ class HeightLayer(DynamicLayer):
     def _mu_of_args(self, arg: np.ndarray) -> np.ndarray:
         """mu' from the tanh arguments gain s / span (m,), in place."""
         np.tanh(arg, out=arg)  # numpy's, not libm's (a kernel's): 1.7 against 13 ns a value
-        _add_spans(arg, self.mu_rest, self.mu_max - self.mu_rest, self.mu_rest - self.mu_min)
+        _add_spans(arg, self.mu_rest, self.mu_min, self.mu_max)
         return arg
 
 
@@ -571,8 +578,12 @@ def _tanh_args_of_motion(gx, gy, vx, vy, v_fade_mm_s, signed, up, down, gain):
 
 
 @njit(cache=True, nogil=True)
-def _add_spans(t, mu_rest, up, down):
+def _add_spans(t, mu_rest, mu_min, mu_max):
     """mu' = mu_rest + span tanh in place over t = tanh(gain s / span) (m,): t has the sign
-    of s, or is +-0, where the span does not matter (mu_rest + span * +-0 = mu_rest)."""
+    of s, or is +-0, where the span does not matter (mu_rest + span * +-0 = mu_rest). At
+    tanh = +-1 the sum can round one ulp past mu_max or mu_min: it is held to them (NaN
+    stays NaN)."""
+    up, down = mu_max - mu_rest, mu_rest - mu_min
     for i in range(t.size):
-        t[i] = mu_rest + (up if t[i] >= 0.0 else down) * t[i]
+        mu = mu_rest + (up if t[i] >= 0.0 else down) * t[i]
+        t[i] = mu_max if mu > mu_max else (mu_min if mu < mu_min else mu)
