@@ -200,7 +200,7 @@ def test_a_failed_resampling_names_the_file_in_replay(tmp_path, monkeypatch, cap
     scene = write(tmp_path, BODY)
     model = load_scene(scene).layers[0].model
     monkeypatch.setattr("textures.hatt.poly_to_lsf", _no_lsf)
-    with pytest.raises(TextureError, match=r"wood\.xml: model 1: its AR\(16\) fit at 10000 Hz failed"):
+    with pytest.raises(TextureError, match=r"wood\.xml: model 1: its AR\(32\) fit at 10000 Hz failed"):
         model.resampled(10_000.0)
     capsys.readouterr()
     assert main(["replay", str(scene), "swipe-40mms-50hz", "--out", str(tmp_path / "r"), "--quiet"]) == 2

@@ -79,8 +79,13 @@ def lsf_to_poly(lsf, twiddle=None) -> np.ndarray:
 
 
 @njit(cache=True)
-def barycentric(s0, f0, inv, speed, force):
-    """(triangle, weights (3,)) of (speed, force); see ``TextureModel.weights``."""
+def barycentric(s0, f0, inv, corners, scale, speed, force):
+    """(triangle, weights (3,)) of (speed, force); see ``TextureModel.weights``. ``s0``,
+    ``f0`` (T,): each triangle's vertex 0; ``inv`` (T, 2, 2): the inverse of its edge
+    matrix; ``corners`` (T, 3, 2): its vertices in units scaled by ``scale`` (2,) (per mm/s,
+    per N). Inside: the triangle holding the point (its smallest weight the largest) and
+    the point's weights. Outside: the point of the triangulation nearest to it, in the
+    scaled units, and that point's weights."""
     best, best_t = -np.inf, 0
     w = np.zeros(3)
     for t in range(s0.size):
@@ -91,16 +96,62 @@ def barycentric(s0, f0, inv, speed, force):
         if lowest > best:
             best, best_t = lowest, t
             w[0], w[1], w[2] = 1.0 - u - v, u, v
+    if not best >= 0.0:  # outside every triangle (NaN too: no nearest point then)
+        px, py = speed * scale[0], force * scale[1]
+        nearest = np.inf
+        for t in range(s0.size):
+            wa, wb, wc = _nearest_weights(px, py, corners[t])
+            qx = wa * corners[t, 0, 0] + wb * corners[t, 1, 0] + wc * corners[t, 2, 0]
+            qy = wa * corners[t, 0, 1] + wb * corners[t, 1, 1] + wc * corners[t, 2, 1]
+            d2 = (px - qx) ** 2 + (py - qy) ** 2
+            if d2 < nearest:
+                nearest, best_t = d2, t
+                w[0], w[1], w[2] = wa, wb, wc
     w = np.maximum(w, 0.0)
     return best_t, w / w.sum()
 
 
 @njit(cache=True)
-def blend_at(s0, f0, inv, triangles, lsf, variances, twiddle, speed, force):
-    """The toolkit's blend at (speed, force): barycentric weights on the three vertices'
-    LSFs and variances (``twiddle``: ``twiddles(lsf.shape[1])``). Returns (A(z) = [1, a_1
-    .. a_p], variance)."""
-    t, w = barycentric(s0, f0, inv, speed, force)
+def _nearest_weights(px, py, abc):
+    """The weights on the vertices ``abc`` (3, 2) of the point of that triangle nearest to
+    (px, py): the vertex, edge or inside region the point projects to (Ericson, Real-Time
+    Collision Detection, 2005, section 5.1.5)."""
+    ax, ay, bx, by, cx, cy = abc[0, 0], abc[0, 1], abc[1, 0], abc[1, 1], abc[2, 0], abc[2, 1]
+    abx, aby, acx, acy = bx - ax, by - ay, cx - ax, cy - ay
+    d1 = abx * (px - ax) + aby * (py - ay)
+    d2 = acx * (px - ax) + acy * (py - ay)
+    if d1 <= 0.0 and d2 <= 0.0:
+        return 1.0, 0.0, 0.0
+    d3 = abx * (px - bx) + aby * (py - by)
+    d4 = acx * (px - bx) + acy * (py - by)
+    if d3 >= 0.0 and d4 <= d3:
+        return 0.0, 1.0, 0.0
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        v = d1 / (d1 - d3)
+        return 1.0 - v, v, 0.0
+    d5 = abx * (px - cx) + aby * (py - cy)
+    d6 = acx * (px - cx) + acy * (py - cy)
+    if d6 >= 0.0 and d5 <= d6:
+        return 0.0, 0.0, 1.0
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        v = d2 / (d2 - d6)
+        return 1.0 - v, 0.0, v
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and d4 - d3 >= 0.0 and d5 - d6 >= 0.0:
+        v = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        return 0.0, 1.0 - v, v
+    vb, vc = vb / (va + vb + vc), vc / (va + vb + vc)
+    return 1.0 - vb - vc, vb, vc
+
+
+@njit(cache=True)
+def blend_at(s0, f0, inv, corners, scale, triangles, lsf, variances, twiddle, speed, force):
+    """The toolkit's blend at (speed, force): barycentric weights (:func:`barycentric`) on
+    the three vertices' LSFs and variances (``twiddle``: ``twiddles(lsf.shape[1])``).
+    Returns (A(z) = [1, a_1 .. a_p], variance)."""
+    t, w = barycentric(s0, f0, inv, corners, scale, speed, force)
     mixed = np.zeros(lsf.shape[1])
     variance = 0.0
     for k in range(3):
@@ -238,7 +289,7 @@ def render_finger(contact, touch_id, vx, vy, force, v_rest, seed, finger, index0
     """Model output y (n,) of one finger row; see the module docstring. ``touch`` and
     ``history`` (most recent first) come from the previous block; returns the touch id
     after the block (``history`` is updated in place)."""
-    s0, f0, inv, triangles, lsf, variances, twiddle = model
+    s0, f0, inv, corners, scale, triangles, lsf, variances, twiddle = model
     n = y.size
     a = 0
     while a < n:
@@ -252,8 +303,8 @@ def render_finger(contact, touch_id, vx, vy, force, v_rest, seed, finger, index0
             touch = touch_id[a]
             history[:] = 0.0
         if moving:
-            poly, variance = blend_at(s0, f0, inv, triangles, lsf, variances, twiddle, speed,
-                                      force[a])
+            poly, variance = blend_at(s0, f0, inv, corners, scale, triangles, lsf, variances,
+                                      twiddle, speed, force[a])
             _synthesise(poly / poly[0], np.sqrt(variance), noise_key(seed, finger, touch),
                         index0 + a, history, y[a:b])
         else:

@@ -61,16 +61,22 @@ them is of those models' LSFs, where the toolkit blends A's and B's LSFs and the
 The rate: the paper describes resampling the models for rates other than the 10 kHz of
 the recordings. frictex resamples each vertex model to its output rate from the
 model's exact spectrum: S(f) up to the lower of the two Nyquist frequencies (nothing
-above), its autocorrelation at the new rate, and a Levinson-Durbin fit of order 4p
-(``TextureModel.resampled``): an AR(p) process seen at another rate is not AR(p), and a
-fit of order p misses the spectrum by 2.5 dB where 4p stays within 0.1 dB (test
-models, 10 to 5 kHz); from 1 kHz to 10 kHz an order-20 test model stays within 5.3 dB
+above), its autocorrelation at the new rate, and a Levinson-Durbin fit of order 4p,
+times the ratio of the rates when going up (at most 100; ``TextureModel.resampled``): an
+AR(p) process seen at another rate is not AR(p), and a fit of order p misses the
+spectrum by 2.5 dB where 4p stays within 0.1 dB (test models, 10 to 5 kHz); at 48 and
+96 kHz, 4p missed it by 3.0 and 9.6 dB over 20-800 Hz, its resonances squeezed into the
+lowest few percent of the band, which the scaled order follows; from 1 kHz to 10 kHz an order-20 test model stays within 5.3 dB
 below 450 Hz (the fit follows the cliff at the old Nyquist frequency badly). This is
 frictex's own procedure, not a copy of the toolkit's MATLAB code.
 
 Outside the triangulation the toolkit saturates speed and force at ``maxSpeed`` and
-``maxForce``; frictex takes the triangle the point is least outside of, its negative
-weights set to 0 (``TextureModel.weights``): both continuous, the same inside.
+``maxForce``; frictex blends at the point of the triangulation nearest to (speed, force),
+speed and force each in units of the span of the vertices' values
+(``TextureModel.weights``): continuous, as a Delaunay triangulation covers a convex
+region, and the same inside. (Taking the triangle the point was least outside of, its
+negative weights set to 0, jumped where that triangle changed: by up to 10 dB in the
+toolkit's Book model at 400 mm/s.)
 
 Other elements (``mu``, ``material``, pictures) are ignored. frictex ships none of the
 toolkit's data: its licence is for non-commercial research only; users bring their
@@ -102,6 +108,9 @@ FIT_FLOOR = 1e-9  # fit_ar adds this share of the peak: nulls and empty bands st
 MAX_HATT_BYTES = 8 << 20
 MAX_ORDER = 100
 MAX_MODELS = 2_000
+#: largest excitation variance read ((m/s^2)^2, after an ARMA model's gain): far above any
+#: recording, and low enough that the synthesis's sums stay finite
+MAX_VARIANCE = 1e100
 
 
 # ---------------------------------------------------------------------------
@@ -241,13 +250,16 @@ class TextureModel:
 
     def __post_init__(self):
         # per triangle: vertex 0 and the inverse of the 2x2 edge matrix, for barycentrics
-        # (a degenerate triangle gives inf: parse_hatt_xml refuses it)
+        # (a degenerate triangle gives inf: parse_hatt_xml refuses it), and its corners in
+        # units of the vertices' span of speed and of force, for the nearest point outside
         s, f = self.speeds_mm_s[self.triangles], self.forces_n[self.triangles]
         a, b = s[:, 1] - s[:, 0], s[:, 2] - s[:, 0]
         c, d = f[:, 1] - f[:, 0], f[:, 2] - f[:, 0]
         with np.errstate(divide="ignore", invalid="ignore"):
             inv = np.stack([np.stack([d, -b], -1), np.stack([-c, a], -1)], 1) / (a * d - b * c)[:, None, None]
-        object.__setattr__(self, "_tri", (s[:, 0], f[:, 0], inv))
+            scale = 1.0 / np.array([np.ptp(self.speeds_mm_s), np.ptp(self.forces_n)])
+        corners = np.stack([s * scale[0], f * scale[1]], -1)
+        object.__setattr__(self, "_tri", (s[:, 0], f[:, 0], inv, corners, scale))
 
     @property
     def order(self) -> int:
@@ -255,17 +267,17 @@ class TextureModel:
 
     def weights(self, speed_mm_s: float, force_n: float) -> tuple[np.ndarray, np.ndarray]:
         """The three vertices (indices) and barycentric weights of (speed, force). Outside
-        the triangulation: the triangle it is least outside of, negative weights set to 0
-        and the rest renormalised (the nearest edge or vertex, continuously)."""
-        s0, f0, inv = self._tri
-        t, w = barycentric(s0, f0, inv, float(speed_mm_s), float(force_n))
+        the triangulation: those of its point nearest to (speed, force), speed and force
+        each in units of the vertices' span (continuous where the triangles cover a convex
+        region, as a Delaunay triangulation's do)."""
+        t, w = barycentric(*self._tri, float(speed_mm_s), float(force_n))
         return self.triangles[t], w
 
     @property
     def arrays(self) -> tuple:
         """What :func:`blend_at` needs, in its order."""
-        s0, f0, inv = self._tri
-        return s0, f0, inv, self.triangles, self.lsf, self.variances, twiddles(self.lsf.shape[1])
+        return (*self._tri, self.triangles, self.lsf, self.variances,
+                twiddles(self.lsf.shape[1]))
 
     def at(self, speed_mm_s: float, force_n: float) -> tuple[np.ndarray, float]:
         """AR polynomial [1, a_1 .. a_p] and variance blended at (speed, force)."""
@@ -278,7 +290,7 @@ class TextureModel:
         spectral frequencies (:func:`poly_to_lsf`)."""
         if rate_hz == self.rate_hz:
             return self
-        order = min(4 * self.order, MAX_ORDER)
+        order = min(math.ceil(4 * self.order * max(1.0, rate_hz / self.rate_hz)), MAX_ORDER)
         fits = []
         for k, w in enumerate(self.lsf):
             try:
@@ -287,10 +299,15 @@ class TextureModel:
             except ValueError as exc:
                 raise TextureError(f"{self.source}: model {k + 1}: its AR({order}) fit at "
                                    f"{rate_hz:g} Hz failed: {exc}") from None
+        with np.errstate(over="ignore"):
+            variances = np.array([gain * v for (_, gain), v in zip(fits, self.variances)])
+        if not np.isfinite(variances).all():
+            k = int(np.flatnonzero(~np.isfinite(variances))[0])
+            raise TextureError(f"{self.source}: model {k + 1}: its variance at {rate_hz:g} Hz "
+                               f"is not finite ({self.variances[k]:g} at {self.rate_hz:g} Hz)")
         return TextureModel(self.speeds_mm_s, self.forces_n, self.triangles,
-                            np.array([lsf for lsf, _ in fits]),
-                            np.array([gain * v for (_, gain), v in zip(fits, self.variances)]),
-                            float(rate_hz), self.source)
+                            np.array([lsf for lsf, _ in fits]), variances, float(rate_hz),
+                            self.source)
 
 
 def fit_ar(psd, from_rate_hz: float, rate_hz: float, order: int, grid: int = 1 << 14,
@@ -407,8 +424,6 @@ def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
         here = f"{where}: model {k + 1}"
         w = _polynomial(node, here, "AR", order)
         v = _scalar(node, "var", here)
-        if v < 0:
-            raise TextureError(f"{here}: var is {v:g}, expected >= 0")
         if ma_order:  # y = gain B(z) / A(z) e: its AR(MAX_ORDER) fit (module docstring)
             gain = _scalar(node, "gain", here)
             b, a = lsf_to_poly(_polynomial(node, here, "MA", ma_order)), lsf_to_poly(w)
@@ -417,7 +432,11 @@ def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
                                   rate, rate, MAX_ORDER)
             except ValueError as exc:
                 raise TextureError(f"{here}: its ARMA model has no AR({MAX_ORDER}) fit: {exc}") from None
-            v *= gain * gain * shape
+            with np.errstate(over="ignore"):
+                v *= gain * gain * shape
+        if not 0.0 <= v <= MAX_VARIANCE:
+            raise TextureError(f"{here}: var{' times gain^2' if ma_order else ''} is {v:g}, "
+                               f"expected 0 to {MAX_VARIANCE:g}")
         sp = _scalar(node, "speedMod", here) * scale["SpeedUnits"]
         fo = _scalar(node, "forceMod", here)
         if not (np.isclose(sp, speeds[k]) and np.isclose(fo, forces[k])):
