@@ -66,9 +66,10 @@ times the ratio of the rates when going up (at most 100; ``TextureModel.resample
 AR(p) process seen at another rate is not AR(p), and a fit of order p misses the
 spectrum by 2.5 dB where 4p stays within 0.1 dB (test models, 10 to 5 kHz); at 48 and
 96 kHz, 4p missed it by 3.0 and 9.6 dB over 20-800 Hz, its resonances squeezed into the
-lowest few percent of the band, which the scaled order follows; from 1 kHz to 10 kHz an order-20 test model stays within 5.3 dB
-below 450 Hz (the fit follows the cliff at the old Nyquist frequency badly). This is
-frictex's own procedure, not a copy of the toolkit's MATLAB code.
+lowest few percent of the band, which the scaled order follows (within 0.2 dB); from
+1 kHz to 10 kHz an order-20 test model stays within 4.6 dB below 450 Hz (the fit follows
+the cliff at the old Nyquist frequency badly). This is frictex's own procedure, not a
+copy of the toolkit's MATLAB code.
 
 Outside the triangulation the toolkit saturates speed and force at ``maxSpeed`` and
 ``maxForce``; frictex blends at the point of the triangulation nearest to (speed, force),
