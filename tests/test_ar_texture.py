@@ -177,6 +177,10 @@ def test_the_toolkit_xml_form_reads_into_the_same_model():
     (_xml()[:-20], r"HaTT model:2: not well-formed XML"),
     (_xml().replace("<var>1e-06</var>", "<var>nan</var>"), "<var> missing or not a finite number"),
     (_xml(coeffs=[_resonator(80, 0.95)] + COEFFS[1:]), "model 1: ARlsf must be 4 increasing values"),
+    (_xml().replace("<numARCoeff>4</numARCoeff>", "<numARCoeff>4.9</numARCoeff>"),
+     "numARCoeff is 4.9, expected a whole number 1 to 100"),
+    (_xml().replace("<numARCoeff>4</numARCoeff>", "<numARCoeff>0</numARCoeff>"),
+     "numARCoeff is 0, expected a whole number 1 to 100"),
 ])
 def test_bad_model_files_are_one_line_errors(text, message):
     with pytest.raises(TextureError, match=message) as info:

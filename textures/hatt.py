@@ -365,6 +365,15 @@ def _scalar(root, tag: str, where: str) -> float:
     return x
 
 
+def _count(root, tag: str, where: str, lowest: int) -> int:
+    """The whole number ``lowest`` .. MAX_ORDER in ``<tag>``."""
+    x = _scalar(root, tag, where)
+    if x != round(x) or not lowest <= x <= MAX_ORDER:
+        raise TextureError(f"{where}: {tag} is {x:g}, expected a whole number {lowest} to "
+                           f"{MAX_ORDER}")
+    return int(x)
+
+
 def _polynomial(node, here: str, part: str, order: int) -> np.ndarray:
     """The LSFs of a model's ``part`` ("AR": A(z), "MA": B(z)) from ``<ARlsf>`` or
     ``<MAlsf>``, checked against ``<ARcoeff>`` / ``<MAcoeff>`` where the model has it."""
@@ -414,12 +423,8 @@ def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
     if not 3 <= m <= MAX_MODELS or speeds.size != m or forces.size != m:
         raise TextureError(f"{where}: {m} <model>, {speeds.size} speeds and {forces.size} forces; "
                            f"expected the same number, 3 to {MAX_MODELS}")
-    order = int(_scalar(root, "numARCoeff", where))
-    if not 1 <= order <= MAX_ORDER:
-        raise TextureError(f"{where}: numARCoeff is {order}, expected 1 to {MAX_ORDER}")
-    ma_order = int(_scalar(root, "numMACoeff", where)) if root.find("numMACoeff") is not None else 0
-    if not 0 <= ma_order <= MAX_ORDER:
-        raise TextureError(f"{where}: numMACoeff is {ma_order}, expected 0 to {MAX_ORDER}")
+    order = _count(root, "numARCoeff", where, 1)
+    ma_order = _count(root, "numMACoeff", where, 0) if root.find("numMACoeff") is not None else 0
     lsf, var = [], []
     for k, node in enumerate(models):
         here = f"{where}: model {k + 1}"
