@@ -98,52 +98,34 @@ def barycentric(s0, f0, inv, corners, scale, speed, force):
             w[0], w[1], w[2] = 1.0 - u - v, u, v
     if not best >= 0.0:  # outside every triangle (NaN too: no nearest point then)
         px, py = speed * scale[0], force * scale[1]
-        nearest = np.inf
+        nearest, on_edge = np.inf, np.zeros(3)
         for t in range(s0.size):
-            wa, wb, wc = _nearest_weights(px, py, corners[t])
-            qx = wa * corners[t, 0, 0] + wb * corners[t, 1, 0] + wc * corners[t, 2, 0]
-            qy = wa * corners[t, 0, 1] + wb * corners[t, 1, 1] + wc * corners[t, 2, 1]
-            d2 = (px - qx) ** 2 + (py - qy) ** 2
+            d2 = _nearest_on_edges(px, py, corners[t], on_edge)
             if d2 < nearest:
                 nearest, best_t = d2, t
-                w[0], w[1], w[2] = wa, wb, wc
+                w[:] = on_edge
     w = np.maximum(w, 0.0)
     return best_t, w / w.sum()
 
 
 @njit(cache=True)
-def _nearest_weights(px, py, abc):
-    """The weights on the vertices ``abc`` (3, 2) of the point of that triangle nearest to
-    (px, py): the vertex, edge or inside region the point projects to (Ericson, Real-Time
-    Collision Detection, 2005, section 5.1.5)."""
-    ax, ay, bx, by, cx, cy = abc[0, 0], abc[0, 1], abc[1, 0], abc[1, 1], abc[2, 0], abc[2, 1]
-    abx, aby, acx, acy = bx - ax, by - ay, cx - ax, cy - ay
-    d1 = abx * (px - ax) + aby * (py - ay)
-    d2 = acx * (px - ax) + acy * (py - ay)
-    if d1 <= 0.0 and d2 <= 0.0:
-        return 1.0, 0.0, 0.0
-    d3 = abx * (px - bx) + aby * (py - by)
-    d4 = acx * (px - bx) + acy * (py - by)
-    if d3 >= 0.0 and d4 <= d3:
-        return 0.0, 1.0, 0.0
-    vc = d1 * d4 - d3 * d2
-    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
-        v = d1 / (d1 - d3)
-        return 1.0 - v, v, 0.0
-    d5 = abx * (px - cx) + aby * (py - cy)
-    d6 = acx * (px - cx) + acy * (py - cy)
-    if d6 >= 0.0 and d5 <= d6:
-        return 0.0, 0.0, 1.0
-    vb = d5 * d2 - d1 * d6
-    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
-        v = d2 / (d2 - d6)
-        return 1.0 - v, 0.0, v
-    va = d3 * d6 - d5 * d4
-    if va <= 0.0 and d4 - d3 >= 0.0 and d5 - d6 >= 0.0:
-        v = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-        return 0.0, 1.0 - v, v
-    vb, vc = vb / (va + vb + vc), vc / (va + vb + vc)
-    return 1.0 - vb - vc, vb, vc
+def _nearest_on_edges(px, py, abc, w):
+    """The squared distance from (px, py) to the nearest point of the edges of the
+    triangle ``abc`` (3, 2), that point's weights on the vertices written into ``w`` (3,):
+    for a point outside the triangle, its nearest point. Each edge's nearest point is the
+    projection onto it, held to its ends."""
+    nearest = np.inf
+    for i in range(3):
+        j = (i + 1) % 3
+        ex, ey = abc[j, 0] - abc[i, 0], abc[j, 1] - abc[i, 1]
+        along = ((px - abc[i, 0]) * ex + (py - abc[i, 1]) * ey) / (ex * ex + ey * ey)
+        along = min(max(along, 0.0), 1.0)
+        d2 = (px - abc[i, 0] - along * ex) ** 2 + (py - abc[i, 1] - along * ey) ** 2
+        if d2 < nearest:
+            nearest = d2
+            w[:] = 0.0
+            w[i], w[j] = 1.0 - along, along
+    return nearest
 
 
 @njit(cache=True)
