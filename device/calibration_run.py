@@ -105,28 +105,32 @@ def run_sweep(link, sweep: Sweep, on_step=None):
         if on_step is not None:
             on_step(k + 1, len(steps))
 
+    def collect(upto: int) -> None:
+        """Take the steps' forces in order, up to step ``upto``, as far as they have come."""
+        while len(ratios) < upto:
+            forces = _step_forces(link, *window(len(ratios)), len(ratios))
+            if forces is None:
+                return
+            take(len(ratios), forces)
+
     for k, w in enumerate(steps):
         for lo in range(0, per, BLOCK_SAMPLES):
             link.send(start + k * per + lo, np.full((min(BLOCK_SAMPLES, per - lo), 1), w))
-            while len(ratios) < k and (forces := _step_forces(link, *window(len(ratios)),
-                                                              len(ratios))) is not None:
-                take(len(ratios), forces)
+            collect(k)
     # the plate back at rest, for long enough that the reports go past the last step
     end = start + len(steps) * per
     for lo in range(0, 2 * LATE_SAMPLES, BLOCK_SAMPLES):
         link.send(end + lo, np.zeros((BLOCK_SAMPLES, 1)))
     deadline = time.monotonic() + 2 * sweep.step_s + REPORT_WAIT_S
+    collect(len(steps))
     while len(ratios) < len(steps):
-        forces = _step_forces(link, *window(len(ratios)), len(ratios))
-        if forces is not None:
-            take(len(ratios), forces)
-        elif time.monotonic() > deadline:
+        if time.monotonic() > deadline:
             i0, n = window(len(ratios))
             raise LinkStalled(f"{link.label}: no force reports for samples {i0} to "
                               f"{i0 + n - 1} after {2 * sweep.step_s + REPORT_WAIT_S:g} s; "
                               f"the device stopped taking data or reporting")
-        else:
-            time.sleep(0.005)
+        time.sleep(0.005)
+        collect(len(steps))
     ratios, normals = np.array(ratios), np.array(normals)
     rest = 0.5 * (ratios[0:-1:2] + ratios[2::2])
     return np.array(sweep.levels), normals[1::2], ratios[1::2] / rest

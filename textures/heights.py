@@ -94,12 +94,12 @@ def _along(x, y, x0: float, y0: float, normal_deg: float):
     return nx * (np.asarray(x, dtype=np.float64) - x0) + ny * (np.asarray(y, dtype=np.float64) - y0)
 
 
-def _flat(x, y):
-    """Positions (mm) as two float64 (m,) arrays of their broadcast shape, and the shape."""
-    x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-    if x.shape != y.shape:
-        x, y = np.broadcast_arrays(x, y)
-    return x.ravel(), y.ravel(), x.shape
+def _broadcast_flat(*values) -> tuple[list[np.ndarray], tuple[int, ...]]:
+    """float64 (m,) arrays of the values broadcast to one shape, and that shape."""
+    arrays = [np.asarray(a, dtype=np.float64) for a in values]
+    if len({a.shape for a in arrays}) > 1:
+        arrays = np.broadcast_arrays(*arrays)
+    return [a.ravel() for a in arrays], arrays[0].shape
 
 
 class _Planes:
@@ -109,7 +109,7 @@ class _Planes:
     for it (row 0, above the gradient's two)."""
 
     def _evaluate(self, x, y, with_height: bool) -> tuple[np.ndarray, ...]:
-        x, y, shape = _flat(x, y)
+        (x, y), shape = _broadcast_flat(x, y)
         out = np.empty((3 if with_height else 2, x.size))
         self._fill(x, y, out)
         return tuple(plane.reshape(shape) for plane in out)
@@ -518,14 +518,6 @@ def slope_along_motion(gx, gy, vx, vy, v_fade_mm_s: float, signed: bool) -> np.n
     """
     arrays, shape = _broadcast_flat(gx, gy, vx, vy)
     return _slope_kernel(*arrays, v_fade_mm_s, signed).reshape(shape)
-
-
-def _broadcast_flat(*values) -> tuple[list[np.ndarray], tuple[int, ...]]:
-    """float64 (m,) arrays of the values broadcast to one shape, and that shape."""
-    arrays = [np.asarray(a, dtype=np.float64) for a in values]
-    if len({a.shape for a in arrays}) > 1:
-        arrays = np.broadcast_arrays(*arrays)
-    return [a.ravel() for a in arrays], arrays[0].shape
 
 
 @njit(cache=True, nogil=True, inline="always")

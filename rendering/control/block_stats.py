@@ -20,23 +20,16 @@ from numba import njit
 
 
 @njit(cache=True, nogil=True)
-def feed_forward(mu_target, contact, c):
+def feed_forward(mu_target, c):
     """The mu' asked of the inverse (F, n) for the target mu' (F, n): 1 - c (1 - mu')
-    where the target is below 1, else the target, at gain ``c`` if one finger touches
-    (``contact`` (F, n)), else at gain 1 (loop docstring, 2). Returns (asked, how many
-    fingers touch, the first that does (-1: none))."""
-    touching, row = 0, -1
-    for f in range(contact.shape[0]):
-        if contact[f].any():
-            touching += 1
-            row = f if row < 0 else row
-    gain = c if touching == 1 else 1.0
+    where the target is below 1, else the target (loop docstring, 2; the caller gives
+    gain ``c`` = 1 unless one finger touches)."""
     asked = np.empty(mu_target.shape)
     for f in range(mu_target.shape[0]):
         for i in range(mu_target.shape[1]):
             mu = mu_target[f, i]
-            asked[f, i] = 1.0 - gain * (1.0 - mu) if mu < 1.0 else mu
-    return asked, touching, row
+            asked[f, i] = 1.0 - c * (1.0 - mu) if mu < 1.0 else mu
+    return asked
 
 
 @njit(cache=True, nogil=True)

@@ -299,18 +299,18 @@ class ClosedLoop:
         """
         state, pending = self._pair(state, int(fingers.index0), forces)
         contact = fingers.contact
-        # the tracker's speed (mm/s) of the first finger touching: the loop's, if it is alone
+        # the first finger touching (-1: none) and the tracker's speed of it (mm/s): the
+        # loop's, if it is alone
         touching = contact.any(axis=1)
-        first = int(np.argmax(touching)) if touching.any() else None
+        count = int(touching.sum())
+        row = int(np.argmax(touching)) if count else -1
         n = mu_target.shape[1]
-        speed = (np.hypot(fingers.vx[first], fingers.vy[first]) if first is not None
-                 else np.zeros(n))
-        gain = 1.0
-        if not state.fallback and math.isfinite(state.mu0):
-            gain = math.exp(self._log_gain(state, float(np.mean(speed))))
-        asked, count, row = feed_forward(mu_target, contact, gain)
+        speed = np.hypot(fingers.vx[row], fingers.vy[row]) if count else np.zeros(n)
         single = count == 1
-        c = gain if single else 1.0  # the gain asked with: 1 with several fingers down
+        c = 1.0  # the gain asked with: 1 with several fingers down
+        if single and not state.fallback and math.isfinite(state.mu0):
+            c = math.exp(self._log_gain(state, float(np.mean(speed))))
+        asked = feed_forward(mu_target, c)
         if single and not state.fallback and not math.isfinite(state.mu0):
             # probe (module docstring, 1): the plate still while the finger starts to slide
             slow = speed < self.config.probe_mm_s
