@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from device.friction import forward_mu
-from device.profile import Calibration, FrictionParams
+from frictex.device.friction import forward_mu
+from frictex.device.profile import Calibration, FrictionParams
 
 #: residual RMS (mu') above which the closed-form model is said not to fit
 MODEL_TOLERANCE = 0.02

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from device.link.host import LinkStalled
+from frictex.device.link.host import LinkStalled
 
 #: samples per block sent (5 ms at 10 kHz)
 BLOCK_SAMPLES = 50

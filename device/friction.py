@@ -48,7 +48,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numba import njit
 
-from device.profile import Calibration, DeviceProfile, FrictionParams
+from frictex.device.profile import Calibration, DeviceProfile, FrictionParams
 
 
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from device.friction import ClampCounts, SeedFrictionModel, asymptote
+from frictex.device.friction import ClampCounts, SeedFrictionModel, asymptote
 
 #: table size: 4096 points keep the interpolation error near 1e-5 of the range
 TABLE_SIZE = 4096

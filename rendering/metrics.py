@@ -52,8 +52,8 @@ import numpy as np
 from numba import njit
 from scipy.signal import stft
 
-from rendering.compose import ideal_mu
-from rendering.input.trace_file import UP, Trace, TraceError
+from frictex.rendering.compose import ideal_mu
+from frictex.rendering.input.trace_file import UP, Trace, TraceError
 
 #: tactile band (Hz) of the spectral error: from the lowest vibration frequency skin
 #: resolves as texture to the ~1 kHz where the Pacinian channel's sensitivity ends

@@ -19,16 +19,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from device.actuation.factory import make_actuation
-from rendering.compose import compose
-from rendering.tracking.finger_select import SelectionState, select_fingers
-from device.friction import ClampCounts, make_friction_model
-from rendering.layers.sho import ShoRenderer
-from rendering.layers.sht import ShtRenderer
-from rendering.input.trace_file import Trace
-from rendering.tracking.tracks import TrackerConfig, TrackerState, track
-from device.profile import FORCE_PROFILES
-from textures.model import Scene
+from frictex.device.actuation.factory import make_actuation
+from frictex.rendering.compose import compose
+from frictex.rendering.tracking.finger_select import SelectionState, select_fingers
+from frictex.device.friction import ClampCounts, make_friction_model
+from frictex.rendering.layers.sho import ShoRenderer
+from frictex.rendering.layers.sht import ShtRenderer
+from frictex.rendering.input.trace_file import Trace
+from frictex.rendering.tracking.tracks import TrackerConfig, TrackerState, track
+from frictex.device.profile import FORCE_PROFILES
+from frictex.textures.model import Scene
 
 #: renderer names accepted by ``render_override`` and reported by ``frictex report``
 RENDERERS = ("sho-held", "sho-predicted", "sht", "hybrid")
@@ -127,7 +127,7 @@ def _layer_renderer(layer, mode: str, rate_hz: float):
     if mode == "sht":
         return ShtRenderer(layer, rate_hz)
     if mode == "hybrid":
-        from rendering.layers.hybrid import HybridRenderer  # built only for scenes that use it
+        from frictex.rendering.layers.hybrid import HybridRenderer  # built only for scenes that use it
         return HybridRenderer(layer, rate_hz)
     raise ValueError(f"unknown renderer {mode!r}; expected one of {', '.join(RENDERERS)}")
 
@@ -135,12 +135,12 @@ def _layer_renderer(layer, mode: str, rate_hz: float):
 def _authored_renderer(kind: str, layer, rate_hz: float):
     """The renderer of a height, recorded-texture or clip layer (built only if used)."""
     if kind == "height":
-        from rendering.layers.height import HeightRenderer
+        from frictex.rendering.layers.height import HeightRenderer
         return HeightRenderer(layer, rate_hz)
     if kind == "ar":
-        from rendering.layers.ar_texture import ArTextureRenderer
+        from frictex.rendering.layers.ar_texture import ArTextureRenderer
         return ArTextureRenderer(layer, rate_hz)
-    from rendering.layers.clips import ClipRenderer
+    from frictex.rendering.layers.clips import ClipRenderer
     return ClipRenderer(layer, rate_hz)
 
 
@@ -184,13 +184,13 @@ class Pipeline:
                              f"{', '.join(INVERSIONS)}")
         self.friction = make_friction_model(scene.device)
         if inversion == "lut":
-            from rendering.inversion_lut import LutFrictionModel
+            from frictex.rendering.inversion_lut import LutFrictionModel
             self.friction = LutFrictionModel(self.friction)
         self.actuation = make_actuation(scene.device)
         self.control = None  # closed-loop friction (rendering.control.loop), not open loop
         control = scene.control if control is None else control  # the file's, or overridden
         if control != "open":
-            from rendering.control.loop import ClosedLoop, LoopConfig
+            from frictex.rendering.control.loop import ClosedLoop, LoopConfig
             self.control = ClosedLoop(scene.device, self.rate_hz, self.block_size, control,
                                       loop_config or LoopConfig())
         elif loop_config is not None:
@@ -198,7 +198,7 @@ class Pipeline:
                              "'adaptive', not open loop")
         self.forces = None
         if scene.device.profile in FORCE_PROFILES:
-            from rendering.layers.force_layers import ForceStage  # travelling-wave profiles only
+            from frictex.rendering.layers.force_layers import ForceStage  # travelling-wave profiles only
             self.forces = ForceStage(scene, self.rate_hz, self.actuation)
         self.timer = StageTimer()
         self._warm_up()
@@ -211,7 +211,7 @@ class Pipeline:
         the process on their first call, ~0.2 s in a fresh process: that belongs to
         loading the scene, not to the first live block or a timed replay.
         """
-        from rendering.input.trace_file import DOWN, MOVE, make_trace
+        from frictex.rendering.input.trace_file import DOWN, MOVE, make_trace
         t0 = self.tracker_config.t0_s
         cx, cy = self.scene.display.width_mm / 2, self.scene.display.height_mm / 2
         touch = make_trace([t0, t0 + 1e-3], [0, 0], [cx, cx + 0.01], [cy, cy], event=[DOWN, MOVE])

@@ -66,7 +66,7 @@ def _no_link_outlives_its_test(monkeypatch):
     the join) keeps reconnecting to its port's path, and a later test's pseudo-terminal
     may get the same /dev/pts number: its device would then play another test's blocks.
     """
-    from device.link.host import CommandSink
+    from frictex.device.link.host import CommandSink
 
     opened = []
     init = CommandSink.__init__

@@ -1,8 +1,8 @@
 """Scenes built in code for the core tests (independent of the texture-file loader)."""
 
-from device.profile import DeviceProfile
+from frictex.device.profile import DeviceProfile
 
-from textures.model import Display, DiscRegion, Grating, Scene, Shape, VisualHints
+from frictex.textures.model import Display, DiscRegion, Grating, Scene, Shape, VisualHints
 
 DISPLAY = Display(108.0, 64.8, 800, 480)
 

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose
 
-from textures.ahap import parse_ahap, read_ahap
-from textures.errors import TextureError
+from frictex.textures.ahap import parse_ahap, read_ahap
+from frictex.textures.errors import TextureError
 
 RATE = 10_000.0
 

@@ -7,12 +7,12 @@ from hypothesis import example, given, settings, strategies as st
 from numpy.testing import assert_allclose
 from scipy.signal import welch
 
-from rendering.layers.ar_texture import ArTextureRenderer
-from rendering.tracking.tracks import BLOCK_FIELDS, FingerBlock
-from textures.errors import TextureError
-from textures.hatt import (ArTextureLayer, lsf_to_poly, model_from_coefficients, parse_hatt_xml,
+from frictex.rendering.layers.ar_texture import ArTextureRenderer
+from frictex.rendering.tracking.tracks import BLOCK_FIELDS, FingerBlock
+from frictex.textures.errors import TextureError
+from frictex.textures.hatt import (ArTextureLayer, lsf_to_poly, model_from_coefficients, parse_hatt_xml,
                            poly_to_lsf)
-from textures.model import VisualHints
+from frictex.textures.model import VisualHints
 
 RATE = 10_000.0
 GAIN = 0.02
@@ -316,7 +316,7 @@ def test_an_a_whose_lsfs_rounding_hides_is_refused():
 
 
 def test_the_noise_is_standard_white_and_keyed_by_touch():
-    from textures.ar_synthesis import gaussian_noise
+    from frictex.textures.ar_synthesis import gaussian_noise
 
     z = gaussian_noise(0, 0, 1, 0, 200_000)
     assert abs(z.mean()) < 0.01 and abs(z.std() - 1.0) < 0.01
@@ -333,7 +333,7 @@ def test_the_noise_is_normal_out_to_its_tails():
     each within 4 binomial standard deviations of the normal's."""
     from scipy import stats
 
-    from textures.ar_synthesis import gaussian_noise
+    from frictex.textures.ar_synthesis import gaussian_noise
 
     n = 4_000_000
     z = gaussian_noise(7, 2, 5, 0, n)
@@ -348,7 +348,7 @@ def test_the_noise_is_normal_out_to_its_tails():
 def test_synthesis_is_the_direct_form_recursion_bit_for_bit(order):
     """The compiled all-pole filter against its docstring's recursion in plain Python, in
     blocks of 0, 1, 2 and 57 samples with the history carried."""
-    from textures.ar_synthesis import _normal, _synthesise
+    from frictex.textures.ar_synthesis import _normal, _synthesise
     rng = np.random.default_rng(order)
     poly = np.concatenate([[1.0], rng.uniform(-0.4, 0.4, order)])
     history = rng.normal(0.0, 1e-3, order)
@@ -371,7 +371,7 @@ def test_synthesis_is_the_direct_form_recursion_bit_for_bit(order):
 def test_a_blend_is_the_numpy_blend_of_lsfs_bit_for_bit():
     """blend_at (kept twiddles, no temporaries) against the blend written in numpy, and
     lsf_to_poly with and without the twiddles handed in, orders 1 to 15."""
-    from textures.ar_synthesis import barycentric, blend_at, twiddles
+    from frictex.textures.ar_synthesis import barycentric, blend_at, twiddles
     rng = np.random.default_rng(12)
     for order in range(1, 16):
         lsf = np.sort(rng.uniform(0.05, 3.0, (4, order)), axis=1)

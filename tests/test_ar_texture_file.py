@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from rendering.layers.ar_texture import ArTextureRenderer
+from frictex.rendering.layers.ar_texture import ArTextureRenderer
 from test_ar_texture import _db_error, _model, _synthesise, _xml
 from test_texture_loader import write
-from textures.errors import TextureError
-from textures.hatt import ArTextureLayer, parse_hatt_xml
-from textures.loader import load_scene
+from frictex.textures.errors import TextureError
+from frictex.textures.hatt import ArTextureLayer, parse_hatt_xml
+from frictex.textures.loader import load_scene
 
 BODY = '[[layer]]\ntype = "recorded"\nmodel = "wood.xml"\ngain = 0.03\n'
 
@@ -179,10 +179,10 @@ def _no_lsf(a):
 def test_a_failed_ar_fit_names_the_file_in_validate(tmp_path, monkeypatch, capsys):
     """poly_to_lsf's ValueError from the AR fit of an ARMA model (parse) is a TextureError
     naming the model file and the model: one line from ``frictex validate``, exit 2."""
-    from app.commands.cli import main
+    from frictex.app.commands.cli import main
     (tmp_path / "wood.xml").write_text(published_xml(ma=((300, 0.8), 1.5)), encoding="utf-8")
     scene = write(tmp_path, BODY)
-    monkeypatch.setattr("textures.hatt.poly_to_lsf", _no_lsf)
+    monkeypatch.setattr("frictex.textures.hatt.poly_to_lsf", _no_lsf)
     with pytest.raises(TextureError, match=r"scene\.toml:9: layer\[1\]\.model: .*wood\.xml: model 1: "
                                            r"its ARMA model has no AR\(100\) fit: found 3"):
         load_scene(scene)
@@ -195,11 +195,11 @@ def test_a_failed_ar_fit_names_the_file_in_validate(tmp_path, monkeypatch, capsy
 def test_a_failed_resampling_names_the_file_in_replay(tmp_path, monkeypatch, capsys):
     """The same from the fit that resamples a 5 kHz model to the 10 kHz output, when the
     renderer is built: ``frictex replay`` prints one line naming the file, exit 2."""
-    from app.commands.cli import main
+    from frictex.app.commands.cli import main
     (tmp_path / "wood.xml").write_text(published_xml(rate=5_000.0), encoding="utf-8")
     scene = write(tmp_path, BODY)
     model = load_scene(scene).layers[0].model
-    monkeypatch.setattr("textures.hatt.poly_to_lsf", _no_lsf)
+    monkeypatch.setattr("frictex.textures.hatt.poly_to_lsf", _no_lsf)
     with pytest.raises(TextureError, match=r"wood\.xml: model 1: its AR\(32\) fit at 10000 Hz failed"):
         model.resampled(10_000.0)
     capsys.readouterr()

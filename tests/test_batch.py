@@ -5,9 +5,9 @@ import csv
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from app.commands.cli import main
-from app.engine.batch import ManifestError, read_manifest
-from rendering.pipeline import RENDERERS
+from frictex.app.commands.cli import main
+from frictex.app.engine.batch import ManifestError, read_manifest
+from frictex.rendering.pipeline import RENDERERS
 
 MANIFEST = """# a study's trials
 scene,trace,renderer,name

@@ -7,7 +7,7 @@ import pytest
 from numpy.polynomial import chebyshev as cheb
 from numpy.testing import assert_allclose
 
-from device.structures.beam import FreeFreeBeam, ModesError
+from frictex.device.structures.beam import FreeFreeBeam, ModesError
 
 # seed 000, Table I
 TABLE_I = dict(length_mm=350, width_mm=6, thickness_mm=6, youngs_gpa=57, density_kg_m3=2561)

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from device.structures.beam import FreeFreeBeam, ModesError
-from device.structures.measured_modes import MeasuredModes
+from frictex.device.structures.beam import FreeFreeBeam, ModesError
+from frictex.device.structures.measured_modes import MeasuredModes
 
 BEAM = FreeFreeBeam(350, 6, 6, 57, 2561)
 SCAN_X = np.arange(0.0, 350.0 + 1e-9, 2.0)  # a 2 mm vibrometer grid

@@ -5,8 +5,8 @@ import numpy as np
 from hypothesis import example, given, settings, strategies as st
 from scipy.optimize import minimize
 
-from device.actuation.bounded_two import bounded_two
-from device.actuation.modal import _bounded_commands
+from frictex.device.actuation.bounded_two import bounded_two
+from frictex.device.actuation.modal import _bounded_commands
 
 SETTINGS = settings(derandomize=True, max_examples=80, deadline=None)
 

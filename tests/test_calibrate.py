@@ -7,12 +7,12 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from app.commands.cli import main
-from device.calibration_fit import fit_points
-from device.calibration_run import Sweep, run_sweep
-from device.finger import draw_finger, moisture
-from device.link.forces import ForceReport
-from device.link.host import LinkStalled, start_sim_device
+from frictex.app.commands.cli import main
+from frictex.device.calibration_fit import fit_points
+from frictex.device.calibration_run import Sweep, run_sweep
+from frictex.device.finger import draw_finger, moisture
+from frictex.device.link.forces import ForceReport
+from frictex.device.link.host import LinkStalled, start_sim_device
 
 
 def test_fit_recovers_constants_of_exact_points():
@@ -123,7 +123,7 @@ def test_a_device_without_force_reports_or_a_lower_limit_is_refused():
 def test_calibrate_recovers_the_simulated_finger_within_5_percent(tmp_path, capsys):
     """Through the simulated device's link and force reports, as on a plate; the section
     written is one the loader accepts."""
-    from textures.loader import load_scene
+    from frictex.textures.loader import load_scene
     out = tmp_path / "device.toml"
     assert main(["calibrate", "--device", "sim", "--finger", "4", "--out", str(out),
                  "--plot", str(tmp_path / "fit.png")]) == 0
@@ -158,7 +158,7 @@ def test_a_port_is_a_one_line_error(capsys, tmp_path):
 
 
 def test_no_finger_on_the_plate_is_said_after_the_wait(monkeypatch):
-    import device.calibration_run as run
+    import frictex.device.calibration_run as run
     monkeypatch.setattr(run, "TOUCH_WAIT_S", 0.05)
     link = ModelLink(1.4, 0.8, normal_n=0.0)
     with pytest.raises(ValueError, match="no finger on the plate after 0.05 s"):

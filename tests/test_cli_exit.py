@@ -17,7 +17,7 @@ def _python(code: str, *args: str) -> subprocess.CompletedProcess:
 def test_entry_runs_atexit_handlers_and_flushes_what_was_printed():
     done = _python("""
         import atexit, sys
-        from app.commands import cli
+        from frictex.app.commands import cli
         atexit.register(lambda: print("handler ran"))
         sys.argv = ["frictex", "library"]
         print("before", end="")  # unflushed: no newline, stdout a pipe
@@ -31,7 +31,7 @@ def test_entry_runs_atexit_handlers_and_flushes_what_was_printed():
 def test_entry_exits_with_the_commands_code(tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("t_s,finger,x_mm,y_mm\n0,0,1e308,1\n")
-    done = subprocess.run([sys.executable, "-m", "app.commands.cli", "replay", "grating-5mm",
+    done = subprocess.run([sys.executable, "-m", "frictex", "replay", "grating-5mm",
                            str(bad), "--out", str(tmp_path / "out")],
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 2
@@ -43,7 +43,7 @@ def test_entry_waits_for_a_thread_still_running(tmp_path):
     done = _python("""
         import sys, threading, time
         from pathlib import Path
-        from app.commands import cli
+        from frictex.app.commands import cli
         mark = Path(sys.argv[1])
         def late():
             time.sleep(0.3)

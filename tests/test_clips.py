@@ -7,12 +7,12 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose
 
-from device.profile import DeviceProfile
-from rendering.input.trace_file import DOWN, MOVE, UP, make_trace
-from rendering.pipeline import build_pipeline
+from frictex.device.profile import DeviceProfile
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP, make_trace
+from frictex.rendering.pipeline import build_pipeline
 from scenes import DISPLAY
-from textures.clips import Clip, ClipEvent, ClipLayer
-from textures.model import DiscRegion, RectRegion, Scene, VisualHints
+from frictex.textures.clips import Clip, ClipEvent, ClipLayer
+from frictex.textures.model import DiscRegion, RectRegion, Scene, VisualHints
 
 RATE, BLOCK = 10_000.0, 50
 
@@ -182,7 +182,7 @@ def _one_sample_at_a_time(trigger, contact, touch_id, inside, flag, prev, index0
 def test_a_block_is_the_clip_played_sample_by_sample(seed):
     """Events anywhere (restarts while playing, on a block's first and last samples), a
     clip started in an earlier block, one to three fingers."""
-    from rendering.layers.clips import render_block
+    from frictex.rendering.layers.clips import render_block
     rng = np.random.default_rng(seed)
     fingers, n = int(rng.integers(1, 4)), int(rng.integers(1, 300))
     rate = rng.choice([0.002, 0.02, 0.2])  # how often the inputs change
@@ -218,7 +218,7 @@ def test_the_edge_side_is_the_sign_of_the_distance_to_the_line():
 def test_a_clip_from_an_earlier_block_plays_to_its_last_sample_and_no_further(ends_in_block):
     """No event in the block: the clip's last sample still plays on its first sample; one
     that ended just before gives the idle block itself."""
-    from rendering.layers.clips import render_block
+    from frictex.rendering.layers.clips import render_block
     samples, index0, n = np.linspace(0.5, 0.9, 10), 100, 30
     contact, touch_id = np.ones((1, n), bool), np.full((1, n), 5)
     start = index0 - 9 if ends_in_block else index0 - 10

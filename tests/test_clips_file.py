@@ -5,10 +5,10 @@ import pytest
 from numpy.testing import assert_allclose
 
 from test_texture_loader import write
-from textures.clips import ClipLayer
-from textures.errors import TextureError
-from textures.library import resolve_scene
-from textures.loader import check_scene, load_scene
+from frictex.textures.clips import ClipLayer
+from frictex.textures.errors import TextureError
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import check_scene, load_scene
 
 RATE = 10_000.0
 

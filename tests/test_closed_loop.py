@@ -5,11 +5,11 @@ import math
 import numpy as np
 import pytest
 
-from app.measure.report_closed_loop import BLOCK, RATE_HZ, REPORT_DELAY_BLOCKS, Run, simulate
-from device.finger import draw_finger, rest_mu
-from rendering.control.loop import LoopConfig
-from device.finger import SensorParams
-from rendering.control.margins import COVER_SLOPE, KI_MAX, margins, scheduled_ki
+from frictex.app.measure.report_closed_loop import BLOCK, RATE_HZ, REPORT_DELAY_BLOCKS, Run, simulate
+from frictex.device.finger import draw_finger, rest_mu
+from frictex.rendering.control.loop import LoopConfig
+from frictex.device.finger import SensorParams
+from frictex.rendering.control.margins import COVER_SLOPE, KI_MAX, margins, scheduled_ki
 
 
 def _simulate_loop(ki, delay_blocks, rate, block, blocks=1500):
@@ -92,14 +92,14 @@ def test_a_dead_sensor_falls_back_within_the_stale_time():
 
 def test_a_finger_at_rest_does_not_wind_the_integrator_up():
     """The trace holds still on a low-friction line: no sliding, so no update at all."""
-    from app.engine.clocks import VirtualClock
-    from app.engine.driver import drive
-    from app.engine.sources import TraceSource
-    from app.measure.closed_loop_sim import FingerSink, LoopStage
-    from app.measure.report_matrix import load
-    from device.finger import FingerPlant
-    from rendering.input.trace_file import DOWN, MOVE, make_trace
-    from rendering.pipeline import build_pipeline
+    from frictex.app.engine.clocks import VirtualClock
+    from frictex.app.engine.driver import drive
+    from frictex.app.engine.sources import TraceSource
+    from frictex.app.measure.closed_loop_sim import FingerSink, LoopStage
+    from frictex.app.measure.report_matrix import load
+    from frictex.device.finger import FingerPlant
+    from frictex.rendering.input.trace_file import DOWN, MOVE, make_trace
+    from frictex.rendering.pipeline import build_pipeline
     scene = load("grating-15mm")
     t = np.arange(0, 2.0, 0.02)
     trace = make_trace(t, np.zeros(t.size, dtype=int), np.full(t.size, 3.0),
@@ -132,8 +132,8 @@ def test_a_sensor_that_goes_bad_falls_back_at_the_next_block(monkeypatch, fault,
     """Reports from 1.0 s on are zeros, beyond full scale, or NaN: open loop from the block
     that first has a bad report (REPORT_DELAY_BLOCKS after the block it measures), said
     once."""
-    from app.measure import closed_loop_sim
-    from device.link.forces import ForceReport
+    from frictex.app.measure import closed_loop_sim
+    from frictex.device.link.forces import ForceReport
     write = closed_loop_sim.FingerSink.write
 
     def faulty(self, out, commands_um):
@@ -152,7 +152,7 @@ def test_a_sensor_that_goes_bad_falls_back_at_the_next_block(monkeypatch, fault,
 def test_a_loop_past_its_gain_margin_is_seen_oscillating():
     """The report's oscillation check can fail: the same finger with the integrator's gain
     1.5x past the stated gain margin swings for many periods; at the stated gain not."""
-    from app.measure.report_closed_loop import OSCILLATION_STEPS, gain_swings
+    from frictex.app.measure.report_closed_loop import OSCILLATION_STEPS, gain_swings
     _, stage = simulate(Run("grating-15mm", 4, "closed", 2.0))
     assert gain_swings(np.array(stage.log_c)) < OSCILLATION_STEPS
     row = margins((REPORT_DELAY_BLOCKS,), SensorParams(), RATE_HZ, BLOCK)["rows"][0]

@@ -8,10 +8,10 @@ import time
 import numpy as np
 import pytest
 
-from app.commands.cli import main
-from app.engine.replay import run_replay
-from device.finger import draw_finger, rest_mu
-from rendering.input.trace_file import DOWN, MOVE, UP, make_trace
+from frictex.app.commands.cli import main
+from frictex.app.engine.replay import run_replay
+from frictex.device.finger import draw_finger, rest_mu
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP, make_trace
 
 RATE = 10_000.0
 
@@ -55,10 +55,10 @@ def test_the_live_thread_reads_the_links_force_reports():
     finger: a swipe fed as the window would feed it; the loop measures the reports'
     delay and learns from them. What is asserted holds however late the reports come
     on a busy machine (a report later than max_wait_s only makes the loop fall back)."""
-    from app.live.haptic_thread import HapticThread
-    from device.link.host import open_sink
-    from textures.library import resolve_scene
-    from textures.loader import load_scene
+    from frictex.app.live.haptic_thread import HapticThread
+    from frictex.device.link.host import open_sink
+    from frictex.textures.library import resolve_scene
+    from frictex.textures.loader import load_scene
     scene = load_scene(resolve_scene("grating-15mm"))
     haptic = HapticThread(scene, RATE, 50, control="closed")
     haptic.sink = open_sink("sim", 1, RATE, paced=False, sim_args=("--finger", "3"))
@@ -102,10 +102,10 @@ def test_the_live_stage_tells_the_loop_what_an_emergency_stop_played():
     reduction asked (so its report of a still plate is not read as a slippery finger),
     where the block before it, mid-band, asked for a reduction."""
     import threading
-    from app.live.haptic_thread import HapticStats, LiveStage
-    from rendering.pipeline import build_pipeline
-    from textures.library import resolve_scene
-    from textures.loader import load_scene
+    from frictex.app.live.haptic_thread import HapticStats, LiveStage
+    from frictex.rendering.pipeline import build_pipeline
+    from frictex.textures.library import resolve_scene
+    from frictex.textures.loader import load_scene
     pipeline = build_pipeline(load_scene(resolve_scene("grating-15mm")), RATE, 50,
                               control="closed")
     estop = threading.Event()

@@ -7,14 +7,14 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from app.measure.report_closed_loop import claims, markdown, summarise
-from device.link.forces import ForceReport
-from device.profile import DeviceProfile, FrictionParams
-from rendering.control.adapt import Rls, _solve_spd
-from rendering.control.block_stats import chain_input, median
-from rendering.control.chain import Chain
-from device.finger import SensorParams
-from rendering.control.loop import ClosedLoop
+from frictex.app.measure.report_closed_loop import claims, markdown, summarise
+from frictex.device.link.forces import ForceReport
+from frictex.device.profile import DeviceProfile, FrictionParams
+from frictex.rendering.control.adapt import Rls, _solve_spd
+from frictex.rendering.control.block_stats import chain_input, median
+from frictex.rendering.control.chain import Chain
+from frictex.device.finger import SensorParams
+from frictex.rendering.control.loop import ClosedLoop
 
 
 def test_rls_converges_to_the_constants_of_exact_points():
@@ -83,8 +83,8 @@ def test_chain_is_scipys_lfilter_and_a_delay_to_the_bit():
 
 
 def test_chain_input_is_the_models_mu_and_jacobian_to_the_bit():
-    from device.calibration_fit import model_jacobian
-    from device.friction import ASYMPTOTE_MARGIN, forward_mu
+    from frictex.device.calibration_fit import model_jacobian
+    from frictex.device.friction import ASYMPTOTE_MARGIN, forward_mu
     rng = np.random.default_rng(4)
     w, target = rng.uniform(0.0, 2.5, 50), rng.uniform(0.2, 1.2, 50)
     normal = rng.uniform(0.1, 1.2, 50)  # past the model's edge (1.13 F_n >= 1) too
@@ -204,7 +204,7 @@ def test_fingers_without_mu0_are_left_out_of_the_figures_from_mu0_on():
 
 
 def test_gain_swings_see_an_oscillation_that_grows_or_holds():
-    from app.measure.report_closed_loop import SWING, gain_swings
+    from frictex.app.measure.report_closed_loop import SWING, gain_swings
     k = np.arange(200)
     growing = 0.01 * (-1.0) ** k * 1.02 ** k
     big = np.flatnonzero(np.abs(np.diff(growing)) > np.log1p(SWING))
@@ -221,8 +221,8 @@ def test_gain_swings_see_an_oscillation_that_grows_or_holds():
 def test_population_slopes_against_the_closed_form():
     """R = (1 - A)(1 - exp(-b w)), so d log R / dw = b / (exp(b w) - 1) whatever A: the
     slope factor is that of the finger's b (speed-reduced) over the model's."""
-    from app.measure.report_closed_loop import population_slopes
-    from device.finger import draw_finger
+    from frictex.app.measure.report_closed_loop import population_slopes
+    from frictex.device.finger import draw_finger
     finger = draw_finger(1)
     w = np.linspace(0.01, 2.5, 250)[:, None]
     b = finger.b_per_um / (1 + np.linspace(0.0, 200.0, 11)[None, :] / finger.v_c_mm_s)
@@ -300,8 +300,8 @@ def _run_late(delay, blocks, lost=(), **config):
     finger gets twice the reduction asked: ratio 0.8 * 0.2) reaches the loop ``delay``
     blocks after block j ends, except those of the blocks in ``lost``, which never come.
     ``config``: LoopConfig fields. Returns the loop and its state after each block."""
-    from device.link.forces import ForceHistory
-    from rendering.control.loop import LoopConfig
+    from frictex.device.link.forces import ForceHistory
+    from frictex.rendering.control.loop import LoopConfig
     loop = ClosedLoop(DeviceProfile(), 5000.0, N_BLOCK, mode="closed", config=LoopConfig(**config))
     state, history, states = loop.initial_state(), ForceHistory(), []
     for k in range(blocks):
@@ -320,7 +320,7 @@ def test_late_reports_pair_with_their_own_blocks_and_slow_the_gain(delay):
     same things from them, ``delay`` blocks later, each integrator step scaled by the
     gain scheduled for that delay against none (the first step's g is the same; the
     first measurement's start of the gain is off here: ``first_step`` 0)."""
-    from rendering.control.margins import scheduled_ki
+    from frictex.rendering.control.margins import scheduled_ki
     now_loop, now = _run_late(0, 12, first_step=0.0)
     late_loop, late = _run_late(delay, 12 + delay, first_step=0.0)
     assert late[-1].delay_blocks == delay and now[-1].delay_blocks == 0
@@ -387,7 +387,7 @@ def test_without_force_reports_the_loop_is_open_loop_and_says_why():
                                          ("min_mu", 1.5), ("max_wait_s", float("nan")),
                                          ("decimate", 0)])
 def test_a_bad_loop_configuration_is_refused_with_its_name(field, value):
-    from rendering.control.loop import LoopConfig
+    from frictex.rendering.control.loop import LoopConfig
     with pytest.raises(ValueError, match=f"loop configuration: {field} = "):
         LoopConfig(**{field: value})
 
@@ -402,7 +402,7 @@ def test_a_lost_report_does_not_slow_the_gain_for_good():
 def test_a_block_played_at_zero_is_not_fed_back():
     """An emergency stop zeroes a block after the loop asked for it: the report of a
     still plate must not read as a finger that got no reduction (winding the gain up)."""
-    from device.link.forces import ForceHistory
+    from frictex.device.link.forces import ForceHistory
     loop = ClosedLoop(DeviceProfile(), 5000.0, N_BLOCK, mode="closed")
     state, history = loop.initial_state(), ForceHistory()
     for k in range(30):
@@ -477,7 +477,7 @@ def test_the_gain_follows_a_finger_whose_reduction_depends_on_its_speed():
 def test_the_adaptation_study_is_the_object_scenes_adaptive_runs_when_as_long():
     """Same fingers, same length: the study's gaps are those runs' own, not run again;
     a study of another length is run apart and gives its own gaps."""
-    from app.measure.report_closed_loop import ADAPT_SCENE, measure, score, Run
+    from frictex.app.measure.report_closed_loop import ADAPT_SCENE, measure, score, Run
     done = []
     section = measure(fingers=2, duration_s=0.4, scenes=(ADAPT_SCENE,), adapt_s=0.4,
                       on_done=lambda *_: done.append(1))

@@ -2,9 +2,9 @@
 
 import pytest
 
-from rendering.pipeline import build_pipeline
-from textures.errors import TextureError
-from textures.loader import load_scene
+from frictex.rendering.pipeline import build_pipeline
+from frictex.textures.errors import TextureError
+from frictex.textures.loader import load_scene
 
 BODY = '''format = 1
 {control}

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from app.commands import modes as cmd_modes
-from app.commands.cli import main
-from device.structures.beam import FreeFreeBeam
+from frictex.app.commands import modes as cmd_modes
+from frictex.app.commands.cli import main
+from frictex.device.structures.beam import FreeFreeBeam
 
 SEED000 = ["--length-mm", "350", "--width-mm", "6", "--thickness-mm", "6",
            "--youngs-gpa", "57", "--density", "2561"]

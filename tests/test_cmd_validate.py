@@ -2,8 +2,8 @@
 
 import pytest
 
-from app.commands.cli import main
-from textures.library import LIBRARY_DIR
+from frictex.app.commands.cli import main
+from frictex.textures.library import LIBRARY_DIR
 
 HEAD = "format = 1\n[display]\nwidth_mm = 108.0\nheight_mm = 64.8\nwidth_px = 800\nheight_px = 480\n"
 LAYER = '[[layer]]\ntype = "bump"\ncx_mm = 50\ncy_mm = 30\nsigma_mm = 4\nmu = {mu}\n'

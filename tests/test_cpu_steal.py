@@ -1,6 +1,6 @@
 """CPU steal from /proc/stat: parsed by column, and None wherever it cannot be measured."""
 
-from app.live.cpu_steal import StealMeter, cpu_times
+from frictex.app.live.cpu_steal import StealMeter, cpu_times
 
 
 def write(path, steal, other):

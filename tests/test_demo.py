@@ -18,7 +18,7 @@ import time
 import numpy as np
 import pytest
 
-from textures.library import resolve_scene
+from frictex.textures.library import resolve_scene
 
 BLOCK_S = 50 / 10_000.0
 
@@ -61,7 +61,7 @@ def start_demo(display, cwd, scene_file, rec, *args):
     ``rec`` (a pipe would stay open as long as its children, the haptic process and a
     simulated device, if it were killed)."""
     with open(rec.parent / "demo-stderr.txt", "w") as err:
-        proc = subprocess.Popen([sys.executable, "-u", "-m", "app.commands.cli", "demo",
+        proc = subprocess.Popen([sys.executable, "-u", "-m", "frictex", "demo",
                                  str(scene_file), "--record", str(rec), "--duration", "300", *args],
                                 env={**os.environ, "DISPLAY": display, "PYTHONFAULTHANDLER": "1"},
                                 cwd=cwd, stdout=subprocess.PIPE, stderr=err, text=True)
@@ -251,14 +251,14 @@ def test_window_keeps_running_while_the_device_is_unplugged(xvfb_display, xdotoo
 
 
 def test_faults_without_a_device_is_one_line_exit_2(capsys):
-    from app.commands.cli import main
+    from frictex.app.commands.cli import main
     assert main(["demo", "grating-5mm", "--faults", "trip@1"]) == 2
     err = capsys.readouterr().err
     assert err == "frictex: error: --faults needs --device: the faults are injected on the link to it\n"
 
 
 def test_bad_faults_spec_is_one_line_exit_2(capsys):
-    from app.commands.cli import main
+    from frictex.app.commands.cli import main
     with pytest.raises(SystemExit) as exc:
         main(["demo", "grating-5mm", "--device", "sim", "--faults", "wobble=3"])
     err = capsys.readouterr().err

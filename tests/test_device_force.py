@@ -6,11 +6,11 @@ import time
 import numpy as np
 from numpy.testing import assert_allclose
 
-from app.live.haptic_thread import HapticThread
-from device.link.host import CommandSink, open_port, start_sim_device
-from device.friction import make_friction_model
-from rendering.pipeline import build_pipeline
-from rendering.input.trace_file import make_trace
+from frictex.app.live.haptic_thread import HapticThread
+from frictex.device.link.host import CommandSink, open_port, start_sim_device
+from frictex.device.friction import make_friction_model
+from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.input.trace_file import make_trace
 from scenes import grating_scene
 
 

@@ -10,17 +10,17 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from app.engine.clocks import VirtualClock
-from app.engine.driver import PipelineStage, drive
-from app.engine.replay import run_replay
-from app.engine.sinks import MemorySink
-from app.engine.sources import TraceSource
-from app.measure.report_matrix import run_blocks
-from rendering.input.trace_file import read_trace
-from rendering.pipeline import build_pipeline
-from rendering.tracking.tracks import apply_index
-from textures.library import resolve_scene, resolve_trace
-from textures.loader import load_scene
+from frictex.app.engine.clocks import VirtualClock
+from frictex.app.engine.driver import PipelineStage, drive
+from frictex.app.engine.replay import run_replay
+from frictex.app.engine.sinks import MemorySink
+from frictex.app.engine.sources import TraceSource
+from frictex.app.measure.report_matrix import run_blocks
+from frictex.rendering.input.trace_file import read_trace
+from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.tracking.tracks import apply_index
+from frictex.textures.library import resolve_scene, resolve_trace
+from frictex.textures.loader import load_scene
 
 SCENE, TRACE = "composed-fine-grating-in-disc", "circle-30mms-60hz"
 
@@ -143,8 +143,8 @@ def test_live_thread_on_the_device_paced_clock_with_the_simulated_device(tmp_pat
     """The live path, paced by a simulated device's own clock: every block the thread
     computed was sent, and the device's log holds exactly the commands sent, at their
     output indices (what does not depend on how the scheduler runs us)."""
-    from app.live.haptic_thread import HapticThread
-    from device.link.host import open_sink
+    from frictex.app.live.haptic_thread import HapticThread
+    from frictex.device.link.host import open_sink
     scene = load_scene(resolve_scene("grating-5mm"))
     log = tmp_path / "played.csv"
     link = open_sink("sim", channels=1, rate_hz=10_000.0, paced=True, log_path=log)
@@ -230,7 +230,7 @@ def test_outputs_that_would_not_fit_the_disk_are_refused_before_writing(tmp_path
     import shutil
     from collections import namedtuple
 
-    from app.commands.cli import main
+    from frictex.app.commands.cli import main
     usage = namedtuple("usage", "total used free")
     monkeypatch.setattr(shutil, "disk_usage", lambda path: usage(10 << 30, 0, 100 << 20))
     assert main(["replay", SCENE, TRACE, "--out", str(tmp_path / "fits"), "--quiet"]) == 0
@@ -246,7 +246,7 @@ def test_a_disk_filling_up_mid_run_fails_loudly_and_leaves_nothing(tmp_path, mon
     import shutil
     from collections import namedtuple
 
-    from app.engine import tables
+    from frictex.app.engine import tables
     usage = namedtuple("usage", "total used free")
     free = iter([1 << 40] * 3 + [1 << 20] * 100)  # plenty for the estimate, then full
     monkeypatch.setattr(shutil, "disk_usage", lambda path: usage(1 << 41, 0, next(free)))
@@ -259,7 +259,7 @@ def test_a_disk_filling_up_mid_run_fails_loudly_and_leaves_nothing(tmp_path, mon
 
 def taps(n_touch, same_id):
     """``n_touch`` strokes one after another, each with its own id unless ``same_id``."""
-    from rendering.input.trace_file import Trace
+    from frictex.rendering.input.trace_file import Trace
     t, f, x, ev = [], [], [], []
     for k in range(n_touch):
         for i in range(8):
@@ -314,7 +314,7 @@ def _in_one_call(trace, blocks):
 
 
 def _rows(outs):
-    from app.engine.sinks import friction_rows
+    from frictex.app.engine.sinks import friction_rows
     rows = [friction_rows(o) for o in outs]
     return {k: np.concatenate([r[k] for r in rows]) for k in rows[0]}
 
@@ -352,7 +352,7 @@ def test_a_lift_and_the_next_touch_in_one_block_do_not_share_a_row():
     just after it in the same 5 ms block (in a shared row the lift would end the touch):
     per-id results equal the one-call reference, and no call needs more rows than fingers
     touch at once plus the one lifting in the block another touches."""
-    from rendering.input.trace_file import Trace
+    from frictex.rendering.input.trace_file import Trace
     # (id, start s, samples at 100 Hz); 3 touches at 0.19005 s, 7 lifts at 0.1901 s, in
     # one block: in one row the lift would follow the touch
     strokes = [
@@ -377,13 +377,13 @@ def test_a_lift_and_the_next_touch_in_one_block_do_not_share_a_row():
 
 
 @pytest.mark.parametrize("make, code", [
-    (lambda: __import__("device.link.host", fromlist=["LinkStalled"]).LinkStalled("stalled"), 1),
+    (lambda: __import__("frictex.device.link.host", fromlist=["LinkStalled"]).LinkStalled("stalled"), 1),
     (lambda: OSError(28, "No space left on device"), 1),
     (lambda: OSError(2, "No such file or directory"), 2),
     (lambda: ValueError("bad trace"), 2),
 ])
 def test_exit_status_says_bad_input_or_a_run_that_could_not_finish(monkeypatch, capsys, make, code):
-    from app.commands import cli, library
+    from frictex.app.commands import cli, library
     def fail(args):
         raise make()
     monkeypatch.setattr(library, "run", fail)
@@ -401,7 +401,7 @@ def test_finger_roles_hold_across_blocks_as_in_one_call():
         for i, ti in enumerate(t):
             rows.append((ti, f, x0 + dx * ti, y, 0 if i == 0 else (2 if i == t.size - 1 else 1)))
     rows.sort(key=lambda r: (r[0], r[1]))
-    from rendering.input.trace_file import Trace
+    from frictex.rendering.input.trace_file import Trace
     a = np.array(rows)
     trace = Trace(a[:, 0], a[:, 1].astype(np.int64), a[:, 2], a[:, 3], np.full(len(rows), 0.5),
                   a[:, 4].astype(np.int8))

@@ -7,13 +7,13 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose
 
-from rendering.input.evdev_decode import (ABS_MT_POSITION_X as PX, ABS_MT_POSITION_Y as PY,
+from frictex.rendering.input.evdev_decode import (ABS_MT_POSITION_X as PX, ABS_MT_POSITION_Y as PY,
                                     ABS_MT_PRESSURE as PRESSURE, ABS_MT_SLOT as SLOT,
                                     ABS_MT_TOUCH_MAJOR as MAJOR, ABS_MT_TRACKING_ID as TID,
                                     BTN_TOUCH, EV_ABS, EV_KEY, EV_SYN, SYN_DROPPED, SYN_MT_REPORT,
                                     SYN_REPORT, AbsInfo, AxisMap, EvdevDecoder, RawSample,
                                     ScreenMap, ScreenSpec, decode_all, screen_map, signed32)
-from rendering.input.trace_file import DOWN, MOVE, UP, TraceError
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP, TraceError
 
 
 def abs_(t, code, value):

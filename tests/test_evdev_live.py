@@ -5,11 +5,11 @@ import struct
 
 import pytest
 
-from rendering.input.evdev_decode import (ABS_MT_POSITION_X as PX, ABS_MT_POSITION_Y as PY,
+from frictex.rendering.input.evdev_decode import (ABS_MT_POSITION_X as PX, ABS_MT_POSITION_Y as PY,
                                     ABS_MT_SLOT as SLOT, ABS_MT_TRACKING_ID as TID, EV_ABS, EV_SYN,
                                     SYN_REPORT, ScreenSpec)
-from rendering.input.evdev_live import EVIOCSCLOCKID, INPUT_EVENT, EvdevReader, eviocgabs, unpack_events
-from rendering.input.trace_file import DOWN, MOVE, UP, TraceError
+from frictex.rendering.input.evdev_live import EVIOCSCLOCKID, INPUT_EVENT, EvdevReader, eviocgabs, unpack_events
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP, TraceError
 
 SPEC = ScreenSpec(width_mm=100.0, height_mm=50.0, x_range=(0, 1000), y_range=(0, 1000))
 

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from rendering.input.trace_synth import Motion, make_motion, sample, truth
-from rendering.layers.hybrid import SLIP, HybridRenderer
-from rendering.metrics import accuracy, reference
-from rendering.tracking.tracks import TrackerConfig, TrackerState, track
+from frictex.rendering.input.trace_synth import Motion, make_motion, sample, truth
+from frictex.rendering.layers.hybrid import SLIP, HybridRenderer
+from frictex.rendering.metrics import accuracy, reference
+from frictex.rendering.tracking.tracks import TrackerConfig, TrackerState, track
 from scenes import grating_scene
-from textures.model import VisualHints, Waveform
+from frictex.textures.model import VisualHints, Waveform
 
 RATE = 10_000.0
 
@@ -120,7 +120,7 @@ def test_human_varied_strokes_are_continuous_and_stay_on_the_display(seed):
 def test_a_varying_stroke_never_runs_backwards():
     """The ripple on a stroke's minimum-jerk progress is at most 0.8 of the bound that
     keeps its slope positive: the progress is non-decreasing for 1-3 ripples."""
-    from rendering.input.trace_synth import _progress
+    from frictex.rendering.input.trace_synth import _progress
     tau = np.linspace(0.0, 1.0, 100_001)
     for cycles in (1.0, 2.0, 3.0):
         ripple = 0.8 * 30.0 / (np.pi * cycles / 2 + 3)

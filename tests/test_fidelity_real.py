@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.measure.report_real import real_section
+from frictex.app.measure.report_real import real_section
 
 REFDATA = Path(__file__).resolve().parents[2] / "shared" / "refdata" / "android-getevent"
 pytestmark = pytest.mark.skipif(not REFDATA.is_dir(),

@@ -5,7 +5,7 @@ import math
 import numpy as np
 from hypothesis import given, settings, strategies as st
 
-from device.finger import (RANGES, FingerParams, FingerPlant, SensorParams, draw_finger,
+from frictex.device.finger import (RANGES, FingerParams, FingerPlant, SensorParams, draw_finger,
                            moisture, rest_mu, true_amplitude, true_mu)
 
 

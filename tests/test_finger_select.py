@@ -10,13 +10,13 @@ from hypothesis import given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 from numpy.testing import assert_array_equal
 
-from rendering.compose import compose
-from device.actuation.base import touch_rank
-from rendering.input.trace_file import read_trace
-from rendering.input.trace_import import add_import_arguments, run_import
-from rendering.tracking.finger_select import (HYSTERESIS_MM, SelectionState, finger_masks,
+from frictex.rendering.compose import compose
+from frictex.device.actuation.base import touch_rank
+from frictex.rendering.input.trace_file import read_trace
+from frictex.rendering.input.trace_import import add_import_arguments, run_import
+from frictex.rendering.tracking.finger_select import (HYSTERESIS_MM, SelectionState, finger_masks,
                                               select_fingers)
-from rendering.tracking.tracks import TrackerConfig, TrackerState, track
+from frictex.rendering.tracking.tracks import TrackerConfig, TrackerState, track
 
 INF = np.inf
 

@@ -9,11 +9,11 @@ import dataclasses
 import numpy as np
 import pytest
 
-from device.firmware.build import FirmwareBuildError, sim_library
-from device.firmware.ccore import CDeviceCore
-from device.link import protocol as p
-from device.link.faults import Faults, inject
-from device.link.simdevice import DeviceConfig, DeviceCore
+from frictex.device.firmware.build import FirmwareBuildError, sim_library
+from frictex.device.firmware.ccore import CDeviceCore
+from frictex.device.link import protocol as p
+from frictex.device.link.faults import Faults, inject
+from frictex.device.link.simdevice import DeviceConfig, DeviceCore
 from device_recorder import Recorder
 
 RATE = 10_000.0

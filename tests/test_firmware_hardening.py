@@ -6,7 +6,7 @@ import subprocess
 
 import pytest
 
-from device.firmware.build import BUILD, FIRMWARE, FirmwareBuildError, make
+from frictex.device.firmware.build import BUILD, FIRMWARE, FirmwareBuildError, make
 from test_firmware_link import stream_and_check
 
 SANITIZER_REPORT = re.compile(r"runtime error|ERROR: (Address|Leak|Undefined)Sanitizer")

@@ -9,11 +9,11 @@ import time
 import numpy as np
 import pytest
 
-from device.firmware import hostport
-from device.firmware.build import FirmwareBuildError, host_port
-from device.link import protocol as p
-from device.link.faults import Faults, Plug
-from device.link.host import CommandSink, LinkError, open_port
+from frictex.device.firmware import hostport
+from frictex.device.firmware.build import FirmwareBuildError, host_port
+from frictex.device.link import protocol as p
+from frictex.device.link.faults import Faults, Plug
+from frictex.device.link.host import CommandSink, LinkError, open_port
 from link_checks import accounted, all_played_unless_tripped, in_order_within, until
 
 STEP = p.AMPLITUDE_STEP_UM

@@ -5,7 +5,7 @@ import re
 
 import pytest
 
-from device.firmware.build import FirmwareBuildError, make
+from frictex.device.firmware.build import FirmwareBuildError, make
 
 
 def _make(*targets):

@@ -7,8 +7,8 @@ import subprocess
 
 import pytest
 
-from device.firmware.build import BUILD, FIRMWARE, FirmwareBuildError, make
-from device.firmware.vectors import make_vectors
+from frictex.device.firmware.build import BUILD, FIRMWARE, FirmwareBuildError, make
+from frictex.device.firmware.vectors import make_vectors
 
 VECTORS = FIRMWARE / "vectors" / "frames.json"
 

@@ -4,12 +4,12 @@ recomputed from the channel commands alone are the forces each layer wanted."""
 import numpy as np
 from numpy.testing import assert_allclose, assert_array_equal
 
-from rendering.input.trace_synth import make_motion, sample
-from rendering.pipeline import build_pipeline
-from rendering.input.trace_file import make_trace
-from rendering.tracking.tracks import apply_index
-from device.profile import DeviceProfile
-from textures.model import Directional, Display, Guidance, Scene, VisualHints
+from frictex.rendering.input.trace_synth import make_motion, sample
+from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.input.trace_file import make_trace
+from frictex.rendering.tracking.tracks import apply_index
+from frictex.device.profile import DeviceProfile
+from frictex.textures.model import Directional, Display, Guidance, Scene, VisualHints
 
 RATE = 10_000.0
 KP, TH, MU0, K_A, B = 0.13, 1.0, 0.5, 1.13, 1.67   # seed 004 Fig. 3c; seed 003 eq 2

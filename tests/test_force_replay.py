@@ -8,9 +8,9 @@ import json
 import numpy as np
 import pytest
 
-from app.commands.cli import main
-from rendering.input.trace_file import read_trace
-from textures.library import list_scenes, resolve_trace
+from frictex.app.commands.cli import main
+from frictex.rendering.input.trace_file import read_trace
+from frictex.textures.library import list_scenes, resolve_trace
 
 CASES = {
     "keyclick-ring": "keyclick-press-100hz",
@@ -80,7 +80,7 @@ def test_keyclick_presses_with_a_new_finger_id_each_are_counted_per_id(tmp_path)
     id, with commands byte-identical to the same presses under one id."""
     from dataclasses import replace
 
-    from rendering.input.trace_file import DOWN, write_trace
+    from frictex.rendering.input.trace_file import DOWN, write_trace
     trace = read_trace(resolve_trace(CASES["keyclick-ring"]))
     assert set(trace.finger.tolist()) == {0}
     renamed = replace(trace, finger=100 + np.cumsum(trace.event == DOWN).astype(np.int64))

@@ -3,8 +3,8 @@
 import tomllib
 from pathlib import Path
 
-from textures import format_doc
-from textures import loader as L
+from frictex.textures import format_doc
+from frictex.textures import loader as L
 
 PAGE = Path(__file__).resolve().parents[1] / "textures" / "FORMAT.md"
 LIBRARY = Path(__file__).resolve().parents[1] / "textures" / "library"
@@ -12,7 +12,7 @@ LIBRARY = Path(__file__).resolve().parents[1] / "textures" / "library"
 
 def test_the_page_is_the_loaders_tables():
     assert PAGE.read_text(encoding="utf-8") == format_doc.render(), (
-        "textures/FORMAT.md is stale: .venv/bin/python -m textures.format_doc > textures/FORMAT.md")
+        "textures/FORMAT.md is stale: .venv/bin/python -m frictex.textures.format_doc > textures/FORMAT.md")
 
 
 def test_every_layer_type_has_its_table():

@@ -5,9 +5,9 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 
-from device.friction import (CalibratedFrictionModel, ClampCounts, SeedFrictionModel, forward_mu,
+from frictex.device.friction import (CalibratedFrictionModel, ClampCounts, SeedFrictionModel, forward_mu,
                                 make_friction_model, mu_floor)
-from device.profile import Calibration, DeviceProfile, FrictionParams
+from frictex.device.profile import Calibration, DeviceProfile, FrictionParams
 
 DEVICE = DeviceProfile(amplitude_limit_um=2.5, normal_force_n=0.5)
 MODEL = SeedFrictionModel(DEVICE)

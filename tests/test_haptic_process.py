@@ -12,9 +12,9 @@ import time
 import numpy as np
 import pytest
 
-from app.live.haptic_process import HapticConfig, HapticProcess
-from textures.library import resolve_scene
-from textures.loader import load_scene
+from frictex.app.live.haptic_process import HapticConfig, HapticProcess
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import load_scene
 
 BLOCK_S = 50 / 10_000.0
 
@@ -132,9 +132,9 @@ def test_link_failure_in_the_child_comes_back_as_oserror(tmp_path):
 
 PARENT = """
 import sys, time
-from app.live.haptic_process import HapticConfig, HapticProcess
-from textures.library import resolve_scene
-from textures.loader import load_scene
+from frictex.app.live.haptic_process import HapticConfig, HapticProcess
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import load_scene
 path = resolve_scene("grating-5mm")
 haptic = HapticProcess(load_scene(path), HapticConfig(path, 10_000.0, 50, None, None, None))
 print(haptic._proc.pid, flush=True)

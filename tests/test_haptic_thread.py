@@ -8,10 +8,10 @@ result is the same however busy the machine is.
 import numpy as np
 import pytest
 
-from app.engine.sources import QueueSource
-from app.live.haptic_thread import HapticThread
-from textures.library import resolve_scene
-from textures.loader import load_scene
+from frictex.app.engine.sources import QueueSource
+from frictex.app.live.haptic_thread import HapticThread
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import load_scene
 
 
 class Collect:

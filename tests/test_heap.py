@@ -12,7 +12,7 @@ import pytest
 CHURN = """
 import resource, sys
 import numpy as np
-from app.engine.heap import keep_freed_memory
+from frictex.app.engine.heap import keep_freed_memory
 if sys.argv[1] == "keep":
     assert keep_freed_memory()
 block = np.ones(50_000)

@@ -9,15 +9,15 @@ from hypothesis import example, given, settings, strategies as st
 from numpy.testing import assert_allclose
 from PIL import Image
 
-from device.profile import DeviceProfile
-from rendering.input.trace_file import DOWN, MOVE, UP, make_trace
-from rendering.pipeline import build_pipeline
-from rendering.tracking.tracks import apply_index
+from frictex.device.profile import DeviceProfile
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP, make_trace
+from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.tracking.tracks import apply_index
 from scenes import DISPLAY
-from textures.errors import TextureError
-from textures.heights import (ButtonRim, GaussianBump, HeightLayer, HeightMap,
+from frictex.textures.errors import TextureError
+from frictex.textures.heights import (ButtonRim, GaussianBump, HeightLayer, HeightMap,
                               Ridge, Step, read_height_png)
-from textures.model import Scene, VisualHints
+from frictex.textures.model import Scene, VisualHints
 
 RATE = 10_000.0
 CX, CY, SIGMA, H = 54.0, 32.4, 5.0, 1.0
@@ -265,9 +265,9 @@ def test_gradient_alone_is_the_gradient_of_height_and_gradient_bit_for_bit(shape
 def test_renderer_is_the_saturation_of_the_slope_bit_for_bit(shape, rendering):
     """The renderer, slope and saturation in one pass, gives the saturation of every
     sample's slope (mu_rest where it is 0, whatever the zero's sign)."""
-    from rendering.layers.height import HeightRenderer
-    from rendering.tracking.tracks import BLOCK_FIELDS, FingerBlock
-    from textures.heights import slope_along_motion
+    from frictex.rendering.layers.height import HeightRenderer
+    from frictex.rendering.tracking.tracks import BLOCK_FIELDS, FingerBlock
+    from frictex.textures.heights import slope_along_motion
     x, y = _grid_with_edges()
     n = x.size // 2
     rng = np.random.default_rng(4)
@@ -315,7 +315,7 @@ def _around_band_edges(shape, rng):
 
 @pytest.mark.parametrize("shape", BANDED, ids=lambda s: type(s).__name__)
 def test_outside_its_slope_band_a_shape_is_flat(shape):
-    from rendering.layers.height import _in_band
+    from frictex.rendering.layers.height import _in_band
     x, y = _around_band_edges(shape, np.random.default_rng(5))
     x, y = np.append(x, [np.nan, np.inf, -np.inf, 50.0]), np.append(y, [30.0, 30.0, 1.0, np.inf])
     at = np.flatnonzero(_in_band(x, y, np.zeros(x.size), np.zeros(x.size),
@@ -333,9 +333,9 @@ def test_outside_its_slope_band_a_shape_is_flat(shape):
 def test_renderer_skips_the_band_outside_bit_for_bit(shape, rendering):
     """Around the band's edges, at positions and velocities that are not finite, the
     renderer gives what the saturation of every sample's slope gives."""
-    from rendering.layers.height import HeightRenderer
-    from rendering.tracking.tracks import BLOCK_FIELDS, FingerBlock
-    from textures.heights import slope_along_motion
+    from frictex.rendering.layers.height import HeightRenderer
+    from frictex.rendering.tracking.tracks import BLOCK_FIELDS, FingerBlock
+    from frictex.textures.heights import slope_along_motion
     rng = np.random.default_rng(6)
     x, y = _around_band_edges(shape, rng)
     x[:12], y[:12] = [np.nan, np.inf, -np.inf, 50.0] * 3, [30.0, 30.0, 1.0, np.inf] * 3
@@ -358,7 +358,7 @@ def test_renderer_skips_the_band_outside_bit_for_bit(shape, rendering):
 def test_slope_is_the_documented_formula_bit_for_bit(signed):
     """The slope kernel (one vectorised pass) against the module docstring's formula in numpy,
     at rest, below and above v_fade, signed zeros, NaN and infinities."""
-    from textures.heights import slope_along_motion
+    from frictex.textures.heights import slope_along_motion
     rng = np.random.default_rng(8)
     special = np.array([0.0, -0.0, np.nan, np.inf, -np.inf, 1e-300, 3.0, -1e300])
     gx, gy, vx, vy = (np.concatenate([rng.normal(0.0, scale, 3000), rng.choice(special, 1000)])

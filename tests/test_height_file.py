@@ -6,10 +6,10 @@ from numpy.testing import assert_allclose
 from PIL import Image
 
 from test_texture_loader import write
-from textures.errors import TextureError
-from textures.heights import ButtonRim, GaussianBump, HeightLayer, HeightMap, Ridge
-from textures.library import resolve_scene
-from textures.loader import check_scene, load_scene
+from frictex.textures.errors import TextureError
+from frictex.textures.heights import ButtonRim, GaussianBump, HeightLayer, HeightMap, Ridge
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import check_scene, load_scene
 
 
 def test_bundled_examples_load_as_written():
@@ -61,8 +61,8 @@ def test_a_height_map_from_a_16_bit_png_and_an_8_bit_one_refused(tmp_path):
 
 
 def test_preview_shows_a_height_as_felt_sliding_towards_plus_x(tmp_path):
-    from app.commands.preview import as_previewed, write_preview
-    from rendering.compose import ideal_mu
+    from frictex.app.commands.preview import as_previewed, write_preview
+    from frictex.rendering.compose import ideal_mu
 
     scene = load_scene(resolve_scene("height-bump"))
     x = np.array([54.0 - 8.0, 54.0, 54.0 + 8.0, 5.0])

@@ -292,7 +292,7 @@ def test_every_hostile_file_is_one_line_and_exit_2(tmp_path):
 
 
 def test_a_bom_at_the_start_just_works(tmp_path):
-    from app.commands.cli import main
+    from frictex.app.commands.cli import main
     scene = tmp_path / "bom.toml"
     scene.write_bytes(b"\xef\xbb\xbf" + (HEAD + GRATING.format(period=5)).encode())
     trace = tmp_path / "bom.csv"

@@ -22,8 +22,8 @@ from pathlib import Path
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from app.commands.cli import main
-from textures.library import LIBRARY_DIR, TRACES_DIR
+from frictex.app.commands.cli import main
+from frictex.textures.library import LIBRARY_DIR, TRACES_DIR
 
 SCENES = sorted(LIBRARY_DIR.glob("*.toml"))
 TRACES = sorted(TRACES_DIR.glob("*.csv"))

@@ -3,7 +3,7 @@
 
 import pytest
 
-from app.commands.cli import main
+from frictex.app.commands.cli import main
 
 
 @pytest.mark.parametrize("options, message", [

@@ -14,13 +14,13 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose
 
-from rendering.input.trace_synth import make_motion, sample
-import rendering.layers.hybrid as hybrid_module
-from rendering.layers.hybrid import (BACK_MM, COARSE_MM, GATE_SIGMAS, LOCK_MM, RELOCK_MM_S,
+from frictex.rendering.input.trace_synth import make_motion, sample
+import frictex.rendering.layers.hybrid as hybrid_module
+from frictex.rendering.layers.hybrid import (BACK_MM, COARSE_MM, GATE_SIGMAS, LOCK_MM, RELOCK_MM_S,
                                      SLIP, HybridRenderer, slew_offset)
-from rendering.metrics import accuracy, reference
-from rendering.pipeline import build_pipeline
-from rendering.tracking.tracks import FingerBlock, apply_index
+from frictex.rendering.metrics import accuracy, reference
+from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.tracking.tracks import FingerBlock, apply_index
 from scenes import grating_scene
 
 RATE = 10_000.0
@@ -45,7 +45,7 @@ def tracker_estimates(monkeypatch):
 
 def _sawtooth(period_mm):
     """A waveform layer whose mu' reads the rendered phase back: 1 - phase mod 1."""
-    from textures.model import VisualHints, Waveform
+    from frictex.textures.model import VisualHints, Waveform
     return Waveform(name="saw", render="hybrid", region=None, blend="multiply",
                     visual=VisualHints(), period_mm=period_mm, shape="sawtooth", mu_min=0.0,
                     mu_max=1.0)

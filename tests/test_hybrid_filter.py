@@ -6,10 +6,10 @@ import numpy as np
 from numpy.testing import assert_allclose
 from scipy.stats import norm
 
-from rendering.input.trace_synth import make_motion, sample, truth
-from rendering.layers.finger_filter import (Q_MANOEUVRE, Q_STEADY, R_MM2, STAY, V0_MM_S,
+from frictex.rendering.input.trace_synth import make_motion, sample, truth
+from frictex.rendering.layers.finger_filter import (Q_MANOEUVRE, Q_STEADY, R_MM2, STAY, V0_MM_S,
                                             filter_axis)
-from rendering.tracking.tracks import TrackerConfig, TrackerState, apply_index, track
+from frictex.rendering.tracking.tracks import TrackerConfig, TrackerState, apply_index, track
 
 RATE = 10_000.0
 

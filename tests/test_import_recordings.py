@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from app.commands.cli import main
-from rendering.input.trace_import import add_import_arguments, run_import
-from rendering.input.evdev_decode import ABS_MT_POSITION_X, ABS_MT_TRACKING_ID, EV_ABS, EV_KEY, AbsInfo, decode_all
-from rendering.input.import_evemu import parse_evemu
-from rendering.input.import_getevent import parse_getevent, read_getevent
-from rendering.input.trace_file import DOWN, MOVE, UP, TraceError, make_trace, read_trace
-from rendering.tracking.tracks import TrackerConfig, TrackerState, apply_index, track
+from frictex.app.commands.cli import main
+from frictex.rendering.input.trace_import import add_import_arguments, run_import
+from frictex.rendering.input.evdev_decode import ABS_MT_POSITION_X, ABS_MT_TRACKING_ID, EV_ABS, EV_KEY, AbsInfo, decode_all
+from frictex.rendering.input.import_evemu import parse_evemu
+from frictex.rendering.input.import_getevent import parse_getevent, read_getevent
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP, TraceError, make_trace, read_trace
+from frictex.rendering.tracking.tracks import TrackerConfig, TrackerState, apply_index, track
 
 REFDATA = Path(__file__).resolve().parents[2] / "shared" / "refdata" / "android-getevent"
 needs_refdata = pytest.mark.skipif(not REFDATA.is_dir(),

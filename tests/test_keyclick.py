@@ -5,8 +5,8 @@ import numpy as np
 from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_array_equal
 
-from rendering.input.press_synth import press_trace
-from rendering.layers.keyclick import CLICKED, IDLE, ON, button_states
+from frictex.rendering.input.press_synth import press_trace
+from frictex.rendering.layers.keyclick import CLICKED, IDLE, ON, button_states
 
 PRESS, CLICK, RELEASE = 0.5, 0.8, 0.4
 

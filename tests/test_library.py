@@ -7,12 +7,12 @@ import pytest
 from numpy.testing import assert_allclose
 from PIL import Image
 
-from app.commands.cli import main
-from textures import model
-from textures.errors import TextureError
-from textures.library import (LIBRARY_DIR, TRACES_DIR, list_scenes, list_traces, resolve_scene,
+from frictex.app.commands.cli import main
+from frictex.textures import model
+from frictex.textures.errors import TextureError
+from frictex.textures.library import (LIBRARY_DIR, TRACES_DIR, list_scenes, list_traces, resolve_scene,
                               resolve_trace)
-from textures.loader import check_scene, load_scene
+from frictex.textures.loader import check_scene, load_scene
 
 # the scenes the haptic-core issue asks for, on seed 003's 5-inch screen
 SCENES = ["composed-fine-grating-in-disc", "grating-0.6mm", "grating-15mm", "grating-5mm",

@@ -11,12 +11,12 @@ import time
 import numpy as np
 import pytest
 
-from device.link import protocol as p
-from device.link.faults import TRIP_S, Event, Faults, Plug, Schedule
-from device.link.host import CommandSink, LinkError, LinkStalled, open_port, open_sink
-from device.firmware.build import FirmwareBuildError
-from device.firmware.ccore import built_core_class
-from device.link.simdevice import DeviceConfig, DeviceCore, open_pty, serve
+from frictex.device.link import protocol as p
+from frictex.device.link.faults import TRIP_S, Event, Faults, Plug, Schedule
+from frictex.device.link.host import CommandSink, LinkError, LinkStalled, open_port, open_sink
+from frictex.device.firmware.build import FirmwareBuildError
+from frictex.device.firmware.ccore import built_core_class
+from frictex.device.link.simdevice import DeviceConfig, DeviceCore, open_pty, serve
 from link_checks import accounted, all_played_unless_tripped, in_order_within, until
 
 STEP = p.AMPLITUDE_STEP_UM
@@ -137,8 +137,8 @@ def test_sim_subprocess_round_trip_matches_the_commands(tmp_path):
 
 
 def test_replay_streamed_to_the_sim_device_plays_commands_csv(tmp_path):
-    from app.engine.replay import run_replay
-    from rendering.input.trace_synth import make_motion, sample
+    from frictex.app.engine.replay import run_replay
+    from frictex.rendering.input.trace_synth import make_motion, sample
     from scenes import grating_scene
 
     trace = sample(make_motion("human", speed_mm_s=80.0, duration_s=1.5, seed=3), 120.0,
@@ -440,7 +440,7 @@ def test_block_indices_past_2_63_and_across_the_wrap_reach_the_device(device):
 
 def test_sim_device_serves_host_after_host_over_tcp_with_nodelay(tmp_path):
     log = tmp_path / "played.csv"
-    proc = subprocess.Popen([sys.executable, "-m", "app.commands.cli", "sim-device", "--tcp",
+    proc = subprocess.Popen([sys.executable, "-m", "frictex", "sim-device", "--tcp",
                              "0", "--log", str(log)], stdout=subprocess.PIPE, text=True,
                             stderr=subprocess.PIPE)
     try:

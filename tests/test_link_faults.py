@@ -4,7 +4,7 @@ import pytest
 import serial
 from hypothesis import given, settings, strategies as st
 
-from device.link.faults import (TRIP_S, Event, FaultPlan, Faults, FaultSpecError, FaultyPort,
+from frictex.device.link.faults import (TRIP_S, Event, FaultPlan, Faults, FaultSpecError, FaultyPort,
                                 Plug, Schedule, parse_faults)
 
 
@@ -128,7 +128,7 @@ def test_a_stall_event_holds_the_calling_thread_until_it_ends(monkeypatch):
     def sleep(s):
         slept.append(s)
         clock.t += s
-    monkeypatch.setattr("device.link.faults.time.sleep", sleep)
+    monkeypatch.setattr("frictex.device.link.faults.time.sleep", sleep)
     schedule = Schedule((Event("stall", 0.0, 0.25),), clock=clock)
     clock.t += 0.05
     port = FaultyPort(Wire(), Faults(), schedule=schedule)

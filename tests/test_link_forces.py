@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from app.commands.cli import main
-from device.finger import draw_finger
-from device.link import protocol as p
-from device.link.forces import ForceHistory, ForceReport, per_sample
-from device.link.host import CommandSink, open_port, open_sink, start_sim_device
-from device.link.simdevice import DeviceConfig, DeviceCore
+from frictex.app.commands.cli import main
+from frictex.device.finger import draw_finger
+from frictex.device.link import protocol as p
+from frictex.device.link.forces import ForceHistory, ForceReport, per_sample
+from frictex.device.link.host import CommandSink, open_port, open_sink, start_sim_device
+from frictex.device.link.simdevice import DeviceConfig, DeviceCore
 from link_checks import all_played_unless_tripped
 
 RATE = 10_000.0

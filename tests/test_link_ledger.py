@@ -3,9 +3,9 @@
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from device.link import protocol as p
-from device.link.ledger import Ledger, Pacing, Snapshot, unwrap
-from device.link.protocol import DeviceState as S
+from frictex.device.link import protocol as p
+from frictex.device.link.ledger import Ledger, Pacing, Snapshot, unwrap
+from frictex.device.link.protocol import DeviceState as S
 
 RATE = 10_000.0
 U64 = st.integers(0, 2**64 - 1)

@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 import serial
 
-from device.link import protocol as p
-from device.link.host import READ_WAIT_S, CommandSink
-from device.link.simdevice import DeviceConfig, DeviceCore
+from frictex.device.link import protocol as p
+from frictex.device.link.host import READ_WAIT_S, CommandSink
+from frictex.device.link.simdevice import DeviceConfig, DeviceCore
 from device_recorder import Recorder
 
 RATE = 10_000.0

@@ -31,8 +31,8 @@ STALLED_EXIT = 3
 
 def child(transport: str, seconds: float, spec: str, log_path: str) -> int:
     """Stream ``seconds`` of a paced signal; print "ready", then the final link status."""
-    from device.link.faults import parse_faults
-    from device.link.host import LinkStalled, open_sink
+    from frictex.device.link.faults import parse_faults
+    from frictex.device.link.host import LinkStalled, open_sink
 
     sink = open_sink("sim" if transport == "pty" else "sim:tcp", 1, RATE, paced=True,
                      log_path=log_path, faults=parse_faults(spec) if spec else None)
@@ -85,7 +85,7 @@ def run(tmp_path: Path, transport: str, seconds: float, spec: str,
 
 def _held(spec: str) -> float:
     """Seconds the spec's stalls and unplugs can hold the stream back."""
-    from device.link.faults import parse_faults
+    from frictex.device.link.faults import parse_faults
     return sum(e.duration_s for e in parse_faults(spec).events) if spec else 0.0
 
 

@@ -10,13 +10,13 @@ import time
 import numpy as np
 import pytest
 
-from app.live.demo_loop import DemoLoop, HapticStopped, next_screenshot
-from app.live.haptic_thread import HapticThread
-from device.link.host import LinkStalled
-from rendering.input.trace_file import DOWN, MOVE, UP
-from rendering.visual.context import OffscreenBackend
-from textures.library import resolve_scene
-from textures.loader import load_scene
+from frictex.app.live.demo_loop import DemoLoop, HapticStopped, next_screenshot
+from frictex.app.live.haptic_thread import HapticThread
+from frictex.device.link.host import LinkStalled
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP
+from frictex.rendering.visual.context import OffscreenBackend
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import load_scene
 
 SIZE = (800, 615)  # the default frame: the 800 x 480 px scene above the scope
 PX_PER_MM = 800 / 108.0

@@ -15,19 +15,19 @@ import pytest
 from numpy.testing import assert_allclose
 from PIL import Image
 
-from app.live.demo_loop import RELOAD_POLL_S, DemoLoop
-from app.live.haptic_thread import HapticThread
-from app.live.watch import FileWatch
+from frictex.app.live.demo_loop import RELOAD_POLL_S, DemoLoop
+from frictex.app.live.haptic_thread import HapticThread
+from frictex.app.live.watch import FileWatch
 from test_ar_texture import VARIANCES, _xml
 from test_live_demo_loop import ScriptedWindow
 from test_texture_loader import HEAD
-from textures.clips import ClipLayer
-from textures.errors import TextureError
-from textures.hatt import ArTextureLayer
-from textures.heights import HeightLayer
-from textures.library import list_scenes
-from textures.loader import check_scene, load_scene
-from textures.references import referenced_files
+from frictex.textures.clips import ClipLayer
+from frictex.textures.errors import TextureError
+from frictex.textures.hatt import ArTextureLayer
+from frictex.textures.heights import HeightLayer
+from frictex.textures.library import list_scenes
+from frictex.textures.loader import check_scene, load_scene
+from frictex.textures.references import referenced_files
 
 LAYERS = """
 [[layer]]

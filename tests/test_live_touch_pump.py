@@ -10,14 +10,14 @@ import time
 import numpy as np
 import pytest
 
-from app.live.haptic_process import HapticConfig, HapticProcess
-from app.live.haptic_thread import HapticThread
-from app.live.touch_pump import TouchPump, open_source
-from rendering.input.evdev_decode import TouchSample
-from rendering.input.trace_file import DOWN, MOVE, UP
+from frictex.app.live.haptic_process import HapticConfig, HapticProcess
+from frictex.app.live.haptic_thread import HapticThread
+from frictex.app.live.touch_pump import TouchPump, open_source
+from frictex.rendering.input.evdev_decode import TouchSample
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP
 from test_tuio import frame
-from textures.library import resolve_scene
-from textures.loader import load_scene
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import load_scene
 
 WAIT_S = 120.0  # bound of waits on real threads and processes: only a broken one reaches it
 

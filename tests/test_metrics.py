@@ -7,9 +7,9 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose
 
-from rendering.input.trace_file import UP
-from rendering.input.trace_synth import make_motion, truth
-from rendering.metrics import (CHATTER_S, REVERSAL_MEASURED_MM, REVERSAL_TRUE_MM, MetricError,
+from frictex.rendering.input.trace_file import UP
+from frictex.rendering.input.trace_synth import make_motion, truth
+from frictex.rendering.metrics import (CHATTER_S, REVERSAL_MEASURED_MM, REVERSAL_TRUE_MM, MetricError,
                                accuracy, alignment_error, chatter, find_steps, hold, reference,
                                spectral_error, time_error, turns)
 from scenes import disc_scene, grating_scene

@@ -6,8 +6,8 @@ from hypothesis import assume, given, settings, strategies as st
 from numpy.testing import assert_allclose
 from scipy.optimize import minimize
 
-from device.structures.beam import FreeFreeBeam, ModesError
-from device.actuation.modal import METHODS, forward, solve
+from frictex.device.structures.beam import FreeFreeBeam, ModesError
+from frictex.device.actuation.modal import METHODS, forward, solve
 
 # seed 000, eq 12 (shapes at the actuators) and eq 13 (at x_a = 120, x_b = 250 mm)
 PHI_ACT = np.array([[-0.9680, -0.6949], [1.0, -0.7447]])

@@ -8,17 +8,17 @@ import pytest
 from numpy.testing import assert_allclose
 
 
-from device.actuation.base import SingleModeActuation
-from device.structures.beam import FreeFreeBeam
-from device.actuation.modal_actuation import ModalActuation, make_modal_actuation
-from device.structures.plate2d import ACTUATORS, Plate2D
-from rendering.tracking.finger_select import HYSTERESIS_MM
-from rendering.pipeline import build_pipeline
-from rendering.input.trace_file import make_trace
-from rendering.tracking.tracks import apply_index
+from frictex.device.actuation.base import SingleModeActuation
+from frictex.device.structures.beam import FreeFreeBeam
+from frictex.device.actuation.modal_actuation import ModalActuation, make_modal_actuation
+from frictex.device.structures.plate2d import ACTUATORS, Plate2D
+from frictex.rendering.tracking.finger_select import HYSTERESIS_MM
+from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.input.trace_file import make_trace
+from frictex.rendering.tracking.tracks import apply_index
 from scenes import grating_scene
-from device.profile import BeamStructure, DeviceProfile, PlateStructure
-from textures.model import Display, RectRegion, Scene, Shape, VisualHints
+from frictex.device.profile import BeamStructure, DeviceProfile, PlateStructure
+from frictex.textures.model import Display, RectRegion, Scene, Shape, VisualHints
 
 BEAM = FreeFreeBeam(350, 6, 6, 57, 2561)          # seed 000, Table I
 ORDERS = (16, 17)
@@ -211,8 +211,8 @@ def test_a_single_mode_scene_builds_no_modal_stage():
 
 
 def test_bundled_plate_scene_gives_the_left_finger_the_grating_as_fingers_cross():
-    from textures.library import resolve_scene
-    from textures.loader import load_scene
+    from frictex.textures.library import resolve_scene
+    from frictex.textures.loader import load_scene
 
     scene = load_scene(resolve_scene("two-finger-plate-seed001"))
     grating, slippery = scene.layers

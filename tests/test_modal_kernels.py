@@ -6,11 +6,11 @@ import numpy as np
 from hypothesis import given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
-from device.actuation.base import touch_rank
-from device.actuation.modal import _gains_2x2, _gains_svd, _scale_to_limits, forward, magnitude, solve
-from device.actuation.modal import achieved_magnitude
-from device.actuation.modal_actuation import _serve_rows, _served_fingers
-from device.structures.beam import FreeFreeBeam, _mode
+from frictex.device.actuation.base import touch_rank
+from frictex.device.actuation.modal import _gains_2x2, _gains_svd, _scale_to_limits, forward, magnitude, solve
+from frictex.device.actuation.modal import achieved_magnitude
+from frictex.device.actuation.modal_actuation import _serve_rows, _served_fingers
+from frictex.device.structures.beam import FreeFreeBeam, _mode
 
 SETTINGS = settings(derandomize=True, max_examples=80, deadline=None)
 SEED000 = FreeFreeBeam(350, 6, 6, 57, 2561)

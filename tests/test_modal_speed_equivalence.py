@@ -10,10 +10,10 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
-from device.actuation.modal import magnitude, solve
-from device.actuation.modal_actuation import beam_actuation, plate_actuation
-from device.profile import BeamStructure, PlateStructure
-from device.structures.beam import ModesError
+from frictex.device.actuation.modal import magnitude, solve
+from frictex.device.actuation.modal_actuation import beam_actuation, plate_actuation
+from frictex.device.profile import BeamStructure, PlateStructure
+from frictex.device.structures.beam import ModesError
 from test_modal_kernels import assert_same_bits, numpy_forward, numpy_touch_rank
 
 SETTINGS = settings(derandomize=True, max_examples=60, deadline=None)

@@ -5,9 +5,9 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose
 
-from rendering.input.trace_synth import make_motion, sample
-from rendering.pipeline import build_pipeline
-from rendering.tracking.tracks import apply_index
+from frictex.rendering.input.trace_synth import make_motion, sample
+from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.tracking.tracks import apply_index
 from scenes import disc_scene, grating_scene
 
 

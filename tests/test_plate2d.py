@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from device.structures.beam import ModesError
-from device.actuation.modal import solve
-from device.structures.plate2d import ACTUATORS, Plate2D
+from frictex.device.structures.beam import ModesError
+from frictex.device.actuation.modal import solve
+from frictex.device.structures.plate2d import ACTUATORS, Plate2D
 
 # seed 001 section 4.1: 140 x 140 x 4 mm, k = 8; aluminium assumed (the paper names no material)
 PLATE = Plate2D(140, 140, 4, 69, 2700, poisson=0.33, order=8)

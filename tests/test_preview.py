@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from app.commands.cli import main
-from app.engine.frames import FrameWriter
-from app.engine.replay import run_replay
+from frictex.app.commands.cli import main
+from frictex.app.engine.frames import FrameWriter
+from frictex.app.engine.replay import run_replay
 from scenes import grating_scene
 
 
@@ -58,15 +58,15 @@ def test_frames_follow_the_replayed_finger(gl, tmp_path):
 def test_default_panel_is_the_display_size_scaled_to_fit_2048_px():
     from types import SimpleNamespace
 
-    from app.commands.preview import default_size
+    from frictex.app.commands.preview import default_size
     assert default_size(SimpleNamespace(width_px=800, height_px=480)) == (800, 480)
     assert default_size(SimpleNamespace(width_px=16384, height_px=4096)) == (2048, 512)
     assert default_size(SimpleNamespace(width_px=3, height_px=16384)) == (1, 2048)
 
 
 def test_friction_map_in_row_bands_equals_one_pass(monkeypatch):
-    from app.commands import preview
-    from rendering.visual.viewport import fit_viewport
+    from frictex.app.commands import preview
+    from frictex.rendering.visual.viewport import fit_viewport
     scene = grating_scene(5.0)
     viewport = fit_viewport(scene.display, 90, 54)
     monkeypatch.setattr(preview, "ROWS_PER_PASS", 10_000)

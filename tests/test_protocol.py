@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from device.link import protocol as p
-from device.link.faults import Faults, inject
+from frictex.device.link import protocol as p
+from frictex.device.link.faults import Faults, inject
 
 SETTINGS = settings(derandomize=True, max_examples=150, deadline=None)
 U16 = st.integers(0, 65535)

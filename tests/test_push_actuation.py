@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from device.actuation.factory import make_actuation
-from device.structures.beam import FreeFreeBeam
-from device.actuation.push_actuation import make_push_actuation
-from device.actuation.travelling import BeamActuation, beam_wave
-from device.profile import DeviceProfile
+from frictex.device.actuation.factory import make_actuation
+from frictex.device.structures.beam import FreeFreeBeam
+from frictex.device.actuation.push_actuation import make_push_actuation
+from frictex.device.actuation.travelling import BeamActuation, beam_wave
+from frictex.device.profile import DeviceProfile
 
 BEAM = make_push_actuation("travelling-beam-seed002", 1e9)  # limits tested on their own
 RING = make_push_actuation("ring-seed004", 1e9)

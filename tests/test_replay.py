@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from app.engine.replay import run_replay
-from rendering.input.trace_synth import make_motion, sample
+from frictex.app.engine.replay import run_replay
+from frictex.rendering.input.trace_synth import make_motion, sample
 from scenes import grating_scene
 
 
@@ -100,8 +100,8 @@ def test_sink_receives_every_block_in_order(tmp_path, human_trace):
 
 def test_a_trace_read_in_small_chunks_replays_identically(tmp_path, monkeypatch):
     """Replay streams the trace (bounded memory): chunk boundaries change nothing."""
-    import app.engine.replay as replay_module
-    from rendering.input.trace_file import iter_trace
+    import frictex.app.engine.replay as replay_module
+    from frictex.rendering.input.trace_file import iter_trace
 
     trace = "two-fingers-crossing-50hz"
     run_replay("two-finger-beam-seed000", trace, tmp_path / "whole", progress=False)

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from app.commands.cli import main
-from app.measure.report_claims import claims, paired
-from app.measure.report_matrix import Runner, matrix
-from app.measure.report_output import pareto
-from app.measure.report_seeds import draws
+from frictex.app.commands.cli import main
+from frictex.app.measure.report_claims import claims, paired
+from frictex.app.measure.report_matrix import Runner, matrix
+from frictex.app.measure.report_output import pareto
+from frictex.app.measure.report_seeds import draws
 
 REFDATA = Path(__file__).resolve().parents[2] / "shared" / "refdata" / "android-getevent"
 
@@ -159,7 +159,7 @@ def test_real_recordings_replay_with_their_figures():
     """The tablet two-finger drag on the 15 mm grating, every renderer: outputs finite, no
     clamp, the hybrid's distance from itself 0 and plain SHT's far from it (a texture
     whose phase drifts), left-most stable with hysteresis (1 hand-over, 9 without)."""
-    from app.measure.report_real import replay, summary_lines
+    from frictex.app.measure.report_real import replay, summary_lines
     run = replay(REFDATA / "Tablet" / "tablet-two-finger-drag.txt", "grating-15mm")
     assert run["fingers"] == 2 and run["samples"] == 265
     for r in run["renderers"].values():

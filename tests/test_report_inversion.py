@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from device.friction import SeedFrictionModel, make_friction_model
-from rendering.inversion_lut import LutFrictionModel
-from rendering.pipeline import build_pipeline
+from frictex.device.friction import SeedFrictionModel, make_friction_model
+from frictex.rendering.inversion_lut import LutFrictionModel
+from frictex.rendering.pipeline import build_pipeline
 from scenes import grating_scene
-from device.profile import Calibration, DeviceProfile
+from frictex.device.profile import Calibration, DeviceProfile
 
 
 def test_error_is_within_the_interpolation_bound():

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from app.commands import modes_ring
-from app.commands.cli import main
-from device.structures.beam import ModesError
-from device.structures.ring import RingResonator
+from frictex.app.commands import modes_ring
+from frictex.app.commands.cli import main
+from frictex.device.structures.beam import ModesError
+from frictex.device.structures.ring import RingResonator
 
 # seed 004, section II-B: L 140 mm, R 50 mm, h 2.75 mm, w 30 mm, aluminium 5052
 DESIGN = dict(length_mm=140, radius_mm=50, thickness_mm=2.75, width_mm=30, youngs_gpa=69,

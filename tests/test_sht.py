@@ -5,7 +5,7 @@ import math
 import numpy as np
 from numpy.testing import assert_allclose
 
-from rendering.layers.sht import integrate_phase
+from frictex.rendering.layers.sht import integrate_phase
 
 
 def test_one_hour_phase_stays_within_1e_6_period():

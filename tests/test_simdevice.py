@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from device.link import protocol as p
-from device.link.faults import Faults, inject
-from device.link.protocol import DeviceState as S
-from device.firmware.build import FirmwareBuildError
-from device.firmware.ccore import built_core_class
-from device.link.simdevice import DeviceConfig, DeviceCore as PythonDeviceCore
+from frictex.device.link import protocol as p
+from frictex.device.link.faults import Faults, inject
+from frictex.device.link.protocol import DeviceState as S
+from frictex.device.firmware.build import FirmwareBuildError
+from frictex.device.firmware.ccore import built_core_class
+from frictex.device.link.simdevice import DeviceConfig, DeviceCore as PythonDeviceCore
 from device_recorder import Recorder
 
 RATE = 10_000.0

@@ -10,15 +10,15 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 
-from rendering.input.trace_synth import make_motion, sample
-from device.actuation.base import SingleModeActuation, primary_finger
-from device.actuation.modal import _gains_2x2, _gains_svd, forward, solve
-from rendering.compose import compose
-from device.friction import make_friction_model
-from rendering.layers.sht import integrate_phase
-from rendering.tracking.tracks import BLOCK_FIELDS, FingerBlock, TrackerConfig, TrackerState, track
-from device.profile import DeviceProfile
-from textures.model import DiscRegion, Grating, RectRegion, Shape, VisualHints, Waveform, _smoothstep_inside, _wrap
+from frictex.rendering.input.trace_synth import make_motion, sample
+from frictex.device.actuation.base import SingleModeActuation, primary_finger
+from frictex.device.actuation.modal import _gains_2x2, _gains_svd, forward, solve
+from frictex.rendering.compose import compose
+from frictex.device.friction import make_friction_model
+from frictex.rendering.layers.sht import integrate_phase
+from frictex.rendering.tracking.tracks import BLOCK_FIELDS, FingerBlock, TrackerConfig, TrackerState, track
+from frictex.device.profile import DeviceProfile
+from frictex.textures.model import DiscRegion, Grating, RectRegion, Shape, VisualHints, Waveform, _smoothstep_inside, _wrap
 
 SETTINGS = settings(derandomize=True, max_examples=60, deadline=None)
 
@@ -50,7 +50,7 @@ def test_closed_form_equals_svd_on_random_well_conditioned_matrices(method):
 def test_regularised_closed_form_equals_svd_through_the_singular_locus():
     """Seed 000's beam with finger b swept through finger a's position (det = 0 there):
     the regularised gains are continuous, so the two computations agree everywhere."""
-    from device.structures.beam import FreeFreeBeam
+    from frictex.device.structures.beam import FreeFreeBeam
     beam = FreeFreeBeam(350, 6, 6, 57, 2561)
     xb = np.linspace(100.0, 140.0, 40_001)  # passes x_a = 120 mm exactly
     phi = np.stack([np.broadcast_to(beam.phi((16, 17), np.array([120.0])), (xb.size, 2)),
@@ -278,7 +278,7 @@ def test_tracker_window_sums_are_numpys_row_sums(width, used, seed):
     """The tracker's compiled line fits add each window in the order numpy's ``sum``
     adds a padded table row (pairwise), so velocities keep every bit of the table
     summation: values of mixed sign and size, rows padded with zeros."""
-    from rendering.tracking.tracks import _pairwise
+    from frictex.rendering.tracking.tracks import _pairwise
     rng = np.random.default_rng(seed)
     row = np.zeros(width)
     k = min(used, width)

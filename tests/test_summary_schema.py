@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from app.commands.cli import main
+from frictex.app.commands.cli import main
 
 DOC = Path(__file__).resolve().parents[1] / "app" / "engine" / "SUMMARY.md"
 #: objects whose keys are data (finger ids, layer names) or documented elsewhere

@@ -5,9 +5,9 @@ import pyarrow.parquet as pq
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from app.engine import tables
-from app.engine.csv_text import rows_text
-from app.engine.tables import TableWriter
+from frictex.app.engine import tables
+from frictex.app.engine.csv_text import rows_text
+from frictex.app.engine.tables import TableWriter
 
 COLUMNS = [("t_s", np.float64, "%.7f"), ("finger", np.int64, "%d"),
            ("x_mm", np.float64, "%.4f"), ("amplitude_um", np.float64, "%.6f")]

@@ -6,10 +6,10 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 
-from device.friction import forward_mu
-from rendering.layers.tangential import (DrivingForceParams, TangentialState, invert_tangential,
+from frictex.device.friction import forward_mu
+from frictex.rendering.layers.tangential import (DrivingForceParams, TangentialState, invert_tangential,
                                   tangential_force)
-from device.profile import FrictionParams
+from frictex.device.profile import FrictionParams
 
 FRICTION = FrictionParams()
 PARAMS = DrivingForceParams()

@@ -5,10 +5,10 @@ import re
 
 import pytest
 
-from app.commands.cli import main
-from textures.loader import check_scene
-from device.profile import DrivingForceParams
-from textures.model import Directional, Guidance, KeyClick
+from frictex.app.commands.cli import main
+from frictex.textures.loader import check_scene
+from frictex.device.profile import DrivingForceParams
+from frictex.textures.model import Directional, Guidance, KeyClick
 
 HEAD = """\
 format = 1

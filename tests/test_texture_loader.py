@@ -7,10 +7,10 @@ import pytest
 from numpy.testing import assert_allclose
 from PIL import Image
 
-from device import profile as profiles
-from textures import model
-from textures.errors import TextureError
-from textures.loader import check_scene, load_scene
+from frictex.device import profile as profiles
+from frictex.textures import model
+from frictex.textures.errors import TextureError
+from frictex.textures.loader import check_scene, load_scene
 
 HEAD = """\
 format = 1
@@ -297,14 +297,14 @@ def test_load_scene_raises_texture_error_with_all_problems(tmp_path):
 def test_the_retired_asymptote_cap_is_ignored_with_one_warning(tmp_path, capsys):
     """Format 1 files written when [device.friction] documented asymptote_cap still load:
     the key is ignored (the scene is the one without it) and named in one warning line."""
-    from app.commands.cli import main
+    from frictex.app.commands.cli import main
     layer = '[[layer]]\ntype = "grating"\nperiod_mm = 2.0\nmu_low = 0.6\n'
     friction = "[device.friction]\nb_per_um = 1.5\n"
     path = write(tmp_path, friction + "asymptote_cap = 0.95\n" + layer)
     scene, problems, warnings = check_scene(path)
     assert problems == [] and len(warnings) == 1
     w = warnings[0]
-    assert (w.line, w.field) == (9, "device.friction.asymptote_cap") and "ignored" in w.message
+    assert (w.line, w.field) == (9, "frictex.device.friction.asymptote_cap") and "ignored" in w.message
     plain = load_scene(write(tmp_path, friction + layer, name="plain.toml"))
     assert scene.device == plain.device
     capsys.readouterr()

@@ -5,13 +5,13 @@ import re
 import numpy as np
 import pytest
 
-from app.commands.cli import main
-from device.structures.beam import FreeFreeBeam
-from device.actuation.modal_actuation import ModalActuation
-from rendering.pipeline import build_pipeline
-from device import profile as profiles
-from textures.library import resolve_scene
-from textures.loader import check_scene, load_scene
+from frictex.app.commands.cli import main
+from frictex.device.structures.beam import FreeFreeBeam
+from frictex.device.actuation.modal_actuation import ModalActuation
+from frictex.rendering.pipeline import build_pipeline
+from frictex.device import profile as profiles
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import check_scene, load_scene
 
 BEAM = """\
 format = 1

@@ -5,9 +5,9 @@ import math
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from textures.errors import Locator, field_name
-from textures.loader import check_scene
-from textures.model import auto_render_mode
+from frictex.textures.errors import Locator, field_name
+from frictex.textures.loader import check_scene
+from frictex.textures.model import auto_render_mode
 
 # values whose text could fool a line scanner: brackets at the start of continuation
 # lines, headers and "key = value" inside multi-line strings, '#' and '=' inside strings

@@ -5,9 +5,9 @@ import pytest
 from numpy.testing import assert_allclose
 from PIL import Image
 
-from textures import raster_io
-from textures.errors import TextureError
-from textures.raster_io import read_grey
+from frictex.textures import raster_io
+from frictex.textures.errors import TextureError
+from frictex.textures.raster_io import read_grey
 
 
 def save(tmp_path, image, name="m.png"):

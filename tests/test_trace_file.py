@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from hypothesis import assume, example, given, settings, strategies as st
 
-from app.commands.cli import main
-from rendering.input.trace_file import (DOWN, MOVE, UP, TraceError, concat_traces, format_trace,
+from frictex.app.commands.cli import main
+from frictex.rendering.input.trace_file import (DOWN, MOVE, UP, TraceError, concat_traces, format_trace,
                                         parse_trace, read_trace)
 
 
@@ -103,7 +103,7 @@ def test_cli_bad_trace_exits_2_with_one_line(tmp_path, capsys):
 
 
 def test_live_batches_keep_their_events():
-    from rendering.input.trace_file import make_trace
+    from frictex.rendering.input.trace_file import make_trace
     batch = make_trace([1.0, 1.01], [0, 0], [5.0, 6.0], [0.0, 0.0], event=[MOVE, MOVE],
                        normalise=False)
     assert batch.event.tolist() == [MOVE, MOVE]
@@ -111,7 +111,7 @@ def test_live_batches_keep_their_events():
 
 
 def test_chunked_reading_equals_whole_and_checks_across_chunks(tmp_path):
-    from rendering.input.trace_file import concat_traces, iter_trace
+    from frictex.rendering.input.trace_file import concat_traces, iter_trace
     path = tmp_path / "t.csv"
     path.write_text("t_s,finger,x_mm,y_mm,event\n" + "".join(
         f"{k * 0.01},{k % 2},{k},{k},{'up' if k in (5, 6) else 'move'}\n" for k in range(20)))
@@ -137,7 +137,7 @@ def test_bom_at_the_start_is_dropped():
 
 
 def test_interleaved_fingers_are_sorted_into_time_order(tmp_path):
-    from rendering.input.trace_file import iter_trace
+    from frictex.rendering.input.trace_file import iter_trace
     path = tmp_path / "t.csv"
     # finger 1's sample at 8 ms is logged after finger 0's at 10 ms (2 ms back)
     path.write_text("t_s,finger,x_mm,y_mm\n0,0,0,0\n0.010,0,1,0\n0.008,1,5,5\n0.010,1,6,5\n"
@@ -155,7 +155,7 @@ def test_interleaved_fingers_are_sorted_into_time_order(tmp_path):
 
 
 def test_samples_further_back_are_dropped_and_counted(tmp_path):
-    from rendering.input.trace_file import iter_trace
+    from frictex.rendering.input.trace_file import iter_trace
     path = tmp_path / "t.csv"
     path.write_text("t_s,finger,x_mm,y_mm\n0,0,0,0\n0.1,0,1,0\n0.05,0,9,9\n0.09,0,9,9\n0.2,0,2,0\n")
     reader = iter_trace(path)
@@ -191,7 +191,7 @@ def _reference_order(times, tolerance):
                                        -0.005, -0.0051, -0.02]), min_size=1, max_size=40),
        chunk_rows=st.integers(1, 9))
 def test_chunked_reordering_matches_the_rule(tmp_path_factory, steps, chunk_rows):
-    from rendering.input.trace_file import iter_trace
+    from frictex.rendering.input.trace_file import iter_trace
     times = np.round(np.cumsum([1.0] + steps), 6).tolist()
     path = tmp_path_factory.mktemp("order") / "t.csv"
     path.write_text("t_s,finger,x_mm,y_mm\n" + "".join(
@@ -204,8 +204,8 @@ def test_chunked_reordering_matches_the_rule(tmp_path_factory, steps, chunk_rows
 
 
 def test_rows_held_for_reordering_are_bounded(tmp_path, monkeypatch):
-    from rendering.input import trace_file
-    from rendering.input.trace_file import iter_trace
+    from frictex.rendering.input import trace_file
+    from frictex.rendering.input.trace_file import iter_trace
     path = tmp_path / "t.csv"
     # 12 rows at one time, read 3 at a time, at most 3 held back: a later row 1 ms
     # earlier can no longer go before the ones handed out, and is dropped
@@ -258,7 +258,7 @@ def _reference_touches(fingers, events, down):
                         max_size=40),
        down=st.sets(st.integers(0, 6), max_size=3))
 def test_event_normalisation_and_touch_count_follow_the_rule(samples, down):
-    from rendering.input.trace_file import _touch_steps
+    from frictex.rendering.input.trace_file import _touch_steps
     fingers = np.array([f for f, _ in samples], dtype=np.int64)
     events = np.array([e for _, e in samples], dtype=np.int8)
     carried = set(down)
@@ -274,7 +274,7 @@ def test_event_normalisation_and_touch_count_follow_the_rule(samples, down):
        end=st.sampled_from(["\n", "\r\n", ""]))
 def test_fields_split_a_line_as_the_csv_module_does(text, end):
     import csv
-    from rendering.input.trace_file import _fields
+    from frictex.rendering.input.trace_file import _fields
     line = text + end
     assume(line.strip())  # blank lines are skipped before a line is split
     try:
@@ -324,7 +324,7 @@ def _reference_lines(data: bytes, where: str, limit: int):
        block=st.integers(1, 12), limit=st.integers(2, 12))
 def test_lines_read_in_blocks_as_line_by_line(data, block, limit):
     from unittest import mock
-    from rendering.input import trace_file
+    from frictex.rendering.input import trace_file
     want, problem = _reference_lines(data, "<t>", limit)
     got = []
     with mock.patch.object(trace_file, "_READ_BYTES", block), \
@@ -345,7 +345,7 @@ def test_a_row_search_that_finds_no_problem_says_so():
     """_first_row_problem always raises: rows that fail together but pass one by one (a
     parser bug, not a bad file) are an AssertionError naming the lines, never a return
     that would leave the columns unset (an UnboundLocalError later)."""
-    from rendering.input.trace_file import TimeOrder, _RowParser
+    from frictex.rendering.input.trace_file import TimeOrder, _RowParser
     parser = _RowParser(["t_s", "finger", "x_mm", "y_mm"], "good.csv", TimeOrder(), False, 100)
     rows = [(2, ["0.0", "1", "3", "4"]), (3, ["0.1", "1", "3", "4"])]
     with pytest.raises(AssertionError, match="good.csv: rows 2 to 3"):
@@ -359,7 +359,7 @@ def test_a_row_search_that_finds_no_problem_says_so():
 def _read_both_ways(text: str, chunk_rows: int = 65_536):
     """(what reading ``text`` gives line by line, what it gives with every block tried as a
     plain block): each a tuple of the trace's columns or the TraceError's message."""
-    from rendering.input import trace_file
+    from frictex.rendering.input import trace_file
 
     def read():
         try:
@@ -450,7 +450,7 @@ def test_blocks_with_comments_blanks_quotes_and_ragged_rows_read_as_line_by_line
 def test_a_long_plain_trace_is_parsed_at_once_and_reads_as_line_by_line(tmp_path, monkeypatch):
     """A trace of several read blocks (the size replays meet) takes the plain path, with
     the line numbers of its errors right."""
-    from rendering.input import trace_file
+    from frictex.rendering.input import trace_file
     n = 3 * trace_file._PLAIN_MIN_LINES
     k = np.arange(n)
     text = "t_s,finger,x_mm,y_mm,force_n,event\n" + "".join(

@@ -3,8 +3,8 @@
 import numpy as np
 from numpy.testing import assert_allclose
 
-from rendering.input.trace_file import DOWN, MOVE, UP, make_trace
-from rendering.tracking.tracks import TrackerConfig, TrackerState, apply_index, track
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP, make_trace
+from frictex.rendering.tracking.tracks import TrackerConfig, TrackerState, apply_index, track
 
 CFG = TrackerConfig(rate_hz=10_000.0, quantum=50)
 

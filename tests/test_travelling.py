@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from device.structures.beam import FreeFreeBeam, ModesError
-from device.structures.ring import RingResonator
-from device.actuation.travelling import (BeamActuation, beam_wave, phase_shift_response, ring_wave,
+from frictex.device.structures.beam import FreeFreeBeam, ModesError
+from frictex.device.structures.ring import RingResonator
+from frictex.device.actuation.travelling import (BeamActuation, beam_wave, phase_shift_response, ring_wave,
                                surface_speed_mm_s)
-from rendering.layers.tangential import DrivingForceParams
+from frictex.rendering.layers.tangential import DrivingForceParams
 
 # seed 002's beam: 600 x 6 x 6 mm aluminium, wavelength about 41 mm (orders 28-29 here)
 BEAM = FreeFreeBeam(600, 6, 6, 69, 2700)

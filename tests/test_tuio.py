@@ -9,9 +9,9 @@ import time
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from rendering.input.trace_file import DOWN, MOVE, UP, TraceError
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP, TraceError
 from test_evdev_decode import check_event_sequence
-from rendering.input.tuio import OscError, TuioDecoder, TuioListener, parse_message, parse_packet
+from frictex.rendering.input.tuio import OscError, TuioDecoder, TuioListener, parse_message, parse_packet
 
 
 # an OSC 1.0 encoder written from the specification, independent of the parser under test

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from app.commands.cli import main
-from device.structures.beam import FreeFreeBeam
-from rendering.input.trace_file import format_trace, read_trace
-from rendering.input.two_finger_trace import description, two_finger_trace
-from textures.library import resolve_trace
+from frictex.app.commands.cli import main
+from frictex.device.structures.beam import FreeFreeBeam
+from frictex.rendering.input.trace_file import format_trace, read_trace
+from frictex.rendering.input.two_finger_trace import description, two_finger_trace
+from frictex.textures.library import resolve_trace
 
 SCENE, TRACE = "two-finger-beam-seed000", "two-fingers-crossing-50hz"
 BEAM = FreeFreeBeam(350, 6, 6, 57, 2561)

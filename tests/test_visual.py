@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from rendering.pipeline import build_pipeline
-from rendering.input.trace_file import make_trace
-from rendering.visual.compositor import Compositor, FrameView
-from rendering.visual.context import OffscreenBackend
-from rendering.visual.overlay import FINGER_RGB, BlockRecord, OverlayState, segment_triangles
-from rendering.visual.scene_image import composed_rgb, from_srgb8, scene_rgb, to_srgb8
-from rendering.visual.viewport import fit_viewport
+from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.input.trace_file import make_trace
+from frictex.rendering.visual.compositor import Compositor, FrameView
+from frictex.rendering.visual.context import OffscreenBackend
+from frictex.rendering.visual.overlay import FINGER_RGB, BlockRecord, OverlayState, segment_triangles
+from frictex.rendering.visual.scene_image import composed_rgb, from_srgb8, scene_rgb, to_srgb8
+from frictex.rendering.visual.viewport import fit_viewport
 from scenes import DISPLAY, disc_scene, grating_scene
 
 ROW = 240  # the row measured (any row: the gratings are vertical lines)
@@ -233,7 +233,7 @@ def test_a_legend_of_many_fingers_stops_short_of_the_title(gl):
     """A log with a new id per touch (1,000 ids over a session) can have dozens in the
     scope's window: the legend names the latest that fit, sums up the rest as "+k more"
     in white, and never runs over the mu' title."""
-    from rendering.visual.text import text_rgba
+    from frictex.rendering.visual.text import text_rgba
     scene = grating_scene(5.0, mu_low=1.0)
     ov = OverlayState(scope_s=3.0)
     for fid in range(100, 140):

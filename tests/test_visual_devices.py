@@ -8,17 +8,17 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from rendering.layers.keyclick import CLICKED, IDLE, ON
-from rendering.pipeline import build_pipeline
-from rendering.input.trace_file import make_trace
-from rendering.visual.compositor import Compositor, FrameView
-from rendering.visual.device_panels import FORCE_ARROW_MM, force_scale_n
-from rendering.visual.context import OffscreenBackend
-from rendering.visual.modal_view import ModalEnvelope, heat_rgb, modal_envelope
-from rendering.visual.overlay import FINGER_RGB, OverlayState, record_from_output
-from rendering.visual.scene_image import from_srgb8, to_srgb8
-from textures.library import resolve_scene
-from textures.loader import load_scene
+from frictex.rendering.layers.keyclick import CLICKED, IDLE, ON
+from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.input.trace_file import make_trace
+from frictex.rendering.visual.compositor import Compositor, FrameView
+from frictex.rendering.visual.device_panels import FORCE_ARROW_MM, force_scale_n
+from frictex.rendering.visual.context import OffscreenBackend
+from frictex.rendering.visual.modal_view import ModalEnvelope, heat_rgb, modal_envelope
+from frictex.rendering.visual.overlay import FINGER_RGB, OverlayState, record_from_output
+from frictex.rendering.visual.scene_image import from_srgb8, to_srgb8
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import load_scene
 
 
 def run_pipeline(scene, fingers_xy, force_n=0.5, seconds=0.2):

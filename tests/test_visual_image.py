@@ -8,14 +8,14 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from rendering.visual.scene_image import (_srgb_formula, composed_rgb, periodic_mean, scene_rgb,
+from frictex.rendering.visual.scene_image import (_srgb_formula, composed_rgb, periodic_mean, scene_rgb,
                                           to_srgb8)
-from rendering.visual.viewport import fit_viewport
+from frictex.rendering.visual.viewport import fit_viewport
 from scenes import DISPLAY
-from textures.library import resolve_scene
-from textures.loader import load_scene
-from device.profile import DeviceProfile
-from textures.model import DiscRegion, Display, Grating, Scene, VisualHints, Waveform
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import load_scene
+from frictex.device.profile import DeviceProfile
+from frictex.textures.model import DiscRegion, Display, Grating, Scene, VisualHints, Waveform
 
 
 def dense_mean(layer, x, y, cell, n=300):
@@ -125,7 +125,7 @@ def test_letterboxed_fullscreen_grating_keeps_its_period():
 
 def _marks(scene, size=(1400, 300)):
     """(mask of pixels mostly in the mark colour, viewport) of ``scene`` drawn at ``size``."""
-    from rendering.visual.force_marks import MARK_RGB
+    from frictex.rendering.visual.force_marks import MARK_RGB
     vp = fit_viewport(scene.display, *size)
     rgb = scene_rgb(scene, vp)
     return np.linalg.norm(rgb - MARK_RGB, axis=-1) < 0.1, vp
@@ -142,7 +142,7 @@ def test_guidance_line_is_drawn_where_the_pull_points():
     fx, _ = layer.pull(np.array([60.0, 70.0, 80.0]), np.array([15.0, 15.0, 15.0]))
     assert fx[0] > 0 and fx[1] == 0 and fx[2] < 0
     # a target point: a ring of RING_MM around it
-    from rendering.visual.force_marks import RING_MM
+    from frictex.rendering.visual.force_marks import RING_MM
     point = replace(layer, line=False, x_mm=40.0, y_mm=12.0)
     mask, vp = _marks(replace(scene, layers=(scene.layers[0], point)))
     rows, cols = np.nonzero(mask)
@@ -155,7 +155,7 @@ def test_guidance_line_is_drawn_where_the_pull_points():
 
 @pytest.mark.parametrize("forward, backward, glide", [(0.03, 0.2, 1), (0.2, 0.03, -1)])
 def test_directional_chevrons_point_the_way_the_finger_glides(forward, backward, glide):
-    from rendering.visual.force_marks import CHEVRON_MM
+    from frictex.rendering.visual.force_marks import CHEVRON_MM
     scene = load_scene(resolve_scene("directional-ring"))
     layer = replace(scene.layers[0], forward=forward, backward=backward)
     mask, vp = _marks(replace(scene, layers=(layer,)))

@@ -4,15 +4,15 @@ covers the scene or a finger, and its labels sit in rows of their own, off the m
 import numpy as np
 import pytest
 
-from rendering.visual.compositor import Compositor, FrameView
-from rendering.visual.context import OffscreenBackend
-from rendering.visual.device_panels import DevicePanels, default_frame_size
-from rendering.visual.modal_view import modal_envelope
-from rendering.visual.overlay import OverlayState, record_from_output
-from rendering.visual.viewport import default_frame_size as display_frame_size
+from frictex.rendering.visual.compositor import Compositor, FrameView
+from frictex.rendering.visual.context import OffscreenBackend
+from frictex.rendering.visual.device_panels import DevicePanels, default_frame_size
+from frictex.rendering.visual.modal_view import modal_envelope
+from frictex.rendering.visual.overlay import OverlayState, record_from_output
+from frictex.rendering.visual.viewport import default_frame_size as display_frame_size
 from test_visual_devices import run_pipeline
-from textures.library import resolve_scene
-from textures.loader import load_scene
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import load_scene
 
 
 def _overlaps(a, b):
@@ -89,7 +89,7 @@ def test_the_layout_returns_the_column_beside_the_scene_and_above_the_strip(fram
     """frame_layout's column (the device panel's, ``envelope_rect`` reads its left edge):
     at the right of the frame, ``side_px`` wide but at most half the frame, above the
     scope strip, and the scene fitted left of it."""
-    from rendering.visual.viewport import frame_layout
+    from frictex.rendering.visual.viewport import frame_layout
     scene = load_scene(resolve_scene("two-finger-plate-seed001"))
     w, h = frame
     vp, strip, column = frame_layout(scene.display, w, h, scope, side_px)

@@ -8,15 +8,15 @@ import sys
 PROBE = r"""
 import gc, json, sys
 from numba.core.registry import CPUDispatcher
-from app.commands.cli import main
+from frictex.app.commands.cli import main
 for scene, trace in [("composed-fine-grating-in-disc", "circle-30mms-60hz"),
                      ("two-finger-beam-seed000", "two-fingers-crossing-50hz"),
                      ("keyclick-ring", "keyclick-press-100hz")]:
     for fmt in ("csv", "parquet"):
         assert main(["replay", scene, trace, "--out", sys.argv[1], "--format", fmt,
                      "--quiet"]) == 0
-from app.commands.warm import height_shapes_scene, recorded_texture_scene
-from app.engine.replay import run_replay
+from frictex.app.commands.warm import height_shapes_scene, recorded_texture_scene
+from frictex.app.engine.replay import run_replay
 for scene in (height_shapes_scene(), recorded_texture_scene()):
     run_replay(scene, "circle-30mms-60hz", sys.argv[1], progress=False)
 run_replay("grating-15mm", "circle-30mms-60hz", sys.argv[1], control="adaptive", progress=False)

@@ -41,9 +41,9 @@ from pathlib import Path
 
 import numpy as np
 
-from textures.clips import MAX_CLIP_S, Clip, ClipEvent
-from textures.errors import TextureError
-from textures.library import UnreadableText, read_utf8
+from frictex.textures.clips import MAX_CLIP_S, Clip, ClipEvent
+from frictex.textures.errors import TextureError
+from frictex.textures.library import UnreadableText, read_utf8
 
 MAX_AHAP_BYTES = 1 << 20
 MAX_ITEMS = 10_000  # pattern entries, curve points

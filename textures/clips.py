@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from textures.dynamic import DynamicLayer
+from frictex.textures.dynamic import DynamicLayer
 
 CLIP_TRIGGERS = ("down", "lift", "edge", "force")
 EVENT_KINDS = ("transient", "continuous")

@@ -7,7 +7,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from textures.model import _LayerBase
+from frictex.textures.model import _LayerBase
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from frictex.device.errors import InputError
+
 #: A key path into parsed TOML: table keys (str) and array-of-tables indices (int, 0-based).
 KeyPath = tuple[str | int, ...]
 
@@ -58,7 +60,7 @@ class Problem:
         return f"{where}{field} {self.message}"
 
 
-class TextureError(ValueError):
+class TextureError(InputError):
     """A texture file (or bundled name) that cannot be used.
 
     ``problems`` lists every problem found in the file (empty when the error is not

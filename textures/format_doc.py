@@ -3,19 +3,19 @@
 ``textures/FORMAT.md`` is this module's output; a test compares the two, so the page
 cannot drift from what ``textures.loader`` accepts. Regenerate it after changing a key:
 
-    .venv/bin/python -m textures.format_doc > textures/FORMAT.md
+    .venv/bin/python -m frictex.textures.format_doc > textures/FORMAT.md
 """
 
 from __future__ import annotations
 
 import math
 
-from textures import loader as L
+from frictex.textures import loader as L
 
 INTRO = """# Texture files: every table and key
 
 One scene per TOML file. This page is generated from the loader's key tables
-(`textures/loader.py`) by `python -m textures.format_doc`, and a test keeps the two equal:
+(`textures/loader.py`) by `python -m frictex.textures.format_doc`, and a test keeps the two equal:
 every key the loader accepts is here, with its unit, range and default, and no other.
 `frictex validate FILE` checks a file against it and names the file, line and field of
 every problem. The grammar's overview and its worked examples are at the top of

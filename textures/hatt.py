@@ -94,10 +94,10 @@ from pathlib import Path
 
 import numpy as np
 
-from textures.ar_synthesis import barycentric, blend_at, lsf_to_poly, twiddles
-from textures.errors import TextureError
-from textures.library import UnreadableText, read_utf8
-from textures.dynamic import DynamicLayer
+from frictex.textures.ar_synthesis import barycentric, blend_at, lsf_to_poly, twiddles
+from frictex.textures.errors import TextureError
+from frictex.textures.library import UnreadableText, read_utf8
+from frictex.textures.dynamic import DynamicLayer
 
 HATT_RATE_HZ = 10_000.0
 RATE_RANGE_HZ = (100.0, 1e6)

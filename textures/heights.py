@@ -27,10 +27,10 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from textures.dynamic import DynamicLayer
-from textures.errors import TextureError
-from textures.model import _hypot
-from textures.raster_io import read_grey
+from frictex.textures.dynamic import DynamicLayer
+from frictex.textures.errors import TextureError
+from frictex.textures.model import _hypot
+from frictex.textures.raster_io import read_grey
 
 HEIGHT_RENDERINGS = ("slope", "magnitude")
 #: the image a height map takes, for error messages

@@ -22,7 +22,8 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from textures.errors import TextureError
+from frictex.textures.errors import TextureError
+from frictex.device.errors import InputError
 
 LIBRARY_DIR = Path(__file__).resolve().parent / "library"
 TRACES_DIR = LIBRARY_DIR / "traces"
@@ -71,7 +72,7 @@ def file_problem(path: str | Path, max_bytes: int | None = None) -> str | None:
     return None
 
 
-class UnreadableText(ValueError):
+class UnreadableText(InputError):
     """Why a file cannot be read as UTF-8 text; ``line`` (1-based) where that applies."""
 
     def __init__(self, message: str, line: int | None = None):

@@ -178,18 +178,18 @@ from typing import Any, Callable
 
 import numpy as np
 
-from device.structures.beam import THEORIES, ModesError
-from device import profile as profiles
-from device.friction import ASYMPTOTE_MARGIN
-from device.profile import METHODS
-from textures import model
-from textures.ahap import read_ahap
-from textures.clips import CLIP_TRIGGERS, MAX_CLIP_S, Clip, ClipEvent, ClipLayer
-from textures.heights import (HEIGHT_RENDERINGS, ButtonRim, GaussianBump, HeightLayer, HeightMap,
+from frictex.device.structures.beam import THEORIES, ModesError
+from frictex.device import profile as profiles
+from frictex.device.friction import ASYMPTOTE_MARGIN
+from frictex.device.profile import METHODS
+from frictex.textures import model
+from frictex.textures.ahap import read_ahap
+from frictex.textures.clips import CLIP_TRIGGERS, MAX_CLIP_S, Clip, ClipEvent, ClipLayer
+from frictex.textures.heights import (HEIGHT_RENDERINGS, ButtonRim, GaussianBump, HeightLayer, HeightMap,
                               Ridge, Step, read_height_png)
-from textures.errors import KeyPath, Locator, Problem, TextureError, bracket_peak, field_name
-from textures.library import UnreadableText, file_problem, read_utf8
-from textures.raster_io import read_grey
+from frictex.textures.errors import KeyPath, Locator, Problem, TextureError, bracket_peak, field_name
+from frictex.textures.library import UnreadableText, file_problem, read_utf8
+from frictex.textures.raster_io import read_grey
 
 FORMAT_VERSION = 1
 
@@ -747,7 +747,7 @@ def _structure_holds_display(r: _Reader, path: KeyPath, display, keys, start: fl
 
 
 def _modes_table(r: _Reader, path: KeyPath, name: str, raw: dict, base_dir: Path):
-    from device.structures.measured_modes import MeasuredModes
+    from frictex.device.structures.measured_modes import MeasuredModes
 
     if "orders" in raw:
         r.report(path + ("orders",), "not used with modes_file (the table's columns are the "
@@ -780,7 +780,7 @@ def _real_path(base_dir: Path, name: str) -> Path:
 
 def _actuation_builds(r: _Reader, device: profiles.DeviceProfile) -> bool:
     """Build the modal actuation once (modes solved, actuator matrix checked)."""
-    from device.actuation.modal_actuation import make_modal_actuation
+    from frictex.device.actuation.modal_actuation import make_modal_actuation
 
     try:
         make_modal_actuation(device)
@@ -1170,7 +1170,7 @@ def _build_recorded(r, path, v, given, ctx):
         r.report(path + ("mu_mean",), f"mu_min {v['mu_min']:g} < mu_mean {v['mu_mean']:g} < "
                                       f"mu_max {v['mu_max']:g} does not hold")
         return None
-    from textures.hatt import ArTextureLayer, read_hatt_xml  # numba: only for scenes that use it
+    from frictex.textures.hatt import ArTextureLayer, read_hatt_xml  # numba: only for scenes that use it
 
     texture = _file_read(r, path, "model", v["model"], ctx, read_hatt_xml)
     if texture is None:
@@ -1337,7 +1337,7 @@ def _selector_warnings(r: _Reader, device: profiles.DeviceProfile, built) -> Non
 
 
 def _reach_warnings(r: _Reader, device: profiles.DeviceProfile, built) -> None:
-    from device.friction import mu_floor
+    from frictex.device.friction import mu_floor
 
     force = device.normal_force_n
     floor = mu_floor(device, force)

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from device.profile import DeviceProfile
+from frictex.device.profile import DeviceProfile
 
 RENDER_MODES = ("sho", "sht", "hybrid")
 

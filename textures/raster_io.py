@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from textures.errors import TextureError
-from textures.library import file_problem
+from frictex.textures.errors import TextureError
+from frictex.textures.library import file_problem
 
 #: Largest image accepted (pixels), checked from the file's header before any pixel is
 #: decoded: a friction map is sampled at finger positions only, and a 16 Mpx float64

@@ -13,9 +13,9 @@ import os
 import tomllib
 from pathlib import Path
 
-from textures.errors import TextureError
-from textures.library import UnreadableText, read_utf8
-from textures.loader import MAX_FILE_BYTES, _deepest_line
+from frictex.textures.errors import TextureError
+from frictex.textures.library import UnreadableText, read_utf8
+from frictex.textures.loader import MAX_FILE_BYTES, _deepest_line
 
 #: the keys of a ``[[layer]]`` table that name a file, and that of ``[device.structure]``
 LAYER_FILE_KEYS = ("image", "model", "file")

@@ -38,7 +38,7 @@ def share(text: str) -> float:
 
 def fault_plan(text: str):
     """A ``--faults`` spec (``device.link.faults.parse_faults``)."""
-    from device.link.faults import parse_faults
+    from frictex.device.link.faults import parse_faults
     try:
         return parse_faults(text)
     except ValueError as exc:
@@ -63,7 +63,7 @@ output_rate = bounded(float, *OUTPUT_RATES_HZ, "Hz")
 def add_link_arguments(parser: argparse.ArgumentParser) -> None:
     """``--device``, ``--faults``, ``--sim-finger`` and ``--control``, as every command
     that streams to a device takes them."""
-    from textures.model import CONTROL_MODES
+    from frictex.textures.model import CONTROL_MODES
     parser.add_argument("--device", metavar="sim|PORT", default=None,
                         help="stream the commands to a device: 'sim' starts a simulated one, "
                              "otherwise a serial port or pyserial URL (default: no link)")

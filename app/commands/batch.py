@@ -12,10 +12,10 @@ import sys
 from functools import partial
 from pathlib import Path
 
-from app.commands.argtypes import positive_int
-from app.engine.batch import read_manifest, run_job, write_results
-from app.engine.fanout import default_workers, fan_out
-from rendering.pipeline import RENDERERS
+from frictex.app.commands.argtypes import positive_int
+from frictex.app.engine.batch import read_manifest, run_job, write_results
+from frictex.app.engine.fanout import default_workers, fan_out
+from frictex.rendering.pipeline import RENDERERS
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

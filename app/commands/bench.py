@@ -12,15 +12,15 @@ import json
 import sys
 from dataclasses import asdict
 
-from app.measure.figure import Figure
+from frictex.app.measure.figure import Figure
 
 #: section name -> module
 SECTIONS = {
-    "pipeline": "app.measure.bench_pipeline",
-    "replay": "app.measure.bench_replay",
-    "link": "app.measure.bench_link",
-    "visual": "app.measure.bench_visual",
-    "modal": "app.measure.bench_modal",
+    "pipeline": "frictex.app.measure.bench_pipeline",
+    "replay": "frictex.app.measure.bench_replay",
+    "link": "frictex.app.measure.bench_link",
+    "visual": "frictex.app.measure.bench_visual",
+    "modal": "frictex.app.measure.bench_modal",
 }
 
 

@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from device.calibration_fit import device_toml, fit_points
-from device.calibration_run import Sweep, run_sweep
+from frictex.device.calibration_fit import device_toml, fit_points
+from frictex.device.calibration_run import Sweep, run_sweep
 
 #: the plate's sample rate (Hz, seed 003) and the simulated plate's amplitude limit (um)
 RATE_HZ = 10_000.0
@@ -51,7 +51,7 @@ def _progress(done: int, total: int) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from device.link.host import open_sink  # with the command: its imports stay out of --help
+    from frictex.device.link.host import open_sink  # with the command: its imports stay out of --help
     if args.finger < 0:
         raise ValueError(f"calibrate: --finger {args.finger}: expected 0 or a positive person number")
     sweep = Sweep()
@@ -84,7 +84,7 @@ def _plot(path: Path, w, normal, mu, fit) -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from device.friction import forward_mu
+    from frictex.device.friction import forward_mu
     grid = np.linspace(0.0, max(float(w.max()), 1e-3), 200)
     fig, ax = plt.subplots(figsize=(5, 3.5))
     ax.plot(w, mu, "o", label="measured")

@@ -19,23 +19,23 @@ import sys
 import threading
 from typing import NoReturn
 
-from app.engine.heap import keep_freed_memory
+from frictex.app.engine.heap import keep_freed_memory
 
 #: subcommand -> (module in app/, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
-    "validate": ("app.commands.validate", "check texture files; report every problem with file, line and field"),
-    "library": ("app.commands.library", "list the bundled scenes and traces"),
-    "replay": ("app.commands.replay", "run the haptic pipeline on a recorded trace, headless"),
-    "batch": ("app.commands.batch", "replay many (scene, trace, renderer) jobs over the cores or a Dask cluster"),
-    "trace": ("app.commands.trace", "synthesise or import touch traces"),
-    "sim-device": ("app.commands.sim_device", "run a simulated plate microcontroller on a pseudo-terminal or TCP"),
-    "bench": ("app.commands.bench", "measure speed: pipeline, link, visual layer, modal solves"),
-    "modes": ("app.commands.modes", "natural frequencies, wavelengths and nodes of beams, plates and rings"),
-    "report": ("app.commands.report", "speed against error over a matrix of scenes, motions and renderers"),
-    "demo": ("app.commands.demo", "the live demo window (mouse or multi-touch as fingers)"),
-    "preview": ("app.commands.preview", "render a scene and its friction map to a PNG"),
-    "warm": ("app.commands.warm", "compile the pipeline's kernels now (setup does this once)"),
-    "calibrate": ("app.commands.calibrate", "fit the friction model to a finger on a plate (simulated or real)"),
+    "validate": ("frictex.app.commands.validate", "check texture files; report every problem with file, line and field"),
+    "library": ("frictex.app.commands.library", "list the bundled scenes and traces"),
+    "replay": ("frictex.app.commands.replay", "run the haptic pipeline on a recorded trace, headless"),
+    "batch": ("frictex.app.commands.batch", "replay many (scene, trace, renderer) jobs over the cores or a Dask cluster"),
+    "trace": ("frictex.app.commands.trace", "synthesise or import touch traces"),
+    "sim-device": ("frictex.app.commands.sim_device", "run a simulated plate microcontroller on a pseudo-terminal or TCP"),
+    "bench": ("frictex.app.commands.bench", "measure speed: pipeline, link, visual layer, modal solves"),
+    "modes": ("frictex.app.commands.modes", "natural frequencies, wavelengths and nodes of beams, plates and rings"),
+    "report": ("frictex.app.commands.report", "speed against error over a matrix of scenes, motions and renderers"),
+    "demo": ("frictex.app.commands.demo", "the live demo window (mouse or multi-touch as fingers)"),
+    "preview": ("frictex.app.commands.preview", "render a scene and its friction map to a PNG"),
+    "warm": ("frictex.app.commands.warm", "compile the pipeline's kernels now (setup does this once)"),
+    "calibrate": ("frictex.app.commands.calibrate", "fit the friction model to a finger on a plate (simulated or real)"),
 }
 
 
@@ -101,7 +101,7 @@ def run_failed(exc: BaseException) -> bool:
     a disk that filled up): exit 1; anything else is bad input: exit 2."""
     if isinstance(exc, OSError) and exc.errno == errno.ENOSPC:
         return True
-    from device.link.host import LinkStalled  # on the error path only: no cost to a run
+    from frictex.device.link.host import LinkStalled  # on the error path only: no cost to a run
     return isinstance(exc, LinkStalled)
 
 

@@ -23,13 +23,13 @@ import math
 import threading
 from pathlib import Path
 
-from app.commands.preview import frame_size
-from app.commands.argtypes import (add_link_arguments, output_rate, positive_float, positive_int,
+from frictex.app.commands.preview import frame_size
+from frictex.app.commands.argtypes import (add_link_arguments, output_rate, positive_float, positive_int,
                                    sim_device_args)
-from rendering.input.tuio import TUIO_PORT
-from rendering.visual.context import NoDisplayError, open_backend
-from rendering.visual.device_panels import default_frame_size
-from rendering.visual.viewport import MIN_FRAME
+from frictex.rendering.input.tuio import TUIO_PORT
+from frictex.rendering.visual.context import NoDisplayError, open_backend
+from frictex.rendering.visual.device_panels import default_frame_size
+from frictex.rendering.visual.viewport import MIN_FRAME
 
 HEADLESS_TRACE = "swipe-40mms-50hz"
 INPUT_KINDS = ("mouse", "follow", "tuio", "evdev")
@@ -122,9 +122,9 @@ def _start_haptic(args, scene, scene_path: Path, record: Path | None):
     kind, arg = args.input
     touch = (kind, arg) if kind in TOUCH_SCREENS else None
     if args.haptic == "thread":
-        from app.live.haptic_setup import open_haptic
-        from app.live.haptic_thread import shorten_switch_interval
-        from app.live.touch_pump import open_source
+        from frictex.app.live.haptic_setup import open_haptic
+        from frictex.app.live.haptic_thread import shorten_switch_interval
+        from frictex.app.live.touch_pump import open_source
         shorten_switch_interval(args.block / args.rate)
         sim_args = sim_device_args(args)  # refused before the touch screen is opened
         haptic, finish = open_haptic(scene, args.rate, args.block, args.renderer, args.device,
@@ -133,7 +133,7 @@ def _start_haptic(args, scene, scene_path: Path, record: Path | None):
                                      control=args.control, sim_args=sim_args)
         haptic.start()
         return haptic, finish
-    from app.live.haptic_process import HapticConfig, HapticProcess
+    from frictex.app.live.haptic_process import HapticConfig, HapticProcess
     haptic = HapticProcess(scene, HapticConfig(scene_path, args.rate, args.block, args.renderer,
                                                args.device, record, touch, args.faults,
                                                args.control, sim_device_args(args)))
@@ -146,7 +146,7 @@ def _start_haptic(args, scene, scene_path: Path, record: Path | None):
 
 
 def _playlist(scene_arg):
-    from textures.library import list_scenes, resolve_scene
+    from frictex.textures.library import list_scenes, resolve_scene
     if scene_arg is not None:
         return [resolve_scene(scene_arg)], 0
     paths = [entry.path for entry in list_scenes()]
@@ -156,13 +156,13 @@ def _playlist(scene_arg):
 
 
 def _load(path):
-    from textures.loader import load_scene
+    from frictex.textures.loader import load_scene
     return load_scene(path)
 
 
 def run_headless(args, reason: str | None = None) -> int:
-    from app.engine.frames import FrameWriter
-    from app.engine.replay import run_replay
+    from frictex.app.engine.frames import FrameWriter
+    from frictex.app.engine.replay import run_replay
     paths, index = _playlist(args.scene)
     scene = _load(paths[index])
     if reason:
@@ -196,8 +196,8 @@ def run(args: argparse.Namespace) -> int:
     scene = _load(paths[index])
     size = args.size or default_frame_size(scene)
     record = Path(args.record) if args.record else None
-    from app.live.cpu_steal import StealMeter
-    from app.live.demo_loop import DemoLoop
+    from frictex.app.live.cpu_steal import StealMeter
+    from frictex.app.live.demo_loop import DemoLoop
     # first the haptic side: a bad --input or --device fails before a window opens
     haptic, finish = _start_haptic(args, scene, paths[index], record)
     loop = backend = no_display = None
@@ -220,7 +220,7 @@ def run(args: argparse.Namespace) -> int:
                 # yield to the child; this thread (input) does not, nor the render thread
                 # it starts, which mostly waits on llvmpipe and holds the GIL the input
                 # thread needs: niced, it could be descheduled holding it)
-                from app.live.haptic_process import yield_to_haptic
+                from frictex.app.live.haptic_process import yield_to_haptic
                 yield_to_haptic(keep=(threading.get_native_id(),))
             loop = DemoLoop(backend, haptic, paths, index, scene, _load, Path(args.screenshots),
                             events_path=record / "events.csv" if record else None,

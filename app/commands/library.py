@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from textures.library import list_scenes, list_traces
+from frictex.textures.library import list_scenes, list_traces
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 import importlib
 
-STRUCTURES = {"beam": "app.commands.modes_beam", "plate": "app.commands.modes_plate", "ring": "app.commands.modes_ring"}
+STRUCTURES = {"beam": "frictex.app.commands.modes_beam", "plate": "frictex.app.commands.modes_plate", "ring": "frictex.app.commands.modes_ring"}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

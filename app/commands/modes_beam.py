@@ -12,9 +12,9 @@ import argparse
 
 import numpy as np
 
-from app.commands.modes_output import add_output_arguments, print_modes, save_figure
-from app.commands.argtypes import positive_float
-from device.structures.beam import THEORIES, FreeFreeBeam
+from frictex.app.commands.modes_output import add_output_arguments, print_modes, save_figure
+from frictex.app.commands.argtypes import positive_float
+from frictex.device.structures.beam import THEORIES, FreeFreeBeam
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -14,10 +14,10 @@ import argparse
 
 import numpy as np
 
-from app.commands.modes_output import add_output_arguments, print_modes, save_figure
-from app.commands.argtypes import positive_float
-from device.structures.beam import ModesError
-from device.structures.plate2d import AXES, Plate2D
+from frictex.app.commands.modes_output import add_output_arguments, print_modes, save_figure
+from frictex.app.commands.argtypes import positive_float
+from frictex.device.structures.beam import ModesError
+from frictex.device.structures.plate2d import AXES, Plate2D
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

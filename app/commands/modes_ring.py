@@ -16,8 +16,8 @@ import json
 
 import numpy as np
 
-from app.commands.argtypes import positive_float, positive_int
-from device.structures.ring import RingResonator
+from frictex.app.commands.argtypes import positive_float, positive_int
+from frictex.device.structures.ring import RingResonator
 
 #: crossings listed: L/R within this factor of the ring's own
 _RATIO_WINDOW = 2.0
@@ -62,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         _print_table(ring, modes, pairs, args.band)
     if args.plot:
-        from app.commands.modes import save_figure
+        from frictex.app.commands.modes import save_figure
         save_figure(_plot(ring, [p["order"] for p in pairs] or sorted({m.order for m in modes})),
                     args.plot)
     return 0

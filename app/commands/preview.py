@@ -20,10 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
-from rendering.compose import ideal_mu
-from device.friction import mu_floor
-from rendering.visual.scene_image import scene_rgb, to_srgb8
-from rendering.visual.viewport import fit_viewport
+from frictex.rendering.compose import ideal_mu
+from frictex.device.friction import mu_floor
+from frictex.rendering.visual.scene_image import scene_rgb, to_srgb8
+from frictex.rendering.visual.viewport import fit_viewport
 
 
 #: Largest scene panel (px per side): ``--size`` up to this; by default the display's own
@@ -62,8 +62,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def load(scene_name: str):
-    from textures.library import resolve_scene
-    from textures.loader import load_scene
+    from frictex.textures.library import resolve_scene
+    from frictex.textures.loader import load_scene
     return load_scene(resolve_scene(scene_name))
 
 

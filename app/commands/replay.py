@@ -5,12 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 
-from app.commands.argtypes import (add_link_arguments, bounded, output_rate, positive_float,
+from frictex.app.commands.argtypes import (add_link_arguments, bounded, output_rate, positive_float,
                                    share, sim_device_args)
-from app.engine.replay import run_replay
-from app.engine.sources import MAX_GAP_S
-from app.engine.tables import FORMATS
-from rendering.pipeline import RENDERERS
+from frictex.app.engine.replay import run_replay
+from frictex.app.engine.sources import MAX_GAP_S
+from frictex.app.engine.tables import FORMATS
+from frictex.rendering.pipeline import RENDERERS
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -48,7 +48,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     frames = None
     if args.frames is not None:
-        from app.engine.frames import FrameWriter
+        from frictex.app.engine.frames import FrameWriter
         frames = FrameWriter(args.out, args.scene, fps=args.frames, rate_hz=args.rate)
     summary = run_replay(args.scene, args.trace, args.out, rate_hz=args.rate,
                          fmt=args.format, device=args.device, block_size=args.block,

@@ -22,9 +22,9 @@ from dataclasses import asdict
 from functools import partial
 from pathlib import Path
 
-from app.commands.argtypes import positive_int
-from app.engine.fanout import default_workers, fan_out
-from app.measure import report_matrix as rm
+from frictex.app.commands.argtypes import positive_int
+from frictex.app.engine.fanout import default_workers, fan_out
+from frictex.app.measure import report_matrix as rm
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -61,15 +61,15 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--out {out}: exists and is not a folder")
     real_dir = None
     if args.real is not None:
-        from app.measure.report_real import recordings
+        from frictex.app.measure.report_real import recordings
         real_dir = Path(args.real)
         recordings(real_dir)  # fail now on a folder without recordings
     out.mkdir(parents=True, exist_ok=True)  # fail now, not after the matrix has run
     from tqdm import tqdm
 
-    from app.measure import report_output as ro
-    from device.friction import make_friction_model
-    from rendering.inversion_lut import LutFrictionModel
+    from frictex.app.measure import report_output as ro
+    from frictex.device.friction import make_friction_model
+    from frictex.rendering.inversion_lut import LutFrictionModel
 
     cases = rm.matrix(args.quick, tuple(args.scenes))
     wall = time.perf_counter()
@@ -86,19 +86,19 @@ def run(args: argparse.Namespace) -> int:
                 "lut_max_error_um": lut.max_error_um(),
                 "cpu_count": os.cpu_count(), "jobs": None if args.scheduler else jobs,
                 "scheduler": args.scheduler, "wall_s": time.perf_counter() - wall}
-    from app.measure import bench_modal
-    from app.measure import report_seeds
-    from app.measure.bench_pipeline import modal_throughput
+    from frictex.app.measure import bench_modal
+    from frictex.app.measure import report_seeds
+    from frictex.app.measure.bench_pipeline import modal_throughput
     modal = [asdict(f) for f in bench_modal.run(args.quick)]
     gratings = [s for s in args.scenes if s in report_seeds.GRATINGS]
     draws = report_seeds.draws(report_seeds.QUICK_DRAWS if args.quick else report_seeds.DRAWS,
                                gratings, workers=jobs, scheduler=args.scheduler)
     real = None
     if real_dir is not None:
-        from app.measure.report_real import real_section
+        from frictex.app.measure.report_real import real_section
         real = real_section(real_dir, gratings)
     closed_loop = _closed_loop(args, jobs)
-    from app.measure.bench_replay import end_to_end
+    from frictex.app.measure.bench_replay import end_to_end
     doc = ro.write_json(rows, out / "report.json", args.quick, settings, modal,
                         modal_throughput(), draws, real,
                         end_to_end(20.0 if args.quick else 120.0), closed_loop)
@@ -106,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
     ro.plot_cost(rows, out / plots[0])
     ro.plot_period(rows, out / plots[1])
     if closed_loop is not None:
-        from app.measure.report_closed_loop import plot as plot_loop
+        from frictex.app.measure.report_closed_loop import plot as plot_loop
         plots.append("closed_loop.png")
         plot_loop(closed_loop, out / plots[-1])
     ro.write_markdown(doc, out / "report.md", plots)
@@ -128,7 +128,7 @@ def _closed_loop(args: argparse.Namespace, jobs: int) -> dict | None:
     fanned out like the matrix."""
     from tqdm import tqdm
 
-    from app.measure import report_closed_loop as rcl
+    from frictex.app.measure import report_closed_loop as rcl
     if not any(s in rcl.SCENES for s in args.scenes):
         return None
     bar = tqdm(total=rcl.runs_in(args.quick, args.scenes), desc="closed loop", unit="run",

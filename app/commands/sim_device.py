@@ -14,8 +14,8 @@ import signal
 import sys
 import threading
 
-from app.commands.argtypes import positive_float, positive_int
-from device.link.simdevice import (DeviceConfig, DeviceCore, open_listener, open_pty,
+from frictex.app.commands.argtypes import positive_float, positive_int
+from frictex.device.link.simdevice import (DeviceConfig, DeviceCore, open_listener, open_pty,
                                    played_log, plate_log, serve, socket_url)
 
 

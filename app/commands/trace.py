@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import argparse
 
-from app.commands.argtypes import positive_float
-from rendering.input.press_synth import press_trace
-from rendering.input.trace_synth import MOTIONS, make_motion, sample, truth
-from rendering.input.trace_file import write_trace
+from frictex.app.commands.argtypes import positive_float
+from frictex.rendering.input.press_synth import press_trace
+from frictex.rendering.input.trace_synth import MOTIONS, make_motion, sample, truth
+from frictex.rendering.input.trace_file import write_trace
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -52,7 +52,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     imp = sub.add_parser("import", help="convert a touch recording to a trace CSV",
                          description="Convert a recording (Android getevent -lt, evemu, "
                                      "trace CSV) to a frictex trace CSV.")
-    from rendering.input.trace_import import add_import_arguments
+    from frictex.rendering.input.trace_import import add_import_arguments
     add_import_arguments(imp)
 
 
@@ -108,7 +108,7 @@ def _check_limits(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.trace_command == "import":
-        from rendering.input.trace_import import run_import
+        from frictex.rendering.input.trace_import import run_import
         return run_import(args)
     _check_limits(args)
     if args.motion == "press":

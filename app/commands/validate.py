@@ -12,9 +12,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from textures.errors import TextureError
-from textures.library import resolve_scene
-from textures.loader import check_scene
+from frictex.textures.errors import TextureError
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import check_scene
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -29,10 +29,10 @@ def recorded_texture_scene():
 
     import numpy as np
 
-    from textures.hatt import ArTextureLayer, model_from_coefficients
-    from textures.library import resolve_scene
-    from textures.loader import load_scene
-    from textures.model import VisualHints
+    from frictex.textures.hatt import ArTextureLayer, model_from_coefficients
+    from frictex.textures.library import resolve_scene
+    from frictex.textures.loader import load_scene
+    from frictex.textures.model import VisualHints
 
     def resonance(f_hz: float, r: float) -> list[float]:   # a stable AR(2) at 10 kHz
         return [1.0, -2.0 * r * np.cos(2.0 * np.pi * f_hz / 1e4), r * r]
@@ -53,10 +53,10 @@ def height_shapes_scene():
 
     import numpy as np
 
-    from textures.heights import ButtonRim, GaussianBump, HeightLayer, HeightMap, Ridge, Step
-    from textures.library import resolve_scene
-    from textures.loader import load_scene
-    from textures.model import VisualHints
+    from frictex.textures.heights import ButtonRim, GaussianBump, HeightLayer, HeightMap, Ridge, Step
+    from frictex.textures.library import resolve_scene
+    from frictex.textures.loader import load_scene
+    from frictex.textures.model import VisualHints
 
     rows, cols = np.mgrid[0:16, 0:32]
     shapes = (GaussianBump(30.0, 32.4, 8.0, 1.0), Ridge(54.0, 32.4, 90.0, 6.0, 0.8),
@@ -73,10 +73,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from app.engine.replay import run_replay
-    from app.engine.tables import FORMATS
-    from rendering.input.trace_synth import make_motion, sample
-    from rendering.pipeline import RENDERERS
+    from frictex.app.engine.replay import run_replay
+    from frictex.app.engine.tables import FORMATS
+    from frictex.rendering.input.trace_synth import make_motion, sample
+    from frictex.rendering.pipeline import RENDERERS
     start = time.perf_counter()
     motion = make_motion("human", duration_s=1.0, seed=1)
     with tempfile.TemporaryDirectory(prefix="frictex-warm-") as tmp:

@@ -24,7 +24,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from app.engine.tables import FORMATS
+from frictex.app.engine.tables import FORMATS
+from frictex.device.errors import InputError
 
 COLUMNS = ("scene", "trace", "renderer", "rate_hz", "block", "format", "name")
 RESULT_COLUMNS = ("job", "name", "status", "error", "output_s", "wall_s",
@@ -45,7 +46,7 @@ class Job:
     name: str
 
 
-class ManifestError(ValueError):
+class ManifestError(InputError):
     """A manifest that cannot be read: names the file, the line and the field."""
 
 
@@ -135,7 +136,7 @@ def run_job(job: Job, out_dir: str) -> dict:
     """Replay one job into ``out_dir/job.name``; never raises for the job's own errors:
     returns its result row (``status`` "ok" or "failed" with the error). Run the jobs of a
     batch with ``app.engine.fanout.fan_out(functools.partial(run_job, out_dir=...), jobs)``."""
-    from app.engine.replay import run_replay
+    from frictex.app.engine.replay import run_replay
     start = time.perf_counter()
     row = {"job": job.index, "name": job.name, "status": "ok", "error": "", "output_s": 0.0,
            "wall_s": 0.0, "x_realtime_end_to_end": 0.0, "clamps": 0, "warnings": 0}

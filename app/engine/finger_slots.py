@@ -20,7 +20,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from rendering.input.trace_file import UP, Trace
+from frictex.rendering.input.trace_file import UP, Trace
 
 
 class FingerSlots:

@@ -16,13 +16,13 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from device.actuation.factory import make_actuation
-from rendering.visual.compositor import Compositor, FrameView
-from rendering.visual.modal_view import modal_envelope
-from rendering.visual.context import OffscreenBackend
-from rendering.visual.overlay import OverlayState, record_from_output
-from rendering.visual.device_panels import default_frame_size
-from textures.model import Scene
+from frictex.device.actuation.factory import make_actuation
+from frictex.rendering.visual.compositor import Compositor, FrameView
+from frictex.rendering.visual.modal_view import modal_envelope
+from frictex.rendering.visual.context import OffscreenBackend
+from frictex.rendering.visual.overlay import OverlayState, record_from_output
+from frictex.rendering.visual.device_panels import default_frame_size
+from frictex.textures.model import Scene
 
 
 class FrameWriter:
@@ -37,8 +37,8 @@ class FrameWriter:
         if not fps > 0 or not np.isfinite(fps):
             raise ValueError(f"frame rate {fps!r} fps: expected a positive number")
         if not isinstance(scene, Scene):
-            from textures.library import resolve_scene
-            from textures.loader import load_scene
+            from frictex.textures.library import resolve_scene
+            from frictex.textures.loader import load_scene
             scene = load_scene(resolve_scene(scene))
         self.scene = scene
         self.fps = float(fps)

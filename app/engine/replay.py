@@ -23,16 +23,16 @@ import json
 import time
 from pathlib import Path
 
-from app.engine.clocks import VirtualClock
-from app.engine.driver import PipelineStage, RunTimer, drive, force_reports_of
-from app.engine.sinks import (FRICTION_COLUMNS, FrameSink, LinkSink, ProgressSink, TableSink,
+from frictex.app.engine.clocks import VirtualClock
+from frictex.app.engine.driver import PipelineStage, RunTimer, drive, force_reports_of
+from frictex.app.engine.sinks import (FRICTION_COLUMNS, FrameSink, LinkSink, ProgressSink, TableSink,
                               command_columns)
-from app.engine.sources import MAX_GAP_S, TraceSource
-from app.engine.summary import Totals, finite_json, summary, timings
-from app.engine.tables import FORMATS, check_room, load_writer, row_bytes
-from rendering.input.trace_file import Trace, iter_trace, most_touching
-from rendering.pipeline import build_pipeline
-from textures.model import Scene
+from frictex.app.engine.sources import MAX_GAP_S, TraceSource
+from frictex.app.engine.summary import Totals, finite_json, summary, timings
+from frictex.app.engine.tables import FORMATS, check_room, load_writer, row_bytes
+from frictex.rendering.input.trace_file import Trace, iter_trace, most_touching
+from frictex.rendering.pipeline import build_pipeline
+from frictex.textures.model import Scene
 
 OUTPUT_STEMS = ("commands", "friction")
 #: finger-samples per pipeline call by default (blocks x block size x fingers touching):
@@ -53,12 +53,12 @@ def load_inputs(scene, trace, strict: bool = False):
     such a trace instead.
     """
     if not isinstance(scene, Scene):
-        from textures.library import resolve_scene
-        from textures.loader import load_scene
+        from frictex.textures.library import resolve_scene
+        from frictex.textures.loader import load_scene
         scene = load_scene(resolve_scene(scene))
     if isinstance(trace, Trace):
         return scene, iter([trace]), None
-    from textures.library import resolve_trace
+    from frictex.textures.library import resolve_trace
     trace_path = resolve_trace(trace)
     return scene, iter_trace(trace_path, strict=strict), trace_path
 
@@ -114,7 +114,7 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     setup_s = read0 - wall0 + time.perf_counter() - build0  # scene and kernels loaded
     looped = pipeline.control is not None
     if device is not None:
-        from device.link.host import open_sink
+        from frictex.device.link.host import open_sink
         sink = open_sink(device, channels=len(pipeline.channels), rate_hz=rate_hz,
                          phases=pipeline.actuation.has_phases, paced=True, faults=faults,
                          sim_args=tuple(sim_args),

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from app.engine.tables import TableWriter
+from frictex.app.engine.tables import TableWriter
 
 FRICTION_COLUMNS = [("t_s", np.float64, "%.7f"), ("finger", np.int64, "%d"),
                     ("x_mm", np.float64, "%.4f"), ("y_mm", np.float64, "%.4f"),

@@ -29,9 +29,9 @@ import queue
 
 import numpy as np
 
-from app.engine.finger_slots import FingerSlots
-from rendering.input.trace_file import UP, Trace, concat_traces, make_trace
-from rendering.tracking.tracks import apply_index
+from frictex.app.engine.finger_slots import FingerSlots
+from frictex.rendering.input.trace_file import UP, Trace, concat_traces, make_trace
+from frictex.rendering.tracking.tracks import apply_index
 
 #: default longest gap between touch samples that is output as it is (s)
 MAX_GAP_S = 5.0

@@ -15,9 +15,9 @@ import math
 
 import numpy as np
 
-from app.engine.force_summary import ForceSummary
-from device.friction import ClampCounts
-from rendering.pipeline import STAGES
+from frictex.app.engine.force_summary import ForceSummary
+from frictex.device.friction import ClampCounts
+from frictex.rendering.pipeline import STAGES
 
 SUMMARY_VERSION = 3
 

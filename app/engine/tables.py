@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from app.engine.csv_text import rows_text
+from frictex.app.engine.csv_text import rows_text
 
 FORMATS = ("csv", "npz", "parquet")
 #: rows gathered before a batch is written (memory: ~13 MB a batch for six columns)

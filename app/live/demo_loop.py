@@ -53,13 +53,13 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from app.live.haptic_thread import EVENTS
-from app.live.watch import FileWatch
-from rendering.visual.compositor import Compositor, FrameView
-from rendering.visual.modal_view import modal_envelope
-from rendering.visual.overlay import OverlayState
-from textures.errors import TextureError
-from textures.references import referenced_files
+from frictex.app.live.haptic_thread import EVENTS
+from frictex.app.live.watch import FileWatch
+from frictex.rendering.visual.compositor import Compositor, FrameView
+from frictex.rendering.visual.modal_view import modal_envelope
+from frictex.rendering.visual.overlay import OverlayState
+from frictex.textures.errors import TextureError
+from frictex.textures.references import referenced_files
 
 RENDERER_CYCLE = (None, "sho", "sht", "hybrid")
 FORCE_STEP_N = 0.05

@@ -35,9 +35,9 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from app.live.haptic_thread import (COMMAND_QUEUE, SNAPSHOT_QUEUE, TOUCH_QUEUE, HapticStats,
+from frictex.app.live.haptic_thread import (COMMAND_QUEUE, SNAPSHOT_QUEUE, TOUCH_QUEUE, HapticStats,
                                TouchInput, shorten_switch_interval)
-from device.actuation.factory import make_actuation
+from frictex.device.actuation.factory import make_actuation
 
 WINDOW_NICE = 10  # how much lower than the haptic child the window's threads run
 START_TIMEOUT_S = 60.0  # spawn, imports, scene load and build, link handshake
@@ -244,9 +244,9 @@ def yield_to_haptic(increment: int = WINDOW_NICE, keep: tuple[int, ...] = ()) ->
 def serve(config: HapticConfig, estop, touches, snapshots, requests, replies,
           touch_force) -> None:
     """The child process: build, run, answer switches, stop (see the module docstring)."""
-    from app.live.haptic_setup import open_haptic  # the thread mode's own setup, in this process
-    from app.live.touch_pump import open_source
-    from textures.loader import load_scene
+    from frictex.app.live.haptic_setup import open_haptic  # the thread mode's own setup, in this process
+    from frictex.app.live.touch_pump import open_source
+    from frictex.textures.loader import load_scene
     shorten_switch_interval(config.block_size / config.rate_hz)
     try:
         scene = load_scene(config.scene_path)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from app.engine.sinks import TableSink, ThreadedSink
+from frictex.app.engine.sinks import TableSink, ThreadedSink
 
 RECORD_QUEUE = 4000  # blocks (20 s at 5 ms) the writer may fall behind before dropping
 JOIN_TIMEOUT_S = 5.0  # the thread commits its sinks (drains the link, writes the tables)
@@ -24,8 +24,8 @@ def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | N
     as it ends. ``control``: the friction loop's mode instead of the scene file's;
     ``sim_args``: more ``frictex sim-device`` flags for ``device`` "sim". ``queues``:
     HapticThread's ``estop``, ``touches``, ``snapshots``, ``touch_force``."""
-    from app.live.haptic_thread import HapticThread
-    from app.live.touch_pump import TouchPump
+    from frictex.app.live.haptic_thread import HapticThread
+    from frictex.app.live.touch_pump import TouchPump
     haptic = None
     try:
         haptic = HapticThread(scene, rate_hz, block_size, render_override, control=control,
@@ -35,7 +35,7 @@ def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | N
             haptic.pump = TouchPump(source, haptic, lambda: haptic.pipeline.scene.display,
                                     lambda: haptic.touch_force.value)
         if device is not None:
-            from device.link.host import open_sink
+            from frictex.device.link.host import open_sink
             haptic.sink = open_sink(device, channels=len(pipeline.channels), rate_hz=rate_hz,
                                     phases=pipeline.actuation.has_phases, paced=False,
                                     faults=faults, sim_args=tuple(sim_args))

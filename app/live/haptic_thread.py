@@ -39,14 +39,14 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from app.engine.clocks import DevicePacedClock, WallClock
-from app.engine.driver import drive, force_reports_of
-from app.engine.sinks import LinkSink
-from app.engine.sources import QueueSource
-from device.friction import ClampCounts
-from rendering.input.trace_file import DOWN, MOVE, UP
-from rendering.pipeline import PipelineState, build_pipeline
-from rendering.visual.overlay import BlockRecord, record_from_output
+from frictex.app.engine.clocks import DevicePacedClock, WallClock
+from frictex.app.engine.driver import drive, force_reports_of
+from frictex.app.engine.sinks import LinkSink
+from frictex.app.engine.sources import QueueSource
+from frictex.device.friction import ClampCounts
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP
+from frictex.rendering.pipeline import PipelineState, build_pipeline
+from frictex.rendering.visual.overlay import BlockRecord, record_from_output
 
 TOUCH_QUEUE = 4096
 COMMAND_QUEUE = 64

@@ -25,13 +25,13 @@ def open_source(kind: str, arg):
     path), positions normalised to 0..1 of the active area. Raises OSError or
     ValueError (one line) when it cannot be opened."""
     if kind == "tuio":
-        from rendering.input.tuio import TuioListener
+        from frictex.rendering.input.tuio import TuioListener
         source = TuioListener(arg, width_mm=1.0, height_mm=1.0)
         print(f"demo: listening for TUIO 1.1 cursors on UDP port {source.port}", flush=True)
         return source
     if kind == "evdev":
-        from rendering.input.evdev_decode import ScreenSpec
-        from rendering.input.evdev_live import EvdevReader
+        from frictex.rendering.input.evdev_decode import ScreenSpec
+        from frictex.rendering.input.evdev_live import EvdevReader
         try:
             return EvdevReader(arg, ScreenSpec(width_mm=1.0, height_mm=1.0))
         except ValueError as exc:  # no axis ranges: a file, a pipe, not a touch screen

@@ -16,8 +16,8 @@ import time
 
 import numpy as np
 
-from app.measure.figure import Figure
-from device.link.host import open_sink
+from frictex.app.measure.figure import Figure
+from frictex.device.link.host import open_sink
 
 BLOCK = 50
 
@@ -41,7 +41,7 @@ def _report_delays(seconds: float, rate_hz: float = 10_000.0) -> np.ndarray:
     """Live blocks to a simulated finger for ``seconds``: for each block, the whole blocks
     from its end to the first block computed with its force report come (the first
     tenth left out: the device's prefill)."""
-    from rendering.control.loop import LoopConfig
+    from frictex.rendering.control.loop import LoopConfig
     wait = LoopConfig().max_wait_s * rate_hz  # samples the loop waits for a report
     sink = open_sink("sim", channels=1, rate_hz=rate_hz, paced=False, sim_args=("--finger", "3"))
     block = np.full((BLOCK, 1), 1.0)

@@ -20,12 +20,12 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from app.measure.figure import Figure
-from device.actuation.factory import make_actuation
-from textures.library import resolve_scene
-from textures.loader import load_scene
-from device.structures.beam import FreeFreeBeam
-from device.actuation.modal import DEFAULT_RCOND, METHODS, solve
+from frictex.app.measure.figure import Figure
+from frictex.device.actuation.factory import make_actuation
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import load_scene
+from frictex.device.structures.beam import FreeFreeBeam
+from frictex.device.actuation.modal import DEFAULT_RCOND, METHODS, solve
 
 ORDERS = (16, 17)
 LIMIT_UM = 0.75

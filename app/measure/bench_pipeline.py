@@ -35,10 +35,10 @@ from pathlib import Path
 
 import numpy as np
 
-from app.measure.figure import Figure
-from app.measure.report_matrix import load, run_blocks
-from rendering.input.trace_synth import make_motion, sample
-from rendering.pipeline import build_pipeline
+from frictex.app.measure.figure import Figure
+from frictex.app.measure.report_matrix import load, run_blocks
+from frictex.rendering.input.trace_synth import make_motion, sample
+from frictex.rendering.pipeline import build_pipeline
 
 SCENE = "composed-fine-grating-in-disc"
 LOOP_SCENE = "grating-15mm"
@@ -108,9 +108,9 @@ class _Timed:
 def _live(stage, trace, duration: float, sinks=()) -> tuple[np.ndarray, np.ndarray]:
     """Run ``trace`` through ``stage`` (a pipeline stage) one block per call, virtual
     clock, for ``duration`` s; per-call (wall, thread CPU) seconds."""
-    from app.engine.clocks import VirtualClock
-    from app.engine.driver import drive
-    from app.engine.sources import TraceSource
+    from frictex.app.engine.clocks import VirtualClock
+    from frictex.app.engine.driver import drive
+    from frictex.app.engine.sources import TraceSource
     timed = _Timed(stage)
     source = TraceSource(iter([trace]), until_s=duration)
     source.start(stage.pipeline.tracker_config)
@@ -122,9 +122,9 @@ def loop_blocks(mode: str, duration: float) -> tuple[np.ndarray, np.ndarray]:
     """Per-call (wall, thread CPU) seconds of :data:`LOOP_SCENE` live, one block per
     call, friction control ``mode``, a simulated finger answering each block, its report
     as late as the report's population has it (module docstring)."""
-    from app.measure.closed_loop_sim import FingerSink, LoopStage
-    from app.measure.report_closed_loop import REPORT_DELAY_BLOCKS, finger_force, finger_speed
-    from device.finger import FingerPlant, draw_finger
+    from frictex.app.measure.closed_loop_sim import FingerSink, LoopStage
+    from frictex.app.measure.report_closed_loop import REPORT_DELAY_BLOCKS, finger_force, finger_speed
+    from frictex.device.finger import FingerPlant, draw_finger
     scene = load(LOOP_SCENE)
     motion = make_motion("human", speed_mm_s=60.0, duration_s=duration, seed=1)
     trace = sample(motion, 120.0, noise_mm=0.05, seed=101)
@@ -144,7 +144,7 @@ _AR_SPEEDS, _AR_FORCES = (20.0, 200.0, 20.0, 200.0), (0.2, 0.2, 2.0, 2.0)
 def _ar_model_xml() -> str:
     """A model file in the Penn Haptic Texture Toolkit's XML form (``textures.hatt``):
     four AR(4) models, two triangles. The toolkit's own models are not shipped."""
-    from textures.hatt import HATT_RATE_HZ, poly_to_lsf
+    from frictex.textures.hatt import HATT_RATE_HZ, poly_to_lsf
     values = lambda xs: "".join(f"<value>{float(x)!r}</value>" for x in xs)  # noqa: E731
     models = ""
     for peaks, s, f in zip(_AR_PEAKS, _AR_SPEEDS, _AR_FORCES):
@@ -263,8 +263,8 @@ def new_layer_scene(folder: Path):
     written into ``folder``."""
     from PIL import Image
 
-    from textures.library import LIBRARY_DIR
-    from textures.loader import load_scene
+    from frictex.textures.library import LIBRARY_DIR
+    from frictex.textures.loader import load_scene
     y, x = np.mgrid[0:64, 0:108]
     ripple = 0.5 + 0.25 * np.sin(x / 6.0) + 0.25 * np.cos(y / 5.0)
     Image.fromarray(np.round(ripple * 65535).astype(np.uint16)).save(folder / "height.png")
@@ -280,8 +280,8 @@ def new_layer_blocks(duration: float) -> tuple[np.ndarray, np.ndarray, dict[str,
     """Per-call (wall, thread CPU) seconds of the issue-18 scene live, one block per
     call, and its cost per stage and layer (``stage_costs``); the human-like strokes'
     normal force swells from 0.5 to 1.5 N once (the force clip)."""
-    from app.engine.driver import PipelineStage
-    from rendering.input.trace_file import make_trace
+    from frictex.app.engine.driver import PipelineStage
+    from frictex.rendering.input.trace_file import make_trace
     trace = _trace(duration)
     swell = 0.5 + np.exp(-0.5 * np.square((trace.t_s - 0.5 * duration) / 0.1))
     trace = make_trace(trace.t_s, trace.finger, trace.x_mm, trace.y_mm, force_n=swell,
@@ -310,8 +310,8 @@ def stage_costs(pipeline, duration: float) -> dict[str, float]:
 def modal_throughput() -> dict:
     """Headless replay of two fingers with modal actuation (seed 000's beam, the bundled
     two-finger trace, 10 kHz): ``replay_x_realtime`` and ``stages_us_per_s``."""
-    from rendering.input.trace_file import read_trace
-    from textures.library import resolve_trace
+    from frictex.rendering.input.trace_file import read_trace
+    from frictex.textures.library import resolve_trace
     trace = read_trace(resolve_trace(MODAL_TRACE))
     pipeline = build_pipeline(load(MODAL_SCENE), rate_hz=RATE_HZ, block_size=BLOCK,
                               t0_s=float(trace.t_s[0]))

@@ -35,11 +35,11 @@ from pathlib import Path
 
 import numpy as np
 
-from app.measure.bench_pipeline import new_layer_scene
-from app.measure.figure import Figure
-from rendering.input.trace_file import Trace, concat_traces, read_trace, write_trace
-from rendering.input.trace_synth import make_motion, sample
-from textures.library import resolve_trace
+from frictex.app.measure.bench_pipeline import new_layer_scene
+from frictex.app.measure.figure import Figure
+from frictex.rendering.input.trace_file import Trace, concat_traces, read_trace, write_trace
+from frictex.rendering.input.trace_synth import make_motion, sample
+from frictex.textures.library import resolve_trace
 
 SCENE = "composed-fine-grating-in-disc"
 MODAL_SCENE, MODAL_TRACE = "two-finger-beam-seed000", "two-fingers-crossing-50hz"
@@ -50,7 +50,7 @@ def _frictex(*args: str) -> tuple[float, int, int]:
     Earlier processes' file data is written out first (``os.sync``, not timed)."""
     os.sync()
     start = time.perf_counter()
-    proc = subprocess.Popen([sys.executable, "-m", "app.commands.cli", *args],
+    proc = subprocess.Popen([sys.executable, "-m", "frictex", *args],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     _, status, usage = os.wait4(proc.pid, 0)
     proc.returncode = os.waitstatus_to_exitcode(status)

@@ -17,13 +17,13 @@ import time
 
 import numpy as np
 
-from app.measure.figure import Figure
-from rendering.visual.compositor import Compositor, FrameView
-from rendering.visual import scene_image
-from rendering.visual.context import OffscreenBackend, VisualError
-from rendering.visual.overlay import BlockRecord, OverlayState
-from device.profile import DeviceProfile
-from textures.model import DiscRegion, Display, Grating, Scene, VisualHints
+from frictex.app.measure.figure import Figure
+from frictex.rendering.visual.compositor import Compositor, FrameView
+from frictex.rendering.visual import scene_image
+from frictex.rendering.visual.context import OffscreenBackend, VisualError
+from frictex.rendering.visual.overlay import BlockRecord, OverlayState
+from frictex.device.profile import DeviceProfile
+from frictex.textures.model import DiscRegion, Display, Grating, Scene, VisualHints
 
 SIZES = ((800, 480), (1920, 1080))
 
@@ -59,8 +59,8 @@ def scene_ms(comp: Compositor, scene: Scene, repeats: int) -> float:
 
 
 def bundled_scene_figures(comp: Compositor, label: str, repeats: int) -> list[Figure]:
-    from textures.library import list_scenes
-    from textures.loader import load_scene
+    from frictex.textures.library import list_scenes
+    from frictex.textures.loader import load_scene
     return [Figure("visual", f"static image {entry.path.stem} {label}",
                    scene_ms(comp, load_scene(entry.path), repeats), "ms (once per scene)")
             for entry in list_scenes()]

@@ -18,8 +18,8 @@ from collections import deque
 
 import numpy as np
 
-from device.finger import FingerPlant, lowpass, rest_mu, true_amplitude, true_mu
-from device.link.forces import ForceHistory, ForceReport
+from frictex.device.finger import FingerPlant, lowpass, rest_mu, true_amplitude, true_mu
+from frictex.device.link.forces import ForceHistory, ForceReport
 
 
 class FingerSink:

@@ -57,17 +57,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from app.engine.clocks import VirtualClock
-from app.engine.driver import drive
-from app.engine.sources import TraceSource
-from app.measure.closed_loop_sim import FingerSink, LoopStage
-from app.measure.report_claims import Claim, paired
-from app.measure.report_matrix import load
-from device.finger import FingerPlant, SensorParams, draw_finger, true_mu
-from device.friction import forward_mu
-from rendering.control.margins import margins
-from rendering.input.trace_synth import make_motion, sample, truth
-from rendering.pipeline import build_pipeline
+from frictex.app.engine.clocks import VirtualClock
+from frictex.app.engine.driver import drive
+from frictex.app.engine.sources import TraceSource
+from frictex.app.measure.closed_loop_sim import FingerSink, LoopStage
+from frictex.app.measure.report_claims import Claim, paired
+from frictex.app.measure.report_matrix import load
+from frictex.device.finger import FingerPlant, SensorParams, draw_finger, true_mu
+from frictex.device.friction import forward_mu
+from frictex.rendering.control.margins import margins
+from frictex.rendering.input.trace_synth import make_motion, sample, truth
+from frictex.rendering.pipeline import build_pipeline
 
 SCENES = ("grating-15mm", "grating-5mm", "grating-0.6mm", "objects-bump-edge-disc")
 MODES = ("open", "closed", "adaptive")
@@ -250,7 +250,7 @@ def measure(fingers: int = FINGERS, duration_s: float = DURATION_S, workers: int
     adapting for ``adapt_s`` on it; fanned out as ``app.engine.fanout.fan_out`` does
     (``workers`` processes or a Dask ``scheduler``; ``on_done`` after each run). Returns
     the section's JSON (see :func:`summarise`)."""
-    from app.engine.fanout import fan_out
+    from frictex.app.engine.fanout import fan_out
     runs = [Run(s, f, m, duration_s, noise=s in noise_scenes and m == "adaptive")
             for s in scenes for m in MODES for f in range(1, fingers + 1)]
     study = adapt_s > 0 and ADAPT_SCENE in scenes

@@ -23,15 +23,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from app.engine.clocks import VirtualClock
-from app.engine.driver import PipelineStage, drive
-from app.engine.sinks import MemorySink
-from app.engine.sources import TraceSource
-from rendering.input.trace_synth import make_motion, sample, truth
-from rendering.metrics import CHATTER_PERIOD_MM, MetricError, accuracy, reference
-from rendering.pipeline import build_pipeline
-from rendering.input.trace_file import Trace
-from rendering.tracking.tracks import apply_index
+from frictex.app.engine.clocks import VirtualClock
+from frictex.app.engine.driver import PipelineStage, drive
+from frictex.app.engine.sinks import MemorySink
+from frictex.app.engine.sources import TraceSource
+from frictex.rendering.input.trace_synth import make_motion, sample, truth
+from frictex.rendering.metrics import CHATTER_PERIOD_MM, MetricError, accuracy, reference
+from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.input.trace_file import Trace
+from frictex.rendering.tracking.tracks import apply_index
 
 #: bundled scenes of the matrix: the seed 003 gratings, one object scene, one composed
 SCENES = ("grating-15mm", "grating-5mm", "grating-0.6mm", "objects-bump-edge-disc",
@@ -107,8 +107,8 @@ _SCENE_CACHE: dict = {}
 def load(scene_name: str):
     """A bundled scene by name (loaded once per process)."""
     if scene_name not in _SCENE_CACHE:
-        from textures.library import resolve_scene
-        from textures.loader import load_scene
+        from frictex.textures.library import resolve_scene
+        from frictex.textures.loader import load_scene
         _SCENE_CACHE[scene_name] = load_scene(resolve_scene(scene_name))
     return _SCENE_CACHE[scene_name]
 
@@ -168,7 +168,7 @@ def stack_fingers(outs, field: str, fill) -> tuple[list[int], np.ndarray]:
 def _encode_seconds(commands_um: np.ndarray, block: int) -> float | None:
     """Compute time (s) to put these commands on the wire, block by block."""
     try:
-        from device.link.protocol import Block, amplitude_to_wire, encode
+        from frictex.device.link.protocol import Block, amplitude_to_wire, encode
     except ImportError:
         return None
     t = time.perf_counter()
@@ -179,7 +179,7 @@ def _encode_seconds(commands_um: np.ndarray, block: int) -> float | None:
 
 
 def _link_buffer_s() -> float:
-    from device.link.host import TARGET_S
+    from frictex.device.link.host import TARGET_S
     return TARGET_S
 
 

@@ -29,8 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-from app.measure.report_seeds import summary_lines as draw_lines
-from app.measure.report_claims import GRATINGS, METRICS, NOT_CLAIMED, OUTPUT_HZ, TOUCH_HZ, claims
+from frictex.app.measure.report_seeds import summary_lines as draw_lines
+from frictex.app.measure.report_claims import GRATINGS, METRICS, NOT_CLAIMED, OUTPUT_HZ, TOUCH_HZ, claims
 
 REPORT_VERSION = 2
 PLATE_LOOP_HZ = 400.0  # seed 003, Fig. 3b: the amplitude loop's -3 dB bandwidth
@@ -168,7 +168,7 @@ def write_json(rows, path: Path, quick: bool, settings: dict, modal: list[dict],
     list, or None."""
     found = claims(draws)
     if closed_loop is not None:
-        from app.measure.report_closed_loop import claims as loop_claims
+        from frictex.app.measure.report_closed_loop import claims as loop_claims
         found += loop_claims(closed_loop)
     doc = {"report_version": REPORT_VERSION, "quick": quick, "settings": settings,
            "rows": rows, "claims": [asdict(c) for c in found],
@@ -239,7 +239,7 @@ def write_markdown(doc: dict, path: Path, plots: list[str]) -> None:
     if doc["draws"]["values"]:
         lines += ["", *draw_lines(doc["draws"])[:-1]]
     if doc["real"] is not None:
-        from app.measure.report_real import summary_lines as real_lines
+        from frictex.app.measure.report_real import summary_lines as real_lines
         lines += ["", *real_lines(doc["real"])[:-1]]
     lines += ["", "## Other scenes", ""]
     other = [r for r in rows if r["scene"] not in GRATINGS and r["output_hz"] == OUTPUT_HZ
@@ -325,7 +325,7 @@ def write_markdown(doc: dict, path: Path, plots: list[str]) -> None:
     lines += _table(["figure", "value", "unit"],
                     [(f["label"], f"{f['value']:.4g}", f["unit"]) for f in doc["modal_inversion"]])
     if doc.get("closed_loop") is not None:
-        from app.measure.report_closed_loop import markdown as loop_lines
+        from frictex.app.measure.report_closed_loop import markdown as loop_lines
         lines += ["", *loop_lines(doc["closed_loop"])[:-1]]
     lines += ["", "## Plots", ""] + [f"![{p}]({p})" for p in plots]
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")

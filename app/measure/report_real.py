@@ -34,14 +34,14 @@ from pathlib import Path
 
 import numpy as np
 
-from app.measure.report_matrix import load, run_blocks, stack_fingers
-from rendering.input.trace_file import TraceError, make_trace, read_trace
-from rendering.input.trace_import import add_import_arguments, detect_format, run_import
-from rendering.metrics import (CHATTER_PERIOD_MM, CHATTER_S, REVERSAL_MEASURED_MM,
+from frictex.app.measure.report_matrix import load, run_blocks, stack_fingers
+from frictex.rendering.input.trace_file import TraceError, make_trace, read_trace
+from frictex.rendering.input.trace_import import add_import_arguments, detect_format, run_import
+from frictex.rendering.metrics import (CHATTER_PERIOD_MM, CHATTER_S, REVERSAL_MEASURED_MM,
                                MetricError, chatter, spectral_error)
-from rendering.pipeline import build_pipeline
-from rendering.tracking.finger_select import HYSTERESIS_MM, SelectionState, select_fingers
-from rendering.tracking.tracks import TrackerConfig, TrackerState, track
+from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.tracking.finger_select import HYSTERESIS_MM, SelectionState, select_fingers
+from frictex.rendering.tracking.tracks import TrackerConfig, TrackerState, track
 
 RENDERERS = ("sho-held", "sho-predicted", "sht", "hybrid")
 OUTPUT_HZ = 10_000.0

@@ -22,9 +22,9 @@ from functools import partial
 
 import numpy as np
 
-from app.engine.fanout import fan_out
-from app.measure.report_claims import GRATINGS, METRICS, OUTPUT_HZ, TOUCH_HZ
-from app.measure.report_matrix import MOTIONS, Case, run_case
+from frictex.app.engine.fanout import fan_out
+from frictex.app.measure.report_claims import GRATINGS, METRICS, OUTPUT_HZ, TOUCH_HZ
+from frictex.app.measure.report_matrix import MOTIONS, Case, run_case
 
 #: renderers compared on every draw; ``auto`` picks the hybrid for periodic layers
 RENDERERS = ("sho-held", "sho-predicted", "sht", "hybrid")

@@ -42,9 +42,9 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from device.structures.beam import ModesError
-from device.actuation.bounded_two import bounded_two
-from device.profile import DEFAULT_METHOD, DEFAULT_RCOND, METHODS
+from frictex.device.structures.beam import ModesError
+from frictex.device.actuation.bounded_two import bounded_two
+from frictex.device.profile import DEFAULT_METHOD, DEFAULT_RCOND, METHODS
 
 #: singular values below this fraction of the largest are treated as zero by "exact"
 _EXACT_RCOND = 1e-12

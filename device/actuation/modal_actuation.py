@@ -40,11 +40,11 @@ from collections.abc import Callable
 import numpy as np
 from numba import njit
 
-from device.actuation.base import Actuated, touch_rank
-from device.structures.beam import FreeFreeBeam, ModesError
-from device.actuation.modal import (achieved_magnitude, check_settings, gain_threshold, magnitude,
+from frictex.device.actuation.base import Actuated, touch_rank
+from frictex.device.structures.beam import FreeFreeBeam, ModesError
+from frictex.device.actuation.modal import (achieved_magnitude, check_settings, gain_threshold, magnitude,
                                     serve_two_modes, solve)
-from device.structures.plate2d import ACTUATOR_NAMES, ACTUATORS, Plate2D
+from frictex.device.structures.plate2d import ACTUATOR_NAMES, ACTUATORS, Plate2D
 
 #: largest condition number accepted for the actuator matrix (an actuator on a node of a
 #: driven mode cannot excite it: seed 000 section V)

@@ -26,11 +26,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from device.profile import SURFACE_LENGTH_MM
-from device.actuation.base import Actuated
-from device.structures.beam import FreeFreeBeam
-from device.structures.ring import RingResonator
-from device.actuation.travelling import BeamActuation, TwoModeWave, beam_wave, ring_wave
+from frictex.device.profile import SURFACE_LENGTH_MM
+from frictex.device.actuation.base import Actuated
+from frictex.device.structures.beam import FreeFreeBeam
+from frictex.device.structures.ring import RingResonator
+from frictex.device.actuation.travelling import BeamActuation, TwoModeWave, beam_wave, ring_wave
 
 _DIRECTIONS = (-1, 0, 1)
 

@@ -54,9 +54,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from device.structures.beam import FreeFreeBeam, ModesError
-from device.structures.ring import RingMode, RingResonator
-from device.profile import DrivingForceParams
+from frictex.device.structures.beam import FreeFreeBeam, ModesError
+from frictex.device.structures.ring import RingMode, RingResonator
+from frictex.device.profile import DrivingForceParams
 
 #: grid samples per wavelength (ratio and gain tables are read between them linearly)
 _SAMPLES_PER_WAVELENGTH = 512

@@ -12,6 +12,8 @@ import shutil
 import subprocess
 from pathlib import Path
 
+from frictex.device.errors import FrictexError
+
 FIRMWARE = Path(__file__).resolve().parent
 BUILD = FIRMWARE / "build"
 #: program -> Debian package that provides it
@@ -26,7 +28,7 @@ NEEDS = {"host": ("make", "cc"), "simlib": ("make", "cc"), "check": ("make", "cc
          "isr-cost": ("make", "cc", "valgrind", "callgrind_annotate")}
 
 
-class FirmwareBuildError(RuntimeError):
+class FirmwareBuildError(FrictexError, RuntimeError):
     """A tool is missing or a build failed; the message says which and how to fix it."""
 
 

@@ -19,7 +19,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from device.link import protocol as p
+from frictex.device.link import protocol as p
 
 _CHUNK = 65536
 # host/sim_lib.c fwsim_counters, in order
@@ -78,7 +78,7 @@ class CDeviceCore:
     def __init__(self, config, log=None, plate_log=None, sensor=None, *,
                  library: Path | None = None):
         if library is None:
-            from device.firmware.build import sim_library
+            from frictex.device.firmware.build import sim_library
             library = sim_library()
         self._lib, params_type = _load(Path(library))
         self.config = config
@@ -218,5 +218,5 @@ def built_core_class():
     package to install) if it cannot be built."""
     from functools import partial
 
-    from device.firmware.build import sim_library
+    from frictex.device.firmware.build import sim_library
     return partial(CDeviceCore, library=sim_library())

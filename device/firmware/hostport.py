@@ -11,8 +11,8 @@ import os
 import select
 import subprocess
 
-from device.firmware.build import host_port
-from device.link.protocol import LinkError
+from frictex.device.firmware.build import host_port
+from frictex.device.link.protocol import LinkError
 
 
 def start(channels: int = 1, rate_hz: float = 10_000.0, *, binary=None,

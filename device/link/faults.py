@@ -33,6 +33,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import serial
 
+from frictex.device.errors import InputError
+
 #: how long a ``trip@T`` event silences the host (s): past any watchdog (<= 49 ms)
 TRIP_S = 0.1
 #: longest stall or unplug a spec may ask for (s)
@@ -84,7 +86,7 @@ class FaultPlan:
         return Plug(open_port, self.faults, self.seed, Schedule(self.events))
 
 
-class FaultSpecError(ValueError):
+class FaultSpecError(InputError):
     """A ``--faults`` spec that does not follow the grammar (one line, names the item)."""
 
 

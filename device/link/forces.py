@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from device.link import protocol as p
-from device.link.ledger import unwrap
+from frictex.device.link import protocol as p
+from frictex.device.link.ledger import unwrap
 
 #: samples of reports the host keeps (1 s at 10 kHz)
 HISTORY_SAMPLES = 10_000

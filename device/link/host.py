@@ -53,10 +53,10 @@ try:
 except ImportError:  # Windows: in_waiting stays pyserial's (0 or 1)
     fcntl = termios = None
 
-from device.link import protocol as p
-from device.link.forces import ForceHistory, ForceReport, per_sample
-from device.link.ledger import Ledger, Pacing, Snapshot
-from device.link.protocol import DeviceState, LinkError
+from frictex.device.link import protocol as p
+from frictex.device.link.forces import ForceHistory, ForceReport, per_sample
+from frictex.device.link.ledger import Ledger, Pacing, Snapshot
+from frictex.device.link.protocol import DeviceState, LinkError
 
 #: jitter-buffer prefill asked of the device, and the level paced sending keeps (s)
 PREFILL_S = 0.010
@@ -729,7 +729,7 @@ def start_sim_device(channels: int, rate_hz: float, *, phases: bool = False, log
                      ) -> tuple[subprocess.Popen, str]:
     """Start ``frictex sim-device --once`` on a new pty (or, ``tcp``, a loopback TCP port);
     returns (process, pty path or ``socket://`` URL)."""
-    cmd = [sys.executable, "-m", "app.commands.cli", "sim-device", "--once", "--channels",
+    cmd = [sys.executable, "-m", "frictex", "sim-device", "--once", "--channels",
            str(channels), "--rate", repr(float(rate_hz)), "--parent-pid", str(os.getpid()),
            *extra]
     if phases:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import collections
 from dataclasses import dataclass
 
-from device.link.protocol import INDEX_MODULUS, DeviceState
+from frictex.device.link.protocol import INDEX_MODULUS, DeviceState
 
 #: why a commanded sample was never played (``CommandSink.status()["unplayed_by_cause"]``)
 CAUSES = ("disconnected", "queue_full", "stalled", "flushed", "late", "overflow", "lost")

@@ -31,6 +31,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from frictex.device.errors import DeviceError
+
 #: the newest version this module speaks (it speaks every version from 1)
 PROTOCOL_VERSION = 3
 #: sample numbers are u64 and wrap modulo this (PROTOCOL.md 4.3)
@@ -54,7 +56,7 @@ _CRC = struct.Struct("<I")
 _MIN_BODY = _HEADER.size + _CRC.size
 
 
-class LinkError(OSError):
+class LinkError(DeviceError):
     """Root of the device link's errors: port, handshake, protocol."""
 
 

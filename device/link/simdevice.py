@@ -33,9 +33,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.signal import lfilter
 
-from device.link import protocol as p
-from device.link.protocol import DeviceState as S
-from device.link.simsensor import FINGER_FORCE_N, ConstantSensor, FingerSensor, ForceWindows
+from frictex.device.link import protocol as p
+from frictex.device.link.protocol import DeviceState as S
+from frictex.device.link.simsensor import FINGER_FORCE_N, ConstantSensor, FingerSensor, ForceWindows
 
 
 @dataclass(frozen=True)

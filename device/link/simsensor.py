@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from device.finger import FingerPlant, FingerParams, SensorParams, draw_finger
-from device.link import protocol as p
+from frictex.device.finger import FingerPlant, FingerParams, SensorParams, draw_finger
+from frictex.device.link import protocol as p
 
 #: normal force (N) of the simulated finger when none is configured
 FINGER_FORCE_N = 0.5

@@ -48,6 +48,8 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
+from frictex.device.errors import InputError
+
 THEORIES = ("euler-bernoulli", "timoshenko")
 
 #: Gauss-Legendre panels per wavelength for norms (20 nodes each: exact to round-off)
@@ -57,7 +59,7 @@ _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(20)
 _NODE_SAMPLES_PER_WAVELENGTH = 40
 
 
-class ModesError(ValueError):
+class ModesError(InputError):
     """A structure, mode order or mode table that cannot be used; says which value and why.
 
     The one exception root of frictex's structures, modes and modal inversion

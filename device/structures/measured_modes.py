@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from device.structures.beam import ModesError
+from frictex.device.structures.beam import ModesError
 
 MIN_SAMPLES = 4
 

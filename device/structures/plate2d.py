@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from device.structures.beam import ModesError, check_positive
+from frictex.device.structures.beam import ModesError, check_positive
 
 AXES = ("x", "y")
 #: modal amplitudes (W_X, W_Y) -> commands (V_AC, V_BD), unit gain (seed 001, section 4.1)

@@ -61,7 +61,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import brentq
 
-from device.structures.beam import ModesError, check_positive
+from frictex.device.structures.beam import ModesError, check_positive
 
 KINDS = ("symmetric", "asymmetric")
 #: determinant samples per pi of total phase around the ring (roots are 2 pi apart per family)

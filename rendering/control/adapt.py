@@ -19,8 +19,8 @@ from functools import cached_property
 
 import numpy as np
 
-from device.calibration_fit import B_BOUNDS, K_BOUNDS
-from device.profile import FrictionParams
+from frictex.device.calibration_fit import B_BOUNDS, K_BOUNDS
+from frictex.device.profile import FrictionParams
 
 
 @dataclass(frozen=True)

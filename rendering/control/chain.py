@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 from scipy.signal import lfilter_zi
 
-from device.finger import SensorParams, pole
+from frictex.device.finger import SensorParams, pole
 
 
 @dataclass(frozen=True, eq=False)

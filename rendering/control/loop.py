@@ -114,16 +114,16 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from device.finger import SensorParams
-from device.link.forces import ForceReport
-from device.friction import ASYMPTOTE_MARGIN, SeedFrictionModel
-from device.profile import DeviceProfile
-from rendering.control.adapt import Rls, RlsState
-from rendering.control.block_stats import (chain_input, feed_forward, feedback_stats,
+from frictex.device.finger import SensorParams
+from frictex.device.link.forces import ForceReport
+from frictex.device.friction import ASYMPTOTE_MARGIN, SeedFrictionModel
+from frictex.device.profile import DeviceProfile
+from frictex.rendering.control.adapt import Rls, RlsState
+from frictex.rendering.control.block_stats import (chain_input, feed_forward, feedback_stats,
                                            report_peak, rest_stats, sent_rows)
-from rendering.control.chain import Chain, ChainState
-from rendering.control.margins import COVER_SLOPE, scheduled_ki
-from textures.model import CONTROL_MODES
+from frictex.rendering.control.chain import Chain, ChainState
+from frictex.rendering.control.margins import COVER_SLOPE, scheduled_ki
+from frictex.textures.model import CONTROL_MODES
 
 _NONE = np.zeros(0)  # chain_input's model rows left out (closed mode)
 

@@ -34,8 +34,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from device.finger import SensorParams
-from rendering.control.chain import Chain
+from frictex.device.finger import SensorParams
+from frictex.rendering.control.chain import Chain
 
 #: the integrator's gain per block, at most: the cover asks for less at every delay with
 #: 5 ms blocks (0.296 at 5 kHz, 0.269 at 10 kHz with the report before the next block);

@@ -39,8 +39,8 @@ from typing import Iterable, NamedTuple
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from rendering.input.trace_file import DEFAULT_FORCE_N, DOWN, MOVE, UP, Trace, TraceError, make_trace
-from textures.library import UnreadableText, read_utf8
+from frictex.rendering.input.trace_file import DEFAULT_FORCE_N, DOWN, MOVE, UP, Trace, TraceError, make_trace
+from frictex.textures.library import UnreadableText, read_utf8
 
 EV_SYN, EV_KEY, EV_ABS = 0x00, 0x01, 0x03
 SYN_REPORT, SYN_MT_REPORT, SYN_DROPPED = 0x00, 0x02, 0x03

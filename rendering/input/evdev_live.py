@@ -24,7 +24,7 @@ import struct
 import time
 from pathlib import Path
 
-from rendering.input.evdev_decode import (ABS_MT_POSITION_X, ABS_MT_POSITION_Y, AbsInfo, EvdevDecoder,
+from frictex.rendering.input.evdev_decode import (ABS_MT_POSITION_X, ABS_MT_POSITION_Y, AbsInfo, EvdevDecoder,
                                     Event, ScreenSpec, TouchSample, screen_map)
 
 INPUT_EVENT = struct.Struct("llHHi")

@@ -17,8 +17,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
-from rendering.input.evdev_decode import AbsInfo, Event, signed32
-from rendering.input.trace_file import TraceError
+from frictex.rendering.input.evdev_decode import AbsInfo, Event, signed32
+from frictex.rendering.input.trace_file import TraceError
 
 # values are the kernel's __s32 (at most 10 digits); times whole seconds and microseconds
 _EVENT = re.compile(r"^E:\s+(?P<t>\d{1,12}\.\d{1,9})\s+(?P<type>[0-9a-fA-F]{1,4})\s+"

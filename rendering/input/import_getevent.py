@@ -18,11 +18,11 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from rendering.input.evdev_decode import (ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_PRESSURE,
+from frictex.rendering.input.evdev_decode import (ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_PRESSURE,
                                     ABS_MT_SLOT, ABS_MT_TOUCH_MAJOR, ABS_MT_TRACKING_ID,
                                     BTN_TOUCH, EV_ABS, EV_KEY, EV_SYN, SYN_DROPPED,
                                     SYN_MT_REPORT, SYN_REPORT, Event, read_text, signed32)
-from rendering.input.trace_file import TraceError
+from frictex.rendering.input.trace_file import TraceError
 
 TYPES = {"EV_SYN": EV_SYN, "EV_KEY": EV_KEY, "EV_REL": 0x02, "EV_ABS": EV_ABS, "EV_MSC": 0x04,
          "EV_SW": 0x05, "EV_LED": 0x11, "EV_SND": 0x12, "EV_REP": 0x14, "EV_FF": 0x15,

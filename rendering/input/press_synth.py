@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rendering.input.trace_file import DOWN, MOVE, UP, Trace, make_trace
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP, Trace, make_trace
 
 
 def press_trace(peaks_n=(1.0, 0.95, 1.1), x_mm: float = 70.0, y_mm: float = 15.0,

@@ -44,7 +44,8 @@ from typing import Callable, NoReturn
 
 import numpy as np
 
-from textures.library import file_problem
+from frictex.textures.library import file_problem
+from frictex.device.errors import InputError
 
 DEFAULT_FORCE_N = 0.5
 REQUIRED = ("t_s", "finger", "x_mm", "y_mm")
@@ -69,7 +70,7 @@ RANGES = {"t_s": (-MAX_TIME_S, MAX_TIME_S, "s"), "x_mm": (-MAX_COORD_MM, MAX_COO
           "finger": (0, MAX_FINGER_ID, "finger id")}
 
 
-class TraceError(ValueError):
+class TraceError(InputError):
     """A trace file or trace data that cannot be used; the message says where and why."""
 
 

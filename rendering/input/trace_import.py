@@ -17,11 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from rendering.input.evdev_decode import (AbsInfo, Event, RawSample, ScreenSpec, decode_all, observed_ranges,
+from frictex.rendering.input.evdev_decode import (AbsInfo, Event, RawSample, ScreenSpec, decode_all, observed_ranges,
                                     read_text, screen_map)
-from rendering.input.import_evemu import parse_evemu
-from rendering.input.import_getevent import parse_getevent
-from rendering.input.trace_file import (DEFAULT_FORCE_N, TraceError, concat_traces, format_trace,
+from frictex.rendering.input.import_evemu import parse_evemu
+from frictex.rendering.input.import_getevent import parse_getevent
+from frictex.rendering.input.trace_file import (DEFAULT_FORCE_N, TraceError, concat_traces, format_trace,
                                         iter_trace, most_touching)
 
 FORMATS = ("auto", "getevent", "evemu", "csv")

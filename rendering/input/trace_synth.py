@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rendering.input.trace_file import DOWN, MOVE, UP, Trace, make_trace
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP, Trace, make_trace
 
 MOTIONS = ("swipe", "back-and-forth", "circle", "human", "human-varied")
 #: segment kinds of ``human-varied`` and their draw probabilities

@@ -37,8 +37,8 @@ import threading
 import time
 from typing import Callable
 
-from rendering.input.evdev_decode import AxisMap, RawSample, ScreenMap, TouchSample
-from rendering.input.trace_file import DEFAULT_FORCE_N, DOWN, MOVE, UP, TraceError
+from frictex.rendering.input.evdev_decode import AxisMap, RawSample, ScreenMap, TouchSample
+from frictex.rendering.input.trace_file import DEFAULT_FORCE_N, DOWN, MOVE, UP, TraceError
 
 TUIO_PORT = 3333
 _MAX_DEPTH = 8

@@ -7,14 +7,14 @@ They cross near x = 153 mm at t = 2.87 s (coincident fingers: det Phi = 0), and 
 way their pair crosses the other loci where det Phi of modes 16 and 17 changes sign
 (seed 000, Fig. 8), about every 10 mm of relative travel. Regenerate the bundled file with:
 
-    .venv/bin/python -m rendering.input.two_finger_trace
+    .venv/bin/python -m frictex.rendering.input.two_finger_trace
 """
 
 import numpy as np
 
-from rendering.input.trace_synth import make_motion, sample
-from rendering.input.trace_file import make_trace, write_trace
-from textures.library import LIBRARY_DIR
+from frictex.rendering.input.trace_synth import make_motion, sample
+from frictex.rendering.input.trace_file import make_trace, write_trace
+from frictex.textures.library import LIBRARY_DIR
 
 RATE_HZ = 50.0
 Y_MM = 3.0
@@ -39,7 +39,7 @@ def two_finger_trace():
 def description() -> str:
     return ("two fingers crossing on the seed 000 beam, 50 Hz: finger 0 from 110 mm right at "
             "15 mm/s, finger 1 from 260 mm left at 40 mm/s, crossing at 153 mm "
-            "(python -m rendering.input.two_finger_trace)")
+            "(python -m frictex.rendering.input.two_finger_trace)")
 
 
 if __name__ == "__main__":

@@ -23,8 +23,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from rendering.tracking.tracks import FingerBlock
-from textures.ar_synthesis import render_finger
+from frictex.rendering.tracking.tracks import FingerBlock
+from frictex.textures.ar_synthesis import render_finger
 
 @dataclass(frozen=True)
 class ArState:

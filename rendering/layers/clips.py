@@ -24,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from rendering.tracking.tracks import FingerBlock
+from frictex.rendering.tracking.tracks import FingerBlock
 
 TRIGGER_CODES = {"down": 0, "lift": 1, "edge": 2, "force": 3}
 

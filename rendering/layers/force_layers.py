@@ -36,12 +36,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from device.actuation.base import Actuated, primary_finger
-from device.actuation.travelling import driving_force
-from device.friction import ClampCounts
-from rendering.layers.keyclick import button_states
-from rendering.layers.tangential import TangentialState, finger_motion, invert_tangential, tangential_force
-from textures.model import FORCE_LAYERS, Directional, Guidance, KeyClick, Scene
+from frictex.device.actuation.base import Actuated, primary_finger
+from frictex.device.actuation.travelling import driving_force
+from frictex.device.friction import ClampCounts
+from frictex.rendering.layers.keyclick import button_states
+from frictex.rendering.layers.tangential import TangentialState, finger_motion, invert_tangential, tangential_force
+from frictex.textures.model import FORCE_LAYERS, Directional, Guidance, KeyClick, Scene
 
 
 @dataclass(frozen=True, eq=False)

@@ -32,7 +32,7 @@ from dataclasses import astuple
 import numpy as np
 from numba import njit
 
-from rendering.tracking.tracks import FingerBlock
+from frictex.rendering.tracking.tracks import FingerBlock
 
 
 @njit(cache=True, nogil=True)

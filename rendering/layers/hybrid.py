@@ -155,8 +155,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from rendering.layers.finger_filter import filter_axis
-from rendering.tracking.tracks import FingerBlock
+from frictex.rendering.layers.finger_filter import filter_axis
+from frictex.rendering.tracking.tracks import FingerBlock
 
 #: fastest correction, as a fraction of the finger's own phase rate (below 1: the phase
 #: does not run backwards), but see RELOCK_MM_S

@@ -9,7 +9,7 @@ samples (see ``rendering.tracking.tracks``).
 
 from __future__ import annotations
 
-from rendering.tracking.tracks import FingerBlock
+from frictex.rendering.tracking.tracks import FingerBlock
 
 
 class ShoRenderer:

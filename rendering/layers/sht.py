@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rendering.layers.hybrid import integrate_phase
-from rendering.tracking.tracks import FingerBlock
+from frictex.rendering.layers.hybrid import integrate_phase
+from frictex.rendering.tracking.tracks import FingerBlock
 
 
 @dataclass(frozen=True)

@@ -41,9 +41,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.special import lambertw
 
-from device.actuation.travelling import driving_force
-from device.friction import asymptote, forward_mu
-from device.profile import DrivingForceParams, FrictionParams
+from frictex.device.actuation.travelling import driving_force
+from frictex.device.friction import asymptote, forward_mu
+from frictex.device.profile import DrivingForceParams, FrictionParams
 
 
 @dataclass(frozen=True)

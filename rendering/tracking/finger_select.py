@@ -30,8 +30,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from device.actuation.base import touch_rank
-from textures.model import POSITIONAL_SELECTORS
+from frictex.device.actuation.base import touch_rank
+from frictex.textures.model import POSITIONAL_SELECTORS
 
 ANY = "any"
 #: a finger keeps a positional role until another is this much (mm) beyond it

@@ -36,7 +36,7 @@ from operator import attrgetter
 import numpy as np
 from numba import njit
 
-from rendering.input.trace_file import DOWN, MOVE, UP, Trace
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP, Trace
 
 
 @dataclass(frozen=True)

@@ -22,13 +22,13 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from rendering.visual.device_panels import DevicePanels
-from rendering.visual.modal_view import Envelope
-from rendering.visual.overlay import FINGER_RGB, OverlayState, plot_y
-from rendering.visual.scene_image import scene_rgb, to_srgb8
-from rendering.visual.text import text_rgba, wrap
-from rendering.visual.viewport import Viewport, frame_layout
-from textures.model import Scene
+from frictex.rendering.visual.device_panels import DevicePanels
+from frictex.rendering.visual.modal_view import Envelope
+from frictex.rendering.visual.overlay import FINGER_RGB, OverlayState, plot_y
+from frictex.rendering.visual.scene_image import scene_rgb, to_srgb8
+from frictex.rendering.visual.text import text_rgba, wrap
+from frictex.rendering.visual.viewport import Viewport, frame_layout
+from frictex.textures.model import Scene
 
 _VERT_PX = """
 uniform vec2 u_frame;

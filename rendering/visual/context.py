@@ -17,8 +17,10 @@ import os
 import moderngl
 import numpy as np
 
+from frictex.device.errors import FrictexError
 
-class VisualError(OSError):
+
+class VisualError(FrictexError, OSError):
     """The visual layer cannot run here (no display, no GL); the message says what is missing."""
 
 

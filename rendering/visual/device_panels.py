@@ -15,13 +15,13 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from rendering.layers.keyclick import CLICKED, IDLE, ON
-from rendering.visual.modal_view import Envelope, heat_rgb
-from rendering.visual.overlay import FINGER_RGB, OverlayState, arrow_triangles, segment_triangles
-from rendering.visual import viewport
-from rendering.visual.scene_image import to_srgb8
-from device.profile import FORCE_PROFILES, PlateStructure
-from textures.model import Directional, Guidance, KeyClick, Scene
+from frictex.rendering.layers.keyclick import CLICKED, IDLE, ON
+from frictex.rendering.visual.modal_view import Envelope, heat_rgb
+from frictex.rendering.visual.overlay import FINGER_RGB, OverlayState, arrow_triangles, segment_triangles
+from frictex.rendering.visual import viewport
+from frictex.rendering.visual.scene_image import to_srgb8
+from frictex.device.profile import FORCE_PROFILES, PlateStructure
+from frictex.textures.model import Directional, Guidance, KeyClick, Scene
 
 PANEL_BG = (0.0, 0.0, 0.0, 0.8)
 PANEL_MARGIN_PX = 8.0

@@ -18,7 +18,7 @@ import math
 
 import numpy as np
 
-from textures.model import Directional, DiscRegion, Guidance, Scene
+from frictex.textures.model import Directional, DiscRegion, Guidance, Scene
 
 MARK_RGB = np.array([0.85, 0.05, 0.55], dtype=np.float32)  # magenta: unlike any texture colour
 MARK_WIDTH_PX = 2.5

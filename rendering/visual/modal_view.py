@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from device.profile import BeamStructure, PlateStructure
-from textures.model import Scene
+from frictex.device.profile import BeamStructure, PlateStructure
+from frictex.textures.model import Scene
 
 BEAM_SAMPLES = 512  # points along the display's width
 PLATE_CELLS = 64  # heat-map cells along the plate's longer side

@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rendering.layers.keyclick import IDLE
-from rendering.tracking.tracks import TrackerConfig
-from rendering.visual.viewport import Viewport
+from frictex.rendering.layers.keyclick import IDLE
+from frictex.rendering.tracking.tracks import TrackerConfig
+from frictex.rendering.visual.viewport import Viewport
 
 #: cursor/trace colour per finger (sRGB, 0-1): finger k uses FINGER_RGB[k % len]
 FINGER_RGB = ((0.10, 0.60, 1.00), (1.00, 0.45, 0.10), (0.20, 0.80, 0.30),

@@ -35,10 +35,10 @@ from functools import lru_cache
 
 import numpy as np
 
-from rendering.visual.force_marks import draw_force_marks, has_marks
-from rendering.visual.viewport import Viewport
-from textures.heights import HeightLayer
-from textures.model import (Bump, Directional, DiscRegion, Edge, Guidance, KeyClick, Line,
+from frictex.rendering.visual.force_marks import draw_force_marks, has_marks
+from frictex.rendering.visual.viewport import Viewport
+from frictex.textures.heights import HeightLayer
+from frictex.textures.model import (Bump, Directional, DiscRegion, Edge, Guidance, KeyClick, Line,
                             RasterMap, Scene, Shape)
 
 OUTLINE_RGB = np.array([1.0, 0.35, 0.0])  # orange: visible on black, white and grey

@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from textures.model import Display
+from frictex.textures.model import Display
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,7 @@ ROOT = Path(__file__).resolve().parents[3]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from device.link import protocol as p  # noqa: E402
+from frictex.device.link import protocol as p  # noqa: E402
 
 NEWEST = 3  # the newest version the firmware speaks
 OUT = Path(__file__).with_name("frames.json")

@@ -1,0 +1,5 @@
+"""``python -m frictex``: the ``frictex`` command."""
+
+from frictex.app.commands.cli import entry
+
+entry()

@@ -1,0 +1,1 @@
+"""The protocol test vectors shared by the Python simulated device and the C firmware."""
