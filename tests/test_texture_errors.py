@@ -117,7 +117,7 @@ CASES = [
     ("height_mm", "height_mm = -64.8", "height_mm", "display.height_mm", r"-64\.8 is outside \[0\.001, 10000\] \(mm\)"),
     ("amplitude_limit_um", "amplitude_limit_um = 0", "amplitude_limit_um", "device.amplitude_limit_um",
      r"0 is outside \(0, 100\] \(um zero-to-peak\)"),
-    ("amplitude_limit_um", 'profile = "beam"', "amplitude_limit_um", "frictex.device.profile",
+    ("amplitude_limit_um", 'profile = "beam"', "amplitude_limit_um", "device.profile",
      r'"beam" is not one of plate-seed003'),
     ("normal_force_n", "normal_force = 0.5", "normal_force_n", "device.normal_force",
      r"did you mean normal_force_n\?"),

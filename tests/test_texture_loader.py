@@ -304,7 +304,7 @@ def test_the_retired_asymptote_cap_is_ignored_with_one_warning(tmp_path, capsys)
     scene, problems, warnings = check_scene(path)
     assert problems == [] and len(warnings) == 1
     w = warnings[0]
-    assert (w.line, w.field) == (9, "frictex.device.friction.asymptote_cap") and "ignored" in w.message
+    assert (w.line, w.field) == (9, "device.friction.asymptote_cap") and "ignored" in w.message
     plain = load_scene(write(tmp_path, friction + layer, name="plain.toml"))
     assert scene.device == plain.device
     capsys.readouterr()

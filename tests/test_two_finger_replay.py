@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 import pytest
+from trace_text import assert_same_trace_text
 from numpy.testing import assert_allclose
 
 from frictex.app.commands.cli import main
@@ -89,7 +90,7 @@ def test_replay_is_deterministic(replayed, tmp_path):
 
 def test_bundled_trace_is_what_its_script_makes():
     path = resolve_trace(TRACE)
-    assert path.read_text() == format_trace(two_finger_trace(), description())
+    assert_same_trace_text(format_trace(two_finger_trace(), description()), path.read_text())
     trace = read_trace(path)
     x = {f: trace.x_mm[trace.finger == f] for f in (0, 1)}
     assert x[0][0] < x[1][0] and x[0][-1] > x[1][-1]  # the fingers swap sides: they cross

@@ -21,7 +21,7 @@ for scene in (height_shapes_scene(), recorded_texture_scene()):
     run_replay(scene, "circle-30mms-60hz", sys.argv[1], progress=False)
 run_replay("grating-15mm", "circle-30mms-60hz", sys.argv[1], control="adaptive", progress=False)
 ours = [d for d in gc.get_objects() if isinstance(d, CPUDispatcher)
-        and d.py_func.__module__.split(".")[0] in ("app", "rendering", "textures", "device")]
+        and d.py_func.__module__.startswith("frictex.")]
 print(json.dumps({"hits": sum(sum(d.stats.cache_hits.values()) for d in ours),
                   "misses": [f"{d.py_func.__module__}.{d.py_func.__name__}" for d in ours
                              if d.stats.cache_misses]}))
