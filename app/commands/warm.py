@@ -87,6 +87,7 @@ def run(args: argparse.Namespace) -> int:
                                fmt=fmt, render_override=renderer, progress=False)
         for scene in (height_shapes_scene(), recorded_texture_scene()):
             run_replay(scene, sample(motion, 60.0, noise_mm=0.05, seed=2), tmp, progress=False)
+        height_shapes_scene().layers[-1].mu_of_slope(0.0)  # the saturation alone (preview, tests)
         run_replay("grating-15mm", sample(motion, 60.0, noise_mm=0.05, seed=2), tmp,
                    control="adaptive", progress=False)  # the friction loop's kernels
     if not args.quiet:
