@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from frictex.device.errors import InputError
 from frictex.device.friction import forward_mu
 from frictex.device.profile import Calibration, FrictionParams
 
@@ -60,7 +61,7 @@ def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> 
     good = np.isfinite(w) & np.isfinite(f) & np.isfinite(m) & (w >= 0) & (f > 0)
     w, f, m = w[good], f[good], m[good]
     if w.size < 3 or not np.any(w > 0):
-        raise ValueError(f"{w.size} usable calibration points with {np.count_nonzero(w > 0)} "
+        raise InputError(f"{w.size} usable calibration points with {np.count_nonzero(w > 0)} "
                          f"above 0 um: expected at least 3, some with the plate vibrating")
 
     def residual(theta):

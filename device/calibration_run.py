@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from frictex.device.errors import DeviceError
 from frictex.device.link.host import LinkStalled
 
 #: samples per block sent (5 ms at 10 kHz)
@@ -79,11 +80,11 @@ def run_sweep(link, sweep: Sweep, on_step=None):
     """
     info = link.info
     if info is None or not info.has_force_reports:
-        raise ValueError(f"{link.label}: the device sends no force reports (PROTOCOL.md "
+        raise DeviceError(f"{link.label}: the device sends no force reports (PROTOCOL.md "
                          f"4.9: a version 3 device with a lateral force sensor); it cannot "
                          f"be calibrated")
     if max(sweep.levels) > info.limits_um[0]:
-        raise ValueError(f"{link.label}: the device's amplitude limit {info.limits_um[0]:g} "
+        raise DeviceError(f"{link.label}: the device's amplitude limit {info.limits_um[0]:g} "
                          f"um is below the sweep's {max(sweep.levels):g} um")
     per = int(round(sweep.step_s * link.rate_hz))
     kept = per - int(per * sweep.settle_share)
@@ -98,7 +99,7 @@ def run_sweep(link, sweep: Sweep, on_step=None):
         lateral, normal_n = forces
         normal = float(np.median(normal_n))
         if not normal >= MIN_NORMAL_N:
-            raise ValueError(f"{link.label}: normal force {normal:.3g} N during step {k + 1}: "
+            raise DeviceError(f"{link.label}: normal force {normal:.3g} N during step {k + 1}: "
                              f"the finger lifted (slide it through the whole sweep)")
         ratios.append(float(np.median(lateral / normal_n)))
         normals.append(normal)
@@ -164,7 +165,7 @@ def _wait_for_finger(link) -> int:
         if latest is not None and float(np.median(latest.normal_n)) >= MIN_NORMAL_N:
             return index
         if time.monotonic() > deadline:
-            raise ValueError(f"{link.label}: no finger on the plate after {TOUCH_WAIT_S:g} s "
+            raise DeviceError(f"{link.label}: no finger on the plate after {TOUCH_WAIT_S:g} s "
                              f"(normal force below {MIN_NORMAL_N:g} N); touch it and slide")
         link.send(index, np.zeros((BLOCK_SAMPLES, 1)))  # paced: waits for the device's room
         index += BLOCK_SAMPLES

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from frictex.device.errors import InputError
 from frictex.device.friction import ClampCounts, SeedFrictionModel, asymptote
 
 #: table size: 4096 points keep the interpolation error near 1e-5 of the range
@@ -33,7 +34,7 @@ class LutFrictionModel:
 
     def __init__(self, exact, size: int = TABLE_SIZE):
         if not isinstance(exact, SeedFrictionModel):
-            raise ValueError(f"lut inversion: the device has a {type(exact).__name__}; "
+            raise InputError(f"lut inversion: the device has a {type(exact).__name__}; "
                              "expected seed 003's closed-form model (use the exact inversion "
                              "with a calibration table)")
         self.exact = exact

@@ -10,6 +10,7 @@ import pytest
 from frictex.app.commands.cli import main
 from frictex.device.calibration_fit import fit_points
 from frictex.device.calibration_run import Sweep, run_sweep
+from frictex.device.errors import DeviceError
 from frictex.device.finger import draw_finger, moisture
 from frictex.device.link.forces import ForceReport
 from frictex.device.link.host import LinkStalled, start_sim_device
@@ -112,11 +113,11 @@ def test_reports_a_device_dropped_are_done_without_or_refuse_the_step():
 def test_a_device_without_force_reports_or_a_lower_limit_is_refused():
     link = ModelLink(1.4, 0.8)
     link.info.has_force_reports = False
-    with pytest.raises(ValueError, match="sends no force reports"):
+    with pytest.raises(DeviceError, match="sends no force reports"):
         run_sweep(link, Sweep())
     link = ModelLink(1.4, 0.8)
     link.info.limits_um = (2.0, 4.0)  # only channel 0 is driven
-    with pytest.raises(ValueError, match="limit 2 um is below the sweep's 2.4 um"):
+    with pytest.raises(DeviceError, match="limit 2 um is below the sweep's 2.4 um"):
         run_sweep(link, Sweep())
 
 
@@ -151,7 +152,7 @@ def test_calibrate_recovers_the_simulated_finger_within_5_percent(tmp_path, caps
 
 
 def test_a_port_is_a_one_line_error(capsys, tmp_path):
-    assert main(["calibrate", "--device", "/dev/ttyUSB9", "--out", str(tmp_path / "x")]) == 2
+    assert main(["calibrate", "--device", "/dev/ttyUSB9", "--out", str(tmp_path / "x")]) == 1  # the device, not the input (exit 2)
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and err[0].startswith("frictex: error: ") and "/dev/ttyUSB9" in err[0]
     assert not (tmp_path / "x").exists()
@@ -161,14 +162,14 @@ def test_no_finger_on_the_plate_is_said_after_the_wait(monkeypatch):
     import frictex.device.calibration_run as run
     monkeypatch.setattr(run, "TOUCH_WAIT_S", 0.05)
     link = ModelLink(1.4, 0.8, normal_n=0.0)
-    with pytest.raises(ValueError, match="no finger on the plate after 0.05 s"):
+    with pytest.raises(DeviceError, match="no finger on the plate after 0.05 s"):
         run_sweep(link, Sweep())
 
 
 def test_a_device_without_a_force_sensor_is_a_one_line_error(capsys, tmp_path):
     proc, path = start_sim_device(1, 10_000.0)  # no --finger: no force reports
     try:
-        assert main(["calibrate", "--device", path, "--out", str(tmp_path / "x")]) == 2
+        assert main(["calibrate", "--device", path, "--out", str(tmp_path / "x")]) == 1
         proc.wait(timeout=10)  # --once: it ends when the host closes the link
     finally:
         if proc.poll() is None:

@@ -54,3 +54,49 @@ def test_entry_waits_for_a_thread_still_running(tmp_path):
         """, str(mark))
     assert done.returncode == 0, done.stderr
     assert mark.read_text() == "done"
+
+
+def _run_raising(exc_source: str) -> subprocess.CompletedProcess:
+    """``frictex library`` whose run raises what ``exc_source`` builds."""
+    return _python(f"""
+        import sys
+        from frictex.app.commands import cli, library
+        from frictex.device import errors
+        def run(args):
+            raise {exc_source}
+        library.run = run
+        sys.argv = ["frictex", "library"]
+        cli.entry()
+        """)
+
+
+def test_a_bug_is_an_internal_error_with_its_traceback_never_bad_input():
+    # a numpy broadcast error inside frictex is not the user's mistake
+    done = _run_raising("ValueError('operands could not be broadcast together')")
+    assert done.returncode == 70
+    assert "Traceback (most recent call last)" in done.stderr
+    assert "ValueError: operands could not be broadcast together" in done.stderr
+    assert done.stderr.rstrip().splitlines()[-1].startswith("frictex: internal error: please report")
+    assert "frictex: error:" not in done.stderr
+
+
+def test_each_kind_of_error_has_its_exit_code_and_one_line():
+    for source, code in [("errors.InputError('bad value')", 2),
+                         ("errors.DeviceError('the port went away')", 1),
+                         ("errors.OutputSpaceError('need 3 GB, 1 GB free')", 1),
+                         ("errors.RunFailed('2 of 5 jobs failed')", 1),
+                         ("FileNotFoundError(2, 'No such file or directory', 'my.toml')", 2),
+                         ("OSError(5, 'Input/output error')", 1),
+                         ("ModuleNotFoundError('no moderngl', name='moderngl')", 1)]:
+        done = _run_raising(source)
+        assert done.returncode == code, (source, done.stderr)
+        assert done.stderr.startswith("frictex: error: ") and done.stderr.count("\n") == 1, source
+    assert "pip install 'frictex[gui]'" in _run_raising(
+        "ModuleNotFoundError('no moderngl', name='moderngl')").stderr
+
+
+def test_control_characters_in_a_message_never_reach_the_terminal():
+    done = _run_raising(r"errors.InputError('key \x1b]0;owned\x07\x1b[2J\nforged line')")
+    assert done.returncode == 2
+    assert "\x1b" not in done.stderr and "\x07" not in done.stderr
+    assert done.stderr == "frictex: error: key \\x1b]0;owned\\x07\\x1b[2J\\nforged line\n"

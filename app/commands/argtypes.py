@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from frictex.device.errors import InputError
+
 
 def positive_float(text: str) -> float:
     try:
@@ -86,9 +88,9 @@ def sim_device_args(args: argparse.Namespace) -> tuple[str, ...]:
     if args.sim_finger is None:
         return ()
     if args.sim_finger < 0:
-        raise ValueError(f"--sim-finger {args.sim_finger}: expected a person number >= 0")
+        raise InputError(f"--sim-finger {args.sim_finger}: expected a person number >= 0")
     if args.device not in ("sim", "sim:tcp"):
         given = f"got --device {args.device}" if args.device else "no --device was given"
-        raise ValueError(f"--sim-finger {args.sim_finger}: needs --device sim (a simulated "
+        raise InputError(f"--sim-finger {args.sim_finger}: needs --device sim (a simulated "
                          f"device); {given}")
     return ("--finger", str(args.sim_finger))

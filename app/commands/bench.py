@@ -13,6 +13,7 @@ import sys
 from dataclasses import asdict
 
 from frictex.app.measure.figure import Figure
+from frictex.device.errors import InputError
 
 #: section name -> module
 SECTIONS = {
@@ -34,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     unknown = [s for s in args.sections if s not in SECTIONS]
     if unknown:
-        raise ValueError(f"unknown bench section(s) {', '.join(unknown)}; "
+        raise InputError(f"unknown bench section(s) {', '.join(unknown)}; "
                          f"expected some of {', '.join(SECTIONS)}")
     figures: list[Figure] = []
     for name in args.sections or list(SECTIONS):

@@ -22,6 +22,7 @@ import numpy as np
 
 from frictex.device.calibration_fit import device_toml, fit_points
 from frictex.device.calibration_run import Sweep, run_sweep
+from frictex.device.errors import InputError
 
 #: the plate's sample rate (Hz, seed 003) and the simulated plate's amplitude limit (um)
 RATE_HZ = 10_000.0
@@ -53,7 +54,7 @@ def _progress(done: int, total: int) -> None:
 def run(args: argparse.Namespace) -> int:
     from frictex.device.link.host import open_sink  # with the command: its imports stay out of --help
     if args.finger < 0:
-        raise ValueError(f"calibrate: --finger {args.finger}: expected 0 or a positive person number")
+        raise InputError(f"calibrate: --finger {args.finger}: expected 0 or a positive person number")
     sweep = Sweep()
     sim = args.device in ("sim", "sim:tcp")
     sim_args = (("--finger", str(args.finger), "--finger-speed", f"{sweep.speed_mm_s:g}",

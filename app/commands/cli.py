@@ -3,9 +3,21 @@
 Each subcommand lives in its own module of ``app`` exposing
 ``add_arguments(parser)`` and ``run(args) -> int``; the module is imported only
 when its subcommand runs, so ``frictex validate`` never loads OpenGL.
-Errors raised as ``ValueError`` (bad input: texture, trace, option) or ``OSError``
-(files, ports) become one line on stderr, ``frictex: error: ...``, and exit 2; a run that
-could not finish (the device stopped taking data, the disk filled up) exits 1.
+
+What escapes a command decides its exit status (``frictex.device.errors``):
+
+- a :class:`FrictexError` is one line on stderr, ``frictex: error: ...``, and its kind's
+  exit status: 2 for bad input (a file, an option, a name), 1 for the device, the disk
+  or a run that could not do what was asked;
+- an ``OSError`` the system raised (a file, a port, the disk) is one line too: exit 1,
+  or 2 where it names a file the user gave that does not exist or cannot be read;
+- an optional part of frictex that is not installed names the pip command (exit 1);
+- Ctrl-C is one line, ``frictex: interrupted``, exit 130;
+- anything else is a bug in frictex: its traceback, then ``frictex: internal error:
+  please report``, exit 70 (EX_SOFTWARE), never dressed as the user's mistake.
+
+Every message is printed with its control characters escaped (``\x1b``), so a value
+that came from a file cannot drive the terminal.
 """
 
 from __future__ import annotations
@@ -17,9 +29,24 @@ import importlib
 import os
 import sys
 import threading
+import traceback
+import unicodedata
 from typing import NoReturn
 
 from frictex.app.engine.heap import keep_freed_memory
+from frictex.device.errors import FrictexError, MissingExtra
+
+#: errno values of an OSError on a path the user named that is bad input (exit 2)
+INPUT_ERRNOS = frozenset((errno.ENOENT, errno.ENOTDIR, errno.EISDIR, errno.EACCES,
+                          errno.ENAMETOOLONG, errno.ELOOP))
+#: module of an optional extra -> (extra, what needs it)
+EXTRAS = {"moderngl": ("gui", "OpenGL drawing"), "glfw": ("gui", "the demo window"),
+          "matplotlib": ("report", "plots"), "dask": ("cluster", "a Dask cluster"),
+          "distributed": ("cluster", "a Dask cluster"),
+          "sounddevice": ("audio", "the audio output")}
+#: report this, with the traceback above it, for anything frictex did not mean to raise
+INTERNAL = ("frictex: internal error: please report it with the traceback above "
+            "and the command line")
 
 #: subcommand -> (module in app/, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -91,18 +118,43 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("frictex: interrupted", file=sys.stderr)
         return 130
-    except (ValueError, OSError) as exc:
-        print(f"frictex: error: {exc}", file=sys.stderr)
-        return 1 if run_failed(exc) else 2
+    except BaseException as exc:  # noqa: BLE001 - sorted into the kinds below
+        return report_error(exc)
 
 
-def run_failed(exc: BaseException) -> bool:
-    """True for errors of a run that could not finish (a device that stopped taking data,
-    a disk that filled up): exit 1; anything else is bad input: exit 2."""
-    if isinstance(exc, OSError) and exc.errno == errno.ENOSPC:
-        return True
-    from frictex.device.link.host import LinkStalled  # on the error path only: no cost to a run
-    return isinstance(exc, LinkStalled)
+def report_error(exc: BaseException) -> int:
+    """Print what escaped a command as the module docstring says; return the exit status.
+    SystemExit passes through."""
+    if isinstance(exc, SystemExit):
+        raise exc
+    if isinstance(exc, ModuleNotFoundError) and (exc.name or "").split(".")[0] in EXTRAS:
+        extra, what = EXTRAS[exc.name.split(".")[0]]
+        exc = MissingExtra(extra, what, exc.name.split(".")[0])
+    if isinstance(exc, FrictexError):
+        code = exc.exit_code
+    elif isinstance(exc, OSError):
+        code = 2 if exc.errno in INPUT_ERRNOS and exc.filename is not None else 1
+    else:
+        traceback.print_exception(exc, file=sys.stderr)
+        print(INTERNAL, file=sys.stderr)
+        return 70
+    print(f"frictex: error: {printable(str(exc))}", file=sys.stderr)
+    return code
+
+
+def printable(message: str) -> str:
+    """``message`` on one line that cannot drive a terminal: tab and line breaks shown as
+    ``\\t``, ``\\n``, ``\\r``, every other control or format character as ``\\xHH``
+    or ``\\uHHHH`` (ESC as the four characters ``\\x1b``). Backslashes already in it
+    (values a reader escaped) stay as they are."""
+    return "".join(_NAMED.get(ch) or (ch if ch.isprintable() and unicodedata.category(ch)
+                                      not in ("Cf", "Co", "Cn")
+                                      else f"\\x{ord(ch):02x}" if ord(ch) <= 0xFF
+                                      else f"\\u{ord(ch):04x}")
+                   for ch in message)
+
+
+_NAMED = {"\t": "\\t", "\n": "\\n", "\r": "\\r"}
 
 
 def entry() -> NoReturn:

@@ -12,6 +12,8 @@ from __future__ import annotations
 import argparse
 import importlib
 
+from frictex.device.errors import FrictexError
+
 STRUCTURES = {"beam": "frictex.app.commands.modes_beam", "plate": "frictex.app.commands.modes_plate", "ring": "frictex.app.commands.modes_ring"}
 
 
@@ -38,7 +40,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _not_available(name: str, module_name: str):
     def run(args: argparse.Namespace) -> int:
-        raise ValueError(f"modes {name}: not available (module {module_name} is not installed)")
+        raise FrictexError(f"modes {name}: not available (module {module_name} is not installed)")
     return run
 
 

@@ -25,6 +25,7 @@ from pathlib import Path
 from frictex.app.commands.argtypes import positive_int
 from frictex.app.engine.fanout import default_workers, fan_out
 from frictex.app.measure import report_matrix as rm
+from frictex.device.errors import InputError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -54,11 +55,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     unknown = [s for s in args.scenes if s not in rm.SCENES]
     if unknown:
-        raise ValueError(f"--scenes: unknown scene(s) {', '.join(unknown)}; expected some of "
+        raise InputError(f"--scenes: unknown scene(s) {', '.join(unknown)}; expected some of "
                          f"{', '.join(rm.SCENES)}")
     out = Path(args.out)
     if out.exists() and not out.is_dir():
-        raise ValueError(f"--out {out}: exists and is not a folder")
+        raise InputError(f"--out {out}: exists and is not a folder")
     real_dir = None
     if args.real is not None:
         from frictex.app.measure.report_real import recordings

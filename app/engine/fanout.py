@@ -10,6 +10,8 @@ from __future__ import annotations
 import os
 import sys
 
+from frictex.device.errors import MissingExtra
+
 
 def default_workers() -> int:
     """The cores this process may use."""
@@ -66,7 +68,7 @@ def _dask(fn, items: list, address: str, done) -> list:
     try:
         from distributed import Client, as_completed
     except ImportError:
-        raise OSError("--scheduler needs dask.distributed: pip install 'frictex[cluster]'") from None
+        raise MissingExtra("cluster", "--scheduler", "dask.distributed") from None
     try:
         client = Client(address, timeout=10)
     except (OSError, TimeoutError) as exc:

@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from frictex.app.measure.report_matrix import load, run_blocks, stack_fingers
+from frictex.device.errors import InputError
 from frictex.rendering.input.trace_file import TraceError, make_trace, read_trace
 from frictex.rendering.input.trace_import import add_import_arguments, detect_format, run_import
 from frictex.rendering.metrics import (CHATTER_PERIOD_MM, CHATTER_S, REVERSAL_MEASURED_MM,
@@ -52,7 +53,7 @@ MAX_BYTES = 8 << 20
 def recordings(folder: Path) -> list[Path]:
     """The files under ``folder`` that look like touch recordings (sorted)."""
     if not folder.is_dir():
-        raise ValueError(f"--real {folder}: not a folder; expected a folder of touch "
+        raise InputError(f"--real {folder}: not a folder; expected a folder of touch "
                          "recordings (getevent logs, evemu recordings or trace CSVs)")
     found = []
     for path in sorted(p for p in folder.rglob("*") if p.is_file()):
@@ -65,7 +66,7 @@ def recordings(folder: Path) -> list[Path]:
             continue
         found.append(path)
     if not found:
-        raise ValueError(f"--real {folder}: no touch recordings found (getevent logs, evemu "
+        raise InputError(f"--real {folder}: no touch recordings found (getevent logs, evemu "
                          "recordings or trace CSVs)")
     return found
 

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from frictex.device.errors import InputError
 from frictex.device.profile import SURFACE_LENGTH_MM
 from frictex.device.actuation.base import Actuated
 from frictex.device.structures.beam import FreeFreeBeam
@@ -117,5 +118,5 @@ def make_push_actuation(profile: str, limit_um: float) -> PushActuation:
         refs = [wave.modal(1.0, d) for d in _DIRECTIONS]
         return PushActuation.build(("mode_sym", "mode_asym"), wave, refs, -ring.length_mm / 2,
                                    limit_um)
-    raise ValueError(f"device profile {profile!r} has no travelling-wave actuation; expected one "
+    raise InputError(f"device profile {profile!r} has no travelling-wave actuation; expected one "
                      f"of {', '.join(SURFACE_LENGTH_MM)}")

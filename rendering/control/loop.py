@@ -114,6 +114,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from frictex.device.errors import InputError
 from frictex.device.finger import SensorParams
 from frictex.device.link.forces import ForceReport
 from frictex.device.friction import ASYMPTOTE_MARGIN, SeedFrictionModel
@@ -184,7 +185,7 @@ class LoopConfig:
         if not (isinstance(self.decimate, int) and self.decimate >= 1):
             bad.append(f"decimate = {self.decimate!r} (expected an integer >= 1)")
         if bad:
-            raise ValueError("loop configuration: " + "; ".join(bad))
+            raise InputError("loop configuration: " + "; ".join(bad))
 
 
 @dataclass(frozen=True, eq=False)
@@ -232,10 +233,10 @@ class ClosedLoop:
     def __init__(self, device: DeviceProfile, rate_hz: float, block_size: int,
                  mode: str = "adaptive", config: LoopConfig = LoopConfig()):
         if mode not in CONTROL_MODES[1:]:
-            raise ValueError(f"control mode {mode!r}: expected one of {', '.join(CONTROL_MODES)} "
+            raise InputError(f"control mode {mode!r}: expected one of {', '.join(CONTROL_MODES)} "
                              f"(open loop builds no loop)")
         if device.calibration is not None or device.profile != "plate-seed003":
-            raise ValueError(f"closed-loop control needs profile plate-seed003 with seed 003's "
+            raise InputError(f"closed-loop control needs profile plate-seed003 with seed 003's "
                              f"model; got {device.profile!r}"
                              f"{' with a calibration table' if device.calibration else ''}")
         self.device = device

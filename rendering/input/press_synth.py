@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from frictex.device.errors import InputError
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP, Trace, make_trace
 
 
@@ -28,7 +29,7 @@ def press_trace(peaks_n=(1.0, 0.95, 1.1), x_mm: float = 70.0, y_mm: float = 15.0
     its end; times in s from 0, forces in N.
     """
     if rate_hz <= 0 or rise_s <= 0 or noise_n < 0:
-        raise ValueError(f"rate {rate_hz} Hz and rise {rise_s} s must be > 0, noise {noise_n} N >= 0")
+        raise InputError(f"rate {rate_hz} Hz and rise {rise_s} s must be > 0, noise {noise_n} N >= 0")
     rng = np.random.default_rng(seed)
     t_all, f_all, ev_all = [], [], []
     start = 0.0

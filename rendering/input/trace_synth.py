@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from frictex.device.errors import InputError
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP, Trace, make_trace
 
 MOTIONS = ("swipe", "back-and-forth", "circle", "human", "human-varied")
@@ -105,9 +106,9 @@ def make_motion(kind: str, *, speed_mm_s: float = 40.0, duration_s: float = 2.0,
                 area_mm: tuple[float, float] = (108.0, 64.8), seed: int = 0) -> Motion:
     """A motion of the given kind (see the module docstring); units mm, s, mm/s."""
     if kind not in MOTIONS:
-        raise ValueError(f"unknown motion {kind!r}; expected one of {', '.join(MOTIONS)}")
+        raise InputError(f"unknown motion {kind!r}; expected one of {', '.join(MOTIONS)}")
     if speed_mm_s <= 0 or duration_s <= 0:
-        raise ValueError(f"speed {speed_mm_s} mm/s and duration {duration_s} s must be > 0")
+        raise InputError(f"speed {speed_mm_s} mm/s and duration {duration_s} s must be > 0")
     a = np.radians(angle_deg)
     ux, uy = float(np.cos(a)), float(np.sin(a))
     if kind == "swipe":
@@ -219,9 +220,9 @@ def sample(motion: Motion, rate_hz: float, *, noise_mm: float = 0.0, jitter_s: f
     never reports (drawn independently; the first and the last are always kept).
     """
     if rate_hz <= 0:
-        raise ValueError(f"sampling rate {rate_hz} Hz must be > 0")
+        raise InputError(f"sampling rate {rate_hz} Hz must be > 0")
     if not 0.0 <= drop < 1.0:
-        raise ValueError(f"drop {drop!r}: expected a share of samples in [0, 1)")
+        raise InputError(f"drop {drop!r}: expected a share of samples in [0, 1)")
     rng = np.random.default_rng(seed + 1)
     n = int(np.floor(motion.duration_s * rate_hz)) + 1
     t = np.arange(n) / rate_hz
