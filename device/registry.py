@@ -3,8 +3,7 @@
 Each extension point (renderer, touch source, output device, actuation, clock, sink,
 window backend) is a ``typing.Protocol`` in the module that uses it, and a
 :class:`Registry` beside it. frictex's own implementations register there by name; other
-packages add theirs through an entry-point group, loaded the first time a name is
-looked up that is not already known, or the names are listed:
+packages add theirs through an entry-point group:
 
 .. code-block:: toml
 
@@ -12,20 +11,32 @@ looked up that is not already known, or the names are listed:
     [project.entry-points."frictex.renderers"]
     wobble = "frictex_wobble:WobbleRenderer"
 
+The group's entry points are read (not imported) the first time the registry is asked
+for a name or its names, and read again whenever a name is not found (a package
+installed since); an entry point's object is imported the first time its name is looked
+up, so listing the names imports no plugin. A registry whose names belong to a lower
+layer than its implementations (the renderers, which texture files name) gets frictex's
+own entries from frictex's own entry points, as a plugin would: the lower layer then lists
+them without importing the higher one.
+
 Every list of names a user sees (command-line choices, the demo's key cycle, the report's
 matrix, texture-file validation, the docs) is ``registry.names()``; an unknown name is an
-:class:`~frictex.device.errors.InputError` that lists the known ones. This module is in
-the lowest layer so that every layer can register into it.
+:class:`UnknownName` (an :class:`~frictex.device.errors.InputError`) that lists the known
+ones. This module is in the lowest layer so that every layer can register into it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
+from importlib.metadata import EntryPoint
 from typing import Generic, TypeVar, overload
 
 from frictex.device.errors import FrictexError, InputError
 
 T = TypeVar("T")
+
+#: the distribution whose entry points are frictex's own (listed first)
+OWN_DISTRIBUTION = "frictex"
 
 
 class UnknownName(InputError, KeyError):
@@ -38,6 +49,10 @@ class UnknownName(InputError, KeyError):
 class PluginError(FrictexError, RuntimeError):
     """An entry point of another package that cannot be loaded, or clashes with a name
     already registered."""
+
+
+def _distribution(point: EntryPoint) -> str:
+    return point.dist.name if point.dist is not None else "?"
 
 
 class Registry(Generic[T]):
@@ -54,9 +69,9 @@ class Registry(Generic[T]):
     def __init__(self, kind: str, group: str):
         self.kind = kind
         self.group = group
-        self._entries: dict[str, T] = {}
+        self._entries: dict[str, T | EntryPoint] = {}
         self._origin: dict[str, str] = {}
-        self._plugins_loaded = False
+        self._scanned = False
 
     @overload
     def register(self, name: str) -> Callable[[T], T]: ...
@@ -69,58 +84,75 @@ class Registry(Generic[T]):
         twice is an error: a plugin cannot silently replace a built-in."""
         if entry is None:
             return lambda obj: self.register(name, obj)
-        self._add(name, entry, "frictex")
+        self._add(name, entry, OWN_DISTRIBUTION)
         return entry
 
-    def _add(self, name: str, entry: T, origin: str) -> None:
+    def _add(self, name: str, entry, origin: str) -> None:
         if not isinstance(name, str) or not name or name != name.strip() or ":" in name:
             raise PluginError(f"{self.kind} name {name!r} from {origin}: expected a "
                               "non-empty name without spaces at its ends or ':'")
-        if name in self._entries and self._entries[name] is not entry:
+        known = self._entries.get(name)
+        if known is not None and known is not entry and known != entry:
             raise PluginError(f"{self.kind} {name!r} from {origin} is already registered "
                               f"by {self._origin[name]}")
-        self._entries[name] = entry
-        self._origin[name] = origin
+        self._entries.setdefault(name, entry)
+        self._origin.setdefault(name, origin)
 
-    def load_plugins(self) -> None:
-        """Load the entry points of the group (once)."""
-        if self._plugins_loaded:
-            return
-        self._plugins_loaded = True
+    def scan(self) -> None:
+        """Read the group's entry points (without importing them): frictex's own first,
+        then the other distributions' by name. A name already known from the same entry
+        point is kept; another entry point under a known name is a :class:`PluginError`."""
+        import importlib
         from importlib.metadata import entry_points
-        for point in entry_points(group=self.group):
-            origin = f"{point.dist.name if point.dist else '?'} ({point.value})"
-            try:
-                entry = point.load()
-            except Exception as exc:  # a broken plugin names itself, not frictex
-                raise PluginError(f"{self.kind} {point.name!r} of {origin} cannot be "
-                                  f"loaded: {type(exc).__name__}: {exc}") from exc
-            self._add(point.name, entry, origin)
+        importlib.invalidate_caches()  # a package installed since the last scan
+        self._scanned = True
+        points = sorted(entry_points(group=self.group),
+                        key=lambda p: (_distribution(p) != OWN_DISTRIBUTION, _distribution(p)))
+        for point in points:
+            dist = _distribution(point)
+            origin = dist if dist == OWN_DISTRIBUTION else f"{dist} ({point.value})"
+            if self._origin.get(point.name) == origin:
+                continue  # this entry point, seen before (perhaps loaded since)
+            self._add(point.name, point, origin)
+
+    def _load(self, name: str) -> T:
+        entry = self._entries[name]
+        if not isinstance(entry, EntryPoint):
+            return entry
+        try:
+            loaded = entry.load()
+        except Exception as exc:  # a broken plugin names itself, not frictex
+            raise PluginError(f"{self.kind} {name!r} of {self._origin[name]} cannot be "
+                              f"loaded: {type(exc).__name__}: {exc}") from exc
+        self._entries[name] = loaded
+        return loaded
 
     def get(self, name: str) -> T:
         """The entry registered under ``name``; :class:`UnknownName` lists the known."""
-        if name not in self._entries:
-            self.load_plugins()
-        try:
-            return self._entries[name]
-        except (KeyError, TypeError):
-            raise UnknownName(f"unknown {self.kind} {name!r}; expected one of "
-                              f"{', '.join(self.names())}") from None
+        if not isinstance(name, str) or name not in self._entries or not self._scanned:
+            self.scan()
+        if isinstance(name, str) and name in self._entries:
+            return self._load(name)
+        raise UnknownName(f"unknown {self.kind} {name!r}; expected one of "
+                          f"{', '.join(self.names())}")
 
     def names(self) -> tuple[str, ...]:
-        """Every registered name, frictex's own first in registration order, then the
-        plugins' in the order they loaded."""
-        self.load_plugins()
+        """Every registered name: frictex's own first in registration order, then the
+        other packages' by distribution."""
+        if not self._scanned:
+            self.scan()
         return tuple(self._entries)
 
     def origin(self, name: str) -> str:
-        """Who registered ``name``: ``frictex`` or the plugin's distribution."""
+        """Who registered ``name``: ``frictex`` or the plugin's distribution and object."""
         self.get(name)
         return self._origin[name]
 
     def __contains__(self, name: object) -> bool:
+        if not isinstance(name, str):
+            return False
         if name not in self._entries:
-            self.load_plugins()
+            self.scan()
         return name in self._entries
 
     def __iter__(self) -> Iterator[str]:

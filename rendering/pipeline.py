@@ -20,18 +20,17 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from frictex.device.actuation.factory import make_actuation
+from frictex.device.errors import InputError
+from frictex.device.registry import UnknownName
 from frictex.rendering.compose import compose
 from frictex.rendering.tracking.finger_select import SelectionState, select_fingers
 from frictex.device.friction import ClampCounts, make_friction_model
-from frictex.rendering.layers.sho import ShoRenderer
-from frictex.rendering.layers.sht import ShtRenderer
 from frictex.rendering.input.trace_file import Trace
+from frictex.rendering.renderers import LAYER_RENDERERS, RENDERERS, any_layer, render_modes
 from frictex.rendering.tracking.tracks import TrackerConfig, TrackerState, track
 from frictex.device.profile import FORCE_PROFILES
 from frictex.textures.model import Scene
 
-#: renderer names accepted by ``render_override`` and reported by ``frictex report``
-RENDERERS = ("sho-held", "sho-predicted", "sht", "hybrid")
 #: what a layer's ``render = "sho"`` means unless overridden
 DEFAULT_SHO = "sho-predicted"
 #: friction inversions: the closed form (seed 003, eq 3) or a table built at scene load
@@ -117,31 +116,11 @@ class StageTimer:
 
 
 def _layer_renderer(layer, mode: str, rate_hz: float):
-    kind = getattr(layer, "renderer_kind", None)  # layers that render motion or events
-    if kind is not None:
-        return _authored_renderer(kind, layer, rate_hz)
-    if mode == "sho-held":
-        return ShoRenderer(layer, predicted=False)
-    if mode == "sho-predicted":
-        return ShoRenderer(layer, predicted=True)
-    if mode == "sht":
-        return ShtRenderer(layer, rate_hz)
-    if mode == "hybrid":
-        from frictex.rendering.layers.hybrid import HybridRenderer  # built only for scenes that use it
-        return HybridRenderer(layer, rate_hz)
-    raise ValueError(f"unknown renderer {mode!r}; expected one of {', '.join(RENDERERS)}")
-
-
-def _authored_renderer(kind: str, layer, rate_hz: float):
-    """The renderer of a height, recorded-texture or clip layer (built only if used)."""
-    if kind == "height":
-        from frictex.rendering.layers.height import HeightRenderer
-        return HeightRenderer(layer, rate_hz)
-    if kind == "ar":
-        from frictex.rendering.layers.ar_texture import ArTextureRenderer
-        return ArTextureRenderer(layer, rate_hz)
-    from frictex.rendering.layers.clips import ClipRenderer
-    return ClipRenderer(layer, rate_hz)
+    """The renderer of ``layer``: its kind's (``renderer_kind``: layers that render motion
+    or events) if it has one, else renderer ``mode`` (``rendering.renderers``)."""
+    kind = getattr(layer, "renderer_kind", None)
+    factory = RENDERERS.get(mode) if kind is None else LAYER_RENDERERS.get(kind)
+    return factory(layer, rate_hz)
 
 
 def _layer_mode(layer, render_override: str | None, sho_variant: str) -> str:
@@ -164,9 +143,12 @@ class Pipeline:
             raise ValueError(f"output rate {rate_hz!r} Hz: expected a positive number")
         if block_size < 1:
             raise ValueError(f"block size {block_size!r}: expected at least 1 sample")
-        if render_override not in (None, "sho", *RENDERERS):
-            raise ValueError(f"unknown renderer {render_override!r}; expected one of "
-                             f"sho, {', '.join(RENDERERS)}")
+        if render_override is not None and render_override not in render_modes():
+            raise UnknownName(f"unknown renderer {render_override!r}; expected one of "
+                              f"{', '.join(render_modes())}")
+        if not any_layer(sho_variant):
+            raise InputError(f"SHO variant {sho_variant!r}: expected a renderer of any "
+                             f"layer, one of {', '.join(filter(any_layer, RENDERERS.names()))}")
         self.scene = scene
         self.rate_hz = float(rate_hz)
         self.block_size = int(block_size)

@@ -28,8 +28,25 @@ from pathlib import Path
 import numpy as np
 
 from frictex.device.profile import DeviceProfile
+from frictex.device.registry import Registry
 
-RENDER_MODES = ("sho", "sht", "hybrid")
+#: The renderers a periodic layer may ask for, by name (the ``LayerRenderer`` protocol of
+#: ``rendering.renderers``). frictex's own register as entry points of group
+#: ``frictex.renderers`` in its pyproject.toml, as another package's would, so that this
+#: layer lists them without importing ``rendering``.
+RENDERERS: Registry = Registry("renderer", "frictex.renderers")
+#: ``render = "sho"`` (and ``--renderer sho``): SHO, in the run's variant (``sho_variant``)
+SHO = "sho"
+
+
+def render_modes() -> tuple[str, ...]:
+    """What a layer's ``render`` (or a run's renderer override) may name: :data:`SHO` or
+    any renderer of :data:`RENDERERS`."""
+    return (SHO, *RENDERERS.names())
+
+
+#: :func:`render_modes` of the packages installed when frictex was imported
+RENDER_MODES = render_modes()
 
 #: ``fingers`` selectors of a layer besides "any" and finger numbers "1", "2", ...
 #: (1-based, in order of touch-down among the fingers touching at that sample).

@@ -15,6 +15,10 @@ from frictex.rendering.tracking.tracks import FingerBlock
 class ShoRenderer:
     """Position-map rendering of one layer. Stateless: ``render`` returns state unchanged."""
 
+    #: reads any layer's map at a position, so it can be a run's SHO variant (the
+    #: renderer of every layer without a period: ``rendering.renderers``)
+    any_layer = True
+
     def __init__(self, layer, predicted: bool):
         self.layer = layer
         self.predicted = predicted
@@ -27,3 +31,17 @@ class ShoRenderer:
         x, y = (block.x_pred, block.y_pred) if self.predicted else (block.x_held, block.y_held)
         mu, covers = self.layer.mu_and_covers(x, y)
         return mu, covers, state
+
+
+class HeldSho(ShoRenderer):
+    """The ``sho-held`` renderer: the last measured position (seed 003's plain SHO)."""
+
+    def __init__(self, layer, rate_hz: float):
+        super().__init__(layer, predicted=False)
+
+
+class PredictedSho(ShoRenderer):
+    """The ``sho-predicted`` renderer: the position extrapolated between touch samples."""
+
+    def __init__(self, layer, rate_hz: float):
+        super().__init__(layer, predicted=True)
