@@ -20,7 +20,7 @@ from scipy.optimize import least_squares
 
 from frictex.device.errors import InputError
 from frictex.device.friction import forward_mu
-from frictex.device.profile import Calibration, FrictionParams
+from frictex.device.profile import DEFAULT_PROFILE, Calibration, FrictionParams
 
 #: residual RMS (mu') above which the closed-form model is said not to fit
 MODEL_TOLERANCE = 0.02
@@ -98,7 +98,7 @@ def _table(w: np.ndarray, f: np.ndarray, m: np.ndarray) -> Calibration | None:
 
 
 def device_toml(fit: Fit, amplitude_limit_um: float, normal_force_n: float,
-                profile: str = "plate-seed003") -> str:
+                profile: str = DEFAULT_PROFILE) -> str:
     """The ``[device]`` section (text) a texture file can use for this calibration."""
     lines = ["[device]", f'profile = "{profile}"',
              f"amplitude_limit_um = {amplitude_limit_um:.6g}",

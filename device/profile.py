@@ -11,6 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from frictex.device.registry import Registry
+
 
 #: How the modal profiles turn wanted amplitudes into actuator commands
 #: (``device.actuation.modal.solve``).
@@ -20,24 +22,8 @@ DEFAULT_METHOD = "regularised"
 #: regularisation threshold, relative to the largest singular value (device/MODES.md)
 DEFAULT_RCOND = 0.1
 
-#: The actuation profiles a scene's ``[device] profile`` may name, with one line each.
-#: This is the one place to add a profile.
-DEVICE_PROFILES: dict[str, str] = {
-    "plate-seed003": "single-mode glass plate of seed 003, one channel",
-    "beam-seed000": "free-free aluminium beam of seed 000, modes 16 and 17, two actuators",
-    "plate-seed001": "2D plate of seed 001, X and Y modes, channels V_AC and V_BD",
-    "travelling-beam-seed002": "600 mm aluminium beam of seed 002, travelling wave from modes "
-                               "28 and 29, two actuators",
-    "ring-seed004": "Ultraloop ring of seed 004, degenerate 24th-order pair, phase-shift control",
-}
-#: The travelling-wave profiles (seed 002, seed 004): the only ones that can push a finger,
-#: so the only ones that accept force layers (:data:`FORCE_LAYERS`) and ``[device.driving]``.
-FORCE_PROFILES = ("travelling-beam-seed002", "ring-seed004")
-#: touch-surface length along x (mm) of each travelling-wave profile: the display must fit on it
-SURFACE_LENGTH_MM = {"travelling-beam-seed002": 600.0, "ring-seed004": 140.0}
-#: The profiles driven by modal control (seed 000 eq 10, seed 001 eqs 4-5); each has a
-#: ``[device.structure]`` table (:class:`BeamStructure` or :class:`PlateStructure`).
-MODAL_PROFILES = ("beam-seed000", "plate-seed001")
+#: the profile of a ``[device]`` table that names none
+DEFAULT_PROFILE = "plate-seed003"
 
 
 @dataclass(frozen=True)
@@ -150,18 +136,76 @@ StructureSpec = BeamStructure | PlateStructure
 
 
 @dataclass(frozen=True)
+class ProfileSpec:
+    """What frictex knows of one device profile, besides a scene's own ``[device]`` values.
+
+    summary : one line for listings.
+    actuation : the name of its actuation (``device.actuation.factory.ACTUATIONS``).
+    structure : the class of its ``[device.structure]`` table (modal profiles), else None.
+    surface_length_mm : travelling-wave profiles, the only ones that push a finger (they
+        take force layers and ``[device.driving]``): touch-surface length along x (mm),
+        which the display must fit on; else None.
+    friction_loop : seed 003's friction loop can run on it (the lateral force is sensed
+        and seed 003's model applies: ``rendering.control.loop``).
+    """
+
+    summary: str
+    actuation: str
+    structure: type | None = None
+    surface_length_mm: float | None = None
+    friction_loop: bool = False
+
+
+#: The device profiles a scene's ``[device] profile`` may name: the one table of them.
+#: Another package adds one under entry-point group ``frictex.profiles`` (a
+#: :class:`ProfileSpec` naming an actuation it registers under ``frictex.actuations``).
+PROFILES: Registry[ProfileSpec] = Registry("device profile", "frictex.profiles")
+PROFILES.register(DEFAULT_PROFILE, ProfileSpec(
+    "single-mode glass plate of seed 003, one channel", "single-mode", friction_loop=True))
+PROFILES.register("beam-seed000", ProfileSpec(
+    "free-free aluminium beam of seed 000, modes 16 and 17, two actuators", "modal",
+    structure=BeamStructure))
+PROFILES.register("plate-seed001", ProfileSpec(
+    "2D plate of seed 001, X and Y modes, channels V_AC and V_BD", "modal",
+    structure=PlateStructure))
+PROFILES.register("travelling-beam-seed002", ProfileSpec(
+    "600 mm aluminium beam of seed 002, travelling wave from modes 28 and 29, two actuators",
+    "travelling-beam", surface_length_mm=600.0))
+PROFILES.register("ring-seed004", ProfileSpec(
+    "Ultraloop ring of seed 004, degenerate 24th-order pair, phase-shift control",
+    "travelling-ring", surface_length_mm=140.0))
+
+#: every profile with its one line
+DEVICE_PROFILES: dict[str, str] = {name: PROFILES.get(name).summary for name in PROFILES.names()}
+#: The travelling-wave profiles (seed 002, seed 004): the only ones that can push a finger,
+#: so the only ones that accept force layers and ``[device.driving]``.
+FORCE_PROFILES = tuple(name for name in PROFILES.names()
+                       if PROFILES.get(name).surface_length_mm is not None)
+#: touch-surface length along x (mm) of each travelling-wave profile
+SURFACE_LENGTH_MM = {name: PROFILES.get(name).surface_length_mm for name in FORCE_PROFILES}
+#: The profiles driven by modal control (seed 000 eq 10, seed 001 eqs 4-5); each has a
+#: ``[device.structure]`` table (:class:`BeamStructure` or :class:`PlateStructure`).
+MODAL_PROFILES = tuple(name for name in PROFILES.names()
+                       if PROFILES.get(name).structure is not None)
+#: The profiles seed 003's friction loop runs on (``rendering.control.loop``).
+FRICTION_LOOP_PROFILES = tuple(name for name in PROFILES.names()
+                               if PROFILES.get(name).friction_loop)
+
+
+@dataclass(frozen=True)
 class DeviceProfile:
     """Which actuation the scene is for, and the limits of that device.
 
-    ``profile`` names the actuation (``"plate-seed003"``: the single-mode glass plate
-    of seed 003, one channel; the modal profiles of :data:`MODAL_PROFILES`).
+    ``profile`` names the device (one of :data:`PROFILES`: :data:`DEFAULT_PROFILE`, the
+    single-mode glass plate of seed 003, one channel; the modal profiles of
+    :data:`MODAL_PROFILES`; the travelling-wave ones of :data:`FORCE_PROFILES`).
     ``amplitude_limit_um`` is the zero-to-peak amplitude the host never asks for under a
     finger; ``normal_force_n`` the nominal finger force used where a trace gives none and
     for ``frictex validate``'s reachability warnings. ``structure`` describes the
-    vibrating structure of a modal profile (None for plate-seed003).
+    vibrating structure of a modal profile (None for the others).
     """
 
-    profile: str = "plate-seed003"
+    profile: str = DEFAULT_PROFILE
     amplitude_limit_um: float = 2.5
     normal_force_n: float = 0.5
     friction: FrictionParams = field(default_factory=FrictionParams)

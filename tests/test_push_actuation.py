@@ -10,12 +10,13 @@ from numpy.testing import assert_allclose
 
 from frictex.device.actuation.factory import make_actuation
 from frictex.device.structures.beam import FreeFreeBeam
-from frictex.device.actuation.push_actuation import make_push_actuation
+from frictex.device.actuation.push_actuation import travelling_beam, travelling_ring
 from frictex.device.actuation.travelling import BeamActuation, beam_wave
 from frictex.device.profile import DeviceProfile
+from frictex.device.registry import UnknownName
 
-BEAM = make_push_actuation("travelling-beam-seed002", 1e9)  # limits tested on their own
-RING = make_push_actuation("ring-seed004", 1e9)
+BEAM = travelling_beam(1e9)  # limits tested on their own
+RING = travelling_ring(1e9)
 
 
 def fingers(x):
@@ -66,12 +67,13 @@ def test_ratio_and_envelope_under_fingers_follow_the_beam_and_the_display_offset
 def test_make_actuation_dispatches_the_force_profiles():
     act = make_actuation(DeviceProfile(profile="ring-seed004"))
     assert act.channels == ("mode_sym", "mode_asym") and act.has_phases
-    with pytest.raises(ValueError, match="'plate-seed003' has no travelling-wave actuation"):
-        make_push_actuation("plate-seed003", 3.0)
+    with pytest.raises(UnknownName, match="unknown device profile 'ring'; expected one of "
+                                          "plate-seed003, .*ring-seed004"):
+        make_actuation(DeviceProfile(profile="ring"))
 
 
 def test_channel_commands_never_pass_the_limit_and_keep_the_wave_shape():
-    beam = make_push_actuation("travelling-beam-seed002", 3.0)
+    beam = travelling_beam(3.0)
     w = np.linspace(0.0, 5.0, 101)
     d = np.ones(w.size, dtype=np.int8)
     wave, limited = beam.within_limit(w, d)

@@ -41,6 +41,7 @@ import numpy as np
 from numba import njit
 
 from frictex.device.actuation.base import Actuated, touch_rank
+from frictex.device.profile import BeamStructure
 from frictex.device.structures.beam import FreeFreeBeam, ModesError
 from frictex.device.actuation.modal import (achieved_magnitude, check_settings, gain_threshold, magnitude,
                                     serve_two_modes, solve)
@@ -266,9 +267,8 @@ def plate_actuation(spec, amplitude_limit_um: float) -> ModalActuation:
                           spec.method, spec.rcond)
 
 
-BUILDERS = {"beam-seed000": beam_actuation, "plate-seed001": plate_actuation}
-
-
 def make_modal_actuation(device) -> ModalActuation:
-    """The modal actuation of a device profile (``device.profile.DeviceProfile``)."""
-    return BUILDERS[device.profile](device.structure, device.amplitude_limit_um)
+    """The modal actuation of a device profile (``device.profile.DeviceProfile``), by
+    its structure: a beam or a 2D plate."""
+    build = beam_actuation if isinstance(device.structure, BeamStructure) else plate_actuation
+    return build(device.structure, device.amplitude_limit_um)

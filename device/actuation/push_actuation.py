@@ -5,11 +5,11 @@ propagating amplitude of ``device.actuation.travelling``) and a direction d (+1 
 towards -x, 0 a standing wave) per output sample become two channel commands with
 phases (``has_phases``):
 
-- ``travelling-beam-seed002``: seed 002's 600 x 6 x 6 mm aluminium beam, modes 28 and 29
+- ``travelling-beam-seed002`` (:func:`travelling_beam`): seed 002's 600 x 6 x 6 mm aluminium beam, modes 28 and 29
   (wavelength near the paper's 41 mm), Langevin transducers 19 mm from each end (its
   Fig. 1). The references are the field at the actuators, W_A = +-j W_B (seed 002,
   eqs 4-5): neither equal amplitudes nor 90 degrees apart.
-- ``ring-seed004``: seed 004's Ultraloop (L 140, R 50, h 2.75, w 30 mm, aluminium 5052),
+- ``ring-seed004`` (:func:`travelling_ring`): seed 004's Ultraloop (L 140, R 50, h 2.75, w 30 mm, aluminium 5052),
   its 24th-order degenerate pair; one channel per mode, W_A = e^{j phi} W_B with
   phi = +-90 degrees (seed 004, eq 1 and Fig. 4): the sign of the shift sets d.
 
@@ -26,8 +26,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from frictex.device.errors import InputError
-from frictex.device.profile import SURFACE_LENGTH_MM
 from frictex.device.actuation.base import Actuated
 from frictex.device.structures.beam import FreeFreeBeam
 from frictex.device.structures.ring import RingResonator
@@ -104,19 +102,20 @@ class PushActuation:
         return Actuated(commands, np.angle(refs), achieved, limited=limited)
 
 
-def make_push_actuation(profile: str, limit_um: float) -> PushActuation:
-    """The actuation of a travelling-wave profile (one of ``SURFACE_LENGTH_MM``), its
-    channel commands limited to ``limit_um`` (um zero-to-peak)."""
-    if profile == "travelling-beam-seed002":
-        wave = beam_wave(FreeFreeBeam(600.0, 6.0, 6.0, 69.0, 2700.0), 28)
-        beam = BeamActuation(wave, (19.0, 581.0))
-        refs = [beam.references(1.0, d) for d in _DIRECTIONS]
-        return PushActuation.build(("actuator1", "actuator2"), wave, refs, 0.0, limit_um)
-    if profile == "ring-seed004":
-        ring = RingResonator(140.0, 50.0, 2.75, 30.0, 69.0, 2680.0)
-        wave = ring_wave(ring, 24)
-        refs = [wave.modal(1.0, d) for d in _DIRECTIONS]
-        return PushActuation.build(("mode_sym", "mode_asym"), wave, refs, -ring.length_mm / 2,
-                                   limit_um)
-    raise InputError(f"device profile {profile!r} has no travelling-wave actuation; expected one "
-                     f"of {', '.join(SURFACE_LENGTH_MM)}")
+def travelling_beam(limit_um: float) -> PushActuation:
+    """Seed 002's beam (``travelling-beam`` actuation), channel commands limited to
+    ``limit_um`` (um zero-to-peak)."""
+    wave = beam_wave(FreeFreeBeam(600.0, 6.0, 6.0, 69.0, 2700.0), 28)
+    beam = BeamActuation(wave, (19.0, 581.0))
+    refs = [beam.references(1.0, d) for d in _DIRECTIONS]
+    return PushActuation.build(("actuator1", "actuator2"), wave, refs, 0.0, limit_um)
+
+
+def travelling_ring(limit_um: float) -> PushActuation:
+    """Seed 004's ring (``travelling-ring`` actuation), channel commands limited to
+    ``limit_um`` (um zero-to-peak)."""
+    ring = RingResonator(140.0, 50.0, 2.75, 30.0, 69.0, 2680.0)
+    wave = ring_wave(ring, 24)
+    refs = [wave.modal(1.0, d) for d in _DIRECTIONS]
+    return PushActuation.build(("mode_sym", "mode_asym"), wave, refs, -ring.length_mm / 2,
+                               limit_um)

@@ -118,7 +118,7 @@ from frictex.device.errors import InputError
 from frictex.device.finger import SensorParams
 from frictex.device.link.forces import ForceReport
 from frictex.device.friction import ASYMPTOTE_MARGIN, SeedFrictionModel
-from frictex.device.profile import DeviceProfile
+from frictex.device.profile import FRICTION_LOOP_PROFILES, DeviceProfile
 from frictex.rendering.control.adapt import Rls, RlsState
 from frictex.rendering.control.block_stats import (chain_input, feed_forward, feedback_stats,
                                            report_peak, rest_stats, sent_rows)
@@ -235,8 +235,9 @@ class ClosedLoop:
         if mode not in CONTROL_MODES[1:]:
             raise InputError(f"control mode {mode!r}: expected one of {', '.join(CONTROL_MODES)} "
                              f"(open loop builds no loop)")
-        if device.calibration is not None or device.profile != "plate-seed003":
-            raise InputError(f"closed-loop control needs profile plate-seed003 with seed 003's "
+        if device.calibration is not None or device.profile not in FRICTION_LOOP_PROFILES:
+            raise InputError(f"closed-loop control needs profile "
+                             f"{' or '.join(FRICTION_LOOP_PROFILES)} with seed 003's "
                              f"model; got {device.profile!r}"
                              f"{' with a calibration table' if device.calibration else ''}")
         self.device = device
