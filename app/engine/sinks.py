@@ -5,6 +5,11 @@ A sink takes every pipeline call's output and the channel commands actually sent
 (n, channels) um), then either ``commit()`` (the run finished: make the result final)
 or ``abort()`` (the run failed: leave nothing that looks complete). The driver calls
 them; a sink never calls another.
+
+The :class:`Sink` protocol is an extension point: :data:`SINKS` holds the sinks by name
+(``tables``, ``link``, ``frames``, ``memory``, ``progress``, ``threaded``), and another
+package adds one under entry-point group ``frictex.sinks``. Each is built with its own
+arguments (a sink class).
 """
 
 from __future__ import annotations
@@ -12,8 +17,11 @@ from __future__ import annotations
 import queue
 import threading
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
+
+from frictex.device.registry import Registry
 
 from frictex.app.engine.tables import TableWriter
 
@@ -48,6 +56,24 @@ def friction_rows(out) -> dict[str, np.ndarray]:
             "mu_target": mu[contact], "amplitude_um": amplitude[contact]}
 
 
+class Sink(Protocol):
+    """Where a run's output goes (see the module docstring)."""
+
+    def write(self, out, commands_um: np.ndarray) -> None:
+        """Take one pipeline call's output and the (n, channels) commands sent (um)."""
+
+    def commit(self) -> None:
+        """The run finished: make the result final."""
+
+    def abort(self) -> None:
+        """The run failed: leave nothing that looks complete."""
+
+
+#: sinks by name (their classes)
+SINKS: Registry[type] = Registry("sink", "frictex.sinks")
+
+
+@SINKS.register("tables")
 class TableSink:
     """``commands.<fmt>`` and ``friction.<fmt>`` in ``out_dir`` (DESIGN.md, replay output)."""
 
@@ -81,6 +107,7 @@ class TableSink:
         self.friction.abort()
 
 
+@SINKS.register("link")
 class LinkSink:
     """Streams every block's commands to a device link (``device.link.host.CommandSink``);
     commit drains the link, abort closes it at once. Blocks go out ``block_size`` samples
@@ -102,6 +129,7 @@ class LinkSink:
     abort = commit
 
 
+@SINKS.register("frames")
 class FrameSink:
     """PNG frames of the visual layer (``app.engine.frames.FrameWriter``)."""
 
@@ -117,6 +145,7 @@ class FrameSink:
     abort = commit
 
 
+@SINKS.register("memory")
 class MemorySink:
     """Keeps every block output in a list (measurements and tests of short runs)."""
 
@@ -132,6 +161,7 @@ class MemorySink:
     abort = commit
 
 
+@SINKS.register("progress")
 class ProgressSink:
     """A progress bar on stderr counting seconds of output (tqdm)."""
 
@@ -150,6 +180,7 @@ class ProgressSink:
     abort = commit
 
 
+@SINKS.register("threaded")
 class ThreadedSink:
     """Another sink, run on its own thread so that ``write`` never blocks the caller (the
     live haptic loop): a full queue drops the block, counted in ``dropped``."""
