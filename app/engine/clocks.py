@@ -3,14 +3,36 @@
 A clock is asked to ``wait(k)`` before block ``k`` is computed and told ``finished(k, n)``
 once blocks ``k .. k + n - 1`` have reached the sinks. Clocks that pace in real time
 count deadline misses; every wait has a bound.
+
+The :class:`Clock` protocol is an extension point: :data:`CLOCKS` holds the clocks by
+name (``virtual``, ``wall``, ``device``), and another package adds one under entry-point
+group ``frictex.clocks``. Each is built with its own arguments (a clock class).
 """
 
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import Protocol
+
+from frictex.device.registry import Registry
 
 
+class Clock(Protocol):
+    """What paces a run (see the module docstring)."""
+
+    def wait(self, k: int) -> None:
+        """Return when block ``k`` may be computed (a bounded wait)."""
+
+    def finished(self, k: int, n: int) -> None:
+        """Blocks ``k .. k + n - 1`` have reached the sinks."""
+
+
+#: clocks by name (their classes)
+CLOCKS: Registry[type] = Registry("clock", "frictex.clocks")
+
+
+@CLOCKS.register("virtual")
 class VirtualClock:
     """Replay: every block may run at once; output time advances exactly n / rate."""
 
@@ -29,6 +51,7 @@ class DeadlineStats:
     worst_lateness_s: float = 0.0
 
 
+@CLOCKS.register("wall")
 class WallClock:
     """Live: block ``k`` starts at ``t0 + k * block_s`` on ``now`` (s) and is due
     ``deadline_s`` after its start (the device's jitter-buffer prefill); a block handed
@@ -64,6 +87,7 @@ class WallClock:
             self.stats.misses += 1
 
 
+@CLOCKS.register("device")
 class DevicePacedClock:
     """Streaming to a device: block ``k`` runs when the device's link can take it, so the
     device's own sample clock paces the run. Each wait is bounded by ``timeout_s``; a wait
