@@ -138,3 +138,86 @@ def test_two_fingers_are_tracked_independently():
     live = block.t_s > 0.1
     assert_allclose(block.vx[0, live], 40.0, rtol=1e-9)
     assert_allclose(block.vx[1, live], -20.0, rtol=1e-9)
+
+
+# -- cost bounded by the samples, however closely they crowd --------------------------------
+
+def _crowded(m, span_s=1e-4, seed=0):
+    """One finger's ``m`` samples within ``span_s`` (moving at 40 mm/s plus 1 um noise)."""
+    t = np.linspace(0.0, span_s, m)
+    rng = np.random.default_rng(seed)
+    return (t, 10 + 40.0 * t + rng.normal(0, 1e-3, m), 20 - 30.0 * t + rng.normal(0, 1e-3, m),
+            np.full(m, 0.5), np.r_[DOWN, np.full(m - 1, MOVE)].astype(np.int8))
+
+
+def _summed_rows(monkeypatch, m, cap):
+    """Run the step kernel as Python over ``m`` crowded samples with fits of at most
+    ``cap`` rows, counting the values its sums add: (number of sums, values summed)."""
+    from frictex.rendering.tracking import tracks
+    calls = []
+    real = tracks._pairwise
+    monkeypatch.setattr(tracks, "_pairwise", lambda a, lo, n: calls.append(n) or real(a, lo, n))
+    t, x, y, f, ev = _crowded(m)
+    tracks._steps_kernel.py_func((False, 0, -np.inf, 0.0, 0.0, 0.0, 0.0, np.inf), np.empty((0, 3)),
+                                 t, x, y, f, ev, (0.05, 0.1, 2000.0, 10.0), cap)
+    return len(calls), sum(calls)
+
+
+def test_fit_work_is_linear_in_crowded_samples(monkeypatch):
+    # 6 sums per sample (t, t^2, x, y, t x, t y), each over at most `cap` rows: doubling
+    # the samples doubles the work
+    for m in (400, 800):
+        sums, values = _summed_rows(monkeypatch, m, cap=16)
+        assert sums == 6 * m and values == 6 * m * 16
+    # without the cap every fit spans the touch so far: the work the cap removes
+    sums, values = _summed_rows(monkeypatch, 200, cap=10**9)
+    assert sums == 6 * 200 and values == 6 * 200 * 200
+
+
+def test_capped_fit_is_the_line_through_the_latest_samples():
+    # brute force: np.polyfit through each sample's last `cap` samples (all within 50 ms)
+    from frictex.rendering.tracking.tracks import FingerState, _finger_steps
+    cap = 8
+    t, x, y, f, ev = _crowded(300, span_s=0.003)
+    counters = {"jumps": 0, "out_of_order": 0}
+    table, keep, _ = _finger_steps(FingerState(), t, x, y, f, ev,
+                                   TrackerConfig(fit_samples=cap), counters)
+    assert keep.all() and counters == {"jumps": 0, "out_of_order": 0}
+    for k in range(1, t.size):
+        rows = slice(max(0, k - cap + 1), k + 1)
+        vx, x0 = np.polyfit(t[rows] - t[k], x[rows], 1)
+        vy, y0 = np.polyfit(t[rows] - t[k], y[rows], 1)
+        assert_allclose(table[7:9, k], [vx, vy], rtol=1e-6, err_msg=f"sample {k}")
+        assert_allclose(table[5:7, k], [x0, y0], rtol=1e-12, atol=1e-9, err_msg=f"sample {k}")
+
+
+def test_capped_fit_carries_across_blocks():
+    # the same crowded samples in one call or in 7 blocks: same tracks (the history
+    # carried is the cap's rows, not the whole window)
+    t, x, y, f, ev = _crowded(2000, span_s=0.01)
+    trace = make_trace(t, np.zeros(t.size, int), x, y, f, ev)
+    cfg = TrackerConfig(rate_hz=10_000.0, quantum=1, fit_samples=32)
+    whole, _ = track(0, 120, trace, TrackerState(), cfg)
+    applied = apply_index(trace.t_s, cfg)
+    state, parts, i = TrackerState(), [], 0
+    for lo in range(0, 120, 20):
+        j = int(np.searchsorted(applied, lo + 20))
+        block, state = track(lo, 20, trace.slice(i, j) if j > i else None, state, cfg)
+        parts.append(block.vx)
+        i = j
+    assert_allclose(np.concatenate(parts, axis=1), whole.vx, rtol=1e-9, atol=1e-9)
+
+
+def test_many_short_touches_in_one_block_track_each_finger():
+    # 400 touches (down, move, up) within 1 ms: each finger's rows as if tracked alone
+    m = 400
+    fid = np.repeat(np.arange(m), 3)
+    t = np.linspace(0, 1e-3, 3 * m)
+    ev = np.tile([DOWN, MOVE, UP], m).astype(np.int8)
+    x = 5 + 0.01 * np.arange(3 * m)
+    trace = make_trace(t, fid, x, np.full(3 * m, 7.0), None, ev)
+    block, state = track(0, 50, trace, TrackerState(), CFG)
+    assert block.ids == tuple(range(m)) and state.fingers == {}
+    for k in (0, 137, m - 1):
+        alone, _ = track(0, 50, trace.slice(3 * k, 3 * k + 3), TrackerState(), CFG)
+        assert_allclose(block.x_held[k], alone.x_held[0]) and (block.touch_id[k] == alone.touch_id[0]).all()
