@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import math
 
-from frictex.textures import loader as L
+from frictex.textures import keys as K
+from frictex.textures import model
+from frictex.textures import schema as S
 
 INTRO = """# Texture files: every table and key
 
 One scene per TOML file. This page is generated from the loader's key tables
-(`textures/loader.py`) by `python -m frictex.textures.format_doc`, and a test keeps the two equal:
+(`textures/keys.py`) by `python -m frictex.textures.format_doc`, and a test keeps the two equal:
 every key the loader accepts is here, with its unit, range and default, and no other.
 `frictex validate FILE` checks a file against it and names the file, line and field of
 every problem. The grammar's overview and its worked examples are at the top of
@@ -37,7 +39,7 @@ def _range(spec) -> str:
 
 def _default(spec) -> str:
     value = spec.default
-    if value is L.REQUIRED:
+    if value is S.REQUIRED:
         return "*required*"
     if value is None:
         return "none (derived, see the loader's grammar)"
@@ -53,24 +55,24 @@ def _default(spec) -> str:
 
 
 def _kind(spec) -> str:
-    if isinstance(spec, L.Num):
+    if isinstance(spec, S.Num):
         return f"number ({spec.unit})"
-    if isinstance(spec, L.Int):
+    if isinstance(spec, S.Int):
         return f"integer ({spec.unit})"
-    if isinstance(spec, L.Choice):
+    if isinstance(spec, S.Choice):
         return "one of " + ", ".join(f"`{o}`" for o in spec.options)
-    if isinstance(spec, L.Text):
+    if isinstance(spec, S.Text):
         return f"text (at most {spec.max_len} characters{', may span lines' if spec.lines else ''})"
-    if isinstance(spec, L.Flag):
+    if isinstance(spec, S.Flag):
         return "true or false"
-    if isinstance(spec, L.Colour):
+    if isinstance(spec, S.Colour):
         return "colour: [r, g, b] in 0..1 or \"#rrggbb\""
-    if isinstance(spec, L.Selector):
+    if isinstance(spec, S.Selector):
         return ("finger selector: `any`, a finger number `1`, `2`, ... (order of touch-down), "
-                "or " + ", ".join(f"`{s}`" for s in L.model.POSITIONAL_SELECTORS))
-    if isinstance(spec, L.NumList):
+                "or " + ", ".join(f"`{s}`" for s in model.POSITIONAL_SELECTORS))
+    if isinstance(spec, S.NumList):
         return f"list of at least {spec.min_len} numbers ({spec.item.unit})"
-    if isinstance(spec, L.Rows):
+    if isinstance(spec, S.Rows):
         return f"list of rows of numbers ({spec.item.unit})"
     raise TypeError(f"no description for {type(spec).__name__}")
 
@@ -78,26 +80,26 @@ def _kind(spec) -> str:
 def _table(title: str, specs: dict) -> list[str]:
     lines = [f"## {title}", "", "| key | value | range | default |", "|---|---|---|---|"]
     for key, spec in specs.items():
-        if isinstance(spec, L.Retired):
+        if isinstance(spec, S.Retired):
             lines.append(f"| `{key}` | no longer used: accepted, ignored, with a warning ({spec.why}) "
                          f"| - | - |")
             continue
-        inner = spec.item if isinstance(spec, (L.NumList, L.Rows)) else spec
+        inner = spec.item if isinstance(spec, (S.NumList, S.Rows)) else spec
         lines.append(f"| `{key}` | {_kind(spec)} | {_range(inner) or '-'} | {_default(spec)} |")
     return lines + [""]
 
 
 def sections() -> list[tuple[str, dict]]:
     """(title, key table) for every table a texture file may hold, in file order."""
-    out = [("Top level", L.TOP), ("[display]", L.DISPLAY), ("[device]", L.DEVICE),
-           ("[device.friction]", L.FRICTION), ("[device.calibration]", L.CALIBRATION)]
+    out = [("Top level", K.TOP), ("[display]", K.DISPLAY), ("[device]", K.DEVICE),
+           ("[device.friction]", K.FRICTION), ("[device.calibration]", K.CALIBRATION)]
     out += [(f"[device.structure] for profile = \"{profile}\"", specs)
-            for profile, specs in L.STRUCTURES.items()]
-    out.append(("[device.driving] (travelling-wave profiles)", L.DRIVING))
-    out.append(("[[layer]]: every layer", L.COMMON))
-    out += [(f"[[layer]] type = \"{kind}\"", specs) for kind, specs in L.LAYER_KEYS.items()]
-    out += [("[layer.region]: a rectangle", L.RECT_REGION), ("[layer.region]: a disc", L.DISC_REGION),
-            ("[layer.visual]", L.VISUAL)]
+            for profile, specs in K.STRUCTURES.items()]
+    out.append(("[device.driving] (travelling-wave profiles)", K.DRIVING))
+    out.append(("[[layer]]: every layer", K.COMMON))
+    out += [(f"[[layer]] type = \"{kind}\"", specs) for kind, specs in K.LAYER_KEYS.items()]
+    out += [("[layer.region]: a rectangle", K.RECT_REGION), ("[layer.region]: a disc", K.DISC_REGION),
+            ("[layer.visual]", K.VISUAL)]
     return out
 
 

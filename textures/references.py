@@ -15,7 +15,7 @@ from pathlib import Path
 
 from frictex.textures.errors import TextureError
 from frictex.textures.library import UnreadableText, read_utf8
-from frictex.textures.loader import MAX_FILE_BYTES, _deepest_line
+from frictex.textures.toml_safe import MAX_FILE_BYTES, deepest_line
 
 #: the keys of a ``[[layer]]`` table that name a file, and that of ``[device.structure]``
 LAYER_FILE_KEYS = ("image", "model", "file")
@@ -32,7 +32,7 @@ def referenced_files(scene_path: str | Path) -> tuple[Path, ...]:
         text = read_utf8(scene_path, MAX_FILE_BYTES)
     except UnreadableText as exc:
         raise TextureError(f"{scene_path}: {exc}") from None
-    if _deepest_line(text) is not None:  # tomllib would recurse or take quadratic time
+    if deepest_line(text) is not None:  # tomllib would recurse or take quadratic time
         raise TextureError(f"{scene_path}: nested too deep to list the files it names")
     try:
         doc = tomllib.loads(text)

@@ -1,0 +1,82 @@
+"""Text from files and the network, made safe to print: escaped and cut to a length.
+
+Every value that frictex shows in a message and that came from outside (a key, a name,
+a cell of a table, a file name) goes through :func:`escape` first, so that a message
+never carries a terminal escape (ESC, BEL, CSI), a line break that would forge a second
+line, or a whole line of a file that is not what it claims to be.
+
+- Printable characters stay as they are (non-ASCII letters included).
+- ``\\``, tab, newline and carriage return become ``\\\\``, ``\\t``, ``\\n``, ``\\r``.
+- Every other control or format character (Unicode categories Cc, Cf, Cs, Co, Cn, Zl,
+  Zp: ESC, BEL, DEL, C1 controls, bidirectional overrides, unpaired surrogates) becomes
+  ``\\xHH``, ``\\uHHHH`` or ``\\UHHHHHHHH``: ESC is shown as the four characters
+  ``\\x1b``.
+- The escaped text is cut to at most ``limit`` characters (:data:`MAX_SHOWN`, 60, by
+  default), ending with an ellipsis ``...`` where it was cut; an escape is never cut in
+  the middle.
+
+This module is in the lowest layer so that every layer (the device's own messages, the
+texture and trace readers, the command line's error printer) can use it.
+"""
+
+from __future__ import annotations
+
+import unicodedata
+
+#: Longest escaped value shown in a message (characters, the ellipsis included).
+MAX_SHOWN = 60
+
+_NAMED = {"\\": "\\\\", "\t": "\\t", "\n": "\\n", "\r": "\\r"}
+_UNSAFE = frozenset(("Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp"))
+_ELLIPSIS = "..."
+
+
+def _escape_char(ch: str) -> str:
+    if ch in _NAMED:
+        return _NAMED[ch]
+    if unicodedata.category(ch) not in _UNSAFE:
+        return ch
+    code = ord(ch)
+    if code <= 0xFF:
+        return f"\\x{code:02x}"
+    return f"\\u{code:04x}" if code <= 0xFFFF else f"\\U{code:08x}"
+
+
+def escape(value: object, limit: int | None = MAX_SHOWN) -> str:
+    """``value`` (``str()`` of it if not a string) escaped and cut for a one-line message.
+
+    Parameters
+    ----------
+    value : the text (or any object, shown by its ``str()``).
+    limit : most characters returned, the ellipsis included (at least 4); None: no cut.
+
+    Returns
+    -------
+    str
+        Printable text on one line: no control character, no line break.
+
+    Examples
+    --------
+    >>> escape("\\x1b]0;owned\\x07name")
+    '\\\\x1b]0;owned\\\\x07name'
+    >>> escape("x" * 100, limit=10)
+    'xxxxxxx...'
+    """
+    text = value if isinstance(value, str) else str(value)
+    if limit is not None and limit < len(_ELLIPSIS) + 1:
+        raise ValueError(f"limit must be at least {len(_ELLIPSIS) + 1}, got {limit}")
+    pieces = [_escape_char(ch) for ch in (text if limit is None else text[:limit + 1])]
+    if limit is None or sum(map(len, pieces)) <= limit and len(text) <= limit:
+        return "".join(pieces)
+    out, length = [], 0
+    for piece in pieces:
+        if length + len(piece) > limit - len(_ELLIPSIS):
+            break
+        out.append(piece)
+        length += len(piece)
+    return "".join(out) + _ELLIPSIS
+
+
+def quoted(value: object, limit: int | None = MAX_SHOWN) -> str:
+    """:func:`escape` of ``value`` in double quotes (the quotes not counted in ``limit``)."""
+    return f'"{escape(value, limit)}"'

@@ -1,0 +1,118 @@
+"""Builders of the dynamic layers: heights felt by their slope (``textures.heights``),
+recorded textures (``textures.hatt``) and effect clips (``textures.clips``,
+``textures.ahap``)."""
+
+from __future__ import annotations
+
+from frictex.textures import model
+from frictex.textures.ahap import read_ahap
+from frictex.textures.clips import Clip, ClipEvent, ClipLayer
+from frictex.textures.heights import (ButtonRim, GaussianBump, HeightLayer, HeightMap, Ridge, Step,
+                                      read_height_png)
+from frictex.textures.keys import CLIP_SHAPES, HEIGHT_SHAPES
+from frictex.textures.schema import show
+from frictex.textures.sections.common import chosen_keys, forbid, strictly_increasing
+from frictex.textures.sections.files import file_read
+from frictex.textures.sections.geometry import on_display, region_on_display
+
+
+def build_height(r, path, v, given, ctx):
+    kind = v["shape"]
+    ok = chosen_keys(r, path, v, given, HEIGHT_SHAPES, "shape",
+                      optional=("x_mm", "y_mm") if kind == "map" else ())
+    low = "<=" if v["rendering"] == "magnitude" else "<"
+    if not ((v["mu_min"] <= v["mu_rest"] if low == "<=" else v["mu_min"] < v["mu_rest"])
+            and v["mu_rest"] < v["mu_max"]):
+        r.report(path + ("mu_rest",), f"mu_min {v['mu_min']:g} {low} mu_rest {v['mu_rest']:g} "
+                                      f"< mu_max {v['mu_max']:g} does not hold")
+        ok = False
+    if not ok:
+        return None
+    if kind == "bump":
+        shape = GaussianBump(v["cx_mm"], v["cy_mm"], v["sigma_mm"], v["rise_mm"])
+        ok = on_display(r, path + ("cx_mm",), ctx, "bump centre", [v["cx_mm"]], [v["cy_mm"]])
+    elif kind == "ridge":
+        shape = Ridge(v["x_mm"], v["y_mm"], v["angle_deg"], v["width_mm"], v["rise_mm"])
+        ok = on_display(r, path + ("x_mm",), ctx, "ridge point", [v["x_mm"]], [v["y_mm"]])
+    elif kind == "step":
+        shape = Step(v["x_mm"], v["y_mm"], v["angle_deg"], v["rise_mm"], v["chamfer_mm"])
+        ok = on_display(r, path + ("x_mm",), ctx, "step point", [v["x_mm"]], [v["y_mm"]])
+    elif kind == "button":
+        if not v["rim_mm"] < v["radius_mm"]:
+            r.report(path + ("rim_mm",), f"{v['rim_mm']:g} mm is not below radius_mm {v['radius_mm']:g}")
+            return None
+        shape = ButtonRim(v["cx_mm"], v["cy_mm"], v["radius_mm"], v["rim_mm"], v["rise_mm"])
+        ok = ctx.display is None or region_on_display(
+            r, path + ("cx_mm",), model.DiscRegion(v["cx_mm"], v["cy_mm"], v["radius_mm"]),
+            ctx.display, "button")
+    else:
+        x, y = v["x_mm"] or 0.0, v["y_mm"] or 0.0
+        sprite = model.RectRegion(x, y, v["width_mm"], v["height_mm"])
+        ok = ctx.display is None or region_on_display(r, path + ("x_mm",), sprite, ctx.display,
+                                                        "height map")
+        heights = file_read(r, path, "image", v["image"], ctx,
+                             lambda f: read_height_png(f, v["rise_mm"]))
+        if heights is None:
+            return None
+        shape = HeightMap(heights, x, y, v["width_mm"], v["height_mm"])
+    keys = ("rendering", "gain", "mu_rest", "mu_min", "mu_max", "v_fade_mm_s")
+    return (HeightLayer(**ctx.common, shape=shape, **{k: v[k] for k in keys}), "mu_min") if ok else None
+
+
+def build_recorded(r, path, v, given, ctx):
+    if not v["mu_min"] < v["mu_mean"] < v["mu_max"]:
+        r.report(path + ("mu_mean",), f"mu_min {v['mu_min']:g} < mu_mean {v['mu_mean']:g} < "
+                                      f"mu_max {v['mu_max']:g} does not hold")
+        return None
+    from frictex.textures.hatt import ArTextureLayer, read_hatt_xml  # numba: only for scenes that use it
+
+    texture = file_read(r, path, "model", v["model"], ctx, read_hatt_xml)
+    if texture is None:
+        return None
+    return ArTextureLayer(**ctx.common, **{**v, "model": texture}), "mu_min"
+
+
+def _clip_shape(r, path, v, ctx) -> Clip | None:
+    kind, depth = v["clip"], v["depth"]
+    sharp = v["sharpness"] if v["sharpness"] is not None else (0.5 if kind == "tick" else 0.0)
+    if kind == "tick":
+        return Clip((ClipEvent("transient", 0.0, v["intensity"], sharp),), depth)
+    if kind == "ramp":
+        envelope = ((0.0, v["level_from"]), (v["duration_s"], v["level_to"]))
+        return Clip((ClipEvent("continuous", 0.0, 1.0, sharp, v["duration_s"], envelope),), depth)
+    if kind == "envelope":
+        times, levels = v["times_s"], v["levels"]
+        if len(times) != len(levels) or times[0] != 0.0 or not strictly_increasing(times):
+            r.report(path + ("times_s",), f"{show(list(times))}: expected times from 0, strictly "
+                                          f"increasing, one per level ({len(levels)})")
+            return None
+        return Clip((ClipEvent("continuous", 0.0, v["intensity"], sharp, times[-1],
+                               tuple(zip(times, levels))),), depth)
+    got = file_read(r, path, "file", v["file"], ctx, lambda f: read_ahap(f, depth))
+    if got is None:
+        return None
+    clip, notes = got
+    for note in notes[:3]:
+        r.report(path + ("file",), note, warning=True)
+    return clip
+
+
+def build_clip(r, path, v, given, ctx):
+    shape_ok = chosen_keys(r, path, v, given, CLIP_SHAPES, "clip", optional=("sharpness",))
+    ok = True
+    trigger = v["trigger"]
+    needs = {"edge": ("x_mm", "y_mm"), "force": ("force_n",)}.get(trigger, ())
+    for key in needs:
+        if v[key] is None:
+            r.report(path + (key,), f'missing (required with trigger = "{trigger}")')
+            ok = False
+    unused = [k for k in ("x_mm", "y_mm", "angle_deg", "force_n") if k not in needs
+              and not (k == "angle_deg" and trigger == "edge")]
+    ok &= forbid(r, path, given, unused, f'with trigger = "{trigger}"')
+    if ok and trigger == "edge":
+        ok = on_display(r, path + ("x_mm",), ctx, "edge point", [v["x_mm"]], [v["y_mm"]])
+    clip = _clip_shape(r, path, v, ctx) if shape_ok else None  # its problems too
+    if clip is None or not ok:
+        return None
+    place = {k: v[k] for k in ("x_mm", "y_mm", "angle_deg", "force_n") if v[k] is not None}
+    return ClipLayer(**ctx.common, clip=clip, trigger=trigger, **place), "depth"

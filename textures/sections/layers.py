@@ -1,0 +1,115 @@
+"""``[[layer]]`` tables: the keys every layer takes (type, name, render, blend, fingers,
+region, visual), then the builder of its type; and the warnings about layers a device
+cannot serve as written."""
+
+from __future__ import annotations
+
+from typing import Callable
+
+from frictex.device import profile as profiles
+from frictex.textures import model
+from frictex.textures.errors import KeyPath
+from frictex.textures.keys import COMMON, LAYER_KEYS, LAYER_TABLES, LAYER_TYPES, MAX_LAYERS, PERIODIC_TYPES, VISUAL
+from frictex.textures.schema import BAD, Reader, kind, show
+from frictex.textures.sections import dynamic, forces, shapes
+from frictex.textures.sections.common import Context
+from frictex.textures.sections.files import Files
+from frictex.textures.sections.geometry import parse_region
+
+BUILDERS: dict[str, Callable] = {
+    "grating": shapes.build_grating, "waveform": shapes.build_waveform,
+    "rectangle": shapes.build_rectangle, "disc": shapes.build_disc, "edge": shapes.build_edge,
+    "bump": shapes.build_bump, "line": shapes.build_line, "raster": shapes.build_raster,
+    "directional": forces.build_directional, "guidance": forces.build_guidance,
+    "keyclick": forces.build_keyclick, "height": dynamic.build_height,
+    "recorded": dynamic.build_recorded, "clip": dynamic.build_clip,
+}
+
+
+def parse_layer(r: Reader, raw, index: int, display, files: Files, names: dict):
+    """One [[layer]] -> (layer, key of its lowest mu') or None (problems reported)."""
+    path: KeyPath = ("layer", index)
+    if not isinstance(raw, dict):
+        r.report(path, f"expected a table, got {kind(raw)}")
+        return None
+    if "type" not in raw:
+        r.report(path + ("type",), f"missing (required): one of {', '.join(LAYER_TYPES)}")
+        return None
+    layer_type = COMMON["type"].check(r, raw["type"], path + ("type",))
+    if layer_type is BAD:
+        return None
+    v = r.table(raw, path, {**COMMON, **LAYER_KEYS[layer_type]}, tables=LAYER_TABLES)
+    region = parse_region(r, raw["region"], path + ("region",), display) if "region" in raw else None
+    visual = r.table(raw.get("visual", {}), path + ("visual",), VISUAL)
+    name = v["name"] if v["name"] is not None else f"{layer_type}-{index + 1}"
+    if name is not BAD:
+        if not name.strip():
+            r.report(path + ("name",), 'is empty; give the layer a name or leave the key out')
+        elif name in names:
+            r.report(path + ("name",), f"{show(name)} is already the name of layer[{names[name] + 1}]")
+        names.setdefault(name, index)
+    render = v["render"]
+    if render in ("sht", "hybrid") and layer_type not in PERIODIC_TYPES:
+        render = r.report(path + ("render",), f'"{render}" needs a periodic layer (grating or '
+                                               f'waveform); a {layer_type} renders with "sho" (or "auto")')
+    values = {k: v[k] for k in LAYER_KEYS[layer_type]}
+    if BAD in values.values():
+        return None
+    common_ok = not (BAD in (name, render, v["blend"], v["fingers"], region) or visual is None
+                     or BAD in visual.values())
+    if render == "auto":
+        render = model.auto_render_mode(values["period_mm"] if layer_type in PERIODIC_TYPES else None)
+    # with problems in the common keys the type's own checks still run (every problem
+    # is reported) on placeholder hints, and the layer is dropped afterwards
+    hints = model.VisualHints(**visual) if common_ok else model.VisualHints()
+    common = dict(name=name, render=render, blend=v["blend"], region=region, visual=hints,
+                  fingers=v["fingers"])
+    built = BUILDERS[layer_type](r, path, values, set(raw), Context(display, files, common))
+    return built if common_ok else None
+
+
+def parse_layers(r: Reader, doc: dict, display, files: Files):
+    raw = doc.get("layer")
+    if raw is None:
+        r.report(("layer",), "no [[layer]] tables: a scene needs at least one layer")
+        return None
+    if not isinstance(raw, list) or not all(isinstance(x, dict) for x in raw):
+        r.report(("layer",), f"expected [[layer]] tables (an array of tables), got {kind(raw)}; "
+                             f"start each layer with [[layer]]")
+        return None
+    if len(raw) > MAX_LAYERS:
+        r.report(("layer",), f"{len(raw)} [[layer]] tables; a scene holds at most {MAX_LAYERS} "
+                             f"(every layer is evaluated for every finger at every output sample)")
+        return None
+    names: dict[str, int] = {}
+    built = [parse_layer(r, item, i, display, files, names) for i, item in enumerate(raw)]
+    return None if None in built else built
+
+
+def selector_warnings(r: Reader, device: profiles.DeviceProfile, built) -> None:
+    if device.profile != "plate-seed003":
+        return
+    for index, (layer, _) in enumerate(built):
+        if layer.fingers != "any":
+            r.report(("layer", index, "fingers"),
+                     f"{show(layer.fingers)} on profile {show(device.profile)}: one channel "
+                     f"serves only the finger touching longest, so other fingers feel its "
+                     f"amplitude, not this layer (a modal profile gives each finger its own: "
+                     f"{', '.join(profiles.MODAL_PROFILES)})", warning=True)
+
+
+def reach_warnings(r: Reader, device: profiles.DeviceProfile, built) -> None:
+    from frictex.device.friction import mu_floor
+
+    force = device.normal_force_n
+    floor = mu_floor(device, force)
+    source = ("the calibration table" if device.calibration is not None
+              else f"seed 003 eq 2, amplitude_limit_um {device.amplitude_limit_um:g}")
+    for index, (layer, low_key) in enumerate(built):
+        low = layer.mu_range[0]
+        if low < floor - 1e-12:
+            r.report(("layer", index, low_key),
+                     f"asks for mu' down to {low:.4g}, but the device reaches only {floor:.4g} at "
+                     f"the nominal {force:g} N ({source}); lower values will be clamped",
+                     warning=True)
+
