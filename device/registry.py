@@ -28,8 +28,8 @@ ones. This module is in the lowest layer so that every layer can register into i
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
-from importlib.metadata import EntryPoint
-from typing import Generic, TypeVar, overload
+from dataclasses import dataclass
+from typing import Any, Generic, TypeVar, overload
 
 from frictex.device.errors import FrictexError, InputError
 
@@ -51,8 +51,16 @@ class PluginError(FrictexError, RuntimeError):
     already registered."""
 
 
-def _distribution(point: EntryPoint) -> str:
+def _distribution(point) -> str:
     return point.dist.name if point.dist is not None else "?"
+
+
+@dataclass(frozen=True)
+class _Unloaded:
+    """An entry point not imported yet (``importlib.metadata``'s, or the backport's where
+    a package installs ``importlib_metadata``'s finder: the same interface)."""
+
+    point: Any
 
 
 class Registry(Generic[T]):
@@ -69,7 +77,7 @@ class Registry(Generic[T]):
     def __init__(self, kind: str, group: str):
         self.kind = kind
         self.group = group
-        self._entries: dict[str, T | EntryPoint] = {}
+        self._entries: dict[str, T | _Unloaded] = {}
         self._origin: dict[str, str] = {}
         self._scanned = False
 
@@ -113,14 +121,14 @@ class Registry(Generic[T]):
             origin = dist if dist == OWN_DISTRIBUTION else f"{dist} ({point.value})"
             if self._origin.get(point.name) == origin:
                 continue  # this entry point, seen before (perhaps loaded since)
-            self._add(point.name, point, origin)
+            self._add(point.name, _Unloaded(point), origin)
 
     def _load(self, name: str) -> T:
         entry = self._entries[name]
-        if not isinstance(entry, EntryPoint):
+        if not isinstance(entry, _Unloaded):
             return entry
         try:
-            loaded = entry.load()
+            loaded = entry.point.load()
         except Exception as exc:  # a broken plugin names itself, not frictex
             raise PluginError(f"{self.kind} {name!r} of {self._origin[name]} cannot be "
                               f"loaded: {type(exc).__name__}: {exc}") from exc
