@@ -15,7 +15,7 @@ from pathlib import Path
 from frictex.app.commands.argtypes import positive_int
 from frictex.app.engine.batch import read_manifest, run_job, write_results
 from frictex.app.engine.fanout import default_workers, fan_out
-from frictex.rendering.pipeline import RENDERERS
+from frictex.rendering.renderers import render_modes
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -33,7 +33,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    jobs = read_manifest(Path(args.manifest), ("sho", *RENDERERS))
+    jobs = read_manifest(Path(args.manifest), render_modes())
     out_dir = Path(args.out)
     out_dir.mkdir(parents=True, exist_ok=True)
     from tqdm import tqdm

@@ -27,6 +27,7 @@ from frictex.app.commands.preview import frame_size
 from frictex.app.commands.argtypes import (add_link_arguments, output_rate, positive_float, positive_int,
                                    sim_device_args)
 from frictex.rendering.input.tuio import TUIO_PORT
+from frictex.rendering.renderers import render_modes
 from frictex.rendering.visual.context import NoDisplayError, open_backend
 from frictex.rendering.visual.device_panels import default_frame_size
 from frictex.rendering.visual.viewport import MIN_FRAME
@@ -80,7 +81,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--size", type=frame_size, default=None, metavar="WxH",
                         help="window size in px (default: the scene's display size, at least "
                              f"{MIN_FRAME[0]}x{MIN_FRAME[1]})")
-    parser.add_argument("--renderer", choices=("sho", "sht", "hybrid"), default=None,
+    parser.add_argument("--renderer", choices=render_modes(), default=None,
                         help="start with every periodic layer rendered this way (R cycles it live)")
     add_link_arguments(parser)
     parser.add_argument("--rate", type=output_rate, default=10_000.0, metavar="HZ",

@@ -10,7 +10,7 @@ from frictex.app.commands.argtypes import (add_link_arguments, bounded, output_r
 from frictex.app.engine.replay import run_replay
 from frictex.app.engine.sources import MAX_GAP_S
 from frictex.app.engine.tables import FORMATS
-from frictex.rendering.pipeline import RENDERERS
+from frictex.rendering.renderers import render_modes
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -27,7 +27,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="csv (default), npz (one array per column) or parquet (columnar, "
                              "compressed; pandas and polars open it): the two faster for "
                              "long replays")
-    parser.add_argument("--renderer", choices=("sho", *RENDERERS), default=None,
+    parser.add_argument("--renderer", choices=render_modes(), default=None,
                         help="render every periodic layer this way instead of as its file says")
     add_link_arguments(parser)
     parser.add_argument("--max-unplayed", type=share, default=0.01, metavar="SHARE",

@@ -76,12 +76,12 @@ def run(args: argparse.Namespace) -> int:
     from frictex.app.engine.replay import run_replay
     from frictex.app.engine.tables import FORMATS
     from frictex.rendering.input.trace_synth import make_motion, sample
-    from frictex.rendering.pipeline import RENDERERS
+    from frictex.rendering.renderers import RENDERERS
     start = time.perf_counter()
     motion = make_motion("human", duration_s=1.0, seed=1)
     with tempfile.TemporaryDirectory(prefix="frictex-warm-") as tmp:
         for k, scene in enumerate(SCENES):
-            for renderer in (None, *RENDERERS) if k == 0 else (None,):
+            for renderer in (None, *RENDERERS.names()) if k == 0 else (None,):
                 for fmt in FORMATS if k == 0 and renderer is None else ("csv",):
                     run_replay(scene, sample(motion, 60.0, noise_mm=0.05, seed=2), tmp,
                                fmt=fmt, render_override=renderer, progress=False)

@@ -24,7 +24,7 @@ along x (seed 001's way of testing two-finger control with one hand); a touch sc
 (TUIO, evdev) is read by the haptic side itself (``app.live.touch_pump``), not here:
 the mouse then only hovers, and a touch screen that fails is shown and the mouse
 takes over. The wheel or up/down set the normal force of every finger. Keys: N / B
-next / previous scene, R cycles the renderer (as the file says, SHO, SHT, hybrid), S
+next / previous scene, R cycles the renderer (as the file says, then each of ``render_modes()``), S
 scope, O outlines, P screenshot (numbered after those already in the folder, never
 overwriting one), SPACE emergency stop (latched; SPACE again resumes, ramped), Q /
 Escape quit.
@@ -55,13 +55,14 @@ from PIL import Image
 
 from frictex.app.live.haptic_thread import EVENTS
 from frictex.app.live.watch import FileWatch
+from frictex.rendering.renderers import render_modes
 from frictex.rendering.visual.compositor import Compositor, FrameView
 from frictex.rendering.visual.modal_view import modal_envelope
 from frictex.rendering.visual.overlay import OverlayState
 from frictex.textures.errors import TextureError
 from frictex.textures.references import referenced_files
 
-RENDERER_CYCLE = (None, "sho", "sht", "hybrid")
+RENDERER_CYCLE = (None, *render_modes())
 FORCE_STEP_N = 0.05
 FORCE_RANGE_N = (0.05, 2.0)
 RELOAD_POLL_S = 0.15  # an edit is applied once it has held still for a poll: 0.15-0.3 s after saving
