@@ -26,13 +26,12 @@ from frictex.rendering.compose import compose
 from frictex.rendering.tracking.finger_select import SelectionState, select_fingers
 from frictex.device.friction import ClampCounts, make_friction_model
 from frictex.rendering.input.trace_file import Trace
-from frictex.rendering.renderers import LAYER_RENDERERS, RENDERERS, any_layer, render_modes
+from frictex.rendering.renderers import (DEFAULT_SHO, LAYER_RENDERERS, RENDERERS, any_layer,
+                                         render_modes)
 from frictex.rendering.tracking.tracks import TrackerConfig, TrackerState, track
 from frictex.device.profile import FORCE_PROFILES
 from frictex.textures.model import Scene
 
-#: what a layer's ``render = "sho"`` means unless overridden
-DEFAULT_SHO = "sho-predicted"
 #: friction inversions: the closed form (seed 003, eq 3) or a table built at scene load
 INVERSIONS = ("exact", "lut")
 

@@ -35,8 +35,11 @@ from frictex.device.registry import Registry
 from frictex.rendering.tracking.tracks import FingerBlock
 from frictex.textures.model import RENDERERS, render_modes
 
-__all__ = ["LAYER_RENDERERS", "RENDERERS", "LayerRenderer", "RendererFactory", "any_layer",
-           "render_modes"]
+__all__ = ["DEFAULT_SHO", "LAYER_RENDERERS", "RENDERERS", "LayerRenderer", "RendererFactory",
+           "any_layer", "render_modes", "sho_variant_of"]
+
+#: what a layer's ``render = "sho"`` means unless the run says otherwise
+DEFAULT_SHO = "sho-predicted"
 
 
 @runtime_checkable
@@ -67,3 +70,9 @@ LAYER_RENDERERS: Registry[RendererFactory] = Registry("dynamic layer kind",
 def any_layer(name: str) -> bool:
     """Whether renderer ``name`` renders any layer (can be a run's SHO variant)."""
     return bool(getattr(RENDERERS.get(name), "any_layer", False))
+
+
+def sho_variant_of(name: str) -> str:
+    """The SHO variant of a run that renders periodic layers with ``name``: ``name``
+    itself where it renders any layer, else :data:`DEFAULT_SHO`."""
+    return name if any_layer(name) else DEFAULT_SHO
