@@ -30,6 +30,7 @@ from frictex.app.engine.sources import TraceSource
 from frictex.rendering.input.trace_synth import make_motion, sample, truth
 from frictex.rendering.metrics import CHATTER_PERIOD_MM, MetricError, accuracy, reference
 from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.renderers import RENDERERS, any_layer, sho_variant_of
 from frictex.rendering.input.trace_file import Trace
 from frictex.rendering.tracking.tracks import apply_index
 
@@ -46,7 +47,6 @@ MOTIONS = {
     "human": dict(kind="human", speed_mm_s=60.0, duration_s=4.0, seed=7),
 }
 TOUCH_HZ = (50.0, 120.0, 240.0)
-RENDERERS = ("sho-held", "sho-predicted", "sht", "hybrid")
 OUTPUT_HZ = (2000.0, 5000.0, 10_000.0, 20_000.0)
 INVERSIONS = ("exact", "lut")
 #: one block of output (s): the live haptic thread's block
@@ -81,7 +81,9 @@ def matrix(quick: bool, scenes=SCENES) -> list[Case]:
     """
     cases = []
     for scene in scenes:
-        renderers = RENDERERS if _has_periodic(scene) else RENDERERS[:2]
+        renderers = RENDERERS.names()
+        if not _has_periodic(scene):
+            renderers = tuple(filter(any_layer, renderers))
         for motion in MOTIONS:
             if quick and motion == "reversing":
                 continue
@@ -115,7 +117,7 @@ def load(scene_name: str):
 
 def _pipeline(scene, case: Case):
     block = max(1, int(round(case.output_hz * BLOCK_S)))
-    sho_variant = "sho-held" if case.renderer == "sho-held" else "sho-predicted"
+    sho_variant = sho_variant_of(case.renderer)
     return build_pipeline(scene, rate_hz=case.output_hz, block_size=block,
                           render_override=case.renderer, sho_variant=sho_variant,
                           inversion=case.inversion)

@@ -41,10 +41,10 @@ from frictex.rendering.input.trace_import import add_import_arguments, detect_fo
 from frictex.rendering.metrics import (CHATTER_PERIOD_MM, CHATTER_S, REVERSAL_MEASURED_MM,
                                MetricError, chatter, spectral_error)
 from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.renderers import RENDERERS, sho_variant_of
 from frictex.rendering.tracking.finger_select import HYSTERESIS_MM, SelectionState, select_fingers
 from frictex.rendering.tracking.tracks import TrackerConfig, TrackerState, track
 
-RENDERERS = ("sho-held", "sho-predicted", "sht", "hybrid")
 OUTPUT_HZ = 10_000.0
 #: recordings larger than this (bytes) are left out (a report is not a bulk converter)
 MAX_BYTES = 8 << 20
@@ -135,10 +135,10 @@ def replay(path: Path, scene_name: str) -> dict:
     mu_by = {}
     layer = next((lay for lay in scene.layers if lay.is_periodic), None)
     measured = None
-    for renderer in RENDERERS:
+    for renderer in RENDERERS.names():
         pipeline = build_pipeline(scene, rate_hz=OUTPUT_HZ, block_size=50,
                                   render_override=renderer,
-                                  sho_variant="sho-held" if renderer == "sho-held" else "sho-predicted")
+                                  sho_variant=sho_variant_of(renderer))
         outs, _ = run_blocks(pipeline, trace, 200, duration)
         ids, contact = stack_fingers(outs, "contact", False)
         amplitude = stack_fingers(outs, "amplitude_um", 0.0)[1]
@@ -154,7 +154,7 @@ def replay(path: Path, scene_name: str) -> dict:
         out["renderers"][renderer] = {
             "largest_step_um": _largest_step(amplitude, contact), "chatter": doubled,
             "clamps": clamps.total, "finite": bool(np.isfinite(amplitude).all())}
-    for renderer in RENDERERS:
+    for renderer in RENDERERS.names():
         out["renderers"][renderer]["spectral_distance_from_hybrid"] = _agreement(
             *mu_by[renderer], mu_by["hybrid"][0])
     tracker = TrackerConfig(rate_hz=OUTPUT_HZ)

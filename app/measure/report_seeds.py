@@ -25,9 +25,9 @@ import numpy as np
 from frictex.app.engine.fanout import fan_out
 from frictex.app.measure.report_claims import GRATINGS, METRICS, OUTPUT_HZ, TOUCH_HZ
 from frictex.app.measure.report_matrix import MOTIONS, Case, run_case
+from frictex.rendering.renderers import RENDERERS
 
-#: renderers compared on every draw; ``auto`` picks the hybrid for periodic layers
-RENDERERS = ("sho-held", "sho-predicted", "sht", "hybrid")
+#: draws of each kind; every registered renderer runs on each (``auto`` picks the hybrid)
 DRAWS = 16
 QUICK_DRAWS = 8
 #: motion kinds of the draws
@@ -61,7 +61,7 @@ def draws(n: int, scenes=tuple(GRATINGS), workers: int = 1, scheduler: str | Non
     spec = motions(n)
     cases = [Case(scene, f"{kind}-{k}", TOUCH_HZ, renderer, OUTPUT_HZ)
              for scene in scenes for kind in KINDS for k in range(1, n + 1)
-             for renderer in RENDERERS]
+             for renderer in RENDERERS.names()]
     rows = fan_out(partial(run_case, live_s=0.005, motions=spec), cases, workers=workers,
                    scheduler=scheduler)
     values: dict = {}
@@ -71,7 +71,7 @@ def draws(n: int, scenes=tuple(GRATINGS), workers: int = 1, scheduler: str | Non
             case.renderer, {m: [] for m in DRAW_METRICS})
         for m in DRAW_METRICS:
             per[m].append(row[m])
-    return {"n": n, "kinds": list(KINDS), "renderers": list(RENDERERS), "values": values}
+    return {"n": n, "kinds": list(KINDS), "renderers": list(RENDERERS.names()), "values": values}
 
 
 def summary_lines(doc: dict) -> list[str]:
