@@ -30,26 +30,26 @@ def test_first_sample_after_up_is_a_down():
     ("", "empty trace"),
     ("t_s,finger,x_mm\n0,0,1\n", r"lacks column\(s\) y_mm"),
     ("t_s,finger,x_mm,y_mm\n", "header but no samples"),
-    ("t_s,finger,x_mm,y_mm\n0,0,abc,1\n", r"<t>:2: column x_mm: 'abc' is not a number"),
+    ("t_s,finger,x_mm,y_mm\n0,0,abc,1\n", r'<t>:2: column x_mm: "abc" is not a number'),
     ("t_s,finger,x_mm,y_mm\n0,0,nan,1\n", "not a finite number"),
     ("t_s,finger,x_mm,y_mm\n0,-1,0,0\n",
-     r"^<t>:2: column finger: '-1' is not an integer from 0 to 2147483647 \(32-bit ids"),
-    ("t_s,finger,x_mm,y_mm\n0,1e20,0,0\n", r"^<t>:2: column finger: '1e20' is not an integer from 0"),
-    ("t_s,finger,x_mm,y_mm\n0,9223372036854775807,0,0\n", r"^<t>:2: column finger: '9223372036854775807'"),
-    ("t_s,finger,x_mm,y_mm\n1e308,0,0,0\n", r"^<t>:2: column t_s: '1e308' is not a number from -1e\+10 to 1e\+10 s$"),
-    ("t_s,finger,x_mm,y_mm\n0,0,1e308,0\n", r"^<t>:2: column x_mm: '1e308' is not a number from -100000 to 100000 mm$"),
-    ("t_s,finger,x_mm,y_mm\n0,0,0,-1e6\n", r"^<t>:2: column y_mm: '-1e6' is not a number from -100000 to 100000 mm$"),
-    ("t_s,finger,x_mm,y_mm\n0,0,0,inf\n", r"^<t>:2: column y_mm: 'inf' is not a finite number$"),
-    ("t_s,finger,x_mm,y_mm,force_n\n0,0,0,0,1e4\n", r"^<t>:2: column force_n: '1e4' is not a number from 0 to 1000 N$"),
-    ("t_s,finger,x_mm,y_mm\n0,1.5,0,0\n", "finger: '1.5' is not an integer"),
+     r'^<t>:2: column finger: "-1" is not an integer from 0 to 2147483647 \(32-bit ids'),
+    ("t_s,finger,x_mm,y_mm\n0,1e20,0,0\n", r'^<t>:2: column finger: "1e20" is not an integer from 0'),
+    ("t_s,finger,x_mm,y_mm\n0,9223372036854775807,0,0\n", r'^<t>:2: column finger: "9223372036854775807"'),
+    ("t_s,finger,x_mm,y_mm\n1e308,0,0,0\n", r'^<t>:2: column t_s: "1e308" is not a number from -1e\+10 to 1e\+10 s$'),
+    ("t_s,finger,x_mm,y_mm\n0,0,1e308,0\n", r'^<t>:2: column x_mm: "1e308" is not a number from -100000 to 100000 mm$'),
+    ("t_s,finger,x_mm,y_mm\n0,0,0,-1e6\n", r'^<t>:2: column y_mm: "-1e6" is not a number from -100000 to 100000 mm$'),
+    ("t_s,finger,x_mm,y_mm\n0,0,0,inf\n", r'^<t>:2: column y_mm: "inf" is not a finite number$'),
+    ("t_s,finger,x_mm,y_mm,force_n\n0,0,0,0,1e4\n", r'^<t>:2: column force_n: "1e4" is not a number from 0 to 1000 N$'),
+    ("t_s,finger,x_mm,y_mm\n0,1.5,0,0\n", 'finger: "1.5" is not an integer'),
     ("t_s,finger,x_mm,y_mm\n0,0,0\n", "3 fields, expected 4"),
-    ("t_s,finger,x_mm,y_mm,force_n\n0,0,0,0,-2\n", r"^<t>:2: column force_n: '-2' is not a number from 0 to 1000 N$"),
+    ("t_s,finger,x_mm,y_mm,force_n\n0,0,0,0,-2\n", r'^<t>:2: column force_n: "-2" is not a number from 0 to 1000 N$'),
     ("t_s,finger,x_mm,y_mm\n0,0,0," + "9" * 5000 + "\n", r"^<t>:2: line longer than 4096 bytes"),
     ("t_s,finger,x_mm,y_mm\n0,0\x00,0,0\n", r"^<t>:2: binary content \(a NUL byte at column 4\)"),
     ("t_s,finger,x_mm,y_mm\n" + "".join(f"0,{k},0,0\n" for k in range(21)),
      r"^<t>:22: 21 fingers touch at once \(finger 20 comes down while the others have no up "
      r"event\); at most 20 are accepted$"),
-    ("t_s,finger,x_mm,y_mm,event\n0,0,0,0,press\n", "'press' is not one of down, move, up"),
+    ("t_s,finger,x_mm,y_mm,event\n0,0,0,0,press\n", '"press" is not one of down, move, up'),
 ])
 def test_bad_traces_get_one_line_errors(text, message):
     with pytest.raises(TraceError, match=message):
@@ -225,12 +225,12 @@ def test_rows_held_for_reordering_are_bounded(tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize("rows, message", [
-    ("0,0,0,0,move\n0,0,nan,0,slide\n", r"<t>:3: column x_mm: 'nan'"),
-    ("0,0,0,0,slide\n0,0,nan,0,move\n", r"<t>:2: column event: 'slide'"),
+    ("0,0,0,0,move\n0,0,nan,0,slide\n", r'<t>:3: column x_mm: "nan"'),
+    ("0,0,0,0,slide\n0,0,nan,0,move\n", r'<t>:2: column event: "slide"'),
     ("1,0,0,0,move\n0.5,0,0,0,move\n0,0,nan,0,move\n", r"<t>:3: t_s goes back from 1\.0 to 0\.5"),
-    ("1,0,0,0,move\n0.5,0,0,0,slide\n", r"<t>:3: column event: 'slide'"),  # values first
-    ("1,0,0,0,move\n1,0,0,0,slide\n0.5,0,0,0,move\n", r"<t>:3: column event: 'slide'"),
-    ("1,0,inf,0,move\n0.5,0,0,0,move\n", r"<t>:2: column x_mm: 'inf' is not a finite number"),
+    ("1,0,0,0,move\n0.5,0,0,0,slide\n", r'<t>:3: column event: "slide"'),  # values first
+    ("1,0,0,0,move\n1,0,0,0,slide\n0.5,0,0,0,move\n", r'<t>:3: column event: "slide"'),
+    ("1,0,inf,0,move\n0.5,0,0,0,move\n", r'<t>:2: column x_mm: "inf" is not a finite number'),
 ])
 def test_the_first_problem_in_file_order_is_reported(rows, message):
     with pytest.raises(TraceError, match=message):
@@ -466,5 +466,5 @@ def test_a_long_plain_trace_is_parsed_at_once_and_reads_as_line_by_line(tmp_path
     bad = text.split("\n")
     bad[n - 5] = bad[n - 5].replace("0.5,move", "-0.5,move")
     by_line, at_once = _read_both_ways("\n".join(bad))
-    assert at_once == by_line == (f"<t>:{n - 4}: column force_n: '-0.5' is not a number from "
+    assert at_once == by_line == (f'<t>:{n - 4}: column force_n: "-0.5" is not a number from '
                                   f"0 to 1000 N")

@@ -3,11 +3,17 @@
 Grammar (DESIGN.md, "Trace files")::
 
     file    := [BOM] header NEWLINE { row NEWLINE }   # UTF-8; a leading UTF-8 BOM is dropped
-    header  := column { "," column }        # any order; names are case-sensitive
+    header  := column { "," column }        # any order; names are case-sensitive, each once
     required columns: t_s, finger, x_mm, y_mm
     optional columns: force_n (N, default 0.5), event (down | move | up)
     extra columns are ignored; blank lines and lines starting with '#' are skipped;
     a line holds at most MAX_LINE_BYTES bytes.
+    number  := [SPACES] ["+" | "-"] ( DIGITS ["." [DIGITS]] | "." DIGITS )
+               [ ("e" | "E") ["+" | "-"] DIGITS ] [SPACES]
+    DIGITS  := { "0".."9" }-   SPACES := { " " | TAB }-     # ASCII only (:data:`NUMBER`)
+
+Python's ``float`` also takes Unicode digits (``"\u0662\u0661"`` is 21), underscores
+(``"2_2"`` is 22), ``nan`` and ``inf`` and Unicode spaces: none of these is a number here.
 
 Rules checked here, once, at the boundary (every error names the file, the line and the
 column, shows the value and what was expected):
@@ -29,6 +35,11 @@ column, shows the value and what was expected):
 
 Only regular files are opened (``textures.library.file_problem``): a FIFO or a device
 is refused before anything blocks.
+
+Errors never carry a line of a file that is not a trace: a header without the required
+columns is described (its number of fields, and those of its names that are plain
+column names), and every value shown is escaped and cut to
+``device.safe_text.MAX_SHOWN`` characters (``device.safe_text.quoted``).
 """
 
 from __future__ import annotations
@@ -37,6 +48,7 @@ import codecs
 import csv
 import io
 import math
+import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,6 +58,7 @@ import numpy as np
 
 from frictex.textures.library import file_problem
 from frictex.device.errors import InputError
+from frictex.device.safe_text import quoted
 
 DEFAULT_FORCE_N = 0.5
 REQUIRED = ("t_s", "finger", "x_mm", "y_mm")
@@ -68,6 +81,20 @@ MAX_HELD_ROWS = 65_536
 RANGES = {"t_s": (-MAX_TIME_S, MAX_TIME_S, "s"), "x_mm": (-MAX_COORD_MM, MAX_COORD_MM, "mm"),
           "y_mm": (-MAX_COORD_MM, MAX_COORD_MM, "mm"), "force_n": (0.0, MAX_FORCE_N, "N"),
           "finger": (0, MAX_FINGER_ID, "finger id")}
+
+
+#: A number as trace files (and manifests, device logs) write it: ASCII decimal digits,
+#: optional sign, fraction and exponent, spaces or tabs around (the module docstring's
+#: grammar). Possessive: a long run of digits fails in linear time.
+NUMBER = re.compile(r"[ \t]*+[+-]?+(?:[0-9]++(?:\.[0-9]*+)?+|\.[0-9]++)(?:[eE][+-]?+[0-9]++)?+[ \t]*+")
+
+
+def ascii_float(text: str) -> float:
+    """``float(text)`` for a :data:`NUMBER`; ValueError for anything else (``float``
+    alone takes Unicode digits, underscores, ``nan``, ``inf`` and Unicode spaces)."""
+    if NUMBER.fullmatch(text) is None:
+        raise ValueError(f"not a number: {text!r}")
+    return float(text)
 
 
 class TraceError(InputError):
@@ -250,21 +277,20 @@ class TimeOrder:
 
 def _parse_number(text: str, path: str, line: int, column: str) -> float:
     """A field as a float within ``RANGES[column]``."""
-    try:
+    if NUMBER.fullmatch(text) is None:
+        if text.strip(" \t").lower().lstrip("+-") not in ("nan", "inf", "infinity"):
+            raise TraceError(f"{path}:{line}: column {column}: {quoted(text)} is not a number "
+                             f"(expected ASCII decimal, e.g. 12, -0.5 or 1.5e-3)")
+        value = math.inf
+    else:
         value = float(text)
-    except ValueError:
-        raise TraceError(f"{path}:{line}: column {column}: {_short(text)} is not a number") from None
     lo, hi, _ = RANGES[column]
     if not math.isfinite(value):
-        raise TraceError(f"{path}:{line}: column {column}: {_short(text)} is not a finite number")
+        raise TraceError(f"{path}:{line}: column {column}: {quoted(text)} is not a finite number")
     if not lo <= value <= hi or (column == "finger" and value != int(value)):
-        raise TraceError(f"{path}:{line}: column {column}: {_short(text)} is not "
+        raise TraceError(f"{path}:{line}: column {column}: {quoted(text)} is not "
                          f"{_range_text(column)}")
     return value
-
-
-def _short(text: str) -> str:
-    return repr(text if len(text) <= 40 else text[:37] + "...")
 
 
 class _RowParser:
@@ -313,7 +339,8 @@ class _RowParser:
         batch = batch or [_Rows(np.zeros(0, dtype=np.int64), None, list)]
         lines = np.concatenate([piece.lines for piece in batch])
         try:
-            parts = [piece.columns or self._columns(piece.fields()) for piece in batch]
+            parts = [piece.columns or self._columns(piece.fields(), piece.plain_ascii)
+                     for piece in batch]
         except (ValueError, IndexError, KeyError):
             self._first_row_problem(_numbered_rows(batch))
         t, fv, x, y, force, event = (np.concatenate(part) for part in zip(*parts))
@@ -324,25 +351,27 @@ class _RowParser:
         keep = self._keep(t, lines)
         return [a[keep] for a in (t, fv.astype(np.int64), x, y, force, event, lines)]
 
-    def _columns(self, rows: list[list[str]]) -> tuple[np.ndarray, ...]:
-        """t, finger, x, y, force, event of well-formed rows (``float`` on each field, as
-        the row-by-row check does); raises ValueError, IndexError or KeyError on the
-        first field that is not (the caller then finds and reports it)."""
+    def _columns(self, rows: list[list[str]], plain_ascii: bool = False) -> tuple[np.ndarray, ...]:
+        """t, finger, x, y, force, event of well-formed rows (:func:`ascii_float` on each
+        field, as the row-by-row check does; plain ``float`` where the rows are
+        ``plain_ascii``, which then takes the same numbers); raises ValueError, IndexError
+        or KeyError on the first field that is not (the caller then finds and reports it)."""
         col, n = self.col, len(rows)
         if n and min(map(len, rows)) < len(self.names):
             raise IndexError
-        t, fv, x, y = (np.fromiter(map(float, (row[col[name]] for row in rows)),
+        number = float if plain_ascii else ascii_float
+        t, fv, x, y = (np.fromiter(map(number, (row[col[name]] for row in rows)),
                                    dtype=np.float64, count=n) for name in REQUIRED)
         force = np.full(n, DEFAULT_FORCE_N)
         if "force_n" in col:
             i = col["force_n"]
-            given = [k for k, row in enumerate(rows) if row[i].strip()]
-            force[given] = np.fromiter(map(float, (rows[k][i] for k in given)),
+            given = [k for k, row in enumerate(rows) if row[i].strip(" \t")]
+            force[given] = np.fromiter(map(number, (rows[k][i] for k in given)),
                                        dtype=np.float64, count=len(given))
         event = np.full(n, MOVE, dtype=np.int8)
         if "event" in col:
             i = col["event"]
-            words = [row[i].strip() for row in rows]
+            words = [row[i].strip(" \t") for row in rows]
             given = [k for k, word in enumerate(words) if word]
             event[given] = [_EVENT_CODES[words[k]] for k in given]
         return t, fv, x, y, force, event
@@ -384,10 +413,10 @@ class _RowParser:
             raise TraceError(f"{where}:{line}: {len(row)} fields, expected {len(self.names)} "
                              f"({','.join(self.names)})")
         for name in ("t_s", "finger", "x_mm", "y_mm", "force_n"):
-            if name in self.col and (name != "force_n" or row[self.col[name]].strip()):
+            if name in self.col and (name != "force_n" or row[self.col[name]].strip(" \t")):
                 _parse_number(row[self.col[name]], where, line, name)
-        word = row[self.col["event"]].strip()
-        raise TraceError(f"{where}:{line}: column event: {_short(word)} is not one of "
+        word = row[self.col["event"]].strip(" \t")
+        raise TraceError(f"{where}:{line}: column event: {quoted(word)} is not one of "
                          f"{', '.join(EVENTS)}")
 
     def _time_order(self, t: np.ndarray, lines: np.ndarray) -> None:
@@ -515,18 +544,23 @@ class _Rows:
     columns : (t, finger, x, y, force, event) parsed at once from a plain block, or None.
     fields : a function giving each row's fields (for a plain block, split only when a
         row's problem is to be named).
+    plain_ascii : every byte of the rows is printable ASCII other than ``_``, or a tab:
+        ``float`` then takes exactly the :data:`NUMBER` s (and the words nan and inf,
+        which the range check refuses).
     """
 
     lines: np.ndarray
     columns: tuple | None
     fields: Callable[[], list[list[str]]]
+    plain_ascii: bool = False
 
     def split(self, k: int) -> tuple["_Rows", "_Rows"]:
         """The first ``k`` rows and the rest."""
         halves = []
         for part in (slice(0, k), slice(k, None)):
             cols = None if self.columns is None else tuple(c[part] for c in self.columns)
-            halves.append(_Rows(self.lines[part], cols, lambda part=part: self.fields()[part]))
+            halves.append(_Rows(self.lines[part], cols, lambda part=part: self.fields()[part],
+                                self.plain_ascii))
         return halves[0], halves[1]
 
 
@@ -581,7 +615,7 @@ def _plain_columns(data: bytes, count: int, col: dict[str, int], width: int) -> 
     if "event" in col:
         codes = []
         for part in table.column(f"f{col['event']}").chunks:
-            words = [word.strip() for word in part.dictionary.to_pylist()]
+            words = [word.strip(" \t") for word in part.dictionary.to_pylist()]
             if not set(words) <= set(EVENTS) | {""}:
                 return None
             lookup = np.array([_EVENT_CODES.get(word, MOVE) for word in words], dtype=np.int8)
@@ -630,13 +664,40 @@ def _header(data: bytes, first: int, where: str, order: TimeOrder, strict: bool)
     for k, text in enumerate(data.decode("utf-8").split("\n")):
         if not text.strip() or text.lstrip().startswith("#"):
             continue
-        names = [h.strip() for h in _fields(text, where, first + k)]
+        names = [h.strip(" \t") for h in _fields(text, where, first + k)]
         missing = [c for c in REQUIRED if c not in names]
         if missing:
-            raise TraceError(f"{where}:{first + k}: header lacks column(s) {', '.join(missing)} "
-                             f"(got {_short(','.join(names))}; required {','.join(REQUIRED)})")
+            raise TraceError(f"{where}:{first + k}: not a trace header: it lacks column(s) "
+                             f"{', '.join(missing)} ({describe_header(names)}; expected a "
+                             f"first line naming {','.join(REQUIRED)})")
+        twice = next((name for k, name in enumerate(names) if name and name in names[:k]), None)
+        if twice is not None:
+            raise TraceError(f"{where}:{first + k}: header names column {quoted(twice)} twice "
+                             f"(each column once)")
         return _RowParser(names, where, order, strict, MAX_HELD_ROWS), k + 1
     return None, 0
+
+
+#: a header field shown in an error: a plain column name of at most 32 characters
+_COLUMN_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
+#: most column names an error lists
+_NAMES_SHOWN = 8
+
+
+def describe_header(names: list[str]) -> str:
+    """What a header line holds, for an error, without printing the line: the number of
+    fields and the first :data:`_NAMES_SHOWN` of them that are plain column names
+    (:data:`_COLUMN_NAME`); a line of another file (``/etc/shadow``) shows none of its text."""
+    plain = [name for name in names if _COLUMN_NAME.fullmatch(name)]
+    count = f"{len(names)} field{'s' * (len(names) != 1)}"
+    if not plain:
+        return f"{count}, {'not a column name' if len(names) == 1 else 'none a column name'}"
+    shown = plain[:_NAMES_SHOWN] + ([f"{len(plain) - _NAMES_SHOWN} more column names"]
+                                    if len(plain) > _NAMES_SHOWN else [])
+    others = len(names) - len(plain)
+    if others:
+        shown.append(f"{others} that {'is not a column name' if others == 1 else 'are not column names'}")
+    return f"{count}: {', '.join(shown[:-1])} and {shown[-1]}" if len(shown) > 1 else f"{count}: {shown[0]}"
 
 
 def _block_rows(data: bytes, first: int, count: int, parser: "_RowParser", where: str) -> _Rows:
@@ -654,7 +715,12 @@ def _block_rows(data: bytes, first: int, count: int, parser: "_RowParser", where
         return _Rows(lines, columns, lambda: [row for _, row in split_rows()])
     numbered = split_rows()
     lines = np.fromiter((line for line, _ in numbered), dtype=np.int64, count=len(numbered))
-    return _Rows(lines, None, lambda: [row for _, row in numbered])
+    plain_ascii = not data.translate(None, _PLAIN_ASCII_BYTES)
+    return _Rows(lines, None, lambda: [row for _, row in numbered], plain_ascii)
+
+
+#: the bytes of a block whose fields ``float`` reads as :data:`NUMBER` reads them
+_PLAIN_ASCII_BYTES = bytes(range(0x20, 0x7F)).replace(b"_", b"") + b"\t\n"
 
 
 def _take(batch: list[_Rows], n: int) -> tuple[list[_Rows], list[_Rows]]:
