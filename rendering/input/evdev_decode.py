@@ -56,6 +56,10 @@ MT_AXES = (ABS_MT_TOUCH_MAJOR, ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_TRAC
            ABS_MT_PRESSURE)
 #: more simultaneous contacts (protocol B slots) than any touch screen reports
 MAX_CONTACTS = 64
+#: finest axis resolution believed (units per mm; 0.1 um a count): digitizers give 10 to 200
+MAX_RESOLUTION = 10_000
+#: screen sizes believed along an axis (mm): a watch's 20 mm to a 10 m interactive wall
+SCREEN_MM = (1.0, 10_000.0)
 
 
 class Event(NamedTuple):
@@ -345,8 +349,9 @@ class AxisMap:
     def __post_init__(self) -> None:
         if not (math.isfinite(self.lo) and math.isfinite(self.hi) and self.hi > self.lo):
             raise TraceError(f"axis range {self.lo!r}..{self.hi!r}: expected finite MIN < MAX")
-        if not (math.isfinite(self.size_mm) and self.size_mm > 0):
-            raise TraceError(f"screen size {self.size_mm!r} mm: expected a finite size > 0")
+        if not SCREEN_MM[0] <= self.size_mm <= SCREEN_MM[1]:  # NaN fails
+            raise TraceError(f"screen size {self.size_mm:g} mm: expected {SCREEN_MM[0]:g} to "
+                             f"{SCREEN_MM[1]:g} mm")
 
     def mm(self, value: np.ndarray) -> np.ndarray:
         """Position (mm) of device values; shape kept."""
@@ -402,13 +407,14 @@ class ScreenMap:
 
 def _axis_map(axis: str, size_option: str, size_mm: float | None, flip: bool,
               given: tuple[float, float] | None, absinfo: AbsInfo | None,
-              observed: tuple[float, float] | None) -> tuple[AxisMap, list[str]]:
+              observed: tuple[float, float] | None, where: str) -> tuple[AxisMap, list[str]]:
     """The map of device axis ``axis`` (see :func:`screen_map`) and its warnings."""
     warnings = []
     if given is not None:
         lo, hi = given
         if not hi > lo:
-            raise TraceError(f"--{axis}-range {lo:g} {hi:g}: expected MIN < MAX (device counts)")
+            raise TraceError(f"{where}: --{axis}-range {lo:g} {hi:g}: expected MIN < MAX "
+                             "(device counts)")
     elif absinfo is not None and absinfo.maximum > absinfo.minimum:
         lo, hi = absinfo.minimum, absinfo.maximum
     elif observed is not None and observed[1] > observed[0]:
@@ -417,13 +423,21 @@ def _axis_map(axis: str, size_option: str, size_mm: float | None, flip: bool,
                         f"(positions stretch to the screen edges; give --{axis}-range MIN MAX)")
     else:
         seen = f" (the recording only shows {axis} = {observed[0]:g})" if observed else ""
-        raise TraceError(f"device {axis} range unknown{seen}: give --{axis}-range MIN MAX")
+        raise TraceError(f"{where}: device {axis} range unknown{seen}: give --{axis}-range MIN MAX")
     if size_mm is None:
         if absinfo is None or absinfo.resolution <= 0:
-            raise TraceError(f"screen size along device {axis} unknown (the device gives no "
-                             f"resolution): give {size_option}")
+            raise TraceError(f"{where}: screen size along device {axis} unknown (the device "
+                             f"gives no resolution): give {size_option}")
         size_mm = (hi - lo) / absinfo.resolution
-    return AxisMap(float(lo), float(hi), float(size_mm), flip), warnings
+        if not SCREEN_MM[0] <= size_mm <= SCREEN_MM[1]:
+            raise TraceError(f"{where}: device {axis} counts {lo:g}..{hi:g} at its resolution of "
+                             f"{absinfo.resolution} units/mm make a screen {size_mm:.3g} mm "
+                             f"across; expected {SCREEN_MM[0]:g} to {SCREEN_MM[1]:g} mm (give "
+                             f"{size_option})")
+    try:
+        return AxisMap(float(lo), float(hi), float(size_mm), flip), warnings
+    except TraceError as exc:
+        raise TraceError(f"{where}: {exc}") from None
 
 
 @dataclass(frozen=True)
@@ -449,21 +463,25 @@ class ScreenSpec:
 
 
 def screen_map(spec: ScreenSpec, absinfo: dict[int, AbsInfo],
-               observed: dict[int, tuple[float, float]] | None = None) -> tuple[ScreenMap, list[str]]:
+               observed: dict[int, tuple[float, float]] | None = None,
+               where: str = "touch screen") -> tuple[ScreenMap, list[str]]:
     """The device-to-screen map from what is known, best first, and the warnings to show.
 
     Each device axis range is the user's (``spec``), else the device's (``absinfo``, keyed
     by ABS_MT_POSITION_X / _Y), else the ``observed`` min..max of the recording with a
-    warning; each size is the user's, else the range over the device resolution (units/mm).
+    warning; each size is the user's, else the range over the device resolution (units/mm),
+    and must lie within SCREEN_MM. ``where`` (a file, a device) starts every error.
     """
     observed = observed or {}
     sw = spec.swap_xy
     dev_x, wx = _axis_map("x", "--height-mm" if sw else "--width-mm",
                           spec.height_mm if sw else spec.width_mm, spec.flip_y if sw else spec.flip_x,
-                          spec.x_range, absinfo.get(ABS_MT_POSITION_X), observed.get(ABS_MT_POSITION_X))
+                          spec.x_range, absinfo.get(ABS_MT_POSITION_X), observed.get(ABS_MT_POSITION_X),
+                          where)
     dev_y, wy = _axis_map("y", "--width-mm" if sw else "--height-mm",
                           spec.width_mm if sw else spec.height_mm, spec.flip_x if sw else spec.flip_y,
-                          spec.y_range, absinfo.get(ABS_MT_POSITION_Y), observed.get(ABS_MT_POSITION_Y))
+                          spec.y_range, absinfo.get(ABS_MT_POSITION_Y), observed.get(ABS_MT_POSITION_Y),
+                          where)
     screen_x, screen_y = (dev_y, dev_x) if sw else (dev_x, dev_y)
     return ScreenMap(screen_x, screen_y, sw, spec.pressure_n, spec.force_n), wx + wy
 

@@ -11,6 +11,10 @@ Grammar (one event per line; ``-l`` prints names, without it the fields are hex)
 Codes frictex does not use (ABS_MISC, KEY_*) are kept with code -1, which the decoder
 ignores. A log holding several devices needs ``device`` to pick one. The log does not
 record the axis ranges (``getevent -p`` prints them): the importer must be told them.
+
+Digits are ASCII (``re``'s ``\\d`` alone also takes Unicode digits); a time is at most
+MAX_TIME_S. A line that is not of the grammar is described, never printed; the device
+names and tokens an error shows are escaped and cut (``device.safe_text``).
 """
 
 from __future__ import annotations
@@ -22,7 +26,8 @@ from frictex.rendering.input.evdev_decode import (ABS_MT_POSITION_X, ABS_MT_POSI
                                     ABS_MT_SLOT, ABS_MT_TOUCH_MAJOR, ABS_MT_TRACKING_ID,
                                     BTN_TOUCH, EV_ABS, EV_KEY, EV_SYN, SYN_DROPPED,
                                     SYN_MT_REPORT, SYN_REPORT, Event, read_text, signed32)
-from frictex.rendering.input.trace_file import TraceError
+from frictex.rendering.input.trace_file import MAX_TIME_S, TraceError
+from frictex.device.safe_text import quoted
 
 TYPES = {"EV_SYN": EV_SYN, "EV_KEY": EV_KEY, "EV_REL": 0x02, "EV_ABS": EV_ABS, "EV_MSC": 0x04,
          "EV_SW": 0x05, "EV_LED": 0x11, "EV_SND": 0x12, "EV_REP": 0x14, "EV_FF": 0x15,
@@ -35,8 +40,8 @@ CODES = {"SYN_REPORT": SYN_REPORT, "SYN_CONFIG": 0x01, "SYN_MT_REPORT": SYN_MT_R
 VALUES = {"UP": 0, "DOWN": 1, "REPEAT": 2}
 
 _LINE = re.compile(r"^\s*\[\s*(?P<t>\d{1,12}\.\d{1,9})\s*\]\s+(?:(?P<dev>/\S+):\s+)?"
-                   r"(?P<type>\S+)\s+(?P<code>\S+)\s+(?P<value>\S+)\s*$")
-_UNTIMED = re.compile(r"^\s*(?:/\S+:\s+)?(EV_[A-Z_]+|[0-9a-f]{4})\s+\S+\s+\S+\s*$")
+                   r"(?P<type>\S+)\s+(?P<code>\S+)\s+(?P<value>\S+)\s*$", re.ASCII)
+_UNTIMED = re.compile(r"^\s*(?:/\S+:\s+)?(EV_[A-Z_]+|[0-9a-f]{4})\s+\S+\s+\S+\s*$", re.ASCII)
 _HEADER = ("add device", "name:", "could not", "version", "events:", "input props:",
            "location:", "id:", "bus ")
 _HEX4 = re.compile(r"^[0-9a-fA-F]{4}$")
@@ -49,7 +54,7 @@ def _number(token: str, names: dict[str, int], where: str, line: int, field: str
     if _HEX4.match(token):
         return int(token, 16)
     if field == "type":
-        raise TraceError(f"{where}:{line}: event type {token!r} is not known "
+        raise TraceError(f"{where}:{line}: event type {quoted(token)} is not known "
                          f"(expected EV_ABS, EV_SYN, ... or 4 hex digits)")
     return -1  # a code frictex does not use (ABS_MISC, KEY_VOLUMEUP, ...)
 
@@ -79,8 +84,8 @@ def parse_getevent(text: str, where: str = "<getevent>", device: str | None = No
             if _UNTIMED.match(raw):
                 raise TraceError(f"{where}:{number}: event without a timestamp: record with "
                                  "'getevent -lt' (the -t adds '[ seconds.micros]')")
-            raise TraceError(f"{where}:{number}: {stripped[:60]!r} is not a getevent -lt line "
-                             "(expected '[ seconds.micros] EV_TYPE CODE VALUE')")
+            raise TraceError(f"{where}:{number}: not a getevent -lt line (expected "
+                             "'[ seconds.micros] EV_TYPE CODE VALUE', ASCII digits)")
         dev = m["dev"] or ""
         devices.setdefault(dev, number)
         if device is not None and dev != device:
@@ -93,17 +98,27 @@ def parse_getevent(text: str, where: str = "<getevent>", device: str | None = No
         elif _HEX8.match(token):
             value = signed32(int(token, 16))
         else:
-            raise TraceError(f"{where}:{number}: value {token!r} is not 8 hex digits "
+            raise TraceError(f"{where}:{number}: value {quoted(token)} is not 8 hex digits "
                              "(or DOWN / UP / REPEAT)")
-        events.append(Event(float(m["t"]), etype, code, value, number))
+        t = float(m["t"])
+        if t > MAX_TIME_S:
+            raise TraceError(f"{where}:{number}: event time {t:g} s is more than {MAX_TIME_S:g} s "
+                             "(evdev clocks count from boot or from 1970)")
+        events.append(Event(t, etype, code, value, number))
     named = sorted(d for d in devices if d)
     if device is not None and device not in devices:
-        raise TraceError(f"{where}: no events of device {device!r} "
-                         f"(the log has {', '.join(named) or 'no device names'})")
+        raise TraceError(f"{where}: no events of device {quoted(device)} "
+                         f"(the log has {_names(named) or 'no device names'})")
     if device is None and len(devices) > 1:
-        raise TraceError(f"{where}: events of {len(devices)} devices ({', '.join(named)}); "
+        raise TraceError(f"{where}: events of {len(devices)} devices ({_names(named)}); "
                          "choose one with --device")
     return events
+
+
+def _names(devices: list[str], shown: int = 8) -> str:
+    """The first ``shown`` device names, escaped, for an error."""
+    more = f" and {len(devices) - shown} more" if len(devices) > shown else ""
+    return ", ".join(quoted(d, 40) for d in devices[:shown]) + more
 
 
 def read_getevent(path: str | Path, device: str | None = None) -> list[Event]:

@@ -21,8 +21,9 @@ from frictex.rendering.input.evdev_decode import (AbsInfo, Event, RawSample, Scr
                                     read_text, screen_map)
 from frictex.rendering.input.import_evemu import parse_evemu
 from frictex.rendering.input.import_getevent import parse_getevent
-from frictex.rendering.input.trace_file import (DEFAULT_FORCE_N, TraceError, concat_traces, format_trace,
-                                        iter_trace, most_touching)
+from frictex.rendering.input.trace_file import (DEFAULT_FORCE_N, TraceError, ascii_float, concat_traces,
+                                                format_trace, iter_trace, most_touching)
+from frictex.device.safe_text import quoted
 
 FORMATS = ("auto", "getevent", "evemu", "csv")
 
@@ -39,9 +40,10 @@ Example, the Samsung Galaxy S phone of the Android refdata (0..1023 digitizer, 4
 
 def _finite(text: str) -> float:
     try:
-        value = float(text)
+        value = ascii_float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        raise argparse.ArgumentTypeError(f"{quoted(text)} is not a number (ASCII decimal, as "
+                                         "in trace files)") from None
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
     return value
@@ -179,7 +181,7 @@ def run_import(args: argparse.Namespace) -> int:
                          "expected ABS_MT_* contacts)")
     spec = ScreenSpec(args.width_mm, args.height_mm, _pair(args.x_range), _pair(args.y_range),
                       args.swap_xy, args.flip_x, args.flip_y, args.pressure_scale, args.force)
-    screen, warnings = screen_map(spec, absinfo, observed_ranges(samples))
+    screen, warnings = screen_map(spec, absinfo, observed_ranges(samples), str(path))
     t0 = samples[0].t_s
     if not args.keep_time:
         # both formats stamp whole microseconds: rounding gives back the exact decimal difference
