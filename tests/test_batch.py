@@ -93,12 +93,12 @@ def test_an_unreachable_scheduler_is_one_line(tmp_path, capsys):
 @pytest.mark.parametrize("text, message", [
     ("", "no header and no jobs"),
     ("scene,trace\n", "a header but no jobs"),
-    ("scene,colour\ngrating-5mm,red\n", "header scene,colour"),
-    ("scene,trace,renderer\ngrating-5mm,swipe-40mms-50hz,fastest\n", "renderer 'fastest'"),
-    ("scene,trace,rate_hz\ngrating-5mm,swipe-40mms-50hz,-3\n", "rate_hz '-3'"),
-    ("scene,trace,rate_hz\ngrating-5mm,swipe-40mms-50hz,nan\n", "rate_hz 'nan'"),
-    ("scene,trace,format\ngrating-5mm,swipe-40mms-50hz,xlsx\n", "format 'xlsx'"),
-    ("scene,trace,name\na,b,x\nc,d,x\n", "name 'x' is used by an earlier job"),
+    ("scene,colour\ngrating-5mm,red\n", "not a manifest header (2 fields: scene and colour)"),
+    ("scene,trace,renderer\ngrating-5mm,swipe-40mms-50hz,fastest\n", 'renderer "fastest"'),
+    ("scene,trace,rate_hz\ngrating-5mm,swipe-40mms-50hz,-3\n", 'rate_hz "-3"'),
+    ("scene,trace,rate_hz\ngrating-5mm,swipe-40mms-50hz,nan\n", 'rate_hz "nan"'),
+    ("scene,trace,format\ngrating-5mm,swipe-40mms-50hz,xlsx\n", 'format "xlsx"'),
+    ("scene,trace,name\na,b,x\nc,d,x\n", 'name "x" is used by an earlier job'),
     ("scene,trace,name\na,b,../escape\n", "expected a plain folder name"),
     ("scene,trace\na\n", "1 fields, expected 2"),
 ])

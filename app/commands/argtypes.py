@@ -60,6 +60,9 @@ def bounded(kind, low, high, unit: str):
 #: output sample rates a pipeline may run at (Hz): seed 003's link runs at 10 kHz
 OUTPUT_RATES_HZ = (100.0, 1e6)
 output_rate = bounded(float, *OUTPUT_RATES_HZ, "Hz")
+#: block sizes a replay may use (output samples)
+BLOCK_SIZES = (1, 100_000)
+block_size = bounded(int, *BLOCK_SIZES, "samples")
 
 
 def add_link_arguments(parser: argparse.ArgumentParser) -> None:

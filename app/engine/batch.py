@@ -7,8 +7,23 @@ Manifest grammar (CSV with a header; ``#`` lines are comments)::
 ``scene`` and ``trace`` as ``frictex replay`` takes them (a file, relative to the
 manifest's folder, or a bundled name); ``renderer`` empty means the file's own;
 ``rate_hz`` (default 10000), ``block`` (default 50) and ``format`` (csv, npz, parquet;
-default csv) as the replay's options; ``name`` the job's output folder under the
-batch's ``--out`` (default: ``<row number>-<scene stem>-<trace stem>``, names unique).
+default csv) as the replay's options, within the same bounds as on the command line
+(``--rate`` 100 to 1e6 Hz, ``--block`` 1 to 100000 samples); ``name`` the job's output
+folder under the batch's ``--out`` (default: ``<row number>-<scene stem>-<trace stem>``,
+the stems' other characters as ``_``), unique::
+
+    rate_hz := a number as trace files write it (ASCII decimal: 10000, 2.5e4)
+    block   := DIGITS                                   # ASCII 0-9
+    name    := (letter | digit) { letter | digit | "." | "_" | "-" }   # ASCII, at most 64
+
+A name is thus a plain folder name and a plain cell of ``batch.csv``: no path separator,
+no control character, no line break, never ``.`` or ``..``. Cells may be quoted as CSV
+allows; a line ends at a line feed (a carriage return before it is dropped).
+
+The manifest is read as the trace reader reads traces (``textures.library.read_utf8``):
+a regular UTF-8 file of at most MAX_MANIFEST_BYTES, without NUL bytes, lines of at most
+MAX_LINE_BYTES; a FIFO or a device is refused before anything is read. Errors name the
+file and the line, and show values escaped and cut (``device.safe_text``).
 
 Every job writes its replay outputs into its folder; the batch writes ``batch.csv``:
 one row per job with its status (``ok`` or ``failed``), error, output seconds, wall
@@ -19,17 +34,30 @@ stop the others.
 from __future__ import annotations
 
 import csv
+import math
 import os
+import re
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from frictex.app.commands.argtypes import BLOCK_SIZES, OUTPUT_RATES_HZ
 from frictex.app.engine.tables import FORMATS
 from frictex.device.errors import InputError
+from frictex.device.safe_text import escape, quoted
+from frictex.rendering.input.trace_file import MAX_LINE_BYTES, NUMBER, describe_header
+from frictex.textures.library import UnreadableText, read_utf8
 
 COLUMNS = ("scene", "trace", "renderer", "rate_hz", "block", "format", "name")
 RESULT_COLUMNS = ("job", "name", "status", "error", "output_s", "wall_s",
                   "x_realtime_end_to_end", "clamps", "warnings")
+#: Largest manifest read (bytes): about 10,000 jobs
+MAX_MANIFEST_BYTES = 1 << 20
+#: a job name (the module docstring's grammar)
+NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
+_DIGITS = re.compile(r"[0-9]+")
+#: longest error kept in a ``batch.csv`` cell (characters, escaped)
+MAX_ERROR_SHOWN = 500
 
 
 @dataclass(frozen=True)
@@ -54,22 +82,33 @@ def read_manifest(path: Path, renderers: tuple[str, ...]) -> list[Job]:
     """The jobs of a manifest file (see the module docstring); raises ManifestError."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ManifestError(f"{path}: cannot read the manifest: {exc}") from None
-    lines = [(n, line) for n, line in enumerate(text.splitlines(), 1)
-             if line.strip() and not line.lstrip().startswith("#")]
+        text = read_utf8(path, MAX_MANIFEST_BYTES)
+    except UnreadableText as exc:
+        where = f"{path}:{exc.line}" if exc.line is not None else f"{path}"
+        raise ManifestError(f"{where}: {exc}; expected a CSV manifest of jobs") from None
+    lines = []
+    for n, line in enumerate(text.split("\n"), 1):
+        line = line.removesuffix("\r")
+        if len(line.encode("utf-8")) >= MAX_LINE_BYTES:
+            raise ManifestError(f"{path}:{n}: line longer than {MAX_LINE_BYTES} bytes; expected "
+                                f"a CSV row of a few fields")
+        if line.strip() and not line.lstrip().startswith("#"):
+            lines.append((n, line))
     if not lines:
         raise ManifestError(f"{path}: no header and no jobs (expected a CSV header "
                             f"{','.join(COLUMNS[:2])},...)")
-    rows = csv.reader([line for _, line in lines])
-    header = [h.strip() for h in next(rows)]
+    rows = [_row(line, f"{path}:{n}") for n, line in lines]
+    header = [h.strip() for h in rows[0]]
     unknown = [h for h in header if h not in COLUMNS]
     if unknown or not {"scene", "trace"} <= set(header):
-        raise ManifestError(f"{path}:{lines[0][0]}: header {','.join(header)}: expected "
-                            f"scene,trace and optionally {','.join(COLUMNS[2:])}")
+        raise ManifestError(f"{path}:{lines[0][0]}: not a manifest header ({describe_header(header)}); "
+                            f"expected scene,trace and optionally {','.join(COLUMNS[2:])}")
+    twice = next((h for k, h in enumerate(header) if h in header[:k]), None)
+    if twice is not None:
+        raise ManifestError(f"{path}:{lines[0][0]}: header names column {twice} twice "
+                            f"(each column once)")
     jobs, names = [], set()
-    for (line_no, _), row in zip(lines[1:], rows):
+    for (line_no, _), row in zip(lines[1:], rows[1:]):
         where = f"{path}:{line_no}"
         if len(row) != len(header):
             raise ManifestError(f"{where}: {len(row)} fields, expected {len(header)} "
@@ -77,7 +116,7 @@ def read_manifest(path: Path, renderers: tuple[str, ...]) -> list[Job]:
         cell = dict(zip(header, (c.strip() for c in row)))
         job = _job(len(jobs), cell, path.parent, renderers, where)
         if job.name in names:
-            raise ManifestError(f"{where}: name {job.name!r} is used by an earlier job")
+            raise ManifestError(f"{where}: name {quoted(job.name)} is used by an earlier job")
         names.add(job.name)
         jobs.append(job)
     if not jobs:
@@ -85,51 +124,71 @@ def read_manifest(path: Path, renderers: tuple[str, ...]) -> list[Job]:
     return jobs
 
 
-def _job(index: int, cell: dict, base: Path, renderers, where: str) -> Job:
-    def number(key, kind, default, ok):
-        text = cell.get(key) or ""
-        if not text:
-            return default
-        try:
-            value = kind(text)
-        except ValueError:
-            value = None
-        if value is None or not ok(value):
-            raise ManifestError(f"{where}: {key} {text!r}: expected a positive "
-                                f"{'whole number' if kind is int else 'finite number'}")
-        return value
+def _row(line: str, where: str) -> list[str]:
+    """The CSV fields of one manifest line."""
+    try:
+        return next(csv.reader([line], strict=True))
+    except csv.Error as exc:
+        raise ManifestError(f"{where}: not a CSV row ({exc})") from None
 
+
+def _number(cell: dict, key: str, default, bounds: tuple, unit: str, where: str):
+    """Field ``key`` (a :data:`NUMBER`, or for ``block`` digits) within ``bounds``, the
+    command line's; ``default`` when empty."""
+    text = cell.get(key) or ""
+    if not text:
+        return default
+    whole = key == "block"
+    low, high = bounds
+    if (_DIGITS if whole else NUMBER).fullmatch(text) is None:
+        raise ManifestError(f"{where}: {key} {quoted(text)} is not "
+                            f"{'a whole number (ASCII digits)' if whole else 'an ASCII decimal number'}"
+                            f"; expected {low:g} to {high:g} {unit}")
+    value = int(text) if whole else float(text)
+    if not (math.isfinite(value) and low <= value <= high):
+        raise ManifestError(f"{where}: {key} {quoted(text)}: expected {low:g} to {high:g} {unit} "
+                            f"(as the command line's option)")
+    return value
+
+
+def _job(index: int, cell: dict, base: Path, renderers, where: str) -> Job:
     for key in ("scene", "trace"):
         if not cell.get(key):
             raise ManifestError(f"{where}: {key} is empty")
     renderer = cell.get("renderer") or None
     if renderer is not None and renderer not in renderers:
-        raise ManifestError(f"{where}: renderer {renderer!r}: expected one of "
+        raise ManifestError(f"{where}: renderer {quoted(renderer)}: expected one of "
                             f"{', '.join(renderers)} or empty")
     fmt = cell.get("format") or "csv"
     if fmt not in FORMATS:
-        raise ManifestError(f"{where}: format {fmt!r}: expected one of {', '.join(FORMATS)}")
+        raise ManifestError(f"{where}: format {quoted(fmt)}: expected one of {', '.join(FORMATS)}")
     name = cell.get("name") or f"{index:04d}-{_stem(cell['scene'])}-{_stem(cell['trace'])}"
-    if "/" in name or "\\" in name or name in (".", "..") or "\0" in name:
-        raise ManifestError(f"{where}: name {name!r}: expected a plain folder name")
+    if NAME.fullmatch(name) is None:
+        raise ManifestError(f"{where}: name {quoted(name)}: expected a plain folder name (ASCII "
+                            f"letters, digits, '.', '_' and '-', starting with a letter or a "
+                            f"digit, at most 64)")
     return Job(index, _resolve(cell["scene"], base), _resolve(cell["trace"], base), renderer,
-               number("rate_hz", float, 10_000.0, lambda v: 0 < v < float("inf")),
-               number("block", int, 50, lambda v: v >= 1), fmt, name)
+               _number(cell, "rate_hz", 10_000.0, OUTPUT_RATES_HZ, "Hz", where),
+               _number(cell, "block", 50, BLOCK_SIZES, "samples", where), fmt, name)
 
 
 def _stem(spec: str) -> str:
-    """A job name part: the file name without its .toml or .csv, or the bundled name."""
+    """A job name part: the file name without its .toml or .csv, or the bundled name; other
+    characters than a name's (:data:`NAME`) as ``_``, at most 28 characters."""
     name = Path(spec).name
     for suffix in (".toml", ".csv"):
         name = name.removesuffix(suffix)
-    return name or "job"
+    return re.sub(r"[^A-Za-z0-9._-]", "_", name)[:28] or "job"
 
 
 def _resolve(spec: str, base: Path) -> str:
     """A path relative to the manifest's folder where such a file exists, else as given
     (a bundled name, or a path the replay will report as missing)."""
     candidate = base / spec
-    return str(candidate) if candidate.exists() else spec
+    try:
+        return str(candidate) if candidate.exists() else spec
+    except OSError:  # a name too long for the file system: the replay reports it
+        return spec
 
 
 def run_job(job: Job, out_dir: str) -> dict:
@@ -145,7 +204,7 @@ def run_job(job: Job, out_dir: str) -> dict:
                          fmt=job.fmt, block_size=job.block, render_override=job.renderer,
                          progress=False)
     except (ValueError, OSError) as exc:
-        row.update(status="failed", error=str(exc))
+        row.update(status="failed", error=escape(exc, MAX_ERROR_SHOWN))
     else:
         row.update(output_s=doc["output"]["duration_s"],
                    x_realtime_end_to_end=doc["timings"]["x_realtime_end_to_end"] or 0.0,
