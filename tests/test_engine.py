@@ -96,17 +96,20 @@ class FailsAt:
         self.closed = True
 
 
-def test_an_error_mid_run_leaves_no_outputs_not_even_old_ones(tmp_path, reference):
-    """The sinks are all or nothing: an error at block 300 (after several table batches
-    were gathered) removes every partial file, and an earlier run's outputs in the same
-    folder are gone too (they would look like this run's)."""
+def test_an_error_mid_run_leaves_the_previous_run_as_it_was(tmp_path, reference):
+    """Outputs are staged beside the folder: an error at block 300 (after several table
+    batches were gathered) removes the staging folder, and the previous run's outputs
+    stay byte for byte."""
     scene, trace, _ = reference
-    run_replay(scene, trace, tmp_path, progress=False)
-    assert (tmp_path / "summary.json").exists()
+    out = tmp_path / "out"
+    run_replay(scene, trace, out, progress=False)
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert sorted(before) == ["commands.csv", "friction.csv", "summary.json"]
     link = FailsAt(300)
     with pytest.raises(OSError, match="port vanished"):
-        run_replay(scene, trace, tmp_path, sink=link, progress=False, chunk_blocks=7)
-    assert sorted(p.name for p in tmp_path.iterdir()) == []
+        run_replay(scene, trace, out, sink=link, progress=False, chunk_blocks=7)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
     assert link.closed and link.sent == 300
 
 
@@ -237,7 +240,7 @@ def test_outputs_that_would_not_fit_the_disk_are_refused_before_writing(tmp_path
     assert main(["replay", SCENE, TRACE, "--out", str(tmp_path / "big"), "--rate", "1e6"]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "the outputs (5.0001 s at 1e+06 Hz" in err[0] and "is free" in err[0]
-    assert sorted(p.name for p in (tmp_path / "big").iterdir()) == []
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fits"]  # nothing made for "big"
 
 
 def test_a_disk_filling_up_mid_run_fails_loudly_and_leaves_nothing(tmp_path, monkeypatch):
@@ -379,8 +382,8 @@ def test_a_lift_and_the_next_touch_in_one_block_do_not_share_a_row():
 @pytest.mark.parametrize("make, code", [
     (lambda: __import__("frictex.device.link.host", fromlist=["LinkStalled"]).LinkStalled("stalled"), 1),
     (lambda: OSError(28, "No space left on device"), 1),
-    (lambda: OSError(2, "No such file or directory"), 2),
-    (lambda: ValueError("bad trace"), 2),
+    (lambda: OSError(2, "No such file or directory", "trace.csv"), 2),
+    (lambda: __import__("frictex.device.errors", fromlist=["InputError"]).InputError("bad trace"), 2),
 ])
 def test_exit_status_says_bad_input_or_a_run_that_could_not_finish(monkeypatch, capsys, make, code):
     from frictex.app.commands import cli, library

@@ -1,8 +1,93 @@
 """frictex: render textures and objects on ultrasonic friction-modulation touchscreens.
 
-The public, typed API. Everything else lives in the four layers below it, in the order
-DESIGN.md's data flow gives: ``frictex.app`` (commands, replay engine, live demo,
-reports) uses ``frictex.rendering`` (tracking, renderers, composition, friction
-inversion, visual layer), which uses ``frictex.textures`` (the texture file format and
-its library), which uses ``frictex.device`` (structures, actuation, link, protocol).
+The public, typed API::
+
+    import frictex
+
+    r = frictex.replay("grating-5mm", "swipe-40mms-50hz")   # bundled scene and trace
+    r.summary.counts.contact_samples                        # typed summary
+    r.friction.to_pandas()                                  # pyarrow Table -> DataFrame
+
+- :func:`load_scene`, :func:`read_trace`, :func:`synth_trace`: the inputs (a texture file
+  or bundled scene, a trace CSV or bundled trace, a synthetic finger motion);
+- :func:`build_pipeline`: the haptic pipeline of a scene; :meth:`Pipeline.process` runs
+  a whole trace through it;
+- :func:`replay`: a scene and a trace through the pipeline on a virtual clock, with the
+  tables in memory or written into a folder (as ``frictex replay``); a :class:`Replay`.
+
+Units everywhere: positions in mm, time in s, velocity in mm/s, force in N, frequency in
+Hz, vibration amplitude in um zero-to-peak, friction relative (mu' = mu(w) / mu(0)).
+Errors are :class:`FrictexError`: :class:`InputError` (a ``ValueError``) for bad input,
+:class:`DeviceError` (an ``OSError``) for the device's link, :class:`OutputSpaceError`
+when outputs do not fit.
+
+Everything else lives in the four layers below, in the order of DESIGN.md's data flow:
+``frictex.app`` (commands, replay engine, live demo, reports) uses ``frictex.rendering``
+(tracking, renderers, composition, friction inversion, visual layer), which uses
+``frictex.textures`` (the texture file format and its library), which uses
+``frictex.device`` (structures, actuation, link, protocol). ``import frictex`` loads none
+of them (nor numpy, numba, scipy or pyarrow): each name here is imported on first use.
 """
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
+#: public name -> the module that defines it
+_WHERE = {
+    "load_scene": "frictex._inputs",
+    "read_trace": "frictex._inputs",
+    "synth_trace": "frictex._inputs",
+    "build_pipeline": "frictex._pipeline",
+    "Pipeline": "frictex._pipeline",
+    "replay": "frictex._replay",
+    "Replay": "frictex._replay",
+    "Scene": "frictex.textures.model",
+    "Trace": "frictex.rendering.input.trace_file",
+    "BlockOutput": "frictex.rendering.pipeline",
+    "Summary": "frictex.app.engine.summary_types",
+    "SceneInfo": "frictex.app.engine.summary_types",
+    "LayerInfo": "frictex.app.engine.summary_types",
+    "TraceInfo": "frictex.app.engine.summary_types",
+    "TimeOrderInfo": "frictex.app.engine.summary_types",
+    "GapInfo": "frictex.app.engine.summary_types",
+    "OutputInfo": "frictex.app.engine.summary_types",
+    "Counts": "frictex.app.engine.summary_types",
+    "Clamps": "frictex.app.engine.summary_types",
+    "FingerErrors": "frictex.app.engine.summary_types",
+    "Timings": "frictex.app.engine.summary_types",
+    "FrictexError": "frictex.device.errors",
+    "InputError": "frictex.device.errors",
+    "DeviceError": "frictex.device.errors",
+    "OutputSpaceError": "frictex.device.errors",
+}
+
+__all__ = sorted(_WHERE)
+
+if TYPE_CHECKING:
+    from frictex._inputs import load_scene, read_trace, synth_trace
+    from frictex._pipeline import Pipeline, build_pipeline
+    from frictex._replay import Replay, replay
+    from frictex.app.engine.summary_types import (Clamps, Counts, FingerErrors, GapInfo, LayerInfo,
+                                                  OutputInfo, SceneInfo, Summary, TimeOrderInfo,
+                                                  Timings, TraceInfo)
+    from frictex.device.errors import DeviceError, FrictexError, InputError, OutputSpaceError
+    from frictex.rendering.input.trace_file import Trace
+    from frictex.rendering.pipeline import BlockOutput
+    from frictex.textures.model import Scene
+
+
+def __getattr__(name: str):
+    """Import a public name on first use (module docstring)."""
+    try:
+        module = _WHERE[name]
+    except KeyError:
+        raise AttributeError(f"module 'frictex' has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from frictex.app.engine.outfile import write_file
+from frictex.device.errors import InputError
 from frictex.rendering.compose import ideal_mu
 from frictex.device.friction import mu_floor
 from frictex.rendering.visual.scene_image import scene_rgb, to_srgb8
@@ -127,7 +129,11 @@ def mu_map(scene, viewport, supersample: int = 3) -> np.ndarray:
 
 def write_preview(scene, out: Path, size: tuple[int, int] | None = None,
                   outlines: bool = False) -> dict:
-    """Render the preview PNG of ``scene`` into ``out``; return what it shows (mu' range, floor)."""
+    """Render the preview PNG of ``scene`` into ``out``; return what it shows (mu' range, floor).
+
+    Room-checked (4 bytes per pixel of the figure) and written under a temporary name
+    (``app.engine.outfile``): a full disk leaves no truncated or empty PNG, and an earlier
+    file of that name stays."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -161,7 +167,8 @@ def write_preview(scene, out: Path, size: tuple[int, int] | None = None,
                 transform=bar.ax.get_yaxis_transform(), color="red", fontsize=8, va="center")
     layers = "; ".join(_layer_note(layer) for layer in scene.layers)
     fig.suptitle(f"layers: {layers}", fontsize=9)
-    fig.savefig(out)
+    width, height = fig.get_size_inches() * fig.dpi
+    write_file(out, lambda to: fig.savefig(to, format="png"), width * height * 4)
     return {"mu_min": float(mu.min()), "mu_max": float(mu.max()), "floor": floor,
             "size": (viewport.width_px, viewport.height_px)}
 
@@ -169,9 +176,9 @@ def write_preview(scene, out: Path, size: tuple[int, int] | None = None,
 def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.suffix.lower() != ".png":
-        raise ValueError(f"output {str(out)!r}: expected a .png file name")
+        raise InputError(f"output {str(out)!r}: expected a .png file name")
     if not out.parent.is_dir():
-        raise OSError(f"output folder {str(out.parent)!r} does not exist")
+        raise InputError(f"output folder {str(out.parent)!r} does not exist")
     scene = load(args.scene)
     info = write_preview(scene, out, args.size, args.outlines)
     print(f"wrote {out}: {scene.name}, scene panel {info['size'][0]} x {info['size'][1]} px, "

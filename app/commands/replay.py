@@ -7,7 +7,7 @@ import sys
 
 from frictex.app.commands.argtypes import (add_link_arguments, bounded, output_rate, positive_float,
                                    share, sim_device_args)
-from frictex.app.engine.replay import run_replay
+from frictex.app.engine.replay import ReplayOptions, replay_with
 from frictex.app.engine.sources import MAX_GAP_S
 from frictex.app.engine.tables import FORMATS
 from frictex.rendering.renderers import render_modes
@@ -50,12 +50,12 @@ def run(args: argparse.Namespace) -> int:
     if args.frames is not None:
         from frictex.app.engine.frames import FrameWriter
         frames = FrameWriter(args.out, args.scene, fps=args.frames, rate_hz=args.rate)
-    summary = run_replay(args.scene, args.trace, args.out, rate_hz=args.rate,
-                         fmt=args.format, device=args.device, block_size=args.block,
-                         render_override=args.renderer, progress=not args.quiet,
-                         frames=frames, strict=args.strict, faults=args.faults,
-                         max_gap_s=args.max_gap, control=args.control,
-                         sim_args=sim_device_args(args))
+    options = ReplayOptions(rate_hz=args.rate, fmt=args.format, device=args.device,
+                            block_size=args.block, render_override=args.renderer,
+                            progress=not args.quiet, strict=args.strict, faults=args.faults,
+                            max_gap_s=args.max_gap, control=args.control,
+                            sim_args=sim_device_args(args))
+    summary = replay_with(args.scene, args.trace, args.out, options, frames=frames).summary
     if not args.quiet:
         out = summary["output"]
         timing = summary["timings"]

@@ -12,7 +12,9 @@ import argparse
 from frictex.app.commands.argtypes import positive_float
 from frictex.rendering.input.press_synth import press_trace
 from frictex.rendering.input.trace_synth import MOTIONS, make_motion, sample, truth
-from frictex.rendering.input.trace_file import write_trace
+from frictex.app.engine.outfile import write_file
+from frictex.device.errors import InputError
+from frictex.rendering.input.trace_file import format_trace
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -92,18 +94,25 @@ def _provenance(args: argparse.Namespace) -> str:
 
 
 def _check_limits(args: argparse.Namespace) -> None:
-    """ValueError for a synth option outside LIMITS, or a trace of more than MAX_SAMPLES."""
+    """InputError for a synth option outside LIMITS, or a trace of more than MAX_SAMPLES."""
     for name, (lo, hi, unit) in LIMITS.items():
         values = getattr(args, name)
         for value in values if isinstance(values, list) else [values]:
             if not lo <= value <= hi:
-                raise ValueError(f"--{name.replace('_', '-')} {value:g}: expected {lo:g} to "
+                raise InputError(f"--{name.replace('_', '-')} {value:g}: expected {lo:g} to "
                                  f"{hi:g} {unit}")
     rates = [("--rate", args.rate)] + ([("--truth-rate", args.truth_rate)] if args.truth else [])
     for option, rate in rates:
         if rate * args.duration > MAX_SAMPLES:
-            raise ValueError(f"{option} {rate:g} Hz over --duration {args.duration:g} s is "
+            raise InputError(f"{option} {rate:g} Hz over --duration {args.duration:g} s is "
                              f"{rate * args.duration:,.0f} samples; at most {MAX_SAMPLES:,}")
+
+
+def _write(path: str, trace, comment: str | None = None) -> None:
+    """The trace CSV at ``path``, room-checked and written whole or not at all
+    (``app.engine.outfile``)."""
+    data = format_trace(trace, comment).encode("utf-8")
+    write_file(path, lambda to: to.write_bytes(data), len(data))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -113,10 +122,10 @@ def run(args: argparse.Namespace) -> int:
     _check_limits(args)
     if args.motion == "press":
         if args.truth:
-            raise ValueError("--truth: a press does not move; its trace is its true path")
+            raise InputError("--truth: a press does not move; its trace is its true path")
         trace = press_trace(peaks_n=args.peaks, x_mm=args.x0, y_mm=args.y0, rate_hz=args.rate,
                             touch_n=args.force, noise_n=args.force_noise, seed=args.seed)
-        write_trace(args.out, trace, comment=_provenance(args))
+        _write(args.out, trace, comment=_provenance(args))
         print(f"wrote {len(trace)} samples ({trace.duration_s:.3f} s at {args.rate:g} Hz) "
               f"to {args.out}")
         return 0
@@ -125,10 +134,10 @@ def run(args: argparse.Namespace) -> int:
                          length_mm=args.length, radius_mm=args.radius, seed=args.seed)
     trace = sample(motion, args.rate, noise_mm=args.noise, jitter_s=args.jitter,
                    force_n=args.force, seed=args.seed)
-    write_trace(args.out, trace, comment=_provenance(args))
+    _write(args.out, trace, comment=_provenance(args))
     print(f"wrote {len(trace)} samples ({trace.duration_s:.3f} s at {args.rate:g} Hz) to {args.out}")
     if args.truth:
         true = truth(motion, args.truth_rate, force_n=args.force)
-        write_trace(args.truth, true)
+        _write(args.truth, true)
         print(f"wrote the true path ({len(true)} samples at {args.truth_rate:g} Hz) to {args.truth}")
     return 0

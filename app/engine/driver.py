@@ -12,11 +12,20 @@ Each step runs up to ``chunk_blocks`` blocks in one pipeline call (replay: fast;
 depend on ``chunk_blocks``. After the last block every sink is committed; if anything
 raises (a source, the pipeline, a sink, a commit, Ctrl-C) every sink not yet committed
 is aborted and the error propagates: a run writes complete outputs or none.
+
+Ctrl-C. A SIGINT that arrives inside a compiled (numba) kernel and raises there makes the
+kernel return a value with an exception set, which Python reports as a 30-line
+``SystemError``. :func:`deferred_interrupts` holds the first Ctrl-C as a flag that the
+loop turns into ``KeyboardInterrupt`` between steps (``check``), where nothing compiled
+runs; a second Ctrl-C raises at once.
 """
 
 from __future__ import annotations
 
+import signal
+import threading
 import time
+from contextlib import contextmanager
 
 
 class PipelineStage:
@@ -54,10 +63,39 @@ class RunTimer:
         self.seconds = {"read": 0.0, "compute": 0.0, "write": 0.0, "commit": 0.0}
 
 
+@contextmanager
+def deferred_interrupts():
+    """Within: the first Ctrl-C (SIGINT) is held until the ``check()`` this yields is
+    called, which raises ``KeyboardInterrupt`` then (see the module docstring); a second
+    Ctrl-C raises at once. Outside the main thread (where Python runs no signal handler)
+    ``check`` does nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield lambda: None
+        return
+    held = []
+
+    def hold(signum, frame):
+        if held:
+            raise KeyboardInterrupt
+        held.append(signum)
+
+    def check() -> None:
+        if held:
+            raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, hold)
+    try:
+        yield check
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    check()
+
+
 def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,
-          timer: RunTimer | None = None) -> int:
+          timer: RunTimer | None = None, check=None) -> int:
     """Run until ``source.done`` (or ``stop()`` is true); returns the number of blocks run
-    (skipped gaps not counted).
+    (skipped gaps not counted). ``check()``, if given, is called before each step and may
+    raise to end the run (a held Ctrl-C: :func:`deferred_interrupts`).
 
     ``stage.process(k, samples, n) -> (out, commands_um)``; ``source.resume_at(k)`` (the
     block to run next: ``k``, or later past a skipped gap), ``source.take(k, n) ->
@@ -70,6 +108,8 @@ def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,
     pending = list(sinks)
     try:
         while not source.done and not (stop is not None and stop()):
+            if check is not None:
+                check()
             k = source.resume_at(k)
             clock.wait(k)
             t0 = time.perf_counter()
@@ -86,6 +126,8 @@ def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,
             seconds["write"] += time.perf_counter() - t2
             k += n
             run += n
+        if check is not None:
+            check()
         t3 = time.perf_counter()
         while pending:
             pending[0].commit()

@@ -7,6 +7,12 @@ their trails and the scope as they were at that instant into
 needed. ``ffmpeg -framerate FPS -i DIR/frames/frame_%05d.png out.mp4`` makes a video.
 Modal devices show |W| from the commands of each frame's instant, devices that push a
 finger its force and their buttons' state, as in the demo window.
+
+A replay stages its outputs (``app.engine.staging``): it points the writer at its staging
+folder (:meth:`FrameWriter.into`) before the first frame. Each frame is room-checked
+(:data:`FRAME_BYTES_PER_PX` per pixel, or twice the last frame's size if larger) and
+written under a temporary name, then renamed: a full disk never leaves a truncated PNG,
+and the error names the frame.
 """
 
 from __future__ import annotations
@@ -17,12 +23,18 @@ import numpy as np
 from PIL import Image
 
 from frictex.device.actuation.factory import make_actuation
+from frictex.device.errors import InputError
 from frictex.rendering.visual.compositor import Compositor, FrameView
 from frictex.rendering.visual.modal_view import modal_envelope
 from frictex.rendering.visual.context import OffscreenBackend
 from frictex.rendering.visual.overlay import OverlayState, record_from_output
 from frictex.rendering.visual.device_panels import default_frame_size
 from frictex.textures.model import Scene
+from frictex.app.engine.outfile import write_file
+
+#: bytes per pixel a frame is counted at before it is written (the scene images'
+#: PNGs take 0.02-0.2 bytes per pixel; an RGB pixel uncompressed is 3)
+FRAME_BYTES_PER_PX = 1.0
 
 
 class FrameWriter:
@@ -35,7 +47,7 @@ class FrameWriter:
     def __init__(self, out_dir, scene, fps: float, rate_hz: float = 10_000.0,
                  size: tuple[int, int] | None = None):
         if not fps > 0 or not np.isfinite(fps):
-            raise ValueError(f"frame rate {fps!r} fps: expected a positive number")
+            raise InputError(f"frame rate {fps!r} fps: expected a positive number")
         if not isinstance(scene, Scene):
             from frictex.textures.library import resolve_scene
             from frictex.textures.loader import load_scene
@@ -43,7 +55,7 @@ class FrameWriter:
         self.scene = scene
         self.fps = float(fps)
         self.folder = Path(out_dir) / "frames"
-        self.folder.mkdir(parents=True, exist_ok=True)
+        self.last_bytes = 0
         self.size = size or default_frame_size(scene)
         self.backend = OffscreenBackend(self.size)
         self.compositor = Compositor(self.backend.ctx, scene, self.size)
@@ -53,6 +65,18 @@ class FrameWriter:
         self.stride = max(1, int(rate_hz / 2000.0))  # 2 kHz is plenty for the scope
         self.t_first: float | None = None
         self.count = 0
+
+    def into(self, out_dir) -> None:
+        """Write the frames into ``out_dir/frames`` instead (before the first frame)."""
+        self.folder = Path(out_dir) / "frames"
+
+    def frame_bytes(self) -> float:
+        """Bytes a frame is counted at in a room check (see the module docstring)."""
+        return max(self.size[0] * self.size[1] * FRAME_BYTES_PER_PX, 2.0 * self.last_bytes)
+
+    def frames_bytes(self, duration_s: float) -> float:
+        """Bytes the frames of ``duration_s`` seconds of output are counted at."""
+        return (int(duration_s * self.fps) + 1) * self.frame_bytes()
 
     def _frame_time(self, j: int) -> float:
         return self.t_first + j / self.fps
@@ -95,7 +119,10 @@ class FrameWriter:
                                        amplitude_max_um=self.scene.device.amplitude_limit_um,
                                        envelope=envelope, envelope_scale_um=self.envelope_scale_um))
         path = self.folder / f"frame_{self.count:05d}.png"
-        Image.fromarray(self.backend.read_rgb()).save(path)
+        self.folder.mkdir(parents=True, exist_ok=True)
+        image = Image.fromarray(self.backend.read_rgb())
+        write_file(path, lambda to: image.save(to, format="PNG"), self.frame_bytes())
+        self.last_bytes = path.stat().st_size
         self.count += 1
 
     def close(self) -> None:

@@ -12,29 +12,37 @@ byte-identical (``summary.json`` aside, whose ``timings`` differ).
 Outputs (DESIGN.md): ``commands.<fmt>`` (t_s, one column per channel in um, phases where
 the actuation has them), ``friction.<fmt>`` (one row per touching finger and output
 sample: t_s, finger, x_mm, y_mm, mu_target, amplitude_um), ``summary.json`` (written
-last). ``fmt``: csv, npz or parquet (``app.engine.tables``). A replay first removes an
-earlier run's outputs from the folder; on any error it removes what it wrote, so the
-folder holds a complete set of outputs or none.
+last), ``frames/`` with ``--frames``. ``fmt``: csv, npz or parquet (``app.engine.tables``),
+or ``memory``: no folder, the two tables kept as pyarrow Tables (``frictex.replay``).
+
+Atomic runs: everything is written into a staging folder beside the output folder and
+swapped in when the run commits (``app.engine.staging``): until then the previous run's
+outputs stay as they were, whatever ends the run; a run refused before writing (disk
+room, an output folder it cannot replace) touches nothing.
 """
 
 from __future__ import annotations
 
 import json
 import time
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from frictex.app.engine.clocks import VirtualClock
-from frictex.app.engine.driver import PipelineStage, RunTimer, drive, force_reports_of
+from frictex.app.engine.driver import (PipelineStage, RunTimer, deferred_interrupts, drive,
+                                       force_reports_of)
 from frictex.app.engine.sinks import (FRICTION_COLUMNS, FrameSink, LinkSink, ProgressSink, TableSink,
                               command_columns)
 from frictex.app.engine.sources import MAX_GAP_S, TraceSource
+from frictex.app.engine.staging import Staging
 from frictex.app.engine.summary import Totals, finite_json, summary, timings
-from frictex.app.engine.tables import FORMATS, check_room, load_writer, row_bytes
+from frictex.app.engine.tables import MEMORY, check_room, load_writer, row_bytes
+from frictex.device.errors import InputError
 from frictex.rendering.input.trace_file import Trace, iter_trace, most_touching
 from frictex.rendering.pipeline import build_pipeline
 from frictex.textures.model import Scene
 
-OUTPUT_STEMS = ("commands", "friction")
 #: finger-samples per pipeline call by default (blocks x block size x fingers touching):
 #: measured on the composed scene, 10-min trace, idle machine: compute 0.52 s at 10,000,
 #: 0.37 s at 50,000, 0.67 s at 200,000 (per-call overhead against the cache)
@@ -43,6 +51,71 @@ CHUNK_SAMPLES = 50_000
 #: this close to the device's play position, so a block's force report comes back a
 #: few blocks after it is computed (``rendering.control.loop``'s ``max_wait_s``)
 LOOP_QUEUE_BLOCKS = 2
+
+
+@dataclass(frozen=True, kw_only=True)
+class ReplayOptions:
+    """How a replay runs (the ``frictex replay`` options).
+
+    Attributes
+    ----------
+    rate_hz : float
+        Output sample rate (Hz).
+    fmt : str
+        Table format: csv, npz, parquet, or ``memory`` (no output folder).
+    block_size : int
+        Output samples per block; touch samples take effect at block boundaries.
+    render_override : str or None
+        Render every periodic layer this way instead of as its file says.
+    chunk_blocks : int or None
+        Blocks per pipeline call (None: about :data:`CHUNK_SAMPLES` finger-samples).
+    progress : bool
+        A progress bar on stderr for long traces.
+    strict : bool
+        Refuse a trace whose time goes back (else sorted or dropped, counted, warned).
+    device : str or None
+        Stream the commands to a device: ``"sim"``, a port or a pyserial URL, opened with
+        the channels and phases of the scene's actuation.
+    faults : device.link.faults.FaultPlan or None
+        Faults injected into that device's link.
+    sim_args : tuple of str
+        More ``frictex sim-device`` flags for ``device="sim"``.
+    max_gap_s : float
+        A longer gap between touch samples (s) is a lift, and its silence is skipped.
+    control : str or None
+        The friction loop's mode (open, closed, adaptive) instead of the scene file's.
+        With the loop on, one block per pipeline call and, streaming to a device, the
+        link's queue kept to :data:`LOOP_QUEUE_BLOCKS`.
+    """
+
+    rate_hz: float = 10_000.0
+    fmt: str = "csv"
+    block_size: int = 50
+    render_override: str | None = None
+    chunk_blocks: int | None = None
+    progress: bool = True
+    strict: bool = False
+    device: str | None = None
+    faults: Any = None
+    sim_args: tuple[str, ...] = ()
+    max_gap_s: float = MAX_GAP_S
+    control: str | None = None
+
+
+@dataclass(frozen=True)
+class ReplayResult:
+    """What :func:`replay_with` returns.
+
+    Attributes
+    ----------
+    summary : dict
+        The summary document (``summary.json`` before non-finite numbers become null).
+    tables : dict of str to pyarrow.Table, or None
+        ``commands`` and ``friction`` when kept in memory (``fmt`` ``memory``); else None.
+    """
+
+    summary: dict[str, Any]
+    tables: dict[str, Any] | None
 
 
 def load_inputs(scene, trace, strict: bool = False):
@@ -63,93 +136,125 @@ def load_inputs(scene, trace, strict: bool = False):
     return scene, iter_trace(trace_path, strict=strict), trace_path
 
 
-def clear_outputs(out_dir: Path) -> None:
-    """Remove an earlier run's outputs (any format) and summary from ``out_dir``."""
-    for stem in OUTPUT_STEMS:
-        for fmt in FORMATS:
-            (out_dir / f"{stem}.{fmt}").unlink(missing_ok=True)
-    (out_dir / "summary.json").unlink(missing_ok=True)
+def run_replay(scene, trace, out_dir, *, sink=None, frames=None, **options) -> dict[str, Any]:
+    """:func:`replay_with` for keyword options (the fields of :class:`ReplayOptions`);
+    returns the summary document."""
+    return replay_with(scene, trace, out_dir, ReplayOptions(**options), sink=sink,
+                       frames=frames).summary
 
 
-def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv", sink=None,
-               device: str | None = None, block_size: int = 50, render_override: str | None = None,
-               chunk_blocks: int | None = None, progress: bool = True, frames=None, strict: bool = False,
-               faults=None, max_gap_s: float = MAX_GAP_S, control: str | None = None,
-               sim_args: tuple[str, ...] = ()) -> dict:
+def replay_with(scene, trace, out_dir: str | Path | None, options: ReplayOptions, *,
+                sink=None, frames=None) -> ReplayResult:
     """Replay ``trace`` (Trace or path/bundled name) on ``scene`` (Scene or path/name).
 
-    Writes the outputs into ``out_dir`` (created if needed) and returns the summary
-    (also written as ``summary.json``). ``sink``: an optional device link
-    (``device.link.host.open_sink(..., paced=True)``) that receives every block and, by
-    waiting for the device's room, paces the run; the replay closes it (draining first) before writing the summary, so its
-    counters are final. ``device``: instead of a link, a spec (``"sim"``, a port or a
-    pyserial URL) opened here with the channels and phases of the scene's actuation,
-    with ``faults`` (``device.link.faults.FaultPlan``) injected if given. ``frames``: an
-    optional ``app.engine.frames.FrameWriter``. ``strict``: refuse a trace whose time
-    goes back (else sorted or dropped, counted and warned about). ``max_gap_s``: a longer
-    gap between touch samples is a lift, and its silence is skipped
-    (``app.engine.sources``). ``control``: the friction loop's mode (open, closed,
-    adaptive) instead of the scene file's; with the loop on, one block per pipeline call
-    (the loop acts once a block) and, streaming to a device, the link's queue kept to
-    :data:`LOOP_QUEUE_BLOCKS` so that the device's force reports come back within the
-    loop's wait (``rendering.control.loop``); the summary gets a ``control`` section.
-    A ``sink`` passed in must then be a link (``device.link.host.CommandSink``).
-    ``sim_args``: more ``frictex sim-device`` flags for ``device="sim"`` (e.g. a
-    simulated finger's force reports: ``("--finger", "3")``).
+    Writes the outputs into ``out_dir`` (created if needed; staged and swapped in whole,
+    see the module docstring), or keeps the tables in memory when ``out_dir`` is None
+    (``options.fmt`` then :data:`~frictex.app.engine.tables.MEMORY`). ``sink``: an
+    optional device link (``device.link.host.open_sink(..., paced=True)``) that receives
+    every block and, by waiting for the device's room, paces the run; the replay closes it
+    (draining first) before writing the summary, so its counters are final; with the
+    friction loop on it must be a ``device.link.host.CommandSink``. ``frames``: an optional
+    ``app.engine.frames.FrameWriter`` (its frames are staged with the tables). Ctrl-C is
+    held while kernels run and ends the run between blocks (``KeyboardInterrupt``).
     """
+    if (out_dir is None) != (options.fmt == MEMORY):
+        raise InputError(f"output format {options.fmt!r}: tables in memory need no output "
+                         "folder, files need one")
+    if frames is not None and out_dir is None:
+        raise InputError("frames are written into an output folder: give one")
+    with deferred_interrupts() as check:
+        return _replay(scene, trace, out_dir, options, sink, frames, check)
+
+
+def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) -> ReplayResult:
     wall0 = time.perf_counter()
     timer = RunTimer()
-    scene, chunks, trace_path = load_inputs(scene, trace, strict)
-    load_writer(fmt)
-    source = TraceSource(chunks, max_gap_s=max_gap_s)
+    scene, chunks, trace_path = load_inputs(scene, trace, options.strict)
+    load_writer(options.fmt)
+    source = TraceSource(chunks, max_gap_s=options.max_gap_s)
     read0 = time.perf_counter()
     t0 = source.first_time()
     timer.seconds["read"] += time.perf_counter() - read0
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    clear_outputs(out_dir)
+    staging = None if out_dir is None else Staging(out_dir)
+    if staging is not None:
+        staging.check()
     build0 = time.perf_counter()
-    pipeline = build_pipeline(scene, rate_hz=rate_hz, block_size=block_size,
-                              render_override=render_override, t0_s=t0, control=control)
+    pipeline = build_pipeline(scene, rate_hz=options.rate_hz, block_size=options.block_size,
+                              render_override=options.render_override, t0_s=t0,
+                              control=options.control)
     setup_s = read0 - wall0 + time.perf_counter() - build0  # scene and kernels loaded
     looped = pipeline.control is not None
-    if device is not None:
-        from frictex.device.link.host import open_sink
-        sink = open_sink(device, channels=len(pipeline.channels), rate_hz=rate_hz,
-                         phases=pipeline.actuation.has_phases, paced=True, faults=faults,
-                         sim_args=tuple(sim_args),
-                         **({"queue_blocks": LOOP_QUEUE_BLOCKS} if looped else {}))
-    elif sim_args:
-        raise ValueError("sim_args are for a simulated device (device 'sim')")
     read0 = time.perf_counter()
     source.start(pipeline.tracker_config)
     timer.seconds["read"] += time.perf_counter() - read0
-    if source.ended:  # the whole trace is read: the outputs' size is known before writing
-        _check_outputs_fit(out_dir, source, pipeline, fmt)
+    if staging is not None and source.ended:  # the outputs' size is known before writing
+        _check_outputs_fit(staging.out, source, pipeline, options.fmt, frames)
+    if options.sim_args and options.device is None:
+        raise InputError("sim_args are for a simulated device (device 'sim')")
+    check()
+    folder = None
+    try:
+        if staging is not None:
+            folder = staging.begin()
+        if options.device is not None:
+            from frictex.device.link.host import open_sink
+            sink = open_sink(options.device, channels=len(pipeline.channels),
+                             rate_hz=options.rate_hz, phases=pipeline.actuation.has_phases,
+                             paced=True, faults=options.faults, sim_args=tuple(options.sim_args),
+                             **({"queue_blocks": LOOP_QUEUE_BLOCKS} if looped else {}))
+        if frames is not None:
+            frames.into(folder)
+        doc, tables = _run(pipeline, source, chunks, trace_path, scene, folder, options, sink,
+                           frames, timer, check)
+        output_s = doc["output"]["duration_s"]
+        doc["timings"] = timings(pipeline, output_s, timer.seconds,
+                                 time.perf_counter() - wall0, setup_s)
+        if staging is not None:
+            if staging.removed:
+                doc["warnings"].append(f"removed the leftovers of {len(staging.removed)} "
+                                       f"interrupted runs beside {staging.out.name}: "
+                                       + ", ".join(staging.removed))
+            text = json.dumps(finite_json(doc), indent=2, allow_nan=False) + "\n"
+            (folder / "summary.json").write_text(text, encoding="utf-8")
+            check()
+            staging.commit()
+    except BaseException:
+        if staging is not None:
+            staging.abort()
+        raise
+    return ReplayResult(doc, tables)
+
+
+def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOptions, sink,
+         frames, timer, check):
+    """The block loop into the sinks; the summary document (without ``timings``) and the
+    tables kept in memory (or None)."""
+    looped = pipeline.control is not None
     totals = Totals()
     sinks = [totals]
     if sink is not None:  # a paced link: its send waits (bounded) for the device's room
-        sinks.append(LinkSink(sink, block_size))
+        sinks.append(LinkSink(sink, options.block_size))
     if frames is not None:
         sinks.append(FrameSink(frames))
-    if progress and _long(source):
-        sinks.append(ProgressSink(rate_hz))
+    if options.progress and _long(source):
+        sinks.append(ProgressSink(options.rate_hz))
     # last: its files become final only once the link has drained and the frames are out
-    tables = TableSink(out_dir, pipeline.channels, pipeline.actuation.has_phases, fmt)
+    tables = TableSink(folder, pipeline.channels, pipeline.actuation.has_phases, options.fmt)
     sinks.append(tables)
+    chunk_blocks = options.chunk_blocks
     if looped:
         chunk_blocks = 1
     elif chunk_blocks is None:
         fingers = max(1, most_touching(source.pending)) if source.pending is not None else 1
-        chunk_blocks = max(1, CHUNK_SAMPLES // (block_size * fingers))
+        chunk_blocks = max(1, CHUNK_SAMPLES // (options.block_size * fingers))
     stage = PipelineStage(pipeline)
     if looped and sink is not None:  # the loop reads the device's forces
         stage = PipelineStage(pipeline, sink.device_force_n, force_reports_of(sink))
-    blocks = drive(stage, source, sinks, VirtualClock(), chunk_blocks=chunk_blocks, timer=timer)
+    blocks = drive(stage, source, sinks, VirtualClock(), chunk_blocks=chunk_blocks, timer=timer,
+                   check=check)
 
-    output_s = blocks * block_size / rate_hz
     doc = summary(scene, source.stats.report(trace_path), pipeline, stage.state.tracker, totals,
-                  fmt, tables.files, blocks)
+                  options.fmt, tables.files, blocks)
     order = getattr(chunks, "order", None)
     if order is not None:
         doc["trace"]["time_order"] = order.as_dict()
@@ -162,23 +267,33 @@ def run_replay(scene, trace, out_dir, rate_hz: float = 10_000.0, fmt: str = "csv
     if sink is not None:
         doc["device"] = sink.status()
         doc["warnings"] += device_warnings(doc["device"])
-    doc["timings"] = timings(pipeline, output_s, timer.seconds, time.perf_counter() - wall0,
-                             setup_s)
-    text = json.dumps(finite_json(doc), indent=2, allow_nan=False) + "\n"
-    (out_dir / "summary.json").write_text(text, encoding="utf-8")
-    return doc
+    in_memory = None
+    if options.fmt == MEMORY:
+        in_memory = {"commands": tables.commands.table, "friction": tables.friction.table}
+    return doc, in_memory
 
 
-def _check_outputs_fit(out_dir: Path, source: TraceSource, pipeline, fmt: str) -> None:
-    """Refuse, before writing anything, outputs that would not fit the disk."""
+def _check_outputs_fit(out_dir: Path, source: TraceSource, pipeline, fmt: str, frames) -> None:
+    """Refuse, before writing anything, outputs that would not fit the disk (frames
+    counted): checked on the folder that will hold the staging folder."""
     trace = source.pending
     output_s = trace.duration_s - source.gaps.skipped_s + 2 * pipeline.block_size / pipeline.rate_hz
     samples = output_s * pipeline.rate_hz
     fingers = max(1, most_touching(trace))
     need = samples * (row_bytes(command_columns(pipeline.channels, pipeline.actuation.has_phases), fmt)
                       + fingers * row_bytes(FRICTION_COLUMNS, fmt))
-    check_room(out_dir, need, f"the outputs ({output_s:.6g} s at {pipeline.rate_hz:g} Hz, "
-                              f"up to {fingers} fingers, {fmt})")
+    what = f"the outputs ({output_s:.6g} s at {pipeline.rate_hz:g} Hz, up to {fingers} fingers, {fmt}"
+    if frames is not None:
+        need += frames.frames_bytes(output_s)
+        what += f", frames at {frames.fps:g} fps"
+    check_room(_existing(out_dir), need, what + ")")
+
+
+def _existing(path: Path) -> Path:
+    """``path`` or its nearest existing parent (whose file system it will be on)."""
+    while not path.exists() and path.parent != path:
+        path = path.parent
+    return path
 
 
 def device_warnings(status: dict) -> list[str]:

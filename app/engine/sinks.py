@@ -23,7 +23,7 @@ import numpy as np
 
 from frictex.device.registry import Registry
 
-from frictex.app.engine.tables import TableWriter
+from frictex.app.engine.tables import open_table
 
 FRICTION_COLUMNS = [("t_s", np.float64, "%.7f"), ("finger", np.int64, "%d"),
                     ("x_mm", np.float64, "%.4f"), ("y_mm", np.float64, "%.4f"),
@@ -75,13 +75,15 @@ SINKS: Registry[type] = Registry("sink", "frictex.sinks")
 
 @SINKS.register("tables")
 class TableSink:
-    """``commands.<fmt>`` and ``friction.<fmt>`` in ``out_dir`` (DESIGN.md, replay output)."""
+    """``commands.<fmt>`` and ``friction.<fmt>`` in ``out_dir`` (DESIGN.md, replay output),
+    or two pyarrow Tables in memory (``fmt`` ``memory``: ``app.engine.tables.MemoryTable``;
+    ``files`` stays empty)."""
 
-    def __init__(self, out_dir: Path, channels: tuple[str, ...], phases: bool, fmt: str):
+    def __init__(self, out_dir: Path | None, channels: tuple[str, ...], phases: bool, fmt: str):
         self.channels = channels
         self.phases = phases
-        self.commands = TableWriter(out_dir, "commands", command_columns(channels, phases), fmt)
-        self.friction = TableWriter(out_dir, "friction", FRICTION_COLUMNS, fmt)
+        self.commands = open_table(out_dir, "commands", command_columns(channels, phases), fmt)
+        self.friction = open_table(out_dir, "friction", FRICTION_COLUMNS, fmt)
         self.files: list[str] = []
 
     def write(self, out, commands_um) -> None:
@@ -97,10 +99,12 @@ class TableSink:
     def commit(self) -> None:
         commands = self.commands.commit()
         try:
-            self.files = [commands.name, self.friction.commit().name]
+            friction = self.friction.commit()
         except BaseException:
-            commands.unlink(missing_ok=True)
+            if commands is not None:
+                commands.unlink(missing_ok=True)
             raise
+        self.files = [path.name for path in (commands, friction) if path is not None]
 
     def abort(self) -> None:
         self.commands.abort()

@@ -25,6 +25,11 @@ Formats:
   declared required (not nullable), as no value is ever missing: the writer then encodes
   no definition levels (the every-layer scene's 10-min friction table, 6 million rows:
   0.32 -> 0.23 s of writer CPU). pandas, polars, pyarrow and DuckDB open it directly.
+- ``memory`` (:data:`MEMORY`, ``frictex.replay`` without a folder): no file; a
+  :class:`MemoryTable` keeps the rows and its ``table`` is a pyarrow Table once committed.
+
+:func:`open_table` opens the writer of a format; :func:`read_table` reads a written table
+back as a pyarrow Table.
 """
 
 from __future__ import annotations
@@ -40,8 +45,11 @@ from pathlib import Path
 import numpy as np
 
 from frictex.app.engine.csv_text import rows_text
+from frictex.device.errors import InputError, OutputSpaceError
 
 FORMATS = ("csv", "npz", "parquet")
+#: the format of tables kept in memory (a pyarrow Table each; no file)
+MEMORY = "memory"
 #: rows gathered before a batch is written (memory: ~13 MB a batch for six columns)
 BATCH_ROWS = 1 << 18
 #: free space a batch must leave on the output's file system (bytes)
@@ -63,14 +71,16 @@ def row_bytes(columns, fmt: str) -> int:
     return sum(3 if f == "%d" else 7 + int(f[2:-1]) for _, _, f in columns)
 
 
-def check_room(out_dir: Path, need_bytes: float, what: str) -> None:
-    """Raise a one-line OSError (ENOSPC) unless ``out_dir``'s file system has room for
-    ``need_bytes`` more and :data:`RESERVE_BYTES` to spare."""
+def check_room(out_dir: Path, need_bytes: float, what: str,
+               hint: str = "write elsewhere, or use --format parquet") -> None:
+    """Raise a one-line :class:`OutputSpaceError` (errno ENOSPC) unless ``out_dir``'s file
+    system has room for ``need_bytes`` more and :data:`RESERVE_BYTES` to spare; the
+    message names ``what`` and ends with ``hint``."""
     free = shutil.disk_usage(out_dir).free
     if need_bytes + RESERVE_BYTES > free:
-        full = OSError(f"{out_dir}: {what} need about {_size(need_bytes)} and {_size(free)} "
-                       f"is free (a margin of {_size(RESERVE_BYTES)} kept); free some space, "
-                       f"write elsewhere, or use --format parquet")
+        full = OutputSpaceError(f"{out_dir}: {what} need about {_size(need_bytes)} and "
+                                f"{_size(free)} is free (a margin of {_size(RESERVE_BYTES)} "
+                                f"kept); free some space, {hint}")
         full.errno = errno.ENOSPC
         raise full
 
@@ -91,7 +101,7 @@ class TableWriter:
 
     def __init__(self, out_dir: Path, stem: str, columns, fmt: str):
         if fmt not in FORMATS:
-            raise ValueError(f"output format {fmt!r}: expected one of {', '.join(FORMATS)}")
+            raise InputError(f"output format {fmt!r}: expected one of {', '.join(FORMATS)}")
         self.fmt = fmt
         self.columns = list(columns)
         self.path = Path(out_dir) / f"{stem}.{fmt}"
@@ -152,6 +162,76 @@ class TableWriter:
         self.partial.unlink(missing_ok=True)
 
 
+class MemoryTable:
+    """Rows of named columns kept in memory; :meth:`commit` makes them a pyarrow Table.
+
+    The same interface as :class:`TableWriter` (``write``, ``commit``, ``abort``) without a
+    file: ``table`` is the result once committed (columns typed as the writers' files,
+    declared not nullable), ``path`` is None. Memory: 8 bytes per value.
+    """
+
+    def __init__(self, columns):
+        self.columns = list(columns)
+        self.path = None
+        self.rows = 0
+        self.table = None
+        self._chunks: list[dict[str, np.ndarray]] = []
+
+    def write(self, chunk: dict[str, np.ndarray]) -> None:
+        """Append rows: one equal-length 1-D array per column."""
+        n = len(next(iter(chunk.values())))
+        if n:
+            self._chunks.append({name: np.asarray(chunk[name], dtype=dtype)
+                                 for name, dtype, _ in self.columns})
+            self.rows += n
+
+    def commit(self) -> None:
+        """Join the rows into ``table``."""
+        import pyarrow as pa
+        schema = arrow_schema(self.columns)
+        arrays = [np.concatenate([c[f.name] for c in self._chunks]) if self._chunks
+                  else np.zeros(0, dtype=np.dtype(f.type.to_pandas_dtype())) for f in schema]
+        self.table = pa.Table.from_arrays([pa.array(a, type=f.type) for a, f in zip(arrays, schema)],
+                                          schema=schema)
+        self._chunks = []
+
+    def abort(self) -> None:
+        """Drop the rows."""
+        self._chunks = []
+
+
+def open_table(out_dir: Path | None, stem: str, columns, fmt: str) -> TableWriter | MemoryTable:
+    """The writer of table ``stem`` in ``fmt``: a :class:`MemoryTable` for :data:`MEMORY`
+    (``out_dir`` unused), else a :class:`TableWriter` into ``out_dir``."""
+    if fmt == MEMORY:
+        return MemoryTable(columns)
+    return TableWriter(Path(out_dir), stem, columns, fmt)
+
+
+def arrow_schema(columns):
+    """The pyarrow schema of ``columns`` ((name, dtype, %-format) triples), not nullable."""
+    import pyarrow as pa
+    return pa.schema([pa.field(name, pa.from_numpy_dtype(np.dtype(dtype)), nullable=False)
+                      for name, dtype, _ in columns])
+
+
+def read_table(path: Path):
+    """A table file written here (csv, npz or parquet, by its suffix) as a pyarrow Table."""
+    import pyarrow as pa
+    path = Path(path)
+    fmt = path.suffix[1:]
+    if fmt == "parquet":
+        import pyarrow.parquet as pq
+        return pq.read_table(path)
+    if fmt == "npz":
+        with np.load(path) as arrays:
+            return pa.table({name: arrays[name] for name in arrays.files})
+    if fmt == "csv":
+        import pyarrow.csv as pa_csv
+        return pa_csv.read_csv(path)
+    raise InputError(f"{path}: not a table file ({', '.join(FORMATS)})")
+
+
 class _Csv:
     def __init__(self, table: TableWriter):
         self.columns = table.columns
@@ -205,8 +285,7 @@ class _Parquet:
     def __init__(self, table: TableWriter):
         import pyarrow as pa
         import pyarrow.parquet as pq
-        self.schema = pa.schema([pa.field(name, pa.from_numpy_dtype(np.dtype(dtype)),
-                                          nullable=False) for name, dtype, _ in table.columns])
+        self.schema = arrow_schema(table.columns)
         floats = [name for name, dtype, _ in table.columns if np.dtype(dtype).kind == "f"]
         self.writer = pq.ParquetWriter(table.partial, self.schema, compression="snappy",
                                        use_dictionary=["finger"], use_byte_stream_split=floats)

@@ -1,0 +1,119 @@
+"""The haptic pipeline of a scene, run over a whole trace in one call."""
+
+from __future__ import annotations
+
+import dataclasses
+
+from frictex.device.errors import InputError
+from frictex.rendering.input.trace_file import Trace
+from frictex.rendering.pipeline import BlockOutput
+from frictex.rendering.pipeline import build_pipeline as build
+from frictex.rendering.tracking.tracks import apply_index
+from frictex.textures.model import Scene
+
+
+class Pipeline:
+    """The stages a scene needs (tracker, renderers, composition, friction inversion,
+    actuation), built once; :meth:`process` runs a trace through them.
+
+    Made by :func:`build_pipeline`. The live demo and ``frictex replay`` run the same
+    stages block by block with the state carried over; one call over a whole trace gives
+    the same output (a touch sample takes effect at the block boundary after it).
+    """
+
+    def __init__(self, scene: Scene, *, rate_hz: float, block_size: int,
+                 renderer: str | None, control: str | None, inversion: str):
+        self._stages = build(scene, rate_hz=rate_hz, block_size=block_size,
+                             render_override=renderer, control=control, inversion=inversion)
+
+    @property
+    def scene(self) -> Scene:
+        """The scene the pipeline renders."""
+        return self._stages.scene
+
+    @property
+    def rate_hz(self) -> float:
+        """Output sample rate (Hz)."""
+        return self._stages.rate_hz
+
+    @property
+    def block_size(self) -> int:
+        """Output samples per block."""
+        return self._stages.block_size
+
+    @property
+    def channels(self) -> tuple[str, ...]:
+        """The actuator channels, in the order of ``BlockOutput.commands_um``'s columns."""
+        return self._stages.channels
+
+    def process(self, trace: Trace) -> BlockOutput:
+        """Run a whole trace through the pipeline, from a fresh state.
+
+        The output clock starts at the trace's first sample (output sample k at
+        ``t0 + k / rate_hz``) and runs to the end of the block after its last sample, as
+        a replay's does.
+
+        Parameters
+        ----------
+        trace : Trace
+            Touch samples (:func:`read_trace`, :func:`synth_trace`), at least one.
+
+        Returns
+        -------
+        BlockOutput
+            For n output samples and F fingers: ``t_s`` (n,) s; per finger (F, n):
+            ``contact``, ``x_mm``, ``y_mm`` (mm), ``mu_target`` (mu'), ``wanted_um`` and
+            ``amplitude_um`` (um zero-to-peak); ``commands_um`` (n, channels) um;
+            ``phases_rad`` (n, channels) rad or None; ``clamps``, the friction
+            inversion's guard counts.
+
+        Raises
+        ------
+        InputError
+            An empty trace.
+        """
+        if len(trace) == 0:
+            raise InputError("the trace has no samples")
+        stages = self._stages
+        config = dataclasses.replace(stages.tracker_config, t0_s=float(trace.t_s[0]))
+        stages.tracker_config = config
+        last = int(apply_index(trace.t_s[-1:], config)[0])
+        out, _ = stages.process(0, trace, stages.initial_state(),
+                                n_blocks=last // stages.block_size + 1)
+        return out
+
+
+def build_pipeline(scene: Scene, *, rate_hz: float = 10_000.0, block_size: int = 50,
+                   renderer: str | None = None, control: str | None = None,
+                   inversion: str = "exact") -> Pipeline:
+    """Build the haptic pipeline of a scene.
+
+    Parameters
+    ----------
+    scene : Scene
+        From :func:`load_scene`.
+    rate_hz : float, optional
+        Output sample rate (Hz); 10 kHz is the seed 003 device's link.
+    block_size : int, optional
+        Output samples per block (50 = 5 ms at 10 kHz): touch samples take effect at
+        block boundaries, as live.
+    renderer : str or None, optional
+        Render every periodic layer this way (``sho``, ``sho-held``, ``sho-predicted``,
+        ``sht``, ``hybrid``) instead of as its file says.
+    control : str or None, optional
+        The friction loop (``open``, ``closed``, ``adaptive``) instead of the scene file's.
+    inversion : str, optional
+        The friction inversion: ``exact`` (seed 003's eq 3) or ``lut`` (a table).
+
+    Returns
+    -------
+    Pipeline
+        Built and warmed (its compiled kernels loaded).
+
+    Raises
+    ------
+    ValueError
+        A bad rate, block size, renderer, control mode or inversion.
+    """
+    return Pipeline(scene, rate_hz=rate_hz, block_size=block_size, renderer=renderer,
+                    control=control, inversion=inversion)

@@ -1,0 +1,135 @@
+"""A whole replay: a scene and a trace through the pipeline, tables and a typed summary."""
+
+from __future__ import annotations
+
+import functools
+import json
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from frictex.app.engine.replay import ReplayOptions, replay_with
+from frictex.app.engine.sources import MAX_GAP_S
+from frictex.app.engine.summary import finite_json
+from frictex.app.engine.summary_types import Summary
+from frictex.app.engine.tables import FORMATS, MEMORY, read_table
+from frictex.device.errors import InputError
+from frictex.rendering.input.trace_file import Trace
+from frictex.textures.model import Scene
+
+if TYPE_CHECKING:
+    import pyarrow
+
+__all__ = ["Replay", "replay"]
+
+
+class Replay:
+    """The result of :func:`replay`: the summary and the two tables.
+
+    Attributes
+    ----------
+    summary : Summary
+        What ``summary.json`` holds, typed; ``summary.to_dict()`` is that document.
+    out : Path or None
+        The output folder, or None when the tables are in memory.
+    """
+
+    def __init__(self, summary: Summary, out: Path | None, tables: dict[str, Any] | None):
+        self.summary = summary
+        self.out = out
+        self._tables = tables
+
+    def _table(self, stem: str) -> pyarrow.Table:
+        if self._tables is not None:
+            return self._tables[stem]
+        return read_table(self.out / f"{stem}.{self.summary.output.format}")
+
+    @functools.cached_property
+    def friction(self) -> pyarrow.Table:
+        """One row per touching finger and output sample.
+
+        Columns ``t_s`` (s), ``finger`` (id), ``x_mm``, ``y_mm`` (mm, the position used),
+        ``mu_target`` (mu' composed from the layers), ``amplitude_um`` (the amplitude the
+        actuation achieves under the finger, um zero-to-peak); ``.to_pandas()`` where
+        pandas is installed. Read from the output folder on first use when there is one.
+        """
+        return self._table("friction")
+
+    @functools.cached_property
+    def commands(self) -> pyarrow.Table:
+        """One row per output sample: ``t_s`` (s), ``<channel>_um`` per actuator channel
+        (um zero-to-peak) and ``<channel>_phase_rad`` (rad) where the actuation has phases.
+        Read from the output folder on first use when there is one."""
+        return self._table("commands")
+
+    def __repr__(self) -> str:
+        where = "in memory" if self.out is None else str(self.out)
+        return (f"Replay({self.summary.scene.name!r}, {self.summary.output.samples} output "
+                f"samples, {where})")
+
+
+def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
+           out: str | Path | None = None, format: str | None = None,
+           renderer: str | None = None, device: str | None = None,
+           rate_hz: float = 10_000.0, block_size: int = 50, control: str | None = None,
+           strict: bool = False, max_gap_s: float = MAX_GAP_S,
+           progress: bool = False) -> Replay:
+    """Replay a touch trace on a scene, headless, on a virtual clock (``frictex replay``).
+
+    Parameters
+    ----------
+    scene : Scene, str or Path
+        A scene (:func:`load_scene`), a texture file or a bundled scene's name.
+    trace : Trace, str or Path
+        A trace (:func:`read_trace`, :func:`synth_trace`), a trace CSV or a bundled
+        trace's name.
+    out : str, Path or None, optional
+        Write ``commands.<format>``, ``friction.<format>`` and ``summary.json`` into this
+        folder (replaced whole when the run completes; the previous run's outputs stay
+        until then). None (the default): keep the tables in memory, write nothing.
+    format : str or None, optional
+        With ``out``: ``csv`` (the default), ``npz`` or ``parquet``. Without ``out``: None.
+    renderer : str or None, optional
+        Render every periodic layer this way (``sho``, ``sho-held``, ``sho-predicted``,
+        ``sht``, ``hybrid``) instead of as its file says.
+    device : str or None, optional
+        Also stream the commands to a device, paced by it: ``"sim"`` (the simulated
+        device), a serial port or a pyserial URL.
+    rate_hz : float, optional
+        Output sample rate (Hz).
+    block_size : int, optional
+        Output samples per block; touch samples take effect at block boundaries.
+    control : str or None, optional
+        The friction loop (``open``, ``closed``, ``adaptive``) instead of the scene file's.
+    strict : bool, optional
+        Refuse a trace whose time goes back (else sorted or dropped, counted, warned).
+    max_gap_s : float, optional
+        A longer gap between touch samples (s) is a lift; its silence is skipped.
+    progress : bool, optional
+        A progress bar on stderr for long traces.
+
+    Returns
+    -------
+    Replay
+        ``summary`` (typed), ``friction`` and ``commands`` (pyarrow Tables).
+
+    Raises
+    ------
+    InputError
+        A bad scene, trace or option.
+    DeviceError
+        The device's link failed.
+    OutputSpaceError
+        The outputs would not fit in ``out``'s file system (checked before writing).
+    """
+    if out is None and format is not None:
+        raise InputError(f"format {format!r}: the tables are kept in memory unless out names "
+                         "a folder to write them into")
+    fmt = MEMORY if out is None else format or "csv"
+    if fmt not in (MEMORY, *FORMATS):
+        raise InputError(f"format {format!r}: expected one of {', '.join(FORMATS)}")
+    options = ReplayOptions(rate_hz=rate_hz, fmt=fmt, block_size=block_size,
+                            render_override=renderer, device=device, control=control,
+                            strict=strict, max_gap_s=max_gap_s, progress=progress)
+    result = replay_with(scene, trace, out, options)
+    doc = json.loads(json.dumps(finite_json(result.summary), allow_nan=False))
+    return Replay(Summary.from_dict(doc), None if out is None else Path(out), result.tables)

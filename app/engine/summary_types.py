@@ -1,0 +1,371 @@
+"""A replay's summary as typed, frozen objects: what ``summary.json`` holds, field by field.
+
+``app/engine/SUMMARY.md`` documents every key; each class here is one object of that
+page, its fields the object's keys in the order ``summary.json`` writes them, so that
+``Summary.from_dict(doc).to_dict() == doc`` and ``json.dumps`` of either gives the same
+text. Sections whose keys are data or documented elsewhere (``forces``, ``device``,
+``control``, the per-stage and per-layer seconds) stay mappings. An optional section
+(``trace.time_order``, ``forces``, ``control``, ``device``) is None when the run has none,
+and is left out of :meth:`Summary.to_dict`, as out of ``summary.json``.
+
+Standard library only: importing these types loads no numeric library.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import types
+import typing
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+#: marks a field left out of ``to_dict`` when it is None (an optional section)
+_OPTIONAL = {"optional": True}
+
+
+@dataclass(frozen=True)
+class LayerInfo:
+    """One layer of the scene replayed.
+
+    Attributes
+    ----------
+    name : str
+        The layer's name in the texture file.
+    type : str
+        Its type (``grating``, ``disc``, ...).
+    renderer : str
+        The renderer it ran with (``sho-predicted``, ``sht``, ``hybrid``, ...).
+    """
+
+    name: str
+    type: str
+    renderer: str
+
+
+@dataclass(frozen=True)
+class SceneInfo:
+    """The scene replayed (``summary.json``'s ``scene``).
+
+    Attributes
+    ----------
+    name : str
+        The scene's name.
+    path : str or None
+        Its texture file (None for a scene built in memory).
+    device : str
+        The device profile (``[device] profile``).
+    layers : tuple of LayerInfo
+        Its layers, in drawing order.
+    """
+
+    name: str
+    path: str | None
+    device: str
+    layers: tuple[LayerInfo, ...]
+
+
+@dataclass(frozen=True)
+class TimeOrderInfo:
+    """Where the trace's time went back (a trace read from a file only).
+
+    Attributes
+    ----------
+    tolerance_s : float
+        Samples up to this much earlier (s) were sorted into order.
+    reordered : int
+        Samples sorted into order.
+    dropped : int
+        Samples dropped (further back than ``tolerance_s``).
+    """
+
+    tolerance_s: float
+    reordered: int
+    dropped: int
+
+
+@dataclass(frozen=True)
+class GapInfo:
+    """Gaps between touch samples longer than ``limit_s``, taken as lifts and skipped.
+
+    Attributes
+    ----------
+    limit_s : float or None
+        The longest gap output as it is (s).
+    count : int
+        Gaps longer than that.
+    skipped_s : float
+        Output skipped there (s): ``t_s`` jumps.
+    """
+
+    limit_s: float | None
+    count: int
+    skipped_s: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class TraceInfo:
+    """The touch trace replayed (``summary.json``'s ``trace``).
+
+    Attributes
+    ----------
+    path : str or None
+        Its file (None for a trace given as arrays).
+    samples : int
+        Touch samples read.
+    fingers : tuple of int
+        Finger ids seen.
+    duration_s : float
+        Last sample time minus first (s).
+    touch_rate_hz : float or None
+        Median touch sample rate (Hz).
+    time_order : TimeOrderInfo or None
+        Where time went back; None for a trace given as arrays.
+    gaps : GapInfo
+        Long gaps taken as lifts.
+    """
+
+    path: str | None
+    samples: int
+    fingers: tuple[int, ...]
+    duration_s: float
+    touch_rate_hz: float | None
+    time_order: TimeOrderInfo | None = field(default=None, metadata=_OPTIONAL)
+    gaps: GapInfo
+
+
+@dataclass(frozen=True)
+class OutputInfo:
+    """The output stream (``summary.json``'s ``output``).
+
+    Attributes
+    ----------
+    rate_hz : float
+        Output sample rate (Hz).
+    block_size : int
+        Samples per block.
+    samples : int
+        Output samples per channel (skipped gaps not counted).
+    duration_s : float
+        ``samples / rate_hz`` (s).
+    channels : tuple of str
+        Actuator channel names (the ``commands`` table's amplitude columns, in um).
+    format : str
+        ``csv``, ``npz`` or ``parquet``; ``memory`` for tables kept in memory.
+    files : tuple of str
+        The table files written (none in memory).
+    """
+
+    rate_hz: float
+    block_size: int
+    samples: int
+    duration_s: float
+    channels: tuple[str, ...]
+    format: str
+    files: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Counts:
+    """What happened, counted (``summary.json``'s ``counts``).
+
+    Attributes
+    ----------
+    blocks : int
+        Blocks run.
+    contact_samples : int
+        Output samples with at least one finger touching.
+    jumps : int
+        Finger jumps treated as lift and touch.
+    out_of_order : int
+        Touch samples the tracker dropped as out of order.
+    max_amplitude_um : float or None
+        Largest channel command (um, zero-to-peak).
+    actuator_limited : int
+        Samples where an actuator limit changed the actuation's solution.
+    off_structure : int
+        Finger samples off the vibrating structure (held at its edge).
+    """
+
+    blocks: int
+    contact_samples: int
+    jumps: int
+    out_of_order: int
+    max_amplitude_um: float | None
+    actuator_limited: int
+    off_structure: int
+
+
+@dataclass(frozen=True)
+class Clamps:
+    """Samples each guard of the friction inversion changed (``device/friction.py``).
+
+    Attributes
+    ----------
+    above_one : int
+        Targets above 1 (w = 0).
+    unreachable : int
+        Targets below the lowest reachable mu' (w = limit), or forces out of a wave's reach.
+    force_beyond_model : int
+        Normal forces beyond the friction model's validity.
+    bad_force : int
+        Normal forces NaN, infinite or negative (nominal force used).
+    nonfinite_target : int
+        Targets NaN or infinite (w = 0).
+    """
+
+    above_one: int
+    unreachable: int
+    force_beyond_model: int
+    bad_force: int
+    nonfinite_target: int
+
+    @property
+    def total(self) -> int:
+        """All clamped samples, every guard together."""
+        return sum(dataclasses.astuple(self))
+
+
+@dataclass(frozen=True)
+class FingerErrors:
+    """How far one finger's achieved amplitude was from the wanted one while touching.
+
+    Attributes
+    ----------
+    contact_samples : int
+        Output samples the finger touched.
+    amplitude_error_rms_um : float or None
+        RMS of achieved minus wanted amplitude (um).
+    amplitude_error_max_um : float or None
+        Largest absolute difference (um).
+    """
+
+    contact_samples: int
+    amplitude_error_rms_um: float | None
+    amplitude_error_max_um: float | None
+
+
+@dataclass(frozen=True)
+class Timings:
+    """How long the run took; differs between two otherwise identical runs.
+
+    Attributes
+    ----------
+    wall_s : float
+        Wall time from loading the inputs to the last table committed (s).
+    setup_s : float
+        The part of ``wall_s`` spent loading the scene and building the pipeline (s).
+    compute_s : float
+        The pipeline's compute time (s).
+    x_realtime_end_to_end : float or None
+        Output seconds over ``wall_s - setup_s``.
+    x_realtime_with_setup : float or None
+        Output seconds over ``wall_s``.
+    x_realtime_compute : float or None
+        Output seconds over ``compute_s``.
+    loop_s : Mapping of str to float
+        The run loop's wall time by part (s): ``read``, ``compute``, ``write``, ``commit``.
+    stages_s : Mapping of str to float
+        Compute time per pipeline stage (s).
+    layers_s : Mapping of str to float
+        Compute time per layer, by layer name (s).
+    """
+
+    wall_s: float
+    setup_s: float
+    compute_s: float
+    x_realtime_end_to_end: float | None
+    x_realtime_with_setup: float | None
+    x_realtime_compute: float | None
+    loop_s: Mapping[str, float]
+    stages_s: Mapping[str, float]
+    layers_s: Mapping[str, float]
+
+
+@dataclass(frozen=True, kw_only=True)
+class Summary:
+    """A replay's summary: ``summary.json`` as typed fields (``app/engine/SUMMARY.md``).
+
+    Attributes
+    ----------
+    summary_version : int
+        The schema's version.
+    scene : SceneInfo
+    trace : TraceInfo
+    output : OutputInfo
+    counts : Counts
+    clamps : Clamps
+    warnings : tuple of str
+        One sentence per thing changed, dropped or not played.
+    fingers : Mapping of int to FingerErrors
+        Per finger id.
+    forces : Mapping or None
+        Travelling-wave profiles only: per finger id (a string) the force errors (N).
+    control : Mapping or None
+        With the friction loop on only: the loop's report.
+    device : Mapping or None
+        Streaming to a device only: the link's counters (``device/PROTOCOL.md`` section 6).
+    timings : Timings
+    """
+
+    summary_version: int
+    scene: SceneInfo
+    trace: TraceInfo
+    output: OutputInfo
+    counts: Counts
+    clamps: Clamps
+    warnings: tuple[str, ...]
+    fingers: Mapping[int, FingerErrors]
+    forces: Mapping[str, Any] | None = field(default=None, metadata=_OPTIONAL)
+    control: Mapping[str, Any] | None = field(default=None, metadata=_OPTIONAL)
+    device: Mapping[str, Any] | None = field(default=None, metadata=_OPTIONAL)
+    timings: Timings
+
+    @classmethod
+    def from_dict(cls, doc: Mapping[str, Any]) -> Summary:
+        """The summary of a ``summary.json`` document (as ``json.load`` gives it).
+
+        Raises
+        ------
+        KeyError
+            A required key is missing.
+        """
+        return _build(cls, doc)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``summary.json`` document: plain dicts, lists, str, int, float and None."""
+        return _plain(self)
+
+
+def _plain(value):
+    if dataclasses.is_dataclass(value):
+        return {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)
+                if not (f.metadata.get("optional") and getattr(value, f.name) is None)}
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _build(cls, doc: Mapping[str, Any]):
+    hints = typing.get_type_hints(cls)
+    return cls(**{f.name: _convert(hints[f.name], doc[f.name]) for f in dataclasses.fields(cls)
+                  if f.name in doc or not f.metadata.get("optional")})
+
+
+def _convert(hint, value):
+    """``value`` (from JSON) as the type ``hint`` names."""
+    if value is None:
+        return None
+    origin = typing.get_origin(hint)
+    args = typing.get_args(hint)
+    if origin in (typing.Union, types.UnionType):
+        return _convert(next(a for a in args if a is not type(None)), value)
+    if dataclasses.is_dataclass(hint):
+        return _build(hint, value)
+    if origin is tuple:
+        return tuple(_convert(args[0], v) for v in value)
+    if origin is Mapping and args[0] is int:
+        return {int(k): _convert(args[1], v) for k, v in value.items()}
+    return value
