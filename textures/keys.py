@@ -78,25 +78,30 @@ MATERIAL = {"youngs_gpa": Num("GPa", _BEAM.youngs_gpa, gt=0.0),
             "poisson": Num("Poisson's ratio", _BEAM.poisson, gt=-1.0, lt=0.5)}
 SOLVER = {"method": Choice(METHODS, _BEAM.method),
           "rcond": Num("relative to the largest singular value", _BEAM.rcond, gt=0.0, lt=1.0)}
-STRUCTURES: dict[str, dict[str, Spec]] = {
-    "beam-seed000": {"length_mm": replace(SIZE, default=_BEAM.length_mm),
-                     "width_mm": replace(SIZE, default=_BEAM.width_mm),
-                     "thickness_mm": replace(SIZE, default=_BEAM.thickness_mm), **MATERIAL,
-                     "theory": Choice(THEORIES, _BEAM.theory),
-                     "orders": NumList(Num("mode order", ge=1.0, le=MAX_MODE_ORDER),
-                                       default=_BEAM.orders),
-                     "actuators_mm": NumList(POS, default=_BEAM.actuators_mm),
-                     "x0_mm": replace(POS, default=_BEAM.x0_mm),
-                     "channel_limit_um": replace(UM, default=_BEAM.channel_limit_um),
-                     **SOLVER, "modes_file": Text(None, max_len=MAX_PATH_CHARS)},
-    "plate-seed001": {"width_mm": replace(SIZE, default=_PLATE.width_mm),
-                      "height_mm": replace(SIZE, default=_PLATE.height_mm),
-                      "thickness_mm": replace(SIZE, default=_PLATE.thickness_mm), **MATERIAL,
-                      "order": Int("mode order k", _PLATE.order, ge=1, le=MAX_MODE_ORDER),
-                      "x0_mm": replace(POS, default=_PLATE.x0_mm),
-                      "y0_mm": replace(POS, default=_PLATE.y0_mm),
-                      "channel_limit_um": replace(UM, default=None), **SOLVER},
+#: the keys of ``[device.structure]`` by the structure a modal profile has
+STRUCTURE_KEYS: dict[type, dict[str, Spec]] = {
+    profiles.BeamStructure: {"length_mm": replace(SIZE, default=_BEAM.length_mm),
+                             "width_mm": replace(SIZE, default=_BEAM.width_mm),
+                             "thickness_mm": replace(SIZE, default=_BEAM.thickness_mm), **MATERIAL,
+                             "theory": Choice(THEORIES, _BEAM.theory),
+                             "orders": NumList(Num("mode order", ge=1.0, le=MAX_MODE_ORDER),
+                                               default=_BEAM.orders),
+                             "actuators_mm": NumList(POS, default=_BEAM.actuators_mm),
+                             "x0_mm": replace(POS, default=_BEAM.x0_mm),
+                             "channel_limit_um": replace(UM, default=_BEAM.channel_limit_um),
+                             **SOLVER, "modes_file": Text(None, max_len=MAX_PATH_CHARS)},
+    profiles.PlateStructure: {"width_mm": replace(SIZE, default=_PLATE.width_mm),
+                              "height_mm": replace(SIZE, default=_PLATE.height_mm),
+                              "thickness_mm": replace(SIZE, default=_PLATE.thickness_mm),
+                              **MATERIAL,
+                              "order": Int("mode order k", _PLATE.order, ge=1, le=MAX_MODE_ORDER),
+                              "x0_mm": replace(POS, default=_PLATE.x0_mm),
+                              "y0_mm": replace(POS, default=_PLATE.y0_mm),
+                              "channel_limit_um": replace(UM, default=None), **SOLVER},
 }
+#: the keys of ``[device.structure]`` by modal profile
+STRUCTURES = {name: STRUCTURE_KEYS[profiles.PROFILES.get(name).structure]
+              for name in profiles.MODAL_PROFILES}
 COMMON = {"type": Choice(LAYER_TYPES), "name": Text(None),
           "render": Choice(RENDER_CHOICES, "auto"), "blend": Choice(model.BLEND_MODES, "multiply"),
           "fingers": Selector("any")}
