@@ -63,7 +63,7 @@ def _structure(r: Reader, profile: str, raw, display, files: Files):
     v = r.table(raw, path, STRUCTURES[profile])
     if v is None or BAD in v.values():
         return BAD
-    if profile == "plate-seed001":
+    if profiles.PROFILES.get(profile).structure is profiles.PlateStructure:
         ok = _structure_holds_display(r, path, display, ("x0_mm", "width_mm", "width_mm"),
                                       v["x0_mm"], v["width_mm"])
         ok &= _structure_holds_display(r, path, display, ("y0_mm", "height_mm", "height_mm"),

@@ -49,7 +49,7 @@ def parse_layer(r: Reader, raw, index: int, display, files: Files, names: dict):
             r.report(path + ("name",), f"{show(name)} is already the name of layer[{names[name] + 1}]")
         names.setdefault(name, index)
     render = v["render"]
-    if render in ("sht", "hybrid") and layer_type not in PERIODIC_TYPES:
+    if render not in (BAD, "auto", model.SHO) and layer_type not in PERIODIC_TYPES:
         render = r.report(path + ("render",), f'"{render}" needs a periodic layer (grating or '
                                                f'waveform); a {layer_type} renders with "sho" (or "auto")')
     values = {k: v[k] for k in LAYER_KEYS[layer_type]}
@@ -87,7 +87,7 @@ def parse_layers(r: Reader, doc: dict, display, files: Files):
 
 
 def selector_warnings(r: Reader, device: profiles.DeviceProfile, built) -> None:
-    if device.profile != "plate-seed003":
+    if device.profile != profiles.DEFAULT_PROFILE:
         return
     for index, (layer, _) in enumerate(built):
         if layer.fingers != "any":
@@ -112,4 +112,3 @@ def reach_warnings(r: Reader, device: profiles.DeviceProfile, built) -> None:
                      f"asks for mu' down to {low:.4g}, but the device reaches only {floor:.4g} at "
                      f"the nominal {force:g} N ({source}); lower values will be clamped",
                      warning=True)
-
