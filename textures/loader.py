@@ -16,8 +16,8 @@ default shown. Layers are drawn and composed in file order (later on top).
     width_px, height_px               # required integers 1 to 8192 (visual layer, one-to-one maps)
 
     [device]                          # optional table
-    profile = "plate-seed003"         # one of device.profile.DEVICE_PROFILES: plate-seed003
-                                      #   (one channel), beam-seed000, plate-seed001 (modal)
+    profile = "plate-seed003"         # one of device.profile.PROFILES: plate-seed003
+                                      #   (one channel), beam-seed000, plate-seed001 (modal), ...
     amplitude_limit_um = 2.5          # > 0, <= 100, zero-to-peak; the host never asks for more
                                       #   under a finger
     normal_force_n = 0.5              # > 0, <= 100; nominal force for warnings and force-less traces
@@ -66,10 +66,11 @@ default shown. Layers are drawn and composed in file order (later on top).
                                       #   edge | bump | line | raster | directional |
                                       #   guidance | keyclick (the last three: force layers)
     name = "..."                      # unique in the file; default "<type>-<n>"
-    render = "auto"                   # sho | sht | hybrid | auto. auto: periodic layers use
+    render = "auto"                   # auto | sho | a renderer (frictex replay --help lists
+                                      #   them: sho-held, sht, ...). auto: periodic layers use
                                       #   the hybrid (textures.model.auto_render_mode: it beats
                                       #   SHO and SHT on seed 003's gratings, frictex report);
-                                      #   objects and rasters use sho. sht and hybrid need a
+                                      #   objects and rasters use sho. Other renderers need a
                                       #   periodic layer.
     blend = "multiply"                # multiply | replace (opaque where the layer covers)
     fingers = "any"                   # which fingers feel the layer: "any" | "1" | "2" | ...
