@@ -169,6 +169,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from frictex.device.profile import FRICTION_LOOP_PROFILES
 from frictex.textures import model
 from frictex.textures.errors import Locator, Problem, TextureError
 from frictex.textures.keys import FORMAT_VERSION, LAYER_KEYS, LAYER_TYPES, TOP
@@ -216,9 +217,10 @@ def check_scene(path: str | Path) -> tuple[model.Scene | None, list[Problem], li
     device_warnings(r, device)
     reach_warnings(r, device, built)
     selector_warnings(r, device, built)
-    if top["control"] != "open" and (device.profile != "plate-seed003"
+    if top["control"] != "open" and (device.profile not in FRICTION_LOOP_PROFILES
                                      or device.calibration is not None):
-        r.report(("control",), f"{top['control']!r} needs profile = \"plate-seed003\" with seed "
+        loop = " or ".join(f'"{name}"' for name in FRICTION_LOOP_PROFILES)
+        r.report(("control",), f"{top['control']!r} needs profile = {loop} with seed "
                                f"003's model (no [device.calibration]); expected \"open\" here")
         return None, r.problems, r.warnings
     scene = model.Scene(format=fmt, name=name, description=top["description"], display=display,
