@@ -1,12 +1,13 @@
 """frictex batch: a manifest of replays over the cores or a Dask cluster on loopback."""
 
 import csv
+import unicodedata
 
 import pytest
 from hypothesis import given, settings, strategies as st
 
 from frictex.app.commands.cli import main
-from frictex.app.engine.batch import ManifestError, read_manifest
+from frictex.app.engine.batch import NAME, ManifestError, read_manifest
 from frictex.rendering.pipeline import RENDERERS
 
 MANIFEST = """# a study's trials
@@ -121,3 +122,30 @@ def test_any_manifest_text_is_jobs_or_one_clear_error(tmp_path_factory, text):
         assert str(exc).startswith(str(path)) and "\n" not in str(exc)
     else:
         assert jobs and len({j.name for j in jobs}) == len(jobs)
+
+
+UNSAFE = {"Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp"}
+_FIELDS = st.sampled_from(["grating-5mm", "swipe-40mms-50hz", "5e-324", "1e4", "\u0661\u0660",
+                           "10_000", "50", "0", "csv", "sht", "../x", "a\x1bb", '"', ",", "\n",
+                           "\r", "#", " ", "\u202e", "n" * 70, "name", "rate_hz", "block"])
+
+
+@settings(max_examples=200, derandomize=True, deadline=None)
+@given(st.one_of(st.lists(_FIELDS, max_size=30).map(lambda parts: "scene,trace,rate_hz,block,name\n"
+                                                    + "".join(parts)),
+                 st.text(max_size=200)))
+def test_any_manifest_is_bounded_jobs_or_one_escaped_line(tmp_path_factory, text):
+    """Any text: jobs within the command line's bounds whose names are plain folder
+    names, or one ManifestError line naming the file, without a control character."""
+    path = tmp_path_factory.mktemp("m") / "m.csv"
+    path.write_text(text, encoding="utf-8", errors="surrogatepass")
+    try:
+        jobs = read_manifest(path, ("sho", *RENDERERS))
+    except ManifestError as exc:
+        message = str(exc)
+        assert message.startswith(str(path)) and not any(
+            unicodedata.category(ch) in UNSAFE for ch in message), ascii(message)
+    else:
+        for job in jobs:
+            assert 100 <= job.rate_hz <= 1e6 and 1 <= job.block <= 100_000
+            assert NAME.fullmatch(job.name) and job.name not in (".", "..")

@@ -1,15 +1,19 @@
 """Importing real touch-screen recordings: getevent -lt logs (refdata), evemu, the CLI."""
 
 import argparse
+import unicodedata
 from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings, strategies as st
 from numpy.testing import assert_allclose
 
 from frictex.app.commands.cli import main
 from frictex.rendering.input.trace_import import add_import_arguments, run_import
-from frictex.rendering.input.evdev_decode import ABS_MT_POSITION_X, ABS_MT_TRACKING_ID, EV_ABS, EV_KEY, AbsInfo, decode_all
+from frictex.rendering.input.evdev_decode import (ABS_MT_POSITION_X, ABS_MT_TRACKING_ID, EV_ABS, EV_KEY,
+                                                  MAX_RESOLUTION, SCREEN_MM, AbsInfo, ScreenSpec,
+                                                  decode_all, screen_map)
 from frictex.rendering.input.import_evemu import parse_evemu
 from frictex.rendering.input.import_getevent import parse_getevent, read_getevent
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP, TraceError, make_trace, read_trace
@@ -354,3 +358,73 @@ def test_csv_import_sorts_time_that_steps_back_and_says_so(tmp_path, capsys):
     written = read_trace(out)
     assert written.t_s.tolist() == [0.0, 0.008, 0.010, 0.5]
     assert written.finger.tolist() == [0, 1, 0, 0]
+
+
+# -- any log text: events, or one escaped line ------------------------------------------------
+
+UNSAFE = {"Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp"}
+_GETEVENT_BITS = ["[", "]", " ", "   1.000000", "0.5", "/dev/input/event2:", "EV_ABS", "EV_SYN",
+                  "ABS_MT_POSITION_X", "ABS_MT_SLOT", "ABS_MT_TRACKING_ID", "SYN_REPORT",
+                  "SYN_MT_REPORT", "0000000a", "ffffffff", "DOWN", "0003", "\n", "\u0661", "_",
+                  "\x1b", "add device 1: /dev/input/event2", "99999999999.0"]
+_EVEMU_BITS = ["E: ", "A: ", "N: ", "# ", "0.000000 ", "0003 ", "0000 ", "0035 ", "0036 ",
+               "0039 ", "002f ", "-1", "100", "2147483647", "9999999999", " 0 1023 0 0 ", "20",
+               "\n", "\u0662", "\x1b", "Q: "]
+
+
+def _one_line_or_events(parse, text):
+    """``parse(text)`` and the decoder on its events: events, or one TraceError naming
+    the source, without a control character."""
+    try:
+        events = parse(text)
+        decode_all(events if isinstance(events, list) else events.events, "<log>")
+    except TraceError as exc:
+        message = str(exc)
+        assert message.startswith("<log>") and not any(
+            unicodedata.category(ch) in UNSAFE for ch in message), ascii(message)
+
+
+@settings(max_examples=300, derandomize=True, deadline=None)
+@given(st.one_of(st.lists(st.sampled_from(_GETEVENT_BITS), max_size=40).map("".join),
+                 st.text(max_size=200)))
+def test_any_getevent_text_is_events_or_one_escaped_line(text):
+    _one_line_or_events(lambda t: parse_getevent(t, "<log>"), text)
+
+
+@settings(max_examples=300, derandomize=True, deadline=None)
+@given(st.one_of(st.lists(st.sampled_from(_EVEMU_BITS), max_size=40).map("".join),
+                 st.text(max_size=200)))
+def test_any_evemu_text_is_events_or_one_escaped_line(text):
+    _one_line_or_events(lambda t: parse_evemu(t, "<log>"), text)
+
+
+@settings(max_examples=200, derandomize=True, deadline=None)
+@given(resolution=st.integers(-2**31, 2**31 - 1), lo=st.integers(-2**31, 2**31 - 1),
+       span=st.integers(1, 2**32))
+def test_an_evemu_screen_is_of_plausible_size_or_refused(resolution, lo, span):
+    """Whatever the A: line says: a screen of 1 to 10,000 mm, or one line naming the file."""
+    hi = min(lo + span, 2**31 - 1)
+    assume(hi > lo)
+    text = (f"A: 35 {lo} {hi} 0 0 {resolution}\nA: 36 {lo} {hi} 0 0 {resolution}\n"
+            f"E: 0.0 0003 0039 1\nE: 0.0 0003 0035 {lo}\nE: 0.0 0003 0036 {hi}\nE: 0.0 0000 0000 0\n")
+    recording = parse_evemu_or_none(text)
+    if recording is None:
+        assert not 0 <= resolution <= MAX_RESOLUTION
+        return
+    try:
+        screen, _ = screen_map(ScreenSpec(), recording.absinfo, where="<log>")
+    except TraceError as exc:
+        assert str(exc).startswith("<log>: ")
+        size = (hi - lo) / resolution if resolution else None
+        assert size is None or not SCREEN_MM[0] <= size <= SCREEN_MM[1]
+    else:
+        for axis in (screen.x, screen.y):
+            assert SCREEN_MM[0] <= axis.size_mm <= SCREEN_MM[1]
+
+
+def parse_evemu_or_none(text):
+    try:
+        return parse_evemu(text, "<log>")
+    except TraceError as exc:
+        assert "resolution" in str(exc)
+        return None

@@ -1,13 +1,15 @@
 """Trace CSV: the grammar, its errors, and exact round trips."""
 
 import io
+import unicodedata
+
 import numpy as np
 import pytest
 from hypothesis import assume, example, given, settings, strategies as st
 
 from frictex.app.commands.cli import main
-from frictex.rendering.input.trace_file import (DOWN, MOVE, UP, TraceError, concat_traces, format_trace,
-                                        parse_trace, read_trace)
+from frictex.rendering.input.trace_file import (DOWN, MOVE, NUMBER, UP, TraceError, ascii_float,
+                                                concat_traces, format_trace, parse_trace, read_trace)
 
 
 def test_minimal_trace_defaults():
@@ -468,3 +470,52 @@ def test_a_long_plain_trace_is_parsed_at_once_and_reads_as_line_by_line(tmp_path
     by_line, at_once = _read_both_ways("\n".join(bad))
     assert at_once == by_line == (f'<t>:{n - 4}: column force_n: "-0.5" is not a number from '
                                   f"0 to 1000 N")
+
+
+# -- the number grammar ---------------------------------------------------------------------
+
+#: character categories an error message never holds (device.safe_text escapes them)
+UNSAFE = {"Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp"}
+_PRINTABLE_ASCII = "".join(chr(c) for c in range(0x20, 0x7F) if chr(c) != "_") + "\t"
+
+
+@settings(max_examples=600, derandomize=True, deadline=None)
+@example("\u0662\u0661")
+@example("2_2")
+@example(" 1.5e-3\t")
+@example("1e400")
+@given(st.one_of(st.from_regex(NUMBER, fullmatch=True),
+                 st.text(alphabet="0123456789+-.eE \tnaifINF_\x0c\u00a0\u0663\uff11", max_size=10),
+                 st.text(alphabet=_PRINTABLE_ASCII, max_size=10)))
+def test_the_number_grammar_is_float_on_ascii_without_words(text):
+    """ascii_float takes what NUMBER states, to float's value; on printable ASCII without
+    '_' (a block read with plain float) float takes no finite number the grammar refuses,
+    so the fast path reads what the grammar does (inf and nan fail the range check)."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = None
+    try:
+        strict = ascii_float(text)
+    except ValueError:
+        strict = None
+    assert (strict is not None) == (NUMBER.fullmatch(text) is not None)
+    if strict is not None:
+        assert value == strict
+        assert text.isascii() and "_" not in text
+    elif value is not None and all(ch in _PRINTABLE_ASCII for ch in text):
+        assert not np.isfinite(value)
+
+
+@settings(max_examples=150, derandomize=True, deadline=None)
+@given(st.text(max_size=300))
+def test_any_header_or_row_is_read_or_one_escaped_line(text):
+    """Whatever the text (control characters, other scripts): a trace, or one TraceError
+    line with every character printable."""
+    for doc in (text, "t_s,finger,x_mm,y_mm,event\n" + text):
+        try:
+            parse_trace(doc, "<t>")
+        except TraceError as exc:
+            message = str(exc)
+            assert message.startswith("<t>") and not any(
+                unicodedata.category(ch) in UNSAFE for ch in message), ascii(message)
