@@ -7,7 +7,9 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from frictex.app.commands.cli import main
-from frictex.app.engine.batch import NAME, ManifestError, read_manifest
+from frictex.app.engine.batch import MAX_ERROR_SHOWN, NAME, Job, ManifestError, read_manifest, run_job
+from frictex.device.errors import RunFailed
+from frictex.rendering.input.trace_file import TraceError
 from frictex.rendering.pipeline import RENDERERS
 
 MANIFEST = """# a study's trials
@@ -149,3 +151,18 @@ def test_any_manifest_is_bounded_jobs_or_one_escaped_line(tmp_path_factory, text
         for job in jobs:
             assert 100 <= job.rate_hz <= 1e6 and 1 <= job.block <= 100_000
             assert NAME.fullmatch(job.name) and job.name not in (".", "..")
+
+
+@pytest.mark.parametrize("error", [RunFailed, TraceError, OSError])
+def test_a_job_error_is_an_escaped_cut_cell(monkeypatch, tmp_path, error):
+    """Whatever a job raises of frictex's kinds (or ValueError, OSError): a failed row
+    whose error is one escaped line of at most MAX_ERROR_SHOWN characters."""
+    from frictex.app.engine import replay
+
+    def fail(*args, **kwargs):
+        raise error("bad\x1b[2J\nline" + "x" * 1000)
+
+    monkeypatch.setattr(replay, "run_replay", fail)
+    row = run_job(Job(0, "s", "t", None, 1e4, 50, "csv", "j"), str(tmp_path))
+    assert row["status"] == "failed" and row["error"].startswith("bad\\x1b[2J\\nlinexxx")
+    assert len(row["error"]) == MAX_ERROR_SHOWN and row["error"].isprintable()

@@ -43,7 +43,7 @@ from pathlib import Path
 
 from frictex.app.commands.argtypes import BLOCK_SIZES, OUTPUT_RATES_HZ
 from frictex.app.engine.tables import FORMATS
-from frictex.device.errors import InputError
+from frictex.device.errors import FrictexError, InputError
 from frictex.device.safe_text import escape, quoted
 from frictex.rendering.input.trace_file import MAX_LINE_BYTES, NUMBER, describe_header
 from frictex.textures.library import UnreadableText, read_utf8
@@ -203,7 +203,7 @@ def run_job(job: Job, out_dir: str) -> dict:
         doc = run_replay(job.scene, job.trace, Path(out_dir) / job.name, rate_hz=job.rate_hz,
                          fmt=job.fmt, block_size=job.block, render_override=job.renderer,
                          progress=False)
-    except (ValueError, OSError) as exc:
+    except (FrictexError, ValueError, OSError) as exc:
         row.update(status="failed", error=escape(exc, MAX_ERROR_SHOWN))
     else:
         row.update(output_s=doc["output"]["duration_s"],
