@@ -238,3 +238,35 @@ def test_a_stopped_haptic_side_ends_the_loop_with_a_one_line_error(gl, tmp_path,
         window.close()
     assert loop.frames == 0
     assert issubclass(raised, OSError)  # frictex: error: ..., never a traceback
+
+
+def test_contacts_logged_follow_the_fingers_touching_not_every_id_seen(gl, tmp_path):
+    """1,000 one-touch ids through the snapshots: each down and up is logged once, and
+    the loop remembers only the fingers touching."""
+    from frictex.rendering.visual.overlay import BlockRecord
+    scene = load_scene(resolve_scene("grating-5mm"))
+    window = ScriptedWindow(gl)
+    haptic = HapticThread(scene)
+    loop = DemoLoop(window, haptic, [resolve_scene("grating-5mm")], 0, scene, load_scene,
+                    tmp_path, events_path=tmp_path / "e.csv")
+
+    def record(t0, fids, contact):
+        n, f = 3, len(fids)
+        rows = np.full((f, n), 20.0)
+        return BlockRecord(t0 + np.arange(n) * 1e-3, tuple(fids), np.array(contact, bool),
+                           rows, rows, np.ones((f, n)), np.zeros((f, n)))
+    try:
+        for fid in range(1_000):  # each touch lands in one snapshot and lifts in the next,
+            loop._log_contacts(record(fid, [fid], [[False, True, True]]))
+            assert loop._contact == {fid: True}
+            if fid % 2:  # ... or leaves the tracks without a sample out of contact
+                loop._log_contacts(record(fid + 0.5, [], np.zeros((0, 3))))
+            else:
+                loop._log_contacts(record(fid + 0.5, [fid], [[True, False, False]]))
+            assert loop._contact == {}
+    finally:
+        loop.close()
+        window.close()
+    events = (tmp_path / "e.csv").read_text().splitlines()[1:]
+    assert sum(",finger-down," in e for e in events) == 1_000
+    assert sum(",finger-up," in e for e in events) == 1_000

@@ -174,6 +174,17 @@ def test_trail_breaks_where_the_finger_lifts_and_lands_within_a_block():
     assert tris.shape == (4 * 6, 6)  # segments 0-1, 1-2, 3-4 and 4-5
 
 
+def test_overlay_forgets_fingers_once_their_trail_has_faded():
+    """1,000 one-touch ids, each seen in one record: the overlay holds the fingers whose
+    samples are still within its window, not every id it has seen."""
+    ov = OverlayState(trail_s=1.0, scope_s=1.0)
+    for fid in range(1_000):
+        t = 0.125 * fid + np.array([0.0, 0.0625])  # exact in binary
+        ov.add(_record(t, [10.0, 11.0], [5.0, 5.0], [True, False], fid=fid))
+        assert fid in ov.fingers and len(ov.fingers) <= 9  # 1 s of touches 0.125 s apart
+    assert sorted(ov.fingers) == list(range(991, 1_000))  # ending within the last second
+
+
 def test_segment_triangles_have_the_requested_width():
     tris = segment_triangles(np.array([[0.0, 0.0], [10.0, 0.0]]), np.ones((2, 4)), 3.0)
     assert_allclose(np.sort(np.unique(tris[:, 1])), [-1.5, 1.5])

@@ -150,7 +150,7 @@ class DemoLoop:
         self._stop = threading.Event()
         self.render_error: BaseException | None = None
         self._applied_seen = 0  # output changes (stats.applied) already logged
-        self._contact: dict[int, bool] = {}  # finger id: touching, at the last snapshot
+        self._contact: dict[int, bool] = {}  # finger ids touching at the last snapshot: True
         self._events = open(events_path, "a", encoding="utf-8") if events_path else None
         if self._events is not None and self._events.tell() == 0:
             self._events.write("t_s,event,detail\n")
@@ -394,10 +394,13 @@ class DemoLoop:
                 self.log("finger-down" if states[i + 1] else "finger-up",
                          f"finger {fid} at {record.x_mm[row, i]:.2f}, {record.y_mm[row, i]:.2f} mm",
                          float(record.t_s[i]))
-            self._contact[fid] = bool(states[-1])
-        for fid in [f for f, on in self._contact.items() if on and f not in record.finger_ids]:
+            if states[-1]:
+                self._contact[fid] = True
+            else:  # forgotten: the dict follows the fingers touching, not every id seen
+                self._contact.pop(fid, None)
+        for fid in [f for f in self._contact if f not in record.finger_ids]:
             self.log("finger-up", f"finger {fid}", float(record.t_s[0]))
-            self._contact[fid] = False
+            del self._contact[fid]
 
     def status_lines(self) -> tuple[str, ...]:
         st = self.status

@@ -205,7 +205,8 @@ class _Finger:
 
 @dataclass(frozen=True)
 class HybridState:
-    """Per finger id: its :class:`_Finger` record."""
+    """Per finger id of the last block's tracks (``FingerBlock.ids``: the fingers
+    touching, and those that lifted in it): its :class:`_Finger` record."""
 
     fingers: dict[int, _Finger]
 
@@ -495,7 +496,10 @@ class HybridRenderer:
         """mu' (F, n) and coverage (F, n) under each finger (mu' 1 where the layer does
         not cover), and the new state."""
         phase = np.empty((len(block.ids), block.n))
-        carried = dict(state.fingers)
+        # only the block's fingers are carried on: one that lifted and left the tracks
+        # is forgotten (its id, if it comes back, is a new touch that restarts it
+        # anyway), so the state follows the fingers touching, not every id ever used
+        carried: dict[int, _Finger] = {}
         layer_phase = (float(self.layer.offset_mm), float(self.layer.period_mm))
         limits = (self.dt_s, self.slip, self.lock, self.event_hz,
                   RELOCK_MM_S / self.layer.period_mm, self.locked,
@@ -504,7 +508,7 @@ class HybridRenderer:
                 for name in ("vx", "vy", "x_held", "y_held", "x_pred", "y_pred")]
         touch = np.ascontiguousarray(block.touch_id, dtype=np.int64)
         for row, fid in enumerate(block.ids):
-            before = carried.get(fid)
+            before = state.fingers.get(fid)
             fields = _NO_FINGER if before is None else (
                 before.touch, before.phase, before.offset, before.target, *before.measured,
                 before.speed, before.held)

@@ -123,6 +123,11 @@ class OverlayState:
             rows = np.stack((record.contact[row].astype(np.float64), record.x_mm[row],
                              record.y_mm[row], record.mu_target[row], record.amplitude_um[row]))
             self.fingers.setdefault(fid, _History()).append(record.t_s, rows, keep)
+        for fid in [f for f in self.fingers if f not in record.finger_ids]:
+            history = self.fingers[fid]  # gone from the tracks: its trail fades out
+            history.append(record.t_s[:0], np.empty((5, 0)), keep)
+            if history.t.size == 0:  # and then it is forgotten
+                del self.fingers[fid]
         if record.commands_um is not None:
             phase = 0.0 if record.phases_rad is None else record.phases_rad[-1]
             self.commands = record.commands_um[-1] * np.exp(1j * phase)
