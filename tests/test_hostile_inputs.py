@@ -113,6 +113,8 @@ BAD_TRACES = {
     "comments only": ("# a comment\n\n# another\n", "empty trace"),
     "header only": (_trace(), "header but no samples"),
     "short row": (_trace("0,0,1"), "3 fields, expected 4"),
+    "short row under a secret column": (_trace("0,0,1", header=f"{HEADER},{SECRET}{ESC}"),
+                                        "3 fields, expected 5 as the header has (5 fields: t_s"),
     "escape event": (_trace(f"0,0,1,1,{ESC}", header=HEADER + ",event"), "column event"),
     "half finger": (_trace("0,1.5,1,1"), "is not an integer"),
     "negative finger": (_trace("0,-1,1,1"), "is not an integer"),

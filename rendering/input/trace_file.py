@@ -410,8 +410,8 @@ class _RowParser:
         """Raise the TraceError of a row known to hold a problem."""
         where = self.where
         if len(row) < len(self.names):
-            raise TraceError(f"{where}:{line}: {len(row)} fields, expected {len(self.names)} "
-                             f"({','.join(self.names)})")
+            raise TraceError(f"{where}:{line}: {len(row)} fields, expected {len(self.names)} as "
+                             f"the header has ({describe_header(self.names)})")
         for name in ("t_s", "finger", "x_mm", "y_mm", "force_n"):
             if name in self.col and (name != "force_n" or row[self.col[name]].strip(" \t")):
                 _parse_number(row[self.col[name]], where, line, name)
