@@ -26,6 +26,7 @@ finger touching is lifted where the gap starts, and the output skips from
 from __future__ import annotations
 
 import queue
+from operator import itemgetter
 
 import numpy as np
 
@@ -258,7 +259,14 @@ class QueueSource:
     """Live touch samples from a queue whose items are lists of ``(t_s, finger, x_mm,
     y_mm, force_n, event)`` tuples stamped on the output clock (s since the run's start;
     the samples of one item arrive together); a sample is handed out with the first block
-    starting at or after its stamp. Never ends by itself."""
+    starting at or after its stamp, taken after it arrived. Never ends by itself.
+
+    Several producers (the window's mouse, a touch screen's pump) put items in whatever
+    order their threads or processes are scheduled, so the items need not arrive in the
+    order of their stamps: each call hands out every sample due, once, sorted by stamp
+    (samples with equal stamps in the order they arrived, so a finger's down and up at
+    one instant stay in order), and keeps the rest, whatever their order, for later.
+    """
 
     done = False
 
@@ -277,7 +285,8 @@ class QueueSource:
         due = [s for s in self._pending if s[0] <= start_s]
         if not due:
             return None, n
-        self._pending = self._pending[len(due):]
+        self._pending = [s for s in self._pending if s[0] > start_s]
+        due.sort(key=itemgetter(0))  # stable: equal stamps keep their arrival order
         t, finger, x, y, force, event = (np.array(c) for c in zip(*due))
         return make_trace(t, finger, x, y, force, event, where="live touch", normalise=False), n
 
