@@ -1,0 +1,226 @@
+"""Extension points by registry: another package adds a renderer with one module and one
+entry-point line, and frictex's command line, texture files and Python API take it.
+
+The plugin is a real distribution (pyproject.toml and one module) built and installed by
+pip into a folder of this test (``--target``, no network: ``--no-index
+--no-build-isolation``); the runs that use it are subprocesses with that folder on their
+path, so nothing of it reaches this process or any other test, and nothing is left to
+uninstall. The registries themselves (``device.registry``) are tested in this process.
+"""
+
+import csv
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from dataclasses import replace
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+from frictex.device.registry import PluginError, Registry, UnknownName
+from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.renderers import LAYER_RENDERERS, RENDERERS, render_modes
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import load_scene
+
+#: the plugin's renderer: mu' = WOBBLE_MU under every finger, wherever the layer is
+WOBBLE_MU = 0.625
+PLUGIN = {
+    "pyproject.toml": """
+        [build-system]
+        requires = ["setuptools>=70.1"]
+        build-backend = "setuptools.build_meta"
+
+        [project]
+        name = "frictex-test-wobble"
+        version = "1.0"
+
+        [project.entry-points."frictex.renderers"]
+        wobble = "frictex_test_wobble:Wobble"
+
+        [tool.setuptools]
+        py-modules = ["frictex_test_wobble"]
+        """,
+    "frictex_test_wobble.py": f"""
+        import numpy as np
+
+
+        class Wobble:
+            def __init__(self, layer, rate_hz):
+                self.layer = layer
+
+            def initial_state(self):
+                return 0
+
+            def render(self, block, state):
+                mu, covers = self.layer.mu_and_covers(block.x_pred, block.y_pred)
+                return np.full(mu.shape, {WOBBLE_MU!r}), covers, state + 1
+        """,
+}
+FRICTEX = Path(sys.executable).with_name("frictex")
+
+
+@pytest.fixture(scope="module")
+def plugin_path(tmp_path_factory) -> Path:
+    """A folder holding the installed plugin (its module and its dist-info)."""
+    source = tmp_path_factory.mktemp("plugin-source")
+    for name, text in PLUGIN.items():
+        (source / name).write_text(textwrap.dedent(text).lstrip(), encoding="utf-8")
+    target = tmp_path_factory.mktemp("plugin-installed")
+    done = subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",
+                           "--no-index", "--no-build-isolation", "--disable-pip-version-check",
+                           "--target", str(target), str(source)],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert (target / "frictex_test_wobble.py").is_file()
+    return target
+
+
+def run(args: list[str], plugin: Path | None, cwd: Path, timeout: float = 300):
+    """``args`` in a fresh process, with the plugin's folder on its path if given."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    if plugin is not None:
+        env["PYTHONPATH"] = str(plugin)
+    return subprocess.run(args, capture_output=True, text=True, timeout=timeout, cwd=cwd,
+                          env=env)
+
+
+def mu_targets(folder: Path) -> list[float]:
+    with open(folder / "friction.csv", newline="", encoding="utf-8") as fh:
+        return [float(row["mu_target"]) for row in csv.DictReader(fh)]
+
+
+def test_replay_renders_with_a_plugins_renderer(plugin_path, tmp_path):
+    listed = run([str(FRICTEX), "replay", "--help"], plugin_path, tmp_path)
+    assert listed.returncode == 0 and "wobble" in listed.stdout
+    out = tmp_path / "wobble"
+    done = run([str(FRICTEX), "replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(out),
+                "--renderer", "wobble", "--quiet"], plugin_path, tmp_path)
+    assert done.returncode == 0, done.stderr
+    mu = mu_targets(out)
+    assert len(mu) > 1000 and set(mu) == {WOBBLE_MU}
+    # the same replay with frictex's own renderer is not the plugin's
+    own = tmp_path / "sht"
+    assert run([str(FRICTEX), "replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(own),
+                "--renderer", "sht", "--quiet"], plugin_path, tmp_path).returncode == 0
+    assert WOBBLE_MU not in set(mu_targets(own))
+
+
+def test_without_the_plugin_its_name_is_an_error_listing_the_known(tmp_path):
+    done = run([str(FRICTEX), "replay", "grating-5mm", "swipe-40mms-50hz", "--out",
+                str(tmp_path / "o"), "--renderer", "wobble"], None, tmp_path)
+    assert done.returncode == 2
+    assert "invalid choice: 'wobble'" in done.stderr and "'sho-held'" in done.stderr
+    assert not (tmp_path / "o").exists()
+
+
+PYTHON_USE = """
+import json, sys
+import numpy as np
+import frictex
+from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.renderers import RENDERERS
+
+run = frictex.replay("grating-5mm", "swipe-40mms-50hz", renderer="wobble")
+mu = run.friction.column("mu_target").to_numpy()
+scene = frictex.load_scene(sys.argv[1])  # a texture file whose layer names the plugin's
+pipeline = build_pipeline(scene)               # renderer
+print(json.dumps({"origin": RENDERERS.origin("wobble"), "rows": int(mu.size),
+                  "values": sorted(set(mu.tolist())),
+                  "renderer": type(pipeline.renderers[0]).__name__}))
+"""
+
+
+def test_the_python_api_and_texture_files_take_a_plugins_renderer(plugin_path, tmp_path):
+    text = Path(resolve_scene("grating-5mm")).read_text(encoding="utf-8")
+    assert text.count('render = "auto"') == 1
+    scene = tmp_path / "wobbly.toml"
+    scene.write_text(text.replace('render = "auto"', 'render = "wobble"'), encoding="utf-8")
+    done = run([sys.executable, "-c", PYTHON_USE, str(scene)], plugin_path, tmp_path)
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout.splitlines()[-1])
+    assert got["origin"] == "frictex-test-wobble (frictex_test_wobble:Wobble)"
+    assert got["rows"] > 1000 and got["values"] == [WOBBLE_MU]
+    assert got["renderer"] == "Wobble"
+
+
+def test_frictexs_own_renderers_come_from_its_entry_points():
+    """The installed metadata lists what pyproject.toml declares (a stale editable install
+    would not), each loads, and each is frictex's own."""
+    import tomllib
+    root = Path(__file__).resolve().parents[1]
+    declared = tomllib.loads((root / "pyproject.toml").read_text(encoding="utf-8"))
+    points = declared["project"]["entry-points"]
+    for registry in (RENDERERS, LAYER_RENDERERS):
+        names = sorted(points[registry.group])
+        assert sorted(n for n in registry.names() if registry.origin(n) == "frictex") == names
+        for name in names:
+            assert callable(registry.get(name))
+    assert render_modes()[0] == "sho" and set(render_modes()[1:]) >= {"sho-held", "sht"}
+
+
+def test_an_unknown_renderer_lists_the_known():
+    scene = load_scene(resolve_scene("grating-5mm"))
+    with pytest.raises(UnknownName, match=r"unknown renderer 'wobble'; expected one of sho, "
+                                          r".*sho-held.*sht"):
+        build_pipeline(scene, render_override="wobble")
+    with pytest.raises(UnknownName, match="SHO variant|unknown renderer"):
+        build_pipeline(scene, sho_variant="nope")
+    with pytest.raises(ValueError, match="expected a renderer of any layer, one of "
+                                         "sho-held, sho-predicted"):
+        build_pipeline(scene, sho_variant="sht")
+
+
+def test_an_unknown_dynamic_layer_kind_is_an_error_not_a_clip():
+    """A layer whose renderer_kind nobody registered became a clip renderer, silently."""
+    scene = load_scene(resolve_scene("grating-5mm"))
+    stranger = SimpleNamespace(name="stranger", renderer_kind="ripple", is_periodic=False,
+                               blend="multiply", fingers="any")
+    with pytest.raises(UnknownName, match="unknown dynamic layer kind 'ripple'; expected one "
+                                          "of ar, clip, height"):
+        build_pipeline(replace(scene, layers=(stranger,)))
+
+
+def test_a_registry_refuses_a_second_entry_under_a_name_and_bad_names():
+    registry: Registry = Registry("gadget", "frictex.test-gadgets-none")
+    registry.register("one", len)
+
+    @registry.register("two")
+    def two(x):
+        return x
+
+    assert registry.names() == ("one", "two") and registry.get("two") is two
+    registry.register("one", len)  # the same entry again: no clash
+    with pytest.raises(PluginError, match="gadget 'one' from frictex is already registered by "
+                                          "frictex"):
+        registry.register("one", abs)
+    for bad in ("", " x", "a:b", 3):
+        with pytest.raises(PluginError, match="expected a non-empty name"):
+            registry.register(bad, abs)
+    with pytest.raises(UnknownName, match="unknown gadget 'three'; expected one of one, two"):
+        registry.get("three")
+    assert "one" in registry and "three" not in registry and 3 not in registry
+    assert registry.origin("two") == "frictex" and list(registry) == ["one", "two"]
+
+
+def test_a_broken_plugin_names_itself(tmp_path):
+    """An entry point that cannot be imported is a PluginError naming the distribution."""
+    dist = tmp_path / "frictex_test_broken-1.0.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: frictex-test-broken\n"
+                                   "Version: 1.0\n", encoding="utf-8")
+    (dist / "entry_points.txt").write_text("[frictex.test-broken]\nbad = no_such_module_x:Thing\n",
+                                           encoding="utf-8")
+    sys.path.insert(0, str(tmp_path))
+    try:
+        registry: Registry = Registry("gadget", "frictex.test-broken")
+        assert registry.names() == ("bad",)  # listed without importing it
+        with pytest.raises(PluginError, match=r"gadget 'bad' of frictex-test-broken "
+                                              r"\(no_such_module_x:Thing\) cannot be loaded: "
+                                              r"ModuleNotFoundError"):
+            registry.get("bad")
+    finally:
+        sys.path.remove(str(tmp_path))
