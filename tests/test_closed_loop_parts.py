@@ -8,6 +8,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from frictex.app.measure.report_closed_loop import claims, markdown, summarise
+from frictex.app.measure.report_loop_records import LoopScore, RunScore
 from frictex.device.link.forces import ForceReport
 from frictex.device.profile import DeviceProfile, FrictionParams
 from frictex.rendering.control.adapt import Rls, _solve_spd
@@ -127,11 +128,14 @@ def test_the_loop_needs_seed_003s_plate():
         ClosedLoop(DeviceProfile(), 10_000.0, 50, mode="open")
 
 
-def _fake(rms, swings=2):
-    return {"rms": rms * 1.5, "rms_reachable": rms, "rms_after_mu0": rms / 2, "fallbacks": 0,
-            "noise_fraction": 0.01, "adapted_gap": 0.03, "max_command_um": 2.0,
-            "swings": swings, "first_mu0_s": 0.25,
-            "cumulative": (np.linspace(0, rms ** 2 * 1000, 101), np.linspace(0, 1000, 101))}
+def _fake(rms, swings=2, mu0_s=0.25):
+    found = mu0_s is not None
+    return RunScore(rms=rms * 1.5, rms_reachable=rms, max_command_um=2.0,
+                    cumulative=(np.linspace(0, rms ** 2 * 1000, 101), np.linspace(0, 1000, 101)),
+                    loop=LoopScore(fallbacks=0, log_c=0.0, mu0_estimate=0.5, b_per_um=1.0,
+                                   k_per_n=0.0, swings=swings, first_mu0_s=mu0_s,
+                                   rms_after_mu0=rms / 2 if found else None),
+                    adapted_gap=0.03, noise_fraction=0.01)
 
 
 OPEN = [0.04, 0.03, 0.05, 0.02, 0.04, 0.06]
@@ -147,15 +151,16 @@ def _section(closed, adaptive, swings=2):
 def test_section_tables_gains_and_claims():
     closed = [0.004, 0.003, 0.01, 0.002, 0.004, 0.006]
     section = _section(closed, [r / 2 for r in OPEN])
-    row = section["scenes"]["grating-15mm"]
+    row = section.scenes["grating-15mm"]
     open_pop = math.sqrt(np.mean(np.square(OPEN)))
     closed_pop = math.sqrt(np.mean(np.square(closed)))
-    assert math.isclose(row["closed"]["gain_vs_open"], open_pop / closed_pop, rel_tol=1e-12)
-    assert math.isclose(row["adaptive"]["gain_vs_open"], 2.0, rel_tol=1e-12)
-    assert row["closed"]["worst"] == 0.01 and row["closed"]["worst_improves"]
+    assert math.isclose(row["closed"].gain_vs_open, open_pop / closed_pop, rel_tol=1e-12)
+    assert math.isclose(row["adaptive"].gain_vs_open, 2.0, rel_tol=1e-12)
+    assert row["closed"].worst == 0.01 and row["closed"].worst_improves
     # from mu0 on (block 50 of 100): open loop over the same samples, finger by finger
-    assert_allclose(row["closed"]["per_finger"]["open_rms_after_mu0"], OPEN, rtol=1e-12)
-    assert math.isclose(row["closed"]["gain_after_mu0"], open_pop / closed_pop * 2, rel_tol=1e-12)
+    assert_allclose(row["closed"].per_finger.open_rms_after_mu0, OPEN, rtol=1e-12)
+    assert math.isclose(row["closed"].loop.gain_after_mu0, open_pop / closed_pop * 2,
+                        rel_tol=1e-12)
     text = "\n".join(markdown(section))
     assert "| grating-15mm | closed |" in text and "gain margin 8.00" in text
     assert "covered at every delay" in text  # s up to 7.37 against a margin of 8
@@ -185,22 +190,21 @@ def test_fingers_without_mu0_are_left_out_of_the_figures_from_mu0_on():
     table says how many were kept."""
     closed = [0.004, 0.003, 0.01, 0.002, 0.004, 0.006]
     values = {"grating-15mm": {"open": [_fake(r) for r in OPEN],
-                               "closed": [_fake(r) for r in closed]}}
-    for k in (1, 4):
-        values["grating-15mm"]["closed"][k].update(first_mu0_s=None, rms_after_mu0=None)
-    row = summarise(values, fingers=len(OPEN), duration_s=1.0)["scenes"]["grating-15mm"]["closed"]
+                               "closed": [_fake(r, mu0_s=None if k in (1, 4) else 0.25)
+                                          for k, r in enumerate(closed)]}}
+    row = summarise(values, fingers=len(OPEN), duration_s=1.0).scenes["grating-15mm"]["closed"]
     kept = [0, 2, 3, 5]
     closed_pop = math.sqrt(np.mean(np.square(np.array(closed)[kept] / 2)))
     open_pop = math.sqrt(np.mean(np.square(np.array(OPEN)[kept])))
-    assert row["mu0_missing"] == 2
-    assert math.isclose(row["rms_after_mu0_pop"], closed_pop, rel_tol=1e-12)
-    assert math.isclose(row["gain_after_mu0"], open_pop / closed_pop, rel_tol=1e-12)
-    assert row["per_finger"]["open_rms_after_mu0"][1] is None
+    assert row.loop.mu0_missing == 2
+    assert math.isclose(row.loop.rms_after_mu0_pop, closed_pop, rel_tol=1e-12)
+    assert math.isclose(row.loop.gain_after_mu0, open_pop / closed_pop, rel_tol=1e-12)
+    assert row.per_finger.open_rms_after_mu0[1] is None
     section = summarise(values, fingers=len(OPEN), duration_s=1.0)
     line = [x for x in markdown(section) if x.startswith("| grating-15mm | closed |")][0]
     assert f"{closed_pop:.4f} (4 of 6 fingers)" in line
-    everyone = _section(closed, closed)["scenes"]["grating-15mm"]["closed"]
-    assert everyone["mu0_missing"] == 0
+    everyone = _section(closed, closed).scenes["grating-15mm"]["closed"]
+    assert everyone.loop.mu0_missing == 0
 
 
 def test_gain_swings_see_an_oscillation_that_grows_or_holds():
@@ -482,8 +486,23 @@ def test_the_adaptation_study_is_the_object_scenes_adaptive_runs_when_as_long():
     section = measure(fingers=2, duration_s=0.4, scenes=(ADAPT_SCENE,), adapt_s=0.4,
                       on_done=lambda *_: done.append(1))
     assert len(done) == 2 * 3  # open, closed, adaptive for each finger, nothing more
-    alone = [score(Run(ADAPT_SCENE, f, "adaptive", 0.4))["adapted_gap"] for f in (1, 2)]
-    assert section["adaptation"]["gaps"] == alone and section["adaptation"]["duration_s"] == 0.4
+    alone = [score(Run(ADAPT_SCENE, f, "adaptive", 0.4)).adapted_gap for f in (1, 2)]
+    assert section.adaptation.gaps == alone and section.adaptation.duration_s == 0.4
     longer = measure(fingers=2, duration_s=0.4, scenes=(ADAPT_SCENE,), adapt_s=0.6)
-    assert len(longer["adaptation"]["gaps"]) == 2
-    assert longer["adaptation"]["gaps"] != alone
+    assert len(longer.adaptation.gaps) == 2
+    assert longer.adaptation.gaps != alone
+
+
+def test_the_section_plot_is_legible_with_one_scene():
+    """One scene makes the narrowest figure: its title wraps rather than leaving the
+    canvas, and no text overlaps another."""
+    from frictex.app.measure.figure_check import text_flaws
+    from frictex.app.measure.report_closed_loop import figure
+    from frictex.app.measure.report_output import pyplot
+    closed = [0.004, 0.003, 0.01, 0.002, 0.004, 0.006]
+    fig = figure(_section(closed, [r / 2 for r in OPEN]))
+    try:
+        assert text_flaws(fig) == []
+        assert "\n" in fig.get_suptitle()
+    finally:
+        pyplot().close(fig)

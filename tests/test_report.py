@@ -9,8 +9,11 @@ from numpy.testing import assert_allclose
 
 from frictex.app.commands.cli import main
 from frictex.app.measure.report_claims import claims, paired
-from frictex.app.measure.report_matrix import Runner, matrix
-from frictex.app.measure.report_output import pareto
+from frictex.app.measure.figure_check import text_flaws
+from frictex.app.measure.report_doc import Report, Settings, headline
+from frictex.app.measure.report_markdown import write_markdown
+from frictex.app.measure.report_matrix import MOTIONS, Runner, matrix
+from frictex.app.measure.report_output import cost_figure, pareto, period_figure
 from frictex.app.measure.report_seeds import draws
 
 REFDATA = Path(__file__).resolve().parents[2] / "shared" / "refdata" / "android-getevent"
@@ -58,7 +61,7 @@ def test_claims_hold_only_where_the_interval_excludes_a_loss(few_draws):
 
 
 def test_draws_pair_every_renderer_on_the_same_traces(few_draws):
-    values = few_draws["values"]
+    values = few_draws.values
     assert set(values) == {"grating-15mm", "grating-5mm", "grating-0.6mm"}
     for kinds in values.values():
         assert set(kinds) == {"human", "slow", "fast"}
@@ -71,7 +74,7 @@ def test_draws_pair_every_renderer_on_the_same_traces(few_draws):
 
 
 def test_rows_have_the_documented_fields(grating_rows):
-    row = grating_rows[0]
+    row = grating_rows[0].to_json()
     for key in ("scene", "period_mm", "motion", "touch_hz", "renderer", "output_hz",
                 "time_error", "spectral_error", "alignment_error_mm", "cost_us_per_s"):
         assert key in row
@@ -128,6 +131,14 @@ def test_report_writes_its_files(tmp_path, capsys):
                       "closed loop: added noise", "closed loop: stability margin"}
     assert "## Closed-loop friction" in markdown and "![closed_loop.png]" in markdown
     assert (out / "closed_loop.png").stat().st_size > 10_000
+    # report.json reads back into the report's records and writes the same document
+    back = Report.read(out / "report.json")
+    assert json.dumps(back.to_json(), indent=1) + "\n" == (out / "report.json").read_text()
+    # every plot the report wrote, drawn again from the records: no text overlaps another
+    # or leaves the canvas
+    from frictex.app.measure.report_closed_loop import figure
+    for fig in (cost_figure(back.rows), period_figure(back.rows), figure(back.closed_loop)):
+        assert text_flaws(fig) == []
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -174,3 +185,48 @@ def test_real_recordings_replay_with_their_figures():
     assert run["tracker"] == {"jumps": 0, "out_of_order": 0}
     lines = summary_lines({"folder": "refdata", "runs": [run], "skipped": []})
     assert any("tablet-two-finger-drag.txt | 2 | 1.47 | 1 | 9" in line for line in lines)
+
+
+def _report(rows, few_draws) -> Report:
+    settings = Settings(reference_hz=20_000.0, touch_noise_mm=0.05, block_s=0.005,
+                        motions=MOTIONS, lut_max_error_um=1e-3, cpu_count=2, jobs=2,
+                        scheduler=None, wall_s=1.0)
+    return Report(quick=True, settings=settings, rows=rows, claims=[], headline=headline(rows),
+                  modal_replay={"scene": "s", "trace": "t", "output_hz": 10_000.0,
+                                "replay_x_realtime": 300.0, "stages_us_per_s": {"actuation": 2.0}},
+                  draws=few_draws, real=None, modal_inversion=[], end_to_end=None,
+                  closed_loop=None)
+
+
+def test_markdown_has_no_empty_table(grating_rows, few_draws, tmp_path):
+    """Sections the scenes chosen leave without rows (here: no object or composed scene,
+    no modal figures) say so in a sentence instead of a table of headers alone."""
+    write_markdown(_report(grating_rows, few_draws), tmp_path / "report.md", [])
+    lines = (tmp_path / "report.md").read_text().splitlines()
+    rules = [k for k, line in enumerate(lines) if line.startswith("|---")]
+    assert rules and all(lines[k + 1].startswith("| ") for k in rules if k + 1 < len(lines))
+    assert all(k + 1 < len(lines) for k in rules)
+    text = "\n".join(lines)
+    assert "None in this report: only gratings among the scenes chosen." in text
+    assert "None in this report: the composed scene is not among the scenes chosen." in text
+
+
+def test_report_json_reads_back(grating_rows, few_draws, tmp_path):
+    doc = _report(grating_rows, few_draws)
+    doc.write(tmp_path / "report.json")
+    text = (tmp_path / "report.json").read_text()
+    assert json.dumps(Report.read(tmp_path / "report.json").to_json(), indent=1) + "\n" == text
+    assert json.loads((tmp_path / "report.json").read_text())["report_version"] == 2
+
+
+def test_report_json_of_another_version_is_refused(tmp_path):
+    (tmp_path / "report.json").write_text('{"report_version": 1}')
+    with pytest.raises(ValueError, match="report_version 1; this frictex reads version 2"):
+        Report.read(tmp_path / "report.json")
+
+
+def test_matrix_plots_are_legible(grating_rows):
+    """The cost plot labels its Pareto front beside the points, the period plot its
+    log axes, without a text over another."""
+    for fig in (cost_figure(grating_rows), period_figure(grating_rows)):
+        assert text_flaws(fig) == []

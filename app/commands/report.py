@@ -1,6 +1,8 @@
 """``frictex report``: speed against error over a matrix of scenes, motions, touch rates
 and renderer configurations (see ``app.measure.report_matrix`` for what a row measures,
-``app.measure.report_output`` for the files and ``app.measure.report_claims`` for the checked targets),
+``app.measure.report_doc`` for report.json, ``app.measure.report_markdown`` for report.md,
+``app.measure.report_output`` for the plots and ``app.measure.report_claims`` for the
+checked targets),
 and closed-loop friction over a simulated population of fingers on the chosen scenes it
 covers (``app.measure.report_closed_loop``), fanned out the same way.
 
@@ -53,6 +55,35 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    out, real_dir = _checked(args)
+    from frictex.app.measure.report_doc import Report, headline
+    from frictex.app.measure.report_markdown import write_markdown
+    jobs = args.jobs or default_workers()
+    rows, settings = _matrix(args, jobs)
+    draws, real, modal, modal_replay, end_to_end = _beside_the_matrix(args, jobs, real_dir)
+    closed_loop = _closed_loop(args, jobs)
+    doc = Report(quick=args.quick, settings=settings, rows=rows,
+                 claims=_claims(draws, closed_loop), headline=headline(rows),
+                 modal_replay=modal_replay, draws=draws, real=real, modal_inversion=modal,
+                 end_to_end=end_to_end, closed_loop=closed_loop)
+    doc.write(out / "report.json")
+    plots = _plots(doc, out)
+    write_markdown(doc, out / "report.md", plots)
+    failed = [c for c in doc.claims if not c.passed]
+    print(f"frictex report: {len(rows)} rows in {settings.wall_s:.1f} s; "
+          f"{len(doc.claims) - len(failed)} of {len(doc.claims)} claims hold; "
+          f"wrote {out / 'report.md'}, {out / 'report.json'}, {', '.join(plots)}")
+    if failed and args.strict:
+        print(f"frictex: error: {len(failed)} claims not shown (--strict): "
+              + "; ".join(f"{c.scene} {c.motion} {c.metric}: {c.text}" for c in failed[:3])
+              + ("; ..." if len(failed) > 3 else ""), file=sys.stderr)
+        return 1
+    return 0
+
+
+def _checked(args: argparse.Namespace) -> tuple[Path, Path | None]:
+    """The output folder, made (fail now, not after the matrix has run), and the folder
+    of real recordings (None without ``--real``; one without recordings fails now)."""
     unknown = [s for s in args.scenes if s not in rm.SCENES]
     if unknown:
         raise InputError(f"--scenes: unknown scene(s) {', '.join(unknown)}; expected some of "
@@ -64,17 +95,21 @@ def run(args: argparse.Namespace) -> int:
     if args.real is not None:
         from frictex.app.measure.report_real import recordings
         real_dir = Path(args.real)
-        recordings(real_dir)  # fail now on a folder without recordings
-    out.mkdir(parents=True, exist_ok=True)  # fail now, not after the matrix has run
+        recordings(real_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    return out, real_dir
+
+
+def _matrix(args: argparse.Namespace, jobs: int):
+    """The matrix's rows, fanned out, and the report's settings."""
     from tqdm import tqdm
 
-    from frictex.app.measure import report_output as ro
+    from frictex.app.measure.report_doc import Settings
     from frictex.device.friction import make_friction_model
     from frictex.rendering.inversion_lut import LutFrictionModel
 
     cases = rm.matrix(args.quick, tuple(args.scenes))
     wall = time.perf_counter()
-    jobs = args.jobs or default_workers()
     bar = tqdm(total=len(cases), desc="report", unit="case", disable=args.no_progress or None)
     try:
         rows = fan_out(partial(rm.run_case, live_s=0.5 if args.quick else 2.0), cases,
@@ -82,14 +117,20 @@ def run(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     lut = LutFrictionModel(make_friction_model(rm.load(args.scenes[0]).device))
-    settings = {"reference_hz": rm.REFERENCE_HZ, "touch_noise_mm": rm.TOUCH_NOISE_MM,
-                "block_s": rm.BLOCK_S, "motions": rm.MOTIONS,
-                "lut_max_error_um": lut.max_error_um(),
-                "cpu_count": os.cpu_count(), "jobs": None if args.scheduler else jobs,
-                "scheduler": args.scheduler, "wall_s": time.perf_counter() - wall}
-    from frictex.app.measure import bench_modal
-    from frictex.app.measure import report_seeds
+    return rows, Settings(reference_hz=rm.REFERENCE_HZ, touch_noise_mm=rm.TOUCH_NOISE_MM,
+                          block_s=rm.BLOCK_S, motions=rm.MOTIONS,
+                          lut_max_error_um=lut.max_error_um(), cpu_count=os.cpu_count(),
+                          jobs=None if args.scheduler else jobs, scheduler=args.scheduler,
+                          wall_s=time.perf_counter() - wall)
+
+
+def _beside_the_matrix(args: argparse.Namespace, jobs: int, real_dir: Path | None):
+    """The draws behind the claims, the real recordings' section (None without
+    ``--real``), the modal inversion's figures, two fingers with modal actuation in
+    replay, and whole replays end to end."""
+    from frictex.app.measure import bench_modal, report_seeds
     from frictex.app.measure.bench_pipeline import modal_throughput
+    from frictex.app.measure.bench_replay import end_to_end
     modal = [asdict(f) for f in bench_modal.run(args.quick)]
     gratings = [s for s in args.scenes if s in report_seeds.GRATINGS]
     draws = report_seeds.draws(report_seeds.QUICK_DRAWS if args.quick else report_seeds.DRAWS,
@@ -98,35 +139,35 @@ def run(args: argparse.Namespace) -> int:
     if real_dir is not None:
         from frictex.app.measure.report_real import real_section
         real = real_section(real_dir, gratings)
-    closed_loop = _closed_loop(args, jobs)
-    from frictex.app.measure.bench_replay import end_to_end
-    doc = ro.write_json(rows, out / "report.json", args.quick, settings, modal,
-                        modal_throughput(), draws, real,
-                        end_to_end(20.0 if args.quick else 120.0), closed_loop)
-    plots = ["error_vs_cost.png", "error_vs_period.png"]
-    ro.plot_cost(rows, out / plots[0])
-    ro.plot_period(rows, out / plots[1])
+    return draws, real, modal, modal_throughput(), end_to_end(20.0 if args.quick else 120.0)
+
+
+def _claims(draws, closed_loop) -> list:
+    """The draws' claims, then the closed-loop section's (if run)."""
+    from frictex.app.measure.report_claims import claims
+    found = claims(draws)
     if closed_loop is not None:
-        from frictex.app.measure.report_closed_loop import plot as plot_loop
-        plots.append("closed_loop.png")
-        plot_loop(closed_loop, out / plots[-1])
-    ro.write_markdown(doc, out / "report.md", plots)
-    failed = [c for c in doc["claims"] if not c["passed"]]
-    print(f"frictex report: {len(rows)} rows in {settings['wall_s']:.1f} s; "
-          f"{len(doc['claims']) - len(failed)} of {len(doc['claims'])} claims hold; "
-          f"wrote {out / 'report.md'}, {out / 'report.json'}, {', '.join(plots)}")
-    if failed and args.strict:
-        print(f"frictex: error: {len(failed)} claims not shown (--strict): "
-              + "; ".join(f"{c['scene']} {c['motion']} {c['metric']}: {c['text']}"
-                          for c in failed[:3]) + ("; ..." if len(failed) > 3 else ""),
-              file=sys.stderr)
-        return 1
-    return 0
+        from frictex.app.measure.report_closed_loop import claims as loop_claims
+        found += loop_claims(closed_loop)
+    return found
 
 
-def _closed_loop(args: argparse.Namespace, jobs: int) -> dict | None:
-    """The closed-loop section on the chosen scenes it covers (None if it covers none),
-    fanned out like the matrix."""
+def _plots(doc, out: Path) -> list[str]:
+    """Write the plots into ``out``; their file names."""
+    from frictex.app.measure import report_output as ro
+    plots = {"error_vs_cost.png": ro.cost_figure(doc.rows),
+             "error_vs_period.png": ro.period_figure(doc.rows)}
+    if doc.closed_loop is not None:
+        from frictex.app.measure.report_closed_loop import figure as loop_figure
+        plots["closed_loop.png"] = loop_figure(doc.closed_loop)
+    for name, fig in plots.items():
+        ro.save(fig, out / name)
+    return list(plots)
+
+
+def _closed_loop(args: argparse.Namespace, jobs: int):
+    """The closed-loop section (``report_loop_records.LoopSection``) on the chosen scenes
+    it covers (None if it covers none), fanned out like the matrix."""
     from tqdm import tqdm
 
     from frictex.app.measure import report_closed_loop as rcl

@@ -86,17 +86,17 @@ def _claim(group, scene, kind, metric, values, a, b, scale=1.0, strict=True) -> 
     return Claim(group, scene, kind, metric, text, mean, low, high, n, holds)
 
 
-def claims(draws: dict) -> list[Claim]:
-    """Every claim the draws (``app.measure.report_seeds.draws``) allow checking."""
-    values = draws["values"]
+def claims(draws) -> list[Claim]:
+    """Every claim the draws (``app.measure.report_seeds.Draws``) allow checking."""
+    values = draws.values
     out: list[Claim | None] = []
-    for kind in draws["kinds"]:
+    for kind in draws.kinds:
         out.append(_claim("seed 003", "grating-0.6mm", kind, "spectral_error", values,
                           "sht", "sho-held"))
         out.append(_claim("seed 003", "grating-15mm", kind, "alignment_error_mm", values,
                           "sho-held", "sht"))
     for scene in ("grating-15mm", "grating-5mm"):
-        for kind in draws["kinds"]:
+        for kind in draws.kinds:
             for metric in ("time_error", "spectral_error"):
                 for rival in ("sho-held", "sht"):
                     out.append(_claim("auto beats SHO and SHT", scene, kind, metric, values,
@@ -108,7 +108,7 @@ def claims(draws: dict) -> list[Claim]:
                 best = min(rivals, key=lambda r: np.mean(per[r][metric]))
                 out.append(_claim("auto near the best", scene, "human", metric, values, AUTO,
                                   best, 1.05, strict=False))
-    for kind in draws["kinds"]:
+    for kind in draws.kinds:
         out.append(_claim("auto on fine gratings", "grating-0.6mm", kind, "spectral_error",
                           values, AUTO, "sht", 1.03 if kind == "human" else 1.0, strict=False))
     return [c for c in out if c is not None]

@@ -53,7 +53,8 @@ errors, MSE_loop - MSE_open / T^2, so that a claim that holds says the populatio
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import textwrap
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -62,6 +63,9 @@ from frictex.app.engine.driver import drive
 from frictex.app.engine.sources import TraceSource
 from frictex.app.measure.closed_loop_sim import FingerSink, LoopStage
 from frictex.app.measure.report_claims import Claim, paired
+from frictex.app.measure.report_loop_records import (Adaptation, LoopFigures, LoopScore,
+                                                     LoopSection, ModeSummary, PerFinger,
+                                                     RunScore)
 from frictex.app.measure.report_matrix import load
 from frictex.device.finger import FingerPlant, SensorParams, draw_finger, true_mu
 from frictex.device.friction import forward_mu
@@ -158,39 +162,51 @@ def simulate(run: Run, loop_config=None):
     return sink, stage
 
 
-def score(run: Run) -> dict:
+def score(run: Run) -> RunScore:
     """The measurements of one run (module docstring)."""
     sink, stage = simulate(run)
     a = sink.arrays()
     slide = a["speed"] >= SLIDING_MM_S
-    err = a["delivered"][slide] - a["target"][slide]
     reach = a["delivered"][slide] - a["best"][slide]
-    out = {"rms": _rms(err), "rms_reachable": _rms(reach), "max_command_um": sink.max_command_um}
+    cumulative = None
     if run.mode == "open":  # the squared error so far, every block: RMS over any later window
         ends = np.append(np.searchsorted(a["t"][slide], np.arange(0.0, run.duration_s,
                                                                     BLOCK / RATE_HZ)), reach.size)
-        out["cumulative"] = (np.concatenate([[0.0], np.cumsum(np.square(reach))])[ends], ends)
+        cumulative = (np.concatenate([[0.0], np.cumsum(np.square(reach))])[ends], ends)
+    out = RunScore(rms=_rms(a["delivered"][slide] - a["target"][slide]),
+                   rms_reachable=_rms(reach), max_command_um=sink.max_command_um,
+                   cumulative=cumulative)
     control = stage.state.control
-    if control is not None:
-        known = stage.first_mu0_s
-        after = a["t"][slide] >= (known if known is not None else np.inf)  # none without mu0
-        out.update(fallbacks=control.fallbacks, log_c=control.log_c, mu0_estimate=control.mu0,
-                   b_per_um=control.rls.theta[0], k_per_n=control.rls.theta[1],
-                   swings=gain_swings(np.array(stage.log_c)),
-                   first_mu0_s=known, rms_after_mu0=_rms(reach[after]) if known is not None else None)
-        if run.mode == "adaptive":
-            out["adapted_gap"] = adapted_gap(run, control.rls.params, float(a["t"][-1]))
-            if run.noise:
-                quiet, _ = simulate(Run(run.scene, run.finger, run.mode, run.duration_s,
-                                        noiseless=True))
-                q = quiet.arrays()
-                m = min(q["delivered"].size, a["delivered"].size)
-                friction = a["mu0"][:m] * a["force"][:m]
-                diff = friction * (a["delivered"][:m] - q["delivered"][:m])
-                noise = _rms(diff[slide[:m]])
-                mean = float(np.mean(friction[slide[:m]] * a["delivered"][:m][slide[:m]]))
-                out.update(noise_n=noise, noise_fraction=noise / mean if mean > 0 else 0.0)
+    if control is None:
+        return out
+    known = stage.first_mu0_s
+    after = a["t"][slide] >= (known if known is not None else np.inf)  # none without mu0
+    out = replace(out, loop=LoopScore(
+        fallbacks=control.fallbacks, log_c=control.log_c, mu0_estimate=control.mu0,
+        b_per_um=control.rls.theta[0], k_per_n=control.rls.theta[1],
+        swings=gain_swings(np.array(stage.log_c)), first_mu0_s=known,
+        rms_after_mu0=_rms(reach[after]) if known is not None else None))
+    if run.mode != "adaptive":
+        return out
+    out = replace(out, adapted_gap=adapted_gap(run, control.rls.params, float(a["t"][-1])))
+    if run.noise:
+        noise, fraction = added_noise(run, a, slide)
+        out = replace(out, noise_n=noise, noise_fraction=fraction)
     return out
+
+
+def added_noise(run: Run, a: dict, slide: np.ndarray) -> tuple[float, float]:
+    """The force noise (N RMS) the loop adds in ``run`` (whose sink's arrays are ``a``,
+    sliding where ``slide``): its delivered friction force against the same run with a
+    noiseless sensor; and that as a fraction of the mean friction force (0 if none)."""
+    quiet, _ = simulate(Run(run.scene, run.finger, run.mode, run.duration_s, noiseless=True))
+    q = quiet.arrays()
+    m = min(q["delivered"].size, a["delivered"].size)
+    friction = a["mu0"][:m] * a["force"][:m]
+    diff = friction * (a["delivered"][:m] - q["delivered"][:m])
+    noise = _rms(diff[slide[:m]])
+    mean = float(np.mean(friction[slide[:m]] * a["delivered"][:m][slide[:m]]))
+    return noise, (noise / mean if mean > 0 else 0.0)
 
 
 def adapted_gap(run: Run, params, t_s: float) -> float:
@@ -244,12 +260,13 @@ def _rms(x: np.ndarray) -> float:
 
 def measure(fingers: int = FINGERS, duration_s: float = DURATION_S, workers: int = 1,
             scenes=SCENES, adapt_s: float = ADAPT_S, adapt_fingers: int | None = None,
-            noise_scenes=NOISE_SCENES, scheduler: str | None = None, on_done=None) -> dict:
+            noise_scenes=NOISE_SCENES, scheduler: str | None = None,
+            on_done=None) -> LoopSection:
     """Every scene x mode x finger (the added noise measured on ``noise_scenes``), and,
     when ``ADAPT_SCENE`` is among ``scenes``, fingers 1..``adapt_fingers`` (default all)
     adapting for ``adapt_s`` on it; fanned out as ``app.engine.fanout.fan_out`` does
     (``workers`` processes or a Dask ``scheduler``; ``on_done`` after each run). Returns
-    the section's JSON (see :func:`summarise`)."""
+    the section (see :func:`summarise`)."""
     from frictex.app.engine.fanout import fan_out
     runs = [Run(s, f, m, duration_s, noise=s in noise_scenes and m == "adaptive")
             for s in scenes for m in MODES for f in range(1, fingers + 1)]
@@ -263,13 +280,13 @@ def measure(fingers: int = FINGERS, duration_s: float = DURATION_S, workers: int
     for run, res in zip(runs, results):
         values.setdefault(run.scene, {}).setdefault(run.mode, []).append(res)
     section = summarise(values, fingers, duration_s)
-    if study:
-        gaps = ([r["adapted_gap"] for r in values[ADAPT_SCENE]["adaptive"]] if reuse
-                else results[len(runs):])
-        section["adaptation"] = {"scene": ADAPT_SCENE, "duration_s": adapt_s,
-                                 "fingers": len(gaps), "gap_max": max(gaps),
-                                 "gap_median": float(np.median(gaps)), "gaps": gaps}
-    return section
+    if not study:
+        return section
+    gaps = ([r.adapted_gap for r in values[ADAPT_SCENE]["adaptive"]] if reuse
+            else results[len(runs):])
+    return replace(section, adaptation=Adaptation(
+        scene=ADAPT_SCENE, duration_s=adapt_s, fingers=len(gaps), gap_max=max(gaps),
+        gap_median=float(np.median(gaps)), gaps=gaps))
 
 
 def _study_is_main(duration_s: float, adapt_s: float, fingers: int,
@@ -286,7 +303,7 @@ def _job(run: Run):
 
 
 def section(quick: bool, workers: int = 1, scenes=SCENES, scheduler: str | None = None,
-            on_done=None) -> dict:
+            on_done=None) -> LoopSection:
     """The section for ``frictex report`` (``--quick``: shorter runs, same population),
     on the bundled ``scenes`` among :data:`SCENES`."""
     scenes = [s for s in SCENES if s in scenes]
@@ -303,64 +320,82 @@ def runs_in(quick: bool, scenes=SCENES) -> int:
     return FINGERS * (len(scenes) * len(MODES) + study)
 
 
-def summarise(values: dict, fingers: int, duration_s: float) -> dict:
-    """Population statistics from per-finger results: per scene and mode, the population
-    RMS (RMS over fingers), the worst finger, the gains against open loop, and each
-    finger's figures (``per_finger``) from which :func:`claims` are computed."""
+def summarise(values: dict[str, dict[str, list[RunScore]]], fingers: int,
+              duration_s: float) -> LoopSection:
+    """Population statistics from per-finger results (``values[scene][mode]``: each
+    finger's :func:`score`): per scene and mode, the population RMS (RMS over fingers),
+    the worst finger, the gains against open loop, and each finger's figures
+    (``per_finger``) from which :func:`claims` are computed."""
     scenes = {}
     for scene, modes in values.items():
-        row = {}
-        for mode, results in modes.items():
-            rms = np.array([r["rms_reachable"] for r in results])
-            r_mode = {"rms_reachable_pop": _rms(rms), "worst": float(rms.max()),
-                      "worst_finger": int(np.argmax(rms)) + 1,
-                      "rms_pop": _rms(np.array([r["rms"] for r in results])),
-                      "fallbacks": int(sum(r.get("fallbacks", 0) for r in results)),
-                      "max_command_um": max(r["max_command_um"] for r in results),
-                      "per_finger": {"rms_reachable": rms.tolist(),
-                                     "max_command_um": [r["max_command_um"] for r in results]}}
-            if mode != "open":
-                per = r_mode["per_finger"]
-                per["swings"] = [r["swings"] for r in results]
-                per["rms_after_mu0"] = [r["rms_after_mu0"] for r in results]
-                per["first_mu0_s"] = [r["first_mu0_s"] for r in results]
-                known = [t for t in per["first_mu0_s"] if t is not None]
-                r_mode["swings_max"] = max(per["swings"])
-                # "from mu0 on": only the fingers whose loop found mu0
-                after = [x for x in per["rms_after_mu0"] if x is not None]
-                r_mode["mu0_missing"] = len(results) - len(after)
-                r_mode["rms_after_mu0_pop"] = _rms(np.array(after)) if after else None
-                if "open" in modes:  # open loop over the same samples, finger by finger
-                    per["open_rms_after_mu0"] = [
-                        _window_rms(o["cumulative"], t) if t is not None else None
-                        for o, t in zip(modes["open"], per["first_mu0_s"])]
-                    if after:
-                        opened = [x for x in per["open_rms_after_mu0"] if x is not None]
-                        r_mode["gain_after_mu0"] = _rms(np.array(opened)) / max(
-                            r_mode["rms_after_mu0_pop"], 1e-12)
-                r_mode["first_mu0_s_median"] = float(np.median(known)) if known else None
-                r_mode["first_mu0_s_max"] = max(known) if len(known) == len(results) else None
-            if mode == "adaptive":
-                noise = [r["noise_fraction"] for r in results if "noise_fraction" in r]
-                if noise:
-                    r_mode["noise_fraction_max"] = max(noise)
-                    r_mode["per_finger"]["noise_fraction"] = noise
-                r_mode["adapted_gap_max"] = max(r["adapted_gap"] for r in results)
-            row[mode] = r_mode
-        for mode in ("closed", "adaptive"):
-            if mode in row and "open" in row:
-                row[mode]["gain_vs_open"] = row["open"]["rms_reachable_pop"] / max(
-                    row[mode]["rms_reachable_pop"], 1e-12)
-                row[mode]["worst_improves"] = row[mode]["worst"] < row["open"]["worst"]
-        scenes[scene] = row
+        row = {mode: _mode_summary(mode, results, modes.get("open"))
+               for mode, results in modes.items()}
+        scenes[scene] = {mode: _against_open(r, row.get("open")) if mode != "open" else r
+                         for mode, r in row.items()}
     device = load(SCENES[0]).device
-    return {"fingers": fingers, "duration_s": duration_s, "rate_hz": RATE_HZ,
-            "block": BLOCK, "weber_fraction": WEBER_FRACTION,
-            "report_delay_blocks": REPORT_DELAY_BLOCKS,
-            "margins": margins(range(REPORT_DELAY_BLOCKS + 3), rate_hz=RATE_HZ, block=BLOCK),
-            "slope_range": population_slopes(fingers, device.friction,
-                                             device.amplitude_limit_um),
-            "scenes": scenes}
+    return LoopSection(
+        fingers=fingers, duration_s=duration_s, rate_hz=RATE_HZ, block=BLOCK,
+        weber_fraction=WEBER_FRACTION, report_delay_blocks=REPORT_DELAY_BLOCKS,
+        margins=margins(range(REPORT_DELAY_BLOCKS + 3), rate_hz=RATE_HZ, block=BLOCK),
+        slope_range=population_slopes(fingers, device.friction, device.amplitude_limit_um),
+        scenes=scenes)
+
+
+def _mode_summary(mode: str, results: list[RunScore],
+                  opened: list[RunScore] | None) -> ModeSummary:
+    """One scene and ``mode`` over its fingers; ``opened``: open loop's runs of the same
+    fingers on the scene (None if not run)."""
+    rms = np.array([r.rms_reachable for r in results])
+    per = PerFinger(rms_reachable=rms.tolist(),
+                    max_command_um=[r.max_command_um for r in results])
+    loop = None
+    if mode != "open":
+        per, loop = _loop_figures(results, per, opened)
+    adaptive = mode == "adaptive"
+    noise = [r.noise_fraction for r in results if adaptive and r.noise_fraction is not None]
+    if noise:
+        per = replace(per, noise_fraction=noise)
+    gaps = [r.adapted_gap for r in results] if adaptive else []
+    return ModeSummary(
+        rms_reachable_pop=_rms(rms), worst=float(rms.max()), worst_finger=int(np.argmax(rms)) + 1,
+        rms_pop=_rms(np.array([r.rms for r in results])),
+        fallbacks=int(sum(r.loop.fallbacks for r in results if r.loop is not None)),
+        max_command_um=max(r.max_command_um for r in results), per_finger=per, loop=loop,
+        noise_fraction_max=max(noise) if noise else None,
+        adapted_gap_max=max(gaps) if gaps else None)
+
+
+def _loop_figures(results: list[RunScore], per: PerFinger, opened: list[RunScore] | None
+                  ) -> tuple[PerFinger, LoopFigures]:
+    """A loop mode's per-finger and population figures (module docstring: "from mu0
+    on" counts only the fingers whose loop found mu0)."""
+    first = [r.loop.first_mu0_s for r in results]
+    per = replace(per, swings=[r.loop.swings for r in results],
+                  rms_after_mu0=[r.loop.rms_after_mu0 for r in results], first_mu0_s=first)
+    known = [t for t in first if t is not None]
+    after = [x for x in per.rms_after_mu0 if x is not None]
+    after_pop = _rms(np.array(after)) if after else None
+    gain = None
+    if opened is not None:  # open loop over the same samples, finger by finger
+        per = replace(per, open_rms_after_mu0=[
+            _window_rms(o.cumulative, t) if t is not None else None for o, t in zip(opened, first)])
+        if after:
+            same = [x for x in per.open_rms_after_mu0 if x is not None]
+            gain = _rms(np.array(same)) / max(after_pop, 1e-12)
+    return per, LoopFigures(
+        swings_max=max(per.swings), mu0_missing=len(results) - len(after),
+        rms_after_mu0_pop=after_pop, gain_after_mu0=gain,
+        first_mu0_s_median=float(np.median(known)) if known else None,
+        first_mu0_s_max=max(known) if len(known) == len(results) else None)
+
+
+def _against_open(mode: ModeSummary, opened: ModeSummary | None) -> ModeSummary:
+    """A loop mode's gain in population RMS over open loop and whether its worst finger
+    improves (``mode`` itself without an open-loop mode)."""
+    if opened is None:
+        return mode
+    return replace(mode, gain_vs_open=opened.rms_reachable_pop / max(mode.rms_reachable_pop, 1e-12),
+                   worst_improves=mode.worst < opened.worst)
 
 
 def population_slopes(fingers: int, params, limit_um: float) -> tuple[float, float]:
@@ -382,66 +417,13 @@ def population_slopes(fingers: int, params, limit_um: float) -> tuple[float, flo
     return float(min(s.min() for s in slopes)), float(max(s.max() for s in slopes))
 
 
-def claims(section: dict) -> list[Claim]:
+def claims(section: LoopSection) -> list[Claim]:
     """The issue's targets as claims over the population (module docstring)."""
     out = []
-    for scene, row in section["scenes"].items():
-        if "open" not in row:
-            continue
-        limit = load(scene).device.amplitude_limit_um
-        open_rms = np.array(row["open"]["per_finger"]["rms_reachable"])
-        target = TARGETS[scene]
-        for mode in ("closed", "adaptive"):
-            if mode not in row:
-                continue
-            r = row[mode]
-            rms = np.array(r["per_finger"]["rms_reachable"])
-            mean, low, high, n = paired(np.square(rms), np.square(open_rms), 1.0 / target ** 2)
-            cut = f"cuts the RMS error at least {target:g}x against" if target > 1 else \
-                "has a lower RMS error than"
-            out.append(Claim(
-                "closed loop: RMS error", scene, "human", f"rms_reachable, {mode}",
-                f"{mode} {cut} open loop: MSE {mode} - MSE open / "
-                f"{target ** 2:g} = {mean:+.2e}, 95 % interval [{low:+.2e}, {high:+.2e}], {n} "
-                f"fingers; population RMS {row['open']['rms_reachable_pop']:.4f} -> "
-                f"{r['rms_reachable_pop']:.4f} ({r['gain_vs_open']:.2f}x)",
-                mean, low, high, n, bool(high < 0.0)))
-            better = int(np.sum(rms < open_rms))
-            worst = r["worst"] - row["open"]["worst"]
-            out.append(Claim(
-                "closed loop: worst finger", scene, "human", f"worst rms_reachable, {mode}",
-                f"the worst finger improves: open's worst {row['open']['worst']:.4f} (finger "
-                f"{row['open']['worst_finger']}) -> {mode}'s worst {r['worst']:.4f} (finger "
-                f"{r['worst_finger']}); {better} of {rms.size} fingers improve",
-                worst, worst, worst, int(rms.size), bool(worst < 0.0)))
-        commands = [c for r in row.values() for c in r["per_finger"]["max_command_um"]]
-        top = max(commands)
-        out.append(Claim(
-            "closed loop: amplitude limit", scene, "human", "max_command_um",
-            f"no run commands beyond the device's {limit:g} um: largest {top:.3f} um over "
-            f"{len(commands)} runs", top - limit, top - limit, top - limit, len(commands),
-            bool(top <= limit)))
-        steps = [a for m in ("closed", "adaptive") if m in row
-                 for a in row[m]["per_finger"]["swings"]]
-        if steps:
-            mean, low, high, n = paired(steps, [0] * len(steps))
-            out.append(Claim(
-                "closed loop: no growing oscillation", scene, "human", "swings",
-                f"no run's loop gain oscillates: longest run of swings over "
-                f"{SWING:.0%} {max(steps)} (mean {mean:.2f}, 95 % interval [{low:.2f}, "
-                f"{high:.2f}]) against {OSCILLATION_STEPS} for a growing oscillation, {n} runs",
-                float(max(steps)), low, high, n, bool(max(steps) < OSCILLATION_STEPS)))
-        noise = row.get("adaptive", {}).get("per_finger", {}).get("noise_fraction")
-        if noise:
-            mean, low, high, n = paired(noise, [WEBER_FRACTION] * len(noise))
-            out.append(Claim(
-                "closed loop: added noise", scene, "human", "noise_fraction",
-                f"the force noise the loop adds stays below the Weber fraction "
-                f"{WEBER_FRACTION:g} (Gueorguiev et al. 2017): noise / friction - "
-                f"{WEBER_FRACTION:g} = {mean:+.3f}, 95 % interval [{low:+.3f}, {high:+.3f}], "
-                f"{n} fingers, largest {max(noise):.3f}",
-                mean, low, high, n, bool(high < 0.0 and max(noise) < WEBER_FRACTION)))
-    rows, (_, steepest) = section["margins"]["rows"], section["slope_range"]
+    for scene, row in section.scenes.items():
+        if "open" in row:
+            out += _scene_claims(scene, row)
+    rows, (_, steepest) = section.margins["rows"], section.slope_range
     least = min(r["gain_margin"] for r in rows)
     out.append(Claim(
         "closed loop: stability margin", "all", "human", "gain margin / steepest s",
@@ -450,25 +432,87 @@ def claims(section: dict) -> list[Claim]:
         f"population's steepest s {steepest:.2f} (computed from the fingers, "
         f"population_slopes)", least - steepest, least - steepest, least - steepest, len(rows),
         bool(steepest < least)))
-    ad = section.get("adaptation")
+    ad = section.adaptation
     if ad:
-        mean, low, high, n = paired(ad["gaps"], [ADAPT_TARGET] * len(ad["gaps"]))
+        mean, low, high, n = paired(ad.gaps, [ADAPT_TARGET] * len(ad.gaps))
         out.append(Claim(
-            "closed loop: adaptation", ad["scene"], "human", "adapted_gap",
-            f"after {ad['duration_s']:g} s of sliding (the target: 60 s), feed-forward with "
+            "closed loop: adaptation", ad.scene, "human", "adapted_gap",
+            f"after {ad.duration_s:g} s of sliding (the target: 60 s), feed-forward with "
             f"the adapted model is within {ADAPT_TARGET:.0%} RMS of the true finger: gap - "
             f"{ADAPT_TARGET:g} = {mean:+.3f}, 95 % interval [{low:+.3f}, {high:+.3f}], {n} "
-            f"fingers, largest gap {ad['gap_max']:.3f}", mean, low, high, n, bool(high < 0.0)))
+            f"fingers, largest gap {ad.gap_max:.3f}", mean, low, high, n, bool(high < 0.0)))
     return out
 
 
-def markdown(section: dict) -> list[str]:
+def _scene_claims(scene: str, row: dict[str, ModeSummary]) -> list[Claim]:
+    """A scene's claims: each loop mode's RMS cut and worst finger against open loop, the
+    amplitude limit, no growing oscillation and the added noise."""
+    out = []
+    for mode in ("closed", "adaptive"):
+        if mode in row:
+            out += _mode_claims(scene, mode, row[mode], row["open"])
+    limit = load(scene).device.amplitude_limit_um
+    commands = [c for r in row.values() for c in r.per_finger.max_command_um]
+    top = max(commands)
+    out.append(Claim(
+        "closed loop: amplitude limit", scene, "human", "max_command_um",
+        f"no run commands beyond the device's {limit:g} um: largest {top:.3f} um over "
+        f"{len(commands)} runs", top - limit, top - limit, top - limit, len(commands),
+        bool(top <= limit)))
+    steps = [a for m in ("closed", "adaptive") if m in row for a in row[m].per_finger.swings]
+    if steps:
+        mean, low, high, n = paired(steps, [0] * len(steps))
+        out.append(Claim(
+            "closed loop: no growing oscillation", scene, "human", "swings",
+            f"no run's loop gain oscillates: longest run of swings over "
+            f"{SWING:.0%} {max(steps)} (mean {mean:.2f}, 95 % interval [{low:.2f}, "
+            f"{high:.2f}]) against {OSCILLATION_STEPS} for a growing oscillation, {n} runs",
+            float(max(steps)), low, high, n, bool(max(steps) < OSCILLATION_STEPS)))
+    noise = row["adaptive"].per_finger.noise_fraction if "adaptive" in row else None
+    if noise:
+        mean, low, high, n = paired(noise, [WEBER_FRACTION] * len(noise))
+        out.append(Claim(
+            "closed loop: added noise", scene, "human", "noise_fraction",
+            f"the force noise the loop adds stays below the Weber fraction "
+            f"{WEBER_FRACTION:g} (Gueorguiev et al. 2017): noise / friction - "
+            f"{WEBER_FRACTION:g} = {mean:+.3f}, 95 % interval [{low:+.3f}, {high:+.3f}], "
+            f"{n} fingers, largest {max(noise):.3f}",
+            mean, low, high, n, bool(high < 0.0 and max(noise) < WEBER_FRACTION)))
+    return out
+
+
+def _mode_claims(scene: str, mode: str, r: ModeSummary, opened: ModeSummary) -> list[Claim]:
+    """A loop mode's RMS cut (the scene's target, paired per finger) and worst finger
+    against open loop on ``scene``."""
+    open_rms = np.array(opened.per_finger.rms_reachable)
+    rms = np.array(r.per_finger.rms_reachable)
+    target = TARGETS[scene]
+    mean, low, high, n = paired(np.square(rms), np.square(open_rms), 1.0 / target ** 2)
+    cut = (f"cuts the RMS error at least {target:g}x against" if target > 1 else
+           "has a lower RMS error than")
+    better = int(np.sum(rms < open_rms))
+    worst = r.worst - opened.worst
+    return [
+        Claim("closed loop: RMS error", scene, "human", f"rms_reachable, {mode}",
+              f"{mode} {cut} open loop: MSE {mode} - MSE open / "
+              f"{target ** 2:g} = {mean:+.2e}, 95 % interval [{low:+.2e}, {high:+.2e}], {n} "
+              f"fingers; population RMS {opened.rms_reachable_pop:.4f} -> "
+              f"{r.rms_reachable_pop:.4f} ({r.gain_vs_open:.2f}x)",
+              mean, low, high, n, bool(high < 0.0)),
+        Claim("closed loop: worst finger", scene, "human", f"worst rms_reachable, {mode}",
+              f"the worst finger improves: open's worst {opened.worst:.4f} (finger "
+              f"{opened.worst_finger}) -> {mode}'s worst {r.worst:.4f} (finger "
+              f"{r.worst_finger}); {better} of {rms.size} fingers improve",
+              worst, worst, worst, int(rms.size), bool(worst < 0.0))]
+
+
+def markdown(section: LoopSection) -> list[str]:
     """The section's lines for report.md (its claims are in the report's list)."""
-    m = section["margins"]
-    lo, hi = section["slope_range"]
+    m = section.margins
+    lo, hi = section.slope_range
     lines = ["## Closed-loop friction", "",
-             f"{section['fingers']} simulated fingers (device/finger.py), {section['duration_s']:g} s "
-             f"of human-like sliding each, {section['rate_hz']:g} Hz in blocks of {section['block']} "
+             f"{section.fingers} simulated fingers (device/finger.py), {section.duration_s:g} s "
+             f"of human-like sliding each, {section.rate_hz:g} Hz in blocks of {section.block} "
              "(app/measure/report_closed_loop.py says how each figure is made). RMS: error of the "
              "delivered mu' against what a controller knowing the finger exactly delivers "
              "through the plate's 400 Hz loop, over the population (RMS over fingers of each "
@@ -488,35 +532,16 @@ def markdown(section: dict) -> list[str]:
              "mu0 found s | raw RMS | "
              "max um | gain swings | fallbacks | noise / friction (max) | adapted gap (max) |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-    for scene, row in section["scenes"].items():
-        for mode, r in row.items():
-            gain = f"{r['gain_vs_open']:.2f}x" if "gain_vs_open" in r else ""
-            noise = f"{r['noise_fraction_max']:.3f}" if "noise_fraction_max" in r else ""
-            gap = f"{r['adapted_gap_max']:.3f}" if "adapted_gap_max" in r else ""
-            after = ""
-            if r.get("rms_after_mu0_pop") is not None:
-                after = f"{r['rms_after_mu0_pop']:.4f}"
-            if r.get("mu0_missing"):
-                kept = len(r["per_finger"]["rms_reachable"]) - r["mu0_missing"]
-                after = f"{after} ({kept} of {kept + r['mu0_missing']} fingers)".lstrip()
-            found = (f"{r['first_mu0_s_median']:.2f}, {r['first_mu0_s_max']:.2f}"
-                     if r.get("first_mu0_s_max") is not None else
-                     ("not in every run" if "first_mu0_s_max" in r else ""))
-            swings = str(r["swings_max"]) if "swings_max" in r else ""
-            gain_after = f"{r['gain_after_mu0']:.2f}x" if "gain_after_mu0" in r else ""
-            lines.append(f"| {scene} | {mode} | {r['rms_reachable_pop']:.4f} | {gain} | "
-                         f"{r['worst']:.4f} | {after} | {gain_after} | {found} | "
-                         f"{r['rms_pop']:.4f} | "
-                         f"{r['max_command_um']:.3f} | {swings} | {r['fallbacks']} | "
-                         f"{noise} | {gap} |")
-    if "adaptation" in section:
-        ad = section["adaptation"]
-        lines += ["", f"Adaptation ({ad['fingers']} fingers): after {ad['duration_s']:g} s on "
-                      f"{ad['scene']}, seed 003's eq 2 with the adapted (b, k) against each true "
-                      f"finger over 0-2.5 um: relative RMS gap median {ad['gap_median']:.3f}, "
-                      f"worst {ad['gap_max']:.3f}."]
+    lines += [_table_line(scene, mode, r) for scene, row in section.scenes.items()
+              for mode, r in row.items()]
+    if section.adaptation is not None:
+        ad = section.adaptation
+        lines += ["", f"Adaptation ({ad.fingers} fingers): after {ad.duration_s:g} s on "
+                      f"{ad.scene}, seed 003's eq 2 with the adapted (b, k) against each true "
+                      f"finger over 0-2.5 um: relative RMS gap median {ad.gap_median:.3f}, "
+                      f"worst {ad.gap_max:.3f}."]
     rows = m["rows"]
-    used = next(r for r in rows if r["delay_blocks"] == section["report_delay_blocks"])
+    used = next(r for r in rows if r["delay_blocks"] == section.report_delay_blocks)
     lines += ["", "Stability (rendering/control/margins.py): the loop linearised in the log of its "
                   "gain, an integrator of ki per block through the plate's 400 Hz amplitude "
                   "loop (seed 003, Fig. 3b), the fingertip (90 Hz), the sensor (1 kHz, 0.5 ms) "
@@ -537,9 +562,33 @@ def markdown(section: dict) -> list[str]:
                   "delay margin (blocks) |", "|---|---|---|---|---|"]
     lines += [f"| {r['delay_blocks']} | {r['ki']:.4f} | {r['gain_margin']:.2f} | "
               f"{r['phase_margin_deg']:.0f} | {r['delay_margin_blocks']:.1f} |" for r in rows]
-    lines += ["", f"Noise threshold: Weber fraction {section['weber_fraction']:g} for a change "
+    lines += ["", f"Noise threshold: Weber fraction {section.weber_fraction:g} for a change "
                   "of friction (Gueorguiev et al., J. R. Soc. Interface 2017).", ""]
     return lines
+
+
+def _fixed(value: float | None, spec: str, suffix: str = "") -> str:
+    """``value`` formatted by ``spec`` (and ``suffix``), or "" where there is none."""
+    return "" if value is None else f"{value:{spec}}{suffix}"
+
+
+def _table_line(scene: str, mode: str, r: ModeSummary) -> str:
+    """One scene and mode's line of the section's table (a figure the mode does not
+    have is left blank)."""
+    loop = r.loop
+    after = found = swings = gain_after = ""
+    if loop is not None:
+        after = _fixed(loop.rms_after_mu0_pop, ".4f")
+        if loop.mu0_missing:
+            kept = len(r.per_finger.rms_reachable) - loop.mu0_missing
+            after = f"{after} ({kept} of {kept + loop.mu0_missing} fingers)".lstrip()
+        found = (f"{loop.first_mu0_s_median:.2f}, {loop.first_mu0_s_max:.2f}"
+                 if loop.first_mu0_s_max is not None else "not in every run")
+        swings, gain_after = str(loop.swings_max), _fixed(loop.gain_after_mu0, ".2f", "x")
+    return (f"| {scene} | {mode} | {r.rms_reachable_pop:.4f} | "
+            f"{_fixed(r.gain_vs_open, '.2f', 'x')} | {r.worst:.4f} | {after} | {gain_after} | "
+            f"{found} | {r.rms_pop:.4f} | {r.max_command_um:.3f} | {swings} | {r.fallbacks} | "
+            f"{_fixed(r.noise_fraction_max, '.3f')} | {_fixed(r.adapted_gap_max, '.3f')} |")
 
 
 #: the plot's lowest loop RMS: a finger whose loop delivers what is reachable to within
@@ -547,39 +596,44 @@ def markdown(section: dict) -> list[str]:
 PLOT_FLOOR = 1e-4
 
 
-def plot(section: dict, path) -> None:
+def figure(section: LoopSection):
     """Each finger's RMS, closed and adaptive against open loop, one panel per scene,
     with the target's line (RMS open / T); a loop RMS under ``PLOT_FLOOR`` is drawn at
-    it, as a triangle pointing down."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    scenes = section["scenes"]
-    fig, axes = plt.subplots(1, max(len(scenes), 1), figsize=(4.2 * max(len(scenes), 1), 4.2),
-                             constrained_layout=True, squeeze=False)
+    it, as a triangle pointing down. The title wraps to the figure's width."""
+    from frictex.app.measure.report_output import pyplot
+    plt = pyplot()
+    scenes = section.scenes
+    panels = max(len(scenes), 1)
+    fig, axes = plt.subplots(1, panels, figsize=(4.2 * panels, 4.6), constrained_layout=True,
+                             squeeze=False)
     for ax, (scene, row) in zip(axes[0], scenes.items()):
-        x = np.array(row["open"]["per_finger"]["rms_reachable"])
-        for k, mode in enumerate(m for m in ("closed", "adaptive") if m in row):
-            y = np.array(row[mode]["per_finger"]["rms_reachable"])
-            low = y < PLOT_FLOOR
-            ax.scatter(x[~low], y[~low], s=18, c=f"C{k}", label=mode)
-            if low.any():
-                ax.scatter(x[low], np.full(int(low.sum()), PLOT_FLOOR), s=24, c=f"C{k}",
-                           marker="v", label=f"{mode}, under {PLOT_FLOOR:g} (drawn at it)")
-        span = np.array([x.min() / 2, x.max() * 2])
-        target = TARGETS[scene]
-        ax.plot(span, span, c="k", lw=0.8,
-                label="no change" + (" (the target)" if target == 1 else ""))
-        if target != 1:
-            ax.plot(span, span / target, c="k", lw=0.8, ls="--", label=f"target: open / {target:g}")
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("open loop RMS (per finger)")
-        ax.set_ylabel("loop RMS (per finger)")
-        ax.set_title(scene, fontsize=9)
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.suptitle(f"Closed-loop friction: {section['fingers']} simulated fingers, "
-                 f"{section['duration_s']:g} s each, RMS of delivered against reachable mu'")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+        _panel(ax, scene, row)
+    title = (f"Closed-loop friction: {section.fingers} simulated fingers, "
+             f"{section.duration_s:g} s each, RMS of delivered against reachable mu'")
+    # about 9 characters of the title's 12 pt font per inch of figure
+    fig.suptitle(textwrap.fill(title, width=int(9 * fig.get_figwidth())))
+    return fig
+
+
+def _panel(ax, scene: str, row: dict[str, ModeSummary]) -> None:
+    """One scene's panel of :func:`figure`."""
+    x = np.array(row["open"].per_finger.rms_reachable)
+    for k, mode in enumerate(m for m in ("closed", "adaptive") if m in row):
+        y = np.array(row[mode].per_finger.rms_reachable)
+        low = y < PLOT_FLOOR
+        ax.scatter(x[~low], y[~low], s=18, c=f"C{k}", label=mode)
+        if low.any():
+            ax.scatter(x[low], np.full(int(low.sum()), PLOT_FLOOR), s=24, c=f"C{k}",
+                       marker="v", label=f"{mode}, under {PLOT_FLOOR:g} (drawn at it)")
+    span = np.array([x.min() / 2, x.max() * 2])
+    target = TARGETS[scene]
+    ax.plot(span, span, c="k", lw=0.8, label="no change" + (" (the target)" if target == 1 else ""))
+    if target != 1:
+        ax.plot(span, span / target, c="k", lw=0.8, ls="--", label=f"target: open / {target:g}")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("open loop RMS (per finger)")
+    ax.set_ylabel("loop RMS (per finger)")
+    ax.set_title(scene, fontsize=9)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)

@@ -19,7 +19,7 @@ the block that first uses it, plus the link's jitter buffer (``device.link.host.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -67,6 +67,66 @@ class Case:
     renderer: str
     output_hz: float
     inversion: str = "exact"
+
+
+@dataclass(frozen=True)
+class Steps:
+    """Friction steps of the true path (``ideal``) and of the rendered friction
+    (``rendered``), as ``rendering.metrics.accuracy`` counts them."""
+
+    ideal: int
+    rendered: int
+
+
+@dataclass(frozen=True)
+class Throughput:
+    """Speed figures of a row: ``replay_x_realtime`` (seconds of output per second of
+    pipeline compute), ``live_block_p99_us`` (99th percentile of one 5 ms block's compute,
+    us), ``latency_ms`` (longest wait of a touch sample for its block plus the link's
+    jitter buffer, ms)."""
+
+    replay_x_realtime: float
+    live_block_p99_us: float
+    latency_ms: float
+
+
+@dataclass(frozen=True)
+class Row:
+    """One row of the matrix (module docstring): the case, its errors (``rendering.metrics``;
+    None where a metric has nothing to measure), its cost in us per second of output, in
+    all and per stage, its ``throughput`` and the inversion's clamp counts."""
+
+    scene: str
+    period_mm: float | None
+    motion: str
+    touch_hz: float
+    renderer: str
+    output_hz: float
+    inversion: str
+    time_error: float
+    spectral_error: float
+    alignment_error_mm: float | None
+    chatter: int | None
+    steps: Steps
+    cost_us_per_s: float
+    stages_us_per_s: dict[str, float]
+    throughput: Throughput
+    clamps: dict
+
+    @property
+    def config(self) -> str:
+        """The renderer configuration: renderer, output rate, inversion."""
+        return f"{self.renderer} {self.output_hz / 1000:g} kHz {self.inversion}"
+
+    def to_json(self) -> dict:
+        """The row as report.json holds it."""
+        return asdict(self)
+
+    @classmethod
+    def from_json(cls, doc: dict) -> Row:
+        """A row read back from report.json."""
+        return cls(**{**doc, "steps": Steps(**doc["steps"]),
+                      "throughput": Throughput(**doc["throughput"])})
 
 
 def matrix(quick: bool, scenes=SCENES) -> list[Case]:
@@ -216,7 +276,7 @@ class Runner:
                                        noise_mm=TOUCH_NOISE_MM, **sampling)
         return self._traces[key]
 
-    def run(self, case: Case) -> dict:
+    def run(self, case: Case) -> Row:
         """The row for ``case`` (see the module docstring and ``app.commands.report``)."""
         scene = load(case.scene)
         trace = self.trace(case.motion, case.touch_hz)
@@ -254,28 +314,26 @@ class Runner:
         clamps = None
         for o in outs:
             clamps = o.clamps if clamps is None else (clamps.add(o.clamps) or clamps)
-        return {
-            "scene": case.scene, "period_mm": scene.grating_period_mm, "motion": case.motion,
-            "touch_hz": case.touch_hz, "renderer": case.renderer, "output_hz": case.output_hz,
-            "inversion": case.inversion,
-            "time_error": acc.time_error, "spectral_error": acc.spectral_error,
-            "alignment_error_mm": acc.alignment_error_mm, "chatter": acc.chatter,
-            "steps": {"ideal": acc.ideal_steps, "rendered": acc.rendered_steps},
-            "cost_us_per_s": compute / output_s * 1e6,
-            "stages_us_per_s": {k: v / output_s * 1e6 for k, v in stages.items()},
-            "throughput": {
-                "replay_x_realtime": output_s / compute,
-                "live_block_p99_us": float(np.percentile(per_block, 99) * 1e6),
-                "latency_ms": (wait_s + _link_buffer_s()) * 1e3,
-            },
-            "clamps": clamps.as_dict(),
-        }
+        return Row(
+            scene=case.scene, period_mm=scene.grating_period_mm, motion=case.motion,
+            touch_hz=case.touch_hz, renderer=case.renderer, output_hz=case.output_hz,
+            inversion=case.inversion,
+            time_error=acc.time_error, spectral_error=acc.spectral_error,
+            alignment_error_mm=acc.alignment_error_mm, chatter=acc.chatter,
+            steps=Steps(ideal=acc.ideal_steps, rendered=acc.rendered_steps),
+            cost_us_per_s=compute / output_s * 1e6,
+            stages_us_per_s={k: v / output_s * 1e6 for k, v in stages.items()},
+            throughput=Throughput(
+                replay_x_realtime=output_s / compute,
+                live_block_p99_us=float(np.percentile(per_block, 99) * 1e6),
+                latency_ms=(wait_s + _link_buffer_s()) * 1e3),
+            clamps=clamps.as_dict())
 
 
 _RUNNERS: dict = {}
 
 
-def run_case(case: Case, live_s: float = 1.0, motions: dict | None = None) -> dict:
+def run_case(case: Case, live_s: float = 1.0, motions: dict | None = None) -> Row:
     """``Runner(live_s, motions).run(case)`` with one runner per process and settings, so
     that cases fanned out over processes (``app.engine.fanout``) share its caches."""
     key = (live_s, None if motions is None else tuple(sorted(motions)))

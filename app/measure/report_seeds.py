@@ -18,6 +18,7 @@ draw (``app.measure.report_claims``).
 
 from __future__ import annotations
 
+from dataclasses import asdict, dataclass
 from functools import partial
 
 import numpy as np
@@ -40,6 +41,26 @@ DROP = 0.05
 DRAW_METRICS = (*METRICS, "chatter")
 
 
+@dataclass(frozen=True)
+class Draws:
+    """Every renderer on ``n`` draws of each kind: ``values[scene][kind][renderer][metric]``
+    is the metric per draw (alignment error and chatter None where undefined)."""
+
+    n: int
+    kinds: list[str]
+    renderers: list[str]
+    values: dict[str, dict[str, dict[str, dict[str, list]]]]
+
+    def to_json(self) -> dict:
+        """The draws as report.json holds them."""
+        return asdict(self)
+
+    @classmethod
+    def from_json(cls, doc: dict) -> Draws:
+        """Draws read back from report.json."""
+        return cls(**doc)
+
+
 def motions(n: int) -> dict:
     """``make_motion`` arguments (with their ``sampling``) per draw name ``<kind>-<k>``."""
     out = {}
@@ -52,12 +73,9 @@ def motions(n: int) -> dict:
     return out
 
 
-def draws(n: int, scenes=tuple(GRATINGS), workers: int = 1, scheduler: str | None = None) -> dict:
-    """Every renderer on ``n`` draws of each kind, per grating in ``scenes``.
-
-    Returns ``{"n": n, "kinds": [...], "renderers": [...], "values": {scene: {kind:
-    {renderer: {metric: [value per draw]}}}}}`` (alignment error None where undefined).
-    """
+def draws(n: int, scenes=tuple(GRATINGS), workers: int = 1,
+          scheduler: str | None = None) -> Draws:
+    """Every renderer on ``n`` draws of each kind, per grating in ``scenes``."""
     spec = motions(n)
     cases = [Case(scene, f"{kind}-{k}", TOUCH_HZ, renderer, OUTPUT_HZ)
              for scene in scenes for kind in KINDS for k in range(1, n + 1)
@@ -70,20 +88,20 @@ def draws(n: int, scenes=tuple(GRATINGS), workers: int = 1, scheduler: str | Non
         per = values.setdefault(case.scene, {}).setdefault(kind, {}).setdefault(
             case.renderer, {m: [] for m in DRAW_METRICS})
         for m in DRAW_METRICS:
-            per[m].append(row[m])
-    return {"n": n, "kinds": list(KINDS), "renderers": list(RENDERERS.names()), "values": values}
+            per[m].append(getattr(row, m))
+    return Draws(n, list(KINDS), list(RENDERERS.names()), values)
 
 
-def summary_lines(doc: dict) -> list[str]:
+def summary_lines(doc: Draws) -> list[str]:
     """The report.md table of :func:`draws`: each metric's mean (min-max) over the draws."""
-    lines = [f"## Draws (50 Hz touch, 10 kHz output, {doc['n']} draws of each kind)", "",
+    lines = [f"## Draws (50 Hz touch, 10 kHz output, {doc.n} draws of each kind)", "",
              "Every claim above is computed on these draws, paired by draw (see "
              "app/measure/report_seeds.py for how they are made): mean (min-max) of each "
              "metric; chatter: edges felt twice (rendering/metrics.py), total over the "
              "draws, on the 15 and 5 mm gratings.", "",
              "| scene | motion | renderer | time | spectral | alignment mm | chatter |",
              "|---|---|---|---|---|---|---|"]
-    for scene, kinds in doc["values"].items():
+    for scene, kinds in doc.values.items():
         for kind, per in kinds.items():
             for renderer, metrics in per.items():
                 doubled = [v for v in metrics.get("chatter", []) if v is not None]

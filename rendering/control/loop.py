@@ -409,80 +409,107 @@ class ClosedLoop:
         """Fold block ``sent``'s report (None: missed, for the reason ``missed``),
         ``delay`` blocks late, into the state (module docstring, 1, 2, 4); ``now``: the
         output index of the next block to be sent."""
-        cfg = self.config
         n = sent.w_um.size
         fresh = report is not None and report.index0 == sent.index0 and report.lateral_n.size == n
-        if self.mode == "adaptive":  # the model's mu' and Jacobian as the sensor sees them
-            normal = (np.asarray(report.normal_n, dtype=np.float64) if fresh
-                      else np.full(n, self.device.normal_force_n))
-            b, k = state.rls.theta
-            rows = chain_input(sent.target, sent.w_um, cfg.still_um, normal,
-                               np.exp(-b * sent.w_um), k, 1.0 - ASYMPTOTE_MARGIN)
-        else:
-            rows = chain_input(sent.target, sent.w_um, cfg.still_um, _NONE, _NONE, 0.0, 1.0)
-        seen, chain = self.chain.run(rows, state.chain)
+        seen, chain = self.chain.run(self._chain_rows(state, sent, report if fresh else None),
+                                     state.chain)
         if not fresh:
             return self._bad(replace(state, chain=chain), missed, stale=True)
         lat = np.asarray(report.lateral_n, dtype=np.float64)
         nor = np.asarray(report.normal_n, dtype=np.float64)
-        problem = _problem(lat, nor, sent.single and bool(n), cfg)
+        problem = _problem(lat, nor, sent.single and bool(n), self.config)
         if problem:
             return self._bad(replace(state, chain=chain), problem, stale=False)
         good_s = state.good_s + self.block_s
-        fallback = state.fallback and good_s < cfg.recover_s
-        delay = max(state.delay_blocks, delay)
-        changes = dict(chain=chain, since_report_s=0.0, good_s=good_s, fallback=fallback,
-                       delay_blocks=delay)
-        if not sent.single:
-            return replace(state, **changes)  # several fingers: nothing to learn
+        changes = dict(chain=chain, since_report_s=0.0, good_s=good_s,
+                       fallback=state.fallback and good_s < self.config.recover_s,
+                       delay_blocks=max(state.delay_blocks, delay))
+        if sent.single:  # several fingers: nothing to learn
+            changes.update(self._learn_finger(state, sent, lat, nor, seen, changes, now))
+        return replace(state, **changes)
+
+    def _chain_rows(self, state: ControlState, sent: Sent, report: ForceReport | None):
+        """The block statistics' input rows for ``sent``: in adaptive mode the model's mu'
+        and Jacobian as the sensor sees them (at the report's normal force; the device's
+        without a report)."""
+        cfg = self.config
+        if self.mode != "adaptive":
+            return chain_input(sent.target, sent.w_um, cfg.still_um, _NONE, _NONE, 0.0, 1.0)
+        normal = (np.asarray(report.normal_n, dtype=np.float64) if report is not None
+                  else np.full(sent.w_um.size, self.device.normal_force_n))
+        b, k = state.rls.theta
+        return chain_input(sent.target, sent.w_um, cfg.still_um, normal,
+                           np.exp(-b * sent.w_um), k, 1.0 - ASYMPTOTE_MARGIN)
+
+    def _learn_finger(self, state: ControlState, sent: Sent, lat: np.ndarray,
+                      nor: np.ndarray, seen, changes: dict, now: int) -> dict:
+        """What one finger's good report teaches (module docstring, 1-3): the first mu0
+        and the probe, then mu0, the gain and the RLS model; the state's changes."""
+        cfg = self.config
         first_estimate = not math.isfinite(state.mu0)
         ratio, *rest = rest_stats(lat, nor, sent.speed, seen[1], cfg.min_normal_n,
                                   cfg.creep_mm_s, cfg.slide_mm_s, cfg.still_seen,
                                   cfg.min_rest_mu, cfg.min_still // 2, first_estimate)
-        if first_estimate:  # (docstring, 1)
-            early, late, quiet_late = rest  # the halves' medians (nan: too few samples)
-            if math.isfinite(late) and abs(late - early) <= cfg.settled * late:
-                changes["mu0"] = late  # not the fingertip's rise into sliding
-            rising = quiet_late >= cfg.min_still // 2  # sliding on the still plate
-            first = sent.index0 if state.probe_from is None else state.probe_from
-            changes["probe_from"] = first if rising else None
-            return replace(state, **changes)
+        if first_estimate:
+            return self._first_mu0(state, sent, *rest)
         moving, count, m = rest
         if not moving:
-            return replace(state, **changes)  # at rest: nothing to learn
+            return {}  # at rest: nothing to learn
+        out = {}
         mu0 = state.mu0
         if count >= cfg.min_still:  # m: a median, robust to a stop the tracker sees late
             alpha = -math.expm1(-count / (self.rate_hz * cfg.mu0_tau_s))
-            mu0 = m if not math.isfinite(mu0) else mu0 + alpha * (m - mu0)
-            changes["mu0"] = mu0
-        if not math.isfinite(mu0) or fallback:
-            return replace(state, **changes)
+            mu0 = out["mu0"] = mu0 + alpha * (m - mu0)
+        if not math.isfinite(mu0) or changes["fallback"]:
+            return out
         # feedback from the tracker's first sight of motion: at a stroke's start it lags
         # the finger by tens of ms; a finger that stuck reads friction near 0 (min_mu)
         asked, g, cut, jac, resid = feedback_stats(
             ratio, mu0, nor, sent.speed, seen, sent.cut, cfg.min_normal_n, cfg.creep_mm_s,
             cfg.slide_mm_s, cfg.min_mu, cfg.min_reduction, cfg.min_still, cfg.decimate)
         if asked >= cfg.min_still and sent.index0 >= state.fed_from:
-            # g: median of per-sample delivered/asked, robust to the few samples of a stop
-            error = math.log(min(max(g, 0.25), 4.0))
-            # the first measurement starts the gain (module docstring, 2)
-            first = state.updates == 0 and self.first_step > 0
-            speed = float(np.mean(sent.speed))
-            step = (self.first_step * (sent.log_c - error - self._log_gain(state, speed))
-                    if first else -self.ki_by_delay[delay] * error)
-            if step > 0 and cut > 0.1 * n:
-                step = 0.0  # anti-windup: the limit already cuts what is asked
-            p = 0.0 if first else speed / cfg.speed_ref_mm_s  # the first step: log_c alone
-            lim = cfg.log_c_max
-            changes["log_c"] = min(max(state.log_c + step / (1.0 + p * p), -lim), lim)
-            changes["log_c_slope"] = min(max(state.log_c_slope + step * p / (1.0 + p * p),
-                                             -lim), lim)
-            changes["updates"] = state.updates + 1
-            if first and step:
-                changes["fed_from"] = now  # blocks on their way were asked with the old gain
+            out.update(self._gain_step(state, sent, g, cut, changes["delay_blocks"], now))
         if self.mode == "adaptive":  # one RLS step (module docstring, 3)
-            changes["rls"] = cfg.rls.update(state.rls, jac, resid)
-        return replace(state, **changes)
+            out["rls"] = cfg.rls.update(state.rls, jac, resid)
+        return out
+
+    def _first_mu0(self, state: ControlState, sent: Sent, early: float, late: float,
+                   quiet_late: int) -> dict:
+        """The first estimate of mu0 (module docstring, 1): the later half's median once
+        it agrees with the earlier half's (``early``, ``late``: nan with too few samples;
+        not the fingertip's rise into sliding), and where the probe started when the
+        finger slides on the still plate (``quiet_late`` still samples)."""
+        cfg = self.config
+        out = {}
+        if math.isfinite(late) and abs(late - early) <= cfg.settled * late:
+            out["mu0"] = late
+        rising = quiet_late >= cfg.min_still // 2
+        first = sent.index0 if state.probe_from is None else state.probe_from
+        out["probe_from"] = first if rising else None
+        return out
+
+    def _gain_step(self, state: ControlState, sent: Sent, g: float, cut: int, delay: int,
+                   now: int) -> dict:
+        """One step of the loop's log gain (module docstring, 2) from ``g``, the median of
+        per-sample delivered / asked (robust to the few samples of a stop); ``cut``:
+        samples the amplitude limit cut; ``delay``: the largest report delay (blocks)."""
+        cfg = self.config
+        error = math.log(min(max(g, 0.25), 4.0))
+        # the first measurement starts the gain (module docstring, 2)
+        first = state.updates == 0 and self.first_step > 0
+        speed = float(np.mean(sent.speed))
+        step = (self.first_step * (sent.log_c - error - self._log_gain(state, speed))
+                if first else -self.ki_by_delay[delay] * error)
+        if step > 0 and cut > 0.1 * sent.w_um.size:
+            step = 0.0  # anti-windup: the limit already cuts what is asked
+        p = 0.0 if first else speed / cfg.speed_ref_mm_s  # the first step: log_c alone
+        lim = cfg.log_c_max
+        out = {"log_c": min(max(state.log_c + step / (1.0 + p * p), -lim), lim),
+               "log_c_slope": min(max(state.log_c_slope + step * p / (1.0 + p * p), -lim), lim),
+               "updates": state.updates + 1}
+        if first and step:
+            out["fed_from"] = now  # blocks on their way were asked with the old gain
+        return out
 
     def _bad(self, state: ControlState, problem: str, stale: bool) -> ControlState:
         since = state.since_report_s + self.block_s if stale else state.since_report_s

@@ -1,0 +1,207 @@
+"""``frictex report``'s ``report.md``: the document (``app.measure.report_doc.Report``) in
+words and tables, one function per section. A table with nothing to show (the scenes
+chosen with ``--scenes`` have no rows for it) is replaced by a sentence saying so.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from frictex.app.measure.report_claims import GRATINGS, METRICS, NOT_CLAIMED, OUTPUT_HZ
+from frictex.app.measure.report_doc import Report, grating_rows, mean_defined
+from frictex.app.measure.report_matrix import Row
+
+PLATE_LOOP_HZ = 400.0  # seed 003, Fig. 3b: the amplitude loop's -3 dB bandwidth
+
+
+def table(header, lines, empty: str) -> list[str]:
+    """A markdown table, or the sentence ``empty`` where it has no lines."""
+    lines = list(lines)
+    if not lines:
+        return [f"None in this report: {empty}."]
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    return out + ["| " + " | ".join(str(c) for c in line) + " |" for line in lines]
+
+
+def _fmt(value) -> str:
+    """Three decimals; '-' where the metric is undefined."""
+    return "-" if value is None or np.isnan(value) else f"{value:.3f}"
+
+
+def _by(rows: list[Row], key: str, values, metric: str) -> list[str]:
+    """The mean of ``metric`` over the rows whose ``key`` is each of ``values``."""
+    return [_fmt(mean_defined(getattr(r, metric) for r in rows if getattr(r, key) == v))
+            for v in values]
+
+
+def _base(rows: list[Row]) -> list[Row]:
+    """The rows at the reference output rate with exact inversion."""
+    return [r for r in rows if r.output_hz == OUTPUT_HZ and r.inversion == "exact"]
+
+
+def _intro(doc: Report) -> list[str]:
+    return ["# frictex report: speed against error", "",
+            f"{'Quick' if doc.quick else 'Full'} matrix, {len(doc.rows)} rows. "
+            "Metrics (rendering/metrics.py): time error = RMS(mu' - mu'*) / std(mu'*); spectral "
+            "error = distance of third-octave short-time spectra, 10 Hz - 1 kHz (phase "
+            "ignored); alignment error = mean distance (mm of path) between matching "
+            "friction steps, both ways. Time and alignment matter for objects and coarse "
+            "gratings (P > ~5 mm), the spectrum for fine textures (seed 003 section 6).", ""]
+
+
+def _claims(doc: Report) -> list[str]:
+    lines = ["## Claims", "",
+             f"Each claim compares renderers on the same {doc.draws.n} draws of each "
+             "motion (paired by draw): the mean difference and its 95 % interval. A claim "
+             "**holds** only where the interval excludes a loss; otherwise it is **not "
+             "shown** (the draws do not settle it). " + NOT_CLAIMED
+             + (" The groups 'closed loop: ...' compare friction control modes on the same "
+                "simulated fingers, paired by finger (section Closed-loop friction)."
+                if doc.closed_loop is not None else ""), ""]
+    groups: dict[str, list] = {}
+    for c in doc.claims:
+        groups.setdefault(c.group, []).append(c)
+    if not groups:
+        lines += ["None in this report: no claim covers the scenes chosen.", ""]
+    for group, cs in groups.items():
+        lines.append(f"**{group}**: {sum(c.passed for c in cs)} of {len(cs)} hold.")
+        lines += [f"- {'holds' if c.passed else 'not shown'}: {c.scene}, {c.motion}, "
+                  f"{c.metric}: {c.text}" for c in cs]
+        lines.append("")
+    return lines
+
+
+def _gratings(doc: Report) -> list[str]:
+    lines = ["## Gratings at 50 Hz touch, 10 kHz output", ""]
+    lines += table(["scene", "motion", "renderer", "time", "spectral", "alignment mm", "cost us/s"],
+                   [(r.scene, r.motion, r.renderer, f"{r.time_error:.3f}",
+                     f"{r.spectral_error:.3f}", _fmt(r.alignment_error_mm),
+                     f"{r.cost_us_per_s:.0f}") for r in _base(grating_rows(doc.rows))],
+                   "no seed 003 grating among the scenes chosen")
+    if doc.draws.values:
+        from frictex.app.measure.report_seeds import summary_lines as draw_lines
+        lines += ["", *draw_lines(doc.draws)[:-1]]
+    if doc.real is not None:
+        from frictex.app.measure.report_real import summary_lines as real_lines
+        lines += ["", *real_lines(doc.real)[:-1]]
+    return lines
+
+
+def _other_scenes(doc: Report) -> list[str]:
+    other = [r for r in _base(doc.rows) if r.scene not in GRATINGS]
+    return ["", "## Other scenes", ""] + table(
+        ["scene", "motion", "touch Hz", "renderer", "time", "spectral", "alignment mm",
+         "cost us/s"],
+        [(r.scene, r.motion, f"{r.touch_hz:g}", r.renderer, f"{r.time_error:.3f}",
+          f"{r.spectral_error:.3f}", _fmt(r.alignment_error_mm), f"{r.cost_us_per_s:.0f}")
+         for r in other], "only gratings among the scenes chosen")
+
+
+def _throughput(doc: Report) -> list[str]:
+    head = doc.headline
+    lines = ["", "## Throughput and latency (composed scene, one finger, 10 kHz)", ""]
+    lines += table(["renderer/motion", "replay x real time, compute only",
+                    "live 5 ms block p99 us", "latency ms", "cost us/s"],
+                   [(k, f"{v.replay_x_realtime:.0f}", f"{v.live_block_p99_us:.0f}",
+                     f"{v.latency_ms:.1f}", f"{v.cost_us_per_s:.0f}") for k, v in head.items()],
+                   "the composed scene is not among the scenes chosen")
+    if head:
+        stages = next(iter(head.values())).stages_us_per_s
+        lines += ["", "Per-stage cost (us per second of output) for the first of these: "
+                  + ", ".join(f"{k} {v:.0f}" for k, v in stages.items())
+                  + ". Replay counts the pipeline stages; link encode is what a live link adds."]
+    return lines + _end_to_end(doc.end_to_end) + _modal_replay(doc)
+
+
+def _end_to_end(e2e: dict | None) -> list[str]:
+    if not e2e:
+        return []
+    done = {fmt: got for fmt, got in e2e["formats"].items() if got is not None}
+    failed = sorted(set(e2e["formats"]) - set(done))
+    return ["", f"End to end ({e2e['scene']}, a {e2e['duration_s']:g} s human-like trace, "
+            "each a fresh `frictex replay` process: reading the trace, computing, writing "
+            "every output): " + "; ".join(
+                f"{fmt} {got['x_realtime_end_to_end']:.0f}x real time (compute only "
+                f"{got['x_realtime_compute']:.0f}x; whole process with start-up "
+                f"{e2e['duration_s'] / got['process_wall_s']:.0f}x, peak "
+                f"{got['peak_mib']:.0f} MiB)" for fmt, got in done.items())
+            + (f"; failed: {', '.join(failed)}" if failed else "") + "."]
+
+
+def _modal_replay(doc: Report) -> list[str]:
+    modal = doc.modal_replay
+    return ["", f"Two fingers with modal actuation ({modal['scene']}, trace {modal['trace']}, "
+            f"{modal['output_hz'] / 1e3:g} kHz): replay {modal['replay_x_realtime']:.0f}x real "
+            "time, compute only; per stage (us per second of output): "
+            + ", ".join(f"{k} {v:.0f}" for k, v in modal["stages_us_per_s"].items()) + ".",
+            "", "Targets: replay >= 1000x real time, live p99 <= 500 us (10 % of a 5 ms block); "
+            "two fingers with modal actuation >= 200x real time in replay. "
+            "Latency = longest wait of a touch sample for its block (<= one 5 ms block) plus the "
+            "link's 20 ms jitter buffer (device.link.host.TARGET_S). These figures are measured on "
+            f"the machine that wrote the report ({doc.settings.cpu_count} CPUs) and vary "
+            "with its load; no test asserts them.", ""]
+
+
+def _physical_limits(doc: Report) -> list[str]:
+    lines = ["## Physical limits", ""]
+    hybrid = [r for r in grating_rows(doc.rows) if r.renderer == "hybrid" and r.motion == "human"
+              and r.inversion == "exact"]
+    rates = sorted({r.output_hz for r in hybrid})
+    if rates:
+        lines += [f"Output rate against the plate's {PLATE_LOOP_HZ:g} Hz amplitude loop (seed "
+                  "003, Fig. 3b): the plate follows nothing above ~400 Hz, so an output rate a "
+                  "few times that (2 kHz) already carries all it can reproduce; higher rates "
+                  "only place steps more finely in time (1 / rate: 0.5 ms at 2 kHz, 0.05 ms at 20 kHz). "
+                  "Hybrid, gratings, human motion, mean over gratings:", ""]
+        lines += table(["metric", *(f"{h / 1000:g} kHz" for h in rates)],
+                       [(m, *_by(hybrid, "output_hz", rates, m)) for m in METRICS], "")
+        lines.append("")
+    held = [r for r in _base(doc.rows) if r.scene == "grating-0.6mm" and r.renderer == "sho-held"]
+    touch = sorted({r.touch_hz for r in held})
+    lines += ["Touch rate against texture frequency: a grating of period P under a finger at v "
+              "is a signal at v / P (0.6 mm at 40 mm/s: 67 Hz); position-map rendering (SHO) "
+              "can only render up to half the touch rate (25 Hz at 50 Hz, seed 003 section "
+              "4.4.1), above which it aliases. sho-held on the 0.6 mm grating, spectral error by "
+              "touch rate (mean over motions):", ""]
+    return lines + table(["touch rate", *(f"{t:g} Hz" for t in touch)],
+                         [("spectral error", *_by(held, "touch_hz", touch, "spectral_error"))]
+                         if touch else [], "the 0.6 mm grating is not among the scenes chosen")
+
+
+def _inversion(doc: Report) -> list[str]:
+    inv = [r for r in grating_rows(doc.rows) if r.motion == "human" and r.output_hz == OUTPUT_HZ]
+    names = sorted({r.inversion for r in inv})
+    lines = ["", "## Inversion", "",
+             "Exact (seed 003 eq 3, closed form) against the table built at scene load "
+             "(rendering/inversion_lut.py); the table's amplitude error is reported in "
+             "settings.lut_max_error_um. Mean over the gratings, human motion, 50 Hz, 10 kHz:", ""]
+    cost = [("inversion us/s", *[
+        f"{np.mean([r.stages_us_per_s['inversion'] for r in inv if r.inversion == n]):.0f}"
+        for n in names])]
+    figures = [(m, *_by(inv, "inversion", names, m)) for m in (*METRICS, "cost_us_per_s")]
+    return lines + table(["", *names], figures + cost if names else [],
+                         "no seed 003 grating among the scenes chosen")
+
+
+def _modal_inversion(doc: Report) -> list[str]:
+    return ["", "## Modal inversion (two fingers, seed 000 beam)", "",
+            "Each method of device/actuation/modal.py on seed 000's beam (modes 16, 17; actuator "
+            "limit 0.75 um), two fingers at random and near-singular (within 0.5 mm) "
+            "positions; the default, regularised, is the one that stays continuous across "
+            "a singular locus (app/measure/bench_modal.py says how each figure is made):", ""
+            ] + table(["figure", "value", "unit"],
+                      [(f["label"], f"{f['value']:.4g}", f["unit"]) for f in doc.modal_inversion],
+                      "no modal inversion figures")
+
+
+def write_markdown(doc: Report, path: Path, plots: list[str]) -> None:
+    """Write report.md: the claims, then each section's tables, then the plots."""
+    lines = (_intro(doc) + _claims(doc) + _gratings(doc) + _other_scenes(doc)
+             + _throughput(doc) + _physical_limits(doc) + _inversion(doc) + _modal_inversion(doc))
+    if doc.closed_loop is not None:
+        from frictex.app.measure.report_closed_loop import markdown as loop_lines
+        lines += ["", *loop_lines(doc.closed_loop)[:-1]]
+    lines += ["", "## Plots", ""] + [f"![{p}]({p})" for p in plots]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
