@@ -12,9 +12,10 @@ packages add theirs through an entry-point group:
     wobble = "frictex_wobble:WobbleRenderer"
 
 The group's entry points are read (not imported) the first time the registry is asked
-for a name or its names, and read again whenever a name is not found (a package
-installed since); an entry point's object is imported the first time its name is looked
-up, so listing the names imports no plugin. A registry whose names belong to a lower
+for a name or its names (the installed metadata once per process for every registry),
+and read again whenever a name is not found (a package installed since); an entry
+point's object is imported the first time its name is looked up, so listing the names
+imports no plugin. A registry whose names belong to a lower
 layer than its implementations (the renderers, which texture files name) gets frictex's
 own entries from frictex's own entry points, as a plugin would: the lower layer then lists
 them without importing the higher one.
@@ -49,6 +50,27 @@ class UnknownName(InputError, KeyError):
 class PluginError(FrictexError, RuntimeError):
     """An entry point of another package that cannot be loaded, or clashes with a name
     already registered."""
+
+
+_INSTALLED = None  # importlib.metadata's entry points of every installed distribution
+_GROUPS: dict[str, list] = {}  # those of each group asked for, from _INSTALLED
+
+
+def _entry_points(group: str, fresh: bool) -> list:
+    """The installed entry points of ``group``. Reading them costs about 20 ms (every
+    installed distribution's metadata), so they are read once for every registry, and
+    again only when ``fresh`` (a name not found: a package installed since)."""
+    global _INSTALLED
+    if _INSTALLED is None or fresh:
+        import importlib
+        from importlib.metadata import entry_points
+        if _INSTALLED is not None:
+            importlib.invalidate_caches()
+        _INSTALLED = entry_points()  # 3.11: SelectableGroups, 3.12: EntryPoints; both select
+        _GROUPS.clear()
+    if group not in _GROUPS:
+        _GROUPS[group] = list(_INSTALLED.select(group=group))
+    return _GROUPS[group]
 
 
 def _distribution(point) -> str:
@@ -106,15 +128,13 @@ class Registry(Generic[T]):
         self._entries.setdefault(name, entry)
         self._origin.setdefault(name, origin)
 
-    def scan(self) -> None:
+    def scan(self, fresh: bool = False) -> None:
         """Read the group's entry points (without importing them): frictex's own first,
-        then the other distributions' by name. A name already known from the same entry
-        point is kept; another entry point under a known name is a :class:`PluginError`."""
-        import importlib
-        from importlib.metadata import entry_points
-        importlib.invalidate_caches()  # a package installed since the last scan
+        then the other distributions' by name; ``fresh``: read the installed metadata
+        again. A name already known from the same entry point is kept; another entry
+        point under a known name is a :class:`PluginError`."""
         self._scanned = True
-        points = sorted(entry_points(group=self.group),
+        points = sorted(_entry_points(self.group, fresh),
                         key=lambda p: (_distribution(p) != OWN_DISTRIBUTION, _distribution(p)))
         for point in points:
             dist = _distribution(point)
@@ -137,8 +157,10 @@ class Registry(Generic[T]):
 
     def get(self, name: str) -> T:
         """The entry registered under ``name``; :class:`UnknownName` lists the known."""
-        if not isinstance(name, str) or name not in self._entries or not self._scanned:
+        if not self._scanned:
             self.scan()
+        if not isinstance(name, str) or name not in self._entries:
+            self.scan(fresh=True)
         if isinstance(name, str) and name in self._entries:
             return self._load(name)
         raise UnknownName(f"unknown {self.kind} {name!r}; expected one of "
@@ -159,8 +181,10 @@ class Registry(Generic[T]):
     def __contains__(self, name: object) -> bool:
         if not isinstance(name, str):
             return False
-        if name not in self._entries:
+        if not self._scanned:
             self.scan()
+        if name not in self._entries:
+            self.scan(fresh=True)
         return name in self._entries
 
     def __iter__(self) -> Iterator[str]:

@@ -217,6 +217,7 @@ def test_a_broken_plugin_names_itself(tmp_path):
     sys.path.insert(0, str(tmp_path))
     try:
         registry: Registry = Registry("gadget", "frictex.test-broken")
+        assert "bad" in registry  # installed after the metadata was first read: read again
         assert registry.names() == ("bad",)  # listed without importing it
         with pytest.raises(PluginError, match=r"gadget 'bad' of frictex-test-broken "
                                               r"\(no_such_module_x:Thing\) cannot be loaded: "
