@@ -117,3 +117,34 @@ def test_a_failing_write_raises_and_leaves_nothing(tmp_path, monkeypatch):
 def test_unknown_format_is_refused(tmp_path):
     with pytest.raises(ValueError, match="output format 'xlsx'"):
         TableWriter(tmp_path, "friction", COLUMNS, "xlsx")
+
+
+@pytest.mark.parametrize("fmt", ["csv", "npz", "parquet"])
+def test_a_table_in_memory_is_what_the_file_reads_back_as(tmp_path, monkeypatch, fmt):
+    """MemoryTable (frictex.replay without a folder) holds the rows a writer's file reads
+    back as (read_table): the same columns, types and values (CSV: to its decimals)."""
+    monkeypatch.setattr(tables, "BATCH_ROWS", 3000)
+    writer = TableWriter(tmp_path, "friction", COLUMNS, fmt)
+    memory = tables.open_table(None, "friction", COLUMNS, tables.MEMORY)
+    for chunk, _ in chunks(10_000):
+        writer.write(chunk)
+        memory.write(chunk)
+    memory.commit()
+    got, want = tables.read_table(writer.commit()), memory.table
+    assert memory.path is None and want.num_rows == 10_000
+    assert got.column_names == want.column_names == [name for name, _, _ in COLUMNS]
+    assert [f.nullable for f in want.schema] == [False] * len(COLUMNS)
+    for (name, dtype, form), a, b in zip(COLUMNS, got.columns, want.columns):
+        a, b = a.to_numpy(), b.to_numpy()
+        assert a.dtype == b.dtype == dtype
+        if fmt == "csv" and form != "%d":
+            np.testing.assert_allclose(a, b, rtol=0, atol=0.51 * 10.0 ** -int(form[2:-1]))
+        else:
+            np.testing.assert_array_equal(a, b)
+
+
+def test_an_empty_table_in_memory_has_its_columns():
+    memory = tables.MemoryTable(COLUMNS)
+    memory.commit()
+    assert memory.table.num_rows == 0
+    assert [f.type.to_pandas_dtype() for f in memory.table.schema] == [d for _, d, _ in COLUMNS]

@@ -15,9 +15,9 @@ is aborted and the error propagates: a run writes complete outputs or none.
 
 Ctrl-C. A SIGINT that arrives inside a compiled (numba) kernel and raises there makes the
 kernel return a value with an exception set, which Python reports as a 30-line
-``SystemError``. :func:`deferred_interrupts` holds the first Ctrl-C as a flag that the
-loop turns into ``KeyboardInterrupt`` between steps (``check``), where nothing compiled
-runs; a second Ctrl-C raises at once.
+``SystemError`` (3 of 15 Ctrl-Cs of a replay did). :func:`deferred_interrupts` holds the
+first Ctrl-C (and SIGTERM, SIGHUP) as a flag that the loop turns into an exception between
+steps (``check``), where nothing compiled runs; a second one raises at once.
 """
 
 from __future__ import annotations
@@ -63,31 +63,41 @@ class RunTimer:
         self.seconds = {"read": 0.0, "compute": 0.0, "write": 0.0, "commit": 0.0}
 
 
+#: signals held by :func:`deferred_interrupts`: Ctrl-C, and what ``timeout`` or a closed
+#: terminal sends
+HELD_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+
 @contextmanager
 def deferred_interrupts():
-    """Within: the first Ctrl-C (SIGINT) is held until the ``check()`` this yields is
-    called, which raises ``KeyboardInterrupt`` then (see the module docstring); a second
-    Ctrl-C raises at once. Outside the main thread (where Python runs no signal handler)
-    ``check`` does nothing."""
+    """Within: the first SIGINT (Ctrl-C), SIGTERM or SIGHUP is held until the ``check()``
+    this yields is called, which raises then (see the module docstring): Ctrl-C as
+    ``KeyboardInterrupt``, the others as ``SystemExit(128 + signal)``, their default exit
+    status, so that the run is aborted cleanly (its sinks and staged files removed). A
+    second signal raises at once. Outside the main thread (where Python runs no signal
+    handler) ``check`` does nothing."""
     if threading.current_thread() is not threading.main_thread():
         yield lambda: None
         return
-    held = []
-
-    def hold(signum, frame):
-        if held:
-            raise KeyboardInterrupt
-        held.append(signum)
+    held: list[int] = []
 
     def check() -> None:
         if held:
-            raise KeyboardInterrupt
+            if held[0] == signal.SIGINT:
+                raise KeyboardInterrupt
+            raise SystemExit(128 + held[0])
 
-    previous = signal.signal(signal.SIGINT, hold)
+    def hold(signum, frame):
+        held.append(signum)
+        if len(held) > 1:
+            check()
+
+    previous = {sig: signal.signal(sig, hold) for sig in HELD_SIGNALS}
     try:
         yield check
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
     check()
 
 

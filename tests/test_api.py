@@ -1,0 +1,114 @@
+"""The public API, frictex: cheap to import, typed results equal to what the command writes."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import frictex
+from frictex.app.commands.cli import main
+
+SCENE, TRACE = "grating-5mm", "swipe-40mms-50hz"
+
+
+def run_python(code: str, cwd) -> str:
+    done = subprocess.run([sys.executable, "-c", code], cwd=cwd, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+def test_import_frictex_loads_no_numeric_library(tmp_path):
+    out = run_python("import sys, frictex; print(sorted(m for m in ('numpy', 'numba', 'scipy', "
+                     "'pyarrow', 'frictex.app') if m in sys.modules))", tmp_path)
+    assert out.strip() == "[]"
+
+
+def test_the_issue_s_one_line_works_as_written(tmp_path):
+    out = run_python("import frictex; r = frictex.replay('grating-5mm', 'swipe-40mms-50hz'); "
+                     "print(r.friction.num_rows, r.summary.to_dict()['timings'])", tmp_path)
+    rows, timings = out.split(" ", 1)
+    assert int(rows) > 0
+    assert "'x_realtime_end_to_end': " in timings and "'stages_s': {" in timings
+    assert list(tmp_path.iterdir()) == []  # in memory: nothing written
+
+
+def test_every_public_name_resolves_and_is_documented():
+    for name in frictex.__all__:
+        value = getattr(frictex, name)
+        assert value.__doc__, name
+    assert "replay" in dir(frictex)
+    with pytest.raises(AttributeError, match="no attribute 'nope'"):
+        frictex.nope  # noqa: B018
+
+
+@pytest.mark.parametrize("scene, trace", [(SCENE, TRACE), ("keyclick-ring", "keyclick-press-100hz")])
+def test_the_typed_summary_is_summary_json_exactly(tmp_path, scene, trace):
+    r = frictex.replay(scene, trace, out=tmp_path / "o", format="npz")
+    text = (tmp_path / "o" / "summary.json").read_text(encoding="utf-8")
+    assert json.dumps(r.summary.to_dict(), indent=2) + "\n" == text
+    assert isinstance(r.summary, frictex.Summary) and isinstance(r.summary.clamps, frictex.Clamps)
+    assert r.summary.output.files == ("commands.npz", "friction.npz")
+    assert r.summary.clamps.total == sum(json.loads(text)["clamps"].values())
+    assert frictex.Summary.from_dict(json.loads(text)) == r.summary
+
+
+def test_tables_in_memory_are_the_command_s_files(tmp_path, capsys):
+    """In memory, the tables hold exactly what `frictex replay --format parquet` writes,
+    and what a Replay with a folder reads back."""
+    memory = frictex.replay(SCENE, TRACE)
+    assert memory.out is None and memory.summary.output.format == "memory"
+    assert memory.summary.output.files == ()
+    assert main(["replay", SCENE, TRACE, "--out", str(tmp_path / "cli"), "--format", "parquet",
+                 "--quiet"]) == 0
+    on_disk = frictex.replay(SCENE, TRACE, out=tmp_path / "api", format="parquet")
+    import pyarrow.parquet as pq
+    for stem in ("friction", "commands"):
+        written = pq.read_table(tmp_path / "cli" / f"{stem}.parquet")
+        assert getattr(memory, stem).equals(written)
+        assert getattr(on_disk, stem).equals(written)
+
+
+def test_a_pipeline_runs_a_whole_trace_as_a_replay_does():
+    scene = frictex.load_scene(SCENE)
+    trace = frictex.read_trace(TRACE)
+    out = frictex.build_pipeline(scene).process(trace)
+    r = frictex.replay(scene, trace)
+    assert out.commands_um.shape == (r.summary.output.samples, 1)
+    np.testing.assert_array_equal(out.commands_um[:, 0], r.commands.column("ch0_um").to_numpy())
+    np.testing.assert_array_equal(out.t_s, r.commands.column("t_s").to_numpy())
+
+
+def test_synth_trace_makes_what_the_command_writes(tmp_path, capsys):
+    assert main(["trace", "synth", "circle", "--rate", "60", "--duration", "1.5", "--noise",
+                 "0.05", "--seed", "3", "-o", str(tmp_path / "c.csv")]) == 0
+    made = frictex.synth_trace("circle", rate_hz=60.0, duration_s=1.5, noise_mm=0.05, seed=3)
+    read = frictex.read_trace(tmp_path / "c.csv")
+    for name in ("t_s", "finger", "x_mm", "y_mm", "force_n", "event"):
+        np.testing.assert_array_equal(getattr(made, name), getattr(read, name))
+    press = frictex.synth_trace("press", peaks_n=(1.0,))
+    assert press.force_n.max() > 0.8 and np.ptp(press.x_mm) == 0.0
+
+
+def test_pandas_opens_the_tables():
+    pd = pytest.importorskip("pandas")
+    frame = frictex.replay(SCENE, TRACE).friction.to_pandas()
+    assert isinstance(frame, pd.DataFrame) and list(frame.columns)[:2] == ["t_s", "finger"]
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda: frictex.replay(SCENE, TRACE, format="csv"), "kept in memory unless out"),
+    (lambda: frictex.replay(SCENE, TRACE, out="o", format="xlsx"), "expected one of csv"),
+    (lambda: frictex.synth_trace("zigzag"), "expected one of swipe, .*press"),
+    (lambda: frictex.load_scene("no-such-scene"), "no-such-scene"),
+    (lambda: frictex.read_trace("no-such-trace"), "no-such-trace"),
+    (lambda: frictex.build_pipeline(frictex.load_scene(SCENE)).process(
+        frictex.synth_trace("swipe").slice(0, 0)), "no samples"),
+])
+def test_bad_input_is_an_input_error(tmp_path, monkeypatch, call, message):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(frictex.InputError, match=message):
+        call()
+    assert list(tmp_path.iterdir()) == []

@@ -1,0 +1,206 @@
+"""A replay's output folder holds a whole run, the previous or the new, whatever ends it.
+
+Replays are killed (SIGKILL, SIGTERM, SIGINT) at random moments of their run, seeded; after
+each the folder must hold exactly the outputs of the previous run or of the new one, and
+the next run removes whatever the killed one left beside it. Ctrl-C ends a run with one
+line and exit 130 (never numba's SystemError). Then the refusals: disk room (frames
+counted) on a small tmpfs, a folder it could not replace whole.
+"""
+
+import json
+import os
+import random
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from frictex.app.commands.cli import main
+
+SCENE = "grating-5mm"
+TRACES = ("swipe-40mms-50hz", "circle-30mms-60hz")  # the two runs that replace each other
+KILLS = 20
+LEFTOVERS = "removed the leftovers of"
+
+
+def replay(out: Path, trace: str) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "frictex", "replay", SCENE, trace, "--out",
+                             str(out), "--quiet"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+
+
+def contents(folder: Path) -> dict:
+    """The folder's files (paths under it -> bytes), summary.json without its timings and
+    the warning about leftovers (which differ between two runs of the same inputs)."""
+    found = {}
+    for path in sorted(folder.rglob("*")):
+        if path.is_file():
+            found[str(path.relative_to(folder))] = path.read_bytes()
+    if "summary.json" in found:
+        doc = json.loads(found["summary.json"])
+        doc.pop("timings", None)
+        doc["warnings"] = [w for w in doc.get("warnings", []) if not w.startswith(LEFTOVERS)]
+        found["summary.json"] = doc
+    return found
+
+
+def beside(folder: Path) -> list[str]:
+    """What is beside ``folder`` in its parent (a killed run's staging folder, if any)."""
+    return sorted(p.name for p in folder.parent.iterdir() if p.name != folder.name)
+
+
+@pytest.fixture(scope="module")
+def references(tmp_path_factory):
+    """Each trace's complete run, and the wall time of one (s)."""
+    found, wall = {}, 0.0
+    for trace in TRACES:
+        out = tmp_path_factory.mktemp("ref") / "out"
+        t0 = time.monotonic()
+        run = replay(out, trace)
+        assert run.wait(timeout=300) == 0, run.stderr.read()
+        wall = max(wall, time.monotonic() - t0)
+        found[trace] = contents(out)
+    return found, wall
+
+
+def test_a_killed_run_leaves_the_previous_run_or_the_new_one(tmp_path, references):
+    runs, wall = references
+    out = tmp_path / "out"
+    first = replay(out, TRACES[0])
+    assert first.wait(timeout=300) == 0
+    rng = random.Random(7)
+    signals = (signal.SIGKILL, signal.SIGTERM, signal.SIGINT)
+    held, mid_write = TRACES[0], 0
+    for i in range(KILLS):
+        trace = TRACES[(TRACES.index(held) + 1) % 2]
+        run = replay(out, trace)
+        staging = out.with_name(f".{out.name}.frictex-staging.{run.pid}")
+        if i % 2:  # any moment of the run, start-up included
+            time.sleep(rng.uniform(0.0, wall * 1.2))
+        else:  # a moment after it began writing into its staging folder
+            while not staging.exists() and run.poll() is None:
+                time.sleep(0.005)
+            time.sleep(rng.uniform(0.0, 0.3))
+        mid_write += staging.exists()
+        sig = signals[i % 3]
+        run.send_signal(sig)
+        code = run.wait(timeout=120)
+        err = run.stderr.read()
+        assert "SystemError" not in err
+        if sig == signal.SIGINT and code == 130:
+            assert err.strip().splitlines() == ["frictex: interrupted"]
+        now = contents(out)
+        assert now in (runs[held], runs[trace]), f"kill {i} ({sig.name}) left a mix"
+        held = trace if now == runs[trace] else held
+    assert mid_write > 0  # some kills came while a run was writing (else this proved less)
+    # the next run removes what killed runs left beside the folder, and says so
+    left = beside(out)
+    final = replay(out, TRACES[0])
+    assert final.wait(timeout=300) == 0
+    assert beside(out) == []
+    assert contents(out) == runs[TRACES[0]]
+    warned = [w for w in json.loads((out / "summary.json").read_text())["warnings"]
+              if w.startswith(LEFTOVERS)]
+    assert bool(warned) == bool(left)
+
+
+def test_frames_of_an_earlier_run_go_with_it(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["replay", SCENE, TRACES[0], "--out", str(out), "--quiet", "--frames", "2"]) == 0
+    assert list((out / "frames").glob("frame_*.png"))
+    assert main(["replay", SCENE, TRACES[0], "--out", str(out), "--quiet"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["commands.csv", "friction.csv",
+                                                     "summary.json"]
+
+
+def test_a_folder_a_run_cannot_replace_whole_is_refused_untouched(tmp_path, monkeypatch, capsys):
+    out = tmp_path / "out"
+    (out / "notes").mkdir(parents=True)
+    (out / "mine.txt").write_text("kept")
+    assert main(["replay", SCENE, TRACES[0], "--out", str(out), "--quiet"]) == 2
+    assert "holds the folder 'notes'" in capsys.readouterr().err
+    assert sorted(p.name for p in out.iterdir()) == ["mine.txt", "notes"]
+    (out / "notes").rmdir()
+    assert main(["replay", SCENE, TRACES[0], "--out", str(out), "--quiet"]) == 0
+    assert (out / "mine.txt").read_text() == "kept"  # not a run's: carried over
+    monkeypatch.chdir(out)
+    assert main(["replay", SCENE, TRACES[0], "--out", ".", "--quiet"]) == 2
+    assert "holds the current folder" in capsys.readouterr().err
+    assert beside(out) == []
+
+
+@pytest.fixture
+def small_disk(tmp_path):
+    """A 5 MB tmpfs (root only)."""
+    if os.geteuid() != 0:
+        pytest.skip("mounting a small tmpfs needs root")
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=5m", "tmpfs", str(disk)],
+                          capture_output=True, text=True)
+    if done.returncode:
+        pytest.skip(f"cannot mount a tmpfs here: {done.stderr.strip()}")
+    yield disk
+    subprocess.run(["umount", str(disk)], check=True)
+
+
+def fill(disk: Path) -> None:
+    """Fill ``disk`` to the last byte."""
+    for name, size in (("filler", 65536), ("filler-tail", 1)):
+        fd = os.open(disk / name, os.O_WRONLY | os.O_CREAT)
+        try:
+            while os.write(fd, b"\0" * size):
+                pass
+        except OSError:
+            pass
+        finally:
+            os.close(fd)
+
+
+def test_a_replay_refused_for_room_touches_nothing(small_disk, capsys):
+    out = small_disk / "out"
+    out.mkdir()
+    (out / "commands.csv").write_text("an earlier run\n")
+    (out / "summary.json").write_text("{}\n")
+    before = contents(out)
+    assert main(["replay", SCENE, TRACES[0], "--out", str(out), "--quiet"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "the outputs (" in err[0] and "is free" in err[0]
+    assert contents(out) == before and beside(out) == []
+
+
+def test_frames_are_counted_in_the_room_check(small_disk, monkeypatch, capsys):
+    from frictex.app.engine import tables
+    monkeypatch.setattr(tables, "RESERVE_BYTES", 0)
+    out = small_disk / "out"
+    argv = ["replay", SCENE, TRACES[0], "--out", str(out), "--quiet", "--rate", "2000"]
+    assert main(argv + ["--frames", "100"]) == 1
+    err = capsys.readouterr().err
+    assert "frames at 100 fps" in err and "is free" in err
+    assert sorted(p.name for p in small_disk.iterdir()) == []
+    assert main(argv) == 0  # the tables alone fit
+
+
+@pytest.mark.parametrize("command", [
+    ["trace", "synth", "swipe", "--duration", "5", "-o"],
+    ["preview", SCENE, "-o"],
+])
+@pytest.mark.parametrize("checked", [True, False], ids=["room-checked", "disk-fills-while-writing"])
+def test_a_full_disk_leaves_the_earlier_file_and_names_it(small_disk, monkeypatch, capsys,
+                                                          command, checked):
+    from frictex.app.engine import outfile, tables
+    monkeypatch.setattr(tables, "RESERVE_BYTES", 0)
+    if not checked:  # the estimate let it through: the write itself meets the full disk
+        monkeypatch.setattr(outfile, "check_room", lambda *args: None)
+    target = small_disk / ("out.csv" if command[0] == "trace" else "out.png")
+    target.write_bytes(b"an earlier file")
+    fill(small_disk)
+    assert main(command + [str(target)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and target.name in err[0]
+    assert target.read_bytes() == b"an earlier file"
+    assert sorted(p.name for p in small_disk.iterdir()) == ["filler", "filler-tail", target.name]
