@@ -1,5 +1,6 @@
-"""Extension points by registry: another package adds a renderer with one module and one
-entry-point line, and frictex's command line, texture files and Python API take it.
+"""Extension points by registry: another package adds a renderer, or a device profile and
+its actuation, with one module and one entry-point line each, and frictex's command line,
+texture files and Python API take them.
 
 The plugin is a real distribution (pyproject.toml and one module) built and installed by
 pip into a folder of this test (``--target``, no network: ``--no-index
@@ -41,11 +42,30 @@ PLUGIN = {
         [project.entry-points."frictex.renderers"]
         wobble = "frictex_test_wobble:Wobble"
 
+        [project.entry-points."frictex.profiles"]
+        wobble-plate = "frictex_test_wobble:PLATE"
+
+        [project.entry-points."frictex.actuations"]
+        wobble-channel = "frictex_test_wobble:one_channel"
+
         [tool.setuptools]
         py-modules = ["frictex_test_wobble"]
         """,
     "frictex_test_wobble.py": f"""
         import numpy as np
+
+        from frictex.device.actuation.base import SingleModeActuation
+        from frictex.device.profile import ProfileSpec
+
+        PLATE = ProfileSpec("a one-channel plate of a test plugin", "wobble-channel")
+
+
+        class OneChannel(SingleModeActuation):
+            channels = ("wobble",)
+
+
+        def one_channel(device):
+            return OneChannel()
 
 
         class Wobble:
@@ -145,6 +165,27 @@ def test_the_python_api_and_texture_files_take_a_plugins_renderer(plugin_path, t
     assert got["origin"] == "frictex-test-wobble (frictex_test_wobble:Wobble)"
     assert got["rows"] > 1000 and got["values"] == [WOBBLE_MU]
     assert got["renderer"] == "Wobble"
+
+
+def test_a_plugins_device_profile_drives_its_actuation(plugin_path, tmp_path):
+    text = Path(resolve_scene("grating-5mm")).read_text(encoding="utf-8")
+    assert text.count('profile = "plate-seed003"') == 1
+    scene = tmp_path / "wobble-plate.toml"
+    scene.write_text(text.replace('profile = "plate-seed003"', 'profile = "wobble-plate"'),
+                     encoding="utf-8")
+    assert run([str(FRICTEX), "validate", str(scene)], plugin_path, tmp_path).returncode == 0
+    out = tmp_path / "out"
+    done = run([str(FRICTEX), "replay", str(scene), "swipe-40mms-50hz", "--out", str(out),
+                "--quiet"], plugin_path, tmp_path)
+    assert done.returncode == 0, done.stderr
+    own = tmp_path / "own"
+    assert run([str(FRICTEX), "replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(own),
+                "--quiet"], None, tmp_path).returncode == 0
+    lines = (out / "commands.csv").read_text(encoding="utf-8").splitlines()
+    assert lines[0] == "t_s,wobble_um"  # the plugin's channel, the same commands
+    assert lines[1:] == (own / "commands.csv").read_text(encoding="utf-8").splitlines()[1:]
+    refused = run([str(FRICTEX), "validate", str(scene)], None, tmp_path)
+    assert refused.returncode == 2 and "is not one of plate-seed003" in refused.stderr
 
 
 def test_frictexs_own_renderers_come_from_its_entry_points():
