@@ -25,6 +25,8 @@ import unicodedata
 
 #: Longest escaped value shown in a message (characters, the ellipsis included).
 MAX_SHOWN = 60
+#: Longest escaped file path shown in a message (its end is kept: the file's name).
+MAX_PATH_SHOWN = 160
 
 _NAMED = {"\\": "\\\\", "\t": "\\t", "\n": "\\n", "\r": "\\r"}
 _UNSAFE = frozenset(("Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp"))
@@ -80,3 +82,14 @@ def escape(value: object, limit: int | None = MAX_SHOWN) -> str:
 def quoted(value: object, limit: int | None = MAX_SHOWN) -> str:
     """:func:`escape` of ``value`` in double quotes (the quotes not counted in ``limit``)."""
     return f'"{escape(value, limit)}"'
+
+
+def escape_path(path: object, limit: int = MAX_PATH_SHOWN) -> str:
+    """A file path for a message: :func:`escape`'d, and where longer than ``limit``
+    characters, its last ``limit`` shown after an ellipsis (the file's name is at the end)."""
+    text = escape(path, None)
+    if len(text) <= limit:
+        return text
+    tail = text[len(text) - (limit - len(_ELLIPSIS)):]
+    cut = tail.find("\\")  # do not start inside an escape such as \x1b
+    return _ELLIPSIS + (tail[cut:] if 0 <= cut < 10 else tail)

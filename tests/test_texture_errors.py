@@ -207,7 +207,7 @@ def test_unreadable_files(tmp_path):
 
 
 @pytest.mark.parametrize("content, pattern", [
-    (b"not a png", r"not an image Pillow can read"),
+    (b"not a png", r"9 bytes that do not start with the PNG signature, not a PNG"),
     (None, r"map\.png: No such file or directory; expected 8- or 16-bit greyscale PNG"),
 ])
 def test_bad_raster_image(tmp_path, content, pattern):

@@ -59,17 +59,32 @@ def test_transparent_pixels_are_refused(tmp_path):
         read_grey(save(tmp_path, la))
 
 
-def test_float_images_are_refused(tmp_path):
+def test_other_formats_are_refused_before_pillow_sees_them(tmp_path, monkeypatch):
+    """A float TIFF, and an EPS named .png (which Pillow would hand to Ghostscript), are
+    refused from their first bytes; Pillow is never asked to open them."""
+    from PIL import Image as PILImage
     path = save(tmp_path, Image.fromarray(np.zeros((2, 2), np.float32)), "f.tiff")
-    with pytest.raises(TextureError, match=r"image mode F is not supported; expected 8- or 16-bit greyscale PNG"):
+    eps = tmp_path / "map.png"
+    eps.write_bytes(b"%!PS-Adobe-3.0 EPSF-3.0\n%%BoundingBox: 0 0 10 10\nshowpage\n")
+    opened = []
+    monkeypatch.setattr(PILImage, "open", lambda *a, **k: opened.append(a))
+    with pytest.raises(TextureError, match=r"f\.tiff: a TIFF file, not a PNG; expected 8- or 16-bit greyscale PNG"):
         read_grey(path)
+    with pytest.raises(TextureError, match=r"map\.png: a PostScript \(EPS\) file, not a PNG"):
+        read_grey(eps)
+    assert opened == []
 
 
 def test_not_an_image_and_too_big(tmp_path, monkeypatch):
     junk = tmp_path / "j.png"
     junk.write_bytes(b"\x89PNG but not really")
-    with pytest.raises(TextureError, match=r"not an image Pillow can read"):
+    with pytest.raises(TextureError, match=r"19 bytes that do not start with the PNG signature, not a PNG"):
         read_grey(junk)
+    cut = tmp_path / "cut.png"
+    noise = np.random.default_rng(0).integers(0, 255, (40, 40), dtype=np.uint8)
+    cut.write_bytes(save(tmp_path, Image.fromarray(noise)).read_bytes()[:800])
+    with pytest.raises(TextureError, match=r"cut\.png: corrupt PNG, decoding failed"):
+        read_grey(cut)
     with pytest.raises(TextureError, match=r"none\.png: No such file or directory; expected 8- or 16-bit"):
         read_grey(tmp_path / "none.png")
     monkeypatch.setattr(raster_io, "MAX_PIXELS", 10)

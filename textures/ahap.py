@@ -41,6 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
+from frictex.device.safe_text import escape, escape_path
 from frictex.textures.clips import MAX_CLIP_S, Clip, ClipEvent
 from frictex.textures.errors import TextureError
 from frictex.textures.library import UnreadableText, read_utf8
@@ -224,7 +225,7 @@ def parse_ahap(text: str, depth: float, where: str = "AHAP") -> tuple[Clip, list
             continue
         key = next((k2 for k2 in ("ParameterCurve", "Parameter") if k2 in item), None)
         if key is None:
-            r.fail(path, f"expected Event, ParameterCurve or Parameter, got {sorted(item)[:3]}")
+            r.fail(path, f"expected Event, ParameterCurve or Parameter, got {escape(', '.join(sorted(item)[:3]))}")
         got = _control_points(r, r.table(item[key], f"{path}.{key}"), key, f"{path}.{key}", notes)
         if got is not None:
             curves[got[0]].append(got[1])
@@ -245,5 +246,5 @@ def read_ahap(path: str | Path, depth: float) -> tuple[Clip, list[str]]:
         text = read_utf8(path, MAX_AHAP_BYTES)
     except UnreadableText as exc:
         line = f":{exc.line}" if exc.line else ""
-        raise TextureError(f"{path}{line}: {exc}") from None
-    return parse_ahap(text, depth, str(path))
+        raise TextureError(f"{escape_path(path)}{line}: {exc}") from None
+    return parse_ahap(text, depth, escape_path(path))

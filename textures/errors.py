@@ -20,6 +20,7 @@ import re
 from dataclasses import dataclass
 
 from frictex.device.errors import InputError
+from frictex.device.safe_text import escape, escape_path
 
 #: A key path into parsed TOML: table keys (str) and array-of-tables indices (int, 0-based).
 KeyPath = tuple[str | int, ...]
@@ -29,15 +30,16 @@ def field_name(path: KeyPath) -> str:
     """The field as a user reads it: ``("layer", 1, "period_mm")`` -> ``layer[2].period_mm``.
 
     Array indices are shown 1-based: ``layer[1]`` is the first ``[[layer]]`` in the file.
-    The empty path (the file as a whole) gives "". Keys longer than 40 characters are
-    shortened (an unknown key can be as long as the file).
+    The empty path (the file as a whole) gives "". Keys are escaped and cut to 40
+    characters (``device.safe_text.escape``): an unknown key can be as long as the file,
+    and made of terminal escapes.
     """
     out = ""
     for part in path:
         if isinstance(part, int):
             out += f"[{part + 1}]"
         else:
-            out += ("." if out else "") + (part if len(part) <= 40 else part[:37] + "...")
+            out += ("." if out else "") + escape(part, 40)
     return out
 
 
@@ -55,7 +57,8 @@ class Problem:
     warning: bool = False
 
     def __str__(self) -> str:
-        where = f"{self.file}:{self.line}:" if self.line is not None else f"{self.file}:"
+        file = escape_path(self.file)
+        where = f"{file}:{self.line}:" if self.line is not None else f"{file}:"
         field = f" {self.field}:" if self.field else ""
         return f"{where}{field} {self.message}"
 
@@ -78,7 +81,7 @@ class TextureError(InputError):
             more = len(self.problems) - 1
             if more:
                 message += (f" (and {more} more problem{'s' if more > 1 else ''}; "
-                            f"frictex validate {self.problems[0].file} lists them all)")
+                            f"frictex validate {escape_path(self.problems[0].file)} lists them all)")
         super().__init__(message)
 
 

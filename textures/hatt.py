@@ -94,6 +94,7 @@ from pathlib import Path
 
 import numpy as np
 
+from frictex.device.safe_text import escape, escape_path, quoted
 from frictex.textures.ar_synthesis import barycentric, blend_at, lsf_to_poly, twiddles
 from frictex.textures.errors import TextureError
 from frictex.textures.library import UnreadableText, read_utf8
@@ -347,9 +348,9 @@ def _values(node, where: str, what: str) -> np.ndarray:
         try:
             x = float((v.text or "").strip())
         except ValueError:
-            raise TextureError(f"{where}: <{what}> value {v.text!r} is not a number") from None
+            raise TextureError(f"{where}: <{what}> value {quoted(v.text or '')} is not a number") from None
         if not math.isfinite(x):
-            raise TextureError(f"{where}: <{what}> value {v.text!r} is not finite")
+            raise TextureError(f"{where}: <{what}> value {quoted(v.text or '')} is not finite")
         out.append(x)
     return np.array(out)
 
@@ -402,15 +403,15 @@ def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
     try:
         root = ET.fromstring(text)
     except ET.ParseError as exc:
-        raise TextureError(f"{where}:{exc.position[0]}: not well-formed XML ({exc})") from None
+        raise TextureError(f"{where}:{exc.position[0]}: not well-formed XML ({escape(exc)})") from None
     if root.tag != "modelSet":
-        raise TextureError(f"{where}: top element is <{root.tag}>, expected <modelSet>")
+        raise TextureError(f"{where}: top element is <{escape(root.tag)}>, expected <modelSet>")
     scale = {}
     for tag, known in UNITS.items():
         node = root.find(tag)
         unit = (node.text or "").strip() if node is not None else next(iter(known))
         if unit not in known:
-            raise TextureError(f"{where}: <{tag}> is {unit!r}, expected one of {', '.join(known)}")
+            raise TextureError(f"{where}: <{tag}> is {quoted(unit)}, expected one of {', '.join(known)}")
         scale[tag] = known[unit]
     rate = _scalar(root, "SampleRate", where) if root.find("SampleRate") is not None else HATT_RATE_HZ
     if not RATE_RANGE_HZ[0] <= rate <= RATE_RANGE_HZ[1]:
@@ -469,8 +470,8 @@ def read_hatt_xml(path: str | Path) -> TextureModel:
         text = read_utf8(path, MAX_HATT_BYTES)
     except UnreadableText as exc:
         line = f":{exc.line}" if exc.line else ""
-        raise TextureError(f"{path}{line}: {exc}") from None
-    return parse_hatt_xml(text, str(path))
+        raise TextureError(f"{escape_path(path)}{line}: {exc}") from None
+    return parse_hatt_xml(text, escape_path(path))
 
 
 # ---------------------------------------------------------------------------

@@ -27,14 +27,18 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
+from frictex.device.safe_text import escape_path
 from frictex.textures.dynamic import DynamicLayer
 from frictex.textures.errors import TextureError
 from frictex.textures.model import _hypot
-from frictex.textures.raster_io import read_grey
+from frictex.textures.raster_io import PixelBudget, read_grey
 
 HEIGHT_RENDERINGS = ("slope", "magnitude")
 #: the image a height map takes, for error messages
 HEIGHT_PNG = "16-bit greyscale PNG (height = value / 65535 x rise_mm)"
+#: Bytes a decoded height map keeps per pixel: its heights and the three float64 planes
+#: of :class:`HeightMap` (height, dh/dx, dh/dy).
+HEIGHT_MAP_BYTES_PER_PX = 32
 #: shaded relief for the visual layer: light from the top-left of the screen, 45 deg up,
 #: heights exaggerated this many times (screen shapes are a few tenths of a mm high)
 RELIEF_LIGHT = np.array([-1.0, -1.0, math.sqrt(2.0)]) / 2.0
@@ -410,14 +414,15 @@ def _bilinear(plane, corners):
     return top * (1 - ty) + bottom * ty
 
 
-def read_height_png(path: str | Path, max_height_mm: float) -> np.ndarray:
+def read_height_png(path: str | Path, max_height_mm: float, budget: PixelBudget | None = None) -> np.ndarray:
     """Heights (mm), float64 (rows, cols), from a 16-bit greyscale PNG: value v gives
     v / 65535 * max_height_mm. Read by ``textures.raster_io.read_grey`` (its size and
-    file checks apply). An 8-bit image is refused: 256 levels make a staircase whose
-    slope is zero or a spike, which this rendering would feel as clicks."""
-    grey, kind = read_grey(path, HEIGHT_PNG)
+    file checks apply; ``budget``, the scene's budget of decoded maps, is charged
+    :data:`HEIGHT_MAP_BYTES_PER_PX` per pixel). An 8-bit image is refused: 256 levels make
+    a staircase whose slope is zero or a spike, which this rendering would feel as clicks."""
+    grey, kind = read_grey(path, HEIGHT_PNG, budget, HEIGHT_MAP_BYTES_PER_PX)
     if kind != "16-bit greyscale":
-        raise TextureError(f"{path}: height maps must be 16-bit greyscale PNGs, got {kind}; "
+        raise TextureError(f"{escape_path(path)}: height maps must be 16-bit greyscale PNGs, got {kind}; "
                            f"8-bit levels make slopes of zero or spikes")
     return grey * max_height_mm
 

@@ -175,13 +175,21 @@ from frictex.textures.errors import Locator, Problem, TextureError
 from frictex.textures.keys import FORMAT_VERSION, LAYER_KEYS, LAYER_TYPES, TOP
 from frictex.textures.schema import BAD, Reader
 from frictex.textures.sections.device import device_warnings, force_device, parse_device, parse_display
-from frictex.textures.sections.files import Files
+from frictex.textures.sections.files import Files, allow_outside_from_env
 from frictex.textures.sections.layers import parse_layers, reach_warnings, selector_warnings
 from frictex.textures.toml_safe import parse_toml, read_text
 
 
-def check_scene(path: str | Path) -> tuple[model.Scene | None, list[Problem], list[Problem]]:
+def check_scene(path: str | Path, *, allow_outside: bool = False,
+                ) -> tuple[model.Scene | None, list[Problem], list[Problem]]:
     """Read and check a texture file.
+
+    Parameters
+    ----------
+    path : the texture file.
+    allow_outside : let the file name files outside its own folder (absolute paths,
+        ``..``, links leading out); also allowed by ``FRICTEX_ALLOW_OUTSIDE=1``
+        (``textures.sections.files``).
 
     Returns ``(scene, problems, warnings)``: ``scene`` is None if there is any problem;
     ``problems`` lists every problem found, ``warnings`` things that are legal but
@@ -207,7 +215,7 @@ def check_scene(path: str | Path) -> tuple[model.Scene | None, list[Problem], li
         return None, r.problems, r.warnings
     name = top["name"] if top["name"] is not None else path.stem
     display = parse_display(r, doc)
-    files = Files(path.parent)
+    files = Files(path.parent, allow_outside or allow_outside_from_env())
     device = parse_device(r, doc, display, files)
     built = parse_layers(r, doc, display, files)
     device = force_device(r, doc, device, display, built)
@@ -229,9 +237,10 @@ def check_scene(path: str | Path) -> tuple[model.Scene | None, list[Problem], li
     return scene, r.problems, r.warnings
 
 
-def load_scene(path: str | Path) -> model.Scene:
-    """The scene in a texture file; raises :class:`TextureError` listing every problem."""
-    scene, problems, _ = check_scene(path)
+def load_scene(path: str | Path, *, allow_outside: bool = False) -> model.Scene:
+    """The scene in a texture file; raises :class:`TextureError` listing every problem.
+    ``allow_outside``: as :func:`check_scene`'s."""
+    scene, problems, _ = check_scene(path, allow_outside=allow_outside)
     if scene is None:
         raise TextureError(problems)
     return scene

@@ -1,7 +1,8 @@
 """Friction maps from image files: grey levels as float64 in [0, 1].
 
 The convention is that of commercial friction displays: a greyscale image where
-brightness is friction (black = most slippery, white = most friction). Read with Pillow:
+brightness is friction (black = most slippery, white = most friction). PNG files only (the
+signature is checked first; Pillow decodes with its PNG plugin alone), read with Pillow:
 
 - 8-bit greyscale (mode ``L``): g = value / 255;
 - 16-bit greyscale (modes ``I;16``, ``I;16B``, ``I`` with values in 0..65535): g = value / 65535;
@@ -17,20 +18,34 @@ Row 0 is the top of the image (screen y points down).
 
 from __future__ import annotations
 
+import io
+import struct
 import warnings
 from pathlib import Path
 
 import numpy as np
 
+from frictex.device.safe_files import UnsafeFile, read_bytes
+from frictex.device.safe_text import escape, escape_path
 from frictex.textures.errors import TextureError
-from frictex.textures.library import file_problem
 
-#: Largest image accepted (pixels), checked from the file's header before any pixel is
+#: Largest image accepted (pixels), checked from the PNG header before any pixel is
 #: decoded: a friction map is sampled at finger positions only, and a 16 Mpx float64
 #: map already takes 128 MB.
 MAX_PIXELS = 16_000_000
 #: Largest image file read (bytes): a 16 Mpx 16-bit RGBA PNG stored uncompressed.
 MAX_FILE_BYTES = 128 << 20
+#: Decoded maps one scene may hold (bytes of float64 planes, all its images and height
+#: maps together): a raster map keeps 8 bytes per pixel (32 Mpx in all), a height map 32
+#: (``textures.heights.HeightMap``: heights and three planes; 8 Mpx in all). Charged from
+#: each PNG's header before it is decoded, so 32 layers of small files that decode to
+#: 16 Mpx each are refused at the first that does not fit, having decoded none of it.
+MAX_SCENE_BYTES = 256 << 20
+#: Bytes a decoded raster map keeps per pixel (its float64 grey levels).
+RASTER_BYTES_PER_PX = 8
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+_IHDR = struct.Struct(">I4sIIBB")  # chunk length, type, width, height, bit depth, colour type
 
 _REC601 = np.array([0.299, 0.587, 0.114])
 
@@ -39,13 +54,65 @@ _REC601 = np.array([0.299, 0.587, 0.114])
 ACCEPTED = "8- or 16-bit greyscale PNG (colour is converted to Rec. 601 luma)"
 
 
-def read_grey(path: str | Path, expected: str = ACCEPTED) -> tuple[np.ndarray, str]:
-    """Read an image file as grey levels.
+class PixelBudget:
+    """What is left of a scene's :data:`MAX_SCENE_BYTES` of decoded maps."""
+
+    def __init__(self, max_bytes: int = MAX_SCENE_BYTES):
+        self.max_bytes = max_bytes
+        self.spent = 0
+
+    def charge(self, where: str, pixels: int, bytes_per_px: int) -> None:
+        """Take ``pixels`` x ``bytes_per_px`` from the budget, or raise TextureError
+        (its message starting with ``where``) if that does not fit."""
+        cost = pixels * bytes_per_px
+        if self.spent + cost > self.max_bytes:
+            raise TextureError(
+                f"{where}: decoding it would take {cost / 2**20:,.0f} MiB ({pixels:,} px x "
+                f"{bytes_per_px} bytes) where the scene has {(self.max_bytes - self.spent) / 2**20:,.0f} "
+                f"MiB left of the {self.max_bytes / 2**20:,.0f} MiB its images and height maps "
+                f"may take together; scale the image down")
+        self.spent += cost
+
+
+def png_header(data: bytes, where: str, expected: str) -> tuple[int, int, int, int]:
+    """(width, height, bit depth, colour type) from a PNG's IHDR chunk, or TextureError if
+    ``data`` does not start as a PNG file does (any other format is refused here, before
+    an image library sees the bytes)."""
+    if not data.startswith(PNG_SIGNATURE):
+        return _not_png(data, where, expected)
+    if len(data) < len(PNG_SIGNATURE) + _IHDR.size:
+        raise TextureError(f"{where}: a PNG file cut short ({len(data)} bytes, no header); "
+                           f"expected {expected}")
+    length, kind, width, height, depth, colour = _IHDR.unpack_from(data, len(PNG_SIGNATURE))
+    if length != 13 or kind != b"IHDR":
+        raise TextureError(f"{where}: a PNG file whose first chunk is not its header (IHDR); "
+                           f"expected {expected}")
+    return width, height, depth, colour
+
+
+def _not_png(data: bytes, where: str, expected: str):
+    known = ((b"%!PS", "PostScript (EPS)"), (b"\xc5\xd0\xd3\xc6", "PostScript (EPS)"),
+             (b"\xff\xd8\xff", "JPEG"), (b"GIF8", "GIF"), (b"BM", "BMP"), (b"II*\x00", "TIFF"),
+             (b"MM\x00*", "TIFF"), (b"RIFF", "RIFF (WebP)"), (b"%PDF", "PDF"))
+    name = next((label for magic, label in known if data.startswith(magic)), None)
+    what = f"a {name} file" if name else (f"{len(data):,} bytes that do not start with the PNG "
+                                           f"signature" if data else "an empty file")
+    raise TextureError(f"{where}: {what}, not a PNG; expected {expected} (frictex opens PNG "
+                       f"files only)")
+
+
+def read_grey(path: str | Path, expected: str = ACCEPTED, budget: PixelBudget | None = None,
+              bytes_per_px: int = RASTER_BYTES_PER_PX) -> tuple[np.ndarray, str]:
+    """Read a PNG file as grey levels.
 
     Parameters
     ----------
-    path : the image file (PNG; any format Pillow reads is accepted).
+    path : the image file (PNG only: the signature is checked before an image library
+        sees the bytes, and Pillow is allowed only its PNG plugin).
     expected : what the caller takes, said by the errors (default :data:`ACCEPTED`).
+    budget : the scene's budget of decoded maps, charged ``bytes_per_px`` per pixel from
+        the header before decoding (None: only :data:`MAX_PIXELS` applies).
+    bytes_per_px : what the caller keeps per pixel once decoded (bytes).
 
     Returns
     -------
@@ -54,48 +121,50 @@ def read_grey(path: str | Path, expected: str = ACCEPTED) -> tuple[np.ndarray, s
 
     Raises
     ------
-    OSError if the file cannot be read; TextureError if it is not a usable image: not a
-    regular file (checked before opening: a FIFO would block), larger than
-    ``MAX_FILE_BYTES``, more than ``MAX_PIXELS`` (from the header, before decoding),
-    corrupt or truncated.
+    TextureError, its message starting with the file's (escaped) path: not a regular
+    file (checked before opening: a FIFO would block), larger than ``MAX_FILE_BYTES``,
+    not a PNG, more than ``MAX_PIXELS`` or more than the budget has left (from the
+    header, before decoding), corrupt or truncated.
     """
-    from PIL import Image, UnidentifiedImageError
+    from PIL import Image
 
     path = Path(path)
-    problem = file_problem(path, MAX_FILE_BYTES)
-    if problem is not None:
-        raise TextureError(f"{path}: {problem}; expected {expected}")
+    where = escape_path(path)
+    try:
+        data = read_bytes(path, MAX_FILE_BYTES)
+    except UnsafeFile as exc:
+        raise TextureError(f"{where}: {exc}; expected {expected}") from None
+    width, height, _, _ = png_header(data, where, expected)
+    if width == 0 or height == 0:
+        raise TextureError(f"{where}: image is empty ({width} x {height} px)")
+    if width * height > MAX_PIXELS:
+        raise TextureError(f"{where}: image is {width} x {height} px, more than the "
+                           f"{MAX_PIXELS:,} px frictex reads; scale it down")
+    if budget is not None:
+        budget.charge(where, width * height, bytes_per_px)
     try:
         with warnings.catch_warnings():
-            # Pillow's own bomb guard warns from 89 Mpx; the header check below refuses
+            # Pillow's own bomb guard warns from 89 Mpx; the header check above refuses
             # anything over MAX_PIXELS first, with a sentence instead of a warning
             warnings.simplefilter("ignore", Image.DecompressionBombWarning)
-            with Image.open(path) as image:
-                width, height = image.size
-                if width * height > MAX_PIXELS:
-                    raise TextureError(f"{path}: image is {width} x {height} px, more than the "
-                                       f"{MAX_PIXELS:,} px frictex reads; scale it down")
-                if width == 0 or height == 0:
-                    raise TextureError(f"{path}: image is empty ({width} x {height} px)")
+            with Image.open(io.BytesIO(data), formats=["PNG"]) as image:
+                if image.size != (width, height):  # should Pillow read another header
+                    raise TextureError(f"{where}: image size {image.size} differs from its header's")
                 image.load()
-                return _to_grey(image, path, expected)
-    except UnidentifiedImageError:
-        raise TextureError(f"{path}: not an image Pillow can read; expected {expected}") from None
-    except Image.DecompressionBombError as exc:
-        raise TextureError(f"{path}: {exc}") from None
+                return _to_grey(image, where, expected)
     except (TextureError, MemoryError):
         raise
     except Exception as exc:  # noqa: BLE001 - decoders raise anything on a corrupt file
-        raise TextureError(f"{path}: corrupt image, decoding failed ({type(exc).__name__}: "
-                           f"{exc}); expected {expected}") from None
+        raise TextureError(f"{where}: corrupt PNG, decoding failed ({type(exc).__name__}: "
+                           f"{escape(exc)}); expected {expected}") from None
 
 
-def _to_grey(image, path: Path, expected: str) -> tuple[np.ndarray, str]:
+def _to_grey(image, where: str, expected: str) -> tuple[np.ndarray, str]:
     mode = image.mode
     if mode in ("LA", "RGBA", "PA"):
         alpha = np.asarray(image.getchannel("A"))
         if alpha.min() < 255:
-            raise TextureError(f"{path}: image mode {mode} has transparent pixels "
+            raise TextureError(f"{where}: image mode {mode} has transparent pixels "
                                f"(alpha down to {int(alpha.min())}); transparency has no "
                                f"friction meaning: flatten the image onto a background")
         image = image.convert("RGB" if mode != "LA" else "L")
@@ -105,7 +174,7 @@ def _to_grey(image, path: Path, expected: str) -> tuple[np.ndarray, str]:
     if mode in ("I;16", "I;16B", "I;16L", "I"):
         values = np.asarray(image).astype(np.float64)
         if values.min() < 0 or values.max() > 65535:
-            raise TextureError(f"{path}: 32-bit integer image with values from {values.min():g} "
+            raise TextureError(f"{where}: 32-bit integer image with values from {values.min():g} "
                                f"to {values.max():g}; expected 16-bit greyscale (0..65535)")
         return values / 65535.0, "16-bit greyscale"
     if mode == "1":
@@ -116,4 +185,4 @@ def _to_grey(image, path: Path, expected: str) -> tuple[np.ndarray, str]:
     if mode == "RGB":
         rgb = np.asarray(image, dtype=np.float64)
         return rgb @ _REC601 / 255.0, "RGB as Rec. 601 luma"
-    raise TextureError(f"{path}: image mode {mode} is not supported; expected {expected}")
+    raise TextureError(f"{where}: image mode {mode} is not supported; expected {expected}")

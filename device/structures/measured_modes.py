@@ -12,23 +12,32 @@ File grammar (CSV)::
     file   := header NEWLINE { row NEWLINE }
     header := "x_mm" { "," mode_name }          # at least one mode column
     row    := x { "," deflection }              # finite numbers, any consistent unit
+    number := ASCII decimal: [sign] digits [. digits] [e [sign] digits], spaces around
     blank lines and lines starting with '#' are skipped; x strictly increasing;
-    at least 4 rows.
+    at least 4 rows. A regular UTF-8 file of at most MAX_TABLE_BYTES (1 MiB).
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import math
+import re
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from frictex.device.safe_files import UnsafeFile, read_bytes
+from frictex.device.safe_text import escape, escape_path, quoted
 from frictex.device.structures.beam import ModesError
 
 MIN_SAMPLES = 4
+#: Largest mode table read (bytes): a scan of thousands of points fits.
+MAX_TABLE_BYTES = 1 << 20
+#: A number as the table writes it: ASCII decimal, optional sign, fraction and exponent,
+#: spaces around (Python's ``float`` alone also takes Unicode digits and underscores).
+_NUMBER = re.compile(r" *+[+-]?+(?:[0-9]++(?:\.[0-9]*+)?+|\.[0-9]++)(?:[eE][+-]?+[0-9]++)?+ *+")
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,29 +69,61 @@ class MeasuredModes:
         object.__setattr__(self, "_spline", CubicSpline(x, s, axis=0, bc_type="not-a-knot"))
 
     @classmethod
-    def from_csv(cls, path) -> "MeasuredModes":
-        """Read a mode table (grammar in the module docstring); errors name file and line."""
-        path = Path(path)
-        with path.open(newline="") as fh:
-            rows = [(i, r) for i, r in enumerate(csv.reader(fh), start=1)
+    def from_csv(cls, path, max_bytes: int = MAX_TABLE_BYTES) -> "MeasuredModes":
+        """Read a mode table (grammar in the module docstring) from a regular UTF-8 file of
+        at most ``max_bytes`` (``device.safe_files``); errors name file and line."""
+        try:
+            data = read_bytes(path, max_bytes)
+        except UnsafeFile as exc:
+            raise ModesError(f"{escape_path(path)}: {exc}") from None
+        try:
+            text = data.decode("utf-8-sig")
+        except UnicodeDecodeError as exc:
+            raise ModesError(f"{escape_path(path)}: not UTF-8 text (byte {data[exc.start]:#04x} at "
+                             f"offset {exc.start}); expected a CSV mode table") from None
+        return cls.from_text(text, escape_path(path))
+
+    @classmethod
+    def from_text(cls, text: str, source: str = "<table>") -> "MeasuredModes":
+        """A mode table from its text; errors start with ``source`` and the line, and
+        describe a row that does not fit rather than print it."""
+        if "\0" in text:
+            raise ModesError(f"{source}: holds a NUL byte: binary content, not a CSV mode table")
+        try:
+            rows = [(i, r) for i, r in enumerate(csv.reader(io.StringIO(text, newline="")), start=1)
                     if r and not r[0].lstrip().startswith("#")]
+        except csv.Error as exc:  # e.g. a field over csv's 128 KiB limit
+            raise ModesError(f"{source}: not a CSV mode table ({escape(exc)})") from None
         if not rows or rows[0][1][0].strip() != "x_mm" or len(rows[0][1]) < 2:
-            raise ModesError(f"{path}: line {rows[0][0] if rows else 1}: header must be "
+            raise ModesError(f"{source}: line {rows[0][0] if rows else 1}: header must be "
                              f"'x_mm,<mode>[,<mode>...]'")
         names = tuple(c.strip() for c in rows[0][1][1:])
-        values = []
-        for line, row in rows[1:]:
-            if len(row) != len(names) + 1:
-                raise ModesError(f"{path}: line {line}: expected {len(names) + 1} values, got {len(row)}")
-            try:
-                nums = [float(v) for v in row]
-            except ValueError:
-                raise ModesError(f"{path}: line {line}: {row!r} has a value that is not a number") from None
-            if not all(math.isfinite(v) for v in nums):
-                raise ModesError(f"{path}: line {line}: values must be finite, got {row!r}")
-            values.append(nums)
+        bad_name = next((n for n in names if not n or not n.isprintable()), None)
+        if bad_name is not None:
+            raise ModesError(f"{source}: line {rows[0][0]}: mode name {quoted(bad_name)} is empty "
+                             f"or holds control characters; expected printable names")
+        values = [cls._row(source, line, row, len(names) + 1) for line, row in rows[1:]]
         table = np.array(values).reshape(-1, len(names) + 1)
-        return cls(table[:, 0], table[:, 1:], names, source=str(path))
+        return cls(table[:, 0], table[:, 1:], names, source=source)
+
+    @staticmethod
+    def _row(source: str, line: int, row: list[str], width: int) -> list[float]:
+        if len(row) != width:
+            raise ModesError(f"{source}: line {line}: expected {width} values, got {len(row)}")
+        column = next((i for i, v in enumerate(row) if _NUMBER.fullmatch(v) is None), None)
+        if column is not None:
+            word = row[column].strip().lower().lstrip("+-")
+            if word in ("nan", "inf", "infinity"):
+                raise ModesError(f"{source}: line {line}: values must be finite; value "
+                                 f"{column + 1} is {quoted(row[column])}")
+            raise ModesError(f"{source}: line {line}: value {column + 1} ({quoted(row[column])}) "
+                             f"is not a number (ASCII decimal, e.g. -1.5e-3)")
+        nums = [float(v) for v in row]
+        if not all(math.isfinite(v) for v in nums):
+            column = next(i for i, v in enumerate(nums) if not math.isfinite(v))
+            raise ModesError(f"{source}: line {line}: values must be finite; value {column + 1} "
+                             f"is {quoted(row[column])}")
+        return nums
 
     def phi(self, x_mm) -> np.ndarray:
         """Interpolated shapes at ``x_mm`` (any shape) -> float64 (..., p); ends held outside."""

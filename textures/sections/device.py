@@ -11,9 +11,9 @@ from frictex.device import profile as profiles
 from frictex.device.friction import ASYMPTOTE_MARGIN
 from frictex.device.structures.beam import ModesError
 from frictex.textures import model
-from frictex.textures.errors import KeyPath
+from frictex.device.safe_text import escape, escape_path
+from frictex.textures.errors import KeyPath, TextureError
 from frictex.textures.keys import CALIBRATION, DEVICE, DISPLAY, DRIVING, FRICTION, STRUCTURES
-from frictex.textures.library import file_problem
 from frictex.textures.schema import BAD, Reader, show
 from frictex.textures.sections.common import strictly_increasing
 from frictex.textures.sections.files import Files
@@ -76,10 +76,11 @@ def _structure(r: Reader, profile: str, raw, display, files: Files):
         r.report(path + ("orders",), f"{show(list(orders))}: expected distinct whole mode "
                                      f"orders (at most 26)")
         ok = False
-    modes = None
+    modes = modes_path = None
     if v["modes_file"] is not None:
-        modes = _modes_table(r, path, v["modes_file"], raw, files)
-        ok &= modes is not None
+        got = _modes_table(r, path, v["modes_file"], raw, files)
+        ok &= got is not None
+        modes_path, modes = got if got is not None else (None, None)
     n_modes = len(modes.names) if modes is not None else len(orders)
     if len(actuators) != n_modes:
         r.report(path + ("actuators_mm",), f"has {len(actuators)} positions, expected one per mode "
@@ -91,8 +92,7 @@ def _structure(r: Reader, profile: str, raw, display, files: Files):
         ok = False
     if not ok:
         return BAD
-    modes_file = v.pop("modes_file")
-    modes_path = files.real_path(modes_file) if modes_file is not None else None
+    v.pop("modes_file")
     return profiles.BeamStructure(**{**v, "orders": tuple(int(o) for o in orders)},
                                modes_path=modes_path, modes=modes)
 
@@ -112,30 +112,28 @@ def _structure_holds_display(r: Reader, path: KeyPath, display, keys, start: flo
 
 
 def _modes_table(r: Reader, path: KeyPath, name: str, raw: dict, files: Files):
-    from frictex.device.structures.measured_modes import MeasuredModes
-
+    """(real path, MeasuredModes) of ``modes_file``, or None with the problem reported."""
     if "orders" in raw:
         r.report(path + ("orders",), "not used with modes_file (the table's columns are the "
                                      "modes); remove one of them")
         return None
-    modes_path = files.real_path(name)
-    problem = file_problem(modes_path, MAX_FILE_BYTES)
-    try:
-        if problem is not None:
-            raise ModesError(problem)
-        # the table's reader checks its grammar; binary content and values that overflow
-        # the spline fit come out as ValueError or (with errstate) FloatingPointError
-        with np.errstate(all="raise"):
-            return MeasuredModes.from_csv(modes_path)
-    except (OSError, ModesError, ValueError, FloatingPointError) as exc:
-        text = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
-        if isinstance(exc, UnicodeDecodeError):
-            text = f"not UTF-8 text (byte {exc.object[exc.start]:#04x} at offset {exc.start})"
-        elif isinstance(exc, FloatingPointError):
-            text = f"deflections too large to fit splines through ({exc})"
-        r.report(path + ("modes_file",), f"{show(name)} ({modes_path}): {text}")
-        return None
+    return files.read(r, path + ("modes_file",), name, _read_modes)
 
+
+def _read_modes(modes_path):
+    """``MeasuredModes.from_csv``, its problems as TextureError starting with the path."""
+    from frictex.device.structures.measured_modes import MeasuredModes
+
+    try:
+        # the table's reader checks its grammar; values that overflow the spline fit come
+        # out as ValueError or (with errstate) FloatingPointError
+        with np.errstate(all="raise"):
+            return MeasuredModes.from_csv(modes_path, MAX_FILE_BYTES)
+    except ModesError as exc:  # its message starts with the file's path
+        raise TextureError(str(exc)) from None
+    except (ValueError, FloatingPointError) as exc:
+        raise TextureError(f"{escape_path(modes_path)}: deflections too large to fit splines "
+                           f"through ({escape(exc)})") from None
 
 
 def _actuation_builds(r: Reader, device: profiles.DeviceProfile) -> bool:

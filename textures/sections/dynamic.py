@@ -51,7 +51,7 @@ def build_height(r, path, v, given, ctx):
         ok = ctx.display is None or region_on_display(r, path + ("x_mm",), sprite, ctx.display,
                                                         "height map")
         heights = file_read(r, path, "image", v["image"], ctx,
-                             lambda f: read_height_png(f, v["rise_mm"]))
+                             lambda f: read_height_png(f, v["rise_mm"], ctx.files.budget))
         if heights is None:
             return None
         shape = HeightMap(heights, x, y, v["width_mm"], v["height_mm"])

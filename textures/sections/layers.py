@@ -112,3 +112,4 @@ def reach_warnings(r: Reader, device: profiles.DeviceProfile, built) -> None:
                      f"asks for mu' down to {low:.4g}, but the device reaches only {floor:.4g} at "
                      f"the nominal {force:g} N ({source}); lower values will be clamped",
                      warning=True)
+

@@ -4,10 +4,8 @@
 from __future__ import annotations
 
 from frictex.textures import model
-from frictex.textures.errors import TextureError
 from frictex.textures.keys import DISC_REGION, RECT_REGION
 from frictex.textures.raster_io import read_grey
-from frictex.textures.schema import show
 from frictex.textures.sections.common import forbid, ordered
 from frictex.textures.sections.geometry import fits, on_display, region_on_display
 
@@ -100,18 +98,11 @@ def build_raster(r, path, v, given, ctx):
                 ok = False
         if mode == "stretch":
             ok &= forbid(r, path, given, ["tile_width_mm", "tile_height_mm"], 'with mode = "stretch"')
-    image_path = ctx.files.real_path(v["image"]) if v["image"] else None
-    grey = None
-    try:
-        if image_path is None:
-            raise TextureError("empty image path")
-        grey, _ = read_grey(image_path)
-    except OSError as exc:
-        r.report(path + ("image",), f"{show(v['image'])}: {image_path}: {exc.strerror or exc}")
-        ok = False
-    except TextureError as exc:  # its message starts with the image's path
-        r.report(path + ("image",), f"{show(v['image'])}: {exc}")
-        ok = False
+    got = ctx.files.read(r, path + ("image",), v["image"],
+                         lambda f: read_grey(f, budget=ctx.files.budget)[0])
+    if got is None:
+        return None
+    image_path, grey = got
     if not ok or ctx.display is None:
         return None
     px_x, px_y = ctx.display.px_per_mm
