@@ -13,7 +13,8 @@ from frictex.device.calibration_run import Sweep, run_sweep
 from frictex.device.errors import DeviceError
 from frictex.device.finger import draw_finger, moisture
 from frictex.device.link.forces import ForceReport
-from frictex.device.link.host import LinkStalled, start_sim_device
+from frictex.device.link.host import LinkStalled
+from link_checks import start_sim_device
 
 
 def test_fit_recovers_constants_of_exact_points():

@@ -7,7 +7,8 @@ import numpy as np
 from numpy.testing import assert_allclose
 
 from frictex.app.live.haptic_thread import HapticThread
-from frictex.device.link.host import CommandSink, open_port, start_sim_device
+from frictex.device.link.host import CommandSink, open_port
+from link_checks import start_sim_device
 from frictex.device.friction import make_friction_model
 from frictex.rendering.pipeline import build_pipeline
 from frictex.rendering.input.trace_file import make_trace

@@ -114,7 +114,7 @@ def _signal(n, seed=0):
     return np.clip(1.5 + np.cumsum(rng.normal(0, 0.02, n)), 0.0, 2.9)[:, None]
 
 
-def test_sim_subprocess_round_trip_matches_the_commands(tmp_path):
+def test_sim_round_trip_matches_the_commands(tmp_path):
     log = tmp_path / "played.csv"
     sig = _signal(6000)
     sink = open_sink("sim", channels=1, rate_hz=RATE, paced=True, log_path=log)
@@ -133,7 +133,7 @@ def test_sim_subprocess_round_trip_matches_the_commands(tmp_path):
     assert status["frames_sent"] > 120 and status["resyncs"] == 0
     assert status["device"]["sample_rate_hz"] == RATE
     assert 0 < status["latency_ms_p50"] <= status["latency_ms_p99"]
-    assert sink._process.returncode == 0  # the sim exited after the Stop
+    assert status["device_state"] == "silent"  # the Stop played out
 
 
 def test_replay_streamed_to_the_sim_device_plays_commands_csv(tmp_path):
@@ -379,11 +379,13 @@ def test_a_device_that_stops_answering_ends_in_link_stalled(stoppable_device):
             if b == 2000:
                 stop()  # the device dies; its pty stays openable, nothing answers
             sink.send(b, np.ones((50, 1)), None)
-    with pytest.raises(LinkStalled, match=r"through 3 bounded waits in a row \(the last 0.2 s\); giving up"):
+    with pytest.raises(LinkStalled, match=r"s without progress while blocks waited, over the "
+                                          r"bound of 0.6 s \+ 0.25 x [0-9.]+ s played; giving up"):
         _within(60.0, stream_until_it_fails)
     assert issubclass(LinkStalled, LinkError)
     assert sink.status()["state"] == "failed"
-    assert "stall 1 of 3 in a row" in err.getvalue()
+    assert sink.status()["stalled_s"] > 0.6
+    assert "for 0.2 s; dropped a block of 50 samples, stream goes on" in err.getvalue()
     with pytest.raises(LinkStalled):  # and ever after
         sink.send(10**7, np.ones((50, 1)), None)
     _within(30.0, sink.close)
@@ -405,8 +407,7 @@ def test_wait_for_room_is_bounded_and_counts_a_stall(stoppable_device):
     stalls = sink.status()["stalls"]
     assert _within(10.0, sink.wait_for_room, 0.3) is False
     assert sink.status()["stalls"] == stalls + 1
-    assert f"for 0.3 s; no room for a block, stream goes on (stall {stalls + 1} of 5" in \
-        err.getvalue()
+    assert "no device for 0.3 s; no room for a block, stream goes on" in err.getvalue()
     _within(30.0, sink.close)
 
 

@@ -10,7 +10,8 @@ from frictex.app.commands.cli import main
 from frictex.device.finger import draw_finger
 from frictex.device.link import protocol as p
 from frictex.device.link.forces import ForceHistory, ForceReport, per_sample
-from frictex.device.link.host import CommandSink, open_port, open_sink, start_sim_device
+from frictex.device.link.host import CommandSink, open_port, open_sink
+from link_checks import start_sim_device
 from frictex.device.link.simdevice import DeviceConfig, DeviceCore
 from link_checks import all_played_unless_tripped
 

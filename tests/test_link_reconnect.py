@@ -17,7 +17,8 @@ import pytest
 import serial
 
 from frictex.device.link import protocol as p
-from frictex.device.link.host import READ_WAIT_S, CommandSink
+from frictex.device.link.host import CommandSink
+from frictex.device.link.port import READ_WAIT_S
 from frictex.device.link.simdevice import DeviceConfig, DeviceCore
 from device_recorder import Recorder
 

@@ -1,10 +1,12 @@
 """Device streaming under injected faults and a host process that is stopped outright.
 
 Each run is a child process (this file, run as a script) streaming a paced signal to a
-``frictex sim-device`` over a pty or ``socket://``, with ``--faults``-style injection
+``frictex sim-device`` process over a pty or ``socket://``, or to the in-process
+``sim`` device, with ``--faults``-style injection
 (corruption, drops, link-thread stalls, watchdog trips, unplugging); the test stops the
 child with SIGSTOP for fractions of a second and resumes it (SIGCONT), so the host is
-starved deterministically while the device keeps its own clock. Every run must end (exit
+starved deterministically while the device keeps its own clock (the in-process device's
+clock runs on while it is stopped: it plays the silence when it resumes). Every run must end (exit
 0, or 3 for LinkStalled) within a bound, and account for every sample: what the device's
 own log says it played, and what the host counts as unplayed, add up.
 
@@ -33,9 +35,14 @@ def child(transport: str, seconds: float, spec: str, log_path: str) -> int:
     """Stream ``seconds`` of a paced signal; print "ready", then the final link status."""
     from frictex.device.link.faults import parse_faults
     from frictex.device.link.host import LinkStalled, open_sink
+    from link_checks import start_sim_device
 
-    sink = open_sink("sim" if transport == "pty" else "sim:tcp", 1, RATE, paced=True,
-                     log_path=log_path, faults=parse_faults(spec) if spec else None)
+    faults = parse_faults(spec) if spec else None
+    if transport == "sim":
+        sink = open_sink("sim", 1, RATE, paced=True, log_path=log_path, faults=faults)
+    else:
+        _, where = start_sim_device(1, RATE, log_path=log_path, tcp=transport == "tcp")
+        sink = open_sink(where, 1, RATE, paced=True, faults=faults)
     print("ready", flush=True)
     n = int(seconds * RATE)
     signal_um = (1.5 + np.sin(np.arange(n) / 37.0))[:, None]
@@ -109,7 +116,7 @@ def describe(transport, spec, stops, result) -> str:
             f"stops {stops}")
 
 
-@pytest.mark.parametrize("transport", ["pty", "tcp"])
+@pytest.mark.parametrize("transport", ["pty", "tcp", "sim"])
 def test_a_stopped_host_under_faults_finishes_and_counts_every_sample(tmp_path, transport):
     spec = "corrupt=0.0005,drop=0.0002,stall=0.2@0.8,trip@1.6,unplug=0.4@2.2,seed=1"
     stops = [(0.4, 0.3), (1.9, 0.2)]
@@ -139,7 +146,7 @@ def sweep(k: int) -> tuple[str, float, str, list[tuple[float, float]]]:
     stops = sorted((round(float(rng.uniform(0.2, seconds)), 2),
                     round(float(rng.uniform(0.05, 0.5)), 2))
                    for _ in range(rng.integers(2, 5)))
-    return ("pty" if k % 2 == 0 else "tcp"), seconds, ",".join(items), stops
+    return ("pty", "tcp", "sim")[k % 3], seconds, ",".join(items), stops
 
 
 @pytest.mark.skipif(os.environ.get("FRICTEX_SOAK") != "1",

@@ -167,6 +167,7 @@ class Ledger:
 
     def __init__(self):
         self.commanded = 0
+        self.sent_total = 0
         self.host = collections.Counter()
         self.done = collections.Counter()
         self.partial = False
@@ -190,6 +191,7 @@ class Ledger:
     def sent(self, n: int) -> None:
         """``n`` samples written to the device in the current session."""
         self._session.sent += n
+        self.sent_total += n
 
     def mark(self) -> int:
         """Samples sent in this session so far (taken when a heartbeat goes out)."""

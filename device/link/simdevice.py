@@ -4,13 +4,15 @@
 optional log writers): it decodes the host's frames, keeps received samples in a jitter
 buffer indexed by sample number, plays one sample per tick at its sample rate, models
 the plate's closed amplitude loop as a first-order low pass (seed 003, Fig. 3b: 400 Hz
-bandwidth; bilinear transform prewarped at the bandwidth), enforces the watchdog (no valid
+bandwidth; bilinear transform prewarped at the bandwidth; run where it is seen: a
+``sensor`` reporting it, or a ``plate_log``), enforces the watchdog (no valid
 frame for ``watchdog_ms`` and the output ramps to zero within ``ramp_ms`` and the buffer is
 flushed) and, with a force sensor (``device.link.simsensor``), reports the lateral and
 normal force in ForceReport messages to a version 3 host.
 
-:func:`serve` binds a core to the wall clock and to a pseudo-terminal or a TCP listener,
-host after host; ``frictex sim-device`` runs it. The core answers each frame in the
+:func:`serve` binds a core to the wall clock and to a pseudo-terminal or a TCP listener
+(one host at a time); ``frictex sim-device`` runs it for external tools. The host's
+``--device sim`` runs a core in its own process instead (``device.link.simport``). The core answers each frame in the
 protocol version the frame was sent in (up to ``DeviceConfig.protocol_version``).
 
 Played-sample log (CSV, ``--log``): ``index,ch0_um,...[,ch0_phase_rad,...]``, one row per
@@ -31,8 +33,8 @@ import tty
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.signal import lfilter
 
+from frictex.device.errors import InputError
 from frictex.device.link import protocol as p
 from frictex.device.link.protocol import DeviceState as S
 from frictex.device.link.simsensor import FINGER_FORCE_N, ConstantSensor, FingerSensor, ForceWindows
@@ -102,7 +104,7 @@ class DeviceConfig:
                    "3 for force reports (lateral_n or finger)")]
         for ok, name, expected in checks:
             if not ok:
-                raise ValueError(f"sim-device {name} = {getattr(self, name)!r}: expected {expected}")
+                raise InputError(f"sim-device {name} = {getattr(self, name)!r}: expected {expected}")
 
     @property
     def limit_counts(self) -> np.ndarray:
@@ -402,11 +404,13 @@ class DeviceCore:
         else:
             sp[:] = self.setpoint  # IDLE/BUFFERING hold the last value (a step is a click)
         self.setpoint = sp[-1].copy()
-        plate, self._zi = lfilter(self._b, self._a, sp, axis=0, zi=self._zi.T)
-        self._zi = self._zi.T
-        self.plate_um = plate[-1].copy()
-        if self.plate_log is not None:
-            self.plate_log((self.tick + np.arange(n)) / c.rate_hz, self.state, sp, plate)
+        if c.sensor or self.plate_log is not None:  # the plate model, where it is seen
+            from scipy.signal import lfilter  # here: scipy.signal takes a second to import
+            plate, self._zi = lfilter(self._b, self._a, sp, axis=0, zi=self._zi.T)
+            self._zi = self._zi.T
+            self.plate_um = plate[-1].copy()
+            if self.plate_log is not None:
+                self.plate_log((self.tick + np.arange(n)) / c.rate_hz, self.state, sp, plate)
         reports = []
         if self.sensor is not None:
             lateral, normal = self.sensor.read(self.tick, sp)

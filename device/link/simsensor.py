@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from frictex.device.finger import FingerPlant, FingerParams, SensorParams, draw_finger
 from frictex.device.link import protocol as p
 
 #: normal force (N) of the simulated finger when none is configured
@@ -40,12 +39,15 @@ class FingerSensor:
     it: friction from seed 003's model with this person's constants, moisture drift and
     speed dependence, through the fingertip's compliance and the sensor's bandwidth,
     delay and noise (``device.finger.SensorParams``: 1 kHz, 0.5 ms, 2 mN lateral and 5 mN
-    normal noise, 5 N full scale). ``finger``: a seed of :func:`device.finger.draw_finger`
-    or the :class:`~device.finger.FingerParams` themselves."""
+    normal noise, 5 N full scale; ``sensor``, None for those). ``finger``: a seed of
+    :func:`device.finger.draw_finger` or the :class:`~device.finger.FingerParams`
+    themselves."""
 
-    def __init__(self, finger: int | FingerParams, rate_hz: float, limit_um: float,
-                 speed_mm_s: float = 100.0, normal_n: float = FINGER_FORCE_N,
-                 sensor: SensorParams = SensorParams()):
+    def __init__(self, finger, rate_hz: float, limit_um: float,
+                 speed_mm_s: float = 100.0, normal_n: float = FINGER_FORCE_N, sensor=None):
+        # with the finger only: device.finger brings scipy.signal (a second to import)
+        from frictex.device.finger import FingerPlant, SensorParams, draw_finger
+        sensor = SensorParams() if sensor is None else sensor
         params = draw_finger(finger) if isinstance(finger, int) else finger
         seed = finger if isinstance(finger, int) else 0
         self.plant = FingerPlant(params, rate_hz, limit_um, sensor, seed=seed)

@@ -1,0 +1,167 @@
+"""Output devices by name: the registry ``--device NAME[:ARG]`` is looked up in.
+
+:data:`DEVICES` is a :class:`~device.registry.Registry` (entry-point group
+``frictex.devices``): another package adds an output device with one module and one
+entry point::
+
+    [project.entry-points."frictex.devices"]
+    mydev = "mypkg.mydev:open_mydev"
+
+``open_mydev(arg, request)`` gets ARG (the text after ``mydev:``, or after ``mydev://``;
+"" when none) and a :class:`DeviceRequest`, and returns an :class:`OutputDevice`. Raise
+``frictex.device.errors.InputError`` for a bad ARG (exit 2) and ``DeviceError`` when the
+device cannot be reached (exit 1).
+
+``device.link.host.open_sink`` is what the engine calls; importing ``device.link.host``
+registers the built-ins: ``sim`` (the simulated device in this process, ``device.link.simport``; ARG:
+its options, ``sim:finger=3,force=0.5``) and ``port`` (a serial port or pyserial URL,
+``device.link.port``). :func:`resolve` reads a spec: ``NAME://...`` goes to the device
+NAME if one is registered, any other URL to ``port``; ``NAME[:ARG]`` to NAME if one is
+registered, else a path (``/dev/ttyACM0``, ``./tty``, ``COM3``) to ``port``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol, runtime_checkable
+from urllib.parse import parse_qsl
+
+import numpy as np
+
+from frictex.device.errors import InputError
+from frictex.device.registry import Registry
+
+
+@dataclass(frozen=True)
+class DeviceRequest:
+    """What the pipeline asks of an output device (``open_sink``'s arguments).
+
+    channels : actuator channels per sample. rate_hz : samples per second (Hz); the
+    device must play at it. phases : a phase (rad) comes with each amplitude.
+    paced : True: :meth:`OutputDevice.send` may wait for the device (replay); False: it
+    never blocks (live). queue_blocks : blocks a link may hold before the device takes
+    them. log_path : a played-sample CSV (simulated devices). faults : a
+    ``device.link.faults.FaultPlan`` to inject on a link, or None. stderr : where
+    warnings go. stall_s, max_stalls : bound of one wait (s), and its multiple a paced
+    link may spend without progress. sim_args : ``frictex sim-device`` flags (``sim``).
+    """
+
+    channels: int
+    rate_hz: float
+    phases: bool = False
+    paced: bool = False
+    queue_blocks: int = 64
+    log_path: Any = None
+    faults: Any = None
+    stderr: Any = sys.stderr
+    stall_s: float = 1.0
+    max_stalls: int = 5
+    sim_args: tuple[str, ...] = ()
+
+    def link_options(self) -> dict:
+        """The keyword arguments of ``device.link.host.CommandSink`` this request sets."""
+        return {"phases": self.phases, "paced": self.paced, "queue_blocks": self.queue_blocks,
+                "stderr": self.stderr, "stall_s": self.stall_s, "max_stalls": self.max_stalls}
+
+
+@runtime_checkable
+class OutputDevice(Protocol):
+    """What the engine, the live haptic thread and calibration call on an output device
+    (the contract :class:`~device.link.host.CommandSink` implements).
+
+    Attributes: ``label`` (str, its name in messages), ``channels``, ``rate_hz`` (Hz),
+    ``paced`` (as requested) and ``info`` (a ``device.link.protocol.Info``: what the
+    device declared; the engine reads ``info.has_force_reports``, calibration
+    ``info.limits_um``).
+    """
+
+    label: str
+    channels: int
+    rate_hz: float
+    paced: bool
+
+    def send(self, start_index: int, amplitudes_um: np.ndarray,
+             phases_rad: np.ndarray | None = None) -> None:
+        """Play (n, channels) amplitudes (um, zero-to-peak, float64) from output sample
+        ``start_index`` on, ``phases_rad`` (n, channels) with them when requested.
+        Blocks arrive in order of ``start_index``, without gaps. Paced: may wait, bounded;
+        live: never waits (drops, counted, instead). Raises a ``DeviceError`` when the
+        device has failed for good."""
+
+    def wait_for_room(self, timeout_s: float) -> bool:
+        """Wait at most ``timeout_s`` (s) until :meth:`send` of one more block would not
+        wait; False on timeout. True at once when not paced."""
+
+    def status(self) -> dict:
+        """JSON-able counters for ``summary.json``'s ``device`` section; the engine reads
+        ``commanded_samples``, ``unplayed_samples`` and ``unplayed_by_cause`` (a dict of
+        cause -> samples) and, when the keys are there, ``state`` and ``underruns``."""
+
+    def unplayed_share(self) -> float:
+        """Commanded samples that never played, over all commanded (0 when none were);
+        final once :meth:`close` has returned."""
+
+    def device_force_n(self) -> float | None:
+        """The normal force (N) the device last measured, or None."""
+
+    def force_report(self, index0: int | None = None, n: int | None = None):
+        """Lateral and normal force (N) per sample (``device.link.forces.ForceReport``):
+        the latest report without arguments, else samples ``index0 .. index0 + n - 1``
+        exactly or None. None when the device has no lateral force sensor."""
+
+    def forces_covered(self, index0: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """The (lateral, normal) forces (N) of those samples of the window the device
+        reported, in sample order; empty arrays if none."""
+
+    def close(self) -> None:
+        """Play out what was sent (paced: bounded), stop the device, release it.
+        Idempotent; never raises for the stream's faults."""
+
+    def __enter__(self) -> OutputDevice: ...
+
+    def __exit__(self, *exc) -> None: ...
+
+
+#: ``factory(arg, request) -> OutputDevice``, by name
+DeviceFactory = Callable[[str, DeviceRequest], OutputDevice]
+DEVICES: Registry[DeviceFactory] = Registry("output device", "frictex.devices")
+_COM = re.compile(r"COM\d+", re.IGNORECASE)
+
+
+def resolve(spec: str) -> tuple[DeviceFactory, str]:
+    """The factory and ARG of a ``--device`` spec (see the module docstring); an unknown
+    NAME is ``UnknownName`` (an InputError) listing the known."""
+    if not isinstance(spec, str) or not spec.strip():
+        raise InputError(f"device {spec!r}: expected NAME[:ARG], a URL or a port path")
+    if "://" in spec:
+        scheme, _, rest = spec.partition("://")
+        if scheme in DEVICES:
+            return DEVICES.get(scheme), rest
+        return DEVICES.get("port"), spec
+    name, _, arg = spec.partition(":")
+    if name in DEVICES:
+        return DEVICES.get(name), arg
+    if spec.startswith(("/", ".")) or os.sep in spec or _COM.fullmatch(spec):
+        return DEVICES.get("port"), spec
+    return DEVICES.get(name), arg
+
+
+def sim_pairs(arg: str, sim_args: tuple[str, ...]) -> list[tuple[str, str]]:
+    """(option, text) pairs of ``sim:ARG`` (``a=1,b=2``; a URL query ``?a=1&b=2``) and of
+    ``frictex sim-device`` flags (``--a 1 --b 2``, ``--sensor`` alone)."""
+    pairs = parse_qsl(arg.lstrip("/").lstrip("?").replace(",", "&"), keep_blank_values=True,
+                      strict_parsing=False)
+    if arg.strip("/?") and not pairs:
+        raise InputError(f"sim device options {arg!r}: expected NAME=VALUE[,NAME=VALUE...]")
+    flags = list(sim_args)
+    while flags:
+        flag = flags.pop(0)
+        if not flag.startswith("--"):
+            raise InputError(f"sim device flag {flag!r}: expected --NAME [VALUE]")
+        value = flags.pop(0) if flags and not flags[0].startswith("--") else "1"
+        pairs.append((flag[2:], value))
+    return pairs

@@ -1,0 +1,401 @@
+"""The host side of the protocol for one link, sans I/O: handshake, heartbeats, paced
+sending, the ledger, recoveries and the closing Stop (``device/PROTOCOL.md``).
+
+:class:`HostSession` is driven by the port thread (``device.link.portthread``), which
+only moves bytes: :meth:`~HostSession.connection_made` when a port opens,
+:meth:`~HostSession.data_received` with what arrived, :meth:`~HostSession.poll` for what
+to write now, :meth:`~HostSession.connection_lost` when the port fails. The caller's side
+(``device.link.host.CommandSink``) queues blocks into it and reads its counters under
+:attr:`HostSession.cond`. Every method takes the host's time ``now`` (s, monotonic).
+
+Heartbeats go out every ``watchdog_ms / 5``; each Status is read against how far the host
+had sent when its heartbeat left (``device.link.ledger``), so the estimate of the
+device's buffer is re-based on every answer. A device that says nothing valid for
+:data:`SILENCE_S`, or takes no block for that long while blocks wait, is handshaken
+again (a *recovery*); a recovery or a reconnect that gets no answer within
+:data:`RESYNC_TIMEOUT_S` is taken as the port lost (the thread reopens it). Hellos are
+resent with back-off, :data:`HELLO_FIRST_S` doubling up to :data:`HELLO_MAX_S`.
+"""
+
+from __future__ import annotations
+
+import collections
+import sys
+import threading
+
+import numpy as np
+
+from frictex.device.link import protocol as p
+from frictex.device.link.forces import ForceHistory, per_sample
+from frictex.device.link.ledger import Ledger, Pacing, Snapshot
+from frictex.device.link.protocol import DeviceState, LinkError
+
+#: jitter-buffer prefill asked of the device, and the level paced sending keeps (s)
+PREFILL_S = 0.010
+TARGET_S = 0.020
+#: the first Hello's wait for an answer, and the longest, doubling between (s)
+HELLO_FIRST_S = 0.1
+HELLO_MAX_S = 1.0
+#: a recovery or reconnect handshake unanswered this long: the port is taken as lost (s)
+RESYNC_TIMEOUT_S = 1.0
+#: a connected device that sends nothing valid, or takes no block while blocks wait, for
+#: this long is handshaken again (s)
+SILENCE_S = 0.5
+#: a gap this long between two turns of the port thread means the host was starved (s)
+STARVED_S = 0.1
+#: beyond the drain itself, how long the closing Stop may take to play out (s)
+STOP_MARGIN_S = 0.5
+#: most bytes of blocks written in one turn
+_TURN_BYTES = 4096
+
+_COUNTS = ("frames_sent", "blocks_sent", "heartbeats", "retries", "reconnects", "disconnects",
+           "recoveries", "stalls", "device_flushes", "clamped_samples", "dropped_blocks",
+           "force_reports")
+
+
+class LinkStalled(LinkError):
+    """The device made too little progress for too long (``device.link.stall``)."""
+
+
+class HostSession:
+    """One link's protocol state and bookkeeping (see the module docstring).
+
+    Parameters
+    ----------
+    channels, rate_hz, phases : what the pipeline sends (rate in Hz).
+    paced : True for replay (blocks go out as the device's buffer has room).
+    label : the link's name in messages. stderr : where warnings go.
+    """
+
+    def __init__(self, channels: int, rate_hz: float, *, phases: bool, paced: bool,
+                 label: str, stderr=sys.stderr):
+        self.channels, self.rate_hz, self.phases, self.paced = channels, rate_hz, phases, paced
+        self.label = label
+        self._stderr = stderr
+        self.cond = threading.Condition()
+        self.queue: collections.deque = collections.deque()
+        # every key up front: status() copies these while the thread counts
+        self.counts = collections.Counter(dict.fromkeys(_COUNTS, 0))
+        self.errors = collections.Counter(dict.fromkeys([*p.ErrorCode.NAMES.values(), "other"], 0))
+        self.ledger = Ledger()
+        self.rtt_ms: collections.deque = collections.deque(maxlen=4096)
+        self.decoder = p.Decoder()
+        self.forces = ForceHistory()
+        self.forces_lock = threading.Lock()
+        self.status: p.Status | None = None
+        self.snapshot: Snapshot | None = None
+        self.info: p.Info | None = None
+        self.version = 1
+        self.connected = False       # a session is open (blocks may be queued)
+        self.failure: LinkError | None = None
+        self.refused: LinkError | None = None   # a device that does not fit the pipeline
+        self.last_error: str | None = None
+        self.phase = "closed"        # closed, handshake, session, closing, done
+        self.close_requested = False
+        self._marks: dict[int, tuple[float, int, int]] = {}  # token -> (t, sent_end, mark)
+        self._token = 0
+        self._seq = 0
+        self.sent_end = 0            # host index after the last sample sent
+        self._last_rx = self._last_progress = self._last_turn = 0.0
+        self._next_hb = 0.0
+        self._ever_connected = False
+        self._reconnecting = False
+
+    # ------------------------------------------------------------------ port events
+    def connection_made(self, now: float) -> None:
+        """A port opened: handshake on it."""
+        self._begin_handshake(now)
+
+    def connection_lost(self, exc: BaseException) -> None:
+        """The port failed (or a recovery went unanswered): the thread reopens it."""
+        self.last_error = f"{type(exc).__name__}: {exc}"
+        was = self.phase in ("session", "closing") or (self.phase == "handshake"
+                                                       and self.connected)
+        closing = self.phase == "closing" or self.close_requested
+        self.phase = "closed"
+        self._reconnecting = True
+        if not was:
+            return
+        self.counts["disconnects"] += 1
+        with self.cond:  # the session is settled by the next handshake, or by close
+            self.connected = False
+            if not self.paced or closing:  # live blocks go stale; paced go out on reconnecting
+                self._drop_queued("disconnected")
+            self.cond.notify_all()
+        self._warn(f"link lost ({self.last_error}); output continues without it, reconnecting")
+
+    def finish_without_port(self) -> None:
+        """Closing with no port: what is queued is dropped, the session settled."""
+        with self.cond:
+            self._drop_queued("disconnected")
+            self.ledger.end_session()
+            self.connected = False
+            self.phase = "done"
+            self.cond.notify_all()
+
+    def data_received(self, data: bytes, now: float) -> None:
+        for frame in self.decoder.feed(data):
+            msg = frame.message
+            if self.phase == "handshake" and isinstance(msg, p.Info):
+                self._start_session(msg, now)
+            elif isinstance(msg, (p.Info, p.Hello, p.Block, p.Heartbeat, p.Stop)):
+                continue  # a late Info, or our own frames echoed back (loop://)
+            else:
+                self._handle(msg, now)
+
+    def poll(self, now: float) -> bytes:
+        """What to write now. Raises :class:`LinkError` when a recovery or reconnect
+        handshake went unanswered (the port thread then reopens the port)."""
+        if now - self._last_turn > STARVED_S:  # the thread did not run: not the device's silence
+            self._last_rx = self._last_progress = now
+        self._last_turn = now
+        if self.phase == "handshake":
+            return self._poll_handshake(now)
+        if self.phase == "session":
+            if self.close_requested:
+                return self._begin_closing(now)
+            out = self._poll_session(now)
+            self._watch(now)
+            return out
+        if self.phase == "closing":
+            return self._poll_closing(now)
+        return b""
+
+    @property
+    def done(self) -> bool:
+        """The closing Stop has played out (or was given up): the thread may end."""
+        return self.phase == "done"
+
+    # ------------------------------------------------------------------ handshake
+    def _begin_handshake(self, now: float) -> None:
+        self.phase = "handshake"
+        self._hs_start = now
+        self._hello_at = now
+        self._hello_wait = HELLO_FIRST_S
+        self._hellos = 0
+        self._settling = None  # token of the settling heartbeat; popped when answered
+
+    def _poll_handshake(self, now: float) -> bytes:
+        """Send Hello (in a version 1 frame: every device answers it) until Info comes
+        back; the device flushes its buffer and restarts its counters on Hello.
+
+        If a session is open (a recovery or a reconnect), a Heartbeat goes out just before
+        each Hello, in the same write, until one is answered: the Status answering it
+        settles the session with the device's counters as of the Hello (PROTOCOL.md 6.1).
+        """
+        if self._ever_connected and now - self._hs_start > RESYNC_TIMEOUT_S:
+            raise LinkError(f"{self.label}: no answer to the handshake within "
+                            f"{RESYNC_TIMEOUT_S:g} s")
+        if self.close_requested and self._ever_connected:
+            self.finish_without_port()
+            return b""
+        if now < self._hello_at:
+            return b""
+        if self._hellos:
+            self.counts["retries"] += 1
+        self._hellos += 1
+        self._hello_at = now + self._hello_wait
+        self._hello_wait = min(2.0 * self._hello_wait, HELLO_MAX_S)
+        settle = b""
+        if self.ledger.reporting and (self._settling is None or self._settling in self._marks):
+            settle = self._heartbeat(now)
+            self._settling = self._token
+        # a leading delimiter ends whatever partial frame the device was holding
+        return b"\x00" + settle + self._frame(p.Hello(int(PREFILL_S * self.rate_hz)), 1)
+
+    def handshake_failure(self, waited_s: float) -> LinkError:
+        """Why the first handshake failed after ``waited_s`` (s), for the caller."""
+        if self.refused is not None:
+            return self.refused
+        bad = self.decoder.counts.last_bad_version
+        if bad is not None:
+            return LinkError(f"{self.label}: device speaks protocol version {bad}; this host "
+                             f"speaks 1 to {p.PROTOCOL_VERSION}")
+        return LinkError(f"{self.label}: no answer to the handshake within {waited_s:.3g} s "
+                         f"({self._hellos} Hellos); is it a frictex device?")
+
+    def _check(self, info: p.Info) -> LinkError | None:
+        problems = []
+        if info.channels < self.channels:
+            problems.append(f"{info.channels} channel(s), the pipeline needs {self.channels}")
+        if self.phases and not info.has_phases:
+            problems.append("no phase control, the actuation has phases")
+        if abs(info.sample_rate_hz - self.rate_hz) > 1e-3:
+            problems.append(f"sample rate {info.sample_rate_hz:g} Hz, the pipeline runs at "
+                            f"{self.rate_hz:g} Hz")
+        if problems:
+            return LinkError(f"{self.label} ({info.name or 'unnamed'}) has " + "; ".join(problems))
+        return None
+
+    def _start_session(self, info: p.Info, now: float) -> None:
+        refused = self._check(info)
+        if refused is not None:
+            self.refused = refused
+            return
+        self.info = info
+        self.version = min(info.protocol_version, p.PROTOCOL_VERSION)
+        self._limits = np.asarray(info.limits_um[:self.channels], dtype=np.float64)
+        prefill = max(1, min(int(PREFILL_S * info.sample_rate_hz), info.buffer_samples // 4))
+        self.target = max(prefill + 1,
+                          min(int(TARGET_S * info.sample_rate_hz), info.buffer_samples // 2))
+        self._pacing = Pacing(info.sample_rate_hz, self.target, prefill, info.buffer_samples // 2)
+        self._heartbeat_s = max(info.watchdog_ms / 5.0, 1.0) * 1e-3
+        self._marks.clear()
+        self._last_rx = self._last_progress = now
+        self._next_hb = now
+        if not info.has_force_reports:
+            with self.forces_lock:
+                self.forces = ForceHistory()
+        if self._reconnecting and self._ever_connected:
+            self.counts["reconnects"] += 1
+            print(f"frictex: {self.label} link back", file=self._stderr)
+        self._reconnecting = False
+        self._ever_connected = True
+        self.phase = "session"
+        with self.cond:
+            self.snapshot = None
+            self.ledger.start_session()
+            self.connected = True
+            self.cond.notify_all()
+
+    @property
+    def limits_um(self) -> np.ndarray:
+        """The device's declared limits for the pipeline's channels (um)."""
+        return self._limits
+
+    # ------------------------------------------------------------------ frames
+    def _frame(self, msg, version: int | None = None) -> bytes:
+        data = p.encode(msg, self._seq, self.version if version is None else version)
+        self._seq = (self._seq + 1) & 0xFFFF
+        self.counts["frames_sent"] += 1
+        return data
+
+    def _heartbeat(self, now: float) -> bytes:
+        """A Heartbeat frame, its token remembered with how far the host had sent."""
+        self._token = self._token % 0xFFFFFFFF + 1   # never 0: a Stop's Status echoes 0
+        self.counts["heartbeats"] += 1
+        self._marks[self._token] = (now, self.sent_end, self.ledger.mark())
+        if len(self._marks) > 64:
+            self._marks.pop(next(iter(self._marks)))
+        return self._frame(p.Heartbeat(self._token))
+
+    def _warn(self, text: str) -> None:
+        print(f"frictex: warning: {self.label}: {text}", file=self._stderr)
+
+    def _drop_queued(self, cause: str) -> None:
+        """Drop every queued block (counted); the caller holds ``cond``."""
+        while self.queue:
+            _, counts, _ = self.queue.popleft()
+            self.counts["dropped_blocks"] += 1
+            self.ledger.drop(cause, len(counts))
+        self.cond.notify_all()
+
+    def _handle(self, msg, now: float) -> None:
+        self._last_rx = now
+        if isinstance(msg, p.Status):
+            self.status = msg
+            mark = self._marks.pop(msg.echo, None)
+            if mark is not None:
+                sent_t, sent_end, ledger_mark = mark
+                self.rtt_ms.append((now - sent_t) * 1e3)
+                with self.cond:
+                    self.snapshot = Snapshot.from_status(msg, 0.5 * (now + sent_t), sent_end,
+                                                         ledger_mark)
+                    self.ledger.status(msg, ledger_mark)
+        elif isinstance(msg, p.Flushed):
+            self.counts["device_flushes"] += 1
+            with self.cond:
+                self.snapshot = Snapshot.flushed(msg.play_index, now, self.sent_end,
+                                                 self.ledger.mark())
+        elif isinstance(msg, p.ForceReport):
+            if self.info is not None and self.info.has_force_reports:
+                self.counts["force_reports"] += 1
+                report = per_sample(msg, self.sent_end)
+                with self.forces_lock:
+                    self.forces.add(report)
+        elif isinstance(msg, p.ErrorReport):
+            self.errors[p.ErrorCode.NAMES.get(msg.code, "other")] += 1
+
+    # ------------------------------------------------------------------ streaming
+    def _poll_session(self, now: float) -> bytes:
+        out = bytearray()
+        if now >= self._next_hb:
+            out += self._heartbeat(now)
+            self._next_hb = now + self._heartbeat_s
+        sent = 0
+        with self.cond:
+            # blocks wait for the session's first Status: it is the counters' baseline
+            while self.queue and len(out) < _TURN_BYTES and self.ledger.reporting:
+                start, counts, phases = self.queue[0]
+                if self.paced and not self.snapshot.room(
+                        self._pacing, now, self.sent_end, self.ledger.mark(), start, len(counts)):
+                    break
+                self.queue.popleft()
+                out += self._send_block(start, counts, phases)
+                sent += 1
+            if sent:
+                self.cond.notify_all()
+        if not self.queue or sent:
+            self._last_progress = now
+        return bytes(out)
+
+    def _send_block(self, start: int, counts, phases) -> bytes:
+        """A Block frame for samples ``start ..``; the caller holds ``cond``."""
+        self.counts["blocks_sent"] += 1
+        self.ledger.sent(len(counts))
+        self.sent_end = max(self.sent_end, start + len(counts))
+        return self._frame(p.Block(start % p.INDEX_MODULUS, counts, phases))
+
+    def _watch(self, now: float) -> None:
+        """Handshake again with a device that went quiet or stopped taking blocks."""
+        if now - self._last_rx > SILENCE_S:
+            self._resync(f"no valid frame from the device for {now - self._last_rx:.2f} s", now)
+        elif self.queue and now - self._last_progress > SILENCE_S:
+            snap, start = self.snapshot, self.queue[0][0]
+            where = ("no Status yet" if snap is None else
+                     f"device at {snap.play_index}, holding {snap.held} up to {snap.end}, "
+                     f"{'playing' if snap.playing else 'waiting'}; next block {start}")
+            self._resync(f"device took no block for {now - self._last_progress:.2f} s "
+                         f"({where})", now)
+
+    def _resync(self, reason: str, now: float) -> None:
+        self.counts["recoveries"] += 1
+        self._warn(f"{reason}; handshaking again")
+        self._begin_handshake(now)
+
+    # ------------------------------------------------------------------ closing
+    def _begin_closing(self, now: float) -> bytes:
+        """Send what a live queue still holds (a paced one was drained or given up by the
+        caller), then Stop with drain; heartbeats follow until the device reports silence
+        (bounded), so that the last Status settles the ledger."""
+        out = bytearray()
+        with self.cond:
+            while self.queue and self.ledger.reporting and not self.paced:
+                out += self._send_block(*self.queue.popleft())
+            self._drop_queued("stalled")
+        out += self._frame(p.Stop(drain=True))
+        self._first_after_stop = self._token + 1
+        self._close_by = now + self._drain_s()
+        self._next_hb = now
+        self.phase = "closing"
+        return bytes(out)
+
+    def _poll_closing(self, now: float) -> bytes:
+        st = self.status
+        if ((st is not None and st.state == DeviceState.SILENT
+             and st.echo >= self._first_after_stop) or now >= self._close_by):
+            with self.cond:
+                self.ledger.end_session()
+                self.phase = "done"
+                self.cond.notify_all()
+            return b""
+        if now < self._next_hb:
+            return b""
+        self._next_hb = now + self._heartbeat_s
+        return self._heartbeat(now)
+
+    def _drain_s(self) -> float:
+        """Time for a drained Stop to play out: what may be buffered, the ramp, a margin."""
+        buffered = self.sent_end - (self.snapshot.play_index if self.snapshot else 0)
+        buffered = min(max(buffered, 0), self.info.buffer_samples)
+        return buffered / self.rate_hz + self.info.ramp_ms * 1e-3 + STOP_MARGIN_S
