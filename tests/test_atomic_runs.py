@@ -204,3 +204,35 @@ def test_a_full_disk_leaves_the_earlier_file_and_names_it(small_disk, monkeypatc
     assert len(err) == 1 and target.name in err[0]
     assert target.read_bytes() == b"an earlier file"
     assert sorted(p.name for p in small_disk.iterdir()) == ["filler", "filler-tail", target.name]
+
+
+def dead_pid() -> int:
+    done = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    return int(done.stdout)
+
+
+def test_without_an_atomic_exchange_two_renames_and_a_recovery(tmp_path, monkeypatch):
+    """Where the file system cannot exchange two folders: --out is renamed aside, then the
+    staging folder in; a run killed between the two leaves no --out, and the next run puts
+    the previous one back before it starts."""
+    from frictex.app.engine import staging
+    monkeypatch.setattr(staging, "_exchange", lambda a, b: False)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "summary.json").write_text("old")
+    (out / "mine.txt").write_text("kept")
+    run = staging.Staging(out)
+    (run.begin() / "summary.json").write_text("new")
+    run.commit()
+    assert {p.name: p.read_text() for p in out.iterdir()} == {"summary.json": "new",
+                                                               "mine.txt": "kept"}
+    assert beside(out) == []
+    out.rename(tmp_path / f".out.frictex-old.{dead_pid()}")  # killed between the renames
+    (tmp_path / f".out.frictex-staging.{dead_pid()}").mkdir()
+    again = staging.Staging(out)
+    again.begin()
+    assert (out / "summary.json").read_text() == "new"
+    assert beside(out) == [again.folder.name]
+    again.abort()
+    assert beside(out) == []

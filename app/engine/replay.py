@@ -211,9 +211,8 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
                                  time.perf_counter() - wall0, setup_s)
         if staging is not None:
             if staging.removed:
-                doc["warnings"].append(f"removed the leftovers of {len(staging.removed)} "
-                                       f"interrupted runs beside {staging.out.name}: "
-                                       + ", ".join(staging.removed))
+                doc["warnings"].append(f"removed the leftovers of killed runs beside "
+                                       f"{staging.out.name}: " + ", ".join(staging.removed))
             text = json.dumps(finite_json(doc), indent=2, allow_nan=False) + "\n"
             (folder / "summary.json").write_text(text, encoding="utf-8")
             check()

@@ -11,7 +11,8 @@ the staging folder renamed to ``--out``: two renames, between which a killed run
 no ``--out``, and the next run renames the previous one back.
 
 What is not a run's output is kept: files and links in ``--out`` beside the outputs are
-hard-linked into the staging folder before the swap (no byte copied, none lost); a
+hard-linked into the staging folder before the swap (no byte copied, none lost; copied
+where the file system has no hard links); a
 folder there other than ``frames`` is refused before anything is written, as is an
 ``--out`` that holds the current folder (the process would be left in the deleted one).
 
@@ -101,7 +102,7 @@ class Staging:
             return
         for entry in os.scandir(self.out):
             if not is_run_output(entry.name) and not entry.is_dir(follow_symlinks=False):
-                os.link(entry.path, self.folder / entry.name, follow_symlinks=False)
+                _carry(Path(entry.path), self.folder / entry.name)
         if _exchange(self.folder, self.out):
             shutil.rmtree(self.folder)
             return
@@ -128,6 +129,14 @@ def _exchange(a: Path, b: Path) -> bool:
     if code in (errno.EINVAL, errno.ENOSYS, errno.ENOTSUP):
         return False
     raise OSError(code, os.strerror(code), str(b))
+
+
+def _carry(path: Path, to: Path) -> None:
+    """``path`` also as ``to``: a hard link, or a copy where the file system has none."""
+    try:
+        os.link(path, to, follow_symlinks=False)
+    except OSError:
+        shutil.copy2(path, to, follow_symlinks=False)
 
 
 def _alive(pid: int) -> bool:
