@@ -175,7 +175,8 @@ from frictex.textures.errors import Locator, Problem, TextureError
 from frictex.textures.keys import FORMAT_VERSION, LAYER_KEYS, LAYER_TYPES, TOP
 from frictex.textures.schema import BAD, Reader
 from frictex.textures.sections.device import device_warnings, force_device, parse_device, parse_display
-from frictex.textures.sections.files import Files, allow_outside_from_env
+from frictex.textures.outside import allow_outside_from_env
+from frictex.textures.sections.files import Files
 from frictex.textures.sections.layers import parse_layers, reach_warnings, selector_warnings
 from frictex.textures.toml_safe import parse_toml, read_text
 

@@ -16,6 +16,7 @@ from frictex.app.commands.argtypes import positive_int
 from frictex.app.engine.batch import read_manifest, run_job, write_results
 from frictex.app.engine.fanout import default_workers, fan_out
 from frictex.rendering.renderers import render_modes
+from frictex.textures.outside import add_allow_outside
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -30,6 +31,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "pip install 'frictex[cluster]' and the files at the same paths "
                              "on every worker")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_allow_outside(parser)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -31,6 +31,7 @@ from frictex.rendering.renderers import render_modes
 from frictex.rendering.visual.context import NoDisplayError, open_backend
 from frictex.rendering.visual.device_panels import default_frame_size
 from frictex.rendering.visual.viewport import MIN_FRAME
+from frictex.textures.outside import add_allow_outside
 
 HEADLESS_TRACE = "swipe-40mms-50hz"
 INPUT_KINDS = ("mouse", "follow", "tuio", "evdev")
@@ -115,6 +116,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                       help="open the window if a display exists, else behave as --headless")
     parser.add_argument("--out", metavar="DIR", default="frictex-demo-out",
                         help="output folder for --headless (default: frictex-demo-out)")
+    add_allow_outside(parser)
 
 
 def _start_haptic(args, scene, scene_path: Path, record: Path | None):

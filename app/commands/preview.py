@@ -26,6 +26,7 @@ from frictex.rendering.compose import ideal_mu
 from frictex.device.friction import mu_floor
 from frictex.rendering.visual.scene_image import scene_rgb, to_srgb8
 from frictex.rendering.visual.viewport import fit_viewport
+from frictex.textures.outside import add_allow_outside
 
 
 #: Largest scene panel (px per side): ``--size`` up to this; by default the display's own
@@ -61,6 +62,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--size", type=frame_size, default=None, metavar="WxH",
                         help="pixel size of the scene panel (default: the scene's display size)")
     parser.add_argument("--outlines", action="store_true", help="outline every region and object")
+    add_allow_outside(parser)
 
 
 def load(scene_name: str):

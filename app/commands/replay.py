@@ -11,6 +11,7 @@ from frictex.app.engine.replay import ReplayOptions, replay_with
 from frictex.app.engine.sources import MAX_GAP_S
 from frictex.app.engine.tables import FORMATS
 from frictex.rendering.renderers import render_modes
+from frictex.textures.outside import add_allow_outside
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -43,6 +44,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         metavar="FPS",
                         help="also write PNG frames of the visual layer at FPS into DIR/frames")
     parser.add_argument("--quiet", action="store_true", help="no progress bar, no summary line")
+    add_allow_outside(parser)
 
 
 def run(args: argparse.Namespace) -> int:

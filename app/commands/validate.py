@@ -15,11 +15,13 @@ import sys
 from frictex.textures.errors import TextureError
 from frictex.textures.library import resolve_scene
 from frictex.textures.loader import check_scene
+from frictex.textures.outside import add_allow_outside
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("files", nargs="+", metavar="FILE",
                         help="texture file (.toml), or a bundled scene name (see frictex library)")
+    add_allow_outside(parser)
 
 
 def run(args: argparse.Namespace) -> int:

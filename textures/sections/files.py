@@ -23,18 +23,9 @@ from typing import Callable
 
 from frictex.device.safe_text import escape, escape_path
 from frictex.textures.errors import KeyPath, TextureError
+from frictex.textures.outside import HOW
 from frictex.textures.raster_io import PixelBudget
 from frictex.textures.schema import Reader, show
-
-#: Setting this environment variable to 1 lets texture files name files outside their folder.
-ALLOW_OUTSIDE_ENV = "FRICTEX_ALLOW_OUTSIDE"
-_HOW = f"pass --allow-outside or set {ALLOW_OUTSIDE_ENV}=1 to read it anyway"
-
-
-def allow_outside_from_env() -> bool:
-    """Whether ``FRICTEX_ALLOW_OUTSIDE=1`` is set."""
-    return os.environ.get(ALLOW_OUTSIDE_ENV, "").strip() == "1"
-
 
 @dataclass
 class Files:
@@ -60,16 +51,16 @@ class Files:
             return real
         if os.path.isabs(name):
             raise TextureError(f"{show(name)} is an absolute path; a texture file names files "
-                               f"in its own folder or below ({_HOW})")
+                               f"in its own folder or below ({HOW})")
         root = os.path.realpath(self.base_dir)
         if os.path.normpath(name).split(os.sep)[0] == os.pardir:
             raise TextureError(f"{show(name)} leads out of the texture file's folder through "
                                f"'..'; a texture file names files in its own folder or below "
-                               f"({_HOW})")
+                               f"({HOW})")
         if os.path.commonpath([root, str(real)]) != root:
             raise TextureError(f"{show(name)} passes through a symbolic link to "
                                f"{escape_path(real)}, outside the texture file's folder; a "
-                               f"texture file names files in its own folder or below ({_HOW})")
+                               f"texture file names files in its own folder or below ({HOW})")
         return real
 
     def read(self, r: Reader, path: KeyPath, name: str, reader: Callable):

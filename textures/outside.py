@@ -1,0 +1,42 @@
+"""Whether texture files may name files outside their own folder: ``--allow-outside`` on
+the commands that load scenes, or ``FRICTEX_ALLOW_OUTSIDE=1`` in the environment.
+
+By default a texture file names files (images, height maps, HaTT models, AHAP clips,
+mode tables) in its own folder or below it (``textures.sections.files``). This module is
+light (no numpy) so that the commands can add the option without loading the loader.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+
+#: Setting this environment variable to 1 lets texture files name files outside their folder.
+ALLOW_OUTSIDE_ENV = "FRICTEX_ALLOW_OUTSIDE"
+HOW = f"pass --allow-outside or set {ALLOW_OUTSIDE_ENV}=1 to read it anyway"
+
+
+def allow_outside_from_env() -> bool:
+    """Whether ``FRICTEX_ALLOW_OUTSIDE=1`` is set."""
+    return os.environ.get(ALLOW_OUTSIDE_ENV, "").strip() == "1"
+
+
+class _AllowOutside(argparse.Action):
+    """``--allow-outside``: sets ``FRICTEX_ALLOW_OUTSIDE=1`` for this run, so that every
+    load of the scene sees it, in this process and in those it starts (the haptic
+    process of the demo, the replays of a batch)."""
+
+    def __init__(self, option_strings, dest, **kwargs):
+        super().__init__(option_strings, dest, nargs=0, default=False, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        os.environ[ALLOW_OUTSIDE_ENV] = "1"
+        setattr(namespace, self.dest, True)
+
+
+def add_allow_outside(parser: argparse.ArgumentParser) -> None:
+    """Add ``--allow-outside`` to a command that loads texture files."""
+    parser.add_argument("--allow-outside", action=_AllowOutside,
+                        help="let texture files name files outside their own folder (absolute "
+                             "paths, '..', links leading out); only for files you trust (the "
+                             "same as FRICTEX_ALLOW_OUTSIDE=1)")
