@@ -470,3 +470,34 @@ def test_sim_device_serves_host_after_host_over_tcp_with_nodelay(tmp_path):
         assert np.all(played[mine, 1] == 1.0 + host)
     in_order_within(index, np.concatenate([np.arange(500) + 1000 * h for h in range(3)]))
     assert proc.returncode == 0 and f"played {len(index)} samples" in stderr
+
+
+def test_sim_device_over_tcp_refuses_a_second_host_while_one_is_connected(tmp_path):
+    log = tmp_path / "played.csv"
+    proc = subprocess.Popen([sys.executable, "-m", "frictex", "sim-device", "--tcp",
+                             "0", "--log", str(log)], stdout=subprocess.PIPE, text=True,
+                            stderr=subprocess.PIPE)
+    try:
+        url = proc.stdout.readline().strip()
+        with CommandSink(lambda: open_port(url), 1, RATE, paced=True) as first:
+            first.send(0, np.full((500, 1), 1.0), None)
+            with pytest.raises(LinkError, match="the device refused the handshake: 'busy: "
+                                                "serving another host; one host at a time'"):
+                CommandSink(lambda: open_port(url), 1, RATE, paced=True)
+            first.send(500, np.full((500, 1), 2.0), None)  # never taken over
+        status = first.status()
+        # the first host's link is the one that lived on, undisturbed
+        assert status["recoveries"] == 0 and status["reconnects"] == 0
+        # and, once it has hung up, the next host is served
+        with CommandSink(lambda: open_port(url), 1, RATE, paced=True) as second:
+            second.send(5000, np.full((50, 1), 3.0), None)
+        assert second.status()["commanded_samples"] == 50
+    finally:
+        proc.terminate()
+        _, stderr = proc.communicate(timeout=10)
+    played = np.loadtxt(log, delimiter=",", skiprows=1, ndmin=2)
+    index = played[:, 0].astype(np.int64)
+    mine = index < 1000
+    all_played_unless_tripped(status, index[mine], 1000, trips=status["watchdog_trips"])
+    assert np.all(played[mine, 1] == np.where(index[mine] < 500, 1.0, 2.0))
+    assert "refused a second host 127.0.0.1:" in stderr

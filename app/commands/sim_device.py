@@ -4,6 +4,13 @@ Prints where a host reaches it as the first line on stdout (the pty's path, or
 ``socket://HOST:PORT`` with ``--tcp``), then speaks the device side of
 ``device/PROTOCOL.md`` to host after host until Ctrl-C (or, with ``--once``, until the
 first host's Stop has played out).
+
+One host at a time: over TCP, a connection made while a host is connected is refused
+(it gets an ErrorReport saying the device is busy and is closed, a line on stderr says
+so); it never takes the stream over. The next host is served once the current one has
+hung up. The protocol has no field for a shared secret: keep the listener on loopback
+(the default) or a network only trusted hosts reach. For tools outside frictex: the host's
+own ``--device sim`` runs the simulated device in its process and needs none of this.
 """
 
 from __future__ import annotations
@@ -72,7 +79,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="write every tick: t_s,state,ch<k>_setpoint_um,ch<k>_plate_um")
     parser.add_argument("--tcp", type=_tcp_address, default=None, metavar="[HOST:]PORT",
                         help="listen on TCP instead of a pty (host default 127.0.0.1; port 0: "
-                             "any free port); hosts open the printed socket:// URL")
+                             "any free port); hosts open the printed socket:// URL, one at a "
+                             "time: a second connection is refused while one is connected")
     parser.add_argument("--protocol", type=int, choices=(1, 2, 3), default=3,
                         help="newest protocol version to speak (default 3; 1 and 2 act as "
                              "firmware of that version)")
@@ -114,8 +122,11 @@ def run(args: argparse.Namespace) -> int:
 
 def _serve(core: DeviceCore, args: argparse.Namespace, quit_event: threading.Event) -> None:
     """Open the pty or the TCP listener, say where, and serve until told to stop."""
+    def refused(address):
+        print(f"frictex sim-device: refused a second host {address[0]}:{address[1]} "
+              "(one host at a time)", file=sys.stderr)
     options = {"exit_on_stop": args.once, "parent_pid": args.parent_pid,
-               "quit_event": quit_event}
+               "quit_event": quit_event, "on_refused": refused}
     if args.tcp is not None:
         listener = open_listener(*args.tcp)
         where, close = socket_url(listener), listener.close

@@ -125,7 +125,8 @@ class CommandSink:
         stopped and the error raised (a :class:`LinkError`)."""
         s, t0 = self._session, time.monotonic()
         with self._cond:
-            while not s.connected and s.refused is None and s.failure is None:
+            while (not s.connected and s.refused is None and s.failure is None
+                   and s.device_said is None):
                 left = t0 + total_s - time.monotonic()
                 if left <= 0 or not self._thread.is_alive():
                     break

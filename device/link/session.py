@@ -89,6 +89,7 @@ class HostSession:
         self.connected = False       # a session is open (blocks may be queued)
         self.failure: LinkError | None = None
         self.refused: LinkError | None = None   # a device that does not fit the pipeline
+        self.device_said: str | None = None     # an ErrorReport's text during a handshake
         self.last_error: str | None = None
         self.phase = "closed"        # closed, handshake, session, closing, done
         self.close_requested = False
@@ -138,6 +139,9 @@ class HostSession:
             msg = frame.message
             if self.phase == "handshake" and isinstance(msg, p.Info):
                 self._start_session(msg, now)
+            elif self.phase == "handshake" and isinstance(msg, p.ErrorReport) and msg.text:
+                self.device_said = msg.text
+                self._handle(msg, now)
             elif isinstance(msg, (p.Info, p.Hello, p.Block, p.Heartbeat, p.Stop)):
                 continue  # a late Info, or our own frames echoed back (loop://)
             else:
@@ -211,6 +215,9 @@ class HostSession:
         if bad is not None:
             return LinkError(f"{self.label}: device speaks protocol version {bad}; this host "
                              f"speaks 1 to {p.PROTOCOL_VERSION}")
+        if self.device_said is not None:
+            return LinkError(f"{self.label}: the device refused the handshake: "
+                             f"{self.device_said!r}")
         return LinkError(f"{self.label}: no answer to the handshake within {waited_s:.3g} s "
                          f"({self._hellos} Hellos); is it a frictex device?")
 

@@ -544,15 +544,36 @@ def _write(conn, data: bytes) -> None:
         pass
 
 
+#: what a second TCP host is told before its connection is closed
+BUSY_TEXT = "busy: serving another host; one host at a time"
+
+
+def _refuse(sock: socket.socket) -> None:
+    """Tell a second host the device is busy (an ErrorReport it can decode), close it."""
+    try:
+        sock.settimeout(0.1)
+        sock.sendall(b"\x00" + p.encode(p.ErrorReport(p.ErrorCode.NOT_READY, 0, 0, BUSY_TEXT),
+                                         0, 1))
+    except OSError:
+        pass
+    finally:
+        sock.close()
+
+
 def serve(core: DeviceCore, master: int | None = None, listener: socket.socket | None = None,
           *, poll_s: float = 0.001, exit_on_stop: bool = False, parent_pid: int | None = None,
-          quit_event=None, clock=time.monotonic) -> int:
+          quit_event=None, clock=time.monotonic, on_refused=None) -> int:
     """Run ``core`` in real time on the pty ``master`` or on TCP connections to
-    ``listener``, host after host, until ``quit_event`` is set, ``parent_pid`` is gone, or
-    (``exit_on_stop``) a host's Stop has played out. Returns the number of TCP hosts served.
+    ``listener``, one host at a time, until ``quit_event`` is set, ``parent_pid`` is gone,
+    or (``exit_on_stop``) a host's Stop has played out. Returns the number of TCP hosts
+    served.
 
-    A newly accepted TCP host replaces the current one (a host that reconnects may not
-    have been seen to hang up yet). Received bytes are handled before the clock advances,
+    One host at a time: a TCP connection made while a host is connected is refused, never
+    allowed to take over: it gets one ErrorReport (``NOT_READY``, :data:`BUSY_TEXT`, in a
+    version 1 frame that every host decodes) and is closed; ``on_refused(address)`` is
+    told. The next host is served once the current one has hung up (its socket closed: a
+    host process that ends, however it ends, closes it). Received bytes are handled before
+    the clock advances,
     so a sim process that was descheduled does not mistake its own sleep for host silence.
     """
     t0 = clock()
@@ -565,12 +586,14 @@ def serve(core: DeviceCore, master: int | None = None, listener: socket.socket |
             now = clock() - t0
             if listener is not None and listener in ready:
                 try:
-                    accepted, _ = listener.accept()
+                    accepted, address = listener.accept()
                 except (BlockingIOError, InterruptedError):
                     accepted = None
-                if accepted is not None:
-                    if isinstance(conn, socket.socket):
-                        conn.close()
+                if accepted is not None and isinstance(conn, socket.socket):
+                    _refuse(accepted)
+                    if on_refused is not None:
+                        on_refused(address)
+                elif accepted is not None:
                     accepted.setblocking(False)
                     accepted.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
                     conn, hosts = accepted, hosts + 1
