@@ -166,7 +166,11 @@ def entry() -> NoReturn:
     one-second replay (paired runs, farm-bench), a quarter of what the user waits for.
     A thread still running gets the ordinary exit, which waits for it.
     """
-    code = main()
+    try:
+        code = main()
+    except KeyboardInterrupt:  # in the command's imports, before main's own handler
+        print("frictex: interrupted", file=sys.stderr)
+        code = 130
     if threading.active_count() > 1:
         sys.exit(code)
     atexit._run_exitfuncs()
