@@ -133,12 +133,16 @@ def test_link_failure_in_the_child_comes_back_as_oserror(tmp_path):
 PARENT = """
 import sys, time
 from frictex.app.live.haptic_process import HapticConfig, HapticProcess
+from frictex.app.live.haptic_thread import SNAPSHOT_QUEUE
 from frictex.textures.library import resolve_scene
 from frictex.textures.loader import load_scene
 path = resolve_scene("grating-5mm")
 haptic = HapticProcess(load_scene(path), HapticConfig(path, 10_000.0, 50, None, None, None))
+if sys.argv[1] == "full":  # nothing read: the child's snapshots fill their pipe
+    while haptic.snapshots.qsize() < SNAPSHOT_QUEUE:
+        time.sleep(0.01)
 print(haptic._proc.pid, flush=True)
-time.sleep(60)
+time.sleep(600)
 """
 
 
@@ -151,14 +155,20 @@ def running(pid):
         return False
 
 
-def test_child_exits_when_the_window_process_dies():
-    parent = subprocess.Popen([sys.executable, "-c", PARENT], stdout=subprocess.PIPE, text=True)
+@pytest.mark.parametrize("snapshots", ["read", "full"])
+def test_child_exits_when_the_window_process_dies(snapshots):
+    """SIGKILL to the window's process, at once or once the snapshots it never read
+    fill their pipe (the child then blocked at exit flushing them, for good): the child
+    is gone within a bound (it is told by a parent-death signal, and watches its
+    parent's pipe)."""
+    parent = subprocess.Popen([sys.executable, "-c", PARENT, snapshots], stdout=subprocess.PIPE,
+                              text=True)
     try:
         child = int(parent.stdout.readline())
         assert running(child)
         parent.kill()  # no clean shutdown: SIGKILL
         parent.wait()
-        deadline = time.monotonic() + WAIT_S  # it looks every 0.2 s: a bound, not a timing
+        deadline = time.monotonic() + WAIT_S  # a bound, not a timing
         while time.monotonic() < deadline and running(child):
             time.sleep(0.05)
         if running(child):

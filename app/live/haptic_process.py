@@ -20,17 +20,33 @@ A scene switch sends the scene's file and the renderer; the child loads and buil
 and an error comes back as a message (the old scene stays). The child stops when asked,
 when its haptic thread fails, or when the window's process is gone.
 
+The child never outlives the window's process (:func:`die_with_parent`). Two watches
+tell it the parent died, however: the kernel's parent-death signal (Linux
+``prctl(PR_SET_PDEATHSIG, SIGTERM)``; sent when the thread that started the child
+ends) and a thread waiting on the parent's end of the pipe ``multiprocessing`` leaves
+the child (readable when the parent's process is gone, on any system). Either one
+stops the queues the child writes from flushing at exit (the child holds both ends of
+their pipes: with no reader left, a full pipe held its exit for good: 25 minutes and
+more after the window died) and arms a hard exit ``PARENT_GONE_EXIT_S`` later; in
+between, the bridge loop sees the parent gone and shuts down as when asked (the link
+closed, the recording committed).
+
 Both processes stamp with ``time.perf_counter`` (on Linux CLOCK_MONOTONIC, one clock for
 the whole machine), so the window's ``now()`` is the child's output clock.
 """
 
 from __future__ import annotations
 
+import ctypes
 import gc
 import multiprocessing as mp
+import multiprocessing.connection as mp_connection
 import os
 import pickle
 import queue
+import signal
+import sys
+import threading
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -44,6 +60,10 @@ START_TIMEOUT_S = 60.0  # spawn, imports, scene load and build, link handshake
 SWITCH_TIMEOUT_S = 30.0  # a modal scene's build
 STOP_TIMEOUT_S = 30.0  # the recording's queued blocks are written before the child says done
 PARENT_CHECK_S = 0.2  # how often the idle bridge looks whether the window's process lives
+#: once the window's process is gone, the child exits at the latest this much later (s):
+#: the haptic thread's join and the link's close (haptic_setup.JOIN_TIMEOUT_S) fit in it
+PARENT_GONE_EXIT_S = 15.0
+PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
 
 class HapticProcessError(OSError):
@@ -241,9 +261,71 @@ def yield_to_haptic(increment: int = WINDOW_NICE, keep: tuple[int, ...] = ()) ->
         return None
 
 
+class _ParentWatch:
+    """What the child does when its parent is gone (:func:`die_with_parent`): once,
+    stop ``outgoing`` queues from flushing at exit and arm the hard exit."""
+
+    def __init__(self, outgoing, exit_after_s: float):
+        self.outgoing = outgoing
+        self.exit_after_s = exit_after_s
+        self.gone = threading.Event()
+        self._lock = threading.Lock()
+
+    def parent_gone(self, *_signal) -> None:
+        with self._lock:
+            if self.gone.is_set():
+                return
+            self.gone.set()
+        for q in self.outgoing:
+            q.cancel_join_thread()  # no reader will ever take what is still buffered
+        threading.Thread(target=self._hard_exit, name="frictex-orphan-exit", daemon=True).start()
+
+    def _hard_exit(self) -> None:
+        time.sleep(self.exit_after_s)
+        os._exit(1)  # the clean shutdown hung: the parent is gone, nobody waits for it
+
+
+def _set_parent_death_signal(signum: int) -> bool:
+    """Ask the kernel to send ``signum`` to this process when its parent (the thread
+    that started it) ends; False where the system has no such request (not Linux)."""
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        return libc.prctl(PR_SET_PDEATHSIG, signum, 0, 0, 0) == 0
+    except (OSError, AttributeError):
+        return False
+
+
+def die_with_parent(outgoing, exit_after_s: float = PARENT_GONE_EXIT_S) -> _ParentWatch:
+    """Make this (child) process end when its parent does: see the module docstring.
+    ``outgoing``: the ``multiprocessing`` queues this process writes to. Call it from
+    the main thread, first thing (the SIGTERM handler is installed there)."""
+    watch = _ParentWatch(tuple(outgoing), exit_after_s)
+    parent = mp.parent_process()
+
+    def on_sigterm(signum, _frame):
+        if parent is not None and not parent.is_alive():
+            watch.parent_gone()
+        else:  # the parent's own terminate(): end as SIGTERM always did
+            signal.signal(signum, signal.SIG_DFL)
+            os.kill(os.getpid(), signum)
+    if _set_parent_death_signal(signal.SIGTERM):
+        signal.signal(signal.SIGTERM, on_sigterm)
+    if parent is not None:
+        def wait_for_parent():
+            mp_connection.wait([parent.sentinel])
+            watch.parent_gone()
+        threading.Thread(target=wait_for_parent, name="frictex-parent-watch", daemon=True).start()
+    if parent is not None and not parent.is_alive():  # it died before the watches were set
+        watch.parent_gone()
+    return watch
+
+
 def serve(config: HapticConfig, estop, touches, snapshots, requests, replies,
           touch_force) -> None:
     """The child process: build, run, answer switches, stop (see the module docstring)."""
+    watch = die_with_parent((snapshots, replies))
     from frictex.app.live.haptic_setup import open_haptic  # the thread mode's own setup, in this process
     from frictex.app.live.touch_pump import open_source
     from frictex.textures.loader import load_scene
@@ -265,9 +347,8 @@ def serve(config: HapticConfig, estop, touches, snapshots, requests, replies,
     gc.freeze()
     haptic.start()
     replies.put(("ready", haptic.t0, haptic.pipeline.channels))
-    parent = mp.parent_process()
     try:
-        while haptic.error is None and parent.is_alive():
+        while haptic.error is None and not watch.gone.is_set():
             if (failure := haptic.input_error()) is not None:
                 replies.put(("input-failed", failure))
             try:
@@ -281,7 +362,8 @@ def serve(config: HapticConfig, estop, touches, snapshots, requests, replies,
             replies.put(("error", _sendable(haptic.error)))
     finally:
         link, dropped_records = finish()
-        replies.put(("done", haptic.stats, link, dropped_records))
+        if not watch.gone.is_set():
+            replies.put(("done", haptic.stats, link, dropped_records))
 
 
 def _sendable(exc: BaseException) -> BaseException:
