@@ -36,10 +36,10 @@ class Replay:
     def __init__(self, summary: Summary, out: Path | None, tables: dict[str, Any] | None):
         self.summary = summary
         self.out = out
-        self._tables = tables
+        self._tables = tables or {}  # in memory (out is None)
 
     def _table(self, stem: str) -> pyarrow.Table:
-        if self._tables is not None:
+        if self.out is None:
             return self._tables[stem]
         return read_table(self.out / f"{stem}.{self.summary.output.format}")
 

@@ -214,7 +214,7 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
                 doc["warnings"].append(f"removed the leftovers of killed runs beside "
                                        f"{staging.out.name}: " + ", ".join(staging.removed))
             text = json.dumps(finite_json(doc), indent=2, allow_nan=False) + "\n"
-            (folder / "summary.json").write_text(text, encoding="utf-8")
+            (staging.folder / "summary.json").write_text(text, encoding="utf-8")
             check()
             staging.commit()
     except BaseException:

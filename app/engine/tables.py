@@ -205,6 +205,8 @@ def open_table(out_dir: Path | None, stem: str, columns, fmt: str) -> TableWrite
     (``out_dir`` unused), else a :class:`TableWriter` into ``out_dir``."""
     if fmt == MEMORY:
         return MemoryTable(columns)
+    if out_dir is None:
+        raise InputError(f"a {fmt} table is a file: it needs an output folder")
     return TableWriter(Path(out_dir), stem, columns, fmt)
 
 
