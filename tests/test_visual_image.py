@@ -15,7 +15,9 @@ from scenes import DISPLAY
 from frictex.textures.library import resolve_scene
 from frictex.textures.loader import load_scene
 from frictex.device.profile import DeviceProfile
-from frictex.textures.model import DiscRegion, Display, Grating, Scene, VisualHints, Waveform
+from frictex.textures.heights import GaussianBump, HeightLayer, Step
+from frictex.textures.model import (DiscRegion, Display, Grating, RectRegion, Scene, VisualHints,
+                                    Waveform)
 
 
 def dense_mean(layer, x, y, cell, n=300):
@@ -64,9 +66,24 @@ def two_gratings() -> Scene:
     return Scene(1, "two", "", Display(60.0, 40.0, 240, 160), DeviceProfile(), (coarse, fine))
 
 
-@pytest.mark.parametrize("scene", [two_gratings(), "objects-bump-edge-disc",
+def height_steps() -> Scene:
+    """Heights whose relief jumps inside a pixel (at 4 px/mm): a step's chamfer edges (its
+    slope jumps there), a chamfer and a bump narrower than two pixels, a region's rim;
+    the steps face away from the light (the relief's darkest), so a jump left to a
+    pixel's centre is off by up to 0.3."""
+    def height(name, shape, region):
+        return HeightLayer(name=name, render="sho", region=region, blend="replace",
+                           visual=VisualHints((0.0, 0.0, 0.0), (1.0, 1.0, 1.0)), shape=shape)
+    return Scene(1, "steps", "", Display(60.0, 40.0, 240, 160), DeviceProfile(), (
+        height("wide", Step(15.0, 20.0, 225.0, 0.5, 3.0), RectRegion(0.0, 0.0, 30.0, 40.0)),
+        height("narrow", Step(45.0, 20.0, 225.0, 0.3, 0.1), DiscRegion(45.0, 20.0, 12.0)),
+        height("dot", GaussianBump(12.0, 30.0, 0.2, 0.3), DiscRegion(12.0, 30.0, 3.0))))
+
+
+@pytest.mark.parametrize("scene", [two_gratings(), height_steps(), "objects-bump-edge-disc",
                                    "composed-fine-grating-in-disc", "raster-map",
-                                   "keyclick-ring"],
+                                   "keyclick-ring", "height-bump", "height-button",
+                                   "height-ridge", "slider-clips"],
                          ids=lambda s: s if isinstance(s, str) else s.name)
 def test_fast_image_matches_brute_force_supersampling(scene):
     """Linear RGB within 0.004 on average of 256 point samples per pixel; at most 0.13 on

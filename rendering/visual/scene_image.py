@@ -37,9 +37,10 @@ import numpy as np
 
 from frictex.rendering.visual.force_marks import draw_force_marks, has_marks
 from frictex.rendering.visual.viewport import Viewport
-from frictex.textures.heights import HeightLayer
+from frictex.textures.dynamic import DynamicLayer
+from frictex.textures.heights import GaussianBump, HeightLayer, HeightMap
 from frictex.textures.model import (Bump, Directional, DiscRegion, Edge, Guidance, KeyClick, Line,
-                            RasterMap, Scene, Shape)
+                                    RasterMap, RectRegion, Scene, Shape)
 
 OUTLINE_RGB = np.array([1.0, 0.35, 0.0])  # orange: visible on black, white and grey
 OUTLINE_WIDTH_PX = 1.5
@@ -47,6 +48,8 @@ OUTLINE_WIDTH_PX = 1.5
 #: keeps a pixel next to a black line within one sRGB code (sRGB is steep near black)
 TABLE_CELLS_PER_PX = 2048
 TABLE_MIN, TABLE_MAX = 1024, 1 << 20
+#: sub-pixel cells composed at once when supersampling (about 100 bytes each at the peak)
+SUPERSAMPLE_CELLS = 1 << 18
 #: a jump in a periodic profile: a change of more than this fraction of its mu' range
 #: between two table cells
 JUMP_FRACTION = 0.02
@@ -241,6 +244,10 @@ def _discontinuities(layer, x, y, pixel_mm: tuple[float, float]) -> np.ndarray |
         found |= band(layer.region.signed_distance(x, y))
     if layer.is_periodic or isinstance(layer, (Directional, Guidance)):
         return found
+    if isinstance(layer, HeightLayer):
+        return found | _relief_jumps(layer.shape, x, y, band, smooth_mm, pixel_mm)
+    if isinstance(layer, DynamicLayer):  # drawn at its mu' at rest: uniform
+        return found
     if isinstance(layer, Shape):
         return found | soft_edge(layer.geometry.signed_distance(x, y), layer.edge_mm,
                                  layer.edge_mm / 2)
@@ -263,6 +270,31 @@ def _discontinuities(layer, x, y, pixel_mm: tuple[float, float]) -> np.ndarray |
     if isinstance(layer, KeyClick):
         return found | band(layer.geometry.signed_distance(x, y))
     return None
+
+
+def _relief_jumps(shape, x, y, band, smooth_mm: float, pixel_mm: tuple[float, float]) -> np.ndarray:
+    """Where a height's shaded relief (a function of its gradient) may change faster
+    than the pixel scale: at a slope band's edges where the gradient jumps (a step's
+    chamfer; a raised cosine's slope is continuous there, but kept for safety: the band
+    is thin), across the whole band, bump or map when its feature is narrower than
+    ``smooth_mm``, and at a map sprite's border. Elsewhere the relief is smooth and a
+    pixel's centre stands for its mean."""
+    if isinstance(shape, HeightMap):
+        rows, cols = shape.heights_mm.shape
+        sprite = RectRegion(shape.x_mm, shape.y_mm, shape.width_mm, shape.height_mm)
+        fine = min(shape.width_mm / cols, shape.height_mm / rows) < max(pixel_mm)
+        return band(sprite.signed_distance(x, y), -np.inf if fine else 0.0)
+    if isinstance(shape, GaussianBump):
+        r = np.hypot(x - shape.cx_mm, y - shape.cy_mm) - 4 * shape.sigma_mm
+        return band(r, -np.inf) if shape.sigma_mm < smooth_mm else np.zeros(r.shape, bool)
+    sb = shape.slope_band
+    if sb.ring:
+        d = np.hypot(x - sb.x0_mm, y - sb.y0_mm)
+    else:
+        d = sb.nx * (x - sb.x0_mm) + sb.ny * (y - sb.y0_mm)
+    if sb.hi_mm - sb.lo_mm < smooth_mm:
+        return band(d, sb.lo_mm, sb.hi_mm)
+    return band(d, sb.lo_mm, sb.lo_mm) | band(d, sb.hi_mm, sb.hi_mm)
 
 
 def _pixel_slice(box, sx: float, sy: float, width: int, height: int):
@@ -314,7 +346,7 @@ def scene_rgb(scene: Scene, viewport: Viewport, supersample: int = 4,
             if count_jumps:
                 jumps[rows, cols] += _jump_table(layer, pixel)[idx]
         else:
-            colour = layer_rgb(layer, np.broadcast_to(layer.mu_at(x, y), shape), np.float32)
+            colour = layer_rgb(layer, np.broadcast_to(layer_mu(layer, x, y), shape), np.float32)
         edges = _discontinuities(layer, x, y, pixel)
         rough[rows, cols] |= True if edges is None else edges
         covers = np.broadcast_to(layer.covers(x, y), shape)
@@ -335,14 +367,21 @@ def scene_rgb(scene: Scene, viewport: Viewport, supersample: int = 4,
 
 
 def _supersampled(scene, rows, cols, sx, sy, s: int) -> np.ndarray:
-    """Mean colour (k, 3) of the pixels (rows, cols) over s x s cells each."""
+    """Mean colour (k, 3) of the pixels (rows, cols) over s x s cells each, composed
+    ``SUPERSAMPLE_CELLS`` cells at a time (memory bounded whatever k)."""
     offsets = (np.arange(s) + 0.5) / s
-    x = (cols[:, None] + offsets[None, :]) / sx  # (k, s)
-    y = (rows[:, None] + offsets[None, :]) / sy
-    xx = np.broadcast_to(x[:, None, :], (rows.size, s, s))
-    yy = np.broadcast_to(y[:, :, None], (rows.size, s, s))
     cell = (1.0 / (s * sx), 1.0 / (s * sy))
-    return composed_rgb(scene, xx, yy, cell, (1.0 / sx, 1.0 / sy)).mean(axis=(1, 2))
+    out = np.empty((rows.size, 3), dtype=np.float32)
+    step = max(1, SUPERSAMPLE_CELLS // (s * s))
+    for lo in range(0, rows.size, step):
+        part = slice(lo, lo + step)
+        x = (cols[part, None] + offsets[None, :]) / sx  # (k, s)
+        y = (rows[part, None] + offsets[None, :]) / sy
+        k = x.shape[0]
+        xx = np.broadcast_to(x[:, None, :], (k, s, s))
+        yy = np.broadcast_to(y[:, :, None], (k, s, s))
+        out[part] = composed_rgb(scene, xx, yy, cell, (1.0 / sx, 1.0 / sy)).mean(axis=(1, 2))
+    return out
 
 
 def _outline_distance(layer, x, y) -> np.ndarray | None:
