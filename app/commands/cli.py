@@ -63,6 +63,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "preview": ("frictex.app.commands.preview", "render a scene and its friction map to a PNG"),
     "warm": ("frictex.app.commands.warm", "compile the pipeline's kernels now (setup does this once)"),
     "calibrate": ("frictex.app.commands.calibrate", "fit the friction model to a finger on a plate (simulated or real)"),
+    "experiment": ("frictex.app.commands.experiment", "run a psychophysical session from a protocol file; 'experiment analyse' fits its results"),
 }
 
 

@@ -1,0 +1,235 @@
+"""A simulated participant: feels what the pipeline outputs and answers as a Weber observer.
+
+What it feels. For each stimulus the participant explores its area of the display with
+one synthesized human-like stroke (``rendering.input.trace_synth``'s "human" motion:
+minimum-jerk strokes with pauses, sampled at a 60 Hz touch rate), and the scene's haptic
+pipeline (``rendering.pipeline``, 10 kHz, blocks of 50) turns the stroke into the friction
+target under the finger, mu'(t). From mu'(t) along the finger's path it takes:
+
+- ``contrast``: the friction depth felt, max - min of mu' while touching;
+- ``period_mm``: the spatial period felt, the path length between the first and last
+  downward crossings of mu' through its mid-level over the number of cycles between
+  them (the whole path when fewer than two crossings: a period at least that long);
+- ``fidelity``: how well mu'(t) reproduces the scene at the finger's true position
+  (``rendering.compose.ideal_mu``), in [0, 1]: the cosine similarity of the two
+  magnitude spectra, times their correlation for periods of 3.5 mm and more (seed 003
+  section 5, after its reference [17]: the fingerpad cannot place features finer than
+  that, so only their rhythm counts).
+
+The stroke is the same for every stimulus (its seed is the participant's), so what differs
+between stimuli is what the pipeline made of them; the features of a stimulus are
+computed once and kept (``feel`` is cached by scene text and area), which keeps a
+simulated session to a few pipeline runs.
+
+How it answers. The attribute judged follows ``vary``: period for ``period_mm``, contrast
+for ``depth`` and ``level``, fidelity for a list of stimuli (seed 003's "accuracy of
+reproduction"). Each presentation's percept is the attribute times exp(sigma e), e
+standard normal; sigma = ln(1 + k) / (sqrt(2) z(0.75)) makes the Weber fraction k the
+ratio a noise-free forced choice tells apart 75 % of the time. Two-interval trials: the
+larger percept is chosen; same-different: "different" when the log percepts differ by
+more than ln(1 + k). Magnitude: the percept placed on the scale (fidelity and contrast
+directly, a period on a log scale from 0.1 to 100 mm). With probability ``lapse`` the
+participant answers at random instead, whatever the trial. Draws come from the
+participant's seed and the trial number, so a resumed session answers as an unbroken one.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from scipy.special import ndtr, ndtri
+
+from frictex.app.experiment.presenter import Presentation, Shown
+from frictex.app.experiment.scheduler import Trial
+from frictex.device.errors import InputError
+from frictex.rendering.input.trace_file import Trace, make_trace
+
+#: finger speed (mm/s), stroke duration (s), touch rate (Hz) of the synthesized strokes
+SPEED_MM_S = 80.0
+STROKE_S = 1.0
+TOUCH_HZ = 60.0
+RATE_HZ = 10_000.0
+BLOCK = 50
+#: features finer than this cannot be placed under the fingerpad (seed 003, section 5)
+PLACEMENT_MM = 3.5
+Z75 = float(ndtri(0.75))
+#: the participant spec's keys: ``simulated:weber=0.11,lapse=0.02,seed=1``
+SPEC_KEYS = {"weber": (0.001, 10.0), "lapse": (0.0, 1.0), "seed": (0, 2**63 - 1),
+             "stroke_s": (0.05, 60.0)}
+
+
+@dataclass(frozen=True)
+class Felt:
+    """What one stroke over a stimulus felt like (see the module docstring); ``trace``
+    is the stroke (touch samples, mm and s)."""
+
+    contrast: float
+    period_mm: float
+    fidelity: float
+    trace: Trace
+
+
+def sigma_of(weber: float) -> float:
+    """The log-percept noise (natural log units) of a Weber fraction ``weber``."""
+    return math.log1p(weber) / (math.sqrt(2.0) * Z75)
+
+
+def p_choose_larger(ratio, weber: float, lapse: float):
+    """Probability that the two-interval observer picks the stimulus whose attribute is
+    ``ratio`` times the other's (ratio > 1: a correct answer)."""
+    ratio = np.asarray(ratio, dtype=np.float64)
+    d = np.log(ratio) / (sigma_of(weber) * math.sqrt(2.0))
+    return 0.5 * lapse + (1.0 - lapse) * ndtr(d)
+
+
+def ratio_at(p: float, weber: float, lapse: float) -> float:
+    """The attribute ratio the observer picks correctly with probability ``p``."""
+    q = (p - 0.5 * lapse) / (1.0 - lapse)
+    if not 0.5 < q < 1.0:
+        raise ValueError(f"proportion {p} is out of reach with lapse rate {lapse}")
+    return math.exp(float(ndtri(q)) * sigma_of(weber) * math.sqrt(2.0))
+
+
+def _stroke(area: tuple[float, float, float, float], duration_s: float, seed: int) -> Trace:
+    from frictex.rendering.input.trace_synth import make_motion, sample
+    x0, y0, width, height = area
+    motion = make_motion("human", speed_mm_s=SPEED_MM_S, duration_s=duration_s,
+                         area_mm=(width, height), seed=seed)
+    t = sample(motion, TOUCH_HZ, seed=seed)
+    return make_trace(t.t_s, t.finger, t.x_mm + x0, t.y_mm + y0, t.force_n, t.event)
+
+
+def _period(mu: np.ndarray, x: np.ndarray, y: np.ndarray) -> float:
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+    mid = 0.5 * (mu.max() + mu.min())
+    above = mu >= mid
+    falls = np.flatnonzero(above[:-1] & ~above[1:])
+    if falls.size < 2:
+        return float(s[-1]) if s[-1] > 0 else math.inf
+    # where mu' crosses mid between samples i and i + 1, along the path
+    frac = (mu[falls] - mid) / (mu[falls] - mu[falls + 1])
+    at = s[falls] + frac * (s[falls + 1] - s[falls])
+    return float((at[-1] - at[0]) / (falls.size - 1))
+
+
+def _fidelity(felt: np.ndarray, ideal: np.ndarray, period_mm: float | None) -> float:
+    a, b = felt - felt.mean(), ideal - ideal.mean()
+    if not np.any(b) or not np.any(a):
+        return 1.0 if not np.any(a) and not np.any(b) else 0.0
+    fa, fb = np.abs(np.fft.rfft(a)), np.abs(np.fft.rfft(b))
+    spectral = float(fa @ fb / (np.linalg.norm(fa) * np.linalg.norm(fb)))
+    if period_mm is not None and period_mm < PLACEMENT_MM:
+        return max(0.0, spectral)
+    placed = float(a @ b / (np.linalg.norm(a) * np.linalg.norm(b)))
+    return max(0.0, spectral * max(0.0, placed))
+
+
+def feel_scene(scene, area, duration_s: float, seed: int) -> Felt:
+    """Run ``scene``'s pipeline on the participant's stroke over ``area`` (x, y, width,
+    height in mm) and take the features the module docstring lists."""
+    from frictex.rendering.compose import ideal_mu
+    from frictex.rendering.input.trace_synth import make_motion
+    from frictex.rendering.pipeline import build_pipeline
+    trace = _stroke(area, duration_s, seed)
+    pipeline = build_pipeline(scene, rate_hz=RATE_HZ, block_size=BLOCK, t0_s=float(trace.t_s[0]))
+    blocks = int(math.ceil(trace.duration_s * RATE_HZ / BLOCK)) + 1
+    out, _ = pipeline.process(0, trace, pipeline.initial_state(), n_blocks=blocks)
+    touching = out.contact[0]
+    mu = out.mu_target[0][touching]
+    if mu.size < 2:
+        raise InputError(f"the simulated stroke never touched scene {scene.name!r}")
+    t = out.t_s[touching]
+    motion = make_motion("human", speed_mm_s=SPEED_MM_S, duration_s=duration_s,
+                         area_mm=area[2:], seed=seed)
+    tx, ty = motion.position(t - trace.t_s[0])
+    ideal = ideal_mu(scene, tx + area[0], ty + area[1])
+    return Felt(contrast=float(mu.max() - mu.min()),
+                period_mm=_period(mu, out.x_mm[0][touching], out.y_mm[0][touching]),
+                fidelity=_fidelity(mu, ideal, scene.grating_period_mm), trace=trace)
+
+
+class SimulatedParticipant:
+    """A presenter that is its own participant (``presenter.Presenter``); see the module
+    docstring. ``weber``: Weber fraction k; ``lapse``: share of random answers;
+    ``seed``: its stroke and its draws; ``stroke_s``: the longest stroke per stimulus (s)."""
+
+    def __init__(self, weber: float = 0.11, lapse: float = 0.02, seed: int = 0,
+                 stroke_s: float = STROKE_S):
+        self.weber, self.lapse, self.seed, self.stroke_s = weber, lapse, int(seed), stroke_s
+        self.sigma = sigma_of(weber)
+        self.attribute = "fidelity"
+        self.scale: tuple[int, int] | None = None
+        self._felt: dict[tuple, Felt] = {}
+
+    def begin(self, protocol) -> None:
+        vary = protocol.stimuli.vary
+        self.attribute = {"period_mm": "period_mm", "depth": "contrast", "level": "contrast",
+                          None: "fidelity"}[vary]
+        self.scale = protocol.scale
+
+    def feel(self, shown: Shown) -> Felt:
+        """The features of ``shown`` (cached: the same stroke on the same scene)."""
+        duration = min(self.stroke_s, shown.seconds)
+        key = (shown.text, shown.area, duration)
+        if key not in self._felt:
+            self._felt[key] = feel_scene(shown.scene, shown.area, duration, self.seed)
+        return self._felt[key]
+
+    def value(self, felt: Felt) -> float:
+        """The attribute this participant judges, as felt."""
+        return getattr(felt, self.attribute)
+
+    def rest(self, trial: Trial) -> None:
+        """A break: a simulated participant needs none."""
+
+    def present(self, trial: Trial, shown: Sequence[Shown]) -> Presentation:
+        felts = [self.feel(s) for s in shown]
+        rng = np.random.default_rng([self.seed, trial.number])
+        percepts = [max(self.value(f), 1e-12) * math.exp(self.sigma * rng.standard_normal())
+                    for f in felts]
+        lapsed = rng.random() < self.lapse
+        guess = trial.responses[int(rng.integers(len(trial.responses)))]
+        if lapsed:
+            response = guess
+        elif len(trial.responses) == 2 and trial.responses == ("1", "2"):
+            response = "1" if percepts[0] > percepts[1] else "2"
+        elif trial.responses == ("same", "different"):
+            apart = abs(math.log(percepts[0] / percepts[1])) > math.log1p(self.weber)
+            response = "different" if apart else "same"
+        else:
+            response = self._rating(percepts[0], trial.responses)
+        explored = sum(min(self.stroke_s, s.seconds) if s.free else s.seconds for s in shown)
+        rt = explored + float(rng.lognormal(math.log(0.8), 0.3))
+        return Presentation(response, rt, tuple(f.trace for f in felts))
+
+    def _rating(self, percept: float, responses: tuple[str, ...]) -> str:
+        if self.attribute == "period_mm":
+            where = math.log10(percept / 0.1) / 3.0
+        else:
+            where = percept
+        index = int(round(min(max(where, 0.0), 1.0) * (len(responses) - 1)))
+        return responses[index]
+
+
+def parse_spec(text: str) -> SimulatedParticipant:
+    """``weber=0.11,lapse=0.02[,seed=N][,stroke_s=S]`` -> a participant (InputError naming
+    the bad part)."""
+    values: dict[str, float] = {}
+    for part in filter(None, (p.strip() for p in text.split(","))):
+        key, sep, raw = part.partition("=")
+        if not sep or key not in SPEC_KEYS:
+            raise InputError(f"simulated participant: {part!r}: expected key=value with a key "
+                             f"of {', '.join(SPEC_KEYS)}")
+        low, high = SPEC_KEYS[key]
+        try:
+            value = int(raw) if key == "seed" else float(raw)
+        except ValueError:
+            raise InputError(f"simulated participant: {key}={raw!r} is not a number") from None
+        if not (low <= value <= high) or (key == "lapse" and value >= 1.0):
+            raise InputError(f"simulated participant: {key}={raw} is outside [{low:g}, {high:g}]"
+                             f"{' (and below 1)' if key == 'lapse' else ''}")
+        values[key] = value
+    return SimulatedParticipant(**values)

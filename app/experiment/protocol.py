@@ -1,0 +1,530 @@
+"""Protocol files: TOML, one experiment per file, checked once into :class:`Protocol`.
+
+Grammar (format 1). Every key not marked *required* has the default shown; the full
+table of keys, units and ranges is ``app/experiment/PROTOCOL_FORMAT.md``, generated from
+the tables below.
+::
+
+    format = 1                  # required; the version of this grammar
+    name = "..."                # default: the file name without .toml; names the study
+    description = "..."
+    method = "2afc"             # required: 2afc | staircase | same-different | magnitude
+    seed = 12345                # trial order; default: drawn when a session starts (recorded)
+    question = "..."            # what the participant is asked; default from the method
+    repetitions = 10            # trials per level and order (see the methods below)
+    practice = 0                # practice trials first (not analysed, not adapting)
+    break_every = 0             # a break after every N main trials (0: none)
+
+    [stimuli]                   # one scene with a parameter varied
+    scene = "grating-5mm"       # required: a bundled scene or a path (relative to this file)
+    vary = "period_mm"          # period_mm | depth | level (a clip's intensity); omit for
+                                #   one stimulus per renderer in `renderers`
+    layer = "lines"             # the layer varied; default: the first that has the parameter
+    reference = 5.0             # the standard stimulus (units of `vary`)
+    levels = [5.3, 5.6, 6.2]    # comparisons (2afc, same-different, magnitude); above the
+                                #   reference for 2afc
+    renderers = ["sho", "sht"]  # render the varied layer each of these ways: magnitude only,
+                                #   crossed with the levels (seed 003's grating comparison)
+
+    [[stimulus]]                # instead of [stimuli] (magnitude only): a list of scenes
+    name = "..."                # required, unique
+    scene = "grating-15mm"      # required
+    renderer = "sht"            # optional: render every periodic layer this way
+
+    [presentation]
+    mode = "sequential"         # | side-by-side: two-interval trials in time or in space
+    exploration = "fixed"       # | free: the participant answers when ready
+    exploration_s = 3.0         # per stimulus: the time shown (fixed) or the most (free)
+
+    [staircase]                 # method = "staircase" only
+    rule = "1-up-2-down"        # | 1-up-3-down (Levitt 1971: 70.7 % and 79.4 % correct)
+    start = 2.0                 # required: the first comparison's difference from the reference
+    steps = [0.2, 0.1]          # step after 0, 1, ... reversals (the last one thereafter)
+    scale = "log"               # log: steps in log10 units (x or / 10^step); linear: +- step
+    reversals = 12              # stop after this many reversals ...
+    max_trials = 100            # ... or this many trials
+    threshold_reversals = 8     # the staircase's threshold: mean of the last N reversal levels
+    min = ..., max = ...        # bounds of the difference (default: none)
+
+    [scale]                     # method = "magnitude" only: the rating scale (integers)
+    min = 1
+    max = 10
+
+    [analysis]
+    function = "weibull"        # | logistic: the psychometric function fitted
+    lapse_max = 0.06            # the lapse rate is fitted within [0, lapse_max]
+    target = ...                # the threshold's proportion correct; default: 0.75 (2afc),
+                                #   the rule's convergence point (staircase)
+    bootstrap = 1000            # parametric bootstrap samples for the 95 % intervals
+
+Methods: ``2afc``: constant stimuli; each trial shows the reference and one comparison in
+random order, counterbalanced (each level ``repetitions`` times in each order); correct
+is choosing the comparison, guess rate 0.5. ``staircase``: the same two-interval trials
+with the comparison's difference set by the rule: down a step after 2 (or 3) correct in a
+row, up after an error; the order of the intervals is counterbalanced in pairs of trials.
+``same-different``: pairs AB, BA, AA, BB (A the reference, B a level), ``repetitions``
+of each; correct is "same" for AA and BB. ``magnitude``: one stimulus per trial, each
+``repetitions`` times, rated on the scale. Trial order is shuffled from ``seed``.
+
+Every problem in a file is reported as ``file:line: field: message``
+(:class:`ProtocolError`, an ``InputError``); the line numbers come from the texture
+loader's :class:`~frictex.textures.errors.Locator`, and the values are read by its reader,
+so a protocol's numbers and strings are checked as a texture file's are.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from frictex.device.errors import InputError
+from frictex.textures.errors import KeyPath, Locator, Problem
+from frictex.textures.keys import RENDER_CHOICES
+from frictex.textures.library import UnreadableText, read_utf8
+from frictex.textures.schema import BAD as _BAD
+from frictex.textures.schema import Choice, Int, Num, NumList, Reader, Text
+from frictex.textures.toml_safe import parse_toml
+
+FORMAT_VERSION = 1
+METHODS = ("2afc", "staircase", "same-different", "magnitude")
+#: what a stimulus may vary (``stimuli.PARAMETERS`` says how each sets a layer)
+VARIES = ("period_mm", "depth", "level")
+PRESENTATIONS = ("sequential", "side-by-side")
+EXPLORATIONS = ("fixed", "free")
+RULES = {"1-up-2-down": 2, "1-up-3-down": 3}
+FUNCTIONS = ("weibull", "logistic")
+#: the proportion correct a rule converges on: p^n = 1/2 (Levitt 1971)
+RULE_TARGETS = {rule: 0.5 ** (1.0 / n) for rule, n in RULES.items()}
+#: guess rate by method (chance performance), for the psychometric fit
+GUESS_RATES = {"2afc": 0.5, "staircase": 0.5}
+MAX_FILE_BYTES = 1 << 20
+MAX_LEVELS = 100
+MAX_STIMULI = 100
+
+#: what the participant is asked when the file gives no ``question``
+QUESTIONS = {
+    "2afc": "Which of the two felt {attribute}?",
+    "staircase": "Which of the two felt {attribute}?",
+    "same-different": "Did the two feel the same or different?",
+    "magnitude": "How accurately did this reproduce what you saw? Rate it.",
+}
+#: the attribute a two-interval question names, by ``vary``
+ATTRIBUTES = {"period_mm": "coarser (wider lines)", "depth": "stronger", "level": "stronger"}
+
+NUMBER = Num("units of `vary`", ge=-1e6, le=1e6)
+TOP = {"format": Int("format version"), "name": Text(None),
+       "description": Text("", max_len=10_000, lines=True),
+       "method": Choice(METHODS), "seed": Int("random seed", None, ge=0, le=2**63 - 1),
+       "question": Text(None, max_len=500),
+       "repetitions": Int("trials per level and order", 10, ge=1, le=1000),
+       "practice": Int("trials", 0, ge=0, le=100),
+       "break_every": Int("trials", 0, ge=0, le=10_000)}
+
+
+@dataclass(frozen=True)
+class Names:
+    """A list of distinct names, each one of ``options``."""
+
+    options: tuple[str, ...]
+    default: tuple = ()
+
+    def check(self, r: Reader, value, path: KeyPath):
+        if not isinstance(value, list) or not value:
+            return r.report(path, f"expected a list of names ({', '.join(self.options)})")
+        out = [Choice(self.options).check(r, v, path + (i,)) for i, v in enumerate(value)]
+        if _BAD in out:
+            return _BAD
+        if len(set(out)) != len(out):
+            return r.report(path, "names one twice")
+        return tuple(out)
+
+
+STIMULI = {"scene": Text(max_len=1000), "vary": Choice(VARIES, None), "layer": Text(None),
+           "reference": replace(NUMBER, default=None), "levels": NumList(NUMBER, default=()),
+           "renderers": Names(RENDER_CHOICES)}
+STIMULUS = {"name": Text(), "scene": Text(max_len=1000), "renderer": Choice(RENDER_CHOICES, None)}
+PRESENTATION = {"mode": Choice(PRESENTATIONS, "sequential"),
+                "exploration": Choice(EXPLORATIONS, "fixed"),
+                "exploration_s": Num("s", 3.0, gt=0.0, le=600.0)}
+STAIRCASE = {"rule": Choice(tuple(RULES), "1-up-2-down"),
+             "start": Num("units of `vary`", gt=0.0, le=1e6),
+             "steps": NumList(Num("step (log10 units or units of `vary`)", gt=0.0, le=1e6),
+                              default=(0.2, 0.1)),
+             "scale": Choice(("log", "linear"), "log"),
+             "reversals": Int("reversals", 12, ge=2, le=200),
+             "max_trials": Int("trials", 100, ge=1, le=5000),
+             "threshold_reversals": Int("reversals", 8, ge=1, le=200),
+             "min": Num("units of `vary`", None, gt=0.0, le=1e6),
+             "max": Num("units of `vary`", None, gt=0.0, le=1e6)}
+SCALE = {"min": Int("rating", 1, ge=-1000, le=1000), "max": Int("rating", 10, ge=-1000, le=1000)}
+ANALYSIS = {"function": Choice(FUNCTIONS, "weibull"),
+            "lapse_max": Num("proportion", 0.06, ge=0.0, le=0.2),
+            "target": Num("proportion correct", None, gt=0.5, lt=1.0),
+            "bootstrap": Int("samples", 1000, ge=0, le=100_000)}
+TABLES = ("stimuli", "stimulus", "presentation", "staircase", "scale", "analysis")
+
+
+class ProtocolError(InputError):
+    """A protocol file that cannot be used. ``problems`` lists every problem found;
+    ``str()`` is one line: the first problem and how many more there are."""
+
+    def __init__(self, problems: list[Problem] | str):
+        self.problems = [] if isinstance(problems, str) else list(problems)
+        if isinstance(problems, str):
+            super().__init__(problems)
+            return
+        message = str(self.problems[0])
+        more = len(self.problems) - 1
+        if more:
+            message += f" (and {more} more problem{'s' if more > 1 else ''})"
+        super().__init__(message)
+
+
+@dataclass(frozen=True)
+class Stimulus:
+    """One stimulus: ``scene`` (a texture file) with ``value`` set on its ``vary`` layer
+    (None: as the file has it) and rendered by ``renderer`` (None: as the file says).
+    ``name`` is unique within the protocol and names the stimulus in the results."""
+
+    name: str
+    scene: Path
+    value: float | None = None
+    renderer: str | None = None
+
+
+@dataclass(frozen=True)
+class Stimuli:
+    """``[stimuli]`` or ``[[stimulus]]``: where the stimuli come from.
+
+    ``vary``/``layer``/``reference``/``levels``: the parametric form (``layer`` is the
+    index of the varied layer in the base scene); ``listed``: the scenes of the
+    ``[[stimulus]]`` form (or the renderers crossed with the levels)."""
+
+    scene: Path | None
+    vary: str | None = None
+    layer: int | None = None
+    reference: float | None = None
+    levels: tuple[float, ...] = ()
+    listed: tuple[Stimulus, ...] = ()
+
+
+@dataclass(frozen=True)
+class Presentation:
+    mode: str = "sequential"
+    exploration: str = "fixed"
+    exploration_s: float = 3.0
+
+
+@dataclass(frozen=True)
+class Staircase:
+    rule: str
+    start: float
+    steps: tuple[float, ...]
+    scale: str
+    reversals: int
+    max_trials: int
+    threshold_reversals: int
+    min: float | None
+    max: float | None
+
+    @property
+    def down_after(self) -> int:
+        """Correct answers in a row that take the difference down a step."""
+        return RULES[self.rule]
+
+
+@dataclass(frozen=True)
+class Analysis:
+    function: str = "weibull"
+    lapse_max: float = 0.06
+    target: float | None = None
+    bootstrap: int = 1000
+
+
+@dataclass(frozen=True)
+class Protocol:
+    """A checked protocol file (see the module docstring); ``text`` is the file as read,
+    kept so that a session records exactly what it ran."""
+
+    source: Path
+    text: str
+    name: str
+    description: str
+    method: str
+    seed: int | None
+    question: str
+    repetitions: int
+    practice: int
+    break_every: int
+    stimuli: Stimuli
+    presentation: Presentation
+    staircase: Staircase | None
+    scale: tuple[int, int] | None
+    analysis: Analysis
+
+    @property
+    def two_interval(self) -> bool:
+        """Trials that show two stimuli (all methods but magnitude estimation)."""
+        return self.method != "magnitude"
+
+    @property
+    def guess_rate(self) -> float | None:
+        """Chance performance of the method's forced choice; None where none applies."""
+        return GUESS_RATES.get(self.method)
+
+    @property
+    def target(self) -> float:
+        """The proportion correct that defines the threshold (see ``[analysis] target``)."""
+        if self.analysis.target is not None:
+            return self.analysis.target
+        if self.staircase is not None:
+            return RULE_TARGETS[self.staircase.rule]
+        return 0.75
+
+
+def _scene_path(raw: str, base_dir: Path) -> Path:
+    """A scene named in a protocol: a path relative to the protocol, else a bundled name
+    (``textures.library.resolve_scene``; a TextureError when neither exists)."""
+    from frictex.textures.library import resolve_scene
+    local = base_dir / raw
+    if local.exists() or local.is_symlink():
+        return local
+    return resolve_scene(raw)
+
+
+class _Check:
+    """The reader, plus the checks that span keys."""
+
+    def __init__(self, label: str):
+        self.r = Reader(label, None)
+
+    def report(self, path: KeyPath, message: str) -> object:
+        return self.r.report(path, message)
+
+
+def _parametric(c: _Check, doc: dict, method: str, base_dir: Path) -> Stimuli | None:
+    v = c.r.table(doc["stimuli"], ("stimuli",), STIMULI)
+    if v is None:
+        return None
+    raw = doc["stimuli"]
+    renderers = v["renderers"]
+    if renderers:
+        if renderers is not _BAD and method != "magnitude":
+            renderers = c.report(("stimuli", "renderers"), f"only method \"magnitude\" crosses "
+                                                           f"renderers (this is {method})")
+    if _BAD in v.values() or renderers is _BAD:
+        return None
+    from frictex.app.experiment import stimuli as S
+    try:
+        scene = _scene_path(v["scene"], base_dir)
+        base = S.load_base(scene)
+    except InputError as exc:
+        c.report(("stimuli", "scene"), str(exc))
+        return None
+    vary, levels, reference = v["vary"], tuple(v["levels"]), v["reference"]
+    if vary is None:
+        if not renderers:
+            c.report(("stimuli", "vary"), f"missing: one of {', '.join(VARIES)} (or list "
+                                          f"`renderers` for a magnitude estimation)")
+            return None
+        for key in ("layer", "levels"):
+            if raw.get(key) is not None:
+                c.report(("stimuli", key), "given without `vary`")
+        listed = tuple(Stimulus(f"{scene.stem}-{name}", scene, None, name) for name in renderers)
+        return Stimuli(scene, listed=listed)
+    shown = doc.get("presentation")
+    if method != "magnitude" and isinstance(shown, dict) and shown.get("mode") == "side-by-side":
+        problem = S.side_by_side_problem(base.doc, base.doc)
+        if problem:
+            c.report(("presentation", "mode"), problem)
+            return None
+    layer = S.varied_layer(base, vary, v["layer"])
+    if isinstance(layer, str):
+        c.report(("stimuli", "layer" if v["layer"] is not None else "vary"), layer)
+        return None
+    if reference is None:
+        c.report(("stimuli", "reference"), f"missing (required with vary = \"{vary}\"): the "
+                                           f"standard stimulus's {vary}")
+        return None
+    if method == "staircase":
+        if levels:
+            c.report(("stimuli", "levels"), "not used by a staircase: [staircase] start and "
+                                            "steps set the levels")
+    elif not levels:
+        c.report(("stimuli", "levels"), f"missing (required for method \"{method}\"): the "
+                                        f"comparison levels")
+        return None
+    elif len(levels) > MAX_LEVELS:
+        c.report(("stimuli", "levels"), f"{len(levels)} levels; at most {MAX_LEVELS}")
+        return None
+    elif len(set(levels)) != len(levels):
+        c.report(("stimuli", "levels"), "a level is given twice")
+        return None
+    ok = True
+    for i, level in enumerate(levels):
+        if method in ("2afc", "same-different") and not level > reference:
+            c.report(("stimuli", "levels", i),
+                     f"{level:g} is not above the reference {reference:g}: "
+                     f"{'2afc asks which of the two is larger' if method == '2afc' else 'each level is compared with the reference'}")
+            ok = False
+    for i, value in [(None, reference), *enumerate(levels)]:
+        problem = S.value_problem(base, vary, layer, value)
+        if problem:
+            c.report(("stimuli", "reference" if i is None else "levels"), problem)
+            ok = False
+    if not ok:
+        return None
+    listed = ()
+    if renderers:
+        listed = tuple(Stimulus(S.name_of(vary, value, renderer), scene, value, renderer)
+                       for renderer in renderers for value in (reference, *levels))
+    return Stimuli(scene, vary, layer, reference, levels, listed)
+
+
+def _listed(c: _Check, doc: dict, method: str, base_dir: Path) -> Stimuli | None:
+    raw = doc["stimulus"]
+    if not isinstance(raw, list) or not all(isinstance(x, dict) for x in raw):
+        c.report(("stimulus",), "expected [[stimulus]] tables (an array of tables)")
+        return None
+    if method != "magnitude":
+        c.report(("stimulus",), f"[[stimulus]] lists are for method \"magnitude\"; {method} "
+                                f"compares levels of one parameter: use [stimuli]")
+        return None
+    if not raw or len(raw) > MAX_STIMULI:
+        c.report(("stimulus",), f"{len(raw)} stimuli; expected 1 to {MAX_STIMULI}")
+        return None
+    from frictex.app.experiment import stimuli as S
+    out, names = [], set()
+    for i, item in enumerate(raw):
+        v = c.r.table(item, ("stimulus", i), STIMULUS)
+        if v is None or _BAD in v.values():
+            continue
+        if v["name"] in names or not v["name"].strip() or not S.plain_name(v["name"]):
+            c.report(("stimulus", i, "name"), f"{v['name']!r}: expected a unique name of "
+                                              f"letters, digits, '.', '-', '_', '='")
+            continue
+        names.add(v["name"])
+        try:
+            scene = _scene_path(v["scene"], base_dir)
+            S.load_base(scene)
+        except InputError as exc:
+            c.report(("stimulus", i, "scene"), str(exc))
+            continue
+        out.append(Stimulus(v["name"], scene, None, v["renderer"]))
+    if len(out) != len(raw):
+        return None
+    return Stimuli(None, listed=tuple(out))
+
+
+def _staircase(c: _Check, doc: dict, method: str) -> Staircase | None | object:
+    if method != "staircase":
+        if "staircase" in doc:
+            c.report(("staircase",), f"only for method \"staircase\" (this is {method})")
+        return None
+    if "staircase" not in doc:
+        return c.report(("staircase",), "missing [staircase] table (start is required)")
+    v = c.r.table(doc["staircase"], ("staircase",), STAIRCASE)
+    if v is None or _BAD in v.values():
+        return _BAD
+    if v["threshold_reversals"] > v["reversals"]:
+        return c.report(("staircase", "threshold_reversals"),
+                        f"{v['threshold_reversals']} is more than the {v['reversals']} "
+                        f"reversals the staircase stops after")
+    low, high = v["min"], v["max"]
+    if low is not None and high is not None and not low < high:
+        return c.report(("staircase", "min"), f"{low:g} is not below max {high:g}")
+    if (low is not None and v["start"] < low) or (high is not None and v["start"] > high):
+        return c.report(("staircase", "start"), f"{v['start']:g} is outside [min, max]")
+    return Staircase(v["rule"], v["start"], tuple(v["steps"]), v["scale"], v["reversals"],
+                     v["max_trials"], v["threshold_reversals"], low, high)
+
+
+def check_protocol(path: str | Path) -> tuple[Protocol | None, list[Problem]]:
+    """Read and check a protocol file: ``(protocol, problems)``, the protocol None when
+    there is any problem. Never raises for bad input."""
+    path = Path(path)
+    c = _Check(str(path))
+    r = c.r
+    try:
+        text = read_utf8(path, MAX_FILE_BYTES)
+    except UnreadableText as exc:
+        return None, [Problem(str(path), exc.line, "", f"{exc}; expected a protocol file (.toml)")]
+    if not text.strip():
+        c.report((), "is empty; expected a protocol file (format = 1, method, [stimuli])")
+        return None, r.problems
+    doc = parse_toml(text, r)
+    if doc is None:
+        return None, r.problems
+    r.locator = Locator(text)
+    top = r.table(doc, (), TOP, tables=TABLES)
+    fmt = top["format"]
+    if fmt is not _BAD and fmt != FORMAT_VERSION:
+        c.report(("format",), f"{fmt} is not a protocol format this frictex reads "
+                              f"(format = {FORMAT_VERSION})")
+        return None, r.problems
+    method = top["method"]
+    if method is _BAD:
+        return None, sorted(r.problems, key=lambda p: p.line or 0)
+    presentation = r.table(doc.get("presentation", {}), ("presentation",), PRESENTATION)
+    analysis = r.table(doc.get("analysis", {}), ("analysis",), ANALYSIS)
+    staircase = _staircase(c, doc, method)
+    scale = None
+    if method == "magnitude":
+        v = r.table(doc.get("scale", {}), ("scale",), SCALE)
+        if v is not None and _BAD not in v.values():
+            if not v["min"] < v["max"]:
+                c.report(("scale", "min"), f"{v['min']} is not below max {v['max']}")
+            elif v["max"] - v["min"] > 1000:
+                c.report(("scale", "max"), "a scale of more than 1000 steps")
+            else:
+                scale = (v["min"], v["max"])
+    elif "scale" in doc:
+        c.report(("scale",), f"only for method \"magnitude\" (this is {method})")
+    if presentation is not None and presentation["mode"] == "side-by-side" and method == "magnitude":
+        c.report(("presentation", "mode"), "side-by-side needs two stimuli a trial; magnitude "
+                                           "estimation shows one")
+    if analysis is not None and analysis["target"] not in (None, _BAD) and method not in GUESS_RATES:
+        c.report(("analysis", "target"), f"method \"{method}\" fits no psychometric function")
+    stimuli = None
+    if ("stimuli" in doc) == ("stimulus" in doc):
+        c.report(("stimuli",), "expected either [stimuli] (one scene, a parameter varied) or "
+                               "[[stimulus]] tables (a list of scenes), and not both")
+    elif "stimuli" in doc:
+        stimuli = _parametric(c, doc, method, path.parent)
+    else:
+        stimuli = _listed(c, doc, method, path.parent)
+    problems = sorted(r.problems, key=lambda p: p.line or 0)
+    if (problems or stimuli is None or presentation is None or analysis is None
+            or staircase is _BAD or _BAD in top.values()):
+        return None, problems
+    if method == "staircase" and stimuli.vary is None:
+        c.report(("stimuli", "vary"), "a staircase needs a parameter to vary")
+        return None, r.problems
+    if method == "staircase":
+        from frictex.app.experiment.stimuli import load_base, value_problem
+        base = load_base(stimuli.scene)
+        for key in ("start", "max"):
+            difference = getattr(staircase, key)
+            problem = difference is not None and value_problem(
+                base, stimuli.vary, stimuli.layer, stimuli.reference + difference)
+            if problem:
+                c.report(("staircase", key), f"the reference plus {difference:g}: {problem}")
+        if r.problems:
+            return None, r.problems
+    question = top["question"]
+    if question is None:
+        question = QUESTIONS[method].format(attribute=ATTRIBUTES.get(stimuli.vary, "stronger"))
+    return Protocol(source=path, text=text, name=top["name"] or path.stem,
+                    description=top["description"], method=method, seed=top["seed"],
+                    question=question, repetitions=top["repetitions"], practice=top["practice"],
+                    break_every=top["break_every"], stimuli=stimuli,
+                    presentation=Presentation(**presentation), staircase=staircase,
+                    scale=scale, analysis=Analysis(**analysis)), []
+
+
+def load_protocol(path: str | Path) -> Protocol:
+    """The protocol in a file; :class:`ProtocolError` lists every problem."""
+    protocol, problems = check_protocol(path)
+    if protocol is None:
+        raise ProtocolError(problems)
+    return protocol

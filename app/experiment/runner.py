@@ -1,0 +1,126 @@
+"""Running a session: the scheduler's trials shown by a presenter, recorded as they end.
+
+A presenter (``presenter.Presenter``) shows a trial's stimuli and returns the
+participant's answer. The runner owns everything else: which trial comes next
+(``scheduler``), the scenes (``stimuli.StimulusBank``), the session folder
+(``session``). Presenters register by
+name in :data:`PARTICIPANTS` (``--participant NAME:OPTIONS``): ``simulated`` (the
+observer model, headless); the demo window registers its own.
+
+    session = run_session(protocol, presenter, "out/p01")
+"""
+
+from __future__ import annotations
+
+import secrets
+from pathlib import Path
+from typing import Callable
+
+from frictex.app.experiment import session as S
+from frictex.app.experiment.presenter import Presenter, Shown
+from frictex.app.experiment.protocol import Protocol as ExperimentProtocol
+from frictex.app.experiment.protocol import Stimulus
+from frictex.app.experiment.scheduler import Scheduler, Trial
+from frictex.app.experiment.stimuli import StimulusBank, name_of
+from frictex.device.errors import InputError
+from frictex.device.registry import Registry
+
+
+#: ``--participant NAME:OPTIONS`` -> a factory taking OPTIONS and giving a Presenter
+PARTICIPANTS: Registry[Callable[[str], Presenter]] = Registry("participant",
+                                                              "frictex.participants")
+
+
+def _simulated(options: str) -> Presenter:
+    from frictex.app.experiment.observer import parse_spec
+    return parse_spec(options)
+
+
+PARTICIPANTS.register("simulated", _simulated)
+
+
+def make_presenter(spec: str) -> Presenter:
+    """``simulated:weber=0.11,lapse=0.02`` -> the registered participant's presenter."""
+    name, _, options = spec.partition(":")
+    return PARTICIPANTS.get(name)(options)
+
+
+class _Stage:
+    """The scenes of a protocol's trials (``Shown`` per interval)."""
+
+    def __init__(self, protocol: ExperimentProtocol, bank: StimulusBank):
+        self.protocol = protocol
+        self.bank = bank
+        s = protocol.stimuli
+        self.listed = {st.name: st for st in s.listed}
+
+    def stimulus(self, name: str, trial: Trial) -> Stimulus:
+        if name in self.listed:
+            return self.listed[name]
+        s = self.protocol.stimuli
+        value = s.reference if name == name_of(s.vary, s.reference, None) else trial.value
+        return Stimulus(name, s.scene, value, None)
+
+    def shown(self, trial: Trial) -> list[Shown]:
+        p = self.protocol
+        s, pres = p.stimuli, p.presentation
+        stimuli = [self.stimulus(name, trial) for name in trial.stimuli]
+        free = pres.exploration == "free"
+        if pres.mode == "side-by-side" and len(stimuli) == 2:
+            scene, text = self.bank.pair(*stimuli, s.vary, s.layer)
+            w, h = scene.display.width_mm, scene.display.height_mm
+            name = f"{stimuli[0].name}+{stimuli[1].name}"
+            return [Shown(name, scene, text, (0.0, 0.0, w / 2, h), pres.exploration_s, free),
+                    Shown(name, scene, text, (w / 2, 0.0, w / 2, h), pres.exploration_s, free)]
+        out = []
+        for st in stimuli:
+            scene, text = self.bank.get(st, s.vary, s.layer)
+            area = (0.0, 0.0, scene.display.width_mm, scene.display.height_mm)
+            out.append(Shown(st.name, scene, text, area, pres.exploration_s, free))
+        return out
+
+
+def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str | Path, *,
+                seed: int | None = None, participant: str = "", resume: bool = False,
+                record: str = "all", progress: Callable[[Trial, dict], None] | None = None
+                ) -> S.Session:
+    """Run (or with ``resume`` go on with) the session of ``protocol`` in ``out_dir``.
+
+    ``seed``: the trial order's seed (default: the protocol's, else drawn now; recorded
+    in session.json). ``participant``: the participant spec, recorded. ``record``:
+    ``all`` (per trial: scene, trace and their replay), ``traces`` (scene and trace) or
+    ``results`` (the results table only). ``progress(trial, row)`` is called after each
+    trial is recorded. Returns the session (its ``rows``: every trial answered).
+    """
+    if record not in S.RECORDS:
+        raise InputError(f"record {record!r}: expected one of {', '.join(S.RECORDS)}")
+    out_dir = Path(out_dir)
+    if resume:
+        session = S.resume(out_dir, protocol, participant or None)
+    else:
+        if seed is None:
+            seed = protocol.seed if protocol.seed is not None else secrets.randbits(63)
+        session = S.create(out_dir, protocol, seed, participant)
+    scheduler = Scheduler(protocol, session.seed)
+    state = scheduler.replay((row["stimuli"].split(S.SEPARATOR), row["response"])
+                             for row in session.rows)
+    stage = _Stage(protocol, StimulusBank(out_dir / "stimuli"))
+    presenter.begin(protocol)
+    while (trial := scheduler.next_trial(state)) is not None:
+        if trial.break_before:
+            presenter.rest(trial)
+        shown = stage.shown(trial)
+        result = presenter.present(trial, shown)
+        if result.response not in trial.responses:
+            raise InputError(f"trial {trial.number}: the presenter answered "
+                             f"{result.response!r}; expected one of {', '.join(trial.responses)}")
+        if record != "results":
+            for interval, (item, trace) in enumerate(zip(shown, result.traces), start=1):
+                session.write_interval(trial.number, interval, item.text, trace, record)
+            session.sync_trial(trial.number)
+        row = S.result_row(trial, result.response, result.rt_s)
+        session.append(row)
+        state = scheduler.answer(state, trial, result.response)
+        if progress is not None:
+            progress(trial, row)
+    return session

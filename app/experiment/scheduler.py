@@ -1,0 +1,279 @@
+"""The methods as pure trial logic: a scheduler with explicit state.
+
+    scheduler = Scheduler(protocol, seed)
+    state = scheduler.initial_state()
+    while (trial := scheduler.next_trial(state)) is not None:
+        response = ...                      # the presenter's
+        state = scheduler.answer(state, trial, response)
+
+Nothing here reads a clock or a file, and every random draw comes from ``seed`` (and the
+trial's position), so a session is rebuilt exactly by answering the recorded responses
+again (:meth:`Scheduler.replay`): that is how ``--resume`` continues with no trial lost
+or repeated.
+
+Constant methods (2afc, same-different, magnitude) draw their whole list of main trials
+when the scheduler is made: every level in every order ``repetitions`` times (2afc: the
+comparison first and second; same-different: AB, BA, AA, BB; magnitude: each stimulus),
+shuffled. The staircase draws the order of the two intervals in pairs of trials (one
+comparison-first and one comparison-second in each pair, in random order), and sets the
+comparison from the answers (Levitt 1971's transformed up-down rules: down a step after
+``n`` correct in a row, up a step after an error; a 1-up-2-down staircase converges on
+the difference answered correctly 70.7 % of the time, p^2 = 1/2, a 1-up-3-down on 79.4 %).
+A reversal is a change of direction; its level is the difference of the trial before
+the change. Steps shrink with the reversals (``steps[i]`` after ``i`` reversals) and on
+the log scale are factors 10^step. The staircase stops after ``reversals`` reversals or
+``max_trials`` main trials.
+
+Practice trials come first (the easiest comparison, or random stimuli for magnitude
+estimation), answered but neither adapting a staircase nor analysed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Iterable
+
+import numpy as np
+
+from frictex.app.experiment.protocol import Protocol, Staircase, Stimulus
+from frictex.app.experiment.stimuli import name_of
+from frictex.device.errors import InputError
+
+INTERVALS = ("1", "2")
+SAME_DIFFERENT = ("same", "different")
+#: stream tags of the draws from the seed (so that each kind of draw is independent)
+_PLAN, _PRACTICE, _ORDER = 1, 2, 3
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One trial.
+
+    number : 1-based position in the session, practice included.
+    practice : a practice trial (not analysed, does not adapt a staircase).
+    stimuli : the stimulus names in presentation order (first/left, second/right).
+    value : the comparison's value of ``vary`` (None for magnitude estimation).
+    difference : ``value`` minus the reference (units of ``vary``); 0 for an AA/BB pair.
+    answer : the correct response (None where no answer is correct: magnitude).
+    responses : the responses a participant may give.
+    break_before : a break is due before this trial.
+    """
+
+    number: int
+    practice: bool
+    stimuli: tuple[str, ...]
+    value: float | None
+    difference: float | None
+    answer: str | None
+    responses: tuple[str, ...]
+    break_before: bool = False
+
+
+@dataclass(frozen=True)
+class StaircaseState:
+    """difference : the next comparison's difference from the reference.
+    run : correct answers in a row since the last step.
+    direction : +1 after a step up, -1 after a step down, 0 before any step.
+    reversals : the difference at each reversal so far."""
+
+    difference: float
+    run: int = 0
+    direction: int = 0
+    reversals: tuple[float, ...] = ()
+
+
+@dataclass(frozen=True)
+class SchedulerState:
+    """done : trials answered (practice included). main : main trials answered.
+    staircase : the staircase's state (staircase protocols only)."""
+
+    done: int = 0
+    main: int = 0
+    staircase: StaircaseState | None = None
+
+
+@dataclass(frozen=True)
+class _Planned:
+    """A constant-method trial before it is numbered: stimuli, value, difference, answer."""
+
+    stimuli: tuple[str, ...]
+    value: float | None
+    difference: float | None
+    answer: str | None
+
+
+class Scheduler:
+    """The trials of ``protocol`` drawn from ``seed`` (see the module docstring)."""
+
+    def __init__(self, protocol: Protocol, seed: int):
+        if not 0 <= seed < 2**63:
+            raise InputError(f"seed {seed}: expected an integer from 0 to 2^63 - 1")
+        self.protocol = protocol
+        self.seed = int(seed)
+        s = protocol.stimuli
+        self.reference = name_of(s.vary, s.reference, None) if s.vary else None
+        if protocol.method == "magnitude":
+            self.responses = tuple(str(i) for i in range(protocol.scale[0], protocol.scale[1] + 1))
+        elif protocol.method == "same-different":
+            self.responses = SAME_DIFFERENT
+        else:
+            self.responses = INTERVALS
+        self.plan = self._main_plan() if protocol.method != "staircase" else None
+        self.practice = self._practice_plan()
+
+    # -- plans -------------------------------------------------------------------------
+
+    def _rng(self, *tags: int) -> np.random.Generator:
+        return np.random.default_rng([self.seed, *tags])
+
+    def stimuli_list(self) -> tuple[Stimulus, ...]:
+        """Every stimulus the constant methods show (the staircase's are made as it goes)."""
+        s = self.protocol.stimuli
+        if s.listed:
+            return s.listed
+        values = (s.reference, *s.levels)
+        return tuple(Stimulus(name_of(s.vary, v, None), s.scene, v, None) for v in values)
+
+    def _pair(self, value: float, comparison_first: bool) -> _Planned:
+        s = self.protocol.stimuli
+        names = (name_of(s.vary, value, None), self.reference)
+        if not comparison_first:
+            names = names[::-1]
+        return _Planned(names, value, value - s.reference, "1" if comparison_first else "2")
+
+    def _main_plan(self) -> tuple[_Planned, ...]:
+        p, s = self.protocol, self.protocol.stimuli
+        plan: list[_Planned] = []
+        for _ in range(p.repetitions):
+            if p.method == "magnitude":
+                plan += [_Planned((st.name,), st.value, None, None) for st in self.stimuli_list()]
+                continue
+            for value in s.levels:
+                if p.method == "2afc":
+                    plan += [self._pair(value, True), self._pair(value, False)]
+                    continue
+                a, b = self.reference, name_of(s.vary, value, None)
+                diff = value - s.reference
+                plan += [_Planned((a, b), value, diff, "different"),
+                         _Planned((b, a), value, diff, "different"),
+                         _Planned((a, a), value, 0.0, "same"),
+                         _Planned((b, b), value, 0.0, "same")]
+        order = self._rng(_PLAN).permutation(len(plan))
+        return tuple(plan[i] for i in order)
+
+    def _practice_plan(self) -> tuple[_Planned, ...]:
+        p, s = self.protocol, self.protocol.stimuli
+        rng = self._rng(_PRACTICE)
+        out = []
+        for i in range(p.practice):
+            first = bool(rng.integers(2))
+            if p.method == "magnitude":
+                st = self.stimuli_list()[rng.integers(len(self.stimuli_list()))]
+                out.append(_Planned((st.name,), st.value, None, None))
+            elif p.method == "staircase":
+                out.append(self._pair(self._value(p.staircase.start), first))
+            elif p.method == "2afc":
+                out.append(self._pair(max(s.levels), first))
+            else:
+                planned = self._pair(max(s.levels), first)
+                out.append(replace(planned, answer="different"))
+        return tuple(out)
+
+    def _value(self, difference: float) -> float:
+        return self.protocol.stimuli.reference + difference
+
+    # -- the state machine ---------------------------------------------------------------
+
+    def initial_state(self) -> SchedulerState:
+        sc = self.protocol.staircase
+        return SchedulerState(staircase=StaircaseState(sc.start) if sc is not None else None)
+
+    def finished(self, state: SchedulerState) -> bool:
+        if state.done < len(self.practice):
+            return False
+        if self.plan is not None:
+            return state.main >= len(self.plan)
+        sc = self.protocol.staircase
+        return (len(state.staircase.reversals) >= sc.reversals or state.main >= sc.max_trials)
+
+    def next_trial(self, state: SchedulerState) -> Trial | None:
+        """The trial to run in ``state``, or None when the session is complete."""
+        if self.finished(state):
+            return None
+        number = state.done + 1
+        if state.done < len(self.practice):
+            planned, practice = self.practice[state.done], True
+        elif self.plan is not None:
+            planned, practice = self.plan[state.main], False
+        else:
+            pair, second = divmod(state.main, 2)
+            first = bool(self._rng(_ORDER, pair).permutation(2)[second])
+            planned, practice = self._pair(self._value(state.staircase.difference), first), False
+        due = not practice and ((state.main == 0 and len(self.practice) > 0) or (
+            self.protocol.break_every and state.main > 0
+            and state.main % self.protocol.break_every == 0))
+        return Trial(number, practice, planned.stimuli, planned.value, planned.difference,
+                     planned.answer, self.responses, bool(due))
+
+    def answer(self, state: SchedulerState, trial: Trial, response: str) -> SchedulerState:
+        """The state after ``trial`` was answered with ``response`` (one of its responses)."""
+        if trial.number != state.done + 1:
+            raise ValueError(f"trial {trial.number} answered in the state before trial "
+                             f"{state.done + 1}")
+        if response not in trial.responses:
+            raise InputError(f"trial {trial.number}: response {response!r} is not one of "
+                             f"{', '.join(trial.responses)}")
+        done, main = state.done + 1, state.main + (not trial.practice)
+        staircase = state.staircase
+        if staircase is not None and not trial.practice:
+            staircase = staircase_step(self.protocol.staircase, staircase,
+                                       response == trial.answer)
+        return SchedulerState(done, main, staircase)
+
+    def replay(self, responses: Iterable[tuple[tuple[str, ...], str]]) -> SchedulerState:
+        """The state after the recorded trials ``(stimuli, response)``, in order; an
+        InputError at the first that does not match the trial this scheduler draws (a
+        session recorded with another protocol or seed)."""
+        state = self.initial_state()
+        for i, (stimuli, response) in enumerate(responses, start=1):
+            trial = self.next_trial(state)
+            if trial is None:
+                raise InputError(f"trial {i}: recorded after the end of the session")
+            if tuple(stimuli) != trial.stimuli:
+                raise InputError(f"trial {i}: recorded {' vs '.join(stimuli)}, but the protocol "
+                                 f"and seed give {' vs '.join(trial.stimuli)}")
+            state = self.answer(state, trial, response)
+        return state
+
+
+def staircase_step(sc: Staircase, st: StaircaseState, correct: bool) -> StaircaseState:
+    """The staircase ``sc``'s state after a main trial answered ``correct`` (or not) in
+    state ``st`` (the module docstring's rules)."""
+    run = st.run + 1 if correct else 0
+    if correct and run < sc.down_after:
+        return replace(st, run=run)
+    direction = -1 if correct else +1
+    reversals = st.reversals
+    if st.direction and direction != st.direction:
+        reversals = reversals + (st.difference,)
+    step = sc.steps[min(len(reversals), len(sc.steps) - 1)]
+    if sc.scale == "log":
+        new = st.difference * 10.0 ** (direction * step)
+    else:
+        new = st.difference + direction * step
+        if new <= 0.0:  # the linear scale's floor: never the reference itself
+            new = st.difference
+    if sc.min is not None:
+        new = max(new, sc.min)
+    if sc.max is not None:
+        new = min(new, sc.max)
+    return StaircaseState(new, 0, direction, reversals)
+
+
+def staircase_threshold(reversals: tuple[float, ...], last: int, scale: str) -> float | None:
+    """The staircase's threshold: the mean of the last ``last`` reversal levels (the
+    geometric mean on the log scale); None before there are that many."""
+    if len(reversals) < last:
+        return None
+    tail = np.asarray(reversals[-last:], dtype=np.float64)
+    return float(np.exp(np.log(tail).mean()) if scale == "log" else tail.mean())

@@ -1,0 +1,260 @@
+"""The session folder: what a session ran, trial by trial, safe against a killed process.
+
+::
+
+    DIR/session.json          what ran: protocol name, method, seed, participant, version,
+                              and the design the analysis needs
+    DIR/protocol.toml         the protocol file as it was read
+    DIR/results.csv           one row per trial answered (RESULT_COLUMNS), in order
+    DIR/stimuli/NAME.toml     each stimulus's scene, as a texture file
+    DIR/trials/NNNN/I.toml    the scene of interval I (1, 2) of trial NNNN ...
+    DIR/trials/NNNN/I.csv     ... the touch trace over it (trace format) ...
+    DIR/trials/NNNN/I/        ... and the replay of the two: commands.csv (what was sent to
+                              the device), friction.csv, summary.json
+
+``frictex replay DIR/trials/0007/1.toml DIR/trials/0007/1.csv --out X`` plays interval 1
+of trial 7 again and writes the same commands.
+
+Crash safety. A trial's files are written and synced first; then its row is appended to
+``results.csv`` in one write and synced (``os.fsync``): the row is what makes the trial
+count. A session killed at any point therefore holds every answered trial and at most the
+files of one trial without its row; ``--resume`` drops those (and a row cut short by a
+power loss, which has no line end), rebuilds the scheduler's state by answering the rows
+again (``scheduler.Scheduler.replay``, which also checks that they are this protocol's and
+seed's trials) and goes on with the next trial.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import math
+import os
+import shutil
+from dataclasses import asdict, dataclass
+from datetime import datetime, timezone
+from importlib import metadata
+from pathlib import Path
+
+from frictex.device.errors import InputError
+
+FORMAT = 1
+RESULT_COLUMNS = ("trial", "practice", "stimuli", "value", "difference", "answer", "response",
+                  "correct", "rt_s", "ended_utc")
+#: the separator between the stimuli of a trial in the ``stimuli`` column
+SEPARATOR = "|"
+RECORDS = ("all", "traces", "results")
+
+
+def _fsync_dir(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _write_synced(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file, synced, then renamed."""
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "w", encoding="utf-8") as fh:
+        fh.write(text)
+        fh.flush()
+        os.fsync(fh.fileno())
+    os.replace(tmp, path)
+    _fsync_dir(path.parent)
+
+
+def _fsync_tree(folder: Path) -> None:
+    for root, _, files in os.walk(folder):
+        for name in files:
+            fd = os.open(os.path.join(root, name), os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+        _fsync_dir(Path(root))
+
+
+def _number(value) -> str:
+    if value is None:
+        return ""
+    return f"{value:.12g}" if isinstance(value, float) else str(value)
+
+
+def result_row(trial, response: str, rt_s: float) -> dict:
+    """The results row of ``trial`` (a ``scheduler.Trial``) answered ``response``."""
+    correct = "" if trial.answer is None else int(response == trial.answer)
+    return {"trial": trial.number, "practice": int(trial.practice),
+            "stimuli": SEPARATOR.join(trial.stimuli), "value": _number(trial.value),
+            "difference": _number(trial.difference), "answer": trial.answer or "",
+            "response": response, "correct": correct, "rt_s": f"{rt_s:.4f}",
+            "ended_utc": datetime.now(timezone.utc).isoformat(timespec="milliseconds")}
+
+
+@dataclass
+class Session:
+    """An open session folder (see the module docstring)."""
+
+    folder: Path
+    info: dict
+    rows: list[dict]
+
+    @property
+    def seed(self) -> int:
+        return int(self.info["seed"])
+
+    @property
+    def results(self) -> Path:
+        return self.folder / "results.csv"
+
+    def trial_dir(self, number: int) -> Path:
+        return self.folder / "trials" / f"{number:04d}"
+
+    def append(self, row: dict) -> None:
+        """Append ``row`` to the results table in one write and sync it to the disk."""
+        buf = io.StringIO()
+        csv.DictWriter(buf, RESULT_COLUMNS, lineterminator="\n").writerow(row)
+        fd = os.open(self.results, os.O_WRONLY | os.O_APPEND)
+        try:
+            os.write(fd, buf.getvalue().encode("utf-8"))
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        self.rows.append({k: str(v) for k, v in row.items()})
+
+    def write_interval(self, number: int, interval: int, scene_text: str, trace,
+                       record: str) -> None:
+        """Interval ``interval`` of trial ``number``: its scene and trace, and with
+        ``record = "all"`` their replay (what was sent to the device); synced."""
+        from frictex.rendering.input.trace_file import write_trace
+        folder = self.trial_dir(number)
+        folder.mkdir(parents=True, exist_ok=True)
+        scene_path, trace_path = folder / f"{interval}.toml", folder / f"{interval}.csv"
+        scene_path.write_text(scene_text, encoding="utf-8")
+        write_trace(trace_path, trace, comment=f"trial {number}, interval {interval}")
+        if record == "all":
+            from frictex.app.engine.replay import run_replay
+            run_replay(scene_path, trace_path, folder / str(interval), progress=False)
+
+    def sync_trial(self, number: int) -> None:
+        folder = self.trial_dir(number)
+        if folder.exists():
+            _fsync_tree(folder)
+            _fsync_dir(folder.parent)
+
+
+def design(protocol) -> dict:
+    """What ``frictex experiment analyse`` needs of a protocol (kept in session.json, so
+    that a session folder is analysed without its scenes)."""
+    s = protocol.stimuli
+    return {"vary": s.vary, "reference": s.reference, "question": protocol.question,
+            "guess": protocol.guess_rate,
+            "target": protocol.target if protocol.guess_rate is not None else None,
+            "analysis": asdict(protocol.analysis),
+            "staircase": asdict(protocol.staircase) if protocol.staircase else None,
+            "scale": list(protocol.scale) if protocol.scale else None}
+
+
+def create(folder: Path, protocol, seed: int, participant: str) -> Session:
+    """A new session in ``folder`` (made if needed; refused if it holds a session)."""
+    folder = Path(folder)
+    if (folder / "results.csv").exists() or (folder / "session.json").exists():
+        raise InputError(f"{folder} already holds a session; continue it with --resume, or "
+                         f"give another --out")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / "trials").mkdir(exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"{folder}: cannot make the session folder ({exc.strerror})") from None
+    try:
+        release = metadata.version("frictex")
+    except metadata.PackageNotFoundError:
+        release = "unknown (not installed)"
+    info = {"format": FORMAT, "protocol": protocol.name, "method": protocol.method,
+            "protocol_sha256": hashlib.sha256(protocol.text.encode("utf-8")).hexdigest(),
+            "seed": int(seed), "participant": participant, "frictex": release,
+            "started_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+            "design": design(protocol)}
+    _write_synced(folder / "protocol.toml", protocol.text)
+    _write_synced(folder / "results.csv", ",".join(RESULT_COLUMNS) + "\n")
+    _write_synced(folder / "session.json", json.dumps(info, indent=2) + "\n")
+    return Session(folder, info, [])
+
+
+def read_info(folder: Path) -> dict:
+    """``session.json`` of ``folder`` (InputError when it is not a session folder)."""
+    path = Path(folder) / "session.json"
+    try:
+        info = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(f"{folder}: not a session folder (no session.json)") from None
+    except (OSError, ValueError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: cannot be read as a session ({exc})") from None
+    if not isinstance(info, dict) or info.get("format") != FORMAT or not isinstance(
+            info.get("seed"), int):
+        raise InputError(f"{path}: not a format {FORMAT} session file")
+    return info
+
+
+def read_rows(folder: Path, repair: bool = False) -> list[dict]:
+    """The rows of ``folder``'s results table. A last line without a line end (a write
+    cut short) is not a row; ``repair`` also cuts it from the file."""
+    path = Path(folder) / "results.csv"
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise InputError(f"{path}: cannot be read ({exc.strerror or exc})") from None
+    complete = data[:data.rfind(b"\n") + 1]
+    if repair and len(complete) != len(data):
+        with open(path, "r+b") as fh:
+            fh.truncate(len(complete))
+            os.fsync(fh.fileno())
+    try:
+        reader = csv.DictReader(io.StringIO(complete.decode("utf-8")))
+        rows = list(reader)
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise InputError(f"{path}: not a results table ({exc})") from None
+    if tuple(reader.fieldnames or ()) != RESULT_COLUMNS:
+        raise InputError(f"{path}: expected the columns {','.join(RESULT_COLUMNS)}")
+    for i, row in enumerate(rows, start=1):
+        if row.get("trial") != str(i) or None in row.values():
+            raise InputError(f"{path}:{i + 1}: expected the row of trial {i} with "
+                             f"{len(RESULT_COLUMNS)} fields")
+        rt = row["rt_s"]
+        try:
+            ok = math.isfinite(float(rt)) and float(rt) >= 0
+        except ValueError:
+            ok = False
+        if not ok:
+            raise InputError(f"{path}:{i + 1}: rt_s {rt!r}: expected a time in s")
+    return rows
+
+
+def resume(folder: Path, protocol, participant: str | None) -> Session:
+    """The session in ``folder``, ready to go on: the trial files of a trial without its
+    row removed, a cut-short row dropped. InputError if ``protocol`` is not the one the
+    session started with, or ``participant`` (if given) not its participant."""
+    folder = Path(folder)
+    info = read_info(folder)
+    try:
+        started_with = (folder / "protocol.toml").read_text(encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"{folder}: the session's protocol.toml cannot be read "
+                         f"({exc.strerror})") from None
+    if started_with != protocol.text:
+        raise InputError(f"{protocol.source}: not the protocol {folder} started with (its copy "
+                         f"is {folder / 'protocol.toml'})")
+    if participant is not None and participant != info.get("participant"):
+        raise InputError(f"--participant {participant}: {folder} was started with "
+                         f"{info.get('participant')!r}")
+    rows = read_rows(folder, repair=True)
+    trials = folder / "trials"
+    trials.mkdir(exist_ok=True)
+    for leftover in trials.iterdir():
+        if not (leftover.name.isdigit() and int(leftover.name) <= len(rows)):
+            shutil.rmtree(leftover) if leftover.is_dir() else leftover.unlink()
+    _fsync_dir(trials)
+    return Session(folder, info, rows)
