@@ -19,14 +19,14 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import threading
+from dataclasses import replace
 from pathlib import Path
 
 from frictex.app.commands.preview import frame_size
 from frictex.app.commands.argtypes import (add_link_arguments, output_rate, positive_float, positive_int,
                                    sim_device_args)
-from frictex.rendering.input.tuio import TUIO_PORT
+from frictex.device.errors import InputError
 from frictex.rendering.renderers import render_modes
 from frictex.rendering.visual.context import NoDisplayError, open_backend
 from frictex.rendering.visual.device_panels import default_frame_size
@@ -34,44 +34,25 @@ from frictex.rendering.visual.viewport import MIN_FRAME
 from frictex.textures.outside import add_allow_outside
 
 HEADLESS_TRACE = "swipe-40mms-50hz"
-INPUT_KINDS = ("mouse", "follow", "tuio", "evdev")
-TOUCH_SCREENS = ("tuio", "evdev")  # read by the haptic side (app.live.touch_pump)
-FOLLOW_OFFSET_MM = 30.0  # the follower finger's offset along x
 
 
 def input_option(text: str) -> tuple[str, object]:
-    """argparse type for ``--input``: (kind, argument): ("mouse", None), ("follow",
-    offset mm), ("tuio", UDP port), ("evdev", device path)."""
-    kind, colon, arg = text.partition(":")
-    if kind not in INPUT_KINDS:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected mouse, follow[:OFFSET_MM], "
-                                         "tuio[:PORT] or evdev:PATH")
-    if kind == "mouse":
-        if colon:
-            raise argparse.ArgumentTypeError(f"{text!r}: mouse takes no argument")
-        return kind, None
-    if kind == "evdev":
-        if not arg:
-            raise argparse.ArgumentTypeError(f"{text!r}: expected evdev:PATH "
-                                             "(e.g. evdev:/dev/input/event5)")
-        return kind, arg
-    if kind == "follow":
-        try:
-            offset = float(arg) if colon else FOLLOW_OFFSET_MM
-        except ValueError:
-            offset = float("nan")
-        if not (math.isfinite(offset) and offset != 0.0):
-            raise argparse.ArgumentTypeError(f"{text!r}: expected follow:OFFSET_MM, a non-zero "
-                                             "number of mm (e.g. follow:30)")
-        return kind, offset
+    """argparse type for ``--input``: (name, argument) as ``app.live.inputs.parse_input``
+    gives them (the kinds are ``app.live.inputs.INPUTS``)."""
+    from frictex.app.live.inputs import parse_input
     try:
-        port = int(arg) if colon else TUIO_PORT
-    except ValueError:
-        port = -1
-    if not 0 <= port <= 65535:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected tuio:PORT, a UDP port 0 to 65535 "
-                                         "(0: any free port)")
-    return kind, port
+        return parse_input(text)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def sender_option(text: str) -> tuple[str, int | None]:
+    """argparse type for ``--tuio-from``: ``rendering.input.tuio.parse_sender``."""
+    from frictex.rendering.input.tuio import parse_sender
+    try:
+        return parse_sender(text)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -89,16 +70,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="output sample rate (default 10000 Hz)")
     parser.add_argument("--block", type=positive_int, default=50, metavar="N",
                         help="block size in output samples (default 50 = 5 ms at 10 kHz)")
+    from frictex.app.live.inputs import INPUTS
+    kinds = [(name, INPUTS.get(name)) for name in INPUTS.names()]
     parser.add_argument("--input", type=input_option, default=("mouse", None),
-                        metavar="mouse|follow[:MM]|tuio[:PORT]|evdev:PATH",
-                        help="where the fingers come from: 'mouse' (default; finger 0 while the "
-                             "left button is held), 'follow' (the mouse is finger 0 and finger 1 "
-                             f"follows it MM mm to the right along x, default {FOLLOW_OFFSET_MM:g}; "
-                             "seed 001's two-finger test), 'tuio' (TUIO 1.1 cursors on UDP PORT, "
-                             f"default {TUIO_PORT}, 0: any free port), 'evdev' (a Linux multi-touch "
-                             "device such as /dev/input/event5 spanning the scene's display). With "
-                             "tuio and evdev the mouse only hovers and every finger gets the force "
-                             "set with the wheel")
+                        metavar="|".join(kind.usage for _, kind in kinds),
+                        help="where the fingers come from (default mouse): "
+                             + "; ".join(f"'{name}': {kind.help}" for name, kind in kinds)
+                             + ". With a touch screen the mouse only hovers and every finger "
+                             "gets the force set with the wheel")
+    parser.add_argument("--tuio-from", type=sender_option, default=None, metavar="ADDR[:PORT]",
+                        help="with --input tuio: accept datagrams from this IPv4 address (and "
+                             "port) only; default: from the first sender heard. Datagrams from "
+                             "others are dropped and counted in the summary")
     parser.add_argument("--haptic", choices=("process", "thread"), default="process",
                         help="where the haptic pipeline runs: its own process (default: the "
                              "window's GL calls cannot delay it) or a thread of the window's "
@@ -122,12 +105,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def _start_haptic(args, scene, scene_path: Path, record: Path | None):
     """The haptic side of ``--haptic``, started with its link and touch screen, and its
     ``finish()`` (as open_haptic's). A touch screen that cannot be opened raises here."""
+    from frictex.app.live.inputs import INPUTS
     kind, arg = args.input
-    touch = (kind, arg) if kind in TOUCH_SCREENS else None
+    touch = (kind, arg) if INPUTS.get(kind).touch_screen else None
     if args.haptic == "thread":
         from frictex.app.live.haptic_setup import open_haptic
         from frictex.app.live.haptic_thread import shorten_switch_interval
-        from frictex.app.live.touch_pump import open_source
+        from frictex.app.live.inputs import open_source
         shorten_switch_interval(args.block / args.rate)
         sim_args = sim_device_args(args)  # refused before the touch screen is opened
         haptic, finish = open_haptic(scene, args.rate, args.block, args.renderer, args.device,
@@ -154,7 +138,7 @@ def _playlist(scene_arg):
         return [resolve_scene(scene_arg)], 0
     paths = [entry.path for entry in list_scenes()]
     if not paths:
-        raise ValueError("no bundled scenes found; give a texture file")
+        raise InputError("no bundled scenes found; give a texture file")
     return paths, 0
 
 
@@ -181,20 +165,26 @@ def run_headless(args, reason: str | None = None) -> int:
 
 def input_name(kind: str, arg) -> str:
     """``--input`` as the status line and the summary show it."""
-    if kind == "follow":
-        return f"follow {arg:g} mm"
-    return kind if arg is None else f"{kind} {':' if kind == 'tuio' else ''}{arg}"
+    from frictex.app.live.inputs import INPUTS
+    return INPUTS.get(kind).label(arg)
 
 
 def run(args: argparse.Namespace) -> int:
+    from frictex.app.live.inputs import INPUTS
     kind, arg = args.input
+    if args.tuio_from is not None:
+        if kind != "tuio":
+            raise InputError(f"--tuio-from needs --input tuio (the input is {input_name(kind, arg)})")
+        arg = replace(arg, accept_from=args.tuio_from)
+        args.input = (kind, arg)
+    touch_screen = INPUTS.get(kind).touch_screen
     if args.headless:
         if kind != "mouse":
-            raise ValueError(f"--input {input_name(kind, arg)}: --headless replays a bundled "
+            raise InputError(f"--input {input_name(kind, arg)}: --headless replays a bundled "
                              "trace and takes no live input")
         return run_headless(args)
     if args.faults is not None and args.device is None:
-        raise ValueError("--faults needs --device: the faults are injected on the link to it")
+        raise InputError("--faults needs --device: the faults are injected on the link to it")
     paths, index = _playlist(args.scene)
     scene = _load(paths[index])
     size = args.size or default_frame_size(scene)
@@ -229,7 +219,7 @@ def run(args: argparse.Namespace) -> int:
                             events_path=record / "events.csv" if record else None,
                             link_name="none" if args.device is None else "starting",
                             follow_mm=arg if kind == "follow" else None,
-                            touch_screen=kind in TOUCH_SCREENS, input_name=input_name(kind, arg))
+                            touch_screen=touch_screen, input_name=input_name(kind, arg))
             loop.run(args.duration)
     finally:
         try:
@@ -253,6 +243,11 @@ def run(args: argparse.Namespace) -> int:
           f"{summary['deadline_misses']} deadline misses{stolen if summary['deadline_misses'] else ''}, "
           f"{summary['clamps_total']} clamped samples, "
           f"{summary['frames']} frames ({summary['frame_ms_mean']:.1f} ms mean), link: {link['state']}")
+    if "datagrams" in summary["input_counts"]:  # TUIO: what came from whom
+        c = summary["input_counts"]
+        print(f"demo: TUIO on {c['listen']} from {c['sender']}: {c['datagrams']} datagrams, "
+              f"{c['refused']} refused from other senders, {c['dropped']} dropped (queue full), "
+              f"{c['bad_packets']} malformed")
     loop = summary["control"]
     if loop is not None:
         print(f"demo: {loop['mode']} loop, force reports up to {loop['report_delay_blocks']} "
@@ -268,7 +263,7 @@ def _summary(st, block_s: float, loop, dropped_records: int, link) -> dict:
             "dropped_record_blocks": dropped_records, "ramps": st.ramps,
             "clamps": st.clamps.as_dict(), "clamps_total": st.clamps.total,
             "output_changes": [{"t_s": t, "event": e, "detail": d} for t, e, d in st.applied],
-            "input": loop.input_name,
+            "input": loop.input_name, "input_counts": st.input,
             "frames": loop.frames, "frame_ms_mean": loop.frame_seconds / max(loop.frames, 1) * 1e3,
             "screenshots": [str(p) for p in loop.screenshots], "link": link,
             "control": st.control}
