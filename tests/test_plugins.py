@@ -23,7 +23,7 @@ import pytest
 
 from frictex.device.registry import PluginError, Registry, UnknownName
 from frictex.rendering.pipeline import build_pipeline
-from frictex.rendering.renderers import LAYER_RENDERERS, RENDERERS, render_modes
+from frictex.rendering.renderers import LAYER_RENDERERS, RENDERERS, LayerRenderer, render_modes
 from frictex.textures.library import resolve_scene
 from frictex.textures.loader import load_scene
 
@@ -200,6 +200,9 @@ def test_frictexs_own_renderers_come_from_its_entry_points():
         assert sorted(n for n in registry.names() if registry.origin(n) == "frictex") == names
         for name in names:
             assert callable(registry.get(name))
+    grating = load_scene(resolve_scene("grating-5mm")).layers[0]
+    for name in RENDERERS.names():
+        assert isinstance(RENDERERS.get(name)(grating, 10_000.0), LayerRenderer)
     assert render_modes()[0] == "sho" and set(render_modes()[1:]) >= {"sho-held", "sht"}
 
 
