@@ -236,3 +236,14 @@ def test_without_an_atomic_exchange_two_renames_and_a_recovery(tmp_path, monkeyp
     assert beside(out) == [again.folder.name]
     again.abort()
     assert beside(out) == []
+
+
+def test_an_output_folder_named_by_a_link_is_replaced_where_it_is(tmp_path, capsys):
+    (tmp_path / "real").mkdir()
+    (tmp_path / "link").symlink_to("real")
+    for _ in range(2):
+        assert main(["replay", SCENE, TRACES[0], "--out", str(tmp_path / "link"), "--quiet"]) == 0
+    assert (tmp_path / "link").is_symlink()
+    assert sorted(p.name for p in (tmp_path / "real").iterdir()) == [
+        "commands.csv", "friction.csv", "summary.json"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link", "real"]

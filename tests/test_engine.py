@@ -4,6 +4,8 @@ Expectations are computed here independently: the pipeline run in one call over 
 whole trace, and its rows formatted with Python's %-formatting (the tables' definition).
 """
 
+import os
+import signal
 import time
 
 import numpy as np
@@ -418,3 +420,22 @@ def test_finger_roles_hold_across_blocks_as_in_one_call():
         drive(PipelineStage(pipeline), source, [memory], VirtualClock(), chunk_blocks=chunk)
         results[chunk] = np.concatenate([o.mu_target for o in memory.outs], axis=1)
     np.testing.assert_array_equal(results[1], results[400])
+
+
+@pytest.mark.parametrize("sig, raised", [(signal.SIGINT, KeyboardInterrupt), (signal.SIGTERM, SystemExit)])
+def test_a_signal_is_held_until_the_loop_checks(sig, raised):
+    """Ctrl-C (or SIGTERM) during a step is held until ``check()``, between steps, where
+    no compiled kernel runs; a second one raises at once; the handlers are restored."""
+    from frictex.app.engine.driver import deferred_interrupts
+    before = signal.getsignal(sig)
+    with pytest.raises(raised) as caught:
+        with deferred_interrupts() as check:
+            os.kill(os.getpid(), sig)
+            time.sleep(0.01)  # the handler has run: held, nothing raised
+            with pytest.raises(raised):
+                os.kill(os.getpid(), sig)
+                time.sleep(1.0)
+            check()
+    if raised is SystemExit:
+        assert caught.value.code == 128 + sig
+    assert signal.getsignal(sig) is before

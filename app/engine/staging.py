@@ -51,7 +51,7 @@ class Staging:
     """The staging folder of one run into ``out`` (see the module docstring)."""
 
     def __init__(self, out: str | Path):
-        self.out = Path(os.path.abspath(out))
+        self.out = Path(os.path.realpath(out))  # a link to a folder: that folder
         self.folder = self._name(_STAGING, os.getpid())
         self.removed: list[str] = []  # leftovers of killed runs that begin() removed
 
@@ -63,7 +63,7 @@ class Staging:
         if self.out.exists() and not self.out.is_dir():
             raise InputError(f"{self.out}: exists and is not a folder")
         cwd = Path.cwd().resolve()
-        if self.out.exists() and (cwd == self.out.resolve() or self.out.resolve() in cwd.parents):
+        if self.out.exists() and (cwd == self.out or self.out in cwd.parents):
             raise InputError(f"{self.out}: holds the current folder; a run replaces its output "
                              "folder as a whole: write into a folder of its own")
         if self.out.is_dir():
