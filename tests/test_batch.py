@@ -88,7 +88,7 @@ def test_an_unreachable_scheduler_is_one_line(tmp_path, capsys):
     manifest = tmp_path / "m.csv"
     manifest.write_text(MANIFEST)
     assert main(["batch", str(manifest), "--out", str(tmp_path / "o"),
-                 "--scheduler", "tcp://127.0.0.1:9"]) == 2
+                 "--scheduler", "tcp://127.0.0.1:9"]) == 1  # the cluster, not the input
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("frictex: error: cannot reach the Dask scheduler")
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from frictex.app.engine.limits import BLOCK_SIZES, OUTPUT_RATES_HZ
 from frictex.device.errors import InputError
 
 
@@ -57,11 +58,9 @@ def bounded(kind, low, high, unit: str):
     return parse
 
 
-#: output sample rates a pipeline may run at (Hz): seed 003's link runs at 10 kHz
-OUTPUT_RATES_HZ = (100.0, 1e6)
+#: an output rate (Hz) within app.engine.limits (seed 003's link runs at 10 kHz)
 output_rate = bounded(float, *OUTPUT_RATES_HZ, "Hz")
-#: block sizes a replay may use (output samples)
-BLOCK_SIZES = (1, 100_000)
+#: a block size (output samples) within app.engine.limits
 block_size = bounded(int, *BLOCK_SIZES, "samples")
 
 

@@ -41,7 +41,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from frictex.app.commands.argtypes import BLOCK_SIZES, OUTPUT_RATES_HZ
+from frictex.app.engine.limits import BLOCK_SIZES, OUTPUT_RATES_HZ
 from frictex.app.engine.tables import FORMATS
 from frictex.device.errors import FrictexError, InputError
 from frictex.device.safe_text import escape, quoted
