@@ -15,6 +15,8 @@ from test_demo import (drag, focus_window, grating_file, off_edges, quit_demo,  
                        read_csv, start_demo, wait_event, xdo, xdotool)  # (xdotool: a fixture)
 from test_tuio import frame
 
+from frictex.app.live.inputs import TuioSpec
+
 PX_PER_MM = 800 / 108.0  # an 800x480 window on the 108 x 64.8 mm display
 
 
@@ -68,7 +70,8 @@ def test_tuio_cursors_over_udp_drive_two_fingers(xvfb_display, xdotool, tmp_path
     try:
         line = proc.stdout.readline()
         assert "listening for TUIO" in line, line
-        port = int(line.split()[-1])
+        port = int(line.split("127.0.0.1:")[1].split(",")[0])
+        assert "accepting the first sender only" in line
         focus_window(xvfb_display)
         wait_event(proc, rec)
         fseq = 1
@@ -100,6 +103,8 @@ def test_tuio_cursors_over_udp_drive_two_fingers(xvfb_display, xdotool, tmp_path
     start = 0.1 * 108.0 + 3 * 0.6 * 108.0 / 59
     assert x.min() < start + 1.0 and x.max() > 0.7 * 108.0 - 1.0
     assert x[0] < start + 1.0 and x[-1] > 0.5 * 108.0
+    counts = json.loads((rec / "summary.json").read_text())["input_counts"]
+    assert counts["refused"] == counts["dropped"] == 0 and counts["datagrams"] == fseq + 1
     np.testing.assert_allclose(still[:, 1:3], np.tile([0.8 * 108.0, 0.75 * 64.8], (len(still), 1)),
                                atol=1e-4)
     assert still[-1, 0] > swipe[-1, 0]  # held after the other lifted
@@ -107,7 +112,8 @@ def test_tuio_cursors_over_udp_drive_two_fingers(xvfb_display, xdotool, tmp_path
 
 @pytest.mark.parametrize("text, expect", [
     ("mouse", ("mouse", None)), ("follow", ("follow", 30.0)), ("follow:-12.5", ("follow", -12.5)),
-    ("tuio", ("tuio", 3333)), ("tuio:0", ("tuio", 0)),
+    ("tuio", ("tuio", TuioSpec("127.0.0.1", 3333))), ("tuio:0", ("tuio", TuioSpec("127.0.0.1", 0))),
+    ("tuio:0.0.0.0:4000", ("tuio", TuioSpec("0.0.0.0", 4000))),
     ("evdev:/dev/input/event5", ("evdev", "/dev/input/event5")),
 ])
 def test_input_option_values(text, expect):
@@ -115,7 +121,8 @@ def test_input_option_values(text, expect):
 
 
 @pytest.mark.parametrize("value, message", [
-    ("pen", "expected mouse, follow"), ("follow:abc", "non-zero number of mm"),
+    ("pen", "unknown touch input 'pen'; expected one of mouse, follow, tuio, evdev"),
+    ("tuio:localhost:3333", "tuio:HOST:PORT, an IPv4 address"), ("follow:abc", "non-zero number of mm"),
     ("follow:0", "non-zero"), ("follow:inf", "non-zero"), ("tuio:70000", "UDP port 0 to 65535"),
     ("evdev", "evdev:PATH"), ("mouse:1", "no argument"),
 ])
@@ -129,7 +136,15 @@ def test_bad_input_option_is_one_line_exit_2(capsys, value, message):
 def test_headless_refuses_live_input(capsys):
     assert main(["demo", "--input", "tuio", "--headless"]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("frictex: error: --input tuio :3333") and err.count("\n") == 1
+    assert err.startswith("frictex: error: --input tuio 127.0.0.1:3333") and err.count("\n") == 1
+
+
+def test_tuio_from_needs_tuio_and_a_valid_address(capsys):
+    assert main(["demo", "--input", "mouse", "--tuio-from", "127.0.0.2"]) == 2
+    assert "--tuio-from needs --input tuio" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        main(["demo", "--input", "tuio", "--tuio-from", "nowhere"])
+    assert exc.value.code == 2 and "expected ADDR or ADDR:PORT" in capsys.readouterr().err
 
 
 def test_unreadable_evdev_device_is_one_line_exit_2(tmp_path, capsys):

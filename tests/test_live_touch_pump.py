@@ -12,7 +12,9 @@ import pytest
 
 from frictex.app.live.haptic_process import HapticConfig, HapticProcess
 from frictex.app.live.haptic_thread import HapticThread
-from frictex.app.live.touch_pump import TouchPump, open_source
+from frictex.app.live.inputs import INPUTS, TuioSpec, open_source
+from frictex.device.errors import InputError
+from frictex.app.live.touch_pump import TouchPump
 from frictex.rendering.input.evdev_decode import TouchSample
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP
 from test_tuio import frame
@@ -102,8 +104,12 @@ def test_open_source_refuses_what_is_not_a_touch_screen(tmp_path):
     os.mkfifo(fifo)
     with pytest.raises(ValueError, match=r"evdev:.*events is not a multi-touch device"):
         open_source("evdev", str(fifo))
-    with pytest.raises(ValueError, match="has no touch source"):
+    with pytest.raises(ValueError, match="read by the window, not opened"):
         open_source("mouse", None)
+    with pytest.raises(ValueError, match="unknown touch input 'pen'; expected one of mouse, "
+                                         "follow, tuio, evdev"):
+        open_source("pen", None)
+    assert [n for n in INPUTS.names() if INPUTS.get(n).touch_screen] == ["tuio", "evdev"]
 
 
 def free_udp_port() -> int:
@@ -118,7 +124,7 @@ def test_tuio_reaches_the_child_pipeline_with_no_window(tmp_path):
     path = resolve_scene("grating-5mm")
     port = free_udp_port()
     haptic = HapticProcess(load_scene(path), HapticConfig(path, 10_000.0, 50, "sho", None, None,
-                                                          ("tuio", port)))
+                                                          ("tuio", TuioSpec("127.0.0.1", port))))
     snaps = []
 
     def until(done):
@@ -148,10 +154,13 @@ def test_tuio_reaches_the_child_pipeline_with_no_window(tmp_path):
     np.testing.assert_allclose(x, 27.0, atol=1e-4)  # float32 on the wire
     np.testing.assert_allclose(y, 32.4, atol=1e-4)
     assert haptic.error is None and haptic.stats.dropped_touches == 0
+    counts = haptic.stats.input  # the child's touch screen's counts came back with its stats
+    assert counts["datagrams"] == 2 and counts["refused"] == counts["dropped"] == 0
+    assert counts["samples"] == 2 and counts["sender"].startswith("127.0.0.1:")
 
 
 def test_a_touch_screen_that_cannot_open_fails_the_child_start(tmp_path):
     path = resolve_scene("grating-5mm")
-    with pytest.raises(OSError, match="no-such-device: cannot open input device"):
+    with pytest.raises(InputError, match="no-such-device: no such device"):  # as the child raised it
         HapticProcess(load_scene(path), HapticConfig(path, 10_000.0, 50, None, None, None,
                                                      ("evdev", str(tmp_path / "no-such-device"))))

@@ -11,7 +11,9 @@ from hypothesis import given, settings, strategies as st
 
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP, TraceError
 from test_evdev_decode import check_event_sequence
-from frictex.rendering.input.tuio import OscError, TuioDecoder, TuioListener, parse_message, parse_packet
+from frictex.device.errors import InputError
+from frictex.rendering.input.tuio import (OscError, TuioDecoder, TuioListener, parse_message,
+                                         parse_packet, parse_sender)
 
 
 # an OSC 1.0 encoder written from the specification, independent of the parser under test
@@ -231,3 +233,72 @@ def test_a_datagram_is_stamped_when_it_arrived_not_when_it_was_read():
                 time.sleep(0.005)
     assert [s.x_mm for s in samples] == [25.0, 50.0]
     assert samples[1].t_s <= sent + 1e-3 < released  # not when the thread got to it
+
+
+# -- who may send ---------------------------------------------------------------------------
+def sender(address):
+    """A UDP socket sending from ``address`` (127.0.0.2 is a second loopback host)."""
+    tx = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    tx.bind((address, 0))
+    return tx
+
+
+def received(listener, accepted, refused):
+    """Wait (bounded) until the listener counted ``accepted`` and ``refused`` datagrams;
+    the samples it decoded meanwhile."""
+    samples, deadline = [], time.monotonic() + 60.0
+    while ((listener.datagrams, listener.refused) != (accepted, refused)
+           and time.monotonic() < deadline):
+        samples += listener.poll()
+        time.sleep(0.005)
+    assert (listener.datagrams, listener.refused) == (accepted, refused)
+    return samples + listener.poll()
+
+
+def test_listener_binds_loopback_by_default():
+    with TuioListener(0, width_mm=1.0, height_mm=1.0) as listener:
+        assert listener._sock.getsockname()[0] == "127.0.0.1"
+        assert listener.counters()["listen"] == f"127.0.0.1:{listener.port}"
+
+
+def test_only_the_first_sender_moves_fingers_and_the_others_are_counted():
+    with TuioListener(0, width_mm=100.0, height_mm=100.0) as listener, \
+            sender("127.0.0.1") as first, sender("127.0.0.2") as stranger, \
+            sender("127.0.0.1") as neighbour:
+        to = ("127.0.0.1", listener.port)
+        first.sendto(frame(1, [3], [(3, 0.25, 0.5)]), to)
+        samples = received(listener, 1, 0)
+        stranger.sendto(frame(1, [7], [(7, 0.9, 0.9)]), to)  # another host
+        neighbour.sendto(frame(1, [8], [(8, 0.9, 0.9)]), to)  # another process, same host
+        first.sendto(frame(2, [3], [(3, 0.5, 0.5)]), to)
+        samples += received(listener, 2, 2)
+        counts, first_port = listener.counters(), first.getsockname()[1]
+    assert [(s.x_mm, s.event) for s in samples] == [(25.0, DOWN), (50.0, MOVE)]
+    assert counts["sender"] == f"127.0.0.1:{first_port}"
+    assert (counts["datagrams"], counts["refused"], counts["dropped"]) == (2, 2, 0)
+
+
+def test_accept_from_an_address_takes_any_of_its_ports_and_nothing_else():
+    with TuioListener(0, width_mm=100.0, height_mm=100.0, host="0.0.0.0",
+                      accept_from=("127.0.0.2", None)) as listener, \
+            sender("127.0.0.1") as local, sender("127.0.0.2") as a, sender("127.0.0.2") as b:
+        to = ("127.0.0.1", listener.port)
+        local.sendto(frame(1, [1], [(1, 0.1, 0.1)]), to)  # first, but not the one accepted
+        a.sendto(frame(1, [3], [(3, 0.25, 0.5)]), to)
+        b.sendto(frame(2, [3], [(3, 0.5, 0.5)]), to)
+        samples = received(listener, 2, 1)
+        assert listener.counters()["sender"] == "127.0.0.2:*"
+    assert [(s.x_mm, s.event) for s in samples] == [(25.0, DOWN), (50.0, MOVE)]
+
+
+@pytest.mark.parametrize("text, expect", [("10.0.0.7", ("10.0.0.7", None)),
+                                          ("127.0.0.2:5000", ("127.0.0.2", 5000))])
+def test_parse_sender(text, expect):
+    assert parse_sender(text) == expect
+
+
+@pytest.mark.parametrize("text", ["", "host", "10.0.0", "10.0.0.7:0", "10.0.0.7:70000",
+                                  "10.0.0.7:x", "::1", "10.0.0.7\x1b[2J"])
+def test_bad_sender_is_an_input_error(text):
+    with pytest.raises(InputError, match="expected ADDR or ADDR:PORT"):
+        parse_sender(text)

@@ -74,7 +74,8 @@ class HapticProcessError(OSError):
 class HapticConfig:
     """What the child needs to build its pipeline, link, recorder and touch screen (units
     as in ``HapticThread``; ``device``: ``--device`` spec or None; ``record``: folder or
-    None; ``touch_input``: ("tuio", port) or ("evdev", path) or None; ``faults``: a
+    None; ``touch_input``: a touch screen's (name, argument) as
+    ``app.live.inputs.parse_input`` gives them, or None; ``faults``: a
     ``device.link.faults.FaultPlan`` for the link, or None; ``control``: the friction
     loop's mode instead of the scene file's; ``sim_args``: ``frictex sim-device`` flags)."""
 
@@ -106,7 +107,8 @@ class HapticProcess(TouchInput):
     ``render_override``, ``pipeline``.
 
     Starts the child and waits until it runs; a failure to load the scene, open the
-    link or the touch screen comes back as ValueError / OSError with the child's message.
+    link or the touch screen comes back as the child's exception (an InputError, an
+    OSError, ...), raised here.
     """
 
     def __init__(self, scene, config: HapticConfig, clock=time.perf_counter):
@@ -135,7 +137,7 @@ class HapticProcess(TouchInput):
         reply = self._wait("ready", START_TIMEOUT_S)
         if reply[0] == "failed":
             self._proc.join(timeout=STOP_TIMEOUT_S)
-            raise (OSError if reply[1] == "OSError" else ValueError)(reply[2])
+            raise reply[1]  # the child's own exception: its kind decides the exit status
         self.t0 = reply[1]
         self.pipeline = PipelineInfo(reply[2], make_actuation(scene.device))
 
@@ -327,7 +329,7 @@ def serve(config: HapticConfig, estop, touches, snapshots, requests, replies,
     """The child process: build, run, answer switches, stop (see the module docstring)."""
     watch = die_with_parent((snapshots, replies))
     from frictex.app.live.haptic_setup import open_haptic  # the thread mode's own setup, in this process
-    from frictex.app.live.touch_pump import open_source
+    from frictex.app.live.inputs import open_source
     from frictex.textures.loader import load_scene
     shorten_switch_interval(config.block_size / config.rate_hz)
     try:
@@ -340,7 +342,7 @@ def serve(config: HapticConfig, estop, touches, snapshots, requests, replies,
                                      touches=touches, snapshots=snapshots,
                                      touch_force=touch_force)
     except (ValueError, OSError, ModuleNotFoundError) as exc:  # open_haptic closed the source
-        replies.put(("failed", "OSError" if isinstance(exc, OSError) else "ValueError", str(exc)))
+        replies.put(("failed", _sendable(exc)))
         return
     # the built pipeline lives until the next switch: keep it out of the cyclic
     # collector's scans (a full collection of it took 15-30 ms, three blocks, here)

@@ -18,7 +18,7 @@ def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | N
     """A :class:`HapticThread` (not started) for ``scene`` with its link (``--device``;
     ``faults``: a ``device.link.faults.FaultPlan`` injected on it), recorder
     (``--record``: the replay's tables, written on a thread of their own) and touch
-    screen (``source``: ``app.live.touch_pump.open_source``, pumped from the thread's
+    screen (``source``: ``app.live.inputs.open_source``, pumped from the thread's
     start; closed here if setting up fails), and ``finish() -> (link status, dropped record blocks)``, which stops the
     touch screen and the thread; the thread closes the link and commits the recording
     as it ends. ``control``: the friction loop's mode instead of the scene file's;
@@ -53,6 +53,7 @@ def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | N
     def finish():
         if haptic.pump is not None:
             haptic.pump.stop()
+            haptic.stats.input = haptic.pump.counters()
         haptic.stop()
         if haptic.is_alive():
             haptic.join(timeout=JOIN_TIMEOUT_S)

@@ -87,6 +87,9 @@ class HapticStats:
     #: "output-switch" | "loop" (what the friction loop said), detail) in the order they
     #: took effect
     applied: list = field(default_factory=list)
+    #: a touch screen's counts when it stopped (``TouchPump.counters``: samples forwarded;
+    #: TUIO's datagrams accepted, refused from other senders, dropped), else empty
+    input: dict = field(default_factory=dict)
 
 
 class TouchInput:

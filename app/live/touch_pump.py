@@ -2,10 +2,12 @@
 thread of its own, sample by sample as they arrive, so that neither the window's frames
 nor its input handling delay a finger.
 
-A source is any object with ``wait(timeout_s)`` (return when samples may be ready, or
+A source is an ``app.live.inputs.TouchSource`` (opened by its ``--input`` kind in
+``app.live.inputs.INPUTS``): ``wait(timeout_s)`` (return when samples may be ready, or
 after ``timeout_s`` s), ``poll() -> list[TouchSample]`` (never blocking; positions
 normalised to 0..1 of the active area, stamped on ``time.monotonic``: TUIO at arrival,
-evdev by the kernel) and ``close()``. The pump maps the positions to mm of the scene
+evdev by the kernel), ``close()``, and optionally ``counters() -> dict`` (what it
+received and refused, for the demo's summary). The pump maps the positions to mm of the scene
 shown now and moves the stamps to the haptic output clock; the haptic side runs a
 sample from the first block boundary after it is queued (``app.live.haptic_thread``).
 In the demo's default process mode the pump runs in the haptic child process, which
@@ -18,27 +20,6 @@ import threading
 import time
 
 WAIT_S = 0.05  # longest wait for the source before looking whether to stop (s)
-
-
-def open_source(kind: str, arg):
-    """The touch source of the demo's ``--input`` ("tuio": UDP port, "evdev": device
-    path), positions normalised to 0..1 of the active area. Raises OSError or
-    ValueError (one line) when it cannot be opened."""
-    if kind == "tuio":
-        from frictex.rendering.input.tuio import TuioListener
-        source = TuioListener(arg, width_mm=1.0, height_mm=1.0)
-        print(f"demo: listening for TUIO 1.1 cursors on UDP port {source.port}", flush=True)
-        return source
-    if kind == "evdev":
-        from frictex.rendering.input.evdev_decode import ScreenSpec
-        from frictex.rendering.input.evdev_live import EvdevReader
-        try:
-            return EvdevReader(arg, ScreenSpec(width_mm=1.0, height_mm=1.0))
-        except ValueError as exc:  # no axis ranges: a file, a pipe, not a touch screen
-            raise ValueError(f"evdev:{arg} is not a multi-touch device reporting its axis ranges "
-                             f"({exc}); the demo takes them from the device (a recording can be "
-                             "converted with 'frictex trace import' and replayed)") from None
-    raise ValueError(f"input {kind!r} has no touch source (expected tuio or evdev)")
 
 
 class TouchPump(threading.Thread):
@@ -90,6 +71,11 @@ class TouchPump(threading.Thread):
             self.error = str(exc)
         finally:
             self.source.close()
+
+    def counters(self) -> dict:
+        """The samples forwarded, and the source's own ``counters()`` if it has them."""
+        counts = getattr(self.source, "counters", None)
+        return {"samples": self.samples, **(counts() if counts is not None else {})}
 
     def take_error(self) -> str | None:
         """Why the source stopped, the first time it is asked; else None."""

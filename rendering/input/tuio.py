@@ -24,10 +24,17 @@ accepted. Positions are normalised; :class:`TuioListener` maps them to the displ
 TUIO 1.1 carries no usable time, so samples are stamped with their arrival time: the
 kernel's receive time of the datagram (``SO_TIMESTAMPNS``) where the system gives it,
 so that a receiving thread held up (a busy machine, the GIL) does not delay the stamp.
+
+Who may send. A datagram moves a finger on the plate, so :class:`TuioListener` listens
+on loopback (127.0.0.1) unless given another address, and takes datagrams from one
+sender only: the address (and port, if given) it is told to accept, or else the first
+sender it hears from (its address and port, so that another process on the same host
+cannot join in). Datagrams from anyone else are dropped unread and counted (``refused``).
 """
 
 from __future__ import annotations
 
+import ipaddress
 import math
 import queue
 import socket
@@ -38,9 +45,11 @@ import time
 from typing import Callable
 
 from frictex.rendering.input.evdev_decode import AxisMap, RawSample, ScreenMap, TouchSample
+from frictex.device.errors import InputError
 from frictex.rendering.input.trace_file import DEFAULT_FORCE_N, DOWN, MOVE, UP, TraceError
 
 TUIO_PORT = 3333
+TUIO_HOST = "127.0.0.1"  # listen on loopback unless told otherwise
 _MAX_DEPTH = 8
 #: accepted late-frame jump: an fseq this much below the last one is a tracker restart
 _FSEQ_RESTART = 100
@@ -239,6 +248,21 @@ def _age_s(ancillary) -> float:
     return 0.0
 
 
+def parse_sender(text: str) -> tuple[str, int | None]:
+    """``ADDR`` or ``ADDR:PORT`` (an IPv4 address, a UDP port 1-65535) as (address,
+    port or None: any). Raises InputError naming what was expected."""
+    addr, colon, port_text = text.partition(":")
+    try:
+        address = str(ipaddress.IPv4Address(addr))
+        port = int(port_text) if colon else None
+    except ValueError:
+        address, port = "", -1
+    if not address or (port is not None and not 1 <= port <= 65535):
+        raise InputError(f"TUIO sender {text[:60]!r}: expected ADDR or ADDR:PORT, an IPv4 "
+                         "address (e.g. 192.168.1.20) and a UDP port 1 to 65535")
+    return address, port
+
+
 class TuioListener:
     """Receives TUIO on a UDP port in a thread; :meth:`poll` returns the new touch samples.
 
@@ -246,25 +270,33 @@ class TuioListener:
     overflow is counted in ``dropped``); decoding happens in :meth:`poll`, on the
     caller's thread, which may block in :meth:`wait` until a datagram is there.
     Malformed packets are counted in ``bad_packets`` (last message in ``last_error``),
-    never raised.
+    never raised. Datagrams from a sender other than the accepted one (module
+    docstring) are counted in ``refused``; ``sender`` is the accepted one once known.
 
     Parameters
     ----------
     port : UDP port (TUIO's default 3333; 0 picks a free one, see ``.port``).
     width_mm, height_mm : display size the normalised TUIO coordinates span (mm).
-    host : address to bind.
+    host : address to bind (default loopback; "0.0.0.0": every interface).
+    accept_from : the sender to accept, (IPv4 address, port or None for any port), as
+        :func:`parse_sender` gives; None: the first sender heard from (address and port).
     force_n : normal force given to every sample (N); TUIO 1.1 cursors carry none.
     max_packets : queue bound.
     clock : time source for arrival stamps (s).
     """
 
     def __init__(self, port: int = TUIO_PORT, *, width_mm: float, height_mm: float,
-                 host: str = "0.0.0.0", force_n: float = DEFAULT_FORCE_N, max_packets: int = 1024,
+                 host: str = TUIO_HOST, accept_from: tuple[str, int | None] | None = None,
+                 force_n: float = DEFAULT_FORCE_N, max_packets: int = 1024,
                  clock: Callable[[], float] = time.monotonic) -> None:
         self.screen = ScreenMap(AxisMap(0.0, 1.0, width_mm), AxisMap(0.0, 1.0, height_mm),
                                 force_n=force_n)
         self.decoder = TuioDecoder()
-        self.dropped = self.bad_packets = 0
+        self.dropped = self.bad_packets = self.refused = self.datagrams = 0
+        self.host = host
+        self.accept_from = accept_from
+        #: the accepted sender (address, port or None) once known
+        self.sender: tuple[str, int | None] | None = accept_from
         self.last_error: str | None = None
         self._clock = clock
         self._queue: queue.Queue[tuple[float, bytes]] = queue.Queue(max_packets)
@@ -286,11 +318,17 @@ class TuioListener:
     def _receive(self) -> None:
         while not self._stop.is_set():
             try:
-                data, ancillary, _, _ = self._sock.recvmsg(65536, _STAMP_SPACE)
+                data, ancillary, _, (address, port) = self._sock.recvmsg(65536, _STAMP_SPACE)
             except socket.timeout:
                 continue
             except OSError:
                 return
+            if self.sender is None:
+                self.sender = (address, port)
+            elif address != self.sender[0] or self.sender[1] not in (None, port):
+                self.refused += 1
+                continue
+            self.datagrams += 1
             try:
                 self._queue.put_nowait((self._clock() - _age_s(ancillary), data))
             except queue.Full:
@@ -317,6 +355,16 @@ class TuioListener:
                 self.bad_packets += 1
                 self.last_error = str(exc)
         return self.screen.touches(raw)
+
+    def counters(self) -> dict:
+        """What was received: ``datagrams`` accepted, ``refused`` (other senders),
+        ``dropped`` (queue full), ``bad_packets``, and the accepted ``sender``
+        ("ADDR:PORT", "ADDR:*" for any port, or None before the first datagram)."""
+        sender = None if self.sender is None else (
+            f"{self.sender[0]}:{'*' if self.sender[1] is None else self.sender[1]}")
+        return {"listen": f"{self.host}:{self.port}", "sender": sender,
+                "datagrams": self.datagrams, "refused": self.refused, "dropped": self.dropped,
+                "bad_packets": self.bad_packets}
 
     def close(self) -> None:
         """Stop the thread and release the port."""
