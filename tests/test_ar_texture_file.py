@@ -1,6 +1,8 @@
 """Recorded-texture layers in texture files: the toolkit's XML models in their published
 form (units, sample rate, 1-based triangles, the sign of A(z)), line-located errors."""
 
+import math
+
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
@@ -206,3 +208,41 @@ def test_a_failed_resampling_names_the_file_in_replay(tmp_path, monkeypatch, cap
     assert main(["replay", str(scene), "swipe-40mms-50hz", "--out", str(tmp_path / "r"), "--quiet"]) == 2
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and err[0].startswith("frictex: error: ") and "wood.xml: model 1" in err[0], err
+
+
+def _grid_xml(side: int, ma: bool) -> str:
+    """A model of side x side vertices on a speed-force grid, each the same AR(4) (with an
+    MA(2) part and a gain if ``ma``), triangulated cell by cell."""
+    values = lambda xs, fmt="{:.6f}": "".join(f"<value>{fmt.format(x)}</value>" for x in xs)  # noqa: E731
+    speeds = [10.0 + 10 * (k // side) for k in range(side * side)]
+    forces = [0.1 + 0.1 * (k % side) for k in range(side * side)]
+    lsf = _lsf(PEAKS[0], 1e4)
+    mlsf = _lsf([(1500.0, 0.5)], 1e4)
+    moving = f"<MAlsf>{values(mlsf)}</MAlsf><MAcoeff>{values(_poly(mlsf), '{:.20f}')}</MAcoeff><gain>0.5</gain>"
+    models = "".join(f"<model><ARcoeff>{values(_poly(lsf), '{:.20f}')}</ARcoeff><ARlsf>{values(lsf)}</ARlsf>"
+                     f"{moving if ma else ''}<var>0.01</var><speedMod>{s:.6f}</speedMod>"
+                     f"<forceMod>{f:.6f}</forceMod></model>" for s, f in zip(speeds, forces))
+    tris = "".join(f"<tri>{values(t, '{}')}</tri>" for i in range(side - 1) for j in range(side - 1)
+                   for a in [i * side + j + 1] for t in ((a, a + 1, a + side), (a + 1, a + side + 1, a + side)))
+    return (f"<modelSet><SpeedUnits>mm/s</SpeedUnits><speedList>{values(speeds)}</speedList>"
+            f"<forceList>{values(forces)}</forceList>{tris}<numARCoeff>4</numARCoeff>"
+            f"<numMACoeff>{2 if ma else 0}</numMACoeff>{models}</modelSet>")
+
+
+def test_model_cost_is_bounded_before_any_fit(monkeypatch):
+    """An ARMA file refits every vertex when read, and any file refits every vertex when
+    played at another rate: more than MAX_FIT_VERTICES of them is a one-line error raised
+    before the first fit (fit_ar is never called), whatever the file's size in bytes."""
+    from frictex.textures import hatt
+    side = math.isqrt(hatt.MAX_FIT_VERTICES) + 1
+    fits = []
+    monkeypatch.setattr(hatt, "fit_ar", lambda *a, **k: fits.append(a))
+    with pytest.raises(TextureError, match=rf"{side * side} vertices hold ARMA models, each refitted .* "
+                                           rf"at most {hatt.MAX_FIT_VERTICES} are refitted"):
+        hatt.parse_hatt_xml(_grid_xml(side, ma=True), "big.xml")
+    model = hatt.parse_hatt_xml(_grid_xml(side, ma=False), "big.xml")  # AR: nothing to refit
+    assert model.rate_hz == 1e4 and model.resampled(1e4) is model
+    with pytest.raises(TextureError, match=rf"big.xml: {side * side} vertices made at 10000 Hz to play "
+                                           rf"at 48000 Hz"):
+        model.resampled(48_000.0)
+    assert fits == []

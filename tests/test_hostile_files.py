@@ -23,7 +23,7 @@ from typing import Callable
 ROOT = Path(__file__).resolve().parents[1]
 ADDRESS_SPACE = 1 << 30
 TIMEOUT_S = 60.0
-RUN = "import sys; from app.commands.cli import main; sys.exit(main(sys.argv[1:]))"
+RUN = "import sys; from frictex.app.commands.cli import main; sys.exit(main(sys.argv[1:]))"
 
 HEAD = ("format = 1\n[display]\nwidth_mm = 108.0\nheight_mm = 64.8\nwidth_px = 800\n"
         "height_px = 480\n")
@@ -286,7 +286,7 @@ def test_every_hostile_file_is_one_line_and_exit_2(tmp_path):
         if lines is None:
             failures.append(f"{case.kind}: still running after {TIMEOUT_S:g} s")
         elif (code != 2 or len(lines) != 1 or not lines[0].startswith("frictex: error: ")
-              or name not in lines[0] or len(lines[0]) > 1000):
+              or name not in lines[0] or len(lines[0]) > 1000 or not lines[0].isprintable()):
             failures.append(f"{case.kind}: exit {code}, stderr {lines[-12:]}")
     assert not failures, "\n".join(failures)
 

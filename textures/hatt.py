@@ -109,7 +109,15 @@ ARCOEFF_TOLERANCE = 1e-3
 FIT_FLOOR = 1e-9  # fit_ar adds this share of the peak: nulls and empty bands stay fittable
 MAX_HATT_BYTES = 8 << 20
 MAX_ORDER = 100
+#: Most vertices (``<model>`` elements) read from an AR file: reading one costs about
+#: 0.1 ms (its LSFs checked), 2,000 about 0.2 s.
 MAX_MODELS = 2_000
+#: Most vertices refitted, which costs FIT_COST_MS each (``fit_ar``: 11 ms measured on the
+#: test machine, 27 ms on a slower one, where 1,800 ARMA vertices took 48 s to validate):
+#: an ARMA file's vertices are all refitted when read, and any file's when played at a rate
+#: other than its own (``TextureModel.resampled``). 150 refits: about 2 to 4 s of CPU.
+MAX_FIT_VERTICES = 150
+FIT_COST_MS = 30
 #: largest excitation variance read ((m/s^2)^2, after an ARMA model's gain): far above any
 #: recording, and low enough that the synthesis's sums stay finite
 MAX_VARIANCE = 1e100
@@ -292,6 +300,8 @@ class TextureModel:
         spectral frequencies (:func:`poly_to_lsf`)."""
         if rate_hz == self.rate_hz:
             return self
+        _refits_bounded(len(self.lsf), self.source, f"made at {self.rate_hz:g} Hz to play at "
+                                                    f"{rate_hz:g} Hz")
         order = min(math.ceil(4 * self.order * max(1.0, rate_hz / self.rate_hz)), MAX_ORDER)
         fits = []
         for k, w in enumerate(self.lsf):
@@ -396,8 +406,16 @@ def _polynomial(node, here: str, part: str, order: int) -> np.ndarray:
     return w
 
 
-def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
-    """A :class:`TextureModel` from the text of a toolkit XML file (module docstring)."""
+def _refits_bounded(m: int, where: str, why: str) -> None:
+    """TextureError unless ``m`` vertices fit in :data:`MAX_FIT_VERTICES` refits."""
+    if m > MAX_FIT_VERTICES:
+        raise TextureError(f"{where}: {m} vertices {why}, each refitted as an AR model "
+                           f"(about {FIT_COST_MS:g} ms each); at most {MAX_FIT_VERTICES} are "
+                           f"refitted: fewer vertices, or models already AR at the output rate")
+
+
+def _root(text: str, where: str):
+    """The ``<modelSet>`` element of the file's text (no DTD, no entities)."""
     if re.search(r"<!(DOCTYPE|ENTITY)", text):
         raise TextureError(f"{where}: DOCTYPE or ENTITY declarations are not accepted in a model file")
     try:
@@ -406,6 +424,11 @@ def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
         raise TextureError(f"{where}:{exc.position[0]}: not well-formed XML ({escape(exc)})") from None
     if root.tag != "modelSet":
         raise TextureError(f"{where}: top element is <{escape(root.tag)}>, expected <modelSet>")
+    return root
+
+
+def _units(root, where: str) -> tuple[dict[str, float], float]:
+    """The unit factors (``UNITS``) and the sample rate (Hz) a file states."""
     scale = {}
     for tag, known in UNITS.items():
         node = root.find(tag)
@@ -417,6 +440,46 @@ def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
     if not RATE_RANGE_HZ[0] <= rate <= RATE_RANGE_HZ[1]:
         raise TextureError(f"{where}: <SampleRate> is {rate:g} Hz, expected {RATE_RANGE_HZ[0]:g} "
                            f"to {RATE_RANGE_HZ[1]:g}")
+    return scale, rate
+
+
+def _vertex(node, here: str, order: int, ma_order: int, rate: float) -> tuple[np.ndarray, float]:
+    """One ``<model>``: its LSFs (AR, refitted from ARMA) and its excitation variance."""
+    w = _polynomial(node, here, "AR", order)
+    v = _scalar(node, "var", here)
+    if ma_order:  # y = gain B(z) / A(z) e: its AR(MAX_ORDER) fit (module docstring)
+        gain = _scalar(node, "gain", here)
+        b, a = lsf_to_poly(_polynomial(node, here, "MA", ma_order)), lsf_to_poly(w)
+        try:
+            w, shape = fit_ar(lambda f: ar_psd(a, 1.0, f, rate) * response2(b, f, rate),
+                              rate, rate, MAX_ORDER)
+        except ValueError as exc:
+            raise TextureError(f"{here}: its ARMA model has no AR({MAX_ORDER}) fit: {exc}") from None
+        with np.errstate(over="ignore"):
+            v *= gain * gain * shape
+    if not 0.0 <= v <= MAX_VARIANCE:
+        raise TextureError(f"{here}: var{' times gain^2' if ma_order else ''} is {v:g}, "
+                           f"expected 0 to {MAX_VARIANCE:g}")
+    return w, v
+
+
+def _triangles(root, where: str, m: int) -> np.ndarray:
+    """The ``<tri>`` elements as 0-based vertex indices (n, 3)."""
+    tris = [_values(t, where, "tri") for t in root.findall("tri")]
+    if not tris or any(t.size != 3 for t in tris):
+        raise TextureError(f"{where}: expected <tri> elements of three vertex numbers")
+    tri = np.array(tris)
+    if (tri != np.round(tri)).any() or tri.min() < 1 or tri.max() > m:
+        raise TextureError(f"{where}: <tri> vertex numbers must be integers 1 to {m}")
+    return tri.astype(np.intp) - 1
+
+
+def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
+    """A :class:`TextureModel` from the text of a toolkit XML file (module docstring).
+    Its cost is bounded before any fit: an ARMA file has at most :data:`MAX_FIT_VERTICES`
+    vertices (each is refitted), an AR file at most :data:`MAX_MODELS`."""
+    root = _root(text, where)
+    scale, rate = _units(root, where)
     speeds = _values(root.find("speedList"), where, "speedList") * scale["SpeedUnits"]
     forces = _values(root.find("forceList"), where, "forceList")
     models = root.findall("model")
@@ -426,24 +489,12 @@ def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
                            f"expected the same number, 3 to {MAX_MODELS}")
     order = _count(root, "numARCoeff", where, 1)
     ma_order = _count(root, "numMACoeff", where, 0) if root.find("numMACoeff") is not None else 0
+    if ma_order:
+        _refits_bounded(m, where, "hold ARMA models")
     lsf, var = [], []
     for k, node in enumerate(models):
         here = f"{where}: model {k + 1}"
-        w = _polynomial(node, here, "AR", order)
-        v = _scalar(node, "var", here)
-        if ma_order:  # y = gain B(z) / A(z) e: its AR(MAX_ORDER) fit (module docstring)
-            gain = _scalar(node, "gain", here)
-            b, a = lsf_to_poly(_polynomial(node, here, "MA", ma_order)), lsf_to_poly(w)
-            try:
-                w, shape = fit_ar(lambda f: ar_psd(a, 1.0, f, rate) * response2(b, f, rate),
-                                  rate, rate, MAX_ORDER)
-            except ValueError as exc:
-                raise TextureError(f"{here}: its ARMA model has no AR({MAX_ORDER}) fit: {exc}") from None
-            with np.errstate(over="ignore"):
-                v *= gain * gain * shape
-        if not 0.0 <= v <= MAX_VARIANCE:
-            raise TextureError(f"{here}: var{' times gain^2' if ma_order else ''} is {v:g}, "
-                               f"expected 0 to {MAX_VARIANCE:g}")
+        w, v = _vertex(node, here, order, ma_order, rate)
         sp = _scalar(node, "speedMod", here) * scale["SpeedUnits"]
         fo = _scalar(node, "forceMod", here)
         if not (np.isclose(sp, speeds[k]) and np.isclose(fo, forces[k])):
@@ -451,14 +502,8 @@ def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
                                f"speedList/forceList entry ({speeds[k]:g}, {forces[k]:g})")
         lsf.append(w)
         var.append(v)
-    tris = [_values(t, where, "tri") for t in root.findall("tri")]
-    if not tris or any(t.size != 3 for t in tris):
-        raise TextureError(f"{where}: expected <tri> elements of three vertex numbers")
-    tri = np.array(tris)
-    if (tri != np.round(tri)).any() or tri.min() < 1 or tri.max() > m:
-        raise TextureError(f"{where}: <tri> vertex numbers must be integers 1 to {m}")
-    model = TextureModel(speeds, forces, tri.astype(np.intp) - 1, np.array(lsf), np.array(var), rate,
-                         where)
+    model = TextureModel(speeds, forces, _triangles(root, where, m), np.array(lsf), np.array(var),
+                         rate, where)
     if not np.isfinite(model._tri[2]).all():
         raise TextureError(f"{where}: a <tri> triangle is degenerate (its vertices are in a line)")
     return model
