@@ -171,6 +171,8 @@ def test_a_replay_refused_for_room_touches_nothing(small_disk, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "the outputs (" in err[0] and "is free" in err[0]
     assert contents(out) == before and beside(out) == []
+    assert main(["replay", SCENE, TRACES[0], "--out", str(small_disk), "--quiet"]) == 2
+    assert "a mount point" in capsys.readouterr().err
 
 
 def test_frames_are_counted_in_the_room_check(small_disk, monkeypatch, capsys):

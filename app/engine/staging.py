@@ -13,8 +13,9 @@ no ``--out``, and the next run renames the previous one back.
 What is not a run's output is kept: files and links in ``--out`` beside the outputs are
 hard-linked into the staging folder before the swap (no byte copied, none lost; copied
 where the file system has no hard links); a
-folder there other than ``frames`` is refused before anything is written, as is an
-``--out`` that holds the current folder (the process would be left in the deleted one).
+folder there other than ``frames`` is refused before anything is written, as are an
+``--out`` that holds the current folder (the process would be left in the deleted one) and
+a mount point (its staging folder would be on another file system).
 
 Leftovers: a staging or set-aside folder whose process is gone is recognised by its
 name and removed by the next run into the same ``--out`` (:meth:`Staging.begin`), which
@@ -66,6 +67,9 @@ class Staging:
         if self.out.exists() and (cwd == self.out or self.out in cwd.parents):
             raise InputError(f"{self.out}: holds the current folder; a run replaces its output "
                              "folder as a whole: write into a folder of its own")
+        if self.out.is_dir() and self.out.stat().st_dev != self.out.parent.stat().st_dev:
+            raise InputError(f"{self.out}: a mount point, which a run cannot replace; write "
+                             "into a folder inside it")
         if self.out.is_dir():
             foreign = sorted(e.name for e in os.scandir(self.out)
                              if not is_run_output(e.name) and e.is_dir(follow_symlinks=False))
