@@ -9,6 +9,7 @@ cannot drift from what ``textures.loader`` accepts. Regenerate it after changing
 from __future__ import annotations
 
 import math
+import textwrap
 
 from frictex.textures import keys as K
 from frictex.textures import model
@@ -27,6 +28,50 @@ Units are in the key names (`_mm`, `_um` zero-to-peak, `_n`, `_deg`, `_s`); rela
 friction μ' = μ(w)/μ(0) in (0, 1] (seed 003, eq 1). *required* means the key has no
 default. Ranges are inclusive unless written with `<` or `>`.
 """
+
+
+def files_section() -> str:
+    """What a texture file may name and how those files are read (from the readers' limits)."""
+    from frictex.device.safe_text import MAX_SHOWN
+    from frictex.textures import ahap, hatt, heights, raster_io, schema, toml_safe
+    from frictex.textures.outside import ALLOW_OUTSIDE_ENV
+
+    mib = 1 << 20
+    paragraphs = [
+        "`image` (raster and height-map layers), `model` (recorded layers), `file` (AHAP "
+        "clips) and `[device.structure] modes_file` name files by a path relative to the "
+        "texture file, **in its own folder or below**. An absolute path, a path whose `..` "
+        "leads out of the folder, or a symbolic link that leads out is an error naming the key. "
+        "Only for files you trust: `--allow-outside` (on `validate`, `replay`, `preview`, "
+        f"`demo` and `batch`), or `{ALLOW_OUTSIDE_ENV}=1` in the environment, lifts the rule.",
+        "Every file is opened only if it is a regular file (never a FIFO, a device such as "
+        "`/dev/zero`, a socket or a folder), and read up to a size: the texture file "
+        f"{toml_safe.MAX_FILE_BYTES // mib} MiB, an image or height map "
+        f"{raster_io.MAX_FILE_BYTES // mib} MiB, a HaTT model {hatt.MAX_HATT_BYTES // mib} MiB, "
+        f"an AHAP clip {ahap.MAX_AHAP_BYTES // mib} MiB, a mode table "
+        f"{toml_safe.MAX_FILE_BYTES // mib} MiB.",
+        "Images and height maps are PNG files and nothing else: the PNG signature is checked "
+        "before any image library sees the bytes (an EPS or TIFF file named `.png` is "
+        "refused). Their size is read from the PNG header before decoding: at most "
+        f"{raster_io.MAX_PIXELS:,} pixels per image, and at most "
+        f"{raster_io.MAX_SCENE_BYTES // mib} MiB of decoded maps per scene, a raster map "
+        f"keeping {raster_io.RASTER_BYTES_PER_PX} bytes per pixel and a height map "
+        f"{heights.HEIGHT_MAP_BYTES_PER_PX} (so at most "
+        f"{raster_io.MAX_SCENE_BYTES / raster_io.RASTER_BYTES_PER_PX / 1e6:.1f} Mpx of raster "
+        f"maps, or {raster_io.MAX_SCENE_BYTES / heights.HEIGHT_MAP_BYTES_PER_PX / 1e6:.1f} Mpx "
+        "of height maps, in one scene).",
+        f"A HaTT model holds at most {hatt.MAX_MODELS:,} vertices, and at most "
+        f"{hatt.MAX_FIT_VERTICES} where each vertex must be refitted as an AR model (an ARMA "
+        "model, when read; any model played at a sample rate other than its own): its size is "
+        "bounded by the cost of the fits, checked before the first.",
+        "Messages never carry a file's contents: the values they show are escaped (a control "
+        "character such as ESC is shown as the four characters `\\x1b`) and cut to "
+        f"{schema.MAX_SHOWN} characters (keys and strings of the texture file) or {MAX_SHOWN} "
+        "(cells of the files it names), ending with `...`; a row that is not what the file "
+        "should hold is described, not printed.",
+    ]
+    return "\n\n".join(["## Files a texture file names"]
+                        + [textwrap.fill(p, 90, break_on_hyphens=False) for p in paragraphs]) + "\n"
 
 
 def _range(spec) -> str:
@@ -105,7 +150,7 @@ def sections() -> list[tuple[str, dict]]:
 
 def render() -> str:
     """The whole page (Markdown)."""
-    lines = INTRO.splitlines() + [""]
+    lines = INTRO.splitlines() + [""] + files_section().splitlines() + [""]
     for title, specs in sections():
         lines += _table(title, specs)
     return "\n".join(lines).rstrip() + "\n"

@@ -155,7 +155,11 @@ amplitudes at most 100 um; any other number at most 1e6 in magnitude. Strings ho
 control characters (``description`` may hold line breaks and tabs); names at most 200
 characters, paths 1000. A file is UTF-8 (a leading byte order mark is dropped), at most
 1 MiB, a regular file (never a FIFO or a device: checked before opening), with arrays and
-inline tables nested at most 16 deep.
+inline tables nested at most 16 deep. The files it names (``image``, ``model``, ``file``,
+``modes_file``) lie in its own folder or below unless ``allow_outside`` (``--allow-outside``,
+``FRICTEX_ALLOW_OUTSIDE=1``); images are PNG only, within a per-image and per-scene budget
+of decoded pixels checked from their headers (``textures.sections.files``,
+``textures.raster_io``; FORMAT.md states the figures).
 
 Objects, points, regions and sprites must lie on the display. Every problem in a file is
 reported (not only the first) as ``file:line: field: message``; ``frictex validate`` also

@@ -13,6 +13,7 @@ import os
 import tomllib
 from pathlib import Path
 
+from frictex.device.safe_text import escape, escape_path
 from frictex.textures.errors import TextureError
 from frictex.textures.library import UnreadableText, read_utf8
 from frictex.textures.toml_safe import MAX_FILE_BYTES, deepest_line
@@ -31,13 +32,13 @@ def referenced_files(scene_path: str | Path) -> tuple[Path, ...]:
     try:
         text = read_utf8(scene_path, MAX_FILE_BYTES)
     except UnreadableText as exc:
-        raise TextureError(f"{scene_path}: {exc}") from None
+        raise TextureError(f"{escape_path(scene_path)}: {exc}") from None
     if deepest_line(text) is not None:  # tomllib would recurse or take quadratic time
-        raise TextureError(f"{scene_path}: nested too deep to list the files it names")
+        raise TextureError(f"{escape_path(scene_path)}: nested too deep to list the files it names")
     try:
         doc = tomllib.loads(text)
     except (tomllib.TOMLDecodeError, RecursionError, ValueError) as exc:
-        raise TextureError(f"{scene_path}: not TOML ({exc})") from None
+        raise TextureError(f"{escape_path(scene_path)}: not TOML ({escape(exc)})") from None
     names = []
     device = doc.get("device")
     structure = device.get("structure") if isinstance(device, dict) else None
