@@ -11,8 +11,11 @@ mouse and a follower finger, a TUIO tracker over UDP, or a Linux evdev touch scr
 ``--faults SPEC`` injects link faults on ``--device`` (as ``frictex replay --faults``).
 
 Without a display: ``frictex demo`` says so and exits 2; ``--headless`` (or
-``--headless-fallback`` when no display is found) replays the bundled swipe trace on
-the scene instead and writes its outputs and PNG frames to ``--out``.
+``--headless-fallback`` when no display is found) runs the same demo loop on a window
+without a display (``rendering.visual.headless``), a synthesized human-like stroke
+driving its mouse (``app.live.synthetic``), and writes what a ``--record`` would
+(``commands.csv``, ``friction.csv``, ``events.csv``, ``summary.json``) and its frames as
+PNG files (``frames/``) to ``--out``.
 """
 
 from __future__ import annotations
@@ -28,13 +31,11 @@ from frictex.app.commands.argtypes import (add_link_arguments, output_rate, posi
                                    sim_device_args)
 from frictex.device.errors import InputError
 from frictex.rendering.renderers import render_modes
-from frictex.rendering.visual.context import NoDisplayError, open_backend
+from frictex.rendering.visual.context import NoDisplayError
+from frictex.rendering.visual.windows import open_backend
 from frictex.rendering.visual.device_panels import default_frame_size
 from frictex.rendering.visual.viewport import MIN_FRAME
 from frictex.textures.outside import add_allow_outside
-
-HEADLESS_TRACE = "swipe-40mms-50hz"
-
 
 def input_option(text: str) -> tuple[str, object]:
     """argparse type for ``--input``: (name, argument) as ``app.live.inputs.parse_input``
@@ -94,11 +95,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="close the window after S seconds (default: run until closed)")
     mode = parser.add_mutually_exclusive_group()
     mode.add_argument("--headless", action="store_true",
-                      help="no window: replay the bundled trace on the scene into --out, with frames")
+                      help="no display: run the demo on a synthesized stroke of the mouse, writing "
+                           "its outputs and PNG frames to --out")
     mode.add_argument("--headless-fallback", action="store_true",
                       help="open the window if a display exists, else behave as --headless")
     parser.add_argument("--out", metavar="DIR", default="frictex-demo-out",
-                        help="output folder for --headless (default: frictex-demo-out)")
+                        help="output folder for --headless (default: frictex-demo-out; --record "
+                             "takes the tables elsewhere)")
     add_allow_outside(parser)
 
 
@@ -147,22 +150,6 @@ def _load(path):
     return load_scene(path)
 
 
-def run_headless(args, reason: str | None = None) -> int:
-    from frictex.app.engine.frames import FrameWriter
-    from frictex.app.engine.replay import run_replay
-    paths, index = _playlist(args.scene)
-    scene = _load(paths[index])
-    if reason:
-        print(f"frictex demo: {reason}; running headless instead")
-    frames = FrameWriter(args.out, scene, fps=30.0, rate_hz=args.rate)
-    summary = run_replay(scene, HEADLESS_TRACE, args.out, rate_hz=args.rate, block_size=args.block,
-                         render_override=args.renderer, progress=False, frames=frames,
-                         control=args.control)
-    print(f"replayed {HEADLESS_TRACE} on {scene.name}: {summary['output']['samples']} output samples, "
-          f"{frames.count} frames in {Path(args.out) / 'frames'}; outputs in {args.out}")
-    return 0
-
-
 def input_name(kind: str, arg) -> str:
     """``--input`` as the status line and the summary show it."""
     from frictex.app.live.inputs import INPUTS
@@ -170,58 +157,80 @@ def input_name(kind: str, arg) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    from frictex.app.live.inputs import INPUTS
     kind, arg = args.input
     if args.tuio_from is not None:
         if kind != "tuio":
             raise InputError(f"--tuio-from needs --input tuio (the input is {input_name(kind, arg)})")
-        arg = replace(arg, accept_from=args.tuio_from)
-        args.input = (kind, arg)
-    touch_screen = INPUTS.get(kind).touch_screen
-    if args.headless:
-        if kind != "mouse":
-            raise InputError(f"--input {input_name(kind, arg)}: --headless replays a bundled "
-                             "trace and takes no live input")
-        return run_headless(args)
+        args.input = (kind, replace(arg, accept_from=args.tuio_from))
     if args.faults is not None and args.device is None:
         raise InputError("--faults needs --device: the faults are injected on the link to it")
+    try:
+        return _run(args, headless=args.headless)
+    except NoDisplayError as exc:
+        if args.headless or not args.headless_fallback:
+            raise NoDisplayError(f"{exc}: the demo needs a window. Without a display run "
+                                 "'frictex demo --headless' (the demo on a synthesized stroke, "
+                                 "writing frames) or 'frictex replay SCENE TRACE --out DIR'"
+                                 ) from None
+        print(f"frictex demo: {exc}; running the demo headless on a synthesized stroke instead",
+              flush=True)
+        return _run(args, headless=True)
+
+
+def _open_window(args, size, scene, headless: bool):
+    """The demo's window (glfw), or with ``headless`` an injected-input one whose frames
+    go to ``--out``/frames; and the frame files (None with a window)."""
+    if not headless:
+        return open_backend("glfw", size, title=f"frictex demo: {scene.name}",
+                            fullscreen=args.fullscreen, monitor=args.monitor, vsync=False), None
+    from frictex.app.live.frame_files import FrameFiles
+    frames = FrameFiles(Path(args.out) / "frames")
+    return open_backend("headless", size, on_frame=frames.write), frames
+
+
+def _run(args: argparse.Namespace, headless: bool) -> int:
+    """The demo on a window, or ``headless`` on a synthesized stroke (outputs to --out)."""
+    from frictex.app.live.inputs import INPUTS
+    kind, arg = args.input
+    touch_screen = INPUTS.get(kind).touch_screen
+    if headless and touch_screen:
+        raise InputError(f"--input {input_name(kind, arg)}: the headless demo drives the mouse "
+                         "with a synthesized stroke and takes no touch screen")
     paths, index = _playlist(args.scene)
     scene = _load(paths[index])
     size = args.size or default_frame_size(scene)
-    record = Path(args.record) if args.record else None
+    record = Path(args.record) if args.record else Path(args.out) if headless else None
     from frictex.app.live.cpu_steal import StealMeter
     from frictex.app.live.demo_loop import DemoLoop
     # first the haptic side: a bad --input or --device fails before a window opens
     haptic, finish = _start_haptic(args, scene, paths[index], record)
-    loop = backend = no_display = None
+    loop = backend = frames = hand = None
     link = {"state": "none"}
     dropped_records = 0
     steal = StealMeter()
     try:
-        try:
-            backend = open_backend("glfw", size, title=f"frictex demo: {scene.name}",
-                                   fullscreen=args.fullscreen, monitor=args.monitor, vsync=False)
-        except NoDisplayError as exc:
-            if not args.headless_fallback:
-                raise NoDisplayError(f"{exc}: the demo needs a window. Without a display run "
-                                     "'frictex demo --headless' (replays a bundled trace, "
-                                     "writes frames) or 'frictex replay SCENE TRACE --out DIR'"
-                                     ) from None
-            no_display = str(exc)
-        else:
-            if args.haptic == "process":  # llvmpipe's threads, started with the window,
-                # yield to the child; this thread (input) does not, nor the render thread
-                # it starts, which mostly waits on llvmpipe and holds the GIL the input
-                # thread needs: niced, it could be descheduled holding it)
-                from frictex.app.live.haptic_process import yield_to_haptic
-                yield_to_haptic(keep=(threading.get_native_id(),))
-            loop = DemoLoop(backend, haptic, paths, index, scene, _load, Path(args.screenshots),
-                            events_path=record / "events.csv" if record else None,
-                            link_name="none" if args.device is None else "starting",
-                            follow_mm=arg if kind == "follow" else None,
-                            touch_screen=touch_screen, input_name=input_name(kind, arg))
-            loop.run(args.duration)
+        backend, frames = _open_window(args, size, scene, headless)
+        if args.haptic == "process":  # llvmpipe's threads, started with the window,
+            # yield to the child; this thread (input) does not, nor the render thread
+            # it starts, which mostly waits on llvmpipe and holds the GIL the input
+            # thread needs: niced, it could be descheduled holding it)
+            from frictex.app.live.haptic_process import yield_to_haptic
+            yield_to_haptic(keep=(threading.get_native_id(),))
+        loop = DemoLoop(backend, haptic, paths, index, scene, _load, Path(args.screenshots),
+                        events_path=record / "events.csv" if record else None,
+                        link_name="none" if args.device is None else "starting",
+                        follow_mm=arg if kind == "follow" else None,
+                        touch_screen=touch_screen, input_name=input_name(kind, arg))
+        if headless:
+            from frictex.app.live.synthetic import SyntheticStroke
+            hand = SyntheticStroke(backend, loop.compositor.viewport.to_px,
+                                   (scene.display.width_mm, scene.display.height_mm),
+                                   lifted=lambda: not loop.fingers_down)
+            hand.start()
+        loop.run(args.duration)
     finally:
+        if hand is not None:
+            hand.stop()
         try:
             link, dropped_records = finish()
         finally:
@@ -229,8 +238,6 @@ def run(args: argparse.Namespace) -> int:
                 loop.close()
             if backend is not None:
                 backend.close()
-    if no_display is not None:
-        return run_headless(args, reason=no_display)
     summary = _summary(haptic.stats, haptic.block_s, loop, dropped_records, link)
     summary["haptic"] = args.haptic
     summary["clock_origin_s"] = haptic.t0  # output time 0 on CLOCK_MONOTONIC (time.monotonic)
@@ -248,6 +255,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"demo: TUIO on {c['listen']} from {c['sender']}: {c['datagrams']} datagrams, "
               f"{c['refused']} refused from other senders, {c['dropped']} dropped (queue full), "
               f"{c['bad_packets']} malformed")
+    if frames is not None:
+        print(f"demo: headless, a synthesized stroke of {hand.duration_s:g} s drove the mouse: "
+              f"{frames.count} frames in {frames.folder}; outputs in {record}")
     loop = summary["control"]
     if loop is not None:
         print(f"demo: {loop['mode']} loop, force reports up to {loop['report_delay_blocks']} "

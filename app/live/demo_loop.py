@@ -3,9 +3,11 @@
 The haptic side is an ``app.live.haptic_thread.HapticThread`` or an
 ``app.live.haptic_process.HapticProcess`` (same interface).
 
-Backend-neutral: it drives any ``rendering.visual.context`` backend that has input
-callbacks, ``wait_events(timeout_s)``, ``wake()``, ``make_current()``,
-``release_context()``, ``swap()`` and ``should_close`` (the glfw window).
+Backend-neutral: it drives any ``rendering.visual.context.Window`` (input callbacks,
+``wait_events(timeout_s)``, ``wake()``, ``make_current()``, ``release_context()``,
+``swap()``, ``should_close``): the glfw window, or without a display the headless one
+(``rendering.visual.headless``) with a synthesized hand injecting its input
+(``app.live.synthetic``).
 
 Input and drawing run on two threads, so that a slow frame delays drawing, never the
 finger. The main thread (where the window's events arrive) only waits for events and
@@ -401,6 +403,11 @@ class DemoLoop:
         for fid in [f for f in self._contact if f not in record.finger_ids]:
             self.log("finger-up", f"finger {fid}", float(record.t_s[0]))
             del self._contact[fid]
+
+    @property
+    def fingers_down(self) -> tuple[int, ...]:
+        """The finger ids touching at the last snapshot drained (the output's view)."""
+        return tuple(self._contact)
 
     def status_lines(self) -> tuple[str, ...]:
         st = self.status

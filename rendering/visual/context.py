@@ -6,18 +6,76 @@
   (cursor, buttons, wheel, keys) is forwarded to callbacks as backend-neutral values:
   cursor positions in framebuffer pixels as floats (never truncated), key names as
   lower-case strings ("space", "n", "up", ...).
+- ``headless``: the glfw window's contract without a display: an EGL framebuffer whose
+  input the caller injects (``rendering.visual.headless``).
 
-Both expose ``ctx``, ``size``, ``use()``, ``read_rgb()`` and ``close()``.
+Every backend is a :class:`Frame` (``ctx``, ``size``, ``use()``, ``read_rgb()``,
+``close()``); ``glfw`` and ``headless`` are also a :class:`Window`, what the demo loop
+drives (``app.live.demo_loop``). They are registered by name in
+``rendering.visual.windows.WINDOWS``.
 """
 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
+from typing import Protocol, runtime_checkable
 
 import moderngl
 import numpy as np
 
-from frictex.device.errors import FrictexError
+from frictex.device.errors import FrictexError, InputError
+
+
+@runtime_checkable
+class Frame(Protocol):
+    """Something to draw into: a moderngl context ``ctx`` and ``size`` (width, height) px."""
+
+    ctx: moderngl.Context
+    size: tuple[int, int]
+
+    def use(self) -> None:
+        """Draw into this frame from now on (its framebuffer and viewport)."""
+
+    def read_rgb(self) -> np.ndarray:
+        """The frame as sRGB uint8 (height, width, 3), row 0 at the top."""
+
+    def close(self) -> None:
+        """Release the frame (and its context if it made it)."""
+
+
+@runtime_checkable
+class Window(Frame, Protocol):
+    """A frame with input, as the demo loop drives it (``GlfwBackend`` documents each).
+
+    Callbacks (attributes, None or callables): ``on_cursor(x_px, y_px)`` (framebuffer
+    pixels, floats), ``on_button(pressed)`` (left button), ``on_scroll(dy)``,
+    ``on_key(name, shift)``; called on the thread running :meth:`wait_events`.
+    """
+
+    on_cursor: Callable | None
+    on_button: Callable | None
+    on_scroll: Callable | None
+    on_key: Callable | None
+    should_close: bool
+
+    def cursor_px(self) -> tuple[float, float]:
+        """Where the pointer is now (framebuffer px)."""
+
+    def wait_events(self, timeout_s: float) -> None:
+        """Handle the pending events, waiting for one at most ``timeout_s`` s."""
+
+    def swap(self) -> None:
+        """Show the frame drawn."""
+
+    def make_current(self) -> None:
+        """Make the GL context current on the calling thread."""
+
+    def release_context(self) -> None:
+        """Detach the GL context from the calling thread."""
+
+    def wake(self) -> None:
+        """End a ``wait_events`` in progress (from any thread)."""
 
 
 class VisualError(FrictexError, OSError):
@@ -56,7 +114,7 @@ class OffscreenBackend:
     def resize(self, size: tuple[int, int]) -> None:
         w, h = int(size[0]), int(size[1])
         if w < 1 or h < 1:
-            raise ValueError(f"frame size {w}x{h} px: expected at least 1x1")
+            raise InputError(f"frame size {w}x{h} px: expected at least 1x1")
         if self.fbo is not None:
             self._default.use()
             self.fbo.release()
@@ -209,13 +267,3 @@ class GlfwBackend:
         self.ctx.release()
         self._glfw.destroy_window(self.window)
         self._glfw.terminate()
-
-
-BACKENDS = {"egl": OffscreenBackend, "glfw": GlfwBackend}
-
-
-def open_backend(name: str, size: tuple[int, int], **options):
-    """The backend called ``name`` (see BACKENDS), opened at ``size`` (width, height) px."""
-    if name not in BACKENDS:
-        raise ValueError(f"unknown visual backend {name!r}; expected one of {', '.join(BACKENDS)}")
-    return BACKENDS[name](size, **options)
