@@ -7,21 +7,27 @@ inside a disc composed with a 5 mm grating, and at 1920x1080 for every bundled s
 the per-frame cost of the overlay on top of it (two
 fingers with trails, the scope with 3 s of history, the status line), each frame
 finished on the GPU (``ctx.finish``), without and with reading the pixels back (what
-``--frames`` and screenshots pay).
+``--frames`` and screenshots pay), best of 100 (20 with ``--quick``); beside it, measured
+in the same run, the floor of this renderer (clear, the scene's textured quad and the
+read-back, nothing else), their ratio, the frame's draw calls, and the machine's load
+average when the section starts (the CPU is shared: state it with the figures).
 """
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 
+import moderngl
 import numpy as np
 
 from frictex.app.measure.figure import Figure
-from frictex.rendering.visual.compositor import Compositor, FrameView
+from frictex.rendering.visual.compositor import TEXTURED, Compositor, FrameView
 from frictex.rendering.visual import scene_image
 from frictex.rendering.visual.context import OffscreenBackend, VisualError
 from frictex.rendering.visual.overlay import BlockRecord, OverlayState
+from frictex.rendering.visual.viewport import fit_viewport
 from frictex.device.profile import DeviceProfile
 from frictex.textures.model import DiscRegion, Display, Grating, Scene, VisualHints
 
@@ -48,7 +54,10 @@ def busy_overlay() -> OverlayState:
 
 def scene_ms(comp: Compositor, scene: Scene, repeats: int) -> float:
     """Milliseconds ``comp`` takes to draw ``scene`` into its static texture, cold (no
-    cached table), best of ``repeats`` (the CPU is shared: the best run is the cost)."""
+    cached table), best of ``repeats`` (the CPU is shared: the best run is the cost).
+    The scene is first drawn once at 64 x 48 px, untimed: that loads its compiled kernels,
+    once per process (start-up's cost, not the image's)."""
+    scene_image.scene_rgb(scene, fit_viewport(scene.display, 64, 48))
     best = float("inf")
     for _ in range(repeats):
         scene_image.clear_tables()
@@ -66,10 +75,58 @@ def bundled_scene_figures(comp: Compositor, label: str, repeats: int) -> list[Fi
             for entry in list_scenes()]
 
 
+def floor_ms(backend: OffscreenBackend, texture_size: tuple[int, int], frames: int) -> float:
+    """Milliseconds of the least a frame can cost on this renderer: clear, one textured
+    quad of ``texture_size`` px (the scene) and the pixels read back."""
+    ctx = backend.ctx
+    program = ctx.program(vertex_shader=TEXTURED[0], fragment_shader=TEXTURED[1])
+    texture = ctx.texture(texture_size, 3, bytes(3 * texture_size[0] * texture_size[1]),
+                          alignment=1)
+    w, h = backend.size
+    quad = np.array([[0, 0, 0, 0], [texture_size[0], 0, 1, 0], [0, texture_size[1], 0, 1],
+                     [texture_size[0], texture_size[1], 1, 1]], dtype="f4")
+    buffer = ctx.buffer(quad.tobytes())
+    vao = ctx.vertex_array(program, [(buffer, "2f 2f", "in_px", "in_uv")])
+    program["u_frame"] = (float(w), float(h))
+    program["u_tex"] = 0
+    backend.use()
+    best = float("inf")
+    for _ in range(frames):
+        t0 = time.perf_counter()
+        ctx.clear(0.12, 0.12, 0.12, 1.0)
+        texture.use(0)
+        vao.render(moderngl.TRIANGLE_STRIP, vertices=4)
+        backend.read_rgb()
+        ctx.finish()
+        best = min(best, time.perf_counter() - t0)
+    for obj in (vao, buffer, texture, program):
+        obj.release()
+    return best * 1e3
+
+
+def frame_ms(backend: OffscreenBackend, comp: Compositor, view: FrameView, frames: int,
+             read_back: bool) -> float:
+    """Milliseconds of the best of ``frames`` frames of ``view`` (finished on the GPU;
+    ``read_back``: with the pixels read back)."""
+    backend.use()
+    comp.draw(view)  # warm-up: shaders, text atlas
+    backend.ctx.finish()
+    best = float("inf")
+    for _ in range(frames):
+        t0 = time.perf_counter()
+        comp.draw(view)
+        if read_back:
+            backend.read_rgb()
+        backend.ctx.finish()
+        best = min(best, time.perf_counter() - t0)
+    return best * 1e3
+
+
 def run(quick: bool) -> list[Figure]:
     frames = 20 if quick else 100
     repeats = 1 if quick else 3
-    figures = []
+    figures = [Figure("visual", "load average (1 min) at the start", os.getloadavg()[0],
+                      f"({os.cpu_count()} CPUs)")]
     scene = bench_scene()
     view = FrameView(overlay=busy_overlay(), hover_mm=(50.0, 30.0),
                      status=("bench | renderer: file | force 0.50 N | link: none",))
@@ -86,19 +143,15 @@ def run(quick: bool) -> list[Figure]:
         if size == SIZES[-1]:
             figures.extend(bundled_scene_figures(comp, label, repeats))
             comp.set_scene(scene)
-        backend.use()
-        for read_back in (False, True):
-            comp.draw(view)  # warm-up: shaders, text textures
-            backend.ctx.finish()
-            t0 = time.perf_counter()
-            for _ in range(frames):
-                comp.draw(view)
-                if read_back:
-                    backend.read_rgb()
-                backend.ctx.finish()
-            per_frame = (time.perf_counter() - t0) / frames * 1e3
-            what = "frame + read back" if read_back else "frame"
-            figures.append(Figure("visual", f"{what} {label}", per_frame, "ms"))
+        frame = frame_ms(backend, comp, view, frames, read_back=False)
+        read = frame_ms(backend, comp, view, frames, read_back=True)
+        floor = floor_ms(backend, (comp.viewport.width_px, comp.viewport.height_px), frames)
+        figures += [Figure("visual", f"frame {label}", frame, "ms (best)"),
+                    Figure("visual", f"frame + read back {label}", read, "ms (best)"),
+                    Figure("visual", f"floor {label} (clear, scene quad, read back)", floor,
+                           "ms (best)"),
+                    Figure("visual", f"frame + read back / floor {label}", read / floor, "x"),
+                    Figure("visual", f"draw calls per frame {label}", comp.batch.calls, "")]
         comp.release()
         backend.close()
     return figures

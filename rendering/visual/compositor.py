@@ -8,25 +8,29 @@ needs a place of its own (a plate's |W| heat map) has a column at the right of t
 frame (``DevicePanels.column_px``), and the scene is fitted beside it.
 
 The scene is rendered once per scene (``scene_image``) into a texture drawn 1:1 on
-the viewport's pixels; each frame only the overlay is rebuilt. All geometry arrives in
-frame pixels (float, y down) and one vertex shader maps it to clip space; the drawing
-primitives (``draw_triangles``, ``draw_rect``, ``draw_texture``, ``draw_cursors``,
-``text``) are public for the panels.
+the viewport's pixels; each frame only the overlay is rebuilt, the scope's frame only
+when the strip moves, and the scope's traces are decimated to its pixel columns. All
+geometry arrives in frame pixels (float, y down) and one vertex shader maps it to clip
+space; the drawing primitives (``draw_triangles``, ``draw_rect``, ``draw_texture``,
+``draw_cursors``, ``text``) are public for the panels, and queue their vertices by kind
+(``batch``; texts live in one atlas, ``text_atlas``): a frame of the demo is four draw
+calls (scene, lines, cursors, texts).
 """
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from dataclasses import dataclass
 
 import moderngl
 import numpy as np
 
+from frictex.rendering.visual.batch import Batcher
 from frictex.rendering.visual.device_panels import DevicePanels
 from frictex.rendering.visual.modal_view import Envelope
 from frictex.rendering.visual.overlay import FINGER_RGB, OverlayState, plot_y
 from frictex.rendering.visual.scene_image import scene_rgb, to_srgb8
 from frictex.rendering.visual.text import text_rgba, wrap
+from frictex.rendering.visual.text_atlas import AtlasEntry, TextAtlas
 from frictex.rendering.visual.viewport import Viewport, frame_layout
 from frictex.textures.model import Scene
 
@@ -48,14 +52,17 @@ in vec4 v_rgba; out vec4 f_colour;
 void main() { f_colour = v_rgba; }""")
 
 # A cursor is a quad around its centre; the fragment shader draws, from its distance to
-# the centre, a dark halo ring, a coloured ring and (if filled) a coloured dot: readable
-# on black, white and grey scenes, and anti-aliased over one pixel.
+# the centre, a dark halo ring, a coloured ring and, if filled (a touching finger), a
+# translucent disc inside the ring and a solid dot at the centre; hollow (a lifted finger,
+# the hover pointer) it is the ring alone: readable on black, white and grey scenes, and
+# anti-aliased over one pixel.
 CURSOR = ("""#version 330
 in vec2 in_px; in vec2 in_local; in float in_radius; in vec4 in_rgba; in float in_fill;
 out vec2 v_local; out float v_radius; out vec4 v_rgba; out float v_fill;""" + _VERT_PX + """
 void main() { v_local = in_local; v_radius = in_radius; v_rgba = in_rgba; v_fill = in_fill;
               gl_Position = to_clip(in_px); }""", """#version 330
 in vec2 v_local; in float v_radius; in vec4 v_rgba; in float v_fill; out vec4 f_colour;
+const float CURSOR_FILL_ALPHA = 0.35;
 float band(float d, float centre, float half_width) {
     return clamp(half_width + 0.5 - abs(d - centre), 0.0, 1.0); }
 void main() {
@@ -63,7 +70,8 @@ void main() {
     float halo = band(d, v_radius, 2.5);
     float ring = band(d, v_radius, 1.0);
     float dot_ = v_fill * clamp(v_radius * 0.3 + 0.5 - d, 0.0, 1.0);
-    float c = max(ring, dot_);
+    float disc = v_fill * CURSOR_FILL_ALPHA * clamp(v_radius + 0.5 - d, 0.0, 1.0);
+    float c = max(max(ring, dot_), disc);
     float a = max(halo * 0.6, c) * v_rgba.a;
     vec3 rgb = mix(vec3(0.0), v_rgba.rgb, c / max(max(halo * 0.6, c), 1e-6));
     f_colour = vec4(rgb, a);
@@ -72,7 +80,6 @@ void main() {
 SCOPE_BG = (0.05, 0.05, 0.05, 1.0)
 SCOPE_GRID = (1.0, 1.0, 1.0, 0.18)  # at 0, half and full scale of each plot
 SCOPE_RULE = (1.0, 1.0, 1.0, 0.45)  # the edges of the strip and between the two plots
-TEXT_CACHE = 64  # text textures kept between frames (a frame draws about 20)
 BANNER_RGBA = {"stop": (0.75, 0.0, 0.0, 0.92), "error": (0.55, 0.05, 0.05, 0.92),
                "info": (0.1, 0.1, 0.1, 0.85)}
 
@@ -109,8 +116,15 @@ class Compositor:
         self.textured = ctx.program(vertex_shader=TEXTURED[0], fragment_shader=TEXTURED[1])
         self.coloured = ctx.program(vertex_shader=COLOURED[0], fragment_shader=COLOURED[1])
         self.cursor = ctx.program(vertex_shader=CURSOR[0], fragment_shader=CURSOR[1])
-        self._buffers: dict[str, moderngl.Buffer] = {}
-        self._text_cache: OrderedDict[tuple, moderngl.Texture] = OrderedDict()
+        self.batch = Batcher(ctx, {
+            "coloured": (self.coloured, "2f 4f", ("in_px", "in_rgba")),
+            "cursor": (self.cursor, "2f 2f 1f 4f 1f", ("in_px", "in_local", "in_radius",
+                                                       "in_rgba", "in_fill")),
+            "textured": (self.textured, "2f 2f", ("in_px", "in_uv")),
+            "text": (self.textured, "2f 2f", ("in_px", "in_uv"))})
+        self.atlas = TextAtlas(ctx, size[0], self.batch.flush)
+        self.batch.textures["text"] = self.atlas.texture
+        self._scope_frame: tuple[tuple, np.ndarray] | None = None
         self.panels = DevicePanels(self)
         self.status_bottom = 4.0  # px: below the status lines of the last frame drawn
         self.scene = scene
@@ -129,6 +143,11 @@ class Compositor:
         if size == self.size:
             return
         self.size = size
+        if size[0] > self.atlas.width:  # a status line as wide as the frame must fit
+            self.batch.flush()
+            self.atlas.release()
+            self.atlas = TextAtlas(self.ctx, size[0], self.batch.flush)
+            self.batch.textures["text"] = self.atlas.texture
         self.set_scene(self.scene)
 
     def set_scene(self, scene: Scene, outlines: bool | None = None) -> None:
@@ -146,79 +165,57 @@ class Compositor:
         self.scene_texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
         self.panels.set_scene(scene)
 
-    # -- drawing helpers ----------------------------------------------------------------
+    # -- drawing primitives (queued by kind: ``batch``) ------------------------------------
 
-    def _buffer(self, key: str, data: np.ndarray) -> moderngl.Buffer:
-        raw = np.ascontiguousarray(data, dtype="f4").tobytes()
-        buf = self._buffers.get(key)
-        if buf is None or buf.size < len(raw):
-            if buf is not None:
-                buf.release()
-            buf = self.ctx.buffer(reserve=max(len(raw), 4096) * 2, dynamic=True)
-            self._buffers[key] = buf
-        buf.write(raw)
-        return buf
+    @staticmethod
+    def _quad(x, y, w, h, u0=0.0, v0=0.0, u1=1.0, v1=1.0) -> np.ndarray:
+        """Two triangles (6, 4) of x, y, u, v covering (x, y, w, h) px."""
+        return np.array([[x, y, u0, v0], [x + w, y, u1, v0], [x, y + h, u0, v1],
+                         [x, y + h, u0, v1], [x + w, y, u1, v0], [x + w, y + h, u1, v1]])
 
-    def draw_texture(self, texture: moderngl.Texture, x: float, y: float,
-                      size: tuple[float, float] | None = None) -> None:
+    def draw_texture(self, texture, x: float, y: float, size: tuple[float, float] | None = None,
+                     opaque: bool = False) -> None:
+        """Draw a text (an entry of :meth:`text`, queued with the frame's other texts) or
+        a texture (drawn now; ``opaque``: replacing what is below, not blended) at
+        (x, y) px, stretched to ``size`` px if given."""
         w, h = size or texture.size
-        quad = np.array([[x, y, 0, 0], [x + w, y, 1, 0], [x, y + h, 0, 1],
-                         [x + w, y + h, 1, 1]], dtype=np.float64)
-        buf = self._buffer("quad", quad)
-        vao = self.ctx.vertex_array(self.textured, [(buf, "2f 2f", "in_px", "in_uv")])
-        texture.use(0)
-        self.textured["u_tex"] = 0
-        vao.render(moderngl.TRIANGLE_STRIP, vertices=4)
-        vao.release()
-
-    def draw_triangles(self, key: str, tris: np.ndarray) -> None:
-        if len(tris) == 0:
+        if isinstance(texture, AtlasEntry):
+            self.batch.queue("text", self._quad(x, y, w, h, *self.atlas.uv(texture)))
             return
-        buf = self._buffer(key, tris)
-        vao = self.ctx.vertex_array(self.coloured, [(buf, "2f 4f", "in_px", "in_rgba")])
-        vao.render(moderngl.TRIANGLES, vertices=len(tris))
-        vao.release()
+        self.batch.flush()
+        if opaque:
+            self.ctx.disable(moderngl.BLEND)
+        self.batch.draw_now("textured", self._quad(x, y, w, h), texture)
+        if opaque:
+            self.ctx.enable(moderngl.BLEND)
+
+    def draw_triangles(self, tris: np.ndarray) -> None:
+        """Triangles (k, 6) of x, y (px), r, g, b, a, queued with the frame's others."""
+        self.batch.queue("coloured", tris)
 
     def draw_rect(self, x, y, w, h, rgba) -> None:
-        corners = np.array([[x, y], [x + w, y], [x, y + h], [x, y + h], [x + w, y], [x + w, y + h]])
-        self.draw_triangles("rect", np.column_stack((corners, np.tile(rgba, (6, 1)))))
+        tris = np.empty((6, 6))
+        tris[:, :2], tris[:, 2:] = self._quad(x, y, w, h)[:, :2], rgba
+        self.draw_triangles(tris)
 
     def draw_cursors(self, cursors: np.ndarray) -> None:
+        """Cursor instances (k, 8) (``OverlayState.cursors``), queued with the frame's others."""
         if len(cursors) == 0:
             return
-        r = cursors[:, 2:3] + 4.0
         local = np.array([[-1, -1], [1, -1], [-1, 1], [-1, 1], [1, -1], [1, 1]], dtype=np.float64)
-        verts = []
-        for c, reach in zip(cursors, r[:, 0]):
-            offs = local * reach
-            verts.append(np.column_stack((c[0] + offs[:, 0], c[1] + offs[:, 1], offs,
-                                          np.full(6, c[2]), np.tile(c[3:7], (6, 1)),
-                                          np.full(6, c[7]))))
-        buf = self._buffer("cursor", np.concatenate(verts))
-        vao = self.ctx.vertex_array(self.cursor, [(buf, "2f 2f 1f 4f 1f", "in_px", "in_local",
-                                                   "in_radius", "in_rgba", "in_fill")])
-        vao.render(moderngl.TRIANGLES, vertices=6 * len(cursors))
-        vao.release()
+        offs = local[None, :, :] * (cursors[:, 2] + 4.0)[:, None, None]  # (k, 6, 2)
+        verts = np.empty((len(cursors), 6, 10))
+        verts[:, :, 0:2] = cursors[:, None, 0:2] + offs
+        verts[:, :, 2:4] = offs
+        verts[:, :, 4:] = cursors[:, None, 2:8]
+        self.batch.queue("cursor", verts.reshape(-1, 10))
 
     def text(self, lines: tuple[str, ...], size_px: int, rgb=(255, 255, 255),
-              background=(0, 0, 0, 170)) -> moderngl.Texture:
-        """The texture of ``lines`` of text (cached; valid until the next frame starts)."""
-        key = (lines, size_px, rgb, background)
-        tex = self._text_cache.get(key)
-        if tex is not None:
-            self._text_cache.move_to_end(key)
-        else:
-            img = text_rgba(lines, size_px, rgb, background)
-            tex = self.ctx.texture((img.shape[1], img.shape[0]), 4, img.tobytes(), alignment=1)
-            tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-            self._text_cache[key] = tex
-        return tex
-
-    def _trim_text_cache(self) -> None:
-        """Release the least recently used texts beyond TEXT_CACHE. Only between frames:
-        a text made earlier in a frame may still be waiting to be drawn."""
-        while len(self._text_cache) > TEXT_CACHE:
-            self._text_cache.popitem(last=False)[1].release()
+             background=(0, 0, 0, 170)) -> AtlasEntry:
+        """``lines`` of text in the frame's text atlas (its ``size`` (w, h) px; drawn by
+        :meth:`draw_texture`)."""
+        return self.atlas.get((lines, size_px, rgb, background),
+                              lambda: text_rgba(lines, size_px, rgb, background))
 
     # -- the frame ----------------------------------------------------------------------
 
@@ -256,10 +253,12 @@ class Compositor:
         return ((x, y + 1.0 + row, w, plot_h), (x, y + 2.0 + 2.0 * row + plot_h, w, plot_h))
 
     def draw(self, view: FrameView | None = None) -> None:
-        """Draw the scene and ``view`` into the framebuffer in use."""
+        """Draw the scene and ``view`` into the framebuffer in use: the scene, then the
+        trails and the scope's lines in one call, the cursors in one, the device panels,
+        and every text in one (``batch``)."""
         view = view or FrameView()
-        self._set_scope(view.show_scope and view.overlay is not None)
-        self._trim_text_cache()
+        scope = view.show_scope and view.overlay is not None
+        self._set_scope(scope)
         ctx = self.ctx
         w, h = self.size
         ctx.viewport = (0, 0, w, h)
@@ -267,11 +266,12 @@ class Compositor:
         ctx.clear(0.12, 0.12, 0.12, 1.0)
         for prog in (self.textured, self.coloured, self.cursor):
             prog["u_frame"] = (float(w), float(h))
+        self.textured["u_tex"] = 0
+        self.batch.begin_frame()
         vp = self.viewport
-        ctx.disable(moderngl.BLEND)
-        self.draw_texture(self.scene_texture, vp.x0, vp.y0)
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
+        self.draw_texture(self.scene_texture, vp.x0, vp.y0, opaque=True)
         font_px = self.font_px
         status = None
         if view.status:
@@ -279,11 +279,15 @@ class Compositor:
         self.status_bottom = 4.0 + (status.size[1] if status is not None else 0.0)
         overlay = view.overlay or OverlayState()
         if view.overlay is not None:
-            self.draw_triangles("trail", view.overlay.trail_triangles(vp))
+            self.draw_triangles(view.overlay.trail_triangles(vp))
+        if scope:
+            self.draw_triangles(self._scope_lines())
+            self.draw_triangles(view.overlay.scope_triangles(self.scope_plots(),
+                                                             view.amplitude_max_um))
         self.draw_cursors(overlay.cursors(vp, view.hover_mm))
         self.panels.draw(overlay, view.envelope, view.envelope_scale_um)
-        if view.show_scope and view.overlay is not None:
-            self._draw_scope(view, font_px)
+        if scope:
+            self._draw_scope_labels(view)
         if status is not None:
             self.draw_texture(status, 4, 4)
         if view.banner:
@@ -293,18 +297,31 @@ class Compositor:
             y = (h - bh) / 2 if view.banner_kind == "stop" else h * 0.12
             self.draw_rect(0, y, w, bh, BANNER_RGBA.get(view.banner_kind, BANNER_RGBA["info"]))
             self.draw_texture(tex, max(4.0, (w - tex.size[0]) / 2), y + 6)
+        self.batch.flush()
         ctx.disable(moderngl.BLEND)
 
-    def _draw_scope(self, view: FrameView, font_px: int) -> None:
-        x, y, w, h = self.scope_rect()
-        self.draw_rect(x, y, w, h, SCOPE_BG)
+    def _scope_lines(self) -> np.ndarray:
+        """The scope strip's background, rules and grid: triangles (k, 6), made again only
+        when the strip moves."""
+        rect, plots = self.scope_rect(), self.scope_plots()
+        if self._scope_frame is None or self._scope_frame[0] != (rect, plots):
+            x, y, w, h = rect
+            rects = [(x, y, w, h, SCOPE_BG)]
+            for px, py, pw, ph in plots:
+                rects.append((px, py - 1.0, pw, 1.0, SCOPE_RULE))  # under the title row
+                rects += [(px, level - 0.5, pw, 1.0, SCOPE_GRID)
+                          for level in plot_y((0.0, 0.5, 1.0), (px, py, pw, ph))]
+            rects.append((x, y, w, 1.0, SCOPE_RULE))
+            tris = np.empty((6 * len(rects), 6))
+            for k, (rx, ry, rw, rh, rgba) in enumerate(rects):
+                tris[6 * k:6 * k + 6, :2] = self._quad(rx, ry, rw, rh)[:, :2]
+                tris[6 * k:6 * k + 6, 2:] = rgba
+            self._scope_frame = ((rect, plots), tris)
+        return self._scope_frame[1]
+
+    def _draw_scope_labels(self, view: FrameView) -> None:
+        x, _, w, _ = self.scope_rect()
         plots = self.scope_plots()
-        for px, py, pw, ph in plots:
-            self.draw_rect(px, py - 1.0, pw, 1.0, SCOPE_RULE)  # under the title row
-            for level in plot_y((0.0, 0.5, 1.0), (px, py, pw, ph)):
-                self.draw_rect(px, level - 0.5, pw, 1.0, SCOPE_GRID)
-        self.draw_rect(x, y, w, 1.0, SCOPE_RULE)
-        self.draw_triangles("scope", view.overlay.scope_triangles(plots, view.amplitude_max_um))
         label_px, row = self.label_px, self.label_row_px
         titles = ("mu' target (0 to 1)",
                   f"amplitude (0 to {view.amplitude_max_um:g} um, 0-peak)")
@@ -362,7 +379,7 @@ class Compositor:
 
     def release(self) -> None:
         self.panels.release()
-        for obj in (*self._buffers.values(), *self._text_cache.values(), self.scene_texture,
-                    self.textured, self.coloured, self.cursor):
+        self.batch.release()
+        for obj in (self.atlas, self.scene_texture, self.textured, self.coloured, self.cursor):
             if obj is not None:
                 obj.release()

@@ -97,9 +97,9 @@ class DevicePanels:
         """Force arrows on the fingers and their scale (bottom left, above the scope)."""
         comp, vp = self.comp, self.comp.viewport
         length = FORCE_ARROW_MM * min(vp.px_per_mm)
-        comp.draw_triangles("forces", overlay.force_arrows(vp, length / self.force_scale_n))
+        comp.draw_triangles(overlay.force_arrows(vp, length / self.force_scale_n))
         y = comp.scope_rect()[1] - comp.font_px * 2.2
-        comp.draw_triangles("force-scale", arrow_triangles((12.0, y), (length, 0.0),
+        comp.draw_triangles(arrow_triangles((12.0, y), (length, 0.0),
                                                            (1.0, 1.0, 1.0, 0.9), 3.0))
         comp.draw_texture(comp.text((f"{self.force_scale_n:g} N (arrow: force on the finger, "
                                      "thin: wanted)",), comp.label_px, background=(0, 0, 0, 150)),
@@ -122,7 +122,7 @@ class DevicePanels:
             corners = np.column_stack((cx + half[:, 0] * np.cos(a) - half[:, 1] * np.sin(a),
                                        cy + half[:, 0] * np.sin(a) + half[:, 1] * np.cos(a)))
             px = np.column_stack(vp.to_px(corners[:, 0], corners[:, 1]))
-            comp.draw_triangles("button", segment_triangles(px, np.tile(rgba, (5, 1)), 4.0))
+            comp.draw_triangles(segment_triangles(px, np.tile(rgba, (5, 1)), 4.0))
             tex = comp.text((f"{layer.name}: {text}",), comp.font_px,
                             background=(*(int(255 * c) for c in rgba[:3]), 230))
             comp.draw_texture(tex, px[:4, 0].min(), px[:4, 1].min() - tex.size[1] - 2)
@@ -201,9 +201,9 @@ class DevicePanels:
                                                        (x0, b0), (x1, y1), (x1, b1))],
                         axis=1).reshape(-1, 2)
         rgba = np.tile((0.95, 0.45, 0.1, 0.55), (len(fill), 1))
-        comp.draw_triangles("envelope", np.column_stack((fill, rgba)))
+        comp.draw_triangles(np.column_stack((fill, rgba)))
         curve = np.column_stack((px, py))
-        comp.draw_triangles("envelope-line", segment_triangles(
+        comp.draw_triangles(segment_triangles(
             curve, np.tile((1.0, 0.8, 0.3, 1.0), (len(px), 1)), 1.5, keep))
         marks = []
         for fid, fx, _, amp in env.fingers:
@@ -225,9 +225,7 @@ class DevicePanels:
             tex.write(np.ascontiguousarray(rgb).tobytes())
             self._heat = (env, scale_um, tex)
         ax, ay, aw, ah = self.heat_map_rect(rect)
-        comp.ctx.disable(moderngl.BLEND)
-        comp.draw_texture(tex, ax, ay, (aw, ah))
-        comp.ctx.enable(moderngl.BLEND)
+        comp.draw_texture(tex, ax, ay, (aw, ah), opaque=True)
         d = comp.scene.display
         self._draw_marks([(ax + aw * fx / d.width_mm, ay + ah * fy / d.height_mm, fid)
                           for fid, fx, fy, _ in env.fingers])

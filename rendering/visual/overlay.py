@@ -15,6 +15,7 @@ at mu' = 1 or at the limit is never drawn on the plot's edge.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -106,6 +107,8 @@ class OverlayState:
         self.scope_s = scope_s
         self.now_s = 0.0
         self.fingers: dict[int, _History] = {}
+        #: the finger ids of the latest record (a finger not among them has gone)
+        self.present: set[int] = set()
         #: at the latest sample: channel commands (q,) complex (um, phase), or None
         self.commands: np.ndarray | None = None
         #: at the latest sample, per touching finger id: (achieved, wanted) force (N, (2,))
@@ -118,6 +121,7 @@ class OverlayState:
         if record.t_s.size == 0:
             return
         self.now_s = max(self.now_s, float(record.t_s[-1]))
+        self.present = set(record.finger_ids)
         keep = self.now_s - max(self.trail_s, self.scope_s)
         for row, fid in enumerate(record.finger_ids):
             rows = np.stack((record.contact[row].astype(np.float64), record.x_mm[row],
@@ -141,14 +145,31 @@ class OverlayState:
 
     def clear(self) -> None:
         self.fingers.clear()
+        self.present = set()
         self.commands, self.forces, self.button = None, {}, None
 
+    def _touching(self, fid: int, h: _History) -> bool:
+        """Whether finger ``fid`` touches now: in the latest record, touching at its
+        latest sample (a finger gone from the tracks has lifted, whatever its last
+        sample said)."""
+        return fid in self.present and h.t.size > 0 and h.data[0, -1] > 0
+
     def current(self) -> list[tuple[int, float, float, bool]]:
-        """(finger id, x mm, y mm, touching) at the latest sample of each finger."""
+        """(finger id, x mm, y mm, True) of each finger touching now."""
+        return [(fid, float(h.data[1, -1]), float(h.data[2, -1]), True)
+                for fid, h in sorted(self.fingers.items()) if self._touching(fid, h)]
+
+    def lifted(self) -> list[tuple[int, float, float, float]]:
+        """(finger id, x mm, y mm, s since its last contact) of each finger that touched
+        within the last ``trail_s`` and does not touch now, at its latest position."""
         out = []
         for fid, h in sorted(self.fingers.items()):
-            if h.t.size and h.data[0, -1] > 0:
-                out.append((fid, float(h.data[1, -1]), float(h.data[2, -1]), True))
+            touched = np.flatnonzero(h.data[0] > 0)
+            if self._touching(fid, h) or touched.size == 0:
+                continue
+            age = self.now_s - float(h.t[touched[-1]])
+            if age <= self.trail_s:
+                out.append((fid, float(h.data[1, -1]), float(h.data[2, -1]), age))
         return out
 
     # -- geometry in frame pixels -------------------------------------------------------
@@ -174,13 +195,19 @@ class OverlayState:
         return np.concatenate(parts) if parts else np.empty((0, 6))
 
     def cursors(self, viewport: Viewport, hover_mm: tuple[float, float] | None = None) -> np.ndarray:
-        """Cursor instances (k, 8): x_px, y_px, radius_px, r, g, b, a, filled. Touching
-        fingers are filled rings in their colour; the hover pointer a thin grey ring."""
+        """Cursor instances (k, 8): x_px, y_px, radius_px, r, g, b, a, filled. A touching
+        finger is a filled ring (a dot inside) in its colour; a lifted one a hollow ring
+        in its colour, fading out with its trail over ``trail_s``; the hover pointer a
+        hollow grey ring."""
         radius = CURSOR_RADIUS_MM * min(viewport.px_per_mm)
         rows = []
         for fid, x, y, _ in self.current():
             px, py = viewport.to_px(x, y)
             rows.append((float(px), float(py), radius, *FINGER_RGB[fid % len(FINGER_RGB)], 1.0, 1.0))
+        for fid, x, y, age in self.lifted():
+            px, py = viewport.to_px(x, y)
+            alpha = 0.9 * (1.0 - age / self.trail_s)
+            rows.append((float(px), float(py), radius, *FINGER_RGB[fid % len(FINGER_RGB)], alpha, 0.0))
         if hover_mm is not None:
             px, py = viewport.to_px(*hover_mm)
             rows.append((float(px), float(py), radius, 0.6, 0.6, 0.6, 0.9, 0.0))
@@ -189,7 +216,9 @@ class OverlayState:
     def scope_triangles(self, plots, amplitude_max_um: float) -> np.ndarray:
         """Triangles (k, 6) for the scope traces: ``plots`` = (mu' plot, amplitude plot),
         each (x, y, w, h) px; mu' in [0, 1] and amplitude in [0, amplitude_max_um] at
-        the heights :func:`plot_y` gives."""
+        the heights :func:`plot_y` gives. Each trace is decimated to the plot's pixel
+        columns (:func:`column_spans`, min and max per column, as an oscilloscope
+        draws): one quad per column whatever the number of samples."""
         parts = []
         for fid, hist in self.fingers.items():
             keep = hist.t >= self.now_s - self.scope_s
@@ -198,14 +227,13 @@ class OverlayState:
                 continue
             mu = hist.data[3, keep]
             amp = hist.data[4, keep] / amplitude_max_um
-            rgba = np.empty((t.size, 4))
-            rgba[:, :3] = FINGER_RGB[fid % len(FINGER_RGB)]
-            rgba[:, 3] = 1.0
+            rgba = (*FINGER_RGB[fid % len(FINGER_RGB)], 1.0)
             for values, rect in zip((mu, amp), plots):
                 x0, _, w, _ = rect
                 px = x0 + w * (1.0 - (self.now_s - t) / self.scope_s)
-                parts.append(segment_triangles(np.column_stack((px, plot_y(values, rect))),
-                                               rgba, SCOPE_LINE_PX))
+                left, lo, hi = column_spans(px, plot_y(values, rect), x0, w)
+                parts.append(column_quads(left, lo - SCOPE_LINE_PX / 2, hi + SCOPE_LINE_PX / 2,
+                                          rgba))
         return np.concatenate(parts) if parts else np.empty((0, 6))
 
     def force_arrows(self, viewport: Viewport, px_per_n: float) -> np.ndarray:
@@ -231,6 +259,48 @@ def plot_y(values, rect) -> np.ndarray:
     _, y, _, h = rect
     v = np.clip(np.asarray(values, dtype=np.float64), 0.0, 1.0)
     return y + SCOPE_PAD_PX + (h - 2.0 * SCOPE_PAD_PX) * (1.0 - v)
+
+
+def column_spans(x, y, x0: float, width: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A polyline reduced to the pixel columns it crosses: per column, the least and
+    greatest height it reaches there (its samples in the column and its values,
+    interpolated, at the column's two edges), so a trace with many samples per column
+    draws the same band as every segment would, and a sparse one stays joined.
+
+    Parameters
+    ----------
+    x : (n,) px, non-decreasing (time order), n >= 1. y : (n,) px.
+    x0, width : the plot's left edge and width (px): columns [x0 + c, x0 + c + 1) for
+        c = 0 .. ceil(width) - 1; samples outside go to the nearest.
+
+    Returns
+    -------
+    left : (k,) left edge (px) of each column crossed, lo, hi : (k,) px.
+    """
+    x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+    columns = max(1, math.ceil(width))
+    col = np.clip(np.floor(x - x0), 0, columns - 1).astype(np.intp)
+    first, last = int(col[0]), int(col[-1])
+    edges = x0 + np.arange(first, last + 2, dtype=np.float64)
+    at_edges = np.interp(edges, x, y)
+    lo = np.minimum(at_edges[:-1], at_edges[1:])
+    hi = np.maximum(at_edges[:-1], at_edges[1:])
+    starts = np.flatnonzero(np.concatenate(([True], col[1:] != col[:-1])))
+    which = col[starts] - first
+    lo[which] = np.minimum(lo[which], np.minimum.reduceat(y, starts))
+    hi[which] = np.maximum(hi[which], np.maximum.reduceat(y, starts))
+    return edges[:-1], lo, hi
+
+
+def column_quads(left, top, bottom, rgba) -> np.ndarray:
+    """One-pixel-wide quads from ``left`` to ``left + 1`` and ``top`` to ``bottom`` (px,
+    (k,) each), in colour ``rgba``: triangles (6 k, 6) of x, y, r, g, b, a."""
+    right = left + 1.0
+    xs = np.stack((left, right, left, left, right, right), axis=1)
+    ys = np.stack((top, top, bottom, bottom, top, bottom), axis=1)
+    out = np.empty((xs.size, 6))
+    out[:, 0], out[:, 1], out[:, 2:] = xs.ravel(), ys.ravel(), rgba
+    return out
 
 
 def arrow_triangles(origin, vector_px, rgba, width_px: float) -> np.ndarray:

@@ -28,8 +28,10 @@ def text_rgba(lines: tuple[str, ...], size_px: int, rgb=(255, 255, 255),
     return np.asarray(img)
 
 
+@lru_cache(maxsize=256)
 def wrap(text: str, size_px: int, width_px: float) -> tuple[str, ...]:
-    """``text`` split into lines no wider than ``width_px`` (words kept whole)."""
+    """``text`` split into lines no wider than ``width_px`` (words kept whole; remembered:
+    a frame wraps the same status lines as the last)."""
     f = font(size_px)
     probe = ImageDraw.Draw(Image.new("RGBA", (1, 1)))
     lines: list[str] = []
