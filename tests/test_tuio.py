@@ -12,8 +12,8 @@ from hypothesis import given, settings, strategies as st
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP, TraceError
 from test_evdev_decode import check_event_sequence
 from frictex.device.errors import InputError
-from frictex.rendering.input.tuio import (OscError, TuioDecoder, TuioListener, parse_message,
-                                         parse_packet, parse_sender)
+from frictex.rendering.input.tuio import (MAX_CURSORS, MAX_SOURCES, OscError, TuioDecoder,
+                                         TuioListener, parse_message, parse_packet, parse_sender)
 
 
 # an OSC 1.0 encoder written from the specification, independent of the parser under test
@@ -153,6 +153,22 @@ def test_sources_scope_session_ids_and_stray_sets_are_counted():
     b = dec.feed(frame(1, [1], [(1, 0.9, 0.9), (2, 0.5, 0.5)], source="tableB"), 0.0)
     assert [s.finger for s in a + b] == [0, 1] and dec.stray == 1
     assert _short(dec.feed(frame(2, [], source="tableA"), 0.1)) == [(0, 0.1, 0.1, UP)]
+
+
+def test_what_the_decoder_keeps_is_bounded_whatever_a_sender_claims():
+    """A frame claiming 1,000 cursors alive gives MAX_CURSORS fingers; frames of a 9th
+    source and on are ignored; both counted."""
+    dec = TuioDecoder()
+    ids = list(range(1_000))
+    down = dec.feed(frame(1, ids, [(i, 0.5, 0.5) for i in ids]), 0.0)
+    assert len(down) == MAX_CURSORS and dec.over_limit == 1_000 - MAX_CURSORS
+    assert sorted(s.finger for s in down) == list(range(MAX_CURSORS))
+    for k in range(1, 20):
+        dec.feed(frame(1, [], source=f"table{k}"), 0.0)
+    assert len(dec._alive) == MAX_SOURCES
+    assert dec.over_limit == 1_000 - MAX_CURSORS + 19 - (MAX_SOURCES - 1)
+    up = dec.feed(frame(2, []), 0.1)  # all lift: the fingers are free again
+    assert len(up) == MAX_CURSORS and not dec._pos and not dec._fingers
 
 
 def test_bad_tuio_messages_change_nothing():

@@ -53,6 +53,9 @@ TUIO_HOST = "127.0.0.1"  # listen on loopback unless told otherwise
 _MAX_DEPTH = 8
 #: accepted late-frame jump: an fseq this much below the last one is a tracker restart
 _FSEQ_RESTART = 100
+#: most cursors touching at once (two hands' fingers, twice over) and most TUIO sources
+MAX_CURSORS = 20
+MAX_SOURCES = 8
 
 
 class OscError(TraceError):
@@ -142,11 +145,13 @@ class TuioDecoder:
 
     Samples are :class:`RawSample` with x, y normalised to 0..1 (TUIO's units) and no
     pressure. Counters: ``frames``, ``late`` (late frames dropped), ``stray`` (set
-    messages for sessions not alive, ignored).
+    messages for sessions not alive, ignored), ``over_limit`` (cursors beyond
+    ``MAX_CURSORS`` touching at once, and frames of sources beyond ``MAX_SOURCES``,
+    ignored: what the decoder keeps is bounded whatever a sender claims).
     """
 
     def __init__(self) -> None:
-        self.frames = self.late = self.stray = 0
+        self.frames = self.late = self.stray = self.over_limit = 0
         self._fseq: dict[str, int] = {}
         self._alive: dict[str, set[int]] = {}
         self._pending_alive: dict[str, set[int] | None] = {}
@@ -169,6 +174,9 @@ class TuioDecoder:
     def _commit(self, source: str, fseq: int, t: float, out: list[RawSample]) -> None:
         alive = self._pending_alive.pop(source, None)
         sets = self._pending_set.pop(source, {})
+        if source not in self._alive and len(self._alive) >= MAX_SOURCES:
+            self.over_limit += 1
+            return
         last = self._fseq.get(source)
         if fseq > 0 and last is not None and fseq < last and last - fseq <= _FSEQ_RESTART:
             self.late += 1
@@ -187,6 +195,9 @@ class TuioDecoder:
                 self.stray += 1
                 continue
             key = (source, sid)
+            if key not in self._pos and len(self._pos) >= MAX_CURSORS:
+                self.over_limit += 1
+                continue
             event = MOVE if key in self._pos else DOWN
             if key not in self._fingers:
                 used = set(self._fingers.values())
@@ -364,7 +375,7 @@ class TuioListener:
             f"{self.sender[0]}:{'*' if self.sender[1] is None else self.sender[1]}")
         return {"listen": f"{self.host}:{self.port}", "sender": sender,
                 "datagrams": self.datagrams, "refused": self.refused, "dropped": self.dropped,
-                "bad_packets": self.bad_packets}
+                "bad_packets": self.bad_packets, "over_limit": self.decoder.over_limit}
 
     def close(self) -> None:
         """Stop the thread and release the port."""
