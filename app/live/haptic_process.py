@@ -23,7 +23,9 @@ when its haptic thread fails, or when the window's process is gone.
 The child never outlives the window's process (:func:`die_with_parent`). Two watches
 tell it the parent died, however: the kernel's parent-death signal (Linux
 ``prctl(PR_SET_PDEATHSIG, SIGTERM)``; sent when the thread that started the child
-ends) and a thread waiting on the parent's end of the pipe ``multiprocessing`` leaves
+ends, so a :class:`HapticProcess` is made on a thread that lives as long as the window,
+the demo's main thread; a SIGTERM while the parent lives ends the child as it always
+did) and a thread waiting on the parent's end of the pipe ``multiprocessing`` leaves
 the child (readable when the parent's process is gone, on any system). Either one
 stops the queues the child writes from flushing at exit (the child holds both ends of
 their pipes: with no reader left, a full pipe held its exit for good: 25 minutes and
