@@ -147,6 +147,12 @@ class ProfileSpec:
         which the display must fit on; else None.
     friction_loop : seed 003's friction loop can run on it (the lateral force is sensed
         and seed 003's model applies: ``rendering.control.loop``).
+    carrier_hz : the plate's working resonance (Hz), the carrier an audio interface
+        synthesises for it (``device.audio``).
+    um_per_volt : vibration amplitude (um zero-to-peak) per volt (zero-to-peak) of drive
+        at the carrier; ``frictex calibrate`` fits it where a sensor reports.
+    voltage_limit_v : the largest drive (V zero-to-peak) the amplifier may be asked for;
+        the audio output clamps there and counts the clamps.
     """
 
     summary: str
@@ -154,6 +160,28 @@ class ProfileSpec:
     structure: type | None = None
     surface_length_mm: float | None = None
     friction_loop: bool = False
+    carrier_hz: float = 0.0
+    um_per_volt: float = 0.0
+    voltage_limit_v: float = 0.0
+
+    def __post_init__(self):
+        # a plugin's profile that names no drive figures gets the documented defaults
+        for name, default in (("carrier_hz", DEFAULT_CARRIER_HZ),
+                              ("um_per_volt", DEFAULT_UM_PER_VOLT),
+                              ("voltage_limit_v", DEFAULT_VOLTAGE_LIMIT_V)):
+            if not getattr(self, name) > 0:
+                object.__setattr__(self, name, default)
+
+
+#: Drive figures of a profile that gives none. Seed 003 names neither its resonance nor
+#: its drive voltage: 30 kHz sits in the 26-40 kHz band of seeds 000-004's plates, and
+#: 0.02 um/V puts the default 2.5 um limit at 125 V zero-to-peak, inside the 150 V of
+#: seed 001's amplifiers (300 V peak-to-peak). Measure a real plate and set its own.
+DEFAULT_CARRIER_HZ = 30_000.0
+DEFAULT_UM_PER_VOLT = 0.02
+DEFAULT_VOLTAGE_LIMIT_V = 150.0
+#: seed 000, eq 14: 0.41 um under the fingers at 160 V peak-to-peak (80 V zero-to-peak)
+SEED000_UM_PER_VOLT = 0.41 / 80.0
 
 
 #: The device profiles a scene's ``[device] profile`` may name: the one table of them.
@@ -161,19 +189,23 @@ class ProfileSpec:
 #: :class:`ProfileSpec` naming an actuation it registers under ``frictex.actuations``).
 PROFILES: Registry[ProfileSpec] = Registry("device profile", "frictex.profiles")
 PROFILES.register(DEFAULT_PROFILE, ProfileSpec(
-    "single-mode glass plate of seed 003, one channel", "single-mode", friction_loop=True))
+    "single-mode glass plate of seed 003, one channel", "single-mode", friction_loop=True,
+    carrier_hz=DEFAULT_CARRIER_HZ))
 PROFILES.register("beam-seed000", ProfileSpec(
     "free-free aluminium beam of seed 000, modes 16 and 17, two actuators", "modal",
-    structure=BeamStructure))
+    structure=BeamStructure, carrier_hz=28_000.0, um_per_volt=SEED000_UM_PER_VOLT,
+    voltage_limit_v=150.0))  # seed 000: "resonance of the beam is around 28 kHz"
 PROFILES.register("plate-seed001", ProfileSpec(
     "2D plate of seed 001, X and Y modes, channels V_AC and V_BD", "modal",
-    structure=PlateStructure))
+    structure=PlateStructure, carrier_hz=33_000.0, um_per_volt=SEED000_UM_PER_VOLT,
+    voltage_limit_v=150.0))  # seed 001: 33.0 kHz measured; same laboratory as seed 000
 PROFILES.register("travelling-beam-seed002", ProfileSpec(
     "600 mm aluminium beam of seed 002, travelling wave from modes 28 and 29, two actuators",
-    "travelling-beam", surface_length_mm=600.0))
+    "travelling-beam", surface_length_mm=600.0, carrier_hz=28_300.0))  # seed 002: 28.3 kHz
 PROFILES.register("ring-seed004", ProfileSpec(
     "Ultraloop ring of seed 004, degenerate 24th-order pair, phase-shift control",
-    "travelling-ring", surface_length_mm=140.0))
+    "travelling-ring", surface_length_mm=140.0, carrier_hz=39_500.0,
+    voltage_limit_v=80.0))  # seed 004: 39.5 kHz, amplifiers at +-80 V
 
 #: every profile with its one line
 DEVICE_PROFILES: dict[str, str] = {name: PROFILES.get(name).summary for name in PROFILES.names()}

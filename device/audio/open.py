@@ -1,0 +1,24 @@
+"""The ``audio`` output device's factory, registered under entry-point group
+``frictex.devices`` (pyproject.toml): ``--device audio[:ARG]`` (grammar:
+``device.audio.options``)."""
+
+from __future__ import annotations
+
+from frictex.device.audio.options import make_plan, parse_arg
+
+
+def open_audio(arg: str, request):
+    """Open the audio output ``arg`` describes for a ``device.link.devices.DeviceRequest``:
+    a :class:`~device.audio.wav.WavOutput` for ``wav:PATH``, else a
+    :class:`~device.audio.stream.StreamOutput`. The drive figures come from the
+    request's ``profile`` (the scene's device profile) when it carries one."""
+    args = parse_arg(arg)
+    plan = make_plan(args, request.channels, request.rate_hz, getattr(request, "profile", None))
+    if args.wav_path is not None:
+        from frictex.device.audio.wav import WavOutput
+        return WavOutput(plan, args.wav_path, phases=request.phases, stderr=request.stderr)
+    from frictex.device.audio.stream import StreamOutput
+    return StreamOutput(plan, args.target, blocksize=args.blocksize,
+                        buffer_frames=round(args.buffer_ms * 1e-3 * plan.audio_rate),
+                        phases=request.phases, paced=request.paced,
+                        wait_s=request.stall_s * request.max_stalls, stderr=request.stderr)

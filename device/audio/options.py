@@ -1,0 +1,162 @@
+"""The ``audio`` output device's ARG, and the drive figures it resolves to.
+
+Grammar of ARG (the text after ``audio:`` in ``--device audio:ARG``)::
+
+    ARG     := [TARGET] ("," OPTION)*
+    TARGET  := ""                 the default PortAudio output device
+             | NAME               a PortAudio output device, by (part of) its name or index
+             | "wav:" PATH        write the stream to a WAV file instead of playing it
+    OPTION  := "envelope"         play the amplitude envelope itself (a generator's AM input)
+             | "rate=" HZ         audio sample rate (Hz; default 192000)
+             | "carrier=" HZ      the plate's resonance (Hz; default: the profile's)
+             | "profile=" NAME    the device profile whose drive figures apply
+             | "full_scale=" V    drive volts (zero-to-peak) at digital full scale
+                                  (default: the profile's voltage limit)
+             | "blocksize=" N     PortAudio frames per callback (default 256)
+             | "buffer_ms=" MS    frames queued ahead of the callback (default 100 ms)
+             | "ramp_ms=" MS      start, stop, starvation and emergency-stop ramps (default 2 ms)
+
+A PATH or NAME cannot contain a comma. The rate must keep the carrier below 0.4 of it
+(192 kHz: up to 76.8 kHz; 96 kHz: up to 38.4 kHz); envelope mode has no carrier.
+
+The drive figures (``carrier_hz``, ``um_per_volt``, ``voltage_limit_v``) come from the
+device profile (``device.profile.PROFILES``): the one the pipeline's scene names when the
+request carries it (``DeviceRequest.profile``), else ``profile=``, else
+``device.profile.DEFAULT_PROFILE``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from frictex.device.errors import InputError
+from frictex.device.profile import DEFAULT_PROFILE, PROFILES
+
+DEFAULT_RATE_HZ = 192_000
+#: the carrier must stay below this share of the audio rate
+MAX_CARRIER_SHARE = 0.4
+DEFAULT_BLOCKSIZE = 256
+DEFAULT_BUFFER_MS = 100.0
+#: start, stop, starvation and emergency-stop ramps (ms): within a friction step the
+#: finger feels (2.3-2.4 ms, Gueorguiev 2019), and 384 frames at 192 kHz
+DEFAULT_RAMP_MS = 2.0
+
+
+@dataclass(frozen=True)
+class AudioPlan:
+    """What the synthesis and the outputs run with (validated, trusted inside).
+
+    rate_hz : command sample rate (Hz) of the pipeline. audio_rate : audio frames per
+    second (an integer, Hz). channels : actuator channels, one audio channel each.
+    carrier_hz : carrier frequency (Hz). envelope : play the envelope, no carrier.
+    um_per_volt : um zero-to-peak per volt zero-to-peak. limit_v : the largest drive
+    played (V zero-to-peak): the profile's voltage limit or full scale, whichever is
+    lower. full_scale_v : volts at digital full scale (1.0). ramp_frames : ramp length
+    (audio frames). profile : the profile whose figures these are.
+    """
+
+    rate_hz: float
+    audio_rate: int
+    channels: int
+    carrier_hz: float
+    envelope: bool
+    um_per_volt: float
+    limit_v: float
+    full_scale_v: float
+    ramp_frames: int
+    profile: str
+
+
+@dataclass(frozen=True)
+class AudioArgs:
+    """ARG parsed: ``target`` ("" default device, a device NAME), ``wav_path`` (or None),
+    and the options (None where not given)."""
+
+    target: str = ""
+    wav_path: str | None = None
+    envelope: bool = False
+    rate: float | None = None
+    carrier: float | None = None
+    profile: str | None = None
+    full_scale: float | None = None
+    blocksize: int = DEFAULT_BLOCKSIZE
+    buffer_ms: float = DEFAULT_BUFFER_MS
+    ramp_ms: float = DEFAULT_RAMP_MS
+
+
+_NUMBERS = {"rate": float, "carrier": float, "full_scale": float, "blocksize": int,
+            "buffer_ms": float, "ramp_ms": float}
+
+
+def parse_arg(arg: str) -> AudioArgs:
+    """Read ARG (module docstring). Raises InputError naming the bad part."""
+    parts = [p.strip() for p in arg.split(",")] if arg.strip() else [""]
+    target, options = parts[0], parts[1:]
+    if target == "envelope" or "=" in target:
+        target, options = "", parts
+    values: dict = {}
+    if target.startswith("wav:"):
+        path = target[4:]
+        if not path:
+            raise InputError("audio device 'wav:': expected wav:PATH")
+        values["wav_path"], target = path, ""
+    values["target"] = target
+    for option in options:
+        name, eq, text = option.partition("=")
+        name = name.strip()
+        if option == "envelope":
+            values["envelope"] = True
+        elif eq and name == "profile":
+            values["profile"] = text.strip()
+        elif eq and name in _NUMBERS:
+            values[name] = _number(name, text, _NUMBERS[name])
+        else:
+            raise InputError(f"audio device option {option!r}: expected envelope, profile=NAME "
+                             "or one of " + ", ".join(f"{n}=NUMBER" for n in _NUMBERS))
+    return AudioArgs(**values)
+
+
+def _number(name: str, text: str, kind: type) -> float | int:
+    try:
+        value = kind(text)
+    except ValueError:
+        raise InputError(f"audio device option {name}={text!r}: expected a "
+                         f"{'whole ' if kind is int else ''}number") from None
+    if not math.isfinite(value) or value <= 0:
+        raise InputError(f"audio device option {name}={text!r}: expected a finite number > 0")
+    return value
+
+
+def profile_name(requested) -> str | None:
+    """The profile name in a request's ``profile`` (a name, an object with ``.profile``
+    such as ``device.profile.DeviceProfile``, or None)."""
+    if requested is None or isinstance(requested, str):
+        return requested
+    return getattr(requested, "profile", None)
+
+
+def make_plan(args: AudioArgs, channels: int, rate_hz: float, requested_profile=None) -> AudioPlan:
+    """The :class:`AudioPlan` of parsed ARG for a pipeline of ``channels`` at ``rate_hz``
+    (Hz). The profile: ``profile=`` if given, else ``requested_profile``, else the default.
+    Raises InputError for a rate the carrier does not fit or a non-integer rate."""
+    name = args.profile or profile_name(requested_profile) or DEFAULT_PROFILE
+    spec = PROFILES.get(name)
+    audio_rate = args.rate if args.rate is not None else DEFAULT_RATE_HZ
+    if audio_rate != int(audio_rate):
+        raise InputError(f"audio device rate={audio_rate:g}: expected a whole number of Hz")
+    audio_rate = int(audio_rate)
+    carrier = float(args.carrier if args.carrier is not None else spec.carrier_hz)
+    if not args.envelope and carrier >= MAX_CARRIER_SHARE * audio_rate:
+        raise InputError(f"audio device: carrier {carrier:g} Hz at rate={audio_rate} Hz: the "
+                         f"carrier must stay below {MAX_CARRIER_SHARE:g} of the rate (use "
+                         f"rate={math.floor(carrier / MAX_CARRIER_SHARE) + 1} or more)")
+    if audio_rate < rate_hz:
+        raise InputError(f"audio device rate={audio_rate} Hz: below the pipeline's "
+                         f"{rate_hz:g} Hz commands")
+    full_scale = float(args.full_scale if args.full_scale is not None else spec.voltage_limit_v)
+    ramp = max(1, round(args.ramp_ms * 1e-3 * audio_rate))
+    return AudioPlan(rate_hz=float(rate_hz), audio_rate=audio_rate, channels=int(channels),
+                     carrier_hz=carrier, envelope=args.envelope, um_per_volt=spec.um_per_volt,
+                     limit_v=min(spec.voltage_limit_v, full_scale), full_scale_v=full_scale,
+                     ramp_frames=ramp, profile=name)

@@ -1,0 +1,175 @@
+"""``audio[:NAME]``: the stream played through PortAudio (python-sounddevice, the ``audio``
+extra; Debian: ``libportaudio2``).
+
+The producer (the pipeline's thread) renders frames and writes them into a
+:class:`~device.audio.ring.FrameRing`; PortAudio's callback runs
+:meth:`~device.audio.ring.Player.fill` and nothing else (it never blocks, logs or
+allocates arrays). The stream starts once half the ring is queued (or at close), so the
+first callback finds frames. The ring always keeps ``ramp_frames`` of room in reserve:
+a live producer (``paced=False``) that finds no room for a block drops it (counted,
+``ring_full``) and writes the ramp to 0 instead, and the next block ramps in. A paced
+producer (replay) waits for room, at most ``stall_s * max_stalls`` seconds, then fails
+with a DeviceError: the audio device stopped taking frames.
+
+:meth:`StreamOutput.close` writes the stream's own ramp to 0, waits (bounded) for the
+ring to play out, then stops the stream after PortAudio's reported output latency.
+:meth:`StreamOutput.emergency_stop` ramps to 0 within ``ramp_ms`` from whatever plays.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import numpy as np
+
+from frictex.device.audio.options import AudioPlan
+from frictex.device.audio.output import CAUSES, AudioOutput
+from frictex.device.audio.ring import FrameRing, Player
+from frictex.device.errors import DeviceError, InputError, MissingExtra
+
+#: how often a waiting producer looks at the ring again (s)
+POLL_S = 0.001
+#: bound on waiting for the end of the stream beyond what is queued (s)
+DRAIN_MARGIN_S = 2.0
+
+
+def import_sounddevice():
+    """python-sounddevice, or MissingExtra / DeviceError saying what to install."""
+    try:
+        import sounddevice
+    except ModuleNotFoundError:
+        raise MissingExtra("audio", "--device audio", "sounddevice") from None
+    except OSError as exc:  # the module is there, the PortAudio library is not
+        raise DeviceError(f"audio device: {exc} (Debian: apt-get install libportaudio2)") from None
+    return sounddevice
+
+
+class StreamOutput(AudioOutput):
+    """Plays the stream on a PortAudio output device (module docstring).
+
+    Parameters
+    ----------
+    plan : synthesis figures. device : PortAudio output device (name or index; "" or
+    None: the default). blocksize : frames per callback. buffer_frames : ring capacity
+    (frames). phases, paced, stderr : as ``AudioOutput``. wait_s : how long a paced
+    ``send`` may wait for room (s). tap_frames : record the callback's first
+    ``tap_frames`` output frames (``player.tap``; tests).
+    """
+
+    def __init__(self, plan: AudioPlan, device: str | None, *, blocksize: int,
+                 buffer_frames: int, phases: bool, paced: bool, wait_s: float,
+                 stderr=sys.stderr, tap_frames: int = 0):
+        sd = import_sounddevice()
+        super().__init__(plan, f"audio:{device}" if device else "audio", phases=phases,
+                         paced=paced, stderr=stderr)
+        capacity = max(int(buffer_frames), 4 * blocksize) + plan.ramp_frames
+        self.ring = FrameRing(capacity, plan.channels, plan.ramp_frames)
+        self.player = Player(self.ring, plan.ramp_frames, tap_frames)
+        self.wait_s = float(wait_s)
+        self.ring_full = 0
+        self.not_drained = 0
+        self.xruns = 0  # callbacks PortAudio flagged with an output underflow
+        self._ramp_in = plan.ramp_frames  # producer's ramp-in after a dropped block
+        self._started = False
+        target = int(device) if device and device.isdigit() else (device or None)
+        try:
+            self.stream = sd.OutputStream(
+                samplerate=plan.audio_rate, blocksize=blocksize, device=target,
+                channels=plan.channels, dtype="float32", latency="low",
+                callback=self._callback)
+        except ValueError as exc:  # no such device
+            raise InputError(f"audio device {device!r}: {exc}") from None
+        except sd.PortAudioError as exc:
+            raise DeviceError(f"{self.label}: cannot open a {plan.channels}-channel output "
+                              f"at {plan.audio_rate} Hz: {exc}") from None
+        #: PortAudio's reported output latency (s): from a callback's buffer to the DAC
+        self.output_latency_s = float(self.stream.latency)
+
+    def _callback(self, outdata, frames, time_info, status) -> None:
+        if status.output_underflow:
+            self.xruns += 1
+        self.player.fill(outdata)
+
+    # ----------------------------------------------------------------- producer
+    def _emit(self, frames: np.ndarray) -> None:
+        ring, ramp = self.ring, self.plan.ramp_frames
+        if self._ramp_in < ramp:  # after a dropped block: ramp in from 0
+            g = min(frames.shape[0], ramp - self._ramp_in)
+            frames[:g] *= (np.arange(self._ramp_in + 1, self._ramp_in + g + 1) / ramp)[:, None]
+            self._ramp_in += g
+        if not self.paced and ring.room() - ramp < frames.shape[0]:
+            self.ring_full += frames.shape[0]
+            self.commanded_frames += frames.shape[0]
+            if self._ramp_in >= ramp:  # the stream so far ends in a ramp, not a step
+                self._write(self.synth.fade_tail())
+            self._ramp_in = 0
+            return
+        step = ring.capacity - ramp
+        for lo in range(0, frames.shape[0], step):
+            chunk = frames[lo:lo + step]
+            self._wait_room(chunk.shape[0] + ramp)
+            self._write(chunk, self.synth.fade_tail())
+
+    def _write(self, frames: np.ndarray, fade: np.ndarray | None = None) -> None:
+        self.ring.write(frames.astype(np.float32), None if fade is None else fade.astype(np.float32))
+        self.commanded_frames += frames.shape[0]
+        if not self._started and (self.ring.tail >= self.ring.capacity // 2 or self.closed):
+            self._start()
+
+    def _wait_room(self, frames: int) -> None:
+        deadline = time.monotonic() + self.wait_s
+        while self.ring.room() < frames:
+            if not self._started:
+                self._start()
+            if time.monotonic() > deadline:
+                raise DeviceError(f"{self.label}: the audio device took no frames for "
+                                  f"{self.wait_s:g} s")
+            time.sleep(POLL_S)
+
+    def _start(self) -> None:
+        self._started = True
+        self.stream.start()
+
+    # ----------------------------------------------------------------- ending
+    def emergency_stop(self) -> None:
+        """Ramp to 0 within ``ramp_ms`` from what plays now; drop the rest (``stopped``).
+        Never waits; :meth:`close` releases the device."""
+        self.player.estop = True
+
+    def _end(self, tail: np.ndarray) -> None:
+        try:
+            if not self.player.estop:
+                self._ramp_in = self.plan.ramp_frames
+                self._wait_room(tail.shape[0])
+                self._write(tail)
+            self.player.ended = True
+            if not self._started:
+                self._start()
+            queued = self.ring.tail - self.ring.head
+            deadline = time.monotonic() + queued / self.plan.audio_rate + DRAIN_MARGIN_S
+            while self.ring.head < self.ring.tail and time.monotonic() < deadline:
+                time.sleep(POLL_S)
+            # the last callback's frames are still on their way to the DAC
+            time.sleep(self.output_latency_s + self.stream.blocksize / self.plan.audio_rate)
+            self.not_drained = self.ring.tail - self.ring.head
+            self.stream.stop()
+        finally:
+            self.stream.close()
+
+    # ----------------------------------------------------------------- accounting
+    def played_frames(self) -> int:
+        return self.player.played
+
+    def unplayed_by_cause(self) -> dict[str, int]:
+        counts = {"late": self.player.late, "ring_full": self.ring_full,
+                  "stopped": self.player.stopped, "not_drained": self.not_drained}
+        return {k: counts[k] for k in CAUSES}
+
+    def status(self) -> dict:
+        out = super().status()
+        out["underruns"] = self.player.underruns
+        out["audio"].update({"underrun_frames": self.player.underrun_frames,
+                             "xruns": self.xruns, "output_latency_s": self.output_latency_s,
+                             "blocksize": self.stream.blocksize})
+        return out

@@ -1,0 +1,73 @@
+"""``audio:wav:PATH``: the stream the audio output would play, written to a WAV file.
+
+The file is RIFF/WAVE, IEEE float (format tag 3), 32-bit float samples, one channel per
+actuator, at the plan's audio rate: the very float32 frames PortAudio would be given,
+start and end ramps included (a file has no starvation: it is written as fast as the
+pipeline runs, unpaced). Full scale 1.0 is ``full_scale_v`` volts of drive. RIFF's 32-bit
+sizes bound a file to 4 GiB (about 93 min of one channel at 192 kHz): a stream past that
+is a DeviceError. The header's sizes are written when the file is closed.
+"""
+
+from __future__ import annotations
+
+import struct
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from frictex.device.audio.options import AudioPlan
+from frictex.device.audio.output import CAUSES, AudioOutput
+from frictex.device.errors import DeviceError, InputError
+
+_FLOAT = 3  # WAVE_FORMAT_IEEE_FLOAT
+_HEADER = 12 + 26 + 12 + 8  # RIFF, fmt (18-byte body), fact, data chunk header
+_MAX_DATA = 2**32 - 1 - _HEADER
+
+
+def wav_header(channels: int, rate: int, frames: int) -> bytes:
+    """The 58-byte header of a float32 WAV file of ``frames`` frames."""
+    data = frames * channels * 4
+    return (b"RIFF" + struct.pack("<I", _HEADER - 8 + data) + b"WAVE"
+            + b"fmt " + struct.pack("<IHHIIHHH", 18, _FLOAT, channels, rate,
+                                    rate * channels * 4, channels * 4, 32, 0)
+            + b"fact" + struct.pack("<II", 4, frames)
+            + b"data" + struct.pack("<I", data))
+
+
+class WavOutput(AudioOutput):
+    """Writes the audio stream to ``path`` (module docstring)."""
+
+    def __init__(self, plan: AudioPlan, path: str, *, phases: bool, stderr=sys.stderr):
+        super().__init__(plan, f"audio:wav:{path}", phases=phases, paced=False, stderr=stderr)
+        self.path = Path(path)
+        try:
+            self._file = open(self.path, "wb")  # noqa: SIM115 (closed by close())
+        except OSError as exc:
+            raise InputError(f"audio device wav:{path}: cannot write it: "
+                             f"{exc.strerror or exc}") from None
+        self._file.write(wav_header(plan.channels, plan.audio_rate, 0))
+        self._frames = 0
+
+    def _emit(self, frames: np.ndarray) -> None:
+        if (self._frames + frames.shape[0]) * self.channels * 4 > _MAX_DATA:
+            raise DeviceError(f"{self.label}: the stream outgrows a WAV file's 4 GiB")
+        self._file.write(np.ascontiguousarray(frames, dtype="<f4").tobytes())
+        self._frames += frames.shape[0]
+        self.commanded_frames += frames.shape[0]
+
+    def _end(self, tail: np.ndarray) -> None:
+        try:
+            self._emit(tail)
+        finally:
+            self._file.seek(0)
+            self._file.write(wav_header(self.channels, self.plan.audio_rate, self._frames))
+            self._file.close()
+
+    def played_frames(self) -> int:
+        """Frames written."""
+        return self._frames
+
+    def unplayed_by_cause(self) -> dict[str, int]:
+        """None: every frame is written."""
+        return dict.fromkeys(CAUSES, 0)
