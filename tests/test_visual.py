@@ -171,7 +171,9 @@ def test_trail_breaks_where_the_finger_lifts_and_lands_within_a_block():
     x = np.array([90.0, 90.05, 90.1, 30.0, 30.05, 30.1])
     ov.add(_record(t, x, np.full(6, 5.0), [True] * 6))
     tris = ov.trail_triangles(fit_viewport(DISPLAY, 800, 480))
-    assert tris.shape == (4 * 6, 6)  # segments 0-1, 1-2, 3-4 and 4-5
+    width = np.ptp(tris[:, 0].reshape(-1, 3), axis=1)  # x extent of each triangle (px)
+    assert len(tris) and width.max() < 5.0  # both strokes drawn (vertices 0.37 px apart, thinned), no jump
+    assert tris[:, 0].min() < 250 < 600 < tris[:, 0].max()
 
 
 def test_overlay_forgets_fingers_once_their_trail_has_faded():

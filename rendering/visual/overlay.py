@@ -29,6 +29,7 @@ FINGER_RGB = ((0.10, 0.60, 1.00), (1.00, 0.45, 0.10), (0.20, 0.80, 0.30),
               (0.85, 0.25, 0.85), (0.95, 0.85, 0.10))
 CURSOR_RADIUS_MM = 4.0  # about a fingertip contact patch
 TRAIL_WIDTH_PX = 2.0
+TRAIL_STEP_PX = 1.0  # a trail keeps a vertex per this much of its path (and its breaks)
 SCOPE_LINE_PX = 1.5
 SCOPE_PAD_PX = 4.0  # between a plot's edge and its full scale (or zero) line
 #: a trail step longer than this (mm) and faster than this (mm/s) is a lift and a touch
@@ -191,7 +192,9 @@ class OverlayState:
             joined = (contact[:-1] > 0) & (contact[1:] > 0)
             step = np.hypot(np.diff(x), np.diff(y))
             joined &= (step <= TRAIL_BREAK_MM) | (step <= TRAIL_BREAK_MM_S * np.diff(t))
-            parts.append(segment_triangles(np.column_stack((px, py)), rgba, TRAIL_WIDTH_PX, joined))
+            points = np.column_stack((px, py))
+            kept, joined = thin_polyline(points, joined, TRAIL_STEP_PX)
+            parts.append(segment_triangles(points[kept], rgba[kept], TRAIL_WIDTH_PX, joined))
         return np.concatenate(parts) if parts else np.empty((0, 6))
 
     def cursors(self, viewport: Viewport, hover_mm: tuple[float, float] | None = None) -> np.ndarray:
@@ -261,6 +264,34 @@ def plot_y(values, rect) -> np.ndarray:
     return y + SCOPE_PAD_PX + (h - 2.0 * SCOPE_PAD_PX) * (1.0 - v)
 
 
+def thin_polyline(points: np.ndarray, joined: np.ndarray,
+                  step_px: float) -> tuple[np.ndarray, np.ndarray]:
+    """The vertices of a polyline worth drawing: its first and last, each end of a break,
+    and one wherever the path has gone another ``step_px`` (a trail sampled every 0.5 ms
+    moves a fraction of a pixel between samples: its vertices are mostly invisible).
+
+    Parameters
+    ----------
+    points : (n,) x 2 px, n >= 2. joined : (n - 1,) bool, the segments drawn.
+    step_px : path length (px) between kept vertices.
+
+    Returns
+    -------
+    kept : (k,) indices of the kept vertices, increasing. joined : (k - 1,) bool, whether
+    every segment between two kept vertices was drawn.
+    """
+    length = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))))
+    marks = np.floor(length / step_px)
+    keep = np.zeros(len(points), dtype=bool)
+    keep[[0, -1]] = True
+    keep[1:] |= marks[1:] != marks[:-1]
+    keep[:-1] |= ~joined
+    keep[1:] |= ~joined
+    kept = np.flatnonzero(keep)
+    breaks = np.concatenate(([0], np.cumsum(~joined)))
+    return kept, breaks[kept[1:]] == breaks[kept[:-1]]
+
+
 def column_spans(x, y, x0: float, width: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A polyline reduced to the pixel columns it crosses: per column, the least and
     greatest height it reaches there (its samples in the column and its values,
@@ -293,9 +324,17 @@ def column_spans(x, y, x0: float, width: float) -> tuple[np.ndarray, np.ndarray,
 
 
 def column_quads(left, top, bottom, rgba) -> np.ndarray:
-    """One-pixel-wide quads from ``left`` to ``left + 1`` and ``top`` to ``bottom`` (px,
-    (k,) each), in colour ``rgba``: triangles (6 k, 6) of x, y, r, g, b, a."""
-    right = left + 1.0
+    """Quads over one-pixel columns from ``left`` to ``left + 1`` and ``top`` to ``bottom``
+    (px, (k,) each, ``left`` a column apart), in colour ``rgba``, a run of neighbouring
+    columns with equal spans (a flat trace) joined into one quad: triangles (6 q, 6) of x,
+    y, r, g, b, a."""
+    left, top, bottom = (np.asarray(a, dtype=np.float64) for a in (left, top, bottom))
+    if left.size == 0:
+        return np.empty((0, 6))
+    first = np.flatnonzero(np.concatenate(([True], (top[1:] != top[:-1])
+                                           | (bottom[1:] != bottom[:-1]))))
+    right = np.append(left[first[1:] - 1], left[-1]) + 1.0
+    left, top, bottom = left[first], top[first], bottom[first]
     xs = np.stack((left, right, left, left, right, right), axis=1)
     ys = np.stack((top, top, bottom, bottom, top, bottom), axis=1)
     out = np.empty((xs.size, 6))
