@@ -48,7 +48,31 @@ def _intro(doc: Report) -> list[str]:
             "error = distance of third-octave short-time spectra, 10 Hz - 1 kHz (phase "
             "ignored); alignment error = mean distance (mm of path) between matching "
             "friction steps, both ways. Time and alignment matter for objects and coarse "
-            "gratings (P > ~5 mm), the spectrum for fine textures (seed 003 section 6).", ""]
+            "gratings (P > ~5 mm), the spectrum for fine textures (seed 003 section 6).", ""
+            ] + _quick_note(doc)
+
+
+def _quick_note(doc: Report) -> list[str]:
+    """What ``--quick`` ran, against the full report (empty for the full report)."""
+    if not doc.quick:
+        return []
+    from frictex.app.measure import report_closed_loop as rcl
+    from frictex.app.measure.report_seeds import DRAWS
+    loop = doc.closed_loop
+    runs = ""
+    if loop is not None:
+        runs = (f"; closed-loop runs of {loop.duration_s:g} s on {loop.fingers} fingers "
+                f"(full: {rcl.DURATION_S:g} s)")
+        if loop.adaptation is not None:
+            runs += (f" and an adaptation study of {loop.adaptation.duration_s:g} s on "
+                     f"{loop.adaptation.fingers} fingers (full: {rcl.ADAPT_S:g} s)")
+    return ["What --quick runs: the small matrix (50 Hz touch, the human motion also at 120 "
+            "and 240 Hz; the slow, fast and human motions; 10 kHz output, and on the gratings "
+            "the output-rate and inversion sweep of the human motion), "
+            f"{doc.draws.n} draws of each motion (full: {DRAWS}){runs}. Its intervals are "
+            "those of these smaller samples: a claim not shown here may hold in the full "
+            "report, and the closed-loop gains of short runs weigh the loop's start more "
+            "than a session does.", ""]
 
 
 def _claims(doc: Report) -> list[str]:
@@ -131,6 +155,7 @@ def _end_to_end(e2e: dict | None) -> list[str]:
 
 
 def _modal_replay(doc: Report) -> list[str]:
+    from frictex.device.link.host import TARGET_S
     modal = doc.modal_replay
     return ["", f"Two fingers with modal actuation ({modal['scene']}, trace {modal['trace']}, "
             f"{modal['output_hz'] / 1e3:g} kHz): replay {modal['replay_x_realtime']:.0f}x real "
@@ -139,7 +164,8 @@ def _modal_replay(doc: Report) -> list[str]:
             "", "Targets: replay >= 1000x real time, live p99 <= 500 us (10 % of a 5 ms block); "
             "two fingers with modal actuation >= 200x real time in replay. "
             "Latency = longest wait of a touch sample for its block (<= one 5 ms block) plus the "
-            "link's 20 ms jitter buffer (device.link.host.TARGET_S). These figures are measured on "
+            f"link's {TARGET_S * 1e3:g} ms jitter buffer (device.link.host.TARGET_S). These "
+            "figures are measured on "
             f"the machine that wrote the report ({doc.settings.cpu_count} CPUs) and vary "
             "with its load; no test asserts them.", ""]
 
