@@ -7,9 +7,10 @@ line, or a whole line of a file that is not what it claims to be.
 
 - Printable characters stay as they are (non-ASCII letters included).
 - ``\\``, tab, newline and carriage return become ``\\\\``, ``\\t``, ``\\n``, ``\\r``.
-- Every other control or format character (Unicode categories Cc, Cf, Cs, Co, Cn, Zl,
-  Zp: ESC, BEL, DEL, C1 controls, bidirectional overrides, unpaired surrogates) becomes
-  ``\\xHH``, ``\\uHHHH`` or ``\\UHHHHHHHH``: ESC is shown as the four characters
+- Every other character that ``str.isprintable`` refuses (controls, format characters,
+  separators other than the ASCII space, unassigned code points: ESC, BEL, DEL, C1
+  controls, bidirectional overrides, no-break and zero-width spaces, unpaired surrogates)
+  becomes ``\\xHH``, ``\\uHHHH`` or ``\\UHHHHHHHH``: ESC is shown as the four characters
   ``\\x1b``.
 - The escaped text is cut to at most ``limit`` characters (:data:`MAX_SHOWN`, 60, by
   default), ending with an ellipsis ``...`` where it was cut; an escape is never cut in
@@ -21,22 +22,19 @@ texture and trace readers, the command line's error printer) can use it.
 
 from __future__ import annotations
 
-import unicodedata
-
 #: Longest escaped value shown in a message (characters, the ellipsis included).
 MAX_SHOWN = 60
 #: Longest escaped file path shown in a message (its end is kept: the file's name).
 MAX_PATH_SHOWN = 160
 
 _NAMED = {"\\": "\\\\", "\t": "\\t", "\n": "\\n", "\r": "\\r"}
-_UNSAFE = frozenset(("Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp"))
 _ELLIPSIS = "..."
 
 
 def _escape_char(ch: str) -> str:
     if ch in _NAMED:
         return _NAMED[ch]
-    if unicodedata.category(ch) not in _UNSAFE:
+    if ch.isprintable():
         return ch
     code = ord(ch)
     if code <= 0xFF:
@@ -86,10 +84,16 @@ def quoted(value: object, limit: int | None = MAX_SHOWN) -> str:
 
 def escape_path(path: object, limit: int = MAX_PATH_SHOWN) -> str:
     """A file path for a message: :func:`escape`'d, and where longer than ``limit``
-    characters, its last ``limit`` shown after an ellipsis (the file's name is at the end)."""
-    text = escape(path, None)
-    if len(text) <= limit:
-        return text
-    tail = text[len(text) - (limit - len(_ELLIPSIS)):]
-    cut = tail.find("\\")  # do not start inside an escape such as \x1b
-    return _ELLIPSIS + (tail[cut:] if 0 <= cut < 10 else tail)
+    characters, an ellipsis and its last characters (the file's name is at the end; an
+    escape is never cut in the middle)."""
+    text = path if isinstance(path, str) else str(path)
+    pieces = [_escape_char(ch) for ch in text]
+    if sum(map(len, pieces)) <= limit:
+        return "".join(pieces)
+    tail, length = [], 0
+    for piece in reversed(pieces):
+        if length + len(piece) > limit - len(_ELLIPSIS):
+            break
+        tail.append(piece)
+        length += len(piece)
+    return _ELLIPSIS + "".join(reversed(tail))
