@@ -164,7 +164,8 @@ def entry() -> NoReturn:
     Once the command has returned (its outputs committed and closed), the atexit handlers
     run and the standard streams are flushed, but the interpreter's teardown is skipped:
     unloading numba's and scipy's modules object by object took 0.24 s of CPU after a
-    one-second replay (paired runs, farm-bench), a quarter of what the user waits for.
+    one-second replay (alternated pairs of whole processes under ``/usr/bin/time``), a
+    quarter of what the user waits for.
     A thread still running gets the ordinary exit, which waits for it.
     """
     try:

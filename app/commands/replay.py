@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from frictex.app.commands.argtypes import (add_link_arguments, bounded, output_rate, positive_float,
+from frictex.app.commands.argtypes import (add_link_arguments, block_size, bounded, output_rate, positive_float,
                                    share, sim_device_args)
 from frictex.app.engine.replay import ReplayOptions, replay_with
 from frictex.app.engine.sources import MAX_GAP_S
@@ -20,7 +20,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder")
     parser.add_argument("--rate", type=output_rate, default=10_000.0, metavar="HZ",
                         help="output sample rate (default 10000 Hz, the seed 003 link)")
-    parser.add_argument("--block", type=bounded(int, 1, 100_000, "samples"), default=50,
+    parser.add_argument("--block", type=block_size, default=50,
                         metavar="N",
                         help="block size in output samples: touch samples take effect at "
                              "block boundaries, as live (default 50 = 5 ms at 10 kHz)")
