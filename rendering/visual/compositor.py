@@ -80,8 +80,9 @@ void main() {
 SCOPE_BG = (0.05, 0.05, 0.05, 1.0)
 SCOPE_GRID = (1.0, 1.0, 1.0, 0.18)  # at 0, half and full scale of each plot
 SCOPE_RULE = (1.0, 1.0, 1.0, 0.45)  # the edges of the strip and between the two plots
-BANNER_RGBA = {"stop": (0.75, 0.0, 0.0, 0.92), "error": (0.55, 0.05, 0.05, 0.92),
-               "info": (0.1, 0.1, 0.1, 0.85)}
+#: the banner's band is opaque: a text under it is not drawn (``draw_texture``)
+BANNER_RGBA = {"stop": (0.75, 0.0, 0.0, 1.0), "error": (0.55, 0.05, 0.05, 1.0),
+               "info": (0.1, 0.1, 0.1, 1.0)}
 
 
 @dataclass
@@ -125,6 +126,10 @@ class Compositor:
         self.atlas = TextAtlas(ctx, size[0], self.batch.flush)
         self.batch.textures["text"] = self.atlas.texture
         self._scope_frame: tuple[tuple, np.ndarray] | None = None
+        #: the box (x, y, w, h) px of every text drawn in the last frame, in drawing
+        #: order (its background included): what a layout check reads
+        self.text_boxes: list[tuple[float, float, float, float]] = []
+        self._banner_band: tuple[float, float] | None = None  # (top, bottom) px
         self.panels = DevicePanels(self)
         self.status_bottom = 4.0  # px: below the status lines of the last frame drawn
         self.scene = scene
@@ -180,7 +185,11 @@ class Compositor:
         (x, y) px, stretched to ``size`` px if given."""
         w, h = size or texture.size
         if isinstance(texture, AtlasEntry):
+            band = self._banner_band
+            if band is not None and y < band[1] and y + h > band[0]:
+                return  # under the banner's opaque band: hidden whole, not cut
             self.batch.queue("text", self._quad(x, y, w, h, *self.atlas.uv(texture)))
+            self.text_boxes.append((float(x), float(y), float(w), float(h)))
             return
         self.batch.flush()
         if opaque:
@@ -268,6 +277,7 @@ class Compositor:
             prog["u_frame"] = (float(w), float(h))
         self.textured["u_tex"] = 0
         self.batch.begin_frame()
+        self.text_boxes = []
         vp = self.viewport
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
@@ -277,6 +287,8 @@ class Compositor:
         if view.status:
             status = self.text(sum((wrap(line, font_px, w - 16) for line in view.status), ()), font_px)
         self.status_bottom = 4.0 + (status.size[1] if status is not None else 0.0)
+        banner = self._banner(view) if view.banner else None
+        self._banner_band = None if banner is None else banner[1]
         overlay = view.overlay or OverlayState()
         if view.overlay is not None:
             self.draw_triangles(view.overlay.trail_triangles(vp))
@@ -290,15 +302,25 @@ class Compositor:
             self._draw_scope_labels(view)
         if status is not None:
             self.draw_texture(status, 4, 4)
-        if view.banner:
-            lines = wrap(view.banner, font_px + 2, w - 40)
-            tex = self.text(lines, font_px + 2, background=(0, 0, 0, 0))
-            bh = tex.size[1] + 12
-            y = (h - bh) / 2 if view.banner_kind == "stop" else h * 0.12
-            self.draw_rect(0, y, w, bh, BANNER_RGBA.get(view.banner_kind, BANNER_RGBA["info"]))
-            self.draw_texture(tex, max(4.0, (w - tex.size[0]) / 2), y + 6)
+        if banner is not None:
+            tex, band = banner
+            self._banner_band = None  # the banner's own text is drawn
+            self.draw_rect(0, band[0], w, band[1] - band[0],
+                           BANNER_RGBA.get(view.banner_kind, BANNER_RGBA["info"]))
+            self.draw_texture(tex, max(4.0, (w - tex.size[0]) / 2), band[0] + 6)
         self.batch.flush()
         ctx.disable(moderngl.BLEND)
+
+    def _banner(self, view: FrameView) -> tuple[AtlasEntry, tuple[float, float]]:
+        """The banner's text and its band (top, bottom) px across the frame: centred for
+        an emergency stop, else at 12 % of the height; below the status lines either way."""
+        w, h = self.size
+        size_px = self.font_px + 2
+        tex = self.text(wrap(view.banner, size_px, w - 40), size_px, background=(0, 0, 0, 0))
+        bh = tex.size[1] + 12
+        y = (h - bh) / 2 if view.banner_kind == "stop" else h * 0.12
+        y = min(max(y, self.status_bottom + 4.0), max(h - bh, 0.0))
+        return tex, (y, y + bh)
 
     def _scope_lines(self) -> np.ndarray:
         """The scope strip's background, rules and grid: triangles (k, 6), made again only

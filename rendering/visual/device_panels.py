@@ -171,6 +171,9 @@ class DevicePanels:
         what = "along the beam" if env.kind == "beam" else "over the plate"
         title = comp.text((f"|W| {what}, 0 to {scale_um:.2g} um",), comp.label_px,
                           background=(0, 0, 0, 150))
+        if title.size[0] > w - 8:  # a narrow column: the short form
+            title = comp.text((f"|W|, 0 to {scale_um:.2g} um",), comp.label_px,
+                              background=(0, 0, 0, 150))
         comp.draw_texture(title, x + 4, y + 2)
         # |W| under each finger, in its colour: after the title if there is room, else
         # along the panel's bottom (kept clear of the heat map)
@@ -181,6 +184,8 @@ class DevicePanels:
         if right + sum(t.size[0] + 6 for t in texs) > x + w:
             right, row = x + 4, y + h - self.row_px
         for tex in texs:
+            if right + tex.size[0] > x + w:  # no room left in the row: the rest unlabelled
+                break
             comp.draw_texture(tex, right, row)
             right += tex.size[0] + 6
 
