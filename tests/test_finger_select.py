@@ -172,7 +172,8 @@ def test_two_fingers_side_by_side_on_the_tablet_keep_their_roles(tmp_path):
     parser = argparse.ArgumentParser()
     add_import_arguments(parser)
     assert run_import(parser.parse_args([str(REFDATA / "Tablet/tablet-two-finger-drag.txt"),
-                                         "-o", str(out)] + TABLET)) == 0
+                                         "-o", str(out)] + TABLET),
+                      lambda path, text: Path(path).write_text(text)) == 0
     trace = read_trace(out)
     cfg = TrackerConfig(t0_s=float(trace.t_s[0]))
     fingers, _ = track(0, int((trace.duration_s + 0.05) * cfg.rate_hz), trace, TrackerState(), cfg)

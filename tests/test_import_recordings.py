@@ -30,7 +30,7 @@ PHONE = ["--x-range", "0", "1023", "--y-range", "0", "1023", "--width-mm", "52",
 def _import(argv):
     parser = argparse.ArgumentParser(prog="frictex trace import")
     add_import_arguments(parser)
-    return run_import(parser.parse_args(argv))
+    return run_import(parser.parse_args(argv), lambda path, text: Path(path).write_text(text))
 
 
 def _most_down(samples):

@@ -111,14 +111,18 @@ def _check_limits(args: argparse.Namespace) -> None:
 def _write(path: str, trace, comment: str | None = None) -> None:
     """The trace CSV at ``path``, room-checked and written whole or not at all
     (``app.engine.outfile``)."""
-    data = format_trace(trace, comment).encode("utf-8")
+    _write_text(path, format_trace(trace, comment))
+
+
+def _write_text(path: str, text: str) -> None:
+    data = text.encode("utf-8")
     write_file(path, lambda to: to.write_bytes(data), len(data))
 
 
 def run(args: argparse.Namespace) -> int:
     if args.trace_command == "import":
         from frictex.rendering.input.trace_import import run_import
-        return run_import(args)
+        return run_import(args, _write_text)
     _check_limits(args)
     if args.motion == "press":
         if args.truth:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -128,18 +129,11 @@ def _extra_columns(trace_csv: str, samples: list[RawSample]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _write(out: str, text: str) -> None:
-    try:
-        Path(out).write_text(text, encoding="utf-8")
-    except OSError as exc:
-        raise OSError(f"{out}: cannot write the trace ({exc.strerror})") from None
-
-
 def _pair(values: list[float] | None) -> tuple[float, float] | None:
     return None if values is None else (values[0], values[1])
 
 
-def _copy_csv(path: Path, args: argparse.Namespace) -> int:
+def _copy_csv(path: Path, args: argparse.Namespace, write: Callable[[str, str], None]) -> int:
     """A trace CSV in: validate it and write it back out."""
     mapping = [o for o in ("x_range", "y_range", "width_mm", "height_mm", "swap_xy", "flip_x",
                            "flip_y", "pressure_scale", "device", "keep_time")
@@ -149,7 +143,7 @@ def _copy_csv(path: Path, args: argparse.Namespace) -> int:
                          "(it is already in mm and s)")
     reader = iter_trace(path)
     trace = concat_traces(reader)
-    _write(args.out, format_trace(trace, comment=f"imported from {path}"))
+    write(args.out, format_trace(trace, comment=f"imported from {path}"))
     for w in reader.order.warnings():
         print(f"frictex: warning: {w}", file=sys.stderr)
     print(f"wrote {len(trace)} samples, {len(trace.fingers)} finger(s), "
@@ -167,13 +161,14 @@ def _events(path: Path, text: str, fmt: str, device: str | None) -> tuple[list[E
     return recording.events, recording.absinfo
 
 
-def run_import(args: argparse.Namespace) -> int:
-    """Convert ``args.input`` to the trace CSV ``args.out``; print a summary; return 0."""
+def run_import(args: argparse.Namespace, write: Callable[[str, str], None]) -> int:
+    """Convert ``args.input`` to the trace CSV ``args.out``, written by ``write(path,
+    text)`` (the command's room-checked, all-or-nothing writer); print a summary; return 0."""
     path = Path(args.input)
     text = read_text(path, "recording")
     fmt = detect_format(path, text) if args.format == "auto" else args.format
     if fmt == "csv":
-        return _copy_csv(path, args)
+        return _copy_csv(path, args, write)
     events, absinfo = _events(path, text, fmt, args.device)
     samples, decoder = decode_all(events, str(path))
     if not samples:
@@ -204,7 +199,7 @@ def run_import(args: argparse.Namespace) -> int:
                f"{'' if args.keep_time else ' (shifted to t = 0)'}; x {screen.x.lo:g}..{screen.x.hi:g} "
                f"-> 0..{screen.x.size_mm:g} mm, y {screen.y.lo:g}..{screen.y.hi:g} -> "
                f"0..{screen.y.size_mm:g} mm{', axes swapped' if args.swap_xy else ''}")
-    _write(args.out, _extra_columns(format_trace(trace, comment), samples))
+    write(args.out, _extra_columns(format_trace(trace, comment), samples))
     for w in warnings:
         print(f"frictex: warning: {w}", file=sys.stderr)
     most = most_touching(trace)
