@@ -4,6 +4,8 @@ import re
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from frictex.app.commands.cli import main
 from frictex.device.structures.beam import FreeFreeBeam
@@ -176,3 +178,21 @@ def test_orders_and_modes_file_together_are_refused(tmp_path):
     scene, problems, _ = check(tmp_path, 'modes_file = "modes.csv"\norders = [16, 17]',
                                files=[("modes.csv", modes_csv())])
     only_problem(problems, "device.structure.orders", r"not used with modes_file")
+
+
+@settings(max_examples=200, deadline=None, derandomize=True)
+@given(text=st.lists(st.sampled_from(list("x_mA,0123456789.e-+ \n#\"\x1b\x07٢") + ["inf", "nan"]),
+                    max_size=80).map("".join))
+def test_any_mode_table_text_is_a_table_or_one_escaped_line(text):
+    """Whatever a mode table holds, reading it gives a table or a ModesError whose message
+    is one printable line showing no cell longer than MAX_CELL_SHOWN."""
+    from frictex.device.structures.beam import ModesError
+    from frictex.device.structures.measured_modes import MAX_CELL_SHOWN, MeasuredModes
+    try:
+        with np.errstate(all="raise"):
+            MeasuredModes.from_text("x_mm,A\n" + text, "m.csv")
+    except (ModesError, ValueError, FloatingPointError) as exc:
+        message = str(exc)
+        assert message.isprintable() and "m.csv" in message
+        for shown in re.findall(r'"([^"]*)"', message):
+            assert len(shown) <= MAX_CELL_SHOWN

@@ -35,6 +35,9 @@ from frictex.device.structures.beam import ModesError
 MIN_SAMPLES = 4
 #: Largest mode table read (bytes): a scan of thousands of points fits.
 MAX_TABLE_BYTES = 1 << 20
+#: Longest cell shown in an error (characters, escaped): a number is shorter, and a row of
+#: something that is not a mode table is described, not printed.
+MAX_CELL_SHOWN = 24
 #: A number as the table writes it: ASCII decimal, optional sign, fraction and exponent,
 #: spaces around (Python's ``float`` alone also takes Unicode digits and underscores).
 _NUMBER = re.compile(r" *+[+-]?+(?:[0-9]++(?:\.[0-9]*+)?+|\.[0-9]++)(?:[eE][+-]?+[0-9]++)?+ *+")
@@ -115,14 +118,14 @@ class MeasuredModes:
             word = row[column].strip().lower().lstrip("+-")
             if word in ("nan", "inf", "infinity"):
                 raise ModesError(f"{source}: line {line}: values must be finite; value "
-                                 f"{column + 1} is {quoted(row[column])}")
-            raise ModesError(f"{source}: line {line}: value {column + 1} ({quoted(row[column])}) "
+                                 f"{column + 1} is {quoted(row[column], MAX_CELL_SHOWN)}")
+            raise ModesError(f"{source}: line {line}: value {column + 1} ({quoted(row[column], MAX_CELL_SHOWN)}) "
                              f"is not a number (ASCII decimal, e.g. -1.5e-3)")
         nums = [float(v) for v in row]
         if not all(math.isfinite(v) for v in nums):
             column = next(i for i, v in enumerate(nums) if not math.isfinite(v))
             raise ModesError(f"{source}: line {line}: values must be finite; value {column + 1} "
-                             f"is {quoted(row[column])}")
+                             f"is {quoted(row[column], MAX_CELL_SHOWN)}")
         return nums
 
     def phi(self, x_mm) -> np.ndarray:
