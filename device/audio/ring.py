@@ -83,7 +83,8 @@ class Player:
     (slots without a frame before the end), ``underruns`` (times it starved),
     ``stopped`` (frames left at an emergency stop). ``tap``: an optional (frames,
     channels) float32 array the callback copies its output into, up to its length, with
-    ``marks`` the tap positions where underruns began (tests; ``tap_len`` filled).
+    ``marks`` the tap positions where underruns began and ``resumes`` those where frames
+    played again after one (tests; ``tap_len`` filled).
     """
 
     def __init__(self, ring: FrameRing, ramp_frames: int, tap_frames: int = 0):
@@ -97,6 +98,8 @@ class Player:
         self.tap_len = 0
         self.marks = np.zeros(MAX_MARKS, dtype=np.int64)
         self.mark_count = 0
+        self.resumes = np.zeros(MAX_MARKS, dtype=np.int64)
+        self.resume_count = 0
         self.slot = self.played = self.late = self.underrun_frames = self.underruns = 0
         self.stopped = 0
         self.started = False
@@ -138,6 +141,9 @@ class Player:
         if self._fading >= 0:  # resume from the level the fade reached
             self._gain = self.ramp - min(self._fading, self.ramp)
             self._fading = -1
+            if self.resume_count < MAX_MARKS:
+                self.resumes[self.resume_count] = self.tap_len + pos
+                self.resume_count += 1
         if self._gain < self.ramp:
             g = min(m, self.ramp - self._gain)
             seg[:g] *= self._up[self._gain:self._gain + g]

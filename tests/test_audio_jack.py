@@ -1,0 +1,145 @@
+"""The audio output through a real audio server: JACK's dummy backend (Debian's jackd2,
+installed by .ci/setup-firmware) at 192 kHz, 256-frame periods, as the device PortAudio
+plays into. The output is read back from the callback's own buffer (``Player.tap``)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import time
+
+import numpy as np
+import pytest
+
+from frictex.device.audio.options import AudioArgs, make_plan
+from frictex.device.audio.stream import StreamOutput
+from frictex.device.link.host import open_sink
+
+FS = 192_000
+RATE = 10_000.0
+START_S = 15.0  # bound on the server's start
+LEVEL_UM = 1.5  # 0.5 of full scale on the default profile (0.02 um/V, 150 V)
+
+
+def _jack_output(sd) -> int | None:
+    """The JACK host API's first output device, or None."""
+    for api in sd.query_hostapis():
+        if "JACK" in api["name"]:
+            for index in api["devices"]:
+                if sd.query_devices(index)["max_output_channels"] > 0:
+                    return index
+    return None
+
+
+@pytest.fixture
+def jack_device(monkeypatch, tmp_path):
+    """A private jackd (dummy backend, 192 kHz, 256 frames) and PortAudio rescanned to
+    see it; yields the PortAudio device index. Stops the server afterwards."""
+    jackd = shutil.which("jackd")
+    if jackd is None:
+        pytest.skip("jackd is not installed (Debian package jackd2, see .ci/setup-firmware)")
+    import sounddevice as sd
+
+    name = f"frictex-test-{os.getpid()}"
+    monkeypatch.setenv("JACK_DEFAULT_SERVER", name)
+    monkeypatch.setenv("JACK_NO_AUDIO_RESERVATION", "1")
+    log = open(tmp_path / "jackd.log", "wb")  # noqa: SIM115 (closed below)
+    server = subprocess.Popen([jackd, "--no-realtime", "-n", name, "-d", "dummy",
+                               "-r", str(FS), "-p", "256"], stdout=log,
+                              stderr=subprocess.STDOUT, start_new_session=True)
+    try:
+        deadline = time.monotonic() + START_S
+        index = None
+        while index is None:
+            if server.poll() is not None or time.monotonic() > deadline:
+                log.flush()
+                pytest.fail("jackd did not come up within "
+                            f"{START_S:g} s: {(tmp_path / 'jackd.log').read_text()[-800:]}")
+            time.sleep(0.2)
+            sd._terminate()  # PortAudio lists host APIs when initialised: rescan
+            sd._initialize()
+            index = _jack_output(sd)
+        yield index
+    finally:
+        sd._terminate()  # PortAudio's JACK client goes before its server
+        server.terminate()
+        try:
+            server.wait(5)
+        except subprocess.TimeoutExpired:
+            server.kill()
+            server.wait(5)
+        log.close()
+        sd._initialize()
+
+
+def send_for(out, seconds: float, start: int) -> int:
+    """Send ``seconds`` of constant commands in 50-sample blocks from ``start``; the
+    next start index."""
+    block = np.full((50, 1), LEVEL_UM)
+    for _ in range(round(seconds * RATE / 50)):
+        out.send(start, block)
+        start += 50
+    return start
+
+
+def test_starved_producer_ramps_to_zero_and_every_frame_is_accounted_for(jack_device):
+    plan = make_plan(AudioArgs(), 1, RATE)
+    out = StreamOutput(plan, str(jack_device), blocksize=256, buffer_frames=FS // 10,
+                       phases=False, paced=True, wait_s=10.0, tap_frames=6 * FS)
+    with out:
+        assert out.output_latency_s > 0
+        index = send_for(out, 1.5, 0)
+        time.sleep(0.6)  # the producer stops: the ring's 100 ms run dry
+        send_for(out, 1.0, index)
+    p, status = out.player, out.status()
+    audio = status["audio"]
+    # every frame handed to the device either played or is counted, by cause
+    assert audio["commanded_frames"] == p.played + sum(audio["unplayed_frames"].values())
+    assert 0 < p.late <= p.underrun_frames
+    assert audio["unplayed_frames"]["late"] == p.late
+    assert status["unplayed_samples"] > 0 and status["underruns"] == p.underruns >= 1
+    # the deliberate starvation: the longest from an underrun to the frames' return
+    gaps = [(p.resumes[i] - p.marks[i], p.marks[i], p.resumes[i])
+            for i in range(min(p.mark_count, p.resume_count))]
+    _, start, back = max(gaps)
+    assert back - start > 0.05 * FS  # well past the 5 ms looked at below
+    tap = p.tap[:p.tap_len, 0]
+    before = np.abs(tap[start - 2000:start])
+    assert before.max() > 0.45  # it was playing at 0.5 of full scale
+    settle = round(5e-3 * FS)
+    assert np.abs(tap[start + settle:back]).max() < 0.01  # below 1 % within 5 ms
+    slope = 0.5 * 2 * np.pi * plan.carrier_hz / FS  # the carrier's own largest step
+    assert np.abs(np.diff(tap[start - 2000:start + settle])).max() <= slope * 1.01
+    assert np.abs(np.diff(tap[back - 10:back + 2000])).max() <= slope * 1.01
+
+
+def test_emergency_stop_ramps_through_jack(jack_device):
+    plan = make_plan(AudioArgs(), 1, RATE)
+    out = StreamOutput(plan, str(jack_device), blocksize=256, buffer_frames=FS // 10,
+                       phases=False, paced=True, wait_s=10.0, tap_frames=4 * FS)
+    send_for(out, 1.0, 0)
+    out.emergency_stop()
+    time.sleep(0.1)
+    out.close()
+    p, audio = out.player, out.status()["audio"]
+    assert p.stopped > 0
+    assert audio["commanded_frames"] == p.played + sum(audio["unplayed_frames"].values())
+    tap = p.tap[:p.tap_len, 0]
+    loud = np.flatnonzero(np.abs(tap) > 0.01)
+    last = loud[-1]
+    assert np.abs(tap[last + 1:]).max(initial=0.0) < 0.01 and tap.size - last > 0.05 * FS
+    slope = 0.5 * 2 * np.pi * plan.carrier_hz / FS
+    assert np.abs(np.diff(tap[last - 2 * plan.ramp_frames:])).max() <= slope * 1.01
+
+
+def test_audio_device_by_name_through_the_registry(jack_device):
+    with open_sink(f"audio:{jack_device},blocksize=256", 1, RATE, paced=True) as sink:
+        assert sink.label == f"audio:{jack_device}"
+        send_for(sink, 0.5, 0)
+    status = sink.status()
+    audio = status["audio"]
+    assert status["state"] == "closed" and status["commanded_samples"] == 5000
+    assert audio["commanded_frames"] == audio["played_frames"] + sum(
+        audio["unplayed_frames"].values())
+    assert audio["played_frames"] > 0.9 * 0.5 * FS
