@@ -201,3 +201,40 @@ def test_unknown_keys_are_shown_escaped_and_cut(tmp_path, key):
     line = str(problems[0])
     assert line.isprintable() and "\n" not in line
     assert problems[0].field == "layer[1]." + escape(key, 40)
+
+
+def test_preview_takes_allow_outside(tmp_path, monkeypatch):
+    monkeypatch.setenv(ALLOW_OUTSIDE_ENV, "0")  # restored after the test
+    (tmp_path / "elsewhere.png").write_bytes(_png(4, 4))
+    folder = tmp_path / "scene"
+    folder.mkdir()
+    path = folder / "t.toml"
+    path.write_text(HEAD + RASTER.format(name="../elsewhere.png"))
+    assert main(["preview", str(path), "-o", str(tmp_path / "p.png")]) == 2
+    assert not (tmp_path / "p.png").exists()
+    assert main(["preview", str(path), "-o", str(tmp_path / "p.png"), "--allow-outside"]) == 0
+    assert (tmp_path / "p.png").stat().st_size > 0
+
+
+@settings(max_examples=200, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(parts=st.lists(st.sampled_from(["a", "b", "..", ".", "up"]), min_size=1, max_size=8))
+def test_a_relative_name_is_refused_exactly_when_it_leads_out(tmp_path, parts):
+    """Names of folders, '.', '..' and a link 'up' (to the folder above) resolve inside
+    the texture file's folder, or are refused; never read outside."""
+    from frictex.textures.errors import TextureError
+    from frictex.textures.sections.files import Files
+    root = tmp_path / "root"
+    for sub in ("a", "b", "a/b", "b/a", "a/a", "b/b"):
+        (root / sub).mkdir(parents=True, exist_ok=True)
+    if not (root / "up").exists():
+        os.symlink("..", root / "up")
+    name = "/".join(parts)
+    real = Path(os.path.realpath(root / name))
+    inside = real == root.resolve() or root.resolve() in real.parents
+    try:
+        located = Files(root).locate(name)
+    except TextureError:
+        assert not inside or os.path.normpath(name).split(os.sep)[0] == ".."
+    else:
+        assert inside and located == real
