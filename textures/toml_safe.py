@@ -13,6 +13,7 @@ import sys
 import tomllib
 from pathlib import Path
 
+from frictex.device.safe_text import escape
 from frictex.textures.errors import Problem, bracket_peak
 from frictex.textures.library import UnreadableText, read_utf8
 from frictex.textures.schema import Reader
@@ -22,6 +23,8 @@ MAX_FILE_BYTES = 1 << 20
 #: Deepest nesting of arrays and inline tables accepted (the grammar needs 3: rows of a
 #: calibration table inside [device.calibration]).
 MAX_NESTING = 16
+#: Longest part of tomllib's own message shown (characters, escaped).
+MAX_TOML_MESSAGE = 120
 
 
 def read_text(path: Path, r: Reader) -> str | None:
@@ -52,8 +55,9 @@ def parse_toml(text: str, r: Reader) -> dict | None:
         message = str(exc)
         m = _TOML_POSITION.search(message)
         line = int(m.group(1)) if m else None
-        if m:
-            message = f"{message[:m.start()]} (column {m.group(2)})"
+        # tomllib's message may quote a key of the file (a duplicate table): escaped and cut
+        message = escape(message[:m.start()] if m else message, MAX_TOML_MESSAGE) + (
+            f" (column {m.group(2)})" if m else "")
         r.problems.append(Problem(r.label, line, "TOML syntax", message))
         return None
     except RecursionError:  # should the bracket scan above ever miss a nesting
