@@ -185,7 +185,7 @@ from frictex.textures.sections.layers import parse_layers, reach_warnings, selec
 from frictex.textures.toml_safe import parse_toml, read_text
 
 
-def check_scene(path: str | Path, *, allow_outside: bool = False,
+def check_scene(path: str | Path, *, allow_outside: bool = False, text: str | None = None,
                 ) -> tuple[model.Scene | None, list[Problem], list[Problem]]:
     """Read and check a texture file.
 
@@ -195,6 +195,9 @@ def check_scene(path: str | Path, *, allow_outside: bool = False,
     allow_outside : let the file name files outside its own folder (absolute paths,
         ``..``, links leading out); also allowed by ``FRICTEX_ALLOW_OUTSIDE=1``
         (``textures.sections.files``).
+    text : the file's text as an editor holds it (not saved yet), read in place of the
+        file's; ``path`` still names the file (messages, and the folder its references
+        are relative to).
 
     Returns ``(scene, problems, warnings)``: ``scene`` is None if there is any problem;
     ``problems`` lists every problem found, ``warnings`` things that are legal but
@@ -202,7 +205,7 @@ def check_scene(path: str | Path, *, allow_outside: bool = False,
     """
     path = Path(path)
     r = Reader(str(path), None)
-    text = read_text(path, r)
+    text = read_text(path, r) if text is None else text
     if text is None:
         return None, r.problems, r.warnings
     if not text.strip():
@@ -242,10 +245,11 @@ def check_scene(path: str | Path, *, allow_outside: bool = False,
     return scene, r.problems, r.warnings
 
 
-def load_scene(path: str | Path, *, allow_outside: bool = False) -> model.Scene:
+def load_scene(path: str | Path, *, allow_outside: bool = False,
+               text: str | None = None) -> model.Scene:
     """The scene in a texture file; raises :class:`TextureError` listing every problem.
-    ``allow_outside``: as :func:`check_scene`'s."""
-    scene, problems, _ = check_scene(path, allow_outside=allow_outside)
+    ``allow_outside``, ``text``: as :func:`check_scene`'s."""
+    scene, problems, _ = check_scene(path, allow_outside=allow_outside, text=text)
     if scene is None:
         raise TextureError(problems)
     return scene

@@ -1,0 +1,361 @@
+"""The demo's layer panel, its state and logic (no GL): which layer, which key, the
+value, the undo stack and the edit to the texture file's TOML document.
+
+A :class:`LayerEdit` holds a texture file's text as a ``tomlkit`` document, which keeps
+comments, key order and formatting: saving writes back every line the author did not
+change byte for byte. A layer's controls come from the loader's key tables
+(``textures.keys.LAYER_KEYS``, each key's ``textures.schema`` spec):
+
+- a number key (``Num``, ``Int``) is a :class:`Slider` over its allowed range, narrowed
+  to what can be dragged (see :func:`slider_span`); a value set is clamped into it and
+  rounded to the slider's step (a short decimal in the file);
+- a word key (``Choice``: ``blend``, ``render``, a grating's ``edge``, ...) is a
+  :class:`Menu` of its options. The keys that decide which other keys a layer takes
+  (``type``, a height's ``shape``, a clip's ``clip`` and ``trigger``, a waveform's
+  ``shape``) are not offered.
+
+A key is offered when the file gives it, or when its default is a value (a key whose
+default is derived by the loader, "none" in the tables, is offered only once written).
+A height or clip layer offers only the keys of its shape (``HEIGHT_SHAPES``,
+``CLIP_SHAPES``) besides its common ones.
+
+Every change pushes the document's text before it on the undo stack; changes made with
+the same ``group`` (one slider drag) share one entry. :meth:`LayerEdit.save` writes the
+document to :func:`save_path` (a bundled scene: a copy in the user's scene folder, with
+the files it names) and checks that the saved file loads.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import tomlkit
+from tomlkit.exceptions import TOMLKitError
+
+from frictex.device.errors import InputError
+from frictex.textures.keys import CLIP_SHAPES, COMMON, HEIGHT_SHAPES, LAYER_KEYS
+from frictex.textures.library import LIBRARY_DIR
+from frictex.textures.loader import load_scene
+from frictex.textures.references import referenced_files
+from frictex.textures.schema import MAX_MAGNITUDE, Choice, Int, Num
+
+#: word keys that change which keys a layer takes: not offered as menus
+STRUCTURAL = ("type", "shape", "clip", "trigger")
+#: slider steps per span at least (the step is a power of ten)
+MIN_STEPS = 500
+MAX_UNDO = 200
+
+
+class EditError(InputError):
+    """A texture file the panel cannot edit or save (unreadable TOML, no layers, ...)."""
+
+
+@dataclass(frozen=True)
+class Slider:
+    """A number key: ``value`` (``unit``) dragged over [``lo``, ``hi``] in ``step``s,
+    allowed in [``allowed_lo``, ``allowed_hi``] (the key's range; an open bound kept out
+    by a step). ``written``: the file gives the key (else ``value`` is its default)."""
+
+    key: str
+    unit: str
+    lo: float
+    hi: float
+    step: float
+    value: float
+    written: bool
+    allowed_lo: float
+    allowed_hi: float
+    integer: bool = False
+
+    @property
+    def fraction(self) -> float:
+        """Where ``value`` sits on the slider, 0 (``lo``) to 1 (``hi``)."""
+        return float(min(max((self.value - self.lo) / (self.hi - self.lo), 0.0), 1.0))
+
+    def value_at(self, fraction: float) -> float:
+        """The value at ``fraction`` (0 to 1, clipped) of the slider."""
+        f = min(max(float(fraction), 0.0), 1.0)
+        return self.lo + f * (self.hi - self.lo)
+
+
+@dataclass(frozen=True)
+class Menu:
+    """A word key: ``value``, one of ``options``."""
+
+    key: str
+    options: tuple[str, ...]
+    value: str
+    written: bool
+
+
+def _step(span: float) -> float:
+    """The power of ten giving at least MIN_STEPS steps over ``span``."""
+    return 10.0 ** math.floor(math.log10(span / MIN_STEPS))
+
+
+def slider_span(spec: Num | Int, value: float, extent_mm: float) -> tuple[float, float, float]:
+    """(lo, hi, step) of a slider for ``spec`` holding ``value``.
+
+    The allowed range (``spec``'s bounds) narrowed to what a drag can use: lengths and
+    positions (unit mm) to [0, ``extent_mm``] (the display's larger side), angles to
+    [-180, 180] deg, an unbounded side to 0 below and 4 x max(|value|, 0.25) above;
+    always wide enough to hold ``value``. An open bound (``gt``/``lt``) is kept out by
+    one step.
+    """
+    lower = spec.ge if isinstance(spec, Int) else (spec.gt if spec.gt is not None else spec.ge)
+    upper = spec.le if isinstance(spec, Int) else (spec.lt if spec.lt is not None else spec.le)
+    unit = spec.unit
+    if unit == "mm":
+        lo, hi = 0.0, extent_mm
+    elif unit == "deg":
+        lo, hi = -180.0, 180.0
+    else:
+        lo, hi = 0.0, 4.0 * max(abs(value), 0.25)
+    lo = max(lo, lower) if lower is not None else lo
+    hi = min(hi, upper) if upper is not None else hi
+    lo, hi = min(lo, value), max(hi, value)
+    if not hi > lo:
+        hi = lo + 1.0
+    step = 1.0 if isinstance(spec, Int) else _step(hi - lo)
+    if isinstance(spec, Num):
+        if spec.gt is not None and lo <= spec.gt:
+            lo = spec.gt + step
+        if spec.lt is not None and hi >= spec.lt:
+            hi = spec.lt - step
+    return float(lo), float(hi), float(step)
+
+
+def allowed_range(spec: Num | Int, step: float) -> tuple[float, float]:
+    """The values ``spec`` accepts, as a closed interval: an open bound moved in by
+    ``step``, a missing one at the schema's largest magnitude (``MAX_MAGNITUDE``)."""
+    if isinstance(spec, Int):
+        lo, hi = spec.ge, spec.le
+    else:
+        lo = spec.gt + step if spec.gt is not None else spec.ge
+        hi = spec.lt - step if spec.lt is not None else spec.le
+    return (float(lo) if lo is not None else -MAX_MAGNITUDE,
+            float(hi) if hi is not None else MAX_MAGNITUDE)
+
+
+def clamp(slider: Slider, value: float) -> float:
+    """``value`` for ``slider``'s key: not finite refused, clamped to the key's allowed
+    range, rounded to the slider's step (a whole number for an integer key; a short
+    decimal for a real one)."""
+    v = float(value)
+    if not math.isfinite(v):
+        raise EditError(f"{slider.key} = {value!r}: expected a finite number ({slider.unit})")
+    v = min(max(v, slider.allowed_lo), slider.allowed_hi)
+    if slider.integer:
+        return float(round(v))
+    digits = max(0, -int(math.floor(math.log10(slider.step))))
+    v = round(round(v / slider.step) * slider.step, digits)
+    return min(max(v, slider.allowed_lo), slider.allowed_hi)
+
+
+def _offered(layer_type: str, table) -> list[str]:
+    """The keys of a layer of ``layer_type`` the panel may show, in the tables' order."""
+    keys = list(LAYER_KEYS.get(layer_type, {}))
+    shapes = {"height": (HEIGHT_SHAPES, "shape"), "clip": (CLIP_SHAPES, "clip")}.get(layer_type)
+    if shapes is not None:
+        table_of, word = shapes
+        own = set(table_of.get(str(table.get(word, "")), ()))
+        every = {k for ks in table_of.values() for k in ks}
+        keys = [k for k in keys if k not in every or k in own]
+    return keys
+
+
+def layer_controls(table, extent_mm: float) -> tuple[Slider | Menu, ...]:
+    """The panel's controls for one ``[[layer]]`` table (``extent_mm``: the display's
+    larger side, mm)."""
+    layer_type = str(table.get("type", ""))
+    specs = {k: COMMON[k] for k in ("blend", "render")}
+    specs.update({k: LAYER_KEYS[layer_type][k] for k in _offered(layer_type, table)})
+    out: list[Slider | Menu] = []
+    for key, spec in specs.items():
+        written = key in table
+        if isinstance(spec, Choice):
+            if key in STRUCTURAL:
+                continue
+            value = table[key] if written else spec.default
+            if isinstance(value, str) and value in spec.options:
+                out.append(Menu(key, spec.options, str(value), written))
+        elif isinstance(spec, (Num, Int)):
+            value = table[key] if written else spec.default
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                continue  # derived default ("none"), or a bad value the loader reports
+            lo, hi, step = slider_span(spec, float(value), extent_mm)
+            out.append(Slider(key, spec.unit, lo, hi, step, float(value), written,
+                              *allowed_range(spec, step), isinstance(spec, Int)))
+    return tuple(out)
+
+
+def _user_scenes() -> Path:
+    """The user's scene folder: ``$XDG_DATA_HOME/frictex/scenes`` (default
+    ``~/.local/share/frictex/scenes``)."""
+    base = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
+    return Path(base) / "frictex" / "scenes"
+
+
+def is_bundled(path: Path) -> bool:
+    """``path`` is one of the scenes installed with frictex (never written to)."""
+    resolved = Path(path).resolve()
+    return resolved.is_relative_to(LIBRARY_DIR) or "site-packages" in resolved.parts
+
+
+def save_path(path: Path) -> Path:
+    """Where the panel saves the scene read from ``path``: ``path`` itself, or for a
+    bundled scene ``<user scene folder>/<file name>``."""
+    return _user_scenes() / Path(path).name if is_bundled(path) else Path(path)
+
+
+class LayerEdit:
+    """The texture file at ``path`` (its ``text`` if given: what the demo shows) open
+    for editing; see the module docstring.
+
+    Attributes
+    ----------
+    layer : the index of the layer selected (``[[layer]]`` order), or None.
+    """
+
+    def __init__(self, path: Path, text: str | None = None):
+        self.path = Path(path)
+        if text is None:
+            try:
+                text = self.path.read_text(encoding="utf-8")
+            except (OSError, UnicodeDecodeError) as exc:
+                raise EditError(f"cannot read {self.path.name} for editing: {exc}") from None
+        self.original = text
+        try:
+            self.doc = tomlkit.parse(text)
+        except TOMLKitError as exc:
+            raise EditError(f"{self.path.name} is not TOML the panel can edit: {exc}") from None
+        layers = self.doc.get("layer")
+        if not layers:
+            raise EditError(f"{self.path.name} has no [[layer]] to edit")
+        display = self.doc.get("display", {})
+        self.extent_mm = float(max(display.get("width_mm", 100.0), display.get("height_mm", 100.0)))
+        self.layer: int | None = None
+        self._undo: list[tuple[str, object]] = []  # (text before, group)
+        self._group: object = None
+
+    # -- reading -----------------------------------------------------------------------
+
+    def text(self) -> str:
+        """The document as it would be saved."""
+        return tomlkit.dumps(self.doc)
+
+    @property
+    def dirty(self) -> bool:
+        """The document differs from the text it was opened with."""
+        return self.text() != self.original
+
+    def layer_names(self) -> tuple[str, ...]:
+        """Each layer as the panel lists it: "<name> (<type>)" or "<k> <type>"."""
+        names = []
+        for k, table in enumerate(self.doc["layer"]):
+            kind = str(table.get("type", "?"))
+            names.append(f"{table['name']} ({kind})" if "name" in table else f"{k + 1} {kind}")
+        return tuple(names)
+
+    def controls(self) -> tuple[Slider | Menu, ...]:
+        """The selected layer's controls (none when no layer is selected)."""
+        if self.layer is None:
+            return ()
+        return layer_controls(self.doc["layer"][self.layer], self.extent_mm)
+
+    def control(self, key: str) -> Slider | Menu:
+        for c in self.controls():
+            if c.key == key:
+                return c
+        raise EditError(f"the layer has no key {key!r} the panel edits")
+
+    @property
+    def can_undo(self) -> bool:
+        return bool(self._undo)
+
+    # -- changing ----------------------------------------------------------------------
+
+    def select(self, index: int) -> None:
+        """Select layer ``index`` (0-based, file order)."""
+        count = len(self.doc["layer"])
+        if not 0 <= index < count:
+            raise EditError(f"layer {index} does not exist; expected 0 to {count - 1}")
+        self.layer = index
+
+    def set(self, key: str, value, group: object = None) -> str | float:
+        """Set ``key`` of the selected layer: a number (clamped to its slider, rounded to
+        its step) or one of a menu's options. Returns the value written. ``group``: a
+        change with the group of the change before it (a drag) shares its undo entry."""
+        control = self.control(key)
+        if isinstance(control, Menu):
+            if value not in control.options:
+                raise EditError(f"{key} = {value!r} is not one of {', '.join(control.options)}")
+            new = value
+        else:
+            new = clamp(control, value)
+            new = int(new) if control.integer else new
+        table = self.doc["layer"][self.layer]
+        if control.written and control.value == new:
+            return new
+        if group is None or group != self._group or not self._undo:
+            self._undo.append((self.text(), group))
+            del self._undo[:-MAX_UNDO]
+        self._group = group
+        table[key] = new
+        return new
+
+    def undo(self) -> bool:
+        """Take back the last change (a whole drag); False if there is none."""
+        if not self._undo:
+            return False
+        text, _ = self._undo.pop()
+        self.doc = tomlkit.parse(text)
+        self._group = None
+        return True
+
+    def revert(self, text: str) -> None:
+        """Put the document back to ``text`` (a change the loader refused), the undo
+        stack as it is."""
+        self.doc = tomlkit.parse(text)
+
+    def end_group(self) -> None:
+        """The drag ended: the next change starts a new undo entry."""
+        self._group = None
+
+    # -- saving ------------------------------------------------------------------------
+
+    def save(self) -> Path:
+        """Write the document to :func:`save_path` (atomically: a new file renamed over
+        the old), with the files it names for a copy of a bundled scene; the saved file
+        must load (``textures.loader.load_scene``). Returns the path written."""
+        target = save_path(self.path)
+        text = self.text()
+        load_scene(self.path, text=text)  # refused before anything is written
+        try:
+            target.parent.mkdir(parents=True, exist_ok=True)
+            if target != self.path:
+                self._copy_references(target.parent)
+            fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+            with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
+                f.write(text)
+            os.replace(tmp, target)
+        except OSError as exc:
+            raise EditError(f"cannot save {target}: {exc}") from None
+        load_scene(target)
+        self.path, self.original = target, text
+        return target
+
+    def _copy_references(self, folder: Path) -> None:
+        """Copy the files the scene names (rasters, clips, ...) below ``folder`` as they
+        lie below the scene's own folder, unless a file is there already."""
+        home = self.path.parent.resolve()
+        for ref in referenced_files(self.path):
+            ref = Path(ref).resolve()
+            if ref.is_relative_to(home) and not (folder / ref.relative_to(home)).exists():
+                (folder / ref.relative_to(home)).parent.mkdir(parents=True, exist_ok=True)
+                shutil.copy2(ref, folder / ref.relative_to(home))
