@@ -143,3 +143,15 @@ def test_audio_device_by_name_through_the_registry(jack_device):
     assert audio["commanded_frames"] == audio["played_frames"] + sum(
         audio["unplayed_frames"].values())
     assert audio["played_frames"] > 0.9 * 0.5 * FS
+
+
+def test_touch_to_dac_latency_through_jack(jack_device):
+    from frictex.device.audio.latency import audio_latency
+
+    result = audio_latency(f"{jack_device},blocksize=256", events=20)
+    latency = result["latency_s"]
+    assert latency.size + result["missed"] == 20 and latency.size >= 1
+    # the first frame of an event's block reaches the DAC after the event arrived, and
+    # no earlier than the callback that plays it plus what PortAudio reports downstream
+    assert np.all(latency > 0) and np.all(np.isfinite(latency))
+    assert result["output_latency_s"] > 0 and result["audio_rate"] == FS

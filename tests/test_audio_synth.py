@@ -262,3 +262,19 @@ def test_idle_before_the_first_frame_does_not_count():
     player = Player(ring, R)
     out = play(player, 1024)
     assert not out.any() and player.slot == 0 and player.underruns == 0
+
+
+def test_play_log_gives_each_played_frame_its_dac_time():
+    ring, s = ring_with(1000)
+    player = Player(ring, R)
+    out = np.zeros((256, 1), dtype=np.float32)
+    for i in range(6):  # 1536 slots: frames 0..tail-1 play, then starvation
+        player.fill(out, dac_time=10.0 + i * 256 / FS)
+    assert player.dac_time(0, FS) == pytest.approx(10.0)
+    assert player.dac_time(300, FS) == pytest.approx(10.0 + 300 / FS)
+    assert player.dac_time(ring.tail - 1, FS) == pytest.approx(10.0 + (ring.tail - 1) / FS)
+    assert player.dac_time(ring.tail, FS) is None  # not played (yet)
+    late = ring.tail
+    ring.write(s.render(np.full((10, 1), 1.5)).astype(np.float32), None)
+    player.fill(out, dac_time=20.0)
+    assert player.late > 0 and player.dac_time(late, FS) is None  # dropped, never played

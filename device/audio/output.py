@@ -59,6 +59,7 @@ class AudioOutput:
         self.gap_samples = 0
         self.closed = False
         self._next: int | None = None  # the start index the next block should have
+        self.first_index = 0  # the first block's start index (command sample 0 of the stream)
 
     # ----------------------------------------------------------------- OutputDevice
     def send(self, start_index: int, amplitudes_um: np.ndarray,
@@ -77,7 +78,9 @@ class AudioOutput:
         if self._next is not None and start_index < self._next:
             raise InputError(f"start_index = {start_index}: expected {self._next} or later "
                              "(blocks in order, without overlap)")
-        gap = 0 if self._next is None else start_index - self._next
+        if self._next is None:
+            self.first_index = self._next = start_index
+        gap = start_index - self._next
         while gap > 0:
             n = min(gap, GAP_CHUNK)
             zeros = np.zeros((n, self.channels))

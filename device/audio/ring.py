@@ -29,6 +29,8 @@ import numpy as np
 
 #: marks of where underruns began in a tap (``Player.tap``), at most this many
 MAX_MARKS = 256
+#: callbacks the play log keeps (the latest; 87 s of 256-frame callbacks at 192 kHz)
+LOG_CALLBACKS = 65_536
 
 
 class FrameRing:
@@ -85,6 +87,12 @@ class Player:
     channels) float32 array the callback copies its output into, up to its length, with
     ``marks`` the tap positions where underruns began and ``resumes`` those where frames
     played again after one (tests; ``tap_len`` filled).
+
+    Play log, one entry per callback (the latest :data:`LOG_CALLBACKS`): the ring position
+    of the first frame it played (``log_pos``; -1: none), that frame's offset in the
+    callback's buffer (``log_off``), and the time (s, the caller's clock) the
+    buffer's first frame reaches the DAC (``log_dac``), the frames it played (``log_n``,
+    contiguous in the ring); ``log_count`` callbacks so far. :meth:`dac_time` reads it.
     """
 
     def __init__(self, ring: FrameRing, ramp_frames: int, tap_frames: int = 0):
@@ -100,6 +108,11 @@ class Player:
         self.mark_count = 0
         self.resumes = np.zeros(MAX_MARKS, dtype=np.int64)
         self.resume_count = 0
+        self.log_pos = np.full(LOG_CALLBACKS, -1, dtype=np.int64)
+        self.log_off = np.zeros(LOG_CALLBACKS, dtype=np.int64)
+        self.log_n = np.zeros(LOG_CALLBACKS, dtype=np.int64)
+        self.log_dac = np.zeros(LOG_CALLBACKS, dtype=np.float64)
+        self.log_count = 0
         self.slot = self.played = self.late = self.underrun_frames = self.underruns = 0
         self.stopped = 0
         self.started = False
@@ -109,9 +122,15 @@ class Player:
         self._fading = -1  # frames of the fade played; -1: not starving
         self._stopping = False  # the emergency stop's ramp has begun
 
-    def fill(self, out: np.ndarray) -> None:
-        """Fill ``out`` (frames, channels) float32 in place: the PortAudio callback."""
+    def fill(self, out: np.ndarray, dac_time: float = 0.0) -> None:
+        """Fill ``out`` (frames, channels) float32 in place: the PortAudio callback.
+        ``dac_time``: when its first frame reaches the DAC (s, any clock; logged)."""
         pos, frames, ring = 0, out.shape[0], self.ring
+        entry = self.log_count % LOG_CALLBACKS
+        self.log_pos[entry] = -1
+        self.log_n[entry] = 0
+        self.log_dac[entry] = dac_time
+        self.log_count += 1
         while pos < frames:
             tail, head = ring.tail, ring.head
             if not self.started:
@@ -138,6 +157,11 @@ class Player:
     def _play(self, out, pos: int, m: int, head: int) -> int:
         seg = out[pos:pos + m]
         self.ring.read_into(head, seg)
+        entry = (self.log_count - 1) % LOG_CALLBACKS
+        if self.log_pos[entry] < 0:
+            self.log_pos[entry] = head
+            self.log_off[entry] = pos
+        self.log_n[entry] += m
         if self._fading >= 0:  # resume from the level the fade reached
             self._gain = self.ramp - min(self._fading, self.ramp)
             self._fading = -1
@@ -208,6 +232,19 @@ class Player:
             self.stopped += tail - head
             self.ring.head = tail
         return out.shape[0]
+
+    def dac_time(self, position: int, rate: int) -> float | None:
+        """When the frame at ring ``position`` reached the DAC (s, ``fill``'s clock),
+        from the play log; None if it never played or its callback left the log. Not
+        for the callback's thread (it reads the log while the callback writes it)."""
+        n = min(self.log_count, LOG_CALLBACKS)
+        idx = np.arange(self.log_count - n, self.log_count) % LOG_CALLBACKS
+        pos, count = self.log_pos[idx], self.log_n[idx]
+        hit = np.flatnonzero((pos >= 0) & (pos <= position) & (position < pos + count))
+        if hit.size == 0:
+            return None
+        i = idx[hit[-1]]
+        return float(self.log_dac[i] + (self.log_off[i] + position - self.log_pos[i]) / rate)
 
     def _record(self, out) -> None:
         if self.tap is None or self.tap_len >= self.tap.shape[0]:

@@ -4,8 +4,8 @@ extra; Debian: ``libportaudio2``).
 The producer (the pipeline's thread) renders frames and writes them into a
 :class:`~device.audio.ring.FrameRing`; PortAudio's callback runs
 :meth:`~device.audio.ring.Player.fill` and nothing else (it never blocks, logs or
-allocates arrays). The stream starts once half the ring is queued (or at close), so the
-first callback finds frames. The ring always keeps ``ramp_frames`` of room in reserve:
+allocates arrays). A paced stream starts once half the ring is queued (or at close), so the
+first callback finds frames; a live one with its first frames. The ring always keeps ``ramp_frames`` of room in reserve:
 a live producer (``paced=False``) that finds no room for a block drops it (counted,
 ``ring_full``) and writes the ramp to 0 instead, and the next block ramps in. A paced
 producer (replay) waits for room, at most ``stall_s * max_stalls`` seconds, then fails
@@ -71,6 +71,8 @@ class StreamOutput(AudioOutput):
         self.not_drained = 0
         self.xruns = 0  # callbacks PortAudio flagged with an output underflow
         self._ramp_in = plan.ramp_frames  # producer's ramp-in after a dropped block
+        # ring position - synth frame, from a synth frame on (it moves at a dropped block)
+        self._offsets = [(0, 0)]
         self._started = False
         target = int(device) if device and device.isdigit() else (device or None)
         try:
@@ -89,7 +91,10 @@ class StreamOutput(AudioOutput):
     def _callback(self, outdata, frames, time_info, status) -> None:
         if status.output_underflow:
             self.xruns += 1
-        self.player.fill(outdata)
+        # on the producer's clock: when the callback runs, plus PortAudio's time from then
+        # to the buffer's first frame at the DAC (its stream clock can jump under load)
+        self.player.fill(outdata, time.monotonic() + (time_info.outputBufferDacTime
+                                                      - time_info.currentTime))
 
     # ----------------------------------------------------------------- producer
     def _emit(self, frames: np.ndarray) -> None:
@@ -101,8 +106,11 @@ class StreamOutput(AudioOutput):
         if not self.paced and ring.room() - ramp < frames.shape[0]:
             self.ring_full += frames.shape[0]
             self.commanded_frames += frames.shape[0]
+            offset = self._offsets[-1][1] - frames.shape[0]
             if self._ramp_in >= ramp:  # the stream so far ends in a ramp, not a step
                 self._write(self.synth.fade_tail())
+                offset += ramp
+            self._offsets.append((self.synth.frames, offset))
             self._ramp_in = 0
             return
         step = ring.capacity - ramp
@@ -114,7 +122,8 @@ class StreamOutput(AudioOutput):
     def _write(self, frames: np.ndarray, fade: np.ndarray | None = None) -> None:
         self.ring.write(frames.astype(np.float32), None if fade is None else fade.astype(np.float32))
         self.commanded_frames += frames.shape[0]
-        if not self._started and (self.ring.tail >= self.ring.capacity // 2 or self.closed):
+        if not self._started and (not self.paced or self.closed
+                                  or self.ring.tail >= self.ring.capacity // 2):
             self._start()
 
     def _wait_room(self, frames: int) -> None:
@@ -126,6 +135,22 @@ class StreamOutput(AudioOutput):
                 raise DeviceError(f"{self.label}: the audio device took no frames for "
                                   f"{self.wait_s:g} s")
             time.sleep(POLL_S)
+
+    def now(self) -> float:
+        """The clock of :meth:`dac_time_of_command` (s): ``time.monotonic``."""
+        return time.monotonic()
+
+    def dac_time_of_command(self, index: int) -> float | None:
+        """When the first frame carrying command sample ``index`` (``send``'s
+        ``start_index`` counting) reached the DAC (s, :meth:`now`'s clock: when its
+        callback ran, plus PortAudio's time from then to the DAC, plus the frame's offset
+        in the buffer); None if that frame never played."""
+        frame = self.synth.frames_until(int(index) - self.first_index)
+        offset = 0
+        for since, value in self._offsets:
+            if since <= frame:
+                offset = value
+        return self.player.dac_time(frame + offset, self.plan.audio_rate)
 
     def _start(self) -> None:
         self._started = True
