@@ -100,3 +100,12 @@ def test_control_characters_in_a_message_never_reach_the_terminal():
     assert done.returncode == 2
     assert "\x1b" not in done.stderr and "\x07" not in done.stderr
     assert done.stderr == "frictex: error: key \\x1b]0;owned\\x07\\x1b[2J\\nforged line\n"
+
+
+def test_an_option_that_sets_the_environment_sets_it_for_its_run_only(tmp_path, monkeypatch):
+    from frictex.app.commands.cli import main
+    from frictex.textures.outside import ALLOW_OUTSIDE_ENV
+    monkeypatch.delenv(ALLOW_OUTSIDE_ENV, raising=False)
+    import os
+    assert main(["validate", "grating-5mm", "--allow-outside"]) == 0
+    assert ALLOW_OUTSIDE_ENV not in os.environ  # an in-process caller's next run is confined

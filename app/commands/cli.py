@@ -107,10 +107,20 @@ def main(argv: list[str] | None = None) -> int:
     if name in COMMANDS:
         module = importlib.import_module(COMMANDS[name][0])
         module.add_arguments(subparsers[name])
-    args = parser.parse_args(argv)
-    if module is None:
-        parser.print_help()
-        return 2 if argv else 0
+    environment = dict(os.environ)  # options such as --allow-outside set it for one run
+    try:
+        args = parser.parse_args(argv)
+        if module is None:
+            parser.print_help()
+            return 2 if argv else 0
+        return _run(module, args)
+    finally:
+        os.environ.clear()
+        os.environ.update(environment)
+
+
+def _run(module, args: argparse.Namespace) -> int:
+    """``module.run(args)``, with what escapes it sorted as the module docstring says."""
     try:
         return int(module.run(args) or 0)
     except BrokenPipeError:  # output piped into e.g. head, which stopped reading
