@@ -46,8 +46,8 @@ from __future__ import annotations
 from dataclasses import dataclass, fields
 
 import numpy as np
-from numba import njit
 
+from frictex.device.jit import njit
 from frictex.device.profile import Calibration, DeviceProfile, FrictionParams
 
 

@@ -17,6 +17,8 @@ from frictex.device.registry import Registry
 #: How the modal profiles turn wanted amplitudes into actuator commands
 #: (``device.actuation.modal.solve``).
 METHODS = ("exact", "regularised", "bounded")
+#: the beam theories ``device.structures.beam`` computes a beam's modes with
+THEORIES = ("euler-bernoulli", "timoshenko")
 #: chosen by measurement (``frictex bench modal``, device/MODES.md)
 DEFAULT_METHOD = "regularised"
 #: regularisation threshold, relative to the largest singular value (device/MODES.md)

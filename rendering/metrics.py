@@ -49,9 +49,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 from scipy.signal import stft
 
+from frictex.device.jit import njit
 from frictex.rendering.compose import ideal_mu
 from frictex.rendering.input.trace_file import UP, Trace, TraceError
 

@@ -10,6 +10,8 @@ from pathlib import Path
 import pytest
 from numba.core.registry import CPUDispatcher
 
+from frictex.device.jit import dispatcher
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -28,6 +30,7 @@ def foreign_calls(module):
     function defined in another module."""
     found = []
     for name, obj in vars(module).items():
+        obj = dispatcher(obj)
         if not (isinstance(obj, CPUDispatcher) and obj.__module__ == module.__name__
                 and type(obj._cache).__name__ != "NullCache"):  # cache=True
             continue
@@ -38,7 +41,7 @@ def foreign_calls(module):
             code_names.update(code.co_names)
             stack.extend(c for c in code.co_consts if inspect.iscode(c))
         for ref in sorted(code_names):
-            target = obj.py_func.__globals__.get(ref)
+            target = dispatcher(obj.py_func.__globals__.get(ref))
             if isinstance(target, CPUDispatcher) and target.__module__ != module.__name__:
                 found.append((name, f"{target.__module__}.{ref}"))
     return found

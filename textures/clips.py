@@ -25,8 +25,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 import numpy as np
-from numba import njit
 
+from frictex.device.jit import njit
 from frictex.textures.dynamic import DynamicLayer
 
 CLIP_TRIGGERS = ("down", "lift", "edge", "force")

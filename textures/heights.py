@@ -25,8 +25,8 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 import numpy as np
-from numba import njit
 
+from frictex.device.jit import njit
 from frictex.device.safe_text import escape_path
 from frictex.textures.dynamic import DynamicLayer
 from frictex.textures.errors import TextureError

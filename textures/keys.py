@@ -9,8 +9,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from frictex.device import profile as profiles
-from frictex.device.profile import METHODS
-from frictex.device.structures.beam import THEORIES
+from frictex.device.profile import METHODS, THEORIES
 from frictex.textures import model
 from frictex.textures.clips import CLIP_TRIGGERS, MAX_CLIP_S
 from frictex.textures.heights import HEIGHT_RENDERINGS

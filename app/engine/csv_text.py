@@ -13,7 +13,9 @@ table) and its text spliced in by the kernel.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from frictex.device.jit import njit
+
 
 def rows_text(columns: list[np.ndarray], formats: list[str]) -> memoryview:
     """The CSV lines (``\\n``-terminated, no header) of equal-length columns, as a view of

@@ -23,7 +23,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+
+from frictex.device.jit import njit
 
 
 @dataclass(frozen=True, eq=False)

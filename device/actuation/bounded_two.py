@@ -32,7 +32,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from frictex.device.jit import njit
 
 #: grid points over [0, 2 pi) bracketing the minimum over the second command's phase
 GRID = 64

@@ -40,8 +40,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from frictex.device.jit import njit
 from frictex.device.structures.beam import ModesError
 from frictex.device.actuation.bounded_two import bounded_two
 from frictex.device.profile import DEFAULT_METHOD, DEFAULT_RCOND, METHODS

@@ -38,9 +38,9 @@ import string
 from collections.abc import Callable
 
 import numpy as np
-from numba import njit
 
 from frictex.device.actuation.base import Actuated, touch_rank
+from frictex.device.jit import njit
 from frictex.device.profile import BeamStructure
 from frictex.device.structures.beam import FreeFreeBeam, ModesError
 from frictex.device.actuation.modal import (achieved_magnitude, check_settings, gain_threshold, magnitude,

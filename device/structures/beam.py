@@ -46,11 +46,11 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-from numba import njit
 
 from frictex.device.errors import InputError
+from frictex.device.jit import njit
+from frictex.device.profile import THEORIES
 
-THEORIES = ("euler-bernoulli", "timoshenko")
 
 #: Gauss-Legendre panels per wavelength for norms (20 nodes each: exact to round-off)
 _PANELS_PER_WAVELENGTH = 8

@@ -16,7 +16,8 @@ Units: mu' and force ratios dimensionless, forces N, amplitudes um, speeds mm/s.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from frictex.device.jit import njit
 
 
 @njit(cache=True, nogil=True)

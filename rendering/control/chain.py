@@ -13,10 +13,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 from scipy.signal import lfilter_zi
 
 from frictex.device.finger import SensorParams, pole
+from frictex.device.jit import njit
 
 
 @dataclass(frozen=True, eq=False)

@@ -21,8 +21,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
+from frictex.device.jit import njit
 from frictex.rendering.tracking.tracks import FingerBlock
 from frictex.textures.ar_synthesis import render_finger
 

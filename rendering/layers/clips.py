@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
+from frictex.device.jit import njit
 from frictex.rendering.tracking.tracks import FingerBlock
 
 TRIGGER_CODES = {"down": 0, "lift": 1, "edge": 2, "force": 3}

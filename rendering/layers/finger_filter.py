@@ -67,7 +67,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from frictex.device.jit import njit
 
 #: touch noise variance (mm^2): 0.05 mm standard deviation, a good capacitive controller
 #: (``app.measure.report_matrix.TOUCH_NOISE_MM``)

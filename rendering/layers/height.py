@@ -30,8 +30,8 @@ from __future__ import annotations
 from dataclasses import astuple
 
 import numpy as np
-from numba import njit
 
+from frictex.device.jit import njit
 from frictex.rendering.tracking.tracks import FingerBlock
 
 

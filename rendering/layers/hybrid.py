@@ -153,8 +153,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from frictex.device.jit import njit
 from frictex.rendering.layers.finger_filter import filter_axis
 from frictex.rendering.tracking.tracks import FingerBlock
 

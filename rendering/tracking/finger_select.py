@@ -28,9 +28,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
 from frictex.device.actuation.base import touch_rank
+from frictex.device.jit import njit
 from frictex.textures.model import POSITIONAL_SELECTORS
 
 ANY = "any"

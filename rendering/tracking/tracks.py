@@ -38,8 +38,8 @@ from dataclasses import dataclass, field
 from operator import attrgetter
 
 import numpy as np
-from numba import njit
 
+from frictex.device.jit import njit
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP, Trace
 
 

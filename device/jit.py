@@ -1,0 +1,126 @@
+"""numba's ``njit``, compiled (or loaded from the cache) at a kernel's first use.
+
+Importing numba costs 0.3-0.4 s of CPU and pulls in scipy; loading a cached kernel costs
+a few milliseconds more. Kernels are defined beside the data they serve (a texture's
+layer, a device's actuation), so a command that only reads texture files (``validate``,
+``library``) would pay for every kernel of every module it imports. ``njit`` here
+returns a stand-in that imports numba and builds the real dispatcher on its first call
+or attribute access, then puts the dispatcher in its module's namespace in its place, so
+that later calls from that module, and kernels compiled after it, see the dispatcher
+itself. A cached kernel loaded from disk brings its callees' code with it: a callee that
+nothing calls from Python is never built at all.
+
+numba imports scipy at start-up only to check its version, and scipy.linalg (0.2 s) to
+see whether BLAS is there; ``_import_numba`` skips both (scipy is a dependency, so BLAS
+is there) and numba imports scipy.linalg itself when it compiles a call that needs it.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.abc
+import importlib.util
+import sys
+import threading
+from typing import Any, Callable
+
+_lock = threading.RLock()
+_typeof_registered = False
+
+
+class LazyKernel:
+    """A function to be compiled by ``numba.njit(**options)`` at its first use.
+
+    Parameters
+    ----------
+    func : callable
+        The Python function (numba's ``py_func``).
+    options : dict
+        ``numba.njit``'s keyword arguments (``cache``, ``nogil``, ``error_model``, ...).
+    """
+
+    def __init__(self, func: Callable, options: dict[str, Any]) -> None:
+        self._func = func
+        self._options = options
+        self._kernel = None
+        functools.update_wrapper(self, func)
+
+    def kernel(self):
+        """The numba dispatcher, built at the first call (thread-safe)."""
+        if self._kernel is None:
+            with _lock:
+                if self._kernel is None:
+                    numba = _import_numba()
+                    _register_typeof()
+                    self._kernel = numba.njit(**self._options)(self._func)
+                    names = self._func.__globals__
+                    if names.get(self._func.__name__) is self:
+                        names[self._func.__name__] = self._kernel
+        return self._kernel
+
+    def __call__(self, *args, **kwargs):
+        return self.kernel()(*args, **kwargs)
+
+    def __getattr__(self, name: str):
+        if name.startswith("__"):
+            raise AttributeError(name)
+        return getattr(self.kernel(), name)
+
+
+class _RefuseScipy(importlib.abc.MetaPathFinder):
+    """Refuses ``import scipy`` in the thread that made it, and in no other."""
+
+    def __init__(self) -> None:
+        self.thread = threading.get_ident()
+
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname == "scipy" and threading.get_ident() == self.thread:
+            raise ModuleNotFoundError("scipy is left for numba to import when it needs it",
+                                      name=fullname)
+        return None
+
+
+def _import_numba():
+    """numba, imported without scipy when scipy is not loaded yet (see the module)."""
+    if "numba" in sys.modules or "scipy" in sys.modules:
+        import numba
+        return numba
+    has_scipy = importlib.util.find_spec("scipy") is not None
+    refuse = _RefuseScipy()
+    sys.meta_path.insert(0, refuse)
+    try:
+        import numba
+        import numba.np.linalg as linalg
+        ensure_blas = linalg.ensure_blas
+        linalg.ensure_blas = lambda: None if has_scipy else ensure_blas()
+        try:
+            import numba.np.arraymath
+        finally:
+            linalg.ensure_blas = ensure_blas
+        numba.np.arraymath.ensure_blas = ensure_blas
+    finally:
+        sys.meta_path.remove(refuse)
+    return numba
+
+
+def _register_typeof() -> None:
+    """Teach numba that a stand-in met as a global in nopython code is its dispatcher."""
+    global _typeof_registered
+    if not _typeof_registered:
+        from numba.extending import typeof_impl
+
+        @typeof_impl.register(LazyKernel)
+        def _typeof_lazy(value, context):
+            return typeof_impl(value.kernel(), context)
+        _typeof_registered = True
+
+
+def njit(**options: Any) -> Callable[[Callable], LazyKernel]:
+    """``numba.njit(**options)``, deferred to the kernel's first use (see the module)."""
+    return functools.partial(LazyKernel, options=options)
+
+
+def dispatcher(obj):
+    """The numba dispatcher behind ``obj`` (built now), or ``obj`` itself if it is not a
+    stand-in."""
+    return obj.kernel() if isinstance(obj, LazyKernel) else obj

@@ -1,0 +1,64 @@
+"""A command imports only what it uses: each command runs in a fresh process, which then
+names the heavy packages it has loaded (``sys.modules``). No timing is asserted."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+HEAVY = ("numba", "llvmlite", "scipy", "matplotlib", "moderngl", "glfw", "pyarrow", "dask")
+
+PROBE = r"""
+import json, sys
+from frictex.app.commands.cli import main
+try:
+    code = main(json.loads(sys.argv[1]))
+except SystemExit as exc:   # --version exits through argparse
+    code = exc.code
+print(json.dumps({"code": code, "loaded": sorted({m.split(".")[0] for m in sys.modules})}))
+"""
+
+
+def loaded_after(argv: list[str]) -> set[str]:
+    """The heavy top-level packages in ``sys.modules`` after ``frictex ARGV`` ran."""
+    done = subprocess.run([sys.executable, "-c", PROBE, json.dumps(argv)], capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result["code"] == 0, done.stderr
+    return set(result["loaded"]) & set(HEAVY)
+
+
+@pytest.mark.parametrize("argv", [["--version"], ["library"], ["validate", "grating-5mm"],
+                                  ["validate", "height-button"]])
+def test_commands_that_read_no_trace_import_no_compiler(argv):
+    assert loaded_after(argv) == set()
+
+
+def test_a_parquet_replay_imports_pyarrow_and_numba_only(tmp_path):
+    argv = ["replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(tmp_path / "run"),
+            "--format", "parquet", "--quiet"]
+    assert loaded_after(argv) == {"numba", "llvmlite", "pyarrow"}
+
+
+@pytest.mark.parametrize("fmt", ["csv", "npz"])
+def test_a_text_or_npz_replay_imports_no_pyarrow(tmp_path, fmt):
+    argv = ["replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(tmp_path / "run"),
+            "--format", fmt, "--quiet"]
+    assert loaded_after(argv) == {"numba", "llvmlite"}
+
+
+def test_a_kernel_compiled_after_the_lazy_import_can_use_blas():
+    """numba is imported without scipy.linalg (``device.jit``); a kernel calling BLAS still
+    compiles, numba importing scipy.linalg then."""
+    probe = ("import numpy as np\n"
+             "from frictex.device.jit import njit\n"
+             "@njit()\n"
+             "def dot(a, b):\n"
+             "    return np.dot(a, b)\n"
+             "print(dot(np.arange(3.0), np.arange(3.0)))\n")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "5.0"
