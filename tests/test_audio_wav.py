@@ -9,6 +9,7 @@ from scipy.io import wavfile
 
 import frictex
 from frictex.device.errors import InputError
+from frictex.device.link.devices import OutputDevice
 from frictex.device.link.host import open_sink
 from frictex.device.profile import PROFILES
 
@@ -127,7 +128,7 @@ def test_wav_through_the_registry(tmp_path):
     path = tmp_path / "s.wav"
     with open_sink(f"audio:wav:{path},carrier=25000,full_scale=50", 1, RATE,
                    paced=True) as sink:
-        assert sink.label.startswith("audio:wav:")
+        assert sink.label.startswith("audio:wav:") and isinstance(sink, OutputDevice)
         sink.send(0, np.full((500, 1), 2.0))  # 100 V asked, 50 V full scale: clamped
         sink.send(600, np.full((100, 1), 0.5))  # a gap of 100 samples: silence
         status = sink.status()

@@ -132,6 +132,9 @@ class Player:
         self.log_dac[entry] = dac_time
         self.log_count += 1
         while pos < frames:
+            # published before tail: the writer sets tail first, so a fade read here is
+            # the one that follows `tail` whenever the ring turns out empty
+            published = ring.published
             tail, head = ring.tail, ring.head
             if not self.started:
                 if tail == head or self.estop:
@@ -150,7 +153,7 @@ class Player:
             if tail > head:
                 pos = self._play(out, pos, min(tail - head, frames - pos), head)
             else:
-                self._starve(out, pos, tail)
+                self._starve(out, pos, tail, published)
                 break
         self._record(out)
 
@@ -177,7 +180,7 @@ class Player:
         self.played += m
         return pos + m
 
-    def _starve(self, out, pos: int, tail: int) -> None:
+    def _starve(self, out, pos: int, tail: int, published: tuple[int, int]) -> None:
         rest = out.shape[0] - pos
         if self.ended:
             out[pos:] = 0.0
@@ -188,7 +191,7 @@ class Player:
             if self.mark_count < MAX_MARKS:
                 self.marks[self.mark_count] = self.tap_len + pos
                 self.mark_count += 1
-            at, which = self.ring.published
+            at, which = published
             if at == tail and which >= 0 and tail == self.slot:
                 self._fade[:] = self.ring.fades[which]
                 if self._gain < self.ramp:  # still ramping in: fade from where it is
