@@ -2,6 +2,9 @@
 
 Each section is a module ``app.measure.bench_<name>`` with ``run(quick: bool) -> list[Figure]``.
 A section whose optional dependency is missing reports why instead of failing the rest.
+Every section's figures are printed between the machine's load (the 1-minute average)
+at its start and at its end, and followed by the section's whole wall time and CPU (its
+own and its processes'), so that a figure is read with the load it was measured under.
 """
 
 from __future__ import annotations
@@ -9,7 +12,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import resource
 import sys
+import time
 from dataclasses import asdict
 
 from frictex.app.measure.figure import Figure
@@ -22,6 +27,8 @@ SECTIONS = {
     "link": "frictex.app.measure.bench_link",
     "visual": "frictex.app.measure.bench_visual",
     "modal": "frictex.app.measure.bench_modal",
+    "startup": "frictex.app.measure.bench_startup",
+    "baseline": "frictex.app.measure.bench_baseline",
 }
 
 
@@ -30,6 +37,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"sections to run (default: all of {', '.join(SECTIONS)})")
     parser.add_argument("--quick", action="store_true", help="shorter runs (less precise figures)")
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+
+
+def _measured(name: str, section, quick: bool) -> list[Figure]:
+    """A section's figures between the machine's load before and after it and the whole
+    section's wall time and CPU (this process and the processes it ran, user + system)."""
+    from frictex.app.measure.processes import load
+
+    def cpu() -> float:
+        own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(
+            resource.RUSAGE_CHILDREN)
+        return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+    before, cpu0, wall0 = load(), cpu(), time.perf_counter()
+    figures = section(quick)
+    wall, used = time.perf_counter() - wall0, cpu() - cpu0
+    return [Figure(name, "machine load at the start (1-minute average)", before, ""),
+            *figures,
+            Figure(name, "machine load at the end (1-minute average)", load(), ""),
+            Figure(name, "the whole section, wall", wall, "s"),
+            Figure(name, "the whole section, CPU user + system (its processes too)", used, "s")]
 
 
 def run(args: argparse.Namespace) -> int:
@@ -44,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
         except ModuleNotFoundError as exc:
             print(f"frictex: bench {name}: not available ({exc})", file=sys.stderr)
             continue
-        figures.extend(module.run(args.quick))
+        figures.extend(_measured(name, module.run, args.quick))
     if args.json:
         print(json.dumps([asdict(f) for f in figures], indent=2))
     else:

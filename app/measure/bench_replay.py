@@ -25,18 +25,15 @@ ran second was charged for both.
 from __future__ import annotations
 
 import json
-import os
 import shutil
-import subprocess
-import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
 from frictex.app.measure.bench_pipeline import new_layer_scene
 from frictex.app.measure.figure import Figure
+from frictex.app.measure.processes import cores, frictex_argv, run_process
 from frictex.rendering.input.trace_file import Trace, concat_traces, read_trace, write_trace
 from frictex.rendering.input.trace_synth import make_motion, sample
 from frictex.textures.library import resolve_trace
@@ -46,18 +43,13 @@ MODAL_SCENE, MODAL_TRACE = "two-finger-beam-seed000", "two-fingers-crossing-50hz
 
 
 def _frictex(*args: str) -> tuple[float, int, int]:
-    """Run ``frictex ARGS`` in a fresh process: (wall s, peak memory KiB, exit code).
-    Earlier processes' file data is written out first (``os.sync``, not timed)."""
-    os.sync()
-    start = time.perf_counter()
-    proc = subprocess.Popen([sys.executable, "-m", "frictex", *args],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    _, status, usage = os.wait4(proc.pid, 0)
-    proc.returncode = os.waitstatus_to_exitcode(status)
-    return time.perf_counter() - start, usage.ru_maxrss, proc.returncode
+    """Run ``frictex ARGS`` in a fresh process: (wall s, peak memory KiB, exit code)."""
+    done = run_process(frictex_argv(*args))
+    return done.wall_s, done.peak_mib * 1024, done.code
 
 
-def _human(duration_s: float) -> Trace:
+def human_trace(duration_s: float) -> Trace:
+    """Human-like strokes at 60 mm/s sampled at 60 Hz, ``duration_s`` long (seeded)."""
     return sample(make_motion("human", speed_mm_s=60.0, duration_s=duration_s, seed=7), 60.0,
                   noise_mm=0.05, seed=1)
 
@@ -90,7 +82,7 @@ def end_to_end(duration_s: float, formats=("csv", "npz", "parquet")) -> dict:
     per output format (``frictex report`` states these beside its compute-only figures)."""
     with tempfile.TemporaryDirectory(prefix="frictex-e2e-") as name:
         path = Path(name) / f"human-{duration_s:g}.csv"
-        write_trace(path, _human(duration_s))
+        write_trace(path, human_trace(duration_s))
         return {"scene": SCENE, "duration_s": duration_s,
                 "formats": {fmt: replay_process(Path(name), SCENE, path, fmt) for fmt in formats}}
 
@@ -120,21 +112,21 @@ def _batch_figures(tmp: Path, jobs: int) -> list[Figure]:
     (a job's system time was 55-65 ms after the last run's output was removed, 130-150 ms
     with it still cached), so without the first run the first counted one paid more."""
     trace_path = tmp / "minute.csv"
-    write_trace(trace_path, _human(60.0))
+    write_trace(trace_path, human_trace(60.0))
     manifest = tmp / "batch.csv"
     manifest.write_text("scene,trace\n" + f"{SCENE},{trace_path}\n" * jobs)
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    _batch_wall(tmp, manifest, cores)
-    walls = {1: [], cores: []}
-    for workers in (1, cores, cores, 1):
+    n = cores()
+    _batch_wall(tmp, manifest, n)
+    walls = {1: [], n: []}
+    for workers in (1, n, n, 1):
         walls[workers].append(_batch_wall(tmp, manifest, workers))
     rates = {workers: jobs / float(np.mean(w)) for workers, w in walls.items()}
     return [Figure("replay", f"batch of {jobs} one-minute jobs, one after another",
                    rates[1], "jobs/s"),
-            Figure("replay", f"batch of {jobs} one-minute jobs, {cores} at once", rates[cores],
+            Figure("replay", f"batch of {jobs} one-minute jobs, {n} at once", rates[n],
                    "jobs/s"),
-            Figure("replay", f"batch throughput, {cores} cores against one after another",
-                   rates[cores] / rates[1], "x")]
+            Figure("replay", f"batch throughput, {n} cores against one after another",
+                   rates[n] / rates[1], "x")]
 
 
 def _batch_wall(tmp: Path, manifest: Path, workers: int) -> float:
@@ -154,7 +146,7 @@ def run(quick: bool) -> list[Figure]:
         tmp = Path(name)
         for duration in (long_s, long_s / 10):
             path = tmp / f"human-{duration:g}.csv"
-            write_trace(path, _human(duration))
+            write_trace(path, human_trace(duration))
             for fmt in ("csv", "npz", "parquet"):
                 figures += _replay_figures(tmp, f"one finger {duration:g} s", SCENE, path, fmt,
                                            duration)
@@ -162,7 +154,7 @@ def run(quick: bool) -> list[Figure]:
         layers.mkdir()
         new_layer_scene(layers)  # writes scene.toml and its files there
         path = tmp / f"every-layer-{long_s:g}.csv"
-        write_trace(path, _human(long_s))
+        write_trace(path, human_trace(long_s))
         for fmt in ("csv", "parquet"):
             figures += _replay_figures(tmp, f"every issue-18 layer {long_s:g} s",
                                        str(layers / "scene.toml"), path, fmt, long_s)
@@ -173,7 +165,7 @@ def run(quick: bool) -> list[Figure]:
             figures += _replay_figures(tmp, f"two fingers modal {two.duration_s:.0f} s",
                                        MODAL_SCENE, path, fmt, two.duration_s)
         one = tmp / "one-second.csv"
-        write_trace(one, _human(1.0))
+        write_trace(one, human_trace(1.0))
         walls = [_frictex("replay", SCENE, str(one), "--out", str(tmp / "one"), "--quiet")[0]
                  for _ in range(5)]
         figures.append(Figure("replay", "one-second replay, whole process (median of 5)",

@@ -1,0 +1,121 @@
+"""``frictex bench baseline``: frictex against the bare-numpy floor, as whole processes.
+
+The floor is a program of some twenty lines using numpy and pyarrow only (``BARE``): it
+reads a trace with pyarrow's CSV reader, interpolates the finger to the 10 kHz output
+rate, computes a grating's friction and amplitude, and writes the same two tables as a
+replay (``friction``: six columns at 10 kHz; ``commands``: two) with pyarrow's Parquet
+or CSV writer or ``numpy.savez``. It does less than a replay (no tracking, no scene, no
+summary), so the ratio is an upper bound of frictex's overhead. Both run as fresh
+processes on the same human-like trace (600 s; 60 s with ``--quick``), alternated, one
+of each per round (3 rounds; 2 with ``--quick``); each figure is the median wall time.
+Beside them, in this process: reading that trace with ``read_trace`` against
+``pyarrow.csv.read_csv`` (median of 7 alternated reads).
+
+Targets (issue 31): a Parquet replay at most 1.2x the floor, npz and CSV at most 1.3x;
+trace reading at most 2x pyarrow's reader.
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from frictex.app.measure.bench_replay import SCENE, human_trace
+from frictex.app.measure.figure import Figure
+from frictex.app.measure.processes import alternated, frictex_argv, median
+from frictex.rendering.input.trace_file import read_trace, write_trace
+
+#: the bare program: python -c BARE TRACE OUT_DIR FORMAT
+BARE = r"""
+import sys
+from pathlib import Path
+import numpy as np
+import pyarrow as pa, pyarrow.csv as pcsv
+trace, out, fmt = sys.argv[1], Path(sys.argv[2]), sys.argv[3]
+out.mkdir(parents=True, exist_ok=True)
+with open(trace, "rb") as f:
+    skip = 0
+    while f.readline().startswith(b"#"):
+        skip += 1
+table = pcsv.read_csv(trace, read_options=pcsv.ReadOptions(skip_rows=skip))
+t, x, y = (table[c].to_numpy() for c in ("t_s", "x_mm", "y_mm"))
+ts = np.arange(t[0], t[-1], 1e-4)
+xs, ys = np.interp(ts, t, x), np.interp(ts, t, y)
+mu = 0.3 + 0.2 * (np.sin(2.0 * np.pi * xs / 2.0) > 0.0)
+amp = np.clip(2.5 * (0.5 - mu) / 0.2, 0.0, 2.5)
+tables = {"friction": {"t_s": ts, "finger": np.zeros(ts.size, np.int64), "x_mm": xs,
+                       "y_mm": ys, "mu_target": mu, "amplitude_um": amp},
+          "commands": {"t_s": ts, "ch0_um": amp}}
+for name, cols in tables.items():
+    if fmt == "npz":
+        np.savez(out / f"{name}.npz", **cols)
+        continue
+    arrow = pa.table(cols)
+    if fmt == "parquet":
+        import pyarrow.parquet as pq
+        pq.write_table(arrow, out / f"{name}.parquet", compression="snappy")
+    else:
+        pcsv.write_csv(arrow, out / f"{name}.csv")
+"""
+
+
+def _reading_figures(path: Path, reads: int = 7) -> list[Figure]:
+    """Median seconds of ``read_trace`` and of ``pyarrow.csv.read_csv`` on ``path``,
+    alternated, and their ratio."""
+    import pyarrow.csv as pcsv
+
+    lines = path.read_text().splitlines()
+    skip = next(k for k, line in enumerate(lines) if not line.startswith("#"))  # comments
+    options = pcsv.ReadOptions(skip_rows=skip)
+    ours, theirs = [], []
+    for _ in range(reads):
+        start = time.perf_counter()
+        read_trace(path)
+        ours.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        pcsv.read_csv(path, read_options=options)
+        theirs.append(time.perf_counter() - start)
+    a, b = float(np.median(ours)), float(np.median(theirs))
+    return [Figure("baseline", f"reading the trace, frictex read_trace (median of {reads})", a,
+                   "s"),
+            Figure("baseline", f"reading the trace, pyarrow.csv.read_csv (median of {reads})",
+                   b, "s"),
+            Figure("baseline", "reading the trace, frictex against pyarrow (target 2x)", a / b,
+                   "x")]
+
+
+def run(quick: bool) -> list[Figure]:
+    duration = 60.0 if quick else 600.0
+    rounds = 2 if quick else 3
+    targets = {"parquet": 1.2, "npz": 1.3, "csv": 1.3}
+    figures = []
+    with tempfile.TemporaryDirectory(prefix="frictex-baseline-") as name:
+        tmp = Path(name)
+        trace = tmp / f"human-{duration:g}.csv"
+        write_trace(trace, human_trace(duration))
+        figures += _reading_figures(trace)
+        commands = {}
+        for fmt in targets:
+            commands[f"bare {fmt}"] = [sys.executable, "-c", BARE, str(trace),
+                                       str(tmp / f"bare-{fmt}"), fmt]
+            commands[f"frictex {fmt}"] = frictex_argv(
+                "replay", SCENE, str(trace), "--out", str(tmp / f"frictex-{fmt}"), "--format",
+                fmt, "--quiet")
+        runs = alternated(commands, rounds)
+    for fmt, target in targets.items():
+        bare, ours = median(runs[f"bare {fmt}"], "wall_s"), median(runs[f"frictex {fmt}"],
+                                                                    "wall_s")
+        label = f"{duration:g} s replay to {fmt}, whole process"
+        figures += [Figure("baseline", f"{label}, bare numpy/pyarrow (median of {rounds})",
+                           bare, "s"),
+                    Figure("baseline", f"{label}, frictex (median of {rounds}, alternated)",
+                           ours, "s"),
+                    Figure("baseline", f"{label}, frictex against bare (target {target:g}x)",
+                           ours / bare, "x"),
+                    Figure("baseline", f"{label}, frictex CPU user + system (median)",
+                           median(runs[f"frictex {fmt}"], "cpu_s"), "s")]
+    return figures

@@ -1,0 +1,71 @@
+"""The machinery of ``frictex bench``'s whole-process figures: alternated runs, the load and
+section totals beside every section, and the bare-numpy floor program (no timing asserted)."""
+
+import sys
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+from frictex.app.commands.bench import _measured
+from frictex.app.measure.bench_baseline import BARE
+from frictex.app.measure.figure import Figure
+from frictex.app.measure.processes import alternated, median, run_process
+from frictex.rendering.input.trace_file import read_trace, write_trace
+from frictex.rendering.input.trace_synth import make_motion, sample
+
+
+def test_alternated_rounds_run_each_command_once_reversing_the_order(tmp_path):
+    log = tmp_path / "log"
+    append = "import sys; open(sys.argv[1], 'a').write(sys.argv[2])"
+    commands = {name: [sys.executable, "-c", append, str(log), name] for name in "abc"}
+    runs = alternated(commands, 4)
+    assert log.read_text() == "abc" "cba" "abc" "cba"
+    assert {name: len(got) for name, got in runs.items()} == {"a": 4, "b": 4, "c": 4}
+    assert all(r.code == 0 and r.wall_s > 0 and r.cpu_s >= 0 for got in runs.values() for r in got)
+
+
+def test_a_failed_run_is_left_out_of_the_median():
+    ok = run_process([sys.executable, "-c", "pass"])
+    failed = run_process([sys.executable, "-c", "raise SystemExit(3)"])
+    assert failed.code == 3
+    assert median([ok, failed], "wall_s") == ok.wall_s
+    assert np.isnan(median([failed], "wall_s"))
+
+
+def test_every_section_is_framed_by_the_load_and_its_whole_cost():
+    inner = [Figure("demo", "something", 1.0, "s")]
+    figures = _measured("demo", lambda quick: inner, True)
+    labels = [f.label for f in figures]
+    assert labels[1] == "something"
+    assert labels[0].startswith("machine load at the start")
+    assert labels[2].startswith("machine load at the end")
+    assert [f.unit for f in figures[3:]] == ["s", "s"]
+    assert all(f.section == "demo" for f in figures)
+
+
+@pytest.mark.parametrize("fmt", ["parquet", "csv", "npz"])
+def test_the_bare_floor_writes_a_replays_two_tables(tmp_path, fmt):
+    trace = sample(make_motion("human", speed_mm_s=60.0, duration_s=1.0, seed=7), 60.0,
+                   noise_mm=0.05, seed=1)
+    path = tmp_path / "trace.csv"
+    write_trace(path, trace, comment="a comment line first")
+    done = run_process([sys.executable, "-c", BARE, str(path), str(tmp_path / "out"), fmt])
+    assert done.code == 0
+    t = read_trace(path).t_s
+    rows = np.arange(t[0], t[-1], 1e-4).size
+    expected = {"friction": ["t_s", "finger", "x_mm", "y_mm", "mu_target", "amplitude_um"],
+                "commands": ["t_s", "ch0_um"]}
+    for name, columns in expected.items():
+        out = tmp_path / "out" / f"{name}.{fmt}"
+        if fmt == "parquet":
+            table = pq.read_table(out)
+            assert (table.column_names, table.num_rows) == (columns, rows)
+        elif fmt == "npz":
+            with np.load(out) as data:
+                assert sorted(data.files) == sorted(columns)
+                assert data["t_s"].size == rows
+        else:
+            lines = out.read_text().splitlines()
+            assert lines[0].replace('"', "").split(",") == columns
+            assert len(lines) == rows + 1
