@@ -19,13 +19,15 @@ BUILD = FIRMWARE / "build"
 #: program -> Debian package that provides it
 PACKAGES = {"make": "make", "cc": "gcc", "clang": "clang", "python3": "python3",
             "arm-none-eabi-gcc": "gcc-arm-none-eabi", "arm-none-eabi-size": "binutils-arm-none-eabi",
-            "valgrind": "valgrind", "callgrind_annotate": "valgrind"}
+            "valgrind": "valgrind", "callgrind_annotate": "valgrind",
+            "qemu-system-arm": "qemu-system-arm"}
 #: what each make target needs
 NEEDS = {"host": ("make", "cc"), "simlib": ("make", "cc"), "check": ("make", "cc"),
          "asan": ("make", "cc"), "fuzz": ("make", "clang", "python3"),
          "fuzz-loop": ("make", "cc", "python3"),
          "stm32g0": ("make", "arm-none-eabi-gcc", "arm-none-eabi-size"),
-         "isr-cost": ("make", "cc", "valgrind", "callgrind_annotate")}
+         "isr-cost": ("make", "cc", "valgrind", "callgrind_annotate"),
+         "mps2": ("make", "arm-none-eabi-gcc")}
 
 
 class FirmwareBuildError(FrictexError, RuntimeError):

@@ -1,0 +1,108 @@
+#include "uart.h"
+
+#include "board.h"
+#include "regs.h"
+
+/* Sizes are powers of two. Each ring has one writer and one reader, so the indices need
+ * no lock: the writer owns the head, the reader the tail. */
+#define RX_SIZE 1024u
+#define TX_SIZE 1024u
+#define LOG_SIZE 16384u /* 2730 one-channel records: 270 ms of a main loop that is late */
+
+typedef struct {
+    volatile uint8_t *buf;
+    uint32_t mask;
+    volatile uint32_t head, tail;
+} ring;
+
+static volatile uint8_t rx_buf[RX_SIZE], tx_buf[TX_SIZE], log_buf[LOG_SIZE];
+static ring rx = {rx_buf, RX_SIZE - 1u, 0, 0};
+static ring tx = {tx_buf, TX_SIZE - 1u, 0, 0};
+static ring lg = {log_buf, LOG_SIZE - 1u, 0, 0};
+
+static uint32_t ring_free(const ring *r) { return r->mask - ((r->head - r->tail) & r->mask); }
+
+static void ring_put(ring *r, const uint8_t *p, size_t n)
+{
+    uint32_t head = r->head;
+    for (size_t i = 0; i < n; i++) {
+        r->buf[head] = p[i];
+        head = (head + 1u) & r->mask;
+    }
+    r->head = head;
+}
+
+/* The received bytes the UART holds, into the ring while it has room (else they wait in
+ * the UART, and QEMU holds back the next byte: nothing is lost). */
+static void rx_drain(void)
+{
+    while ((UART_STATE(0) & UART_STATE_RXFULL) && ring_free(&rx)) {
+        uint8_t b = (uint8_t)UART_DATA(0);
+        ring_put(&rx, &b, 1);
+    }
+}
+
+void uart_init(void)
+{
+    for (unsigned n = 0; n < 2; n++) {
+        UART_BAUDDIV(n) = BOARD_BAUDDIV;
+        UART_CTRL(n) = UART_CTRL_TX_EN | (n == 0 ? UART_CTRL_RX_EN | UART_CTRL_RX_INTEN : 0u);
+    }
+    NVIC_IPR(IRQ_UART0_RX) = 0x40u; /* below the sample clock (0) */
+    NVIC_ISER = 1u << IRQ_UART0_RX;
+}
+
+size_t uart_read(uint8_t *p, size_t cap)
+{
+    size_t n = 0;
+    uint32_t tail = rx.tail;
+    while (n < cap && tail != rx.head) {
+        p[n++] = rx.buf[tail];
+        tail = (tail + 1u) & rx.mask;
+    }
+    rx.tail = tail;
+    __asm volatile("cpsid i" ::: "memory");
+    rx_drain(); /* bytes held in the UART while the ring was full */
+    __asm volatile("cpsie i" ::: "memory");
+    return n;
+}
+
+bool uart_rx_pending(void) { return rx.head != rx.tail || (UART_STATE(0) & UART_STATE_RXFULL); }
+
+void uart_write(void *ctx, const uint8_t *p, size_t n)
+{
+    (void)ctx;
+    uint32_t room = ring_free(&tx);
+    ring_put(&tx, p, n < room ? n : room);
+}
+
+bool log_write(const uint8_t *p, size_t n)
+{
+    if (ring_free(&lg) < n)
+        return false;
+    ring_put(&lg, p, n);
+    return true;
+}
+
+static bool send(ring *r, unsigned uart)
+{
+    uint32_t tail = r->tail;
+    while (tail != r->head && !(UART_STATE(uart) & UART_STATE_TXFULL)) {
+        UART_DATA(uart) = r->buf[tail];
+        tail = (tail + 1u) & r->mask;
+    }
+    r->tail = tail;
+    return tail == r->head;
+}
+
+bool uart_flush(void)
+{
+    bool link = send(&tx, 0);
+    return send(&lg, 1) && link;
+}
+
+void uart0_rx_irq(void)
+{
+    UART_INTCLEAR(0) = UART_INT_RX; /* first: a byte arriving after this raises it again */
+    rx_drain();
+}

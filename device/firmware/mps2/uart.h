@@ -1,0 +1,24 @@
+/* CMSDK UARTs with rings: UART0 carries the link (received bytes taken by its RX
+ * interrupt, so they never wait for the main loop), UART1 the played-sample log. Neither
+ * ever waits for the line: the main loop moves queued bytes out while the UART takes them
+ * (QEMU's UART holds one byte and passes it to its character device at once). */
+#ifndef UART_H
+#define UART_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+void uart_init(void);
+/* Bytes received so far, at most cap; 0 if none. */
+size_t uart_read(uint8_t *p, size_t cap);
+/* Whether received bytes wait in the ring (call with interrupts off before sleeping). */
+bool uart_rx_pending(void);
+/* Queue link bytes to send; drops what does not fit (the host's CRC check counts it). */
+void uart_write(void *ctx, const uint8_t *p, size_t n);
+/* Queue one played-sample record from the sample interrupt; false if it did not fit. */
+bool log_write(const uint8_t *p, size_t n);
+/* Move queued bytes to both UARTs while they take them; true when nothing is left. */
+bool uart_flush(void);
+
+#endif
