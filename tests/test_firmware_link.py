@@ -55,7 +55,7 @@ def stream_and_check(binary, tmp_path):
     index = played[:, 0].astype(np.int64)
     in_order_within(index, np.arange(6000))
     np.testing.assert_allclose(played[:, 1], sig[index, 0], atol=STEP / 2 + 1e-9)
-    assert status["protocol_version"] == 3
+    assert status["protocol_version"] == 4
     all_played_unless_tripped(status, index, 6000)
     assert status["blocks_sent"] == 120 and status["dropped_blocks"] == 0
     assert status["resyncs"] == 0 and status["device_crc_errors"] == 0
@@ -220,7 +220,7 @@ def test_faults_on_the_wire_are_counted_and_never_played(binary, tmp_path):
     (("--force", "70"), "force_n: expected in [0, 65] N"),
     (("--log", "/nonexistent/dir/played.csv"), "cannot open a log file"),
     (("--frobnicate",), "unrecognized argument: --frobnicate"),
-    (("--protocol", "4"), "protocol_version: expected in [1, 3]"),
+    (("--protocol", "5"), "protocol_version: expected in [1, 4]"),
     (("--lateral", "9"), "lateral_n: expected in [-8, 8] N"),
     (("--lateral", "1", "--protocol", "2"), "protocol_version: expected 3 for force reports"),
 ])

@@ -158,10 +158,10 @@ def _stream(sink, n=2000):
 
 
 @pytest.mark.parametrize("extra, version", [(("--protocol", "2", "--force", "0.5"), 2),
-                                            (("--force", "0.5"), 3)])
+                                            (("--force", "0.5"), p.PROTOCOL_VERSION)])
 def test_a_device_without_the_capability_streams_as_before_with_no_lateral_force(extra,
                                                                                   version):
-    """A version 2 device, and a version 3 device without a lateral sensor: the stream
+    """A version 2 device, and a newest-version device without a lateral sensor: the stream
     plays every sample (bar what a watchdog trip on a starved host flushed, counted), the
     normal force still arrives in Status, force_report() is None."""
     proc, path = start_sim_device(1, RATE, extra=extra)
@@ -189,7 +189,7 @@ def test_sim_device_finger_reports_reach_the_host():
     one window. The windows themselves are property-tested above, deterministically."""
     sink = open_sink("sim", 1, RATE, paced=True, sim_args=("--finger", "3", "--force", "0.5"))
     try:
-        assert sink.info.has_force_reports and sink.info.protocol_version == 3
+        assert sink.info.has_force_reports and sink.info.protocol_version == p.PROTOCOL_VERSION
         _stream(sink, 4000)
     finally:
         sink.close()

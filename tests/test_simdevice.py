@@ -343,7 +343,7 @@ def test_a_version_1_host_only_ever_sees_version_1_frames():
     def v1(msg):
         return p.encode(msg, next(seq), version=1)
     replies = old.feed(core.receive(v1(p.Hello(10)), 0.0))
-    assert replies[0].message.protocol_version == 3  # it says what it speaks
+    assert replies[0].message.protocol_version == p.PROTOCOL_VERSION  # it says what it speaks
     for b in range(0, 300, 50):
         replies += old.feed(core.receive(v1(block(b, np.ones(50))), 0.0))
     replies += old.feed(core.advance_to(0.1))   # a trip: no Flushed for a version 1 host
@@ -477,3 +477,62 @@ def test_without_a_lateral_sensor_there_is_no_flag_and_no_report():
 def test_force_reports_need_protocol_version_3():
     with pytest.raises(ValueError, match="protocol_version = 2: expected 3 for force reports"):
         DeviceConfig(lateral_n=0.1, protocol_version=2)
+
+
+def _feed(core, data: bytes, t: float, cuts: list[int]) -> bytes:
+    """``data`` to the core in pieces of the ``cuts`` lengths (then the rest)."""
+    out, pos = bytearray(), 0
+    for cut in [*cuts, len(data)]:
+        out += core.receive(data[pos:pos + cut], t)
+        pos += cut
+        if pos >= len(data):
+            break
+    return bytes(out)
+
+
+@settings(derandomize=True, max_examples=40, deadline=None)
+@given(st.sets(st.integers(0, 59)), st.lists(st.integers(1, 120), max_size=20))
+def test_lost_blocks_are_asked_for_and_their_resends_play_on_time(lost, cuts):
+    """Version 4 repair (PROTOCOL.md 4.10): whichever Block frames the wire loses, the
+    device names their sequence numbers in Missing, the host resends them, and every
+    sample plays as commanded, on time, whatever the chunking of the byte stream; a
+    resend that comes again (the device no longer misses it) has no effect."""
+    core, host, rec = make()
+    signal = 1.5 + np.sin(np.arange(3000) / 37.0)
+    replies, kept, asked, dropped = p.Decoder(), {}, [], set()
+    t = 0.0
+    for k, b in enumerate(range(0, 3000, 50)):
+        t = max(b / RATE - 0.02, 0.0)
+        core.advance_to(t)
+        kept[host.seq] = block(b, signal[b:b + 50])
+        if k in lost:
+            dropped.add(host.seq)
+        frame = host(kept[host.seq])
+        data = (b"" if k in lost else frame) + host(p.Heartbeat(k + 1))
+        pending = _feed(core, data, t, cuts)
+        while pending:  # the host answers each Missing at once, as the link does
+            resend = b""
+            for f in replies.feed(pending):
+                if isinstance(f.message, p.Missing):
+                    asked += f.message.seqs
+                    resend += b"".join(host(p.Resend(kept[q].start_index, kept[q].amplitudes,
+                                                     None, q))
+                                       for q in f.message.seqs if q in kept)
+            pending = _feed(core, resend, t, cuts) if resend else b""
+    stream(core, host, np.zeros(0), t_start=t, end_s=0.4)
+    index, values = rec.played()
+    np.testing.assert_array_equal(index, np.arange(3000))
+    np.testing.assert_allclose(values[:, 0], signal, atol=STEP / 2)
+    assert core.counters.late_samples == 0 and core.counters.gap_samples == 0
+    assert set(asked) & set(kept) == dropped  # it asked for exactly the blocks lost
+    again = kept[1]  # the first block, long played: a duplicate now
+    assert core.receive(host(p.Resend(again.start_index, again.amplitudes, None, 1)), 0.5) == b""
+    assert core.counters.late_samples == 0
+
+
+def test_a_version_3_host_gets_no_missing_reports():
+    core, host, rec = make()
+    host.seq += 3  # three frames lost on the wire
+    frames = p.Decoder().feed(core.receive(p.encode(p.Heartbeat(7), host.seq, 3), 0.0))
+    assert [type(f.message) for f in frames] == [p.Status]
+    assert frames[0].message.lost_frames == 3

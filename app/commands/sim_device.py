@@ -81,9 +81,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="listen on TCP instead of a pty (host default 127.0.0.1; port 0: "
                              "any free port); hosts open the printed socket:// URL, one at a "
                              "time: a second connection is refused while one is connected")
-    parser.add_argument("--protocol", type=int, choices=(1, 2, 3), default=3,
-                        help="newest protocol version to speak (default 3; 1 and 2 act as "
-                             "firmware of that version)")
+    parser.add_argument("--protocol", type=int, choices=(1, 2, 3, 4), default=4,
+                        help="newest protocol version to speak (default 4, with repair of "
+                             "lost frames; 1 to 3 act as firmware of that version)")
     parser.add_argument("--once", action="store_true",
                         help="exit once the first host's Stop has played out (default: serve "
                              "host after host until Ctrl-C)")

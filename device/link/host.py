@@ -357,6 +357,7 @@ class CommandSink:
             "disconnects": c["disconnects"], "recoveries": c["recoveries"],
             "stalls": c["stalls"], "device_flushes": c["device_flushes"],
             "force_reports": c["force_reports"],
+            "resent_frames": c["resent_frames"], "resends_too_late": c["resends_too_late"],
             "resyncs": d.discarded, "crc_errors": d.crc_errors,
             "lost_frames_from_device": d.lost_frames,
             "clamped_samples": c["clamped_samples"], "dropped_blocks": c["dropped_blocks"],

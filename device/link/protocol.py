@@ -18,8 +18,10 @@ Forces travel as signed 16-bit fixed point, :data:`FORCE_STEP_N` (1/4096 N) per 
 
 Versions: a frame's ``version`` byte selects the payload layouts. Version 2 adds the
 buffer-accounting fields to :class:`Status` and the :class:`Flushed` message; version 3
-adds the :class:`ForceReport` message (lateral and normal force); every other payload is
-the same in all three. :func:`encode` writes the version asked for; a :class:`Decoder`
+adds the :class:`ForceReport` message (lateral and normal force); version 4 adds repair:
+:class:`Missing` (the device names the host frames it found missing) and
+:class:`Resend` (the host sends a missing Block again). Every other payload is the same
+in all four. :func:`encode` writes the version asked for; a :class:`Decoder`
 accepts versions 1 to its ``max_version``.
 """
 
@@ -34,7 +36,7 @@ import numpy as np
 from frictex.device.errors import DeviceError
 
 #: the newest version this module speaks (it speaks every version from 1)
-PROTOCOL_VERSION = 3
+PROTOCOL_VERSION = 4
 #: sample numbers are u64 and wrap modulo this (PROTOCOL.md 4.3)
 INDEX_MODULUS = 2 ** 64
 #: one count of a wire amplitude (um, zero-to-peak)
@@ -47,6 +49,8 @@ PHASE_STEP_RAD = 2.0 * np.pi / 65536.0
 FORCE_STEP_N = 1.0 / 4096.0
 #: ForceReport values per message, at most
 FORCE_PAIRS_MAX = 255
+#: sequence numbers in one Missing message, at most
+MISSING_MAX = 16
 #: largest body (version..crc) a receiver must accept, bytes
 MAX_BODY = 4096
 #: largest COBS-stuffed frame before its 0x00 delimiter, bytes (4113; 4114 with it)
@@ -306,6 +310,32 @@ class ForceReport:
     normal_n: tuple[float, ...]
 
 
+@dataclass(frozen=True, eq=False)
+class Resend(Block):
+    """Host -> device (version 4): the Block first sent in the frame of sequence number
+    ``orig_seq``, sent again because the device reported it missing (:class:`Missing`).
+    A device plays it only if ``orig_seq`` is still missing; else it is a duplicate and
+    has no effect (PROTOCOL.md 4.10)."""
+
+    TYPE = 0x05
+    orig_seq: int = 0
+
+    def __eq__(self, other):
+        if not isinstance(other, Resend):
+            return NotImplemented
+        return self.orig_seq == other.orig_seq and Block.__eq__(self, other)
+
+
+@dataclass(frozen=True)
+class Missing:
+    """Device -> host (version 4): sequence numbers of host frames the device found
+    missing (a gap in the numbers) and still wants, oldest first, at most
+    :data:`MISSING_MAX` (PROTOCOL.md 4.10)."""
+
+    TYPE = 0x86
+    seqs: tuple[int, ...]
+
+
 @dataclass(frozen=True)
 class ErrorReport:
     """Device -> host: something the host sent was refused."""
@@ -317,9 +347,10 @@ class ErrorReport:
     text: str = ""
 
 
-MESSAGES = (Hello, Info, Block, Heartbeat, Stop, Status, ErrorReport, Flushed, ForceReport)
+MESSAGES = (Hello, Info, Block, Heartbeat, Stop, Status, ErrorReport, Flushed, ForceReport,
+            Resend, Missing)
 #: message types by the first version that has them
-_SINCE = {Flushed: 2, ForceReport: 3}
+_SINCE = {Flushed: 2, ForceReport: 3, Resend: 4, Missing: 4}
 _BY_TYPE = {m.TYPE: m for m in MESSAGES}
 
 
@@ -330,6 +361,8 @@ class Frame:
     seq: int
     message: object
     version: int = PROTOCOL_VERSION
+    #: frames missing just before this one (its sequence number skipped ahead by this)
+    lost: int = 0
 
 
 # ---------------------------------------------------------------------------- payloads
@@ -344,6 +377,7 @@ _STATUS_V2 = struct.Struct("<QIII")   # buffer_end, played, flushed, flushes
 _FLUSHED = struct.Struct("<BQII")
 _ERROR = struct.Struct("<BHI")
 _FORCES = struct.Struct("<QHB")     # start_index, decimation, count; then count x (i16, i16)
+_U16S = struct.Struct("<H")
 _U16 = np.dtype("<u2")
 _I16 = np.dtype("<i2")
 _FLAG_PHASES, _FLAG_SENSOR, _FLAG_FORCE, _FLAG_FORCE_REPORTS = 1, 2, 4, 8
@@ -373,6 +407,14 @@ def _payload(msg, version: int) -> bytes:
                           int(round(msg.sample_rate_hz * 1000.0)), msg.buffer_samples,
                           msg.watchdog_ms, msg.ramp_ms, len(name))
         return head + np.array(_u16_limit(msg.limits_um), dtype=_U16).tobytes() + name
+    if isinstance(msg, Resend):
+        return _U16S.pack(msg.orig_seq) + _payload(Block(msg.start_index, msg.amplitudes,
+                                                         msg.phases), version)
+    if isinstance(msg, Missing):
+        if not 1 <= len(msg.seqs) <= MISSING_MAX:
+            raise ProtocolError(f"Missing: {len(msg.seqs)} sequence numbers; expected 1 to "
+                                f"{MISSING_MAX}")
+        return bytes([len(msg.seqs)]) + b"".join(_U16S.pack(q) for q in msg.seqs)
     if isinstance(msg, Block):
         amps = np.asarray(msg.amplitudes)
         if amps.ndim != 2 or amps.dtype != np.uint16 or amps.shape[1] < 1:
@@ -483,6 +525,14 @@ def _parse(mtype: int, p: bytes, version: int):
         amps = words[:n * ch].reshape(n, ch)
         phases = words[n * ch:].reshape(n, ch) if k == 2 else None
         return Block(start, amps, phases)
+    if mtype == Resend.TYPE:
+        (orig,) = _U16S.unpack_from(p)
+        block = _parse(Block.TYPE, p[_U16S.size:], version)
+        return Resend(block.start_index, block.amplitudes, block.phases, orig)
+    if mtype == Missing.TYPE:
+        if len(p) < 1 or not 1 <= p[0] <= MISSING_MAX or len(p) != 1 + 2 * p[0]:
+            raise ValueError("Missing length")
+        return Missing(tuple(int(q) for q in np.frombuffer(p[1:], dtype=_U16)))
     if mtype == Heartbeat.TYPE:
         return Heartbeat(*_HEARTBEAT.unpack(p))
     if mtype == Stop.TYPE:
@@ -552,7 +602,8 @@ class Decoder:
 
     A corrupted, truncated or foreign frame is counted in :attr:`counts` and dropped; the
     next 0x00 starts a fresh frame, so the decoder resynchronises within one frame.
-    Sequence numbers that skip forward count as ``lost_frames``. Frames of versions 1 to
+    Sequence numbers that skip forward count as ``lost_frames`` (and as the next frame's
+    :attr:`Frame.lost`). Frames of versions 1 to
     ``max_version`` are accepted.
     """
 
@@ -611,8 +662,9 @@ class Decoder:
             c.bad_payload += 1
             return None
         skipped = (seq - self._next_seq) & 0xFFFF if self._next_seq is not None else 0
-        if skipped < 0x8000:  # a jump backwards is the sender restarting, not a loss
-            c.lost_frames += skipped
+        if skipped >= 0x8000:  # a jump backwards is the sender restarting, not a loss
+            skipped = 0
+        c.lost_frames += skipped
         self._next_seq = (seq + 1) & 0xFFFF
         c.frames_ok += 1
-        return Frame(seq, msg, version)
+        return Frame(seq, msg, version, skipped)

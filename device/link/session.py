@@ -32,7 +32,7 @@ from frictex.device.link.protocol import DeviceState, LinkError
 
 #: jitter-buffer prefill asked of the device, and the level paced sending keeps (s)
 PREFILL_S = 0.010
-TARGET_S = 0.020
+TARGET_S = 0.040
 #: the first Hello's wait for an answer, and the longest, doubling between (s)
 HELLO_FIRST_S = 0.1
 HELLO_MAX_S = 1.0
@@ -50,7 +50,11 @@ _TURN_BYTES = 4096
 
 _COUNTS = ("frames_sent", "blocks_sent", "heartbeats", "retries", "reconnects", "disconnects",
            "recoveries", "stalls", "device_flushes", "clamped_samples", "dropped_blocks",
-           "force_reports")
+           "force_reports", "resent_frames", "resends_too_late")
+#: Blocks kept for resending, by sequence number (PROTOCOL.md 4.10)
+RESEND_KEEP = 512
+#: a Block is resent at most once in this long, however often it is asked for (s)
+RESEND_HOLDOFF_S = 0.001
 
 
 class LinkStalled(LinkError):
@@ -97,6 +101,10 @@ class HostSession:
         self._token = 0
         self._seq = 0
         self.sent_end = 0            # host index after the last sample sent
+        # version 4 repair: seq -> [start, counts, phases, last sent at]; resend seq -> seq
+        self._kept: collections.OrderedDict = collections.OrderedDict()
+        self._alias: collections.OrderedDict = collections.OrderedDict()
+        self._due: dict[int, None] = {}  # original seqs the device asked for, in order
         self._last_rx = self._last_progress = self._last_turn = 0.0
         self._next_hb = 0.0
         self._ever_connected = False
@@ -248,6 +256,9 @@ class HostSession:
         self._pacing = Pacing(info.sample_rate_hz, self.target, prefill, info.buffer_samples // 2)
         self._heartbeat_s = max(info.watchdog_ms / 5.0, 1.0) * 1e-3
         self._marks.clear()
+        self._kept.clear()  # the device forgot what it missed on Hello
+        self._alias.clear()
+        self._due.clear()
         self._last_rx = self._last_progress = now
         self._next_hb = now
         if not info.has_force_reports:
@@ -322,6 +333,11 @@ class HostSession:
                     self.forces.add(report)
         elif isinstance(msg, p.ErrorReport):
             self.errors[p.ErrorCode.NAMES.get(msg.code, "other")] += 1
+        elif isinstance(msg, p.Missing):
+            for seq in msg.seqs:
+                orig = self._alias.get(seq, seq)
+                if orig in self._kept:
+                    self._due[orig] = None
 
     # ------------------------------------------------------------------ streaming
     def _poll_session(self, now: float) -> bytes:
@@ -329,6 +345,11 @@ class HostSession:
         if now >= self._next_hb:
             out += self._heartbeat(now)
             self._next_hb = now + self._heartbeat_s
+        if self._due:
+            resent = self._resends(now)
+            if resent:  # and a Heartbeat after them: the answer says at once what is still missing
+                out += resent + self._heartbeat(now)
+                self._next_hb = now + self._heartbeat_s
         sent = 0
         with self.cond:
             # blocks wait for the session's first Status: it is the counters' baseline
@@ -347,11 +368,45 @@ class HostSession:
         return bytes(out)
 
     def _send_block(self, start: int, counts, phases) -> bytes:
-        """A Block frame for samples ``start ..``; the caller holds ``cond``."""
+        """A Block frame for samples ``start ..``, kept for resending (version 4); the
+        caller holds ``cond``."""
         self.counts["blocks_sent"] += 1
         self.ledger.sent(len(counts))
         self.sent_end = max(self.sent_end, start + len(counts))
+        if self.version >= 4:
+            self._kept[self._seq] = [start, counts, phases, -1.0]
+            if len(self._kept) > RESEND_KEEP:
+                self._kept.popitem(last=False)
         return self._frame(p.Block(start % p.INDEX_MODULUS, counts, phases))
+
+    def _resends(self, now: float) -> bytes:
+        """Resend frames for the Blocks the device asked for (PROTOCOL.md 4.10): each
+        at most once per :data:`RESEND_HOLDOFF_S` (the device asks again with every Status
+        while it still misses one, and a Heartbeat follows the resends), and only while its samples can still play (estimated from
+        the last Status: a later one is dropped, counted)."""
+        out = bytearray()
+        played = None
+        if self.snapshot is not None:
+            played, _ = self.snapshot.level(now, self.rate_hz, self.sent_end)
+        for orig in list(self._due):
+            entry = self._kept.get(orig)
+            if entry is not None and now - entry[3] < RESEND_HOLDOFF_S:
+                continue  # asked again before the last resend could arrive: wait a little
+            del self._due[orig]
+            if entry is None:
+                continue
+            start, counts, phases, _ = entry
+            if played is not None and start + len(counts) <= played:
+                self.counts["resends_too_late"] += 1
+                del self._kept[orig]
+                continue
+            entry[3] = now
+            self._alias[self._seq] = orig
+            if len(self._alias) > RESEND_KEEP:
+                self._alias.popitem(last=False)
+            self.counts["resent_frames"] += 1
+            out += self._frame(p.Resend(start % p.INDEX_MODULUS, counts, phases, orig))
+        return bytes(out)
 
     def _watch(self, now: float) -> None:
         """Handshake again with a device that went quiet or stopped taking blocks."""
@@ -396,10 +451,11 @@ class HostSession:
                 self.phase = "done"
                 self.cond.notify_all()
             return b""
+        out = self._resends(now) if self._due else b""
         if now < self._next_hb:
-            return b""
+            return out
         self._next_hb = now + self._heartbeat_s
-        return self._heartbeat(now)
+        return out + self._heartbeat(now)
 
     def _drain_s(self) -> float:
         """Time for a drained Stop to play out: what may be buffered, the ramp, a margin."""

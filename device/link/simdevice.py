@@ -7,7 +7,8 @@ the plate's closed amplitude loop as a first-order low pass (seed 003, Fig. 3b: 
 bandwidth; bilinear transform prewarped at the bandwidth; run where it is seen: a
 ``sensor`` reporting it, or a ``plate_log``), enforces the watchdog (no valid
 frame for ``watchdog_ms`` and the output ramps to zero within ``ramp_ms`` and the buffer is
-flushed) and, with a force sensor (``device.link.simsensor``), reports the lateral and
+flushed), asks for host frames it found missing (version 4: Missing, answered by Resend)
+and, with a force sensor (``device.link.simsensor``), reports the lateral and
 normal force in ForceReport messages to a version 3 host.
 
 :func:`serve` binds a core to the wall clock and to a pseudo-terminal or a TCP listener
@@ -38,6 +39,10 @@ from frictex.device.errors import InputError
 from frictex.device.link import protocol as p
 from frictex.device.link.protocol import DeviceState as S
 from frictex.device.link.simsensor import FINGER_FORCE_N, ConstantSensor, FingerSensor, ForceWindows
+
+
+#: how long the device keeps asking for a missing frame (ms, PROTOCOL.md 4.10)
+MISSING_TTL_MS = 100
 
 
 @dataclass(frozen=True)
@@ -213,6 +218,8 @@ class DeviceCore:
         self.tick = 0
         self._last_rx_tick: int | None = None
         self._wd_ticks = c.ticks(c.watchdog_ms)
+        self.missing: dict[int, int] = {}  # host seq -> tick it was found missing (4.10)
+        self._missing_ttl = c.ticks(MISSING_TTL_MS)
         self._ramp_ticks = c.ticks(c.ramp_ms)
         self._top = c.limit_counts
         self.setpoint = np.zeros(c.channels)  # um, what the loop is told to produce now
@@ -237,12 +244,37 @@ class DeviceCore:
         """Handle bytes from the host arriving at ``t_s``; returns the reply bytes."""
         out = bytearray()
         for frame in self.decoder.feed(data):
-            self._last_rx_tick = max(self.tick, int(t_s * self.config.rate_hz))
+            tick = max(self.tick, int(t_s * self.config.rate_hz))
+            self._last_rx_tick = tick
             self.host_version = frame.version
+            gap = frame.lost and frame.version >= 4
+            if isinstance(frame.message, p.Hello):
+                self.missing.clear()
+            elif gap:
+                self._note_missing(frame.seq, frame.lost, tick)
             reply = self._handle(frame)
             if reply is not None:
                 out += self._encode(reply)
+            if frame.version >= 4 and (gap or isinstance(frame.message, p.Heartbeat)):
+                missing = self._missing_report(tick)
+                if missing is not None:
+                    out += self._encode(missing)
         return bytes(out)
+
+    def _note_missing(self, seq: int, lost: int, tick: int) -> None:
+        """The ``lost`` frames just before ``seq`` are missing since ``tick`` (the newest
+        :data:`~device.link.protocol.MISSING_MAX` kept, PROTOCOL.md 4.10)."""
+        for k in range(min(lost, p.MISSING_MAX), 0, -1):
+            self.missing[(seq - k) & 0xFFFF] = tick
+        while len(self.missing) > p.MISSING_MAX:
+            self.missing.pop(next(iter(self.missing)))
+
+    def _missing_report(self, tick: int) -> p.Missing | None:
+        """A Missing message of what is still wanted (older than ``MISSING_TTL_MS``
+        forgotten), or None."""
+        for seq in [q for q, t in self.missing.items() if tick - t > self._missing_ttl]:
+            del self.missing[seq]
+        return p.Missing(tuple(self.missing)) if self.missing else None
 
     def _encode(self, msg) -> bytes:
         """A frame in the version the host last spoke."""
@@ -273,6 +305,10 @@ class DeviceCore:
                 self._silence()
                 self.stopped = True
             return self.status(0)
+        if isinstance(msg, p.Resend):
+            if self.missing.pop(msg.orig_seq, None) is None:
+                return None  # not missing (any more): a duplicate, no effect
+            return self._block(frame.seq, msg)
         if isinstance(msg, p.Block):
             return self._block(frame.seq, msg)
         return None  # device-to-host messages echoed back at us: ignore

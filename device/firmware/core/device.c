@@ -57,6 +57,7 @@ void fw_init(fw_device *d, const fw_config *cfg, const fw_hal *hal, void *hal_ct
         fw_put16(d->limits_le + 2 * ch, cfg->limits[ch]);
     d->wd_ticks = ms_to_ticks(cfg->watchdog_ms, cfg->rate_mhz);
     d->ramp_ticks = ms_to_ticks(cfg->ramp_ms, cfg->rate_mhz);
+    d->missing_ttl = ms_to_ticks(FW_MISSING_TTL_MS, cfg->rate_mhz);
     d->ramp_pos = d->ramp_ticks;
     d->buf.cap = cfg->buffer_samples;
     d->buf.channels = cfg->channels;
@@ -509,17 +510,71 @@ void fw_poll(fw_device *d)
         send(d, force_version, FW_FORCE, fw_put_force(d->tx + 4, &f));
 }
 
+/* ------------------------------------------------------------------ repair (4.10) */
+/* The `lost` host frames just before `seq` are missing since `now`; the newest
+ * FW_MISSING_MAX are kept. Touched only from fw_receive (never from fw_tick). */
+static void note_missing(fw_device *d, uint16_t seq, uint16_t lost, uint32_t now)
+{
+    for (uint16_t k = lost < FW_MISSING_MAX ? lost : FW_MISSING_MAX; k > 0; k--) {
+        if (d->n_missing == FW_MISSING_MAX) { /* forget the oldest */
+            memmove(d->missing_seq, d->missing_seq + 1, (FW_MISSING_MAX - 1u) * 2u);
+            memmove(d->missing_tick, d->missing_tick + 1, (FW_MISSING_MAX - 1u) * 4u);
+            d->n_missing--;
+        }
+        d->missing_seq[d->n_missing] = (uint16_t)(seq - k);
+        d->missing_tick[d->n_missing++] = now;
+    }
+}
+
+/* Remove seq from the missing list; whether it was there. */
+static bool take_missing(fw_device *d, uint16_t seq)
+{
+    for (uint8_t i = 0; i < d->n_missing; i++)
+        if (d->missing_seq[i] == seq) {
+            d->n_missing--;
+            memmove(d->missing_seq + i, d->missing_seq + i + 1, (size_t)(d->n_missing - i) * 2u);
+            memmove(d->missing_tick + i, d->missing_tick + i + 1,
+                    (size_t)(d->n_missing - i) * 4u);
+            return true;
+        }
+    return false;
+}
+
+/* Forget what has been missing longer than missing_ttl; send Missing for the rest. */
+static void report_missing(fw_device *d, uint32_t now)
+{
+    uint8_t kept = 0;
+    for (uint8_t i = 0; i < d->n_missing; i++)
+        if (now - d->missing_tick[i] <= d->missing_ttl) {
+            d->missing_seq[kept] = d->missing_seq[i];
+            d->missing_tick[kept++] = d->missing_tick[i];
+        }
+    d->n_missing = kept;
+    if (kept)
+        send(d, d->host_version, FW_MISSING, fw_put_missing(d->tx + 4, d->missing_seq, kept));
+}
+
 static void on_frame(fw_device *d, const fw_msg *msg, uint32_t now_tick)
 {
     fw_poll(d); /* a trip noted before this frame is reported before its answer */
     lock(d);
     d->last_rx = (int32_t)(now_tick - d->tick) > 0 ? now_tick : d->tick;
+    uint32_t now = d->last_rx;
     d->armed = true; /* 5.3: armed by the first valid frame */
     d->host_version = msg->version;
     unlock(d);
+    bool gap = msg->lost && msg->version >= 4;
+    if (msg->type == FW_HELLO)
+        d->n_missing = 0;
+    else if (gap)
+        note_missing(d, msg->seq, msg->lost, now);
     switch (msg->type) {
     case FW_HELLO:
         on_hello(d, msg->m.prefill);
+        break;
+    case FW_RESEND:
+        if (take_missing(d, msg->orig_seq)) /* else a duplicate: no effect */
+            on_block(d, msg->seq, &msg->m.block);
         break;
     case FW_HEARTBEAT:
         on_heartbeat(d, msg->m.token);
@@ -533,6 +588,8 @@ static void on_frame(fw_device *d, const fw_msg *msg, uint32_t now_tick)
     default:
         break; /* device-to-host messages echoed back at us */
     }
+    if (msg->version >= 4 && (gap || msg->type == FW_HEARTBEAT))
+        report_missing(d, now);
 }
 
 void fw_receive(fw_device *d, const uint8_t *data, size_t n, uint32_t now_tick)

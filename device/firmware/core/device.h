@@ -50,6 +50,8 @@ typedef struct {
 /* Largest payload the device sends: an Error with its longest text, a Status with every
  * channel measured, or an Info with the longest name (PROTOCOL.md 4.2, 4.6, 4.7). */
 #define FW_BIGGER(a, b) ((a) > (b) ? (a) : (b))
+/* how long a missing host frame is asked for (ms, PROTOCOL.md 4.10) */
+#define FW_MISSING_TTL_MS 100u
 #define FW_TX_PAYLOAD_MAX                                                                     \
     FW_BIGGER(FW_BIGGER(7u + FW_ERROR_TEXT_MAX, 11u + 4u * FW_FORCE_PAIRS),                   \
               FW_BIGGER(80u + 2u * FW_MAX_CHANNELS, 16u + 2u * FW_MAX_CHANNELS + FW_NAME_MAX))
@@ -97,6 +99,10 @@ typedef struct {
     uint16_t ramp_q[FW_MAX_CHANNELS];    /* per tick the ramp falls by q ... */
     uint32_t ramp_r[FW_MAX_CHANNELS];    /* ... plus r / ramp_ticks (accumulated in err) */
     uint32_t ramp_err[FW_MAX_CHANNELS];
+    uint16_t missing_seq[FW_MISSING_MAX];  /* host frames found missing, oldest first */
+    uint32_t missing_tick[FW_MISSING_MAX]; /* ... and the tick each was found (4.10) */
+    uint8_t n_missing;
+    uint32_t missing_ttl;                  /* ticks a missing frame stays asked for */
     fw_output out;
     uint8_t tx[FW_TX_OVERHEAD + FW_TX_PAYLOAD_MAX];
 } fw_device;

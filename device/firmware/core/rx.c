@@ -66,8 +66,10 @@ static bool check(fw_rx *rx, fw_msg *msg)
     }
     msg->seq = fw_le16(rx->body + 2);
     uint16_t skipped = (uint16_t)(msg->seq - rx->next_seq);
-    if (rx->seq_known && skipped < 0x8000u) /* a jump backwards is a restart, not a loss */
-        c->lost_frames += skipped;
+    if (!rx->seq_known || skipped >= 0x8000u) /* a jump backwards is a restart, not a loss */
+        skipped = 0;
+    c->lost_frames += skipped;
+    msg->lost = skipped;
     rx->next_seq = (uint16_t)(msg->seq + 1u);
     rx->seq_known = true;
     c->frames_ok++;

@@ -137,7 +137,8 @@ static bool parse_force(const uint8_t *p, size_t n, fw_force *m)
 bool fw_known_type(uint8_t version, uint8_t type)
 {
     return (type >= FW_HELLO && type <= FW_STOP) || (type >= FW_INFO && type <= FW_ERROR) ||
-           (type == FW_FLUSHED && version >= 2) || (type == FW_FORCE && version >= 3);
+           (type == FW_FLUSHED && version >= 2) || (type == FW_FORCE && version >= 3) ||
+           ((type == FW_RESEND || type == FW_MISSING) && version >= 4);
 }
 
 bool fw_parse(uint8_t version, uint8_t type, const uint8_t *p, size_t n, fw_msg *out)
@@ -156,6 +157,15 @@ bool fw_parse(uint8_t version, uint8_t type, const uint8_t *p, size_t n, fw_msg 
         return n == 1;
     case FW_BLOCK:
         return parse_block(p, n, &out->m.block);
+    case FW_RESEND:
+        if (n < 2)
+            return false;
+        out->orig_seq = fw_le16(p);
+        return parse_block(p + 2, n - 2, &out->m.block);
+    case FW_MISSING:
+        out->m.missing.count = n ? p[0] : 0;
+        out->m.missing.seqs = p + 1;
+        return n >= 1 && p[0] >= 1 && p[0] <= FW_MISSING_MAX && n == 1u + 2u * p[0];
     case FW_INFO:
         return parse_info(p, n, &out->m.info);
     case FW_STATUS:
@@ -235,4 +245,13 @@ size_t fw_put_force(uint8_t *out, const fw_force *m)
     *p++ = m->count;
     memmove(p, m->pairs, 4u * m->count); /* the values may already be in place */
     return FORCE_HEAD + 4u * m->count;
+}
+
+size_t fw_put_missing(uint8_t *out, const uint16_t *seqs, uint8_t count)
+{
+    uint8_t *p = out;
+    *p++ = count;
+    for (uint8_t k = 0; k < count; k++)
+        p = fw_put16(p, seqs[k]);
+    return (size_t)(p - out);
 }

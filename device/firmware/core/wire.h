@@ -9,12 +9,13 @@
 #include <stdint.h>
 
 /* Versions 1 to FW_NEWEST_VERSION are spoken (PROTOCOL.md 2.1). */
-#define FW_NEWEST_VERSION 3u
+#define FW_NEWEST_VERSION 4u
 
 enum fw_type {
     FW_HELLO = 0x01, FW_BLOCK = 0x02, FW_HEARTBEAT = 0x03, FW_STOP = 0x04,
     FW_INFO = 0x81, FW_STATUS = 0x82, FW_ERROR = 0x83, FW_FLUSHED = 0x84, /* version 2 */
     FW_FORCE = 0x85, /* version 3 */
+    FW_RESEND = 0x05, FW_MISSING = 0x86, /* version 4 */
 };
 
 enum fw_state { FW_IDLE, FW_BUFFERING, FW_PLAYING, FW_DRAINING, FW_SILENT };
@@ -92,8 +93,17 @@ typedef struct {
     size_t text_len;
 } fw_error;
 
+/* Missing (version 4): count sequence numbers, LE u16 each (PROTOCOL.md 4.10). */
+#define FW_MISSING_MAX 16u
+typedef struct {
+    uint8_t count;
+    const uint8_t *seqs;
+} fw_missing;
+
 typedef struct {
     uint16_t seq;
+    uint16_t lost;     /* frames missing just before this one (its seq skipped ahead) */
+    uint16_t orig_seq; /* Resend: the seq of the frame that first carried m.block */
     uint8_t version;
     uint8_t type;
     union {
@@ -106,6 +116,7 @@ typedef struct {
         fw_error error;
         fw_flushed flushed;
         fw_force force;
+        fw_missing missing;
     } m;
 } fw_msg;
 
@@ -116,7 +127,8 @@ uint8_t *fw_put16(uint8_t *p, uint16_t v);
 uint8_t *fw_put32(uint8_t *p, uint32_t v);
 uint8_t *fw_put64(uint8_t *p, uint64_t v);
 
-/* Whether `type` exists in protocol `version` (Flushed from version 2, ForceReport 3). */
+/* Whether `type` exists in protocol `version` (Flushed from version 2, ForceReport 3,
+ * Resend and Missing 4). */
 bool fw_known_type(uint8_t version, uint8_t type);
 
 /* Parse the payload of a known message of `type` in a `version` frame; false if the
@@ -125,11 +137,12 @@ bool fw_parse(uint8_t version, uint8_t type, const uint8_t *p, size_t n, fw_msg 
 
 /* Payload writers for what a device sends; each returns the bytes written. Worst case:
  * Info 16 + 2 * channels + name_len, Status 80 + 2 * n_measured, Error 7 + 200,
- * Flushed 17, ForceReport 11 + 4 * count. */
+ * Flushed 17, ForceReport 11 + 4 * count, Missing 1 + 2 * count. */
 size_t fw_put_info(uint8_t *out, const fw_info *m);
 size_t fw_put_status(uint8_t *out, const fw_status *m);
 size_t fw_put_error(uint8_t *out, const fw_error *m);
 size_t fw_put_flushed(uint8_t *out, const fw_flushed *m);
 size_t fw_put_force(uint8_t *out, const fw_force *m);
+size_t fw_put_missing(uint8_t *out, const uint16_t *seqs, uint8_t count);
 
 #endif

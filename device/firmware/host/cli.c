@@ -11,7 +11,7 @@ static const char usage[] =
     "usage: " PROG " [--channels N] [--rate HZ] [--limit UM]... [--buffer N]\n"
     "       [--bandwidth HZ] [--watchdog-ms MS] [--ramp-ms MS] [--phases] [--sensor]\n"
     "       [--force N] [--lateral N] [--log CSV] [--plate-log CSV] [--rx-log CSV]\n"
-    "       [--protocol {1,2,3}]\n"
+    "       [--protocol {1,2,3,4}]\n"
     "       [--once]\n"
     "\n"
     "The frictex reference firmware's core on a pseudo-terminal: prints the pty's path as\n"
@@ -35,7 +35,7 @@ static const char usage[] =
     "  --plate-log CSV   write every tick: t_s,state,ch<k>_setpoint_um,ch<k>_plate_um\n"
     "  --rx-log CSV      write t_s,frames_ok,discarded,core_t_s whenever a read changed\n"
     "                    the counts (core_t_s: how far the clock had played by then)\n"
-    "  --protocol V      newest protocol version to speak (default 3; 1 and 2 act as\n"
+    "  --protocol V      newest protocol version to speak (default 4; 1 to 3 act as\n"
     "                    firmware of that version)\n"
     "  --once            exit once the first host's Stop has played out\n";
 

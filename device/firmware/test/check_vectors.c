@@ -58,6 +58,13 @@ static void render(const fw_msg *m)
     case FW_STOP:
         out("stop drain=%d", m->m.drain);
         break;
+    case FW_MISSING:
+        out("missing seqs=");
+        u16s(m->m.missing.seqs, m->m.missing.count);
+        break;
+    case FW_RESEND:
+        out("resend orig=%u ", m->orig_seq);
+        /* fall through: the rest is the Block's */
     case FW_BLOCK: {
         const fw_block *b = &m->m.block;
         out("block start=%" PRIu64 " n=%u ch=%u amps=", b->start_index, b->n, b->channels);
@@ -159,6 +166,13 @@ static bool reencode(const fw_msg *m)
     case FW_FORCE:
         n = fw_put_force(body + 4, &m->m.force);
         break;
+    case FW_MISSING: {
+        uint16_t seqs[FW_MISSING_MAX];
+        for (uint8_t k = 0; k < m->m.missing.count; k++)
+            seqs[k] = fw_le16(m->m.missing.seqs + 2 * k);
+        n = fw_put_missing(body + 4, seqs, m->m.missing.count);
+        break;
+    }
     default:
         return false;
     }

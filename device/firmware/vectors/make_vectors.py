@@ -1,4 +1,4 @@
-"""Write ``frames.json``: byte streams and what a receiver of protocol versions 1 to 3
+"""Write ``frames.json``: byte streams and what a receiver of protocol versions 1 to 4
 makes of them.
 
 Run once from the repository root (``python device/firmware/vectors/make_vectors.py``);
@@ -29,7 +29,7 @@ if str(ROOT) not in sys.path:
 
 from frictex.device.link import protocol as p  # noqa: E402
 
-NEWEST = 3  # the newest version the firmware speaks
+NEWEST = 4  # the newest version the firmware speaks
 OUT = Path(__file__).with_name("frames.json")
 _DROPS = {"cobs_errors": "cobs", "short_frames": "short", "crc_errors": "crc",
           "bad_version": "version", "unknown_type": "type", "bad_payload": "payload",
@@ -53,6 +53,11 @@ def render(msg) -> str:
         return f"heartbeat token={msg.token}"
     if isinstance(msg, p.Stop):
         return f"stop drain={int(msg.drain)}"
+    if isinstance(msg, p.Missing):
+        return f"missing seqs={_u16s(msg.seqs)}"
+    if isinstance(msg, p.Resend):
+        return f"resend orig={msg.orig_seq} " + render(p.Block(msg.start_index, msg.amplitudes,
+                                                                msg.phases))
     if isinstance(msg, p.Block):
         n, ch = msg.amplitudes.shape
         phases = "-" if msg.phases is None else _u16s(msg.phases)
@@ -185,6 +190,12 @@ def valid_messages():
     yield "error late", p.ErrorReport(5, 77, 10, "10 samples arrived after their time"), 3
     yield "error empty text", p.ErrorReport(2, 0, 0, ""), 4
     yield "error 200 bytes", p.ErrorReport(3, 1, 2, "x" * 200), 5
+    yield "resend", p.Resend(2**63 + 9, np.array([[1, 2], [3, 65535]], dtype=np.uint16),
+                             None, 65535), 12
+    yield "resend phases", p.Resend(0, np.array([[7]], dtype=np.uint16),
+                                    np.array([[65535]], dtype=np.uint16), 0), 13
+    yield "missing one", p.Missing((0,)), 14
+    yield "missing largest", p.Missing(tuple(range(65535 - 15, 65536))), 15
 
 
 def _body(mtype, payload, version=1, seq=0):
@@ -209,7 +220,15 @@ def damaged_streams(rng):
     yield "cobs code past end", bytes([0x20, 1, 3, 0, 0]) + b"\x00"
     yield "short body", p.cobs_encode(bytes([1, 3, 0, 0, 1, 2, 3])) + b"\x00"
     yield "empty frames ignored", b"\x00\x00" + hb + b"\x00"
-    yield "version 4", raw_frame(_body(p.Heartbeat.TYPE, b"\1\0\0\0", version=4))
+    yield "version 5", raw_frame(_body(p.Heartbeat.TYPE, b"\1\0\0\0", version=5))
+    yield "heartbeat in version 4", raw_frame(_body(p.Heartbeat.TYPE, b"\1\0\0\0", version=4))
+    yield "type 0x05 in version 3", raw_frame(_body(0x05, bytes(14), version=3))
+    yield "missing 0 seqs", raw_frame(_body(0x86, b"\0", version=4))
+    yield "missing 17 seqs", raw_frame(_body(0x86, b"\x11" + bytes(34), version=4))
+    yield "missing count 2, one seq", raw_frame(_body(0x86, b"\2\0\0", version=4))
+    yield "missing empty", raw_frame(_body(0x86, b"", version=4))
+    yield "resend 1 byte", raw_frame(_body(0x05, b"\0", version=4))
+    yield "resend block cut", raw_frame(_body(0x05, bytes(2 + 12) + b"\1", version=4))
     yield "heartbeat in version 3", raw_frame(_body(p.Heartbeat.TYPE, b"\1\0\0\0", version=3))
     yield "heartbeat in version 2", raw_frame(_body(p.Heartbeat.TYPE, b"\1\0\0\0", version=2))
     yield "version 0", raw_frame(_body(p.Heartbeat.TYPE, b"\1\0\0\0", version=0))
@@ -277,8 +296,14 @@ def damaged_streams(rng):
         _body(p.Heartbeat.TYPE, b"\1\0\0\0", seq=7), crc_ok=False) + enc(p.Heartbeat(0), 1)
 
 
+def _random_message_block(rng):
+    ch, n = int(rng.integers(1, 5)), int(rng.integers(0, 60))
+    ph = rng.integers(0, 65536, (n, ch)) if rng.integers(0, 2) else None
+    return _block(int(rng.integers(0, 2**63)), rng.integers(0, 65536, (n, ch)), ph)
+
+
 def _random_message(rng):
-    kind = rng.integers(0, 9)
+    kind = rng.integers(0, 11)
     u32 = lambda: int(rng.integers(0, 2**32))  # noqa: E731
     if kind == 0:
         return p.Hello(u32())
@@ -287,9 +312,7 @@ def _random_message(rng):
     if kind == 2:
         return p.Stop(bool(rng.integers(0, 2)))
     if kind == 3:
-        ch, n = int(rng.integers(1, 5)), int(rng.integers(0, 60))
-        ph = rng.integers(0, 65536, (n, ch)) if rng.integers(0, 2) else None
-        return _block(int(rng.integers(0, 2**63)), rng.integers(0, 65536, (n, ch)), ph)
+        return _random_message_block(rng)
     if kind == 4:
         ch = int(rng.integers(1, 9))
         return _info(ch, limits_um=tuple(int(c) / 4096 for c in rng.integers(1, 65536, ch)),
@@ -306,6 +329,13 @@ def _random_message(rng):
                         flushed_samples=accounting[2], flushes=accounting[3])
     if kind == 6:
         return p.Flushed(int(rng.integers(0, 256)), int(rng.integers(0, 2**63)), u32(), u32())
+    if kind == 9:
+        block = _random_message_block(rng)
+        return p.Resend(block.start_index, block.amplitudes, block.phases,
+                        int(rng.integers(0, 65536)))
+    if kind == 10:
+        return p.Missing(tuple(int(q) for q in rng.integers(0, 65536,
+                                                             int(rng.integers(1, 17)))))
     if kind == 7:
         count = int(rng.integers(1, 30))
         return _force(int(rng.integers(0, 2**63)), int(rng.integers(1, 65536)),
@@ -316,12 +346,14 @@ def _random_message(rng):
 
 def _versions(msg) -> tuple[int, ...]:
     """The versions a message can be sent in: a Status's layout says which; Flushed is 2
-    and 3, ForceReport 3."""
+    to 4, ForceReport 3 and 4, Resend and Missing 4."""
     if isinstance(msg, p.Status):
-        return (2, 3) if msg.accounted else (1,)
+        return (2, 3, 4) if msg.accounted else (1,)
     if isinstance(msg, p.ForceReport):
-        return (3,)
-    return (2, 3) if isinstance(msg, p.Flushed) else (1, 2, 3)
+        return (3, 4)
+    if isinstance(msg, (p.Resend, p.Missing)):
+        return (4,)
+    return (2, 3, 4) if isinstance(msg, p.Flushed) else (1, 2, 3, 4)
 
 
 def _version(msg, rng) -> int:
