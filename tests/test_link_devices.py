@@ -198,3 +198,18 @@ def test_the_sim_device_plays_its_silence_when_nobody_calls():
     assert port.in_waiting > 0
     core: DeviceCore = device.core
     assert core.counters.watchdog_trips == 1 and core.level == 0
+
+
+@pytest.mark.parametrize("device, code, message", [
+    ("/dev/nonexistent-frictex", 1, "frictex: error: cannot open device port "
+                                    "'/dev/nonexistent-frictex'"),
+    ("nosuchdevice", 2, "frictex: error: unknown output device 'nosuchdevice'; expected "
+                        "one of port, sim"),
+])
+def test_a_device_that_cannot_be_reached_is_exit_1_a_bad_name_exit_2(tmp_path, capsys,
+                                                                       device, code, message):
+    from frictex.app.commands.cli import main
+    assert main(["replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(tmp_path),
+                 "--device", device]) == code
+    err = capsys.readouterr().err
+    assert err.startswith(message) and err.count("\n") == 1
