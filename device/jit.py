@@ -13,6 +13,8 @@ nothing calls from Python is never built at all.
 numba imports scipy at start-up only to check its version, and scipy.linalg (0.2 s) to
 see whether BLAS is there; ``_import_numba`` skips both (scipy is a dependency, so BLAS
 is there) and numba imports scipy.linalg itself when it compiles a call that needs it.
+It also leaves out numba's typing of cffi functions (cffi and its C parser: 40 ms of
+CPU a process), which no kernel here calls, unless cffi is loaded already.
 """
 
 from __future__ import annotations
@@ -67,29 +69,35 @@ class LazyKernel:
         return getattr(self.kernel(), name)
 
 
-class _RefuseScipy(importlib.abc.MetaPathFinder):
-    """Refuses ``import scipy`` in the thread that made it, and in no other."""
+#: packages numba imports at start-up that no kernel here needs
+_LEFT_OUT = ("scipy", "cffi")
+
+
+class _Refuse(importlib.abc.MetaPathFinder):
+    """Refuses to import :data:`_LEFT_OUT` in the thread that made it, and in no other."""
 
     def __init__(self) -> None:
         self.thread = threading.get_ident()
 
     def find_spec(self, fullname, path=None, target=None):
-        if fullname == "scipy" and threading.get_ident() == self.thread:
-            raise ModuleNotFoundError("scipy is left for numba to import when it needs it",
+        if fullname in _LEFT_OUT and threading.get_ident() == self.thread:
+            raise ModuleNotFoundError(f"{fullname} is left out of numba's start-up",
                                       name=fullname)
         return None
 
 
 def _import_numba():
-    """numba, imported without scipy when scipy is not loaded yet (see the module)."""
+    """numba, imported without scipy and cffi when scipy is not loaded yet (see the
+    module)."""
     if "numba" in sys.modules or "scipy" in sys.modules:
         import numba
         return numba
     has_scipy = importlib.util.find_spec("scipy") is not None
-    refuse = _RefuseScipy()
+    refuse = _Refuse()
     sys.meta_path.insert(0, refuse)
     try:
         import numba
+        import numba.core.typing.cffi_utils  # noqa: F401 (its cffi support off, see the module)
         import numba.np.linalg as linalg
         ensure_blas = linalg.ensure_blas
         linalg.ensure_blas = lambda: None if has_scipy else ensure_blas()
