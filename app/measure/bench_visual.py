@@ -5,7 +5,8 @@ waits for: image, sRGB encoding and texture upload, with no table cached from an
 earlier draw; best of 3, or 1 with ``--quick``) for a 0.6 mm grating at 30 degrees
 inside a disc composed with a 5 mm grating, and at 1920x1080 for every bundled scene;
 the per-frame cost of the overlay on top of it (two
-fingers with trails, the scope with 3 s of history, the status line), each frame
+fingers with trails, the scope with 3 s of history, the status line; each frame after
+1/60 s more of the stroke, as live), each frame
 finished on the GPU (``ctx.finish``), without and with reading the pixels back (what
 ``--frames`` and screenshots pay), best of 100 (20 with ``--quick``) and the mean CPU time
 of all threads; beside them, measured in the same run, the floor of this renderer (clear,
@@ -42,14 +43,30 @@ def bench_scene() -> Scene:
     return Scene(1, "bench", "", Display(108.0, 64.8, 800, 480), DeviceProfile(), (coarse, fine))
 
 
-def busy_overlay() -> OverlayState:
-    overlay = OverlayState()
-    t = np.arange(0.0, 3.0, 0.0005)
-    x = np.stack((20 + 20 * t, 80 - 15 * t))
-    y = np.stack((30 + 10 * np.sin(3 * t), 20 + 5 * t))
+#: the bench's two fingers: 2 kHz records, a frame every 1/60 s
+RECORD_HZ, FRAME_S = 2000.0, 1.0 / 60.0
+
+
+def stroke_record(t0: float, t1: float) -> BlockRecord:
+    """Two fingers sliding over [t0, t1) s (sampled at RECORD_HZ), mu' a square wave
+    and a slow sine, amplitude following."""
+    t = np.arange(round(t0 * RECORD_HZ), round(t1 * RECORD_HZ)) / RECORD_HZ
+    x = np.stack((54 + 30 * np.sin(0.7 * t), 54 - 25 * np.sin(0.5 * t)))
+    y = np.stack((32 + 12 * np.sin(1.1 * t), 20 + 5 * np.cos(0.9 * t)))
     mu = np.stack((0.6 + 0.4 * (np.sin(200 * t) > 0), 0.8 + 0.1 * np.sin(20 * t)))
-    overlay.add(BlockRecord(t, (0, 1), np.ones((2, t.size), bool), x, y, mu, (1 - mu) * 4))
+    return BlockRecord(t, (0, 1), np.ones((2, t.size), bool), x, y, mu, (1 - mu) * 4)
+
+
+def busy_overlay() -> OverlayState:
+    """An overlay with 3 s of both fingers' history (full trails and scope)."""
+    overlay = OverlayState()
+    overlay.add(stroke_record(0.0, 3.0))
     return overlay
+
+
+def next_frame(overlay: OverlayState) -> None:
+    """Feed ``overlay`` the next FRAME_S of the stroke (what a live frame receives)."""
+    overlay.add(stroke_record(overlay.now_s + 1.0 / RECORD_HZ, overlay.now_s + FRAME_S))
 
 
 def scene_ms(comp: Compositor, scene: Scene, repeats: int) -> float:
@@ -75,17 +92,20 @@ def bundled_scene_figures(comp: Compositor, label: str, repeats: int) -> list[Fi
             for entry in list_scenes()]
 
 
-def timed(step, frames: int) -> tuple[float, float]:
-    """``step()`` run ``frames`` times: its best wall time and its mean CPU time of all
-    this process's threads (the software rasterizer's included), both ms. On a shared
-    machine the CPU time is the steadier figure: waiting for a core does not count."""
-    best = float("inf")
-    cpu0 = time.process_time()
+def timed(step, frames: int, before=None) -> tuple[float, float]:
+    """``step()`` run ``frames`` times (after ``before()``, untimed, each time): its best
+    wall time and its mean CPU time of all this process's threads (the software
+    rasterizer's included), both ms. On a shared machine the CPU time is the steadier
+    figure: waiting for a core does not count."""
+    best, cpu = float("inf"), 0.0
     for _ in range(frames):
-        t0 = time.perf_counter()
+        if before is not None:
+            before()
+        cpu0, t0 = time.process_time(), time.perf_counter()
         step()
         best = min(best, time.perf_counter() - t0)
-    return best * 1e3, (time.process_time() - cpu0) / frames * 1e3
+        cpu += time.process_time() - cpu0
+    return best * 1e3, cpu / frames * 1e3
 
 
 def floor_ms(backend: OffscreenBackend, texture_size: tuple[int, int],
@@ -121,7 +141,8 @@ def floor_ms(backend: OffscreenBackend, texture_size: tuple[int, int],
 def frame_ms(backend: OffscreenBackend, comp: Compositor, view: FrameView, frames: int,
              read_back: bool) -> tuple[float, float]:
     """Frames of ``view`` finished on the GPU (``read_back``: with the pixels read
-    back), (best wall, mean CPU) ms."""
+    back), each after the next FRAME_S of the stroke was fed to its overlay (untimed),
+    (best wall, mean CPU) ms."""
     backend.use()
     comp.draw(view)  # warm-up: shaders, text atlas
     backend.ctx.finish()
@@ -132,7 +153,7 @@ def frame_ms(backend: OffscreenBackend, comp: Compositor, view: FrameView, frame
             backend.read_rgb()
         backend.ctx.finish()
 
-    return timed(step, frames)
+    return timed(step, frames, lambda: next_frame(view.overlay))
 
 
 def run(quick: bool) -> list[Figure]:

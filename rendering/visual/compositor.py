@@ -9,12 +9,13 @@ frame (``DevicePanels.column_px``), and the scene is fitted beside it.
 
 The scene is rendered once per scene (``scene_image``) into a texture drawn 1:1 on
 the viewport's pixels; each frame only the overlay is rebuilt, the scope's frame only
-when the strip moves, and the scope's traces are decimated to its pixel columns. All
+when the strip moves, and of the scope's traces only the columns that time brought
+(``scope_ring``: a ring of time bins in a texture, min and max per column). All
 geometry arrives in frame pixels (float, y down) and one vertex shader maps it to clip
 space; the drawing primitives (``draw_triangles``, ``draw_rect``, ``draw_texture``,
 ``draw_cursors``, ``text``) are public for the panels, and queue their vertices by kind
-(``batch``; texts live in one atlas, ``text_atlas``): a frame of the demo is four draw
-calls (scene, lines, cursors, texts).
+(``batch``; texts live in one atlas, ``text_atlas``): a frame of the demo is five draw
+calls (scene, lines, scope traces, cursors, texts).
 """
 
 from __future__ import annotations
@@ -26,9 +27,11 @@ import numpy as np
 
 from frictex.rendering.visual.batch import Batcher
 from frictex.rendering.visual.device_panels import DevicePanels
+from frictex.rendering.visual.layer_panel import PanelRow, PanelView, draw_layer_panel, panel_width
 from frictex.rendering.visual.modal_view import Envelope
 from frictex.rendering.visual.overlay import FINGER_RGB, OverlayState, plot_y
 from frictex.rendering.visual.scene_image import scene_rgb, to_srgb8
+from frictex.rendering.visual.scope_ring import ScopeRing
 from frictex.rendering.visual.text import text_rgba, wrap
 from frictex.rendering.visual.text_atlas import AtlasEntry, TextAtlas
 from frictex.rendering.visual.viewport import Viewport, frame_layout
@@ -99,6 +102,8 @@ class FrameView:
     #: |W| of a modal device (``modal_view.ModalEnvelope.at``) and its full scale (um)
     envelope: Envelope | None = None
     envelope_scale_um: float = 1.0
+    #: the demo's layer panel (``layer_panel``), in a column at the left; None: none
+    layer_panel: PanelView | None = None
 
 
 class Compositor:
@@ -126,6 +131,7 @@ class Compositor:
         self.atlas = TextAtlas(ctx, size[0], self.batch.flush)
         self.batch.textures["text"] = self.atlas.texture
         self._scope_frame: tuple[tuple, np.ndarray] | None = None
+        self.scope_ring = ScopeRing(ctx)
         #: the box (x, y, w, h) px of every text drawn in the last frame, in drawing
         #: order (its background included): what a layout check reads
         self.text_boxes: list[tuple[float, float, float, float]] = []
@@ -137,6 +143,8 @@ class Compositor:
         self.viewport: Viewport | None = None
         self._scope_rect: tuple[float, float, float, float] | None = None
         self._column_rect: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+        self.left_px = 0  # the layer panel's column (px), kept at the left of the frame
+        self.panel_rows: tuple[PanelRow, ...] = ()  # the layer panel's rows last drawn
         self.scene_texture: moderngl.Texture | None = None
         self.resize(size)
 
@@ -161,7 +169,8 @@ class Compositor:
         if outlines is not None:
             self.outlines = outlines
         self.viewport, self._scope_rect, self._column_rect = frame_layout(
-            scene.display, *self.size, self.scope, self.panels.column_px(scene, self.size))
+            scene.display, *self.size, self.scope, self.panels.column_px(scene, self.size),
+            left_px=self.left_px)
         rgb = to_srgb8(scene_rgb(scene, self.viewport, self.supersample, self.outlines))
         if self.scene_texture is not None:
             self.scene_texture.release()
@@ -236,9 +245,23 @@ class Compositor:
         self.scope = scope
         viewport = self.viewport
         self.viewport, self._scope_rect, self._column_rect = frame_layout(
-            self.scene.display, *self.size, scope, self.panels.column_px(self.scene, self.size))
+            self.scene.display, *self.size, scope, self.panels.column_px(self.scene, self.size),
+            left_px=self.left_px)
         if self.viewport != viewport:
             self.set_scene(self.scene)
+
+    def _set_left(self, px: int) -> None:
+        """Keep a column ``px`` wide at the left for the layer panel (0: none); the scene
+        is fitted beside it, drawn again if it moved."""
+        if px != self.left_px:
+            self.left_px = px
+            self.set_scene(self.scene)
+
+    def layer_panel_rect(self) -> tuple[float, float, float, float]:
+        """The layer panel's column (x, y, w, h) px: at the left, from below the status
+        lines to the scope strip."""
+        top = self.status_bottom + 4.0
+        return 0.0, top, float(min(self.left_px, self.viewport.x0)), max(self.scope_rect()[1] - top, 0.0)
 
     def column_rect(self) -> tuple[float, float, float, float]:
         """The device panel column (x, y, w, h) px at the right of the frame, above the
@@ -268,6 +291,7 @@ class Compositor:
         view = view or FrameView()
         scope = view.show_scope and view.overlay is not None
         self._set_scope(scope)
+        self._set_left(0 if view.layer_panel is None else panel_width(self.size[0]))
         ctx = self.ctx
         w, h = self.size
         ctx.viewport = (0, 0, w, h)
@@ -294,10 +318,11 @@ class Compositor:
             self.draw_triangles(view.overlay.trail_triangles(vp))
         if scope:
             self.draw_triangles(self._scope_lines())
-            self.draw_triangles(view.overlay.scope_triangles(self.scope_plots(),
-                                                             view.amplitude_max_um))
+            self._draw_scope_traces(view)
         self.draw_cursors(overlay.cursors(vp, view.hover_mm))
         self.panels.draw(overlay, view.envelope, view.envelope_scale_um)
+        self.panel_rows = (() if view.layer_panel is None else
+                           draw_layer_panel(self, view.layer_panel, self.layer_panel_rect()))
         if scope:
             self._draw_scope_labels(view)
         if status is not None:
@@ -340,6 +365,16 @@ class Compositor:
                 tris[6 * k:6 * k + 6, 2:] = rgba
             self._scope_frame = ((rect, plots), tris)
         return self._scope_frame[1]
+
+    def _draw_scope_traces(self, view: FrameView) -> None:
+        """The traces: the ring of time bins (``scope_ring``) brought up to date and drawn
+        as one quad over the two plots, its texture coordinate running with time."""
+        plots = self.scope_plots()
+        texture, u0, u1 = self.scope_ring.update(view.overlay, plots, view.amplitude_max_um)
+        x, y, w, _ = plots[0]
+        h = texture.size[1]
+        self.batch.flush()
+        self.batch.draw_now("textured", self._quad(x, y, w, h, u0, 0.0, u1, 1.0), texture)
 
     def _draw_scope_labels(self, view: FrameView) -> None:
         x, _, w, _ = self.scope_rect()
@@ -402,6 +437,7 @@ class Compositor:
     def release(self) -> None:
         self.panels.release()
         self.batch.release()
+        self.scope_ring.release()
         for obj in (self.atlas, self.scene_texture, self.textured, self.coloured, self.cursor):
             if obj is not None:
                 obj.release()

@@ -8,14 +8,14 @@ so its geometry is tested without a context.
 
 The scope shows, for the last ``scope_s`` seconds and per finger, the mu' target
 (upper plot, 0 to 1) and the vibration amplitude under the finger (lower plot,
-0 to the device's amplitude limit, um zero-to-peak); "now" is the right edge. Each
+0 to the device's amplitude limit, um zero-to-peak); "now" is the right edge
+(``scope_ring`` draws it from this history). Each
 plot keeps ``SCOPE_PAD_PX`` free above its full scale and below its zero, so a trace
 at mu' = 1 or at the limit is never drawn on the plot's edge.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -108,6 +108,8 @@ class OverlayState:
         self.scope_s = scope_s
         self.now_s = 0.0
         self.fingers: dict[int, _History] = {}
+        #: how many times the history was cleared (what it drew before is stale)
+        self.generation = 0
         #: the finger ids of the latest record (a finger not among them has gone)
         self.present: set[int] = set()
         #: at the latest sample: channel commands (q,) complex (um, phase), or None
@@ -146,6 +148,7 @@ class OverlayState:
 
     def clear(self) -> None:
         self.fingers.clear()
+        self.generation += 1
         self.present = set()
         self.commands, self.forces, self.button = None, {}, None
 
@@ -216,29 +219,6 @@ class OverlayState:
             rows.append((float(px), float(py), radius, 0.6, 0.6, 0.6, 0.9, 0.0))
         return np.array(rows, dtype=np.float64).reshape(-1, 8)
 
-    def scope_triangles(self, plots, amplitude_max_um: float) -> np.ndarray:
-        """Triangles (k, 6) for the scope traces: ``plots`` = (mu' plot, amplitude plot),
-        each (x, y, w, h) px; mu' in [0, 1] and amplitude in [0, amplitude_max_um] at
-        the heights :func:`plot_y` gives. Each trace is decimated to the plot's pixel
-        columns (:func:`column_spans`, min and max per column, as an oscilloscope
-        draws): one quad per column whatever the number of samples."""
-        parts = []
-        for fid, hist in self.fingers.items():
-            keep = hist.t >= self.now_s - self.scope_s
-            t = hist.t[keep]
-            if t.size < 2:
-                continue
-            mu = hist.data[3, keep]
-            amp = hist.data[4, keep] / amplitude_max_um
-            rgba = (*FINGER_RGB[fid % len(FINGER_RGB)], 1.0)
-            for values, rect in zip((mu, amp), plots):
-                x0, _, w, _ = rect
-                px = x0 + w * (1.0 - (self.now_s - t) / self.scope_s)
-                left, lo, hi = column_spans(px, plot_y(values, rect), x0, w)
-                parts.append(column_quads(left, lo - SCOPE_LINE_PX / 2, hi + SCOPE_LINE_PX / 2,
-                                          rgba))
-        return np.concatenate(parts) if parts else np.empty((0, 6))
-
     def force_arrows(self, viewport: Viewport, px_per_n: float) -> np.ndarray:
         """Triangles (k, 6) of the force on each touching finger, from its centre, ``px_per_n``
         px long per N: the achieved force solid in the finger's colour, the wanted one a
@@ -290,56 +270,6 @@ def thin_polyline(points: np.ndarray, joined: np.ndarray,
     kept = np.flatnonzero(keep)
     breaks = np.concatenate(([0], np.cumsum(~joined)))
     return kept, breaks[kept[1:]] == breaks[kept[:-1]]
-
-
-def column_spans(x, y, x0: float, width: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """A polyline reduced to the pixel columns it crosses: per column, the least and
-    greatest height it reaches there (its samples in the column and its values,
-    interpolated, at the column's two edges), so a trace with many samples per column
-    draws the same band as every segment would, and a sparse one stays joined.
-
-    Parameters
-    ----------
-    x : (n,) px, non-decreasing (time order), n >= 1. y : (n,) px.
-    x0, width : the plot's left edge and width (px): columns [x0 + c, x0 + c + 1) for
-        c = 0 .. ceil(width) - 1; samples outside go to the nearest.
-
-    Returns
-    -------
-    left : (k,) left edge (px) of each column crossed, lo, hi : (k,) px.
-    """
-    x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-    columns = max(1, math.ceil(width))
-    col = np.clip(np.floor(x - x0), 0, columns - 1).astype(np.intp)
-    first, last = int(col[0]), int(col[-1])
-    edges = x0 + np.arange(first, last + 2, dtype=np.float64)
-    at_edges = np.interp(edges, x, y)
-    lo = np.minimum(at_edges[:-1], at_edges[1:])
-    hi = np.maximum(at_edges[:-1], at_edges[1:])
-    starts = np.flatnonzero(np.concatenate(([True], col[1:] != col[:-1])))
-    which = col[starts] - first
-    lo[which] = np.minimum(lo[which], np.minimum.reduceat(y, starts))
-    hi[which] = np.maximum(hi[which], np.maximum.reduceat(y, starts))
-    return edges[:-1], lo, hi
-
-
-def column_quads(left, top, bottom, rgba) -> np.ndarray:
-    """Quads over one-pixel columns from ``left`` to ``left + 1`` and ``top`` to ``bottom``
-    (px, (k,) each, ``left`` a column apart), in colour ``rgba``, a run of neighbouring
-    columns with equal spans (a flat trace) joined into one quad: triangles (6 q, 6) of x,
-    y, r, g, b, a."""
-    left, top, bottom = (np.asarray(a, dtype=np.float64) for a in (left, top, bottom))
-    if left.size == 0:
-        return np.empty((0, 6))
-    first = np.flatnonzero(np.concatenate(([True], (top[1:] != top[:-1])
-                                           | (bottom[1:] != bottom[:-1]))))
-    right = np.append(left[first[1:] - 1], left[-1]) + 1.0
-    left, top, bottom = left[first], top[first], bottom[first]
-    xs = np.stack((left, right, left, left, right, right), axis=1)
-    ys = np.stack((top, top, bottom, bottom, top, bottom), axis=1)
-    out = np.empty((xs.size, 6))
-    out[:, 0], out[:, 1], out[:, 2:] = xs.ravel(), ys.ravel(), rgba
-    return out
 
 
 def arrow_triangles(origin, vector_px, rgba, width_px: float) -> np.ndarray:
