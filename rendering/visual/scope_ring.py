@@ -69,7 +69,8 @@ class ScopeRing:
         ring = columns + 2
         bin_s = overlay.scope_s / columns
         now_bin = math.floor(overlay.now_s / bin_s)
-        key = (id(overlay), overlay.generation, plots, amplitude_max_um, overlay.scope_s)
+        # the overlay itself, not its id: a new overlay may get a dropped one's id
+        key = (overlay, overlay.generation, plots, amplitude_max_um, overlay.scope_s)
         if key != self._key or now_bin - self._next_bin >= ring:
             if self.texture is None or self.texture.size != (ring, height):
                 if self.texture is not None:
