@@ -7,7 +7,8 @@ Per study, by method:
 - ``2afc`` and ``staircase``: the psychometric function (``psychometric``) fitted to the
   proportion correct against the comparison's difference from the reference, pooled over
   the study's sessions and per session; threshold and slope with their 95 % bootstrap
-  intervals. A staircase is also summarised by its reversals (the same rules as the run,
+  intervals (for a staircase, the bootstrap runs the staircase again with the fitted
+  function as the observer: ``psychometric.fit_adaptive``). A staircase is also summarised by its reversals (the same rules as the run,
   ``scheduler.staircase_step``, replayed from the answers): the mean of its last
   ``threshold_reversals`` reversal levels (geometric on the log scale), per session and
   their mean over sessions.
@@ -116,6 +117,39 @@ def _fit(design: dict, x, n, k, seed: int) -> psychometric.Fit | None:
                             bootstrap=a["bootstrap"], seed=seed)
 
 
+def _play(sc: Staircase, p, rng) -> tuple[list[float], list[bool], StaircaseState]:
+    """One staircase run to its stopping rule by an observer correct with probability
+    ``p(difference)``: its differences, answers and final state."""
+    state, xs, cs = StaircaseState(sc.start), [], []
+    while len(state.reversals) < sc.reversals and len(xs) < sc.max_trials:
+        correct = bool(rng.random() < p(state.difference))
+        xs.append(state.difference)
+        cs.append(correct)
+        state = staircase_step(sc, state, correct)
+    return xs, cs, state
+
+
+def _staircase_plays(sc: Staircase, sessions: int):
+    """``simulate`` for ``psychometric.fit_adaptive``: ``sessions`` staircases."""
+    def play(p, rng):
+        runs = [_play(sc, p, rng) for _ in range(sessions)]
+        return (np.concatenate([r[0] for r in runs]),
+                np.concatenate([r[1] for r in runs]).astype(bool))
+    return play
+
+
+def _fit_staircase(design: dict, rows: list[dict], sessions: int, seed: int):
+    if not rows:
+        return None
+    a = design["analysis"]
+    x = np.array([_float(r["difference"]) for r in rows])
+    correct = np.array([r["correct"] == "1" for r in rows])
+    return psychometric.fit_adaptive(x, correct, _staircase_plays(
+        Staircase(**design["staircase"]), sessions), function=a["function"],
+        guess=design["guess"], lapse_max=a["lapse_max"], target=design["target"],
+        bootstrap=a["bootstrap"], seed=seed)
+
+
 def staircase_summary(design: dict, rows: list[dict]) -> dict:
     """A staircase session's reversals and threshold, replayed from its answers."""
     sc = Staircase(**design["staircase"])
@@ -134,12 +168,14 @@ def _forced_choice(design: dict, sessions: list[SessionData]) -> dict:
         rows = s.main()
         pooled_rows += rows
         entry = {"session": str(s.folder), "trials": len(rows)}
-        fitted = _fit(design, *_counts(rows), seed=i + 1)
+        fitted = (_fit_staircase(design, rows, 1, seed=i + 1) if design["staircase"]
+                  else _fit(design, *_counts(rows), seed=i + 1))
         entry["fit"] = _fit_dict(fitted) if fitted else None
         if design["staircase"]:
             entry["staircase"] = staircase_summary(design, rows)
         per.append(entry)
-    pooled = _fit(design, *_counts(pooled_rows), seed=0)
+    pooled = (_fit_staircase(design, pooled_rows, len(sessions), seed=0) if design["staircase"]
+              else _fit(design, *_counts(pooled_rows), seed=0))
     out = {"per_session": per, "pooled": _fit_dict(pooled) if pooled else None}
     if design["staircase"]:
         values = [e["staircase"]["threshold"] for e in per if e["staircase"]["threshold"] is not None]

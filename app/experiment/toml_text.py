@@ -9,6 +9,7 @@ other value on a ``key = value`` line; keys that are not bare words are quoted.
 from __future__ import annotations
 
 import math
+import numbers
 import re
 
 _BARE = re.compile(r"^[A-Za-z0-9_-]+$")
@@ -35,12 +36,12 @@ def _key(key: str) -> str:
 def _value(value) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
+    if isinstance(value, numbers.Integral):
+        return str(int(value))
+    if isinstance(value, numbers.Real):  # numpy's too: repr(float) is the shortest exact form
         if not math.isfinite(value):
             raise ValueError(f"{value!r}: a scene file holds finite numbers only")
-        return repr(value)
+        return repr(float(value))
     if isinstance(value, str):
         return _string(value)
     if isinstance(value, list):

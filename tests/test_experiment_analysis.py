@@ -1,0 +1,120 @@
+"""frictex experiment and experiment analyse as a user runs them: simulated sessions of
+each method, analysed together, pooled by study; bad input is one line and exit 2."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from frictex.app.commands.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+BUNDLED = ROOT / "app" / "experiment" / "protocols"
+SIM = "simulated:weber=0.11,lapse=0.02"
+
+SAME_DIFFERENT = """format = 1
+name = "depth-same-different"
+method = "same-different"
+repetitions = 3
+
+[stimuli]
+scene = "grating-5mm"
+vary = "depth"
+reference = 0.3
+levels = [0.33, 0.45]
+
+[presentation]
+exploration_s = 0.5
+"""
+
+TWO_AFC = """format = 1
+name = "depth-2afc"
+method = "2afc"
+repetitions = 3
+
+[stimuli]
+scene = "grating-5mm"
+vary = "depth"
+reference = 0.3
+levels = [0.31, 0.33, 0.36, 0.42]
+
+[presentation]
+exploration_s = 0.5
+
+[analysis]
+bootstrap = 200
+"""
+
+
+def experiment(*args):
+    return main(["experiment", *map(str, args), "--quiet"])
+
+
+@pytest.fixture(scope="module")
+def sessions(tmp_path_factory):
+    root = tmp_path_factory.mktemp("sessions")
+    (root / "sd.toml").write_text(SAME_DIFFERENT)
+    (root / "afc.toml").write_text(TWO_AFC)
+    runs = [(BUNDLED / "seed003-gratings.toml", "g", 1), (root / "sd.toml", "sd", 2),
+            (root / "afc.toml", "a1", 3), (root / "afc.toml", "a2", 4)]
+    for protocol, name, seed in runs:
+        assert experiment(protocol, "--participant", f"{SIM},seed={seed}", "--out", root / name,
+                          "--record", "results") == 0
+    return root
+
+
+def test_analyse_pools_each_study(sessions, capsys):
+    out = sessions / "analysis"
+    folders = [sessions / n for n in ("g", "sd", "a1", "a2")]
+    assert main(["experiment", "analyse", *map(str, folders), "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    studies = {s["study"]: s for s in json.loads((out / "analysis.json").read_text())["studies"]}
+    assert set(studies) == {"seed003-gratings", "depth-same-different", "depth-2afc"}
+    afc = studies["depth-2afc"]
+    assert afc["sessions"] == 2 and len(afc["per_session"]) == 2
+    assert [lv["trials"] for lv in afc["pooled"]["levels"]] == [12, 12, 12, 12]  # 2 x 3 x 2
+    lo, hi = afc["pooled"]["threshold_ci95"]
+    assert lo <= afc["pooled"]["threshold"] <= hi
+    assert 0.0 <= afc["pooled"]["lapse"] <= 0.06 and afc["pooled"]["guess"] == 0.5
+    rated = {st["stimulus"]: st for st in studies["seed003-gratings"]["stimuli"]}
+    assert len(rated) == 6 and all(st["n"] == 3 and 1 <= st["mean"] <= 10 for st in rated.values())
+    levels = studies["depth-same-different"]["levels"]
+    assert [(lv["different"], lv["same"]) for lv in levels] == [(6, 6), (6, 6)]
+    assert levels[1]["d_prime"] > levels[0]["d_prime"]  # the larger difference is easier
+    assert "depth-2afc: 2afc, 2 sessions" in printed and "threshold (0.75 correct" in printed
+    png = (out / "analysis.png").read_bytes()
+    assert png.startswith(b"\x89PNG") and len(png) > 10_000
+
+
+def test_sessions_of_one_name_must_share_their_protocol(sessions, tmp_path, capsys):
+    changed = tmp_path / "afc.toml"
+    changed.write_text(TWO_AFC.replace("repetitions = 3", "repetitions = 2"))
+    assert experiment(changed, "--participant", SIM, "--out", tmp_path / "a3",
+                      "--record", "results") == 0
+    capsys.readouterr()
+    assert main(["experiment", "analyse", str(sessions / "a1"), str(tmp_path / "a3"),
+                 "--no-plot", "--out", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "ran another protocol file" in err
+
+
+@pytest.mark.parametrize("args, words", [
+    (["analyse"], "give one or more session folders"),
+    (["analyse", "."], "not a session folder"),
+    ([str(BUNDLED / "period-2afc.toml"), "--out", "x"], "--participant is required"),
+    ([str(BUNDLED / "period-2afc.toml"), "--participant", "window", "--out", "x"],
+     "simulated"),
+    ([str(BUNDLED / "period-2afc.toml"), "--participant", "simulated:weber=-1", "--out", "x"],
+     "outside"),
+    (["a.toml", "b.toml"], "expected one protocol file"),
+])
+def test_bad_command_lines_are_one_line(tmp_path, monkeypatch, capsys, args, words):
+    monkeypatch.chdir(tmp_path)
+    assert main(["experiment", *args]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("frictex: error: ") and err.count("\n") == 1 and words in err
+
+
+def test_check_counts_the_trials(capsys):
+    assert main(["experiment", str(BUNDLED / "period-2afc.toml"), "--check"]) == 0
+    assert "4 practice and 120 main trials" in capsys.readouterr().out
