@@ -69,29 +69,12 @@ def until(predicate, what: str, timeout_s: float = 20.0) -> None:
 
 def start_sim_device(channels: int, rate_hz: float, *, phases: bool = False, log_path=None,
                      tcp: bool = False, extra: tuple[str, ...] = ()):
-    """Start ``frictex sim-device --once`` in a process of its own, as an external tool
-    would, on a new pty (or, ``tcp``, a loopback TCP port); returns (process, pty path or
-    ``socket://`` URL). The link reaches it by that path like any port (the in-process
-    ``sim`` device needs none of this)."""
+    """``frictex sim-device`` in a process of its own, as an external tool would run it
+    (``app.commands.sim_device.spawn``); returns (process, pty path or ``socket://``
+    URL). The in-process ``sim`` device needs none of this."""
     import os
-    import select
-    import subprocess
-    import sys
-    cmd = [sys.executable, "-m", "frictex", "sim-device", "--once", "--channels",
-           str(channels), "--rate", repr(float(rate_hz)), "--parent-pid", str(os.getpid()),
-           *extra]
-    if phases:
-        cmd.append("--phases")
-    if tcp:
-        cmd += ["--tcp", "0"]
-    if log_path is not None:
-        cmd += ["--log", os.fspath(log_path)]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
-    ready, _, _ = select.select([proc.stdout], [], [], 120.0)  # a test's bound, on a busy machine
-    line = proc.stdout.readline().strip() if ready else ""
-    if not line.startswith(("/", "socket://")):
-        proc.kill()
-        proc.wait(timeout=5.0)
-        raise AssertionError(f"frictex sim-device did not start (printed {line!r}; exit code "
-                             f"{proc.poll()})")
-    return proc, line
+
+    from frictex.app.commands.sim_device import spawn
+    flags = (*(["--phases"] if phases else []),
+             *(["--log", os.fspath(log_path)] if log_path is not None else []), *extra)
+    return spawn(channels, rate_hz, tcp=tcp, extra=tuple(flags))

@@ -17,11 +17,15 @@ from __future__ import annotations
 
 import argparse
 import os
+import select
 import signal
+import subprocess
 import sys
 import threading
+import time
 
 from frictex.app.commands.argtypes import positive_float, positive_int
+from frictex.device.errors import DeviceError
 from frictex.device.link.simdevice import (DeviceConfig, DeviceCore, open_listener, open_pty,
                                    played_log, plate_log, serve, socket_url)
 
@@ -147,3 +151,33 @@ def _serve(core: DeviceCore, args: argparse.Namespace, quit_event: threading.Eve
         pass
     finally:
         close()
+
+
+#: longest a sim-device that neither prints where it is nor exits is waited for (s): a
+#: hang, not a busy machine
+HANG_S = 120.0
+
+
+def spawn(channels: int = 1, rate_hz: float = 10_000.0, *, tcp: bool = False,
+          extra: tuple[str, ...] = ()) -> tuple[subprocess.Popen, str]:
+    """Start ``frictex sim-device --once`` in a process of its own (as an external tool
+    would run it) on a new pty, or with ``tcp`` a loopback TCP port; returns (process,
+    pty path or ``socket://`` URL), which the host opens like any port. ``extra``: more
+    flags (``--log CSV``, ``--finger 3``...). It ends when its host's Stop has played out
+    or this process is gone. Waited for as long as it runs (at most :data:`HANG_S`);
+    raises DeviceError if it exits or hangs first."""
+    cmd = [sys.executable, "-m", "frictex", "sim-device", "--once", "--channels",
+           str(channels), "--rate", repr(float(rate_hz)), "--parent-pid", str(os.getpid()),
+           *(["--tcp", "0"] if tcp else []), *extra]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+    line, deadline = "", time.monotonic() + HANG_S
+    while time.monotonic() < deadline and proc.poll() is None:
+        if select.select([proc.stdout], [], [], 0.5)[0]:
+            line = proc.stdout.readline().strip()
+            break
+    if not line.startswith(("/", "socket://")):
+        proc.kill()
+        proc.wait(timeout=5.0)
+        raise DeviceError(f"frictex sim-device did not start (printed {line!r}; exit code "
+                          f"{proc.poll()})")
+    return proc, line

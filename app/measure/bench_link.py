@@ -1,13 +1,15 @@
 """``frictex bench link``: the host link to a simulated device through a real pseudo-terminal.
 
-Two runs against a ``frictex sim-device`` subprocess, paced by the device as in replay
+Two runs against a ``frictex sim-device`` process (``sim_device.spawn``: the device's CPU
+is not the host's), paced by the device as in replay
 (timed from the first block until the device has played the last and stopped):
 at the seed 003 rate (10 kHz, blocks of 50) for host CPU per second of output and the
 heartbeat round trip; and at 1 MHz (the device's clock no longer limits) for the sustained
 frame and block rates the link itself manages. A third run, live (the wall clock paces
 the blocks, as the demo's haptic thread does), to a device whose simulated finger sends
-force reports: how many blocks after a block ends its report is in the host's hands
-(``rendering.control.loop``'s delay D; the report's closed-loop section simulates it).
+force reports (the in-process ``sim`` device): how many blocks after a block ends its
+report is in the host's hands (``rendering.control.loop``'s delay D; the report's
+closed-loop section simulates it).
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import time
 
 import numpy as np
 
+from frictex.app.commands.sim_device import spawn
 from frictex.app.measure.figure import Figure
 from frictex.device.link.host import open_sink
 
@@ -26,13 +29,15 @@ def _stream(rate_hz: float, seconds: float) -> tuple[dict, float, float]:
     """Stream ``seconds`` of output; returns (status, wall s, host CPU s)."""
     n_blocks = int(seconds * rate_hz / BLOCK)
     block = np.abs(np.sin(np.arange(BLOCK) / 7.0))[:, None] * 2.0
-    sink = open_sink("sim", channels=1, rate_hz=rate_hz, paced=True)
+    proc, path = spawn(1, rate_hz)
+    sink = open_sink(path, channels=1, rate_hz=rate_hz, paced=True)
     try:
         wall0, cpu0 = time.perf_counter(), time.process_time()
         for b in range(n_blocks):
             sink.send(b * BLOCK, block, None)
     finally:
         sink.close()  # drains: the device has played everything when it returns
+        proc.wait(timeout=30.0)  # --once: it exits after the Stop
     wall, cpu = time.perf_counter() - wall0, time.process_time() - cpu0
     return sink.status(), wall, cpu
 
@@ -43,7 +48,7 @@ def _report_delays(seconds: float, rate_hz: float = 10_000.0) -> np.ndarray:
     tenth left out: the device's prefill)."""
     from frictex.rendering.control.loop import LoopConfig
     wait = LoopConfig().max_wait_s * rate_hz  # samples the loop waits for a report
-    sink = open_sink("sim", channels=1, rate_hz=rate_hz, paced=False, sim_args=("--finger", "3"))
+    sink = open_sink("sim:finger=3", channels=1, rate_hz=rate_hz, paced=False)
     block = np.full((BLOCK, 1), 1.0)
     delays, pending = [], []
     n_blocks = int(seconds * rate_hz / BLOCK)
