@@ -155,7 +155,7 @@ def test_a_device_that_never_answers_is_a_device_error_after_the_stated_total():
     late = _LateDevice(deaf=10**6)
     t0 = time.monotonic()
     with pytest.raises(LinkError, match=r"no answer to the handshake within [0-9.]+ s "
-                                        r"\(4 Hellos\); is it a frictex device\?") as info:
+                                        r"\([34] Hellos\); is it a frictex device\?") as info:
         CommandSink(lambda: late, 1, RATE, paced=False, handshake_s=1.0)
     assert time.monotonic() - t0 >= 1.0
     assert isinstance(info.value, DeviceError) and info.value.exit_code == 1

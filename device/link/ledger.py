@@ -36,7 +36,8 @@ class Pacing:
     """A paced host's limits, in samples at ``rate_hz``: keep at most ``target`` buffered;
     a device that waits for ``prefill`` samples (BUFFERING) gets blocks up to ``window``
     ahead of its play position, so it reaches its prefill across holes left by lost
-    blocks (frames arrive in order and are never resent: a hole stays a hole)."""
+    blocks (a version 4 device has them resent, PROTOCOL.md 4.10; an older one never
+    fills a hole)."""
 
     rate_hz: float
     target: int
