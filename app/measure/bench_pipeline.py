@@ -29,6 +29,7 @@ block).
 
 from __future__ import annotations
 
+import gc
 import tempfile
 import time
 from pathlib import Path
@@ -114,6 +115,7 @@ def _live(stage, trace, duration: float, sinks=()) -> tuple[np.ndarray, np.ndarr
     timed = _Timed(stage)
     source = TraceSource(iter([trace]), until_s=duration)
     source.start(stage.pipeline.tracker_config)
+    gc.freeze()  # as the live haptic process does once its pipeline is built
     drive(timed, source, list(sinks), VirtualClock(), chunk_blocks=1)
     return np.array(timed.seconds), np.array(timed.cpu_seconds)
 

@@ -69,6 +69,9 @@ class HeightRenderer:
         at = None
         if self.band is not None:
             at = np.flatnonzero(_in_band(x, y, vx, vy, *self.band))
+            if not at.size:  # no finger near the shape: mu_rest everywhere
+                return (np.full(block.x_pred.shape, layer.mu_rest),
+                        layer.covers(block.x_pred, block.y_pred), state)
             x, y, vx, vy = x[at], y[at], vx[at], vy[at]
         gx, gy = layer.shape.gradient(x, y)
         mu = layer.mu_of_motion(gx, gy, vx, vy)
