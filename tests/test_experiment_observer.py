@@ -36,7 +36,8 @@ WEBER, LAPSE = 0.11, 0.02
 
 def scene_with(tmp_path, vary, value):
     base = load_base(GRATING)
-    return write_scene(stimulus_doc(base, vary, 0, value, None), tmp_path / f"{vary}{value}.toml")
+    return write_scene(stimulus_doc(base, vary, 0, value, None), tmp_path / f"{vary}{value}.toml",
+                       base.folder)
 
 
 def whole(scene):

@@ -139,3 +139,23 @@ def test_killed_at_a_random_trial_and_resumed(tmp_path, protocol_file):
     assert trials == [f"{i:04d}" for i in range(1, len(expected) + 1)]
     for name in trials:
         assert (out / "trials" / name / "2" / "commands.csv").is_file()
+
+
+def test_scenes_that_name_files_carry_them(tmp_path):
+    """A stimulus whose scene names a map or a clip file: the file is placed beside every
+    scene file written from it, and a trial replays from its own folder."""
+    path = tmp_path / "files.toml"
+    path.write_text('format = 1\nmethod = "magnitude"\nrepetitions = 1\n'
+                    '[[stimulus]]\nname = "map"\nscene = "raster-map"\n'
+                    '[[stimulus]]\nname = "clips"\nscene = "slider-clips"\n'
+                    '[presentation]\nexploration_s = 0.3\n')
+    out = tmp_path / "s"
+    run_session(load_protocol(path), make_presenter(PARTICIPANT), out, seed=1,
+                participant=PARTICIPANT, record="all")
+    assert (out / "stimuli" / "raster-map.png").is_file()
+    for trial in ("0001", "0002"):
+        folder = out / "trials" / trial
+        again = tmp_path / f"again{trial}"
+        assert main(["replay", str(folder / "1.toml"), str(folder / "1.csv"), "--out",
+                     str(again), "--quiet"]) == 0
+        assert (again / "commands.csv").read_bytes() == (folder / "1" / "commands.csv").read_bytes()

@@ -33,6 +33,7 @@ import json
 import math
 import os
 import shutil
+import tomllib
 from dataclasses import asdict, dataclass
 from datetime import datetime, timezone
 from importlib import metadata
@@ -127,13 +128,16 @@ class Session:
 
     def write_interval(self, number: int, interval: int, scene_text: str, trace,
                        record: str) -> None:
-        """Interval ``interval`` of trial ``number``: its scene and trace, and with
-        ``record = "all"`` their replay (what was sent to the device); synced."""
+        """Interval ``interval`` of trial ``number``: its scene (with the files it names,
+        linked from ``stimuli/``) and trace, and with ``record = "all"`` their replay
+        (what was sent to the device)."""
+        from frictex.app.experiment.stimuli import place_files
         from frictex.rendering.input.trace_file import write_trace
         folder = self.trial_dir(number)
         folder.mkdir(parents=True, exist_ok=True)
         scene_path, trace_path = folder / f"{interval}.toml", folder / f"{interval}.csv"
         scene_path.write_text(scene_text, encoding="utf-8")
+        place_files(tomllib.loads(scene_text), self.folder / "stimuli", folder)
         write_trace(trace_path, trace, comment=f"trial {number}, interval {interval}")
         if record == "all":
             from frictex.app.engine.replay import run_replay

@@ -4,8 +4,9 @@ A stimulus is a texture file's document (``tomllib``'s dict) with a change: the 
 layer's period, depth or clip level set (:data:`PARAMETERS`), its periodic layers'
 ``render`` set. The changed document is written as a texture file (``toml_text``) and
 loaded by the texture loader, so a stimulus is checked exactly as any scene and the file
-is what ``frictex replay`` reads to play it again. Paths inside the base file (maps, clip
-files, measured modes) are made absolute, so the written file loads from anywhere.
+is what ``frictex replay`` reads to play it again. The files a base file names (maps,
+clip files, measured modes: relative to it, in its folder or below) are linked (or
+copied) beside every scene file written from it, under the same names.
 
 Side by side: the two stimuli's layers in one scene, the first's confined to the left
 half of the display and the second's to the right half (each layer gets that half as
@@ -17,6 +18,7 @@ from __future__ import annotations
 import copy
 import os
 import re
+import shutil
 import tempfile
 import tomllib
 from dataclasses import dataclass
@@ -51,26 +53,42 @@ class Base:
     doc: dict
     scene: Scene
 
+    @property
+    def folder(self) -> Path:
+        """Where the files the base names are."""
+        return Path(os.path.realpath(self.path)).parent
+
 
 def load_base(path: Path) -> Base:
     """The scene file at ``path``, checked (``TextureError`` listing its problems)."""
     from frictex.textures.loader import load_scene
     scene = load_scene(path)
-    doc = tomllib.loads(read_utf8(path, MAX_SCENE_BYTES))
-    _absolute_paths(doc, Path(os.path.realpath(path)).parent)
-    return Base(Path(path), doc, scene)
+    return Base(Path(path), tomllib.loads(read_utf8(path, MAX_SCENE_BYTES)), scene)
 
 
-def _absolute_paths(value, base_dir: Path) -> None:
+def referenced(value) -> list[str]:
+    """The file names (relative) a scene document names, under :data:`PATH_KEYS`."""
     if isinstance(value, dict):
-        for key, inner in value.items():
-            if key in PATH_KEYS and isinstance(inner, str):
-                value[key] = str(base_dir / inner)
-            else:
-                _absolute_paths(inner, base_dir)
-    elif isinstance(value, list):
-        for inner in value:
-            _absolute_paths(inner, base_dir)
+        return [name for key, inner in value.items()
+                for name in ([inner] if key in PATH_KEYS and isinstance(inner, str)
+                             else referenced(inner))]
+    if isinstance(value, list):
+        return [name for inner in value for name in referenced(inner)]
+    return []
+
+
+def place_files(doc: dict, source: Path, target: Path) -> None:
+    """Link (or, across file systems, copy) the files ``doc`` names from folder
+    ``source`` into folder ``target``, under the same relative names."""
+    for name in referenced(doc):
+        src, dst = source / name, target / name
+        if dst.exists() or not src.is_file() or os.path.realpath(src) == os.path.realpath(dst):
+            continue
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            os.link(src, dst)
+        except OSError:
+            shutil.copyfile(src, dst)
 
 
 def plain_name(name: str) -> bool:
@@ -97,9 +115,11 @@ def varied_layer(base: Base, vary: str, name: str | None) -> int | str:
         kind = _layers(base.doc)[index].get("type")
         if name is not None and layer.name != name:
             continue
-        if kind in types:
-            if vary == "level" and _layers(base.doc)[index].get("clip") == "ahap":
+        if kind in types and vary == "level" and _layers(base.doc)[index].get("clip") == "ahap":
+            if name is not None:
                 return f"layer {layer.name!r} plays an AHAP file, whose levels the file sets"
+            continue
+        if kind in types:
             return index
         if name is not None:
             return (f"layer {name!r} is a {kind}; {vary} applies to "
@@ -175,11 +195,13 @@ def side_by_side_problem(left: dict, right: dict) -> str | None:
     return None
 
 
-def write_scene(doc: dict, path: Path) -> Scene:
-    """Write ``doc`` as the texture file ``path`` and load it back (``TextureError`` if
-    the stimulus is not a valid scene)."""
+def write_scene(doc: dict, path: Path, files_from: Path) -> Scene:
+    """Write ``doc`` as the texture file ``path``, the files it names placed beside it
+    from folder ``files_from``, and load it back (``TextureError`` if the stimulus is not
+    a valid scene)."""
     from frictex.textures.errors import TextureError
     path.write_text(toml_text(doc), encoding="utf-8")
+    place_files(doc, files_from, path.parent)
     scene, problems, _ = check_scene(path)
     if scene is None:
         raise TextureError(problems)
@@ -192,6 +214,7 @@ def value_problem(base: Base, vary: str, layer: int, value: float) -> str | None
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / f"{base.path.stem}.toml"
         path.write_text(toml_text(doc), encoding="utf-8")
+        place_files(doc, base.folder, Path(folder))
         _, problems, _ = check_scene(path)
     if not problems:
         return None
@@ -201,7 +224,8 @@ def value_problem(base: Base, vary: str, layer: int, value: float) -> str | None
 
 class StimulusBank:
     """The scenes of a protocol's stimuli, each written once into ``folder`` as
-    ``NAME.toml`` and loaded from there (side-by-side pairs as ``LEFT+RIGHT.toml``).
+    ``NAME.toml`` with the files it names, and loaded from there (side-by-side pairs as
+    ``LEFT+RIGHT.toml``).
 
     ``get(stimulus)`` gives ``(scene, text)``: the checked scene and its file's text.
     """
@@ -216,11 +240,11 @@ class StimulusBank:
             self._bases[path] = load_base(path)
         return self._bases[path]
 
-    def _make(self, name: str, doc: dict) -> tuple[Scene, str, dict]:
+    def _make(self, name: str, doc: dict, files_from: Path) -> tuple[Scene, str, dict]:
         if name not in self._made:
             self.folder.mkdir(parents=True, exist_ok=True)
             path = self.folder / f"{name}.toml"
-            scene = write_scene(doc, path)
+            scene = write_scene(doc, path, files_from)
             self._made[name] = (scene, path.read_text(encoding="utf-8"), doc)
         return self._made[name]
 
@@ -230,7 +254,7 @@ class StimulusBank:
         base = self._base(stimulus.scene)
         doc = stimulus_doc(base, vary if stimulus.value is not None else None, layer,
                            stimulus.value, stimulus.renderer)
-        scene, text, _ = self._make(stimulus.name, doc)
+        scene, text, _ = self._make(stimulus.name, doc, base.folder)
         return scene, text
 
     def pair(self, left, right, vary: str | None, layer: int | None) -> tuple[Scene, str]:
@@ -239,5 +263,6 @@ class StimulusBank:
         for stimulus in (left, right):
             self.get(stimulus, vary, layer)
             docs.append(self._made[stimulus.name][2])
-        scene, text, _ = self._make(f"{left.name}+{right.name}", side_by_side(*docs))
+        scene, text, _ = self._make(f"{left.name}+{right.name}", side_by_side(*docs),
+                                    self.folder)
         return scene, text
