@@ -16,6 +16,7 @@ from frictex.app.live.layer_edit import (EditError, LayerEdit, Menu, Slider, cla
                                          layer_controls, save_path)
 from frictex.rendering.visual.layer_panel import (ControlView, PanelView, hit, panel_layout,
                                                   track_fraction)
+from frictex.rendering.visual.viewport import frame_layout
 from frictex.textures.keys import LAYER_KEYS
 from frictex.textures.library import list_scenes, resolve_scene
 from frictex.textures.loader import load_scene
@@ -254,3 +255,16 @@ def test_layout_and_hit_test_agree():
     assert hit(rows, 1.0, 41.0) is None  # the column's padding
     short = panel_layout(view, (0.0, 40.0, 300.0, 100.0), 24.0)
     assert [r.kind for r in short] == kinds[:3] and short[-1].box[1] + 24.0 <= 140.0
+
+
+@pytest.mark.parametrize("size, left", [((800, 615), 240), ((640, 480), 400), ((1920, 1080), 360)])
+def test_the_panel_column_is_kept_left_of_the_scene(size, left):
+    """frame_layout's left column: the scene fitted right of it (never under it), the scope
+    strip still across the frame; a column wider than half the frame is cut to half."""
+    display = load_scene(resolve_scene("grating-5mm")).display
+    vp, strip, _ = frame_layout(display, *size, True, 0, left_px=left)
+    kept = min(left, size[0] // 2)
+    assert vp.x0 >= kept and vp.x0 + vp.width_px <= size[0]
+    assert strip[0] == 0.0 and strip[2] == size[0] and vp.y0 + vp.height_px <= strip[1]
+    alone, _, _ = frame_layout(display, size[0] - kept, size[1], True)
+    assert (vp.width_px, vp.height_px, vp.x0 - kept) == (alone.width_px, alone.height_px, alone.x0)

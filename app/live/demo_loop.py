@@ -31,6 +31,19 @@ scope, O outlines, P screenshot (numbered after those already in the folder, nev
 overwriting one), SPACE emergency stop (latched; SPACE again resumes, ramped), Q /
 Escape quit.
 
+L opens (and closes) the layer panel at the left of the frame
+(``rendering.visual.layer_panel``, its state ``app.live.layer_edit``): a click on a
+layer selects it, a drag on a slider sets a number key, a click on a menu and one of
+its options sets a word key, Ctrl+Z (or U) undoes, Ctrl+S (or the panel's button)
+saves. The pointer there never touches the scene. The input thread only turns clicks
+and drags into panel events queued to the render thread, which applies them once per
+frame (a drag's latest position): the edited text is loaded into a scene
+(``load_scene(path, text=...)``) and handed to the haptic side as a reload is
+(``haptic.switch``, crossfaded in one block), and the next frame draws it. Saving
+writes the file back with its untouched lines as they were; a bundled scene is saved
+as a copy in the user's scene folder (``layer_edit.save_path``), which the demo
+watches and edits from then on.
+
 The scene's texture file and every file it names (raster images, height-map PNGs,
 recorded-texture models, AHAP clips, measured mode tables: ``textures.references``)
 are polled for changes (``app.live.watch``); a change to any of them reloads the scene
@@ -56,12 +69,15 @@ import numpy as np
 from PIL import Image
 
 from frictex.app.live.haptic_thread import EVENTS
+from frictex.app.live.layer_edit import EditError, LayerEdit, Menu
 from frictex.app.live.watch import FileWatch
 from frictex.rendering.renderers import render_modes
 from frictex.rendering.visual.compositor import Compositor, FrameView
+from frictex.rendering.visual.layer_panel import ControlView, PanelView, hit, track_fraction
 from frictex.rendering.visual.modal_view import modal_envelope
 from frictex.rendering.visual.overlay import OverlayState
 from frictex.textures.errors import TextureError
+from frictex.textures.loader import load_scene
 from frictex.textures.references import referenced_files
 
 RENDERER_CYCLE = (None, *render_modes())
@@ -72,7 +88,7 @@ ENVELOPE_S = 0.2  # a modal device's |W| is redrawn from the latest commands 5 t
 FRAME_S = 1.0 / 60.0
 INPUT_WAKE_S = 0.05  # longest the input thread waits for an event before looking at the time
 KEYS_HELP = ("wheel, up/down: force | N/B: scene | R: renderer | S: scope | "
-             "O: outlines | P: screenshot | SPACE: emergency stop | Q: quit")
+             "O: outlines | P: screenshot | L: layers | SPACE: emergency stop | Q: quit")
 
 
 def next_screenshot(folder: Path, stem: str):
@@ -148,6 +164,17 @@ class DemoLoop:
         self._set_envelope(scene, haptic.pipeline.actuation)
         self._next_poll = 0.0
         self._keys: queue.SimpleQueue = queue.SimpleQueue()  # for the render thread
+        #: the layer panel: its editor, the menu open, its note (render thread); the
+        #: slider being dragged and the drags so far (input thread); panel events
+        #: (input -> render thread): ("click", row) | ("slide", row, fraction, drag) | ("end",)
+        self.editor: LayerEdit | None = None
+        self.panel_open = False
+        self.open_menu: str | None = None
+        self.panel_note = ""
+        self._drag = None
+        self._drags = 0
+        self._panel: queue.SimpleQueue = queue.SimpleQueue()
+        self._drag_slider: tuple = (None, None)  # (drag, the slider as it began)
         self._log_lock = threading.Lock()  # both threads log
         self._stop = threading.Event()
         self.render_error: BaseException | None = None
@@ -192,12 +219,39 @@ class DemoLoop:
 
     def on_cursor(self, x_px: float, y_px: float) -> None:
         self.hover_px = (x_px, y_px)
+        if self._drag is not None:
+            self._panel.put(("slide", self._drag, track_fraction(self._drag, x_px), self._drags))
+            return
         self._pending.append((None, self.hover_px))
 
     def on_button(self, pressed: bool) -> None:
         if self.hover_px is None:
             self.hover_px = self.backend.cursor_px()
+        if self._drag is not None and not pressed:
+            self._drag = None
+            self._panel.put(("end",))
+            return
+        if pressed and not self.touching and self._on_panel(self.hover_px):
+            return
         self._pending.append((pressed, self.hover_px))
+
+    def _on_panel(self, px: tuple[float, float]) -> bool:
+        """A press at ``px``: if it is on the layer panel's column, the panel's (a click
+        on a row, or the start of a slider's drag) and True."""
+        left = self.compositor.left_px  # 0 while the panel is closed
+        rows = self.compositor.panel_rows
+        if not left or px[0] >= left or not rows:
+            return False
+        found = hit(rows, *px)
+        if found is not None:
+            row, fraction = found
+            if row.track is not None and px[0] >= row.track[0]:
+                self._drags += 1
+                self._drag = row
+                self._panel.put(("slide", row, fraction, self._drags))
+            else:
+                self._panel.put(("click", row))
+        return True
 
     def on_scroll(self, dy: float) -> None:
         self.set_force(self.force_n + FORCE_STEP_N * dy)
@@ -280,14 +334,141 @@ class DemoLoop:
             self.compositor.set_scene(self.scene, outlines=self.outlines)
         elif name in ("p", "f12"):
             self.screenshot_pending = True
+        elif name == "l":
+            self.toggle_panel()
+        elif name in ("ctrl+z", "u"):
+            self.undo_edit()
+        elif name == "ctrl+s":
+            self.save_edit()
+
+    # -- the layer panel (render thread) ------------------------------------------------
+
+    def toggle_panel(self) -> None:
+        """L: open the layer panel on the scene's file, or close it (edits stay applied)."""
+        self.panel_open = not self.panel_open
+        self.log("panel", "open" if self.panel_open else "closed")
+        if self.panel_open:
+            self._open_editor()
+
+    def _open_editor(self) -> None:
+        """Read the scene's file into a new editor while the panel is open (a file the
+        panel cannot edit is said in the panel)."""
+        if not self.panel_open:
+            return
+        path = Path(self.playlist[self.index])
+        try:
+            self.editor = LayerEdit(path)
+        except EditError as exc:
+            self.editor, self.panel_note = None, str(exc)
+            return
+        self.editor.select(0)
+        self.open_menu, self.panel_note = None, ""
+
+    def handle_panel(self, items: list[tuple]) -> None:
+        """The panel events queued since the last frame, in order; of a drag's run of
+        positions only the last is applied (one scene built a frame)."""
+        for k, item in enumerate(items):
+            if self.editor is None:
+                return
+            if item[0] == "slide":
+                nxt = items[k + 1] if k + 1 < len(items) else None
+                if nxt is not None and nxt[0] == "slide" and nxt[3] == item[3]:
+                    continue  # a later position of the same drag follows
+                _, row, fraction, drag = item
+                if self._drag_slider[0] != drag:  # its span as the drag began, all along
+                    self._drag_slider = (drag, self.editor.control(row.key))
+                self._set_key(row.key, self._drag_slider[1].value_at(fraction), drag)
+            elif item[0] == "end":
+                self.editor.end_group()
+            elif item[0] == "click":
+                self._click(item[1])
+
+    def _click(self, row) -> None:
+        if row.kind == "layer":
+            self.editor.select(row.index)
+            self.open_menu = None
+        elif row.kind == "menu":
+            self.open_menu = None if self.open_menu == row.key else row.key
+        elif row.kind == "option":
+            self.open_menu = None
+            self._set_key(row.key, row.option)
+        elif row.kind == "undo":
+            self.undo_edit()
+        elif row.kind == "save":
+            self.save_edit()
+
+    def _set_key(self, key: str, value, drag: object = None) -> None:
+        """Set ``key`` of the selected layer and apply the edited scene; a value the
+        loader refuses is taken back and said."""
+        editor = self.editor
+        before = editor.text()
+        written = editor.set(key, value, group=drag)
+        if editor.text() != before:
+            name = editor.layer_names()[editor.layer]
+            if not self._apply_text(f"{name} {key} = {written}"):
+                editor.revert(before)
+
+    def _apply_text(self, what: str) -> bool:
+        """The editor's text as the scene, to the haptic side and the picture."""
+        text = self.editor.text()
+        try:
+            scene = load_scene(self.editor.path, text=text)
+        except (ValueError, OSError) as exc:
+            self.error = f"edit refused ({what}), keeping {self.scene.name}: {exc}"
+            self.log("edit-failed", str(exc))
+            return False
+        return self._apply(scene, self.renderer, "edit", what, text)
+
+    def undo_edit(self) -> None:
+        """Ctrl+Z: take back the panel's last change (a whole drag)."""
+        if self.editor is not None and self.editor.undo():
+            self._apply_text("undo")
+
+    def save_edit(self) -> None:
+        """Ctrl+S: write the edited file (a bundled scene: its copy in the user's
+        folder, watched and edited from then on)."""
+        if self.editor is None:
+            return
+        try:
+            path = self.editor.save()
+        except (EditError, ValueError, OSError) as exc:
+            self.panel_note = f"not saved: {exc}"
+            self.log("save-failed", str(exc))
+            return
+        self.playlist[self.index] = path
+        self.files = FileWatch()  # the file as saved is no change to reload
+        self._watch(path)
+        self.panel_note = f"saved {path}"
+        self.log("save", str(path))
+        print(f"saved: {path}")
+
+    def panel_view(self) -> PanelView:
+        """What the panel shows now."""
+        editor = self.editor
+        if editor is None:
+            return PanelView((), None, (), note=self.panel_note)
+        controls = []
+        for c in editor.controls():
+            shown = c.value if isinstance(c, Menu) else f"{c.value:.6g}"
+            label = f"{c.key} = {shown}" + ("" if c.written else " (default)")
+            if isinstance(c, Menu):
+                controls.append(ControlView("menu", c.key, label, options=c.options))
+            else:
+                controls.append(ControlView("slider", c.key, label, fraction=c.fraction))
+        return PanelView(editor.layer_names(), editor.layer, tuple(controls), self.open_menu,
+                         self.panel_note, editor.can_undo)
 
     # -- scenes -------------------------------------------------------------------------
 
-    def _apply(self, scene, renderer, event: str, detail: str) -> bool:
+    def _apply(self, scene, renderer, event: str, detail: str, text: str | None = None) -> bool:
         """Hand ``scene`` with ``renderer`` to the haptic thread and redraw; on error keep
-        the current one and show why."""
+        the current one and show why. ``text``: the text ``scene`` was read from, when it
+        is not its file's (the layer panel's edit)."""
         try:
-            pipeline = self.haptic.switch(scene, renderer)
+            if text is None:
+                pipeline = self.haptic.switch(scene, renderer)
+            else:
+                pipeline = self.haptic.switch(scene, renderer, text=text)
         except (ValueError, OSError, ModuleNotFoundError) as exc:
             self.error = f"{event} failed (keeping {self.scene.name}, {self.renderer or 'file'}): {exc}"
             self.log(f"{event}-failed", str(exc))
@@ -295,7 +476,8 @@ class DemoLoop:
         self.log(event, detail)  # before redrawing the scene image
         if scene is not self.scene:
             self.compositor.set_scene(scene)
-            self.overlay.clear()
+            if event != "edit":  # an edit keeps the trails: the finger is where it was
+                self.overlay.clear()
             self._set_envelope(scene, pipeline.actuation)
         self.scene, self.renderer, self.error = scene, renderer, None
         return True
@@ -312,6 +494,7 @@ class DemoLoop:
             self.index = index
             self.files = FileWatch()
             self._watch(path)
+            self._open_editor()
 
     def _watch(self, path: Path) -> None:
         """Watch the texture file at ``path`` and the files it names now (an edit may
@@ -344,7 +527,8 @@ class DemoLoop:
             self.error = f"reload failed ({what} changed), keeping the last good scene: {exc}"
             self.log("reload-failed", str(exc))
             return
-        self._apply(scene, self.renderer, "reload", f"{scene.name} ({what} changed)")
+        if self._apply(scene, self.renderer, "reload", f"{scene.name} ({what} changed)"):
+            self._open_editor()  # the file as saved, from now on
 
     def _set_envelope(self, scene, actuation) -> None:
         self.envelope = modal_envelope(scene, actuation)
@@ -436,7 +620,8 @@ class DemoLoop:
             overlay=self.overlay, hover_mm=hover, show_scope=self.show_scope,
             amplitude_max_um=self.scene.device.amplitude_limit_um, status=self.status_lines(),
             banner=banner, banner_kind=kind, envelope=self.envelope_now,
-            envelope_scale_um=self.envelope_scale_um))
+            envelope_scale_um=self.envelope_scale_um,
+            layer_panel=self.panel_view() if self.panel_open else None))
 
     def screenshot(self) -> Path:
         """The frame drawn last, as a new PNG in the screenshot folder (never overwriting)."""
@@ -492,6 +677,11 @@ class DemoLoop:
                     raise output_stopped(error)
                 while not self._keys.empty():
                     self.handle_key(*self._keys.get())
+                items = []
+                while not self._panel.empty():
+                    items.append(self._panel.get())
+                if items:
+                    self.handle_panel(items)
                 now = clock()
                 if now < next_frame:
                     self._stop.wait(next_frame - now)

@@ -16,8 +16,8 @@ samples reach the pipeline as they arrive however slow the window's frames are) 
 opened in the child, which sends: the status with every snapshot, a touch screen's
 failure, and the final stats and link status when it stops. The force the wheel sets
 for a touch screen's fingers is a shared ``mp.Value``.
-A scene switch sends the scene's file and the renderer; the child loads and builds it,
-and an error comes back as a message (the old scene stays). The child stops when asked,
+A scene switch sends the scene's file and the renderer (and the file's text as the
+layer panel edited it, not saved yet); the child loads and builds it, and an error comes back as a message (the old scene stays). The child stops when asked,
 when its haptic thread fails, or when the window's process is gone.
 
 The child never outlives the window's process (:func:`die_with_parent`). Two watches
@@ -161,18 +161,20 @@ class HapticProcess(TouchInput):
         error, self._input_error = self._input_error, None
         return error
 
-    def switch(self, scene=None, render_override: str | None | bool = False) -> PipelineInfo:
+    def switch(self, scene=None, render_override: str | None | bool = False,
+               text: str | None = None) -> PipelineInfo:
         """Change scene and/or renderer (False: keep the current renderer), as
-        ``HapticThread.switch``: the child loads ``scene.source`` and builds it (the
-        window waits for its answer, the haptic output does not); errors raise ValueError
-        with the child's message, and nothing changes."""
+        ``HapticThread.switch``: the child loads ``scene.source`` (read as ``text`` if
+        given: the layer panel's edit, not saved) and builds it (the window waits for its
+        answer, the haptic output does not); errors raise ValueError with the child's
+        message, and nothing changes."""
         override = self.render_override if render_override is False else render_override
         new = scene is not None and scene is not self.scene
         if new and scene.source is None:
             raise ValueError(f"scene {scene.name} has no file: the haptic process loads "
                              "scenes from their files")
-        self._requests.put(("switch", str(scene.source) if new else None, override),
-                           timeout=SWITCH_TIMEOUT_S)
+        self._requests.put(("switch", str(scene.source) if new else None, override,
+                            text if new else None), timeout=SWITCH_TIMEOUT_S)
         reply = self._wait("switched", SWITCH_TIMEOUT_S)
         if reply[1] is not None:
             raise ValueError(reply[1])
@@ -380,10 +382,12 @@ def _sendable(exc: BaseException) -> BaseException:
         return RuntimeError(repr(exc))
 
 
-def _switch(haptic, load_scene, path: str | None, override) -> tuple:
-    """(error message or None, the pipeline's channels) of switching ``haptic``."""
+def _switch(haptic, load_scene, path: str | None, override, text: str | None) -> tuple:
+    """(error message or None, the pipeline's channels) of switching ``haptic`` to the
+    scene in the file at ``path`` (read as ``text`` if given) with ``override``."""
     try:
-        pipeline = haptic.switch(load_scene(path) if path is not None else None, override)
+        scene = None if path is None else load_scene(path, text=text)
+        pipeline = haptic.switch(scene, override)
     except (ValueError, OSError, ModuleNotFoundError) as exc:
         return str(exc), None
     gc.freeze()  # as at the start

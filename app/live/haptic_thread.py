@@ -305,10 +305,12 @@ class HapticThread(TouchInput, threading.Thread):
 
     # -- called from other threads ------------------------------------------------------
 
-    def switch(self, scene=None, render_override: str | None | bool = False):
+    def switch(self, scene=None, render_override: str | None | bool = False,
+               text: str | None = None):
         """Change scene and/or renderer (False: keep the current one). The pipeline is
         built here, on the caller's thread (errors raise here: nothing changes), returned,
-        and taken over, crossfaded, at the next block."""
+        and taken over, crossfaded, at the next block. ``text``: the scene file's text
+        (``HapticProcess.switch`` sends it; here the scene itself is at hand)."""
         override = self.render_override if render_override is False else render_override
         pipeline = build_pipeline(scene or self.pipeline.scene, self.rate_hz, self.block_size,
                                   override, control=self.control)

@@ -5,7 +5,7 @@
 - ``glfw``: a window (windowed or fullscreen on a chosen monitor) whose input
   (cursor, buttons, wheel, keys) is forwarded to callbacks as backend-neutral values:
   cursor positions in framebuffer pixels as floats (never truncated), key names as
-  lower-case strings ("space", "n", "up", ...).
+  lower-case strings ("space", "n", "up", ...; held Control prefixes "ctrl+": "ctrl+z").
 - ``headless``: the glfw window's contract without a display: an EGL framebuffer whose
   input the caller injects (``rendering.visual.headless``).
 
@@ -222,7 +222,10 @@ class GlfwBackend:
 
     def _key(self, _win, key, _scancode, action, mods):
         if self.on_key and action == self._glfw.PRESS and key in self._keys:
-            self.on_key(self._keys[key], bool(mods & self._glfw.MOD_SHIFT))
+            name = self._keys[key]
+            if mods & self._glfw.MOD_CONTROL:
+                name = "ctrl+" + name
+            self.on_key(name, bool(mods & self._glfw.MOD_SHIFT))
 
     def cursor_px(self) -> tuple[float, float]:
         x, y = self._glfw.get_cursor_pos(self.window)

@@ -71,7 +71,7 @@ def scope_height(frame_h: int) -> int:
 
 
 def frame_layout(display: Display, frame_w: int, frame_h: int, scope: bool, side_px: int = 0,
-                 ) -> tuple[Viewport, tuple[float, float, float, float] | None,
+                 left_px: int = 0) -> tuple[Viewport, tuple[float, float, float, float] | None,
                             tuple[float, float, float, float]]:
     """Where the active area, the scope strip and the panel column go in a frame.
 
@@ -79,7 +79,9 @@ def frame_layout(display: Display, frame_w: int, frame_h: int, scope: bool, side
     active area is fitted above it, never under it (in a frame too low for both, each
     gets half); without, the strip is None. ``side_px``: a column that wide at the right
     of the frame, above the strip, is kept for a device panel (at most half the frame)
-    and the active area is fitted beside it, never under it.
+    and the active area is fitted beside it, never under it. ``left_px``: likewise a
+    column at the left (the demo's layer panel; at most half of what the right one
+    leaves).
 
     Returns
     -------
@@ -88,10 +90,11 @@ def frame_layout(display: Display, frame_w: int, frame_h: int, scope: bool, side
     """
     strip = min(scope_height(frame_h), frame_h // 2) if scope else 0
     side = min(max(int(side_px), 0), frame_w // 2)
-    area = fit_viewport(display, max(frame_w - side, 1), max(frame_h - strip, 1))
+    left = min(max(int(left_px), 0), (frame_w - side) // 2)
+    area = fit_viewport(display, max(frame_w - side - left, 1), max(frame_h - strip, 1))
     rect = (0.0, float(frame_h - strip), float(frame_w), float(strip)) if scope else None
     column = (float(frame_w - side), 0.0, float(side), float(frame_h - strip))
-    return replace(area, frame_w=frame_w, frame_h=frame_h), rect, column
+    return replace(area, x0=area.x0 + left, frame_w=frame_w, frame_h=frame_h), rect, column
 
 
 def default_frame_size(display: Display, side_px: int = 0) -> tuple[int, int]:

@@ -1,0 +1,172 @@
+"""The layer panel in the demo loop itself, on the headless window (no display): L opens
+it, a slider drag made of injected mouse events changes the scene the haptic side
+renders from the block that takes the switch on, and the picture from the next frame;
+Ctrl+Z takes the drag back; Ctrl+S saves the file keeping its untouched lines. Every
+wait is for the demo to confirm a step, bounded."""
+
+import csv
+import re
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from frictex.app.live.demo_loop import DemoLoop
+from frictex.app.live.haptic_setup import open_haptic
+from frictex.app.live.haptic_thread import EVENTS
+from frictex.rendering.visual.viewport import default_frame_size
+from frictex.rendering.visual.windows import open_backend
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import load_scene
+
+pytest.importorskip("moderngl", reason="moderngl (Python package) not installed")
+
+FINGER, X_MM, Y_MM = 5, 1.25, 30.0  # a finger held in the first quarter of a 5 mm period
+DUTY_AT = 0.2  # the slider is dragged to this fraction of its track: duty 0.201
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def wait_for(what, test, timeout_s=120.0):
+    deadline = time.monotonic() + timeout_s
+    while not test():
+        assert time.monotonic() < deadline, f"waited {timeout_s} s for {what}"
+        time.sleep(0.01)
+
+
+class Frames:
+    """The frames the window shows, each with the scene it was drawn with: the last
+    before each change of scene and the first after it."""
+
+    def __init__(self):
+        self.loop = None
+        self.pairs = []  # (last frame of the scene before, first frame of the new one)
+        self._last = None  # (scene, frame)
+
+    def __call__(self, rgb):
+        scene = self.loop.scene
+        if self._last is not None and scene is not self._last[0]:
+            self.pairs.append((self._last[1], rgb.copy(), self.loop.compositor.viewport))
+        self._last = (scene, rgb.copy())
+
+
+def test_a_slider_drag_changes_the_next_block_and_frame(tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
+    scene_file = tmp_path / "lines.toml"
+    text = resolve_scene("grating-5mm").read_text().replace('render = "auto"', 'render = "sho"')
+    scene_file.write_text(text)
+    scene = load_scene(scene_file)
+    rec = tmp_path / "rec"
+    frames = Frames()
+    try:
+        window = open_backend("headless", default_frame_size(scene.display), on_frame=frames)
+    except OSError as exc:
+        pytest.skip(f"EGL unavailable: {exc}")
+    haptic, finish = open_haptic(scene, 10_000.0, 50, None, None, rec)
+    haptic.start()
+    loop = DemoLoop(window, haptic, [scene_file], 0, scene, load_scene, tmp_path,
+                    events_path=rec / "events.csv")
+    frames.loop = loop
+    failures = []
+
+    def hand():
+        """The user: a finger held on the scene (a touch screen's, beside the mouse),
+        L, a drag on the duty slider, Ctrl+Z, the drag again, Ctrl+S, Q."""
+        stop = threading.Event()
+
+        def hold():
+            event = "down"
+            while not stop.is_set():
+                haptic.touches_at(haptic.now(), [(FINGER, X_MM, Y_MM, 0.5, EVENTS[event])])
+                event = "move"
+                stop.wait(0.01)
+            haptic.touches_at(haptic.now(), [(FINGER, X_MM, Y_MM, 0.5, EVENTS["up"])])
+        holder = threading.Thread(target=hold)
+
+        def drag_duty():
+            row = next(r for r in loop.compositor.panel_rows if r.key == "duty")
+            tx, ty, tw, th = row.track
+            window.move(tx + row.fraction * tw, ty + th / 2)
+            window.press()
+            for f in np.linspace(row.fraction, DUTY_AT, 8):
+                window.move(tx + f * tw, ty + th / 2)
+            window.release()
+            wait_for("the edit", lambda: loop.scene.layers[0].duty == 0.201)
+        try:
+            wait_for("the first frame", lambda: window.frames > 0)
+            holder.start()
+            wait_for("the finger's touch", lambda: FINGER in loop.fingers_down)
+            window.key("l")
+            wait_for("the duty slider", lambda: any(r.key == "duty" for r in loop.compositor.panel_rows))
+            drag_duty()
+            window.key("ctrl+z")
+            wait_for("the undo", lambda: loop.scene.layers[0].duty == 0.5)
+            wait_for("the slider back", lambda: any(r.key == "duty" and r.fraction == 0.5
+                                                    for r in loop.compositor.panel_rows))
+            drag_duty()
+            window.key("ctrl+s")
+            wait_for("the save", lambda: scene_file.read_text() != text)
+            n = haptic.stats.blocks
+            wait_for("10 blocks more", lambda: haptic.stats.blocks > n + 10)
+            stop.set()
+            holder.join()
+            wait_for("the lift", lambda: FINGER not in loop.fingers_down)
+        except BaseException as exc:  # raised in the test below
+            failures.append(exc)
+        finally:
+            stop.set()
+            window.key("q")
+
+    user = threading.Thread(target=hand, name="test-hand")
+    user.start()
+    try:
+        loop.run(duration_s=300.0)
+    finally:
+        user.join()
+        finish()
+        loop.close()
+        window.close()
+    if failures:
+        raise failures[0]
+
+    # the file: the duty line changed, its comment kept; every other line as it was
+    saved = scene_file.read_text().splitlines(keepends=True)
+    changed = [(a, b) for a, b in zip(text.splitlines(keepends=True), saved) if a != b]
+    assert len(saved) == len(text.splitlines()) and len(changed) == 1
+    assert changed[0][1].startswith("duty = 0.201 ") and changed[0][1].endswith(
+        "# the black line is the first half of each period\n")
+    assert load_scene(scene_file).layers[0].duty == 0.201
+
+    # the output: at each edit's switch the finger's target becomes the edited scene's
+    events = read_csv(rec / "events.csv")
+    edits = [e for e in events if e["event"] in ("edit", "output-switch")]
+    duties = [0.5]
+    for e in edits:
+        if e["event"] == "edit":
+            m = re.search(r"duty = ([0-9.]+)$", e["detail"])
+            duties.append(float(m.group(1)) if m else 0.5)  # "undo": back to 0.5
+    switches = [float(e["t_s"]) for e in edits if e["event"] == "output-switch"]
+    assert len(switches) == len(duties) - 1 >= 3 and duties[-1] == 0.201 and 0.5 in duties[1:]
+    rows = [r for r in read_csv(rec / "friction.csv") if r["finger"] == str(FINGER)]
+    t = np.array([float(r["t_s"]) for r in rows])
+    mu = np.array([float(r["mu_target"]) for r in rows])
+    np.testing.assert_allclose(np.array([float(r["x_mm"]) for r in rows]), X_MM, atol=1e-4)
+    for k, t_switch in enumerate(switches):
+        before, after = np.flatnonzero(t < t_switch)[-1], np.flatnonzero(t >= t_switch)[0]
+        # the grating: low (0.6) where the phase 0.25 of the finger is below the duty
+        assert mu[before] == (0.6 if 0.25 < duties[k] else 1.0)
+        assert mu[after] == (0.6 if 0.25 < duties[k + 1] else 1.0)
+        assert t[after] - t_switch < 50 / 10_000.0 + 1e-9  # the switch's own block
+    assert mu[-1] == 1.0 and (mu == 0.6).any()
+
+    # the picture: the frame after each change of scene differs from the one before in
+    # the scene's area (lines of another width), not only in the panel
+    assert len(frames.pairs) >= len(switches)
+    for before, after, vp in frames.pairs:
+        area = (slice(vp.y0, vp.y0 + vp.height_px), slice(vp.x0, vp.x0 + vp.width_px))
+        changed_px = np.any(before[area] != after[area], axis=-1).mean()
+        assert changed_px > 0.0
