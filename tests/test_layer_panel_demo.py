@@ -54,28 +54,66 @@ class Frames:
         self._last = (scene, rgb.copy())
 
 
+def run_demo(scene_file, rec, hand, on_frame=None) -> None:
+    """The demo loop on the headless window with ``scene_file``, its haptic thread in this
+    process, recording into ``rec``; ``hand(window, loop, haptic)``, the user, runs on a
+    thread of its own, then Q. What the hand raises is raised here."""
+    scene = load_scene(scene_file)
+    try:
+        window = open_backend("headless", default_frame_size(scene.display), on_frame=on_frame)
+    except OSError as exc:
+        pytest.skip(f"EGL unavailable: {exc}")
+    haptic, finish = open_haptic(scene, 10_000.0, 50, None, None, rec)
+    haptic.start()
+    loop = DemoLoop(window, haptic, [scene_file], 0, scene, load_scene, rec.parent,
+                    events_path=rec / "events.csv")
+    if on_frame is not None:
+        on_frame.loop = loop
+    failures = []
+
+    def user():
+        try:
+            wait_for("the first frame", lambda: window.frames > 0)
+            hand(window, loop, haptic)
+        except BaseException as exc:  # raised below
+            failures.append(exc)
+        finally:
+            window.key("q")
+    thread = threading.Thread(target=user, name="test-hand")
+    thread.start()
+    try:
+        loop.run(duration_s=300.0)
+    finally:
+        thread.join()
+        finish()
+        loop.close()
+        window.close()
+    if failures:
+        raise failures[0]
+
+
+def row_of(loop, key):
+    return next(r for r in loop.compositor.panel_rows if r.key == key)
+
+
+def click(window, row):
+    x, y, w, h = row.box
+    window.move(x + w / 4, y + h / 2)
+    window.press()
+    window.release()
+
+
 def test_a_slider_drag_changes_the_next_block_and_frame(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
     scene_file = tmp_path / "lines.toml"
     text = resolve_scene("grating-5mm").read_text().replace('render = "auto"', 'render = "sho"')
     scene_file.write_text(text)
-    scene = load_scene(scene_file)
     rec = tmp_path / "rec"
     frames = Frames()
-    try:
-        window = open_backend("headless", default_frame_size(scene.display), on_frame=frames)
-    except OSError as exc:
-        pytest.skip(f"EGL unavailable: {exc}")
-    haptic, finish = open_haptic(scene, 10_000.0, 50, None, None, rec)
-    haptic.start()
-    loop = DemoLoop(window, haptic, [scene_file], 0, scene, load_scene, tmp_path,
-                    events_path=rec / "events.csv")
-    frames.loop = loop
-    failures = []
 
-    def hand():
-        """The user: a finger held on the scene (a touch screen's, beside the mouse),
-        L, a drag on the duty slider, Ctrl+Z, the drag again, Ctrl+S, Q."""
+    def hand(window, loop, haptic):
+        """A finger held on the scene (a touch screen's, beside the mouse), L, a drag on
+        the duty slider, Ctrl+Z, the drag again, Ctrl+S."""
         stop = threading.Event()
 
         def hold():
@@ -85,10 +123,9 @@ def test_a_slider_drag_changes_the_next_block_and_frame(tmp_path, monkeypatch):
                 event = "move"
                 stop.wait(0.01)
             haptic.touches_at(haptic.now(), [(FINGER, X_MM, Y_MM, 0.5, EVENTS["up"])])
-        holder = threading.Thread(target=hold)
 
         def drag_duty():
-            row = next(r for r in loop.compositor.panel_rows if r.key == "duty")
+            row = row_of(loop, "duty")
             tx, ty, tw, th = row.track
             window.move(tx + row.fraction * tw, ty + th / 2)
             window.press()
@@ -96,42 +133,27 @@ def test_a_slider_drag_changes_the_next_block_and_frame(tmp_path, monkeypatch):
                 window.move(tx + f * tw, ty + th / 2)
             window.release()
             wait_for("the edit", lambda: loop.scene.layers[0].duty == 0.201)
+        holder = threading.Thread(target=hold)
+        holder.start()
         try:
-            wait_for("the first frame", lambda: window.frames > 0)
-            holder.start()
             wait_for("the finger's touch", lambda: FINGER in loop.fingers_down)
             window.key("l")
             wait_for("the duty slider", lambda: any(r.key == "duty" for r in loop.compositor.panel_rows))
             drag_duty()
             window.key("ctrl+z")
             wait_for("the undo", lambda: loop.scene.layers[0].duty == 0.5)
-            wait_for("the slider back", lambda: any(r.key == "duty" and r.fraction == 0.5
-                                                    for r in loop.compositor.panel_rows))
+            wait_for("the slider back", lambda: row_of(loop, "duty").fraction == 0.5)
             drag_duty()
             window.key("ctrl+s")
             wait_for("the save", lambda: scene_file.read_text() != text)
             n = haptic.stats.blocks
             wait_for("10 blocks more", lambda: haptic.stats.blocks > n + 10)
-            stop.set()
-            holder.join()
-            wait_for("the lift", lambda: FINGER not in loop.fingers_down)
-        except BaseException as exc:  # raised in the test below
-            failures.append(exc)
         finally:
             stop.set()
-            window.key("q")
+            holder.join()
+        wait_for("the lift", lambda: FINGER not in loop.fingers_down)
 
-    user = threading.Thread(target=hand, name="test-hand")
-    user.start()
-    try:
-        loop.run(duration_s=300.0)
-    finally:
-        user.join()
-        finish()
-        loop.close()
-        window.close()
-    if failures:
-        raise failures[0]
+    run_demo(scene_file, rec, hand, frames)
 
     # the file: the duty line changed, its comment kept; every other line as it was
     saved = scene_file.read_text().splitlines(keepends=True)
@@ -170,3 +192,39 @@ def test_a_slider_drag_changes_the_next_block_and_frame(tmp_path, monkeypatch):
         area = (slice(vp.y0, vp.y0 + vp.height_px), slice(vp.x0, vp.x0 + vp.width_px))
         changed_px = np.any(before[area] != after[area], axis=-1).mean()
         assert changed_px > 0.0
+
+
+def test_a_click_selects_a_layer_and_a_menu_sets_a_word_key(tmp_path, monkeypatch):
+    """objects-bump-edge-disc, bundled: the disc (layer 2) selected, its blend menu opened
+    and "replace" chosen: the scene shown and rendered takes it; undo takes it back; the
+    bundled file is never written (nothing was saved)."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
+    path = resolve_scene("objects-bump-edge-disc")
+    text = path.read_text()
+    rec = tmp_path / "rec"
+
+    def hand(window, loop, haptic):
+        window.key("l")
+        wait_for("the layers", lambda: sum(r.kind == "layer" for r in loop.compositor.panel_rows) == 3)
+        layer = [r for r in loop.compositor.panel_rows if r.kind == "layer"][1]
+        assert layer.text == "disc (disc)"
+        click(window, layer)
+        wait_for("the disc's keys", lambda: any(r.key == "radius_mm" for r in loop.compositor.panel_rows))
+        click(window, row_of(loop, "blend"))
+        wait_for("the menu", lambda: any(r.kind == "option" for r in loop.compositor.panel_rows))
+        options = [r for r in loop.compositor.panel_rows if r.kind == "option"]
+        assert [r.option for r in options] == ["multiply", "replace"]
+        click(window, options[1])
+        wait_for("the edit", lambda: loop.scene.layers[1].blend == "replace")
+        wait_for("the haptic side's", lambda: haptic.pipeline.scene.layers[1].blend == "replace")
+        wait_for("the menu closed", lambda: not any(r.kind == "option"
+                                                    for r in loop.compositor.panel_rows))
+        window.key("u")
+        wait_for("the undo", lambda: loop.scene.layers[1].blend == "multiply")
+
+    run_demo(path, rec, hand)
+    events = read_csv(rec / "events.csv")
+    assert [e["detail"] for e in events if e["event"] == "edit"] == [
+        "disc (disc) blend = replace", "undo"]
+    assert sum(e["event"] == "output-switch" for e in events) == 2
+    assert path.read_text() == text and not (tmp_path / "data").exists()

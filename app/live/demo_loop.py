@@ -69,11 +69,11 @@ import numpy as np
 from PIL import Image
 
 from frictex.app.live.haptic_thread import EVENTS
-from frictex.app.live.layer_edit import EditError, LayerEdit, Menu
+from frictex.app.live.layer_edit import EditError, LayerEdit, panel_view
 from frictex.app.live.watch import FileWatch
 from frictex.rendering.renderers import render_modes
 from frictex.rendering.visual.compositor import Compositor, FrameView
-from frictex.rendering.visual.layer_panel import ControlView, PanelView, hit, track_fraction
+from frictex.rendering.visual.layer_panel import PanelView, hit, track_fraction
 from frictex.rendering.visual.modal_view import modal_envelope
 from frictex.rendering.visual.overlay import OverlayState
 from frictex.textures.errors import TextureError
@@ -438,25 +438,13 @@ class DemoLoop:
         self.playlist[self.index] = path
         self.files = FileWatch()  # the file as saved is no change to reload
         self._watch(path)
-        self.panel_note = f"saved {path}"
+        self.panel_note = f"saved {path.name} in {path.parent}"
         self.log("save", str(path))
         print(f"saved: {path}")
 
     def panel_view(self) -> PanelView:
         """What the panel shows now."""
-        editor = self.editor
-        if editor is None:
-            return PanelView((), None, (), note=self.panel_note)
-        controls = []
-        for c in editor.controls():
-            shown = c.value if isinstance(c, Menu) else f"{c.value:.6g}"
-            label = f"{c.key} = {shown}" + ("" if c.written else " (default)")
-            if isinstance(c, Menu):
-                controls.append(ControlView("menu", c.key, label, options=c.options))
-            else:
-                controls.append(ControlView("slider", c.key, label, fraction=c.fraction))
-        return PanelView(editor.layer_names(), editor.layer, tuple(controls), self.open_menu,
-                         self.panel_note, editor.can_undo)
+        return panel_view(self.editor, self.open_menu, self.panel_note)
 
     # -- scenes -------------------------------------------------------------------------
 

@@ -38,6 +38,7 @@ import tomlkit
 from tomlkit.exceptions import TOMLKitError
 
 from frictex.device.errors import InputError
+from frictex.rendering.visual.layer_panel import ControlView, PanelView
 from frictex.textures.keys import CLIP_SHAPES, COMMON, HEIGHT_SHAPES, LAYER_KEYS
 from frictex.textures.library import LIBRARY_DIR
 from frictex.textures.loader import load_scene
@@ -359,3 +360,21 @@ class LayerEdit:
             if ref.is_relative_to(home) and not (folder / ref.relative_to(home)).exists():
                 (folder / ref.relative_to(home)).parent.mkdir(parents=True, exist_ok=True)
                 shutil.copy2(ref, folder / ref.relative_to(home))
+
+
+def panel_view(editor: LayerEdit | None, open_menu: str | None = None, note: str = "") -> PanelView:
+    """What the panel shows of ``editor`` (None: a file it could not open, ``note`` saying
+    why): its layers, the selected one's controls labelled "key = value" ("(default)"
+    where the file does not give the key), the menu ``open_menu`` open."""
+    if editor is None:
+        return PanelView((), None, (), note=note)
+    controls = []
+    for c in editor.controls():
+        shown = c.value if isinstance(c, Menu) else f"{c.value:.6g}"
+        label = f"{c.key} = {shown}" + ("" if c.written else " (default)")
+        if isinstance(c, Menu):
+            controls.append(ControlView("menu", c.key, label, options=c.options))
+        else:
+            controls.append(ControlView("slider", c.key, label, fraction=c.fraction))
+    return PanelView(editor.layer_names(), editor.layer, tuple(controls), open_menu, note,
+                     editor.can_undo)
