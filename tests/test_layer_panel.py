@@ -268,3 +268,11 @@ def test_the_panel_column_is_kept_left_of_the_scene(size, left):
     assert strip[0] == 0.0 and strip[2] == size[0] and vp.y0 + vp.height_px <= strip[1]
     alone, _, _ = frame_layout(display, size[0] - kept, size[1], True)
     assert (vp.width_px, vp.height_px, vp.x0 - kept) == (alone.width_px, alone.height_px, alone.x0)
+
+
+def test_an_integer_key_is_a_slider_of_whole_numbers():
+    table = {"type": "recorded", "model": "model.json", "seed": 3}
+    seed = next(c for c in layer_controls(table, 100.0) if c.key == "seed")
+    assert isinstance(seed, Slider) and seed.integer and seed.step == 1.0
+    assert (seed.lo, seed.allowed_lo, seed.allowed_hi) == (0.0, 0.0, 2.0**31 - 1)
+    assert clamp(seed, 7.6) == 8.0 and clamp(seed, -4) == 0.0 and clamp(seed, 1e12) == 2**31 - 1

@@ -8,6 +8,7 @@ import csv
 import re
 import threading
 import time
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -15,6 +16,7 @@ import pytest
 from frictex.app.live.demo_loop import DemoLoop
 from frictex.app.live.haptic_setup import open_haptic
 from frictex.app.live.haptic_thread import EVENTS
+from frictex.rendering.visual.layer_panel import PanelRow
 from frictex.rendering.visual.viewport import default_frame_size
 from frictex.rendering.visual.windows import open_backend
 from frictex.textures.library import resolve_scene
@@ -221,6 +223,11 @@ def test_a_click_selects_a_layer_and_a_menu_sets_a_word_key(tmp_path, monkeypatc
                                                     for r in loop.compositor.panel_rows))
         window.key("u")
         wait_for("the undo", lambda: loop.scene.layers[1].blend == "multiply")
+        # rows of a file as it was before a reload: said in the panel, the demo runs on
+        loop._panel.put(("click", PanelRow("layer", "gone", (0.0, 0.0, 1.0, 1.0), index=7)))
+        wait_for("the note", lambda: "layer 7 does not exist" in loop.panel_note)
+        loop._panel.put(("slide", replace(row_of(loop, "mu"), key="colour"), 0.5, 99))
+        wait_for("the note", lambda: "no key 'colour'" in loop.panel_note)
 
     run_demo(path, rec, hand)
     events = read_csv(rec / "events.csv")

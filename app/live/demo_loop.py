@@ -366,22 +366,27 @@ class DemoLoop:
 
     def handle_panel(self, items: list[tuple]) -> None:
         """The panel events queued since the last frame, in order; of a drag's run of
-        positions only the last is applied (one scene built a frame)."""
+        positions only the last is applied (one scene built a frame). An event for a
+        row the editor no longer has (the file was reloaded meanwhile) is said in the
+        panel and dropped."""
         for k, item in enumerate(items):
             if self.editor is None:
                 return
-            if item[0] == "slide":
-                nxt = items[k + 1] if k + 1 < len(items) else None
-                if nxt is not None and nxt[0] == "slide" and nxt[3] == item[3]:
-                    continue  # a later position of the same drag follows
-                _, row, fraction, drag = item
-                if self._drag_slider[0] != drag:  # its span as the drag began, all along
-                    self._drag_slider = (drag, self.editor.control(row.key))
-                self._set_key(row.key, self._drag_slider[1].value_at(fraction), drag)
-            elif item[0] == "end":
-                self.editor.end_group()
-            elif item[0] == "click":
-                self._click(item[1])
+            try:
+                if item[0] == "slide":
+                    nxt = items[k + 1] if k + 1 < len(items) else None
+                    if nxt is not None and nxt[0] == "slide" and nxt[3] == item[3]:
+                        continue  # a later position of the same drag follows
+                    _, row, fraction, drag = item
+                    if self._drag_slider[0] != drag:  # its span as the drag began, all along
+                        self._drag_slider = (drag, self.editor.control(row.key))
+                    self._set_key(row.key, self._drag_slider[1].value_at(fraction), drag)
+                elif item[0] == "end":
+                    self.editor.end_group()
+                elif item[0] == "click":
+                    self._click(item[1])
+            except EditError as exc:
+                self.panel_note = str(exc)
 
     def _click(self, row) -> None:
         if row.kind == "layer":
