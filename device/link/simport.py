@@ -31,8 +31,6 @@ OPTIONS = {"limit": ("limits_um", float), "buffer": ("buffer_samples", int),
            "sensor": ("sensor", bool), "force": ("force_n", float),
            "lateral": ("lateral_n", float), "finger": ("finger", int),
            "finger-speed": ("finger_speed_mm_s", float), "protocol": ("protocol_version", int)}
-#: how finely a waiting read polls the device's clock (s)
-_POLL_S = 0.0005
 
 
 def sim_config(pairs, channels: int, rate_hz: float, phases: bool) -> DeviceConfig:
@@ -120,17 +118,19 @@ class SimPort:
 
     @property
     def in_waiting(self) -> int:
+        """Bytes the device has sent and nobody read yet (as of the last call)."""
         self._check()
-        self._advance()
         return len(self._out)
 
     def read(self, size: int = 1) -> bytes:
-        """Up to ``size`` bytes the device sent, waiting at most ``timeout`` for one."""
+        """Up to ``size`` bytes the device sent, waiting ``timeout`` if it had none: the
+        device speaks on its own only at its ticks (force reports, a watchdog's Flushed),
+        which the next call plays, so one wait per read does (a poll every tick would
+        cost the host's CPU for nothing)."""
         self._check()
-        deadline = time.monotonic() + self.timeout
         self._advance()
-        while not self._out and time.monotonic() < deadline:
-            time.sleep(_POLL_S)
+        if not self._out:
+            time.sleep(self.timeout)
             self._advance()
         data = bytes(self._out[:size])
         del self._out[:size]
@@ -139,8 +139,7 @@ class SimPort:
     def write(self, data: bytes) -> int:
         self._check()
         self._out += self._device.core.receive(bytes(data), self._device.now())
-        self._advance()
-        return len(data)
+        return len(data)  # the clock plays on at the next read
 
     def close(self) -> None:
         self.is_open = False
