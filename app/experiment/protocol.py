@@ -263,11 +263,6 @@ class Protocol:
     analysis: Analysis
 
     @property
-    def two_interval(self) -> bool:
-        """Trials that show two stimuli (all methods but magnitude estimation)."""
-        return self.method != "magnitude"
-
-    @property
     def guess_rate(self) -> float | None:
         """Chance performance of the method's forced choice; None where none applies."""
         return GUESS_RATES.get(self.method)
