@@ -10,7 +10,7 @@ after changing a key:
 from __future__ import annotations
 
 from frictex.app.experiment import protocol as P
-from frictex.textures.format_doc import _default, _kind, _range
+from frictex.textures.schema import REQUIRED
 
 INTRO = """# Protocol files: every table and key
 
@@ -28,18 +28,50 @@ to the protocol file.
 """
 
 
+def _number(value) -> str:
+    return str(value) if isinstance(value, int) else f"{value:g}"
+
+
+def _range(spec) -> str:
+    """The bounds of a number: ``> 0, <= 600``; "-" for none."""
+    low = (f"> {_number(spec.gt)}" if getattr(spec, "gt", None) is not None
+           else f">= {_number(spec.ge)}" if getattr(spec, "ge", None) is not None else "")
+    high = (f"< {_number(spec.lt)}" if getattr(spec, "lt", None) is not None
+            else f"<= {_number(spec.le)}" if getattr(spec, "le", None) is not None else "")
+    return ", ".join(part for part in (low, high) if part) or "-"
+
+
+def _default(spec) -> str:
+    value = spec.default
+    if value is REQUIRED:
+        return "*required*"
+    if value is None:
+        return "none (see the grammar in `app/experiment/protocol.py`)"
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, tuple):
+        return "[" + ", ".join(f"{v:g}" for v in value) + "]" if value else "none"
+    return f"{value:g}"
+
+
 def _describe(spec) -> tuple[str, str, str]:
+    """(what the value is, its range, its default) of a key."""
     if isinstance(spec, P.Names):
         return ("list of distinct names, each one of " + ", ".join(f"`{o}`" for o in spec.options),
-                "-", "none")
-    inner = spec.item if isinstance(spec, P.NumList) else spec
-    span = _range(inner) or "-"
+                "-", _default(spec))
+    if isinstance(spec, P.NumList):
+        return (f"list of at least {spec.min_len} numbers ({spec.item.unit})", _range(spec.item),
+                _default(spec) if spec.default != () else "[]")
+    if isinstance(spec, P.Num):
+        return f"number ({spec.unit})", _range(spec), _default(spec)
     if isinstance(spec, P.Int):
-        span = ", ".join(part for part in (f">= {spec.ge}" if spec.ge is not None else "",
-                                           f"<= {spec.le}" if spec.le is not None else "") if part)
-    default = ("none (see the grammar in `app/experiment/protocol.py`)" if spec.default is None
-               else _default(spec))
-    return _kind(spec), span or "-", default
+        return f"integer ({spec.unit})", _range(spec), _default(spec)
+    if isinstance(spec, P.Choice):
+        return "one of " + ", ".join(f"`{o}`" for o in spec.options), "-", _default(spec)
+    if isinstance(spec, P.Text):
+        lines = ", may span lines" if spec.lines else ""
+        return f"text (at most {spec.max_len} characters{lines})", "-", _default(spec)
+    raise TypeError(f"no description for {type(spec).__name__}")
 
 
 def sections() -> list[tuple[str, dict]]:
