@@ -1,5 +1,7 @@
 """``frictex validate``: output lines and exit codes, as a user sees them."""
 
+import re
+
 import pytest
 
 from frictex.app.commands.cli import main
@@ -32,9 +34,55 @@ def test_warning_does_not_fail(files, capsys):
     assert main(["validate", str(low)]) == 0
     out, err = capsys.readouterr()
     assert out == f"ok {low} (1 layer)\n"
-    assert err.startswith(f"frictex: warning: {low}:12: layer[1].mu: asks for mu' down to 0.3, but the device "
-                          f"reaches only 0.5717 at the nominal 0.5 N")
-    assert err.count("\n") == 1
+    layer, reach = err.splitlines()
+    assert layer.startswith(f"frictex: warning: {low}:12: layer[1].mu: asks for mu' down to 0.3, but the "
+                            f"device reaches only 0.5717 at the nominal 0.5 N")
+    assert reach.startswith(f"frictex: warning: {low}: layers: ")
+    assert 'the product of layers "bump-1"' in reach
+
+
+def test_strict_fails_a_file_with_warnings_with_exit_2(files, capsys):
+    good, low, _ = files
+    assert main(["validate", "--strict", str(good)]) == 0
+    assert capsys.readouterr().out == f"ok {good} (1 layer)\n"
+    assert main(["validate", "--strict", str(good), str(low)]) == 2
+    out, err = capsys.readouterr()
+    assert out == f"ok {good} (1 layer)\n"
+    assert f"frictex: error: {low}: 2 warnings (--strict)" in err.splitlines()
+    assert err.splitlines()[-1] == "frictex: error: 1 of 2 files have problems"
+
+
+def _plank(tmp_path, name):
+    from frictex.textures.format_doc import example_files
+    path = tmp_path / "plank.toml"
+    path.write_text(example_files()[name], encoding="utf-8")
+    return path
+
+
+def test_the_plank_as_first_written_warns_of_its_stroke_below_the_floor(tmp_path, capsys):
+    """Each layer alone is within reach (no warning of the loader's); their product is
+    not: 12-13 % of a typical stroke, naming the grain and the rings."""
+    path = _plank(tmp_path, "plank-first")
+    assert main(["validate", str(path)]) == 0
+    out, err = capsys.readouterr()
+    assert out == f"ok {path} (3 layers)\n"
+    [line] = err.splitlines()
+    share = float(re.search(r"layers: ([\d.]+)% of a typical stroke", line).group(1))
+    assert 12.0 <= share <= 13.0
+    assert "floor 0.5717 at the nominal 0.5 N (down to 0.346)" in line
+    assert 'the product of layers "grain", "rings";' in line
+    assert main(["validate", "--strict", str(path)]) == 2
+
+
+def test_the_corrected_plank_validates_without_a_warning_even_strict(tmp_path, capsys):
+    path = _plank(tmp_path, "plank")
+    assert main(["validate", "--strict", str(path)]) == 0
+    assert capsys.readouterr() == (f"ok {path} (3 layers)\n", "")
+
+
+@pytest.mark.parametrize("path", sorted(LIBRARY_DIR.glob("*.toml")), ids=lambda p: p.stem)
+def test_every_bundled_scene_validates_strict(path, capsys):
+    assert main(["validate", "--strict", str(path)]) == 0, capsys.readouterr().err
 
 
 def test_bad_file_lists_every_problem_and_exits_2(files, capsys):

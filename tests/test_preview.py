@@ -7,6 +7,7 @@ from PIL import Image
 from frictex.app.commands.cli import main
 from frictex.app.engine.frames import FrameWriter
 from frictex.app.engine.replay import run_replay
+from frictex.textures.library import LIBRARY_DIR
 from scenes import grating_scene
 
 
@@ -76,3 +77,50 @@ def test_friction_map_in_row_bands_equals_one_pass(monkeypatch):
     assert banded.shape == (54, 90)
     np.testing.assert_array_equal(banded, whole)
     assert whole.min() == pytest.approx(0.6) and whole.max() == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("path", sorted(LIBRARY_DIR.glob("*.toml")), ids=lambda p: p.stem)
+def test_no_text_of_a_bundled_scenes_preview_overlaps_or_leaves_the_figure(path):
+    from frictex.app.commands.preview import preview_figure
+    from frictex.app.measure.figure_check import text_flaws
+    from frictex.textures.loader import load_scene
+    fig, _ = preview_figure(load_scene(path), size=(400, 400))
+    assert [str(flaw) for flaw in text_flaws(fig)] == []
+
+
+def test_the_plank_as_first_written_is_hatched_below_the_floor_and_titled_by_its_layers(tmp_path):
+    """The page's first plank: the floor as a red tick of its own, the places below it
+    hatched (their share in the title), each layer named by its file's type and shape."""
+    from matplotlib.collections import Collection
+
+    from frictex.app.commands.preview import preview_figure
+    from frictex.textures.format_doc import example_files
+    from frictex.textures.loader import load_scene
+    path = tmp_path / "plank.toml"
+    shown = {}
+    for name in ("plank-first", "plank"):
+        path.write_text(example_files()[name], encoding="utf-8")
+        fig, info = preview_figure(load_scene(path), size=(400, 240))
+        fig.draw_without_rendering()
+        hatched = [c for ax in fig.axes for c in ax.collections
+                   if isinstance(c, Collection) and "////" in (getattr(c, "hatches", None) or ())]
+        shown[name] = info["below"], len(hatched)
+        floor = [t for t in fig.axes[-1].get_yticklabels() if t.get_text().startswith("floor")]
+        assert [t.get_text() for t in floor] == ["floor 0.57"] and floor[0].get_color() == "red"
+        title = fig.get_suptitle().replace("\n", " ")
+        assert "grain (triangle waveform, hybrid, 1.5 mm); rings (grating, hybrid, 9 mm); " \
+               "knot (height bump, felt moving +x)" in title
+    below, hatches = shown["plank-first"]
+    assert 0.1 < below < 0.2 and hatches == 1
+    assert shown["plank"] == (0.0, 0)
+
+
+def test_layer_kinds_are_the_files_words():
+    from frictex.app.commands.preview import layer_kind
+    from frictex.textures.library import resolve_scene
+    from frictex.textures.loader import load_scene
+    kinds = {layer_kind(layer) for name in ("objects-bump-edge-disc", "height-button", "raster-map",
+                                            "height-ridge", "composed-fine-grating-in-disc")
+             for layer in load_scene(resolve_scene(name)).layers}
+    assert {"height button", "height ridge", "raster", "disc", "bump", "edge"} <= kinds
+    assert not any(k in kinds for k in ("shape", "rastermap", "height gaussianbump", "height buttonrim"))

@@ -14,19 +14,154 @@ import textwrap
 from frictex.textures import keys as K
 from frictex.textures import model
 from frictex.textures import schema as S
+from frictex.textures.format_examples import EXAMPLES, PLANK
 
 INTRO = """# Texture files: every table and key
 
-One scene per TOML file. This page is generated from the loader's key tables
-(`textures/keys.py`) by `python -m frictex.textures.format_doc`, and a test keeps the two equal:
-every key the loader accepts is here, with its unit, range and default, and no other.
-`frictex validate FILE` checks a file against it and names the file, line and field of
-every problem. The grammar's overview and its worked examples are at the top of
-`textures/loader.py` and in `textures/library/*.toml`.
+One scene per TOML file. This page is all an author needs: how to start, the conventions
+(coordinates, angles, regions, colours, pixels), every key the loader accepts with its
+meaning, unit, range and default (or the rule that derives it), and a complete example
+of every layer type. It is generated from the loader's key tables (`textures/keys.py`)
+by `python -m frictex.textures.format_doc`, and tests keep it equal to them, validate and
+replay every example on it, and check each convention stated here against the friction
+map the loader builds (`tests/test_format_doc.py`).
 
-Units are in the key names (`_mm`, `_um` zero-to-peak, `_n`, `_deg`, `_s`); relative
-friction μ' = μ(w)/μ(0) in (0, 1] (seed 003, eq 1). *required* means the key has no
-default. Ranges are inclusive unless written with `<` or `>`.
+Units are in the key names (`_mm`, `_um` zero-to-peak, `_n`, `_deg`, `_s`, `_px`);
+relative friction μ' = μ(w)/μ(0) in (0, 1]: 1 is the plate at rest, lower is more
+slippery (seed 003, eq 1). A file asks for μ' targets, never for amplitudes.
+*required* means the key has no default. Ranges are inclusive unless written with `<`
+or `>`. `frictex validate FILE` checks a file and names the file, line and field of
+every problem.
+"""
+
+FIRST = """## Your first texture: a wood plank
+
+From an empty file to a scene you can feel, in six steps. Each block below is a whole
+file.
+
+1. **The display.** Every file starts with `format = 1` and the touchscreen's active
+   area: its size in mm (the positions of everything else are in mm from its top-left
+   corner, x right, y down) and in pixels (what the demo's window opens at).
+2. **The grain**: fine lines of a triangle profile, 1.5 mm apart, running 5 degrees
+   below horizontal to the right. A periodic layer's `angle_deg` is the direction
+   *across* its lines (see Angles): lines running at 5 degrees take angle_deg = 5 + 90 = 95.
+3. **The growth rings**: a grating 9 mm apart along the grain, with narrow slippery
+   bands (`duty` = 0.15 of each period at `mu_low`).
+4. **The knot**: a height layer, a bump 0.6 mm high felt by the size of its slope
+   (`rendering = "magnitude"`: rougher where steeper, whichever way the finger crosses).
+   Confining it to a disc with a `[layer.region]` seems natural; see step 5.
+5. **Validate.** `frictex validate plank.toml`:
+
+<!-- example: plank-first -->
+```toml
+{plank_first}```
+
+   says that about 13 % of a typical stroke asks for a friction the device cannot reach:
+
+       frictex: warning: plank.toml: layers: 12.9% of a typical stroke (4 s) and 13.8% of
+       the display ask for mu' below the device's floor 0.5717 at the nominal 0.5 N (down
+       to 0.346): the product of layers "grain", "rings"; those targets will be clamped to
+       the floor
+
+   Each layer is within reach alone, but layers multiply (see Composition): 0.72 x 0.6 x
+   0.8 = 0.346, where the plate at 0.5 N and 2.5 um goes no lower than 0.572. The region
+   adds a step too: a height layer covers its region at `mu_rest` (0.8), so the knot's
+   disc is a step of 0.8 against 1 outside it (see Regions). `frictex preview plank.toml -o
+   plank.png` hatches the places below the floor. The fix: shallower grain and rings,
+   and the knot without a region (a bump's slope vanishes beyond about 3 sigma, so it is
+   confined already; its rest level then covers the whole display evenly, no step):
+
+<!-- example: plank -->
+```toml
+{plank}```
+
+6. **Feel it.** `frictex validate plank.toml` prints `ok`; `frictex demo plank.toml` opens
+   it on the device (or a mouse stands in for a finger); `frictex replay plank.toml
+   swipe-40mms-50hz --out run` plays a bundled trace over it headless and writes the
+   amplitudes asked of the device (`run/friction.csv`).
+"""
+
+
+def _angle_figure() -> str:
+    return """## Conventions
+
+### Coordinates and angles
+
+Positions are in mm from the top-left corner of the active area, **x to the right, y
+down**. Every angle is in degrees from +x towards +y: because y points down, a positive
+angle turns **clockwise** on the screen.
+
+A grating's or a waveform's `angle_deg` is the direction of the axis **across** its lines
+(the lines' normal, along which μ' varies and `period_mm` is measured), not the direction
+of the lines: lines running at θ take angle_deg = θ + 90. The same holds for an `edge`
+layer, a height `step` and a clip's trigger line (their `angle_deg` is the normal), while
+a height `ridge`'s `angle_deg` and a guidance `line_angle_deg` give the direction the
+line itself runs.
+
+```
+ (0,0) ------------------------------------------------------------> +x
+   |
+   |   angle_deg = 0          angle_deg = 90          angle_deg = 45
+   |   axis --->              axis |                  axis \\
+   |                               v                        v  (+x and +y)
+   |   |  |  |  |  |                                     /   /   /   /
+   |   |  |  |  |  |          ================          /   /   /   /
+   |   |  |  |  |  |          ================         /   /   /   /
+   |   vertical lines:        horizontal lines:     lines rising to the
+   |   mu' varies with x      mu' varies with y     right on the screen
+   v
+  +y
+```
+
+Phase 0 of a periodic layer lies `offset_mm` along its axis from the origin; its profile
+starts there (a grating's `mu_low` band, a waveform's shape from phase 0).
+
+### Display pixels and millimetres
+
+`width_mm` x `height_mm` is the active area; every position is in mm on it. `width_px`
+x `height_px` is the screen's pixel count: the demo's window opens at it and `preview`
+draws at it, and the pixel density along each axis, width_px / width_mm and height_px /
+height_mm (px/mm), sizes what is counted in pixels: a raster with `mode = "one-to-one"`
+(one image pixel per display pixel) and the default tile of `mode = "tile"`. The
+scene is always drawn with its millimetre proportions: the area is fitted into a window
+or image of another shape at one scale, centred, with bars on two sides. Where the pixel
+aspect (width_px / height_px) differs from the millimetre aspect, the two densities
+differ and a pixel is not square: a one-to-one image is stretched along the axis of
+lower density (nothing else changes, and nothing warns).
+
+### Colours
+
+`color_low` and `color_high` of `[layer.visual]` are sRGB colours written `"#rrggbb"` or
+`"#rgb"` (hexadecimal, as in CSS: `"#fa0"` is `"#ffaa00"`); nothing else is accepted.
+The visual layer draws a layer's lowest μ' in `color_low`, its highest in `color_high`,
+and blends between them.
+
+### Composition
+
+Layers are drawn and composed in file order, later on top. With `blend = "multiply"`
+(the default) the μ' of every layer covering a finger multiply: two layers at 0.6 give
+0.36. With `blend = "replace"` a layer's μ' replaces what the layers before it gave,
+where it covers. The product can go below the device's floor (the lowest μ' it reaches
+at the normal force, `[device]`) even where every layer alone stays above it:
+`frictex validate` measures that share of the display and of a typical stroke and names
+the layers causing it.
+
+### Regions
+
+Every layer type takes an optional `[layer.region]`: a rectangle (`x_mm`, `y_mm`,
+`width_mm`, `height_mm`, `angle_deg`) or a disc (`cx_mm`, `cy_mm`, `radius_mm`). Outside
+its region a layer is not composed (as if its μ' were 1 there). What that does to each
+type:
+
+| layer type | covers without a region | with a region |
+|---|---|---|
+| `grating`, `waveform`, `edge` | the whole display | the pattern is cut at the region's outline: a step from the pattern's μ' to 1 |
+| `rectangle`, `disc`, `line`, `bump` | the shape (a bump: r <= 4 sigma) | the part of the shape inside the region |
+| `raster` | the image's area | the part of the image inside the region |
+| `height` | the whole display, at `mu_rest` on flat ground | the region, at `mu_rest`: **a step** from mu_rest to 1 at its outline, felt and seen. To confine a shape without a step, leave the region out (a bump's or ridge's slope is ~0 beyond 3 sigma or its width: the rest level then covers the display evenly), or raise `mu_rest` towards 1 (the step is 1 - mu_rest) |
+| `recorded` | the whole display, about `mu_mean` | the region: a step from about mu_mean to 1 at its outline |
+| `clip` | triggers anywhere | triggers only inside the region (the clip, once started, plays until it ends) |
+| `directional`, `guidance`, `keyclick` | the whole display (a keyclick: its button) | acts only inside the region |
 """
 
 
@@ -82,12 +217,22 @@ def _range(spec) -> str:
     return ", ".join(part for part in (low, high) if part)
 
 
+def _hex(rgb) -> str:
+    """A linear RGB colour (the loader's form) as the ``"#rrggbb"`` sRGB a file writes."""
+    def encode(c: float) -> int:
+        v = 12.92 * c if c <= 0.0031308 else 1.055 * c ** (1 / 2.4) - 0.055
+        return round(min(max(v, 0.0), 1.0) * 255)
+    return '"#' + "".join(f"{encode(c):02x}" for c in rgb) + '"'
+
+
 def _default(spec) -> str:
     value = spec.default
     if value is S.REQUIRED:
         return "*required*"
     if value is None:
-        return "none (derived, see the loader's grammar)"
+        return spec.rule
+    if isinstance(spec, S.Colour):
+        return _hex(value)
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, float) and math.isfinite(value):
@@ -111,7 +256,7 @@ def _kind(spec) -> str:
     if isinstance(spec, S.Flag):
         return "true or false"
     if isinstance(spec, S.Colour):
-        return "colour: [r, g, b] in 0..1 or \"#rrggbb\""
+        return 'colour: "#rrggbb" or "#rgb" (sRGB, hexadecimal)'
     if isinstance(spec, S.Selector):
         return ("finger selector: `any`, a finger number `1`, `2`, ... (order of touch-down), "
                 "or " + ", ".join(f"`{s}`" for s in model.POSITIONAL_SELECTORS))
@@ -123,14 +268,16 @@ def _kind(spec) -> str:
 
 
 def _table(title: str, specs: dict) -> list[str]:
-    lines = [f"## {title}", "", "| key | value | range | default |", "|---|---|---|---|"]
+    lines = [f"### {title}", "", "| key | meaning | value | range | default |",
+             "|---|---|---|---|---|"]
     for key, spec in specs.items():
         if isinstance(spec, S.Retired):
-            lines.append(f"| `{key}` | no longer used: accepted, ignored, with a warning ({spec.why}) "
-                         f"| - | - |")
+            lines.append(f"| `{key}` | no longer used: accepted, ignored, with a warning "
+                         f"({spec.why}) | - | - | - |")
             continue
         inner = spec.item if isinstance(spec, (S.NumList, S.Rows)) else spec
-        lines.append(f"| `{key}` | {_kind(spec)} | {_range(inner) or '-'} | {_default(spec)} |")
+        lines.append(f"| `{key}` | {spec.doc} | {_kind(spec)} | {_range(inner) or '-'} "
+                     f"| {_default(spec)} |")
     return lines + [""]
 
 
@@ -148,11 +295,32 @@ def sections() -> list[tuple[str, dict]]:
     return out
 
 
+def example_files() -> dict[str, str]:
+    """Every example file on the page, by name (the walk-through's and one per layer type)."""
+    return {**PLANK, **{f"{kind}-example": text for kind, text in EXAMPLES.items()}}
+
+
+def examples_section() -> str:
+    """A complete file per layer type, as the tests validate and replay them."""
+    lines = ["## Worked examples, one per layer type", "",
+             "Each is a whole file; tests validate and replay every one (the files they name, "
+             "`raster-map.png`, `clips/tick-then-buzz.ahap`, are in `textures/library/`; "
+             "`wood.xml` is any HaTT model).", ""]
+    for kind, text in EXAMPLES.items():
+        lines += [f"### `{kind}`", "", f"<!-- example: {kind}-example -->", "```toml",
+                  text.rstrip("\n"), "```", ""]
+    return "\n".join(lines)
+
+
 def render() -> str:
     """The whole page (Markdown)."""
-    lines = INTRO.splitlines() + [""] + files_section().splitlines() + [""]
+    lines = INTRO.splitlines() + [""]
+    lines += FIRST.format(plank_first=PLANK["plank-first"], plank=PLANK["plank"]).splitlines()
+    lines += [""] + _angle_figure().splitlines() + [""]
+    lines += files_section().splitlines() + [""] + ["## Every table and key", ""]
     for title, specs in sections():
         lines += _table(title, specs)
+    lines += examples_section().splitlines()
     return "\n".join(lines).rstrip() + "\n"
 
 

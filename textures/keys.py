@@ -188,3 +188,289 @@ DRIVING = {"mu0": Num("friction coefficient", _DRIVING.mu0, gt=0.0),
            "slope_per_um": Num("N per um per N", _DRIVING.slope_per_um, gt=0.0),
            "threshold_um": Num("um zero-to-peak", _DRIVING.threshold_um, ge=0.0, le=MAX_UM),
            "v_hold_mm_s": Num("mm/s", _DRIVING.v_hold_mm_s, gt=0.0)}
+
+
+# ---- what each key means (printed on the format page, textures/FORMAT.md) ------------------
+# A value is the key's meaning, or (meaning, rule) for a key whose default depends on
+# other keys: the rule says how it is derived or when it is required.
+
+def documented(table: dict, docs: dict) -> None:
+    """Attach ``docs`` (key -> meaning or (meaning, rule)) to the specs of ``table``, in place."""
+    for key, text in docs.items():
+        doc, rule = text if isinstance(text, tuple) else (text, "")
+        table[key] = replace(table[key], doc=doc, rule=rule)
+
+
+_MU_TXT = "relative friction mu' = mu(w)/mu(0): 1 is the plate at rest, lower is more slippery"
+_EDGE_MM = ("width (mm) of a raised-cosine ramp centred on the outline, from mu inside to 1 "
+            "outside; 0 is a sharp step")
+_PERIOD = "length (mm) of one period, measured across the lines (along the axis at angle_deg)"
+_ANGLE = ("direction of the axis *across* the lines (their normal), in degrees from +x "
+          "towards +y; y points down, so positive angles turn clockwise on the screen. "
+          "0: vertical lines, mu' varies with x; 90: horizontal lines, mu' varies with y "
+          "(see Angles)")
+_OFFSET = ("where phase 0 lies: this many mm along the axis from the display's origin "
+           "(top-left); shifts the pattern across its lines")
+_MU_MAX = "highest mu' of the pattern"
+_DUTY = "share of each period, from phase 0, at the low level (mu_low / mu_min)"
+
+documented(TOP, {
+    "format": "version of this grammar; write 1",
+    "name": ("the scene's name in titles, reports and `frictex library`",
+             "the file name without `.toml`"),
+    "description": "one line shown by `frictex library`",
+    "control": ("friction control: `open` (the model's inversion), `closed` (a loop on the "
+                "lateral force the device reports) or `adaptive` (that loop, corrected by "
+                "seed 003's model fitted to the same reports); `closed` and `adaptive` need "
+                "plate-seed003 with seed 003's model"),
+})
+documented(DISPLAY, {
+    "width_mm": "width of the touchscreen's active area (mm): x runs 0 to width_mm, left to right",
+    "height_mm": "height of the active area (mm): y runs 0 to height_mm, top to bottom",
+    "width_px": "the screen's pixels across (see Display pixels and millimetres)",
+    "height_px": "the screen's pixels down (see Display pixels and millimetres)",
+})
+documented(DEVICE, {
+    "profile": "the vibrating structure and its actuation (device/profile.py): `plate-seed003` "
+               "is one plate, one channel; the others are modal or travelling-wave devices",
+    "amplitude_limit_um": "largest vibration amplitude asked under a finger (um, zero-to-peak); "
+                          "with the normal force it sets the lowest reachable mu' (the floor)",
+    "normal_force_n": "the finger's nominal normal force (N): used for traces without a force "
+                      "column and for the floor `validate` and `preview` check against",
+})
+documented(FRICTION, {
+    "b_per_um": "b of seed 003 eq 2, mu'(w) = (1 - A) exp(-b w) + A (1/um)",
+    "asymptote_per_n": "k of seed 003 eq 2, the asymptote A = k F_n (1/N): the lowest mu' "
+                       "any amplitude gives at normal force F_n",
+})
+documented(CALIBRATION, {
+    "amplitudes_um": "measured amplitudes (um, zero-to-peak), from 0, strictly increasing",
+    "forces_n": "normal forces (N) of the rows of `mu`, strictly increasing",
+    "mu": "one row per force, one mu' per amplitude; each row starts at 1 and strictly "
+          "decreases. Replaces the model of [device.friction]",
+})
+_STRUCTURE_COMMON = {
+    "thickness_mm": "thickness of the structure (mm)",
+    "youngs_gpa": "Young's modulus of its material (GPa)",
+    "density_kg_m3": "density of its material (kg/m^3)",
+    "poisson": "Poisson's ratio of its material",
+    "x0_mm": "display x (mm) of the structure's left end (beam) or corner (plate); the "
+             "display must lie on the structure",
+    "method": "how channel commands are solved from the fingers' targets (device.actuation."
+              "modal): `exact` inverse, `regularised` (continuous across singular places) or "
+              "`bounded` (within channel_limit_um)",
+    "rcond": "regularisation threshold, relative to the largest singular value",
+}
+documented(STRUCTURE_KEYS[profiles.BeamStructure], {
+    **_STRUCTURE_COMMON,
+    "length_mm": "length of the beam (mm), along display x",
+    "width_mm": "width of the beam (mm)",
+    "theory": "beam theory of the mode shapes and frequencies",
+    "orders": "the flexural mode orders driven (distinct, 1 to 100, at most 26)",
+    "actuators_mm": "positions of the transducers along the beam (mm from its end), one per mode",
+    "channel_limit_um": "largest command per transducer (um, zero-to-peak)",
+    "modes_file": ("a measured mode table (CSV, one column per mode, path relative to this "
+                   "file) replacing `orders`",
+                   "none: mode shapes computed from `theory` and `orders`"),
+})
+documented(STRUCTURE_KEYS[profiles.PlateStructure], {
+    **_STRUCTURE_COMMON,
+    "width_mm": "width of the plate (mm), along display x",
+    "height_mm": "height of the plate (mm), along display y",
+    "order": "k of seed 001 eq 6: the X and Y modes driven",
+    "y0_mm": "display y (mm) of the plate's corner",
+    "channel_limit_um": ("largest command per channel (um, zero-to-peak)",
+                         "amplitude_limit_um of [device]"),
+})
+documented(DRIVING, {
+    "mu0": "friction coefficient at rest: the friction force is mu0 F_n mu'",
+    "slope_per_um": "N of driving force per um of travelling-wave amplitude per N of normal "
+                    "force (seed 004)",
+    "threshold_um": "amplitude (um) below which the travelling wave drives no force",
+    "v_hold_mm_s": "speed (mm/s) below which a finger counts as held still",
+})
+documented(COMMON, {
+    "type": "what the layer is; each type's own keys are in its table below",
+    "name": ("the layer's name in messages, titles and the demo's panel; unique in the file",
+             "the type and the layer's number, e.g. `grating-2`"),
+    "render": "how the haptics render it (rendering/RENDERERS.md): `auto` is the hybrid for a "
+              "grating or waveform and `sho` (the map at the finger's position) for every "
+              "other layer; `hybrid`, `sht` and `sho-*` need a grating or waveform",
+    "blend": "how it composes with the layers above it in the file: `multiply` (mu' values "
+             "multiply) or `replace` (where it covers, its mu' replaces theirs)",
+    "fingers": "which touching fingers feel it, decided at every output sample",
+})
+documented(RECT_REGION, {
+    "x_mm": "x (mm) of the rectangle's top-left corner before rotation",
+    "y_mm": "y (mm) of the rectangle's top-left corner before rotation",
+    "width_mm": "width (mm), along x before rotation",
+    "height_mm": "height (mm), along y before rotation",
+    "angle_deg": "rotation (degrees) about the rectangle's centre, from +x towards +y "
+                 "(clockwise on the screen)",
+})
+documented(DISC_REGION, {"cx_mm": "x (mm) of the centre", "cy_mm": "y (mm) of the centre",
+                         "radius_mm": "radius (mm)"})
+documented(VISUAL, {
+    "color_low": "colour drawn where the layer's mu' is lowest",
+    "color_high": "colour drawn where the layer's mu' is highest (1)",
+    "outline": "draw the layer's outline",
+})
+documented(LAYER_KEYS["grating"], {
+    "period_mm": _PERIOD, "angle_deg": _ANGLE, "offset_mm": _OFFSET, "duty": _DUTY,
+    "mu_low": "mu' of the lines (the first `duty` of each period)",
+    "mu_high": "mu' between the lines",
+    "edge": "`square`: mu' steps at the line boundaries; `smooth`: raised-cosine ramps",
+    "edge_mm": "width (mm) of each smooth ramp, centred on the boundary; only with "
+               "edge = \"smooth\", > 0 and at most the narrower band",
+})
+documented(LAYER_KEYS["waveform"], {
+    "period_mm": _PERIOD, "angle_deg": _ANGLE, "offset_mm": _OFFSET,
+    "shape": "one period's profile from phase 0: `sine` (mu_min at 0, mu_max at half a "
+             "period), `square` (mu_min for the first duty), `triangle` (mu_max at 0 down to "
+             "mu_min at half a period and back), `sawtooth` (mu_max falling linearly to "
+             "mu_min), `samples` (your own values)",
+    "mu_min": ("lowest mu' of the shape",
+               "required with a standard shape; not allowed with shape = \"samples\""),
+    "mu_max": _MU_MAX + "; not with shape = \"samples\"",
+    "duty": "share of the period at mu_min; only with shape = \"square\"",
+    "samples": "mu' values over one period, evenly spaced from phase 0, linearly "
+               "interpolated and wrapped; only (and required) with shape = \"samples\"",
+})
+documented(LAYER_KEYS["rectangle"], {
+    **{k: RECT_REGION[k].doc for k in RECT_REGION}, "mu": "mu' inside the rectangle",
+    "edge_mm": _EDGE_MM + "; at most the shorter side"})
+documented(LAYER_KEYS["disc"], {
+    **{k: DISC_REGION[k].doc for k in DISC_REGION}, "mu": "mu' inside the disc",
+    "edge_mm": _EDGE_MM + "; at most the diameter"})
+documented(LAYER_KEYS["edge"], {
+    "x_mm": "x (mm) of a point on the edge (on the display)",
+    "y_mm": "y (mm) of a point on the edge",
+    "angle_deg": "direction of the edge's normal, from +x towards +y: the side it points to "
+                 "has mu', the other side 1. 0: a vertical edge, mu' to its right; 90: a "
+                 "horizontal edge, mu' below it",
+    "mu": "mu' on the side the normal points to",
+    "edge_mm": "width (mm) of the raised-cosine ramp across the edge; 0 is a step"})
+documented(LAYER_KEYS["bump"], {
+    "cx_mm": "x (mm) of the centre (on the display)", "cy_mm": "y (mm) of the centre",
+    "sigma_mm": "standard deviation (mm) of the gaussian: mu' = 1 - (1 - mu) "
+                "exp(-r^2 / (2 sigma^2)); the layer covers r <= 4 sigma",
+    "mu": "mu' at the centre"})
+documented(LAYER_KEYS["line"], {
+    "x0_mm": "x (mm) of one end", "y0_mm": "y (mm) of one end",
+    "x1_mm": "x (mm) of the other end", "y1_mm": "y (mm) of the other end",
+    "width_mm": "width (mm) across the segment (round ends)", "mu": "mu' on the line",
+    "edge_mm": _EDGE_MM + "; at most width_mm"})
+documented(LAYER_KEYS["raster"], {
+    "image": "PNG (8- or 16-bit grey, or colour read as grey), path relative to this file: "
+             "grey g in [0, 1] gives mu' = mu_black + g (mu_white - mu_black); row 0 at the top",
+    "mode": "`stretch`: the image fills width_mm x height_mm once; `tile`: tiles of "
+            "tile_width_mm x tile_height_mm repeat over it; `one-to-one`: one image pixel "
+            "per display pixel",
+    "x_mm": "x (mm) of the image's top-left corner before rotation",
+    "y_mm": "y (mm) of the image's top-left corner before rotation",
+    "rotation_deg": "rotation (degrees) about the image's centre, from +x towards +y",
+    "width_mm": ("width (mm) of the area the image covers",
+                 "required with `stretch` and `tile`; with `one-to-one` not allowed: image "
+                 "columns / (width_px / width_mm of [display])"),
+    "height_mm": ("height (mm) of the area the image covers",
+                  "required with `stretch` and `tile`; with `one-to-one` not allowed: image "
+                  "rows / (height_px / height_mm of [display])"),
+    "tile_width_mm": ("width (mm) of one tile (`tile` only)",
+                      "image columns / (width_px / width_mm): one image pixel per display pixel"),
+    "tile_height_mm": ("height (mm) of one tile (`tile` only)",
+                       "image rows / (height_px / height_mm)"),
+    "mu_black": "mu' where the image is black",
+    "mu_white": "mu' where the image is white"})
+_PAIR = ("give mu_forward and mu_backward, or force_forward_n and force_backward_n: one pair, "
+         "both of its keys")
+documented(LAYER_KEYS["directional"], {
+    "angle_deg": "the forward direction: 0 (+x) or 180 (-x); the waves run along display x",
+    "mu_forward": ("mu' (net tangential force over mu0 F_n) moving forward", _PAIR),
+    "mu_backward": ("mu' moving backward", _PAIR),
+    "force_forward_n": ("net tangential force (N) moving forward, positive resisting the "
+                        "finger, negative dragging it along", _PAIR),
+    "force_backward_n": ("net tangential force (N) moving backward", _PAIR)})
+documented(LAYER_KEYS["guidance"], {
+    "x_mm": "x (mm) of the target point (on the display)", "y_mm": "y (mm) of the target point",
+    "line": "pull towards the line through the point instead of the point itself",
+    "line_angle_deg": "direction of that line (not its normal), from +x towards +y; 90 is "
+                      "vertical; only with line = true",
+    "gain_n_per_mm": "pull (N) per mm of distance to the target",
+    "max_force_n": "largest pull (N)"})
+documented(LAYER_KEYS["keyclick"], {
+    "x_mm": "x (mm) of the button's top-left corner", "y_mm": "y (mm) of its top-left corner",
+    "width_mm": "the button's width (mm)", "height_mm": "the button's height (mm)",
+    "press_n": "normal force (N) at which the first push starts",
+    "click_n": "normal force (N) at which the push reverses (the click)",
+    "release_n": "normal force (N) below which the button resets; release_n < press_n < click_n",
+    "dwell_s": "how long (s) each condition must hold before it changes the state",
+    "force_n": "the push's tangential force (N)",
+    "first_push": "direction of the first push, along display x"})
+_BY_SHAPE = "required with shape = {}; not allowed with other shapes"
+documented(LAYER_KEYS["height"], {
+    "shape": "the height field: `bump` (gaussian), `ridge` (raised cosine across a line), "
+             "`step` (a chamfered step), `button` (a plateau with a rounded rim), `map` (a "
+             "16-bit PNG)",
+    "rise_mm": "height of the shape (mm); negative for a dip or a step down",
+    "cx_mm": ("x (mm) of the centre", _BY_SHAPE.format("`bump` or `button`")),
+    "cy_mm": ("y (mm) of the centre", _BY_SHAPE.format("`bump` or `button`")),
+    "x_mm": ("x (mm) of a point on the crest (ridge) or edge (step), or of the map's "
+             "top-left corner", _BY_SHAPE.format("`ridge` or `step`") + "; with `map` "
+                                                                         "optional, default 0"),
+    "y_mm": ("y (mm) of that point or corner", _BY_SHAPE.format("`ridge` or `step`")
+             + "; with `map` optional, default 0"),
+    "sigma_mm": ("standard deviation (mm) of the bump, h = rise exp(-r^2 / (2 sigma^2))",
+                 _BY_SHAPE.format("`bump`")),
+    "width_mm": ("width (mm) across a ridge, or of a map", _BY_SHAPE.format("`ridge` or `map`")),
+    "height_mm": ("height (mm) of a map", _BY_SHAPE.format("`map`")),
+    "chamfer_mm": ("width (mm) of the step's flat chamfer", _BY_SHAPE.format("`step`")),
+    "radius_mm": ("radius (mm) of the button", _BY_SHAPE.format("`button`")),
+    "rim_mm": ("width (mm) of the button's rounded rim, below radius_mm",
+               _BY_SHAPE.format("`button`")),
+    "angle_deg": "ridge: the direction the crest runs; step: its normal, pointing up the step "
+                 "(from +x towards +y)",
+    "image": ("16-bit greyscale PNG of heights, path relative to this file: level v gives "
+              "h = v / 65535 rise_mm", _BY_SHAPE.format("`map`")),
+    "rendering": "`slope`: the height's slope along the finger's motion, signed (climbing "
+                 "raises mu', descending lowers it); `magnitude`: the slope's size, "
+                 "whichever way (raises mu' only)",
+    "gain": "d mu' / d slope at flat ground",
+    "mu_rest": "mu' on flat ground and at rest, over the layer's whole region (the display "
+               "if none): mu_min < mu_rest < mu_max (mu_min = mu_rest allowed with magnitude)",
+    "mu_min": "lowest mu' (descending steeply)",
+    "mu_max": "highest mu' (climbing steeply)",
+    "v_fade_mm_s": "below this speed (mm/s) the slope fades in proportion to speed"})
+documented(LAYER_KEYS["recorded"], {
+    "model": "a HaTT texture model (XML), path relative to this file",
+    "mu_mean": "mu' about which the recorded texture varies",
+    "gain": "mu' per m/s^2 of the model's synthesised acceleration",
+    "mu_min": "lowest mu' (mu_min < mu_mean < mu_max)", "mu_max": "highest mu'",
+    "v_rest_mm_s": "below this speed (mm/s) the texture is silent (mu_mean)",
+    "seed": "seed of the model's noise: the same seed, the same texture"})
+_CLIP = "required with clip = {}; not allowed with other clips"
+documented(LAYER_KEYS["clip"], {
+    "trigger": "what starts the clip: `down` (a touch begins), `lift` (a touch ends), `edge` "
+               "(a finger crosses a line), `force` (a finger's normal force rises through "
+               "force_n); always inside the layer's region",
+    "x_mm": ("x (mm) of a point on the trigger line", "required with trigger = \"edge\"; "
+                                                      "not allowed with other triggers"),
+    "y_mm": ("y (mm) of a point on the trigger line", "required with trigger = \"edge\"; "
+                                                      "not allowed with other triggers"),
+    "angle_deg": "the trigger line's normal, from +x towards +y (0: a vertical line); only "
+                 "with trigger = \"edge\"; crossing either way triggers",
+    "force_n": ("the normal force (N) whose rising crossing triggers",
+                "required with trigger = \"force\"; not allowed with other triggers"),
+    "depth": "drop in mu' at level 1: mu' = 1 - depth x level",
+    "clip": "the clip: `tick` (a transient), `ramp` (level_from to level_to over "
+            "duration_s), `envelope` (levels at times_s), `ahap` (an Apple AHAP file)",
+    "intensity": "peak level of a tick or scale of an envelope (`tick`, `envelope`)",
+    "sharpness": ("a tick's pulse length (30 ms at 0 down to 5 ms at 1), or a ramp's or "
+                  "envelope's carrier frequency (250 Hz x sharpness; 0: a smooth drop)",
+                  "0.5 for `tick`, 0 for `ramp` and `envelope`"),
+    "duration_s": ("length (s) of the ramp", _CLIP.format("`ramp`")),
+    "level_from": "level at the ramp's start (`ramp`)",
+    "level_to": "level at the ramp's end (`ramp`)",
+    "times_s": ("times (s) of the envelope's points, from 0, strictly increasing",
+                _CLIP.format("`envelope`")),
+    "levels": ("level at each of times_s", _CLIP.format("`envelope`")),
+    "file": ("an AHAP file, path relative to this file", _CLIP.format("`ahap`"))})

@@ -336,7 +336,7 @@ class Waveform(_PeriodicBase):
             grid = np.arange(n + 1) / n
             return np.interp(p, grid, np.append(s, s[0]))
         if self.shape == "sine":
-            u = 0.5 - 0.5 * np.cos(2 * np.pi * p)  # 0 at phase 0: starts at mu_max
+            u = 0.5 - 0.5 * np.cos(2 * np.pi * p)  # 0 at phase 0: starts at mu_min
         elif self.shape == "square":
             u = (p < self.duty).astype(np.float64)
             u = 1.0 - u  # low friction for the first duty of the period

@@ -3,7 +3,10 @@ that walks a parsed TOML table against a table of them.
 
 A key table maps each key to its type (:class:`Num`, :class:`Int`, :class:`Choice`,
 :class:`Text`, :class:`Flag`, :class:`Colour`, :class:`Selector`, :class:`NumList`,
-:class:`Rows`, :class:`Retired`). Each type's ``check(reader, value, path)`` returns the
+:class:`Rows`, :class:`Retired`). Each type also carries its documentation for the
+format page: ``doc`` (what the key means, with its convention) and, for a key whose
+default depends on other keys (``default`` None), ``rule`` (how it is derived, or when it
+is required). Each type's ``check(reader, value, path)`` returns the
 checked value, or reports the problem to the :class:`Reader` and returns :data:`BAD`.
 :meth:`Reader.table` checks a whole table: unknown keys (with a spelling suggestion),
 missing required keys, defaults filled in. The key tables themselves are in
@@ -89,6 +92,8 @@ class Num:
     ge: float | None = None
     lt: float | None = None
     le: float | None = None
+    doc: str = ""
+    rule: str = ""
 
     def bounds_text(self) -> str:
         """The closed or open interval, e.g. ``(0, 1]``."""
@@ -141,6 +146,8 @@ class Int:
     default: Any = REQUIRED
     ge: int | None = None
     le: int | None = None
+    doc: str = ""
+    rule: str = ""
 
     def check(self, r: "Reader", value, path: KeyPath):
         if isinstance(value, bool) or not isinstance(value, int):
@@ -158,6 +165,8 @@ class Choice:
 
     options: tuple[str, ...]
     default: Any = REQUIRED
+    doc: str = ""
+    rule: str = ""
 
     def check(self, r: "Reader", value, path: KeyPath):
         if not isinstance(value, str):
@@ -176,6 +185,8 @@ class Text:
     default: Any = REQUIRED
     max_len: int = 200
     lines: bool = False
+    doc: str = ""
+    rule: str = ""
 
     def check(self, r: "Reader", value, path: KeyPath):
         if not isinstance(value, str):
@@ -197,6 +208,8 @@ class Flag:
     """true or false."""
 
     default: Any = REQUIRED
+    doc: str = ""
+    rule: str = ""
 
     def check(self, r: "Reader", value, path: KeyPath):
         if not isinstance(value, bool):
@@ -209,6 +222,8 @@ class Colour:
     """``"#rrggbb"`` or ``"#rgb"`` (sRGB), checked into linear RGB in [0, 1]."""
 
     default: Any = REQUIRED
+    doc: str = ""
+    rule: str = ""
 
     def check(self, r: "Reader", value, path: KeyPath):
         if not isinstance(value, str) or not _HEX.match(value):
@@ -222,6 +237,8 @@ class Selector:
     """A layer's ``fingers`` selector (see ``rendering.tracking.finger_select``)."""
 
     default: Any = REQUIRED
+    doc: str = ""
+    rule: str = ""
 
     def check(self, r: "Reader", value, path: KeyPath):
         words = ("any",) + model.POSITIONAL_SELECTORS
@@ -250,6 +267,8 @@ class NumList:
     item: Num
     min_len: int = 1
     default: Any = REQUIRED
+    doc: str = ""
+    rule: str = ""
 
     def check(self, r: "Reader", value, path: KeyPath):
         if not isinstance(value, list):
@@ -267,6 +286,8 @@ class Rows:
 
     item: Num
     default: Any = REQUIRED
+    doc: str = ""
+    rule: str = ""
 
     def check(self, r: "Reader", value, path: KeyPath):
         if not isinstance(value, list) or not all(isinstance(row, list) for row in value) or not value:

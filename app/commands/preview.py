@@ -5,7 +5,9 @@ The left panel is the visual layer's static image (``rendering.visual.scene_imag
 the same pixels the demo window shows); the right panel is mu' composed from the
 layers (``rendering.compose.ideal_mu``: what a perfect renderer gives a finger there),
 averaged over each pixel. The colour bar marks the lowest mu' the device reaches at
-the scene's nominal normal force: targets below it will be clamped.
+the scene's nominal normal force (``device.friction.mu_floor``); where a finger touching
+alone would ask for less, the map is hatched and outlined in red: targets there will be
+clamped (``frictex validate`` gives the share of a typical stroke, ``rendering.reach``).
 
 Layers whose mu' depends on motion or time are shown as follows (and said so in the
 title): a height layer as a finger sliding towards +x feels it (climbing flanks above
@@ -16,14 +18,17 @@ its rest level, descending ones below); a recorded texture at its mean; a clip a
 from __future__ import annotations
 
 import argparse
+import textwrap
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from frictex.app.engine.outfile import write_file
 from frictex.device.errors import InputError
-from frictex.rendering.compose import ideal_mu
 from frictex.device.friction import mu_floor
+from frictex.rendering.compose import ideal_mu
+from frictex.rendering.reach import applies_alone, as_previewed
 from frictex.rendering.visual.scene_image import scene_rgb, to_srgb8
 from frictex.rendering.visual.viewport import fit_viewport
 from frictex.textures.outside import add_allow_outside
@@ -33,6 +38,9 @@ from frictex.textures.outside import add_allow_outside
 #: pixel size, scaled down to fit it.
 MAX_PANEL_PX = 4096
 DEFAULT_MAX_PANEL_PX = 2048
+#: Displays flatter than this (height / width) get their panels one above the other,
+#: stretched in y, with a horizontal colour bar (seed 000's beam is 350 x 6 mm).
+FLAT_ASPECT = 0.35
 #: Rows of the friction map computed at once (bounds memory for any panel size).
 ROWS_PER_PASS = 256
 
@@ -71,43 +79,38 @@ def load(scene_name: str):
     return load_scene(resolve_scene(scene_name))
 
 
-class _MovingRight:
-    """A height layer as ``ideal_mu`` sees it in the preview: felt sliding towards +x
-    (above ``v_fade_mm_s``), instead of at rest."""
-
-    def __init__(self, layer):
-        self.layer = layer
-        self.blend = layer.blend
-
-    def covers(self, x, y):
-        return self.layer.covers(x, y)
-
-    def mu_at(self, x, y):
-        layer = self.layer
-        gx, gy = layer.shape.gradient(x, y)
-        speed = 2.0 * layer.v_fade_mm_s
-        return layer.mu_of_motion(gx, gy, speed, 0.0)
+#: what the title calls a height layer's shape (the file's ``shape`` word)
+HEIGHT_SHAPE_WORDS = {"GaussianBump": "bump", "Ridge": "ridge", "Step": "step",
+                      "ButtonRim": "button", "HeightMap": "map"}
 
 
-def as_previewed(scene):
-    """The scene with its height layers felt sliding towards +x (see the module docstring)."""
-    from dataclasses import replace
-    return replace(scene, layers=tuple(_MovingRight(layer) if getattr(layer, "renderer_kind", None)
-                                       == "height" else layer for layer in scene.layers))
+def layer_kind(layer) -> str:
+    """The layer's ``type`` as its file writes it (``shape`` too for heights and waveforms)."""
+    from frictex.textures import model
+    kind = getattr(layer, "renderer_kind", None)
+    if kind == "height":
+        return "height " + HEIGHT_SHAPE_WORDS.get(type(layer.shape).__name__, "map")
+    if isinstance(layer, model.Shape):
+        return "disc" if isinstance(layer.geometry, model.DiscRegion) else "rectangle"
+    if isinstance(layer, model.RasterMap):
+        return "raster"
+    if isinstance(layer, model.Waveform):
+        return f"{layer.shape} waveform"
+    return type(layer).__name__.lower()
 
 
 def _layer_note(layer) -> str:
     """How the title describes a layer."""
     kind = getattr(layer, "renderer_kind", None)
     if kind == "height":
-        return f"{layer.name} (height {type(layer.shape).__name__.lower()}, felt moving +x)"
+        return f"{layer.name} ({layer_kind(layer)}, felt moving +x)"
     if kind == "ar":
         return f"{layer.name} (recorded texture, shown at its mean {layer.mu_mean:g})"
     if kind == "clip":
         lo = 1.0 - layer.clip.depth
         return (f"{layer.name} (clip on {layer.trigger}: {layer.clip.duration_s * 1e3:.0f} ms, "
                 f"mu' down to {lo:.2f}; not in the map)")
-    return (f"{layer.name} ({type(layer).__name__.lower()}, {layer.render}"
+    return (f"{layer.name} ({layer_kind(layer)}, {layer.render}"
             + (f", {layer.period_mm:g} mm" if layer.is_periodic else "") + ")")
 
 
@@ -129,50 +132,91 @@ def mu_map(scene, viewport, supersample: int = 3) -> np.ndarray:
     return acc / supersample ** 2
 
 
-def write_preview(scene, out: Path, size: tuple[int, int] | None = None,
-                  outlines: bool = False) -> dict:
-    """Render the preview PNG of ``scene`` into ``out``; return what it shows (mu' range, floor).
+def preview_figure(scene, size: tuple[int, int] | None = None, outlines: bool = False):
+    """The preview of ``scene`` as a matplotlib Figure, and what it shows (mu' range, floor,
+    share of the display below the floor, panel size).
 
-    Room-checked (4 bytes per pixel of the figure) and written under a temporary name
-    (``app.engine.outfile``): a full disk leaves no truncated or empty PNG, and an earlier
-    file of that name stays."""
+    Where the composed mu' lies below the device's floor at the scene's nominal normal
+    force, the friction map is hatched (those targets will be clamped); the floor is a red
+    line and a labelled tick on the colour bar."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
     d = scene.display
     viewport = fit_viewport(d, *(size or default_size(d)))
     image = to_srgb8(scene_rgb(scene, viewport, outlines=outlines))
-    mu = mu_map(as_previewed(scene), viewport)
-    floor = mu_floor(scene.device, scene.device.normal_force_n)
+    previewed = as_previewed(scene)
+    mu = mu_map(previewed, viewport)
+    force = scene.device.normal_force_n
+    floor = mu_floor(scene.device, force)
+    # below the floor for a finger touching alone (layers for a 2nd finger left out)
+    alone = tuple(layer for layer in previewed.layers if applies_alone(layer))
+    alone_mu = mu if len(alone) == len(previewed.layers) else mu_map(replace(previewed,
+                                                                             layers=alone), viewport)
+    below = alone_mu < floor - 1e-12
     extent = (0.0, d.width_mm, d.height_mm, 0.0)
-    # a display far taller than wide would ask for a figure metres high
-    aspect = min(d.height_mm / d.width_mm, 4.0)
-    fig = Figure(figsize=(13.0, 13.0 * aspect / 2 + 1.4), dpi=110, layout="constrained")
+    flat = d.height_mm / d.width_mm < FLAT_ASPECT
+    if flat:  # a strip: the panels one above the other, stretched to a legible height
+        fig = Figure(figsize=(13.0, 6.4), dpi=110, layout="constrained")
+        left, right = fig.subplots(2, 1)
+        stretch = "auto"
+    else:  # a display far taller than wide would ask for a figure metres high
+        aspect = min(d.height_mm / d.width_mm, 4.0)
+        fig = Figure(figsize=(13.0, 13.0 * aspect / 2 + 1.6), dpi=110, layout="constrained")
+        left, right = fig.subplots(1, 2)
+        stretch = None
     FigureCanvasAgg(fig)
-    left, right = fig.subplots(1, 2)
-    left.imshow(image, extent=extent, interpolation="antialiased")
-    left.set_title(f"{scene.name}: as drawn ({viewport.width_px} x {viewport.height_px} px)")
+    left.imshow(image, extent=extent, interpolation="antialiased", aspect=stretch)
+    left.set_title(f"{scene.name}: as drawn ({viewport.width_px} x {viewport.height_px} px"
+                   + (", y stretched" if flat else "") + ")", fontsize=10)
     vmin = min(float(mu.min()), floor) - 0.02
     shown = right.imshow(mu, extent=extent, cmap="viridis", vmin=vmin, vmax=1.0,
-                         interpolation="antialiased")
-    right.set_title("friction map: target mu' (1 = plate at rest)")
+                         interpolation="antialiased", aspect=stretch)
+    if below.any():
+        xs = (np.arange(viewport.width_px) + 0.5) * d.width_mm / viewport.width_px
+        ys = (np.arange(viewport.height_px) + 0.5) * d.height_mm / viewport.height_px
+        right.contourf(xs, ys, below.astype(np.float64), levels=[0.5, 1.5], colors="none",
+                       hatches=["////"])
+        right.contour(xs, ys, below.astype(np.float64), levels=[0.5], colors="red",
+                      linewidths=0.8)
+    right.set_title("target mu' (1 = plate at rest)"
+                    + (f"; hatched: below the floor ({below.mean():.0%})" if below.any() else ""),
+                    fontsize=10)
     for ax in (left, right):
         ax.set_xlabel("x (mm)")
         ax.set_ylabel("y (mm)")
-    bar = fig.colorbar(shown, ax=right, shrink=0.9)
-    bar.set_label("mu' = mu(w) / mu(0)")
-    bar.ax.axhline(floor, color="red", linewidth=2)
-    # a tick label next to the floor's would print over it
-    bar.set_ticks([t for t in bar.get_ticks()
-                   if vmin <= t <= 1.0 and abs(t - floor) > 0.08 * (1.0 - vmin)])
-    bar.ax.text(1.05, floor, f" floor\n {floor:.2f}\n @{scene.device.normal_force_n:g} N",
-                transform=bar.ax.get_yaxis_transform(), color="red", fontsize=8, va="center")
+    # a flat strip's bar lies under it: one standing beside it would be shorter than its label
+    bar = fig.colorbar(shown, ax=right, shrink=0.9,
+                       location="bottom" if flat else "right")
+    bar.set_label(f"mu' = mu(w) / mu(0); red: the device's floor at {force:g} N")
+    (bar.ax.axvline if flat else bar.ax.axhline)(floor, color="red", linewidth=2)
+    # the floor is a tick of its own; a tick next to it would print over its label
+    room = (0.2 if flat else 0.08) * (1.0 - vmin)
+    ticks = sorted([t for t in bar.get_ticks() if vmin <= t <= 1.0 and abs(t - floor) > room]
+                   + [floor])
+    bar.set_ticks(ticks, labels=[f"floor {t:.2f}" if t == floor else f"{t:g}" for t in ticks])
+    for label in (bar.ax.get_xticklabels() if flat else bar.ax.get_yticklabels()):
+        if label.get_text().startswith("floor"):
+            label.set_color("red")
     layers = "; ".join(_layer_note(layer) for layer in scene.layers)
-    fig.suptitle(f"layers: {layers}", fontsize=9)
+    fig.suptitle("\n".join(textwrap.wrap(f"layers: {layers}", 150)), fontsize=9)
+    info = {"mu_min": float(mu.min()), "mu_max": float(mu.max()), "floor": floor,
+            "below": float(below.mean()), "size": (viewport.width_px, viewport.height_px)}
+    return fig, info
+
+
+def write_preview(scene, out: Path, size: tuple[int, int] | None = None,
+                  outlines: bool = False) -> dict:
+    """Render the preview PNG of ``scene`` into ``out``; return what it shows (mu' range,
+    floor, share below the floor, panel size).
+
+    Room-checked (4 bytes per pixel of the figure) and written under a temporary name
+    (``app.engine.outfile``): a full disk leaves no truncated or empty PNG, and an earlier
+    file of that name stays."""
+    fig, info = preview_figure(scene, size, outlines)
     width, height = fig.get_size_inches() * fig.dpi
     write_file(out, lambda to: fig.savefig(to, format="png"), width * height * 4)
-    return {"mu_min": float(mu.min()), "mu_max": float(mu.max()), "floor": floor,
-            "size": (viewport.width_px, viewport.height_px)}
+    return info
 
 
 def run(args: argparse.Namespace) -> int:
@@ -185,5 +229,6 @@ def run(args: argparse.Namespace) -> int:
     info = write_preview(scene, out, args.size, args.outlines)
     print(f"wrote {out}: {scene.name}, scene panel {info['size'][0]} x {info['size'][1]} px, "
           f"mu' {info['mu_min']:.3f} to {info['mu_max']:.3f} (device floor {info['floor']:.3f} "
-          f"at {scene.device.normal_force_n:g} N)")
+          f"at {scene.device.normal_force_n:g} N"
+          + (f"; {info['below']:.1%} of the display below it, hatched)" if info["below"] else ")"))
     return 0

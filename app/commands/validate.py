@@ -2,9 +2,17 @@
 
 For each file: ``ok FILE (n layers)`` on stdout, or every problem as one line on stderr,
 ``frictex: error: FILE:LINE: field: message`` (the README's form for every error);
-warnings (legal but probably unintended, such as a mu' the device cannot reach at its
-nominal force) as ``frictex: warning: FILE:LINE: field: message``. Exit 0 if every file
-is good (warnings allowed), 2 if any is bad.
+warnings (legal but probably unintended) as ``frictex: warning: FILE:LINE: field:
+message``. Two kinds of warning concern reach, at the scene's nominal normal force
+(``[device] normal_force_n``): a layer asking on its own for a mu' below the device's
+floor (the loader's, with the line of its key), and layers whose *product* goes below it
+(``rendering.reach``: the share of the display's area and of a typical stroke run
+through the scene's pipeline, and the layers that cause it).
+
+Exit 0 if every file is good (warnings allowed), 2 if any is bad. ``--strict`` counts a
+file with warnings as bad: exit 2, because a warning is about what the file asks for
+(bad input for a session that must render it as written); 1 stays for failures of the
+program's surroundings (device, link, output space).
 """
 
 from __future__ import annotations
@@ -21,7 +29,27 @@ from frictex.textures.outside import add_allow_outside
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("files", nargs="+", metavar="FILE",
                         help="texture file (.toml), or a bundled scene name (see frictex library)")
+    parser.add_argument("--strict", action="store_true",
+                        help="a file with warnings fails too (exit 2), e.g. a scene whose "
+                             "layers together ask for a friction below the device's floor")
     add_allow_outside(parser)
+
+
+def reach_warning(path, scene) -> str | None:
+    """The warning for a scene whose layers together ask for mu' below the device's floor
+    (``rendering.reach.scene_reach``), or None."""
+    from frictex.device.safe_text import escape_path
+    from frictex.rendering.reach import STROKE_S, scene_reach
+
+    reach = scene_reach(scene)
+    if not reach.below:
+        return None
+    causes = ", ".join(f'"{name}"' for name in reach.causes) or "the layers together"
+    return (f"{escape_path(path)}: layers: {reach.stroke_share:.1%} of a typical stroke "
+            f"({STROKE_S:g} s) and {reach.area_share:.1%} of the display ask for mu' below the "
+            f"device's floor {reach.floor:.4g} at the nominal {reach.force_n:g} N (down to "
+            f"{reach.lowest:.3g}): the product of layers {causes}; those targets will be "
+            f"clamped to the floor")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -36,9 +64,16 @@ def run(args: argparse.Namespace) -> int:
         scene, problems, warnings = check_scene(path)
         for problem in problems:
             print(f"frictex: error: {problem}", file=sys.stderr)
-        for warning in warnings:
-            print(f"frictex: warning: {warning}", file=sys.stderr)
+        notes = [str(w) for w in warnings]
+        reach = reach_warning(path, scene) if scene is not None else None
+        notes += [reach] if reach is not None else []
+        for note in notes:
+            print(f"frictex: warning: {note}", file=sys.stderr)
         if scene is None:
+            bad += 1
+        elif args.strict and notes:
+            print(f"frictex: error: {path}: {len(notes)} warning{'s' * (len(notes) != 1)} "
+                  f"(--strict)", file=sys.stderr)
             bad += 1
         else:
             n = len(scene.layers)

@@ -1,0 +1,210 @@
+"""Reach: how much of a scene asks for a friction the device cannot give.
+
+A device lowers friction only down to a floor: the lowest mu' it reaches at a normal force
+within its amplitude limit (``device.friction.mu_floor``; seed 003 eq 2 at the amplifier
+limit, or the asymptote A = k F_n). Each layer of a scene may stay above that floor while
+their *product* (``rendering.compose``) goes below it: a grain at 0.72 times rings at 0.6
+asks for 0.43. Those targets are clamped to the floor when the scene plays, and what the
+finger feels there is flattened.
+
+:func:`scene_reach` measures it before a session, at the scene's nominal normal force:
+
+- over the scene's area: mu' composed on a grid of cell centres over the display
+  (:data:`GRID_CELLS` along its longer side), each layer as :func:`as_previewed` shows it;
+- over a typical stroke: a human-like motion across the display (``trace_synth``'s
+  ``human`` motion, :data:`STROKE_S` s of minimum-jerk strokes and pauses, peak speeds
+  around :data:`STROKE_SPEED_MM_S`), sampled like a touch screen at
+  :data:`STROKE_RATE_HZ` and run through the scene's own pipeline (trackers, renderers,
+  composition), counting the output samples in contact whose composed target is below
+  the floor.
+
+The layers named as the cause are those that lower mu' where the product falls below
+the floor: each layer's share of the mean -ln mu' there, kept if at least
+:data:`CAUSE_SHARE` of it.
+
+The pipeline (and the kernels it compiles) runs only for a scene whose layers' lowest
+mu' values multiply to less than the floor: below that bound no composition can fall
+below it, and the answer is "none" without running anything.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from frictex.device.friction import mu_floor
+from frictex.rendering.compose import compose
+
+#: Grid cells along the display's longer side for the area share.
+GRID_CELLS = 240
+#: The typical stroke: duration (s), typical peak speed (mm/s), touch report rate (Hz), seed.
+STROKE_S = 4.0
+STROKE_SPEED_MM_S = 80.0
+STROKE_RATE_HZ = 120.0
+STROKE_SEED = 0
+#: A layer is named as a cause if it holds at least this share of the mean -ln mu'
+#: of the targets below the floor.
+CAUSE_SHARE = 0.1
+#: Targets within this of the floor count as reached (the inversion's own tolerance).
+TOLERANCE = 1e-12
+
+
+@dataclass(frozen=True)
+class Reach:
+    """What part of a scene lies below the device's floor.
+
+    floor : lowest mu' the device reaches at ``force_n`` (N).
+    area_share, stroke_share : fraction in [0, 1] of the display's area and of the typical
+        stroke's contact samples whose composed target is below ``floor``.
+    lowest : lowest mu' the layers a lone finger feels can ask for together (the product
+        of their lowest values).
+    causes : names of the layers whose product takes it below the floor, in file order.
+    """
+
+    floor: float
+    force_n: float
+    area_share: float
+    stroke_share: float
+    lowest: float
+    causes: tuple[str, ...]
+
+    @property
+    def below(self) -> bool:
+        """True if any part of the area or the stroke lies below the floor."""
+        return self.area_share > 0.0 or self.stroke_share > 0.0
+
+
+class _MovingRight:
+    """A height layer as a map sees it: felt sliding towards +x (above ``v_fade_mm_s``),
+    instead of at rest (where it is flat at ``mu_rest``)."""
+
+    def __init__(self, layer):
+        self.layer = layer
+        self.name = layer.name
+        self.blend = layer.blend
+        self.fingers = layer.fingers
+
+    def covers(self, x, y):
+        return self.layer.covers(x, y)
+
+    def mu_at(self, x, y):
+        layer = self.layer
+        gx, gy = layer.shape.gradient(x, y)
+        return layer.mu_of_motion(gx, gy, 2.0 * layer.v_fade_mm_s, 0.0)
+
+
+def as_previewed(scene):
+    """The scene with its height layers felt sliding towards +x (climbing flanks above
+    their rest level, descending ones below); every other layer as it is."""
+    return replace(scene, layers=tuple(
+        _MovingRight(layer) if getattr(layer, "renderer_kind", None) == "height" else layer
+        for layer in scene.layers))
+
+
+def applies_alone(layer) -> bool:
+    """True if the layer applies to a finger touching alone (the stroke's and the map's):
+    selectors ``any``, ``1`` and the positional ones, not ``2``, ``3``, ..."""
+    return not layer.fingers.isdigit() or layer.fingers == "1"
+
+
+def lowest_possible(scene) -> float:
+    """The product of the lowest mu' of every layer a lone finger feels: no composition
+    for that finger goes below it."""
+    return float(np.prod([layer.mu_range[0] for layer in scene.layers if applies_alone(layer)]))
+
+
+def grid(display, cells: int = GRID_CELLS) -> tuple[np.ndarray, np.ndarray]:
+    """Cell centres (mm) of a grid over the display, ``cells`` along its longer side."""
+    w, h = display.width_mm, display.height_mm
+    step = max(w, h) / cells
+    nx, ny = max(1, round(w / step)), max(1, round(h / step))
+    x = (np.arange(nx) + 0.5) * (w / nx)
+    y = (np.arange(ny) + 0.5) * (h / ny)
+    xx, yy = np.meshgrid(x, y)
+    return xx.ravel(), yy.ravel()
+
+
+def _area(scene):
+    """(composed mu' (n,), per-layer (mu, covers) pairs of shape (1, n)) on the grid."""
+    layers = as_previewed(scene).layers
+    x, y = grid(scene.display)
+    outputs = [(np.broadcast_to(layer.mu_at(x, y), x.shape)[None, :],
+                np.broadcast_to(layer.covers(x, y) & applies_alone(layer), x.shape)[None, :])
+               for layer in layers]
+    mu = compose(outputs, [layer.blend for layer in layers], np.ones((1, x.size), bool))
+    return mu[0], outputs
+
+
+class _Recording:
+    """A layer renderer that keeps what it gave (the pipeline's per-layer outputs)."""
+
+    def __init__(self, inner):
+        self.inner = inner
+        self.outputs: list[tuple[np.ndarray, np.ndarray]] = []
+
+    def __getattr__(self, name):
+        return getattr(self.inner, name)
+
+    def render(self, fingers, state):
+        mu, covers, new_state = self.inner.render(fingers, state)
+        self.outputs.append((np.array(mu, dtype=np.float64), np.array(covers, dtype=bool)))
+        return mu, covers, new_state
+
+
+def stroke_trace(scene):
+    """The typical stroke over ``scene``'s display at its nominal force (a ``Trace``)."""
+    from frictex.rendering.input.trace_synth import make_motion, sample
+    d = scene.display
+    motion = make_motion("human", duration_s=STROKE_S, speed_mm_s=STROKE_SPEED_MM_S,
+                         area_mm=(d.width_mm, d.height_mm), seed=STROKE_SEED)
+    return sample(motion, STROKE_RATE_HZ, force_n=scene.device.normal_force_n)
+
+
+def _stroke(scene):
+    """(composed mu' of the contact samples (m,), per-layer (mu, covers) (1, m) there)."""
+    from frictex.rendering.pipeline import build_pipeline
+    from frictex.rendering.tracking.tracks import apply_index
+
+    trace = stroke_trace(scene)
+    pipe = build_pipeline(scene, t0_s=float(trace.t_s[0]))
+    pipe.renderers = tuple(_Recording(r) for r in pipe.renderers)
+    applied = apply_index(trace.t_s, pipe.tracker_config)
+    blocks = int(applied[-1] // pipe.block_size) + 1
+    out, _ = pipe.process(0, trace, pipe.initial_state(), n_blocks=blocks)
+    touching = out.contact
+    outputs = [(np.broadcast_to(mu, touching.shape)[touching][None, :],
+                np.broadcast_to(covers, touching.shape)[touching][None, :])
+               for mu, covers in (r.outputs[0] for r in pipe.renderers)]
+    return out.mu_target[touching], outputs
+
+
+def _causes(names, below: list[tuple[np.ndarray, list]]) -> tuple[str, ...]:
+    """Layers holding at least CAUSE_SHARE of the mean -ln mu' where the product is below."""
+    drops = np.zeros(len(names))
+    for mask, outputs in below:
+        for k, (mu, covers) in enumerate(outputs):
+            lowered = np.where(covers[0][mask], -np.log(mu[0][mask]), 0.0)
+            drops[k] += float(lowered.sum())
+    total = drops.sum()
+    if total <= 0.0:
+        return ()
+    return tuple(name for name, drop in zip(names, drops) if drop >= CAUSE_SHARE * total)
+
+
+def scene_reach(scene) -> Reach:
+    """The share of ``scene``'s area and of a typical stroke below the device's floor at
+    the scene's nominal normal force (see the module docstring)."""
+    force = scene.device.normal_force_n
+    floor = mu_floor(scene.device, force)
+    limit = floor - TOLERANCE
+    if lowest_possible(scene) >= limit:
+        return Reach(floor, force, 0.0, 0.0, lowest_possible(scene), ())
+    area_mu, area_layers = _area(scene)
+    stroke_mu, stroke_layers = _stroke(scene)
+    area_below, stroke_below = area_mu < limit, stroke_mu < limit
+    causes = _causes([layer.name for layer in scene.layers],
+                     [(area_below, area_layers), (stroke_below, stroke_layers)])
+    return Reach(floor, force, float(area_below.mean()),
+                 float(stroke_below.mean()) if stroke_mu.size else 0.0, lowest_possible(scene),
+                 causes)
