@@ -29,6 +29,7 @@ SECTIONS = {
     "modal": "frictex.app.measure.bench_modal",
     "startup": "frictex.app.measure.bench_startup",
     "baseline": "frictex.app.measure.bench_baseline",
+    "latency": "frictex.app.measure.bench_latency",
 }
 
 

@@ -13,7 +13,7 @@ against the commanded samples. Cycles: :func:`isr_cycles.cycles`'s Cortex-M0+ ti
 1 + registers, POP into pc 3 + registers) plus :data:`ENTRY_EXIT_CYCLES` for the
 exception's entry and return; flash wait states are not counted.
 
-    python -m frictex.device.firmware.isr_unicorn      # prints the figures
+    .venv/bin/python device/firmware/isr_unicorn.py      # prints the figures
 """
 
 from __future__ import annotations

@@ -7,8 +7,8 @@ link, as :mod:`hostport` does for the host port.
                            process=dev.proc)
 
 QEMU's clock follows the instructions it executes, held to the host's (``-icount
-shift=5,sleep=on,align=on``, see :data:`ICOUNT`), so the firmware's SysTick samples at
-10 kHz of wall time while the host gives QEMU the CPU.
+shift=5,sleep=on,align=on``, see :data:`ICOUNT`), so the firmware samples at 10 kHz of
+wall time while the host gives QEMU the CPU it needs.
 """
 
 from __future__ import annotations
@@ -17,9 +17,11 @@ import ctypes
 import os
 import re
 import select
+import shutil
 import signal
 import subprocess
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -32,15 +34,17 @@ QEMU = "qemu-system-arm"
 #: the samples per second, channels and per-channel limit (counts) of mps2/board.h
 RATE_HZ = 10_000.0
 CHANNELS = 1
-#: QEMU's clock: 2**5 = 32 ns of emulated time per instruction (a 25 MHz Cortex-M3 runs
-#: about 31 million instructions a second); an idle guest (``wfi``) sleeps in real time
-#: (``sleep=on``), and a guest whose clock ran ahead of the host's while it computed
-#: waits for it (``align=on``): so the SysTick samples at 10 kHz of wall time, slower
-#: only while the host starves QEMU of CPU. Measured streaming 6,000 samples here:
-#: ``shift=auto`` tripped the firmware's watchdog in 2 of 3 streams (it raises the
-#: shift while the guest idles, so a Block received then runs at up to 1 us per
-#: instruction and the clock races ahead); without ``align=on`` the clock ran ahead of
-#: the host's by the time QEMU computed faster than 31 MIPS, and blocks arrived late.
+#: QEMU's clock (None: the host's, no ``-icount``): 2**5 = 32 ns of emulated time per
+#: instruction (a 25 MHz Cortex-M3 runs about 31 million instructions a second); an
+#: idle guest (``wfi``) sleeps in real time (``sleep=on``), and a guest whose clock ran
+#: ahead of the host's while it computed waits for it (``align=on``). Measured streaming
+#: 6,000 samples paced by the device here: ``shift=auto`` tripped the firmware's
+#: watchdog in 2 of 3 streams (it raises the shift while the guest idles, so a Block
+#: received then runs at up to 1 us per instruction and the clock races ahead); without
+#: ``align=on`` the clock ran ahead of the host's and blocks arrived late; without
+#: ``-icount`` the paced stream dropped blocks while closing on this busy machine. With the
+#: clock held, it falls behind the host's when QEMU gets less CPU than it needs (a live
+#: stream then queues up in the device: ``frictex bench latency`` shows it).
 ICOUNT = "shift=5,sleep=on,align=on"
 _PTY = re.compile(r"char device redirected to (/dev/\S+) \(label link\)")
 
@@ -55,52 +59,87 @@ def _die_with_parent() -> None:
     ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
 
 
-def command(elf: Path, log_path: os.PathLike | None, icount: str = ICOUNT) -> list[str]:
-    """The QEMU command line: UART0 (the link) on a new pty, UART1 (the played-sample
-    log) into ``log_path`` (discarded when None), semihosting for the exit, QEMU's clock
-    from ``icount`` (see :data:`ICOUNT`)."""
-    played = f"file,id=played,path={os.fspath(log_path)}" if log_path else "null,id=played"
+def command(elf: Path, icount: str | None = ICOUNT) -> list[str]:
+    """The QEMU command line: UART0 (the link) on a new pty; semihosting for the
+    played-sample log (``played.bin`` in QEMU's working folder) and for the exit; QEMU's
+    clock from ``icount`` (see :data:`ICOUNT`)."""
     return [QEMU, "-M", "mps2-an385", "-display", "none", "-monitor", "none",
             "-chardev", "pty,id=link", "-serial", "chardev:link",
-            "-chardev", played, "-serial", "chardev:played",
             "-semihosting-config", "enable=on,target=native",
-            "-icount", icount, "-kernel", os.fspath(elf)]
+            *(("-icount", icount) if icount else ()), "-kernel", os.fspath(elf)]
 
 
 class QemuDevice:
     """The QEMU port running; ``path`` is its link's pty, ``proc`` the QEMU process.
 
+    The played-sample log the firmware writes (:func:`played_log`'s records) goes to
+    ``log_path`` (None: nowhere) and, as it arrives, to ``on_log(chunk, t)`` (``t``:
+    ``time.perf_counter()`` at its arrival), from a thread that reads QEMU's output.
     It exits by itself (status 0) once a host's Stop has played out; :meth:`close` ends
     it otherwise. The pty's slave is held open here, so QEMU sees its port connected from
     the start and never discards a reply while the host opens it.
     """
 
     def __init__(self, log_path: os.PathLike | None = None, *, elf: Path | None = None,
-                 icount: str = ICOUNT, start_timeout_s: float = 30.0):
+                 icount: str | None = ICOUNT, on_log=None, start_timeout_s: float = 30.0):
         require(QEMU)
-        self._slave = None
-        self.stderr = tempfile.TemporaryFile("w+")  # QEMU's complaints, for errors
-        self.proc = subprocess.Popen(command(elf or firmware(), log_path, icount),
+        self._slave = self._reader = None
+        self._log = open(log_path, "wb") if log_path is not None else None
+        self._on_log = on_log
+        self.stderr = tempfile.TemporaryFile("w+b")  # QEMU's messages, for errors
+        self._folder = tempfile.TemporaryDirectory(prefix="frictex-qemu-")
+        fifo = os.path.join(self._folder.name, "played.bin")  # mps2/board.h BOARD_PLAYED_LOG
+        os.mkfifo(fifo)
+        self._fifo = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)  # so QEMU's open returns
+        self.proc = subprocess.Popen(command(elf or firmware(), icount), cwd=self._folder.name,
                                      stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                     stderr=self.stderr, text=True,
-                                     preexec_fn=_die_with_parent)
+                                     stderr=self.stderr, preexec_fn=_die_with_parent)
         ready, _, _ = select.select([self.proc.stdout], [], [], start_timeout_s)
-        line = self.proc.stdout.readline() if ready else ""
+        line = self.proc.stdout.readline().decode("ascii", "replace") if ready else ""
         found = _PTY.search(line)
         if not found:
             self.close()
             self.stderr.seek(0)
             raise LinkError(f"{QEMU} did not start the firmware (printed {line.strip()!r}; "
-                            f"exit code {self.proc.returncode}; {self.stderr.read()[-500:]!r})")
+                            f"exit code {self.proc.returncode}; "
+                            f"{self.stderr.read()[-500:].decode(errors='replace')!r})")
         self.path = found.group(1)
         self._slave = os.open(self.path, os.O_RDWR | os.O_NOCTTY)
+        self._reader = threading.Thread(target=self._read_log, name="frictex-qemu-log",
+                                        daemon=True)
+        self._reader.start()
+        # what QEMU prints later (-icount align's "guest is late" notes) must not fill the pipe
+        threading.Thread(target=shutil.copyfileobj, args=(self.proc.stdout, self.stderr),
+                         name="frictex-qemu-out", daemon=True).start()
+
+    def _read_log(self) -> None:
+        while True:
+            select.select([self._fifo], [], [], 1.0)
+            try:
+                chunk = os.read(self._fifo, 1 << 16)
+            except BlockingIOError:  # no writer yet, or nothing written
+                continue
+            if not chunk:  # QEMU closed it: exited
+                if self.proc.poll() is not None:
+                    return
+                time.sleep(0.01)  # not opened yet
+                continue
+            t = time.perf_counter()
+            if self._log is not None:
+                self._log.write(chunk)
+                self._log.flush()
+            if self._on_log is not None:
+                self._on_log(chunk, t)
 
     def wait(self, timeout_s: float) -> int:
-        """QEMU's exit status once it has exited by itself (within ``timeout_s``)."""
-        return self.proc.wait(timeout=timeout_s)
+        """QEMU's exit status once it has exited by itself (within ``timeout_s``), its
+        log complete."""
+        code = self.proc.wait(timeout=timeout_s)
+        self._reader.join(timeout=timeout_s)
+        return code
 
     def close(self) -> None:
-        """End QEMU if it still runs, and release the pty."""
+        """End QEMU if it still runs, and release the pty and the log."""
         if self.proc.poll() is None:
             self.proc.terminate()
             try:
@@ -108,10 +147,15 @@ class QemuDevice:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait(timeout=5.0)
+        if self._reader is not None:
+            self._reader.join(timeout=5.0)
         if self._slave is not None:
             os.close(self._slave)
             self._slave = None
-        self.proc.stdout.close()
+        os.close(self._fifo)
+        self._folder.cleanup()
+        if self._log is not None:
+            self._log.close()
 
     def __enter__(self) -> QemuDevice:
         return self
@@ -121,18 +165,15 @@ class QemuDevice:
 
 
 def played_log(path: os.PathLike, channels: int = CHANNELS) -> tuple[np.ndarray, np.ndarray]:
-    """The played-sample log UART1 wrote: (sample numbers, setpoints in counts of
+    """The played-sample log the firmware wrote: (sample numbers, setpoints in counts of
     1/4096 um, shape (n, channels)). A record is the number (u32) and a u16 per channel,
     little-endian; a partial record at the end (QEMU still writing) is left out."""
+    return records(Path(path).read_bytes(), channels)
+
+
+def records(raw: bytes, channels: int = CHANNELS) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`played_log` of bytes ``raw``."""
     rec = np.dtype([("index", "<u4"), ("amp", "<u2", (channels,))])
-    raw = Path(path).read_bytes()
     data = np.frombuffer(raw[: len(raw) // rec.itemsize * rec.itemsize], rec)
     return data["index"].astype(np.int64), data["amp"].astype(np.int64)
 
-
-def wait_for(predicate, timeout_s: float) -> bool:
-    """Poll ``predicate()`` every 5 ms for at most ``timeout_s``; its last value."""
-    deadline = time.monotonic() + timeout_s
-    while not (ok := predicate()) and time.monotonic() < deadline:
-        time.sleep(0.005)
-    return ok

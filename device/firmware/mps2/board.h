@@ -15,7 +15,11 @@
 #define BOARD_LIMIT 16384u /* 4 um per channel */
 #define BOARD_WATCHDOG_MS 25
 #define BOARD_RAMP_MS 20
+#define BOARD_PLAYED_LOG "played.bin" /* opened through semihosting in QEMU's folder */
+#define BOARD_CATCH_UP 1000u /* most ticks one sample interrupt plays (100 ms) */
 #define BOARD_BAUDDIV 16u /* QEMU does not pace the UART; 16 is its smallest legal divider */
+
+#define BOARD_TICK_CYCLES (BOARD_SYSCLK_HZ / BOARD_RATE_HZ)
 
 #if BOARD_SYSCLK_HZ % BOARD_RATE_HZ
 #error "the sample rate must divide the system clock"

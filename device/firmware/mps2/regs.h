@@ -8,8 +8,7 @@
 
 #define REG(addr) (*(volatile uint32_t *)(addr))
 
-/* CMSDK APB UART n at 0x40004000 + 0x1000 n: UART0 is the host link, UART1 the
- * played-sample log (QEMU's first and second -serial). */
+/* CMSDK APB UART n at 0x40004000 + 0x1000 n: UART0 (QEMU's first -serial) is the link. */
 #define UART_DATA(n) REG(0x40004000u + 0x1000u * (n))
 #define UART_STATE(n) REG(0x40004004u + 0x1000u * (n))
 #define UART_CTRL(n) REG(0x40004008u + 0x1000u * (n))
@@ -22,6 +21,12 @@
 #define UART_CTRL_RX_INTEN (1u << 3)
 #define UART_INT_RX (1u << 1)
 #define IRQ_UART0_RX 0u
+
+/* CMSDK APB timer 0: a 32-bit down-counter at the system clock. */
+#define TIMER0_CTRL REG(0x40000000u)
+#define TIMER0_VALUE REG(0x40000004u)
+#define TIMER0_RELOAD REG(0x40000008u)
+#define TIMER_CTRL_EN (1u << 0)
 
 #define SYST_CSR REG(0xE000E010u)
 #define SYST_RVR REG(0xE000E014u)

@@ -7,7 +7,6 @@
  * no lock: the writer owns the head, the reader the tail. */
 #define RX_SIZE 1024u
 #define TX_SIZE 1024u
-#define LOG_SIZE 16384u /* 2730 one-channel records: 270 ms of a main loop that is late */
 
 typedef struct {
     volatile uint8_t *buf;
@@ -15,10 +14,9 @@ typedef struct {
     volatile uint32_t head, tail;
 } ring;
 
-static volatile uint8_t rx_buf[RX_SIZE], tx_buf[TX_SIZE], log_buf[LOG_SIZE];
+static volatile uint8_t rx_buf[RX_SIZE], tx_buf[TX_SIZE];
 static ring rx = {rx_buf, RX_SIZE - 1u, 0, 0};
 static ring tx = {tx_buf, TX_SIZE - 1u, 0, 0};
-static ring lg = {log_buf, LOG_SIZE - 1u, 0, 0};
 
 static uint32_t ring_free(const ring *r) { return r->mask - ((r->head - r->tail) & r->mask); }
 
@@ -44,10 +42,8 @@ static void rx_drain(void)
 
 void uart_init(void)
 {
-    for (unsigned n = 0; n < 2; n++) {
-        UART_BAUDDIV(n) = BOARD_BAUDDIV;
-        UART_CTRL(n) = UART_CTRL_TX_EN | (n == 0 ? UART_CTRL_RX_EN | UART_CTRL_RX_INTEN : 0u);
-    }
+    UART_BAUDDIV(0) = BOARD_BAUDDIV;
+    UART_CTRL(0) = UART_CTRL_TX_EN | UART_CTRL_RX_EN | UART_CTRL_RX_INTEN;
     NVIC_IPR(IRQ_UART0_RX) = 0x40u; /* below the sample clock (0) */
     NVIC_ISER = 1u << IRQ_UART0_RX;
 }
@@ -76,29 +72,15 @@ void uart_write(void *ctx, const uint8_t *p, size_t n)
     ring_put(&tx, p, n < room ? n : room);
 }
 
-bool log_write(const uint8_t *p, size_t n)
-{
-    if (ring_free(&lg) < n)
-        return false;
-    ring_put(&lg, p, n);
-    return true;
-}
-
-static bool send(ring *r, unsigned uart)
-{
-    uint32_t tail = r->tail;
-    while (tail != r->head && !(UART_STATE(uart) & UART_STATE_TXFULL)) {
-        UART_DATA(uart) = r->buf[tail];
-        tail = (tail + 1u) & r->mask;
-    }
-    r->tail = tail;
-    return tail == r->head;
-}
-
 bool uart_flush(void)
 {
-    bool link = send(&tx, 0);
-    return send(&lg, 1) && link;
+    uint32_t tail = tx.tail;
+    while (tail != tx.head && !(UART_STATE(0) & UART_STATE_TXFULL)) {
+        UART_DATA(0) = tx.buf[tail];
+        tail = (tail + 1u) & tx.mask;
+    }
+    tx.tail = tail;
+    return tail == tx.head;
 }
 
 void uart0_rx_irq(void)

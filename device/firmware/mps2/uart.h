@@ -1,7 +1,7 @@
-/* CMSDK UARTs with rings: UART0 carries the link (received bytes taken by its RX
- * interrupt, so they never wait for the main loop), UART1 the played-sample log. Neither
- * ever waits for the line: the main loop moves queued bytes out while the UART takes them
- * (QEMU's UART holds one byte and passes it to its character device at once). */
+/* The link on CMSDK UART0 with rings: received bytes are taken by its RX interrupt, so
+ * they never wait for the main loop; sending never waits for the line: the main loop
+ * moves queued bytes out while the UART takes them (QEMU's UART holds one byte and
+ * passes it to its character device at once). */
 #ifndef UART_H
 #define UART_H
 
@@ -16,9 +16,7 @@ size_t uart_read(uint8_t *p, size_t cap);
 bool uart_rx_pending(void);
 /* Queue link bytes to send; drops what does not fit (the host's CRC check counts it). */
 void uart_write(void *ctx, const uint8_t *p, size_t n);
-/* Queue one played-sample record from the sample interrupt; false if it did not fit. */
-bool log_write(const uint8_t *p, size_t n);
-/* Move queued bytes to both UARTs while they take them; true when nothing is left. */
+/* Move queued bytes to the UART while it takes them; true when nothing is left. */
 bool uart_flush(void);
 
 #endif
