@@ -252,3 +252,26 @@ def test_the_walkthroughs_warning_is_what_validate_prints(tmp_path, capsys):
     err = capsys.readouterr().err.replace(str(target), "plank.toml")
     page = " ".join(PAGE.read_text(encoding="utf-8").split())
     assert " ".join(err.split()) in page
+
+
+def test_the_corrected_plank_plays_without_a_clamp_and_its_knot_is_felt(tmp_path):
+    """The walk-through's plank, replayed with a vertical swipe at 40 mm/s through the
+    knot: no target below the device's floor (the first plank: hundreds), and friction
+    higher over the knot's flanks than away from it (magnitude rendering: rougher where
+    steeper)."""
+    from frictex.app.engine.replay import run_replay
+    from frictex.rendering.input.trace_synth import make_motion, sample
+    paths = write_examples(tmp_path)
+    motion = make_motion("swipe", speed_mm_s=40.0, duration_s=1.4, x0_mm=70.0, y0_mm=4.0,
+                         angle_deg=90.0)
+    clamped = {}
+    for name in ("plank-first", "plank"):
+        out = tmp_path / f"run-{name}"
+        clamped[name] = run_replay(L.load_scene(paths[name]), sample(motion, 120.0), out,
+                                   progress=False)["clamps"]["unreachable"]
+    assert clamped["plank"] == 0 and clamped["plank-first"] > 100
+    table = np.loadtxt(tmp_path / "run-plank" / "friction.csv", delimiter=",", skiprows=1)
+    y, mu = table[:, 3], table[:, 4]
+    flank = (np.abs(y - 32.0) > 1.0) & (np.abs(y - 32.0) < 6.0)
+    away = np.abs(y - 32.0) > 12.0
+    assert mu[flank].mean() > mu[away].mean() + 0.05
