@@ -117,3 +117,9 @@ def test_help_and_usage(capsys):
         main(["validate"])
     assert info.value.code == 2
     assert "required: FILE" in capsys.readouterr().err
+
+
+def test_a_share_above_zero_never_reads_zero():
+    from frictex.app.commands.validate import _share
+    assert [_share(f) for f in (0.0, 1e-6, 0.0004999, 0.0005, 0.129)] == [
+        "0.0%", "under 0.1%", "under 0.1%", "0.1%", "12.9%"]

@@ -35,6 +35,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_allow_outside(parser)
 
 
+def _share(fraction: float) -> str:
+    """A share as a percentage, never rounding a share above 0 to "0.0%"."""
+    return "under 0.1%" if 0.0 < fraction < 0.0005 else f"{fraction:.1%}"
+
+
 def reach_warning(path, scene) -> str | None:
     """The warning for a scene whose layers together ask for mu' below the device's floor
     (``rendering.reach.scene_reach``), or None."""
@@ -45,8 +50,8 @@ def reach_warning(path, scene) -> str | None:
     if not reach.below:
         return None
     causes = ", ".join(f'"{name}"' for name in reach.causes) or "the layers together"
-    return (f"{escape_path(path)}: layers: {reach.stroke_share:.1%} of a typical stroke "
-            f"({STROKE_S:g} s) and {reach.area_share:.1%} of the display ask for mu' below the "
+    return (f"{escape_path(path)}: layers: {_share(reach.stroke_share)} of a typical stroke "
+            f"({STROKE_S:g} s) and {_share(reach.area_share)} of the display ask for mu' below the "
             f"device's floor {reach.floor:.4g} at the nominal {reach.force_n:g} N (down to "
             f"{reach.lowest:.3g}): the product of layers {causes}; those targets will be "
             f"clamped to the floor")
