@@ -133,7 +133,7 @@ def test_samples_played_before_a_recovery_or_reconnect_are_played_not_lost(fault
     status = sink.status()
     index, values = rec.played()
     # the fault happened, and the device played samples the host had not seen reported.
-    # At least once: the host's watch is on the wall clock (SILENCE_S, HANDSHAKE_TIMEOUT_S),
+    # At least once: the host's watch is on the wall clock (session.SILENCE_S, RESYNC_TIMEOUT_S),
     # so a link thread starved that long (a CPU hog) resyncs or reconnects once more, and
     # what follows holds for any number of them
     count = status["recoveries" if fault == "recovery" else "reconnects"]
