@@ -43,6 +43,8 @@ STROKE_S = 4.0
 STROKE_SPEED_MM_S = 80.0
 STROKE_RATE_HZ = 120.0
 STROKE_SEED = 0
+#: Shortest side (mm) the stroke is drawn on: ``trace_synth`` keeps 8 mm from each edge.
+MIN_STROKE_SPAN_MM = 32.0
 #: A layer is named as a cause if it holds at least this share of the mean -ln mu'
 #: of the targets below the floor.
 CAUSE_SHARE = 0.1
@@ -153,12 +155,22 @@ class _Recording:
 
 
 def stroke_trace(scene):
-    """The typical stroke over ``scene``'s display at its nominal force (a ``Trace``)."""
+    """The typical stroke over ``scene``'s display at its nominal force (a ``Trace``).
+
+    The motion keeps ``trace_synth``'s margin from the edges, so along a side shorter than
+    :data:`MIN_STROKE_SPAN_MM` it is drawn on that span and scaled onto the side (a 6 mm
+    beam's stroke stays on the beam, moving slower across it)."""
+    from frictex.rendering.input.trace_file import make_trace
     from frictex.rendering.input.trace_synth import make_motion, sample
     d = scene.display
+    span = (max(d.width_mm, MIN_STROKE_SPAN_MM), max(d.height_mm, MIN_STROKE_SPAN_MM))
     motion = make_motion("human", duration_s=STROKE_S, speed_mm_s=STROKE_SPEED_MM_S,
-                         area_mm=(d.width_mm, d.height_mm), seed=STROKE_SEED)
-    return sample(motion, STROKE_RATE_HZ, force_n=scene.device.normal_force_n)
+                         area_mm=span, seed=STROKE_SEED)
+    trace = sample(motion, STROKE_RATE_HZ, force_n=scene.device.normal_force_n)
+    if span == (d.width_mm, d.height_mm):
+        return trace
+    return make_trace(trace.t_s, trace.finger, trace.x_mm * (d.width_mm / span[0]),
+                      trace.y_mm * (d.height_mm / span[1]), trace.force_n, trace.event)
 
 
 def _stroke(scene):

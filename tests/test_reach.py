@@ -77,3 +77,14 @@ def test_the_grid_covers_the_display_in_cells_of_equal_size():
     from types import SimpleNamespace
     x, y = R.grid(SimpleNamespace(width_mm=350.0, height_mm=6.0))
     assert x.size == 240 * 4 and x.min() == pytest.approx(350 / 480) and y.max() == pytest.approx(6.0 - 0.75)
+
+
+@pytest.mark.parametrize("size", [(108.0, 64.8), (350.0, 6.0), (1.0, 1.0), (20.0, 300.0)])
+def test_the_typical_stroke_stays_on_the_display_whatever_its_size(tmp_path, size):
+    path = tmp_path / "s.toml"
+    path.write_text(HEAD.replace("108.0", str(size[0])).replace("64.8", str(size[1]))
+                    + '[[layer]]\ntype = "grating"\nperiod_mm = 0.5\nmu_low = 0.6\n', encoding="utf-8")
+    trace = R.stroke_trace(load_scene(path))
+    assert (trace.x_mm >= 0).all() and (trace.x_mm <= size[0]).all()
+    assert (trace.y_mm >= 0).all() and (trace.y_mm <= size[1]).all()
+    assert np.ptp(trace.x_mm) > 0.2 * size[0] or np.ptp(trace.y_mm) > 0.2 * size[1]
