@@ -144,7 +144,8 @@ Layers are drawn and composed in file order, later on top. With `blend = "multip
 where it covers. The product can go below the device's floor (the lowest μ' it reaches
 at the normal force, `[device]`) even where every layer alone stays above it:
 `frictex validate` measures that share of the display and of a typical stroke and names
-the layers causing it.
+the layers causing it (`--strict` fails such a file, exit 2); `frictex preview` hatches
+those places on the friction map.
 
 ### Regions
 
