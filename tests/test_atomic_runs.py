@@ -78,14 +78,15 @@ def test_a_killed_run_leaves_the_previous_run_or_the_new_one(tmp_path, reference
     for i in range(KILLS):
         trace = TRACES[(TRACES.index(held) + 1) % 2]
         run = replay(out, trace)
-        staging = out.with_name(f".{out.name}.frictex-staging.{run.pid}")
+        def staging():
+            return list(tmp_path.glob(f".{out.name}.frictex-staging.{run.pid}.*"))
         if i % 2:  # any moment of the run, start-up included
             time.sleep(rng.uniform(0.0, wall * 1.2))
         else:  # a moment after it began writing into its staging folder
-            while not staging.exists() and run.poll() is None:
+            while not staging() and run.poll() is None:
                 time.sleep(0.005)
             time.sleep(rng.uniform(0.0, 0.3))
-        mid_write += staging.exists()
+        mid_write += bool(staging())
         sig = signals[i % 3]
         run.send_signal(sig)
         code = run.wait(timeout=120)
@@ -230,8 +231,8 @@ def test_without_an_atomic_exchange_two_renames_and_a_recovery(tmp_path, monkeyp
     assert {p.name: p.read_text() for p in out.iterdir()} == {"summary.json": "new",
                                                                "mine.txt": "kept"}
     assert beside(out) == []
-    out.rename(tmp_path / f".out.frictex-old.{dead_pid()}")  # killed between the renames
-    (tmp_path / f".out.frictex-staging.{dead_pid()}").mkdir()
+    out.rename(tmp_path / f".out.frictex-old.{dead_pid()}.0a1b")  # killed between the renames
+    (tmp_path / f".out.frictex-staging.{dead_pid()}.2c3d").mkdir()
     again = staging.Staging(out)
     again.begin()
     assert (out / "summary.json").read_text() == "new"
@@ -249,3 +250,159 @@ def test_an_output_folder_named_by_a_link_is_replaced_where_it_is(tmp_path, caps
     assert sorted(p.name for p in (tmp_path / "real").iterdir()) == [
         "commands.csv", "friction.csv", "summary.json"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["link", "real"]
+
+
+def test_only_the_names_a_run_writes_are_its_own(tmp_path, capsys):
+    """A folder or file whose name merely starts like a table's is the user's: a folder is
+    refused untouched, a file carried over; so is a frames folder with a file of theirs."""
+    out = tmp_path / "out"
+    (out / "friction.backup").mkdir(parents=True)
+    (out / "friction.backup" / "data.txt").write_text("x")
+    (out / "commands.notes.txt").write_text("n")
+    assert main(["replay", SCENE, TRACES[0], "--out", str(out), "--quiet"]) == 2
+    assert "holds the folder 'friction.backup'" in capsys.readouterr().err
+    assert (out / "friction.backup" / "data.txt").read_text() == "x"
+    shutil.rmtree(out / "friction.backup")
+    (out / "frames").mkdir()
+    (out / "frames" / "mine.txt").write_text("f")
+    assert main(["replay", SCENE, TRACES[0], "--out", str(out), "--quiet"]) == 2
+    assert "holds the folder 'frames'" in capsys.readouterr().err
+    assert (out / "frames" / "mine.txt").read_text() == "f"
+    (out / "frames" / "mine.txt").unlink()
+    assert main(["replay", SCENE, TRACES[0], "--out", str(out), "--quiet"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["commands.csv", "commands.notes.txt",
+                                                     "friction.csv", "summary.json"]
+    assert (out / "commands.notes.txt").read_text() == "n"
+    assert beside(out) == []
+
+
+def test_a_folder_made_in_out_during_the_run_fails_it_and_is_kept(tmp_path, monkeypatch, capsys):
+    from frictex.app.engine import staging
+    out = tmp_path / "out"
+    assert main(["replay", SCENE, TRACES[0], "--out", str(out), "--quiet"]) == 0
+    before = contents(out)
+    begin = staging.Staging.begin
+
+    def begin_then_a_folder_appears(self):
+        folder = begin(self)
+        (out / "late").mkdir()
+        (out / "late" / "data.txt").write_text("x")
+        return folder
+
+    monkeypatch.setattr(staging.Staging, "begin", begin_then_a_folder_appears)
+    assert main(["replay", SCENE, TRACES[1], "--out", str(out), "--quiet"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "'late'" in err[0] and "nothing was replaced" in err[0]
+    assert (out / "late" / "data.txt").read_text() == "x"
+    (out / "late" / "data.txt").unlink()
+    (out / "late").rmdir()
+    assert contents(out) == before and beside(out) == []
+
+
+def test_a_file_that_appears_during_the_swap_is_moved_into_the_new_run(tmp_path, monkeypatch):
+    from frictex.app.engine import staging
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "summary.json").write_text("old")
+    run = staging.Staging(out)
+    (run.begin() / "summary.json").write_text("new")
+    exchange = staging._exchange
+
+    def a_file_appears_first(a, b):
+        (b / "late.txt").write_text("x")  # after the carry, before the swap
+        return exchange(a, b)
+
+    monkeypatch.setattr(staging, "_exchange", a_file_appears_first)
+    run.commit()
+    assert {p.name: p.read_text() for p in out.iterdir()} == {"summary.json": "new",
+                                                               "late.txt": "x"}
+    assert beside(out) == []
+
+
+def test_two_runs_of_one_process_into_one_folder_have_their_own_staging(tmp_path):
+    from frictex.app.engine import staging
+    out = tmp_path / "out"
+    first, second = staging.Staging(out), staging.Staging(out)
+    (first.begin() / "summary.json").write_text("first")
+    (second.begin() / "summary.json").write_text("second")
+    assert first.folder != second.folder and first.folder.exists()
+    third = staging.Staging(out)
+    third.begin()  # its recovery leaves the other two alone: this process still owns them
+    first.commit()
+    assert (out / "summary.json").read_text() == "first"
+    second.commit()
+    assert (out / "summary.json").read_text() == "second"
+    third.abort()
+    assert beside(out) == [] and third.removed == []
+
+
+def test_the_root_folder_is_bad_input(capsys):
+    import frictex
+    assert main(["replay", SCENE, TRACES[0], "--out", "/", "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "the root folder" in err[0]
+    with pytest.raises(frictex.InputError, match="the root folder"):
+        frictex.replay(SCENE, TRACES[0], out="/")
+
+
+def test_the_output_folder_keeps_its_permissions_and_attributes(tmp_path):
+    out = tmp_path / "out"
+    out.mkdir()
+    out.chmod(0o710)
+    try:
+        os.setxattr(out, "user.note", b"mine")
+        xattr = True
+    except OSError:  # a file system without user attributes
+        xattr = False
+    for trace in TRACES:
+        assert main(["replay", SCENE, trace, "--out", str(out), "--quiet"]) == 0
+        assert out.stat().st_mode & 0o7777 == 0o710
+        if xattr:
+            assert os.getxattr(out, "user.note") == b"mine"
+
+
+def test_a_long_folder_name_fits_its_staging_name(tmp_path):
+    out = tmp_path / ("a" * 240)
+    for trace in TRACES:
+        assert main(["replay", SCENE, trace, "--out", str(out), "--quiet"]) == 0
+    assert (out / "summary.json").exists() and beside(out) == []
+
+
+@pytest.fixture
+def mounted(tmp_path):
+    """Mount with ``mount ARGS...`` (root only); unmounted after the test."""
+    if os.geteuid() != 0:
+        pytest.skip("mounting needs root")
+    points = []
+
+    def mount(*args: str) -> None:
+        done = subprocess.run(["mount", *args], capture_output=True, text=True)
+        if done.returncode:
+            pytest.skip(f"cannot mount here: {done.stderr.strip()}")
+        if args[-1] not in points:
+            points.append(args[-1])
+
+    yield mount
+    for point in reversed(points):
+        subprocess.run(["umount", point], check=True)
+
+
+def test_a_bind_mount_is_refused_as_a_mount_point(tmp_path, mounted, capsys):
+    (tmp_path / "real").mkdir()
+    (tmp_path / "bound").mkdir()
+    mounted("--bind", str(tmp_path / "real"), str(tmp_path / "bound"))
+    assert main(["replay", SCENE, TRACES[0], "--out", str(tmp_path / "bound"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "a mount point" in err[0]
+    assert list((tmp_path / "real").iterdir()) == []
+
+
+def test_an_error_on_the_staging_folder_names_the_output_folder(tmp_path, mounted, capsys):
+    parent = tmp_path / "ro"
+    parent.mkdir()
+    mounted("--bind", str(parent), str(parent))
+    mounted("-o", "remount,ro,bind", str(parent))
+    assert main(["replay", SCENE, TRACES[0], "--out", str(parent / "out"), "--quiet"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"{parent / 'out'}: cannot" in err[0]
+    assert "frictex-staging" not in err[0]

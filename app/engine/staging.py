@@ -1,25 +1,44 @@
 """A run's output folder replaced as a whole, or not at all.
 
 A replay writes every output (tables, frames, ``summary.json``) into a staging folder
-beside ``--out`` (``.<name>.frictex-staging.<pid>``, on the same file system) and, when
-the run commits, swaps it with ``--out`` in one ``renameat2(RENAME_EXCHANGE)`` system
-call: at every instant ``--out`` is the previous run's folder or the new run's, whatever
-kills the process (SIGKILL included). Then the previous run, now under the staging
-name, is deleted. Where the file system cannot exchange (not Linux, or a file system
-without RENAME_EXCHANGE), ``--out`` is renamed aside (``.<name>.frictex-old.<pid>``) and
-the staging folder renamed to ``--out``: two renames, between which a killed run leaves
-no ``--out``, and the next run renames the previous one back.
+beside ``--out`` (``.<name>.frictex-staging.<pid>.<token>``, on the same file system;
+``<token>`` is random, so two runs of one process into one ``--out`` never share one)
+and, when the run commits, swaps it with ``--out`` in one ``renameat2(RENAME_EXCHANGE)``
+system call: at every instant ``--out`` is the previous run's folder or the new run's,
+whatever kills the process (SIGKILL included). Where the file system cannot exchange
+(not Linux, or a file system without RENAME_EXCHANGE), ``--out`` is renamed aside
+(``.<name>.frictex-old.<pid>.<token>``) and the staging folder renamed to ``--out``: two
+renames, between which a killed run leaves no ``--out``, and the next run renames the
+previous one back. A name too long to take the suffix (the file system's 255 bytes) is
+shortened in the staging name to its first 100 characters and a hash of the whole. The
+new folder gets the old one's permissions, owner and group (where the process may set
+them) and extended attributes (ACLs included).
 
-What is not a run's output is kept: files and links in ``--out`` beside the outputs are
+What a run owns in ``--out`` is exactly what it writes there: ``summary.json``,
+``commands.<fmt>`` and ``friction.<fmt>`` (``fmt`` csv, npz or parquet; also the
+``.partial`` and npz ``.<column>.raw`` files a table is written under), and a ``frames``
+folder that holds nothing but ``frame_<number>.png`` files (or their ``.partial``). Every
+other file or link in ``--out`` (``commands.notes.txt`` included) is the user's: it is
 hard-linked into the staging folder before the swap (no byte copied, none lost; copied
-where the file system has no hard links); a
-folder there other than ``frames`` is refused before anything is written, as are an
-``--out`` that holds the current folder (the process would be left in the deleted one) and
-a mount point (its staging folder would be on another file system).
+where the file system has no hard links). Every other folder (a ``frames`` folder with a
+file of the user's in it included) is refused before anything is written, and again at
+the commit (a folder created in ``--out`` while the run went on): the run then fails
+(:class:`~frictex.device.errors.RunFailed`), its outputs are deleted and ``--out`` is left
+as it was. After the swap only the previous run's own outputs and the files carried over
+are deleted from the old folder; anything that appeared in it in between is moved into
+the new ``--out`` (or, where a name is taken, the old folder is kept as
+``.<name>.frictex-kept.<random>`` and the run fails naming it): a run never deletes a file
+it did not write. Also refused before anything is written: ``--out`` the root folder, an
+``--out`` that holds the current folder (the process would be left in the deleted one)
+and a mount point, bind mounts included (its staging folder would be on another file
+system, or the swap would fail with EBUSY). Errors name ``--out``, not the staging
+folder.
 
 Leftovers: a staging or set-aside folder whose process is gone is recognised by its
-name and removed by the next run into the same ``--out`` (:meth:`Staging.begin`), which
-says so (a warning in its summary). A run that is killed therefore never writes a
+name and cleared by the next run into the same ``--out`` (:meth:`Staging.begin`), as
+above (only a run's own outputs and copies of the user's files are deleted), which says
+so (a warning in its summary); a staging folder of this process is touched only by the
+:class:`Staging` that made it. A run that is killed therefore never writes a
 ``summary.json`` of its own: its outputs are only ever seen complete, so no summary
 marks an interrupted run.
 """
@@ -28,24 +47,48 @@ from __future__ import annotations
 
 import ctypes
 import errno
+import filecmp
 import glob
+import hashlib
 import os
+import re
+import secrets
 import shutil
+import stat
 from pathlib import Path
 
-from frictex.device.errors import InputError
+from frictex.device.errors import InputError, OutputSpaceError, RunFailed
 
-#: the entries of an output folder that belong to a run (the rest is kept across runs)
+#: the tables' stems, formats, and the other names a run writes into its output folder
 OUTPUT_STEMS = ("commands", "friction")
-_RUN_NAMES = ("summary.json", "frames")
-_STAGING, _OLD = "frictex-staging", "frictex-old"
+_TABLE = re.compile(r"(?:commands|friction)\.(?:csv|npz|parquet)(?:\.partial|\.\w+\.raw)?")
+_FRAME = re.compile(r"frame_\d+\.png(?:\.partial)?")
+SUMMARY, FRAMES = "summary.json", "frames"
+_STAGING, _OLD, _KEPT = "frictex-staging", "frictex-old", "frictex-kept"
 _RENAME_EXCHANGE = 2
+#: a longer output folder name is shortened in its staging folders' names
+_LONGEST_NAME = 150
+#: staging folders this process made and has not yet committed or aborted
+_OWNED: set[str] = set()
 
 
-def is_run_output(name: str) -> bool:
-    """Whether ``name`` (an entry of an output folder) is a run's: a table (or a part of
-    one being written), ``summary.json`` or ``frames``."""
-    return name in _RUN_NAMES or name.split(".", 1)[0] in OUTPUT_STEMS and "." in name
+def is_run_output(entry: os.DirEntry | Path) -> bool:
+    """Whether ``entry`` (of an output folder) is a run's own (see the module docstring):
+    ``summary.json``, a table file, or a ``frames`` folder holding only frame files."""
+    path = Path(entry)
+    if not path.is_dir() or path.is_symlink():
+        return path.name == SUMMARY or _TABLE.fullmatch(path.name) is not None
+    if path.name != FRAMES:
+        return False
+    return all(_FRAME.fullmatch(e.name) and not e.is_dir(follow_symlinks=False)
+               for e in os.scandir(path))
+
+
+def _short(name: str) -> str:
+    """``name`` as it prefixes staging names: itself, or shortened with its hash."""
+    if len(os.fsencode(name)) <= _LONGEST_NAME:
+        return name
+    return name[:100] + "~" + hashlib.sha256(os.fsencode(name)).hexdigest()[:16]
 
 
 class Staging:
@@ -53,11 +96,15 @@ class Staging:
 
     def __init__(self, out: str | Path):
         self.out = Path(os.path.realpath(out))  # a link to a folder: that folder
-        self.folder = self._name(_STAGING, os.getpid())
+        if self.out.parent == self.out:
+            raise InputError(f"{self.out}: the root folder cannot be an output folder (a run "
+                             "replaces its output folder as a whole): name a folder of its own")
+        self.token = secrets.token_hex(6)
+        self.folder = self._name(_STAGING)
         self.removed: list[str] = []  # leftovers of killed runs that begin() removed
 
-    def _name(self, kind: str, pid: int) -> Path:
-        return self.out.with_name(f".{self.out.name}.{kind}.{pid}")
+    def _name(self, kind: str) -> Path:
+        return self.out.with_name(f".{_short(self.out.name)}.{kind}.{os.getpid()}.{self.token}")
 
     def check(self) -> None:
         """Refuse, touching nothing, an ``out`` this run could not replace whole."""
@@ -67,57 +114,179 @@ class Staging:
         if self.out.exists() and (cwd == self.out or self.out in cwd.parents):
             raise InputError(f"{self.out}: holds the current folder; a run replaces its output "
                              "folder as a whole: write into a folder of its own")
-        if self.out.is_dir() and self.out.stat().st_dev != self.out.parent.stat().st_dev:
+        if self.out.is_dir() and _is_mount(self.out):
             raise InputError(f"{self.out}: a mount point, which a run cannot replace; write "
                              "into a folder inside it")
         if self.out.is_dir():
-            foreign = sorted(e.name for e in os.scandir(self.out)
-                             if not is_run_output(e.name) and e.is_dir(follow_symlinks=False))
+            foreign = self._foreign()
             if foreign:
                 raise InputError(f"{self.out}: holds the folder {foreign[0]!r}, not a run's "
                                  "output; a run replaces its output folder as a whole: write "
                                  "into a folder of its own")
 
+    def _foreign(self) -> list[str]:
+        """The folders in ``out`` that are not a run's."""
+        return sorted(e.name for e in os.scandir(self.out)
+                      if e.is_dir(follow_symlinks=False) and not is_run_output(e))
+
     def begin(self) -> Path:
-        """Remove the leftovers of killed runs, then create the staging folder."""
+        """Clear the leftovers of killed runs, then create the staging folder (with the
+        output folder's permissions, owner and extended attributes)."""
         self.check()
         self._recover()
-        self.out.parent.mkdir(parents=True, exist_ok=True)
-        self.folder.mkdir()
+        try:
+            self.out.parent.mkdir(parents=True, exist_ok=True)
+            self.folder.mkdir()
+            _OWNED.add(str(self.folder))
+            if self.out.is_dir():
+                _same_access(self.out, self.folder)
+        except OSError as exc:
+            self.abort()
+            raise self._failed(exc, "create its staging folder beside it") from None
         return self.folder
 
     def _recover(self) -> None:
-        for path in sorted(self.out.parent.glob(f".{glob.escape(self.out.name)}.frictex-*.*")):
-            kind, _, pid = path.name[len(self.out.name) + 2:].rpartition(".")
-            if kind not in (_STAGING, _OLD) or not pid.isdigit():
+        prefix = _short(self.out.name)
+        for path in sorted(self.out.parent.glob(f".{glob.escape(prefix)}.frictex-*.*")):
+            kind, _, rest = path.name[len(prefix) + 2:].partition(".")
+            pid = rest.split(".")[0]
+            if kind not in (_STAGING, _OLD) or not pid.isdigit() or str(path) in _OWNED:
                 continue
             if int(pid) != os.getpid() and _alive(int(pid)):  # a run going on now
                 continue
             if kind == _OLD and not self.out.exists():
                 os.rename(path, self.out)  # killed between the two renames: the previous run
                 continue
-            shutil.rmtree(path, ignore_errors=True)
-            self.removed.append(path.name)
+            kept = self._clear(path)
+            self.removed.append(path.name if kept is None else f"{path.name} (kept as {kept.name}: "
+                                "it held files not a run's)")
 
     def commit(self) -> None:
-        """Swap the staging folder in as ``out``; the previous ``out`` is deleted."""
-        if not self.out.exists():
-            os.rename(self.folder, self.out)
-            return
-        for entry in os.scandir(self.out):
-            if not is_run_output(entry.name) and not entry.is_dir(follow_symlinks=False):
-                _carry(Path(entry.path), self.folder / entry.name)
-        if _exchange(self.folder, self.out):
-            shutil.rmtree(self.folder)
-            return
-        old = self._name(_OLD, os.getpid())
-        os.rename(self.out, old)
-        os.rename(self.folder, self.out)
-        shutil.rmtree(old)
+        """Swap the staging folder in as ``out``; the previous run's outputs are deleted,
+        the rest kept (module docstring). :class:`RunFailed` if a folder not a run's
+        appeared in ``out`` during the run (``out`` left as it was)."""
+        try:
+            if not self.out.exists():
+                os.rename(self.folder, self.out)
+                _OWNED.discard(str(self.folder))
+                return
+            foreign = self._foreign()
+            if foreign:
+                raise RunFailed(f"{self.out}: the folder {foreign[0]!r}, not a run's output, "
+                                "appeared in it during the run; nothing was replaced (a run "
+                                "replaces its output folder as a whole): move it and run again")
+            for entry in os.scandir(self.out):
+                if not entry.is_dir(follow_symlinks=False) and not is_run_output(entry):
+                    _carry(Path(entry.path), self.folder / entry.name)
+            if _exchange(self.folder, self.out):
+                old = self.folder
+            else:
+                old = self._name(_OLD)
+                os.rename(self.out, old)
+                os.rename(self.folder, self.out)
+        except OSError as exc:
+            raise self._failed(exc, "replace it with the run's outputs") from None
+        _OWNED.discard(str(self.folder))
+        kept = self._clear(old)
+        if kept is not None:
+            raise RunFailed(f"{self.out}: holds the new run's outputs, but files appeared "
+                            "beside the previous run's while they were swapped, and could not "
+                            f"be moved into it: kept in {kept}")
+
+    def _clear(self, old: Path) -> Path | None:
+        """Delete ``old`` (a previous run's folder, or a killed run's staging folder): its
+        run's outputs and the copies of files that are also in ``out``; anything else is
+        moved into ``out``, or ``old`` is kept under a name of its own, returned."""
+        left = []
+        for entry in os.scandir(old):
+            path = Path(entry.path)
+            if is_run_output(entry) or _same_file(path, self.out / entry.name):
+                if entry.is_dir(follow_symlinks=False):
+                    shutil.rmtree(path)
+                else:
+                    path.unlink()
+            elif self.out.is_dir() and not os.path.lexists(self.out / entry.name):
+                os.rename(path, self.out / entry.name)
+            else:
+                left.append(entry.name)
+        if not left:
+            os.rmdir(old)
+            return None
+        kept = self.out.with_name(f".{_short(self.out.name)}.{_KEPT}.{secrets.token_hex(6)}")
+        os.rename(old, kept)
+        return kept
 
     def abort(self) -> None:
         """Delete the staging folder; ``out`` stays as it was."""
         shutil.rmtree(self.folder, ignore_errors=True)
+        _OWNED.discard(str(self.folder))
+
+    def _failed(self, exc: OSError, doing: str) -> OSError:
+        """``exc`` (on the staging folder) as an error naming ``out``."""
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+            full = OutputSpaceError(f"{self.out}: the disk is full ({exc.strerror}); nothing "
+                                    "was replaced")
+            full.errno = exc.errno
+            return full
+        if exc.errno == errno.EBUSY:
+            return InputError(f"{self.out}: a mount point, which a run cannot replace; write "
+                              "into a folder inside it")
+        if exc.errno is None:
+            return exc
+        return OSError(exc.errno, f"{self.out}: cannot {doing} ({exc.strerror})")
+
+
+def _is_mount(path: Path) -> bool:
+    """Whether ``path`` (resolved) is a mount point, a bind mount of a folder of the same
+    file system included (``/proc/self/mountinfo``, where there is one)."""
+    if os.path.ismount(path):
+        return True
+    try:
+        with open("/proc/self/mountinfo", encoding="utf-8", errors="surrogateescape") as fh:
+            points = {_unescape(line.split()[4]) for line in fh if len(line.split()) > 4}
+    except OSError:
+        return False
+    return str(path) in points
+
+
+def _unescape(field: str) -> str:
+    """A mountinfo path: space, tab, newline and backslash are written as octal escapes."""
+    return re.sub(r"\\([0-7]{3})", lambda m: chr(int(m.group(1), 8)), field)
+
+
+def _same_access(src: Path, dst: Path) -> None:
+    """Give folder ``dst`` the owner, group, permissions and extended attributes (ACLs)
+    of ``src``, each where the process may."""
+    st = os.stat(src)
+    try:
+        os.chown(dst, st.st_uid, st.st_gid)
+    except PermissionError:
+        pass
+    os.chmod(dst, stat.S_IMODE(st.st_mode))
+    try:
+        names = os.listxattr(src)
+    except OSError:  # a file system without them
+        return
+    for name in names:
+        try:
+            os.setxattr(dst, name, os.getxattr(src, name))
+        except OSError:
+            pass
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    """Whether ``a`` is ``b`` carried over: the same file (a hard link), or an equal
+    copy (a link with the same target, a file with the same bytes)."""
+    try:
+        sa, sb = os.lstat(a), os.lstat(b)
+    except FileNotFoundError:
+        return False
+    if os.path.samestat(sa, sb):
+        return True
+    if stat.S_ISLNK(sa.st_mode) and stat.S_ISLNK(sb.st_mode):
+        return os.readlink(a) == os.readlink(b)
+    return (stat.S_ISREG(sa.st_mode) and stat.S_ISREG(sb.st_mode)
+            and filecmp.cmp(a, b, shallow=False))
 
 
 def _exchange(a: Path, b: Path) -> bool:
@@ -151,4 +320,3 @@ def _alive(pid: int) -> bool:
     except PermissionError:
         return True
     return True
-
