@@ -201,6 +201,7 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
             sink = open_sink(options.device, channels=len(pipeline.channels),
                              rate_hz=options.rate_hz, phases=pipeline.actuation.has_phases,
                              paced=True, faults=options.faults, sim_args=tuple(options.sim_args),
+                             profile=scene.device.profile,
                              **({"queue_blocks": LOOP_QUEUE_BLOCKS} if looped else {}))
         if frames is not None:
             frames.into(folder)

@@ -38,7 +38,8 @@ def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | N
             from frictex.device.link.host import open_sink
             haptic.sink = open_sink(device, channels=len(pipeline.channels), rate_hz=rate_hz,
                                     phases=pipeline.actuation.has_phases, paced=False,
-                                    faults=faults, sim_args=tuple(sim_args))
+                                    faults=faults, sim_args=tuple(sim_args),
+                                    profile=pipeline.scene.device.profile)
         if record is not None:
             record.mkdir(parents=True, exist_ok=True)
             tables = TableSink(record, pipeline.channels, pipeline.actuation.has_phases, "csv")

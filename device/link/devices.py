@@ -48,6 +48,8 @@ class DeviceRequest:
     ``device.link.faults.FaultPlan`` to inject on a link, or None. stderr : where
     warnings go. stall_s, max_stalls : bound of one wait (s), and its multiple a paced
     link may spend without progress. sim_args : ``frictex sim-device`` flags (``sim``).
+    profile : the scene's device profile (``device.profile.PROFILES``), for a device
+    whose drive depends on the plate (an audio output's carrier and um per volt), or None.
     """
 
     channels: int
@@ -61,6 +63,7 @@ class DeviceRequest:
     stall_s: float = 1.0
     max_stalls: int = 5
     sim_args: tuple[str, ...] = ()
+    profile: str | None = None
 
     def link_options(self) -> dict:
         """The keyword arguments of ``device.link.host.CommandSink`` this request sets."""

@@ -480,7 +480,8 @@ def open_sim_device(arg: str, request: DeviceRequest):
 def open_sink(spec: str, channels: int, rate_hz: float, *, phases: bool = False,
               log_path=None, paced: bool = False, queue_blocks: int = 64, faults=None,
               stderr=sys.stderr, stall_s: float = STALL_S,
-              max_stalls: int = MAX_STALLS, sim_args: tuple[str, ...] = ()):
+              max_stalls: int = MAX_STALLS, sim_args: tuple[str, ...] = (),
+              profile: str | None = None):
     """Open the output device named by ``spec`` and handshake.
 
     Parameters
@@ -500,6 +501,8 @@ def open_sink(spec: str, channels: int, rate_hz: float, *, phases: bool = False,
         ``stall_s * max_stalls`` s without progress (``device.link.stall``).
     sim_args : ``frictex sim-device`` flags for ``sim`` (``("--finger", "3")``): the
         same options as ``sim:ARG``.
+    profile : the scene's device profile name, for devices whose drive depends on the
+        plate (``audio``: its carrier and um per volt); None: the device's default.
 
     Returns a ``device.link.devices.OutputDevice`` (the built-ins a :class:`CommandSink`). Raises :class:`LinkError` (an OSError, exit 1) if the port
     cannot be opened or the device does not answer or does not fit the pipeline,
@@ -508,6 +511,6 @@ def open_sink(spec: str, channels: int, rate_hz: float, *, phases: bool = False,
     request = DeviceRequest(channels=int(channels), rate_hz=float(rate_hz), phases=phases,
                             paced=paced, queue_blocks=queue_blocks, log_path=log_path,
                             faults=faults, stderr=stderr, stall_s=stall_s,
-                            max_stalls=max_stalls, sim_args=tuple(sim_args))
+                            max_stalls=max_stalls, sim_args=tuple(sim_args), profile=profile)
     factory, arg = resolve(spec)
     return factory(arg, request)
