@@ -468,17 +468,21 @@ def _blocks(fh, where: str):
         if block and cut == 0 and len(data) <= MAX_LINE_BYTES:
             rest = data  # a line longer than a block so far: read on
             continue
-        chunk, rest = (data[:cut], data[cut:]) if cut else (data, b"")
-        if not chunk:
+        end, rest = (cut, data[cut:]) if cut else (len(data), b"")
+        if not end:
             return
-        ended = chunk.endswith(b"\n")
-        raws = (chunk[:-1] if ended else chunk).split(b"\n")
-        bad = _first_bad_line(chunk, raws, ended)
-        if bad:
-            yield number + 1, b"\n".join(raws[:bad]), bad
-        if bad < len(raws):
-            _line_problem(raws[bad], number + bad + 1, where, ended or bad < len(raws) - 1)
-        number += len(raws)
+        ended = data[end - 1] == 0x0A  # a line break
+        body = data[:end - ended]  # the block's lines, one copy
+        count = body.count(b"\n") + 1
+        bad = _first_bad_line(body, count, ended)
+        if bad == count:  # the whole block is good: handed out as it is, not split
+            yield number + 1, body, count
+        else:
+            raws = body.split(b"\n", bad + 1)
+            if bad:
+                yield number + 1, b"\n".join(raws[:bad]), bad
+            _line_problem(raws[bad], number + bad + 1, where, ended or bad < count - 1)
+        number += count
 
 
 def _without_bom(head: bytes, where: str) -> bytes:
@@ -489,22 +493,26 @@ def _without_bom(head: bytes, where: str) -> bytes:
     return head[len(codecs.BOM_UTF8):] if head.startswith(codecs.BOM_UTF8) else head
 
 
-def _first_bad_line(chunk: bytes, raws: list[bytes], ended: bool) -> int:
-    """Index in ``raws`` (the lines of ``chunk``, without line breaks) of the first line
-    too long, holding a NUL byte or not UTF-8; ``len(raws)`` if none."""
-    bad = len(raws)
-    longest = max(map(len, raws))
-    if longest >= MAX_LINE_BYTES:
-        last_limit = MAX_LINE_BYTES if ended else MAX_LINE_BYTES + 1  # its break counts
-        bad = next((k for k, raw in enumerate(raws)
-                    if len(raw) >= (MAX_LINE_BYTES if k < len(raws) - 1 else last_limit)), bad)
-    nul = chunk.find(0)
+def _first_bad_line(body: bytes, count: int, ended: bool) -> int:
+    """Index among the ``count`` lines of ``body`` (joined by line breaks, the last one's
+    break removed if it had one: ``ended``) of the first line too long, holding a NUL
+    byte or not UTF-8; ``count`` if none."""
+    bad = count
+    if len(body) + ended >= MAX_LINE_BYTES:  # else no line can be too long
+        breaks = np.flatnonzero(np.frombuffer(body, dtype=np.uint8) == 0x0A)
+        lengths = np.diff(breaks, prepend=-1, append=len(body)) - 1
+        limits = np.full(count, MAX_LINE_BYTES)
+        limits[-1] = MAX_LINE_BYTES if ended else MAX_LINE_BYTES + 1  # its break counts
+        long = np.flatnonzero(lengths >= limits)
+        if long.size:
+            bad = int(long[0])
+    nul = body.find(0)
     if nul >= 0:
-        bad = min(bad, chunk.count(b"\n", 0, nul))
+        bad = min(bad, body.count(b"\n", 0, nul))
     try:
-        chunk.decode("utf-8")
+        body.decode("utf-8")
     except UnicodeDecodeError as exc:
-        bad = min(bad, chunk.count(b"\n", 0, exc.start))
+        bad = min(bad, body.count(b"\n", 0, exc.start))
     return bad
 
 
@@ -661,7 +669,7 @@ def _chunks(blocks, where: str, chunk_rows: int, order: TimeOrder, strict: bool)
 def _header(data: bytes, first: int, where: str, order: TimeOrder, strict: bool):
     """(the parser of the header line among a block's lines, how many lines up to and
     including it), or (None, 0) if the block has only blank and comment lines."""
-    for k, text in enumerate(data.decode("utf-8").split("\n")):
+    for k, text in enumerate(_lines(data)):
         if not text.strip() or text.lstrip().startswith("#"):
             continue
         names = [h.strip(" \t") for h in _fields(text, where, first + k)]
@@ -679,6 +687,16 @@ def _header(data: bytes, first: int, where: str, order: TimeOrder, strict: bool)
 
 
 #: a header field shown in an error: a plain column name of at most 32 characters
+def _lines(data: bytes):
+    """The lines of ``data`` (UTF-8, joined by b"\\n"), decoded one at a time: the header
+    is near the start of a block of a megabyte."""
+    start = 0
+    while (end := data.find(b"\n", start)) >= 0:
+        yield data[start:end].decode("utf-8")
+        start = end + 1
+    yield data[start:].decode("utf-8")
+
+
 _COLUMN_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,31}")
 #: most column names an error lists
 _NAMES_SHOWN = 8
