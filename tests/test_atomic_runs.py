@@ -406,3 +406,21 @@ def test_an_error_on_the_staging_folder_names_the_output_folder(tmp_path, mounte
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"{parent / 'out'}: cannot" in err[0]
     assert "frictex-staging" not in err[0]
+
+
+def test_a_ctrl_c_during_the_commit_reports_the_complete_run(tmp_path, monkeypatch, capsys):
+    """Once the swap has begun the run cannot be stopped: Ctrl-C then (twice) is held and
+    the run reports success, as --out holds the whole new run."""
+    from frictex.app.engine import staging
+    out = tmp_path / "out"
+    commit = staging.Staging.commit
+
+    def commit_under_ctrl_c(self):
+        os.kill(os.getpid(), signal.SIGINT)
+        commit(self)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    monkeypatch.setattr(staging.Staging, "commit", commit_under_ctrl_c)
+    assert main(["replay", SCENE, TRACES[0], "--out", str(out), "--quiet"]) == 0
+    assert "interrupted" not in capsys.readouterr().err
+    assert json.loads((out / "summary.json").read_text())["output"]["samples"] > 0

@@ -439,3 +439,35 @@ def test_a_signal_is_held_until_the_loop_checks(sig, raised):
     if raised is SystemExit:
         assert caught.value.code == 128 + sig
     assert signal.getsignal(sig) is before
+
+
+def test_an_ignored_signal_stays_ignored():
+    """Under ``nohup`` SIGHUP is ignored: holding it would end a run the user meant to
+    outlive the terminal."""
+    from frictex.app.engine.driver import deferred_interrupts
+    before = signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    try:
+        with deferred_interrupts() as check:
+            assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN
+            os.kill(os.getpid(), signal.SIGHUP)
+            check()  # nothing held
+        assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN
+    finally:
+        signal.signal(signal.SIGHUP, before)
+
+
+def test_signals_during_the_commit_are_held_and_dropped_once_it_succeeds():
+    from frictex.app.engine.driver import deferred_interrupts
+    done = []
+    with deferred_interrupts() as check:
+        with check.committing():
+            os.kill(os.getpid(), signal.SIGINT)
+            os.kill(os.getpid(), signal.SIGINT)  # a second one: held too
+            done.append(len(check.held))
+    assert done == [2]
+    with pytest.raises(KeyboardInterrupt):  # before the commit, a held one still raises
+        with deferred_interrupts() as check:
+            os.kill(os.getpid(), signal.SIGINT)
+            with check.committing():
+                done.append("committed")
+    assert done == [2]

@@ -17,7 +17,9 @@ Ctrl-C. A SIGINT that arrives inside a compiled (numba) kernel and raises there 
 kernel return a value with an exception set, which Python reports as a 30-line
 ``SystemError`` (3 of 15 Ctrl-Cs of a replay did). :func:`deferred_interrupts` holds the
 first Ctrl-C (and SIGTERM, SIGHUP) as a flag that the loop turns into an exception between
-steps (``check``), where nothing compiled runs; a second one raises at once.
+steps (``check``), where nothing compiled runs; a second one raises at once. Through a
+run's commit (``check.committing()``) both are held, then dropped: the run is complete.
+A signal the process ignores (``nohup``) stays ignored.
 """
 
 from __future__ import annotations
@@ -68,36 +70,69 @@ class RunTimer:
 HELD_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
+class HeldSignals:
+    """What :func:`deferred_interrupts` yields: call it to raise a held signal;
+    :meth:`committing` for the step after which a run is complete."""
+
+    def __init__(self):
+        self.held: list[int] = []
+        self._committing = False
+
+    def __call__(self) -> None:
+        """Raise the first signal held, if any (see :func:`deferred_interrupts`)."""
+        if self.held:
+            if self.held[0] == signal.SIGINT:
+                raise KeyboardInterrupt
+            raise SystemExit(128 + self.held[0])
+
+    def hold(self, signum, frame) -> None:
+        """The signal handler: hold ``signum``; a second one raises at once, except
+        while committing."""
+        self.held.append(signum)
+        if len(self.held) > 1 and not self._committing:
+            self()
+
+    @contextmanager
+    def committing(self):
+        """Within: the run's commit (the swap of its outputs into place). Every signal is
+        held through it, a second one too; once it has succeeded the run is complete and
+        the signals held are dropped: the run reports success, as its outputs are all in
+        place (a run that could still stop raised at the ``check()`` before)."""
+        self()
+        self._committing = True
+        try:
+            yield
+        except BaseException:
+            self._committing = False
+            raise
+        self.held.clear()
+        self._committing = False
+
+
 @contextmanager
 def deferred_interrupts():
     """Within: the first SIGINT (Ctrl-C), SIGTERM or SIGHUP is held until the ``check()``
-    this yields is called, which raises then (see the module docstring): Ctrl-C as
-    ``KeyboardInterrupt``, the others as ``SystemExit(128 + signal)``, their default exit
-    status, so that the run is aborted cleanly (its sinks and staged files removed). A
-    second signal raises at once. Outside the main thread (where Python runs no signal
+    this yields (a :class:`HeldSignals`) is called, which raises then (see the module
+    docstring): Ctrl-C as ``KeyboardInterrupt``, the others as ``SystemExit(128 +
+    signal)``, their default exit status, so that the run is aborted cleanly (its sinks
+    and staged files removed). A second signal raises at once, except within
+    ``check.committing()``. A signal whose handler is ``SIG_IGN`` (``nohup``, a shell's
+    background job) stays ignored. Outside the main thread (where Python runs no signal
     handler) ``check`` does nothing."""
+    check = HeldSignals()
     if threading.current_thread() is not threading.main_thread():
-        yield lambda: None
+        yield check
         return
-    held: list[int] = []
-
-    def check() -> None:
-        if held:
-            if held[0] == signal.SIGINT:
-                raise KeyboardInterrupt
-            raise SystemExit(128 + held[0])
-
-    def hold(signum, frame):
-        held.append(signum)
-        if len(held) > 1:
-            check()
-
-    previous = {sig: signal.signal(sig, hold) for sig in HELD_SIGNALS}
+    previous = {sig: signal.getsignal(sig) for sig in HELD_SIGNALS}
+    for sig, handler in previous.items():
+        if handler is not signal.SIG_IGN:
+            signal.signal(sig, check.hold)
     try:
         yield check
     finally:
         for sig, handler in previous.items():
-            signal.signal(sig, handler)
+            if handler is not signal.SIG_IGN:
+                signal.signal(sig, handler)
     check()
 
 

@@ -155,7 +155,9 @@ def replay_with(scene, trace, out_dir: str | Path | None, options: ReplayOptions
     (draining first) before writing the summary, so its counters are final; with the
     friction loop on it must be a ``device.link.host.CommandSink``. ``frames``: an optional
     ``app.engine.frames.FrameWriter`` (its frames are staged with the tables). Ctrl-C is
-    held while kernels run and ends the run between blocks (``KeyboardInterrupt``).
+    held while kernels run and ends the run between blocks (``KeyboardInterrupt``); one
+    that comes once the outputs are being swapped into ``out_dir`` is held and dropped:
+    the run completes and returns.
     """
     if (out_dir is None) != (options.fmt == MEMORY):
         raise InputError(f"output format {options.fmt!r}: tables in memory need no output "
@@ -216,8 +218,8 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
                                        f"{staging.out.name}: " + ", ".join(staging.removed))
             text = json.dumps(finite_json(doc), indent=2, allow_nan=False) + "\n"
             (staging.folder / "summary.json").write_text(text, encoding="utf-8")
-            check()
-            staging.commit()
+            with check.committing():  # held through the swap: then the run is complete
+                staging.commit()
     except BaseException:
         if staging is not None:
             staging.abort()
