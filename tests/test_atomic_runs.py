@@ -10,10 +10,14 @@ counted) on a small tmpfs, a folder it could not replace whole.
 import json
 import os
 import random
+import select
 import shutil
 import signal
+import socket
+import stat
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -424,3 +428,62 @@ def test_a_ctrl_c_during_the_commit_reports_the_complete_run(tmp_path, monkeypat
     assert main(["replay", SCENE, TRACES[0], "--out", str(out), "--quiet"]) == 0
     assert "interrupted" not in capsys.readouterr().err
     assert json.loads((out / "summary.json").read_text())["output"]["samples"] > 0
+
+
+def test_a_link_is_written_through_and_stays_a_link(tmp_path):
+    (tmp_path / "real.csv").write_text("earlier")
+    (tmp_path / "link.csv").symlink_to("real.csv")
+    assert main(["trace", "synth", "swipe", "--duration", "1", "-o",
+                 str(tmp_path / "link.csv")]) == 0
+    assert (tmp_path / "link.csv").is_symlink()
+    assert (tmp_path / "real.csv").read_text().count("\n") > 10
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.csv", "real.csv"]
+
+
+def test_a_device_node_is_written_not_replaced(tmp_path):
+    if os.geteuid() != 0:
+        pytest.skip("making a device node needs root")
+    null = tmp_path / "null"
+    os.mknod(null, 0o666 | stat.S_IFCHR, os.makedev(1, 3))  # what /dev/null is
+    assert main(["trace", "synth", "swipe", "--duration", "1", "-o", str(null)]) == 0
+    assert stat.S_ISCHR(os.lstat(null).st_mode)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["null"]
+
+
+def test_a_fifo_is_written_into_not_replaced(tmp_path):
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    reader = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)  # open now: the writer never waits
+    got = bytearray()
+    done = threading.Event()
+
+    def read():
+        while not done.is_set():
+            ready, _, _ = select.select([reader], [], [], 0.05)
+            if ready:
+                got.extend(os.read(reader, 1 << 16))
+
+    thread = threading.Thread(target=read, daemon=True)
+    thread.start()
+    try:
+        assert main(["trace", "synth", "swipe", "--duration", "1", "-o", str(fifo)]) == 0
+    finally:
+        done.set()
+        thread.join(timeout=10)
+        os.close(reader)
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    assert bytes(got).startswith(b"#") or b"t_s" in bytes(got)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fifo"]
+
+
+def test_a_folder_or_socket_as_an_output_file_is_one_line(tmp_path, capsys):
+    sock = socket.socket(socket.AF_UNIX)
+    sock.bind(str(tmp_path / "sock"))
+    try:
+        for target, what in ((tmp_path, "is a folder"), (tmp_path / "sock", "is a socket")):
+            assert main(["trace", "synth", "swipe", "--duration", "1", "-o", str(target)]) == 2
+            err = capsys.readouterr().err.strip().splitlines()
+            assert len(err) == 1 and what in err[0]
+    finally:
+        sock.close()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sock"]

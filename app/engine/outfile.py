@@ -5,17 +5,24 @@ writes under ``<name>.partial`` and renames it into place only once it is comple
 full disk or a killed process never leaves a truncated or empty file under the real
 name, and an earlier file of that name stays until the new one replaces it. Errors name
 the file.
+
+What the path names decides how: a link is followed, and the file it points to is
+replaced (the link stays); a character device or a FIFO (``/dev/null``, ``/dev/stdout``,
+``/proc/self/fd/1`` on a terminal or a pipe) is written directly, as a stream has no
+earlier contents to keep; anything else that is not a regular file (a folder, a block
+device, a socket) is refused, touching nothing.
 """
 
 from __future__ import annotations
 
 import errno
 import os
+import stat
 from collections.abc import Callable
 from pathlib import Path
 
 from frictex.app.engine.tables import check_room
-from frictex.device.errors import OutputSpaceError
+from frictex.device.errors import InputError, OutputSpaceError
 
 
 def write_file(path: str | Path, write: Callable[[Path], object], need_bytes: float) -> None:
@@ -32,10 +39,17 @@ def write_file(path: str | Path, write: Callable[[Path], object], need_bytes: fl
 
     Raises
     ------
+    InputError
+        ``path`` is a folder, a block device or a socket.
     OutputSpaceError
         Not enough room (before writing), or the disk filled while writing; names ``path``.
     """
     path = Path(path)
+    kind = _kind(path)
+    if kind == "stream":
+        write(path)
+        return
+    path = Path(os.path.realpath(path))  # a link: the file it points to
     check_room(path.parent, need_bytes, path.name, "or write elsewhere")
     partial = path.with_name(path.name + ".partial")
     try:
@@ -50,3 +64,19 @@ def write_file(path: str | Path, write: Callable[[Path], object], need_bytes: fl
     except BaseException:
         partial.unlink(missing_ok=True)
         raise
+
+
+def _kind(path: Path) -> str:
+    """``stream`` (a character device or FIFO, links followed), else ``file`` (a regular
+    file, or nothing yet); :class:`InputError` for anything else."""
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        return "file"
+    if stat.S_ISREG(mode):
+        return "file"
+    if stat.S_ISCHR(mode) or stat.S_ISFIFO(mode):
+        return "stream"
+    what = ("a folder" if stat.S_ISDIR(mode) else "a block device" if stat.S_ISBLK(mode)
+            else "a socket" if stat.S_ISSOCK(mode) else "not a regular file")
+    raise InputError(f"{path}: is {what}; give a file to write")
