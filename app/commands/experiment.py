@@ -22,8 +22,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("target", nargs="+", metavar="PROTOCOL | analyse SESSION",
                         help="a protocol file (.toml) to run, or 'analyse' and session folders")
     parser.add_argument("--participant", metavar="NAME:OPTIONS", default=None,
-                        help="who answers: 'simulated:weber=0.11,lapse=0.02[,seed=N]"
-                             "[,stroke_s=S]' is a simulated participant (headless)")
+                        help="who answers: 'window' is a person at the demo's window (on "
+                             "--device, as frictex demo); 'simulated:weber=0.11,lapse=0.02"
+                             "[,seed=N][,stroke_s=S]' is a simulated participant (headless)")
     parser.add_argument("--out", metavar="DIR", default=None,
                         help="the session folder (run), or where analysis.json and "
                              "analysis.png go (analyse; default: SESSION/analysis)")
@@ -37,6 +38,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="only check the protocol file and list its trials' count")
     parser.add_argument("--no-plot", action="store_true", help="analyse: no analysis.png")
     parser.add_argument("--quiet", action="store_true", help="no line per trial")
+    from frictex.app.commands.argtypes import add_link_arguments
+    from frictex.app.commands.preview import frame_size
+    add_link_arguments(parser)
+    parser.add_argument("--size", type=frame_size, default=None, metavar="WxH",
+                        help="--participant window: the window's size in px (default: the "
+                             "first stimulus's display size)")
+    parser.add_argument("--haptic", choices=("process", "thread"), default="process",
+                        help="--participant window: where the haptic pipeline runs (as "
+                             "frictex demo --haptic)")
+    parser.add_argument("--screenshots", metavar="DIR", default=None,
+                        help="--participant window: folder for screenshots taken with P "
+                             "(default: --out/screenshots)")
 
 
 def _analyse(args: argparse.Namespace) -> int:
@@ -49,6 +62,32 @@ def _analyse(args: argparse.Namespace) -> int:
         print("\n".join(report_lines(summary)))
     print(f"wrote {out / 'analysis.json'}" + ("" if args.no_plot else f" and {out / 'analysis.png'}"))
     return 0
+
+
+def _in_window(args: argparse.Namespace, protocol, presenter, session):
+    """``session()`` run in the demo's window on the live haptic side of ``--device``
+    (``app.experiment.window_presenter``); its result."""
+    from frictex.app.commands.argtypes import sim_device_args
+    from frictex.app.commands.demo import _start_haptic
+    from frictex.app.experiment.window_presenter import run_in_window
+    from frictex.rendering.visual.device_panels import default_frame_size
+    from frictex.rendering.visual.windows import open_backend
+    from frictex.textures.loader import load_scene
+    if args.faults is not None and args.device is None:
+        raise InputError("--faults needs --device: the faults are injected on the link to it")
+    demo = argparse.Namespace(**vars(args), input=("mouse", None), renderer=None,
+                              rate=10_000.0, block=50)
+    sim_device_args(demo)  # a bad --sim-finger is refused before the window opens
+    s = protocol.stimuli
+    first = s.listed[0].scene if s.listed else s.scene
+    scene = load_scene(first)
+    out = Path(args.out)
+    backend = open_backend("glfw", args.size or default_frame_size(scene),
+                           title=f"frictex experiment: {protocol.name}", vsync=False)
+    return run_in_window(presenter, session, backend,
+                         lambda sc, record: _start_haptic(demo, sc, Path(sc.source), record),
+                         scene, out / "live", Path(args.screenshots or out / "screenshots"),
+                         "none" if args.device is None else "starting")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -73,6 +112,7 @@ def run(args: argparse.Namespace) -> int:
     if args.participant is None and not args.resume:
         raise InputError("--participant is required, e.g. --participant "
                          "simulated:weber=0.11,lapse=0.02")
+    from frictex.app.experiment import window_presenter  # noqa: F401 (registers "window")
     from frictex.app.experiment.runner import make_presenter, run_session
     from frictex.app.experiment.session import read_info
     spec = args.participant if args.participant is not None else read_info(Path(args.out))["participant"]
@@ -85,8 +125,14 @@ def run(args: argparse.Namespace) -> int:
                   f"{'' if row['correct'] == '' else (' (correct)' if row['correct'] else ' (wrong)')}",
                   flush=True)
 
-    session = run_session(protocol, presenter, args.out, seed=args.seed, participant=spec,
-                          resume=args.resume, record=args.record, progress=progress)
+    def session():
+        return run_session(protocol, presenter, args.out, seed=args.seed, participant=spec,
+                           resume=args.resume, record=args.record, progress=progress)
+
+    if spec.partition(":")[0] == "window":
+        session = _in_window(args, protocol, presenter, session)
+    else:
+        session = session()
     print(f"{len(session.rows)} trials in {args.out}/results.csv (seed {session.seed}); "
           f"analyse with: frictex experiment analyse {args.out}", file=sys.stderr)
     return 0

@@ -660,14 +660,19 @@ class DemoLoop:
         if self.render_error is not None:
             raise self.render_error
 
+    def check_output(self) -> None:
+        """The haptic side stopped (a device lost, a failure): raise why, which ends the
+        demo (render thread, every frame; an experiment session pauses instead)."""
+        if (error := self.haptic.error) is not None:
+            raise output_stopped(error)
+
     def _render(self, clock) -> None:
         """The render thread: keys, then a frame whenever one is due."""
         self.backend.make_current()
         try:
             next_frame = clock()
             while not self._stop.is_set():
-                if (error := self.haptic.error) is not None:
-                    raise output_stopped(error)
+                self.check_output()
                 while not self._keys.empty():
                     self.handle_key(*self._keys.get())
                 items = []

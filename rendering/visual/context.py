@@ -140,7 +140,9 @@ def _key_names(glfw) -> dict[int, str]:
     names.update({glfw.KEY_SPACE: "space", glfw.KEY_ESCAPE: "escape", glfw.KEY_UP: "up",
                   glfw.KEY_DOWN: "down", glfw.KEY_LEFT: "left", glfw.KEY_RIGHT: "right",
                   glfw.KEY_TAB: "tab", glfw.KEY_F12: "f12", glfw.KEY_PAGE_UP: "page_up",
-                  glfw.KEY_PAGE_DOWN: "page_down"})
+                  glfw.KEY_PAGE_DOWN: "page_down", glfw.KEY_ENTER: "enter",
+                  glfw.KEY_KP_ENTER: "enter"})
+    names.update({getattr(glfw, f"KEY_KP_{d}"): str(d) for d in range(10)})
     return names
 
 

@@ -1,0 +1,205 @@
+"""The demo's window loop hosting an experiment session (``window_presenter``).
+
+:class:`ExperimentLoop` is the demo loop (``app.live.demo_loop.DemoLoop``: the input
+thread hands the mouse to the haptic side, the render thread draws) with what a session
+changes:
+
+- what is drawn: the screen the presenter sets (``screen``, an
+  ``rendering.visual.experiment_view.ExperimentView``, replaced whole) over the scene;
+  the buttons drawn (``buttons``, replaced whole each frame) are what a press hits;
+- the mouse touches only while an interval accepts touches (``accept_touch``); a press
+  on a button is an answer, never a touch; the touches sent during an interval are
+  recorded (:meth:`start_recording`, :meth:`stop_recording`) exactly as the haptic side
+  received them (haptic clock);
+- keys: SPACE (emergency stop), up/down (force) and P (screenshot) act as in the demo;
+  every other key is queued to the presenter (``answers``), Q included: the demo's
+  keys that would change the scene or open the layer panel do nothing here;
+- scene switches and reconnecting the output are asked of the render thread
+  (``requests``), which owns the haptic side's lifetime;
+- a haptic side that stops (a device lost) no longer ends the loop: ``lost`` says
+  why, and the presenter pauses the session (:meth:`check_output`).
+
+Threads: as THREADS.md says for the demo, plus the ``frictex-session`` thread (the
+runner and the presenter), which only reads ``answers`` and ``lost`` and sets
+``screen``, ``accept_touch`` and the recording.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+import time
+
+from frictex.app.live.demo_loop import DemoLoop, output_stopped
+from frictex.app.live.haptic_thread import EVENTS
+from frictex.rendering.input.trace_file import UP
+from frictex.rendering.visual.compositor import FrameView
+from frictex.rendering.visual.experiment_view import ExperimentView, draw_experiment, hit
+from frictex.textures.loader import load_scene
+
+#: keys the demo loop handles itself in a session (the emergency stop, the force)
+DEMO_KEYS = ("space", "up", "down")
+SCREENSHOT_KEYS = ("p", "f12")
+ANSWER_POLL_S = 0.05  # how often a wait for the render thread looks at the window closing
+
+
+class ExperimentLoop(DemoLoop):
+    """See the module docstring. ``restart(scene) -> (haptic, finish)`` starts a new
+    haptic side on ``scene`` (reconnecting after a lost device); ``finish`` is the
+    current haptic side's (``app.live.haptic_setup.open_haptic``'s)."""
+
+    def __init__(self, backend, haptic, finish, scene, screenshot_dir, events_path,
+                 restart, link_name: str = "none"):
+        super().__init__(backend, haptic, [scene.source], 0, scene, load_scene, screenshot_dir,
+                         events_path=events_path, link_name=link_name)
+        self.finish = finish
+        self.restart = restart
+        self.show_scope = False
+        self.screen = ExperimentView("message")
+        self.buttons: tuple = ()
+        self.answers: queue.SimpleQueue = queue.SimpleQueue()  # ("key" | "button", value, t_s)
+        self.requests: queue.SimpleQueue = queue.SimpleQueue()  # (what, args, reply queue)
+        self.accept_touch = False
+        self.lost: str | None = None
+        self._recording: list | None = None
+        self._rec_lock = threading.Lock()
+
+    # -- input thread -------------------------------------------------------------------
+
+    def on_key(self, name: str, shift: bool) -> None:
+        if name in DEMO_KEYS:
+            super().on_key(name, shift)
+        elif name in SCREENSHOT_KEYS:
+            self._keys.put((name, shift))
+        else:
+            self.answers.put(("key", name, self.haptic.now()))
+
+    def on_button(self, pressed: bool) -> None:
+        if self.hover_px is None:
+            self.hover_px = self.backend.cursor_px()
+        if not self.touching:
+            if pressed:
+                button = hit(self.buttons, *self.hover_px)
+                if button is not None:
+                    self.answers.put(("button", button.value, self.haptic.now()))
+                    return
+            if not (pressed and self.accept_touch):
+                return  # a release after a button, or a press while nothing is explored
+        super().on_button(pressed)
+
+    def flush_mouse(self) -> None:
+        super().flush_mouse()
+        if self.touching and not self.accept_touch:  # the interval ended under the finger
+            self._pending = []
+            self.touching = False
+            self._mouse_touch("up", self.hover_px, self.haptic.now())
+
+    def _mouse_touch(self, event: str, px, t_s: float) -> None:
+        super()._mouse_touch(event, px, t_s)
+        x, y = self._mm(px)
+        with self._rec_lock:
+            if self._recording is not None:
+                self._recording.append((max(min(t_s, self.haptic.now()), 0.0), x, y,
+                                        self.force_n, EVENTS[event]))
+
+    # -- session thread -----------------------------------------------------------------
+
+    def start_recording(self) -> None:
+        """Record the touches sent from now on."""
+        with self._rec_lock:
+            self._recording = []
+
+    def stop_recording(self) -> list[tuple]:
+        """The touches sent since :meth:`start_recording`: (t_s haptic clock, x_mm, y_mm,
+        force_n, event code), ending with a lift (added at the last position now if the
+        finger was still down)."""
+        with self._rec_lock:
+            samples, self._recording = self._recording or [], None
+        if samples and samples[-1][4] != UP:
+            t, x, y, f, _ = samples[-1]
+            samples.append((max(t, self.haptic.now()), x, y, f, UP))
+        return samples
+
+    def ask(self, what: str, *args, cancel: threading.Event, timeout_s: float):
+        """Ask the render thread to ``switch`` (args: scene, text) or ``reconnect``
+        (args: scene) and wait for it; returns its error message or None (or a message
+        once ``cancel`` is set: the window closed). Raises TimeoutError if the render
+        thread does not answer within ``timeout_s``."""
+        reply: queue.SimpleQueue = queue.SimpleQueue()
+        self.requests.put((what, args, reply))
+        deadline = time.monotonic() + timeout_s
+        while not cancel.is_set():
+            try:
+                return reply.get(timeout=ANSWER_POLL_S)
+            except queue.Empty:
+                if time.monotonic() > deadline:
+                    raise TimeoutError(f"the window did not {what} within {timeout_s:g} s"
+                                       ) from None
+        return "the window was closed"
+
+    # -- render thread ------------------------------------------------------------------
+
+    def check_output(self) -> None:
+        """A haptic side that stopped pauses the session (``lost``) instead of ending
+        the window."""
+        if self.lost is None and (error := self.haptic.error) is not None:
+            self.lost = str(output_stopped(error))
+            self.log("output-lost", self.lost)
+
+    def check_reload(self, now: float) -> None:
+        """A session's scenes are fixed by its protocol: no file is reloaded."""
+
+    def _serve(self) -> None:
+        while True:
+            try:
+                what, args, reply = self.requests.get_nowait()
+            except queue.Empty:
+                return
+            if what == "switch":
+                scene, text = args
+                ok = self._apply(scene, None, "stimulus", scene.name, text)
+                reply.put(None if ok else (self.error or f"cannot show {scene.name}"))
+            elif what == "reconnect":
+                reply.put(self._reconnect(*args))
+
+    def _reconnect(self, scene) -> str | None:
+        """Stop the haptic side that stopped and start a new one on ``scene``."""
+        try:
+            self.finish()
+        except OSError as exc:  # the child ended without its report: nothing more to keep
+            self.log("output-finish-failed", str(exc))
+        try:
+            haptic, finish = self.restart(scene)
+        except (OSError, ValueError) as exc:
+            self.log("reconnect-failed", str(exc))
+            return str(exc)
+        self.haptic, self.finish = haptic, finish
+        self.scene, self.renderer, self.lost, self.error = scene, None, None, None
+        self._applied_seen = 0
+        self.compositor.set_scene(scene)
+        self.overlay.clear()
+        self._set_envelope(scene, haptic.pipeline.actuation)
+        self.log("reconnect", scene.name)
+        return None
+
+    def frame(self, now: float) -> None:
+        self._serve()
+        super().frame(now)
+
+    def draw(self) -> None:
+        self.compositor.resize(self.backend.size)
+        self.backend.use()
+        screen = self.screen
+        interval = screen.phase == "interval"
+        if self.haptic.estop.is_set():
+            banner, kind = "EMERGENCY STOP: output is 0 um. SPACE resumes.", "stop"
+        else:
+            banner, kind = None, "error"
+        hover = (self._mm(self.hover_px) if interval and self.hover_px is not None
+                 and not self.touching else None)
+        self.compositor.draw(FrameView(
+            overlay=self.overlay if interval else None, hover_mm=hover, show_scope=False,
+            amplitude_max_um=self.scene.device.amplitude_limit_um,
+            status=(screen.progress,) if screen.progress else (), banner=banner,
+            banner_kind=kind))
+        self.buttons = draw_experiment(self.compositor, screen)

@@ -1,0 +1,203 @@
+"""A session with a person at the demo window, on the headless window: the real presenter
+(``app.experiment.window_presenter``) and loop, the haptic thread in this process, a
+hand injecting mouse strokes, clicks and key presses. Checks the results table, the
+per-trial files (the traces replay with ``frictex replay`` to the commands the session
+wrote) and that the screens' texts do not overlap. Every wait is bounded."""
+
+import csv
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from frictex.app.experiment.protocol import load_protocol
+from frictex.app.experiment.runner import run_session
+from frictex.app.experiment.window_presenter import (WindowPresenter, how_to_answer,
+                                                     response_keys, run_in_window)
+from frictex.app.live.haptic_setup import open_haptic
+from frictex.app.commands.cli import main as cli_main
+from frictex.rendering.input.trace_file import read_trace
+from frictex.rendering.visual.viewport import default_frame_size
+from frictex.rendering.visual.windows import open_backend
+from frictex.textures.loader import load_scene
+from frictex.textures.library import resolve_scene
+
+pytest.importorskip("moderngl", reason="moderngl (Python package) not installed")
+
+PROTOCOL = """format = 1
+name = "tiny-2afc"
+method = "2afc"
+repetitions = 1
+practice = 1
+break_every = 1
+
+[stimuli]
+scene = "grating-5mm"
+vary = "period_mm"
+reference = 5.0
+levels = [6.6]
+
+[presentation]
+mode = "sequential"
+exploration = "fixed"
+exploration_s = 1.5
+"""
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def wait_for(what, test, timeout_s=120.0):
+    deadline = time.monotonic() + timeout_s
+    while not (found := test()):
+        assert time.monotonic() < deadline, f"waited {timeout_s} s for {what}"
+        time.sleep(0.01)
+    return found
+
+
+def overlapping(boxes):
+    """Pairs of text boxes (x, y, w, h) that overlap by more than a pixel."""
+    out = []
+    for i, (x, y, w, h) in enumerate(boxes):
+        for (u, v, p, q) in boxes[i + 1:]:
+            if min(x + w, u + p) - max(x, u) > 1 and min(y + h, v + q) - max(y, v) > 1:
+                out.append(((x, y, w, h), (u, v, p, q)))
+    return out
+
+
+def test_keys_of_the_responses():
+    assert response_keys(("1", "2")) == {"1": "1", "2": "2"}
+    assert response_keys(("same", "different")) == {"s": "same", "d": "different"}
+    scale = tuple(str(i) for i in range(1, 11))
+    keys = response_keys(scale)
+    assert keys["0"] == "10" and keys["7"] == "7" and len(keys) == 10
+    assert "0" not in response_keys(tuple(str(i) for i in range(0, 11))).values() or \
+        response_keys(tuple(str(i) for i in range(0, 11)))["0"] == "0"
+    assert "(the others by their button)" in how_to_answer(
+        tuple(str(i) for i in range(0, 12)), response_keys(tuple(str(i) for i in range(0, 12))))
+
+
+class Hand:
+    """The participant: answers each screen once it is drawn; records what it did."""
+
+    def __init__(self, window, presenter):
+        self.window, self.presenter = window, presenter
+        self.answers = []  # the responses given, in order
+        self.strokes = []  # (x_mm range) of each interval's stroke
+        self.layouts = []  # text boxes of each message screen as drawn
+        self.done = threading.Event()
+
+    def click(self, box):
+        x, y, w, h = box
+        self.window.move(x + w / 2, y + h / 2)
+        self.window.press()
+        self.window.release()
+
+    def run(self):
+        loop = wait_for("the loop", lambda: self.presenter.loop)
+        seen = None
+        while not self.done.is_set():
+            screen = loop.screen
+            drawn = loop.buttons
+            if screen is seen or (screen.buttons and tuple(b.value for b in drawn)
+                                  != tuple(v for v, _ in screen.buttons)):
+                time.sleep(0.01)
+                continue
+            seen = screen
+            if screen.phase == "interval":
+                self.stroke(loop)
+                continue
+            frames = self.window.frames
+            wait_for("a frame of the screen", lambda: self.window.frames > frames + 1)
+            self.layouts.append((screen.title, list(loop.compositor.text_boxes),
+                                 loop.compositor.size))
+            values = [v for v, _ in screen.buttons]
+            if values == ["1", "2"]:
+                if not self.answers:  # the first answer by key, the others by button
+                    self.answers.append("1")
+                    self.window.key("1")
+                else:
+                    self.answers.append("2")
+                    self.click(drawn[1].box)
+            else:
+                self.click(drawn[0].box)
+
+    def stroke(self, loop):
+        vp = loop.compositor.viewport
+        xs = np.linspace(vp.x0 + 0.2 * vp.width_px, vp.x0 + 0.8 * vp.width_px, 15)
+        y = vp.y0 + vp.height_px / 2
+        self.window.move(xs[0], y)
+        self.window.press()
+        for x in xs[1:]:
+            self.window.move(x, y)
+            time.sleep(0.02)
+        self.window.release()
+        self.strokes.append(tuple(float(v) for v in vp.to_mm(xs[[0, -1]], [y, y])[0]))
+
+
+def test_a_session_in_the_headless_window(tmp_path, capsys):
+    protocol_file = tmp_path / "tiny.toml"
+    protocol_file.write_text(PROTOCOL)
+    protocol = load_protocol(protocol_file)
+    scene = load_scene(resolve_scene("grating-5mm"))
+    try:
+        window = open_backend("headless", default_frame_size(scene.display))
+    except OSError as exc:
+        pytest.skip(f"EGL unavailable: {exc}")
+    out = tmp_path / "session"
+    presenter = WindowPresenter()
+    hand = Hand(window, presenter)
+
+    def start(sc, record):
+        haptic, finish = open_haptic(sc, 10_000.0, 50, None, None, record)
+        haptic.start()
+        return haptic, finish
+
+    thread = threading.Thread(target=hand.run, name="test-hand", daemon=True)
+    thread.start()
+    try:
+        session = run_in_window(
+            presenter, lambda: run_session(protocol, presenter, out, seed=7, participant="window"),
+            window, start, scene, out / "live", tmp_path / "shots")
+    finally:
+        hand.done.set()
+        thread.join(timeout=30)
+
+    # the results: a practice trial and two main trials, answered as the hand did
+    rows = read_csv(out / "results.csv")
+    assert [r["practice"] for r in rows] == ["1", "0", "0"]
+    assert [r["response"] for r in rows] == hand.answers == ["1", "2", "2"]
+    assert len(session.rows) == 3
+    assert all(0.0 < float(r["rt_s"]) < 120.0 for r in rows)
+    # per trial and interval: the scene, the touches as sent, and their replay
+    assert len(hand.strokes) == 6
+    for k, (lo, hi) in enumerate(hand.strokes):
+        trial, interval = k // 2 + 1, k % 2 + 1
+        folder = out / "trials" / f"{trial:04d}"
+        trace = read_trace(folder / f"{interval}.csv")
+        assert trace.x_mm.min() == pytest.approx(lo, abs=1e-6)
+        assert trace.x_mm.max() == pytest.approx(hi, abs=1e-6)
+        assert 0.0 <= trace.t_s[0] and trace.t_s[-1] < 60.0
+        assert (folder / str(interval) / "commands.csv").exists()
+    # the trace replays with frictex replay to the commands the session wrote
+    folder = out / "trials" / "0002"
+    assert cli_main(["replay", str(folder / "1.toml"), str(folder / "1.csv"),
+                     "--out", str(tmp_path / "again")]) == 0
+    assert (tmp_path / "again" / "commands.csv").read_text() == \
+        (folder / "1" / "commands.csv").read_text()
+    # the live output: full-rate commands and the intervals' times on its clock
+    events = read_csv(out / "live" / "events.csv")
+    starts = [e for e in events if e["event"] == "interval-start"]
+    assert len(starts) == 6
+    assert len(read_csv(out / "live" / "commands.csv")) > 1000
+    # the screens: instructions, a break before each main trial, the questions; legible
+    titles = [t for t, _, _ in hand.layouts]
+    assert titles[0] == "tiny-2afc" and titles.count("Break") == 2
+    for title, boxes, (w, h) in hand.layouts:
+        assert boxes, title
+        assert not overlapping(boxes), title
+        assert all(x >= 0 and y >= 0 and x + bw <= w + 1 and y + bh <= h + 1
+                   for x, y, bw, bh in boxes), title
