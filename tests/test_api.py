@@ -112,3 +112,25 @@ def test_bad_input_is_an_input_error(tmp_path, monkeypatch, call, message):
     with pytest.raises(frictex.InputError, match=message):
         call()
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_replay_never_reads_a_later_runs_tables(tmp_path, monkeypatch):
+    """Its tables are read lazily from the folder, but only while the folder holds its
+    run: after a later run into it, a RunFailed, never the other run's rows; and a
+    relative folder still means the same one after os.chdir."""
+    monkeypatch.chdir(tmp_path)
+    first = frictex.replay(SCENE, TRACE, out="out")
+    early = first.commands  # read now: kept
+    monkeypatch.chdir(tmp_path.parent)
+    assert first.out == tmp_path / "out"
+    assert first.friction.num_rows > 0  # read after chdir, from the same folder
+    second = frictex.replay(SCENE, "circle-30mms-60hz", out=tmp_path / "out", format="npz")
+    third = frictex.replay(SCENE, "circle-30mms-60hz", out=tmp_path / "out2")
+    (tmp_path / "out2" / "summary.json").write_text("{}")  # replaced by hand
+    with pytest.raises(frictex.RunFailed, match="no longer holds this run"):
+        third.friction
+    assert first.commands is early
+    assert second.friction.num_rows != first.friction.num_rows
+    frictex.replay(SCENE, TRACE, out=tmp_path / "out", format="npz")
+    with pytest.raises(frictex.RunFailed, match="no longer holds this run"):
+        second.commands  # same format, same name: another run's table

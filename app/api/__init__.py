@@ -19,7 +19,8 @@ Units everywhere: positions in mm, time in s, velocity in mm/s, force in N, freq
 Hz, vibration amplitude in um zero-to-peak, friction relative (mu' = mu(w) / mu(0)).
 Errors are :class:`FrictexError`: :class:`InputError` (a ``ValueError``) for bad input,
 :class:`DeviceError` (an ``OSError``) for the device's link, :class:`OutputSpaceError`
-when outputs do not fit.
+when outputs do not fit, :class:`RunFailed` for a :class:`Replay` whose output folder
+holds another run since.
 
 Everything else lives in the four layers below, in the order of DESIGN.md's data flow:
 ``frictex.app`` (commands, replay engine, live demo, reports) uses ``frictex.rendering``
@@ -61,6 +62,7 @@ _WHERE = {
     "InputError": "frictex.device.errors",
     "DeviceError": "frictex.device.errors",
     "OutputSpaceError": "frictex.device.errors",
+    "RunFailed": "frictex.device.errors",
 }
 
 __all__ = sorted(_WHERE)
@@ -72,7 +74,8 @@ if TYPE_CHECKING:
     from frictex.app.engine.summary_types import (Clamps, Counts, FingerErrors, GapInfo, LayerInfo,
                                                   OutputInfo, SceneInfo, Summary, TimeOrderInfo,
                                                   Timings, TraceInfo)
-    from frictex.device.errors import DeviceError, FrictexError, InputError, OutputSpaceError
+    from frictex.device.errors import (DeviceError, FrictexError, InputError, OutputSpaceError,
+                                       RunFailed)
     from frictex.rendering.input.trace_file import Trace
     from frictex.rendering.pipeline import BlockOutput
     from frictex.textures.model import Scene

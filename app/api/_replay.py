@@ -4,15 +4,16 @@ from __future__ import annotations
 
 import functools
 import json
+import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from frictex.app.engine.replay import ReplayOptions, replay_with
+from frictex.app.engine.replay import ReplayOptions, file_id, replay_with
 from frictex.app.engine.sources import MAX_GAP_S
 from frictex.app.engine.summary import finite_json
 from frictex.app.engine.summary_types import Summary
 from frictex.app.engine.tables import FORMATS, MEMORY, read_table
-from frictex.device.errors import InputError
+from frictex.device.errors import InputError, RunFailed
 from frictex.rendering.input.trace_file import Trace
 from frictex.textures.model import Scene
 
@@ -25,23 +26,44 @@ __all__ = ["Replay", "replay"]
 class Replay:
     """The result of :func:`replay`: the summary and the two tables.
 
+    With an output folder the tables are read from it on first use (a long run's tables
+    need not fit in memory), and only while the folder still holds this run: before
+    reading, its ``summary.json`` must be the file this run wrote (the same device, inode,
+    size and modification time); after a later run into the same folder (or the folder's
+    removal) reading a table is a :class:`~frictex.device.errors.RunFailed` instead of
+    another run's rows. A table once read is kept. The folder is held as an absolute path
+    (a later ``os.chdir`` changes nothing).
+
     Attributes
     ----------
     summary : Summary
         What ``summary.json`` holds, typed; ``summary.to_dict()`` is that document.
     out : Path or None
-        The output folder, or None when the tables are in memory.
+        The output folder (absolute, links resolved), or None when the tables are in
+        memory.
     """
 
-    def __init__(self, summary: Summary, out: Path | None, tables: dict[str, Any] | None):
+    def __init__(self, summary: Summary, out: Path | None, tables: dict[str, Any] | None,
+                 summary_id: tuple[int, ...] | None = None):
         self.summary = summary
-        self.out = out
+        self.out = None if out is None else Path(os.path.realpath(out))
         self._tables = tables or {}  # in memory (out is None)
+        self._summary_id = summary_id
 
     def _table(self, stem: str) -> pyarrow.Table:
         if self.out is None:
             return self._tables[stem]
-        return read_table(self.out / f"{stem}.{self.summary.output.format}")
+        path = self.out / f"{stem}.{self.summary.output.format}"
+        try:  # checked after reading: a run swapped in meanwhile is caught too
+            table = read_table(path)
+            same = self._summary_id is None or file_id(self.out / "summary.json") == self._summary_id
+        except FileNotFoundError:
+            same = False
+        if not same:
+            raise RunFailed(f"{self.out}: no longer holds this run (its summary.json was "
+                            f"replaced or removed since): {path.name} would not be its table; "
+                            "read the tables before the next run into the folder")
+        return table
 
     @functools.cached_property
     def friction(self) -> pyarrow.Table:
@@ -50,7 +72,8 @@ class Replay:
         Columns ``t_s`` (s), ``finger`` (id), ``x_mm``, ``y_mm`` (mm, the position used),
         ``mu_target`` (mu' composed from the layers), ``amplitude_um`` (the amplitude the
         actuation achieves under the finger, um zero-to-peak); ``.to_pandas()`` where
-        pandas is installed. Read from the output folder on first use when there is one.
+        pandas is installed. Read from the output folder on first use when there is one (while it holds
+        this run: see the class).
         """
         return self._table("friction")
 
@@ -58,7 +81,8 @@ class Replay:
     def commands(self) -> pyarrow.Table:
         """One row per output sample: ``t_s`` (s), ``<channel>_um`` per actuator channel
         (um zero-to-peak) and ``<channel>_phase_rad`` (rad) where the actuation has phases.
-        Read from the output folder on first use when there is one."""
+        Read from the output folder on first use when there is one (while it holds this
+        run: see the class)."""
         return self._table("commands")
 
     def __repr__(self) -> str:
@@ -132,4 +156,4 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
                             strict=strict, max_gap_s=max_gap_s, progress=progress)
     result = replay_with(scene, trace, out, options)
     doc = json.loads(json.dumps(finite_json(result.summary), allow_nan=False))
-    return Replay(Summary.from_dict(doc), None if out is None else Path(out), result.tables)
+    return Replay(Summary.from_dict(doc), out, result.tables, result.summary_id)

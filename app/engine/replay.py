@@ -24,6 +24,7 @@ room, an output folder it cannot replace) touches nothing.
 from __future__ import annotations
 
 import json
+import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -112,10 +113,14 @@ class ReplayResult:
         The summary document (``summary.json`` before non-finite numbers become null).
     tables : dict of str to pyarrow.Table, or None
         ``commands`` and ``friction`` when kept in memory (``fmt`` ``memory``); else None.
+    summary_id : tuple of int, or None
+        The written ``summary.json``'s (device, inode, size, mtime in ns), which tell
+        this run's folder from a later run's; None without a folder.
     """
 
     summary: dict[str, Any]
     tables: dict[str, Any] | None
+    summary_id: tuple[int, int, int, int] | None = None
 
 
 def load_inputs(scene, trace, strict: bool = False):
@@ -194,7 +199,7 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
     if options.sim_args and options.device is None:
         raise InputError("sim_args are for a simulated device (device 'sim')")
     check()
-    folder = None
+    folder = summary_id = None
     try:
         if staging is not None:
             folder = staging.begin()
@@ -218,13 +223,21 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
                                        f"{staging.out.name}: " + ", ".join(staging.removed))
             text = json.dumps(finite_json(doc), indent=2, allow_nan=False) + "\n"
             (staging.folder / "summary.json").write_text(text, encoding="utf-8")
+            summary_id = file_id(staging.folder / "summary.json")  # the swap keeps it
             with check.committing():  # held through the swap: then the run is complete
                 staging.commit()
     except BaseException:
         if staging is not None:
             staging.abort()
         raise
-    return ReplayResult(doc, tables)
+    return ReplayResult(doc, tables, summary_id)
+
+
+def file_id(path: Path) -> tuple[int, int, int, int]:
+    """(device, inode, size, mtime in ns) of ``path``: what tells one written file from
+    another written later at the same path."""
+    st = os.stat(path)
+    return st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns
 
 
 def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOptions, sink,
