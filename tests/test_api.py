@@ -134,3 +134,17 @@ def test_a_replay_never_reads_a_later_runs_tables(tmp_path, monkeypatch):
     frictex.replay(SCENE, TRACE, out=tmp_path / "out", format="npz")
     with pytest.raises(frictex.RunFailed, match="no longer holds this run"):
         second.commands  # same format, same name: another run's table
+
+
+def test_tables_read_back_from_a_folder_equal_the_tables_in_memory(tmp_path):
+    in_memory = frictex.replay(SCENE, TRACE)
+    for fmt in ("parquet", "npz", "csv"):
+        written = frictex.replay(SCENE, TRACE, out=tmp_path / fmt, format=fmt)
+        for stem in ("friction", "commands"):
+            got, want = getattr(written, stem), getattr(in_memory, stem)
+            assert got.schema.equals(want.schema)
+            if fmt != "csv":
+                assert got.equals(want)
+            else:  # to its printed precision: t_s 7 decimals, the rest at least 4
+                for a, b in zip(got.columns, want.columns):
+                    np.testing.assert_allclose(a.to_numpy(), b.to_numpy(), rtol=0, atol=5.1e-5)

@@ -148,3 +148,21 @@ def test_an_empty_table_in_memory_has_its_columns():
     memory.commit()
     assert memory.table.num_rows == 0
     assert [f.type.to_pandas_dtype() for f in memory.table.schema] == [d for _, d, _ in COLUMNS]
+
+
+@pytest.mark.parametrize("fmt", ["csv", "npz", "parquet"])
+@pytest.mark.parametrize("rows", [0, 1000])
+def test_a_table_file_reads_back_typed_as_written(tmp_path, fmt, rows):
+    """read_table gives the writer's schema (not nullable; a CSV without rows typed as one
+    with rows); npz and parquet equal the table in memory exactly."""
+    writer = TableWriter(tmp_path, "friction", COLUMNS, fmt)
+    memory = tables.open_table(None, "friction", COLUMNS, tables.MEMORY)
+    for chunk, _ in chunks(rows):
+        writer.write(chunk)
+        memory.write(chunk)
+    memory.commit()
+    path = writer.commit()
+    for got in (tables.read_table(path), tables.read_table(path, COLUMNS)):
+        assert got.schema.equals(memory.table.schema)
+        if fmt != "csv" or rows == 0:
+            assert got.equals(memory.table)

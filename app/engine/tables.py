@@ -29,7 +29,8 @@ Formats:
   :class:`MemoryTable` keeps the rows and its ``table`` is a pyarrow Table once committed.
 
 :func:`open_table` opens the writer of a format; :func:`read_table` reads a written table
-back as a pyarrow Table.
+back as a pyarrow Table, typed as the writer's (equal to a :class:`MemoryTable`'s for
+parquet and npz; CSV to its printed precision).
 """
 
 from __future__ import annotations
@@ -217,21 +218,44 @@ def arrow_schema(columns):
                       for name, dtype, _ in columns])
 
 
-def read_table(path: Path):
-    """A table file written here (csv, npz or parquet, by its suffix) as a pyarrow Table."""
+def read_table(path: Path, columns=None):
+    """A table file written here (csv, npz or parquet, by its suffix) as a pyarrow Table
+    typed as the writer's: the schema of ``columns`` ((name, dtype, %-format) triples, as
+    given to the writer), or where None the one every frictex table has (``finger``
+    int64, every other column float64), all declared not nullable, as a
+    :class:`MemoryTable`'s. Parquet and npz then read back exactly as they were written
+    (``table.equals`` holds); CSV to its printed precision (each column's ``%.Nf``), and
+    a CSV without rows with its columns typed all the same.
+    """
     import pyarrow as pa
     path = Path(path)
     fmt = path.suffix[1:]
     if fmt == "parquet":
         import pyarrow.parquet as pq
-        return pq.read_table(path)
-    if fmt == "npz":
+        table = pq.read_table(path)
+    elif fmt == "npz":
         with np.load(path) as arrays:
-            return pa.table({name: arrays[name] for name in arrays.files})
-    if fmt == "csv":
+            table = pa.table({name: arrays[name] for name in arrays.files})
+    elif fmt == "csv":
         import pyarrow.csv as pa_csv
-        return pa_csv.read_csv(path)
-    raise InputError(f"{path}: not a table file ({', '.join(FORMATS)})")
+        with open(path, "rb") as fh:
+            names = fh.readline().decode("ascii").strip().split(",")
+        schema = _schema(names, columns)
+        table = pa_csv.read_csv(path, convert_options=pa_csv.ConvertOptions(
+            column_types={f.name: f.type for f in schema}))
+    else:
+        raise InputError(f"{path}: not a table file ({', '.join(FORMATS)})")
+    return table.cast(_schema(table.column_names, columns))
+
+
+def _schema(names, columns):
+    """The writer's schema of a table with columns ``names`` (see :func:`read_table`)."""
+    if columns is None:
+        columns = [(name, np.int64 if name == "finger" else np.float64, None) for name in names]
+    elif [name for name, _, _ in columns] != list(names):
+        raise InputError(f"a table with columns {', '.join(names)}: expected "
+                         f"{', '.join(name for name, _, _ in columns)}")
+    return arrow_schema(columns)
 
 
 class _Csv:
