@@ -8,9 +8,11 @@ Per study, by method:
   proportion correct against the comparison's difference from the reference, pooled over
   the study's sessions and per session; threshold and slope with their 95 % bootstrap
   intervals (for a staircase, the bootstrap runs the staircase again with the fitted
-  function as the observer: ``psychometric.fit_adaptive``). A staircase is also summarised by its reversals (the same rules as the run,
-  ``scheduler.staircase_step``, replayed from the answers): the mean of its last
-  ``threshold_reversals`` reversal levels (geometric on the log scale), per session and
+  function as the observer, and the threshold's interval is a Bayesian credible interval
+  with the slope integrated out: ``psychometric.fit_adaptive``); each fit names its
+  threshold interval's method (``threshold_ci_method``, also printed). A staircase is
+  also summarised by its reversals (the same rules as the run, ``scheduler.staircase_step``,
+  replayed from the answers): the mean of its last ``threshold_reversals`` reversal levels (geometric on the log scale), per session and
   their mean over sessions.
 - ``same-different``: per level, the hit rate (saying "different" to AB and BA), the
   false-alarm rate (to AA and BB) and d' = z(H) - z(F) with each rate taken as
@@ -103,6 +105,7 @@ def _fit_dict(f: psychometric.Fit) -> dict:
     return {"function": f.function, "guess": f.guess, "lapse_max": f.lapse_max,
             "target": f.target, "alpha": f.alpha, "beta": f.beta, "lapse": f.lapse,
             "threshold": f.threshold, "threshold_ci95": list(f.threshold_ci),
+            "threshold_ci_method": f.threshold_ci_method,
             "slope": f.slope, "slope_ci95": list(f.slope_ci), "bootstrap": f.bootstrap,
             "levels": [{"difference": float(x), "trials": int(n), "correct": int(k)}
                        for x, n, k in zip(f.x, f.n, f.k)]}
@@ -278,6 +281,7 @@ def report_lines(summary: dict) -> list[str]:
         lines.append(f"  threshold ({pooled['target']:.3g} correct, {pooled['function']}): "
                      f"{pooled['threshold']:.4g} {unit} difference, 95 % [{lo:.4g}, {hi:.4g}]; "
                      f"slope {pooled['slope']:.4g} per {unit}, lapse {pooled['lapse']:.3f}")
+        lines.append(f"  threshold interval: {pooled['threshold_ci_method']}")
     if summary.get("staircase_threshold_mean") is not None:
         lines.append(f"  staircases: mean of the sessions' reversal means "
                      f"{summary['staircase_threshold_mean']:.4g} {unit}")
