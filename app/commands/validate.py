@@ -13,6 +13,13 @@ Exit 0 if every file is good (warnings allowed), 2 if any is bad. ``--strict`` c
 file with warnings as bad: exit 2, because a warning is about what the file asks for
 (bad input for a session that must render it as written); 1 stays for failures of the
 program's surroundings (device, link, output space).
+
+``--perception`` adds what a finger can feel (``rendering.perception``, each threshold
+with its source): a scene's features below the published thresholds, and for an
+experiment protocol (a file with a top-level ``method``) its scenes and its stimuli
+compared pair by pair (``app.experiment.perception_check``). These are printed as
+``frictex: warning: FILE: perception: ...`` and never fail a file, not even with
+``--strict``: they say what a finger will not tell apart, not what the file asks for.
 """
 
 from __future__ import annotations
@@ -32,6 +39,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--strict", action="store_true",
                         help="a file with warnings fails too (exit 2), e.g. a scene whose "
                              "layers together ask for a friction below the device's floor")
+    parser.add_argument("--perception", action="store_true",
+                        help="also report features a finger cannot feel (published thresholds, "
+                             "each with its source); FILE may be an experiment protocol, whose "
+                             "stimuli are compared pair by pair; warnings only")
     add_allow_outside(parser)
 
 
@@ -57,9 +68,48 @@ def reach_warning(path, scene) -> str | None:
             f"clamped to the floor")
 
 
+def _is_protocol(name: str) -> bool:
+    """True for a readable TOML file with a top-level ``method`` (an experiment protocol)."""
+    import tomllib
+    from pathlib import Path
+
+    try:
+        return "method" in tomllib.loads(Path(name).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return False
+
+
+def _perception(label, findings) -> None:
+    from frictex.device.safe_text import escape_path
+
+    for finding in findings:
+        print(f"frictex: warning: {escape_path(label)}: perception: {finding.message}",
+              file=sys.stderr)
+
+
+def _protocol(name: str) -> bool:
+    """Check protocol ``name`` with --perception; True if it is good."""
+    from frictex.app.experiment.perception_check import protocol_findings
+    from frictex.app.experiment.protocol import check_protocol
+
+    protocol, problems = check_protocol(name)
+    for problem in problems:
+        print(f"frictex: error: {problem}", file=sys.stderr)
+    if protocol is None:
+        return False
+    findings = protocol_findings(protocol)
+    _perception(name, findings)
+    print(f"ok {name} (protocol, {len(findings)} perception warning"
+          f"{'s' * (len(findings) != 1)})")
+    return True
+
+
 def run(args: argparse.Namespace) -> int:
     bad = 0
     for name in args.files:
+        if args.perception and _is_protocol(name):
+            bad += not _protocol(name)
+            continue
         try:
             path = resolve_scene(name)
         except TextureError as exc:
@@ -74,6 +124,9 @@ def run(args: argparse.Namespace) -> int:
         notes += [reach] if reach is not None else []
         for note in notes:
             print(f"frictex: warning: {note}", file=sys.stderr)
+        if args.perception and scene is not None:
+            from frictex.rendering.perception import scene_findings
+            _perception(path, scene_findings(scene))
         if scene is None:
             bad += 1
         elif args.strict and notes:

@@ -1,0 +1,168 @@
+"""What a finger can feel: a scene's features, and pairs of stimuli, against published
+thresholds of touch.
+
+Every check warns; none refuses a scene. The thresholds, with their sources, are in one
+table, :data:`THRESHOLDS`, and each finding names the one it is below:
+
+- ``weber``: a layer's friction contrast, (mu'_high - mu'_low) / mu'_high over what it
+  asks for (``layer.mu_range``), under 0.11 is not detected as a change of friction
+  (a Weber fraction: Gueorguiev et al. 2017). Layers with no contrast (force layers,
+  mu' 1 everywhere) are not features of friction and are left out.
+- ``touch``: a periodic layer (grating, waveform) of period p below the spatial Nyquist
+  period of the touch samples, p < 2 v / f_touch: at a finger speed v the touch screen
+  reports the finger every v / f_touch mm, and a period shorter than two of those steps
+  cannot be placed by the samples (a renderer reading the map at the finger's position
+  aliases it; one synthesising the period from velocity plays it, but cannot keep it
+  registered with what is drawn). At the typical 100 mm/s and 60 Hz: 3.33 mm.
+- ``temporal``: a periodic layer whose fundamental at the typical speed, f = v / p (Hz),
+  is above 800 Hz, where the skin's vibration sensitivity has fallen away (p < 0.125 mm
+  at 100 mm/s).
+- ``event``: a clip event playing for less than 2.3 ms (Gueorguiev et al. 2019).
+- ``period`` and ``weber`` for pairs (:func:`compare_values`, :func:`compare_scenes`):
+  two stimuli whose every difference is below its discrimination threshold, periods
+  within 14 % of each other and friction contrasts (or clip levels) within 11 %.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+#: a finger speed typical of exploring a texture (mm/s)
+SPEED_MM_S = 100.0
+#: a common touch screen's report rate (Hz)
+TOUCH_HZ = 60.0
+
+
+@dataclass(frozen=True)
+class Threshold:
+    """A published threshold: ``value`` in ``unit``, what it bounds, and its source."""
+
+    value: float
+    unit: str
+    what: str
+    source: str
+
+
+THRESHOLDS: dict[str, Threshold] = {
+    "weber": Threshold(0.11, "", "Weber fraction of a friction change, dmu'/mu'",
+                       "Gueorguiev et al. 2017, J R Soc Interface 14:20170641"),
+    "period": Threshold(0.14, "", "discrimination of grating periods, dp/p",
+                        "ultrasonic friction gratings, Basdogan's group (Koc University)"),
+    "event": Threshold(0.0023, "s", "shortest friction drop felt apart",
+                       "Gueorguiev et al. 2019, IEEE Trans Haptics (short ultrasonic square "
+                       "reductions of friction)"),
+    "temporal": Threshold(800.0, "Hz", "highest texture frequency the skin resolves",
+                          "vibrotactile sensitivity above 800 Hz: Bolanowski et al. 1988, "
+                          "J Acoust Soc Am 84:1680"),
+    "touch": Threshold(2.0 * SPEED_MM_S / TOUCH_HZ, "mm",
+                       f"spatial Nyquist period of the touch samples, 2 v / f_touch (v "
+                       f"{SPEED_MM_S:g} mm/s, f_touch {TOUCH_HZ:g} Hz)",
+                       "sampling theorem; typical touch rate and exploration speed"),
+}
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One feature beyond a threshold (below it; for ``temporal``, above): ``kind`` (a key of :data:`THRESHOLDS`), where
+    (``where``: a layer's or a pair's name), its ``value`` in the threshold's unit and
+    the sentence to print."""
+
+    kind: str
+    where: str
+    value: float
+    message: str
+
+    @property
+    def threshold(self) -> Threshold:
+        return THRESHOLDS[self.kind]
+
+
+def _below(kind: str, where: str, value: float, text: str, side: str = "below") -> Finding:
+    t = THRESHOLDS[kind]
+    return Finding(kind, where, value, f"{where}: {text}, {side} the {t.what} {t.value:.4g}"
+                                       f"{' ' + t.unit if t.unit else ''} ({t.source})")
+
+
+def contrast(layer) -> float:
+    """A layer's friction contrast, (mu'_high - mu'_low) / mu'_high (0 for none)."""
+    low, high = layer.mu_range
+    return 0.0 if high <= 0.0 else (high - low) / high
+
+
+def _period(layer) -> float | None:
+    return layer.period_mm if layer.is_periodic else None
+
+
+def scene_findings(scene) -> list[Finding]:
+    """The features of ``scene`` below a threshold of :data:`THRESHOLDS` (module
+    docstring), in layer order."""
+    out = []
+    for layer in scene.layers:
+        where = f'layer "{layer.name}"'
+        c = contrast(layer)
+        if 0.0 < c < THRESHOLDS["weber"].value:
+            out.append(_below("weber", where, c, f"friction contrast {c:.3g}"))
+        period = _period(layer)
+        if period is not None:
+            if period < THRESHOLDS["touch"].value:
+                out.append(_below("touch", where, period, f"period {period:g} mm"))
+            hz = SPEED_MM_S / period
+            if hz > THRESHOLDS["temporal"].value:
+                out.append(_below("temporal", where, hz,
+                                  f"period {period:g} mm plays at {hz:.4g} Hz at "
+                                  f"{SPEED_MM_S:g} mm/s (f = v / p)", side="above"))
+        clip = getattr(layer, "clip", None)
+        if clip is not None:
+            for i, event in enumerate(clip.events):
+                length = clip.event_length_s(event)
+                if length < THRESHOLDS["event"].value:
+                    out.append(_below("event", f"{where} event {i + 1}", length,
+                                      f"{event.kind} event of {length * 1e3:.3g} ms"))
+    return out
+
+
+def relative_difference(a: float, b: float) -> float:
+    """|a - b| / min(|a|, |b|): the step from the smaller to the larger (0 for equal)."""
+    if a == b:
+        return 0.0
+    return abs(a - b) / min(abs(a), abs(b))
+
+
+#: what a stimulus parameter (``vary``) is compared by: its threshold's key
+VARY_THRESHOLD = {"period_mm": "period", "depth": "weber", "level": "weber"}
+
+
+def compare_values(vary: str, a: float, b: float, where: str) -> Finding | None:
+    """Two stimuli that differ only in ``vary`` (``period_mm``, ``depth`` or a clip's
+    ``level``), by less than its threshold; None if they differ by more, or not at all,
+    or ``vary`` has no published threshold (a renderer)."""
+    kind = VARY_THRESHOLD.get(vary)
+    d = relative_difference(a, b)
+    if kind is None or d == 0.0 or d >= THRESHOLDS[kind].value:
+        return None
+    return _below(kind, where, d, f"{vary} {a:g} and {b:g} differ by {d:.3g}")
+
+
+def compare_scenes(a, b, where: str) -> Finding | None:
+    """Two scenes whose layers match one to one (same count and types) and whose every
+    difference of period and friction contrast is below its threshold, some above 0:
+    the finding for the largest of them (relative to its threshold). None if the
+    scenes differ otherwise (layer types, count) or by more."""
+    if len(a.layers) != len(b.layers) or any(type(x) is not type(y)
+                                             for x, y in zip(a.layers, b.layers)):
+        return None
+    steps = []
+    for x, y in zip(a.layers, b.layers):
+        px, py = _period(x), _period(y)
+        if px is not None and py is not None:
+            steps.append(("period", f'layer "{x.name}" period', px, py))
+        steps.append(("weber", f'layer "{x.name}" contrast', contrast(x), contrast(y)))
+    ratios = [(relative_difference(u, v) / THRESHOLDS[kind].value, kind, what, u, v)
+              for kind, what, u, v in steps if u > 0.0 and v > 0.0 or u == v]
+    if len(ratios) != len(steps) or max(r[0] for r in ratios) >= 1.0 or all(
+            r[0] == 0.0 for r in ratios):
+        return None
+    ratio, kind, what, u, v = max(ratios)
+    return _below(kind, where, ratio * THRESHOLDS[kind].value,
+                  f"{what} {u:.4g} and {v:.4g} differ by {ratio * THRESHOLDS[kind].value:.3g}"
+                  f" (the largest difference between them)")
