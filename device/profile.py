@@ -209,21 +209,40 @@ PROFILES.register("ring-seed004", ProfileSpec(
     "travelling-ring", surface_length_mm=140.0, carrier_hz=39_500.0,
     voltage_limit_v=80.0))  # seed 004: 39.5 kHz, amplifiers at +-80 V
 
-#: every profile with its one line
-DEVICE_PROFILES: dict[str, str] = {name: PROFILES.get(name).summary for name in PROFILES.names()}
-#: The travelling-wave profiles (seed 002, seed 004): the only ones that can push a finger,
-#: so the only ones that accept force layers and ``[device.driving]``.
-FORCE_PROFILES = tuple(name for name in PROFILES.names()
-                       if PROFILES.get(name).surface_length_mm is not None)
-#: touch-surface length along x (mm) of each travelling-wave profile
-SURFACE_LENGTH_MM = {name: PROFILES.get(name).surface_length_mm for name in FORCE_PROFILES}
-#: The profiles driven by modal control (seed 000 eq 10, seed 001 eqs 4-5); each has a
+#: The tables derived from :data:`PROFILES`, made on first use (module ``__getattr__``),
+#: so that importing this module imports no plugin; a plugin's profile that cannot be
+#: loaded is left out of them with a warning (an error where a scene names it).
+#: ``DEVICE_PROFILES``: every profile with its one line. ``FORCE_PROFILES``: the
+#: travelling-wave profiles (seed 002, seed 004), the only ones that can push a finger, so
+#: the only ones that accept force layers and ``[device.driving]``. ``SURFACE_LENGTH_MM``:
+#: the touch-surface length along x (mm) of each of them. ``MODAL_PROFILES``: the profiles
+#: driven by modal control (seed 000 eq 10, seed 001 eqs 4-5), each with a
 #: ``[device.structure]`` table (:class:`BeamStructure` or :class:`PlateStructure`).
-MODAL_PROFILES = tuple(name for name in PROFILES.names()
-                       if PROFILES.get(name).structure is not None)
-#: The profiles seed 003's friction loop runs on (``rendering.control.loop``).
-FRICTION_LOOP_PROFILES = tuple(name for name in PROFILES.names()
-                               if PROFILES.get(name).friction_loop)
+#: ``FRICTION_LOOP_PROFILES``: the profiles seed 003's friction loop runs on
+#: (``rendering.control.loop``).
+_DERIVED = {
+    "DEVICE_PROFILES": lambda specs: {name: spec.summary for name, spec in specs.items()},
+    "FORCE_PROFILES": lambda specs: tuple(name for name, spec in specs.items()
+                                          if spec.surface_length_mm is not None),
+    "SURFACE_LENGTH_MM": lambda specs: {name: spec.surface_length_mm
+                                        for name, spec in specs.items()
+                                        if spec.surface_length_mm is not None},
+    "MODAL_PROFILES": lambda specs: tuple(name for name, spec in specs.items()
+                                          if spec.structure is not None),
+    "FRICTION_LOOP_PROFILES": lambda specs: tuple(name for name, spec in specs.items()
+                                                  if spec.friction_loop),
+}
+
+
+def __getattr__(name: str):
+    """The tables of :data:`_DERIVED`, made from the profiles that load on first use."""
+    try:
+        make = _DERIVED[name]
+    except KeyError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    value = make(PROFILES.loaded())
+    globals()[name] = value
+    return value
 
 
 @dataclass(frozen=True)

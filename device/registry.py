@@ -20,6 +20,14 @@ layer than its implementations (the renderers, which texture files name) gets fr
 own entries from frictex's own entry points, as a plugin would: the lower layer then lists
 them without importing the higher one.
 
+Another package's entry point is refused on its own, never breaking the rest: one whose
+name is malformed, reserved (:attr:`Registry.reserved`, such as the renderer ``sho``) or
+already taken is left out with a one-line warning on stderr (``frictex: warning: ...``,
+once per process); one that cannot be imported is a :class:`PluginError` when its name is
+used, and is left out with such a warning where every entry is needed at once
+(:meth:`Registry.loaded`). A built-in registered after a plugin took its name replaces it
+(the plugin is refused, with the warning).
+
 Every list of names a user sees (command-line choices, the demo's key cycle, the report's
 matrix, texture-file validation, the docs) is ``registry.names()``; an unknown name is an
 :class:`UnknownName` (an :class:`~frictex.device.errors.InputError`) that lists the known
@@ -28,6 +36,7 @@ ones. This module is in the lowest layer so that every layer can register into i
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar, overload
@@ -50,6 +59,20 @@ class UnknownName(InputError, KeyError):
 class PluginError(FrictexError, RuntimeError):
     """An entry point of another package that cannot be loaded, or clashes with a name
     already registered."""
+
+
+_WARNED: set[str] = set()  # the warnings printed by this process
+
+
+def warn_once(message: str) -> None:
+    """``message`` on stderr as one line, ``frictex: warning: ...`` (control characters
+    escaped), the first time this process says it."""
+    if message in _WARNED:
+        return
+    _WARNED.add(message)
+    text = "".join(ch if ch.isprintable() else ch.encode("unicode_escape").decode("ascii")
+                   for ch in message)
+    print(f"frictex: warning: {text}", file=sys.stderr, flush=True)
 
 
 _INSTALLED = None  # importlib.metadata's entry points of every installed distribution
@@ -94,11 +117,15 @@ class Registry(Generic[T]):
         What the entries are, for messages ("renderer", "output device").
     group : str
         The entry-point group other packages register under ("frictex.renderers").
+    reserved : iterable of str, optional
+        Names no other package may register (a name that means something else where the
+        registry's names are offered, such as ``sho`` beside the renderers).
     """
 
-    def __init__(self, kind: str, group: str):
+    def __init__(self, kind: str, group: str, reserved=()):
         self.kind = kind
         self.group = group
+        self.reserved = frozenset(reserved)
         self._entries: dict[str, T | _Unloaded] = {}
         self._origin: dict[str, str] = {}
         self._scanned = False
@@ -110,8 +137,9 @@ class Registry(Generic[T]):
     def register(self, name: str, entry: T) -> T: ...
 
     def register(self, name, entry=None):
-        """Register ``entry`` under ``name`` (or use as a decorator). A name registered
-        twice is an error: a plugin cannot silently replace a built-in."""
+        """Register ``entry`` under ``name`` (or use as a decorator). A name frictex
+        registers twice is an error; one a plugin took is frictex's (the plugin refused
+        with a warning): a plugin cannot replace a built-in."""
         if entry is None:
             return lambda obj: self.register(name, obj)
         self._add(name, entry, OWN_DISTRIBUTION)
@@ -121,8 +149,15 @@ class Registry(Generic[T]):
         if not isinstance(name, str) or not name or name != name.strip() or ":" in name:
             raise PluginError(f"{self.kind} name {name!r} from {origin}: expected a "
                               "non-empty name without spaces at its ends or ':'")
+        if name in self.reserved and origin != OWN_DISTRIBUTION:
+            raise PluginError(f"{self.kind} {name!r} from {origin}: the name is reserved")
         known = self._entries.get(name)
         if known is not None and known is not entry and known != entry:
+            if origin == OWN_DISTRIBUTION and self._origin[name] != OWN_DISTRIBUTION:
+                warn_once(f"{self.kind} {name!r} from {self._origin[name]} is refused: the "
+                          "name is frictex's own")
+                self._entries[name], self._origin[name] = entry, origin
+                return
             raise PluginError(f"{self.kind} {name!r} from {origin} is already registered "
                               f"by {self._origin[name]}")
         self._entries.setdefault(name, entry)
@@ -131,8 +166,9 @@ class Registry(Generic[T]):
     def scan(self, fresh: bool = False) -> None:
         """Read the group's entry points (without importing them): frictex's own first,
         then the other distributions' by name; ``fresh``: read the installed metadata
-        again. A name already known from the same entry point is kept; another entry
-        point under a known name is a :class:`PluginError`."""
+        again. A name already known from the same entry point is kept; another package's
+        entry point under a known, reserved or malformed name is refused with a warning
+        (module docstring)."""
         self._scanned = True
         points = sorted(_entry_points(self.group, fresh),
                         key=lambda p: (_distribution(p) != OWN_DISTRIBUTION, _distribution(p)))
@@ -141,7 +177,12 @@ class Registry(Generic[T]):
             origin = dist if dist == OWN_DISTRIBUTION else f"{dist} ({point.value})"
             if self._origin.get(point.name) == origin:
                 continue  # this entry point, seen before (perhaps loaded since)
-            self._add(point.name, _Unloaded(point), origin)
+            try:
+                self._add(point.name, _Unloaded(point), origin)
+            except PluginError as exc:
+                if dist == OWN_DISTRIBUTION:
+                    raise  # frictex's own metadata: a bug, not a plugin's
+                warn_once(f"{exc}; left out")
 
     def _load(self, name: str) -> T:
         entry = self._entries[name]
@@ -165,6 +206,18 @@ class Registry(Generic[T]):
             return self._load(name)
         raise UnknownName(f"unknown {self.kind} {name!r}; expected one of "
                           f"{', '.join(self.names())}")
+
+    def loaded(self) -> dict[str, T]:
+        """Every entry that loads, by name (importing every plugin's): one that cannot
+        be loaded is left out with a warning (its :class:`PluginError` when its name is
+        used)."""
+        found = {}
+        for name in self.names():
+            try:
+                found[name] = self._load(name)
+            except PluginError as exc:
+                warn_once(f"{exc}; left out")
+        return found
 
     def names(self) -> tuple[str, ...]:
         """Every registered name: frictex's own first in registration order, then the

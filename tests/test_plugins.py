@@ -12,6 +12,7 @@ uninstall. The registries themselves (``device.registry``) are tested in this pr
 import csv
 import json
 import os
+import re
 import subprocess
 import sys
 import textwrap
@@ -269,3 +270,86 @@ def test_a_broken_plugin_names_itself(tmp_path):
             registry.get("bad")
     finally:
         sys.path.remove(str(tmp_path))
+
+
+def fake_distribution(folder: Path, name: str, entry_points: str) -> Path:
+    """An installed distribution's metadata only (``<name>-1.0.dist-info``) in ``folder``."""
+    dist = folder / f"{name.replace('-', '_')}-1.0.dist-info"
+    dist.mkdir(parents=True)
+    (dist / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: 1.0\n",
+                                   encoding="utf-8")
+    (dist / "entry_points.txt").write_text(textwrap.dedent(entry_points), encoding="utf-8")
+    return folder
+
+
+def test_a_clashing_or_broken_plugin_is_refused_on_its_own(tmp_path):
+    """A plugin registering a built-in's name, the reserved 'sho', a broken profile and a
+    broken touch input: every command still runs, each refusal one warning line (once),
+    and a broken entry is an error only where its name is used."""
+    plugin = fake_distribution(tmp_path / "site", "frictex-test-clash", """
+        [frictex.renderers]
+        sho = frictex_nothing:Sho
+        sht = frictex_nothing:Sht
+        [frictex.profiles]
+        broken-plate = no_such_module_y:PLATE
+        [frictex.inputs]
+        broken-pen = no_such_module_y:PEN
+        """)
+    done = run([str(FRICTEX), "replay", "grating-5mm", "swipe-40mms-50hz", "--out",
+                str(tmp_path / "out"), "--quiet", "--renderer", "sht"], plugin, tmp_path)
+    assert done.returncode == 0, done.stderr
+    warnings = done.stderr.strip().splitlines()
+    assert "Traceback" not in done.stderr and len(warnings) == len(set(warnings))
+    assert any("renderer 'sho' from frictex-test-clash" in w and "reserved" in w
+               for w in warnings)
+    assert any("renderer 'sht' from frictex-test-clash" in w and "already registered by "
+               "frictex" in w for w in warnings)
+    assert all(w.startswith("frictex: warning: ") for w in warnings)
+    helped = run([str(FRICTEX), "replay", "--help"], plugin, tmp_path)
+    assert helped.returncode == 0
+    choices = re.findall(r"\{([^{}]*sho-held[^{}]*)\}", " ".join(helped.stdout.split()))
+    assert choices and all(sorted(set(c.split(","))) == sorted(c.split(",")) for c in choices)
+    assert all(c.split(",").count("sho") == 1 for c in choices)
+    demo = run([str(FRICTEX), "demo", "--help"], plugin, tmp_path)
+    assert demo.returncode == 0, demo.stderr
+    assert "broken-pen" in demo.stderr and "cannot be loaded" in demo.stderr
+    scene = tmp_path / "broken.toml"
+    scene.write_text(resolve_scene("grating-5mm").read_text(encoding="utf-8")
+                     .replace("[device]", '[device]\nprofile = "broken-plate"', 1)
+                     if "[device]" in resolve_scene("grating-5mm").read_text(encoding="utf-8")
+                     else resolve_scene("grating-5mm").read_text(encoding="utf-8")
+                     + '\n[device]\nprofile = "broken-plate"\n', encoding="utf-8")
+    named = run([str(FRICTEX), "validate", str(scene)], plugin, tmp_path)
+    assert named.returncode in (1, 2) and "Traceback" not in named.stderr
+    assert "broken-plate" in named.stderr
+
+
+def test_a_missing_extra_before_the_command_runs_is_the_pip_hint(tmp_path):
+    """The demo's module imports OpenGL: without the gui extra that import is the one-line
+    pip hint (exit 1), not a traceback; a bug in a command's import is exit 70."""
+    code = ("import sys; sys.modules['moderngl'] = sys.modules['glfw'] = None\n"
+            "from frictex.app.commands.cli import main; sys.exit(main(['demo', '--headless']))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300, cwd=tmp_path)
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        "frictex: error: OpenGL drawing needs frictex's 'gui' extra (moderngl is not "
+        "installed): pip install 'frictex[gui]'"] or "pip install 'frictex[gui]'" in done.stderr
+    assert "Traceback" not in done.stderr
+    code = ("import sys; from frictex.app.commands import cli\n"
+            "cli.COMMANDS['library'] = ('frictex_no_such_module_z', 'x')\n"
+            "sys.exit(cli.main(['library']))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300, cwd=tmp_path)
+    assert done.returncode == 70 and "internal error" in done.stderr
+
+
+def test_a_registry_gives_a_builtin_its_name_back_and_refuses_reserved_names(capsys):
+    registry: Registry = Registry("gadget", "frictex.test-gadgets-none", reserved=("any",))
+    registry._add("late", abs, "frictex-test-x (m:abs)")  # a plugin, scanned first
+    registry.register("late", len)  # then frictex's own: its name
+    assert registry.get("late") is len and registry.origin("late") == "frictex"
+    assert "gadget 'late' from frictex-test-x (m:abs) is refused" in capsys.readouterr().err
+    with pytest.raises(PluginError, match="the name is reserved"):
+        registry._add("any", abs, "frictex-test-x (m:abs)")
+    registry.register("any", abs)  # frictex's own may

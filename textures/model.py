@@ -34,9 +34,10 @@ from frictex.device.registry import Registry
 #: ``rendering.renderers``). frictex's own register as entry points of group
 #: ``frictex.renderers`` in its pyproject.toml, as another package's would, so that this
 #: layer lists them without importing ``rendering``.
-RENDERERS: Registry = Registry("renderer", "frictex.renderers")
-#: ``render = "sho"`` (and ``--renderer sho``): SHO, in the run's variant (``sho_variant``)
+#: ``render = "sho"`` (and ``--renderer sho``): SHO, in the run's variant (``sho_variant``);
+#: reserved: no plugin may register a renderer under it
 SHO = "sho"
+RENDERERS: Registry = Registry("renderer", "frictex.renderers", reserved=(SHO,))
 
 
 def render_modes() -> tuple[str, ...]:

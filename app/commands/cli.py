@@ -2,7 +2,9 @@
 
 Each subcommand lives in its own module of ``app`` exposing
 ``add_arguments(parser)`` and ``run(args) -> int``; the module is imported only
-when its subcommand runs, so ``frictex validate`` never loads OpenGL.
+when its subcommand runs, so ``frictex validate`` never loads OpenGL. Its import and
+its options are inside the error handling below: an optional extra missing (``frictex
+demo`` without ``gui``) or a plugin that breaks is one line, as any other error.
 
 What escapes a command decides its exit status (``frictex.device.errors``):
 
@@ -103,26 +105,32 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     parser, subparsers = build_parser()
     name = next((a for a in argv if not a.startswith("-")), None)
-    module = None
-    if name in COMMANDS:
-        module = importlib.import_module(COMMANDS[name][0])
-        module.add_arguments(subparsers[name])
     environment = dict(os.environ)  # options such as --allow-outside set it for one run
     try:
-        args = parser.parse_args(argv)
-        if module is None:
-            parser.print_help()
-            return 2 if argv else 0
-        return _run(module, args)
+        return _run(lambda: _command(parser, subparsers, name, argv))
     finally:
         os.environ.clear()
         os.environ.update(environment)
 
 
-def _run(module, args: argparse.Namespace) -> int:
-    """``module.run(args)``, with what escapes it sorted as the module docstring says."""
+def _command(parser, subparsers, name: str | None, argv: list[str]) -> int:
+    """Import the subcommand ``name``'s module, parse ``argv`` and run it."""
+    module = None
+    if name in COMMANDS:
+        module = importlib.import_module(COMMANDS[name][0])
+        module.add_arguments(subparsers[name])
+    args = parser.parse_args(argv)
+    if module is None:
+        parser.print_help()
+        return 2 if argv else 0
+    return module.run(args)
+
+
+def _run(command) -> int:
+    """``command()`` (a subcommand's import, parsing and run), with what escapes it
+    sorted as the module docstring says."""
     try:
-        return int(module.run(args) or 0)
+        return int(command() or 0)
     except BrokenPipeError:  # output piped into e.g. head, which stopped reading
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0

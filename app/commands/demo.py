@@ -72,7 +72,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--block", type=positive_int, default=50, metavar="N",
                         help="block size in output samples (default 50 = 5 ms at 10 kHz)")
     from frictex.app.live.inputs import INPUTS
-    kinds = [(name, INPUTS.get(name)) for name in INPUTS.names()]
+    kinds = list(INPUTS.loaded().items())  # a plugin's that cannot load: left out, warned
     parser.add_argument("--input", type=input_option, default=("mouse", None),
                         metavar="|".join(kind.usage for _, kind in kinds),
                         help="where the fingers come from (default mouse): "
