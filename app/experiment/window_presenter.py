@@ -94,13 +94,9 @@ def button_label(response: str, keys: dict[str, str]) -> str:
 
 def how_to_answer(responses: Sequence[str], keys: dict[str, str]) -> str:
     """One sentence telling the participant how to answer."""
-    keyed = [f"{k.upper()} = {r}" if k != r else k for k, r in keys.items()]
-    if not keyed:
+    listed = ", ".join(k if k == r else f"{k.upper()} = {r}" for k, r in keys.items())
+    if not listed:
         return "Answer by clicking a button."
-    if all(k == r for k, r in keys.items()):
-        listed = ", ".join(keyed)
-    else:
-        listed = "; ".join(keyed)
     rest = "" if len(keys) == len(responses) else " (the others by their button)"
     return f"Answer with a key ({listed}){rest} or by clicking a button."
 
@@ -151,8 +147,9 @@ class WindowPresenter:
                    if free else
                    f"Explore each texture for {protocol.presentation.exploration_s:g} s with "
                    "the left button held (your finger).")
-        practice = (f"The first {self.practice} trials are practice (marked PRACTICE) and "
-                    "are not analysed." if self.practice else "")
+        first = "trial is" if self.practice == 1 else f"{self.practice} trials are"
+        practice = (f"The first {first} practice (marked PRACTICE), not analysed."
+                    if self.practice else "")
         lines = tuple(p for p in (protocol.description, protocol.question, explore,
                                   how_to_answer(self.responses, self.keys), practice,
                                   "Escape ends the session; it can be continued later.") if p)
