@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from frictex.device.structures.beam import FreeFreeBeam, ModesError
+from frictex.device.structures.beam import MAX_MODES, FreeFreeBeam, ModesError
 from frictex.device.structures.measured_modes import MeasuredModes
 
 BEAM = FreeFreeBeam(350, 6, 6, 57, 2561)
@@ -51,9 +51,23 @@ def test_csv_round_trip(tmp_path):
     ("x_mm,A\n0,1\n1,inf\n", "line 3: values must be finite"),
     ("x_mm,A\n0,1\n2,2\n1,3\n3,4\n", "x = 1 mm follows 2 mm"),
     ("x_mm,A\n0,1\n1,2\n", "at least 4 positions, got 2"),
+    ("x_mm,m1,m1\n0,1,1\n1,2,2\n2,3,1\n3,4,0\n", 'line 1: mode name "m1" appears twice'),
 ])
 def test_bad_tables(tmp_path, text, match):
     path = tmp_path / "bad.csv"
     path.write_text(text)
     with pytest.raises(ModesError, match=match):
         MeasuredModes.from_csv(path)
+
+
+def test_mode_columns_are_bounded_before_rows_are_read(tmp_path):
+    """A header of 20,000 mode columns is refused at the header: the rows (here not
+    even numbers) are never parsed, and no (p, p) matrix is built later."""
+    names = ",".join(f"m{i}" for i in range(20_000))
+    path = tmp_path / "wide.csv"
+    path.write_text(f"x_mm,{names}\n" + "0,x\n" * 4)
+    with pytest.raises(ModesError, match=r"line 1: 20000 mode columns; expected at most 26"):
+        MeasuredModes.from_csv(path)
+    at_bound = ",".join(f"m{i}" for i in range(MAX_MODES))
+    path.write_text(f"x_mm,{at_bound}\n" + "".join(f"{x}" + ",1" * MAX_MODES + "\n" for x in range(4)))
+    assert len(MeasuredModes.from_csv(path).names) == MAX_MODES

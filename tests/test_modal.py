@@ -6,7 +6,7 @@ from hypothesis import assume, given, settings, strategies as st
 from numpy.testing import assert_allclose
 from scipy.optimize import minimize
 
-from frictex.device.structures.beam import FreeFreeBeam, ModesError
+from frictex.device.structures.beam import MAX_MODES, FreeFreeBeam, ModesError
 from frictex.device.actuation.modal import METHODS, forward, solve
 
 # seed 000, eq 12 (shapes at the actuators) and eq 13 (at x_a = 120, x_b = 250 mm)
@@ -177,3 +177,28 @@ def test_complex_and_integer_actuator_matrices(method, real_phi):
     ints = solve(phi, [0.4, 0.1], method, actuators=[[1, 0], [1, 2]], limits_um=2)
     floats = solve(phi, [0.4, 0.1], method, actuators=[[1.0, 0.0], [1.0, 2.0]], limits_um=2)
     assert_allclose(ints.commands_um, floats.commands_um, rtol=0, atol=0)
+
+
+def test_modes_over_the_bound_are_refused_before_any_p_by_p_matrix():
+    """p = 3000 modes: refused with no (p, p) allocation (np.eye(3000) alone is 72 MB)."""
+    import tracemalloc
+    phi = np.ones((1, 3000))
+    tracemalloc.start()
+    try:
+        with pytest.raises(ModesError, match=f"1 to {MAX_MODES} modes, got 3000"):
+            solve(phi, [1.0])
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 4 << 20
+
+
+def test_bad_limits_are_shown_on_one_short_escaped_line():
+    """A long limits array is shown as a cut flat list, never numpy's multi-line repr."""
+    with pytest.raises(ModesError) as info:
+        solve(np.eye(2), [1, 1], limits_um=np.full(200, 0.75))
+    message = str(info.value)
+    assert "\n" not in message and "got 200 values [0.75, " in message and len(message) < 200
+    with pytest.raises(ModesError) as info:
+        solve(np.eye(2), [1, 1], method="\x1b]0;title\x07")
+    assert "\x1b" not in str(info.value) and "\\x1b" in str(info.value)

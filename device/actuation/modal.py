@@ -42,7 +42,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from frictex.device.jit import njit
-from frictex.device.structures.beam import ModesError
+from frictex.device.safe_text import escape
+from frictex.device.structures.beam import MAX_MODES, ModesError
 from frictex.device.actuation.bounded_two import bounded_two
 from frictex.device.profile import DEFAULT_METHOD, DEFAULT_RCOND, METHODS
 
@@ -357,15 +358,29 @@ def check_settings(method: str, actuators, limits_um, rcond: float, p: int):
     the bad one); returns the actuator matrix (q, p) and the limits (q,) or None as it
     uses them."""
     if method not in METHODS:
-        raise ModesError(f"modal method must be one of {', '.join(METHODS)}, got {method!r}")
+        raise ModesError(f"modal method must be one of {', '.join(METHODS)}, got {escape(method)}")
+    if not 1 <= p <= MAX_MODES:
+        raise ModesError(f"modal inversion takes 1 to {MAX_MODES} modes, got {p}")
     a = _check_actuators(actuators, p)
     limits = _check_limits(limits_um, a.shape[0])
     if method == "bounded" and (limits is None or a.shape[0] != p or np.linalg.cond(a) > 1e12):
         raise ModesError(f"method 'bounded' needs limits_um and a square, invertible "
-                         f"(p, p) actuator matrix, got limits {limits_um!r} and actuators of shape {a.shape}")
+                         f"(p, p) actuator matrix, got limits {_shown(limits_um)} and actuators of shape {a.shape}")
     if not (0 < rcond < 1):
-        raise ModesError(f"rcond must be in (0, 1), got {rcond!r}")
+        raise ModesError(f"rcond must be in (0, 1), got {escape(rcond)}")
     return a, limits
+
+
+def _shown(values) -> str:
+    """``values`` (a number, a sequence, an array) for a one-line message: as a flat list,
+    escaped and cut to :data:`~frictex.device.safe_text.MAX_SHOWN` characters."""
+    try:
+        flat = np.asarray(values).ravel()
+    except (TypeError, ValueError):
+        return escape(values)
+    # a bounded prefix: never a repr of a whole large array
+    text = ", ".join(str(v) for v in flat[:8].tolist())
+    return escape(f"{flat.size} values [{text}, ...]" if flat.size > 8 else f"[{text}]")
 
 
 def gain_threshold(method: str, rcond: float) -> float:
@@ -626,5 +641,5 @@ def _check_limits(limits_um, q: int) -> np.ndarray | None:
         else np.asarray(limits_um, dtype=np.float64)
     if lim.shape != (q,) or not np.all(np.isfinite(lim) & (lim > 0)):
         raise ModesError(f"limits_um must be one finite value > 0 or one per actuator "
-                         f"({q}), got {limits_um!r}")
+                         f"({q}), got {_shown(limits_um)}")
     return lim

@@ -41,6 +41,7 @@ import numpy as np
 
 from frictex.device.actuation.base import Actuated, touch_rank
 from frictex.device.jit import njit
+from frictex.device.safe_text import escape
 from frictex.device.profile import BeamStructure
 from frictex.device.structures.beam import FreeFreeBeam, ModesError
 from frictex.device.actuation.modal import (achieved_magnitude, check_settings, gain_threshold, magnitude,
@@ -91,8 +92,8 @@ class ModalActuation:
         self.closed_form = self.n_modes == 2 and method != "bounded"
         cond = np.linalg.cond(self.actuators)
         if self.actuators.shape[0] != len(self.channels) or not cond < MAX_ACTUATOR_CONDITION:
-            raise ModesError(f"actuator matrix {self.actuators.round(4).tolist()} (channels "
-                             f"{', '.join(self.channels)}) has condition number {cond:.3g}; expected "
+            raise ModesError(f"actuator matrix of shape {self.actuators.shape} (channels "
+                             f"{escape(', '.join(self.channels))}) has condition number {cond:.3g}; expected "
                              f"one channel per row and below {MAX_ACTUATOR_CONDITION:g} (is an "
                              f"actuator on a node of a driven mode?)")
 

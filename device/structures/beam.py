@@ -59,6 +59,11 @@ _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(20)
 _NODE_SAMPLES_PER_WAVELENGTH = 40
 
 
+#: Most modes one structure drives or one mode table holds: the modal inversion builds
+#: (p, p) matrices, and 26 is the bound on a scene's ``orders`` too.
+MAX_MODES = 26
+
+
 class ModesError(InputError):
     """A structure, mode order or mode table that cannot be used; says which value and why.
 

@@ -10,7 +10,7 @@ caller can count them.
 File grammar (CSV)::
 
     file   := header NEWLINE { row NEWLINE }
-    header := "x_mm" { "," mode_name }          # at least one mode column
+    header := "x_mm" { "," mode_name }          # 1 to MAX_MODES (26) distinct mode names
     row    := x { "," deflection }              # finite numbers, any consistent unit
     number := ASCII decimal: [sign] digits [. digits] [e [sign] digits], spaces around
     blank lines and lines starting with '#' are skipped; x strictly increasing;
@@ -30,7 +30,7 @@ from scipy.interpolate import CubicSpline
 
 from frictex.device.safe_files import UnsafeFile, read_bytes
 from frictex.device.safe_text import escape, escape_path, quoted
-from frictex.device.structures.beam import ModesError
+from frictex.device.structures.beam import MAX_MODES, ModesError
 
 MIN_SAMPLES = 4
 #: Largest mode table read (bytes): a scan of thousands of points fits.
@@ -100,11 +100,18 @@ class MeasuredModes:
         if not rows or rows[0][1][0].strip() != "x_mm" or len(rows[0][1]) < 2:
             raise ModesError(f"{source}: line {rows[0][0] if rows else 1}: header must be "
                              f"'x_mm,<mode>[,<mode>...]'")
+        if len(rows[0][1]) - 1 > MAX_MODES:
+            raise ModesError(f"{source}: line {rows[0][0]}: {len(rows[0][1]) - 1} mode columns; "
+                             f"expected at most {MAX_MODES}")
         names = tuple(c.strip() for c in rows[0][1][1:])
         bad_name = next((n for n in names if not n or not n.isprintable()), None)
         if bad_name is not None:
             raise ModesError(f"{source}: line {rows[0][0]}: mode name {quoted(bad_name)} is empty "
                              f"or holds control characters; expected printable names")
+        twice = next((n for i, n in enumerate(names) if n in names[:i]), None)
+        if twice is not None:
+            raise ModesError(f"{source}: line {rows[0][0]}: mode name {quoted(twice)} appears twice; "
+                             f"expected distinct names")
         values = [cls._row(source, line, row, len(names) + 1) for line, row in rows[1:]]
         table = np.array(values).reshape(-1, len(names) + 1)
         return cls(table[:, 0], table[:, 1:], names, source=source)
