@@ -1,0 +1,186 @@
+"""frictex validate --perception: hand-made scenes and protocols with one feature just
+below and just above each threshold of ``rendering.perception.THRESHOLDS`` (flagged
+and not), the bundled scenes and protocols, and the command's output."""
+
+from pathlib import Path
+
+import pytest
+
+from frictex.app.commands.cli import main
+from frictex.app.experiment.perception_check import protocol_findings
+from frictex.app.experiment.protocol import load_protocol
+from frictex.rendering.perception import (SPEED_MM_S, THRESHOLDS, TOUCH_HZ, compare_values,
+                                          scene_findings)
+from frictex.textures.loader import load_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+LIBRARY = ROOT / "textures" / "library"
+
+HEAD = """format = 1
+name = "hand-made"
+description = "one feature near a threshold"
+
+[display]
+width_mm = 108.0
+height_mm = 64.8
+width_px = 800
+height_px = 480
+
+[device]
+profile = "plate-seed003"
+amplitude_limit_um = 2.5
+normal_force_n = 0.5
+"""
+
+GRATING = """
+[[layer]]
+type = "grating"
+name = "lines"
+render = "{render}"
+period_mm = {period}
+mu_low = {low}
+mu_high = 1.0
+"""
+
+RAMP = """
+[[layer]]
+type = "clip"
+name = "drop"
+trigger = "down"
+clip = "ramp"
+duration_s = {duration}
+level_from = 1.0
+level_to = 0.0
+depth = 0.4
+"""
+
+#: (threshold, a layer just beyond it, the same layer just inside it)
+NEAR = {
+    "weber": (GRATING.format(render="sht", period=10.0, low=0.895),  # contrast 0.105
+              GRATING.format(render="sht", period=10.0, low=0.885)),  # 0.115
+    "touch": (GRATING.format(render="sho", period=3.3, low=0.6),  # 2 v / f = 3.333 mm
+              GRATING.format(render="sho", period=3.4, low=0.6)),
+    "temporal": (GRATING.format(render="hybrid", period=0.12, low=0.6),  # 833 Hz
+                 GRATING.format(render="hybrid", period=0.13, low=0.6)),  # 769 Hz
+    "event": (RAMP.format(duration=0.0022), RAMP.format(duration=0.0024)),
+}
+
+
+def scene(tmp_path, layer, name="s.toml"):
+    path = tmp_path / name
+    path.write_text(HEAD + layer)
+    return load_scene(path)
+
+
+def test_the_table_states_each_source_and_the_touch_formula():
+    assert THRESHOLDS["touch"].value == pytest.approx(2.0 * SPEED_MM_S / TOUCH_HZ)
+    assert (THRESHOLDS["weber"].value, THRESHOLDS["period"].value) == (0.11, 0.14)
+    assert THRESHOLDS["event"].value == pytest.approx(2.3e-3)
+    assert THRESHOLDS["temporal"].value == 800.0
+    assert all(t.source and t.what for t in THRESHOLDS.values())
+
+
+@pytest.mark.parametrize("kind", sorted(NEAR))
+def test_just_beyond_is_flagged_and_just_inside_is_not(tmp_path, kind):
+    beyond, inside = NEAR[kind]
+    found = scene_findings(scene(tmp_path, beyond))
+    assert kind in {f.kind for f in found}
+    flagged = next(f for f in found if f.kind == kind)
+    assert THRESHOLDS[kind].source in flagged.message
+    assert kind not in {f.kind for f in scene_findings(scene(tmp_path, inside))}
+
+
+def test_a_layer_well_inside_every_threshold_is_not_flagged(tmp_path):
+    assert scene_findings(scene(tmp_path, GRATING.format(render="hybrid", period=5.0,
+                                                         low=0.6))) == []
+
+
+@pytest.mark.parametrize("vary, a, beyond, inside", [
+    ("period_mm", 5.0, 5.65, 5.75),  # 13 % and 15 %
+    ("depth", 0.3, 0.33, 0.34),  # 10 % and 13.3 %
+    ("level", 0.5, 0.54, 0.56),  # 8 % and 12 %
+])
+def test_pairs_of_values(vary, a, beyond, inside):
+    assert compare_values(vary, a, beyond, "pair") is not None
+    assert compare_values(vary, beyond, a, "pair") is not None
+    assert compare_values(vary, a, inside, "pair") is None
+    assert compare_values(vary, a, a, "pair") is None
+    assert compare_values("renderer", a, beyond, "pair") is None
+
+
+PARAMETRIC = """format = 1
+name = "near"
+method = "2afc"
+repetitions = 2
+
+[stimuli]
+scene = "grating-5mm"
+vary = "period_mm"
+reference = 5.0
+levels = [5.65, 5.75]
+"""
+
+LISTED = """format = 1
+name = "pairs"
+method = "magnitude"
+repetitions = 1
+
+[[stimulus]]
+name = "a"
+scene = "a.toml"
+
+[[stimulus]]
+name = "b"
+scene = "b.toml"
+
+[[stimulus]]
+name = "c"
+scene = "c.toml"
+"""
+
+
+def test_a_protocols_stimuli_are_compared_pairwise(tmp_path):
+    (tmp_path / "p.toml").write_text(PARAMETRIC)
+    found = protocol_findings(load_protocol(tmp_path / "p.toml"))
+    assert [(f.kind, f.where) for f in found] == [("period", "stimuli 5 and 5.65")]
+    for name, period in (("a", 5.0), ("b", 5.6), ("c", 6.4)):  # a-b 12 %, b-c 14.3 %
+        (tmp_path / f"{name}.toml").write_text(HEAD + GRATING.format(render="hybrid",
+                                                                     period=period, low=0.6))
+    (tmp_path / "l.toml").write_text(LISTED)
+    found = protocol_findings(load_protocol(tmp_path / "l.toml"))
+    assert [(f.kind, f.where) for f in found] == [("period", 'stimuli "a" and "b"')]
+
+
+def test_bundled_scenes_flag_only_features_beyond_their_thresholds():
+    flagged = {}
+    for path in sorted(LIBRARY.glob("*.toml")):
+        for f in scene_findings(load_scene(path)):
+            limit = THRESHOLDS[f.kind].value
+            assert f.value > limit if f.kind == "temporal" else f.value < limit, f.message
+            flagged.setdefault(path.stem, set()).add(f.kind)
+    # the example of the request: a 0.6 mm grating at 60 Hz touch and 100 mm/s
+    assert "touch" in flagged["grating-0.6mm"]
+    assert "grating-5mm" not in flagged and "grating-15mm" not in flagged
+
+
+def test_validate_perception_warns_and_never_fails(tmp_path, capsys):
+    path = tmp_path / "s.toml"
+    path.write_text(HEAD + NEAR["touch"][0])
+    assert main(["validate", str(path)]) == 0
+    assert "perception" not in capsys.readouterr().err
+    assert main(["validate", "--perception", "--strict", str(path)]) == 0
+    out, err = capsys.readouterr()
+    assert out.startswith("ok ")
+    assert err.count("\n") == 1 and "perception: layer \"lines\": period 3.3 mm" in err
+    assert "2 v / f_touch" in err
+    (tmp_path / "p.toml").write_text(PARAMETRIC)
+    assert main(["validate", "--perception", str(tmp_path / "p.toml")]) == 0
+    out, err = capsys.readouterr()
+    assert "(protocol, 1 perception warning)" in out and "5 and 5.65" in err
+
+
+def test_validate_perception_reports_a_bad_protocol(tmp_path, capsys):
+    (tmp_path / "p.toml").write_text(PARAMETRIC.replace('method = "2afc"', 'method = "x"'))
+    assert main(["validate", "--perception", str(tmp_path / "p.toml")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("frictex: error: ") and "method" in err
