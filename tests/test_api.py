@@ -148,3 +148,24 @@ def test_tables_read_back_from_a_folder_equal_the_tables_in_memory(tmp_path):
             else:  # to its printed precision: t_s 7 decimals, the rest at least 4
                 for a, b in zip(got.columns, want.columns):
                     np.testing.assert_allclose(a.to_numpy(), b.to_numpy(), rtol=0, atol=5.1e-5)
+
+
+def test_process_runs_through_a_pause_that_a_replay_skips():
+    """As Pipeline.process's docstring says: every output sample of the trace's span,
+    a 20 s pause included (240,050 at 10 kHz), where replay skips the pause (42,050),
+    the two the same up to the pause's start."""
+    from frictex.rendering.input.trace_file import make_trace
+    stroke = frictex.synth_trace("swipe", duration_s=2.0)
+    twice = make_trace(np.concatenate([stroke.t_s, stroke.t_s + 22.0]),
+                       np.concatenate([stroke.finger, stroke.finger + 1]),
+                       np.concatenate([stroke.x_mm, stroke.x_mm]),
+                       np.concatenate([stroke.y_mm, stroke.y_mm]))
+    scene = frictex.load_scene(SCENE)
+    out = frictex.build_pipeline(scene).process(twice)
+    replayed = frictex.replay(scene, twice)
+    assert out.t_s.size == 240_050 and replayed.commands.num_rows == 42_050
+    assert replayed.summary.trace.gaps.count == 1
+    start = int(round((stroke.t_s[-1] - stroke.t_s[0]) * 10_000))  # the pause's start
+    np.testing.assert_array_equal(out.t_s[:start], replayed.commands.column("t_s").to_numpy()[:start])
+    np.testing.assert_array_equal(out.commands_um[:start, 0],
+                                  replayed.commands.column(1).to_numpy()[:start])

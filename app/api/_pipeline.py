@@ -50,8 +50,14 @@ class Pipeline:
         """Run a whole trace through the pipeline, from a fresh state.
 
         The output clock starts at the trace's first sample (output sample k at
-        ``t0 + k / rate_hz``) and runs to the end of the block after its last sample, as
-        a replay's does.
+        ``t0 + k / rate_hz``) and runs, without a break, to the end of the block after
+        its last sample: every output sample of that span, long pauses included. That is
+        where it differs from :func:`replay`, which takes a pause longer than its
+        ``max_gap_s`` (5 s by default) as a lift and skips its silence, keeping 0.1 s on
+        each side, and lifts every finger touching where the pause starts: at 10 kHz a
+        2 s stroke, a 20 s pause and a 2 s stroke give 240,050 output samples here and
+        42,050 from :func:`replay`, the same up to the pause's start. For a replay's
+        output, use :func:`replay`.
 
         Parameters
         ----------
