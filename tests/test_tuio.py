@@ -13,7 +13,8 @@ from frictex.rendering.input.trace_file import DOWN, MOVE, UP, TraceError
 from test_evdev_decode import check_event_sequence
 from frictex.device.errors import InputError
 from frictex.rendering.input.tuio import (MAX_CURSORS, MAX_SOURCES, OscError, TuioDecoder,
-                                         TuioListener, parse_message, parse_packet, parse_sender)
+                                         TuioListener, exposure_warning, is_tuio_frame,
+                                         parse_message, parse_packet, parse_sender)
 
 
 # an OSC 1.0 encoder written from the specification, independent of the parser under test
@@ -305,6 +306,36 @@ def test_accept_from_an_address_takes_any_of_its_ports_and_nothing_else():
         samples = received(listener, 2, 1)
         assert listener.counters()["sender"] == "127.0.0.2:*"
     assert [(s.x_mm, s.event) for s in samples] == [(25.0, DOWN), (50.0, MOVE)]
+
+
+def test_only_a_tuio_frame_claims_the_first_sender_slot():
+    """Garbage, a lone OSC message and a bundle of another profile, from another host
+    first, claim nothing: the tablet that then sends a 2Dcur frame is served."""
+    stray = [b"\x00garbage\xff" * 3, osc_message("/tuio/2Dcur", "fseq", 1),
+             osc_bundle(osc_message("/tuio/2Dobj", "alive"), osc_message("/tuio/2Dobj", "fseq", 1)),
+             osc_bundle(osc_message("/tuio/2Dcur", "alive", 1)),  # no fseq: not a frame
+             b"#bundle\0" + b"\x00" * 7]
+    assert not any(is_tuio_frame(d) for d in stray) and is_tuio_frame(frame(1, []))
+    with TuioListener(0, width_mm=100.0, height_mm=100.0) as listener, \
+            sender("127.0.0.2") as stranger, sender("127.0.0.1") as tablet:
+        to = ("127.0.0.1", listener.port)
+        for data in stray:
+            stranger.sendto(data, to)
+        received(listener, 0, len(stray))
+        tablet.sendto(frame(1, [3], [(3, 0.25, 0.5)]), to)
+        samples = received(listener, 1, len(stray))
+        assert listener.counters()["sender"] == f"127.0.0.1:{tablet.getsockname()[1]}"
+    assert [(s.x_mm, s.event) for s in samples] == [(25.0, DOWN)]
+
+
+@pytest.mark.parametrize("host, accept_from, warned", [
+    ("127.0.0.1", None, False), ("127.0.0.5", None, False), ("0.0.0.0", None, True),
+    ("192.168.1.4", None, True), ("0.0.0.0", ("10.0.0.7", None), False)])
+def test_exposure_warning_beyond_loopback_without_a_named_sender(host, accept_from, warned):
+    line = exposure_warning(host, accept_from)
+    assert (line is not None) == warned
+    if warned:
+        assert "\n" not in line and host in line and "--tuio-from" in line
 
 
 @pytest.mark.parametrize("text, expect", [("10.0.0.7", ("10.0.0.7", None)),

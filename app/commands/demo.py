@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import threading
 from dataclasses import replace
 from pathlib import Path
@@ -81,8 +82,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "gets the force set with the wheel")
     parser.add_argument("--tuio-from", type=sender_option, default=None, metavar="ADDR[:PORT]",
                         help="with --input tuio: accept datagrams from this IPv4 address (and "
-                             "port) only; default: from the first sender heard. Datagrams from "
-                             "others are dropped and counted in the summary")
+                             "port) only; default: from the first sender of a TUIO frame "
+                             "(listening beyond loopback, the demo then warns at start). "
+                             "Datagrams from others are dropped and counted in the summary")
     parser.add_argument("--haptic", choices=("process", "thread"), default="process",
                         help="where the haptic pipeline runs: its own process (default: the "
                              "window's GL calls cannot delay it) or a thread of the window's "
@@ -162,6 +164,11 @@ def run(args: argparse.Namespace) -> int:
         if kind != "tuio":
             raise InputError(f"--tuio-from needs --input tuio (the input is {input_name(kind, arg)})")
         args.input = (kind, replace(arg, accept_from=args.tuio_from))
+    if kind == "tuio" and not args.headless:  # headless refuses a live input anyway
+        from frictex.rendering.input.tuio import exposure_warning
+        warning = exposure_warning(arg.host, args.tuio_from)
+        if warning is not None:
+            print(f"frictex demo: {warning}", file=sys.stderr, flush=True)
     if args.faults is not None and args.device is None:
         raise InputError("--faults needs --device: the faults are injected on the link to it")
     try:

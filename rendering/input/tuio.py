@@ -28,8 +28,12 @@ so that a receiving thread held up (a busy machine, the GIL) does not delay the 
 Who may send. A datagram moves a finger on the plate, so :class:`TuioListener` listens
 on loopback (127.0.0.1) unless given another address, and takes datagrams from one
 sender only: the address (and port, if given) it is told to accept, or else the first
-sender it hears from (its address and port, so that another process on the same host
-cannot join in). Datagrams from anyone else are dropped unread and counted (``refused``).
+sender of a well-formed TUIO frame (a bundle that parses and holds ``/tuio/2Dcur alive``
+and ``fseq``: :func:`is_tuio_frame`), its address and port, so that another process on
+the same host cannot join in. Until a sender is accepted, datagrams that are not such a
+frame claim nothing: stray traffic cannot lock the tablet out. Datagrams from anyone
+else, and those unclaiming ones, are dropped and counted (``refused``). Listening beyond
+loopback with no sender named, :func:`exposure_warning` gives the line a command prints.
 """
 
 from __future__ import annotations
@@ -241,6 +245,27 @@ def _arg(args: list, i: int, kind: type, what: str):
     return kind(value)
 
 
+def is_tuio_frame(data: bytes) -> bool:
+    """True if ``data`` is an OSC bundle that parses and holds a well-formed
+    ``/tuio/2Dcur alive`` and ``fseq``: a datagram that may claim the first-sender slot."""
+    if not data.startswith(b"#bundle\0"):
+        return False
+    try:
+        commands = {command for command, _, _ in _commands(parse_packet(data))}
+    except OscError:
+        return False
+    return {"alive", "fseq"} <= commands
+
+
+def exposure_warning(host: str, accept_from: tuple[str, int | None] | None) -> str | None:
+    """The one-line warning for a listener on ``host`` beyond loopback that serves the
+    first sender (``accept_from`` None); None where there is nothing to warn of."""
+    if accept_from is not None or ipaddress.ip_address(host).is_loopback:
+        return None
+    return (f"warning: TUIO listens on {host} (beyond loopback) and will serve the first "
+            "sender of a TUIO frame on the network; name the tablet with --tuio-from ADDR[:PORT]")
+
+
 #: Linux's SO_TIMESTAMPNS (asm-generic/socket.h; Python's socket module lacks it): the
 #: kernel's receive time of each datagram, a struct timespec of two native longs
 _SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35 if sys.platform.startswith("linux") else None)
@@ -281,8 +306,9 @@ class TuioListener:
     overflow is counted in ``dropped``); decoding happens in :meth:`poll`, on the
     caller's thread, which may block in :meth:`wait` until a datagram is there.
     Malformed packets are counted in ``bad_packets`` (last message in ``last_error``),
-    never raised. Datagrams from a sender other than the accepted one (module
-    docstring) are counted in ``refused``; ``sender`` is the accepted one once known.
+    never raised. Datagrams from a sender other than the accepted one, and before one is
+    accepted those that are not a TUIO frame (module docstring), are counted in
+    ``refused``; ``sender`` is the accepted one once known.
 
     Parameters
     ----------
@@ -335,6 +361,9 @@ class TuioListener:
             except OSError:
                 return
             if self.sender is None:
+                if not is_tuio_frame(data):
+                    self.refused += 1
+                    continue
                 self.sender = (address, port)
             elif address != self.sender[0] or self.sender[1] not in (None, port):
                 self.refused += 1
