@@ -4,7 +4,8 @@ The floor is a program of some twenty lines using numpy and pyarrow only (``BARE
 reads a trace with pyarrow's CSV reader, interpolates the finger to the 10 kHz output
 rate, computes a grating's friction and amplitude, and writes the same two tables as a
 replay (``friction``: six columns at 10 kHz; ``commands``: two) with pyarrow's Parquet
-or CSV writer or ``numpy.savez``. It does less than a replay (no tracking, no scene, no
+writer (the encodings frictex uses: byte-stream-split floats, a dictionary for the
+integers), pyarrow's CSV writer (every digit of each float) or ``numpy.savez``. It does less than a replay (no tracking, no scene, no
 summary), so the ratio is an upper bound of frictex's overhead. Both run as fresh
 processes on the same human-like trace (600 s; 60 s with ``--quick``), alternated, one
 of each per round (3 rounds; 2 with ``--quick``); each figure is the median wall time.
@@ -57,7 +58,10 @@ for name, cols in tables.items():
     arrow = pa.table(cols)
     if fmt == "parquet":
         import pyarrow.parquet as pq
-        pq.write_table(arrow, out / f"{name}.parquet", compression="snappy")
+        floats = [c for c in cols if cols[c].dtype.kind == "f"]
+        pq.write_table(arrow, out / f"{name}.parquet", compression="snappy",
+                       use_dictionary=[c for c in cols if c not in floats],
+                       use_byte_stream_split=floats)
     else:
         pcsv.write_csv(arrow, out / f"{name}.csv")
 """
@@ -116,6 +120,8 @@ def run(quick: bool) -> list[Figure]:
                            ours, "s"),
                     Figure("baseline", f"{label}, frictex against bare (target {target:g}x)",
                            ours / bare, "x"),
+                    Figure("baseline", f"{label}, bare CPU user + system (median)",
+                           median(runs[f"bare {fmt}"], "cpu_s"), "s"),
                     Figure("baseline", f"{label}, frictex CPU user + system (median)",
                            median(runs[f"frictex {fmt}"], "cpu_s"), "s")]
     return figures
