@@ -184,3 +184,12 @@ def test_validate_perception_reports_a_bad_protocol(tmp_path, capsys):
     assert main(["validate", "--perception", str(tmp_path / "p.toml")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("frictex: error: ") and "method" in err
+
+
+def test_preview_shows_what_a_finger_will_not_feel():
+    from frictex.app.commands.preview import preview_figure
+
+    _, info = preview_figure(load_scene(LIBRARY / "grating-0.6mm.toml"), (160, 96))
+    assert [m.split(",")[0] for m in info["perception"]] == ['layer "lines": period 0.6 mm']
+    _, info = preview_figure(load_scene(LIBRARY / "grating-5mm.toml"), (160, 96))
+    assert info["perception"] == []

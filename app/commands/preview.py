@@ -13,6 +13,9 @@ Layers whose mu' depends on motion or time are shown as follows (and said so in 
 title): a height layer as a finger sliding towards +x feels it (climbing flanks above
 its rest level, descending ones below); a recorded texture at its mean; a clip at rest
 (mu' 1) in the map, with its trigger, length and deepest mu' in the title.
+
+Under the panels, and printed: the scene's features a finger will not feel
+(``rendering.perception``, as ``frictex validate --perception`` reports them).
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from frictex.app.engine.outfile import write_file
 from frictex.device.errors import InputError
 from frictex.device.friction import mu_floor
 from frictex.rendering.compose import ideal_mu
+from frictex.rendering.perception import scene_findings
 from frictex.rendering.reach import applies_alone, as_previewed
 from frictex.rendering.visual.scene_image import scene_rgb, to_srgb8
 from frictex.rendering.visual.viewport import fit_viewport
@@ -200,8 +204,13 @@ def preview_figure(scene, size: tuple[int, int] | None = None, outlines: bool = 
             label.set_color("red")
     layers = "; ".join(_layer_note(layer) for layer in scene.layers)
     fig.suptitle("\n".join(textwrap.wrap(f"layers: {layers}", 150)), fontsize=9)
+    felt = [f.message for f in scene_findings(scene)]
+    if felt:  # what a finger cannot feel (frictex validate --perception), under the panels
+        fig.supxlabel("\n".join(textwrap.wrap("a finger will not feel: " + "; ".join(felt), 170)),
+                      fontsize=8, color="darkorange")
     info = {"mu_min": float(mu.min()), "mu_max": float(mu.max()), "floor": floor,
-            "below": float(below.mean()), "size": (viewport.width_px, viewport.height_px)}
+            "below": float(below.mean()), "size": (viewport.width_px, viewport.height_px),
+            "perception": felt}
     return fig, info
 
 
@@ -231,4 +240,6 @@ def run(args: argparse.Namespace) -> int:
           f"mu' {info['mu_min']:.3f} to {info['mu_max']:.3f} (device floor {info['floor']:.3f} "
           f"at {scene.device.normal_force_n:g} N"
           + (f"; {info['below']:.1%} of the display below it, hatched)" if info["below"] else ")"))
+    for message in info["perception"]:
+        print(f"perception: {message}")
     return 0
