@@ -12,7 +12,8 @@ from numpy.testing import assert_allclose
 from frictex.app.commands.cli import main
 from frictex.rendering.input.trace_import import add_import_arguments, run_import
 from frictex.rendering.input.evdev_decode import (ABS_MT_POSITION_X, ABS_MT_TRACKING_ID, EV_ABS, EV_KEY,
-                                                  MAX_RESOLUTION, SCREEN_MM, AbsInfo, ScreenSpec,
+                                                  MAX_RECORDING_BYTES, MAX_RESOLUTION, SCREEN_MM,
+                                                  AbsInfo, ScreenSpec,
                                                   decode_all, screen_map)
 from frictex.rendering.input.import_evemu import parse_evemu
 from frictex.rendering.input.import_getevent import parse_getevent, read_getevent
@@ -428,3 +429,45 @@ def parse_evemu_or_none(text):
     except TraceError as exc:
         assert "resolution" in str(exc)
         return None
+
+
+def _dense_evemu(size: int) -> str:
+    """An evemu log of about ``size`` bytes in its densest form: one finger moving, an
+    X event and a SYN_REPORT per sample (about 25 bytes an event)."""
+    head = ("# EVEMU 1.3\nN: T\nI: 0018 04f3 0001 0100\nA: 35 0 4095 0 0 40\nA: 36 0 2047 0 0 40\n"
+            "E: 0.000001 0003 0039 5\nE: 0.000001 0003 0035 1000\nE: 0.000001 0003 0036 1000\n"
+            "E: 0.000001 0000 0000 0\n")
+    lines, n = [head], len(head)
+    k = 0
+    while n < size:
+        k += 1
+        t = 0.01 + k * 1e-6
+        pair = f"E: {t:.6f} 0003 0035 {1000 + k % 2000}\nE: {t:.6f} 0000 0000 0\n"
+        lines.append(pair)
+        n += len(pair)
+    return "".join(lines)
+
+
+def test_the_recording_cap_keeps_the_largest_import_under_1_gib(tmp_path):
+    """Memory scales with the bytes of a recording: the peak of importing 1 MiB of the
+    densest evemu, scaled to MAX_RECORDING_BYTES, plus the interpreter's 100 MiB, stays
+    under 1 GiB (the 64 MiB cap it replaces took 1.35 GB and 17 s of CPU)."""
+    import tracemalloc
+    src = tmp_path / "dense.evemu"
+    src.write_text(_dense_evemu(1 << 20))
+    size = src.stat().st_size
+    tracemalloc.start()
+    try:
+        assert _import([str(src), "-o", str(tmp_path / "out.csv")]) == 0
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak * MAX_RECORDING_BYTES / size + (100 << 20) < 1 << 30
+
+
+def test_a_recording_over_the_cap_is_refused_unread(tmp_path):
+    src = tmp_path / "big.evemu"
+    with open(src, "wb") as f:
+        f.truncate(MAX_RECORDING_BYTES + 1)
+    with pytest.raises(TraceError, match="big.evemu"):
+        _import([str(src), "-o", str(tmp_path / "out.csv")])

@@ -493,9 +493,13 @@ def observed_ranges(samples: list[RawSample]) -> dict[int, tuple[float, float]]:
     return {ABS_MT_POSITION_X: (min(xs), max(xs)), ABS_MT_POSITION_Y: (min(ys), max(ys))} if samples else {}
 
 
-#: Largest recording read (bytes): its events are held in memory (about 150 bytes each),
-#: and half an hour of two fingers at 120 Hz is about 20 MB of getevent log.
-MAX_RECORDING_BYTES = 64 << 20
+#: Largest recording read (bytes), set by its cost: decoding takes about 0.26 s of CPU and
+#: 21 MB of memory per MB of evemu log (the densest format, about 25 bytes an event;
+#: getevent's 80-byte lines cost a third of that per MB), so the largest accepted file
+#: stays under 5 s and 1 GiB: 12 MiB of evemu took 3.9 s and 340 MB, 8 MB 2.7 s and
+#: 240 MB (``trace import``, /usr/bin/time). 10 MiB is about 7 minutes of evemu at two
+#: fingers and 120 Hz, 25 minutes of getevent log; split longer recordings.
+MAX_RECORDING_BYTES = 10 << 20
 
 
 def read_text(path: str | Path, what: str) -> str:
