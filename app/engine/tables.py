@@ -13,9 +13,12 @@ Formats:
   of decimals (its ``%.Nf`` format), byte for byte Python's ``"%.Nf" % value``
   (``app.engine.csv_text``).
 - ``npz``: numpy's zip of ``.npy`` arrays, one per column. Columns are streamed to raw
-  files beside the output and, at commit, appended into the zip from memory maps (a zip
-  member's bytes must be contiguous and the ``.npy`` header holds the row count, known
-  only at the end; holding the columns in memory instead would not be bounded).
+  files beside the output, their CRC-32 taken as they are written (on the writer
+  thread), and at commit the kernel copies them into the zip (``os.copy_file_range``)
+  behind headers written here, byte for byte what ``zipfile`` writes. A zip member's
+  bytes must be contiguous and the ``.npy`` header holds the row count, known only at
+  the end, so a member cannot be written in place while the columns grow together;
+  holding the columns in memory instead would not be bounded.
 - ``parquet``: Apache Parquet, one row group per batch, snappy-compressed (the codec
   every Parquet reader has); float columns in the BYTE_STREAM_SPLIT encoding (Parquet
   format 2.8: the bytes of each value in separate streams, which the compressor then
@@ -36,10 +39,14 @@ parquet and npz; CSV to its printed precision).
 from __future__ import annotations
 
 import errno
-import mmap
+import functools
+import io
 import os
 import shutil
+import struct
+import time
 import zipfile
+import zlib
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -279,6 +286,7 @@ class _Npz:
     def __init__(self, table: TableWriter):
         self.table = table
         self.raw = {name: open(self._raw_path(name), "wb") for name, _, _ in table.columns}
+        self.crc = dict.fromkeys(self.raw, 0)  # each raw file's CRC-32 so far
 
     def _raw_path(self, name: str) -> Path:
         return self.table.path.with_name(f"{self.table.path.name}.{name}.raw")
@@ -286,20 +294,24 @@ class _Npz:
     def write(self, chunks: list[dict[str, np.ndarray]]) -> None:
         for name, fh in self.raw.items():
             for chunk in chunks:
-                fh.write(np.ascontiguousarray(chunk[name]).data)
+                data = np.ascontiguousarray(chunk[name]).data
+                fh.write(data)
+                self.crc[name] = zlib.crc32(data, self.crc[name])  # (it releases the GIL)
 
     def close(self) -> None:
         for fh in self.raw.values():
             fh.close()
-        with zipfile.ZipFile(self.table.partial, "w", compression=zipfile.ZIP_STORED,
-                             allowZip64=True) as zf:
+        members = []
+        with open(self.table.partial, "wb", buffering=0) as out:
             for name, dtype, _ in self.table.columns:
-                header = {"descr": np.lib.format.dtype_to_descr(np.dtype(dtype)),
-                          "fortran_order": False, "shape": (self.table.rows,)}
-                with zf.open(f"{name}.npy", "w", force_zip64=True) as member:
-                    np.lib.format.write_array_header_2_0(member, header)
-                    _copy_mapped(self._raw_path(name), member)
+                header = io.BytesIO()
+                np.lib.format.write_array_header_2_0(
+                    header, {"descr": np.lib.format.dtype_to_descr(np.dtype(dtype)),
+                             "fortran_order": False, "shape": (self.table.rows,)})
+                members.append(_stored_member(out, f"{name}.npy", header.getvalue(),
+                                              self._raw_path(name), self.crc[name]))
                 os.remove(self._raw_path(name))
+            _zip_directory(out, members)
 
     def discard(self) -> None:
         for name, fh in self.raw.items():
@@ -329,22 +341,116 @@ class _Parquet:
     discard = close
 
 
-def _copy_mapped(path: Path, member) -> None:
-    """Append the file at ``path`` to ``member`` (a zip member open for writing) from a
-    memory map: the kernel's pages are written as they are, not first read into a copy."""
-    with open(path, "rb") as fh:
-        if os.fstat(fh.fileno()).st_size == 0:
-            return
-        with mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as mapped:
-            view = memoryview(mapped)
-            try:
-                for start in range(0, len(view), _COPY_BYTES):
-                    member.write(view[start:start + _COPY_BYTES])
-            finally:
-                view.release()
+def _stored_member(out, name: str, head: bytes, raw: Path, raw_crc: int) -> zipfile.ZipInfo:
+    """Write a stored (uncompressed) zip member, ``head`` then the file ``raw`` whose
+    CRC-32 is ``raw_crc``, at ``out``'s position (an unbuffered file); its ZipInfo.
+
+    The same bytes as ``zipfile.ZipFile.open(name, "w", force_zip64=True)`` would write
+    (tests/test_tables.py compares them), without reading the data again: the CRC was
+    taken as it was written, and the kernel copies the file (``os.copy_file_range``)."""
+    size = os.path.getsize(raw)
+    info = zipfile.ZipInfo(name, date_time=time.localtime(time.time())[:6])
+    info.compress_type = zipfile.ZIP_STORED
+    info.external_attr = 0o600 << 16  # as zipfile gives a member written by name
+    info.file_size = info.compress_size = len(head) + size
+    info.CRC = _crc32_combine(zlib.crc32(head), raw_crc, size)
+    info.header_offset = out.tell()
+    out.write(info.FileHeader(zip64=True))
+    out.write(head)
+    with open(raw, "rb") as src:
+        _copy_file(src, out, size)
+    return info
 
 
-#: bytes handed to a zip member per write (its CRC is computed as they go)
+def _copy_file(src, out, size: int) -> None:
+    """Copy ``size`` bytes from ``src`` to ``out`` (both at their positions) in the kernel
+    where it can, else through a buffer."""
+    try:
+        while size > 0:
+            done = os.copy_file_range(src.fileno(), out.fileno(), size)
+            if done == 0:
+                raise OSError(errno.EIO, "the file ended early")
+            size -= done
+    except (AttributeError, OSError) as exc:  # not Linux, or a file system without it
+        if isinstance(exc, OSError) and exc.errno not in (errno.EXDEV, errno.ENOSYS,
+                                                         errno.EINVAL, errno.EOPNOTSUPP):
+            raise
+        shutil.copyfileobj(src, out, _COPY_BYTES)
+
+
+def _zip_directory(out, members: list[zipfile.ZipInfo]) -> None:
+    """The zip's central directory and end records after its ``members`` (written by
+    :func:`_stored_member`), as ``zipfile`` writes them when it closes an archive."""
+    start = out.tell()
+    for info in members:
+        dt = info.date_time
+        dosdate = (dt[0] - 1980) << 9 | dt[1] << 5 | dt[2]
+        dostime = dt[3] << 11 | dt[4] << 5 | (dt[5] // 2)
+        extra, size, offset = [], info.file_size, info.header_offset
+        if size > zipfile.ZIP64_LIMIT:
+            extra += [size, size]
+            size = 0xFFFFFFFF
+        if offset > zipfile.ZIP64_LIMIT:
+            extra.append(offset)
+            offset = 0xFFFFFFFF
+        extra_data = struct.pack("<HH" + "Q" * len(extra), 1, 8 * len(extra), *extra) if extra else b""
+        name = info.filename.encode("ascii")
+        out.write(struct.pack(zipfile.structCentralDir, zipfile.stringCentralDir,
+                              info.create_version, info.create_system, info.extract_version,
+                              info.reserved, info.flag_bits, info.compress_type, dostime,
+                              dosdate, info.CRC, size, size, len(name), len(extra_data), 0, 0,
+                              info.internal_attr, info.external_attr, offset))
+        out.write(name + extra_data)
+    end = out.tell()
+    count, dir_size = len(members), end - start
+    if start > zipfile.ZIP64_LIMIT or dir_size > zipfile.ZIP64_LIMIT:
+        out.write(struct.pack(zipfile.structEndArchive64, zipfile.stringEndArchive64, 44, 45,
+                              45, 0, 0, count, count, dir_size, start))
+        out.write(struct.pack(zipfile.structEndArchive64Locator,
+                              zipfile.stringEndArchive64Locator, 0, end, 1))
+    out.write(struct.pack(zipfile.structEndArchive, zipfile.stringEndArchive, 0, 0, count,
+                          count, min(dir_size, 0xFFFFFFFF), min(start, 0xFFFFFFFF), 0))
+
+
+def _crc32_combine(crc1: int, crc2: int, len2: int) -> int:
+    """The CRC-32 of A + B from ``crc1`` = CRC-32(A), ``crc2`` = CRC-32(B) and ``len2`` =
+    len(B) (zlib's crc32_combine, which Python's zlib does not offer): crc1 carried
+    through len2 zero bytes, by the CRC's operator for 2**k zero bytes for each bit k
+    of len2 (:func:`_zero_bytes`), then crc2 added (over GF(2))."""
+    k = 0
+    while len2 >> k:
+        if len2 >> k & 1:
+            crc1 = _gf2_times(_zero_bytes(k), crc1)
+        k += 1
+    return crc1 ^ crc2
+
+
+@functools.lru_cache(maxsize=None)
+def _zero_bytes(k: int) -> list[int]:
+    """The CRC-32 register's operator (32 columns over GF(2)) for 2**k zero bytes."""
+    if k == 0:
+        bit = [0xEDB88320] + [1 << j for j in range(31)]  # one zero bit
+        for _ in range(3):  # 2, 4, 8 bits
+            bit = _gf2_square(bit)
+        return bit
+    return _gf2_square(_zero_bytes(k - 1))
+
+
+def _gf2_times(matrix: list[int], vector: int) -> int:
+    total, row = 0, 0
+    while vector:
+        if vector & 1:
+            total ^= matrix[row]
+        vector >>= 1
+        row += 1
+    return total
+
+
+def _gf2_square(matrix: list[int]) -> list[int]:
+    return [_gf2_times(matrix, column) for column in matrix]
+
+
+#: bytes copied at a time where the kernel cannot copy a file
 _COPY_BYTES = 1 << 24
 
 _OPENERS = {"csv": _Csv, "npz": _Npz, "parquet": _Parquet}
