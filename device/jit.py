@@ -99,13 +99,16 @@ def _import_numba():
         import numba
         import numba.core.typing.cffi_utils  # noqa: F401 (its cffi support off, see the module)
         import numba.np.linalg as linalg
-        ensure_blas = linalg.ensure_blas
-        linalg.ensure_blas = lambda: None if has_scipy else ensure_blas()
-        try:
-            import numba.np.arraymath
-        finally:
-            linalg.ensure_blas = ensure_blas
-        numba.np.arraymath.ensure_blas = ensure_blas
+        ensure_blas = getattr(linalg, "ensure_blas", None)  # None: a numba that changed
+        if ensure_blas is None:
+            import numba.np.arraymath  # noqa: F401 (it probes BLAS its own way)
+        else:
+            linalg.ensure_blas = lambda: None if has_scipy else ensure_blas()
+            try:
+                import numba.np.arraymath
+            finally:
+                linalg.ensure_blas = ensure_blas
+            numba.np.arraymath.ensure_blas = ensure_blas
     finally:
         sys.meta_path.remove(refuse)
     return numba
