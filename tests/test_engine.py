@@ -471,3 +471,35 @@ def test_signals_during_the_commit_are_held_and_dropped_once_it_succeeds():
             with check.committing():
                 done.append("committed")
     assert done == [2]
+
+
+def test_brief_taps_within_a_block_share_a_row_with_the_same_results():
+    """Taps that touch and lift within one 5 ms block (10 us each, a new id each, 200
+    of them between two strokes) show at no output sample: they share rows, so no call
+    carries more rows than fingers touch at once plus one lifting (they took a row each
+    before), and the friction table and commands equal the one-call reference's."""
+    from frictex.rendering.input.trace_file import Trace
+    t, f, x, ev = [], [], [], []
+    for i in range(8):  # a stroke, then 200 brief taps, then a stroke over them
+        t.append(0.001 + i / 100)
+        f.append(1)
+        x.append(20.0 + i)
+        ev.append(0 if i == 0 else (2 if i == 7 else 1))
+    for k in range(200):
+        for j, e in enumerate((0, 2)):
+            t.append(0.1001 + k * 2e-5 + j * 1e-5)
+            f.append(1000 + k)
+            x.append(30.0 + k % 7)
+            ev.append(e)
+    for i in range(8):
+        t.append(0.1002 + i / 100 + 1e-6)
+        f.append(2)
+        x.append(25.0 + i)
+        ev.append(0 if i == 0 else (2 if i == 7 else 1))
+    order = np.argsort(t, kind="stable")
+    trace = Trace(np.array(t)[order], np.array(f, np.int64)[order], np.array(x)[order],
+                  np.full(len(t), 32.4), np.full(len(t), 0.5), np.array(ev, np.int8)[order])
+    for chunk in (1, 2000):
+        outs = _by_source(trace, chunk)
+        assert max(len(o.finger_ids) for o in outs) <= 3
+        _assert_same_rows(outs, _in_one_call(trace, sum(o.t_s.size for o in outs) // 50))

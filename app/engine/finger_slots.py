@@ -5,9 +5,17 @@ it sees, so a log of 1,000 touches one at a time would cost per call what its id
 up to, not what its fingers touching at once do (issue 15). :class:`FingerSlots` hands
 each touch the lowest slot whose last finger lifted in an earlier block than the touch
 begins, or a new slot if none is free (within one block a touch's first sample may come
-before another finger's lift: in one row, that lift would end the touch). To the pipeline
-a slot touched again is a finger touching again: a new touch, with a new touch id and
-fresh per-touch state, as a new finger id gets.
+before another finger's lift: in one row, that lift would end the touch; and a touch
+held past the block would follow the lift with no output sample between them).
+
+A touch that begins and lifts within one block (both apply at the same output index)
+shows at no output sample: it may also take a slot whose finger lifted earlier in that
+same block, its first sample after that lift. So the slots in use are bounded by the
+fingers touching at once plus those lifting in a block, however many brief touches a
+block holds (100,000 taps of 10 us within 2 s: 3 slots, were 251).
+
+To the pipeline a slot touched again is a finger touching again: a new touch, with a
+new touch id and fresh per-touch state, as a new finger id gets.
 
 The outputs carry the recording's ids again: :meth:`FingerSlots.label` gives each
 output row its finger id, and where a row passes from one finger to the next within a
@@ -29,6 +37,8 @@ class FingerSlots:
     def __init__(self):
         self._slot_of: dict[int, int] = {}  # finger id touching (no up yet) -> its slot
         self._free_from: list[float] = []  # per slot: first output index a touch may take it
+        self._lift_seq: list[int] = []  # per slot: sample number of its last lift (-1: none)
+        self._seq = 0  # sample number of the first sample of the next assign call
         self._changes: list[tuple[int, int, int]] = []  # (output index, slot, id) to label
         self._id_of: dict[int, int] = {}  # slot -> finger id it carries (labelled so far)
 
@@ -49,25 +59,32 @@ class FingerSlots:
         slots = np.empty(starts.size, dtype=np.int64)
         for s in np.argsort(order[starts], kind="stable").tolist():  # touches in time order
             fid = int(ids[starts[s]])
+            lifts = bool(up[ends[s] - 1])
             slot = self._slot_of.pop(fid, None)
             if slot is None:
-                slot = self._free_slot(int(first_at[s]))
+                brief = lifts and first_at[s] == last_at[s]
+                slot = self._free_slot(int(first_at[s]), self._seq + int(order[starts[s]]), brief)
                 self._changes.append((int(first_at[s]), slot, fid))
-            if up[ends[s] - 1]:  # free from the block after the lift's
+            if lifts:  # free from the block after the lift's
                 self._free_from[slot] = int(last_at[s]) + 1
+                self._lift_seq[slot] = self._seq + int(order[ends[s] - 1])
             else:
                 self._slot_of[fid] = slot
                 self._free_from[slot] = np.inf
             slots[s] = slot
         renamed = np.empty(n, dtype=np.int64)
         renamed[order] = np.repeat(slots, ends - starts)
+        self._seq += n
         return replace(samples, finger=renamed)
 
-    def _free_slot(self, index: int) -> int:
+    def _free_slot(self, index: int, seq: int, brief: bool) -> int:
+        """The lowest slot free for a touch whose first sample (number ``seq``) applies
+        at output ``index``; ``brief``: it lifts at that same index (shows at no output)."""
         for slot, free_from in enumerate(self._free_from):
-            if free_from <= index:
+            if free_from <= index or (brief and free_from == index + 1 and self._lift_seq[slot] < seq):
                 return slot
         self._free_from.append(np.inf)
+        self._lift_seq.append(-1)
         return len(self._free_from) - 1
 
     def label(self, out):
@@ -75,7 +92,8 @@ class FingerSlots:
         recording's finger ids: ``finger_ids`` each row's id at the call's first sample,
         and ``sample_ids`` (F, n) where a row carries more than one id in the call."""
         index0, end = out.index0, out.index0 + out.t_s.size
-        due = sorted(c for c in self._changes if c[0] < end)
+        # by output index; at one index in the order the touches began (stable)
+        due = sorted((c for c in self._changes if c[0] < end), key=lambda c: c[0])
         self._changes = [c for c in self._changes if c[0] >= end]
         for _, slot, fid in (c for c in due if c[0] <= index0):
             self._id_of[slot] = fid

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from frictex.app.engine.finger_table import FingerTable
 from frictex.app.engine.force_summary import ForceSummary
 from frictex.device.friction import ClampCounts
 from frictex.rendering.pipeline import STAGES
@@ -50,25 +51,38 @@ class Totals:
 
 
 class AmplitudeErrors:
-    """Per finger: how far the achieved amplitude was from the wanted one while touching."""
+    """Per finger: how far the achieved amplitude was from the wanted one while touching
+    (bounded in the ids it lists: ``app.engine.finger_table``)."""
 
     def __init__(self):
-        self.stats: dict[int, list] = {}  # finger id -> [contact samples, sum of squares, max]
+        # finger id -> [contact samples, sum of squares, max]
+        self.table = FingerTable(("sum", "sum", "max"))
 
     def add(self, out) -> None:
         err = np.where(out.contact, out.amplitude_um - out.wanted_um, 0.0)
-        for row, fid, lo, hi in out.segments():
-            s = self.stats.setdefault(fid, [0, 0.0, 0.0])
+        segments = out.segments()
+        for row, fid, lo, hi in segments:
+            s = self.table.row(fid)
             s[0] += int(out.contact[row, lo:hi].sum())
             s[1] += float(np.sum(err[row, lo:hi] ** 2))
             s[2] = max(s[2], float(np.abs(err[row, lo:hi]).max(initial=0.0)))
+        self.table.done_adding(fid for _, fid, _, _ in segments)
+
+    @staticmethod
+    def _entry(n, sq, mx) -> dict:
+        return {"contact_samples": n, "amplitude_error_rms_um": (sq / n) ** 0.5 if n else 0.0,
+                "amplitude_error_max_um": mx}
 
     def report(self) -> dict:
-        """{finger: {contact_samples, amplitude_error_rms_um, amplitude_error_max_um}}."""
-        return {str(fid): {"contact_samples": n,
-                           "amplitude_error_rms_um": (sq / n) ** 0.5 if n else 0.0,
-                           "amplitude_error_max_um": mx}
-                for fid, (n, sq, mx) in sorted(self.stats.items())}
+        """{finger: {contact_samples, amplitude_error_rms_um, amplitude_error_max_um}} for
+        the listed fingers (at most ``MAX_LISTED``, those with the most contact samples)."""
+        return {str(fid): self._entry(*row) for fid, row in self.table.report()[0].items()}
+
+    def others(self) -> dict | None:
+        """The fingers not listed, aggregated: ``fingers`` (how many ids) and the entry
+        over all their samples; None when every finger is listed."""
+        rest = self.table.report()[1]
+        return None if rest is None else {"fingers": rest[0], **self._entry(*rest[1])}
 
 
 def warnings_of(pipeline, tracker, totals: Totals) -> list[str]:
@@ -122,6 +136,10 @@ def summary(scene, trace_report: dict, pipeline, tracker, totals: Totals, fmt: s
         "warnings": warnings_of(pipeline, tracker, totals),
         "fingers": totals.errors.report(),
     }
+    others = totals.errors.others()
+    if others is not None:
+        force_others = totals.forces.others()
+        doc["fingers_others"] = others if force_others is None else {**others, "forces": force_others}
     forces = totals.forces.report()
     if forces is not None:
         doc["forces"] = forces

@@ -298,7 +298,10 @@ class Summary:
     warnings : tuple of str
         One sentence per thing changed, dropped or not played.
     fingers : Mapping of int to FingerErrors
-        Per finger id.
+        Per finger id: the ``MAX_LISTED`` (100) with the most contact samples.
+    fingers_others : Mapping or None
+        The fingers not listed, aggregated (``fingers``: how many ids); None when every
+        finger is listed.
     forces : Mapping or None
         Travelling-wave profiles only: per finger id (a string) the force errors (N).
     control : Mapping or None
@@ -316,6 +319,7 @@ class Summary:
     clamps: Clamps
     warnings: tuple[str, ...]
     fingers: Mapping[int, FingerErrors]
+    fingers_others: Mapping[str, Any] | None = field(default=None, metadata=_OPTIONAL)
     forces: Mapping[str, Any] | None = field(default=None, metadata=_OPTIONAL)
     control: Mapping[str, Any] | None = field(default=None, metadata=_OPTIONAL)
     device: Mapping[str, Any] | None = field(default=None, metadata=_OPTIONAL)
