@@ -26,8 +26,8 @@ import time
 
 from frictex.app.commands.argtypes import positive_float, positive_int
 from frictex.device.errors import DeviceError
-from frictex.device.link.simdevice import (DeviceConfig, DeviceCore, open_listener, open_pty,
-                                   played_log, plate_log, serve, socket_url)
+from frictex.device.link.simdevice import (HELLO_TIMEOUT_S, DeviceConfig, DeviceCore, open_listener,
+                                           open_pty, played_log, plate_log, serve, socket_url)
 
 
 def _tcp_address(text: str) -> tuple[str, int]:
@@ -84,7 +84,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--tcp", type=_tcp_address, default=None, metavar="[HOST:]PORT",
                         help="listen on TCP instead of a pty (host default 127.0.0.1; port 0: "
                              "any free port); hosts open the printed socket:// URL, one at a "
-                             "time: a second connection is refused while one is connected")
+                             "time: a second connection is refused while one is connected, "
+                             "and one that says no Hello within 2 s is dropped")
     parser.add_argument("--protocol", type=int, choices=(1, 2, 3, 4), default=4,
                         help="newest protocol version to speak (default 4, with repair of "
                              "lost frames; 1 to 3 act as firmware of that version)")
@@ -126,11 +127,16 @@ def run(args: argparse.Namespace) -> int:
 
 def _serve(core: DeviceCore, args: argparse.Namespace, quit_event: threading.Event) -> None:
     """Open the pty or the TCP listener, say where, and serve until told to stop."""
-    def refused(address):
-        print(f"frictex sim-device: refused a second host {address[0]}:{address[1]} "
+    def refused(address, count):
+        more = f" and {count - 1} more in the last second" if count > 1 else ""
+        print(f"frictex sim-device: refused a second host {address[0]}:{address[1]}{more} "
               "(one host at a time)", file=sys.stderr)
+
+    def dropped(address):
+        print(f"frictex sim-device: dropped host {address[0]}:{address[1]}: no Hello within "
+              f"{HELLO_TIMEOUT_S:g} s of connecting", file=sys.stderr)
     options = {"exit_on_stop": args.once, "parent_pid": args.parent_pid,
-               "quit_event": quit_event, "on_refused": refused}
+               "quit_event": quit_event, "on_refused": refused, "on_dropped": dropped}
     if args.tcp is not None:
         listener = open_listener(*args.tcp)
         where, close = socket_url(listener), listener.close

@@ -213,6 +213,7 @@ class DeviceCore:
         self.play_index = 0        # modulo 2**64
         self.host_version = 1      # version of the last valid frame from the host
         self.hello_seen = False
+        self.hellos = 0            # Hellos handled (a connection that adds none is silent)
         self._origin_set = False
         self.prefill = 1
         self.tick = 0
@@ -292,6 +293,7 @@ class DeviceCore:
             self.state = S.BUFFERING
             self.stopped = False
             self.hello_seen = True
+            self.hellos += 1
             return self.config.info()
         if isinstance(msg, p.Heartbeat):
             if self.state == S.SILENT and not self.stopped:
@@ -582,6 +584,11 @@ def _write(conn, data: bytes) -> None:
 
 #: what a second TCP host is told before its connection is closed
 BUSY_TEXT = "busy: serving another host; one host at a time"
+#: a TCP host must say Hello within this long of connecting (s), else it is dropped: an
+#: idle connection would otherwise hold the device and every other host be refused busy
+HELLO_TIMEOUT_S = 2.0
+#: refusals are reported at most once per this long (s), with their count
+REFUSAL_REPORT_S = 1.0
 
 
 def _refuse(sock: socket.socket) -> None:
@@ -598,7 +605,8 @@ def _refuse(sock: socket.socket) -> None:
 
 def serve(core: DeviceCore, master: int | None = None, listener: socket.socket | None = None,
           *, poll_s: float = 0.001, exit_on_stop: bool = False, parent_pid: int | None = None,
-          quit_event=None, clock=time.monotonic, on_refused=None) -> int:
+          quit_event=None, clock=time.monotonic, on_refused=None, on_dropped=None,
+          hello_timeout_s: float = HELLO_TIMEOUT_S) -> int:
     """Run ``core`` in real time on the pty ``master`` or on TCP connections to
     ``listener``, one host at a time, until ``quit_event`` is set, ``parent_pid`` is gone,
     or (``exit_on_stop``) a host's Stop has played out. Returns the number of TCP hosts
@@ -606,15 +614,23 @@ def serve(core: DeviceCore, master: int | None = None, listener: socket.socket |
 
     One host at a time: a TCP connection made while a host is connected is refused, never
     allowed to take over: it gets one ErrorReport (``NOT_READY``, :data:`BUSY_TEXT`, in a
-    version 1 frame that every host decodes) and is closed; ``on_refused(address)`` is
-    told. The next host is served once the current one has hung up (its socket closed: a
-    host process that ends, however it ends, closes it). Received bytes are handled before
+    version 1 frame that every host decodes) and is closed; ``on_refused(address, count)``
+    is told at most once per :data:`REFUSAL_REPORT_S` (the latest address, and how many
+    were refused since the last call; the rest when serving ends), so a flood of
+    connections makes a line a second, not one each. A TCP host that has not said Hello
+    within ``hello_timeout_s`` of connecting is dropped (closed; ``on_dropped(address)``
+    told): a connection that never speaks cannot hold the device. The next host is
+    served once the current one has hung up or been dropped (its socket closed: a host
+    process that ends, however it ends, closes it). Received bytes are handled before
     the clock advances,
     so a sim process that was descheduled does not mistake its own sleep for host silence.
     """
     t0 = clock()
     conn = master
     hosts = 0
+    address = None  # the TCP host's, with the time it connected and core.hellos then
+    connected_at = hellos_then = 0
+    refused, refused_from, reported_at = 0, None, -math.inf
     try:
         while True:
             watch = [x for x in (conn, listener) if x is not None]
@@ -622,17 +638,20 @@ def serve(core: DeviceCore, master: int | None = None, listener: socket.socket |
             now = clock() - t0
             if listener is not None and listener in ready:
                 try:
-                    accepted, address = listener.accept()
+                    accepted, peer = listener.accept()
                 except (BlockingIOError, InterruptedError):
                     accepted = None
                 if accepted is not None and isinstance(conn, socket.socket):
                     _refuse(accepted)
-                    if on_refused is not None:
-                        on_refused(address)
+                    refused, refused_from = refused + 1, peer
                 elif accepted is not None:
                     accepted.setblocking(False)
                     accepted.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-                    conn, hosts = accepted, hosts + 1
+                    conn, hosts, address = accepted, hosts + 1, peer
+                    connected_at, hellos_then = now, core.hellos
+            if refused and on_refused is not None and now - reported_at >= REFUSAL_REPORT_S:
+                on_refused(refused_from, refused)
+                refused, reported_at = 0, now
             out = b""
             if conn is not None and conn in ready:
                 data = _read(conn)
@@ -641,6 +660,12 @@ def serve(core: DeviceCore, master: int | None = None, listener: socket.socket |
                     conn = None
                 elif data:
                     out = core.receive(data, now)
+            if (isinstance(conn, socket.socket) and core.hellos == hellos_then
+                    and now - connected_at > hello_timeout_s):
+                conn.close()
+                conn = None
+                if on_dropped is not None:
+                    on_dropped(address)
             out += core.advance_to(now)
             if out and conn is not None:
                 _write(conn, out)
@@ -652,3 +677,5 @@ def serve(core: DeviceCore, master: int | None = None, listener: socket.socket |
     finally:
         if isinstance(conn, socket.socket):
             conn.close()
+        if refused and on_refused is not None:
+            on_refused(refused_from, refused)
