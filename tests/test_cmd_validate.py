@@ -123,3 +123,23 @@ def test_a_share_above_zero_never_reads_zero():
     from frictex.app.commands.validate import _share
     assert [_share(f) for f in (0.0, 1e-6, 0.0004999, 0.0005, 0.129)] == [
         "0.0%", "under 0.1%", "under 0.1%", "0.1%", "12.9%"]
+
+
+def test_file_names_and_names_reach_the_terminal_escaped(tmp_path, capsys):
+    """A file named with ESC/BEL sequences is printed escaped (it would set the terminal's
+    title); a name holding a format character (U+202E reverses what follows) is refused."""
+    hostile = tmp_path / "a\x1b]0;PWNED\x07\u202e.toml"
+    hostile.write_text(HEAD + LAYER.format(mu=0.7))
+    assert main(["validate", str(hostile)]) == 0
+    out, err = capsys.readouterr()
+    assert "\x1b" not in out and "\x07" not in out and "\u202e" not in out
+    assert out.startswith("ok ") and "a\\x1b]0;PWNED\\x07\\u202e.toml (1 layer)" in out
+    for name, char in (("ok\u202eTXT.exe", "\\u202e"), ("a\u200bb", "\\u200b"),
+                       ("\u2066x", "\\u2066")):
+        scene = tmp_path / "named.toml"
+        scene.write_text(f'name = "{name}"\n' + HEAD + LAYER.format(mu=0.7).replace(
+            "[[layer]]\n", f'[[layer]]\nname = "{name}"\n'))
+        assert main(["validate", str(scene)]) == 2
+        out, err = capsys.readouterr()
+        assert out == "" and err.count(f"holds the format character '{char}'") == 2
+        assert name not in err

@@ -124,3 +124,11 @@ def test_layer_kinds_are_the_files_words():
              for layer in load_scene(resolve_scene(name)).layers}
     assert {"height button", "height ridge", "raster", "disc", "bump", "edge"} <= kinds
     assert not any(k in kinds for k in ("shape", "rastermap", "height gaussianbump", "height buttonrim"))
+
+
+def test_preview_prints_its_output_path_escaped(tmp_path, capsys):
+    out = tmp_path / "p\x1b[2J\u202e.png"
+    assert main(["preview", "grating-5mm", "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "\x1b" not in printed and "\u202e" not in printed
+    assert "p\\x1b[2J\\u202e.png: " in printed and out.is_file()

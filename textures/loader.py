@@ -152,7 +152,8 @@ Limits, so that every later stage stays finite and bounded (a value beyond them 
 or a wrong unit): lengths and positions within +-10000 mm, sizes (widths, radii, sigma)
 from 0.001 mm, periods from 0.01 mm; angles -360 to 360 deg; forces at most 100 N;
 amplitudes at most 100 um; any other number at most 1e6 in magnitude. Strings hold no
-control characters (``description`` may hold line breaks and tabs); names at most 200
+control characters (``description`` may hold line breaks and tabs), and names and file
+names no format characters (Unicode Cf: U+202E, U+200B, U+2066...); names at most 200
 characters, paths 1000. A file is UTF-8 (a leading byte order mark is dropped), at most
 1 MiB, a regular file (never a FIFO or a device: checked before opening), with arrays and
 inline tables nested at most 16 deep. The files it names (``image``, ``model``, ``file``,

@@ -180,7 +180,10 @@ class Choice:
 @dataclass(frozen=True)
 class Text:
     """A string of at most ``max_len`` characters; ``lines``: may hold line breaks and tabs.
-    Other control characters (NUL, escape, ...) are refused everywhere."""
+    Other control characters (NUL, escape, ...) are refused everywhere; a one-line string
+    (a name, a file name) refuses format characters too (Unicode category Cf: bidi
+    overrides such as U+202E, zero-width spaces, isolates), which make a name shown in a
+    terminal or a table read other than it is."""
 
     default: Any = REQUIRED
     max_len: int = 200
@@ -193,6 +196,13 @@ class Text:
             return r.report(path, f"expected a string, got {kind(value)}")
         allowed = "\t\n\r" if self.lines else ""
         bad = next((c for c in value if unicodedata.category(c) == "Cc" and c not in allowed), None)
+        invisible = None if self.lines else next(
+            (c for c in value if unicodedata.category(c) == "Cf"), None)
+        if bad is None and invisible is not None:
+            where = f"at character {value.index(invisible) + 1}"
+            return r.report(path, f"holds the format character '{escape(invisible)}' {where} "
+                                  "(invisible, or reorders the text shown); expected one line "
+                                  "of visible text")
         if bad is not None:
             where = f"at character {value.index(bad) + 1}"
             return r.report(path, f"holds the control character '{escape(bad)}' {where}; expected "

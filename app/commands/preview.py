@@ -27,9 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
+from frictex.app.commands.cli import printable
 from frictex.app.engine.outfile import write_file
 from frictex.device.errors import InputError
 from frictex.device.friction import mu_floor
+from frictex.device.safe_text import escape, escape_path
 from frictex.rendering.compose import ideal_mu
 from frictex.rendering.perception import scene_findings
 from frictex.rendering.reach import applies_alone, as_previewed
@@ -236,10 +238,10 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"output folder {str(out.parent)!r} does not exist")
     scene = load(args.scene)
     info = write_preview(scene, out, args.size, args.outlines)
-    print(f"wrote {out}: {scene.name}, scene panel {info['size'][0]} x {info['size'][1]} px, "
+    print(f"wrote {escape_path(out)}: {escape(scene.name, limit=None)}, scene panel {info['size'][0]} x {info['size'][1]} px, "
           f"mu' {info['mu_min']:.3f} to {info['mu_max']:.3f} (device floor {info['floor']:.3f} "
           f"at {scene.device.normal_force_n:g} N"
           + (f"; {info['below']:.1%} of the display below it, hatched)" if info["below"] else ")"))
     for message in info["perception"]:
-        print(f"perception: {message}")
+        print(f"perception: {printable(message)}")
     return 0

@@ -27,6 +27,9 @@ from __future__ import annotations
 import argparse
 import sys
 
+from frictex.app.commands.cli import printable
+from frictex.device.safe_text import escape_path
+
 from frictex.textures.errors import TextureError
 from frictex.textures.library import resolve_scene
 from frictex.textures.loader import check_scene
@@ -54,7 +57,6 @@ def _share(fraction: float) -> str:
 def reach_warning(path, scene) -> str | None:
     """The warning for a scene whose layers together ask for mu' below the device's floor
     (``rendering.reach.scene_reach``), or None."""
-    from frictex.device.safe_text import escape_path
     from frictex.rendering.reach import STROKE_S, scene_reach
 
     reach = scene_reach(scene)
@@ -80,10 +82,8 @@ def _is_protocol(name: str) -> bool:
 
 
 def _perception(label, findings) -> None:
-    from frictex.device.safe_text import escape_path
-
     for finding in findings:
-        print(f"frictex: warning: {escape_path(label)}: perception: {finding.message}",
+        print(f"frictex: warning: {escape_path(label)}: perception: {printable(finding.message)}",
               file=sys.stderr)
 
 
@@ -94,12 +94,12 @@ def _protocol(name: str) -> bool:
 
     protocol, problems = check_protocol(name)
     for problem in problems:
-        print(f"frictex: error: {problem}", file=sys.stderr)
+        print(f"frictex: error: {printable(str(problem))}", file=sys.stderr)
     if protocol is None:
         return False
     findings = protocol_findings(protocol)
     _perception(name, findings)
-    print(f"ok {name} (protocol, {len(findings)} perception warning"
+    print(f"ok {escape_path(name)} (protocol, {len(findings)} perception warning"
           f"{'s' * (len(findings) != 1)})")
     return True
 
@@ -113,29 +113,29 @@ def run(args: argparse.Namespace) -> int:
         try:
             path = resolve_scene(name)
         except TextureError as exc:
-            print(f"frictex: error: {exc}", file=sys.stderr)
+            print(f"frictex: error: {printable(str(exc))}", file=sys.stderr)
             bad += 1
             continue
         scene, problems, warnings = check_scene(path)
         for problem in problems:
-            print(f"frictex: error: {problem}", file=sys.stderr)
+            print(f"frictex: error: {printable(str(problem))}", file=sys.stderr)
         notes = [str(w) for w in warnings]
         reach = reach_warning(path, scene) if scene is not None else None
         notes += [reach] if reach is not None else []
         for note in notes:
-            print(f"frictex: warning: {note}", file=sys.stderr)
+            print(f"frictex: warning: {printable(note)}", file=sys.stderr)
         if args.perception and scene is not None:
             from frictex.rendering.perception import scene_findings
             _perception(path, scene_findings(scene))
         if scene is None:
             bad += 1
         elif args.strict and notes:
-            print(f"frictex: error: {path}: {len(notes)} warning{'s' * (len(notes) != 1)} "
+            print(f"frictex: error: {escape_path(path)}: {len(notes)} warning{'s' * (len(notes) != 1)} "
                   f"(--strict)", file=sys.stderr)
             bad += 1
         else:
             n = len(scene.layers)
-            print(f"ok {path} ({n} layer{'s' * (n != 1)})")
+            print(f"ok {escape_path(path)} ({n} layer{'s' * (n != 1)})")
     if bad and len(args.files) > 1:
         print(f"frictex: error: {bad} of {len(args.files)} files have problems", file=sys.stderr)
     return 2 if bad else 0
