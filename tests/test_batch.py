@@ -166,3 +166,39 @@ def test_a_job_error_is_an_escaped_cut_cell(monkeypatch, tmp_path, error):
     row = run_job(Job(0, "s", "t", None, 1e4, 50, "csv", "j"), str(tmp_path))
     assert row["status"] == "failed" and row["error"].startswith("bad\\x1b[2J\\nlinexxx")
     assert len(row["error"]) == MAX_ERROR_SHOWN and row["error"].isprintable()
+
+
+@pytest.mark.parametrize("scene", ['=HYPERLINK("http://x","y")', "@SUM(A1:A2)", "+1+2",
+                                   "-2+3"])
+def test_error_cells_never_start_a_formula(monkeypatch, tmp_path, scene):
+    """An error that starts with the scene name as written is stored behind a single
+    quote (OWASP): read back, no text cell starts with = + - @ tab or CR."""
+    import csv
+    from frictex.app.engine import replay
+    from frictex.app.engine.batch import write_results
+
+    def fail(scene_name, *args, **kwargs):
+        raise TraceError(f"{scene_name}: no such scene")
+
+    monkeypatch.setattr(replay, "run_replay", fail)
+    rows = [run_job(Job(0, scene, "t", None, 1e4, 50, "csv", "j"), str(tmp_path))]
+    with open(write_results(tmp_path, rows), encoding="utf-8", newline="") as fh:
+        header, *cells = list(csv.reader(fh))
+    error = cells[0][header.index("error")]
+    assert error.startswith("'") and error[1:] == rows[0]["error"]
+    assert not any(c.startswith(("=", "+", "-", "@", "\t", "\r")) for row in cells for c in row)
+
+
+def test_cells_starting_with_tab_or_cr_are_quoted_too(tmp_path):
+    """Errors reach batch.csv escaped (a tab as the two characters \\t), but any text
+    cell written that starts with a tab or a carriage return is quoted as well; numbers
+    are numbers."""
+    import csv
+    from frictex.app.engine.batch import RESULT_COLUMNS, write_results
+    rows = [{name: "" for name in RESULT_COLUMNS} | {"error": start + "=1+1", "status": "failed"}
+            for start in ("\t", "@", "=", "ok")]
+    with open(write_results(tmp_path, rows), encoding="utf-8", newline="") as fh:
+        errors = [row[RESULT_COLUMNS.index("error")] for row in list(csv.reader(fh))[1:]]
+    assert errors == ["'\t=1+1", "'@=1+1", "'==1+1", "ok=1+1"]
+    from frictex.app.engine.batch import _cell
+    assert _cell("\r=1") == "'\r=1" and _cell(-1.5) == "-1.5000" and _cell(3) == 3

@@ -28,7 +28,10 @@ file and the line, and show values escaped and cut (``device.safe_text``).
 Every job writes its replay outputs into its folder; the batch writes ``batch.csv``:
 one row per job with its status (``ok`` or ``failed``), error, output seconds, wall
 seconds and end-to-end real-time factor, clamps and warnings. A failed job does not
-stop the others.
+stop the others. A text cell that would start with ``=``, ``+``, ``-``, ``@``, a tab or a
+carriage return (an error that starts with a scene named ``=HYPERLINK(...)``) is written
+behind a single quote, so that a spreadsheet shows it as text, never runs it (OWASP's
+rule for CSV injection).
 """
 
 from __future__ import annotations
@@ -228,5 +231,15 @@ def write_results(out_dir: Path, rows: list[dict]) -> Path:
     return path
 
 
+#: first characters that make a spreadsheet read a cell as a formula (OWASP CSV injection)
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
 def _cell(value):
-    return f"{value:.4f}" if isinstance(value, float) else value
+    """A ``batch.csv`` cell: floats to 4 decimals; text that a spreadsheet would take for
+    a formula (starting with one of :data:`FORMULA_STARTS`) behind a single quote."""
+    if isinstance(value, float):
+        return f"{value:.4f}"
+    if isinstance(value, str) and value.startswith(FORMULA_STARTS):
+        return "'" + value
+    return value
