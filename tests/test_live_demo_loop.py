@@ -32,6 +32,9 @@ class ScriptedWindow(OffscreenBackend):
     def cursor_px(self):
         return (0.0, 0.0)
 
+    def set_title(self, title):
+        self.title = title
+
 
 class StuckFrame(Exception):
     """Ends a frame that never finished."""
@@ -270,3 +273,18 @@ def test_contacts_logged_follow_the_fingers_touching_not_every_id_seen(gl, tmp_p
     events = (tmp_path / "e.csv").read_text().splitlines()[1:]
     assert sum(",finger-down," in e for e in events) == 1_000
     assert sum(",finger-up," in e for e in events) == 1_000
+
+
+def test_the_window_title_names_the_scene_and_follows_a_switch(gl, tmp_path):
+    scene = load_scene(resolve_scene("grating-5mm"))
+    window = ScriptedWindow(gl)
+    haptic = HapticThread(scene)
+    playlist = [resolve_scene("grating-5mm"), resolve_scene("grating-15mm")]
+    loop = DemoLoop(window, haptic, playlist, 0, scene, load_scene, tmp_path)
+    try:
+        assert window.title == "frictex: grating-5mm"
+        loop.select(1)
+        assert window.title == "frictex: grating-15mm"
+    finally:
+        loop.close()
+        window.close()

@@ -71,6 +71,7 @@ from PIL import Image
 from frictex.app.live.haptic_thread import EVENTS
 from frictex.app.live.layer_edit import EditError, LayerEdit, panel_view
 from frictex.app.live.watch import FileWatch
+from frictex.device.safe_text import escape
 from frictex.rendering.renderers import render_modes
 from frictex.rendering.visual.compositor import Compositor, FrameView
 from frictex.rendering.visual.layer_panel import PanelView, hit, track_fraction
@@ -89,6 +90,12 @@ FRAME_S = 1.0 / 60.0
 INPUT_WAKE_S = 0.05  # longest the input thread waits for an event before looking at the time
 KEYS_HELP = ("wheel, up/down: force | N/B: scene | R: renderer | S: scope | "
              "O: outlines | P: screenshot | L: layers | SPACE: emergency stop | Q: quit")
+
+
+def window_title(scene) -> str:
+    """The window's title for ``scene``: frictex and the scene's name (escaped: a name
+    comes from a file)."""
+    return f"frictex: {escape(scene.name, limit=80)}"
 
 
 def next_screenshot(folder: Path, stem: str):
@@ -140,6 +147,7 @@ class DemoLoop:
         self.touch_screen = touch_screen
         self.input_name = input_name
         self.compositor = Compositor(backend.ctx, scene, backend.size)
+        backend.set_title(window_title(scene))
         self.overlay = OverlayState()
         self.force_n = scene.device.normal_force_n
         self.renderer = haptic.render_override
@@ -469,6 +477,7 @@ class DemoLoop:
         self.log(event, detail)  # before redrawing the scene image
         if scene is not self.scene:
             self.compositor.set_scene(scene)
+            self.backend.set_title(window_title(scene))
             if event != "edit":  # an edit keeps the trails: the finger is where it was
                 self.overlay.clear()
             self._set_envelope(scene, pipeline.actuation)

@@ -77,6 +77,9 @@ class Window(Frame, Protocol):
     def wake(self) -> None:
         """End a ``wait_events`` in progress (from any thread)."""
 
+    def set_title(self, title: str) -> None:
+        """Show ``title`` in the window's title bar (from any thread)."""
+
 
 class VisualError(FrictexError, OSError):
     """The visual layer cannot run here (no display, no GL); the message says what is missing."""
@@ -186,6 +189,7 @@ class GlfwBackend:
         glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
         glfw.window_hint(glfw.OPENGL_FORWARD_COMPAT, True)
         self.window = glfw.create_window(int(size[0]), int(size[1]), title, target, None)
+        self._title: str | None = None  # a title set_title asked for, not yet shown
         if not self.window:
             glfw.terminate()
             raise VisualError("glfw could not create an OpenGL 3.3 core window on this display")
@@ -245,6 +249,9 @@ class GlfwBackend:
             self._glfw.wait_events_timeout(timeout_s)
         else:
             self._glfw.poll_events()
+        title, self._title = self._title, None
+        if title is not None:
+            self._glfw.set_window_title(self.window, title)
 
     def swap(self) -> None:
         self._glfw.swap_buffers(self.window)
@@ -260,6 +267,12 @@ class GlfwBackend:
     def wake(self) -> None:
         """End a ``wait_events`` in progress (from any thread)."""
         self._glfw.post_empty_event()
+
+    def set_title(self, title: str) -> None:
+        """Show ``title`` in the window's title bar (from any thread: glfw takes it on the
+        event thread, at its next ``wait_events``)."""
+        self._title = title
+        self.wake()
 
     @property
     def should_close(self) -> bool:

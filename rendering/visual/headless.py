@@ -111,6 +111,10 @@ class HeadlessWindow(OffscreenBackend):
         """End a ``wait_events`` in progress (from any thread)."""
         self._inbox.put(("wake",))
 
+    def set_title(self, title: str) -> None:
+        """The title a window would show (kept in ``title``; from any thread)."""
+        self.title = title
+
     # -- the window's side -----------------------------------------------------------------
 
     def wait_events(self, timeout_s: float) -> None:
