@@ -130,6 +130,14 @@ def test_read_ahap_from_a_file(tmp_path):
     (_doc(_event("HapticTransient", 0.0), _control("HapticSharpnessControl", 0.0, points=[])),
      r"ParameterCurveControlPoints: no control points"),
     (_doc(*[_event("HapticContinuous", 0.0, 59.0)] * 11), r"Pattern: the events play for 649 s"),
+    ('{"Pattern": [], "Pattern": [' + json.dumps(_event("HapticTransient", 0.5)) + ']}',
+     r'AHAP: key "Pattern" appears twice in one object; expected distinct keys'),
+    ('{"Pattern": [{"Event": {"Time": 0.0, "Time": 0.5, "EventType": "HapticTransient"}}]}',
+     r'key "Time" appears twice'),
+    ('{"Pattern": [{"Event": {"Time": NaN, "EventType": "HapticTransient"}}]}',
+     r"AHAP: NaN is not a JSON number"),
+    ('{"Pattern": [{"Event": {"Time": -Infinity, "EventType": "HapticTransient"}}]}',
+     r"AHAP: -Infinity is not a JSON number"),
 ])
 def test_bad_files_get_one_line_errors_that_say_where(text, message):
     with pytest.raises(TextureError, match=message) as info:

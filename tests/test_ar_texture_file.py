@@ -145,6 +145,14 @@ def test_the_sample_rate_and_speed_unit_a_file_states_are_used(tmp_path):
     (published_xml(ma=((300, 0.8), 1.5)).replace("gain>", "gaim>"), r"model 1: <gain> missing"),
     (published_xml(ma=((300, 0.8), 1.5)).replace("<numMACoeff>2", "<numMACoeff>3"),
      r"model 1: MAlsf must be 3 increasing values"),
+    (published_xml().replace("<var>", "<var>0_0", 1), r"model 1: <var> missing or not a finite number \(ASCII"),
+    (published_xml().replace("<forceMod>", "<forceMod>\u0660", 1), r"model 1: <forceMod> missing or not"),
+    (published_xml().replace("<speedMod>", "<speedMod>\u2003", 1), r"model 1: <speedMod> missing or not"),
+    (published_xml().replace("</speedList>", "<value>1_0</value></speedList>", 1), r"<speedList> value \"1_0\" is not a number"),
+    (published_xml().replace("<numARCoeff>", "<numARCoeff>99</numARCoeff><numARCoeff>", 1),
+     r"<numARCoeff> appears 2 times; expected one"),
+    (published_xml().replace("<forceList", "<speedList><value>1</value></speedList><forceList", 1),
+     r"<speedList> appears 2 times"),
 ])
 def test_a_file_against_the_published_form_is_one_line_error(text, message):
     with pytest.raises(TextureError, match=message) as info:

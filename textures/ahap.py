@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from frictex.device.safe_text import escape, escape_path
+from frictex.device.safe_text import escape, escape_path, quoted
 from frictex.textures.clips import MAX_CLIP_S, Clip, ClipEvent
 from frictex.textures.errors import TextureError
 from frictex.textures.library import UnreadableText, read_utf8
@@ -200,13 +200,36 @@ def _control_curve(entries: list) -> tuple[tuple[float, float], ...]:
     return tuple(out)
 
 
+class _NotStrict(ValueError):
+    """JSON that parses but that AHAP (RFC 8259's interoperable JSON) does not allow."""
+
+
+def _unique_keys(pairs: list[tuple[str, object]]) -> dict:
+    """An object of distinct keys: ``json``'s hook (a second "Pattern" would otherwise
+    silently replace the first)."""
+    doc = dict(pairs)
+    if len(doc) != len(pairs):
+        seen: set[str] = set()
+        twice = next(k for k, _ in pairs if k in seen or seen.add(k))
+        raise _NotStrict(f"key {quoted(twice)} appears twice in one object; expected "
+                         "distinct keys")
+    return doc
+
+
+def _no_constant(word: str):
+    """``json``'s hook for NaN, Infinity and -Infinity: not JSON numbers."""
+    raise _NotStrict(f"{word} is not a JSON number; expected finite numbers")
+
+
 def parse_ahap(text: str, depth: float, where: str = "AHAP") -> tuple[Clip, list[str]]:
     """A clip (and notes on what was skipped) from AHAP JSON text; ``depth`` is the
     drop in mu' at full intensity, in (0, 1). Raises TextureError (one line) on any
     problem."""
     r = _Reader(where)
     try:
-        doc = json.loads(text)
+        doc = json.loads(text, object_pairs_hook=_unique_keys, parse_constant=_no_constant)
+    except _NotStrict as exc:
+        raise TextureError(f"{where}: {exc}") from None
     except json.JSONDecodeError as exc:
         raise TextureError(f"{where}:{exc.lineno}: not JSON ({exc.msg})") from None
     except RecursionError:

@@ -43,6 +43,10 @@ the toolkit's MLHD port (github.com/ralee9/PennHaTT_MLHD, ``src/`` and ``build/X
 - ``<var>``: the variance of the white Gaussian excitation (the renderer draws it with
   standard deviation sqrt(var)), blended with the same weights.
 
+Numbers are ASCII decimal (``device/numbers.py``: no Unicode digits, no underscores,
+no nan or inf), white space around; an element frictex reads appears at most once where
+it is one (a second ``<numARCoeff>`` is an error, not ignored).
+
 frictex reads ``SampleRate`` (10 kHz, the rate of the recordings, when a file has
 none), checks the unit elements a file has (speeds in mm/s or m/s, forces in N,
 acceleration in m/s^2: the layer's gain is per m/s^2) and, where a model has
@@ -94,6 +98,7 @@ from pathlib import Path
 
 import numpy as np
 
+from frictex.device.numbers import ascii_float
 from frictex.device.safe_text import escape, escape_path, quoted
 from frictex.textures.ar_synthesis import barycentric, blend_at, lsf_to_poly, twiddles
 from frictex.textures.errors import TextureError
@@ -356,7 +361,7 @@ def _values(node, where: str, what: str) -> np.ndarray:
     out = []
     for v in node.findall("value"):
         try:
-            x = float((v.text or "").strip())
+            x = _number(v.text)
         except ValueError:
             raise TextureError(f"{where}: <{what}> value {quoted(v.text or '')} is not a number") from None
         if not math.isfinite(x):
@@ -365,14 +370,30 @@ def _values(node, where: str, what: str) -> np.ndarray:
     return np.array(out)
 
 
+def _number(text: str | None) -> float:
+    """The number an element holds: ASCII decimal (``device.numbers``), XML white space
+    (space, tab, line breaks) around it; ValueError for anything else."""
+    return ascii_float((text or "").strip(" \t\r\n"))
+
+
+def _one(root, tag: str, where: str):
+    """The one ``<tag>`` child of ``root``, or None; a second one is an error (it would
+    be ignored silently)."""
+    found = root.findall(tag)
+    if len(found) > 1:
+        raise TextureError(f"{where}: <{tag}> appears {len(found)} times; expected one")
+    return found[0] if found else None
+
+
 def _scalar(root, tag: str, where: str) -> float:
-    node = root.find(tag)
+    node = _one(root, tag, where)
     try:
-        x = float((node.text or "").strip()) if node is not None else None
+        x = _number(node.text) if node is not None else None
     except ValueError:
         x = None
     if x is None or not math.isfinite(x):
-        raise TextureError(f"{where}: <{tag}> missing or not a finite number")
+        raise TextureError(f"{where}: <{tag}> missing or not a finite number (ASCII decimal, "
+                           "e.g. 0.25 or 1e-3)")
     return x
 
 
@@ -388,10 +409,10 @@ def _count(root, tag: str, where: str, lowest: int) -> int:
 def _polynomial(node, here: str, part: str, order: int) -> np.ndarray:
     """The LSFs of a model's ``part`` ("AR": A(z), "MA": B(z)) from ``<ARlsf>`` or
     ``<MAlsf>``, checked against ``<ARcoeff>`` / ``<MAcoeff>`` where the model has it."""
-    w = _values(node.find(f"{part}lsf"), here, f"{part}lsf")
+    w = _values(_one(node, f"{part}lsf", here), here, f"{part}lsf")
     if w.size != order or not ((w > 0) & (w < np.pi)).all() or (np.diff(w) <= 0).any():
         raise TextureError(f"{here}: {part}lsf must be {order} increasing values in (0, pi)")
-    coeff = node.find(f"{part}coeff")
+    coeff = _one(node, f"{part}coeff", here)
     if coeff is not None:
         written = _values(coeff, here, f"{part}coeff")
         rebuilt = lsf_to_poly(w)
@@ -431,12 +452,12 @@ def _units(root, where: str) -> tuple[dict[str, float], float]:
     """The unit factors (``UNITS``) and the sample rate (Hz) a file states."""
     scale = {}
     for tag, known in UNITS.items():
-        node = root.find(tag)
+        node = _one(root, tag, where)
         unit = (node.text or "").strip() if node is not None else next(iter(known))
         if unit not in known:
             raise TextureError(f"{where}: <{tag}> is {quoted(unit)}, expected one of {', '.join(known)}")
         scale[tag] = known[unit]
-    rate = _scalar(root, "SampleRate", where) if root.find("SampleRate") is not None else HATT_RATE_HZ
+    rate = _scalar(root, "SampleRate", where) if _one(root, "SampleRate", where) is not None else HATT_RATE_HZ
     if not RATE_RANGE_HZ[0] <= rate <= RATE_RANGE_HZ[1]:
         raise TextureError(f"{where}: <SampleRate> is {rate:g} Hz, expected {RATE_RANGE_HZ[0]:g} "
                            f"to {RATE_RANGE_HZ[1]:g}")
@@ -480,15 +501,15 @@ def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
     vertices (each is refitted), an AR file at most :data:`MAX_MODELS`."""
     root = _root(text, where)
     scale, rate = _units(root, where)
-    speeds = _values(root.find("speedList"), where, "speedList") * scale["SpeedUnits"]
-    forces = _values(root.find("forceList"), where, "forceList")
+    speeds = _values(_one(root, "speedList", where), where, "speedList") * scale["SpeedUnits"]
+    forces = _values(_one(root, "forceList", where), where, "forceList")
     models = root.findall("model")
     m = len(models)
     if not 3 <= m <= MAX_MODELS or speeds.size != m or forces.size != m:
         raise TextureError(f"{where}: {m} <model>, {speeds.size} speeds and {forces.size} forces; "
                            f"expected the same number, 3 to {MAX_MODELS}")
     order = _count(root, "numARCoeff", where, 1)
-    ma_order = _count(root, "numMACoeff", where, 0) if root.find("numMACoeff") is not None else 0
+    ma_order = _count(root, "numMACoeff", where, 0) if _one(root, "numMACoeff", where) is not None else 0
     if ma_order:
         _refits_bounded(m, where, "hold ARMA models")
     lsf, var = [], []

@@ -12,7 +12,8 @@ File grammar (CSV)::
     file   := header NEWLINE { row NEWLINE }
     header := "x_mm" { "," mode_name }          # 1 to MAX_MODES (26) distinct mode names
     row    := x { "," deflection }              # finite numbers, any consistent unit
-    number := ASCII decimal: [sign] digits [. digits] [e [sign] digits], spaces around
+    number := ASCII decimal: [sign] digits [. digits] [e [sign] digits], spaces or tabs
+              around (device/numbers.py, the grammar of every frictex text format)
     blank lines and lines starting with '#' are skipped; x strictly increasing;
     at least 4 rows. A regular UTF-8 file of at most MAX_TABLE_BYTES (1 MiB).
 """
@@ -22,12 +23,12 @@ from __future__ import annotations
 import csv
 import io
 import math
-import re
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+from frictex.device.numbers import NUMBER
 from frictex.device.safe_files import UnsafeFile, read_bytes
 from frictex.device.safe_text import escape, escape_path, quoted
 from frictex.device.structures.beam import MAX_MODES, ModesError
@@ -38,9 +39,6 @@ MAX_TABLE_BYTES = 1 << 20
 #: Longest cell shown in an error (characters, escaped): a number is shorter, and a row of
 #: something that is not a mode table is described, not printed.
 MAX_CELL_SHOWN = 24
-#: A number as the table writes it: ASCII decimal, optional sign, fraction and exponent,
-#: spaces around (Python's ``float`` alone also takes Unicode digits and underscores).
-_NUMBER = re.compile(r" *+[+-]?+(?:[0-9]++(?:\.[0-9]*+)?+|\.[0-9]++)(?:[eE][+-]?+[0-9]++)?+ *+")
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,7 +118,7 @@ class MeasuredModes:
     def _row(source: str, line: int, row: list[str], width: int) -> list[float]:
         if len(row) != width:
             raise ModesError(f"{source}: line {line}: expected {width} values, got {len(row)}")
-        column = next((i for i, v in enumerate(row) if _NUMBER.fullmatch(v) is None), None)
+        column = next((i for i, v in enumerate(row) if NUMBER.fullmatch(v) is None), None)
         if column is not None:
             word = row[column].strip().lower().lstrip("+-")
             if word in ("nan", "inf", "infinity"):

@@ -58,6 +58,9 @@ import numpy as np
 
 from frictex.textures.library import file_problem
 from frictex.device.errors import InputError
+# a number as trace files (and manifests, device logs) write it: the module docstring's
+# grammar, shared by every text format (batch.py takes NUMBER from here)
+from frictex.device.numbers import NUMBER, ascii_float  # noqa: F401
 from frictex.device.safe_text import quoted
 
 DEFAULT_FORCE_N = 0.5
@@ -81,20 +84,6 @@ MAX_HELD_ROWS = 65_536
 RANGES = {"t_s": (-MAX_TIME_S, MAX_TIME_S, "s"), "x_mm": (-MAX_COORD_MM, MAX_COORD_MM, "mm"),
           "y_mm": (-MAX_COORD_MM, MAX_COORD_MM, "mm"), "force_n": (0.0, MAX_FORCE_N, "N"),
           "finger": (0, MAX_FINGER_ID, "finger id")}
-
-
-#: A number as trace files (and manifests, device logs) write it: ASCII decimal digits,
-#: optional sign, fraction and exponent, spaces or tabs around (the module docstring's
-#: grammar). Possessive: a long run of digits fails in linear time.
-NUMBER = re.compile(r"[ \t]*+[+-]?+(?:[0-9]++(?:\.[0-9]*+)?+|\.[0-9]++)(?:[eE][+-]?+[0-9]++)?+[ \t]*+")
-
-
-def ascii_float(text: str) -> float:
-    """``float(text)`` for a :data:`NUMBER`; ValueError for anything else (``float``
-    alone takes Unicode digits, underscores, ``nan``, ``inf`` and Unicode spaces)."""
-    if NUMBER.fullmatch(text) is None:
-        raise ValueError(f"not a number: {text!r}")
-    return float(text)
 
 
 class TraceError(InputError):
