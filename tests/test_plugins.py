@@ -1,6 +1,6 @@
-"""Extension points by registry: another package adds a renderer, or a device profile and
-its actuation, with one module and one entry-point line each, and frictex's command line,
-texture files and Python API take them.
+"""Extension points by registry: another package adds a renderer, an output device, or a
+device profile and its actuation, with one module and one entry-point line each, and
+frictex's command line, texture files and Python API take them.
 
 The plugin is a real distribution (pyproject.toml and one module) built and installed by
 pip into a folder of this test (``--target``, no network: ``--no-index
@@ -49,6 +49,9 @@ PLUGIN = {
         [project.entry-points."frictex.actuations"]
         wobble-channel = "frictex_test_wobble:one_channel"
 
+        [project.entry-points."frictex.devices"]
+        tally = "frictex_test_wobble:open_tally"
+
         [tool.setuptools]
         py-modules = ["frictex_test_wobble"]
         """,
@@ -67,6 +70,58 @@ PLUGIN = {
 
         def one_channel(device):
             return OneChannel()
+
+
+        class Tally:
+            # an output device that writes the sum of every amplitude it is sent to the
+            # file its ARG names when it closes (the OutputDevice contract, no hardware)
+
+            info = None
+
+            def __init__(self, path, request):
+                self.label = "tally"
+                self.channels, self.rate_hz = request.channels, request.rate_hz
+                self.paced, self.path = request.paced, path
+                self.sent, self.total, self.next = 0, 0.0, 0
+
+            def send(self, start_index, amplitudes_um, phases_rad=None):
+                assert start_index == self.next  # in order, without gaps
+                self.next += len(amplitudes_um)
+                self.sent += len(amplitudes_um)
+                self.total += float(np.sum(amplitudes_um))
+
+            def wait_for_room(self, timeout_s):
+                return True
+
+            def status(self):
+                return {{"state": "tally", "commanded_samples": self.sent,
+                        "unplayed_samples": 0, "unplayed_by_cause": {{}}}}
+
+            def unplayed_share(self):
+                return 0.0
+
+            def device_force_n(self):
+                return None
+
+            def force_report(self, index0=None, n=None):
+                return None
+
+            def forces_covered(self, index0, n):
+                return np.zeros(0), np.zeros(0)
+
+            def close(self):
+                with open(self.path, "w") as fh:
+                    fh.write(f"{{self.sent}} {{self.total!r}}")
+
+            def __enter__(self):
+                return self
+
+            def __exit__(self, *exc):
+                self.close()
+
+
+        def open_tally(arg, request):
+            return Tally(arg, request)
 
 
         class Wobble:
@@ -166,6 +221,40 @@ def test_the_python_api_and_texture_files_take_a_plugins_renderer(plugin_path, t
     assert got["origin"] == "frictex-test-wobble (frictex_test_wobble:Wobble)"
     assert got["rows"] > 1000 and got["values"] == [WOBBLE_MU]
     assert got["renderer"] == "Wobble"
+
+
+DEVICE_USE = """
+import sys
+import frictex
+run = frictex.replay("grating-5mm", "swipe-40mms-50hz", device="tally:" + sys.argv[1])
+print(run.summary.to_dict()["device"]["state"], run.commands.num_rows)
+"""
+
+
+def test_replay_and_the_python_api_stream_to_a_plugins_output_device(plugin_path, tmp_path):
+    own = tmp_path / "own"
+    assert run([str(FRICTEX), "replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(own),
+                "--quiet"], None, tmp_path).returncode == 0
+    with open(own / "commands.csv", newline="", encoding="utf-8") as fh:
+        commanded = [float(row[1]) for row in list(csv.reader(fh))[1:]]
+    tally = tmp_path / "tally.txt"
+    done = run([str(FRICTEX), "replay", "grating-5mm", "swipe-40mms-50hz", "--out",
+                str(tmp_path / "out"), "--device", f"tally:{tally}", "--quiet"],
+               plugin_path, tmp_path)
+    assert done.returncode == 0, done.stderr
+    sent, total = tally.read_text().split()
+    # every commanded sample reached the plugin's device, the same amplitudes (the CSV
+    # prints 6 decimals: each sample within 0.5e-6 um)
+    assert int(sent) == len(commanded)
+    assert float(total) == pytest.approx(sum(commanded), abs=0.5e-6 * len(commanded))
+    tally.unlink()
+    done = run([sys.executable, "-c", DEVICE_USE, str(tally)], plugin_path, tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["tally", str(len(commanded))]
+    assert int(tally.read_text().split()[0]) == len(commanded)
+    refused = run([str(FRICTEX), "replay", "grating-5mm", "swipe-40mms-50hz", "--out",
+                   str(tmp_path / "o2"), "--device", f"tally:{tally}"], None, tmp_path)
+    assert refused.returncode == 2 and "sim" in refused.stderr
 
 
 def test_a_plugins_device_profile_drives_its_actuation(plugin_path, tmp_path):

@@ -148,9 +148,9 @@ def resolve(spec: str) -> tuple[DeviceFactory, str]:
     name, _, arg = spec.partition(":")
     if name in DEVICES:
         return DEVICES.get(name), arg
-    if spec.startswith(("/", ".")) or os.sep in spec or _COM.fullmatch(spec):
+    if spec.startswith(("/", ".")) or _COM.fullmatch(spec) or (os.sep in spec and not arg):
         return DEVICES.get("port"), spec
-    return DEVICES.get(name), arg
+    return DEVICES.get(name), arg  # NAME:ARG of a device not installed: listed as unknown
 
 
 def sim_pairs(arg: str, sim_args: tuple[str, ...]) -> list[tuple[str, str]]:
