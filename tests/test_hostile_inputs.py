@@ -127,7 +127,7 @@ BAD_TRACES = {
     "folder": ("dir", "is a folder, not a file"),
     "link loop": ("loop", "symbolic link loop"),
     "dangling link": ("dangling", "symbolic link to a missing file"),
-    "sparse zeros": ("sparse:64", "binary content"),
+    "sparse zeros": ("sparse:8", "binary content"),  # under MAX_RECORDING_BYTES (10 MiB)
 }
 BAD_TRACES["utf-16"] = (BAD_TRACES["utf-16"], "UTF-16 text")
 
@@ -217,7 +217,7 @@ BAD_LOGS = {
     "getevent time back": (_getevent(*GE_OK, "[ 0.5] EV_ABS ABS_MT_POSITION_X 00000065",
                                      "[ 0.5] EV_SYN SYN_REPORT 00000000"), GE_RANGE, "time goes back"),
     "getevent fifo": ("fifo", [], "is a FIFO (named pipe), not a regular file"),
-    "getevent oversize": ("sparse:65", [], "more than the 67,108,864 bytes"),
+    "getevent oversize": ("sparse:11", [], "more than the 10,485,760 bytes"),
     "evemu resolution 2^31": (_evemu("2147483647"), [], "resolution 2147483647 units/mm"),
     "evemu resolution 2^31 - 1 wrapped": (_evemu("4294967295"), [], "outside a 32-bit signed value"),
     "evemu negative resolution": (_evemu("-5"), [], "resolution -5 units/mm"),
