@@ -73,3 +73,20 @@ def test_preview_shows_a_height_as_felt_sliding_towards_plus_x(tmp_path):
                                        down * np.tanh(2 * slope / down)), atol=1e-4)
     info = write_preview(scene, tmp_path / "bump.png", (200, 120))
     assert info["mu_min"] < 0.8 < info["mu_max"]
+
+
+def test_a_colour_height_map_is_refused_from_its_header_before_decoding(tmp_path, monkeypatch):
+    """An RGB height map was decoded whole (367 MB at 8 Mpx) before being refused: now
+    its header refuses it, and no pixel is decoded (the decoder is never called)."""
+    from frictex.textures import heights
+    from frictex.textures.raster_io import PixelBudget
+    Image.fromarray(np.zeros((300, 400, 3), np.uint8)).save(tmp_path / "rgb.png")
+    from PIL import Image as PILImage
+
+    def no_decoding(*args, **kwargs):
+        raise AssertionError("decoded")
+    monkeypatch.setattr(PILImage, "open", no_decoding)
+    budget = PixelBudget()
+    with pytest.raises(TextureError, match="its header says 8-bit RGB pixels; expected 16-bit"):
+        heights.read_height_png(tmp_path / "rgb.png", 1.0, budget)
+    assert budget.spent == 0

@@ -83,10 +83,77 @@ def test_not_an_image_and_too_big(tmp_path, monkeypatch):
     cut = tmp_path / "cut.png"
     noise = np.random.default_rng(0).integers(0, 255, (40, 40), dtype=np.uint8)
     cut.write_bytes(save(tmp_path, Image.fromarray(noise)).read_bytes()[:800])
-    with pytest.raises(TextureError, match=r"cut\.png: corrupt PNG, decoding failed"):
+    with pytest.raises(TextureError, match=r"cut\.png: truncated PNG: .* of the 40 rows"):
         read_grey(cut)
     with pytest.raises(TextureError, match=r"none\.png: No such file or directory; expected 8- or 16-bit"):
         read_grey(tmp_path / "none.png")
     monkeypatch.setattr(raster_io, "MAX_PIXELS", 10)
     with pytest.raises(TextureError, match=r"image is 4 x 3 px, more than the 10 px frictex reads"):
         read_grey(save(tmp_path, Image.fromarray(np.zeros((3, 4), np.uint8))))
+
+
+def _png(width, height, depth, colour, raw, interlace=0):
+    """A PNG written from the specification: IHDR, one IDAT of ``raw`` (filtered
+    scanlines) deflated, IEND."""
+    import struct
+    import zlib
+
+    def chunk(kind, body):
+        return (struct.pack(">I", len(body)) + kind + body
+                + struct.pack(">I", zlib.crc32(kind + body) & 0xFFFFFFFF))
+    ihdr = struct.pack(">IIBBBBB", width, height, depth, colour, 0, 0, interlace)
+    return (raster_io.PNG_SIGNATURE + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(raw))
+            + chunk(b"IEND", b""))
+
+
+def test_image_data_shorter_than_the_header_is_refused(tmp_path):
+    """A header of 4000 x 4000 over one row of data: Pillow pads with black; refused,
+    and Pillow's LOAD_TRUNCATED_IMAGES stays False."""
+    from PIL import ImageFile
+    path = tmp_path / "lie.png"
+    path.write_bytes(_png(4000, 4000, 8, 0, b"\x00" + b"\x80" * 4000))
+    with pytest.raises(TextureError, match=r"truncated PNG: .* 1 of the 4,000 rows"):
+        read_grey(path)
+    path.write_bytes(_png(40, 30, 8, 0, (b"\x00" + b"\x80" * 40) * 29))  # one row short
+    with pytest.raises(TextureError, match="truncated PNG"):
+        read_grey(path)
+    path.write_bytes(_png(40, 30, 8, 0, (b"\x00" + b"\x80" * 40) * 30))
+    assert_allclose(read_grey(path)[0], 128 / 255)
+    assert ImageFile.LOAD_TRUNCATED_IMAGES is False
+
+
+@pytest.mark.parametrize("size, depth, mode", [((37, 23), 8, "L"), ((37, 23), 16, "I;16"),
+                                               ((5, 3), 8, "RGB"), ((9, 9), 1, "1")])
+def test_the_expected_image_data_matches_what_pillow_writes(tmp_path, size, depth, mode):
+    """image_data_bytes is what a whole PNG inflates to, so whole files are never taken
+    for truncated ones."""
+    import zlib
+    arr = np.random.default_rng(1).integers(0, 2 ** min(depth, 8), size[::-1])
+    image = Image.fromarray(arr.astype(np.uint16 if depth == 16 else np.uint8))
+    image = image.convert(mode) if mode in ("RGB", "1") else image
+    data = save(tmp_path, image).read_bytes()
+    width, height, d, colour = raster_io.png_header(data, "w", "")
+    idat, pos = b"", 8
+    while pos < len(data):
+        length = int.from_bytes(data[pos:pos + 4], "big")
+        if data[pos + 4:pos + 8] == b"IDAT":
+            idat += data[pos + 8:pos + 8 + length]
+        pos += 12 + length
+    assert raster_io.image_data_bytes(width, height, d, colour, False) == len(zlib.decompress(idat))
+
+
+@pytest.mark.parametrize("width, height", [(13, 11), (1, 1), (8, 3), (3, 8)])
+def test_an_interlaced_png_is_whole_at_its_adam7_size_and_truncated_below(tmp_path, width, height):
+    """Adam7 scanlines written by hand (pass by pass, filter 0), decoded by Pillow: the
+    whole file reads back exactly; one byte less is refused as truncated."""
+    grid = np.arange(width * height, dtype=np.uint8).reshape(height, width)
+    raw = b"".join(b"\x00" + grid[y, x0::dx].tobytes()
+                   for x0, y0, dx, dy in raster_io._ADAM7 if x0 < width
+                   for y in range(y0, height, dy))
+    assert len(raw) == raster_io.image_data_bytes(width, height, 8, 0, True)
+    path = tmp_path / "a7.png"
+    path.write_bytes(_png(width, height, 8, 0, raw, interlace=1))
+    assert_allclose(read_grey(path)[0], grid / 255)
+    path.write_bytes(_png(width, height, 8, 0, raw[:-1], interlace=1))
+    with pytest.raises(TextureError, match="truncated PNG"):
+        read_grey(path)

@@ -27,15 +27,14 @@ from pathlib import Path
 import numpy as np
 
 from frictex.device.jit import njit
-from frictex.device.safe_text import escape_path
 from frictex.textures.dynamic import DynamicLayer
-from frictex.textures.errors import TextureError
 from frictex.textures.model import _hypot
 from frictex.textures.raster_io import PixelBudget, read_grey
 
 HEIGHT_RENDERINGS = ("slope", "magnitude")
 #: the image a height map takes, for error messages
-HEIGHT_PNG = "16-bit greyscale PNG (height = value / 65535 x rise_mm)"
+HEIGHT_PNG = ("16-bit greyscale PNG (height = value / 65535 x rise_mm; 8-bit levels make "
+              "slopes of zero or spikes)")
 #: Bytes a decoded height map keeps per pixel: its heights and the three float64 planes
 #: of :class:`HeightMap` (height, dh/dx, dh/dy).
 HEIGHT_MAP_BYTES_PER_PX = 32
@@ -420,10 +419,8 @@ def read_height_png(path: str | Path, max_height_mm: float, budget: PixelBudget 
     file checks apply; ``budget``, the scene's budget of decoded maps, is charged
     :data:`HEIGHT_MAP_BYTES_PER_PX` per pixel). An 8-bit image is refused: 256 levels make
     a staircase whose slope is zero or a spike, which this rendering would feel as clicks."""
-    grey, kind = read_grey(path, HEIGHT_PNG, budget, HEIGHT_MAP_BYTES_PER_PX)
-    if kind != "16-bit greyscale":
-        raise TextureError(f"{escape_path(path)}: height maps must be 16-bit greyscale PNGs, got {kind}; "
-                           f"8-bit levels make slopes of zero or spikes")
+    # refused from the header, before decoding (an 8-bit RGB map was decoded whole first)
+    grey, _ = read_grey(path, HEIGHT_PNG, budget, HEIGHT_MAP_BYTES_PER_PX, header=(16, 0))
     return grey * max_height_mm
 
 

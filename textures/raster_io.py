@@ -90,6 +90,66 @@ def png_header(data: bytes, where: str, expected: str) -> tuple[int, int, int, i
     return width, height, depth, colour
 
 
+#: PNG colour types (IHDR): name and samples per pixel
+_COLOUR_TYPES = {0: ("greyscale", 1), 2: ("RGB", 3), 3: ("palette", 1), 4: ("greyscale with alpha", 2),
+                 6: ("RGBA", 4)}
+#: Adam7 passes: first column, first row, column step, row step
+_ADAM7 = ((0, 0, 8, 8), (4, 0, 8, 8), (0, 4, 4, 8), (2, 0, 4, 4), (0, 2, 2, 4), (1, 0, 2, 2), (0, 1, 1, 2))
+_INFLATE_STEP = 1 << 20  # bytes inflated at a time when counting the image data
+
+
+def header_kind(depth: int, colour: int) -> str:
+    """What a PNG header says its pixels are, e.g. ``"8-bit RGB"``."""
+    name = _COLOUR_TYPES.get(colour, (f"colour type {colour}", 1))[0]
+    return f"{depth}-bit {name}"
+
+
+def image_data_bytes(width: int, height: int, depth: int, colour: int, interlaced: bool) -> int:
+    """Bytes of filtered scanlines a PNG of this header inflates to (PNG spec 7.2, 8.2):
+    per row of each pass, a filter byte and the row's packed samples."""
+    bits = depth * _COLOUR_TYPES.get(colour, ("", 1))[1]
+    passes = _ADAM7 if interlaced else ((0, 0, 1, 1),)
+    total = 0
+    for x0, y0, dx, dy in passes:
+        cols, rows = -(-(width - x0) // dx), -(-(height - y0) // dy)
+        if cols > 0 and rows > 0:
+            total += rows * (1 + -(-cols * bits // 8))
+        # an empty pass has no rows at all
+    return total
+
+
+def check_image_data(data: bytes, where: str, expected: str) -> None:
+    """Refuse a PNG whose image data (its IDAT chunks, inflated) is shorter than its
+    header's size needs: Pillow would decode the rows there are and pad the rest with
+    black (a 4000 x 4000 header over one row of data), whatever LOAD_TRUNCATED_IMAGES
+    says. Counts without keeping: memory stays at :data:`_INFLATE_STEP`."""
+    import zlib
+
+    width, height, depth, colour = png_header(data, where, expected)
+    interlaced = len(data) > 28 and data[28] == 1
+    need = image_data_bytes(width, height, depth, colour, interlaced)
+    inflater, got, pos = zlib.decompressobj(), 0, len(PNG_SIGNATURE)
+    while pos + 8 <= len(data) and got < need:
+        length, kind = struct.unpack_from(">I4s", data, pos)
+        if kind == b"IDAT":
+            pending = data[pos + 8:pos + 8 + length]
+            while pending and got < need:
+                try:
+                    got += len(inflater.decompress(pending, _INFLATE_STEP))
+                except zlib.error as exc:
+                    raise TextureError(f"{where}: corrupt PNG, its image data does not inflate "
+                                       f"({escape(exc)}); expected {expected}") from None
+                pending = inflater.unconsumed_tail
+        elif kind == b"IEND":
+            break
+        pos += 12 + length
+    if got < need:
+        row = need / max(height, 1)
+        raise TextureError(f"{where}: truncated PNG: its image data holds about {got / row:,.0f} "
+                           f"of the {height:,} rows its header says ({got:,} of {need:,} bytes); "
+                           f"expected {expected}")
+
+
 def _not_png(data: bytes, where: str, expected: str):
     known = ((b"%!PS", "PostScript (EPS)"), (b"\xc5\xd0\xd3\xc6", "PostScript (EPS)"),
              (b"\xff\xd8\xff", "JPEG"), (b"GIF8", "GIF"), (b"BM", "BMP"), (b"II*\x00", "TIFF"),
@@ -102,7 +162,8 @@ def _not_png(data: bytes, where: str, expected: str):
 
 
 def read_grey(path: str | Path, expected: str = ACCEPTED, budget: PixelBudget | None = None,
-              bytes_per_px: int = RASTER_BYTES_PER_PX) -> tuple[np.ndarray, str]:
+              bytes_per_px: int = RASTER_BYTES_PER_PX,
+              header: tuple[int, int] | None = None) -> tuple[np.ndarray, str]:
     """Read a PNG file as grey levels.
 
     Parameters
@@ -113,6 +174,9 @@ def read_grey(path: str | Path, expected: str = ACCEPTED, budget: PixelBudget | 
     budget : the scene's budget of decoded maps, charged ``bytes_per_px`` per pixel from
         the header before decoding (None: only :data:`MAX_PIXELS` applies).
     bytes_per_px : what the caller keeps per pixel once decoded (bytes).
+    header : the one (bit depth, PNG colour type) the caller takes, e.g. (16, 0) for
+        16-bit greyscale: any other is refused from the header, before decoding
+        (None: every kind above).
 
     Returns
     -------
@@ -123,8 +187,9 @@ def read_grey(path: str | Path, expected: str = ACCEPTED, budget: PixelBudget | 
     ------
     TextureError, its message starting with the file's (escaped) path: not a regular
     file (checked before opening: a FIFO would block), larger than ``MAX_FILE_BYTES``,
-    not a PNG, more than ``MAX_PIXELS`` or more than the budget has left (from the
-    header, before decoding), corrupt or truncated.
+    not a PNG, not of the ``header`` kind, more than ``MAX_PIXELS`` or more than the
+    budget has left (from the header, before decoding), corrupt, or truncated (image
+    data shorter than the header's size: :func:`check_image_data`).
     """
     from PIL import Image
 
@@ -134,7 +199,10 @@ def read_grey(path: str | Path, expected: str = ACCEPTED, budget: PixelBudget | 
         data = read_bytes(path, MAX_FILE_BYTES)
     except UnsafeFile as exc:
         raise TextureError(f"{where}: {exc}; expected {expected}") from None
-    width, height, _, _ = png_header(data, where, expected)
+    width, height, depth, colour = png_header(data, where, expected)
+    if header is not None and (depth, colour) != header:
+        raise TextureError(f"{where}: its header says {header_kind(depth, colour)} pixels; "
+                           f"expected {expected}")
     if width == 0 or height == 0:
         raise TextureError(f"{where}: image is empty ({width} x {height} px)")
     if width * height > MAX_PIXELS:
@@ -142,6 +210,7 @@ def read_grey(path: str | Path, expected: str = ACCEPTED, budget: PixelBudget | 
                            f"{MAX_PIXELS:,} px frictex reads; scale it down")
     if budget is not None:
         budget.charge(where, width * height, bytes_per_px)
+    check_image_data(data, where, expected)
     try:
         with warnings.catch_warnings():
             # Pillow's own bomb guard warns from 89 Mpx; the header check above refuses
