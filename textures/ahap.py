@@ -1,6 +1,7 @@
 """Clips from Apple Haptic and Audio Pattern (AHAP) files: JSON in, ``textures.clips.Clip`` out.
 
-What is read (every other key is ignored; times in s)::
+What is read (every other key is ignored; times in s; the keys of an object are
+distinct and numbers finite: a repeated key or NaN/Infinity is an error)::
 
     {"Version": 1.0,
      "Pattern": [
