@@ -13,6 +13,11 @@ clips, tables) goes through :func:`file_problem` before it is opened, or through
 
 The answers are phrases to put after the file's name (``"is a FIFO (named pipe), not a
 regular file ..."``), so that every reader words them the same way.
+
+A caller that checked where a path leads and opened it itself (a texture file's named
+files: ``textures.sections.files``) pins the path to its descriptor with :func:`pinned`;
+:func:`read_bytes` of that path then reads the file held open, never the path again, so
+the path cannot be swapped between the check and the read.
 """
 
 from __future__ import annotations
@@ -20,7 +25,12 @@ from __future__ import annotations
 import errno
 import os
 import stat
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
+
+#: paths pinned to the descriptors they were opened as (:func:`pinned`)
+_PINNED: ContextVar[dict[str, int | str]] = ContextVar("frictex_pinned_files", default={})
 
 _SPECIAL = ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character device"),
             (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
@@ -66,6 +76,39 @@ class UnsafeFile(OSError):
     """A file :func:`read_bytes` refused; ``str()`` is the phrase to put after its name."""
 
 
+@contextmanager
+def pinned(path: str | Path, fd: int | str):
+    """Within the block, :func:`read_bytes` of ``path`` reads the file open on ``fd``
+    (from its start, through a duplicate of the descriptor) instead of opening ``path``;
+    ``fd`` a phrase (the caller could not open it: :func:`file_problem`'s words):
+    :func:`read_bytes` raises :class:`UnsafeFile` with it, opening nothing."""
+    token = _PINNED.set({**_PINNED.get(), os.fspath(path): fd})
+    try:
+        yield
+    finally:
+        _PINNED.reset(token)
+
+
+def _open(path: str | Path, max_bytes: int) -> int:
+    """A descriptor to read ``path`` from: the pinned one's duplicate, rewound, or the
+    path opened after :func:`file_problem` found nothing wrong."""
+    held = _PINNED.get().get(os.fspath(path)) if isinstance(path, (str, os.PathLike)) else None
+    if isinstance(held, str):
+        raise UnsafeFile(held)
+    if held is not None:
+        fd = os.dup(held)
+        os.lseek(fd, 0, os.SEEK_SET)
+        return fd
+    problem = file_problem(path, max_bytes)
+    if problem is not None:
+        raise UnsafeFile(problem)
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0)
+    try:
+        return os.open(path, flags | getattr(os, "O_CLOEXEC", 0))
+    except OSError as exc:
+        raise UnsafeFile(f"cannot be read ({exc.strerror or exc})") from None
+
+
 def read_bytes(path: str | Path, max_bytes: int) -> bytes:
     """The bytes of the regular file ``path``, at most ``max_bytes`` of them.
 
@@ -80,16 +123,10 @@ def read_bytes(path: str | Path, max_bytes: int) -> bytes:
         With :func:`file_problem`'s phrase: not a regular file (checked before opening,
         and again on the opened descriptor, which is opened non-blocking so that a FIFO
         swapped in between cannot block), larger than ``max_bytes`` (also when it grew
-        after the look), or unreadable.
+        after the look), or unreadable. A :func:`pinned` path is read from its
+        descriptor, with the same checks on it.
     """
-    problem = file_problem(path, max_bytes)
-    if problem is not None:
-        raise UnsafeFile(problem)
-    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0)
-    try:
-        fd = os.open(path, flags | getattr(os, "O_CLOEXEC", 0))
-    except OSError as exc:
-        raise UnsafeFile(f"cannot be read ({exc.strerror or exc})") from None
+    fd = _open(path, max_bytes)
     with os.fdopen(fd, "rb", buffering=0) as fh:
         problem = _mode_problem(os.fstat(fd), max_bytes)
         if problem is not None:

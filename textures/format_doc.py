@@ -180,6 +180,17 @@ def files_section() -> str:
         "leads out of the folder, or a symbolic link that leads out is an error naming the key. "
         "Only for files you trust: `--allow-outside` (on `validate`, `replay`, `preview`, "
         f"`demo` and `batch`), or `{ALLOW_OUTSIDE_ENV}=1` in the environment, lifts the rule.",
+        "A file is checked and opened once: the path is opened with its last part never "
+        "followed, where the opened file really lies is checked again, and the file is read "
+        "from what was opened, so a path swapped for a link after the check reads nothing "
+        "outside. A **hard link** is not caught: it is a second name of the same file, not a "
+        "link that leads anywhere, so a hard link in the folder to a file outside it is read "
+        "like any file of the folder. It is not refused (files with more than one link) "
+        "because package managers and backups make hard links of ordinary files (the caches "
+        "of uv and pip, `cp -al`, `rsync --link-dest`), and only someone who can write to "
+        "the file system it is read on, and could read the file already, can make one: a "
+        "folder unpacked from a stranger's archive should be checked for them (`find DIR "
+        "-type f -links +1`).",
         "Every file is opened only if it is a regular file (never a FIFO, a device such as "
         "`/dev/zero`, a socket or a folder), and read up to a size: the texture file "
         f"{toml_safe.MAX_FILE_BYTES // mib} MiB, an image or height map "
@@ -188,7 +199,9 @@ def files_section() -> str:
         f"{toml_safe.MAX_FILE_BYTES // mib} MiB.",
         "Images and height maps are PNG files and nothing else: the PNG signature is checked "
         "before any image library sees the bytes (an EPS or TIFF file named `.png` is "
-        "refused). Their size is read from the PNG header before decoding: at most "
+        "refused), and one whose image data is shorter than its header says is refused as "
+        "truncated (never padded). Their size and kind are read from the PNG header before "
+        "decoding (a height map that is not 16-bit greyscale is refused there): at most "
         f"{raster_io.MAX_PIXELS:,} pixels per image, and at most "
         f"{raster_io.MAX_SCENE_BYTES // mib} MiB of decoded maps per scene, a raster map "
         f"keeping {raster_io.RASTER_BYTES_PER_PX} bytes per pixel and a height map "
