@@ -9,7 +9,7 @@ import numpy as np
 
 from frictex.device import profile as profiles
 from frictex.device.friction import ASYMPTOTE_MARGIN
-from frictex.device.structures.beam import ModesError
+from frictex.device.structures.beam import MAX_MODES, ModesError
 from frictex.textures import model
 from frictex.device.safe_text import escape, escape_path
 from frictex.textures.errors import KeyPath, TextureError
@@ -72,9 +72,9 @@ def _structure(r: Reader, profile: str, raw, display, files: Files):
     ok = _structure_holds_display(r, path, display, ("x0_mm", "length_mm", "width_mm"),
                                   v["x0_mm"], v["length_mm"])
     orders, actuators = v["orders"], v["actuators_mm"]
-    if any(o != int(o) for o in orders) or len(set(orders)) != len(orders) or len(orders) > 26:
+    if any(o != int(o) for o in orders) or len(set(orders)) != len(orders) or len(orders) > MAX_MODES:
         r.report(path + ("orders",), f"{show(list(orders))}: expected distinct whole mode "
-                                     f"orders (at most 26)")
+                                     f"orders (at most {MAX_MODES})")
         ok = False
     modes = modes_path = None
     if v["modes_file"] is not None:
