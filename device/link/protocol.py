@@ -394,85 +394,125 @@ def _u16_limit(values_um) -> list[int]:
     return [int(c) for c in amplitude_to_wire(np.array([values_um], dtype=np.float64))[0][0]]
 
 
-def _payload(msg, version: int) -> bytes:
-    if isinstance(msg, Hello):
-        return _HELLO.pack(msg.prefill)
-    if isinstance(msg, Info):
-        if len(msg.limits_um) != msg.channels:
-            raise ProtocolError(f"Info: {len(msg.limits_um)} limits for {msg.channels} channels")
-        name = msg.name.encode("utf-8")[:255]
-        flags = (_FLAG_PHASES * msg.has_phases | _FLAG_SENSOR * msg.has_sensor
-                 | _FLAG_FORCE * msg.has_force | _FLAG_FORCE_REPORTS * msg.has_force_reports)
-        head = _INFO.pack(msg.protocol_version, msg.channels, flags,
-                          int(round(msg.sample_rate_hz * 1000.0)), msg.buffer_samples,
-                          msg.watchdog_ms, msg.ramp_ms, len(name))
-        return head + np.array(_u16_limit(msg.limits_um), dtype=_U16).tobytes() + name
-    if isinstance(msg, Resend):
-        return _U16S.pack(msg.orig_seq) + _payload(Block(msg.start_index, msg.amplitudes,
-                                                         msg.phases), version)
-    if isinstance(msg, Missing):
-        if not 1 <= len(msg.seqs) <= MISSING_MAX:
-            raise ProtocolError(f"Missing: {len(msg.seqs)} sequence numbers; expected 1 to "
-                                f"{MISSING_MAX}")
-        return bytes([len(msg.seqs)]) + b"".join(_U16S.pack(q) for q in msg.seqs)
-    if isinstance(msg, Block):
-        amps = np.asarray(msg.amplitudes)
-        if amps.ndim != 2 or amps.dtype != np.uint16 or amps.shape[1] < 1:
-            raise ProtocolError(f"Block amplitudes: got {amps.dtype} {amps.shape}, expected "
-                                "uint16 (n, channels)")
-        n, ch = amps.shape
-        flags = 0
-        body = amps.astype(_U16).tobytes()
-        if msg.phases is not None:
-            ph = np.asarray(msg.phases)
-            if ph.shape != amps.shape or ph.dtype != np.uint16:
-                raise ProtocolError(f"Block phases: got {ph.dtype} {ph.shape}, expected uint16 "
-                                    f"{amps.shape}")
-            flags = _FLAG_PHASES
-            body += ph.astype(_U16).tobytes()
-        if len(body) > BLOCK_SAMPLE_BYTES:
-            raise ProtocolError(f"Block of {n} samples x {ch} channels is {len(body)} bytes; at "
-                                f"most {BLOCK_SAMPLE_BYTES} fit in one frame")
-        return _BLOCK.pack(msg.start_index, n, ch, flags) + body
-    if isinstance(msg, Heartbeat):
-        return _HEARTBEAT.pack(msg.token)
-    if isinstance(msg, Stop):
-        return _STOP.pack(int(msg.drain))
-    if isinstance(msg, Status):
-        flags = (_FLAG_SENSOR * (msg.measured_um is not None)
-                 | _FLAG_FORCE * (msg.force_n is not None))
-        if msg.measured_um is not None and len(msg.measured_um) == 0:
-            raise ProtocolError("Status measured_um: empty; expected one value per channel or None")
-        counters = (msg.underruns, msg.crc_errors, msg.frames_ok, msg.lost_frames,
-                    msg.gap_samples, msg.late_samples, msg.overflow_samples,
-                    msg.watchdog_trips, msg.clamped)
-        # counters wrap at 2**32 on the wire (PROTOCOL.md 4.6)
-        out = _STATUS.pack(msg.echo, msg.state, flags, msg.play_index, msg.level,
-                           *(c & 0xFFFFFFFF for c in counters), len(msg.measured_um or ()))
-        if version >= 2:
-            extra = (msg.buffer_end, msg.played_samples, msg.flushed_samples, msg.flushes)
-            if None in extra:
-                raise ProtocolError("Status in version 2 needs buffer_end, played_samples, "
-                                    "flushed_samples and flushes; got None")
-            out += _STATUS_V2.pack(extra[0], *(c & 0xFFFFFFFF for c in extra[1:]))
-        if msg.measured_um is not None:
-            out += np.array(_u16_limit(msg.measured_um), dtype=_U16).tobytes()
-        if msg.force_n is not None:
-            out += struct.pack("<H", int(min(max(round(msg.force_n * 1000.0), 0), 65535)))
-        return out
-    if isinstance(msg, Flushed):
-        return _FLUSHED.pack(msg.cause, msg.play_index, msg.flushed & 0xFFFFFFFF,
-                             msg.flushes & 0xFFFFFFFF)
-    if isinstance(msg, ForceReport):
-        count = len(msg.lateral_n)
-        if not 1 <= count <= FORCE_PAIRS_MAX or len(msg.normal_n) != count:
-            raise ProtocolError(f"ForceReport: {count} lateral and {len(msg.normal_n)} normal "
-                                f"values; expected the same number, 1 to {FORCE_PAIRS_MAX}")
-        if not 1 <= msg.decimation <= 65535:
-            raise ProtocolError(f"ForceReport decimation {msg.decimation}: expected 1 to 65535")
-        pairs = np.column_stack([force_to_wire(msg.lateral_n), force_to_wire(msg.normal_n)])
-        return _FORCES.pack(msg.start_index, msg.decimation, count) + pairs.astype(_I16).tobytes()
+def _encode_hello(msg: Hello, version: int) -> bytes:
+    return _HELLO.pack(msg.prefill)
+
+
+def _encode_info(msg: Info, version: int) -> bytes:
+    if len(msg.limits_um) != msg.channels:
+        raise ProtocolError(f"Info: {len(msg.limits_um)} limits for {msg.channels} channels")
+    name = msg.name.encode("utf-8")[:255]
+    flags = (_FLAG_PHASES * msg.has_phases | _FLAG_SENSOR * msg.has_sensor
+             | _FLAG_FORCE * msg.has_force | _FLAG_FORCE_REPORTS * msg.has_force_reports)
+    head = _INFO.pack(msg.protocol_version, msg.channels, flags,
+                      int(round(msg.sample_rate_hz * 1000.0)), msg.buffer_samples,
+                      msg.watchdog_ms, msg.ramp_ms, len(name))
+    return head + np.array(_u16_limit(msg.limits_um), dtype=_U16).tobytes() + name
+
+
+def _encode_block(msg: Block, version: int) -> bytes:
+    amps = np.asarray(msg.amplitudes)
+    if amps.ndim != 2 or amps.dtype != np.uint16 or amps.shape[1] < 1:
+        raise ProtocolError(f"Block amplitudes: got {amps.dtype} {amps.shape}, expected "
+                            "uint16 (n, channels)")
+    n, ch = amps.shape
+    flags = 0
+    body = amps.astype(_U16).tobytes()
+    if msg.phases is not None:
+        ph = np.asarray(msg.phases)
+        if ph.shape != amps.shape or ph.dtype != np.uint16:
+            raise ProtocolError(f"Block phases: got {ph.dtype} {ph.shape}, expected uint16 "
+                                f"{amps.shape}")
+        flags = _FLAG_PHASES
+        body += ph.astype(_U16).tobytes()
+    if len(body) > BLOCK_SAMPLE_BYTES:
+        raise ProtocolError(f"Block of {n} samples x {ch} channels is {len(body)} bytes; at "
+                            f"most {BLOCK_SAMPLE_BYTES} fit in one frame")
+    return _BLOCK.pack(msg.start_index, n, ch, flags) + body
+
+
+def _encode_resend(msg: Resend, version: int) -> bytes:
+    return _U16S.pack(msg.orig_seq) + _encode_block(msg, version)
+
+
+def _encode_missing(msg: Missing, version: int) -> bytes:
+    if not 1 <= len(msg.seqs) <= MISSING_MAX:
+        raise ProtocolError(f"Missing: {len(msg.seqs)} sequence numbers; expected 1 to "
+                            f"{MISSING_MAX}")
+    return bytes([len(msg.seqs)]) + b"".join(_U16S.pack(q) for q in msg.seqs)
+
+
+def _encode_heartbeat(msg: Heartbeat, version: int) -> bytes:
+    return _HEARTBEAT.pack(msg.token)
+
+
+def _encode_stop(msg: Stop, version: int) -> bytes:
+    return _STOP.pack(int(msg.drain))
+
+
+def _status_accounting(msg: Status) -> bytes:
+    """The version 2 buffer-accounting fields of a Status (counters wrap at 2**32)."""
+    extra = (msg.buffer_end, msg.played_samples, msg.flushed_samples, msg.flushes)
+    if None in extra:
+        raise ProtocolError("Status in version 2 needs buffer_end, played_samples, "
+                            "flushed_samples and flushes; got None")
+    return _STATUS_V2.pack(extra[0], *(c & 0xFFFFFFFF for c in extra[1:]))
+
+
+def _encode_status(msg: Status, version: int) -> bytes:
+    flags = (_FLAG_SENSOR * (msg.measured_um is not None)
+             | _FLAG_FORCE * (msg.force_n is not None))
+    if msg.measured_um is not None and len(msg.measured_um) == 0:
+        raise ProtocolError("Status measured_um: empty; expected one value per channel or None")
+    counters = (msg.underruns, msg.crc_errors, msg.frames_ok, msg.lost_frames,
+                msg.gap_samples, msg.late_samples, msg.overflow_samples,
+                msg.watchdog_trips, msg.clamped)
+    # counters wrap at 2**32 on the wire (PROTOCOL.md 4.6)
+    out = _STATUS.pack(msg.echo, msg.state, flags, msg.play_index, msg.level,
+                       *(c & 0xFFFFFFFF for c in counters), len(msg.measured_um or ()))
+    if version >= 2:
+        out += _status_accounting(msg)
+    if msg.measured_um is not None:
+        out += np.array(_u16_limit(msg.measured_um), dtype=_U16).tobytes()
+    if msg.force_n is not None:
+        out += struct.pack("<H", int(min(max(round(msg.force_n * 1000.0), 0), 65535)))
+    return out
+
+
+def _encode_flushed(msg: Flushed, version: int) -> bytes:
+    return _FLUSHED.pack(msg.cause, msg.play_index, msg.flushed & 0xFFFFFFFF,
+                         msg.flushes & 0xFFFFFFFF)
+
+
+def _encode_force_report(msg: ForceReport, version: int) -> bytes:
+    count = len(msg.lateral_n)
+    if not 1 <= count <= FORCE_PAIRS_MAX or len(msg.normal_n) != count:
+        raise ProtocolError(f"ForceReport: {count} lateral and {len(msg.normal_n)} normal "
+                            f"values; expected the same number, 1 to {FORCE_PAIRS_MAX}")
+    if not 1 <= msg.decimation <= 65535:
+        raise ProtocolError(f"ForceReport decimation {msg.decimation}: expected 1 to 65535")
+    pairs = np.column_stack([force_to_wire(msg.lateral_n), force_to_wire(msg.normal_n)])
+    return _FORCES.pack(msg.start_index, msg.decimation, count) + pairs.astype(_I16).tobytes()
+
+
+def _encode_error_report(msg: ErrorReport, version: int) -> bytes:
     return _ERROR.pack(msg.code, msg.ref_seq, msg.detail) + msg.text.encode("utf-8")[:200]
+
+
+#: payload encoder of each message class: ``encoder(msg, version) -> bytes``
+_ENCODERS = {Hello: _encode_hello, Info: _encode_info, Block: _encode_block,
+             Resend: _encode_resend, Missing: _encode_missing, Heartbeat: _encode_heartbeat,
+             Stop: _encode_stop, Status: _encode_status, Flushed: _encode_flushed,
+             ForceReport: _encode_force_report, ErrorReport: _encode_error_report}
+
+
+def _payload(msg, version: int) -> bytes:
+    """The payload of ``msg`` in a ``version`` frame (a subclass of a message is encoded
+    as its nearest message class)."""
+    encoder = _ENCODERS.get(type(msg))
+    if encoder is None:
+        encoder = next(_ENCODERS[c] for c in type(msg).__mro__ if c in _ENCODERS)
+    return encoder(msg, version)
 
 
 def encode(msg, seq: int = 0, version: int = PROTOCOL_VERSION) -> bytes:
@@ -500,76 +540,106 @@ def encode(msg, seq: int = 0, version: int = PROTOCOL_VERSION) -> bytes:
     return cobs_encode(body) + b"\x00"
 
 
+def _decode_hello(p: bytes, version: int) -> Hello:
+    return Hello(*_HELLO.unpack(p))
+
+
+def _decode_info(p: bytes, version: int) -> Info:
+    version, ch, flags, rate, buf, wd, ramp, namelen = _INFO.unpack_from(p)
+    rest = p[_INFO.size:]
+    if ch < 1 or len(rest) != 2 * ch + namelen:
+        raise ValueError("Info length")
+    limits = amplitude_from_wire(np.frombuffer(rest[:2 * ch], dtype=_U16))
+    return Info(ch, rate / 1000.0, tuple(float(x) for x in limits), buf, wd, ramp,
+                bool(flags & _FLAG_PHASES), bool(flags & _FLAG_SENSOR),
+                bool(flags & _FLAG_FORCE), rest[2 * ch:].decode("utf-8"), version,
+                bool(flags & _FLAG_FORCE_REPORTS))
+
+
+def _decode_block(p: bytes, version: int) -> Block:
+    start, n, ch, flags = _BLOCK.unpack_from(p)
+    k = 2 if flags & _FLAG_PHASES else 1
+    data = p[_BLOCK.size:]
+    if ch < 1 or len(data) != 2 * n * ch * k:
+        raise ValueError("Block length")
+    words = np.frombuffer(data, dtype=_U16).astype(np.uint16)
+    amps = words[:n * ch].reshape(n, ch)
+    phases = words[n * ch:].reshape(n, ch) if k == 2 else None
+    return Block(start, amps, phases)
+
+
+def _decode_resend(p: bytes, version: int) -> Resend:
+    (orig,) = _U16S.unpack_from(p)
+    block = _decode_block(p[_U16S.size:], version)
+    return Resend(block.start_index, block.amplitudes, block.phases, orig)
+
+
+def _decode_missing(p: bytes, version: int) -> Missing:
+    if len(p) < 1 or not 1 <= p[0] <= MISSING_MAX or len(p) != 1 + 2 * p[0]:
+        raise ValueError("Missing length")
+    return Missing(tuple(int(q) for q in np.frombuffer(p[1:], dtype=_U16)))
+
+
+def _decode_heartbeat(p: bytes, version: int) -> Heartbeat:
+    return Heartbeat(*_HEARTBEAT.unpack(p))
+
+
+def _decode_stop(p: bytes, version: int) -> Stop:
+    (drain,) = _STOP.unpack(p)
+    return Stop(bool(drain))
+
+
+def _decode_status(p: bytes, version: int) -> Status:
+    echo, state, flags, play, level, *counters, n_meas = _STATUS.unpack_from(p)
+    rest = p[_STATUS.size:]
+    extra = {}
+    if version >= 2:
+        values = _STATUS_V2.unpack_from(rest)
+        extra = dict(zip(("buffer_end", "played_samples", "flushed_samples", "flushes"),
+                         values))
+        rest = rest[_STATUS_V2.size:]
+    n_force = 2 if flags & _FLAG_FORCE else 0
+    if len(rest) != 2 * n_meas + n_force or bool(flags & _FLAG_SENSOR) != (n_meas > 0):
+        raise ValueError("Status length")
+    measured = None
+    if flags & _FLAG_SENSOR:
+        measured = tuple(float(x) for x in amplitude_from_wire(
+            np.frombuffer(rest[:2 * n_meas], dtype=_U16)))
+    force = struct.unpack("<H", rest[2 * n_meas:])[0] / 1000.0 if n_force else None
+    return Status(echo, state, play, level, *counters, measured_um=measured, force_n=force,
+                  **extra)
+
+
+def _decode_flushed(p: bytes, version: int) -> Flushed:
+    return Flushed(*_FLUSHED.unpack(p))
+
+
+def _decode_force_report(p: bytes, version: int) -> ForceReport:
+    start, decimation, count = _FORCES.unpack_from(p)
+    if count < 1 or decimation < 1 or len(p) != _FORCES.size + 4 * count:
+        raise ValueError("ForceReport length")
+    pairs = force_from_wire(np.frombuffer(p[_FORCES.size:], dtype=_I16).reshape(count, 2))
+    return ForceReport(start, decimation, tuple(float(x) for x in pairs[:, 0]),
+                       tuple(float(x) for x in pairs[:, 1]))
+
+
+def _decode_error_report(p: bytes, version: int) -> ErrorReport:
+    code, ref, detail = _ERROR.unpack_from(p)
+    return ErrorReport(code, ref, detail, p[_ERROR.size:].decode("utf-8"))
+
+
+#: payload decoder of each message type byte: ``decoder(payload, version) -> message``
+_DECODERS = {Hello.TYPE: _decode_hello, Info.TYPE: _decode_info, Block.TYPE: _decode_block,
+             Resend.TYPE: _decode_resend, Missing.TYPE: _decode_missing,
+             Heartbeat.TYPE: _decode_heartbeat, Stop.TYPE: _decode_stop,
+             Status.TYPE: _decode_status, Flushed.TYPE: _decode_flushed,
+             ForceReport.TYPE: _decode_force_report, ErrorReport.TYPE: _decode_error_report}
+
+
 def _parse(mtype: int, p: bytes, version: int):
     """The message of type ``mtype`` in payload ``p`` of a ``version`` frame; ValueError or
-    struct.error if malformed."""
-    if mtype == Hello.TYPE:
-        return Hello(*_HELLO.unpack(p))
-    if mtype == Info.TYPE:
-        version, ch, flags, rate, buf, wd, ramp, namelen = _INFO.unpack_from(p)
-        rest = p[_INFO.size:]
-        if ch < 1 or len(rest) != 2 * ch + namelen:
-            raise ValueError("Info length")
-        limits = amplitude_from_wire(np.frombuffer(rest[:2 * ch], dtype=_U16))
-        return Info(ch, rate / 1000.0, tuple(float(x) for x in limits), buf, wd, ramp,
-                    bool(flags & _FLAG_PHASES), bool(flags & _FLAG_SENSOR),
-                    bool(flags & _FLAG_FORCE), rest[2 * ch:].decode("utf-8"), version,
-                    bool(flags & _FLAG_FORCE_REPORTS))
-    if mtype == Block.TYPE:
-        start, n, ch, flags = _BLOCK.unpack_from(p)
-        k = 2 if flags & _FLAG_PHASES else 1
-        data = p[_BLOCK.size:]
-        if ch < 1 or len(data) != 2 * n * ch * k:
-            raise ValueError("Block length")
-        words = np.frombuffer(data, dtype=_U16).astype(np.uint16)
-        amps = words[:n * ch].reshape(n, ch)
-        phases = words[n * ch:].reshape(n, ch) if k == 2 else None
-        return Block(start, amps, phases)
-    if mtype == Resend.TYPE:
-        (orig,) = _U16S.unpack_from(p)
-        block = _parse(Block.TYPE, p[_U16S.size:], version)
-        return Resend(block.start_index, block.amplitudes, block.phases, orig)
-    if mtype == Missing.TYPE:
-        if len(p) < 1 or not 1 <= p[0] <= MISSING_MAX or len(p) != 1 + 2 * p[0]:
-            raise ValueError("Missing length")
-        return Missing(tuple(int(q) for q in np.frombuffer(p[1:], dtype=_U16)))
-    if mtype == Heartbeat.TYPE:
-        return Heartbeat(*_HEARTBEAT.unpack(p))
-    if mtype == Stop.TYPE:
-        (drain,) = _STOP.unpack(p)
-        return Stop(bool(drain))
-    if mtype == Status.TYPE:
-        echo, state, flags, play, level, *counters, n_meas = _STATUS.unpack_from(p)
-        rest = p[_STATUS.size:]
-        extra = {}
-        if version >= 2:
-            values = _STATUS_V2.unpack_from(rest)
-            extra = dict(zip(("buffer_end", "played_samples", "flushed_samples", "flushes"),
-                             values))
-            rest = rest[_STATUS_V2.size:]
-        n_force = 2 if flags & _FLAG_FORCE else 0
-        if len(rest) != 2 * n_meas + n_force or bool(flags & _FLAG_SENSOR) != (n_meas > 0):
-            raise ValueError("Status length")
-        measured = None
-        if flags & _FLAG_SENSOR:
-            measured = tuple(float(x) for x in amplitude_from_wire(
-                np.frombuffer(rest[:2 * n_meas], dtype=_U16)))
-        force = struct.unpack("<H", rest[2 * n_meas:])[0] / 1000.0 if n_force else None
-        return Status(echo, state, play, level, *counters, measured_um=measured, force_n=force,
-                      **extra)
-    if mtype == Flushed.TYPE:
-        return Flushed(*_FLUSHED.unpack(p))
-    if mtype == ForceReport.TYPE:
-        start, decimation, count = _FORCES.unpack_from(p)
-        if count < 1 or decimation < 1 or len(p) != _FORCES.size + 4 * count:
-            raise ValueError("ForceReport length")
-        pairs = force_from_wire(np.frombuffer(p[_FORCES.size:], dtype=_I16).reshape(count, 2))
-        return ForceReport(start, decimation, tuple(float(x) for x in pairs[:, 0]),
-                           tuple(float(x) for x in pairs[:, 1]))
-    if mtype == ErrorReport.TYPE:
-        code, ref, detail = _ERROR.unpack_from(p)
-        return ErrorReport(code, ref, detail, p[_ERROR.size:].decode("utf-8"))
-    raise KeyError(mtype)
+    struct.error if malformed, KeyError for an unknown type."""
+    return _DECODERS[mtype](p, version)
 
 
 # ---------------------------------------------------------------------------- decoder
