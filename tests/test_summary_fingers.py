@@ -56,6 +56,8 @@ def test_a_replay_of_many_ids_lists_100_and_aggregates_the_rest(tmp_path):
     doc = json.loads((out / "summary.json").read_text())
     fingers, others = doc["fingers"], doc["fingers_others"]
     assert len(fingers) == MAX_LISTED and others["fingers"] == 30
+    assert doc["trace"]["fingers"] == list(range(MAX_LISTED))
+    assert doc["trace"]["finger_count"] == MAX_LISTED + 30
     listed = sum(v["contact_samples"] for v in fingers.values())
     assert listed + others["contact_samples"] == doc["counts"]["contact_samples"]
     assert min(v["contact_samples"] for v in fingers.values()) >= 1

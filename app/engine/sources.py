@@ -31,6 +31,7 @@ from operator import itemgetter
 import numpy as np
 
 from frictex.app.engine.finger_slots import FingerSlots
+from frictex.app.engine.finger_table import MAX_LISTED
 from frictex.rendering.input.trace_file import UP, Trace, concat_traces, make_trace
 from frictex.rendering.tracking.tracks import apply_index
 
@@ -250,8 +251,10 @@ class TraceStats:
 
     def report(self, path) -> dict:
         steps = np.concatenate(self.steps) if self.steps else np.zeros(0)
+        # a list bounded like the summary's fingers section (a new id per touch: 100,000)
         return {"path": str(path) if path else None, "samples": self.samples,
-                "fingers": sorted(self.fingers), "duration_s": self.last_t - self.first_t,
+                "fingers": sorted(self.fingers)[:MAX_LISTED], "finger_count": len(self.fingers),
+                "duration_s": self.last_t - self.first_t,
                 "touch_rate_hz": float(1.0 / np.median(steps)) if steps.size else None}
 
 

@@ -114,7 +114,9 @@ class TraceInfo:
     samples : int
         Touch samples read.
     fingers : tuple of int
-        Finger ids seen.
+        Finger ids seen: the 100 lowest.
+    finger_count : int or None
+        How many distinct finger ids the trace holds (None in summaries before it).
     duration_s : float
         Last sample time minus first (s).
     touch_rate_hz : float or None
@@ -128,6 +130,7 @@ class TraceInfo:
     path: str | None
     samples: int
     fingers: tuple[int, ...]
+    finger_count: int | None = field(default=None, metadata=_OPTIONAL)
     duration_s: float
     touch_rate_hz: float | None
     time_order: TimeOrderInfo | None = field(default=None, metadata=_OPTIONAL)
