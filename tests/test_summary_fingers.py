@@ -3,7 +3,6 @@
 import json
 
 import numpy as np
-import pytest
 
 from frictex.app.commands.cli import main
 from frictex.app.engine.finger_table import MAX_LISTED, FingerTable
