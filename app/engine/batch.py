@@ -84,11 +84,27 @@ class ManifestError(InputError):
 def read_manifest(path: Path, renderers: tuple[str, ...]) -> list[Job]:
     """The jobs of a manifest file (see the module docstring); raises ManifestError."""
     path = Path(path)
+    lines = _content_lines(path, _manifest_text(path))
+    rows = [_row(line, f"{path}:{n}") for n, line in lines]
+    header = _header(rows[0], f"{path}:{lines[0][0]}")
+    jobs = _jobs(path, header, [n for n, _ in lines[1:]], rows[1:], renderers)
+    if not jobs:
+        raise ManifestError(f"{path}: a header but no jobs")
+    return jobs
+
+
+def _manifest_text(path: Path) -> str:
+    """The manifest's text, read as UTF-8 within :data:`MAX_MANIFEST_BYTES`."""
     try:
-        text = read_utf8(path, MAX_MANIFEST_BYTES)
+        return read_utf8(path, MAX_MANIFEST_BYTES)
     except UnreadableText as exc:
         where = f"{path}:{exc.line}" if exc.line is not None else f"{path}"
         raise ManifestError(f"{where}: {exc}; expected a CSV manifest of jobs") from None
+
+
+def _content_lines(path: Path, text: str) -> list[tuple[int, str]]:
+    """The (line number, line) pairs of ``text`` that are neither blank nor comments;
+    at least one."""
     lines = []
     for n, line in enumerate(text.split("\n"), 1):
         line = line.removesuffix("\r")
@@ -100,18 +116,29 @@ def read_manifest(path: Path, renderers: tuple[str, ...]) -> list[Job]:
     if not lines:
         raise ManifestError(f"{path}: no header and no jobs (expected a CSV header "
                             f"{','.join(COLUMNS[:2])},...)")
-    rows = [_row(line, f"{path}:{n}") for n, line in lines]
-    header = [h.strip() for h in rows[0]]
+    return lines
+
+
+def _header(row: list[str], where: str) -> list[str]:
+    """The column names of the header ``row``: known ones, each once, scene and trace
+    among them."""
+    header = [h.strip() for h in row]
     unknown = [h for h in header if h not in COLUMNS]
     if unknown or not {"scene", "trace"} <= set(header):
-        raise ManifestError(f"{path}:{lines[0][0]}: not a manifest header ({describe_header(header)}); "
+        raise ManifestError(f"{where}: not a manifest header ({describe_header(header)}); "
                             f"expected scene,trace and optionally {','.join(COLUMNS[2:])}")
     twice = next((h for k, h in enumerate(header) if h in header[:k]), None)
     if twice is not None:
-        raise ManifestError(f"{path}:{lines[0][0]}: header names column {twice} twice "
+        raise ManifestError(f"{where}: header names column {twice} twice "
                             f"(each column once)")
+    return header
+
+
+def _jobs(path: Path, header: list[str], line_nos: list[int], rows: list[list[str]],
+          renderers: tuple[str, ...]) -> list[Job]:
+    """One job per data row (line numbers ``line_nos``), names unique."""
     jobs, names = [], set()
-    for (line_no, _), row in zip(lines[1:], rows[1:]):
+    for line_no, row in zip(line_nos, rows):
         where = f"{path}:{line_no}"
         if len(row) != len(header):
             raise ManifestError(f"{where}: {len(row)} fields, expected {len(header)} "
@@ -122,8 +149,6 @@ def read_manifest(path: Path, renderers: tuple[str, ...]) -> list[Job]:
             raise ManifestError(f"{where}: name {quoted(job.name)} is used by an earlier job")
         names.add(job.name)
         jobs.append(job)
-    if not jobs:
-        raise ManifestError(f"{path}: a header but no jobs")
     return jobs
 
 
