@@ -297,64 +297,63 @@ class _Check:
         return self.r.report(path, message)
 
 
-def _parametric(c: _Check, doc: dict, method: str, base_dir: Path) -> Stimuli | None:
-    v = c.r.table(doc["stimuli"], ("stimuli",), STIMULI)
-    if v is None:
+def _renderers(c: _Check, renderers, method: str):
+    """``[stimuli] renderers`` as read, or :data:`BAD` if the method does not cross them."""
+    if renderers and renderers is not _BAD and method != "magnitude":
+        return c.report(("stimuli", "renderers"), f"only method \"magnitude\" crosses "
+                                                  f"renderers (this is {method})")
+    return renderers
+
+
+def _per_renderer(c: _Check, raw: dict, scene: Path, renderers: tuple) -> Stimuli | None:
+    """``[stimuli]`` without ``vary``: the scene once per renderer."""
+    if not renderers:
+        c.report(("stimuli", "vary"), f"missing: one of {', '.join(VARIES)} (or list "
+                                      f"`renderers` for a magnitude estimation)")
         return None
-    raw = doc["stimuli"]
-    renderers = v["renderers"]
-    if renderers:
-        if renderers is not _BAD and method != "magnitude":
-            renderers = c.report(("stimuli", "renderers"), f"only method \"magnitude\" crosses "
-                                                           f"renderers (this is {method})")
-    if _BAD in v.values() or renderers is _BAD:
-        return None
+    for key in ("layer", "levels"):
+        if raw.get(key) is not None:
+            c.report(("stimuli", key), "given without `vary`")
+    listed = tuple(Stimulus(f"{scene.stem}-{name}", scene, None, name) for name in renderers)
+    return Stimuli(scene, listed=listed)
+
+
+def _side_by_side_fits(c: _Check, doc: dict, method: str, base) -> bool:
+    """Whether the base scene can be shown twice side by side, where the file asks for it."""
     from frictex.app.experiment import stimuli as S
-    try:
-        scene = _scene_path(v["scene"], base_dir)
-        base = S.load_base(scene)
-    except InputError as exc:
-        c.report(("stimuli", "scene"), str(exc))
-        return None
-    vary, levels, reference = v["vary"], tuple(v["levels"]), v["reference"]
-    if vary is None:
-        if not renderers:
-            c.report(("stimuli", "vary"), f"missing: one of {', '.join(VARIES)} (or list "
-                                          f"`renderers` for a magnitude estimation)")
-            return None
-        for key in ("layer", "levels"):
-            if raw.get(key) is not None:
-                c.report(("stimuli", key), "given without `vary`")
-        listed = tuple(Stimulus(f"{scene.stem}-{name}", scene, None, name) for name in renderers)
-        return Stimuli(scene, listed=listed)
     shown = doc.get("presentation")
     if method != "magnitude" and isinstance(shown, dict) and shown.get("mode") == "side-by-side":
         problem = S.side_by_side_problem(base.doc, base.doc)
         if problem:
             c.report(("presentation", "mode"), problem)
-            return None
-    layer = S.varied_layer(base, vary, v["layer"])
-    if isinstance(layer, str):
-        c.report(("stimuli", "layer" if v["layer"] is not None else "vary"), layer)
-        return None
-    if reference is None:
-        c.report(("stimuli", "reference"), f"missing (required with vary = \"{vary}\"): the "
-                                           f"standard stimulus's {vary}")
-        return None
+            return False
+    return True
+
+
+def _levels_fit(c: _Check, method: str, levels: tuple[float, ...]) -> bool:
+    """Whether ``levels`` suit the method (a staircase's levels are reported, not fatal)."""
     if method == "staircase":
         if levels:
             c.report(("stimuli", "levels"), "not used by a staircase: [staircase] start and "
                                             "steps set the levels")
-    elif not levels:
+        return True
+    if not levels:
         c.report(("stimuli", "levels"), f"missing (required for method \"{method}\"): the "
                                         f"comparison levels")
-        return None
     elif len(levels) > MAX_LEVELS:
         c.report(("stimuli", "levels"), f"{len(levels)} levels; at most {MAX_LEVELS}")
-        return None
     elif len(set(levels)) != len(levels):
         c.report(("stimuli", "levels"), "a level is given twice")
-        return None
+    else:
+        return True
+    return False
+
+
+def _values_fit(c: _Check, base, vary: str, layer: int, method: str, reference: float,
+                levels: tuple[float, ...]) -> bool:
+    """Whether every level is above the reference where the method needs it, and the
+    reference and every level can be set on the varied layer (all problems reported)."""
+    from frictex.app.experiment import stimuli as S
     ok = True
     for i, level in enumerate(levels):
         if method in ("2afc", "same-different") and not level > reference:
@@ -367,7 +366,39 @@ def _parametric(c: _Check, doc: dict, method: str, base_dir: Path) -> Stimuli | 
         if problem:
             c.report(("stimuli", "reference" if i is None else "levels"), problem)
             ok = False
-    if not ok:
+    return ok
+
+
+def _parametric(c: _Check, doc: dict, method: str, base_dir: Path) -> Stimuli | None:
+    """``[stimuli]``: one scene with a parameter varied, or crossed with renderers."""
+    v = c.r.table(doc["stimuli"], ("stimuli",), STIMULI)
+    if v is None:
+        return None
+    renderers = _renderers(c, v["renderers"], method)
+    if _BAD in v.values() or renderers is _BAD:
+        return None
+    from frictex.app.experiment import stimuli as S
+    try:
+        scene = _scene_path(v["scene"], base_dir)
+        base = S.load_base(scene)
+    except InputError as exc:
+        c.report(("stimuli", "scene"), str(exc))
+        return None
+    vary, levels, reference = v["vary"], tuple(v["levels"]), v["reference"]
+    if vary is None:
+        return _per_renderer(c, doc["stimuli"], scene, renderers)
+    if not _side_by_side_fits(c, doc, method, base):
+        return None
+    layer = S.varied_layer(base, vary, v["layer"])
+    if isinstance(layer, str):
+        c.report(("stimuli", "layer" if v["layer"] is not None else "vary"), layer)
+        return None
+    if reference is None:
+        c.report(("stimuli", "reference"), f"missing (required with vary = \"{vary}\"): the "
+                                           f"standard stimulus's {vary}")
+        return None
+    if not (_levels_fit(c, method, levels)
+            and _values_fit(c, base, vary, layer, method, reference, levels)):
         return None
     listed = ()
     if renderers:
@@ -434,78 +465,123 @@ def _staircase(c: _Check, doc: dict, method: str) -> Staircase | None | object:
                      v["max_trials"], v["threshold_reversals"], low, high)
 
 
+def _read(c: _Check, path: Path) -> tuple[str | None, dict | None]:
+    """The text of a protocol file and its TOML document; ``(text, None)`` with the
+    problems in ``c`` when it cannot be read, is empty or is not TOML."""
+    r = c.r
+    try:
+        text = read_utf8(path, MAX_FILE_BYTES)
+    except UnreadableText as exc:
+        r.problems.append(Problem(str(path), exc.line, "",
+                                  f"{exc}; expected a protocol file (.toml)"))
+        return None, None
+    if not text.strip():
+        c.report((), "is empty; expected a protocol file (format = 1, method, [stimuli])")
+        return text, None
+    doc = parse_toml(text, r)
+    if doc is not None:
+        r.locator = Locator(text)
+    return text, doc
+
+
+def _format_fits(c: _Check, fmt) -> bool:
+    """Whether ``format`` is one this module reads (a bad value is reported already)."""
+    if fmt is not _BAD and fmt != FORMAT_VERSION:
+        c.report(("format",), f"{fmt} is not a protocol format this frictex reads "
+                              f"(format = {FORMAT_VERSION})")
+        return False
+    return True
+
+
+def _scale(c: _Check, doc: dict, method: str) -> tuple[int, int] | None:
+    """``[scale]``: (min, max) of a magnitude estimation's ratings; None for other methods
+    or when it has a problem."""
+    if method != "magnitude":
+        if "scale" in doc:
+            c.report(("scale",), f"only for method \"magnitude\" (this is {method})")
+        return None
+    v = c.r.table(doc.get("scale", {}), ("scale",), SCALE)
+    if v is None or _BAD in v.values():
+        return None
+    if not v["min"] < v["max"]:
+        c.report(("scale", "min"), f"{v['min']} is not below max {v['max']}")
+    elif v["max"] - v["min"] > 1000:
+        c.report(("scale", "max"), "a scale of more than 1000 steps")
+    else:
+        return (v["min"], v["max"])
+    return None
+
+
+def _method_fits(c: _Check, method: str, presentation: dict | None, analysis: dict | None):
+    """Report presentation and analysis settings the method cannot use."""
+    if presentation is not None and presentation["mode"] == "side-by-side" and method == "magnitude":
+        c.report(("presentation", "mode"), "side-by-side needs two stimuli a trial; magnitude "
+                                           "estimation shows one")
+    if analysis is not None and analysis["target"] not in (None, _BAD) and method not in GUESS_RATES:
+        c.report(("analysis", "target"), f"method \"{method}\" fits no psychometric function")
+
+
+def _stimuli(c: _Check, doc: dict, method: str, base_dir: Path) -> Stimuli | None:
+    """``[stimuli]`` or ``[[stimulus]]``, exactly one of them."""
+    if ("stimuli" in doc) == ("stimulus" in doc):
+        c.report(("stimuli",), "expected either [stimuli] (one scene, a parameter varied) or "
+                               "[[stimulus]] tables (a list of scenes), and not both")
+        return None
+    if "stimuli" in doc:
+        return _parametric(c, doc, method, base_dir)
+    return _listed(c, doc, method, base_dir)
+
+
+def _staircase_fits(c: _Check, stimuli: Stimuli, staircase: Staircase) -> bool:
+    """Whether a staircase varies a parameter and its start and max differences can be set
+    on the varied layer (problems reported)."""
+    if stimuli.vary is None:
+        c.report(("stimuli", "vary"), "a staircase needs a parameter to vary")
+        return False
+    from frictex.app.experiment.stimuli import load_base, value_problem
+    base = load_base(stimuli.scene)
+    ok = True
+    for key in ("start", "max"):
+        difference = getattr(staircase, key)
+        problem = difference is not None and value_problem(
+            base, stimuli.vary, stimuli.layer, stimuli.reference + difference)
+        if problem:
+            c.report(("staircase", key), f"the reference plus {difference:g}: {problem}")
+            ok = False
+    return ok
+
+
+def _by_line(problems: list[Problem]) -> list[Problem]:
+    return sorted(problems, key=lambda p: p.line or 0)
+
+
 def check_protocol(path: str | Path) -> tuple[Protocol | None, list[Problem]]:
     """Read and check a protocol file: ``(protocol, problems)``, the protocol None when
     there is any problem. Never raises for bad input."""
     path = Path(path)
     c = _Check(str(path))
     r = c.r
-    try:
-        text = read_utf8(path, MAX_FILE_BYTES)
-    except UnreadableText as exc:
-        return None, [Problem(str(path), exc.line, "", f"{exc}; expected a protocol file (.toml)")]
-    if not text.strip():
-        c.report((), "is empty; expected a protocol file (format = 1, method, [stimuli])")
-        return None, r.problems
-    doc = parse_toml(text, r)
+    text, doc = _read(c, path)
     if doc is None:
         return None, r.problems
-    r.locator = Locator(text)
     top = r.table(doc, (), TOP, tables=TABLES)
-    fmt = top["format"]
-    if fmt is not _BAD and fmt != FORMAT_VERSION:
-        c.report(("format",), f"{fmt} is not a protocol format this frictex reads "
-                              f"(format = {FORMAT_VERSION})")
+    if not _format_fits(c, top["format"]):
         return None, r.problems
     method = top["method"]
     if method is _BAD:
-        return None, sorted(r.problems, key=lambda p: p.line or 0)
+        return None, _by_line(r.problems)
     presentation = r.table(doc.get("presentation", {}), ("presentation",), PRESENTATION)
     analysis = r.table(doc.get("analysis", {}), ("analysis",), ANALYSIS)
     staircase = _staircase(c, doc, method)
-    scale = None
-    if method == "magnitude":
-        v = r.table(doc.get("scale", {}), ("scale",), SCALE)
-        if v is not None and _BAD not in v.values():
-            if not v["min"] < v["max"]:
-                c.report(("scale", "min"), f"{v['min']} is not below max {v['max']}")
-            elif v["max"] - v["min"] > 1000:
-                c.report(("scale", "max"), "a scale of more than 1000 steps")
-            else:
-                scale = (v["min"], v["max"])
-    elif "scale" in doc:
-        c.report(("scale",), f"only for method \"magnitude\" (this is {method})")
-    if presentation is not None and presentation["mode"] == "side-by-side" and method == "magnitude":
-        c.report(("presentation", "mode"), "side-by-side needs two stimuli a trial; magnitude "
-                                           "estimation shows one")
-    if analysis is not None and analysis["target"] not in (None, _BAD) and method not in GUESS_RATES:
-        c.report(("analysis", "target"), f"method \"{method}\" fits no psychometric function")
-    stimuli = None
-    if ("stimuli" in doc) == ("stimulus" in doc):
-        c.report(("stimuli",), "expected either [stimuli] (one scene, a parameter varied) or "
-                               "[[stimulus]] tables (a list of scenes), and not both")
-    elif "stimuli" in doc:
-        stimuli = _parametric(c, doc, method, path.parent)
-    else:
-        stimuli = _listed(c, doc, method, path.parent)
-    problems = sorted(r.problems, key=lambda p: p.line or 0)
+    scale = _scale(c, doc, method)
+    _method_fits(c, method, presentation, analysis)
+    stimuli = _stimuli(c, doc, method, path.parent)
+    problems = _by_line(r.problems)
     if (problems or stimuli is None or presentation is None or analysis is None
             or staircase is _BAD or _BAD in top.values()):
         return None, problems
-    if method == "staircase" and stimuli.vary is None:
-        c.report(("stimuli", "vary"), "a staircase needs a parameter to vary")
+    if method == "staircase" and not _staircase_fits(c, stimuli, staircase):
         return None, r.problems
-    if method == "staircase":
-        from frictex.app.experiment.stimuli import load_base, value_problem
-        base = load_base(stimuli.scene)
-        for key in ("start", "max"):
-            difference = getattr(staircase, key)
-            problem = difference is not None and value_problem(
-                base, stimuli.vary, stimuli.layer, stimuli.reference + difference)
-            if problem:
-                c.report(("staircase", key), f"the reference plus {difference:g}: {problem}")
-        if r.problems:
-            return None, r.problems
     question = top["question"]
     if question is None:
         question = QUESTIONS[method].format(attribute=ATTRIBUTES.get(stimuli.vary, "stronger"))
