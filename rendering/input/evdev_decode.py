@@ -231,8 +231,9 @@ class EvdevDecoder:
             del self._fingers[key]
 
     # -- protocol A ---------------------------------------------------------------------------
-    def _frame_a(self, syn: Event, out: list[RawSample]) -> None:
-        t = syn.t_s
+    def _reports_a(self) -> tuple[list[_Contact], bool]:
+        """The contacts this protocol A frame reports, and whether it lifts every finger
+        (an empty SYN_MT_REPORT or BTN_TOUCH 0)."""
         reports: list[_Contact] = []
         cur = _Contact()
         lift_all = False
@@ -251,6 +252,11 @@ class EvdevDecoder:
                 lift_all = True
         if cur.changed:  # axes after the last SYN_MT_REPORT: a contact left unclosed
             reports.append(cur)
+        return reports, lift_all
+
+    def _frame_a(self, syn: Event, out: list[RawSample]) -> None:
+        t = syn.t_s
+        reports, lift_all = self._reports_a()
         placed = [c for c in reports if c.placed]
         self.unplaced += len(reports) - len(placed)
         if not placed and not lift_all:
