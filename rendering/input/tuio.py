@@ -178,22 +178,39 @@ class TuioDecoder:
     def _commit(self, source: str, fseq: int, t: float, out: list[RawSample]) -> None:
         alive = self._pending_alive.pop(source, None)
         sets = self._pending_set.pop(source, {})
-        if source not in self._alive and len(self._alive) >= MAX_SOURCES:
-            self.over_limit += 1
+        if not self._admit(source, fseq):
             return
-        last = self._fseq.get(source)
-        if fseq > 0 and last is not None and fseq < last and last - fseq <= _FSEQ_RESTART:
-            self.late += 1
-            return
-        if fseq > 0:
-            self._fseq[source] = fseq
         self.frames += 1
         if alive is None:
             alive = self._alive.get(source, set())
         self._alive[source] = alive
+        self._lift_gone(source, alive, t, out)
+        self._apply_sets(source, sets, alive, t, out)
+
+    def _admit(self, source: str, fseq: int) -> bool:
+        """Whether frame ``fseq`` of ``source`` is taken (counting it as over the limit or
+        late when not), remembering its frame number."""
+        if source not in self._alive and len(self._alive) >= MAX_SOURCES:
+            self.over_limit += 1
+            return False
+        last = self._fseq.get(source)
+        if fseq > 0 and last is not None and fseq < last and last - fseq <= _FSEQ_RESTART:
+            self.late += 1
+            return False
+        if fseq > 0:
+            self._fseq[source] = fseq
+        return True
+
+    def _lift_gone(self, source: str, alive: set, t: float, out: list[RawSample]) -> None:
+        """An UP sample for each cursor of ``source`` no longer ``alive``, forgetting it."""
         for key in [k for k in self._pos if k[0] == source and k[1] not in alive]:
             x, y = self._pos.pop(key)
             out.append(RawSample(t, self._fingers.pop(key), x, y, math.nan, math.nan, UP))
+
+    def _apply_sets(self, source: str, sets: dict, alive: set, t: float,
+                    out: list[RawSample]) -> None:
+        """A DOWN or MOVE sample for each ``set`` of an ``alive`` cursor within the cursor
+        limit (counting the others as stray or over the limit)."""
         for sid, (x, y) in sets.items():
             if sid not in alive:
                 self.stray += 1
@@ -204,10 +221,14 @@ class TuioDecoder:
                 continue
             event = MOVE if key in self._pos else DOWN
             if key not in self._fingers:
-                used = set(self._fingers.values())
-                self._fingers[key] = next(i for i in range(len(used) + 1) if i not in used)
+                self._fingers[key] = self._free_finger()
             self._pos[key] = (x, y)
             out.append(RawSample(t, self._fingers[key], x, y, math.nan, math.nan, event))
+
+    def _free_finger(self) -> int:
+        """The lowest finger index no cursor holds."""
+        used = set(self._fingers.values())
+        return next(i for i in range(len(used) + 1) if i not in used)
 
 
 def _commands(messages: list[tuple[str, list]]) -> list[tuple[str, str, object]]:
