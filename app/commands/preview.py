@@ -145,9 +145,6 @@ def preview_figure(scene, size: tuple[int, int] | None = None, outlines: bool = 
     Where the composed mu' lies below the device's floor at the scene's nominal normal
     force, the friction map is hatched (those targets will be clamped); the floor is a red
     line and a labelled tick on the colour bar."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
     d = scene.display
     viewport = fit_viewport(d, *(size or default_size(d)))
     image = to_srgb8(scene_rgb(scene, viewport, outlines=outlines))
@@ -155,13 +152,43 @@ def preview_figure(scene, size: tuple[int, int] | None = None, outlines: bool = 
     mu = mu_map(previewed, viewport)
     force = scene.device.normal_force_n
     floor = mu_floor(scene.device, force)
-    # below the floor for a finger touching alone (layers for a 2nd finger left out)
+    below = _below_floor(previewed, mu, viewport, floor)
+    extent = (0.0, d.width_mm, d.height_mm, 0.0)
+    flat = d.height_mm / d.width_mm < FLAT_ASPECT
+    fig, left, right, stretch = _panels(d, flat)
+    left.imshow(image, extent=extent, interpolation="antialiased", aspect=stretch)
+    left.set_title(f"{scene.name}: as drawn ({viewport.width_px} x {viewport.height_px} px"
+                   + (", y stretched" if flat else "") + ")", fontsize=10)
+    vmin = min(float(mu.min()), floor) - 0.02
+    shown = right.imshow(mu, extent=extent, cmap="viridis", vmin=vmin, vmax=1.0,
+                         interpolation="antialiased", aspect=stretch)
+    _hatch_below(right, below, d, viewport)
+    for ax in (left, right):
+        ax.set_xlabel("x (mm)")
+        ax.set_ylabel("y (mm)")
+    _floor_bar(fig, shown, right, flat, floor, force, vmin)
+    felt = _captions(fig, scene)
+    info = {"mu_min": float(mu.min()), "mu_max": float(mu.max()), "floor": floor,
+            "below": float(below.mean()), "size": (viewport.width_px, viewport.height_px),
+            "perception": felt}
+    return fig, info
+
+
+def _below_floor(previewed, mu: np.ndarray, viewport, floor: float) -> np.ndarray:
+    """Where (height_px, width_px, bool) mu' for a finger touching alone lies below
+    ``floor``; layers for a 2nd finger are left out (``mu`` is the map of all layers)."""
     alone = tuple(layer for layer in previewed.layers if applies_alone(layer))
     alone_mu = mu if len(alone) == len(previewed.layers) else mu_map(replace(previewed,
                                                                              layers=alone), viewport)
-    below = alone_mu < floor - 1e-12
-    extent = (0.0, d.width_mm, d.height_mm, 0.0)
-    flat = d.height_mm / d.width_mm < FLAT_ASPECT
+    return alone_mu < floor - 1e-12
+
+
+def _panels(d, flat: bool):
+    """A figure with its two panels (drawing, friction map) and their aspect for a display
+    ``d``: one above the other, stretched, for a ``flat`` strip, else side by side."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     if flat:  # a strip: the panels one above the other, stretched to a legible height
         fig = Figure(figsize=(13.0, 6.4), dpi=110, layout="constrained")
         left, right = fig.subplots(2, 1)
@@ -172,27 +199,29 @@ def preview_figure(scene, size: tuple[int, int] | None = None, outlines: bool = 
         left, right = fig.subplots(1, 2)
         stretch = None
     FigureCanvasAgg(fig)
-    left.imshow(image, extent=extent, interpolation="antialiased", aspect=stretch)
-    left.set_title(f"{scene.name}: as drawn ({viewport.width_px} x {viewport.height_px} px"
-                   + (", y stretched" if flat else "") + ")", fontsize=10)
-    vmin = min(float(mu.min()), floor) - 0.02
-    shown = right.imshow(mu, extent=extent, cmap="viridis", vmin=vmin, vmax=1.0,
-                         interpolation="antialiased", aspect=stretch)
+    return fig, left, right, stretch
+
+
+def _hatch_below(ax, below: np.ndarray, d, viewport) -> None:
+    """Hatch and outline in red the pixels ``below`` the floor on the friction map ``ax``,
+    and title it with their share."""
     if below.any():
         xs = (np.arange(viewport.width_px) + 0.5) * d.width_mm / viewport.width_px
         ys = (np.arange(viewport.height_px) + 0.5) * d.height_mm / viewport.height_px
-        right.contourf(xs, ys, below.astype(np.float64), levels=[0.5, 1.5], colors="none",
-                       hatches=["////"])
-        right.contour(xs, ys, below.astype(np.float64), levels=[0.5], colors="red",
-                      linewidths=0.8)
-    right.set_title("target mu' (1 = plate at rest)"
-                    + (f"; hatched: below the floor ({below.mean():.0%})" if below.any() else ""),
-                    fontsize=10)
-    for ax in (left, right):
-        ax.set_xlabel("x (mm)")
-        ax.set_ylabel("y (mm)")
+        ax.contourf(xs, ys, below.astype(np.float64), levels=[0.5, 1.5], colors="none",
+                    hatches=["////"])
+        ax.contour(xs, ys, below.astype(np.float64), levels=[0.5], colors="red",
+                   linewidths=0.8)
+    ax.set_title("target mu' (1 = plate at rest)"
+                 + (f"; hatched: below the floor ({below.mean():.0%})" if below.any() else ""),
+                 fontsize=10)
+
+
+def _floor_bar(fig, shown, ax, flat: bool, floor: float, force: float, vmin: float) -> None:
+    """The colour bar of the friction map ``ax``, with the device's ``floor`` (mu') at
+    ``force`` (N) as a red line and a red tick of its own."""
     # a flat strip's bar lies under it: one standing beside it would be shorter than its label
-    bar = fig.colorbar(shown, ax=right, shrink=0.9,
+    bar = fig.colorbar(shown, ax=ax, shrink=0.9,
                        location="bottom" if flat else "right")
     bar.set_label(f"mu' = mu(w) / mu(0); red: the device's floor at {force:g} N")
     (bar.ax.axvline if flat else bar.ax.axhline)(floor, color="red", linewidth=2)
@@ -204,16 +233,18 @@ def preview_figure(scene, size: tuple[int, int] | None = None, outlines: bool = 
     for label in (bar.ax.get_xticklabels() if flat else bar.ax.get_yticklabels()):
         if label.get_text().startswith("floor"):
             label.set_color("red")
+
+
+def _captions(fig, scene) -> list[str]:
+    """Title ``fig`` with the scene's layers and caption it with what a finger will not
+    feel; return those perception messages."""
     layers = "; ".join(_layer_note(layer) for layer in scene.layers)
     fig.suptitle("\n".join(textwrap.wrap(f"layers: {layers}", 150)), fontsize=9)
     felt = [f.message for f in scene_findings(scene)]
     if felt:  # what a finger cannot feel (frictex validate --perception), under the panels
         fig.supxlabel("\n".join(textwrap.wrap("a finger will not feel: " + "; ".join(felt), 170)),
                       fontsize=8, color="darkorange")
-    info = {"mu_min": float(mu.min()), "mu_max": float(mu.max()), "floor": floor,
-            "below": float(below.mean()), "size": (viewport.width_px, viewport.height_px),
-            "perception": felt}
-    return fig, info
+    return felt
 
 
 def write_preview(scene, out: Path, size: tuple[int, int] | None = None,
