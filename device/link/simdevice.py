@@ -626,56 +626,111 @@ def serve(core: DeviceCore, master: int | None = None, listener: socket.socket |
     so a sim process that was descheduled does not mistake its own sleep for host silence.
     """
     t0 = clock()
-    conn = master
-    hosts = 0
-    address = None  # the TCP host's, with the time it connected and core.hellos then
-    connected_at = hellos_then = 0
-    refused, refused_from, reported_at = 0, None, -math.inf
+    hosts = _Hosts(core, master, listener, on_refused, on_dropped, hello_timeout_s)
     try:
         while True:
-            watch = [x for x in (conn, listener) if x is not None]
-            ready, _, _ = select.select(watch, [], [], poll_s)
+            ready = hosts.wait(poll_s)
             now = clock() - t0
             if listener is not None and listener in ready:
-                try:
-                    accepted, peer = listener.accept()
-                except (BlockingIOError, InterruptedError):
-                    accepted = None
-                if accepted is not None and isinstance(conn, socket.socket):
-                    _refuse(accepted)
-                    refused, refused_from = refused + 1, peer
-                elif accepted is not None:
-                    accepted.setblocking(False)
-                    accepted.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-                    conn, hosts, address = accepted, hosts + 1, peer
-                    connected_at, hellos_then = now, core.hellos
-            if refused and on_refused is not None and now - reported_at >= REFUSAL_REPORT_S:
-                on_refused(refused_from, refused)
-                refused, reported_at = 0, now
-            out = b""
-            if conn is not None and conn in ready:
-                data = _read(conn)
-                if data is None:
-                    conn.close()
-                    conn = None
-                elif data:
-                    out = core.receive(data, now)
-            if (isinstance(conn, socket.socket) and core.hellos == hellos_then
-                    and now - connected_at > hello_timeout_s):
-                conn.close()
-                conn = None
-                if on_dropped is not None:
-                    on_dropped(address)
-            out += core.advance_to(now)
-            if out and conn is not None:
-                _write(conn, out)
-            if (exit_on_stop and core.finished) or (quit_event is not None and quit_event.is_set()):
-                return hosts
-            if parent_pid is not None and os.getppid() != parent_pid:
-                print("frictex sim-device: parent process gone; stopping", file=sys.stderr)
-                return hosts
+                hosts.accept(now)
+            hosts.report_refusals(now)
+            out = hosts.receive(ready, now)
+            hosts.drop_silent(now)
+            hosts.send(out + core.advance_to(now))
+            if _should_stop(core, exit_on_stop, quit_event, parent_pid):
+                return hosts.served
     finally:
-        if isinstance(conn, socket.socket):
-            conn.close()
-        if refused and on_refused is not None:
-            on_refused(refused_from, refused)
+        hosts.close()
+
+
+def _should_stop(core: DeviceCore, exit_on_stop: bool, quit_event, parent_pid: int | None) -> bool:
+    """Whether :func:`serve` ends now: (``exit_on_stop``) a Stop has played out,
+    ``quit_event`` is set, or the process ``parent_pid`` is gone (said on stderr)."""
+    if (exit_on_stop and core.finished) or (quit_event is not None and quit_event.is_set()):
+        return True
+    if parent_pid is not None and os.getppid() != parent_pid:
+        print("frictex sim-device: parent process gone; stopping", file=sys.stderr)
+        return True
+    return False
+
+
+class _Hosts:
+    """:func:`serve`'s hosts: the one connected (the pty master, or a TCP socket from
+    ``listener``), when it connected and how many Hellos the core had then, how many TCP
+    hosts were served, and the refusals of second hosts not yet reported."""
+
+    def __init__(self, core: DeviceCore, master: int | None, listener: socket.socket | None,
+                 on_refused, on_dropped, hello_timeout_s: float) -> None:
+        self.core = core
+        self.conn = master
+        self.listener = listener
+        self.on_refused = on_refused
+        self.on_dropped = on_dropped
+        self.hello_timeout_s = hello_timeout_s
+        self.served = 0
+        self.address = None  # the TCP host's, with the time it connected and core.hellos then
+        self.connected_at = self.hellos_then = 0
+        self.refused, self.refused_from, self.reported_at = 0, None, -math.inf
+
+    def wait(self, poll_s: float) -> list:
+        """The connection and listener ready to read within ``poll_s`` (s)."""
+        watch = [x for x in (self.conn, self.listener) if x is not None]
+        ready, _, _ = select.select(watch, [], [], poll_s)
+        return ready
+
+    def accept(self, now: float) -> None:
+        """Take a TCP connection waiting on the listener at ``now`` (s): served if no TCP
+        host is connected, else refused busy."""
+        try:
+            accepted, peer = self.listener.accept()
+        except (BlockingIOError, InterruptedError):
+            return
+        if isinstance(self.conn, socket.socket):
+            _refuse(accepted)
+            self.refused, self.refused_from = self.refused + 1, peer
+            return
+        accepted.setblocking(False)
+        accepted.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.conn, self.served, self.address = accepted, self.served + 1, peer
+        self.connected_at, self.hellos_then = now, self.core.hellos
+
+    def report_refusals(self, now: float) -> None:
+        """Tell ``on_refused`` of the refusals since its last call, at most once per
+        :data:`REFUSAL_REPORT_S`."""
+        if self.refused and self.on_refused is not None and now - self.reported_at >= REFUSAL_REPORT_S:
+            self.on_refused(self.refused_from, self.refused)
+            self.refused, self.reported_at = 0, now
+
+    def receive(self, ready: list, now: float) -> bytes:
+        """The core's answer to what the host sent, if it is ``ready``; a host that hung up
+        is closed."""
+        if self.conn is None or self.conn not in ready:
+            return b""
+        data = _read(self.conn)
+        if data is None:
+            self.conn.close()
+            self.conn = None
+            return b""
+        return self.core.receive(data, now) if data else b""
+
+    def drop_silent(self, now: float) -> None:
+        """Close a TCP host that has not said Hello within ``hello_timeout_s`` of
+        connecting, telling ``on_dropped``."""
+        if (isinstance(self.conn, socket.socket) and self.core.hellos == self.hellos_then
+                and now - self.connected_at > self.hello_timeout_s):
+            self.conn.close()
+            self.conn = None
+            if self.on_dropped is not None:
+                self.on_dropped(self.address)
+
+    def send(self, out: bytes) -> None:
+        """Write ``out`` to the connected host, if any."""
+        if out and self.conn is not None:
+            _write(self.conn, out)
+
+    def close(self) -> None:
+        """Close a TCP host still connected; report the refusals not yet reported."""
+        if isinstance(self.conn, socket.socket):
+            self.conn.close()
+        if self.refused and self.on_refused is not None:
+            self.on_refused(self.refused_from, self.refused)
