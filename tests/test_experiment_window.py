@@ -83,12 +83,15 @@ def test_keys_of_the_responses():
 class Hand:
     """The participant: answers each screen once it is drawn; records what it did."""
 
-    def __init__(self, window, presenter):
+    def __init__(self, window, presenter, lose_at=None):
         self.window, self.presenter = window, presenter
+        self.lose_at = lose_at  # the interval (1-based) at which the output is lost
+        self.intervals = 0
         self.answers = []  # the responses given, in order
         self.strokes = []  # (x_mm range) of each interval's stroke
         self.layouts = []  # text boxes of each message screen as drawn
         self.done = threading.Event()
+        self.failure = None
 
     def click(self, box):
         x, y, w, h = box
@@ -97,18 +100,31 @@ class Hand:
         self.window.release()
 
     def run(self):
+        """Act until done; a failure is kept (``failure``) and closes the window, which
+        ends the session."""
+        try:
+            self.act()
+        except BaseException as exc:  # raised by the test
+            self.failure = exc
+            self.window.close_window()
+
+    def act(self):
         loop = wait_for("the loop", lambda: self.presenter.loop)
         seen = None
         while not self.done.is_set():
             screen = loop.screen
             drawn = loop.buttons
-            if screen is seen or (screen.buttons and tuple(b.value for b in drawn)
-                                  != tuple(v for v, _ in screen.buttons)):
+            if screen is seen or (screen.phase == "message" and not screen.buttons) or (
+                    tuple(b.value for b in drawn) != tuple(v for v, _ in screen.buttons)):
                 time.sleep(0.01)
                 continue
             seen = screen
             if screen.phase == "interval":
-                self.stroke(loop)
+                self.intervals += 1
+                if self.intervals == self.lose_at:  # the haptic side stops: a device lost
+                    loop.haptic.error = OSError("the device stopped taking data (test)")
+                else:
+                    self.stroke(loop)
                 continue
             frames = self.window.frames
             wait_for("a frame of the screen", lambda: self.window.frames > frames + 1)
@@ -122,7 +138,7 @@ class Hand:
                 else:
                     self.answers.append("2")
                     self.click(drawn[1].box)
-            else:
+            else:  # a message's first button: Start, Continue, Reconnect
                 self.click(drawn[0].box)
 
     def stroke(self, loop):
@@ -138,7 +154,9 @@ class Hand:
         self.strokes.append(tuple(float(v) for v in vp.to_mm(xs[[0, -1]], [y, y])[0]))
 
 
-def test_a_session_in_the_headless_window(tmp_path, capsys):
+def run_headless(tmp_path, lose_at=None):
+    """The tiny protocol's session in the headless window with a :class:`Hand`:
+    (session, hand, session folder)."""
     protocol_file = tmp_path / "tiny.toml"
     protocol_file.write_text(PROTOCOL)
     protocol = load_protocol(protocol_file)
@@ -149,7 +167,7 @@ def test_a_session_in_the_headless_window(tmp_path, capsys):
         pytest.skip(f"EGL unavailable: {exc}")
     out = tmp_path / "session"
     presenter = WindowPresenter()
-    hand = Hand(window, presenter)
+    hand = Hand(window, presenter, lose_at)
 
     def start(sc, record):
         haptic, finish = open_haptic(sc, 10_000.0, 50, None, None, record)
@@ -165,7 +183,13 @@ def test_a_session_in_the_headless_window(tmp_path, capsys):
     finally:
         hand.done.set()
         thread.join(timeout=30)
+        if hand.failure is not None:
+            raise hand.failure
+    return session, hand, out
 
+
+def test_a_session_in_the_headless_window(tmp_path):
+    session, hand, out = run_headless(tmp_path)
     # the results: a practice trial and two main trials, answered as the hand did
     rows = read_csv(out / "results.csv")
     assert [r["practice"] for r in rows] == ["1", "0", "0"]
@@ -201,3 +225,20 @@ def test_a_session_in_the_headless_window(tmp_path, capsys):
         assert not overlapping(boxes), title
         assert all(x >= 0 and y >= 0 and x + bw <= w + 1 and y + bh <= h + 1
                    for x, y, bw, bh in boxes), title
+
+
+def test_a_lost_device_pauses_and_reconnecting_repeats_the_trial(tmp_path):
+    session, hand, out = run_headless(tmp_path, lose_at=3)  # trial 2's first interval
+    rows = read_csv(out / "results.csv")
+    assert [r["response"] for r in rows] == hand.answers == ["1", "2", "2"]
+    assert hand.intervals == 7  # trial 2's first interval shown again after reconnecting
+    titles = [t for t, _, _ in hand.layouts]
+    assert titles.count("Output device lost") == 1
+    events = read_csv(out / "live" / "events.csv")
+    kinds = [e["event"] for e in events]
+    assert "output-lost" in kinds and "paused" in kinds and "reconnect" in kinds
+    # the new haptic side records beside the first; every trial's files are there
+    assert (out / "live-2" / "commands.csv").exists()
+    for trial in (1, 2, 3):
+        for interval in (1, 2):
+            assert read_trace(out / "trials" / f"{trial:04d}" / f"{interval}.csv").t_s.size > 2
