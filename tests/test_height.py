@@ -121,7 +121,8 @@ def test_magnitude_rendering_is_the_same_both_ways_and_never_below_rest():
 
 @given(st.floats(-1e6, 1e6, allow_nan=False))
 @example(1.097e-18)  # a change of mu' below rounding: the old expectation's failure
-@settings(derandomize=True, max_examples=200)
+@settings(derandomize=True, max_examples=200, deadline=None)  # values, not speed: the first
+# call loads the kernel from numba's cache, which a busy machine may take past 200 ms for
 def test_mu_stays_within_its_limits_whatever_the_slope(s):
     layer = _bump_layer(mu_rest=0.75, mu_min=0.5, mu_max=0.95)
     mu = float(layer.mu_of_slope(s))

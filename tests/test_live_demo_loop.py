@@ -282,9 +282,9 @@ def test_the_window_title_names_the_scene_and_follows_a_switch(gl, tmp_path):
     playlist = [resolve_scene("grating-5mm"), resolve_scene("grating-15mm")]
     loop = DemoLoop(window, haptic, playlist, 0, scene, load_scene, tmp_path)
     try:
-        assert window.title == "frictex: grating-5mm"
+        assert window.title == "frictex demo: grating-5mm"
         loop.select(1)
-        assert window.title == "frictex: grating-15mm"
+        assert window.title == "frictex demo: grating-15mm"
     finally:
         loop.close()
         window.close()

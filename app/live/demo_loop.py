@@ -93,9 +93,9 @@ KEYS_HELP = ("wheel, up/down: force | N/B: scene | R: renderer | S: scope | "
 
 
 def window_title(scene) -> str:
-    """The window's title for ``scene``: frictex and the scene's name (escaped: a name
-    comes from a file)."""
-    return f"frictex: {escape(scene.name, limit=80)}"
+    """The window's title for ``scene``: "frictex demo" and the scene's name (escaped: a
+    name comes from a file)."""
+    return f"frictex demo: {escape(scene.name, limit=80)}"
 
 
 def next_screenshot(folder: Path, stem: str):

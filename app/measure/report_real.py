@@ -80,7 +80,7 @@ def load_recording(path: Path, width_mm: float, height_mm: float):
         args = parser.parse_args([str(path), "-o", str(out), "--width-mm", str(width_mm),
                                   "--height-mm", str(height_mm)])
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-            run_import(args)
+            run_import(args, lambda to, text: Path(to).write_text(text, encoding="utf-8"))
         trace = read_trace(out)
     return make_trace(trace.t_s - trace.t_s[0], trace.finger, trace.x_mm, trace.y_mm,
                       trace.force_n, trace.event)
