@@ -13,7 +13,7 @@ import pytest
 
 from frictex.app.experiment.protocol import load_protocol
 from frictex.app.experiment.runner import run_session
-from frictex.app.experiment.window_presenter import (WindowPresenter, how_to_answer,
+from frictex.app.experiment.window_presenter import (SessionPaused, WindowPresenter, how_to_answer,
                                                      response_keys, run_in_window)
 from frictex.app.live.haptic_setup import open_haptic
 from frictex.app.commands.cli import main as cli_main
@@ -83,8 +83,10 @@ def test_keys_of_the_responses():
 class Hand:
     """The participant: answers each screen once it is drawn; records what it did."""
 
-    def __init__(self, window, presenter, lose_at=None):
+    def __init__(self, window, presenter, lose_at=None, escape_at=None):
         self.window, self.presenter = window, presenter
+        self.escape_at = escape_at  # the question (1-based) answered with Escape
+        self.questions = 0
         self.lose_at = lose_at  # the interval (1-based) at which the output is lost
         self.intervals = 0
         self.answers = []  # the responses given, in order
@@ -115,7 +117,7 @@ class Hand:
             screen = loop.screen
             drawn = loop.buttons
             if screen is seen or (screen.phase == "message" and not screen.buttons) or (
-                    tuple(b.value for b in drawn) != tuple(v for v, _ in screen.buttons)):
+                    tuple((b.value, b.label) for b in drawn) != screen.buttons):
                 time.sleep(0.01)
                 continue
             seen = screen
@@ -128,11 +130,15 @@ class Hand:
                 continue
             frames = self.window.frames
             wait_for("a frame of the screen", lambda: self.window.frames > frames + 1)
+            drawn = loop.buttons  # as drawn now (two screens may have the same buttons)
             self.layouts.append((screen.title, list(loop.compositor.text_boxes),
                                  loop.compositor.size))
             values = [v for v, _ in screen.buttons]
             if values == ["1", "2"]:
-                if not self.answers:  # the first answer by key, the others by button
+                self.questions += 1
+                if self.questions == self.escape_at:
+                    self.window.key("escape")
+                elif not self.answers:  # the first answer by key, the others by button
                     self.answers.append("1")
                     self.window.key("1")
                 else:
@@ -154,7 +160,7 @@ class Hand:
         self.strokes.append(tuple(float(v) for v in vp.to_mm(xs[[0, -1]], [y, y])[0]))
 
 
-def run_headless(tmp_path, lose_at=None):
+def run_headless(tmp_path, lose_at=None, escape_at=None, resume=False):
     """The tiny protocol's session in the headless window with a :class:`Hand`:
     (session, hand, session folder)."""
     protocol_file = tmp_path / "tiny.toml"
@@ -167,7 +173,7 @@ def run_headless(tmp_path, lose_at=None):
         pytest.skip(f"EGL unavailable: {exc}")
     out = tmp_path / "session"
     presenter = WindowPresenter()
-    hand = Hand(window, presenter, lose_at)
+    hand = Hand(window, presenter, lose_at, escape_at)
 
     def start(sc, record):
         haptic, finish = open_haptic(sc, 10_000.0, 50, None, None, record)
@@ -178,7 +184,8 @@ def run_headless(tmp_path, lose_at=None):
     thread.start()
     try:
         session = run_in_window(
-            presenter, lambda: run_session(protocol, presenter, out, seed=7, participant="window"),
+            presenter, lambda: run_session(protocol, presenter, out, seed=7, participant="window",
+                                           resume=resume),
             window, start, scene, out / "live", tmp_path / "shots")
     finally:
         hand.done.set()
@@ -242,3 +249,16 @@ def test_a_lost_device_pauses_and_reconnecting_repeats_the_trial(tmp_path):
     for trial in (1, 2, 3):
         for interval in (1, 2):
             assert read_trace(out / "trials" / f"{trial:04d}" / f"{interval}.csv").t_s.size > 2
+
+
+def test_escape_ends_the_session_keeping_the_answers_and_resume_goes_on(tmp_path):
+    with pytest.raises(SessionPaused, match="trial 2 .*Escape.*--resume"):
+        run_headless(tmp_path, escape_at=2)
+    out = tmp_path / "session"
+    assert [r["response"] for r in read_csv(out / "results.csv")] == ["1"]
+    assert not (out / "trials" / "0002").exists()  # the trial left is not recorded
+    session, hand, _ = run_headless(tmp_path, resume=True)
+    rows = read_csv(out / "results.csv")
+    assert [r["trial"] for r in rows] == ["1", "2", "3"]
+    assert [r["response"] for r in rows] == ["1", *hand.answers]
+    assert (out / "live-2" / "events.csv").exists()  # the resumed run's live output

@@ -6,7 +6,8 @@ changes:
 
 - what is drawn: the screen the presenter sets (``screen``, an
   ``rendering.visual.experiment_view.ExperimentView``, replaced whole) over the scene;
-  the buttons drawn (``buttons``, replaced whole each frame) are what a press hits;
+  the buttons drawn (``buttons``, replaced whole each frame) are what a press hits,
+  once they are the current screen's (a press before its first frame hits nothing);
 - the mouse touches only while an interval accepts touches (``accept_touch``); a press
   on a button is an answer, never a touch; the touches sent during an interval are
   recorded (:meth:`start_recording`, :meth:`stop_recording`) exactly as the haptic side
@@ -57,6 +58,7 @@ class ExperimentLoop(DemoLoop):
         self.show_scope = False
         self.screen = ExperimentView("message")
         self.buttons: tuple = ()
+        self._buttons_of: ExperimentView | None = None  # the screen they were drawn for
         self.answers: queue.SimpleQueue = queue.SimpleQueue()  # ("key" | "button", value, t_s)
         self.requests: queue.SimpleQueue = queue.SimpleQueue()  # (what, args, reply queue)
         self.accept_touch = False
@@ -78,7 +80,7 @@ class ExperimentLoop(DemoLoop):
         if self.hover_px is None:
             self.hover_px = self.backend.cursor_px()
         if not self.touching:
-            if pressed:
+            if pressed and self._buttons_of is self.screen:  # (not a screen's gone by)
                 button = hit(self.buttons, *self.hover_px)
                 if button is not None:
                     self.answers.put(("button", button.value, self.haptic.now()))
@@ -202,4 +204,4 @@ class ExperimentLoop(DemoLoop):
             amplitude_max_um=self.scene.device.amplitude_limit_um,
             status=(screen.progress,) if screen.progress else (), banner=banner,
             banner_kind=kind))
-        self.buttons = draw_experiment(self.compositor, screen)
+        self.buttons, self._buttons_of = draw_experiment(self.compositor, screen), screen

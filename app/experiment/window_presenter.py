@@ -243,6 +243,13 @@ class WindowPresenter:
     # -- screens and events -------------------------------------------------------------
 
     def _show(self, view: ExperimentView) -> None:
+        """Show ``view``; keys and clicks that came before it are dropped (a double
+        press must not answer the next screen)."""
+        while True:
+            try:
+                self.loop.answers.get_nowait()
+            except queue.Empty:
+                break
         self.loop.screen = view
         if view.phase == "message":  # what the participant is asked to do, logged
             self.loop.log("screen", view.title)
