@@ -66,6 +66,9 @@ def test_seed003_gratings_in_the_window_under_xvfb(xvfb_display, xdotool, tmp_pa
                     xdo(xvfb_display, "key", "Return")
                 wait_event(proc, rec, "screen", len(screens(rec)))  # bounded, and alive
             asked = len(screens(rec))
+            if k == 1:  # the first interval as shown: the grating, the Next button
+                xdo(xvfb_display, "key", "p")
+                wait_event(proc, rec, "screenshot", 2)
             y = SIZE[1] // 2
             drag(xvfb_display, win, proc, rec,
                  [(x, y) for x in np.linspace(150, 650, 20)], k - 1)
@@ -73,7 +76,7 @@ def test_seed003_gratings_in_the_window_under_xvfb(xvfb_display, xdotool, tmp_pa
             wait_event(proc, rec, "screen", asked + 1)  # the question
             if k == 1:
                 xdo(xvfb_display, "key", "p")
-                wait_event(proc, rec, "screenshot", 2)
+                wait_event(proc, rec, "screenshot", 3)
             xdo(xvfb_display, "key", rating)
             wait_event(proc, rec, "response", k)
         finish(proc)
@@ -90,12 +93,12 @@ def test_seed003_gratings_in_the_window_under_xvfb(xvfb_display, xdotool, tmp_pa
     assert breaks == 2 and screens(rec).count("Break") == 2  # after the practice, after 3 trials
     for k in range(1, 8):
         assert (out / "trials" / f"{k:04d}" / "1" / "commands.csv").exists()
-    # the screenshots: the instructions and the question, with their buttons drawn
+    # the screenshots: the instructions, an interval and the question, their buttons drawn
     button = np.round(np.array(BUTTON_RGBA[:3]) * 255)
     for path in sorted(shots.glob("*.png")):
         Image.open(path).save(Path(os.environ.get("FRICTEX_KEEP_SHOTS", tmp_path)) / path.name)
         rgb = np.asarray(Image.open(path).convert("RGB")).astype(int)
         assert np.all(np.abs(rgb - button) <= 2, axis=-1).sum() > 500, path.name
-    assert len(list(shots.glob("*.png"))) == 2
+    assert len(list(shots.glob("*.png"))) == 3
     assert cli_main(["experiment", "analyse", str(out), "--out", str(tmp_path / "analysis")]) == 0
     assert (tmp_path / "analysis" / "analysis.json").exists()

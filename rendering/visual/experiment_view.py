@@ -90,7 +90,7 @@ def layout(view: ExperimentView, size: tuple[int, int], top_px: float
     """Where ``view``'s texts and buttons go in a frame of ``size`` (w, h) px, below
     ``top_px`` (the status lines): (texts as (lines, size px, x, y), buttons). Message
     screens stack title, paragraphs and button rows from the top; an interval puts
-    its buttons in a row at the bottom right."""
+    its buttons in a row centred at the bottom."""
     w, h = size
     px = font_px(h)
     texts: list[tuple[tuple[str, ...], int, float, float]] = []
