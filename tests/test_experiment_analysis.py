@@ -64,7 +64,7 @@ def sessions(tmp_path_factory):
             (root / "afc.toml", "a1", 3), (root / "afc.toml", "a2", 4)]
     for protocol, name, seed in runs:
         assert experiment(protocol, "--participant", f"{SIM},seed={seed}", "--out", root / name,
-                          "--record", "results") == 0
+                          "--seed", seed, "--record", "results") == 0  # both seeds: reproducible
     return root
 
 

@@ -201,8 +201,7 @@ class SimulatedParticipant:
             response = "different" if apart else "same"
         else:
             response = self._rating(percepts[0], trial.responses)
-        explored = sum(min(self.stroke_s, s.seconds) if s.free else s.seconds for s in shown)
-        rt = explored + float(rng.lognormal(math.log(0.8), 0.3))
+        rt = float(rng.lognormal(math.log(0.8), 0.3))  # from the last interval's end
         return Presentation(response, rt, tuple(f.trace for f in felts))
 
     def _rating(self, percept: float, responses: tuple[str, ...]) -> str:

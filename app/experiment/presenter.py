@@ -37,7 +37,8 @@ class Shown:
 @dataclass(frozen=True)
 class Presentation:
     """What a presenter returns: the ``response`` (one of the trial's), the response
-    time ``rt_s`` (s, from the start of the trial) and one touch trace per interval."""
+    time ``rt_s`` (s, from the end of the trial's last interval to the answer: the
+    exploration's own length is not in it) and one touch trace per interval."""
 
     response: str
     rt_s: float
