@@ -56,3 +56,42 @@ def test_without_repair_the_same_faults_lose_a_tenth():
     st = _stream("sim:protocol=3", "corrupt=0.001,seed=3")
     assert st["protocol_version"] == 3 and st["resent_frames"] == 0
     assert st["unplayed_by_cause"]["lost"] > 0.05 * SECONDS * RATE
+
+
+def _stream_losing_stops(lose: int) -> tuple[dict, object]:
+    """A short paced stream to the in-process device, which never sees the first ``lose``
+    Stop frames (lost on the wire: a Stop is not repaired by Missing, PROTOCOL.md 4.5)."""
+    from frictex.device.link import protocol as p
+    from frictex.device.link.host import CommandSink
+    from frictex.device.link.simdevice import DeviceConfig
+    from frictex.device.link.simport import SimDevice
+
+    device = SimDevice(DeviceConfig(channels=1, rate_hz=RATE))
+    handle, lost = device.core._handle, []
+
+    def losing_stops(frame):
+        if isinstance(frame.message, p.Stop) and len(lost) < lose:
+            lost.append(frame)
+            return None
+        return handle(frame)
+    device.core._handle = losing_stops
+    n = int(0.3 * RATE)
+    with CommandSink(device.open, 1, RATE, paced=True, simulated=True,
+                     stderr=io.StringIO()) as sink:
+        for b in range(0, n, 50):
+            sink.send(b, np.full((50, 1), 1.0))
+    st = sink.status()
+    accounted(st, None, n)
+    return st, device.core
+
+
+def test_a_lost_stop_is_sent_again_and_the_device_stops():
+    st, core = _stream_losing_stops(1)
+    assert st["stop_resends"] == 1
+    assert core.stopped  # the Stop took: `sim-device --once` exits once its ramp has run
+
+
+def test_stops_lost_every_time_end_the_close_within_its_bound():
+    st, core = _stream_losing_stops(10)
+    assert st["stop_resends"] == 3
+    assert not core.stopped

@@ -358,6 +358,7 @@ class CommandSink:
             "stalls": c["stalls"], "device_flushes": c["device_flushes"],
             "force_reports": c["force_reports"],
             "resent_frames": c["resent_frames"], "resends_too_late": c["resends_too_late"],
+            "stop_resends": c["stop_resends"],
             "resyncs": d.discarded, "crc_errors": d.crc_errors,
             "lost_frames_from_device": d.lost_frames,
             "clamped_samples": c["clamped_samples"], "dropped_blocks": c["dropped_blocks"],

@@ -45,12 +45,14 @@ SILENCE_S = 0.5
 STARVED_S = 0.1
 #: beyond the drain itself, how long the closing Stop may take to play out (s)
 STOP_MARGIN_S = 0.5
+#: times a Stop is sent again when a Status after it shows a device that is not stopping
+STOP_RESENDS = 3
 #: most bytes of blocks written in one turn
 _TURN_BYTES = 4096
 
 _COUNTS = ("frames_sent", "blocks_sent", "heartbeats", "retries", "reconnects", "disconnects",
            "recoveries", "stalls", "device_flushes", "clamped_samples", "dropped_blocks",
-           "force_reports", "resent_frames", "resends_too_late")
+           "force_reports", "resent_frames", "resends_too_late", "stop_resends")
 #: Blocks kept for resending, by sequence number (PROTOCOL.md 4.10)
 RESEND_KEEP = 512
 #: a Block is resent at most once in this long, however often it is asked for (s)
@@ -435,23 +437,33 @@ class HostSession:
             while self.queue and self.ledger.reporting and not self.paced:
                 out += self._send_block(*self.queue.popleft())
             self._drop_queued("stalled")
-        out += self._frame(p.Stop(drain=True))
-        self._first_after_stop = self._token + 1
-        self._close_by = now + self._drain_s()
+        out += self._stop(now)
         self._next_hb = now
         self.phase = "closing"
         return bytes(out)
 
+    def _stop(self, now: float) -> bytes:
+        """A drained Stop; a Status that echoes a later Heartbeat tells whether it arrived."""
+        self._first_after_stop = self._token + 1
+        self._close_by = now + self._drain_s()
+        return self._frame(p.Stop(drain=True))
+
     def _poll_closing(self, now: float) -> bytes:
         st = self.status
-        if ((st is not None and st.state == DeviceState.SILENT
-             and st.echo >= self._first_after_stop) or now >= self._close_by):
+        answered = st is not None and st.echo >= self._first_after_stop
+        if (answered and st.state == DeviceState.SILENT) or now >= self._close_by:
             with self.cond:
                 self.ledger.end_session()
                 self.phase = "done"
                 self.cond.notify_all()
             return b""
         out = self._resends(now) if self._due else b""
+        if (answered and st.state != DeviceState.DRAINING
+                and self.counts["stop_resends"] < STOP_RESENDS):
+            # The Stop was lost on the wire, or a watchdog trip cut its drain short (the
+            # next Heartbeat took the device back to BUFFERING): neither is stopping.
+            self.counts["stop_resends"] += 1
+            out += self._stop(now)
         if now < self._next_hb:
             return out
         self._next_hb = now + self._heartbeat_s
