@@ -391,7 +391,8 @@ def test_a_device_that_stops_answering_ends_in_link_stalled(stoppable_device):
     _within(30.0, sink.close)
     status = sink.status()
     assert status["state"] == "closed"
-    assert status["played_samples"] + status["unplayed_samples"] == status["commanded_samples"]
+    assert status["played_samples"] + status["unplayed_samples"] == status["commanded_samples"], \
+        status
 
 
 def test_wait_for_room_is_bounded_and_counts_a_stall(stoppable_device):
