@@ -3,6 +3,7 @@
  * a host's Stop has played out it leaves QEMU through semihosting, as the host port's
  * --once. */
 #include "../core/device.h"
+#include "../cortexm/cortexm.h"
 #include "board.h"
 #include "played_log.h"
 #include "regs.h"
@@ -11,19 +12,7 @@
 static fw_device device;
 static volatile uint32_t log_dropped;
 
-static void lock(void *ctx)
-{
-    (void)ctx;
-    __asm volatile("cpsid i" ::: "memory");
-}
-
-static void unlock(void *ctx)
-{
-    (void)ctx;
-    __asm volatile("cpsie i" ::: "memory");
-}
-
-static const fw_hal hal = {uart_write, NULL, NULL, lock, unlock, NULL}; /* no sensors */
+static const fw_hal hal = {uart_write, NULL, NULL, cortexm_lock, cortexm_unlock, NULL}; /* no sensors */
 
 static const fw_config config = {
     .channels = BOARD_CHANNELS,

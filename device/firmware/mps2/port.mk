@@ -5,9 +5,9 @@ MPS2_CFLAGS := -std=c11 -mcpu=cortex-m3 -mthumb -O2 -g -ffunction-sections -fdat
     -fno-common -Wall -Wextra -Wshadow $(MPS2_DEFS)
 MPS2_LDFLAGS := -T mps2/mps2.ld -nostartfiles --specs=nano.specs --specs=nosys.specs \
     -Wl,--gc-sections
-MPS2_SRC := $(CORE) mps2/startup.c mps2/uart.c mps2/played_log.c mps2/main.c
+MPS2_SRC := $(CORE) cortexm/reset.c mps2/startup.c mps2/uart.c mps2/played_log.c mps2/main.c
 
-$(BUILD)/mps2/frictex-fw-mps2.elf: $(MPS2_SRC) $(HDRS) $(wildcard mps2/*.h) mps2/mps2.ld
+$(BUILD)/mps2/frictex-fw-mps2.elf: $(MPS2_SRC) $(HDRS) $(wildcard cortexm/*.h mps2/*.h) mps2/mps2.ld
 	@mkdir -p $(@D)
 	$(ARM_CC) $(MPS2_CFLAGS) $(MPS2_SRC) $(MPS2_LDFLAGS) -o $@
 

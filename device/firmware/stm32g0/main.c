@@ -1,6 +1,7 @@
 /* The Cortex-M0+ port: NUCLEO-G071RB, USART2 at 1 Mbaud, TIM6 sample clock, DAC1 outputs
  * (see README.md for the wiring and first power-up). */
 #include "../core/device.h"
+#include "../cortexm/cortexm.h"
 #include "board.h"
 #include "clock.h"
 #include "sample_clock.h"
@@ -8,19 +9,7 @@
 
 static fw_device device;
 
-static void lock(void *ctx)
-{
-    (void)ctx;
-    __asm volatile("cpsid i" ::: "memory");
-}
-
-static void unlock(void *ctx)
-{
-    (void)ctx;
-    __asm volatile("cpsie i" ::: "memory");
-}
-
-static const fw_hal hal = {uart_write, NULL, NULL, lock, unlock}; /* no sensors wired */
+static const fw_hal hal = {uart_write, NULL, NULL, cortexm_lock, cortexm_unlock, NULL}; /* no sensors wired */
 
 static const fw_config config = {
     .channels = BOARD_CHANNELS,

@@ -8,10 +8,10 @@ ARM_CFLAGS := -std=c11 -mcpu=cortex-m0plus -mthumb -Os -g -ffunction-sections -f
     -fno-common -Wall -Wextra -Wshadow $(ARM_DEFS) -fstack-usage
 ARM_LDFLAGS := -T stm32g0/stm32g0.ld -nostartfiles --specs=nano.specs --specs=nosys.specs \
     -Wl,--gc-sections -Wl,-Map=$(BUILD)/stm32g0/frictex-fw.map
-ARM_SRC := $(CORE) stm32g0/startup.c stm32g0/clock.c stm32g0/uart.c stm32g0/sample_clock.c \
+ARM_SRC := $(CORE) cortexm/reset.c stm32g0/startup.c stm32g0/clock.c stm32g0/uart.c stm32g0/sample_clock.c \
     stm32g0/main.c
 
-$(BUILD)/stm32g0/frictex-fw.elf: $(ARM_SRC) $(HDRS) $(wildcard stm32g0/*.h) stm32g0/stm32g0.ld
+$(BUILD)/stm32g0/frictex-fw.elf: $(ARM_SRC) $(HDRS) $(wildcard cortexm/*.h stm32g0/*.h) stm32g0/stm32g0.ld
 	@mkdir -p $(@D)
 	$(ARM_CC) $(ARM_CFLAGS) $(ARM_SRC) $(ARM_LDFLAGS) -o $@
 
