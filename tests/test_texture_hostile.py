@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import os
 import zlib
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from struct import pack
 
@@ -16,7 +15,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from test_hostile_files import HEAD, TIMEOUT_S, Case, _run
+from test_hostile_files import HEAD, Case, run_all
 
 from frictex.app.commands.cli import main
 from frictex.device.safe_text import escape
@@ -117,18 +116,10 @@ CASES = [
 
 
 def test_every_case_is_one_escaped_line_and_exit_2(tmp_path):
-    with ThreadPoolExecutor(max_workers=4) as pool:
-        results = list(pool.map(lambda ic: _run(ic[1], tmp_path / f"case{ic[0]}"),
-                                enumerate(CASES)))
-    failures = []
-    for case, lines, name, code in results:
-        if lines is None:
-            failures.append(f"{case.kind}: still running after {TIMEOUT_S:g} s")
-        elif (code != 2 or len(lines) != (29 if case.kind == MANY else 1) or name not in lines[0]
-              or not all(x.startswith("frictex: error: ") and x.isprintable() and "root:*" not in x
-                         for x in lines)):
-            failures.append(f"{case.kind}: exit {code}, stderr {[escape(x, 300) for x in lines[-12:]]}")
-    assert not failures, "\n".join(failures)
+    run_all(CASES, tmp_path, lambda case, lines, name, code: (
+        code == 2 and len(lines) == (29 if case.kind == MANY else 1) and name in lines[0]
+        and all(x.startswith("frictex: error: ") and x.isprintable() and "root:*" not in x
+                for x in lines)))
 
 
 @pytest.mark.parametrize("kind", list(NAMING))
