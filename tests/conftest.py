@@ -6,15 +6,24 @@ itself rather than the next one. Tests skip only when the library or binary they
 is truly absent, and the skip names it.
 
 No device link outlives its test (``_no_link_outlives_its_test``).
+
+Ctrl-C is not ignored in the test process or the commands it starts: a shell starts a
+background job (``pytest ... &`` in a script) with SIGINT ignored, which a run keeps
+ignored, as it must (``app.engine.driver.deferred_interrupts``); the tests of Ctrl-C
+mean the one a terminal sends.
 """
 
 from __future__ import annotations
 
 import os
 import shutil
+import signal
 import subprocess
 
 import pytest
+
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 @pytest.fixture(scope="session")
