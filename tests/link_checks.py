@@ -49,6 +49,18 @@ def all_played_unless_tripped(status: dict, played_index: np.ndarray | None,
             assert by_cause["disconnected"] == by_cause["queue_full"] == by_cause["stalled"] == 0
 
 
+def clean_unless_starved(status: dict, blocks: int) -> bool:
+    """With no watchdog trip and no recovery (a device or host starved of CPU for half a
+    second is handshaken again, which drops what waited, counted), every one of
+    ``blocks`` went out once and nothing was damaged on the wire; returns whether the
+    stream was so clean (for the caller's further checks of a clean stream)."""
+    if status["recoveries"] or status["watchdog_trips"]:
+        return False
+    assert status["blocks_sent"] == blocks and status["dropped_blocks"] == 0, status
+    assert status["resyncs"] == 0 and status["device_crc_errors"] == 0, status
+    return True
+
+
 def in_order_within(played_index: np.ndarray, commanded_index: np.ndarray) -> None:
     """The samples that played are commanded ones, each once, in the order commanded."""
     where = np.searchsorted(commanded_index, played_index)

@@ -14,7 +14,8 @@ from frictex.device.firmware.build import FirmwareBuildError, host_port
 from frictex.device.link import protocol as p
 from frictex.device.link.faults import Faults, Plug
 from frictex.device.link.host import CommandSink, LinkError, open_port
-from link_checks import accounted, all_played_unless_tripped, in_order_within, until
+from link_checks import (accounted, all_played_unless_tripped, clean_unless_starved, in_order_within,
+                         until)
 
 STEP = p.AMPLITUDE_STEP_UM
 RATE = 10_000.0
@@ -40,7 +41,8 @@ def _csv(path):
 def stream_and_check(binary, tmp_path):
     """Stream 6000 samples paced by the port; every sample plays, exactly as commanded
     (bar what a watchdog trip flushed if the machine starved the host, counted).
-    Returns (the port's stderr: its summary and any sanitizer report, samples played)."""
+    Returns (the port's stderr: its summary and any sanitizer report, samples played,
+    whether the stream was clean: ``link_checks.clean_unless_starved``)."""
     log = tmp_path / "played.csv"
     proc, path = hostport.start(binary=binary, extra=("--log", str(log), "--limit", "3.0"))
     sig = _signal(6000)
@@ -57,15 +59,15 @@ def stream_and_check(binary, tmp_path):
     np.testing.assert_allclose(played[:, 1], sig[index, 0], atol=STEP / 2 + 1e-9)
     assert status["protocol_version"] == 4
     all_played_unless_tripped(status, index, 6000)
-    assert status["blocks_sent"] == 120 and status["dropped_blocks"] == 0
-    assert status["resyncs"] == 0 and status["device_crc_errors"] == 0
+    clean = clean_unless_starved(status, 120)
     assert proc.returncode == 0  # the port exited after the Stop had played out
-    return proc.stderr.read(), len(index)
+    return proc.stderr.read(), len(index), clean
 
 
 def test_the_host_link_streams_to_the_c_firmware_and_it_plays_every_sample(binary, tmp_path):
-    stderr, played = stream_and_check(binary, tmp_path)
-    assert f"played {played} samples; " in stderr and ", 0 bad frames, " in stderr
+    stderr, played, clean = stream_and_check(binary, tmp_path)
+    assert f"played {played} samples; " in stderr
+    assert ", 0 bad frames, " in stderr or not clean
 
 
 def test_the_firmware_clamps_what_the_host_did_not(binary, tmp_path):

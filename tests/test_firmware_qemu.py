@@ -15,7 +15,8 @@ from frictex.device.firmware.build import FirmwareBuildError
 from frictex.device.link import protocol as p
 from frictex.device.link.faults import Faults, Plug
 from frictex.device.link.host import CommandSink, LinkError, open_port
-from link_checks import accounted, all_played_unless_tripped, in_order_within, until
+from link_checks import (accounted, all_played_unless_tripped, clean_unless_starved, in_order_within,
+                         until)
 
 STEP = p.AMPLITUDE_STEP_UM
 RATE = qemuport.RATE_HZ
@@ -61,12 +62,9 @@ def test_the_host_link_streams_to_the_firmware_in_qemu_and_it_plays_what_it_is_s
     np.testing.assert_allclose(amp[:, 0] * STEP, sig[index, 0], atol=STEP / 2 + 1e-9)
     assert status["protocol_version"] == p.PROTOCOL_VERSION
     all_played_unless_tripped(status, index, 6000)
-    # QEMU starved of CPU (a busy machine) can take no block for half a second: the host
-    # then handshakes again (a recovery) and drops what waited, counted; seen 2 of 3 runs
-    # beside four busy processes. Without one, every block went out once and clean.
-    if status["recoveries"] == 0 and status["watchdog_trips"] == 0:
-        assert status["blocks_sent"] == 120 and status["dropped_blocks"] == 0
-        assert status["resyncs"] == 0 and status["device_crc_errors"] == 0
+    # QEMU starved of CPU took no block for half a second in 2 of 3 runs beside four
+    # busy processes: a recovery, its drops counted
+    clean_unless_starved(status, 120)
 
 
 def test_the_firmware_in_qemu_clamps_what_the_host_did_not(elf, tmp_path):

@@ -17,7 +17,8 @@ from frictex.device.link.host import CommandSink, LinkError, LinkStalled, open_p
 from frictex.device.firmware.build import FirmwareBuildError
 from frictex.device.firmware.ccore import built_core_class
 from frictex.device.link.simdevice import DeviceConfig, DeviceCore, open_pty, serve
-from link_checks import accounted, all_played_unless_tripped, in_order_within, until
+from link_checks import (accounted, all_played_unless_tripped, clean_unless_starved, in_order_within,
+                         until)
 
 STEP = p.AMPLITUDE_STEP_UM
 RATE = 10_000.0
@@ -129,8 +130,8 @@ def test_sim_round_trip_matches_the_commands(tmp_path):
     in_order_within(index, np.arange(6000))
     np.testing.assert_allclose(played[:, 1], sig[index, 0], atol=STEP / 2 + 1e-9)
     all_played_unless_tripped(status, index, 6000)
-    assert status["blocks_sent"] == 120 and status["dropped_blocks"] == 0
-    assert status["frames_sent"] > 120 and status["resyncs"] == 0
+    clean_unless_starved(status, 120)
+    assert status["frames_sent"] > 120
     assert status["device"]["sample_rate_hz"] == RATE
     assert 0 < status["latency_ms_p50"] <= status["latency_ms_p99"]
     assert status["device_state"] == "silent"  # the Stop played out
