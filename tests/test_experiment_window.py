@@ -40,9 +40,11 @@ levels = [6.6]
 
 [presentation]
 mode = "sequential"
-exploration = "fixed"
-exploration_s = 1.5
+exploration = "{exploration}"
+exploration_s = {seconds}
 """
+#: the hand moves on with Enter after its stroke: nothing waits on the machine's speed
+FREE = {"exploration": "free", "seconds": 60}
 
 
 def read_csv(path):
@@ -83,8 +85,9 @@ def test_keys_of_the_responses():
 class Hand:
     """The participant: answers each screen once it is drawn; records what it did."""
 
-    def __init__(self, window, presenter, lose_at=None, escape_at=None):
+    def __init__(self, window, presenter, lose_at=None, escape_at=None, free=True):
         self.window, self.presenter = window, presenter
+        self.free = free  # each interval ended with Enter after the stroke
         self.escape_at = escape_at  # the question (1-based) answered with Escape
         self.questions = 0
         self.lose_at = lose_at  # the interval (1-based) at which the output is lost
@@ -127,6 +130,8 @@ class Hand:
                     loop.haptic.error = OSError("the device stopped taking data (test)")
                 else:
                     self.stroke(loop)
+                    if self.free:
+                        self.window.key("enter")
                 continue
             frames = self.window.frames
             wait_for("a frame of the screen", lambda: self.window.frames > frames + 1)
@@ -160,11 +165,11 @@ class Hand:
         self.strokes.append(tuple(float(v) for v in vp.to_mm(xs[[0, -1]], [y, y])[0]))
 
 
-def run_headless(tmp_path, lose_at=None, escape_at=None, resume=False):
+def run_headless(tmp_path, lose_at=None, escape_at=None, resume=False, presentation=FREE):
     """The tiny protocol's session in the headless window with a :class:`Hand`:
     (session, hand, session folder)."""
     protocol_file = tmp_path / "tiny.toml"
-    protocol_file.write_text(PROTOCOL)
+    protocol_file.write_text(PROTOCOL.format(**presentation))
     protocol = load_protocol(protocol_file)
     scene = load_scene(resolve_scene("grating-5mm"))
     try:
@@ -173,7 +178,7 @@ def run_headless(tmp_path, lose_at=None, escape_at=None, resume=False):
         pytest.skip(f"EGL unavailable: {exc}")
     out = tmp_path / "session"
     presenter = WindowPresenter()
-    hand = Hand(window, presenter, lose_at, escape_at)
+    hand = Hand(window, presenter, lose_at, escape_at, presentation["exploration"] == "free")
 
     def start(sc, record):
         haptic, finish = open_haptic(sc, 10_000.0, 50, None, None, record)
@@ -232,6 +237,23 @@ def test_a_session_in_the_headless_window(tmp_path):
         assert not overlapping(boxes), title
         assert all(x >= 0 and y >= 0 and x + bw <= w + 1 and y + bh <= h + 1
                    for x, y, bw, bh in boxes), title
+
+
+def test_a_fixed_exploration_lasts_its_time_on_the_haptic_clock(tmp_path):
+    """Each interval ends by itself after ``exploration_s`` (one not touched in time, on a
+    busy machine, is shown again); what the hand touched is recorded."""
+    session, hand, out = run_headless(tmp_path, presentation={"exploration": "fixed",
+                                                              "seconds": 1.0})
+    assert [r["response"] for r in read_csv(out / "results.csv")] == hand.answers == ["1", "2", "2"]
+    events = read_csv(out / "live" / "events.csv")
+    times = {kind: [float(e["t_s"]) for e in events if e["event"] == kind]
+             for kind in ("interval-start", "interval-end")}
+    assert len(times["interval-start"]) == len(times["interval-end"]) >= 6
+    assert all(end - start >= 1.0 for start, end in zip(times["interval-start"],
+                                                          times["interval-end"]))
+    for trial in (1, 2, 3):
+        for interval in (1, 2):
+            assert read_trace(out / "trials" / f"{trial:04d}" / f"{interval}.csv").t_s.size > 2
 
 
 def test_a_lost_device_pauses_and_reconnecting_repeats_the_trial(tmp_path):

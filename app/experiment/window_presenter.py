@@ -222,7 +222,7 @@ class WindowPresenter:
                 "interval", buttons=((NEXT, "Next (Enter)"),) if item.free else (),
                 progress=self._progress(trial, label),
                 active_mm=None if whole else item.area))
-            loop.log("interval-start", f"trial {trial.number} interval {i}: {item.name}")
+            loop.log("interval-start", f"trial {trial.number} interval {i}: {item.name}", t_s=t0)
             try:
                 while (event := self._event(t0 + item.seconds)) is not None:
                     kind, value, _ = event
