@@ -45,6 +45,17 @@ LATE_SAMPLES = 200
 TOUCH_WAIT_S = 30.0
 
 
+class StepCut(LinkStalled):
+    """A step's reports cover less than ``MIN_COVERED`` of it: the device underran or its
+    watchdog tripped (a host starved of CPU), and dropped what it was building.
+    ``next_index``: the first sample past everything the sweep sent, where another sweep
+    on the same link may start."""
+
+    def __init__(self, message: str, next_index: int = 0):
+        super().__init__(message)
+        self.next_index = next_index
+
+
 @dataclass(frozen=True)
 class Sweep:
     """The protocol: amplitudes (um), time per step (s), share of each step discarded,
@@ -69,14 +80,16 @@ class Sweep:
         return steps
 
 
-def run_sweep(link, sweep: Sweep, on_step=None):
+def run_sweep(link, sweep: Sweep, on_step=None, first_index: int = 0):
     """Wait for a finger, stream the protocol to ``link`` (a paced ``CommandSink``, one
-    channel) and read the forces back; returns the points (w_um, normal_n, mu) as arrays.
+    channel) from sample ``first_index`` on and read the forces back; returns the points
+    (w_um, normal_n, mu) as arrays.
 
     ``on_step(done, total)`` is called as each step's forces have come (progress).
     Raises ValueError for a device that cannot be calibrated (no force reports, a limit
-    below the sweep's levels) or no finger on the plate, and ``LinkStalled`` when a
-    step's reports do not come or cover too little of it.
+    below the sweep's levels) or no finger on the plate, ``LinkStalled`` when a step's
+    reports do not come, and :class:`StepCut` (a ``LinkStalled``) when they cover too
+    little of it.
     """
     info = link.info
     if info is None or not info.has_force_reports:
@@ -89,8 +102,9 @@ def run_sweep(link, sweep: Sweep, on_step=None):
     per = int(round(sweep.step_s * link.rate_hz))
     kept = per - int(per * sweep.settle_share)
     steps = sweep.amplitudes()
-    start = _wait_for_finger(link)
+    start = _wait_for_finger(link, first_index)
     ratios, normals = [], []
+    sent = [start]  # one past the last sample sent
 
     def window(k: int) -> tuple[int, int]:
         return start + (k + 1) * per - kept, kept
@@ -109,19 +123,27 @@ def run_sweep(link, sweep: Sweep, on_step=None):
     def collect(upto: int) -> None:
         """Take the steps' forces in order, up to step ``upto``, as far as they have come."""
         while len(ratios) < upto:
-            forces = _step_forces(link, *window(len(ratios)), len(ratios))
+            try:
+                forces = _step_forces(link, *window(len(ratios)), len(ratios))
+            except StepCut as cut:
+                cut.next_index = sent[0]
+                raise
             if forces is None:
                 return
             take(len(ratios), forces)
 
+    def send(index: int, amplitudes) -> None:
+        link.send(index, amplitudes)
+        sent[0] = index + len(amplitudes)
+
     for k, w in enumerate(steps):
         for lo in range(0, per, BLOCK_SAMPLES):
-            link.send(start + k * per + lo, np.full((min(BLOCK_SAMPLES, per - lo), 1), w))
+            send(start + k * per + lo, np.full((min(BLOCK_SAMPLES, per - lo), 1), w))
             collect(k)
     # the plate back at rest, for long enough that the reports go past the last step
     end = start + len(steps) * per
     for lo in range(0, 2 * LATE_SAMPLES, BLOCK_SAMPLES):
-        link.send(end + lo, np.zeros((BLOCK_SAMPLES, 1)))
+        send(end + lo, np.zeros((BLOCK_SAMPLES, 1)))
     deadline = time.monotonic() + 2 * sweep.step_s + REPORT_WAIT_S
     collect(len(steps))
     while len(ratios) < len(steps):
@@ -149,17 +171,16 @@ def _step_forces(link, index0: int, n: int, k: int):
         return None
     lateral, normal = link.forces_covered(index0, n)
     if lateral.size < MIN_COVERED * n:
-        raise LinkStalled(f"{link.label}: the device's reports cover {lateral.size} of step "
-                          f"{k + 1}'s {n} samples (it drops a report when it underruns); "
-                          f"calibrate again with the host less busy")
+        raise StepCut(f"{link.label}: the device's reports cover {lateral.size} of step "
+                      f"{k + 1}'s {n} samples (it drops a report when it underruns or its "
+                      f"watchdog trips: a host starved of CPU)")
     return lateral, normal
 
 
-def _wait_for_finger(link) -> int:
-    """Keep the plate at rest until the device's reports show a finger pressing (at most
-    ``TOUCH_WAIT_S``); returns the next sample to send."""
+def _wait_for_finger(link, index: int) -> int:
+    """Keep the plate at rest from sample ``index`` on until the device's reports show a
+    finger pressing (at most ``TOUCH_WAIT_S``); returns the next sample to send."""
     deadline = time.monotonic() + TOUCH_WAIT_S
-    index = 0
     while True:
         latest = link.force_report()
         if latest is not None and float(np.median(latest.normal_n)) >= MIN_NORMAL_N:

@@ -111,6 +111,23 @@ def test_reports_a_device_dropped_are_done_without_or_refuse_the_step():
         run_sweep(ModelLink(1.4, 0.8, dropped=(first, first + 999)), Sweep())
 
 
+def test_a_sweep_cut_by_a_starved_host_is_run_again_from_where_it_stopped(capsys):
+    """calibrate's sweeps: the first loses a fifth of step 4's reports; the second starts
+    past all the first sent and gives eq 2's points; three cut sweeps are an error."""
+    from frictex.app.commands.calibrate import SWEEPS, _sweeps
+    first = 100 + 4 * 5000 - 3000  # step 4's kept samples in the first sweep
+    link = ModelLink(1.4, 0.8, drift_per_s=0.0, dropped=(first, first + 999))
+    w, _, mu = _sweeps(link, Sweep())
+    kf = 0.8 * 0.5
+    np.testing.assert_allclose(mu, (1 - kf) * np.exp(-1.4 * w) + kf, rtol=1e-12)
+    err = capsys.readouterr().err
+    assert err.count("frictex: warning: model: the device's reports cover 2000 of step 4's "
+                     "3000 samples") == 1 and f"sweeping again (2 of {SWEEPS})" in err
+    every_sweep = ModelLink(1.4, 0.8, dropped=(0, 10**9))
+    with pytest.raises(LinkStalled, match=f"in each of {SWEEPS} sweeps: calibrate again"):
+        _sweeps(every_sweep, Sweep())
+
+
 def test_a_device_without_force_reports_or_a_lower_limit_is_refused():
     link = ModelLink(1.4, 0.8)
     link.info.has_force_reports = False

@@ -21,12 +21,14 @@ from pathlib import Path
 import numpy as np
 
 from frictex.device.calibration_fit import device_toml, fit_points
-from frictex.device.calibration_run import Sweep, run_sweep
+from frictex.device.calibration_run import StepCut, Sweep, run_sweep
 from frictex.device.errors import InputError
 
 #: the plate's sample rate (Hz, seed 003) and the simulated plate's amplitude limit (um)
 RATE_HZ = 10_000.0
 SIM_LIMIT_UM = 2.5
+#: sweeps run at most: one whose step lost its reports to a starved host is run again
+SWEEPS = 3
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -64,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"{link.label}: slide a finger at about {sweep.speed_mm_s:g} mm/s, pressing "
               f"about {sweep.force_n:g} N, for {sweep.duration_s:g} s (the sweep starts at "
               f"the touch)", file=sys.stderr)
-        w, normal, mu = run_sweep(link, sweep, on_step=_progress)
+        w, normal, mu = _sweeps(link, sweep)
         limit_um = link.info.limits_um[0]
     finally:
         link.close()
@@ -79,6 +81,22 @@ def run(args: argparse.Namespace) -> int:
         _plot(args.plot, w, normal, mu, fit)
         print(f"wrote {args.plot}")
     return 0
+
+
+def _sweeps(link, sweep: Sweep):
+    """``run_sweep``, again from where the last one stopped when a step's reports were
+    cut (said on stderr), at most :data:`SWEEPS` times."""
+    first = 0
+    for attempt in range(1, SWEEPS + 1):
+        try:
+            return run_sweep(link, sweep, on_step=_progress, first_index=first)
+        except StepCut as cut:
+            if attempt == SWEEPS:
+                raise StepCut(f"{cut}; in each of {SWEEPS} sweeps: calibrate again with the "
+                              "host less busy", cut.next_index) from None
+            print(f"frictex: warning: {cut}; sweeping again ({attempt + 1} of {SWEEPS})",
+                  file=sys.stderr)
+            first = cut.next_index
 
 
 def _plot(path: Path, w, normal, mu, fit) -> None:
