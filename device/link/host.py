@@ -53,8 +53,7 @@ from frictex.device.link.forces import ForceReport
 from frictex.device.link.port import open_port
 from frictex.device.link.portthread import PortThread
 from frictex.device.link.protocol import DeviceState, LinkError
-from frictex.device.link.session import (PREFILL_S, STOP_MARGIN_S, TARGET_S, HostSession,
-                                         LinkStalled)
+from frictex.device.link.session import PREFILL_S, TARGET_S, HostSession, LinkStalled
 from frictex.device.link.stall import StallPolicy
 
 __all__ = ["CommandSink", "LinkError", "LinkStalled", "open_port", "open_sink", "PREFILL_S",
@@ -398,8 +397,7 @@ class CommandSink:
             self._wait_queue_sent()
         with self._cond:
             s.close_requested = True
-        drain_s = (s.info.buffer_samples / self.rate_hz + s.info.ramp_ms * 1e-3 + STOP_MARGIN_S)
-        self._thread.join(timeout=drain_s + 2.0)
+        self._thread.join(timeout=s.close_limit_s() + 2.0)
         if self._thread.is_alive():
             self._warn("link thread did not finish; closing without it")
             self._thread.stop_event.set()

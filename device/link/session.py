@@ -47,6 +47,9 @@ STARVED_S = 0.1
 STOP_MARGIN_S = 0.5
 #: times a Stop is sent again when a Status after it shows a device that is not stopping
 STOP_RESENDS = 3
+#: a close waits at most this many times the longest drain (a full buffer, the ramp and
+#: the margin), however often its Stop is resent or however slowly the device plays on
+CLOSE_STRETCH = 4
 #: most bytes of blocks written in one turn
 _TURN_BYTES = 4096
 
@@ -437,10 +440,18 @@ class HostSession:
             while self.queue and self.ledger.reporting and not self.paced:
                 out += self._send_block(*self.queue.popleft())
             self._drop_queued("stalled")
+        self._close_limit = now + self.close_limit_s()
+        self._close_seen = self.snapshot.play_index if self.snapshot else None
         out += self._stop(now)
         self._next_hb = now
         self.phase = "closing"
         return bytes(out)
+
+    def close_limit_s(self) -> float:
+        """The longest a close may take once begun (s): :data:`CLOSE_STRETCH` times a full
+        buffer's drain."""
+        return CLOSE_STRETCH * (self.info.buffer_samples / self.rate_hz
+                                + self.info.ramp_ms * 1e-3 + STOP_MARGIN_S)
 
     def _stop(self, now: float) -> bytes:
         """A drained Stop; a Status that echoes a later Heartbeat tells whether it arrived."""
@@ -451,7 +462,13 @@ class HostSession:
     def _poll_closing(self, now: float) -> bytes:
         st = self.status
         answered = st is not None and st.echo >= self._first_after_stop
-        if (answered and st.state == DeviceState.SILENT) or now >= self._close_by:
+        if st is not None and st.play_index != self._close_seen:
+            # the device plays on, slower than its clock promised (a starved emulator):
+            # its drain is waited for while it lasts, up to the close's limit
+            self._close_seen = st.play_index
+            self._close_by = max(self._close_by, now + STOP_MARGIN_S)
+        if ((answered and st.state == DeviceState.SILENT)
+                or now >= min(self._close_by, self._close_limit)):
             with self.cond:
                 self.ledger.end_session()
                 self.phase = "done"
