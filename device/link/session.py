@@ -49,7 +49,7 @@ STOP_MARGIN_S = 0.5
 STOP_RESENDS = 3
 #: a close waits at most this many times the longest drain (a full buffer, the ramp and
 #: the margin), however often its Stop is resent or however slowly the device plays on
-CLOSE_STRETCH = 4
+CLOSE_STRETCH = 2
 #: most bytes of blocks written in one turn
 _TURN_BYTES = 4096
 
