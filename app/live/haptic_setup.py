@@ -4,12 +4,16 @@ down together; used by the demo in thread mode and by the haptic child process."
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from frictex.app.engine.sinks import TableSink, ThreadedSink
 
 RECORD_QUEUE = 4000  # blocks (20 s at 5 ms) the writer may fall behind before dropping
-JOIN_TIMEOUT_S = 5.0  # the thread commits its sinks (drains the link, writes the tables)
+#: the most (s) ``finish`` waits for the thread to commit its sinks: the link's close
+#: (under 2 s) and the recording's backlog (up to RECORD_QUEUE blocks) on a busy machine;
+#: below the 30 s a demo waits for its haptic child (``haptic_process.STOP_TIMEOUT_S``)
+JOIN_TIMEOUT_S = 25.0
 
 
 def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | None,
@@ -58,6 +62,9 @@ def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | N
         haptic.stop()
         if haptic.is_alive():
             haptic.join(timeout=JOIN_TIMEOUT_S)
+            if haptic.is_alive():
+                print(f"frictex: warning: the haptic thread did not end within "
+                      f"{JOIN_TIMEOUT_S:g} s; its recording may be incomplete", file=sys.stderr)
         elif not haptic.ident:  # never started: nothing committed the sinks
             for sink in (haptic.recorder, haptic.sink):
                 if sink is not None:
