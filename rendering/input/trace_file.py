@@ -569,6 +569,8 @@ def _numbered_rows(batch: list[_Rows]) -> list[tuple[int, list[str]]]:
 #: until pyarrow is imported, a block of fewer lines is split line by line: for a small
 #: file, importing it (about 0.1 s) would cost more than its parser saves (4 us a line)
 _PLAIN_MIN_LINES = 8192
+#: least bytes Arrow parses as one block (many rows, so a row never spans two)
+_ARROW_BLOCK = 1 << 16
 
 
 def _plain_columns(data: bytes, count: int, col: dict[str, int], width: int) -> tuple | None:
@@ -596,8 +598,9 @@ def _plain_columns(data: bytes, count: int, col: dict[str, int], width: int) -> 
     try:
         table = pa_csv.read_csv(
             pa.py_buffer(data + b"\n"),  # Arrow needs a line break to see a row's end
-            read_options=pa_csv.ReadOptions(autogenerate_column_names=True, use_threads=False,
-                                            block_size=len(data) + 2),
+            # a few blocks parsed on Arrow's threads (the cores); in order, as one
+            read_options=pa_csv.ReadOptions(autogenerate_column_names=True, use_threads=True,
+                                            block_size=max(len(data) // 4 + 2, _ARROW_BLOCK)),
             parse_options=pa_csv.ParseOptions(quote_char=False, escape_char=False,
                                               ignore_empty_lines=False),
             convert_options=pa_csv.ConvertOptions(column_types=types, include_columns=list(types),
