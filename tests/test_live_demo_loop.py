@@ -164,12 +164,14 @@ def test_force_changes_while_still_make_a_sample_and_reach_a_touch_screen(gl, tm
         loop.on_cursor(100.0, 240.0)
         loop.on_button(True)
         loop.flush_mouse()
-        loop.flush_mouse()  # nothing moved: nothing sent
-        assert haptic.touches.qsize() == 1
+        loop.flush_mouse()  # held still: reported still, where it was
+        assert haptic.touches.qsize() == 2
         loop.set_force(0.9)
         loop.flush_mouse()
-        assert haptic.touches.qsize() == 2
-        assert [haptic.touches.get_nowait()[0][4] for _ in range(2)] == [0.5, 0.9]
+        assert haptic.touches.qsize() == 3
+        got = [haptic.touches.get_nowait()[0] for _ in range(3)]
+        assert [g[4] for g in got] == [0.5, 0.5, 0.9]
+        assert got[0][2:4] == got[1][2:4] == got[2][2:4] and got[0][5] == DOWN != got[1][5]
         assert haptic.touch_force.value == 0.9  # what a touch screen's fingers press with
     finally:
         loop.close()

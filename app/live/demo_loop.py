@@ -18,7 +18,8 @@ burst); the keys that change what is drawn (scene, renderer, scope, outlines,
 screenshot) are queued to it. On Mesa's llvmpipe under load a frame took 100-870 ms;
 the input thread waits meanwhile in the window system, without the GIL, and runs as
 soon as an event comes. Events handled together (the input thread was held up) keep
-their order and path, stamped evenly over the time they arrived in (``flush_mouse``).
+their order and path, stamped evenly over the time they arrived in (``flush_mouse``);
+a pointer held still while touching is reported still every ``STILL_REPORT_S``.
 
 Touch input (``--input``): ``mouse``, the mouse is finger 0 (left button held =
 touching); ``follow``, the mouse is finger 0 and finger 1 follows it at a fixed offset
@@ -88,6 +89,10 @@ RELOAD_POLL_S = 0.15  # an edit is applied once it has held still for a poll: 0.
 ENVELOPE_S = 0.2  # a modal device's |W| is redrawn from the latest commands 5 times a second
 FRAME_S = 1.0 / 60.0
 INPUT_WAKE_S = 0.05  # longest the input thread waits for an event before looking at the time
+#: while the button is held, the pointer is reported at least this often (s), moved or
+#: not, as a touch screen re-reports a still finger: a mouse that stops sends no event,
+#: and the tracker would otherwise rest the finger where its prediction had carried it
+STILL_REPORT_S = 0.01
 KEYS_HELP = ("wheel, up/down: force | N/B: scene | R: renderer | S: scope | "
              "O: outlines | P: screenshot | L: layers | SPACE: emergency stop | Q: quit")
 
@@ -297,6 +302,8 @@ class DemoLoop:
             if event != "move" or (px, self.force_n) != last:  # a move nowhere new: none
                 kept.append((event, px))
                 last = (px, self.force_n)
+        if touching and not kept:  # held still: reported still (STILL_REPORT_S)
+            kept.append(("move", self.hover_px))
         for i, (event, px) in enumerate(kept):
             self._mouse_touch(event, px, since + (now - since) * (i + 1) / len(kept))
 
@@ -660,7 +667,7 @@ class DemoLoop:
             while not (self.quit or self.backend.should_close or self.render_error is not None):
                 if duration_s is not None and clock() - start >= duration_s:
                     break
-                self.backend.wait_events(INPUT_WAKE_S)
+                self.backend.wait_events(STILL_REPORT_S if self.touching else INPUT_WAKE_S)
                 self.flush_mouse()
         finally:
             self._stop.set()
