@@ -450,8 +450,7 @@ class HostSession:
     def close_limit_s(self) -> float:
         """The longest a close may take once begun (s): :data:`CLOSE_STRETCH` times a full
         buffer's drain."""
-        return CLOSE_STRETCH * (self.info.buffer_samples / self.rate_hz
-                                + self.info.ramp_ms * 1e-3 + STOP_MARGIN_S)
+        return CLOSE_STRETCH * self._play_out_s(self.info.buffer_samples)
 
     def _stop(self, now: float) -> bytes:
         """A drained Stop; a Status that echoes a later Heartbeat tells whether it arrived."""
@@ -489,5 +488,8 @@ class HostSession:
     def _drain_s(self) -> float:
         """Time for a drained Stop to play out: what may be buffered, the ramp, a margin."""
         buffered = self.sent_end - (self.snapshot.play_index if self.snapshot else 0)
-        buffered = min(max(buffered, 0), self.info.buffer_samples)
-        return buffered / self.rate_hz + self.info.ramp_ms * 1e-3 + STOP_MARGIN_S
+        return self._play_out_s(min(max(buffered, 0), self.info.buffer_samples))
+
+    def _play_out_s(self, samples: int) -> float:
+        """Time for ``samples`` buffered to play, the ramp to run and a margin (s)."""
+        return samples / self.rate_hz + self.info.ramp_ms * 1e-3 + STOP_MARGIN_S
