@@ -27,7 +27,7 @@ def test_a_touch_is_timed_to_the_first_rise_played_after_it():
     commands[700:800] = 1.5  # the second
     played = PlayedTimes(1000.0)
     played.note(np.arange(0, 1000), 10.0)  # sample i played at 9.001 + i / 1000 s
-    latency = _latencies([9.25, 9.6], commands, played)
+    latency = _latencies([9.25, 9.6], commands, played, int)
     np.testing.assert_allclose(latency, [9.001 + 0.3 - 9.25, 9.001 + 0.7 - 9.6])
 
 
@@ -36,7 +36,7 @@ def test_a_rise_that_never_played_leaves_its_touch_out_not_the_next_touchs_rise(
     commands[10:20] = commands[50:60] = 1.0
     played = PlayedTimes(100.0)
     played.note(np.arange(40, 100), 5.0)  # 0-39 never played (flushed)
-    np.testing.assert_allclose(_latencies([4.0, 4.3], commands, played), [5.0 - 0.49 - 4.3])
+    np.testing.assert_allclose(_latencies([4.0, 4.3], commands, played, int), [5.0 - 0.49 - 4.3])
 
 
 def test_tuio_frames_decode_to_a_down_at_the_position_and_an_up():
@@ -45,3 +45,15 @@ def test_tuio_frames_decode_to_a_down_at_the_position_and_an_up():
     up = decoder.feed(tuio_frame(2, None), 2.0)
     assert [(s.event, round(s.x, 6), round(s.y, 6)) for s in down] == [(DOWN, 0.25, 0.5)]
     assert [s.event for s in up] == [UP]
+
+
+def test_a_rise_in_a_skipped_block_is_timed_at_the_sample_played_in_its_stead():
+    from frictex.device.link.catch_up import IndexMap
+    commands = np.zeros(200)
+    commands[55:] = 1.0
+    index = IndexMap()
+    index.skip(50, 25)  # host samples 50-74 never went out; 75 went out as the device's 50
+    played = PlayedTimes(1000.0)
+    played.note(np.arange(0, 175), 1.0)  # device sample d played at 1.0 - (174 - d) / 1000
+    np.testing.assert_allclose(_latencies([0.8], commands, played, index.device_index),
+                               [1.0 - 0.124 - 0.8])

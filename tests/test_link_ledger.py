@@ -103,7 +103,7 @@ def test_the_ledger_settles_every_commanded_sample():
     led.sent(600)
     led.status(status(450, 100, end=550, played=300, flushed=100, late=55), mark=600)
     # 600 sent before that heartbeat: 300 played, 100 flushed, 50 late, 100 held, 50 lost
-    assert led.breakdown() == {"disconnected": 100, "queue_full": 0, "stalled": 0,
+    assert led.breakdown() == {"disconnected": 100, "queue_full": 0, "stalled": 0, "skipped": 0,
                                "flushed": 100, "late": 50, "overflow": 0, "lost": 50}
     assert led.played == 300 and led.unplayed == 300
     led.sent(300)

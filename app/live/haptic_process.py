@@ -2,7 +2,7 @@
 starve it.
 
 moderngl holds the GIL for the whole of each GL call; on a software renderer (Mesa
-llvmpipe) a frame's calls take 10-25 ms, longer than a block's 10 ms deadline, so a
+llvmpipe) a frame's calls take 10-25 ms, longer than a block's 5 ms deadline, so a
 haptic *thread* in the window's process misses deadlines while the window draws. Here
 the child runs the same :class:`app.live.haptic_thread.HapticThread` (plus a small bridge
 thread for scene switches and shutdown); the window talks to it through bounded

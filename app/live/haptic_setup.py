@@ -9,7 +9,7 @@ from pathlib import Path
 
 from frictex.app.engine.sinks import TableSink, ThreadedSink
 
-RECORD_QUEUE = 4000  # blocks (20 s at 5 ms) the writer may fall behind before dropping
+RECORD_QUEUE = 8000  # blocks (20 s at 2.5 ms) the writer may fall behind before dropping
 #: the most (s) ``finish`` waits for the thread to commit its sinks: the link's close
 #: (under 2 s) and the recording's backlog (up to RECORD_QUEUE blocks) on a busy machine;
 #: below the 30 s a demo waits for its haptic child (``haptic_process.STOP_TIMEOUT_S``)
@@ -28,7 +28,7 @@ def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | N
     as it ends. ``control``: the friction loop's mode instead of the scene file's;
     ``sim_args``: more ``frictex sim-device`` flags for ``device`` "sim". ``queues``:
     HapticThread's ``estop``, ``touches``, ``snapshots``, ``touch_force``."""
-    from frictex.app.live.haptic_thread import HapticThread
+    from frictex.app.live.haptic_thread import HapticThread, link_options
     from frictex.app.live.touch_pump import TouchPump
     haptic = None
     try:
@@ -43,7 +43,8 @@ def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | N
             haptic.sink = open_sink(device, channels=len(pipeline.channels), rate_hz=rate_hz,
                                     phases=pipeline.actuation.has_phases, paced=False,
                                     faults=faults, sim_args=tuple(sim_args),
-                                    profile=pipeline.scene.device.profile)
+                                    profile=pipeline.scene.device.profile,
+                                    **link_options(haptic.block_s))
         if record is not None:
             record.mkdir(parents=True, exist_ok=True)
             tables = TableSink(record, pipeline.channels, pipeline.actuation.has_phases, "csv")

@@ -4,11 +4,15 @@ The thread runs ``app.engine.driver.drive`` with the live touch queue as its sou
 (``app.engine.sources.QueueSource``), :class:`LiveStage` (the pipeline, scene switches
 and the emergency stop) and as sinks the device link, the recording and the window's
 snapshots. Its clock (``app.engine.clocks``) is the wall clock: block k starts at
-t0 + k * block / rate; the device starts playing a stream once its jitter buffer holds
-``DEADLINE_S`` (the link's 10 ms prefill, ``device.link.host.PREFILL_S``), so block k
-is due ``DEADLINE_S`` after its start; one sent later is a deadline miss (counted, with
-the worst lateness past the block's own end), and the thread catches up without
-sleeping. With ``pacing="device"`` the device's own sample clock paces the blocks
+t0 + k * block / rate (a block of 25 samples, 2.5 ms at 10 kHz, by default: a touch waits
+at most one block for the next boundary). The link asks its device to start playing once
+its jitter buffer holds ``LEAD_BLOCKS`` blocks (:func:`link_options`: the prefill), so
+block k is due that long after its start; one sent later is a deadline miss (counted,
+with the worst lateness past the block's own end), and the thread catches up without
+sleeping. A device that fell behind (it ran dry and waited for its prefill again, or its
+clock is slow) is brought back to that lead by the link, which skips blocks
+(``device.link.catch_up``): a touch is felt the same lead after it, however long the
+run. With ``pacing="device"`` the device's own sample clock paces the blocks
 instead (each wait bounded). The thread never waits on the window: a full snapshot
 queue drops the oldest snapshot (counted).
 
@@ -51,15 +55,24 @@ from frictex.rendering.visual.overlay import BlockRecord, record_from_output
 TOUCH_QUEUE = 4096
 COMMAND_QUEUE = 64
 SNAPSHOT_QUEUE = 256
-DEADLINE_S = 0.010  # = device.link.host.PREFILL_S, not imported: the link is optional
+#: the live block (samples): 2.5 ms at 10 kHz
+BLOCK_SIZE = 25
+#: blocks a live link's device holds before it plays: one playing, one on its way
+LEAD_BLOCKS = 2
 LINK_STATUS_EVERY = 20  # blocks between two sink.status() calls
 APPLIED_IN_STATUS = 8  # the latest stops, resumes and switches each snapshot carries
 EVENTS = {"down": DOWN, "move": MOVE, "up": UP}
 
 
+def link_options(block_s: float) -> dict:
+    """``open_sink``'s keywords for a live link whose blocks last ``block_s`` (s): the
+    prefill of :data:`LEAD_BLOCKS` blocks and the catch-up."""
+    return {"prefill_s": LEAD_BLOCKS * block_s, "catch_up": True}
+
+
 def shorten_switch_interval(block_s: float) -> None:
     """Let the haptic thread get the GIL back within a quarter of a block (``block_s``,
-    s), not after Python's default 5 ms switch interval (a whole block at 10 kHz / 50)."""
+    s), not after Python's default 5 ms switch interval (two blocks at 10 kHz / 25)."""
     sys.setswitchinterval(min(sys.getswitchinterval(), 0.25 * block_s))
 
 
@@ -266,7 +279,7 @@ class HapticThread(TouchInput, threading.Thread):
     TouchPump` feeding this thread, started with it (``app.live.haptic_setup``).
     """
 
-    def __init__(self, scene, rate_hz: float = 10_000.0, block_size: int = 50,
+    def __init__(self, scene, rate_hz: float = 10_000.0, block_size: int = BLOCK_SIZE,
                  render_override: str | None = None, sink=None, recorder=None,
                  clock=time.perf_counter, snapshot_stride: int = 10, estop=None,
                  touches=None, snapshots=None, sleep=time.sleep, pacing: str = "wall",
@@ -291,7 +304,7 @@ class HapticThread(TouchInput, threading.Thread):
         self.stage = LiveStage(build_pipeline(scene, rate_hz, block_size, render_override,
                                               control=control), self.estop, self.stats)
         self.stage.render_override = render_override
-        self.wall = WallClock(self.block_s, DEADLINE_S, now=clock, sleep=sleep)
+        self.wall = WallClock(self.block_s, LEAD_BLOCKS * self.block_s, now=clock, sleep=sleep)
         self.t0 = self.wall.t0
         self.error: BaseException | None = None
         self.touch_force = (SimpleNamespace(value=scene.device.normal_force_n)

@@ -1,7 +1,7 @@
 """``frictex bench latency``: from a touch event to the first output sample that carries it.
 
 A touch goes into the live haptic path the demo runs (``app.live.haptic_setup.
-open_haptic``: the haptic thread, one block of 50 samples every 5 ms at 10 kHz on the
+open_haptic``: the haptic thread, one block of 25 samples every 2.5 ms at 10 kHz on the
 wall clock, and for TUIO its touch pump), on ``grating-5mm`` with the finger resting on a
 low-friction line, so that the output is 0 um without a finger and rises with it. Two
 inputs: *trace* (the sample queued through the thread's ``touch_at``, as the mouse and
@@ -11,9 +11,11 @@ demo opens for ``--input tuio``). Events come at random instants, one finger dow
 
 The latency of an event is the wall time from the touch (the call, or the datagram's
 send) to the moment the device played the first sample the touch changed. Each figure
-includes the wait for the next block boundary (0 to 5 ms), the pipeline's compute, the
-link (frames through the port thread) and the device's buffer lead (the link's 10 ms
-prefill); not the touch hardware's own delay. The play time is the device's:
+includes the wait for the next block boundary (0 to 2.5 ms), the pipeline's compute, the
+link (frames through the port thread) and the device's buffer lead (the link's prefill of
+two blocks, less the block playing; after an underrun the link skips blocks until the
+device is back to it, ``device.link.catch_up``); not the touch hardware's own delay. A
+touch whose first sample was skipped is timed at the first sample played in its stead. The play time is the device's:
 
 - *sim*: the simulated device in this process (``sim``), its played samples timed when
   its clock plays them (each at its own tick: the time its batch was played less the
@@ -47,10 +49,11 @@ import time
 
 import numpy as np
 
+from frictex.app.live.haptic_thread import BLOCK_SIZE as BLOCK
+from frictex.app.live.haptic_thread import LEAD_BLOCKS, link_options
 from frictex.app.measure.figure import Figure
 
 RATE = 10_000.0
-BLOCK = 50
 FINGER_MM = (1.0, 30.0)  # on grating-5mm's first low-friction line
 HOLD_S = 0.05
 GAP_S = (0.06, 0.11)
@@ -197,8 +200,9 @@ def _qemu_output():
     return (lambda: open_port(device.path)), device.proc, played, device.close
 
 
-def _events(output: str, touch: str, events: int, seed: int) -> np.ndarray:
-    """Latencies (s) of ``events`` touches of kind ``touch`` through ``output``."""
+def _events(output: str, touch: str, events: int, seed: int) -> tuple[np.ndarray, dict]:
+    """Latencies (s) of ``events`` touches of kind ``touch`` through ``output``, and the
+    link's status when it closed."""
     from frictex.app.live.haptic_setup import open_haptic
     from frictex.device.link.host import CommandSink
     from frictex.textures.library import resolve_scene
@@ -211,8 +215,8 @@ def _events(output: str, touch: str, events: int, seed: int) -> np.ndarray:
     opener, proc, played, close = _sim_output() if output == "sim" else _qemu_output()
     try:
         haptic, finish = open_haptic(scene, RATE, BLOCK, None, None, None, source=source)
-        haptic.sink = CommandSink(opener, 1, RATE, paced=False, stderr=io.StringIO(),
-                                  process=proc)
+        haptic.sink = sink = CommandSink(opener, 1, RATE, paced=False, stderr=io.StringIO(),
+                                         process=proc, **link_options(BLOCK / RATE))
         haptic.recorder = commands = _Commands()
         rng = np.random.default_rng(seed)
         touches = _Touch(touch, haptic, scene.display)
@@ -228,21 +232,23 @@ def _events(output: str, touch: str, events: int, seed: int) -> np.ndarray:
             time.sleep(0.1)
         finally:
             touches.close()
-            finish()
+            link, _ = finish()
     finally:
         close()
-    return _latencies(downs, np.concatenate(commands.blocks), played)
+    return _latencies(downs, np.concatenate(commands.blocks), played, sink.device_index), link
 
 
-def _latencies(downs: list[float], commands: np.ndarray, played: PlayedTimes) -> np.ndarray:
+def _latencies(downs: list[float], commands: np.ndarray, played: PlayedTimes,
+               device_index) -> np.ndarray:
     """Per touch-down (in order, each 50 ms down, then up), the play time of its own
-    rising edge of the commands (the n-th edge is the n-th touch's) less the touch time
-    (s); a touch whose edge never played (a flushed or late block) is left out."""
+    rising edge of the commands (the n-th edge is the n-th touch's; ``device_index``
+    numbers it as the device did) less the touch time (s); a touch whose edge never
+    played (a flushed or late block) is left out."""
     on = commands > 0
     edges = np.flatnonzero(on & ~np.concatenate([[False], on[:-1]]))
     out = []
     for t, edge in zip(downs, edges):
-        played_at = played.time_of(int(edge))
+        played_at = played.time_of(device_index(int(edge)))
         if played_at is not None and played_at > t:
             out.append(played_at - t)
     return np.array(out, dtype=np.float64)
@@ -273,10 +279,20 @@ def _figures(label: str, latency_s: np.ndarray, events: int) -> list[Figure]:
             Figure("latency", f"{label}: events played", latency_s.size, f"of {events}")]
 
 
+def _link_figures(label: str, link: dict) -> list[Figure]:
+    """What the lead cost on a link: the device's underruns and the blocks skipped to
+    bring it back (``device.link.catch_up``), of all blocks."""
+    blocks = link["blocks_sent"] + link["skipped_blocks"]
+    return [Figure("latency", f"{label}: device underruns", link["underruns"] or 0, "times"),
+            Figure("latency", f"{label}: blocks skipped to catch up", link["skipped_blocks"],
+                   f"of {blocks}")]
+
+
 def _audio(events: int) -> np.ndarray | None:
     try:
         from frictex.device.audio.latency import audio_latency
         return audio_latency(os.environ.get("FRICTEX_BENCH_AUDIO", ""), events=events,
+                             block_size=BLOCK, lead_blocks=LEAD_BLOCKS,
                              timeout_s=60.0)["latency_s"]
     except Exception as exc:  # no PortAudio, no JACK server, no audio device: say so
         print(f"frictex: bench latency: audio not measured ({type(exc).__name__}: "
@@ -303,9 +319,9 @@ def run(quick: bool) -> list[Figure]:
         try:
             for seed, (output, touch) in enumerate(
                     (o, t) for o in outputs for t in ("trace", "tuio")):
-                latency = _events(output, touch, events, seed)
-                figures += _figures(f"{touch} touch -> {output} device played, {where}",
-                                    latency, events)
+                latency, link = _events(output, touch, events, seed)
+                label = f"{touch} touch -> {output} device played, {where}"
+                figures += _figures(label, latency, events) + _link_figures(label, link)
             audio = _audio(events)
             if audio is not None:
                 figures += _figures(f"audio producer -> DAC (PortAudio), {where}", audio,

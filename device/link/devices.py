@@ -33,6 +33,7 @@ from urllib.parse import parse_qsl
 import numpy as np
 
 from frictex.device.errors import InputError
+from frictex.device.link.session import PREFILL_S
 from frictex.device.registry import Registry
 
 
@@ -50,6 +51,8 @@ class DeviceRequest:
     link may spend without progress. sim_args : ``frictex sim-device`` flags (``sim``).
     profile : the scene's device profile (``device.profile.PROFILES``), for a device
     whose drive depends on the plate (an audio output's carrier and um per volt), or None.
+    prefill_s, catch_up : a link's jitter-buffer prefill (s) and live catch-up
+    (``device.link.host.open_sink``).
     """
 
     channels: int
@@ -64,11 +67,14 @@ class DeviceRequest:
     max_stalls: int = 5
     sim_args: tuple[str, ...] = ()
     profile: str | None = None
+    prefill_s: float = PREFILL_S
+    catch_up: bool = False
 
     def link_options(self) -> dict:
         """The keyword arguments of ``device.link.host.CommandSink`` this request sets."""
         return {"phases": self.phases, "paced": self.paced, "queue_blocks": self.queue_blocks,
-                "stderr": self.stderr, "stall_s": self.stall_s, "max_stalls": self.max_stalls}
+                "stderr": self.stderr, "stall_s": self.stall_s, "max_stalls": self.max_stalls,
+                "prefill_s": self.prefill_s, "catch_up": self.catch_up}
 
 
 @runtime_checkable

@@ -81,17 +81,23 @@ class CommandSink:
     stall_s : bound of one caller's wait (s). max_stalls : the link gives up past
         ``stall_s * max_stalls`` s without progress (plus a share of the time played).
     handshake_s : total of the first handshake's tries (s).
+    prefill_s, catch_up : the jitter-buffer prefill asked of the device (s), and for a
+        live link whether it catches up after the device fell behind (both: see
+        :func:`open_sink`).
     """
 
     def __init__(self, opener, channels: int, rate_hz: float, *, phases: bool = False,
                  paced: bool = False, queue_blocks: int = 64, label: str = "device",
                  process: subprocess.Popen | None = None, stderr=sys.stderr,
                  stall_s: float = STALL_S, max_stalls: int = MAX_STALLS, on_close=None,
-                 simulated: bool = False, handshake_s: float = HANDSHAKE_TOTAL_S):
+                 simulated: bool = False, handshake_s: float = HANDSHAKE_TOTAL_S,
+                 prefill_s: float = PREFILL_S, catch_up: bool = False):
         if channels < 1:
             raise InputError(f"channels = {channels!r}: expected at least 1")
         if not (rate_hz > 0 and np.isfinite(rate_hz)):
             raise InputError(f"rate_hz = {rate_hz!r}: expected a positive number")
+        if not (0 < prefill_s <= 1.0):
+            raise InputError(f"prefill_s = {prefill_s!r}: expected a time in (0, 1] s")
         if not (stall_s > 0 and np.isfinite(stall_s)) or max_stalls < 1:
             raise InputError(f"stall_s = {stall_s!r}, max_stalls = {max_stalls!r}: expected a "
                              "positive time and at least 1")
@@ -109,7 +115,8 @@ class CommandSink:
         self._capacity = int(queue_blocks)
         self._closed = False
         self._session = s = HostSession(self.channels, self.rate_hz, phases=self.phases,
-                                        paced=self.paced, label=label, stderr=stderr)
+                                        paced=self.paced, label=label, stderr=stderr,
+                                        prefill_s=prefill_s, catch_up=catch_up)
         self._policy = StallPolicy(self.rate_hz, self.stall_s * self.max_stalls)
         self._progress_seen = 0
         self._cond = s.cond
@@ -318,6 +325,13 @@ class CommandSink:
         with s.forces_lock:
             return s.forces.covered(int(index0), int(n))
 
+    def device_index(self, index: int) -> int:
+        """The device's number of sample ``index`` (the caller's): the same unless a live
+        link skipped blocks to catch up (PROTOCOL.md 6.1); a skipped sample's is that
+        of the first sample sent after it."""
+        with self._cond:
+            return self._session.index_map.device_index(int(index))
+
     def unplayed_share(self) -> float:
         """Commanded samples known never to have played, as a share of all commanded (0
         when nothing was commanded). Final once :meth:`close` has returned."""
@@ -361,6 +375,7 @@ class CommandSink:
             "resyncs": d.discarded, "crc_errors": d.crc_errors,
             "lost_frames_from_device": d.lost_frames,
             "clamped_samples": c["clamped_samples"], "dropped_blocks": c["dropped_blocks"],
+            "skipped_blocks": c["skipped_blocks"],
             "commanded_samples": commanded,
             "played_samples": played,
             "unplayed_samples": sum(v for v in breakdown.values() if v is not None),
@@ -480,7 +495,8 @@ def open_sink(spec: str, channels: int, rate_hz: float, *, phases: bool = False,
               log_path=None, paced: bool = False, queue_blocks: int = 64, faults=None,
               stderr=sys.stderr, stall_s: float = STALL_S,
               max_stalls: int = MAX_STALLS, sim_args: tuple[str, ...] = (),
-              profile: str | None = None):
+              profile: str | None = None, prefill_s: float = PREFILL_S,
+              catch_up: bool = False):
     """Open the output device named by ``spec`` and handshake.
 
     Parameters
@@ -502,6 +518,12 @@ def open_sink(spec: str, channels: int, rate_hz: float, *, phases: bool = False,
         same options as ``sim:ARG``.
     profile : the scene's device profile name, for devices whose drive depends on the
         plate (``audio``: its carrier and um per volt); None: the device's default.
+    prefill_s : the jitter-buffer prefill asked of a link's device (s): it starts playing
+        once it holds this much, so a live stream plays this much less one block after
+        the pipeline made it (default :data:`PREFILL_S`).
+    catch_up : live only: skip a block while the device holds its prefill or more,
+        after it fell behind (an underrun, a slow clock), so that the delay comes back
+        to the prefill (``device.link.catch_up``; skipped samples count as unplayed).
 
     Returns a ``device.link.devices.OutputDevice`` (the built-ins a :class:`CommandSink`). Raises :class:`LinkError` (an OSError, exit 1) if the port
     cannot be opened or the device does not answer or does not fit the pipeline,
@@ -510,6 +532,7 @@ def open_sink(spec: str, channels: int, rate_hz: float, *, phases: bool = False,
     request = DeviceRequest(channels=int(channels), rate_hz=float(rate_hz), phases=phases,
                             paced=paced, queue_blocks=queue_blocks, log_path=log_path,
                             faults=faults, stderr=stderr, stall_s=stall_s,
-                            max_stalls=max_stalls, sim_args=tuple(sim_args), profile=profile)
+                            max_stalls=max_stalls, sim_args=tuple(sim_args), profile=profile,
+                            prefill_s=prefill_s, catch_up=catch_up)
     factory, arg = resolve(spec)
     return factory(arg, request)

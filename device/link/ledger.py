@@ -20,8 +20,9 @@ from dataclasses import dataclass
 from frictex.device.link.protocol import INDEX_MODULUS, DeviceState
 
 #: why a commanded sample was never played (``CommandSink.status()["unplayed_by_cause"]``)
-CAUSES = ("disconnected", "queue_full", "stalled", "flushed", "late", "overflow", "lost")
-_HOST_CAUSES = CAUSES[:3]
+CAUSES = ("disconnected", "queue_full", "stalled", "skipped", "flushed", "late", "overflow",
+          "lost")
+_HOST_CAUSES = CAUSES[:4]
 _COUNTER_WRAP = 2 ** 32
 
 

@@ -26,7 +26,8 @@ import threading
 import numpy as np
 
 from frictex.device.link import protocol as p
-from frictex.device.link.forces import ForceHistory, per_sample
+from frictex.device.link.catch_up import IndexMap, behind
+from frictex.device.link.forces import ForceHistory, ForceReport, per_sample
 from frictex.device.link.ledger import Ledger, Pacing, Snapshot
 from frictex.device.link.protocol import DeviceState, LinkError
 
@@ -55,7 +56,8 @@ _TURN_BYTES = 4096
 
 _COUNTS = ("frames_sent", "blocks_sent", "heartbeats", "retries", "reconnects", "disconnects",
            "recoveries", "stalls", "device_flushes", "clamped_samples", "dropped_blocks",
-           "force_reports", "resent_frames", "resends_too_late", "stop_resends")
+           "force_reports", "resent_frames", "resends_too_late", "stop_resends",
+           "skipped_blocks")
 #: Blocks kept for resending, by sequence number (PROTOCOL.md 4.10)
 RESEND_KEEP = 512
 #: a Block is resent at most once in this long, however often it is asked for (s)
@@ -74,11 +76,19 @@ class HostSession:
     channels, rate_hz, phases : what the pipeline sends (rate in Hz).
     paced : True for replay (blocks go out as the device's buffer has room).
     label : the link's name in messages. stderr : where warnings go.
+    prefill_s : the jitter-buffer prefill asked of the device (s; at most a quarter of
+        its buffer): a live stream's lead.
+    catch_up : live only: skip blocks while the device is behind (``device.link.catch_up``).
     """
 
     def __init__(self, channels: int, rate_hz: float, *, phases: bool, paced: bool,
-                 label: str, stderr=sys.stderr):
+                 label: str, stderr=sys.stderr, prefill_s: float = PREFILL_S,
+                 catch_up: bool = False):
         self.channels, self.rate_hz, self.phases, self.paced = channels, rate_hz, phases, paced
+        self.prefill_s = float(prefill_s)
+        self.catch_up = bool(catch_up) and not self.paced
+        #: the host's sample numbers to the device's (they differ once a block was skipped)
+        self.index_map = IndexMap()
         self.label = label
         self._stderr = stderr
         self.cond = threading.Condition()
@@ -105,7 +115,7 @@ class HostSession:
         self._marks: dict[int, tuple[float, int, int]] = {}  # token -> (t, sent_end, mark)
         self._token = 0
         self._seq = 0
-        self.sent_end = 0            # host index after the last sample sent
+        self.sent_end = 0            # the device's sample number after the last one sent
         # version 4 repair: seq -> [start, counts, phases, last sent at]; resend seq -> seq
         self._kept: collections.OrderedDict = collections.OrderedDict()
         self._alias: collections.OrderedDict = collections.OrderedDict()
@@ -218,7 +228,7 @@ class HostSession:
             settle = self._heartbeat(now)
             self._settling = self._token
         # a leading delimiter ends whatever partial frame the device was holding
-        return b"\x00" + settle + self._frame(p.Hello(int(PREFILL_S * self.rate_hz)), 1)
+        return b"\x00" + settle + self._frame(p.Hello(int(self.prefill_s * self.rate_hz)), 1)
 
     def handshake_failure(self, waited_s: float) -> LinkError:
         """Why the first handshake failed after ``waited_s`` (s), for the caller."""
@@ -255,7 +265,7 @@ class HostSession:
         self.info = info
         self.version = min(info.protocol_version, p.PROTOCOL_VERSION)
         self._limits = np.asarray(info.limits_um[:self.channels], dtype=np.float64)
-        prefill = max(1, min(int(PREFILL_S * info.sample_rate_hz), info.buffer_samples // 4))
+        prefill = max(1, min(int(self.prefill_s * info.sample_rate_hz), info.buffer_samples // 4))
         self.target = max(prefill + 1,
                           min(int(TARGET_S * info.sample_rate_hz), info.buffer_samples // 2))
         self._pacing = Pacing(info.sample_rate_hz, self.target, prefill, info.buffer_samples // 2)
@@ -334,8 +344,11 @@ class HostSession:
             if self.info is not None and self.info.has_force_reports:
                 self.counts["force_reports"] += 1
                 report = per_sample(msg, self.sent_end)
+                runs = self.index_map.host_runs(report.index0, report.lateral_n.size)
                 with self.forces_lock:
-                    self.forces.add(report)
+                    for host, lo, hi in runs:
+                        self.forces.add(ForceReport(host, report.lateral_n[lo:hi],
+                                                    report.normal_n[lo:hi]))
         elif isinstance(msg, p.ErrorReport):
             self.errors[p.ErrorCode.NAMES.get(msg.code, "other")] += 1
         elif isinstance(msg, p.Missing):
@@ -355,7 +368,7 @@ class HostSession:
             if resent:  # and a Heartbeat after them: the answer says at once what is still missing
                 out += resent + self._heartbeat(now)
                 self._next_hb = now + self._heartbeat_s
-        sent = 0
+        taken = 0  # blocks sent or skipped
         with self.cond:
             # blocks wait for the session's first Status: it is the counters' baseline
             while self.queue and len(out) < _TURN_BYTES and self.ledger.reporting:
@@ -364,17 +377,28 @@ class HostSession:
                         self._pacing, now, self.sent_end, self.ledger.mark(), start, len(counts)):
                     break
                 self.queue.popleft()
-                out += self._send_block(start, counts, phases)
-                sent += 1
-            if sent:
+                taken += 1
+                if self.catch_up and behind(self.snapshot, now, self.rate_hz, self.sent_end,
+                                            self._pacing.prefill):
+                    self._skip(start, len(counts))
+                    continue
+                out += self._send_block(self.index_map.to_device(start), counts, phases)
+            if taken:
                 self.cond.notify_all()
-        if not self.queue or sent:
+        if not self.queue or taken:
             self._last_progress = now
         return bytes(out)
 
+    def _skip(self, start: int, n: int) -> None:
+        """Host samples ``start ..`` (``n``) not sent: the device is behind (catch-up,
+        PROTOCOL.md 6.1); the caller holds ``cond``."""
+        self.counts["skipped_blocks"] += 1
+        self.ledger.drop("skipped", n)
+        self.index_map.skip(start, n)
+
     def _send_block(self, start: int, counts, phases) -> bytes:
-        """A Block frame for samples ``start ..``, kept for resending (version 4); the
-        caller holds ``cond``."""
+        """A Block frame for samples ``start ..`` (the device's numbers), kept for
+        resending (version 4); the caller holds ``cond``."""
         self.counts["blocks_sent"] += 1
         self.ledger.sent(len(counts))
         self.sent_end = max(self.sent_end, start + len(counts))
@@ -438,7 +462,8 @@ class HostSession:
         out = bytearray()
         with self.cond:
             while self.queue and self.ledger.reporting and not self.paced:
-                out += self._send_block(*self.queue.popleft())
+                start, counts, phases = self.queue.popleft()
+                out += self._send_block(self.index_map.to_device(start), counts, phases)
             self._drop_queued("stalled")
         self._close_limit = now + self.close_limit_s()
         self._close_seen = self.snapshot.play_index if self.snapshot else None
