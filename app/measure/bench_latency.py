@@ -20,12 +20,10 @@ touch whose first sample was skipped is timed at the first sample played in its 
 - *sim*: the simulated device in this process (``sim``), its played samples timed when
   its clock plays them (each at its own tick: the time its batch was played less the
   ticks after it);
-- *qemu*: the firmware's QEMU port (``device/firmware/mps2``, a Cortex-M3 in
+- *qemu*: the firmware's QEMU port (``device/firmware/lm3s``, a Cortex-M3 in
   ``qemu-system-arm`` on the host's clock) on a pty, its played samples timed as its log
   reaches this process (batches written at least every 2 ms; each sample timed back
-  from its batch's arrival by the ticks after it, so QEMU's I/O delay is included); an
-  underrun (a block later than its play time) holds the device's play position, as
-  PROTOCOL.md 5.1 has it, so each one adds to every later event's latency;
+  from its batch's arrival by the ticks after it, so QEMU's I/O delay is included);
 - *audio*: ``device.audio.latency.audio_latency`` into a PortAudio device (a JACK
   server at 192 kHz with 256-frame periods where one runs): a live producer paced by
   the device, the first frame carrying an event timed at the DAC (PortAudio's reported
@@ -178,12 +176,7 @@ def _sim_output():
 
 def _qemu_output():
     """The same for the firmware in QEMU: its played-sample log timed as it arrives.
-
-    QEMU runs on the host's clock (no ``-icount``): its interrupts come late while the
-    host runs other work, and the firmware plays the ticks it missed, so it keeps the
-    wall clock's pace; held to instruction counts (``qemuport.ICOUNT``, the tests' setting)
-    its clock fell 10 % behind the host's here and a live stream queued up without
-    bound (0.4 s after 2 s)."""
+    QEMU runs on the host's clock (``qemuport.ICOUNT``)."""
     from frictex.device.firmware import qemuport
     from frictex.device.link.host import open_port
     played = PlayedTimes(RATE)
@@ -196,7 +189,7 @@ def _qemu_output():
         rest = data[len(index) * (4 + 2 * qemuport.CHANNELS):]
         played.note(index, t)
 
-    device = qemuport.QemuDevice(on_log=on_log, icount=None)
+    device = qemuport.QemuDevice(on_log=on_log)
     return (lambda: open_port(device.path)), device.proc, played, device.close
 
 

@@ -1,4 +1,4 @@
-"""Run the firmware's QEMU port (``mps2/``: MPS2-AN385, Cortex-M3) in
+"""Run the firmware's QEMU port (``lm3s/``: LM3S6965EVB, a Stellaris Cortex-M3) in
 ``qemu-system-arm`` with its link UART on a pty, and link to it with frictex's own host
 link, as :mod:`hostport` does for the host port.
 
@@ -6,9 +6,9 @@ link, as :mod:`hostport` does for the host port.
         sink = CommandSink(lambda: open_port(dev.path), 1, 10_000.0, paced=True,
                            process=dev.proc)
 
-QEMU's clock follows the instructions it executes, held to the host's (``-icount
-shift=5,sleep=on,align=on``, see :data:`ICOUNT`), so the firmware samples at 10 kHz of
-wall time while the host gives QEMU the CPU it needs.
+QEMU's clock is the host's (no ``-icount``): the firmware's sample interrupt comes late
+while the host runs something else, and it plays the ticks its free-running counter says
+it missed, so it samples at 10 kHz of wall time while QEMU gets the CPU it needs.
 """
 
 from __future__ import annotations
@@ -31,28 +31,22 @@ from frictex.device.firmware.build import BUILD, make, require
 from frictex.device.link.protocol import LinkError
 
 QEMU = "qemu-system-arm"
-#: the samples per second, channels and per-channel limit (counts) of mps2/board.h
+BOARD = "lm3s6965evb"
+#: the samples per second, channels and per-channel limit (counts) of lm3s/board.h
 RATE_HZ = 10_000.0
 CHANNELS = 1
-#: QEMU's clock (None: the host's, no ``-icount``): 2**5 = 32 ns of emulated time per
-#: instruction (a 25 MHz Cortex-M3 runs about 31 million instructions a second); an
-#: idle guest (``wfi``) sleeps in real time (``sleep=on``), and a guest whose clock ran
-#: ahead of the host's while it computed waits for it (``align=on``). Measured streaming
-#: 6,000 samples paced by the device here: ``shift=auto`` tripped the firmware's
-#: watchdog in 2 of 3 streams (it raises the shift while the guest idles, so a Block
-#: received then runs at up to 1 us per instruction and the clock races ahead); without
-#: ``align=on`` the clock ran ahead of the host's and blocks arrived late; without
-#: ``-icount`` the paced stream dropped blocks while closing on this busy machine. With the
-#: clock held, it falls behind the host's when QEMU gets less CPU than it needs (a live
-#: stream then queues up in the device: ``frictex bench latency`` shows it).
-ICOUNT = "shift=5,sleep=on,align=on"
+#: QEMU's clock: None, the host's. Held to instruction counts instead (``-icount
+#: shift=5,sleep=on,align=on``: 32 ns per instruction, sleeping in real time while the
+#: guest idles) this port played about 5,400 samples a second, not 10,000, on an idle
+#: machine: the emulated clock fell behind the host's.
+ICOUNT = None
 _PTY = re.compile(r"char device redirected to (/dev/\S+) \(label link\)")
 
 
 def firmware() -> Path:
     """The QEMU port's ELF, built if needed (needs the Arm cross compiler)."""
-    make("mps2")
-    return BUILD / "mps2" / "frictex-fw-mps2.elf"
+    make("lm3s")
+    return BUILD / "lm3s" / "frictex-fw-lm3s.elf"
 
 
 def _die_with_parent() -> None:
@@ -63,7 +57,7 @@ def command(elf: Path, icount: str | None = ICOUNT) -> list[str]:
     """The QEMU command line: UART0 (the link) on a new pty; semihosting for the
     played-sample log (``played.bin`` in QEMU's working folder) and for the exit; QEMU's
     clock from ``icount`` (see :data:`ICOUNT`)."""
-    return [QEMU, "-M", "mps2-an385", "-display", "none", "-monitor", "none",
+    return [QEMU, "-M", BOARD, "-display", "none", "-monitor", "none",
             "-chardev", "pty,id=link", "-serial", "chardev:link",
             "-semihosting-config", "enable=on,target=native",
             *(("-icount", icount) if icount else ()), "-kernel", os.fspath(elf)]
@@ -88,7 +82,7 @@ class QemuDevice:
         self._on_log = on_log
         self.stderr = tempfile.TemporaryFile("w+b")  # QEMU's messages, for errors
         self._folder = tempfile.TemporaryDirectory(prefix="frictex-qemu-")
-        fifo = os.path.join(self._folder.name, "played.bin")  # mps2/board.h BOARD_PLAYED_LOG
+        fifo = os.path.join(self._folder.name, "played.bin")  # lm3s/board.h BOARD_PLAYED_LOG
         os.mkfifo(fifo)
         self._fifo = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)  # so QEMU's open returns
         self.proc = subprocess.Popen(command(elf or firmware(), icount), cwd=self._folder.name,

@@ -1,5 +1,5 @@
-/* The QEMU port: MPS2-AN385 (Cortex-M3), the link on UART0, SysTick as the sample clock,
- * each played sample logged through semihosting (see README.md, "The QEMU board"). When
+/* The QEMU port: LM3S6965EVB (Cortex-M3), the link on UART0, SysTick's count as the
+ * sample clock, each played sample logged through semihosting (see README.md, "The QEMU board"). When
  * a host's Stop has played out it leaves QEMU through semihosting, as the host port's
  * --once. */
 #include "../core/device.h"
@@ -25,18 +25,21 @@ static const fw_config config = {
     .protocol_version = FW_NEWEST_VERSION,
 };
 
-/* The sample clock is timer 0's count: SysTick interrupts about every sample period,
- * and each plays the ticks the count says are due (one, on a board). QEMU delivers a
- * 10 kHz timer interrupt late or not at all while the host runs something else, but its
- * counter follows the host's clock; so a late interrupt plays the ticks it missed, as
- * the host port does after it was descheduled, and the output keeps the wall clock's
- * pace (at most BOARD_CATCH_UP ticks per interrupt; the rest at the next). */
+/* The sample clock is SysTick's count, running free at the system clock (24 bits: it
+ * wraps every 1.3 s): timer 0A interrupts every BOARD_IRQ_TICKS sample periods, and each
+ * interrupt plays the ticks the count says are due. QEMU delivers a timer interrupt late
+ * or not at all while the host runs something else (and each one costs its main loop a
+ * wake-up: at 10 kHz they took a fifth of a host core), but the count follows the host's
+ * clock; so an interrupt plays the ticks due since the last, as the host port does after
+ * it was descheduled, and the output keeps the wall clock's pace (at most BOARD_CATCH_UP
+ * ticks per interrupt; the rest at the next). A board plays one tick per interrupt. */
 static uint32_t last_count, cycles_due;
 
-void systick_irq(void)
+void timer0a_irq(void)
 {
-    uint32_t now = TIMER0_VALUE;
-    cycles_due += last_count - now; /* a down-counter: wraps cleanly */
+    GPTM0_ICR = GPTM_INT_TATO;
+    uint32_t now = SYST_CVR;
+    cycles_due += (last_count - now) & SYST_MAX; /* a 24-bit down-counter */
     last_count = now;
     for (unsigned n = 0; cycles_due >= BOARD_TICK_CYCLES && n < BOARD_CATCH_UP; n++) {
         cycles_due -= BOARD_TICK_CYCLES;
@@ -58,14 +61,19 @@ int main(void)
     uart_init();
     played_log_open();
     fw_init(&device, &config, &hal, NULL);
-    SCB_SHPR3 &= 0x00FFFFFFu; /* SysTick at the highest priority */
-    TIMER0_RELOAD = UINT32_MAX;
-    TIMER0_VALUE = UINT32_MAX;
-    last_count = UINT32_MAX;
-    TIMER0_CTRL = TIMER_CTRL_EN;
-    SYST_RVR = BOARD_TICK_CYCLES - 1u;
+    SYST_RVR = SYST_MAX;
     SYST_CVR = 0;
-    SYST_CSR = SYST_CSR_ENABLE | SYST_CSR_TICKINT | SYST_CSR_CLKSOURCE;
+    SYST_CSR = SYST_CSR_ENABLE | SYST_CSR_CLKSOURCE; /* counts, never interrupts */
+    last_count = SYST_CVR;
+    RCGC1 |= RCGC1_TIMER0;
+    GPTM0_CTL = 0;
+    GPTM0_CFG = 0; /* 32-bit */
+    GPTM0_TAMR = GPTM_TAMR_PERIODIC;
+    GPTM0_TAILR = BOARD_IRQ_TICKS * BOARD_TICK_CYCLES - 1u;
+    GPTM0_IMR = GPTM_INT_TATO;
+    NVIC_IPR(IRQ_TIMER0A) = 0x00u; /* the highest priority: above the UART */
+    NVIC_ISER = 1u << IRQ_TIMER0A;
+    GPTM0_CTL = GPTM_CTL_TAEN;
     for (;;) {
         uint8_t chunk[64];
         size_t n = uart_read(chunk, sizeof chunk);

@@ -1,10 +1,12 @@
-/* MPS2-AN385 as QEMU emulates it (qemu-system-arm -M mps2-an385): a Cortex-M3 at 25 MHz
- * with CMSDK APB UARTs. What the board offers the host; override with -D. */
+/* LM3S6965EVB as QEMU emulates it (qemu-system-arm -M lm3s6965evb): a Stellaris
+ * Cortex-M3 with PL011 UARTs. What the board offers the host; override with -D. */
 #ifndef BOARD_H
 #define BOARD_H
 
-#define BOARD_NAME "frictex fw mps2-an385"
-#define BOARD_SYSCLK_HZ 25000000u /* QEMU's mps2 SYSCLK, SysTick's processor clock */
+#define BOARD_NAME "frictex fw lm3s6965evb"
+#ifndef BOARD_SYSCLK_HZ
+#define BOARD_SYSCLK_HZ 12500000u
+#endif /* QEMU's Stellaris system clock after reset (RCC: 200 MHz / 16) */
 #ifndef BOARD_RATE_HZ
 #define BOARD_RATE_HZ 10000u /* sample clock: SysTick */
 #endif
@@ -17,7 +19,9 @@
 #define BOARD_RAMP_MS 20
 #define BOARD_PLAYED_LOG "played.bin" /* opened through semihosting in QEMU's folder */
 #define BOARD_CATCH_UP 1000u /* most ticks one sample interrupt plays (100 ms) */
-#define BOARD_BAUDDIV 16u /* QEMU does not pace the UART; 16 is its smallest legal divider */
+#ifndef BOARD_IRQ_TICKS
+#define BOARD_IRQ_TICKS 5u /* sample periods per timer interrupt (2 kHz) */
+#endif
 
 #define BOARD_TICK_CYCLES (BOARD_SYSCLK_HZ / BOARD_RATE_HZ)
 

@@ -30,22 +30,23 @@ static void ring_put(ring *r, const uint8_t *p, size_t n)
     r->head = head;
 }
 
-/* The received bytes the UART holds, into the ring while it has room (else they wait in
- * the UART, and QEMU holds back the next byte: nothing is lost). */
+/* The received bytes the UART's FIFO holds, into the ring while it has room (else they
+ * wait in the FIFO, and QEMU holds back what does not fit in it: nothing is lost). */
 static void rx_drain(void)
 {
-    while ((UART_STATE(0) & UART_STATE_RXFULL) && ring_free(&rx)) {
-        uint8_t b = (uint8_t)UART_DATA(0);
+    while (!(UART0_FR & UART_FR_RXFE) && ring_free(&rx)) {
+        uint8_t b = (uint8_t)UART0_DR;
         ring_put(&rx, &b, 1);
     }
 }
 
 void uart_init(void)
 {
-    UART_BAUDDIV(0) = BOARD_BAUDDIV;
-    UART_CTRL(0) = UART_CTRL_TX_EN | UART_CTRL_RX_EN | UART_CTRL_RX_INTEN;
-    NVIC_IPR(IRQ_UART0_RX) = 0x40u; /* below the sample clock (0) */
-    NVIC_ISER = 1u << IRQ_UART0_RX;
+    UART0_LCRH = UART_LCRH_FEN | UART_LCRH_WLEN8;
+    UART0_IMSC = UART_INT_RX;
+    UART0_CR = UART_CR_UARTEN | UART_CR_TXE | UART_CR_RXE;
+    NVIC_IPR(IRQ_UART0) = 0x40u; /* below the sample clock (0) */
+    NVIC_ISER = 1u << IRQ_UART0;
 }
 
 size_t uart_read(uint8_t *p, size_t cap)
@@ -63,7 +64,7 @@ size_t uart_read(uint8_t *p, size_t cap)
     return n;
 }
 
-bool uart_rx_pending(void) { return rx.head != rx.tail || (UART_STATE(0) & UART_STATE_RXFULL); }
+bool uart_rx_pending(void) { return rx.head != rx.tail || !(UART0_FR & UART_FR_RXFE); }
 
 void uart_write(void *ctx, const uint8_t *p, size_t n)
 {
@@ -75,16 +76,16 @@ void uart_write(void *ctx, const uint8_t *p, size_t n)
 bool uart_flush(void)
 {
     uint32_t tail = tx.tail;
-    while (tail != tx.head && !(UART_STATE(0) & UART_STATE_TXFULL)) {
-        UART_DATA(0) = tx.buf[tail];
+    while (tail != tx.head && !(UART0_FR & UART_FR_TXFF)) {
+        UART0_DR = tx.buf[tail];
         tail = (tail + 1u) & tx.mask;
     }
     tx.tail = tail;
     return tail == tx.head;
 }
 
-void uart0_rx_irq(void)
+void uart0_irq(void)
 {
-    UART_INTCLEAR(0) = UART_INT_RX; /* first: a byte arriving after this raises it again */
+    UART0_ICR = UART_INT_RX; /* first: a byte arriving after this raises it again */
     rx_drain();
 }

@@ -1,9 +1,9 @@
-/* The vector table of the MPS2-AN385 (Cortex-M3: 16 system entries, 32 IRQs); reset is
+/* The vector table of the LM3S6965 (Cortex-M3: 16 system entries, 43 IRQs); reset is
  * ../cortexm/reset.c. */
 #include "../cortexm/cortexm.h"
 
-void systick_irq(void);
-void uart0_rx_irq(void);
+void timer0a_irq(void);
+void uart0_irq(void);
 
 /* Any fault or stray interrupt: stop (QEMU keeps running; the host's link reports the
  * silent device). */
@@ -14,11 +14,11 @@ void fault(void)
     }
 }
 
-__attribute__((section(".isr_vector"), used)) const uintptr_t vectors[16 + 32] = {
+__attribute__((section(".isr_vector"), used)) const uintptr_t vectors[16 + 43] = {
     CORTEXM_SYSTEM_VECTORS,
     [4] = (uintptr_t)fault, /* MemManage */
     [5] = (uintptr_t)fault, /* BusFault */
     [6] = (uintptr_t)fault, /* UsageFault */
-    [15] = (uintptr_t)systick_irq,
-    [16 + 0] = (uintptr_t)uart0_rx_irq, /* the other IRQs are never enabled */
+    [16 + 5] = (uintptr_t)uart0_irq,
+    [16 + 19] = (uintptr_t)timer0a_irq, /* the other IRQs are never enabled */
 };
