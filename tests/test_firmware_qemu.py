@@ -1,5 +1,5 @@
-"""The firmware as ARM code: the QEMU port (device/firmware/lm3s/, a Cortex-M3 that
-``qemu-system-arm -M lm3s6965evb`` runs) on a pty, driven by frictex's own host link
+"""The firmware as ARM code: the QEMU port (device/firmware/sf2/, a Cortex-M3 that
+``qemu-system-arm -M emcraft-sf2`` runs) on a pty, driven by frictex's own host link
 through the shared link checks, as the Python simulated device and the host build are.
 What it plays comes back through semihosting, a record per played sample."""
 
@@ -51,7 +51,7 @@ def test_the_host_link_streams_to_the_firmware_in_qemu_and_it_plays_what_it_is_s
     with qemuport.QemuDevice(log, elf=elf) as dev:
         sink = CommandSink(lambda: open_port(dev.path), 1, RATE, paced=True, process=dev.proc)
         assert sink.status()["state"] == "simulated"
-        assert sink.info.name == "frictex fw lm3s6965evb" and sink.info.limits_um == (4.0,)
+        assert sink.info.name == "frictex fw emcraft-sf2" and sink.info.limits_um == (4.0,)
         for b in range(0, 6000, 50):
             sink.send(b, sig[b:b + 50], None)
         sink.close()

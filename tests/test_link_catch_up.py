@@ -55,14 +55,37 @@ def _snapshot(play, end, playing=True, t_s=0.0):
     return Snapshot(t_s, play, end, end - play, playing, end, end)
 
 
-def test_behind_only_a_playing_device_holding_its_prefill_or_more():
+def test_behind_a_playing_device_holding_its_prefill_or_more():
     assert behind(_snapshot(100, 150), 0.0, RATE, 150, 50)
     assert not behind(_snapshot(100, 149), 0.0, RATE, 149, 50)
-    assert not behind(_snapshot(100, 200, playing=False), 0.0, RATE, 200, 50)
     assert not behind(None, 0.0, RATE, 0, 50)
     # 2.5 ms later the device has played 25 more: 75 ahead, then 50
     assert behind(_snapshot(100, 175), 0.0, RATE, 175, 50)
     assert not behind(_snapshot(100, 175), 0.0026, RATE, 175, 50)
+
+
+def test_a_device_that_stopped_reporting_is_not_taken_to_play_on_for_ever():
+    """Reports 0.1 s old: the device is taken to have played 4 prefills past its last
+    report, not 1000 samples, so 200 samples sent since are ahead of it."""
+    assert behind(_snapshot(100, 150), 0.1, RATE, 350, 50)
+    assert not behind(_snapshot(100, 150), 0.1, RATE, 349, 50)
+
+
+def test_behind_a_waiting_device_only_with_three_prefills_held_or_on_their_way():
+    """A device waiting for its prefill starts as soon as it holds it; the Status saying
+    so may come two blocks later: only three prefills held or sent mean it is late
+    (a transport that delivers slowly), however long ago it reported."""
+    assert not behind(_snapshot(100, 200, playing=False), 5.0, RATE, 200, 50)
+    assert not behind(_snapshot(100, 100, playing=False), 5.0, RATE, 249, 50)
+    assert behind(_snapshot(100, 100, playing=False), 5.0, RATE, 250, 50)
+
+
+def test_behind_when_fresher_blocks_wait_behind_it():
+    """Blocks queued at the host (a port that took no bytes for a while): once those
+    behind a block make up the prefill, it is stale, whatever the device reported."""
+    assert behind(None, 0.0, RATE, 0, 50, queued=50)
+    assert not behind(None, 0.0, RATE, 0, 50, queued=49)
+    assert behind(_snapshot(100, 100, playing=False), 0.0, RATE, 100, 50, queued=75)
 
 
 def test_a_live_stream_whose_device_fell_behind_comes_back_to_its_lead():

@@ -20,7 +20,7 @@ touch whose first sample was skipped is timed at the first sample played in its 
 - *sim*: the simulated device in this process (``sim``), its played samples timed when
   its clock plays them (each at its own tick: the time its batch was played less the
   ticks after it);
-- *qemu*: the firmware's QEMU port (``device/firmware/lm3s``, a Cortex-M3 in
+- *qemu*: the firmware's QEMU port (``device/firmware/sf2``, a Cortex-M3 in
   ``qemu-system-arm`` on the host's clock) on a pty, its played samples timed as its log
   reaches this process (batches written at least every 2 ms; each sample timed back
   from its batch's arrival by the ticks after it, so QEMU's I/O delay is included);
@@ -273,12 +273,15 @@ def _figures(label: str, latency_s: np.ndarray, events: int) -> list[Figure]:
 
 
 def _link_figures(label: str, link: dict) -> list[Figure]:
-    """What the lead cost on a link: the device's underruns and the blocks skipped to
-    bring it back (``device.link.catch_up``), of all blocks."""
-    blocks = link["blocks_sent"] + link["skipped_blocks"]
+    """What the lead cost on a link: the device's underruns, the blocks skipped to bring
+    it back (``device.link.catch_up``) and those dropped (its queue full, or the link
+    down), of all blocks made."""
+    blocks = link["blocks_sent"] + link["skipped_blocks"] + link["dropped_blocks"]
     return [Figure("latency", f"{label}: device underruns", link["underruns"] or 0, "times"),
             Figure("latency", f"{label}: blocks skipped to catch up", link["skipped_blocks"],
-                   f"of {blocks}")]
+                   f"of {blocks}"),
+            Figure("latency", f"{label}: blocks dropped (queue full, link down)",
+                   link["dropped_blocks"], f"of {blocks}; {link['disconnects']} disconnects")]
 
 
 def _audio(events: int) -> np.ndarray | None:

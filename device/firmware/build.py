@@ -27,7 +27,7 @@ NEEDS = {"host": ("make", "cc"), "simlib": ("make", "cc"), "check": ("make", "cc
          "fuzz-loop": ("make", "cc", "python3"),
          "stm32g0": ("make", "arm-none-eabi-gcc", "arm-none-eabi-size"),
          "isr-cost": ("make", "cc", "valgrind", "callgrind_annotate"),
-         "lm3s": ("make", "arm-none-eabi-gcc")}
+         "sf2": ("make", "arm-none-eabi-gcc")}
 
 
 class FirmwareBuildError(FrictexError, RuntimeError):

@@ -1,4 +1,4 @@
-"""Run the firmware's QEMU port (``lm3s/``: LM3S6965EVB, a Stellaris Cortex-M3) in
+"""Run the firmware's QEMU port (``sf2/``: Emcraft's SmartFusion2 SOM, a Cortex-M3) in
 ``qemu-system-arm`` with its link UART on a pty, and link to it with frictex's own host
 link, as :mod:`hostport` does for the host port.
 
@@ -31,22 +31,22 @@ from frictex.device.firmware.build import BUILD, make, require
 from frictex.device.link.protocol import LinkError
 
 QEMU = "qemu-system-arm"
-BOARD = "lm3s6965evb"
-#: the samples per second, channels and per-channel limit (counts) of lm3s/board.h
+BOARD = "emcraft-sf2"
+#: the samples per second, channels and per-channel limit (counts) of sf2/board.h
 RATE_HZ = 10_000.0
 CHANNELS = 1
 #: QEMU's clock: None, the host's. Held to instruction counts instead (``-icount
 #: shift=5,sleep=on,align=on``: 32 ns per instruction, sleeping in real time while the
-#: guest idles) this port played about 5,400 samples a second, not 10,000, on an idle
-#: machine: the emulated clock fell behind the host's.
+#: guest idles) this port did not answer a handshake within 10 s, and an LM3S6965 port
+#: tried before it played about 5,400 samples a second, not 10,000, on an idle machine.
 ICOUNT = None
 _PTY = re.compile(r"char device redirected to (/dev/\S+) \(label link\)")
 
 
 def firmware() -> Path:
     """The QEMU port's ELF, built if needed (needs the Arm cross compiler)."""
-    make("lm3s")
-    return BUILD / "lm3s" / "frictex-fw-lm3s.elf"
+    make("sf2")
+    return BUILD / "sf2" / "frictex-fw-sf2.elf"
 
 
 def _die_with_parent() -> None:
@@ -82,7 +82,7 @@ class QemuDevice:
         self._on_log = on_log
         self.stderr = tempfile.TemporaryFile("w+b")  # QEMU's messages, for errors
         self._folder = tempfile.TemporaryDirectory(prefix="frictex-qemu-")
-        fifo = os.path.join(self._folder.name, "played.bin")  # lm3s/board.h BOARD_PLAYED_LOG
+        fifo = os.path.join(self._folder.name, "played.bin")  # sf2/board.h BOARD_PLAYED_LOG
         os.mkfifo(fifo)
         self._fifo = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)  # so QEMU's open returns
         self.proc = subprocess.Popen(command(elf or firmware(), icount), cwd=self._folder.name,

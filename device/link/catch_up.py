@@ -6,11 +6,13 @@ A live stream's samples play a fixed lead after the pipeline made them only whil
 device never runs dry. A device that underran holds its play position (PROTOCOL.md 5.1)
 and plays again once it holds its prefill, so from then on every sample plays later by
 the time it waited, and nothing in the device takes that delay back: a touch is felt
-later for the rest of the run. The host takes it back. When a live block is due to go
-out while the device, playing, still holds its prefill or more (at least one block more
-than it holds at the stream's steady pace), the block is not sent (its samples count as
+later for the rest of the run. The host takes it back (:func:`behind`). When a live block
+is due to go out while the device, playing, still holds its prefill or more (at least one
+block more than it holds at the stream's steady pace), the block is not sent (its samples count as
 unplayed, cause ``skipped``) and the next block takes its sample numbers: one block less
-queued, one block less of delay, and no gap in what the device plays.
+queued, one block less of delay, and no gap in what the device plays. The same holds for
+blocks that wait at the host (a port that took no bytes for a while) or on their way (a
+device that reads its transport slowly): the newest go out, the older are skipped.
 
 Pure bookkeeping on the numbers it is given (no clock, no I/O).
 """
@@ -26,15 +28,34 @@ from frictex.device.link.ledger import Snapshot
 KEEP_SKIPS = 4096
 
 
+#: a device waiting for its prefill is behind once it holds, or has on its way, this many
+#: prefills: more than it needs to start, so what arrives later would play later (a
+#: device starved by a slow transport; at a stream's start the Status that says it
+#: started playing may come two blocks after it did)
+WAITING_PREFILLS = 3
+
+
+#: a playing device is taken to have played on at its rate since its last report for at
+#: most this many prefills (20 ms at the live default, four heartbeats): past that, it
+#: is taken to have stopped where the estimate reached (its reports are not coming, so
+#: neither, maybe, are the blocks), and what is sent meanwhile counts as ahead of it
+HORIZON_PREFILLS = 4
+
+
 def behind(snapshot: Snapshot | None, now_s: float, rate_hz: float, sent_end: int,
-           prefill: int) -> bool:
-    """Does the device, as last reported and extrapolated to ``now_s`` (s), play at least
-    ``prefill`` samples (sent or on their way) before the next block? Only a playing
-    device is behind: one waiting for its prefill plays the next block as soon as it can."""
-    if snapshot is None or not snapshot.playing:
+           prefill: int, queued: int = 0) -> bool:
+    """Is a live stream's next block late before it leaves? Yes when ``queued`` samples
+    (the blocks queued behind it) already make up the ``prefill``: they are fresher and
+    enough for the device; when the device, as last reported and extrapolated to
+    ``now_s`` (s), plays at least ``prefill`` samples (held or on their way) before the
+    block (extrapolated at most :data:`HORIZON_PREFILLS` prefills past the report); or when
+    it waits for its prefill and holds or has on its way :data:`WAITING_PREFILLS` of them."""
+    if queued >= prefill:
+        return True
+    if snapshot is None:
         return False
-    played, end = snapshot.level(now_s, rate_hz, sent_end)
-    return end - played >= prefill
+    played, end = snapshot.level(now_s, rate_hz, sent_end, horizon=HORIZON_PREFILLS * prefill)
+    return end - played >= (prefill if snapshot.playing else WAITING_PREFILLS * prefill)
 
 
 class IndexMap:

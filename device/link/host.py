@@ -521,9 +521,10 @@ def open_sink(spec: str, channels: int, rate_hz: float, *, phases: bool = False,
     prefill_s : the jitter-buffer prefill asked of a link's device (s): it starts playing
         once it holds this much, so a live stream plays this much less one block after
         the pipeline made it (default :data:`PREFILL_S`).
-    catch_up : live only: skip a block while the device holds its prefill or more,
-        after it fell behind (an underrun, a slow clock), so that the delay comes back
-        to the prefill (``device.link.catch_up``; skipped samples count as unplayed).
+    catch_up : live only: skip a block while the device holds its prefill or more
+        after it fell behind (an underrun, a slow clock), or while fresher blocks wait
+        behind it, so that the delay comes back to the prefill (``device.link.catch_up``;
+        skipped samples count as unplayed).
 
     Returns a ``device.link.devices.OutputDevice`` (the built-ins a :class:`CommandSink`). Raises :class:`LinkError` (an OSError, exit 1) if the port
     cannot be opened or the device does not answer or does not fit the pipeline,

@@ -379,7 +379,7 @@ class HostSession:
                 self.queue.popleft()
                 taken += 1
                 if self.catch_up and behind(self.snapshot, now, self.rate_hz, self.sent_end,
-                                            self._pacing.prefill):
+                                            self._pacing.prefill, self._queued_samples()):
                     self._skip(start, len(counts))
                     continue
                 out += self._send_block(self.index_map.to_device(start), counts, phases)
@@ -388,6 +388,10 @@ class HostSession:
         if not self.queue or taken:
             self._last_progress = now
         return bytes(out)
+
+    def _queued_samples(self) -> int:
+        """Samples in the blocks queued at the host; the caller holds ``cond``."""
+        return sum(len(counts) for _, counts, _ in self.queue)
 
     def _skip(self, start: int, n: int) -> None:
         """Host samples ``start ..`` (``n``) not sent: the device is behind (catch-up,

@@ -1,6 +1,6 @@
-/* The link on PL011 UART0 with rings: received bytes are taken by its RX interrupt from
- * the 16-byte FIFO, so they never wait for the main loop; sending never waits for the
- * line: the main loop moves queued bytes out while the UART takes them (QEMU's PL011
+/* The link on MMUART_0 (a 16550) with rings: received bytes are taken by its RX interrupt
+ * from the 16-byte FIFO, so they never wait for the main loop; sending never waits for
+ * the line: the main loop moves queued bytes out while the UART takes them (QEMU's 16550
  * passes each byte to its character device at once). */
 #ifndef UART_H
 #define UART_H

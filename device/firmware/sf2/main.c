@@ -1,7 +1,7 @@
-/* The QEMU port: LM3S6965EVB (Cortex-M3), the link on UART0, SysTick's count as the
- * sample clock, each played sample logged through semihosting (see README.md, "The QEMU board"). When
- * a host's Stop has played out it leaves QEMU through semihosting, as the host port's
- * --once. */
+/* The QEMU port: Emcraft's SmartFusion2 SOM (M2S010, Cortex-M3), the link on MMUART_0,
+ * SysTick's count as the sample clock, each played sample logged through semihosting (see
+ * README.md, "The QEMU board"). When a host's Stop has played out it leaves QEMU through
+ * semihosting, as the host port's --once. */
 #include "../core/device.h"
 #include "../cortexm/cortexm.h"
 #include "board.h"
@@ -25,8 +25,8 @@ static const fw_config config = {
     .protocol_version = FW_NEWEST_VERSION,
 };
 
-/* The sample clock is SysTick's count, running free at the system clock (24 bits: it
- * wraps every 1.3 s): timer 0A interrupts every BOARD_IRQ_TICKS sample periods, and each
+/* The sample clock is SysTick's count, running free at the M3 clock (24 bits: it
+ * wraps every 118 ms): MSS timer 1 interrupts every BOARD_IRQ_TICKS sample periods, and each
  * interrupt plays the ticks the count says are due. QEMU delivers a timer interrupt late
  * or not at all while the host runs something else (and each one costs its main loop a
  * wake-up: at 10 kHz they took a fifth of a host core), but the count follows the host's
@@ -35,9 +35,9 @@ static const fw_config config = {
  * ticks per interrupt; the rest at the next). A board plays one tick per interrupt. */
 static uint32_t last_count, cycles_due;
 
-void timer0a_irq(void)
+void timer1_irq(void)
 {
-    GPTM0_ICR = GPTM_INT_TATO;
+    TIM1_RIS = 1u;
     uint32_t now = SYST_CVR;
     cycles_due += (last_count - now) & SYST_MAX; /* a 24-bit down-counter */
     last_count = now;
@@ -65,15 +65,10 @@ int main(void)
     SYST_CVR = 0;
     SYST_CSR = SYST_CSR_ENABLE | SYST_CSR_CLKSOURCE; /* counts, never interrupts */
     last_count = SYST_CVR;
-    RCGC1 |= RCGC1_TIMER0;
-    GPTM0_CTL = 0;
-    GPTM0_CFG = 0; /* 32-bit */
-    GPTM0_TAMR = GPTM_TAMR_PERIODIC;
-    GPTM0_TAILR = BOARD_IRQ_TICKS * BOARD_TICK_CYCLES - 1u;
-    GPTM0_IMR = GPTM_INT_TATO;
-    NVIC_IPR(IRQ_TIMER0A) = 0x00u; /* the highest priority: above the UART */
-    NVIC_ISER = 1u << IRQ_TIMER0A;
-    GPTM0_CTL = GPTM_CTL_TAEN;
+    TIM1_LOADVAL = BOARD_IRQ_TICKS * (BOARD_TIMER_HZ / BOARD_RATE_HZ) - 1u;
+    NVIC_IPR(IRQ_TIMER1) = 0x00u; /* the highest priority: above the UART */
+    NVIC_ISER = 1u << IRQ_TIMER1;
+    TIM1_CTRL = TIM_CTRL_ENABLE | TIM_CTRL_INTEN;
     for (;;) {
         uint8_t chunk[64];
         size_t n = uart_read(chunk, sizeof chunk);

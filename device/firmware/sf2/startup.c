@@ -1,8 +1,8 @@
-/* The vector table of the LM3S6965 (Cortex-M3: 16 system entries, 43 IRQs); reset is
+/* The vector table of the M2S010 (Cortex-M3: 16 system entries, 81 IRQs); reset is
  * ../cortexm/reset.c. */
 #include "../cortexm/cortexm.h"
 
-void timer0a_irq(void);
+void timer1_irq(void);
 void uart0_irq(void);
 
 /* Any fault or stray interrupt: stop (QEMU keeps running; the host's link reports the
@@ -14,11 +14,11 @@ void fault(void)
     }
 }
 
-__attribute__((section(".isr_vector"), used)) const uintptr_t vectors[16 + 43] = {
+__attribute__((section(".isr_vector"), used)) const uintptr_t vectors[16 + 81] = {
     CORTEXM_SYSTEM_VECTORS,
     [4] = (uintptr_t)fault, /* MemManage */
     [5] = (uintptr_t)fault, /* BusFault */
     [6] = (uintptr_t)fault, /* UsageFault */
-    [16 + 5] = (uintptr_t)uart0_irq,
-    [16 + 19] = (uintptr_t)timer0a_irq, /* the other IRQs are never enabled */
+    [16 + 10] = (uintptr_t)uart0_irq,
+    [16 + 14] = (uintptr_t)timer1_irq, /* the other IRQs are never enabled */
 };

@@ -1,14 +1,14 @@
-/* LM3S6965EVB as QEMU emulates it (qemu-system-arm -M lm3s6965evb): a Stellaris
- * Cortex-M3 with PL011 UARTs. What the board offers the host; override with -D. */
+/* Emcraft's SmartFusion2 SOM as QEMU emulates it (qemu-system-arm -M emcraft-sf2): a
+ * Microsemi M2S010, Cortex-M3 at 142 MHz, with 16550 UARTs. What the board offers the
+ * host; override with -D. */
 #ifndef BOARD_H
 #define BOARD_H
 
-#define BOARD_NAME "frictex fw lm3s6965evb"
-#ifndef BOARD_SYSCLK_HZ
-#define BOARD_SYSCLK_HZ 12500000u
-#endif /* QEMU's Stellaris system clock after reset (RCC: 200 MHz / 16) */
+#define BOARD_NAME "frictex fw emcraft-sf2"
+#define BOARD_SYSCLK_HZ 142000000u /* QEMU's M3 clock, SysTick's processor clock */
+#define BOARD_TIMER_HZ 71000000u   /* the MSS timer's: the M3 clock / APB0's divider (2) */
 #ifndef BOARD_RATE_HZ
-#define BOARD_RATE_HZ 10000u /* sample clock: SysTick */
+#define BOARD_RATE_HZ 10000u /* sample clock: SysTick's count */
 #endif
 #ifndef BOARD_CHANNELS
 #define BOARD_CHANNELS 1
@@ -25,8 +25,8 @@
 
 #define BOARD_TICK_CYCLES (BOARD_SYSCLK_HZ / BOARD_RATE_HZ)
 
-#if BOARD_SYSCLK_HZ % BOARD_RATE_HZ
-#error "the sample rate must divide the system clock"
+#if BOARD_SYSCLK_HZ % BOARD_RATE_HZ || BOARD_TIMER_HZ % BOARD_RATE_HZ
+#error "the sample rate must divide the clocks"
 #endif
 
 #endif
