@@ -8,7 +8,8 @@ commands run alternated, one of each per round (15 rounds; 5 with ``--quick``), 
 figure is the median over the rounds: wall time (what a user waits) and user + system
 CPU (what the machine's load does not change much); ``frictex bench`` prints the
 machine's load before and after. ``python -X importtime -m frictex ...`` says where a command's
-start-up goes.
+start-up goes. With ``PYTHONDONTWRITEBYTECODE`` set, Python caches no compiled modules and
+every command compiles frictex's again: the section says so.
 
 Targets (issue 31): ``frictex --version`` under 0.15 s; a one-second replay under 0.5 s
 of wall time on a quiet machine.
@@ -16,6 +17,7 @@ of wall time on a quiet machine.
 
 from __future__ import annotations
 
+import os
 import sys
 import tempfile
 from pathlib import Path
@@ -43,6 +45,12 @@ def commands(tmp: Path) -> dict[str, list[str]]:
 
 
 def run(quick: bool) -> list[Figure]:
+    if os.environ.get("PYTHONDONTWRITEBYTECODE"):
+        # measured here: about 70 frictex modules compiled again by every one-second
+        # replay, 80 ms of its 0.52-0.60 s
+        print("frictex: bench startup: PYTHONDONTWRITEBYTECODE is set, so every command "
+              "compiles frictex's modules from source again; unset it for the start-up a "
+              "user gets", file=sys.stderr)
     rounds = 5 if quick else 15
     with tempfile.TemporaryDirectory(prefix="frictex-startup-") as name:
         runs = alternated(commands(Path(name)), rounds)

@@ -438,7 +438,7 @@ class _RowParser:
 
 
 #: bytes read from a trace file at a time
-_READ_BYTES = 1 << 20
+_READ_BYTES = 1 << 22
 
 
 def _blocks(fh, where: str):
@@ -462,8 +462,9 @@ def _blocks(fh, where: str):
             return
         ended = data[end - 1] == 0x0A  # a line break
         body = data[:end - ended]  # the block's lines, one copy
-        count = body.count(b"\n") + 1
-        bad = _first_bad_line(body, count, ended)
+        breaks = np.flatnonzero(np.frombuffer(body, dtype=np.uint8) == 0x0A)
+        count = breaks.size + 1
+        bad = _first_bad_line(body, breaks, ended)
         if bad == count:  # the whole block is good: handed out as it is, not split
             yield number + 1, body, count
         else:
@@ -482,13 +483,12 @@ def _without_bom(head: bytes, where: str) -> bytes:
     return head[len(codecs.BOM_UTF8):] if head.startswith(codecs.BOM_UTF8) else head
 
 
-def _first_bad_line(body: bytes, count: int, ended: bool) -> int:
-    """Index among the ``count`` lines of ``body`` (joined by line breaks, the last one's
-    break removed if it had one: ``ended``) of the first line too long, holding a NUL
-    byte or not UTF-8; ``count`` if none."""
-    bad = count
+def _first_bad_line(body: bytes, breaks: np.ndarray, ended: bool) -> int:
+    """Index among the lines of ``body`` (joined by line breaks at offsets ``breaks``, the
+    last one's break removed if it had one: ``ended``) of the first line too long, holding
+    a NUL byte or not UTF-8; the number of lines if none."""
+    count = bad = breaks.size + 1
     if len(body) + ended >= MAX_LINE_BYTES:  # else no line can be too long
-        breaks = np.flatnonzero(np.frombuffer(body, dtype=np.uint8) == 0x0A)
         lengths = np.diff(breaks, prepend=-1, append=len(body)) - 1
         limits = np.full(count, MAX_LINE_BYTES)
         limits[-1] = MAX_LINE_BYTES if ended else MAX_LINE_BYTES + 1  # its break counts
@@ -498,6 +498,8 @@ def _first_bad_line(body: bytes, count: int, ended: bool) -> int:
     nul = body.find(0)
     if nul >= 0:
         bad = min(bad, body.count(b"\n", 0, nul))
+    if body.isascii():  # UTF-8, and no 2 MB string to build and drop
+        return bad
     try:
         body.decode("utf-8")
     except UnicodeDecodeError as exc:
