@@ -261,6 +261,11 @@ def _run(args: argparse.Namespace, headless: bool) -> int:
           f"{summary['deadline_misses']} deadline misses{stolen if summary['deadline_misses'] else ''}, "
           f"{summary['clamps_total']} clamped samples, "
           f"{summary['frames']} frames ({summary['frame_ms_mean']:.1f} ms mean), link: {link['state']}")
+    if "skipped_blocks" in link:  # a device link: what its lead cost
+        print(f"demo: link: the device ran dry {link['underruns'] or 0} times and "
+              f"{link['skipped_blocks']} blocks were skipped to catch up; "
+              f"{link['unplayed_samples']} of {link['commanded_samples']} samples unplayed"
+              + "".join(f", {k} {v}" for k, v in link["unplayed_by_cause"].items() if v))
     if "datagrams" in summary["input_counts"]:  # TUIO: what came from whom
         c = summary["input_counts"]
         print(f"demo: TUIO on {c['listen']} from {c['sender']}: {c['datagrams']} datagrams, "
