@@ -111,7 +111,20 @@ def _import_numba():
             numba.np.arraymath.ensure_blas = ensure_blas
     finally:
         sys.meta_path.remove(refuse)
+    _numba_extensions_known()
     return numba
+
+
+def _numba_extensions_known() -> None:
+    """numba reads every installed distribution's metadata again at its first compile, to
+    run the ``init`` of each ``numba_extensions`` entry point (about 15 ms); frictex's
+    registries have read it once already. Where no distribution has one, numba is told
+    its extensions are loaded."""
+    from frictex.device.registry import entry_points_named
+    if not entry_points_named("numba_extensions", "init"):
+        entrypoints = importlib.import_module("numba.core.entrypoints")
+        if hasattr(entrypoints, "_already_initialized"):  # else a numba that changed: it reads
+            entrypoints._already_initialized = True
 
 
 def _register_typeof() -> None:

@@ -96,6 +96,12 @@ def _entry_points(group: str, fresh: bool) -> list:
     return _GROUPS[group]
 
 
+def entry_points_named(group: str, name: str) -> list:
+    """The installed entry points of ``group`` called ``name``, from the one reading of
+    the installed metadata every registry shares (:func:`_entry_points`)."""
+    return [point for point in _entry_points(group, False) if point.name == name]
+
+
 def _distribution(point) -> str:
     return point.dist.name if point.dist is not None else "?"
 

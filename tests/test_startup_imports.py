@@ -77,3 +77,36 @@ def test_reading_a_scene_loads_no_kernel():
                           timeout=600)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"
+
+
+NUMBA_EXTENSIONS_PROBE = r"""
+import importlib.metadata as metadata, json, sys
+import numpy as np
+from frictex.device import registry
+from frictex.device.jit import njit
+registry.entry_points_named("frictex.renderers", "sho")  # the registries' one reading
+if json.loads(sys.argv[1]):  # a distribution with a numba extension, as its metadata lists it
+    point = metadata.EntryPoint("init", "json:dumps", "numba_extensions")
+    registry.entry_points_named = lambda group, name: [point]
+reads = []
+real = metadata.entry_points
+metadata.entry_points = lambda *a, **k: reads.append(1) or real(*a, **k)
+@njit()
+def twice(x):
+    return 2.0 * x
+twice(np.float64(1.5))
+print(json.dumps(len(reads)))
+"""
+
+
+@pytest.mark.parametrize("extension", [False, True])
+def test_numba_reads_the_installed_metadata_again_only_for_an_extension(extension):
+    """frictex's registries read every distribution's entry points once (here, before
+    the count starts); numba would read them all again at its first compile to run its
+    extensions' ``init``. With none installed it is told they are loaded (no second
+    reading); with one, it reads and runs them as it would without frictex."""
+    done = subprocess.run([sys.executable, "-c", NUMBA_EXTENSIONS_PROBE, json.dumps(extension)],
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    reads = json.loads(done.stdout.strip().splitlines()[-1])
+    assert reads == (1 if extension else 0)
