@@ -307,8 +307,9 @@ class _RowParser:
         cols = self._rows(batch)
         if self.held is not None:
             cols = [np.concatenate(pair) for pair in zip(self.held, cols)]
-        order = np.argsort(cols[0], kind="stable")
-        cols = [c[order] for c in cols]
+        if np.any(cols[0][1:] < cols[0][:-1]):  # a trace's rows are nearly always in order
+            order = np.argsort(cols[0], kind="stable")
+            cols = [c[order] for c in cols]
         cut = cols[0].size if final else max(cols[0].size - self.max_held, int(np.searchsorted(
             cols[0], self.latest - self.order.tolerance_s, side="right")))
         self.held = [c[cut:] for c in cols]
@@ -338,7 +339,8 @@ class _RowParser:
         if first_bad < t.size:
             self._row_problem(*_numbered_rows(batch)[first_bad])
         keep = self._keep(t, lines)
-        return [a[keep] for a in (t, fv.astype(np.int64), x, y, force, event, lines)]
+        cols = (t, fv.astype(np.int64), x, y, force, event, lines)
+        return list(cols) if keep.all() else [a[keep] for a in cols]
 
     def _columns(self, rows: list[list[str]], plain_ascii: bool = False) -> tuple[np.ndarray, ...]:
         """t, finger, x, y, force, event of well-formed rows (:func:`ascii_float` on each
