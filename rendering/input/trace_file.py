@@ -625,7 +625,8 @@ def _plain_columns(data: bytes, count: int, col: dict[str, int], width: int) -> 
             lookup = np.array([_EVENT_CODES.get(word, MOVE) for word in words], dtype=np.int8)
             codes.append(lookup[part.indices.to_numpy()])
         event = np.concatenate(codes)
-    return tuple(np.array(c, dtype=np.float64) for c in (t, fv, x, y, force)) + (event,)
+    # read-only views of Arrow's buffers: the parser concatenates (copies) every column
+    return tuple(np.asarray(c, dtype=np.float64) for c in (t, fv, x, y, force)) + (event,)
 
 
 def _chunks(blocks, where: str, chunk_rows: int, order: TimeOrder, strict: bool):
