@@ -16,6 +16,16 @@ void fault(void);
     [0] = (uintptr_t)&_estack, [1] = (uintptr_t)reset, [2] = (uintptr_t)fault,             \
     [3] = (uintptr_t)fault, [11] = (uintptr_t)fault, [14] = (uintptr_t)fault
 
+/* A port's fw_config from its board.h (BOARD_CHANNELS, BOARD_RATE_HZ, BOARD_BUFFER,
+ * BOARD_WATCHDOG_MS, BOARD_RAMP_MS, BOARD_NAME), the per-channel limits as arguments. */
+#define CORTEXM_BOARD_CONFIG(...)                                                          \
+    {                                                                                      \
+        .channels = BOARD_CHANNELS, .rate_mhz = BOARD_RATE_HZ * 1000u,                     \
+        .buffer_samples = BOARD_BUFFER, .watchdog_ms = BOARD_WATCHDOG_MS,                  \
+        .ramp_ms = BOARD_RAMP_MS, .limits = {__VA_ARGS__}, .name = BOARD_NAME,             \
+        .protocol_version = FW_NEWEST_VERSION,                                             \
+    }
+
 /* fw_hal.lock: mask interrupts (the sample interrupt shares the device core). */
 static inline void cortexm_lock(void *ctx)
 {

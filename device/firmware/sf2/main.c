@@ -14,16 +14,7 @@ static volatile uint32_t log_dropped;
 
 static const fw_hal hal = {uart_write, NULL, NULL, cortexm_lock, cortexm_unlock, NULL}; /* no sensors */
 
-static const fw_config config = {
-    .channels = BOARD_CHANNELS,
-    .rate_mhz = BOARD_RATE_HZ * 1000u,
-    .buffer_samples = BOARD_BUFFER,
-    .watchdog_ms = BOARD_WATCHDOG_MS,
-    .ramp_ms = BOARD_RAMP_MS,
-    .limits = {BOARD_LIMIT},
-    .name = BOARD_NAME,
-    .protocol_version = FW_NEWEST_VERSION,
-};
+static const fw_config config = CORTEXM_BOARD_CONFIG(BOARD_LIMIT);
 
 /* The sample clock is SysTick's count, running free at the M3 clock (24 bits: it
  * wraps every 118 ms): MSS timer 1 interrupts every BOARD_IRQ_TICKS sample periods, and each

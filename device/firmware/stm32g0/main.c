@@ -11,16 +11,7 @@ static fw_device device;
 
 static const fw_hal hal = {uart_write, NULL, NULL, cortexm_lock, cortexm_unlock, NULL}; /* no sensors wired */
 
-static const fw_config config = {
-    .channels = BOARD_CHANNELS,
-    .rate_mhz = BOARD_RATE_HZ * 1000u,
-    .buffer_samples = BOARD_BUFFER,
-    .watchdog_ms = BOARD_WATCHDOG_MS,
-    .ramp_ms = BOARD_RAMP_MS,
-    .limits = {BOARD_LIMIT, BOARD_LIMIT},
-    .name = BOARD_NAME,
-    .protocol_version = FW_NEWEST_VERSION,
-};
+static const fw_config config = CORTEXM_BOARD_CONFIG(BOARD_LIMIT, BOARD_LIMIT);
 
 int main(void)
 {
