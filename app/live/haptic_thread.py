@@ -59,6 +59,10 @@ SNAPSHOT_QUEUE = 256
 BLOCK_SIZE = 25
 #: blocks a live link's device holds before it plays: one playing, one on its way
 LEAD_BLOCKS = 2
+#: the least prefill a live link asks for, whatever the block (s): a thread handing over
+#: a block every half millisecond is late more often than not (``--block 5``: three
+#: blocks in four skipped with a prefill of two blocks)
+MIN_PREFILL_S = 0.005
 LINK_STATUS_EVERY = 20  # blocks between two sink.status() calls
 APPLIED_IN_STATUS = 8  # the latest stops, resumes and switches each snapshot carries
 EVENTS = {"down": DOWN, "move": MOVE, "up": UP}
@@ -66,8 +70,9 @@ EVENTS = {"down": DOWN, "move": MOVE, "up": UP}
 
 def link_options(block_s: float) -> dict:
     """``open_sink``'s keywords for a live link whose blocks last ``block_s`` (s): the
-    prefill of :data:`LEAD_BLOCKS` blocks and the catch-up."""
-    return {"prefill_s": LEAD_BLOCKS * block_s, "catch_up": True}
+    prefill of :data:`LEAD_BLOCKS` blocks (at least :data:`MIN_PREFILL_S`) and the
+    catch-up."""
+    return {"prefill_s": max(LEAD_BLOCKS * block_s, MIN_PREFILL_S), "catch_up": True}
 
 
 def shorten_switch_interval(block_s: float) -> None:
@@ -304,7 +309,8 @@ class HapticThread(TouchInput, threading.Thread):
         self.stage = LiveStage(build_pipeline(scene, rate_hz, block_size, render_override,
                                               control=control), self.estop, self.stats)
         self.stage.render_override = render_override
-        self.wall = WallClock(self.block_s, LEAD_BLOCKS * self.block_s, now=clock, sleep=sleep)
+        self.wall = WallClock(self.block_s, link_options(self.block_s)["prefill_s"], now=clock,
+                              sleep=sleep)
         self.t0 = self.wall.t0
         self.error: BaseException | None = None
         self.touch_force = (SimpleNamespace(value=scene.device.normal_force_n)
