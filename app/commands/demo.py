@@ -73,7 +73,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--block", type=positive_int, default=25, metavar="N",
                         help="block size in output samples (default 25 = 2.5 ms at 10 kHz: "
                              "a touch waits at most one block, and the device plays two "
-                             "blocks behind; replay's default is 50, so replay a demo's "
+                             "blocks (at least 5 ms) behind; replay's default is 50, so "
+                             "replay a demo's "
                              "recorded trace with --block 25 to apply its touches at the "
                              "same boundaries)")
     from frictex.app.live.inputs import INPUTS
