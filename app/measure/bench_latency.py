@@ -15,7 +15,8 @@ includes the wait for the next block boundary (0 to 2.5 ms), the pipeline's comp
 link (frames through the port thread) and the device's buffer lead (the link's prefill of
 two blocks, less the block playing; after an underrun the link skips blocks until the
 device is back to it, ``device.link.catch_up``); not the touch hardware's own delay. A
-touch whose first sample was skipped is timed at the first sample played in its stead. The play time is the device's:
+touch whose first sample was skipped is timed at the first sample played in its stead.
+The play time is the device's:
 
 - *sim*: the simulated device in this process (``sim``), its played samples timed when
   its clock plays them (each at its own tick: the time its batch was played less the

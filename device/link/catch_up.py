@@ -6,13 +6,14 @@ A live stream's samples play a fixed lead after the pipeline made them only whil
 device never runs dry. A device that underran holds its play position (PROTOCOL.md 5.1)
 and plays again once it holds its prefill, so from then on every sample plays later by
 the time it waited, and nothing in the device takes that delay back: a touch is felt
-later for the rest of the run. The host takes it back (:func:`behind`). When a live block
-is due to go out while the device, playing, still holds its prefill or more (at least one
-block more than it holds at the stream's steady pace), the block is not sent (its samples count as
-unplayed, cause ``skipped``) and the next block takes its sample numbers: one block less
-queued, one block less of delay, and no gap in what the device plays. The same holds for
-blocks that wait at the host (a port that took no bytes for a while) or on their way (a
-device that reads its transport slowly): the newest go out, the older are skipped.
+later for the rest of the run. The host takes it back (:func:`behind`). When a live
+block is due to go out while the device, playing, still holds its prefill or more (at
+least one block more than it holds at the stream's steady pace), the block is not sent
+(its samples count as unplayed, cause ``skipped``) and the next block takes its sample
+numbers: one block less queued, one block less of delay, and no gap in what the device
+plays. The same holds for blocks that wait at the host (a port that took no bytes for a
+while) or on their way (a device that reads its transport slowly): the newest go out,
+the older are skipped.
 
 Pure bookkeeping on the numbers it is given (no clock, no I/O).
 """
@@ -23,18 +24,14 @@ import bisect
 
 from frictex.device.link.ledger import Snapshot
 
-#: skips remembered for mapping sample numbers back (more than a second's worth of
-#: blocks at 10 kHz; older samples map as if nothing before them was skipped)
+#: skips remembered for mapping sample numbers back (10 s of 2.5 ms blocks skipped back
+#: to back; older samples map as if nothing before them was skipped)
 KEEP_SKIPS = 4096
-
-
 #: a device waiting for its prefill is behind once it holds, or has on its way, this many
 #: prefills: more than it needs to start, so what arrives later would play later (a
 #: device starved by a slow transport; at a stream's start the Status that says it
 #: started playing may come two blocks after it did)
 WAITING_PREFILLS = 3
-
-
 #: a playing device is taken to have played on at its rate since its last report for at
 #: most this many prefills (20 ms at the live default, four heartbeats): past that, it
 #: is taken to have stopped where the estimate reached (its reports are not coming, so
@@ -47,9 +44,9 @@ def behind(snapshot: Snapshot | None, now_s: float, rate_hz: float, sent_end: in
     """Is a live stream's next block late before it leaves? Yes when ``queued`` samples
     (the blocks queued behind it) already make up the ``prefill``: they are fresher and
     enough for the device; when the device, as last reported and extrapolated to
-    ``now_s`` (s), plays at least ``prefill`` samples (held or on their way) before the
-    block (extrapolated at most :data:`HORIZON_PREFILLS` prefills past the report); or when
-    it waits for its prefill and holds or has on its way :data:`WAITING_PREFILLS` of them."""
+    ``now_s`` (s; at most :data:`HORIZON_PREFILLS` prefills past the report), plays at
+    least ``prefill`` samples (held or on their way) before the block; or when it waits
+    for its prefill and holds or has on its way :data:`WAITING_PREFILLS` of them."""
     if queued >= prefill:
         return True
     if snapshot is None:
