@@ -68,11 +68,16 @@ APPLIED_IN_STATUS = 8  # the latest stops, resumes and switches each snapshot ca
 EVENTS = {"down": DOWN, "move": MOVE, "up": UP}
 
 
+def live_prefill_s(block_s: float) -> float:
+    """A live link's prefill for blocks of ``block_s`` (s): :data:`LEAD_BLOCKS` blocks, at
+    least :data:`MIN_PREFILL_S`; a block is due that long after its start."""
+    return max(LEAD_BLOCKS * block_s, MIN_PREFILL_S)
+
+
 def link_options(block_s: float) -> dict:
-    """``open_sink``'s keywords for a live link whose blocks last ``block_s`` (s): the
-    prefill of :data:`LEAD_BLOCKS` blocks (at least :data:`MIN_PREFILL_S`) and the
-    catch-up."""
-    return {"prefill_s": max(LEAD_BLOCKS * block_s, MIN_PREFILL_S), "catch_up": True}
+    """``open_sink``'s keywords for a live link whose blocks last ``block_s`` (s): its
+    prefill (:func:`live_prefill_s`) and the catch-up."""
+    return {"prefill_s": live_prefill_s(block_s), "catch_up": True}
 
 
 def shorten_switch_interval(block_s: float) -> None:
@@ -309,8 +314,7 @@ class HapticThread(TouchInput, threading.Thread):
         self.stage = LiveStage(build_pipeline(scene, rate_hz, block_size, render_override,
                                               control=control), self.estop, self.stats)
         self.stage.render_override = render_override
-        self.wall = WallClock(self.block_s, link_options(self.block_s)["prefill_s"], now=clock,
-                              sleep=sleep)
+        self.wall = WallClock(self.block_s, live_prefill_s(self.block_s), now=clock, sleep=sleep)
         self.t0 = self.wall.t0
         self.error: BaseException | None = None
         self.touch_force = (SimpleNamespace(value=scene.device.normal_force_n)

@@ -5,7 +5,10 @@
 #ifndef FRICTEX_CORTEXM_H
 #define FRICTEX_CORTEXM_H
 
+#include <stddef.h>
 #include <stdint.h>
+
+#include "../core/device.h"
 
 extern uint32_t _estack;
 void reset(void);
@@ -25,6 +28,19 @@ void fault(void);
         .ramp_ms = BOARD_RAMP_MS, .limits = {__VA_ARGS__}, .name = BOARD_NAME,             \
         .protocol_version = FW_NEWEST_VERSION,                                             \
     }
+
+/* One turn of a port's main loop for what the link brought: the bytes received so far
+ * (``read``, the port's uart_read) handed to the core, after the watchdog trip the sample
+ * interrupt may have noted. Returns how many bytes there were. */
+static inline size_t cortexm_take_bytes(fw_device *d, size_t (*read)(uint8_t *, size_t))
+{
+    uint8_t chunk[64];
+    size_t n = read(chunk, sizeof chunk);
+    fw_poll(d);
+    if (n)
+        fw_receive(d, chunk, n, d->tick);
+    return n;
+}
 
 /* fw_hal.lock: mask interrupts (the sample interrupt shares the device core). */
 static inline void cortexm_lock(void *ctx)

@@ -61,11 +61,7 @@ int main(void)
     NVIC_ISER = 1u << IRQ_TIMER1;
     TIM1_CTRL = TIM_CTRL_ENABLE | TIM_CTRL_INTEN;
     for (;;) {
-        uint8_t chunk[64];
-        size_t n = uart_read(chunk, sizeof chunk);
-        fw_poll(&device); /* a watchdog trip the sample interrupt noted */
-        if (n)
-            fw_receive(&device, chunk, n, device.tick);
+        cortexm_take_bytes(&device, uart_read);
         bool finished = fw_finished(&device);
         bool sent = uart_flush() & played_log_flush(device.tick, finished);
         if (finished && sent && log_dropped == 0)

@@ -21,12 +21,7 @@ int main(void)
     fw_init(&device, &config, &hal, NULL);
     sample_clock_start(&device);
     for (;;) {
-        uint8_t chunk[32];
-        size_t n = uart_read(chunk, sizeof chunk);
-        fw_poll(&device); /* a watchdog trip the sample interrupt noted */
-        if (n)
-            fw_receive(&device, chunk, n, device.tick);
-        else
+        if (!cortexm_take_bytes(&device, uart_read))
             __asm volatile("wfi"); /* until the next byte or sample */
     }
 }
