@@ -148,6 +148,29 @@ def _section(closed, adaptive, swings=2):
     return summarise(values, fingers=len(OPEN), duration_s=1.0)
 
 
+def test_the_section_says_how_late_its_measured_reports_came():
+    """Measured delays: the stability table reaches two past the largest, the text gives
+    the distribution and how it was measured, and the loop's gain at the largest."""
+    from frictex.app.measure.link_report_delays import LOST, ReportDelays
+    from frictex.app.measure.report_loop_records import LoopSection
+    delays = ReportDelays((2, 3, 3, 5, LOST, 3), seconds=5.0, rate_hz=5000.0, block=25,
+                          busy=2, load_start=1.0, load_end=2.5)
+    values = {"grating-15mm": {"open": [_fake(r) for r in OPEN]}}
+    section = summarise(values, fingers=len(OPEN), duration_s=1.0, delays=delays)
+    assert [r["delay_blocks"] for r in section.margins["rows"]] == list(range(8))
+    assert np.percentile([2, 3, 3, 3, 5], 99) == 3 + 0.96 * 2  # 4.92: between 3 and 5
+    text = "\n".join(markdown(section))
+    assert ("measured for 5 s beside 2 busy processes (load 1.0 to 2.5)" in text
+            and "p50 3, p99 4.92, largest 5 blocks (2: 1, 3: 3, 5: 1 blocks of that delay; "
+                "1 of 6 reports never came)" in text)
+    ki5 = section.margins["rows"][5]["ki"]
+    assert f"At the largest, 5 blocks, the loop's ki is {ki5:.4f}" in text
+    assert LoopSection.from_json(section.to_json()) == section
+    # a constant, as tests and the bench run it, says so
+    plain = "\n".join(markdown(_section(OPEN, OPEN)))
+    assert "These runs had every report 3 blocks late (not measured)." in plain
+
+
 def test_section_tables_gains_and_claims():
     closed = [0.004, 0.003, 0.01, 0.002, 0.004, 0.006]
     section = _section(closed, [r / 2 for r in OPEN])

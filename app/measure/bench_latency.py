@@ -41,7 +41,6 @@ import io
 import os
 import socket
 import struct
-import subprocess
 import sys
 import threading
 import time
@@ -51,6 +50,7 @@ import numpy as np
 from frictex.app.live.haptic_thread import BLOCK_SIZE as BLOCK
 from frictex.app.live.haptic_thread import LEAD_BLOCKS, link_options
 from frictex.app.measure.figure import Figure
+from frictex.app.measure.processes import BusyProcesses
 
 RATE = 10_000.0
 FINGER_MM = (1.0, 30.0)  # on grating-5mm's first low-friction line
@@ -248,22 +248,6 @@ def _latencies(downs: list[float], commands: np.ndarray, played: PlayedTimes,
     return np.array(out, dtype=np.float64)
 
 
-class _Load:
-    """Two busy processes for at most ``seconds`` (each ends itself), ended on exit."""
-
-    def __init__(self, seconds: float):
-        code = f"import time\nend = time.monotonic() + {seconds!r}\nwhile time.monotonic() < end: pass"
-        self.procs = [subprocess.Popen([sys.executable, "-c", code]) for _ in range(LOAD_PROCESSES)]
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        for proc in self.procs:
-            proc.kill()
-            proc.wait(timeout=5.0)
-
-
 def _figures(label: str, latency_s: np.ndarray, events: int) -> list[Figure]:
     if not latency_s.size:
         return [Figure("latency", f"{label}: events played", 0, f"of {events}")]
@@ -312,7 +296,8 @@ def run(quick: bool) -> list[Figure]:
     per_run_s = events * (HOLD_S + GAP_S[1]) + SETTLE_S + 30.0
     for loaded in (False, True):
         where = "two-process load" if loaded else "idle"
-        load = _Load(per_run_s * (2 * len(outputs) + 1)) if loaded else None
+        load = (BusyProcesses(LOAD_PROCESSES, per_run_s * (2 * len(outputs) + 1)) if loaded
+                else None)
         try:
             for seed, (output, touch) in enumerate(
                     (o, t) for o in outputs for t in ("trace", "tuio")):

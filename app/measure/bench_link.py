@@ -8,9 +8,10 @@ at the seed 003 rate (10 kHz, blocks of 50) for host CPU per second of output an
 heartbeat round trip; and at 1 MHz (the device's clock no longer limits) for the sustained
 frame and block rates the link itself manages. A third run, live (the wall clock paces
 the blocks, as the demo's haptic thread does), to a device whose simulated finger sends
-force reports (the in-process ``sim`` device): how many blocks after a block ends its
-report is in the host's hands (``rendering.control.loop``'s delay D; the report's
-closed-loop section simulates it).
+force reports (the in-process ``sim`` device), idle and beside one busy process per core:
+how many blocks after a block ends its report is in the host's hands
+(``rendering.control.loop``'s delay D; ``app.measure.link_report_delays``, which the
+report's closed-loop section measures and replays).
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ import time
 import numpy as np
 
 from frictex.app.measure.figure import Figure
+from frictex.app.measure.link_report_delays import measure as measure_delays
+from frictex.app.measure.processes import cores
 from frictex.device.link.host import open_sink
 
 BLOCK = 50
@@ -40,33 +43,6 @@ def _stream(rate_hz: float, seconds: float) -> tuple[dict, float, float]:
     return sink.status(), wall, cpu
 
 
-def _report_delays(seconds: float, rate_hz: float = 10_000.0) -> np.ndarray:
-    """Live blocks to a simulated finger for ``seconds``: for each block, the whole blocks
-    from its end to the first block computed with its force report come (the first
-    tenth left out: the device's prefill)."""
-    from frictex.rendering.control.loop import LoopConfig
-    wait = LoopConfig().max_wait_s * rate_hz  # samples the loop waits for a report
-    sink = open_sink("sim:finger=3", channels=1, rate_hz=rate_hz, paced=False)
-    block = np.full((BLOCK, 1), 1.0)
-    delays, pending = [], []
-    n_blocks = int(seconds * rate_hz / BLOCK)
-    try:
-        t0 = time.perf_counter()
-        for b in range(n_blocks):
-            while time.perf_counter() < t0 + b * BLOCK / rate_hz:
-                time.sleep(2e-4)
-            now = b * BLOCK
-            come = [i for i in pending if sink.force_report(i, BLOCK) is not None]
-            delays += [(now - i - BLOCK) // BLOCK for i in come]
-            # given up when the loop would give up on it
-            pending = [i for i in pending if i not in come and now - i - BLOCK <= wait]
-            sink.send(now, block, None)
-            pending.append(now)
-    finally:
-        sink.close()
-    return np.array(delays[n_blocks // 10:], dtype=float)
-
-
 def run(quick: bool) -> list[Figure]:
     seconds = 1.0 if quick else 5.0
     status, wall, cpu = _stream(10_000.0, seconds)
@@ -80,12 +56,21 @@ def run(quick: bool) -> list[Figure]:
              Figure("link", "sustained blocks/s (1 MHz device)", fast["blocks_sent"] / wall, "1/s"),
              Figure("link", "sustained samples/s (1 MHz device)",
                     fast["blocks_sent"] * BLOCK / wall, "1/s")]
-    delays = _report_delays(seconds)
-    if delays.size == 0:
-        return figs + [Figure("link", "force reports: none came back (live, 5 ms blocks)",
-                              float("nan"), "")]
-    figs += [Figure("link", "force report delay p50 (live, 5 ms blocks)",
-                    float(np.percentile(delays, 50)), "blocks"),
-             Figure("link", "force report delay max (live, 5 ms blocks)",
-                    float(delays.max()), "blocks")]
+    for busy in (0, cores()):
+        where = f"beside {busy} busy processes" if busy else "idle"
+        delays = measure_delays(max(seconds, 2.0), 10_000.0, BLOCK, busy)
+        come = delays.come()
+        if come.size == 0:
+            figs.append(Figure("link", f"force reports: none came back (live, 5 ms blocks, "
+                                       f"{where})", float("nan"), ""))
+            continue
+        p50, p99 = np.percentile(come, [50, 99])
+        figs += [Figure("link", f"force report delay p50 (live, 5 ms blocks, {where})", p50,
+                        "blocks"),
+                 Figure("link", f"force report delay p99 (live, 5 ms blocks, {where})", p99,
+                        "blocks"),
+                 Figure("link", f"force report delay max (live, 5 ms blocks, {where})",
+                        float(come.max()), "blocks"),
+                 Figure("link", f"force reports lost (live, 5 ms blocks, {where})",
+                        float(len(delays.blocks) - come.size), f"of {len(delays.blocks)}")]
     return figs

@@ -130,7 +130,7 @@ def _live(stage, trace, duration: float, sinks=()) -> tuple[np.ndarray, np.ndarr
 def loop_blocks(mode: str, duration: float) -> tuple[np.ndarray, np.ndarray]:
     """Per-call (wall, thread CPU) seconds of :data:`LOOP_SCENE` live, one block per
     call, friction control ``mode``, a simulated finger answering each block, its report
-    as late as the report's population has it (module docstring)."""
+    ``REPORT_DELAY_BLOCKS`` blocks late (module docstring)."""
     from frictex.app.measure.closed_loop_sim import FingerSink, LoopStage
     from frictex.app.measure.report_closed_loop import REPORT_DELAY_BLOCKS, finger_force, finger_speed
     from frictex.device.finger import FingerPlant, draw_finger
@@ -140,7 +140,7 @@ def loop_blocks(mode: str, duration: float) -> tuple[np.ndarray, np.ndarray]:
     pipeline = build_pipeline(scene, rate_hz=RATE_HZ, block_size=BLOCK, control=mode)
     plant = FingerPlant(draw_finger(1), RATE_HZ, scene.device.amplitude_limit_um, seed=1)
     sink = FingerSink(plant, finger_speed(motion), finger_force(1))
-    return _live(LoopStage(pipeline, sink, REPORT_DELAY_BLOCKS), trace, duration, [sink])
+    return _live(LoopStage(pipeline, sink, (REPORT_DELAY_BLOCKS,)), trace, duration, [sink])
 
 
 #: a minimum-phase AR(4) polynomial per model of the bench's recorded texture: two

@@ -2,22 +2,27 @@
 
 ``FingerSink`` takes each block's commands to the simulated plate and finger
 (``device.finger.FingerPlant``) and keeps what the sensors report; ``LoopStage`` hands
-each report to the pipeline's loop ``report_delay_blocks`` blocks after the block it
-measures (0: before the next block; a link's reports come later) and runs the pipeline
+each report to the pipeline's loop as late as a link delivers it and runs the pipeline
 with the reports come so far (the loop's measurement) and the latest one's normal force
 (open and closed loop alike, as the live demo reads a device's normal force either way;
-a replay to a device reads it with the loop on). One run::
+a replay to a device reads it with the loop on). The delays are a sequence of whole
+blocks per block (0: before the next block; ``link_report_delays.LOST``: never), a
+measured link's (``link_report_delays.measure``) or one constant, replayed from
+``start`` and from its beginning again when it runs out. Reports travel one stream, so
+none overtakes an earlier one. One run::
 
     sink = FingerSink(plant, speed_of, force_of)
-    drive(LoopStage(pipeline, sink, report_delay_blocks=4), source, [sink], VirtualClock())
+    drive(LoopStage(pipeline, sink, (4,)), source, [sink], VirtualClock())
 """
 
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Sequence
 
 import numpy as np
 
+from frictex.app.measure.link_report_delays import LOST
 from frictex.device.finger import FingerPlant, lowpass, rest_mu, true_amplitude, true_mu
 from frictex.device.link.forces import ForceHistory, ForceReport
 
@@ -87,13 +92,16 @@ class FingerSink:
 
 
 class LoopStage:
-    """The pipeline fed with ``sink``'s force reports, each ``report_delay_blocks`` blocks
-    after the block it measures (see the module docstring)."""
+    """The pipeline fed with ``sink``'s force reports, each ``report_delays[(start + k) %
+    len]`` blocks after block k ends (see the module docstring)."""
 
-    def __init__(self, pipeline, sink: FingerSink, report_delay_blocks: int = 0):
+    def __init__(self, pipeline, sink: FingerSink, report_delays: Sequence[int] = (0,),
+                 start: int = 0):
         self.pipeline = pipeline
         self.sink = sink
-        self.report_delay_blocks = int(report_delay_blocks)
+        self.report_delays = tuple(int(d) for d in report_delays)
+        self.start = int(start)
+        self._last_due = 0  # the block the last report in flight is due at
         self.state = pipeline.initial_state()
         self.history = ForceHistory()
         self._in_flight: deque = deque()  # (first block that sees it, report), in order
@@ -101,9 +109,11 @@ class LoopStage:
         self.first_mu0_s: float | None = None  # output time (s) the loop first knew mu0
 
     def process(self, k: int, samples, n: int):
-        report = self.sink.take_report()
-        if report is not None:
-            self._in_flight.append((k + self.report_delay_blocks, report))
+        report = self.sink.take_report()  # block k - 1's
+        delay = self.report_delays[(self.start + k - 1) % len(self.report_delays)]
+        if report is not None and delay != LOST:
+            self._last_due = max(k + delay, self._last_due)
+            self._in_flight.append((self._last_due, report))
         while self._in_flight and self._in_flight[0][0] <= k:
             self.history.add(self._in_flight.popleft()[1])
         latest = self.history.latest()

@@ -43,6 +43,23 @@ def cores() -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
 
 
+class BusyProcesses:
+    """``count`` processes that keep a core busy each, for at most ``seconds`` (each ends
+    itself, so none outlives a crashed parent by long), killed on leaving the ``with``."""
+
+    def __init__(self, count: int, seconds: float):
+        code = f"import time\nend = time.monotonic() + {seconds!r}\nwhile time.monotonic() < end: pass"
+        self.procs = [subprocess.Popen([sys.executable, "-c", code]) for _ in range(count)]
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        for proc in self.procs:
+            proc.kill()
+            proc.wait(timeout=5.0)
+
+
 def run_process(argv: list[str]) -> Run:
     """Run ``argv`` to its end, its output discarded; earlier processes' unwritten file
     data is written out first (``os.sync``, not timed), so that no run pays for the

@@ -7,8 +7,9 @@ run) slides with a human-like motion (``rendering.input.trace_synth``, kind ``hu
 object scene, rendered at 5 kHz in 5 ms blocks by the hybrid renderer; its normal force
 is ``force_n`` (0.35-0.65 N, drawn per finger) with a 0.5 Hz, 15 % swell. All three
 modes read the normal force from the device; the loop modes also read the lateral force,
-each block's report ``REPORT_DELAY_BLOCKS`` blocks after the block ends, as a live link
-delivers them (``frictex bench link`` measures it), and schedule their gain on it.
+each block's report as late as this machine's live link delivered it, measured at the
+section's start beside one busy process per core (``link_report_delays``; each finger
+replays the measured sequence from its own block), and schedule their gain on it.
 
 Measured, over the samples where the finger touches and slides (>= 5 mm/s):
 
@@ -61,7 +62,10 @@ import numpy as np
 from frictex.app.engine.clocks import VirtualClock
 from frictex.app.engine.driver import drive
 from frictex.app.engine.sources import TraceSource
+from frictex.app.measure import link_report_delays
 from frictex.app.measure.closed_loop_sim import FingerSink, LoopStage
+from frictex.app.measure.link_report_delays import ReportDelays
+from frictex.app.measure.processes import cores
 from frictex.app.measure.report_claims import Claim, paired
 from frictex.app.measure.report_loop_records import (Adaptation, LoopFigures, LoopScore,
                                                      LoopSection, ModeSummary, PerFinger,
@@ -94,9 +98,14 @@ ADAPT_SCENE = "objects-bump-edge-disc"
 WEBER_FRACTION = 0.11
 SLIDING_MM_S = 5.0
 #: blocks between a block's end and the block whose computation first has its force
-#: report: the live link to the simulated device (pty, 10 kHz, 5 ms blocks) delivered 89 %
-#: of reports 2 blocks late and the rest 3 (``frictex bench link``); the worst is used
+#: report, for runs given no measured link (tests; ``frictex bench pipeline``'s loop): the
+#: live link to the simulated device, idle, delivered most reports 2 blocks late, some 3
+#: (``frictex bench link``); the worst is used
 REPORT_DELAY_BLOCKS = 3
+UNMEASURED = ReportDelays.constant(REPORT_DELAY_BLOCKS)
+#: how long (s) the section measures the live link's report delays, full and ``--quick``
+LINK_S = 20.0
+QUICK_LINK_S = 5.0
 #: the issue's targets: RMS cut at least this many times against open loop (the object
 #: scene has none: closed loop is claimed to improve on it, factor 1)
 TARGETS = {"grating-15mm": 5.0, "grating-5mm": 5.0, "grating-0.6mm": 2.0,
@@ -123,7 +132,7 @@ class Run:
     noise: bool = False
     sensor_dead_after_s: float | None = None
     study: bool = False  # the adaptation study (:func:`adaptation`) rather than :func:`score`
-    report_delay_blocks: int = REPORT_DELAY_BLOCKS
+    report_delays: ReportDelays = UNMEASURED
 
 
 def finger_force(seed: int):
@@ -155,7 +164,8 @@ def simulate(run: Run, loop_config=None):
                         sensor=sensor, seed=run.finger)
     sink = FingerSink(plant, finger_speed(motion), finger_force(run.finger),
                       sensor_dead_after_s=run.sensor_dead_after_s)
-    stage = LoopStage(pipeline, sink, run.report_delay_blocks)
+    stage = LoopStage(pipeline, sink, run.report_delays.blocks,
+                      run.report_delays.start_for(run.finger))
     source = TraceSource(iter([trace]), until_s=run.duration_s)
     source.start(pipeline.tracker_config)
     drive(stage, source, [sink], VirtualClock(), chunk_blocks=1)
@@ -261,25 +271,27 @@ def _rms(x: np.ndarray) -> float:
 def measure(fingers: int = FINGERS, duration_s: float = DURATION_S, workers: int = 1,
             scenes=SCENES, adapt_s: float = ADAPT_S, adapt_fingers: int | None = None,
             noise_scenes=NOISE_SCENES, scheduler: str | None = None,
-            on_done=None) -> LoopSection:
+            on_done=None, delays: ReportDelays = UNMEASURED) -> LoopSection:
     """Every scene x mode x finger (the added noise measured on ``noise_scenes``), and,
     when ``ADAPT_SCENE`` is among ``scenes``, fingers 1..``adapt_fingers`` (default all)
     adapting for ``adapt_s`` on it; fanned out as ``app.engine.fanout.fan_out`` does
-    (``workers`` processes or a Dask ``scheduler``; ``on_done`` after each run). Returns
-    the section (see :func:`summarise`)."""
+    (``workers`` processes or a Dask ``scheduler``; ``on_done`` after each run), each
+    run's force reports as late as ``delays`` has them. Returns the section (see
+    :func:`summarise`)."""
     from frictex.app.engine.fanout import fan_out
-    runs = [Run(s, f, m, duration_s, noise=s in noise_scenes and m == "adaptive")
+    runs = [Run(s, f, m, duration_s, noise=s in noise_scenes and m == "adaptive",
+                report_delays=delays)
             for s in scenes for m in MODES for f in range(1, fingers + 1)]
     study = adapt_s > 0 and ADAPT_SCENE in scenes
     # the object scene's adaptive runs are the study's own when they last as long
     reuse = study and _study_is_main(duration_s, adapt_s, fingers, adapt_fingers)
-    adapt = [Run(ADAPT_SCENE, f, "adaptive", adapt_s, study=True)
+    adapt = [Run(ADAPT_SCENE, f, "adaptive", adapt_s, study=True, report_delays=delays)
              for f in range(1, (adapt_fingers or fingers) + 1) if study and not reuse]
     results = fan_out(_job, runs + adapt, workers=workers, scheduler=scheduler, on_done=on_done)
     values: dict = {}
     for run, res in zip(runs, results):
         values.setdefault(run.scene, {}).setdefault(run.mode, []).append(res)
-    section = summarise(values, fingers, duration_s)
+    section = summarise(values, fingers, duration_s, delays)
     if not study:
         return section
     gaps = ([r.adapted_gap for r in values[ADAPT_SCENE]["adaptive"]] if reuse
@@ -305,11 +317,14 @@ def _job(run: Run):
 def section(quick: bool, workers: int = 1, scenes=SCENES, scheduler: str | None = None,
             on_done=None) -> LoopSection:
     """The section for ``frictex report`` (``--quick``: shorter runs, same population),
-    on the bundled ``scenes`` among :data:`SCENES`."""
+    on the bundled ``scenes`` among :data:`SCENES`, with the report delays of this
+    machine's live link measured first, beside one busy process per core."""
     scenes = [s for s in SCENES if s in scenes]
+    delays = link_report_delays.measure(QUICK_LINK_S if quick else LINK_S, RATE_HZ, BLOCK,
+                                        busy=cores())
     return measure(FINGERS, QUICK_DURATION_S if quick else DURATION_S, workers, scenes,
                    adapt_s=QUICK_ADAPT_S if quick else ADAPT_S, scheduler=scheduler,
-                   on_done=on_done)
+                   on_done=on_done, delays=delays)
 
 
 def runs_in(quick: bool, scenes=SCENES) -> int:
@@ -321,11 +336,12 @@ def runs_in(quick: bool, scenes=SCENES) -> int:
 
 
 def summarise(values: dict[str, dict[str, list[RunScore]]], fingers: int,
-              duration_s: float) -> LoopSection:
+              duration_s: float, delays: ReportDelays = UNMEASURED) -> LoopSection:
     """Population statistics from per-finger results (``values[scene][mode]``: each
-    finger's :func:`score`): per scene and mode, the population RMS (RMS over fingers),
-    the worst finger, the gains against open loop, and each finger's figures
-    (``per_finger``) from which :func:`claims` are computed."""
+    finger's :func:`score`, its reports as late as ``delays`` has them): per scene and
+    mode, the population RMS (RMS over fingers), the worst finger, the gains against
+    open loop, and each finger's figures (``per_finger``) from which :func:`claims` are
+    computed; the loop's margins at every delay up to two past the largest."""
     scenes = {}
     for scene, modes in values.items():
         row = {mode: _mode_summary(mode, results, modes.get("open"))
@@ -335,8 +351,8 @@ def summarise(values: dict[str, dict[str, list[RunScore]]], fingers: int,
     device = load(SCENES[0]).device
     return LoopSection(
         fingers=fingers, duration_s=duration_s, rate_hz=RATE_HZ, block=BLOCK,
-        weber_fraction=WEBER_FRACTION, report_delay_blocks=REPORT_DELAY_BLOCKS,
-        margins=margins(range(REPORT_DELAY_BLOCKS + 3), rate_hz=RATE_HZ, block=BLOCK),
+        weber_fraction=WEBER_FRACTION, report_delays=delays.to_json(),
+        margins=margins(range(delays.largest() + 3), rate_hz=RATE_HZ, block=BLOCK),
         slope_range=population_slopes(fingers, device.friction, device.amplitude_limit_um),
         scenes=scenes)
 
@@ -541,7 +557,8 @@ def markdown(section: LoopSection) -> list[str]:
                       f"finger over 0-2.5 um: relative RMS gap median {ad.gap_median:.3f}, "
                       f"worst {ad.gap_max:.3f}."]
     rows = m["rows"]
-    used = next(r for r in rows if r["delay_blocks"] == section.report_delay_blocks)
+    delays = section.report_delays
+    used = next(r for r in rows if r["delay_blocks"] == delays["max"])
     lines += ["", "Stability (rendering/control/margins.py): the loop linearised in the log of its "
                   "gain, an integrator of ki per block through the plate's 400 Hz amplitude "
                   "loop (seed 003, Fig. 3b), the fingertip (90 Hz), the sensor (1 kHz, 0.5 ms) "
@@ -555,9 +572,10 @@ def markdown(section: LoopSection) -> list[str]:
                   "after 60 s of moisture): "
                   + ("covered at every delay" if all(hi < r["gain_margin"] for r in rows)
                      else "NOT covered at every delay")
-                  + f". These runs had reports {used['delay_blocks']} blocks late (ki "
-                  f"{used['ki']:.4f}, gain margin {used['gain_margin']:.2f}, phase margin "
-                  f"{used['phase_margin_deg']:.0f} deg).", "",
+                  + f". {_delays_line(delays)} At the largest, {used['delay_blocks']} "
+                  f"blocks, the loop's ki is {used['ki']:.4f} (gain margin "
+                  f"{used['gain_margin']:.2f}, phase margin {used['phase_margin_deg']:.0f} "
+                  "deg).", "",
                   "| report delay (blocks) | ki | gain margin | phase margin (deg) | "
                   "delay margin (blocks) |", "|---|---|---|---|---|"]
     lines += [f"| {r['delay_blocks']} | {r['ki']:.4f} | {r['gain_margin']:.2f} | "
@@ -565,6 +583,20 @@ def markdown(section: LoopSection) -> list[str]:
     lines += ["", f"Noise threshold: Weber fraction {section.weber_fraction:g} for a change "
                   "of friction (Gueorguiev et al., J. R. Soc. Interface 2017).", ""]
     return lines
+
+
+def _delays_line(delays: dict) -> str:
+    """How late the runs' force reports came, and where that came from."""
+    if delays["seconds"] == 0:
+        return f"These runs had every report {delays['max']} blocks late (not measured)."
+    counts = ", ".join(f"{d}: {c}" for d, c in delays["counts"].items())
+    return (f"These runs had their reports as late as this machine's live link to the "
+            f"simulated device delivered them, measured for {delays['seconds']:g} s beside "
+            f"{delays['busy']} busy processes (load {delays['load_start']:.1f} to "
+            f"{delays['load_end']:.1f}), each finger from its own block of the measured "
+            f"sequence: p50 {delays['p50']:g}, p99 {delays['p99']:g}, largest "
+            f"{delays['max']} blocks ({counts} blocks of that delay; {delays['lost']} of "
+            f"{len(delays['blocks'])} reports never came).")
 
 
 def _fixed(value: float | None, spec: str, suffix: str = "") -> str:

@@ -152,7 +152,7 @@ class Adaptation:
 @dataclass(frozen=True)
 class LoopSection:
     """The closed-loop section: the runs' settings (``rate_hz``, ``block`` samples,
-    ``report_delay_blocks``), the Weber fraction the noise is judged against, the loop's
+    ``report_delays``: ``link_report_delays.ReportDelays.to_json``), the Weber fraction the noise is judged against, the loop's
     margins by report delay (``rendering.control.margins.margins``), the population's
     range of the slope factor s, per scene and mode its :class:`ModeSummary`, and the
     adaptation study (None where not run)."""
@@ -162,7 +162,7 @@ class LoopSection:
     rate_hz: float
     block: int
     weber_fraction: float
-    report_delay_blocks: int
+    report_delays: dict
     margins: dict
     slope_range: tuple[float, float]
     scenes: dict[str, dict[str, ModeSummary]]

@@ -1,0 +1,112 @@
+"""How late a live link's force reports reach the host, measured on this machine.
+
+A block's delay is the whole blocks from its end to the first block computed with its
+force report in hand (``rendering.control.loop``'s D). ``measure`` streams live blocks
+(the wall clock paces them, as the demo's haptic thread does) to the simulated device
+with a finger (``sim:finger=3``), beside busy processes that take the other cores, and
+keeps each block's delay in the order the blocks went out: a loaded machine delays
+reports in bursts (several late blocks in a row), which independent draws from the
+histogram would not reproduce. ``frictex report``'s closed-loop runs replay the
+sequence (``closed_loop_sim.LoopStage``), each finger from its own starting block;
+``frictex bench link`` gives its percentiles idle and loaded.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from frictex.app.measure.processes import BusyProcesses, load
+
+#: the delay of a block whose report never came within the loop's wait (``max_wait_s``)
+LOST = -1
+
+
+@dataclass(frozen=True)
+class ReportDelays:
+    """Per block, in the order sent, its report's delay in blocks (``LOST``: none came),
+    and how it was measured: ``seconds`` of live blocks of ``block`` samples at
+    ``rate_hz`` beside ``busy`` busy processes, the 1-minute load average at the start
+    and end. ``seconds`` 0: not measured, a constant delay (tests, ``bench pipeline``)."""
+
+    blocks: tuple[int, ...]
+    seconds: float = 0.0
+    rate_hz: float = 0.0
+    block: int = 0
+    busy: int = 0
+    load_start: float = float("nan")
+    load_end: float = float("nan")
+
+    @classmethod
+    def constant(cls, delay_blocks: int) -> ReportDelays:
+        """Every report ``delay_blocks`` blocks late."""
+        return cls((int(delay_blocks),))
+
+    @property
+    def measured(self) -> bool:
+        return self.seconds > 0
+
+    def come(self) -> np.ndarray:
+        """The delays of the reports that came (blocks, int64)."""
+        d = np.asarray(self.blocks, dtype=np.int64)
+        return d[d != LOST]
+
+    def largest(self) -> int:
+        """The largest delay of a report that came (0 if none came)."""
+        come = self.come()
+        return int(come.max()) if come.size else 0
+
+    def start_for(self, seed: int) -> int:
+        """Where in the sequence a run with ``seed`` starts (the same for every mode of one
+        finger, so their comparison is paired)."""
+        return int(np.random.default_rng([seed, 23]).integers(len(self.blocks)))
+
+    def to_json(self) -> dict:
+        come = self.come()
+        counts = np.unique(come, return_counts=True) if come.size else ([], [])
+        p50, p99 = (np.percentile(come, [50, 99]) if come.size else (float("nan"),) * 2)
+        return {"blocks": list(self.blocks), "seconds": self.seconds, "rate_hz": self.rate_hz,
+                "block": self.block, "busy": self.busy, "load_start": self.load_start,
+                "load_end": self.load_end, "p50": float(p50), "p99": float(p99),
+                "max": self.largest(), "lost": len(self.blocks) - int(come.size),
+                "counts": {str(int(d)): int(c) for d, c in zip(*counts)}}
+
+    @classmethod
+    def from_json(cls, doc: dict) -> ReportDelays:
+        return cls(tuple(int(d) for d in doc["blocks"]), doc["seconds"], doc["rate_hz"],
+                   doc["block"], doc["busy"], doc["load_start"], doc["load_end"])
+
+
+def measure(seconds: float, rate_hz: float, block: int, busy: int) -> ReportDelays:
+    """Stream ``seconds`` of live blocks of ``block`` samples at ``rate_hz`` to the
+    simulated device with a finger, beside ``busy`` busy processes; each block's report
+    delay (module docstring). The first tenth is left out (the device's prefill), and so
+    are the last blocks, whose reports had not yet had the loop's wait to come."""
+    from frictex.device.link.host import open_sink
+    from frictex.rendering.control.loop import LoopConfig
+    wait_blocks = int(np.ceil(LoopConfig().max_wait_s * rate_hz / block))
+    n_blocks = int(seconds * rate_hz / block) + wait_blocks
+    delays = np.full(n_blocks, LOST, dtype=np.int64)
+    ones = np.ones((block, 1))
+    load_start = load()
+    with BusyProcesses(busy, seconds + 30.0):
+        sink = open_sink("sim:finger=3", channels=1, rate_hz=rate_hz, paced=False)
+        try:
+            pending: list[int] = []  # blocks sent whose reports have not come
+            t0 = time.perf_counter()
+            for b in range(n_blocks):
+                while time.perf_counter() < t0 + b * block / rate_hz:
+                    time.sleep(2e-4)
+                for j in [j for j in pending if sink.force_report(j * block, block) is not None]:
+                    delays[j] = b - j - 1
+                    pending.remove(j)
+                pending = [j for j in pending if b - j - 1 <= wait_blocks]
+                sink.send(b * block, ones, None)
+                pending.append(b)
+        finally:
+            sink.close()
+    kept = delays[n_blocks // 10:n_blocks - wait_blocks - 1]
+    return ReportDelays(tuple(int(d) for d in kept), seconds, rate_hz, block, busy,
+                        load_start, load())
