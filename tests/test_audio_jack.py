@@ -120,7 +120,11 @@ def test_emergency_stop_ramps_through_jack(jack_device):
                        phases=False, paced=True, wait_s=10.0, tap_frames=4 * FS)
     send_for(out, 1.0, 0)
     out.emergency_stop()
-    time.sleep(0.1)
+    # JACK's thread plays the ramp and then silence when it next runs: waited for (a busy
+    # machine may hold it), not assumed to take 0.1 s
+    deadline = time.monotonic() + 10.0
+    while time.monotonic() < deadline and not _quiet_after_stop(out.player, FS // 20):
+        time.sleep(0.01)
     out.close()
     p, audio = out.player, out.status()["audio"]
     assert p.stopped > 0
@@ -131,6 +135,13 @@ def test_emergency_stop_ramps_through_jack(jack_device):
     assert np.abs(tap[last + 1:]).max(initial=0.0) < 0.01 and tap.size - last > 0.05 * FS
     slope = 0.5 * 2 * np.pi * plan.carrier_hz / FS
     assert np.abs(np.diff(tap[last - 2 * plan.ramp_frames:])).max() <= slope * 1.01
+
+
+def _quiet_after_stop(player, frames: int) -> bool:
+    """Whether ``player`` has stopped and played ``frames`` quiet frames since."""
+    tap = player.tap[:player.tap_len, 0]
+    loud = np.flatnonzero(np.abs(tap) > 0.01)
+    return player.stopped > 0 and loud.size > 0 and tap.size - loud[-1] > frames
 
 
 def test_audio_device_by_name_through_the_registry(jack_device):
