@@ -11,8 +11,10 @@ finished on the GPU (``ctx.finish``), without and with reading the pixels back (
 ``--frames`` and screenshots pay), best of 100 (20 with ``--quick``) and the mean CPU time
 of all threads; beside them, measured in the same run, the floor of this renderer (clear,
 the scene's textured quad and the read-back, nothing else), the ratios, the frame's draw
-calls. The CPU is shared: quote the machine's load with the figures; the CPU ratio is
-the one that holds on a busy machine.
+calls. The frame and the floor are measured again beside one busy process per core. Each
+label names the renderer EGL chose (llvmpipe is Mesa's software rasterizer; a GPU's
+driver names the GPU). The CPU is shared: quote the machine's load with the figures; the
+CPU ratio is the one that holds on a busy machine.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import moderngl
 import numpy as np
 
 from frictex.app.measure.figure import Figure
+from frictex.app.measure.processes import BusyProcesses, cores
 from frictex.rendering.visual.compositor import TEXTURED, Compositor, FrameView
 from frictex.rendering.visual import scene_image
 from frictex.rendering.visual.context import OffscreenBackend, VisualError
@@ -164,12 +167,13 @@ def run(quick: bool) -> list[Figure]:
     view = FrameView(overlay=busy_overlay(), hover_mm=(50.0, 30.0),
                      status=("bench | renderer: file | force 0.50 N | link: none",))
     for size in SIZES:
-        label = f"{size[0]}x{size[1]}"
         try:
             backend = OffscreenBackend(size)
         except VisualError as exc:
             print(f"frictex: bench visual: not available ({exc})", file=sys.stderr)
             return figures
+        # the renderer EGL chose: llvmpipe (software) or a GPU's driver
+        label = f"{size[0]}x{size[1]} on {backend.ctx.info['GL_RENDERER'].split(' (')[0]}"
         comp = Compositor(backend.ctx, scene, size)
         figures.append(Figure("visual", f"static scene image {label}",
                               scene_ms(comp, scene, repeats), "ms (once per scene)"))
@@ -177,19 +181,30 @@ def run(quick: bool) -> list[Figure]:
             figures.extend(bundled_scene_figures(comp, label, repeats))
             comp.set_scene(scene)
         frame, _ = frame_ms(backend, comp, view, frames, read_back=False)
-        read, read_cpu = frame_ms(backend, comp, view, frames, read_back=True)
-        floor, floor_cpu = floor_ms(backend, (comp.viewport.width_px, comp.viewport.height_px),
-                                    frames)
-        figures += [Figure("visual", f"frame {label}", frame, "ms (best)"),
-                    Figure("visual", f"frame + read back {label}", read, "ms (best)"),
-                    Figure("visual", f"floor {label} (clear, scene quad, read back)", floor,
-                           "ms (best)"),
-                    Figure("visual", f"frame + read back / floor {label}", read / floor, "x"),
-                    Figure("visual", f"frame + read back CPU {label}", read_cpu,
-                           "ms (mean, all threads)"),
-                    Figure("visual", f"floor CPU {label}", floor_cpu, "ms (mean, all threads)"),
-                    Figure("visual", f"frame / floor CPU {label}", read_cpu / floor_cpu, "x"),
-                    Figure("visual", f"draw calls per frame {label}", comp.batch.calls, "")]
+        figures.append(Figure("visual", f"frame {label}", frame, "ms (best)"))
+        figures += against_floor(backend, comp, view, frames, label)
+        busy = cores()
+        with BusyProcesses(busy, 120.0):
+            figures += against_floor(backend, comp, view, frames,
+                                     f"{label}, beside {busy} busy processes")
+        figures.append(Figure("visual", f"draw calls per frame {label}", comp.batch.calls, ""))
         comp.release()
         backend.close()
     return figures
+
+
+def against_floor(backend: OffscreenBackend, comp: Compositor, view: FrameView, frames: int,
+                  label: str) -> list[Figure]:
+    """The frame with its pixels read back against the floor, measured one after the
+    other: best wall times, mean CPU times, and their ratios."""
+    read, read_cpu = frame_ms(backend, comp, view, frames, read_back=True)
+    floor, floor_cpu = floor_ms(backend, (comp.viewport.width_px, comp.viewport.height_px),
+                                frames)
+    return [Figure("visual", f"frame + read back {label}", read, "ms (best)"),
+            Figure("visual", f"floor {label} (clear, scene quad, read back)", floor,
+                   "ms (best)"),
+            Figure("visual", f"frame + read back / floor {label}", read / floor, "x"),
+            Figure("visual", f"frame + read back CPU {label}", read_cpu,
+                   "ms (mean, all threads)"),
+            Figure("visual", f"floor CPU {label}", floor_cpu, "ms (mean, all threads)"),
+            Figure("visual", f"frame / floor CPU {label}", read_cpu / floor_cpu, "x")]
