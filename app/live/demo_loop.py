@@ -85,7 +85,10 @@ from frictex.textures.references import referenced_files
 RENDERER_CYCLE = (None, *render_modes())
 FORCE_STEP_N = 0.05
 FORCE_RANGE_N = (0.05, 2.0)
-RELOAD_POLL_S = 0.15  # an edit is applied once it has held still for a poll: 0.15-0.3 s after saving
+#: an edit is applied once it has held still for a poll: 0.075-0.15 s after saving, so that
+#: with the new scene's image (at most 0.12 s for a bundled scene at 1920x1080 on
+#: llvmpipe: ``frictex bench visual``) the picture changes within 0.3 s of a save
+RELOAD_POLL_S = 0.075
 ENVELOPE_S = 0.2  # a modal device's |W| is redrawn from the latest commands 5 times a second
 FRAME_S = 1.0 / 60.0
 INPUT_WAKE_S = 0.05  # longest the input thread waits for an event before looking at the time
