@@ -341,6 +341,42 @@ def _run_late(delay, blocks, lost=(), **config):
     return loop, states
 
 
+def test_a_burst_of_late_reports_slows_the_gain_only_for_a_while():
+    """The scheduled delay rises to a late report at once and comes down one block per
+    ``delay_hold_s`` without a report that late; a link late every second stays there;
+    the summary keeps the largest delay seen."""
+    from dataclasses import replace
+    loop = ClosedLoop(DeviceProfile(), 5000.0, N_BLOCK, mode="closed")
+    hold = int(loop.hold_samples)
+    assert hold == 2.0 * 5000
+
+    def run(delays):
+        state, scheduled = loop.initial_state(), []
+        for k, d in enumerate(delays):
+            state = replace(state, **loop._held_delay(state, d, k * N_BLOCK))
+            scheduled.append(state.delay_blocks)
+        return state, scheduled
+
+    per_s = round(5000 / N_BLOCK)  # blocks a second
+    burst = [3] * per_s + [9] * 5 + [3] * 20 * per_s
+    state, scheduled = run(burst)
+    last_9 = per_s + 4  # the burst's last block
+    # written out: 9 from the burst on, then one block lower each hold since it was last seen
+    steps = [(last_9 + m * hold // N_BLOCK, 9 - m) for m in range(1, 7)]
+    want = [3] * per_s + [9] * (steps[0][0] - per_s)
+    for (at, d), (nxt, _) in zip(steps, steps[1:] + [(len(burst), 0)]):
+        want += [d] * (nxt - at)
+    assert scheduled == want and scheduled[-1] == 3
+    assert state.delay_max_blocks == 9
+    assert loop.report(state)["report_delay_blocks"] == 9
+    assert loop.report(state)["scheduled_delay_blocks"] == 3
+    assert loop.report(state)["ki"] == loop.ki_by_delay[3]
+    # late every second: never lowered
+    every = ([3] * (per_s - 1) + [7]) * 10
+    _, scheduled = run(every)
+    assert scheduled[per_s - 1:] == [7] * (len(every) - per_s + 1)
+
+
 @pytest.mark.parametrize("delay", [1, 3, 6])
 def test_late_reports_pair_with_their_own_blocks_and_slow_the_gain(delay):
     """The same reports ``delay`` blocks later: the loop measures the delay, learns the

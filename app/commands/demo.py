@@ -278,7 +278,8 @@ def _run(args: argparse.Namespace, headless: bool) -> int:
     loop = summary["control"]
     if loop is not None:
         print(f"demo: {loop['mode']} loop, force reports up to {loop['report_delay_blocks']} "
-              f"blocks late (gain {loop['ki']:.3g} per block), {loop['updates']} gain updates, "
+              f"blocks late (gain {loop['ki']:.3g} per block at the end, scheduled for "
+              f"{loop['scheduled_delay_blocks']}), {loop['updates']} gain updates, "
               f"{loop['fallbacks']} fallbacks to open loop ({loop['fallback_samples']} samples)")
     return 0
 

@@ -71,7 +71,8 @@ def run(args: argparse.Namespace) -> int:
         loop = summary.get("control")
         if loop is not None:
             print(f"{loop['mode']} loop: force reports up to {loop['report_delay_blocks']} "
-                  f"blocks late (gain {loop['ki']:.3g} per block), {loop['updates']} gain "
+                  f"blocks late (gain {loop['ki']:.3g} per block at the end, scheduled for "
+                  f"{loop['scheduled_delay_blocks']}), {loop['updates']} gain "
                   f"updates, gain {loop['gain']:.3f} at the end, {loop['fallbacks']} "
                   f"fallbacks to open loop ({loop['fallback_samples']} samples)")
         for warning in summary["warnings"]:

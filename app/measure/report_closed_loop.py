@@ -73,6 +73,7 @@ from frictex.app.measure.report_loop_records import (Adaptation, LoopFigures, Lo
 from frictex.app.measure.report_matrix import load
 from frictex.device.finger import FingerPlant, SensorParams, draw_finger, true_mu
 from frictex.device.friction import forward_mu
+from frictex.rendering.control.loop import LoopConfig
 from frictex.rendering.control.margins import margins
 from frictex.rendering.input.trace_synth import make_motion, sample, truth
 from frictex.rendering.pipeline import build_pipeline
@@ -558,12 +559,14 @@ def markdown(section: LoopSection) -> list[str]:
                       f"worst {ad.gap_max:.3f}."]
     rows = m["rows"]
     delays = section.report_delays
-    used = next(r for r in rows if r["delay_blocks"] == delays["max"])
+    used = next(r for r in rows if r["delay_blocks"] == delays["max"])  # the slowest ki
     lines += ["", "Stability (rendering/control/margins.py): the loop linearised in the log of its "
                   "gain, an integrator of ki per block through the plate's 400 Hz amplitude "
                   "loop (seed 003, Fig. 3b), the fingertip (90 Hz), the sensor (1 kHz, 0.5 ms) "
                   f"and the force report's delay D, blocks of {m['block_s'] * 1e3:g} ms. The "
-                  "loop measures D (the largest it has seen) and schedules ki on it: the "
+                  "loop measures D (the largest it has seen lately: one block lower each "
+                  f"{LoopConfig().delay_hold_s:g} s without a report that late) and "
+                  "schedules ki on it: the "
                   f"largest gain whose gain margin is at least {m['cover']:g}, the steepest s "
                   "it must tolerate. A finger whose reduction of friction grows s times as "
                   "fast as the model's multiplies the loop gain by s, so the gain margin is "

@@ -13,8 +13,12 @@ with several fingers down the loop holds its state and the block is fed forward 
    ``max_wait_s`` after its end is folded as missed (stale, 4). The delay D, in whole
    blocks between a block's end and the block being computed when its report is folded,
    is measured; the integrator's gain ``ki`` is ``rendering.control.margins``'
-   ``scheduled_ki`` at the largest D seen (``delay_blocks``), so that its stated gain
-   margin holds at the delay the loop actually has.
+   ``scheduled_ki`` at the largest D seen lately (``delay_blocks``), so that its stated
+   gain margin holds at the delay the loop actually has. "Lately": a D below the one
+   scheduled lowers it by one block once ``delay_hold_s`` has passed without a report that
+   late, so one burst of late reports (a busy host, a collection of the garbage
+   collector) does not slow the loop for the rest of the session, while a link that is
+   late every few seconds keeps its gain scheduled on that delay.
 1. **Measure.** The device's force report for a block sent gives the ratio
    F_t / F_n. The friction at rest mu0 is its level where the plate has been still long
    enough for the sensor to see it (``Chain`` of the commanded amplitude below
@@ -139,6 +143,7 @@ class LoopConfig:
     first_step: float = 1.0
     cover_slope: float = COVER_SLOPE
     max_wait_s: float = 0.05
+    delay_hold_s: float = 2.0
     log_c_max: float = math.log(4.0)
     speed_ref_mm_s: float = 100.0
     slide_mm_s: float = 5.0
@@ -163,7 +168,7 @@ class LoopConfig:
     rls: Rls = field(default_factory=Rls)
 
     def __post_init__(self):
-        positive = ("cover_slope", "slide_mm_s", "probe_mm_s", "probe_s", "creep_mm_s",
+        positive = ("cover_slope", "delay_hold_s", "slide_mm_s", "probe_mm_s", "probe_s", "creep_mm_s",
                     "still_um", "mu0_tau_s", "stale_s", "recover_s", "min_normal_n",
                     "max_ratio", "log_c_max", "speed_ref_mm_s")
         bad = [f"{name} = {getattr(self, name)!r} (expected a finite value > 0)"
@@ -215,6 +220,8 @@ class ControlState:
     chain: ChainState | None = None
     pending: tuple[Sent, ...] = ()
     delay_blocks: int = 0
+    delay_seen_at: int = 0
+    delay_max_blocks: int = 0
     fed_from: int = 0
     since_report_s: float = 0.0
     good_s: float = 0.0
@@ -249,6 +256,7 @@ class ClosedLoop:
         self.block_size = int(block_size)
         self.first_step = config.first_step if mode == "closed" else 0.0  # docstring, 2
         self.wait_samples = config.max_wait_s * self.rate_hz
+        self.hold_samples = config.delay_hold_s * self.rate_hz
         #: the integrator's gain for reports 0, 1, ... blocks late (module docstring, 0)
         self.ki_by_delay = tuple(
             config.ki if config.ki is not None else
@@ -382,11 +390,13 @@ class ClosedLoop:
 
     def report(self, state: ControlState) -> dict:
         """The loop's figures after a run, for a summary (JSON-able): mode, the largest
-        report delay seen (blocks) and the gain scheduled for it, the gain c and mu0
+        report delay seen (blocks), the delay the gain is scheduled on at the end and
+        that gain, the gain c and mu0
         where the run ended (at rest, and its log's slope per ``speed_ref_mm_s``), gain
         updates, fallbacks, samples fed forward open loop
         while fallen back, and what the loop said."""
-        return {"mode": self.mode, "report_delay_blocks": state.delay_blocks,
+        return {"mode": self.mode, "report_delay_blocks": state.delay_max_blocks,
+                "scheduled_delay_blocks": state.delay_blocks,
                 "ki": self.ki_by_delay[state.delay_blocks], "gain": math.exp(state.log_c),
                 "log_gain_per_speed_ref": state.log_c_slope,
                 "speed_ref_mm_s": self.config.speed_ref_mm_s,
@@ -423,7 +433,7 @@ class ClosedLoop:
         good_s = state.good_s + self.block_s
         changes = dict(chain=chain, since_report_s=0.0, good_s=good_s,
                        fallback=state.fallback and good_s < self.config.recover_s,
-                       delay_blocks=max(state.delay_blocks, delay))
+                       **self._held_delay(state, delay, now))
         if sent.single:  # several fingers: nothing to learn
             changes.update(self._learn_finger(state, sent, lat, nor, seen, changes, now))
         return replace(state, **changes)
@@ -468,7 +478,8 @@ class ClosedLoop:
             ratio, mu0, nor, sent.speed, seen, sent.cut, cfg.min_normal_n, cfg.creep_mm_s,
             cfg.slide_mm_s, cfg.min_mu, cfg.min_reduction, cfg.min_still, cfg.decimate)
         if asked >= cfg.min_still and sent.index0 >= state.fed_from:
-            out.update(self._gain_step(state, sent, g, cut, changes["delay_blocks"], now))
+            out.update(self._gain_step(state, sent, g, cut,
+                                       changes.get("delay_blocks", state.delay_blocks), now))
         if self.mode == "adaptive":  # one RLS step (module docstring, 3)
             out["rls"] = cfg.rls.update(state.rls, jac, resid)
         return out
@@ -488,11 +499,24 @@ class ClosedLoop:
         out["probe_from"] = first if rising else None
         return out
 
+    def _held_delay(self, state: ControlState, delay: int, now: int) -> dict:
+        """The report delay (blocks) the gain is scheduled on after a report ``delay``
+        blocks late folded at output index ``now`` (module docstring, 0): raised to it at
+        once, lowered by one block once ``delay_hold_s`` has passed since a report was
+        last as late as the scheduled delay; and the largest delay seen."""
+        if delay >= state.delay_blocks:
+            return dict(delay_blocks=delay, delay_seen_at=now,
+                        delay_max_blocks=max(state.delay_max_blocks, delay))
+        if now - state.delay_seen_at >= self.hold_samples:
+            return dict(delay_blocks=state.delay_blocks - 1, delay_seen_at=now)
+        return {}
+
     def _gain_step(self, state: ControlState, sent: Sent, g: float, cut: int, delay: int,
                    now: int) -> dict:
         """One step of the loop's log gain (module docstring, 2) from ``g``, the median of
         per-sample delivered / asked (robust to the few samples of a stop); ``cut``:
-        samples the amplitude limit cut; ``delay``: the largest report delay (blocks)."""
+        samples the amplitude limit cut; ``delay``: the report delay (blocks) the gain is
+        scheduled on."""
         cfg = self.config
         error = math.log(min(max(g, 0.25), 4.0))
         # the first measurement starts the gain (module docstring, 2)
