@@ -177,7 +177,7 @@ def _sim_output():
 
 def _qemu_output():
     """The same for the firmware in QEMU: its played-sample log timed as it arrives.
-    QEMU runs on the host's clock (``qemuport.ICOUNT``)."""
+    QEMU runs on the host's clock (``device.firmware.qemuport``)."""
     from frictex.device.firmware import qemuport
     from frictex.device.link.host import open_port
     played = PlayedTimes(RATE)

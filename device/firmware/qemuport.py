@@ -35,11 +35,10 @@ BOARD = "emcraft-sf2"
 #: the samples per second, channels and per-channel limit (counts) of sf2/board.h
 RATE_HZ = 10_000.0
 CHANNELS = 1
-#: QEMU's clock: None, the host's. Held to instruction counts instead (``-icount
-#: shift=5,sleep=on,align=on``: 32 ns per instruction, sleeping in real time while the
-#: guest idles) this port did not answer a handshake within 10 s, and an LM3S6965 port
-#: tried before it played about 5,400 samples a second, not 10,000, on an idle machine.
-ICOUNT = None
+# QEMU's clock is the host's. Held to instruction counts instead (``-icount
+# shift=5,sleep=on,align=on``: 32 ns per instruction, sleeping in real time while the
+# guest idles) this port did not answer a handshake within 10 s, and an LM3S6965 port
+# tried before it played about 5,400 samples a second, not 10,000, on an idle machine.
 _PTY = re.compile(r"char device redirected to (/dev/\S+) \(label link\)")
 
 
@@ -53,14 +52,14 @@ def _die_with_parent() -> None:
     ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
 
 
-def command(elf: Path, icount: str | None = ICOUNT) -> list[str]:
+def command(elf: Path) -> list[str]:
     """The QEMU command line: UART0 (the link) on a new pty; semihosting for the
     played-sample log (``played.bin`` in QEMU's working folder) and for the exit; QEMU's
-    clock from ``icount`` (see :data:`ICOUNT`)."""
+    clock the host's (module docstring)."""
     return [QEMU, "-M", BOARD, "-display", "none", "-monitor", "none",
             "-chardev", "pty,id=link", "-serial", "chardev:link",
             "-semihosting-config", "enable=on,target=native",
-            *(("-icount", icount) if icount else ()), "-kernel", os.fspath(elf)]
+            "-kernel", os.fspath(elf)]
 
 
 class QemuDevice:
@@ -75,7 +74,7 @@ class QemuDevice:
     """
 
     def __init__(self, log_path: os.PathLike | None = None, *, elf: Path | None = None,
-                 icount: str | None = ICOUNT, on_log=None, start_timeout_s: float = 30.0):
+                 on_log=None, start_timeout_s: float = 30.0):
         require(QEMU)
         self._slave = self._reader = None
         self._log = open(log_path, "wb") if log_path is not None else None
@@ -85,7 +84,7 @@ class QemuDevice:
         fifo = os.path.join(self._folder.name, "played.bin")  # sf2/board.h BOARD_PLAYED_LOG
         os.mkfifo(fifo)
         self._fifo = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)  # so QEMU's open returns
-        self.proc = subprocess.Popen(command(elf or firmware(), icount), cwd=self._folder.name,
+        self.proc = subprocess.Popen(command(elf or firmware()), cwd=self._folder.name,
                                      stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                                      stderr=self.stderr, preexec_fn=_die_with_parent)
         ready, _, _ = select.select([self.proc.stdout], [], [], start_timeout_s)
@@ -102,7 +101,7 @@ class QemuDevice:
         self._reader = threading.Thread(target=self._read_log, name="frictex-qemu-log",
                                         daemon=True)
         self._reader.start()
-        # what QEMU prints later (-icount align's "guest is late" notes) must not fill the pipe
+        # what QEMU prints later must not fill the pipe
         threading.Thread(target=shutil.copyfileobj, args=(self.proc.stdout, self.stderr),
                          name="frictex-qemu-out", daemon=True).start()
 

@@ -370,6 +370,7 @@ class HostSession:
                 self._next_hb = now + self._heartbeat_s
         taken = 0  # blocks sent or skipped
         with self.cond:
+            queued = sum(len(counts) for _, counts, _ in self.queue) if self.catch_up else 0
             # blocks wait for the session's first Status: it is the counters' baseline
             while self.queue and len(out) < _TURN_BYTES and self.ledger.reporting:
                 start, counts, phases = self.queue[0]
@@ -377,9 +378,10 @@ class HostSession:
                         self._pacing, now, self.sent_end, self.ledger.mark(), start, len(counts)):
                     break
                 self.queue.popleft()
+                queued -= len(counts)  # the samples queued behind this block
                 taken += 1
                 if self.catch_up and behind(self.snapshot, now, self.rate_hz, self.sent_end,
-                                            self._pacing.prefill, self._queued_samples()):
+                                            self._pacing.prefill, queued):
                     self._skip(start, len(counts))
                     continue
                 out += self._send_block(self.index_map.to_device(start), counts, phases)
@@ -388,10 +390,6 @@ class HostSession:
         if not self.queue or taken:
             self._last_progress = now
         return bytes(out)
-
-    def _queued_samples(self) -> int:
-        """Samples in the blocks queued at the host; the caller holds ``cond``."""
-        return sum(len(counts) for _, counts, _ in self.queue)
 
     def _skip(self, start: int, n: int) -> None:
         """Host samples ``start ..`` (``n``) not sent: the device is behind (catch-up,
