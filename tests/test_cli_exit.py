@@ -109,3 +109,14 @@ def test_an_option_that_sets_the_environment_sets_it_for_its_run_only(tmp_path, 
     import os
     assert main(["validate", "grating-5mm", "--allow-outside"]) == 0
     assert ALLOW_OUTSIDE_ENV not in os.environ  # an in-process caller's next run is confined
+
+
+def test_version_prints_the_installed_version_on_stdout_and_exits_0():
+    done = _python("""
+        import sys
+        from frictex.app.commands import cli
+        sys.argv = ["frictex", "--version"]
+        cli.entry()
+        """)
+    from importlib.metadata import version
+    assert (done.returncode, done.stdout, done.stderr) == (0, f"frictex {version('frictex')}\n", "")

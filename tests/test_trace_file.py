@@ -519,3 +519,9 @@ def test_any_header_or_row_is_read_or_one_escaped_line(text):
             message = str(exc)
             assert message.startswith("<t>") and not any(
                 unicodedata.category(ch) in UNSAFE for ch in message), ascii(message)
+
+
+@given(st.lists(st.integers(0, 2**31 - 1), min_size=1, max_size=20))  # 20: most touching
+def test_a_traces_fingers_are_its_distinct_ids_ascending(ids):
+    text = "t_s,finger,x_mm,y_mm\n" + "".join(f"{k},{f},1,1\n" for k, f in enumerate(ids))
+    assert parse_trace(text).fingers == tuple(sorted(set(ids)))

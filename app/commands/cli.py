@@ -87,11 +87,25 @@ def version() -> str:
         return "unknown (not installed)"
 
 
+class _VersionAction(argparse.Action):
+    """``--version``: the version is looked up only when asked, not by every command
+    as it builds its parser (argparse's own ``version`` action takes the text made)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS,
+                         help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"frictex {version()}")
+        parser.exit()
+
+
 def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.ArgumentParser]]:
     parser = OneLineParser(
         prog="frictex",
         description="Render textures on ultrasonic friction-modulation touchscreens.")
-    parser.add_argument("--version", action="version", version=f"frictex {version()}")
+    parser.add_argument("--version", action=_VersionAction,
+                        help="show frictex's version and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     subparsers = {}
     for name, (_, help_text) in COMMANDS.items():

@@ -208,7 +208,7 @@ def _down_after(down: set[int], samples: Trace) -> set[int]:
     down = set(down)
     if len(samples) == 0:
         return down
-    for f in np.unique(samples.finger).tolist():
+    for f in samples.fingers:
         last = samples.event[samples.finger == f][-1]
         (down.discard if last == UP else down.add)(f)
     return down

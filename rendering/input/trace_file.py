@@ -113,7 +113,8 @@ class Trace:
 
     @property
     def fingers(self) -> tuple[int, ...]:
-        return tuple(int(f) for f in np.unique(self.finger))
+        """The finger numbers in the trace, ascending."""
+        return tuple(np.unique(self.finger).tolist())
 
     @property
     def duration_s(self) -> float:
