@@ -147,3 +147,19 @@ def test_headless_takes_no_touch_screen(no_display, capsys):
     assert main(["demo", "--headless", "--input", "tuio:0"]) == 2
     err = capsys.readouterr().err
     assert "drives the mouse with a synthesized stroke" in err and err.count("\n") == 1
+
+
+def test_a_headless_demo_cut_short_by_duration_ends_cleanly(tmp_path):
+    """--duration ending the demo mid-stroke: the synthesized hand stops with the demo
+    (it once outlived it, and printed a traceback from its thread in about half the runs),
+    and the run says where the stroke was cut."""
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, "-m", "frictex", "demo", "grating-5mm", "--headless",
+                           "--haptic", "thread", "--duration", "1", "--out", str(out)],
+                          env=env, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert "Traceback" not in done.stderr and "Exception" not in done.stderr, done.stderr
+    assert "a synthesized stroke of 3 s (cut at 1 s by --duration)" in done.stdout
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["blocks"] > 0 and summary["frames"] > 0

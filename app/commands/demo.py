@@ -273,14 +273,17 @@ def _run(args: argparse.Namespace, headless: bool) -> int:
               f"{c['refused']} refused from other senders, {c['dropped']} dropped (queue full), "
               f"{c['bad_packets']} malformed")
     if frames is not None:
-        print(f"demo: headless, a synthesized stroke of {hand.duration_s:g} s drove the mouse: "
-              f"{frames.count} frames in {frames.folder}; outputs in {record}")
-    loop = summary["control"]
-    if loop is not None:
-        print(f"demo: {loop['mode']} loop, force reports up to {loop['report_delay_blocks']} "
-              f"blocks late (gain {loop['ki']:.3g} per block at the end, scheduled for "
-              f"{loop['scheduled_delay_blocks']}), {loop['updates']} gain updates, "
-              f"{loop['fallbacks']} fallbacks to open loop ({loop['fallback_samples']} samples)")
+        cut = (f" (cut at {args.duration:g} s by --duration)"
+               if args.duration is not None and args.duration < hand.duration_s else "")
+        print(f"demo: headless, a synthesized stroke of {hand.duration_s:g} s{cut} drove the "
+              f"mouse: {frames.count} frames in {frames.folder}; outputs in {record}")
+    control = summary["control"]
+    if control is not None:
+        print(f"demo: {control['mode']} loop, force reports up to "
+              f"{control['report_delay_blocks']} blocks late (gain {control['ki']:.3g} per "
+              f"block at the end, scheduled for {control['scheduled_delay_blocks']}), "
+              f"{control['updates']} gain updates, {control['fallbacks']} fallbacks to open "
+              f"loop ({control['fallback_samples']} samples)")
     return 0
 
 

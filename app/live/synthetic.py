@@ -51,7 +51,7 @@ class SyntheticStroke(threading.Thread):
         self.sleep = sleep
         self.lifted = lifted
         self.positions = 0  # pointer positions sent
-        self._stop = threading.Event()
+        self._quit = threading.Event()
 
     def _move(self, t: float) -> None:
         x, y = self.motion.position(t)
@@ -64,7 +64,7 @@ class SyntheticStroke(threading.Thread):
         self.window.press()
         step = 1.0 / EVENTS_HZ
         k = 1
-        while not self._stop.is_set():
+        while not self._quit.is_set():
             t = min(k * step, self.duration_s)
             wait = start + t - self.clock()
             if wait > 0.0:
@@ -75,10 +75,15 @@ class SyntheticStroke(threading.Thread):
             k += 1
         self.window.release()
         deadline = self.clock() + LIFT_WAIT_S
-        while self.lifted is not None and not self.lifted() and self.clock() < deadline:
-            self._stop.wait(0.01)
+        while (self.lifted is not None and not self._quit.is_set() and not self.lifted()
+               and self.clock() < deadline):
+            self._quit.wait(0.01)
         self.window.key("q")
 
-    def stop(self) -> None:
-        """Stop early (the button is released and Q pressed as at the end)."""
-        self._stop.set()
+    def stop(self, timeout_s: float = 5.0) -> None:
+        """Stop early (the button is released and Q pressed, the lift not waited for) and
+        wait for the thread to end, at most ``timeout_s`` (s): the window it drives is
+        closed next."""
+        self._quit.set()
+        if self.is_alive():
+            self.join(timeout_s)
