@@ -349,6 +349,16 @@ def test_the_root_folder_is_bad_input(capsys):
         frictex.replay(SCENE, TRACES[0], out="/")
 
 
+def test_an_output_folder_under_a_file_is_bad_input_naming_the_file(tmp_path, capsys):
+    (tmp_path / "a-file").write_text("kept")
+    out = tmp_path / "a-file" / "deeper" / "out"
+    assert main(["replay", SCENE, TRACES[0], "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"frictex: error: {out}: {tmp_path / 'a-file'} is not a folder, so no folder "
+                   "can be made in it"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a-file"]
+
+
 def test_the_output_folder_keeps_its_permissions_and_attributes(tmp_path):
     out = tmp_path / "out"
     out.mkdir()

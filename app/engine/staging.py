@@ -110,6 +110,10 @@ class Staging:
         """Refuse, touching nothing, an ``out`` this run could not replace whole."""
         if self.out.exists() and not self.out.is_dir():
             raise InputError(f"{self.out}: exists and is not a folder")
+        above = next(folder for folder in self.out.parents if folder.exists())
+        if not above.is_dir():
+            raise InputError(f"{self.out}: {above} is not a folder, so no folder can be made "
+                             "in it")
         cwd = Path.cwd().resolve()
         if self.out.exists() and (cwd == self.out or self.out in cwd.parents):
             raise InputError(f"{self.out}: holds the current folder; a run replaces its output "
