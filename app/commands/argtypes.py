@@ -68,9 +68,12 @@ def add_link_arguments(parser: argparse.ArgumentParser) -> None:
     """``--device``, ``--faults``, ``--sim-finger`` and ``--control``, as every command
     that streams to a device takes them."""
     from frictex.textures.model import CONTROL_MODES
-    parser.add_argument("--device", metavar="sim|PORT", default=None,
-                        help="stream the commands to a device: 'sim' starts a simulated one, "
-                             "otherwise a serial port or pyserial URL (default: no link)")
+    parser.add_argument("--device", metavar="NAME[:ARG]|PORT", default=None,
+                        help="stream the commands to an output device: 'sim' starts a "
+                             "simulated one, 'audio[:NAME]' plays through a sound card (the "
+                             "audio extra), otherwise a serial port or pyserial URL; an unknown "
+                             "NAME lists every device installed, a package's too (default: no "
+                             "link)")
     parser.add_argument("--faults", metavar="SPEC", type=fault_plan, default=None,
                         help="with --device: inject link faults, e.g. 'corrupt=0.001,"
                              "stall=0.2@1.5,trip@3,unplug=2@4' (grammar: device/link/faults.py)")
