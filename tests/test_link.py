@@ -25,22 +25,35 @@ RATE = 10_000.0
 
 
 class Played:
+    """What the device played, logged by its thread; read by the test while the device
+    thread still runs, so each log entry is added whole, under a lock."""
+
     def __init__(self):
+        self._lock = threading.Lock()
         self.index, self.values = [], []
         self.t, self.setpoint = [], []
 
     def log(self, index, values, phases):
-        self.index.append(index)
-        self.values.append(values)
+        with self._lock:
+            self.index.append(index)
+            self.values.append(values)
 
     def plate_log(self, t, state, setpoint, plate):
-        self.t.append(t)
-        self.setpoint.append(setpoint[:, 0])
+        with self._lock:
+            self.t.append(t)
+            self.setpoint.append(setpoint[:, 0])
 
     def arrays(self):
-        if not self.index:
-            return np.zeros(0, dtype=np.int64), np.zeros((0, 1))
-        return np.concatenate(self.index), np.concatenate(self.values)
+        """(sample index, commanded values) of every sample played so far."""
+        with self._lock:
+            if not self.index:
+                return np.zeros(0, dtype=np.int64), np.zeros((0, 1))
+            return np.concatenate(self.index), np.concatenate(self.values)
+
+    def plate(self):
+        """(time s, setpoint um of channel 0) of every device tick so far."""
+        with self._lock:
+            return np.concatenate(self.t), np.concatenate(self.setpoint)
 
 
 @pytest.fixture(scope="module", params=["python", "c-firmware"])
@@ -65,14 +78,20 @@ def _serve_device(config, core_class):
                               kwargs={"quit_event": quit_event}, daemon=True)
     thread.start()
 
-    def stop():
-        """The device is gone when this returns (its thread has ended)."""
+    open_fds = [master, slave]
+
+    def stop(keep_pty: bool = False):
+        """The device is gone when this returns (its thread has ended), and its pty with
+        it unless ``keep_pty``: then the path stays openable and nothing answers. A closed
+        pty's number goes to the next pty any process opens: a host reopening ``path``
+        then reaches that one (another test's device), so a test that stops the device
+        either keeps its pty or unplugs the host's port first."""
         if not quit_event.is_set():
             quit_event.set()
             thread.join(timeout=30.0)
             assert not thread.is_alive(), "the simulated device did not stop within 30 s"
-            os.close(master)
-            os.close(slave)
+        while open_fds and not keep_pty:
+            os.close(open_fds.pop())
     return core, played, path, stop
 
 
@@ -192,6 +211,20 @@ def test_a_port_that_does_not_exist_or_does_not_answer_is_an_error():
         open_sink("loop://", 1, RATE)
 
 
+def test_a_port_another_host_holds_is_refused_until_it_lets_go(device):
+    """One host at a time on a device path: a second frictex (or a stale host reopening a
+    path whose number a new pseudo-terminal took) cannot stream into the same plate."""
+    _, _, path = device
+    with open_sink(path, 1, RATE) as first:
+        with pytest.raises(LinkError, match=f"cannot open device port '{path}': another "
+                                            r"program holds it \(a port is opened for one "
+                                            r"host at a time\)"):
+            open_sink(path, 1, RATE)
+        first.send(0, np.full((50, 1), 1.0), None)
+    with open_sink(path, 1, RATE) as second:  # let go: the next host opens it, handshakes
+        assert second.status()["state"] == "connected"
+
+
 def test_live_mode_never_blocks_and_counts_what_it_drops(device):
     """Live sends never wait on the link; while the link thread cannot take a block (the
     test holds the lock it needs) the queue of 4 fills and every further block is
@@ -297,8 +330,7 @@ def test_a_long_stall_lets_the_watchdog_zero_the_output(device):
           "the watchdog zeroing the output")  # ... until the device has seen the silence
     plug.port.faults = Faults()
     sink.close()
-    t = np.concatenate(played.t)
-    sp = np.concatenate(played.setpoint)
+    t, sp = played.plate()
     assert np.any(sp[t > 0.02] == 0.0)  # silent during the stall
     # the command is a constant 2 um: every fall is the ramp (20 ms = 200 ticks), no step
     # (the firmware ramps in whole counts: one count of slack)
@@ -378,7 +410,7 @@ def test_a_device_that_stops_answering_ends_in_link_stalled(stoppable_device):
     def stream_until_it_fails():
         for b in range(0, 10**7, 50):
             if b == 2000:
-                stop()  # the device dies; its pty stays openable, nothing answers
+                stop(keep_pty=True)  # the device dies; its pty stays openable, nothing answers
             sink.send(b, np.ones((50, 1)), None)
     with pytest.raises(LinkStalled, match=r"s without progress while blocks waited, over the "
                                           r"bound of 0.6 s \+ 0.25 x [0-9.]+ s played; giving up"):
@@ -399,10 +431,11 @@ def test_a_device_that_stops_answering_ends_in_link_stalled(stoppable_device):
 def test_wait_for_room_is_bounded_and_counts_a_stall(stoppable_device):
     core, played, path, stop = stoppable_device
     err = io.StringIO()
-    sink = CommandSink(lambda: open_port(path), 1, RATE, paced=True, queue_blocks=2,
-                       stderr=err)
+    plug = Plug(lambda: open_port(path))
+    sink = CommandSink(plug, 1, RATE, paced=True, queue_blocks=2, stderr=err)
     assert _within(10.0, sink.wait_for_room, 1.0)
-    stop()  # the device dies and its pty with it: the link drops and cannot come back
+    plug.unplug()  # the device dies and its port with it: the link drops and cannot come back
+    stop()
     until(lambda: sink.status()["state"] == "disconnected", "the link seeing the device gone")
     sink.send(0, np.ones((50, 1)), None)   # each waits for the link at most stall_s
     sink.send(50, np.ones((50, 1)), None)
