@@ -36,7 +36,11 @@ def _at_most_a_thousandth_unless_tripped(st: dict) -> None:
     accounted(st, None, n)
     assert st["resent_frames"] > 0  # frames were lost, and resent
     if st["watchdog_trips"] == 0 and st["recoveries"] == 0:
-        assert st["unplayed_samples"] <= 0.001 * n, st["unplayed_by_cause"]
+        assert st["unplayed_samples"] <= 0.001 * n, (
+            f"{st['unplayed_samples']} of {n} unplayed: {st['unplayed_by_cause']}; "
+            f"resent {st['resent_frames']}; " + ", ".join(
+                f"{k} {st[k]}" for k in ("underruns", "resends_too_late", "stalls",
+                                         "latency_ms_p99", "device_lost_frames", "stop_resends")))
 
 
 @pytest.mark.parametrize("transport", ["sim", "pty", "tcp"])
