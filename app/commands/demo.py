@@ -277,13 +277,9 @@ def _run(args: argparse.Namespace, headless: bool) -> int:
                if args.duration is not None and args.duration < hand.duration_s else "")
         print(f"demo: headless, a synthesized stroke of {hand.duration_s:g} s{cut} drove the "
               f"mouse: {frames.count} frames in {frames.folder}; outputs in {record}")
-    control = summary["control"]
-    if control is not None:
-        print(f"demo: {control['mode']} loop, force reports up to "
-              f"{control['report_delay_blocks']} blocks late (gain {control['ki']:.3g} per "
-              f"block at the end, scheduled for {control['scheduled_delay_blocks']}), "
-              f"{control['updates']} gain updates, {control['fallbacks']} fallbacks to open "
-              f"loop ({control['fallback_samples']} samples)")
+    if summary["control"] is not None:
+        from frictex.app.engine.summary import control_line
+        print(f"demo: {control_line(summary['control'])}")
     return 0
 
 

@@ -9,6 +9,7 @@ from frictex.app.commands.argtypes import (add_link_arguments, block_size, bound
                                    share, sim_device_args)
 from frictex.app.engine.replay import ReplayOptions, replay_with
 from frictex.app.engine.sources import MAX_GAP_S
+from frictex.app.engine.summary import control_line
 from frictex.app.engine.tables import FORMATS
 from frictex.rendering.renderers import render_modes
 from frictex.textures.outside import add_allow_outside
@@ -68,13 +69,8 @@ def run(args: argparse.Namespace) -> int:
               f"{timing['x_realtime_end_to_end']:.3g}x real time end to end (read, compute, "
               f"write; {timing['x_realtime_with_setup']:.3g}x with the {timing['setup_s']:.2f} s "
               f"start-up, {timing['x_realtime_compute']:.3g}x compute only)")
-        loop = summary.get("control")
-        if loop is not None:
-            print(f"{loop['mode']} loop: force reports up to {loop['report_delay_blocks']} "
-                  f"blocks late (gain {loop['ki']:.3g} per block at the end, scheduled for "
-                  f"{loop['scheduled_delay_blocks']}), {loop['updates']} gain "
-                  f"updates, gain {loop['gain']:.3f} at the end, {loop['fallbacks']} "
-                  f"fallbacks to open loop ({loop['fallback_samples']} samples)")
+        if summary.get("control") is not None:
+            print(control_line(summary["control"]))
         for warning in summary["warnings"]:
             print(f"frictex: warning: {warning}", file=sys.stderr)
     device = summary.get("device")

@@ -171,3 +171,13 @@ def finite_json(value):
     if isinstance(value, (list, tuple)):
         return [finite_json(v) for v in value]
     return value
+
+
+def control_line(control: dict) -> str:
+    """One line of a summary's ``control`` section (``rendering.control.loop``'s
+    ``report``), as ``frictex replay`` and ``frictex demo`` print it."""
+    return (f"{control['mode']} loop: force reports up to {control['report_delay_blocks']} "
+            f"blocks late (gain {control['ki']:.3g} per block at the end, scheduled for "
+            f"{control['scheduled_delay_blocks']}), {control['updates']} gain updates, gain "
+            f"{control['gain']:.3f} at the end, {control['fallbacks']} fallbacks to open loop "
+            f"({control['fallback_samples']} samples)")

@@ -168,8 +168,8 @@ class LoopConfig:
     rls: Rls = field(default_factory=Rls)
 
     def __post_init__(self):
-        positive = ("cover_slope", "delay_hold_s", "slide_mm_s", "probe_mm_s", "probe_s", "creep_mm_s",
-                    "still_um", "mu0_tau_s", "stale_s", "recover_s", "min_normal_n",
+        positive = ("cover_slope", "delay_hold_s", "slide_mm_s", "probe_mm_s", "probe_s",
+                    "creep_mm_s", "still_um", "mu0_tau_s", "stale_s", "recover_s", "min_normal_n",
                     "max_ratio", "log_c_max", "speed_ref_mm_s")
         bad = [f"{name} = {getattr(self, name)!r} (expected a finite value > 0)"
                for name in positive
@@ -390,11 +390,10 @@ class ClosedLoop:
 
     def report(self, state: ControlState) -> dict:
         """The loop's figures after a run, for a summary (JSON-able): mode, the largest
-        report delay seen (blocks), the delay the gain is scheduled on at the end and
-        that gain, the gain c and mu0
-        where the run ended (at rest, and its log's slope per ``speed_ref_mm_s``), gain
-        updates, fallbacks, samples fed forward open loop
-        while fallen back, and what the loop said."""
+        report delay seen (blocks), the delay the gain is scheduled on at the end and that
+        gain, the gain c and mu0 where the run ended (at rest, and its log's slope per
+        ``speed_ref_mm_s``), gain updates, fallbacks, samples fed forward open loop while
+        fallen back, and what the loop said."""
         return {"mode": self.mode, "report_delay_blocks": state.delay_max_blocks,
                 "scheduled_delay_blocks": state.delay_blocks,
                 "ki": self.ki_by_delay[state.delay_blocks], "gain": math.exp(state.log_c),
