@@ -15,6 +15,12 @@ see whether BLAS is there; ``_import_numba`` skips both (scipy is a dependency, 
 is there) and numba imports scipy.linalg itself when it compiles a call that needs it.
 It also leaves out numba's typing of cffi functions (cffi and its C parser: 40 ms of
 CPU a process), which no kernel here calls, unless cffi is loaded already.
+
+Loading a kernel from numba's cache first refreshes numba's typing and lowering contexts
+(every registry of every numba module: about 85 ms of a process's first load), which
+only compiling uses, and numba's compiler refreshes them itself before it compiles. Where
+no package extends numba, a kernel here loads from the cache after starting only what
+the loaded machine code calls: numba's runtime (NRT).
 """
 
 from __future__ import annotations
@@ -28,6 +34,11 @@ from typing import Any, Callable
 
 _lock = threading.RLock()
 _typeof_registered = False
+#: once numba is imported: whether no installed package extends it (an extension's
+#: ``init`` may register what a cached kernel's code needs, so its refresh is kept)
+_no_extensions: bool | None = None
+#: numba's FunctionCache, loading without the refresh (see the module); built once
+_cache_class = None
 
 
 class LazyKernel:
@@ -55,6 +66,7 @@ class LazyKernel:
                     numba = _import_numba()
                     _register_typeof()
                     self._kernel = numba.njit(**self._options)(self._func)
+                    _load_without_refresh(self._kernel)
                     names = self._func.__globals__
                     if names.get(self._func.__name__) is self:
                         names[self._func.__name__] = self._kernel
@@ -89,14 +101,20 @@ class _Refuse(importlib.abc.MetaPathFinder):
 def _import_numba():
     """numba, imported without scipy and cffi when scipy is not loaded yet (see the
     module)."""
-    if "numba" in sys.modules or "scipy" in sys.modules:
-        import numba
-        return numba
+    if "numba" not in sys.modules and "scipy" not in sys.modules:
+        _import_numba_alone()
+    import numba
+    if _no_extensions is None:
+        _numba_extensions_known()
+    return numba
+
+
+def _import_numba_alone() -> None:
     has_scipy = importlib.util.find_spec("scipy") is not None
     refuse = _Refuse()
     sys.meta_path.insert(0, refuse)
     try:
-        import numba
+        import numba  # noqa: F401
         import numba.core.typing.cffi_utils  # noqa: F401 (its cffi support off, see the module)
         import numba.np.linalg as linalg
         ensure_blas = getattr(linalg, "ensure_blas", None)  # None: a numba that changed
@@ -111,8 +129,6 @@ def _import_numba():
             numba.np.arraymath.ensure_blas = ensure_blas
     finally:
         sys.meta_path.remove(refuse)
-    _numba_extensions_known()
-    return numba
 
 
 def _numba_extensions_known() -> None:
@@ -120,11 +136,42 @@ def _numba_extensions_known() -> None:
     run the ``init`` of each ``numba_extensions`` entry point (about 15 ms); frictex's
     registries have read it once already. Where no distribution has one, numba is told
     its extensions are loaded."""
+    global _no_extensions
     from frictex.device.registry import entry_points_named
+    _no_extensions = False
     if not entry_points_named("numba_extensions", "init"):
         entrypoints = importlib.import_module("numba.core.entrypoints")
         if hasattr(entrypoints, "_already_initialized"):  # else a numba that changed: it reads
             entrypoints._already_initialized = True
+            _no_extensions = True
+
+
+def _load_without_refresh(kernel) -> None:
+    """Give ``kernel``'s cache a load that skips numba's context refresh (see the module),
+    where numba's cache is the one this was written against and nothing extends numba."""
+    global _cache_class
+    from numba.core import caching
+    cache = getattr(kernel, "_cache", None)
+    if not _no_extensions or type(cache) is not caching.FunctionCache or not all(
+            hasattr(cache, name) for name in ("_load_overload",
+                                              "_guard_against_spurious_io_errors")):
+        return  # an extended numba, no cache, or a numba that changed: numba's own load
+    if _cache_class is None:
+        _cache_class = type("FunctionCacheLoadingWithoutRefresh", (caching.FunctionCache,),
+                            {"load_overload": _load_overload})
+    cache.__class__ = _cache_class
+
+
+def _load_overload(cache, sig, target_context):
+    """numba's ``Cache.load_overload`` less its ``target_context.refresh()``: numba's
+    runtime (NRT), which loaded code allocating arrays calls, is started instead. The
+    other symbols such code links against (numba's C helpers, the hash secret) are added
+    when numba is imported."""
+    from numba.core.runtime import rtsys
+    rtsys.initialize(target_context)
+    with cache._guard_against_spurious_io_errors():
+        return cache._load_overload(sig, target_context)
+    return None  # the guard swallowed an I/O error: numba compiles instead, as its own load
 
 
 def _register_typeof() -> None:
