@@ -384,6 +384,8 @@ class CommandSink:
             "latency_ms_p50": float(np.percentile(rtt, 50)) if rtt.size else None,
             "latency_ms_p99": float(np.percentile(rtt, 99)) if rtt.size else None,
             "stalled_s": self._policy.lag_s if self.paced else None,
+            "longest_turn_gap_ms": s.longest_turn_gap_s * 1e3,
+            "longest_status_gap_ms": s.longest_status_gap_s * 1e3,
             "last_error": s.last_error,
             "failure": str(s.failure) if s.failure is not None else None,
             "device": asdict(s.info) if s.info else None,

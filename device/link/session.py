@@ -121,6 +121,12 @@ class HostSession:
         self._alias: collections.OrderedDict = collections.OrderedDict()
         self._due: dict[int, None] = {}  # original seqs the device asked for, in order
         self._last_rx = self._last_progress = self._last_turn = 0.0
+        # the longest the port thread went without a turn, and without a Status from the
+        # device, while a session was open (s): a starved host or device, which no repair
+        # outruns once it exceeds the device's lead
+        self.longest_turn_gap_s = 0.0
+        self.longest_status_gap_s = 0.0
+        self._last_status = None
         self._next_hb = 0.0
         self._ever_connected = False
         self._reconnecting = False
@@ -175,6 +181,8 @@ class HostSession:
         handshake went unanswered (the port thread then reopens the port)."""
         if now - self._last_turn > STARVED_S:  # the thread did not run: not the device's silence
             self._last_rx = self._last_progress = now
+        if self.phase == "session":
+            self.longest_turn_gap_s = max(self.longest_turn_gap_s, now - self._last_turn)
         self._last_turn = now
         if self.phase == "handshake":
             return self._poll_handshake(now)
@@ -275,6 +283,7 @@ class HostSession:
         self._alias.clear()
         self._due.clear()
         self._last_rx = self._last_progress = now
+        self._last_status = None
         self._next_hb = now
         if not info.has_force_reports:
             with self.forces_lock:
@@ -327,6 +336,10 @@ class HostSession:
         self._last_rx = now
         if isinstance(msg, p.Status):
             self.status = msg
+            if self.phase == "session" and self._last_status is not None:
+                self.longest_status_gap_s = max(self.longest_status_gap_s,
+                                                now - self._last_status)
+            self._last_status = now
             mark = self._marks.pop(msg.echo, None)
             if mark is not None:
                 sent_t, sent_end, ledger_mark = mark
