@@ -211,6 +211,20 @@ def test_a_port_that_does_not_exist_or_does_not_answer_is_an_error():
         open_sink("loop://", 1, RATE)
 
 
+def test_a_port_another_host_holds_is_refused_until_it_lets_go(device):
+    """One host at a time on a device path: a second frictex (or a stale host reopening a
+    path whose number a new pseudo-terminal took) cannot stream into the same plate."""
+    _, _, path = device
+    with open_sink(path, 1, RATE) as first:
+        with pytest.raises(LinkError, match=f"cannot open device port '{path}': another "
+                                            r"program holds it \(a port is opened for one "
+                                            r"host at a time\)"):
+            open_sink(path, 1, RATE)
+        first.send(0, np.full((50, 1), 1.0), None)
+    with open_sink(path, 1, RATE) as second:  # let go: the next host opens it, handshakes
+        assert second.status()["state"] == "connected"
+
+
 def test_live_mode_never_blocks_and_counts_what_it_drops(device):
     """Live sends never wait on the link; while the link thread cannot take a block (the
     test holds the lock it needs) the queue of 4 fills and every further block is

@@ -6,10 +6,16 @@
 :data:`READ_WAIT_S`. ``socket://`` gets :class:`TcpPort` (TCP_NODELAY, a true
 ``in_waiting``). ``sim://`` is not a port of pyserial's: the simulated device opens it
 (``device.link.simport``), in this process.
+
+A device path is opened exclusively (pyserial's ``exclusive``: an advisory ``flock`` on
+POSIX): a second host, another frictex or a stale one reconnecting to a path whose
+number a new pseudo-terminal took, is refused while one holds the port, rather than both
+streaming frames into one plate.
 """
 
 from __future__ import annotations
 
+import errno
 import socket
 import struct
 
@@ -58,9 +64,14 @@ def open_port(url: str):
             port = TcpPort(None, **options)
             port.port = url
             port.open()
-        else:
+        elif "://" in url:
             port = serial.serial_for_url(url, **options)
+        else:
+            port = serial.serial_for_url(url, exclusive=True, **options)
     except (serial.SerialException, ValueError, OSError) as exc:
+        if getattr(exc, "errno", None) in (errno.EAGAIN, errno.EWOULDBLOCK):  # the lock
+            raise LinkError(f"cannot open device port {url!r}: another program holds it "
+                            "(a port is opened for one host at a time)") from None
         raise LinkError(f"cannot open device port {url!r}: {exc}") from None
     return port
 
