@@ -59,12 +59,123 @@ def test_controls_follow_the_key_tables(tmp_path):
     assert (edge.value, edge.written) == ("square", True)
 
 
-def test_a_height_layer_offers_the_keys_of_its_shape_only():
-    table = {"type": "height", "shape": "bump", "rise_mm": 1.0, "cx_mm": 5.0, "cy_mm": 5.0,
-             "sigma_mm": 2.0}
-    keys = {c.key for c in layer_controls(table, 100.0)}
+WAVEFORM = """format = 1
+name = "w"
+[display]
+width_mm = 100.0
+height_mm = 60.0
+width_px = 1000
+height_px = 600
+
+[[layer]]
+type = "waveform"
+shape = "{shape}"
+period_mm = 3.0
+mu_min = 0.8
+[layer.region]
+cx_mm = 25.0
+cy_mm = 30.0
+radius_mm = 15.0
+
+[[layer]]
+type = "height"
+shape = "bump"
+rise_mm = 1.0
+cx_mm = 50.0
+cy_mm = 30.0
+sigma_mm = 2.0
+
+[[layer]]
+type = "clip"
+trigger = "down"
+clip = "ramp"
+duration_s = 0.05
+[layer.region]
+cx_mm = 80.0
+cy_mm = 45.0
+radius_mm = 8.0
+"""
+
+
+def offered(tmp_path, text, index) -> set[str]:
+    path = tmp_path / "w.toml"
+    path.write_text(text)
+    ed = LayerEdit(path)
+    ed.select(index)
+    return {c.key for c in ed.controls()}
+
+
+@pytest.mark.parametrize("shape", ["sine", "triangle", "sawtooth", "square"])
+def test_a_waveform_offers_duty_only_where_the_loader_takes_it(tmp_path, shape):
+    keys = offered(tmp_path, WAVEFORM.format(shape=shape), 0)
+    assert {"period_mm", "mu_min", "mu_max", "angle_deg"} <= keys
+    assert ("duty" in keys) == (shape == "square")
+    assert "samples" not in keys and "shape" not in keys
+
+
+def test_every_key_offered_unwritten_loads_when_written_at_its_default(tmp_path):
+    """What the panel offers, the loader takes: each layer of the file, each key the
+    file does not give, written at the value the panel shows."""
+    for shape in ("sine", "square"):
+        text = WAVEFORM.format(shape=shape)
+        for index in range(3):
+            path = tmp_path / "w.toml"
+            path.write_text(text)
+            ed = LayerEdit(path)
+            ed.select(index)
+            for c in ed.controls():
+                if not c.written:
+                    ed.set(c.key, c.value)
+            load_scene(path, text=ed.text())
+
+
+def test_a_height_or_clip_layer_offers_the_keys_of_its_shape_only(tmp_path):
+    keys = offered(tmp_path, WAVEFORM.format(shape="sine"), 1)
     assert {"rise_mm", "cx_mm", "sigma_mm", "gain", "mu_rest"} <= keys
-    assert not keys & {"radius_mm", "rim_mm", "chamfer_mm", "shape", "width_mm"}
+    assert not keys & {"radius_mm", "rim_mm", "chamfer_mm", "shape", "width_mm", "angle_deg"}
+    keys = offered(tmp_path, WAVEFORM.format(shape="sine"), 2)
+    assert {"depth", "duration_s", "level_from", "level_to"} <= keys
+    assert not keys & {"intensity", "clip", "trigger"}
+
+
+def test_a_square_grating_offers_no_edge_width(tmp_path):
+    ed = LayerEdit(grating(tmp_path))
+    ed.select(0)
+    assert "edge_mm" not in {c.key for c in ed.controls()}
+
+
+def test_an_unnamed_layer_is_listed_by_the_loaders_name_for_it(tmp_path):
+    path = tmp_path / "w.toml"
+    path.write_text(WAVEFORM.format(shape="sine"))
+    names = LayerEdit(path).layer_names()
+    loaded = [layer.name for layer in load_scene(path).layers]
+    assert names == tuple(f"{name} ({kind})" for name, kind in
+                          zip(loaded, ("waveform", "height", "clip")))
+    assert names[0] == "waveform-1 (waveform)"
+
+
+def test_a_refused_edit_is_said_at_the_line_of_the_file_on_disk(tmp_path):
+    path = tmp_path / "w.toml"
+    text = WAVEFORM.format(shape="square")
+    path.write_text(text)
+    lines = text.splitlines()
+    ed = LayerEdit(path)
+    ed.select(0)
+    ed.set("duty", 0.3)  # a key the file does not give: a line more in the edited text
+    ed.doc["layer"][1]["sigma_mm"] = -1.0  # refused, a line further down than on disk
+    with pytest.raises(ValueError) as refused:
+        load_scene(path, text=ed.text())
+    assert refused.value.problems[0].line > lines.index("sigma_mm = 2.0") + 1  # edited text
+    said = ed.refusal(refused.value)
+    line = int(said.split(":")[1])
+    assert lines[line - 1] == "sigma_mm = 2.0" and "layer[2].sigma_mm" in said
+    ed.revert(text)
+    ed.doc["layer"][0]["shape"] = "sine"
+    ed.doc["layer"][0]["duty"] = 0.3
+    with pytest.raises(ValueError) as refused:
+        load_scene(path, text=ed.text())
+    said = ed.refusal(refused.value)
+    assert lines[int(said.split(":")[1]) - 1] == "[[layer]]" and "not in the file yet" in said
 
 
 @settings(max_examples=200, derandomize=True)

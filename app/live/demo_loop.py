@@ -437,8 +437,9 @@ class DemoLoop:
         try:
             scene = load_scene(self.editor.path, text=text)
         except (ValueError, OSError) as exc:
-            self.error = f"edit refused ({what}), keeping {self.scene.name}: {exc}"
-            self.log("edit-failed", str(exc))
+            why = self.editor.refusal(exc) if isinstance(exc, ValueError) else str(exc)
+            self.error = f"edit refused ({what}), keeping {self.scene.name}: {why}"
+            self.log("edit-failed", why)
             return False
         return self._apply(scene, self.renderer, "edit", what, text)
 

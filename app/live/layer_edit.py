@@ -15,9 +15,15 @@ change byte for byte. A layer's controls come from the loader's key tables
   ``shape``) are not offered.
 
 A key is offered when the file gives it, or when its default is a value (a key whose
-default is derived by the loader, "none" in the tables, is offered only once written).
-A height or clip layer offers only the keys of its shape (``HEIGHT_SHAPES``,
-``CLIP_SHAPES``) besides its common ones.
+default is derived by the loader, "none" in the tables, is offered only once written)
+and the loader takes it written beside the layer's other keys: the loader itself is
+asked (:func:`refused_keys`: the layer with the key written at its default, which
+changes nothing but that the key is given), so a waveform of shape "sine" offers no
+``duty``, a height layer only its shape's keys, a clip only its clip's.
+
+A refused edit is said at the line of the file as it is on disk (the file the user
+sees; :meth:`LayerEdit.refusal`), not of the edited text, where a key the edit wrote
+adds a line.
 
 Every change pushes the document's text before it on the undo stack; changes made with
 the same ``group`` (one slider drag) share one entry. :meth:`LayerEdit.save` writes the
@@ -29,9 +35,10 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import shutil
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import tomlkit
@@ -39,9 +46,10 @@ from tomlkit.exceptions import TOMLKitError
 
 from frictex.device.errors import InputError
 from frictex.rendering.visual.layer_panel import ControlView, PanelView
-from frictex.textures.keys import CLIP_SHAPES, COMMON, HEIGHT_SHAPES, LAYER_KEYS
+from frictex.textures.errors import Locator, TextureError, field_name
+from frictex.textures.keys import COMMON, LAYER_KEYS
 from frictex.textures.library import LIBRARY_DIR
-from frictex.textures.loader import load_scene
+from frictex.textures.loader import check_scene, load_scene
 from frictex.textures.references import referenced_files
 from frictex.textures.schema import MAX_MAGNITUDE, Choice, Int, Num
 
@@ -158,27 +166,41 @@ def clamp(slider: Slider, value: float) -> float:
     return min(max(v, slider.allowed_lo), slider.allowed_hi)
 
 
-def _offered(layer_type: str, table) -> list[str]:
-    """The keys of a layer of ``layer_type`` the panel may show, in the tables' order."""
-    keys = list(LAYER_KEYS.get(layer_type, {}))
-    shapes = {"height": (HEIGHT_SHAPES, "shape"), "clip": (CLIP_SHAPES, "clip")}.get(layer_type)
-    if shapes is not None:
-        table_of, word = shapes
-        own = set(table_of.get(str(table.get(word, "")), ()))
-        every = {k for ks in table_of.values() for k in ks}
-        keys = [k for k in keys if k not in every or k in own]
-    return keys
+def refused_keys(path: Path, doc, index: int) -> frozenset[str]:
+    """The keys of ``doc``'s layer ``index`` (0-based) the file does not give and the
+    loader refuses given: each is written at its default (the only change: the key is
+    given) and the document checked (``check_scene`` as read from ``path``); a problem
+    at the key ("not used with shape = ...") refuses it. Keys whose default is derived
+    ("none") are not tried: the panel does not offer them unwritten."""
+    table = doc["layer"][index]
+    specs = {**{k: COMMON[k] for k in ("blend", "render")},
+             **LAYER_KEYS.get(str(table.get("type", "")), {})}
+    text = tomlkit.dumps(doc)
+    refused = set()
+    for key, spec in specs.items():
+        if key in table or key in STRUCTURAL or isinstance(spec.default, bool) \
+                or not isinstance(spec.default, (int, float, str)):
+            continue
+        probe = tomlkit.parse(text)
+        probe["layer"][index][key] = spec.default
+        _, problems, _ = check_scene(path, text=tomlkit.dumps(probe))
+        if any(p.field == field_name(("layer", index, key)) for p in problems):
+            refused.add(key)
+    return frozenset(refused)
 
 
-def layer_controls(table, extent_mm: float) -> tuple[Slider | Menu, ...]:
+def layer_controls(table, extent_mm: float, refused=frozenset()) -> tuple[Slider | Menu, ...]:
     """The panel's controls for one ``[[layer]]`` table (``extent_mm``: the display's
-    larger side, mm)."""
+    larger side, mm), leaving out the keys the file does not give and the loader
+    ``refused`` (:func:`refused_keys`)."""
     layer_type = str(table.get("type", ""))
     specs = {k: COMMON[k] for k in ("blend", "render")}
-    specs.update({k: LAYER_KEYS[layer_type][k] for k in _offered(layer_type, table)})
+    specs.update(LAYER_KEYS.get(layer_type, {}))
     out: list[Slider | Menu] = []
     for key, spec in specs.items():
         written = key in table
+        if key in refused and not written:
+            continue
         if isinstance(spec, Choice):
             if key in STRUCTURAL:
                 continue
@@ -193,6 +215,19 @@ def layer_controls(table, extent_mm: float) -> tuple[Slider | Menu, ...]:
             out.append(Slider(key, spec.unit, lo, hi, step, float(value), written,
                               *allowed_range(spec, step), isinstance(spec, Int)))
     return tuple(out)
+
+
+def _key_path(field: str) -> tuple | None:
+    """A problem's field (``layer[2].duty``) as a key path (``("layer", 1, "duty")``),
+    or None if it is not one (an escaped key)."""
+    path: list = []
+    for part in field.split("."):
+        m = re.fullmatch(r"([A-Za-z0-9_-]+)((?:\[\d+\])*)", part)
+        if m is None:
+            return None
+        path.append(m.group(1))
+        path += [int(n) - 1 for n in re.findall(r"\[(\d+)\]", m.group(2))]
+    return tuple(path) if field else None
 
 
 def _user_scenes() -> Path:
@@ -243,6 +278,7 @@ class LayerEdit:
         self.layer: int | None = None
         self._undo: list[tuple[str, object]] = []  # (text before, group)
         self._group: object = None
+        self._refused: tuple = (None, None, frozenset())  # (layer, text, refused_keys)
 
     # -- reading -----------------------------------------------------------------------
 
@@ -256,24 +292,47 @@ class LayerEdit:
         return self.text() != self.original
 
     def layer_names(self) -> tuple[str, ...]:
-        """Each layer as the panel lists it: "<name> (<type>)" or "<k> <type>"."""
+        """Each layer as the panel lists it: "<name> (<type>)", an unnamed one by the
+        name the loader gives it, "<type>-<k>" (k from 1, as ``preview`` and the format
+        page name it)."""
         names = []
         for k, table in enumerate(self.doc["layer"]):
             kind = str(table.get("type", "?"))
-            names.append(f"{table['name']} ({kind})" if "name" in table else f"{k + 1} {kind}")
+            name = table["name"] if "name" in table else f"{kind}-{k + 1}"
+            names.append(f"{name} ({kind})")
         return tuple(names)
 
     def controls(self) -> tuple[Slider | Menu, ...]:
-        """The selected layer's controls (none when no layer is selected)."""
+        """The selected layer's controls (none when no layer is selected); the keys the
+        loader refuses given (:func:`refused_keys`) are worked out once per text."""
         if self.layer is None:
             return ()
-        return layer_controls(self.doc["layer"][self.layer], self.extent_mm)
+        text = self.text()
+        if self._refused[:2] != (self.layer, text):
+            self._refused = (self.layer, text, refused_keys(self.path, self.doc, self.layer))
+        return layer_controls(self.doc["layer"][self.layer], self.extent_mm, self._refused[2])
 
     def control(self, key: str) -> Slider | Menu:
         for c in self.controls():
             if c.key == key:
                 return c
         raise EditError(f"the layer has no key {key!r} the panel edits")
+
+    def refusal(self, exc: ValueError) -> str:
+        """``exc`` (the loader refusing the edited text) in one line, its first problem at
+        the line of the file as on disk (the text opened or last saved): a key the edit
+        added, not in the file yet, is said at its layer's line."""
+        if not isinstance(exc, TextureError) or not exc.problems:
+            return str(exc)
+        first, more = exc.problems[0], len(exc.problems) - 1
+        path = _key_path(first.field)
+        if path is not None:
+            locator = Locator(self.original)
+            line = locator.line(path)
+            absent = len(path) > 1 and line == locator.line(path[:-1])
+            first = replace(first, line=line, message=first.message
+                            + (" (a key the edit adds; not in the file yet)" if absent else ""))
+        return str(first) + (f" (and {more} more)" if more else "")
 
     @property
     def can_undo(self) -> bool:
