@@ -15,7 +15,7 @@ import pytest
 from numpy.testing import assert_allclose
 from PIL import Image
 
-from frictex.app.live.demo_loop import RELOAD_POLL_S, DemoLoop
+from frictex.app.live.demo_loop import GONE_S, RELOAD_POLL_S, DemoLoop
 from frictex.app.live.haptic_thread import HapticThread
 from frictex.app.live.watch import FileWatch
 from test_ar_texture import VARIANCES, _xml
@@ -331,9 +331,9 @@ def test_a_texture_file_caught_half_written_is_not_loaded(demo, tmp_path):
     assert "is empty" in loop.error and len(_events(tmp_path, "reload-failed")) == 1
 
 
-def test_a_texture_file_being_saved_is_waited_for(demo, tmp_path):
+def test_a_texture_file_being_saved_is_waited_for(demo, tmp_path, capsys):
     """An editor that deletes the file before writing it: no reload and no error while it
-    is missing; written again, the scene reloads."""
+    is missing; written again, the scene reloads, said once on stderr."""
     loop, files, poll = demo
     first = loop.scene
     (tmp_path / "scene.toml").unlink()
@@ -343,3 +343,33 @@ def test_a_texture_file_being_saved_is_waited_for(demo, tmp_path):
     poll()
     assert loop.scene is not first and loop.error is None
     assert _layer(loop.scene, HeightLayer).shape.heights_mm.max() == pytest.approx(2.0 * 39000 / 65535)
+    assert capsys.readouterr().err.splitlines() == [
+        f"frictex demo: reloaded {loop.scene.name} (scene.toml changed)"]
+
+
+@pytest.mark.parametrize("empty_first", [False, True])
+def test_a_texture_file_moved_away_is_said_gone_and_the_scene_kept(demo, tmp_path, capsys,
+                                                                  empty_first):
+    """Moved away (or emptied, then deleted): after GONE_S the banner and stderr say the
+    file is gone, once; the last good scene stays; back, it reloads."""
+    loop, files, poll = demo
+    first = loop.scene
+    path = tmp_path / "scene.toml"
+    text = path.read_text()
+    if empty_first:
+        files.write("scene.toml", "")
+        poll()
+        assert "is empty" in loop.error
+    path.rename(tmp_path / "elsewhere.toml")
+    poll()
+    assert "is gone" not in (loop.error or "")
+    poll(GONE_S, looks=2)
+    assert loop.error.startswith("scene.toml is gone (moved or deleted), keeping the last good "
+                                 "scene") and loop.scene is first
+    err = capsys.readouterr().err.splitlines()
+    assert err[-1] == f"frictex demo: {loop.error}"
+    assert len(err) == 1 + empty_first and all(line.count("\n") == 0 for line in err)
+    files.write("scene.toml", text)
+    poll()
+    assert loop.error is None and loop.scene is not first
+    assert capsys.readouterr().err == f"frictex demo: reloaded {loop.scene.name} (scene.toml changed)\n"

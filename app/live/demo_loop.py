@@ -49,7 +49,8 @@ The scene's texture file and every file it names (raster images, height-map PNGs
 recorded-texture models, AHAP clips, measured mode tables: ``textures.references``)
 are polled for changes (``app.live.watch``); a change to any of them reloads the scene
 (haptics crossfade in one block), and a bad edit keeps the last good scene and shows
-its error on screen.
+its error on screen and once on stderr (a reload too: "reloaded"); a texture file moved
+away or deleted is said to be gone, the last good scene kept.
 Events are appended to ``events.csv`` (t_s on the haptic clock, event, detail) when a
 record folder is given: what the window did when it did it (keys, scene loads,
 screenshots), and what the output did when it did it, at the output time of the
@@ -89,6 +90,9 @@ FORCE_RANGE_N = (0.05, 2.0)
 #: with the new scene's image (at most 0.12 s for a bundled scene at 1920x1080 on
 #: llvmpipe: ``frictex bench visual``) the picture changes within 0.3 s of a save
 RELOAD_POLL_S = 0.075
+#: a texture file missing this long (s) is said to be gone: an editor deleting it before
+#: writing it again takes milliseconds
+GONE_S = 0.5
 ENVELOPE_S = 0.2  # a modal device's |W| is redrawn from the latest commands 5 times a second
 FRAME_S = 1.0 / 60.0
 INPUT_WAKE_S = 0.05  # longest the input thread waits for an event before looking at the time
@@ -179,6 +183,7 @@ class DemoLoop:
         self._watch(self.playlist[self.index])
         self._set_envelope(scene, haptic.pipeline.actuation)
         self._next_poll = 0.0
+        self._missing_since: float | None = None  # when the texture file went missing (s)
         self._keys: queue.SimpleQueue = queue.SimpleQueue()  # for the render thread
         #: the layer panel: its editor, the menu open, its note (render thread); the
         #: slider being dragged and the drags so far (input thread); panel events
@@ -505,7 +510,7 @@ class DemoLoop:
             return
         if self._apply(scene, self.renderer, "scene", scene.name):
             self.index = index
-            self.files = FileWatch()
+            self.files, self._missing_since = FileWatch(), None
             self._watch(path)
             self._open_editor()
 
@@ -522,15 +527,28 @@ class DemoLoop:
         """Every RELOAD_POLL_S (s on the loop's clock): if the scene's texture file or
         a file it names changed and has since held still for a poll (a save caught between
         truncating and writing is not loaded, unless the writing waits a whole poll), load
-        the scene again; a good load is applied, a bad one
-        keeps the last good scene and shows why. A texture file that is not there (an
-        editor between deleting and writing it) is waited for."""
+        the scene again; a good load is applied, a bad one keeps the last good scene and
+        shows why. A texture file that is not there (an editor between deleting and
+        writing it) is waited for; missing GONE_S on, it is said to be gone (moved or
+        deleted), the last good scene kept, and reloaded once it is back. Each failure,
+        and each reload, is also one line on stderr (:meth:`say`)."""
         if now < self._next_poll:
             return
         self._next_poll = now + RELOAD_POLL_S
         changed = self.files.changed()
         path = Path(self.playlist[self.index])
-        if not changed or self.files.stamps.get(path) is None:
+        if self.files.stamps.get(path) is None:
+            if path in changed:
+                self._missing_since = now
+            if self._missing_since is not None and now - self._missing_since >= GONE_S:
+                self._missing_since = None
+                self.error = (f"{path.name} is gone (moved or deleted), keeping the last good "
+                              f"scene; it reloads when {path.name} is back")
+                self.log("reload-failed", f"{path} is gone")
+                self.say(self.error)
+            return
+        self._missing_since = None
+        if not changed:
             return
         self._watch(path)
         what = ", ".join(p.name for p in changed)
@@ -539,9 +557,18 @@ class DemoLoop:
         except (ValueError, OSError) as exc:
             self.error = f"reload failed ({what} changed), keeping the last good scene: {exc}"
             self.log("reload-failed", str(exc))
+            self.say(self.error)
             return
         if self._apply(scene, self.renderer, "reload", f"{scene.name} ({what} changed)"):
+            self.say(f"reloaded {scene.name} ({what} changed)")
             self._open_editor()  # the file as saved, from now on
+        else:
+            self.say(self.error)
+
+    @staticmethod
+    def say(message: str) -> None:
+        """``message`` as one line on stderr, as the demo's other messages."""
+        print(f"frictex demo: {' '.join(message.split())}", file=sys.stderr, flush=True)
 
     def _set_envelope(self, scene, actuation) -> None:
         self.envelope = modal_envelope(scene, actuation)
