@@ -20,6 +20,62 @@ def test_preview_writes_scene_beside_its_friction_map(tmp_path, capsys):
     assert img.shape[1] > 1000  # two panels side by side
 
 
+GRATING_4MM = """format = 1
+name = "grating-4mm-v"
+[display]
+width_mm = 120.0
+height_mm = 80.0
+width_px = 1200
+height_px = 800
+
+[[layer]]
+type = "grating"
+period_mm = 4.0
+angle_deg = 0.0
+offset_mm = 1.0
+duty = 0.25
+mu_low = 0.7
+"""
+
+
+def rising_edge_period(row: np.ndarray) -> float:
+    """Mean spacing (px) of the dark-to-light crossings of the row's mid level."""
+    light = row > (row.min() + row.max()) / 2
+    rises = np.flatnonzero(light[1:] & ~light[:-1])
+    assert rises.size >= 5
+    return (rises[-1] - rises[0]) / (rises.size - 1)
+
+
+@pytest.mark.parametrize("size, px_per_mm", [(None, 10.0), ("2400x1600", 20.0), ("600x600", 5.0)])
+def test_the_scene_image_is_at_the_display_pixels_and_a_gratings_period_measures_in_it(
+        tmp_path, capsys, size, px_per_mm):
+    scene = tmp_path / "g.toml"
+    scene.write_text(GRATING_4MM)
+    out = tmp_path / "g.png"
+    assert main(["preview", str(scene), "-o", str(out)] + (["--size", size] if size else [])) == 0
+    figure, drawn = capsys.readouterr().out.splitlines()[:2]
+    image = Image.open(tmp_path / "g-scene.png")
+    w, h = round(120 * px_per_mm), round(80 * px_per_mm)
+    assert image.size == (w, h)
+    assert drawn.startswith(f"wrote {tmp_path / 'g-scene.png'}: the scene as the demo's frame "
+                            f"draws it, {w} x {h} px, {px_per_mm:g} px/mm along x")
+    assert ("the display's pixels" in drawn) == (size is None)
+    grey = np.asarray(image.convert("L"), dtype=np.float64)
+    for row in grey[::97]:
+        assert rising_edge_period(row) == pytest.approx(4.0 * px_per_mm, abs=1.0)
+    assert f"a {Image.open(out).size[0]} x {Image.open(out).size[1]} px figure" in figure
+
+
+def test_the_scene_image_can_be_named_but_not_as_the_figure(tmp_path, capsys):
+    out = tmp_path / "g.png"
+    assert main(["preview", "grating-5mm", "-o", str(out), "--scene-out",
+                 str(tmp_path / "exact.png")]) == 0
+    assert Image.open(tmp_path / "exact.png").size == (800, 480)
+    assert not (tmp_path / "g-scene.png").exists()
+    assert main(["preview", "grating-5mm", "-o", str(out), "--scene-out", str(out)]) == 2
+    assert "is the figure's file" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("argv, message", [
     (["preview", "no-such-scene", "-o", "x.png"], "no-such-scene"),
     (["preview", "grating-5mm", "-o", "out.jpg"], "expected a .png"),

@@ -1,9 +1,15 @@
-"""``frictex preview SCENE -o out.png``: the scene as the demo draws it, beside its
-friction map (mu' as an image with a colour bar), in one PNG.
+"""``frictex preview SCENE -o out.png``: two PNGs, the scene at its display's pixels and
+a figure of the scene beside its friction map (mu' as an image with a colour bar).
 
-The left panel is the visual layer's static image (``rendering.visual.scene_image``,
-the same pixels the demo window shows); the right panel is mu' composed from the
-layers (``rendering.compose.ideal_mu``: what a perfect renderer gives a finger there),
+The scene image (``--scene-out``, by default ``<out>-scene.png`` beside ``out.png``) is
+the visual layer's static image (``rendering.visual.scene_image``) at the display's
+``width_px`` x ``height_px``, pixel for pixel what the demo's frame draws there: a
+grating's period measures period_mm x px/mm in it. ``--size WxH`` draws it at another
+size (the display fitted in WxH, its aspect kept).
+
+The figure's left panel is that image scaled to fit the figure (its pixels are not the
+display's: its title says so); the right panel is mu' composed from the layers
+(``rendering.compose.ideal_mu``: what a perfect renderer gives a finger there),
 averaged over each pixel. The colour bar marks the lowest mu' the device reaches at
 the scene's nominal normal force (``device.friction.mu_floor``); where a finger touching
 alone would ask for less, the map is hatched and outlined in red: targets there will be
@@ -40,9 +46,11 @@ from frictex.rendering.visual.viewport import fit_viewport
 from frictex.textures.outside import add_allow_outside
 
 
-#: Largest scene panel (px per side): ``--size`` up to this; by default the display's own
+#: Largest scene image (px per side): ``--size`` up to this; by default the display's own
 #: pixel size, scaled down to fit it.
 MAX_PANEL_PX = 4096
+#: Largest panel (px per side) the figure's two panels are computed at (they are scaled
+#: to the figure's few hundred pixels anyway).
 DEFAULT_MAX_PANEL_PX = 2048
 #: Displays flatter than this (height / width) get their panels one above the other,
 #: stretched in y, with a horizontal colour bar (seed 000's beam is 350 x 6 mm).
@@ -63,18 +71,24 @@ def frame_size(text: str) -> tuple[int, int]:
     return w, h
 
 
-def default_size(display) -> tuple[int, int]:
-    """The display's pixel size, scaled down to at most DEFAULT_MAX_PANEL_PX per side."""
+def default_size(display, limit: int = DEFAULT_MAX_PANEL_PX) -> tuple[int, int]:
+    """The display's pixel size, scaled down to at most ``limit`` px per side."""
     w, h = display.width_px, display.height_px
-    scale = min(1.0, DEFAULT_MAX_PANEL_PX / max(w, h))
+    scale = min(1.0, limit / max(w, h))
     return max(1, round(w * scale)), max(1, round(h * scale))
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scene", help="texture file (.toml) or bundled scene name (see frictex library)")
-    parser.add_argument("-o", "--out", required=True, metavar="PNG", help="output image (.png)")
+    parser.add_argument("-o", "--out", required=True, metavar="PNG",
+                        help="the figure: the scene (scaled to fit) beside its friction map (.png)")
+    parser.add_argument("--scene-out", default=None, metavar="PNG",
+                        help="the scene alone at its pixels, as the demo's frame draws it "
+                             "(default: OUT's name with -scene, beside it)")
     parser.add_argument("--size", type=frame_size, default=None, metavar="WxH",
-                        help="pixel size of the scene panel (default: the scene's display size)")
+                        help="pixel size of the scene image (--scene-out): the display fitted "
+                             "in WxH, its aspect kept (default: the display's width_px x "
+                             f"height_px, up to {MAX_PANEL_PX} px a side)")
     parser.add_argument("--outlines", action="store_true", help="outline every region and object")
     add_allow_outside(parser)
 
@@ -138,16 +152,27 @@ def mu_map(scene, viewport, supersample: int = 3) -> np.ndarray:
     return acc / supersample ** 2
 
 
-def preview_figure(scene, size: tuple[int, int] | None = None, outlines: bool = False):
+def scene_image(scene, size: tuple[int, int], outlines: bool = False) -> np.ndarray:
+    """The scene as the demo's frame draws it, the display fitted in ``size`` (w, h px)
+    keeping its aspect: sRGB uint8 (height_px, width_px, 3)."""
+    return to_srgb8(scene_rgb(scene, fit_viewport(scene.display, *size), outlines=outlines))
+
+
+def preview_figure(scene, size: tuple[int, int] | None = None, outlines: bool = False,
+                   image: np.ndarray | None = None):
     """The preview of ``scene`` as a matplotlib Figure, and what it shows (mu' range, floor,
     share of the display below the floor, panel size).
 
-    Where the composed mu' lies below the device's floor at the scene's nominal normal
-    force, the friction map is hatched (those targets will be clamped); the floor is a red
-    line and a labelled tick on the colour bar."""
+    The panels are computed at ``size`` (w, h px; default the display's pixels up to
+    DEFAULT_MAX_PANEL_PX a side) and scaled to fit the figure; ``image``: the scene image
+    at that size if already drawn (:func:`scene_image`). Where the composed mu' lies below
+    the device's floor at the scene's nominal normal force, the friction map is hatched
+    (those targets will be clamped); the floor is a red line and a labelled tick on the
+    colour bar."""
     d = scene.display
     viewport = fit_viewport(d, *(size or default_size(d)))
-    image = to_srgb8(scene_rgb(scene, viewport, outlines=outlines))
+    if image is None or image.shape[:2] != (viewport.height_px, viewport.width_px):
+        image = to_srgb8(scene_rgb(scene, viewport, outlines=outlines))
     previewed = as_previewed(scene)
     mu = mu_map(previewed, viewport)
     force = scene.device.normal_force_n
@@ -157,8 +182,9 @@ def preview_figure(scene, size: tuple[int, int] | None = None, outlines: bool = 
     flat = d.height_mm / d.width_mm < FLAT_ASPECT
     fig, left, right, stretch = _panels(d, flat)
     left.imshow(image, extent=extent, interpolation="antialiased", aspect=stretch)
-    left.set_title(f"{scene.name}: as drawn ({viewport.width_px} x {viewport.height_px} px"
-                   + (", y stretched" if flat else "") + ")", fontsize=10)
+    left.set_title(f"{scene.name}: as drawn, scaled to fit" + (", y stretched" if flat else "")
+                   + ("; " if flat else "\n") + "at the display's pixels: the scene image",
+                   fontsize=10)
     vmin = min(float(mu.min()), floor) - 0.02
     shown = right.imshow(mu, extent=extent, cmap="viridis", vmin=vmin, vmax=1.0,
                          interpolation="antialiased", aspect=stretch)
@@ -248,31 +274,67 @@ def _captions(fig, scene) -> list[str]:
 
 
 def write_preview(scene, out: Path, size: tuple[int, int] | None = None,
-                  outlines: bool = False) -> dict:
-    """Render the preview PNG of ``scene`` into ``out``; return what it shows (mu' range,
-    floor, share below the floor, panel size).
+                  outlines: bool = False, image: np.ndarray | None = None) -> dict:
+    """Render the preview figure of ``scene`` into ``out`` (panels computed at ``size``,
+    ``image``: as :func:`preview_figure`'s); return what it shows (mu' range, floor,
+    share below the floor, panel size, ``figure``: the PNG's size in px).
 
     Room-checked (4 bytes per pixel of the figure) and written under a temporary name
     (``app.engine.outfile``): a full disk leaves no truncated or empty PNG, and an earlier
     file of that name stays."""
-    fig, info = preview_figure(scene, size, outlines)
+    fig, info = preview_figure(scene, size, outlines, image)
     width, height = fig.get_size_inches() * fig.dpi
     write_file(out, lambda to: fig.savefig(to, format="png"), width * height * 4)
+    info["figure"] = fig.canvas.get_width_height()
     return info
 
 
-def run(args: argparse.Namespace) -> int:
-    out = Path(args.out)
+def write_scene_image(image: np.ndarray, out: Path) -> None:
+    """Write ``image`` (sRGB uint8, rows x columns x 3) as the PNG ``out``, pixel for pixel
+    (room-checked and written whole, as :func:`write_preview`)."""
+    from PIL import Image
+    write_file(out, lambda to: Image.fromarray(image).save(to, format="PNG"), image.size * 4 / 3 * 4)
+
+
+def scene_out_path(out: Path) -> Path:
+    """The scene image's default name: ``out``'s with ``-scene`` before the suffix."""
+    return out.with_name(f"{out.stem}-scene{out.suffix}")
+
+
+def _png_path(out: Path, option: str) -> Path:
+    """``out`` checked: a .png name in a folder that exists."""
     if out.suffix.lower() != ".png":
-        raise InputError(f"output {str(out)!r}: expected a .png file name")
+        raise InputError(f"{option} {str(out)!r}: expected a .png file name")
     if not out.parent.is_dir():
         raise InputError(f"output folder {str(out.parent)!r} does not exist")
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    out = _png_path(Path(args.out), "output")
+    scene_out = _png_path(Path(args.scene_out) if args.scene_out else scene_out_path(out),
+                          "--scene-out")
+    if scene_out.resolve() == out.resolve():
+        raise InputError(f"--scene-out {str(scene_out)!r} is the figure's file (-o); "
+                         "expected another name")
     scene = load(args.scene)
-    info = write_preview(scene, out, args.size, args.outlines)
-    print(f"wrote {escape_path(out)}: {escape(scene.name, limit=None)}, scene panel {info['size'][0]} x {info['size'][1]} px, "
+    d = scene.display
+    size = args.size or default_size(d, MAX_PANEL_PX)
+    image = scene_image(scene, size, args.outlines)
+    info = write_preview(scene, out, outlines=args.outlines, image=image)
+    write_scene_image(image, scene_out)
+    print(f"wrote {escape_path(out)}: {escape(scene.name, limit=None)} beside its friction map, "
+          f"a {info['figure'][0]} x {info['figure'][1]} px figure (the scene scaled to fit), "
           f"mu' {info['mu_min']:.3f} to {info['mu_max']:.3f} (device floor {info['floor']:.3f} "
           f"at {scene.device.normal_force_n:g} N"
           + (f"; {info['below']:.1%} of the display below it, hatched)" if info["below"] else ")"))
+    h, w = image.shape[:2]
+    own = (w, h) == (d.width_px, d.height_px)
+    print(f"wrote {escape_path(scene_out)}: the scene as the demo's frame draws it, {w} x {h} px, "
+          f"{w / d.width_mm:.4g} px/mm along x, {h / d.height_mm:.4g} along y ("
+          + ("the display's pixels)" if own else
+             f"the display has {d.width_px} x {d.height_px} px"
+             + ("" if args.size else f"; drawn at most {MAX_PANEL_PX} px a side") + ")"))
     for message in info["perception"]:
         print(f"perception: {printable(message)}")
     return 0
