@@ -38,7 +38,7 @@ def test_warning_does_not_fail(files, capsys):
     assert layer.startswith(f"frictex: warning: {low}:12: layer[1].mu: asks for mu' down to 0.3, but the "
                             f"device reaches only 0.5717 at the nominal 0.5 N")
     assert reach.startswith(f"frictex: warning: {low}: layers: ")
-    assert 'the product of layers "bump-1"' in reach
+    assert 'from layer "bump-1"; lowest where layers overlap: 0.3, layer "bump-1" alone;' in reach
 
 
 def test_strict_fails_a_file_with_warnings_with_exit_2(files, capsys):
@@ -69,8 +69,8 @@ def test_the_plank_as_first_written_warns_of_its_stroke_below_the_floor(tmp_path
     [line] = err.splitlines()
     share = float(re.search(r"layers: ([\d.]+)% of a typical stroke", line).group(1))
     assert 12.0 <= share <= 13.0
-    assert "floor 0.5717 at the nominal 0.5 N (down to 0.346)" in line
-    assert 'the product of layers "grain", "rings";' in line
+    assert ('floor 0.5717 at the nominal 0.5 N, from layers "grain", "rings"; lowest where layers '
+            'overlap: 0.346, the product of layers "grain", "rings", "knot";') in line
     assert main(["validate", "--strict", str(path)]) == 2
 
 

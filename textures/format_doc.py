@@ -14,6 +14,7 @@ import textwrap
 from frictex.textures import keys as K
 from frictex.textures import model
 from frictex.textures import schema as S
+from frictex.textures.extent import FAST_FINGER_MM_S
 from frictex.textures.format_examples import EXAMPLES, PLANK
 
 INTRO = """# Texture files: every table and key
@@ -59,12 +60,17 @@ file.
    says that about 13 % of a typical stroke asks for a friction the device cannot reach:
 
        frictex: warning: plank.toml: layers: 12.9% of a typical stroke (4 s) and 13.8% of
-       the display ask for mu' below the device's floor 0.5717 at the nominal 0.5 N (down
-       to 0.346): the product of layers "grain", "rings"; those targets will be clamped to
-       the floor
+       the display ask for mu' below the device's floor 0.5717 at the nominal 0.5 N, from
+       layers "grain", "rings"; lowest where layers overlap: 0.346, the product of layers
+       "grain", "rings", "knot"; those targets will be clamped to the floor
 
-   Each layer is within reach alone, but layers multiply (see Composition): 0.72 x 0.6 x
-   0.8 = 0.346, where the plate at 0.5 N and 2.5 um goes no lower than 0.572. The region
+   Each layer is within reach alone, but layers multiply (see Composition). "from" names
+   the layers that lower mu' most where the stroke and the display fall below the floor;
+   "lowest where layers overlap" multiplies the lowest mu' of the layers whose extents
+   overlap, at the place where that product is least: in the knot's disc the grain
+   (0.72), the rings (0.6) and the knot at rest (0.8) give 0.72 x 0.6 x 0.8 = 0.346,
+   where the plate at 0.5 N and 2.5 um goes no lower than 0.572. Layers that never
+   overlap are never multiplied. The region
    adds a step too: a height layer covers its region at `mu_rest` (0.8), so the knot's
    disc is a step of 0.8 against 1 outside it (see Regions). `frictex preview plank.toml -o
    plank.png` hatches the places below the floor. The fix: shallower grain and rings,
@@ -143,9 +149,11 @@ Layers are drawn and composed in file order, later on top. With `blend = "multip
 0.36. With `blend = "replace"` a layer's μ' replaces what the layers before it gave,
 where it covers. The product can go below the device's floor (the lowest μ' it reaches
 at the normal force, `[device]`) even where every layer alone stays above it:
-`frictex validate` measures that share of the display and of a typical stroke and names
-the layers causing it (`--strict` fails such a file, exit 2); `frictex preview` hatches
-those places on the friction map.
+`frictex validate` measures that share of the display and of a typical stroke, names
+the layers causing it, and gives the lowest product where the layers' extents overlap
+(a clip counts as far beyond its region as a finger sliding at <FAST> mm/s goes while
+it plays); `--strict` fails such a file (exit 2), and `frictex preview` hatches those
+places on the friction map.
 
 ### Regions
 
@@ -163,7 +171,7 @@ type:
 | `recorded` | the whole display, about `mu_mean` | the region: a step from about mu_mean to 1 at its outline |
 | `clip` | triggers anywhere | triggers only inside the region (the clip, once started, plays until it ends) |
 | `directional`, `guidance`, `keyclick` | the whole display (a keyclick: its button) | acts only inside the region |
-"""
+""".replace("<FAST>", f"{FAST_FINGER_MM_S:g}")
 
 
 def files_section() -> str:

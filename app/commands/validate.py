@@ -7,7 +7,8 @@ message``. Two kinds of warning concern reach, at the scene's nominal normal for
 (``[device] normal_force_n``): a layer asking on its own for a mu' below the device's
 floor (the loader's, with the line of its key), and layers whose *product* goes below it
 (``rendering.reach``: the share of the display's area and of a typical stroke run
-through the scene's pipeline, and the layers that cause it).
+through the scene's pipeline, and the layers that cause it; ``textures.overlap``: the
+lowest product where layers overlap, and those layers).
 
 Exit 0 if every file is good (warnings allowed), 2 if any is bad. ``--strict`` counts a
 file with warnings as bad: exit 2, because a warning is about what the file asks for
@@ -54,20 +55,32 @@ def _share(fraction: float) -> str:
     return "under 0.1%" if 0.0 < fraction < 0.0005 else f"{fraction:.1%}"
 
 
+def _names(names) -> str:
+    """``layers "a", "b"`` or ``layer "a"``."""
+    return f"layer{'s' * (len(names) != 1)} " + ", ".join(f'"{name}"' for name in names)
+
+
 def reach_warning(path, scene) -> str | None:
     """The warning for a scene whose layers together ask for mu' below the device's floor
-    (``rendering.reach.scene_reach``), or None."""
-    from frictex.rendering.reach import STROKE_S, scene_reach
+    (``rendering.reach.scene_reach``), or None. It names the layers that lower mu' where
+    the typical stroke and the display's map fall below the floor (``Reach.causes``), and
+    the lowest product of the layers' lowest mu' where their extents overlap, with the
+    layers that overlap there (``textures.overlap``), for a finger touching alone."""
+    from frictex.rendering.reach import STROKE_S, applies_alone, scene_reach
+    from frictex.textures.overlap import lowest_overlap
 
     reach = scene_reach(scene)
     if not reach.below:
         return None
-    causes = ", ".join(f'"{name}"' for name in reach.causes) or "the layers together"
+    causes = f"from {_names(reach.causes)}" if reach.causes else "from the layers together"
+    overlap = lowest_overlap(scene.display, [layer for layer in scene.layers if applies_alone(layer)])
+    where = (f"the product of {_names(overlap.names)}" if len(overlap.names) > 1
+             else f"{_names(overlap.names)} alone")
     return (f"{escape_path(path)}: layers: {_share(reach.stroke_share)} of a typical stroke "
             f"({STROKE_S:g} s) and {_share(reach.area_share)} of the display ask for mu' below the "
-            f"device's floor {reach.floor:.4g} at the nominal {reach.force_n:g} N (down to "
-            f"{reach.lowest:.3g}): the product of layers {causes}; those targets will be "
-            f"clamped to the floor")
+            f"device's floor {reach.floor:.4g} at the nominal {reach.force_n:g} N, {causes}; lowest "
+            f"where layers overlap: {overlap.lowest:.3g}, {where}; those targets will be clamped "
+            f"to the floor")
 
 
 def _is_protocol(name: str) -> bool:
