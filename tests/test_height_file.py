@@ -32,7 +32,7 @@ BUMP = 'type = "height"\nshape = "bump"\nrise_mm = 1.0\n'
      r"scene\.toml:14: layer\[1\]\.chamfer_mm: not used with shape = \"bump\""),
     (BUMP + "cx_mm = 50\ncy_mm = 30\nsigma_mm = 5\nmu_rest = 0.5\n",
      r"scene\.toml:14: layer\[1\]\.mu_rest: mu_min 0\.6 < mu_rest 0\.5 < mu_max 1 does not hold"),
-    (BUMP + "cx_mm = 500\ncy_mm = 30\nsigma_mm = 5\n", r"scene\.toml:11: layer\[1\]\.cx_mm: bump centre"),
+    (BUMP + "cx_mm = 500\ncy_mm = 30\nsigma_mm = 5\n", r"scene\.toml:11: layer\[1\]\.cx_mm: bump \(to 4 sigma\) at x 480 to 520 mm"),
     ('type = "height"\nshape = "button"\nrise_mm = 1\ncx_mm = 50\ncy_mm = 30\nradius_mm = 5\nrim_mm = 6\n',
      r"scene\.toml:14: layer\[1\]\.rim_mm: 6 mm is not below radius_mm 5"),
     ('type = "height"\nshape = "cone"\nrise_mm = 1\n', r"scene\.toml:9: layer\[1\]\.shape: \"cone\" is not one of"),

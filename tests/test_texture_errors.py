@@ -96,11 +96,11 @@ CASES = [
      r'"add" is not one of multiply, replace'),
     ("type = \"disc\"", 'type = "disc"\nname = "grating-1"', "type = \"disc\"", "layer[2].name",
      r'"grating-1" is already the name of layer\[1\]'),
-    ("cx_mm", "cx_mm = 100", "cx_mm", "layer[2].cx_mm", r"disc at x 90 to 110 mm, y 20 to 40 mm is off the display "
-                                                  r"\(0 to 108 mm by 0 to 64\.8 mm\)"),
+    ("cx_mm", "cx_mm = 130", "cx_mm", "layer[2].cx_mm", r"disc at x 120 to 140 mm, y 20 to 40 mm lies wholly off "
+                                                  r"the display \(x 0 to 108 mm, y 0 to 64\.8 mm\)"),
     ("radius_mm", "radius_mm = 10\nedge_mm = 25", "radius_mm", "layer[2].edge_mm", r"more than the diameter"),
-    ("region", "region = { x_mm = 100, y_mm = 0, width_mm = 50, height_mm = 20 }", "region",
-     "layer[1].region", r"region at x 100 to 150 mm.* is off the display"),
+    ("region", "region = { x_mm = 110, y_mm = 0, width_mm = 50, height_mm = 20 }", "region",
+     "layer[1].region", r"region at x 110 to 160 mm.* lies wholly off the display"),
     ("region", "region = { x_mm = 0, y_mm = 0, width_mm = 50, radius_mm = 20 }", "region",
      "layer[1].region", r"mixes rectangle keys \(x_mm, y_mm, width_mm\) and disc keys \(radius_mm\)"),
     ("region", "region = { x_mm = 0, y_mm = 0, width_mm = 50 }", "region",

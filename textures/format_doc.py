@@ -171,6 +171,17 @@ type:
 | `recorded` | the whole display, about `mu_mean` | the region: a step from about mu_mean to 1 at its outline |
 | `clip` | triggers anywhere | triggers only inside the region (the clip, once started, plays until it ends) |
 | `directional`, `guidance`, `keyclick` | the whole display (a keyclick: its button) | acts only inside the region |
+
+### At the display's edge
+
+A shape may run off the display: a `rectangle`, `disc`, `line` (with its width), `bump`
+(to 4 sigma), `raster` image, height `button` or height map, a keyclick's button or a
+region partly off the display is cut at its edge, drawn and felt where it lies on the
+display (every layer is evaluated per position). One wholly off the display is refused
+(`... lies wholly off the display (x 0 to W mm, y 0 to H mm)`): it would do nothing.
+A point that places a line or a target (an `edge`'s, a height `ridge`'s or `step`'s
+`x_mm`, `y_mm`, a clip's trigger line, a `guidance` target) must lie on the display
+itself, edges included.
 """.replace("<FAST>", f"{FAST_FINGER_MM_S:g}")
 
 

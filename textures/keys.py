@@ -351,7 +351,7 @@ documented(LAYER_KEYS["edge"], {
     "mu": "mu' on the side the normal points to",
     "edge_mm": "width (mm) of the raised-cosine ramp across the edge; 0 is a step"})
 documented(LAYER_KEYS["bump"], {
-    "cx_mm": "x (mm) of the centre (on the display)", "cy_mm": "y (mm) of the centre",
+    "cx_mm": "x (mm) of the centre (the disc r <= 4 sigma must reach the display)", "cy_mm": "y (mm) of the centre",
     "sigma_mm": "standard deviation (mm) of the gaussian: mu' = 1 - (1 - mu) "
                 "exp(-r^2 / (2 sigma^2)); the layer covers r <= 4 sigma",
     "mu": "mu' at the centre"})

@@ -13,7 +13,7 @@ from frictex.textures.keys import CLIP_SHAPES, HEIGHT_SHAPES
 from frictex.textures.schema import show
 from frictex.textures.sections.common import chosen_keys, forbid, strictly_increasing
 from frictex.textures.sections.files import file_read
-from frictex.textures.sections.geometry import on_display, region_on_display
+from frictex.textures.sections.geometry import on_display, shape_on_display
 
 
 def build_height(r, path, v, given, ctx):
@@ -30,7 +30,9 @@ def build_height(r, path, v, given, ctx):
         return None
     if kind == "bump":
         shape = GaussianBump(v["cx_mm"], v["cy_mm"], v["sigma_mm"], v["rise_mm"])
-        ok = on_display(r, path + ("cx_mm",), ctx, "bump centre", [v["cx_mm"]], [v["cy_mm"]])
+        support = model.DiscRegion(v["cx_mm"], v["cy_mm"], 4.0 * v["sigma_mm"])
+        ok = ctx.display is None or shape_on_display(r, path + ("cx_mm",), support, ctx.display,
+                                                     "bump (to 4 sigma)")
     elif kind == "ridge":
         shape = Ridge(v["x_mm"], v["y_mm"], v["angle_deg"], v["width_mm"], v["rise_mm"])
         ok = on_display(r, path + ("x_mm",), ctx, "ridge point", [v["x_mm"]], [v["y_mm"]])
@@ -42,13 +44,13 @@ def build_height(r, path, v, given, ctx):
             r.report(path + ("rim_mm",), f"{v['rim_mm']:g} mm is not below radius_mm {v['radius_mm']:g}")
             return None
         shape = ButtonRim(v["cx_mm"], v["cy_mm"], v["radius_mm"], v["rim_mm"], v["rise_mm"])
-        ok = ctx.display is None or region_on_display(
+        ok = ctx.display is None or shape_on_display(
             r, path + ("cx_mm",), model.DiscRegion(v["cx_mm"], v["cy_mm"], v["radius_mm"]),
             ctx.display, "button")
     else:
         x, y = v["x_mm"] or 0.0, v["y_mm"] or 0.0
         sprite = model.RectRegion(x, y, v["width_mm"], v["height_mm"])
-        ok = ctx.display is None or region_on_display(r, path + ("x_mm",), sprite, ctx.display,
+        ok = ctx.display is None or shape_on_display(r, path + ("x_mm",), sprite, ctx.display,
                                                         "height map")
         heights = file_read(r, path, "image", v["image"], ctx,
                              lambda f: read_height_png(f, v["rise_mm"], ctx.files.budget))

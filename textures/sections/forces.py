@@ -7,7 +7,7 @@ import math
 
 from frictex.textures import model
 from frictex.textures.sections.common import forbid
-from frictex.textures.sections.geometry import on_display, region_on_display
+from frictex.textures.sections.geometry import on_display, shape_on_display
 
 
 def force_common(r, path, given) -> bool:
@@ -56,7 +56,7 @@ def build_keyclick(r, path, v, given, ctx):
                                       f"{v['press_n']:g} < click_n {v['click_n']:g} (N) do not hold")
         ok = False
     geometry = model.RectRegion(v["x_mm"], v["y_mm"], v["width_mm"], v["height_mm"])
-    ok &= ctx.display is None or region_on_display(r, path + ("x_mm",), geometry, ctx.display, "button")
+    ok &= ctx.display is None or shape_on_display(r, path + ("x_mm",), geometry, ctx.display, "button")
     if not ok:
         return None
     keys = ("press_n", "click_n", "release_n", "dwell_s", "force_n")

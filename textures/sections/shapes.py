@@ -7,7 +7,7 @@ from frictex.textures import model
 from frictex.textures.keys import DISC_REGION, RECT_REGION
 from frictex.textures.raster_io import read_grey
 from frictex.textures.sections.common import forbid, ordered
-from frictex.textures.sections.geometry import fits, on_display, region_on_display
+from frictex.textures.sections.geometry import fits, on_display, shape_on_display
 
 
 def build_grating(r, path, v, given, ctx):
@@ -53,14 +53,14 @@ def build_waveform(r, path, v, given, ctx):
 def build_rectangle(r, path, v, given, ctx):
     geometry = model.RectRegion(*(v[k] for k in RECT_REGION))
     ok = fits(r, path, "edge_mm", v["edge_mm"], min(v["width_mm"], v["height_mm"]), "the shorter side")
-    ok &= ctx.display is None or region_on_display(r, path + ("x_mm",), geometry, ctx.display, "rectangle")
+    ok &= ctx.display is None or shape_on_display(r, path + ("x_mm",), geometry, ctx.display, "rectangle")
     return (model.Shape(**ctx.common, geometry=geometry, mu=v["mu"], edge_mm=v["edge_mm"]), "mu") if ok else None
 
 
 def build_disc(r, path, v, given, ctx):
     geometry = model.DiscRegion(*(v[k] for k in DISC_REGION))
     ok = fits(r, path, "edge_mm", v["edge_mm"], 2 * v["radius_mm"], "the diameter")
-    ok &= ctx.display is None or region_on_display(r, path + ("cx_mm",), geometry, ctx.display, "disc")
+    ok &= ctx.display is None or shape_on_display(r, path + ("cx_mm",), geometry, ctx.display, "disc")
     return (model.Shape(**ctx.common, geometry=geometry, mu=v["mu"], edge_mm=v["edge_mm"]), "mu") if ok else None
 
 
@@ -70,7 +70,9 @@ def build_edge(r, path, v, given, ctx):
 
 
 def build_bump(r, path, v, given, ctx):
-    ok = on_display(r, path + ("cx_mm",), ctx, "bump centre", [v["cx_mm"]], [v["cy_mm"]])
+    support = model.DiscRegion(v["cx_mm"], v["cy_mm"], 4.0 * v["sigma_mm"])
+    ok = ctx.display is None or shape_on_display(r, path + ("cx_mm",), support, ctx.display,
+                                                 "bump (to 4 sigma)")
     return (model.Bump(**ctx.common, **v), "mu") if ok else None
 
 
@@ -81,7 +83,8 @@ def build_line(r, path, v, given, ctx):
                  f"(use a disc for a dot)")
         ok = False
     ok &= fits(r, path, "edge_mm", v["edge_mm"], v["width_mm"], "width_mm")
-    ok &= on_display(r, path + ("x0_mm",), ctx, "line", [v["x0_mm"], v["x1_mm"]], [v["y0_mm"], v["y1_mm"]])
+    line = (v["x0_mm"], v["y0_mm"], v["x1_mm"], v["y1_mm"], v["width_mm"])
+    ok &= ctx.display is None or shape_on_display(r, path + ("x0_mm",), line, ctx.display, "line")
     return (model.Line(**ctx.common, **v), "mu") if ok else None
 
 
@@ -113,7 +116,7 @@ def build_raster(r, path, v, given, ctx):
     v["tile_width_mm"] = v["tile_width_mm"] or cols / px_x
     v["tile_height_mm"] = v["tile_height_mm"] or rows / px_y
     layer = model.RasterMap(**ctx.common, **v)
-    if not region_on_display(r, path + ("x_mm",), layer.sprite, ctx.display, "image sprite"):
+    if not shape_on_display(r, path + ("x_mm",), layer.sprite, ctx.display, "image"):
         return None
     low_key = "mu_black" if v["mu_black"] <= v["mu_white"] else "mu_white"
     return layer, low_key
