@@ -79,6 +79,7 @@ from frictex.rendering.visual.compositor import Compositor, FrameView
 from frictex.rendering.visual.layer_panel import PanelView, hit, track_fraction
 from frictex.rendering.visual.modal_view import modal_envelope
 from frictex.rendering.visual.overlay import OverlayState
+from frictex.rendering.visual.viewport import frame_layout
 from frictex.textures.errors import TextureError
 from frictex.textures.loader import load_scene
 from frictex.textures.references import referenced_files
@@ -159,6 +160,7 @@ class DemoLoop:
         self.touch_screen = touch_screen
         self.input_name = input_name
         self.compositor = Compositor(backend.ctx, scene, backend.size)
+        self.show_scope = self._scope_first(scene)
         backend.set_title(window_title(scene))
         self.overlay = OverlayState()
         self.force_n = scene.device.normal_force_n
@@ -170,7 +172,6 @@ class DemoLoop:
         self._pending: list[tuple[bool | None, tuple[float, float]]] = []
         self._flushed_at: float | None = None  # haptic clock (s)
         self._sent: tuple | None = None  # (pointer px, force N) of the last mouse sample
-        self.show_scope = True
         self.outlines = False
         self.error: str | None = None
         self.status: dict = {}
@@ -208,6 +209,33 @@ class DemoLoop:
         backend.on_button = self.on_button
         backend.on_scroll = self.on_scroll
         backend.on_key = self.on_key
+
+    def _scope_first(self, scene) -> bool:
+        """Whether the scope strip is shown at first: yes, unless the window was cut to
+        the screen's work area (``backend.requested``: the size asked for) and holds the
+        scene at its display's pixels only without the strip (a grating's lines then keep
+        their size); a cut window says on stderr what it shows."""
+        d, size = scene.display, tuple(self.backend.size)
+        asked = tuple(getattr(self.backend, "requested", size))
+        if asked[0] <= size[0] and asked[1] <= size[1]:
+            return True
+        side = self.compositor.panels.column_px(scene, size)
+        drawn = {scope: frame_layout(d, *size, scope, side)[0] for scope in (True, False)}
+        own = {scope: (v.width_px, v.height_px) == (d.width_px, d.height_px)
+               for scope, v in drawn.items()}
+        window = (f"the window is {size[0]} x {size[1]} px, the screen's work area "
+                  f"({asked[0]} x {asked[1]} asked)")
+        if own[False] and not own[True]:
+            self.say(f"{window}: the scene at its {d.width_px} x {d.height_px} px leaves no room "
+                     "for the scope strip under it; S shows the scope (the scene then scaled "
+                     "to fit above it)")
+            return False
+        if not own[True]:
+            v = drawn[True]
+            self.say(f"{window}: the scene is drawn at {v.width_px} x {v.height_px} px "
+                     f"({v.px_per_mm[0]:.3g} px/mm), not its display's {d.width_px} x "
+                     f"{d.height_px} px ({d.width_px / d.width_mm:.3g} px/mm)")
+        return True
 
     # -- input --------------------------------------------------------------------------
 

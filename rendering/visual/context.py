@@ -27,6 +27,11 @@ import numpy as np
 from frictex.device.errors import FrictexError, InputError
 
 
+def fit_size(size: tuple[int, int], room: tuple[int, int]) -> tuple[int, int]:
+    """``size`` (w, h px) cut to ``room`` (w, h px) side by side, at least 1 px each."""
+    return (max(1, min(int(size[0]), int(room[0]))), max(1, min(int(size[1]), int(room[1]))))
+
+
 @runtime_checkable
 class Frame(Protocol):
     """Something to draw into: a moderngl context ``ctx`` and ``size`` (width, height) px."""
@@ -184,6 +189,13 @@ class GlfwBackend:
             target = monitors[monitor]
             mode = glfw.get_video_mode(target)
             size = (mode.size.width, mode.size.height)
+        #: the size asked for (px); a window is opened within the screen's work area
+        self.requested = (int(size[0]), int(size[1]))
+        self.work_area: tuple[int, int] | None = None
+        if target is None and monitors:
+            self.work_area = tuple(int(v) for v in
+                                   glfw.get_monitor_workarea(glfw.get_primary_monitor())[2:])
+            size = fit_size(self.requested, self.work_area)
         glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 3)
         glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)
         glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
@@ -193,6 +205,12 @@ class GlfwBackend:
         if not self.window:
             glfw.terminate()
             raise VisualError("glfw could not create an OpenGL 3.3 core window on this display")
+        if self.work_area is not None:  # its title bar and borders within the work area too
+            left, top, right, bottom = glfw.get_window_frame_size(self.window)
+            inner = fit_size(size, (self.work_area[0] - left - right,
+                                    self.work_area[1] - top - bottom))
+            if inner != tuple(size):
+                glfw.set_window_size(self.window, *inner)
         glfw.make_context_current(self.window)
         glfw.swap_interval(1 if vsync else 0)
         self.ctx = moderngl.create_context()
