@@ -169,3 +169,52 @@ def test_process_runs_through_a_pause_that_a_replay_skips():
     np.testing.assert_array_equal(out.t_s[:start], replayed.commands.column("t_s").to_numpy()[:start])
     np.testing.assert_array_equal(out.commands_um[:start, 0],
                                   replayed.commands.column(1).to_numpy()[:start])
+
+
+def test_version_is_the_installed_one_as_the_command_prints_it(tmp_path, capsys):
+    from importlib.metadata import version
+    assert frictex.__version__ == version("frictex")
+    with pytest.raises(SystemExit):
+        main(["--version"])
+    assert capsys.readouterr().out == f"frictex {frictex.__version__}\n"
+    out = run_python("import sys, frictex; print(frictex.__version__, sorted(m for m in ("
+                     "'numpy', 'numba', 'scipy', 'pyarrow') if m in sys.modules))", tmp_path)
+    assert out.split(" ", 1) == [frictex.__version__, "[]\n"]
+
+
+def test_replay_takes_the_command_s_options_with_its_defaults():
+    import argparse
+    import inspect
+    from frictex.app.commands.replay import add_arguments
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    command = parser.parse_args([SCENE, TRACE, "--out", "o"])
+    defaults = {name: p.default for name, p in inspect.signature(frictex.replay).parameters.items()}
+    for api, option in (("rate_hz", "rate"), ("block_size", "block"), ("max_gap_s", "max_gap"),
+                        ("max_unplayed", "max_unplayed"), ("faults", "faults"),
+                        ("device", "device"), ("control", "control"), ("renderer", "renderer"),
+                        ("strict", "strict")):
+        assert defaults[api] == getattr(command, option), api
+
+
+def test_a_device_leaving_samples_unplayed_fails_the_replay_as_it_fails_the_command(tmp_path,
+                                                                                   capsys):
+    """A watchdog trip (its samples never play): with max_unplayed 0 the command exits 1
+    and replay raises DeviceError, the same sentence, the outputs written and the run's
+    Replay on the error; with 1 the same run returns. The device section is a dict of
+    PROTOCOL.md 6.4's counters."""
+    link = ["--device", "sim", "--faults", "trip@0.3", "--max-unplayed", "0"]
+    assert main(["replay", SCENE, TRACE, "--out", str(tmp_path / "cli"), "--quiet", *link]) == 1
+    said = capsys.readouterr().err
+    assert "of the commanded samples never played on the device (limit 0.00%, --max-unplayed)" in said
+    with pytest.raises(frictex.DeviceError, match=r"never played on the device \(limit 0\.00%, "
+                                                   r"max_unplayed\); outputs in ") as caught:
+        frictex.replay(SCENE, TRACE, out=tmp_path / "api", device="sim", faults="trip@0.3",
+                       max_unplayed=0.0)
+    failed = caught.value.replay
+    assert failed.out == tmp_path / "api" and failed.friction.num_rows > 0
+    device = failed.summary.device
+    assert isinstance(device, dict) and device["unplayed_samples"] > 0
+    assert device["played_samples"] + device["unplayed_samples"] == device["commanded_samples"]
+    passed = frictex.replay(SCENE, TRACE, device="sim", faults="trip@0.3", max_unplayed=1.0)
+    assert passed.summary.device["unplayed_samples"] > 0

@@ -1,7 +1,6 @@
 """The API reference builds from the docstrings (.ci/api-docs, pdoc), warnings failing it."""
 
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest

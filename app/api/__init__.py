@@ -8,8 +8,10 @@ The public, typed API::
     r.summary.counts.contact_samples                        # typed summary
     r.friction.to_pandas()                                  # pyarrow Table -> DataFrame
 
-- :func:`load_scene`, :func:`read_trace`, :func:`synth_trace`: the inputs (a texture file
-  or bundled scene, a trace CSV or bundled trace, a synthetic finger motion);
+- :func:`load_scene`, :func:`read_trace`, :func:`synth_trace`, :func:`make_trace`: the
+  inputs (a texture file or bundled scene, a trace CSV or bundled trace, a synthetic
+  finger motion, a trace from arrays checked as a trace file's rows are; its event codes
+  :data:`DOWN`, :data:`MOVE`, :data:`UP`);
 - :func:`build_pipeline`: the haptic pipeline of a scene; :meth:`Pipeline.process` runs
   a whole trace through it;
 - :func:`replay`: a scene and a trace through the pipeline on a virtual clock, with the
@@ -17,10 +19,12 @@ The public, typed API::
 
 Units everywhere: positions in mm, time in s, velocity in mm/s, force in N, frequency in
 Hz, vibration amplitude in um zero-to-peak, friction relative (mu' = mu(w) / mu(0)).
-Errors are :class:`FrictexError`: :class:`InputError` (a ``ValueError``) for bad input,
-:class:`DeviceError` (an ``OSError``) for the device's link, :class:`OutputSpaceError`
-when outputs do not fit, :class:`RunFailed` for a :class:`Replay` whose output folder
-holds another run since.
+Errors are :class:`FrictexError`: :class:`InputError` (a ``ValueError``; a bad trace is
+its :class:`TraceError`) for bad input, arguments beyond the command line's bounds
+included, :class:`DeviceError` (an ``OSError``) for the device's link and samples it
+never played, :class:`OutputSpaceError` when outputs do not fit, :class:`RunFailed` for a
+:class:`Replay` whose output folder holds another run since. ``__version__`` is the
+installed frictex's version (looked up on first use).
 
 Everything else lives in the four layers below, in the order of DESIGN.md's data flow:
 ``frictex.app`` (commands, replay engine, live demo, reports) uses ``frictex.rendering``
@@ -40,6 +44,11 @@ _WHERE = {
     "load_scene": "frictex._inputs",
     "read_trace": "frictex._inputs",
     "synth_trace": "frictex._inputs",
+    "make_trace": "frictex._inputs",
+    "DOWN": "frictex.rendering.input.trace_file",
+    "MOVE": "frictex.rendering.input.trace_file",
+    "UP": "frictex.rendering.input.trace_file",
+    "TraceError": "frictex.rendering.input.trace_file",
     "build_pipeline": "frictex._pipeline",
     "Pipeline": "frictex._pipeline",
     "replay": "frictex._replay",
@@ -68,7 +77,7 @@ _WHERE = {
 __all__ = sorted(_WHERE)
 
 if TYPE_CHECKING:
-    from frictex._inputs import load_scene, read_trace, synth_trace
+    from frictex._inputs import load_scene, make_trace, read_trace, synth_trace
     from frictex._pipeline import Pipeline, build_pipeline
     from frictex._replay import Replay, replay
     from frictex.app.engine.summary_types import (Clamps, Counts, FingerErrors, GapInfo, LayerInfo,
@@ -76,18 +85,33 @@ if TYPE_CHECKING:
                                                   Timings, TraceInfo)
     from frictex.device.errors import (DeviceError, FrictexError, InputError, OutputSpaceError,
                                        RunFailed)
-    from frictex.rendering.input.trace_file import Trace
+    from frictex.rendering.input.trace_file import Trace, TraceError
     from frictex.rendering.pipeline import BlockOutput
     from frictex.textures.model import Scene
 
 
+# annotated here, given by __getattr__ on first use, documented for pdoc
+DOWN: int
+"""Event code of a touch sample (:class:`Trace`'s ``event``), 0: a finger comes down."""
+MOVE: int
+"""Event code 1: a touching finger moves (or stays)."""
+UP: int
+"""Event code 2: a finger lifts."""
+__version__: str
+"""The installed frictex's version, as ``frictex --version`` prints it."""
+
+
 def __getattr__(name: str):
     """Import a public name on first use (module docstring)."""
-    try:
-        module = _WHERE[name]
-    except KeyError:
-        raise AttributeError(f"module 'frictex' has no attribute {name!r}") from None
-    value = getattr(importlib.import_module(module), name)
+    if name == "__version__":
+        from frictex.app.commands.cli import version
+        value = version()
+    else:
+        try:
+            module = _WHERE[name]
+        except KeyError:
+            raise AttributeError(f"module 'frictex' has no attribute {name!r}") from None
+        value = getattr(importlib.import_module(module), name)
     globals()[name] = value
     return value
 

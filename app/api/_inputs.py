@@ -2,16 +2,24 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
+import numpy as np
+import numpy.typing as npt
+
+from frictex._args import path_like, real, whole
 from frictex.device.errors import InputError
-from frictex.rendering.input.trace_file import Trace
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP, Trace, TraceError
+from frictex.rendering.input.trace_file import make_trace as checked_trace
 from frictex.rendering.input.trace_synth import MOTIONS
 from frictex.textures.model import Scene
 
 #: the kinds :func:`synth_trace` makes: finger paths, and ``press`` (a still finger pressing)
 SYNTH_KINDS = (*MOTIONS, "press")
+#: what names a trace's source in its errors
+_WHERE = "trace"
 
 
 def load_scene(name_or_path: str | Path) -> Scene:
@@ -36,7 +44,17 @@ def load_scene(name_or_path: str | Path) -> Scene:
     """
     from frictex.textures.library import resolve_scene
     from frictex.textures.loader import load_scene as load
+    path_like("name_or_path", name_or_path, "a texture file or a bundled scene's name")
     return load(resolve_scene(name_or_path))
+
+
+def scene_of(scene: Scene | str | Path) -> Scene:
+    """``scene`` itself, or the scene a texture file or bundled scene's name gives."""
+    if isinstance(scene, Scene):
+        return scene
+    path_like("scene", scene, "a Scene (frictex.load_scene), a texture file or a bundled "
+                              "scene's name")
+    return load_scene(scene)
 
 
 def read_trace(path: str | Path, *, strict: bool = False) -> Trace:
@@ -65,7 +83,82 @@ def read_trace(path: str | Path, *, strict: bool = False) -> Trace:
     """
     from frictex.rendering.input.trace_file import read_trace as read
     from frictex.textures.library import resolve_trace
+    path_like("path", path, "a trace CSV or a bundled trace's name")
     return read(resolve_trace(path), strict=strict)
+
+
+def make_trace(t_s: npt.ArrayLike, finger: npt.ArrayLike, x_mm: npt.ArrayLike,
+               y_mm: npt.ArrayLike, force_n: npt.ArrayLike | None = None,
+               event: npt.ArrayLike | None = None) -> Trace:
+    """A touch trace from arrays (or lists), checked as a trace file's rows are.
+
+    Parameters
+    ----------
+    t_s : array_like of float, shape (n,)
+        Sample times (s), not decreasing, within +-1e10 s.
+    finger : array_like of int, shape (n,)
+        Finger ids, integers from 0 to 2**31 - 1 (as Linux tracking ids).
+    x_mm, y_mm : array_like of float, shape (n,)
+        Positions (mm, screen origin top-left, y down), within +-1e5 mm.
+    force_n : array_like of float, shape (n,), optional
+        Normal force (N), 0 to 1000; 0.5 N where not given.
+    event : array_like of int, shape (n,), optional
+        :data:`DOWN` (0), :data:`MOVE` (1) or :data:`UP` (2) per sample; all ``MOVE`` where
+        not given. As in a trace file, a finger's first sample (or its first after an
+        ``UP``) becomes a ``DOWN``, and at most 20 fingers touch at once.
+
+    Returns
+    -------
+    Trace
+        The samples as float64 arrays (``finger`` int64, ``event`` int8).
+
+    Raises
+    ------
+    InputError
+        A :class:`TraceError`: no samples, arrays of different lengths or not
+        one-dimensional, values that are not numbers, or the first sample breaking a rule
+        (a NaN or infinite value, a value out of range, time going back, an unknown event
+        code); the message names the field and the sample.
+    """
+    columns = {"t_s": t_s, "finger": finger, "x_mm": x_mm, "y_mm": y_mm, "force_n": force_n,
+               "event": event}
+    arrays = {name: None if values is None else _column(name, values)
+              for name, values in columns.items()}
+    code = arrays["event"]
+    if code is not None:
+        if code.dtype != np.int8:  # a code the cast to int8 would not keep is refused here
+            with np.errstate(invalid="ignore"):  # NaN and inf: not kept
+                bad = code != code.astype(np.int8)
+            if bad.any():
+                i = int(np.argmax(bad))
+                raise TraceError(f"{_WHERE}: sample {i}: event is {code[i].item()!r}, expected "
+                                 f"{DOWN} (down), {MOVE} (move) or {UP} (up)")
+            arrays["event"] = code.astype(np.int8)
+    return checked_trace(**arrays, where=_WHERE)
+
+
+def checked(trace: Trace) -> Trace:
+    """``trace`` as :func:`make_trace` checks it (a :class:`Trace` built by hand is not):
+    what :func:`~frictex.replay` and :meth:`~frictex.Pipeline.process` run."""
+    if not isinstance(trace, Trace):
+        raise InputError(f"trace: expected a Trace (frictex.make_trace, frictex.read_trace), "
+                         f"got {type(trace).__name__}")
+    return make_trace(trace.t_s, trace.finger, trace.x_mm, trace.y_mm, trace.force_n, trace.event)
+
+
+def _column(name: str, values: npt.ArrayLike) -> np.ndarray:
+    """One field of a trace as a 1-D array of numbers (not yet checked against the rules)."""
+    try:
+        array = np.asarray(values)
+    except (TypeError, ValueError):  # a ragged nesting
+        raise TraceError(f"{_WHERE}: {name} is not an array of numbers: expected one "
+                         "number per sample, shape (n,)") from None
+    if array.ndim != 1:
+        raise TraceError(f"{_WHERE}: {name} has shape {array.shape}: expected one number per "
+                         "sample, shape (n,)")
+    if array.dtype.kind not in "iuf" and array.size:
+        raise TraceError(f"{_WHERE}: {name} holds {array.dtype} values: expected numbers")
+    return array
 
 
 def synth_trace(kind: str, *, rate_hz: float = 50.0, duration_s: float = 2.0,
@@ -118,14 +211,47 @@ def synth_trace(kind: str, *, rate_hz: float = 50.0, duration_s: float = 2.0,
     Raises
     ------
     InputError
-        An unknown kind or a value out of range.
+        An unknown kind, a negative seed, or a value that is not a number or is beyond
+        what ``frictex trace synth`` accepts for its option (``LIMITS`` and
+        ``MAX_SAMPLES`` in ``app/commands/trace.py``); the message names the argument.
     """
     if kind not in SYNTH_KINDS:
         raise InputError(f"unknown trace kind {kind!r}; expected one of {', '.join(SYNTH_KINDS)}")
+    from frictex.app.commands.trace import LIMITS, MAX_SAMPLES  # ``frictex trace synth``'s
+
+    def option(name: str, value: float, key: str, positive: bool = False) -> float:
+        low, high, unit = LIMITS[key]
+        return real(name, value, unit, (low, high), positive=positive)
+
+    rate_hz = option("rate_hz", rate_hz, "rate", positive=True)
+    x0_mm, y0_mm = option("x0_mm", x0_mm, "x0"), option("y0_mm", y0_mm, "y0")
+    force_n = option("force_n", force_n, "force")
+    seed = whole("seed", seed, "", (0, math.inf))
     if kind == "press":
+        force_noise_n = option("force_noise_n", force_noise_n, "force_noise")
+        if isinstance(peaks_n, str | bytes) or not isinstance(peaks_n, Iterable):
+            raise InputError(f"peaks_n: expected a sequence of peak forces (N), got "
+                             f"{type(peaks_n).__name__}")
+        peaks_n = tuple(peaks_n)
+        if not peaks_n:
+            raise InputError("peaks_n: no peaks; expected one or more peak forces (N)")
+        if len(peaks_n) * rate_hz > MAX_SAMPLES:  # a press lasts over a second
+            raise InputError(f"peaks_n: {len(peaks_n)} presses at rate_hz={rate_hz:g} would "
+                             f"exceed {MAX_SAMPLES:,} samples")
+        peaks_n = tuple(option(f"peaks_n[{i}]", peak, "peaks") for i, peak in enumerate(peaks_n))
         from frictex.rendering.input.press_synth import press_trace
-        return press_trace(peaks_n=tuple(peaks_n), x_mm=x0_mm, y_mm=y0_mm, rate_hz=rate_hz,
+        return press_trace(peaks_n=peaks_n, x_mm=x0_mm, y_mm=y0_mm, rate_hz=rate_hz,
                            touch_n=force_n, noise_n=force_noise_n, seed=seed)
+    speed_mm_s = option("speed_mm_s", speed_mm_s, "speed", positive=True)
+    duration_s = option("duration_s", duration_s, "duration", positive=True)
+    angle_deg = option("angle_deg", angle_deg, "angle")
+    length_mm = option("length_mm", length_mm, "length", positive=True)
+    radius_mm = option("radius_mm", radius_mm, "radius", positive=True)
+    noise_mm = option("noise_mm", noise_mm, "noise")
+    jitter_s = option("jitter_s", jitter_s, "jitter")
+    if rate_hz * duration_s > MAX_SAMPLES:
+        raise InputError(f"rate_hz={rate_hz:g} Hz over duration_s={duration_s:g} s is "
+                         f"{rate_hz * duration_s:,.0f} samples; at most {MAX_SAMPLES:,}")
     from frictex.rendering.input.trace_synth import make_motion, sample
     motion = make_motion(kind, speed_mm_s=speed_mm_s, duration_s=duration_s, x0_mm=x0_mm,
                          y0_mm=y0_mm, angle_deg=angle_deg, length_mm=length_mm,

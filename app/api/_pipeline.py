@@ -3,13 +3,26 @@
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
-from frictex.device.errors import InputError
+from frictex._args import choice, real, whole
+from frictex._inputs import checked, scene_of
+from frictex.app.engine.limits import BLOCK_SIZES, OUTPUT_RATES_HZ
 from frictex.rendering.input.trace_file import Trace
-from frictex.rendering.pipeline import BlockOutput
+from frictex.rendering.pipeline import INVERSIONS, BlockOutput
 from frictex.rendering.pipeline import build_pipeline as build
 from frictex.rendering.tracking.tracks import apply_index
-from frictex.textures.model import Scene
+from frictex.textures.model import CONTROL_MODES, Scene, render_modes
+
+
+def run_settings(rate_hz: float, block_size: int, renderer: str | None,
+                 control: str | None) -> tuple[float, int]:
+    """The output rate (Hz) and block size (samples) checked against the command line's
+    bounds (``app.engine.limits``), the renderer and control mode against those known."""
+    choice("renderer", renderer, render_modes(), none=True)
+    choice("control", control, CONTROL_MODES, none=True)
+    return (real("rate_hz", rate_hz, "Hz", OUTPUT_RATES_HZ),
+            whole("block_size", block_size, "samples", BLOCK_SIZES))
 
 
 class Pipeline:
@@ -21,8 +34,12 @@ class Pipeline:
     the same output (a touch sample takes effect at the block boundary after it).
     """
 
-    def __init__(self, scene: Scene, *, rate_hz: float, block_size: int,
-                 renderer: str | None, control: str | None, inversion: str):
+    def __init__(self, scene: Scene | str | Path, *, rate_hz: float = 10_000.0,
+                 block_size: int = 50, renderer: str | None = None, control: str | None = None,
+                 inversion: str = "exact"):
+        scene = scene_of(scene)
+        rate_hz, block_size = run_settings(rate_hz, block_size, renderer, control)
+        choice("inversion", inversion, INVERSIONS)
         self._stages = build(scene, rate_hz=rate_hz, block_size=block_size,
                              render_override=renderer, control=control, inversion=inversion)
 
@@ -62,7 +79,8 @@ class Pipeline:
         Parameters
         ----------
         trace : Trace
-            Touch samples (:func:`read_trace`, :func:`synth_trace`), at least one.
+            Touch samples (:func:`read_trace`, :func:`synth_trace`, :func:`make_trace`), at
+            least one; checked as :func:`make_trace` checks arrays.
 
         Returns
         -------
@@ -76,10 +94,10 @@ class Pipeline:
         Raises
         ------
         InputError
-            An empty trace.
+            A trace :func:`make_trace` refuses (no samples, a NaN, a value out of range,
+            time going back, ...); the message names the field and the first bad sample.
         """
-        if len(trace) == 0:
-            raise InputError("the trace has no samples")
+        trace = checked(trace)
         stages = self._stages
         config = dataclasses.replace(stages.tracker_config, t0_s=float(trace.t_s[0]))
         stages.tracker_config = config
@@ -89,20 +107,21 @@ class Pipeline:
         return out
 
 
-def build_pipeline(scene: Scene, *, rate_hz: float = 10_000.0, block_size: int = 50,
+def build_pipeline(scene: Scene | str | Path, *, rate_hz: float = 10_000.0, block_size: int = 50,
                    renderer: str | None = None, control: str | None = None,
                    inversion: str = "exact") -> Pipeline:
     """Build the haptic pipeline of a scene.
 
     Parameters
     ----------
-    scene : Scene
-        From :func:`load_scene`.
+    scene : Scene, str or Path
+        A scene (:func:`load_scene`), a texture file or a bundled scene's name.
     rate_hz : float, optional
-        Output sample rate (Hz); 10 kHz is the seed 003 device's link.
+        Output sample rate (Hz), 100 Hz to 1 MHz as ``frictex replay --rate``; 10 kHz is
+        the seed 003 device's link.
     block_size : int, optional
-        Output samples per block (50 = 5 ms at 10 kHz): touch samples take effect at
-        block boundaries, as live.
+        Output samples per block, 1 to 100,000 as ``--block`` (50 = 5 ms at 10 kHz):
+        touch samples take effect at block boundaries, as live.
     renderer : str or None, optional
         Render every periodic layer this way (``sho``, ``sho-held``, ``sho-predicted``,
         ``sht``, ``hybrid``) instead of as its file says.
@@ -118,8 +137,9 @@ def build_pipeline(scene: Scene, *, rate_hz: float = 10_000.0, block_size: int =
 
     Raises
     ------
-    ValueError
-        A bad rate, block size, renderer, control mode or inversion.
+    InputError
+        A bad scene, or a rate, block size, renderer, control mode or inversion that is
+        not one the command line accepts (the message names the argument).
     """
     return Pipeline(scene, rate_hz=rate_hz, block_size=block_size, renderer=renderer,
                     control=control, inversion=inversion)

@@ -8,12 +8,16 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from frictex.app.engine.replay import ReplayOptions, file_id, replay_with
+from frictex._args import path_like, real
+from frictex._inputs import checked, scene_of
+from frictex._pipeline import run_settings
+from frictex.app.engine.replay import (MAX_UNPLAYED, ReplayOptions, file_id, replay_with,
+                                       unplayed_problem)
 from frictex.app.engine.sources import MAX_GAP_S
 from frictex.app.engine.summary import finite_json
 from frictex.app.engine.summary_types import Summary
 from frictex.app.engine.tables import FORMATS, MEMORY, read_table
-from frictex.device.errors import InputError, RunFailed
+from frictex.device.errors import DeviceError, InputError, RunFailed
 from frictex.rendering.input.trace_file import Trace
 from frictex.textures.model import Scene
 
@@ -93,10 +97,10 @@ class Replay:
 
 def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
            out: str | Path | None = None, format: str | None = None,
-           renderer: str | None = None, device: str | None = None,
-           rate_hz: float = 10_000.0, block_size: int = 50, control: str | None = None,
-           strict: bool = False, max_gap_s: float = MAX_GAP_S,
-           progress: bool = False) -> Replay:
+           renderer: str | None = None, device: str | None = None, faults: str | None = None,
+           max_unplayed: float = MAX_UNPLAYED, rate_hz: float = 10_000.0,
+           block_size: int = 50, control: str | None = None, strict: bool = False,
+           max_gap_s: float = MAX_GAP_S, progress: bool = False) -> Replay:
     """Replay a touch trace on a scene, headless, on a virtual clock (``frictex replay``).
 
     Parameters
@@ -104,8 +108,8 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
     scene : Scene, str or Path
         A scene (:func:`load_scene`), a texture file or a bundled scene's name.
     trace : Trace, str or Path
-        A trace (:func:`read_trace`, :func:`synth_trace`), a trace CSV or a bundled
-        trace's name.
+        A trace (:func:`read_trace`, :func:`synth_trace`, :func:`make_trace`; checked as
+        :func:`make_trace` checks arrays), a trace CSV or a bundled trace's name.
     out : str, Path or None, optional
         Write ``commands.<format>``, ``friction.<format>`` and ``summary.json`` into this
         folder (replaced whole when the run completes; the previous run's outputs stay
@@ -117,17 +121,26 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
         ``sht``, ``hybrid``) instead of as its file says.
     device : str or None, optional
         Also stream the commands to a device, paced by it: ``"sim"`` (the simulated
-        device), a serial port or a pyserial URL.
+        device), a serial port or a pyserial URL (``--device``).
+    faults : str or None, optional
+        With ``device``: link faults to inject, e.g. ``"corrupt=0.001,stall=0.2@1.5"``
+        (``--faults``; grammar: ``device/link/faults.py``).
+    max_unplayed : float, optional
+        With ``device``: the largest share (0 to 1) of the commanded samples that may
+        never play on the device; more is a :class:`DeviceError` once the run is done
+        (``--max-unplayed``, default 0.01).
     rate_hz : float, optional
-        Output sample rate (Hz).
+        Output sample rate (Hz), 100 Hz to 1 MHz (``--rate``).
     block_size : int, optional
-        Output samples per block; touch samples take effect at block boundaries.
+        Output samples per block, 1 to 100,000 (``--block``); touch samples take effect
+        at block boundaries.
     control : str or None, optional
         The friction loop (``open``, ``closed``, ``adaptive``) instead of the scene file's.
     strict : bool, optional
         Refuse a trace whose time goes back (else sorted or dropped, counted, warned).
     max_gap_s : float, optional
-        A longer gap between touch samples (s) is a lift; its silence is skipped.
+        A longer gap between touch samples (s, more than 0) is a lift; its silence is
+        skipped (``--max-gap``).
     progress : bool, optional
         A progress bar on stderr for long traces.
 
@@ -139,12 +152,37 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
     Raises
     ------
     InputError
-        A bad scene, trace or option.
+        A bad scene, trace or option: the command line's bounds apply, and the message
+        names the argument (or the trace's field and first bad sample).
     DeviceError
-        The device's link failed.
+        The device's link failed; or the device left more than ``max_unplayed`` of the
+        commanded samples unplayed, where ``frictex replay --device`` exits 1: the run
+        is complete (its outputs written into ``out``), and the error's ``replay``
+        attribute is its :class:`Replay`.
     OutputSpaceError
         The outputs would not fit in ``out``'s file system (checked before writing).
     """
+    scene = scene_of(scene)
+    if isinstance(trace, Trace):
+        trace = checked(trace)
+    else:
+        path_like("trace", trace, "a Trace, a trace CSV or a bundled trace's name")
+    if out is not None:
+        path_like("out", out, "a folder to write the tables into, or None")
+    rate_hz, block_size = run_settings(rate_hz, block_size, renderer, control)
+    max_gap_s = real("max_gap_s", max_gap_s, "s", positive=True)
+    max_unplayed = real("max_unplayed", max_unplayed, "", (0.0, 1.0))
+    if device is not None and not isinstance(device, str):
+        raise InputError(f"device: expected 'sim', a serial port or a pyserial URL, got "
+                         f"{type(device).__name__}")
+    if faults is not None:
+        if device is None:
+            raise InputError("faults are injected into a device's link: give device too")
+        if not isinstance(faults, str):
+            raise InputError(f"faults: expected a fault spec such as 'corrupt=0.001', got "
+                             f"{type(faults).__name__}")
+        from frictex.device.link.faults import parse_faults
+        faults = parse_faults(faults)
     if out is None and format is not None:
         raise InputError(f"format {format!r}: the tables are kept in memory unless out names "
                          "a folder to write them into")
@@ -152,8 +190,15 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
     if fmt not in (MEMORY, *FORMATS):
         raise InputError(f"format {format!r}: expected one of {', '.join(FORMATS)}")
     options = ReplayOptions(rate_hz=rate_hz, fmt=fmt, block_size=block_size,
-                            render_override=renderer, device=device, control=control,
-                            strict=strict, max_gap_s=max_gap_s, progress=progress)
+                            render_override=renderer, device=device, faults=faults,
+                            control=control, strict=strict, max_gap_s=max_gap_s,
+                            progress=progress)
     result = replay_with(scene, trace, out, options)
     doc = json.loads(json.dumps(finite_json(result.summary), allow_nan=False))
-    return Replay(Summary.from_dict(doc), out, result.tables, result.summary_id)
+    done = Replay(Summary.from_dict(doc), out, result.tables, result.summary_id)
+    problem = unplayed_problem(result.summary.get("device"), max_unplayed, "max_unplayed")
+    if problem is not None:
+        error = DeviceError(problem + ("" if out is None else f"; outputs in {done.out}"))
+        error.replay = done
+        raise error
+    return done

@@ -7,7 +7,7 @@ import sys
 
 from frictex.app.commands.argtypes import (add_link_arguments, block_size, bounded, output_rate, positive_float,
                                    share, sim_device_args)
-from frictex.app.engine.replay import ReplayOptions, replay_with
+from frictex.app.engine.replay import MAX_UNPLAYED, ReplayOptions, replay_with, unplayed_problem
 from frictex.app.engine.sources import MAX_GAP_S
 from frictex.app.engine.summary import control_line
 from frictex.app.engine.tables import FORMATS
@@ -32,9 +32,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--renderer", choices=render_modes(), default=None,
                         help="render every periodic layer this way instead of as its file says")
     add_link_arguments(parser)
-    parser.add_argument("--max-unplayed", type=share, default=0.01, metavar="SHARE",
+    parser.add_argument("--max-unplayed", type=share, default=MAX_UNPLAYED, metavar="SHARE",
                         help="with --device: exit 1 when more than this share of the "
-                             "commanded samples never played on the device (default 0.01)")
+                             f"commanded samples never played on the device (default {MAX_UNPLAYED:g})")
     parser.add_argument("--max-gap", type=positive_float, default=MAX_GAP_S, metavar="S",
                         help=f"a gap between touch samples longer than this is a lift; its "
                              f"silence is not written (default {MAX_GAP_S:g} s)")
@@ -73,12 +73,8 @@ def run(args: argparse.Namespace) -> int:
             print(control_line(summary["control"]))
         for warning in summary["warnings"]:
             print(f"frictex: warning: {warning}", file=sys.stderr)
-    device = summary.get("device")
-    if device is not None and device.get("commanded_samples"):
-        lost = device["unplayed_samples"] / device["commanded_samples"]
-        if lost > args.max_unplayed:
-            print(f"frictex: error: {lost:.2%} of the commanded samples never played on the "
-                  f"device (limit {args.max_unplayed:.2%}, --max-unplayed); outputs in "
-                  f"{args.out}", file=sys.stderr)
-            return 1
+    problem = unplayed_problem(summary.get("device"), args.max_unplayed, "--max-unplayed")
+    if problem is not None:
+        print(f"frictex: error: {problem}; outputs in {args.out}", file=sys.stderr)
+        return 1
     return 0

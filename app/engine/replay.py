@@ -52,6 +52,10 @@ CHUNK_SAMPLES = 50_000
 #: this close to the device's play position, so a block's force report comes back a
 #: few blocks after it is computed (``rendering.control.loop``'s ``max_wait_s``)
 LOOP_QUEUE_BLOCKS = 2
+#: streaming to a device: the largest share of the commanded samples that may never play
+#: before the run fails (``frictex replay --max-unplayed``, ``frictex.replay``'s
+#: ``max_unplayed``)
+MAX_UNPLAYED = 0.01
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -320,6 +324,19 @@ def device_warnings(status: dict) -> list[str]:
                        for cause, n in status.get("unplayed_by_cause", {}).items() if n)
     return [f"{unplayed} of {commanded} commanded samples ({unplayed / commanded:.2%}) were "
             f"never played by the device ({causes})"]
+
+
+def unplayed_problem(status: dict | None, max_unplayed: float, option: str) -> str | None:
+    """Why a run streaming to a device failed, if the device (``status``, the summary's
+    ``device``) never played more than ``max_unplayed`` of the commanded samples; None if
+    it played enough or there was no device. ``option`` names the limit in the message."""
+    if status is None or not status.get("commanded_samples"):
+        return None
+    lost = status["unplayed_samples"] / status["commanded_samples"]
+    if lost <= max_unplayed:
+        return None
+    return (f"{lost:.2%} of the commanded samples never played on the device (limit "
+            f"{max_unplayed:.2%}, {option})")
 
 
 def _long(source: TraceSource) -> bool:

@@ -168,7 +168,9 @@ def make_trace(t_s, finger, x_mm, y_mm, force_n=None, event=None, where: str = "
         raise TraceError(f"{where}: sample {i}: t_s goes back from {float(t[i - 1])!r} to {float(t[i])!r} s "
                          "(time must not decrease)")
     if ((ev < DOWN) | (ev > UP)).any():
-        raise TraceError(f"{where}: event codes must be {DOWN}, {MOVE} or {UP}")
+        i = int(np.argmax((ev < DOWN) | (ev > UP)))
+        raise TraceError(f"{where}: sample {i}: event is {int(ev[i])}, expected {DOWN} (down), "
+                         f"{MOVE} (move) or {UP} (up)")
     fing_i = fing_f.astype(np.int64)
     if normalise:
         ev = _normalise_events(fing_i, ev, set(), where)
