@@ -17,8 +17,8 @@ change byte for byte. A layer's controls come from the loader's key tables
 A key is offered when the file gives it, or when its default is a value (a key whose
 default is derived by the loader, "none" in the tables, is offered only once written)
 and the loader takes it written beside the layer's other keys: the loader itself is
-asked (:func:`refused_keys`: the layer with the key written at its default, which
-changes nothing but that the key is given), so a waveform of shape "sine" offers no
+asked (:func:`refused_keys`: the layer with those keys written at their defaults,
+which changes nothing but that they are given), so a waveform of shape "sine" offers no
 ``duty``, a height layer only its shape's keys, a clip only its clip's.
 
 A refused edit is said at the line of the file as it is on disk (the file the user
@@ -168,25 +168,28 @@ def clamp(slider: Slider, value: float) -> float:
 
 def refused_keys(path: Path, doc, index: int) -> frozenset[str]:
     """The keys of ``doc``'s layer ``index`` (0-based) the file does not give and the
-    loader refuses given: each is written at its default (the only change: the key is
-    given) and the document checked (``check_scene`` as read from ``path``); a problem
-    at the key ("not used with shape = ...") refuses it. Keys whose default is derived
-    ("none") are not tried: the panel does not offer them unwritten."""
+    loader refuses given: they are written at their defaults (the only change: the keys
+    are given) and the document checked once (``check_scene`` as read from ``path``); a
+    problem at a key ("not used with shape = ...") refuses it. Keys whose default is
+    derived ("none") are not tried: the panel does not offer them unwritten."""
     table = doc["layer"][index]
     specs = {**{k: COMMON[k] for k in ("blend", "render")},
              **LAYER_KEYS.get(str(table.get("type", "")), {})}
-    text = tomlkit.dumps(doc)
-    refused = set()
-    for key, spec in specs.items():
-        if key in table or key in STRUCTURAL or isinstance(spec.default, bool) \
-                or not isinstance(spec.default, (int, float, str)):
-            continue
-        probe = tomlkit.parse(text)
-        probe["layer"][index][key] = spec.default
-        _, problems, _ = check_scene(path, text=tomlkit.dumps(probe))
-        if any(p.field == field_name(("layer", index, key)) for p in problems):
-            refused.add(key)
-    return frozenset(refused)
+    tried = {key: spec.default for key, spec in specs.items()
+             if key not in table and key not in STRUCTURAL and not isinstance(spec.default, bool)
+             and isinstance(spec.default, (int, float, str))}
+    probe = tomlkit.parse(tomlkit.dumps(doc))
+    probe["layer"][index].update(tried)
+    _, problems, _ = check_scene(path, text=tomlkit.dumps(probe))
+    fields = {p.field for p in problems}
+    return frozenset(key for key in tried if field_name(("layer", index, key)) in fields)
+
+
+def _layout(table) -> tuple:
+    """What of a layer decides which keys the loader takes: the keys it gives and its
+    words (``shape``, ``edge``, ``mode``, ...), not its numbers (a drag keeps it)."""
+    return tuple(sorted((str(k), v if isinstance(v, (str, bool)) else None)
+                        for k, v in table.items()))
 
 
 def layer_controls(table, extent_mm: float, refused=frozenset()) -> tuple[Slider | Menu, ...]:
@@ -278,7 +281,7 @@ class LayerEdit:
         self.layer: int | None = None
         self._undo: list[tuple[str, object]] = []  # (text before, group)
         self._group: object = None
-        self._refused: tuple = (None, None, frozenset())  # (layer, text, refused_keys)
+        self._refused: tuple = (None, None, frozenset())  # (layer, _layout, refused_keys)
 
     # -- reading -----------------------------------------------------------------------
 
@@ -304,13 +307,15 @@ class LayerEdit:
 
     def controls(self) -> tuple[Slider | Menu, ...]:
         """The selected layer's controls (none when no layer is selected); the keys the
-        loader refuses given (:func:`refused_keys`) are worked out once per text."""
+        loader refuses given (:func:`refused_keys`) are worked out again only when the
+        layer's keys or words change (:func:`_layout`)."""
         if self.layer is None:
             return ()
-        text = self.text()
-        if self._refused[:2] != (self.layer, text):
-            self._refused = (self.layer, text, refused_keys(self.path, self.doc, self.layer))
-        return layer_controls(self.doc["layer"][self.layer], self.extent_mm, self._refused[2])
+        table = self.doc["layer"][self.layer]
+        if self._refused[:2] != (self.layer, _layout(table)):
+            self._refused = (self.layer, _layout(table),
+                             refused_keys(self.path, self.doc, self.layer))
+        return layer_controls(table, self.extent_mm, self._refused[2])
 
     def control(self, key: str) -> Slider | Menu:
         for c in self.controls():
