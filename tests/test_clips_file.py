@@ -45,6 +45,15 @@ CLIP = '[[layer]]\ntype = "clip"\n'
      r"scene\.toml:11: layer\[1\]\.times_s: \[0\.0, 0\.2, 0\.1\]: expected times from 0, strictly increasing"),
     (CLIP + 'trigger = "down"\nclip = "ahap"\nfile = "missing.ahap"\n', r"scene\.toml:11: layer\[1\]\.file: \"missing\.ahap\""),
     (CLIP + 'trigger = "down"\nclip = "tick"\ndepth = 1\n', r"scene\.toml:11: layer\[1\]\.depth: 1 is outside \(0, 1\)"),
+    # a quoted number in a list: the second value (counted from 1, as layer[1]), and the
+    # list shown with it unquoted, never "levels = 1"
+    (CLIP + 'trigger = "down"\nclip = "envelope"\ntimes_s = [0, 0.1, 0.2]\nlevels = [0.0, "1", 0.0]\n',
+     r'scene\.toml:12: layer\[1\]\.levels\[2\]: expected a number \(level, 0 to 1\), got the string "1"; '
+     r"write the number without quotes: levels = \[0\.0, 1, 0\.0\]$"),
+    (CLIP + 'trigger = "down"\nclip = "envelope"\ntimes_s = [0, 1, 2, 3, 4, 5, 6, 7]\n'
+     'levels = [0, 0.1, 0.2, 0.3, "0.4 um", 0.5, 0.6, 0]\n',
+     r"layer\[1\]\.levels\[5\]: .*; write the number without quotes or units: "
+     r"levels = \[\.\.\., 0\.2, 0\.3, 0\.4, 0\.5, 0\.6, \.\.\.\]$"),
 ])
 def test_problems_are_reported_at_their_line(tmp_path, body, message):
     with pytest.raises(TextureError, match=message):

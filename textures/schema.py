@@ -101,13 +101,20 @@ class Num:
         upper = f"{self.lt if self.lt is not None else self.le:g}{')' if self.lt is not None else ']'}"
         return f"{lower}, {upper}"
 
-    def _not_a_number(self, r: "Reader", value, path: KeyPath):
+    def _not_a_number(self, r: "Reader", value, path: KeyPath, items: list | None):
         hint = ""
         m = _NUMBER_WITH_UNIT.match(value) if isinstance(value, str) else None
         if m:
             key = next(p for p in reversed(path) if isinstance(p, str))
-            hint = (f"; write the number without quotes{' or units' if m.group(2) else ''}: "
-                    f"{escape(key, MAX_SHOWN)} = {escape(m.group(1), MAX_SHOWN)}")
+            number = escape(m.group(1), MAX_SHOWN)
+            if items is not None:  # an element of a list: the list, that element unquoted
+                i = path[-1]
+                shown = [number if k == i else show(v) for k, v in enumerate(items)]
+                lo, hi = max(0, i - 2), min(len(items), i + 3)
+                number = ("[" + "..., " * (lo > 0) + ", ".join(shown[lo:hi])
+                          + ", ..." * (hi < len(items)) + "]")
+            lhs = f"{escape(key, MAX_SHOWN)} = " if items is None or isinstance(path[-2], str) else ""
+            hint = f"; write the number without quotes{' or units' if m.group(2) else ''}: {lhs}{number}"
         return r.report(path, f"expected a number ({self.unit}), got {kind(value)}{hint}")
 
     def _out_of_bounds(self, v: float) -> str | None:
@@ -126,9 +133,11 @@ class Num:
             return f"is not {'<' if self.lt is not None else '<='} {upper:g} ({self.unit})"
         return None
 
-    def check(self, r: "Reader", value, path: KeyPath):
+    def check(self, r: "Reader", value, path: KeyPath, items: list | None = None):
+        """``value`` checked (a float) or BAD (reported); ``items``: the list that holds
+        it at ``path[-1]``, if it is an element of one (for the hint of a quoted number)."""
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            return self._not_a_number(r, value, path)
+            return self._not_a_number(r, value, path, items)
         v = float(value)
         if not math.isfinite(v):
             return r.report(path, f"{show(value)} is not a finite number ({self.unit})")
@@ -286,7 +295,7 @@ class NumList:
         if len(value) < self.min_len:
             return r.report(path, f"has {len(value)} value{'s' * (len(value) != 1)}, "
                                   f"needs at least {self.min_len}")
-        out = [self.item.check(r, v, path + (i,)) for i, v in enumerate(value)]
+        out = [self.item.check(r, v, path + (i,), value) for i, v in enumerate(value)]
         return BAD if BAD in out else tuple(out)
 
 
