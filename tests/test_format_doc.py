@@ -275,3 +275,25 @@ def test_the_corrected_plank_plays_without_a_clamp_and_its_knot_is_felt(tmp_path
     flank = (np.abs(y - 32.0) > 1.0) & (np.abs(y - 32.0) < 6.0)
     away = np.abs(y - 32.0) > 12.0
     assert mu[flank].mean() > mu[away].mean() + 0.05
+
+
+def test_every_limit_of_the_loader_is_on_the_page_with_its_value():
+    """Every ``MAX_`` constant of ``frictex.textures`` (its modules and sections) is in the
+    page's Limits list, and the list shows each one's value (``format_doc.limits``)."""
+    import importlib
+    import pkgutil
+
+    import frictex.textures as package
+    found = {}
+    for info in pkgutil.walk_packages(package.__path__, package.__name__ + "."):
+        module = importlib.import_module(info.name)
+        for name, value in vars(module).items():
+            if name.startswith("MAX_") and isinstance(value, (int, float)):
+                found[(name, value)] = info.name
+    listed = {(name, value) for _, name, value, _ in format_doc.limits()}
+    assert set(found) - listed == set(), "limits missing from format_doc.limits()"
+    section = PAGE.read_text(encoding="utf-8").split("### Limits")[1].split("\n## ")[0]
+    for _, name, value, text in format_doc.limits():
+        assert f"- {text.format(format_doc._size(value))}\n" in section
+    assert "- at most 32 `[[layer]]` tables in a scene\n" in section
+    assert "- arrays and inline tables nested at most 16 deep\n" in section

@@ -32,7 +32,9 @@ relative friction μ' = μ(w)/μ(0) in (0, 1]: 1 is the plate at rest, lower is 
 slippery (seed 003, eq 1). A file asks for μ' targets, never for amplitudes.
 *required* means the key has no default. Ranges are inclusive unless written with `<`
 or `>`. `frictex validate FILE` checks a file and names the file, line and field of
-every problem.
+every problem; a field's `[n]` counts from 1, as `[[layer]]` tables are numbered:
+`layer[2].levels[3]` is the third value of the second layer's `levels`. What the loader
+accepts at most is under "Limits".
 """
 
 FIRST = """## Your first texture: a wood plank
@@ -242,6 +244,63 @@ def files_section() -> str:
                         + [textwrap.fill(p, 90, break_on_hyphens=False) for p in paragraphs]) + "\n"
 
 
+def _size(value) -> str:
+    """A limit as the page shows it: bytes in MiB, counts with thousands separators."""
+    if isinstance(value, int) and value >= 1 << 20 and value % (1 << 20) == 0:
+        return f"{value >> 20} MiB"
+    return f"{value:,}" if isinstance(value, int) else f"{value:g}"
+
+
+def limits() -> list[tuple[str, str, object, str]]:
+    """Every limit the loader and its readers enforce: (module, constant, value, what it
+    bounds, with ``{}`` for the value). A test checks that every ``MAX_`` constant of
+    ``frictex.textures`` is here."""
+    from frictex.device.structures import beam
+    from frictex.textures import ahap, clips, hatt, keys, raster_io, schema, toml_safe
+    table = [
+        (toml_safe, "MAX_FILE_BYTES", "a texture file (and a mode table): at most {}"),
+        (toml_safe, "MAX_NESTING", "arrays and inline tables nested at most {} deep"),
+        (keys, "MAX_LAYERS", "at most {} `[[layer]]` tables in a scene"),
+        (keys, "MAX_MM", "positions and sizes: at most {} mm in magnitude"),
+        (keys, "MAX_ANGLE_DEG", "angles: -{0} to {0} degrees"),
+        (keys, "MAX_FORCE_N", "forces: at most {} N"),
+        (keys, "MAX_UM", "vibration amplitudes: at most {} um"),
+        (keys, "MAX_PX", "the display: at most {} px along each side"),
+        (keys, "MAX_MODE_ORDER", "a structure's mode orders: at most {}"),
+        (beam, "MAX_MODES", "a structure's modes (`orders`, or a mode table's columns): at most {}"),
+        (schema, "MAX_MAGNITUDE", "any other number without a range of its own: at most {} in "
+                                  "magnitude"),
+        (keys, "MAX_PATH_CHARS", "a path to a file the scene names: at most {} characters"),
+        (raster_io, "MAX_FILE_BYTES", "an image or height map file: at most {}"),
+        (raster_io, "MAX_PIXELS", "an image or height map: at most {} pixels"),
+        (raster_io, "MAX_SCENE_BYTES", "decoded images and height maps of one scene together: "
+                                       "at most {}"),
+        (clips, "MAX_CLIP_S", "a clip: at most {} s long"),
+        (ahap, "MAX_AHAP_BYTES", "an AHAP file: at most {}"),
+        (ahap, "MAX_ITEMS", "an AHAP file: at most {} pattern entries and as many curve points"),
+        (ahap, "MAX_EVENTS_S", "an AHAP clip's events: at most {} s of playing in all"),
+        (hatt, "MAX_HATT_BYTES", "a HaTT model file: at most {}"),
+        (hatt, "MAX_MODELS", "a HaTT model: at most {} vertices"),
+        (hatt, "MAX_FIT_VERTICES", "a HaTT model: at most {} vertices refitted"),
+        (hatt, "MAX_ORDER", "a HaTT model's AR or MA order: at most {}"),
+        (hatt, "MAX_VARIANCE", "a HaTT model's excitation variance: at most {} (m/s^2)^2"),
+        (schema, "MAX_PROBLEMS", "`frictex validate` lists at most {} problems and as many "
+                                 "warnings of a file, then says the rest are not listed"),
+        (schema, "MAX_SHOWN", "a value shown in a message: cut to {} characters"),
+        (toml_safe, "MAX_TOML_MESSAGE", "a TOML syntax error: the parser's message cut to {} "
+                                        "characters"),
+    ]
+    return [(module.__name__, name, getattr(module, name), text) for module, name, text in table]
+
+
+def limits_section() -> str:
+    """The loader's limits, one line each, from their constants."""
+    lines = ["### Limits", "", "What the loader accepts at most (a file beyond a limit is an "
+             "error naming it):", ""]
+    lines += [f"- {text.format(_size(value))}" for _, _, value, text in limits()]
+    return "\n".join(lines) + "\n"
+
+
 def _range(spec) -> str:
     low = (f"> {spec.gt:g}" if getattr(spec, "gt", None) is not None
            else f">= {spec.ge:g}" if getattr(spec, "ge", None) is not None else "")
@@ -350,7 +409,8 @@ def render() -> str:
     lines = INTRO.splitlines() + [""]
     lines += FIRST.format(plank_first=PLANK["plank-first"], plank=PLANK["plank"]).splitlines()
     lines += [""] + _angle_figure().splitlines() + [""]
-    lines += files_section().splitlines() + [""] + ["## Every table and key", ""]
+    lines += files_section().splitlines() + [""] + limits_section().splitlines() + [""]
+    lines += ["## Every table and key", ""]
     for title, specs in sections():
         lines += _table(title, specs)
     lines += examples_section().splitlines()
