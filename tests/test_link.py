@@ -211,6 +211,24 @@ def test_a_port_that_does_not_exist_or_does_not_answer_is_an_error():
         open_sink("loop://", 1, RATE)
 
 
+def test_a_second_host_on_the_same_device_overflows_nothing(device):
+    """Hosts in turn on one device, as a lab runs replays against one ``frictex
+    sim-device``: until a session's first block reaches it, the device reports the play
+    index its last session ended at, far past anything the new host sent. The host sent
+    its whole queue at once on that (961 of 20,050 samples overflowed on the second
+    replay); it now places the device by its first block. Holds whatever the scheduler
+    does: paced blocks never go further than the window, half the device's buffer."""
+    _, _, path = device
+    signal = np.full((50, 1), 1.0)
+    for host in range(3):
+        with open_sink(path, 1, RATE, paced=True) as sink:
+            for b in range(0, int(0.5 * RATE), 50):
+                sink.send(b, signal)
+        st = sink.status()
+        assert st["unplayed_by_cause"]["overflow"] == 0, (host, st["unplayed_by_cause"])
+        assert "overflow" not in st["device_errors"], (host, st["device_errors"])
+
+
 def test_a_port_another_host_holds_is_refused_until_it_lets_go(device):
     """One host at a time on a device path: a second frictex (or a stale host reopening a
     path whose number a new pseudo-terminal took) cannot stream into the same plate."""

@@ -40,6 +40,24 @@ def test_after_a_watchdog_flush_the_empty_buffer_takes_the_next_block():
     assert not held.room(PACING, 0.0, 1200, 1200, 1200, 50)
 
 
+def test_a_device_without_an_origin_in_this_session_is_placed_where_the_host_is():
+    """A device reused by a new host reports, until this session's first block reaches
+    it, the play index its last session ended at (20000): with nothing held, played or
+    flushed since the Hello it has no origin yet. Taken as empty at 20000, every block
+    up to 20000 + window had room; it is taken as empty where the host is, and gets
+    blocks up to the target (then its prefill is on its way)."""
+    snap = Snapshot.from_status(status(20000, 0, S.BUFFERING, end=20000), 0.0, mark_end=0,
+                                mark_count=0)
+    sent = 0
+    while sent < 30000 and snap.room(PACING, 0.0, sent, sent, sent, 50):
+        sent += 50
+    assert sent == PACING.target
+    # once it holds, played or flushed something, its index is this session's again
+    placed = Snapshot.from_status(status(20000, 0, S.BUFFERING, end=20000, flushed=50), 0.0,
+                                  mark_end=20100, mark_count=100)
+    assert placed.play_index == 20000
+
+
 def test_a_playing_device_drains_at_its_rate_from_the_report():
     snap = Snapshot.from_status(status(1000, 200, end=1200), t_s=10.0, mark_end=1200,
                                 mark_count=1200)

@@ -65,7 +65,14 @@ class Snapshot:
     @classmethod
     def from_status(cls, st, t_s: float, mark_end: int, mark_count: int) -> Snapshot:
         """From a Status answering a heartbeat sent at mark (``mark_end``,
-        ``mark_count``); version 1 Statuses lack ``buffer_end`` and give ``play + level``."""
+        ``mark_count``); version 1 Statuses lack ``buffer_end`` and give ``play + level``.
+
+        A device that holds, played and flushed nothing since its Hello has no origin in
+        this session yet (its first block sets it, PROTOCOL.md 5.1): its ``play_index``
+        is where its last session ended, not where this one plays. It is taken as empty
+        at ``mark_end``, so its first block goes out and the next Status places it."""
+        if st.accounted and st.level == 0 and st.played_samples == 0 and st.flushed_samples == 0:
+            return cls(t_s, mark_end, mark_end, 0, False, mark_end, mark_count)
         play = unwrap(st.play_index, mark_end)
         end = unwrap(st.buffer_end, mark_end) if st.accounted else play + st.level
         return cls(t_s, play, max(end, play), st.level,
