@@ -34,11 +34,17 @@ def test_outputs_have_the_documented_columns(tmp_path, human_trace):
                                                    "inversion", "actuation"}
 
 
-def test_replaying_twice_is_byte_identical(tmp_path, human_trace):
+@pytest.mark.parametrize("fmt", ["csv", "npz", "parquet"])
+def test_replaying_twice_is_byte_identical(tmp_path, human_trace, monkeypatch, fmt):
+    """In every format, whenever each is written: the second replay runs a day later by
+    the clock (npz members carried the time of writing)."""
+    import time
     scene = grating_scene(0.6, render="sht")
-    a = run_replay(scene, human_trace, tmp_path / "a", progress=False)
-    b = run_replay(scene, human_trace, tmp_path / "b", progress=False)
-    for name in ("commands.csv", "friction.csv"):
+    a = run_replay(scene, human_trace, tmp_path / "a", fmt=fmt, progress=False)
+    real_time = time.time
+    monkeypatch.setattr(time, "time", lambda: real_time() + 86_400.0)
+    b = run_replay(scene, human_trace, tmp_path / "b", fmt=fmt, progress=False)
+    for name in (f"commands.{fmt}", f"friction.{fmt}"):
         assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes()
     a.pop("timings"), b.pop("timings")
     assert a == b

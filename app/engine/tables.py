@@ -44,7 +44,6 @@ import io
 import os
 import shutil
 import struct
-import time
 import zipfile
 import zlib
 from concurrent.futures import ThreadPoolExecutor
@@ -341,6 +340,12 @@ class _Parquet:
     discard = close
 
 
+#: the date every npz member carries: the zip format's earliest, not the time of writing,
+#: so that two replays of the same inputs are byte-identical in every format (as
+#: reproducible builds date their archives)
+ZIP_EPOCH = (1980, 1, 1, 0, 0, 0)
+
+
 def _stored_member(out, name: str, head: bytes, raw: Path, raw_crc: int) -> zipfile.ZipInfo:
     """Write a stored (uncompressed) zip member, ``head`` then the file ``raw`` whose
     CRC-32 is ``raw_crc``, at ``out``'s position (an unbuffered file); its ZipInfo.
@@ -349,7 +354,7 @@ def _stored_member(out, name: str, head: bytes, raw: Path, raw_crc: int) -> zipf
     (tests/test_tables.py compares them), without reading the data again: the CRC was
     taken as it was written, and the kernel copies the file (``os.copy_file_range``)."""
     size = os.path.getsize(raw)
-    info = zipfile.ZipInfo(name, date_time=time.localtime(time.time())[:6])
+    info = zipfile.ZipInfo(name, date_time=ZIP_EPOCH)
     info.compress_type = zipfile.ZIP_STORED
     info.external_attr = 0o600 << 16  # as zipfile gives a member written by name
     info.file_size = info.compress_size = len(head) + size
