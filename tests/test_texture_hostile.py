@@ -230,3 +230,24 @@ def test_a_relative_name_is_refused_exactly_when_it_leads_out(tmp_path, parts):
         assert not inside or os.path.normpath(name).split(os.sep)[0] == ".."
     else:
         assert inside and located == real
+
+
+@pytest.mark.parametrize("kind", list(NAMING))
+@pytest.mark.parametrize("make, phrase", [
+    (os.mkfifo, "is a FIFO (named pipe), not a regular file (frictex reads only regular files)"),
+    (os.mkdir, "is a folder, not a file"),
+])
+def test_a_named_fifo_or_folder_is_refused_in_the_words_used_for_the_texture_file(
+        tmp_path, kind, make, phrase):
+    """A FIFO or a folder named by a scene: the sentence a texture file of that kind gets
+    (``device.safe_files``), not the system's 'Illegal seek' or 'Is a directory'."""
+    template, key = NAMING[kind]
+    make(tmp_path / "f.dat")
+    path = tmp_path / "t.toml"
+    path.write_text((BEAM_HEAD if kind == "mode table" else HEAD) + template.format(name="f.dat"))
+    _, problems, _ = check_scene(path)
+    assert [p.field.rsplit(".", 1)[-1] for p in problems] == [key]
+    assert f'"f.dat": {tmp_path / "f.dat"}: {phrase}' in problems[0].message
+    make(tmp_path / "scene.toml")
+    _, problems, _ = check_scene(tmp_path / "scene.toml")
+    assert phrase in problems[0].message

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import errno
 import os
+import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
@@ -94,6 +95,11 @@ class Files:
         except OSError as exc:  # the reader says so in its words, opening nothing
             held = ("became a symbolic link after it was checked" if exc.errno == errno.ELOOP
                   else file_problem(file_path) or f"cannot be read ({exc.strerror or exc})")
+        if isinstance(held, int) and not stat.S_ISREG(os.fstat(held).st_mode):
+            # a folder or a FIFO opens (read only, non-blocking) but is no file to read:
+            # the reader says so in safe_files' words, as for the texture file itself
+            os.close(held)
+            held = file_problem(file_path) or "is not a regular file (frictex reads only regular files)"
         try:
             if isinstance(held, int):
                 self._check_held(held, name)
