@@ -189,6 +189,9 @@ def test_replay_takes_the_command_s_options_with_its_defaults():
     parser = argparse.ArgumentParser()
     add_arguments(parser)
     command = parser.parse_args([SCENE, TRACE, "--out", "o"])
+    from frictex.app.engine.replay import MAX_UNPLAYED
+    assert command.max_unplayed is None  # given only with --device; MAX_UNPLAYED there
+    command.max_unplayed = MAX_UNPLAYED
     defaults = {name: p.default for name, p in inspect.signature(frictex.replay).parameters.items()}
     for api, option in (("rate_hz", "rate"), ("block_size", "block"), ("max_gap_s", "max_gap"),
                         ("max_unplayed", "max_unplayed"), ("faults", "faults"),

@@ -89,10 +89,15 @@ def test_the_live_thread_reads_the_links_force_reports():
                             "--device was given"),
     (["--sim-finger", "3", "--device", "/dev/null"], "got --device /dev/null"),
     (["--sim-finger", "-1", "--device", "sim"], "--sim-finger -1: expected a person number >= 0"),
+    (["--faults", "corrupt=0.01"], "--faults: needs --device (the faults are injected on the "
+                                   "link to a device); no --device was given"),
+    (["--max-unplayed", "0.5"], "--max-unplayed 0.5: needs --device"),
 ])
-def test_sim_finger_needs_the_simulated_device(argv, message, tmp_path, capsys):
-    assert main(["replay", "grating-15mm", "swipe-40mms-50hz", "--out", str(tmp_path),
-                 *argv]) == 2
+def test_device_options_need_a_device(argv, message, tmp_path, capsys):
+    """Device options without the device they act on are refused, not ignored."""
+    out = tmp_path / "out"
+    assert main(["replay", "grating-15mm", "swipe-40mms-50hz", "--out", str(out), *argv]) == 2
+    assert not out.exists()
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
 

@@ -89,7 +89,12 @@ def add_link_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def sim_device_args(args: argparse.Namespace) -> tuple[str, ...]:
-    """``frictex sim-device`` flags from ``--sim-finger`` (refused without ``--device sim``)."""
+    """``frictex sim-device`` flags from ``--sim-finger`` (refused without ``--device sim``);
+    every option of :func:`add_link_arguments` that acts on a device is refused without
+    ``--device`` rather than ignored."""
+    if args.device is None and args.faults is not None:
+        raise InputError("--faults: needs --device (the faults are injected on the link to a "
+                         "device); no --device was given")
     if args.sim_finger is None:
         return ()
     if args.sim_finger < 0:

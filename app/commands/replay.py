@@ -11,6 +11,7 @@ from frictex.app.engine.replay import MAX_UNPLAYED, ReplayOptions, replay_with, 
 from frictex.app.engine.sources import MAX_GAP_S
 from frictex.app.engine.summary import control_line
 from frictex.app.engine.tables import FORMATS
+from frictex.device.errors import InputError
 from frictex.rendering.renderers import render_modes
 from frictex.textures.outside import add_allow_outside
 
@@ -32,7 +33,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--renderer", choices=render_modes(), default=None,
                         help="render every periodic layer this way instead of as its file says")
     add_link_arguments(parser)
-    parser.add_argument("--max-unplayed", type=share, default=MAX_UNPLAYED, metavar="SHARE",
+    parser.add_argument("--max-unplayed", type=share, default=None, metavar="SHARE",
                         help="with --device: exit 1 when more than this share of the "
                              f"commanded samples never played on the device (default {MAX_UNPLAYED:g})")
     parser.add_argument("--max-gap", type=positive_float, default=MAX_GAP_S, metavar="S",
@@ -49,6 +50,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.max_unplayed is not None and args.device is None:
+        raise InputError(f"--max-unplayed {args.max_unplayed:g}: needs --device (the share "
+                         "of samples a device never played); no --device was given")
     frames = None
     if args.frames is not None:
         from frictex.app.engine.frames import FrameWriter
@@ -73,7 +77,8 @@ def run(args: argparse.Namespace) -> int:
             print(control_line(summary["control"]))
         for warning in summary["warnings"]:
             print(f"frictex: warning: {warning}", file=sys.stderr)
-    problem = unplayed_problem(summary.get("device"), args.max_unplayed, "--max-unplayed")
+    limit = MAX_UNPLAYED if args.max_unplayed is None else args.max_unplayed
+    problem = unplayed_problem(summary.get("device"), limit, "--max-unplayed")
     if problem is not None:
         print(f"frictex: error: {problem}; outputs in {args.out}", file=sys.stderr)
         return 1
