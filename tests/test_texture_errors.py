@@ -1,11 +1,13 @@
 """Bad texture files: every problem named with file, line and field, never a traceback."""
 
 import re
+import tomllib
 
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from frictex.device.safe_text import escape
 from frictex.textures.loader import check_scene
 
 GOOD = """\
@@ -167,7 +169,14 @@ def test_every_problem_is_collected(tmp_path):
     ("format = 1\n", None, "display", r"missing \[display\] table"),
     ("format = 1\n[display\n", 2, "TOML syntax", r"Expected '\]' at the end of a table declaration \(column \d+\)"),
     ("format = 1\nx = \n", 2, "TOML syntax", r"Invalid value \(column 5\)"),
-    ("format = 1\nformat = 1\n", 2, "TOML syntax", r"[Cc]annot overwrite a value"),
+    # tomllib's messages with the line's number and text: a duplicate key, a value the
+    # file ends in (tomllib: "at end of document"), an unclosed string (its '\n' escaped
+    # once), a line with a terminal escape (shown escaped)
+    ("format = 1\nformat = 1\n", 2, "TOML syntax", r"^Cannot overwrite a value \(column 11\): format = 1$"),
+    ("format = 1\ngarbage = [", 2, "TOML syntax", r"^Invalid value \(at the end of the file\): garbage = \[$"),
+    ("format = 1\n\ngarbage = [\n\n", 3, "TOML syntax", r"^Invalid value \(at the end of the file\): garbage = \[$"),
+    ('format = 1\nname = "abc\n', 2, "TOML syntax", r"""^Illegal character '\\n' \(column 12\): name = "abc$"""),
+    ('format = 1\nname = "\x1b[2J\n', 2, "TOML syntax", r"""^Illegal character '\\x1b' \(column 9\): name = "\\x1b\[2J$"""),
     ("format = 1\n[display]\nwidth_mm = 1\nheight_mm = 1\nwidth_px = 1\nheight_px = 1\n", None, "layer",
      r"no \[\[layer\]\] tables"),
     ("format = 1\n[display]\nwidth_mm = 1\nheight_mm = 1\nwidth_px = 1\nheight_px = 1\n[layer]\ntype = \"bump\"\n",
@@ -281,3 +290,27 @@ def test_dotted_keys_nest_at_most_16_deep(tmp_path):
     assert problems[0].message.startswith("arrays, inline tables or dotted keys nested more than 16")
     _, problems, _ = check(tmp_path, "a" + ".b" * 15 + " = 1\n" + GOOD)
     assert [(p.line, p.field) for p in problems] == [(1, "a")]  # 16 parts: only unknown
+
+
+@settings(max_examples=200, deadline=None, derandomize=True)
+@given(st.lists(st.sampled_from(['format = 1', 'a = [', 'b = "x', 'c = 1', 'c = 2', '[t]', '[t]',
+                                 '[[u]', 'd = {', '"\x1b" = 3', 'e = 1e', '', '  ', 'f = "\\q"',
+                                 "g = '\t\x07'"]), min_size=1, max_size=8))
+def test_every_toml_syntax_error_is_one_printable_line_at_a_line_of_the_file(parts):
+    """Whatever tomllib refuses: a line of the file (1 .. its last), the message one
+    printable line ending with that line's text when it is not blank."""
+    from frictex.textures.toml_safe import syntax_problem
+    text = "\n".join(parts)
+    try:
+        tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        line, message = syntax_problem(str(exc), text)
+    else:
+        return
+    lines = text.splitlines()
+    assert line is not None and 1 <= line <= max(1, len(lines))
+    assert message.isprintable()
+    head = message.split(" (")[0]  # tomllib's own words: a character it quotes escaped once
+    assert not re.search(r"\\\\[nrtx]|\\\\\\\\", head), head
+    if line <= len(lines) and lines[line - 1].strip():
+        assert message.endswith(": " + escape(lines[line - 1].strip()))

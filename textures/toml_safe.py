@@ -8,6 +8,7 @@ than 4300 digits with a bare ValueError; each is caught here first, as a one-lin
 
 from __future__ import annotations
 
+import ast
 import re
 import sys
 import tomllib
@@ -37,6 +38,9 @@ def read_text(path: Path, r: Reader) -> str | None:
 
 
 _TOML_POSITION = re.compile(r"\s*\(at line (\d+), column (\d+)\)\s*$")
+_AT_END = "(at end of document)"
+#: a single character as tomllib quotes it, by its repr (``'\\n'``, ``'\\x1b'``, ``'a'``)
+_REPR_CHAR = re.compile(r"'(?:\\(?:x[0-9a-f]{2}|u[0-9a-f]{4}|U[0-9a-f]{8}|[nrt\\'])|[^'\\])'")
 _LONG_DIGITS = re.compile(r"\d{%d,}" % (sys.get_int_max_str_digits() or 4300))
 
 
@@ -52,12 +56,7 @@ def parse_toml(text: str, r: Reader) -> dict | None:
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        message = str(exc)
-        m = _TOML_POSITION.search(message)
-        line = int(m.group(1)) if m else None
-        # tomllib's message may quote a key of the file (a duplicate table): escaped and cut
-        message = escape(message[:m.start()] if m else message, MAX_TOML_MESSAGE) + (
-            f" (column {m.group(2)})" if m else "")
+        line, message = syntax_problem(str(exc), text)
         r.problems.append(Problem(r.label, line, "TOML syntax", message))
         return None
     except RecursionError:  # should the bracket scan above ever miss a nesting
@@ -74,6 +73,30 @@ def parse_toml(text: str, r: Reader) -> dict | None:
         r.problems.append(Problem(r.label, deepest_line(text), "TOML syntax", too_deep))
         return None
     return doc
+
+
+def syntax_problem(message: str, text: str) -> tuple[int | None, str]:
+    """(line, message) of tomllib's error ``message`` about ``text``: its position as a
+    line number (for one at the end of the document, the last line that is not blank),
+    the column and the line's own text after the message (escaped and cut,
+    ``device.safe_text.escape``), and a character it quotes by its Python repr shown
+    escaped once (``'\\n'``, not ``'\\\\n'``)."""
+    lines = text.splitlines()
+    m = _TOML_POSITION.search(message)
+    if m:
+        line, where = int(m.group(1)), f" (column {m.group(2)})"
+    elif message.endswith(_AT_END):
+        line = max((k for k, part in enumerate(lines, start=1) if part.strip()), default=1)
+        where = " (at the end of the file)"
+    else:
+        line, where = None, ""
+    head = message[:m.start()] if m else message.removesuffix(_AT_END).rstrip()
+    # tomllib's message may quote a key of the file (a duplicate table): escaped and cut
+    shown = escape(_REPR_CHAR.sub(lambda c: f"'{ast.literal_eval(c.group())}'", head),
+                   MAX_TOML_MESSAGE) + where
+    if line is not None and line <= len(lines) and lines[line - 1].strip():
+        shown += f": {escape(lines[line - 1].strip())}"
+    return line, shown
 
 
 def _depth(doc) -> int:
