@@ -27,7 +27,7 @@ from frictex.rendering.tracking.finger_select import SelectionState, select_fing
 from frictex.device.friction import ClampCounts, make_friction_model
 from frictex.rendering.input.trace_file import Trace
 from frictex.rendering.renderers import (DEFAULT_SHO, LAYER_RENDERERS, RENDERERS, any_layer,
-                                         render_modes)
+                                         build_renderer, render_modes)
 from frictex.rendering.tracking.tracks import TrackerConfig, TrackerState, track
 from frictex.device.profile import FORCE_PROFILES
 from frictex.textures.model import Scene
@@ -118,8 +118,9 @@ def _layer_renderer(layer, mode: str, rate_hz: float):
     """The renderer of ``layer``: its kind's (``renderer_kind``: layers that render motion
     or events) if it has one, else renderer ``mode`` (``rendering.renderers``)."""
     kind = getattr(layer, "renderer_kind", None)
-    factory = RENDERERS.get(mode) if kind is None else LAYER_RENDERERS.get(kind)
-    return factory(layer, rate_hz)
+    if kind is None:
+        return build_renderer(RENDERERS, mode, layer, rate_hz)
+    return build_renderer(LAYER_RENDERERS, kind, layer, rate_hz)
 
 
 def _layer_mode(layer, render_override: str | None, sho_variant: str) -> str:

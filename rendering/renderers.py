@@ -22,7 +22,10 @@ package adds a renderer with one module and one line of its pyproject.toml:
   that are.
 
 frictex's own are listed in its pyproject.toml: the renderer names are part of the
-texture format, which ``textures`` checks without importing this layer.
+texture format, which ``textures`` checks without importing this layer. Anything another
+package's renderer raises, building or rendering, is a :class:`PluginError` naming the
+package and the layer (exit 1), not an internal error of frictex's
+(:func:`build_renderer`).
 """
 
 from __future__ import annotations
@@ -31,12 +34,12 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from frictex.device.registry import Registry
+from frictex.device.registry import OWN_DISTRIBUTION, PluginError, Registry
 from frictex.rendering.tracking.tracks import FingerBlock
 from frictex.textures.model import RENDERERS, render_modes
 
 __all__ = ["DEFAULT_SHO", "LAYER_RENDERERS", "RENDERERS", "LayerRenderer", "RendererFactory",
-           "any_layer", "render_modes", "sho_variant_of"]
+           "any_layer", "build_renderer", "render_modes", "sho_variant_of"]
 
 #: what a layer's ``render = "sho"`` means unless the run says otherwise
 DEFAULT_SHO = "sho-predicted"
@@ -76,3 +79,56 @@ def sho_variant_of(name: str) -> str:
     """The SHO variant of a run that renders periodic layers with ``name``: ``name``
     itself where it renders any layer, else :data:`DEFAULT_SHO`."""
     return name if any_layer(name) else DEFAULT_SHO
+
+
+def build_renderer(registry: Registry, name: str, layer: Any, rate_hz: float) -> LayerRenderer:
+    """The renderer ``name`` of ``registry`` built for ``layer`` at ``rate_hz`` (Hz); another
+    package's is wrapped so that what it raises names it (:class:`PluginRenderer`)."""
+    factory = registry.get(name)
+    origin = registry.origin(name)
+    if origin == OWN_DISTRIBUTION:
+        return factory(layer, rate_hz)
+    return PluginRenderer(factory, f"{registry.kind} {name!r} of {origin}", layer, rate_hz)
+
+
+class PluginRenderer:
+    """Another package's renderer, whose exceptions become :class:`PluginError` saying
+    whose renderer failed on which layer, and what it raised; as do outputs that break
+    :class:`LayerRenderer`'s contract where frictex would fail on them or write them:
+    mu' or covers not (fingers, samples), mu' not finite where the layer covers.
+    ``inner``: the plugin's renderer."""
+
+    def __init__(self, factory: RendererFactory, who: str, layer: Any, rate_hz: float):
+        self._who = who
+        self._layer = getattr(layer, "name", "?")
+        self.inner = self._guarded("building", factory, layer, rate_hz)
+        self.any_layer = getattr(self.inner, "any_layer", False)
+
+    def _guarded(self, doing: str, call, *args):
+        try:
+            return call(*args)
+        except Exception as exc:  # noqa: BLE001 -- a plugin's bug, told as the plugin's
+            raise PluginError(f"{self._who} failed {doing} layer {self._layer!r}: "
+                              f"{type(exc).__name__}: {exc}") from exc
+
+    def initial_state(self) -> Any:
+        return self._guarded("starting", self.inner.initial_state)
+
+    def render(self, block: FingerBlock, state: Any) -> tuple[np.ndarray, np.ndarray, Any]:
+        got = self._guarded("rendering", self.inner.render, block, state)
+        shape = (len(block.ids), block.n)
+        if not (isinstance(got, tuple) and len(got) == 3):
+            raise PluginError(f"{self._who} returned {type(got).__name__} on layer "
+                              f"{self._layer!r}; expected (mu', covers, state)")
+        mu, covers, new_state = got
+        for what, value in (("mu'", mu), ("covers", covers)):
+            if np.shape(value) != shape:
+                raise PluginError(f"{self._who} returned {what} of shape {np.shape(value)} on "
+                                  f"layer {self._layer!r}; expected {shape} ({shape[0]} "
+                                  f"finger(s) x {shape[1]} samples)")
+        mu, covers = np.asarray(mu, dtype=np.float64), np.asarray(covers, dtype=bool)
+        bad = int(np.count_nonzero(~np.isfinite(mu) & covers))
+        if bad:
+            raise PluginError(f"{self._who} returned {bad} mu' values that are not finite "
+                              f"(NaN or inf) on layer {self._layer!r}, where it covers")
+        return mu, covers, new_state

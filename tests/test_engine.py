@@ -503,3 +503,15 @@ def test_brief_taps_within_a_block_share_a_row_with_the_same_results():
         outs = _by_source(trace, chunk)
         assert max(len(o.finger_ids) for o in outs) <= 3
         _assert_same_rows(outs, _in_one_call(trace, sum(o.t_s.size for o in outs) // 50))
+
+
+def test_targets_that_are_not_finite_are_a_warning_saying_what_was_commanded():
+    """The inversion commands 0 um for a NaN or inf target and counts it (device.friction);
+    the run says so, where it said nothing."""
+    from types import SimpleNamespace
+    from frictex.app.engine.summary import Totals, warnings_of
+    totals = Totals()
+    totals.clamps.nonfinite_target = 7
+    assert warnings_of(SimpleNamespace(forces=None), SimpleNamespace(jumps=0, out_of_order=0),
+                       totals) == ["7 target samples were not finite (NaN or inf) and were "
+                                   "commanded 0 um"]

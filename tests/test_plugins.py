@@ -42,6 +42,9 @@ PLUGIN = {
 
         [project.entry-points."frictex.renderers"]
         wobble = "frictex_test_wobble:Wobble"
+        short = "frictex_test_wobble:Short"
+        unset = "frictex_test_wobble:Unset"
+        unbuilt = "frictex_test_wobble:Unbuilt"
 
         [project.entry-points."frictex.profiles"]
         wobble-plate = "frictex_test_wobble:PLATE"
@@ -134,6 +137,23 @@ PLUGIN = {
             def render(self, block, state):
                 mu, covers = self.layer.mu_and_covers(block.x_pred, block.y_pred)
                 return np.full(mu.shape, {WOBBLE_MU!r}), covers, state + 1
+
+
+        class Short(Wobble):  # one sample short: frictex would fail broadcasting it
+            def render(self, block, state):
+                mu, covers, state = super().render(block, state)
+                return mu[:, :-1], covers[:, :-1], state
+
+
+        class Unset(Wobble):  # NaN, which frictex would write as the target
+            def render(self, block, state):
+                mu, covers, state = super().render(block, state)
+                return mu * np.nan, covers, state
+
+
+        class Unbuilt(Wobble):
+            def __init__(self, layer, rate_hz):
+                raise RuntimeError("no calibration table for this layer")
         """,
 }
 FRICTEX = Path(sys.executable).with_name("frictex")
@@ -185,6 +205,30 @@ def test_replay_renders_with_a_plugins_renderer(plugin_path, tmp_path):
     assert WOBBLE_MU not in set(mu_targets(own))
 
 
+@pytest.mark.parametrize("name, message", [
+    ("short", "returned mu' of shape (1, 99) on layer 'lines'; expected (1, 100) (1 finger(s) "
+              "x 100 samples)"),
+    ("unset", "returned 100 mu' values that are not finite (NaN or inf) on layer 'lines', "
+              "where it covers"),
+    ("unbuilt", "failed building layer 'lines': RuntimeError: no calibration table for this "
+                "layer"),
+])
+def test_a_plugins_renderer_that_breaks_its_contract_is_named_not_frictex(plugin_path,
+                                                                        tmp_path, name,
+                                                                        message):
+    """A plugin's renderer raising, or returning what frictex would fail on (a short
+    block) or write (NaN), fails the run naming the plugin and the layer: exit 1, one
+    line, no outputs; never frictex's internal error (exit 70) or NaN in friction.csv."""
+    out = tmp_path / name
+    done = run([str(FRICTEX), "replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(out),
+                "--renderer", name, "--quiet"], plugin_path, tmp_path)
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        f"frictex: error: renderer {name!r} of frictex-test-wobble (frictex_test_wobble:"
+        f"{name.capitalize()}) {message}"]
+    assert not out.exists()
+
+
 def test_without_the_plugin_its_name_is_an_error_listing_the_known(tmp_path):
     done = run([str(FRICTEX), "replay", "grating-5mm", "swipe-40mms-50hz", "--out",
                 str(tmp_path / "o"), "--renderer", "wobble"], None, tmp_path)
@@ -206,7 +250,8 @@ scene = frictex.load_scene(sys.argv[1])  # a texture file whose layer names the 
 pipeline = build_pipeline(scene)               # renderer
 print(json.dumps({"origin": RENDERERS.origin("wobble"), "rows": int(mu.size),
                   "values": sorted(set(mu.tolist())),
-                  "renderer": type(pipeline.renderers[0]).__name__}))
+                  "renderer": [type(r).__name__ for r in (pipeline.renderers[0],
+                                                          pipeline.renderers[0].inner)]}))
 """
 
 
@@ -220,7 +265,7 @@ def test_the_python_api_and_texture_files_take_a_plugins_renderer(plugin_path, t
     got = json.loads(done.stdout.splitlines()[-1])
     assert got["origin"] == "frictex-test-wobble (frictex_test_wobble:Wobble)"
     assert got["rows"] > 1000 and got["values"] == [WOBBLE_MU]
-    assert got["renderer"] == "Wobble"
+    assert got["renderer"] == ["PluginRenderer", "Wobble"]  # wrapped: its errors name it
 
 
 DEVICE_USE = """

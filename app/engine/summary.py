@@ -95,6 +95,9 @@ def warnings_of(pipeline, tracker, totals: Totals) -> list[str]:
     elif clamps["unreachable"]:
         warnings.append(f"{clamps['unreachable']} target samples were below the lowest "
                         "reachable mu' and were clamped to the amplitude limit")
+    if clamps["nonfinite_target"]:
+        warnings.append(f"{clamps['nonfinite_target']} target samples were not finite (NaN or "
+                        "inf) and were commanded 0 um")
     if clamps["force_beyond_model"]:
         warnings.append(f"{clamps['force_beyond_model']} samples had a normal force beyond "
                         "seed 003's friction model, whose asymptote 1.13 F_n reaches 1 there (full "
