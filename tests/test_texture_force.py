@@ -79,8 +79,8 @@ def test_force_layers_and_driving_model_parse_on_the_ring(tmp_path):
      "blend", "not used on a force layer"),
     ('type = "keyclick"\nx_mm = 50\ny_mm = 5\nwidth_mm = 40\nheight_mm = 20\nclick_n = 0.45',
      "press_n", "release_n 0.4 < press_n 0.5 < click_n 0.45"),
-    ('type = "keyclick"\nx_mm = 120\ny_mm = 5\nwidth_mm = 40\nheight_mm = 20',
-     "x_mm", "button at x 120 to 160 mm"),
+    ('type = "keyclick"\nx_mm = 150\ny_mm = 5\nwidth_mm = 40\nheight_mm = 20',
+     "x_mm", "button at x 150 to 190 mm, y 5 to 25 mm lies wholly off the display"),
     ('type = "guidance"\nx_mm = 70\ny_mm = 15\ngain_n_per_mm = 0.01\nmax_force_n = 0.1\n'
      'line_angle_deg = 0', "line_angle_deg", "with line = false"),
 ])
