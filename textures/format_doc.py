@@ -295,8 +295,8 @@ def limits() -> list[tuple[str, str, object, str]]:
 
 def limits_section() -> str:
     """The loader's limits, one line each, from their constants."""
-    lines = ["### Limits", "", "What the loader accepts at most (a file beyond a limit is an "
-             "error naming it):", ""]
+    lines = ["### Limits", "", "What the loader accepts at most (beyond a limit, an error "
+             "names the file and the key), and how much its messages show:", ""]
     lines += [f"- {text.format(_size(value))}" for _, _, value, text in limits()]
     return "\n".join(lines) + "\n"
 
