@@ -35,6 +35,7 @@ import numpy as np
 
 from frictex.device.friction import mu_floor
 from frictex.rendering.compose import compose
+from frictex.textures.overlap import Overlap, lowest_overlap
 
 #: Grid cells along the display's longer side for the area share.
 GRID_CELLS = 240
@@ -59,8 +60,8 @@ class Reach:
     floor : lowest mu' the device reaches at ``force_n`` (N).
     area_share, stroke_share : fraction in [0, 1] of the display's area and of the typical
         stroke's contact samples whose composed target is below ``floor``.
-    lowest : lowest mu' the layers a lone finger feels can ask for together (the product
-        of their lowest values).
+    overlap : the lowest product of the lowest mu' of the layers a lone finger feels,
+        where their extents overlap (``textures.overlap``): no target goes below it.
     causes : names of the layers whose product takes it below the floor, in file order.
     """
 
@@ -68,7 +69,7 @@ class Reach:
     force_n: float
     area_share: float
     stroke_share: float
-    lowest: float
+    overlap: Overlap
     causes: tuple[str, ...]
 
     @property
@@ -108,12 +109,6 @@ def applies_alone(layer) -> bool:
     """True if the layer applies to a finger touching alone (the stroke's and the map's):
     selectors ``any``, ``1`` and the positional ones, not ``2``, ``3``, ..."""
     return not layer.fingers.isdigit() or layer.fingers == "1"
-
-
-def lowest_possible(scene) -> float:
-    """The product of the lowest mu' of every layer a lone finger feels: no composition
-    for that finger goes below it."""
-    return float(np.prod([layer.mu_range[0] for layer in scene.layers if applies_alone(layer)]))
 
 
 def grid(display, cells: int = GRID_CELLS) -> tuple[np.ndarray, np.ndarray]:
@@ -210,13 +205,14 @@ def scene_reach(scene) -> Reach:
     force = scene.device.normal_force_n
     floor = mu_floor(scene.device, force)
     limit = floor - TOLERANCE
-    if lowest_possible(scene) >= limit:
-        return Reach(floor, force, 0.0, 0.0, lowest_possible(scene), ())
+    overlap = lowest_overlap(scene.display, [layer for layer in scene.layers
+                                             if applies_alone(layer)])
+    if overlap.lowest >= limit:
+        return Reach(floor, force, 0.0, 0.0, overlap, ())
     area_mu, area_layers = _area(scene)
     stroke_mu, stroke_layers = _stroke(scene)
     area_below, stroke_below = area_mu < limit, stroke_mu < limit
     causes = _causes([layer.name for layer in scene.layers],
                      [(area_below, area_layers), (stroke_below, stroke_layers)])
     return Reach(floor, force, float(area_below.mean()),
-                 float(stroke_below.mean()) if stroke_mu.size else 0.0, lowest_possible(scene),
-                 causes)
+                 float(stroke_below.mean()) if stroke_mu.size else 0.0, overlap, causes)

@@ -33,7 +33,7 @@ def test_the_area_share_is_where_the_two_overlap(tmp_path):
     assert got.floor == pytest.approx(mu_floor(halves(tmp_path).device, 0.5))
     # the grid's 0.45 mm cells align with both edges: exactly 54 x 27 of 108 x 64.8 mm
     assert got.area_share == pytest.approx(0.5 * 27.0 / 64.8, abs=1e-12)
-    assert got.lowest == pytest.approx(0.49)
+    assert got.overlap.lowest == pytest.approx(0.49)
     assert got.causes == ("left", "top") and got.below
 
 
@@ -60,7 +60,7 @@ def test_a_layer_with_a_small_part_of_the_drop_is_not_named(tmp_path):
 def test_a_layer_for_a_second_finger_never_multiplies_with_the_first_fingers(tmp_path):
     got = R.scene_reach(halves(tmp_path, fingers='fingers = "2"\n'))
     assert (got.area_share, got.stroke_share, got.causes) == (0.0, 0.0, ())
-    assert got.lowest == pytest.approx(0.7) and not got.below
+    assert got.overlap.lowest == pytest.approx(0.7) and not got.below
 
 
 def test_a_scene_within_reach_runs_nothing(tmp_path, monkeypatch):
@@ -70,7 +70,7 @@ def test_a_scene_within_reach_runs_nothing(tmp_path, monkeypatch):
     monkeypatch.setattr(R, "_area", fail)
     got = R.scene_reach(scene(tmp_path, RECT.format(name="a", x=0, y=0, w=54, h=64.8, mu=0.8,
                                                     extra="")))
-    assert (got.area_share, got.stroke_share, got.lowest, got.below) == (0.0, 0.0, 0.8, False)
+    assert (got.area_share, got.stroke_share, got.overlap.lowest, got.below) == (0.0, 0.0, 0.8, False)
 
 
 def test_the_grid_covers_the_display_in_cells_of_equal_size():

@@ -66,14 +66,13 @@ def reach_warning(path, scene) -> str | None:
     the typical stroke and the display's map fall below the floor (``Reach.causes``), and
     the lowest product of the layers' lowest mu' where their extents overlap, with the
     layers that overlap there (``textures.overlap``), for a finger touching alone."""
-    from frictex.rendering.reach import STROKE_S, applies_alone, scene_reach
-    from frictex.textures.overlap import lowest_overlap
+    from frictex.rendering.reach import STROKE_S, scene_reach
 
     reach = scene_reach(scene)
     if not reach.below:
         return None
     causes = f"from {_names(reach.causes)}" if reach.causes else "from the layers together"
-    overlap = lowest_overlap(scene.display, [layer for layer in scene.layers if applies_alone(layer)])
+    overlap = reach.overlap
     where = (f"the product of {_names(overlap.names)}" if len(overlap.names) > 1
              else f"{_names(overlap.names)} alone")
     return (f"{escape_path(path)}: layers: {_share(reach.stroke_share)} of a typical stroke "
