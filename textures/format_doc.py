@@ -44,7 +44,7 @@ file.
 
 1. **The display.** Every file starts with `format = 1` and the touchscreen's active
    area: its size in mm (the positions of everything else are in mm from its top-left
-   corner, x right, y down) and in pixels (what the demo's window opens at).
+   corner, x right, y down) and in pixels (what the demo draws the scene at).
 2. **The grain**: fine lines of a triangle profile, 1.5 mm apart, running 5 degrees
    below horizontal to the right. A periodic layer's `angle_deg` is the direction
    *across* its lines (see Angles): lines running at 5 degrees take angle_deg = 5 + 90 = 95.
@@ -127,8 +127,9 @@ starts there (a grating's `mu_low` band, a waveform's shape from phase 0).
 ### Display pixels and millimetres
 
 `width_mm` x `height_mm` is the active area; every position is in mm on it. `width_px`
-x `height_px` is the screen's pixel count: the demo's window opens at it and `preview`
-draws at it, and the pixel density along each axis, width_px / width_mm and height_px /
+x `height_px` is the screen's pixel count: the demo draws the scene at it (its window
+adds the scope's strip below, cut to the screen's work area; README "Using it") and
+`preview` writes the scene image at it, and the pixel density along each axis, width_px / width_mm and height_px /
 height_mm (px/mm), sizes what is counted in pixels: a raster with `mode = "one-to-one"`
 (one image pixel per display pixel) and the default tile of `mode = "tile"`. The
 scene is always drawn with its millimetre proportions: the area is fitted into a window

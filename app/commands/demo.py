@@ -63,8 +63,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--fullscreen", action="store_true", help="fullscreen on --monitor")
     parser.add_argument("--monitor", type=int, default=0, metavar="N", help="monitor for --fullscreen (default 0)")
     parser.add_argument("--size", type=frame_size, default=None, metavar="WxH",
-                        help="window size in px (default: the scene's display size, at least "
-                             f"{MIN_FRAME[0]}x{MIN_FRAME[1]})")
+                        help="window size in px (default: the scene's display size with the "
+                             f"scope's strip, at least {MIN_FRAME[0]}x{MIN_FRAME[1]}; either is "
+                             "cut to the screen's work area)")
     parser.add_argument("--renderer", choices=render_modes(), default=None,
                         help="start with every periodic layer rendered this way (R cycles it live)")
     add_link_arguments(parser)
