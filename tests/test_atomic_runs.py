@@ -359,6 +359,18 @@ def test_an_output_folder_under_a_file_is_bad_input_naming_the_file(tmp_path, ca
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a-file"]
 
 
+@pytest.mark.skipif(not os.path.ismount("/proc"), reason="no /proc file system mounted")
+def test_an_output_folder_on_a_file_system_of_no_size_is_bad_input(capsys):
+    """/proc holds no files: it was 'need about 1.85 MB and 0 B is free' (exit 1)."""
+    import frictex
+    assert main(["replay", SCENE, TRACES[0], "--out", "/proc/frictex-out", "--quiet"]) == 2
+    assert capsys.readouterr().err == ("frictex: error: /proc: a file system that holds no "
+                                       "files (such as /proc or /sys); write the outputs "
+                                       "elsewhere\n")
+    with pytest.raises(frictex.InputError, match="holds no files"):
+        frictex.replay(SCENE, TRACES[0], out="/proc/frictex-out")
+
+
 def test_the_output_folder_keeps_its_permissions_and_attributes(tmp_path):
     out = tmp_path / "out"
     out.mkdir()

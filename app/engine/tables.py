@@ -82,8 +82,13 @@ def check_room(out_dir: Path, need_bytes: float, what: str,
                hint: str = "write elsewhere, or use --format parquet") -> None:
     """Raise a one-line :class:`OutputSpaceError` (errno ENOSPC) unless ``out_dir``'s file
     system has room for ``need_bytes`` more and :data:`RESERVE_BYTES` to spare; the
-    message names ``what`` and ends with ``hint``."""
-    free = shutil.disk_usage(out_dir).free
+    message names ``what`` and ends with ``hint``. A file system of no size (proc, sysfs:
+    nothing can be written there) is bad input, said as such."""
+    usage = shutil.disk_usage(out_dir)
+    if usage.total == 0:
+        raise InputError(f"{out_dir}: a file system that holds no files (such as /proc or "
+                         "/sys); write the outputs elsewhere")
+    free = usage.free
     if need_bytes + RESERVE_BYTES > free:
         full = OutputSpaceError(f"{out_dir}: {what} need about {_size(need_bytes)} and "
                                 f"{_size(free)} is free (a margin of {_size(RESERVE_BYTES)} "
