@@ -11,7 +11,8 @@ import numpy as np
 
 from frictex.app.measure.report_claims import GRATINGS, METRICS, NOT_CLAIMED, OUTPUT_HZ
 from frictex.app.measure.report_doc import Report, grating_rows, mean_defined
-from frictex.app.measure.report_matrix import Row
+from frictex.app.measure.report_matrix import Row, link_buffer_s
+from frictex.rendering.metrics import ALIGNMENT_CAP_MM
 
 PLATE_LOOP_HZ = 400.0  # seed 003, Fig. 3b: the amplitude loop's -3 dB bandwidth
 
@@ -47,7 +48,11 @@ def _intro(doc: Report) -> list[str]:
             "Metrics (rendering/metrics.py): time error = RMS(mu' - mu'*) / std(mu'*); spectral "
             "error = distance of third-octave short-time spectra, 10 Hz - 1 kHz (phase "
             "ignored); alignment error = mean distance (mm of path) between matching "
-            "friction steps, both ways. Time and alignment matter for objects and coarse "
+            "friction steps, both ways, each distance capped at "
+            f"{ALIGNMENT_CAP_MM:g} mm (also the cost of a step with no partner: "
+            f"{ALIGNMENT_CAP_MM:.3f} means no step was matched). '-' marks a metric that is "
+            "undefined for the row (a scene without steps has no alignment error). Time and "
+            "alignment matter for objects and coarse "
             "gratings (P > ~5 mm), the spectrum for fine textures (seed 003 section 6).", ""
             ] + _quick_note(doc)
 
@@ -127,7 +132,7 @@ def _throughput(doc: Report) -> list[str]:
     head = doc.headline
     lines = ["", "## Throughput and latency (composed scene, one finger, 10 kHz)", ""]
     lines += table(["renderer/motion", "replay x real time, compute only",
-                    "live 5 ms block p99 us", "latency ms", "cost us/s"],
+                    "live 5 ms block p99 us", "block wait + link buffer ms", "cost us/s"],
                    [(k, f"{v.replay_x_realtime:.0f}", f"{v.live_block_p99_us:.0f}",
                      f"{v.latency_ms:.1f}", f"{v.cost_us_per_s:.0f}") for k, v in head.items()],
                    "the composed scene is not among the scenes chosen")
@@ -135,7 +140,11 @@ def _throughput(doc: Report) -> list[str]:
         stages = next(iter(head.values())).stages_us_per_s
         lines += ["", "Per-stage cost (us per second of output) for the first of these: "
                   + ", ".join(f"{k} {v:.0f}" for k, v in stages.items())
-                  + ". Replay counts the pipeline stages; link encode is what a live link adds."]
+                  + ". Replay counts the pipeline stages; link encode is what a live link adds. "
+                  "Block wait + link buffer: the longest a touch sample waits for the block "
+                  "that first uses it, plus the jitter buffer a paced link keeps "
+                  f"({link_buffer_s() * 1e3:g} ms); the live touch-to-output latency, timed end "
+                  "to end, is `frictex bench latency`'s."]
     return lines + _end_to_end(doc.end_to_end) + _modal_replay(doc)
 
 

@@ -240,7 +240,8 @@ def _encode_seconds(commands_um: np.ndarray, block: int) -> float | None:
     return time.perf_counter() - t
 
 
-def _link_buffer_s() -> float:
+def link_buffer_s() -> float:
+    """The jitter buffer a paced link keeps (s): what ``latency_ms`` adds to the wait."""
     from frictex.device.link.host import TARGET_S
     return TARGET_S
 
@@ -326,7 +327,7 @@ class Runner:
             throughput=Throughput(
                 replay_x_realtime=output_s / compute,
                 live_block_p99_us=float(np.percentile(per_block, 99) * 1e6),
-                latency_ms=(wait_s + _link_buffer_s()) * 1e3),
+                latency_ms=(wait_s + link_buffer_s()) * 1e3),
             clamps=clamps.as_dict())
 
 
