@@ -31,7 +31,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "compressed; pandas and polars open it): the two faster for "
                              "long replays")
     parser.add_argument("--renderer", choices=render_modes(), default=None,
-                        help="render every periodic layer this way instead of as its file says")
+                        help="render every periodic layer this way instead of as its file says "
+                             "(sho: the run's SHO variant, sho-predicted unless sho-held is "
+                             "chosen; rendering/RENDERERS.md)")
     add_link_arguments(parser)
     parser.add_argument("--max-unplayed", type=share, default=None, metavar="SHARE",
                         help="with --device: exit 1 when more than this share of the "

@@ -71,7 +71,7 @@ class AmplitudeErrors:
     @staticmethod
     def _entry(n, sq, mx) -> dict:
         return {"contact_samples": n, "amplitude_error_rms_um": (sq / n) ** 0.5 if n else 0.0,
-                "amplitude_error_max_um": mx}
+                "amplitude_error_max_um": float(mx)}
 
     def report(self) -> dict:
         """{finger: {contact_samples, amplitude_error_rms_um, amplitude_error_max_um}} for
