@@ -80,6 +80,19 @@ class Sweep:
         return steps
 
 
+def check_calibratable(link, sweep: Sweep) -> None:
+    """Raise DeviceError unless the device on ``link`` can run ``sweep``: it sends force
+    reports and its amplitude limit reaches the sweep's levels."""
+    info = link.info
+    if info is None or not info.has_force_reports:
+        raise DeviceError(f"{link.label}: the device sends no force reports (PROTOCOL.md "
+                         f"4.9: a version 3 device with a lateral force sensor); it cannot "
+                         f"be calibrated")
+    if max(sweep.levels) > info.limits_um[0]:
+        raise DeviceError(f"{link.label}: the device's amplitude limit {info.limits_um[0]:g} "
+                         f"um is below the sweep's {max(sweep.levels):g} um")
+
+
 def run_sweep(link, sweep: Sweep, on_step=None, first_index: int = 0):
     """Wait for a finger, stream the protocol to ``link`` (a paced ``CommandSink``, one
     channel) from sample ``first_index`` on and read the forces back; returns the points
@@ -91,14 +104,7 @@ def run_sweep(link, sweep: Sweep, on_step=None, first_index: int = 0):
     reports do not come, and :class:`StepCut` (a ``LinkStalled``) when they cover too
     little of it.
     """
-    info = link.info
-    if info is None or not info.has_force_reports:
-        raise DeviceError(f"{link.label}: the device sends no force reports (PROTOCOL.md "
-                         f"4.9: a version 3 device with a lateral force sensor); it cannot "
-                         f"be calibrated")
-    if max(sweep.levels) > info.limits_um[0]:
-        raise DeviceError(f"{link.label}: the device's amplitude limit {info.limits_um[0]:g} "
-                         f"um is below the sweep's {max(sweep.levels):g} um")
+    check_calibratable(link, sweep)
     per = int(round(sweep.step_s * link.rate_hz))
     kept = per - int(per * sweep.settle_share)
     steps = sweep.amplitudes()

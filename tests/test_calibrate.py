@@ -195,3 +195,4 @@ def test_a_device_without_a_force_sensor_is_a_one_line_error(capsys, tmp_path):
             proc.wait(timeout=10)
     err = capsys.readouterr().err.splitlines()
     assert err[-1].startswith(f"frictex: error: {path}: the device sends no force reports")
+    assert not any("slide a finger" in line for line in err)  # refused before asking

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from frictex.device.calibration_fit import device_toml, fit_points
-from frictex.device.calibration_run import StepCut, Sweep, run_sweep
+from frictex.device.calibration_run import StepCut, Sweep, check_calibratable, run_sweep
 from frictex.device.errors import InputError
 
 #: the plate's sample rate (Hz, seed 003) and the simulated plate's amplitude limit (um)
@@ -63,6 +63,7 @@ def run(args: argparse.Namespace) -> int:
                  "--force", f"{sweep.force_n:g}", "--limit", f"{SIM_LIMIT_UM:g}") if sim else ())
     link = open_sink(args.device, channels=1, rate_hz=RATE_HZ, paced=True, sim_args=sim_args)
     try:
+        check_calibratable(link, sweep)  # before asking for a finger
         print(f"{link.label}: slide a finger at about {sweep.speed_mm_s:g} mm/s, pressing "
               f"about {sweep.force_n:g} N, for {sweep.duration_s:g} s (the sweep starts at "
               f"the touch)", file=sys.stderr)
