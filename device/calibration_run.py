@@ -99,8 +99,8 @@ def run_sweep(link, sweep: Sweep, on_step=None, first_index: int = 0):
     (w_um, normal_n, mu) as arrays.
 
     ``on_step(done, total)`` is called as each step's forces have come (progress).
-    Raises ValueError for a device that cannot be calibrated (no force reports, a limit
-    below the sweep's levels) or no finger on the plate, ``LinkStalled`` when a step's
+    Raises DeviceError for a device that cannot be calibrated (:func:`check_calibratable`)
+    or no finger on the plate, ``LinkStalled`` when a step's
     reports do not come, and :class:`StepCut` (a ``LinkStalled``) when they cover too
     little of it.
     """
