@@ -86,6 +86,24 @@ def test_traces_are_listed_with_their_comment():
         assert e.kind == "trace" and first == "# " + e.description
 
 
+def test_scenes_saved_from_the_demo_are_listed_with_their_paths(tmp_path, monkeypatch, capsys):
+    """A bundled scene edited in the demo's layer panel is saved to the user's scene
+    folder (its name stays the bundled file's): library lists it, path included, so
+    that it can be opened again."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path))
+    assert main(["library"]) == 0
+    assert " saved " not in capsys.readouterr().out  # no folder yet: nothing listed
+    saved = tmp_path / "frictex" / "scenes" / "grating-5mm.toml"
+    saved.parent.mkdir(parents=True)
+    saved.write_text((LIBRARY_DIR / "grating-5mm.toml").read_text(encoding="utf-8")
+                     .replace('description = "', 'description = "mine: '), encoding="utf-8")
+    assert main(["library"]) == 0
+    lines = [line for line in capsys.readouterr().out.splitlines() if " saved " in line]
+    assert len(lines) == 1 and lines[0].startswith("grating-5mm")
+    assert "mine: " in lines[0] and lines[0].endswith(f"[{saved}]")
+    assert resolve_scene("grating-5mm") == LIBRARY_DIR / "grating-5mm.toml"
+
+
 def test_resolve_names_and_paths(tmp_path, monkeypatch):
     assert resolve_scene("grating-5mm") == LIBRARY_DIR / "grating-5mm.toml"
     assert resolve_scene("grating-5mm.toml") == LIBRARY_DIR / "grating-5mm.toml"

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import codecs
 import difflib
+import os
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -98,6 +99,24 @@ def list_scenes() -> list[Entry]:
     """The bundled scenes, sorted by name."""
     return [Entry(p.stem, "scene", p, _scene_description(p))
             for p in sorted(LIBRARY_DIR.glob("*.toml"))]
+
+
+def user_scenes_dir() -> Path:
+    """Where the demo's layer panel saves a bundled scene the user edited (the bundled
+    files are never written to): ``$XDG_DATA_HOME/frictex/scenes``, by default
+    ``~/.local/share/frictex/scenes``."""
+    base = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
+    return Path(base) / "frictex" / "scenes"
+
+
+def list_saved_scenes() -> list[Entry]:
+    """The scenes saved in :func:`user_scenes_dir`, sorted by name, of kind "saved": one
+    opens by its path (its name stays the bundled scene's)."""
+    folder = user_scenes_dir()
+    if not folder.is_dir():
+        return []
+    return [Entry(p.stem, "saved", p, _scene_description(p))
+            for p in sorted(folder.glob("*.toml")) if p.is_file()]
 
 
 def list_traces() -> list[Entry]:

@@ -48,7 +48,7 @@ from frictex.device.errors import InputError
 from frictex.rendering.visual.layer_panel import ControlView, PanelView
 from frictex.textures.errors import Locator, TextureError, field_name
 from frictex.textures.keys import COMMON, LAYER_KEYS
-from frictex.textures.library import LIBRARY_DIR
+from frictex.textures.library import LIBRARY_DIR, user_scenes_dir
 from frictex.textures.loader import check_scene, load_scene
 from frictex.textures.references import referenced_files
 from frictex.textures.schema import MAX_MAGNITUDE, Choice, Int, Num
@@ -233,13 +233,6 @@ def _key_path(field: str) -> tuple | None:
     return tuple(path) if field else None
 
 
-def _user_scenes() -> Path:
-    """The user's scene folder: ``$XDG_DATA_HOME/frictex/scenes`` (default
-    ``~/.local/share/frictex/scenes``)."""
-    base = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
-    return Path(base) / "frictex" / "scenes"
-
-
 def is_bundled(path: Path) -> bool:
     """``path`` is one of the scenes installed with frictex (never written to)."""
     resolved = Path(path).resolve()
@@ -249,7 +242,7 @@ def is_bundled(path: Path) -> bool:
 def save_path(path: Path) -> Path:
     """Where the panel saves the scene read from ``path``: ``path`` itself, or for a
     bundled scene ``<user scene folder>/<file name>``."""
-    return _user_scenes() / Path(path).name if is_bundled(path) else Path(path)
+    return user_scenes_dir() / Path(path).name if is_bundled(path) else Path(path)
 
 
 class LayerEdit:
