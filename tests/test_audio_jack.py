@@ -156,6 +156,18 @@ def test_audio_device_by_name_through_the_registry(jack_device):
     assert audio["played_frames"] > 0.9 * 0.5 * FS
 
 
+def test_an_unknown_audio_device_lists_the_output_devices_there_are(jack_device):
+    """The help promises that an unknown name lists every device installed."""
+    import sounddevice as sd
+    from frictex.device.errors import InputError
+    name = sd.query_devices(jack_device)["name"]
+    with pytest.raises(InputError) as refused:
+        open_sink("audio:no-such-card", 1, RATE, paced=True)
+    message = str(refused.value)
+    assert message.startswith("audio device 'no-such-card': ")
+    assert "output devices: " in message and f"{jack_device}: {name} (" in message
+
+
 def test_touch_to_dac_latency_through_jack(jack_device):
     from frictex.device.audio.latency import audio_latency
 

@@ -45,6 +45,19 @@ def import_sounddevice():
     return sounddevice
 
 
+def _outputs(sd) -> str:
+    """The output devices PortAudio lists, for a message: ``audio:NAME`` takes a name (or
+    part of one) or a number."""
+    try:
+        devices = [d for d in sd.query_devices() if d["max_output_channels"] > 0]
+    except sd.PortAudioError as exc:
+        return f"PortAudio cannot list its devices ({exc})"
+    if not devices:
+        return "PortAudio lists no output device on this machine (a sound card, or JACK)"
+    return "output devices: " + ", ".join(
+        f"{d['index']}: {d['name']} ({d['max_output_channels']} ch)" for d in devices)
+
+
 class StreamOutput(AudioOutput):
     """Plays the stream on a PortAudio output device (module docstring).
 
@@ -81,10 +94,10 @@ class StreamOutput(AudioOutput):
                 channels=plan.channels, dtype="float32", latency="low",
                 callback=self._callback)
         except ValueError as exc:  # no such device
-            raise InputError(f"audio device {device!r}: {exc}") from None
+            raise InputError(f"audio device {device!r}: {exc}; {_outputs(sd)}") from None
         except sd.PortAudioError as exc:
             raise DeviceError(f"{self.label}: cannot open a {plan.channels}-channel output "
-                              f"at {plan.audio_rate} Hz: {exc}") from None
+                              f"at {plan.audio_rate} Hz: {exc}; {_outputs(sd)}") from None
         #: PortAudio's reported output latency (s): from a callback's buffer to the DAC
         self.output_latency_s = float(self.stream.latency)
 
