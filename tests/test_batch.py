@@ -7,7 +7,8 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from frictex.app.commands.cli import main
-from frictex.app.engine.batch import MAX_ERROR_SHOWN, NAME, Job, ManifestError, read_manifest, run_job
+from frictex.app.engine.batch import (MAX_ERROR_SHOWN, NAME, RESERVED, Job, ManifestError,
+                                      read_manifest, run_job)
 from frictex.device.errors import RunFailed
 from frictex.rendering.input.trace_file import TraceError
 from frictex.rendering.pipeline import RENDERERS
@@ -103,6 +104,9 @@ def test_an_unreachable_scheduler_is_one_line(tmp_path, capsys):
     ("scene,trace,format\ngrating-5mm,swipe-40mms-50hz,xlsx\n", 'format "xlsx"'),
     ("scene,trace,name\na,b,x\nc,d,x\n", 'name "x" is used by an earlier job'),
     ("scene,trace,name\na,b,../escape\n", "expected a plain folder name"),
+    ("scene,trace,name\na,b,batch.csv\n", 'name "batch.csv" is a file the batch writes'),
+    ("scene,trace,name\na,b,x\nc,d,Batch.CSV.partial\n",
+     'name "Batch.CSV.partial" is a file the batch writes'),
     ("scene,trace\na\n", "1 fields, expected 2"),
 ])
 def test_bad_manifests_name_the_line(tmp_path, capsys, text, message):
@@ -129,7 +133,8 @@ def test_any_manifest_text_is_jobs_or_one_clear_error(tmp_path_factory, text):
 UNSAFE = {"Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp"}
 _FIELDS = st.sampled_from(["grating-5mm", "swipe-40mms-50hz", "5e-324", "1e4", "\u0661\u0660",
                            "10_000", "50", "0", "csv", "sht", "../x", "a\x1bb", '"', ",", "\n",
-                           "\r", "#", " ", "\u202e", "n" * 70, "name", "rate_hz", "block"])
+                           "\r", "#", " ", "\u202e", "n" * 70, "name", "rate_hz", "block",
+                           "batch.csv", "BATCH.csv.partial"])
 
 
 @settings(max_examples=200, derandomize=True, deadline=None)
@@ -151,6 +156,7 @@ def test_any_manifest_is_bounded_jobs_or_one_escaped_line(tmp_path_factory, text
         for job in jobs:
             assert 100 <= job.rate_hz <= 1e6 and 1 <= job.block <= 100_000
             assert NAME.fullmatch(job.name) and job.name not in (".", "..")
+            assert job.name.casefold() not in RESERVED
 
 
 @pytest.mark.parametrize("error", [RunFailed, TraceError, OSError])

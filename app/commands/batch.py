@@ -1,20 +1,24 @@
 """``frictex batch MANIFEST --out DIR``: many replays, over this machine's cores or a cluster.
 
-The manifest's grammar is in ``app.engine.batch``. Exit status: 0 every job finished,
-1 some jobs failed (each is listed with its error, and in ``DIR/batch.csv``), 2 the
-manifest or an option is bad (nothing ran).
+The manifest's grammar, ``batch.csv``'s columns, what ``DIR`` may hold and what a
+signal does are in ``app.engine.batch``. Exit status: 0 every job finished, 1 some jobs
+failed (each is listed with its error, and in ``DIR/batch.csv``), 2 the manifest, an
+option or ``DIR`` is bad (nothing ran), 130 Ctrl-C (128 + the signal for SIGTERM,
+SIGHUP) stopped it (``DIR/batch.csv`` lists the jobs that finished).
 """
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 from functools import partial
 from pathlib import Path
 
 from frictex.app.commands.argtypes import positive_int
-from frictex.app.engine.batch import read_manifest, run_job, write_results
-from frictex.app.engine.fanout import default_workers, fan_out
+from frictex.app.engine.batch import (earlier_jobs, not_ok, read_manifest, remove_earlier,
+                                      run_job, write_results)
+from frictex.app.engine.fanout import Interrupted, default_workers, fan_out
 from frictex.rendering.renderers import render_modes
 from frictex.textures.outside import add_allow_outside
 
@@ -37,7 +41,44 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     jobs = read_manifest(Path(args.manifest), render_modes())
     out_dir = Path(args.out)
+    earlier = earlier_jobs(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
+    rows, stop = _run_jobs(args, jobs, out_dir)
+    table = write_results(out_dir, rows)
+    for name in remove_earlier(out_dir, earlier, rows):
+        print(f"frictex: warning: {out_dir / name}: an earlier batch's job folder that also "
+              "holds files not a run's output; left as it was", file=sys.stderr)
+    return _report(args, rows, stop, table)
+
+
+def _report(args: argparse.Namespace, rows: list[dict], stop, table: Path) -> int:
+    """The batch's last lines and exit status (module docstring); a stopped batch ends as
+    an interrupted replay does (``KeyboardInterrupt``, or ``SystemExit(128 + signal)``)."""
+    if not args.quiet or stop is not None:
+        print(_totals(rows, table), file=sys.stderr if stop is not None else sys.stdout)
+    if stop is not None:
+        if stop.signum == signal.SIGINT:
+            raise KeyboardInterrupt
+        raise SystemExit(128 + stop.signum)
+    failed = [row for row in rows if row["status"] == "failed"]
+    if failed:
+        print(f"frictex: error: {len(failed)} of {len(rows)} jobs failed: "
+              + "; ".join(f"{row['name']}: {row['error']}" for row in failed), file=sys.stderr)
+        return 1
+    return 0
+
+
+def _totals(rows: list[dict], table: Path) -> str:
+    """One line: how many jobs finished, their seconds of output and of wall time."""
+    ok = [row for row in rows if row["status"] == "ok"]
+    return (f"{len(ok)} of {len(rows)} jobs finished ({sum(r['output_s'] for r in ok):.1f} s "
+            f"of output, {sum(r['wall_s'] for r in ok):.1f} s of job time); results in {table}")
+
+
+def _run_jobs(args: argparse.Namespace, jobs: list, out_dir: Path):
+    """The jobs' result rows, with a progress bar, and the :class:`Interrupted` that
+    stopped them (None if none did; the jobs it kept from finishing then have rows
+    ``interrupted``)."""
     from tqdm import tqdm
     bar = tqdm(total=len(jobs), desc="batch", unit="job", disable=True if args.quiet else None)
 
@@ -47,20 +88,18 @@ def run(args: argparse.Namespace) -> int:
             bar.write(f"frictex: job {row['name']} failed: {row['error']}", file=sys.stderr)
 
     try:
-        rows = fan_out(partial(run_job, out_dir=str(out_dir.resolve())), jobs,
+        return fan_out(partial(run_job, out_dir=str(out_dir.resolve())), jobs,
                        workers=args.jobs or default_workers(), scheduler=args.scheduler,
-                       on_done=done)
+                       on_done=done), None
+    except Interrupted as stop:
+        return [row if row is not None else _interrupted(job, stop)
+                for job, row in zip(jobs, stop.results)], stop
     finally:
         bar.close()
-    table = write_results(out_dir, rows)
-    failed = [row for row in rows if row["status"] != "ok"]
-    output_s = sum(row["output_s"] for row in rows)
-    wall_s = sum(row["wall_s"] for row in rows)
-    if not args.quiet:
-        print(f"{len(rows) - len(failed)} of {len(rows)} jobs finished ({output_s:.1f} s of "
-              f"output, {wall_s:.1f} s of job time); results in {table}")
-    if failed:
-        print(f"frictex: error: {len(failed)} of {len(rows)} jobs failed: "
-              + "; ".join(f"{row['name']}: {row['error']}" for row in failed), file=sys.stderr)
-        return 1
-    return 0
+
+
+def _interrupted(job, stop: Interrupted) -> dict:
+    """The row of a job that ``stop`` kept from finishing."""
+    how = "stopped while it ran" if job.index in stop.stopped else "not started"
+    return not_ok(job, "interrupted", f"{how}: the batch was stopped by "
+                                      f"{signal.Signals(stop.signum).name}")

@@ -15,9 +15,11 @@ the stems' other characters as ``_``), unique::
     rate_hz := a number as trace files write it (ASCII decimal: 10000, 2.5e4)
     block   := DIGITS                                   # ASCII 0-9
     name    := (letter | digit) { letter | digit | "." | "_" | "-" }   # ASCII, at most 64
+               except a name in RESERVED: batch.csv, batch.csv.partial (any case)
 
 A name is thus a plain folder name and a plain cell of ``batch.csv``: no path separator,
-no control character, no line break, never ``.`` or ``..``. Cells may be quoted as CSV
+no control character, no line break, never ``.`` or ``..``, never a file the batch
+writes itself (:data:`RESERVED`). Cells may be quoted as CSV
 allows; a line ends at a line feed (a carriage return before it is dropped).
 
 The manifest is read as the trace reader reads traces (``textures.library.read_utf8``):
@@ -25,10 +27,40 @@ a regular UTF-8 file of at most MAX_MANIFEST_BYTES, without NUL bytes, lines of 
 MAX_LINE_BYTES; a FIFO or a device is refused before anything is read. Errors name the
 file and the line, and show values escaped and cut (``device.safe_text``).
 
-Every job writes its replay outputs into its folder; the batch writes ``batch.csv``:
-one row per job with its status (``ok`` or ``failed``), error, output seconds, wall
-seconds and end-to-end real-time factor, clamps and warnings. A failed job does not
-stop the others. A text cell that would start with ``=``, ``+``, ``-``, ``@``, a tab or a
+Every job writes its replay outputs into its folder; the batch writes ``batch.csv``,
+one row per job (:data:`RESULT_COLUMNS`):
+
+- ``job`` (its row among the jobs, from 0), ``name``, ``status``: ``ok``, ``failed``
+  (``error`` says why) or ``interrupted`` (the batch was stopped before the job
+  finished: ``error`` says whether it had started);
+- ``output_s``: seconds of output the job wrote; ``wall_s``: the job's wall time in its
+  worker, from its start to its outputs in place, start-up included (reading the scene
+  and the trace, loading the compiled kernels); ``x_realtime``: ``output_s / wall_s``;
+  ``x_realtime_end_to_end``: the replay's own factor (``timings`` in its
+  ``summary.json``), which leaves the start-up out, so it is the larger of the two;
+- ``clamps`` (the inversion's clamped samples, all guards) and ``warnings`` (how many;
+  the texts are in the job's ``summary.json``).
+
+A job that is not ``ok`` has these numeric cells empty. A failed job does not stop the
+others.
+
+The output folder. ``--out`` is new, empty, or an earlier batch's: nothing in it but
+``batch.csv`` (and ``batch.csv.partial``), job folders (a folder with a replay's
+``summary.json``) and the staging leftovers of killed replays (``.<name>.frictex-*``);
+anything else is refused before a job runs (:func:`earlier_jobs`). A job's folder is
+replaced as a replay replaces its ``--out``: whole, when the job commits, so it holds
+the earlier outputs until then. Once ``batch.csv`` is written (the batch's end, or its
+interruption), the earlier batch's job folders that it does not list as ``ok`` are
+removed (:func:`remove_earlier`; one that holds a file not a run's output, the user's,
+is left as it is and named in a warning). So ``--out`` then holds ``batch.csv`` and
+exactly the folders of the jobs it lists ``ok``.
+
+Ctrl-C (or SIGTERM, SIGHUP) stops a batch within about a second: no job starts after
+it, each running one ends as an interrupted replay ends (its folder as it was), and
+``batch.csv`` is written with the jobs that finished and the rest ``interrupted``; the
+command then exits as an interrupted replay does (130 for Ctrl-C, 128 + the signal
+otherwise). On a Dask cluster jobs already running finish on their workers (Dask cannot
+stop them) though ``batch.csv`` lists them ``interrupted``. A text cell that would start with ``=``, ``+``, ``-``, ``@``, a tab or a
 carriage return (an error that starts with a scene named ``=HYPERLINK(...)``) is written
 behind a single quote, so that a spreadsheet shows it as text, never runs it (OWASP's
 rule for CSV injection).
@@ -40,11 +72,13 @@ import csv
 import math
 import os
 import re
+import shutil
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 from frictex.app.engine.limits import BLOCK_SIZES, OUTPUT_RATES_HZ
+from frictex.app.engine.staging import SUMMARY, is_run_output
 from frictex.app.engine.tables import FORMATS
 from frictex.device.errors import FrictexError, InputError
 from frictex.device.safe_text import escape, quoted
@@ -52,8 +86,13 @@ from frictex.rendering.input.trace_file import MAX_LINE_BYTES, NUMBER, describe_
 from frictex.textures.library import UnreadableText, read_utf8
 
 COLUMNS = ("scene", "trace", "renderer", "rate_hz", "block", "format", "name")
-RESULT_COLUMNS = ("job", "name", "status", "error", "output_s", "wall_s",
+RESULT_COLUMNS = ("job", "name", "status", "error", "output_s", "wall_s", "x_realtime",
                   "x_realtime_end_to_end", "clamps", "warnings")
+#: the numeric cells of ``batch.csv``, empty for a job that is not ``ok``
+MEASURES = RESULT_COLUMNS[4:]
+#: the files a batch writes in its ``--out`` beside the job folders: no job's name
+RESULTS, RESULTS_PARTIAL = "batch.csv", "batch.csv.partial"
+RESERVED = (RESULTS, RESULTS_PARTIAL)
 #: Largest manifest read (bytes): about 10,000 jobs
 MAX_MANIFEST_BYTES = 1 << 20
 #: a job name (the module docstring's grammar)
@@ -190,14 +229,24 @@ def _job(index: int, cell: dict, base: Path, renderers, where: str) -> Job:
     fmt = cell.get("format") or "csv"
     if fmt not in FORMATS:
         raise ManifestError(f"{where}: format {quoted(fmt)}: expected one of {', '.join(FORMATS)}")
+    name = _name(cell, index, where)
+    return Job(index, _resolve(cell["scene"], base), _resolve(cell["trace"], base), renderer,
+               _number(cell, "rate_hz", 10_000.0, OUTPUT_RATES_HZ, "Hz", where),
+               _number(cell, "block", 50, BLOCK_SIZES, "samples", where), fmt, name)
+
+
+def _name(cell: dict, index: int, where: str) -> str:
+    """The job's name: the ``name`` field, or made of the row number and the stems; a
+    :data:`NAME`, not one of :data:`RESERVED`."""
     name = cell.get("name") or f"{index:04d}-{_stem(cell['scene'])}-{_stem(cell['trace'])}"
     if NAME.fullmatch(name) is None:
         raise ManifestError(f"{where}: name {quoted(name)}: expected a plain folder name (ASCII "
                             f"letters, digits, '.', '_' and '-', starting with a letter or a "
                             f"digit, at most 64)")
-    return Job(index, _resolve(cell["scene"], base), _resolve(cell["trace"], base), renderer,
-               _number(cell, "rate_hz", 10_000.0, OUTPUT_RATES_HZ, "Hz", where),
-               _number(cell, "block", 50, BLOCK_SIZES, "samples", where), fmt, name)
+    if name.casefold() in RESERVED:
+        raise ManifestError(f"{where}: name {quoted(name)} is a file the batch writes in its "
+                            f"--out ({', '.join(RESERVED)}): name the job otherwise")
+    return name
 
 
 def _stem(spec: str) -> str:
@@ -221,30 +270,37 @@ def _resolve(spec: str, base: Path) -> str:
 
 def run_job(job: Job, out_dir: str) -> dict:
     """Replay one job into ``out_dir/job.name``; never raises for the job's own errors:
-    returns its result row (``status`` "ok" or "failed" with the error). Run the jobs of a
-    batch with ``app.engine.fanout.fan_out(functools.partial(run_job, out_dir=...), jobs)``."""
+    returns its result row (``status`` "ok", or "failed" with the error and empty
+    measures). Run the jobs of a batch with
+    ``app.engine.fanout.fan_out(functools.partial(run_job, out_dir=...), jobs)``."""
     from frictex.app.engine.replay import run_replay
     start = time.perf_counter()
-    row = {"job": job.index, "name": job.name, "status": "ok", "error": "", "output_s": 0.0,
-           "wall_s": 0.0, "x_realtime_end_to_end": 0.0, "clamps": 0, "warnings": 0}
     try:
         doc = run_replay(job.scene, job.trace, Path(out_dir) / job.name, rate_hz=job.rate_hz,
                          fmt=job.fmt, block_size=job.block, render_override=job.renderer,
                          progress=False)
     except (FrictexError, ValueError, OSError) as exc:
-        row.update(status="failed", error=escape(exc, MAX_ERROR_SHOWN))
-    else:
-        row.update(output_s=doc["output"]["duration_s"],
-                   x_realtime_end_to_end=doc["timings"]["x_realtime_end_to_end"] or 0.0,
-                   clamps=sum(doc["clamps"].values()), warnings=len(doc["warnings"]))
-    row["wall_s"] = time.perf_counter() - start
-    return row
+        return not_ok(job, "failed", escape(exc, MAX_ERROR_SHOWN))
+    wall_s = time.perf_counter() - start
+    output_s = doc["output"]["duration_s"]
+    return {"job": job.index, "name": job.name, "status": "ok", "error": "",
+            "output_s": output_s, "wall_s": wall_s,
+            "x_realtime": output_s / wall_s if wall_s > 0 else None,
+            "x_realtime_end_to_end": doc["timings"]["x_realtime_end_to_end"],
+            "clamps": sum(doc["clamps"].values()), "warnings": len(doc["warnings"])}
+
+
+def not_ok(job: Job, status: str, error: str) -> dict:
+    """The result row of a job that did not finish: ``status`` ("failed" or
+    "interrupted"), ``error``, every measure empty."""
+    return {"job": job.index, "name": job.name, "status": status, "error": error,
+            **dict.fromkeys(MEASURES)}
 
 
 def write_results(out_dir: Path, rows: list[dict]) -> Path:
     """``batch.csv``: one row per job (see the module docstring), written all or nothing."""
-    path = Path(out_dir) / "batch.csv"
-    partial = path.with_name(path.name + ".partial")
+    path = Path(out_dir) / RESULTS
+    partial = path.with_name(RESULTS_PARTIAL)
     try:
         with open(partial, "w", encoding="utf-8", newline="") as fh:
             writer = csv.writer(fh, lineterminator="\n")
@@ -256,13 +312,69 @@ def write_results(out_dir: Path, rows: list[dict]) -> Path:
     return path
 
 
+def earlier_jobs(out_dir: Path) -> list[str]:
+    """The job folders an earlier batch left in ``out_dir`` (sorted names; none where it
+    does not exist); an InputError, touching nothing, where it holds anything else than
+    an earlier batch's outputs (the module docstring's "The output folder")."""
+    out_dir = Path(out_dir)
+    if not out_dir.exists():
+        return []
+    if not out_dir.is_dir():
+        raise InputError(f"{out_dir}: exists and is not a folder; --out is a folder for the "
+                         "jobs' folders and batch.csv")
+    jobs = []
+    for entry in sorted(os.scandir(out_dir), key=lambda e: e.name):
+        if entry.name in RESERVED and entry.is_file(follow_symlinks=False):
+            continue
+        if _LEFTOVER.fullmatch(entry.name):
+            continue
+        if entry.is_dir(follow_symlinks=False) and os.path.isfile(Path(entry.path) / SUMMARY):
+            jobs.append(entry.name)
+            continue
+        raise InputError(f"{out_dir}: holds {quoted(escape(entry.name, 80))}, which is not an "
+                         f"earlier batch's output ({RESULTS}, job folders with a "
+                         f"{SUMMARY}); a batch replaces what an earlier one wrote in its "
+                         "--out: write into a new folder or move it")
+    return jobs
+
+
+#: a killed replay's staging leftover beside its job folder (``app.engine.staging``)
+_LEFTOVER = re.compile(r"\..+\.frictex-(?:staging|old|kept)\..+")
+
+
+def remove_earlier(out_dir: Path, earlier: list[str], rows: list[dict]) -> list[str]:
+    """Remove the ``earlier`` job folders of ``out_dir`` that ``rows`` do not list as ok,
+    each holding only a run's outputs (``summary.json`` removed last, so that a folder cut
+    short is still recognised as a job's). Returns the folders left as they were because
+    they hold something else too (the user's files)."""
+    ok = {row["name"] for row in rows if row["status"] == "ok"}
+    kept = []
+    for name in earlier:
+        folder = Path(out_dir) / name
+        if name in ok or not folder.is_dir():
+            continue
+        entries = sorted(os.scandir(folder), key=lambda e: e.name == SUMMARY)
+        if not all(is_run_output(entry) for entry in entries):
+            kept.append(name)
+            continue
+        for entry in entries:
+            if entry.is_dir(follow_symlinks=False):
+                shutil.rmtree(entry.path)
+            else:
+                os.unlink(entry.path)
+        folder.rmdir()
+    return kept
+
+
 #: first characters that make a spreadsheet read a cell as a formula (OWASP CSV injection)
 FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
 
 
 def _cell(value):
-    """A ``batch.csv`` cell: floats to 4 decimals; text that a spreadsheet would take for
+    """A ``batch.csv`` cell: None empty, floats to 4 decimals; text that a spreadsheet would take for
     a formula (starting with one of :data:`FORMULA_STARTS`) behind a single quote."""
+    if value is None:
+        return ""
     if isinstance(value, float):
         return f"{value:.4f}"
     if isinstance(value, str) and value.startswith(FORMULA_STARTS):

@@ -3,14 +3,55 @@ Dask cluster. ``frictex batch`` fans replays out this way, ``frictex report`` it
 
 The function and the items must be picklable (a module-level function, frozen
 dataclasses); results come back in the items' order whatever order they finish in.
+
+Stopping. A SIGINT (Ctrl-C), SIGTERM or SIGHUP that comes while :func:`fan_out` runs
+(in the main thread) stops it: no item starts after it, the items running are stopped,
+and once none runs :func:`fan_out` raises :class:`Interrupted` with the results of the
+items that finished. Over this machine's cores the workers run in a process group of
+their own, so that a terminal's Ctrl-C (or ``timeout``'s signal to the group) reaches
+only this process, which sets a flag the workers share (a worker reads it before each
+item, and starts none once it is set) and passes one SIGINT on to each worker: a
+worker gets it once whether the signal came to this process alone or to its group. A
+worker between items lets it pass; one running an item gets ``KeyboardInterrupt`` there,
+or, in a replay, where a replay ends a run on Ctrl-C (between blocks, its output folder
+left as it was: ``app.engine.driver.deferred_interrupts``). A further signal is passed
+on again, and a replay then stops at once. In this process (one worker) the signal
+stops the item running the same way. Should this process die (SIGKILL), each worker
+gets a SIGINT from the system (Linux) and stops its item likewise. On a Dask cluster
+Ctrl-C cancels the items not yet started; those already running go on to their end on
+their workers (Dask cannot stop a running task).
 """
 
 from __future__ import annotations
 
 import os
+import signal
 import sys
+import threading
+from contextlib import contextmanager
 
+from frictex.app.engine.driver import HELD_SIGNALS
 from frictex.device.errors import MissingExtra
+
+#: prctl(2)'s option: the signal a process gets when its parent dies (Linux)
+_PR_SET_PDEATHSIG = 1
+#: how often (s) the parent looks at the signal flag while it waits for results
+POLL_S = 0.1
+#: a worker's outcomes for one item: fn(item) returned; not started (the flag was set);
+#: stopped by a signal while it ran
+DONE, NOT_STARTED, STOPPED = "done", "not started", "stopped"
+
+
+class Interrupted(KeyboardInterrupt):
+    """:func:`fan_out` stopped by signal ``signum``: ``results`` in the items' order, None
+    for an item that did not finish; ``stopped`` the indices of the items stopped while
+    they ran (the other unfinished ones never started)."""
+
+    def __init__(self, signum: int, results: list, stopped: list[int]):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+        self.results = results
+        self.stopped = stopped
 
 
 def default_workers() -> int:
@@ -26,24 +67,196 @@ def fan_out(fn, items: list, *, workers: int = 1, scheduler: str | None = None,
     """``[fn(item) for item in items]``, computed by ``workers`` processes (1: here, in
     order) or, with ``scheduler`` (a Dask scheduler's address), by that cluster's workers,
     which need frictex installed and the items' files at the same paths.
-    ``on_done(result)`` is called in this process as each finishes.
+    ``on_done(result)`` is called in this process as each finishes. A signal stops it
+    (module docstring): :class:`Interrupted`.
     """
     done = on_done or (lambda result: None)
     if scheduler is not None:
         return _dask(fn, items, scheduler, done)
     if workers == 1 or len(items) <= 1:
-        results = []
-        for item in items:
-            results.append(fn(item))
-            done(results[-1])
-        return results
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+        return _here(fn, items, done)
+    return _pool(fn, items, min(workers, len(items)), done)
+
+
+class _Stopper:
+    """This process's handler of :data:`HELD_SIGNALS` while :func:`fan_out` runs: keeps
+    the first signal (``signum``); with workers (``flag``, their shared flag) sets the
+    flag and passes SIGINT on to each, else raises ``KeyboardInterrupt`` in the item
+    running here (``running``)."""
+
+    def __init__(self, flag=None):
+        self.signum: int | None = None
+        self.flag = flag
+        self.running = False
+
+    def __call__(self, signum, frame) -> None:
+        if self.signum is None:
+            self.signum = signum
+        if self.flag is None:
+            if self.running:
+                raise KeyboardInterrupt
+            return
+        self.flag.value = 1
+        import multiprocessing
+        for child in multiprocessing.active_children():
+            try:
+                os.kill(child.pid, signal.SIGINT)
+            except ProcessLookupError:  # it ended meanwhile
+                pass
+
+
+@contextmanager
+def _handling(stopper: _Stopper):
+    """Within: ``stopper`` handles the signals this process does not ignore (main thread
+    only: elsewhere Python runs no handler)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {sig: signal.getsignal(sig) for sig in HELD_SIGNALS}
+    for sig, handler in previous.items():
+        if handler is not signal.SIG_IGN:
+            signal.signal(sig, stopper)
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            if handler is not signal.SIG_IGN:
+                signal.signal(sig, handler)
+
+
+def _signal_of(exc: BaseException) -> int | None:
+    """The signal that ``exc`` (raised by an item) stands for: SIGINT for a
+    ``KeyboardInterrupt``, ``SystemExit(128 + signal)`` as a replay raises it for the
+    others; None for any other exit."""
+    if isinstance(exc, KeyboardInterrupt):
+        return signal.SIGINT
+    code = exc.code if isinstance(exc, SystemExit) else None
+    return next((sig for sig in HELD_SIGNALS if code == 128 + sig), None)
+
+
+def _here(fn, items: list, done) -> list:
+    """The items one after another in this process, stopped by a signal."""
+    stopper = _Stopper()
     results: list = [None] * len(items)
-    with ProcessPoolExecutor(min(workers, len(items)), mp_context=_pool_context()) as pool:
-        futures = {pool.submit(fn, item): k for k, item in enumerate(items)}
-        for future in as_completed(futures):
-            results[futures[future]] = future.result()
-            done(results[futures[future]])
+    stopped: list[int] = []
+    with _handling(stopper):
+        for k, item in enumerate(items):
+            if stopper.signum is not None:
+                break
+            stopper.running = True
+            try:
+                results[k] = fn(item)
+            except (KeyboardInterrupt, SystemExit) as exc:
+                signum = _signal_of(exc)
+                if signum is None:
+                    raise
+                stopper.signum = stopper.signum or signum
+                stopped.append(k)
+                break
+            finally:
+                stopper.running = False
+            done(results[k])
+    if stopper.signum is not None:
+        raise Interrupted(stopper.signum, results, stopped)
+    return results
+
+
+class _Worker:
+    """A worker process's part: the parent's flag and pid, and whether an item runs now
+    (a SIGINT then stops it; between items it passes, unless the parent has died: then
+    the worker ends, as it does after an item once the parent is gone)."""
+
+    flag = None
+    parent = 0
+    running = False
+
+    @classmethod
+    def interrupt(cls, signum, frame) -> None:
+        if cls.running:
+            raise KeyboardInterrupt
+        cls.end_if_orphaned()
+
+    @classmethod
+    def end_if_orphaned(cls) -> None:
+        """End this worker if its parent is gone: nothing would take its results, and
+        every worker holds the item queue open, so that it would wait for ever."""
+        if os.getppid() != cls.parent:
+            os._exit(128 + signal.SIGINT)
+
+
+def _start_worker(flag, parent: int) -> None:
+    """A worker's start: the parent's ``flag``, a process group of its own (signals to
+    the parent's group reach only the parent, which passes them on), its SIGINT handler;
+    writing to the terminal from that background group never stops it (SIGTTOU). On
+    Linux a SIGINT also comes when the parent (pid ``parent``) dies, even by SIGKILL, so
+    that the item running stops as it would on the parent's Ctrl-C."""
+    _Worker.flag, _Worker.parent = flag, parent
+    if hasattr(os, "setpgid"):
+        os.setpgid(0, 0)
+    if sys.platform == "linux":
+        import ctypes
+        ctypes.CDLL(None).prctl(_PR_SET_PDEATHSIG, signal.SIGINT)
+        _Worker.end_if_orphaned()  # it died before that
+    signal.signal(signal.SIGINT, _Worker.interrupt)
+    for sig in HELD_SIGNALS[1:]:
+        if signal.getsignal(sig) is not signal.SIG_IGN:  # nohup's stays
+            signal.signal(sig, signal.SIG_DFL)
+    if hasattr(signal, "SIGTTOU"):
+        signal.signal(signal.SIGTTOU, signal.SIG_IGN)
+
+
+def _run_item(fn, item) -> tuple[str, object]:
+    """In a worker: ``(DONE, fn(item))``, or ``(NOT_STARTED, None)`` once the parent's
+    flag is set, or ``(STOPPED, None)`` when the parent's SIGINT stopped ``fn``."""
+    _Worker.running = True  # before the flag is read: a signal after it stops the item
+    try:
+        if _Worker.flag.value:
+            return NOT_STARTED, None
+        return DONE, fn(item)
+    except (KeyboardInterrupt, SystemExit) as exc:
+        if _signal_of(exc) is None:
+            raise
+        return STOPPED, None
+    finally:
+        _Worker.running = False
+        _Worker.end_if_orphaned()
+
+
+def _pool(fn, items: list, workers: int, done) -> list:
+    """The items over ``workers`` processes of this machine, stopped by a signal."""
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+    context = _pool_context()
+    stopper = _Stopper(context.RawValue("b", 0))
+    results: list = [None] * len(items)
+    stopped: list[int] = []
+
+    def take(future) -> None:
+        outcome, result = future.result()
+        if outcome == DONE:
+            results[futures[future]] = result
+            done(result)
+        elif outcome == STOPPED:
+            stopped.append(futures[future])
+            if stopper.signum is None:  # a worker signalled on its own: stop all
+                stopper(signal.SIGINT, None)
+
+    with _handling(stopper):
+        pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_start_worker,
+                                   initargs=(stopper.flag, os.getpid()))
+        try:
+            futures = {pool.submit(_run_item, fn, item): k for k, item in enumerate(items)}
+            pending = set(futures)
+            while pending and stopper.signum is None:
+                finished, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    take(future)
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+        for future in pending:
+            if not future.cancelled():
+                take(future)
+    if stopper.signum is not None:
+        raise Interrupted(stopper.signum, results, sorted(stopped))
     return results
 
 
@@ -73,13 +286,17 @@ def _dask(fn, items: list, address: str, done) -> list:
         client = Client(address, timeout=10)
     except (OSError, TimeoutError) as exc:
         raise OSError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
+    results: list = [None] * len(items)
     try:
         futures = client.map(fn, items, pure=False)
         index = {f.key: k for k, f in enumerate(futures)}
-        results: list = [None] * len(items)
-        for future in as_completed(futures):
-            results[index[future.key]] = future.result()
-            done(results[index[future.key]])
+        try:
+            for future in as_completed(futures):
+                results[index[future.key]] = future.result()
+                done(results[index[future.key]])
+        except KeyboardInterrupt:
+            client.cancel(futures)
+            raise Interrupted(signal.SIGINT, results, []) from None
     finally:
         client.close()
     return results

@@ -1,0 +1,121 @@
+"""frictex batch's output folder and batch.csv: an earlier batch's folders replaced,
+anything else refused, each column counting what it says."""
+
+import csv
+import json
+
+import pytest
+
+from frictex.app.commands.cli import main
+from frictex.app.engine.batch import MEASURES, RESULT_COLUMNS
+
+
+def manifest(tmp_path, *names, trace="swipe-40mms-50hz"):
+    path = tmp_path / f"m-{'-'.join(names)}.csv"
+    path.write_text("scene,trace,name\n" + "".join(f"grating-5mm,{trace},{n}\n" for n in names))
+    return path
+
+
+def batch(path, out, *extra) -> int:
+    return main(["batch", str(path), "--out", str(out), "--jobs", "1", "--quiet", *extra])
+
+
+def results(out):
+    with open(out / "batch.csv", newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def listing(out):
+    return sorted(p.name for p in out.iterdir())
+
+
+def test_a_batch_replaces_an_earlier_batch_in_its_folder(tmp_path):
+    """The review's case: p01-t1, t2, t4 from an earlier batch, then a batch of new1 and
+    p01-t2: afterwards the folder holds batch.csv and the new batch's jobs, and p01-t2
+    holds the new run (its summary replaced)."""
+    out = tmp_path / "batch1"
+    assert batch(manifest(tmp_path, "p01-t1", "p01-t2", "p01-t4"), out) == 0
+    before = (out / "p01-t2" / "summary.json").stat().st_ino
+    assert batch(manifest(tmp_path, "new1", "p01-t2"), out) == 0
+    assert listing(out) == ["batch.csv", "new1", "p01-t2"]
+    assert [row["name"] for row in results(out)] == ["new1", "p01-t2"]
+    assert (out / "p01-t2" / "summary.json").stat().st_ino != before
+
+
+def test_an_earlier_jobs_folder_goes_when_its_job_now_fails(tmp_path, capsys):
+    """batch.csv lists the job failed: its earlier outputs are not left beside it as if
+    they were this batch's."""
+    out = tmp_path / "o"
+    assert batch(manifest(tmp_path, "a", "b"), out) == 0
+    broken = tmp_path / "m-broken.csv"
+    broken.write_text("scene,trace,name\ngrating-5mm,swipe-40mms-50hz,a\n"
+                      "grating-5mm,no-such-trace.csv,b\n")
+    assert batch(broken, out) == 1
+    assert listing(out) == ["a", "batch.csv"]
+    assert {r["name"]: r["status"] for r in results(out)} == {"a": "ok", "b": "failed"}
+
+
+@pytest.mark.parametrize("foreign", ["notes.txt", "data", "m.csv"])
+def test_a_folder_holding_anything_else_is_refused_untouched(tmp_path, capsys, foreign):
+    out = tmp_path / "o"
+    assert batch(manifest(tmp_path, "a"), out) == 0
+    if foreign == "data":
+        (out / foreign).mkdir()
+        (out / foreign / "x.csv").write_text("1\n")
+    else:
+        (out / foreign).write_text("mine\n")
+    before = {p: p.stat().st_mtime_ns for p in out.rglob("*")}
+    assert batch(manifest(tmp_path, "b"), out) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f'holds "{foreign}", which is not an earlier batch' in err[0]
+    assert {p: p.stat().st_mtime_ns for p in out.rglob("*")} == before
+
+
+def test_a_job_folder_with_the_users_file_is_kept_and_named(tmp_path, capsys):
+    out = tmp_path / "o"
+    assert batch(manifest(tmp_path, "a", "b"), out) == 0
+    (out / "b" / "notes.txt").write_text("trial b went badly\n")
+    assert batch(manifest(tmp_path, "a"), out) == 0
+    assert "b: an earlier batch's job folder that also holds files" in capsys.readouterr().err
+    assert sorted(p.name for p in (out / "b").iterdir()) == ["commands.csv", "friction.csv",
+                                                              "notes.txt", "summary.json"]
+
+
+def test_a_file_as_out_is_refused(tmp_path, capsys):
+    (tmp_path / "o").write_text("")
+    assert batch(manifest(tmp_path, "a"), tmp_path / "o") == 2
+    assert "exists and is not a folder" in capsys.readouterr().err
+
+
+def test_each_column_counts_what_it_says(tmp_path):
+    """x_realtime is output_s / wall_s of the same row; the replay's end-to-end factor,
+    which leaves the start-up out, is at least as large; a failed job's numeric cells
+    are empty."""
+    path = tmp_path / "m.csv"
+    path.write_text("scene,trace,name\ngrating-5mm,swipe-40mms-50hz,ok1\n"
+                    "grating-5mm,no-such-trace.csv,bad\n")
+    assert batch(path, tmp_path / "o") == 1
+    rows = {row["name"]: row for row in results(tmp_path / "o")}
+    assert list(rows["ok1"]) == list(RESULT_COLUMNS)
+    ok = {key: float(rows["ok1"][key]) for key in MEASURES}
+    assert ok["output_s"] == pytest.approx(2.005)
+    half = 0.5e-4  # the cells' rounding (4 decimals)
+    assert (ok["output_s"] / (ok["wall_s"] + half) - half <= ok["x_realtime"]
+            <= ok["output_s"] / (ok["wall_s"] - half) + half)
+    assert ok["x_realtime_end_to_end"] >= ok["x_realtime"]
+    assert all(rows["bad"][key] == "" for key in MEASURES)
+    assert rows["bad"]["status"] == "failed" and rows["bad"]["error"]
+
+
+def test_a_killed_jobs_staging_leftover_is_not_foreign(tmp_path):
+    """What a killed replay leaves beside its folder is cleared by the next replay of the
+    same job, not refused."""
+    out = tmp_path / "o"
+    assert batch(manifest(tmp_path, "a"), out) == 0
+    leftover = out / ".a.frictex-staging.999999999.abcdef"
+    leftover.mkdir()
+    (leftover / "friction.csv").write_text("t_s\n")
+    assert batch(manifest(tmp_path, "a"), out) == 0
+    assert listing(out) == ["a", "batch.csv"]
+    warnings = json.loads((out / "a" / "summary.json").read_text())["warnings"]
+    assert any("removed the leftovers of killed runs" in w for w in warnings)
