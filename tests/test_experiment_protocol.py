@@ -9,6 +9,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from frictex.app.commands.cli import main
 from frictex.app.experiment import protocol_doc
 from frictex.app.experiment.protocol import ProtocolError, check_protocol, load_protocol
 from frictex.app.experiment.toml_text import toml_text
@@ -128,6 +129,35 @@ def test_every_problem_is_listed(tmp_path):
     text = GOOD.replace("repetitions = 2", "repetitions = -1\npractice = 1000")
     _, problems = check_protocol(write(tmp_path, text))
     assert [p.field for p in problems] == ["repetitions", "practice"]
+
+
+def test_check_prints_every_problem_one_line_each(tmp_path, capsys):
+    """--check lists every problem with its file, line and field, as frictex validate
+    does; a run names the first and points at --check for the rest."""
+    bad = write(tmp_path, BAD_THREE)
+    assert main(["experiment", str(bad), "--check"]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert [line.split(": ")[2:4] for line in lines] == [
+        [f"{bad}:3", "repetitions"], [f"{bad}:8", "stimuli.levels[1]"],
+        [f"{bad}:10", "analysis.target"]]
+    assert all(line.startswith("frictex: error: ") and "more problem" not in line
+               for line in lines)
+    with pytest.raises(ProtocolError, match=r"\(and 2 more problems; frictex experiment .*"
+                                            r"p\.toml --check lists them all\)$"):
+        load_protocol(bad)
+
+
+BAD_THREE = """format = 1
+method = "2afc"
+repetitions = 0
+[stimuli]
+scene = "grating-5mm"
+vary = "period_mm"
+reference = 5.0
+levels = [4.5, 5.5]
+[analysis]
+target = 1.2
+"""
 
 
 #: a value as TOML text: odd literals, and any finite value written by toml_text

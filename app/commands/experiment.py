@@ -96,9 +96,14 @@ def run(args: argparse.Namespace) -> int:
     if len(args.target) != 1:
         raise InputError(f"expected one protocol file, got {len(args.target)} arguments "
                          f"(to analyse sessions: frictex experiment analyse SESSION ...)")
-    from frictex.app.experiment.protocol import load_protocol
-    protocol = load_protocol(args.target[0])
+    from frictex.app.experiment.protocol import check_protocol, load_protocol
     if args.check:
+        protocol, problems = check_protocol(args.target[0])
+        if protocol is None:  # every problem, one line each, as frictex validate lists them
+            from frictex.app.commands.cli import printable
+            for problem in problems:
+                print(f"frictex: error: {printable(str(problem))}", file=sys.stderr)
+            return 2
         from frictex.app.experiment.scheduler import Scheduler
         scheduler = Scheduler(protocol, protocol.seed or 0)
         count = (f"{len(scheduler.practice)} practice and {len(scheduler.plan)} main trials"
@@ -107,6 +112,7 @@ def run(args: argparse.Namespace) -> int:
                  f"{protocol.staircase.max_trials} trials")
         print(f"{args.target[0]}: {protocol.name}, {protocol.method}: {count}")
         return 0
+    protocol = load_protocol(args.target[0])
     if args.out is None:
         raise InputError("--out DIR is required: the session folder")
     if args.participant is None and not args.resume:

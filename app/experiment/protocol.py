@@ -78,6 +78,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from frictex.device.errors import InputError
+from frictex.device.safe_text import escape_path
 from frictex.textures.errors import KeyPath, Locator, Problem
 from frictex.textures.keys import RENDER_CHOICES
 from frictex.textures.library import UnreadableText, read_utf8
@@ -176,7 +177,8 @@ class ProtocolError(InputError):
         message = str(self.problems[0])
         more = len(self.problems) - 1
         if more:
-            message += f" (and {more} more problem{'s' if more > 1 else ''})"
+            message += (f" (and {more} more problem{'s' if more > 1 else ''}; frictex "
+                        f"experiment {escape_path(self.problems[0].file)} --check lists them all)")
         super().__init__(message)
 
 
