@@ -9,7 +9,7 @@ import pytest
 
 from frictex.app.commands.cli import main
 from frictex.app.experiment import psychometric as P
-from frictex.app.experiment.analysis import _play
+from frictex.app.experiment.analysis import _play, mean_interval
 from frictex.app.experiment.observer import p_choose_larger, ratio_at
 from frictex.app.experiment.protocol import load_protocol
 
@@ -83,12 +83,29 @@ def test_analyse_pools_each_study(sessions, capsys):
     assert 0.0 <= afc["pooled"]["lapse"] <= 0.06 and afc["pooled"]["guess"] == 0.5
     rated = {st["stimulus"]: st for st in studies["seed003-gratings"]["stimuli"]}
     assert len(rated) == 6 and all(st["n"] == 3 and 1 <= st["mean"] <= 10 for st in rated.values())
+    assert all(1 <= st["ci95"][0] <= st["mean"] <= st["ci95"][1] <= 10 for st in rated.values())
+    assert "intervals: Student's t on the ratings (n >= 2), clipped to the rating scale" in printed
     levels = studies["depth-same-different"]["levels"]
     assert [(lv["different"], lv["same"]) for lv in levels] == [(6, 6), (6, 6)]
     assert levels[1]["d_prime"] > levels[0]["d_prime"]  # the larger difference is easier
     assert "depth-2afc: 2afc, 2 sessions" in printed and "threshold (0.75 correct" in printed
     png = (out / "analysis.png").read_bytes()
     assert png.startswith(b"\x89PNG") and len(png) > 10_000
+
+
+@pytest.mark.parametrize("ratings, expected, clipped", [
+    # the review's 0.6mm-sht: 10, 10, 6 (mean 8.67; t gives [4.87, 12.5] on a 1-10 scale)
+    ([10, 10, 6], (8.667 - 4.303 * 2.309 / 3 ** 0.5, 10.0), True),
+    ([1, 2, 1, 1], (1.0, 1.25 + 3.182 * 0.5 / 2), True),
+    ([4, 6, 5], (5 - 4.303 / 3 ** 0.5, 5 + 4.303 / 3 ** 0.5), False),
+])
+def test_a_mean_ratings_interval_stays_on_the_scale(ratings, expected, clipped):
+    """Student's t (written out: t(0.975, n - 1) sd / sqrt n) clipped to the 1-10 scale,
+    and marked clipped where it was; one rating has no interval."""
+    ci, was = mean_interval(np.array(ratings, dtype=float), (1, 10))
+    assert ci == pytest.approx(expected, abs=2e-3) and was is clipped
+    assert all(np.isnan(mean_interval(np.array([7.0]), (1, 10))[0]))
+    assert mean_interval(np.array([9.0, 10.0]), None)[0][1] > 10  # no scale: nothing to clip
 
 
 def test_sessions_of_one_name_must_share_their_protocol(sessions, tmp_path, capsys):

@@ -19,7 +19,10 @@ Per study, by method:
   (k + 0.5) / (n + 1) (the yes-no formula: for a same-different task under the
   differencing model it underestimates the sensitivity; Macmillan & Creelman 2005, ch. 9).
 - ``magnitude``: per stimulus, the ratings' mean, standard deviation, count and the 95 %
-  interval of the mean (Student's t).
+  interval of the mean: Student's t (2 ratings or more; none below), clipped to the
+  rating scale and marked so (``ci95_clipped``). The mean cannot leave the scale, so
+  clipping removes no value the t-interval covers and keeps its coverage; with few
+  ratings near an end of the scale the t-interval is wide (n 3: the mean +- 2.5 sd).
 
 Writes ``analysis.json`` (every number above) and ``analysis.png`` (one panel per study)
 into the output folder.
@@ -213,19 +216,40 @@ def _same_different(sessions: list[SessionData]) -> dict:
     return {"levels": out}
 
 
-def _magnitude(sessions: list[SessionData]) -> dict:
+#: how a magnitude study's interval of a mean rating is computed (printed and recorded)
+MEAN_CI_METHOD = ("Student's t on the ratings (n >= 2), clipped to the rating scale: the "
+                  "mean lies on the scale, so clipping drops no mean the interval covers")
+
+
+def mean_interval(ratings: np.ndarray, scale: tuple[float, float] | None):
+    """The 95 % interval of the mean of ``ratings`` (:data:`MEAN_CI_METHOD`) and whether
+    the scale ``(min, max)`` clipped it; ``(nan, nan), False`` below 2 ratings."""
+    if ratings.size < 2:
+        return (math.nan, math.nan), False
+    mean = float(ratings.mean())
+    half = float(stats.t.ppf(0.975, ratings.size - 1) * ratings.std(ddof=1)
+                 / math.sqrt(ratings.size))
+    low, high = mean - half, mean + half
+    if scale is None:
+        return (low, high), False
+    clipped = (max(low, float(scale[0])), min(high, float(scale[1])))
+    return clipped, clipped != (low, high)
+
+
+def _magnitude(design: dict, sessions: list[SessionData]) -> dict:
     ratings: dict[str, list[float]] = {}
     for s in sessions:
         for row in s.main():
             ratings.setdefault(row["stimuli"], []).append(_float(row["response"]))
+    scale = design.get("scale")
     out = []
     for name in sorted(ratings):
         r = np.asarray(ratings[name])
         sd = float(r.std(ddof=1)) if r.size > 1 else math.nan
-        half = float(stats.t.ppf(0.975, r.size - 1) * sd / math.sqrt(r.size)) if r.size > 1 else math.nan
+        ci, clipped = mean_interval(r, scale)
         out.append({"stimulus": name, "n": int(r.size), "mean": float(r.mean()), "sd": sd,
-                    "ci95": [float(r.mean()) - half, float(r.mean()) + half]})
-    return {"stimuli": out}
+                    "ci95": list(ci), "ci95_clipped": clipped})
+    return {"scale": scale, "ci95_method": MEAN_CI_METHOD, "stimuli": out}
 
 
 def analyse_study(sessions: list[SessionData]) -> dict:
@@ -239,7 +263,7 @@ def analyse_study(sessions: list[SessionData]) -> dict:
     elif method == "same-different":
         out.update(_same_different(sessions))
     else:
-        out.update(_magnitude(sessions))
+        out.update(_magnitude(design, sessions))
     return out
 
 
@@ -289,6 +313,9 @@ def report_lines(summary: dict) -> list[str]:
         lines.append(f"  {unit} {level['value']:.4g}: hits {level['hit_rate']:.3f}, false "
                      f"alarms {level['false_alarm_rate']:.3f}, d' {level['d_prime']:.3f}")
     for st in summary.get("stimuli", []):
+        low, high = (math.nan if v is None else v for v in st["ci95"])
         lines.append(f"  {st['stimulus']}: mean {st['mean']:.3g} (n {st['n']}, 95 % "
-                     f"[{st['ci95'][0]:.3g}, {st['ci95'][1]:.3g}])")
+                     f"[{low:.3g}, {high:.3g}]{', clipped to the scale' * st['ci95_clipped']})")
+    if summary.get("stimuli"):
+        lines.append(f"  intervals: {summary['ci95_method']}")
     return lines

@@ -62,6 +62,8 @@ def _magnitude(ax, s: dict) -> None:
     ax.bar(range(len(items)), means, yerr=err, color="C0", capsize=3)
     ax.set_xticks(range(len(items)), [st["stimulus"] for st in items], rotation=30, ha="right",
                   fontsize=7)
+    if s.get("scale"):
+        ax.set_ylim(s["scale"][0] - 0.5, s["scale"][1] + 0.5)
     ax.set_ylabel("mean rating")
 
 
