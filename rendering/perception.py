@@ -128,6 +128,12 @@ def relative_difference(a: float, b: float) -> float:
     return abs(a - b) / min(abs(a), abs(b))
 
 
+def _relative(kind: str, d: float) -> str:
+    """A relative difference ``d`` as a percentage and as the fraction its threshold
+    ``kind`` is given in: ``2 % (dp/p 0.02)``."""
+    return f"{d * 100:.3g} % ({THRESHOLDS[kind].what.rpartition(', ')[2]} {d:.3g})"
+
+
 #: what a stimulus parameter (``vary``) is compared by: its threshold's key
 VARY_THRESHOLD = {"period_mm": "period", "depth": "weber", "level": "weber"}
 
@@ -140,7 +146,7 @@ def compare_values(vary: str, a: float, b: float, where: str) -> Finding | None:
     d = relative_difference(a, b)
     if kind is None or d == 0.0 or d >= THRESHOLDS[kind].value:
         return None
-    return _below(kind, where, d, f"{vary} {a:g} and {b:g} differ by {d:.3g}")
+    return _below(kind, where, d, f"{vary} {a:g} and {b:g} differ by {_relative(kind, d)}")
 
 
 def compare_scenes(a, b, where: str) -> Finding | None:
@@ -164,5 +170,6 @@ def compare_scenes(a, b, where: str) -> Finding | None:
         return None
     ratio, kind, what, u, v = max(ratios)
     return _below(kind, where, ratio * THRESHOLDS[kind].value,
-                  f"{what} {u:.4g} and {v:.4g} differ by {ratio * THRESHOLDS[kind].value:.3g}"
+                  f"{what} {u:.4g} and {v:.4g} differ by "
+                  f"{_relative(kind, ratio * THRESHOLDS[kind].value)}"
                   f" (the largest difference between them)")

@@ -108,6 +108,16 @@ def test_pairs_of_values(vary, a, beyond, inside):
     assert compare_values("renderer", a, beyond, "pair") is None
 
 
+def test_a_relative_difference_reads_as_a_percentage_and_the_thresholds_fraction():
+    """5 and 5.1 mm: 0.1 / 5, "2 %" beside the mm values, and the fraction the period
+    threshold is given in (dp/p) for comparison with it."""
+    message = compare_values("period_mm", 5.0, 5.1, "pair").message
+    assert "period_mm 5 and 5.1 differ by 2 % (dp/p 0.02), below " in message
+    assert "dp/p 0.14" in message
+    depth = compare_values("depth", 0.3, 0.32, "pair").message
+    assert "differ by 6.67 % (dmu'/mu' 0.0667)" in depth
+
+
 PARAMETRIC = """format = 1
 name = "near"
 method = "2afc"
