@@ -54,6 +54,26 @@ def wait_for(predicate, what: str) -> None:
         time.sleep(0.05)
 
 
+@pytest.fixture
+def spawn():
+    """``spawn(argv, **popen)``: a started process, with pipes; one still running at the
+    end of the test is killed (its workers continued first, so that they can end)."""
+    started = []
+
+    def start(argv, **popen):
+        started.append(subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                        text=True, **popen))
+        return started[-1]
+
+    yield start
+    for proc in started:
+        if proc.poll() is None:
+            for pid in children(proc.pid):
+                os.kill(pid, signal.SIGCONT)
+            proc.kill()
+            proc.communicate()
+
+
 def send(proc: subprocess.Popen, sig: int, target: str) -> None:
     """``sig`` to the process alone, or to its whole group (it leads a session)."""
     if target == "group":
@@ -74,14 +94,13 @@ def finish(proc: subprocess.Popen) -> tuple[int, str, str]:
 
 @pytest.mark.parametrize("workers, target", [(2, "parent"), (2, "group"), (1, "parent"),
                                              (1, "group")])
-def test_a_signal_starts_no_item_and_stops_the_running_ones(tmp_path, workers, target):
+def test_a_signal_starts_no_item_and_stops_the_running_ones(tmp_path, spawn, workers, target):
     script = tmp_path / "fake_jobs.py"
     script.write_text(FAKE_JOBS)
     marks = tmp_path / "marks"
     marks.mkdir()
-    proc = subprocess.Popen([sys.executable, str(script), str(marks), str(workers)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+    proc = spawn([sys.executable, str(script), str(marks), str(workers)],
+                 start_new_session=True)
     wait_for(lambda: len(list(marks.glob("*.start"))) == workers, f"{workers} items to start")
     send(proc, signal.SIGINT, target)
     code, out, err = finish(proc)
@@ -111,16 +130,15 @@ def results(path: Path) -> dict:
 @pytest.mark.parametrize("sig, target, code", [(signal.SIGINT, "parent", 130),
                                                (signal.SIGINT, "group", 130),
                                                (signal.SIGTERM, "parent", 143)])
-def test_a_stopped_batch_lists_what_finished(tmp_path, long_trace, sig, target, code):
+def test_a_stopped_batch_lists_what_finished(tmp_path, spawn, long_trace, sig, target, code):
     """A short job finishes, two long ones run, a fourth waits: the signal stops the two
     (their folders never appear), the fourth never starts, batch.csv says so."""
     manifest = tmp_path / "m.csv"
     manifest.write_text("scene,trace,rate_hz,name\ngrating-5mm,swipe-40mms-50hz,10000,S1\n"
                         + "".join(f"grating-5mm,{long_trace},100000,L{k}\n" for k in (2, 3, 4)))
     out = tmp_path / "out"
-    proc = subprocess.Popen([FRICTEX, "batch", str(manifest), "--out", str(out), "--jobs", "2",
-                             "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, start_new_session=True)
+    proc = spawn([FRICTEX, "batch", str(manifest), "--out", str(out), "--jobs", "2",
+                  "--quiet"], start_new_session=True)
 
     def running(name):
         return any(out.glob(f".{name}.frictex-staging.*"))
@@ -142,16 +160,15 @@ def test_a_stopped_batch_lists_what_finished(tmp_path, long_trace, sig, target, 
 
 
 @pytest.mark.skipif(sys.platform != "linux", reason="the workers learn of it by prctl (Linux)")
-def test_a_killed_batch_stops_its_running_jobs(tmp_path, long_trace):
+def test_a_killed_batch_stops_its_running_jobs(tmp_path, spawn, long_trace):
     """SIGKILL to the batch alone: its workers, in a group of their own, stop their jobs
     as on Ctrl-C (staging removed, no job folder), instead of running them to the end."""
     manifest = tmp_path / "m.csv"
     manifest.write_text("scene,trace,rate_hz,name\n"
                         + "".join(f"grating-5mm,{long_trace},100000,L{k}\n" for k in (1, 2)))
     out = tmp_path / "out"
-    proc = subprocess.Popen([FRICTEX, "batch", str(manifest), "--out", str(out), "--jobs", "2",
-                             "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            start_new_session=True)
+    proc = spawn([FRICTEX, "batch", str(manifest), "--out", str(out), "--jobs", "2",
+                  "--quiet"], start_new_session=True)
     wait_for(lambda: len(list(out.glob(".L*.frictex-staging.*"))) == 2, "both jobs to run")
     os.kill(proc.pid, signal.SIGKILL)
     assert proc.wait(timeout=BOUND_S) == -signal.SIGKILL
@@ -170,3 +187,49 @@ def workers_of(out: Path) -> list[int]:
         except OSError:  # it ended meanwhile
             pass
     return found
+
+
+def state(pid: int) -> str:
+    """A process's state letter (``T``: stopped), or "" once it is gone."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return ""
+
+
+def children(pid: int) -> list[int]:
+    """The processes whose parent is ``pid``."""
+    found = []
+    for proc in Path("/proc").iterdir():
+        try:
+            fields = (proc / "stat").read_text().rsplit(")", 1)[1].split()
+            if proc.name.isdigit() and int(fields[1]) == pid:
+                found.append(int(proc.name))
+        except (OSError, IndexError, ValueError):
+            pass
+    return found
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads process states in /proc")
+def test_ctrl_z_stops_the_workers_too_and_fg_continues_them(tmp_path, spawn):
+    """The workers are in a group of their own: a terminal's Ctrl-Z (SIGTSTP to the
+    batch's group) stops them with the batch; SIGCONT continues them; Ctrl-C still
+    stops everything."""
+    script = tmp_path / "fake_jobs.py"
+    script.write_text(FAKE_JOBS)
+    marks = tmp_path / "marks"
+    marks.mkdir()
+    # a group of its own in this session, as a shell's job: in a session of its own the
+    # group would be orphaned, and the system discards a SIGTSTP to it
+    proc = spawn([sys.executable, str(script), str(marks), "2"], process_group=0)
+    wait_for(lambda: len(list(marks.glob("*.start"))) == 2, "2 items to start")
+    workers = children(proc.pid)
+    assert len(workers) == 2
+    os.killpg(proc.pid, signal.SIGTSTP)
+    wait_for(lambda: [state(p) for p in (proc.pid, *workers)] == ["T"] * 3, "all to stop")
+    os.killpg(proc.pid, signal.SIGCONT)
+    wait_for(lambda: "T" not in [state(p) for p in (proc.pid, *workers)], "all to continue")
+    os.killpg(proc.pid, signal.SIGINT)
+    code, out, err = finish(proc)
+    assert code == 130, err
+    assert json.loads(out)["stopped"] == [0, 1]

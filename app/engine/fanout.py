@@ -16,7 +16,8 @@ worker between items lets it pass; one running an item gets ``KeyboardInterrupt`
 or, in a replay, where a replay ends a run on Ctrl-C (between blocks, its output folder
 left as it was: ``app.engine.driver.deferred_interrupts``). A further signal is passed
 on again, and a replay then stops at once. In this process (one worker) the signal
-stops the item running the same way. Should this process die (SIGKILL), each worker
+stops the item running the same way. A terminal's Ctrl-Z (SIGTSTP) stops the workers
+with this process, and ``fg`` or ``bg`` continues them. Should this process die (SIGKILL), each worker
 gets a SIGINT from the system (Linux) and stops its item likewise. On a Dask cluster
 Ctrl-C cancels the items not yet started; those already running go on to their end on
 their workers (Dask cannot stop a running task).
@@ -82,7 +83,8 @@ class _Stopper:
     """This process's handler of :data:`HELD_SIGNALS` while :func:`fan_out` runs: keeps
     the first signal (``signum``); with workers (``flag``, their shared flag) sets the
     flag and passes SIGINT on to each, else raises ``KeyboardInterrupt`` in the item
-    running here (``running``)."""
+    running here (``running``). With workers it also handles a terminal's Ctrl-Z
+    (:meth:`pause`)."""
 
     def __init__(self, flag=None):
         self.signum: int | None = None
@@ -97,25 +99,43 @@ class _Stopper:
                 raise KeyboardInterrupt
             return
         self.flag.value = 1
-        import multiprocessing
-        for child in multiprocessing.active_children():
-            try:
-                os.kill(child.pid, signal.SIGINT)
-            except ProcessLookupError:  # it ended meanwhile
-                pass
+        _to_workers(signal.SIGINT)
+
+    def pause(self, signum, frame) -> None:
+        """SIGTSTP (Ctrl-Z): stop the workers, which the terminal's signal to this
+        process's group does not reach, then this process as the signal would; once
+        continued (``fg``, ``bg``), continue them."""
+        _to_workers(signal.SIGSTOP)
+        signal.signal(signum, signal.SIG_DFL)
+        os.kill(os.getpid(), signum)  # stops here until SIGCONT
+        signal.signal(signum, self.pause)
+        _to_workers(signal.SIGCONT)
+
+
+def _to_workers(sig: int) -> None:
+    """Send ``sig`` to each worker process of this one."""
+    import multiprocessing
+    for child in multiprocessing.active_children():
+        try:
+            os.kill(child.pid, sig)
+        except ProcessLookupError:  # it ended meanwhile
+            pass
 
 
 @contextmanager
 def _handling(stopper: _Stopper):
-    """Within: ``stopper`` handles the signals this process does not ignore (main thread
-    only: elsewhere Python runs no handler)."""
+    """Within: ``stopper`` handles the signals this process does not ignore, and with
+    workers Ctrl-Z (main thread only: elsewhere Python runs no handler)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = {sig: signal.getsignal(sig) for sig in HELD_SIGNALS}
-    for sig, handler in previous.items():
-        if handler is not signal.SIG_IGN:
-            signal.signal(sig, stopper)
+    handlers = dict.fromkeys(HELD_SIGNALS, stopper)
+    if stopper.flag is not None and hasattr(signal, "SIGTSTP"):
+        handlers[signal.SIGTSTP] = stopper.pause
+    previous = {sig: signal.getsignal(sig) for sig in handlers}
+    for sig, handler in handlers.items():
+        if previous[sig] is not signal.SIG_IGN:
+            signal.signal(sig, handler)
     try:
         yield
     finally:
@@ -198,8 +218,8 @@ def _start_worker(flag, parent: int) -> None:
         ctypes.CDLL(None).prctl(_PR_SET_PDEATHSIG, signal.SIGINT)
         _Worker.end_if_orphaned()  # it died before that
     signal.signal(signal.SIGINT, _Worker.interrupt)
-    for sig in HELD_SIGNALS[1:]:
-        if signal.getsignal(sig) is not signal.SIG_IGN:  # nohup's stays
+    for sig in (*HELD_SIGNALS[1:], getattr(signal, "SIGTSTP", None)):
+        if sig is not None and signal.getsignal(sig) is not signal.SIG_IGN:  # nohup's stays
             signal.signal(sig, signal.SIG_DFL)
     if hasattr(signal, "SIGTTOU"):
         signal.signal(signal.SIGTTOU, signal.SIG_IGN)
