@@ -211,18 +211,18 @@ def _start_worker(flag, parent: int) -> None:
     Linux a SIGINT also comes when the parent (pid ``parent``) dies, even by SIGKILL, so
     that the item running stops as it would on the parent's Ctrl-C."""
     _Worker.flag, _Worker.parent = flag, parent
-    if hasattr(os, "setpgid"):
-        os.setpgid(0, 0)
-    if sys.platform == "linux":
-        import ctypes
-        ctypes.CDLL(None).prctl(_PR_SET_PDEATHSIG, signal.SIGINT)
-        _Worker.end_if_orphaned()  # it died before that
     signal.signal(signal.SIGINT, _Worker.interrupt)
     for sig in (*HELD_SIGNALS[1:], getattr(signal, "SIGTSTP", None)):
         if sig is not None and signal.getsignal(sig) is not signal.SIG_IGN:  # nohup's stays
             signal.signal(sig, signal.SIG_DFL)
     if hasattr(signal, "SIGTTOU"):
         signal.signal(signal.SIGTTOU, signal.SIG_IGN)
+    if hasattr(os, "setpgid"):
+        os.setpgid(0, 0)
+    if sys.platform == "linux":
+        import ctypes
+        ctypes.CDLL(None).prctl(_PR_SET_PDEATHSIG, signal.SIGINT)
+        _Worker.end_if_orphaned()  # it died before that
 
 
 def _run_item(fn, item) -> tuple[str, object]:
