@@ -164,6 +164,49 @@ def test_same_traffic_same_frames_and_samples_as_the_python_reference(version, s
     assert py[3] == c[3] and c[3]["discarded"] > 0
 
 
+def _stalls(cls, seed):
+    """Random blocks with heartbeat-only stalls (the host talks, sends no samples: the hold
+    ramps out, PROTOCOL.md 5.1), Hellos mid-stream and in a ramp, and silences that trip
+    the watchdog; returns (played, per-tick setpoints, counters)."""
+    rec = Recorder()
+    core = cls(config(limits_um=(3.0,)), log=rec.log, plate_log=rec.plate_log)
+    rng = np.random.default_rng(seed)
+    host = Host(2)
+    core.receive(host(p.Hello(50)), 0.0)
+    t, start = 0.0, 0
+    for _ in range(60):
+        n = int(rng.integers(20, 400))
+        amps = rng.integers(1, 12000, (n, 1)).astype(np.uint16)
+        core.receive(host(p.Block(start, amps)), t)
+        start += n
+        pause = rng.choice(["heartbeats", "hello", "silence"], p=[0.7, 0.15, 0.15])
+        end = t + n / RATE + rng.uniform(0.0, 0.08)
+        while t < end:
+            t = min(t + rng.uniform(0.001, 0.006), end)
+            core.advance_to(t)
+            if pause != "silence" or rng.random() < 0.1:
+                core.receive(host(p.Heartbeat(0)), t)
+            if pause == "hello" and rng.random() < 0.05:
+                core.receive(host(p.Hello(50)), t)
+                start += 10_000
+    core.advance_to(t + 0.1)
+    counters = (core.counters.underruns, core.counters.watchdog_trips, core.counters.gap_samples)
+    return rec.played(), rec.ticks()[1], counters
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_bounded_hold_is_the_same_in_both_cores(seed):
+    """Tick for tick the same setpoints (the C ramps in whole counts: within one count) and
+    the same played samples, through holds that ramp out, Hellos and watchdog trips."""
+    (pi, pv), psp, pk = _stalls(DeviceCore, seed)
+    (ci, cv), csp, ck = _stalls(CDeviceCore, seed)
+    np.testing.assert_array_equal(pi, ci)
+    np.testing.assert_array_equal(pv, cv)
+    np.testing.assert_allclose(psp, csp, atol=STEP)
+    assert pk == ck and pk[0] > 10 and pk[1] > 0
+    assert np.sum((psp[:, 0] == 0) & (np.roll(psp[:, 0], 1) > 0)) > 10  # ramped out often
+
+
 def test_version_2_accounts_for_every_stored_sample_and_reports_a_trip():
     """PROTOCOL.md 4.6: since a Hello, stored = played + flushed + level; 4.8: a watchdog
     trip is reported once, in a Flushed, to a version 2 host."""

@@ -123,6 +123,93 @@ def test_watchdog_ramps_to_zero_within_50_ms_of_host_silence():
     assert index.max() < 260                                 # the rest was flushed, not played
 
 
+def _held_then_ramped(sp, value):
+    """(ticks the setpoint stayed at ``value`` after its first tick, ticks of the ramp
+    after them until zero, the ramp's values) in a per-tick setpoint ``sp``."""
+    first = int(np.flatnonzero(sp == value)[0])
+    after = sp[first + 1:]
+    hold = int(np.argmax(after != value))
+    ramp = after[hold:]
+    return hold, int(np.argmax(ramp == 0.0)) + 1, ramp
+
+
+def test_a_host_that_heartbeats_but_sends_no_samples_gets_a_bounded_hold():
+    """PROTOCOL.md 5.1: a BUFFERING device holds a non-zero setpoint for ticks(watchdog_ms)
+    after the last sample played, then ramps it to zero over ticks(ramp_ms), keeping its
+    play position; the samples sent later all play, from where it stopped."""
+    cfg = DeviceConfig()
+    core, host, rec = make(cfg)
+    first = STEP * (4096 + 4 * np.arange(1000))  # distinct, exact on the wire: 1 to 1.97 um
+    t = stream(core, host, first, end_s=0.2)  # 0.1 s of heartbeats after it ran dry
+    assert (core.state, core.play_index, core.level) == (S.BUFFERING, 1000, 0)
+    assert core.counters.watchdog_trips == 0 and core.session.flushes == 0
+    _, sp, _ = rec.ticks()
+    held, to_zero, ramp = _held_then_ramped(sp[:, 0], first[-1])
+    assert held == cfg.ticks(cfg.watchdog_ms) == 250
+    assert to_zero == cfg.ticks(cfg.ramp_ms) == 200
+    k = np.arange(1, to_zero + 1)
+    np.testing.assert_allclose(ramp[:to_zero], first[-1] * (1 - k / to_zero), atol=STEP)
+    assert np.all(ramp[to_zero:] == 0.0)
+    second = 0.5 + np.arange(1000) / 2000.0
+    for b in range(0, 1000, 50):  # the host is back: blocks 1000.. as if never late
+        core.advance_to(t)
+        core.receive(host(block(1000 + b, second[b:b + 50])), t)
+        core.receive(host(p.Heartbeat(b)), t)
+        t += 0.004
+    stream(core, host, np.zeros(0), t_start=t, end_s=t + 0.15)
+    index, values = rec.played()
+    np.testing.assert_array_equal(index, np.arange(2000))
+    np.testing.assert_allclose(values[:, 0], np.concatenate([first, second]), atol=STEP / 2)
+    assert core.counters.gap_samples == 0 and core.counters.watchdog_trips == 0
+
+
+def test_a_hello_ramps_the_flushed_streams_setpoint_out_at_once():
+    """PROTOCOL.md 5.1: a Hello voids what the host sent before; the setpoint it left
+    ramps to zero from the Hello's tick (no watchdog_ms hold), and the new stream plays
+    from its own first sample."""
+    cfg = DeviceConfig()
+    core, host, rec = make(cfg)
+    core.receive(host(block(0, np.full(1000, 2.0))), 0.0)
+    t = stream(core, host, np.zeros(0), end_s=0.05)
+    assert core.state == S.PLAYING
+    core.receive(host(p.Hello(100)), t)  # mid-stream, about 500 ticks in
+    hello = core.play_index
+    t = stream(core, host, np.zeros(0), t_start=t, end_s=t + 0.05)
+    t_s, sp, _ = rec.ticks()
+    after = sp[np.round(t_s * RATE).astype(int) >= hello, 0]
+    r = cfg.ticks(cfg.ramp_ms)
+    np.testing.assert_allclose(after[:r], 2.0 * (1 - np.arange(1, r + 1) / r), atol=STEP)
+    assert np.all(after[r - 1:] == 0.0)
+    assert core.level == 0 and core.counters.watchdog_trips == 0
+    core.receive(host(block(7000, np.full(200, 1.0))), t)
+    stream(core, host, np.zeros(0), t_start=t, end_s=t + 0.05)
+    index, values = rec.played()
+    np.testing.assert_array_equal(index, np.concatenate([np.arange(hello), 7000 + np.arange(200)]))
+
+
+def test_a_host_back_during_the_watchdog_ramp_does_not_stop_it():
+    """A Heartbeat ends SILENT mid-ramp: the ramp goes on to zero (BUFFERING holds nothing
+    a trip began ramping out), and the stream resumes where it stopped."""
+    cfg = DeviceConfig()
+    core, host, rec = make(cfg)
+    core.receive(host(block(0, np.full(1000, 2.0))), 0.0)
+    core.advance_to(0.03)  # the trip: 25 ms of silence
+    assert core.state == S.SILENT
+    core.receive(host(p.Heartbeat(1)), 0.03)
+    t = stream(core, host, np.zeros(0), t_start=0.03, end_s=0.1)
+    assert core.state == S.BUFFERING
+    t_s, sp, _ = rec.ticks()
+    trip = cfg.ticks(cfg.watchdog_ms)
+    r = cfg.ticks(cfg.ramp_ms)
+    ramp = sp[trip:, 0]
+    np.testing.assert_allclose(ramp[:r], 2.0 * (1 - np.arange(1, r + 1) / r), atol=STEP)
+    assert np.all(ramp[r - 1:] == 0.0)
+    core.receive(host(block(trip, np.full(100, 1.5))), t)
+    stream(core, host, np.zeros(0), t_start=t, end_s=t + 0.05)
+    index, _ = rec.played()
+    np.testing.assert_array_equal(index, np.arange(trip + 100))
+
+
 def test_a_slow_host_underruns_but_loses_nothing():
     core, host, rec = make()
     signal = np.linspace(0.0, 3.0, 2000)

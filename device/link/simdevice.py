@@ -7,7 +7,9 @@ the plate's closed amplitude loop as a first-order low pass (seed 003, Fig. 3b: 
 bandwidth; bilinear transform prewarped at the bandwidth; run where it is seen: a
 ``sensor`` reporting it, or a ``plate_log``), enforces the watchdog (no valid
 frame for ``watchdog_ms`` and the output ramps to zero within ``ramp_ms`` and the buffer is
-flushed), asks for host frames it found missing (version 4: Missing, answered by Resend)
+flushed) and the bounded hold (a BUFFERING device holds its setpoint at most
+``watchdog_ms`` after the last sample it played, a Hello not at all, then ramps it to zero
+keeping its buffer: PROTOCOL.md 5.1), asks for host frames it found missing (version 4: Missing, answered by Resend)
 and, with a force sensor (``device.link.simsensor``), reports the lateral and
 normal force in ForceReport messages to a version 3 host.
 
@@ -226,6 +228,9 @@ class DeviceCore:
         self.setpoint = np.zeros(c.channels)  # um, what the loop is told to produce now
         self._ramp_from = np.zeros(c.channels)
         self._ramp_pos = self._ramp_ticks      # ticks into the current ramp (done)
+        # BUFFERING ticks held since the last sample played; _wd_ticks + 1: a ramp to zero
+        # has begun since (PROTOCOL.md 5.1)
+        self._held = 0
         # bilinear transform prewarped at the bandwidth: -3 dB and -45 deg exactly at f_c
         w = math.tan(math.pi * c.bandwidth_hz / c.rate_hz)
         self._b = np.array([w, w]) / (1.0 + w)
@@ -291,6 +296,8 @@ class DeviceCore:
             self._origin_set = False
             self.prefill = int(min(max(msg.prefill, 1), self._cap // 4))
             self.state = S.BUFFERING
+            if self._held <= self._wd_ticks:  # 5.1: the flushed stream's setpoint ramps out now
+                self._begin_ramp()
             self.stopped = False
             self.hello_seen = True
             self.hellos += 1
@@ -398,9 +405,16 @@ class DeviceCore:
         return flushed
 
     def _silence(self):
-        """Start ramping the output to zero; drop everything buffered."""
+        """Start ramping the output to zero (a ramp under way goes on); drop everything
+        buffered."""
         self._flush()
         self.state = S.SILENT
+        if self._held <= self._wd_ticks:
+            self._begin_ramp()
+
+    def _begin_ramp(self):
+        """Start a linear ramp from the current setpoint to zero (PROTOCOL.md 5.1-5.3)."""
+        self._held = self._wd_ticks + 1
         self._ramp_from = self.setpoint.copy()
         self._ramp_pos = 0
 
@@ -431,16 +445,15 @@ class DeviceCore:
         """Run ``n`` ticks; returns the ForceReports they complete."""
         c = self.config
         sp = np.empty((n, c.channels))
-        first, advanced = self.play_index, 0
-        if self.state == S.SILENT:
-            k = self._ramp_pos + np.arange(1, n + 1)
-            frac = np.clip(1.0 - k / self._ramp_ticks, 0.0, 1.0)
-            sp[:] = frac[:, None] * self._ramp_from
-            self._ramp_pos = min(self._ramp_pos + n, self._ramp_ticks)
-        elif self.state in (S.PLAYING, S.DRAINING):
+        first, advanced, start_state = self.play_index, 0, self.state
+        if self.state in (S.PLAYING, S.DRAINING):
             advanced = self._play(sp)
-        else:
-            sp[:] = self.setpoint  # IDLE/BUFFERING hold the last value (a step is a click)
+        if self.state == S.SILENT:
+            self._ramp(sp[advanced:])
+        elif self.state == S.BUFFERING:  # the tick that ran dry holds too
+            self._hold(sp[advanced:])
+        elif self.state == S.IDLE:
+            sp[:] = self.setpoint
         self.setpoint = sp[-1].copy()
         if c.sensor or self.plate_log is not None:  # the plate model, where it is seen
             from scipy.signal import lfilter  # here: scipy.signal takes a second to import
@@ -448,7 +461,9 @@ class DeviceCore:
             self._zi = self._zi.T
             self.plate_um = plate[-1].copy()
             if self.plate_log is not None:
-                self.plate_log((self.tick + np.arange(n)) / c.rate_hz, self.state, sp, plate)
+                ticks = np.arange(n)  # the state of each tick: a run can only end playing
+                state = np.where(ticks < advanced, int(start_state), int(self.state))
+                self.plate_log((self.tick + ticks) / c.rate_hz, state, sp, plate)
         reports = []
         if self.sensor is not None:
             lateral, normal = self.sensor.read(self.tick, sp)
@@ -458,8 +473,29 @@ class DeviceCore:
         self.tick += n
         return reports
 
+    def _ramp(self, sp: np.ndarray) -> None:
+        """Go on with the ramp to zero for ``len(sp)`` ticks into ``sp``."""
+        k = self._ramp_pos + np.arange(1, len(sp) + 1)
+        frac = np.clip(1.0 - k / self._ramp_ticks, 0.0, 1.0)
+        sp[:] = frac[:, None] * self._ramp_from
+        self._ramp_pos = min(self._ramp_pos + len(sp), self._ramp_ticks)
+
+    def _hold(self, sp: np.ndarray) -> None:
+        """``len(sp)`` BUFFERING ticks into ``sp``: the setpoint held for at most
+        ``watchdog_ms`` since the last sample played, then ramped to zero (5.1)."""
+        n = min(max(self._wd_ticks - self._held, 0), len(sp))
+        sp[:n] = self.setpoint
+        self._held += n
+        if n == len(sp):
+            return
+        if self._held == self._wd_ticks:
+            self._begin_ramp()
+        self._ramp(sp[n:])
+
     def _play(self, sp: np.ndarray) -> int:
-        """Play ``len(sp)`` ticks into ``sp``; returns how many advanced the play index."""
+        """Play ticks into ``sp`` until it is full or the buffer runs dry (BUFFERING; a
+        drain ends in SILENT); returns how many ticks advanced the play index (the ticks
+        after them are left to the new state)."""
         n = len(sp)
         idx = np.uint64(self.play_index) + np.arange(n, dtype=np.uint64)  # wraps at 2**64
         slots = (self._head + np.arange(n)) % self._cap
@@ -478,6 +514,10 @@ class DeviceCore:
         self.counters.gap_samples += used - len(played)
         self.counters.played_samples += len(played)
         self.session.played += len(played)
+        if len(played):
+            self._held = 0
+        if used:
+            self.setpoint = sp[used - 1].copy()
         if self.log is not None and len(played):
             phases = p.phase_from_wire(self._phase[slots[played]]) if self.config.phases else None
             self.log(idx[played], values[played], phases)

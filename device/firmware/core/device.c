@@ -183,20 +183,28 @@ static void send_error(fw_device *d, uint8_t code, uint16_t ref_seq, uint32_t de
 
 /* ------------------------------------------------------------------ the clock */
 
-/* Flush, enter SILENT and ramp linearly from the current setpoint to zero (5.2, 5.3).
- * The ramp steps by from / ramp_ticks, the remainder spread Bresenham-style, so after
- * k ticks the setpoint is from - floor(k * from / ramp_ticks): no division per tick. */
-static void silence(fw_device *d)
+/* Ramp linearly from the current setpoint to zero (5.1, 5.2, 5.3). The ramp steps by
+ * from / ramp_ticks, the remainder spread Bresenham-style, so after k ticks the setpoint
+ * is from - floor(k * from / ramp_ticks): no division per tick. */
+static void begin_ramp(fw_device *d)
 {
-    fw_jitter_flush(&d->buf);
-    d->end = 0;
-    d->state = FW_SILENT;
+    d->held = d->wd_ticks + 1u;
     d->ramp_pos = 0;
     for (unsigned ch = 0; ch < d->cfg.channels; ch++) {
         d->ramp_q[ch] = (uint16_t)(d->out.amp[ch] / d->ramp_ticks);
         d->ramp_r[ch] = d->out.amp[ch] % d->ramp_ticks;
         d->ramp_err[ch] = 0;
     }
+}
+
+/* Flush, enter SILENT and ramp to zero (5.2, 5.3); a ramp under way goes on. */
+static void silence(fw_device *d)
+{
+    fw_jitter_flush(&d->buf);
+    d->end = 0;
+    d->state = FW_SILENT;
+    if (d->held <= d->wd_ticks)
+        begin_ramp(d);
 }
 
 static void ramp(fw_device *d)
@@ -213,6 +221,19 @@ static void ramp(fw_device *d)
         }
         d->out.amp[ch] = (uint16_t)(d->out.amp[ch] - fall);
     }
+}
+
+/* 5.1: a BUFFERING tick holds the setpoint, at most wd_ticks since the last sample
+ * played; the next begins a ramp to zero (one under way, from a trip or a Hello, goes on). */
+static void hold(fw_device *d)
+{
+    if (d->held < d->wd_ticks) {
+        d->held++;
+        return;
+    }
+    if (d->held == d->wd_ticks)
+        begin_ramp(d);
+    ramp(d);
 }
 
 /* A flush that discards what the host sent (a watchdog trip, a Stop without drain):
@@ -246,6 +267,7 @@ static bool play(fw_device *d)
         d->out.index = d->play_index;
         d->k.played_samples++;
         d->session.played++;
+        d->held = 0;
     } else {
         d->k.gap_samples++;
     }
@@ -321,10 +343,12 @@ const fw_output *fw_tick(fw_device *d)
         }
     }
     bool advanced = false;
-    if (d->state == FW_SILENT)
-        ramp(d);
-    else if (d->state == FW_PLAYING || d->state == FW_DRAINING)
+    if (d->state == FW_PLAYING || d->state == FW_DRAINING)
         advanced = play(d);
+    if (d->state == FW_SILENT) /* the tick a drain ran dry ramps already */
+        ramp(d);
+    else if (d->state == FW_BUFFERING) /* as the tick that ran dry holds */
+        hold(d);
     if (d->hal->force_pair) /* the sample just played (or gapped) is play_index - 1 */
         sense(d, advanced, d->play_index - advanced);
     d->out.state = d->state;
@@ -351,6 +375,8 @@ static void on_hello(fw_device *d, uint32_t prefill)
     if (d->prefill > quarter)
         d->prefill = quarter;
     d->state = FW_BUFFERING;
+    if (d->held <= d->wd_ticks) /* 5.1: the flushed stream's setpoint ramps out now */
+        begin_ramp(d);
     d->stopped = false;
     d->hello_seen = true;
     unlock(d);

@@ -95,6 +95,8 @@ typedef struct {
     uint8_t force_version;
     uint64_t force_pending_start;
     uint8_t force_pending_pairs[4u * FW_FORCE_PAIRS];
+    uint32_t held;     /* BUFFERING ticks held since the last sample played; wd_ticks + 1:
+                          a ramp to zero has begun since (PROTOCOL.md 5.1) */
     uint32_t ramp_pos;                   /* ticks into the ramp to zero */
     uint16_t ramp_q[FW_MAX_CHANNELS];    /* per tick the ramp falls by q ... */
     uint32_t ramp_r[FW_MAX_CHANNELS];    /* ... plus r / ramp_ticks (accumulated in err) */
