@@ -120,11 +120,13 @@ def test_stops_lost_every_time_end_the_close_within_its_bound():
 
 
 def test_a_stalled_host_shows_in_its_longest_gaps():
-    """A host whose link thread stops for 0.15 s mid-stream (``stall=0.15@0.4``) went that
-    long at least without a turn and without a Status (PROTOCOL.md 6.4), whatever else
-    the scheduler did; the figures are what the repair bound above is excused by."""
+    """A host whose link thread stops for 0.15 s mid-stream (``stall=0.15@0.4``) shows it
+    in its longest gaps without a turn and without a Status (PROTOCOL.md 6.4), whatever
+    else the scheduler did: a turn that began inside the stall can split it in two (the
+    thread's next port call then waits out the rest), so each gap is at least half of it;
+    the figures are what the repair bound above is excused by."""
     st = _stream("sim", "stall=0.15@0.4")
     accounted(st, None, int(SECONDS * RATE))
-    assert st["longest_turn_gap_ms"] >= 150.0
-    assert st["longest_status_gap_ms"] >= 150.0
+    assert st["longest_turn_gap_ms"] >= 75.0
+    assert st["longest_status_gap_ms"] >= 75.0
     assert not _scheduled_in_time(st)
