@@ -121,24 +121,35 @@ def load_in_fresh_process(folder: Path, extension: bool) -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
+def expected_results() -> dict:
+    words = {}
+    for i in range(20):
+        words[str(i % 7)] = i
+    return {"words": [words[key] for key in sorted(words)],
+            "sums": np.cumsum(np.arange(5.0) * 0.5).tolist()}
+
+
+@pytest.fixture(scope="module")
+def compiled_kernels(tmp_path_factory) -> Path:
+    """A folder with the kernels' module, compiled once (and cached) in a fresh process."""
+    folder = tmp_path_factory.mktemp("kernels")
+    (folder / "cached_kernels.py").write_text(KERNELS)
+    compiled = load_in_fresh_process(folder, False)
+    assert compiled["hits"] == 0
+    assert {key: compiled[key] for key in expected_results()} == expected_results()
+    return folder
+
+
 @pytest.mark.parametrize("extension", [False, True])
 def test_a_cached_kernel_loads_without_the_context_refresh_and_computes_the_same(
-        tmp_path, extension):
+        compiled_kernels, extension):
     """``device.jit`` loads a cached kernel without numba's context refresh unless a
     package extends numba. A kernel whose code needs numba's runtime and the hash secret
     (a dict of strings, arrays made) computes, loaded so, what Python computes; with an
     extension installed, numba's own load (and its refresh) is kept."""
-    (tmp_path / "cached_kernels.py").write_text(KERNELS)
-    compiled = load_in_fresh_process(tmp_path, extension)   # compiles and writes the cache
-    loaded = load_in_fresh_process(tmp_path, extension)     # loads it
-    words = {}
-    for i in range(20):
-        words[str(i % 7)] = i
-    expected = {"words": [words[key] for key in sorted(words)],
-                "sums": np.cumsum(np.arange(5.0) * 0.5).tolist()}
-    for run in (compiled, loaded):
-        assert {key: run[key] for key in expected} == expected
-    assert compiled["hits"] == 0 and loaded["hits"] == 1
+    loaded = load_in_fresh_process(compiled_kernels, extension)
+    assert {key: loaded[key] for key in expected_results()} == expected_results()
+    assert loaded["hits"] == 1
     if extension:
         assert loaded["cache"] == "FunctionCache" and loaded["refreshes"] >= 1
     else:
