@@ -59,7 +59,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="host silence that trips the watchdog (default 25 ms; with the ramp "
                              "at most 50 ms)")
     parser.add_argument("--ramp-ms", type=positive_int, default=20, metavar="MS",
-                        help="ramp to zero after a trip or a stop (default 20 ms)")
+                        help="ramp to zero after a trip, a stop, a Hello or a hold of "
+                             "watchdog_ms without a sample to play (default 20 ms)")
     parser.add_argument("--phases", action="store_true", help="accept a phase per channel")
     parser.add_argument("--sensor", action="store_true",
                         help="report the modelled plate amplitude as 'measured'")

@@ -536,16 +536,27 @@ class DeviceCore:
         return used
 
 
-class CsvLog:
-    """Append-only CSV writer for the played-sample or plate log (see module docstring)."""
+#: longest a played or plate log's rows wait in memory before they are written (s)
+LOG_FLUSH_S = 0.25
 
-    def __init__(self, path, header: list[str]):
+
+class CsvLog:
+    """Append-only CSV writer for the played-sample or plate log (see module docstring),
+    flushed at least every :data:`LOG_FLUSH_S` so that a reader sees what was played
+    while the device runs, not only once it exits."""
+
+    def __init__(self, path, header: list[str], clock=time.monotonic):
         self._fh = open(path, "w", encoding="ascii", newline="\n")
         self._fh.write(",".join(header) + "\n")
+        self._clock = clock
+        self._flushed = clock()
 
     def rows(self, columns: list[np.ndarray], formats: list[str]) -> None:
         table = np.column_stack(columns)
         np.savetxt(self._fh, table, fmt=formats, delimiter=",")
+        if self._clock() - self._flushed >= LOG_FLUSH_S:
+            self._fh.flush()
+            self._flushed = self._clock()
 
     def close(self) -> None:
         self._fh.close()
