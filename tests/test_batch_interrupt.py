@@ -45,12 +45,14 @@ FAKE_JOBS = textwrap.dedent("""
 """ % BOUND_S)
 
 
-def wait_for(predicate, what: str) -> None:
-    """Poll ``predicate`` until true, at most BOUND_S."""
+def wait_for(predicate, what: str, detail=None) -> None:
+    """Poll ``predicate`` until true, at most BOUND_S; ``detail()``: what the failure
+    message adds (the state that kept it false)."""
     end = time.monotonic() + BOUND_S
     while not predicate():
         if time.monotonic() > end:
-            raise AssertionError(f"waited {BOUND_S} s for {what}")
+            raise AssertionError(f"waited {BOUND_S} s for {what}"
+                                 + (f": {detail()}" if detail else ""))
         time.sleep(0.05)
 
 
@@ -172,7 +174,9 @@ def test_a_killed_batch_stops_its_running_jobs(tmp_path, spawn, long_trace):
     wait_for(lambda: len(list(out.glob(".L*.frictex-staging.*"))) == 2, "both jobs to run")
     os.kill(proc.pid, signal.SIGKILL)
     assert proc.wait(timeout=BOUND_S) == -signal.SIGKILL
-    wait_for(lambda: not list(out.glob(".L*.frictex-staging.*")), "the jobs to stop")
+    wait_for(lambda: not list(out.glob(".L*.frictex-staging.*")), "the jobs to stop",
+             lambda: f"left {sorted(p.name for p in out.iterdir())}; workers "
+                     f"{[(pid, state(pid)) for pid in workers_of(out)]}")
     assert list(out.iterdir()) == []
     wait_for(lambda: not workers_of(out), "the workers to end")
 
