@@ -2,7 +2,6 @@
 is cut to the screen's work area, and where the scene then fits at its display's pixels
 only without the strip, the demo starts with the scope hidden (S shows it) and says so."""
 
-import numpy as np
 import pytest
 
 from frictex.app.live.demo_loop import DemoLoop
@@ -10,20 +9,7 @@ from frictex.app.live.haptic_thread import HapticThread
 from frictex.rendering.visual.context import OffscreenBackend, fit_size
 from frictex.rendering.visual.device_panels import default_frame_size
 from frictex.textures.loader import load_scene
-
-GRATING = """format = 1
-name = "lines"
-[display]
-width_mm = 120.0
-height_mm = 80.0
-width_px = 1200
-height_px = 800
-
-[[layer]]
-type = "grating"
-period_mm = 4.0
-mu_low = 0.7
-"""
+from scenes import GRATING_4MM, rising_edge_period
 
 
 class CutWindow(OffscreenBackend):
@@ -56,7 +42,7 @@ def test_a_size_is_cut_to_the_room_side_by_side():
 def test_a_window_cut_to_the_screen_keeps_the_scene_at_its_pixels_where_it_can(
         gl, tmp_path, capsys, screen, scope, said):
     path = tmp_path / "lines.toml"
-    path.write_text(GRATING)
+    path.write_text(GRATING_4MM)
     scene = load_scene(path)
     asked = default_frame_size(scene)
     assert asked[1] > 800  # the strip under the 800 px scene: taller than a 1280 x 800 screen
@@ -71,9 +57,7 @@ def test_a_window_cut_to_the_screen_keeps_the_scene_at_its_pixels_where_it_can(
         if said != "the scene is drawn at":
             assert (view.width_px, view.height_px) == (1200, 800)
             grey = window.read_rgb()[view.y0 + 400, view.x0:view.x0 + 1200].mean(axis=1)
-            light = grey > (grey.min() + grey.max()) / 2
-            rises = np.flatnonzero(light[1:] & ~light[:-1])
-            assert (rises[-1] - rises[0]) / (rises.size - 1) == pytest.approx(40.0, abs=1.0)
+            assert rising_edge_period(grey) == pytest.approx(40.0, abs=1.0)
         else:
             assert view.height_px < 800
     finally:

@@ -8,7 +8,7 @@ from frictex.app.commands.cli import main
 from frictex.app.engine.frames import FrameWriter
 from frictex.app.engine.replay import run_replay
 from frictex.textures.library import LIBRARY_DIR
-from scenes import grating_scene
+from scenes import GRATING_4MM, grating_scene, rising_edge_period
 
 
 def test_preview_writes_scene_beside_its_friction_map(tmp_path, capsys):
@@ -18,32 +18,6 @@ def test_preview_writes_scene_beside_its_friction_map(tmp_path, capsys):
     assert "mu' 0.600 to 1.000" in printed and "800 x 480 px" in printed
     img = np.asarray(Image.open(out).convert("RGB"))
     assert img.shape[1] > 1000  # two panels side by side
-
-
-GRATING_4MM = """format = 1
-name = "grating-4mm-v"
-[display]
-width_mm = 120.0
-height_mm = 80.0
-width_px = 1200
-height_px = 800
-
-[[layer]]
-type = "grating"
-period_mm = 4.0
-angle_deg = 0.0
-offset_mm = 1.0
-duty = 0.25
-mu_low = 0.7
-"""
-
-
-def rising_edge_period(row: np.ndarray) -> float:
-    """Mean spacing (px) of the dark-to-light crossings of the row's mid level."""
-    light = row > (row.min() + row.max()) / 2
-    rises = np.flatnonzero(light[1:] & ~light[:-1])
-    assert rises.size >= 5
-    return (rises[-1] - rises[0]) / (rises.size - 1)
 
 
 @pytest.mark.parametrize("size, px_per_mm", [(None, 10.0), ("2400x1600", 20.0), ("600x600", 5.0)])
