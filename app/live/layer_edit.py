@@ -52,6 +52,7 @@ from frictex.textures.library import LIBRARY_DIR, user_scenes_dir
 from frictex.textures.loader import check_scene, load_scene
 from frictex.textures.references import referenced_files
 from frictex.textures.schema import MAX_MAGNITUDE, Choice, Int, Num
+from frictex.textures.sections.layers import default_layer_name
 
 #: word keys that change which keys a layer takes: not offered as menus
 STRUCTURAL = ("type", "shape", "clip", "trigger")
@@ -294,7 +295,7 @@ class LayerEdit:
         names = []
         for k, table in enumerate(self.doc["layer"]):
             kind = str(table.get("type", "?"))
-            name = table["name"] if "name" in table else f"{kind}-{k + 1}"
+            name = table["name"] if "name" in table else default_layer_name(kind, k)
             names.append(f"{name} ({kind})")
         return tuple(names)
 

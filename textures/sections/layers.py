@@ -26,6 +26,12 @@ BUILDERS: dict[str, Callable] = {
 }
 
 
+def default_layer_name(layer_type: str, index: int) -> str:
+    """The name of a layer without ``name``: its type and its place among the
+    ``[[layer]]`` tables, from 1 ("grating-2" for the second table)."""
+    return f"{layer_type}-{index + 1}"
+
+
 def parse_layer(r: Reader, raw, index: int, display, files: Files, names: dict):
     """One [[layer]] -> (layer, key of its lowest mu') or None (problems reported)."""
     path: KeyPath = ("layer", index)
@@ -41,7 +47,7 @@ def parse_layer(r: Reader, raw, index: int, display, files: Files, names: dict):
     v = r.table(raw, path, {**COMMON, **LAYER_KEYS[layer_type]}, tables=LAYER_TABLES)
     region = parse_region(r, raw["region"], path + ("region",), display) if "region" in raw else None
     visual = r.table(raw.get("visual", {}), path + ("visual",), VISUAL)
-    name = v["name"] if v["name"] is not None else f"{layer_type}-{index + 1}"
+    name = v["name"] if v["name"] is not None else default_layer_name(layer_type, index)
     if name is not BAD:
         if not name.strip():
             r.report(path + ("name",), 'is empty; give the layer a name or leave the key out')
