@@ -39,6 +39,8 @@ def read_text(path: Path, r: Reader) -> str | None:
 
 _TOML_POSITION = re.compile(r"\s*\(at line (\d+), column (\d+)\)\s*$")
 _AT_END = "(at end of document)"
+#: tomllib's words for an array whose closing bracket never came
+_UNCLOSED = "Unclosed array"
 #: a single character as tomllib quotes it, by its repr (``'\\n'``, ``'\\x1b'``, ``'a'``)
 _REPR_CHAR = re.compile(r"'(?:\\(?:x[0-9a-f]{2}|u[0-9a-f]{4}|U[0-9a-f]{8}|[nrt\\'])|[^'\\])'")
 _LONG_DIGITS = re.compile(r"\d{%d,}" % (sys.get_int_max_str_digits() or 4300))
@@ -80,7 +82,9 @@ def syntax_problem(message: str, text: str) -> tuple[int | None, str]:
     line number (for one at the end of the document, the last line that is not blank),
     the column and the line's own text after the message (escaped and cut,
     ``device.safe_text.escape``), and a character it quotes by its Python repr shown
-    escaped once (``'\\n'``, not ``'\\\\n'``)."""
+    escaped once (``'\\n'``, not ``'\\\\n'``). An array left open is placed at the line
+    that opened it, where tomllib's position (the line where the file went on without
+    closing it) is given in the message."""
     lines = text.splitlines()
     m = _TOML_POSITION.search(message)
     if m:
@@ -91,12 +95,29 @@ def syntax_problem(message: str, text: str) -> tuple[int | None, str]:
     else:
         line, where = None, ""
     head = message[:m.start()] if m else message.removesuffix(_AT_END).rstrip()
+    if head == _UNCLOSED and line is not None:  # tomllib stops where the file goes on
+        opened = opened_line(lines, line if m else len(lines) + 1)
+        if opened is not None and opened < line:
+            stop = f"line {line}, column {m.group(2)}" if m else "the end of the file"
+            line, where = opened, f" (opened here; still open at {stop})"
     # tomllib's message may quote a key of the file (a duplicate table): escaped and cut
     shown = escape(_REPR_CHAR.sub(lambda c: f"'{ast.literal_eval(c.group())}'", head),
                    MAX_TOML_MESSAGE) + where
     if line is not None and line <= len(lines) and lines[line - 1].strip():
         shown += f": {escape(lines[line - 1].strip())}"
     return line, shown
+
+
+def opened_line(lines: list[str], before: int) -> int | None:
+    """The line (from 1) that opened the innermost bracket still open at the start of line
+    ``before`` (comments and strings skipped, as :func:`deepest_line` reads them); None
+    when none is open there."""
+    depth, in_string, opened = 0, None, []  # opened: a line per bracket open
+    for number, line in enumerate(lines[:before - 1], start=1):
+        depth, in_string, _ = bracket_peak(line, depth, in_string)
+        del opened[max(depth, 0):]
+        opened += [number] * (depth - len(opened))
+    return opened[-1] if opened else None
 
 
 def _depth(doc) -> int:
