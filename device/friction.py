@@ -36,9 +36,11 @@ Where the model stops being usable, frictex decides as follows (each case counte
 A device may instead carry a measured calibration table (``device.profile.Calibration``):
 mu' against amplitude at one or more normal forces. Each row is inverted by monotone
 cubic (PCHIP) interpolation; between two measured forces the *amplitudes* for the same
-mu' are interpolated linearly in force (outside the measured forces, the nearest row is
-used and ``force_beyond_model`` counted). The forward model of a calibration is defined
-as the inverse of that map, so forward(invert(mu)) == mu on the reachable range.
+mu' are interpolated linearly in force. Outside the measured forces the nearest row is
+used, and each such sample with a target below 1 is counted as ``force_beyond_model``
+(not also as ``unreachable``: one out of that row's reach gets the limit). The forward
+model of a calibration is defined as the inverse of that map, so forward(invert(mu)) ==
+mu on the reachable range.
 """
 
 from __future__ import annotations
@@ -121,6 +123,12 @@ class SeedFrictionModel:
         """Lowest mu' reachable at that force within the amplitude limit."""
         return self.forward(self.limit_um, normal_force_n)
 
+    def beyond_model(self) -> str:
+        """What a sample counted ``force_beyond_model`` met, for a warning."""
+        return (f"beyond seed 003's friction model, whose asymptote "
+                f"{self.params.asymptote_per_n:g} F_n reaches 1 there (full amplitude was "
+                "commanded)")
+
     def _amplitude(self, mu, force, counts: ClampCounts) -> np.ndarray:
         a, beyond = asymptote(force, self.params)  # force may be one value for all of mu
         reduction = (1.0 - mu) / (1.0 - a)  # in [0, 1) where reachable
@@ -167,11 +175,9 @@ class CalibratedFrictionModel:
             brentq(lambda m, inv=inverse: float(inv(m)) - w_max, row.min(), 1.0, xtol=1e-15)
             for inverse, row in zip(self._inverse_rows, mu)])
 
-    def _blend(self, force: np.ndarray, counts: ClampCounts):
+    def _blend(self, force: np.ndarray):
         """Row indices and weights for each force (linear in force, clamped to the table)."""
         f = np.asarray(force, dtype=np.float64)
-        outside = (f < self.forces[0]) | (f > self.forces[-1])
-        counts.force_beyond_model += int(np.count_nonzero(outside))
         if self.forces.size == 1:
             zeros = np.zeros(f.shape, dtype=np.intp)
             return zeros, zeros, np.zeros(f.shape)
@@ -182,17 +188,30 @@ class CalibratedFrictionModel:
         return lo, hi, weight
 
     def _amplitude(self, mu, force, counts: ClampCounts) -> np.ndarray:
-        lo, hi, weight = self._blend(np.broadcast_to(force, mu.shape), counts)
+        force = np.broadcast_to(force, mu.shape)
+        lo, hi, weight = self._blend(force)
         per_row = np.stack([inverse(mu) for inverse in self._inverse_rows])
         per_row = np.where(np.isnan(per_row), np.inf, per_row)  # below a row's range: unreachable
         w_lo = np.take_along_axis(per_row, lo[None], 0)[0]
         w_hi = np.take_along_axis(per_row, hi[None], 0)[0]
         with np.errstate(invalid="ignore"):
             blended = (1.0 - weight) * w_lo + weight * w_hi
-        return np.where(weight == 0.0, w_lo, np.where(weight == 1.0, w_hi, blended))
+        w = np.where(weight == 0.0, w_lo, np.where(weight == 1.0, w_hi, blended))
+        # a force outside the table: its nearest row, counted (a target of 1 is w = 0
+        # whatever the force); out of that row's reach, it gets the limit as counted here
+        out = ((force < self.forces[0]) | (force > self.forces[-1])) & (mu < 1.0)
+        if out.any():
+            counts.force_beyond_model += int(np.count_nonzero(out))
+            w = np.where(out & ~(w <= self.limit_um), self.limit_um, w)
+        return w
+
+    def beyond_model(self) -> str:
+        """What a sample counted ``force_beyond_model`` met, for a warning."""
+        return (f"outside the calibration's measured forces ({self.forces[0]:g} to "
+                f"{self.forces[-1]:g} N): the nearest measured force's row was used")
 
     def floor(self, normal_force_n) -> np.ndarray:
-        lo, hi, weight = self._blend(normal_force_n, ClampCounts())
+        lo, hi, weight = self._blend(normal_force_n)
         both = np.maximum(self._row_floor[lo], self._row_floor[hi])
         return np.where(weight == 0.0, self._row_floor[lo],
                         np.where(weight == 1.0, self._row_floor[hi], both))

@@ -515,3 +515,29 @@ def test_targets_that_are_not_finite_are_a_warning_saying_what_was_commanded():
     assert warnings_of(SimpleNamespace(forces=None), SimpleNamespace(jumps=0, out_of_order=0),
                        totals) == ["7 target samples were not finite (NaN or inf) and were "
                                    "commanded 0 um"]
+
+
+@pytest.mark.parametrize("device, words", [
+    ("[device.calibration]\namplitudes_um = [0.0, 1.0, 2.0, 3.0]\nforces_n = [0.3, 0.6]\n"
+     "mu = [[1.0, 0.8, 0.6, 0.5], [1.0, 0.85, 0.7, 0.6]]\n",
+     "had a normal force outside the calibration's measured forces (0.3 to 0.6 N): the "
+     "nearest measured force's row was used"),
+    ("[device.friction]\nasymptote_per_n = 0.5\n",
+     "had a normal force beyond seed 003's friction model, whose asymptote 0.5 F_n reaches 1 "
+     "there (full amplitude was commanded)")])
+def test_the_warning_for_a_press_beyond_the_friction_model_names_the_model_in_use(
+        tmp_path, device, words):
+    """A 2.5 N press on a grating: beyond a calibration's forces (0.3-0.6 N), and beyond
+    seed 003's model once k F_n >= 1 (k = 0.5 /N). Only the grating's low-friction
+    samples (mu' 0.6 < 1) count; the warning says what the device's own model did."""
+    text = resolve_scene("grating-5mm").read_text().replace("normal_force_n = 0.5\n",
+                                                           "normal_force_n = 0.5\n" + device)
+    (tmp_path / "s.toml").write_text(text)
+    rows = [r.replace(",0.5,", ",2.5,") for r in stroke(0.0, 20.0, n=50)]
+    trace = write_csv(tmp_path / "press.csv", rows)
+    doc = run_replay(load_scene(tmp_path / "s.toml"), str(trace), None, fmt="memory",
+                     progress=False)
+    beyond = doc["clamps"]["force_beyond_model"]
+    assert 0 < beyond < doc["output"]["samples"]
+    assert f"{beyond} samples {words}" in doc["warnings"]
+    assert doc["clamps"]["unreachable"] == 0

@@ -151,6 +151,23 @@ def test_calibration_outside_measured_forces_is_counted():
     assert_allclose(w, [0.5, model.invert(0.8, 0.6)[0]], atol=1e-12)
 
 
+def test_a_force_outside_the_calibration_counts_once_and_only_below_one():
+    """A target of 1 is w = 0 whatever the force: not counted. One out of the nearest
+    row's reach gets the limit, counted as beyond the table only (the clamp total is the
+    samples changed, each once). The warning names the table's forces, not seed 003."""
+    model = make_friction_model(CAL_DEVICE)
+    w, counts = model.invert(np.array([1.0, 1.0, 0.8, 0.05]), np.array([0.1, 2.0, 2.0, 2.0]))
+    assert_allclose(w, [0.0, 0.0, model.invert(0.8, 0.6)[0], 2.5], atol=1e-12)
+    assert counts.as_dict() == {**ClampCounts().as_dict(), "force_beyond_model": 2}
+    assert model.beyond_model() == ("outside the calibration's measured forces (0.3 to 0.6 N): "
+                                    "the nearest measured force's row was used")
+
+
+def test_the_seed_models_warning_gives_its_own_asymptote():
+    model = SeedFrictionModel(DeviceProfile(friction=FrictionParams(asymptote_per_n=0.5)))
+    assert "asymptote 0.5 F_n reaches 1" in model.beyond_model()
+
+
 def test_amplitude_is_equation_3_bit_for_bit_with_unreachable_targets_among_them():
     """Unreachable targets skip log1p(-1) (slow in numpy) and still give eq 3's inf."""
     mu = np.concatenate([np.linspace(-0.5, 1.0, 3001), [0.565, np.nextafter(0.565, 1.0),

@@ -99,9 +99,8 @@ def warnings_of(pipeline, tracker, totals: Totals) -> list[str]:
         warnings.append(f"{clamps['nonfinite_target']} target samples were not finite (NaN or "
                         "inf) and were commanded 0 um")
     if clamps["force_beyond_model"]:
-        warnings.append(f"{clamps['force_beyond_model']} samples had a normal force beyond "
-                        "seed 003's friction model, whose asymptote 1.13 F_n reaches 1 there (full "
-                        "amplitude was commanded)")
+        warnings.append(f"{clamps['force_beyond_model']} samples had a normal force "
+                        + pipeline.friction.beyond_model())
     if tracker.jumps:
         warnings.append(f"{tracker.jumps} finger jumps were treated as lift and touch")
     if tracker.out_of_order:
