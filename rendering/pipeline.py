@@ -7,7 +7,7 @@ friction model and its actuation; nothing else is built. The same object runs li
 call, as fast as it goes): a sample takes effect at the block boundary after its
 timestamp either way (see ``rendering.tracking.tracks``), so both give the same output.
 
-    pipeline = build_pipeline(scene, rate_hz=10_000.0, block_size=50)
+    pipeline = build_pipeline(scene, rate_hz=10_000.0)  # blocks of 5 ms: 50 samples
     state = pipeline.initial_state()
     out, state = pipeline.process(block_index, samples, state, n_blocks=1)
 """
@@ -132,15 +132,28 @@ def _layer_mode(layer, render_override: str | None, sho_variant: str) -> str:
     return sho_variant if mode == "sho" else mode
 
 
-class Pipeline:
-    """The stages for one scene; see the module docstring."""
+#: a block's length when none is given (s): 50 samples at the seed 003 link's 10 kHz, the
+#: longest a touch sample waits to take effect
+BLOCK_S = 0.005
 
-    def __init__(self, scene: Scene, rate_hz: float = 10_000.0, block_size: int = 50,
+
+def default_block_size(rate_hz: float, block_s: float = BLOCK_S) -> int:
+    """Samples in a block of ``block_s`` (s) at ``rate_hz`` (Hz), at least 1."""
+    return max(1, round(rate_hz * block_s))
+
+
+class Pipeline:
+    """The stages for one scene; see the module docstring. ``block_size`` None: a
+    block of :data:`BLOCK_S` (:func:`default_block_size`)."""
+
+    def __init__(self, scene: Scene, rate_hz: float = 10_000.0, block_size: int | None = None,
                  render_override: str | None = None, sho_variant: str = DEFAULT_SHO,
                  t0_s: float = 0.0, tracker: TrackerConfig | None = None,
                  inversion: str = "exact", control: str | None = None, loop_config=None):
         if rate_hz <= 0 or not np.isfinite(rate_hz):
             raise ValueError(f"output rate {rate_hz!r} Hz: expected a positive number")
+        if block_size is None:
+            block_size = default_block_size(rate_hz)
         if block_size < 1:
             raise ValueError(f"block size {block_size!r}: expected at least 1 sample")
         if render_override is not None and render_override not in render_modes():
@@ -280,7 +293,7 @@ class Pipeline:
                                   forces=force_state, control=control_state, selection=selection)
 
 
-def build_pipeline(scene: Scene, rate_hz: float = 10_000.0, block_size: int = 50,
+def build_pipeline(scene: Scene, rate_hz: float = 10_000.0, block_size: int | None = None,
                    render_override: str | None = None, **kwargs) -> Pipeline:
     """The pipeline for ``scene`` (see :class:`Pipeline`)."""
     return Pipeline(scene, rate_hz=rate_hz, block_size=block_size,

@@ -241,7 +241,8 @@ def test_outputs_that_would_not_fit_the_disk_are_refused_before_writing(tmp_path
     assert main(["replay", SCENE, TRACE, "--out", str(tmp_path / "fits"), "--quiet"]) == 0
     assert main(["replay", SCENE, TRACE, "--out", str(tmp_path / "big"), "--rate", "1e6"]) == 1
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "the outputs (5.0001 s at 1e+06 Hz" in err[0] and "is free" in err[0]
+    # the trace's 5 s and two blocks of 5 ms after it
+    assert len(err) == 1 and "the outputs (5.01 s at 1e+06 Hz" in err[0] and "is free" in err[0]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fits"]  # nothing made for "big"
 
 
@@ -541,3 +542,26 @@ def test_the_warning_for_a_press_beyond_the_friction_model_names_the_model_in_us
     assert 0 < beyond < doc["output"]["samples"]
     assert f"{beyond} samples {words}" in doc["warnings"]
     assert doc["clamps"]["unreachable"] == 0
+
+
+@pytest.mark.parametrize("rate_hz, samples", [(100.0, 1), (10_000.0, 50), (1e6, 5000)])
+def test_a_block_is_5_ms_whatever_the_rate_unless_given(tmp_path, rate_hz, samples):
+    """Touch samples take effect at block boundaries: a block of 50 samples at 100 Hz
+    held each touch for up to 0.5 s. Without --block a block is 5 ms of samples (at
+    least one), in the replay, the Python API and a batch job."""
+    import frictex
+    from frictex.app.engine.batch import read_manifest
+    from frictex.rendering.renderers import render_modes
+    trace = write_csv(tmp_path / "t.csv", stroke(0.0, 20.0, n=10))
+    doc = run_replay("grating-5mm", str(trace), None, fmt="memory", rate_hz=rate_hz,
+                     progress=False)
+    assert doc["output"]["block_size"] == samples
+    assert frictex.replay("grating-5mm", str(trace),
+                          rate_hz=rate_hz).summary.output.block_size == samples
+    manifest = tmp_path / "m.csv"
+    manifest.write_text(f"scene,trace,rate_hz\ngrating-5mm,{trace},{rate_hz:g}\n")
+    job, = read_manifest(manifest, render_modes())
+    assert run_replay(job.scene, job.trace, None, fmt="memory", rate_hz=job.rate_hz,
+                      block_size=job.block, progress=False)["output"]["block_size"] == samples
+    assert run_replay("grating-5mm", str(trace), None, fmt="memory", rate_hz=rate_hz,
+                      block_size=7, progress=False)["output"]["block_size"] == 7

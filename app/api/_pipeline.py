@@ -15,14 +15,16 @@ from frictex.rendering.tracking.tracks import apply_index
 from frictex.textures.model import CONTROL_MODES, Scene, render_modes
 
 
-def run_settings(rate_hz: float, block_size: int, renderer: str | None,
-                 control: str | None) -> tuple[float, int]:
-    """The output rate (Hz) and block size (samples) checked against the command line's
-    bounds (``app.engine.limits``), the renderer and control mode against those known."""
+def run_settings(rate_hz: float, block_size: int | None, renderer: str | None,
+                 control: str | None) -> tuple[float, int | None]:
+    """The output rate (Hz) and block size (samples; None: 5 ms of samples) checked
+    against the command line's bounds (``app.engine.limits``), the renderer and control
+    mode against those known."""
     choice("renderer", renderer, render_modes(), none=True)
     choice("control", control, CONTROL_MODES, none=True)
     return (real("rate_hz", rate_hz, "Hz", OUTPUT_RATES_HZ),
-            whole("block_size", block_size, "samples", BLOCK_SIZES))
+            None if block_size is None
+            else whole("block_size", block_size, "samples", BLOCK_SIZES))
 
 
 class Pipeline:
@@ -35,7 +37,8 @@ class Pipeline:
     """
 
     def __init__(self, scene: Scene | str | Path, *, rate_hz: float = 10_000.0,
-                 block_size: int = 50, renderer: str | None = None, control: str | None = None,
+                 block_size: int | None = None, renderer: str | None = None,
+                 control: str | None = None,
                  inversion: str = "exact"):
         scene = scene_of(scene)
         rate_hz, block_size = run_settings(rate_hz, block_size, renderer, control)
@@ -107,7 +110,8 @@ class Pipeline:
         return out
 
 
-def build_pipeline(scene: Scene | str | Path, *, rate_hz: float = 10_000.0, block_size: int = 50,
+def build_pipeline(scene: Scene | str | Path, *, rate_hz: float = 10_000.0,
+                   block_size: int | None = None,
                    renderer: str | None = None, control: str | None = None,
                    inversion: str = "exact") -> Pipeline:
     """Build the haptic pipeline of a scene.
@@ -119,9 +123,10 @@ def build_pipeline(scene: Scene | str | Path, *, rate_hz: float = 10_000.0, bloc
     rate_hz : float, optional
         Output sample rate (Hz), 100 Hz to 1 MHz as ``frictex replay --rate``; 10 kHz is
         the seed 003 device's link.
-    block_size : int, optional
-        Output samples per block, 1 to 100,000 as ``--block`` (50 = 5 ms at 10 kHz):
-        touch samples take effect at block boundaries, as live.
+    block_size : int or None, optional
+        Output samples per block, 1 to 100,000 as ``--block``: touch samples take effect
+        at block boundaries, as live. None (the default): 5 ms of samples (50 at 10 kHz,
+        1 at 100 Hz).
     renderer : str or None, optional
         Render every periodic layer this way (``sho``, ``sho-held``, ``sho-predicted``,
         ``sht``, ``hybrid``) instead of as its file says.

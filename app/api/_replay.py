@@ -99,7 +99,7 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
            out: str | Path | None = None, format: str | None = None,
            renderer: str | None = None, device: str | None = None, faults: str | None = None,
            max_unplayed: float = MAX_UNPLAYED, rate_hz: float = 10_000.0,
-           block_size: int = 50, control: str | None = None, strict: bool = False,
+           block_size: int | None = None, control: str | None = None, strict: bool = False,
            max_gap_s: float = MAX_GAP_S, progress: bool = False) -> Replay:
     """Replay a touch trace on a scene, headless, on a virtual clock (``frictex replay``).
 
@@ -131,9 +131,9 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
         (``--max-unplayed``, default 0.01).
     rate_hz : float, optional
         Output sample rate (Hz), 100 Hz to 1 MHz (``--rate``).
-    block_size : int, optional
+    block_size : int or None, optional
         Output samples per block, 1 to 100,000 (``--block``); touch samples take effect
-        at block boundaries.
+        at block boundaries. None (the default): 5 ms of samples (50 at 10 kHz).
     control : str or None, optional
         The friction loop (``open``, ``closed``, ``adaptive``) instead of the scene file's.
     strict : bool, optional

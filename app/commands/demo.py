@@ -71,13 +71,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_link_arguments(parser)
     parser.add_argument("--rate", type=output_rate, default=10_000.0, metavar="HZ",
                         help="output sample rate (default 10000 Hz)")
-    parser.add_argument("--block", type=positive_int, default=25, metavar="N",
-                        help="block size in output samples (default 25 = 2.5 ms at 10 kHz: "
-                             "a touch waits at most one block, and the device plays two "
-                             "blocks (at least 5 ms) behind; replay's default is 50, so "
-                             "replay a demo's "
-                             "recorded trace with --block 25 to apply its touches at the "
-                             "same boundaries)")
+    parser.add_argument("--block", type=positive_int, default=None, metavar="N",
+                        help="block size in output samples (default: 2.5 ms of samples, 25 "
+                             "at 10 kHz: a touch waits at most one block, and the device "
+                             "plays two blocks (at least 5 ms) behind; replay's default is "
+                             "5 ms, so replay a demo's recorded trace with --block 25 to "
+                             "apply its touches at the same boundaries)")
     from frictex.app.live.inputs import INPUTS
     kinds = list(INPUTS.loaded().items())  # a plugin's that cannot load: left out, warned
     parser.add_argument("--input", type=input_option, default=("mouse", None),
@@ -165,6 +164,10 @@ def input_name(kind: str, arg) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.block is None:
+        from frictex.app.live.haptic_thread import BLOCK_S
+        from frictex.rendering.pipeline import default_block_size
+        args.block = default_block_size(args.rate, BLOCK_S)
     kind, arg = args.input
     if args.tuio_from is not None:
         if kind != "tuio":

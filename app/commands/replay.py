@@ -22,10 +22,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder")
     parser.add_argument("--rate", type=output_rate, default=10_000.0, metavar="HZ",
                         help="output sample rate (default 10000 Hz, the seed 003 link)")
-    parser.add_argument("--block", type=block_size, default=50,
+    parser.add_argument("--block", type=block_size, default=None,
                         metavar="N",
                         help="block size in output samples: touch samples take effect at "
-                             "block boundaries, as live (default 50 = 5 ms at 10 kHz)")
+                             "block boundaries, as live (default: 5 ms of samples, 50 at "
+                             "10 kHz, 1 at 100 Hz)")
     parser.add_argument("--format", choices=FORMATS, default="csv",
                         help="csv (default), npz (one array per column) or parquet (columnar, "
                              "compressed; pandas and polars open it): the two faster for "

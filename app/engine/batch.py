@@ -6,7 +6,7 @@ Manifest grammar (CSV with a header; ``#`` lines are comments)::
 
 ``scene`` and ``trace`` as ``frictex replay`` takes them (a file, relative to the
 manifest's folder, or a bundled name); ``renderer`` empty means the file's own;
-``rate_hz`` (default 10000), ``block`` (default 50) and ``format`` (csv, npz, parquet;
+``rate_hz`` (default 10000), ``block`` (default 5 ms of samples: 50 at 10 kHz) and ``format`` (csv, npz, parquet;
 default csv) as the replay's options, within the same bounds as on the command line
 (``--rate`` 100 to 1e6 Hz, ``--block`` 1 to 100000 samples); ``name`` the job's output
 folder under the batch's ``--out`` (default: ``<row number>-<scene stem>-<trace stem>``,
@@ -111,7 +111,7 @@ class Job:
     trace: str
     renderer: str | None
     rate_hz: float
-    block: int
+    block: int | None
     fmt: str
     name: str
 
@@ -232,7 +232,7 @@ def _job(index: int, cell: dict, base: Path, renderers, where: str) -> Job:
     name = _name(cell, index, where)
     return Job(index, _resolve(cell["scene"], base), _resolve(cell["trace"], base), renderer,
                _number(cell, "rate_hz", 10_000.0, OUTPUT_RATES_HZ, "Hz", where),
-               _number(cell, "block", 50, BLOCK_SIZES, "samples", where), fmt, name)
+               _number(cell, "block", None, BLOCK_SIZES, "samples", where), fmt, name)
 
 
 def _name(cell: dict, index: int, where: str) -> str:

@@ -68,8 +68,9 @@ class ReplayOptions:
         Output sample rate (Hz).
     fmt : str
         Table format: csv, npz, parquet, or ``memory`` (no output folder).
-    block_size : int
-        Output samples per block; touch samples take effect at block boundaries.
+    block_size : int or None
+        Output samples per block; touch samples take effect at block boundaries. None:
+        5 ms of samples (``rendering.pipeline.default_block_size``).
     render_override : str or None
         Render every periodic layer this way instead of as its file says.
     chunk_blocks : int or None
@@ -95,7 +96,7 @@ class ReplayOptions:
 
     rate_hz: float = 10_000.0
     fmt: str = "csv"
-    block_size: int = 50
+    block_size: int | None = None
     render_override: str | None = None
     chunk_blocks: int | None = None
     progress: bool = True
@@ -252,7 +253,7 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     totals = Totals()
     sinks = [totals]
     if sink is not None:  # a paced link: its send waits (bounded) for the device's room
-        sinks.append(LinkSink(sink, options.block_size))
+        sinks.append(LinkSink(sink, pipeline.block_size))
     if frames is not None:
         sinks.append(FrameSink(frames))
     if options.progress and _long(source):
@@ -265,7 +266,7 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
         chunk_blocks = 1
     elif chunk_blocks is None:
         fingers = max(1, most_touching(source.pending)) if source.pending is not None else 1
-        chunk_blocks = max(1, CHUNK_SAMPLES // (options.block_size * fingers))
+        chunk_blocks = max(1, CHUNK_SAMPLES // (pipeline.block_size * fingers))
     stage = PipelineStage(pipeline)
     if looped and sink is not None:  # the loop reads the device's forces
         stage = PipelineStage(pipeline, sink.device_force_n, force_reports_of(sink))

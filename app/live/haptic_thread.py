@@ -49,14 +49,16 @@ from frictex.app.engine.sinks import LinkSink
 from frictex.app.engine.sources import QueueSource
 from frictex.device.friction import ClampCounts
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP
-from frictex.rendering.pipeline import PipelineState, build_pipeline
+from frictex.rendering.pipeline import PipelineState, build_pipeline, default_block_size
 from frictex.rendering.visual.overlay import BlockRecord, record_from_output
 
 TOUCH_QUEUE = 4096
 COMMAND_QUEUE = 64
 SNAPSHOT_QUEUE = 256
-#: the live block (samples): 2.5 ms at 10 kHz
-BLOCK_SIZE = 25
+#: the live block (s): a touch waits at most this long to take effect
+BLOCK_S = 0.0025
+#: the live block at 10 kHz (samples)
+BLOCK_SIZE = default_block_size(10_000.0, BLOCK_S)
 #: blocks a live link's device holds before it plays: one playing, one on its way
 LEAD_BLOCKS = 2
 #: the least prefill a live link asks for, whatever the block (s): a thread handing over

@@ -29,7 +29,7 @@ from frictex.app.engine.sinks import MemorySink
 from frictex.app.engine.sources import TraceSource
 from frictex.rendering.input.trace_synth import make_motion, sample, truth
 from frictex.rendering.metrics import CHATTER_PERIOD_MM, MetricError, accuracy, reference
-from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.pipeline import BLOCK_S, build_pipeline
 from frictex.rendering.renderers import RENDERERS, any_layer, sho_variant_of
 from frictex.rendering.input.trace_file import Trace
 from frictex.rendering.tracking.tracks import apply_index
@@ -49,8 +49,6 @@ MOTIONS = {
 TOUCH_HZ = (50.0, 120.0, 240.0)
 OUTPUT_HZ = (2000.0, 5000.0, 10_000.0, 20_000.0)
 INVERSIONS = ("exact", "lut")
-#: one block of output (s): the live haptic thread's block
-BLOCK_S = 0.005
 #: the reference grid (Hz): at least the highest output rate
 REFERENCE_HZ = 20_000.0
 #: position noise of the sampled traces (mm, standard deviation)
@@ -176,9 +174,8 @@ def load(scene_name: str):
 
 
 def _pipeline(scene, case: Case):
-    block = max(1, int(round(case.output_hz * BLOCK_S)))
     sho_variant = sho_variant_of(case.renderer)
-    return build_pipeline(scene, rate_hz=case.output_hz, block_size=block,
+    return build_pipeline(scene, rate_hz=case.output_hz,
                           render_override=case.renderer, sho_variant=sho_variant,
                           inversion=case.inversion)
 
