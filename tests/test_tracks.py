@@ -1,6 +1,7 @@
 """Finger tracking: velocity from noisy samples, prediction, touch events, hard cases."""
 
 import numpy as np
+import pytest
 from numpy.testing import assert_allclose
 
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP, make_trace
@@ -221,3 +222,25 @@ def test_many_short_touches_in_one_block_track_each_finger():
     for k in (0, 137, m - 1):
         alone, _ = track(0, 50, trace.slice(3 * k, 3 * k + 3), TrackerState(), CFG)
         assert_allclose(block.x_held[k], alone.x_held[0]) and (block.touch_id[k] == alone.touch_id[0]).all()
+
+
+@pytest.mark.parametrize("rate_hz", [60.0, 120.0, 240.0])
+@pytest.mark.parametrize("speed_mm_s", [1950.0, 2000.0, 2500.0, 4000.0])
+def test_a_fast_swipe_is_no_jump_and_a_jump_out_of_it_is_one(rate_hz, speed_mm_s):
+    """A swipe reaching 2-4 m/s in 0.1 s, then steady, with 0.05 mm of noise: its steps
+    are 8-67 mm, at or beyond 2 m/s times the interval, yet none is a jump (at 2 m/s
+    and 120 Hz 3 of 6 samples were). The same swipe whose last samples are a finger
+    resting 50 mm aside (another touch reported under its id) has one jump."""
+    rng = np.random.default_rng(3)
+    t = np.arange(int(0.25 * rate_hz)) / rate_hz
+    ramp_s = 0.1
+    x = 5.0 + speed_mm_s * np.where(t < ramp_s, t ** 2 / (2 * ramp_s), t - ramp_s / 2)
+    x += rng.normal(0.0, 0.05, t.size)
+    y = 30.0 + rng.normal(0.0, 0.05, t.size)
+    finger = np.zeros(t.size, int)
+    _, state = _run(make_trace(t, finger, x, y), 10_000)
+    assert state.jumps == 0
+    aside = t.size - 3
+    x[aside:], y[aside:] = x[aside], y[aside:] + 50.0
+    _, state = _run(make_trace(t, finger, x, y), 10_000)
+    assert state.jumps == 1

@@ -24,11 +24,14 @@ finger unmoved 0.6 ms after another one moves (refdata phone-two-finger-drag): a
 difference quotient there swings between 0 and twice the true speed.
 
 Guards, all counted: a sample older than the finger's last one is dropped
-(``out_of_order``); a sample whose implied speed exceeds ``jump_speed_mm_s`` over more
-than ``jump_min_mm`` is a lift and a touch elsewhere (``jumps``: velocity and SHT phase
-restart); after ``predict_horizon_s`` without a new sample the finger is taken as
-resting (prediction stops, velocity 0), so a screen that stops reporting a still
-finger does not leave SHT synthesising forever.
+(``out_of_order``); a sample that the touch's recent motion does not explain is a lift
+and a touch elsewhere (``jumps``: velocity and SHT phase restart). It lies off where
+that motion (the chord over the velocity window) leads by more than ``jump_min_mm`` and
+by more than ``jump_speed_mm_s`` times the interval: a change of velocity no finger
+makes within one sample, whereas a swipe at any steady speed is no jump. After
+``predict_horizon_s`` without a new sample the finger is taken as resting (prediction
+stops, velocity 0), so a screen that stops reporting a still finger does not leave SHT
+synthesising forever.
 """
 
 from __future__ import annotations
@@ -207,10 +210,26 @@ def _steps_kernel(fs, history, t, x, y, force, event, cfg, cap):
     touch, t_down, last_new = fs_touch, fs_t_down, -1
     for k in range(m):
         i = idx[k]
-        win[h + k, 0], win[h + k, 1], win[h + k, 2] = t[i], x[i], y[i]
-        dist = np.hypot(x[i] - x_prev, y[i] - y_prev)
-        jump = (contact_prev and event[i] == MOVE and dist > jump_min
-                and dist > jump_speed * (t[i] - t_prev))
+        g = h + k
+        win[g, 0], win[g, 1], win[g, 2] = t[i], x[i], y[i]
+        # a jump: a move the touch's recent motion does not explain, by more than
+        # jump_min and by more than jump_speed over the interval (a swipe at any steady
+        # speed is none). That motion: the chord over the rows a next call keeps as
+        # history (the velocity window), not the last step: a screen re-reports a finger
+        # unmoved 0.6 ms after another one moves
+        jump = False
+        if contact_prev and event[i] == MOVE:
+            last = g - 1
+            f = max(np.searchsorted(win[:g, 0], win[last, 0] - window_s),
+                    touch_first[k - 1] if k > 0 else 0, last - cap + 1)
+            vx_recent = vy_recent = 0.0
+            if win[last, 0] > win[f, 0]:
+                span_s = win[last, 0] - win[f, 0]
+                vx_recent = (win[last, 1] - win[f, 1]) / span_s
+                vy_recent = (win[last, 2] - win[f, 2]) / span_s
+            dt = t[i] - t_prev
+            off = np.hypot(x[i] - x_prev - vx_recent * dt, y[i] - y_prev - vy_recent * dt)
+            jump = off > jump_min and off > jump_speed * dt
         if jump:
             jumps += 1
         new_touch[k] = event[i] == DOWN or not contact_prev or jump
