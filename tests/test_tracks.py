@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings, strategies as st
 from numpy.testing import assert_allclose
 
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP, make_trace
@@ -244,3 +245,30 @@ def test_a_fast_swipe_is_no_jump_and_a_jump_out_of_it_is_one(rate_hz, speed_mm_s
     x[aside:], y[aside:] = x[aside], y[aside:] + 50.0
     _, state = _run(make_trace(t, finger, x, y), 10_000)
     assert state.jumps == 1
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(steps=st.lists(st.floats(-60.0, 60.0), min_size=3, max_size=40),
+       dts=st.lists(st.sampled_from([0.0006, 0.004, 0.0083, 0.0167, 0.04]), min_size=40,
+                    max_size=40),
+       cut=st.integers(1, 30))
+def test_jumps_are_the_same_in_one_call_or_in_blocks(steps, dts, cut):
+    """Steps of up to 60 mm (jumps among them) at intervals of 0.6-40 ms: the touches and
+    jumps found in one call are those found block by block (the motion a jump is judged
+    against is carried in the history)."""
+    t = np.cumsum(dts[:len(steps)])
+    x = 50.0 + np.cumsum(steps)
+    trace = make_trace(t, np.zeros(t.size, int), x, np.full(t.size, 30.0))
+    cfg = TrackerConfig(rate_hz=1000.0, quantum=1)
+    n = int(t[-1] * 1000) + 3
+    whole, whole_state = track(0, n, trace, TrackerState(), cfg)
+    applied = apply_index(trace.t_s, cfg)
+    state, i = TrackerState(), 0
+    for lo in range(0, n, cut):
+        size = min(cut, n - lo)
+        j = int(np.searchsorted(applied, lo + size))
+        block, state = track(lo, size, trace.slice(i, j) if j > i else None, state, cfg)
+        if block.touch_id.shape[0]:  # the finger is known from its first sample on
+            np.testing.assert_array_equal(block.touch_id, whole.touch_id[:, lo:lo + size])
+        i = j
+    assert (state.jumps, state.touches) == (whole_state.jumps, whole_state.touches)
