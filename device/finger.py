@@ -2,7 +2,7 @@
 
 One person's finger (:class:`FingerParams`) on the plate, per output sample:
 
-1. The plate's amplitude loop (seed 003, section 4, Fig. 3b: a PID loop with a -3 dB
+1. The plate's amplitude loop (seed 003, section 4.2, Fig. 3b: a PI loop with a -3 dB
    bandwidth of 400 Hz at 2 um) is a first-order low-pass at ``plate_bw_hz`` on the
    commanded amplitude, clamped to the amplifier limit first.
 2. The friction the finger gets, relative to its friction at rest (seed 003, eqs 1-2)::

@@ -11,7 +11,7 @@ target under the finger, mu'(t). From mu'(t) along the finger's path it takes:
   is cut into strokes where the finger rests or turns back, each stroke's mu' is read
   over distance travelled and given the period of its best-fitting sinusoid (a
   periodogram over distance, so neither the grating's phase where a stroke starts nor
-  the stroke's speed profile counts: seed 003, section 5, found participants blind to
+  the stroke's speed profile counts: seed 003, section 6, found participants blind to
   the spatial phase of a periodic signal, only its period felt), and the strokes' periods
   are averaged, weighted by the periods each covers (cubed). A stroke across the lines at an
   angle feels them further apart (the period along its path); the same stroke over a
@@ -21,8 +21,9 @@ target under the finger, mu'(t). From mu'(t) along the finger's path it takes:
 - ``fidelity``: how well mu'(t) reproduces the scene at the finger's true position
   (``rendering.compose.ideal_mu``), in [0, 1]: the cosine similarity of the two
   magnitude spectra, times their correlation for periods of 3.5 mm and more (seed 003
-  section 5, after its reference [17]: the fingerpad cannot place features finer than
-  that, so only their rhythm counts).
+  section 4.4.3, after its reference [17]: single objects are told apart down to 3-4
+  mm; section 6: the plate's stimulus cannot be placed under the fingerpad, so of finer
+  features only their rhythm counts).
 
 The stroke is the same for every stimulus (its seed is the participant's), so what differs
 between stimuli is what the pipeline made of them; the features of a stimulus are
@@ -62,7 +63,8 @@ STROKE_S = 2.0
 TOUCH_HZ = 60.0
 RATE_HZ = 10_000.0
 BLOCK = 50
-#: features finer than this cannot be placed under the fingerpad (seed 003, section 5)
+#: features finer than this cannot be placed under the fingerpad (seed 003, sections
+#: 4.4.3 and 6: 3-4 mm)
 PLACEMENT_MM = 3.5
 #: the finger moves (a stroke) above this speed (mm/s); mu' is read along a stroke every STEP_MM
 MOVING_MM_S = 1.0
