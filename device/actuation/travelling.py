@@ -67,7 +67,12 @@ _SLOPE_STEP = 1e-3
 def driving_force(travelling_um, normal_force_n, params: DrivingForceParams) -> np.ndarray:
     """F_p (N) = k_p F_n max(0, w_t - w_th) for a travelling amplitude w_t (um, zero-to-peak).
 
-    Seed 004, Fig. 3c. Arguments broadcast together.
+    Seed 004, section IV.B and Fig. 3c, gives the slope (0.13 N/um) only at f_z = 1 N, as
+    a line fitted through its points, and says the force is insignificant below about 1
+    um and weaker than the line below 1.3 um; it is larger at 1 N than at 0.5 N. The
+    threshold ``w_th`` (1 um) and the force's proportion to F_n are this model's own
+    reading of those statements, not the paper's equation: at 3 um and 1 N it gives 0.26
+    N, where a line through the origin would give 0.39 N. Arguments broadcast together.
     """
     drive = np.maximum(np.asarray(travelling_um, dtype=np.float64) - params.threshold_um, 0.0)
     return params.slope_per_um * np.asarray(normal_force_n, dtype=np.float64) * drive
