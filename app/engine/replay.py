@@ -182,9 +182,12 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
     wall0 = time.perf_counter()
     timer = RunTimer()
     scene, chunks, trace_path = load_inputs(scene, trace, options.strict)
-    load_writer(options.fmt)
-    source = TraceSource(chunks, max_gap_s=options.max_gap_s)
+    inputs_s = time.perf_counter() - wall0
+    write0 = time.perf_counter()
+    load_writer(options.fmt)  # the format's library: part of writing, not of start-up
+    timer.seconds["write"] += time.perf_counter() - write0
     read0 = time.perf_counter()
+    source = TraceSource(chunks, max_gap_s=options.max_gap_s)
     t0 = source.first_time()
     timer.seconds["read"] += time.perf_counter() - read0
     staging = None if out_dir is None else Staging(out_dir)
@@ -194,7 +197,7 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
     pipeline = build_pipeline(scene, rate_hz=options.rate_hz, block_size=options.block_size,
                               render_override=options.render_override, t0_s=t0,
                               control=options.control)
-    setup_s = read0 - wall0 + time.perf_counter() - build0  # scene and kernels loaded
+    setup_s = inputs_s + time.perf_counter() - build0  # scene and kernels loaded
     looped = pipeline.control is not None
     read0 = time.perf_counter()
     source.start(pipeline.tracker_config)

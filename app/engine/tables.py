@@ -64,8 +64,8 @@ RESERVE_BYTES = 64 << 20
 
 
 def load_writer(fmt: str) -> None:
-    """Import the library that writes ``fmt`` now (pyarrow for Parquet, 0.1-0.2 s), as
-    part of a run's start-up like its kernels, rather than inside its first write."""
+    """Import the library that writes ``fmt`` now (pyarrow for Parquet, 0.1-0.2 s),
+    before the run's first block, where a replay counts it as writing time."""
     if fmt == "parquet":
         import pyarrow.parquet  # noqa: F401
 
