@@ -1,16 +1,21 @@
 """The machinery of ``frictex bench``'s whole-process figures: alternated runs, the load and
-section totals beside every section, and the bare-numpy floor program (no timing asserted)."""
+section totals beside every section, the bare-numpy floor program and the verdict on its
+paired rounds, and the start-up row without frictex's bytecode cache (no timing
+asserted)."""
 
 import sys
+from pathlib import Path
 
 import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
+import frictex.app
 from frictex.app.commands.bench import _measured
-from frictex.app.measure.bench_baseline import BARE
+from frictex.app.measure.bench_baseline import BARE, paired_figures, verdict
+from frictex.app.measure.bench_startup import without_frictex_cache
 from frictex.app.measure.figure import Figure
-from frictex.app.measure.processes import alternated, median, run_process
+from frictex.app.measure.processes import Run, alternated, frictex_argv, median, run_process
 from frictex.rendering.input.trace_file import read_trace, write_trace
 from frictex.rendering.input.trace_synth import make_motion, sample
 
@@ -69,3 +74,38 @@ def test_the_bare_floor_writes_a_replays_two_tables(tmp_path, fmt):
             lines = out.read_text().splitlines()
             assert lines[0].replace('"', "").split(",") == columns
             assert len(lines) == rows + 1
+
+
+def _run(wall_s: float, code: int = 0) -> Run:
+    return Run(wall_s, wall_s, 100.0, code)
+
+
+def test_the_baseline_verdict_holds_only_where_every_round_is_under_the_target():
+    assert verdict([1.1, 1.19, 0.8], 1.2) == "met in every round"
+    assert verdict([1.1, 1.21, 0.8], 1.2) == "not shown"
+    assert verdict([], 1.2) == "not shown"
+
+
+def test_the_baseline_prints_each_rounds_paired_ratio_and_no_verdict_without_a_floor():
+    bare = [_run(2.0), _run(4.0), _run(2.0)]
+    ours = [_run(2.2), _run(2.0), _run(9.0, code=1)]  # the third round failed: left out
+    figures = {f.label.removeprefix("L, "): f for f in paired_figures("L", bare, ours, 1.2)}
+    assert [figures[f"frictex against bare, round {k}"].value for k in (1, 2)] == [
+        pytest.approx(1.1), pytest.approx(0.5)]
+    assert "frictex against bare, round 3" not in figures
+    assert figures["frictex against bare, median of 2 rounds' ratios (target 1.2x)"].value == (
+        pytest.approx(0.8))
+    assert figures["rounds under the target"].unit == "of 2: met in every round"
+    csv = [f.label for f in paired_figures("L", bare, ours, None)]
+    assert any("no verdict: the bare program is no floor" in label for label in csv)
+    assert not any("rounds under the target" in label for label in csv)
+
+
+def test_the_startup_row_without_frictexs_bytecode_cache_keeps_every_other_modules(tmp_path):
+    argv = without_frictex_cache(frictex_argv("--version"), tmp_path)
+    assert argv[:4] == [sys.executable, "-B", "-X", f"pycache_prefix={tmp_path}"]
+    cached = [p.relative_to(tmp_path) for p in tmp_path.rglob("*.pyc")]
+    assert any(p.name.startswith("argparse.") for p in cached)  # the standard library's
+    frictex_dirs = [Path(p).resolve().relative_to("/") for p in frictex.app.__path__]
+    assert not [p for p in cached if any(d in p.parents for d in frictex_dirs)]
+    assert run_process(argv).code == 0

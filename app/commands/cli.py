@@ -58,7 +58,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "batch": ("frictex.app.commands.batch", "replay many (scene, trace, renderer) jobs over the cores or a Dask cluster"),
     "trace": ("frictex.app.commands.trace", "synthesise or import touch traces"),
     "sim-device": ("frictex.app.commands.sim_device", "run a simulated plate microcontroller on a pseudo-terminal or TCP"),
-    "bench": ("frictex.app.commands.bench", "measure speed: pipeline, replay, start-up, the bare-numpy floor, link, visual layer, modal solves"),
+    "bench": ("frictex.app.commands.bench", "measure speed: pipeline, replay, link, visual layer, modal solves, start-up, the bare-numpy floor, touch-to-output latency"),
     "modes": ("frictex.app.commands.modes", "natural frequencies, wavelengths and nodes of beams, plates and rings"),
     "report": ("frictex.app.commands.report", "speed against error over a matrix of scenes, motions and renderers"),
     "demo": ("frictex.app.commands.demo", "the live demo window (mouse or multi-touch as fingers)"),

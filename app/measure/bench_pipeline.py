@@ -66,7 +66,8 @@ def run(quick: bool) -> list[Figure]:
                                 render_override=renderer)
         _, seconds = run_blocks(replay, trace, 200, duration)
         compute = float(seconds.sum())
-        figures.append(Figure("pipeline", f"replay compute only, {label}", duration / compute,
+        figures.append(Figure("pipeline", f"replay compute only, {duration:g} s, {label}",
+                              duration / compute,
                               "x real time"))
         live = build_pipeline(load(SCENE), rate_hz=RATE_HZ, block_size=BLOCK,
                               render_override=renderer)
@@ -92,7 +93,7 @@ def live_figures(per_block: np.ndarray, label: str, block: int = BLOCK) -> list[
     """p50 and p99 (us) of per-call seconds, one block of ``block`` samples per call."""
     us = np.asarray(per_block) * 1e6
     ms = block / RATE_HZ * 1e3
-    return [Figure("pipeline", f"live {ms:g} ms block {name}, {label}",
+    return [Figure("pipeline", f"live {ms:g} ms block {name} of {us.size:,} blocks, {label}",
                    float(np.percentile(us, q)), "us") for name, q in (("p50", 50), ("p99", 99))]
 
 

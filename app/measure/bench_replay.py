@@ -1,7 +1,9 @@
 """``frictex bench replay``: replays end to end, each in a fresh process as a user runs it.
 
 - One finger, composed scene, 10 kHz, human-like strokes at 60 Hz (600 s; 60 s with
-  ``--quick``), in each output format: the run's own real-time factor end to end
+  ``--quick``), in each output format, one run each, one format after another (not
+  alternated: ``frictex bench baseline`` compares the formats in alternated rounds):
+  the run's own real-time factor end to end
   (reading the trace, computing, writing and committing every output, from
   ``summary.json``), the same with start-up (loading the scene and the kernels), the
   compute-only factor beside them, the whole process's wall time
@@ -11,7 +13,8 @@
   layer (five height layers, a recorded texture, four clips), CSV and Parquet.
 - Two fingers with modal actuation (seed 000's beam): the bundled crossing trace repeated
   to 98 s (24 s quick), CSV and Parquet.
-- A one-second replay: the whole process's wall time (what a user waits).
+- A one-second replay: the whole process's wall time (what a user waits; median of 5
+  runs one after another).
 - A batch of one-minute jobs (64; 16 quick) on all cores against the same batch run one
   job after another (``--jobs 1``): jobs per second of each, and their ratio (two runs
   each, in the order 1, N, N, 1, after one run not counted: ``_batch_figures``).
@@ -93,15 +96,15 @@ def _replay_figures(tmp: Path, label: str, scene: str, trace_path: Path, fmt: st
     got = replay_process(tmp, scene, trace_path, fmt)
     if got is None:
         return [Figure("replay", f"{label} {fmt}: replay failed", float("nan"), "")]
+    once = "x real time (one run)"
     return [Figure("replay", f"{label} {fmt}, end to end (read, compute, write)",
-                   got["x_realtime_end_to_end"], "x real time"),
+                   got["x_realtime_end_to_end"], once),
             Figure("replay", f"{label} {fmt}, end to end with start-up (scene, kernels)",
-                   got["x_realtime_with_setup"], "x real time"),
-            Figure("replay", f"{label} {fmt}, compute only", got["x_realtime_compute"],
-                   "x real time"),
+                   got["x_realtime_with_setup"], once),
+            Figure("replay", f"{label} {fmt}, compute only", got["x_realtime_compute"], once),
             Figure("replay", f"{label} {fmt}, whole process (start, imports too)",
-                   duration_s / got["process_wall_s"], "x real time"),
-            Figure("replay", f"{label} {fmt}, peak memory", got["peak_mib"], "MiB")]
+                   duration_s / got["process_wall_s"], once),
+            Figure("replay", f"{label} {fmt}, peak memory", got["peak_mib"], "MiB (one run)")]
 
 
 def _batch_figures(tmp: Path, jobs: int) -> list[Figure]:

@@ -8,8 +8,15 @@ commands run alternated, one of each per round (15 rounds; 5 with ``--quick``), 
 figure is the median over the rounds: wall time (what a user waits) and user + system
 CPU (what the machine's load does not change much); ``frictex bench`` prints the
 machine's load before and after. ``python -X importtime -m frictex ...`` says where a command's
-start-up goes. With ``PYTHONDONTWRITEBYTECODE`` set, Python caches no compiled modules and
-every command compiles frictex's again: the section says so.
+start-up goes.
+
+Python keeps each module's bytecode in ``__pycache__`` and compiles a module again only
+where that cache is missing or older than its source. With ``PYTHONDONTWRITEBYTECODE``
+set it writes no cache, so after frictex's sources change (an edit, a checkout) every
+command compiles the changed modules again, each time. The section measures what that
+costs at most: the one-second Parquet replay once more in the same rounds, with the
+cache of every module but frictex's (``python -B -X pycache_prefix=DIR``, DIR filled by
+one untimed run, frictex's part then removed). It warns where the variable is set.
 
 Targets (issue 31): ``frictex --version`` under 0.15 s; a one-second replay under 0.5 s
 of wall time on a quiet machine.
@@ -17,7 +24,10 @@ of wall time on a quiet machine.
 
 from __future__ import annotations
 
+import importlib
 import os
+import shutil
+import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -26,6 +36,9 @@ from frictex.app.measure.bench_replay import SCENE, human_trace
 from frictex.app.measure.figure import Figure
 from frictex.app.measure.processes import alternated, frictex_argv, median
 from frictex.rendering.input.trace_file import write_trace
+
+#: the row of the one-second Parquet replay without frictex's bytecode cache
+NO_CACHE = "frictex replay, one second, parquet, without frictex's bytecode cache"
 
 
 def commands(tmp: Path) -> dict[str, list[str]]:
@@ -44,16 +57,34 @@ def commands(tmp: Path) -> dict[str, list[str]]:
     return found
 
 
+def without_frictex_cache(argv: list[str], prefix: Path) -> list[str]:
+    """``argv`` (a frictex command) as a command that finds the bytecode cache of every
+    module in ``prefix`` except frictex's own, and writes none: it runs once here
+    (untimed, writing its cache even where ``PYTHONDONTWRITEBYTECODE`` is set) to fill
+    ``prefix``, whose frictex part is then removed."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    subprocess.run([argv[0], "-X", f"pycache_prefix={prefix}", *argv[1:]], env=env,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, check=False)
+    # every frictex module, the top package (app/api) too, lies under these
+    roots = {Path(p) for layer in ("app", "rendering", "textures", "device")
+             for p in importlib.import_module(f"frictex.{layer}").__path__}
+    for root in roots:
+        shutil.rmtree(prefix / root.resolve().relative_to("/"), ignore_errors=True)
+    return [argv[0], "-B", "-X", f"pycache_prefix={prefix}", *argv[1:]]
+
+
 def run(quick: bool) -> list[Figure]:
     if os.environ.get("PYTHONDONTWRITEBYTECODE"):
-        # measured here: about 70 frictex modules compiled again by every one-second
-        # replay, 80 ms of its 0.52-0.60 s
-        print("frictex: bench startup: PYTHONDONTWRITEBYTECODE is set, so every command "
-              "compiles frictex's modules from source again; unset it for the start-up a "
-              "user gets", file=sys.stderr)
+        print("frictex: bench startup: PYTHONDONTWRITEBYTECODE is set, so Python writes no "
+              "bytecode cache, and a command whose frictex modules changed since their "
+              "cache was written compiles them again each time (up to the 'bytecode "
+              "cache' figure below); unset it for the start-up a user gets", file=sys.stderr)
     rounds = 5 if quick else 15
     with tempfile.TemporaryDirectory(prefix="frictex-startup-") as name:
-        runs = alternated(commands(Path(name)), rounds)
+        found = commands(Path(name))
+        found[NO_CACHE] = without_frictex_cache(found["frictex replay, one second, parquet"],
+                                                Path(name) / "pycache")
+        runs = alternated(found, rounds)
     figures = []
     for label, got in runs.items():
         failed = sum(r.code != 0 for r in got)
@@ -62,4 +93,9 @@ def run(quick: bool) -> list[Figure]:
                            median(got, "wall_s"), "s"),
                     Figure("startup", f"{label}, CPU user + system (median of {rounds})",
                            median(got, "cpu_s"), "s")]
+    cost = median(runs[NO_CACHE], "wall_s") - median(
+        runs["frictex replay, one second, parquet"], "wall_s")
+    figures.append(Figure("startup", "frictex's bytecode cache, what a one-second Parquet "
+                          f"replay pays without it (difference of the medians of {rounds})",
+                          cost * 1e3, "ms"))
     return figures

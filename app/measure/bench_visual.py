@@ -9,9 +9,11 @@ fingers with trails, the scope with 3 s of history, the status line; each frame 
 1/60 s more of the stroke, as live), each frame
 finished on the GPU (``ctx.finish``), without and with reading the pixels back (what
 ``--frames`` and screenshots pay), best of 100 (20 with ``--quick``) and the mean CPU time
-of all threads; beside them, measured in the same run, the floor of this renderer (clear,
-the scene's textured quad and the read-back, nothing else), the ratios, the frame's draw
-calls. The frame and the floor are measured again beside one busy process per core. Each
+of all threads; beside them, measured in the same run just after the frames (not
+alternated with them), the floor of this renderer (clear, the scene's textured quad and
+the read-back, nothing else), the ratios (best against best, mean CPU against mean
+CPU), the frame's draw calls. The frame and the floor are measured again beside one
+busy process per core. Each
 label names the renderer EGL chose (llvmpipe is Mesa's software rasterizer; a GPU's
 driver names the GPU). The CPU is shared: quote the machine's load with the figures; the
 CPU ratio is the one that holds on a busy machine.
@@ -91,8 +93,14 @@ def bundled_scene_figures(comp: Compositor, label: str, repeats: int) -> list[Fi
     from frictex.textures.library import list_scenes
     from frictex.textures.loader import load_scene
     return [Figure("visual", f"static image {entry.path.stem} {label}",
-                   scene_ms(comp, load_scene(entry.path), repeats), "ms (once per scene)")
+                   scene_ms(comp, load_scene(entry.path), repeats), static_unit(repeats))
             for entry in list_scenes()]
+
+
+def static_unit(repeats: int) -> str:
+    """The unit of a static image's figure: what ``scene_ms`` measured."""
+    return (f"ms (drawn once per scene; best of {repeats} after an untimed 64x48 px draw "
+            "that loads its kernels)")
 
 
 def timed(step, frames: int, before=None) -> tuple[float, float]:
@@ -176,12 +184,12 @@ def run(quick: bool) -> list[Figure]:
         label = f"{size[0]}x{size[1]} on {backend.ctx.info['GL_RENDERER'].split(' (')[0]}"
         comp = Compositor(backend.ctx, scene, size)
         figures.append(Figure("visual", f"static scene image {label}",
-                              scene_ms(comp, scene, repeats), "ms (once per scene)"))
+                              scene_ms(comp, scene, repeats), static_unit(repeats)))
         if size == SIZES[-1]:
             figures.extend(bundled_scene_figures(comp, label, repeats))
             comp.set_scene(scene)
         frame, _ = frame_ms(backend, comp, view, frames, read_back=False)
-        figures.append(Figure("visual", f"frame {label}", frame, "ms (best)"))
+        figures.append(Figure("visual", f"frame {label}", frame, f"ms (best of {frames})"))
         figures += against_floor(backend, comp, view, frames, label)
         busy = cores()
         with BusyProcesses(busy, 120.0):
@@ -195,16 +203,18 @@ def run(quick: bool) -> list[Figure]:
 
 def against_floor(backend: OffscreenBackend, comp: Compositor, view: FrameView, frames: int,
                   label: str) -> list[Figure]:
-    """The frame with its pixels read back against the floor, measured one after the
-    other: best wall times, mean CPU times, and their ratios."""
+    """The frame with its pixels read back against the floor, ``frames`` of the one,
+    then ``frames`` of the other: best wall times, mean CPU times, and their ratios."""
     read, read_cpu = frame_ms(backend, comp, view, frames, read_back=True)
     floor, floor_cpu = floor_ms(backend, (comp.viewport.width_px, comp.viewport.height_px),
                                 frames)
-    return [Figure("visual", f"frame + read back {label}", read, "ms (best)"),
-            Figure("visual", f"floor {label} (clear, scene quad, read back)", floor,
-                   "ms (best)"),
-            Figure("visual", f"frame + read back / floor {label}", read / floor, "x"),
-            Figure("visual", f"frame + read back CPU {label}", read_cpu,
-                   "ms (mean, all threads)"),
-            Figure("visual", f"floor CPU {label}", floor_cpu, "ms (mean, all threads)"),
-            Figure("visual", f"frame / floor CPU {label}", read_cpu / floor_cpu, "x")]
+    best, mean = f"ms (best of {frames})", f"ms (mean of {frames}, all threads)"
+    return [Figure("visual", f"frame + read back {label}", read, best),
+            Figure("visual", f"floor {label} (clear, scene quad, read back; after the frames)",
+                   floor, best),
+            Figure("visual", f"frame + read back / floor {label}", read / floor,
+                   "x (best against best)"),
+            Figure("visual", f"frame + read back CPU {label}", read_cpu, mean),
+            Figure("visual", f"floor CPU {label}", floor_cpu, mean),
+            Figure("visual", f"frame / floor CPU {label}", read_cpu / floor_cpu,
+                   "x (mean against mean)")]
