@@ -198,10 +198,21 @@ def test_host_clamps_to_the_declared_limit_and_counts(device):
 
 def test_a_device_of_the_wrong_kind_is_refused(device):
     _, _, path = device
-    with pytest.raises(LinkError, match="1 channel.*needs 2"):
+    with pytest.raises(LinkError, match=r"1 channel\(s\), the pipeline sends 2"):
         CommandSink(lambda: open_port(path), 2, RATE)
     with pytest.raises(LinkError, match="sample rate 10000 Hz, the pipeline runs at 8000 Hz"):
         CommandSink(lambda: open_port(path), 1, 8000.0)
+
+
+@pytest.mark.parametrize("stoppable_device", [DeviceConfig(channels=2)], indirect=True)
+def test_a_device_with_more_channels_than_the_pipeline_is_refused(stoppable_device):
+    """A Block carries exactly Info.channels (PROTOCOL.md 4.3): a 1-channel stream to a
+    2-channel device had every block refused (20,050 of 20,050 samples lost); the
+    handshake now refuses it, naming both counts, and nothing is played."""
+    _, played, path, _ = stoppable_device
+    with pytest.raises(LinkError, match=r"has 2 channel\(s\), the pipeline sends 1$"):
+        CommandSink(lambda: open_port(path), 1, RATE)
+    assert len(played.arrays()[0]) == 0
 
 
 def test_a_port_that_does_not_exist_or_does_not_answer_is_an_error():

@@ -254,8 +254,8 @@ class HostSession:
 
     def _check(self, info: p.Info) -> LinkError | None:
         problems = []
-        if info.channels < self.channels:
-            problems.append(f"{info.channels} channel(s), the pipeline needs {self.channels}")
+        if info.channels != self.channels:  # a Block carries exactly Info.channels (4.3)
+            problems.append(f"{info.channels} channel(s), the pipeline sends {self.channels}")
         if self.phases and not info.has_phases:
             problems.append("no phase control, the actuation has phases")
         if abs(info.sample_rate_hz - self.rate_hz) > 1e-3:
