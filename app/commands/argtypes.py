@@ -89,18 +89,44 @@ def add_link_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def sim_device_args(args: argparse.Namespace) -> tuple[str, ...]:
-    """``frictex sim-device`` flags from ``--sim-finger`` (refused without ``--device sim``);
+    """``frictex sim-device`` flags from ``--sim-finger`` (:func:`sim_finger_args`);
     every option of :func:`add_link_arguments` that acts on a device is refused without
     ``--device`` rather than ignored."""
     if args.device is None and args.faults is not None:
         raise InputError("--faults: needs --device (the faults are injected on the link to a "
                          "device); no --device was given")
-    if args.sim_finger is None:
+    return sim_finger_args("--sim-finger", args.sim_finger, args.device)
+
+
+def sim_options(device: str | None) -> list[tuple[str, str]] | None:
+    """The (option, text) pairs a ``--device`` spec gives the simulated device (``sim``:
+    none; ``sim:finger=2`` or ``sim://?finger=2``: ``[("finger", "2")]``); None when
+    ``device`` is None or names another device. An unknown device name is ``UnknownName``
+    (an InputError) listing the known."""
+    if device is None:
+        return None
+    import importlib
+    importlib.import_module("frictex.device.link.host")  # registers the built-in devices
+    from frictex.device.link.devices import DEVICES, resolve, sim_pairs
+    factory, arg = resolve(device)
+    return sim_pairs(arg, ()) if factory is DEVICES.get("sim") else None
+
+
+def sim_finger_args(option: str, finger: int | None, device: str | None) -> tuple[str, ...]:
+    """``frictex sim-device`` flags for the simulated finger ``finger`` (person number,
+    given as ``option``: replay's ``--sim-finger``, calibrate's ``--finger``); () when it
+    is None. Refused (InputError) below 0, without a simulated ``device``, and with a
+    ``device`` spec that already names a finger (``sim:finger=2``)."""
+    if finger is None:
         return ()
-    if args.sim_finger < 0:
-        raise InputError(f"--sim-finger {args.sim_finger}: expected a person number >= 0")
-    if args.device not in ("sim", "sim:tcp"):
-        given = f"got --device {args.device}" if args.device else "no --device was given"
-        raise InputError(f"--sim-finger {args.sim_finger}: needs --device sim (a simulated "
-                         f"device); {given}")
-    return ("--finger", str(args.sim_finger))
+    if finger < 0:
+        raise InputError(f"{option} {finger}: expected a person number >= 0")
+    pairs = sim_options(device)
+    if pairs is None:
+        given = f"got --device {device}" if device else "no --device was given"
+        raise InputError(f"{option} {finger}: needs --device sim (a simulated device); {given}")
+    named = [text for name, text in pairs if name == "finger"]
+    if named:
+        raise InputError(f"{option} {finger}: --device {device} already names the simulated "
+                         f"finger (finger={named[-1]}); give the finger once, in one of them")
+    return ("--finger", str(finger))

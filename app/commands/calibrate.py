@@ -8,36 +8,54 @@ and plots the measured points against the fitted curve.
 
 ``--device`` takes what ``replay --device`` takes: ``sim`` starts ``frictex sim-device``
 with a simulated finger (``--finger N``: person N of ``device.finger``'s population,
-sliding and pressing as the protocol asks); a serial port or pyserial URL is a plate,
-which must announce force reports (PROTOCOL.md 4.9).
+sliding and pressing as the protocol asks; ``sim:finger=N`` names it too, once); a
+serial port or pyserial URL is a plate, which must announce force reports (PROTOCOL.md
+4.9).
+
+Everything the person's sweep does not decide is checked before the device is opened, so
+a mistake never throws a sweep away: ``--finger`` (only with a simulated device), each
+output path (``--out``, ``--plot``: what it names, its folder, the room for it, as
+``app.engine.outfile`` writes it) and the plot's library. The outputs are written whole
+or not at all (``app.engine.outfile.write_file``).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
 import numpy as np
 
+from frictex.app.commands.argtypes import sim_finger_args, sim_options
+from frictex.app.engine.outfile import _kind, write_file
+from frictex.app.engine.tables import check_room
 from frictex.device.calibration_fit import device_toml, fit_points
 from frictex.device.calibration_run import StepCut, Sweep, check_calibratable, run_sweep
-from frictex.device.errors import InputError
+from frictex.device.errors import InputError, require_extra
 
 #: the plate's sample rate (Hz, seed 003) and the simulated plate's amplitude limit (um)
 RATE_HZ = 10_000.0
 SIM_LIMIT_UM = 2.5
 #: sweeps run at most: one whose step lost its reports to a starved host is run again
 SWEEPS = 3
+#: the simulated finger when none is named (person number)
+DEFAULT_FINGER = 1
+#: bounds of the outputs' sizes (bytes): the [device] section with a measured table, and
+#: the plot's 500 x 350 px at 4 bytes a pixel
+TOML_BYTES = 64 << 10
+PLOT_BYTES = 500 * 350 * 4
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--device", required=True, metavar="sim|PORT",
                         help="the plate: 'sim' (a simulated device with a simulated finger), "
                              "or a serial port or pyserial URL, as for replay --device")
-    parser.add_argument("--finger", type=int, default=1, metavar="N",
+    parser.add_argument("--finger", type=int, default=None, metavar="N",
                         help="with --device sim: the simulated finger, person N (>= 0) of "
-                             "device/finger.py's population (default 1)")
+                             f"device/finger.py's population (default {DEFAULT_FINGER}); "
+                             "refused with any other device")
     parser.add_argument("--out", type=Path, default=Path("calibration.toml"),
                         help="where to write the [device] section (default calibration.toml)")
     parser.add_argument("--plot", type=Path, default=None,
@@ -55,12 +73,15 @@ def _progress(done: int, total: int) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from frictex.device.link.host import open_sink  # with the command: its imports stay out of --help
-    if args.finger < 0:
-        raise InputError(f"calibrate: --finger {args.finger}: expected 0 or a positive person number")
     sweep = Sweep()
-    sim = args.device in ("sim", "sim:tcp")
-    sim_args = (("--finger", str(args.finger), "--finger-speed", f"{sweep.speed_mm_s:g}",
-                 "--force", f"{sweep.force_n:g}", "--limit", f"{SIM_LIMIT_UM:g}") if sim else ())
+    sim_args = _sim_args(args.device, args.finger, sweep)
+    _check_output("--out", args.out, TOML_BYTES)
+    if args.plot is not None:
+        _check_output("--plot", args.plot, PLOT_BYTES)
+        if os.path.realpath(args.plot) == os.path.realpath(args.out):
+            raise InputError(f"--plot {args.plot}: the same file as --out {args.out}; give "
+                             "the plot a name of its own")
+        require_extra("report", "matplotlib", "--plot")
     link = open_sink(args.device, channels=1, rate_hz=RATE_HZ, paced=True, sim_args=sim_args)
     try:
         check_calibratable(link, sweep)  # before asking for a finger
@@ -76,12 +97,57 @@ def run(args: argparse.Namespace) -> int:
           f"b = {fit.params.b_per_um:.4f} /um, k = {fit.params.asymptote_per_n:.4f} /N, "
           f"residual RMS {fit.residual_rms:.5f} (mu')"
           + ("" if fit.fits else "; the model does not fit: calibration table written"))
-    args.out.write_text(device_toml(fit, limit_um, sweep.force_n))
+    text = device_toml(fit, limit_um, sweep.force_n).encode("utf-8")
+    write_file(args.out, lambda to: to.write_bytes(text), len(text))
     print(f"wrote {args.out}")
     if args.plot is not None:
         _plot(args.plot, w, normal, mu, fit)
         print(f"wrote {args.plot}")
     return 0
+
+
+def _sim_args(device: str, finger: int | None, sweep: Sweep) -> tuple[str, ...]:
+    """The simulated device's flags for ``sweep`` (its finger slides and presses as the
+    sweep asks; amplitude limit :data:`SIM_LIMIT_UM`), each unless ``device``'s spec names
+    it (``sim:limit=3``); () for another device. ``--finger`` is refused as replay refuses
+    ``--sim-finger`` (``app.commands.argtypes.sim_finger_args``)."""
+    flags = sim_finger_args("--finger", finger, device)
+    named = sim_options(device)
+    if named is None:
+        return ()
+    given = {name for name, _ in named}
+    own = {"finger": DEFAULT_FINGER, "finger-speed": sweep.speed_mm_s, "force": sweep.force_n,
+           "limit": SIM_LIMIT_UM}
+    for name, value in own.items():
+        if name not in given and not (name == "finger" and flags):
+            flags += (f"--{name}", f"{value:g}")
+    return flags
+
+
+def _check_output(option: str, path: Path, need_bytes: float) -> None:
+    """Refuse, touching nothing, an output path ``write_file`` could not write
+    ``need_bytes`` (bytes) into: what it names (``app.engine.outfile``: a folder, a
+    socket), a folder that does not exist or cannot be written, a file system that holds
+    no files or has too little room (``check_room``: OutputSpaceError, exit 1), a path
+    that cannot be looked at (a file as a folder, a link loop). The InputError names
+    ``option`` and ``path``."""
+    try:
+        if _kind(path) == "stream":  # a character device or a FIFO: written as it is
+            return
+        folder = Path(os.path.realpath(path)).parent  # a link: where it points
+        if not folder.is_dir():
+            missing = "is not a folder" if folder.exists() else "does not exist"
+            raise InputError(f"the folder {folder} {missing}; give a file in an existing "
+                             "folder")
+        if not os.access(folder, os.W_OK):
+            raise InputError(f"the folder {folder} cannot be written (no permission, or a "
+                             "read-only file system)")
+        check_room(folder, need_bytes, f"{option} {path}", "or write elsewhere")
+    except InputError as exc:
+        message = str(exc).removeprefix(f"{path}: ")  # outfile's start with the path
+        raise InputError(f"{option} {path}: {message}") from None
+    except OSError as exc:  # the path itself cannot be looked at (/dev/null/x, a link loop)
+        raise InputError(f"{option} {path}: cannot be written ({exc.strerror or exc})") from None
 
 
 def _sweeps(link, sweep: Sweep):
@@ -101,6 +167,8 @@ def _sweeps(link, sweep: Sweep):
 
 
 def _plot(path: Path, w, normal, mu, fit) -> None:
+    """The measured points against the fitted curve, a PNG written whole
+    (``app.engine.outfile.write_file``)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -113,5 +181,7 @@ def _plot(path: Path, w, normal, mu, fit) -> None:
     ax.set_ylabel("relative friction mu'")
     ax.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    try:
+        write_file(path, lambda to: fig.savefig(to, format="png", dpi=100), PLOT_BYTES)
+    finally:
+        plt.close(fig)
