@@ -60,6 +60,17 @@ def test_calibrate_refuses_before_opening_the_device(argv, message, tmp_path, ca
     assert sorted(os.listdir(tmp_path)) == before  # nothing written
 
 
+def test_a_full_disk_is_said_before_the_device_opens(monkeypatch, tmp_path, capsys, no_device):
+    """No room for the calibration file: the disk's error (exit 1), not bad input."""
+    import shutil
+    from collections import namedtuple
+    usage = namedtuple("usage", "total used free")
+    monkeypatch.setattr(shutil, "disk_usage", lambda path: usage(1 << 30, 1 << 30, 0))
+    assert main(["calibrate", "--device", "sim", "--out", str(tmp_path / "c.toml")]) == 1
+    assert "--out " + str(tmp_path / "c.toml") in _one_line(capsys)
+    assert os.listdir(tmp_path) == []
+
+
 def test_a_missing_plot_library_is_said_before_the_device_opens(monkeypatch, tmp_path, capsys,
                                                                 no_device):
     monkeypatch.setitem(__import__("sys").modules, "matplotlib", None)

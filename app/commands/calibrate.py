@@ -29,8 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from frictex.app.commands.argtypes import sim_finger_args, sim_options
-from frictex.app.engine.outfile import _kind, write_file
-from frictex.app.engine.tables import check_room
+from frictex.app.engine.outfile import check_writable, write_file
 from frictex.device.calibration_fit import device_toml, fit_points
 from frictex.device.calibration_run import StepCut, Sweep, check_calibratable, run_sweep
 from frictex.device.errors import InputError, require_extra
@@ -75,9 +74,9 @@ def run(args: argparse.Namespace) -> int:
     from frictex.device.link.host import open_sink  # with the command: its imports stay out of --help
     sweep = Sweep()
     sim_args = _sim_args(args.device, args.finger, sweep)
-    _check_output("--out", args.out, TOML_BYTES)
+    check_writable("--out", args.out, TOML_BYTES)
     if args.plot is not None:
-        _check_output("--plot", args.plot, PLOT_BYTES)
+        check_writable("--plot", args.plot, PLOT_BYTES)
         if os.path.realpath(args.plot) == os.path.realpath(args.out):
             raise InputError(f"--plot {args.plot}: the same file as --out {args.out}; give "
                              "the plot a name of its own")
@@ -122,32 +121,6 @@ def _sim_args(device: str, finger: int | None, sweep: Sweep) -> tuple[str, ...]:
         if name not in given and not (name == "finger" and flags):
             flags += (f"--{name}", f"{value:g}")
     return flags
-
-
-def _check_output(option: str, path: Path, need_bytes: float) -> None:
-    """Refuse, touching nothing, an output path ``write_file`` could not write
-    ``need_bytes`` (bytes) into: what it names (``app.engine.outfile``: a folder, a
-    socket), a folder that does not exist or cannot be written, a file system that holds
-    no files or has too little room (``check_room``: OutputSpaceError, exit 1), a path
-    that cannot be looked at (a file as a folder, a link loop). The InputError names
-    ``option`` and ``path``."""
-    try:
-        if _kind(path) == "stream":  # a character device or a FIFO: written as it is
-            return
-        folder = Path(os.path.realpath(path)).parent  # a link: where it points
-        if not folder.is_dir():
-            missing = "is not a folder" if folder.exists() else "does not exist"
-            raise InputError(f"the folder {folder} {missing}; give a file in an existing "
-                             "folder")
-        if not os.access(folder, os.W_OK):
-            raise InputError(f"the folder {folder} cannot be written (no permission, or a "
-                             "read-only file system)")
-        check_room(folder, need_bytes, f"{option} {path}", "or write elsewhere")
-    except InputError as exc:
-        message = str(exc).removeprefix(f"{path}: ")  # outfile's start with the path
-        raise InputError(f"{option} {path}: {message}") from None
-    except OSError as exc:  # the path itself cannot be looked at (/dev/null/x, a link loop)
-        raise InputError(f"{option} {path}: cannot be written ({exc.strerror or exc})") from None
 
 
 def _sweeps(link, sweep: Sweep):

@@ -66,6 +66,34 @@ def write_file(path: str | Path, write: Callable[[Path], object], need_bytes: fl
         raise
 
 
+def check_writable(option: str, path: Path, need_bytes: float) -> None:
+    """Refuse, touching nothing, an output path that :func:`write_file` could not write
+    ``need_bytes`` (bytes) into, before the work that makes the file: one that names a
+    folder or a socket, a folder that does not exist or cannot be written, a path that
+    cannot be looked at (a file taken as a folder, a link loop): InputError naming
+    ``option`` and ``path``; a file system that holds no files or has too little room
+    (``check_room``): OutputSpaceError."""
+    try:
+        if _kind(path) == "stream":  # a character device or a FIFO: written as it is
+            return
+        folder = Path(os.path.realpath(path)).parent  # a link: where it points
+        if not folder.is_dir():
+            missing = "is not a folder" if folder.exists() else "does not exist"
+            raise InputError(f"the folder {folder} {missing}; give a file in an existing "
+                             "folder")
+        if not os.access(folder, os.W_OK):
+            raise InputError(f"the folder {folder} cannot be written (no permission, or a "
+                             "read-only file system)")
+        check_room(folder, need_bytes, f"{option} {path}", "or write elsewhere")
+    except InputError as exc:
+        message = str(exc).removeprefix(f"{path}: ")  # _kind's start with the path
+        raise InputError(f"{option} {path}: {message}") from None
+    except OutputSpaceError:
+        raise
+    except OSError as exc:  # the path itself cannot be looked at (/dev/null/x, a link loop)
+        raise InputError(f"{option} {path}: cannot be written ({exc.strerror or exc})") from None
+
+
 def _kind(path: Path) -> str:
     """``stream`` (a character device or FIFO, links followed), else ``file`` (a regular
     file, or nothing yet); :class:`InputError` for anything else."""
