@@ -8,11 +8,19 @@ allocates arrays). A paced stream starts once half the ring is queued (or at clo
 first callback finds frames; a live one with its first frames. The ring always keeps ``ramp_frames`` of room in reserve:
 a live producer (``paced=False``) that finds no room for a block drops it (counted,
 ``ring_full``) and writes the ramp to 0 instead, and the next block ramps in. A paced
-producer (replay) waits for room, at most ``stall_s * max_stalls`` seconds, then fails
-with a DeviceError: the audio device stopped taking frames.
+producer (replay) waits for room, at most ``stall_s * max_stalls`` seconds (less once
+PortAudio says the stream is no longer active: a JACK server that went away), then lets
+the device go and fails with one DeviceError: the audio device stopped taking frames.
+
+Letting the device go: ``Pa_StopStream`` then ``Pa_CloseStream``, each bounded by
+:data:`PA_CALL_LIMIT_S` (``device.audio.bounded``: with its server gone, PortAudio's JACK
+host API blocks in them for 10 minutes, signals unanswered). One that does not return is
+abandoned with the stream (the callback, should it ever run again, ramps to 0), and that
+is a DeviceError too.
 
 :meth:`StreamOutput.close` writes the stream's own ramp to 0, waits (bounded) for the
-ring to play out, then stops the stream after PortAudio's reported output latency.
+ring to play out, then stops the stream after PortAudio's reported output latency (the
+bounded stop and close above).
 :meth:`StreamOutput.emergency_stop` ramps to 0 within ``ramp_ms`` from whatever plays.
 """
 
@@ -23,6 +31,7 @@ import time
 
 import numpy as np
 
+from frictex.device.audio.bounded import abandon_portaudio, call_bounded
 from frictex.device.audio.options import AudioPlan
 from frictex.device.audio.output import CAUSES, AudioOutput
 from frictex.device.audio.ring import FrameRing, Player
@@ -32,6 +41,8 @@ from frictex.device.errors import DeviceError, InputError, MissingExtra
 POLL_S = 0.001
 #: bound on waiting for the end of the stream beyond what is queued (s)
 DRAIN_MARGIN_S = 2.0
+#: bound on one PortAudio stop or close (s); a healthy device returns within a few periods
+PA_CALL_LIMIT_S = 3.0
 
 
 def import_sounddevice():
@@ -73,7 +84,7 @@ class StreamOutput(AudioOutput):
     def __init__(self, plan: AudioPlan, device: str | None, *, blocksize: int,
                  buffer_frames: int, phases: bool, paced: bool, wait_s: float,
                  stderr=sys.stderr, tap_frames: int = 0):
-        sd = import_sounddevice()
+        sd = self._sd = import_sounddevice()
         super().__init__(plan, f"audio:{device}" if device else "audio", phases=phases,
                          paced=paced, stderr=stderr)
         capacity = max(int(buffer_frames), 4 * blocksize) + plan.ramp_frames
@@ -87,6 +98,7 @@ class StreamOutput(AudioOutput):
         # ring position - synth frame, from a synth frame on (it moves at a dropped block)
         self._offsets = [(0, 0)]
         self._started = False
+        self._released = False  # stop and close done (or abandoned): the stream is gone
         target = int(device) if device and device.isdigit() else (device or None)
         try:
             self.stream = sd.OutputStream(
@@ -144,10 +156,23 @@ class StreamOutput(AudioOutput):
         while self.ring.room() < frames:
             if not self._started:
                 self._start()
-            if time.monotonic() > deadline:
-                raise DeviceError(f"{self.label}: the audio device took no frames for "
-                                  f"{self.wait_s:g} s")
+            gone = not self._active()
+            if gone or time.monotonic() > deadline:
+                problem = self.label + (
+                    ": the audio device went away (PortAudio reports its stream no longer "
+                    "active)" if gone else f": the audio device took no frames for "
+                    f"{self.wait_s:g} s (it stopped or went away)")
+                self.player.estop = True
+                self._release(problem)
+                raise DeviceError(problem + "; the stream was stopped and closed")
             time.sleep(POLL_S)
+
+    def _active(self) -> bool:
+        """Whether PortAudio still runs the stream (False once a JACK server has gone)."""
+        try:
+            return bool(self.stream.active)
+        except self._sd.PortAudioError:
+            return False
 
     def now(self) -> float:
         """The clock of :meth:`dac_time_of_command` (s): ``time.monotonic``."""
@@ -176,6 +201,8 @@ class StreamOutput(AudioOutput):
         self.player.estop = True
 
     def _end(self, tail: np.ndarray) -> None:
+        if self._released:  # a failed wait has let the device go
+            return
         try:
             if not self.player.estop:
                 self._ramp_in = self.plan.ramp_frames
@@ -186,14 +213,41 @@ class StreamOutput(AudioOutput):
                 self._start()
             queued = self.ring.tail - self.ring.head
             deadline = time.monotonic() + queued / self.plan.audio_rate + DRAIN_MARGIN_S
-            while self.ring.head < self.ring.tail and time.monotonic() < deadline:
+            while (self.ring.head < self.ring.tail and time.monotonic() < deadline
+                   and self._active()):
                 time.sleep(POLL_S)
             # the last callback's frames are still on their way to the DAC
             time.sleep(self.output_latency_s + self.stream.blocksize / self.plan.audio_rate)
             self.not_drained = self.ring.tail - self.ring.head
-            self.stream.stop()
         finally:
-            self.stream.close()
+            self._release(f"{self.label}: the audio device stopped responding while the "
+                          "stream closed")
+
+    def _release(self, context: str) -> None:
+        """Stop and close the stream, each PortAudio call bounded by
+        :data:`PA_CALL_LIMIT_S`; one that does not return (or a signal during the wait)
+        abandons the stream (module docstring). Raises DeviceError, starting with
+        ``context``, for an abandoned stream."""
+        if self._released:
+            return
+        self._released = True
+        calls = (("stop", self.stream.stop), ("close", self.stream.close))
+        for what, call in calls if self._started else calls[1:]:
+            try:
+                returned = call_bounded(call, PA_CALL_LIMIT_S)
+            except BaseException:
+                self._abandon()
+                raise
+            if not returned:
+                self._abandon()
+                raise DeviceError(f"{context}; PortAudio's {what} did not return within "
+                                  f"{PA_CALL_LIMIT_S:g} s, so the stream was abandoned")
+
+    def _abandon(self) -> None:
+        """Leave the stream to PortAudio for good: should its callback run again, it
+        ramps to 0 and plays silence."""
+        self.player.estop = True
+        abandon_portaudio(self._sd)
 
     # ----------------------------------------------------------------- accounting
     def played_frames(self) -> int:
