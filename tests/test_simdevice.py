@@ -163,6 +163,19 @@ def test_a_host_that_heartbeats_but_sends_no_samples_gets_a_bounded_hold():
     assert core.counters.gap_samples == 0 and core.counters.watchdog_trips == 0
 
 
+def test_a_zero_ramp_steps_to_zero_on_the_tick_after_the_hold():
+    """``ramp_ms = 0`` (``sim-device --ramp-ms 0``, in the range its message states): the
+    held setpoint reaches zero one tick after the hold, as ticks(0) = 1 says."""
+    cfg = DeviceConfig(ramp_ms=0)
+    core, host, rec = make(cfg)
+    first = STEP * (4096 + 4 * np.arange(500))
+    stream(core, host, first, end_s=0.15)
+    _, sp, _ = rec.ticks()
+    held, to_zero, ramp = _held_then_ramped(sp[:, 0], first[-1])
+    assert (held, to_zero) == (cfg.ticks(cfg.watchdog_ms), 1) == (250, 1)
+    assert np.all(ramp == 0.0)
+
+
 def test_a_hello_ramps_the_flushed_streams_setpoint_out_at_once():
     """PROTOCOL.md 5.1: a Hello voids what the host sent before; the setpoint it left
     ramps to zero from the Hello's tick (no watchdog_ms hold), and the new stream plays

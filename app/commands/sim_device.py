@@ -24,10 +24,11 @@ import sys
 import threading
 import time
 
-from frictex.app.commands.argtypes import positive_float, positive_int
+from frictex.app.commands.argtypes import bounded, positive_float, positive_int
 from frictex.device.errors import DeviceError
-from frictex.device.link.simdevice import (HELLO_TIMEOUT_S, DeviceConfig, DeviceCore, open_listener,
-                                           open_pty, played_log, plate_log, serve, socket_url)
+from frictex.device.link.simdevice import (HELLO_TIMEOUT_S, MAX_CHANNELS, STORE_WORDS, DeviceConfig,
+                                           DeviceCore, open_listener, open_pty, played_log,
+                                           plate_log, serve, socket_url)
 
 
 def _tcp_address(text: str) -> tuple[str, int]:
@@ -44,23 +45,27 @@ def _tcp_address(text: str) -> tuple[str, int]:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--channels", type=positive_int, default=1, metavar="N", help="actuator channels (default 1)")
+    parser.add_argument("--channels", type=bounded(int, 1, MAX_CHANNELS, "channels"), default=1,
+                        metavar="N", help=f"actuator channels, 1 to {MAX_CHANNELS} as the "
+                                          "firmware (default 1)")
     parser.add_argument("--rate", type=positive_float, default=10_000.0, metavar="HZ",
                         help="sample rate the device plays at (default 10000 Hz, seed 003)")
     parser.add_argument("--limit", type=positive_float, action="append", metavar="UM",
                         help="amplitude limit in um zero-to-peak, declared to the host; once for "
                              "all channels or once per channel (default 4.0)")
     parser.add_argument("--buffer", type=positive_int, default=4096, metavar="N",
-                        help="jitter-buffer capacity in samples (default 4096)")
+                        help=f"jitter-buffer capacity in samples, 2 to {STORE_WORDS} / channels "
+                             "as the firmware (default 4096)")
     parser.add_argument("--bandwidth", type=positive_float, default=400.0, metavar="HZ",
                         help="-3 dB bandwidth of the modelled amplitude loop (default 400 Hz, "
                              "seed 003 Fig. 3b)")
-    parser.add_argument("--watchdog-ms", type=positive_int, default=25, metavar="MS",
+    parser.add_argument("--watchdog-ms", type=bounded(int, 1, 49, "ms"), default=25, metavar="MS",
                         help="host silence that trips the watchdog (default 25 ms; with the ramp "
                              "at most 50 ms)")
-    parser.add_argument("--ramp-ms", type=positive_int, default=20, metavar="MS",
+    parser.add_argument("--ramp-ms", type=int, default=20, metavar="MS",
                         help="ramp to zero after a trip, a stop, a Hello or a hold of "
-                             "watchdog_ms without a sample to play (default 20 ms)")
+                             "watchdog_ms without a sample to play, 0 to 50 - watchdog_ms "
+                             "(default 20 ms)")
     parser.add_argument("--phases", action="store_true", help="accept a phase per channel")
     parser.add_argument("--sensor", action="store_true",
                         help="report the modelled plate amplitude as 'measured'")

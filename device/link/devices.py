@@ -16,7 +16,8 @@ device cannot be reached (exit 1).
 registers the built-ins: ``sim`` (the simulated device in this process, ``device.link.simport``; ARG:
 its options, ``sim:finger=3,force=0.5``) and ``port`` (a serial port or pyserial URL,
 ``device.link.port``). :func:`resolve` reads a spec: ``NAME://...`` goes to the device
-NAME if one is registered, any other URL to ``port``; ``NAME[:ARG]`` to NAME if one is
+NAME if one is registered, a pyserial URL of a scheme ``device.link.port.URL_SCHEMES``
+names to ``port``, any other is refused listing both; ``NAME[:ARG]`` to NAME if one is
 registered, else a path (``/dev/ttyACM0``, ``./tty``, ``COM3``) to ``port``.
 """
 
@@ -33,6 +34,7 @@ from urllib.parse import parse_qsl
 import numpy as np
 
 from frictex.device.errors import InputError
+from frictex.device.link.port import URL_SCHEMES
 from frictex.device.link.session import PREFILL_S
 from frictex.device.registry import Registry
 
@@ -150,6 +152,10 @@ def resolve(spec: str) -> tuple[DeviceFactory, str]:
         scheme, _, rest = spec.partition("://")
         if scheme in DEVICES:
             return DEVICES.get(scheme), rest
+        if scheme not in URL_SCHEMES:
+            raise InputError(f"device {spec!r}: unknown URL scheme {scheme!r}; expected a "
+                             f"device ({', '.join(DEVICES.names())}) or a pyserial URL "
+                             f"({', '.join(s + '://' for s in URL_SCHEMES)})")
         return DEVICES.get("port"), spec
     name, _, arg = spec.partition(":")
     if name in DEVICES:

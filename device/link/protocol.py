@@ -27,9 +27,10 @@ accepts versions 1 to its ``max_version``.
 
 from __future__ import annotations
 
+import reprlib
 import struct
 import zlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -515,6 +516,27 @@ def _payload(msg, version: int) -> bytes:
     return encoder(msg, version)
 
 
+class _BriefRepr(reprlib.Repr):
+    """reprlib's cut repr, arrays as their shape and dtype."""
+
+    def __init__(self):
+        super().__init__()
+        self.maxtuple, self.maxstring, self.maxother = 4, 40, 40
+
+    def repr_ndarray(self, obj, level):
+        return f"<{obj.dtype} array {obj.shape}>"
+
+
+_BRIEF = _BriefRepr()
+
+
+def _brief(msg) -> str:
+    """``msg`` as ``Type(field=value, ...)`` with long values cut (a message line, not
+    kilobytes of limits or samples)."""
+    values = ", ".join(f"{f.name}={_BRIEF.repr(getattr(msg, f.name))}" for f in fields(msg))
+    return f"{type(msg).__name__}({values})"
+
+
 def encode(msg, seq: int = 0, version: int = PROTOCOL_VERSION) -> bytes:
     """The bytes of one frame carrying ``msg`` (COBS-stuffed, 0x00-terminated).
 
@@ -532,7 +554,7 @@ def encode(msg, seq: int = 0, version: int = PROTOCOL_VERSION) -> bytes:
     try:
         body = _HEADER.pack(version, msg.TYPE, seq & 0xFFFF) + _payload(msg, version)
     except struct.error as exc:
-        raise ProtocolError(f"cannot encode {msg!r}: {exc}") from None
+        raise ProtocolError(f"cannot encode {_brief(msg)}: {exc}") from None
     body += _CRC.pack(zlib.crc32(body))
     if len(body) > MAX_BODY:
         raise ProtocolError(f"{type(msg).__name__} frame is {len(body)} bytes; at most "

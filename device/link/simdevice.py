@@ -45,6 +45,13 @@ from frictex.device.link.simsensor import FINGER_FORCE_N, ConstantSensor, Finger
 
 #: how long the device keeps asking for a missing frame (ms, PROTOCOL.md 4.10)
 MISSING_TTL_MS = 100
+#: most actuator channels, as the firmware's ``FW_MAX_CHANNELS``
+#: (device/firmware/core/fw_limits.h; Info's channels field is a u8)
+MAX_CHANNELS = 8
+#: jitter-buffer storage (samples x channels), as the firmware's ``FW_STORE_WORDS``
+STORE_WORDS = 32768 * 8
+#: longest device name (UTF-8 bytes), as the firmware's ``FW_NAME_MAX``
+NAME_MAX = 32
 
 
 @dataclass(frozen=True)
@@ -82,13 +89,22 @@ class DeviceConfig:
     force_pairs: int = 10
 
     def __post_init__(self):
-        checks = [(self.channels >= 1, "channels", "at least 1"),
-                  (0 < self.rate_hz < 4e6, "rate_hz", "in (0, 4e6) Hz"),
+        channels_ok = 1 <= self.channels <= MAX_CHANNELS
+        checks = [(channels_ok, "channels", f"1 to {MAX_CHANNELS} (the firmware's "
+                   "FW_MAX_CHANNELS)"),
+                  (0.001 <= self.rate_hz < 4e6, "rate_hz",
+                   "in [0.001, 4e6) Hz (the wire carries a u32 of mHz)"),
                   (len(self.limits_um) in (1, self.channels), "limits_um",
-                   f"1 or {self.channels} values"),
-                  (all(0 < x <= p.AMPLITUDE_MAX_UM for x in self.limits_um), "limits_um",
-                   f"in (0, {p.AMPLITUDE_MAX_UM:.4f}] um"),
-                  (self.buffer_samples >= 2, "buffer_samples", "at least 2"),
+                   f"one value for all channels or one per channel ({self.channels})"),
+                  (all(p.AMPLITUDE_STEP_UM <= x <= p.AMPLITUDE_MAX_UM for x in self.limits_um),
+                   "limits_um", f"in [1/4096, {p.AMPLITUDE_MAX_UM:.4f}] um (one wire count "
+                   "to the wire's top)"),
+                  (not channels_ok or 2 <= self.buffer_samples <= STORE_WORDS // self.channels,
+                   "buffer_samples", f"2 to {STORE_WORDS // max(self.channels, 1)} samples for "
+                   f"{self.channels} channel(s) (the firmware's store, FW_STORE_WORDS = "
+                   f"{STORE_WORDS} values)"),
+                  (len(self.name.encode("utf-8")) <= NAME_MAX, "name",
+                   f"at most {NAME_MAX} UTF-8 bytes (the firmware's FW_NAME_MAX)"),
                   (0 < self.bandwidth_hz < self.rate_hz / 2, "bandwidth_hz",
                    "positive and below half the sample rate"),
                   (1 <= self.watchdog_ms <= 49, "watchdog_ms", "in [1, 49] ms"),
