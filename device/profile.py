@@ -155,6 +155,10 @@ class ProfileSpec:
         at the carrier; ``frictex calibrate`` fits it where a sensor reports.
     voltage_limit_v : the largest drive (V zero-to-peak) the amplifier may be asked for;
         the audio output clamps there and counts the clamps.
+    amplitude_is_drive : the amplitude under a finger is one channel's drive (one mode,
+        all actuators together), so :attr:`drive_reach_um` bounds it (``frictex
+        validate`` warns on a scene's ``amplitude_limit_um`` above); False where the
+        amplitude under a finger combines channels (modal, travelling-wave profiles).
     """
 
     summary: str
@@ -165,6 +169,13 @@ class ProfileSpec:
     carrier_hz: float = 0.0
     um_per_volt: float = 0.0
     voltage_limit_v: float = 0.0
+    amplitude_is_drive: bool = False
+
+    @property
+    def drive_reach_um(self) -> float:
+        """The largest amplitude (um zero-to-peak) one channel's drive reaches:
+        ``um_per_volt`` at ``voltage_limit_v``."""
+        return self.um_per_volt * self.voltage_limit_v
 
     def __post_init__(self):
         # a plugin's profile that names no drive figures gets the documented defaults
@@ -192,7 +203,7 @@ SEED000_UM_PER_VOLT = 0.41 / 80.0
 PROFILES: Registry[ProfileSpec] = Registry("device profile", "frictex.profiles")
 PROFILES.register(DEFAULT_PROFILE, ProfileSpec(
     "single-mode glass plate of seed 003, one channel", "single-mode", friction_loop=True,
-    carrier_hz=DEFAULT_CARRIER_HZ))
+    carrier_hz=DEFAULT_CARRIER_HZ, amplitude_is_drive=True))
 PROFILES.register("beam-seed000", ProfileSpec(
     "free-free aluminium beam of seed 000, modes 16 and 17, two actuators", "modal",
     structure=BeamStructure, carrier_hz=28_000.0, um_per_volt=SEED000_UM_PER_VOLT,

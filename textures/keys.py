@@ -234,7 +234,9 @@ documented(DEVICE, {
     "profile": "the vibrating structure and its actuation (device/profile.py): `plate-seed003` "
                "is one plate, one channel; the others are modal or travelling-wave devices",
     "amplitude_limit_um": "largest vibration amplitude asked under a finger (um, zero-to-peak); "
-                          "with the normal force it sets the lowest reachable mu' (the floor)",
+                          "with the normal force it sets the lowest reachable mu' (the floor); "
+                          "`validate` warns where it is above what the drive of a one-channel "
+                          "profile reaches (um_per_volt at voltage_limit_v, device/profile.py)",
     "normal_force_n": "the finger's nominal normal force (N): used for traces without a force "
                       "column and for the floor `validate` and `preview` check against",
 })

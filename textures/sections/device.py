@@ -184,6 +184,14 @@ def _calibration(r: Reader, raw, path: KeyPath):
 
 
 def device_warnings(r: Reader, device: profiles.DeviceProfile) -> None:
+    spec = profiles.PROFILES.get(device.profile)
+    reach = spec.drive_reach_um
+    if spec.amplitude_is_drive and device.amplitude_limit_um > reach * (1.0 + 1e-9):
+        r.report(("device", "amplitude_limit_um"),
+                 f"{device.amplitude_limit_um:g} um is above the {reach:.3g} um the drive of "
+                 f"profile {show(device.profile)} reaches ({spec.um_per_volt:g} um/V at its "
+                 f"{spec.voltage_limit_v:g} V limit; the drive clamps there)",
+                 warning=True)
     a = device.friction.asymptote_per_n * device.normal_force_n
     if device.calibration is None and a >= 1.0 - ASYMPTOTE_MARGIN:
         r.report(("device", "normal_force_n"),
