@@ -41,7 +41,8 @@ from frictex.device.errors import DeviceError, InputError, MissingExtra
 POLL_S = 0.001
 #: bound on waiting for the end of the stream beyond what is queued (s)
 DRAIN_MARGIN_S = 2.0
-#: bound on one PortAudio stop or close (s); a healthy device returns within a few periods
+#: bound on one PortAudio start, stop or close (s); a healthy device returns within a few
+#: periods
 PA_CALL_LIMIT_S = 3.0
 
 
@@ -191,8 +192,21 @@ class StreamOutput(AudioOutput):
         return self.player.dac_time(frame + offset, self.plan.audio_rate)
 
     def _start(self) -> None:
+        """Start the stream, bounded like stop and close: JACK's start also waits for the
+        callback thread."""
         self._started = True
-        self.stream.start()
+        try:
+            started = call_bounded(self.stream.start, PA_CALL_LIMIT_S)
+        except self._sd.PortAudioError as exc:  # closing still stops and closes it
+            raise DeviceError(f"{self.label}: cannot start the stream: {exc}") from None
+        except BaseException:
+            self._abandon()
+            raise
+        if not started:
+            self._abandon()
+            raise DeviceError(f"{self.label}: PortAudio's start did not return within "
+                              f"{PA_CALL_LIMIT_S:g} s (the audio device stopped responding), "
+                              "so the stream was abandoned")
 
     # ----------------------------------------------------------------- ending
     def emergency_stop(self) -> None:
@@ -246,6 +260,7 @@ class StreamOutput(AudioOutput):
     def _abandon(self) -> None:
         """Leave the stream to PortAudio for good: should its callback run again, it
         ramps to 0 and plays silence."""
+        self._released = True
         self.player.estop = True
         abandon_portaudio(self._sd)
 
