@@ -3,6 +3,7 @@ protocol and the firmware can hold, and ``--device`` URLs checked before pyseria
 them (one line, exit 2, for every malformed one)."""
 
 import re
+import socket
 from pathlib import Path
 
 import pytest
@@ -13,11 +14,12 @@ from serial.urlhandler.protocol_loop import Serial as LoopSerial
 from serial.urlhandler.protocol_spy import Serial as SpySerial
 
 from frictex.app.commands.cli import main
-from frictex.device.errors import InputError
+from frictex.device.errors import DeviceError, InputError
 from frictex.device.link import protocol as p
 from frictex.device.link.devices import resolve
 from frictex.device.link.port import URL_SCHEMES, TcpPort, check_url, open_port
-from frictex.device.link.simdevice import (MAX_CHANNELS, NAME_MAX, STORE_WORDS, DeviceConfig)
+from frictex.device.link.simdevice import (MAX_CHANNELS, NAME_MAX, STORE_WORDS, DeviceConfig,
+                                           open_listener)
 
 FW_LIMITS = Path(__file__).parents[1] / "device" / "firmware" / "core" / "fw_limits.h"
 SETTINGS = settings(max_examples=300, deadline=None, derandomize=True,
@@ -257,3 +259,24 @@ def test_a_device_name_or_a_known_scheme_resolves():
     assert resolve("sim://?finger=2")[1] == "?finger=2"
     with pytest.raises(InputError, match="unknown URL scheme 'foo'"):
         resolve("foo://x")
+
+
+def test_a_listen_address_or_log_that_cannot_be_had_is_one_line(tmp_path, capsys):
+    """``--tcp`` on an address of another machine is bad input (InputError, exit 2); a
+    port in use is the machine's state (DeviceError, exit 1); an unwritable ``--log``
+    names the file (exit 2). Called directly where success would serve for ever."""
+    with pytest.raises(InputError, match=r"^cannot listen on '192\.0\.2\.1:0': .*expected "
+                                         r"an address of this machine, such as 127\.0\.0\.1\)$"):
+        open_listener("192.0.2.1", 0)
+    taken = socket.create_server(("127.0.0.1", 0))
+    try:
+        port = taken.getsockname()[1]
+        with pytest.raises(DeviceError, match=rf"^cannot listen on '127\.0\.0\.1:{port}': "
+                                              r"[^(]+$"):
+            open_listener("127.0.0.1", port)
+    finally:
+        taken.close()
+    log = tmp_path / "missing" / "played.csv"
+    assert run_cli(["sim-device", "--once", "--log", str(log)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"frictex: error: cannot write the log file {log}: No such file or directory"]

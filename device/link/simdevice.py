@@ -26,6 +26,7 @@ ch0_plate_um,...``, one row per tick.
 
 from __future__ import annotations
 
+import errno
 import math
 import os
 import select
@@ -37,10 +38,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from frictex.device.errors import InputError
+from frictex.device.errors import DeviceError, InputError
 from frictex.device.link import protocol as p
 from frictex.device.link.protocol import DeviceState as S
 from frictex.device.link.simsensor import FINGER_FORCE_N, ConstantSensor, FingerSensor, ForceWindows
+from frictex.device.safe_text import escape_path
 
 
 #: how long the device keeps asking for a missing frame (ms, PROTOCOL.md 4.10)
@@ -562,7 +564,11 @@ class CsvLog:
     while the device runs, not only once it exits."""
 
     def __init__(self, path, header: list[str], clock=time.monotonic):
-        self._fh = open(path, "w", encoding="ascii", newline="\n")
+        try:
+            self._fh = open(path, "w", encoding="ascii", newline="\n")
+        except OSError as exc:
+            raise InputError(f"cannot write the log file {escape_path(path)}: "
+                             f"{exc.strerror or exc}") from None
         self._fh.write(",".join(header) + "\n")
         self._clock = clock
         self._flushed = clock()
@@ -612,8 +618,18 @@ def open_pty() -> tuple[int, int, str]:
 
 
 def open_listener(host: str = "127.0.0.1", port: int = 0) -> socket.socket:
-    """A listening TCP socket (``port`` 0: any free port); its URL is :func:`socket_url`."""
-    listener = socket.create_server((host, port))
+    """A listening TCP socket (``port`` 0: any free port); its URL is :func:`socket_url`.
+    Raises InputError for a host that is no address of this machine, DeviceError when
+    the address cannot be taken (in use, not allowed)."""
+    where = f"{host}:{port}"
+    try:
+        listener = socket.create_server((host, port))
+    except OSError as exc:  # create_server re-raises getaddrinfo's errors (errno < 0) too
+        why = str(exc.strerror or exc).split(" (while attempting")[0]
+        if exc.errno is not None and (exc.errno < 0 or exc.errno == errno.EADDRNOTAVAIL):
+            raise InputError(f"cannot listen on {where!r}: {why} (expected an address of "
+                             "this machine, such as 127.0.0.1)") from None
+        raise DeviceError(f"cannot listen on {where!r}: {why}") from None
     listener.setblocking(False)
     return listener
 
