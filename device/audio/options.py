@@ -7,7 +7,7 @@ Grammar of ARG (the text after ``audio:`` in ``--device audio:ARG``)::
              | NAME               a PortAudio output device, by (part of) its name or index
              | "wav:" PATH        write the stream to a WAV file instead of playing it
     OPTION  := "envelope"         play the amplitude envelope itself (a generator's AM input)
-             | "rate=" HZ         audio sample rate (Hz; default 192000)
+             | "rate=" HZ         audio sample rate (Hz; default 192000; 8000 to 768000)
              | "carrier=" HZ      the plate's resonance (Hz; default: the profile's)
              | "profile=" NAME    the device profile whose drive figures apply
              | "full_scale=" V    drive volts (zero-to-peak) at digital full scale
@@ -16,8 +16,11 @@ Grammar of ARG (the text after ``audio:`` in ``--device audio:ARG``)::
              | "buffer_ms=" MS    frames queued ahead of the callback (default 100 ms)
              | "ramp_ms=" MS      start, stop, starvation and emergency-stop ramps (default 2 ms)
 
-A PATH or NAME cannot contain a comma. The rate must keep the carrier below 0.4 of it
-(192 kHz: up to 76.8 kHz; 96 kHz: up to 38.4 kHz); envelope mode has no carrier.
+A PATH or NAME cannot contain a comma. The rate is a whole number of Hz from 8 kHz to
+768 kHz, the rates sound cards offer (a WAV file would take more, but nothing would play
+it; RIFF's 32-bit byte rate ends at 4.29 GHz / 4 bytes / channels). The rate must keep the
+carrier below 0.4 of it (192 kHz: up to 76.8 kHz; 96 kHz: up to 38.4 kHz; 768 kHz: up to
+307.2 kHz, the highest carrier); envelope mode has no carrier.
 
 The drive figures (``carrier_hz``, ``um_per_volt``, ``voltage_limit_v``) come from the
 device profile (``device.profile.PROFILES``): the one the pipeline's scene names when the
@@ -34,6 +37,9 @@ from frictex.device.errors import InputError
 from frictex.device.profile import DEFAULT_PROFILE, PROFILES
 
 DEFAULT_RATE_HZ = 192_000
+#: the audio rates sound cards offer, lowest and highest (Hz)
+MIN_RATE_HZ = 8_000
+MAX_RATE_HZ = 768_000
 #: the carrier must stay below this share of the audio rate
 MAX_CARRIER_SHARE = 0.4
 DEFAULT_BLOCKSIZE = 256
@@ -139,14 +145,23 @@ def profile_name(requested) -> str | None:
 def make_plan(args: AudioArgs, channels: int, rate_hz: float, requested_profile=None) -> AudioPlan:
     """The :class:`AudioPlan` of parsed ARG for a pipeline of ``channels`` at ``rate_hz``
     (Hz). The profile: ``profile=`` if given, else ``requested_profile``, else the default.
-    Raises InputError for a rate the carrier does not fit or a non-integer rate."""
+    Raises InputError for a rate outside :data:`MIN_RATE_HZ` to :data:`MAX_RATE_HZ` or
+    not whole, or a carrier it does not fit."""
     name = args.profile or profile_name(requested_profile) or DEFAULT_PROFILE
     spec = PROFILES.get(name)
     audio_rate = args.rate if args.rate is not None else DEFAULT_RATE_HZ
+    if not MIN_RATE_HZ <= audio_rate <= MAX_RATE_HZ:
+        raise InputError(f"audio device rate={audio_rate:g}: expected {MIN_RATE_HZ} to "
+                         f"{MAX_RATE_HZ} Hz, the rates sound cards offer")
     if audio_rate != int(audio_rate):
         raise InputError(f"audio device rate={audio_rate:g}: expected a whole number of Hz")
     audio_rate = int(audio_rate)
     carrier = float(args.carrier if args.carrier is not None else spec.carrier_hz)
+    top_carrier = MAX_CARRIER_SHARE * MAX_RATE_HZ
+    if not args.envelope and carrier >= top_carrier:
+        raise InputError(f"audio device: carrier {carrier:g} Hz: expected below "
+                         f"{top_carrier:g} Hz, {MAX_CARRIER_SHARE:g} of the highest rate "
+                         f"sound cards offer ({MAX_RATE_HZ} Hz)")
     if not args.envelope and carrier >= MAX_CARRIER_SHARE * audio_rate:
         raise InputError(f"audio device: carrier {carrier:g} Hz at rate={audio_rate} Hz: the "
                          f"carrier must stay below {MAX_CARRIER_SHARE:g} of the rate (use "
