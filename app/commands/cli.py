@@ -14,7 +14,8 @@ What escapes a command decides its exit status (``frictex.device.errors``):
 - an ``OSError`` the system raised (a file, a port, the disk) is one line too: exit 1,
   or 2 where it names a file the user gave that does not exist or cannot be read;
 - an optional part of frictex that is not installed names the pip command (exit 1);
-- Ctrl-C is one line, ``frictex: interrupted``, exit 130;
+- Ctrl-C is one line, ``frictex: interrupted``, exit 130; a run's SIGTERM or SIGHUP
+  ``frictex: terminated by SIGTERM``, exit 128 + the signal;
 - anything else is a bug in frictex: its traceback, then ``frictex: internal error:
   please report``, exit 70 (EX_SOFTWARE), never dressed as the user's mistake.
 
@@ -35,6 +36,7 @@ import traceback
 import unicodedata
 from typing import NoReturn
 
+from frictex.app.engine.driver import Terminated
 from frictex.app.engine.heap import keep_freed_memory
 from frictex.device.errors import FrictexError, MissingExtra
 
@@ -157,8 +159,10 @@ def _run(command) -> int:
 
 def report_error(exc: BaseException) -> int:
     """Print what escaped a command as the module docstring says; return the exit status.
-    SystemExit passes through."""
+    SystemExit passes through (a run's SIGTERM or SIGHUP says so first)."""
     if isinstance(exc, SystemExit):
+        if isinstance(exc, Terminated):
+            print(f"frictex: {exc.reason}", file=sys.stderr)
         raise exc
     if isinstance(exc, ModuleNotFoundError) and (exc.name or "").split(".")[0] in EXTRAS:
         extra, what = EXTRAS[exc.name.split(".")[0]]

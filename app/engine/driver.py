@@ -19,7 +19,11 @@ kernel return a value with an exception set, which Python reports as a 30-line
 first Ctrl-C (and SIGTERM, SIGHUP) as a flag that the loop turns into an exception between
 steps (``check``), where nothing compiled runs; a second one raises at once. Through a
 run's commit (``check.committing()``) both are held, then dropped: the run is complete.
-A signal the process ignores (``nohup``) stays ignored.
+A signal the process ignores (``nohup``) stays ignored. A wait on a device link (a paced
+send, the handshake, a close) asks the same ``check`` between its turns
+(``device.link.waits``), so a held signal ends it within tens of ms; the link's sink is
+then aborted, which stops the plate at once (Stop without drain) instead of playing out
+what was queued.
 """
 
 from __future__ import annotations
@@ -28,6 +32,8 @@ import signal
 import threading
 import time
 from contextlib import contextmanager
+
+from frictex.device.link.waits import interruptible
 
 
 class PipelineStage:
@@ -70,6 +76,16 @@ class RunTimer:
 HELD_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
+class Terminated(SystemExit):
+    """A run ended by SIGTERM or SIGHUP: ``SystemExit(128 + signal)``, the status the
+    signal's default action gives, with ``reason`` (one line: the signal's name) for the
+    command to print."""
+
+    def __init__(self, signum: int):
+        super().__init__(128 + signum)
+        self.reason = f"terminated by {signal.Signals(signum).name}"
+
+
 class HeldSignals:
     """What :func:`deferred_interrupts` yields: call it to raise a held signal;
     :meth:`committing` for the step after which a run is complete."""
@@ -83,7 +99,7 @@ class HeldSignals:
         if self.held:
             if self.held[0] == signal.SIGINT:
                 raise KeyboardInterrupt
-            raise SystemExit(128 + self.held[0])
+            raise Terminated(self.held[0])
 
     def hold(self, signum, frame) -> None:
         """The signal handler: hold ``signum``; a second one raises at once, except
@@ -113,12 +129,13 @@ class HeldSignals:
 def deferred_interrupts():
     """Within: the first SIGINT (Ctrl-C), SIGTERM or SIGHUP is held until the ``check()``
     this yields (a :class:`HeldSignals`) is called, which raises then (see the module
-    docstring): Ctrl-C as ``KeyboardInterrupt``, the others as ``SystemExit(128 +
-    signal)``, their default exit status, so that the run is aborted cleanly (its sinks
-    and staged files removed). A second signal raises at once, except within
+    docstring): Ctrl-C as ``KeyboardInterrupt``, the others as :class:`Terminated` (a
+    ``SystemExit(128 + signal)``, their default exit status), so that the run is aborted
+    cleanly (its sinks and staged files removed). A second signal raises at once, except within
     ``check.committing()``. A signal whose handler is ``SIG_IGN`` (``nohup``, a shell's
     background job) stays ignored. Outside the main thread (where Python runs no signal
-    handler) ``check`` does nothing."""
+    handler) ``check`` does nothing. Within, the waits on device links ask ``check``
+    too (``device.link.waits.interruptible``)."""
     check = HeldSignals()
     if threading.current_thread() is not threading.main_thread():
         yield check
@@ -128,7 +145,8 @@ def deferred_interrupts():
         if handler is not signal.SIG_IGN:
             signal.signal(sig, check.hold)
     try:
-        yield check
+        with interruptible(check):
+            yield check
     finally:
         for sig, handler in previous.items():
             if handler is not signal.SIG_IGN:

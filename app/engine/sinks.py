@@ -114,23 +114,28 @@ class TableSink:
 @SINKS.register("link")
 class LinkSink:
     """Streams every block's commands to a device link (``device.link.host.CommandSink``);
-    commit drains the link, abort closes it at once. Blocks go out ``block_size`` samples
-    at a time, indexed on the output clock."""
+    commit drains the link, abort stops the device at once (the link's ``abort``: Stop
+    without drain; an output device without one is closed). Blocks go out
+    ``block_size`` samples at a time, indexed on the output clock."""
 
     def __init__(self, link, block_size: int):
         self.link = link
         self.block_size = block_size
+        #: the output sample after the last one handed to the link
+        self.handed = 0
 
     def write(self, out, commands_um) -> None:
         for lo in range(0, commands_um.shape[0], self.block_size):
             s = slice(lo, lo + self.block_size)
             phases = None if out.phases_rad is None else out.phases_rad[s]
             self.link.send(out.index0 + lo, commands_um[s], phases)
+            self.handed = out.index0 + min(lo + self.block_size, commands_um.shape[0])
 
     def commit(self) -> None:
         self.link.close()
 
-    abort = commit
+    def abort(self) -> None:
+        getattr(self.link, "abort", self.link.close)()
 
 
 @SINKS.register("frames")

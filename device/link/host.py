@@ -7,6 +7,7 @@
     sink.unplayed_share()                          # commanded samples that never played
     sink.force_report()                            # latest lateral/normal force, or None
     sink.close()                                   # drains, sends Stop
+    sink.abort()                                   # instead: stops now (Stop without drain)
 
 Built in pyserial's shape, one job per piece: the port is opened by URL
 (``device.link.port``; ``sim://`` is the simulated device in this process,
@@ -53,8 +54,10 @@ from frictex.device.link.forces import ForceReport
 from frictex.device.link.port import open_port
 from frictex.device.link.portthread import PortThread
 from frictex.device.link.protocol import DeviceState, LinkError
-from frictex.device.link.session import PREFILL_S, TARGET_S, HostSession, LinkStalled
+from frictex.device.link.session import (PREFILL_S, TARGET_S, HostSession, LinkProgress,
+                                         LinkStalled)
 from frictex.device.link.stall import StallPolicy
+from frictex.device.link.waits import TURN_S, check_interrupt
 
 __all__ = ["CommandSink", "LinkError", "LinkStalled", "open_port", "open_sink", "PREFILL_S",
            "TARGET_S", "HANDSHAKE_TOTAL_S", "STALL_S", "MAX_STALLS"]
@@ -119,6 +122,9 @@ class CommandSink:
                                         prefill_s=prefill_s, catch_up=catch_up)
         self._policy = StallPolicy(self.rate_hz, self.stall_s * self.max_stalls)
         self._progress_seen = 0
+        #: the stalls in a row said so far: [causes, host time the first began, stalls,
+        #: samples dropped], or None (see :meth:`_stall`)
+        self._stalls: list | None = None
         self._cond = s.cond
         port = opener()               # a port that cannot be opened is the caller's error
         self._thread = PortThread(port, opener, s, name=f"frictex-link-{label}",
@@ -128,22 +134,35 @@ class CommandSink:
 
     def _await_handshake(self, total_s: float) -> None:
         """Wait for the first session, at most ``total_s``; on failure the thread is
-        stopped and the error raised (a :class:`LinkError`)."""
+        stopped and the error raised (a :class:`LinkError`). The wait is interruptible
+        (``device.link.waits``): the thread is stopped and the interrupt raised."""
         s, t0 = self._session, time.monotonic()
+        try:
+            with self._cond:
+                while (not s.connected and s.refused is None and s.failure is None
+                       and s.device_said is None):
+                    left = t0 + total_s - time.monotonic()
+                    if left <= 0 or not self._thread.is_alive():
+                        break
+                    self._cond.wait(min(left, TURN_S))
+                    check_interrupt()
+                if s.connected:
+                    return
+        except BaseException:
+            self._abandon()
+            raise
+        self._abandon()
+        raise s.failure or s.handshake_failure(time.monotonic() - t0)
+
+    def _abandon(self) -> None:
+        """No session to close (a handshake that failed or was interrupted): stop the
+        thread, close the port, end what serves the device."""
         with self._cond:
-            while (not s.connected and s.refused is None and s.failure is None
-                   and s.device_said is None):
-                left = t0 + total_s - time.monotonic()
-                if left <= 0 or not self._thread.is_alive():
-                    break
-                self._cond.wait(min(left, 0.05))
-            if s.connected:
-                return
-        s.close_requested = self._closed = True
+            self._session.close_requested = True
+        self._closed = True
         self._thread.stop_event.set()
         self._thread.join(timeout=5.0)
         self._end_resources()
-        raise s.failure or s.handshake_failure(time.monotonic() - t0)
 
     def _crashed(self, exc: BaseException) -> None:
         failure = LinkStalled(f"{self.label}: link thread failed: {type(exc).__name__}: {exc}")
@@ -210,6 +229,8 @@ class CommandSink:
 
     def _put(self, item) -> None:
         n, s = len(item[1]), self._session
+        if self.paced:
+            check_interrupt()
         with self._cond:
             if not self.paced:
                 if self._has_room():
@@ -221,6 +242,7 @@ class CommandSink:
             try:
                 if self._wait_room(self.stall_s):
                     s.queue.append(item)
+                    self._end_stalls("it took blocks again")
                     return
             except LinkStalled:  # the link gave up: this block is one it never took
                 s.counts["dropped_blocks"] += 1
@@ -228,25 +250,26 @@ class CommandSink:
                 raise
             s.counts["dropped_blocks"] += 1
             s.ledger.drop("stalled" if s.connected else "disconnected", n)
-            self._stall(self.stall_s, f"dropped a block of {n} samples")
+            self._stall(self.stall_s, n)
 
     def _wait_room(self, timeout_s: float) -> bool:
         """Wait (holding the lock) until a block can be queued; False after ``timeout_s``.
-        The time waited goes to the stall policy; past its bound the link fails."""
+        The time waited goes to the stall policy; past its bound the link fails. Asks
+        every :data:`~device.link.waits.TURN_S` whether the caller is interrupted."""
         deadline = time.monotonic() + timeout_s
         self._account(waiting=False)
-        try:
-            while not self._has_room():
-                if self._session.failure is not None:
-                    raise self._session.failure
-                left = deadline - time.monotonic()
-                if left <= 0 or not self._thread.is_alive():
-                    return False
-                self._cond.wait(min(left, 0.05))
+        while not self._has_room():
+            if self._session.failure is not None:
+                raise self._session.failure
+            left = deadline - time.monotonic()
+            if left <= 0 or not self._thread.is_alive():
                 self._account(waiting=True)
-            return True
-        finally:
+                return False
+            self._cond.wait(min(left, TURN_S))
             self._account(waiting=True)
+            check_interrupt()
+        self._account(waiting=True)
+        return True
 
     def _account(self, waiting: bool) -> None:
         """Tell the stall policy what played since it last heard (the caller holds the
@@ -257,19 +280,58 @@ class CommandSink:
         gained, self._progress_seen = max(progress - self._progress_seen, 0), progress
         self._policy.account(time.monotonic(), gained, waiting)
         if self._policy.failed and s.failure is None:
-            s.failure = LinkStalled(
-                f"{self.label}: {self._policy.describe()}; giving up ({s.ledger.unplayed} of "
-                f"{s.ledger.commanded} samples unplayed)")
+            progress = self._progress()
+            s.failure = LinkStalled(f"{self.label}: {self._policy.describe()}; giving up: "
+                                    f"{progress.describe()}", progress)
             self._cond.notify_all()
         if waiting and s.failure is not None:
             raise s.failure
 
-    def _stall(self, waited_s: float, what: str) -> None:
-        """Count and report a stall of ``waited_s`` (the caller holds the lock)."""
+    def _progress(self) -> LinkProgress:
+        """Where the commanded samples stand now (the caller holds the lock)."""
+        s, ledger = self._session, self._session.ledger
+        causes = ledger.breakdown()
+        played = ledger.played
+        refused = (None if played is None else
+                   sum(causes[c] or 0 for c in ("flushed", "late", "overflow", "lost")))
+        return LinkProgress(commanded=ledger.commanded, sent=ledger.sent_total, played=played,
+                            refused=refused, dropped=sum(ledger.host.values()),
+                            queued=sum(len(item[1]) for item in s.queue))
+
+    def progress(self) -> LinkProgress:
+        """Where the samples handed to :meth:`send` stand now: sent, played, dropped,
+        queued (a :class:`~device.link.session.LinkProgress`)."""
+        with self._cond:
+            return self._progress()
+
+    def _stall(self, waited_s: float, dropped: int) -> None:
+        """Count a stall of ``waited_s`` that dropped ``dropped`` samples (0: a wait for
+        room that timed out); the caller holds the lock. The first of stalls in a row is
+        said at once, the rest once they end (:meth:`_end_stalls`), with how long the
+        device was away in all."""
         s = self._session
         s.counts["stalls"] += 1
         why = "no device" if not s.connected else "device took no blocks"
-        self._warn(f"{why} for {waited_s:g} s; {what}, stream goes on")
+        if self._stalls is None:
+            self._stalls = [[why], time.monotonic() - waited_s, 1, dropped]
+            what = f"dropped a block of {dropped} samples" if dropped else "no room for a block"
+            self._warn(f"{why} for {waited_s:g} s; {what}, stream goes on (said again "
+                       "when it ends)")
+            return
+        causes, _, stalls, samples = self._stalls
+        if why not in causes:
+            causes.append(why)
+        self._stalls[2:] = [stalls + 1, samples + dropped]
+
+    def _end_stalls(self, how: str) -> None:
+        """Stalls in a row ended (``how``: why): say how long and what they dropped, if
+        more than the first (already said); the caller holds the lock."""
+        run, self._stalls = self._stalls, None
+        if run is None or run[2] < 2:
+            return
+        causes, began, stalls, samples = run
+        self._warn(f"{', then '.join(causes)} for {time.monotonic() - began:.1f} s in all, "
+                   f"until {how}: {stalls} stalls, {samples} samples dropped")
 
     def _warn(self, text: str) -> None:
         print(f"frictex: warning: {self.label}: {text}", file=self._stderr)
@@ -285,8 +347,9 @@ class CommandSink:
             if self._session.failure is not None:
                 raise self._session.failure
             if not self.paced or self._wait_room(timeout_s):
+                self._end_stalls("it took blocks again")
                 return True
-            self._stall(timeout_s, "no room for a block")
+            self._stall(timeout_s, 0)
             return False
 
     def device_force_n(self) -> float | None:
@@ -406,7 +469,9 @@ class CommandSink:
 
     def close(self) -> None:
         """Drain (paced: bounded by ``stall_s`` without progress), send Stop, let it play
-        out, stop the thread, close the port. Never raises LinkStalled."""
+        out, stop the thread, close the port. Never raises LinkStalled. Its waits are
+        interruptible (``device.link.waits``): an interrupt leaves the link open for
+        :meth:`abort`."""
         s = self._session
         if s.close_requested:
             return
@@ -414,7 +479,35 @@ class CommandSink:
             self._wait_queue_sent()
         with self._cond:
             s.close_requested = True
-        self._thread.join(timeout=s.close_limit_s() + 2.0)
+            self._end_stalls("the close")
+        self._finish(interruptible=True)
+
+    def abort(self) -> None:
+        """Stop the plate now (an interrupted or failed run): drop what is queued
+        (counted, ``stalled``), send Stop without drain, so that the device flushes what
+        it holds and ramps to zero over its ``ramp_ms`` (PROTOCOL.md 4.5), wait for the
+        Status that shows it silent (bounded: the ramp and 0.5 s, again for each of at
+        most 3 resent Stops), stop the thread, close the port. Also cuts short a
+        :meth:`close` that an interrupt ended. Never raises for the stream's faults and
+        never asks whether it is interrupted: it is what an interrupt does."""
+        if self._closed:
+            return
+        s = self._session
+        with self._cond:
+            s.abort_requested = s.close_requested = True
+            s._drop_queued("stalled")
+            self._end_stalls("the run ended")
+        self._finish(interruptible=False)
+
+    def _finish(self, interruptible: bool) -> None:
+        """Wait for the thread to play the closing Stop out (bounded), then end the link;
+        ``interruptible``: ask between turns whether the caller is interrupted."""
+        s = self._session
+        limit = time.monotonic() + s.close_limit_s() + 2.0
+        while self._thread.is_alive() and (left := limit - time.monotonic()) > 0:
+            self._thread.join(timeout=min(left, TURN_S))
+            if interruptible:
+                check_interrupt()
         if self._thread.is_alive():
             self._warn("link thread did not finish; closing without it")
             self._thread.stop_event.set()
@@ -439,22 +532,31 @@ class CommandSink:
 
     def _wait_queue_sent(self) -> None:
         """Paced close: wait while the queue drains; give up (dropping, counted) when no
-        block went out for ``stall_s``."""
+        block went out for ``stall_s``. Interruptible (``device.link.waits``)."""
         s = self._session
         with self._cond:
+            queued, since = len(s.queue), time.monotonic()
             while s.queue and s.connected and s.failure is None:
-                before = len(s.queue)
-                self._cond.wait(self.stall_s)
-                if len(s.queue) == before and s.queue:
-                    self._warn(f"device took no blocks for {self.stall_s:g} s while closing; "
+                self._cond.wait(TURN_S)
+                check_interrupt()
+                now = time.monotonic()
+                if len(s.queue) != queued:
+                    queued, since = len(s.queue), now
+                elif now - since >= self.stall_s:
+                    self._warn(f"device took no blocks for {now - since:.1f} s while closing; "
                                f"dropping {len(s.queue)} queued")
                     s._drop_queued("stalled")
 
     def __enter__(self):
         return self
 
-    def __exit__(self, *exc):
-        self.close()
+    def __exit__(self, exc_type, exc, tb):
+        """Close; abort if the block raised (an interrupt, a failure): the plate stops
+        at once instead of playing out what was queued."""
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
 
 
 @DEVICES.register("port")

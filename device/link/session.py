@@ -22,6 +22,7 @@ from __future__ import annotations
 import collections
 import sys
 import threading
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -64,8 +65,48 @@ RESEND_KEEP = 512
 RESEND_HOLDOFF_S = 0.001
 
 
+@dataclass(frozen=True)
+class LinkProgress:
+    """Where the samples handed to a link stood at one moment (samples).
+
+    ``commanded``: handed to ``send``. ``sent``: written to the device; of those
+    ``played`` (None: a version 1 device, which does not say) and ``refused`` (known
+    never to play: flushed, late, overflow, lost). ``dropped``: never sent, dropped by
+    the host (stalls, a lost link, a full live queue, catch-up). ``queued``: never sent,
+    waiting at the host. The rest of the commanded samples were being handed over.
+    """
+
+    commanded: int
+    sent: int
+    played: int | None
+    refused: int | None
+    dropped: int
+    queued: int
+
+    def describe(self) -> str:
+        """One clause: what was sent and played, and what never was sent."""
+        unsent = self.commanded - self.sent
+        if self.played is None:
+            fate = "played unknown: a version 1 device"
+        else:
+            waiting = self.sent - self.played - (self.refused or 0)
+            fate = (f"{self.played} played, {waiting} not reported played"
+                    + (f", {self.refused} flushed, refused or lost" if self.refused else ""))
+        handing = unsent - self.dropped - self.queued
+        return (f"of {self.commanded} samples commanded, {self.sent} were sent ({fate}) and "
+                f"{unsent} never sent ({self.dropped} dropped, {self.queued} queued"
+                + (f", {handing} being queued" if handing else "") + ")")
+
+
 class LinkStalled(LinkError):
-    """The device made too little progress for too long (``device.link.stall``)."""
+    """The device made too little progress for too long (``device.link.stall``).
+
+    ``progress``: a :class:`LinkProgress` of the link when it gave up, or None.
+    """
+
+    def __init__(self, message: str, progress: LinkProgress | None = None):
+        super().__init__(message)
+        self.progress = progress
 
 
 class HostSession:
@@ -112,6 +153,10 @@ class HostSession:
         self.last_error: str | None = None
         self.phase = "closed"        # closed, handshake, session, closing, done
         self.close_requested = False
+        #: close at once (an interrupted or failed run): Stop without drain, the device
+        #: flushes what it holds and ramps to zero (PROTOCOL.md 4.5)
+        self.abort_requested = False
+        self._stopping_drained = False
         self._marks: dict[int, tuple[float, int, int]] = {}  # token -> (t, sent_end, mark)
         self._token = 0
         self._seq = 0
@@ -473,10 +518,12 @@ class HostSession:
     def _begin_closing(self, now: float) -> bytes:
         """Send what a live queue still holds (a paced one was drained or given up by the
         caller), then Stop with drain; heartbeats follow until the device reports silence
-        (bounded), so that the last Status settles the ledger."""
+        (bounded), so that the last Status settles the ledger. Aborting: nothing more is
+        sent, and the Stop flushes and ramps at once."""
         out = bytearray()
         with self.cond:
-            while self.queue and self.ledger.reporting and not self.paced:
+            while (self.queue and self.ledger.reporting and not self.paced
+                   and not self.abort_requested):
                 start, counts, phases = self.queue.popleft()
                 out += self._send_block(self.index_map.to_device(start), counts, phases)
             self._drop_queued("stalled")
@@ -489,16 +536,24 @@ class HostSession:
 
     def close_limit_s(self) -> float:
         """The longest a close may take once begun (s): :data:`CLOSE_STRETCH` times a full
-        buffer's drain."""
-        return CLOSE_STRETCH * self._play_out_s(self.info.buffer_samples)
+        buffer's drain (aborting: times the ramp and the margin, nothing is drained)."""
+        held = 0 if self.abort_requested else self.info.buffer_samples
+        return CLOSE_STRETCH * self._play_out_s(held)
 
     def _stop(self, now: float) -> bytes:
-        """A drained Stop; a Status that echoes a later Heartbeat tells whether it arrived."""
+        """A Stop, drained unless aborting; a Status that echoes a later Heartbeat tells
+        whether it arrived."""
+        drain = not self.abort_requested
+        self._stopping_drained = drain
         self._first_after_stop = self._token + 1
-        self._close_by = now + self._drain_s()
-        return self._frame(p.Stop(drain=True))
+        self._close_by = now + (self._drain_s() if drain else self._play_out_s(0))
+        return self._frame(p.Stop(drain=drain))
 
     def _poll_closing(self, now: float) -> bytes:
+        if self.abort_requested and self._stopping_drained:
+            # an abort during a drained close: flush and ramp now (PROTOCOL.md 4.5)
+            self._close_limit = min(self._close_limit, now + self.close_limit_s())
+            return self._stop(now) + self._heartbeat(now)
         st = self.status
         answered = st is not None and st.echo >= self._first_after_stop
         if st is not None and st.play_index != self._close_seen:
