@@ -195,6 +195,9 @@ DEFAULT_UM_PER_VOLT = 0.02
 DEFAULT_VOLTAGE_LIMIT_V = 150.0
 #: seed 000, eq 14: 0.41 um under the fingers at 160 V peak-to-peak (80 V zero-to-peak)
 SEED000_UM_PER_VOLT = 0.41 / 80.0
+#: seed 004, sections III.A and IV.B: its amplifiers at most +-80 V, its amplitude at most
+#: +-3 um (the default 0.02 um/V reached only 1.6 um there)
+SEED004_UM_PER_VOLT = 3.0 / 80.0
 
 
 #: The device profiles a scene's ``[device] profile`` may name: the one table of them.
@@ -218,7 +221,7 @@ PROFILES.register("travelling-beam-seed002", ProfileSpec(
 PROFILES.register("ring-seed004", ProfileSpec(
     "Ultraloop ring of seed 004, degenerate 24th-order pair, phase-shift control",
     "travelling-ring", surface_length_mm=140.0, carrier_hz=39_500.0,
-    voltage_limit_v=80.0))  # seed 004: 39.5 kHz, amplifiers at +-80 V
+    um_per_volt=SEED004_UM_PER_VOLT, voltage_limit_v=80.0))  # seed 004: 39.5 kHz, +-80 V
 
 #: The tables derived from :data:`PROFILES`, made on first use (module ``__getattr__``),
 #: so that importing this module imports no plugin; a plugin's profile that cannot be

@@ -48,8 +48,13 @@ def test_a_limit_the_drive_reaches_is_not_warned(tmp_path, limit_um):
 
 def test_profiles_whose_amplitude_combines_channels_are_not_compared(tmp_path):
     """A travelling wave's or a modal scene's amplitude under a finger is not one
-    channel's drive: the ring scenes ask 3 um of a profile whose one channel reaches
-    1.6 um (its um_per_volt is the default), and are not warned."""
+    channel's drive: the ring asked 5 um of a profile whose one channel reaches 3 um
+    (seed 004: +-3 um at +-80 V) is not warned."""
     ring = profiles.PROFILES.get("ring-seed004")
-    assert not ring.amplitude_is_drive and ring.drive_reach_um < 3.0
-    assert reach_warnings(LIBRARY / "keyclick-ring.toml") == []
+    assert not ring.amplitude_is_drive and ring.drive_reach_um == pytest.approx(3.0)
+    text = (LIBRARY / "keyclick-ring.toml").read_text(encoding="utf-8")
+    old = "amplitude_limit_um = 3.0"
+    assert text.count(old) == 1
+    (tmp_path / "ring.toml").write_text(text.replace(old, "amplitude_limit_um = 5.0"),
+                                        encoding="utf-8")
+    assert reach_warnings(tmp_path / "ring.toml") == []
