@@ -41,13 +41,43 @@ def test_a_replay_to_the_simulated_device_closes_the_loop_on_its_reports(tmp_pat
     assert json.loads((tmp_path / "summary.json").read_text())["control"] == loop
 
 
-def test_a_replay_without_force_reports_says_the_loop_is_open(tmp_path):
-    """No device: the loop has nothing to read; the replay is open loop, and says why."""
-    doc = run_replay("grating-15mm", _swipe(0.5), tmp_path, rate_hz=RATE, control="adaptive",
-                     progress=False)
-    loop = doc["control"]
-    assert loop["fallbacks"] == 1 and loop["updates"] == 0
-    assert any("force signal absent" in w for w in doc["warnings"])
+@pytest.mark.parametrize("mode", ["closed", "adaptive"])
+def test_a_loop_without_force_reports_is_refused_before_the_run(tmp_path, mode):
+    """No device, or one that announces no lateral force sensor: the loop would have
+    nothing to read and run open loop; the replay is refused before it runs, in one
+    line (bad input without a device, exit 2; the device's lack, exit 1), and writes
+    nothing."""
+    from frictex.device.errors import DeviceError, InputError
+    out = tmp_path / "out"
+    with pytest.raises(InputError, match=f"control '{mode}' reads the force reports of a "
+                                         "device, and no device was given"):
+        run_replay("grating-15mm", _swipe(0.5), out, rate_hz=RATE, control=mode,
+                   progress=False)
+    with pytest.raises(DeviceError, match=r"sim:// sends no force reports .* so control "
+                                          f"'{mode}' has nothing to measure"):
+        run_replay("grating-15mm", _swipe(0.5), out, rate_hz=RATE, control=mode,
+                   device="sim", progress=False)
+    assert not out.exists()
+    trace = tmp_path / "swipe.csv"
+    from frictex.rendering.input.trace_file import write_trace
+    write_trace(trace, _swipe(0.5))
+    args = ["replay", "grating-15mm", str(trace), "--out", str(out), "--control", mode]
+    assert main(args) == 2
+    assert main([*args, "--device", "sim"]) == 1
+    assert not out.exists()
+
+
+def test_the_summary_line_names_each_gain():
+    """The loop's two gains are different figures: the line says which is which."""
+    from frictex.app.engine.summary import control_line
+    line = control_line({"mode": "closed", "report_delay_blocks": 3,
+                         "scheduled_delay_blocks": 2, "ki": 0.269, "gain": 1.25, "updates": 40,
+                         "fallbacks": 0, "fallback_samples": 0})
+    assert "depth gain c 1.250 at the end (reduction asked = c x the texture's; 40 updates)" \
+        in line
+    assert "integrator step ki 0.269 per block at the end (scheduled for reports 2 blocks late)" \
+        in line
+    assert line.count("gain") == 1  # the word alone, unnamed, nowhere
 
 
 def test_the_live_thread_reads_the_links_force_reports():

@@ -303,3 +303,29 @@ def test_stalls_in_a_row_are_said_once_then_summed_up(device):
                                "dropped")
     away_s = float(summary[0].split(" for ")[1].split(" s in all")[0])
     assert away_s >= stalls * 0.1 - 0.05  # printed to 0.1 s
+
+
+def test_a_replay_that_gives_up_says_how_much_of_the_trace_never_went(device, tmp_path):
+    """The device dies 0.3 s into a 6 s replay: the give-up names the output handed
+    over and the rest of the trace, which was never commanded, and keeps the figures."""
+    from frictex.app.engine.replay import ReplayOptions, replay_with
+    core, log, path, stop = device
+
+    def kill_once_vibrating():
+        until(log.vibrating, "the plate vibrating", timeout_s=120.0)
+        time.sleep(0.3)
+        stop(keep_pty=True)
+    killer = threading.Thread(target=kill_once_vibrating, daemon=True)
+    killer.start()
+    with pytest.raises(LinkStalled) as caught:
+        replay_with(_flat_scene(tmp_path), _slide(6.0), tmp_path / "out",
+                    ReplayOptions(device=path, progress=False))
+    killer.join(timeout=30.0)
+    said = str(caught.value)
+    done = caught.value.progress
+    assert done is not None and done.commanded > 0
+    handed_s = float(said.split("the replay stopped after ")[1].split(" s of output")[0])
+    # handed over: every block commanded but the one the link refused (printed to 10 ms)
+    assert handed_s == pytest.approx((done.commanded - 50) / RATE, abs=0.0051)
+    assert f"of the 5.98 s trace (the last {5.98 - handed_s:.2f} s never commanded)" in said
+    assert not (tmp_path / "out").exists()

@@ -19,7 +19,8 @@ from frictex.app.commands.warm import height_shapes_scene, recorded_texture_scen
 from frictex.app.engine.replay import run_replay
 for scene in (height_shapes_scene(), recorded_texture_scene()):
     run_replay(scene, "circle-30mms-60hz", sys.argv[1], progress=False)
-run_replay("grating-15mm", "circle-30mms-60hz", sys.argv[1], control="adaptive", progress=False)
+run_replay("grating-15mm", "circle-30mms-60hz", sys.argv[1], control="adaptive", device="sim",
+           sim_args=("--finger", "3"), progress=False)
 ours = [d for d in gc.get_objects() if isinstance(d, CPUDispatcher)
         and d.py_func.__module__.startswith("frictex.")]
 print(json.dumps({"hits": sum(sum(d.stats.cache_hits.values()) for d in ours),

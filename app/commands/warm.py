@@ -88,8 +88,10 @@ def run(args: argparse.Namespace) -> int:
         for scene in (height_shapes_scene(), recorded_texture_scene()):
             run_replay(scene, sample(motion, 60.0, noise_mm=0.05, seed=2), tmp, progress=False)
         height_shapes_scene().layers[-1].mu_of_slope(0.0)  # the saturation alone (preview, tests)
+        # the friction loop's kernels, on the force reports of a simulated finger
         run_replay("grating-15mm", sample(motion, 60.0, noise_mm=0.05, seed=2), tmp,
-                   control="adaptive", progress=False)  # the friction loop's kernels
+                   control="adaptive", device="sim", sim_args=("--finger", "3"),
+                   progress=False)
     if not args.quiet:
         print(f"frictex: kernels compiled and cached ({time.perf_counter() - start:.1f} s)")
     return 0

@@ -39,7 +39,7 @@ from frictex.app.engine.sources import MAX_GAP_S, TraceSource
 from frictex.app.engine.staging import Staging
 from frictex.app.engine.summary import Totals, finite_json, summary, timings
 from frictex.app.engine.tables import MEMORY, check_room, load_writer, row_bytes
-from frictex.device.errors import InputError
+from frictex.device.errors import DeviceError, InputError
 from frictex.rendering.input.trace_file import Trace, iter_trace, most_touching
 from frictex.rendering.pipeline import build_pipeline
 from frictex.textures.model import Scene
@@ -199,6 +199,11 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
                               control=options.control)
     setup_s = inputs_s + time.perf_counter() - build0  # scene and kernels loaded
     looped = pipeline.control is not None
+    if looped and options.device is None and sink is None:
+        raise InputError(f"control {pipeline.control.mode!r} reads the force reports of a "
+                         "device, and no device was given: stream to one with a lateral force "
+                         "sensor (--device sim:finger=SEED simulates a finger), or use "
+                         "--control open")
     read0 = time.perf_counter()
     source.start(pipeline.tracker_config)
     timer.seconds["read"] += time.perf_counter() - read0
@@ -218,6 +223,13 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
                              paced=True, faults=options.faults, sim_args=tuple(options.sim_args),
                              profile=scene.device.profile,
                              **({"queue_blocks": LOOP_QUEUE_BLOCKS} if looped else {}))
+            if looped and not sink.info.has_force_reports:
+                getattr(sink, "abort", sink.close)()
+                raise DeviceError(f"{sink.label} sends no force reports (it announces no "
+                                  f"lateral force sensor, PROTOCOL.md 4.9), so control "
+                                  f"{pipeline.control.mode!r} has nothing to measure: use a "
+                                  "device with one (--device sim:finger=SEED simulates a "
+                                  "finger), or --control open")
         if frames is not None:
             frames.into(folder)
         doc, tables = _run(pipeline, source, chunks, trace_path, scene, folder, options, sink,
@@ -255,8 +267,10 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     looped = pipeline.control is not None
     totals = Totals()
     sinks = [totals]
+    link = None
     if sink is not None:  # a paced link: its send waits (bounded) for the device's room
-        sinks.append(LinkSink(sink, pipeline.block_size))
+        link = LinkSink(sink, pipeline.block_size)
+        sinks.append(link)
     if frames is not None:
         sinks.append(FrameSink(frames))
     if options.progress and _long(source):
@@ -273,8 +287,16 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     stage = PipelineStage(pipeline)
     if looped and sink is not None:  # the loop reads the device's forces
         stage = PipelineStage(pipeline, sink.device_force_n, force_reports_of(sink))
-    blocks = drive(stage, source, sinks, VirtualClock(), chunk_blocks=chunk_blocks, timer=timer,
-                   check=check)
+    try:
+        blocks = drive(stage, source, sinks, VirtualClock(), chunk_blocks=chunk_blocks,
+                       timer=timer, check=check)
+    except OSError as exc:
+        if link is None:
+            raise
+        from frictex.device.link.session import LinkStalled  # loaded with the link
+        if not isinstance(exc, LinkStalled):
+            raise
+        raise _stopped(exc, link.handed / options.rate_hz, source) from exc
 
     doc = summary(scene, source.stats.report(trace_path), pipeline, stage.state.tracker, totals,
                   options.fmt, tables.files, blocks)
@@ -294,6 +316,19 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     if options.fmt == MEMORY:
         in_memory = {"commands": tables.commands.table, "friction": tables.friction.table}
     return doc, in_memory
+
+
+def _stopped(exc, done_s: float, source: TraceSource):
+    """The link's give-up (``LinkStalled``, its ``progress`` kept) with where the replay
+    stopped: ``done_s`` of output handed to the link, of the trace's duration when the
+    whole trace has been read; the rest was never commanded."""
+    said = f"{exc}; the replay stopped after {done_s:.2f} s of output"
+    stats = source.stats
+    if source.ended and stats.last_t is not None:
+        total_s = stats.last_t - stats.first_t
+        said += (f" of the {total_s:.2f} s trace (the last {max(total_s - done_s, 0.0):.2f} s "
+                 "never commanded)")
+    return type(exc)(said, exc.progress)
 
 
 def _check_outputs_fit(out_dir: Path, source: TraceSource, pipeline, fmt: str, frames) -> None:

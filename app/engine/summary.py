@@ -177,9 +177,13 @@ def finite_json(value):
 
 def control_line(control: dict) -> str:
     """One line of a summary's ``control`` section (``rendering.control.loop``'s
-    ``report``), as ``frictex replay`` and ``frictex demo`` print it."""
+    ``report``), as ``frictex replay`` and ``frictex demo`` print it. Two gains, each
+    named: the depth gain c (the reduction of friction asked is c times the texture's;
+    the integrator moves it) and the integrator's step ki (how far one block's
+    measurement moves log c, scheduled on the force reports' delay)."""
     return (f"{control['mode']} loop: force reports up to {control['report_delay_blocks']} "
-            f"blocks late (gain {control['ki']:.3g} per block at the end, scheduled for "
-            f"{control['scheduled_delay_blocks']}), {control['updates']} gain updates, gain "
-            f"{control['gain']:.3f} at the end, {control['fallbacks']} fallbacks to open loop "
-            f"({control['fallback_samples']} samples)")
+            f"blocks late; depth gain c {control['gain']:.3f} at the end (reduction asked = "
+            f"c x the texture's; {control['updates']} updates), integrator step ki "
+            f"{control['ki']:.3g} per block at the end (scheduled for reports "
+            f"{control['scheduled_delay_blocks']} blocks late); {control['fallbacks']} "
+            f"fallbacks to open loop ({control['fallback_samples']} samples)")

@@ -389,11 +389,16 @@ class ClosedLoop:
         return min(max(log_c, -lim), lim)
 
     def report(self, state: ControlState) -> dict:
-        """The loop's figures after a run, for a summary (JSON-able): mode, the largest
-        report delay seen (blocks), the delay the gain is scheduled on at the end and that
-        gain, the gain c and mu0 where the run ended (at rest, and its log's slope per
-        ``speed_ref_mm_s``), gain updates, fallbacks, samples fed forward open loop while
-        fallen back, and what the loop said."""
+        """The loop's figures after a run, for a summary (JSON-able; module docstring, 2).
+
+        ``mode``; ``report_delay_blocks``: the largest report delay seen (blocks);
+        ``scheduled_delay_blocks`` and ``ki``: the delay the integrator is scheduled on at
+        the end and its step there (the share of one block's log error that moves log c);
+        ``gain``: the depth gain c where the run ended, at rest (the reduction of friction
+        asked is c times the texture's, ``1 - c (1 - mu'_target)``), and
+        ``log_gain_per_speed_ref``: its log's slope per ``speed_ref_mm_s``; ``mu0``;
+        ``updates``: steps of c; ``fallbacks``, ``fallback_samples``: falls to open loop and
+        the samples fed forward open loop meanwhile; ``messages``: what the loop said."""
         return {"mode": self.mode, "report_delay_blocks": state.delay_max_blocks,
                 "scheduled_delay_blocks": state.delay_blocks,
                 "ki": self.ki_by_delay[state.delay_blocks], "gain": math.exp(state.log_c),
