@@ -69,10 +69,13 @@ def run(args: argparse.Namespace) -> int:
     if not args.quiet:
         out = summary["output"]
         timing = summary["timings"]
-        clamps = sum(summary["clamps"].values())
+        clamps = f"{sum(summary['clamps'].values())} clamped"
+        device_clamped = (summary.get("device") or {}).get("clamped_samples")
+        if device_clamped:  # the device's own clamp (its warning says to what)
+            clamps += f" by the friction inversion, {device_clamped} by the device's limit"
         print(f"replayed {summary['trace']['samples']} touch samples -> {out['samples']} output "
               f"samples ({out['duration_s']:.3f} s at {out['rate_hz']:g} Hz) in {args.out}: "
-              f"{', '.join(out['files'])}, summary.json; {clamps} clamped; "
+              f"{', '.join(out['files'])}, summary.json; {clamps}; "
               f"{timing['x_realtime_end_to_end']:.3g}x real time end to end (read, compute, "
               f"write; {timing['x_realtime_with_setup']:.3g}x with the {timing['setup_s']:.2f} s "
               f"start-up, {timing['x_realtime_compute']:.3g}x compute only)")

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 import sys
+from dataclasses import asdict
 
 import numpy as np
 
@@ -154,6 +155,7 @@ class AudioOutput:
             "unplayed_by_cause": by_cause,
             "clamped_samples": self.synth.clamped,
             "gap_samples": self.gap_samples,
+            "device": asdict(self.info),
             "audio": {
                 "rate_hz": plan.audio_rate, "carrier_hz": None if plan.envelope else plan.carrier_hz,
                 "envelope": plan.envelope, "profile": plan.profile,

@@ -1,0 +1,52 @@
+"""What an output device changed of what was commanded, as the summary's warnings say it.
+
+The commands table holds what the pipeline commanded; the device section of
+``summary.json`` counts what the device then did to it: values clamped to its amplitude
+limit (the limit a link's device declared, ``device.link.host``; an audio output's voltage
+limit, ``device.audio.synth``) and, on an audio output, the callbacks PortAudio flagged
+with an output underflow (``xruns``). Neither is unplayed (``unplayed_samples``), so
+neither shows there: a run whose every sample played can still have driven the plate
+with something else than its commands.
+"""
+
+from __future__ import annotations
+
+
+def device_change_warnings(device: dict, max_amplitude_um: float) -> list[str]:
+    """One sentence per thing the output device changed of what was commanded: values
+    clamped to its amplitude limit (a link's declared limit, an audio output's voltage
+    limit) and audio output underflows. ``device``: the summary's ``device`` section
+    (``device.link.host.CommandSink.status``, ``device.audio.output.AudioOutput.status``);
+    ``max_amplitude_um``: the largest command (um, ``counts.max_amplitude_um``)."""
+    warnings = []
+    audio = device.get("audio") or {}
+    clamped = device.get("clamped_samples") or 0
+    if clamped:
+        limits = (device.get("device") or {}).get("limits_um") or []
+        channels = max(1, len(limits))
+        values = device.get("commanded_samples", 0) * channels
+        share = [f"{clamped / values:.1%}"] if values else []
+        counted = "samples" if channels == 1 else "values"
+        said = ", ".join(([] if channels == 1 else [f"samples x {channels} channels"]) + share)
+        if "limit_v" in audio:  # one voltage limit for every channel
+            what = (f"the audio output's {audio['limit_v']:g} V limit "
+                    f"({audio['limit_v'] * audio['um_per_volt']:.4g} um at "
+                    f"{audio['um_per_volt']:g} um/V)")
+        elif len(set(limits)) == 1:
+            what = f"the device's {limits[0]:.4g} um limit"
+        else:
+            what = "the device's limits" + (
+                " (" + ", ".join(f"{um:.4g}" for um in limits) + " um by channel)" if limits else "")
+        warnings.append(f"{clamped} of {values} commanded {counted}"
+                        f"{f' ({said})' if said else ''} were clamped to "
+                        f"{what}: the plate got at most that where the commands table says "
+                        f"up to {max_amplitude_um:.4g} um")
+    xruns = audio.get("xruns") or 0
+    if xruns:
+        warnings.append(f"{xruns} audio callbacks were flagged with an output underflow "
+                        "(xrun: the sound card or audio server ran late and may have put a "
+                        f"gap of up to one {audio['blocksize']}-frame period, "
+                        f"{audio['blocksize'] / audio['rate_hz'] * 1e3:.3g} ms, into the "
+                        "plate's drive); unplayed_samples and underruns count only frictex's "
+                        "own buffer running dry, not these")
+    return warnings
