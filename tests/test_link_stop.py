@@ -19,6 +19,8 @@ import time
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from frictex.device.link.host import CommandSink, LinkStalled, open_port
 from frictex.device.link.protocol import DeviceState
@@ -329,3 +331,27 @@ def test_a_replay_that_gives_up_says_how_much_of_the_trace_never_went(device, tm
     assert handed_s == pytest.approx((done.commanded - 50) / RATE, abs=0.0051)
     assert f"of the 5.98 s trace (the last {5.98 - handed_s:.2f} s never commanded)" in said
     assert not (tmp_path / "out").exists()
+
+
+@given(st.data())
+def test_a_give_up_message_adds_up_to_what_was_commanded(data):
+    """Whatever the figures, the message's parts add up: sent = played + not reported
+    played + refused, commanded = sent + never sent, never sent = dropped + queued +
+    being queued."""
+    import re
+
+    from frictex.device.link.session import LinkProgress
+    commanded = data.draw(st.integers(0, 10**9))
+    sent = data.draw(st.integers(0, commanded))
+    played = data.draw(st.integers(0, sent))
+    refused = data.draw(st.integers(0, sent - played))
+    dropped = data.draw(st.integers(0, commanded - sent))
+    queued = data.draw(st.integers(0, commanded - sent - dropped))
+    said = LinkProgress(commanded, sent, played, refused, dropped, queued).describe()
+    n = {k: int(v) for v, k in re.findall(r"(\d+) (samples commanded|were sent|played|not "
+                                          r"reported played|flushed|never sent|dropped|"
+                                          r"queued|being queued)", said)}
+    assert n["samples commanded"] == commanded and n["were sent"] == sent
+    assert n["played"] + n["not reported played"] + n.get("flushed", 0) == sent
+    assert n["were sent"] + n["never sent"] == commanded
+    assert n["dropped"] + n["queued"] + n.get("being queued", 0) == n["never sent"]
