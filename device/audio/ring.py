@@ -122,6 +122,13 @@ class Player:
         self._fading = -1  # frames of the fade played; -1: not starving
         self._stopping = False  # the emergency stop's ramp has begun
 
+    @property
+    def silent(self) -> bool:
+        """After an emergency stop (``estop``): whether its ramp to 0 has played (or nothing
+        had played), so that the callback plays zeros from now on. For the producer."""
+        return self.estop and (not self.started
+                               or (self._stopping and self._fading >= self.ramp))
+
     def fill(self, out: np.ndarray, dac_time: float = 0.0) -> None:
         """Fill ``out`` (frames, channels) float32 in place: the PortAudio callback.
         ``dac_time``: when its first frame reaches the DAC (s, any clock; logged)."""

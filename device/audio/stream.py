@@ -21,7 +21,9 @@ is a DeviceError too.
 :meth:`StreamOutput.close` writes the stream's own ramp to 0, waits (bounded) for the
 ring to play out, then stops the stream after PortAudio's reported output latency (the
 bounded stop and close above).
-:meth:`StreamOutput.emergency_stop` ramps to 0 within ``ramp_ms`` from whatever plays.
+:meth:`StreamOutput.emergency_stop` ramps to 0 within ``ramp_ms`` from whatever plays;
+:meth:`StreamOutput.abort` (a run ended by a signal or an error) is that, then the close.
+Every wait here asks whether a held signal ends it (``device.link.waits``).
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ from frictex.device.audio.options import AudioPlan
 from frictex.device.audio.output import CAUSES, AudioOutput
 from frictex.device.audio.ring import FrameRing, Player
 from frictex.device.errors import DeviceError, InputError, MissingExtra
+from frictex.device.link.waits import check_interrupt
 
 #: how often a waiting producer looks at the ring again (s)
 POLL_S = 0.001
@@ -166,6 +169,7 @@ class StreamOutput(AudioOutput):
                 self.player.estop = True
                 self._release(problem)
                 raise DeviceError(problem + "; the stream was stopped and closed")
+            check_interrupt()
             time.sleep(POLL_S)
 
     def _active(self) -> bool:
@@ -214,6 +218,12 @@ class StreamOutput(AudioOutput):
         Never waits; :meth:`close` releases the device."""
         self.player.estop = True
 
+    def abort(self) -> None:
+        """End at once (a run stopped by a signal or an error): :meth:`emergency_stop`,
+        then :meth:`close`, which plays the ramp out and releases the device."""
+        self.emergency_stop()
+        self.close()
+
     def _end(self, tail: np.ndarray) -> None:
         if self._released:  # a failed wait has let the device go
             return
@@ -223,19 +233,40 @@ class StreamOutput(AudioOutput):
                 self._wait_room(tail.shape[0])
                 self._write(tail)
             self.player.ended = True
+            if self.player.estop and not self._started:  # stopped before it played
+                self.player.stopped += self.ring.tail - self.ring.head
+                self.ring.head = self.ring.tail
+                return
             if not self._started:
                 self._start()
-            queued = self.ring.tail - self.ring.head
-            deadline = time.monotonic() + queued / self.plan.audio_rate + DRAIN_MARGIN_S
-            while (self.ring.head < self.ring.tail and time.monotonic() < deadline
-                   and self._active()):
-                time.sleep(POLL_S)
-            # the last callback's frames are still on their way to the DAC
-            time.sleep(self.output_latency_s + self.stream.blocksize / self.plan.audio_rate)
-            self.not_drained = self.ring.tail - self.ring.head
+            try:
+                self._drain()
+            finally:  # the last callback's frames (or the ramp) still on their way to the DAC
+                time.sleep(self.output_latency_s + (self.stream.blocksize + self.plan.ramp_frames)
+                           / self.plan.audio_rate)
+                self.not_drained = self.ring.tail - self.ring.head
         finally:
             self._release(f"{self.label}: the audio device stopped responding while the "
                           "stream closed")
+
+    def _drain(self) -> None:
+        """Wait (bounded) until the ring has played out, or after an emergency stop until
+        its ramp to 0 has. A held signal (Ctrl-C, SIGTERM: ``device.link.waits``) makes
+        it an emergency stop, raised once the ramp has played."""
+        queued = self.ring.tail - self.ring.head
+        deadline = time.monotonic() + queued / self.plan.audio_rate + DRAIN_MARGIN_S
+        interrupted = None
+        while ((self.ring.head < self.ring.tail or self.player.estop and not self.player.silent)
+               and time.monotonic() < deadline and self._active()):
+            if interrupted is None:
+                try:
+                    check_interrupt()
+                except BaseException as exc:  # noqa: BLE001 - raised below
+                    interrupted = exc
+                    self.emergency_stop()
+            time.sleep(POLL_S)
+        if interrupted is not None:
+            raise interrupted
 
     def _release(self, context: str) -> None:
         """Stop and close the stream, each PortAudio call bounded by
