@@ -26,11 +26,14 @@ def commands_um(folder) -> np.ndarray:
 
 def replay(tmp_path, capsys, scene: str, device: str) -> tuple[dict, str]:
     """``frictex replay SCENE swipe-40mms-50hz --device DEVICE``: summary.json and the
-    printed line."""
+    printed line; every warning in the summary is printed too."""
     out = tmp_path / "out"
     assert main(["replay", scene, "swipe-40mms-50hz", "--out", str(out),
                  "--device", device]) == 0
-    return json.loads((out / "summary.json").read_text()), capsys.readouterr().out
+    doc = json.loads((out / "summary.json").read_text())
+    printed = capsys.readouterr()
+    assert printed.err == "".join(f"frictex: warning: {w}\n" for w in doc["warnings"])
+    return doc, printed.out
 
 
 def test_a_device_limit_below_the_commands_is_said(tmp_path, capsys):
@@ -44,6 +47,7 @@ def test_a_device_limit_below_the_commands_is_said(tmp_path, capsys):
     assert warning.startswith(f"{over} of {device['commanded_samples']} commanded samples "
                               f"({share:.1%}) were clamped to the device's 1 um limit")
     assert warning.endswith(f"up to {commands.max():.4g} um")
+    assert warning in doc["warnings"]  # in summary.json, and printed with the others
     # the printed count no longer says 0 clamped
     assert f"; 0 clamped by the friction inversion, {over} by the device's limit; " in printed
 
@@ -62,6 +66,7 @@ def test_an_audio_outputs_voltage_limit_is_said(tmp_path, capsys):
     (warning,) = device_change_warnings(device, doc["counts"]["max_amplitude_um"])
     assert f"{over} of {device['commanded_samples']} commanded samples" in warning
     assert "the audio output's 150 V limit (3 um at 0.02 um/V)" in warning
+    assert warning in doc["warnings"]
     inversion = sum(doc["clamps"].values())  # its own clamp to the scene's 100 um, too
     assert f"; {inversion} clamped by the friction inversion, {over} by the device's limit; " \
         in printed

@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from frictex.app.engine.clocks import VirtualClock
+from frictex.app.engine.device_changes import device_change_warnings
 from frictex.app.engine.driver import (PipelineStage, RunTimer, deferred_interrupts, drive,
                                        force_reports_of)
 from frictex.app.engine.sinks import (FRICTION_COLUMNS, FrameSink, LinkSink, ProgressSink, TableSink,
@@ -312,6 +313,7 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     if sink is not None:
         doc["device"] = sink.status()
         doc["warnings"] += device_warnings(doc["device"])
+        doc["warnings"] += device_change_warnings(doc["device"], doc["counts"]["max_amplitude_um"])
     in_memory = None
     if options.fmt == MEMORY:
         in_memory = {"commands": tables.commands.table, "friction": tables.friction.table}
