@@ -12,11 +12,11 @@ producer (replay) waits for room, at most ``stall_s * max_stalls`` seconds (less
 PortAudio says the stream is no longer active: a JACK server that went away), then lets
 the device go and fails with one DeviceError: the audio device stopped taking frames.
 
-Letting the device go: ``Pa_StopStream`` then ``Pa_CloseStream``, each bounded by
-:data:`PA_CALL_LIMIT_S` (``device.audio.bounded``: with its server gone, PortAudio's JACK
-host API blocks in them for 10 minutes, signals unanswered). One that does not return is
-abandoned with the stream (the callback, should it ever run again, ramps to 0), and that
-is a DeviceError too.
+Letting the device go: ``Pa_StopStream`` then ``Pa_CloseStream``. They and
+``Pa_StartStream`` are each bounded by :data:`PA_CALL_LIMIT_S` (``device.audio.bounded``:
+with its server gone, PortAudio's JACK host API blocks in them for 10 minutes, signals
+unanswered). One that does not return is abandoned with the stream (the callback, should
+it ever run again, ramps to 0), and that is a DeviceError too.
 
 :meth:`StreamOutput.close` writes the stream's own ramp to 0, waits (bounded) for the
 ring to play out, then stops the stream after PortAudio's reported output latency (the
