@@ -2,8 +2,8 @@
 exit 1 and one line (``device.audio.stream``, ``device.audio.bounded``).
 
 The device is JACK's dummy backend in a private jackd (Debian's jackd2, installed by
-.ci/setup-firmware), which the test kills (the server gone: PortAudio's stop and close
-then block for 10 minutes) or stops with SIGSTOP (the device frozen) while
+.ci/setup-firmware), which the test ends with SIGTERM (the server gone: PortAudio's stop
+and close then block for 10 minutes) or stops with SIGSTOP (the device frozen) while
 ``frictex replay --device audio`` plays into it, in a process of its own."""
 
 from __future__ import annotations
@@ -30,7 +30,9 @@ END_S = 60.0
 @contextmanager
 def dummy_jack(tmp_path):
     """A private jackd (dummy backend, 192 kHz, 256 frames); yields (Popen, the
-    environment that makes PortAudio use it). Ends it afterwards, frozen or not."""
+    environment that makes PortAudio use it). Ends it afterwards, frozen or not, with
+    SIGTERM: a jackd killed with SIGKILL stays in JACK's server registry in /dev/shm, and
+    a few such make every later jackd fail ('Too many servers already active')."""
     name = f"frictex-vanish-{os.getpid()}"
     env = {**os.environ, "JACK_DEFAULT_SERVER": name, "JACK_NO_AUDIO_RESERVATION": "1"}
     with open(tmp_path / "jackd.log", "wb") as log:
@@ -47,7 +49,11 @@ def dummy_jack(tmp_path):
     finally:
         if server.poll() is None:
             server.send_signal(signal.SIGCONT)
-            server.kill()
+            server.terminate()
+            try:
+                server.wait(10)
+            except subprocess.TimeoutExpired:
+                server.kill()
         server.wait(10)
 
 
@@ -89,7 +95,7 @@ def test_a_jack_server_killed_mid_replay_ends_the_run_with_one_line(tmp_path):
     with dummy_jack(tmp_path) as (server, env):
         replay = start_replay(tmp_path, env)
         wait_until_playing(replay, env)
-        server.kill()
+        server.terminate()  # as `kill` does; the server shuts down and is gone
         server.wait(10)
         code, _, err = finish(replay)
     assert code == 1, err
