@@ -88,6 +88,11 @@ class OutputDevice(Protocol):
     ``paced`` (as requested) and ``info`` (a ``device.link.protocol.Info``: what the
     device declared; the engine reads ``info.has_force_reports``, calibration
     ``info.limits_um``).
+
+    A device may also have ``abort()``: stop at once, dropping what is queued, the plate
+    ramped to zero, the device released (bounded, idempotent, never raising for the
+    stream's faults). A run stopped by a signal or an error calls it where the device
+    has one (:class:`CommandSink` and the audio stream do), :meth:`close` otherwise.
     """
 
     label: str
