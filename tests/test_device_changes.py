@@ -14,7 +14,7 @@ import struct
 import numpy as np
 
 from frictex.app.commands.cli import main
-from frictex.app.engine.device_changes import device_change_warnings
+from frictex.app.engine.device_changes import device_warnings
 from frictex.textures.library import LIBRARY_DIR
 
 
@@ -42,7 +42,7 @@ def test_a_device_limit_below_the_commands_is_said(tmp_path, capsys):
     over = int(np.count_nonzero(commands > 1.0))
     assert over > 0 and device["clamped_samples"] == over  # the table keeps the command
     assert doc["clamps"]["unreachable"] == 0  # the pipeline itself clamped nothing
-    (warning,) = device_change_warnings(device, doc["counts"]["max_amplitude_um"])
+    (warning,) = device_warnings(device, doc["counts"]["max_amplitude_um"])
     share = over / device["commanded_samples"]
     assert warning.startswith(f"{over} of {device['commanded_samples']} commanded samples "
                               f"({share:.1%}) were clamped to the device's 1 um limit")
@@ -63,7 +63,7 @@ def test_an_audio_outputs_voltage_limit_is_said(tmp_path, capsys):
     device, commands = doc["device"], commands_um(tmp_path / "out")
     over = int(np.count_nonzero(commands > 3.0 + 1e-9))
     assert over > 0 and device["clamped_samples"] == over
-    (warning,) = device_change_warnings(device, doc["counts"]["max_amplitude_um"])
+    (warning,) = device_warnings(device, doc["counts"]["max_amplitude_um"])
     assert f"{over} of {device['commanded_samples']} commanded samples" in warning
     assert "the audio output's 150 V limit (3 um at 0.02 um/V)" in warning
     assert warning in doc["warnings"]
@@ -78,17 +78,17 @@ def test_an_audio_outputs_voltage_limit_is_said(tmp_path, capsys):
 def test_audio_underflows_are_said_with_what_they_cost():
     status = {"clamped_samples": 0, "commanded_samples": 50_050,
               "audio": {"xruns": 30, "blocksize": 256, "rate_hz": 192_000}}
-    (warning,) = device_change_warnings(status, 1.5)
+    (warning,) = device_warnings(status, 1.5)
     assert warning.startswith("30 audio callbacks were flagged with an output underflow")
     assert "up to one 256-frame period, 1.33 ms," in warning
     assert "unplayed_samples and underruns count only frictex's own buffer" in warning
     status["audio"]["xruns"] = 0
-    assert device_change_warnings(status, 1.5) == []
+    assert device_warnings(status, 1.5) == []
 
 
 def test_several_channels_count_values_and_name_each_limit():
     status = {"clamped_samples": 5, "commanded_samples": 10,
               "device": {"limits_um": [1.0, 2.0]}}
-    (warning,) = device_change_warnings(status, 3.0)
+    (warning,) = device_warnings(status, 3.0)
     assert warning.startswith("5 of 20 commanded values (samples x 2 channels, 25.0%) were "
                               "clamped to the device's limits (1, 2 um by channel)")

@@ -11,8 +11,8 @@ from typing import TYPE_CHECKING, Any
 from frictex._args import path_like, real
 from frictex._inputs import checked, scene_of
 from frictex._pipeline import run_settings
-from frictex.app.engine.replay import (MAX_UNPLAYED, ReplayOptions, file_id, replay_with,
-                                       unplayed_problem)
+from frictex.app.engine.device_changes import unplayed_problem
+from frictex.app.engine.replay import MAX_UNPLAYED, ReplayOptions, file_id, replay_with
 from frictex.app.engine.sources import MAX_GAP_S
 from frictex.app.engine.summary import finite_json
 from frictex.app.engine.summary_types import Summary

@@ -7,7 +7,8 @@ import sys
 
 from frictex.app.commands.argtypes import (add_link_arguments, block_size, bounded, output_rate, positive_float,
                                    share, sim_device_args)
-from frictex.app.engine.replay import MAX_UNPLAYED, ReplayOptions, replay_with, unplayed_problem
+from frictex.app.engine.device_changes import unplayed_problem
+from frictex.app.engine.replay import MAX_UNPLAYED, ReplayOptions, replay_with
 from frictex.app.engine.sources import MAX_GAP_S
 from frictex.app.engine.summary import control_line
 from frictex.app.engine.tables import FORMATS

@@ -1,7 +1,9 @@
-"""What an output device changed of what was commanded, as the summary's warnings say it.
+"""What an output device did with what was commanded, as the summary's warnings say it,
+and whether a run that streamed to it failed (:func:`unplayed_problem`).
 
 The commands table holds what the pipeline commanded; the device section of
-``summary.json`` counts what the device then did to it: values clamped to its amplitude
+``summary.json`` counts what the device then did with it: samples it never played, by
+cause (``unplayed_samples``), and beside them values clamped to its amplitude
 limit (the limit a link's device declared, ``device.link.host``; an audio output's voltage
 limit, ``device.audio.synth``) and, on an audio output, the callbacks PortAudio flagged
 with an output underflow (``xruns``). Neither is unplayed (``unplayed_samples``), so
@@ -12,13 +14,14 @@ with something else than its commands.
 from __future__ import annotations
 
 
-def device_change_warnings(device: dict, max_amplitude_um: float) -> list[str]:
-    """One sentence per thing the output device changed of what was commanded: values
-    clamped to its amplitude limit (a link's declared limit, an audio output's voltage
-    limit) and audio output underflows. ``device``: the summary's ``device`` section
-    (``device.link.host.CommandSink.status``, ``device.audio.output.AudioOutput.status``);
-    ``max_amplitude_um``: the largest command (um, ``counts.max_amplitude_um``)."""
-    warnings = []
+def device_warnings(device: dict, max_amplitude_um: float) -> list[str]:
+    """One sentence per thing the output device did not play as commanded: samples never
+    played (by cause), values clamped to its amplitude limit (a link's declared limit, an
+    audio output's voltage limit) and audio output underflows. ``device``: the summary's
+    ``device`` section (``device.link.host.CommandSink.status``,
+    ``device.audio.output.AudioOutput.status``); ``max_amplitude_um``: the largest command
+    (um, ``counts.max_amplitude_um``)."""
+    warnings = _unplayed(device)
     audio = device.get("audio") or {}
     clamped = device.get("clamped_samples") or 0
     if clamped:
@@ -50,3 +53,27 @@ def device_change_warnings(device: dict, max_amplitude_um: float) -> list[str]:
                         "plate's drive); unplayed_samples and underruns count only frictex's "
                         "own buffer running dry, not these")
     return warnings
+
+
+def _unplayed(status: dict) -> list[str]:
+    """What the device never played, by cause (``device.link.host.CommandSink.status``)."""
+    commanded, unplayed = status.get("commanded_samples", 0), status.get("unplayed_samples", 0)
+    if not unplayed:
+        return []
+    causes = ", ".join(f"{n} {cause.replace('_', ' ')}"
+                       for cause, n in status.get("unplayed_by_cause", {}).items() if n)
+    return [f"{unplayed} of {commanded} commanded samples ({unplayed / commanded:.2%}) were "
+            f"never played by the device ({causes})"]
+
+
+def unplayed_problem(status: dict | None, max_unplayed: float, option: str) -> str | None:
+    """Why a run streaming to a device failed, if the device (``status``, the summary's
+    ``device``) never played more than ``max_unplayed`` of the commanded samples; None if
+    it played enough or there was no device. ``option`` names the limit in the message."""
+    if status is None or not status.get("commanded_samples"):
+        return None
+    lost = status["unplayed_samples"] / status["commanded_samples"]
+    if lost <= max_unplayed:
+        return None
+    return (f"{lost:.2%} of the commanded samples never played on the device (limit "
+            f"{max_unplayed:.2%}, {option})")

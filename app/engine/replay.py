@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from frictex.app.engine.clocks import VirtualClock
-from frictex.app.engine.device_changes import device_change_warnings
+from frictex.app.engine.device_changes import device_warnings
 from frictex.app.engine.driver import (PipelineStage, RunTimer, deferred_interrupts, drive,
                                        force_reports_of)
 from frictex.app.engine.sinks import (FRICTION_COLUMNS, FrameSink, LinkSink, ProgressSink, TableSink,
@@ -312,8 +312,7 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     doc["warnings"] += source.gaps.warnings()
     if sink is not None:
         doc["device"] = sink.status()
-        doc["warnings"] += device_warnings(doc["device"])
-        doc["warnings"] += device_change_warnings(doc["device"], doc["counts"]["max_amplitude_um"])
+        doc["warnings"] += device_warnings(doc["device"], doc["counts"]["max_amplitude_um"])
     in_memory = None
     if options.fmt == MEMORY:
         in_memory = {"commands": tables.commands.table, "friction": tables.friction.table}
@@ -354,30 +353,6 @@ def _existing(path: Path) -> Path:
     while not path.exists() and path.parent != path:
         path = path.parent
     return path
-
-
-def device_warnings(status: dict) -> list[str]:
-    """What the device never played, by cause (``device.link.host.CommandSink.status``)."""
-    commanded, unplayed = status.get("commanded_samples", 0), status.get("unplayed_samples", 0)
-    if not unplayed:
-        return []
-    causes = ", ".join(f"{n} {cause.replace('_', ' ')}"
-                       for cause, n in status.get("unplayed_by_cause", {}).items() if n)
-    return [f"{unplayed} of {commanded} commanded samples ({unplayed / commanded:.2%}) were "
-            f"never played by the device ({causes})"]
-
-
-def unplayed_problem(status: dict | None, max_unplayed: float, option: str) -> str | None:
-    """Why a run streaming to a device failed, if the device (``status``, the summary's
-    ``device``) never played more than ``max_unplayed`` of the commanded samples; None if
-    it played enough or there was no device. ``option`` names the limit in the message."""
-    if status is None or not status.get("commanded_samples"):
-        return None
-    lost = status["unplayed_samples"] / status["commanded_samples"]
-    if lost <= max_unplayed:
-        return None
-    return (f"{lost:.2%} of the commanded samples never played on the device (limit "
-            f"{max_unplayed:.2%}, {option})")
 
 
 def _long(source: TraceSource) -> bool:
