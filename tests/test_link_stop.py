@@ -124,11 +124,19 @@ def test_a_signal_during_a_replay_stops_the_plate_at_once(device, tmp_path, sig,
         time.sleep(0.3)
         at["t"] = core.tick / RATE
         os.kill(os.getpid(), sig)
+    # under nohup (or a shell's background job) the signal is ignored, and a run keeps it
+    # so by design (test_engine): here it must be delivered
+    before = signal.getsignal(sig)
+    if before is signal.SIG_IGN:
+        signal.signal(sig, signal.SIG_DFL)
     killer = threading.Thread(target=signal_once_vibrating, daemon=True)
     killer.start()
-    with pytest.raises(raised) as caught:
-        replay_with(_flat_scene(tmp_path), _slide(15.0), tmp_path / "out",
-                    ReplayOptions(device=path, progress=False))
+    try:
+        with pytest.raises(raised) as caught:
+            replay_with(_flat_scene(tmp_path), _slide(15.0), tmp_path / "out",
+                        ReplayOptions(device=path, progress=False))
+    finally:
+        signal.signal(sig, before)
     killer.join(timeout=5.0)
     if raised is SystemExit:
         assert caught.value.code == 128 + sig
