@@ -10,9 +10,13 @@ commanded or counted unplayed by its cause, and nothing is unplayed without a tr
 
 from __future__ import annotations
 
+import os
+import threading
 import time
 
 import numpy as np
+
+from frictex.device.link.simdevice import open_pty, serve
 
 
 def accounted(status: dict, played_index: np.ndarray | None, commanded: int) -> None:
@@ -90,3 +94,29 @@ def start_sim_device(channels: int, rate_hz: float, *, phases: bool = False, log
     flags = (*(["--phases"] if phases else []),
              *(["--log", os.fspath(log_path)] if log_path is not None else []), *extra)
     return spawn(channels, rate_hz, tcp=tcp, extra=tuple(flags))
+
+
+def serve_on_pty(core):
+    """Serve the simulated device ``core`` on a new pty from a thread of this process (so
+    the test can look inside it); returns (the pty's path, stop(keep_pty=False)).
+
+    The device is gone when ``stop`` returns (its thread has ended), and its pty with it
+    unless ``keep_pty``: then the path stays openable and nothing answers. A closed pty's
+    number goes to the next pty any process opens: a host reopening the path then reaches
+    that one (another test's device), so a test that stops the device either keeps its
+    pty or unplugs the host's port first. Calling ``stop`` again closes a kept pty."""
+    master, slave, path = open_pty()
+    quit_event = threading.Event()
+    thread = threading.Thread(target=serve, args=(core, master),
+                              kwargs={"quit_event": quit_event}, daemon=True)
+    thread.start()
+    open_fds = [master, slave]
+
+    def stop(keep_pty: bool = False):
+        if not quit_event.is_set():
+            quit_event.set()
+            thread.join(timeout=30.0)
+            assert not thread.is_alive(), "the simulated device did not stop within 30 s"
+        while open_fds and not keep_pty:
+            os.close(open_fds.pop())
+    return path, stop

@@ -5,8 +5,6 @@ plays into. The output is read back from the callback's own buffer (``Player.tap
 from __future__ import annotations
 
 import os
-import shutil
-import subprocess
 import time
 
 import numpy as np
@@ -15,10 +13,9 @@ import pytest
 from frictex.device.audio.options import AudioArgs, make_plan
 from frictex.device.audio.stream import StreamOutput
 from frictex.device.link.host import open_sink
+from jack_server import FS, JACKD, NO_JACKD, START_S, private_jackd
 
-FS = 192_000
 RATE = 10_000.0
-START_S = 15.0  # bound on the server's start
 LEVEL_UM = 1.5  # 0.5 of full scale on the default profile (0.02 um/V, 150 V)
 
 
@@ -34,43 +31,31 @@ def _jack_output(sd) -> int | None:
 
 @pytest.fixture
 def jack_device(monkeypatch, tmp_path):
-    """A private jackd (dummy backend, 192 kHz, 256 frames) and PortAudio rescanned to
-    see it; yields the PortAudio device index. Stops the server afterwards."""
-    jackd = shutil.which("jackd")
-    if jackd is None:
-        pytest.skip("jackd is not installed (Debian package jackd2, see .ci/setup-firmware)")
+    """A private jackd (``jack_server.private_jackd``) and PortAudio rescanned to see it;
+    yields the PortAudio device index. Stops the server afterwards."""
+    if JACKD is None:
+        pytest.skip(NO_JACKD)
     import sounddevice as sd
 
-    name = f"frictex-test-{os.getpid()}"
-    monkeypatch.setenv("JACK_DEFAULT_SERVER", name)
-    monkeypatch.setenv("JACK_NO_AUDIO_RESERVATION", "1")
-    log = open(tmp_path / "jackd.log", "wb")  # noqa: SIM115 (closed below)
-    server = subprocess.Popen([jackd, "--no-realtime", "-n", name, "-d", "dummy",
-                               "-r", str(FS), "-p", "256"], stdout=log,
-                              stderr=subprocess.STDOUT, start_new_session=True)
-    try:
-        deadline = time.monotonic() + START_S
-        index = None
-        while index is None:
-            if server.poll() is not None or time.monotonic() > deadline:
-                log.flush()
-                pytest.fail("jackd did not come up within "
-                            f"{START_S:g} s: {(tmp_path / 'jackd.log').read_text()[-800:]}")
-            time.sleep(0.2)
-            sd._terminate()  # PortAudio lists host APIs when initialised: rescan
-            sd._initialize()
-            index = _jack_output(sd)
-        yield index
-    finally:
-        sd._terminate()  # PortAudio's JACK client goes before its server
-        server.terminate()
+    with private_jackd(tmp_path, f"frictex-test-{os.getpid()}") as (server, env):
+        for key in ("JACK_DEFAULT_SERVER", "JACK_NO_AUDIO_RESERVATION"):
+            monkeypatch.setenv(key, env[key])
         try:
-            server.wait(5)
-        except subprocess.TimeoutExpired:
-            server.kill()
-            server.wait(5)
-        log.close()
-        sd._initialize()
+            deadline = time.monotonic() + START_S
+            index = None
+            while index is None:
+                if server.poll() is not None or time.monotonic() > deadline:
+                    pytest.fail(f"PortAudio did not list the JACK server within {START_S:g} "
+                                f"s: {(tmp_path / 'jackd.log').read_text()[-800:]}")
+                sd._terminate()  # PortAudio lists host APIs when initialised: rescan
+                sd._initialize()
+                index = _jack_output(sd)
+                if index is None:
+                    time.sleep(0.2)
+            yield index
+        finally:
+            sd._terminate()  # PortAudio's JACK client goes before its server
+    sd._initialize()
 
 
 def send_for(out, seconds: float, start: int) -> int:

@@ -9,52 +9,18 @@ and close then block for 10 minutes) or stops with SIGSTOP (the device frozen) w
 from __future__ import annotations
 
 import os
-import shutil
 import signal
 import subprocess
 import sys
 import time
-from contextlib import contextmanager
 
 import pytest
+from jack_server import JACKD, NO_JACKD, START_S, private_jackd
 
-JACKD = shutil.which("jackd")
-pytestmark = pytest.mark.skipif(
-    JACKD is None, reason="jackd is not installed (Debian package jackd2, see .ci/setup-firmware)")
-START_S = 30.0  # bound on the server's start and on the replay's stream opening
+pytestmark = pytest.mark.skipif(JACKD is None, reason=NO_JACKD)
 #: generous bound on the run once its device is gone: the producer's 5 s wait plus the
 #: 3 s bound on PortAudio's stop, on a busy machine (it hung for 10 minutes before)
 END_S = 60.0
-
-
-@contextmanager
-def dummy_jack(tmp_path):
-    """A private jackd (dummy backend, 192 kHz, 256 frames); yields (Popen, the
-    environment that makes PortAudio use it). Ends it afterwards, frozen or not, with
-    SIGTERM: a jackd killed with SIGKILL stays in JACK's server registry in /dev/shm, and
-    a few such make every later jackd fail ('Too many servers already active')."""
-    name = f"frictex-vanish-{os.getpid()}"
-    env = {**os.environ, "JACK_DEFAULT_SERVER": name, "JACK_NO_AUDIO_RESERVATION": "1"}
-    with open(tmp_path / "jackd.log", "wb") as log:
-        server = subprocess.Popen([JACKD, "--no-realtime", "-n", name, "-d", "dummy",
-                                   "-r", "192000", "-p", "256"], stdout=log,
-                                  stderr=subprocess.STDOUT, env=env, start_new_session=True)
-    try:
-        up = subprocess.run(["jack_wait", "-s", name, "-w", "-t", str(int(START_S))],
-                            capture_output=True, env=env, timeout=START_S + 10)
-        if up.returncode != 0:
-            pytest.fail(f"jackd did not come up within {START_S:g} s: "
-                        f"{(tmp_path / 'jackd.log').read_text()[-800:]}")
-        yield server, env
-    finally:
-        if server.poll() is None:
-            server.send_signal(signal.SIGCONT)
-            server.terminate()
-            try:
-                server.wait(10)
-            except subprocess.TimeoutExpired:
-                server.kill()
-        server.wait(10)
 
 
 def start_replay(tmp_path, env) -> subprocess.Popen:
@@ -92,7 +58,7 @@ def finish(replay: subprocess.Popen) -> tuple[int, float, str]:
 
 
 def test_a_jack_server_killed_mid_replay_ends_the_run_with_one_line(tmp_path):
-    with dummy_jack(tmp_path) as (server, env):
+    with private_jackd(tmp_path, f"frictex-vanish-{os.getpid()}") as (server, env):
         replay = start_replay(tmp_path, env)
         wait_until_playing(replay, env)
         server.terminate()  # as `kill` does; the server shuts down and is gone
@@ -107,7 +73,7 @@ def test_a_jack_server_killed_mid_replay_ends_the_run_with_one_line(tmp_path):
 def test_a_frozen_audio_device_ends_the_run_with_one_line(tmp_path):
     """The server stopped (SIGSTOP): the stream takes no frames, and PortAudio's stop
     does not return."""
-    with dummy_jack(tmp_path) as (server, env):
+    with private_jackd(tmp_path, f"frictex-vanish-{os.getpid()}") as (server, env):
         replay = start_replay(tmp_path, env)
         wait_until_playing(replay, env)
         server.send_signal(signal.SIGSTOP)
@@ -122,7 +88,7 @@ def test_sigterm_ends_a_run_whose_audio_device_froze(tmp_path):
     producer waits for a frozen device: the run still ends within the bound, and says
     what became of the device (its stream left to PortAudio) rather than only that it
     was terminated."""
-    with dummy_jack(tmp_path) as (server, env):
+    with private_jackd(tmp_path, f"frictex-vanish-{os.getpid()}") as (server, env):
         replay = start_replay(tmp_path, env)
         wait_until_playing(replay, env)
         server.send_signal(signal.SIGSTOP)

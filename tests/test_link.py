@@ -1,7 +1,6 @@
 """The host link over real pseudo-terminals: round trips, clamping, faults, unplugging."""
 
 import io
-import os
 import socket
 import subprocess
 import sys
@@ -16,9 +15,9 @@ from frictex.device.link.faults import TRIP_S, Event, Faults, Plug, Schedule
 from frictex.device.link.host import CommandSink, LinkError, LinkStalled, open_port, open_sink
 from frictex.device.firmware.build import FirmwareBuildError
 from frictex.device.firmware.ccore import built_core_class
-from frictex.device.link.simdevice import DeviceConfig, DeviceCore, open_pty, serve
+from frictex.device.link.simdevice import DeviceConfig, DeviceCore
 from link_checks import (accounted, all_played_unless_tripped, clean_unless_starved, in_order_within,
-                         until)
+                         serve_on_pty, until)
 
 STEP = p.AMPLITUDE_STEP_UM
 RATE = 10_000.0
@@ -69,29 +68,10 @@ def device_core(request):
 
 def _serve_device(config, core_class):
     """A simulated device served on a pty by a thread of this process (inspectable);
-    returns (core, played, path, stop)."""
+    returns (core, played, path, stop) (``link_checks.serve_on_pty``)."""
     played = Played()
     core = core_class(config, log=played.log, plate_log=played.plate_log)
-    master, slave, path = open_pty()
-    quit_event = threading.Event()
-    thread = threading.Thread(target=serve, args=(core, master),
-                              kwargs={"quit_event": quit_event}, daemon=True)
-    thread.start()
-
-    open_fds = [master, slave]
-
-    def stop(keep_pty: bool = False):
-        """The device is gone when this returns (its thread has ended), and its pty with
-        it unless ``keep_pty``: then the path stays openable and nothing answers. A closed
-        pty's number goes to the next pty any process opens: a host reopening ``path``
-        then reaches that one (another test's device), so a test that stops the device
-        either keeps its pty or unplugs the host's port first."""
-        if not quit_event.is_set():
-            quit_event.set()
-            thread.join(timeout=30.0)
-            assert not thread.is_alive(), "the simulated device did not stop within 30 s"
-        while open_fds and not keep_pty:
-            os.close(open_fds.pop())
+    path, stop = serve_on_pty(core)
     return core, played, path, stop
 
 

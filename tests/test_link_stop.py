@@ -24,9 +24,9 @@ from hypothesis import strategies as st
 
 from frictex.device.link.host import CommandSink, LinkStalled, open_port
 from frictex.device.link.protocol import DeviceState
-from frictex.device.link.simdevice import DeviceConfig, DeviceCore, open_pty, serve
+from frictex.device.link.simdevice import DeviceConfig, DeviceCore
 from frictex.device.link.waits import interruptible
-from link_checks import until
+from link_checks import serve_on_pty, until
 
 RATE = 10_000.0
 
@@ -57,19 +57,7 @@ def device():
     this process: (core, plate log, pty path, stop(keep_pty))."""
     log = PlateLog()
     core = DeviceCore(DeviceConfig(limits_um=(4.0,)), plate_log=log)
-    master, slave, path = open_pty()
-    quit_event = threading.Event()
-    thread = threading.Thread(target=serve, args=(core, master),
-                              kwargs={"quit_event": quit_event}, daemon=True)
-    thread.start()
-    fds = [master, slave]
-
-    def stop(keep_pty: bool = False):
-        quit_event.set()
-        thread.join(timeout=30.0)
-        assert not thread.is_alive(), "the simulated device did not stop within 30 s"
-        while fds and not keep_pty:
-            os.close(fds.pop())
+    path, stop = serve_on_pty(core)
     yield core, log, path, stop
     stop()
 
