@@ -69,6 +69,7 @@ def test_seed003_protocol_is_the_seeds_design():
     assert {(s.scene.stem, s.renderer) for s in p.stimuli.listed} == {
         (f"grating-{period}", r) for period in ("0.6mm", "5mm", "15mm") for r in ("sho", "sht")}
     assert p.scale == (1, 10) and p.presentation.exploration == "free"
+    assert p.presentation.show_scene  # the grating was on the screen as well
 
 
 def test_a_good_file_parses_to_its_values(tmp_path):
@@ -76,6 +77,9 @@ def test_a_good_file_parses_to_its_values(tmp_path):
     assert (p.method, p.stimuli.vary, p.stimuli.reference, p.stimuli.levels) == (
         "2afc", "period_mm", 5.0, (5.5, 6.0))
     assert p.target == 0.75 and p.guess_rate == 0.5 and p.name == "p"
+    assert p.presentation.show_scene is False  # a haptic study shows no picture
+    shown = load_protocol(write(tmp_path, GOOD + "[presentation]\nshow_scene = true\n"))
+    assert shown.presentation.show_scene is True
 
 
 @pytest.mark.parametrize("change, line, field, words", [
@@ -89,6 +93,8 @@ def test_a_good_file_parses_to_its_values(tmp_path):
     (('levels = [5.5, 6.0]', 'levels = [5.5, 5.5]'), 9, "stimuli.levels", "twice"),
     (('[stimuli]', '[stimuli]\nlayer = "nope"'), 6, "stimuli.layer", "no layer 'nope'"),
     (('repetitions = 2', 'repetitions = 2\n[scale]\nmin = 1'), 4, "scale", "only for method"),
+    (('repetitions = 2', 'repetitions = 2\n[presentation]\nshow_scene = "yes"'), 5,
+     "presentation.show_scene", "expected true or false"),
 ])
 def test_bad_values_are_one_line_with_file_line_and_field(tmp_path, change, line, field, words):
     path = write(tmp_path, GOOD.replace(*change))

@@ -42,9 +42,10 @@ levels = [6.6]
 mode = "sequential"
 exploration = "{exploration}"
 exploration_s = {seconds}
-"""
+{show_scene}"""
 #: the hand moves on with Enter after its stroke: nothing waits on the machine's speed
-FREE = {"exploration": "free", "seconds": 60}
+FREE = {"exploration": "free", "seconds": 60, "show_scene": ""}
+FIXED = {"exploration": "fixed", "seconds": 1.0, "show_scene": ""}
 
 
 def read_csv(path):
@@ -165,20 +166,44 @@ class Hand:
         self.strokes.append(tuple(float(v) for v in vp.to_mm(xs[[0, -1]], [y, y])[0]))
 
 
-def run_headless(tmp_path, lose_at=None, escape_at=None, resume=False, presentation=FREE):
+class Frames:
+    """The middle band (30-70 % of the height) of the scene's area in every frame drawn
+    for an interval (``on_frame`` of the headless window)."""
+
+    def __init__(self):
+        self.loop = None
+        self.bands = []
+
+    def __call__(self, rgb):
+        loop = self.loop
+        drawn = getattr(loop, "_buttons_of", None)  # the screen this frame was drawn for
+        if drawn is None or drawn.phase != "interval":
+            return
+        vp = loop.compositor.viewport
+        y0, y1 = int(vp.y0 + 0.3 * vp.height_px), int(vp.y0 + 0.7 * vp.height_px)
+        self.bands.append(rgb[y0:y1, int(vp.x0):int(vp.x0 + vp.width_px)].copy())
+
+
+def run_headless(tmp_path, lose_at=None, escape_at=None, resume=False, presentation=FREE,
+                 frames=None):
     """The tiny protocol's session in the headless window with a :class:`Hand`:
-    (session, hand, session folder)."""
+    (session, hand, session folder); ``frames`` (a :class:`Frames`) keeps the frames of
+    the intervals."""
     protocol_file = tmp_path / "tiny.toml"
     protocol_file.write_text(PROTOCOL.format(**presentation))
     protocol = load_protocol(protocol_file)
     scene = load_scene(resolve_scene("grating-5mm"))
     try:
-        window = open_backend("headless", default_frame_size(scene.display))
+        window = open_backend("headless", default_frame_size(scene.display), on_frame=frames)
     except OSError as exc:
         pytest.skip(f"EGL unavailable: {exc}")
     out = tmp_path / "session"
     presenter = WindowPresenter()
     hand = Hand(window, presenter, lose_at, escape_at, presentation["exploration"] == "free")
+
+    if frames is not None:
+        threading.Thread(target=lambda: setattr(frames, "loop", wait_for(
+            "the loop", lambda: presenter.loop)), daemon=True).start()
 
     def start(sc, record):
         haptic, finish = open_haptic(sc, 10_000.0, 50, None, None, record)
@@ -242,8 +267,8 @@ def test_a_session_in_the_headless_window(tmp_path):
 def test_a_fixed_exploration_lasts_its_time_on_the_haptic_clock(tmp_path):
     """Each interval ends by itself after ``exploration_s`` (one not touched in time, on a
     busy machine, is shown again); what the hand touched is recorded."""
-    session, hand, out = run_headless(tmp_path, presentation={"exploration": "fixed",
-                                                              "seconds": 1.0})
+    frames = Frames()
+    session, hand, out = run_headless(tmp_path, presentation=FIXED, frames=frames)
     assert [r["response"] for r in read_csv(out / "results.csv")] == hand.answers == ["1", "2", "2"]
     events = read_csv(out / "live" / "events.csv")
     times = {kind: [float(e["t_s"]) for e in events if e["event"] == kind]
@@ -254,6 +279,21 @@ def test_a_fixed_exploration_lasts_its_time_on_the_haptic_clock(tmp_path):
     for trial in (1, 2, 3):
         for interval in (1, 2):
             assert read_trace(out / "trials" / f"{trial:04d}" / f"{interval}.csv").t_s.size > 2
+    # by default an interval shows a uniform field, not the grating: nothing to see
+    assert len(frames.bands) >= 6
+    for band in frames.bands:
+        assert (band == band[0, 0]).all()
+
+
+def test_show_scene_shows_the_stimulus_while_it_is_explored(tmp_path):
+    """``[presentation] show_scene = true``: the grating is drawn during the intervals
+    (the band the default leaves uniform has its black and white stripes)."""
+    frames = Frames()
+    run_headless(tmp_path, presentation={**FREE, "show_scene": "show_scene = true\n"},
+                 frames=frames)
+    assert frames.bands
+    for band in frames.bands:
+        assert band.max() - band.min() > 100
 
 
 def test_a_lost_device_pauses_and_reconnecting_repeats_the_trial(tmp_path):

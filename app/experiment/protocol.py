@@ -35,6 +35,8 @@ the tables below.
     mode = "sequential"         # | side-by-side: two-interval trials in time or in space
     exploration = "fixed"       # | free: the participant answers when ready
     exploration_s = 3.0         # per stimulus: the time shown (fixed) or the most (free)
+    show_scene = false          # true: the window shows the scene's picture while a stimulus
+                                #   is explored (visuo-haptic); false: a uniform field
 
     [staircase]                 # method = "staircase" only
     rule = "1-up-2-down"        # | 1-up-3-down (Levitt 1971: 70.7 % and 79.4 % correct)
@@ -83,7 +85,7 @@ from frictex.textures.errors import KeyPath, Locator, Problem
 from frictex.textures.keys import RENDER_CHOICES
 from frictex.textures.library import UnreadableText, read_utf8
 from frictex.textures.schema import BAD as _BAD
-from frictex.textures.schema import Choice, Int, Num, NumList, Reader, Text
+from frictex.textures.schema import Choice, Flag, Int, Num, NumList, Reader, Text
 from frictex.textures.toml_safe import parse_toml
 
 FORMAT_VERSION = 1
@@ -146,7 +148,10 @@ STIMULI = {"scene": Text(max_len=1000), "vary": Choice(VARIES, None), "layer": T
 STIMULUS = {"name": Text(), "scene": Text(max_len=1000), "renderer": Choice(RENDER_CHOICES, None)}
 PRESENTATION = {"mode": Choice(PRESENTATIONS, "sequential"),
                 "exploration": Choice(EXPLORATIONS, "fixed"),
-                "exploration_s": Num("s", 3.0, gt=0.0, le=600.0)}
+                "exploration_s": Num("s", 3.0, gt=0.0, le=600.0),
+                "show_scene": Flag(False, "the scene's picture in the window while a stimulus is "
+                                          "explored (visuo-haptic stimuli); false: a uniform "
+                                          "field, so that only touch tells the stimuli apart")}
 STAIRCASE = {"rule": Choice(tuple(RULES), "1-up-2-down"),
              "start": Num("units of `vary`", gt=0.0, le=1e6),
              "steps": NumList(Num("step (log10 units or units of `vary`)", gt=0.0, le=1e6),
@@ -215,6 +220,7 @@ class Presentation:
     mode: str = "sequential"
     exploration: str = "fixed"
     exploration_s: float = 3.0
+    show_scene: bool = False
 
 
 @dataclass(frozen=True)

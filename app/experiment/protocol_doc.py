@@ -68,6 +68,8 @@ def _describe(spec) -> tuple[str, str, str]:
         return f"integer ({spec.unit})", _range(spec), _default(spec)
     if isinstance(spec, P.Choice):
         return "one of " + ", ".join(f"`{o}`" for o in spec.options), "-", _default(spec)
+    if isinstance(spec, P.Flag):
+        return f"true or false: {spec.doc}", "-", str(spec.default).lower()
     if isinstance(spec, P.Text):
         lines = ", may span lines" if spec.lines else ""
         return f"text (at most {spec.max_len} characters{lines})", "-", _default(spec)

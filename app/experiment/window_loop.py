@@ -6,6 +6,9 @@ changes:
 
 - what is drawn: the screen the presenter sets (``screen``, an
   ``rendering.visual.experiment_view.ExperimentView``, replaced whole) over the scene;
+  while a stimulus is explored the scene's picture is shown only where the protocol
+  asks for it (``show_scene``): by default a uniform field (:data:`FIELD_RGBA`), with
+  no trail and no hover ring, so that nothing but touch tells the stimuli apart;
   the buttons drawn (``buttons``, replaced whole each frame) are what a press hits,
   once they are the current screen's (a press before its first frame hits nothing);
 - the mouse touches only while an interval accepts touches (``accept_touch``); a press
@@ -42,6 +45,8 @@ from frictex.textures.loader import load_scene
 DEMO_KEYS = ("space", "up", "down")
 SCREENSHOT_KEYS = ("p", "f12")
 ANSWER_POLL_S = 0.05  # how often a wait for the render thread looks at the window closing
+#: what an interval shows instead of the stimulus's picture (a mid grey)
+FIELD_RGBA = (0.5, 0.5, 0.5, 1.0)
 
 
 class ExperimentLoop(DemoLoop):
@@ -62,6 +67,7 @@ class ExperimentLoop(DemoLoop):
         self.answers: queue.SimpleQueue = queue.SimpleQueue()  # ("key" | "button", value, t_s)
         self.requests: queue.SimpleQueue = queue.SimpleQueue()  # (what, args, reply queue)
         self.accept_touch = False
+        self.show_scene = False  # the protocol's [presentation] show_scene
         self.lost: str | None = None
         self._recording: list | None = None
         self._rec_lock = threading.Lock()
@@ -197,11 +203,12 @@ class ExperimentLoop(DemoLoop):
             banner, kind = "EMERGENCY STOP: output is 0 um. SPACE resumes.", "stop"
         else:
             banner, kind = None, "error"
-        hover = (self._mm(self.hover_px) if interval and self.hover_px is not None
+        shown = interval and self.show_scene
+        hover = (self._mm(self.hover_px) if shown and self.hover_px is not None
                  and not self.touching else None)
         self.compositor.draw(FrameView(
-            overlay=self.overlay if interval else None, hover_mm=hover, show_scope=False,
+            overlay=self.overlay if shown else None, hover_mm=hover, show_scope=False,
             amplitude_max_um=self.scene.device.amplitude_limit_um,
             status=(screen.progress,) if screen.progress else (), banner=banner,
-            banner_kind=kind))
+            banner_kind=kind, field_rgba=None if shown or not interval else FIELD_RGBA))
         self.buttons, self._buttons_of = draw_experiment(self.compositor, screen), screen

@@ -8,8 +8,9 @@ opens the demo's window on the live haptic pipeline (the same haptic side as
   answer, how many practice trials), then the trials, practice first and marked as
   such on the progress line (the frame's top line, with the trial's place in the
   session), a break screen where the protocol asks for one;
-- each interval shows its scene and plays it under the mouse (left button held =
-  touching) for the protocol's exploration time; with ``exploration = "free"`` the
+- each interval plays its scene under the mouse (left button held = touching) for
+  the protocol's exploration time, the window showing a uniform field (or, with
+  ``[presentation] show_scene = true``, the scene's picture: visuo-haptic stimuli); with ``exploration = "free"`` the
   participant moves on before that with Enter (or the right arrow) or the Next
   button. Side by side, the half not explored in this interval is dimmed. An interval
   nobody touched is shown again (a trial records what was felt);
@@ -137,6 +138,7 @@ class WindowPresenter:
     def begin(self, protocol) -> None:
         scheduler = Scheduler(protocol, protocol.seed or 0)
         self.protocol = protocol
+        self.loop.show_scene = protocol.presentation.show_scene
         self.practice = len(scheduler.practice)
         self.main_total = len(scheduler.plan) if scheduler.plan is not None else None
         self.responses = tuple(scheduler.responses)

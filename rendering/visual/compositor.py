@@ -104,6 +104,9 @@ class FrameView:
     envelope_scale_um: float = 1.0
     #: the demo's layer panel (``layer_panel``), in a column at the left; None: none
     layer_panel: PanelView | None = None
+    #: a uniform field of this colour (RGBA, 0-1) drawn instead of the scene's picture
+    #: (an experiment that must not show its stimulus); None: the scene
+    field_rgba: tuple[float, float, float, float] | None = None
 
 
 class Compositor:
@@ -305,7 +308,10 @@ class Compositor:
         vp = self.viewport
         ctx.enable(moderngl.BLEND)
         ctx.blend_func = moderngl.SRC_ALPHA, moderngl.ONE_MINUS_SRC_ALPHA
-        self.draw_texture(self.scene_texture, vp.x0, vp.y0, opaque=True)
+        if view.field_rgba is None:
+            self.draw_texture(self.scene_texture, vp.x0, vp.y0, opaque=True)
+        else:
+            self.draw_rect(vp.x0, vp.y0, vp.width_px, vp.height_px, view.field_rgba)
         font_px = self.font_px
         status = None
         if view.status:
