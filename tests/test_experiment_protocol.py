@@ -119,6 +119,30 @@ def test_staircase_checks_its_table(tmp_path):
         load_protocol(write(tmp_path, too_far))
 
 
+@pytest.mark.parametrize("table, problem", [
+    # 100 errors in a row at 5 log10 units a step: far past the period's 10000 mm
+    ("start = 1.0\nsteps = [5.0]\n", r":12: staircase.steps: the difference can reach 1e\+06 "
+                                      r"within 100 trials.*outside \[0.01, 10000\].*max"),
+    # linear: 1 + 2 * 5000 mm
+    ('start = 1.0\nsteps = [2.0]\nscale = "linear"\nmax_trials = 5000\n',
+     r":12: staircase.steps: the difference can reach 10001 within 5000 trials"),
+    ("start = 1.0\nsteps = [5.0]\nmax = 100\n", None),  # bounded: every level is valid
+    ("start = 1.0\nsteps = [2.0]\nmax_trials = 1\n", None),  # one step: at most 100 mm
+])
+def test_a_staircase_whose_steps_can_leave_the_valid_range_is_refused(tmp_path, table, problem):
+    """Every difference a staircase can reach within max_trials is a valid stimulus, or
+    the file is refused (a level out of range would stop the session midway)."""
+    text = (GOOD.replace('method = "2afc"', 'method = "staircase"')
+            .replace("levels = [5.5, 6.0]\n", "") + "\n[staircase]\n" + table)
+    path = write(tmp_path, text)
+    if problem is None:
+        assert load_protocol(path).staircase.start == 1.0
+        return
+    with pytest.raises(ProtocolError, match=problem) as err:
+        load_protocol(path)
+    assert "\n" not in str(err.value)
+
+
 def test_unreadable_and_broken_files(tmp_path):
     with pytest.raises(ProtocolError, match="TOML syntax"):
         load_protocol(write(tmp_path, "format = 1\nmethod = \n"))

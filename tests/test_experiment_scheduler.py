@@ -20,7 +20,7 @@ PARAMETRIC = '[stimuli]\nscene = "grating-5mm"\nvary = "depth"\nreference = 0.3\
 def protocol(tmp_path, method="2afc", reps=3, practice=0, breaks=0, extra=""):
     text = HEAD.format(method=method, reps=reps, practice=practice, breaks=breaks) + PARAMETRIC
     if method == "staircase":
-        text += extra or "[staircase]\nstart = 0.2\nsteps = [0.2, 0.1]\nreversals = 6\nthreshold_reversals = 4\n"
+        text += extra or "[staircase]\nstart = 0.2\nsteps = [0.2, 0.1]\nreversals = 6\nthreshold_reversals = 4\nmax = 0.6\n"
     elif method == "magnitude":
         text += "levels = [0.4, 0.5]\n" + extra
     else:
@@ -107,7 +107,7 @@ def test_one_up_two_down_rules(tmp_path):
 
 def test_one_up_three_down_and_linear_steps(tmp_path):
     p = protocol(tmp_path, method="staircase", extra="[staircase]\nrule = \"1-up-3-down\"\n"
-                 "start = 0.2\nsteps = [0.05]\nscale = \"linear\"\nmin = 0.05\n")
+                 "start = 0.2\nsteps = [0.05]\nscale = \"linear\"\nmin = 0.05\nmax = 0.6\n")
     sc, state = p.staircase, StaircaseState(0.2)
     for _ in range(2):
         state = staircase_step(sc, state, True)

@@ -46,7 +46,9 @@ the tables below.
     reversals = 12              # stop after this many reversals ...
     max_trials = 100            # ... or this many trials
     threshold_reversals = 8     # the staircase's threshold: mean of the last N reversal levels
-    min = ..., max = ...        # bounds of the difference (default: none)
+    min = ..., max = ...        # bounds of the difference (default: none); every difference
+                                #   the steps can reach within max_trials (as if each trial
+                                #   moved by the largest step) must be a valid stimulus
 
     [scale]                     # method = "magnitude" only: the rating scale (integers)
     min = 1
@@ -103,6 +105,8 @@ GUESS_RATES = {"2afc": 0.5, "staircase": 0.5}
 MAX_FILE_BYTES = 1 << 20
 MAX_LEVELS = 100
 MAX_STIMULI = 100
+#: the largest difference a staircase may present (units of `vary`; as ``max``'s bound)
+MAX_DIFFERENCE = 1e6
 
 #: what the participant is asked when the file gives no ``question``
 QUESTIONS = {
@@ -160,8 +164,8 @@ STAIRCASE = {"rule": Choice(tuple(RULES), "1-up-2-down"),
              "reversals": Int("reversals", 12, ge=2, le=200),
              "max_trials": Int("trials", 100, ge=1, le=5000),
              "threshold_reversals": Int("reversals", 8, ge=1, le=200),
-             "min": Num("units of `vary`", None, gt=0.0, le=1e6),
-             "max": Num("units of `vary`", None, gt=0.0, le=1e6)}
+             "min": Num("units of `vary`", None, gt=0.0, le=MAX_DIFFERENCE),
+             "max": Num("units of `vary`", None, gt=0.0, le=MAX_DIFFERENCE)}
 SCALE = {"min": Int("rating", 1, ge=-1000, le=1000), "max": Int("rating", 10, ge=-1000, le=1000)}
 ANALYSIS = {"function": Choice(FUNCTIONS, "weibull"),
             "lapse_max": Num("proportion", 0.06, ge=0.0, le=0.2),
@@ -540,23 +544,49 @@ def _stimuli(c: _Check, doc: dict, method: str, base_dir: Path) -> Stimuli | Non
     return _listed(c, doc, method, base_dir)
 
 
+def reachable(sc: Staircase) -> tuple[float, float]:
+    """The smallest and largest difference (units of ``vary``) the staircase ``sc`` can
+    present within its ``max_trials`` main trials, bounded as if every trial moved by
+    the largest step (down only after ``down_after`` correct answers), within ``min``
+    and ``max``; the largest is at most :data:`MAX_DIFFERENCE`."""
+    step, ups, downs = max(sc.steps), sc.max_trials, sc.max_trials // sc.down_after
+    if sc.scale == "log":
+        high = sc.start * 10.0 ** min(step * ups, 300.0)
+        low = sc.start * 10.0 ** -min(step * downs, 300.0)
+    else:
+        high = sc.start + step * ups
+        low = min(sc.steps + (sc.start,))  # the linear scale never steps to 0 or below
+    high = min(high, MAX_DIFFERENCE if sc.max is None else sc.max)
+    return (low if sc.min is None else max(low, sc.min)), high
+
+
 def _staircase_fits(c: _Check, stimuli: Stimuli, staircase: Staircase) -> bool:
-    """Whether a staircase varies a parameter and its start and max differences can be set
-    on the varied layer (problems reported)."""
+    """Whether a staircase varies a parameter and every difference it can reach
+    (:func:`reachable`, from its start) can be set on the varied layer (problems
+    reported): a level the varied field cannot take would stop the session midway."""
     if stimuli.vary is None:
         c.report(("stimuli", "vary"), "a staircase needs a parameter to vary")
         return False
     from frictex.app.experiment.stimuli import load_base, value_problem
     base = load_base(stimuli.scene)
-    ok = True
-    for key in ("start", "max"):
-        difference = getattr(staircase, key)
-        problem = difference is not None and value_problem(
-            base, stimuli.vary, stimuli.layer, stimuli.reference + difference)
-        if problem:
-            c.report(("staircase", key), f"the reference plus {difference:g}: {problem}")
-            ok = False
-    return ok
+    low, high = reachable(staircase)
+    sc = staircase
+    within = (f"within {sc.max_trials} trials (steps up to {max(sc.steps):g}"
+              f"{' log10 units' if sc.scale == 'log' else ''})")
+    for key, difference in (("start", sc.start), ("max" if sc.max == high else "steps", high),
+                            ("min" if sc.min == low else "steps", low)):
+        problem = value_problem(base, stimuli.vary, stimuli.layer, stimuli.reference + difference)
+        if problem is None:
+            continue
+        if key == "steps":
+            bound = "max" if difference == high else "min"
+            c.report(("staircase", key), f"the difference can reach {difference:g} {within}: "
+                                         f"{problem}; bound it with [staircase] {bound} (or "
+                                         f"fewer max_trials, smaller steps)")
+        else:
+            c.report(("staircase", key), f"a difference of {difference:g}: {problem}")
+        return False
+    return True
 
 
 def _by_line(problems: list[Problem]) -> list[Problem]:
