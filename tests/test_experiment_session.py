@@ -88,6 +88,24 @@ def test_resume_refuses_another_protocol_or_participant(tmp_path, protocol_file)
     with pytest.raises(InputError, match="was started with"):
         run_session(load_protocol(protocol_file), make_presenter(PARTICIPANT), tmp_path / "s",
                     participant="simulated:weber=0.2", resume=True)
+    with pytest.raises(InputError, match=r"--seed 9: .* started with seed 5.*leave --seed out"):
+        run_session(load_protocol(protocol_file), make_presenter(PARTICIPANT), tmp_path / "s",
+                    seed=9, participant=PARTICIPANT, resume=True)
+    assert len(session(protocol_file, tmp_path / "s", record="results", resume=True).rows) == 13
+
+
+@pytest.mark.parametrize("out, words", [("", "expected a folder name"),
+                                        ("a\nb", "control character")])
+def test_an_empty_or_unprintable_out_is_refused(tmp_path, protocol_file, monkeypatch, capsys,
+                                                out, words):
+    """``--out ""`` would write the session into the current folder; a newline in the
+    name would break every line naming it: both one error line, exit 2, nothing written."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["experiment", str(protocol_file), "--participant", PARTICIPANT,
+                 "--out", out]) == 2
+    err = capsys.readouterr().err
+    assert words in err and err.count("\n") == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p.toml"]
 
 
 def test_a_row_cut_short_and_a_trial_without_its_row_are_redone(tmp_path, protocol_file):

@@ -57,7 +57,8 @@ def _analyse(args: argparse.Namespace) -> int:
     folders = args.target[1:]
     if not folders:
         raise InputError("analyse: give one or more session folders")
-    out = Path(args.out) if args.out else Path(folders[0]) / "analysis"
+    from frictex.app.experiment.session import folder_of
+    out = folder_of(args.out) if args.out is not None else Path(folders[0]) / "analysis"
     for summary in analyse(folders, out, plot=not args.no_plot):
         print("\n".join(report_lines(summary)))
     print(f"wrote {out / 'analysis.json'}" + ("" if args.no_plot else f" and {out / 'analysis.png'}"))
@@ -115,13 +116,15 @@ def run(args: argparse.Namespace) -> int:
     protocol = load_protocol(args.target[0])
     if args.out is None:
         raise InputError("--out DIR is required: the session folder")
+    from frictex.app.experiment.session import folder_of
+    out = folder_of(args.out)
     if args.participant is None and not args.resume:
         raise InputError("--participant is required, e.g. --participant "
                          "simulated:weber=0.11,lapse=0.02")
     from frictex.app.experiment import window_presenter  # noqa: F401 (registers "window")
     from frictex.app.experiment.runner import make_presenter, run_session
     from frictex.app.experiment.session import read_info
-    spec = args.participant if args.participant is not None else read_info(Path(args.out))["participant"]
+    spec = args.participant if args.participant is not None else read_info(out)["participant"]
     presenter = make_presenter(spec)
 
     def progress(trial, row):
@@ -132,13 +135,13 @@ def run(args: argparse.Namespace) -> int:
                   flush=True)
 
     def session():
-        return run_session(protocol, presenter, args.out, seed=args.seed, participant=spec,
+        return run_session(protocol, presenter, out, seed=args.seed, participant=spec,
                            resume=args.resume, record=args.record, progress=progress)
 
     if spec.partition(":")[0] == "window":
         session = _in_window(args, protocol, presenter, session)
     else:
         session = session()
-    print(f"{len(session.rows)} trials in {args.out}/results.csv (seed {session.seed}); "
-          f"analyse with: frictex experiment analyse {args.out}", file=sys.stderr)
+    print(f"{len(session.rows)} trials in {out / 'results.csv'} (seed {session.seed}); "
+          f"analyse with: frictex experiment analyse {out}", file=sys.stderr)
     return 0

@@ -87,7 +87,7 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
     """Run (or with ``resume`` go on with) the session of ``protocol`` in ``out_dir``.
 
     ``seed``: the trial order's seed (default: the protocol's, else drawn now; recorded
-    in session.json). ``participant``: the participant spec, recorded. ``record``:
+    in session.json; with ``resume``, refused unless it is the session's). ``participant``: the participant spec, recorded. ``record``:
     ``all`` (per trial: scene, trace and their replay), ``traces`` (scene and trace) or
     ``results`` (the results table only). ``progress(trial, row)`` is called after each
     trial is recorded. Returns the session (its ``rows``: every trial answered).
@@ -96,7 +96,7 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
         raise InputError(f"record {record!r}: expected one of {', '.join(S.RECORDS)}")
     out_dir = Path(out_dir)
     if resume:
-        session = S.resume(out_dir, protocol, participant or None)
+        session = S.resume(out_dir, protocol, participant or None, seed)
     else:
         if seed is None:
             seed = protocol.seed if protocol.seed is not None else secrets.randbits(63)

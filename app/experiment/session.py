@@ -237,12 +237,30 @@ def read_rows(folder: Path, repair: bool = False) -> list[dict]:
     return rows
 
 
-def resume(folder: Path, protocol, participant: str | None) -> Session:
+def folder_of(text: str, option: str = "--out") -> Path:
+    """The folder a command-line ``option`` names: InputError for an empty name (it
+    would be the current folder) or one with a character ``str.isprintable`` refuses (a
+    newline, a control character: every line naming the folder would break)."""
+    from frictex.device.safe_text import quoted
+    if not text.strip():
+        raise InputError(f"{option} {quoted(text)}: expected a folder name (give . for the "
+                         f"current folder)")
+    if not text.isprintable():
+        raise InputError(f"{option} {quoted(text)}: a folder name with a control character "
+                         f"(a newline, a tab ...); give a plain name")
+    return Path(text)
+
+
+def resume(folder: Path, protocol, participant: str | None, seed: int | None = None
+           ) -> Session:
     """The session in ``folder``, ready to go on: the trial files of a trial without its
     row removed, a cut-short row dropped. InputError if ``protocol`` is not the one the
-    session started with, or ``participant`` (if given) not its participant."""
+    session started with, or ``participant`` or ``seed`` (if given) not its own."""
     folder = Path(folder)
     info = read_info(folder)
+    if seed is not None and seed != info["seed"]:
+        raise InputError(f"--seed {seed}: {folder} was started with seed {info['seed']}, and "
+                         f"a resumed session keeps its trial order; leave --seed out")
     try:
         started_with = (folder / "protocol.toml").read_text(encoding="utf-8")
     except OSError as exc:
