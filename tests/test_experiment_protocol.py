@@ -143,6 +143,31 @@ def test_a_staircase_whose_steps_can_leave_the_valid_range_is_refused(tmp_path, 
     assert "\n" not in str(err.value)
 
 
+SECRET = "root:x:0:0:root:/root:/bin/bash\n"
+
+
+@pytest.mark.parametrize("scene, words", [
+    ("../secret", "leads out of the protocol's folder"),
+    ("/etc/passwd", "leads out of the protocol's folder"),
+    ("link.toml", "passes through a symbolic link to"),
+])
+def test_a_scene_outside_the_protocols_folder_is_refused(tmp_path, monkeypatch, scene, words):
+    """A protocol names scenes as a texture file names its files: in its folder or below
+    unless allowed; and a file that is not a .toml file never has a line quoted."""
+    monkeypatch.delenv("FRICTEX_ALLOW_OUTSIDE", raising=False)
+    (tmp_path / "secret").write_text(SECRET, encoding="utf-8")
+    folder = tmp_path / "study"
+    folder.mkdir()
+    (folder / "link.toml").symlink_to(tmp_path / "secret")
+    path = write(folder, GOOD.replace('"grating-5mm"', f'"{scene}"'))
+    with pytest.raises(ProtocolError, match=f":6: stimuli.scene: .*{words}.*--allow-outside"):
+        load_protocol(path)
+    monkeypatch.setenv("FRICTEX_ALLOW_OUTSIDE", "1")
+    with pytest.raises(ProtocolError) as err:
+        load_protocol(path)
+    assert "stimuli.scene" in str(err.value) and "root:" not in str(err.value)
+
+
 def test_unreadable_and_broken_files(tmp_path):
     with pytest.raises(ProtocolError, match="TOML syntax"):
         load_protocol(write(tmp_path, "format = 1\nmethod = \n"))

@@ -9,6 +9,7 @@ than 4300 digits with a bare ValueError; each is caught here first, as a one-lin
 from __future__ import annotations
 
 import ast
+import os
 import re
 import sys
 import tomllib
@@ -58,7 +59,10 @@ def parse_toml(text: str, r: Reader) -> dict | None:
     try:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        line, message = syntax_problem(str(exc), text)
+        # a line is quoted only from a TOML file (its real name, links followed): a path
+        # mistaken for a texture or protocol file (/etc/passwd) must not have its text shown
+        toml_file = os.path.realpath(str(r.label)).lower().endswith(".toml")
+        line, message = syntax_problem(str(exc), text, quote=toml_file)
         r.problems.append(Problem(r.label, line, "TOML syntax", message))
         return None
     except RecursionError:  # should the bracket scan above ever miss a nesting
@@ -77,14 +81,14 @@ def parse_toml(text: str, r: Reader) -> dict | None:
     return doc
 
 
-def syntax_problem(message: str, text: str) -> tuple[int | None, str]:
+def syntax_problem(message: str, text: str, quote: bool = True) -> tuple[int | None, str]:
     """(line, message) of tomllib's error ``message`` about ``text``: its position as a
     line number (for one at the end of the document, the last line that is not blank),
     the column and the line's own text after the message (escaped and cut,
     ``device.safe_text.escape``), and a character it quotes by its Python repr shown
     escaped once (``'\\n'``, not ``'\\\\n'``). An array left open is placed at the line
     that opened it, where tomllib's position (the line where the file went on without
-    closing it) is given in the message."""
+    closing it) is given in the message. ``quote``: whether the line's text is shown."""
     lines = text.splitlines()
     m = _TOML_POSITION.search(message)
     if m:
@@ -103,7 +107,7 @@ def syntax_problem(message: str, text: str) -> tuple[int | None, str]:
     # tomllib's message may quote a key of the file (a duplicate table): escaped and cut
     shown = escape(_REPR_CHAR.sub(lambda c: f"'{ast.literal_eval(c.group())}'", head),
                    MAX_TOML_MESSAGE) + where
-    if line is not None and line <= len(lines) and lines[line - 1].strip():
+    if quote and line is not None and line <= len(lines) and lines[line - 1].strip():
         shown += f": {escape(lines[line - 1].strip())}"
     return line, shown
 

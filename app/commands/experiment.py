@@ -41,6 +41,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     from frictex.app.commands.argtypes import add_link_arguments
     from frictex.app.commands.preview import frame_size
     add_link_arguments(parser)
+    from frictex.textures.outside import add_allow_outside
+    add_allow_outside(parser)  # the protocol's scenes and the files they name
     parser.add_argument("--size", type=frame_size, default=None, metavar="WxH",
                         help="--participant window: the window's size in px (default: the "
                              "first stimulus's display size)")

@@ -78,11 +78,12 @@ so a protocol's numbers and strings are checked as a texture file's are.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 from frictex.device.errors import InputError
-from frictex.device.safe_text import escape_path
+from frictex.device.safe_text import escape_path, quoted
 from frictex.textures.errors import KeyPath, Locator, Problem
 from frictex.textures.keys import RENDER_CHOICES
 from frictex.textures.library import UnreadableText, read_utf8
@@ -291,11 +292,27 @@ class Protocol:
 
 def _scene_path(raw: str, base_dir: Path) -> Path:
     """A scene named in a protocol: a path relative to the protocol, else a bundled name
-    (``textures.library.resolve_scene``; a TextureError when neither exists)."""
+    (``textures.library.resolve_scene``; a TextureError when neither exists). The path
+    follows the rule of the files a texture file names (``textures.outside``): in the
+    protocol's folder or below (no absolute path, no '..', no link leading out) unless
+    ``--allow-outside`` lifts it, so that a stranger's protocol cannot make frictex read
+    (and report on) any file of the machine."""
+    from frictex.textures.errors import TextureError
     from frictex.textures.library import resolve_scene
+    from frictex.textures.outside import HOW, allow_outside_from_env
     local = base_dir / raw
+    allowed = allow_outside_from_env()
+    rule = f"a protocol names scenes in its own folder or below, or bundled ones ({HOW})"
+    if not allowed and (os.path.isabs(raw) or os.pardir in Path(os.path.normpath(raw)).parts):
+        raise TextureError(f"{quoted(raw)} leads out of the protocol's folder; {rule}")
     if local.exists() or local.is_symlink():
+        root, real = os.path.realpath(base_dir), os.path.realpath(local)
+        if not allowed and os.path.commonpath([root, real]) != root:
+            raise TextureError(f"{quoted(raw)} passes through a symbolic link to "
+                               f"{escape_path(real)}, outside the protocol's folder; {rule}")
         return local
+    if Path(raw).name != raw:
+        raise TextureError(f"{escape_path(local)}: no such file")
     return resolve_scene(raw)
 
 
