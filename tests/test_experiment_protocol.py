@@ -80,6 +80,9 @@ def test_a_good_file_parses_to_its_values(tmp_path):
     assert p.presentation.show_scene is False  # a haptic study shows no picture
     shown = load_protocol(write(tmp_path, GOOD + "[presentation]\nshow_scene = true\n"))
     assert shown.presentation.show_scene is True
+    for samples in (0, 200):  # 0: no intervals; 200: the fewest that give one
+        text = GOOD + f"[analysis]\nbootstrap = {samples}\n"
+        assert load_protocol(write(tmp_path, text)).analysis.bootstrap == samples
 
 
 @pytest.mark.parametrize("change, line, field, words", [
@@ -95,6 +98,8 @@ def test_a_good_file_parses_to_its_values(tmp_path):
     (('repetitions = 2', 'repetitions = 2\n[scale]\nmin = 1'), 4, "scale", "only for method"),
     (('repetitions = 2', 'repetitions = 2\n[presentation]\nshow_scene = "yes"'), 5,
      "presentation.show_scene", "expected true or false"),
+    (('repetitions = 2', 'repetitions = 2\n[analysis]\nbootstrap = 199'), 5,
+     "analysis.bootstrap", "at least 200, or 0 for no intervals"),
 ])
 def test_bad_values_are_one_line_with_file_line_and_field(tmp_path, change, line, field, words):
     path = write(tmp_path, GOOD.replace(*change))

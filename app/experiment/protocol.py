@@ -59,7 +59,8 @@ the tables below.
     lapse_max = 0.06            # the lapse rate is fitted within [0, lapse_max]
     target = ...                # the threshold's proportion correct; default: 0.75 (2afc),
                                 #   the rule's convergence point (staircase)
-    bootstrap = 1000            # parametric bootstrap samples for the 95 % intervals
+    bootstrap = 1000            # parametric bootstrap samples for the 95 % intervals; 0: no
+                                #   intervals; at least 200 otherwise
 
 Methods: ``2afc``: constant stimuli; each trial shows the reference and one comparison in
 random order, counterbalanced (each level ``repetitions`` times in each order); correct
@@ -108,6 +109,8 @@ MAX_LEVELS = 100
 MAX_STIMULI = 100
 #: the largest difference a staircase may present (units of `vary`; as ``max``'s bound)
 MAX_DIFFERENCE = 1e6
+#: the fewest bootstrap samples that give a 95 % interval (its 2.5 % tails hold 5 each)
+MIN_BOOTSTRAP = 200
 
 #: what the participant is asked when the file gives no ``question``
 QUESTIONS = {
@@ -171,7 +174,8 @@ SCALE = {"min": Int("rating", 1, ge=-1000, le=1000), "max": Int("rating", 10, ge
 ANALYSIS = {"function": Choice(FUNCTIONS, "weibull"),
             "lapse_max": Num("proportion", 0.06, ge=0.0, le=0.2),
             "target": Num("proportion correct", None, gt=0.5, lt=1.0),
-            "bootstrap": Int("samples", 1000, ge=0, le=100_000)}
+            "bootstrap": Int(f"samples; 0: no intervals, else at least {MIN_BOOTSTRAP}", 1000,
+                             ge=0, le=100_000)}
 TABLES = ("stimuli", "stimulus", "presentation", "staircase", "scale", "analysis")
 
 
@@ -548,6 +552,11 @@ def _method_fits(c: _Check, method: str, presentation: dict | None, analysis: di
                                            "estimation shows one")
     if analysis is not None and analysis["target"] not in (None, _BAD) and method not in GUESS_RATES:
         c.report(("analysis", "target"), f"method \"{method}\" fits no psychometric function")
+    if analysis is not None and analysis["bootstrap"] is not _BAD and (
+            0 < analysis["bootstrap"] < MIN_BOOTSTRAP):
+        c.report(("analysis", "bootstrap"), f"{analysis['bootstrap']} samples are too few for a "
+                                            f"95 % interval: at least {MIN_BOOTSTRAP}, or 0 for "
+                                            f"no intervals")
 
 
 def _stimuli(c: _Check, doc: dict, method: str, base_dir: Path) -> Stimuli | None:
