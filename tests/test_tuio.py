@@ -181,6 +181,11 @@ def test_bad_tuio_messages_change_nothing():
         dec.feed(bad, 0.01)
     with pytest.raises(OscError, match="position .* is not finite"):
         dec.feed(frame(3, [1], [(1, math.nan, 0.5)]), 0.02)
+    # one frame far off the screen ended the live demo (its x in mm out of the trace's
+    # range): now a bad packet like the others
+    for x, y in ((1000.0, 0.5), (0.5, -0.6), (1.51, 0.5)):
+        with pytest.raises(OscError, match=r"position .* is off the screen, expected -0.5 to 1.5"):
+            dec.feed(frame(3, [1], [(1, x, y)]), 0.02)
     assert dec.feed(frame(4, [1], []), 0.03) == []  # finger 1 still alive, nothing lifted
     assert dec.feed(osc_message("/tuio/2Dobj", "alive"), 0.04) == []  # other profiles skipped
 

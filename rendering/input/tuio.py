@@ -60,6 +60,9 @@ _FSEQ_RESTART = 100
 #: most cursors touching at once (two hands' fingers, twice over) and most TUIO sources
 MAX_CURSORS = 20
 MAX_SOURCES = 8
+#: a 2Dcur position is normalised to the screen (0 to 1); one this far beyond it on either
+#: side is a finger just off its edge, further is no touch of this screen
+POSITION_RANGE = (-0.5, 1.5)
 
 
 class OscError(TraceError):
@@ -250,6 +253,10 @@ def _commands(messages: list[tuple[str, list]]) -> list[tuple[str, str, object]]
             x, y = (_arg(args, i, float, "position") for i in (2, 3))
             if not (math.isfinite(x) and math.isfinite(y)):
                 raise OscError(f"/tuio/2Dcur set {sid}: position ({x!r}, {y!r}) is not finite")
+            lo, hi = POSITION_RANGE
+            if not (lo <= x <= hi and lo <= y <= hi):
+                raise OscError(f"/tuio/2Dcur set {sid}: position ({x:g}, {y:g}) is off the "
+                               f"screen, expected {lo:g} to {hi:g} (normalised)")
             out.append(("set", source, (sid, x, y)))
         elif command == "fseq":
             out.append(("fseq", source, _arg(args, 1, int, "frame number")))
