@@ -92,6 +92,17 @@ def test_not_an_image_and_too_big(tmp_path, monkeypatch):
         read_grey(save(tmp_path, Image.fromarray(np.zeros((3, 4), np.uint8))))
 
 
+def test_a_corrupt_header_is_said_without_pythons_words_for_a_file_in_memory(tmp_path):
+    """An IHDR whose CRC is wrong: Pillow's message named its in-memory file by its repr
+    (<_io.BytesIO object at 0x7f...>)."""
+    good = save(tmp_path, Image.fromarray(np.zeros((8, 8), np.uint8))).read_bytes()
+    bad = tmp_path / "crc.png"
+    bad.write_bytes(good[:30] + bytes([good[30] ^ 0xFF]) + good[31:])
+    with pytest.raises(TextureError, match=r"crc\.png: corrupt PNG, decoding failed") as caught:
+        read_grey(bad)
+    assert "object at 0x" not in str(caught.value) and "BytesIO" not in str(caught.value)
+
+
 def _png(width, height, depth, colour, raw, interlace=0):
     """A PNG written from the specification: IHDR, one IDAT of ``raw`` (filtered
     scanlines) deflated, IEND."""

@@ -19,6 +19,7 @@ Row 0 is the top of the image (screen y points down).
 from __future__ import annotations
 
 import io
+import re
 import struct
 import warnings
 from pathlib import Path
@@ -96,6 +97,8 @@ _COLOUR_TYPES = {0: ("greyscale", 1), 2: ("RGB", 3), 3: ("palette", 1), 4: ("gre
 #: Adam7 passes: first column, first row, column step, row step
 _ADAM7 = ((0, 0, 8, 8), (4, 0, 8, 8), (0, 4, 4, 8), (2, 0, 4, 4), (0, 2, 2, 4), (1, 0, 2, 2), (0, 1, 1, 2))
 _INFLATE_STEP = 1 << 20  # bytes inflated at a time when counting the image data
+#: how Python shows an in-memory file object in a message (its type and address)
+_IN_MEMORY = re.compile(r"<_io\.BytesIO object at 0x[0-9a-f]+>")
 
 
 def header_kind(depth: int, colour: int) -> str:
@@ -224,8 +227,10 @@ def read_grey(path: str | Path, expected: str = ACCEPTED, budget: PixelBudget | 
     except (TextureError, MemoryError):
         raise
     except Exception as exc:  # noqa: BLE001 - decoders raise anything on a corrupt file
+        # Pillow names its in-memory file by its repr (<_io.BytesIO object at 0x...>)
+        said = _IN_MEMORY.sub("", str(exc)).strip()
         raise TextureError(f"{where}: corrupt PNG, decoding failed ({type(exc).__name__}: "
-                           f"{escape(exc)}); expected {expected}") from None
+                           f"{escape(said)}); expected {expected}") from None
 
 
 def _to_grey(image, where: str, expected: str) -> tuple[np.ndarray, str]:
