@@ -6,18 +6,26 @@ Per study, by method:
 
 - ``2afc`` and ``staircase``: the psychometric function (``psychometric``) fitted to the
   proportion correct against the comparison's difference from the reference, pooled over
-  the study's sessions and per session; threshold and slope with their 95 % bootstrap
-  intervals (for a staircase, the bootstrap runs the staircase again with the fitted
-  function as the observer, and the threshold's interval is a Bayesian credible interval
-  with the slope integrated out: ``psychometric.fit_adaptive``); each fit names its
-  threshold interval's method (``threshold_ci_method``, also printed). A staircase is
-  also summarised by its reversals (the same rules as the run, ``scheduler.staircase_step``,
-  replayed from the answers): the mean of its last ``threshold_reversals`` reversal levels (geometric on the log scale), per session and
-  their mean over sessions.
+  the study's sessions and per session; threshold and slope (d psi / dx at the
+  threshold: proportion correct per unit of ``vary``) with their 95 % bootstrap
+  intervals, each bootstrap seeded from its data (equal data, equal intervals); for a
+  staircase, the bootstrap runs the staircase again with the fitted function as the
+  observer, and the threshold's interval is a Bayesian credible interval with the slope
+  integrated out (``psychometric.fit_adaptive``). Each fit names its intervals' methods
+  (``threshold_ci_method``, ``slope_ci_method``, also printed; None and "no interval"
+  for ``bootstrap = 0``, except a staircase's threshold, whose interval draws nothing).
+  No fit (``fit``/``pooled`` None, ``no_fit`` says why) below :data:`MIN_LEVELS`
+  distinct differences or, for a staircase, :data:`MIN_REVERSALS` reversals. A
+  threshold outside the differences tested is flagged (``threshold_in_tested_range``):
+  the fit extrapolates there. A staircase is also summarised by its reversals (the same
+  rules as the run, ``scheduler.staircase_step``, replayed from the answers): the mean
+  of its last ``threshold_reversals`` reversal levels (geometric on the log scale), per
+  session and their mean over sessions; and by the steps its floor or ceiling held (a
+  down step that would cross the linear scale's floor or ``min``, an up step past
+  ``max``: the level stays), which bias its reversal mean.
 - ``same-different``: per level, the hit rate (saying "different" to AB and BA), the
-  false-alarm rate (to AA and BB) and d' = z(H) - z(F) with each rate taken as
-  (k + 0.5) / (n + 1) (the yes-no formula: for a same-different task under the
-  differencing model it underestimates the sensitivity; Macmillan & Creelman 2005, ch. 9).
+  false-alarm rate (to AA and BB), each taken as (k + 0.5) / (n + 1), and d' under the
+  differencing model with its bootstrap interval (``same_different``).
 - ``magnitude``: per stimulus, the ratings' mean, standard deviation, count and the 95 %
   interval of the mean: Student's t (2 ratings or more; none below), clipped to the
   rating scale and marked so (``ci95_clipped``). The mean cannot leave the scale, so
@@ -38,11 +46,17 @@ from pathlib import Path
 import numpy as np
 from scipy import stats
 
-from frictex.app.experiment import psychometric
+from frictex.app.experiment import psychometric, same_different
 from frictex.app.experiment.protocol import Staircase
 from frictex.app.experiment.scheduler import StaircaseState, staircase_step, staircase_threshold
 from frictex.app.experiment.session import read_info, read_rows
 from frictex.device.errors import InputError
+
+
+#: the fewest distinct differences a psychometric fit needs (one leaves the slope free)
+MIN_LEVELS = 2
+#: the fewest reversals (in all the sessions fitted together) a staircase's fit needs
+MIN_REVERSALS = 4
 
 
 @dataclass(frozen=True)
@@ -109,18 +123,32 @@ def _fit_dict(f: psychometric.Fit) -> dict:
             "target": f.target, "alpha": f.alpha, "beta": f.beta, "lapse": f.lapse,
             "threshold": f.threshold, "threshold_ci95": list(f.threshold_ci),
             "threshold_ci_method": f.threshold_ci_method,
-            "slope": f.slope, "slope_ci95": list(f.slope_ci), "bootstrap": f.bootstrap,
+            "threshold_in_tested_range": bool(f.x[0] <= f.threshold <= f.x[-1]),
+            "slope": f.slope, "slope_definition": psychometric.SLOPE,
+            "slope_ci95": list(f.slope_ci), "slope_ci_method": f.slope_ci_method,
             "levels": [{"difference": float(x), "trials": int(n), "correct": int(k)}
                        for x, n, k in zip(f.x, f.n, f.k)]}
 
 
-def _fit(design: dict, x, n, k, seed: int) -> psychometric.Fit | None:
+def _too_few(x: np.ndarray, reversals: int | None) -> str | None:
+    """Why trials at differences ``x`` (and a staircase's ``reversals``) get no fit."""
     if x.size == 0:
-        return None
+        return "no main trials"
+    levels = np.unique(x).size
+    if levels < MIN_LEVELS:
+        return (f"{x.size} trial{'s' * (x.size != 1)} at {levels} difference: a fit needs "
+                f"at least {MIN_LEVELS}")
+    if reversals is not None and reversals < MIN_REVERSALS:
+        return (f"{x.size} trials, {reversals} reversal{'s' * (reversals != 1)}: a "
+                f"staircase's fit needs at least {MIN_REVERSALS}")
+    return None
+
+
+def _fit(design: dict, x, n, k) -> psychometric.Fit:
     a = design["analysis"]
     return psychometric.fit(x, n, k, function=a["function"], guess=design["guess"],
                             lapse_max=a["lapse_max"], target=design["target"],
-                            bootstrap=a["bootstrap"], seed=seed)
+                            bootstrap=a["bootstrap"], seed=psychometric.data_seed(x, n, k))
 
 
 def _play(sc: Staircase, p, rng) -> tuple[list[float], list[bool], StaircaseState]:
@@ -144,56 +172,68 @@ def _staircase_plays(sc: Staircase, sessions: int):
     return play
 
 
-def _fit_staircase(design: dict, rows: list[dict], sessions: int, seed: int):
-    if not rows:
-        return None
+def _fit_staircase(design: dict, rows: list[dict], sessions: int) -> psychometric.Fit:
     a = design["analysis"]
     x = np.array([_float(r["difference"]) for r in rows])
     correct = np.array([r["correct"] == "1" for r in rows])
     return psychometric.fit_adaptive(x, correct, _staircase_plays(
         Staircase(**design["staircase"]), sessions), function=a["function"],
         guess=design["guess"], lapse_max=a["lapse_max"], target=design["target"],
-        bootstrap=a["bootstrap"], seed=seed)
+        bootstrap=a["bootstrap"], seed=psychometric.data_seed(*_counts(rows)))
+
+
+def _fitted(design: dict, rows: list[dict], sessions: int, reversals: int | None) -> dict:
+    """``{"fit": ...}`` for ``rows`` (of ``sessions`` sessions), or ``fit`` None and
+    ``no_fit`` saying why."""
+    reason = _too_few(np.array([_float(r["difference"]) for r in rows]), reversals)
+    if reason:
+        return {"fit": None, "no_fit": reason}
+    found = (_fit_staircase(design, rows, sessions) if design["staircase"]
+             else _fit(design, *_counts(rows)))
+    return {"fit": _fit_dict(found)}
 
 
 def staircase_summary(design: dict, rows: list[dict]) -> dict:
     """A staircase session's reversals and threshold, replayed from its answers."""
     sc = Staircase(**design["staircase"])
     state = StaircaseState(sc.start)
+    held = {-1: 0, +1: 0}  # steps down and up that left the level where it was
     for row in rows:
-        state = staircase_step(sc, state, row["correct"] == "1")
+        after = staircase_step(sc, state, row["correct"] == "1")
+        if after.run == 0 and after.difference == state.difference:
+            held[after.direction] += 1
+        state = after
     threshold = staircase_threshold(state.reversals, sc.threshold_reversals, sc.scale)
     return {"reversals": list(state.reversals), "threshold": threshold,
-            "threshold_reversals": sc.threshold_reversals, "rule": sc.rule, "scale": sc.scale}
+            "threshold_reversals": sc.threshold_reversals, "rule": sc.rule, "scale": sc.scale,
+            "held_at_floor": held[-1], "held_at_ceiling": held[+1]}
 
 
 def _forced_choice(design: dict, sessions: list[SessionData]) -> dict:
     per = []
     pooled_rows = []
-    for i, s in enumerate(sessions):
+    for s in sessions:
         rows = s.main()
         pooled_rows += rows
         entry = {"session": str(s.folder), "trials": len(rows)}
-        fitted = (_fit_staircase(design, rows, 1, seed=i + 1) if design["staircase"]
-                  else _fit(design, *_counts(rows), seed=i + 1))
-        entry["fit"] = _fit_dict(fitted) if fitted else None
+        reversals = None
         if design["staircase"]:
             entry["staircase"] = staircase_summary(design, rows)
-        per.append(entry)
-    pooled = (_fit_staircase(design, pooled_rows, len(sessions), seed=0) if design["staircase"]
-              else _fit(design, *_counts(pooled_rows), seed=0))
-    out = {"per_session": per, "pooled": _fit_dict(pooled) if pooled else None}
+            reversals = len(entry["staircase"]["reversals"])
+        per.append({**entry, **_fitted(design, rows, 1, reversals)})
+    reversals = (sum(len(e["staircase"]["reversals"]) for e in per) if design["staircase"]
+                 else None)
+    pooled = _fitted(design, pooled_rows, len(sessions), reversals)
+    out = {"per_session": per, "pooled": pooled.pop("fit"), **pooled}
     if design["staircase"]:
         values = [e["staircase"]["threshold"] for e in per if e["staircase"]["threshold"] is not None]
         out["staircase_threshold_mean"] = float(np.mean(values)) if values else None
+        for end in ("held_at_floor", "held_at_ceiling"):
+            out[end] = sum(e["staircase"][end] for e in per)
     return out
 
 
-def _rate(k: float, n: float) -> float:
-    return (k + 0.5) / (n + 1.0)
-
-
-def _same_different(sessions: list[SessionData]) -> dict:
+def _same_different(design: dict, sessions: list[SessionData]) -> dict:
     levels: dict[float, dict[str, float]] = {}
     for s in sessions:
         for row in s.main():
@@ -207,13 +247,20 @@ def _same_different(sessions: list[SessionData]) -> dict:
                 level["same"] += 1
                 level["false_alarms"] += said
     out = []
+    bootstrap = design["analysis"]["bootstrap"]
     for value in sorted(levels):
         c = levels[value]
-        h, f = _rate(c["hits"], c["different"]), _rate(c["false_alarms"], c["same"])
+        h = float(same_different.rate(c["hits"], c["different"]))
+        f = float(same_different.rate(c["false_alarms"], c["same"]))
+        ci = same_different.d_prime_interval(c["hits"], c["different"], c["false_alarms"],
+                                             c["same"], bootstrap)
         out.append({"value": value, **{k: int(v) for k, v in c.items()},
                     "hit_rate": h, "false_alarm_rate": f,
-                    "d_prime": float(stats.norm.ppf(h) - stats.norm.ppf(f))})
-    return {"levels": out}
+                    "d_prime": float(same_different.d_prime(h, f)),
+                    "d_prime_ci95": list(ci) if ci else None})
+    return {"d_prime_model": same_different.MODEL,
+            "d_prime_ci_method": same_different.INTERVAL if bootstrap else None,
+            "levels": out}
 
 
 #: how a magnitude study's interval of a mean rating is computed (printed and recorded)
@@ -261,7 +308,7 @@ def analyse_study(sessions: list[SessionData]) -> dict:
     if method in ("2afc", "staircase"):
         out.update(_forced_choice(design, sessions))
     elif method == "same-different":
-        out.update(_same_different(sessions))
+        out.update(_same_different(design, sessions))
     else:
         out.update(_magnitude(design, sessions))
     return out
@@ -293,25 +340,61 @@ def analyse(folders: list[str | Path], out_dir: str | Path, plot: bool = True) -
     return summaries
 
 
+def _interval(ci: list, method: str | None) -> str:
+    """An interval as printed: its ends, or that there is none."""
+    if method is None:
+        return "no interval (bootstrap = 0)"
+    return f"95 % [{ci[0]:.4g}, {ci[1]:.4g}]"
+
+
+def _forced_choice_lines(summary: dict, unit: str) -> list[str]:
+    """The pooled fit's lines (or why there is none) and the staircases'."""
+    pooled = summary["pooled"]
+    if pooled is None:
+        lines = [f"  no threshold: {summary['no_fit']}"]
+    else:
+        lo, hi = pooled["levels"][0]["difference"], pooled["levels"][-1]["difference"]
+        where = ("" if pooled["threshold_in_tested_range"] else
+                 f" (outside the differences tested, {lo:.4g} to {hi:.4g}: extrapolated)")
+        lines = [f"  threshold ({pooled['target']:.3g} correct, {pooled['function']}): "
+                 f"{pooled['threshold']:.4g} {unit} difference{where}, "
+                 f"{_interval(pooled['threshold_ci95'], pooled['threshold_ci_method'])}; "
+                 f"lapse {pooled['lapse']:.3f}",
+                 f"  slope {pooled['slope']:.4g} per {unit} "
+                 f"({_interval(pooled['slope_ci95'], pooled['slope_ci_method'])}): "
+                 f"{psychometric.SLOPE}"]
+        for name in ("threshold", "slope"):
+            if pooled[f"{name}_ci_method"]:
+                lines.append(f"  {name} interval: {pooled[f'{name}_ci_method']}")
+    if summary.get("staircase_threshold_mean") is not None:
+        lines.append(f"  staircases: mean of the sessions' reversal means "
+                     f"{summary['staircase_threshold_mean']:.4g} {unit}")
+    for end, way in (("floor", "down"), ("ceiling", "up")):
+        if summary.get(f"held_at_{end}"):
+            lines.append(f"  staircases: {summary[f'held_at_{end}']} {way} step(s) held at "
+                         f"the {end} (the level stayed; reversals there bias the "
+                         f"reversal mean)")
+    return lines
+
+
 def report_lines(summary: dict) -> list[str]:
     """The one-screen text summary of a study."""
     head = (f"{summary['study']}: {summary['method']}, {summary['sessions']} session"
             f"{'s' * (summary['sessions'] != 1)}")
     lines = [head]
     unit = summary["vary"] or ""
-    pooled = summary.get("pooled")
-    if pooled:
-        lo, hi = pooled["threshold_ci95"]
-        lines.append(f"  threshold ({pooled['target']:.3g} correct, {pooled['function']}): "
-                     f"{pooled['threshold']:.4g} {unit} difference, 95 % [{lo:.4g}, {hi:.4g}]; "
-                     f"slope {pooled['slope']:.4g} per {unit}, lapse {pooled['lapse']:.3f}")
-        lines.append(f"  threshold interval: {pooled['threshold_ci_method']}")
-    if summary.get("staircase_threshold_mean") is not None:
-        lines.append(f"  staircases: mean of the sessions' reversal means "
-                     f"{summary['staircase_threshold_mean']:.4g} {unit}")
+    if summary["method"] in ("2afc", "staircase"):
+        lines += _forced_choice_lines(summary, unit)
+    elif not summary.get("levels") and not summary.get("stimuli"):
+        lines.append("  no main trials")
+    if summary.get("levels"):
+        lines.append(f"  d': {summary['d_prime_model']}; interval: "
+                     f"{summary['d_prime_ci_method'] or 'none (bootstrap = 0)'}")
     for level in summary.get("levels", []):
+        ci = level["d_prime_ci95"]
         lines.append(f"  {unit} {level['value']:.4g}: hits {level['hit_rate']:.3f}, false "
-                     f"alarms {level['false_alarm_rate']:.3f}, d' {level['d_prime']:.3f}")
+                     f"alarms {level['false_alarm_rate']:.3f}, d' {level['d_prime']:.3f}"
+                     + (f", 95 % [{ci[0]:.3f}, {ci[1]:.3f}]" if ci else ""))
     for st in summary.get("stimuli", []):
         low, high = (math.nan if v is None else v for v in st["ci95"])
         lines.append(f"  {st['stimulus']}: mean {st['mean']:.3g} (n {st['n']}, 95 % "

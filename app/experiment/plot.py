@@ -20,7 +20,8 @@ def _forced_choice(ax, s: dict) -> None:
     fit = s["pooled"]
     unit = s["vary"] or ""
     if fit is None:
-        ax.text(0.5, 0.5, "no main trials", ha="center", va="center", transform=ax.transAxes)
+        ax.text(0.5, 0.5, f"no threshold: {s['no_fit']}", ha="center", va="center",
+                transform=ax.transAxes, wrap=True)
         return
     x = np.array([lv["difference"] for lv in fit["levels"]])
     n = np.array([lv["trials"] for lv in fit["levels"]])

@@ -30,6 +30,7 @@ integrated out (:func:`credible_threshold`), which a short staircase needs.
 
 from __future__ import annotations
 
+import hashlib
 import math
 from dataclasses import dataclass, replace
 
@@ -38,8 +39,13 @@ import numpy as np
 from frictex.device.errors import InputError
 
 FUNCTIONS = ("weibull", "logistic")
-#: how :func:`fit_sets` computes a threshold's interval, as the analysis names it
+#: how :func:`fit_sets` computes its intervals, as the analysis names them
 BOOTSTRAP = "parametric bootstrap, 95 % percentile interval (Wichmann & Hill 2001b)"
+#: how :func:`fit_adaptive` computes the slope's interval
+RERUN = ("parametric bootstrap rerunning the procedure with the fitted function as the "
+         "observer, 95 % percentile interval")
+#: what the slope is, as the analysis prints it
+SLOPE = "d psi / dx at the threshold: proportion correct per unit of the difference"
 _EPS = 1e-12
 #: bounds of the normalised location and of the log spread (x is scaled by its largest value)
 _A_BOUNDS = {"weibull": (-12.0, 5.0), "logistic": (-20.0, 20.0)}
@@ -52,11 +58,10 @@ class Fit:
 
     function, guess, lapse_max, target : as asked. alpha, beta, lapse : the fit (alpha in
     units of x). threshold, slope : at ``target`` (NaN where the fit never reaches it).
-    threshold_ci, slope_ci : 95 % intervals (NaN without a bootstrap); the slope's from
-    a parametric bootstrap (percentiles), the threshold's as ``threshold_ci_method`` says.
-    bootstrap : data sets drawn.
+    threshold_ci, slope_ci : 95 % intervals (NaN where none was computed), as
+    ``threshold_ci_method`` and ``slope_ci_method`` say (None where none was computed).
+    bootstrap : data sets drawn (0: none).
     x, n, k : the data (difference, trials, correct), sorted by x.
-    threshold_ci_method : how threshold_ci was computed, in words.
     """
 
     function: str
@@ -74,7 +79,8 @@ class Fit:
     x: np.ndarray
     n: np.ndarray
     k: np.ndarray
-    threshold_ci_method: str = BOOTSTRAP
+    threshold_ci_method: str | None
+    slope_ci_method: str | None
 
     def psi(self, x) -> np.ndarray:
         """The fitted proportion correct at ``x``."""
@@ -274,9 +280,10 @@ def fit_sets(x, n, k, *, function: str = "weibull", guess: float = 0.5,
         t, s = threshold_and_slope(function, boot[:, 0], boot[:, 1], guess, boot[:, 2], target)
         t_ci = np.percentile(t.reshape(sets, bootstrap), [2.5, 97.5], axis=1).T
         s_ci = np.percentile(s.reshape(sets, bootstrap), [2.5, 97.5], axis=1).T
+    method = f"{BOOTSTRAP}, {bootstrap} data sets" if bootstrap > 0 else None
     return [Fit(function, guess, lapse_max, target, float(a), float(b), float(lam),
                 float(thresholds[i]), float(slopes[i]), (float(t_ci[i, 0]), float(t_ci[i, 1])),
-                (float(s_ci[i, 0]), float(s_ci[i, 1])), bootstrap, x, n, k[i])
+                (float(s_ci[i, 0]), float(s_ci[i, 1])), bootstrap, x, n, k[i], method, method)
             for i, (a, b, lam) in enumerate(params)]
 
 
@@ -374,13 +381,17 @@ def fit_adaptive(x, correct, simulate, *, function: str = "weibull", guess: floa
     ``(x, correct)``; each of ``bootstrap`` plays, with the fitted function as the
     observer, is refitted (a fixed-design bootstrap, :func:`fit_sets`, would ignore that
     a staircase puts its trials where the answers lead it). That slope interval follows
-    the fit's too steep slope and is narrower than its nominal 95 %."""
+    the fit's too steep slope and is narrower than its nominal 95 %. ``bootstrap`` 0: no
+    slope interval (the threshold's needs no draws and is computed all the same)."""
     x = np.asarray(x, dtype=np.float64)
     correct = np.asarray(correct, dtype=np.float64)
     xs, inverse = np.unique(x, return_inverse=True)
     n, k = np.bincount(inverse, minlength=xs.size), np.bincount(inverse, correct, xs.size)
     fitted = fit_sets(xs, n.astype(np.float64), k, function=function, guess=guess,
                       lapse_max=lapse_max, target=target, bootstrap=0)[0]
+    fitted = replace(fitted, threshold_ci=credible_threshold(
+        function, xs, n, k, guess=guess, lapse_max=lapse_max, target=target),
+        threshold_ci_method=CREDIBLE)
     if bootstrap == 0:
         return fitted
     rng = np.random.default_rng(seed)
@@ -394,10 +405,16 @@ def fit_adaptive(x, correct, simulate, *, function: str = "weibull", guess: floa
         np.add.at(K[i], at, np.asarray(pc, dtype=np.float64))
     params = fit_many(function, levels, N, K, guess, lapse_max)
     _, s = threshold_and_slope(function, params[:, 0], params[:, 1], guess, params[:, 2], target)
-    return replace(fitted, threshold_ci=credible_threshold(
-        function, xs, n, k, guess=guess, lapse_max=lapse_max, target=target),
-        slope_ci=tuple(float(v) for v in np.percentile(s, [2.5, 97.5])), bootstrap=bootstrap,
-        threshold_ci_method=CREDIBLE)
+    return replace(fitted, slope_ci=tuple(float(v) for v in np.percentile(s, [2.5, 97.5])),
+                   bootstrap=bootstrap, slope_ci_method=f"{RERUN}, {bootstrap} runs")
+
+
+def data_seed(*arrays) -> int:
+    """A random seed from the data (equal data, equal seed: equal intervals)."""
+    digest = hashlib.sha256()
+    for a in arrays:
+        digest.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+    return int.from_bytes(digest.digest()[:8], "little")
 
 
 def fit(x, n, k, **options) -> Fit:
