@@ -45,6 +45,12 @@ def test_first_sample_after_up_is_a_down():
     ("t_s,finger,x_mm,y_mm,force_n\n0,0,0,0,1e4\n", r'^<t>:2: column force_n: "1e4" is not a number from 0 to 1000 N$'),
     ("t_s,finger,x_mm,y_mm\n0,1.5,0,0\n", 'finger: "1.5" is not an integer'),
     ("t_s,finger,x_mm,y_mm\n0,0,0\n", "3 fields, expected 4"),
+    # a longer row, alone or after good rows (Arrow's path took its first fields, the
+    # rest ignored), and every row longer
+    ("t_s,finger,x_mm,y_mm\n0,0,0,0,9\n", r"^<t>:2: 5 fields, expected 4 as the header has"),
+    ("t_s,finger,x_mm,y_mm\n" + "0,0,0,0\n" * 40 + "1,0,0,0,9\n",
+     r"^<t>:42: 5 fields, expected 4 as the header has"),
+    ("t_s,finger,x_mm,y_mm\n" + "0,0,0,0,9\n" * 40, r"^<t>:2: 5 fields, expected 4"),
     ("t_s,finger,x_mm,y_mm,force_n\n0,0,0,0,-2\n", r'^<t>:2: column force_n: "-2" is not a number from 0 to 1000 N$'),
     ("t_s,finger,x_mm,y_mm\n0,0,0," + "9" * 5000 + "\n", r"^<t>:2: line longer than 4096 bytes"),
     ("t_s,finger,x_mm,y_mm\n0,0\x00,0,0\n", r"^<t>:2: binary content \(a NUL byte at column 4\)"),

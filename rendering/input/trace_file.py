@@ -351,7 +351,7 @@ class _RowParser:
         ``plain_ascii``, which then takes the same numbers); raises ValueError, IndexError
         or KeyError on the first field that is not (the caller then finds and reports it)."""
         col, n = self.col, len(rows)
-        if n and min(map(len, rows)) < len(self.names):
+        if n and set(map(len, rows)) != {len(self.names)}:
             raise IndexError
         number = float if plain_ascii else ascii_float
         t, fv, x, y = (np.fromiter(map(number, (row[col[name]] for row in rows)),
@@ -372,7 +372,7 @@ class _RowParser:
 
     def _first_row_problem(self, numbered_rows) -> NoReturn:
         """Raise the TraceError of the first row in file order that holds a problem: a
-        short row, a field that is not a number or an event, or (before it) a value out
+        row shorter or longer than the header, a field that is not a number or an event, or (before it) a value out
         of range or a step back in time under ``strict``."""
         for k, (line, row) in enumerate(numbered_rows):
             try:
@@ -403,7 +403,7 @@ class _RowParser:
     def _row_problem(self, line: int, row: list[str]):
         """Raise the TraceError of a row known to hold a problem."""
         where = self.where
-        if len(row) < len(self.names):
+        if len(row) != len(self.names):
             raise TraceError(f"{where}:{line}: {len(row)} fields, expected {len(self.names)} as "
                              f"the header has ({describe_header(self.names)})")
         for name in ("t_s", "finger", "x_mm", "y_mm", "force_n"):
@@ -583,9 +583,9 @@ _ARROW_BLOCK = 1 << 16
 def _plain_columns(data: bytes, count: int, col: dict[str, int], width: int) -> tuple | None:
     """(t, finger, x, y, force, event) of ``count`` lines of data rows (``data``, joined by
     newlines), parsed at once by Arrow's CSV reader when the block is plain: no quotes,
-    comments, carriage returns or blank lines, every row of ``width`` fields, every
-    number a float Arrow parses and every event word known. None otherwise: the caller
-    then splits the rows line by line, which names any problem.
+    comments, carriage returns or blank lines, every row of ``width`` fields (the
+    header's), every number a float Arrow parses and every event word known. None
+    otherwise: the caller then splits the rows line by line, which names any problem.
 
     Arrow accepts a subset of what ``float`` does and gives the same value (the correctly
     rounded double; ``tests/test_trace_file.py`` checks it), so a block parses here to
@@ -595,7 +595,7 @@ def _plain_columns(data: bytes, count: int, col: dict[str, int], width: int) -> 
         return None
     if any(mark in data for mark in (b'"', b"#", b"\r")):
         return None
-    if data.split(b"\n", 1)[0].count(b",") + 1 < width:  # Arrow holds the rest to the first row's width
+    if data.split(b"\n", 1)[0].count(b",") + 1 != width:  # Arrow holds the rest to the first row's width
         return None
     import pyarrow as pa
     from pyarrow import csv as pa_csv
