@@ -173,12 +173,14 @@ class Frames:
     def __init__(self):
         self.loop = None
         self.bands = []
+        self.titles = set()  # the window's titles while the intervals were shown
 
     def __call__(self, rgb):
         loop = self.loop
         drawn = getattr(loop, "_buttons_of", None)  # the screen this frame was drawn for
         if drawn is None or drawn.phase != "interval":
             return
+        self.titles.add(loop.backend.title)
         vp = loop.compositor.viewport
         y0, y1 = int(vp.y0 + 0.3 * vp.height_px), int(vp.y0 + 0.7 * vp.height_px)
         self.bands.append(rgb[y0:y1, int(vp.x0):int(vp.x0 + vp.width_px)].copy())
@@ -283,6 +285,7 @@ def test_a_fixed_exploration_lasts_its_time_on_the_haptic_clock(tmp_path):
     assert len(frames.bands) >= 6
     for band in frames.bands:
         assert (band == band[0, 0]).all()
+    assert frames.titles == {"frictex"}  # as opened: no stimulus's name (period_mm=6.6)
 
 
 def test_show_scene_shows_the_stimulus_while_it_is_explored(tmp_path):

@@ -6,6 +6,7 @@ over each grating, Enter to move on, a digit to rate it, Enter after the break; 
 confirm it in live/events.csv (see test_demo)."""
 
 import os
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -102,3 +103,57 @@ def test_seed003_gratings_in_the_window_under_xvfb(xvfb_display, xdotool, tmp_pa
     assert len(list(shots.glob("*.png"))) == 3
     assert cli_main(["experiment", "analyse", str(out), "--out", str(tmp_path / "analysis")]) == 0
     assert (tmp_path / "analysis" / "analysis.json").exists()
+
+
+PWIN = """format = 1
+method = "2afc"
+seed = 3
+repetitions = 1
+[stimuli]
+scene = "grating-5mm"
+vary = "period_mm"
+reference = 5.0
+levels = [5.5]
+"""
+
+
+def test_escape_and_sigterm_stop_a_window_session_in_one_line(xvfb_display, xdotool, tmp_path):
+    """Escape is a planned stop: one line saying where and how to resume, exit 130 (as
+    Ctrl-C). SIGTERM ends a resumed session the same way: ``terminated by SIGTERM``,
+    exit 143, the haptic process ended in order (no leaked-semaphore warning)."""
+    protocol, out = tmp_path / "pwin.toml", tmp_path / "session"
+    protocol.write_text(PWIN)
+    for live, resume in (("live", []), ("live-2", ["--resume"])):
+        with open(tmp_path / "stderr.txt", "w") as err:
+            proc = subprocess.Popen(
+                [sys.executable, "-u", "-m", "frictex", "experiment", str(protocol),
+                 "--participant", "window", "--out", str(out), "--size", "640x480", *resume],
+                env={**os.environ, "DISPLAY": xvfb_display}, cwd=tmp_path,
+                stdout=subprocess.PIPE, stderr=err, text=True)
+        proc.stderr_path = tmp_path / "stderr.txt"
+        try:
+            wait_event(proc, out / live, "screen")  # the instructions
+            wait_event(proc, out / live, "first-frame")
+            if not resume:
+                win = xdo(xvfb_display, "search", "--sync", "--onlyvisible", "--name",
+                          "frictex experiment").split()[0]
+                xdo(xvfb_display, "windowfocus", "--sync", win)
+                xdo(xvfb_display, "key", "Escape")
+            else:
+                proc.send_signal(signal.SIGTERM)
+            proc.wait(timeout=120)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+        proc.stdout.close()
+        err = proc.stderr_path.read_text()
+        assert err.endswith("\n") and err.count("\n") == 1, err
+        if not resume:
+            assert proc.returncode == 130, err
+            assert err.startswith("frictex: session stopped at trial 1 (Escape); resume with: "
+                                  f"frictex experiment {protocol} --out {out} --resume"), err
+        else:
+            assert proc.returncode == 128 + signal.SIGTERM, err
+            assert err.startswith("frictex: terminated by SIGTERM at trial 1"), err
+    assert (out / "results.csv").read_text().count("\n") == 1  # the header: nothing answered

@@ -1,6 +1,10 @@
 """``frictex experiment PROTOCOL --participant ... --out DIR`` runs a session;
 ``frictex experiment analyse SESSION [SESSION ...]`` fits and plots sessions of a study.
 
+A window session the participant stops (Escape, closing the window) is one line saying
+where it stopped and how to resume, exit 130 (as Ctrl-C); SIGTERM or SIGHUP stop it the
+same way, ``frictex: terminated by SIGTERM at trial N ...``, exit 128 + the signal.
+
 The protocol format: ``app/experiment/PROTOCOL_FORMAT.md``; the session folder:
 ``app/experiment/session.py``; the analysis: ``app/experiment/analysis.py``.
 """
@@ -8,11 +12,15 @@ The protocol format: ``app/experiment/PROTOCOL_FORMAT.md``; the session folder:
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
 from pathlib import Path
 
 from frictex.device.errors import InputError
 
+#: the exit status of a window session the participant stopped (Escape, the window
+#: closed): 130, as for Ctrl-C; the answered trials are kept and --resume goes on
+PAUSED_EXIT = 130
 RECORD_HELP = ("per trial, 'all': the scene, the touch trace and their replay (what was "
                "sent to the device); 'traces': scene and trace; 'results': the results "
                "table only (default all)")
@@ -141,7 +149,15 @@ def run(args: argparse.Namespace) -> int:
                            resume=args.resume, record=args.record, progress=progress)
 
     if spec.partition(":")[0] == "window":
-        session = _in_window(args, protocol, presenter, session)
+        from frictex.app.experiment.window_presenter import SessionPaused, stop_on_signals
+        try:
+            with stop_on_signals(presenter):
+                session = _in_window(args, protocol, presenter, session)
+        except SessionPaused as exc:  # a planned stop: one line, exit 130 as for Ctrl-C
+            print(f"frictex: session stopped at trial {exc.trial} ({exc.why}); resume with: "
+                  f"frictex experiment {shlex.quote(args.target[0])} --out "
+                  f"{shlex.quote(str(out))} --resume", file=sys.stderr)
+            return PAUSED_EXIT
     else:
         session = session()
     print(f"{len(session.rows)} trials in {out / 'results.csv'} (seed {session.seed}); "

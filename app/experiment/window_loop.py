@@ -15,6 +15,8 @@ changes:
   on a button is an answer, never a touch; the touches sent during an interval are
   recorded (:meth:`start_recording`, :meth:`stop_recording`) exactly as the haptic side
   received them (haptic clock);
+- the window's title stays as it was opened (:class:`_FixedTitle`), never a stimulus's
+  name;
 - keys: SPACE (emergency stop), up/down (force) and P (screenshot) act as in the demo;
   every other key is queued to the presenter (``answers``), Q included: the demo's
   keys that would change the scene or open the layer panel do nothing here;
@@ -49,6 +51,25 @@ ANSWER_POLL_S = 0.05  # how often a wait for the render thread looks at the wind
 FIELD_RGBA = (0.5, 0.5, 0.5, 1.0)
 
 
+class _FixedTitle:
+    """The window ``backend`` with its title kept as it was opened ("frictex experiment:
+    PROTOCOL"): the demo loop names the scene shown in the title, and a stimulus's name
+    (``period_mm=5.5``) there would tell the participant what is felt. Every other
+    attribute is the backend's."""
+
+    def __init__(self, backend):
+        object.__setattr__(self, "_backend", backend)
+
+    def __getattr__(self, name: str):
+        return getattr(self._backend, name)
+
+    def __setattr__(self, name: str, value) -> None:
+        setattr(self._backend, name, value)
+
+    def set_title(self, title: str) -> None:
+        """Ignored: the title stays as the window was opened."""
+
+
 class ExperimentLoop(DemoLoop):
     """See the module docstring. ``restart(scene) -> (haptic, finish)`` starts a new
     haptic side on ``scene`` (reconnecting after a lost device); ``finish`` is the
@@ -56,7 +77,8 @@ class ExperimentLoop(DemoLoop):
 
     def __init__(self, backend, haptic, finish, scene, screenshot_dir, events_path,
                  restart, link_name: str = "none"):
-        super().__init__(backend, haptic, [scene.source], 0, scene, load_scene, screenshot_dir,
+        super().__init__(_FixedTitle(backend), haptic, [scene.source], 0, scene, load_scene,
+                         screenshot_dir,
                          events_path=events_path, link_name=link_name)
         self.finish = finish
         self.restart = restart

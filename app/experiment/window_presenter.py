@@ -26,7 +26,9 @@ opens the demo's window on the live haptic pipeline (the same haptic side as
   ``friction.csv``, ``events.csv`` with ``interval-start`` / ``interval-end`` at
   their haptic-clock times; ``live-2/`` ... after a reconnect or a resume);
 - Escape (or closing the window) ends the session with every answered trial kept
-  (:class:`SessionPaused`); ``--resume`` goes on from the next trial. A lost device
+  (:class:`SessionPaused`; ``frictex experiment`` says so in one line and exits 130,
+  as for Ctrl-C); ``--resume`` goes on from the next trial. SIGTERM or SIGHUP ends it
+  the same way (:func:`stop_on_signals`), the haptic side stopped as for Escape. A lost device
   (the haptic side stopped) pauses the session on a screen saying why: R reconnects
   and repeats the trial from its start, Escape ends it as above.
 
@@ -37,7 +39,9 @@ this presenter on a ``frictex-session`` thread (:func:`run_in_window`).
 from __future__ import annotations
 
 import queue
+import signal
 import threading
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -61,8 +65,14 @@ END = "end"
 
 
 class SessionPaused(RunFailed):
-    """The participant ended the session (Escape, the window closed); every trial
-    answered is kept, ``--resume`` goes on."""
+    """The participant ended the session (Escape, the window closed): a planned stop,
+    every trial answered kept, ``--resume`` goes on. ``trial``: the trial it stopped
+    at; ``why``: what stopped it ("Escape", "the window was closed")."""
+
+    def __init__(self, trial: int, why: str):
+        super().__init__(f"session stopped at trial {trial} ({why}): the trials answered "
+                         f"before it are kept; go on with --resume")
+        self.trial, self.why = trial, why
 
 
 class _Repeat(Exception):
@@ -284,13 +294,11 @@ class WindowPresenter:
             except queue.Empty:
                 continue
             if event[0] == "key" and event[1] in END_KEYS:
-                raise self._paused("Escape was pressed")
+                raise self._paused("Escape")
             return event
 
     def _paused(self, why: str) -> SessionPaused:
-        number = self.trial.number if self.trial is not None else 1
-        return SessionPaused(f"session ended at trial {number} ({why}): the trials answered "
-                             f"before it are kept; go on with --resume")
+        return SessionPaused(self.trial.number if self.trial is not None else 1, why)
 
     def _lost(self, why: str) -> None:
         """The output stopped: say so and wait for R (reconnect: the trial starts again,
@@ -327,6 +335,36 @@ class WindowPresenter:
                     why, "R tries again; Escape ends the session (continue later with "
                     "--resume)."), ((RECONNECT, "Reconnect (R)"), (END, "End (Esc)")),
                     "paused: output device lost"))
+
+
+@contextmanager
+def stop_on_signals(presenter: WindowPresenter):
+    """While in this block (on the main thread), SIGTERM and SIGHUP end the session as
+    Escape does: the session thread stops at its next look at the window, the window
+    and the haptic side close in order (no process or semaphore left behind), and the
+    block's :class:`SessionPaused` becomes ``Terminated`` (exit 128 + the signal) with
+    the trial it stopped at."""
+    got: list[int] = []
+
+    def stop(signum, frame):
+        got.append(signum)
+        presenter.closed.set()
+
+    held = (signal.SIGTERM, signal.SIGHUP)
+    previous = [signal.signal(s, stop) for s in held]
+    try:
+        yield
+    except SessionPaused as exc:
+        if not got:
+            raise
+        from frictex.app.engine.driver import Terminated
+        ended = Terminated(got[0])
+        ended.reason += (f" at trial {exc.trial}: the trials answered before it are kept; "
+                         f"go on with --resume")
+        raise ended from None
+    finally:
+        for s, handler in zip(held, previous):
+            signal.signal(s, handler)
 
 
 def next_folder(base: Path) -> Path:
