@@ -43,6 +43,15 @@ def test_the_page_is_the_parsers_tables():
         "> app/experiment/PROTOCOL_FORMAT.md")
 
 
+def test_the_page_and_the_parser_agree_that_vary_needs_a_reference(tmp_path):
+    row = next(line for line in PAGE.read_text(encoding="utf-8").splitlines()
+               if line.startswith("| `reference` |"))
+    assert row.endswith("| *required* with `vary` |")
+    text = GOOD.replace('method = "2afc"', 'method = "magnitude"').replace("reference = 5.0\n", "")
+    with pytest.raises(ProtocolError, match=r"stimuli.reference: missing \(required with vary"):
+        load_protocol(write(tmp_path, text))
+
+
 def test_every_key_of_the_bundled_protocols_is_on_the_page():
     page = PAGE.read_text(encoding="utf-8")
     tables = {"stimuli", "stimulus", "presentation", "staircase", "scale", "analysis"}

@@ -20,7 +20,8 @@ the tables below.
     vary = "period_mm"          # period_mm | depth | level (a clip's intensity); omit for
                                 #   one stimulus per renderer in `renderers`
     layer = "lines"             # the layer varied; default: the first that has the parameter
-    reference = 5.0             # the standard stimulus (units of `vary`)
+    reference = 5.0             # required with `vary`: the standard stimulus (units of `vary`;
+                                #   magnitude rates it as one of the stimuli)
     levels = [5.3, 5.6, 6.2]    # comparisons (2afc, same-different, magnitude); above the
                                 #   reference for 2afc
     renderers = ["sho", "sht"]  # render the varied layer each of these ways: magnitude only,

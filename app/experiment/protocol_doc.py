@@ -9,6 +9,8 @@ after changing a key:
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from frictex.app.experiment import protocol as P
 from frictex.textures.schema import REQUIRED
 
@@ -56,6 +58,9 @@ def _default(spec) -> str:
 
 def _describe(spec) -> tuple[str, str, str]:
     """(what the value is, its range, its default) of a key."""
+    if spec is P.STIMULI["reference"]:  # no default, but required wherever `vary` is given
+        kind, span, _ = _describe(replace(spec, default=REQUIRED))
+        return kind, span, "*required* with `vary`"
     if isinstance(spec, P.Names):
         return ("list of distinct names, each one of " + ", ".join(f"`{o}`" for o in spec.options),
                 "-", _default(spec))
