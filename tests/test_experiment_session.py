@@ -2,6 +2,7 @@
 session killed with SIGKILL at a random trial resumed with no trial lost or repeated."""
 
 import csv
+import json
 import os
 import signal
 import subprocess
@@ -92,6 +93,24 @@ def test_resume_refuses_another_protocol_or_participant(tmp_path, protocol_file)
         run_session(load_protocol(protocol_file), make_presenter(PARTICIPANT), tmp_path / "s",
                     seed=9, participant=PARTICIPANT, resume=True)
     assert len(session(protocol_file, tmp_path / "s", record="results", resume=True).rows) == 13
+
+
+def test_the_participant_id_is_recorded_and_checked(tmp_path, protocol_file, capsys):
+    """--participant-id: a plain name, in session.json; --resume refuses another one."""
+    out = tmp_path / "s"
+    base = ["experiment", str(protocol_file), "--out", str(out), "--record", "results", "--quiet"]
+    assert main([*base, "--participant", PARTICIPANT, "--participant-id", "P07"]) == 0
+    info = json.loads((out / "session.json").read_text())
+    assert (info["participant_id"], info["participant"]) == ("P07", PARTICIPANT)
+    capsys.readouterr()
+    assert main([*base, "--resume", "--participant-id", "P08"]) == 2
+    assert "--participant-id P08: " in capsys.readouterr().err
+    assert main([*base, "--resume", "--participant-id", "P07"]) == 0
+    capsys.readouterr()
+    for bad in ("", "a b", "../x", "p\n7", "_p", "p" * 65):
+        assert main([*base, "--participant", PARTICIPANT, "--participant-id", bad]) == 2
+        err = capsys.readouterr().err
+        assert "expected a plain name" in err and err.count("\n") == 1
 
 
 @pytest.mark.parametrize("out, words", [("", "expected a folder name"),

@@ -33,6 +33,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="who answers: 'window' is a person at the demo's window (on "
                              "--device, as frictex demo); 'simulated:weber=0.11,lapse=0.02"
                              "[,seed=N][,stroke_s=S]' is a simulated participant (headless)")
+    parser.add_argument("--participant-id", metavar="ID", default=None,
+                        help="the participant's code (a plain name such as P07), recorded in "
+                             "session.json; checked against the session's on --resume")
     parser.add_argument("--out", metavar="DIR", default=None,
                         help="the session folder (run), or where analysis.json and "
                              "analysis.png go (analyse; default: SESSION/analysis)")
@@ -126,8 +129,9 @@ def run(args: argparse.Namespace) -> int:
     protocol = load_protocol(args.target[0])
     if args.out is None:
         raise InputError("--out DIR is required: the session folder")
-    from frictex.app.experiment.session import folder_of
+    from frictex.app.experiment.session import folder_of, participant_id
     out = folder_of(args.out)
+    pid = participant_id(args.participant_id) if args.participant_id is not None else None
     if args.participant is None and not args.resume:
         raise InputError("--participant is required, e.g. --participant "
                          "simulated:weber=0.11,lapse=0.02")
@@ -146,7 +150,8 @@ def run(args: argparse.Namespace) -> int:
 
     def session():
         return run_session(protocol, presenter, out, seed=args.seed, participant=spec,
-                           resume=args.resume, record=args.record, progress=progress)
+                           participant_id=pid, resume=args.resume, record=args.record,
+                           progress=progress)
 
     if spec.partition(":")[0] == "window":
         from frictex.app.experiment.window_presenter import SessionPaused, stop_on_signals

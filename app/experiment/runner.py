@@ -81,14 +81,17 @@ class _Stage:
 
 
 def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str | Path, *,
-                seed: int | None = None, participant: str = "", resume: bool = False,
+                seed: int | None = None, participant: str = "", participant_id: str | None = None,
+                resume: bool = False,
                 record: str = "all", progress: Callable[[Trial, dict], None] | None = None
                 ) -> S.Session:
     """Run (or with ``resume`` go on with) the session of ``protocol`` in ``out_dir``.
 
     ``seed``: the trial order's seed (default: the protocol's, else drawn now; recorded
-    in session.json; with ``resume``, refused unless it is the session's). ``participant``: the participant spec, recorded. ``record``:
-    ``all`` (per trial: scene, trace and their replay), ``traces`` (scene and trace) or
+    in session.json; with ``resume``, refused unless it is the session's).
+    ``participant``: the participant spec, recorded; ``participant_id``: the person's
+    code (``session.participant_id``), recorded (with ``resume``, refused unless the
+    session's). ``record``: ``all`` (per trial: scene, trace and their replay), ``traces`` (scene and trace) or
     ``results`` (the results table only). ``progress(trial, row)`` is called after each
     trial is recorded. Returns the session (its ``rows``: every trial answered).
     """
@@ -96,11 +99,11 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
         raise InputError(f"record {record!r}: expected one of {', '.join(S.RECORDS)}")
     out_dir = Path(out_dir)
     if resume:
-        session = S.resume(out_dir, protocol, participant or None, seed)
+        session = S.resume(out_dir, protocol, participant or None, seed, participant_id)
     else:
         if seed is None:
             seed = protocol.seed if protocol.seed is not None else secrets.randbits(63)
-        session = S.create(out_dir, protocol, seed, participant)
+        session = S.create(out_dir, protocol, seed, participant, participant_id)
     scheduler = Scheduler(protocol, session.seed)
     state = scheduler.replay((row["stimuli"].split(S.SEPARATOR), row["response"])
                              for row in session.rows)

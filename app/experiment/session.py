@@ -2,8 +2,10 @@
 
 ::
 
-    DIR/session.json          what ran: protocol name, method, seed, participant, version,
-                              and the design the analysis needs
+    DIR/session.json          what ran: protocol name, method, seed, participant (who
+                              answered: window or simulated:...), participant_id (the
+                              person's code, or null), version, and the design the
+                              analysis needs
     DIR/protocol.toml         the protocol file as it was read
     DIR/results.csv           one row per trial answered (RESULT_COLUMNS), in order
     DIR/stimuli/NAME.toml     each stimulus's scene, as a texture file
@@ -162,8 +164,22 @@ def design(protocol) -> dict:
             "scale": list(protocol.scale) if protocol.scale else None}
 
 
-def create(folder: Path, protocol, seed: int, participant: str) -> Session:
-    """A new session in ``folder`` (made if needed; refused if it holds a session)."""
+def participant_id(text: str) -> str:
+    """``--participant-id``: the participant's code, a plain name as a batch's job names
+    are (``app.engine.batch.NAME``); InputError otherwise."""
+    from frictex.app.engine.batch import NAME
+    from frictex.device.safe_text import quoted
+    if NAME.fullmatch(text) is None:
+        raise InputError(f"--participant-id {quoted(text)}: expected a plain name (ASCII "
+                         f"letters, digits, '.', '_' and '-', starting with a letter or a "
+                         f"digit, at most 64), such as P07")
+    return text
+
+
+def create(folder: Path, protocol, seed: int, participant: str, pid: str | None = None
+           ) -> Session:
+    """A new session in ``folder`` (made if needed; refused if it holds a session);
+    ``pid``: the participant's code (:func:`participant_id`), or None."""
     folder = Path(folder)
     if (folder / "results.csv").exists() or (folder / "session.json").exists():
         raise InputError(f"{folder} already holds a session; continue it with --resume, or "
@@ -179,7 +195,8 @@ def create(folder: Path, protocol, seed: int, participant: str) -> Session:
         release = "unknown (not installed)"
     info = {"format": FORMAT, "protocol": protocol.name, "method": protocol.method,
             "protocol_sha256": hashlib.sha256(protocol.text.encode("utf-8")).hexdigest(),
-            "seed": int(seed), "participant": participant, "frictex": release,
+            "seed": int(seed), "participant": participant, "participant_id": pid,
+            "frictex": release,
             "started_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
             "design": design(protocol)}
     _write_synced(folder / "protocol.toml", protocol.text)
@@ -251,11 +268,11 @@ def folder_of(text: str, option: str = "--out") -> Path:
     return Path(text)
 
 
-def resume(folder: Path, protocol, participant: str | None, seed: int | None = None
-           ) -> Session:
+def resume(folder: Path, protocol, participant: str | None, seed: int | None = None,
+           pid: str | None = None) -> Session:
     """The session in ``folder``, ready to go on: the trial files of a trial without its
     row removed, a cut-short row dropped. InputError if ``protocol`` is not the one the
-    session started with, or ``participant`` or ``seed`` (if given) not its own."""
+    session started with, or ``participant``, ``seed`` or ``pid`` (if given) not its own."""
     folder = Path(folder)
     info = read_info(folder)
     if seed is not None and seed != info["seed"]:
@@ -272,6 +289,9 @@ def resume(folder: Path, protocol, participant: str | None, seed: int | None = N
     if participant is not None and participant != info.get("participant"):
         raise InputError(f"--participant {participant}: {folder} was started with "
                          f"{info.get('participant')!r}")
+    if pid is not None and pid != info.get("participant_id"):
+        raise InputError(f"--participant-id {pid}: {folder} was started with "
+                         f"{info.get('participant_id')!r}")
     rows = read_rows(folder, repair=True)
     trials = folder / "trials"
     trials.mkdir(exist_ok=True)
