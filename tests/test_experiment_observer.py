@@ -157,6 +157,65 @@ def test_period_answers_rise_with_the_difference_as_the_model_says(tmp_path, see
     assert np.all(np.abs(np.array(share) - model) < tolerance), (share, model)
 
 
+def _path(moves, rest_s=0.2, move_s=1.0, rate_hz=5_000.0):
+    """Times (s) and positions (mm) of a finger making ``moves`` ((dx, dy) mm each, a
+    minimum-jerk stroke of ``move_s``) from (10, 10) with a rest between them."""
+    t, x, y, at = [np.zeros(1)], [np.full(1, 10.0)], [np.full(1, 10.0)], 0.0
+    for dx, dy in moves:
+        u = np.arange(1, int(move_s * rate_hz) + 1) / (move_s * rate_hz)
+        s = 10 * u**3 - 15 * u**4 + 6 * u**5
+        rest = np.arange(1, int(rest_s * rate_hz) + 1) / rate_hz
+        t += [at + u * move_s, at + move_s + rest]
+        x += [x[-1][-1] + dx * s, np.full(rest.size, x[-1][-1] + dx)]
+        y += [y[-1][-1] + dy * s, np.full(rest.size, y[-1][-1] + dy)]
+        at += move_s + rest_s
+    return np.concatenate(t), np.concatenate(x), np.concatenate(y)
+
+
+@pytest.mark.parametrize("moves", [
+    # a 32 mm stroke at 49 degrees (7.6 mm between lines along it) and two across, 2.1
+    # periods of 5 mm each, 1.9 of 5.55: they were read for 5 mm only, and 5.55 mm felt
+    # 1.21 times 5 mm (1.198 here)
+    [(21.2, 24.4), (10.41, 0.0), (-10.11, 0.0)],
+    # 24 mm across and a 0.37 mm flick over one line, which fits 0.35 mm on 5 mm and
+    # 0.21 mm on 5.55 mm (1.06 and 1.8 of them): it is not read
+    [(24.39, 0.0), (0.37, 0.0)]])
+def test_felt_period_reads_the_same_stroke_for_a_coarser_grating(moves):
+    """Which stroke is read does not depend on the grating: 5.55 mm feels 1.11 times 5 mm
+    (0.5 %) on paths (from the participants of seeds 157 and 98) where the strokes read
+    could differ between the two."""
+    t, x, y = _path(moves)
+    felt = [felt_period(_square(x, period, 0.3), t, x, y) for period in (5.0, 5.55)]
+    assert felt[1] / felt[0] == pytest.approx(1.11, rel=5e-3), felt
+
+
+def test_every_participant_meets_its_weber_fraction_in_short_presentations(tmp_path):
+    """Participants of seeds 0 to 5 (lapse 0), 0.5 s a stimulus, 5 mm against 5.55 mm
+    (the Weber fraction's ratio, 1.11), 400 trials each, each order half the time: each
+    answers correctly 75 % of the time to 4 binomial sd (0.087; at chance, 0.5 is 11.5 sd
+    away), and all 2400 to 4 sd (0.035). Before, the 0.5 s strokes of seeds 2 and 3 ran
+    along the lines or stopped short of two periods: every grating felt alike (12.1 mm,
+    24.8 mm), and they answered 0.535 and 0.507."""
+    def shown(period):
+        sc = scene_with(tmp_path, "period_mm", period)
+        return Shown(f"p{period}", sc, sc.source.read_text(), whole(sc), 0.5, False)
+
+    reference, comparison, n = shown(5.0), shown(5.0 * (1 + WEBER)), 400
+    share = []
+    for seed in range(6):
+        observer = SimulatedParticipant(WEBER, 0.0, seed=seed)
+        observer.attribute = "period_mm"
+        correct = 0
+        for i in range(1, n + 1):
+            pair, answer = ((reference, comparison), "2") if i % 2 else ((comparison, reference), "1")
+            trial = Trial(i, False, tuple(x.name for x in pair), 5.55, 0.55, answer, ("1", "2"))
+            correct += observer.present(trial, pair).response == answer
+        share.append(correct / n)
+    share = np.array(share)
+    assert np.all(np.abs(share - 0.75) < 4 * math.sqrt(0.75 * 0.25 / n)), share
+    assert abs(share.mean() - 0.75) < 4 * math.sqrt(0.75 * 0.25 / (6 * n)), share
+
+
 @pytest.fixture(scope="module")
 def period_sessions(tmp_path_factory):
     """12 sessions of the bundled period-2afc (30 repetitions: 360 main trials, 200

@@ -12,12 +12,14 @@ target under the finger, mu'(t). From mu'(t) along the finger's path it takes:
   over distance travelled and given the period of its best-fitting sinusoid (a
   periodogram over distance, so neither the grating's phase where a stroke starts nor
   the stroke's speed profile counts: seed 003, section 6, found participants blind to
-  the spatial phase of a periodic signal, only its period felt), and the strokes' periods
-  are averaged, weighted by the periods each covers (cubed). A stroke across the lines at an
+  the spatial phase of a periodic signal, only its period felt), and the period of the
+  stroke covering the most periods is the one felt. A stroke across the lines at an
   angle feels them further apart (the period along its path); the same stroke over a
   grating a times coarser feels a times coarser, which is what a discrimination needs.
   The stroke lasts ``STROKE_S`` (2 s, some 60 mm: 10 periods of a 6 mm grating) or the
-  presentation, whichever is shorter;
+  presentation, whichever is shorter; over a grating its path has a stroke of at least
+  ``ACROSS_MM`` across the lines (:func:`_motion`), so a short presentation still feels
+  a period;
 - ``fidelity``: how well mu'(t) reproduces the scene at the finger's true position
   (``rendering.compose.ideal_mu``), in [0, 1]: the cosine similarity of the two
   magnitude spectra, times their correlation for periods of 3.5 mm and more (seed 003
@@ -25,8 +27,8 @@ target under the finger, mu'(t). From mu'(t) along the finger's path it takes:
   mm; section 6: the plate's stimulus cannot be placed under the fingerpad, so of finer
   features only their rhythm counts).
 
-The stroke is the same for every stimulus (its seed is the participant's), so what differs
-between stimuli is what the pipeline made of them; the features of a stimulus are
+The stroke is the same for every stimulus whose lines run alike (its seed is the
+participant's), so what differs between stimuli is what the pipeline made of them; the features of a stimulus are
 computed once and kept (``feel`` is cached by scene text and area), which keeps a
 simulated session to a few pipeline runs.
 
@@ -69,8 +71,12 @@ PLACEMENT_MM = 3.5
 #: the finger moves (a stroke) above this speed (mm/s); mu' is read along a stroke every STEP_MM
 MOVING_MM_S = 1.0
 STEP_MM = 0.05
-#: a stroke's period counts when the stroke covers at least this many of it
+#: a stroke's period is read when its mu' shows this many periods (2 n midrange crossings)
 MIN_PERIODS = 2.0
+#: the participant's path has a stroke this long across the lines (mm: 4 periods of a 5 mm
+#: grating), the first of this many draws of its seed that has one
+ACROSS_MM = 20.0
+PATH_DRAWS = 64
 Z75 = float(ndtri(0.75))
 #: the participant spec's keys: ``simulated:weber=0.11,lapse=0.02,seed=1``
 SPEC_KEYS = {"weber": (0.001, 10.0), "lapse": (0.0, 1.0), "seed": (0, 2**63 - 1),
@@ -109,13 +115,44 @@ def ratio_at(p: float, weber: float, lapse: float) -> float:
     return math.exp(float(ndtri(q)) * sigma_of(weber) * math.sqrt(2.0))
 
 
-def _stroke(area: tuple[float, float, float, float], duration_s: float, seed: int) -> Trace:
-    from frictex.rendering.input.trace_synth import make_motion, sample
-    x0, y0, width, height = area
-    motion = make_motion("human", speed_mm_s=SPEED_MM_S, duration_s=duration_s,
-                         area_mm=(width, height), seed=seed)
+def _across(scene) -> tuple[float, float] | None:
+    """The unit vector across the lines of ``scene``'s one periodic layer; None without
+    exactly one."""
+    axes = [layer.axis for layer in scene.layers if layer.is_periodic]
+    return axes[0] if len(axes) == 1 else None
+
+
+def _motion(area: tuple[float, float, float, float], duration_s: float, seed: int,
+            across: tuple[float, float] | None):
+    """The participant's exploration of ``area`` for ``duration_s`` s (positions relative
+    to the area's corner, mm). Over a grating (``across``: the unit vector across its
+    lines), the first of its seed's human paths (the seed's own, then draw d of it:
+    seed + d 2^63) with a stroke that travels ``ACROSS_MM`` across the lines: a
+    participant strokes across the lines it is asked about, and a path along them, or a
+    first stroke that a short presentation ends before it went far, feels no period (every
+    stimulus alike). Otherwise, or with no such path in ``PATH_DRAWS``, the seed's own."""
+    from frictex.rendering.input.trace_synth import make_motion
+
+    def path(draw):
+        return make_motion("human", speed_mm_s=SPEED_MM_S, duration_s=duration_s,
+                           area_mm=(area[2], area[3]), seed=seed + draw * 2**63)
+
+    if across is not None:
+        t = np.arange(0.0, duration_s, 1.0 / TOUCH_HZ)
+        for draw in range(PATH_DRAWS):
+            motion = path(draw)
+            x, y = motion.position(t)
+            if any(abs((x[i[-1]] - x[i[0]]) * across[0] + (y[i[-1]] - y[i[0]]) * across[1])
+                   >= ACROSS_MM for i in strokes(t, x, y)):
+                return motion
+    return path(0)
+
+
+def _stroke(motion, area: tuple[float, float, float, float], seed: int) -> Trace:
+    """``motion`` as the touch screen reports it, moved to ``area``'s corner (mm)."""
+    from frictex.rendering.input.trace_synth import sample
     t = sample(motion, TOUCH_HZ, seed=seed)
-    return make_trace(t.t_s, t.finger, t.x_mm + x0, t.y_mm + y0, t.force_n, t.event)
+    return make_trace(t.t_s, t.finger, t.x_mm + area[0], t.y_mm + area[1], t.force_n, t.event)
 
 
 def strokes(t: np.ndarray, x: np.ndarray, y: np.ndarray) -> list[np.ndarray]:
@@ -169,28 +206,35 @@ def felt_period(mu: np.ndarray, t: np.ndarray, x: np.ndarray, y: np.ndarray) -> 
     """The spatial period (mm) of mu' along the finger's path: mu' at samples ``t`` (s)
     taken at finger positions ``x``, ``y`` (mm), cut into strokes (:func:`strokes`), each
     read on an even grid of distance travelled (``STEP_MM``) and given its period p
-    (:func:`stroke_period`). The felt period is the strokes' geometric mean weighted by
-    n^3, n = length / p the periods a stroke covers (a frequency estimate's variance
-    falls as the cube of the cycles it spans: Rife & Boorstyn 1974), over the strokes
-    covering at least ``MIN_PERIODS`` (one step under a short stroke fits a sinusoid of
-    any period). The weights scale alike for every stroke when the grating does, so a
-    grating a times coarser is felt a times coarser; the stroke most across the lines
-    counts most. With no stroke covering ``MIN_PERIODS``: the longest stroke's length (a
-    period at least that long; the whole path when the finger never moved)."""
+    (:func:`stroke_period`). The felt period is the p of the stroke covering the most
+    periods, n = length / p (the best-resolved reading: a frequency estimate's variance
+    falls as the cube of the cycles it spans, Rife & Boorstyn 1974), among the strokes
+    whose mu' crosses its midrange at least 2 ``MIN_PERIODS`` times (a stroke over one
+    line fits a sinusoid of any period). Every stroke's n scales alike when the
+    grating does, so the same stroke is read for a grating a times coarser, which is felt
+    a times coarser; a stroke at an angle feels the lines further apart, and the stroke
+    most across them covers the most. (Averaging the strokes, weighted n^3 over those with
+    n >= ``MIN_PERIODS``, let a stroke at another angle count for one grating and not for
+    one 11 % coarser: a 2 s path felt 5 mm as 7.04 mm and 5.55 mm as 8.49, 1.21 times.)
+    With no such stroke: the longest stroke's length (a period at least that long; the
+    whole path when the finger never moved)."""
     found = []
     for index in strokes(t, x, y):
         s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x[index]), np.diff(y[index])))])
         if s[-1] >= 4.0 * STEP_MM:
             grid = np.arange(0.0, s[-1], STEP_MM)
             v = np.interp(grid, s, mu[index])
-            found.append((float(s[-1]), stroke_period(grid, v)))
+            side = np.sign(v - 0.5 * (v.max() + v.min()))
+            side = side[side != 0]
+            found.append((float(s[-1]), stroke_period(grid, v),
+                          np.count_nonzero(side[1:] != side[:-1])))
     if not found:
         return float(max(np.sum(np.hypot(np.diff(x), np.diff(y))), STEP_MM))
-    length, period = np.array(found).T
-    weight = np.where(length >= MIN_PERIODS * period, (length / period) ** 3, 0.0)
-    if not np.any(weight > 0):
+    length, period, crossings = np.array(found).T
+    read = crossings >= 2.0 * MIN_PERIODS
+    if not np.any(read):
         return float(length.max())
-    return float(np.exp(np.sum(weight * np.log(period)) / np.sum(weight)))
+    return float(period[read][np.argmax(length[read] / period[read])])
 
 
 def _fidelity(felt: np.ndarray, ideal: np.ndarray, period_mm: float | None) -> float:
@@ -207,11 +251,12 @@ def _fidelity(felt: np.ndarray, ideal: np.ndarray, period_mm: float | None) -> f
 
 def feel_scene(scene, area, duration_s: float, seed: int) -> Felt:
     """Run ``scene``'s pipeline on the participant's stroke over ``area`` (x, y, width,
-    height in mm) and take the features the module docstring lists."""
+    height in mm; :func:`_motion`, across the lines of its grating if it has one) and
+    take the features the module docstring lists."""
     from frictex.rendering.compose import ideal_mu
-    from frictex.rendering.input.trace_synth import make_motion
     from frictex.rendering.pipeline import build_pipeline
-    trace = _stroke(area, duration_s, seed)
+    motion = _motion(area, duration_s, seed, _across(scene))
+    trace = _stroke(motion, area, seed)
     pipeline = build_pipeline(scene, rate_hz=RATE_HZ, block_size=BLOCK, t0_s=float(trace.t_s[0]))
     blocks = int(math.ceil(trace.duration_s * RATE_HZ / BLOCK)) + 1
     out, _ = pipeline.process(0, trace, pipeline.initial_state(), n_blocks=blocks)
@@ -220,8 +265,6 @@ def feel_scene(scene, area, duration_s: float, seed: int) -> Felt:
     if mu.size < 2:
         raise InputError(f"the simulated stroke never touched scene {scene.name!r}")
     t = out.t_s[touching]
-    motion = make_motion("human", speed_mm_s=SPEED_MM_S, duration_s=duration_s,
-                         area_mm=area[2:], seed=seed)
     tx, ty = motion.position(t - trace.t_s[0])
     ideal = ideal_mu(scene, tx + area[0], ty + area[1])
     return Felt(contrast=float(mu.max() - mu.min()),
