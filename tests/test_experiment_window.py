@@ -46,6 +46,8 @@ exploration_s = {seconds}
 #: the hand moves on with Enter after its stroke: nothing waits on the machine's speed
 FREE = {"exploration": "free", "seconds": 60, "show_scene": ""}
 FIXED = {"exploration": "fixed", "seconds": 1.0, "show_scene": ""}
+#: a window wider than the grating's 800 x 480 px: the scene fills its height
+WIDE = (1000, 480)
 
 
 def read_csv(path):
@@ -168,35 +170,43 @@ class Hand:
 
 class Frames:
     """The middle band (30-70 % of the height) of the scene's area in every frame drawn
-    for an interval (``on_frame`` of the headless window)."""
+    for an interval, and of every other frame the strip beside the status line (the
+    right quarter of the scene's area above the message's cover) (``on_frame`` of the
+    headless window)."""
 
     def __init__(self):
         self.loop = None
         self.bands = []
+        self.strips = []
         self.titles = set()  # the window's titles while the intervals were shown
 
     def __call__(self, rgb):
         loop = self.loop
         drawn = getattr(loop, "_buttons_of", None)  # the screen this frame was drawn for
-        if drawn is None or drawn.phase != "interval":
+        if drawn is None:
             return
         self.titles.add(loop.backend.title)
         vp = loop.compositor.viewport
+        if drawn.phase != "interval":
+            top, right = int(loop.compositor.status_bottom), int(vp.x0 + vp.width_px)
+            self.strips.append(rgb[int(vp.y0):top, right - int(vp.width_px) // 4:right].copy())
+            return
         y0, y1 = int(vp.y0 + 0.3 * vp.height_px), int(vp.y0 + 0.7 * vp.height_px)
         self.bands.append(rgb[y0:y1, int(vp.x0):int(vp.x0 + vp.width_px)].copy())
 
 
 def run_headless(tmp_path, lose_at=None, escape_at=None, resume=False, presentation=FREE,
-                 frames=None):
+                 frames=None, size=None):
     """The tiny protocol's session in the headless window with a :class:`Hand`:
-    (session, hand, session folder); ``frames`` (a :class:`Frames`) keeps the frames of
-    the intervals."""
+    (session, hand, session folder); ``frames`` (a :class:`Frames`) keeps the frames;
+    ``size``: the window's (px), default the display's own."""
     protocol_file = tmp_path / "tiny.toml"
     protocol_file.write_text(PROTOCOL.format(**presentation))
     protocol = load_protocol(protocol_file)
     scene = load_scene(resolve_scene("grating-5mm"))
     try:
-        window = open_backend("headless", default_frame_size(scene.display), on_frame=frames)
+        window = open_backend("headless", size or default_frame_size(scene.display),
+                              on_frame=frames)
     except OSError as exc:
         pytest.skip(f"EGL unavailable: {exc}")
     out = tmp_path / "session"
@@ -270,7 +280,9 @@ def test_a_fixed_exploration_lasts_its_time_on_the_haptic_clock(tmp_path):
     """Each interval ends by itself after ``exploration_s`` (one not touched in time, on a
     busy machine, is shown again); what the hand touched is recorded."""
     frames = Frames()
-    session, hand, out = run_headless(tmp_path, presentation=FIXED, frames=frames)
+    # a frame wider than the display: the scene spans its height, under the status line
+    session, hand, out = run_headless(tmp_path, presentation=FIXED, frames=frames,
+                                      size=WIDE)
     assert [r["response"] for r in read_csv(out / "results.csv")] == hand.answers == ["1", "2", "2"]
     events = read_csv(out / "live" / "events.csv")
     times = {kind: [float(e["t_s"]) for e in events if e["event"] == kind]
@@ -286,6 +298,9 @@ def test_a_fixed_exploration_lasts_its_time_on_the_haptic_clock(tmp_path):
     for band in frames.bands:
         assert (band == band[0, 0]).all()
     assert frames.titles == {"frictex"}  # as opened: no stimulus's name (period_mm=6.6)
+    assert frames.strips and all(strip.size for strip in frames.strips)
+    for strip in frames.strips:  # beside the question's status line: no grating either
+        assert (strip == strip[0, 0]).all()
 
 
 def test_show_scene_shows_the_stimulus_while_it_is_explored(tmp_path):
@@ -293,10 +308,11 @@ def test_show_scene_shows_the_stimulus_while_it_is_explored(tmp_path):
     (the band the default leaves uniform has its black and white stripes)."""
     frames = Frames()
     run_headless(tmp_path, presentation={**FREE, "show_scene": "show_scene = true\n"},
-                 frames=frames)
+                 frames=frames, size=WIDE)
     assert frames.bands
     for band in frames.bands:
         assert band.max() - band.min() > 100
+    assert any(strip.max() - strip.min() > 100 for strip in frames.strips)
 
 
 def test_a_lost_device_pauses_and_reconnecting_repeats_the_trial(tmp_path):

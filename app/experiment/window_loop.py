@@ -6,9 +6,10 @@ changes:
 
 - what is drawn: the screen the presenter sets (``screen``, an
   ``rendering.visual.experiment_view.ExperimentView``, replaced whole) over the scene;
-  while a stimulus is explored the scene's picture is shown only where the protocol
-  asks for it (``show_scene``): by default a uniform field (:data:`FIELD_RGBA`), with
-  no trail and no hover ring, so that nothing but touch tells the stimuli apart;
+  the scene's picture is shown only where the protocol asks for it (``show_scene``):
+  by default a uniform field (:data:`FIELD_RGBA`) takes its place on every screen (a
+  message's cover leaves the strip of the status line uncovered), with no trail and no
+  hover ring, so that nothing but touch tells the stimuli apart;
   the buttons drawn (``buttons``, replaced whole each frame) are what a press hits,
   once they are the current screen's (a press before its first frame hits nothing);
 - the mouse touches only while an interval accepts touches (``accept_touch``); a press
@@ -232,5 +233,5 @@ class ExperimentLoop(DemoLoop):
             overlay=self.overlay if shown else None, hover_mm=hover, show_scope=False,
             amplitude_max_um=self.scene.device.amplitude_limit_um,
             status=(screen.progress,) if screen.progress else (), banner=banner,
-            banner_kind=kind, field_rgba=None if shown or not interval else FIELD_RGBA))
+            banner_kind=kind, field_rgba=None if self.show_scene else FIELD_RGBA))
         self.buttons, self._buttons_of = draw_experiment(self.compositor, screen), screen
