@@ -20,7 +20,9 @@ table, :data:`THRESHOLDS`, and each finding names the one it is below:
 - ``event``: a clip event playing for less than 2.3 ms (Gueorguiev et al. 2019).
 - ``period`` and ``weber`` for pairs (:func:`compare_values`, :func:`compare_scenes`):
   two stimuli whose every difference is below its discrimination threshold, periods
-  within 14 % of each other and friction contrasts (or clip levels) within 11 %.
+  within 14 % of each other and friction contrasts (or clip levels) within 11 %. A
+  design of levels measures that threshold and needs levels below it: it is compared
+  by its level farthest from the reference (``app.experiment.perception_check``).
 """
 
 from __future__ import annotations
@@ -46,8 +48,11 @@ class Threshold:
 THRESHOLDS: dict[str, Threshold] = {
     "weber": Threshold(0.11, "", "Weber fraction of a friction change, dmu'/mu'",
                        "Gueorguiev et al. 2017, J R Soc Interface 14:20170641"),
+    # the paper's abstract: "a relative difference of 14% in spatial period was required to
+    # discriminate two periodic gratings"; its authors, year and venue are not verified here
     "period": Threshold(0.14, "", "discrimination of grating periods, dp/p",
-                        "ultrasonic friction gratings, Basdogan's group (Koc University)"),
+                        '"Tactile perception of virtual edges and gratings displayed by '
+                        'friction modulation via ultrasonic actuation"'),
     "event": Threshold(0.0023, "s", "shortest friction drop felt apart",
                        "Gueorguiev et al. 2019, IEEE Trans Haptics (short ultrasonic square "
                        "reductions of friction)"),

@@ -78,6 +78,9 @@ def test_the_table_states_each_source_and_the_touch_formula():
     assert THRESHOLDS["event"].value == pytest.approx(2.3e-3)
     assert THRESHOLDS["temporal"].value == 800.0
     assert all(t.source and t.what for t in THRESHOLDS.values())
+    # a paper, not a group: its title (its abstract reports the 14 %)
+    assert "gratings displayed by friction modulation via ultrasonic" in THRESHOLDS[
+        "period"].source
 
 
 @pytest.mark.parametrize("kind", sorted(NEAR))
@@ -149,10 +152,32 @@ scene = "c.toml"
 """
 
 
-def test_a_protocols_stimuli_are_compared_pairwise(tmp_path):
-    (tmp_path / "p.toml").write_text(PARAMETRIC)
+@pytest.mark.parametrize("levels, farthest", [
+    ("[5.2, 5.5, 5.65]", "5.65"),  # 4, 10 and 13 %: none reaches 14 %
+    ("[5.1, 5.65, 5.75]", None),  # 5.75 is 15 %: the levels under it are what a design needs
+    ("[5.75]", None)])
+def test_a_design_of_levels_warns_only_when_none_reaches_the_threshold(tmp_path, levels,
+                                                                       farthest):
+    """Constant stimuli measure a threshold: levels below it are expected, and only a
+    design whose farthest level is below it warns, once, naming that level."""
+    (tmp_path / "p.toml").write_text(PARAMETRIC.replace("[5.65, 5.75]", levels))
     found = protocol_findings(load_protocol(tmp_path / "p.toml"))
-    assert [(f.kind, f.where) for f in found] == [("period", "stimuli 5 and 5.65")]
+    if farthest is None:
+        assert found == []
+    else:
+        assert [(f.kind, f.where) for f in found] == [("period", f"stimuli 5 and {farthest}")]
+        assert "none reaches the threshold" in found[0].message
+        assert THRESHOLDS["period"].source in found[0].message
+
+
+def test_the_bundled_constant_stimuli_design_is_not_flagged():
+    """period-2afc's levels span 2 to 32 %: three under 14 %, as a threshold's
+    measurement needs (each was a warning before)."""
+    bundled = Path(__file__).resolve().parents[1] / "app" / "experiment" / "protocols"
+    assert protocol_findings(load_protocol(bundled / "period-2afc.toml")) == []
+
+
+def test_listed_stimuli_are_compared_pairwise(tmp_path):
     for name, period in (("a", 5.0), ("b", 5.6), ("c", 6.4)):  # a-b 12 %, b-c 14.3 %
         (tmp_path / f"{name}.toml").write_text(HEAD + GRATING.format(render="hybrid",
                                                                      period=period, low=0.6))
@@ -183,7 +208,7 @@ def test_validate_perception_warns_and_never_fails(tmp_path, capsys):
     assert out.startswith("ok ")
     assert err.count("\n") == 1 and "perception: layer \"lines\": period 3.3 mm" in err
     assert "2 v / f_touch" in err
-    (tmp_path / "p.toml").write_text(PARAMETRIC)
+    (tmp_path / "p.toml").write_text(PARAMETRIC.replace("[5.65, 5.75]", "[5.2, 5.65]"))
     assert main(["validate", "--perception", str(tmp_path / "p.toml")]) == 0
     out, err = capsys.readouterr()
     assert "(protocol, 1 perception warning)" in out and "5 and 5.65" in err

@@ -4,9 +4,12 @@
 Pairs compared:
 
 - parametric stimuli (``[stimuli]`` with ``vary`` and ``levels``): the reference against
-  each level, the pairs its trials present; their values compared by ``vary``'s
+  its farthest level (the largest: levels are above the reference), by ``vary``'s
   threshold (``perception.compare_values``: periods 14 %, depths and clip levels 11 %).
-  A staircase has no fixed levels: only its scene is checked.
+  Constant stimuli measure a threshold, so levels under it are expected (answered
+  correctly less often than at the threshold, the nearest near chance); only a design
+  with none beyond it warns: its psychometric function stays below the threshold's point
+  and cannot place it. A staircase has no fixed levels: only its scene is checked.
 - listed stimuli (``[[stimulus]]``, or renderers crossed): every pair of stimuli from
   different scene files, their layers matched one to one
   (``perception.compare_scenes``); two renderings of one scene differ by their
@@ -32,10 +35,14 @@ def protocol_findings(protocol: Protocol) -> list[Finding]:
     out = [Finding(f.kind, f.where, f.value, f"{path.name}: {f.message}")
            for path, scene in scenes.items() for f in scene_findings(scene)]
     if st.vary is not None and st.levels:
-        for level in st.levels:
-            found = compare_values(st.vary, st.reference, level,
-                                   f"stimuli {st.reference:g} and {level:g}")
-            out += [found] if found is not None else []
+        farthest = max(st.levels)  # every level is above the reference (protocol)
+        found = compare_values(st.vary, st.reference, farthest,
+                               f"stimuli {st.reference:g} and {farthest:g}")
+        if found is not None:
+            out.append(Finding(found.kind, found.where, found.value,
+                               f"{found.message}; the farthest of {len(st.levels)} level"
+                               f"{'s' * (len(st.levels) != 1)}: none reaches the threshold, "
+                               f"and a design that measures it needs levels on both sides"))
     for a, b in combinations(st.listed, 2):
         if a.scene != b.scene:
             found = compare_scenes(scenes[a.scene], scenes[b.scene],
