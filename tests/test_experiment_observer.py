@@ -207,7 +207,8 @@ def test_every_participant_meets_its_weber_fraction_in_short_presentations(tmp_p
         observer.attribute = "period_mm"
         correct = 0
         for i in range(1, n + 1):
-            pair, answer = ((reference, comparison), "2") if i % 2 else ((comparison, reference), "1")
+            pair, answer = (((reference, comparison), "2") if i % 2
+                            else ((comparison, reference), "1"))
             trial = Trial(i, False, tuple(x.name for x in pair), 5.55, 0.55, answer, ("1", "2"))
             correct += observer.present(trial, pair).response == answer
         share.append(correct / n)

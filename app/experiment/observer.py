@@ -28,9 +28,9 @@ target under the finger, mu'(t). From mu'(t) along the finger's path it takes:
   features only their rhythm counts).
 
 The stroke is the same for every stimulus whose lines run alike (its seed is the
-participant's), so what differs between stimuli is what the pipeline made of them; the features of a stimulus are
-computed once and kept (``feel`` is cached by scene text and area), which keeps a
-simulated session to a few pipeline runs.
+participant's), so what differs between stimuli is what the pipeline made of them; the
+features of a stimulus are computed once and kept (``feel`` is cached by scene text and
+area), which keeps a simulated session to a few pipeline runs.
 
 How it answers. The attribute judged follows ``vary``: period for ``period_mm``, contrast
 for ``depth`` and ``level``, fidelity for a list of stimuli (seed 003's "accuracy of
