@@ -196,3 +196,31 @@ def test_scenes_that_name_files_carry_them(tmp_path):
         assert main(["replay", str(folder / "1.toml"), str(folder / "1.csv"), "--out",
                      str(again), "--quiet"]) == 0
         assert (again / "commands.csv").read_bytes() == (folder / "1" / "commands.csv").read_bytes()
+
+
+def test_a_strangers_session_folder_is_one_line_each(tmp_path, protocol_file, monkeypatch, capsys):
+    """analyse reads session.json and results.csv as a stranger's files: JSON nested
+    100,000 deep was a RecursionError (exit 70), a link to /dev/zero took 3.5 GB, a FIFO
+    hung; a results table larger than any protocol's was read whole (2.3 GB for 173 MB)."""
+    import frictex.app.experiment.session as session_module
+    good = tmp_path / "good"
+    session(protocol_file, good, record="results")
+    cases = {"session.json": [("deep", lambda p: p.write_text("[" * 100_000 + "]" * 100_000),
+                               "JSON nested too deep"),
+                              ("zero", lambda p: p.symlink_to("/dev/zero"), "character device"),
+                              ("fifo", os.mkfifo, "FIFO")],
+             "results.csv": [("rfifo", os.mkfifo, "FIFO"),
+                             ("rbig", lambda p: p.write_bytes(b"x" * 400_000),
+                              "more than the 300,000")]}
+    monkeypatch.setattr(session_module, "MAX_SESSION_FILE_BYTES", 300_000)
+    for name, made in cases.items():
+        for case, make, said in made:
+            folder = tmp_path / case
+            folder.mkdir()
+            for other in ("session.json", "results.csv"):
+                if other != name:
+                    (folder / other).write_bytes((good / other).read_bytes())
+            make(folder / name)
+            assert main(["experiment", "analyse", str(folder)]) == 2, case
+            err = capsys.readouterr().err.strip().splitlines()
+            assert len(err) == 1 and said in err[0] and str(folder / name) in err[0], (case, err)

@@ -205,15 +205,26 @@ def create(folder: Path, protocol, seed: int, participant: str, pid: str | None 
     return Session(folder, info, [])
 
 
+#: largest session.json or results.csv read (bytes): a protocol's most trials (200,000: a
+#: 2AFC of 100 levels, 1000 repetitions and 2 orders) take some 30 MB of either
+MAX_SESSION_FILE_BYTES = 64 << 20
+
+
 def read_info(folder: Path) -> dict:
-    """``session.json`` of ``folder`` (InputError when it is not a session folder)."""
+    """``session.json`` of ``folder`` (InputError when it is not a session folder). Read
+    as a stranger's file: a regular UTF-8 file of at most :data:`MAX_SESSION_FILE_BYTES`,
+    JSON of any nesting a one-line error."""
+    from frictex.textures.library import read_utf8
     path = Path(folder) / "session.json"
+    if not path.exists() and not path.is_symlink():
+        raise InputError(f"{folder}: not a session folder (no session.json)")
     try:
-        info = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"{folder}: not a session folder (no session.json)") from None
-    except (OSError, ValueError, UnicodeDecodeError) as exc:
+        info = json.loads(read_utf8(path, MAX_SESSION_FILE_BYTES))
+    except InputError as exc:  # not a regular file, too large, not UTF-8 text
         raise InputError(f"{path}: cannot be read as a session ({exc})") from None
+    except (ValueError, RecursionError) as exc:
+        what = "nested too deep" if isinstance(exc, RecursionError) else exc
+        raise InputError(f"{path}: cannot be read as a session (JSON {what})") from None
     if not isinstance(info, dict) or info.get("format") != FORMAT or not isinstance(
             info.get("seed"), int):
         raise InputError(f"{path}: not a format {FORMAT} session file")
@@ -223,9 +234,10 @@ def read_info(folder: Path) -> dict:
 def read_rows(folder: Path, repair: bool = False) -> list[dict]:
     """The rows of ``folder``'s results table. A last line without a line end (a write
     cut short) is not a row; ``repair`` also cuts it from the file."""
+    from frictex.device.safe_files import read_bytes
     path = Path(folder) / "results.csv"
     try:
-        data = path.read_bytes()
+        data = read_bytes(path, MAX_SESSION_FILE_BYTES)  # a regular file, of bounded size
     except OSError as exc:
         raise InputError(f"{path}: cannot be read ({exc.strerror or exc})") from None
     complete = data[:data.rfind(b"\n") + 1]
