@@ -10,6 +10,9 @@ from __future__ import annotations
 
 import argparse
 import os
+from pathlib import Path
+
+from frictex.device.safe_text import escape_path
 
 #: Setting this environment variable to 1 lets texture files name files outside their folder.
 ALLOW_OUTSIDE_ENV = "FRICTEX_ALLOW_OUTSIDE"
@@ -40,3 +43,19 @@ def add_allow_outside(parser: argparse.ArgumentParser) -> None:
                         help="let texture files name files outside their own folder (absolute "
                              "paths, '..', links leading out); only for files you trust (the "
                              "same as FRICTEX_ALLOW_OUTSIDE=1)")
+
+
+def leads_out(base_dir: str | Path, name: str) -> str | None:
+    """How ``name``, a path relative to the folder ``base_dir``, leads outside it (a
+    phrase to follow the name: an absolute path, a '..' leading out, a symbolic link to
+    a file outside), or None when it stays in the folder or below (links followed as far
+    as they go)."""
+    if os.path.isabs(name):
+        return "is an absolute path"
+    if os.path.normpath(name).split(os.sep)[0] == os.pardir:
+        return "leads out of the folder through '..'"
+    root = os.path.realpath(base_dir)
+    real = os.path.realpath(os.path.join(base_dir, name))
+    if os.path.commonpath([root, real]) != root:
+        return f"passes through a symbolic link to {escape_path(Path(real))}, outside the folder"
+    return None

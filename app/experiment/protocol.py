@@ -80,7 +80,6 @@ so a protocol's numbers and strings are checked as a texture file's are.
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -304,17 +303,13 @@ def _scene_path(raw: str, base_dir: Path) -> Path:
     (and report on) any file of the machine."""
     from frictex.textures.errors import TextureError
     from frictex.textures.library import resolve_scene
-    from frictex.textures.outside import HOW, allow_outside_from_env
+    from frictex.textures.outside import HOW, allow_outside_from_env, leads_out
     local = base_dir / raw
-    allowed = allow_outside_from_env()
-    rule = f"a protocol names scenes in its own folder or below, or bundled ones ({HOW})"
-    if not allowed and (os.path.isabs(raw) or os.pardir in Path(os.path.normpath(raw)).parts):
-        raise TextureError(f"{quoted(raw)} leads out of the protocol's folder; {rule}")
+    how = None if allow_outside_from_env() else leads_out(base_dir, raw)
+    if how is not None:
+        raise TextureError(f"{quoted(raw)} {how}: a protocol names scenes in its own folder "
+                           f"or below, or bundled ones ({HOW})")
     if local.exists() or local.is_symlink():
-        root, real = os.path.realpath(base_dir), os.path.realpath(local)
-        if not allowed and os.path.commonpath([root, real]) != root:
-            raise TextureError(f"{quoted(raw)} passes through a symbolic link to "
-                               f"{escape_path(real)}, outside the protocol's folder; {rule}")
         return local
     if Path(raw).name != raw:
         raise TextureError(f"{escape_path(local)}: no such file")

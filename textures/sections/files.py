@@ -41,7 +41,7 @@ from typing import Callable
 from frictex.device.safe_files import file_problem, pinned
 from frictex.device.safe_text import escape, escape_path
 from frictex.textures.errors import KeyPath, TextureError
-from frictex.textures.outside import HOW
+from frictex.textures.outside import HOW, leads_out
 from frictex.textures.raster_io import PixelBudget
 from frictex.textures.schema import Reader, show
 
@@ -65,20 +65,10 @@ class Files:
         if not name:
             raise TextureError("is empty; expected a path relative to the texture file")
         real = self.real_path(name)
-        if self.allow_outside:
-            return real
-        if os.path.isabs(name):
-            raise TextureError(f"{show(name)} is an absolute path; a texture file names files "
-                               f"in its own folder or below ({HOW})")
-        root = os.path.realpath(self.base_dir)
-        if os.path.normpath(name).split(os.sep)[0] == os.pardir:
-            raise TextureError(f"{show(name)} leads out of the texture file's folder through "
-                               f"'..'; a texture file names files in its own folder or below "
-                               f"({HOW})")
-        if os.path.commonpath([root, str(real)]) != root:
-            raise TextureError(f"{show(name)} passes through a symbolic link to "
-                               f"{escape_path(real)}, outside the texture file's folder; a "
-                               f"texture file names files in its own folder or below ({HOW})")
+        how = None if self.allow_outside else leads_out(self.base_dir, name)
+        if how is not None:
+            raise TextureError(f"{show(name)} {how}: a texture file names files in its own "
+                               f"folder or below ({HOW})")
         return real
 
     def read(self, r: Reader, path: KeyPath, name: str, reader: Callable):
