@@ -354,3 +354,11 @@ def test_parse_sender(text, expect):
 def test_bad_sender_is_an_input_error(text):
     with pytest.raises(InputError, match="expected ADDR or ADDR:PORT"):
         parse_sender(text)
+
+
+def test_the_demos_line_says_when_nothing_came():
+    """It said 'from None' when no datagram came."""
+    from frictex.app.commands.demo import tuio_line
+    with TuioListener(0, width_mm=200.0, height_mm=100.0, host="127.0.0.1") as listener:
+        line = tuio_line(listener.counters())
+    assert "from no sender (nothing came): 0 datagrams" in line and "None" not in line

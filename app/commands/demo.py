@@ -163,6 +163,14 @@ def input_name(kind: str, arg) -> str:
     return INPUTS.get(kind).label(arg)
 
 
+def tuio_line(counts: dict) -> str:
+    """The demo's last line about a TUIO input: its ``counters()`` (what came from whom)."""
+    sender = "no sender (nothing came)" if counts["sender"] is None else counts["sender"]
+    return (f"demo: TUIO on {counts['listen']} from {sender}: {counts['datagrams']} "
+            f"datagrams, {counts['refused']} refused from other senders, {counts['dropped']} "
+            f"dropped (queue full), {counts['bad_packets']} malformed")
+
+
 def run(args: argparse.Namespace) -> int:
     if args.block is None:
         from frictex.app.live.haptic_thread import BLOCK_S
@@ -272,10 +280,7 @@ def _run(args: argparse.Namespace, headless: bool) -> int:
               f"{link['unplayed_samples']} of {link['commanded_samples']} samples unplayed"
               + "".join(f", {k} {v}" for k, v in link["unplayed_by_cause"].items() if v))
     if "datagrams" in summary["input_counts"]:  # TUIO: what came from whom
-        c = summary["input_counts"]
-        print(f"demo: TUIO on {c['listen']} from {c['sender']}: {c['datagrams']} datagrams, "
-              f"{c['refused']} refused from other senders, {c['dropped']} dropped (queue full), "
-              f"{c['bad_packets']} malformed")
+        print(tuio_line(summary["input_counts"]))
     if frames is not None:
         cut = (f" (cut at {args.duration:g} s by --duration)"
                if args.duration is not None and args.duration < hand.duration_s else "")
