@@ -210,6 +210,18 @@ def test_abort_flushes_what_the_device_holds_and_drops_the_queue(device):
     assert sink.status()["state"] == "closed"
 
 
+def _interrupt_at(n: int):
+    """A wait's interrupt check that raises KeyboardInterrupt at its ``n``-th call, and
+    the list of its calls."""
+    calls = []
+
+    def check():
+        calls.append(1)
+        if len(calls) >= n:
+            raise KeyboardInterrupt
+    return check, calls
+
+
 def test_an_interrupt_cuts_a_draining_close_short(device):
     """A close drains what is queued; an interrupt in its wait raises there, and
     ``abort`` after it turns the drained Stop into a flush."""
@@ -217,12 +229,7 @@ def test_an_interrupt_cuts_a_draining_close_short(device):
     sink = CommandSink(lambda: open_port(path), 1, RATE, paced=True, queue_blocks=200)
     for b in range(0, 10_000, 50):
         sink.send(b, np.full((50, 1), 2.0), None)
-    calls = []
-
-    def check():
-        calls.append(1)
-        if len(calls) >= 3:
-            raise KeyboardInterrupt
+    check, _ = _interrupt_at(3)
     with pytest.raises(KeyboardInterrupt), interruptible(check):
         sink.close()
     sink.abort()
@@ -237,12 +244,7 @@ def test_the_handshake_wait_ends_on_an_interrupt(tmp_path):
     ends it at the next turn of the wait, and the link's thread and port go with it."""
     master, slave = os.openpty()
     try:
-        calls = []
-
-        def check():
-            calls.append(1)
-            if len(calls) >= 5:
-                raise KeyboardInterrupt
+        check, calls = _interrupt_at(5)
         with pytest.raises(KeyboardInterrupt), interruptible(check):
             CommandSink(lambda: open_port(os.ttyname(slave)), 1, RATE, paced=True)
         assert len(calls) == 5
