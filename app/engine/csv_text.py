@@ -3,11 +3,13 @@
 
 Arrow's CSV writer prints floats as their shortest round-trip text (``0.6``), not with
 the fixed decimals the replay's tables have always had (``0.600000``), so the digits are
-written here by a compiled kernel. Rounding is decided in numpy, exactly: a value is
-scaled to integer units of 10**-N and rounded; a value whose float64 product lies within
+written here by compiled kernels, in two passes over the values and no temporary array
+of their size. The first (:func:`_scan`) decides each float's rounding exactly: a value
+is scaled to integer units of 10**-N and rounded, unless its float64 product lies within
 a few ulps of a half unit (where the product's own rounding could decide it), or beyond
-2**53 units, or not finite, is formatted by Python instead (rare: none in a typical
-table) and its text spliced in by the kernel.
+2**53 units, or is not finite; such a value (rare: none in a typical table) is formatted
+by Python and its text spliced in by the second pass (:func:`_write_rows`), which writes
+every other value's digits.
 """
 
 from __future__ import annotations
@@ -15,6 +17,12 @@ from __future__ import annotations
 import numpy as np
 
 from frictex.device.jit import njit
+
+#: 2**53: above it a float64 no longer holds every whole number of units
+_EXACT_UNITS = 2.0 ** 53
+#: a product this close to a half unit, relative to its size, is undecided: 4 ulps
+#: (an ulp of x >= 2**-1022 is at most x * 2**-52; below that no product is near a half)
+_NEAR_HALF = 2.0 ** -50
 
 
 def rows_text(columns: list[np.ndarray], formats: list[str]) -> memoryview:
@@ -24,30 +32,27 @@ def rows_text(columns: list[np.ndarray], formats: list[str]) -> memoryview:
     ``formats[j]`` is ``"%d"`` (int64 column) or ``"%.Nf"`` (float64 column, 0 <= N <= 15).
     """
     n = len(columns[0])
-    ncol = len(columns)
-    units = np.empty((ncol, n), dtype=np.int64)
-    decimals = np.empty(ncol, dtype=np.int64)
-    negative = np.zeros((ncol, n), dtype=np.bool_)
+    is_int = np.array([fmt == "%d" for fmt in formats], dtype=np.bool_)
+    decimals = np.array([-1 if fmt == "%d" else int(fmt[2:-1]) for fmt in formats],
+                        dtype=np.int64)
+    floats = _stacked([c for c, i in zip(columns, is_int) if not i], np.float64, n)
+    ints = _stacked([c for c, i in zip(columns, is_int) if i], np.int64, n)
+    source = np.zeros(len(formats), dtype=np.int64)  # each column's row in floats or ints
+    source[is_int] = np.arange(len(ints))
+    source[~is_int] = np.arange(len(floats))
+    float_decimals = decimals[~is_int]
+    largest, undecided = _scan(floats, float_decimals)
     width = 1  # bytes a row may take: the newline, then per column the widest value
+    for k, digits in enumerate(float_decimals.tolist()):
+        width += 3 + digits + _digits(int(largest[k]) // 10 ** digits)  # comma, sign, point
+    for row in ints:
+        width += 2 + _digits(np.abs(row).max(initial=0))  # comma, sign
+    float_column = np.flatnonzero(~is_int)
     special_at, special_text = [], []
-    for j, (values, fmt) in enumerate(zip(columns, formats)):
-        if fmt == "%d":
-            decimals[j] = -1
-            units[j] = values
-            width += 2 + _digits(np.abs(values).max(initial=0))  # comma, sign, digits
-            continue
-        digits = int(fmt[2:-1])
-        decimals[j] = digits
-        with np.errstate(over="ignore", invalid="ignore"):  # inf and NaN are undecided
-            scaled = np.abs(values) * float(10 ** digits)
-            undecided = ~(scaled < 2.0 ** 53) | (
-                np.abs(scaled - np.floor(scaled) - 0.5) <= 4.0 * np.spacing(scaled))
-        units[j] = np.where(undecided, 0.0, np.rint(scaled))
-        negative[j] = np.signbit(values)
-        width += 3 + digits + _digits(units[j].max(initial=0) // 10 ** digits)
-        for i in np.flatnonzero(undecided).tolist():
-            special_at.append(i * ncol + j)
-            special_text.append((fmt % values[i]).encode("ascii"))
+    for k, i in undecided.tolist():
+        j = int(float_column[k])
+        special_at.append(i * len(formats) + j)
+        special_text.append((formats[j] % floats[k, i]).encode("ascii"))
     order = np.argsort(np.array(special_at, dtype=np.int64), kind="stable")
     at = np.array(special_at, dtype=np.int64)[order]
     texts = [special_text[k] for k in order.tolist()]
@@ -55,8 +60,15 @@ def rows_text(columns: list[np.ndarray], formats: list[str]) -> memoryview:
     offsets[1:] = np.cumsum([len(t) for t in texts])
     blob = np.frombuffer(b"".join(texts), dtype=np.uint8) if texts else np.zeros(0, np.uint8)
     out = np.empty(n * width + int(offsets[-1]), dtype=np.uint8)
-    used = _write_rows(units, decimals, negative, at, offsets, blob, out)
+    used = _write_rows(floats, ints, is_int, source, decimals, at, offsets, blob, out)
     return memoryview(out[:used])
+
+
+def _stacked(columns: list[np.ndarray], dtype, n: int) -> np.ndarray:
+    """The columns as the rows of one C-contiguous array (0 rows if none)."""
+    if not columns:
+        return np.zeros((0, n), dtype=dtype)
+    return np.ascontiguousarray(np.stack(columns), dtype=dtype)
 
 
 def _digits(value) -> int:
@@ -68,6 +80,32 @@ def _digits(value) -> int:
 _PAIRS = np.frombuffer("".join(f"{k:02d}" for k in range(100)).encode("ascii"), dtype=np.uint8)
 #: 10**k for k = 0 .. 18 (int64)
 _POWERS = np.array([10 ** k for k in range(19)], dtype=np.int64)
+
+
+@njit(cache=True, nogil=True)
+def _scan(floats, decimals):
+    """Per float column (row ``k`` of ``floats``, ``decimals[k]`` decimals): the largest
+    whole number of units among the values decided here, and the (column, row) pairs of
+    the undecided values, which Python formats (see the module)."""
+    nf, n = floats.shape
+    largest = np.zeros(nf, dtype=np.int64)
+    undecided = []
+    for k in range(nf):
+        scale = float(_POWERS[decimals[k]])
+        top = 0.0
+        for i in range(n):
+            scaled = np.abs(floats[k, i]) * scale
+            if not (scaled < _EXACT_UNITS) or (
+                    np.abs(scaled - np.floor(scaled) - 0.5) <= scaled * _NEAR_HALF):
+                undecided.append((k, i))
+            elif scaled > top:
+                top = scaled
+        largest[k] = np.int64(np.rint(top))
+    found = np.empty((len(undecided), 2), dtype=np.int64)
+    for s in range(len(undecided)):
+        found[s, 0] = undecided[s][0]
+        found[s, 1] = undecided[s][1]
+    return largest, found
 
 
 @njit(cache=True, nogil=True)
@@ -100,8 +138,9 @@ def _write_uint(out, pos, value, min_digits):
 
 
 @njit(cache=True, nogil=True)
-def _write_rows(units, decimals, negative, special_at, offsets, blob, out):
-    ncol, n = units.shape
+def _write_rows(floats, ints, is_int, source, decimals, special_at, offsets, blob, out):
+    ncol = is_int.size
+    n = floats.shape[1] if floats.shape[0] else ints.shape[1]
     pos = 0
     s = 0
     for i in range(n):
@@ -115,24 +154,26 @@ def _write_rows(units, decimals, negative, special_at, offsets, blob, out):
                     pos += 1
                 s += 1
                 continue
-            value = units[j, i]
-            d = decimals[j]
-            if d < 0:
+            if is_int[j]:
+                value = ints[source[j], i]
                 if value < 0:
                     out[pos] = 45  # -
                     pos += 1
                     value = -value  # int64 ids are >= 0 in practice; -2**63 is refused upstream
                 pos = _write_uint(out, pos, value, 1)
                 continue
-            if negative[j, i]:
+            d = decimals[j]
+            x = floats[source[j], i]
+            if np.signbit(x):
                 out[pos] = 45
                 pos += 1
-            whole = value // _POWERS[d]
+            units = np.int64(np.rint(np.abs(x) * float(_POWERS[d])))
+            whole = units // _POWERS[d]
             pos = _write_uint(out, pos, whole, 1)
             if d:
                 out[pos] = 46  # .
                 pos += 1
-                pos = _write_uint(out, pos, value - whole * _POWERS[d], d)
+                pos = _write_uint(out, pos, units - whole * _POWERS[d], d)
         out[pos] = 10
         pos += 1
     return pos
