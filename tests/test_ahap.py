@@ -87,6 +87,73 @@ def test_a_later_curve_takes_over_from_an_earlier_one():
                     [1.0, 0.75, 0.5001, 0.8, 0.8, 0.8, 0.4, 0.5, 0.6], atol=1e-9)
 
 
+def _control_by_hand(t):
+    """The intensity control of the pattern in the test below, written out piece by piece:
+    a Parameter of 0.5 at 0.3 s, then a curve starting at 0.6 s with points 0.2 at +0.1 s
+    and 1.0 at +0.3 s."""
+    if t < 0.3:
+        return 1.0  # before the first control: neutral
+    if t < 0.6:
+        return 0.5  # the Parameter, held
+    if t < 0.7:
+        return 0.2  # the curve's first value, held from its Time to its first point
+    if t < 0.9:
+        return 0.2 + 0.8 * (t - 0.7) / 0.2
+    return 1.0  # the curve's last value, held
+
+
+def test_controls_take_effect_at_their_time_and_hold_to_the_next():
+    """Apple's dynamic parameters: a control changes nothing before its Time, a Parameter
+    holds its value, a curve interpolates between its points from its Time."""
+    clip, _ = parse_ahap(_doc(_event("HapticContinuous", 0.0, 1.2, HapticSharpness=0.0,
+                                     HapticIntensity=0.9),
+                              _control("HapticIntensityControl", 0.6, points=[(0.1, 0.2), (0.3, 1.0)]),
+                              _control("HapticIntensityControl", 0.3, 0.5)), depth=0.5)
+    times = [0.0, 0.1, 0.2999, 0.3, 0.45, 0.5999, 0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 1.0, 1.19]
+    assert_allclose(_level(clip, times), [0.9 * _control_by_hand(t) for t in times], atol=1e-9)
+
+
+def _pattern(seed):
+    """A random AHAP pattern: 1-4 haptic events within 0.5 s, 0-3 controls."""
+    rng = np.random.default_rng(seed)
+    items = []
+    for _ in range(rng.integers(1, 5)):
+        start, level, sharp = rng.uniform(0, 0.5), rng.uniform(0, 1), rng.uniform(0, 1)
+        if rng.random() < 0.5:
+            items.append(_event("HapticTransient", start, HapticIntensity=level,
+                                HapticSharpness=sharp))
+        else:
+            items.append(_event("HapticContinuous", start, rng.uniform(0.01, 0.3),
+                                HapticIntensity=level, HapticSharpness=sharp,
+                                AttackTime=rng.uniform(0, 0.05)))
+    for _ in range(rng.integers(0, 4)):
+        items.append(_random_control(rng))
+    return items, rng
+
+
+def _random_control(rng, time=None):
+    pid = str(rng.choice(["HapticIntensityControl", "HapticSharpnessControl"]))
+    lo = 0.0 if pid == "HapticIntensityControl" else -1.0
+    time = rng.uniform(0, 0.8) if time is None else time
+    if rng.random() < 0.5:
+        return _control(pid, time, rng.uniform(lo, 1.0))
+    offsets = np.sort(rng.uniform(0, 0.2, rng.integers(1, 4)))
+    return _control(pid, time, points=[(o, rng.uniform(lo, 1.0)) for o in offsets])
+
+
+@given(st.integers(0, 2**32 - 1), st.floats(0.0, 0.8))
+@settings(derandomize=True, max_examples=150, deadline=None)
+def test_no_control_changes_anything_before_its_time(seed, time):
+    items, rng = _pattern(seed)
+    before, _ = parse_ahap(_doc(*items), 0.5)
+    after, _ = parse_ahap(_doc(*items, _random_control(rng, time)), 0.5)
+    mu0, _ = before.sample(RATE)
+    mu1, _ = after.sample(RATE)
+    k = np.arange(min(mu0.size, mu1.size))
+    early = k[k / RATE < time]
+    assert_allclose(mu1[early], mu0[early], rtol=0, atol=0)
+
+
 def test_a_transient_plays_its_whole_pulse_at_the_sharpness_the_curve_gives_it():
     """Sharpness 1 (5 ms) lowered by the control to 0: a whole 30 ms pulse, back at 1."""
     clip, _ = parse_ahap(_doc(_event("HapticTransient", 0.0, HapticSharpness=1.0),

@@ -24,10 +24,13 @@ Mapping onto a friction display (``textures.clips`` says how a clip plays):
   full to the end (Sustained, the default) or a linear decay to 0 over DecayTime (not
   Sustained), and a linear release to 0 over the last ReleaseTime;
 - HapticIntensityControl (0-1) multiplies every event's intensity, HapticSharpnessControl
-  (-1 to 1) is added to every event's sharpness. Each ParameterCurve or Parameter of a
-  control holds from its Time until the next one of that control begins, which takes over
-  with a step: a curve is linear between its points and held at its last, a Parameter is
-  held at its value.
+  (-1 to 1) is added to every event's sharpness (Apple's dynamic parameters: a product for
+  intensity, a sum otherwise). Each ParameterCurve or Parameter of a control takes effect
+  at its Time and holds until the next one of that control begins, which takes over with a
+  step: a curve is held at its first point's value from its Time to that point, linear
+  between its points and held at its last, a Parameter is held at its value. Before the
+  first of a control, the control is neutral (x1, +0): a control changes nothing before
+  its Time, even one after every event has ended.
 
 Audio events and other parameters have no friction meaning: they are skipped and listed
 in the returned notes. Every problem is reported with its place in the file, e.g.

@@ -16,8 +16,9 @@ and mu' = 1 - depth * min(1, sum) (samples where the sum passed 1 are counted).
 Clip-wide curves (AHAP's dynamic parameters): ``intensity_curve`` multiplies every
 event's intensity, ``sharpness_curve`` is added to every event's sharpness (then clipped
 to [0, 1]; a transient takes the curve's value where it starts, for its whole pulse);
-both are piecewise linear through (t, value) points (two points at one time: a step) and
-hold their end values outside them.
+both are piecewise linear through (t, value) points (two points at one time: a step),
+neutral before their first point (a gain of 1, a shift of 0: a control changes nothing
+before its time) and held at their last value after it.
 """
 
 from __future__ import annotations
@@ -58,10 +59,12 @@ def _transient_length(sharpness: float) -> float:
 
 
 def _curve(points: Points, t: np.ndarray, default: float) -> np.ndarray:
+    """A clip-wide curve at times ``t`` (s): ``default`` before its first point (or
+    everywhere if it has none), linear between points, its last value after them."""
     if not points:
-        return np.full(t.shape, default)
+        return np.full(np.shape(t), default)
     ts, vs = zip(*points)
-    return np.interp(t, ts, vs)
+    return np.interp(t, ts, vs, left=default)
 
 
 @dataclass(frozen=True)
