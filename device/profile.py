@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from frictex.device.registry import Registry
+from frictex.device.registry import Expect, Registry
 
 
 #: How the modal profiles turn wanted amplitudes into actuator commands
@@ -202,8 +202,11 @@ SEED004_UM_PER_VOLT = 3.0 / 80.0
 
 #: The device profiles a scene's ``[device] profile`` may name: the one table of them.
 #: Another package adds one under entry-point group ``frictex.profiles`` (a
-#: :class:`ProfileSpec` naming an actuation it registers under ``frictex.actuations``).
-PROFILES: Registry[ProfileSpec] = Registry("device profile", "frictex.profiles")
+#: :class:`ProfileSpec` naming an actuation it registers under ``frictex.actuations``); an
+#: entry that is not a :class:`ProfileSpec` is refused (a warning naming it, an error where
+#: a scene names it).
+PROFILES: Registry[ProfileSpec] = Registry("device profile", "frictex.profiles",
+                                           expect=Expect.instance_of(ProfileSpec))
 PROFILES.register(DEFAULT_PROFILE, ProfileSpec(
     "single-mode glass plate of seed 003, one channel", "single-mode", friction_loop=True,
     carrier_hz=DEFAULT_CARRIER_HZ, amplitude_is_drive=True))

@@ -13,9 +13,11 @@ packages add theirs through an entry-point group:
 
 The group's entry points are read (not imported) the first time the registry is asked
 for a name or its names (the installed metadata once per process for every registry),
-and read again whenever a name is not found (a package installed since); an entry
-point's object is imported the first time its name is looked up, so listing the names
-imports no plugin. A registry whose names belong to a lower
+and read again by every lookup (:meth:`Registry.get`, :meth:`Registry.names`, ``in``)
+once a folder of ``sys.path`` has changed (its modification time: a package installed
+since, as ``%pip install`` in a running notebook does) or the path itself has, and
+whenever a name is not found; an entry point's object is imported the first time its
+name is looked up, so listing the names imports no plugin. A registry whose names belong to a lower
 layer than its implementations (the renderers, which texture files name) gets frictex's
 own entries from frictex's own entry points, as a plugin would: the lower layer then lists
 them without importing the higher one.
@@ -23,8 +25,9 @@ them without importing the higher one.
 Another package's entry point is refused on its own, never breaking the rest: one whose
 name is malformed, reserved (:attr:`Registry.reserved`, such as the renderer ``sho``) or
 already taken is left out with a one-line warning on stderr (``frictex: warning: ...``,
-once per process); one that cannot be imported is a :class:`PluginError` when its name is
-used, and is left out with such a warning where every entry is needed at once
+once per process); one that cannot be imported, or whose object is not what the registry
+holds (its ``expect``: a device profile that is a dict), is a :class:`PluginError` when its
+name is used, and is left out with such a warning where every entry is needed at once
 (:meth:`Registry.loaded`). A built-in registered after a plugin took its name replaces it
 (the plugin is refused, with the warning).
 
@@ -36,6 +39,7 @@ ones. This module is in the lowest layer so that every layer can register into i
 
 from __future__ import annotations
 
+import os
 import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -64,6 +68,20 @@ class PluginError(FrictexError, RuntimeError):
 _WARNED: set[str] = set()  # the warnings printed by this process
 
 
+def guarded(who: str, doing: str, call: Callable[..., T], *args) -> T:
+    """``call(*args)``, where ``call`` is another package's code: what it raises becomes a
+    :class:`PluginError` saying ``who`` failed ``doing`` what (one line, exit 1), so that
+    a plugin's bug is not reported as frictex's; frictex's own errors it raises
+    (:class:`~frictex.device.errors.FrictexError`: an ``InputError`` for a bad argument, a
+    ``DeviceError``) pass as they are."""
+    try:
+        return call(*args)
+    except FrictexError:
+        raise
+    except Exception as exc:  # noqa: BLE001 -- a plugin's bug, told as the plugin's
+        raise PluginError(f"{who} failed {doing}: {type(exc).__name__}: {exc}") from exc
+
+
 def warn_once(message: str) -> None:
     """``message`` on stderr as one line, ``frictex: warning: ...`` (control characters
     escaped), the first time this process says it."""
@@ -77,20 +95,45 @@ def warn_once(message: str) -> None:
 
 _INSTALLED = None  # importlib.metadata's entry points of every installed distribution
 _GROUPS: dict[str, list] = {}  # those of each group asked for, from _INSTALLED
+_STAMP: tuple = ()  # sys.path and its folders' modification times when _INSTALLED was read
+_READINGS = 0  # how many times _INSTALLED was read (a registry scans again after another)
 
 
-def _entry_points(group: str, fresh: bool) -> list:
-    """The installed entry points of ``group``. Reading them costs about 20 ms (every
-    installed distribution's metadata), so they are read once for every registry, and
-    again only when ``fresh`` (a name not found: a package installed since)."""
-    global _INSTALLED
-    if _INSTALLED is None or fresh:
+def _path_stamp() -> tuple:
+    """``sys.path`` with each folder's modification time (ns; None where it cannot be
+    read): installing a package into a folder adds its dist-info there, which changes the
+    time. A few microseconds per folder."""
+    stamp = []
+    for folder in sys.path:
+        try:
+            stamp.append((folder, os.stat(folder or ".").st_mtime_ns))
+        except (OSError, TypeError, ValueError):
+            stamp.append((folder, None))
+    return tuple(stamp)
+
+
+def _read_installed(fresh: bool = False) -> int:
+    """Read every installed distribution's entry points (about 20 ms) the first time, when
+    ``fresh`` (a name not found) and when :func:`_path_stamp` has changed since the last
+    reading (a package installed since); returns the number of readings so far."""
+    global _INSTALLED, _STAMP, _READINGS
+    stamp = _path_stamp()
+    if _INSTALLED is None or fresh or stamp != _STAMP:
         import importlib
         from importlib.metadata import entry_points
         if _INSTALLED is not None:
             importlib.invalidate_caches()
         _INSTALLED = entry_points()  # 3.11: SelectableGroups, 3.12: EntryPoints; both select
         _GROUPS.clear()
+        _STAMP = stamp
+        _READINGS += 1
+    return _READINGS
+
+
+def _entry_points(group: str, fresh: bool) -> list:
+    """The installed entry points of ``group``, from the one reading of the installed
+    metadata every registry shares (:func:`_read_installed`)."""
+    _read_installed(fresh)
     if group not in _GROUPS:
         _GROUPS[group] = list(_INSTALLED.select(group=group))
     return _GROUPS[group]
@@ -106,12 +149,42 @@ def _distribution(point) -> str:
     return point.dist.name if point.dist is not None else "?"
 
 
+def _a(value: object) -> str:
+    """What ``value`` is, for a message: "a dict", "the int 42"."""
+    if isinstance(value, type):
+        return f"the class {value.__module__}.{value.__qualname__}"
+    if isinstance(value, int | float | str | bool) or value is None:
+        return f"the {type(value).__name__} {value!r}"[:80]
+    return f"a {type(value).__name__}"
+
+
 @dataclass(frozen=True)
 class _Unloaded:
     """An entry point not imported yet (``importlib.metadata``'s, or the backport's where
     a package installs ``importlib_metadata``'s finder: the same interface)."""
 
     point: Any
+
+
+@dataclass(frozen=True)
+class Expect:
+    """What a registry's entries must be: ``test(entry)`` true; ``what`` says it in
+    messages ("a frictex.device.profile.ProfileSpec"). Another package's entry that is not
+    is refused when loaded (:class:`PluginError`), before frictex uses it."""
+
+    test: Callable[[Any], bool]
+    what: str
+
+    @classmethod
+    def instance_of(cls, kind: type) -> Expect:
+        """Entries that are instances of ``kind``."""
+        return cls(lambda entry: isinstance(entry, kind),
+                   f"a {kind.__module__}.{kind.__qualname__}")
+
+    @classmethod
+    def factory(cls, what: str) -> Expect:
+        """Entries that are called (a class or a function); ``what`` says its call."""
+        return cls(callable, what)
 
 
 class Registry(Generic[T]):
@@ -126,15 +199,18 @@ class Registry(Generic[T]):
     reserved : iterable of str, optional
         Names no other package may register (a name that means something else where the
         registry's names are offered, such as ``sho`` beside the renderers).
+    expect : Expect or None, optional
+        What another package's entry must be, checked when it is loaded; None: anything.
     """
 
-    def __init__(self, kind: str, group: str, reserved=()):
+    def __init__(self, kind: str, group: str, reserved=(), expect: Expect | None = None):
         self.kind = kind
         self.group = group
         self.reserved = frozenset(reserved)
+        self.expect = expect
         self._entries: dict[str, T | _Unloaded] = {}
         self._origin: dict[str, str] = {}
-        self._scanned = False
+        self._readings = 0  # the reading of the installed metadata last scanned (none: 0)
 
     @overload
     def register(self, name: str) -> Callable[[T], T]: ...
@@ -152,9 +228,10 @@ class Registry(Generic[T]):
         return entry
 
     def _add(self, name: str, entry, origin: str) -> None:
-        if not isinstance(name, str) or not name or name != name.strip() or ":" in name:
+        if (not isinstance(name, str) or not name or ":" in name
+                or any(ch.isspace() or not ch.isprintable() for ch in name)):
             raise PluginError(f"{self.kind} name {name!r} from {origin}: expected a "
-                              "non-empty name without spaces at its ends or ':'")
+                              "non-empty name without spaces or ':'")
         if name in self.reserved and origin != OWN_DISTRIBUTION:
             raise PluginError(f"{self.kind} {name!r} from {origin}: the name is reserved")
         known = self._entries.get(name)
@@ -175,8 +252,9 @@ class Registry(Generic[T]):
         again. A name already known from the same entry point is kept; another package's
         entry point under a known, reserved or malformed name is refused with a warning
         (module docstring)."""
-        self._scanned = True
-        points = sorted(_entry_points(self.group, fresh),
+        points = _entry_points(self.group, fresh)
+        self._readings = _READINGS
+        points = sorted(points,
                         key=lambda p: (_distribution(p) != OWN_DISTRIBUTION, _distribution(p)))
         for point in points:
             dist = _distribution(point)
@@ -199,13 +277,21 @@ class Registry(Generic[T]):
         except Exception as exc:  # a broken plugin names itself, not frictex
             raise PluginError(f"{self.kind} {name!r} of {self._origin[name]} cannot be "
                               f"loaded: {type(exc).__name__}: {exc}") from exc
+        if self.expect is not None and not self.expect.test(loaded):
+            raise PluginError(f"{self.kind} {name!r} of {self._origin[name]} is "
+                              f"{_a(loaded)}; expected {self.expect.what}")
         self._entries[name] = loaded
         return loaded
 
+    def _current(self) -> None:
+        """Scan again if the installed metadata was read again since the last scan, or
+        needs to be (a package installed since: :func:`_read_installed`)."""
+        if _read_installed() != self._readings:
+            self.scan()
+
     def get(self, name: str) -> T:
         """The entry registered under ``name``; :class:`UnknownName` lists the known."""
-        if not self._scanned:
-            self.scan()
+        self._current()
         if not isinstance(name, str) or name not in self._entries:
             self.scan(fresh=True)
         if isinstance(name, str) and name in self._entries:
@@ -228,8 +314,7 @@ class Registry(Generic[T]):
     def names(self) -> tuple[str, ...]:
         """Every registered name: frictex's own first in registration order, then the
         other packages' by distribution."""
-        if not self._scanned:
-            self.scan()
+        self._current()
         return tuple(self._entries)
 
     def origin(self, name: str) -> str:
@@ -240,8 +325,7 @@ class Registry(Generic[T]):
     def __contains__(self, name: object) -> bool:
         if not isinstance(name, str):
             return False
-        if not self._scanned:
-            self.scan()
+        self._current()
         if name not in self._entries:
             self.scan(fresh=True)
         return name in self._entries

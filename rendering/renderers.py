@@ -95,13 +95,21 @@ class PluginRenderer:
     """Another package's renderer, whose exceptions become :class:`PluginError` saying
     whose renderer failed on which layer, and what it raised; as do outputs that break
     :class:`LayerRenderer`'s contract where frictex would fail on them or write them:
-    mu' or covers not (fingers, samples), mu' not finite where the layer covers.
-    ``inner``: the plugin's renderer."""
+    mu' or covers not (fingers, samples), mu' not finite where the layer covers; and a
+    renderer built without ``initial_state`` or ``render``. ``inner``: the plugin's
+    renderer."""
 
     def __init__(self, factory: RendererFactory, who: str, layer: Any, rate_hz: float):
         self._who = who
         self._layer = getattr(layer, "name", "?")
         self.inner = self._guarded("building", factory, layer, rate_hz)
+        missing = [method for method in ("initial_state", "render")
+                   if not callable(getattr(self.inner, method, None))]
+        if missing:
+            raise PluginError(f"{who} built a {type(self.inner).__name__} without "
+                              f"{' or '.join(m + '()' for m in missing)} for layer "
+                              f"{self._layer!r}; expected a LayerRenderer "
+                              "(frictex.rendering.renderers.LayerRenderer)")
         self.any_layer = getattr(self.inner, "any_layer", False)
 
     def _guarded(self, doing: str, call, *args):

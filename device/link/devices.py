@@ -10,7 +10,10 @@ entry point::
 ``open_mydev(arg, request)`` gets ARG (the text after ``mydev:``, or after ``mydev://``;
 "" when none) and a :class:`DeviceRequest`, and returns an :class:`OutputDevice`. Raise
 ``frictex.device.errors.InputError`` for a bad ARG (exit 2) and ``DeviceError`` when the
-device cannot be reached (exit 1).
+device cannot be reached (exit 1). Anything else another package's factory or device
+raises (and a factory that is not callable, or returns no :class:`OutputDevice`) is a
+``PluginError`` naming the package (exit 1), not frictex's internal error
+(:func:`open_device`, :class:`PluginDevice`).
 
 ``device.link.host.open_sink`` is what the engine calls; importing ``device.link.host``
 registers the built-ins: ``sim`` (the simulated device in this process, ``device.link.simport``; ARG:
@@ -23,6 +26,7 @@ registered, else a path (``/dev/ttyACM0``, ``./tty``, ``COM3``) to ``port``.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import sys
@@ -36,7 +40,8 @@ import numpy as np
 from frictex.device.errors import InputError
 from frictex.device.link.port import URL_SCHEMES
 from frictex.device.link.session import PREFILL_S
-from frictex.device.registry import Registry
+from frictex.device.registry import (OWN_DISTRIBUTION, Expect, PluginError, Registry, guarded,
+                                     warn_once)
 
 
 @dataclass(frozen=True)
@@ -144,30 +149,118 @@ class OutputDevice(Protocol):
 
 #: ``factory(arg, request) -> OutputDevice``, by name
 DeviceFactory = Callable[[str, DeviceRequest], OutputDevice]
-DEVICES: Registry[DeviceFactory] = Registry("output device", "frictex.devices")
+DEVICES: Registry[DeviceFactory] = Registry(
+    "output device", "frictex.devices",
+    expect=Expect.factory("a factory(arg, request) returning an OutputDevice"))
 _COM = re.compile(r"COM\d+", re.IGNORECASE)
 
 
 def resolve(spec: str) -> tuple[DeviceFactory, str]:
     """The factory and ARG of a ``--device`` spec (see the module docstring); an unknown
     NAME is ``UnknownName`` (an InputError) listing the known."""
+    name, arg = _named(spec)
+    return DEVICES.get(name), arg
+
+
+def open_device(spec: str, request: DeviceRequest) -> OutputDevice:
+    """The output device of a ``--device`` spec, opened for ``request``: frictex's own as
+    its factory returns it, another package's checked and wrapped in a
+    :class:`PluginDevice` (the module docstring)."""
+    name, arg = _named(spec)
+    factory = DEVICES.get(name)
+    origin = DEVICES.origin(name)
+    if origin == OWN_DISTRIBUTION:
+        return factory(arg, request)
+    who = f"output device {name!r} of {origin}"
+    device = guarded(who, "opening", factory, arg, request)
+    missing = [member for member in _MEMBERS if not hasattr(device, member)]
+    if missing:
+        with contextlib.suppress(Exception):  # release what it opened, if it can
+            device.close()
+        raise PluginError(f"{who} returned a {type(device).__name__} without "
+                          f"{', '.join(missing)}; expected an OutputDevice "
+                          "(frictex.device.link.devices.OutputDevice)")
+    return PluginDevice(device, who)
+
+
+def _named(spec: str) -> tuple[str, str]:
+    """The registered name (or ``port``) and ARG of a ``--device`` spec."""
     if not isinstance(spec, str) or not spec.strip():
         raise InputError(f"device {spec!r}: expected NAME[:ARG], a URL or a port path")
     if "://" in spec:
         scheme, _, rest = spec.partition("://")
         if scheme in DEVICES:
-            return DEVICES.get(scheme), rest
+            return scheme, rest
         if scheme not in URL_SCHEMES:
             raise InputError(f"device {spec!r}: unknown URL scheme {scheme!r}; expected a "
                              f"device ({', '.join(DEVICES.names())}) or a pyserial URL "
                              f"({', '.join(s + '://' for s in URL_SCHEMES)})")
-        return DEVICES.get("port"), spec
+        return "port", spec
     name, _, arg = spec.partition(":")
     if name in DEVICES:
-        return DEVICES.get(name), arg
+        return name, arg
     if spec.startswith(("/", ".")) or _COM.fullmatch(spec) or (os.sep in spec and not arg):
-        return DEVICES.get("port"), spec
-    return DEVICES.get(name), arg  # NAME:ARG of a device not installed: listed as unknown
+        return "port", spec
+    return name, arg  # NAME:ARG of a device not installed: DEVICES.get lists the known
+
+
+#: what :func:`open_device` requires of another package's device
+_MEMBERS = ("label", "channels", "rate_hz", "paced", "info", "send", "wait_for_room",
+            "status", "unplayed_share", "device_force_n", "force_report", "forces_covered",
+            "close")
+
+
+class PluginDevice:
+    """Another package's output device (``inner``), whose methods raise a
+    :class:`PluginError` naming it for anything but frictex's own errors
+    (``registry.guarded``); its other attributes are the inner device's. ``abort`` is the
+    inner device's, or its ``close``; one that raises while a run is already failing is a
+    warning, so that the run's own error is the one reported."""
+
+    def __init__(self, inner: OutputDevice, who: str):
+        self.inner = inner
+        self._who = who
+
+    def __getattr__(self, name: str):
+        return getattr(self.inner, name)
+
+    def send(self, start_index: int, amplitudes_um: np.ndarray,
+             phases_rad: np.ndarray | None = None) -> None:
+        guarded(self._who, "in send()", self.inner.send, start_index, amplitudes_um,
+                phases_rad)
+
+    def wait_for_room(self, timeout_s: float) -> bool:
+        return guarded(self._who, "in wait_for_room()", self.inner.wait_for_room, timeout_s)
+
+    def status(self) -> dict:
+        return guarded(self._who, "in status()", self.inner.status)
+
+    def unplayed_share(self) -> float:
+        return guarded(self._who, "in unplayed_share()", self.inner.unplayed_share)
+
+    def device_force_n(self) -> float | None:
+        return guarded(self._who, "in device_force_n()", self.inner.device_force_n)
+
+    def force_report(self, index0: int | None = None, n: int | None = None):
+        return guarded(self._who, "in force_report()", self.inner.force_report, index0, n)
+
+    def forces_covered(self, index0: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+        return guarded(self._who, "in forces_covered()", self.inner.forces_covered, index0, n)
+
+    def close(self) -> None:
+        guarded(self._who, "in close()", self.inner.close)
+
+    def abort(self) -> None:
+        try:
+            guarded(self._who, "in abort()", getattr(self.inner, "abort", self.inner.close))
+        except PluginError as exc:
+            warn_once(str(exc))
+
+    def __enter__(self) -> PluginDevice:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
 
 def sim_pairs(arg: str, sim_args: tuple[str, ...]) -> list[tuple[str, str]]:

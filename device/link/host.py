@@ -49,7 +49,7 @@ import numpy as np
 
 from frictex.device.errors import InputError
 from frictex.device.link import protocol as p
-from frictex.device.link.devices import DEVICES, DeviceRequest, resolve, sim_pairs
+from frictex.device.link.devices import DEVICES, DeviceRequest, open_device, sim_pairs
 from frictex.device.link.forces import ForceReport
 from frictex.device.link.port import open_port
 from frictex.device.link.portthread import PortThread
@@ -639,5 +639,4 @@ def open_sink(spec: str, channels: int, rate_hz: float, *, phases: bool = False,
                             faults=faults, stderr=stderr, stall_s=stall_s,
                             max_stalls=max_stalls, sim_args=tuple(sim_args), profile=profile,
                             prefill_s=prefill_s, catch_up=catch_up)
-    factory, arg = resolve(spec)
-    return factory(arg, request)
+    return open_device(spec, request)
