@@ -169,7 +169,8 @@ def test_a_refused_edit_is_said_at_the_line_of_the_file_on_disk(tmp_path):
     said = ed.refusal(refused.value)
     line = int(said.split(":")[1])
     assert lines[line - 1] == "sigma_mm = 2.0" and "layer[2].sigma_mm" in said
-    ed.revert(text)
+    ed.revert()  # the duty set
+    ed.doc["layer"][1]["sigma_mm"] = 2.0
     ed.doc["layer"][0]["shape"] = "sine"
     ed.doc["layer"][0]["duty"] = 0.3
     with pytest.raises(ValueError) as refused:
@@ -243,12 +244,11 @@ def valid_nudges(ed):
         for c in ed.controls():
             if isinstance(c, Slider) and c.written:
                 sign = 1.0 if c.value + 10 * c.step <= c.hi else -1.0
-                before = ed.text()
                 assert ed.set(c.key, c.value + sign * 10 * c.step) != c.value
                 try:
                     load_scene(ed.path, text=ed.text())
                 except ValueError:
-                    ed.revert(before)
+                    ed.revert()
                     continue
                 yield c
 

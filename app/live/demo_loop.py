@@ -36,7 +36,12 @@ L opens (and closes) the layer panel at the left of the frame
 (``rendering.visual.layer_panel``, its state ``app.live.layer_edit``): a click on a
 layer selects it, a drag on a slider sets a number key, a click on a menu and one of
 its options sets a word key, Ctrl+Z (or U) undoes, Ctrl+S (or the panel's button)
-saves. The pointer there never touches the scene. The input thread only turns clicks
+saves. The pointer there never touches the scene. A save writes only onto the file
+as the panel read it: if it changed on disk since (an editor), the save is refused and
+said, and Ctrl+S again overwrites it (``layer_edit.SaveConflict``). A reload of the file
+or of one it names keeps the panel's unsaved edits on top of it where they still apply
+(``LayerEdit.reread``), and says how many it kept and dropped; so does closing and
+opening the panel. Moving to another scene with unsaved edits says they were dropped. The input thread only turns clicks
 and drags into panel events queued to the render thread, which applies them once per
 frame (a drag's latest position): the edited text is loaded into a scene
 (``load_scene(path, text=...)``) and handed to the haptic side as a reload is
@@ -71,7 +76,7 @@ import numpy as np
 from PIL import Image
 
 from frictex.app.live.haptic_thread import EVENTS
-from frictex.app.live.layer_edit import EditError, LayerEdit, panel_view
+from frictex.app.live.layer_edit import EditError, LayerEdit, SaveConflict, panel_view
 from frictex.app.live.watch import FileWatch
 from frictex.device.safe_text import escape
 from frictex.rendering.renderers import render_modes
@@ -403,10 +408,13 @@ class DemoLoop:
 
     def _open_editor(self) -> None:
         """Read the scene's file into a new editor while the panel is open (a file the
-        panel cannot edit is said in the panel)."""
+        panel cannot edit is said in the panel); an editor already open on that file
+        (the panel closed and opened again) is kept, its unsaved edits with it."""
         if not self.panel_open:
             return
         path = Path(self.playlist[self.index])
+        if self.editor is not None and self.editor.path == path:
+            return
         try:
             self.editor = LayerEdit(path)
         except EditError as exc:
@@ -461,8 +469,10 @@ class DemoLoop:
         written = editor.set(key, value, group=drag)
         if editor.text() != before:
             name = editor.layer_names()[editor.layer]
-            if not self._apply_text(f"{name} {key} = {written}"):
-                editor.revert(before)
+            if self._apply_text(f"{name} {key} = {written}"):
+                self.panel_note = ""
+            else:
+                editor.revert()
 
     def _apply_text(self, what: str) -> bool:
         """The editor's text as the scene, to the haptic side and the picture."""
@@ -480,6 +490,7 @@ class DemoLoop:
         """Ctrl+Z: take back the panel's last change (a whole drag)."""
         if self.editor is not None and self.editor.undo():
             self._apply_text("undo")
+            self.panel_note = ""
 
     def save_edit(self) -> None:
         """Ctrl+S: write the edited file (a bundled scene: its copy in the user's
@@ -488,6 +499,12 @@ class DemoLoop:
             return
         try:
             path = self.editor.save()
+        except SaveConflict as exc:
+            self.panel_note = "not saved: the file changed on disk; Ctrl+S again overwrites"
+            self.error = str(exc)
+            self.log("save-failed", str(exc))
+            self.say(str(exc))
+            return
         except (EditError, ValueError, OSError) as exc:
             self.panel_note = f"not saved: {exc}"
             self.log("save-failed", str(exc))
@@ -540,6 +557,7 @@ class DemoLoop:
             self.index = index
             self.files, self._missing_since = FileWatch(), None
             self._watch(path)
+            self._drop_editor()
             self._open_editor()
 
     def _watch(self, path: Path) -> None:
@@ -587,11 +605,44 @@ class DemoLoop:
             self.log("reload-failed", str(exc))
             self.say(self.error)
             return
-        if self._apply(scene, self.renderer, "reload", f"{scene.name} ({what} changed)"):
-            self.say(f"reloaded {scene.name} ({what} changed)")
+        text, kept = self._reread_editor(path)
+        if self._apply(scene if text is None else load_scene(path, text=text), self.renderer,
+                       "reload", f"{scene.name} ({what} changed)", text):
+            self.say(f"reloaded {scene.name} ({what} changed){kept}")
             self._open_editor()  # the file as saved, from now on
         else:
             self.say(self.error)
+
+    def _reread_editor(self, path: Path) -> tuple[str | None, str]:
+        """The panel's editor on ``path`` (reloaded: it changed and loads) takes the file
+        again, its unsaved edits on top where they still apply (``LayerEdit.reread``).
+        Returns the text to show (None: the file's own) and what became of the edits
+        (", kept N unsaved panel edits, dropped M", or "")."""
+        editor = self.editor
+        if editor is None or editor.path != path:
+            return None, ""
+        dirty = editor.dirty
+        try:
+            kept, dropped = editor.reread()
+        except EditError as exc:
+            self.editor, self.panel_note = None, str(exc)
+            self._open_editor()
+            return None, ""
+        if not dirty:
+            return None, ""
+        said = f", kept {kept} unsaved panel edit{'s' * (kept != 1)}"
+        if dropped:
+            said += f", dropped {dropped} that no longer appl{'y' if dropped != 1 else 'ies'}"
+        self.panel_note = said[2:]
+        return (editor.text() if kept else None), said
+
+    def _drop_editor(self) -> None:
+        """Another scene: the editor goes; its unsaved edits, if any, are said lost."""
+        editor, self.editor = self.editor, None
+        if editor is not None and editor.dirty:
+            n = editor.unsaved
+            self.say(f"{editor.path.name}: {n} unsaved panel edit{'s' * (n != 1)} dropped "
+                     "(another scene was chosen)")
 
     @staticmethod
     def say(message: str) -> None:

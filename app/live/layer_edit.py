@@ -6,9 +6,10 @@ comments, key order and formatting: saving writes back every line the author did
 change byte for byte. A layer's controls come from the loader's key tables
 (``textures.keys.LAYER_KEYS``, each key's ``textures.schema`` spec):
 
-- a number key (``Num``, ``Int``) is a :class:`Slider` over its allowed range, narrowed
-  to what can be dragged (see :func:`slider_span`); a value set is clamped into it and
-  rounded to the slider's step (a short decimal in the file);
+- a number key (``Num``, ``Int``) is a :class:`Slider` over the range the format
+  allows, a side the format leaves open (or bounds only by its catch-all, such as
+  ``MAX_MM``) narrowed to what can be dragged (see :func:`slider_span`); a value set is
+  clamped into it and rounded to the slider's step (a short decimal in the file);
 - a word key (``Choice``: ``blend``, ``render``, a grating's ``edge``, ...) is a
   :class:`Menu` of its options. The keys that decide which other keys a layer takes
   (``type``, a height's ``shape``, a clip's ``clip`` and ``trigger``, a waveform's
@@ -25,10 +26,28 @@ A refused edit is said at the line of the file as it is on disk (the file the us
 sees; :meth:`LayerEdit.refusal`), not of the edited text, where a key the edit wrote
 adds a line.
 
+A grating's ``edge`` menu carries its ``edge_mm`` along: "smooth" needs edge_mm > 0
+(at most the narrower band), so switching to it writes edge_mm at half the narrower
+band (min(duty, 1 - duty) x period_mm / 2, the middle of what the format allows) unless
+the file gives a usable one; "square" refuses an edge_mm, so switching back removes it.
+
 Every change pushes the document's text before it on the undo stack; changes made with
-the same ``group`` (one slider drag) share one entry. :meth:`LayerEdit.save` writes the
-document to :func:`save_path` (a bundled scene: a copy in the user's scene folder, with
-the files it names) and checks that the saved file loads.
+the same ``group`` (one slider drag) share one entry; a change the loader refuses is
+taken back whole (:meth:`LayerEdit.revert`), leaving no undo entry.
+
+The file is the author's as much as the panel's: :meth:`LayerEdit.save` writes only
+onto the text the panel read (its content, mtime and size, :attr:`LayerEdit.disk`). If
+the file changed since (an editor saved it), the save is refused with
+:class:`SaveConflict`; saving again with the file as it was then found overwrites it
+deliberately. A save keeps the file's permission bits (a new copy gets the mode a file
+created under the umask gets). :meth:`LayerEdit.reread` takes the file again after it
+changed and reloaded, keeping the panel's unsaved edits (each a layer's key set, the
+undo stack's too) on top of it where the layer is still there, of the same type and
+name, and the result loads.
+
+:meth:`LayerEdit.save` writes the document to :func:`save_path` (a bundled scene: a copy
+in the user's scene folder, with the files it names) and checks that the saved file
+loads.
 """
 
 from __future__ import annotations
@@ -36,8 +55,9 @@ from __future__ import annotations
 import math
 import os
 import re
+import secrets
 import shutil
-import tempfile
+import stat as statmod
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -45,9 +65,10 @@ import tomlkit
 from tomlkit.exceptions import TOMLKitError
 
 from frictex.device.errors import InputError
+from frictex.app.live.watch import stamp
 from frictex.rendering.visual.layer_panel import ControlView, PanelView
 from frictex.textures.errors import Locator, TextureError, field_name
-from frictex.textures.keys import COMMON, LAYER_KEYS
+from frictex.textures.keys import COMMON, LAYER_KEYS, MAX_ANGLE_DEG, MAX_MM
 from frictex.textures.library import LIBRARY_DIR, user_scenes_dir
 from frictex.textures.loader import check_scene, load_scene
 from frictex.textures.references import referenced_files
@@ -63,6 +84,38 @@ MAX_UNDO = 200
 
 class EditError(InputError):
     """A texture file the panel cannot edit or save (unreadable TOML, no layers, ...)."""
+
+
+class SaveConflict(EditError):
+    """The file to save changed on disk since the panel read it (or, for a copy of a
+    bundled scene, is there already): not overwritten unless saved again."""
+
+
+@dataclass(frozen=True)
+class OnDisk:
+    """A texture file as the panel read or wrote it: its ``text`` and (mtime ns, size
+    bytes), or None for both when there is no file."""
+
+    text: str | None
+    mtime_size: tuple[int, int] | None
+
+
+def on_disk(path: Path) -> OnDisk:
+    """``path``'s text and (mtime ns, size) now (one open file: the two agree), or
+    ``OnDisk(None, None)`` when it is not there."""
+    try:
+        with open(path, "rb") as f:
+            info = os.fstat(f.fileno())
+            data = f.read()
+    except FileNotFoundError:
+        return OnDisk(None, None)
+    except OSError as exc:
+        raise EditError(f"cannot read {Path(path).name}: {exc.strerror or exc}") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise EditError(f"{Path(path).name} is not UTF-8 text: {exc}") from None
+    return OnDisk(text, (info.st_mtime_ns, info.st_size))
 
 
 @dataclass(frozen=True)
@@ -108,14 +161,21 @@ def _step(span: float) -> float:
     return 10.0 ** math.floor(math.log10(span / MIN_STEPS))
 
 
+#: the bounds the format gives every key of a unit as a catch-all (not a limit of the key)
+CATCH_ALL = {"mm": MAX_MM, "deg": MAX_ANGLE_DEG}
+
+
 def slider_span(spec: Num | Int, value: float, extent_mm: float) -> tuple[float, float, float]:
     """(lo, hi, step) of a slider for ``spec`` holding ``value``.
 
-    The allowed range (``spec``'s bounds) narrowed to what a drag can use: lengths and
-    positions (unit mm) to [0, ``extent_mm``] (the display's larger side), angles to
-    [-180, 180] deg, an unbounded side to 0 below and 4 x max(|value|, 0.25) above;
-    always wide enough to hold ``value``. An open bound (``gt``/``lt``) is kept out by
-    one step.
+    The range the format allows (``spec``'s bounds), where a side is open or at the
+    format's catch-all bound for the unit (``CATCH_ALL``: lengths and positions at
+    +-``MAX_MM``, angles at +-``MAX_ANGLE_DEG``) narrowed to what a drag can use:
+    lengths and positions to [0, ``extent_mm``] (the display's larger side), angles to
+    [-180, 180] deg, other units to 0 below and 4 x max(|value|, 0.25) above; a side the
+    format bounds more tightly (a height's ``rise_mm``, -100 to 100 mm) is the slider's
+    end. Always wide enough to hold ``value``. An open bound (``gt``/``lt``) is kept out
+    by one step.
     """
     lower = spec.ge if isinstance(spec, Int) else (spec.gt if spec.gt is not None else spec.ge)
     upper = spec.le if isinstance(spec, Int) else (spec.lt if spec.lt is not None else spec.le)
@@ -126,8 +186,11 @@ def slider_span(spec: Num | Int, value: float, extent_mm: float) -> tuple[float,
         lo, hi = -180.0, 180.0
     else:
         lo, hi = 0.0, 4.0 * max(abs(value), 0.25)
-    lo = max(lo, lower) if lower is not None else lo
-    hi = min(hi, upper) if upper is not None else hi
+    catch_all = CATCH_ALL.get(unit, MAX_MAGNITUDE)
+    if lower is not None:
+        lo = max(lo, lower) if lower <= -catch_all else lower
+    if upper is not None:
+        hi = min(hi, upper) if upper >= catch_all else upper
     lo, hi = min(lo, value), max(hi, value)
     if not hi > lo:
         hi = lo + 1.0
@@ -246,35 +309,69 @@ def save_path(path: Path) -> Path:
     return user_scenes_dir() / Path(path).name if is_bundled(path) else Path(path)
 
 
+def _parse(path: Path, text: str):
+    """``text`` (the file at ``path``) as a tomlkit document with at least one layer."""
+    try:
+        doc = tomlkit.parse(text)
+    except TOMLKitError as exc:
+        raise EditError(f"{path.name} is not TOML the panel can edit: {exc}") from None
+    if not doc.get("layer"):
+        raise EditError(f"{path.name} has no [[layer]] to edit")
+    return doc
+
+
+def _same_layer(a, b) -> bool:
+    """Layer tables ``a`` and ``b`` are the same layer: same type, same name (or none)."""
+    return a.get("type") == b.get("type") and a.get("name") == b.get("name")
+
+
+def edits(doc, base) -> list[tuple[int, str, object]]:
+    """What ``doc`` sets that ``base`` does not: (layer index, key, value) for each key
+    of a layer that ``base`` lacks or gives another value (the panel only sets keys;
+    one it removed, a smooth edge's edge_mm, is put back by the menu it goes with)."""
+    out = []
+    for k, (table, was) in enumerate(zip(doc["layer"], base["layer"])):
+        for key, value in table.items():
+            if key not in was or was[key] != value:
+                out.append((k, str(key), value))
+    return out
+
+
+def _edited(text: str, old_base, new_base) -> str:
+    """``text`` (a document made from ``old_base`` by the panel) made again on
+    ``new_base``: its edits (:func:`edits`) set where the layer is the same one."""
+    doc = tomlkit.parse(tomlkit.dumps(new_base))
+    layers = doc["layer"]
+    for k, key, value in edits(tomlkit.parse(text), old_base):
+        if k < len(layers) and k < len(old_base["layer"]) and _same_layer(layers[k], old_base["layer"][k]):
+            _set(layers[k], key, value)
+    return tomlkit.dumps(doc)
+
+
 class LayerEdit:
-    """The texture file at ``path`` (its ``text`` if given: what the demo shows) open
-    for editing; see the module docstring.
+    """The texture file at ``path`` open for editing; see the module docstring.
 
     Attributes
     ----------
     layer : the index of the layer selected (``[[layer]]`` order), or None.
+    original : the text the document was read from or last saved as.
+    disk : the file as last read or written (:class:`OnDisk`): a save writes only onto it.
     """
 
-    def __init__(self, path: Path, text: str | None = None):
+    def __init__(self, path: Path):
         self.path = Path(path)
-        if text is None:
-            try:
-                text = self.path.read_text(encoding="utf-8")
-            except (OSError, UnicodeDecodeError) as exc:
-                raise EditError(f"cannot read {self.path.name} for editing: {exc}") from None
-        self.original = text
-        try:
-            self.doc = tomlkit.parse(text)
-        except TOMLKitError as exc:
-            raise EditError(f"{self.path.name} is not TOML the panel can edit: {exc}") from None
-        layers = self.doc.get("layer")
-        if not layers:
-            raise EditError(f"{self.path.name} has no [[layer]] to edit")
+        self.disk = on_disk(self.path)
+        if self.disk.text is None:
+            raise EditError(f"cannot read {self.path.name} for editing: no such file")
+        self.original = self.disk.text
+        self.doc = _parse(self.path, self.original)
         display = self.doc.get("display", {})
         self.extent_mm = float(max(display.get("width_mm", 100.0), display.get("height_mm", 100.0)))
         self.layer: int | None = None
         self._undo: list[tuple[str, object]] = []  # (text before, group)
         self._group: object = None
+        self._last: tuple | None = None  # the last set(): (text before, group before, pushed)
+        self._overwrite: OnDisk | None = None  # the changed file a save was refused on
         self._refused: tuple = (None, None, frozenset())  # (layer, _layout, refused_keys)
 
     # -- reading -----------------------------------------------------------------------
@@ -287,6 +384,11 @@ class LayerEdit:
     def dirty(self) -> bool:
         """The document differs from the text it was opened with."""
         return self.text() != self.original
+
+    @property
+    def unsaved(self) -> int:
+        """How many keys the document sets that the text it was read from does not."""
+        return len(edits(self.doc, tomlkit.parse(self.original)))
 
     def layer_names(self) -> tuple[str, ...]:
         """Each layer as the panel lists it: "<name> (<type>)", an unnamed one by the
@@ -361,11 +463,14 @@ class LayerEdit:
         table = self.doc["layer"][self.layer]
         if control.written and control.value == new:
             return new
-        if group is None or group != self._group or not self._undo:
-            self._undo.append((self.text(), group))
+        before = self.text()
+        pushed = group is None or group != self._group or not self._undo
+        self._last = (before, self._group, pushed)
+        if pushed:
+            self._undo.append((before, group))
             del self._undo[:-MAX_UNDO]
         self._group = group
-        table[key] = new
+        _set(table, key, new)
         return new
 
     def undo(self) -> bool:
@@ -377,10 +482,51 @@ class LayerEdit:
         self._group = None
         return True
 
-    def revert(self, text: str) -> None:
-        """Put the document back to ``text`` (a change the loader refused), the undo
-        stack as it is."""
-        self.doc = tomlkit.parse(text)
+    def revert(self) -> None:
+        """Take back the last :meth:`set` (a change the loader refused) whole: the
+        document as before it, and the undo entry it made, if it made one (a refused
+        drag position leaves the drag's entry to the positions before it)."""
+        if self._last is None:
+            return
+        before, group, pushed = self._last
+        self.doc = tomlkit.parse(before)
+        if pushed:
+            self._undo.pop()
+            self._group = group
+        self._last = None
+
+    def reread(self) -> tuple[int, int]:
+        """Take the file again (it changed on disk and loads), keeping the unsaved edits
+        on top of it: each key the panel set (:func:`edits`, in the document and in each
+        undo entry) set again in the same layer (same place, type and name), as long as
+        the result loads; an edit that no longer applies is dropped. Returns (edits
+        kept, edits dropped) of the document."""
+        disk = on_disk(self.path)
+        if disk.text is None:
+            raise EditError(f"cannot read {self.path.name} for editing: no such file")
+        doc = _parse(self.path, disk.text)
+        old, wanted = tomlkit.parse(self.original), edits(self.doc, tomlkit.parse(self.original))
+        text = _edited(self.text(), old, doc)
+        try:
+            load_scene(self.path, text=text)
+        except (ValueError, OSError):
+            text = disk.text  # the edits, together, are refused: each is tried alone
+            for k, key, value in wanted:
+                trial = tomlkit.parse(text)
+                if k < len(trial["layer"]) and _same_layer(trial["layer"][k], old["layer"][k]):
+                    _set(trial["layer"][k], key, value)
+                    try:
+                        load_scene(self.path, text=tomlkit.dumps(trial))
+                    except (ValueError, OSError):
+                        continue
+                    text = tomlkit.dumps(trial)
+        self._undo = [(_edited(t, old, doc), g) for t, g in self._undo]
+        self.disk, self.original, self.doc = disk, disk.text, tomlkit.parse(text)
+        self._group, self._last, self._overwrite = None, None, None
+        if self.layer is not None and self.layer >= len(self.doc["layer"]):
+            self.layer = len(self.doc["layer"]) - 1
+        kept = len(edits(self.doc, doc))
+        return kept, len(wanted) - kept
 
     def end_group(self) -> None:
         """The drag ended: the next change starts a new undo entry."""
@@ -390,23 +536,35 @@ class LayerEdit:
 
     def save(self) -> Path:
         """Write the document to :func:`save_path` (atomically: a new file renamed over
-        the old), with the files it names for a copy of a bundled scene; the saved file
-        must load (``textures.loader.load_scene``). Returns the path written."""
+        the old, with the old file's permission bits), with the files it names for a
+        copy of a bundled scene; the saved file must load (``textures.loader.load_scene``).
+        Returns the path written.
+
+        Raises :class:`SaveConflict` when the file there is not the one the panel read
+        (:attr:`disk`; for a first copy of a bundled scene: no file): changed on disk
+        since, by content or by mtime and size. Saving again while the file is as that
+        refusal found it overwrites it."""
         target = save_path(self.path)
         text = self.text()
         load_scene(self.path, text=text)  # refused before anything is written
+        now = on_disk(target)
+        expected = self.disk if target == self.path else OnDisk(None, None)
+        if now != expected and now != self._overwrite:
+            self._overwrite = now
+            what = "changed on disk since the panel read it" if target == self.path else "is there already"
+            raise SaveConflict(f"{target.name} {what}: not saved. Ctrl+S again overwrites it "
+                               "with the panel's version; or leave it, and a good edit of the "
+                               "file reloads (keeping the panel's unsaved edits)")
         try:
             target.parent.mkdir(parents=True, exist_ok=True)
             if target != self.path:
                 self._copy_references(target.parent)
-            fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
-            with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
-                f.write(text)
-            os.replace(tmp, target)
+            _write_keeping_mode(target, text)
         except OSError as exc:
-            raise EditError(f"cannot save {target}: {exc}") from None
+            raise EditError(f"cannot save {target}: {exc.strerror or exc}") from None
         load_scene(target)
-        self.path, self.original = target, text
+        self.path, self.original, self._overwrite = target, text, None
+        self.disk = OnDisk(text, on_disk(target).mtime_size)
         return target
 
     def _copy_references(self, folder: Path) -> None:
@@ -420,10 +578,56 @@ class LayerEdit:
                 shutil.copy2(ref, folder / ref.relative_to(home))
 
 
+def _set(table, key: str, value) -> None:
+    """Set ``key`` of a layer ``table`` to ``value``, with what a grating's ``edge``
+    carries along (:func:`_edge_width`)."""
+    table[key] = value
+    if key == "edge" and table.get("type") == "grating":
+        _edge_width(table, value)
+
+
+def _edge_width(table, edge: str) -> None:
+    """A grating's ``edge`` set to ``edge``: "smooth" needs edge_mm > 0 and at most the
+    narrower band, so one not usable is set to half that band (rounded to 3 significant
+    digits, the middle of what the format allows); "square" refuses an edge_mm, so it
+    is removed."""
+    if edge == "square":
+        table.pop("edge_mm", None)
+        return
+    specs = LAYER_KEYS["grating"]
+    duty = float(table.get("duty", specs["duty"].default))
+    period = float(table.get("period_mm", 0.0))
+    narrow = min(duty, 1.0 - duty) * period
+    if narrow > 0.0 and not 0.0 < float(table.get("edge_mm", 0.0)) <= narrow:
+        table["edge_mm"] = float(f"{narrow / 2:.3g}")
+
+
+def _write_keeping_mode(target: Path, text: str) -> None:
+    """Write ``text`` to ``target`` through a new file in its folder renamed over it;
+    the new file has ``target``'s permission bits, or when there is no ``target`` the
+    mode a file created under the umask gets (0o666 less the umask)."""
+    try:
+        mode = statmod.S_IMODE(os.stat(target).st_mode)
+    except FileNotFoundError:
+        mode = None
+    tmp = target.parent / f".{target.name}.{secrets.token_hex(4)}.tmp"
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as f:
+            if mode is not None:
+                os.fchmod(f.fileno(), mode)
+            f.write(text)
+        os.replace(tmp, target)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
 def panel_view(editor: LayerEdit | None, open_menu: str | None = None, note: str = "") -> PanelView:
     """What the panel shows of ``editor`` (None: a file it could not open, ``note`` saying
     why): its layers, the selected one's controls labelled "key = value" ("(default)"
-    where the file does not give the key), the menu ``open_menu`` open."""
+    where the file does not give the key), the menu ``open_menu`` open, whether the
+    scene differs from the file as read or last saved."""
     if editor is None:
         return PanelView((), None, (), note=note)
     controls = []
@@ -435,4 +639,4 @@ def panel_view(editor: LayerEdit | None, open_menu: str | None = None, note: str
         else:
             controls.append(ControlView("slider", c.key, label, fraction=c.fraction))
     return PanelView(editor.layer_names(), editor.layer, tuple(controls), open_menu, note,
-                     editor.can_undo)
+                     editor.can_undo, editor.dirty)

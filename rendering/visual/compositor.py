@@ -138,7 +138,7 @@ class Compositor:
         #: the box (x, y, w, h) px of every text drawn in the last frame, in drawing
         #: order (its background included): what a layout check reads
         self.text_boxes: list[tuple[float, float, float, float]] = []
-        self._banner_band: tuple[float, float] | None = None  # (top, bottom) px
+        self._banner_band: tuple[float, float, float] | None = None  # (top, bottom, left) px
         self.panels = DevicePanels(self)
         self.status_bottom = 4.0  # px: below the status lines of the last frame drawn
         self.scene = scene
@@ -198,7 +198,7 @@ class Compositor:
         w, h = size or texture.size
         if isinstance(texture, AtlasEntry):
             band = self._banner_band
-            if band is not None and y < band[1] and y + h > band[0]:
+            if band is not None and y < band[1] and y + h > band[0] and x + w > band[2]:
                 return  # under the banner's opaque band: hidden whole, not cut
             self.batch.queue("text", self._quad(x, y, w, h, *self.atlas.uv(texture)))
             self.text_boxes.append((float(x), float(y), float(w), float(h)))
@@ -336,22 +336,26 @@ class Compositor:
         if banner is not None:
             tex, band = banner
             self._banner_band = None  # the banner's own text is drawn
-            self.draw_rect(0, band[0], w, band[1] - band[0],
+            left = band[2]
+            self.draw_rect(left, band[0], w - left, band[1] - band[0],
                            BANNER_RGBA.get(view.banner_kind, BANNER_RGBA["info"]))
-            self.draw_texture(tex, max(4.0, (w - tex.size[0]) / 2), band[0] + 6)
+            self.draw_texture(tex, left + max(4.0, (w - left - tex.size[0]) / 2), band[0] + 6)
         self.batch.flush()
         ctx.disable(moderngl.BLEND)
 
-    def _banner(self, view: FrameView) -> tuple[AtlasEntry, tuple[float, float]]:
-        """The banner's text and its band (top, bottom) px across the frame: centred for
-        an emergency stop, else at 12 % of the height; below the status lines either way."""
+    def _banner(self, view: FrameView) -> tuple[AtlasEntry, tuple[float, float, float]]:
+        """The banner's text and its band (top, bottom, left) px across the frame right
+        of the layer panel (its column; none when closed: the panel's rows stay readable):
+        centred for an emergency stop, else at 12 % of the height; below the status lines
+        either way."""
         w, h = self.size
+        left = self.layer_panel_rect()[2] if view.layer_panel is not None else 0.0
         size_px = self.font_px + 2
-        tex = self.text(wrap(view.banner, size_px, w - 40), size_px, background=(0, 0, 0, 0))
+        tex = self.text(wrap(view.banner, size_px, w - left - 40), size_px, background=(0, 0, 0, 0))
         bh = tex.size[1] + 12
         y = (h - bh) / 2 if view.banner_kind == "stop" else h * 0.12
         y = min(max(y, self.status_bottom + 4.0), max(h - bh, 0.0))
-        return tex, (y, y + bh)
+        return tex, (y, y + bh, left)
 
     def _scope_lines(self) -> np.ndarray:
         """The scope strip's background, rules and grid: triangles (k, 6), made again only

@@ -46,8 +46,9 @@ class ControlView:
 @dataclass(frozen=True)
 class PanelView:
     """What the panel shows: the layers (``selected``: index or None), the selected
-    layer's controls, the menu open (its key or None) and a line of news (saved, an
-    error)."""
+    layer's controls, the menu open (its key or None), a line of news (saved, an
+    error), whether there is a change to undo and whether the scene differs from its
+    file as read or last saved (``dirty``: "unsaved changes" on the save button)."""
 
     layers: tuple[str, ...]
     selected: int | None
@@ -55,6 +56,7 @@ class PanelView:
     open_menu: str | None = None
     note: str = ""
     can_undo: bool = False
+    dirty: bool = False
 
 
 @dataclass(frozen=True)
@@ -89,7 +91,8 @@ def panel_layout(view: PanelView, rect: tuple[float, float, float, float],
             if view.open_menu == c.key:
                 specs += [dict(kind="option", text=o, key=c.key, option=o) for o in c.options]
     specs.append(dict(kind="undo", text="undo  (Ctrl+Z)" if view.can_undo else "nothing to undo"))
-    specs.append(dict(kind="save", text="save  (Ctrl+S)"))
+    specs.append(dict(kind="save", text="unsaved changes: Ctrl+S saves" if view.dirty
+                      else "save  (Ctrl+S): no changes"))
     if view.note:
         specs.append(dict(kind="note", text=view.note))
     rows, top = [], y + PAD_PX
