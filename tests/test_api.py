@@ -39,9 +39,17 @@ def test_every_public_name_resolves_and_is_documented():
     for name in frictex.__all__:
         value = getattr(frictex, name)
         assert value.__doc__, name
-    assert "replay" in dir(frictex)
     with pytest.raises(AttributeError, match="no attribute 'nope'"):
         frictex.nope  # noqa: B018
+
+
+def test_all_is_the_lazy_table_and_dir_the_public_names():
+    """``__all__`` is written out for type checkers; it must name exactly what
+    ``__getattr__`` imports. ``dir`` lists those, not the module's helpers."""
+    assert frictex.__all__ == sorted(frictex._WHERE)
+    public = [name for name in dir(frictex) if not name.startswith("__")]
+    assert public == frictex.__all__
+    assert "__version__" in dir(frictex)
 
 
 @pytest.mark.parametrize("scene, trace", [(SCENE, TRACE), ("keyclick-ring", "keyclick-press-100hz")])

@@ -6,7 +6,7 @@ The public, typed API::
 
     r = frictex.replay("grating-5mm", "swipe-40mms-50hz")   # bundled scene and trace
     r.summary.counts.contact_samples                        # typed summary
-    r.friction.to_pandas()                                  # pyarrow Table -> DataFrame
+    r.friction.to_pandas()                                  # DataFrame (needs pandas)
 
 - :func:`load_scene`, :func:`read_trace`, :func:`synth_trace`, :func:`make_trace`: the
   inputs (a texture file or bundled scene, a trace CSV or bundled trace, a synthetic
@@ -15,7 +15,13 @@ The public, typed API::
 - :func:`build_pipeline`: the haptic pipeline of a scene; :meth:`Pipeline.process` runs
   a whole trace through it;
 - :func:`replay`: a scene and a trace through the pipeline on a virtual clock, with the
-  tables in memory or written into a folder (as ``frictex replay``); a :class:`Replay`.
+  tables in memory or written into a folder (as ``frictex replay``); a :class:`Replay`;
+- for a plugin's author (a renderer or an output device registered by entry point, as
+  ``frictex.renderers`` and ``frictex.devices`` in frictex's own pyproject.toml): the
+  contracts :class:`LayerRenderer` (what a layer's renderer answers, given each block's
+  :class:`FingerBlock`) and :class:`OutputDevice` (what an output device answers, opened
+  with a :class:`DeviceRequest`), and :class:`PluginError`, what frictex raises for another
+  package's renderer or device that fails.
 
 Units everywhere: positions in mm, time in s, velocity in mm/s, force in N, frequency in
 Hz, vibration amplitude in um zero-to-peak, friction relative (mu' = mu(w) / mu(0)).
@@ -36,7 +42,6 @@ of them (nor numpy, numba, scipy or pyarrow): each name here is imported on firs
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
 
 #: public name -> the module that defines it
@@ -72,23 +77,23 @@ _WHERE = {
     "DeviceError": "frictex.device.errors",
     "OutputSpaceError": "frictex.device.errors",
     "RunFailed": "frictex.device.errors",
+    "LayerRenderer": "frictex.rendering.renderers",
+    "FingerBlock": "frictex.rendering.tracking.tracks",
+    "OutputDevice": "frictex.device.link.devices",
+    "DeviceRequest": "frictex.device.link.devices",
+    "PluginError": "frictex.device.registry",
 }
 
-__all__ = sorted(_WHERE)
-
-if TYPE_CHECKING:
-    from frictex._inputs import load_scene, make_trace, read_trace, synth_trace
-    from frictex._pipeline import Pipeline, build_pipeline
-    from frictex._replay import Replay, replay
-    from frictex.app.engine.summary_types import (Clamps, Counts, FingerErrors, GapInfo, LayerInfo,
-                                                  OutputInfo, SceneInfo, Summary, TimeOrderInfo,
-                                                  Timings, TraceInfo)
-    from frictex.device.errors import (DeviceError, FrictexError, InputError, OutputSpaceError,
-                                       RunFailed)
-    from frictex.rendering.input.trace_file import Trace, TraceError
-    from frictex.rendering.pipeline import BlockOutput
-    from frictex.textures.model import Scene
-
+# written out, not computed, so that type checkers read it (tests/test_api.py: the keys of
+# _WHERE, sorted)
+__all__ = [
+    "BlockOutput", "Clamps", "Counts", "DOWN", "DeviceError", "DeviceRequest", "FingerBlock",
+    "FingerErrors", "FrictexError", "GapInfo", "InputError", "LayerInfo", "LayerRenderer",
+    "MOVE", "OutputDevice", "OutputInfo", "OutputSpaceError", "Pipeline", "PluginError",
+    "Replay", "RunFailed", "Scene", "SceneInfo", "Summary", "TimeOrderInfo", "Timings",
+    "Trace", "TraceError", "TraceInfo", "UP", "build_pipeline", "load_scene", "make_trace",
+    "read_trace", "replay", "synth_trace",
+]
 
 # annotated here, given by __getattr__ on first use, documented for pdoc
 DOWN: int
@@ -100,21 +105,58 @@ UP: int
 __version__: str
 """The installed frictex's version, as ``frictex --version`` prints it."""
 
-
-def __getattr__(name: str):
-    """Import a public name on first use (module docstring)."""
-    if name == "__version__":
-        from frictex.app.commands.cli import version
-        value = version()
-    else:
-        try:
-            module = _WHERE[name]
-        except KeyError:
-            raise AttributeError(f"module 'frictex' has no attribute {name!r}") from None
-        value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
+if TYPE_CHECKING:  # what a type checker sees; "X as X": re-exported (mypy --strict)
+    from frictex._inputs import load_scene as load_scene
+    from frictex._inputs import make_trace as make_trace
+    from frictex._inputs import read_trace as read_trace
+    from frictex._inputs import synth_trace as synth_trace
+    from frictex._pipeline import Pipeline as Pipeline
+    from frictex._pipeline import build_pipeline as build_pipeline
+    from frictex._replay import Replay as Replay
+    from frictex._replay import replay as replay
+    from frictex.app.engine.summary_types import Clamps as Clamps
+    from frictex.app.engine.summary_types import Counts as Counts
+    from frictex.app.engine.summary_types import FingerErrors as FingerErrors
+    from frictex.app.engine.summary_types import GapInfo as GapInfo
+    from frictex.app.engine.summary_types import LayerInfo as LayerInfo
+    from frictex.app.engine.summary_types import OutputInfo as OutputInfo
+    from frictex.app.engine.summary_types import SceneInfo as SceneInfo
+    from frictex.app.engine.summary_types import Summary as Summary
+    from frictex.app.engine.summary_types import TimeOrderInfo as TimeOrderInfo
+    from frictex.app.engine.summary_types import Timings as Timings
+    from frictex.app.engine.summary_types import TraceInfo as TraceInfo
+    from frictex.device.errors import DeviceError as DeviceError
+    from frictex.device.errors import FrictexError as FrictexError
+    from frictex.device.errors import InputError as InputError
+    from frictex.device.errors import OutputSpaceError as OutputSpaceError
+    from frictex.device.errors import RunFailed as RunFailed
+    from frictex.device.link.devices import DeviceRequest as DeviceRequest
+    from frictex.device.link.devices import OutputDevice as OutputDevice
+    from frictex.device.registry import PluginError as PluginError
+    from frictex.rendering.input.trace_file import Trace as Trace
+    from frictex.rendering.input.trace_file import TraceError as TraceError
+    from frictex.rendering.pipeline import BlockOutput as BlockOutput
+    from frictex.rendering.renderers import LayerRenderer as LayerRenderer
+    from frictex.rendering.tracking.tracks import FingerBlock as FingerBlock
+    from frictex.textures.model import Scene as Scene
+else:  # at run time each name is imported on first use; a checker sees only those above
+    def __getattr__(name: str) -> object:
+        """Import a public name on first use (module docstring)."""
+        if name == "__version__":
+            from frictex.app.commands.cli import version
+            value = version()
+        else:
+            try:
+                module = _WHERE[name]
+            except KeyError:
+                raise AttributeError(f"module 'frictex' has no attribute {name!r}") from None
+            import importlib
+            value = getattr(importlib.import_module(module), name)
+        globals()[name] = value
+        return value
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+    """The public names and the module's own dunder attributes (not its helpers)."""
+    return sorted({*__all__, "__version__",
+                   *(name for name in globals() if name.startswith("__") and name.endswith("__"))})

@@ -1,0 +1,139 @@
+"""A user's script type-checks against frictex's typed API with ``mypy --strict``, and a
+misspelt name or a wrong argument type in it is an error (the API's names are explicit
+exports; nothing public is ``Any``).
+
+mypy reads the source tree, not the editable install (whose import hook it cannot
+follow): a temporary folder holds a package ``frictex`` laid out as the wheel installs it
+(pyproject.toml's ``package-dir``), made of links into the checkout, on ``MYPYPATH``.
+``--follow-imports=silent``: frictex's own modules are read for their types, not checked
+to --strict themselves.
+"""
+
+import os
+import subprocess
+import sys
+import textwrap
+import tomllib
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("mypy", reason="mypy is not installed (pip install 'frictex[test]')")
+
+ROOT = Path(__file__).resolve().parents[1]
+
+USER_SCRIPT = '''\
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+
+import frictex
+
+
+def mean_mu(out: frictex.BlockOutput) -> float:
+    mu: npt.NDArray[np.float64] = out.mu_target
+    return float(mu[out.contact].mean())
+
+
+def main(folder: Path) -> None:
+    scene: frictex.Scene = frictex.load_scene("grating-5mm")
+    trace: frictex.Trace = frictex.read_trace("swipe-40mms-50hz")
+    synth: frictex.Trace = frictex.synth_trace("human", rate_hz=120.0, duration_s=1.0, seed=3)
+    pipe: frictex.Pipeline = frictex.build_pipeline(scene, rate_hz=10_000.0)
+    out: frictex.BlockOutput = pipe.process(synth)
+    channels: tuple[str, ...] = pipe.channels
+    r: frictex.Replay = frictex.replay(scene, trace, out=folder, format="npz", renderer="sht")
+    s: frictex.Summary = r.summary
+    contact: int = s.counts.contact_samples
+    files: tuple[str, ...] = s.output.files
+    name: str = s.scene.name
+    rows: int = r.friction.num_rows
+    columns: list[str] = r.commands.column_names
+    clamps: frictex.Clamps = s.clamps
+    codes: tuple[int, int, int] = (frictex.DOWN, frictex.MOVE, frictex.UP)
+    version: str = frictex.__version__
+    try:
+        frictex.load_scene("no-such-scene")
+    except frictex.InputError as error:
+        print(error)
+    print(mean_mu(out), channels, contact, files, name, rows, columns, clamps.total, codes,
+          version, s.to_dict())
+'''
+
+#: (line, what mypy must say there) of each mistake in MISTAKES
+MISTAKES = '''\
+import frictex
+
+scene = frictex.load_scene("grating-5mm")
+frictex.replya(scene, "swipe-40mms-50hz")
+frictex.build_pipeline(scene, rate_hz="10 kHz")
+'''
+EXPECTED = [
+    (4, 'Module has no attribute "replya"; maybe "replay"?  [attr-defined]'),
+    (5, 'Argument "rate_hz" to "build_pipeline" has incompatible type "str"; expected "float"'
+        '  [arg-type]'),
+]
+
+
+def source_tree(folder: Path) -> Path:
+    """``folder/frictex``, the package as pyproject.toml's ``package-dir`` installs it,
+    made of links to the checkout's files and folders; returns ``folder``."""
+    setup = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    dirs = setup["tool"]["setuptools"]["package-dir"]
+    top = folder / "frictex"
+    top.mkdir(parents=True)
+    for entry in (ROOT / dirs["frictex"]).iterdir():
+        (top / entry.name).symlink_to(entry)
+    for package, where in dirs.items():
+        if package != "frictex":
+            (top / package.removeprefix("frictex.")).symlink_to(ROOT / where)
+    return folder
+
+
+@pytest.fixture(scope="module")
+def checker(tmp_path_factory):
+    """mypy --strict on a script (a path relative to its folder), the source tree and the
+    cache shared by this module's tests."""
+    shared = tmp_path_factory.mktemp("mypy")
+    env = {**os.environ, "MYPYPATH": str(source_tree(shared / "src"))}
+    env.pop("PYTHONPATH", None)
+
+    def check(script: Path) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "mypy", "--strict",
+                               "--follow-imports=silent", "--no-error-summary",
+                               "--cache-dir", str(shared / "cache"), script.name],
+                              capture_output=True, text=True, env=env, cwd=script.parent,
+                              timeout=300)
+    return check
+
+
+def test_a_user_s_script_passes_mypy_strict(tmp_path, checker):
+    script = tmp_path / "use.py"
+    script.write_text(USER_SCRIPT, encoding="utf-8")
+    done = checker(script)
+    assert (done.returncode, done.stdout, done.stderr) == (0, "", "")
+
+
+def test_a_misspelt_name_and_a_wrong_argument_type_are_errors(tmp_path, checker):
+    script = tmp_path / "mistakes.py"
+    script.write_text(MISTAKES, encoding="utf-8")
+    done = checker(script)
+    assert done.returncode == 1, done.stderr
+    assert done.stdout.splitlines() == [f"mistakes.py:{line}: error: {message}"
+                                        for line, message in EXPECTED]
+
+
+def test_the_user_script_runs(tmp_path):
+    """The script the first test checks is one that works."""
+    code = USER_SCRIPT + textwrap.dedent(f'''
+        main(Path({str(tmp_path / "out")!r}))
+    ''')
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=tmp_path, timeout=300)
+    assert done.returncode == 0, done.stderr
+    error, printed = done.stdout.splitlines()
+    assert error.startswith("no-such-scene: no such file")
+    assert "('commands.npz', 'friction.npz') grating-5mm" in printed
