@@ -5,7 +5,6 @@ unsaved edits where they still apply; slider ranges from the format's own bounds
 grating's edge menu carries its edge_mm; a refused change leaves no undo entry."""
 
 import os
-import shutil
 import stat
 from pathlib import Path
 

@@ -617,7 +617,7 @@ class DemoLoop:
         """The panel's editor on ``path`` (reloaded: it changed and loads) takes the file
         again, its unsaved edits on top where they still apply (``LayerEdit.reread``).
         Returns the text to show (None: the file's own) and what became of the edits
-        (", kept N unsaved panel edits, dropped M", or "")."""
+        (", kept N unsaved panel values, dropped M ...", or "")."""
         editor = self.editor
         if editor is None or editor.path != path:
             return None, ""
@@ -630,7 +630,7 @@ class DemoLoop:
             return None, ""
         if not dirty:
             return None, ""
-        said = f", kept {kept} unsaved panel edit{'s' * (kept != 1)}"
+        said = f", kept {kept} unsaved panel value{'s' * (kept != 1)}"
         if dropped:
             said += f", dropped {dropped} that no longer appl{'y' if dropped != 1 else 'ies'}"
         self.panel_note = said[2:]
@@ -641,7 +641,7 @@ class DemoLoop:
         editor, self.editor = self.editor, None
         if editor is not None and editor.dirty:
             n = editor.unsaved
-            self.say(f"{editor.path.name}: {n} unsaved panel edit{'s' * (n != 1)} dropped "
+            self.say(f"{editor.path.name}: {n} unsaved panel value{'s' * (n != 1)} dropped "
                      "(another scene was chosen)")
 
     @staticmethod

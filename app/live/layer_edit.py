@@ -65,7 +65,6 @@ import tomlkit
 from tomlkit.exceptions import TOMLKitError
 
 from frictex.device.errors import InputError
-from frictex.app.live.watch import stamp
 from frictex.rendering.visual.layer_panel import ControlView, PanelView
 from frictex.textures.errors import Locator, TextureError, field_name
 from frictex.textures.keys import COMMON, LAYER_KEYS, MAX_ANGLE_DEG, MAX_MM
