@@ -49,6 +49,9 @@ class BlockOutput:
     commands_um : (n, channels) channel commands (um). phases_rad : (n, channels) or None.
     clamps : counts of the friction inversion's guards in this block.
     limited : samples where an actuator limit changed the actuation's solution.
+    layer_clipped : per layer name, for the layers whose state counts ``clipped`` (a
+        recorded texture's mu' limits, a clip's level sum past 1): the finger samples
+        this block where the layer's own limits clipped the mu' it gave the target.
     off_structure : finger samples outside the vibrating structure (held at its edge).
     forces : travelling-wave profiles only (else None): per finger the wanted and
         achieved force vectors (N) and key-click button state per sample
@@ -73,6 +76,7 @@ class BlockOutput:
     clamps: ClampCounts
     limited: int = 0
     off_structure: int = 0
+    layer_clipped: dict = field(default_factory=dict)
     forces: object | None = None
     sample_ids: np.ndarray | None = None
 
@@ -250,12 +254,14 @@ class Pipeline:
         t1 = clock()
         secs["tracking"] += t1 - t
 
-        outputs, layer_states = [], []
+        outputs, layer_states, layer_clipped = [], [], {}
         for renderer, layer_state, layer in zip(self.renderers, state.layers, self.scene.layers):
             t = clock()
             mu, covers, new_state = renderer.render(fingers, layer_state)
             outputs.append((mu, covers))
             layer_states.append(new_state)
+            if hasattr(new_state, "clipped"):  # a running count: this block's part
+                layer_clipped[layer.name] = new_state.clipped - layer_state.clipped
             dt = clock() - t
             secs["layers"] += dt
             self.timer.layer_seconds[layer.name] = self.timer.layer_seconds.get(layer.name, 0.0) + dt
@@ -288,7 +294,8 @@ class Pipeline:
                           mu_target=mu_target, wanted_um=wanted, amplitude_um=act.achieved_um,
                           commands_um=act.commands_um, phases_rad=act.phases_rad,
                           clamps=clamps, limited=act.limited,
-                          off_structure=act.off_structure, forces=forces)
+                          off_structure=act.off_structure, layer_clipped=layer_clipped,
+                          forces=forces)
         return out, PipelineState(tracker=tracker_state, layers=tuple(layer_states),
                                   forces=force_state, control=control_state, selection=selection)
 

@@ -44,8 +44,8 @@ def _model():
     return model_from_coefficients(SPEEDS, FORCES, TRIANGLES, COEFFS, VARIANCES)
 
 
-def _layer(**kw):
-    return ArTextureLayer(name="t", render="sho", region=None, blend="multiply",
+def _layer(region=None, **kw):
+    return ArTextureLayer(name="t", render="sho", region=region, blend="multiply",
                           visual=VisualHints(), model=_model(), gain=GAIN, **kw)
 
 
@@ -84,7 +84,7 @@ def _db_error(mu, expected_psd_fn, rate=RATE):
 def test_spectrum_at_a_vertex_matches_its_model_within_1_db(vertex):
     renderer = ArTextureRenderer(_layer(), RATE)
     mu, state = _synthesise(renderer, SPEEDS[vertex], FORCES[vertex], 60.0)
-    assert state.limited == 0 and np.isfinite(mu).all()
+    assert state.clipped == 0 and np.isfinite(mu).all()
     err = _db_error(mu, lambda f: GAIN ** 2 * _psd(COEFFS[vertex], VARIANCES[vertex], f))
     assert err.max() < 1.0, f"worst {err.max():.2f} dB"
 
@@ -134,7 +134,26 @@ def test_limits_are_applied_and_counted():
     renderer = ArTextureRenderer(_layer(mu_min=0.79, mu_max=0.81), RATE)
     mu, state = _synthesise(renderer, 100.0, 1.0, 1.0)
     assert mu.min() == 0.79 and mu.max() == 0.81
-    assert state.limited == int(((mu == 0.79) | (mu == 0.81)).sum()) > 0
+    assert state.clipped == int(((mu == 0.79) | (mu == 0.81)).sum()) > 0
+
+
+def test_only_clipped_samples_that_reach_the_target_are_counted():
+    """A finger lifted for part of the block, and a region that leaves the finger out:
+    the limits still apply, but only samples touching inside the region count."""
+    from frictex.textures.model import DiscRegion
+    renderer = ArTextureRenderer(_layer(mu_min=0.79, mu_max=0.81), RATE)
+    block = _block(0, 5000, 100.0, 1.0)
+    mu, _, _ = renderer.render(block, renderer.initial_state())
+    at_limit = (mu == 0.79) | (mu == 0.81)
+    lifted = _block(0, 5000, 100.0, 1.0)
+    lifted.contact[0, 1000:] = False  # lifted: the texture is silent, at mu_mean
+    mu, covers, state = renderer.render(lifted, renderer.initial_state())
+    assert state.clipped == int(at_limit[0, :1000].sum()) > 0 and covers.all()
+    assert (mu[0, 1000:] == 0.8).all()
+    outside = ArTextureRenderer(_layer(mu_min=0.79, mu_max=0.81,
+                                       region=DiscRegion(0.0, 0.0, 10.0)), RATE)
+    mu, covers, state = outside.render(block, outside.initial_state())
+    assert state.clipped == 0 and not covers.any() and ((mu == 0.79) | (mu == 0.81)).any()
 
 
 @given(st.lists(st.integers(1, 1999), max_size=5, unique=True))

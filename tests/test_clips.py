@@ -30,7 +30,7 @@ def test_a_tick_is_a_hann_pulse_of_30_ms_at_sharpness_0():
     k = np.arange(mu.size)
     expected = 1.0 - 0.5 * 0.8 * np.sin(np.pi * np.minimum(k / RATE, 0.03) / 0.03) ** 2
     assert_allclose(mu, expected, atol=1e-12)
-    assert mu.size == 301 and clipped == 0 and mu[-1] == 1.0
+    assert mu.size == 301 and not clipped.any() and mu[-1] == 1.0
 
 
 def test_sharper_ticks_are_shorter():
@@ -61,7 +61,8 @@ def test_sharpness_sets_the_carrier_and_levels_that_add_past_1_are_counted():
     assert np.argmax(spectrum) == 250  # 1 Hz bins: the 250 Hz carrier
     both = Clip((ClipEvent("continuous", 0.0, 0.7, 0.0, 0.01), ClipEvent("continuous", 0.0, 0.7, 0.0, 0.01)), 0.3)
     mu, clipped = both.sample(RATE)
-    assert mu.min() == pytest.approx(0.7) and clipped == 100  # 10 ms at 10 kHz
+    assert mu.min() == pytest.approx(0.7) and clipped.sum() == 100  # 10 ms at 10 kHz
+    assert (mu[clipped] == 0.7).all() and clipped[:100].all()
 
 
 def _scene(*layers):
@@ -155,11 +156,14 @@ def test_any_split_into_blocks_gives_the_same_output(splits):
     assert (whole < 1.0).any()
 
 
-def _one_sample_at_a_time(trigger, contact, touch_id, inside, flag, prev, index0, start, samples):
+def _one_sample_at_a_time(trigger, contact, touch_id, inside, flag, prev, index0, start, samples,
+                          clipped):
     """The renderer's block, sample by sample from the module docstring's rules: mu',
-    coverage, the clip's start after the block and each finger's last sample."""
+    coverage, the clip's start after the block, the clipped samples played under a
+    touching finger and each finger's last sample."""
     fingers, n = contact.shape
     mu, covers = np.ones((fingers, n)), np.zeros((fingers, n), bool)
+    played_clipped = 0
     last = [tuple(int(v) for v in row) for row in prev]
     for j in range(n):
         fired = False
@@ -173,9 +177,10 @@ def _one_sample_at_a_time(trigger, contact, touch_id, inside, flag, prev, index0
             last[i] = (int(c), t, int(inn), int(f))
         if start >= 0 and index0 + j - start < samples.size:
             mu[:, j], covers[:, j] = samples[index0 + j - start], contact[:, j]
+            played_clipped += int(contact[:, j].sum()) * bool(clipped[index0 + j - start])
         if fired:
             start = index0 + j + 1
-    return mu, covers, start, np.array(last, dtype=np.int64).reshape(fingers, 4)
+    return mu, covers, start, played_clipped, np.array(last, dtype=np.int64).reshape(fingers, 4)
 
 
 @pytest.mark.parametrize("seed", range(40))
@@ -193,15 +198,16 @@ def test_a_block_is_the_clip_played_sample_by_sample(seed):
     prev = np.column_stack([rng.integers(0, 2, fingers), rng.integers(-1, 2, fingers),
                             rng.integers(0, 2, fingers), rng.integers(0, 2, fingers)])
     samples = rng.uniform(0.5, 1.0, int(rng.integers(1, 400)))
+    clipped = rng.random(samples.size) < 0.3
     index0 = int(rng.integers(0, 1000))
     start = int(rng.choice([-1, index0, index0 - rng.integers(0, 500)]))
     for trigger in range(4):
         args = (trigger, contact, touch_id, inside, flag, prev.astype(np.int64), index0, start,
-                samples)
+                samples, clipped)
         idle = (np.ones(contact.shape), np.zeros(contact.shape, bool))
         got, want = render_block(*args, idle), _one_sample_at_a_time(*args)
         assert got[0].tobytes() == want[0].tobytes() and (got[1] == want[1]).all()
-        assert got[2] == want[2] and (got[3] == want[3]).all()
+        assert got[2:4] == want[2:4] and (got[4] == want[4]).all()
 
 
 def test_the_edge_side_is_the_sign_of_the_distance_to_the_line():
@@ -223,9 +229,10 @@ def test_a_clip_from_an_earlier_block_plays_to_its_last_sample_and_no_further(en
     contact, touch_id = np.ones((1, n), bool), np.full((1, n), 5)
     start = index0 - 9 if ends_in_block else index0 - 10
     idle = (np.ones((1, n)), np.zeros((1, n), bool))
-    mu, covers, after, _ = render_block(0, contact, touch_id, contact, ~contact,
-                                        np.array([[1, 5, 1, 0]]), index0, start, samples, idle)
-    assert after == start
+    mu, covers, after, clipped, _ = render_block(0, contact, touch_id, contact, ~contact,
+                                                 np.array([[1, 5, 1, 0]]), index0, start,
+                                                 samples, samples < 0.6, idle)
+    assert after == start and clipped == 0  # only the last sample (0.9) plays
     if ends_in_block:
         assert mu[0, 0] == samples[-1] and (mu[0, 1:] == 1.0).all()
         assert covers[0, 0] and not covers[0, 1:].any()

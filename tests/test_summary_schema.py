@@ -10,8 +10,8 @@ from frictex.app.commands.cli import main
 
 DOC = Path(__file__).resolve().parents[1] / "app" / "engine" / "SUMMARY.md"
 #: objects whose keys are data (finger ids, layer names) or documented elsewhere
-OPEN = ("fingers", "fingers_others", "forces", "device", "timings.layers_s", "timings.loop_s",
-        "timings.stages_s", "trace.time_order", "trace.gaps")
+OPEN = ("fingers", "fingers_others", "forces", "device", "layer_clipped", "timings.layers_s",
+        "timings.loop_s", "timings.stages_s", "trace.time_order", "trace.gaps")
 
 
 def documented() -> set[str]:

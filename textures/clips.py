@@ -2,7 +2,8 @@
 
 A clip is a list of events on its own time axis (s, 0 = the first output sample after
 the trigger), each contributing a level in [0, 1] at every output sample; the levels add,
-and mu' = 1 - depth * min(1, sum) (samples where the sum passed 1 are counted).
+and mu' = 1 - depth * min(1, sum) (samples where the sum passed 1 are marked; a replay
+counts those played in ``summary.json``'s ``layer_clipped``).
 
 - ``transient`` (a tick): a Hann pulse sin^2(pi t / T) of peak ``intensity``, T from
   sharpness: T = 30 ms at sharpness 0 down to 5 ms at sharpness 1 (sharper, shorter,
@@ -89,12 +90,12 @@ class Clip:
     def duration_s(self) -> float:
         return max((e.time_s + self.event_length_s(e) for e in self.events), default=0.0)
 
-    def sample(self, rate_hz: float) -> tuple[np.ndarray, int]:
-        """mu' at t = k / rate_hz, k = 0 .. ceil(duration * rate), and how many samples the
-        level sum clipped at 1. An event plays on the samples with time_s <= t < time_s +
-        its length, so the last sample is back at 1. Each event is computed over its own
-        samples only: the cost is the events' total length, not their number times the
-        clip's."""
+    def sample(self, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
+        """mu' at t = k / rate_hz, k = 0 .. ceil(duration * rate), and the samples where the
+        level sum passed 1 and was clipped there (bool, the same shape). An event plays on
+        the samples with time_s <= t < time_s + its length, so the last sample is back at
+        1. Each event is computed over its own samples only: the cost is the events' total
+        length, not their number times the clip's."""
         n = int(math.ceil(self.duration_s * rate_hz)) + 1
         t = np.arange(n) / rate_hz
         gain = _curve(self.intensity_curve, t, 1.0)
@@ -117,8 +118,7 @@ class Clip:
                 carrier = 0.5 + 0.5 * np.cos(2.0 * np.pi * phase)
                 level = np.where(on, _curve(env, rel, 0.0) * carrier, 0.0)
             total[lo:hi] += e.intensity * gain[lo:hi] * level
-        clipped = int((total > 1.0).sum())
-        return 1.0 - self.depth * np.minimum(total, 1.0), clipped
+        return 1.0 - self.depth * np.minimum(total, 1.0), total > 1.0
 
 
 @dataclass(frozen=True)

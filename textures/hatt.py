@@ -548,8 +548,8 @@ def read_hatt_xml(path: str | Path) -> TextureModel:
 class ArTextureLayer(DynamicLayer):
     """A recorded texture synthesised from the finger's speed and normal force
     (``rendering.layers.ar_texture``): mu' = mu_mean + gain * y, y the model's output
-    (m/s^2 for the toolkit's models), limited to [mu_min, mu_max] (limited samples are
-    counted in the renderer's state). Below ``v_rest_mm_s`` the texture is silent
+    (m/s^2 for the toolkit's models), limited to [mu_min, mu_max] (clipped samples are
+    counted in the renderer's state and reported in a replay's ``layer_clipped``). Below ``v_rest_mm_s`` the texture is silent
     (mu' = mu_mean): a still finger on a real texture feels no vibration. ``seed``
     makes the noise, and so every replay, reproducible."""
 

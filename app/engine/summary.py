@@ -20,7 +20,7 @@ from frictex.app.engine.force_summary import ForceSummary
 from frictex.device.friction import ClampCounts
 from frictex.rendering.pipeline import STAGES
 
-SUMMARY_VERSION = 3
+SUMMARY_VERSION = 4
 
 
 class Totals:
@@ -32,8 +32,10 @@ class Totals:
         self.forces = ForceSummary()
         self.max_amplitude = 0.0
         self.contact_samples = 0
+        self.touching = 0  # finger samples touching: the friction table's rows
         self.limited = 0
         self.off_structure = 0
+        self.layer_clipped: dict[str, int] = {}
 
     def write(self, out, commands_um) -> None:
         self.clamps.add(out.clamps)
@@ -41,8 +43,11 @@ class Totals:
         self.forces.add(out)
         self.max_amplitude = max(self.max_amplitude, float(commands_um.max(initial=0.0)))
         self.contact_samples += int(out.contact.any(axis=0).sum())
+        self.touching += int(np.count_nonzero(out.contact))
         self.limited += out.limited
         self.off_structure += out.off_structure
+        for name, n in out.layer_clipped.items():
+            self.layer_clipped[name] = self.layer_clipped.get(name, 0) + n
 
     def commit(self) -> None:
         """Counts are final as they are."""
@@ -111,7 +116,27 @@ def warnings_of(pipeline, tracker, totals: Totals) -> list[str]:
     if totals.off_structure:
         warnings.append(f"{totals.off_structure} finger samples were off the vibrating "
                         "structure and were held at its edge")
+    layers = {layer.name: layer for layer in pipeline.scene.layers}
+    warnings += [_clipped_warning(layers[name], n, totals.touching)
+                 for name, n in totals.layer_clipped.items() if n]
     return warnings
+
+
+def _clipped_warning(layer, n: int, touching: int) -> str:
+    """The sentence for ``n`` finger samples (of ``touching``) that ``layer``'s own
+    limits clipped: a clip's level sum past 1, a recorded texture's mu_min/mu_max."""
+    share = f"{n} of {touching} touching samples ({100.0 * n / max(touching, 1):.1f} %)"
+    kind = getattr(layer, "renderer_kind", None)
+    if kind == "clip":
+        return (f"layer {layer.name!r} (clip): {share} played where its events' levels added "
+                f"past 1 and were held at mu' = 1 - depth = {1.0 - layer.clip.depth:.4g}; "
+                "lower the events' intensities to keep their shape")
+    lo, hi = layer.mu_range
+    said = f"layer {layer.name!r}: {share} were clipped to its mu' limits [{lo:.4g}, {hi:.4g}]"
+    if kind == "ar":
+        said += ("; lower its gain or widen mu_min/mu_max to keep the recorded texture's "
+                 "spectrum")
+    return said
 
 
 def summary(scene, trace_report: dict, pipeline, tracker, totals: Totals, fmt: str,
@@ -135,6 +160,7 @@ def summary(scene, trace_report: dict, pipeline, tracker, totals: Totals, fmt: s
                    "max_amplitude_um": totals.max_amplitude,
                    "actuator_limited": totals.limited, "off_structure": totals.off_structure},
         "clamps": totals.clamps.as_dict(),
+        "layer_clipped": dict(totals.layer_clipped),
         "warnings": warnings_of(pipeline, tracker, totals),
         "fingers": totals.errors.report(),
     }

@@ -298,6 +298,10 @@ class Summary:
     output : OutputInfo
     counts : Counts
     clamps : Clamps
+    layer_clipped : Mapping of str to int
+        Per layer name, for the layers that limit their own mu' (``recorded``: mu_min and
+        mu_max; ``clip``: its events' level sum at 1): the touching finger samples
+        (friction-table rows) whose mu' those limits clipped.
     warnings : tuple of str
         One sentence per thing changed, dropped or not played.
     fingers : Mapping of int to FingerErrors
@@ -320,6 +324,7 @@ class Summary:
     output: OutputInfo
     counts: Counts
     clamps: Clamps
+    layer_clipped: Mapping[str, int]
     warnings: tuple[str, ...]
     fingers: Mapping[int, FingerErrors]
     fingers_others: Mapping[str, Any] | None = field(default=None, metadata=_OPTIONAL)

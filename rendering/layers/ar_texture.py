@@ -12,7 +12,9 @@ The noise of output sample k is a function of (seed, finger id, touch id, k) onl
 live and replay, and any split into blocks, give the same texture; the kernels are in
 ``textures.ar_synthesis``.
 
-mu' = clip(mu_mean + gain * y, mu_min, mu_max); clipped samples are counted in the state.
+mu' = clip(mu_mean + gain * y, mu_min, mu_max); the samples the limits clipped where a
+finger touches inside the layer's region (those that reach the friction target) are
+counted in the state (``clipped``).
 The model is resampled once to the output rate when the renderer is built.
 """
 
@@ -29,10 +31,10 @@ from frictex.textures.ar_synthesis import render_finger
 @dataclass(frozen=True)
 class ArState:
     """Per finger id: (touch id, last p outputs, most recent first); and how many
-    samples so far the mu' limits clipped."""
+    finger samples so far, touching inside the region, the mu' limits clipped."""
 
     fingers: dict = field(default_factory=dict)
-    limited: int = 0
+    clipped: int = 0
 
 
 class ArTextureRenderer:
@@ -51,7 +53,9 @@ class ArTextureRenderer:
         """mu' (F, n) and coverage (F, n) of the layer under each finger."""
         layer = self.layer
         mu = np.empty(block.contact.shape)
-        fingers, limited = {}, state.limited
+        covers = layer.covers(block.x_pred, block.y_pred)
+        counted = block.contact & covers
+        fingers, clipped = {}, state.clipped
         for i, fid in enumerate(block.ids):
             touch, history = state.fingers.get(fid, (-1, np.zeros(self.order)))
             history = history.copy()  # the state passed in stays as it was
@@ -59,21 +63,21 @@ class ArTextureRenderer:
                                    block.force[i], layer.v_rest_mm_s, layer.seed, fid,
                                    block.index0, self.arrays, touch, history, mu[i])
             fingers[fid] = (int(touch), history)
-            limited += _limit(mu[i], layer.mu_mean, layer.gain, layer.mu_min, layer.mu_max)
-        covers = layer.covers(block.x_pred, block.y_pred)
-        return mu, covers, ArState(fingers, limited)
+            clipped += _limit(mu[i], layer.mu_mean, layer.gain, layer.mu_min, layer.mu_max,
+                              counted[i])
+        return mu, covers, ArState(fingers, clipped)
 
 
 @njit(cache=True, nogil=True)
-def _limit(y, mu_mean, gain, mu_min, mu_max):
+def _limit(y, mu_mean, gain, mu_min, mu_max, counted):
     """The model's output y (n,) turned into mu' in place: mu_mean + gain y, limited to
-    [mu_min, mu_max] as numpy's ``clip`` (NaN stays NaN). Returns how many samples the
-    limits changed (NaN counts)."""
-    limited = 0
+    [mu_min, mu_max] as numpy's ``clip`` (NaN stays NaN). Returns how many of the samples
+    where ``counted`` (bool, (n,)) the limits changed (NaN counts)."""
+    clipped = 0
     for j in range(y.size):
         raw = mu_mean + gain * y[j]
         mu = mu_min if raw < mu_min else raw
         mu = mu_max if mu > mu_max else mu
-        limited += not mu == raw
+        clipped += counted[j] and not mu == raw
         y[j] = mu
-    return limited
+    return clipped

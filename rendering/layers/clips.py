@@ -13,7 +13,9 @@ current position, ``lift`` at the last one). An event at output sample k starts 
 clip at k + 1: clip sample j plays at output index k + 1 + j. The tracker puts a touch
 sample into effect at the same block boundary live and in replay, so replay gives the
 same output indices as live, and live lags a touch by less than one block. The clip's
-samples are computed once, at the output rate, when the renderer is built.
+samples are computed once, at the output rate, when the renderer is built, with the
+samples where its events' levels added past 1 (``textures.clips.Clip.sample``); each
+such sample played under a touching finger is counted in the state (``clipped``).
 """
 
 from __future__ import annotations
@@ -42,11 +44,13 @@ class FingerPrev(NamedTuple):
 
 @dataclass(frozen=True)
 class ClipState:
-    """Output index of the clip's first sample (-1: never started), and each finger's
-    last sample by finger id."""
+    """Output index of the clip's first sample (-1: never started), each finger's
+    last sample by finger id, and how many finger samples so far played a clip sample
+    whose level sum was clipped at 1."""
 
     start: int = -1
     fingers: dict = field(default_factory=dict)
+    clipped: int = 0
 
 
 @njit(cache=True, nogil=True)
@@ -76,38 +80,43 @@ def _fired(trigger, contact, touch_id, inside, flag, prev):
     return fired, last
 
 
-def render_block(trigger, contact, touch_id, inside, flag, prev, index0, start, samples, idle):
-    """One block of the layer: mu' and coverage (F, n), the clip's start after the block
+def render_block(trigger, contact, touch_id, inside, flag, prev, index0, start, samples,
+                 clipped, idle):
+    """One block of the layer: mu' and coverage (F, n), the clip's start after the block,
+    how many touching finger samples played a sample of ``clipped`` (bool, as ``samples``)
     and each finger's last sample (:func:`_fired`). The clip started at output index
     ``start`` (-1: none) plays under every touching finger; an event at sample j restarts
     it at j + 1. ``idle``: the (mu', coverage) of a block where the clip does not play
     (all 1, all False), returned as they are if so."""
     fired, last = _fired(trigger, contact, touch_id, inside, flag, prev)
     if not fired.any() and not (start >= 0 and start + samples.size > index0):
-        return *idle, start, last
-    return *_play(fired, contact, index0, start, samples), last
+        return *idle, start, 0, last
+    return *_play(fired, contact, index0, start, samples, clipped), last
 
 
 @njit(cache=True, nogil=True)
-def _play(fired, contact, index0, start, samples):
-    """mu' and coverage (F, n) of a block where the trigger ``fired`` (n,) and the clip's
-    start after it (:func:`render_block`). Between events the clip's samples are copied
-    as one slice."""
+def _play(fired, contact, index0, start, samples, clipped):
+    """mu' and coverage (F, n) of a block where the trigger ``fired`` (n,), the clip's
+    start after it and the clipped samples played (:func:`render_block`). Between events
+    the clip's samples are copied as one slice."""
     fingers, n = contact.shape
     mu, covers = np.ones((fingers, n)), np.zeros((fingers, n), dtype=np.bool_)
     events = np.nonzero(fired)[0]
+    played_clipped = 0
     j = 0  # samples j .. end - 1 play from ``start``
     for k in range(events.size + 1):
         end = events[k] + 1 if k < events.size else n
         stop = min(end, start - index0 + samples.size)  # the clip's end
         if start >= 0 and stop > j:
+            lo, hi = index0 + j - start, index0 + stop - start
             for i in range(fingers):
-                mu[i, j:stop] = samples[index0 + j - start:index0 + stop - start]
+                mu[i, j:stop] = samples[lo:hi]
                 covers[i, j:stop] = contact[i, j:stop]
+                played_clipped += np.count_nonzero(contact[i, j:stop] & clipped[lo:hi])
         if k < events.size:
             start = index0 + end
         j = end
-    return mu, covers, start
+    return mu, covers, start, played_clipped
 
 
 class ClipRenderer:
@@ -116,7 +125,7 @@ class ClipRenderer:
     def __init__(self, layer, rate_hz: float):
         self.layer = layer
         self.trigger = TRIGGER_CODES[layer.trigger]
-        self.samples, self.clipped = layer.clip.sample(rate_hz)
+        self.samples, self.clipped = layer.clip.sample(rate_hz)  # mu', and where it clipped
         self._idle = None  # (mu', coverage) of a block where nothing plays, read-only
 
     def _idle_block(self, shape) -> tuple[np.ndarray, np.ndarray]:
@@ -146,8 +155,8 @@ class ClipRenderer:
         flag = self._flag(block)
         prev = np.array([state.fingers.get(fid, FingerPrev()) for fid in block.ids],
                         dtype=np.int64).reshape(len(block.ids), 4)
-        mu, covers, start, last = render_block(self.trigger, block.contact, block.touch_id,
-                                               inside, flag, prev, block.index0, state.start,
-                                               self.samples, self._idle_block(block.contact.shape))
+        mu, covers, start, clipped, last = render_block(
+            self.trigger, block.contact, block.touch_id, inside, flag, prev, block.index0,
+            state.start, self.samples, self.clipped, self._idle_block(block.contact.shape))
         fingers = {fid: FingerPrev(*row) for fid, row in zip(block.ids, last.tolist())}
-        return mu, covers, ClipState(start, fingers)
+        return mu, covers, ClipState(start, fingers, state.clipped + int(clipped))
