@@ -6,6 +6,7 @@ import functools
 import json
 import os
 from pathlib import Path
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from frictex._args import path_like, real
@@ -13,6 +14,7 @@ from frictex._inputs import checked, scene_of
 from frictex._pipeline import run_settings
 from frictex.app.engine.device_changes import unplayed_problem
 from frictex.app.engine.replay import MAX_UNPLAYED, ReplayOptions, file_id, replay_with
+from frictex.app.engine.sinks import Sink
 from frictex.app.engine.sources import MAX_GAP_S
 from frictex.app.engine.summary import finite_json
 from frictex.app.engine.summary_types import Summary
@@ -100,7 +102,8 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
            renderer: str | None = None, device: str | None = None, faults: str | None = None,
            max_unplayed: float = MAX_UNPLAYED, rate_hz: float = 10_000.0,
            block_size: int | None = None, control: str | None = None, strict: bool = False,
-           max_gap_s: float = MAX_GAP_S, progress: bool = False) -> Replay:
+           max_gap_s: float = MAX_GAP_S, progress: bool = False,
+           sinks: Sequence[str | Sink] = (), clock: str = "virtual") -> Replay:
     """Replay a touch trace on a scene, headless, on a virtual clock (``frictex replay``).
 
     Parameters
@@ -143,6 +146,17 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
         skipped (``--max-gap``).
     progress : bool, optional
         A progress bar on stderr for long traces.
+    sinks : sequence of str or Sink, optional
+        More sinks fed every block (``--sink``): ``"NAME[:ARG]"`` of a registered sink
+        (``frictex.app.engine.sinks.SINKS``, a package's under entry points
+        ``frictex.sinks``), built for the run, or objects with ``write(out,
+        commands_um)``, ``commit()`` and ``abort()`` (``frictex.app.engine.sinks.Sink``),
+        used as they are. They are committed before the tables: one that fails leaves no
+        outputs; a package's that raises is a ``PluginError`` naming it.
+    clock : str, optional
+        What paces the run (``--clock``): ``"virtual"`` (the default: as fast as it
+        computes), ``"wall"`` (real time), ``"device"`` (the device's room), or a
+        package's (entry points ``frictex.clocks``).
 
     Returns
     -------
@@ -153,7 +167,8 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
     ------
     InputError
         A bad scene, trace or option: the command line's bounds apply, and the message
-        names the argument (or the trace's field and first bad sample).
+        names the argument (or the trace's field and first bad sample); a sink or clock
+        name nobody registered (the message lists the known).
     DeviceError
         The device's link failed; or the device left more than ``max_unplayed`` of the
         commanded samples unplayed, where ``frictex replay --device`` exits 1: the run
@@ -192,7 +207,7 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
     options = ReplayOptions(rate_hz=rate_hz, fmt=fmt, block_size=block_size,
                             render_override=renderer, device=device, faults=faults,
                             control=control, strict=strict, max_gap_s=max_gap_s,
-                            progress=progress)
+                            progress=progress, sinks=_sinks(sinks), clock=clock)
     result = replay_with(scene, trace, out, options)
     doc = json.loads(json.dumps(finite_json(result.summary), allow_nan=False))
     done = Replay(Summary.from_dict(doc), out, result.tables, result.summary_id)
@@ -202,3 +217,16 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
         error.replay = done
         raise error
     return done
+
+
+def _sinks(sinks: Sequence[str | Sink]) -> tuple[str | Sink, ...]:
+    """``sinks`` as a tuple, each a str or a :class:`~frictex.app.engine.sinks.Sink`."""
+    if isinstance(sinks, str) or not isinstance(sinks, Sequence):
+        raise InputError(f"sinks: expected a list of sink names or Sink objects, got "
+                         f"{type(sinks).__name__}")
+    for item in sinks:
+        if not isinstance(item, str) and not all(callable(getattr(item, method, None))
+                                                  for method in ("write", "commit", "abort")):
+            raise InputError(f"sinks: {type(item).__name__} is neither a sink's name "
+                             "(NAME[:ARG]) nor a Sink (write, commit and abort)")
+    return tuple(sinks)

@@ -7,8 +7,10 @@ import sys
 
 from frictex.app.commands.argtypes import (add_link_arguments, block_size, bounded, output_rate, positive_float,
                                    share, sim_device_args)
+from frictex.app.engine.clocks import CLOCKS
 from frictex.app.engine.device_changes import unplayed_problem
 from frictex.app.engine.replay import MAX_UNPLAYED, ReplayOptions, replay_with
+from frictex.app.engine.sinks import SINKS
 from frictex.app.engine.sources import MAX_GAP_S
 from frictex.app.engine.summary import control_line
 from frictex.app.engine.tables import FORMATS
@@ -49,6 +51,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--frames", type=bounded(float, 0.01, 1000.0, "frames/s"), default=None,
                         metavar="FPS",
                         help="also write PNG frames of the visual layer at FPS into DIR/frames")
+    parser.add_argument("--sink", action="append", default=[], metavar="NAME[:ARG]",
+                        help="also feed every block to this sink (repeatable; registered: "
+                             f"{', '.join(SINKS.names())}; a package adds one under entry "
+                             "points 'frictex.sinks'); the run's own tables, link, frames and "
+                             "progress bar are built already")
+    parser.add_argument("--clock", choices=CLOCKS.names(), default="virtual",
+                        help="what paces the replay: virtual (default: as fast as it computes), "
+                             "wall (real time), device (the --device's room), or a package's")
     parser.add_argument("--quiet", action="store_true", help="no progress bar, no summary line")
     add_allow_outside(parser)
 
@@ -65,7 +75,8 @@ def run(args: argparse.Namespace) -> int:
                             block_size=args.block, render_override=args.renderer,
                             progress=not args.quiet, strict=args.strict, faults=args.faults,
                             max_gap_s=args.max_gap, control=args.control,
-                            sim_args=sim_device_args(args))
+                            sim_args=sim_device_args(args), sinks=tuple(args.sink),
+                            clock=args.clock)
     summary = replay_with(args.scene, args.trace, args.out, options, frames=frames).summary
     if not args.quiet:
         out = summary["output"]

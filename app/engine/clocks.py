@@ -4,18 +4,27 @@ A clock is asked to ``wait(k)`` before block ``k`` is computed and told ``finish
 once blocks ``k .. k + n - 1`` have reached the sinks. Clocks that pace in real time
 count deadline misses; every wait has a bound.
 
-The :class:`Clock` protocol is an extension point: :data:`CLOCKS` holds the clocks by
-name (``virtual``, ``wall``, ``device``), and another package adds one under entry-point
-group ``frictex.clocks``. Each is built with its own arguments (a clock class).
+The :class:`Clock` protocol is an extension point: :data:`CLOCKS` holds the clocks'
+factories by name (``virtual``, ``wall``, ``device``), and another package adds one under
+entry-point group ``frictex.clocks``::
+
+    [project.entry-points."frictex.clocks"]
+    lazy = "mypkg.lazy:open_lazy"   # open_lazy(arg, request) -> a Clock
+
+A factory is called ``factory(arg, request)``: ``arg`` the text after ``NAME:`` of
+``--clock NAME[:ARG]`` ("" when none), ``request`` a :class:`ClockRequest`.
+:func:`build_clock` builds one (replay's ``--clock``); another package's is wrapped so that
+what it raises is a ``PluginError`` naming it (exit 1).
 """
 
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
-from frictex.device.registry import Registry
+from frictex.device.errors import InputError
+from frictex.device.registry import OWN_DISTRIBUTION, Expect, PluginError, Registry, guarded
 
 
 class Clock(Protocol):
@@ -28,11 +37,81 @@ class Clock(Protocol):
         """Blocks ``k .. k + n - 1`` have reached the sinks."""
 
 
-#: clocks by name (their classes)
-CLOCKS: Registry[type] = Registry("clock", "frictex.clocks")
+@dataclass(frozen=True)
+class ClockRequest:
+    """What a clock is built for: the second argument of a :data:`CLOCKS` factory.
+
+    Attributes
+    ----------
+    block_s : float
+        The duration of one block of output (s): block ``k`` covers
+        ``[k * block_s, (k + 1) * block_s)`` of output time.
+    deadline_s : float
+        How long after its start a block may reach the sinks before it is late (s).
+    link : OutputDevice or None
+        The output device the run streams to (the ``device`` clock's), or None.
+    """
+
+    block_s: float
+    deadline_s: float
+    link: Any = None
 
 
-@CLOCKS.register("virtual")
+#: ``factory(arg, request) -> Clock``, by name
+CLOCKS: Registry[Any] = Registry("clock", "frictex.clocks",
+                                 expect=Expect.factory("a factory(arg, request) returning a "
+                                                       "Clock"))
+
+
+def clock_name(spec: str) -> tuple[str, str]:
+    """NAME and ARG of a ``NAME[:ARG]`` clock spec; NAME registered (else
+    ``UnknownName`` listing the known)."""
+    if not isinstance(spec, str):
+        raise InputError(f"clock {spec!r}: expected NAME[:ARG]")
+    name, _, arg = spec.partition(":")
+    CLOCKS.get(name)
+    return name, arg
+
+
+def build_clock(spec: str, request: ClockRequest) -> Clock:
+    """The clock ``NAME[:ARG]`` of :data:`CLOCKS` built for ``request``: frictex's own as
+    its factory returns it, another package's checked and wrapped in a
+    :class:`PluginClock`."""
+    name, arg = clock_name(spec)
+    factory = CLOCKS.get(name)
+    origin = CLOCKS.origin(name)
+    if origin == OWN_DISTRIBUTION:
+        return factory(arg, request)
+    who = f"clock {name!r} of {origin}"
+    clock = guarded(who, "building", factory, arg, request)
+    missing = [m for m in ("wait", "finished") if not callable(getattr(clock, m, None))]
+    if missing:
+        raise PluginError(f"{who} built a {type(clock).__name__} without "
+                          f"{', '.join(m + '()' for m in missing)}; expected a Clock "
+                          "(frictex.app.engine.clocks.Clock)")
+    return PluginClock(clock, who)
+
+
+class PluginClock:
+    """Another package's clock (``inner``): what it raises, but frictex's own errors, is a
+    ``PluginError`` naming it (``registry.guarded``)."""
+
+    def __init__(self, inner: Clock, who: str):
+        self.inner = inner
+        self._who = who
+
+    def wait(self, k: int) -> None:
+        guarded(self._who, "in wait()", self.inner.wait, k)
+
+    def finished(self, k: int, n: int) -> None:
+        guarded(self._who, "in finished()", self.inner.finished, k, n)
+
+
+def _no_arg(name: str, arg: str) -> None:
+    if arg:
+        raise InputError(f"clock {name!r} takes no ARG, got {arg!r}")
+
+
 class VirtualClock:
     """Replay: every block may run at once; output time advances exactly n / rate."""
 
@@ -41,6 +120,12 @@ class VirtualClock:
 
     def finished(self, k: int, n: int) -> None:
         """Nothing to count."""
+
+    @classmethod
+    def open(cls, arg: str, request: ClockRequest) -> VirtualClock:
+        """Its :data:`CLOCKS` factory."""
+        _no_arg("virtual", arg)
+        return cls()
 
 
 @dataclass
@@ -51,7 +136,6 @@ class DeadlineStats:
     worst_lateness_s: float = 0.0
 
 
-@CLOCKS.register("wall")
 class WallClock:
     """Live: block ``k`` starts at ``t0 + k * block_s`` on ``now`` (s) and is due
     ``deadline_s`` after its start (the device's jitter-buffer prefill); a block handed
@@ -86,8 +170,14 @@ class WallClock:
         if now > start + max(n * self.block_s, self.deadline_s):
             self.stats.misses += 1
 
+    @classmethod
+    def open(cls, arg: str, request: ClockRequest) -> WallClock:
+        """Real time from now on, at ``request``'s block duration and deadline (its
+        factory)."""
+        _no_arg("wall", arg)
+        return cls(request.block_s, request.deadline_s)
 
-@CLOCKS.register("device")
+
 class DevicePacedClock:
     """Streaming to a device: block ``k`` runs when the device's link can take it, so the
     device's own sample clock paces the run. Each wait is bounded by ``timeout_s``; a wait
@@ -106,3 +196,17 @@ class DevicePacedClock:
 
     def finished(self, k: int, n: int) -> None:
         """The device's clock, not this one, says when blocks play."""
+
+    @classmethod
+    def open(cls, arg: str, request: ClockRequest) -> DevicePacedClock:
+        """Paced by ``request.link`` (its factory)."""
+        _no_arg("device", arg)
+        if request.link is None:
+            raise InputError("clock 'device' is paced by an output device, and the run has "
+                             "none: choose one (--device, device=)")
+        return cls(request.link)
+
+
+CLOCKS.register("virtual", VirtualClock.open)
+CLOCKS.register("wall", WallClock.open)
+CLOCKS.register("device", DevicePacedClock.open)

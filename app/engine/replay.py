@@ -30,12 +30,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from frictex.app.engine.clocks import VirtualClock
+from frictex.app.engine.clocks import ClockRequest, DeadlineStats, build_clock, clock_name
 from frictex.app.engine.device_changes import device_warnings
 from frictex.app.engine.driver import (PipelineStage, RunTimer, deferred_interrupts, drive,
                                        force_reports_of)
-from frictex.app.engine.sinks import (FRICTION_COLUMNS, FrameSink, LinkSink, ProgressSink, TableSink,
-                              command_columns)
+from frictex.app.engine.sinks import (FRICTION_COLUMNS, SinkRequest, build_sink,
+                                      command_columns, names_built)
 from frictex.app.engine.sources import MAX_GAP_S, TraceSource
 from frictex.app.engine.staging import Staging
 from frictex.app.engine.summary import Totals, finite_json, summary, timings
@@ -93,6 +93,17 @@ class ReplayOptions:
         The friction loop's mode (open, closed, adaptive) instead of the scene file's.
         With the loop on, one block per pipeline call and, streaming to a device, the
         link's queue kept to :data:`LOOP_QUEUE_BLOCKS`.
+    sinks : tuple of str or Sink
+        More sinks fed every block besides the run's own (``app.engine.sinks``):
+        ``NAME[:ARG]`` of :data:`~frictex.app.engine.sinks.SINKS`, built for the run, or
+        sink objects, used as they are; committed before the tables, so a sink that fails
+        leaves no outputs. The sinks the run builds itself (``tables``, ``link``,
+        ``frames``, ``progress`` where it shows one) are refused.
+    clock : str
+        What paces the run, ``NAME[:ARG]`` of :data:`~frictex.app.engine.clocks.CLOCKS`:
+        ``virtual`` (the default: as fast as it computes), ``wall`` (real time),
+        ``device`` (the output device's room), a plugin's. With any but ``virtual``, one
+        block per pipeline call (unless ``chunk_blocks`` says otherwise), as live.
     """
 
     rate_hz: float = 10_000.0
@@ -107,6 +118,8 @@ class ReplayOptions:
     sim_args: tuple[str, ...] = ()
     max_gap_s: float = MAX_GAP_S
     control: str | None = None
+    sinks: tuple[Any, ...] = ()
+    clock: str = "virtual"
 
 
 @dataclass(frozen=True)
@@ -212,6 +225,8 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
         _check_outputs_fit(staging.out, source, pipeline, options.fmt, frames)
     if options.sim_args and options.device is None:
         raise InputError("sim_args are for a simulated device (device 'sim')")
+    _check_attached(options, sink is not None or options.device is not None,
+                    frames is not None, options.progress and _long(source))
     check()
     folder = summary_id = None
     try:
@@ -268,19 +283,31 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     looped = pipeline.control is not None
     totals = Totals()
     sinks = [totals]
+    request = SinkRequest(tuple(pipeline.channels), pipeline.actuation.has_phases,
+                          options.rate_hz, pipeline.block_size, folder, options.fmt, sink,
+                          frames)
     link = None
-    if sink is not None:  # a paced link: its send waits (bounded) for the device's room
-        link = LinkSink(sink, pipeline.block_size)
-        sinks.append(link)
-    if frames is not None:
-        sinks.append(FrameSink(frames))
-    if options.progress and _long(source):
-        sinks.append(ProgressSink(options.rate_hz))
-    # last: its files become final only once the link has drained and the frames are out
-    tables = TableSink(folder, pipeline.channels, pipeline.actuation.has_phases, options.fmt)
-    sinks.append(tables)
+    try:
+        if sink is not None:  # a paced link: its send waits (bounded) for the device's room
+            link = build_sink("link", request)
+            sinks.append(link)
+        if frames is not None:
+            sinks.append(build_sink("frames", request))
+        if options.progress and _long(source):
+            sinks.append(build_sink("progress", request))
+        sinks += [build_sink(s, request) if isinstance(s, str) else s for s in options.sinks]
+        # last: its files become final only once the link has drained, the frames are out
+        # and the sinks attached have committed
+        tables = build_sink("tables", request)
+        sinks.append(tables)
+        block_s = pipeline.block_size / options.rate_hz
+        clock = build_clock(options.clock, ClockRequest(block_s, block_s, sink))
+    except BaseException:  # a sink or clock that cannot be built: the sinks built are aborted
+        for built in reversed(sinks[1:]):
+            built.abort()
+        raise
     chunk_blocks = options.chunk_blocks
-    if looped:
+    if looped or (options.clock != "virtual" and chunk_blocks is None):
         chunk_blocks = 1
     elif chunk_blocks is None:
         fingers = max(1, most_touching(source.pending)) if source.pending is not None else 1
@@ -289,7 +316,7 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     if looped and sink is not None:  # the loop reads the device's forces
         stage = PipelineStage(pipeline, sink.device_force_n, force_reports_of(sink))
     try:
-        blocks = drive(stage, source, sinks, VirtualClock(), chunk_blocks=chunk_blocks,
+        blocks = drive(stage, source, sinks, clock, chunk_blocks=chunk_blocks,
                        timer=timer, check=check)
     except OSError as exc:
         if link is None:
@@ -310,6 +337,11 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
         doc["warnings"] += doc["control"]["messages"]
     doc["trace"]["gaps"] = source.gaps.as_dict()
     doc["warnings"] += source.gaps.warnings()
+    late = getattr(clock, "stats", None)
+    if isinstance(late, DeadlineStats) and late.misses:
+        doc["warnings"].append(f"clock {options.clock!r}: {late.misses} of {blocks} pipeline "
+                               f"calls reached the sinks late (the worst "
+                               f"{late.worst_lateness_s * 1e3:.1f} ms past its end)")
     if sink is not None:
         doc["device"] = sink.status()
         doc["warnings"] += device_warnings(doc["device"], doc["counts"]["max_amplitude_um"])
@@ -317,6 +349,21 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     if options.fmt == MEMORY:
         in_memory = {"commands": tables.commands.table, "friction": tables.friction.table}
     return doc, in_memory
+
+
+def _check_attached(options: ReplayOptions, link: bool, frames: bool, progress: bool) -> None:
+    """Refuse, before anything is written, a clock or an attached sink of an unknown name
+    (``UnknownName`` lists the known), and an attached sink the run builds itself."""
+    clock_name(options.clock)
+    built = {"tables": "its tables", "link": link and "with a device",
+             "frames": frames and "with frames", "progress": progress and "a long trace's"}
+    for spec in options.sinks:
+        if not isinstance(spec, str):
+            continue
+        for name in names_built(spec):
+            if built.get(name):
+                raise InputError(f"sink {spec!r}: the run builds its own {name!r} sink "
+                                 f"({built[name]}); a sink is attached once")
 
 
 def _stopped(exc, done_s: float, source: TraceSource):

@@ -6,22 +6,35 @@ A sink takes every pipeline call's output and the channel commands actually sent
 or ``abort()`` (the run failed: leave nothing that looks complete). The driver calls
 them; a sink never calls another.
 
-The :class:`Sink` protocol is an extension point: :data:`SINKS` holds the sinks by name
-(``tables``, ``link``, ``frames``, ``memory``, ``progress``, ``threaded``), and another
-package adds one under entry-point group ``frictex.sinks``. Each is built with its own
-arguments (a sink class).
+The :class:`Sink` protocol is an extension point: :data:`SINKS` holds the sinks' factories
+by name (``tables``, ``link``, ``frames``, ``memory``, ``progress``, ``threaded``), and
+another package adds one under entry-point group ``frictex.sinks``::
+
+    [project.entry-points."frictex.sinks"]
+    spy = "mypkg.spy:open_spy"      # open_spy(arg, request) -> a Sink
+
+A factory is called ``factory(arg, request)``: ``arg`` the text after ``NAME:`` of
+``--sink NAME[:ARG]`` ("" when none), ``request`` a :class:`SinkRequest` (what the run
+makes). :func:`build_sink` builds one; replay builds its own sinks that way too, and
+attaches the ones a user names (``frictex replay --sink``, ``frictex.replay(sinks=...)``).
+Another package's sink is wrapped (:class:`PluginSink`): what it raises, building,
+writing or committing, is a ``PluginError`` naming it (exit 1), and the run's own outputs
+are then not written (the driver aborts every sink; replay's are staged).
 """
 
 from __future__ import annotations
 
 import queue
 import threading
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
-from frictex.device.registry import Registry
+from frictex.device.errors import InputError
+from frictex.device.registry import (OWN_DISTRIBUTION, Expect, PluginError, Registry, guarded,
+                                     warn_once)
 
 from frictex.app.engine.tables import open_table
 
@@ -57,10 +70,24 @@ def friction_rows(out) -> dict[str, np.ndarray]:
 
 
 class Sink(Protocol):
-    """Where a run's output goes (see the module docstring)."""
+    """Where a run's output goes (see the module docstring).
+
+    ``write`` is called once per pipeline call, in output order, from the run's thread;
+    then exactly one of ``commit`` (the run completed) or ``abort`` (it failed or was
+    stopped).
+    """
 
     def write(self, out, commands_um: np.ndarray) -> None:
-        """Take one pipeline call's output and the (n, channels) commands sent (um)."""
+        """Take one pipeline call's output and the commands sent.
+
+        ``out`` is a ``rendering.pipeline.BlockOutput`` of n output samples from output
+        sample ``out.index0`` on: ``t_s`` (n,) s; per finger slot (F, n) ``x_mm``,
+        ``y_mm`` (mm), ``contact`` (bool), ``mu_target`` (mu', 0 to 1),
+        ``amplitude_um`` (um zero-to-peak under the finger); ``phases_rad`` (n, channels)
+        rad or None; ``ids_per_sample()`` the finger ids (F, n). ``commands_um``: (n,
+        channels) float64, the amplitude commanded on each actuator channel (um
+        zero-to-peak), in the order of :attr:`SinkRequest.channels`. Read them; do not
+        change them or keep views of them past the call (copy what you keep)."""
 
     def commit(self) -> None:
         """The run finished: make the result final."""
@@ -69,11 +96,113 @@ class Sink(Protocol):
         """The run failed: leave nothing that looks complete."""
 
 
-#: sinks by name (their classes)
-SINKS: Registry[type] = Registry("sink", "frictex.sinks")
+@dataclass(frozen=True)
+class SinkRequest:
+    """What a sink is built for: the second argument of a :data:`SINKS` factory.
+
+    Attributes
+    ----------
+    channels : tuple of str
+        The actuator channels: the columns of ``commands_um``, in order.
+    phases : bool
+        ``out.phases_rad`` (n, channels, rad) comes with the commands.
+    rate_hz : float
+        Output samples per second (Hz).
+    block_size : int
+        Output samples per block.
+    folder : Path or None
+        The run's staging folder: a file written there appears in the output folder only
+        when the run completes, swapped in with its tables (use names of your own, never
+        ``commands.*``, ``friction.*``, ``summary.json`` or ``frames``); None when the
+        tables are kept in memory (``frictex.replay`` without ``out``).
+    fmt : str
+        The tables' format: csv, npz, parquet or memory.
+    link : OutputDevice or None
+        The output device the run streams to (the ``link`` sink's), or None.
+    frames : FrameWriter or None
+        The run's PNG frame writer (the ``frames`` sink's), or None.
+    queue_blocks : int
+        Calls of ``write`` the ``threaded`` sink queues before it drops one.
+    """
+
+    channels: tuple[str, ...]
+    phases: bool = False
+    rate_hz: float = 10_000.0
+    block_size: int = 50
+    folder: Path | None = None
+    fmt: str = "csv"
+    link: Any = None
+    frames: Any = None
+    queue_blocks: int = 64
 
 
-@SINKS.register("tables")
+#: ``factory(arg, request) -> Sink``, by name
+SINKS: Registry[Any] = Registry("sink", "frictex.sinks",
+                                expect=Expect.factory("a factory(arg, request) returning a Sink"))
+
+
+def sink_name(spec: str) -> tuple[str, str]:
+    """NAME and ARG of a ``NAME[:ARG]`` sink spec; NAME registered (else ``UnknownName``
+    listing the known)."""
+    if not isinstance(spec, str):
+        raise InputError(f"sink {spec!r}: expected NAME[:ARG] (a str) or a Sink")
+    name, _, arg = spec.partition(":")
+    SINKS.get(name)
+    return name, arg
+
+
+def build_sink(spec: str, request: SinkRequest) -> Sink:
+    """The sink ``NAME[:ARG]`` of :data:`SINKS` built for ``request``: frictex's own as its
+    factory returns it, another package's checked and wrapped in a :class:`PluginSink`."""
+    name, arg = sink_name(spec)
+    factory = SINKS.get(name)
+    origin = SINKS.origin(name)
+    if origin == OWN_DISTRIBUTION:
+        return factory(arg, request)
+    who = f"sink {name!r} of {origin}"
+    sink = guarded(who, "building", factory, arg, request)
+    missing = [m for m in ("write", "commit", "abort") if not callable(getattr(sink, m, None))]
+    if missing:
+        raise PluginError(f"{who} built a {type(sink).__name__} without "
+                          f"{', '.join(m + '()' for m in missing)}; expected a Sink "
+                          "(frictex.app.engine.sinks.Sink)")
+    return PluginSink(sink, who)
+
+
+def names_built(spec: str) -> list[str]:
+    """The registered names a sink spec builds: NAME, and the sink ``threaded:NAME[:ARG]``
+    runs on its thread."""
+    name, arg = sink_name(spec)
+    return [name] + (names_built(arg) if name == "threaded" and arg else [])
+
+
+class PluginSink:
+    """Another package's sink (``inner``): what its ``write`` or ``commit`` raises, but
+    frictex's own errors, is a ``PluginError`` naming it (``registry.guarded``); what its
+    ``abort`` raises is a warning, as the run is failing already with its own error."""
+
+    def __init__(self, inner: Sink, who: str):
+        self.inner = inner
+        self._who = who
+
+    def write(self, out, commands_um: np.ndarray) -> None:
+        guarded(self._who, "writing", self.inner.write, out, commands_um)
+
+    def commit(self) -> None:
+        guarded(self._who, "committing", self.inner.commit)
+
+    def abort(self) -> None:
+        try:
+            guarded(self._who, "aborting", self.inner.abort)
+        except PluginError as exc:
+            warn_once(str(exc))
+
+
+def _no_arg(name: str, arg: str) -> None:
+    if arg:
+        raise InputError(f"sink {name!r} takes no ARG, got {arg!r}")
+
+
 class TableSink:
     """``commands.<fmt>`` and ``friction.<fmt>`` in ``out_dir`` (DESIGN.md, replay output),
     or two pyarrow Tables in memory (``fmt`` ``memory``: ``app.engine.tables.MemoryTable``;
@@ -110,8 +239,13 @@ class TableSink:
         self.commands.abort()
         self.friction.abort()
 
+    @classmethod
+    def open(cls, arg: str, request: SinkRequest) -> TableSink:
+        """The run's tables in ``request.folder`` (its :data:`SINKS` factory)."""
+        _no_arg("tables", arg)
+        return cls(request.folder, request.channels, request.phases, request.fmt)
 
-@SINKS.register("link")
+
 class LinkSink:
     """Streams every block's commands to a device link (``device.link.host.CommandSink``);
     commit drains the link, abort stops the device at once (the link's ``abort``: Stop
@@ -137,8 +271,16 @@ class LinkSink:
     def abort(self) -> None:
         getattr(self.link, "abort", self.link.close)()
 
+    @classmethod
+    def open(cls, arg: str, request: SinkRequest) -> LinkSink:
+        """``request.link`` fed by blocks of ``request.block_size`` (its factory)."""
+        _no_arg("link", arg)
+        if request.link is None:
+            raise InputError("sink 'link' streams to an output device, and the run has "
+                             "none: choose one (--device, device=)")
+        return cls(request.link, request.block_size)
 
-@SINKS.register("frames")
+
 class FrameSink:
     """PNG frames of the visual layer (``app.engine.frames.FrameWriter``)."""
 
@@ -153,8 +295,16 @@ class FrameSink:
 
     abort = commit
 
+    @classmethod
+    def open(cls, arg: str, request: SinkRequest) -> FrameSink:
+        """The frames of ``request.frames`` (its factory)."""
+        _no_arg("frames", arg)
+        if request.frames is None:
+            raise InputError("sink 'frames' writes the run's PNG frames: ask for them with "
+                             "--frames FPS")
+        return cls(request.frames)
 
-@SINKS.register("memory")
+
 class MemorySink:
     """Keeps every block output in a list (measurements and tests of short runs)."""
 
@@ -169,8 +319,13 @@ class MemorySink:
 
     abort = commit
 
+    @classmethod
+    def open(cls, arg: str, request: SinkRequest) -> MemorySink:
+        """An empty list (its factory)."""
+        _no_arg("memory", arg)
+        return cls()
 
-@SINKS.register("progress")
+
 class ProgressSink:
     """A progress bar on stderr counting seconds of output (tqdm)."""
 
@@ -188,8 +343,13 @@ class ProgressSink:
 
     abort = commit
 
+    @classmethod
+    def open(cls, arg: str, request: SinkRequest) -> ProgressSink:
+        """A bar counting seconds at ``request.rate_hz`` (its factory)."""
+        _no_arg("progress", arg)
+        return cls(request.rate_hz)
 
-@SINKS.register("threaded")
+
 class ThreadedSink:
     """Another sink, run on its own thread so that ``write`` never blocks the caller (the
     live haptic loop): a full queue drops the block, counted in ``dropped``."""
@@ -230,3 +390,20 @@ class ThreadedSink:
     def abort(self) -> None:
         self._finish()
         self.inner.abort()
+
+    @classmethod
+    def open(cls, arg: str, request: SinkRequest) -> ThreadedSink:
+        """The sink ARG names (``threaded:NAME[:ARG]``) on its own thread, queueing
+        ``request.queue_blocks`` calls (its factory)."""
+        if not arg:
+            raise InputError("sink 'threaded' runs another sink on its own thread: name it, "
+                             "threaded:NAME[:ARG]")
+        return cls(build_sink(arg, request), request.queue_blocks)
+
+
+SINKS.register("tables", TableSink.open)
+SINKS.register("link", LinkSink.open)
+SINKS.register("frames", FrameSink.open)
+SINKS.register("memory", MemorySink.open)
+SINKS.register("progress", ProgressSink.open)
+SINKS.register("threaded", ThreadedSink.open)
