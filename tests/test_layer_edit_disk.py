@@ -236,3 +236,12 @@ def test_the_panel_says_unsaved_changes_until_the_scene_is_the_file_again(tmp_pa
     assert not panel_view(ed).dirty
     ed.undo()  # back to the text before the save: not the file
     assert panel_view(ed).dirty and "mu_low = 0.6" in ed.text()
+
+
+def test_a_key_changed_in_the_file_too_keeps_the_files_value(tmp_path):
+    ed = edited(tmp_path)  # mu_low 0.6 -> 0.5 in the panel
+    ed.set("mu_high", 0.9)
+    text = ed.path.read_text()
+    ed.path.write_text(text.replace("mu_low = 0.6", "mu_low = 0.55"))
+    assert ed.reread() == (1, 1)
+    assert "mu_low = 0.55" in ed.text() and "mu_high = 0.9" in ed.text()

@@ -43,7 +43,8 @@ deliberately. A save keeps the file's permission bits (a new copy gets the mode 
 created under the umask gets). :meth:`LayerEdit.reread` takes the file again after it
 changed and reloaded, keeping the panel's unsaved edits (each a layer's key set, the
 undo stack's too) on top of it where the layer is still there, of the same type and
-name, and the result loads.
+name, the file did not change that key too (then the file's value, the later, wins),
+and the result loads.
 
 :meth:`LayerEdit.save` writes the document to :func:`save_path` (a bundled scene: a copy
 in the user's scene folder, with the files it names) and checks that the saved file
@@ -336,13 +337,22 @@ def edits(doc, base) -> list[tuple[int, str, object]]:
     return out
 
 
+def _applies(layers, old_layers, k: int, key: str) -> bool:
+    """An edit of ``key`` in layer ``k`` made on ``old_layers`` applies to ``layers``:
+    the layer is the same one (:func:`_same_layer`) and the file left the key as the
+    edit found it (a key changed in the file too: the file's value is the later)."""
+    if k >= len(layers) or not _same_layer(layers[k], old_layers[k]):
+        return False
+    return layers[k].get(key) == old_layers[k].get(key)
+
+
 def _edited(text: str, old_base, new_base) -> str:
     """``text`` (a document made from ``old_base`` by the panel) made again on
-    ``new_base``: its edits (:func:`edits`) set where the layer is the same one."""
+    ``new_base``: its edits (:func:`edits`) set where they apply (:func:`_applies`)."""
     doc = tomlkit.parse(tomlkit.dumps(new_base))
     layers = doc["layer"]
     for k, key, value in edits(tomlkit.parse(text), old_base):
-        if k < len(layers) and k < len(old_base["layer"]) and _same_layer(layers[k], old_base["layer"][k]):
+        if _applies(new_base["layer"], old_base["layer"], k, key):
             _set(layers[k], key, value)
     return tomlkit.dumps(doc)
 
@@ -497,9 +507,10 @@ class LayerEdit:
     def reread(self) -> tuple[int, int]:
         """Take the file again (it changed on disk and loads), keeping the unsaved edits
         on top of it: each key the panel set (:func:`edits`, in the document and in each
-        undo entry) set again in the same layer (same place, type and name), as long as
-        the result loads; an edit that no longer applies is dropped. Returns (edits
-        kept, edits dropped) of the document."""
+        undo entry) set again in the same layer (same place, type and name) where the
+        file left that key as it was (:func:`_applies`: a key changed in the file too
+        keeps the file's value), as long as the result loads; an edit that no longer
+        applies is dropped. Returns (edits kept, edits dropped) of the document."""
         disk = on_disk(self.path)
         if disk.text is None:
             raise EditError(f"cannot read {self.path.name} for editing: no such file")
@@ -512,7 +523,7 @@ class LayerEdit:
             text = disk.text  # the edits, together, are refused: each is tried alone
             for k, key, value in wanted:
                 trial = tomlkit.parse(text)
-                if k < len(trial["layer"]) and _same_layer(trial["layer"][k], old["layer"][k]):
+                if _applies(doc["layer"], old["layer"], k, key):
                     _set(trial["layer"][k], key, value)
                     try:
                         load_scene(self.path, text=tomlkit.dumps(trial))
