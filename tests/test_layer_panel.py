@@ -387,3 +387,13 @@ def test_an_integer_key_is_a_slider_of_whole_numbers():
     assert isinstance(seed, Slider) and seed.integer and seed.step == 1.0
     assert (seed.lo, seed.allowed_lo, seed.allowed_hi) == (0.0, 0.0, 2.0**31 - 1)
     assert clamp(seed, 7.6) == 8.0 and clamp(seed, -4) == 0.0 and clamp(seed, 1e12) == 2**31 - 1
+
+
+def test_a_full_column_leaves_out_the_last_controls_not_undo_save_and_the_news():
+    view = PanelView(("a (grating)",), 0,
+                     tuple(ControlView("slider", f"k{i}", f"k{i} = {i}", 0.5) for i in range(20)),
+                     note="kept 1 unsaved panel value", can_undo=True, dirty=True)
+    rows = panel_layout(view, (0.0, 0.0, 300.0, 6.0 + 10 * 24.0), 24.0)
+    assert [r.kind for r in rows] == ["title", "layer"] + ["slider"] * 5 + ["undo", "save", "note"]
+    assert [r.key for r in rows[2:7]] == ["k0", "k1", "k2", "k3", "k4"]
+    assert rows[-2].text == "unsaved changes: Ctrl+S saves" and rows[-1].box[1] + 24.0 <= 6.0 + 240.0

@@ -6,7 +6,8 @@ What the panel shows arrives as plain data (:class:`PanelView`, made by
 ``app.live.layer_edit``'s caller); :func:`panel_layout` places it in rows
 (:class:`PanelRow`: what a row is and its box in frame pixels), which both the drawing
 (:func:`draw_layer_panel`) and the pointer (:func:`hit`) use, so a click lands on what
-is drawn under it. Rows that do not fit the column are left out (not drawn, not hit).
+is drawn under it. Rows that do not fit the column are left out (not drawn, not hit):
+the last controls first, so that undo, save and the line of news stay in view.
 """
 
 from __future__ import annotations
@@ -78,23 +79,28 @@ class PanelRow:
 def panel_layout(view: PanelView, rect: tuple[float, float, float, float],
                  row_px: float) -> tuple[PanelRow, ...]:
     """The rows of ``view`` in the column ``rect`` (x, y, w, h px), ``row_px`` high each,
-    top down; those below the column's bottom are left out."""
+    top down: the title and the layers, the controls, then undo, save and the news. Where
+    they do not all fit, the last controls are left out first, then the rows below the
+    column's bottom."""
     x, y, w, h = rect
-    specs: list[dict] = [dict(kind="title", text="layers  (L: close)")]
-    specs += [dict(kind="layer", text=name, index=k) for k, name in enumerate(view.layers)]
+    head: list[dict] = [dict(kind="title", text="layers  (L: close)")]
+    head += [dict(kind="layer", text=name, index=k) for k, name in enumerate(view.layers)]
+    controls: list[dict] = []
     for c in view.controls:
         if c.kind == "slider":
-            specs.append(dict(kind="slider", text=c.label, key=c.key, fraction=c.fraction))
+            controls.append(dict(kind="slider", text=c.label, key=c.key, fraction=c.fraction))
         else:
-            specs.append(dict(kind="menu", text=c.label + ("  ^" if view.open_menu == c.key else "  v"),
-                              key=c.key))
+            controls.append(dict(kind="menu", key=c.key, text=c.label + (
+                "  ^" if view.open_menu == c.key else "  v")))
             if view.open_menu == c.key:
-                specs += [dict(kind="option", text=o, key=c.key, option=o) for o in c.options]
-    specs.append(dict(kind="undo", text="undo  (Ctrl+Z)" if view.can_undo else "nothing to undo"))
+                controls += [dict(kind="option", text=o, key=c.key, option=o) for o in c.options]
+    specs = [dict(kind="undo", text="undo  (Ctrl+Z)" if view.can_undo else "nothing to undo")]
     specs.append(dict(kind="save", text="unsaved changes: Ctrl+S saves" if view.dirty
                       else "save  (Ctrl+S): no changes"))
     if view.note:
         specs.append(dict(kind="note", text=view.note))
+    room = int(max(h - PAD_PX, 0.0) // row_px)
+    specs = head + controls[:max(room - len(head) - len(specs), 0)] + specs
     rows, top = [], y + PAD_PX
     for spec in specs:
         if top + row_px > y + h:
