@@ -8,12 +8,16 @@ table, :data:`THRESHOLDS`, and each finding names the one it is below:
   asks for (``layer.mu_range``), under 0.11 is not detected as a change of friction
   (a Weber fraction: Gueorguiev et al. 2017). Layers with no contrast (force layers,
   mu' 1 everywhere) are not features of friction and are left out.
-- ``touch``: a periodic layer (grating, waveform) of period p below the spatial Nyquist
-  period of the touch samples, p < 2 v / f_touch: at a finger speed v the touch screen
-  reports the finger every v / f_touch mm, and a period shorter than two of those steps
-  cannot be placed by the samples (a renderer reading the map at the finger's position
-  aliases it; one synthesising the period from velocity plays it, but cannot keep it
-  registered with what is drawn). At the typical 100 mm/s and 60 Hz: 3.33 mm.
+- ``touch`` (a limit of rendering, not of perception: :data:`RENDERING_KINDS`): a
+  periodic layer (grating, waveform) of period p below the spatial Nyquist period of
+  the touch samples, p < 2 v / f_touch: at a finger speed v the touch screen reports
+  the finger every v / f_touch mm, and a period shorter than two of those steps cannot
+  be placed by the samples. What that does depends on the layer's renderer, and the
+  finding says which: SHO-held (the map at the last touch sample) aliases it; SHO-
+  predicted plays it between samples and jumps its phase at each; the hybrid and SHT,
+  which synthesise the period from the finger's velocity and exist for such periods,
+  play it (felt), registered with the drawing only as closely as the samples allow.
+  At the typical 100 mm/s and 60 Hz: 3.33 mm.
 - ``temporal``: a periodic layer whose fundamental at the typical speed, f = v / p (Hz),
   is above 800 Hz, where the skin's vibration sensitivity has fallen away (p < 0.125 mm
   at 100 mm/s).
@@ -33,6 +37,8 @@ from dataclasses import dataclass
 SPEED_MM_S = 100.0
 #: a common touch screen's report rate (Hz)
 TOUCH_HZ = 60.0
+#: findings about how a layer renders, not about what a finger can feel
+RENDERING_KINDS = frozenset({"touch"})
 
 
 @dataclass(frozen=True)
@@ -98,6 +104,37 @@ def _period(layer) -> float | None:
     return layer.period_mm if layer.is_periodic else None
 
 
+#: what a period under the touch samples' Nyquist period does, by the layer's renderer
+_UNDER_TOUCH = {
+    "hybrid": "SHO alone (the map read at the touch samples) would alias it; the hybrid "
+              "renderer plays it from the finger's velocity, so it is felt, registered "
+              "with the drawing only as closely as the touch samples allow",
+    "sht": "SHO alone (the map read at the touch samples) would alias it; SHT plays it "
+           "from the finger's velocity, so it is felt, but its phase is not kept with the "
+           "drawing",
+    "sho-held": "SHO-held reads the map only at each touch sample and aliases it (mu' "
+                "changes at the touch rate, not once per period); render = \"hybrid\" "
+                "plays it from the finger's velocity",
+    "sho-predicted": "SHO-predicted plays it between touch samples at the predicted "
+                     "position and jumps its phase at each sample (felt as extra edges); "
+                     "render = \"hybrid\" plays it from the finger's velocity without "
+                     "those jumps",
+}
+
+
+def _under_touch(layer, where: str, period: float) -> Finding:
+    """The ``touch`` finding of ``layer`` (``where``) of period ``period`` (mm): the limit
+    and what the layer's renderer makes of it (module docstring)."""
+    t = THRESHOLDS["touch"]
+    render = "sho-predicted" if layer.render == "sho" else layer.render
+    effect = _UNDER_TOUCH.get(render, f"a renderer that reads the map at the touch samples "
+                                      f"({render}) aliases it; render = \"hybrid\" plays it "
+                                      f"from the finger's velocity")
+    return Finding("touch", where, period,
+                   f"{where}: period {period:g} mm, below the {t.what} {t.value:.4g} {t.unit} "
+                   f"({t.source}): {effect}")
+
+
 def scene_findings(scene) -> list[Finding]:
     """The features of ``scene`` below a threshold of :data:`THRESHOLDS` (module
     docstring), in layer order."""
@@ -110,7 +147,7 @@ def scene_findings(scene) -> list[Finding]:
         period = _period(layer)
         if period is not None:
             if period < THRESHOLDS["touch"].value:
-                out.append(_below("touch", where, period, f"period {period:g} mm"))
+                out.append(_under_touch(layer, where, period))
             hz = SPEED_MM_S / period
             if hz > THRESHOLDS["temporal"].value:
                 out.append(_below("temporal", where, hz,

@@ -206,8 +206,8 @@ def test_validate_perception_warns_and_never_fails(tmp_path, capsys):
     assert main(["validate", "--perception", "--strict", str(path)]) == 0
     out, err = capsys.readouterr()
     assert out.startswith("ok ")
-    assert err.count("\n") == 1 and "perception: layer \"lines\": period 3.3 mm" in err
-    assert "2 v / f_touch" in err
+    assert err.count("\n") == 1 and "rendering: layer \"lines\": period 3.3 mm" in err
+    assert "2 v / f_touch" in err and "SHO-predicted" in err
     (tmp_path / "p.toml").write_text(PARAMETRIC.replace("[5.65, 5.75]", "[5.2, 5.65]"))
     assert main(["validate", "--perception", str(tmp_path / "p.toml")]) == 0
     out, err = capsys.readouterr()
@@ -221,10 +221,34 @@ def test_validate_perception_reports_a_bad_protocol(tmp_path, capsys):
     assert err.startswith("frictex: error: ") and "method" in err
 
 
-def test_preview_shows_what_a_finger_will_not_feel():
+def test_preview_shows_what_a_finger_will_not_feel_apart_from_how_layers_render(tmp_path):
+    """The 0.6 mm grating (hybrid) is felt: under the touch samples' Nyquist period is a
+    note on rendering, never "a finger will not feel"."""
     from frictex.app.commands.preview import preview_figure
 
-    _, info = preview_figure(load_scene(LIBRARY / "grating-0.6mm.toml"), (160, 96))
-    assert [m.split(",")[0] for m in info["perception"]] == ['layer "lines": period 0.6 mm']
-    _, info = preview_figure(load_scene(LIBRARY / "grating-5mm.toml"), (160, 96))
+    fig, info = preview_figure(load_scene(LIBRARY / "grating-0.6mm.toml"), (160, 96))
     assert info["perception"] == []
+    assert [m.split(",")[0] for m in info["rendering"]] == ['layer "lines": period 0.6 mm']
+    assert "the hybrid renderer plays it from the finger's velocity, so it is felt" in \
+        info["rendering"][0]
+    caption = fig.get_supxlabel()
+    assert caption.startswith("rendering: ") and "will not feel" not in caption
+    _, info = preview_figure(load_scene(LIBRARY / "grating-5mm.toml"), (160, 96))
+    assert info["perception"] == [] and info["rendering"] == []
+    fig, info = preview_figure(scene(tmp_path, NEAR["weber"][0]), (160, 96))
+    assert [f.split(":")[0] for f in info["perception"]] == ['layer "lines"']
+    assert fig.get_supxlabel().startswith("a finger will not feel: ")
+
+
+@pytest.mark.parametrize("render, says", [
+    ("hybrid", "the hybrid renderer plays it from the finger's velocity, so it is felt"),
+    ("sht", "SHT plays it from the finger's velocity, so it is felt"),
+    ("sho-held", "SHO-held reads the map only at each touch sample and aliases it"),
+    ("sho-predicted", "jumps its phase at each sample"),
+    ("sho", "jumps its phase at each sample"),  # the run's SHO variant, sho-predicted unless told
+])
+def test_a_period_under_the_touch_nyquist_says_what_its_renderer_makes_of_it(tmp_path, render,
+                                                                             says):
+    found = scene_findings(scene(tmp_path, GRATING.format(render=render, period=1.5, low=0.6)))
+    assert [f.kind for f in found] == ["touch"]
+    assert says in found[0].message and "3.333 mm" in found[0].message

@@ -162,3 +162,20 @@ def test_preview_prints_its_output_path_escaped(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "\x1b" not in printed and "\u202e" not in printed
     assert "p\\x1b[2J\\u202e.png: " in printed and out.is_file()
+
+
+@pytest.mark.parametrize("events, deepest", [
+    # a 5 ms tick (sharpness 1) of intensity 0.6: its Hann peak falls on a sample
+    ('clip = "tick"\nintensity = 0.6\nsharpness = 1.0\n', 1.0 - 0.5 * 0.6),
+    # a ramp from 0 to full level: 1 - depth at its end
+    ('clip = "ramp"\nduration_s = 0.1\nlevel_from = 0.0\nlevel_to = 1.0\n', 1.0 - 0.5),
+])
+def test_a_clips_title_gives_the_deepest_mu_it_plays(tmp_path, events, deepest):
+    """Not 1 - depth (0.5) when the events never reach full level."""
+    from frictex.app.commands.preview import preview_figure
+    from frictex.textures.loader import load_scene
+    path = tmp_path / "c.toml"
+    path.write_text(GRATING_4MM.split("[[layer]]")[0] + '[[layer]]\ntype = "clip"\nname = "k"\n'
+                    f'trigger = "down"\ndepth = 0.5\n{events}', encoding="utf-8")
+    fig, _ = preview_figure(load_scene(path), size=(120, 80))
+    assert f"deepest mu' {deepest:.3f}; not in the map" in fig.get_suptitle().replace("\n", " ")

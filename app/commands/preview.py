@@ -18,10 +18,15 @@ clamped (``frictex validate`` gives the share of a typical stroke, ``rendering.r
 Layers whose mu' depends on motion or time are shown as follows (and said so in the
 title): a height layer as a finger sliding towards +x feels it (climbing flanks above
 its rest level, descending ones below); a recorded texture at its mean; a clip at rest
-(mu' 1) in the map, with its trigger, length and deepest mu' in the title.
+(mu' 1) in the map, with its trigger, length and deepest mu' in the title (the lowest
+of its samples at the default 10 kHz output rate, which is 1 - depth only where its
+events reach full level).
 
-Under the panels, and printed: the scene's features a finger will not feel
-(``rendering.perception``, as ``frictex validate --perception`` reports them).
+Under the panels, and printed, as ``frictex validate --perception`` reports them
+(``rendering.perception``): the scene's features a finger will not feel (below a
+published threshold of touch, with its source), and apart from them, notes on how a
+layer renders (a period finer than the touch samples can place, and what the layer's
+renderer makes of it).
 """
 
 from __future__ import annotations
@@ -39,7 +44,7 @@ from frictex.device.errors import InputError
 from frictex.device.friction import mu_floor
 from frictex.device.safe_text import escape, escape_path
 from frictex.rendering.compose import ideal_mu
-from frictex.rendering.perception import scene_findings
+from frictex.rendering.perception import RENDERING_KINDS, scene_findings
 from frictex.rendering.reach import applies_alone, as_previewed
 from frictex.rendering.visual.scene_image import scene_rgb, to_srgb8
 from frictex.rendering.visual.viewport import fit_viewport
@@ -57,6 +62,8 @@ DEFAULT_MAX_PANEL_PX = 2048
 FLAT_ASPECT = 0.35
 #: Rows of the friction map computed at once (bounds memory for any panel size).
 ROWS_PER_PASS = 256
+#: The output rate (Hz) a clip's deepest mu' is found at: a replay's default
+CLIP_RATE_HZ = 10_000.0
 
 
 def frame_size(text: str) -> tuple[int, int]:
@@ -127,9 +134,9 @@ def _layer_note(layer) -> str:
     if kind == "ar":
         return f"{layer.name} (recorded texture, shown at its mean {layer.mu_mean:g})"
     if kind == "clip":
-        lo = 1.0 - layer.clip.depth
+        deepest = float(layer.clip.sample(CLIP_RATE_HZ)[0].min())
         return (f"{layer.name} (clip on {layer.trigger}: {layer.clip.duration_s * 1e3:.0f} ms, "
-                f"mu' down to {lo:.2f}; not in the map)")
+                f"deepest mu' {deepest:.3f}; not in the map)")
     return (f"{layer.name} ({layer_kind(layer)}, {layer.render}"
             + (f", {layer.period_mm:g} mm" if layer.is_periodic else "") + ")")
 
@@ -193,10 +200,10 @@ def preview_figure(scene, size: tuple[int, int] | None = None, outlines: bool = 
         ax.set_xlabel("x (mm)")
         ax.set_ylabel("y (mm)")
     _floor_bar(fig, shown, right, flat, floor, force, vmin)
-    felt = _captions(fig, scene)
+    felt, rendering = _captions(fig, scene)
     info = {"mu_min": float(mu.min()), "mu_max": float(mu.max()), "floor": floor,
             "below": float(below.mean()), "size": (viewport.width_px, viewport.height_px),
-            "perception": felt}
+            "perception": felt, "rendering": rendering}
     return fig, info
 
 
@@ -261,16 +268,23 @@ def _floor_bar(fig, shown, ax, flat: bool, floor: float, force: float, vmin: flo
             label.set_color("red")
 
 
-def _captions(fig, scene) -> list[str]:
+def _captions(fig, scene) -> tuple[list[str], list[str]]:
     """Title ``fig`` with the scene's layers and caption it with what a finger will not
-    feel; return those perception messages."""
+    feel and how layers render (``rendering.perception``); return those two lists of
+    messages."""
     layers = "; ".join(_layer_note(layer) for layer in scene.layers)
     fig.suptitle("\n".join(textwrap.wrap(f"layers: {layers}", 150)), fontsize=9)
-    felt = [f.message for f in scene_findings(scene)]
-    if felt:  # what a finger cannot feel (frictex validate --perception), under the panels
-        fig.supxlabel("\n".join(textwrap.wrap("a finger will not feel: " + "; ".join(felt), 170)),
-                      fontsize=8, color="darkorange")
-    return felt
+    findings = scene_findings(scene)
+    felt = [f.message for f in findings if f.kind not in RENDERING_KINDS]
+    rendering = [f.message for f in findings if f.kind in RENDERING_KINDS]
+    lines = []  # under the panels (frictex validate --perception)
+    if felt:
+        lines += textwrap.wrap("a finger will not feel: " + "; ".join(felt), 170)
+    if rendering:
+        lines += textwrap.wrap("rendering: " + "; ".join(rendering), 170)
+    if lines:
+        fig.supxlabel("\n".join(lines), fontsize=8, color="darkorange" if felt else "dimgrey")
+    return felt, rendering
 
 
 def write_preview(scene, out: Path, size: tuple[int, int] | None = None,
@@ -337,4 +351,6 @@ def run(args: argparse.Namespace) -> int:
              + ("" if args.size else f"; drawn at most {MAX_PANEL_PX} px a side") + ")"))
     for message in info["perception"]:
         print(f"perception: {printable(message)}")
+    for message in info["rendering"]:
+        print(f"rendering: {printable(message)}")
     return 0

@@ -19,8 +19,11 @@ program's surroundings (device, link, output space).
 with its source): a scene's features below the published thresholds, and for an
 experiment protocol (a file with a top-level ``method``) its scenes and its stimuli
 compared pair by pair (``app.experiment.perception_check``). These are printed as
-``frictex: warning: FILE: perception: ...`` and never fail a file, not even with
-``--strict``: they say what a finger will not tell apart, not what the file asks for.
+``frictex: warning: FILE: perception: ...``, and a periodic layer finer than the touch
+samples can place (a limit of rendering, not of perception: what the layer's renderer
+makes of it) as ``frictex: warning: FILE: rendering: ...``. They never fail a file, not
+even with ``--strict``: they say what a finger will not tell apart or how a layer
+renders, not what the file asks for.
 """
 
 from __future__ import annotations
@@ -45,8 +48,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "layers together ask for a friction below the device's floor")
     parser.add_argument("--perception", action="store_true",
                         help="also report features a finger cannot feel (published thresholds, "
-                             "each with its source); FILE may be an experiment protocol, whose "
-                             "stimuli are compared pair by pair; warnings only")
+                             "each with its source) and periods finer than the touch samples "
+                             "can place (what the layer's renderer makes of them); FILE may be "
+                             "an experiment protocol, whose stimuli are compared pair by pair; "
+                             "warnings only")
     add_allow_outside(parser)
 
 
@@ -94,8 +99,12 @@ def _is_protocol(name: str) -> bool:
 
 
 def _perception(label, findings) -> None:
+    """Print ``findings`` (``rendering.perception``): "perception:" for what a finger
+    will not feel, "rendering:" for how a layer renders (``RENDERING_KINDS``)."""
+    from frictex.rendering.perception import RENDERING_KINDS
     for finding in findings:
-        print(f"frictex: warning: {escape_path(label)}: perception: {printable(finding.message)}",
+        about = "rendering" if finding.kind in RENDERING_KINDS else "perception"
+        print(f"frictex: warning: {escape_path(label)}: {about}: {printable(finding.message)}",
               file=sys.stderr)
 
 
