@@ -617,7 +617,8 @@ class DemoLoop:
         """The panel's editor on ``path`` (reloaded: it changed and loads) takes the file
         again, its unsaved edits on top where they still apply (``LayerEdit.reread``).
         Returns the text to show (None: the file's own) and what became of the edits
-        (", kept N unsaved panel values, dropped M ...", or "")."""
+        (", kept N unsaved panel values", ", dropped M unsaved panel values that no
+        longer apply", both, or "")."""
         editor = self.editor
         if editor is None or editor.path != path:
             return None, ""
@@ -630,9 +631,10 @@ class DemoLoop:
             return None, ""
         if not dirty:
             return None, ""
-        said = f", kept {kept} unsaved panel value{'s' * (kept != 1)}"
+        said = f", kept {kept} unsaved panel value{'s' * (kept != 1)}" if kept else ""
         if dropped:
-            said += f", dropped {dropped} that no longer appl{'y' if dropped != 1 else 'ies'}"
+            said += (f", dropped {dropped} unsaved panel value{'s' * (dropped != 1)} "
+                     f"that no longer appl{'y' if dropped != 1 else 'ies'}")
         self.panel_note = said[2:]
         return (editor.text() if kept else None), said
 
