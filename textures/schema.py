@@ -19,6 +19,7 @@ contents or a terminal escape.
 
 from __future__ import annotations
 
+import datetime
 import difflib
 import math
 import re
@@ -60,14 +61,17 @@ def show(value) -> str:
 
 
 def kind(value) -> str:
-    """The TOML type and value, for 'expected X, got Y' messages."""
+    """The TOML type and value, for 'expected X, got Y' messages (or the Python type of
+    a value no TOML gives, from a Scene built in code: ``frictex._inputs.checked_scene``)."""
     if isinstance(value, dict):
         return "a table"
     for types, name in ((bool, "the boolean"), (str, "the string"), ((int, float), "the number"),
                         (list, "the list")):
         if isinstance(value, types):
             return f"{name} {show(value)}"
-    return f"the date/time {escape(value, MAX_SHOWN)}"
+    if isinstance(value, datetime.date | datetime.time):
+        return f"the date/time {escape(value, MAX_SHOWN)}"
+    return "None" if value is None else f"a value of type {escape(type(value).__name__, MAX_SHOWN)}"
 
 
 def did_you_mean(word: str, options) -> str:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 from collections.abc import Iterable, Sequence
 from pathlib import Path
@@ -49,12 +51,131 @@ def load_scene(name_or_path: str | Path) -> Scene:
 
 
 def scene_of(scene: Scene | str | Path) -> Scene:
-    """``scene`` itself, or the scene a texture file or bundled scene's name gives."""
+    """``scene`` itself (checked: :func:`checked_scene`), or the scene a texture file or
+    bundled scene's name gives."""
     if isinstance(scene, Scene):
-        return scene
+        return checked_scene(scene)
     path_like("scene", scene, "a Scene (frictex.load_scene), a texture file or a bundled "
                               "scene's name")
     return load_scene(scene)
+
+
+def checked_scene(scene: Scene) -> Scene:
+    """``scene`` if its values keep the rules a texture file's keys keep, else a
+    :class:`~frictex.textures.errors.TextureError` naming the layer and field of each one
+    that does not (its first in one line).
+
+    A scene :func:`load_scene` read was checked as its file was read; this is for one
+    built or changed in code (``dataclasses.replace``). Each field named as a texture
+    file's key (``layers[i].mu_low``, ``display.width_mm``, ``device.amplitude_limit_um``,
+    a layer's ``region``, ``geometry`` and ``visual``) is checked by that key's own type
+    (``textures.keys``, ``textures.schema``): a number, finite, within the key's bounds;
+    a value equal to the key's default is taken as the loader takes it. Fields the file
+    writes another way (colours, a raster's image, a clip's events, a height shape) and
+    the rules between keys (mu_low under mu_high, objects on the display) are not checked
+    again.
+    """
+    from frictex.device.profile import DeviceProfile, DrivingForceParams, FrictionParams
+    from frictex.textures import keys
+    from frictex.textures.model import Display, _LayerBase
+    from frictex.textures.schema import Reader, Retired
+
+    r = Reader(f"scene {scene.name!r}", None)
+    top = {name: keys.TOP[name] for name in ("name", "description", "control")}
+    device = getattr(scene, "device", None)
+    for obj, path, table, kind in (
+            (scene, (), top, Scene), (scene.display, ("display",), keys.DISPLAY, Display),
+            (device, ("device",), keys.DEVICE, DeviceProfile),
+            (getattr(device, "friction", None), ("device", "friction"), keys.FRICTION,
+             FrictionParams),
+            (getattr(device, "driving", None), ("device", "driving"), keys.DRIVING,
+             DrivingForceParams)):
+        _fields(r, obj, path, {name: (spec, [spec.default]) for name, spec in table.items()
+                               if not isinstance(spec, Retired)}, kind)
+    layers = scene.layers
+    if not isinstance(layers, tuple | list) or not 1 <= len(layers) <= keys.MAX_LAYERS:
+        count = (f"{len(layers)} layers" if isinstance(layers, tuple | list)
+                 else f"a {type(layers).__name__}")
+        r.report(("layers",), f"{count}; expected a tuple of 1 to {keys.MAX_LAYERS} layers")
+        layers = ()
+    rules = _layer_rules()
+    for i, layer in enumerate(layers):
+        r.label = f"scene {scene.name!r}, layer {getattr(layer, 'name', '?')!r}"
+        path = (f"layers[{i}]",)
+        if _fields(r, layer, path, rules, _LayerBase):
+            for part in ("region", "geometry", "visual"):
+                value = getattr(layer, part, None)
+                if dataclasses.is_dataclass(value):
+                    _fields(r, value, path + (part,), rules)
+    if r.problems:
+        from frictex.textures.errors import TextureError
+        more = len(r.problems) - 1
+        error = TextureError(f"{r.problems[0]}"
+                             + (f" (and {more} more problem{'s' * (more > 1)})" if more else ""))
+        error.problems = r.problems
+        raise error
+    return scene
+
+
+def _fields(r, obj: object, path: tuple, rules: dict, kind: type | None = None) -> bool:
+    """Report to the reader ``r`` each field of the dataclass ``obj`` that the rule of its
+    name refuses (``rules``: name -> (a key's type, the defaults it is not checked at));
+    False (reported) where ``obj`` is not a ``kind``."""
+    if kind is not None and not isinstance(obj, kind):
+        r.report(path, f"expected a {kind.__name__}, got {type(obj).__name__}")
+        return False
+    for field in dataclasses.fields(obj):
+        if field.name in rules:
+            spec, defaults = rules[field.name]
+            value = _plain(getattr(obj, field.name))
+            if not any(value is default or value == _plain(default) for default in defaults):
+                spec.check(r, value, path + (field.name,))
+    return True
+
+
+def _plain(value: object) -> object:
+    """A field's value as TOML would give it: numpy scalars as Python's, tuples as lists."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, tuple):
+        return [_plain(item) for item in value]
+    return value
+
+
+@functools.cache
+def _layer_rules() -> dict:
+    """The rules for a layer's fields, name -> (a key's type, its defaults): the keys
+    every layer has (name, blend, fingers), and by name every number and flag key of the
+    layer types, regions and visual hints (``textures.keys``). A name two types bound
+    differently is left out; one they bound alike in different units keeps both units
+    for its messages, and the defaults of both."""
+    from frictex.textures import keys
+    from frictex.textures.schema import REQUIRED, Flag, Int, Num, NumList
+
+    def rule(spec):  # what a spec checks, not what it documents or defaults to
+        neutral = {"default": None, "doc": "", "rule": ""}
+        if isinstance(spec, NumList):
+            return dataclasses.replace(spec, item=rule(spec.item), **neutral)
+        return dataclasses.replace(spec, **neutral, **({"unit": ""} if isinstance(spec, Num)
+                                                        else {}))
+
+    rules: dict = {name: (keys.COMMON[name], [keys.COMMON[name].default])
+                   for name in ("name", "blend", "fingers")}
+    clashing = set()
+    for table in (keys.RECT_REGION, keys.DISC_REGION, keys.VISUAL, *keys.LAYER_KEYS.values()):
+        for name, spec in table.items():
+            if not isinstance(spec, Num | Int | NumList | Flag):
+                continue
+            known, defaults = rules.setdefault(name, (spec, []))
+            if rule(known) != rule(spec):
+                clashing.add(name)
+                continue
+            if isinstance(spec, Num) and spec.unit not in known.unit.split(" or "):
+                known = dataclasses.replace(known, unit=f"{known.unit} or {spec.unit}")
+            if spec.default is not REQUIRED and spec.default not in defaults:
+                defaults.append(spec.default)
+            rules[name] = (known, defaults)
+    return {name: rule for name, rule in rules.items() if name not in clashing}
 
 
 def read_trace(path: str | Path, *, strict: bool = False) -> Trace:
