@@ -1,7 +1,7 @@
 """The layer panel drawn by the compositor: its column keeps the scene beside it, a
 slider's knob sits where its value is, and no text of the panel overlaps another text of
-the frame or leaves it, whatever the frame's size, with a menu open, a banner and the
-scope (``Compositor.text_boxes``, as test_visual_text_layout checks frames without it)."""
+the frame or leaves it, whatever the frame's size, with a menu open, a banner (right of
+the column, hiding none of its rows) and the scope (``Compositor.text_boxes``, as test_visual_text_layout checks frames without it)."""
 
 import itertools
 
@@ -47,9 +47,13 @@ def test_the_panel_keeps_its_texts_apart_and_in_the_frame(gl, size, name, layer,
         assert x >= -0.5 and y >= -0.5 and x + bw <= w + 0.5 and y + bh <= h + 0.5, (box, size)
     for a, b in itertools.combinations(boxes, 2):
         assert not overlapping(a, b), (a, b, size)
-    # each slider's knob at its value along the track (a banner's band covers some)
+    # every row's text drawn: a banner's band lies right of the column, hiding none
+    top, bottom = rows[0].box[1] - 1.0, rows[-1].box[1] + rows[-1].box[3] + 1.0
+    assert sum(x + bw <= column + 0.5 and top <= y and y + bh <= bottom
+               for x, y, bw, bh in boxes) == len(rows)
+    # each slider's knob at its value along the track
     knob = np.round(np.array(KNOB_RGBA[:3]) * 255)
-    for row in rows if banner is None else ():
+    for row in rows:
         if row.track is None:
             continue
         tx, ty, tw, th = row.track
