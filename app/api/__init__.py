@@ -20,8 +20,8 @@ The public, typed API::
   ``frictex.renderers`` and ``frictex.devices`` in frictex's own pyproject.toml): the
   contracts :class:`LayerRenderer` (what a layer's renderer answers, given each block's
   :class:`FingerBlock`) and :class:`OutputDevice` (what an output device answers, opened
-  with a :class:`DeviceRequest`), and :class:`PluginError`, what frictex raises for another
-  package's renderer or device that fails.
+  with a :class:`DeviceRequest`), and :class:`PluginError`, what frictex raises for
+  another package's plugin that cannot be loaded, fails, or breaks its contract.
 
 Units everywhere: positions in mm, time in s, velocity in mm/s, force in N, frequency in
 Hz, vibration amplitude in um zero-to-peak, friction relative (mu' = mu(w) / mu(0)).

@@ -119,7 +119,9 @@ def build_pipeline(scene: Scene | str | Path, *, rate_hz: float = 10_000.0,
     Parameters
     ----------
     scene : Scene, str or Path
-        A scene (:func:`load_scene`), a texture file or a bundled scene's name.
+        A scene (:func:`load_scene`), a texture file or a bundled scene's name. A
+        :class:`Scene` built or changed in code (``dataclasses.replace``) is checked by
+        the rules of the texture file's keys, as a file is when read.
     rate_hz : float, optional
         Output sample rate (Hz), 100 Hz to 1 MHz as ``frictex replay --rate``; 10 kHz is
         the seed 003 device's link.
@@ -143,8 +145,10 @@ def build_pipeline(scene: Scene | str | Path, *, rate_hz: float = 10_000.0,
     Raises
     ------
     InputError
-        A bad scene, or a rate, block size, renderer, control mode or inversion that is
-        not one the command line accepts (the message names the argument).
+        A bad scene (a value of a :class:`Scene` breaking its key's rule: the message
+        names the layer and field), or a rate, block size, renderer, control mode or
+        inversion that is not one the command line accepts (the message names the
+        argument).
     """
     return Pipeline(scene, rate_hz=rate_hz, block_size=block_size, renderer=renderer,
                     control=control, inversion=inversion)
