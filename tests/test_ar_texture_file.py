@@ -254,3 +254,22 @@ def test_model_cost_is_bounded_before_any_fit(monkeypatch):
                                            rf"at 48000 Hz"):
         model.resampled(48_000.0)
     assert fits == []
+
+
+def test_the_model_file_of_authoring_md_reads_as_it_says(tmp_path):
+    """AUTHORING.md's element table and example: four AR(2) vertices, 1-based <tri>, and
+    its poly_to_lsf recipe gives the first model's LSFs."""
+    import re
+    from pathlib import Path
+
+    from frictex.textures.hatt import poly_to_lsf
+    page = (Path(__file__).resolve().parents[1] / "textures" / "AUTHORING.md").read_text("utf-8")
+    xml = re.search(r"<!-- example: hatt-model -->\n```xml\n(.*?)```", page, re.S).group(1)
+    model = parse_hatt_xml(xml)
+    poly, var = model.at(0.0, 0.0)
+    assert_allclose(poly, [1.0, -1.6, 0.8], atol=1e-5) and var == pytest.approx(0.5)
+    poly, var = model.at(300.0, 4.0)
+    assert_allclose(poly, [1.0, -1.0, 0.6], atol=1e-5) and var == pytest.approx(1.5)
+    assert_allclose(poly_to_lsf(np.array([1.0, -1.6, 0.8])), [0.451027, 0.795399], atol=5e-7)
+    (tmp_path / "wood.xml").write_text(xml, encoding="utf-8")
+    assert isinstance(load_scene(write(tmp_path, BODY)).layers[0], ArTextureLayer)

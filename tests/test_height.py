@@ -199,6 +199,18 @@ def test_height_map_from_a_16_bit_png(tmp_path):
         read_height_png(eight, 1.0)
 
 
+def test_beyond_a_map_the_height_stays_at_its_nearest_edge_and_is_level():
+    """AUTHORING.md: a ramp rising to its right edge is a plateau beyond it (no drop)."""
+    ramp = np.tile(np.linspace(0.0, 1.0, 20), (4, 1))  # 0 to 1 mm over 20 px of 1 mm
+    hmap = HeightMap(ramp, 40.0, 20.0, 20.0, 4.0)
+    # on the ramp; right of it, left of it, below it; the last row's centre above that
+    h, gx, gy = hmap.height_and_gradient(np.array([50.0, 70.0, 10.0, 50.0, 50.0]),
+                                         np.array([22.0, 22.0, 22.0, 40.0, 23.5]))
+    assert gx[0] > 0.0 and gx[4] > 0.0
+    assert_allclose(h[1:4], [1.0, 0.0, h[4]], rtol=0, atol=1e-15)
+    assert (gx[1:4] == 0.0).all() and (gy[1:4] == 0.0).all()
+
+
 def test_relief_is_lit_from_the_top_left_where_the_haptics_put_the_slopes():
     layer = _bump_layer()
     mid = (layer.mu_min + layer.mu_max) / 2

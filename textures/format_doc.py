@@ -170,7 +170,7 @@ type:
 | `grating`, `waveform`, `edge` | the whole display | the pattern is cut at the region's outline: a step from the pattern's μ' to 1 |
 | `rectangle`, `disc`, `line`, `bump` | the shape (a bump: r <= 4 sigma) | the part of the shape inside the region |
 | `raster` | the image's area | the part of the image inside the region |
-| `height` | the whole display, at `mu_rest` on flat ground | the region, at `mu_rest`: **a step** from mu_rest to 1 at its outline, felt and seen. To confine a shape without a step, leave the region out (a bump's or ridge's slope is ~0 beyond 3 sigma or its width: the rest level then covers the display evenly), or raise `mu_rest` towards 1 (the step is 1 - mu_rest) |
+| `height` | the whole display, at `mu_rest` on flat ground; a height map's height goes on beyond its rectangle, level, at its nearest edge pixel's height (no slope there, so nothing is felt: a map whose edge is high does not drop at its border; draw the fall inside the image) | the region, at `mu_rest`: **a step** from mu_rest to 1 at its outline, felt and seen. To confine a shape without a step, leave the region out (a bump's or ridge's slope is ~0 beyond 3 sigma or its width: the rest level then covers the display evenly), or raise `mu_rest` towards 1 (the step is 1 - mu_rest) |
 | `recorded` | the whole display, about `mu_mean` | the region: a step from about mu_mean to 1 at its outline |
 | `clip` | triggers anywhere | triggers only inside the region (the clip, once started, plays until it ends) |
 | `directional`, `guidance`, `keyclick` | the whole display (a keyclick: its button) | acts only inside the region |
@@ -398,7 +398,9 @@ def examples_section() -> str:
     lines = ["## Worked examples, one per layer type", "",
              "Each is a whole file; tests validate and replay every one (the files they name, "
              "`raster-map.png`, `clips/tick-then-buzz.ahap`, are in `textures/library/`; "
-             "`wood.xml` is any HaTT model).", ""]
+             "`wood.xml` is any HaTT model: its elements, and a complete one to copy, are in "
+             "[`AUTHORING.md`](AUTHORING.md#recorded-textures-type--recorded), \"The model "
+             "file, element by element\").", ""]
     for kind, text in EXAMPLES.items():
         lines += [f"### `{kind}`", "", f"<!-- example: {kind}-example -->", "```toml",
                   text.rstrip("\n"), "```", ""]
