@@ -142,3 +142,13 @@ def test_any_value_either_runs_finite_or_is_a_texture_error(short_trace, field, 
         return
     mu = r.friction.column("mu_target").to_numpy()
     assert np.isfinite(mu).all() and ((mu > 0) & (mu <= 1)).all()
+
+
+@pytest.mark.parametrize("name, shown", [
+    ("a\x1b[31m", r"layer 'a\x1b[31m': layers[0].name: holds the control character '\x1b' "),
+    ("x" * 300, f"layer '{'x' * 40}...': layers[0].name: is 300 characters long; "),
+])
+def test_a_bad_layer_name_is_shown_escaped_and_short(name, shown):
+    with pytest.raises(TextureError) as caught:
+        frictex.build_pipeline(changed("grating-5mm", "layers[0].name", name))
+    assert shown in str(caught.value) and str(caught.value).isprintable()

@@ -80,7 +80,7 @@ def checked_scene(scene: Scene) -> Scene:
     from frictex.textures.model import Display, _LayerBase
     from frictex.textures.schema import Reader, Retired
 
-    r = Reader(f"scene {scene.name!r}", None)
+    r = Reader(f"scene {_named(scene.name)}", None)
     top = {name: keys.TOP[name] for name in ("name", "description", "control")}
     device = getattr(scene, "device", None)
     for obj, path, table, kind in (
@@ -100,7 +100,7 @@ def checked_scene(scene: Scene) -> Scene:
         layers = ()
     rules = _layer_rules()
     for i, layer in enumerate(layers):
-        r.label = f"scene {scene.name!r}, layer {getattr(layer, 'name', '?')!r}"
+        r.label = f"scene {_named(scene.name)}, layer {_named(getattr(layer, 'name', '?'))}"
         path = (f"layers[{i}]",)
         if _fields(r, layer, path, rules, _LayerBase):
             for part in ("region", "geometry", "visual"):
@@ -131,6 +131,13 @@ def _fields(r, obj: object, path: tuple, rules: dict, kind: type | None = None) 
             if not any(value is default or value == _plain(default) for default in defaults):
                 spec.check(r, value, path + (field.name,))
     return True
+
+
+def _named(name: object) -> str:
+    """A scene's or layer's name in a message, quoted, its first 40 characters (the
+    message escapes what is not printable)."""
+    text = name if isinstance(name, str) else repr(name)
+    return f"'{text[:40]}...'" if len(text) > 40 else f"'{text}'"
 
 
 def _plain(value: object) -> object:
