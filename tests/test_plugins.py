@@ -22,7 +22,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from frictex.device.registry import PluginError, Registry, UnknownName
+from frictex.device.registry import Expect, PluginError, Registry, UnknownName
 from frictex.rendering.pipeline import build_pipeline
 from frictex.rendering.renderers import LAYER_RENDERERS, RENDERERS, LayerRenderer, render_modes
 from frictex.textures.library import resolve_scene
@@ -45,6 +45,7 @@ PLUGIN = {
         short = "frictex_test_wobble:Short"
         unset = "frictex_test_wobble:Unset"
         unbuilt = "frictex_test_wobble:Unbuilt"
+        methodless = "frictex_test_wobble:Methodless"
 
         [project.entry-points."frictex.profiles"]
         wobble-plate = "frictex_test_wobble:PLATE"
@@ -54,6 +55,17 @@ PLUGIN = {
 
         [project.entry-points."frictex.devices"]
         tally = "frictex_test_wobble:open_tally"
+        numbered = "frictex_test_wobble:NUMBER"
+        unplugged = "frictex_test_wobble:open_unplugged"
+        jammed = "frictex_test_wobble:open_jammed"
+
+        [project.entry-points."frictex.sinks"]
+        ledger = "frictex_test_wobble:Ledger"
+        leaky = "frictex_test_wobble:Leaky"
+
+        [project.entry-points."frictex.clocks"]
+        metronome = "frictex_test_wobble:Metronome"
+        stuck = "frictex_test_wobble:Stuck"
 
         [tool.setuptools]
         py-modules = ["frictex_test_wobble"]
@@ -154,6 +166,76 @@ PLUGIN = {
         class Unbuilt(Wobble):
             def __init__(self, layer, rate_hz):
                 raise RuntimeError("no calibration table for this layer")
+
+
+        class Methodless:  # neither initial_state nor render
+            def __init__(self, layer, rate_hz):
+                pass
+
+
+        NUMBER = 42  # not a device's factory
+
+
+        def open_unplugged(arg, request):
+            raise RuntimeError("USB interface 3 not found")
+
+
+        class Jammed(Tally):
+            def send(self, start_index, amplitudes_um, phases_rad=None):
+                raise ValueError("amplitude buffer overflow in driver")
+
+
+        def open_jammed(arg, request):
+            return Jammed(arg, request)
+
+
+        class Ledger:
+            # a sink (factory(arg, request)): at commit, the calls, rows and sum of every
+            # command (um) it was given, its channels and rate, into the file ARG names
+            def __init__(self, arg, request):
+                self.path, self.request = arg, request
+                self.calls, self.rows, self.total = 0, 0, 0.0
+
+            def write(self, out, commands_um):
+                assert commands_um.shape == (out.t_s.size, len(self.request.channels))
+                self.calls += 1
+                self.rows += commands_um.shape[0]
+                self.total += float(np.sum(commands_um))
+
+            def commit(self):
+                with open(self.path, "w") as fh:
+                    fh.write(f"{{self.calls}} {{self.rows}} {{self.total!r}} "
+                             f"{{','.join(self.request.channels)}} {{self.request.rate_hz!r}}")
+
+            def abort(self):
+                pass
+
+
+        class Leaky(Ledger):
+            def write(self, out, commands_um):
+                raise RuntimeError("the lab server's disk is full")
+
+
+        class Metronome:
+            # a clock: how many calls and blocks it was told of, and its block (s), into
+            # the file ARG names after each call
+            def __init__(self, arg, request):
+                self.path, self.block_s = arg, request.block_s
+                self.calls = self.blocks = 0
+
+            def wait(self, k):
+                assert k == self.blocks  # no gap: the trace has none
+
+            def finished(self, k, n):
+                self.calls += 1
+                self.blocks += n
+                with open(self.path, "w") as fh:
+                    fh.write(f"{{self.calls}} {{self.blocks}} {{self.block_s!r}}")
+
+
+        class Stuck(Metronome):
+            def wait(self, k):
+                raise RuntimeError("no sync pulse from the lab's clock")
         """,
 }
 FRICTEX = Path(sys.executable).with_name("frictex")
@@ -487,3 +569,240 @@ def test_a_registry_gives_a_builtin_its_name_back_and_refuses_reserved_names(cap
     with pytest.raises(PluginError, match="the name is reserved"):
         registry._add("any", abs, "frictex-test-x (m:abs)")
     registry.register("any", abs)  # frictex's own may
+
+
+def commanded(folder: Path) -> list[float]:
+    """The one channel's commands (um) of a replay's commands.csv."""
+    with open(folder / "commands.csv", newline="", encoding="utf-8") as fh:
+        return [float(row[1]) for row in list(csv.reader(fh))[1:]]
+
+
+SINK_USE = """
+import sys
+import frictex
+run = frictex.replay("grating-5mm", "swipe-40mms-50hz", sinks=["ledger:" + sys.argv[1]],
+                     clock="metronome:" + sys.argv[2], renderer="sho-held")
+print(run.commands.num_rows)
+"""
+
+
+def test_replay_and_the_python_api_feed_a_plugins_sink_on_a_plugins_clock(plugin_path,
+                                                                          tmp_path):
+    """--sink NAME:ARG and --clock NAME:ARG build the plugin's by its factory with ARG;
+    the sink gets every command (um, the channels' order), the clock every block."""
+    # sho-held: the same commands however many blocks a pipeline call runs (a pacing
+    # clock runs one; sht's differ at a few grating edges, in the last bit of the phase)
+    own = tmp_path / "own"
+    args = [str(FRICTEX), "replay", "grating-5mm", "swipe-40mms-50hz", "--quiet",
+            "--renderer", "sho-held", "--out"]
+    assert run(args + [str(own)], None, tmp_path).returncode == 0
+    commands = commanded(own)
+    ledger, metronome = tmp_path / "ledger.txt", tmp_path / "metronome.txt"
+    done = run(args + [str(tmp_path / "out"), "--sink", f"ledger:{ledger}", "--clock",
+                       f"metronome:{metronome}"], plugin_path, tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert commanded(tmp_path / "out") == commands  # the run's own outputs unchanged
+    calls, rows, total, channels, rate = ledger.read_text().split()
+    assert int(rows) == len(commands) and channels == "ch0" and float(rate) == 10_000.0
+    assert float(total) == pytest.approx(sum(commands), abs=0.5e-6 * len(commands))
+    blocks = len(commands) // 50  # 5 ms blocks at 10 kHz
+    # a clock that paces is asked before every block: one block per pipeline call
+    assert metronome.read_text().split() == [str(blocks), str(blocks), "0.005"]
+    assert int(calls) == blocks
+    ledger.unlink()
+    done = run([sys.executable, "-c", SINK_USE, str(ledger), str(metronome)], plugin_path,
+               tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == [str(len(commands))]
+    assert int(ledger.read_text().split()[1]) == len(commands)
+
+
+@pytest.mark.parametrize("option, message", [
+    (["--renderer", "methodless"],
+     "renderer 'methodless' of frictex-test-wobble (frictex_test_wobble:Methodless) built a "
+     "Methodless without initial_state() or render() for layer 'lines'; expected a "
+     "LayerRenderer (frictex.rendering.renderers.LayerRenderer)"),
+    (["--device", "numbered"],
+     "output device 'numbered' of frictex-test-wobble (frictex_test_wobble:NUMBER) is the "
+     "int 42; expected a factory(arg, request) returning an OutputDevice"),
+    (["--device", "unplugged"],
+     "output device 'unplugged' of frictex-test-wobble (frictex_test_wobble:open_unplugged) "
+     "failed opening: RuntimeError: USB interface 3 not found"),
+    (["--device", "jammed:{tmp}/jammed.txt"],
+     "output device 'jammed' of frictex-test-wobble (frictex_test_wobble:open_jammed) failed "
+     "in send(): ValueError: amplitude buffer overflow in driver"),
+    (["--sink", "leaky:{tmp}/leaky.txt"],
+     "sink 'leaky' of frictex-test-wobble (frictex_test_wobble:Leaky) failed writing: "
+     "RuntimeError: the lab server's disk is full"),
+    (["--clock", "stuck:{tmp}/stuck.txt"],
+     "clock 'stuck' of frictex-test-wobble (frictex_test_wobble:Stuck) failed in wait(): "
+     "RuntimeError: no sync pulse from the lab's clock"),
+])
+def test_a_plugin_that_fails_is_named_and_the_last_run_stays(plugin_path, tmp_path, option,
+                                                            message):
+    """A renderer, output device, sink or clock of a package that raises (or is not what
+    its group holds) fails the run with one line naming the package (exit 1), never
+    frictex's internal error (exit 70); the previous run's outputs in the folder stay as
+    they were (all or nothing)."""
+    out = tmp_path / "out"
+    args = [str(FRICTEX), "replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(out),
+            "--quiet"]
+    assert run(args, None, tmp_path).returncode == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    done = run(args + [o.format(tmp=tmp_path) for o in option], plugin_path, tmp_path)
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.strip().splitlines() == [f"frictex: error: {message}"]
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+API_FAILURES = """
+import json, sys
+import frictex
+got = []
+for options in [{"renderer": "methodless"}, {"device": "numbered"}, {"device": "unplugged"},
+                {"sinks": ["leaky:" + sys.argv[1]]}, {"clock": "stuck:" + sys.argv[1]},
+                {"sinks": ["nosuch"]}, {"clock": "nosuch"}]:
+    try:
+        frictex.replay("grating-5mm", "swipe-40mms-50hz", **options)
+        got.append("no error")
+    except frictex.FrictexError as exc:
+        got.append(type(exc).__name__ + ": " + str(exc))
+print(json.dumps(got))
+"""
+
+
+def test_the_python_api_raises_a_plugins_failure_as_a_plugin_error(plugin_path, tmp_path):
+    done = run([sys.executable, "-c", API_FAILURES, str(tmp_path / "x.txt")], plugin_path,
+               tmp_path)
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout.splitlines()[-1])
+    assert [g.split(":")[0] for g in got] == ["PluginError"] * 5 + ["UnknownName"] * 2
+    for text, name in zip(got, ("methodless", "numbered", "unplugged", "leaky", "stuck")):
+        assert f"{name!r} of frictex-test-wobble" in text
+    known = {"sink": {"tables", "link", "frames", "memory", "progress", "threaded", "ledger",
+                      "leaky"}, "clock": {"virtual", "wall", "device", "metronome", "stuck"}}
+    for text, kind in zip(got[5:], known):
+        said, listed = text.split("; expected one of ")
+        assert said == f"UnknownName: unknown {kind} 'nosuch'"
+        assert set(listed.split(", ")) == known[kind]
+
+
+@pytest.mark.parametrize("option, message", [
+    (["--sink", "tables"], "sink 'tables': the run builds its own 'tables' sink (its tables); "
+                           "a sink is attached once"),
+    (["--sink", "threaded:link"], "sink 'link' streams to an output device, and the run has "
+                                  "none: choose one (--device, device=)"),
+    (["--sink", "nosuch:3"], "unknown sink 'nosuch'; expected one of tables, link, frames, "
+                             "memory, progress, threaded"),
+    (["--clock", "device"], "clock 'device' is paced by an output device, and the run has "
+                            "none: choose one (--device, device=)"),
+])
+def test_a_sink_or_clock_that_cannot_be_is_an_input_error(tmp_path, option, message):
+    out = tmp_path / "out"
+    done = run([str(FRICTEX), "replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(out),
+                "--quiet", *option], None, tmp_path)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [f"frictex: error: {message}"]
+    assert not out.exists()
+
+
+def test_a_wall_clock_replay_takes_the_traces_time(tmp_path):
+    """--clock wall paces the replay in real time: 2 s of output take 2 s or more (a
+    lower bound only: a busy machine is slower, never faster), as many rows."""
+    outs = {}
+    for clock in ("virtual", "wall"):
+        outs[clock] = tmp_path / clock
+        done = run([str(FRICTEX), "replay", "grating-5mm", "swipe-40mms-50hz", "--out",
+                    str(outs[clock]), "--quiet", "--clock", clock], None, tmp_path)
+        assert done.returncode == 0, done.stderr
+    paced = json.loads((outs["wall"] / "summary.json").read_text(encoding="utf-8"))
+    assert paced["timings"]["wall_s"] >= paced["output"]["duration_s"] - 0.006
+    assert len(commanded(outs["wall"])) == len(commanded(outs["virtual"])) > 20_000
+
+
+def test_a_profile_entry_of_the_wrong_type_is_left_out_with_one_warning(tmp_path):
+    """A frictex.profiles entry that is a dict, not a ProfileSpec, broke every scene
+    command (an ImportError of frictex's own tables, exit 70): it is left out, one warning
+    naming it; a scene that names it is an error naming it."""
+    site = fake_distribution(tmp_path / "site", "frictex-test-dictplate", """
+        [frictex.profiles]
+        dict-plate = frictex_test_dictplate:PLATE
+        """)
+    (site / "frictex_test_dictplate.py").write_text('PLATE = {"channels": 1}\n',
+                                                    encoding="utf-8")
+    warning = ("frictex: warning: device profile 'dict-plate' of frictex-test-dictplate "
+               "(frictex_test_dictplate:PLATE) is a dict; expected a "
+               "frictex.device.profile.ProfileSpec; left out")
+    scene = resolve_scene("grating-5mm")
+    for args in (["validate", str(scene)],
+                 ["replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(tmp_path / "o"),
+                  "--quiet"]):
+        done = run([str(FRICTEX), *args], site, tmp_path)
+        assert done.returncode == 0, done.stderr
+        assert done.stderr.strip().splitlines() == [warning]
+    text = scene.read_text(encoding="utf-8")
+    named = tmp_path / "named.toml"
+    named.write_text(text.replace('profile = "plate-seed003"', 'profile = "dict-plate"'),
+                     encoding="utf-8")
+    done = run([str(FRICTEX), "validate", str(named)], site, tmp_path)
+    assert done.returncode in (1, 2) and "Traceback" not in done.stderr
+    assert "'dict-plate' of frictex-test-dictplate" in done.stderr
+
+
+LATE_INSTALL = """
+import sys
+import frictex
+try:
+    frictex.replay("grating-5mm", "swipe-40mms-50hz", renderer="wobble")
+except frictex.InputError as exc:
+    print("before:", exc)
+sys.path.append(sys.argv[1])  # as %pip install in a running notebook would
+run = frictex.replay("grating-5mm", "swipe-40mms-50hz", renderer="wobble")
+print("after:", sorted(set(run.friction.column("mu_target").to_pylist())))
+"""
+
+
+def test_a_renderer_installed_mid_session_is_found(plugin_path, tmp_path):
+    """The API's renderer choice reads the registry's names, which are read again once
+    the installed packages have changed, as a name looked up is."""
+    done = run([sys.executable, "-c", LATE_INSTALL, str(plugin_path)], None, tmp_path)
+    assert done.returncode == 0, done.stderr
+    before, after = done.stdout.strip().splitlines()[-2:]
+    assert before.startswith("before: renderer='wobble': expected one of sho,")
+    assert after == f"after: [{WOBBLE_MU!r}]"
+
+
+def test_a_registry_sees_a_package_installed_into_a_folder_on_its_path(tmp_path):
+    """A package installed since the metadata was read, into a folder already on
+    sys.path, is listed by names() (no lookup of a missing name needed)."""
+    sys.path.insert(0, str(tmp_path))
+    try:
+        registry: Registry = Registry("gadget", "frictex.test-late")
+        assert registry.names() == ()
+        fake_distribution(tmp_path, "frictex-test-late", "[frictex.test-late]\nlate = m:X\n")
+        os.utime(tmp_path, ns=(0, os.stat(tmp_path).st_mtime_ns + 1))  # a coarse clock
+        assert registry.names() == ("late",)
+    finally:
+        sys.path.remove(str(tmp_path))
+
+
+def test_a_registry_refuses_an_entry_that_is_not_what_it_holds(tmp_path):
+    site = fake_distribution(tmp_path, "frictex-test-typed", """
+        [frictex.test-typed]
+        text = frictex_test_typed:TEXT
+        number = frictex_test_typed:NUMBER
+        """)
+    (site / "frictex_test_typed.py").write_text("TEXT = 'x'\nNUMBER = 3\n", encoding="utf-8")
+    sys.path.insert(0, str(site))
+    try:
+        registry: Registry = Registry("gadget", "frictex.test-typed",
+                                      expect=Expect.instance_of(int))
+        assert registry.get("number") == 3
+        with pytest.raises(PluginError, match=r"gadget 'text' of frictex-test-typed "
+                                              r"\(frictex_test_typed:TEXT\) is the str 'x'; "
+                                              r"expected a builtins.int"):
+            registry.get("text")
+        assert registry.loaded() == {"number": 3}
+    finally:
+        sys.path.remove(str(site))
+        sys.modules.pop("frictex_test_typed", None)
