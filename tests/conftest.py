@@ -22,6 +22,13 @@ import subprocess
 
 import pytest
 
+# OpenBLAS on one thread: the suite's numpy work is on vectors of thousands of values,
+# where a second BLAS thread gains nothing and, on a busy machine, spins against the
+# tests' own processes (a simulated staircase session: 3.8-7.2 s of wall time with it,
+# 1.6-3.3 s without, at load 7). Set before numpy loads; the commands tests start
+# inherit it.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
 
