@@ -81,7 +81,7 @@ class Sink(Protocol):
         """Take one pipeline call's output and the commands sent.
 
         ``out`` is a ``rendering.pipeline.BlockOutput`` of n output samples from output
-        sample ``out.index0`` on: ``t_s`` (n,) s; per finger slot (F, n) ``x_mm``,
+        sample ``out.index0`` on: ``t_s`` (n,) s on the trace's clock; per finger slot (F, n) ``x_mm``,
         ``y_mm`` (mm), ``contact`` (bool), ``mu_target`` (mu', 0 to 1),
         ``amplitude_um`` (um zero-to-peak under the finger); ``phases_rad`` (n, channels)
         rad or None; ``ids_per_sample()`` the finger ids (F, n). ``commands_um``: (n,
