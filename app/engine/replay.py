@@ -1,4 +1,5 @@
-"""Headless replay: a scene and a trace through the pipeline, on a virtual clock.
+"""Headless replay: a scene and a trace through the pipeline, on a virtual clock (or the
+one ``ReplayOptions.clock`` names: ``wall`` paces it in real time).
 
 The output clock starts at the trace's first sample (t_s of output sample k is
 t0 + k / rate) and runs until the block after the last sample. The trace is read and
@@ -339,8 +340,8 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     doc["warnings"] += source.gaps.warnings()
     late = getattr(clock, "stats", None)
     if isinstance(late, DeadlineStats) and late.misses:
-        doc["warnings"].append(f"clock {options.clock!r}: {late.misses} of {blocks} pipeline "
-                               f"calls reached the sinks late (the worst "
+        doc["warnings"].append(f"clock {options.clock!r}: {late.misses} pipeline calls "
+                               f"reached the sinks late (the worst "
                                f"{late.worst_lateness_s * 1e3:.1f} ms past its end)")
     if sink is not None:
         doc["device"] = sink.status()
