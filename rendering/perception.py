@@ -104,32 +104,17 @@ def _period(layer) -> float | None:
     return layer.period_mm if layer.is_periodic else None
 
 
-#: what a period under the touch samples' Nyquist period does, by the layer's renderer
-_UNDER_TOUCH = {
-    "hybrid": "SHO alone (the map read at the touch samples) would alias it; the hybrid "
-              "renderer plays it from the finger's velocity, so it is felt, registered "
-              "with the drawing only as closely as the touch samples allow",
-    "sht": "SHO alone (the map read at the touch samples) would alias it; SHT plays it "
-           "from the finger's velocity, so it is felt, but its phase is not kept with the "
-           "drawing",
-    "sho-held": "SHO-held reads the map only at each touch sample and aliases it (mu' "
-                "changes at the touch rate, not once per period); render = \"hybrid\" "
-                "plays it from the finger's velocity",
-    "sho-predicted": "SHO-predicted plays it between touch samples at the predicted "
-                     "position and jumps its phase at each sample (felt as extra edges); "
-                     "render = \"hybrid\" plays it from the finger's velocity without "
-                     "those jumps",
-}
-
-
 def _under_touch(layer, where: str, period: float) -> Finding:
     """The ``touch`` finding of ``layer`` (``where``) of period ``period`` (mm): the limit
-    and what the layer's renderer makes of it (module docstring)."""
+    and what the layer's renderer makes of it (its class's ``fine_period``; ``sho``: the
+    default SHO variant's)."""
+    from frictex.rendering.renderers import DEFAULT_SHO, RENDERERS
+    from frictex.textures.model import SHO
     t = THRESHOLDS["touch"]
-    render = "sho-predicted" if layer.render == "sho" else layer.render
-    effect = _UNDER_TOUCH.get(render, f"a renderer that reads the map at the touch samples "
-                                      f"({render}) aliases it; render = \"hybrid\" plays it "
-                                      f"from the finger's velocity")
+    render = DEFAULT_SHO if layer.render == SHO else layer.render
+    effect = getattr(RENDERERS.get(render), "fine_period", None) or (
+        f"renderer {render} may alias it where it reads the map at the touch samples; "
+        f"render = \"hybrid\" plays it from the finger's velocity")
     return Finding("touch", where, period,
                    f"{where}: period {period:g} mm, below the {t.what} {t.value:.4g} {t.unit} "
                    f"({t.source}): {effect}")

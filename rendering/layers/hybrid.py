@@ -476,6 +476,12 @@ _NO_FINGER = (0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 class HybridRenderer:
     """Phase-locked period synthesis of one periodic layer (grating or waveform)."""
 
+    #: what it makes of a period finer than the touch samples can place
+    #: (``rendering.perception``)
+    fine_period = ("SHO alone (the map read at the touch samples) would alias it; the hybrid "
+                   "renderer plays it from the finger's velocity, so it is felt, registered "
+                   "with the drawing only as closely as the touch samples allow")
+
     def __init__(self, layer, rate_hz: float, slip: float = SLIP, lock_mm: float = LOCK_MM,
                  event_hz: float = EVENT_HZ):
         if not 0.0 < slip < 1.0:

@@ -36,12 +36,24 @@ class ShoRenderer:
 class HeldSho(ShoRenderer):
     """The ``sho-held`` renderer: the last measured position (seed 003's plain SHO)."""
 
+    #: what it makes of a period finer than the touch samples can place
+    #: (``rendering.perception``)
+    fine_period = ("SHO-held reads the map only at each touch sample and aliases it (mu' "
+                   "changes at the touch rate, not once per period); render = \"hybrid\" "
+                   "plays it from the finger's velocity")
+
     def __init__(self, layer, rate_hz: float):
         super().__init__(layer, predicted=False)
 
 
 class PredictedSho(ShoRenderer):
     """The ``sho-predicted`` renderer: the position extrapolated between touch samples."""
+
+    #: what it makes of a period finer than the touch samples can place
+    #: (``rendering.perception``)
+    fine_period = ("SHO-predicted plays it between touch samples at the predicted position "
+                   "and jumps its phase at each sample (felt as extra edges); render = "
+                   "\"hybrid\" plays it from the finger's velocity without those jumps")
 
     def __init__(self, layer, rate_hz: float):
         super().__init__(layer, predicted=True)

@@ -31,6 +31,12 @@ class ShtState:
 class ShtRenderer:
     """Period synthesis of one periodic layer (grating or waveform)."""
 
+    #: what it makes of a period finer than the touch samples can place
+    #: (``rendering.perception``)
+    fine_period = ("SHO alone (the map read at the touch samples) would alias it; SHT plays "
+                   "it from the finger's velocity, so it is felt, but its phase is not kept "
+                   "with the drawing")
+
     def __init__(self, layer, rate_hz: float):
         self.layer = layer
         self.dt_s = 1.0 / rate_hz
