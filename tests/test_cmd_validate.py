@@ -143,3 +143,79 @@ def test_file_names_and_names_reach_the_terminal_escaped(tmp_path, capsys):
         out, err = capsys.readouterr()
         assert out == "" and err.count(f"holds the format character '{char}'") == 2
         assert name not in err
+
+
+def _validate(tmp_path, capsys, text):
+    path = tmp_path / "s.toml"
+    path.write_text(text)
+    code = main(["validate", str(path)])
+    return code, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("width_mm, width_px, warned, hint", [
+    (0.108, 800, True, "in metres? 0.108 m = 108 mm"),  # the reviewer's file
+    (108.0, 800, False, None),  # 0.135 mm per pixel
+    (8.0, 800, False, None),  # 0.01: the bound itself
+    (7.9, 800, True, None),  # 0.0099 mm per pixel, and in metres 9.9
+    (1600.0, 800, False, None),  # 2.0
+    (1700.0, 800, True, None),
+    (108.0, 1, True, None),  # 108 mm per pixel: width_px is not the pixel count
+])
+def test_a_pixel_pitch_no_screen_has_is_warned_about(tmp_path, capsys, width_mm, width_px,
+                                                     warned, hint):
+    head = HEAD.replace("width_mm = 108.0", f"width_mm = {width_mm}").replace(
+        "width_px = 800", f"width_px = {width_px}")
+    grating = '[[layer]]\ntype = "grating"\nperiod_mm = 5.0\nmu_low = 0.7\n'
+    code, err = _validate(tmp_path, capsys, head + grating)
+    lines = [line for line in err.splitlines() if "display.width_mm" in line]
+    assert code == 0 and len(lines) == warned
+    if warned:
+        pitch = width_mm / width_px
+        assert lines[0].startswith(f"frictex: warning: {tmp_path / 's.toml'}:3: display.width_mm: "
+                                   f"{width_mm:g} mm over width_px = {width_px} is {pitch:.3g} mm "
+                                   "per pixel")
+        assert "outside 0.01 to 2 mm per pixel" in lines[0]
+        assert (hint in lines[0]) if hint else "metres" not in lines[0]
+
+
+def test_a_length_too_small_in_mm_that_fits_in_metres_says_so(tmp_path, capsys):
+    grating = '[[layer]]\ntype = "grating"\nperiod_mm = {}\nmu_low = 0.7\n'
+    code, err = _validate(tmp_path, capsys, HEAD + grating.format(0.003))
+    assert code == 2 and err.splitlines()[0].endswith(
+        "layer[1].period_mm: 0.003 is outside [0.01, 10000] (mm); in metres? 0.003 m = 3 mm")
+    code, err = _validate(tmp_path, capsys, HEAD + grating.format(0.000001))  # 1 um in m: too small
+    assert code == 2 and "metres" not in err
+
+
+@pytest.mark.parametrize("tail, table, key", [
+    ("[layer.region]\ncx_mm = 50.0\ncy_mm = 30.0\nradius_mm = 10.0\nmu = 0.7\n",
+     "[layer.region]", "region.mu"),
+    ("[layer.visual]\ncolor_low = \"#000\"\nsigma_mm = 4\n", "[layer.visual]", "visual.sigma_mm"),
+])
+def test_a_layer_key_written_under_a_sub_table_asks_whether_it_belongs_above(tmp_path, capsys,
+                                                                            tail, table, key):
+    layer = LAYER.format(mu=0.7).replace(tail.split("\n")[-2] + "\n", "")
+    code, err = _validate(tmp_path, capsys, HEAD + layer + tail)
+    line = next(line for line in err.splitlines() if f"layer[1].{key}:" in line)
+    assert code == 2 and line.endswith(
+        f"; {key.split('.')[1]} is a key of the table above: did you mean to put it above "
+        f"{table}? (every key after a [table] header belongs to that table)")
+
+
+def test_a_key_that_belongs_nowhere_gets_no_such_hint(tmp_path, capsys):
+    code, err = _validate(tmp_path, capsys, HEAD + LAYER.format(mu=0.7)
+                          + "[layer.region]\ncx_mm = 50.0\ncy_mm = 30.0\nradius_mm = 10.0\n"
+                            "depth = 0.3\n")
+    assert code == 2 and "region.depth: unknown key" in err and "table above" not in err
+
+
+@pytest.mark.parametrize("region, warned", [
+    ("x_mm = 0.0\ny_mm = 0.0\nwidth_mm = 5.0\nheight_mm = 5.0\n", True),  # the reviewer's
+    ("cx_mm = 90.0\ncy_mm = 30.0\nradius_mm = 10.0\n", True),
+    ("cx_mm = 60.0\ncy_mm = 30.0\nradius_mm = 10.0\n", False),  # meets the bump's 4 sigma
+])
+def test_a_region_that_never_meets_its_layer_is_warned_about(tmp_path, capsys, region, warned):
+    code, err = _validate(tmp_path, capsys, HEAD + LAYER.format(mu=0.7) + "[layer.region]\n" + region)
+    assert code == 0
+    assert ("layer[1].region: never meets where the layer acts (within x 34 to 66 mm, y 14 to "
+            "46 mm): the layer covers nothing" in err) == warned

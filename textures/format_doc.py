@@ -16,6 +16,7 @@ from frictex.textures import model
 from frictex.textures import schema as S
 from frictex.textures.extent import FAST_FINGER_MM_S
 from frictex.textures.format_examples import EXAMPLES, PLANK
+from frictex.textures.loader import PIXEL_PITCH_MM
 
 INTRO = """# Texture files: every table and key
 
@@ -136,7 +137,11 @@ scene is always drawn with its millimetre proportions: the area is fitted into a
 or image of another shape at one scale, centred, with bars on two sides. Where the pixel
 aspect (width_px / height_px) differs from the millimetre aspect, the two densities
 differ and a pixel is not square: a one-to-one image is stretched along the axis of
-lower density (nothing else changes, and nothing warns).
+lower density (nothing else changes, and nothing warns). A pixel pitch (mm per pixel:
+width_mm / width_px, height_mm / height_px) outside <PITCH_LO> to <PITCH_HI> mm is no touch
+screen's (an 800-ppi phone has 0.03 mm, a 1080p 84-inch table about 1 mm): `frictex
+validate` warns about it, and names the size in mm where the value would fit written in
+metres (`width_mm = 0.108` over 800 px: "in metres? 0.108 m = 108 mm").
 
 ### Colours
 
@@ -162,8 +167,9 @@ places on the friction map.
 
 Every layer type takes an optional `[layer.region]`: a rectangle (`x_mm`, `y_mm`,
 `width_mm`, `height_mm`, `angle_deg`) or a disc (`cx_mm`, `cy_mm`, `radius_mm`). Outside
-its region a layer is not composed (as if its μ' were 1 there). What that does to each
-type:
+its region a layer is not composed (as if its μ' were 1 there); a region that never
+meets the area its layer acts on (a disc's region beside the disc) leaves the layer
+covering nothing, and `frictex validate` warns. What a region does to each type:
 
 | layer type | covers without a region | with a region |
 |---|---|---|
@@ -185,7 +191,8 @@ display (every layer is evaluated per position). One wholly off the display is r
 A point that places a line or a target (an `edge`'s, a height `ridge`'s or `step`'s
 `x_mm`, `y_mm`, a clip's trigger line, a `guidance` target) must lie on the display
 itself, edges included.
-""".replace("<FAST>", f"{FAST_FINGER_MM_S:g}")
+""".replace("<FAST>", f"{FAST_FINGER_MM_S:g}").replace(
+    "<PITCH_LO>", f"{PIXEL_PITCH_MM[0]:g}").replace("<PITCH_HI>", f"{PIXEL_PITCH_MM[1]:g}")
 
 
 def files_section() -> str:

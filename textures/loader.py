@@ -165,17 +165,22 @@ of decoded pixels checked from their headers (``textures.sections.files``,
 Objects, points, regions and sprites must lie on the display. Every problem in a file is
 reported (not only the first) as ``file:line: field: message``; ``frictex validate`` also
 warns, without failing, where a layer asks for a mu' the device cannot reach at its
-nominal normal force (``device.friction.mu_floor``), and where a layer is for one
-finger on a one-channel device (which serves only the finger touching longest).
+nominal normal force (``device.friction.mu_floor``), where a layer is for one
+finger on a one-channel device (which serves only the finger touching longest), where a
+display's pixel pitch is no screen's (:data:`PIXEL_PITCH_MM`: a size in metres, most
+often), and where a layer's region never meets the area the layer acts on (the layer
+would cover nothing).
 """
 
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 from frictex.device.profile import FRICTION_LOOP_PROFILES
 from frictex.textures import model
+from frictex.textures.extent import lowering
 from frictex.textures.errors import Locator, Problem, TextureError
 from frictex.textures.keys import FORMAT_VERSION, LAYER_KEYS, LAYER_TYPES, TOP
 from frictex.textures.schema import BAD, Reader
@@ -184,6 +189,47 @@ from frictex.textures.outside import allow_outside_from_env
 from frictex.textures.sections.files import Files
 from frictex.textures.sections.layers import parse_layers, reach_warnings, selector_warnings
 from frictex.textures.toml_safe import parse_toml, read_text
+
+#: The pixel pitch (mm per pixel) of a plausible touch screen: an 800-ppi phone has
+#: 0.03 mm, a 1080p 84-inch touch table about 1 mm; outside these bounds (2540 to 12.7
+#: ppi) a [display] is warned about, as a size given in metres or in pixels would give.
+PIXEL_PITCH_MM = (0.01, 2.0)
+
+
+def _pixel_pitch_warnings(r: Reader, display: model.Display) -> None:
+    """Warn where ``display``'s mm per pixel lies outside :data:`PIXEL_PITCH_MM`, with
+    the size in mm that the value would be if it were written in metres."""
+    lo, hi = PIXEL_PITCH_MM
+    for axis, mm, px in (("width", display.width_mm, display.width_px),
+                         ("height", display.height_mm, display.height_px)):
+        pitch = mm / px
+        if lo <= pitch <= hi:
+            continue
+        hint = (f"; in metres? {mm:g} m = {mm * 1000:g} mm" if lo <= mm * 1000 / px <= hi
+                else "")
+        r.report(("display", f"{axis}_mm"),
+                 f"{mm:g} mm over {axis}_px = {px} is {pitch:.3g} mm per pixel "
+                 f"({25.4 / pitch:,.6g} ppi); touch screens have about 0.03 (an 800-ppi phone) "
+                 f"to 1 mm per pixel (a 1080p 84-inch table), and values outside {lo:g} to "
+                 f"{hi:g} mm per pixel are warned about{hint}", warning=True)
+
+
+def _covers_nothing_warnings(r: Reader, display: model.Display, built) -> None:
+    """Warn where a layer's region never meets the area the layer lowers mu' on
+    (``textures.extent.lowering``, whose boxes never understate it): the layer would
+    cover nothing."""
+    for index, (layer, _) in enumerate(built):
+        if layer.region is None or lowering(layer, display):
+            continue
+        own = lowering(replace(layer, region=None), display)
+        if not own:  # it lowers mu' nowhere, region or not
+            continue
+        x0, y0 = min(b[0] for b, _ in own), min(b[1] for b, _ in own)
+        x1, y1 = max(b[2] for b, _ in own), max(b[3] for b, _ in own)
+        r.report(("layer", index, "region"),
+                 f"never meets where the layer acts (within x {x0:g} to {x1:g} mm, y {y0:g} "
+                 f"to {y1:g} mm): the layer covers nothing; move the region onto it, or "
+                 f"leave the region out", warning=True)
 
 
 def check_scene(path: str | Path, *, allow_outside: bool = False, text: str | None = None,
@@ -234,6 +280,8 @@ def check_scene(path: str | Path, *, allow_outside: bool = False, text: str | No
     device_warnings(r, device)
     reach_warnings(r, device, built)
     selector_warnings(r, device, built)
+    _pixel_pitch_warnings(r, display)
+    _covers_nothing_warnings(r, display, built)
     if top["control"] != "open" and (device.profile not in FRICTION_LOOP_PROFILES
                                      or device.calibration is not None):
         loop = " or ".join(f'"{name}"' for name in FRICTION_LOOP_PROFILES)

@@ -74,6 +74,12 @@ def kind(value) -> str:
     return "None" if value is None else f"a value of type {escape(type(value).__name__, MAX_SHOWN)}"
 
 
+def header(path: KeyPath) -> str:
+    """The TOML header of the table at ``path``: ``[layer.region]`` for ("layer", 0,
+    "region")."""
+    return "[" + ".".join(p for p in path if isinstance(p, str)) + "]"
+
+
 def did_you_mean(word: str, options) -> str:
     """`` (did you mean X?)`` for the closest of ``options`` (which are the program's own
     names, safe to print), or ""."""
@@ -130,12 +136,18 @@ class Num:
         bad_low = (self.gt is not None and not v > self.gt) or (self.ge is not None and not v >= self.ge)
         bad_high = (self.lt is not None and not v < self.lt) or (self.le is not None and not v <= self.le)
         if (bad_low or bad_high) and lower is not None and upper is not None:
-            return f"is outside {self.bounds_text()} ({self.unit})"
+            return f"is outside {self.bounds_text()} ({self.unit}){self._in_metres(v, bad_low)}"
         if bad_low:
             return f"is not {'>' if self.gt is not None else '>='} {lower:g} ({self.unit})"
         if bad_high:
             return f"is not {'<' if self.lt is not None else '<='} {upper:g} ({self.unit})"
         return None
+
+    def _in_metres(self, v: float, too_low: bool) -> str:
+        """A hint for a length in mm too small that would fit written in metres."""
+        if self.unit != "mm" or not too_low or v <= 0.0 or self._out_of_bounds(v * 1000.0):
+            return ""
+        return f"; in metres? {v:g} m = {v * 1000.0:g} mm"
 
     def check(self, r: "Reader", value, path: KeyPath, items: list | None = None):
         """``value`` checked (a float) or BAD (reported); ``items``: the list that holds
@@ -344,6 +356,10 @@ class Reader:
         self.locator = locator
         self.problems: list[Problem] = []
         self.warnings: list[Problem] = []
+        #: the keys of the table holding each sub-table read so far (``tables`` of
+        #: :meth:`table`), by the sub-table's path: for the hint on a key written under
+        #: a [sub.table] header that belongs above it
+        self._outer: dict[KeyPath, list[str]] = {}
 
     def report(self, path: KeyPath, message: str, warning: bool = False) -> object:
         """Record a problem (or a warning) at ``path``; returns :data:`BAD`."""
@@ -367,12 +383,17 @@ class Reader:
             self.report(path, f"expected a table, got {kind(value)}")
             return None
         known = list(spec) + list(tables)
+        self._outer.update((path + (t,), known) for t in tables)
+        outer = self._outer.get(path, ())
         for key in value:
             if len(self.problems) > MAX_PROBLEMS:
                 break  # no more are listed; spare the spelling suggestions
             if key not in known:
+                above = (f"; {key} is a key of the table above: did you mean to put it above "
+                         f"{header(path)}? (every key after a [table] header belongs to that "
+                         "table)" if key in outer else "")
                 self.report(path + (key,), f"unknown key{did_you_mean(key, known)}; "
-                                           f"known here: {', '.join(known)}")
+                                           f"known here: {', '.join(known)}{above}")
         for key, s in spec.items():
             if isinstance(s, Retired) and key in value:
                 self.report(path + (key,), f"no longer used, ignored: {s.why}", warning=True)
