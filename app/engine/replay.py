@@ -226,8 +226,7 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
         _check_outputs_fit(staging.out, source, pipeline, options.fmt, frames)
     if options.sim_args and options.device is None:
         raise InputError("sim_args are for a simulated device (device 'sim')")
-    _check_attached(options, sink is not None or options.device is not None,
-                    frames is not None, options.progress and _long(source))
+    _check_attached(options, sink, frames, source)
     check()
     folder = summary_id = None
     try:
@@ -284,23 +283,8 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     looped = pipeline.control is not None
     totals = Totals()
     sinks = [totals]
-    request = SinkRequest(tuple(pipeline.channels), pipeline.actuation.has_phases,
-                          options.rate_hz, pipeline.block_size, folder, options.fmt, sink,
-                          frames)
-    link = None
     try:
-        if sink is not None:  # a paced link: its send waits (bounded) for the device's room
-            link = build_sink("link", request)
-            sinks.append(link)
-        if frames is not None:
-            sinks.append(build_sink("frames", request))
-        if options.progress and _long(source):
-            sinks.append(build_sink("progress", request))
-        sinks += [build_sink(s, request) if isinstance(s, str) else s for s in options.sinks]
-        # last: its files become final only once the link has drained, the frames are out
-        # and the sinks attached have committed
-        tables = build_sink("tables", request)
-        sinks.append(tables)
+        link, tables = _build_sinks(sinks, pipeline, source, folder, options, sink, frames)
         block_s = pipeline.block_size / options.rate_hz
         clock = build_clock(options.clock, ClockRequest(block_s, block_s, sink))
     except BaseException:  # a sink or clock that cannot be built: the sinks built are aborted
@@ -352,12 +336,37 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     return doc, in_memory
 
 
-def _check_attached(options: ReplayOptions, link: bool, frames: bool, progress: bool) -> None:
+def _build_sinks(sinks: list, pipeline, source: TraceSource, folder, options: ReplayOptions,
+                 device, frames):
+    """Append the run's sinks to ``sinks``, built by name (``app.engine.sinks.SINKS``): the
+    device's link, the frames, the progress bar, the sinks attached, the tables last (its
+    files become final only once the link has drained, the frames are out and the sinks
+    attached have committed). Returns the link's sink (or None) and the tables'."""
+    request = SinkRequest(tuple(pipeline.channels), pipeline.actuation.has_phases,
+                          options.rate_hz, pipeline.block_size, folder, options.fmt, device,
+                          frames)
+    link = None
+    if device is not None:  # a paced link: its send waits (bounded) for the device's room
+        link = build_sink("link", request)
+        sinks.append(link)
+    if frames is not None:
+        sinks.append(build_sink("frames", request))
+    if options.progress and _long(source):
+        sinks.append(build_sink("progress", request))
+    sinks += [build_sink(s, request) if isinstance(s, str) else s for s in options.sinks]
+    tables = build_sink("tables", request)
+    sinks.append(tables)
+    return link, tables
+
+
+def _check_attached(options: ReplayOptions, link, frames, source: TraceSource) -> None:
     """Refuse, before anything is written, a clock or an attached sink of an unknown name
     (``UnknownName`` lists the known), and an attached sink the run builds itself."""
     clock_name(options.clock)
-    built = {"tables": "its tables", "link": link and "with a device",
-             "frames": frames and "with frames", "progress": progress and "a long trace's"}
+    built = {"tables": "its tables",
+             "link": (link is not None or options.device is not None) and "with a device",
+             "frames": frames is not None and "with frames",
+             "progress": options.progress and _long(source) and "a long trace's"}
     for spec in options.sinks:
         if not isinstance(spec, str):
             continue
