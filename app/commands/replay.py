@@ -53,14 +53,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="also write PNG frames of the visual layer at FPS into DIR/frames")
     parser.add_argument("--sink", action="append", default=[], metavar="NAME[:ARG]",
                         help="also feed every block to this sink (repeatable; registered: "
-                             f"{', '.join(SINKS.names())}; a package adds one under entry "
+                             f"{_listed(SINKS.names())}; a package adds one under entry "
                              "points 'frictex.sinks'); the run's own tables, link, frames and "
                              "progress bar are built already")
-    parser.add_argument("--clock", choices=CLOCKS.names(), default="virtual",
+    parser.add_argument("--clock", default="virtual", metavar="NAME[:ARG]",
                         help="what paces the replay: virtual (default: as fast as it computes), "
-                             "wall (real time), device (the --device's room), or a package's")
+                             "wall (real time), device (the --device's room), or a package's "
+                             f"(entry points 'frictex.clocks'; registered: "
+                             f"{_listed(CLOCKS.names())})")
     parser.add_argument("--quiet", action="store_true", help="no progress bar, no summary line")
     add_allow_outside(parser)
+
+
+def _listed(names: tuple[str, ...]) -> str:
+    """Registered names for a help text (argparse formats it with %)."""
+    return ", ".join(names).replace("%", "%%")
 
 
 def run(args: argparse.Namespace) -> int:
