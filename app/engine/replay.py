@@ -7,8 +7,12 @@ the outputs written in chunks, so memory stays bounded however long the trace (a
 at 10 kHz is 36 million command rows). Each pipeline call runs ``chunk_blocks`` blocks
 (by default about :data:`CHUNK_SAMPLES` finger-samples: fewer calls, arrays that still fit
 the cache), but a touch sample still takes effect at the block boundary after it, so the
-result equals a live run block by block, and two replays of the same inputs are
-byte-identical (``summary.json`` aside, whose ``timings`` differ).
+result equals a live run block by block: bit for bit with SHO and SHT; with the hybrid,
+whose slew toward the measured phase starts again from its carried state at each call,
+to rounding (on grating-5mm's 40 mm/s swipe, 3 to 6 of 20,050 samples lie within that
+of a square edge and fall on its other side between one block per call and the
+default). Two replays of the same inputs are byte-identical (``summary.json`` aside,
+whose ``timings`` differ).
 
 Outputs (DESIGN.md): ``commands.<fmt>`` (t_s, one column per channel in um, phases where
 the actuation has them), ``friction.<fmt>`` (one row per touching finger and output
