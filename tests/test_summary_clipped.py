@@ -23,7 +23,11 @@ def _replay(tmp_path, capsys, body):
                  "--format", "npz"]) == 0
     doc = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     mu = np.load(out / "friction.npz")["mu_target"]  # one row per touching finger sample
-    return doc, mu, capsys.readouterr().err
+    printed = capsys.readouterr()
+    clipped = sum(doc["layer_clipped"].values())
+    assert (f"0 clamped, {clipped} clipped by the layers' own limits;" in printed.out) == (
+        clipped > 0)
+    return doc, mu, printed.err
 
 
 def test_a_recorded_texture_clipped_at_its_limits_is_counted_and_warned(tmp_path, capsys):

@@ -92,6 +92,9 @@ def run(args: argparse.Namespace) -> int:
         device_clamped = (summary.get("device") or {}).get("clamped_samples")
         if device_clamped:  # the device's own clamp (its warning says to what)
             clamps += f" by the friction inversion, {device_clamped} by the device's limit"
+        clipped = sum((summary.get("layer_clipped") or {}).values())
+        if clipped:  # a layer's own limits (its warning says which and where)
+            clamps += f", {clipped} clipped by the layers' own limits"
         print(f"replayed {summary['trace']['samples']} touch samples -> {out['samples']} output "
               f"samples ({out['duration_s']:.3f} s at {out['rate_hz']:g} Hz) in {args.out}: "
               f"{', '.join(out['files'])}, summary.json; {clamps}; "
