@@ -10,8 +10,8 @@ covers (``app.measure.report_closed_loop``), fanned out the same way.
     frictex report --out report/             # the full matrix
 
 Exit status: 0 the report was written (whatever its claims say: report.md lists each
-claim as holding or not); with ``--strict``, 1 when any claim does not hold; 2 bad
-options.
+claim as holding, not holding or not shown); with ``--strict``, 1 when any claim does
+not hold or is not shown; 2 bad options.
 """
 
 from __future__ import annotations
@@ -48,15 +48,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="also replay the touch recordings in DIR (getevent logs, evemu "
                              "recordings, trace CSVs; searched recursively) in a section of "
                              "their own, e.g. ../shared/refdata/android-getevent")
+    parser.add_argument("--loop-delays", metavar="FILE", default=None,
+                        help="the closed-loop runs replay the force-report delays recorded in "
+                             "FILE (a report.json, or its closed_loop.report_delays object) "
+                             "instead of measuring this machine's link: the same FILE gives "
+                             "the same closed-loop figures")
     parser.add_argument("--strict", action="store_true",
-                        help="exit 1 when any claim does not hold (default: exit 0 once the "
-                             "report is written)")
+                        help="exit 1 when any claim does not hold or is not shown "
+                             "(default: exit 0 once the report is written)")
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
 def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     out, real_dir = _checked(args)
+    from frictex.app.measure.report_claims import count_line
     from frictex.app.measure.report_doc import Report, headline
     from frictex.app.measure.report_markdown import write_markdown
     jobs = args.jobs or default_workers()
@@ -72,12 +78,12 @@ def run(args: argparse.Namespace) -> int:
     write_markdown(doc, out / "report.md", plots)
     failed = [c for c in doc.claims if not c.passed]
     print(f"frictex report: {len(rows)} rows of the matrix in {settings.wall_s:.1f} s, the "
-          f"whole report in {time.perf_counter() - start:.0f} s; "
-          f"{len(doc.claims) - len(failed)} of {len(doc.claims)} claims hold; "
+          f"whole report in {time.perf_counter() - start:.0f} s; {count_line(doc.claims)}; "
           f"wrote {out / 'report.md'}, {out / 'report.json'}, {', '.join(plots)}")
     if failed and args.strict:
-        print(f"frictex: error: {len(failed)} claims not shown (--strict): "
-              + "; ".join(f"{c.scene} {c.motion} {c.metric}: {c.text}" for c in failed[:3])
+        print(f"frictex: error: {len(failed)} claims do not hold or are not shown (--strict): "
+              + "; ".join(f"{c.verdict}: {c.scene} {c.motion} {c.metric}: {c.text}"
+                          for c in failed[:3])
               + ("; ..." if len(failed) > 3 else ""), file=sys.stderr)
         return 1
     return 0
@@ -175,10 +181,15 @@ def _closed_loop(args: argparse.Namespace, jobs: int):
     from frictex.app.measure import report_closed_loop as rcl
     if not any(s in rcl.SCENES for s in args.scenes):
         return None
+    delays = None
+    if args.loop_delays is not None:
+        from frictex.app.measure.link_report_delays import read
+        delays = read(args.loop_delays, rcl.RATE_HZ, rcl.BLOCK)
     bar = tqdm(total=rcl.runs_in(args.quick, args.scenes), desc="closed loop", unit="run",
                disable=args.no_progress or None)
     try:
         return rcl.section(args.quick, workers=jobs, scenes=args.scenes,
-                           scheduler=args.scheduler, on_done=lambda result: bar.update(1))
+                           scheduler=args.scheduler, on_done=lambda result: bar.update(1),
+                           delays=delays)
     finally:
         bar.close()

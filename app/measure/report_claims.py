@@ -3,9 +3,11 @@
 A claim compares renderers on the same draws (``app.measure.report_seeds``): per draw the
 difference d = A - c B of its two sides (c = 1, or 1 + tolerance for "within x % of"),
 then the mean of d over the draws and its 95 % interval (Student's t, n - 1 degrees of
-freedom). A claim **holds** only where the interval excludes a loss (its upper end below
-0, or at most 0 for "at or below"); otherwise it is **not shown**: the draws do not
-settle it, whatever the mean says.
+freedom). Each claim gets one of three verdicts (``Claim.verdict``): it **holds** only
+where the interval excludes a loss (its upper end below 0, or at most 0 for "at or
+below"); it **does not hold** where the interval lies wholly on the losing side (its
+lower end above 0); otherwise it is **not shown**: the interval straddles 0 and the draws
+do not settle it, whatever the mean says.
 
 Groups (``auto`` is what ``render = "auto"`` picks for a periodic layer: the hybrid):
 
@@ -30,6 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import t as student_t
 
+from frictex.device.errors import InputError
+
 METRICS = ("time_error", "spectral_error", "alignment_error_mm")
 GRATINGS = {"grating-15mm": 15.0, "grating-5mm": 5.0, "grating-0.6mm": 0.6}
 TOUCH_HZ = 50.0
@@ -44,10 +48,29 @@ NOT_CLAIMED = (
     "of a period).")
 
 
+HOLDS = "holds"
+REFUTED = "does not hold"
+NOT_SHOWN = "not shown"
+#: the verdicts in the order report.md and the count line give them
+VERDICTS = (HOLDS, REFUTED, NOT_SHOWN)
+
+
+def verdict(passed: bool, low: float) -> str:
+    """A claim's verdict from whether it holds and the lower end of its interval on d
+    (every claim is phrased so that d < 0 is the claim): ``REFUTED`` where it does not
+    hold and the whole interval lies above 0, ``NOT_SHOWN`` where it does not hold
+    otherwise (an interval that straddles 0, or none: NaN)."""
+    if passed:
+        return HOLDS
+    return REFUTED if low > 0.0 else NOT_SHOWN
+
+
 @dataclass(frozen=True)
 class Claim:
     """One statement over ``n`` draws: d = A - c B per draw; ``mean`` of d and its 95 %
-    interval [``low``, ``high``]; ``passed``: the interval excludes a loss."""
+    interval [``low``, ``high``]; ``passed``: the interval excludes a loss; ``verdict``:
+    ``HOLDS``, ``REFUTED`` or ``NOT_SHOWN`` (:func:`verdict`; derived from ``passed``
+    and ``low`` where not given, as for a report.json written before verdicts)."""
 
     group: str
     scene: str
@@ -59,6 +82,22 @@ class Claim:
     high: float
     n: int
     passed: bool
+    verdict: str = ""
+
+    def __post_init__(self):
+        if not self.verdict:
+            object.__setattr__(self, "verdict", verdict(self.passed, self.low))
+        elif self.verdict not in VERDICTS:
+            raise InputError(f"claim verdict {self.verdict!r}: expected one of {VERDICTS}")
+        elif (self.verdict == HOLDS) != self.passed:
+            raise InputError(f"claim verdict {self.verdict!r} contradicts passed={self.passed}")
+
+
+def count_line(found: list[Claim]) -> str:
+    """"N of M claims hold, K do not, J not shown": the verdicts of ``found`` counted."""
+    counts = {v: sum(c.verdict == v for c in found) for v in VERDICTS}
+    return (f"{counts[HOLDS]} of {len(found)} claims hold, {counts[REFUTED]} do not, "
+            f"{counts[NOT_SHOWN]} not shown")
 
 
 def paired(a, b, scale: float = 1.0) -> tuple[float, float, float, int]:
@@ -83,7 +122,8 @@ def _claim(group, scene, kind, metric, values, a, b, scale=1.0, strict=True) -> 
     text = (f"{'auto (hybrid)' if a == AUTO else a} {relation} {side}: {a} - {side} = "
             f"{mean:+.3f}, 95 % interval [{low:+.3f}, {high:+.3f}], {n} draws")
     holds = bool(high < 0.0 if strict else high <= 0.0)  # NaN: not shown
-    return Claim(group, scene, kind, metric, text, mean, low, high, n, holds)
+    return Claim(group, scene, kind, metric, text, mean, low, high, n, holds,
+                 verdict(holds, low))
 
 
 def claims(draws) -> list[Claim]:

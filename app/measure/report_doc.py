@@ -5,13 +5,15 @@ back.
 
     {"report_version": 2, "quick": bool, "settings": {...}, "rows": [row, ...],
      "claims": [{"group", "scene", "motion", "metric", "text", "mean", "low", "high", "n",
-                 "passed"}, ...],
+                 "passed", "verdict"}, ...],
      "headline": {...}, "modal_replay": {...}, "draws": {...}, "real": {...} or null,
      "modal_inversion": [...], "end_to_end": {...} or null, "closed_loop": {...} or null}
 
 Claims are computed on ``draws`` (``app.measure.report_seeds``), paired by draw, with a
 95 % interval (``app.measure.report_claims``); ``passed`` is true only where the interval
-excludes a loss. ``closed_loop`` (``app.measure.report_closed_loop``): open loop,
+excludes a loss; ``verdict`` is "holds" (``passed``), "does not hold" (the whole interval
+on the losing side) or "not shown" (the interval straddles the claim's bound). A
+report.json written before ``verdict`` existed reads back with it derived. ``closed_loop`` (``app.measure.report_closed_loop``): open loop,
 closed loop and closed loop with adaptation over a simulated population of fingers;
 its claims (groups "closed loop: ...") are in the same list, paired per finger.
 

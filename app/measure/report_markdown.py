@@ -9,7 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from frictex.app.measure.report_claims import GRATINGS, METRICS, NOT_CLAIMED, OUTPUT_HZ
+from frictex.app.measure.report_claims import (GRATINGS, METRICS, NOT_CLAIMED, OUTPUT_HZ,
+                                                count_line)
 from frictex.app.measure.report_doc import Report, grating_rows, mean_defined
 from frictex.app.measure.report_matrix import Row, link_buffer_s
 from frictex.rendering.metrics import ALIGNMENT_CAP_MM
@@ -84,8 +85,10 @@ def _claims(doc: Report) -> list[str]:
     lines = ["## Claims", "",
              f"Each claim compares renderers on the same {doc.draws.n} draws of each "
              "motion (paired by draw): the mean difference and its 95 % interval. A claim "
-             "**holds** only where the interval excludes a loss; otherwise it is **not "
-             "shown** (the draws do not settle it). " + NOT_CLAIMED
+             "**holds** only where the interval excludes a loss; it **does not hold** where "
+             "the whole interval lies on the losing side; otherwise it is **not shown** (the "
+             "interval straddles the claim's bound: the draws do not settle it). "
+             + NOT_CLAIMED
              + (" The groups 'closed loop: ...' compare friction control modes on the same "
                 "simulated fingers, paired by finger (section Closed-loop friction)."
                 if doc.closed_loop is not None else ""), ""]
@@ -95,9 +98,8 @@ def _claims(doc: Report) -> list[str]:
     if not groups:
         lines += ["None in this report: no claim covers the scenes chosen.", ""]
     for group, cs in groups.items():
-        lines.append(f"**{group}**: {sum(c.passed for c in cs)} of {len(cs)} hold.")
-        lines += [f"- {'holds' if c.passed else 'not shown'}: {c.scene}, {c.motion}, "
-                  f"{c.metric}: {c.text}" for c in cs]
+        lines.append(f"**{group}**: {count_line(cs)}.")
+        lines += [f"- {c.verdict}: {c.scene}, {c.motion}, {c.metric}: {c.text}" for c in cs]
         lines.append("")
     return lines
 
