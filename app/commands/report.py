@@ -104,6 +104,10 @@ def _checked(args: argparse.Namespace) -> tuple[Path, Path | None]:
         from frictex.app.measure.report_real import recordings
         real_dir = Path(args.real)
         recordings(real_dir)
+    if args.loop_delays is not None:  # a file that holds no delays fails now
+        from frictex.app.measure import report_closed_loop as rcl
+        from frictex.app.measure.link_report_delays import read
+        read(args.loop_delays, rcl.RATE_HZ, rcl.BLOCK)
     out.mkdir(parents=True, exist_ok=True)
     return out, real_dir
 

@@ -9,16 +9,25 @@ reports in bursts (several late blocks in a row), which independent draws from t
 histogram would not reproduce. ``frictex report``'s closed-loop runs replay the
 sequence (``closed_loop_sim.LoopStage``), each finger from its own starting block;
 ``frictex bench link`` gives its percentiles idle and loaded.
+
+The sequence depends on the machine and its load, so the loop modes' figures differ from
+one report to the next. report.json records it (``ReportDelays.to_json``, with the load it
+was measured at), and ``read`` takes it back (``frictex report --loop-delays FILE``, FILE
+a report.json or that object alone): the same sequence gives the same closed-loop figures.
 """
 
 from __future__ import annotations
 
+import json
+import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 
 from frictex.app.measure.processes import BusyProcesses, load
+from frictex.device.errors import InputError
 
 #: the delay of a block whose report never came within the loop's wait (``max_wait_s``)
 LOST = -1
@@ -29,7 +38,8 @@ class ReportDelays:
     """Per block, in the order sent, its report's delay in blocks (``LOST``: none came),
     and how it was measured: ``seconds`` of live blocks of ``block`` samples at
     ``rate_hz`` beside ``busy`` busy processes, the 1-minute load average at the start
-    and end. ``seconds`` 0: not measured, a constant delay (tests, ``bench pipeline``)."""
+    and end. ``seconds`` 0: not measured, a constant delay (tests, ``bench pipeline``).
+    ``source``: the file the sequence was read from ("": measured by this run)."""
 
     blocks: tuple[int, ...]
     seconds: float = 0.0
@@ -38,6 +48,7 @@ class ReportDelays:
     busy: int = 0
     load_start: float = float("nan")
     load_end: float = float("nan")
+    source: str = ""
 
     @classmethod
     def constant(cls, delay_blocks: int) -> ReportDelays:
@@ -71,12 +82,47 @@ class ReportDelays:
                 "block": self.block, "busy": self.busy, "load_start": self.load_start,
                 "load_end": self.load_end, "p50": float(p50), "p99": float(p99),
                 "max": self.largest(), "lost": len(self.blocks) - int(come.size),
-                "counts": {str(int(d)): int(c) for d, c in zip(*counts)}}
+                "counts": {str(int(d)): int(c) for d, c in zip(*counts)},
+                "source": self.source}
 
     @classmethod
     def from_json(cls, doc: dict) -> ReportDelays:
+        """The sequence of :meth:`to_json` (its summary figures are recomputed, not read;
+        a record written before ``source`` was kept reads as measured by its run)."""
         return cls(tuple(int(d) for d in doc["blocks"]), doc["seconds"], doc["rate_hz"],
-                   doc["block"], doc["busy"], doc["load_start"], doc["load_end"])
+                   doc["block"], doc["busy"], doc["load_start"], doc["load_end"],
+                   doc.get("source", ""))
+
+
+def read(path, rate_hz: float, block: int) -> ReportDelays:
+    """The report delays recorded in ``path``: a report.json (its ``closed_loop``
+    section's ``report_delays``) or that object alone, measured at ``rate_hz`` in blocks
+    of ``block`` samples (a sequence of other blocks would mean other delays). Raises
+    InputError naming the file when it cannot be read or holds no such sequence."""
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise InputError(f"{path}: cannot read report delays: {exc}") from None
+    if isinstance(doc, dict) and isinstance(doc.get("closed_loop"), dict):
+        doc = doc["closed_loop"].get("report_delays")
+    try:
+        delays = ReportDelays.from_json(doc)
+    except (KeyError, TypeError, ValueError, OverflowError):
+        raise InputError(f"{path}: no report delays (expected a report.json with a closed-loop "
+                         "section, or its report_delays object: blocks, seconds, rate_hz, "
+                         "block, busy, load_start, load_end)") from None
+    numbers = (delays.seconds, delays.rate_hz, delays.block, delays.busy)
+    if not delays.blocks or any(d < LOST for d in delays.blocks) or not all(
+            isinstance(x, (int, float)) and math.isfinite(x) and x >= 0 for x in numbers):
+        raise InputError(f"{path}: report delays: blocks must be a non-empty list of whole "
+                         f"blocks >= {LOST} ({LOST}: lost) and seconds, rate_hz, block, busy "
+                         "finite numbers >= 0")
+    if delays.measured and (delays.rate_hz != rate_hz or delays.block != block):
+        raise InputError(f"{path}: report delays measured at {delays.rate_hz:g} Hz in blocks "
+                         f"of {delays.block}; the closed-loop runs use {rate_hz:g} Hz in blocks "
+                         f"of {block}")
+    return replace(delays, source=str(path))
 
 
 def measure(seconds: float, rate_hz: float, block: int, busy: int) -> ReportDelays:

@@ -9,7 +9,14 @@ is ``force_n`` (0.35-0.65 N, drawn per finger) with a 0.5 Hz, 15 % swell. All th
 modes read the normal force from the device; the loop modes also read the lateral force,
 each block's report as late as this machine's live link delivered it, measured at the
 section's start beside one busy process per core (``link_report_delays``; each finger
-replays the measured sequence from its own block), and schedule their gain on it.
+replays the measured sequence from its own block), and schedule their gain on it. Open
+loop reads the normal force ``REPORT_DELAY_BLOCKS`` blocks late, always: its figures do
+not depend on the measured link (with the measured sequence they moved by one part in
+500 from one machine's load to another's, 0.0483 against 0.0484 on grating-15mm), so
+every figure of a loop mode and of its comparison with open loop depends on the measured
+delays, and open loop's alone do not. ``frictex report --loop-delays FILE`` replays a
+recorded sequence (``link_report_delays.read``) instead of measuring one: two reports
+with the same FILE have the same closed-loop figures.
 
 Measured, over the samples where the finger touches and slides (>= 5 mm/s):
 
@@ -210,7 +217,7 @@ def added_noise(run: Run, a: dict, slide: np.ndarray) -> tuple[float, float]:
     """The force noise (N RMS) the loop adds in ``run`` (whose sink's arrays are ``a``,
     sliding where ``slide``): its delivered friction force against the same run with a
     noiseless sensor; and that as a fraction of the mean friction force (0 if none)."""
-    quiet, _ = simulate(Run(run.scene, run.finger, run.mode, run.duration_s, noiseless=True))
+    quiet, _ = simulate(replace(run, noiseless=True, noise=False))
     q = quiet.arrays()
     m = min(q["delivered"].size, a["delivered"].size)
     friction = a["mu0"][:m] * a["force"][:m]
@@ -281,7 +288,7 @@ def measure(fingers: int = FINGERS, duration_s: float = DURATION_S, workers: int
     :func:`summarise`)."""
     from frictex.app.engine.fanout import fan_out
     runs = [Run(s, f, m, duration_s, noise=s in noise_scenes and m == "adaptive",
-                report_delays=delays)
+                report_delays=delays if m != "open" else UNMEASURED)
             for s in scenes for m in MODES for f in range(1, fingers + 1)]
     study = adapt_s > 0 and ADAPT_SCENE in scenes
     # the object scene's adaptive runs are the study's own when they last as long
@@ -316,13 +323,15 @@ def _job(run: Run):
 
 
 def section(quick: bool, workers: int = 1, scenes=SCENES, scheduler: str | None = None,
-            on_done=None) -> LoopSection:
+            on_done=None, delays: ReportDelays | None = None) -> LoopSection:
     """The section for ``frictex report`` (``--quick``: shorter runs, same population),
-    on the bundled ``scenes`` among :data:`SCENES`, with the report delays of this
-    machine's live link measured first, beside one busy process per core."""
+    on the bundled ``scenes`` among :data:`SCENES`, with ``delays`` (recorded:
+    ``link_report_delays.read``) or, None, the report delays of this machine's live link
+    measured first, beside one busy process per core."""
     scenes = [s for s in SCENES if s in scenes]
-    delays = link_report_delays.measure(QUICK_LINK_S if quick else LINK_S, RATE_HZ, BLOCK,
-                                        busy=cores())
+    if delays is None:
+        delays = link_report_delays.measure(QUICK_LINK_S if quick else LINK_S, RATE_HZ,
+                                            BLOCK, busy=cores())
     return measure(FINGERS, QUICK_DURATION_S if quick else DURATION_S, workers, scenes,
                    adapt_s=QUICK_ADAPT_S if quick else ADAPT_S, scheduler=scheduler,
                    on_done=on_done, delays=delays)
@@ -593,13 +602,21 @@ def _delays_line(delays: dict) -> str:
     if delays["seconds"] == 0:
         return f"These runs had every report {delays['max']} blocks late (not measured)."
     counts = ", ".join(f"{d}: {c}" for d, c in delays["counts"].items())
-    return (f"These runs had their reports as late as this machine's live link to the "
-            f"simulated device delivered them, measured for {delays['seconds']:g} s beside "
-            f"{delays['busy']} busy processes (load {delays['load_start']:.1f} to "
-            f"{delays['load_end']:.1f}), each finger from its own block of the measured "
-            f"sequence: p50 {delays['p50']:g}, p99 {delays['p99']:g}, largest "
-            f"{delays['max']} blocks ({counts} blocks of that delay; {delays['lost']} of "
-            f"{len(delays['blocks'])} reports never came).")
+    source = delays.get("source", "")
+    where = (f"recorded in {source} (frictex report --loop-delays), measured there"
+             if source else "this machine's live link to the simulated device, measured")
+    return (f"The loop modes had their reports as late as {where} for "
+            f"{delays['seconds']:g} s beside {delays['busy']} busy processes (load "
+            f"{delays['load_start']:.1f} to {delays['load_end']:.1f}), each finger from its "
+            f"own block of the sequence: p50 {delays['p50']:g}, p99 {delays['p99']:g}, "
+            f"largest {delays['max']} blocks ({counts} blocks of that delay; "
+            f"{delays['lost']} of {len(delays['blocks'])} reports never came). Every figure "
+            "of the closed and adaptive rows, their gains and claims, and the margins' "
+            "rows depend on this sequence, which differs with the machine and its load: "
+            "report.json keeps it (closed_loop.report_delays), and --loop-delays with that "
+            "report.json replays it, for the same figures. Open loop reads the normal force "
+            f"{REPORT_DELAY_BLOCKS} blocks late in every report, so its rows do not depend "
+            "on it.")
 
 
 def _fixed(value: float | None, spec: str, suffix: str = "") -> str:
