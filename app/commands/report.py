@@ -122,6 +122,7 @@ def _matrix(args: argparse.Namespace, jobs: int):
 
     cases = rm.matrix(args.quick, tuple(args.scenes))
     wall = time.perf_counter()
+    load_before = os.getloadavg()[0]
     bar = tqdm(total=len(cases), desc="report", unit="case", disable=args.no_progress or None)
     try:
         rows = fan_out(partial(rm.run_case, live_s=0.5 if args.quick else 2.0), cases,
@@ -133,7 +134,8 @@ def _matrix(args: argparse.Namespace, jobs: int):
                           block_s=rm.BLOCK_S, motions=rm.MOTIONS,
                           lut_max_error_um=lut.max_error_um(), cpu_count=os.cpu_count(),
                           jobs=None if args.scheduler else jobs, scheduler=args.scheduler,
-                          wall_s=time.perf_counter() - wall)
+                          wall_s=time.perf_counter() - wall,
+                          load_1min=(load_before, os.getloadavg()[0]))
 
 
 def _beside_the_matrix(args: argparse.Namespace, jobs: int, real_dir: Path | None):

@@ -49,7 +49,9 @@ class Settings:
     """How the report was made: the reference grid (Hz), the touch noise (mm), the block
     (s), the matrix's motions (``make_motion`` arguments), the LUT inversion's largest
     amplitude error (um), this machine's CPUs, the cases run at once (None on a cluster),
-    the Dask scheduler (None: this machine) and the matrix's wall time (s)."""
+    the Dask scheduler (None: this machine), the matrix's wall time (s) and the machine's
+    1-minute load average as the matrix started and ended (None: not recorded, as in a
+    report.json written before it was)."""
 
     reference_hz: float
     touch_noise_mm: float
@@ -60,6 +62,7 @@ class Settings:
     jobs: int | None
     scheduler: str | None
     wall_s: float
+    load_1min: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)

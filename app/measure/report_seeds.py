@@ -80,8 +80,8 @@ def draws(n: int, scenes=tuple(GRATINGS), workers: int = 1,
     cases = [Case(scene, f"{kind}-{k}", TOUCH_HZ, renderer, OUTPUT_HZ)
              for scene in scenes for kind in KINDS for k in range(1, n + 1)
              for renderer in RENDERERS.names()]
-    rows = fan_out(partial(run_case, live_s=0.005, motions=spec), cases, workers=workers,
-                   scheduler=scheduler)
+    rows = fan_out(partial(run_case, live_s=0.005, motions=spec, plate=False), cases,
+                   workers=workers, scheduler=scheduler)
     values: dict = {}
     for case, row in zip(cases, rows):
         kind = case.motion.rsplit("-", 1)[0]
