@@ -43,10 +43,13 @@ source are our assumptions, stated as such):
   Tribology Letters 44 (2011), and Tomlinson, Lewis and Carre's review (Proc. IMechE J
   221, 2007) report coefficients from about 0.3 to beyond 1 and several-fold between
   people (titles and abstracts read; no table). Our assumption: log-uniform in [0.3, 1.5].
-- moisture drift: Dzidek, Adams, Andrews, Zhang and Johnson, "Contact mechanics of the
-  human finger pad under compressive loads", PNAS 2017 (the "why pens have rubbery
-  grips" paper, abstract read): contact with glass grows by first-order kinetics driven
-  by sweat, saturating within about 20 s of loading; Huloux et al. name "sweating and the
+- moisture drift: Dzidek, Bochereau, Johnson, Hayward and Adams, "Why pens have rubbery
+  grips", PNAS 114 (2017) 10864-10869, doi 10.1073/pnas.1706233114 (abstract read):
+  contact with glass grows by first-order kinetics driven by sweat, saturating within
+  about 20 s of loading; Dzidek, Adams, Andrews, Zhang and Johnson, "Contact mechanics of
+  the human finger pad under compressive loads", J. R. Soc. Interface 14 (2017) 20160935
+  (abstract read): against glass the friction coefficient rises at contact times over
+  10 s, put down to occluded sweat; Huloux et al. name "sweating and the
   subsequent softening of the stratum corneum" as inducing "large changes in the
   friction with time". Gueorguiev, Vezzoli, Mouraux, Lemaire-Semail and Thonnard, "The
   tactile perception of transient changes in friction", J. R. Soc. Interface 14 (2017)

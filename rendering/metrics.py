@@ -16,8 +16,10 @@ Which metric matters for which layer
   mean scores 1.0 and one with the right texture at a random phase scores ~1.4.
 - ``spectral_error`` (distance between short-time third-octave spectra, 10 Hz - 1 kHz):
   what a texture feels like, phase ignored. It is the one that matters for fine
-  gratings and waveforms (P below ~5 mm): it catches aliasing (plain SHO at 50 Hz turns
-  a 66.7 Hz grating into 16.7 Hz, seed 003 section 4.4.1), lost bandwidth and smearing.
+  gratings and waveforms (P below ~5 mm): it catches aliasing (seed 003 section 4.4.1:
+  a 50 Hz touch screen reproduces a grating only up to 25 Hz; our example, derived from
+  sampling, not from seed 003: plain SHO at 50 Hz folds a 66.7 Hz grating to
+  66.7 - 50 = 16.7 Hz), lost bandwidth and smearing.
 - ``alignment_error_mm`` (distance along the path between matching friction steps):
   what the eye checks, an edge felt where it is drawn. It matters for objects and coarse
   gratings (P above ~5 mm), where plain SHT's accumulated phase error shows (seed 003
