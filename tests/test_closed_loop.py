@@ -152,14 +152,22 @@ def test_a_sensor_that_goes_bad_falls_back_at_the_next_block(monkeypatch, fault,
 def test_a_loop_past_its_gain_margin_is_seen_oscillating():
     """The report's oscillation check can fail: the same finger with the integrator's gain
     1.5x past the stated gain margin swings for many periods; at the stated gain not."""
-    from frictex.app.measure.report_closed_loop import OSCILLATION_STEPS, gain_swings
+    from frictex.rendering.control.swings import OSCILLATION_STEPS, longest_run as gain_swings
     _, stage = simulate(Run("grating-15mm", 4, "closed", 2.0))
     assert gain_swings(np.array(stage.log_c)) < OSCILLATION_STEPS
+    report = stage.pipeline.control.report(stage.state.control)
+    assert report["gain_oscillations"] == 0 and not report["messages"]
     row = margins((REPORT_DELAY_BLOCKS,), SensorParams(), RATE_HZ, BLOCK)["rows"][0]
     ki = row["ki"] * row["gain_margin"] * 1.5
     _, stage = simulate(Run("grating-15mm", 4, "closed", 3.0), loop_config=LoopConfig(ki=ki))
     assert set(stage.pipeline.control.ki_by_delay) == {ki}
     assert gain_swings(np.array(stage.log_c)) >= 2 * OSCILLATION_STEPS
+    # the loop sees it too, says so once and counts it (the replay's summary)
+    report = stage.pipeline.control.report(stage.state.control)
+    assert report["gain_oscillations"] >= 1
+    assert report["gain_swings_max"] == gain_swings(np.array(stage.log_c))
+    said = [m for m in report["messages"] if "gain oscillates" in m]
+    assert len(said) == 1 and f"ki {ki:.3g}" in said[0]
 
 
 def test_mu0_is_measured_as_the_first_stroke_starts():

@@ -231,7 +231,7 @@ def test_fingers_without_mu0_are_left_out_of_the_figures_from_mu0_on():
 
 
 def test_gain_swings_see_an_oscillation_that_grows_or_holds():
-    from frictex.app.measure.report_closed_loop import SWING, gain_swings
+    from frictex.rendering.control.swings import SWING, longest_run as gain_swings
     k = np.arange(200)
     growing = 0.01 * (-1.0) ** k * 1.02 ** k
     big = np.flatnonzero(np.abs(np.diff(growing)) > np.log1p(SWING))

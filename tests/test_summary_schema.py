@@ -10,7 +10,8 @@ from frictex.app.commands.cli import main
 
 DOC = Path(__file__).resolve().parents[1] / "app" / "engine" / "SUMMARY.md"
 #: objects whose keys are data (finger ids, layer names) or documented elsewhere
-OPEN = ("fingers", "fingers_others", "forces", "device", "layer_clipped", "timings.layers_s",
+OPEN = ("fingers", "fingers_others", "forces", "device", "control", "layer_clipped",
+        "timings.layers_s",
         "timings.loop_s", "timings.stages_s", "trace.time_order", "trace.gaps")
 
 
@@ -46,6 +47,8 @@ def test_every_key_written_is_documented(summaries):
 
 
 def test_every_documented_key_is_written(summaries):
-    # --device only; more than 100 finger ids only (tests/test_summary_fingers.py)
-    written = set().union(*(keys(doc) for doc in summaries)) | {"device", "fingers_others"}
+    # --device only; more than 100 finger ids only (tests/test_summary_fingers.py); --control
+    # closed or adaptive only (tests/test_control_summary.py)
+    written = set().union(*(keys(doc) for doc in summaries)) | {"device", "fingers_others",
+                                                                "control"}
     assert documented() - written == set()

@@ -82,6 +82,7 @@ from frictex.device.finger import FingerPlant, SensorParams, draw_finger, true_m
 from frictex.device.friction import forward_mu
 from frictex.rendering.control.loop import LoopConfig
 from frictex.rendering.control.margins import margins
+from frictex.rendering.control.swings import OSCILLATION_STEPS, SWING, longest_run
 from frictex.rendering.input.trace_synth import make_motion, sample, truth
 from frictex.rendering.pipeline import build_pipeline
 
@@ -120,10 +121,6 @@ TARGETS = {"grating-15mm": 5.0, "grating-5mm": 5.0, "grating-0.6mm": 2.0,
            "objects-bump-edge-disc": 1.0}
 #: the adapted model within this relative RMS of the true finger (issue 16)
 ADAPT_TARGET = 0.10
-#: this many successive swings of the loop's gain, each over SWING (a 25 % change) and at
-#: least half the one before: an oscillation that grows, holds or rings (three periods)
-OSCILLATION_STEPS = 6
-SWING = 0.25
 #: scenes whose adaptive runs are run again with a noiseless sensor (added noise)
 NOISE_SCENES = ("grating-15mm", "grating-0.6mm")
 
@@ -202,7 +199,7 @@ def score(run: Run) -> RunScore:
     out = replace(out, loop=LoopScore(
         fallbacks=control.fallbacks, log_c=control.log_c, mu0_estimate=control.mu0,
         b_per_um=control.rls.theta[0], k_per_n=control.rls.theta[1],
-        swings=gain_swings(np.array(stage.log_c)), first_mu0_s=known,
+        swings=longest_run(stage.log_c), first_mu0_s=known,
         rms_after_mu0=_rms(reach[after]) if known is not None else None))
     if run.mode != "adaptive":
         return out
@@ -241,26 +238,6 @@ def adaptation(run: Run) -> float:
     """The adapted model's gap to the true finger (:func:`adapted_gap`) after ``run``."""
     sink, stage = simulate(run)
     return adapted_gap(run, stage.state.control.rls.params, float(sink.arrays()["t"][-1]))
-
-
-def gain_swings(log_c: np.ndarray) -> int:
-    """The longest run of successive swings of the log gain (its moves between turning
-    points) each larger than ``log(1 + SWING)`` and at least half the one before
-    (module docstring); 0 when the gain never swung that far."""
-    steps = np.diff(log_c)
-    steps = steps[steps != 0.0]
-    if steps.size == 0:
-        return 0
-    turns = np.flatnonzero(np.sign(steps[1:]) != np.sign(steps[:-1])) + 1
-    swings = np.add.reduceat(steps, np.concatenate([[0], turns]))
-    longest = run = 0
-    prev = np.inf
-    for swing in np.abs(swings):
-        run = run + 1 if swing > np.log1p(SWING) and swing >= prev / 2 else int(
-            swing > np.log1p(SWING))
-        longest = max(longest, run)
-        prev = swing
-    return int(longest)
 
 
 def _window_rms(cumulative, t0_s: float) -> float:

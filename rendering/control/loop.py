@@ -128,6 +128,7 @@ from frictex.rendering.control.block_stats import (chain_input, feed_forward, fe
                                            report_peak, rest_stats, sent_rows)
 from frictex.rendering.control.chain import Chain, ChainState
 from frictex.rendering.control.margins import COVER_SLOPE, scheduled_ki
+from frictex.rendering.control.swings import OSCILLATION_STEPS, SWING, Swings
 from frictex.textures.model import CONTROL_MODES
 
 _NONE = np.zeros(0)  # chain_input's model rows left out (closed mode)
@@ -198,7 +199,8 @@ class Sent:
     """What the loop asked for in a block sent (the report that comes back pairs with
     it sample by sample): output index, the log gain it was asked with, amplitude (um),
     target mu' (1 where the probe held the plate still), speed (mm/s), whether the limit
-    cut it, and whether it was a one-finger block."""
+    cut it, whether it was a one-finger block, and the normal force (N, mean over the
+    block) the inverse model was given for its finger (0 with none touching)."""
 
     index0: int
     log_c: float
@@ -207,6 +209,7 @@ class Sent:
     speed: np.ndarray
     cut: np.ndarray
     single: bool
+    force_n: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -232,6 +235,14 @@ class ControlState:
     fallback_samples: int = 0
     updates: int = 0
     messages: tuple[str, ...] = ()
+    swings: Swings = Swings()
+    limit_s: float = 0.0
+    reports: int = 0
+    reports_missed: int = 0
+    delay_counts: tuple[int, ...] = ()
+    measured_sq: float = 0.0
+    measured_n: int = 0
+    input_force_blocks: int = 0
 
 
 class ClosedLoop:
@@ -339,8 +350,9 @@ class ClosedLoop:
         # probe as a finger that gets no reduction, and wind the gain up)
         wanted, target, cut = sent_rows(wanted, contact, asked, mu_target, row, self._cut_um)
         w = wanted[row] if count else np.zeros(n)
+        force = float(np.mean(fingers.force[row])) if count else 0.0
         sent = Sent(index0=int(fingers.index0), log_c=math.log(c), w_um=w, target=target,
-                    speed=speed, cut=cut, single=single)
+                    speed=speed, cut=cut, single=single, force_n=force)
         held = state.fallback_samples + (n if state.fallback else 0)
         return wanted, clamps, replace(state, pending=pending + (sent,), fallback_samples=held)
 
@@ -398,7 +410,16 @@ class ClosedLoop:
         asked is c times the texture's, ``1 - c (1 - mu'_target)``), and
         ``log_gain_per_speed_ref``: its log's slope per ``speed_ref_mm_s``; ``mu0``;
         ``updates``: steps of c; ``fallbacks``, ``fallback_samples``: falls to open loop and
-        the samples fed forward open loop meanwhile; ``messages``: what the loop said."""
+        the samples fed forward open loop meanwhile; ``gain_oscillations``,
+        ``gain_swings_max``, ``gain_at_limit_s``: oscillations of c seen, the longest run of
+        its swings (``rendering.control.swings``) and the time (s) log c spent at its limit;
+        ``input_force_implausible_blocks``: blocks inverted with a touch input's force
+        below ``min_normal_n`` under a finger the device measured (``_input_force``);
+        ``measured``: what the host measured from the device's force reports (``reports``
+        used, ``reports_missed``, the delay the good ones came with, p50 and p99 in
+        blocks, and once mu0 is known, the RMS of the measured mu'_m = F_t / (F_n mu0)
+        against the target mu' the block asked for, over ``samples`` sliding and pressed,
+        None with none); ``messages``: what the loop said."""
         return {"mode": self.mode, "report_delay_blocks": state.delay_max_blocks,
                 "scheduled_delay_blocks": state.delay_blocks,
                 "ki": self.ki_by_delay[state.delay_blocks], "gain": math.exp(state.log_c),
@@ -406,7 +427,19 @@ class ClosedLoop:
                 "speed_ref_mm_s": self.config.speed_ref_mm_s,
                 "mu0": state.mu0 if math.isfinite(state.mu0) else None,
                 "updates": state.updates, "fallbacks": state.fallbacks,
-                "fallback_samples": state.fallback_samples, "messages": list(state.messages)}
+                "fallback_samples": state.fallback_samples,
+                "gain_oscillations": state.swings.oscillations,
+                "gain_swings_max": state.swings.longest_with_current(),
+                "gain_at_limit_s": state.limit_s,
+                "input_force_implausible_blocks": state.input_force_blocks,
+                "measured": {
+                    "reports": state.reports, "reports_missed": state.reports_missed,
+                    "report_delay_p50_blocks": _quantile(state.delay_counts, 0.5),
+                    "report_delay_p99_blocks": _quantile(state.delay_counts, 0.99),
+                    "samples": state.measured_n,
+                    "rms_mu_vs_target": (math.sqrt(state.measured_sq / state.measured_n)
+                                         if state.measured_n else None)},
+                "messages": list(state.messages)}
 
     def _probing(self, state: ControlState, now: int) -> bool:
         """Whether the probe holds the plate still whatever the tracker's speed (module
@@ -428,19 +461,41 @@ class ClosedLoop:
         seen, chain = self.chain.run(self._chain_rows(state, sent, report if fresh else None),
                                      state.chain)
         if not fresh:
-            return self._bad(replace(state, chain=chain), missed, stale=True)
+            return self._bad(replace(state, chain=chain, reports_missed=state.reports_missed + 1),
+                             missed, stale=True)
         lat = np.asarray(report.lateral_n, dtype=np.float64)
         nor = np.asarray(report.normal_n, dtype=np.float64)
         problem = _problem(lat, nor, sent.single and bool(n), self.config)
         if problem:
             return self._bad(replace(state, chain=chain), problem, stale=False)
         good_s = state.good_s + self.block_s
+        counts = state.delay_counts or (0,) * len(self.ki_by_delay)
         changes = dict(chain=chain, since_report_s=0.0, good_s=good_s,
                        fallback=state.fallback and good_s < self.config.recover_s,
+                       reports=state.reports + 1,
+                       delay_counts=counts[:delay] + (counts[delay] + 1,) + counts[delay + 1:],
                        **self._held_delay(state, delay, now))
         if sent.single:  # several fingers: nothing to learn
+            state = self._input_force(state, sent, nor)
             changes.update(self._learn_finger(state, sent, lat, nor, seen, changes, now))
         return replace(state, **changes)
+
+    def _input_force(self, state: ControlState, sent: Sent, nor: np.ndarray) -> ControlState:
+        """Counts (and says once) a block whose finger the inverse model was given a
+        normal force below ``min_normal_n`` (the touch input's: a trace whose force is 0)
+        while the device's sensors measured a pressing finger: the model's asymptote is
+        k F_n, so it inverts for a finger that is not there, and the loop's gain makes up
+        for it (to 2.2 on grating-15mm with a 0 N trace and the device's 0.5 N)."""
+        measured = float(nor.sum()) / max(nor.size, 1)
+        low = self.config.min_normal_n
+        if not sent.force_n < low <= measured:
+            return state
+        said = (f"closed loop: the touch input's normal force ({sent.force_n:.2g} N) is "
+                f"implausible under a finger the device measures at {measured:.2g} N; the "
+                "model's inversion uses the input's (give the trace its finger's force_n, or "
+                "leave the column out for 0.5 N)")
+        return replace(state, input_force_blocks=state.input_force_blocks + 1,
+                       messages=_said(state.messages, said))
 
     def _chain_rows(self, state: ControlState, sent: Sent, report: ForceReport | None):
         """The block statistics' input rows for ``sent``: in adaptive mode the model's mu'
@@ -474,6 +529,11 @@ class ClosedLoop:
         if count >= cfg.min_still:  # m: a median, robust to a stop the tracker sees late
             alpha = -math.expm1(-count / (self.rate_hz * cfg.mu0_tau_s))
             mu0 = out["mu0"] = mu0 + alpha * (m - mu0)
+        if math.isfinite(mu0):  # what the host measured against the target (``report``)
+            keep = (sent.speed >= cfg.slide_mm_s) & (nor >= cfg.min_normal_n)
+            err = ratio[keep] / mu0 - sent.target[keep]
+            out["measured_sq"] = state.measured_sq + float(err @ err)
+            out["measured_n"] = state.measured_n + int(np.count_nonzero(keep))
         if not math.isfinite(mu0) or changes["fallback"]:
             return out
         # feedback from the tracker's first sight of motion: at a stroke's start it lags
@@ -537,6 +597,22 @@ class ClosedLoop:
                "updates": state.updates + 1}
         if first and step:
             out["fed_from"] = now  # blocks on their way were asked with the old gain
+        out.update(self._watch_gain(state, out["log_c"]))
+        return out
+
+    def _watch_gain(self, state: ControlState, log_c: float) -> dict:
+        """The gain's swings after a step to ``log_c`` (``rendering.control.swings``: an
+        oscillation is said once and counted) and the time it has spent at its limit."""
+        swings = state.swings.step(log_c - state.log_c)
+        out = {"swings": swings}
+        if abs(log_c) >= self.config.log_c_max:
+            out["limit_s"] = state.limit_s + self.block_s
+        if swings.oscillations > state.swings.oscillations:
+            ki = self.ki_by_delay[state.delay_blocks]
+            out["messages"] = _said(state.messages, (
+                f"closed loop: the gain oscillates ({OSCILLATION_STEPS} swings over "
+                f"{SWING:.0%} in a row at ki {ki:.3g} per block): the loop is unstable, "
+                "lower ki or leave it to the scheduler"))
         return out
 
     def _bad(self, state: ControlState, problem: str, stale: bool) -> ControlState:
@@ -547,10 +623,29 @@ class ClosedLoop:
         if state.fallback:
             return state
         messages = state.messages
-        if not messages:
-            messages = (f"closed loop: force signal {problem}; open loop with the latest model "
-                        f"until the signal is good for {self.config.recover_s:g} s",)
+        if not any(m.startswith(_FALLBACK) for m in messages):  # said once
+            messages += (f"{_FALLBACK} {problem}; open loop with the latest model until the "
+                         f"signal is good for {self.config.recover_s:g} s",)
         return replace(state, fallback=True, fallbacks=state.fallbacks + 1, messages=messages)
+
+
+_FALLBACK = "closed loop: force signal"
+
+
+def _said(messages: tuple[str, ...], message: str) -> tuple[str, ...]:
+    """``messages`` with ``message`` added, unless said already (its text up to the first
+    figure: each kind of message is said once)."""
+    kind = message.split("(")[0]
+    return messages if any(m.startswith(kind) for m in messages) else messages + (message,)
+
+
+def _quantile(counts: tuple[int, ...], q: float) -> int | None:
+    """The smallest delay (blocks) with at least ``q`` of the reports at it or earlier
+    (``counts``: reports per delay 0, 1, ...); None without reports."""
+    total = sum(counts)
+    if not total:
+        return None
+    return int(np.searchsorted(np.cumsum(counts), q * total))
 
 
 def _problem(lat: np.ndarray, nor: np.ndarray, touching: bool, cfg: LoopConfig) -> str:
