@@ -20,7 +20,8 @@ from scipy.optimize import least_squares
 
 from frictex.device.errors import InputError
 from frictex.device.friction import forward_mu
-from frictex.device.profile import DEFAULT_PROFILE, Calibration, FrictionParams
+from frictex.device.calibration_identity import toml_lines
+from frictex.device.profile import DEFAULT_PROFILE, Calibration, FittedOn, FrictionParams
 
 #: residual RMS (mu') above which the closed-form model is said not to fit
 MODEL_TOLERANCE = 0.02
@@ -98,8 +99,9 @@ def _table(w: np.ndarray, f: np.ndarray, m: np.ndarray) -> Calibration | None:
 
 
 def device_toml(fit: Fit, amplitude_limit_um: float, normal_force_n: float,
-                profile: str = DEFAULT_PROFILE) -> str:
-    """The ``[device]`` section (text) a texture file can use for this calibration."""
+                profile: str = DEFAULT_PROFILE, fitted: FittedOn | None = None) -> str:
+    """The ``[device]`` section (text) a texture file can use for this calibration, with
+    what it was ``fitted`` on (``[device.fitted]``: ``device.calibration_identity``)."""
     lines = ["[device]", f'profile = "{profile}"',
              f"amplitude_limit_um = {amplitude_limit_um:.6g}",
              f"normal_force_n = {normal_force_n:.6g}",
@@ -107,6 +109,8 @@ def device_toml(fit: Fit, amplitude_limit_um: float, normal_force_n: float,
              f"over {fit.n_points} points",
              f"b_per_um = {fit.params.b_per_um:.6g}",
              f"asymptote_per_n = {fit.params.asymptote_per_n:.6g}"]
+    if fitted is not None:
+        lines += toml_lines(fitted)
     if fit.calibration is not None:
         cal = fit.calibration
         lines += ["[device.calibration]     # the model does not fit: measured table",

@@ -263,6 +263,16 @@ def __getattr__(name: str):
 
 
 @dataclass(frozen=True)
+class FittedOn:
+    """What a ``frictex calibrate`` fit was measured on (``[device.fitted]``): the
+    device's name from its handshake (``device.link.protocol.Info.name``) and, for the
+    simulated device, the simulated finger (person number; None for a real finger)."""
+
+    device: str
+    finger: int | None = None
+
+
+@dataclass(frozen=True)
 class DeviceProfile:
     """Which actuation the scene is for, and the limits of that device.
 
@@ -280,6 +290,9 @@ class DeviceProfile:
     normal_force_n: float = 0.5
     friction: FrictionParams = field(default_factory=FrictionParams)
     calibration: Calibration | None = None
+    #: what the friction constants were fitted on (None: not by ``frictex calibrate``, or
+    #: by a version that did not record it)
+    fitted: FittedOn | None = None
     structure: StructureSpec | None = None
     #: the driving-force model of the travelling-wave profiles (:data:`FORCE_PROFILES`)
     driving: DrivingForceParams = field(default_factory=DrivingForceParams)

@@ -165,7 +165,11 @@ def test_calibrate_recovers_the_simulated_finger_within_5_percent(tmp_path, caps
                      'width_px = 100\nheight_px = 60\n' + text +
                      '[[layer]]\ntype = "disc"\nname = "d"\ncx_mm = 50.0\ncy_mm = 30.0\n'
                      'radius_mm = 10.0\nmu = 0.8\n')
-    assert load_scene(scene).device.friction.b_per_um == b
+    device = load_scene(scene).device
+    assert device.friction.b_per_um == b
+    # what it was fitted on: the simulated device's handshake name and finger 4
+    assert device.fitted.finger == 4 and device.fitted.device
+    assert f'device = "{device.fitted.device}"' in text
     assert (tmp_path / "fit.png").stat().st_size > 0
 
 

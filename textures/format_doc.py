@@ -384,7 +384,8 @@ def _table(title: str, specs: dict) -> list[str]:
 def sections() -> list[tuple[str, dict]]:
     """(title, key table) for every table a texture file may hold, in file order."""
     out = [("Top level", K.TOP), ("[display]", K.DISPLAY), ("[device]", K.DEVICE),
-           ("[device.friction]", K.FRICTION), ("[device.calibration]", K.CALIBRATION)]
+           ("[device.friction]", K.FRICTION), ("[device.fitted]", K.FITTED),
+           ("[device.calibration]", K.CALIBRATION)]
     out += [(f"[device.structure] for profile = \"{profile}\"", specs)
             for profile, specs in K.STRUCTURES.items()]
     out.append(("[device.driving] (travelling-wave profiles)", K.DRIVING))

@@ -67,6 +67,7 @@ FRICTION = {"b_per_um": Num("1/um", _FRICTION.b_per_um, gt=0.0),
             "asymptote_cap": Retired("the friction model holds up to an asymptote of 1 "
                                      "(seed 003, eq 2) and frictex warns where a force takes "
                                      "it there; delete the key")}
+FITTED = {"device": Text(), "finger": Int("person number", None, ge=0)}
 CALIBRATION = {"amplitudes_um": NumList(Num("um zero-to-peak", ge=0.0, le=MAX_UM), min_len=2),
                "forces_n": NumList(Num("N", ge=0.0, le=MAX_FORCE_N)),
                "mu": Rows(MU)}
@@ -244,6 +245,13 @@ documented(FRICTION, {
     "b_per_um": "b of seed 003 eq 2, mu'(w) = (1 - A) exp(-b w) + A (1/um)",
     "asymptote_per_n": "k of seed 003 eq 2, the asymptote A = k F_n (1/N): the lowest mu' "
                        "any amplitude gives at normal force F_n",
+})
+documented(FITTED, {
+    "device": "the device `frictex calibrate` fitted [device.friction] on: its name from the "
+              "link's handshake; a replay to a device of another name warns",
+    "finger": ("with the simulated device: the simulated finger (person number) it was "
+               "fitted on; a replay with another --sim-finger warns",
+               "none: fitted on a real finger"),
 })
 documented(CALIBRATION, {
     "amplitudes_um": "measured amplitudes (um, zero-to-peak), from 0, strictly increasing",

@@ -31,8 +31,10 @@ import numpy as np
 from frictex.app.commands.argtypes import sim_finger_args, sim_options
 from frictex.app.engine.outfile import check_writable, write_file
 from frictex.device.calibration_fit import device_toml, fit_points
+from frictex.device.calibration_identity import simulated_finger
 from frictex.device.calibration_run import StepCut, Sweep, check_calibratable, run_sweep
 from frictex.device.errors import InputError, require_extra
+from frictex.device.profile import FittedOn
 
 #: the plate's sample rate (Hz, seed 003) and the simulated plate's amplitude limit (um)
 RATE_HZ = 10_000.0
@@ -89,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
               f"the touch)", file=sys.stderr)
         w, normal, mu = _sweeps(link, sweep)
         limit_um = link.info.limits_um[0]
+        fitted = FittedOn(link.info.name, simulated_finger(args.device, sim_args))
     finally:
         link.close()
     fit = fit_points(w, normal, mu)
@@ -96,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
           f"b = {fit.params.b_per_um:.4f} /um, k = {fit.params.asymptote_per_n:.4f} /N, "
           f"residual RMS {fit.residual_rms:.5f} (mu')"
           + ("" if fit.fits else "; the model does not fit: calibration table written"))
-    text = device_toml(fit, limit_um, sweep.force_n).encode("utf-8")
+    text = device_toml(fit, limit_um, sweep.force_n, fitted=fitted).encode("utf-8")
     write_file(args.out, lambda to: to.write_bytes(text), len(text))
     print(f"wrote {args.out}")
     if args.plot is not None:

@@ -321,6 +321,11 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     if order is not None:
         doc["trace"]["time_order"] = order.as_dict()
         doc["warnings"] += order.warnings()
+    if sink is not None:  # friction constants calibrated on another device or finger
+        from frictex.device.calibration_identity import mismatch, simulated_finger
+        said = mismatch(scene.device.fitted, sink.info.name,
+                        simulated_finger(options.device, options.sim_args))
+        doc["warnings"] += [said] if said else []
     if looped:
         doc["control"] = pipeline.control.report(stage.state.control)
         doc["warnings"] += doc["control"]["messages"]

@@ -13,7 +13,8 @@ from frictex.device.structures.beam import MAX_MODES, ModesError
 from frictex.textures import model
 from frictex.device.safe_text import escape, escape_path
 from frictex.textures.errors import KeyPath, TextureError
-from frictex.textures.keys import CALIBRATION, DEVICE, DISPLAY, DRIVING, FRICTION, STRUCTURES
+from frictex.textures.keys import (CALIBRATION, DEVICE, DISPLAY, DRIVING, FITTED, FRICTION,
+                                   STRUCTURES)
 from frictex.textures.schema import BAD, Reader, show
 from frictex.textures.sections.common import strictly_increasing
 from frictex.textures.sections.files import Files
@@ -32,10 +33,15 @@ def parse_display(r: Reader, doc: dict) -> model.Display | None:
 
 def parse_device(r: Reader, doc: dict, display, files: Files) -> profiles.DeviceProfile | None:
     raw = doc.get("device", {})
-    v = r.table(raw, ("device",), DEVICE, tables=("friction", "calibration", "structure", "driving"))
+    v = r.table(raw, ("device",), DEVICE,
+                tables=("friction", "fitted", "calibration", "structure", "driving"))
     if v is None:
         return None
     friction = r.table(raw.get("friction", {}), ("device", "friction"), FRICTION)
+    fitted = None
+    if "fitted" in raw:
+        fitted = r.table(raw["fitted"], ("device", "fitted"), FITTED)
+        fitted = BAD if fitted is None or BAD in fitted.values() else profiles.FittedOn(**fitted)
     calibration = None
     if "calibration" in raw:
         calibration = _calibration(r, raw["calibration"], ("device", "calibration"))
@@ -48,10 +54,10 @@ def parse_device(r: Reader, doc: dict, display, files: Files) -> profiles.Device
                                           f"{', '.join(profiles.MODAL_PROFILES)}")
         structure = BAD
     if (friction is None or BAD in friction.values() or BAD in v.values()
-            or BAD in (calibration, structure)):
+            or BAD in (calibration, structure, fitted)):
         return None
     device = profiles.DeviceProfile(friction=profiles.FrictionParams(**friction), calibration=calibration,
-                                 structure=structure, **v)
+                                 fitted=fitted, structure=structure, **v)
     if structure is not None and not _actuation_builds(r, device):
         return None
     return device
