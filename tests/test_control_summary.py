@@ -2,6 +2,7 @@
 app/engine/SUMMARY.md's ``control``): what the host measured from the device's force
 reports, an oscillating gain, and a touch input whose normal force is implausible."""
 
+import json
 import math
 from types import SimpleNamespace
 
@@ -10,6 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from frictex.app.commands.cli import main
 from frictex.device.link.forces import ForceHistory, ForceReport
 from frictex.device.profile import DeviceProfile
 from frictex.rendering.control.loop import ClosedLoop
@@ -110,3 +112,25 @@ def _reference_swings(log_c: np.ndarray) -> int:
 def test_the_loops_swing_count_is_the_reports(steps):
     log_c = np.cumsum([0.0, *steps])
     assert longest_run(log_c) == _reference_swings(log_c)
+
+
+@pytest.mark.parametrize("force, warned", [("0", True), ("0.5", False), ("0.04", True)])
+def test_an_open_loop_replay_of_a_trace_that_does_not_press_warns(tmp_path, force, warned):
+    trace, out = tmp_path / "t.csv", tmp_path / "out"
+    assert main(["trace", "synth", "swipe", "--force", force, "-o", str(trace)]) == 0
+    assert main(["replay", "grating-15mm", str(trace), "--out", str(out), "--quiet"]) == 0
+    said = [w for w in json.loads((out / "summary.json").read_text())["warnings"]
+            if "press under 0.05 N" in w]
+    assert len(said) == int(warned)
+    if warned:
+        assert f"the least {float(force):.2g} N" in said[0] and "force_n" in said[0]
+
+
+def test_a_key_press_landing_through_a_low_force_is_not_warned_about(tmp_path):
+    """The bundled key press rises from 0.04 N in one of its touch samples: a finger
+    landing, not a trace without force."""
+    out = tmp_path / "out"
+    assert main(["replay", "keyclick-ring", "keyclick-press-100hz", "--out", str(out),
+                 "--quiet"]) == 0
+    assert not [w for w in json.loads((out / "summary.json").read_text())["warnings"]
+                if "press under" in w]

@@ -32,6 +32,7 @@ import numpy as np
 
 from frictex.app.engine.finger_slots import FingerSlots
 from frictex.app.engine.finger_table import MAX_LISTED
+from frictex.rendering.control.loop import MIN_NORMAL_N
 from frictex.rendering.input.trace_file import UP, Trace, concat_traces, make_trace
 from frictex.rendering.tracking.tracks import apply_index
 
@@ -236,6 +237,10 @@ class TraceStats:
         self.first_t = self.last_t = None
         self.steps: list[np.ndarray] = []
         self.n_steps = 0
+        #: touch samples (down or move), those pressing under ``MIN_NORMAL_N``, the least force
+        self.touching = 0
+        self.unpressed = 0
+        self.least_force_n = np.inf
 
     def add(self, chunk: Trace) -> None:
         times = chunk.t_s if self.last_t is None else np.concatenate(([self.last_t], chunk.t_s))
@@ -245,9 +250,30 @@ class TraceStats:
             self.steps.append(steps)
             self.n_steps += steps.size
         self.samples += len(chunk)
+        touching = chunk.force_n[chunk.event != UP]
+        self.touching += touching.size
+        self.unpressed += int(np.count_nonzero(touching < MIN_NORMAL_N))
+        self.least_force_n = float(np.min(touching, initial=self.least_force_n))
         self.fingers.update(chunk.fingers)
         self.first_t = float(chunk.t_s[0]) if self.first_t is None else self.first_t
         self.last_t = float(chunk.t_s[-1])
+
+    #: the share of touch samples pressing under ``MIN_NORMAL_N`` that is warned about: a
+    #: finger landing or lifting passes through a low force for a few samples (the bundled
+    #: key-press traces: 1 of their touch samples at 0.04 N), not for a tenth of its touch
+    UNPRESSED_SHARE = 0.1
+
+    def warnings(self) -> list[str]:
+        """A touch input that does not press, said in one line (none where at most
+        ``UNPRESSED_SHARE`` of its touch samples press under ``MIN_NORMAL_N``): the friction
+        model's inversion takes the normal force from it."""
+        if self.unpressed <= self.UNPRESSED_SHARE * self.touching:
+            return []
+        return [f"trace: {self.unpressed} of {self.touching} touch samples press under {MIN_NORMAL_N:g} N (the "
+                f"least {self.least_force_n:.2g} N), implausible under a finger: seed 003's "
+                "inversion takes the normal force from the trace (its asymptote k F_n), so it "
+                "inverts for a finger that barely presses; give the trace its finger's force_n, "
+                "or leave the column out for 0.5 N"]
 
     def report(self, path) -> dict:
         steps = np.concatenate(self.steps) if self.steps else np.zeros(0)

@@ -132,6 +132,9 @@ from frictex.rendering.control.swings import OSCILLATION_STEPS, SWING, Swings
 from frictex.textures.model import CONTROL_MODES
 
 _NONE = np.zeros(0)  # chain_input's model rows left out (closed mode)
+#: a finger touching with a normal force below this (N) is not pressing: seed 003's plate
+#: reads a finger at 0.3-0.75 N (``report_closed_loop.population_slopes``)
+MIN_NORMAL_N = 0.05
 
 
 @dataclass(frozen=True)
@@ -162,7 +165,7 @@ class LoopConfig:
     min_mu: float = 0.15
     stale_s: float = 0.02
     recover_s: float = 0.1
-    min_normal_n: float = 0.05
+    min_normal_n: float = MIN_NORMAL_N
     max_ratio: float = 3.0
     decimate: int = 10
     sensor: SensorParams = field(default_factory=SensorParams)
