@@ -22,7 +22,10 @@ that are not one grating), ``motion``, ``touch_hz``, ``renderer``, ``output_hz``
 ``inversion``, ``time_error``, ``spectral_error``, ``alignment_error_mm``, ``chatter``
 (edges felt twice, ``rendering.metrics.chatter``; on the 15 and 5 mm gratings, else null),
 ``steps``, ``cost_us_per_s``, ``stages_us_per_s``, ``throughput`` (``replay_x_realtime``,
-``live_block_p99_us``, ``latency_ms``) and ``clamps``.
+``live_block_p99_us``, ``latency_ms``), ``clamps`` and ``through_plate`` (``time_error``
+and ``spectral_error`` of what the plate delivers through its 400 Hz loop; the other
+errors, and every claim, score the commanded mu'). ``settings.load_1min``: the machine's
+1-minute load average as the matrix started and ended.
 """
 
 from __future__ import annotations
