@@ -82,6 +82,34 @@ def guarded(who: str, doing: str, call: Callable[..., T], *args) -> T:
         raise PluginError(f"{who} failed {doing}: {type(exc).__name__}: {exc}") from exc
 
 
+def build_entry(registry: Registry, kind: str, name: str, arg: str, request, *,
+                doing: str, members: tuple[str, ...], contract: str, wrap,
+                release: str | None = None):
+    """Entry ``name`` of ``registry`` (a factory) called with ``(arg, request)``: frictex's
+    own as it returns it; another package's through :func:`guarded` (what it raises names
+    it, ``"{kind} {name!r} of {distribution}"``), checked to have ``members`` (``"m()"``
+    a method, ``"m"`` any attribute; else a :class:`PluginError` saying which are
+    missing and that ``contract`` was expected, after calling its method ``release``
+    where given, to free what it opened) and returned as ``wrap(built, who)``."""
+    factory = registry.get(name)
+    origin = registry.origin(name)
+    if origin == OWN_DISTRIBUTION:
+        return factory(arg, request)
+    who = f"{kind} {name!r} of {origin}"
+    built = guarded(who, doing, factory, arg, request)
+    missing = [m for m in members if not (callable(getattr(built, m[:-2], None))
+                                          if m.endswith("()") else hasattr(built, m))]
+    if missing:
+        if release is not None:
+            try:
+                getattr(built, release)()
+            except Exception:  # noqa: BLE001 -- the missing members are the error to tell
+                pass
+        raise PluginError(f"{who} returned a {type(built).__name__} without "
+                          f"{', '.join(missing)}; expected {contract}")
+    return wrap(built, who)
+
+
 def warn_once(message: str) -> None:
     """``message`` on stderr as one line, ``frictex: warning: ...`` (control characters
     escaped), the first time this process says it."""

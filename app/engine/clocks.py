@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from typing import Any, Protocol
 
 from frictex.device.errors import InputError
-from frictex.device.registry import OWN_DISTRIBUTION, Expect, PluginError, Registry, guarded
+from frictex.device.registry import Expect, Registry, build_entry, guarded
 
 
 class Clock(Protocol):
@@ -78,18 +78,9 @@ def build_clock(spec: str, request: ClockRequest) -> Clock:
     its factory returns it, another package's checked and wrapped in a
     :class:`PluginClock`."""
     name, arg = clock_name(spec)
-    factory = CLOCKS.get(name)
-    origin = CLOCKS.origin(name)
-    if origin == OWN_DISTRIBUTION:
-        return factory(arg, request)
-    who = f"clock {name!r} of {origin}"
-    clock = guarded(who, "building", factory, arg, request)
-    missing = [m for m in ("wait", "finished") if not callable(getattr(clock, m, None))]
-    if missing:
-        raise PluginError(f"{who} built a {type(clock).__name__} without "
-                          f"{', '.join(m + '()' for m in missing)}; expected a Clock "
-                          "(frictex.app.engine.clocks.Clock)")
-    return PluginClock(clock, who)
+    return build_entry(CLOCKS, "clock", name, arg, request, doing="building",
+                       members=("wait()", "finished()"),
+                       contract="a Clock (frictex.app.engine.clocks.Clock)", wrap=PluginClock)
 
 
 class PluginClock:

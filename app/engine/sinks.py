@@ -33,7 +33,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from frictex.device.errors import InputError
-from frictex.device.registry import (OWN_DISTRIBUTION, Expect, PluginError, Registry, guarded,
+from frictex.device.registry import (Expect, PluginError, Registry, build_entry, guarded,
                                      warn_once)
 
 from frictex.app.engine.tables import open_table
@@ -155,18 +155,9 @@ def build_sink(spec: str, request: SinkRequest) -> Sink:
     """The sink ``NAME[:ARG]`` of :data:`SINKS` built for ``request``: frictex's own as its
     factory returns it, another package's checked and wrapped in a :class:`PluginSink`."""
     name, arg = sink_name(spec)
-    factory = SINKS.get(name)
-    origin = SINKS.origin(name)
-    if origin == OWN_DISTRIBUTION:
-        return factory(arg, request)
-    who = f"sink {name!r} of {origin}"
-    sink = guarded(who, "building", factory, arg, request)
-    missing = [m for m in ("write", "commit", "abort") if not callable(getattr(sink, m, None))]
-    if missing:
-        raise PluginError(f"{who} built a {type(sink).__name__} without "
-                          f"{', '.join(m + '()' for m in missing)}; expected a Sink "
-                          "(frictex.app.engine.sinks.Sink)")
-    return PluginSink(sink, who)
+    return build_entry(SINKS, "sink", name, arg, request, doing="building",
+                       members=("write()", "commit()", "abort()"),
+                       contract="a Sink (frictex.app.engine.sinks.Sink)", wrap=PluginSink)
 
 
 def names_built(spec: str) -> list[str]:

@@ -26,7 +26,6 @@ registered, else a path (``/dev/ttyACM0``, ``./tty``, ``COM3``) to ``port``.
 
 from __future__ import annotations
 
-import contextlib
 import os
 import re
 import sys
@@ -40,7 +39,7 @@ import numpy as np
 from frictex.device.errors import InputError
 from frictex.device.link.port import URL_SCHEMES
 from frictex.device.link.session import PREFILL_S
-from frictex.device.registry import (OWN_DISTRIBUTION, Expect, PluginError, Registry, guarded,
+from frictex.device.registry import (Expect, PluginError, Registry, build_entry, guarded,
                                      warn_once)
 
 
@@ -167,20 +166,10 @@ def open_device(spec: str, request: DeviceRequest) -> OutputDevice:
     its factory returns it, another package's checked and wrapped in a
     :class:`PluginDevice` (the module docstring)."""
     name, arg = _named(spec)
-    factory = DEVICES.get(name)
-    origin = DEVICES.origin(name)
-    if origin == OWN_DISTRIBUTION:
-        return factory(arg, request)
-    who = f"output device {name!r} of {origin}"
-    device = guarded(who, "opening", factory, arg, request)
-    missing = [member for member in _MEMBERS if not hasattr(device, member)]
-    if missing:
-        with contextlib.suppress(Exception):  # release what it opened, if it can
-            device.close()
-        raise PluginError(f"{who} returned a {type(device).__name__} without "
-                          f"{', '.join(missing)}; expected an OutputDevice "
-                          "(frictex.device.link.devices.OutputDevice)")
-    return PluginDevice(device, who)
+    return build_entry(DEVICES, "output device", name, arg, request, doing="opening",
+                       members=_MEMBERS, release="close",
+                       contract="an OutputDevice (frictex.device.link.devices.OutputDevice)",
+                       wrap=PluginDevice)
 
 
 def _named(spec: str) -> tuple[str, str]:
