@@ -145,10 +145,11 @@ def measure(seconds: float, rate_hz: float, block: int, busy: int) -> ReportDela
             for b in range(n_blocks):
                 while time.perf_counter() < t0 + b * block / rate_hz:
                     time.sleep(2e-4)
+                # a report later than the loop's wait is one the loop never uses: LOST
+                pending = [j for j in pending if b - j - 1 <= wait_blocks]
                 for j in [j for j in pending if sink.force_report(j * block, block) is not None]:
                     delays[j] = b - j - 1
                     pending.remove(j)
-                pending = [j for j in pending if b - j - 1 <= wait_blocks]
                 sink.send(b * block, ones, None)
                 pending.append(b)
         finally:
