@@ -204,7 +204,21 @@ def test_section_tables_gains_and_claims():
     assert found[("closed loop: stability margin", "gain margin / steepest s")].passed
     # a run with a growing oscillation fails the claim
     shaky = claims(_section(closed, closed, swings=40))
-    assert not [c for c in shaky if c.metric == "swings"][0].passed
+    swung = [c for c in shaky if c.metric == "swings"][0]
+    assert not swung.passed and swung.verdict == "does not hold"
+    # every claim reads d < 0 as the claim: the margin's d is steepest s - least margin
+    margin = found[("closed loop: stability margin", "gain margin / steepest s")]
+    assert margin.mean < 0 and margin.verdict == "holds"
+
+
+def test_a_failed_max_claim_does_not_hold_rather_than_not_shown():
+    """Claims decided by a largest value (oscillation, added noise): past the bound they
+    are refuted, not 'not shown' (an interval of the mean may still straddle)."""
+    from frictex.app.measure.report_closed_loop import _noise_verdict
+    assert _noise_verdict(high=-0.05, low=-0.09, largest=0.12) == "does not hold"
+    assert _noise_verdict(high=-0.05, low=-0.09, largest=0.05) == "holds"
+    assert _noise_verdict(high=0.01, low=-0.09, largest=0.05) == "not shown"
+    assert _noise_verdict(high=0.04, low=0.01, largest=0.10) == "does not hold"
 
 
 def test_fingers_without_mu0_are_left_out_of_the_figures_from_mu0_on():

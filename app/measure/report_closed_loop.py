@@ -73,7 +73,7 @@ from frictex.app.measure import link_report_delays
 from frictex.app.measure.closed_loop_sim import FingerSink, LoopStage
 from frictex.app.measure.link_report_delays import ReportDelays
 from frictex.app.measure.processes import cores
-from frictex.app.measure.report_claims import Claim, paired
+from frictex.app.measure.report_claims import HOLDS, NOT_SHOWN, REFUTED, Claim, paired
 from frictex.app.measure.report_loop_records import (Adaptation, LoopFigures, LoopScore,
                                                      LoopSection, ModeSummary, PerFinger,
                                                      RunScore)
@@ -433,8 +433,8 @@ def claims(section: LoopSection) -> list[Claim]:
         f"the gain scheduled on the report's delay (0-{rows[-1]['delay_blocks']} blocks) "
         f"keeps a gain margin of at least {least:.2f} (by design: COVER_SLOPE), above the "
         f"population's steepest s {steepest:.2f} (computed from the fingers, "
-        f"population_slopes)", least - steepest, least - steepest, least - steepest, len(rows),
-        bool(steepest < least)))
+        f"population_slopes)", steepest - least, steepest - least, steepest - least, len(rows),
+        bool(steepest < least)))  # d = steepest - least < 0 is the claim, as for every claim
     ad = section.adaptation
     if ad:
         mean, low, high, n = paired(ad.gaps, [ADAPT_TARGET] * len(ad.gaps))
@@ -470,7 +470,8 @@ def _scene_claims(scene: str, row: dict[str, ModeSummary]) -> list[Claim]:
             f"no run's loop gain oscillates: longest run of swings over "
             f"{SWING:.0%} {max(steps)} (mean {mean:.2f}, 95 % interval [{low:.2f}, "
             f"{high:.2f}]) against {OSCILLATION_STEPS} for a growing oscillation, {n} runs",
-            float(max(steps)), low, high, n, bool(max(steps) < OSCILLATION_STEPS)))
+            *(float(max(steps) - OSCILLATION_STEPS),) * 3, n,
+            bool(max(steps) < OSCILLATION_STEPS)))  # d: the longest run's, decided by it
     noise = row["adaptive"].per_finger.noise_fraction if "adaptive" in row else None
     if noise:
         mean, low, high, n = paired(noise, [WEBER_FRACTION] * len(noise))
@@ -480,8 +481,17 @@ def _scene_claims(scene: str, row: dict[str, ModeSummary]) -> list[Claim]:
             f"{WEBER_FRACTION:g} (Gueorguiev et al. 2017): noise / friction - "
             f"{WEBER_FRACTION:g} = {mean:+.3f}, 95 % interval [{low:+.3f}, {high:+.3f}], "
             f"{n} fingers, largest {max(noise):.3f}",
-            mean, low, high, n, bool(high < 0.0 and max(noise) < WEBER_FRACTION)))
+            mean, low, high, n, bool(high < 0.0 and max(noise) < WEBER_FRACTION),
+            _noise_verdict(high, low, max(noise))))
     return out
+
+
+def _noise_verdict(high: float, low: float, largest: float) -> str:
+    """The added-noise claim's verdict: it says every finger's noise stays below the Weber
+    fraction, so one finger at or above it refutes it, whatever the mean's interval."""
+    if largest >= WEBER_FRACTION or low > 0.0:
+        return REFUTED
+    return HOLDS if high < 0.0 else NOT_SHOWN
 
 
 def _mode_claims(scene: str, mode: str, r: ModeSummary, opened: ModeSummary) -> list[Claim]:
