@@ -116,9 +116,11 @@ def warnings_of(pipeline, tracker, totals: Totals) -> list[str]:
     if totals.off_structure:
         warnings.append(f"{totals.off_structure} finger samples were off the vibrating "
                         "structure and were held at its edge")
-    layers = {layer.name: layer for layer in pipeline.scene.layers}
-    warnings += [_clipped_warning(layers[name], n, totals.touching)
-                 for name, n in totals.layer_clipped.items() if n]
+    clipped = {name: n for name, n in totals.layer_clipped.items() if n}
+    if clipped:
+        layers = {layer.name: layer for layer in pipeline.scene.layers}
+        warnings += [_clipped_warning(layers[name], n, totals.touching)
+                     for name, n in clipped.items()]
     return warnings
 
 
