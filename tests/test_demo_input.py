@@ -71,7 +71,7 @@ def test_tuio_cursors_over_udp_drive_two_fingers(xvfb_display, xdotool, tmp_path
         line = proc.stdout.readline()
         assert "listening for TUIO" in line, line
         port = int(line.split("127.0.0.1:")[1].split(",")[0])
-        assert "accepting the first sender only" in line
+        assert "accepting one sender at a time" in line
         focus_window(xvfb_display)
         wait_event(proc, rec)
         fseq = 1

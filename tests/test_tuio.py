@@ -12,7 +12,8 @@ from hypothesis import given, settings, strategies as st
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP, TraceError
 from test_evdev_decode import check_event_sequence
 from frictex.device.errors import InputError
-from frictex.rendering.input.tuio import (MAX_CURSORS, MAX_SOURCES, OscError, TuioDecoder,
+from frictex.rendering.input.tuio import (MAX_CURSORS, MAX_SOURCES, SILENCE_S, OscError,
+                                         SenderGate, TuioDecoder,
                                          TuioListener, exposure_warning, is_tuio_frame,
                                          parse_message, parse_packet, parse_sender)
 
@@ -192,8 +193,8 @@ def test_bad_tuio_messages_change_nothing():
 
 # -- over real UDP --------------------------------------------------------------------------
 def test_listener_receives_udp_on_localhost():
-    clock = iter(range(100)).__next__
-    with TuioListener(0, width_mm=200.0, height_mm=100.0, host="127.0.0.1", clock=clock) as listener:
+    with TuioListener(0, width_mm=200.0, height_mm=100.0, host="127.0.0.1",
+                      clock=lambda: 100.0) as listener:
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx:
             tx.sendto(frame(1, [3], [(3, 0.25, 0.5)]), ("127.0.0.1", listener.port))
             tx.sendto(b"garbage", ("127.0.0.1", listener.port))
@@ -205,9 +206,9 @@ def test_listener_receives_udp_on_localhost():
                 time.sleep(0.005)
         assert [(s.finger, s.x_mm, s.y_mm, s.force_n, s.event) for s in samples] == \
             [(0, 50.0, 50.0, 0.5, DOWN), (0, 50.0, 50.0, 0.5, UP)]
-        # stamped on the listener's clock (ticks 0, 1, 2 as datagrams are read) less the
-        # time each waited in the socket since the kernel received it
-        assert samples[0].t_s <= 0 and samples[1].t_s <= 2
+        # stamped on the listener's clock (100 s, standing still) less the time each
+        # waited in the socket since the kernel received it
+        assert all(40.0 < s.t_s <= 100.0 for s in samples)
         assert listener.bad_packets == 1 and "no NUL terminator" in listener.last_error
 
 
@@ -309,7 +310,8 @@ def test_accept_from_an_address_takes_any_of_its_ports_and_nothing_else():
         a.sendto(frame(1, [3], [(3, 0.25, 0.5)]), to)
         b.sendto(frame(2, [3], [(3, 0.5, 0.5)]), to)
         samples = received(listener, 2, 1)
-        assert listener.counters()["sender"] == "127.0.0.2:*"
+        # the port served last
+        assert listener.counters()["sender"] == f"127.0.0.2:{b.getsockname()[1]}"
     assert [(s.x_mm, s.event) for s in samples] == [(25.0, DOWN), (50.0, MOVE)]
 
 
@@ -362,3 +364,76 @@ def test_the_demos_line_says_when_nothing_came():
     with TuioListener(0, width_mm=200.0, height_mm=100.0, host="127.0.0.1") as listener:
         line = tuio_line(listener.counters())
     assert "from no sender (nothing came): 0 datagrams" in line and "None" not in line
+
+
+# -- silence: a sender that vanishes, a sender that comes back ------------------------------
+def test_a_silent_source_is_lifted_once_and_forgotten():
+    dec = TuioDecoder()
+    dec.feed(frame(150, [1, 2], [(1, 0.1, 0.4), (2, 0.3, 0.6)]), 0.0, "127.0.0.1:5000")
+    assert dec.expire(SILENCE_S - 0.01) == ([], [])  # not silent long enough
+    up, gone = dec.expire(SILENCE_S)
+    assert _short(up) == [(0, 0.1, 0.4, UP), (1, 0.3, 0.6, UP)] and all(s.t_s == SILENCE_S for s in up)
+    assert gone == [("127.0.0.1:5000", "", 2)]
+    assert dec.expire(10.0) == ([], [])  # said once
+    # the restarted sender counts from 1 again: not taken for a late frame of the old one
+    assert _short(dec.feed(frame(1, [1], [(1, 0.5, 0.5)]), 10.1)) == [(0, 0.5, 0.5, DOWN)]
+    assert dec.late == 0
+
+
+def test_each_source_name_falls_silent_on_its_own():
+    dec = TuioDecoder()
+    dec.feed(frame(1, [1], [(1, 0.1, 0.1)], source="old"), 0.0, "h:1")
+    for k in range(20):  # a new source name from the same sender keeps speaking
+        dec.feed(frame(k + 1, [4], [(4, 0.9, 0.9)], source="new"), 0.1 * k, "h:1")
+    up, gone = dec.expire(1.95)
+    assert _short(up) == [(0, 0.1, 0.1, UP)] and gone == [("h:1", "old", 1)]
+
+
+def test_the_gate_serves_one_sender_and_the_newest_after_silence():
+    a, b = ("127.0.0.1", 4000), ("127.0.0.1", 4001)
+    gate, tick = SenderGate(), frame(1, [])
+    assert gate.admit(*b, 0.0, b"junk") is None  # junk claims nothing
+    assert gate.admit(*a, 0.0, tick) == "new" and gate.sender == a
+    t = 0.0
+    for k in range(1000):  # b floods while a keeps speaking every 10 ms: all refused
+        t = 0.01 * k
+        assert gate.admit(*b, t, tick) is None
+        assert gate.admit(*a, t, tick) == "same"
+    assert gate.admit(*b, t + SILENCE_S - 0.01, tick) is None  # a: not silent long enough
+    assert gate.admit(*b, t + SILENCE_S, b"junk") is None  # junk takes nothing over
+    assert gate.admit(*b, t + SILENCE_S, tick) == "new" and gate.sender == b
+    assert gate.admit(*a, t + SILENCE_S + 0.01, tick) is None and gate.takeovers == 1
+
+
+def test_a_named_address_is_served_on_any_port_and_a_new_port_after_silence_starts_afresh():
+    gate, tick = SenderGate(("127.0.0.2", None)), frame(1, [])
+    assert gate.admit("127.0.0.1", 4000, 0.0, tick) is None
+    assert gate.admit("127.0.0.2", 4000, 0.0, b"any") == "new"
+    assert gate.admit("127.0.0.2", 4001, 0.1, tick) == "same"
+    assert gate.admit("127.0.0.2", 4002, 0.1 + SILENCE_S, tick) == "new"
+
+
+def test_listener_lifts_a_vanished_sender_and_serves_the_one_that_comes_back():
+    """Issue: a sender that exits without an empty alive left two fingers touching for
+    good, and a restarted sender (a new port) was refused."""
+    now, lines = [0.0], []
+    with TuioListener(0, width_mm=100.0, height_mm=100.0, clock=lambda: now[0],
+                      warn=lines.append) as listener, \
+            sender("127.0.0.1") as old, sender("127.0.0.1") as new:
+        to = ("127.0.0.1", listener.port)
+        old.sendto(frame(150, [1, 2], [(1, 0.1, 0.4), (2, 0.3, 0.6)]), to)
+        samples = received(listener, 1, 0)
+        new.sendto(frame(1, [1], [(1, 0.5, 0.5)]), to)  # the old one still counts as speaking
+        samples += received(listener, 1, 1)
+        now[0] = SILENCE_S + 0.5  # a fake clock: the old sender has now been silent
+        samples += listener.poll() + listener.poll()
+        new.sendto(frame(1, [1], [(1, 0.5, 0.5)]), to)
+        samples += received(listener, 2, 1)
+        counts = listener.counters()
+        old_port, new_port = old.getsockname()[1], new.getsockname()[1]
+    assert [(s.finger, round(s.x_mm, 4), s.event) for s in samples] == [
+        (0, 10.0, DOWN), (1, 30.0, DOWN), (0, 10.0, UP), (1, 30.0, UP), (0, 50.0, DOWN)]
+    assert lines == [f"TUIO: no message from 127.0.0.1:{old_port} for {SILENCE_S:g} s: lifted 2 fingers",
+                     f"TUIO: taking frames from 127.0.0.1:{new_port} (127.0.0.1:{old_port} was "
+                     f"silent for {SILENCE_S:g} s or more)"]
+    assert counts["sender"] == f"127.0.0.1:{new_port}" and counts["takeovers"] == 1

@@ -115,10 +115,11 @@ class _Tuio:
 
     @property
     def help(self) -> str:
-        from frictex.rendering.input.tuio import TUIO_HOST, TUIO_PORT
+        from frictex.rendering.input.tuio import SILENCE_S, TUIO_HOST, TUIO_PORT
         return (f"TUIO 1.1 cursors on UDP PORT (default {TUIO_PORT}, 0: any free port), "
                 f"listening on {TUIO_HOST} unless HOST says otherwise (0.0.0.0: every "
-                "interface); only one sender is accepted (see --tuio-from)")
+                f"interface); one sender at a time (see --tuio-from), whose fingers are "
+                f"lifted after {SILENCE_S:g} s of silence, when another may take over")
 
     def parse(self, arg):
         import ipaddress
@@ -142,7 +143,7 @@ class _Tuio:
         from frictex.rendering.input.tuio import TuioListener
         source = TuioListener(arg.port, host=arg.host, accept_from=arg.accept_from,
                               width_mm=1.0, height_mm=1.0)
-        whom = ("the first sender only" if arg.accept_from is None
+        whom = ("one sender at a time" if arg.accept_from is None
                 else f"from {arg.accept_from[0]}:{arg.accept_from[1] or '*'} only")
         print(f"demo: listening for TUIO 1.1 cursors on UDP {arg.host}:{source.port}, "
               f"accepting {whom}", flush=True)

@@ -34,6 +34,20 @@ the same host cannot join in. Until a sender is accepted, datagrams that are not
 frame claim nothing: stray traffic cannot lock the tablet out. Datagrams from anyone
 else, and those unclaiming ones, are dropped and counted (``refused``). Listening beyond
 loopback with no sender named, :func:`exposure_warning` gives the line a command prints.
+
+Silence. UDP has no goodbye: a tracker that crashes, or a sender that exits without an
+empty ``alive``, leaves its cursors touching. TUIO 1.1 senders repeat ``alive`` and
+``fseq`` in every frame (30 to 60 Hz from a camera or touch panel), and the reference
+TuioServer, when nothing moves, still resends its state every ``update_interval`` s
+(1 s by default, whole seconds). So a source silent for :data:`SILENCE_S` (1.5 s: the
+reference server's idle resend with half a second to spare, 45 to 90 frames of a
+sender that keeps its frame rate) has gone: its cursors are lifted (UP at the time the
+silence was seen) and its frame numbers forgotten, and the listener says so once on
+stderr (``TUIO: no message from HOST:PORT for 1.5 s: lifted N fingers``). One sender is
+served at a time (:class:`SenderGate`): the first, and after it has been silent for
+:data:`SILENCE_S`, the first sender of a TUIO frame after that (a restarted tracker on a
+new port, another tablet); while it speaks, every other sender is refused, however much
+it sends. Within the served sender, each ``source`` name falls silent on its own.
 """
 
 from __future__ import annotations
@@ -63,6 +77,8 @@ MAX_SOURCES = 8
 #: a 2Dcur position is normalised to the screen (0 to 1); one this far beyond it on either
 #: side is a finger just off its edge, further is no touch of this screen
 POSITION_RANGE = (-0.5, 1.5)
+#: a TUIO source silent this long (s) has gone: its cursors are lifted (module docstring)
+SILENCE_S = 1.5
 
 
 class OscError(TraceError):
@@ -165,9 +181,11 @@ class TuioDecoder:
         self._pending_set: dict[str, dict[int, tuple[float, float]]] = {}
         self._pos: dict[tuple[str, int], tuple[float, float]] = {}  # emitted, touching
         self._fingers: dict[tuple[str, int], int] = {}
+        self._heard: dict[str, tuple[float, str]] = {}  # source: (last frame's t, origin)
 
-    def feed(self, packet: bytes, t_s: float) -> list[RawSample]:
-        """Decode one UDP datagram received at ``t_s`` (s); a bad packet changes nothing."""
+    def feed(self, packet: bytes, t_s: float, origin: str = "") -> list[RawSample]:
+        """Decode one UDP datagram received at ``t_s`` (s) from ``origin`` (the sender,
+        "HOST:PORT", for :meth:`expire`'s report); a bad packet changes nothing."""
         out: list[RawSample] = []
         for command, source, value in _commands(parse_packet(packet)):
             if command == "alive":
@@ -175,15 +193,39 @@ class TuioDecoder:
             elif command == "set":
                 self._pending_set.setdefault(source, {})[value[0]] = value[1:]
             else:
-                self._commit(source, value, t_s, out)
+                self._commit(source, value, t_s, origin, out)
         return out
 
-    def _commit(self, source: str, fseq: int, t: float, out: list[RawSample]) -> None:
+    def expire(self, t_s: float, silence_s: float = SILENCE_S
+               ) -> tuple[list[RawSample], list[tuple[str, str, int]]]:
+        """Forget every source whose last frame is ``silence_s`` s or more before ``t_s``:
+        an UP sample at ``t_s`` for each of its cursors, its frame number and alive list
+        dropped (a restarted sender starts afresh). Returns the samples and, for each
+        source that had cursors touching, (origin, source, how many were lifted)."""
+        out: list[RawSample] = []
+        gone: list[tuple[str, str, int]] = []
+        for source, (last, origin) in list(self._heard.items()):
+            if t_s - last < silence_s:
+                continue
+            del self._heard[source]
+            self._fseq.pop(source, None)
+            self._alive.pop(source, None)
+            self._pending_alive.pop(source, None)
+            self._pending_set.pop(source, None)
+            before = len(out)
+            self._lift_gone(source, set(), t_s, out)
+            if len(out) > before:
+                gone.append((origin, source, len(out) - before))
+        return out, gone
+
+    def _commit(self, source: str, fseq: int, t: float, origin: str,
+                out: list[RawSample]) -> None:
         alive = self._pending_alive.pop(source, None)
         sets = self._pending_set.pop(source, {})
         if not self._admit(source, fseq):
             return
         self.frames += 1
+        self._heard[source] = (t, origin)
         if alive is None:
             alive = self._alive.get(source, set())
         self._alive[source] = alive
@@ -327,6 +369,57 @@ def parse_sender(text: str) -> tuple[str, int | None]:
     return address, port
 
 
+def _name(sender: tuple[str, int]) -> str:
+    """A sender as "ADDR:PORT"."""
+    return f"{sender[0]}:{sender[1]}"
+
+
+def _to_stderr(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
+
+
+class SenderGate:
+    """Which UDP sender is served: one at a time, the newest after silence.
+
+    Parameters
+    ----------
+    accept_from : :func:`parse_sender`'s (address, port or None) to serve only that
+        address (any of its ports when port is None); None: whoever sends a TUIO frame
+        first (:func:`is_tuio_frame`), and after that sender has been silent for
+        ``silence_s``, whoever sends one next.
+    silence_s : how long (s) the served sender must be silent before another may take over.
+
+    ``sender`` is the one served now, (address, port), or None before the first;
+    ``takeovers`` counts the times another took over after a silence.
+    """
+
+    def __init__(self, accept_from: tuple[str, int | None] | None = None,
+                 silence_s: float = SILENCE_S) -> None:
+        self.accept_from = accept_from
+        self.silence_s = silence_s
+        self.sender: tuple[str, int] | None = None
+        self.takeovers = 0
+        self._last_t = -math.inf
+
+    def admit(self, address: str, port: int, t_s: float, data: bytes) -> str | None:
+        """Whether the datagram ``data`` from ``address:port`` received at ``t_s`` (s) is
+        taken: None (refused), ``"same"`` (the served sender), ``"new"`` (the first, or
+        one taking over from a sender silent for ``silence_s`` or more)."""
+        named = self.accept_from
+        if named is not None and (address != named[0] or named[1] not in (None, port)):
+            return None
+        if self.sender == (address, port):
+            self._last_t = t_s
+            return "same"
+        silent = t_s - self._last_t >= self.silence_s
+        if named is None and not (silent and is_tuio_frame(data)):
+            return None
+        verdict = "new" if self.sender is None or silent else "same"
+        self.takeovers += self.sender is not None and verdict == "new"
+        self.sender, self._last_t = (address, port), t_s
+        return verdict
+
+
 class TuioListener:
     """Receives TUIO on a UDP port in a thread; :meth:`poll` returns the new touch samples.
 
@@ -334,9 +427,10 @@ class TuioListener:
     overflow is counted in ``dropped``); decoding happens in :meth:`poll`, on the
     caller's thread, which may block in :meth:`wait` until a datagram is there.
     Malformed packets are counted in ``bad_packets`` (last message in ``last_error``),
-    never raised. Datagrams from a sender other than the accepted one, and before one is
-    accepted those that are not a TUIO frame (module docstring), are counted in
-    ``refused``; ``sender`` is the accepted one once known.
+    never raised. Datagrams that :class:`SenderGate` refuses (another sender while the
+    served one speaks; before one is served, or after it fell silent, those that are not
+    a TUIO frame) are counted in ``refused``. A source silent for ``silence_s`` s has its
+    cursors lifted when :meth:`poll` sees it, said once through ``warn``.
 
     Parameters
     ----------
@@ -347,24 +441,26 @@ class TuioListener:
         :func:`parse_sender` gives; None: the first sender heard from (address and port).
     force_n : normal force given to every sample (N); TUIO 1.1 cursors carry none.
     max_packets : queue bound.
-    clock : time source for arrival stamps (s).
+    clock : time source for arrival stamps and silences (s).
+    silence_s : a source silent this long (s) has gone (:data:`SILENCE_S`).
+    warn : takes each one-line notice (a silence, a takeover); default: stderr.
     """
 
     def __init__(self, port: int = TUIO_PORT, *, width_mm: float, height_mm: float,
                  host: str = TUIO_HOST, accept_from: tuple[str, int | None] | None = None,
                  force_n: float = DEFAULT_FORCE_N, max_packets: int = 1024,
-                 clock: Callable[[], float] = time.monotonic) -> None:
+                 clock: Callable[[], float] = time.monotonic, silence_s: float = SILENCE_S,
+                 warn: Callable[[str], None] | None = None) -> None:
         self.screen = ScreenMap(AxisMap(0.0, 1.0, width_mm), AxisMap(0.0, 1.0, height_mm),
                                 force_n=force_n)
         self.decoder = TuioDecoder()
         self.dropped = self.bad_packets = self.refused = self.datagrams = 0
         self.host = host
-        self.accept_from = accept_from
-        #: the accepted sender (address, port or None) once known
-        self.sender: tuple[str, int | None] | None = accept_from
+        self.gate = SenderGate(accept_from, silence_s)
         self.last_error: str | None = None
         self._clock = clock
-        self._queue: queue.Queue[tuple[float, bytes]] = queue.Queue(max_packets)
+        self._warn = warn if warn is not None else _to_stderr
+        self._queue: queue.Queue[tuple[float, bytes, str]] = queue.Queue(max_packets)
         self._ready = threading.Event()
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
@@ -388,17 +484,18 @@ class TuioListener:
                 continue
             except OSError:
                 return
-            if self.sender is None:
-                if not is_tuio_frame(data):
-                    self.refused += 1
-                    continue
-                self.sender = (address, port)
-            elif address != self.sender[0] or self.sender[1] not in (None, port):
+            t = self._clock() - _age_s(ancillary)
+            before = self.gate.sender
+            verdict = self.gate.admit(address, port, t, data)
+            if verdict is None:
                 self.refused += 1
                 continue
+            if verdict == "new" and before is not None:
+                self._warn(f"TUIO: taking frames from {address}:{port} ({_name(before)} was "
+                           f"silent for {self.gate.silence_s:g} s or more)")
             self.datagrams += 1
             try:
-                self._queue.put_nowait((self._clock() - _age_s(ancillary), data))
+                self._queue.put_nowait((t, data, f"{address}:{port}"))
             except queue.Full:
                 self.dropped += 1
             self._ready.set()
@@ -414,25 +511,37 @@ class TuioListener:
         raw: list[RawSample] = []
         while True:
             try:
-                t, data = self._queue.get_nowait()
+                t, data, origin = self._queue.get_nowait()
             except queue.Empty:
                 break
+            raw.extend(self._expire(t))
             try:
-                raw.extend(self.decoder.feed(data, t))
+                raw.extend(self.decoder.feed(data, t, origin))
             except OscError as exc:
                 self.bad_packets += 1
                 self.last_error = str(exc)
+        raw.extend(self._expire(self._clock()))
         return self.screen.touches(raw)
+
+    def _expire(self, t: float) -> list[RawSample]:
+        """UP samples for the cursors of sources silent at ``t`` (s), each said once."""
+        lifted, gone = self.decoder.expire(t, self.gate.silence_s)
+        for origin, source, n in gone:
+            named = f" (source {source!r})" if source else ""
+            self._warn(f"TUIO: no message from {origin}{named} for {self.gate.silence_s:g} s: "
+                       f"lifted {n} finger{'s' if n != 1 else ''}")
+        return lifted
 
     def counters(self) -> dict:
         """What was received: ``datagrams`` accepted, ``refused`` (other senders),
-        ``dropped`` (queue full), ``bad_packets``, and the accepted ``sender``
-        ("ADDR:PORT", "ADDR:*" for any port, or None before the first datagram)."""
-        sender = None if self.sender is None else (
-            f"{self.sender[0]}:{'*' if self.sender[1] is None else self.sender[1]}")
+        ``dropped`` (queue full), ``bad_packets``, ``takeovers`` (senders served after
+        another fell silent), and the ``sender`` served last ("ADDR:PORT", or None
+        before the first datagram)."""
+        sender = None if self.gate.sender is None else _name(self.gate.sender)
         return {"listen": f"{self.host}:{self.port}", "sender": sender,
                 "datagrams": self.datagrams, "refused": self.refused, "dropped": self.dropped,
-                "bad_packets": self.bad_packets, "over_limit": self.decoder.over_limit}
+                "bad_packets": self.bad_packets, "over_limit": self.decoder.over_limit,
+                "takeovers": self.gate.takeovers}
 
     def close(self) -> None:
         """Stop the thread and release the port."""
