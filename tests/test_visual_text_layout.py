@@ -100,3 +100,22 @@ def test_a_full_text_atlas_starts_again_and_draws_the_same(gl):
     assert np.array_equal(backend.read_rgb(), long_run)
     fresh.release()
     backend.close()
+
+
+@pytest.mark.parametrize("width_px", [300.0, 560.0, 806.0 - 16.0, 1200.0])
+def test_the_status_line_wraps_at_its_separators_only(width_px):
+    """At 806 px the status line wrapped as 'deadline / misses 506' and 'emergency / stop'."""
+    from frictex.rendering.visual.text import font, wrap
+    from PIL import Image, ImageDraw
+    probe = ImageDraw.Draw(Image.new("RGBA", (1, 1)))
+    for status in (STATUS[0].replace("misses 0", "misses 506"), KEYS_HELP):
+        lines = wrap(status, 14, width_px, " | ")
+        phrases = status.split(" | ")
+        assert " | ".join(lines) == status  # nothing lost, broken at separators only
+        assert all(line.split(" | ")[0] in phrases and line.split(" | ")[-1] in phrases
+                   for line in lines)
+        assert all(probe.textlength(line, font=font(14)) <= width_px for line in lines)
+    # a phrase wider than a line alone is broken between its words, nothing lost
+    long = wrap("a | " + "word " * 40 + "| b", 14, 120.0, " | ")
+    assert long[0] == "a" and long[-1] == "b" and " ".join(long[1:-1]).split() == ["word"] * 40
+    assert len(long) > 3 and all(probe.textlength(line, font=font(14)) <= 120.0 for line in long)

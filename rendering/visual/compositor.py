@@ -315,7 +315,8 @@ class Compositor:
         font_px = self.font_px
         status = None
         if view.status:
-            status = self.text(sum((wrap(line, font_px, w - 16) for line in view.status), ()), font_px)
+            status = self.text(sum((wrap(line, font_px, w - 16, " | ") for line in view.status), ()),
+                               font_px)
         self.status_bottom = 4.0 + (status.size[1] if status is not None else 0.0)
         banner = self._banner(view) if view.banner else None
         self._banner_band = None if banner is None else banner[1]

@@ -29,20 +29,33 @@ def text_rgba(lines: tuple[str, ...], size_px: int, rgb=(255, 255, 255),
 
 
 @lru_cache(maxsize=256)
-def wrap(text: str, size_px: int, width_px: float) -> tuple[str, ...]:
-    """``text`` split into lines no wider than ``width_px`` (words kept whole; remembered:
-    a frame wraps the same status lines as the last)."""
+def wrap(text: str, size_px: int, width_px: float, sep: str = " ") -> tuple[str, ...]:
+    """``text`` split into lines no wider than ``width_px`` px, breaking only at ``sep``
+    (" | " keeps a status line's phrases whole; the separator that ends a line is dropped);
+    a phrase wider than a line alone is broken between its words. Remembered: a frame
+    wraps the same status lines as the last."""
     f = font(size_px)
     probe = ImageDraw.Draw(Image.new("RGBA", (1, 1)))
+
+    def fits(line: str) -> bool:
+        return probe.textlength(line, font=f) <= width_px
+
     lines: list[str] = []
+
+    def put(line: str) -> None:
+        if sep == " " or fits(line):
+            lines.append(line)
+        else:  # one phrase wider than a line: between its words
+            lines.extend(wrap(line, size_px, width_px))
+
     for para in text.splitlines() or [""]:
         line = ""
-        for word in para.split(" "):
-            candidate = f"{line} {word}" if line else word
-            if line and probe.textlength(candidate, font=f) > width_px:
-                lines.append(line)
-                line = word
+        for unit in para.split(sep):
+            candidate = f"{line}{sep}{unit}" if line else unit
+            if line and not fits(candidate):
+                put(line)
+                line = unit
             else:
                 line = candidate
-        lines.append(line)
+        put(line)
     return tuple(lines)
