@@ -159,7 +159,7 @@ def test_trail_only_joins_samples_in_contact():
     t = np.linspace(0, 0.5, 6)
     ov.add(_record(t, 10 + 10 * t, np.full(6, 5.0), [True, True, False, False, True, True]))
     tris = ov.trail_triangles(fit_viewport(DISPLAY, 800, 480))
-    assert tris.shape == (2 * 6, 6)  # segments 0-1 and 4-5 only
+    assert tris.shape == (2 * 2 * 6, 6)  # segments 0-1 and 4-5 only, outline and line
     assert (tris[:, 5] > 0).all() and (tris[:, 5] <= 0.9).all()
 
 

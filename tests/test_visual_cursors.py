@@ -134,3 +134,28 @@ def test_headless_frames_draw_a_lifted_finger_hollow(tmp_path):
     assert_hollow(after, vp.to_px(40.0, 35.0), radius, FINGER_RGB[0])
     for image in (before, after):
         assert_filled(image, vp.to_px(80.0, 45.0), radius, FINGER_RGB[1])
+
+
+def test_a_trail_is_visible_on_a_scene_of_its_own_colour(gl):
+    """Finger 0's blue trail vanished on the blue grating of two-finger-plate-seed001:
+    on a field of the finger's own colour, its dark outline still shows where it ran."""
+    ov = OverlayState(trail_s=1.0)
+    t = np.linspace(0.0, 0.5, 51)
+    x = 10.0 + 100.0 * t
+    ov.add(BlockRecord(t, (0,), np.ones((1, t.size), bool), x[None], np.full((1, t.size), 30.0),
+                       np.ones((1, t.size)), np.zeros((1, t.size))))
+    size = (400, 240)
+    backend = OffscreenBackend(size, ctx=gl)
+    comp = Compositor(gl, grating_scene(5.0, mu_low=1.0), size)
+    backend.use()
+    comp.draw(FrameView(overlay=ov, show_scope=False, field_rgba=(*FINGER_RGB[0], 1.0)))
+    image, vp = backend.read_rgb(), comp.viewport
+    comp.release()
+    backend.close()
+    field = image[5, 5] / 255.0
+    assert near(image[5, 5], FINGER_RGB[0], 0.05)
+    for x_mm in (20.0, 30.0, 40.0):  # along the trail, behind the cursor
+        col, row = (int(v) for v in vp.to_px(x_mm, 30.0))
+        across = image[row - 5:row + 6, col] / 255.0
+        assert np.abs(across - field).max() > 0.25, across
+        assert (np.abs(image[row - 12, col] / 255.0 - field) < 0.02).all()  # and only there

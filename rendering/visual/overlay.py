@@ -29,6 +29,9 @@ FINGER_RGB = ((0.10, 0.60, 1.00), (1.00, 0.45, 0.10), (0.20, 0.80, 0.30),
               (0.85, 0.25, 0.85), (0.95, 0.85, 0.10))
 CURSOR_RADIUS_MM = 4.0  # about a fingertip contact patch
 TRAIL_WIDTH_PX = 2.0
+#: a dark band this wide (px) each side of a trail, as the cursors' halo ring: a trail
+#: stays visible on a scene of its own colour (finger 0's blue on a blue grating)
+TRAIL_OUTLINE_PX, TRAIL_OUTLINE_ALPHA = 1.5, 0.7
 TRAIL_STEP_PX = 1.0  # a trail keeps a vertex per this much of its path (and its breaks)
 SCOPE_LINE_PX = 1.5
 SCOPE_PAD_PX = 4.0  # between a plot's edge and its full scale (or zero) line
@@ -180,7 +183,9 @@ class OverlayState:
 
     def trail_triangles(self, viewport: Viewport) -> np.ndarray:
         """Triangles (k, 6) of x_px, y_px, r, g, b, a for the touching part of each trail,
-        fading out over ``trail_s``; broken where the finger lifted or jumped."""
+        fading out over ``trail_s``; broken where the finger lifted or jumped. Each trail
+        is a dark outline (``TRAIL_OUTLINE_PX`` each side) then its coloured line, in
+        drawing order."""
         parts = []
         for fid, h in self.fingers.items():
             keep = h.t >= self.now_s - self.trail_s
@@ -197,6 +202,10 @@ class OverlayState:
             joined &= (step <= TRAIL_BREAK_MM) | (step <= TRAIL_BREAK_MM_S * np.diff(t))
             points = np.column_stack((px, py))
             kept, joined = thin_polyline(points, joined, TRAIL_STEP_PX)
+            dark = np.zeros_like(rgba[kept])
+            dark[:, 3] = rgba[kept, 3] * (TRAIL_OUTLINE_ALPHA / 0.9)
+            parts.append(segment_triangles(points[kept], dark, TRAIL_WIDTH_PX
+                                           + 2 * TRAIL_OUTLINE_PX, joined))
             parts.append(segment_triangles(points[kept], rgba[kept], TRAIL_WIDTH_PX, joined))
         return np.concatenate(parts) if parts else np.empty((0, 6))
 
