@@ -97,3 +97,18 @@ def test_the_layout_returns_the_column_beside_the_scene_and_above_the_strip(fram
     assert (x + cw, y, cw) == (w, 0.0, min(side_px, w // 2))
     assert ch == (strip[1] if scope else h)
     assert vp.x0 + vp.width_px <= x + 1e-9
+
+
+def test_a_press_touches_the_scene_only_on_its_drawn_area():
+    """A press in the scope strip (y ~75 mm on a 64.8 mm display), in the |W| panel's
+    column or beyond the window is not on the scene; its edges are."""
+    from frictex.rendering.visual.viewport import frame_layout
+    display = load_scene(resolve_scene("two-finger-plate-seed001")).display
+    vp, strip, column = frame_layout(display, 806, 718, True, side_px=240)
+    assert vp.contains_px(vp.x0, vp.y0) and vp.contains_px(vp.x0 + vp.width_px, vp.y0 + vp.height_px)
+    assert vp.contains_px(*vp.to_px(display.width_mm / 2, display.height_mm / 2))
+    outside = [vp.to_px(display.width_mm / 2, 75.0 / 64.8 * display.height_mm),  # the strip
+               (strip[0] + 10.0, strip[1] + 10.0), (column[0] + 10.0, column[1] + 50.0),
+               (-5.0, 100.0), (900.0, 100.0), (100.0, -1.0), (100.0, 800.0)]
+    for px in outside:
+        assert not vp.contains_px(*px), px

@@ -48,6 +48,14 @@ class Viewport:
                 (np.asarray(y_px, dtype=np.float64) - self.y0) / sy)
 
 
+    def contains_px(self, x_px: float, y_px: float) -> bool:
+        """Whether frame pixel coordinates (float, y down) fall on the drawn active area,
+        edges included: where a press may touch the scene (not the scope strip, a panel
+        column, the letterbox, or beyond the window while a drag goes on)."""
+        return (self.x0 <= x_px <= self.x0 + self.width_px
+                and self.y0 <= y_px <= self.y0 + self.height_px)
+
+
 def fit_viewport(display: Display, frame_w: int, frame_h: int) -> Viewport:
     """The largest aspect-preserving placement of ``display``'s active area in a frame."""
     if frame_w < 1 or frame_h < 1:
