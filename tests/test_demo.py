@@ -76,8 +76,18 @@ def focus_window(display) -> str:
     return win
 
 
+def live_folder(rec):
+    """Where a running demo writes its recording ``rec``: its staging folder beside
+    ``rec`` while it runs, ``rec`` itself once it has ended (or for a recording that is
+    not staged)."""
+    staged = sorted(rec.parent.glob(f".{rec.name}.frictex-staging.*"))
+    return staged[0] if staged else rec
+
+
 def events_of(rec, kind):
-    path = rec / "events.csv"
+    path = live_folder(rec) / "events.csv"
+    if not path.exists():  # ended between the two looks
+        path = rec / "events.csv"
     return [e for e in (read_csv(path) if path.exists() else []) if e["event"] == kind]
 
 

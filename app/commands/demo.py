@@ -7,7 +7,17 @@ the main thread (``app.live.demo_loop``). ``--input`` picks the fingers: the mou
 mouse and a follower finger, a TUIO tracker over UDP, or a Linux evdev touch screen
 (read by the haptic side as its samples arrive, not by the window).
 ``--record DIR`` writes what was sent
-(``commands.csv``, ``friction.csv`` as in a replay), ``events.csv`` and ``summary.json``.
+(``commands.csv``, ``friction.csv`` as in a replay), ``events.csv`` and ``summary.json``,
+into a staging folder beside DIR that replaces DIR as a whole when the demo ends
+(``app.engine.staging``, as a replay's ``--out``): a demo that crashes or is killed leaves
+the previous recording as it was; one that replaces a recording says so.
+SIGINT (Ctrl-C), SIGTERM and SIGHUP end the demo as Q does (held as a flag the window's
+loop looks at, never raised inside a window callback: ``app.engine.driver.
+deferred_interrupts``): the plate stopped, the recording committed, the usual last lines,
+then ``frictex: interrupted`` (exit 130) or ``frictex: terminated by SIGTERM`` (128 + the
+signal); a second signal ends it at once.
+N / B skip the playlist's scenes that drive other channels than the link and the
+recording were opened for (``app.live.demo_loop``).
 ``--faults SPEC`` injects link faults on ``--device`` (as ``frictex replay --faults``).
 
 Without a display: ``frictex demo`` says so and exits 2; ``--headless`` (or
@@ -22,11 +32,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
 import threading
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
+from frictex.app.engine.driver import deferred_interrupts
+from frictex.app.engine.staging import FRAMES, Staging
+from frictex.app.engine.summary import finite_json
 from frictex.app.commands.preview import frame_size
 from frictex.app.commands.argtypes import (add_link_arguments, output_rate, positive_float, positive_int,
                                    sim_device_args)
@@ -37,6 +51,10 @@ from frictex.rendering.visual.windows import open_backend
 from frictex.rendering.visual.device_panels import default_frame_size
 from frictex.rendering.visual.viewport import MIN_FRAME
 from frictex.textures.outside import add_allow_outside
+
+#: what a demo writes into ``--record`` (or ``--out``) besides a replay's tables and
+#: summary: the folder is replaced as a whole when the demo ends (``app.engine.staging``)
+DEMO_OUTPUTS = ("events.csv", FRAMES)
 
 def input_option(text: str) -> tuple[str, object]:
     """argparse type for ``--input``: (name, argument) as ``app.live.inputs.parse_input``
@@ -95,7 +113,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "window's GL calls cannot delay it) or a thread of the window's "
                              "process (for debugging; misses deadlines on a software renderer)")
     parser.add_argument("--record", metavar="DIR", default=None,
-                        help="write commands.csv, friction.csv, events.csv and summary.json to DIR")
+                        help="write commands.csv, friction.csv, events.csv and summary.json to "
+                             "DIR (replaced as a whole when the demo ends, as a replay's --out)")
     parser.add_argument("--screenshots", metavar="DIR", default=".",
                         help="folder for screenshots taken with P (default: current folder)")
     parser.add_argument("--duration", type=positive_float, default=None, metavar="S",
@@ -201,14 +220,15 @@ def run(args: argparse.Namespace) -> int:
         return _run(args, headless=True)
 
 
-def _open_window(args, size, scene, headless: bool):
+def _open_window(args, size, scene, headless: bool, record: Path | None):
     """The demo's window (glfw), or with ``headless`` an injected-input one whose frames
-    go to ``--out``/frames; and the frame files (None with a window)."""
+    go to ``record``/frames (--out's staging folder); and the frame files (None with a
+    window)."""
     if not headless:
         return open_backend("glfw", size, title=f"frictex demo: {scene.name}",
                             fullscreen=args.fullscreen, monitor=args.monitor, vsync=False), None
     from frictex.app.live.frame_files import FrameFiles
-    frames = FrameFiles(Path(args.out) / "frames")
+    frames = FrameFiles(record / FRAMES)
     return open_backend("headless", size, on_frame=frames.write), frames
 
 
@@ -216,16 +236,67 @@ def _run(args: argparse.Namespace, headless: bool) -> int:
     """The demo on a window, or ``headless`` on a synthesized stroke (outputs to --out)."""
     from frictex.app.live.inputs import INPUTS
     kind, arg = args.input
-    touch_screen = INPUTS.get(kind).touch_screen
-    if headless and touch_screen:
+    if headless and INPUTS.get(kind).touch_screen:
         raise InputError(f"--input {input_name(kind, arg)}: the headless demo drives the mouse "
                          "with a synthesized stroke and takes no touch screen")
     paths, index = _playlist(args.scene)
     scene = _load(paths[index])
+    out = Path(args.record) if args.record else Path(args.out) if headless else None
+    staging = None if out is None else Staging(out, owned=DEMO_OUTPUTS)
+    if staging is not None:
+        staging.check()
+    with deferred_interrupts() as check:  # a signal held is raised as it ends (exit 128 + n)
+        return _run_demo(args, headless, paths, index, scene, staging, check)
+
+
+def _run_demo(args, headless: bool, paths, index: int, scene, staging, check) -> int:
+    """:func:`_run` with its outputs staged in ``staging`` (or None: no recording) and
+    SIGINT, SIGTERM and SIGHUP held by ``check`` (``deferred_interrupts``): the first
+    ends the demo as Q does (the recording committed), and is raised after its lines."""
+    from frictex.app.live.inputs import INPUTS
+    kind, arg = args.input
+    touch_screen = INPUTS.get(kind).touch_screen
     size = args.size or default_frame_size(scene)
-    record = Path(args.record) if args.record else Path(args.out) if headless else None
+    previous = staging is not None and any(
+        (staging.out / name).exists() for name in ("summary.json", "commands.csv", "events.csv"))
+    record = None if staging is None else staging.begin()
+    try:
+        result = _live(args, headless, paths, index, scene, size, record, touch_screen, check)
+        summary = result.summary
+        if record is not None:
+            if staging.removed:
+                summary["warnings"] = [f"removed the leftovers of killed runs beside "
+                                       f"{staging.out.name}: " + ", ".join(staging.removed)]
+            (record / "summary.json").write_text(json.dumps(finite_json(summary), indent=2,
+                                                            allow_nan=False) + "\n",
+                                                 encoding="utf-8")
+            staging.commit()
+    except BaseException:
+        if staging is not None:
+            staging.abort()
+        raise
+    _print_lines(args, summary, result, None if staging is None else staging.out)
+    if previous:
+        print(f"demo: replaced the previous recording in {staging.out}")
+    return 0
+
+
+@dataclass
+class _Ended:
+    """What a demo's run left for its summary and last lines."""
+
+    summary: dict
+    link: dict
+    frames: object  # FrameFiles (headless) or None
+    hand: object  # SyntheticStroke (headless) or None
+
+
+def _live(args, headless, paths, index, scene, size, record, touch_screen, check) -> _Ended:
+    """Start the haptic side, open the window, run the loop until it ends (Q, the
+    window closed, ``--duration``, a signal held by ``check``), stop both."""
     from frictex.app.live.cpu_steal import StealMeter
     from frictex.app.live.demo_loop import DemoLoop
+    kind, arg = args.input
     # first the haptic side: a bad --input or --device fails before a window opens
     haptic, finish = _start_haptic(args, scene, paths[index], record)
     loop = backend = frames = hand = None
@@ -233,7 +304,7 @@ def _run(args: argparse.Namespace, headless: bool) -> int:
     dropped_records = 0
     steal = StealMeter()
     try:
-        backend, frames = _open_window(args, size, scene, headless)
+        backend, frames = _open_window(args, size, scene, headless, record)
         if args.haptic == "process":  # llvmpipe's threads, started with the window,
             # yield to the child; this thread (input) does not, nor the render thread
             # it starts, which mostly waits on llvmpipe and holds the GIL the input
@@ -251,7 +322,11 @@ def _run(args: argparse.Namespace, headless: bool) -> int:
                                    (scene.display.width_mm, scene.display.height_mm),
                                    lifted=lambda: not loop.fingers_down)
             hand.start()
-        loop.run(args.duration)
+        try:
+            loop.run(args.duration, stop=lambda: bool(check.held))
+        except Exception:
+            if not check.held:  # the output stopped as a signal came (timeout signals
+                raise  # the process group): the signal ends the demo, as it asked
     finally:
         if hand is not None:
             hand.stop()
@@ -266,8 +341,13 @@ def _run(args: argparse.Namespace, headless: bool) -> int:
     summary["haptic"] = args.haptic
     summary["clock_origin_s"] = haptic.t0  # output time 0 on CLOCK_MONOTONIC (time.monotonic)
     summary["cpu_steal_pct"] = steal.percent()
-    if record is not None:
-        (record / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    summary["ended_by"] = signal.Signals(check.held[0]).name if check.held else "window"
+    return _Ended(summary, link, frames, hand)
+
+
+def _print_lines(args, summary: dict, ended: _Ended, out: Path | None) -> None:
+    """The demo's last lines on stdout: blocks, link, input, frames, control."""
+    link, frames, hand = ended.link, ended.frames, ended.hand
     stolen = ("" if summary["cpu_steal_pct"] is None
               else f" (CPU steal by a VM host meanwhile: {summary['cpu_steal_pct']:.0f} %)")
     print(f"demo: {summary['blocks']} blocks ({summary['output_s']:.1f} s of output), "
@@ -285,11 +365,10 @@ def _run(args: argparse.Namespace, headless: bool) -> int:
         cut = (f" (cut at {args.duration:g} s by --duration)"
                if args.duration is not None and args.duration < hand.duration_s else "")
         print(f"demo: headless, a synthesized stroke of {hand.duration_s:g} s{cut} drove the "
-              f"mouse: {frames.count} frames in {frames.folder}; outputs in {record}")
+              f"mouse: {frames.count} frames in {out / FRAMES}; outputs in {out}")
     if summary["control"] is not None:
         from frictex.app.engine.summary import control_line
         print(f"demo: {control_line(summary['control'])}")
-    return 0
 
 
 def _summary(st, block_s: float, loop, dropped_records: int, link) -> dict:

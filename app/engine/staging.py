@@ -94,8 +94,11 @@ def _short(name: str) -> str:
 class Staging:
     """The staging folder of one run into ``out`` (see the module docstring)."""
 
-    def __init__(self, out: str | Path):
+    def __init__(self, out: str | Path, owned: tuple[str, ...] = ()):
         self.out = Path(os.path.realpath(out))  # a link to a folder: that folder
+        #: more names (files or folders) in ``out`` that are this kind of run's own
+        #: outputs, besides a replay's (``frictex demo --record``: ``events.csv``)
+        self.owned = frozenset(owned)
         if self.out.parent == self.out:
             raise InputError(f"{self.out}: the root folder cannot be an output folder (a run "
                              "replaces its output folder as a whole): name a folder of its own")
@@ -131,7 +134,11 @@ class Staging:
     def _foreign(self) -> list[str]:
         """The folders in ``out`` that are not a run's."""
         return sorted(e.name for e in os.scandir(self.out)
-                      if e.is_dir(follow_symlinks=False) and not is_run_output(e))
+                      if e.is_dir(follow_symlinks=False) and not self._own(e))
+
+    def _own(self, entry: os.DirEntry) -> bool:
+        """Whether ``entry`` is a run's output (:func:`is_run_output`, or named in ``owned``)."""
+        return entry.name in self.owned or is_run_output(entry)
 
     def begin(self) -> Path:
         """Clear the leftovers of killed runs, then create the staging folder (with the
@@ -180,7 +187,7 @@ class Staging:
                                 "appeared in it during the run; nothing was replaced (a run "
                                 "replaces its output folder as a whole): move it and run again")
             for entry in os.scandir(self.out):
-                if not entry.is_dir(follow_symlinks=False) and not is_run_output(entry):
+                if not entry.is_dir(follow_symlinks=False) and not self._own(entry):
                     _carry(Path(entry.path), self.folder / entry.name)
             if _exchange(self.folder, self.out):
                 old = self.folder
@@ -204,7 +211,7 @@ class Staging:
         left = []
         for entry in os.scandir(old):
             path = Path(entry.path)
-            if is_run_output(entry) or _same_file(path, self.out / entry.name):
+            if self._own(entry) or _same_file(path, self.out / entry.name):
                 if entry.is_dir(follow_symlinks=False):
                     shutil.rmtree(path)
                 else:

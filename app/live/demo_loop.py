@@ -75,7 +75,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from frictex.app.live.haptic_thread import EVENTS
+from frictex.app.live.haptic_thread import EVENTS, ChannelMismatch
 from frictex.app.live.layer_edit import EditError, LayerEdit, SaveConflict, panel_view
 from frictex.app.live.watch import FileWatch
 from frictex.device.safe_text import escape
@@ -130,6 +130,28 @@ def next_screenshot(folder: Path, stem: str):
             return path, open(path, "xb")
         except FileExistsError:
             n += 1
+
+
+def skip_note(skipped: list) -> str:
+    """One line on the scenes ``skipped`` by N / B (a ``ChannelMismatch`` each)."""
+    groups: dict[str, list[str]] = {}
+    for exc in skipped:
+        groups.setdefault(exc.wants, []).append(exc.scene)
+    which = "; ".join(f"{', '.join(names)} (channels {wants})" for wants, names in groups.items())
+    return (f"skipped {len(skipped)} scene{'s' * (len(skipped) != 1)} the link and recording, "
+            f"opened for {skipped[0].opened}, cannot play: {which}; start the demo on one to "
+            "play it")
+
+
+def starved(link: dict) -> str:
+    """What a device link's status (``sink.status()``) says the device did not play so
+    far, for the status line: ", 7.6 % unplayed, 3 underruns", each part only when
+    non-zero; "" without a device."""
+    commanded, unplayed = link.get("commanded_samples") or 0, link.get("unplayed_samples") or 0
+    said = f", {100.0 * unplayed / commanded:.1f} % unplayed" if commanded and unplayed else ""
+    if underruns := link.get("underruns") or 0:
+        said += f", {underruns} underrun{'s' * (underruns != 1)}"
+    return said
 
 
 class HapticStopped(OSError):
@@ -191,6 +213,8 @@ class DemoLoop:
         self._next_poll = 0.0
         self._missing_since: float | None = None  # when the texture file went missing (s)
         self._keys: queue.SimpleQueue = queue.SimpleQueue()  # for the render thread
+        #: the playlist's scenes the open link and recording cannot play (path: why)
+        self.unplayable: dict[Path, ChannelMismatch] = {}
         #: the layer panel: its editor, the menu open, its note (render thread); the
         #: slider being dragged and the drags so far (input thread); panel events
         #: (input -> render thread): ("click", row) | ("slide", row, fraction, drag) | ("end",)
@@ -379,7 +403,7 @@ class DemoLoop:
         """A key that changes what is drawn (on the thread holding the GL context)."""
         if name in ("n", "b", "tab", "page_down", "page_up"):
             step = -1 if name in ("b", "page_up") or (name == "tab" and shift) else 1
-            self.select((self.index + step) % len(self.playlist))
+            self.step_scene(step)
         elif name == "r":
             nxt = RENDERER_CYCLE[(RENDERER_CYCLE.index(self.renderer) + 1) % len(RENDERER_CYCLE)]
             self._apply(self.scene, nxt, "renderer", nxt or "file")
@@ -522,15 +546,19 @@ class DemoLoop:
 
     # -- scenes -------------------------------------------------------------------------
 
-    def _apply(self, scene, renderer, event: str, detail: str, text: str | None = None) -> bool:
+    def _apply(self, scene, renderer, event: str, detail: str, text: str | None = None,
+               passes: tuple = ()) -> bool:
         """Hand ``scene`` with ``renderer`` to the haptic thread and redraw; on error keep
         the current one and show why. ``text``: the text ``scene`` was read from, when it
-        is not its file's (the layer panel's edit)."""
+        is not its file's (the layer panel's edit); ``passes``: exceptions raised to the
+        caller instead."""
         try:
             if text is None:
                 pipeline = self.haptic.switch(scene, renderer)
             else:
                 pipeline = self.haptic.switch(scene, renderer, text=text)
+        except passes:
+            raise
         except (ValueError, OSError, ModuleNotFoundError) as exc:
             self.error = f"{event} failed (keeping {self.scene.name}, {self.renderer or 'file'}): {exc}"
             self.log(f"{event}-failed", str(exc))
@@ -545,7 +573,37 @@ class DemoLoop:
         self.scene, self.renderer, self.error = scene, renderer, None
         return True
 
-    def select(self, index: int) -> None:
+    def step_scene(self, step: int) -> None:
+        """N (``step`` 1) or B (-1): the next scene of the playlist that the open link and
+        recording can play. Those that drive other channels (``ChannelMismatch``) are
+        skipped, said once on stderr and on screen, and skipped silently from then on;
+        if no other scene fits, that is said instead."""
+        n, skipped = len(self.playlist), []
+        for k in range(1, n):
+            index = (self.index + step * k) % n
+            if self.playlist[index] in self.unplayable:
+                continue
+            try:
+                self.select(index, passes=(ChannelMismatch,))
+            except ChannelMismatch as exc:
+                self.unplayable[self.playlist[index]] = exc
+                skipped.append(exc)
+                self.log("scene-skipped", str(exc))
+                continue
+            break
+        else:
+            if self.unplayable:
+                opened = next(iter(self.unplayable.values())).opened
+                self.error = (f"no other scene of the playlist plays on the link and recording "
+                              f"opened for {opened}: start the demo on another scene to play it")
+        if skipped:
+            note = skip_note(skipped)
+            self.say(note)
+            if self.error is None:
+                self.error = note
+
+    def select(self, index: int, passes: tuple = ()) -> None:
+        """Switch to the playlist's scene ``index`` (``passes``: as :meth:`_apply`)."""
         path = self.playlist[index]
         try:
             scene = self.load(path)
@@ -553,7 +611,7 @@ class DemoLoop:
             self.error = f"cannot load {path.name} (keeping {self.scene.name}): {exc}"
             self.log("load-failed", str(exc))
             return
-        if self._apply(scene, self.renderer, "scene", scene.name):
+        if self._apply(scene, self.renderer, "scene", scene.name, passes=passes):
             self.index = index
             self.files, self._missing_since = FileWatch(), None
             self._watch(path)
@@ -720,7 +778,8 @@ class DemoLoop:
         state = link.get("state", self.link_name)
         frames = f", {link['frames_sent']} frames sent" if "frames_sent" in link else ""
         first = (f"{self.scene.name} ({self.index + 1}/{len(self.playlist)}) | renderer: "
-                 f"{self.renderer or 'file'} | force {self.force_n:.2f} N | link: {state}{frames} | "
+                 f"{self.renderer or 'file'} | force {self.force_n:.2f} N | link: {state}{frames}"
+                 f"{starved(link)} | "
                  f"clamps {st.get('clamps', 0)} | deadline misses {st.get('deadline_misses', 0)}")
         fingers = len(self.overlay.current())
         touch = ("drag: touch" if self.follow_mm is None
@@ -767,9 +826,11 @@ class DemoLoop:
             self.log("first-frame", self.scene.name)
         self.frames += 1
 
-    def run(self, duration_s: float | None = None, clock=time.perf_counter) -> None:
+    def run(self, duration_s: float | None = None, clock=time.perf_counter, stop=None) -> None:
         """Pump input on this thread and draw on a render thread until the window
-        closes, Q, ``duration_s`` (s on ``clock``) or a failure (raised here)."""
+        closes, Q, ``duration_s`` (s on ``clock``), ``stop()`` is true (looked at after
+        each wait for events: a signal held as a flag, never raised in a window
+        callback) or a failure (raised here)."""
         start = clock()
         self.backend.release_context()
         renderer = threading.Thread(target=self._render, args=(clock,), name="frictex-render",
@@ -778,6 +839,8 @@ class DemoLoop:
         try:
             while not (self.quit or self.backend.should_close or self.render_error is not None):
                 if duration_s is not None and clock() - start >= duration_s:
+                    break
+                if stop is not None and stop():
                     break
                 self.backend.wait_events(STILL_REPORT_S if self.touching else INPUT_WAKE_S)
                 self.flush_mouse()

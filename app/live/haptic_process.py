@@ -24,14 +24,15 @@ The child never outlives the window's process (:func:`die_with_parent`). Two wat
 tell it the parent died, however: the kernel's parent-death signal (Linux
 ``prctl(PR_SET_PDEATHSIG, SIGTERM)``; sent when the thread that started the child
 ends, so a :class:`HapticProcess` is made on a thread that lives as long as the window,
-the demo's main thread; a SIGTERM while the parent lives ends the child as it always
-did) and a thread waiting on the parent's end of the pipe ``multiprocessing`` leaves
+the demo's main thread; a SIGTERM while the parent lives stops the child cleanly, as a
+stop request does, and the window is told its output stopped) and a thread waiting on the parent's end of the pipe ``multiprocessing`` leaves
 the child (readable when the parent's process is gone, on any system). Either one
 stops the queues the child writes from flushing at exit (the child holds both ends of
 their pipes: with no reader left, a full pipe held its exit for good: 25 minutes and
 more after the window died) and arms a hard exit ``PARENT_GONE_EXIT_S`` later; in
 between, the bridge loop sees the parent gone and shuts down as when asked (the link
-closed, the recording committed).
+closed, the recording committed). The child ignores SIGINT and SIGHUP, which a
+terminal sends the whole process group: the window's process ends the demo on them.
 
 Both processes stamp with ``time.perf_counter`` (on Linux CLOCK_MONOTONIC, one clock for
 the whole machine), so the window's ``now()`` is the child's output clock.
@@ -53,8 +54,9 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from frictex.app.live.haptic_thread import (COMMAND_QUEUE, SNAPSHOT_QUEUE, TOUCH_QUEUE, HapticStats,
-                               TouchInput, shorten_switch_interval)
+from frictex.app.live.haptic_thread import (COMMAND_QUEUE, SNAPSHOT_QUEUE, TOUCH_QUEUE,
+                                           ChannelMismatch, HapticStats, TouchInput,
+                                           shorten_switch_interval)
 from frictex.device.actuation.factory import make_actuation
 
 WINDOW_NICE = 10  # how much lower than the haptic child the window's threads run
@@ -167,7 +169,7 @@ class HapticProcess(TouchInput):
         ``HapticThread.switch``: the child loads ``scene.source`` (read as ``text`` if
         given: the layer panel's edit, not saved) and builds it (the window waits for its
         answer, the haptic output does not); errors raise ValueError with the child's
-        message, and nothing changes."""
+        message (a scene for other channels: ``ChannelMismatch``), and nothing changes."""
         override = self.render_override if render_override is False else render_override
         new = scene is not None and scene is not self.scene
         if new and scene.source is None:
@@ -176,8 +178,10 @@ class HapticProcess(TouchInput):
         self._requests.put(("switch", str(scene.source) if new else None, override,
                             text if new else None), timeout=SWITCH_TIMEOUT_S)
         reply = self._wait("switched", SWITCH_TIMEOUT_S)
+        if isinstance(reply[1], ChannelMismatch):
+            raise reply[1]
         if reply[1] is not None:
-            raise ValueError(reply[1])
+            raise ValueError(str(reply[1]))
         if new:
             self.scene = scene
             self.pipeline = PipelineInfo(reply[2], make_actuation(scene.device))
@@ -197,6 +201,9 @@ class HapticProcess(TouchInput):
         self._proc.join(timeout=2.0)
         if self._proc.is_alive():
             self._proc.terminate()
+            self._proc.join(timeout=2.0)
+        if self._proc.is_alive():  # its SIGTERM is a stop request, which it did not take
+            self._proc.kill()
             self._proc.join()
         for q in (self.touches, self.snapshots, self._requests, self._replies):
             q.cancel_join_thread()  # a full queue must not hold the window at exit
@@ -275,6 +282,7 @@ class _ParentWatch:
         self.outgoing = outgoing
         self.exit_after_s = exit_after_s
         self.gone = threading.Event()
+        self.terminated = threading.Event()  # a SIGTERM while the parent lives
         self._lock = threading.Lock()
 
     def parent_gone(self, *_signal) -> None:
@@ -306,18 +314,25 @@ def _set_parent_death_signal(signum: int) -> bool:
 def die_with_parent(outgoing, exit_after_s: float = PARENT_GONE_EXIT_S) -> _ParentWatch:
     """Make this (child) process end when its parent does: see the module docstring.
     ``outgoing``: the ``multiprocessing`` queues this process writes to. Call it from
-    the main thread, first thing (the SIGTERM handler is installed there)."""
+    the main thread, first thing (the signal handlers are installed there).
+
+    Ctrl-C and a closed terminal reach the whole process group: the child ignores
+    SIGINT and SIGHUP, and the window's process, which ends the demo on them, stops it
+    as on Q. A SIGTERM while the parent lives (``timeout`` signals the group) is a stop
+    request (``watch.terminated``): the child closes the link and commits the recording
+    and says so to the window."""
     watch = _ParentWatch(tuple(outgoing), exit_after_s)
     parent = mp.parent_process()
 
     def on_sigterm(signum, _frame):
         if parent is not None and not parent.is_alive():
             watch.parent_gone()
-        else:  # the parent's own terminate(): end as SIGTERM always did
-            signal.signal(signum, signal.SIG_DFL)
-            os.kill(os.getpid(), signum)
-    if _set_parent_death_signal(signal.SIGTERM):
-        signal.signal(signal.SIGTERM, on_sigterm)
+        else:
+            watch.terminated.set()
+    for held in (signal.SIGINT, signal.SIGHUP):
+        signal.signal(held, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, on_sigterm)
+    _set_parent_death_signal(signal.SIGTERM)
     if parent is not None:
         def wait_for_parent():
             mp_connection.wait([parent.sentinel])
@@ -354,7 +369,8 @@ def serve(config: HapticConfig, estop, touches, snapshots, requests, replies,
     haptic.start()
     replies.put(("ready", haptic.t0, haptic.pipeline.channels))
     try:
-        while haptic.error is None and not watch.gone.is_set():
+        while (haptic.error is None and not watch.gone.is_set()
+               and not watch.terminated.is_set()):
             if (failure := haptic.input_error()) is not None:
                 replies.put(("input-failed", failure))
             try:
@@ -366,6 +382,9 @@ def serve(config: HapticConfig, estop, touches, snapshots, requests, replies,
             replies.put(("switched", *_switch(haptic, load_scene, *request[1:])))
         if haptic.error is not None:
             replies.put(("error", _sendable(haptic.error)))
+        elif watch.terminated.is_set():
+            replies.put(("error", HapticProcessError("the haptic process was terminated "
+                                                     "(SIGTERM); its output stopped")))
     finally:
         link, dropped_records = finish()
         if not watch.gone.is_set():
@@ -383,11 +402,13 @@ def _sendable(exc: BaseException) -> BaseException:
 
 
 def _switch(haptic, load_scene, path: str | None, override, text: str | None) -> tuple:
-    """(error message or None, the pipeline's channels) of switching ``haptic`` to the
+    """(error message, a ``ChannelMismatch``, or None; the pipeline's channels) of switching ``haptic`` to the
     scene in the file at ``path`` (read as ``text`` if given) with ``override``."""
     try:
         scene = None if path is None else load_scene(path, text=text)
         pipeline = haptic.switch(scene, override)
+    except ChannelMismatch as exc:  # the window skips such a scene
+        return exc, None
     except (ValueError, OSError, ModuleNotFoundError) as exc:
         return str(exc), None
     gc.freeze()  # as at the start

@@ -19,7 +19,9 @@ queue drops the oldest snapshot (counted).
 Changes between blocks ramp across one block (STYLE.md 5): a scene or renderer switch
 crossfades the old pipeline's commands into the new one's (the new pipeline takes over
 the old one's finger tracks), resuming after an emergency stop ramps from 0. The
-emergency stop itself is immediate: while it is set every sample sent is 0 um. Each
+emergency stop itself is immediate: while it is set every sample sent is 0 um, and the
+amplitude under each finger the output reports (friction.csv, the scope) is the 0 um sent
+(a ramp scales it as it scales the commands). Each
 stop, resume and switch as it took effect on the output is kept in ``stats.applied``
 (output time of its first block, kind, detail) and the latest reach the window with
 every snapshot, so the demo logs when the output changed, not when a key was pressed.
@@ -117,6 +119,20 @@ class HapticStats:
     input: dict = field(default_factory=dict)
 
 
+class ChannelMismatch(ValueError):
+    """A scene that drives other channels than the link and the recording were opened for
+    (``wants``, ``opened``: the channels with the device profile, as text): the demo
+    cannot switch to it without reopening them."""
+
+    def __init__(self, scene: str, wants: str, opened: str):
+        super().__init__(f"{scene} drives channels {wants}; the link and recording were opened "
+                         f"for {opened}: start the demo on that scene instead")
+        self.scene, self.wants, self.opened = scene, wants, opened
+
+    def __reduce__(self):  # sent from the haptic process to the window's
+        return type(self), (self.scene, self.wants, self.opened)
+
+
 class TouchInput:
     """The window's side of the touch queue: ``now()``, ``touch``, ``touch_at``.
 
@@ -184,12 +200,14 @@ class LiveStage:
         was_stopped, self.stopped = self.stopped, self.estop.is_set()
         if self.stopped != was_stopped:
             self.stats.applied.append((t, "output-stop" if self.stopped else "output-resume", ""))
-        if self.stopped:
+        if self.stopped:  # the output (the recording, the scope) shows the 0 um sent
             commands = np.zeros_like(commands)
+            out = replace(out, amplitude_um=np.zeros_like(out.amplitude_um))
             played = 0.0
         elif self._gain < 1.0:
             ramp = np.linspace(self._gain, 1.0, commands.shape[0] + 1)[1:]
             commands = commands * ramp[:, None]
+            out = replace(out, amplitude_um=out.amplitude_um * ramp)
             played = ramp if played is None else played * ramp
             self.stats.ramps += 1
         self._gain = 0.0 if self.stopped else 1.0
@@ -235,6 +253,12 @@ class LiveStage:
         self.stats.ramps += 1
         before = old_out.commands_um * (1.0 - fade) if same_device else 0.0
         return out, before + out.commands_um * fade, fade[:, 0]
+
+
+def _layout(pipeline) -> str:
+    """A pipeline's channels and device profile, as :class:`ChannelMismatch` says them."""
+    phases = ", with phases" if pipeline.actuation.has_phases else ""
+    return f"{', '.join(pipeline.channels)} ({pipeline.scene.device.profile}{phases})"
 
 
 class SnapshotSink:
@@ -343,10 +367,7 @@ class HapticThread(TouchInput, threading.Thread):
         if ((self.sink is not None or self.recorder is not None)
                 and (pipeline.channels, pipeline.actuation.has_phases)
                 != (old.channels, old.actuation.has_phases)):
-            raise ValueError(f"{pipeline.scene.name} drives channels {', '.join(pipeline.channels)} "
-                             f"({pipeline.scene.device.profile}); the link and recording were opened "
-                             f"for {', '.join(old.channels)} ({old.scene.device.profile}): start "
-                             "the demo on that scene instead")
+            raise ChannelMismatch(pipeline.scene.name, _layout(pipeline), _layout(old))
         self.stage.changes.put_nowait((pipeline, override))
         self.render_override = override
         return pipeline
