@@ -5,11 +5,13 @@ sleeping advances it, and touch samples are fed when it reaches their times, so 
 result is the same however busy the machine is.
 """
 
+import pickle
+
 import numpy as np
 import pytest
 
 from frictex.app.engine.sources import QueueSource
-from frictex.app.live.haptic_thread import HapticThread
+from frictex.app.live.haptic_thread import ChannelMismatch, HapticThread
 from frictex.textures.library import resolve_scene
 from frictex.textures.loader import load_scene
 
@@ -125,6 +127,10 @@ def test_emergency_stop_is_immediate_and_resumes_by_a_ramp():
     cmd = np.concatenate(collect.commands)[:, 0]
     stopped = (t >= 0.3 + 0.005) & (t < 0.5)
     assert stopped.sum() > 1000 and (cmd[stopped] == 0.0).all()
+    # the recording's amplitude under the finger is the 0 um sent, not what the
+    # pipeline would have played (it was up to 1.51 um)
+    amplitude = np.concatenate([o.amplitude_um.max(axis=0) for o in collect.outs])
+    assert amplitude[~stopped & (t < 0.3)].max() > 0.5 and (amplitude[stopped] == 0.0).all()
     after = np.flatnonzero(t >= 0.5)[:60]
     assert cmd[after[-1]] > 0.5  # the finger is on a slippery line: well above 0
     # a ramp across one block, not a step: each sample moves about 1/25 of the way
@@ -152,9 +158,13 @@ def test_switch_to_another_device_is_refused_while_recording():
     plate = load_scene(resolve_scene("grating-5mm"))
     beam = load_scene(resolve_scene("two-finger-beam-seed000"))
     thread = HapticThread(plate, recorder=Collect())
-    with pytest.raises(ValueError, match=r"two-finger-beam-seed000 drives channels xA, xB .*"
-                                         r"opened for ch0 \(plate-seed003\)"):
+    with pytest.raises(ChannelMismatch, match=r"two-finger-beam-seed000 drives channels xA, xB .*"
+                                              r"opened for ch0 \(plate-seed003\)") as refused:
         thread.switch(beam)
+    # it reaches the window's process whole (the haptic process pickles it)
+    again = pickle.loads(pickle.dumps(refused.value))
+    assert isinstance(again, ValueError) and str(again) == str(refused.value)
+    assert (again.scene, again.opened) == ("two-finger-beam-seed000", "ch0 (plate-seed003)")
     assert thread.stage.changes.empty()
     free = HapticThread(plate)
     assert free.switch(beam).channels == ("xA", "xB")

@@ -10,7 +10,7 @@ import time
 import numpy as np
 import pytest
 
-from frictex.app.live.demo_loop import DemoLoop, HapticStopped, next_screenshot
+from frictex.app.live.demo_loop import DemoLoop, HapticStopped, next_screenshot, starved
 from frictex.app.live.haptic_thread import HapticThread
 from frictex.device.link.host import LinkStalled
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP
@@ -290,3 +290,61 @@ def test_the_window_title_names_the_scene_and_follows_a_switch(gl, tmp_path):
     finally:
         loop.close()
         window.close()
+
+
+def test_n_and_b_skip_the_scenes_the_open_recording_cannot_play(gl, tmp_path, capsys):
+    """With a recording (or a link) open for one plate, N and B move to the next scene
+    that drives the same channels; those skipped are said once, on stderr and on
+    screen, and skipped silently afterwards."""
+    scene = load_scene(resolve_scene("grating-5mm"))
+    window = ScriptedWindow(gl)
+    haptic = HapticThread(scene, recorder=object())  # never started: only switch() runs
+    names = ["grating-5mm", "two-finger-beam-seed000", "grating-15mm", "keyclick-ring"]
+    loop = DemoLoop(window, haptic, [resolve_scene(n) for n in names], 0, scene, load_scene,
+                    tmp_path)
+    try:
+        loop.step_scene(1)
+        assert (loop.index, loop.scene.name) == (2, "grating-15mm")
+        said = capsys.readouterr().err.splitlines()
+        assert len(said) == 1 and "skipped 1 scene" in said[0]
+        assert "two-finger-beam-seed000 (channels xA, xB (beam-seed000" in said[0]
+        assert "opened for ch0 (plate-seed003)" in said[0] and loop.error in said[0]
+        loop.step_scene(1)  # past the ring, back to the first
+        assert loop.index == 0 and "keyclick-ring (channels mode_sym" in capsys.readouterr().err
+        loop.step_scene(-1)  # B: past the ring again, silently
+        assert loop.index == 2 and capsys.readouterr().err == "" and loop.error is None
+        assert sorted(p.stem for p in loop.unplayable) == ["keyclick-ring", "two-finger-beam-seed000"]
+    finally:
+        loop.close()
+        window.close()
+
+
+def test_when_no_other_scene_fits_n_says_so_and_stays(gl, tmp_path, capsys):
+    scene = load_scene(resolve_scene("grating-5mm"))
+    window = ScriptedWindow(gl)
+    haptic = HapticThread(scene, recorder=object())
+    playlist = [resolve_scene("grating-5mm"), resolve_scene("two-finger-beam-seed000")]
+    loop = DemoLoop(window, haptic, playlist, 0, scene, load_scene, tmp_path)
+    try:
+        for _ in range(2):
+            loop.step_scene(1)
+            assert (loop.index, loop.scene.name) == (0, "grating-5mm")
+            assert loop.error.startswith("no other scene of the playlist plays on the link and "
+                                         "recording opened for ch0 (plate-seed003)")
+        assert capsys.readouterr().err.count("skipped 1 scene") == 1
+    finally:
+        loop.close()
+        window.close()
+
+
+@pytest.mark.parametrize("link, said", [
+    ({"state": "none"}, ""),
+    ({"commanded_samples": 0, "unplayed_samples": 0, "underruns": None}, ""),
+    ({"commanded_samples": 2000, "unplayed_samples": 0, "underruns": 0}, ""),
+    ({"commanded_samples": 2000, "unplayed_samples": 152, "underruns": 0}, ", 7.6 % unplayed"),
+    ({"commanded_samples": 2000, "unplayed_samples": 152, "underruns": 3},
+     ", 7.6 % unplayed, 3 underruns"),
+    ({"commanded_samples": 2000, "unplayed_samples": 0, "underruns": 1}, ", 1 underrun"),
+])
+def test_the_status_line_shows_what_the_device_did_not_play(link, said):
+    assert starved(link) == said

@@ -195,7 +195,7 @@ class HapticProcess(TouchInput):
         if self._proc.is_alive() and not self._done:
             try:
                 self._requests.put(("stop",), timeout=1.0)
-                self._wait("done", STOP_TIMEOUT_S)
+                self._wait("done", STOP_TIMEOUT_S, past_errors=True)
             except (HapticProcessError, queue.Full):
                 pass  # it hung or died: terminated below, and said so
         self._proc.join(timeout=2.0)
@@ -212,14 +212,16 @@ class HapticProcess(TouchInput):
             raise HapticProcessError(f"haptic process ended (exit code {self._proc.exitcode}) "
                                      "without reporting its stats and link status")
 
-    def _wait(self, kind: str, timeout_s: float) -> tuple:
-        """The child's next reply of ``kind`` (or its failure); other replies are noted."""
+    def _wait(self, kind: str, timeout_s: float, past_errors: bool = False) -> tuple:
+        """The child's next reply of ``kind`` (or its failure; ``past_errors``: wait on
+        past a failure it reported, as it still reports its stats when it stops); other
+        replies are noted."""
         deadline = time.monotonic() + timeout_s
         while True:
             reply = self._poll(min(0.1, max(deadline - time.monotonic(), 0.0)), want=kind)
             if reply is not None:
                 return reply
-            if self._error is not None:
+            if self._error is not None and not past_errors:
                 raise HapticProcessError(f"haptic process failed: {self._error}")
             if not self._proc.is_alive() and self._replies.empty():
                 raise HapticProcessError(f"haptic process exited with code {self._proc.exitcode} "
