@@ -27,7 +27,8 @@ along x (seed 001's way of testing two-finger control with one hand); a touch sc
 (TUIO, evdev) is read by the haptic side itself (``app.live.touch_pump``), not here:
 the mouse then only hovers, and a touch screen that fails is shown and the mouse
 takes over. The wheel or up/down set the normal force of every finger. Keys: N / B
-next / previous scene, R cycles the renderer (as the file says, then each of ``render_modes()``), S
+next / previous scene (with a link or a recording open, those driving other channels
+are skipped: said once on stderr and on screen, :meth:`DemoLoop.step_scene`), R cycles the renderer (as the file says, then each of ``render_modes()``), S
 scope, O outlines, P screenshot (numbered after those already in the folder, never
 overwriting one), SPACE emergency stop (latched; SPACE again resumes, ramped), Q /
 Escape quit.
