@@ -21,16 +21,18 @@ from test_demo import wait_event
 pytest.importorskip("glfw", reason="glfw (Python package) not installed")
 
 
-def start(display, rec, *args):
+def start(display, rec, *args, group=False):
     """``frictex demo grating-5mm --record rec`` on ``display``, with SIGINT as a
-    terminal gives it (a test's child may inherit it ignored); stderr to a file."""
+    terminal gives it (a test's child may inherit it ignored); stderr to a file.
+    ``group``: in a process group of its own (signalled as a terminal or ``timeout``
+    signals it, its haptic process and simulated device too)."""
     err = rec.parent / f"{rec.name}-stderr.txt"
     with open(err, "w") as fh:
         proc = subprocess.Popen(
             [sys.executable, "-u", "-m", "frictex", "demo", "grating-5mm", "--record", str(rec),
              "--duration", "300", *args],
             env={**os.environ, "DISPLAY": display}, stdout=subprocess.PIPE, stderr=fh, text=True,
-            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+            start_new_session=group, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     proc.stderr_path = err
     return proc
 
@@ -64,16 +66,21 @@ def wait_staged_frame(proc, rec, leftovers=()):
         time.sleep(0.02)
 
 
-@pytest.mark.parametrize("signum, said, device", [
-    (signal.SIGTERM, "frictex: terminated by SIGTERM", ("--device", "sim")),
-    (signal.SIGINT, "frictex: interrupted", ()),
-    (signal.SIGHUP, "frictex: terminated by SIGHUP", ()),
+@pytest.mark.parametrize("signum, said, device, group", [
+    (signal.SIGTERM, "frictex: terminated by SIGTERM", ("--device", "sim"), False),
+    (signal.SIGINT, "frictex: interrupted", (), False),
+    (signal.SIGHUP, "frictex: terminated by SIGHUP", (), False),
+    (signal.SIGTERM, "frictex: terminated by SIGTERM", ("--device", "sim"), True),
+    (signal.SIGINT, "frictex: interrupted", ("--device", "sim"), True),
 ])
-def test_a_signal_ends_the_demo_as_q_does(xvfb_display, tmp_path, signum, said, device):
+def test_a_signal_ends_the_demo_as_q_does(xvfb_display, tmp_path, signum, said, device, group):
     rec = tmp_path / "rec"
-    proc = start(xvfb_display, rec, *device)
+    proc = start(xvfb_display, rec, *device, group=group)
     wait_event(proc, rec, "first-frame")
-    proc.send_signal(signum)
+    if group:
+        os.killpg(proc.pid, signum)
+    else:
+        proc.send_signal(signum)
     code, out, err = ended(proc)
     assert code == 128 + signum, err
     assert err.splitlines().count(said) == 1 and err.rstrip().endswith(said), err
