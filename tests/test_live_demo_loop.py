@@ -155,6 +155,41 @@ def test_a_late_batch_is_spread_over_the_time_it_covers(gl, tmp_path):
     np.testing.assert_allclose([q[0] for q in got[::2]], [0.04, 0.08, 0.12, 0.16, 0.2])
 
 
+def test_a_press_off_the_scene_touches_nothing_and_a_drag_off_it_lifts(gl, tmp_path):
+    """The scope strip, a panel column or beyond the window is no place to touch: a press
+    there makes no finger, and a drag that leaves the scene lifts where it last was on it
+    (X goes on reporting the pointer beyond the window while the button is held)."""
+    scene = load_scene(resolve_scene("grating-5mm"))
+    window = ScriptedWindow(gl)
+    haptic = HapticThread(scene)
+    loop = DemoLoop(window, haptic, [resolve_scene("grating-5mm")], 0, scene, load_scene, tmp_path)
+    view = loop.compositor.viewport
+    below = view.y0 + view.height_px + 5.0  # the scope strip, under the scene
+    try:
+        loop.on_cursor(100.0, below)
+        loop.on_button(True)
+        loop.on_cursor(120.0, below)
+        loop.on_button(False)
+        loop.flush_mouse()
+        assert haptic.touches.empty()
+        loop.on_cursor(100.0, 240.0)
+        loop.on_button(True)
+        loop.on_cursor(140.0, 240.0)
+        loop.on_cursor(160.0, below)
+        loop.on_cursor(-50.0, below)
+        loop.flush_mouse()
+        got = [haptic.touches.get_nowait()[0] for _ in range(haptic.touches.qsize())]
+        assert [(round(g[2] * PX_PER_MM, 6), g[5]) for g in got] == [
+            (100.0, DOWN), (140.0, MOVE), (140.0, UP)]
+        assert not loop.touching
+        loop.on_button(False)  # released beyond the window: nothing more
+        loop.flush_mouse()
+        assert haptic.touches.empty()
+    finally:
+        loop.close()
+        window.close()
+
+
 def test_force_changes_while_still_make_a_sample_and_reach_a_touch_screen(gl, tmp_path):
     scene = load_scene(resolve_scene("grating-5mm"))
     window = ScriptedWindow(gl)

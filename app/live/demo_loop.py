@@ -19,7 +19,9 @@ screenshot) are queued to it. On Mesa's llvmpipe under load a frame took 100-870
 the input thread waits meanwhile in the window system, without the GIL, and runs as
 soon as an event comes. Events handled together (the input thread was held up) keep
 their order and path, stamped evenly over the time they arrived in (``flush_mouse``);
-a pointer held still while touching is reported still every ``STILL_REPORT_S``.
+a pointer held still while touching is reported still every ``STILL_REPORT_S``. Only
+the scene's drawn area touches: a press on the scope strip, a panel column or the
+letterbox makes no finger, and a drag that leaves the area lifts where it last was on it.
 
 Touch input (``--input``): ``mouse``, the mouse is finger 0 (left button held =
 touching); ``follow``, the mouse is finger 0 and finger 1 follows it at a fixed offset
@@ -353,13 +355,23 @@ class DemoLoop:
         if self.touch_screen:
             return  # a touch screen drives the fingers; its emulated mouse must not add one
         samples, touching = [], self.touching
+        inside = self.compositor.viewport.contains_px
+        last_in = self._sent[0] if self._sent is not None else None  # last place touched
         for pressed, px in pending:
             if pressed is None:
-                if touching:
+                if touching and inside(*px):
                     samples.append(("move", px))
-            elif pressed != touching:
-                touching = pressed
-                samples.append(("down" if pressed else "up", px))
+                    last_in = px
+                elif touching:  # dragged off the scene (the scope, a panel, the window's edge)
+                    touching = False
+                    samples.append(("up", last_in))
+            elif pressed and not touching and inside(*px):  # off the scene: no finger
+                touching = True
+                samples.append(("down", px))
+                last_in = px
+            elif not pressed and touching:
+                touching = False
+                samples.append(("up", px if inside(*px) else last_in))
         if touching:
             samples.append(("move", self.hover_px))  # the last position, at the force set now
         self.touching = touching
