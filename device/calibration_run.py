@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from frictex.device.errors import DeviceError
+from frictex.device.friction import MIN_NORMAL_N
 from frictex.device.link.host import LinkStalled
 
 #: samples per block sent (5 ms at 10 kHz)
@@ -34,8 +35,6 @@ BLOCK_SAMPLES = 50
 #: how long (s) a step's reports may take beyond the time the device needs to play what
 #: is queued before it
 REPORT_WAIT_S = 2.0
-#: smallest normal force (N) a finger on the plate gives
-MIN_NORMAL_N = 0.05
 #: least share of a step's kept samples its reports must cover
 MIN_COVERED = 0.8
 #: samples the device's reports must have gone past a step before the ones it lacks are

@@ -52,6 +52,11 @@ import numpy as np
 from frictex.device.jit import njit
 from frictex.device.profile import Calibration, DeviceProfile, FrictionParams
 
+#: a finger touching with a normal force below this (N) is not pressing: seed 003's plate
+#: reads a finger at 0.3-0.75 N (``report_closed_loop.population_slopes``); the closed
+#: loop, calibration and a trace's force check share it
+MIN_NORMAL_N = 0.05
+
 
 
 @dataclass

@@ -32,7 +32,7 @@ import numpy as np
 
 from frictex.app.engine.finger_slots import FingerSlots
 from frictex.app.engine.finger_table import MAX_LISTED
-from frictex.rendering.control.loop import MIN_NORMAL_N
+from frictex.device.friction import MIN_NORMAL_N
 from frictex.rendering.input.trace_file import UP, Trace, concat_traces, make_trace
 from frictex.rendering.tracking.tracks import apply_index
 

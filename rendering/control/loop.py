@@ -121,7 +121,7 @@ import numpy as np
 from frictex.device.errors import InputError
 from frictex.device.finger import SensorParams
 from frictex.device.link.forces import ForceReport
-from frictex.device.friction import ASYMPTOTE_MARGIN, SeedFrictionModel
+from frictex.device.friction import ASYMPTOTE_MARGIN, MIN_NORMAL_N, SeedFrictionModel
 from frictex.device.profile import FRICTION_LOOP_PROFILES, DeviceProfile
 from frictex.rendering.control.adapt import Rls, RlsState
 from frictex.rendering.control.block_stats import (chain_input, feed_forward, feedback_stats,
@@ -132,9 +132,6 @@ from frictex.rendering.control.swings import OSCILLATION_STEPS, SWING, Swings
 from frictex.textures.model import CONTROL_MODES
 
 _NONE = np.zeros(0)  # chain_input's model rows left out (closed mode)
-#: a finger touching with a normal force below this (N) is not pressing: seed 003's plate
-#: reads a finger at 0.3-0.75 N (``report_closed_loop.population_slopes``)
-MIN_NORMAL_N = 0.05
 
 
 @dataclass(frozen=True)
