@@ -323,7 +323,8 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
         doc["warnings"] += order.warnings()
     if sink is not None:  # friction constants calibrated on another device or finger
         from frictex.device.calibration_identity import mismatch, simulated_finger
-        name = getattr(sink.info, "name", "")  # a package's device may declare no Info
+        # a package's device may declare no Info, a caller's sink (sink=) no info at all
+        name = getattr(getattr(sink, "info", None), "name", "")
         said = mismatch(scene.device.fitted, name,
                         simulated_finger(options.device, options.sim_args))
         doc["warnings"] += [said] if said else []
