@@ -327,6 +327,16 @@ class Registry(Generic[T]):
         raise UnknownName(f"unknown {self.kind} {name!r}; expected one of "
                           f"{', '.join(self.names())}")
 
+    def named(self, spec: str, expected: str = "NAME[:ARG]") -> tuple[str, str]:
+        """NAME and ARG of a ``NAME[:ARG]`` spec whose NAME is registered here (else
+        :class:`UnknownName` listing the known); a spec that is no str is an InputError
+        saying ``expected``."""
+        if not isinstance(spec, str):
+            raise InputError(f"{self.kind} {spec!r}: expected {expected}")
+        name, _, arg = spec.partition(":")
+        self.get(name)
+        return name, arg
+
     def loaded(self) -> dict[str, T]:
         """Every entry that loads, by name (importing every plugin's): one that cannot
         be loaded is left out with a warning (its :class:`PluginError` when its name is

@@ -66,11 +66,7 @@ CLOCKS: Registry[Any] = Registry("clock", "frictex.clocks",
 def clock_name(spec: str) -> tuple[str, str]:
     """NAME and ARG of a ``NAME[:ARG]`` clock spec; NAME registered (else
     ``UnknownName`` listing the known)."""
-    if not isinstance(spec, str):
-        raise InputError(f"clock {spec!r}: expected NAME[:ARG]")
-    name, _, arg = spec.partition(":")
-    CLOCKS.get(name)
-    return name, arg
+    return CLOCKS.named(spec)
 
 
 def build_clock(spec: str, request: ClockRequest) -> Clock:

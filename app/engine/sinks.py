@@ -144,11 +144,7 @@ SINKS: Registry[Any] = Registry("sink", "frictex.sinks",
 def sink_name(spec: str) -> tuple[str, str]:
     """NAME and ARG of a ``NAME[:ARG]`` sink spec; NAME registered (else ``UnknownName``
     listing the known)."""
-    if not isinstance(spec, str):
-        raise InputError(f"sink {spec!r}: expected NAME[:ARG] (a str) or a Sink")
-    name, _, arg = spec.partition(":")
-    SINKS.get(name)
-    return name, arg
+    return SINKS.named(spec, "NAME[:ARG] (a str) or a Sink")
 
 
 def build_sink(spec: str, request: SinkRequest) -> Sink:
