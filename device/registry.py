@@ -337,6 +337,11 @@ class Registry(Generic[T]):
         self.get(name)
         return name, arg
 
+    def refuse_arg(self, name: str, arg: str) -> None:
+        """An InputError where entry ``name``, which takes no ARG, was given ``arg``."""
+        if arg:
+            raise InputError(f"{self.kind} {name!r} takes no ARG, got {arg!r}")
+
     def loaded(self) -> dict[str, T]:
         """Every entry that loads, by name (importing every plugin's): one that cannot
         be loaded is left out with a warning (its :class:`PluginError` when its name is

@@ -94,11 +94,6 @@ class PluginClock:
         guarded(self._who, "in finished()", self.inner.finished, k, n)
 
 
-def _no_arg(name: str, arg: str) -> None:
-    if arg:
-        raise InputError(f"clock {name!r} takes no ARG, got {arg!r}")
-
-
 class VirtualClock:
     """Replay: every block may run at once; output time advances exactly n / rate."""
 
@@ -111,7 +106,7 @@ class VirtualClock:
     @classmethod
     def open(cls, arg: str, request: ClockRequest) -> VirtualClock:
         """Its :data:`CLOCKS` factory."""
-        _no_arg("virtual", arg)
+        CLOCKS.refuse_arg("virtual", arg)
         return cls()
 
 
@@ -161,7 +156,7 @@ class WallClock:
     def open(cls, arg: str, request: ClockRequest) -> WallClock:
         """Real time from now on, at ``request``'s block duration and deadline (its
         factory)."""
-        _no_arg("wall", arg)
+        CLOCKS.refuse_arg("wall", arg)
         return cls(request.block_s, request.deadline_s)
 
 
@@ -187,7 +182,7 @@ class DevicePacedClock:
     @classmethod
     def open(cls, arg: str, request: ClockRequest) -> DevicePacedClock:
         """Paced by ``request.link`` (its factory)."""
-        _no_arg("device", arg)
+        CLOCKS.refuse_arg("device", arg)
         if request.link is None:
             raise InputError("clock 'device' is paced by an output device, and the run has "
                              "none: choose one (--device, device=)")

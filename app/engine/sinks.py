@@ -185,11 +185,6 @@ class PluginSink:
             warn_once(str(exc))
 
 
-def _no_arg(name: str, arg: str) -> None:
-    if arg:
-        raise InputError(f"sink {name!r} takes no ARG, got {arg!r}")
-
-
 class TableSink:
     """``commands.<fmt>`` and ``friction.<fmt>`` in ``out_dir`` (DESIGN.md, replay output),
     or two pyarrow Tables in memory (``fmt`` ``memory``: ``app.engine.tables.MemoryTable``;
@@ -229,7 +224,7 @@ class TableSink:
     @classmethod
     def open(cls, arg: str, request: SinkRequest) -> TableSink:
         """The run's tables in ``request.folder`` (its :data:`SINKS` factory)."""
-        _no_arg("tables", arg)
+        SINKS.refuse_arg("tables", arg)
         return cls(request.folder, request.channels, request.phases, request.fmt)
 
 
@@ -261,7 +256,7 @@ class LinkSink:
     @classmethod
     def open(cls, arg: str, request: SinkRequest) -> LinkSink:
         """``request.link`` fed by blocks of ``request.block_size`` (its factory)."""
-        _no_arg("link", arg)
+        SINKS.refuse_arg("link", arg)
         if request.link is None:
             raise InputError("sink 'link' streams to an output device, and the run has "
                              "none: choose one (--device, device=)")
@@ -285,7 +280,7 @@ class FrameSink:
     @classmethod
     def open(cls, arg: str, request: SinkRequest) -> FrameSink:
         """The frames of ``request.frames`` (its factory)."""
-        _no_arg("frames", arg)
+        SINKS.refuse_arg("frames", arg)
         if request.frames is None:
             raise InputError("sink 'frames' writes the run's PNG frames: ask for them with "
                              "--frames FPS")
@@ -309,7 +304,7 @@ class MemorySink:
     @classmethod
     def open(cls, arg: str, request: SinkRequest) -> MemorySink:
         """An empty list (its factory)."""
-        _no_arg("memory", arg)
+        SINKS.refuse_arg("memory", arg)
         return cls()
 
 
@@ -333,7 +328,7 @@ class ProgressSink:
     @classmethod
     def open(cls, arg: str, request: SinkRequest) -> ProgressSink:
         """A bar counting seconds at ``request.rate_hz`` (its factory)."""
-        _no_arg("progress", arg)
+        SINKS.refuse_arg("progress", arg)
         return cls(request.rate_hz)
 
 
