@@ -21,9 +21,17 @@ from test_demo import wait_event
 pytest.importorskip("glfw", reason="glfw (Python package) not installed")
 
 
+def _signals_as_a_terminal_gives() -> None:
+    """In the child: SIGINT and SIGHUP at their defaults, as a terminal gives them (a
+    shell's background job inherits SIGINT ignored, nohup SIGHUP, and a run keeps an
+    ignored signal ignored by design)."""
+    for sig in (signal.SIGINT, signal.SIGHUP):
+        signal.signal(sig, signal.SIG_DFL)
+
+
 def start(display, rec, *args, group=False):
-    """``frictex demo grating-5mm --record rec`` on ``display``, with SIGINT as a
-    terminal gives it (a test's child may inherit it ignored); stderr to a file.
+    """``frictex demo grating-5mm --record rec`` on ``display``, with SIGINT and SIGHUP as
+    a terminal gives them (a test's child may inherit them ignored); stderr to a file.
     ``group``: in a process group of its own (signalled as a terminal or ``timeout``
     signals it, its haptic process and simulated device too)."""
     err = rec.parent / f"{rec.name}-stderr.txt"
@@ -32,7 +40,7 @@ def start(display, rec, *args, group=False):
             [sys.executable, "-u", "-m", "frictex", "demo", "grating-5mm", "--record", str(rec),
              "--duration", "300", *args],
             env={**os.environ, "DISPLAY": display}, stdout=subprocess.PIPE, stderr=fh, text=True,
-            start_new_session=group, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+            start_new_session=group, preexec_fn=_signals_as_a_terminal_gives)
     proc.stderr_path = err
     return proc
 
