@@ -1,0 +1,52 @@
+"""Whether paired rounds show a speed target: the rounds' ratios, their geometric mean and
+its 95 % interval, and a verdict, as ``frictex report`` gives its claims.
+
+A ratio of two processes' wall times varies from round to round on a shared machine (a
+1-second replay against its floor gave 0.60-1.46x in five rounds, median 1.19x), so
+neither one round's ratio nor the median of a few settles a target. Per round the log of
+the ratio is taken; their mean and its 95 % interval (Student's t over the rounds,
+``report_claims.paired``) are turned back into ratios (exp): the geometric mean ratio
+and its interval. The target **holds** where the whole interval lies on its side, **does
+not hold** where the whole interval lies on the other side, and is **not shown**
+otherwise (and below two rounds, which give no interval): ``report_claims.verdict``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from frictex.app.measure.report_claims import paired, verdict
+
+
+@dataclass(frozen=True)
+class RatioClaim:
+    """``geomean`` of ``rounds`` ratios and its 95 % interval [``low``, ``high``] (NaN
+    below two rounds); ``verdict``: ``holds``, ``does not hold`` or ``not shown``."""
+
+    geomean: float
+    low: float
+    high: float
+    rounds: int
+    verdict: str
+
+    def text(self, target: float, at_most: bool) -> str:
+        """The claim in words: ``at most 1.2x: 0.91x, 95 % interval 0.80-1.04x, 8
+        rounds: holds``."""
+        side = "at most" if at_most else "at least"
+        return (f"{side} {target:g}x: {self.geomean:.2f}x, 95 % interval "
+                f"{self.low:.2f}-{self.high:.2f}x, {self.rounds} rounds: {self.verdict}")
+
+
+def ratio_claim(ratios: list[float], target: float, at_most: bool) -> RatioClaim:
+    """What the paired rounds' ``ratios`` (each > 0) show about the target: each ratio
+    ``<= target`` (``at_most``) or ``>= target``. See the module."""
+    if any(not (r > 0.0 and math.isfinite(r)) for r in ratios):
+        raise ValueError(f"ratios must be positive and finite: {ratios}")
+    sign = 1.0 if at_most else -1.0  # the claim as d < 0 on every round
+    d = [sign * (math.log(r) - math.log(target)) for r in ratios]
+    mean, low, high, n = paired(d, [0.0] * len(d))
+    holds = bool(high < 0.0)  # NaN (under two rounds): not shown
+    ends = sorted(math.log(target) + sign * end for end in (low, high))
+    return RatioClaim(math.exp(math.log(target) + sign * mean), math.exp(ends[0]),
+                      math.exp(ends[1]), n, verdict(holds, low))
