@@ -65,12 +65,40 @@ def test_plate_json_and_plot(capsys, tmp_path):
     (["modes", "beam", "--theory", "timoshenko", "--orders", "95"], "Timoshenko cutoff"),
     (["modes", "plate", "--youngs-gpa", "69", "--density", "2700", "--finger", "200", "5"],
      "--finger 200 5 is outside the 140 x 140 mm plate"),
-    (["modes", "beam", "--plot", "/nonexistent-dir/x.png"], "No such file or directory"),
+    (["modes", "beam", "--plot", "/nonexistent-dir/x.png"],
+     "--plot /nonexistent-dir/x.png: the folder /nonexistent-dir does not exist"),
+    (["modes", "ring", "--plot", "/nonexistent-dir/x.png"], "the folder /nonexistent-dir"),
 ])
 def test_bad_input_is_one_line_exit_2(capsys, argv, message):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("frictex: error: ") and message in err and err.count("\n") == 1
+
+
+def test_ring_plot_is_seed_004_fig_2c(capsys, tmp_path):
+    png = tmp_path / "ring.png"
+    assert main(["modes", "ring", "--orders", "24", "--plot", str(png)]) == 0
+    assert f"plot written to {png}" in capsys.readouterr().out
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("structure", [["beam"], ["ring"],
+                                       ["plate", "--youngs-gpa", "69", "--density", "2700"]])
+def test_a_plot_that_cannot_be_written_is_refused_before_any_work(capsys, tmp_path, structure):
+    folder = tmp_path / "taken.png"
+    folder.mkdir()
+    assert main(["modes", *structure, "--plot", str(folder)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""  # no table printed: refused first
+    assert captured.err == f"frictex: error: --plot {folder}: is a folder; give a file to write\n"
+
+
+@pytest.mark.parametrize("name", ["plot.txt", "plot", "plot.pdf"])
+def test_a_plot_name_that_is_no_png_is_refused(capsys, name):
+    with pytest.raises(SystemExit) as exc:
+        main(["modes", "beam", "--plot", name])
+    assert exc.value.code == 2
+    assert "give a file name ending in .png" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("argv", [["modes", "beam", "--length-mm", "-3"],

@@ -12,7 +12,8 @@ import argparse
 
 import numpy as np
 
-from frictex.app.commands.modes_output import add_output_arguments, print_modes, save_figure
+from frictex.app.commands.modes_output import (add_output_arguments, check_plot, print_modes,
+                                               save_figure)
 from frictex.app.commands.argtypes import positive_float
 from frictex.device.structures.beam import THEORIES, FreeFreeBeam
 
@@ -37,6 +38,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_plot(args.plot)
     beam = FreeFreeBeam(args.length_mm, args.width_mm, args.thickness_mm, args.youngs_gpa,
                         args.density, theory=args.theory, poisson=args.poisson)
     modes = [{"order": n, "frequency_hz": beam.frequency_hz(n),

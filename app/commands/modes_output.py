@@ -4,6 +4,13 @@ from __future__ import annotations
 
 import argparse
 import json
+from pathlib import Path
+
+from frictex.app.engine.outfile import check_writable, write_file
+from frictex.device.errors import require_extra
+
+#: a plot's PNG at most (bytes): 8 x 9 inches at 110 dpi, 4 bytes a pixel
+PLOT_BYTES = 880 * 990 * 4
 
 
 def add_output_arguments(parser: argparse.ArgumentParser) -> None:
@@ -11,8 +18,28 @@ def add_output_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true",
                         help='print {"modes": [{"order", "frequency_hz", "wavelength_mm", '
                              '"nodes_mm"}, ...]} instead of a table')
-    parser.add_argument("--plot", metavar="PNG",
-                        help="also write a plot of the modes and of det Phi over finger positions")
+    add_plot_argument(parser, "also write a plot of the modes and of det Phi over finger "
+                              "positions")
+
+
+def add_plot_argument(parser: argparse.ArgumentParser, what: str) -> None:
+    """--plot FILE.png, whose ``what`` is the help."""
+    parser.add_argument("--plot", metavar="PNG", type=_png_name, help=f"{what} (a .png file)")
+
+
+def _png_name(text: str) -> Path:
+    if Path(text).suffix.lower() != ".png":
+        raise argparse.ArgumentTypeError(f"{text!r}: the plot is a PNG image; give a file "
+                                          "name ending in .png")
+    return Path(text)
+
+
+def check_plot(path: Path | None) -> None:
+    """Refuse, before any work, a ``--plot`` that cannot be written (a folder, a folder
+    that does not exist, no room), or matplotlib missing."""
+    if path is not None:
+        check_writable("--plot", path, PLOT_BYTES)
+        require_extra("report", "matplotlib", "--plot")
 
 
 def print_modes(title: str, modes: list[dict], as_json: bool) -> None:
@@ -30,7 +57,12 @@ def print_modes(title: str, modes: list[dict], as_json: bool) -> None:
                 f"{len(m['nodes_mm']):5d}  {nodes}")
 
 
-def save_figure(fig, path: str) -> None:
-    """Write ``fig`` to ``path`` (PNG) and say where; OSError becomes a one-line error."""
-    fig.savefig(path, dpi=110)
+def save_figure(fig, path: Path) -> None:
+    """Write ``fig`` to ``path`` as a PNG, all or nothing (``app.engine.outfile``), and
+    say where."""
+    import matplotlib.pyplot as plt
+    try:
+        write_file(path, lambda to: fig.savefig(to, format="png", dpi=110), PLOT_BYTES)
+    finally:
+        plt.close(fig)
     print(f"plot written to {path}")

@@ -14,7 +14,8 @@ import argparse
 
 import numpy as np
 
-from frictex.app.commands.modes_output import add_output_arguments, print_modes, save_figure
+from frictex.app.commands.modes_output import (add_output_arguments, check_plot, print_modes,
+                                               save_figure)
 from frictex.app.commands.argtypes import positive_float
 from frictex.device.structures.beam import ModesError
 from frictex.device.structures.plate2d import AXES, Plate2D
@@ -35,6 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_plot(args.plot)
     plate = Plate2D(args.width_mm, args.height_mm, args.thickness_mm, args.youngs_gpa,
                     args.density, poisson=args.poisson, order=args.order)
     finger = args.finger or (0.25 * plate.width_mm, 0.5 * plate.height_mm)

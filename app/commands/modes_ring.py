@@ -17,6 +17,7 @@ import json
 import numpy as np
 
 from frictex.app.commands.argtypes import positive_float, positive_int
+from frictex.app.commands.modes_output import add_plot_argument, check_plot, save_figure
 from frictex.device.structures.ring import RingResonator
 
 #: crossings listed: L/R within this factor of the ring's own
@@ -42,11 +43,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true",
                         help='print {"modes": [{"order", "kind", "frequency_hz"}, ...], '
                              '"pairs": [...]} instead of a table')
-    parser.add_argument("--plot", metavar="PNG",
-                        help="also write each pair's frequency split against L/R (seed 004, Fig. 2c)")
+    add_plot_argument(parser, "also write each pair's frequency split against L/R (seed 004, "
+                              "Fig. 2c)")
 
 
 def run(args: argparse.Namespace) -> int:
+    check_plot(args.plot)
     ring = RingResonator(args.length_mm, args.radius_mm, args.thickness_mm, args.width_mm,
                          args.youngs_gpa, args.density)
     if args.band:
@@ -62,7 +64,6 @@ def run(args: argparse.Namespace) -> int:
     else:
         _print_table(ring, modes, pairs, args.band)
     if args.plot:
-        from frictex.app.commands.modes import save_figure
         save_figure(_plot(ring, [p["order"] for p in pairs] or sorted({m.order for m in modes})),
                     args.plot)
     return 0
