@@ -267,3 +267,27 @@ def test_a_press_takes_its_peaks_from_any_sequence():
     listed = frictex.synth_trace("press", peaks_n=[1.0, 0.8])
     arrayed = frictex.synth_trace("press", peaks_n=np.array([1.0, 0.8]))
     same_trace(listed, arrayed)
+
+
+@pytest.mark.parametrize("kind", ["human", "human-varied"])
+def test_a_human_motion_starts_where_told_and_wanders_in_its_area(kind):
+    trace = frictex.synth_trace(kind, duration_s=60.0, x0_mm=150.0, y0_mm=3.0,
+                                area_mm=(600.0, 20.0), seed=3)
+    assert (trace.x_mm[0], trace.y_mm[0]) == (150.0, 3.0)
+    assert trace.x_mm.max() > 108.0  # beyond the default area: the area was used
+    assert 0.0 <= trace.x_mm.min() and trace.x_mm.max() <= 600.0
+    assert 0.0 <= trace.y_mm.min() and trace.y_mm.max() <= 20.0
+    default = frictex.synth_trace(kind, duration_s=60.0, seed=3)
+    assert (default.x_mm[0], default.y_mm[0]) == pytest.approx((0.3 * 108.0, 0.5 * 64.8))
+    assert default.x_mm.max() <= 108.0 and default.y_mm.max() <= 64.8
+
+
+@pytest.mark.parametrize("kind, kwargs, message", [
+    ("human", {"x0_mm": 150.0}, r"^start \(150, 32.4\) mm: outside the 108 x 64.8 mm area"),
+    ("swipe", {"area_mm": (100.0, 50.0)}, "^area_mm: only the human motions wander in an area"),
+    ("human", {"area_mm": (100.0,)}, r"^area_mm: expected \(width, height\) in mm"),
+    ("human", {"area_mm": (math.nan, 30.0)}, r"^area_mm\[0\]=nan: expected more than 0"),
+])
+def test_a_start_or_area_a_motion_cannot_have_is_refused(kind, kwargs, message):
+    with pytest.raises(frictex.InputError, match=message):
+        frictex.synth_trace(kind, **kwargs)

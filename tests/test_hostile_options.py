@@ -18,3 +18,17 @@ def test_synth_options_out_of_range_are_one_line(tmp_path, capsys, options, mess
     assert main(["trace", "synth", "swipe", "-o", str(tmp_path / "s.csv"), *options]) == 2
     assert capsys.readouterr().err == f"frictex: error: {message}\n"
     assert not (tmp_path / "s.csv").exists()
+
+
+@pytest.mark.parametrize("motion, options, message", [
+    ("human", ["--x0", "150", "--y0", "3"], "start (150, 3) mm: outside the 108 x 64.8 mm area"),
+    ("human-varied", ["--area", "600", "6"], "area 600 x 6 mm: a human motion keeps 8 mm from"),
+    ("swipe", ["--area", "600", "60"], "--area: only the human motions wander in an area"),
+    ("human", ["--area", "1e9", "60"], "--area 1e+09: expected 0 to 100000 mm"),
+])
+def test_a_start_or_area_a_motion_cannot_have_is_one_line(tmp_path, capsys, motion, options,
+                                                           message):
+    assert main(["trace", "synth", motion, "-o", str(tmp_path / "s.csv"), *options]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"frictex: error: {message}") and err.count("\n") == 1
+    assert not (tmp_path / "s.csv").exists()

@@ -290,7 +290,8 @@ def _column(name: str, values: npt.ArrayLike) -> np.ndarray:
 
 
 def synth_trace(kind: str, *, rate_hz: float = 50.0, duration_s: float = 2.0,
-                speed_mm_s: float = 40.0, x0_mm: float = 14.0, y0_mm: float = 32.4,
+                speed_mm_s: float = 40.0, x0_mm: float | None = None,
+                y0_mm: float | None = None, area_mm: tuple[float, float] | None = None,
                 angle_deg: float = 0.0, length_mm: float = 80.0, radius_mm: float = 20.0,
                 noise_mm: float = 0.0, jitter_s: float = 0.0, force_n: float = 0.5,
                 peaks_n: Sequence[float] = (1.0, 0.95, 1.1), force_noise_n: float = 0.03,
@@ -311,7 +312,13 @@ def synth_trace(kind: str, *, rate_hz: float = 50.0, duration_s: float = 2.0,
     speed_mm_s : float, optional
         Finger speed (mm/s); for ``human``, the typical peak speed.
     x0_mm, y0_mm : float, optional
-        Start position (mm); for ``press``, where the finger presses.
+        Start position (mm); for ``press``, where the finger presses. Default (14, 32.4);
+        for ``human`` and ``human-varied`` 30 % and 50 % across ``area_mm``, which the
+        start must lie in.
+    area_mm : (float, float), optional
+        ``human`` and ``human-varied`` only: the area (width, height in mm, from 0, 0) the
+        finger wanders in, more than 16 mm each way; default 108 x 64.8 (the demo's
+        display).
     angle_deg : float, optional
         Direction of travel, from +x towards +y (degrees).
     length_mm : float, optional
@@ -352,7 +359,22 @@ def synth_trace(kind: str, *, rate_hz: float = 50.0, duration_s: float = 2.0,
         return real(name, value, unit, (low, high), positive=positive)
 
     rate_hz = option("rate_hz", rate_hz, "rate", positive=True)
-    x0_mm, y0_mm = option("x0_mm", x0_mm, "x0"), option("y0_mm", y0_mm, "y0")
+    from frictex.rendering.input.trace_synth import HUMAN_AREA_MM, START_MM
+    if area_mm is not None and kind not in ("human", "human-varied"):
+        raise InputError(f"area_mm: only the human motions wander in an area; a {kind} starts "
+                         "at x0_mm, y0_mm")
+    if kind not in ("human", "human-varied"):
+        x0_mm = START_MM[0] if x0_mm is None else x0_mm
+        y0_mm = START_MM[1] if y0_mm is None else y0_mm
+    x0_mm = None if x0_mm is None else option("x0_mm", x0_mm, "x0")
+    y0_mm = None if y0_mm is None else option("y0_mm", y0_mm, "y0")
+    if area_mm is None:
+        area_mm = HUMAN_AREA_MM
+    elif isinstance(area_mm, str | bytes) or not isinstance(area_mm, Iterable) or len(
+            tuple(area_mm)) != 2:
+        raise InputError(f"area_mm: expected (width, height) in mm, got {area_mm!r}")
+    area_mm = tuple(option(f"area_mm[{i}]", size, "area", positive=True)
+                    for i, size in enumerate(area_mm))
     force_n = option("force_n", force_n, "force")
     seed = whole("seed", seed, "", (0, math.inf))
     if kind == "press":
@@ -383,6 +405,6 @@ def synth_trace(kind: str, *, rate_hz: float = 50.0, duration_s: float = 2.0,
     from frictex.rendering.input.trace_synth import make_motion, sample
     motion = make_motion(kind, speed_mm_s=speed_mm_s, duration_s=duration_s, x0_mm=x0_mm,
                          y0_mm=y0_mm, angle_deg=angle_deg, length_mm=length_mm,
-                         radius_mm=radius_mm, seed=seed)
+                         radius_mm=radius_mm, area_mm=area_mm, seed=seed)
     return sample(motion, rate_hz, noise_mm=noise_mm, jitter_s=jitter_s, force_n=force_n,
                   seed=seed)

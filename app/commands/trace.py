@@ -11,7 +11,8 @@ import argparse
 
 from frictex.app.commands.argtypes import positive_float
 from frictex.rendering.input.press_synth import press_trace
-from frictex.rendering.input.trace_synth import MOTIONS, make_motion, sample, truth
+from frictex.rendering.input.trace_synth import (HUMAN_AREA_MM, MOTIONS, START_MM, make_motion,
+                                                sample, truth)
 from frictex.app.engine.outfile import write_file
 from frictex.device.errors import InputError
 from frictex.rendering.input.trace_file import format_trace
@@ -30,8 +31,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     synth.add_argument("--speed", type=positive_float, default=40.0, metavar="MM_S",
                        help="finger speed (human: typical peak speed), default 40 mm/s")
     synth.add_argument("--duration", type=positive_float, default=2.0, metavar="S")
-    synth.add_argument("--x0", type=float, default=14.0, metavar="MM", help="start x")
-    synth.add_argument("--y0", type=float, default=32.4, metavar="MM", help="start y")
+    synth.add_argument("--x0", type=float, default=None, metavar="MM",
+                       help="start x (default 14; human motions: 30 %% across --area)")
+    synth.add_argument("--y0", type=float, default=None, metavar="MM",
+                       help="start y (default 32.4; human motions: half way up --area)")
+    synth.add_argument("--area", type=positive_float, nargs=2, default=None,
+                       metavar=("W_MM", "H_MM"),
+                       help="human, human-varied: the area (from 0, 0) the finger wanders in "
+                            "(default 108 x 64.8, the demo's display)")
     synth.add_argument("--angle", type=float, default=0.0, metavar="DEG",
                        help="direction of travel, from +x towards +y")
     synth.add_argument("--length", type=positive_float, default=80.0, metavar="MM",
@@ -64,12 +71,12 @@ LIMITS = {"rate": (0.0, 1e5, "Hz"), "truth_rate": (0.0, 1e6, "Hz"), "duration": 
           "speed": (0.0, 1e4, "mm/s"), "x0": (-1e5, 1e5, "mm"), "y0": (-1e5, 1e5, "mm"),
           "angle": (-360.0, 360.0, "deg"), "length": (0.0, 1e5, "mm"), "radius": (0.0, 1e5, "mm"),
           "noise": (0.0, 1e3, "mm"), "jitter": (0.0, 1.0, "s"), "force": (0.0, 1e3, "N"),
-          "force_noise": (0.0, 100.0, "N"), "peaks": (0.0, 1e3, "N")}
+          "force_noise": (0.0, 100.0, "N"), "peaks": (0.0, 1e3, "N"), "area": (0.0, 1e5, "mm")}
 #: Most samples a synthetic trace (or its true path) may hold.
 MAX_SAMPLES = 10_000_000
 
-PATH_OPTIONS = ("rate", "speed", "duration", "x0", "y0", "angle", "length", "radius", "noise",
-                "jitter", "force", "seed")
+PATH_OPTIONS = ("rate", "speed", "duration", "x0", "y0", "area", "angle", "length", "radius",
+                "noise", "jitter", "force", "seed")
 PRESS_OPTIONS = ("rate", "x0", "y0", "force", "peaks", "force_noise", "seed")
 
 
@@ -77,7 +84,8 @@ def _synth_command(args: argparse.Namespace, options) -> str:
     """The ``frictex trace synth`` command that makes this trace again."""
     def value(v):
         return " ".join(f"{p:g}" for p in v) if isinstance(v, list) else f"{v:g}"
-    flags = " ".join(f"--{name.replace('_', '-')} {value(getattr(args, name))}" for name in options)
+    flags = " ".join(f"--{name.replace('_', '-')} {value(getattr(args, name))}" for name in options
+                     if getattr(args, name) is not None)
     return f"frictex trace synth {args.motion} {flags}"
 
 
@@ -97,7 +105,7 @@ def _check_limits(args: argparse.Namespace) -> None:
     """InputError for a synth option outside LIMITS, or a trace of more than MAX_SAMPLES."""
     for name, (lo, hi, unit) in LIMITS.items():
         values = getattr(args, name)
-        for value in values if isinstance(values, list) else [values]:
+        for value in values if isinstance(values, list) else [] if values is None else [values]:
             if not lo <= value <= hi:
                 raise InputError(f"--{name.replace('_', '-')} {value:g}: expected {lo:g} to "
                                  f"{hi:g} {unit}")
@@ -124,7 +132,12 @@ def run(args: argparse.Namespace) -> int:
         from frictex.rendering.input.trace_import import run_import
         return run_import(args, _write_text)
     _check_limits(args)
+    if args.area is not None and args.motion not in ("human", "human-varied"):
+        raise InputError(f"--area: only the human motions wander in an area; a {args.motion} "
+                         "starts at --x0, --y0")
     if args.motion == "press":
+        args.x0 = START_MM[0] if args.x0 is None else args.x0
+        args.y0 = START_MM[1] if args.y0 is None else args.y0
         if args.truth:
             raise InputError("--truth: a press does not move; its trace is its true path")
         trace = press_trace(peaks_n=args.peaks, x_mm=args.x0, y_mm=args.y0, rate_hz=args.rate,
@@ -135,7 +148,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     motion = make_motion(args.motion, speed_mm_s=args.speed, duration_s=args.duration,
                          x0_mm=args.x0, y0_mm=args.y0, angle_deg=args.angle,
-                         length_mm=args.length, radius_mm=args.radius, seed=args.seed)
+                         length_mm=args.length, radius_mm=args.radius,
+                         area_mm=tuple(args.area or HUMAN_AREA_MM), seed=args.seed)
     trace = sample(motion, args.rate, noise_mm=args.noise, jitter_s=args.jitter,
                    force_n=args.force, seed=args.seed)
     _write(args.out, trace, comment=_provenance(args))

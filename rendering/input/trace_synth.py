@@ -9,6 +9,10 @@ Motions:
 - ``swipe``: constant speed along a straight line.
 - ``back-and-forth``: constant speed between two ends, reversing instantly.
 - ``circle``: constant speed around a circle.
+Human motions (``human``, ``human-varied``) wander inside an area (``area_mm``, from
+(0, 0); the demo's display by default), starting 30 % and 50 % across it unless told
+where; the others start where told (14, 32.4 mm by default).
+
 - ``human``: strokes between random waypoints with a minimum-jerk speed profile
   (Flash & Hogan 1985, the standard model of human reaching), random peak speeds and
   pauses with the finger resting.
@@ -33,6 +37,12 @@ from frictex.rendering.input.trace_file import DOWN, MOVE, UP, Trace, make_trace
 
 MOTIONS = ("swipe", "back-and-forth", "circle", "human", "human-varied")
 #: segment kinds of ``human-varied`` and their draw probabilities
+#: where a swipe, back-and-forth or circle starts unless told (mm)
+START_MM = (14.0, 32.4)
+#: the area human motions wander in unless told (mm): the demo's display
+HUMAN_AREA_MM = (108.0, 64.8)
+#: how near a human motion's waypoints come to its area's edges (mm)
+HUMAN_MARGIN_MM = 8.0
 SEGMENTS = {"stroke": 0.3, "varying": 0.2, "creep": 0.1, "flick": 0.1, "reversal": 0.1,
             "arc": 0.1, "pause": 0.1}
 
@@ -101,14 +111,23 @@ def _segments(t, segments):
 
 
 def make_motion(kind: str, *, speed_mm_s: float = 40.0, duration_s: float = 2.0,
-                x0_mm: float = 14.0, y0_mm: float = 32.4, angle_deg: float = 0.0,
-                length_mm: float = 80.0, radius_mm: float = 20.0,
-                area_mm: tuple[float, float] = (108.0, 64.8), seed: int = 0) -> Motion:
-    """A motion of the given kind (see the module docstring); units mm, s, mm/s."""
+                x0_mm: float | None = None, y0_mm: float | None = None,
+                angle_deg: float = 0.0, length_mm: float = 80.0, radius_mm: float = 20.0,
+                area_mm: tuple[float, float] = HUMAN_AREA_MM, seed: int = 0) -> Motion:
+    """A motion of the given kind (see the module docstring); units mm, s, mm/s. The start
+    (``x0_mm``, ``y0_mm``; None: the kind's default) of a human motion must lie in its
+    ``area_mm`` (InputError otherwise)."""
     if kind not in MOTIONS:
         raise InputError(f"unknown motion {kind!r}; expected one of {', '.join(MOTIONS)}")
     if speed_mm_s <= 0 or duration_s <= 0:
         raise InputError(f"speed {speed_mm_s} mm/s and duration {duration_s} s must be > 0")
+    if kind in ("human", "human-varied"):
+        start = _human_start(x0_mm, y0_mm, area_mm)
+        if kind == "human":
+            return _human_motion(speed_mm_s, duration_s, area_mm, start, seed)
+        return _varied_motion(speed_mm_s, duration_s, area_mm, start, seed)
+    x0_mm = START_MM[0] if x0_mm is None else x0_mm
+    y0_mm = START_MM[1] if y0_mm is None else y0_mm
     a = np.radians(angle_deg)
     ux, uy = float(np.cos(a)), float(np.sin(a))
     if kind == "swipe":
@@ -117,20 +136,33 @@ def make_motion(kind: str, *, speed_mm_s: float = 40.0, duration_s: float = 2.0,
     if kind == "back-and-forth":
         return Motion(kind, duration_s, dict(x0=x0_mm, y0=y0_mm, ux=ux, uy=uy,
                                              length=length_mm, speed=speed_mm_s))
-    if kind == "circle":
-        return Motion(kind, duration_s, dict(cx=x0_mm + radius_mm, cy=y0_mm, radius=radius_mm,
-                                             speed=speed_mm_s, a0=np.pi))
-    if kind == "human":
-        return _human_motion(speed_mm_s, duration_s, area_mm, seed)
-    return _varied_motion(speed_mm_s, duration_s, area_mm, seed)
+    return Motion(kind, duration_s, dict(cx=x0_mm + radius_mm, cy=y0_mm, radius=radius_mm,
+                                         speed=speed_mm_s, a0=np.pi))
 
 
-def _human_motion(speed_mm_s: float, duration_s: float, area_mm, seed: int) -> Motion:
-    """Strokes of 15-60 mm at peak speeds around ``speed_mm_s`` (x0.5-x1.8), with pauses."""
+def _human_start(x0_mm: float | None, y0_mm: float | None, area_mm) -> tuple[float, float]:
+    """Where a human motion in ``area_mm`` (width, height) starts: (``x0_mm``, ``y0_mm``),
+    each 30 % and 50 % across the area where None."""
+    if not all(size > 2 * HUMAN_MARGIN_MM for size in area_mm):
+        raise InputError(f"area {area_mm[0]:g} x {area_mm[1]:g} mm: a human motion keeps "
+                         f"{HUMAN_MARGIN_MM:g} mm from the area's edges; give more than "
+                         f"{2 * HUMAN_MARGIN_MM:g} mm each way")
+    x0 = area_mm[0] * 0.3 if x0_mm is None else float(x0_mm)
+    y0 = area_mm[1] * 0.5 if y0_mm is None else float(y0_mm)
+    if not (0.0 <= x0 <= area_mm[0] and 0.0 <= y0 <= area_mm[1]):
+        raise InputError(f"start ({x0:g}, {y0:g}) mm: outside the {area_mm[0]:g} x "
+                         f"{area_mm[1]:g} mm area (from 0, 0) a human motion wanders in; "
+                         "give a start inside it, or a larger area")
+    return x0, y0
+
+
+def _human_motion(speed_mm_s: float, duration_s: float, area_mm, start, seed: int) -> Motion:
+    """Strokes of 15-60 mm at peak speeds around ``speed_mm_s`` (x0.5-x1.8), with pauses,
+    from ``start`` (x, y mm)."""
     rng = np.random.default_rng(seed)
     w, h = area_mm
-    margin = 8.0
-    knots_t, knots_x, knots_y = [0.0], [w * 0.3], [h * 0.5]
+    margin = HUMAN_MARGIN_MM
+    knots_t, knots_x, knots_y = [0.0], [start[0]], [start[1]]
     while knots_t[-1] < duration_s:
         angle = rng.uniform(-np.pi, np.pi) if rng.random() < 0.3 else rng.choice([0.0, np.pi])
         dist = rng.uniform(15.0, 60.0)
@@ -149,14 +181,15 @@ def _human_motion(speed_mm_s: float, duration_s: float, area_mm, seed: int) -> M
     return Motion("human", duration_s, dict(knots_t=knots_t, knots_x=knots_x, knots_y=knots_y))
 
 
-def _varied_motion(speed_mm_s: float, duration_s: float, area_mm, seed: int) -> Motion:
+def _varied_motion(speed_mm_s: float, duration_s: float, area_mm, start, seed: int) -> Motion:
     """Segments drawn from ``SEGMENTS`` until ``duration_s`` (speeds scale with
-    ``speed_mm_s``, the typical stroke's peak; creeping and flicks have their own)."""
+    ``speed_mm_s``, the typical stroke's peak; creeping and flicks have their own), from
+    ``start`` (x, y mm)."""
     rng = np.random.default_rng(seed)
     w, h = area_mm
-    margin = 8.0
+    margin = HUMAN_MARGIN_MM
     kinds, weights = zip(*SEGMENTS.items())
-    x, y, t = w * 0.3, h * 0.5, 0.0
+    (x, y), t = start, 0.0
     segments = []
 
     def inside(length, angle):
@@ -192,7 +225,8 @@ def _varied_motion(speed_mm_s: float, duration_s: float, area_mm, seed: int) -> 
             line(length, peak, angle)
             line(float(np.hypot(x - x0, y - y0)), peak, float(np.arctan2(y0 - y, x0 - x)))
         elif kind == "arc":
-            radius = rng.uniform(8.0, 20.0)
+            # at most what fits between the margins (the default area fits every radius)
+            radius = min(rng.uniform(8.0, 20.0), (min(w, h) - 2 * margin) / 2)
             sweep = rng.uniform(0.5, 1.5) * 2 * np.pi * rng.choice([-1.0, 1.0])
             a0 = rng.uniform(-np.pi, np.pi)
             cx = float(np.clip(x - radius * np.cos(a0), margin + radius, w - margin - radius))
