@@ -51,10 +51,7 @@ def build_guidance(r, path, v, given, ctx):
 
 def build_keyclick(r, path, v, given, ctx):
     ok = force_common(r, path, given)
-    if not v["release_n"] < v["press_n"] < v["click_n"]:
-        r.report(path + ("press_n",), f"thresholds release_n {v['release_n']:g} < press_n "
-                                      f"{v['press_n']:g} < click_n {v['click_n']:g} (N) do not hold")
-        ok = False
+    ok &= _thresholds_in_order(r, path, v, given)
     geometry = model.RectRegion(v["x_mm"], v["y_mm"], v["width_mm"], v["height_mm"])
     ok &= ctx.display is None or shape_on_display(r, path + ("x_mm",), geometry, ctx.display, "button")
     if not ok:
@@ -63,3 +60,30 @@ def build_keyclick(r, path, v, given, ctx):
     layer = model.KeyClick(**ctx.common, geometry=geometry, first_push=1 if v["first_push"] == "+x" else -1,
                            **{k: v[k] for k in keys})
     return layer, "force_n"
+
+
+#: the key-click's normal-force thresholds, lowest first (seed 004, Fig. 5a)
+_THRESHOLDS = ("release_n", "press_n", "click_n")
+
+
+def _thresholds_in_order(r, path, v, given) -> bool:
+    """Check release_n < press_n < click_n; report a break at the keys to blame.
+
+    A key is blamed if the other two are in order without it, but only a key the file
+    wrote (a default is not what went wrong); where no one key explains the break (all
+    three reversed), every written key of an out-of-order pair. True if the order holds.
+    """
+    values = [v[k] for k in _THRESHOLDS]
+    if values[0] < values[1] < values[2]:
+        return True
+    without = [(k, values[:i] + values[i + 1:]) for i, k in enumerate(_THRESHOLDS)]
+    blamed = [k for k, (a, b) in without if a < b and k in given]
+    if not blamed:
+        pairs = zip(_THRESHOLDS, _THRESHOLDS[1:], values, values[1:])
+        blamed = sorted({k for low, high, a, b in pairs if not a < b for k in (low, high)
+                         if k in given}, key=_THRESHOLDS.index)
+    got = ", ".join(f"{k} {v[k]:g}" + ("" if k in given else " (default)") for k in _THRESHOLDS)
+    for key in blamed:
+        r.report(path + (key,), f"{v[key]:g} N is out of order: expected release_n < press_n "
+                                f"< click_n (N), got {got}")
+    return False
