@@ -12,15 +12,24 @@ Grammar of ARG (the text after ``audio:`` in ``--device audio:ARG``)::
              | "profile=" NAME    the device profile whose drive figures apply
              | "full_scale=" V    drive volts (zero-to-peak) at digital full scale
                                   (default: the profile's voltage limit)
-             | "blocksize=" N     PortAudio frames per callback (default 256)
-             | "buffer_ms=" MS    frames queued ahead of the callback (default 100 ms)
-             | "ramp_ms=" MS      start, stop, starvation and emergency-stop ramps (default 2 ms)
+             | "blocksize=" N     PortAudio frames per callback (default 256; 1 to 8192)
+             | "buffer_ms=" MS    frames queued ahead of the callback (default 100 ms;
+                                  1 to 1000 ms)
+             | "ramp_ms=" MS      start, stop, starvation and emergency-stop ramps (default
+                                  2 ms; more than 0, at most 50 ms less one block)
 
 A PATH or NAME cannot contain a comma. The rate is a whole number of Hz from 8 kHz to
 768 kHz, the rates sound cards offer (a WAV file would take more, but nothing would play
 it; RIFF's 32-bit byte rate ends at 4.29 GHz / 4 bytes / channels). The rate must keep the
 carrier below 0.4 of it (192 kHz: up to 76.8 kHz; 96 kHz: up to 38.4 kHz; 768 kHz: up to
 307.2 kHz, the highest carrier); envelope mode has no carrier.
+
+The plate must be still within :data:`MAX_STOP_MS` (50 ms) of a stop, as a serial
+device's ``watchdog_ms + ramp_ms`` (PROTOCOL.md 5.3): an emergency stop or a starving
+stream begins its ramp at the next callback, so one block (``blocksize`` frames at the
+rate) plus ``ramp_ms`` must not exceed it. ``buffer_ms`` is at most 1 s: a stop with drain
+plays the queue out first, and the ring holds that many frames. An option out of its
+range is refused in one line naming the option, what was typed and the range.
 
 The drive figures (``carrier_hz``, ``um_per_volt``, ``voltage_limit_v``) come from the
 device profile (``device.profile.PROFILES``): the one the pipeline's scene names when the
@@ -43,7 +52,14 @@ MAX_RATE_HZ = 768_000
 #: the carrier must stay below this share of the audio rate
 MAX_CARRIER_SHARE = 0.4
 DEFAULT_BLOCKSIZE = 256
+#: most PortAudio frames per callback (43 ms at 192 kHz)
+MAX_BLOCKSIZE = 8192
 DEFAULT_BUFFER_MS = 100.0
+#: most frames queued ahead of the callback (ms): a stop with drain plays them out first
+MAX_BUFFER_MS = 1000.0
+#: the plate is still within this of a stop (ms): one callback block plus the ramp, as a
+#: serial device's watchdog_ms + ramp_ms (PROTOCOL.md 5.3)
+MAX_STOP_MS = 50.0
 #: start, stop, starvation and emergency-stop ramps (ms): within a friction step the
 #: finger feels (2.3-2.4 ms, Gueorguiev 2019), and 384 frames at 192 kHz
 DEFAULT_RAMP_MS = 2.0
@@ -93,6 +109,15 @@ class AudioArgs:
 
 _NUMBERS = {"rate": float, "carrier": float, "full_scale": float, "blocksize": int,
             "buffer_ms": float, "ramp_ms": float}
+#: (lowest, highest, what the range is) of the options that size a buffer or a time;
+#: a lowest of 0 is excluded (``_number`` takes only numbers > 0)
+_RANGES = {
+    "rate": (MIN_RATE_HZ, MAX_RATE_HZ, "Hz, the rates sound cards offer"),
+    "blocksize": (1, MAX_BLOCKSIZE, "frames per callback"),
+    "buffer_ms": (1, MAX_BUFFER_MS, "ms: a stop with drain plays the queue out first"),
+    "ramp_ms": (0, MAX_STOP_MS, f"ms: the plate must be still within {MAX_STOP_MS:g} ms of "
+                                "a stop (PROTOCOL.md 5.3)"),
+}
 
 
 def parse_arg(arg: str) -> AudioArgs:
@@ -131,6 +156,14 @@ def _number(name: str, text: str, kind: type) -> float | int:
                          f"{'whole ' if kind is int else ''}number") from None
     if not math.isfinite(value) or value <= 0:
         raise InputError(f"audio device option {name}={text!r}: expected a finite number > 0")
+    if name in _RANGES:
+        low, high, unit = _RANGES[name]
+        if not low <= value <= high:
+            lowest = f"more than {low:g}" if low == 0 else f"{low:g}"
+            raise InputError(f"audio device {name}={text.strip()}: expected {lowest} to "
+                             f"{high:g} {unit}")
+    if name == "rate" and value != int(value):
+        raise InputError(f"audio device rate={text.strip()}: expected a whole number of Hz")
     return value
 
 
@@ -145,17 +178,23 @@ def profile_name(requested) -> str | None:
 def make_plan(args: AudioArgs, channels: int, rate_hz: float, requested_profile=None) -> AudioPlan:
     """The :class:`AudioPlan` of parsed ARG for a pipeline of ``channels`` at ``rate_hz``
     (Hz). The profile: ``profile=`` if given, else ``requested_profile``, else the default.
-    Raises InputError for a rate outside :data:`MIN_RATE_HZ` to :data:`MAX_RATE_HZ` or
-    not whole, or a carrier it does not fit."""
+    Raises InputError for a carrier the rate does not fit, or a block and ramp that
+    together exceed :data:`MAX_STOP_MS` at the rate (``parse_arg`` checks each option's
+    own range)."""
     name = args.profile or profile_name(requested_profile) or DEFAULT_PROFILE
     spec = PROFILES.get(name)
-    audio_rate = args.rate if args.rate is not None else DEFAULT_RATE_HZ
-    if not MIN_RATE_HZ <= audio_rate <= MAX_RATE_HZ:
-        raise InputError(f"audio device rate={audio_rate:g}: expected {MIN_RATE_HZ} to "
-                         f"{MAX_RATE_HZ} Hz, the rates sound cards offer")
-    if audio_rate != int(audio_rate):
-        raise InputError(f"audio device rate={audio_rate:g}: expected a whole number of Hz")
-    audio_rate = int(audio_rate)
+    audio_rate = int(args.rate if args.rate is not None else DEFAULT_RATE_HZ)
+    block_ms = args.blocksize * 1e3 / audio_rate
+    if block_ms + args.ramp_ms > MAX_STOP_MS:
+        top_block = math.floor((MAX_STOP_MS - args.ramp_ms) * 1e-3 * audio_rate)
+        room = (f"ramp_ms up to {MAX_STOP_MS - block_ms:.4g} ms" if block_ms < MAX_STOP_MS
+                else f"blocksize up to {top_block}" if top_block >= 1
+                else "a shorter ramp and block")
+        ramp = repr(args.ramp_ms).removesuffix(".0")
+        raise InputError(f"audio device blocksize={args.blocksize} and ramp_ms={ramp}"
+                         f" at rate={audio_rate} Hz: one block ({block_ms:.4g} ms) plus the "
+                         f"ramp must not exceed {MAX_STOP_MS:g} ms ({room}): the plate must be "
+                         f"still within {MAX_STOP_MS:g} ms of a stop (PROTOCOL.md 5.3)")
     carrier = float(args.carrier if args.carrier is not None else spec.carrier_hz)
     top_carrier = MAX_CARRIER_SHARE * MAX_RATE_HZ
     if not args.envelope and carrier >= top_carrier:
