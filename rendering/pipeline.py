@@ -170,8 +170,10 @@ class Pipeline:
         self.rate_hz = float(rate_hz)
         self.block_size = int(block_size)
         base = tracker or TrackerConfig()
+        area = base.area_mm or (scene.display.width_mm, scene.display.height_mm)
         self.tracker_config = TrackerConfig(**{**base.__dict__, "rate_hz": self.rate_hz,
-                                               "quantum": self.block_size, "t0_s": t0_s})
+                                               "quantum": self.block_size, "t0_s": t0_s,
+                                               "area_mm": area})
         self.layer_modes = tuple(_layer_mode(layer, render_override, sho_variant)
                                  for layer in scene.layers)
         self.renderers = tuple(_layer_renderer(layer, mode, self.rate_hz)

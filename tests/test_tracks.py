@@ -107,6 +107,29 @@ def test_finger_that_stops_reporting_rests_after_the_horizon():
     assert np.ptp(block.x_pred[0, late]) == 0.0
 
 
+@pytest.mark.parametrize("speed", [200.0, -200.0])
+def test_a_prediction_stays_on_the_display(speed):
+    # towards an edge at 200 mm/s, then silent for 90 ms before the lift (a phone's
+    # two-finger drag): the fit alone runs 12 mm on, past the 140 mm plate's edge
+    t = np.arange(0.0, 0.3001, 0.0165)
+    x = (131.0 if speed > 0 else 9.0) + speed * (t - t[-1])
+    times = np.append(t, t[-1] + 0.09)
+    xs = np.append(x, x[-1])
+    events = np.full(times.size, MOVE)
+    events[0], events[-1] = DOWN, UP
+    trace = make_trace(times, np.zeros(times.size, int), xs, np.full(times.size, 30.0),
+                       None, events)
+    free, _ = _run(trace, 4_000)
+    held, _ = _run(trace, 4_000, TrackerConfig(rate_hz=10_000.0, quantum=50,
+                                               area_mm=(140.0, 140.0)))
+    touching = free.contact[0]
+    assert free.x_pred[0, touching].max() > 140.0 or free.x_pred[0, touching].min() < 0.0
+    assert 0.0 <= held.x_pred[0, touching].min() and held.x_pred[0, touching].max() <= 140.0
+    inside = (free.x_pred[0] >= 0.0) & (free.x_pred[0] <= 140.0)
+    assert_allclose(held.x_pred[0, inside], free.x_pred[0, inside], rtol=0, atol=0)
+    assert_allclose(held.vx[0], free.vx[0], rtol=0, atol=0)  # velocity is the fit's
+
+
 def test_down_and_up():
     t = np.array([0.0, 0.01, 0.02, 0.05, 0.06])
     ev = np.array([DOWN, MOVE, UP, DOWN, UP], dtype=np.int8)

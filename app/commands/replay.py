@@ -95,6 +95,9 @@ def run(args: argparse.Namespace) -> int:
         clipped = sum((summary.get("layer_clipped") or {}).values())
         if clipped:  # a layer's own limits (its warning says which and where)
             clamps += f", {clipped} clipped by the layers' own limits"
+        limited = summary["counts"].get("actuator_limited")
+        if limited:  # a modal structure's actuators short of what a finger wanted
+            clamps += f", {limited} samples at an actuator limit"
         print(f"replayed {summary['trace']['samples']} touch samples -> {out['samples']} output "
               f"samples ({out['duration_s']:.3f} s at {out['rate_hz']:g} Hz) in {args.out}: "
               f"{', '.join(out['files'])}, summary.json; {clamps}; "

@@ -31,7 +31,10 @@ by more than ``jump_speed_mm_s`` times the interval: a change of velocity no fin
 makes within one sample, whereas a swipe at any steady speed is no jump. After
 ``predict_horizon_s`` without a new sample the finger is taken as resting (prediction
 stops, velocity 0), so a screen that stops reporting a still finger does not leave SHT
-synthesising forever.
+synthesising forever. A prediction stays on the display (``area_mm``): a finger touching
+the screen is on it, and a fit running on past where a finger stopped at the edge (a
+phone's two-finger drag to the edge, silent for 86 ms before the lift: 12.7 mm past the
+140 mm plate) would render, and count as off the structure, a place nobody touched.
 """
 
 from __future__ import annotations
@@ -59,6 +62,8 @@ class TrackerConfig:
     jump_speed_mm_s: float = 2000.0
     jump_min_mm: float = 10.0
     fit_samples: int = 256
+    #: the display's (width, height) (mm): predictions stay within it; None: unbounded
+    area_mm: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -398,7 +403,10 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
     # at once, not every id a recording ever used
     ids = tuple(sorted(set(sampled) | set(state.fingers)))
     table, runs, steps = _step_table(ids, state, updates, index0, n)
-    arrays = _expand(table, runs, steps, t_out, float(config.predict_horizon_s))
+    (x_lo, y_lo), (x_hi, y_hi) = ((0.0, 0.0), config.area_mm) if config.area_mm else (
+        (-math.inf, -math.inf), (math.inf, math.inf))
+    arrays = _expand(table, runs, steps, t_out, float(config.predict_horizon_s),
+                     np.array([x_lo, x_hi, y_lo, y_hi], dtype=np.float64))
     block = FingerBlock(index0, t_out, ids, **dict(zip(BLOCK_FIELDS, arrays)))
     touching = {fid: s for fid, s in fingers.items() if s.contact}
     touches = max([state.touches, *(s.touch_id for s in fingers.values())])
@@ -432,7 +440,7 @@ def _step_table(ids, state: TrackerState, updates: dict, index0: int, n: int):
 
 
 @njit(cache=True, nogil=True)
-def _expand(table, runs, steps, t_out, horizon):
+def _expand(table, runs, steps, t_out, horizon, area):
     """The arrays of a :class:`FingerBlock` (in ``BLOCK_FIELDS`` order, each (F, n)) from
     each finger's piecewise-constant state columns.
 
@@ -441,7 +449,8 @@ def _expand(table, runs, steps, t_out, horizon):
     steps : (F,) number of steps of each finger; t_out : (n,) output times (s);
     horizon : ``predict_horizon_s``. Velocity and prediction: a finger sampled within
     the horizon moves at its fitted velocity from its fitted position; past it, it rests
-    where it was predicted at the horizon (velocity 0).
+    where it was predicted at the horizon (velocity 0). area : (x_lo, x_hi, y_lo, y_hi)
+    (mm; infinite: unbounded): a prediction is held within it.
     """
     f_n, n = steps.size, t_out.size
     contact = np.empty((f_n, n), dtype=np.bool_)
@@ -464,8 +473,8 @@ def _expand(table, runs, steps, t_out, horizon):
                 contact[f, k] = touching
                 touch_id[f, k] = touch
                 x_held[f, k], y_held[f, k] = x, y
-                x_pred[f, k] = xf + vxs * ahead if touching else x
-                y_pred[f, k] = yf + vys * ahead if touching else y
+                x_pred[f, k] = min(max(xf + vxs * ahead, area[0]), area[1]) if touching else x
+                y_pred[f, k] = min(max(yf + vys * ahead, area[2]), area[3]) if touching else y
                 vx[f, k] = vxs if moving else 0.0
                 vy[f, k] = vys if moving else 0.0
                 force[f, k], touch_start[f, k] = table[9, s], table[10, s]
