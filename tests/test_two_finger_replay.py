@@ -82,6 +82,13 @@ def test_error_is_nil_where_phi_is_well_conditioned_and_large_near_the_loci(repl
     assert alone.sum() == 4000 and err[alone].max() < 1e-5
 
 
+def test_the_last_line_counts_the_samples_at_an_actuator_limit(tmp_path, capsys):
+    assert main(["replay", SCENE, TRACE, "--out", str(tmp_path)]) == 0
+    limited = json.loads((tmp_path / "summary.json").read_text())["counts"]["actuator_limited"]
+    assert limited > 0  # the crossing passes the singular loci
+    assert f"; 0 clamped, {limited} samples at an actuator limit; " in capsys.readouterr().out
+
+
 def test_replay_is_deterministic(replayed, tmp_path):
     assert main(["replay", SCENE, TRACE, "--out", str(tmp_path)]) == 0
     for name in ("commands.csv", "friction.csv"):
