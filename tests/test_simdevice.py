@@ -636,20 +636,3 @@ def test_a_version_3_host_gets_no_missing_reports():
     frames = p.Decoder().feed(core.receive(p.encode(p.Heartbeat(7), host.seq, 3), 0.0))
     assert [type(f.message) for f in frames] == [p.Status]
     assert frames[0].message.lost_frames == 3
-
-
-def test_a_log_is_on_disk_within_its_flush_period_while_the_device_runs(tmp_path):
-    """A reader of sim-device's --log saw 19,713 of 20,050 rows until the device exited:
-    rows now reach the file at least every LOG_FLUSH_S of the log's clock."""
-    import numpy as np
-    from frictex.device.link.simdevice import LOG_FLUSH_S, CsvLog
-    now = [0.0]
-    path = tmp_path / "played.csv"
-    log = CsvLog(path, ["index", "ch0_um"], clock=lambda: now[0])
-    log.rows([np.arange(3), np.full(3, 1.5)], ["%d", "%.9f"])
-    now[0] += LOG_FLUSH_S
-    log.rows([np.arange(3, 5), np.full(2, 1.5)], ["%d", "%.9f"])
-    lines = path.read_text().splitlines()  # read while the log is still open
-    assert lines[0] == "index,ch0_um" and [line.split(",")[0] for line in lines[1:]] == [
-        "0", "1", "2", "3", "4"]
-    log.close()
