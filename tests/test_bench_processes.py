@@ -12,7 +12,7 @@ import pytest
 
 import frictex.app
 from frictex.app.commands.bench import _measured
-from frictex.app.measure.bench_baseline import BARE, paired_figures, verdict
+from frictex.app.measure.bench_baseline import BARE, paired_figures
 from frictex.app.measure.bench_startup import without_frictex_cache
 from frictex.app.measure.figure import Figure
 from frictex.app.measure.processes import Run, alternated, frictex_argv, median, run_process
@@ -80,25 +80,21 @@ def _run(wall_s: float, code: int = 0) -> Run:
     return Run(wall_s, wall_s, 100.0, code)
 
 
-def test_the_baseline_verdict_holds_only_where_every_round_is_under_the_target():
-    assert verdict([1.1, 1.19, 0.8], 1.2) == "met in every round"
-    assert verdict([1.1, 1.21, 0.8], 1.2) == "not shown"
-    assert verdict([], 1.2) == "not shown"
-
-
 def test_the_baseline_prints_each_rounds_paired_ratio_and_no_verdict_without_a_floor():
-    bare = [_run(2.0), _run(4.0), _run(2.0)]
-    ours = [_run(2.2), _run(2.0), _run(9.0, code=1)]  # the third round failed: left out
+    bare = [_run(2.0), _run(4.0), _run(2.0), _run(2.0)]
+    ours = [_run(2.2), _run(2.0), _run(9.0, code=1), _run(1.6)]  # round 3 failed: left out
     figures = {f.label.removeprefix("L, "): f for f in paired_figures("L", bare, ours, 1.2)}
-    assert [figures[f"frictex against bare, round {k}"].value for k in (1, 2)] == [
-        pytest.approx(1.1), pytest.approx(0.5)]
-    assert "frictex against bare, round 3" not in figures
-    assert figures["frictex against bare, median of 2 rounds' ratios (target 1.2x)"].value == (
-        pytest.approx(0.8))
-    assert figures["rounds under the target"].unit == "of 2: met in every round"
+    assert [figures[f"frictex against bare, round {k}"].value for k in (1, 2, 3)] == [
+        pytest.approx(1.1), pytest.approx(0.5), pytest.approx(0.8)]
+    assert "frictex against bare, round 4" not in figures
+    geomean = figures["frictex against bare, geometric mean of 3 rounds"]
+    assert geomean.value == pytest.approx((1.1 * 0.5 * 0.8) ** (1 / 3))
+    verdict = figures["target at most 1.2x: the interval's upper end"]
+    assert verdict.unit == "x: not shown"  # 0.5-1.1x in three rounds settles nothing
+    assert verdict.value > 1.2
     csv = [f.label for f in paired_figures("L", bare, ours, None)]
     assert any("no verdict: the bare program is no floor" in label for label in csv)
-    assert not any("rounds under the target" in label for label in csv)
+    assert not any("target" in label for label in csv)
 
 
 def test_the_startup_row_without_frictexs_bytecode_cache_keeps_every_other_modules(tmp_path):
@@ -109,3 +105,17 @@ def test_the_startup_row_without_frictexs_bytecode_cache_keeps_every_other_modul
     frictex_dirs = [Path(p).resolve().relative_to("/") for p in frictex.app.__path__]
     assert not [p for p in cached if any(d in p.parents for d in frictex_dirs)]
     assert run_process(argv).code == 0
+
+
+def test_the_batch_figures_pair_each_run_on_one_core_with_one_on_all(tmp_path, monkeypatch):
+    from frictex.app.measure import bench_replay
+    monkeypatch.setattr(bench_replay, "cores", lambda: 2)  # whatever this machine has
+    figures = {f.label: f for f in bench_replay._batch_figures(tmp_path, 2)}
+    against = "batch throughput, 2 cores against one after another"
+    ratios = [figures[f"{against}, pair {k}"].value for k in range(1, 5)]
+    assert all(r > 0 for r in ratios)
+    geomean = figures[f"{against}, geometric mean of 4 pairs"]
+    assert geomean.value == pytest.approx(np.exp(np.mean(np.log(ratios))))
+    verdict = figures["batch throughput target at least 1.5x: the interval's lower end"]
+    assert verdict.unit in ("x: holds", "x: does not hold", "x: not shown")
+    assert not [p for p in tmp_path.iterdir() if p.is_dir()]  # each run's output removed

@@ -15,13 +15,13 @@ a CSV ratio under the target shows nothing about frictex's overhead, and the sec
 gives CSV no verdict.
 
 Both run as fresh processes on the same human-like trace (600 s; 60 s with ``--quick``),
-alternated, one of each per round (5 rounds; 2 with ``--quick``). Per format the
+alternated, one of each per round (8 rounds; 4 with ``--quick``). Per format the
 section prints the median wall time of each, each round's ratio (frictex's run over the
-bare run of the same round), their median and range, and a verdict: the target is
-``met in every round`` only where each round's ratio is under it, ``not shown``
-otherwise (a median under the target with a round over it shows nothing). Beside them,
-in this process: reading that trace with ``read_trace`` against ``pyarrow.csv.read_csv``
-(median of 7 alternated reads).
+bare run of the same round), their geometric mean with its 95 % interval, and a
+verdict (``app.measure.ratio_claim``): the target **holds** only where the whole
+interval is under it, **does not hold** where the whole interval is over it, and is
+**not shown** otherwise. Beside them, in this process: reading that trace with
+``read_trace`` against ``pyarrow.csv.read_csv`` (median of 7 alternated reads).
 
 Targets (issue 31): a Parquet replay at most 1.2x the floor, npz at most 1.3x (CSV's
 1.3x has no floor to be measured against here); trace reading at most 2x pyarrow's
@@ -40,6 +40,7 @@ import numpy as np
 from frictex.app.measure.bench_replay import SCENE, human_trace
 from frictex.app.measure.figure import Figure
 from frictex.app.measure.processes import alternated, frictex_argv, median
+from frictex.app.measure.ratio_claim import ratio_claim
 from frictex.rendering.input.trace_file import read_trace, write_trace
 
 #: the bare program: python -c BARE TRACE OUT_DIR FORMAT
@@ -108,34 +109,30 @@ def _reading_figures(path: Path, reads: int = 7) -> list[Figure]:
 TARGETS = {"parquet": 1.2, "npz": 1.3, "csv": None}
 
 
-def verdict(ratios: list[float], target: float) -> str:
-    """What paired rounds' ratios show about ``target``: ``met in every round`` only if
-    each is under it, ``not shown`` if any is not (or none succeeded)."""
-    return "met in every round" if ratios and max(ratios) <= target else "not shown"
-
-
 def paired_figures(label: str, bare: list, ours: list, target: float | None) -> list[Figure]:
     """Figures of one format: median wall times, each round's ratio (frictex's run over
     the bare run of the same round; a round where either failed is left out), their
-    median, the verdict (none where ``target`` is None), and median CPU times."""
+    geometric mean and its 95 % interval, the verdict on ``target`` (none where it is
+    None), and median CPU times."""
     ratios = [o.wall_s / b.wall_s for b, o in zip(bare, ours) if b.code == 0 and o.code == 0]
     rounds = len(bare)
-    wanted = "no target" if target is None else f"target {target:g}x"
     figures = [Figure("baseline", f"{label}, bare numpy/pyarrow (median of {rounds})",
                       median(bare, "wall_s"), "s"),
                Figure("baseline", f"{label}, frictex (median of {rounds}, alternated)",
                       median(ours, "wall_s"), "s")]
     figures += [Figure("baseline", f"{label}, frictex against bare, round {k + 1}", r, "x")
                 for k, r in enumerate(ratios)]
-    figures += [Figure("baseline", f"{label}, frictex against bare, median of {len(ratios)} "
-                       f"rounds' ratios ({wanted})",
-                       float(np.median(ratios)) if ratios else float("nan"), "x"),
-                Figure("baseline", f"{label}, rounds under the target", sum(
-                    r <= target for r in ratios), f"of {len(ratios)}: {verdict(ratios, target)}")
-                if target is not None else
-                Figure("baseline", f"{label}, no verdict: the bare program is no floor "
-                       "(pyarrow's CSV writer is slower than frictex's)", len(ratios), "rounds"),
-                Figure("baseline", f"{label}, bare CPU user + system (median)",
+    claim = ratio_claim(ratios, target or 1.0, at_most=True)
+    figures.append(Figure("baseline", f"{label}, frictex against bare, geometric mean of "
+                          f"{claim.rounds} rounds", claim.geomean,
+                          f"x (95 % interval {claim.low:.2f}-{claim.high:.2f}x)"))
+    figures.append(
+        Figure("baseline", f"{label}, target at most {target:g}x: the interval's upper end",
+               claim.high, f"x: {claim.verdict}")
+        if target is not None else
+        Figure("baseline", f"{label}, no verdict: the bare program is no floor "
+               "(pyarrow's CSV writer is slower than frictex's)", len(ratios), "rounds"))
+    figures += [Figure("baseline", f"{label}, bare CPU user + system (median)",
                        median(bare, "cpu_s"), "s"),
                 Figure("baseline", f"{label}, frictex CPU user + system (median)",
                        median(ours, "cpu_s"), "s")]
@@ -144,7 +141,7 @@ def paired_figures(label: str, bare: list, ours: list, target: float | None) -> 
 
 def run(quick: bool) -> list[Figure]:
     duration = 60.0 if quick else 600.0
-    rounds = 2 if quick else 5
+    rounds = 4 if quick else 8
     figures = []
     with tempfile.TemporaryDirectory(prefix="frictex-baseline-") as name:
         tmp = Path(name)
