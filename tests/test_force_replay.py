@@ -43,6 +43,25 @@ def test_bundled_force_scene_replays_with_phases_and_force_figures(tmp_path, sce
     assert forces["force_error_rms_n"] < 0.01 and forces["wanted_max_n"] > 0.03
 
 
+def test_the_friction_table_holds_each_samples_forces(tmp_path):
+    out, _, _, summary = replay(tmp_path, "directional-beam", CASES["directional-beam"])
+    with (out / "friction.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert list(rows[0])[-3:] == ["force_x_wanted_n", "force_y_wanted_n", "force_x_n"]
+    wanted = np.array([float(r["force_x_wanted_n"]) for r in rows])
+    given = np.array([float(r["force_x_n"]) for r in rows])
+    # the scene's mu' 0.3 forward and 0.9 backward at mu0 0.5 and 0.5 N, signed
+    assert sorted({round(abs(w), 6) for w in wanted} - {0.0}) == [0.075, 0.225]
+    forces = summary["forces"]["0"]
+    rms = float(np.sqrt(np.mean((given - wanted) ** 2)))  # at the CSV's 6 decimals
+    assert rms == pytest.approx(forces["force_error_rms_n"], abs=2e-6)
+    assert np.abs(wanted).max() == pytest.approx(forces["wanted_max_n"])
+    plain = tmp_path / "plain"
+    assert main(["replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(plain)]) == 0
+    assert (plain / "friction.csv").read_text().splitlines()[0] == (
+        "t_s,finger,x_mm,y_mm,mu_target,amplitude_um")
+
+
 @pytest.mark.parametrize("scene", ["keyclick-ring", "keyclick-beam"])
 def test_keyclick_flips_once_per_press_at_the_click_force(tmp_path, scene):
     _, _, table, summary = replay(tmp_path, scene, CASES[scene])

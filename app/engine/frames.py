@@ -106,8 +106,11 @@ class FrameWriter:
             self.overlay.add(record_from_output(out, self.stride, a, b))
 
     def _write(self, out, i: int) -> None:
-        touching = [f"finger {fid}: mu' {out.mu_target[row, i]:.3f}, "
-                    f"{out.amplitude_um[row, i]:.2f} um"
+        touching = [f"finger {fid}: " + (
+                        f"mu' {out.mu_target[row, i]:.3f}" if out.forces is None else
+                        f"force {out.forces.achieved_n[row, i, 0]:+.3f} N (wanted "
+                        f"{out.forces.wanted_n[row, i, 0]:+.3f})")
+                    + f", {out.amplitude_um[row, i]:.2f} um"
                     for row, fid in enumerate(out.ids_per_sample()[:, i].tolist())
                     if out.contact[row, i]]
         status = (f"{self.scene.name} | replay t = {self._frame_time(self.count):.3f} s | "

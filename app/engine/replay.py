@@ -16,7 +16,8 @@ whose ``timings`` differ).
 
 Outputs (DESIGN.md): ``commands.<fmt>`` (t_s, one column per channel in um, phases where
 the actuation has them), ``friction.<fmt>`` (one row per touching finger and output
-sample: t_s, finger, x_mm, y_mm, mu_target, amplitude_um), ``summary.json`` (written
+sample: t_s, finger, x_mm, y_mm, mu_target, amplitude_um; on a travelling-wave scene
+also the force wanted and given, ``app.engine.sinks.FORCE_COLUMNS``), ``summary.json`` (written
 last), ``frames/`` with ``--frames``. ``fmt``: csv, npz or parquet (``app.engine.tables``),
 or ``memory``: no folder, the two tables kept as pyarrow Tables (``frictex.replay``).
 
@@ -39,8 +40,8 @@ from frictex.app.engine.clocks import ClockRequest, DeadlineStats, build_clock, 
 from frictex.app.engine.device_changes import device_warnings
 from frictex.app.engine.driver import (PipelineStage, RunTimer, deferred_interrupts, drive,
                                        force_reports_of)
-from frictex.app.engine.sinks import (FRICTION_COLUMNS, SinkRequest, build_sink,
-                                      command_columns, names_built)
+from frictex.app.engine.sinks import (SinkRequest, build_sink, command_columns,
+                                      friction_columns, names_built)
 from frictex.app.engine.sources import MAX_GAP_S, TraceSource
 from frictex.app.engine.staging import Staging
 from frictex.app.engine.summary import Totals, finite_json, summary, timings
@@ -357,7 +358,7 @@ def _build_sinks(sinks: list, pipeline, source: TraceSource, folder, options: Re
     attached have committed). Returns the link's sink (or None) and the tables'."""
     request = SinkRequest(tuple(pipeline.channels), pipeline.actuation.has_phases,
                           options.rate_hz, pipeline.block_size, folder, options.fmt, device,
-                          frames)
+                          frames, forces=pipeline.forces is not None)
     link = None
     if device is not None:  # a paced link: its send waits (bounded) for the device's room
         link = build_sink("link", request)
@@ -410,7 +411,7 @@ def _check_outputs_fit(out_dir: Path, source: TraceSource, pipeline, fmt: str, f
     samples = output_s * pipeline.rate_hz
     fingers = max(1, most_touching(trace))
     need = samples * (row_bytes(command_columns(pipeline.channels, pipeline.actuation.has_phases), fmt)
-                      + fingers * row_bytes(FRICTION_COLUMNS, fmt))
+                      + fingers * row_bytes(friction_columns(pipeline.forces is not None), fmt))
     what = f"the outputs ({output_s:.6g} s at {pipeline.rate_hz:g} Hz, up to {fingers} fingers, {fmt}"
     if frames is not None:
         need += frames.frames_bytes(output_s)

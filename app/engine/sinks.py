@@ -41,6 +41,18 @@ from frictex.app.engine.tables import open_table
 FRICTION_COLUMNS = [("t_s", np.float64, "%.7f"), ("finger", np.int64, "%d"),
                     ("x_mm", np.float64, "%.4f"), ("y_mm", np.float64, "%.4f"),
                     ("mu_target", np.float64, "%.6f"), ("amplitude_um", np.float64, "%.6f")]
+#: the friction table's further columns on a travelling-wave scene (a force stage): the
+#: force wanted on the finger, x and y of the display, and the force the wave gives it
+#: along x (N; the waves push only along x). There ``mu_target`` is the composed mu' of
+#: the friction layers alone; direction-dependent friction and pushes are in the forces.
+FORCE_COLUMNS = [("force_x_wanted_n", np.float64, "%.6f"),
+                 ("force_y_wanted_n", np.float64, "%.6f"), ("force_x_n", np.float64, "%.6f")]
+
+
+def friction_columns(forces: bool) -> list[tuple]:
+    """``friction`` table columns: :data:`FRICTION_COLUMNS`, then :data:`FORCE_COLUMNS`
+    where the scene has a force stage (``forces``)."""
+    return FRICTION_COLUMNS + (FORCE_COLUMNS if forces else [])
 
 
 def command_columns(channels: tuple[str, ...], phases: bool) -> list[tuple]:
@@ -54,19 +66,22 @@ def command_columns(channels: tuple[str, ...], phases: bool) -> list[tuple]:
 
 def friction_rows(out) -> dict[str, np.ndarray]:
     """``friction`` table rows of a block output: sample-major, then finger id, touching
-    only."""
-    ids = out.ids_per_sample()
-    columns = (out.contact, ids, out.x_mm, out.y_mm, out.mu_target, out.amplitude_um)
+    only; the force columns where ``out`` has forces."""
+    names = [name for name, _, _ in friction_columns(out.forces is not None)][1:]
+    columns = [out.contact, out.ids_per_sample(), out.x_mm, out.y_mm, out.mu_target,
+               out.amplitude_um]
+    if out.forces is not None:
+        columns += [out.forces.wanted_n[..., 0], out.forces.wanted_n[..., 1],
+                    out.forces.achieved_n[..., 0]]
+    ids = columns[1]
     if ids.shape[0] > 1 and (np.diff(ids, axis=0) < 0).any():  # reused rows: by id again
         order = np.argsort(ids, axis=0, kind="stable")
-        columns = tuple(np.take_along_axis(c, order, axis=0) for c in columns)
-    contact, ids, x, y, mu, amplitude = (c.T for c in columns)  # (n, F)
+        columns = [np.take_along_axis(c, order, axis=0) for c in columns]
+    contact, *values = (c.T for c in columns)  # (n, F)
     t = np.broadcast_to(out.t_s[:, None], contact.shape)
     if contact.all():  # every finger down throughout: all rows in order (views for one finger)
-        return {"t_s": t.ravel(), "finger": ids.ravel(), "x_mm": x.ravel(), "y_mm": y.ravel(),
-                "mu_target": mu.ravel(), "amplitude_um": amplitude.ravel()}
-    return {"t_s": t[contact], "finger": ids[contact], "x_mm": x[contact], "y_mm": y[contact],
-            "mu_target": mu[contact], "amplitude_um": amplitude[contact]}
+        return {"t_s": t.ravel(), **{name: v.ravel() for name, v in zip(names, values)}}
+    return {"t_s": t[contact], **{name: v[contact] for name, v in zip(names, values)}}
 
 
 class Sink(Protocol):
@@ -83,7 +98,9 @@ class Sink(Protocol):
         ``out`` is a ``rendering.pipeline.BlockOutput`` of n output samples from output
         sample ``out.index0`` on: ``t_s`` (n,) s on the trace's clock; per finger slot (F, n) ``x_mm``,
         ``y_mm`` (mm), ``contact`` (bool), ``mu_target`` (mu', 0 to 1),
-        ``amplitude_um`` (um zero-to-peak under the finger); ``phases_rad`` (n, channels)
+        ``amplitude_um`` (um zero-to-peak under the finger); ``forces`` (a
+        ``rendering.layers.force_layers.ForceBlock``) on a travelling-wave scene, else
+        None; ``phases_rad`` (n, channels)
         rad or None; ``ids_per_sample()`` the finger ids (F, n). ``commands_um``: (n,
         channels) float64, the amplitude commanded on each actuator channel (um
         zero-to-peak), in the order of :attr:`SinkRequest.channels`. Read them; do not
@@ -123,6 +140,8 @@ class SinkRequest:
         The run's PNG frame writer (the ``frames`` sink's), or None.
     queue_blocks : int
         Calls of ``write`` the ``threaded`` sink queues before it drops one.
+    forces : bool
+        ``out.forces`` comes with every output (a travelling-wave scene's force stage).
     """
 
     channels: tuple[str, ...]
@@ -134,6 +153,7 @@ class SinkRequest:
     link: Any = None
     frames: Any = None
     queue_blocks: int = 64
+    forces: bool = False
 
 
 #: ``factory(arg, request) -> Sink``, by name
@@ -190,11 +210,12 @@ class TableSink:
     or two pyarrow Tables in memory (``fmt`` ``memory``: ``app.engine.tables.MemoryTable``;
     ``files`` stays empty)."""
 
-    def __init__(self, out_dir: Path | None, channels: tuple[str, ...], phases: bool, fmt: str):
+    def __init__(self, out_dir: Path | None, channels: tuple[str, ...], phases: bool, fmt: str,
+                 forces: bool = False):
         self.channels = channels
         self.phases = phases
         self.commands = open_table(out_dir, "commands", command_columns(channels, phases), fmt)
-        self.friction = open_table(out_dir, "friction", FRICTION_COLUMNS, fmt)
+        self.friction = open_table(out_dir, "friction", friction_columns(forces), fmt)
         self.files: list[str] = []
 
     def write(self, out, commands_um) -> None:
@@ -225,7 +246,8 @@ class TableSink:
     def open(cls, arg: str, request: SinkRequest) -> TableSink:
         """The run's tables in ``request.folder`` (its :data:`SINKS` factory)."""
         SINKS.refuse_arg("tables", arg)
-        return cls(request.folder, request.channels, request.phases, request.fmt)
+        return cls(request.folder, request.channels, request.phases, request.fmt,
+                   request.forces)
 
 
 class LinkSink:

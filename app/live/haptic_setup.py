@@ -47,7 +47,8 @@ def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | N
                                     **link_options(haptic.block_s))
         if record is not None:
             record.mkdir(parents=True, exist_ok=True)
-            tables = TableSink(record, pipeline.channels, pipeline.actuation.has_phases, "csv")
+            tables = TableSink(record, pipeline.channels, pipeline.actuation.has_phases, "csv",
+                               pipeline.forces is not None)
             haptic.recorder = ThreadedSink(tables, RECORD_QUEUE, name="frictex-recorder")
     except BaseException:
         if haptic is not None and haptic.sink is not None:
