@@ -73,10 +73,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", type=float, default=None, metavar="N",
                         help="report this normal force (N) from a simulated force sensor")
     parser.add_argument("--lateral", type=float, default=None, metavar="N",
-                        help="send force reports (protocol 3) of this constant lateral force "
+                        help="send force reports (protocol 3 or later) of this constant lateral force "
                              "(N) and the --force normal force (0 without)")
     parser.add_argument("--finger", type=int, default=None, metavar="SEED",
-                        help="send force reports (protocol 3) from a simulated finger, person "
+                        help="send force reports (protocol 3 or later) from a simulated finger, person "
                              "SEED (>= 0) of device.finger's population, sliding at "
                              "--finger-speed and pressing with --force (default 0.5 N): "
                              "friction of the played amplitude by seed 003's model with that "

@@ -11,7 +11,7 @@ flushed) and the bounded hold (a BUFFERING device holds its setpoint at most
 ``watchdog_ms`` after the last sample it played, a Hello not at all, then ramps it to zero
 keeping its buffer: PROTOCOL.md 5.1), asks for host frames it found missing (version 4: Missing, answered by Resend)
 and, with a force sensor (``device.link.simsensor``), reports the lateral and
-normal force in ForceReport messages to a version 3 host.
+normal force in ForceReport messages to a version 3 or later host.
 
 :func:`serve` binds a core to the wall clock and to a pseudo-terminal or a TCP listener
 (one host at a time); ``frictex sim-device`` runs it for external tools. The host's
@@ -439,7 +439,8 @@ class DeviceCore:
 
     def advance_to(self, t_s: float) -> bytes:
         """Play every tick up to (not including) tick ``floor(t_s * rate)``; returns the
-        frames the device sends on its own meanwhile (version 2: Flushed after a trip)."""
+        frames the device sends on its own meanwhile (version 2 and later: Flushed after a
+        trip; 3 and later: ForceReports)."""
         out = bytearray()
         end = int(t_s * self.config.rate_hz)
         while self.tick < end:
