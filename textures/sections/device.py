@@ -78,9 +78,15 @@ def _structure(r: Reader, profile: str, raw, display, files: Files):
     ok = _structure_holds_display(r, path, display, ("x0_mm", "length_mm", "width_mm"),
                                   v["x0_mm"], v["length_mm"])
     orders, actuators = v["orders"], v["actuators_mm"]
-    if any(o != int(o) for o in orders) or len(set(orders)) != len(orders) or len(orders) > MAX_MODES:
-        r.report(path + ("orders",), f"{show(list(orders))}: expected distinct whole mode "
-                                     f"orders (at most {MAX_MODES})")
+    shown = [int(o) if o == int(o) else o for o in orders]  # as written: 16, not 16.0
+    broken = next((f"{o:g} is not a whole mode order" for o in orders if o != int(o)), None)
+    twice = next((o for i, o in enumerate(shown) if o in shown[:i]), None)
+    if broken is None and twice is not None:
+        broken = f"{twice} is given twice; expected distinct mode orders"
+    if broken is None and len(orders) > MAX_MODES:
+        broken = f"{len(orders)} orders; at most {MAX_MODES}"
+    if broken is not None:
+        r.report(path + ("orders",), f"{show(shown)}: {broken}")
         ok = False
     modes = modes_path = None
     if v["modes_file"] is not None:
