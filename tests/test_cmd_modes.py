@@ -60,9 +60,10 @@ def test_plate_json_and_plot(capsys, tmp_path):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["modes", "beam", "--orders", "0"], "mode order must be an integer >= 1 (1 = first bending mode), got 0"),
+    (["modes", "beam", "--orders", "0"], "--orders 0: a mode order is at least 1 (1 = the first "
+                                         "bending mode)"),
     (["modes", "beam", "--poisson", "0.6"], "poisson must be in (-1, 0.5), got 0.6"),
-    (["modes", "beam", "--theory", "timoshenko", "--orders", "95"], "Timoshenko cutoff"),
+    (["modes", "beam", "--theory", "timoshenko", "--orders", "95"], "--orders 95: beta = "),
     (["modes", "plate", "--youngs-gpa", "69", "--density", "2700", "--finger", "200", "5"],
      "--finger 200 5 is outside the 140 x 140 mm plate"),
     (["modes", "beam", "--plot", "/nonexistent-dir/x.png"],
@@ -73,6 +74,82 @@ def test_bad_input_is_one_line_exit_2(capsys, argv, message):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("frictex: error: ") and message in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["beam", "--orders", "100000"], "--orders 100000: at most 100, the highest mode order"),
+    (["beam", "--orders", "16", "16"], "--orders 16 16: 16 is given twice; give each order once"),
+    (["beam", "--thickness-mm", "1e9"], "--thickness-mm 1e+09: must be below --length-mm 350 (a "
+                                        "beam is longer than its cross-section)"),
+    (["beam", "--width-mm", "350"], "--width-mm 350: must be below --length-mm 350"),
+    # order 100: wavelength 6.97 mm on an 8 mm thick beam
+    (["beam", "--thickness-mm", "8", "--orders", "100"],
+     "--orders 100: wavelength 6.97 mm is shorter than the thickness 8 mm (--thickness-mm): no "
+     "bending theory holds there"),
+    (["ring", "--thickness-mm", "200"], "--thickness-mm 200: must be below --radius-mm 50 (the "
+                                        "thin curved beam of seed 004, eq 3 needs h well below R)"),
+    (["ring", "--orders", "5000"], "--orders 5000: at most 100"),
+    (["ring", "--orders", "24", "24"], "--orders 24 24: 24 is given twice"),
+    (["ring", "--band", "1", "1e9"], "--band 1 1e+09: reaches order 117097; at most 100"),
+    (["ring", "--band", "5", "4"], "--band 5 4: MIN_HZ must be below MAX_HZ"),
+    (["ring", "--thickness-mm", "8", "--orders", "90"], "--orders 90: wavelength 6.6 mm is shorter "
+                                                        "than the thickness 8 mm"),
+    (["plate", "--order", "1000"], "--order 1000: expected 1 to 100"),
+    (["plate", "--order", "0"], "--order 0: expected 1 to 100"),
+    (["plate", "--thickness-mm", "1e9"], "--thickness-mm 1e+09: must be below --width-mm 140"),
+])
+def test_inputs_outside_the_models_are_refused_in_one_line(capsys, argv, message):
+    material = ["--youngs-gpa", "69", "--density", "2700"] if argv[0] == "plate" else []
+    assert main(["modes", *argv, *material]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    *warnings, error = captured.err.splitlines()  # a warning may come first
+    assert error.startswith(f"frictex: error: {message}")
+    assert all(w.startswith("frictex: warning: ") for w in warnings)
+
+
+@pytest.mark.parametrize("orders", [["0"], ["1"], ["-3"]])
+def test_ring_orders_below_2_get_one_message_with_the_real_bound(capsys, orders):
+    assert main(["modes", "ring", "--orders", *orders]) == 2
+    assert capsys.readouterr().err == (f"frictex: error: --orders {orders[0]}: a mode order is at "
+                                       "least 2 (wavelengths around the ring; order 1 would move "
+                                       "it rigidly)\n")
+
+
+@pytest.mark.parametrize("argv, warning", [
+    # Euler-Bernoulli reads 18 % above Timoshenko at mode 20 (5.7 thicknesses)
+    (["beam", "--orders", "20"], "--orders 20: wavelength 34.1 mm is under 6 thicknesses (36 mm): "
+                                 "outside the model's validity, shear and rotary inertia"),
+    (["beam", "--theory", "timoshenko", "--orders", "60"],
+     "--orders 60: wavelength 11.6 mm is under 2 thicknesses (12 mm)"),
+    (["ring", "--thickness-mm", "6"], "--thickness-mm 6: above 0.1 R = 5 mm, outside the "
+                                      "thin-ring model's validity"),
+    (["ring", "--orders", "90"], "--orders 90: wavelength 6.6 mm is under 6 thicknesses"),
+    (["plate", "--order", "20"], "--order 20 (x): wavelength 13.7 mm is under 6 thicknesses"),
+])
+def test_inputs_the_models_compute_outside_their_validity_warn(capsys, argv, warning):
+    material = ["--youngs-gpa", "69", "--density", "2700"] if argv[0] == "plate" else []
+    assert main(["modes", *argv, *material]) == 0
+    captured = capsys.readouterr()
+    assert f"frictex: warning: {warning}" in captured.err
+    assert "order" in captured.out  # the table still comes
+
+
+@pytest.mark.parametrize("argv", [["beam"], ["ring"], ["plate", "--youngs-gpa", "69", "--density",
+                                                        "2700"]])
+def test_defaults_warn_nothing(capsys, argv):
+    assert main(["modes", *argv]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def test_ring_split_never_prints_minus_zero(capsys, monkeypatch):
+    from frictex.app.commands import modes_ring
+    summary = modes_ring._pair_summary
+    monkeypatch.setattr(modes_ring, "_pair_summary",
+                        lambda *a: {**summary(*a), "split_hz": -0.001})
+    assert main(["modes", "ring"]) == 0
+    row = capsys.readouterr().out.splitlines()[-1].split()
+    assert row[0] == "24" and row[3] == "0.00"
 
 
 def test_ring_plot_is_seed_004_fig_2c(capsys, tmp_path):

@@ -158,5 +158,5 @@ def test_command_json_matches_the_issue_example(capsys):
 def test_command_errors_are_one_line(capsys):
     assert main(["modes", "ring", "--orders", "1"]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("frictex: error: ring mode order must be an integer >= 2")
+    assert err.startswith("frictex: error: --orders 1: a mode order is at least 2")
     assert err.count("\n") == 1

@@ -5,6 +5,11 @@ Each structure is a module of ``app.commands`` (table :data:`STRUCTURES`) with
 installed answers "not available". ``app.commands.modes_output`` prints the common table or JSON,
 ``{"modes": [{"order", "frequency_hz", "wavelength_mm", "nodes_mm"}, ...]}`` (a
 structure may add keys to each mode, e.g. the plate's ``axis``), and save plots.
+
+Each structure refuses, in one line naming the option, what its model cannot describe
+(an order above 100 or given twice, a wavelength under the thickness, a beam thicker
+than long, a ring thicker than its radius) and warns where the model still computes but
+leaves its validity (a wavelength under 6 thicknesses for the theories without shear).
 """
 
 from __future__ import annotations

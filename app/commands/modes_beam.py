@@ -12,10 +12,17 @@ import argparse
 
 import numpy as np
 
-from frictex.app.commands.modes_output import (add_output_arguments, check_plot, print_modes,
+from frictex.app.commands.modes_output import (add_output_arguments, check_below, check_orders,
+                                               check_plot, check_wavelength, print_modes,
                                                save_figure)
 from frictex.app.commands.argtypes import positive_float
-from frictex.device.structures.beam import THEORIES, FreeFreeBeam
+from frictex.device.structures.beam import (THEORIES, VALID_WAVELENGTH_IN_THICKNESSES,
+                                            FreeFreeBeam, ModesError)
+
+#: what each theory misses where the wavelength is too short for it
+_BEYOND = {"euler-bernoulli": "shear and rotary inertia make the true frequency lower "
+                              "(try --theory timoshenko)",
+           "timoshenko": "the section no longer stays plane"}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -39,8 +46,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     check_plot(args.plot)
+    check_orders(args.orders, 1, "1 = the first bending mode")
+    for option, value in (("--thickness-mm", args.thickness_mm), ("--width-mm", args.width_mm)):
+        check_below(option, value, "--length-mm", args.length_mm, "a beam is longer than its "
+                                                                  "cross-section")
     beam = FreeFreeBeam(args.length_mm, args.width_mm, args.thickness_mm, args.youngs_gpa,
                         args.density, theory=args.theory, poisson=args.poisson)
+    for n in args.orders:
+        try:
+            wavelength_mm = beam.wavelength_mm(n)
+        except ModesError as exc:  # above the Timoshenko cutoff
+            raise ModesError(f"--orders {n}: {exc}") from None
+        check_wavelength(f"--orders {n}", wavelength_mm, beam.thickness_mm,
+                         VALID_WAVELENGTH_IN_THICKNESSES[beam.theory], _BEYOND[beam.theory])
     modes = [{"order": n, "frequency_hz": beam.frequency_hz(n),
               "wavelength_mm": beam.wavelength_mm(n), "nodes_mm": beam.nodes_mm(n).tolist()}
              for n in args.orders]

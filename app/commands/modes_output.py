@@ -4,10 +4,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from frictex.app.engine.outfile import check_writable, write_file
 from frictex.device.errors import require_extra
+from frictex.device.structures.beam import MIN_WAVELENGTH_IN_THICKNESSES, ModesError
+from frictex.textures.keys import MAX_MODE_ORDER
 
 #: a plot's PNG at most (bytes): 8 x 9 inches at 110 dpi, 4 bytes a pixel
 PLOT_BYTES = 880 * 990 * 4
@@ -40,6 +43,47 @@ def check_plot(path: Path | None) -> None:
     if path is not None:
         check_writable("--plot", path, PLOT_BYTES)
         require_extra("report", "matplotlib", "--plot")
+
+
+def check_orders(orders: list[int], lowest: int, what: str) -> None:
+    """Refuse ``--orders`` below ``lowest`` (``what`` says why that is the lowest), above
+    :data:`~frictex.textures.keys.MAX_MODE_ORDER` or given twice, in one line."""
+    for order in orders:
+        if order < lowest:
+            raise ModesError(f"--orders {order}: a mode order is at least {lowest} ({what})")
+        if order > MAX_MODE_ORDER:
+            raise ModesError(f"--orders {order}: at most {MAX_MODE_ORDER}, the highest mode "
+                             f"order frictex computes (as in a scene's [device.structure])")
+    twice = next((o for i, o in enumerate(orders) if o in orders[:i]), None)
+    if twice is not None:
+        raise ModesError(f"--orders {' '.join(map(str, orders))}: {twice} is given twice; "
+                         "give each order once")
+
+
+def check_wavelength(which: str, wavelength_mm: float, thickness_mm: float,
+                     valid_in_thicknesses: float, beyond: str) -> None:
+    """Refuse a mode (``which``, e.g. "--orders 120") whose wavelength is under
+    ``MIN_WAVELENGTH_IN_THICKNESSES`` thicknesses, where no bending theory holds; under
+    ``valid_in_thicknesses`` warn on stderr, ``beyond`` saying what the model misses."""
+    if wavelength_mm < MIN_WAVELENGTH_IN_THICKNESSES * thickness_mm:
+        raise ModesError(f"{which}: wavelength {wavelength_mm:.3g} mm is shorter than the "
+                         f"thickness {thickness_mm:g} mm (--thickness-mm): no bending theory "
+                         "holds there (the wave runs along the surfaces)")
+    if wavelength_mm < valid_in_thicknesses * thickness_mm:
+        warn(f"{which}: wavelength {wavelength_mm:.3g} mm is under {valid_in_thicknesses:g} "
+             f"thicknesses ({valid_in_thicknesses * thickness_mm:g} mm): outside the "
+             f"model's validity, {beyond}")
+
+
+def check_below(option: str, value: float, limit_option: str, limit: float, why: str) -> None:
+    """Refuse ``option`` ``value`` (mm) unless it is below ``limit_option`` ``limit``."""
+    if not value < limit:
+        raise ModesError(f"{option} {value:g}: must be below {limit_option} {limit:g} ({why})")
+
+
+def warn(message: str) -> None:
+    """One line ``frictex: warning: message`` on stderr."""
+    print(f"frictex: warning: {message}", file=sys.stderr)
 
 
 def print_modes(title: str, modes: list[dict], as_json: bool) -> None:

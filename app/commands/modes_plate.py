@@ -14,10 +14,11 @@ import argparse
 
 import numpy as np
 
-from frictex.app.commands.modes_output import (add_output_arguments, check_plot, print_modes,
-                                               save_figure)
+from frictex.app.commands.modes_output import (add_output_arguments, check_below, check_plot,
+                                               check_wavelength, print_modes, save_figure)
 from frictex.app.commands.argtypes import positive_float
-from frictex.device.structures.beam import ModesError
+from frictex.device.structures.beam import VALID_WAVELENGTH_IN_THICKNESSES, ModesError
+from frictex.textures.keys import MAX_MODE_ORDER
 from frictex.device.structures.plate2d import AXES, Plate2D
 
 
@@ -29,7 +30,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--density", type=positive_float, required=True, help="density in kg/m^3")
     parser.add_argument("--poisson", type=float, default=0.33, help="Poisson's ratio (default 0.33)")
     parser.add_argument("--order", type=int, default=8, metavar="K",
-                        help="k of seed 001 eq 6 (default 8, the paper's prototype)")
+                        help=f"k of seed 001 eq 6, 1 to {MAX_MODE_ORDER} (default 8, the paper's "
+                             "prototype)")
     parser.add_argument("--finger", type=float, nargs=2, metavar=("X_MM", "Y_MM"),
                         help="first finger for the det Phi map (default 0.25 a, 0.5 b as Fig. 1)")
     add_output_arguments(parser)
@@ -37,12 +39,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     check_plot(args.plot)
+    if not 1 <= args.order <= MAX_MODE_ORDER:
+        raise ModesError(f"--order {args.order}: expected 1 to {MAX_MODE_ORDER} (k of seed 001, "
+                         "eq 6; the highest mode order frictex computes)")
+    for option, value in (("--width-mm", args.width_mm), ("--height-mm", args.height_mm)):
+        check_below("--thickness-mm", args.thickness_mm, option, value,
+                    "a plate is thin against its sides")
     plate = Plate2D(args.width_mm, args.height_mm, args.thickness_mm, args.youngs_gpa,
                     args.density, poisson=args.poisson, order=args.order)
     finger = args.finger or (0.25 * plate.width_mm, 0.5 * plate.height_mm)
     if not (0 <= finger[0] <= plate.width_mm and 0 <= finger[1] <= plate.height_mm):
         raise ModesError(f"--finger {finger[0]:g} {finger[1]:g} is outside the "
                          f"{plate.width_mm:g} x {plate.height_mm:g} mm plate")
+    for axis in AXES:
+        check_wavelength(f"--order {plate.order} ({axis})", plate.wavelength_mm(axis),
+                         plate.thickness_mm, VALID_WAVELENGTH_IN_THICKNESSES["euler-bernoulli"],
+                         "Kirchhoff's plate leaves out shear and rotary inertia, which make "
+                         "the true frequency lower")
     modes = [{"axis": axis, "order": plate.order, "frequency_hz": plate.frequency_hz(axis),
               "wavelength_mm": plate.wavelength_mm(axis), "nodes_mm": plate.nodes_mm(axis).tolist()}
              for axis in AXES]

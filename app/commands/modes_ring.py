@@ -16,12 +16,17 @@ import json
 
 import numpy as np
 
-from frictex.app.commands.argtypes import positive_float, positive_int
-from frictex.app.commands.modes_output import add_plot_argument, check_plot, save_figure
-from frictex.device.structures.ring import RingResonator
+from frictex.app.commands.argtypes import positive_float
+from frictex.app.commands.modes_output import (add_plot_argument, check_below, check_orders,
+                                               check_plot, check_wavelength, save_figure, warn)
+from frictex.device.structures.beam import VALID_WAVELENGTH_IN_THICKNESSES, ModesError
+from frictex.device.structures.ring import THIN_RING_H_OVER_R, RingResonator
+from frictex.textures.keys import MAX_MODE_ORDER
 
 #: crossings listed: L/R within this factor of the ring's own
 _RATIO_WINDOW = 2.0
+#: what the model (Rayleigh straights, thin curved beam) misses at short wavelengths
+_BEYOND = "shear makes the true frequency lower"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -36,8 +41,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="Young's modulus E in GPa (default 69)")
     parser.add_argument("--density", type=positive_float, default=2680.0,
                         help="density in kg/m^3 (default 2680)")
-    parser.add_argument("--orders", type=positive_int, nargs="+", default=[24], metavar="N",
-                        help="mode orders, wavelengths around the ring, >= 2 (default 24)")
+    parser.add_argument("--orders", type=int, nargs="+", default=[24], metavar="N",
+                        help="mode orders, wavelengths around the ring, 2 to "
+                             f"{MAX_MODE_ORDER} (default 24)")
     parser.add_argument("--band", type=positive_float, nargs=2, metavar=("MIN_HZ", "MAX_HZ"),
                         help="list every mode between two frequencies instead of --orders")
     parser.add_argument("--json", action="store_true",
@@ -49,12 +55,25 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     check_plot(args.plot)
+    check_below("--thickness-mm", args.thickness_mm, "--radius-mm", args.radius_mm,
+                "the thin curved beam of seed 004, eq 3 needs h well below R")
+    if args.thickness_mm > THIN_RING_H_OVER_R * args.radius_mm:
+        warn(f"--thickness-mm {args.thickness_mm:g}: above {THIN_RING_H_OVER_R:g} R = "
+             f"{THIN_RING_H_OVER_R * args.radius_mm:g} mm, outside the thin-ring model's "
+             "validity (seed 004, eq 3 takes h much below R)")
     ring = RingResonator(args.length_mm, args.radius_mm, args.thickness_mm, args.width_mm,
                          args.youngs_gpa, args.density)
     if args.band:
+        _check_band(ring, *args.band)
         modes = ring.modes_in_band(*args.band)
         pairs = []
     else:
+        check_orders(args.orders, 2, "wavelengths around the ring; order 1 would move it "
+                                     "rigidly")
+        perimeter_mm = 2 * ring.length_mm + 2 * np.pi * ring.radius_mm
+        for n in args.orders:  # the perimeter over n first: a cheap bound on the wavelength
+            check_wavelength(f"--orders {n}", perimeter_mm / n, ring.thickness_mm,
+                             VALID_WAVELENGTH_IN_THICKNESSES["euler-bernoulli"], _BEYOND)
         found = [ring.pair(n) for n in args.orders]
         modes = [m for pair in found for m in pair]
         pairs = [_pair_summary(ring, sym, asym) for sym, asym in found]
@@ -69,12 +88,27 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_band(ring: RingResonator, f_min_hz: float, f_max_hz: float) -> None:
+    """Refuse a --band reaching above order MAX_MODE_ORDER or a wavelength under the
+    thickness; warn where its top is outside the model's validity."""
+    if not f_min_hz < f_max_hz:
+        raise ModesError(f"--band {f_min_hz:g} {f_max_hz:g}: MIN_HZ must be below MAX_HZ")
+    order = ring.order_at(f_max_hz)
+    if order > MAX_MODE_ORDER + 0.5:
+        raise ModesError(f"--band {f_min_hz:g} {f_max_hz:g}: reaches order {order:.0f}; at "
+                         f"most {MAX_MODE_ORDER}, the highest mode order frictex computes")
+    wavelength_mm = 2e3 * np.pi / float(ring.k_s(2 * np.pi * f_max_hz))
+    check_wavelength(f"--band {f_min_hz:g} {f_max_hz:g}", wavelength_mm, ring.thickness_mm,
+                     VALID_WAVELENGTH_IN_THICKNESSES["euler-bernoulli"], _BEYOND)
+
+
 def _pair_summary(ring: RingResonator, sym, asym) -> dict:
     ratio = ring.length_mm / ring.radius_mm
     crossings = [c for c in ring.crossings(sym.order)
                  if ratio / _RATIO_WINDOW <= c <= ratio * _RATIO_WINDOW]
     return {"order": sym.order, "symmetric_hz": sym.frequency_hz,
-            "asymmetric_hz": asym.frequency_hz, "split_hz": asym.frequency_hz - sym.frequency_hz,
+            "asymmetric_hz": asym.frequency_hz,
+            "split_hz": asym.frequency_hz - sym.frequency_hz,
             "wavelength_mm": sym.wavelength_mm, "degenerate_l_over_r": crossings}
 
 
@@ -94,7 +128,7 @@ def _print_table(ring: RingResonator, modes, pairs: list[dict], band) -> None:
     for p in pairs:
         lr = " ".join(f"{c:.4f}" for c in p["degenerate_l_over_r"]) or "none"
         print(f"{p['order']:5d}  {p['symmetric_hz']:12.2f}  {p['asymmetric_hz']:13.2f}  "
-              f"{p['split_hz']:8.2f}  {p['wavelength_mm']:13.3f}  {lr}")
+              f"{round(p['split_hz'], 2) + 0.0:8.2f}  {p['wavelength_mm']:13.3f}  {lr}")
 
 
 def _plot(ring: RingResonator, orders: list[int]):

@@ -64,6 +64,17 @@ _NODE_SAMPLES_PER_WAVELENGTH = 40
 MAX_MODES = 26
 
 
+#: Shortest flexural wavelength, in thicknesses, at which each theory holds. Theories
+#: without shear (Euler-Bernoulli, and Kirchhoff for plates) read high as the wavelength
+#: nears the thickness: on seed 000's beam, Euler-Bernoulli is 13.7 % above Timoshenko at
+#: 6.7 thicknesses (mode 17) and 18 % at 5.7 (mode 20); Timoshenko follows the exact
+#: elastic solution down to about 2.
+VALID_WAVELENGTH_IN_THICKNESSES = {"euler-bernoulli": 6.0, "timoshenko": 2.0}
+#: Below one thickness no bending theory holds: the wave no longer bends the section
+#: but runs along the surfaces (Rayleigh-Lamb waves).
+MIN_WAVELENGTH_IN_THICKNESSES = 1.0
+
+
 class ModesError(InputError):
     """A structure, mode order or mode table that cannot be used; says which value and why.
 

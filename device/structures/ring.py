@@ -64,6 +64,9 @@ from scipy.optimize import brentq
 from frictex.device.structures.beam import ModesError, check_positive
 
 KINDS = ("symmetric", "asymmetric")
+#: thickness over radius up to which the thin curved beam of eq 3 holds well (seed 004's
+#: ring: 2.75 / 50 = 0.055); at h >= R the "ring" is a thick annulus (inner radius <= R/2)
+THIN_RING_H_OVER_R = 0.1
 #: determinant samples per pi of total phase around the ring (roots are 2 pi apart per family)
 _SAMPLES_PER_PI = 16
 _MAX_REFINEMENTS = 4
@@ -204,6 +207,11 @@ class RingResonator:
         while float(self.omega(hi)) < target:
             hi *= 2
         return brentq(lambda k: float(self.omega(k)) - target, 1.0, hi, xtol=1e-13, rtol=1e-15)
+
+    def order_at(self, frequency_hz: float) -> float:
+        """Total phase around the ring over pi at ``frequency_hz`` (> 0): the (fractional)
+        order of a mode there."""
+        return float(self.total_phase(self._k_c_at(frequency_hz))) / math.pi
 
     def modes_in_band(self, f_min_hz: float, f_max_hz: float) -> list[RingMode]:
         """Every mode (all four families) with f_min_hz <= frequency <= f_max_hz, by frequency.
