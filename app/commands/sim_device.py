@@ -73,11 +73,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--force", type=float, default=None, metavar="N",
                         help="report this normal force (N) from a simulated force sensor")
     parser.add_argument("--lateral", type=float, default=None, metavar="N",
-                        help="send force reports (protocol 3 or later) of this constant lateral force "
-                             "(N) and the --force normal force (0 without)")
+                        help="send force reports (protocol 3 or later) of this constant lateral "
+                             "force (N) and the --force normal force (0 without)")
     parser.add_argument("--finger", type=int, default=None, metavar="SEED",
-                        help="send force reports (protocol 3 or later) from a simulated finger, person "
-                             "SEED (>= 0) of device.finger's population, sliding at "
+                        help="send force reports (protocol 3 or later) from a simulated finger, "
+                             "person SEED (>= 0) of device.finger's population, sliding at "
                              "--finger-speed and pressing with --force (default 0.5 N): "
                              "friction of the played amplitude by seed 003's model with that "
                              "person's constants and drift, seen by a 1 kHz sensor with 2 mN "
@@ -129,8 +129,9 @@ def run(args: argparse.Namespace) -> int:
             core.plate_log, csv = plate_log(args.plate_log, config.channels)
             logs.append(csv)
             rows, mb_hour = plate_log_growth(config.channels, config.rate_hz)
-            print(f"frictex sim-device: --plate-log {escape_path(args.plate_log)} grows by {rows:,.0f} rows "
-                  f"a second, about {mb_hour:,.0f} MB an hour, until the device exits",
+            print(f"frictex sim-device: --plate-log {escape_path(args.plate_log)} grows by "
+                  f"{rows:,.0f} rows a second, about {mb_hour:,.0f} MB an hour, until the "
+                  "device exits",
                   file=sys.stderr)
         _serve(core, args, quit_event)
     finally:
