@@ -1,4 +1,4 @@
-"""Reach: how much of a scene asks for a friction the device cannot give.
+"""Reach: how much of a scene asks for a friction (or a force) the device cannot give.
 
 A device lowers friction only down to a floor: the lowest mu' it reaches at a normal force
 within its amplitude limit (``device.friction.mu_floor``; seed 003 eq 2 at the amplifier
@@ -25,6 +25,11 @@ the floor: each layer's share of the mean -ln mu' there, kept if at least
 The pipeline (and the kernels it compiles) runs only for a scene whose layers' lowest
 mu' values multiply to less than the floor: below that bound no composition can fall
 below it, and the answer is "none" without running anything.
+
+A travelling-wave scene asks for forces as well (``rendering.layers.force_layers``):
+:func:`force_reach` runs the typical stroke through its pipeline and gives the share of
+its contact samples whose wanted force the wave cannot give there, and for each
+key-click button the same over a press at its centre.
 """
 
 from __future__ import annotations
@@ -149,40 +154,52 @@ class _Recording:
         return mu, covers, new_state
 
 
-def stroke_trace(scene):
-    """The typical stroke over ``scene``'s display at its nominal force (a ``Trace``).
+def stroke_trace(scene, box=None):
+    """The typical stroke over ``box`` (x0, y0, x1, y1) mm, default ``scene``'s display, at
+    the scene's nominal force (a ``Trace``).
 
     The motion keeps ``trace_synth``'s margin from the edges, so along a side shorter than
     :data:`MIN_STROKE_SPAN_MM` it is drawn on that span and scaled onto the side (a 6 mm
     beam's stroke stays on the beam, moving slower across it)."""
     from frictex.rendering.input.trace_file import make_trace
     from frictex.rendering.input.trace_synth import make_motion, sample
-    d = scene.display
-    span = (max(d.width_mm, MIN_STROKE_SPAN_MM), max(d.height_mm, MIN_STROKE_SPAN_MM))
+    from frictex.textures.extent import display_box
+    x0, y0, x1, y1 = display_box(scene.display) if box is None else box
+    width, height = x1 - x0, y1 - y0
+    span = (max(width, MIN_STROKE_SPAN_MM), max(height, MIN_STROKE_SPAN_MM))
     motion = make_motion("human", duration_s=STROKE_S, speed_mm_s=STROKE_SPEED_MM_S,
                          area_mm=span, seed=STROKE_SEED)
     trace = sample(motion, STROKE_RATE_HZ, force_n=scene.device.normal_force_n)
-    if span == (d.width_mm, d.height_mm):
+    if span == (width, height) and (x0, y0) == (0.0, 0.0):
         return trace
-    return make_trace(trace.t_s, trace.finger, trace.x_mm * (d.width_mm / span[0]),
-                      trace.y_mm * (d.height_mm / span[1]), trace.force_n, trace.event)
+    return make_trace(trace.t_s, trace.finger, x0 + trace.x_mm * (width / span[0]),
+                      y0 + trace.y_mm * (height / span[1]), trace.force_n, trace.event)
+
+
+def _stroke_output(scene, recording: bool = False, trace=None):
+    """The pipeline's output (a ``BlockOutput``) over ``trace`` (default the typical
+    stroke), and its layer renderers (each a :class:`_Recording` of what it gave where
+    ``recording``)."""
+    from frictex.rendering.pipeline import build_pipeline
+    from frictex.rendering.tracking.tracks import apply_index
+
+    trace = stroke_trace(scene) if trace is None else trace
+    pipe = build_pipeline(scene, t0_s=float(trace.t_s[0]))
+    if recording:
+        pipe.renderers = tuple(_Recording(r) for r in pipe.renderers)
+    applied = apply_index(trace.t_s, pipe.tracker_config)
+    blocks = int(applied[-1] // pipe.block_size) + 1
+    out, _ = pipe.process(0, trace, pipe.initial_state(), n_blocks=blocks)
+    return out, pipe.renderers
 
 
 def _stroke(scene):
     """(composed mu' of the contact samples (m,), per-layer (mu, covers) (1, m) there)."""
-    from frictex.rendering.pipeline import build_pipeline
-    from frictex.rendering.tracking.tracks import apply_index
-
-    trace = stroke_trace(scene)
-    pipe = build_pipeline(scene, t0_s=float(trace.t_s[0]))
-    pipe.renderers = tuple(_Recording(r) for r in pipe.renderers)
-    applied = apply_index(trace.t_s, pipe.tracker_config)
-    blocks = int(applied[-1] // pipe.block_size) + 1
-    out, _ = pipe.process(0, trace, pipe.initial_state(), n_blocks=blocks)
+    out, renderers = _stroke_output(scene, recording=True)
     touching = out.contact
     outputs = [(np.broadcast_to(mu, touching.shape)[touching][None, :],
                 np.broadcast_to(covers, touching.shape)[touching][None, :])
-               for mu, covers in (r.outputs[0] for r in pipe.renderers)]
+               for mu, covers in (r.outputs[0] for r in renderers)]
     return out.mu_target[touching], outputs
 
 
@@ -216,3 +233,76 @@ def scene_reach(scene) -> Reach:
                      [(area_below, area_layers), (stroke_below, stroke_layers)])
     return Reach(floor, force, float(area_below.mean()),
                  float(stroke_below.mean()) if stroke_mu.size else 0.0, overlap, causes)
+
+
+@dataclass(frozen=True)
+class ForceReach:
+    """What part of a travelling-wave scene asks for a force the wave cannot give there.
+
+    stroke_share : fraction in [0, 1] of the contact samples of typical strokes (over the
+        display, and over each directional or guidance layer's region) whose wanted
+        tangential force is out of reach, those under a key-click button that is on left
+        out (a key is pressed, not stroked: a finger sliding against its push gets at
+        most what the wave adds to friction).
+    presses : per key-click layer, (name, fraction in [0, 1] of a press's samples with the
+        button on whose push is out of reach): a still finger at the button's centre
+        pressing to :data:`PRESS_PEAK` times ``click_n`` and back; samples pressing less
+        than ``release_n`` (the button's dwell after a release) are left out.
+    """
+
+    stroke_share: float
+    presses: tuple[tuple[str, float], ...]
+
+
+#: a checking press's peak normal force, over the key's click_n
+PRESS_PEAK = 1.25
+
+
+def force_reach(scene) -> ForceReach | None:
+    """On a travelling-wave scene (one with a force stage), what of its forces the wave
+    cannot give (:class:`ForceReach`): out of reach forces are clamped to the nearest
+    reachable one and counted as ``unreachable`` when the scene plays (the amplifier's
+    limit; on a finite beam also the travelling-wave ratio, which falls away from
+    mid-span). None on any other scene."""
+    from frictex.device.profile import FORCE_PROFILES
+    from frictex.rendering.input.press_synth import press_trace
+    from frictex.textures.model import KeyClick
+    if scene.device.profile not in FORCE_PROFILES:
+        return None
+    unreachable = counted = 0
+    for box in _stroke_boxes(scene):
+        out, _ = _stroke_output(scene, trace=stroke_trace(scene, box))
+        touching = out.contact if out.forces.button is None else (
+            out.contact & (out.forces.button == 0))
+        unreachable += int((out.forces.unreachable & touching).sum())
+        counted += int(touching.sum())
+    stroke = unreachable / counted if counted else 0.0
+    presses = []
+    for layer in scene.layers:
+        if isinstance(layer, KeyClick):
+            x, y = layer.geometry.center
+            press = press_trace(peaks_n=(PRESS_PEAK * layer.click_n,), x_mm=x, y_mm=y,
+                                rate_hz=STROKE_RATE_HZ, touch_n=0.5 * layer.release_n,
+                                noise_n=0.0)
+            pressed, _ = _stroke_output(scene, trace=press)
+            sample = np.maximum(np.searchsorted(press.t_s, pressed.t_s, side="right") - 1, 0)
+            on = (pressed.contact & (pressed.forces.button > 0)
+                  & (press.force_n[sample] >= layer.release_n))
+            presses.append((layer.name, float((pressed.forces.unreachable & on).sum() / on.sum())
+                             if on.any() else 0.0))
+    return ForceReach(stroke, tuple(presses))
+
+
+def _stroke_boxes(scene) -> list:
+    """Where :func:`force_reach` strokes: the display, and each directional or guidance
+    layer's region on it (a long beam's typical stroke covers a fifth of it)."""
+    from frictex.textures.extent import display_box, intersect, region_box
+    from frictex.textures.model import Directional, Guidance
+    display = display_box(scene.display)
+    boxes = [display]
+    for layer in scene.layers:
+        if isinstance(layer, Directional | Guidance) and layer.region is not None:
+            box = intersect(region_box(layer.region), display)
+            if box is not None and box not in boxes:
+                boxes.append(box)
+    return boxes

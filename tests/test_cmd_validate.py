@@ -219,3 +219,44 @@ def test_a_region_that_never_meets_its_layer_is_warned_about(tmp_path, capsys, r
     assert code == 0
     assert ("layer[1].region: never meets where the layer acts (within x 34 to 66 mm, y 14 to "
             "46 mm): the layer covers nothing" in err) == warned
+
+
+def _force_scene(tmp_path, name, old, new):
+    """A bundled force scene with ``old`` replaced by ``new``."""
+    text = (LIBRARY_DIR / f"{name}.toml").read_text()
+    assert old in text
+    path = tmp_path / f"{name}-changed.toml"
+    path.write_text(text.replace(old, new))
+    return path
+
+
+def test_a_directional_region_reaching_the_beams_ends_is_warned_about(tmp_path, capsys):
+    """On seed 002's finite beam the wave takes friction down to 0.3 only mid-span (a
+    travelling-wave ratio of 0.68 and more, 227-373 mm): the whole beam asks for it where
+    it cannot be given; the bundled 230-370 mm validates clean (strict, above)."""
+    path = _force_scene(tmp_path, "directional-beam", "x_mm = 230.0, y_mm = 0.0, width_mm = 140.0",
+                        "x_mm = 0.0, y_mm = 0.0, width_mm = 600.0")
+    assert main(["validate", str(path)]) == 0
+    out, err = capsys.readouterr()
+    assert out == f"ok {path} (1 layer)\n"
+    [line] = err.splitlines()
+    share = float(re.search(r"forces: ([\d.]+)% of typical strokes", line).group(1))
+    assert 15.0 <= share <= 30.0  # the stroke runs 108-221 mm: 21.6 % at these seeds
+    assert "clamped to the nearest reachable (summary.json: clamps.unreachable)" in line
+    assert main(["validate", "--strict", str(path)]) == 2
+    capsys.readouterr()
+    end = _force_scene(tmp_path, "directional-beam", "x_mm = 230.0, y_mm = 0.0, width_mm = 140.0",
+                       "x_mm = 450.0, y_mm = 0.0, width_mm = 150.0")  # where no display stroke goes
+    assert main(["validate", str(end)]) == 0
+    assert "forces:" in capsys.readouterr().err
+
+
+def test_a_key_click_pushing_harder_than_the_wave_can_is_warned_about(tmp_path, capsys):
+    """A still finger pressing at 0.5 N gets at most 0.13 N/um x 0.5 N x (3 um - 1 um) =
+    0.13 N from the ring's wave (seed 004, Fig. 3c): 0.1 N is given, 0.3 N is not."""
+    path = _force_scene(tmp_path, "keyclick-ring", "force_n = 0.1 ", "force_n = 0.3 ")
+    assert main(["validate", str(path)]) == 0
+    [line] = capsys.readouterr().err.splitlines()
+    assert 'forces: key-click "button":' in line and "of a press at its centre" in line
+    share = float(re.search(r'"button": ([\d.]+)% of a press', line).group(1))
+    assert share > 50.0  # every sample pressing below 1.15 N (0.3 / 0.13 x 0.5) at least

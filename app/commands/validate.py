@@ -8,7 +8,10 @@ message``. Two kinds of warning concern reach, at the scene's nominal normal for
 floor (the loader's, with the line of its key), and layers whose *product* goes below it
 (``rendering.reach``: the share of the display's area and of a typical stroke run
 through the scene's pipeline, and the layers that cause it; ``textures.overlap``: the
-lowest product where layers overlap, and those layers).
+lowest product where layers overlap, and those layers). On a travelling-wave scene also
+forces (``rendering.reach.force_reach``): the share of typical strokes (over the display
+and each directional or guidance layer's region), and of a press on each key-click
+button, asking for a force out of the wave's reach.
 
 Exit 0 if every file is good (warnings allowed), 2 if any is bad. ``--strict`` counts a
 file with warnings as bad: exit 2, because a warning is about what the file asks for
@@ -87,6 +90,30 @@ def reach_warning(path, scene) -> str | None:
             f"to the floor")
 
 
+def force_reach_warnings(path, scene) -> list[str]:
+    """The warnings for a travelling-wave scene whose typical stroke, or a press on one of
+    its key-click buttons, asks for forces out of the wave's reach
+    (``rendering.reach.force_reach``)."""
+    from frictex.rendering.reach import PRESS_PEAK, STROKE_S, force_reach
+
+    reach = force_reach(scene)
+    if reach is None:
+        return []
+    why = ("beyond the amplifier's limit or, on a finite beam, where the travelling-wave "
+           "ratio falls away from mid-span; those forces will be clamped to the nearest "
+           "reachable (summary.json: clamps.unreachable)")
+    found = []
+    if reach.stroke_share:
+        found.append(f"{escape_path(path)}: forces: {_share(reach.stroke_share)} of typical "
+                     f"strokes ({STROKE_S:g} s over the display, and over each directional or "
+                     f"guidance layer's region) asks for a tangential force out of the wave's "
+                     f"reach, {why}")
+    found += [f'{escape_path(path)}: forces: key-click "{name}": {_share(share)} of a press '
+              f"at its centre (to {PRESS_PEAK:g} times click_n) asks for a push out of the "
+              f"wave's reach, {why}" for name, share in reach.presses if share]
+    return found
+
+
 def _is_protocol(name: str) -> bool:
     """True for a readable TOML file with a top-level ``method`` (an experiment protocol)."""
     import tomllib
@@ -141,8 +168,9 @@ def run(args: argparse.Namespace) -> int:
         for problem in problems:
             print(f"frictex: error: {printable(str(problem))}", file=sys.stderr)
         notes = [str(w) for w in warnings]
-        reach = reach_warning(path, scene) if scene is not None else None
-        notes += [reach] if reach is not None else []
+        if scene is not None:
+            reach = reach_warning(path, scene)
+            notes += ([reach] if reach is not None else []) + force_reach_warnings(path, scene)
         for note in notes:
             print(f"frictex: warning: {printable(note)}", file=sys.stderr)
         if args.perception and scene is not None:
