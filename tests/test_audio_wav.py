@@ -144,3 +144,31 @@ def test_wav_through_the_registry(tmp_path):
 def test_wav_bad_path_is_an_input_error(tmp_path):
     with pytest.raises(InputError, match="cannot write"):
         open_sink(f"audio:wav:{tmp_path}/missing/x.wav", 1, RATE)
+
+
+def test_a_stream_is_written_all_or_nothing(tmp_path):
+    """The WAV appears only when the stream ends; a failed or refused run removes what it
+    wrote and leaves an earlier file as it was (a closed loop is refused: no force
+    reports)."""
+    path = tmp_path / "s.wav"
+    path.write_bytes(b"earlier")
+    sink = open_sink(f"audio:wav:{path}", 1, RATE, paced=True)
+    sink.send(0, np.full((500, 1), 1.0))
+    assert path.read_bytes() == b"earlier" and (tmp_path / "s.wav.partial").exists()
+    sink.abort()
+    assert path.read_bytes() == b"earlier" and not (tmp_path / "s.wav.partial").exists()
+    with pytest.raises(frictex.DeviceError, match="sends no force reports"):
+        frictex.replay("grating-5mm", "swipe-40mms-50hz", device=f"audio:wav:{path}",
+                       control="closed")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.wav"]
+    assert path.read_bytes() == b"earlier"
+    with open_sink(f"audio:wav:{path}", 1, RATE, paced=True) as sink:
+        sink.send(0, np.full((500, 1), 1.0))
+    fs, frames = wavfile.read(path)
+    assert fs == FS and frames.size == sink.status()["audio"]["commanded_frames"]
+
+
+def test_a_stream_to_a_character_device_is_written_directly():
+    with open_sink("audio:wav:/dev/null", 1, RATE, paced=True) as sink:
+        sink.send(0, np.full((100, 1), 1.0))
+    assert sink.status()["commanded_samples"] == 100

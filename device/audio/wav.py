@@ -6,10 +6,18 @@ start and end ramps included (a file has no starvation: it is written as fast as
 pipeline runs, unpaced). Full scale 1.0 is ``full_scale_v`` volts of drive. RIFF's 32-bit
 sizes bound a file to 4 GiB (about 93 min of one channel at 192 kHz): a stream past that
 is a DeviceError. The header's sizes are written when the file is closed.
+
+All or nothing, as a replay's tables: the stream is written under ``PATH.partial`` and
+renamed to PATH when it ends (:meth:`WavOutput.close`); a run that fails or is stopped
+(:meth:`WavOutput.abort`, a refused closed loop included) removes it and leaves an earlier
+PATH as it was. A PATH that is a character device or a FIFO (``/dev/null``, a pipe) is
+written directly.
 """
 
 from __future__ import annotations
 
+import os
+import stat
 import struct
 import sys
 from pathlib import Path
@@ -41,8 +49,10 @@ class WavOutput(AudioOutput):
     def __init__(self, plan: AudioPlan, path: str, *, phases: bool, stderr=sys.stderr):
         super().__init__(plan, f"audio:wav:{path}", phases=phases, paced=False, stderr=stderr)
         self.path = Path(path)
+        self._partial = None if _is_stream(self.path) else self.path.with_name(
+            self.path.name + ".partial")
         try:
-            self._file = open(self.path, "wb")  # noqa: SIM115 (closed by close())
+            self._file = open(self._partial or self.path, "wb")  # noqa: SIM115 (closed by close())
         except OSError as exc:
             raise InputError(f"audio device wav:{path}: cannot write it: "
                              f"{exc.strerror or exc}") from None
@@ -59,10 +69,26 @@ class WavOutput(AudioOutput):
     def _end(self, tail: np.ndarray) -> None:
         try:
             self._emit(tail)
-        finally:
             self._file.seek(0)
             self._file.write(wav_header(self.channels, self.plan.audio_rate, self._frames))
             self._file.close()
+        except BaseException:
+            self._discard()
+            raise
+        if self._partial is not None:
+            os.replace(self._partial, self.path)
+
+    def abort(self) -> None:
+        """A failed or stopped run: close the file and remove what was written (an earlier
+        file at the path stays); idempotent."""
+        if not self.closed:
+            self.closed = True
+            self._discard()
+
+    def _discard(self) -> None:
+        self._file.close()
+        if self._partial is not None:
+            self._partial.unlink(missing_ok=True)
 
     def played_frames(self) -> int:
         """Frames written."""
@@ -71,3 +97,12 @@ class WavOutput(AudioOutput):
     def unplayed_by_cause(self) -> dict[str, int]:
         """None: every frame is written."""
         return dict.fromkeys(CAUSES, 0)
+
+
+def _is_stream(path: Path) -> bool:
+    """True for a character device or a FIFO (links followed): written directly."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return False
+    return stat.S_ISCHR(mode) or stat.S_ISFIFO(mode)
