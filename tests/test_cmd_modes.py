@@ -199,3 +199,151 @@ def test_help(capsys):
         main(["modes", "beam", "--help"])
     assert exc.value.code == 0
     assert "--theory" in capsys.readouterr().out
+
+
+# --- seed 004, Fig. 4: ratio and force against the phase shift (modes ring --phase-shift)
+
+def phase_json(capsys, *extra):
+    assert main(["modes", "ring", "--phase-shift", "--json", *extra]) == 0
+    return json.loads(capsys.readouterr().out)["phase_shift"]
+
+
+def test_ring_phase_shift_follows_two_degenerate_modes_in_closed_form(capsys):
+    """Two degenerate modes cos and sin at one k with W_A = e^{j phi} W_B: |W|^2 =
+    W^2 (1 + cos phi sin 2kx), so min |W| = W sqrt(1 - |cos phi|), ratio =
+    tan(min(|phi|, 180 - |phi|) / 2), and the force k_p F_n max(0, min |W| - w_th)
+    reverses with the sign of phi. The ring's pair is split by 7 Hz: 1 % tolerance."""
+    got = phase_json(capsys, "--amplitude-um", "2.5", "--normal-force-n", "1", "0.4")
+    assert (got["order"], got["amplitude_um"], got["normal_force_n"]) == (24, 2.5, [1.0, 0.4])
+    phase = np.array([row["phase_deg"] for row in got["rows"]])
+    assert_allclose(phase, np.arange(-180, 181, 15))  # the default step
+    ratio = np.array([row["ratio"] for row in got["rows"]])
+    force = np.array([row["force_n"] for row in got["rows"]])  # (phases, normal forces)
+    phi = np.radians(phase)
+    folded = np.minimum(np.abs(phi), np.pi - np.abs(phi))
+    assert_allclose(ratio, np.tan(folded / 2), atol=0.01)
+    w_min = 2.5 * np.sqrt(1 - np.abs(np.cos(phi)))
+    expected = 0.13 * np.array([1.0, 0.4]) * np.maximum(w_min - 1.0, 0.0)[:, None]
+    assert_allclose(np.abs(force), expected, rtol=0.01, atol=1e-4)
+    assert_allclose(force, -force[::-1], atol=1e-12)  # reverses with the sign of phi
+    at = {p: i for i, p in enumerate(phase)}
+    for p in (-90, 90):  # a pure travelling wave: ratio 1, k_p F_n (W - w_th)
+        assert abs(ratio[at[p]] - 1) < 0.01
+        assert_allclose(np.abs(force[at[p]]), 0.13 * np.array([1.0, 0.4]) * 1.5, rtol=0.01)
+    assert np.sign(force[at[-90], 0]) == -np.sign(force[at[90], 0]) != 0
+    for p in (-180, 0, 180):  # a standing wave: ratio near 0, no force
+        assert ratio[at[p]] < 0.01 and np.all(force[at[p]] == 0)
+
+
+def test_ring_phase_shift_table_prints_the_json_values(capsys):
+    got = phase_json(capsys, "--phase-step-deg", "45")
+    assert main(["modes", "ring", "--phase-shift", "--phase-step-deg", "45"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    header = out.index("phase_deg   ratio     force_n@1N   force_n@0.5N")
+    rows = [line.split() for line in out[header + 1:]]
+    assert len(rows) == len(got["rows"]) == 9
+    for printed, row in zip(rows, got["rows"]):
+        assert float(printed[0]) == row["phase_deg"]
+        assert_allclose([float(v) for v in printed[1:]], [row["ratio"], *row["force_n"]],
+                        atol=5e-5)
+        assert not any(v.startswith("-0.0000") for v in printed)
+
+
+def test_ring_phase_shift_plot_and_default_output_unchanged_without_it(capsys, tmp_path):
+    png = tmp_path / "phase.png"
+    assert main(["modes", "ring", "--phase-shift", "--plot", str(png)]) == 0
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
+    capsys.readouterr()
+    assert main(["modes", "ring", "--json"]) == 0
+    assert set(json.loads(capsys.readouterr().out)) == {"modes", "pairs"}
+
+
+def test_ring_phase_shift_amplitude_beyond_seed_004_warns(capsys):
+    assert main(["modes", "ring", "--phase-shift", "--amplitude-um", "4"]) == 0
+    assert capsys.readouterr().err == ("frictex: warning: --amplitude-um 4: above 3 um, beyond "
+                                       "seed 004's measurements (Fig. 3c): the force's line is "
+                                       "extrapolated\n")
+
+
+# --- the local travelling-wave ratio along a beam (modes beam --travelling)
+
+SEED002 = ["--length-mm", "600", "--width-mm", "6", "--thickness-mm", "6", "--youngs-gpa", "69",
+           "--density", "2700", "--orders", "28", "29"]
+
+
+def test_beam_travelling_ratio_on_seed_002_beam(capsys):
+    """Two adjacent modes drift out of quadrature by delta = (k_B - k_A)(x - L/2):
+    tau = (1 - |sin delta|) / |cos delta| away from the ends' evanescent terms."""
+    assert main(["modes", "beam", *SEED002, "--travelling", "--points", "49", "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert [m["order"] for m in got["modes"]] == [28, 29]
+    travelling = got["travelling"]
+    x, ratio = np.array(travelling["positions_mm"]), np.array(travelling["ratio"])
+    assert_allclose(x, np.linspace(0, 600, 49))
+    beam = FreeFreeBeam(600, 6, 6, 69, 2700)
+    k_a, k_b = (2 * np.pi / beam.wavelength_mm(n) for n in (28, 29))
+    delta = (k_b - k_a) * (x - 300)
+    tau = (1 - np.abs(np.sin(delta))) / np.abs(np.cos(delta))
+    inner = (x > 50) & (x < 550)
+    assert_allclose(ratio[inner], tau[inner], atol=1e-3)
+    assert ratio[0] < 0.01 and ratio[-1] < 0.01
+    spans = {s["threshold"]: s["spans_mm"] for s in travelling["spans"]}
+    # the bundled directional-beam and guidance-beam keep to 230-370 mm, inside the 0.68 span
+    [(start, end)] = spans[0.68]
+    assert 227 < start < 230 and 370 < end < 373 and abs(start + end - 600) < 0.1
+    crossing = 300 - np.arcsin((1 - 0.68 ** 2) / (1 + 0.68 ** 2)) / (k_b - k_a)  # tau = 0.68
+    assert abs(start - crossing) < 0.1
+    assert np.all(ratio[(x < start) | (x > end)] < 0.68)
+    assert np.all(ratio[(x > start) & (x < end)] >= 0.68)
+    [(start9, end9)] = spans[0.9]
+    assert start < start9 < 300 < end9 < end
+
+
+def test_beam_travelling_table_prints_the_json_spans(capsys, tmp_path):
+    png = tmp_path / "travelling.png"
+    argv = ["modes", "beam", *SEED002, "--travelling", "--threshold", "0.5", "0.9"]
+    assert main([*argv, "--json"]) == 0
+    spans = json.loads(capsys.readouterr().out)["travelling"]["spans"]
+    assert main([*argv, "--plot", str(png)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    for item in spans:
+        (s, e), = item["spans_mm"]
+        assert f"ratio >= {item['threshold']:g}: {s:.1f}-{e:.1f} mm" in out
+    assert len([line for line in out if line.startswith(" ") and len(line.split()) == 2]) >= 25
+    assert png.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["ring", "--amplitude-um", "2"], "--amplitude-um 2: needs --phase-shift"),
+    (["ring", "--normal-force-n", "1", "0.5"], "--normal-force-n 1 0.5: needs --phase-shift"),
+    (["ring", "--phase-step-deg", "30"], "--phase-step-deg 30: needs --phase-shift"),
+    (["ring", "--phase-shift", "--phase-step-deg", "7"], "--phase-step-deg 7: must divide 180"),
+    (["ring", "--phase-shift", "--band", "39000", "41000"],
+     "--phase-shift: needs --orders (its first pair), not --band"),
+    (["beam", "--travelling", "--orders", "16", "18"], "--travelling: needs two adjacent --orders "
+                                                       "N N+1 (got 16 18)"),
+    (["beam", "--travelling", "--orders", "17", "16"], "(got 17 16)"),
+    (["beam", "--points", "10"], "--points 10: needs --travelling"),
+    (["beam", "--threshold", "0.7"], "--threshold 0.7: needs --travelling"),
+])
+def test_bad_travelling_options_are_one_line_exit_2(capsys, argv, message):
+    assert main(["modes", *argv]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.count("\n") == 1
+    assert captured.err.startswith("frictex: error: ") and message in captured.err
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["ring", "--phase-shift", "--phase-step-deg", "0.1"], "argument --phase-step-deg: '0.1' "
+                                                           "degrees: expected 0.5 to 90"),
+    (["ring", "--phase-shift", "--amplitude-um", "-1"], "argument --amplitude-um: '-1' must be"),
+    (["ring", "--phase-shift", "--normal-force-n", "inf"], "argument --normal-force-n: 'inf'"),
+    (["beam", "--travelling", "--points", "1"], "argument --points: '1' positions: expected 2"),
+    (["beam", "--travelling", "--threshold", "1.5"], "argument --threshold: '1.5' must be between"),
+])
+def test_bad_travelling_values_are_refused_by_the_parser_in_one_line(capsys, argv, message):
+    with pytest.raises(SystemExit) as exc:
+        main(["modes", *argv])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("frictex: error: ") and message in err and err.count("\n") == 1

@@ -81,6 +81,13 @@ def check_below(option: str, value: float, limit_option: str, limit: float, why:
         raise ModesError(f"{option} {value:g}: must be below {limit_option} {limit:g} ({why})")
 
 
+def refuse_without(option: str, given, needed: str) -> None:
+    """Refuse ``option`` (given as ``given``, a number or a list of them) used without
+    the option ``needed`` that it only modifies."""
+    shown = " ".join(f"{v:g}" for v in given) if isinstance(given, list) else f"{given:g}"
+    raise ModesError(f"{option} {shown}: needs {needed}")
+
+
 def warn(message: str) -> None:
     """One line ``frictex: warning: message`` on stderr."""
     print(f"frictex: warning: {message}", file=sys.stderr)

@@ -7,6 +7,8 @@ frequencies coincide. Defaults are seed 004's design (aluminium 5052, L 140 mm,
 R 50 mm, h 2.75 mm, w 30 mm). For each order the table gives both frequencies, their
 split, and the L/R ratios (R fixed) at which the pair is exactly degenerate
 (seed 004, Fig. 2c). --band lists every mode between two frequencies instead.
+--phase-shift adds, for the first --orders pair, the travelling-wave ratio and the force
+on a still finger against the phase shift between the two modes (seed 004, Fig. 4).
 """
 
 from __future__ import annotations
@@ -16,10 +18,13 @@ import json
 
 import numpy as np
 
-from frictex.app.commands.argtypes import positive_float
+from frictex.app.commands.argtypes import bounded, positive_float
 from frictex.app.commands.modes_output import (add_plot_argument, check_below, check_orders,
-                                               check_plot, check_wavelength, save_figure, warn)
+                                               check_plot, check_wavelength, refuse_without,
+                                               save_figure, warn)
 from frictex.device.structures.beam import VALID_WAVELENGTH_IN_THICKNESSES, ModesError
+from frictex.device.actuation.travelling import phase_shift_response, ring_wave
+from frictex.device.profile import DrivingForceParams
 from frictex.device.structures.ring import THIN_RING_H_OVER_R, RingResonator
 from frictex.textures.keys import MAX_MODE_ORDER
 
@@ -27,6 +32,9 @@ from frictex.textures.keys import MAX_MODE_ORDER
 _RATIO_WINDOW = 2.0
 #: what the model (Rayleigh straights, thin curved beam) misses at short wavelengths
 _BEYOND = "shear makes the true frequency lower"
+#: --phase-shift's defaults, seed 004's Fig. 4 conditions: its largest amplitude (+-3 um,
+#: section IV.B) and the two normal forces of Fig. 4c; the step of the phase shift (deg)
+_PHASE_DEFAULTS = {"phase_step_deg": 15.0, "amplitude_um": 3.0, "normal_force_n": [1.0, 0.5]}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -49,12 +57,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true",
                         help='print {"modes": [{"order", "kind", "frequency_hz"}, ...], '
                              '"pairs": [...]} instead of a table')
+    parser.add_argument("--phase-shift", action="store_true",
+                        help="also give, for the first --orders pair, the travelling-wave ratio "
+                             "and the force (N) on a still finger against the phase shift (deg) "
+                             "between its two modes (seed 004, Fig. 4)")
+    parser.add_argument("--phase-step-deg", type=bounded(float, 0.5, 90.0, "degrees"),
+                        metavar="DEG", help="with --phase-shift: step of the phase shift from "
+                                            "-180 to 180 deg, dividing 180 (default 15)")
+    parser.add_argument("--amplitude-um", type=positive_float, metavar="W",
+                        help="with --phase-shift: amplitude of each mode, um zero-to-peak (default "
+                             "3, seed 004's largest)")
+    parser.add_argument("--normal-force-n", type=positive_float, nargs="+", metavar="N",
+                        help="with --phase-shift: normal force(s) of the finger in N (default 1 "
+                             "0.5, seed 004 Fig. 4c)")
     add_plot_argument(parser, "also write each pair's frequency split against L/R (seed 004, "
-                              "Fig. 2c)")
+                              "Fig. 2c), and with --phase-shift the ratio and force against the "
+                              "phase shift (Fig. 4)")
 
 
 def run(args: argparse.Namespace) -> int:
     check_plot(args.plot)
+    _check_phase_options(args)
     check_below("--thickness-mm", args.thickness_mm, "--radius-mm", args.radius_mm,
                 "the thin curved beam of seed 004, eq 3 needs h well below R")
     if args.thickness_mm > THIN_RING_H_OVER_R * args.radius_mm:
@@ -77,15 +100,80 @@ def run(args: argparse.Namespace) -> int:
         found = [ring.pair(n) for n in args.orders]
         modes = [m for pair in found for m in pair]
         pairs = [_pair_summary(ring, sym, asym) for sym, asym in found]
+    phase = _phase_shift(ring, args) if args.phase_shift else None
     if args.json:
-        print(json.dumps({"modes": [{"order": m.order, "kind": m.kind, "frequency_hz": m.frequency_hz}
-                                    for m in modes], "pairs": pairs}, indent=2))
+        out = {"modes": [{"order": m.order, "kind": m.kind, "frequency_hz": m.frequency_hz}
+                         for m in modes], "pairs": pairs}
+        if phase is not None:
+            out["phase_shift"] = phase
+        print(json.dumps(out, indent=2))
     else:
         _print_table(ring, modes, pairs, args.band)
+        if phase is not None:
+            _print_phase(phase)
     if args.plot:
-        save_figure(_plot(ring, [p["order"] for p in pairs] or sorted({m.order for m in modes})),
-                    args.plot)
+        save_figure(_plot(ring, [p["order"] for p in pairs] or sorted({m.order for m in modes}),
+                          phase), args.plot)
     return 0
+
+
+def _check_phase_options(args: argparse.Namespace) -> None:
+    """Refuse --phase-shift's options without it, --phase-shift with --band, and a step
+    that does not divide 180 degrees; fill in the defaults; warn of an amplitude beyond
+    seed 004's measurements."""
+    for name, default in _PHASE_DEFAULTS.items():
+        option = "--" + name.replace("_", "-")
+        given = getattr(args, name)
+        if given is not None and not args.phase_shift:
+            refuse_without(option, given, "--phase-shift")
+        if given is None:
+            setattr(args, name, default)
+    if not args.phase_shift:
+        return
+    if args.band:
+        raise ModesError("--phase-shift: needs --orders (its first pair), not --band")
+    steps = 180.0 / args.phase_step_deg
+    if abs(steps - round(steps)) > 1e-9:
+        raise ModesError(f"--phase-step-deg {args.phase_step_deg:g}: must divide 180 (e.g. 5, "
+                         "10, 15, 30, 45)")
+    limit_um = _PHASE_DEFAULTS["amplitude_um"]
+    if args.amplitude_um > limit_um:
+        warn(f"--amplitude-um {args.amplitude_um:g}: above {limit_um:g} um, beyond seed 004's "
+             "measurements (Fig. 3c): the force's line is extrapolated")
+
+
+def _phase_shift(ring: RingResonator, args: argparse.Namespace) -> dict:
+    """Seed 004, Fig. 4 for the first --orders pair: travelling-wave ratio (min over max
+    of the envelope on the straight) and force (N, + towards +x) on a still finger at
+    each phase shift phi of the symmetric mode over the asymmetric (W_sym = e^{j phi} W_asym)."""
+    order = args.orders[0]
+    steps = int(round(180.0 / args.phase_step_deg))
+    phase_deg = np.linspace(-180.0, 180.0, 2 * steps + 1)
+    params = DrivingForceParams()
+    wave = ring_wave(ring, order)
+    responses = [phase_shift_response(wave, np.radians(phase_deg), args.amplitude_um, f, params)
+                 for f in args.normal_force_n]
+    ratio = responses[0][0]
+    forces = np.array([force for _, force in responses]) + 0.0  # + 0.0: no -0.0
+    return {"order": order, "amplitude_um": args.amplitude_um,
+            "normal_force_n": list(args.normal_force_n),
+            "slope_per_um": params.slope_per_um, "threshold_um": params.threshold_um,
+            "rows": [{"phase_deg": float(p), "ratio": float(r), "force_n": forces[:, i].tolist()}
+                     for i, (p, r) in enumerate(zip(phase_deg, ratio))]}
+
+
+def _print_phase(phase: dict) -> None:
+    print(f"phase shift phi of order {phase['order']}'s pair, W_sym = e^(j phi) W_asym, "
+          f"{phase['amplitude_um']:g} um each (seed 004, Fig. 4)")
+    print("ratio: min over max of the envelope along the straight; force on a still finger "
+          "(+ towards +x):")
+    print(f"{phase['slope_per_um']:g} N/um per N of normal force above "
+          f"{phase['threshold_um']:g} um (Fig. 3c)")
+    print("phase_deg   ratio" + "".join(f"  {f'force_n@{f:g}N':>13s}"
+                                          for f in phase["normal_force_n"]))
+    for row in phase["rows"]:
+        print(f"{row['phase_deg']:9.1f}  {row['ratio']:6.4f}"
+              + "".join(f"  {round(f, 4) + 0.0:13.4f}" for f in row["force_n"]))
 
 
 def _check_band(ring: RingResonator, f_min_hz: float, f_max_hz: float) -> None:
@@ -131,15 +219,22 @@ def _print_table(ring: RingResonator, modes, pairs: list[dict], band) -> None:
               f"{round(p['split_hz'], 2) + 0.0:8.2f}  {p['wavelength_mm']:13.3f}  {lr}")
 
 
-def _plot(ring: RingResonator, orders: list[int]):
+def _plot(ring: RingResonator, orders: list[int], phase: dict | None = None):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     ratio = ring.length_mm / ring.radius_mm
     ratios = np.linspace(ratio / 1.25, ratio * 1.25, 61)
-    fig, axes = plt.subplots(len(orders), 1, figsize=(7, 3 * len(orders)), squeeze=False)
-    for ax, n in zip(axes[:, 0], orders):
+    if phase is None:
+        fig, axes = plt.subplots(len(orders), 1, figsize=(7, 3 * len(orders)), squeeze=False)
+        split_axes = axes[:, 0]
+    else:  # a last row: ratio and force against the phase shift
+        fig = plt.figure(figsize=(7, 3 * (len(orders) + 1)))
+        grid = fig.add_gridspec(len(orders) + 1, 2)
+        split_axes = [fig.add_subplot(grid[i, :]) for i in range(len(orders))]
+        _plot_phase(fig.add_subplot(grid[-1, 0]), fig.add_subplot(grid[-1, 1]), phase)
+    for ax, n in zip(split_axes, orders):
         freqs = np.array([[m.frequency_hz for m in ring.with_length(r * ring.radius_mm).pair(n)]
                           for r in ratios])
         ax.plot(ratios, freqs[:, 1] - freqs[:, 0], label="asymmetric - symmetric")
@@ -153,3 +248,18 @@ def _plot(ring: RingResonator, orders: list[int]):
         ax.legend(fontsize=8)
     fig.tight_layout()
     return fig
+
+
+def _plot_phase(ratio_ax, force_ax, phase: dict) -> None:
+    """Seed 004, Fig. 4b and 4c: ratio and force against the phase shift."""
+    phase_deg = [row["phase_deg"] for row in phase["rows"]]
+    ratio_ax.plot(phase_deg, [row["ratio"] for row in phase["rows"]], "o-", ms=3)
+    ratio_ax.set(xlabel="phase shift (deg)", ylabel="travelling-wave ratio", ylim=(0, 1.05),
+                 title=f"order {phase['order']}, {phase['amplitude_um']:g} um (Fig. 4b)")
+    for i, normal_n in enumerate(phase["normal_force_n"]):
+        force_ax.plot(phase_deg, [row["force_n"][i] for row in phase["rows"]], "o-", ms=3,
+                      label=f"F_n {normal_n:g} N")
+    force_ax.axhline(0.0, color="k", lw=0.5)
+    force_ax.set(xlabel="phase shift (deg)", ylabel="force on a still finger (N, +x)",
+                 title="Fig. 4c")
+    force_ax.legend(fontsize=8)
