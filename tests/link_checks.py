@@ -15,8 +15,25 @@ import threading
 import time
 
 import numpy as np
+import pytest
 
-from frictex.device.link.simdevice import open_pty, serve
+from frictex.device.firmware.build import FirmwareBuildError
+from frictex.device.firmware.ccore import built_core_class
+from frictex.device.link.simdevice import DeviceCore, open_pty, serve
+
+#: the device logic a link test runs against: the Python reference, the C firmware's core
+CORES = ["python", "c-firmware"]
+
+
+def core_class(kind: str):
+    """The device core class of ``kind`` (one of :data:`CORES`), the firmware built; a
+    firmware that does not build fails the test, with the compiler's message."""
+    if kind == "python":
+        return DeviceCore
+    try:
+        return built_core_class()
+    except FirmwareBuildError as exc:
+        pytest.fail(str(exc), pytrace=False)
 
 
 def accounted(status: dict, played_index: np.ndarray | None, commanded: int) -> None:

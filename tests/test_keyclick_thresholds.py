@@ -5,26 +5,12 @@ import re
 
 import pytest
 
+from frictex.textures.format_examples import EXAMPLES
 from frictex.textures.loader import check_scene
 
-SCENE = """\
-format = 1
-[display]
-width_mm = 140.0
-height_mm = 30.0
-width_px = 700
-height_px = 150
-[device]
-profile = "ring-seed004"
-amplitude_limit_um = 3.0
-
-[[layer]]
-type = "keyclick"
-x_mm = 50
-y_mm = 5
-width_mm = 40
-height_mm = 20
-"""
+#: FORMAT.md's key-click example without its thresholds (each test writes its own)
+SCENE = "".join(line for line in EXAMPLES["keyclick"].splitlines(keepends=True)
+                if line.split(" = ")[0] not in ("press_n", "click_n", "release_n"))
 
 
 def blamed_keys(tmp_path, thresholds: dict) -> list[str]:

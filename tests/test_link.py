@@ -13,11 +13,9 @@ import pytest
 from frictex.device.link import protocol as p
 from frictex.device.link.faults import TRIP_S, Event, Faults, Plug, Schedule
 from frictex.device.link.host import CommandSink, LinkError, LinkStalled, open_port, open_sink
-from frictex.device.firmware.build import FirmwareBuildError
-from frictex.device.firmware.ccore import built_core_class
-from frictex.device.link.simdevice import DeviceConfig, DeviceCore
-from link_checks import (accounted, all_played_unless_tripped, clean_unless_starved, in_order_within,
-                         serve_on_pty, until)
+from frictex.device.link.simdevice import DeviceConfig
+from link_checks import (CORES, accounted, all_played_unless_tripped, clean_unless_starved,
+                         core_class, in_order_within, serve_on_pty, until)
 
 STEP = p.AMPLITUDE_STEP_UM
 RATE = 10_000.0
@@ -55,15 +53,10 @@ class Played:
             return np.concatenate(self.t), np.concatenate(self.setpoint)
 
 
-@pytest.fixture(scope="module", params=["python", "c-firmware"])
+@pytest.fixture(scope="module", params=CORES)
 def device_core(request):
     """The device logic behind the pty: the Python reference or the C firmware core."""
-    if request.param == "python":
-        return DeviceCore
-    try:
-        return built_core_class()
-    except FirmwareBuildError as exc:
-        pytest.fail(str(exc), pytrace=False)
+    return core_class(request.param)
 
 
 def _serve_device(config, core_class):

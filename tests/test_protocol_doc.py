@@ -13,12 +13,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from frictex.device.firmware.build import FirmwareBuildError
-from frictex.device.firmware.ccore import built_core_class
 from frictex.device.link import protocol as p
 from frictex.device.link.host import HANDSHAKE_TOTAL_S
 from frictex.device.link.session import HELLO_FIRST_S, HELLO_MAX_S, RESYNC_TIMEOUT_S
-from frictex.device.link.simdevice import DeviceConfig, DeviceCore
+from frictex.device.link.simdevice import DeviceConfig
+from link_checks import CORES, core_class
 
 TEXT = (Path(p.__file__).parents[1] / "PROTOCOL.md").read_text(encoding="utf-8")
 FLAT = " ".join(TEXT.split())
@@ -62,22 +61,17 @@ def test_the_handshake_bounds_are_the_hosts():
     assert f"| handshake of a recovery or a reconnect | {RESYNC_TIMEOUT_S:g} s" in bounds
 
 
-@pytest.fixture(params=["python", "c-firmware"])
-def core_class(request):
-    if request.param == "python":
-        return DeviceCore
-    try:
-        return built_core_class()
-    except FirmwareBuildError as exc:
-        pytest.fail(str(exc), pytrace=False)
+@pytest.fixture(params=CORES)
+def device_class(request):
+    return core_class(request.param)
 
 
 @pytest.mark.parametrize("version", [2, 3, 4])
-def test_flushed_and_force_reports_follow_every_version_that_has_them(core_class, version):
+def test_flushed_and_force_reports_follow_every_version_that_has_them(device_class, version):
     """A host of ``version`` streams, then falls silent: the device's ForceReports
     (version 3 on) and its Flushed after the watchdog trip (version 2 on) come in
     ``version`` frames, as 4.8 and 4.9 say."""
-    core = core_class(DeviceConfig(lateral_n=0.25, protocol_version=p.PROTOCOL_VERSION))
+    core = device_class(DeviceConfig(lateral_n=0.25, protocol_version=p.PROTOCOL_VERSION))
     core.receive(p.encode(p.Hello(10), 0, version=1), 0.0)
     wire = p.amplitude_to_wire(np.full((200, 1), 1.0))[0]
     core.receive(p.encode(p.Block(0, wire), 1, version=version), 0.0)

@@ -8,24 +8,20 @@ from hypothesis import given, settings, strategies as st
 from frictex.device.link import protocol as p
 from frictex.device.link.faults import Faults, inject
 from frictex.device.link.protocol import DeviceState as S
-from frictex.device.firmware.build import FirmwareBuildError
-from frictex.device.firmware.ccore import built_core_class
 from frictex.device.link.simdevice import DeviceConfig, DeviceCore as PythonDeviceCore
 from device_recorder import Recorder
+from link_checks import CORES, core_class
 
 RATE = 10_000.0
 STEP = p.AMPLITUDE_STEP_UM
 DeviceCore = PythonDeviceCore
 
 
-@pytest.fixture(scope="module", autouse=True, params=["python", "c-firmware"])
+@pytest.fixture(scope="module", autouse=True, params=CORES)
 def device_core(request):
     """Swap the class the tests build their device with (module scope: @given tests)."""
     global DeviceCore
-    try:
-        DeviceCore = PythonDeviceCore if request.param == "python" else built_core_class()
-    except FirmwareBuildError as exc:
-        pytest.fail(str(exc), pytrace=False)
+    DeviceCore = core_class(request.param)
     yield
     DeviceCore = PythonDeviceCore
 
