@@ -124,6 +124,13 @@ def long_trace(tmp_path_factory):
     return path
 
 
+def staged(out: Path) -> Path:
+    """Where a running batch writes its job folders: its staging folder beside ``out``
+    (``app.engine.batch_folder``), or ``out`` itself while there is none."""
+    found = sorted(out.parent.glob(f".{out.name}.frictex-staging.*"))
+    return found[0] if found else out
+
+
 def results(path: Path) -> dict:
     with open(path, newline="") as fh:
         return {row["name"]: row for row in csv.DictReader(fh)}
@@ -143,10 +150,10 @@ def test_a_stopped_batch_lists_what_finished(tmp_path, spawn, long_trace, sig, t
                   "--quiet"], start_new_session=True)
 
     def running(name):
-        return any(out.glob(f".{name}.frictex-staging.*"))
+        return any(staged(out).glob(f".{name}.frictex-staging.*"))
 
-    wait_for(lambda: (out / "S1" / "summary.json").exists() and running("L2") and running("L3"),
-             "S1 to finish and L2, L3 to run")
+    wait_for(lambda: ((staged(out) / "S1" / "summary.json").exists() and running("L2")
+                      and running("L3")), "S1 to finish and L2, L3 to run")
     send(proc, sig, target)
     returncode, _, err = finish(proc)
     assert returncode == code, err
@@ -158,26 +165,30 @@ def test_a_stopped_batch_lists_what_finished(tmp_path, spawn, long_trace, sig, t
     assert table["L2"]["error"] == f"stopped while it ran: the batch was stopped by {name}"
     assert table["L2"]["output_s"] == table["L2"]["wall_s"] == ""
     assert sorted(p.name for p in out.iterdir()) == ["S1", "batch.csv"]  # no leftovers
+    assert not list(tmp_path.glob(".out.frictex-*"))
     assert "Traceback" not in err
 
 
 @pytest.mark.skipif(sys.platform != "linux", reason="the workers learn of it by prctl (Linux)")
 def test_a_killed_batch_stops_its_running_jobs(tmp_path, spawn, long_trace):
     """SIGKILL to the batch alone: its workers, in a group of their own, stop their jobs
-    as on Ctrl-C (staging removed, no job folder), instead of running them to the end."""
+    as on Ctrl-C (staging removed, no job folder), instead of running them to the end;
+    the batch's own --out is never made (its staging folder waits for the next batch)."""
     manifest = tmp_path / "m.csv"
     manifest.write_text("scene,trace,rate_hz,name\n"
                         + "".join(f"grating-5mm,{long_trace},100000,L{k}\n" for k in (1, 2)))
     out = tmp_path / "out"
     proc = spawn([FRICTEX, "batch", str(manifest), "--out", str(out), "--jobs", "2",
                   "--quiet"], start_new_session=True)
-    wait_for(lambda: len(list(out.glob(".L*.frictex-staging.*"))) == 2, "both jobs to run")
+    wait_for(lambda: len(list(staged(out).glob(".L*.frictex-staging.*"))) == 2,
+             "both jobs to run")
+    folder = staged(out)
     os.kill(proc.pid, signal.SIGKILL)
     assert proc.wait(timeout=BOUND_S) == -signal.SIGKILL
-    wait_for(lambda: not list(out.glob(".L*.frictex-staging.*")), "the jobs to stop",
-             lambda: f"left {sorted(p.name for p in out.iterdir())}; workers "
+    wait_for(lambda: not list(folder.glob(".L*.frictex-staging.*")), "the jobs to stop",
+             lambda: f"left {sorted(p.name for p in folder.iterdir())}; workers "
                      f"{[(pid, state(pid)) for pid in workers_of(out)]}")
-    assert list(out.iterdir()) == []
+    assert list(folder.iterdir()) == [] and not out.exists()
     wait_for(lambda: not workers_of(out), "the workers to end")
 
 

@@ -108,8 +108,8 @@ def test_each_column_counts_what_it_says(tmp_path):
 
 
 def test_a_killed_jobs_staging_leftover_is_not_foreign(tmp_path):
-    """What a killed replay leaves beside its folder is cleared by the next replay of the
-    same job, not refused."""
+    """What a killed replay of an earlier version left in a batch's folder is an earlier
+    batch's output, not refused: gone with it when the next batch replaces the folder."""
     out = tmp_path / "o"
     assert batch(manifest(tmp_path, "a"), out) == 0
     leftover = out / ".a.frictex-staging.999999999.abcdef"
@@ -117,5 +117,73 @@ def test_a_killed_jobs_staging_leftover_is_not_foreign(tmp_path):
     (leftover / "friction.csv").write_text("t_s\n")
     assert batch(manifest(tmp_path, "a"), out) == 0
     assert listing(out) == ["a", "batch.csv"]
-    warnings = json.loads((out / "a" / "summary.json").read_text())["warnings"]
-    assert any("removed the leftovers of killed runs" in w for w in warnings)
+
+
+def tree(folder):
+    """Every file under ``folder`` with its bytes (batch.csv's wall times included)."""
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file()}
+
+
+def test_a_batch_killed_midway_leaves_the_earlier_batch_whole(tmp_path):
+    """SIGKILL while job b runs leaves --out byte for byte the earlier batch; the next
+    batch clears the killed one's staging folder, b's replay's leftover in it included."""
+    import subprocess
+    import sys
+    import time
+    out = tmp_path / "o"
+    assert batch(manifest(tmp_path, "a", "b"), out) == 0
+    before = tree(out)
+    long = tmp_path / "long.csv"
+    assert main(["trace", "synth", "swipe", "--duration", "600", "--speed", "0.1",
+                 "-o", str(long)]) == 0
+    rerun = tmp_path / "m-rerun.csv"
+    rerun.write_text("scene,trace,name\ngrating-5mm,swipe-40mms-50hz,a\n"
+                     f"grating-5mm,{long},b\n")
+    proc = subprocess.Popen([sys.executable, "-m", "frictex", "batch", str(rerun), "--out",
+                             str(out), "--jobs", "1", "--quiet"])
+    deadline = time.monotonic() + 120.0
+    staged = []
+    while time.monotonic() < deadline and proc.poll() is None:
+        staged = [p for p in tmp_path.glob(".o.frictex-staging.*")
+                  if (p / "a").is_dir() and list(p.glob(".b.frictex-staging.*"))]
+        if staged:  # job a has finished into the staging folder, b is running: kill now
+            break
+        time.sleep(0.05)
+    proc.kill()
+    proc.wait(timeout=60)
+    assert staged, "the batch never got as far as its first job"
+    assert tree(out) == before
+    assert batch(manifest(tmp_path, "c"), out) == 0
+    assert listing(out) == ["batch.csv", "c"]
+    assert not list(tmp_path.glob(".o.frictex-*"))
+
+
+def test_a_stopped_rerun_keeps_every_earlier_folder_it_did_not_replace(tmp_path, capsys,
+                                                                          monkeypatch):
+    """Ctrl-C during a rerun: the jobs that finished replace their folders, every earlier
+    folder it did not replace is kept, and batch.csv lists it 'earlier' with the earlier
+    figures (job empty where the new manifest does not name it)."""
+    from frictex.app.commands import batch as command
+    from frictex.app.engine.fanout import Interrupted
+    out = tmp_path / "o"
+    assert batch(manifest(tmp_path, "a", "b", "old"), out) == 0
+    earlier = {row["name"]: row for row in results(out)}
+    b_summary = (out / "b" / "summary.json").read_bytes()
+    real = command.fan_out
+
+    def stopped_after_first(fn, items, **kwargs):
+        first = real(fn, items[:1], workers=1)
+        raise Interrupted(2, first + [None] * (len(items) - 1), [1])
+    monkeypatch.setattr(command, "fan_out", stopped_after_first)
+    assert batch(manifest(tmp_path, "a", "b", "new"), out) == 130
+    assert listing(out) == ["a", "b", "batch.csv", "old"]
+    rows = {row["name"]: row for row in results(out)}
+    assert {name: (row["job"], row["status"]) for name, row in rows.items()} == {
+        "a": ("0", "ok"), "b": ("1", "earlier"), "new": ("2", "interrupted"),
+        "old": ("", "earlier")}
+    assert rows["a"]["wall_s"] != earlier["a"]["wall_s"]  # this run's
+    for name in ("b", "old"):
+        assert {k: rows[name][k] for k in MEASURES} == {k: earlier[name][k] for k in MEASURES}
+    assert (out / "b" / "summary.json").read_bytes() == b_summary
+    assert "1 of 3 jobs finished" in capsys.readouterr().err

@@ -16,8 +16,8 @@ from functools import partial
 from pathlib import Path
 
 from frictex.app.commands.argtypes import positive_int
-from frictex.app.engine.batch import (earlier_jobs, not_ok, read_manifest, remove_earlier,
-                                      run_job, write_results)
+from frictex.app.engine.batch import RESULTS, not_ok, read_manifest, run_job
+from frictex.app.engine.batch_folder import EARLIER, BatchFolder
 from frictex.app.engine.fanout import Interrupted, default_workers, fan_out
 from frictex.rendering.renderers import render_modes
 from frictex.textures.outside import add_allow_outside
@@ -41,14 +41,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     jobs = read_manifest(Path(args.manifest), render_modes())
     out_dir = Path(args.out)
-    earlier = earlier_jobs(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    rows, stop = _run_jobs(args, jobs, out_dir)
-    table = write_results(out_dir, rows)
-    for name in remove_earlier(out_dir, earlier, rows):
+    folder = BatchFolder(out_dir, [job.name for job in jobs])
+    staged = folder.begin()
+    try:
+        rows, stop = _run_jobs(args, jobs, staged)
+        rows, users = folder.commit(rows, stopped=stop is not None)
+    except BaseException:
+        folder.abort()
+        raise
+    for name in users:
         print(f"frictex: warning: {out_dir / name}: an earlier batch's job folder that also "
               "holds files not a run's output; left as it was", file=sys.stderr)
-    return _report(args, rows, stop, table)
+    return _report(args, rows, stop, out_dir / RESULTS)
 
 
 def _report(args: argparse.Namespace, rows: list[dict], stop, table: Path) -> int:
@@ -69,10 +73,14 @@ def _report(args: argparse.Namespace, rows: list[dict], stop, table: Path) -> in
 
 
 def _totals(rows: list[dict], table: Path) -> str:
-    """One line: how many jobs finished, their seconds of output and of wall time."""
+    """One line: how many jobs finished, their seconds of output and of wall time, and the
+    earlier job folders a stopped batch kept."""
     ok = [row for row in rows if row["status"] == "ok"]
-    return (f"{len(ok)} of {len(rows)} jobs finished ({sum(r['output_s'] for r in ok):.1f} s "
-            f"of output, {sum(r['wall_s'] for r in ok):.1f} s of job time); results in {table}")
+    jobs = [row for row in rows if row["job"] is not None]
+    kept = sum(row["status"] == EARLIER for row in rows)
+    return (f"{len(ok)} of {len(jobs)} jobs finished ({sum(r['output_s'] for r in ok):.1f} s "
+            f"of output, {sum(r['wall_s'] for r in ok):.1f} s of job time)"
+            + (f", {kept} earlier job folders kept" if kept else "") + f"; results in {table}")
 
 
 def _run_jobs(args: argparse.Namespace, jobs: list, out_dir: Path):

@@ -31,8 +31,9 @@ Every job writes its replay outputs into its folder; the batch writes ``batch.cs
 one row per job (:data:`RESULT_COLUMNS`):
 
 - ``job`` (its row among the jobs, from 0), ``name``, ``status``: ``ok``, ``failed``
-  (``error`` says why) or ``interrupted`` (the batch was stopped before the job
-  finished: ``error`` says whether it had started);
+  (``error`` says why), ``interrupted`` (the batch was stopped before the job finished:
+  ``error`` says whether it had started) or ``earlier`` (a stopped batch kept an earlier
+  batch's folder of that name: below);
 - ``output_s``: seconds of output the job wrote; ``wall_s``: the job's wall time in its
   worker, from its start to its outputs in place, start-up included (reading the scene
   and the trace, loading the compiled kernels); ``x_realtime``: ``output_s / wall_s``;
@@ -41,26 +42,27 @@ one row per job (:data:`RESULT_COLUMNS`):
 - ``clamps`` (the inversion's clamped samples, all guards) and ``warnings`` (how many;
   the texts are in the job's ``summary.json``).
 
-A job that is not ``ok`` has these numeric cells empty. A failed job does not stop the
-others.
+A job that is not ``ok`` has these numeric cells empty (an ``earlier`` one the earlier
+batch's figures). A failed job does not stop the others.
 
 The output folder. ``--out`` is new, empty, or an earlier batch's: nothing in it but
 ``batch.csv`` (and ``batch.csv.partial``), job folders (a folder with a replay's
 ``summary.json``) and the staging leftovers of killed replays (``.<name>.frictex-*``);
-anything else is refused before a job runs (:func:`earlier_jobs`). A job's folder is
-replaced as a replay replaces its ``--out``: whole, when the job commits, so it holds
-the earlier outputs until then. Once ``batch.csv`` is written (the batch's end, or its
-interruption), the earlier batch's job folders that it does not list as ``ok`` are
-removed (:func:`remove_earlier`; one that holds a file not a run's output, the user's,
-is left as it is and named in a warning). So ``--out`` then holds ``batch.csv`` and
-exactly the folders of the jobs it lists ``ok``.
+anything else is refused before a job runs. The batch replaces it as a whole when it
+ends (``app.engine.batch_folder``): until then it holds the earlier batch untouched,
+whatever stops the batch (SIGKILL included); then ``batch.csv`` and exactly the folders
+of the jobs it lists ``ok`` (or ``earlier``, below). An earlier job folder that holds a
+file not a run's output (the user's) is kept as it is and named in a warning.
 
 Ctrl-C (or SIGTERM, SIGHUP) stops a batch within about a second: no job starts after
-it, each running one ends as an interrupted replay ends (its folder as it was), and
-``batch.csv`` is written with the jobs that finished and the rest ``interrupted``; the
+it, each running one ends as an interrupted replay ends, and the new ``--out`` holds the
+jobs that finished (``ok``, or ``failed``), every earlier job folder it did not replace,
+kept and listed with status ``earlier`` (the earlier ``batch.csv``'s figures; ``job``
+empty for a name the new manifest does not have), and the rest ``interrupted``; the
 command then exits as an interrupted replay does (130 for Ctrl-C, 128 + the signal
-otherwise). On a Dask cluster jobs already running finish on their workers (Dask cannot
-stop them) though ``batch.csv`` lists them ``interrupted``. A text cell that would start with ``=``, ``+``, ``-``, ``@``, a tab or a
+otherwise). Stopping a rerun deletes nothing that was complete. On a Dask cluster jobs
+already running finish on their workers (Dask cannot stop them) though ``batch.csv``
+lists them ``interrupted``. A text cell that would start with ``=``, ``+``, ``-``, ``@``, a tab or a
 carriage return (an error that starts with a scene named ``=HYPERLINK(...)``) is written
 behind a single quote, so that a spreadsheet shows it as text, never runs it (OWASP's
 rule for CSV injection).
@@ -72,13 +74,11 @@ import csv
 import math
 import os
 import re
-import shutil
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 from frictex.app.engine.limits import BLOCK_SIZES, OUTPUT_RATES_HZ
-from frictex.app.engine.staging import SUMMARY, is_run_output
 from frictex.app.engine.tables import FORMATS
 from frictex.device.errors import FrictexError, InputError
 from frictex.device.safe_text import escape, quoted
@@ -310,60 +310,6 @@ def write_results(out_dir: Path, rows: list[dict]) -> Path:
     finally:
         partial.unlink(missing_ok=True)
     return path
-
-
-def earlier_jobs(out_dir: Path) -> list[str]:
-    """The job folders an earlier batch left in ``out_dir`` (sorted names; none where it
-    does not exist); an InputError, touching nothing, where it holds anything else than
-    an earlier batch's outputs (the module docstring's "The output folder")."""
-    out_dir = Path(out_dir)
-    if not out_dir.exists():
-        return []
-    if not out_dir.is_dir():
-        raise InputError(f"{out_dir}: exists and is not a folder; --out is a folder for the "
-                         "jobs' folders and batch.csv")
-    jobs = []
-    for entry in sorted(os.scandir(out_dir), key=lambda e: e.name):
-        if entry.name in RESERVED and entry.is_file(follow_symlinks=False):
-            continue
-        if _LEFTOVER.fullmatch(entry.name):
-            continue
-        if entry.is_dir(follow_symlinks=False) and os.path.isfile(Path(entry.path) / SUMMARY):
-            jobs.append(entry.name)
-            continue
-        raise InputError(f"{out_dir}: holds {quoted(escape(entry.name, 80))}, which is not an "
-                         f"earlier batch's output ({RESULTS}, job folders with a "
-                         f"{SUMMARY}); a batch replaces what an earlier one wrote in its "
-                         "--out: write into a new folder or move it")
-    return jobs
-
-
-#: a killed replay's staging leftover beside its job folder (``app.engine.staging``)
-_LEFTOVER = re.compile(r"\..+\.frictex-(?:staging|old|kept)\..+")
-
-
-def remove_earlier(out_dir: Path, earlier: list[str], rows: list[dict]) -> list[str]:
-    """Remove the ``earlier`` job folders of ``out_dir`` that ``rows`` do not list as ok,
-    each holding only a run's outputs (``summary.json`` removed last, so that a folder cut
-    short is still recognised as a job's). Returns the folders left as they were because
-    they hold something else too (the user's files)."""
-    ok = {row["name"] for row in rows if row["status"] == "ok"}
-    kept = []
-    for name in earlier:
-        folder = Path(out_dir) / name
-        if name in ok or not folder.is_dir():
-            continue
-        entries = sorted(os.scandir(folder), key=lambda e: e.name == SUMMARY)
-        if not all(is_run_output(entry) for entry in entries):
-            kept.append(name)
-            continue
-        for entry in entries:
-            if entry.is_dir(follow_symlinks=False):
-                shutil.rmtree(entry.path)
-            else:
-                os.unlink(entry.path)
-        folder.rmdir()
-    return kept
 
 
 #: first characters that make a spreadsheet read a cell as a formula (OWASP CSV injection)

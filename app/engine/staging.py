@@ -94,11 +94,14 @@ def _short(name: str) -> str:
 class Staging:
     """The staging folder of one run into ``out`` (see the module docstring)."""
 
-    def __init__(self, out: str | Path, owned: tuple[str, ...] = ()):
+    def __init__(self, out: str | Path, owned: tuple[str, ...] = (),
+                 owned_pattern: re.Pattern | None = None):
         self.out = Path(os.path.realpath(out))  # a link to a folder: that folder
         #: more names (files or folders) in ``out`` that are this kind of run's own
-        #: outputs, besides a replay's (``frictex demo --record``: ``events.csv``)
+        #: outputs, besides a replay's (``frictex demo --record``: ``events.csv``), and a
+        #: pattern of such names (a batch: its jobs' replays' staging leftovers)
         self.owned = frozenset(owned)
+        self.owned_pattern = owned_pattern
         if self.out.parent == self.out:
             raise InputError(f"{self.out}: the root folder cannot be an output folder (a run "
                              "replaces its output folder as a whole): name a folder of its own")
@@ -137,8 +140,11 @@ class Staging:
                       if e.is_dir(follow_symlinks=False) and not self._own(e))
 
     def _own(self, entry: os.DirEntry) -> bool:
-        """Whether ``entry`` is a run's output (:func:`is_run_output`, or named in ``owned``)."""
-        return entry.name in self.owned or is_run_output(entry)
+        """Whether ``entry`` is a run's output (:func:`is_run_output`, or named in ``owned``
+        or by ``owned_pattern``)."""
+        return (entry.name in self.owned or is_run_output(entry)
+                or (self.owned_pattern is not None
+                    and self.owned_pattern.fullmatch(entry.name) is not None))
 
     def begin(self) -> Path:
         """Clear the leftovers of killed runs, then create the staging folder (with the

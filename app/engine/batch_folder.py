@@ -1,0 +1,177 @@
+"""A batch's ``--out`` replaced as a whole: the previous batch's or the new one's, whatever
+stops the batch.
+
+The jobs write their folders into a staging folder beside ``--out`` (the one a replay
+uses, ``app.engine.staging``: same file system, its leftovers cleared by the next run)
+and the batch swaps it in at its end, ``batch.csv`` with it. Until then ``--out`` holds
+the previous batch untouched: a SIGKILL, a power cut or a full disk leaves it complete.
+
+What the new ``--out`` holds:
+
+- a batch that ran to its end (some jobs failed or not): ``batch.csv`` and the folders of
+  the jobs it lists ``ok``; an earlier job folder holding a file that is not a run's
+  output (the user's) is kept as it was and named in a warning;
+- a batch stopped by a signal (Ctrl-C, SIGTERM, SIGHUP): the same, and every earlier job
+  folder it did not replace, kept as it was and listed in ``batch.csv`` with status
+  ``earlier`` and the earlier ``batch.csv``'s figures for it: stopping a rerun deletes
+  nothing that was complete.
+
+What is carried from the previous ``--out`` into the new one is hard-linked (no byte
+copied; copied where the file system has no hard links), never moved, so that the
+previous ``--out`` stays whole until the swap.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import re
+import shutil
+from pathlib import Path
+
+from frictex.app.engine.batch import MEASURES, RESERVED, RESULT_COLUMNS, RESULTS, write_results
+from frictex.app.engine.staging import SUMMARY, Staging, is_run_output
+from frictex.device.errors import InputError
+from frictex.device.safe_text import escape, quoted
+
+#: a killed replay's staging leftover in an earlier batch's ``--out`` (``app.engine.staging``)
+_LEFTOVER = re.compile(r"\..+\.frictex-(?:staging|old|kept)\..+")
+#: a ``batch.csv`` row's status for a job folder an earlier batch wrote, kept
+EARLIER = "earlier"
+
+
+def earlier_jobs(out_dir: Path) -> list[str]:
+    """The job folders an earlier batch left in ``out_dir`` (sorted names; none where it
+    does not exist); an InputError, touching nothing, where it holds anything else than
+    an earlier batch's outputs: ``batch.csv`` (and ``batch.csv.partial``), job folders (a
+    folder with a replay's ``summary.json``) and the staging leftovers of killed replays
+    (``.<name>.frictex-*``)."""
+    out_dir = Path(out_dir)
+    if not out_dir.exists():
+        return []
+    if not out_dir.is_dir():
+        raise InputError(f"{out_dir}: exists and is not a folder; --out is a folder for the "
+                         "jobs' folders and batch.csv")
+    jobs = []
+    for entry in sorted(os.scandir(out_dir), key=lambda e: e.name):
+        if entry.name in RESERVED and entry.is_file(follow_symlinks=False):
+            continue
+        if _LEFTOVER.fullmatch(entry.name):
+            continue
+        if entry.is_dir(follow_symlinks=False) and os.path.isfile(Path(entry.path) / SUMMARY):
+            jobs.append(entry.name)
+            continue
+        raise InputError(f"{out_dir}: holds {quoted(escape(entry.name, 80))}, which is not an "
+                         f"earlier batch's output ({RESULTS}, job folders with a "
+                         f"{SUMMARY}); a batch replaces what an earlier one wrote in its "
+                         "--out: write into a new folder or move it")
+    return jobs
+
+
+class BatchFolder:
+    """``--out`` of a batch of jobs named ``names`` (see the module docstring)."""
+
+    def __init__(self, out_dir: Path, names: list[str]):
+        self.out = Path(out_dir)
+        self.earlier = earlier_jobs(self.out)
+        self.names = list(names)
+        self.staging = Staging(self.out, owned=tuple(sorted({*self.names, *self.earlier,
+                                                             *RESERVED})),
+                               owned_pattern=_LEFTOVER)
+
+    def begin(self) -> Path:
+        """The folder the jobs write their folders into (the staging folder)."""
+        return self.staging.begin()
+
+    def commit(self, rows: list[dict], stopped: bool) -> tuple[list[dict], list[str]]:
+        """Swap the new ``--out`` in: the jobs' ``rows`` (``batch.csv``'s, in the jobs'
+        order), whether a signal ``stopped`` the batch. Returns the rows written (a
+        stopped batch's: an ``earlier`` row for each earlier folder kept) and the names
+        of the earlier folders kept because they hold the user's files."""
+        staged = self.staging.folder
+        ok = {row["name"] for row in rows if row["status"] == "ok"}
+        before = _earlier_rows(self.out / RESULTS)
+        rows = list(rows)
+        users = []
+        for name in self.earlier:
+            if name in ok:
+                _carry_users_files(self.out / name, staged / name)
+            elif stopped:
+                _link_tree(self.out / name, staged / name)
+            elif not all(is_run_output(e) for e in os.scandir(self.out / name)):
+                _link_tree(self.out / name, staged / name)
+                users.append(name)
+        if stopped:
+            rows = self._kept_rows(rows, ok, before)
+        write_results(staged, rows)
+        self.staging.commit()
+        return rows, users
+
+    def _kept_rows(self, rows: list[dict], ok: set[str], before: dict) -> list[dict]:
+        """``rows`` with each earlier folder a stopped batch keeps listed as ``earlier``:
+        its job's row replaced, or a row of its own (no job number) after them."""
+        kept = [name for name in self.earlier if name not in ok]
+        out = [_kept(row["job"], row["name"], before) if row["name"] in kept else row
+               for row in rows]
+        listed = {row["name"] for row in rows}
+        return out + [_kept(None, name, before) for name in kept if name not in listed]
+
+    def abort(self) -> None:
+        """Delete the staging folder; ``--out`` stays as it was."""
+        self.staging.abort()
+
+
+def _kept(job, name: str, before: dict) -> dict:
+    """The ``batch.csv`` row of an earlier job folder kept: status ``earlier``, the earlier
+    batch's figures for it (empty where its ``batch.csv`` has none)."""
+    figures = before.get(name, {})
+    return {"job": job, "name": name, "status": EARLIER,
+            "error": "kept from an earlier batch: this one was stopped before it replaced it",
+            **{key: figures.get(key) for key in MEASURES}}
+
+
+def _earlier_rows(path: Path) -> dict[str, dict]:
+    """The earlier ``batch.csv``'s figures of its ok (or kept) jobs by name, as it wrote
+    them (a cell that is not a number left empty); none where it is missing or unreadable
+    (its folders are then kept without them)."""
+    try:
+        with open(path, encoding="utf-8", newline="") as fh:
+            rows = list(csv.DictReader(fh))
+    except (OSError, UnicodeDecodeError, csv.Error):
+        return {}
+    return {row["name"]: {key: row[key] if _is_number(row[key]) else None for key in MEASURES}
+            for row in rows
+            if row.get("status") in ("ok", EARLIER) and set(RESULT_COLUMNS) <= set(row)}
+
+
+def _is_number(text) -> bool:
+    try:
+        return math.isfinite(float(text))
+    except (TypeError, ValueError):
+        return False
+
+
+def _link_tree(src: Path, dst: Path) -> None:
+    """A copy of folder ``src`` at ``dst`` made of hard links (copies where the file system
+    has none)."""
+    shutil.copytree(src, dst, symlinks=True, copy_function=_link)
+
+
+def _carry_users_files(src: Path, dst: Path) -> None:
+    """Hard-link into job folder ``dst`` what earlier job folder ``src`` holds that is not
+    a run's output (the user's files and folders)."""
+    for entry in os.scandir(src):
+        if is_run_output(entry) or os.path.lexists(dst / entry.name):
+            continue
+        if entry.is_dir(follow_symlinks=False):
+            _link_tree(Path(entry.path), dst / entry.name)
+        else:
+            _link(entry.path, dst / entry.name)
+
+
+def _link(src, dst) -> None:
+    try:
+        os.link(src, dst, follow_symlinks=False)
+    except OSError:
+        shutil.copy2(src, dst, follow_symlinks=False)
