@@ -2,6 +2,7 @@
 bad input is one ProtocolError line naming file, line and field, and the scene files a
 session writes read back as written."""
 
+import re
 import tomllib
 from pathlib import Path
 
@@ -269,3 +270,26 @@ _DOCS = st.recursive(st.dictionaries(_KEYS, _SCALARS, max_size=4),
 @given(_DOCS)
 def test_toml_text_reads_back_as_written(doc):
     assert tomllib.loads(toml_text(doc)) == doc
+
+
+@pytest.mark.parametrize("table, problem", [
+    # 1.0 - 0.5 per two correct answers reaches 0 on the second down step
+    ('start = 1.0\nsteps = [0.5]\nscale = "linear"\n',
+     r":12: staircase.steps: the difference can reach -24 within 100 trials \(steps up to "
+     r"0.5\): not above 0.*\[staircase\] min"),
+    ('start = 1.0\nsteps = [0.5]\nscale = "linear"\nmin = 0.1\n', None),
+    ('start = 1.0\nsteps = [0.5]\nscale = "linear"\nmax_trials = 3\n', None),  # one down step
+])
+def test_a_linear_staircase_that_can_step_to_zero_is_refused(tmp_path, table, problem):
+    """A linear staircase without min that can step to a difference of 0 or below is
+    refused at load (and --check) with file:line: field, not left to sit at a floor."""
+    text = (GOOD.replace('method = "2afc"', 'method = "staircase"')
+            .replace("levels = [5.5, 6.0]\n", "") + "\n[staircase]\n" + table)
+    path = write(tmp_path, text)
+    if problem is None:
+        assert load_protocol(path).staircase.scale == "linear"
+        return
+    with pytest.raises(ProtocolError, match=problem):
+        load_protocol(path)
+    _, problems = check_protocol(path)
+    assert len(problems) == 1 and re.search(problem, str(problems[0]))

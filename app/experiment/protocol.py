@@ -49,7 +49,8 @@ the tables below.
     threshold_reversals = 8     # the staircase's threshold: mean of the last N reversal levels
     min = ..., max = ...        # bounds of the difference (default: none); every difference
                                 #   the steps can reach within max_trials (as if each trial
-                                #   moved by the largest step) must be a valid stimulus
+                                #   moved by the largest step) must be a valid stimulus,
+                                #   above 0 (a linear scale needs min to stop short of 0)
 
     [scale]                     # method = "magnitude" only: the rating scale (integers)
     min = 1
@@ -570,16 +571,22 @@ def reachable(sc: Staircase) -> tuple[float, float]:
     """The smallest and largest difference (units of ``vary``) the staircase ``sc`` can
     present within its ``max_trials`` main trials, bounded as if every trial moved by
     the largest step (down only after ``down_after`` correct answers), within ``min``
-    and ``max``; the largest is at most :data:`MAX_DIFFERENCE`."""
+    and ``max``; the largest is at most :data:`MAX_DIFFERENCE`. On the linear scale
+    without ``min`` the smallest can be 0 or below (no valid difference)."""
     step, ups, downs = max(sc.steps), sc.max_trials, sc.max_trials // sc.down_after
     if sc.scale == "log":
         high = sc.start * 10.0 ** min(step * ups, 300.0)
         low = sc.start * 10.0 ** -min(step * downs, 300.0)
     else:
         high = sc.start + step * ups
-        low = min(sc.steps + (sc.start,))  # the linear scale never steps to 0 or below
+        low = sc.start - step * downs  # 0 or below without min: refused by _staircase_fits
     high = min(high, MAX_DIFFERENCE if sc.max is None else sc.max)
     return (low if sc.min is None else max(low, sc.min)), high
+
+
+#: why a staircase's difference of 0 or below is no stimulus
+NOT_ABOVE_ZERO = ("not above 0: the comparison would be the reference itself or on its "
+                  "other side, and the staircase would sit at its floor")
 
 
 def _staircase_fits(c: _Check, stimuli: Stimuli, staircase: Staircase) -> bool:
@@ -597,7 +604,8 @@ def _staircase_fits(c: _Check, stimuli: Stimuli, staircase: Staircase) -> bool:
               f"{' log10 units' if sc.scale == 'log' else ''})")
     for key, difference in (("start", sc.start), ("max" if sc.max == high else "steps", high),
                             ("min" if sc.min == low else "steps", low)):
-        problem = value_problem(base, stimuli.vary, stimuli.layer, stimuli.reference + difference)
+        problem = (NOT_ABOVE_ZERO if difference <= 0.0 else
+                   value_problem(base, stimuli.vary, stimuli.layer, stimuli.reference + difference))
         if problem is None:
             continue
         if key == "steps":
