@@ -10,7 +10,8 @@ What escapes a command decides its exit status (``frictex.device.errors``):
 
 - a :class:`FrictexError` is one line on stderr, ``frictex: error: ...``, and its kind's
   exit status: 2 for bad input (a file, an option, a name), 1 for the device, the disk
-  or a run that could not do what was asked;
+  or a run that could not do what was asked; one that found several problems at once
+  (its ``problems``, e.g. a batch manifest's bad rows) is one such line per problem;
 - an ``OSError`` the system raised (a file, a port, the disk) is one line too: exit 1,
   or 2 where it names a file the user gave that does not exist or cannot be read;
 - an optional part of frictex that is not installed names the pip command (exit 1);
@@ -175,7 +176,8 @@ def report_error(exc: BaseException) -> int:
         traceback.print_exception(exc, file=sys.stderr)
         print(INTERNAL, file=sys.stderr)
         return 70
-    print(f"frictex: error: {printable(str(exc))}", file=sys.stderr)
+    for problem in getattr(exc, "problems", None) or (str(exc),):
+        print(f"frictex: error: {printable(problem)}", file=sys.stderr)
     return code
 
 

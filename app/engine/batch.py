@@ -5,7 +5,13 @@ Manifest grammar (CSV with a header; ``#`` lines are comments)::
     scene,trace[,renderer][,rate_hz][,block][,format][,name]
 
 ``scene`` and ``trace`` as ``frictex replay`` takes them (a file, relative to the
-manifest's folder, or a bundled name); ``renderer`` empty means the file's own;
+manifest's folder, or a bundled name), confined as the files a texture file names are
+(``textures.outside``): in the manifest's folder or below, links followed, unless
+``--allow-outside`` (``FRICTEX_ALLOW_OUTSIDE=1``) lifts it, so that a stranger's manifest
+cannot make a batch read any file of the machine; a '..' or a link leading out is
+refused, and an absolute path unless the file it names lies in the folder (a script
+that writes a manifest beside its traces, as ``frictex bench`` does, may write their
+absolute paths); ``renderer`` empty means the file's own;
 ``rate_hz`` (default 10000), ``block`` (default 5 ms of samples: 50 at 10 kHz) and ``format`` (csv, npz, parquet;
 default csv) as the replay's options, within the same bounds as on the command line
 (``--rate`` 100 to 1e6 Hz, ``--block`` 1 to 100000 samples); ``name`` the job's output
@@ -25,7 +31,11 @@ allows; a line ends at a line feed (a carriage return before it is dropped).
 The manifest is read as the trace reader reads traces (``textures.library.read_utf8``):
 a regular UTF-8 file of at most MAX_MANIFEST_BYTES, without NUL bytes, lines of at most
 MAX_LINE_BYTES; a FIFO or a device is refused before anything is read. Errors name the
-file and the line, and show values escaped and cut (``device.safe_text``).
+file and the line, and show values escaped and cut (``device.safe_text``). Every problem
+of a manifest is reported at once, one line each (at most MAX_PROBLEMS_SHOWN, then how
+many more), as ``frictex validate`` reports a texture file's: a bad header alone stops
+the reading, since the rows cannot be read without it. No job runs unless every row is
+good.
 
 Every job writes its replay outputs into its folder; the batch writes ``batch.csv``,
 one row per job (:data:`RESULT_COLUMNS`):
@@ -84,6 +94,7 @@ from frictex.device.errors import FrictexError, InputError
 from frictex.device.safe_text import escape, quoted
 from frictex.rendering.input.trace_file import MAX_LINE_BYTES, NUMBER, describe_header
 from frictex.textures.library import UnreadableText, read_utf8
+from frictex.textures.outside import HOW, allow_outside_from_env, leads_out
 
 COLUMNS = ("scene", "trace", "renderer", "rate_hz", "block", "format", "name")
 RESULT_COLUMNS = ("job", "name", "status", "error", "output_s", "wall_s", "x_realtime",
@@ -100,6 +111,8 @@ NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}")
 _DIGITS = re.compile(r"[0-9]+")
 #: longest error kept in a ``batch.csv`` cell (characters, escaped)
 MAX_ERROR_SHOWN = 500
+#: most problems of a manifest reported one by one (then how many more)
+MAX_PROBLEMS_SHOWN = 50
 
 
 @dataclass(frozen=True)
@@ -117,16 +130,56 @@ class Job:
 
 
 class ManifestError(InputError):
-    """A manifest that cannot be read: names the file, the line and the field."""
+    """A manifest that cannot be read: every problem found, each one line naming the file,
+    the line and the field (``problems``); the message is all of them, joined by "; "."""
+
+    def __init__(self, *problems: str):
+        self.problems = problems
+        super().__init__("; ".join(problems))
+
+
+class _Problems:
+    """The problems found so far in the manifest ``path``, each one line."""
+
+    def __init__(self, path: Path):
+        self.path = path
+        self.lines: list[str] = []
+
+    def add(self, line: str) -> None:
+        self.lines.append(line)
+
+    def check(self, function, *args):
+        """``function(*args)``, or None with its ManifestError's problems kept."""
+        try:
+            return function(*args)
+        except ManifestError as exc:
+            self.lines.extend(exc.problems)
+            return None
+
+    def raise_any(self) -> None:
+        """A ManifestError of every problem kept (at most :data:`MAX_PROBLEMS_SHOWN`, then
+        a line saying how many more), if any."""
+        if len(self.lines) > MAX_PROBLEMS_SHOWN:
+            more = len(self.lines) - MAX_PROBLEMS_SHOWN
+            raise ManifestError(*self.lines[:MAX_PROBLEMS_SHOWN],
+                                f"{self.path}: {more} more problems")
+        if self.lines:
+            raise ManifestError(*self.lines)
 
 
 def read_manifest(path: Path, renderers: tuple[str, ...]) -> list[Job]:
-    """The jobs of a manifest file (see the module docstring); raises ManifestError."""
+    """The jobs of a manifest file (see the module docstring); raises ManifestError with
+    every problem of the file."""
     path = Path(path)
-    lines = _content_lines(path, _manifest_text(path))
-    rows = [_row(line, f"{path}:{n}") for n, line in lines]
-    header = _header(rows[0], f"{path}:{lines[0][0]}")
-    jobs = _jobs(path, header, [n for n, _ in lines[1:]], rows[1:], renderers)
+    problems = _Problems(path)
+    lines = _content_lines(path, _manifest_text(path), problems)
+    rows = [(n, problems.check(_row, line, f"{path}:{n}")) for n, line in lines]
+    n_header, first = rows[0]
+    header = None if first is None else problems.check(_header, first, f"{path}:{n_header}")
+    if header is None:  # the rows cannot be read without their header
+        problems.raise_any()
+    jobs = _jobs(path, header, rows[1:], renderers, problems)
+    problems.raise_any()
     if not jobs:
         raise ManifestError(f"{path}: a header but no jobs")
     return jobs
@@ -141,20 +194,21 @@ def _manifest_text(path: Path) -> str:
         raise ManifestError(f"{where}: {exc}; expected a CSV manifest of jobs") from None
 
 
-def _content_lines(path: Path, text: str) -> list[tuple[int, str]]:
+def _content_lines(path: Path, text: str, problems: _Problems) -> list[tuple[int, str]]:
     """The (line number, line) pairs of ``text`` that are neither blank nor comments;
-    at least one."""
+    at least one. A line too long is a problem, and left out."""
     lines = []
     for n, line in enumerate(text.split("\n"), 1):
         line = line.removesuffix("\r")
         if len(line.encode("utf-8")) >= MAX_LINE_BYTES:
-            raise ManifestError(f"{path}:{n}: line longer than {MAX_LINE_BYTES} bytes; expected "
-                                f"a CSV row of a few fields")
-        if line.strip() and not line.lstrip().startswith("#"):
+            problems.add(f"{path}:{n}: line longer than {MAX_LINE_BYTES} bytes; expected "
+                         f"a CSV row of a few fields")
+        elif line.strip() and not line.lstrip().startswith("#"):
             lines.append((n, line))
     if not lines:
-        raise ManifestError(f"{path}: no header and no jobs (expected a CSV header "
-                            f"{','.join(COLUMNS[:2])},...)")
+        problems.add(f"{path}: no header and no jobs (expected a CSV header "
+                     f"{','.join(COLUMNS[:2])},...)")
+        problems.raise_any()
     return lines
 
 
@@ -173,19 +227,25 @@ def _header(row: list[str], where: str) -> list[str]:
     return header
 
 
-def _jobs(path: Path, header: list[str], line_nos: list[int], rows: list[list[str]],
-          renderers: tuple[str, ...]) -> list[Job]:
-    """One job per data row (line numbers ``line_nos``), names unique."""
+def _jobs(path: Path, header: list[str], rows: list[tuple[int, list[str] | None]],
+          renderers: tuple[str, ...], problems: _Problems) -> list[Job]:
+    """One job per data row (line number, fields; None for a row that is not CSV), names
+    unique; the problems of every row kept in ``problems``."""
     jobs, names = [], set()
-    for line_no, row in zip(line_nos, rows):
+    for index, (line_no, row) in enumerate(rows):
         where = f"{path}:{line_no}"
+        if row is None:
+            continue
         if len(row) != len(header):
-            raise ManifestError(f"{where}: {len(row)} fields, expected {len(header)} "
-                                f"({','.join(header)})")
+            problems.add(f"{where}: {len(row)} fields, expected {len(header)} "
+                         f"({','.join(header)})")
+            continue
         cell = dict(zip(header, (c.strip() for c in row)))
-        job = _job(len(jobs), cell, path.parent, renderers, where)
+        job = _job(index, cell, path.parent, renderers, where, problems)
+        if job is None:
+            continue
         if job.name in names:
-            raise ManifestError(f"{where}: name {quoted(job.name)} is used by an earlier job")
+            problems.add(f"{where}: name {quoted(job.name)} is used by an earlier job")
         names.add(job.name)
         jobs.append(job)
     return jobs
@@ -218,21 +278,25 @@ def _number(cell: dict, key: str, default, bounds: tuple, unit: str, where: str)
     return value
 
 
-def _job(index: int, cell: dict, base: Path, renderers, where: str) -> Job:
-    for key in ("scene", "trace"):
-        if not cell.get(key):
-            raise ManifestError(f"{where}: {key} is empty")
+def _job(index: int, cell: dict, base: Path, renderers, where: str,
+         problems: _Problems) -> Job | None:
+    """The job of one row, or None with each of its problems kept in ``problems``."""
+    before = len(problems.lines)
+    paths = {key: problems.check(_path, key, cell.get(key), base, where)
+             for key in ("scene", "trace")}
     renderer = cell.get("renderer") or None
     if renderer is not None and renderer not in renderers:
-        raise ManifestError(f"{where}: renderer {quoted(renderer)}: expected one of "
-                            f"{', '.join(renderers)} or empty")
+        problems.add(f"{where}: renderer {quoted(renderer)}: expected one of "
+                     f"{', '.join(renderers)} or empty")
     fmt = cell.get("format") or "csv"
     if fmt not in FORMATS:
-        raise ManifestError(f"{where}: format {quoted(fmt)}: expected one of {', '.join(FORMATS)}")
-    name = _name(cell, index, where)
-    return Job(index, _resolve(cell["scene"], base), _resolve(cell["trace"], base), renderer,
-               _number(cell, "rate_hz", 10_000.0, OUTPUT_RATES_HZ, "Hz", where),
-               _number(cell, "block", None, BLOCK_SIZES, "samples", where), fmt, name)
+        problems.add(f"{where}: format {quoted(fmt)}: expected one of {', '.join(FORMATS)}")
+    rate_hz = problems.check(_number, cell, "rate_hz", 10_000.0, OUTPUT_RATES_HZ, "Hz", where)
+    block = problems.check(_number, cell, "block", None, BLOCK_SIZES, "samples", where)
+    name = problems.check(_name, cell, index, where)
+    if len(problems.lines) > before:
+        return None
+    return Job(index, paths["scene"], paths["trace"], renderer, rate_hz, block, fmt, name)
 
 
 def _name(cell: dict, index: int, where: str) -> str:
@@ -258,14 +322,33 @@ def _stem(spec: str) -> str:
     return re.sub(r"[^A-Za-z0-9._-]", "_", name)[:28] or "job"
 
 
-def _resolve(spec: str, base: Path) -> str:
-    """A path relative to the manifest's folder where such a file exists, else as given
-    (a bundled name, or a path the replay will report as missing)."""
+def _path(key: str, spec: str | None, base: Path, where: str) -> str:
+    """The ``scene`` or ``trace`` field ``spec``: the file relative to the manifest's
+    folder ``base`` (its real path) where such a file exists, else as given (a bundled
+    name, or a path the replay will report as missing); a ManifestError if it is empty
+    or, unless allowed, leads outside ``base`` (module docstring)."""
+    if not spec:
+        raise ManifestError(f"{where}: {key} is empty")
+    how = None if allow_outside_from_env() else _leads_out(base, spec)
+    if how is not None:
+        raise ManifestError(f"{where}: {key} {quoted(spec)} {how}: a manifest names files in "
+                            f"its own folder or below, or bundled scenes and traces ({HOW})")
     candidate = base / spec
     try:
-        return str(candidate) if candidate.exists() else spec
+        return os.path.realpath(candidate) if candidate.exists() else spec
     except OSError:  # a name too long for the file system: the replay reports it
         return spec
+
+
+def _leads_out(base: Path, spec: str) -> str | None:
+    """``textures.outside.leads_out``, but an absolute path is judged by the file it
+    names (links followed): out only where that lies outside ``base``."""
+    if not os.path.isabs(spec):
+        return leads_out(base, spec)
+    root, real = os.path.realpath(base), os.path.realpath(spec)
+    if os.path.commonpath([root, real]) != root:
+        return "is an absolute path outside the manifest's folder"
+    return None
 
 
 def run_job(job: Job, out_dir: str) -> dict:
