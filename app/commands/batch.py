@@ -18,6 +18,7 @@ from pathlib import Path
 from frictex.app.commands.argtypes import positive_int
 from frictex.app.engine.batch import RESULTS, not_ok, read_manifest, run_job
 from frictex.app.engine.batch_folder import EARLIER, BatchFolder
+from frictex.app.engine.driver import Terminated
 from frictex.app.engine.fanout import Interrupted, default_workers, fan_out
 from frictex.rendering.renderers import render_modes
 from frictex.textures.outside import add_allow_outside
@@ -57,13 +58,14 @@ def run(args: argparse.Namespace) -> int:
 
 def _report(args: argparse.Namespace, rows: list[dict], stop, table: Path) -> int:
     """The batch's last lines and exit status (module docstring); a stopped batch ends as
-    an interrupted replay does (``KeyboardInterrupt``, or ``SystemExit(128 + signal)``)."""
+    an interrupted replay does (``KeyboardInterrupt``; or ``Terminated``, printed as
+    ``frictex: terminated by SIGTERM``, exit 128 + the signal)."""
     if not args.quiet or stop is not None:
         print(_totals(rows, table), file=sys.stderr if stop is not None else sys.stdout)
     if stop is not None:
         if stop.signum == signal.SIGINT:
             raise KeyboardInterrupt
-        raise SystemExit(128 + stop.signum)
+        raise Terminated(stop.signum)  # the line and status a replay's SIGTERM gives
     failed = [row for row in rows if row["status"] == "failed"]
     if failed:
         print(f"frictex: error: {len(failed)} of {len(rows)} jobs failed: "
