@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 from frictex._args import path_like, real
 from frictex._inputs import checked, scene_of
 from frictex._pipeline import run_settings
+from frictex.app.engine.clocks import Clock
 from frictex.app.engine.device_changes import unplayed_problem
 from frictex.app.engine.replay import MAX_UNPLAYED, ReplayOptions, file_id, replay_with
 from frictex.app.engine.sinks import Sink
@@ -103,7 +104,7 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
            max_unplayed: float = MAX_UNPLAYED, rate_hz: float = 10_000.0,
            block_size: int | None = None, control: str | None = None, strict: bool = False,
            max_gap_s: float = MAX_GAP_S, progress: bool = False,
-           sinks: Sequence[str | Sink] = (), clock: str = "virtual") -> Replay:
+           sinks: Sequence[str | Sink] = (), clock: str | Clock = "virtual") -> Replay:
     """Replay a touch trace on a scene, headless, on a virtual clock (``frictex replay``).
 
     Parameters
@@ -153,10 +154,13 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
         commands_um)``, ``commit()`` and ``abort()`` (``frictex.app.engine.sinks.Sink``),
         used as they are. They are committed before the tables: one that fails leaves no
         outputs; a package's that raises is a ``PluginError`` naming it.
-    clock : str, optional
+    clock : str or Clock, optional
         What paces the run (``--clock``): ``"virtual"`` (the default: as fast as it
         computes), ``"wall"`` (real time), ``"device"`` (the device's room), or a
-        package's (entry points ``frictex.clocks``).
+        package's (entry points ``frictex.clocks``); or an object with ``wait(k)``
+        (return when block k may be computed) and ``finished(k, n)`` (blocks k .. k + n
+        - 1 reached the sinks), ``frictex.app.engine.clocks.Clock``, used as it is. With
+        any clock but ``"virtual"`` the run computes one block per pipeline call.
 
     Returns
     -------
@@ -207,7 +211,7 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
     options = ReplayOptions(rate_hz=rate_hz, fmt=fmt, block_size=block_size,
                             render_override=renderer, device=device, faults=faults,
                             control=control, strict=strict, max_gap_s=max_gap_s,
-                            progress=progress, sinks=_sinks(sinks), clock=clock)
+                            progress=progress, sinks=_sinks(sinks), clock=_clock(clock))
     result = replay_with(scene, trace, out, options)
     doc = json.loads(json.dumps(finite_json(result.summary), allow_nan=False))
     done = Replay(Summary.from_dict(doc), out, result.tables, result.summary_id)
@@ -230,3 +234,13 @@ def _sinks(sinks: Sequence[str | Sink]) -> tuple[str | Sink, ...]:
             raise InputError(f"sinks: {type(item).__name__} is neither a sink's name "
                              "(NAME[:ARG]) nor a Sink (write, commit and abort)")
     return tuple(sinks)
+
+
+def _clock(clock: str | Clock) -> str | Clock:
+    """``clock``: a clock's name (``NAME[:ARG]``), or a
+    :class:`~frictex.app.engine.clocks.Clock` (callable ``wait`` and ``finished``)."""
+    if not isinstance(clock, str) and not all(callable(getattr(clock, method, None))
+                                              for method in ("wait", "finished")):
+        raise InputError(f"clock: {type(clock).__name__} is neither a clock's name "
+                         "(NAME[:ARG]) nor a Clock (wait(k) and finished(k, n))")
+    return clock

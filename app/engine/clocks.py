@@ -63,16 +63,22 @@ CLOCKS: Registry[Any] = Registry("clock", "frictex.clocks",
                                                        "Clock"))
 
 
-def clock_name(spec: str) -> tuple[str, str]:
+def clock_name(spec: str | Clock) -> tuple[str, str]:
     """NAME and ARG of a ``NAME[:ARG]`` clock spec; NAME registered (else
-    ``UnknownName`` listing the known)."""
+    ``UnknownName`` listing the known). A :class:`Clock` object given instead of a spec
+    (``frictex.replay(clock=...)``): its type's name and ""."""
+    if not isinstance(spec, str):
+        return type(spec).__name__, ""
     return CLOCKS.named(spec)
 
 
-def build_clock(spec: str, request: ClockRequest) -> Clock:
+def build_clock(spec: str | Clock, request: ClockRequest) -> Clock:
     """The clock ``NAME[:ARG]`` of :data:`CLOCKS` built for ``request``: frictex's own as
     its factory returns it, another package's checked and wrapped in a
-    :class:`PluginClock`."""
+    :class:`PluginClock`. A :class:`Clock` object (the API's caller's own, checked there)
+    is used as it is, as the API's Sink objects are."""
+    if not isinstance(spec, str):
+        return spec
     name, arg = clock_name(spec)
     return build_entry(CLOCKS, "clock", name, arg, request, doing="building",
                        members=("wait()", "finished()"),
