@@ -12,6 +12,7 @@ too (loading the scene, loading the pipeline's compiled kernels: ``setup_s``);
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
@@ -141,6 +142,13 @@ def _clipped_warning(layer, n: int, touching: int) -> str:
     return said
 
 
+def _real_path(path) -> str | None:
+    """A scene's or trace's file as ``summary.json`` gives it: absolute, links and ``..``
+    resolved, so that the same run started from another folder says the same; None for
+    none (a trace given as a Trace object)."""
+    return os.path.realpath(path) if path else None
+
+
 def summary(scene, trace_report: dict, pipeline, tracker, totals: Totals, fmt: str,
             files: list[str], blocks: int) -> dict:
     """The summary document (without ``timings``, ``device`` and run-level warnings)."""
@@ -148,12 +156,12 @@ def summary(scene, trace_report: dict, pipeline, tracker, totals: Totals, fmt: s
     doc = {
         "summary_version": SUMMARY_VERSION,
         "scene": {"name": scene.name,
-                  "path": str(scene.source) if scene.source else None,
+                  "path": _real_path(scene.source),
                   "device": scene.device.profile,
                   "layers": [{"name": layer.name, "type": type(layer).__name__.lower(),
                               "renderer": mode}
                              for layer, mode in zip(scene.layers, pipeline.layer_modes)]},
-        "trace": trace_report,
+        "trace": {**trace_report, "path": _real_path(trace_report.get("path"))},
         "output": {"rate_hz": pipeline.rate_hz, "block_size": pipeline.block_size,
                    "samples": n_out, "duration_s": n_out / pipeline.rate_hz,
                    "channels": list(pipeline.channels), "format": fmt, "files": files},

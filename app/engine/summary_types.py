@@ -110,7 +110,8 @@ class TraceInfo:
     Attributes
     ----------
     path : str or None
-        Its file (None for a trace given as arrays).
+        Its file, absolute with links resolved; None for a trace given as a Trace
+        object (``frictex.read_trace``'s too: a Trace keeps no file name).
     samples : int
         Touch samples read.
     fingers : tuple of int
@@ -122,7 +123,8 @@ class TraceInfo:
     touch_rate_hz : float or None
         Median touch sample rate (Hz).
     time_order : TimeOrderInfo or None
-        Where time went back; None for a trace given as arrays.
+        Where time went back; None for a trace given as a Trace object
+        (``frictex.read_trace`` sorted it as it read it, and keeps no count).
     gaps : GapInfo
         Long gaps taken as lifts.
     """
