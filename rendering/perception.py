@@ -128,7 +128,8 @@ def scene_findings(scene) -> list[Finding]:
         where = f'layer "{layer.name}"'
         c = contrast(layer)
         if 0.0 < c < THRESHOLDS["weber"].value:
-            out.append(_below("weber", where, c, f"friction contrast {c:.3g}"))
+            out.append(_below("weber", where, c, f"friction contrast (mu'_high - "
+                                                 f"mu'_low)/mu'_high {c:.3g}"))
         period = _period(layer)
         if period is not None:
             if period < THRESHOLDS["touch"].value:
@@ -155,10 +156,13 @@ def relative_difference(a: float, b: float) -> float:
     return abs(a - b) / min(abs(a), abs(b))
 
 
-def _relative(kind: str, d: float) -> str:
-    """A relative difference ``d`` as a percentage and as the fraction its threshold
-    ``kind`` is given in: ``2 % (dp/p 0.02)``."""
-    return f"{d * 100:.3g} % ({THRESHOLDS[kind].what.rpartition(', ')[2]} {d:.3g})"
+def _relative(kind: str, d: float, of: str) -> str:
+    """A relative difference ``d`` of two values of ``of`` as a percentage and as a
+    fraction named for what it is: ``2 % (dp/p 0.02)`` for periods (the fraction the
+    period threshold is given in), ``6.67 % (d(depth)/depth 0.0667)`` for a quantity set
+    against the Weber fraction dmu'/mu', which is another quantity."""
+    symbol = "dp/p" if kind == "period" else f"d({of})/{of}"
+    return f"{d * 100:.3g} % ({symbol} {d:.3g})"
 
 
 #: what a stimulus parameter (``vary``) is compared by: its threshold's key
@@ -173,7 +177,8 @@ def compare_values(vary: str, a: float, b: float, where: str) -> Finding | None:
     d = relative_difference(a, b)
     if kind is None or d == 0.0 or d >= THRESHOLDS[kind].value:
         return None
-    return _below(kind, where, d, f"{vary} {a:g} and {b:g} differ by {_relative(kind, d)}")
+    return _below(kind, where, d, f"{vary} {a:g} and {b:g} differ by "
+                                  f"{_relative(kind, d, vary)}")
 
 
 def compare_scenes(a, b, where: str) -> Finding | None:
@@ -188,15 +193,16 @@ def compare_scenes(a, b, where: str) -> Finding | None:
     for x, y in zip(a.layers, b.layers):
         px, py = _period(x), _period(y)
         if px is not None and py is not None:
-            steps.append(("period", f'layer "{x.name}" period', px, py))
-        steps.append(("weber", f'layer "{x.name}" contrast', contrast(x), contrast(y)))
-    ratios = [(relative_difference(u, v) / THRESHOLDS[kind].value, kind, what, u, v)
-              for kind, what, u, v in steps if u > 0.0 and v > 0.0 or u == v]
+            steps.append(("period", f'layer "{x.name}" period', px, py, "period"))
+        steps.append(("weber", f'layer "{x.name}" contrast', contrast(x), contrast(y),
+                      "contrast"))
+    ratios = [(relative_difference(u, v) / THRESHOLDS[kind].value, kind, what, u, v, of)
+              for kind, what, u, v, of in steps if u > 0.0 and v > 0.0 or u == v]
     if len(ratios) != len(steps) or max(r[0] for r in ratios) >= 1.0 or all(
             r[0] == 0.0 for r in ratios):
         return None
-    ratio, kind, what, u, v = max(ratios)
+    ratio, kind, what, u, v, of = max(ratios)
     return _below(kind, where, ratio * THRESHOLDS[kind].value,
                   f"{what} {u:.4g} and {v:.4g} differ by "
-                  f"{_relative(kind, ratio * THRESHOLDS[kind].value)}"
+                  f"{_relative(kind, ratio * THRESHOLDS[kind].value, of)}"
                   f" (the largest difference between them)")

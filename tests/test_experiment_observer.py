@@ -258,9 +258,10 @@ def test_weber_fraction_is_the_75_percent_ratio():
                                np.linspace(0, 1, 20001)))), rel=1e-6)
 
 
-@pytest.mark.parametrize("spec, words", [("weber=0", "outside"), ("weber=x", "not a number"),
-                                         ("lapse=1", "below 1"), ("speed=3", "key of"),
-                                         ("weber=nan", "outside")])
+@pytest.mark.parametrize("spec, words", [
+    ("weber=0", r"weber=0 is outside \[0.001, 10\]$"), ("weber=x", "not a number"),
+    ("lapse=1", r"lapse=1 is outside \[0, 1\)$"), ("lapse=-0.1", r"is outside \[0, 1\)$"),
+    ("speed=3", "key of"), ("weber=nan", "outside")])
 def test_bad_participant_specs(spec, words):
     with pytest.raises(InputError, match=words):
         parse_spec(spec)

@@ -118,7 +118,19 @@ def test_a_relative_difference_reads_as_a_percentage_and_the_thresholds_fraction
     assert "period_mm 5 and 5.1 differ by 2 % (dp/p 0.02), below " in message
     assert "dp/p 0.14" in message
     depth = compare_values("depth", 0.3, 0.32, "pair").message
-    assert "differ by 6.67 % (dmu'/mu' 0.0667)" in depth
+    # the depths' relative difference, set against the Weber fraction dmu'/mu' (another
+    # quantity), is named for what it is
+    assert "differ by 6.67 % (d(depth)/depth 0.0667), below the Weber fraction" in depth
+    assert "dmu'/mu' 0.0667" not in depth
+
+
+def test_the_scene_checks_contrast_says_what_it_is(tmp_path):
+    """A layer's contrast is (mu'_high - mu'_low)/mu'_high, not the Weber symbol dmu'/mu'
+    the threshold it is set against is written with."""
+    [found] = [f for f in scene_findings(scene(tmp_path, NEAR["weber"][0]))
+               if f.kind == "weber"]
+    assert "friction contrast (mu'_high - mu'_low)/mu'_high 0.105, below the Weber " \
+           "fraction of a friction change, dmu'/mu' 0.11" in found.message
 
 
 PARAMETRIC = """format = 1

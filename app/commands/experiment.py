@@ -26,13 +26,29 @@ RECORD_HELP = ("per trial, 'all': the scene, the touch trace and their replay (w
                "table only (default all)")
 
 
+def session_seed(text: str) -> int:
+    """``--seed``: an integer from 0 to 2^63 - 1 (refused before anything is written)."""
+    from frictex.app.experiment.scheduler import SEED_LIMIT
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if not 0 <= value < SEED_LIMIT:
+        raise argparse.ArgumentTypeError(f"{text}: expected an integer from 0 to 2^63 - 1")
+    return value
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("target", nargs="+", metavar="PROTOCOL | analyse SESSION",
                         help="a protocol file (.toml) to run, or 'analyse' and session folders")
     parser.add_argument("--participant", metavar="NAME:OPTIONS", default=None,
                         help="who answers: 'window' is a person at the demo's window (on "
                              "--device, as frictex demo); 'simulated:weber=0.11,lapse=0.02"
-                             "[,seed=N][,stroke_s=S]' is a simulated participant (headless)")
+                             "[,seed=N][,stroke_s=S]' is a simulated participant (headless; "
+                             "its seed, the noise of its answers and its strokes, defaults "
+                             "to one drawn from the session's --seed, so sessions of "
+                             "different seeds are independent participants; recorded as "
+                             "participant_seed in session.json)")
     parser.add_argument("--participant-id", metavar="ID", default=None,
                         help="the participant's code (a plain name such as P07), recorded in "
                              "session.json; checked against the session's on --resume")
@@ -41,8 +57,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "analysis.png go (analyse; default: SESSION/analysis)")
     parser.add_argument("--resume", action="store_true",
                         help="go on with the session in --out where it stopped")
-    parser.add_argument("--seed", type=int, default=None,
-                        help="trial order seed (default: the protocol's, else drawn; recorded)")
+    parser.add_argument("--seed", type=session_seed, default=None,
+                        help="the session's seed, 0 to 2^63 - 1: the trial order and a "
+                             "simulated participant's own seed (default: the protocol's, "
+                             "else drawn; recorded)")
     parser.add_argument("--record", choices=("all", "traces", "results"), default="all",
                         help=RECORD_HELP)
     parser.add_argument("--check", action="store_true",

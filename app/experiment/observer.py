@@ -42,6 +42,9 @@ more than ln(1 + k). Magnitude: the percept placed on the scale (fidelity and co
 directly, a period on a log scale from 0.1 to 100 mm). With probability ``lapse`` the
 participant answers at random instead, whatever the trial. Draws come from the
 participant's seed and the trial number, so a resumed session answers as an unbroken one.
+The participant's seed is the spec's ``seed=`` or, without one, drawn from the session's
+seed (:func:`participant_seed`): sessions of different seeds are independent observers,
+a session run again with its seed answers alike; session.json records the one used.
 """
 
 from __future__ import annotations
@@ -81,6 +84,17 @@ Z75 = float(ndtri(0.75))
 #: the participant spec's keys: ``simulated:weber=0.11,lapse=0.02,seed=1``
 SPEC_KEYS = {"weber": (0.001, 10.0), "lapse": (0.0, 1.0), "seed": (0, 2**63 - 1),
              "stroke_s": (0.05, 60.0)}
+#: the spec's keys whose upper bound is excluded (``lapse=1`` would answer only at random)
+OPEN_ABOVE = ("lapse",)
+#: the stream tag of the participant's seed among the draws from the session's seed
+_PARTICIPANT_STREAM = 0x0B5E
+
+
+def participant_seed(session_seed: int) -> int:
+    """The simulated participant's seed (0 to 2^63 - 1) when its spec gives none: drawn
+    from the session's seed (a stream of its own, apart from the trial order's draws)."""
+    rng = np.random.default_rng([int(session_seed), _PARTICIPANT_STREAM])
+    return int(rng.integers(0, 2**63))
 
 
 @dataclass(frozen=True)
@@ -275,17 +289,30 @@ def feel_scene(scene, area, duration_s: float, seed: int) -> Felt:
 class SimulatedParticipant:
     """A presenter that is its own participant (``presenter.Presenter``); see the module
     docstring. ``weber``: Weber fraction k; ``lapse``: share of random answers;
-    ``seed``: its stroke and its draws; ``stroke_s``: the longest stroke per stimulus (s)."""
+    ``seed``: its stroke and its draws (None: the session's, :meth:`settle_seed`);
+    ``stroke_s``: the longest stroke per stimulus (s)."""
 
-    def __init__(self, weber: float = 0.11, lapse: float = 0.02, seed: int = 0,
+    def __init__(self, weber: float = 0.11, lapse: float = 0.02, seed: int | None = None,
                  stroke_s: float = STROKE_S):
-        self.weber, self.lapse, self.seed, self.stroke_s = weber, lapse, int(seed), stroke_s
+        self.weber, self.lapse, self.stroke_s = weber, lapse, stroke_s
+        self.seed = None if seed is None else int(seed)
         self.sigma = sigma_of(weber)
         self.attribute = "fidelity"
         self.scale: tuple[int, int] | None = None
         self._felt: dict[tuple, Felt] = {}
 
+    def settle_seed(self, session_seed: int, recorded: int | None = None) -> int:
+        """The seed this participant answers with, fixed now if its spec gave none: the
+        one a resumed session ``recorded``, else :func:`participant_seed` of the
+        session's seed."""
+        if self.seed is None:
+            self.seed = participant_seed(session_seed) if recorded is None else int(recorded)
+        return self.seed
+
     def begin(self, protocol) -> None:
+        if self.seed is None:
+            raise RuntimeError("the simulated participant's seed is not settled: "
+                               "call settle_seed first (run_session does)")
         vary = protocol.stimuli.vary
         self.attribute = {"period_mm": "period_mm", "depth": "contrast", "level": "contrast",
                           None: "fidelity"}[vary]
@@ -348,8 +375,9 @@ def parse_spec(text: str) -> SimulatedParticipant:
             value = int(raw) if key == "seed" else float(raw)
         except ValueError:
             raise InputError(f"simulated participant: {key}={raw!r} is not a number") from None
-        if not (low <= value <= high) or (key == "lapse" and value >= 1.0):
-            raise InputError(f"simulated participant: {key}={raw} is outside [{low:g}, {high:g}]"
-                             f"{' (and below 1)' if key == 'lapse' else ''}")
+        open_above = key in OPEN_ABOVE
+        if not (low <= value <= high) or (open_above and value >= high):
+            raise InputError(f"simulated participant: {key}={raw} is outside [{low:g}, "
+                             f"{high:g}{')' if open_above else ']'}")
         values[key] = value
     return SimulatedParticipant(**values)

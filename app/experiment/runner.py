@@ -37,6 +37,9 @@ def _simulated(options: str) -> Presenter:
 
 
 PARTICIPANTS.register("simulated", _simulated)
+#: the simulated participant's seed in a session.json that does not record one (written
+#: before participant_seed was): the spec's default then
+LEGACY_PARTICIPANT_SEED = 0
 
 
 def make_presenter(spec: str) -> Presenter:
@@ -88,7 +91,10 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
     """Run (or with ``resume`` go on with) the session of ``protocol`` in ``out_dir``.
 
     ``seed``: the trial order's seed (default: the protocol's, else drawn now; recorded
-    in session.json; with ``resume``, refused unless it is the session's).
+    in session.json; with ``resume``, refused unless it is the session's; out of range,
+    refused before anything is written). A presenter with a ``settle_seed(session_seed,
+    recorded)`` method (the simulated participant) is given the session's seed and the
+    participant seed the session recorded (resume); the seed it returns is recorded.
     ``participant``: the participant spec, recorded; ``participant_id``: the person's
     code (``session.participant_id``), recorded (with ``resume``, refused unless the
     session's). ``record``: ``all`` (per trial: scene, trace and their replay), ``traces`` (scene and trace) or
@@ -98,17 +104,37 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
     if record not in S.RECORDS:
         raise InputError(f"record {record!r}: expected one of {', '.join(S.RECORDS)}")
     out_dir = Path(out_dir)
+    settle = getattr(presenter, "settle_seed", None)
     if resume:
         session = S.resume(out_dir, protocol, participant or None, seed, participant_id)
+        scheduler = Scheduler(protocol, session.seed)
+        if settle is not None:  # a session.json from before participant_seed: 0, as then
+            settle(session.seed, session.info.get("participant_seed", LEGACY_PARTICIPANT_SEED))
     else:
         if seed is None:
             seed = protocol.seed if protocol.seed is not None else secrets.randbits(63)
-        session = S.create(out_dir, protocol, seed, participant, participant_id)
-    scheduler = Scheduler(protocol, session.seed)
+        scheduler = Scheduler(protocol, seed)  # a bad seed refused before anything is written
+        session = S.create(out_dir, protocol, seed, participant, participant_id,
+                           None if settle is None else settle(seed))
     state = scheduler.replay((row["stimuli"].split(S.SEPARATOR), row["response"])
                              for row in session.rows)
     stage = _Stage(protocol, StimulusBank(out_dir / "stimuli"))
-    presenter.begin(protocol)
+    first = len(session.rows) + 1
+    S.begin_part(session, first)
+    try:
+        presenter.begin(protocol)
+        _run_trials(scheduler, state, stage, presenter, session, record, progress)
+    except BaseException as exc:
+        S.end_part(session, first, False, getattr(exc, "why", None) or type(exc).__name__)
+        raise
+    S.end_part(session, first, True, None)
+    return session
+
+
+def _run_trials(scheduler: Scheduler, state, stage: _Stage, presenter: Presenter,
+                session: S.Session, record: str,
+                progress: Callable[[Trial, dict], None] | None) -> None:
+    """The trials from ``state`` to the session's end, each recorded as it is answered."""
     while (trial := scheduler.next_trial(state)) is not None:
         if trial.break_before:
             presenter.rest(trial)
@@ -126,4 +152,3 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
         state = scheduler.answer(state, trial, result.response)
         if progress is not None:
             progress(trial, row)
-    return session

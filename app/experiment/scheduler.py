@@ -41,6 +41,8 @@ from frictex.device.errors import InputError
 
 INTERVALS = ("1", "2")
 SAME_DIFFERENT = ("same", "different")
+#: a session's seed is an integer from 0 to SEED_LIMIT - 1 (2^63 - 1)
+SEED_LIMIT = 2**63
 #: stream tags of the draws from the seed (so that each kind of draw is independent)
 _PLAN, _PRACTICE, _ORDER = 1, 2, 3
 
@@ -106,7 +108,7 @@ class Scheduler:
     """The trials of ``protocol`` drawn from ``seed`` (see the module docstring)."""
 
     def __init__(self, protocol: Protocol, seed: int):
-        if not 0 <= seed < 2**63:
+        if not 0 <= seed < SEED_LIMIT:
             raise InputError(f"seed {seed}: expected an integer from 0 to 2^63 - 1")
         self.protocol = protocol
         self.seed = int(seed)

@@ -3,9 +3,14 @@
 ::
 
     DIR/session.json          what ran: protocol name, method, seed, participant (who
-                              answered: window or simulated:...), participant_id (the
-                              person's code, or null), version, and the design the
-                              analysis needs
+                              answered: window or simulated:...), participant_seed
+                              (the seed a simulated participant answered with, else
+                              null), participant_id (the person's code, or null),
+                              versions (frictex, python, numpy, scipy, platform),
+                              started_utc, ended_utc (null until the last trial is
+                              answered), parts (one per run of the session: its start,
+                              end and trials; a part without an end was killed), and
+                              the design the analysis needs
     DIR/protocol.toml         the protocol file as it was read
     DIR/results.csv           one row per trial answered (RESULT_COLUMNS), in order
     DIR/stimuli/NAME.toml     each stimulus's scene, as a texture file
@@ -34,6 +39,7 @@ import io
 import json
 import math
 import os
+import platform
 import shutil
 import tomllib
 from dataclasses import asdict, dataclass
@@ -176,10 +182,49 @@ def participant_id(text: str) -> str:
     return text
 
 
-def create(folder: Path, protocol, seed: int, participant: str, pid: str | None = None
-           ) -> Session:
+def _now() -> str:
+    return datetime.now(timezone.utc).isoformat(timespec="seconds")
+
+
+def versions() -> dict:
+    """What ran a session, as cheaply known: frictex's version, Python's, numpy's,
+    scipy's and the platform (no commit: an installed frictex does not know its own)."""
+    import numpy
+    import scipy
+    try:
+        release = metadata.version("frictex")
+    except metadata.PackageNotFoundError:
+        release = "unknown (not installed)"
+    return {"frictex": release, "python": platform.python_version(),
+            "numpy": numpy.__version__, "scipy": scipy.__version__,
+            "platform": platform.platform()}
+
+
+def begin_part(session: Session, first_trial: int) -> None:
+    """Record in session.json that a run of the session starts now at ``first_trial``
+    (a part whose ``ended_utc`` stays null was killed)."""
+    part = {"started_utc": _now(), "ended_utc": None, "first_trial": first_trial,
+            "trials": 0, "ended": None, **versions()}
+    session.info.setdefault("parts", []).append(part)
+    _write_synced(session.folder / "session.json", json.dumps(session.info, indent=2) + "\n")
+
+
+def end_part(session: Session, first_trial: int, complete: bool, why: str | None) -> None:
+    """Record the end of the run begun by :func:`begin_part`: its trials, how it ended
+    (``complete``, or stopped, ``why``) and, when ``complete``, the session's end."""
+    part = session.info["parts"][-1]
+    part.update(ended_utc=_now(), trials=len(session.rows) - (first_trial - 1),
+                ended="complete" if complete else f"stopped ({why})")
+    if complete:
+        session.info["ended_utc"] = part["ended_utc"]
+    _write_synced(session.folder / "session.json", json.dumps(session.info, indent=2) + "\n")
+
+
+def create(folder: Path, protocol, seed: int, participant: str, pid: str | None = None,
+           participant_seed: int | None = None) -> Session:
     """A new session in ``folder`` (made if needed; refused if it holds a session);
-    ``pid``: the participant's code (:func:`participant_id`), or None."""
+    ``pid``: the participant's code (:func:`participant_id`), or None;
+    ``participant_seed``: the seed a simulated participant answers with, or None."""
     folder = Path(folder)
     if (folder / "results.csv").exists() or (folder / "session.json").exists():
         raise InputError(f"{folder} already holds a session; continue it with --resume, or "
@@ -189,15 +234,11 @@ def create(folder: Path, protocol, seed: int, participant: str, pid: str | None 
         (folder / "trials").mkdir(exist_ok=True)
     except OSError as exc:
         raise InputError(f"{folder}: cannot make the session folder ({exc.strerror})") from None
-    try:
-        release = metadata.version("frictex")
-    except metadata.PackageNotFoundError:
-        release = "unknown (not installed)"
     info = {"format": FORMAT, "protocol": protocol.name, "method": protocol.method,
             "protocol_sha256": hashlib.sha256(protocol.text.encode("utf-8")).hexdigest(),
-            "seed": int(seed), "participant": participant, "participant_id": pid,
-            "frictex": release,
-            "started_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+            "seed": int(seed), "participant": participant,
+            "participant_seed": participant_seed, "participant_id": pid,
+            **versions(), "started_utc": _now(), "ended_utc": None, "parts": [],
             "design": design(protocol)}
     _write_synced(folder / "protocol.toml", protocol.text)
     _write_synced(folder / "results.csv", ",".join(RESULT_COLUMNS) + "\n")
