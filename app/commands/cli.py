@@ -15,7 +15,8 @@ What escapes a command decides its exit status (``frictex.device.errors``):
 - an ``OSError`` the system raised (a file, a port, the disk) is one line too: exit 1,
   or 2 where it names a file the user gave that does not exist or cannot be read;
 - an optional part of frictex that is not installed names the pip command (exit 1);
-- Ctrl-C is one line, ``frictex: interrupted``, exit 130; a run's SIGTERM or SIGHUP
+- Ctrl-C is one line, ``frictex: interrupted``, exit 130, at any moment of the start-up
+  too (:class:`_StartupInterrupts`); a run's SIGTERM or SIGHUP
   ``frictex: terminated by SIGTERM``, exit 128 + the signal;
 - anything else is a bug in frictex: its traceback, then ``frictex: internal error:
   please report``, exit 70 (EX_SOFTWARE), never dressed as the user's mistake.
@@ -31,6 +32,7 @@ import atexit
 import errno
 import importlib
 import os
+import signal
 import sys
 import threading
 import traceback
@@ -118,16 +120,61 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
 
 def main(argv: list[str] | None = None) -> int:
     """Run ``frictex`` with ``argv`` (default: sys.argv[1:]); return the exit code."""
-    keep_freed_memory()  # a replay's blocks would fault their pages in again every call
-    argv = sys.argv[1:] if argv is None else argv
-    parser, subparsers = build_parser()
-    name = next((a for a in argv if not a.startswith("-")), None)
-    environment = dict(os.environ)  # options such as --allow-outside set it for one run
-    try:
-        return _run(lambda: _command(parser, subparsers, name, argv))
-    finally:
-        os.environ.clear()
-        os.environ.update(environment)
+    with _StartupInterrupts() as interrupts:
+        keep_freed_memory()  # a replay's blocks would fault their pages in again every call
+        argv = sys.argv[1:] if argv is None else argv
+        parser, subparsers = build_parser()
+        name = next((a for a in argv if not a.startswith("-")), None)
+        environment = dict(os.environ)  # options such as --allow-outside set it for one run
+        try:
+            return _run(lambda: _command(parser, subparsers, name, argv), interrupts)
+        finally:
+            os.environ.clear()
+            os.environ.update(environment)
+
+
+class _StartupInterrupts:
+    """Ctrl-C at any moment of a command's start-up ends as ``frictex: interrupted``
+    (exit 130), never as an internal error.
+
+    A SIGINT raises KeyboardInterrupt in whatever Python code runs; inside a C
+    extension's import of numpy (``import_array``: pyarrow, numpy.linalg, numpy.random)
+    that code prints the KeyboardInterrupt's traceback (``PyErr_Print``, through
+    ``sys.excepthook``) and replaces it with ``ImportError: numpy._core.multiarray failed
+    to import``. While :func:`main` runs, SIGINT is recorded (``seen``) before it is
+    raised, ``sys.excepthook`` prints nothing for a KeyboardInterrupt (the one line comes
+    after), and :func:`_run` takes what a recorded SIGINT caused for the interrupt.
+    Commands that handle signals themselves (a run's ``deferred_interrupts``) put their
+    own handler in place for the run and this one back after it. In the main thread
+    only (signal handlers can be set nowhere else)."""
+
+    def __init__(self):
+        self.seen = False
+        self._handler = self._hook = None
+
+    def __enter__(self) -> "_StartupInterrupts":
+        if threading.current_thread() is threading.main_thread():
+            self._hook = sys.excepthook
+            sys.excepthook = self._quiet_interrupt
+            self._handler = signal.signal(signal.SIGINT, self._on_sigint)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._handler is not None:
+            signal.signal(signal.SIGINT, self._handler)
+            sys.excepthook = self._hook
+
+    def _on_sigint(self, signum, frame) -> None:
+        self.seen = True
+        raise KeyboardInterrupt
+
+    def _quiet_interrupt(self, kind, value, tb) -> None:
+        if not issubclass(kind, KeyboardInterrupt):
+            self._hook(kind, value, tb)
+
+    def caused(self, exc: BaseException) -> bool:
+        """Whether ``exc``, which would be an internal error, came of a recorded SIGINT."""
+        return self.seen and not isinstance(exc, (FrictexError, OSError, SystemExit))
 
 
 def _command(parser, subparsers, name: str | None, argv: list[str]) -> int:
@@ -143,9 +190,10 @@ def _command(parser, subparsers, name: str | None, argv: list[str]) -> int:
     return module.run(args)
 
 
-def _run(command) -> int:
+def _run(command, interrupts: _StartupInterrupts | None = None) -> int:
     """``command()`` (a subcommand's import, parsing and run), with what escapes it
-    sorted as the module docstring says."""
+    sorted as the module docstring says (what a SIGINT that ``interrupts`` recorded
+    caused, as Ctrl-C)."""
     try:
         return int(command() or 0)
     except BrokenPipeError:  # output piped into e.g. head, which stopped reading
@@ -155,6 +203,9 @@ def _run(command) -> int:
         print("frictex: interrupted", file=sys.stderr)
         return 130
     except BaseException as exc:  # noqa: BLE001 - sorted into the kinds below
+        if interrupts is not None and interrupts.caused(exc):
+            print("frictex: interrupted", file=sys.stderr)
+            return 130
         return report_error(exc)
 
 
