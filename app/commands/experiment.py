@@ -54,7 +54,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "session.json; checked against the session's on --resume")
     parser.add_argument("--out", metavar="DIR", default=None,
                         help="the session folder (run), or where analysis.json and "
-                             "analysis.png go (analyse; default: SESSION/analysis)")
+                             "analysis.png go (analyse; default for one session: "
+                             "SESSION/analysis; required for several)")
     parser.add_argument("--resume", action="store_true",
                         help="go on with the session in --out where it stopped")
     parser.add_argument("--seed", type=session_seed, default=None,
@@ -89,6 +90,10 @@ def _analyse(args: argparse.Namespace) -> int:
     if not folders:
         raise InputError("analyse: give one or more session folders")
     from frictex.app.experiment.session import folder_of
+    if args.out is None and len(folders) > 1:  # SESSION/analysis is that session's own
+        raise InputError(f"analyse: {len(folders)} sessions are pooled; give --out DIR for "
+                         f"their analysis (without it, each session's own goes to "
+                         f"SESSION/analysis)")
     out = folder_of(args.out) if args.out is not None else Path(folders[0]) / "analysis"
     for summary in analyse(folders, out, plot=not args.no_plot):
         print("\n".join(report_lines(summary)))

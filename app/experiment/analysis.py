@@ -23,14 +23,22 @@ Per study, by method:
   session and their mean over sessions; and by the steps its floor or ceiling held (a
   down step that would cross the linear scale's floor or ``min``, an up step past
   ``max``: the level stays), which bias its reversal mean.
-- ``same-different``: per level, the hit rate (saying "different" to AB and BA), the
-  false-alarm rate (to AA and BB), each taken as (k + 0.5) / (n + 1), and d' under the
-  differencing model with its bootstrap interval (``same_different``).
+- ``same-different``: per level, the counts of hits (saying "different" to AB and BA)
+  and false alarms (to AA and BB), their raw rates and the rates d' is computed from,
+  log-linear corrected ((k + 0.5) / (n + 1), ``rate_correction``), and d' under the
+  differencing model with its bootstrap interval (``same_different``); a level whose
+  hits are not above its false alarms says that its d' 0 means no discrimination shown
+  (``d_prime_note``).
 - ``magnitude``: per stimulus, the ratings' mean, standard deviation, count and the 95 %
   interval of the mean: Student's t (2 ratings or more; none below), clipped to the
   rating scale and marked so (``ci95_clipped``). The mean cannot leave the scale, so
   clipping removes no value the t-interval covers and keeps its coverage; with few
   ratings near an end of the scale the t-interval is wide (n 3: the mean +- 2.5 sd).
+
+An interval the data cannot settle is flagged (``*_ci95_unsettled``: why, else None;
+printed after it): one that spans more than a factor of :data:`UNSETTLED_RATIO` or reaches
+0 (a threshold or slope), or a magnitude mean's from fewer than 2 distinct ratings (its
+zero width says nothing of the uncertainty).
 
 Writes ``analysis.json`` (every number above) and ``analysis.png`` (one panel per study)
 into the output folder.
@@ -57,6 +65,23 @@ from frictex.device.errors import InputError
 MIN_LEVELS = 2
 #: the fewest reversals (in all the sessions fitted together) a staircase's fit needs
 MIN_REVERSALS = 4
+#: a threshold's or slope's interval wider than this factor (high / low) is flagged
+UNSETTLED_RATIO = 100.0
+
+
+def unsettled(ci) -> str | None:
+    """Why the interval ``ci`` (low, high) of a positive quantity cannot be settled by
+    its data (it reaches 0 or below, or spans more than :data:`UNSETTLED_RATIO`), or
+    None (settled, or no interval)."""
+    low, high = ci
+    if low is None or high is None or not (math.isfinite(low) and math.isfinite(high)):
+        return None
+    if low <= 0.0:
+        return "unsettled: the interval reaches 0, the data cannot bound it from below"
+    if high / low > UNSETTLED_RATIO:
+        return (f"unsettled: the interval spans a factor of {high / low:.3g} (more than "
+                f"{UNSETTLED_RATIO:g}); the data cannot settle it")
+    return None
 
 
 @dataclass(frozen=True)
@@ -123,9 +148,12 @@ def _fit_dict(f: psychometric.Fit) -> dict:
             "target": f.target, "alpha": f.alpha, "beta": f.beta, "lapse": f.lapse,
             "threshold": f.threshold, "threshold_ci95": list(f.threshold_ci),
             "threshold_ci_method": f.threshold_ci_method,
+            "threshold_ci95_unsettled": (unsettled(f.threshold_ci)
+                                         if f.threshold_ci_method else None),
             "threshold_in_tested_range": bool(f.x[0] <= f.threshold <= f.x[-1]),
             "slope": f.slope, "slope_definition": psychometric.SLOPE,
             "slope_ci95": list(f.slope_ci), "slope_ci_method": f.slope_ci_method,
+            "slope_ci95_unsettled": unsettled(f.slope_ci) if f.slope_ci_method else None,
             "levels": [{"difference": float(x), "trials": int(n), "correct": int(k)}
                        for x, n, k in zip(f.x, f.n, f.k)]}
 
@@ -255,10 +283,14 @@ def _same_different(design: dict, sessions: list[SessionData]) -> dict:
         ci = same_different.d_prime_interval(c["hits"], c["different"], c["false_alarms"],
                                              c["same"], bootstrap)
         out.append({"value": value, **{k: int(v) for k, v in c.items()},
+                    "hit_rate_raw": c["hits"] / c["different"] if c["different"] else None,
+                    "false_alarm_rate_raw": (c["false_alarms"] / c["same"] if c["same"]
+                                             else None),
                     "hit_rate": h, "false_alarm_rate": f,
                     "d_prime": float(same_different.d_prime(h, f)),
+                    "d_prime_note": None if h > f else same_different.NO_DISCRIMINATION,
                     "d_prime_ci95": list(ci) if ci else None})
-    return {"d_prime_model": same_different.MODEL,
+    return {"d_prime_model": same_different.MODEL, "rate_correction": same_different.CORRECTION,
             "d_prime_ci_method": same_different.INTERVAL if bootstrap else None,
             "levels": out}
 
@@ -294,8 +326,12 @@ def _magnitude(design: dict, sessions: list[SessionData]) -> dict:
         r = np.asarray(ratings[name])
         sd = float(r.std(ddof=1)) if r.size > 1 else math.nan
         ci, clipped = mean_interval(r, scale)
+        flat = (f"unsettled: from {np.unique(r).size} distinct rating"
+                f"{'s' * (np.unique(r).size != 1)} (fewer than 2), the interval's width "
+                f"says nothing of the uncertainty" if r.size > 1 and np.unique(r).size < 2
+                else None)
         out.append({"stimulus": name, "n": int(r.size), "mean": float(r.mean()), "sd": sd,
-                    "ci95": list(ci), "ci95_clipped": clipped})
+                    "ci95": list(ci), "ci95_clipped": clipped, "ci95_unsettled": flat})
     return {"scale": scale, "ci95_method": MEAN_CI_METHOD, "stimuli": out}
 
 
@@ -340,11 +376,17 @@ def analyse(folders: list[str | Path], out_dir: str | Path, plot: bool = True) -
     return summaries
 
 
-def _interval(ci: list, method: str | None) -> str:
-    """An interval as printed: its ends, or that there is none."""
+def _interval(ci: list, method: str | None, flag: str | None = None) -> str:
+    """An interval as printed: its ends (and why the data cannot settle it), or that
+    there is none."""
     if method is None:
         return "no interval (bootstrap = 0)"
-    return f"95 % [{ci[0]:.4g}, {ci[1]:.4g}]"
+    return f"95 % [{ci[0]:.4g}, {ci[1]:.4g}]" + (f"; {flag}" if flag else "")
+
+
+def _ci(fit: dict, name: str) -> tuple:
+    """The interval of ``name`` (threshold, slope) in ``fit``, its method and its flag."""
+    return fit[f"{name}_ci95"], fit[f"{name}_ci_method"], fit[f"{name}_ci95_unsettled"]
 
 
 def _forced_choice_lines(summary: dict, unit: str) -> list[str]:
@@ -358,10 +400,9 @@ def _forced_choice_lines(summary: dict, unit: str) -> list[str]:
                  f" (outside the differences tested, {lo:.4g} to {hi:.4g}: extrapolated)")
         lines = [f"  threshold ({pooled['target']:.3g} correct, {pooled['function']}): "
                  f"{pooled['threshold']:.4g} {unit} difference{where}, "
-                 f"{_interval(pooled['threshold_ci95'], pooled['threshold_ci_method'])}; "
-                 f"lapse {pooled['lapse']:.3f}",
+                 f"{_interval(*_ci(pooled, 'threshold'))}; lapse {pooled['lapse']:.3f}",
                  f"  slope {pooled['slope']:.4g} per {unit} "
-                 f"({_interval(pooled['slope_ci95'], pooled['slope_ci_method'])}): "
+                 f"({_interval(*_ci(pooled, 'slope'))}): "
                  f"{psychometric.SLOPE}"]
         for name in ("threshold", "slope"):
             if pooled[f"{name}_ci_method"]:
@@ -390,15 +431,21 @@ def report_lines(summary: dict) -> list[str]:
     if summary.get("levels"):
         lines.append(f"  d': {summary['d_prime_model']}; interval: "
                      f"{summary['d_prime_ci_method'] or 'none (bootstrap = 0)'}")
+        lines.append(f"  rates: {summary['rate_correction']}")
     for level in summary.get("levels", []):
         ci = level["d_prime_ci95"]
-        lines.append(f"  {unit} {level['value']:.4g}: hits {level['hit_rate']:.3f}, false "
-                     f"alarms {level['false_alarm_rate']:.3f}, d' {level['d_prime']:.3f}"
-                     + (f", 95 % [{ci[0]:.3f}, {ci[1]:.3f}]" if ci else ""))
+        note = level["d_prime_note"]
+        lines.append(f"  {unit} {level['value']:.4g}: hits {level['hits']} of "
+                     f"{level['different']}, false alarms {level['false_alarms']} of "
+                     f"{level['same']} (corrected rates {level['hit_rate']:.3f} and "
+                     f"{level['false_alarm_rate']:.3f}), d' {level['d_prime']:.3f}"
+                     + (f", 95 % [{ci[0]:.3f}, {ci[1]:.3f}]" if ci else "")
+                     + (f" ({note})" if note else ""))
     for st in summary.get("stimuli", []):
         low, high = (math.nan if v is None else v for v in st["ci95"])
         lines.append(f"  {st['stimulus']}: mean {st['mean']:.3g} (n {st['n']}, 95 % "
-                     f"[{low:.3g}, {high:.3g}]{', clipped to the scale' * st['ci95_clipped']})")
+                     f"[{low:.3g}, {high:.3g}]{', clipped to the scale' * st['ci95_clipped']}"
+                     f"{'; ' + st['ci95_unsettled'] if st['ci95_unsettled'] else ''})")
     if summary.get("stimuli"):
         lines.append(f"  intervals: {summary['ci95_method']}")
     return lines

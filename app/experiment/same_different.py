@@ -11,7 +11,8 @@ variance 2, so
 
 The first gives k from F; the second increases with d' (H = F at d' = 0) and is solved
 for d' by bisection. H <= F gives d' = 0. The yes-no formula z(H) - z(F) underestimates
-this d' (M&C ch. 9). Rates of 0 or 1 are kept finite by the analysis's (k + 0.5) / (n + 1).
+this d' (M&C ch. 9). Rates of 0 or 1 are kept finite by the log-linear correction,
+(k + 0.5) / (n + 1) (:data:`CORRECTION`); the analysis gives the raw counts beside.
 """
 
 from __future__ import annotations
@@ -28,6 +29,12 @@ MODEL = "differencing model (Macmillan & Creelman 2005, ch. 9)"
 #: the interval, as the analysis names it
 INTERVAL = ("bootstrap over trials (the different and the same trials resampled apart), "
             "95 % percentile interval")
+#: how the hit and false-alarm rates are taken, as the analysis names it
+CORRECTION = ("log-linear correction, (count + 0.5) / (trials + 1) (Hautus 1995), which "
+              "keeps rates of 0 and 1 finite")
+#: what d' 0 means where the hits are not above the false alarms
+NO_DISCRIMINATION = ("hits not above false alarms: d' set to 0, no discrimination shown "
+                     "(the model has no d' below 0)")
 _ROOT2 = math.sqrt(2.0)
 #: bisection halvings: the bracket's width (< 12 for rates within (1e-32, 1 - 1e-16))
 #: shrinks below 1e-15
@@ -35,7 +42,8 @@ _HALVINGS = 60
 
 
 def rate(k, n):
-    """The rate (k + 0.5) / (n + 1): never 0 or 1 (``k`` of ``n`` trials)."""
+    """The rate (k + 0.5) / (n + 1) (:data:`CORRECTION`): never 0 or 1 (``k`` of ``n``
+    trials)."""
     return (np.asarray(k, dtype=np.float64) + 0.5) / (np.asarray(n, dtype=np.float64) + 1.0)
 
 
