@@ -21,11 +21,23 @@ the optimum against ``scipy.optimize.minimize``.
 
 The threshold is the x at which psi equals ``target`` (0.75 for two-interval forced choice
 by constant stimuli; a staircase's convergence point, 0.707 for 1-up-2-down); the slope
-is d psi / dx there (per unit of x). Their 95 % intervals are the 2.5th and 97.5th
-percentiles over ``bootstrap`` data sets drawn from the fitted function at the same x
-and n (Wichmann & Hill 2001b), refitted the same way; for an adaptive procedure
-(:func:`fit_adaptive`) the threshold's is a Bayesian credible interval with the slope
-integrated out (:func:`credible_threshold`), which a short staircase needs.
+is d psi / dx there (per unit of x). Their 95 % intervals come from ``bootstrap`` data
+sets drawn from the fitted function at the same x and n and refitted the same way (a
+parametric bootstrap, Wichmann & Hill 2001b, Percept Psychophys 63:1314). The
+threshold's is the 2.5th to 97.5th percentile of the refits' thresholds. The slope's is
+the bias-corrected and accelerated (BCa) interval of the refits' slopes
+(:func:`bca_interval`; Efron 1987), its acceleration from the delete-one-trial jackknife
+(:func:`_jackknife_slopes`: 2 J refits): the maximum-likelihood slope of some hundred
+trials is too steep (Wichmann & Hill 2001a, Percept Psychophys 63:1293) and the
+percentile interval follows it. Measured at the bundled period-2afc design (six levels,
+20 trials each) with a known Weibull observer (tests/test_psychometric_intervals.py;
+600 sessions, 1000 sets each): the median fitted slope was 21 % too steep; the slope's
+BCa interval covered the true slope in 90 % of the sessions, its percentile interval in
+77 % (nominal 95 %; all misses on the steep side); the threshold's percentile interval
+covered the true threshold in 91 %, a BCa interval in 90 % (so the threshold keeps the
+percentile). For an adaptive procedure (:func:`fit_adaptive`) the threshold's is a
+Bayesian credible interval with the slope integrated out (:func:`credible_threshold`),
+which a short staircase needs.
 """
 
 from __future__ import annotations
@@ -35,15 +47,22 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy.special import ndtr, ndtri
 
 from frictex.device.errors import InputError
 
 FUNCTIONS = ("weibull", "logistic")
-#: how :func:`fit_sets` computes its intervals, as the analysis names them
+#: how :func:`fit_sets` computes the threshold's interval, as the analysis names it
 BOOTSTRAP = "parametric bootstrap, 95 % percentile interval (Wichmann & Hill 2001b)"
-#: how :func:`fit_adaptive` computes the slope's interval
+#: how :func:`fit_sets` computes the slope's interval, with its measured coverage
+SLOPE_BCA = ("parametric bootstrap, 95 % bias-corrected and accelerated (BCa) interval "
+             "(Efron 1987; Wichmann & Hill 2001b); covered the true slope in 90 % of 600 "
+             "simulated sessions at the bundled period-2afc design (the percentile "
+             "interval: 77 %)")
+#: how :func:`fit_adaptive` computes the slope's interval, with its measured coverage
 RERUN = ("parametric bootstrap rerunning the procedure with the fitted function as the "
-         "observer, 95 % percentile interval")
+         "observer, 95 % BCa interval; covered the true slope in 50 of 100 simulated "
+         "runs of the bundled depth-staircase (the percentile interval: 34)")
 #: what the slope is, as the analysis prints it
 SLOPE = "d psi / dx at the threshold: proportion correct per unit of the difference"
 _EPS = 1e-12
@@ -258,12 +277,81 @@ def _check(x, n, k, function, guess, lapse_max, target):
                          f"{guess:g} and 1 - lapse_max ({1.0 - lapse_max:g})")
 
 
+def _jackknife_slopes(function, x, n, k, guess, lapse_max, target):
+    """The delete-one-trial jackknife of counts ``k`` (S, J) correct of ``n`` (J,): each
+    set refitted with one correct and with one incorrect trial fewer at each level (2 J
+    refits stand for all its trials). Returns the refits' slopes (S, 2J) and the trials
+    each refit stands for (S, 2J): k_j and n_j - k_j."""
+    sets, levels = k.shape
+    fewer = np.eye(levels)  # (J, J): row j takes one trial from level j
+    N = np.broadcast_to(np.concatenate([n - fewer, n - fewer]), (sets, 2 * levels, levels))
+    K = np.concatenate([np.maximum(k[:, None, :] - fewer, 0.0),
+                        np.broadcast_to(k[:, None, :], (sets, levels, levels))], axis=1)
+    K = np.minimum(K, N)
+    params = fit_many(function, x, N.reshape(-1, levels), K.reshape(-1, levels), guess,
+                      lapse_max)
+    _, s = threshold_and_slope(function, params[:, 0], params[:, 1], guess, params[:, 2],
+                               target)
+    return s.reshape(sets, -1), np.concatenate([k, n - k], axis=1)
+
+
+def bca_interval(estimate, boot, jack, weights, level: float = 0.95) -> np.ndarray:
+    """Bias-corrected and accelerated bootstrap intervals (Efron 1987, J Am Stat Assoc
+    82:171; Efron & Tibshirani 1993, ch. 14), one per row.
+
+    The bias correction z0 is the normal quantile of the share of bootstrap estimates
+    below the estimate (ties count half; the share kept within [1/(2B), 1 - 1/(2B)]);
+    the acceleration is a = sum w d^3 / (6 (sum w d^2)^1.5), d the jackknife estimates'
+    weighted mean minus each (0 where they are all equal). The ends are the bootstrap
+    estimates' quantiles at Phi(z0 + (z0 + z) / (1 - a (z0 + z))), z the normal quantiles
+    of (1 -+ ``level``) / 2, interpolated linearly as ``np.percentile``.
+
+    Parameters
+    ----------
+    estimate : array_like, shape (S,)
+        The estimates from the data.
+    boot : array_like, shape (S, B)
+        Their bootstrap estimates.
+    jack, weights : array_like, shape (S, M)
+        Jackknife estimates and how many deleted observations each stands for.
+    level : float
+        Nominal coverage.
+
+    Returns
+    -------
+    ndarray, shape (S, 2)
+        Low and high ends, in the estimates' units.
+    """
+    estimate = np.asarray(estimate, dtype=np.float64)[:, None]
+    boot = np.sort(np.asarray(boot, dtype=np.float64), axis=1)
+    jack, weights = np.asarray(jack, dtype=np.float64), np.asarray(weights, dtype=np.float64)
+    draws = boot.shape[1]
+    share = (np.sum(boot < estimate, axis=1) + 0.5 * np.sum(boot == estimate, axis=1)) / draws
+    z0 = ndtri(np.clip(share, 0.5 / draws, 1.0 - 0.5 / draws))[:, None]
+    mean = np.sum(weights * jack, axis=1, keepdims=True) / np.sum(weights, axis=1, keepdims=True)
+    d = mean - jack
+    spread = np.sum(weights * d ** 2, axis=1)
+    accel = np.where(spread > 0.0, np.sum(weights * d ** 3, axis=1)
+                     / (6.0 * np.where(spread > 0.0, spread, 1.0) ** 1.5), 0.0)[:, None]
+    w = z0 + ndtri(np.array([0.5 - 0.5 * level, 0.5 + 0.5 * level]))[None, :]
+    denominator = 1.0 - accel * w
+    # past the pole of the map (|a| large) the end is the bootstrap's extreme on w's side
+    with np.errstate(divide="ignore", invalid="ignore"):
+        adjusted = np.where(denominator > 0.0, z0 + w / denominator, np.sign(w) * np.inf)
+    position = ndtr(adjusted) * (draws - 1)
+    below = np.clip(np.floor(position).astype(np.int64), 0, draws - 1)
+    above = np.minimum(below + 1, draws - 1)
+    rows = np.arange(boot.shape[0])[:, None]
+    return boot[rows, below] + (position - below) * (boot[rows, above] - boot[rows, below])
+
+
 def fit_sets(x, n, k, *, function: str = "weibull", guess: float = 0.5,
              lapse_max: float = 0.06, target: float = 0.75, bootstrap: int = 1000,
              seed: int = 0) -> list[Fit]:
     """Fit each row of ``k`` (S, J): counts correct of ``n`` (J,) at differences ``x`` (J,)
     (distinct), each with its own ``bootstrap`` data sets (drawn from ``seed``); the S
-    fits and their S x ``bootstrap`` refits run as one batch."""
+    fits, their S x ``bootstrap`` refits and S x 2 J jackknife refits run as one batch.
+    The intervals are as the module docstring says (``BOOTSTRAP``, ``SLOPE_BCA``)."""
     x, n = np.asarray(x, dtype=np.float64), np.asarray(n, dtype=np.float64)
     k = np.atleast_2d(np.asarray(k, dtype=np.float64))
     _check(x, n, k, function, guess, lapse_max, target)
@@ -279,11 +367,13 @@ def fit_sets(x, n, k, *, function: str = "weibull", guess: float = 0.5,
         boot = fit_many(function, x, n, draws.reshape(-1, x.size), guess, lapse_max)
         t, s = threshold_and_slope(function, boot[:, 0], boot[:, 1], guess, boot[:, 2], target)
         t_ci = np.percentile(t.reshape(sets, bootstrap), [2.5, 97.5], axis=1).T
-        s_ci = np.percentile(s.reshape(sets, bootstrap), [2.5, 97.5], axis=1).T
-    method = f"{BOOTSTRAP}, {bootstrap} data sets" if bootstrap > 0 else None
+        s_ci = bca_interval(slopes, s.reshape(sets, bootstrap),
+                            *_jackknife_slopes(function, x, n, k, guess, lapse_max, target))
+    drawn = f", {bootstrap} data sets"
+    t_method, s_method = (BOOTSTRAP + drawn, SLOPE_BCA + drawn) if bootstrap > 0 else (None, None)
     return [Fit(function, guess, lapse_max, target, float(a), float(b), float(lam),
                 float(thresholds[i]), float(slopes[i]), (float(t_ci[i, 0]), float(t_ci[i, 1])),
-                (float(s_ci[i, 0]), float(s_ci[i, 1])), bootstrap, x, n, k[i], method, method)
+                (float(s_ci[i, 0]), float(s_ci[i, 1])), bootstrap, x, n, k[i], t_method, s_method)
             for i, (a, b, lam) in enumerate(params)]
 
 
@@ -380,9 +470,13 @@ def fit_adaptive(x, correct, simulate, *, function: str = "weibull", guess: floa
     plays it with an observer correct with probability ``p(x)`` and returns its trials
     ``(x, correct)``; each of ``bootstrap`` plays, with the fitted function as the
     observer, is refitted (a fixed-design bootstrap, :func:`fit_sets`, would ignore that
-    a staircase puts its trials where the answers lead it). That slope interval follows
-    the fit's too steep slope and is narrower than its nominal 95 %. ``bootstrap`` 0: no
-    slope interval (the threshold's needs no draws and is computed all the same)."""
+    a staircase puts its trials where the answers lead it), and its interval is the BCa
+    interval of those refits (:func:`bca_interval`, the acceleration from the jackknife
+    of the trials). It still follows the fit's too steep slope (about twice the true one
+    at the median of 100 simulated runs of the bundled depth-staircase, a known Weibull
+    observer) and covered the true slope in 50 of those 100 runs (the percentile
+    interval: 34), far from its nominal 95 %. ``bootstrap`` 0: no slope interval (the
+    threshold's needs no draws and is computed all the same)."""
     x = np.asarray(x, dtype=np.float64)
     correct = np.asarray(correct, dtype=np.float64)
     xs, inverse = np.unique(x, return_inverse=True)
@@ -405,8 +499,10 @@ def fit_adaptive(x, correct, simulate, *, function: str = "weibull", guess: floa
         np.add.at(K[i], at, np.asarray(pc, dtype=np.float64))
     params = fit_many(function, levels, N, K, guess, lapse_max)
     _, s = threshold_and_slope(function, params[:, 0], params[:, 1], guess, params[:, 2], target)
-    return replace(fitted, slope_ci=tuple(float(v) for v in np.percentile(s, [2.5, 97.5])),
-                   bootstrap=bootstrap, slope_ci_method=f"{RERUN}, {bootstrap} runs")
+    ends = bca_interval([fitted.slope], s[None, :], *_jackknife_slopes(
+        function, xs, n.astype(np.float64), k[None, :], guess, lapse_max, target))[0]
+    return replace(fitted, slope_ci=(float(ends[0]), float(ends[1])), bootstrap=bootstrap,
+                   slope_ci_method=f"{RERUN}, {bootstrap} runs")
 
 
 def data_seed(*arrays) -> int:
