@@ -474,7 +474,7 @@ def fit_adaptive(x, correct, simulate, *, function: str = "weibull", guess: floa
     interval of those refits (:func:`bca_interval`, the acceleration from the jackknife
     of the trials). It still follows the fit's too steep slope (about twice the true one
     at the median of 100 simulated runs of the bundled depth-staircase, a known Weibull
-    observer) and covered the true slope in 50 of those 100 runs (the percentile
+    observer, 200 reruns each) and covered the true slope in 50 of them (the percentile
     interval: 34), far from its nominal 95 %. ``bootstrap`` 0: no slope interval (the
     threshold's needs no draws and is computed all the same)."""
     x = np.asarray(x, dtype=np.float64)
