@@ -147,7 +147,8 @@ def test_a_stopped_batch_lists_what_finished(tmp_path, spawn, long_trace, sig, t
                         + "".join(f"grating-5mm,{long_trace},100000,L{k}\n" for k in (2, 3, 4)))
     out = tmp_path / "out"
     proc = spawn([FRICTEX, "batch", str(manifest), "--out", str(out), "--jobs", "2",
-                  "--quiet"], start_new_session=True)
+                  "--quiet", "--allow-outside"],  # long_trace lies beside the manifest's folder
+                 start_new_session=True)
 
     def running(name):
         return any(staged(out).glob(f".{name}.frictex-staging.*"))
@@ -179,7 +180,8 @@ def test_a_killed_batch_stops_its_running_jobs(tmp_path, spawn, long_trace):
                         + "".join(f"grating-5mm,{long_trace},100000,L{k}\n" for k in (1, 2)))
     out = tmp_path / "out"
     proc = spawn([FRICTEX, "batch", str(manifest), "--out", str(out), "--jobs", "2",
-                  "--quiet"], start_new_session=True)
+                  "--quiet", "--allow-outside"],  # long_trace lies beside the manifest's folder
+                 start_new_session=True)
     wait_for(lambda: len(list(staged(out).glob(".L*.frictex-staging.*"))) == 2,
              "both jobs to run")
     folder = staged(out)
