@@ -105,11 +105,12 @@ class ReplayOptions:
         sink objects, used as they are; committed before the tables, so a sink that fails
         leaves no outputs. The sinks the run builds itself (``tables``, ``link``,
         ``frames``, ``progress`` where it shows one) are refused.
-    clock : str
+    clock : str or Clock
         What paces the run, ``NAME[:ARG]`` of :data:`~frictex.app.engine.clocks.CLOCKS`:
         ``virtual`` (the default: as fast as it computes), ``wall`` (real time),
-        ``device`` (the output device's room), a plugin's. With any but ``virtual``, one
-        block per pipeline call (unless ``chunk_blocks`` says otherwise), as live.
+        ``device`` (the output device's room), a plugin's; or a clock object (``wait(k)``
+        and ``finished(k, n)``), used as it is. With any but ``virtual``, one block per
+        pipeline call (unless ``chunk_blocks`` says otherwise), as live.
     """
 
     rate_hz: float = 10_000.0
@@ -125,7 +126,7 @@ class ReplayOptions:
     max_gap_s: float = MAX_GAP_S
     control: str | None = None
     sinks: tuple[Any, ...] = ()
-    clock: str = "virtual"
+    clock: Any = "virtual"
 
 
 @dataclass(frozen=True)
