@@ -52,14 +52,22 @@ def _run(argv: list[str]) -> int:
 def _one_escaped_line(err: str, path) -> str:
     """The one error line of a refusal: names ``path``, shows no control character, no
     line of a file of another kind."""
+    lines = _escaped_lines(err, path)
+    assert len(lines) == 1, err
+    return lines[0]
+
+
+def _escaped_lines(err: str, path) -> list[str]:
+    """The error lines of a refusal that lists each problem on a line of its own (a
+    manifest's), each as :func:`_one_escaped_line` holds it."""
     lines = err.splitlines()
-    assert len(lines) == 1 and err.endswith("\n"), err
-    line = lines[0]
-    assert line.startswith("frictex: error: ") and str(path) in line, line
-    assert not any(unicodedata.category(ch) in ("Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp")
-                   for ch in line), ascii(line)
-    assert "SECRET" not in line, line
-    return line
+    assert lines and err.endswith("\n"), err
+    for line in lines:
+        assert line.startswith("frictex: error: ") and str(path) in line, line
+        assert not any(unicodedata.category(ch) in ("Cc", "Cf", "Cs", "Co", "Cn", "Zl", "Zp")
+                       for ch in line), ascii(line)
+        assert "SECRET" not in line, line
+    return lines
 
 
 def _make(tmp_path, name: str, content):
@@ -315,11 +323,13 @@ BAD_MANIFESTS = {
 
 @pytest.mark.parametrize("case", sorted(BAD_MANIFESTS))
 def test_hostile_manifests_are_one_escaped_line(tmp_path, capsys, case):
+    """One escaped line per problem: the first names the fault (a quote left open also
+    breaks the next line, said on a line of its own)."""
     content, message = BAD_MANIFESTS[case]
     path = _make(tmp_path, "m.csv", content)
     code = _run(["batch", str(path), "--out", str(tmp_path / "out"), "--quiet"])
     assert code == 2
-    assert message in _one_escaped_line(capsys.readouterr().err, path)
+    assert message in _escaped_lines(capsys.readouterr().err, path)[0]
     assert not (tmp_path / "out").exists()
 
 

@@ -99,9 +99,9 @@ def test_a_name_used_twice_and_a_bad_field_of_a_later_row_both_show(study):
     manifest.write_text("scene,trace,name\na,b,x\nc,d,x\ne,f,../x\n")
     with pytest.raises(ManifestError) as caught:
         read_manifest(manifest, RENDERER_NAMES)
-    assert len(caught.value.problems) == 2
-    assert 'name "x" is used by an earlier job' in caught.value.problems[0]
-    assert "expected a plain folder name" in caught.value.problems[1]
+    assert len(caught.value.error_lines) == 2
+    assert 'name "x" is used by an earlier job' in caught.value.error_lines[0]
+    assert "expected a plain folder name" in caught.value.error_lines[1]
 
 
 def test_a_bad_header_stops_the_reading(study):
@@ -109,7 +109,7 @@ def test_a_bad_header_stops_the_reading(study):
     manifest.write_text("scene,colour\na,b\nc\n")
     with pytest.raises(ManifestError) as caught:
         read_manifest(manifest, RENDERER_NAMES)
-    assert caught.value.problems == (f"{manifest}:1: not a manifest header (2 fields: scene "
+    assert caught.value.error_lines == (f"{manifest}:1: not a manifest header (2 fields: scene "
                                      f"and colour); expected scene,trace and optionally "
                                      f"renderer,rate_hz,block,format,name",)
 
@@ -119,6 +119,6 @@ def test_problems_beyond_the_shown_are_counted(study):
     manifest.write_text("scene,trace\n" + "a\n" * (MAX_PROBLEMS_SHOWN + 7))
     with pytest.raises(ManifestError) as caught:
         read_manifest(manifest, RENDERER_NAMES)
-    problems = caught.value.problems
+    problems = caught.value.error_lines
     assert len(problems) == MAX_PROBLEMS_SHOWN + 1
     assert problems[-1] == f"{manifest}: 7 more problems"

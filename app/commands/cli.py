@@ -227,8 +227,8 @@ def report_error(exc: BaseException) -> int:
         traceback.print_exception(exc, file=sys.stderr)
         print(INTERNAL, file=sys.stderr)
         return 70
-    for problem in getattr(exc, "problems", None) or (str(exc),):
-        print(f"frictex: error: {printable(problem)}", file=sys.stderr)
+    for line in getattr(exc, "error_lines", None) or (str(exc),):  # a manifest's: each
+        print(f"frictex: error: {printable(line)}", file=sys.stderr)
     return code
 
 

@@ -131,10 +131,11 @@ class Job:
 
 class ManifestError(InputError):
     """A manifest that cannot be read: every problem found, each one line naming the file,
-    the line and the field (``problems``); the message is all of them, joined by "; "."""
+    the line and the field (``error_lines``, which the command line prints one by one);
+    the message is all of them, joined by "; "."""
 
     def __init__(self, *problems: str):
-        self.problems = problems
+        self.error_lines = problems
         super().__init__("; ".join(problems))
 
 
@@ -153,7 +154,7 @@ class _Problems:
         try:
             return function(*args)
         except ManifestError as exc:
-            self.lines.extend(exc.problems)
+            self.lines.extend(exc.error_lines)
             return None
 
     def raise_any(self) -> None:
