@@ -14,20 +14,11 @@ from frictex.app.experiment.observer import participant_seed
 from frictex.app.experiment.protocol import load_protocol
 from frictex.app.experiment.runner import make_presenter, run_session
 from frictex.device.errors import InputError
+from test_experiment_session import PROTOCOL as SESSION_PROTOCOL
 
-PROTOCOL = """format = 1
-method = "2afc"
-repetitions = 2
-
-[stimuli]
-scene = "grating-5mm"
-vary = "depth"
-reference = 0.3
-levels = [0.32, 0.36, 0.42]
-
-[presentation]
-exploration_s = 0.4
-"""
+#: the session tests' protocol without practice trials and breaks: every trial answered
+PROTOCOL = SESSION_PROTOCOL.replace("practice = 1\nbreak_every = 5\n", "")
+assert "practice" not in PROTOCOL, "the session tests' protocol changed: take its practice out"
 SPEC = "simulated:weber=0.11,lapse=0.02"  # no seed=: the session's gives it
 TRIALS = 3 * 2 * 2
 
