@@ -130,7 +130,10 @@ class ExperimentLoop(DemoLoop):
         x, y = self._mm(px)
         with self._rec_lock:
             if self._recording is not None:
-                self._recording.append((max(min(t_s, self.haptic.now()), 0.0), x, y,
+                # as the haptic queue takes them (touch_at): a stamp never goes back, though
+                # an event stamped before the last one recorded may reach here after it
+                last = self._recording[-1][0] if self._recording else 0.0
+                self._recording.append((max(min(t_s, self.haptic.now()), last), x, y,
                                         self.force_n, EVENTS[event]))
 
     # -- session thread -----------------------------------------------------------------
