@@ -2,7 +2,6 @@
 anything else refused, each column counting what it says."""
 
 import csv
-import json
 
 import pytest
 
