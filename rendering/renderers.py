@@ -95,7 +95,7 @@ class PluginRenderer:
     """Another package's renderer, whose exceptions become :class:`PluginError` saying
     whose renderer failed on which layer, and what it raised; as do outputs that break
     :class:`LayerRenderer`'s contract where frictex would fail on them or write them:
-    mu' or covers not (fingers, samples), mu' not finite where the layer covers; and a
+    mu' or covers not (fingers, samples), mu' outside (0, 1] where the layer covers; and a
     renderer built without ``initial_state`` or ``render``. ``inner``: the plugin's
     renderer."""
 
@@ -135,8 +135,11 @@ class PluginRenderer:
                                   f"layer {self._layer!r}; expected {shape} ({shape[0]} "
                                   f"finger(s) x {shape[1]} samples)")
         mu, covers = np.asarray(mu, dtype=np.float64), np.asarray(covers, dtype=bool)
-        bad = int(np.count_nonzero(~np.isfinite(mu) & covers))
-        if bad:
-            raise PluginError(f"{self._who} returned {bad} mu' values that are not finite "
-                              f"(NaN or inf) on layer {self._layer!r}, where it covers")
+        bad = ~((mu > 0.0) & (mu <= 1.0)) & covers  # NaN fails both comparisons
+        if bad.any():
+            values = mu[bad]
+            what = ("that are not finite (NaN or inf)" if not np.isfinite(values).any()
+                    else f"outside (0, 1] (the first {values[0]:g})")
+            raise PluginError(f"{self._who} returned {int(np.count_nonzero(bad))} mu' values "
+                              f"{what} on layer {self._layer!r}, where it covers")
         return mu, covers, new_state
