@@ -70,10 +70,11 @@ def checked_scene(scene: Scene) -> Scene:
     file's key (``layers[i].mu_low``, ``display.width_mm``, ``device.amplitude_limit_um``,
     a layer's ``region``, ``geometry`` and ``visual``) is checked by that key's own type
     (``textures.keys``, ``textures.schema``): a number, finite, within the key's bounds;
-    a value equal to the key's default is taken as the loader takes it. Fields the file
-    writes another way (colours, a raster's image, a clip's events, a height shape) and
-    the rules between keys (mu_low under mu_high, objects on the display) are not checked
-    again.
+    a word, one of the key's choices (``edge``, ``blend``, ``mode``); a value equal to
+    the key's default is taken as the loader takes it. Layer names are unique, as in a
+    file. Fields the file writes another way (colours, a raster's image, a clip's events,
+    a height shape, a key click's ``first_push``) and the other rules between keys
+    (mu_low under mu_high, objects on the display) are not checked again.
     """
     from frictex.device.profile import DeviceProfile, DrivingForceParams, FrictionParams
     from frictex.textures import keys
@@ -99,10 +100,12 @@ def checked_scene(scene: Scene) -> Scene:
         r.report(("layers",), f"{count}; expected a tuple of 1 to {keys.MAX_LAYERS} layers")
         layers = ()
     rules = _layer_rules()
+    names: dict = {}  # a layer's name -> the index of the first layer of that name
     for i, layer in enumerate(layers):
         r.label = f"scene {_named(scene.name)}, layer {_named(getattr(layer, 'name', '?'))}"
         path = (f"layers[{i}]",)
         if _fields(r, layer, path, rules, _LayerBase):
+            _unique_name(r, layer.name, i, names)
             for part in ("region", "geometry", "visual"):
                 value = getattr(layer, part, None)
                 if dataclasses.is_dataclass(value):
@@ -125,12 +128,30 @@ def _fields(r, obj: object, path: tuple, rules: dict, kind: type | None = None) 
         r.report(path, f"expected a {kind.__name__}, got {type(obj).__name__}")
         return False
     for field in dataclasses.fields(obj):
-        if field.name in rules:
+        if field.name in rules and _held_as_written(rules[field.name][0], field):
             spec, defaults = rules[field.name]
             value = _plain(getattr(obj, field.name))
             if not any(value is default or value == _plain(default) for default in defaults):
                 spec.check(r, value, path + (field.name,))
     return True
+
+
+def _held_as_written(spec, field: dataclasses.Field) -> bool:
+    """Whether ``field`` holds what its key's ``spec`` checks: any key but a choice, and a
+    choice where the field holds the word (annotated ``str``); the model keeps some
+    choices otherwise (a key click's ``first_push`` as +1 or -1), not checked again."""
+    from frictex.textures.schema import Choice
+    return not isinstance(spec, Choice) or field.type in ("str", str)
+
+
+def _unique_name(r, name: object, index: int, names: dict) -> None:
+    """Report to the reader ``r`` the name of layer ``index`` where an earlier layer has it
+    (``names``: name -> the first layer's index, this one added), as the loader says it."""
+    from frictex.textures.schema import show
+    first = names.setdefault(name, index)
+    if first != index:
+        r.report((f"layers[{index}]", "name"),
+                 f"{show(name)} is already the name of layers[{first}]")
 
 
 def _named(name: object) -> str:
@@ -152,12 +173,12 @@ def _plain(value: object) -> object:
 @functools.cache
 def _layer_rules() -> dict:
     """The rules for a layer's fields, name -> (a key's type, its defaults): the keys
-    every layer has (name, blend, fingers), and by name every number and flag key of the
-    layer types, regions and visual hints (``textures.keys``). A name two types bound
+    every layer has (name, blend, fingers), and by name every number, flag and choice key
+    of the layer types, regions and visual hints (``textures.keys``). A name two types bound
     differently is left out; one they bound alike in different units keeps both units
     for its messages, and the defaults of both."""
     from frictex.textures import keys
-    from frictex.textures.schema import REQUIRED, Flag, Int, Num, NumList
+    from frictex.textures.schema import REQUIRED, Choice, Flag, Int, Num, NumList
 
     def rule(spec):  # what a spec checks, not what it documents or defaults to
         neutral = {"default": None, "doc": "", "rule": ""}
@@ -171,7 +192,7 @@ def _layer_rules() -> dict:
     clashing = set()
     for table in (keys.RECT_REGION, keys.DISC_REGION, keys.VISUAL, *keys.LAYER_KEYS.values()):
         for name, spec in table.items():
-            if not isinstance(spec, Num | Int | NumList | Flag):
+            if not isinstance(spec, Num | Int | NumList | Flag | Choice):
                 continue
             known, defaults = rules.setdefault(name, (spec, []))
             if rule(known) != rule(spec):

@@ -1,0 +1,50 @@
+"""A Scene changed in code keeps the texture file's word keys and its unique layer names:
+a choice the loader refuses, or two layers of one name, is one TextureError line as the
+loader's, not a scene that renders as something else (an unknown edge rendered square)."""
+
+import dataclasses
+
+import pytest
+
+import frictex
+from frictex._inputs import checked_scene
+from frictex.textures.errors import TextureError
+from frictex.textures.library import list_scenes
+
+
+def with_layer(scene_name: str, **changes):
+    scene = frictex.load_scene(scene_name)
+    layers = (dataclasses.replace(scene.layers[0], **changes), *scene.layers[1:])
+    return dataclasses.replace(scene, layers=layers)
+
+
+@pytest.mark.parametrize("scene_name, field, value, message", [
+    ("grating-5mm", "edge", "zigzag", '"zigzag" is not one of square, smooth'),
+    ("grating-5mm", "edge", 1, "expected one of square, smooth, got the number 1"),
+    ("raster-map", "mode", "stretched", '"stretched" is not one of'),
+])
+def test_a_choice_the_loader_refuses_is_refused_naming_layer_and_field(scene_name, field,
+                                                                        value, message):
+    scene = with_layer(scene_name, **{field: value})
+    with pytest.raises(TextureError, match=r"^scene '[^']+', layer '[^']+': "
+                                           rf"layers\[0\]\.{field}: {message}"):
+        frictex.build_pipeline(scene)
+
+
+def test_two_layers_of_one_name_are_refused_as_the_loader_refuses_them():
+    scene = frictex.load_scene("grating-5mm")
+    twice = dataclasses.replace(scene, layers=(scene.layers[0], scene.layers[0]))
+    with pytest.raises(TextureError) as caught:
+        frictex.replay(twice, frictex.synth_trace("swipe", duration_s=0.1))
+    assert str(caught.value) == ("scene 'grating-5mm', layer 'lines': layers[1].name: "
+                                 '"lines" is already the name of layers[0]')
+
+
+def test_a_choice_kept_in_another_form_and_every_bundled_scene_pass():
+    """A key click's first_push is written '+x' and kept as +1: not refused as a word."""
+    assert with_layer("keyclick-ring", first_push=-1).layers[0].first_push == -1
+    checked_scene(with_layer("keyclick-ring", first_push=-1))
+    checked_scene(with_layer("grating-5mm", edge="smooth"))
+    for entry in list_scenes():
+        scene = frictex.load_scene(entry.name)
+        assert checked_scene(scene) is scene
