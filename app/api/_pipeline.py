@@ -5,9 +5,12 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+import numpy as np
+
 from frictex._args import choice, real, whole
 from frictex._inputs import checked, scene_of
 from frictex.app.engine.limits import BLOCK_SIZES, OUTPUT_RATES_HZ
+from frictex.app.engine.tables import check_memory
 from frictex.rendering.input.trace_file import Trace
 from frictex.rendering.pipeline import INVERSIONS, BlockOutput
 from frictex.rendering.pipeline import build_pipeline as build
@@ -25,6 +28,15 @@ def run_settings(rate_hz: float, block_size: int | None, renderer: str | None,
     return (real("rate_hz", rate_hz, "Hz", OUTPUT_RATES_HZ),
             None if block_size is None
             else whole("block_size", block_size, "samples", BLOCK_SIZES))
+
+
+#: values per finger and output sample in a :class:`BlockOutput`: ``contact``, ``x_mm``,
+#: ``y_mm``, ``mu_target``, ``wanted_um``, ``amplitude_um``
+OUTPUT_VALUES_PER_FINGER = 6
+
+#: the computation's peak memory over its output's (the stages' working arrays beside
+#: the output): measured 2.7 at one finger (172 bytes a sample against 64), 2.3 at two
+PEAK_PER_OUTPUT = 3
 
 
 class Pipeline:
@@ -99,15 +111,34 @@ class Pipeline:
         InputError
             A trace :func:`make_trace` refuses (no samples, a NaN, a value out of range,
             time going back, ...); the message names the field and the first bad sample.
+            Or an output too big for memory, refused before anything is computed: its
+            values (8 bytes each: ``t_s``, six per finger, ``commands_um`` and
+            ``phases_rad``) times 3 (the stages' working arrays beside them) may take
+            at most half the memory available (Linux's ``MemAvailable``): with one
+            finger and one channel 192 bytes a sample, at 10 kHz 1.9 GB per 1,000 s of
+            trace, pauses included.
         """
         trace = checked(trace)
         stages = self._stages
         config = dataclasses.replace(stages.tracker_config, t0_s=float(trace.t_s[0]))
-        stages.tracker_config = config
         last = int(apply_index(trace.t_s[-1:], config)[0])
-        out, _ = stages.process(0, trace, stages.initial_state(),
-                                n_blocks=last // stages.block_size + 1)
+        n_blocks = last // stages.block_size + 1
+        self._check_memory(trace, n_blocks * stages.block_size)
+        stages.tracker_config = config
+        out, _ = stages.process(0, trace, stages.initial_state(), n_blocks=n_blocks)
         return out
+
+    def _check_memory(self, trace: Trace, samples: int) -> None:
+        """Refuse an output of ``samples`` samples (of every finger in ``trace``) whose
+        computation would not fit the memory available (``tables.check_memory``)."""
+        fingers = max(1, len(np.unique(trace.finger)))
+        phases = 2 if self._stages.actuation.has_phases else 1
+        values = 1 + OUTPUT_VALUES_PER_FINGER * fingers + phases * len(self.channels)
+        seconds = samples / self.rate_hz
+        check_memory(samples * values * 8 * PEAK_PER_OUTPUT,
+                     f"the output of this {seconds:.6g} s trace ({samples} samples at "
+                     f"{self.rate_hz:g} Hz, {fingers} finger{'s' * (fingers > 1)}, pauses included)",
+                     "replay(out=...) skips long pauses and writes its tables a chunk at a time")
 
 
 def build_pipeline(scene: Scene | str | Path, *, rate_hz: float = 10_000.0,

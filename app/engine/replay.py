@@ -45,7 +45,7 @@ from frictex.app.engine.sinks import (SinkRequest, build_sink, command_columns,
 from frictex.app.engine.sources import MAX_GAP_S, TraceSource
 from frictex.app.engine.staging import Staging
 from frictex.app.engine.summary import Totals, finite_json, summary, timings
-from frictex.app.engine.tables import MEMORY, check_room, load_writer, row_bytes
+from frictex.app.engine.tables import MEMORY, check_memory, check_room, load_writer, row_bytes
 from frictex.device.errors import DeviceError, InputError
 from frictex.rendering.input.trace_file import Trace, iter_trace, most_touching
 from frictex.rendering.pipeline import build_pipeline
@@ -230,6 +230,8 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
     timer.seconds["read"] += time.perf_counter() - read0
     if staging is not None and source.ended:  # the outputs' size is known before writing
         _check_outputs_fit(staging.out, source, pipeline, options.fmt, frames)
+    if options.fmt == MEMORY and source.ended:
+        _check_tables_fit_memory(source, pipeline)
     if options.sim_args and options.device is None:
         raise InputError("sim_args are for a simulated device (device 'sim')")
     _check_attached(options, sink, frames, source)
@@ -407,17 +409,34 @@ def _stopped(exc, done_s: float, source: TraceSource):
 def _check_outputs_fit(out_dir: Path, source: TraceSource, pipeline, fmt: str, frames) -> None:
     """Refuse, before writing anything, outputs that would not fit the disk (frames
     counted): checked on the folder that will hold the staging folder."""
+    output_s, need, what = _tables_size(source, pipeline, fmt)
+    what = f"the outputs ({what}, {fmt}"
+    if frames is not None:
+        need += frames.frames_bytes(output_s)
+        what += f", frames at {frames.fps:g} fps"
+    check_room(_existing(out_dir), need, what + ")")
+
+
+def _check_tables_fit_memory(source: TraceSource, pipeline) -> None:
+    """Refuse, before computing anything, tables kept in memory that would not fit it
+    (``tables.check_memory``): their values at 8 bytes, twice, as joining the chunks
+    into a table holds both at once (``tables.MemoryTable.commit``)."""
+    _, need, what = _tables_size(source, pipeline, MEMORY)
+    check_memory(2 * need, f"the tables kept in memory ({what})",
+                 "write them into a folder instead, a chunk at a time (replay(out=...))")
+
+
+def _tables_size(source: TraceSource, pipeline, fmt: str) -> tuple[float, float, str]:
+    """The output's duration (s) of the trace read whole (``source.pending``), the
+    bytes of its two tables in ``fmt`` (up to ``tables.row_bytes`` a row), and the words
+    saying how much output that is."""
     trace = source.pending
     output_s = trace.duration_s - source.gaps.skipped_s + 2 * pipeline.block_size / pipeline.rate_hz
     samples = output_s * pipeline.rate_hz
     fingers = max(1, most_touching(trace))
     need = samples * (row_bytes(command_columns(pipeline.channels, pipeline.actuation.has_phases), fmt)
                       + fingers * row_bytes(friction_columns(pipeline.forces is not None), fmt))
-    what = f"the outputs ({output_s:.6g} s at {pipeline.rate_hz:g} Hz, up to {fingers} fingers, {fmt}"
-    if frames is not None:
-        need += frames.frames_bytes(output_s)
-        what += f", frames at {frames.fps:g} fps"
-    check_room(_existing(out_dir), need, what + ")")
+    return output_s, need, f"{output_s:.6g} s at {pipeline.rate_hz:g} Hz, up to {fingers} fingers"
 
 
 def _existing(path: Path) -> Path:

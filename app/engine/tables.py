@@ -97,6 +97,39 @@ def check_room(out_dir: Path, need_bytes: float, what: str,
         raise full
 
 
+#: the share of the memory available (:func:`available_memory`) that a run's arrays may
+#: be planned to take: the rest is left to the process's other needs and to the system
+MEMORY_SHARE = 0.5
+
+
+def available_memory() -> int | None:
+    """Bytes of memory a process can take now without swapping: Linux's ``MemAvailable``
+    (``/proc/meminfo``), elsewhere the free physical pages (``os.sysconf``); None when
+    the system says neither."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as meminfo:
+            for line in meminfo:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024  # the file says kB: KiB
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (AttributeError, OSError, ValueError):
+        return None
+
+
+def check_memory(need_bytes: float, what: str, hint: str) -> None:
+    """Raise a one-line :class:`InputError` when ``need_bytes`` is more than
+    :data:`MEMORY_SHARE` (half) of :func:`available_memory`, before anything is computed;
+    the message names ``what`` and ends with ``hint``. Nothing is checked where the
+    memory available is unknown."""
+    available = available_memory()
+    if available is not None and need_bytes > MEMORY_SHARE * available:
+        raise InputError(f"{what} would take about {_size(need_bytes)} of memory, more than "
+                         f"{MEMORY_SHARE:.0%} of the {_size(available)} available: {hint}")
+
+
 def _size(n: float) -> str:
     for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
         if n < 1000 or unit == "PB":
