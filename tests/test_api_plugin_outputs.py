@@ -2,6 +2,10 @@
 wraps it: one that breaks its contract is a PluginError naming the package, never a value
 written into the friction target or a traceback (exit 70)."""
 
+import json
+import os
+import subprocess
+import sys
 from types import SimpleNamespace
 
 import numpy as np
@@ -52,3 +56,98 @@ def test_a_plugin_renderers_nan_is_still_said_as_not_finite():
 def test_a_plugin_renderers_mu_in_0_1_passes(mu_value):
     mu, covers, _ = rendered(mu_value)
     assert mu.tolist() == [[mu_value] * 4] and covers.all()
+
+
+#: another package's output device whose status() is what STATUS (a Python expression of
+#: n, the samples sent) says, read at each call
+DEVICE_MODULE = '''
+import os
+from types import SimpleNamespace
+
+
+class Dev:
+    def __init__(self, arg, request):
+        self.label, self.channels = "counted", request.channels
+        self.rate_hz, self.paced, self.n = request.rate_hz, request.paced, 0
+        self.info = SimpleNamespace(has_force_reports=False, limits_um=None)
+
+    def send(self, start_index, amplitudes_um, phases_rad=None):
+        self.n += len(amplitudes_um)
+
+    def wait_for_room(self, timeout_s):
+        return True
+
+    def status(self):
+        return eval(os.environ["STATUS"], {"n": self.n})
+
+    def unplayed_share(self):
+        return 0.0
+
+    def device_force_n(self):
+        return None
+
+    def force_report(self, index0=None, n=None):
+        return None
+
+    def forces_covered(self, index0, n):
+        return (), ()
+
+    def close(self):
+        pass
+'''
+
+#: each status, then what the run says: its PluginError's message after the device's name
+STATUSES = [
+    ("{'commanded_samples': n}", "returned a dict without 'unplayed_samples' from status()"),
+    ("None", "returned a NoneType, not a dict, from status()"),
+    ("{'commanded_samples': n, 'unplayed_samples': 0, 'x': object()}",
+     "returned a value JSON cannot hold (Object of type object is not JSON serializable) "
+     "from status()"),
+    ("{'commanded_samples': n, 'unplayed_samples': float('nan')}",
+     "returned unplayed_samples nan, not a count (an int, 0 or more), from status()"),
+    ("{'commanded_samples': n, 'unplayed_samples': -1}",
+     "returned unplayed_samples -1, not a count (an int, 0 or more), from status()"),
+    ("{'commanded_samples': n, 'unplayed_samples': n + 1}",
+     "returned unplayed_samples 3051 over commanded_samples 3050 from status()"),
+    ("{'commanded_samples': n, 'unplayed_samples': 0, 'unplayed_by_cause': {'late': 0.5}}",
+     "returned unplayed_by_cause {'late': 0.5}, not a dict of cause -> count, from status()"),
+    ("{'commanded_samples': n, 'unplayed_samples': 0, 'underruns': True}",
+     "returned underruns True, not a count (an int, 0 or more), from status()"),
+]
+
+RUN = '''
+import json, os, sys
+import frictex
+trace = frictex.synth_trace("swipe", duration_s=0.3)
+for status in json.loads(sys.argv[1]):
+    os.environ["STATUS"] = status
+    try:
+        run = frictex.replay("grating-5mm", trace, device="counted")
+        print("ok", json.dumps(run.summary.device))
+    except frictex.PluginError as exc:
+        print(exc)
+'''
+
+
+def test_a_plugin_devices_status_that_breaks_the_contract_is_named_not_a_traceback(tmp_path):
+    """Missing counts, None, an object JSON cannot hold, NaN (once '-nan% never played'):
+    a PluginError naming the package, where the summary reads the status."""
+    dist = tmp_path / "frictex_counted-1.0.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: frictex-counted\n"
+                                   "Version: 1.0\n", encoding="utf-8")
+    (dist / "entry_points.txt").write_text("[frictex.devices]\ncounted = frictex_counted:Dev\n",
+                                           encoding="utf-8")
+    (tmp_path / "frictex_counted.py").write_text(DEVICE_MODULE, encoding="utf-8")
+    good = "{'commanded_samples': n, 'unplayed_samples': 0, 'unplayed_by_cause': {}}"
+    statuses = [good] + [status for status, _ in STATUSES]
+    done = subprocess.run([sys.executable, "-c", RUN, json.dumps(statuses)], cwd=tmp_path,
+                          env={**os.environ, "PYTHONPATH": str(tmp_path)},
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    who = "output device 'counted' of frictex-counted (frictex_counted:Dev)"
+    expected = ("dict of counts (commanded_samples, unplayed_samples, unplayed_by_cause) "
+                "that JSON can hold")
+    assert done.stdout.splitlines() == [
+        'ok {"commanded_samples": 3050, "unplayed_samples": 0, "unplayed_by_cause": {}}',
+        *(f"{who} {said}; expected a {expected}" for _, said in STATUSES)]
