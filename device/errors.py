@@ -25,6 +25,11 @@ layer can raise them.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # the API's layer sits above this one: its type, never an import
+    from frictex._replay import Replay
+
 
 class FrictexError(Exception):
     """Root of every error frictex raises on purpose."""
@@ -41,6 +46,10 @@ class InputError(FrictexError, ValueError):
 
 class DeviceError(FrictexError, OSError):
     """The output device: its port, its handshake, its link, what it played."""
+
+    #: the complete run, where ``frictex.replay`` ran to the end and the device left more
+    #: than ``max_unplayed`` of its samples unplayed; else None
+    replay: Replay | None = None
 
 
 class OutputSpaceError(FrictexError, OSError):

@@ -61,6 +61,10 @@ def main(folder: Path) -> None:
         print(error)
     print(mean_mu(out), channels, contact, files, name, rows, columns, clamps.total, codes,
           version, s.to_dict())
+
+
+def run_kept(error: frictex.DeviceError) -> frictex.Replay | None:
+    return error.replay
 '''
 
 #: (line, what mypy must say there) of each mistake in MISTAKES
