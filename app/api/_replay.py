@@ -132,7 +132,8 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
     max_unplayed : float, optional
         With ``device``: the largest share (0 to 1) of the commanded samples that may
         never play on the device; more is a :class:`DeviceError` once the run is done
-        (``--max-unplayed``, default 0.01).
+        (``--max-unplayed``, default 0.01). Another value without ``device`` is an
+        :class:`InputError`, as the command refuses ``--max-unplayed`` without ``--device``.
     rate_hz : float, optional
         Output sample rate (Hz), 100 Hz to 1 MHz (``--rate``).
     block_size : int or None, optional
@@ -191,6 +192,9 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
     rate_hz, block_size = run_settings(rate_hz, block_size, renderer, control)
     max_gap_s = real("max_gap_s", max_gap_s, "s", positive=True)
     max_unplayed = real("max_unplayed", max_unplayed, "", (0.0, 1.0))
+    if max_unplayed != MAX_UNPLAYED and device is None:
+        raise InputError(f"max_unplayed {max_unplayed:g}: needs device (the share of samples "
+                         "a device never played); no device was given")
     if device is not None and not isinstance(device, str):
         raise InputError(f"device: expected 'sim', a serial port or a pyserial URL, got "
                          f"{type(device).__name__}")

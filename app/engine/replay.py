@@ -223,8 +223,8 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
     if looped and options.device is None and sink is None:
         raise InputError(f"control {pipeline.control.mode!r} reads the force reports of a "
                          "device, and no device was given: stream to one with a lateral force "
-                         "sensor (--device sim:finger=SEED simulates a finger), or use "
-                         "--control open")
+                         "sensor (--device sim:finger=SEED, device=\"sim:finger=SEED\", "
+                         "simulates a finger), or use --control open, control=\"open\"")
     read0 = time.perf_counter()
     source.start(pipeline.tracker_config)
     timer.seconds["read"] += time.perf_counter() - read0
@@ -252,8 +252,9 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
                 raise DeviceError(f"{sink.label} sends no force reports (it announces no "
                                   f"lateral force sensor, PROTOCOL.md 4.9), so control "
                                   f"{pipeline.control.mode!r} has nothing to measure: use a "
-                                  "device with one (--device sim:finger=SEED simulates a "
-                                  "finger), or --control open")
+                                  "device with one (--device sim:finger=SEED, "
+                                  "device=\"sim:finger=SEED\", simulates a finger), or "
+                                  "--control open, control=\"open\"")
         if frames is not None:
             frames.into(folder)
         doc, tables = _run(pipeline, source, chunks, trace_path, scene, folder, options, sink,

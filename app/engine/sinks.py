@@ -304,8 +304,9 @@ class FrameSink:
         """The frames of ``request.frames`` (its factory)."""
         SINKS.refuse_arg("frames", arg)
         if request.frames is None:
-            raise InputError("sink 'frames' writes the run's PNG frames: ask for them with "
-                             "--frames FPS")
+            raise InputError("sink 'frames' writes the run's PNG frames and this run makes "
+                             "none: ask for them with --frames FPS (frictex replay only: "
+                             "frictex.replay makes no frames)")
         return cls(request.frames)
 
 

@@ -79,7 +79,7 @@ def row_bytes(columns, fmt: str) -> int:
 
 
 def check_room(out_dir: Path, need_bytes: float, what: str,
-               hint: str = "write elsewhere, or use --format parquet") -> None:
+               hint: str = "write elsewhere, or use --format parquet, format=\"parquet\"") -> None:
     """Raise a one-line :class:`OutputSpaceError` (errno ENOSPC) unless ``out_dir``'s file
     system has room for ``need_bytes`` more and :data:`RESERVE_BYTES` to spare; the
     message names ``what`` and ends with ``hint``. A file system of no size (proc, sysfs:
