@@ -98,7 +98,8 @@ def test_a_signal_ends_the_demo_as_q_does(xvfb_display, tmp_path, signum, said, 
     assert summary["ended_by"] == signal.Signals(signum).name and summary["blocks"] > 0
     assert summary["link"]["state"] == ("closed" if device else "none")
     assert sorted(p.name for p in rec.iterdir()) == ["commands.csv", "events.csv",
-                                                    "friction.csv", "summary.json"]
+                                                    "friction.csv", "summary.json",
+                                                    "touches.csv"]
     assert staged(rec) == []
 
 

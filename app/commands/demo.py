@@ -7,7 +7,9 @@ the main thread (``app.live.demo_loop``). ``--input`` picks the fingers: the mou
 mouse and a follower finger, a TUIO tracker over UDP, or a Linux evdev touch screen
 (read by the haptic side as its samples arrive, not by the window).
 ``--record DIR`` writes what was sent
-(``commands.csv``, ``friction.csv`` as in a replay), ``events.csv`` and ``summary.json``,
+(``commands.csv``, ``friction.csv`` as in a replay), the touches taken (``touches.csv``, a
+trace file: ``frictex replay SCENE DIR/touches.csv --block N`` replays them, N the demo's
+block), ``events.csv`` and ``summary.json``,
 into a staging folder beside DIR that replaces DIR as a whole when the demo ends
 (``app.engine.staging``, as a replay's ``--out``): a demo that crashes or is killed leaves
 the previous recording as it was; one that replaces a recording says so.
@@ -23,9 +25,10 @@ recording were opened for (``app.live.demo_loop``).
 Without a display: ``frictex demo`` says so and exits 2; ``--headless`` (or
 ``--headless-fallback`` when no display is found) runs the same demo loop on a window
 without a display (``rendering.visual.headless``), a synthesized human-like stroke
-driving its mouse (``app.live.synthetic``), and writes what a ``--record`` would
-(``commands.csv``, ``friction.csv``, ``events.csv``, ``summary.json``) and its frames as
-PNG files (``frames/``) to ``--out``.
+driving its mouse (``app.live.synthetic``), and writes its frames as PNG files
+(``frames/``, at most 30 a second) to ``--out``, and what a ``--record`` would
+(``commands.csv``, ``friction.csv``, ``touches.csv``, ``events.csv``, ``summary.json``)
+to ``--record``, or without it to ``--out`` too.
 """
 
 from __future__ import annotations
@@ -41,7 +44,8 @@ from pathlib import Path
 from frictex.app.engine.driver import deferred_interrupts
 from frictex.app.engine.staging import FRAMES, Staging
 from frictex.app.engine.summary import finite_json
-from frictex.app.commands.preview import frame_size
+from frictex.app.live.touch_log import TOUCHES
+from frictex.app.commands.preview import MAX_PANEL_PX, frame_size
 from frictex.app.commands.argtypes import (add_link_arguments, output_rate, positive_float, positive_int,
                                    sim_device_args)
 from frictex.device.errors import InputError
@@ -54,7 +58,7 @@ from frictex.textures.outside import add_allow_outside
 
 #: what a demo writes into ``--record`` (or ``--out``) besides a replay's tables and
 #: summary: the folder is replaced as a whole when the demo ends (``app.engine.staging``)
-DEMO_OUTPUTS = ("events.csv", FRAMES)
+DEMO_OUTPUTS = ("events.csv", TOUCHES, FRAMES)
 
 def input_option(text: str) -> tuple[str, object]:
     """argparse type for ``--input``: (name, argument) as ``app.live.inputs.parse_input``
@@ -81,9 +85,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--fullscreen", action="store_true", help="fullscreen on --monitor")
     parser.add_argument("--monitor", type=int, default=0, metavar="N", help="monitor for --fullscreen (default 0)")
     parser.add_argument("--size", type=frame_size, default=None, metavar="WxH",
-                        help="window size in px (default: the scene's display size with the "
-                             f"scope's strip, at least {MIN_FRAME[0]}x{MIN_FRAME[1]}; either is "
-                             "cut to the screen's work area)")
+                        help=f"window size in px, each side 1 to {MAX_PANEL_PX} (default: the "
+                             "scene's display size with the scope's strip, at least "
+                             f"{MIN_FRAME[0]}x{MIN_FRAME[1]}); a window is then cut to the "
+                             "screen's work area")
     parser.add_argument("--renderer", choices=render_modes(), default=None,
                         help="start with every periodic layer rendered this way (R cycles it live)")
     add_link_arguments(parser)
@@ -93,8 +98,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="block size in output samples (default: 2.5 ms of samples, 25 "
                              "at 10 kHz: a touch waits at most one block, and the device "
                              "plays two blocks (at least 5 ms) behind; replay's default is "
-                             "5 ms, so replay a demo's recorded trace with --block 25 to "
-                             "apply its touches at the same boundaries)")
+                             "5 ms, so replay a demo's recorded touches.csv with --block 25 "
+                             "to apply its touches at the same boundaries)")
     from frictex.app.live.inputs import INPUTS
     kinds = list(INPUTS.loaded().items())  # a plugin's that cannot load: left out, warned
     parser.add_argument("--input", type=input_option, default=("mouse", None),
@@ -113,8 +118,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "window's GL calls cannot delay it) or a thread of the window's "
                              "process (for debugging; misses deadlines on a software renderer)")
     parser.add_argument("--record", metavar="DIR", default=None,
-                        help="write commands.csv, friction.csv, events.csv and summary.json to "
-                             "DIR (replaced as a whole when the demo ends, as a replay's --out)")
+                        help="write commands.csv, friction.csv, touches.csv (the touches, a "
+                             "trace file to replay), events.csv and summary.json to DIR "
+                             "(replaced as a whole when the demo ends, as a replay's --out)")
     parser.add_argument("--screenshots", metavar="DIR", default=".",
                         help="folder for screenshots taken with P (default: current folder)")
     parser.add_argument("--duration", type=positive_float, default=None, metavar="S",
@@ -122,7 +128,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     mode = parser.add_mutually_exclusive_group()
     mode.add_argument("--headless", action="store_true",
                       help="no display: run the demo on a synthesized stroke of the mouse, writing "
-                           "its outputs and PNG frames to --out")
+                           "its PNG frames (and without --record its outputs) to --out")
     mode.add_argument("--headless-fallback", action="store_true",
                       help="open the window if a display exists, else behave as --headless")
     parser.add_argument("--out", metavar="DIR", default="frictex-demo-out",
@@ -220,15 +226,15 @@ def run(args: argparse.Namespace) -> int:
         return _run(args, headless=True)
 
 
-def _open_window(args, size, scene, headless: bool, record: Path | None):
-    """The demo's window (glfw), or with ``headless`` an injected-input one whose frames
-    go to ``record``/frames (--out's staging folder); and the frame files (None with a
-    window)."""
-    if not headless:
+def _open_window(args, size, scene, frames_dir: Path | None):
+    """The demo's window (glfw), or with ``frames_dir`` (headless: --out's staging
+    folder) an injected-input one whose frames go to ``frames_dir``/frames; and the
+    frame files (None with a window)."""
+    if frames_dir is None:
         return open_backend("glfw", size, title=f"frictex demo: {scene.name}",
                             fullscreen=args.fullscreen, monitor=args.monitor, vsync=False), None
     from frictex.app.live.frame_files import FrameFiles
-    frames = FrameFiles(record / FRAMES)
+    frames = FrameFiles(frames_dir / FRAMES)
     return open_backend("headless", size, on_frame=frames.write), frames
 
 
@@ -241,18 +247,32 @@ def _run(args: argparse.Namespace, headless: bool) -> int:
                          "with a synthesized stroke and takes no touch screen")
     paths, index = _playlist(args.scene)
     scene = _load(paths[index])
-    out = Path(args.record) if args.record else Path(args.out) if headless else None
-    staging = None if out is None else Staging(out, owned=DEMO_OUTPUTS)
-    if staging is not None:
-        staging.check()
+    staging, frames_staging = _stagings(args, headless)
+    for folder in (staging, frames_staging):
+        if folder is not None:
+            folder.check()
     with deferred_interrupts() as check:  # a signal held is raised as it ends (exit 128 + n)
-        return _run_demo(args, headless, paths, index, scene, staging, check)
+        return _run_demo(args, headless, paths, index, scene, (staging, frames_staging), check)
 
 
-def _run_demo(args, headless: bool, paths, index: int, scene, staging, check) -> int:
-    """:func:`_run` with its outputs staged in ``staging`` (or None: no recording) and
-    SIGINT, SIGTERM and SIGHUP held by ``check`` (``deferred_interrupts``): the first
-    ends the demo as Q does (the recording committed), and is raised after its lines."""
+def _stagings(args, headless: bool) -> tuple[Staging | None, Staging | None]:
+    """Where the demo writes: (the recording's tables, events and summary: ``--record``,
+    or headless without it ``--out``; the headless frames' ``--out`` when that is another
+    folder, else None). Each is replaced as a whole when the demo ends."""
+    record = Path(args.record) if args.record else None
+    out = Path(args.out) if headless else None
+    if record is None or out is None or record.resolve() == out.resolve():
+        tables = record or out
+        return (None if tables is None else Staging(tables, owned=DEMO_OUTPUTS)), None
+    return Staging(record, owned=DEMO_OUTPUTS), Staging(out, owned=DEMO_OUTPUTS)
+
+
+def _run_demo(args, headless: bool, paths, index: int, scene, stagings, check) -> int:
+    """:func:`_run` with its outputs staged in ``stagings`` (:func:`_stagings`; the first
+    None: no recording) and SIGINT, SIGTERM and SIGHUP held by ``check``
+    (``deferred_interrupts``): the first ends the demo as Q does (the recording
+    committed), and is raised after its lines."""
+    staging, frames_staging = stagings
     from frictex.app.live.inputs import INPUTS
     kind, arg = args.input
     touch_screen = INPUTS.get(kind).touch_screen
@@ -261,7 +281,9 @@ def _run_demo(args, headless: bool, paths, index: int, scene, staging, check) ->
         (staging.out / name).exists() for name in ("summary.json", "commands.csv", "events.csv"))
     record = None if staging is None else staging.begin()
     try:
-        result = _live(args, headless, paths, index, scene, size, record, touch_screen, check)
+        frames_dir = None if not headless else (
+            record if frames_staging is None else frames_staging.begin())
+        result = _live(args, paths, index, scene, size, record, frames_dir, touch_screen, check)
         summary = result.summary
         if record is not None:
             if staging.removed:
@@ -271,11 +293,15 @@ def _run_demo(args, headless: bool, paths, index: int, scene, staging, check) ->
                                                             allow_nan=False) + "\n",
                                                  encoding="utf-8")
             staging.commit()
+        if frames_staging is not None:
+            frames_staging.commit()
     except BaseException:
-        if staging is not None:
-            staging.abort()
+        for folder in (staging, frames_staging):
+            if folder is not None:
+                folder.abort()
         raise
-    _print_lines(args, summary, result, None if staging is None else staging.out)
+    _print_lines(args, summary, result, None if staging is None else staging.out,
+                 (frames_staging or staging).out / FRAMES if headless else None)
     if previous:
         print(f"demo: replaced the previous recording in {staging.out}")
     return 0
@@ -291,9 +317,10 @@ class _Ended:
     hand: object  # SyntheticStroke (headless) or None
 
 
-def _live(args, headless, paths, index, scene, size, record, touch_screen, check) -> _Ended:
-    """Start the haptic side, open the window, run the loop until it ends (Q, the
-    window closed, ``--duration``, a signal held by ``check``), stop both."""
+def _live(args, paths, index, scene, size, record, frames_dir, touch_screen, check) -> _Ended:
+    """Start the haptic side, open the window (headless: ``frames_dir`` given, the
+    folder its frames go into), run the loop until it ends (Q, the window closed,
+    ``--duration``, a signal held by ``check``), stop both."""
     from frictex.app.live.cpu_steal import StealMeter
     from frictex.app.live.demo_loop import DemoLoop
     kind, arg = args.input
@@ -304,7 +331,7 @@ def _live(args, headless, paths, index, scene, size, record, touch_screen, check
     dropped_records = 0
     steal = StealMeter()
     try:
-        backend, frames = _open_window(args, size, scene, headless, record)
+        backend, frames = _open_window(args, size, scene, frames_dir)
         if args.haptic == "process":  # llvmpipe's threads, started with the window,
             # yield to the child; this thread (input) does not, nor the render thread
             # it starts, which mostly waits on llvmpipe and holds the GIL the input
@@ -316,7 +343,7 @@ def _live(args, headless, paths, index, scene, size, record, touch_screen, check
                         link_name="none" if args.device is None else "starting",
                         follow_mm=arg if kind == "follow" else None,
                         touch_screen=touch_screen, input_name=input_name(kind, arg))
-        if headless:
+        if frames is not None:
             from frictex.app.live.synthetic import SyntheticStroke
             hand = SyntheticStroke(backend, loop.compositor.viewport.to_px,
                                    (scene.display.width_mm, scene.display.height_mm),
@@ -345,15 +372,18 @@ def _live(args, headless, paths, index, scene, size, record, touch_screen, check
     return _Ended(summary, link, frames, hand)
 
 
-def _print_lines(args, summary: dict, ended: _Ended, out: Path | None) -> None:
-    """The demo's last lines on stdout: blocks, link, input, frames, control."""
+def _print_lines(args, summary: dict, ended: _Ended, out: Path | None,
+                 frames_out: Path | None) -> None:
+    """The demo's last lines on stdout: blocks, link, input, frames (headless: kept in
+    ``frames_out``), control."""
     link, frames, hand = ended.link, ended.frames, ended.hand
     stolen = ("" if summary["cpu_steal_pct"] is None
               else f" (CPU steal by a VM host meanwhile: {summary['cpu_steal_pct']:.0f} %)")
     print(f"demo: {summary['blocks']} blocks ({summary['output_s']:.1f} s of output), "
           f"{summary['deadline_misses']} deadline misses{stolen if summary['deadline_misses'] else ''}, "
           f"{summary['clamps_total']} clamped samples, "
-          f"{summary['frames']} frames ({summary['frame_ms_mean']:.1f} ms mean), link: {link['state']}")
+          f"{summary['frames']} frames drawn ({summary['frame_ms_mean']:.1f} ms mean), "
+          f"link: {link['state']}")
     if "skipped_blocks" in link:  # a device link: what its lead cost
         print(f"demo: link: the device ran dry {link['underruns'] or 0} times and "
               f"{link['skipped_blocks']} blocks were skipped to catch up; "
@@ -362,13 +392,25 @@ def _print_lines(args, summary: dict, ended: _Ended, out: Path | None) -> None:
     if "datagrams" in summary["input_counts"]:  # TUIO: what came from whom
         print(tuio_line(summary["input_counts"]))
     if frames is not None:
-        cut = (f" (cut at {args.duration:g} s by --duration)"
-               if args.duration is not None and args.duration < hand.duration_s else "")
-        print(f"demo: headless, a synthesized stroke of {hand.duration_s:g} s{cut} drove the "
-              f"mouse: {frames.count} frames in {out / FRAMES}; outputs in {out}")
+        from frictex.app.live.frame_files import FPS
+        print(f"demo: headless, {stroke_said(hand, args.duration, summary['ended_by'])} drove "
+              f"the mouse: {frames.count} frames kept (at most {FPS:g} a second) in "
+              f"{frames_out}; outputs in {out}")
     if summary["control"] is not None:
         from frictex.app.engine.summary import control_line
         print(f"demo: {control_line(summary['control'])}")
+
+
+def stroke_said(hand, duration_s: float | None, ended_by: str) -> str:
+    """The synthesized stroke as the headless demo's last line says it: "a synthesized
+    stroke of 3 s", or where the demo ended first, how far it went and what cut it
+    ("... cut at 1.6 s of its 3 s by SIGTERM"; ``ended_by``: the summary's)."""
+    if hand.stroked_s >= hand.duration_s:
+        return f"a synthesized stroke of {hand.duration_s:g} s"
+    by = ended_by if ended_by != "window" else (
+        "--duration" if duration_s is not None else "the window closing")
+    return (f"a synthesized stroke cut at {hand.stroked_s:.1f} s of its {hand.duration_s:g} s "
+            f"by {by}")
 
 
 def _summary(st, block_s: float, loop, dropped_records: int, link) -> dict:

@@ -60,10 +60,14 @@ are polled for changes (``app.live.watch``); a change to any of them reloads the
 its error on screen and once on stderr (a reload too: "reloaded"); a texture file moved
 away or deleted is said to be gone, the last good scene kept.
 Events are appended to ``events.csv`` (t_s on the haptic clock, event, detail) when a
-record folder is given: what the window did when it did it (keys, scene loads,
-screenshots), and what the output did when it did it, at the output time of the
-first block it shaped (``output-stop``, ``output-resume``, ``output-switch``,
-``finger-down``, ``finger-up``; read from the haptic side's snapshots).
+record folder is given: what the window did when it did it (keys: ``estop``,
+``estop-release``, ``scope``, ``outlines``, ``force`` with the normal force set by the
+wheel or up/down; scene loads, screenshots and screenshots that failed), and what the
+output did when it did it, at the output time of the first block it shaped
+(``output-stop``, ``output-resume``, ``output-switch``, ``finger-down``, ``finger-up``;
+read from the haptic side's snapshots). Its rows are put in time order when the demo
+closes (:func:`sort_events`). The touches themselves go to ``touches.csv``
+(``app.live.haptic_setup``).
 """
 
 from __future__ import annotations
@@ -117,6 +121,13 @@ def window_title(scene) -> str:
     """The window's title for ``scene``: "frictex demo" and the scene's name (escaped: a
     name comes from a file)."""
     return f"frictex demo: {escape(scene.name, limit=80)}"
+
+
+def file_stem(name: str) -> str:
+    """``name`` (a scene's: it comes from a file) as part of a file name: every run of
+    characters other than ASCII letters, digits, '.', '-' and '_' becomes one '_' (a
+    '/' can lead nowhere), at most 80 characters."""
+    return re.sub(r"[^A-Za-z0-9._-]+", "_", name)[:80]
 
 
 def next_screenshot(folder: Path, stem: str):
@@ -255,8 +266,10 @@ class DemoLoop:
         drawn = {scope: frame_layout(d, *size, scope, side)[0] for scope in (True, False)}
         own = {scope: (v.width_px, v.height_px) == (d.width_px, d.height_px)
                for scope, v in drawn.items()}
-        window = (f"the window is {size[0]} x {size[1]} px, the screen's work area "
-                  f"({asked[0]} x {asked[1]} asked)")
+        window = f"the window is cut to {size[0]} x {size[1]} px ({asked[0]} x {asked[1]} asked)"
+        if (area := getattr(self.backend, "work_area", None)) is not None:
+            window += (f" to fit, with its title bar and borders, the screen's work area "
+                       f"({area[0]} x {area[1]} px)")
         if own[False] and not own[True]:
             self.say(f"{window}: the scene at its {d.width_px} x {d.height_px} px leaves no room "
                      "for the scope strip under it; S shows the scope (the scene then scaled "
@@ -339,8 +352,10 @@ class DemoLoop:
 
     def set_force(self, force_n: float) -> None:
         """The normal force (N) of the mouse's fingers and of a touch screen's."""
-        self.force_n = float(np.clip(force_n, *FORCE_RANGE_N))
+        before, self.force_n = self.force_n, float(np.clip(force_n, *FORCE_RANGE_N))
         self.haptic.touch_force.value = self.force_n
+        if self.force_n != before:
+            self.log("force", f"{self.force_n:.2f} N")
 
     def flush_mouse(self) -> None:
         """The mouse's touches since the last call, in order: a down or up at each
@@ -422,9 +437,11 @@ class DemoLoop:
             self._apply(self.scene, nxt, "renderer", nxt or "file")
         elif name == "s":
             self.show_scope = not self.show_scope
+            self.log("scope", "shown" if self.show_scope else "hidden")
         elif name == "o":
             self.outlines = not self.outlines
             self.compositor.set_scene(self.scene, outlines=self.outlines)
+            self.log("outlines", "on" if self.outlines else "off")
         elif name in ("p", "f12"):
             self.screenshot_pending = True
         elif name == "l":
@@ -816,13 +833,22 @@ class DemoLoop:
             envelope_scale_um=self.envelope_scale_um,
             layer_panel=self.panel_view() if self.panel_open else None))
 
-    def screenshot(self) -> Path:
-        """The frame drawn last, as a new PNG in the screenshot folder (never overwriting)."""
-        path, f = next_screenshot(self.screenshot_dir, f"frictex-{self.scene.name}")
-        with f:
-            Image.fromarray(self.backend.read_rgb()).save(f, format="PNG")
+    def screenshot(self) -> Path | None:
+        """The frame drawn last, as a new PNG in the screenshot folder (never overwriting),
+        said on stdout. A folder that cannot take it (a file of that name, no room, no
+        permission) is said on stderr and on screen and logged; the demo carries on."""
+        try:
+            path, f = next_screenshot(self.screenshot_dir, f"frictex-{file_stem(self.scene.name)}")
+            with f:
+                Image.fromarray(self.backend.read_rgb()).save(f, format="PNG")
+        except OSError as exc:
+            self.error = f"screenshot failed: {exc}"
+            self.log("screenshot-failed", str(exc))
+            self.say(self.error)
+            return None
         self.screenshots.append(path)
         self.log("screenshot", str(path))
+        print(f"screenshot: {path}")
         return path
 
     def frame(self, now: float) -> None:
@@ -833,7 +859,7 @@ class DemoLoop:
         self.draw()
         if self.screenshot_pending:
             self.screenshot_pending = False
-            print(f"screenshot: {self.screenshot()}")
+            self.screenshot()
         self.backend.swap()
         if self.frames == 0:
             self.log("first-frame", self.scene.name)
@@ -900,7 +926,18 @@ class DemoLoop:
             self.backend.release_context()
 
     def close(self) -> None:
-        """Release the GL objects and the events file."""
+        """Release the GL objects; close the events file with its rows in time order."""
         self.compositor.release()
         if self._events is not None:
             self._events.close()
+            sort_events(Path(self._events.name))
+
+
+def sort_events(path: Path) -> None:
+    """Put ``path``'s (events.csv) rows in order of t_s, those of one time in the order
+    they were logged: a key is logged when pressed, an output change at the output time
+    of its block (computed ahead of it) and a touch when its snapshot is drawn (after
+    it), so they are written out of order."""
+    header, *rows = path.read_text(encoding="utf-8").splitlines(keepends=True)
+    rows.sort(key=lambda row: float(row.split(",", 1)[0]))
+    path.write_text(header + "".join(rows), encoding="utf-8")

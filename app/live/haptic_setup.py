@@ -8,12 +8,20 @@ import sys
 from pathlib import Path
 
 from frictex.app.engine.sinks import TableSink, ThreadedSink
+from frictex.app.live.touch_log import TOUCHES, TouchTable
 
 RECORD_QUEUE = 8000  # blocks (20 s at 2.5 ms) the writer may fall behind before dropping
 #: the most (s) ``finish`` waits for the thread to commit its sinks: the link's close
 #: (under 2 s) and the recording's backlog (up to RECORD_QUEUE blocks) on a busy machine;
 #: below the 30 s a demo waits for its haptic child (``haptic_process.STOP_TIMEOUT_S``)
 JOIN_TIMEOUT_S = 25.0
+
+
+def touches_comment(scene_name: str, block_size: int) -> str:
+    """The comment heading a demo's ``touches.csv``: what it holds and how to replay it."""
+    return (f"frictex demo, scene {scene_name}: the touches the haptic side took, on its output "
+            f"clock (s); replay them with: frictex replay SCENE touches.csv --block "
+            f"{block_size} (scene switches and emergency stops are in events.csv)")
 
 
 def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | None,
@@ -50,9 +58,14 @@ def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | N
             tables = TableSink(record, pipeline.channels, pipeline.actuation.has_phases, "csv",
                                pipeline.forces is not None)
             haptic.recorder = ThreadedSink(tables, RECORD_QUEUE, name="frictex-recorder")
+            haptic.touch_log = ThreadedSink(
+                TouchTable(record / TOUCHES, touches_comment(pipeline.scene.name, block_size)),
+                RECORD_QUEUE, name="frictex-touch-log")
     except BaseException:
         if haptic is not None and haptic.sink is not None:
             haptic.sink.close()
+        if haptic is not None and haptic.recorder is not None:
+            haptic.recorder.abort()
         if source is not None:
             source.close()  # the pump never started: it is the source's only owner
         raise
@@ -68,10 +81,11 @@ def open_haptic(scene, rate_hz: float, block_size: int, render_override: str | N
                 print(f"frictex: warning: the haptic thread did not end within "
                       f"{JOIN_TIMEOUT_S:g} s; its recording may be incomplete", file=sys.stderr)
         elif not haptic.ident:  # never started: nothing committed the sinks
-            for sink in (haptic.recorder, haptic.sink):
+            for sink in (haptic.recorder, haptic.touch_log, haptic.sink):
                 if sink is not None:
-                    (sink.abort if sink is haptic.recorder else sink.close)()
+                    (sink.close if sink is haptic.sink else sink.abort)()
         link = haptic.sink.status() if haptic.sink is not None else {"state": "none"}
-        return link, haptic.recorder.dropped if haptic.recorder is not None else 0
+        return link, sum(log.dropped for log in (haptic.recorder, haptic.touch_log)
+                         if log is not None)
 
     return haptic, finish

@@ -21,7 +21,8 @@ crossfades the old pipeline's commands into the new one's (the new pipeline take
 the old one's finger tracks), resuming after an emergency stop ramps from 0. The
 emergency stop itself is immediate: while it is set every sample sent is 0 um, and the
 amplitude under each finger the output reports (friction.csv, the scope) is the 0 um sent
-(a ramp scales it as it scales the commands). Each
+(a ramp scales it as it scales the commands); the friction inversion's clamps count only
+the samples played, none while stopped. Each
 stop, resume and switch as it took effect on the output is kept in ``stats.applied``
 (output time of its first block, kind, detail) and the latest reach the window with
 every snapshot, so the demo logs when the output changed, not when a key was pressed.
@@ -49,6 +50,7 @@ from frictex.app.engine.clocks import DevicePacedClock, WallClock
 from frictex.app.engine.driver import drive, force_reports_of
 from frictex.app.engine.sinks import LinkSink
 from frictex.app.engine.sources import QueueSource
+from frictex.app.live.touch_log import LoggedTouches
 from frictex.device.friction import ClampCounts
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP
 from frictex.rendering.pipeline import PipelineState, build_pipeline, default_block_size
@@ -200,9 +202,10 @@ class LiveStage:
         was_stopped, self.stopped = self.stopped, self.estop.is_set()
         if self.stopped != was_stopped:
             self.stats.applied.append((t, "output-stop" if self.stopped else "output-resume", ""))
-        if self.stopped:  # the output (the recording, the scope) shows the 0 um sent
+        if self.stopped:  # the output (the recording, the scope) shows the 0 um sent,
+            # and the clamps of the commands not sent are not counted
             commands = np.zeros_like(commands)
-            out = replace(out, amplitude_um=np.zeros_like(out.amplitude_um))
+            out = replace(out, amplitude_um=np.zeros_like(out.amplitude_um), clamps=ClampCounts())
             played = 0.0
         elif self._gain < 1.0:
             ramp = np.linspace(self._gain, 1.0, commands.shape[0] + 1)[1:]
@@ -302,8 +305,11 @@ class HapticThread(TouchInput, threading.Thread):
     closed by the thread when it stops. ``recorder``: optional sink
     (``app.engine.sinks``) receiving each block's output and the commands actually sent,
     committed when the thread stops (``app.live.haptic_setup``: a table sink on a thread
-    of its own). ``estop``, ``touches``, ``snapshots``: the emergency stop event and the
-    touch and snapshot queues, when another process holds their other ends
+    of its own). ``touch_log``: optional sink (set after construction, as
+    ``app.live.haptic_setup`` does) receiving the touch samples each block took
+    (``app.live.touch_log``), committed with the recording. ``estop``, ``touches``,
+    ``snapshots``: the emergency stop event and the touch and snapshot queues, when
+    another process holds their other ends
     (``app.live.haptic_process``); by default the thread makes its own. ``clock`` and
     ``sleep``: the wall clock (s) and how to wait on it, injectable for tests.
     ``pacing``: "wall", or "device" (the link's room paces the blocks; needs ``sink``).
@@ -327,6 +333,7 @@ class HapticThread(TouchInput, threading.Thread):
         self.clock = clock
         self.sink = sink
         self.recorder = recorder
+        self.touch_log = None
         self.stride = snapshot_stride
         self.pacing = pacing
         self.touches = queue.Queue(TOUCH_QUEUE) if touches is None else touches
@@ -399,9 +406,12 @@ class HapticThread(TouchInput, threading.Thread):
                 clock = DevicePacedClock(self.sink)
         if self.recorder is not None:
             sinks.append(self.recorder)
+        source = QueueSource(self.touches, self.block_s)
+        if self.touch_log is not None:
+            source = LoggedTouches(source, self.touch_log)
+            sinks.append(source)  # commits the touch log with the recording
         try:
-            drive(self.stage, QueueSource(self.touches, self.block_s), sinks, clock,
-                  stop=self._quit.is_set)
+            drive(self.stage, source, sinks, clock, stop=self._quit.is_set)
         except BaseException as exc:  # reported by the window; output stops
             self.error = exc
         finally:

@@ -51,12 +51,14 @@ class SyntheticStroke(threading.Thread):
         self.sleep = sleep
         self.lifted = lifted
         self.positions = 0  # pointer positions sent
+        self.stroked_s = 0.0  # how far along the stroke the last position sent was (s)
         self._quit = threading.Event()
 
     def _move(self, t: float) -> None:
         x, y = self.motion.position(t)
         self.window.move(*self.to_px(float(x), float(y)))
         self.positions += 1
+        self.stroked_s = t
 
     def run(self) -> None:
         start = self.clock()
