@@ -84,6 +84,10 @@ SCOPE_BG = (0.05, 0.05, 0.05, 1.0)
 SCOPE_GRID = (1.0, 1.0, 1.0, 0.18)  # at 0, half and full scale of each plot
 SCOPE_RULE = (1.0, 1.0, 1.0, 0.45)  # the edges of the strip and between the two plots
 #: the banner's band is opaque: a text under it is not drawn (``draw_texture``)
+#: the status box covers at most this share of the scene's drawn height; the lines beyond
+#: it (the keys' help first: it comes last) are left out, so a small window still shows
+#: its scene
+STATUS_SHARE = 1.0 / 3.0
 BANNER_RGBA = {"stop": (0.75, 0.0, 0.0, 1.0), "error": (0.55, 0.05, 0.05, 1.0),
                "info": (0.1, 0.1, 0.1, 1.0)}
 
@@ -107,6 +111,16 @@ class FrameView:
     #: a uniform field of this colour (RGBA, 0-1) drawn instead of the scene's picture
     #: (an experiment that must not show its stimulus); None: the scene
     field_rgba: tuple[float, float, float, float] | None = None
+
+
+def status_rows(status: tuple[str, ...], font_px: int, width_px: int,
+                scene_px: int) -> tuple[str, ...]:
+    """The status lines wrapped to a frame ``width_px`` wide, as many of them as fit in
+    :data:`STATUS_SHARE` of the scene's drawn height ``scene_px`` (at least one); rows of
+    ``text_rgba``."""
+    rows = sum((wrap(line, font_px, width_px - 16, " | ") for line in status), ())
+    room = int((STATUS_SHARE * scene_px - 8) // round(font_px * 1.25))  # 4 px pads
+    return rows[:max(1, room)]
 
 
 class Compositor:
@@ -315,8 +329,7 @@ class Compositor:
         font_px = self.font_px
         status = None
         if view.status:
-            status = self.text(sum((wrap(line, font_px, w - 16, " | ") for line in view.status), ()),
-                               font_px)
+            status = self.text(status_rows(view.status, font_px, w, vp.height_px), font_px)
         self.status_bottom = 4.0 + (status.size[1] if status is not None else 0.0)
         banner = self._banner(view) if view.banner else None
         self._banner_band = None if banner is None else banner[1]

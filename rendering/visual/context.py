@@ -154,6 +154,15 @@ def _key_names(glfw) -> dict[int, str]:
     return names
 
 
+def display_names() -> str:
+    """The displays the environment names, as an error says them: "display ':77'",
+    "Wayland display 'wayland-0'", or both joined by "or"."""
+    names = [f"{kind}display {os.environ[var]!r}"
+             for var, kind in (("WAYLAND_DISPLAY", "Wayland "), ("DISPLAY", ""))
+             if os.environ.get(var)]
+    return " or ".join(names) or "no display"
+
+
 class GlfwBackend:
     """A glfw window with an OpenGL 3.3 core context.
 
@@ -177,8 +186,9 @@ class GlfwBackend:
         self._glfw = glfw
         if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
             raise NoDisplayError("no display (DISPLAY and WAYLAND_DISPLAY are unset)")
+        glfw.ERROR_REPORTING = "ignore"  # a failure is said once, as the error raised here
         if not glfw.init():
-            raise NoDisplayError(f"glfw cannot initialise on display {os.environ.get('DISPLAY')!r}")
+            raise NoDisplayError(f"glfw cannot initialise on {display_names()}")
         monitors = glfw.get_monitors() or []
         target = None
         if fullscreen:
