@@ -13,12 +13,6 @@ with something else than its commands.
 
 from __future__ import annotations
 
-import json
-
-#: the counts of an output device's status the engine reads when they are there, beside
-#: ``commanded_samples`` and ``unplayed_samples`` (``device.link.devices.OutputDevice.status``)
-OPTIONAL_COUNTS = ("clamped_samples", "underruns")
-
 
 def device_warnings(device: dict, max_amplitude_um: float) -> list[str]:
     """One sentence per thing the output device did not play as commanded: samples never
@@ -84,52 +78,3 @@ def unplayed_problem(status: dict | None, max_unplayed: float, option: str) -> s
     return (f"{lost:.2%} of the commanded samples never played on the device (limit "
             f"{max_unplayed:.2%}, {option})")
 
-
-def checked_status(device) -> dict:
-    """``device.status()``; where the device is another package's
-    (``device.link.devices.PluginDevice``), one that breaks the output-device contract
-    (:func:`status_problem`) is a ``PluginError`` naming the package, not a traceback
-    where the summary reads it."""
-    from frictex.device.link.devices import PluginDevice
-    from frictex.device.registry import PluginError
-    status = device.status()
-    if isinstance(device, PluginDevice):
-        problem = status_problem(status)
-        if problem is not None:
-            raise PluginError(f"{device._who} returned {problem} from status(); expected a "
-                              "dict of counts (commanded_samples, unplayed_samples, "
-                              "unplayed_by_cause) that JSON can hold")
-    return status
-
-
-def status_problem(status) -> str | None:
-    """What keeps an output device's ``status()`` from being read into the summary, said
-    as what it returned: not a dict; ``commanded_samples`` or ``unplayed_samples``
-    missing or not a count (an int, 0 or more), more unplayed than commanded; an
-    ``unplayed_by_cause`` that is not a dict of counts; a count of
-    :data:`OPTIONAL_COUNTS` that is not one; a value JSON cannot hold. None when it can
-    be read."""
-    if not isinstance(status, dict):
-        return f"a {type(status).__name__}, not a dict,"
-    for key in ("commanded_samples", "unplayed_samples"):
-        if key not in status:
-            return f"a dict without {key!r}"
-    for key in ("commanded_samples", "unplayed_samples", *OPTIONAL_COUNTS):
-        if key in status and not _is_count(status[key]):
-            return f"{key} {status[key]!r}, not a count (an int, 0 or more),"
-    if status["unplayed_samples"] > status["commanded_samples"]:
-        return (f"unplayed_samples {status['unplayed_samples']} over commanded_samples "
-                f"{status['commanded_samples']}")
-    causes = status.get("unplayed_by_cause", {})
-    if not (isinstance(causes, dict) and all(_is_count(n) for n in causes.values())):
-        return f"unplayed_by_cause {causes!r}, not a dict of cause -> count,"
-    try:
-        json.dumps(status)
-    except (TypeError, ValueError) as exc:
-        return f"a value JSON cannot hold ({exc})"
-    return None
-
-
-def _is_count(value) -> bool:
-    """An int (not a bool) of 0 or more."""
-    return isinstance(value, int) and not isinstance(value, bool) and value >= 0

@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from frictex.app.engine.clocks import ClockRequest, DeadlineStats, build_clock, clock_name
-from frictex.app.engine.device_changes import checked_status, device_warnings
+from frictex.app.engine.device_changes import device_warnings
 from frictex.app.engine.driver import (PipelineStage, RunTimer, deferred_interrupts, drive,
                                        force_reports_of)
 from frictex.app.engine.sinks import (SinkRequest, build_sink, command_columns,
@@ -346,7 +346,7 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
                                f"reached the sinks late (the worst "
                                f"{late.worst_lateness_s * 1e3:.1f} ms past its end)")
     if sink is not None:
-        doc["device"] = checked_status(sink)
+        doc["device"] = sink.status()
         doc["warnings"] += device_warnings(doc["device"], doc["counts"]["max_amplitude_um"])
     in_memory = None
     if options.fmt == MEMORY:

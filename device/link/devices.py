@@ -39,6 +39,7 @@ import numpy as np
 from frictex.device.errors import InputError
 from frictex.device.link.port import URL_SCHEMES
 from frictex.device.link.session import PREFILL_S
+from frictex.device.link.status_contract import status_problem
 from frictex.device.registry import (Expect, PluginError, Registry, build_entry, guarded,
                                      warn_once)
 
@@ -222,7 +223,15 @@ class PluginDevice:
         return guarded(self._who, "in wait_for_room()", self.inner.wait_for_room, timeout_s)
 
     def status(self) -> dict:
-        return guarded(self._who, "in status()", self.inner.status)
+        """The inner device's status; one that breaks the contract
+        (``device.link.status_contract``) is a PluginError naming the package."""
+        status = guarded(self._who, "in status()", self.inner.status)
+        problem = status_problem(status)
+        if problem is not None:
+            raise PluginError(f"{self._who} returned {problem} from status(); expected a "
+                              "dict of counts (commanded_samples, unplayed_samples, "
+                              "unplayed_by_cause) that JSON can hold")
+        return status
 
     def unplayed_share(self) -> float:
         return guarded(self._who, "in unplayed_share()", self.inner.unplayed_share)
