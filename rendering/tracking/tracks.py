@@ -23,12 +23,31 @@ reporting 1 kHz puts 50 samples in the default 50 ms window, one at 5 kHz 250: t
 finger unmoved 0.6 ms after another one moves (refdata phone-two-finger-drag): a
 difference quotient there swings between 0 and twice the true speed.
 
+A fit spanning less than ``min_fit_span_s`` gives no velocity (the touch's last one is
+carried, 0 on a new touch): it cannot tell motion from a re-reported position. A
+controller reports a touch down at 20.0 mm and its refined position, 20.3 mm, 0.6 ms
+later: a line through those two is 500 mm/s, and the prediction ran 10 mm past a still
+finger within 20 ms. 0.3 mm of position noise over 10 ms is 30 mm/s at most (0.6 mm over
+20 ms of prediction); a 50 Hz screen's first fit spans 20 ms anyway, a 1 kHz screen's
+touch starts with 10 ms at velocity 0.
+
 Guards, all counted: a sample older than the finger's last one is dropped
 (``out_of_order``); a sample that the touch's recent motion does not explain is a lift
-and a touch elsewhere (``jumps``: velocity and SHT phase restart). It lies off where
-that motion (the chord over the velocity window) leads by more than ``jump_min_mm`` and
-by more than ``jump_speed_mm_s`` times the interval: a change of velocity no finger
-makes within one sample, whereas a swipe at any steady speed is no jump. After
+and a touch elsewhere (``jumps``: velocity and SHT phase restart). Recent motion: the
+chord over the velocity window, i.e. the mean velocity over its span S (at least
+``min_fit_span_s``). A finger whose acceleration stays within ``accel_max_mm_s2`` lands,
+dt after the last sample, within ``accel_max * dt * (dt + S) / 2`` of where that chord
+leads (its velocity differs from the chord's mean by at most ``accel_max`` times the
+time since the chord's midpoint; integrated over dt). A sample off by more than that
+plus ``jump_min_mm`` (what touch noise and a rolling fingerpad move a reported position)
+is a jump. 20 m/s^2 is 1.5 times the peak acceleration of the fastest stroke the human
+motion model makes (a 30 mm flick in 0.11 s, 13.7 m/s^2: RENDERERS.md); at 50 Hz
+(dt = 20 ms, S = 40 ms) the bound is 12 mm, so a finger teleported 30 mm within one
+sample is a new touch, where a bound of 2 m/s times dt (40 mm) took it for motion and
+SHT played 12 edges of a 5 mm grating in 100 ms. With no velocity known (the touch's
+first samples), the bound is ``jump_speed_mm_s`` (a finger's top speed) times dt.
+A swipe at any steady speed is no jump; a long gap's bound (0.5 s: 2.7 m) is no jump on
+any display. After
 ``predict_horizon_s`` without a new sample the finger is taken as resting (prediction
 stops, velocity 0), so a screen that stops reporting a still finger does not leave SHT
 synthesising forever. A prediction stays on the display (``area_mm``): a finger touching
@@ -49,6 +68,11 @@ from frictex.device.jit import njit
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP, Trace
 
 
+#: the largest acceleration of a finger (mm/s^2) and the shortest span of samples a
+#: velocity is fitted over (s): module docstring
+ACCEL_MAX_MM_S2, MIN_FIT_SPAN_S = 20_000.0, 0.01
+
+
 @dataclass(frozen=True)
 class TrackerConfig:
     """Tracking parameters (times in s, distances in mm, speeds in mm/s)."""
@@ -61,6 +85,8 @@ class TrackerConfig:
     predict_horizon_s: float = 0.06
     jump_speed_mm_s: float = 2000.0
     jump_min_mm: float = 10.0
+    accel_max_mm_s2: float = ACCEL_MAX_MM_S2
+    min_fit_span_s: float = MIN_FIT_SPAN_S
     fit_samples: int = 256
     #: the display's (width, height) (mm): predictions stay within it; None: unbounded
     area_mm: tuple[float, float] | None = None
@@ -159,7 +185,7 @@ def _finger_steps(fs: FingerState, t, x, y, force, event, cfg: TrackerConfig, co
         np.ascontiguousarray(y, dtype=np.float64), np.ascontiguousarray(force, dtype=np.float64),
         np.ascontiguousarray(event, dtype=np.int8),
         (cfg.velocity_window_s, cfg.max_gap_s, cfg.jump_speed_mm_s, cfg.jump_min_mm),
-        max(int(cfg.fit_samples), 2))
+        max(int(cfg.fit_samples), 2), (cfg.accel_max_mm_s2, cfg.min_fit_span_s))
     counters["out_of_order"] += dropped
     counters["jumps"] += jumps
     if table.shape[1] == 0:
@@ -171,14 +197,15 @@ def _finger_steps(fs: FingerState, t, x, y, force, event, cfg: TrackerConfig, co
 
 
 @njit(cache=True, nogil=True)
-def _steps_kernel(fs, history, t, x, y, force, event, cfg, cap):
+def _steps_kernel(fs, history, t, x, y, force, event, cfg, cap,
+                  motion=(ACCEL_MAX_MM_S2, MIN_FIT_SPAN_S)):
     """:func:`_finger_steps` in one compiled pass.
 
     fs : the finger's (contact, touch_id, t_sample, x, y, vx, vy, t_down) before the
     samples; history : (h, 3) its touch's (t, x, y) within the velocity window (h = 0 if
     not touching); t, x, y, force, event : its samples (s, mm, mm, N, event code);
     cfg : (velocity_window_s, max_gap_s, jump_speed_mm_s, jump_min_mm); cap : most rows
-    of a fit (``fit_samples``, at least 2).
+    of a fit (``fit_samples``, at least 2); motion : (accel_max_mm_s2, min_fit_span_s).
 
     Returns ``(keep, table, dropped, jumps, lo, window)``: the kept samples, the state
     after each kept sample (len(_FIELDS), m), the counts of dropped (out of order)
@@ -194,6 +221,7 @@ def _steps_kernel(fs, history, t, x, y, force, event, cfg, cap):
     """
     fs_contact, fs_touch, fs_t, fs_x, fs_y, fs_vx, fs_vy, fs_t_down = fs
     window_s, max_gap, jump_speed, jump_min = cfg
+    accel_max, min_span = motion
     m_all = t.size
     keep = np.empty(m_all, dtype=np.bool_)
     latest = fs_t
@@ -217,24 +245,25 @@ def _steps_kernel(fs, history, t, x, y, force, event, cfg, cap):
         i = idx[k]
         g = h + k
         win[g, 0], win[g, 1], win[g, 2] = t[i], x[i], y[i]
-        # a jump: a move the touch's recent motion does not explain, by more than
-        # jump_min and by more than jump_speed over the interval (a swipe at any steady
-        # speed is none). That motion: the chord over the rows a next call keeps as
-        # history (the velocity window), not the last step: a screen re-reports a finger
-        # unmoved 0.6 ms after another one moves
+        # a jump: a move the touch's recent motion does not explain (module docstring).
+        # That motion: the chord over the rows a next call keeps as history (the
+        # velocity window), not the last step: a screen re-reports a finger unmoved
+        # 0.6 ms after another one moves
         jump = False
         if contact_prev and event[i] == MOVE:
             last = g - 1
             f = max(np.searchsorted(win[:g, 0], win[last, 0] - window_s),
                     touch_first[k - 1] if k > 0 else 0, last - cap + 1)
+            span_s = win[last, 0] - win[f, 0]
+            dt = t[i] - t_prev
             vx_recent = vy_recent = 0.0
-            if win[last, 0] > win[f, 0]:
-                span_s = win[last, 0] - win[f, 0]
+            bound = jump_speed * dt  # no velocity known: a finger's top speed
+            if span_s > 0.0 and span_s >= min_span:
                 vx_recent = (win[last, 1] - win[f, 1]) / span_s
                 vy_recent = (win[last, 2] - win[f, 2]) / span_s
-            dt = t[i] - t_prev
+                bound = accel_max * dt * (dt + span_s) / 2
             off = np.hypot(x[i] - x_prev - vx_recent * dt, y[i] - y_prev - vy_recent * dt)
-            jump = off > jump_min and off > jump_speed * dt
+            jump = off > jump_min + bound
         if jump:
             jumps += 1
         new_touch[k] = event[i] == DOWN or not contact_prev or jump
@@ -276,12 +305,13 @@ def _steps_kernel(fs, history, t, x, y, force, event, cfg, cap):
         sx, sy = _pairwise(pad[2], 0, width), _pairwise(pad[3], 0, width)
         stx, sty = _pairwise(pad[4], 0, width), _pairwise(pad[5], 0, width)
         denom = n * stt - st * st
-        ok = denom > 1e-18
+        ok = denom > 1e-18 and win[g, 0] - win[first[k], 0] >= min_span
         vx = (n * stx - st * sx) / denom if ok else 0.0
         vy = (n * sty - st * sy) / denom if ok else 0.0
         xf = (sx - vx * st) / n if ok else win[g, 1]
         yf = (sy - vy * st) / n if ok else win[g, 2]
-        # no fit: keep the touch's last velocity (0 from its first sample on)
+        # no fit (or one too short to tell motion from noise): keep the touch's last
+        # velocity (0 from its first sample on)
         if ok:
             source_v[0], source_v[1] = vx, vy
         elif new_touch[k]:
