@@ -22,6 +22,12 @@ Groups (``auto`` is what ``render = "auto"`` picks for a periodic layer: the hyb
   of SHT's on human-like motion, and at or below it on constant-speed swipes.
 
 Not claimed: time error on the 0.6 mm grating (``NOT_CLAIMED``).
+
+A spectral claim on a texture slower than ``rendering.metrics.PHASE_BLIND_HZ`` (16 Hz) at
+its motion's speed (the 15 mm grating under every motion, the 5 mm grating slow and
+human-like: 1.3-12 Hz) says so in its text (:func:`phase_note`): there the spectral
+error counts spatial phase too (a quarter-period shift costs 0.3-1.3), so it is no
+phase-blind judgement of the texture's feel.
 """
 
 from __future__ import annotations
@@ -32,7 +38,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import t as student_t
 
+from frictex.app.measure.report_matrix import MOTIONS
 from frictex.device.errors import InputError
+from frictex.rendering.metrics import PHASE_BLIND_HZ
 
 METRICS = ("time_error", "spectral_error", "alignment_error_mm")
 GRATINGS = {"grating-15mm": 15.0, "grating-5mm": 5.0, "grating-0.6mm": 0.6}
@@ -112,6 +120,20 @@ def paired(a, b, scale: float = 1.0) -> tuple[float, float, float, int]:
     return mean, float(mean - half), float(mean + half), int(d.size)
 
 
+def phase_note(scene: str, kind: str, metric: str) -> str:
+    """What a claim's text adds where its spectral error also counts phase: the texture
+    frequency (Hz) of ``scene``'s grating at motion ``kind``'s speed (``MOTIONS``; the
+    human-like strokes' nominal mean), when below ``PHASE_BLIND_HZ``; else ''."""
+    speed = MOTIONS.get(kind, {}).get("speed_mm_s")
+    if metric != "spectral_error" or scene not in GRATINGS or speed is None:
+        return ""
+    texture_hz = speed / GRATINGS[scene]
+    if texture_hz >= PHASE_BLIND_HZ:
+        return ""
+    return (f" (a {texture_hz:.2g} Hz texture at {speed:g} mm/s: below {PHASE_BLIND_HZ:g} Hz "
+            "the spectral error counts phase too)")
+
+
 def _claim(group, scene, kind, metric, values, a, b, scale=1.0, strict=True) -> Claim | None:
     per = values.get(scene, {}).get(kind, {})
     if a not in per or b not in per:
@@ -120,7 +142,8 @@ def _claim(group, scene, kind, metric, values, a, b, scale=1.0, strict=True) -> 
     side = f"{scale:g} x {b}" if scale != 1.0 else b
     relation = "<" if strict else "<="
     text = (f"{'auto (hybrid)' if a == AUTO else a} {relation} {side}: {a} - {side} = "
-            f"{mean:+.3f}, 95 % interval [{low:+.3f}, {high:+.3f}], {n} draws")
+            f"{mean:+.3f}, 95 % interval [{low:+.3f}, {high:+.3f}], {n} draws"
+            + phase_note(scene, kind, metric))
     holds = bool(high < 0.0 if strict else high <= 0.0)  # NaN: not shown
     return Claim(group, scene, kind, metric, text, mean, low, high, n, holds,
                  verdict(holds, low))

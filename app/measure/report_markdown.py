@@ -14,7 +14,7 @@ from frictex.app.measure.report_claims import (GRATINGS, METRICS, NOT_CLAIMED, O
 from frictex.app.measure.report_doc import Report, grating_rows, mean_defined
 from frictex.app.measure.report_matrix import (MOTIONS, Row, aliasing_degenerate, link_buffer_s,
                                                 periods_per_sample)
-from frictex.rendering.metrics import ALIGNMENT_CAP_MM
+from frictex.rendering.metrics import ALIGNMENT_CAP_MM, PHASE_BLIND_HZ
 from frictex.rendering.pipeline import BLOCK_S
 
 PLATE_LOOP_HZ = 400.0  # seed 003, Fig. 3b: the amplitude loop's -3 dB bandwidth
@@ -81,7 +81,11 @@ def _intro(doc: Report) -> list[str]:
             f"{'Quick' if doc.quick else 'Full'} matrix, {len(doc.rows)} rows. "
             "Metrics (rendering/metrics.py): time error = RMS(mu' - mu'*) / std(mu'*); spectral "
             "error = distance of third-octave short-time spectra, 10 Hz - 1 kHz (phase "
-            "ignored); alignment error = mean distance (mm of path) between matching "
+            f"ignored only for textures of {PHASE_BLIND_HZ:g} Hz and above, v / P: below, a "
+            "0.1 s window holds one or two edges and a shift of a quarter period costs 0.3 "
+            "at 10 Hz, 1.3 at 4 Hz, more than a missing texture; the 15 mm grating under "
+            "every motion and the 5 mm grating at 20 and 60 mm/s are below it, and their "
+            "spectral claims say so); alignment error = mean distance (mm of path) between matching "
             "friction steps, both ways, each distance capped at "
             f"{ALIGNMENT_CAP_MM:g} mm (also the cost of a step with no partner: "
             f"{ALIGNMENT_CAP_MM:.3f} means no step was matched). '-' marks a metric that is "
@@ -347,7 +351,11 @@ def _physical_limits(doc: Report) -> list[str]:
                   "003, Fig. 3b): the plate follows nothing above ~400 Hz, so an output rate a "
                   "few times that (2 kHz) already carries all it can reproduce; higher rates "
                   "only place steps more finely in time (1 / rate: 0.5 ms at 2 kHz, 0.05 ms at 20 kHz). "
-                  "Hybrid, gratings, human motion, mean over gratings:", ""]
+                  "Hybrid, gratings, human motion, mean over gratings. Each column is one "
+                  "draw, so its alignment error moves with a single step: one spurious step "
+                  "pair rendered at some rates and not at others doubles it (one report: "
+                  "0.088 mm at 2 kHz against 0.18 mm at 5-20 kHz), so a difference in that "
+                  "row is not the rate's doing unless it holds across draws:", ""]
         lines += table(["metric", *(f"{h / 1000:g} kHz" for h in rates)],
                        [(m, *_by(hybrid, "output_hz", rates, m)) for m in METRICS], "")
         lines.append("")
@@ -369,7 +377,8 @@ def _inversion(doc: Report) -> list[str]:
     lines = ["", "## Inversion", "",
              "Exact (seed 003 eq 3, closed form) against the table built at scene load "
              "(rendering/inversion_lut.py); the table's amplitude error is reported in "
-             "settings.lut_max_error_um. Mean over the gratings, human motion, 50 Hz, 10 kHz:", ""]
+             "settings.lut_max_error_um. Mean over the gratings and over every renderer, human "
+             "motion, 50 Hz, 10 kHz:", ""]
     cost = [("inversion us/s", *[
         f"{np.mean([r.stages_us_per_s['inversion'] for r in inv if r.inversion == n]):.0f}"
         for n in names])]
