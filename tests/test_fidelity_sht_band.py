@@ -1,0 +1,37 @@
+"""SHT above the output's Nyquist frequency plays the texture's mean, not an alias."""
+
+import numpy as np
+
+from frictex.rendering.input.trace_file import DOWN, MOVE, UP, make_trace
+from frictex.rendering.pipeline import build_pipeline
+from frictex.textures.loader import load_scene
+from frictex.textures.library import resolve_scene
+
+
+def _sht_mu(speed_mm_s: float, rate_hz: float) -> np.ndarray:
+    """SHT's mu' on the 0.6 mm grating (0.6 / 1.0) under a finger swiping at ``speed_mm_s``
+    sampled at 50 Hz, at output rate ``rate_hz``, once the first fit gives a velocity."""
+    scene = load_scene(resolve_scene("grating-0.6mm"))
+    t = np.arange(0, 0.26, 0.02)
+    ev = np.full(t.size, MOVE, np.int8)
+    ev[0], ev[-1] = DOWN, UP
+    trace = make_trace(t, np.zeros(t.size, int), 10 + speed_mm_s * t, np.full(t.size, 30.0),
+                       np.full(t.size, 0.5), ev)
+    pipeline = build_pipeline(scene, rate_hz=rate_hz, render_override="sht", sho_variant="sho-predicted")
+    out, _ = pipeline.process(0, trace, pipeline.initial_state(),
+                              n_blocks=int(0.24 * rate_hz) // pipeline.block_size)
+    moving = out.contact[0] & (out.t_s >= 0.03)
+    return out.mu_target[0][moving]
+
+
+def test_a_texture_above_nyquist_plays_its_mean():
+    # 420 mm/s over 0.6 mm is 700 Hz; at 1 kHz output sampling it played 300 Hz
+    mu = _sht_mu(420.0, 1000.0)
+    np.testing.assert_allclose(mu, 0.8, atol=1e-3)
+
+
+def test_a_texture_below_nyquist_is_played():
+    # 240 mm/s is 400 Hz, under 1 kHz's 500 Hz: both levels, changing 800 times a second
+    mu = _sht_mu(240.0, 1000.0)
+    assert set(np.round(mu, 6)) == {0.6, 1.0}
+    assert abs(np.count_nonzero(np.diff(mu)) / (mu.size / 1000.0) - 800.0) < 60.0
