@@ -261,7 +261,10 @@ def test_screen_map_sources_in_order_of_trust():
     assert (screen.x.lo, screen.x.hi, screen.x.size_mm, screen.y.hi) == (5, 6, 50, 3000)
     screen, warnings = screen_map(ScreenSpec(width_mm=50, height_mm=60), {}, observed)
     assert (screen.x.lo, screen.x.hi) == (10, 90) and len(warnings) == 2
-    assert "device x range unknown: using the observed 10..90" in warnings[0]
+    assert "device x range unknown: using the observed 10..90 at 1.6 units/mm" in warnings[0]
+    # one scale for both axes: y's 60 units are 37.5 mm of the 60, not stretched to 60
+    assert (screen.y.lo, screen.y.hi) == (20, 20 + 1.6 * 60)
+    assert "using the observed 20..80 at 1.6 units/mm, one scale for both axes" in warnings[1]
     with pytest.raises(TraceError, match="give --width-mm"):
         screen_map(ScreenSpec(), {}, observed)
     with pytest.raises(TraceError, match=r"only shows x = 7\): give --x-range"):

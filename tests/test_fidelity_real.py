@@ -40,9 +40,11 @@ def test_renderers_agree_where_they_should(section):
     most). Both lock to the finger's position, but the hybrid's comes from its own finger
     filter (rendering.layers.finger_filter), not the tracker's line, and it holds the
     edges SHO-predicted feels twice: spectral distance median 0.20, at most 0.57
-    (phone-single-drag; 0.3 and 0.15 when the hybrid read the tracker's position)."""
+    (phone-single-drag; 0.3 and 0.15 when the hybrid read the tracker's position). A
+    recording on which no renderer plays any texture (phone-three-touches: three taps in
+    place, distance 0 for all) has nothing to compare."""
     moving = [run for run in section["runs"]
-              if run["renderers"]["sht"]["spectral_distance_from_hybrid"] is not None]
+              if run["renderers"]["sht"]["spectral_distance_from_hybrid"]]
     assert len(moving) >= 10
     near = [run["renderers"]["sho-predicted"]["spectral_distance_from_hybrid"] for run in moving]
     assert max(near) < 0.6 and np.median(near) < 0.25

@@ -14,7 +14,7 @@ from frictex.rendering.input.trace_import import add_import_arguments, run_impor
 from frictex.rendering.input.evdev_decode import (ABS_MT_POSITION_X, ABS_MT_TRACKING_ID, EV_ABS, EV_KEY,
                                                   MAX_RECORDING_BYTES, MAX_RESOLUTION, SCREEN_MM,
                                                   AbsInfo, ScreenSpec,
-                                                  decode_all, screen_map)
+                                                  decode_all, observed_ranges, screen_map)
 from frictex.rendering.input.import_evemu import parse_evemu
 from frictex.rendering.input.import_getevent import parse_getevent, read_getevent
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP, TraceError, make_trace, read_trace
@@ -471,3 +471,21 @@ def test_a_recording_over_the_cap_is_refused_unread(tmp_path):
         f.truncate(MAX_RECORDING_BYTES + 1)
     with pytest.raises(TraceError, match="big.evemu"):
         _import([str(src), "-o", str(tmp_path / "out.csv")])
+
+
+@needs_refdata
+def test_an_unknown_range_keeps_a_strokes_shape():
+    """phone-single-drag's x crosses 392 units of the digitizer while its y wobbles over
+    11: at one scale for both axes that wobble is 4.4 mm of a 160 x 100 mm screen, where
+    stretched to the screen's height it was all 100 mm (9.1 mm a unit: its last report,
+    3 units down, moved the finger 27 mm in 16 ms)."""
+    samples, _ = decode_all(read_getevent(REFDATA / "Phone" / "phone-single-drag.txt"), "drag")
+    x_units = max(s.x for s in samples) - min(s.x for s in samples)
+    y_units = max(s.y for s in samples) - min(s.y for s in samples)
+    assert (x_units, y_units) == (392, 11)
+    screen, warnings = screen_map(ScreenSpec(width_mm=160, height_mm=100), {},
+                                  observed_ranges(samples), "drag")
+    assert len(warnings) == 2 and "one scale for both axes" in warnings[1]
+    trace = screen.trace(samples, "drag")
+    assert np.ptp(trace.x_mm) == pytest.approx(160.0)
+    assert np.ptp(trace.y_mm) == pytest.approx(11 * 160.0 / 392)

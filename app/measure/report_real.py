@@ -3,7 +3,8 @@
 Every recording under DIR (recursively) is replayed: trace CSVs as they are, Android
 ``getevent -lt`` logs and evemu recordings through ``frictex trace import``. A log does
 not record its screen's size, so its observed range is mapped onto the scene's display
-(the touches are replayed on the scene, at the scene's scale). Each recording runs on
+at one scale for both axes (``rendering.input.evdev_decode.screen_map``: a drag keeps its
+shape; the touches are replayed on the scene, at the scene's scale). Each recording runs on
 each seed 003 grating of the report with every renderer (50 Hz is the recordings' own
 rate here: 67-105 Hz), 10 kHz output, exact inversion.
 

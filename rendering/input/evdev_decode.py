@@ -413,9 +413,10 @@ class ScreenMap:
 
 def _axis_map(axis: str, size_option: str, size_mm: float | None, flip: bool,
               given: tuple[float, float] | None, absinfo: AbsInfo | None,
-              observed: tuple[float, float] | None, where: str) -> tuple[AxisMap, list[str]]:
-    """The map of device axis ``axis`` (see :func:`screen_map`) and its warnings."""
-    warnings = []
+              observed: tuple[float, float] | None, where: str) -> tuple[AxisMap, bool]:
+    """The map of device axis ``axis`` (see :func:`screen_map`), and whether its range is
+    the observed one."""
+    guessed = False
     if given is not None:
         lo, hi = given
         if not hi > lo:
@@ -424,9 +425,7 @@ def _axis_map(axis: str, size_option: str, size_mm: float | None, flip: bool,
     elif absinfo is not None and absinfo.maximum > absinfo.minimum:
         lo, hi = absinfo.minimum, absinfo.maximum
     elif observed is not None and observed[1] > observed[0]:
-        lo, hi = observed
-        warnings.append(f"device {axis} range unknown: using the observed {lo:g}..{hi:g} "
-                        f"(positions stretch to the screen edges; give --{axis}-range MIN MAX)")
+        (lo, hi), guessed = observed, True
     else:
         seen = f" (the recording only shows {axis} = {observed[0]:g})" if observed else ""
         raise TraceError(f"{where}: device {axis} range unknown{seen}: give --{axis}-range MIN MAX")
@@ -441,7 +440,7 @@ def _axis_map(axis: str, size_option: str, size_mm: float | None, flip: bool,
                              f"across; expected {SCREEN_MM[0]:g} to {SCREEN_MM[1]:g} mm (give "
                              f"{size_option})")
     try:
-        return AxisMap(float(lo), float(hi), float(size_mm), flip), warnings
+        return AxisMap(float(lo), float(hi), float(size_mm), flip), guessed
     except TraceError as exc:
         raise TraceError(f"{where}: {exc}") from None
 
@@ -477,19 +476,46 @@ def screen_map(spec: ScreenSpec, absinfo: dict[int, AbsInfo],
     by ABS_MT_POSITION_X / _Y), else the ``observed`` min..max of the recording with a
     warning; each size is the user's, else the range over the device resolution (units/mm),
     and must lie within SCREEN_MM. ``where`` (a file, a device) starts every error.
+
+    An observed range is taken at one scale for both axes (device units per mm: the
+    largest of the two axes'), from its smallest value: a stroke keeps its shape and its
+    speed along both axes, where stretching each axis to the screen's edges would blow a
+    drag's few units of sideways wobble up to the screen's height (3 units of a phone's
+    y became 5.9 mm each). Touch screens' units are square to within a factor of about
+    2; a range given or read from the device is kept as it is.
     """
     observed = observed or {}
     sw = spec.swap_xy
-    dev_x, wx = _axis_map("x", "--height-mm" if sw else "--width-mm",
+    dev_x, guessed_x = _axis_map("x", "--height-mm" if sw else "--width-mm",
                           spec.height_mm if sw else spec.width_mm, spec.flip_y if sw else spec.flip_x,
                           spec.x_range, absinfo.get(ABS_MT_POSITION_X), observed.get(ABS_MT_POSITION_X),
                           where)
-    dev_y, wy = _axis_map("y", "--width-mm" if sw else "--height-mm",
+    dev_y, guessed_y = _axis_map("y", "--width-mm" if sw else "--height-mm",
                           spec.width_mm if sw else spec.height_mm, spec.flip_x if sw else spec.flip_y,
                           spec.y_range, absinfo.get(ABS_MT_POSITION_Y), observed.get(ABS_MT_POSITION_Y),
                           where)
+    warnings = []
+    if guessed_x or guessed_y:
+        per_mm = max((m.hi - m.lo) / m.size_mm for m in (dev_x, dev_y))
+        if guessed_x:
+            dev_x, said = _observed_at_scale("x", dev_x, per_mm)
+            warnings.append(said)
+        if guessed_y:
+            dev_y, said = _observed_at_scale("y", dev_y, per_mm)
+            warnings.append(said)
     screen_x, screen_y = (dev_y, dev_x) if sw else (dev_x, dev_y)
-    return ScreenMap(screen_x, screen_y, sw, spec.pressure_n, spec.force_n), wx + wy
+    return ScreenMap(screen_x, screen_y, sw, spec.pressure_n, spec.force_n), warnings
+
+
+def _observed_at_scale(axis: str, observed: AxisMap, per_mm: float) -> tuple[AxisMap, str]:
+    """The map of an axis whose range was observed (``observed``: its min..max onto the
+    screen) at ``per_mm`` device units per mm, and the warning that says so."""
+    scaled = AxisMap(observed.lo, observed.lo + per_mm * observed.size_mm, observed.size_mm,
+                     observed.flip)
+    return scaled, (f"device {axis} range unknown: using the observed "
+                    f"{observed.lo:g}..{observed.hi:g} at {per_mm:.4g} units/mm, one scale "
+                    f"for both axes ({observed.lo:g}..{scaled.hi:.6g} across the screen; give "
+                    f"--{axis}-range MIN MAX)")
 
 
 def observed_ranges(samples: list[RawSample]) -> dict[int, tuple[float, float]]:
