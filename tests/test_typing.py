@@ -74,11 +74,17 @@ import frictex
 scene = frictex.load_scene("grating-5mm")
 frictex.replya(scene, "swipe-40mms-50hz")
 frictex.build_pipeline(scene, rate_hz="10 kHz")
+
+
+def ahead(block: frictex.FingerBlock) -> float:
+    return float(block.x_pread.max())
 '''
 EXPECTED = [
     (4, 'Module has no attribute "replya"; maybe "replay"?  [attr-defined]'),
     (5, 'Argument "rate_hz" to "build_pipeline" has incompatible type "str"; expected "float"'
         '  [arg-type]'),
+    # a renderer's block: its fields are typed, not Any
+    (9, '"FingerBlock" has no attribute "x_pread"; maybe "x_pred" or "y_pred"?  [attr-defined]'),
 ]
 
 

@@ -61,8 +61,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from operator import attrgetter
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from frictex.device.jit import njit
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP, Trace
@@ -141,17 +143,32 @@ class FingerBlock:
     making only the ones a stage reads with numpy would cost. Read-only.
     """
 
+    index0: int
+    t_s: npt.NDArray[np.float64]
+    ids: tuple[int, ...]
+    contact: npt.NDArray[np.bool_]
+    touch_id: npt.NDArray[np.int64]
+    x_held: npt.NDArray[np.float64]
+    y_held: npt.NDArray[np.float64]
+    x_pred: npt.NDArray[np.float64]
+    y_pred: npt.NDArray[np.float64]
+    vx: npt.NDArray[np.float64]
+    vy: npt.NDArray[np.float64]
+    force: npt.NDArray[np.float64]
+    touch_start: npt.NDArray[np.float64]
+
     def __init__(self, index0: int, t_s: np.ndarray, ids: tuple[int, ...], **arrays):
         if set(arrays) != set(BLOCK_FIELDS):
             raise TypeError(f"FingerBlock needs the arrays {', '.join(BLOCK_FIELDS)}; got "
                             f"{', '.join(sorted(arrays)) or 'none'}")
         self.__dict__.update(arrays, index0=index0, t_s=t_s, ids=ids)
 
-    def __getattr__(self, name):  # only called for names that are not there
-        raise AttributeError(f"FingerBlock has no attribute {name!r}")
+    if not TYPE_CHECKING:  # a type checker sees the fields above, so a misspelt one fails it
+        def __getattr__(self, name):  # only called for names that are not there
+            raise AttributeError(f"FingerBlock has no attribute {name!r}")
 
-    def __setattr__(self, name, value):
-        raise AttributeError(f"FingerBlock is read-only (tried to set {name!r})")
+        def __setattr__(self, name, value):
+            raise AttributeError(f"FingerBlock is read-only (tried to set {name!r})")
 
     @property
     def n(self) -> int:
