@@ -1,6 +1,8 @@
-"""SHT above the output's Nyquist frequency plays the texture's mean, not an alias."""
+"""SHT and the hybrid above the output's Nyquist frequency play the texture's mean, not an
+alias, and count those samples (``rendering.layers.band_limit``)."""
 
 import numpy as np
+import pytest
 
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP, make_trace
 from frictex.rendering.pipeline import build_pipeline
@@ -8,20 +10,27 @@ from frictex.textures.loader import load_scene
 from frictex.textures.library import resolve_scene
 
 
-def _sht_mu(speed_mm_s: float, rate_hz: float) -> np.ndarray:
-    """SHT's mu' on the 0.6 mm grating (0.6 / 1.0) under a finger swiping at ``speed_mm_s``
-    sampled at 50 Hz, at output rate ``rate_hz``, once the first fit gives a velocity."""
+def _run(speed_mm_s: float, rate_hz: float, renderer: str = "sht"):
+    """mu' of ``renderer`` on the 0.6 mm grating (0.6 / 1.0) under a finger swiping at
+    ``speed_mm_s`` sampled at 50 Hz, at output rate ``rate_hz``, once the first fit gives a
+    velocity; and the samples the layer counted as played as its mean."""
     scene = load_scene(resolve_scene("grating-0.6mm"))
     t = np.arange(0, 0.26, 0.02)
     ev = np.full(t.size, MOVE, np.int8)
     ev[0], ev[-1] = DOWN, UP
     trace = make_trace(t, np.zeros(t.size, int), 10 + speed_mm_s * t, np.full(t.size, 30.0),
                        np.full(t.size, 0.5), ev)
-    pipeline = build_pipeline(scene, rate_hz=rate_hz, render_override="sht", sho_variant="sho-predicted")
-    out, _ = pipeline.process(0, trace, pipeline.initial_state(),
-                              n_blocks=int(0.24 * rate_hz) // pipeline.block_size)
+    pipeline = build_pipeline(scene, rate_hz=rate_hz, render_override=renderer,
+                              sho_variant="sho-predicted")
+    out, state = pipeline.process(0, trace, pipeline.initial_state(),
+                                  n_blocks=int(0.24 * rate_hz) // pipeline.block_size)
     moving = out.contact[0] & (out.t_s >= 0.03)
-    return out.mu_target[0][moving]
+    (layer_state,) = state.layers
+    return out.mu_target[0][moving], layer_state.clipped
+
+
+def _sht_mu(speed_mm_s: float, rate_hz: float) -> np.ndarray:
+    return _run(speed_mm_s, rate_hz)[0]
 
 
 def test_a_texture_above_nyquist_plays_its_mean():
@@ -35,3 +44,13 @@ def test_a_texture_below_nyquist_is_played():
     mu = _sht_mu(240.0, 1000.0)
     assert set(np.round(mu, 6)) == {0.6, 1.0}
     assert abs(np.count_nonzero(np.diff(mu)) / (mu.size / 1000.0) - 800.0) < 60.0
+
+
+@pytest.mark.parametrize("renderer", ["sht", "hybrid"])
+def test_the_samples_played_as_the_mean_are_counted(renderer):
+    """Every touching sample whose tracked velocity puts the texture past 500 Hz is
+    counted; none at 10 kHz output (5 kHz)."""
+    mu, counted = _run(420.0, 1000.0, renderer)
+    assert counted >= mu.size and np.count_nonzero(np.isclose(mu, 0.8)) == mu.size
+    mu, counted = _run(420.0, 10_000.0, renderer)
+    assert counted == 0 and set(np.round(mu, 6)) == {0.6, 1.0}

@@ -127,9 +127,15 @@ def warnings_of(pipeline, tracker, totals: Totals) -> list[str]:
 
 def _clipped_warning(layer, n: int, touching: int) -> str:
     """The sentence for ``n`` finger samples (of ``touching``) that ``layer``'s own
-    limits clipped: a clip's level sum past 1, a recorded texture's mu_min/mu_max."""
+    limits clipped: a clip's level sum past 1, a recorded texture's mu_min/mu_max, a
+    periodic layer's texture past the output's Nyquist frequency
+    (``rendering.layers.band_limit``)."""
     share = f"{n} of {touching} touching samples ({100.0 * n / max(touching, 1):.1f} %)"
     kind = getattr(layer, "renderer_kind", None)
+    if getattr(layer, "is_periodic", False):
+        return (f"layer {layer.name!r}: {share} moved its texture past the output's Nyquist "
+                "frequency (|v . axis| / period above half the output rate) and were played "
+                "as its mean mu', not an alias; raise --rate to play them")
     if kind == "clip":
         return (f"layer {layer.name!r} (clip): {share} played where its events' levels added "
                 f"past 1 and were held at mu' = 1 - depth = {1.0 - layer.clip.depth:.4g}; "

@@ -302,8 +302,10 @@ class Summary:
     clamps : Clamps
     layer_clipped : Mapping of str to int
         Per layer name, for the layers that limit their own mu' (``recorded``: mu_min and
-        mu_max; ``clip``: its events' level sum at 1): the touching finger samples
-        (friction-table rows) whose mu' those limits clipped.
+        mu_max; ``clip``: its events' level sum at 1; a grating or waveform rendered by SHT
+        or the hybrid: its texture past the output's Nyquist frequency, played as its
+        mean): the touching finger samples (friction-table rows) whose mu' those limits
+        clipped.
     warnings : tuple of str
         One sentence per thing changed, dropped or not played.
     fingers : Mapping of int to FingerErrors

@@ -128,6 +128,8 @@ draws its spectral error fell on every kind of motion (fast swipes 0.131 -> 0.12
 before this rule is reached: their figures did not change (``rendering/RENDERERS.md``).
 
 So the hybrid has SHT's bandwidth on fine textures and SHO's alignment on coarse ones.
+Above the output's Nyquist frequency it plays, as SHT does, the texture's mean instead
+of an alias (``rendering.layers.band_limit``), counted in ``clipped``.
 
 The error is taken once per measurement and the offset ramps towards it at the bounded
 rate, computed in closed form per measurement. The whole per-finger recurrence
@@ -155,6 +157,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from frictex.device.jit import njit
+from frictex.rendering.layers.band_limit import BandLimit
 from frictex.rendering.layers.finger_filter import filter_axis
 from frictex.rendering.tracking.tracks import FingerBlock
 
@@ -206,9 +209,11 @@ class _Finger:
 @dataclass(frozen=True)
 class HybridState:
     """Per finger id of the last block's tracks (``FingerBlock.ids``: the fingers
-    touching, and those that lifted in it): its :class:`_Finger` record."""
+    touching, and those that lifted in it): its :class:`_Finger` record; and the touching
+    samples played as the texture's mean so far (``rendering.layers.band_limit``)."""
 
     fingers: dict[int, _Finger]
+    clipped: int = 0
 
 
 def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, snap: np.ndarray,
@@ -501,6 +506,7 @@ class HybridRenderer:
         self.lock = lock_mm / layer.period_mm
         self.locked = layer.period_mm >= COARSE_MM
         self.event_hz = float(event_hz)
+        self.band_limit = BandLimit(layer, rate_hz)
 
     def initial_state(self) -> HybridState:
         return HybridState(fingers={})
@@ -535,4 +541,6 @@ class HybridRenderer:
                                    measured=end[4:7], speed=end[7], held=end[8],
                                    filter=filtered)
         covers = self.layer.covers(block.x_pred, block.y_pred)
-        return self.layer.profile_where(phase, covers), covers, HybridState(fingers=carried)
+        mu = self.layer.profile_where(phase, covers)
+        limited = self.band_limit.apply(mu, covers, block)
+        return mu, covers, HybridState(fingers=carried, clipped=state.clipped + limited)

@@ -10,13 +10,8 @@ tests/test_sht.py). A new touch (down, or a jump) restarts the phase at 0: plain
 does not know where the finger landed (the seed's stated drawback; the hybrid renderer
 fixes it). The layer's region gates the output at the predicted finger position.
 
-Band limit: where the texture's frequency |v . axis| / P exceeds the output's Nyquist
-frequency (half the output rate), SHT plays the texture's mean mu' (over one period)
-instead of the profile sampled at that phase, which would be an alias: at 1 kHz output a
-0.6 mm grating under a finger at 420 mm/s is a 700 Hz texture, and sampling it played
-300 Hz (1000 - 700), a texture nobody touched, without a word. The mean is what the
-texture feels like to a plate that cannot play it. At 10 kHz output that takes a finger
-beyond 3 m/s on a 0.6 mm grating.
+Above the output's Nyquist frequency the texture's mean is played instead of an alias
+(``rendering.layers.band_limit``), counted in ``clipped``.
 """
 
 from __future__ import annotations
@@ -25,19 +20,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from frictex.rendering.layers.band_limit import BandLimit
 from frictex.rendering.layers.hybrid import integrate_phase
 from frictex.rendering.tracking.tracks import FingerBlock
 
 
-#: phases over one period the texture's mean mu' is taken at
-MEAN_PHASES = 4096
-
-
 @dataclass(frozen=True)
 class ShtState:
-    """Per finger: the touch the phase belongs to and the wrapped phase (cycles)."""
+    """Per finger: the touch the phase belongs to and the wrapped phase (cycles); and the
+    touching samples played as the texture's mean so far (``rendering.layers.band_limit``)."""
 
     phase: dict[int, tuple[int, float]]
+    clipped: int = 0
 
 
 class ShtRenderer:
@@ -52,11 +46,8 @@ class ShtRenderer:
     def __init__(self, layer, rate_hz: float):
         self.layer = layer
         self.dt_s = 1.0 / rate_hz
-        self.nyquist_hz = rate_hz / 2
         self.axis = np.array(layer.axis)
-        phases = np.arange(MEAN_PHASES)[None, :] / MEAN_PHASES
-        #: mu' averaged over one period: what is played above the Nyquist frequency
-        self.mean_mu = float(layer.profile_where(phases, np.ones(phases.shape, bool)).mean())
+        self.band_limit = BandLimit(layer, rate_hz)
 
     def initial_state(self) -> ShtState:
         return ShtState(phase={})
@@ -65,16 +56,14 @@ class ShtRenderer:
         """mu' (F, n) and coverage (F, n) under each finger (mu' 1 where the layer does
         not cover), and the new state."""
         phase = np.empty((len(block.ids), block.n))
-        aliased = np.empty((len(block.ids), block.n), dtype=bool)
         carried = {fid: state.phase[fid] for fid in block.ids if fid in state.phase}
         ax, ay = self.axis
         for row, fid in enumerate(block.ids):
             rate = (block.vx[row] * ax + block.vy[row] * ay) / self.layer.period_mm
-            aliased[row] = np.abs(rate) > self.nyquist_hz
             phase[row], carry = integrate_phase(rate, self.dt_s, block.touch_id[row],
                                                 carried.get(fid))
             carried[fid] = (int(block.touch_id[row, -1]), carry)
         covers = self.layer.covers(block.x_pred, block.y_pred)
         mu = self.layer.profile_where(phase, covers)
-        mu[aliased & covers] = self.mean_mu
-        return mu, covers, ShtState(phase=carried)
+        limited = self.band_limit.apply(mu, covers, block)
+        return mu, covers, ShtState(phase=carried, clipped=state.clipped + limited)
