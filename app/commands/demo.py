@@ -22,10 +22,10 @@ N / B skip the playlist's scenes that drive other channels than the link and the
 recording were opened for (``app.live.demo_loop``).
 ``--faults SPEC`` injects link faults on ``--device`` (as ``frictex replay --faults``).
 
-Without a display: ``frictex demo`` says so and exits 2; ``--headless`` (or
-``--headless-fallback`` when no display is found) runs the same demo loop on a window
-without a display (``rendering.visual.headless``), a synthesized human-like stroke
-driving its mouse (``app.live.synthetic``), and writes its frames as PNG files
+Without a display: ``frictex demo`` says so and exits 1 (a run that could not do what
+was asked); ``--headless`` (or ``--headless-fallback`` when no display is found) runs
+the same demo loop on a window without a display (``rendering.visual.headless``), a
+synthesized human-like stroke driving its mouse (``app.live.synthetic``), and writes its frames as PNG files
 (``frames/``, at most 30 a second) to ``--out``, and what a ``--record`` would
 (``commands.csv``, ``friction.csv``, ``touches.csv``, ``events.csv``, ``summary.json``)
 to ``--record``, or without it to ``--out`` too.
