@@ -322,7 +322,7 @@ documented(DISC_REGION, {"cx_mm": "x (mm) of the centre", "cy_mm": "y (mm) of th
                          "radius_mm": "radius (mm)"})
 documented(VISUAL, {
     "color_low": "colour drawn where the layer's mu' is lowest",
-    "color_high": "colour drawn where the layer's mu' is highest (1)",
+    "color_high": "colour drawn where the layer's mu' is highest",
     "outline": "draw the layer's outline",
 })
 documented(LAYER_KEYS["grating"], {
@@ -372,7 +372,9 @@ documented(LAYER_KEYS["line"], {
     "edge_mm": _EDGE_MM + "; at most width_mm"})
 documented(LAYER_KEYS["raster"], {
     "image": "PNG (8- or 16-bit grey, or colour read as grey), path relative to this file: "
-             "grey g in [0, 1] gives mu' = mu_black + g (mu_white - mu_black); row 0 at the top",
+             "grey g in [0, 1] gives mu' = mu_black + g (mu_white - mu_black); row 0 at the top; "
+             "sampled bilinearly between pixel centres (held at the edge pixels, of each tile "
+             "with `tile`), so a one-pixel stripe becomes a ramp, a triangle two pixels wide",
     "mode": "`stretch`: the image fills width_mm x height_mm once; `tile`: tiles of "
             "tile_width_mm x tile_height_mm repeat over it; `one-to-one`: one image pixel "
             "per display pixel",
@@ -459,9 +461,11 @@ documented(LAYER_KEYS["recorded"], {
     "seed": "seed of the model's noise: the same seed, the same texture"})
 _CLIP = "required with clip = {}; not allowed with other clips"
 documented(LAYER_KEYS["clip"], {
-    "trigger": "what starts the clip: `down` (a touch begins), `lift` (a touch ends), `edge` "
-               "(a finger crosses a line), `force` (a finger's normal force rises through "
-               "force_n); always inside the layer's region",
+    "trigger": "what starts the clip: `down` (a touch begins), `lift` (a touch ends: felt "
+               "only by other fingers still touching, since friction is felt only by a finger "
+               "on the plate; with one finger, never; validate warns), `edge` (a finger "
+               "crosses a line), `force` (a finger's normal force rises through force_n); "
+               "always inside the layer's region",
     "x_mm": ("x (mm) of a point on the trigger line", "required with trigger = \"edge\"; "
                                                       "not allowed with other triggers"),
     "y_mm": ("y (mm) of a point on the trigger line", "required with trigger = \"edge\"; "

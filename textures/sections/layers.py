@@ -8,6 +8,7 @@ from typing import Callable
 
 from frictex.device import profile as profiles
 from frictex.textures import model
+from frictex.textures.clips import ClipLayer
 from frictex.textures.errors import KeyPath
 from frictex.textures.keys import COMMON, LAYER_KEYS, LAYER_TABLES, LAYER_TYPES, MAX_LAYERS, PERIODIC_TYPES, VISUAL
 from frictex.textures.schema import BAD, Reader, kind, show
@@ -102,6 +103,18 @@ def selector_warnings(r: Reader, device: profiles.DeviceProfile, built) -> None:
                      f"serves only the finger touching longest, so other fingers feel its "
                      f"amplitude, not this layer (a modal profile gives each finger its own: "
                      f"{', '.join(profiles.MODAL_PROFILES)})", warning=True)
+
+
+def lift_warnings(r: Reader, built) -> None:
+    """Warn at each ``trigger = "lift"`` clip: it starts as a touch ends, and friction
+    modulation is felt only by a finger on the plate, so only other fingers still
+    touching feel it (with one finger, nothing is felt)."""
+    for index, (layer, _) in enumerate(built):
+        if isinstance(layer, ClipLayer) and layer.trigger == "lift":
+            r.report(("layer", index, "trigger"),
+                     f'"lift" on layer {show(layer.name)}: the clip starts as a touch ends, and '
+                     f"friction is felt only by a finger on the plate, so it is felt only by other "
+                     f"fingers still touching (with one finger, never)", warning=True)
 
 
 def reach_warnings(r: Reader, device: profiles.DeviceProfile, built) -> None:
