@@ -25,8 +25,8 @@ recording were opened for (``app.live.demo_loop``).
 Without a display: ``frictex demo`` says so and exits 1 (a run that could not do what
 was asked); ``--headless`` (or ``--headless-fallback`` when no display is found) runs
 the same demo loop on a window without a display (``rendering.visual.headless``), a
-synthesized human-like stroke driving its mouse (``app.live.synthetic``), and writes its frames as PNG files
-(``frames/``, at most 30 a second) to ``--out``, and what a ``--record`` would
+synthesized human-like stroke driving its mouse (``app.live.synthetic``), and writes its
+frames as PNG files (``frames/``, at most 30 a second) to ``--out``, and what a ``--record`` would
 (``commands.csv``, ``friction.csv``, ``touches.csv``, ``events.csv``, ``summary.json``)
 to ``--record``, or without it to ``--out`` too.
 """

@@ -3,7 +3,10 @@ value, the undo stack and the edit to the texture file's TOML document.
 
 A :class:`LayerEdit` holds a texture file's text as a ``tomlkit`` document, which keeps
 comments, key order and formatting: saving writes back every line the author did not
-change byte for byte. A layer's controls come from the loader's key tables
+change byte for byte: a key the panel adds goes on a line of its own after the layer's
+keys, in the file's line ending, with no blank line added before the layer's sub-tables
+(``[layer.visual]``); a leading byte order mark (U+FEFF, which the loader accepts) is
+kept too. A layer's controls come from the loader's key tables
 (``textures.keys.LAYER_KEYS``, each key's ``textures.schema`` spec):
 
 - a number key (``Num``, ``Int``) is a :class:`Slider` over the range the format
@@ -39,7 +42,8 @@ The file is the author's as much as the panel's: :meth:`LayerEdit.save` writes o
 onto the text the panel read (its content, mtime and size, :attr:`LayerEdit.disk`). If
 the file changed since (an editor saved it), the save is refused with
 :class:`SaveConflict`; saving again with the file as it was then found overwrites it
-deliberately. A save keeps the file's permission bits (a new copy gets the mode a file
+deliberately. A save writes the file a symbolic link leads to, beside it (the link stays
+a link), and keeps the file's permission bits (a new copy gets the mode a file
 created under the umask gets). :meth:`LayerEdit.reread` takes the file again after it
 changed and reloaded, keeping the panel's unsaved edits (each a layer's key set, the
 undo stack's too) on top of it where the layer is still there, of the same type and
@@ -64,6 +68,7 @@ from pathlib import Path
 
 import tomlkit
 from tomlkit.exceptions import TOMLKitError
+from tomlkit.items import AoT, InlineTable, Table
 
 from frictex.device.errors import InputError
 from frictex.rendering.visual.layer_panel import ControlView, PanelView
@@ -309,10 +314,19 @@ def save_path(path: Path) -> Path:
     return user_scenes_dir() / Path(path).name if is_bundled(path) else Path(path)
 
 
+BOM = "\ufeff"
+
+
+def _split_bom(text: str) -> tuple[str, str]:
+    """``text`` as (its leading byte order mark, or "", and the TOML after it)."""
+    return (BOM, text[1:]) if text.startswith(BOM) else ("", text)
+
+
 def _parse(path: Path, text: str):
-    """``text`` (the file at ``path``) as a tomlkit document with at least one layer."""
+    """``text`` (the file at ``path``, a leading byte order mark allowed) as a tomlkit
+    document with at least one layer."""
     try:
-        doc = tomlkit.parse(text)
+        doc = tomlkit.parse(_split_bom(text)[1])
     except TOMLKitError as exc:
         raise EditError(f"{path.name} is not TOML the panel can edit: {exc}") from None
     if not doc.get("layer"):
@@ -363,7 +377,9 @@ class LayerEdit:
     Attributes
     ----------
     layer : the index of the layer selected (``[[layer]]`` order), or None.
-    original : the text the document was read from or last saved as.
+    original : the text the document was read from or last saved as (after its byte
+        order mark, if it has one).
+    bom : the file's leading byte order mark, or "": written back before the text.
     disk : the file as last read or written (:class:`OnDisk`): a save writes only onto it.
     """
 
@@ -372,7 +388,7 @@ class LayerEdit:
         self.disk = on_disk(self.path)
         if self.disk.text is None:
             raise EditError(f"cannot read {self.path.name} for editing: no such file")
-        self.original = self.disk.text
+        self.bom, self.original = _split_bom(self.disk.text)
         self.doc = _parse(self.path, self.original)
         display = self.doc.get("display", {})
         self.extent_mm = float(max(display.get("width_mm", 100.0), display.get("height_mm", 100.0)))
@@ -520,7 +536,7 @@ class LayerEdit:
         try:
             load_scene(self.path, text=text)
         except (ValueError, OSError):
-            text = disk.text  # the edits, together, are refused: each is tried alone
+            text = _split_bom(disk.text)[1]  # the edits, together, are refused: each alone
             for k, key, value in wanted:
                 trial = tomlkit.parse(text)
                 if _applies(doc["layer"], old["layer"], k, key):
@@ -531,7 +547,8 @@ class LayerEdit:
                         continue
                     text = tomlkit.dumps(trial)
         self._undo = [(_edited(t, old, doc), g) for t, g in self._undo]
-        self.disk, self.original, self.doc = disk, disk.text, tomlkit.parse(text)
+        self.bom, original = _split_bom(disk.text)
+        self.disk, self.original, self.doc = disk, original, tomlkit.parse(text)
         self._group, self._last, self._overwrite = None, None, None
         if self.layer is not None and self.layer >= len(self.doc["layer"]):
             self.layer = len(self.doc["layer"]) - 1
@@ -569,12 +586,12 @@ class LayerEdit:
             target.parent.mkdir(parents=True, exist_ok=True)
             if target != self.path:
                 self._copy_references(target.parent)
-            _write_keeping_mode(target, text)
+            _write_keeping_mode(target, self.bom + text)
         except OSError as exc:
             raise EditError(f"cannot save {target}: {exc.strerror or exc}") from None
         load_scene(target)
         self.path, self.original, self._overwrite = target, text, None
-        self.disk = OnDisk(text, on_disk(target).mtime_size)
+        self.disk = OnDisk(self.bom + text, on_disk(target).mtime_size)
         return target
 
     def _copy_references(self, folder: Path) -> None:
@@ -591,7 +608,7 @@ class LayerEdit:
 def _set(table, key: str, value) -> None:
     """Set ``key`` of a layer ``table`` to ``value``, with what a grating's ``edge``
     carries along (:func:`_edge_width`)."""
-    table[key] = value
+    _put(table, key, value)
     if key == "edge" and table.get("type") == "grating":
         _edge_width(table, value)
 
@@ -609,13 +626,41 @@ def _edge_width(table, edge: str) -> None:
     period = float(table.get("period_mm", 0.0))
     narrow = min(duty, 1.0 - duty) * period
     if narrow > 0.0 and not 0.0 < float(table.get("edge_mm", 0.0)) <= narrow:
-        table["edge_mm"] = float(f"{narrow / 2:.3g}")
+        _put(table, "edge_mm", float(f"{narrow / 2:.3g}"))
+
+
+def _put(table, key: str, value) -> None:
+    """Set ``key`` of ``table`` to ``value``, every other line as it was: a new key of a
+    ``[table]`` gets the line ending and indent of the table's keys, and the sub-tables
+    after it keep their indent (tomlkit puts a blank line before the first)."""
+    if key in table or isinstance(table, InlineTable):
+        table[key] = value
+        return
+    body = table.value.body
+    tables = [item for _, item in body if isinstance(item, (Table, AoT))]
+    indents = [_header(item).trivia.indent for item in tables]
+    keys = [item for k, item in body if k is not None and not isinstance(item, (Table, AoT))]
+    table[key] = value
+    for item, indent in zip(tables, indents):
+        _header(item).trivia.indent = indent
+    if keys:
+        added = table.value.item(key).trivia
+        added.indent = keys[-1].trivia.indent
+        added.trail = "\r\n" if keys[-1].trivia.trail.endswith("\r\n") else added.trail
+
+
+def _header(item):
+    """The item whose trivia holds a sub-table's header line: the table, or an array of
+    tables' first."""
+    return item[0] if isinstance(item, AoT) else item
 
 
 def _write_keeping_mode(target: Path, text: str) -> None:
-    """Write ``text`` to ``target`` through a new file in its folder renamed over it;
-    the new file has ``target``'s permission bits, or when there is no ``target`` the
-    mode a file created under the umask gets (0o666 less the umask)."""
+    """Write ``text`` to the file ``target`` is, or leads to through symbolic links,
+    through a new file in that file's folder renamed over it (a link stays a link); the
+    new file has the file's permission bits, or when there is none the mode a file
+    created under the umask gets (0o666 less the umask)."""
+    target = Path(os.path.realpath(target))
     try:
         mode = statmod.S_IMODE(os.stat(target).st_mode)
     except FileNotFoundError:
