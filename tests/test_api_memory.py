@@ -52,7 +52,7 @@ def test_replay_in_memory_is_refused_before_computing_and_to_a_folder_is_not(mem
     trace = frictex.synth_trace("swipe", duration_s=1.0)
     memory_of(1e6)
     with pytest.raises(frictex.InputError, match=r"^the tables kept in memory \(1\.01 s at "
-                                                 r"10000 Hz, up to 1 fingers\) would take "
+                                                 r"10000 Hz, one finger\) would take "
                                                  r"about .* MB of memory, more than 50% of the "
                                                  r"1 MB available: write them into a folder "
                                                  r"instead, a chunk at a time "

@@ -7,7 +7,6 @@ import csv
 import json
 from dataclasses import replace
 
-import numpy as np
 import pytest
 
 from frictex.app.commands.cli import main

@@ -437,7 +437,8 @@ def _tables_size(source: TraceSource, pipeline, fmt: str) -> tuple[float, float,
     fingers = max(1, most_touching(trace))
     need = samples * (row_bytes(command_columns(pipeline.channels, pipeline.actuation.has_phases), fmt)
                       + fingers * row_bytes(friction_columns(pipeline.forces is not None), fmt))
-    return output_s, need, f"{output_s:.6g} s at {pipeline.rate_hz:g} Hz, up to {fingers} fingers"
+    said = "one finger" if fingers == 1 else f"up to {fingers} fingers"
+    return output_s, need, f"{output_s:.6g} s at {pipeline.rate_hz:g} Hz, {said}"
 
 
 def _existing(path: Path) -> Path:
