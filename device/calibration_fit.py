@@ -4,8 +4,10 @@ A point is (w, F_n, mu'): plate amplitude (um), normal force (N), measured relat
 friction. Seed 003, eq 2: ``mu'(w) = (1 - k F_n) exp(-b w) + k F_n``; the fit finds
 (b, k) by bounded least squares. If its residual RMS stays above ``MODEL_TOLERANCE``
 the model does not describe this plate and finger, and :func:`fit_points` also builds a
-calibration table (``device.profile.Calibration``) from the points: binned means along
-amplitude, one row at the points' median force, made strictly decreasing.
+calibration table (``device.profile.Calibration``) from the points: one column per
+measured amplitude (the protocol's levels, however few points each has), or bins of
+neighbouring amplitudes where there are more than ``TABLE_BINS`` of them; one row at the
+points' median force, made strictly decreasing.
 
 :func:`device_toml` writes the result as the ``[device]`` section of a texture file
 (the grammar of ``textures.loader``).
@@ -28,8 +30,11 @@ MODEL_TOLERANCE = 0.02
 #: bounds of the fit: b (1/um), k (1/N)
 B_BOUNDS = (0.05, 20.0)
 K_BOUNDS = (0.0, 5.0)
-#: amplitude bins of a calibration table
+#: most amplitude columns of a calibration table, besides amplitude 0
 TABLE_BINS = 12
+#: least distinct amplitudes above 0 a fit takes: two determine (b, k) at one normal
+#: force, a third checks that the model fits
+MIN_AMPLITUDES = 3
 
 
 def model_jacobian(w_um, normal_n, b_per_um: float, k_per_n: float) -> np.ndarray:
@@ -54,16 +59,20 @@ class Fit:
 
 
 def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> Fit:
-    """Least-squares (b, k) of seed 003, eq 2 on the points; arrays (n,), n >= 3.
+    """Least-squares (b, k) of seed 003, eq 2 on the points; arrays (n,), at least
+    ``MIN_AMPLITUDES`` distinct amplitudes above 0 um among them.
 
-    Raises ValueError when there are too few finite points or no amplitude above 0.
+    Raises InputError (a ValueError) when the usable (finite) points have fewer distinct
+    amplitudes above 0: they cannot determine both b and k and check the fit.
     """
     w, f, m = (np.asarray(a, dtype=np.float64).ravel() for a in (w_um, normal_n, mu))
     good = np.isfinite(w) & np.isfinite(f) & np.isfinite(m) & (w >= 0) & (f > 0)
     w, f, m = w[good], f[good], m[good]
-    if w.size < 3 or not np.any(w > 0):
-        raise InputError(f"{w.size} usable calibration points with {np.count_nonzero(w > 0)} "
-                         f"above 0 um: expected at least 3, some with the plate vibrating")
+    amplitudes = np.unique(w[w > 0]).size
+    if amplitudes < MIN_AMPLITUDES:
+        raise InputError(f"{w.size} usable calibration points at {amplitudes} distinct "
+                         f"amplitudes above 0 um: expected at least {MIN_AMPLITUDES} (two "
+                         f"determine b and k, a third checks the fit)")
 
     def residual(theta):
         return forward_mu(w, f, FrictionParams(theta[0], theta[1])) - m
@@ -81,17 +90,17 @@ def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> 
     return Fit(params=params, residual_rms=rms, n_points=int(w.size), calibration=table)
 
 
-def _table(w: np.ndarray, f: np.ndarray, m: np.ndarray) -> Calibration | None:
-    """One-row table at the median force: mean mu' per amplitude bin, strictly decreasing."""
-    edges = np.linspace(0.0, w.max(), TABLE_BINS + 1)
+def _table(w: np.ndarray, f: np.ndarray, m: np.ndarray) -> Calibration:
+    """One-row table at the median force: mean mu' per amplitude column, strictly
+    decreasing; a column per distinct amplitude above 0 (um), or per run of neighbouring
+    amplitudes where there are more than ``TABLE_BINS`` of them."""
+    vibrating = w > 0
+    levels, level_of = np.unique(w[vibrating], return_inverse=True)
     centres, means = [0.0], [1.0]
-    for lo, hi in zip(edges[1:-1], edges[2:]):
-        inside = (w > lo) & (w <= hi)
-        if np.count_nonzero(inside) >= 3:
-            centres.append(float(w[inside].mean()))
-            means.append(float(m[inside].mean()))
-    if len(centres) < 2:
-        return None
+    for run in np.array_split(np.arange(levels.size), min(TABLE_BINS, levels.size)):
+        inside = np.isin(level_of, run)
+        centres.append(float(w[vibrating][inside].mean()))
+        means.append(float(m[vibrating][inside].mean()))
     mu = np.minimum.accumulate(np.clip(means, 1e-3, 1.0))
     mu = mu - 1e-6 * np.arange(mu.size)  # strictly decreasing, as the table format asks
     return Calibration(amplitudes_um=tuple(centres), forces_n=(float(np.median(f)),),

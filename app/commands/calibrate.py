@@ -98,7 +98,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"{fit.n_points} points in {sweep.duration_s:g} s of sliding; seed 003 eq 2 fit: "
           f"b = {fit.params.b_per_um:.4f} /um, k = {fit.params.asymptote_per_n:.4f} /N, "
           f"residual RMS {fit.residual_rms:.5f} (mu')"
-          + ("" if fit.fits else "; the model does not fit: calibration table written"))
+          + ("" if fit.calibration is None else "; the model does not fit: its measured "
+             f"table ({len(fit.calibration.amplitudes_um)} amplitudes) written"))
     text = device_toml(fit, limit_um, sweep.force_n, fitted=fitted).encode("utf-8")
     write_file(args.out, lambda to: to.write_bytes(text), len(text))
     print(f"wrote {args.out}")
