@@ -31,7 +31,7 @@ import shutil
 from pathlib import Path
 
 from frictex.app.engine.batch import MEASURES, RESERVED, RESULT_COLUMNS, RESULTS, write_results
-from frictex.app.engine.staging import SUMMARY, Staging, is_run_output
+from frictex.app.engine.staging import SUMMARY, Staging, is_run_folder, is_run_output
 from frictex.device.errors import InputError
 from frictex.device.safe_text import escape, quoted
 
@@ -99,7 +99,7 @@ class BatchFolder:
                 _carry_users_files(self.out / name, staged / name)
             elif stopped:
                 _link_tree(self.out / name, staged / name)
-            elif not all(is_run_output(e) for e in os.scandir(self.out / name)):
+            elif not is_run_folder(self.out / name):
                 _link_tree(self.out / name, staged / name)
                 users.append(name)
         if stopped:

@@ -36,7 +36,8 @@ folder.
 
 Leftovers: a staging or set-aside folder whose process is gone is recognised by its
 name and cleared by the next run into the same ``--out`` (:meth:`Staging.begin`), as
-above (only a run's own outputs and copies of the user's files are deleted), which says
+above (only a run's own outputs, folders holding nothing else, such as a killed batch's
+job folders, and copies of the user's files are deleted), which says
 so (a warning in its summary); a staging folder of this process is touched only by the
 :class:`Staging` that made it. A run that is killed therefore never writes a
 ``summary.json`` of its own: its outputs are only ever seen complete, so no summary
@@ -82,6 +83,14 @@ def is_run_output(entry: os.DirEntry | Path) -> bool:
         return False
     return all(_FRAME.fullmatch(e.name) and not e.is_dir(follow_symlinks=False)
                for e in os.scandir(path))
+
+
+def is_run_folder(path: str | Path) -> bool:
+    """Whether ``path`` is a folder (not a link) holding nothing but a run's outputs
+    (:func:`is_run_output`): a run's output folder, such as a batch's job folder."""
+    path = Path(path)
+    return (path.is_dir() and not path.is_symlink()
+            and all(is_run_output(entry) for entry in os.scandir(path)))
 
 
 def _short(name: str) -> str:
@@ -174,7 +183,7 @@ class Staging:
             if kind == _OLD and not self.out.exists():
                 os.rename(path, self.out)  # killed between the two renames: the previous run
                 continue
-            kept = self._clear(path)
+            kept = self._clear(path, leftover=True)
             self.removed.append(path.name if kept is None else f"{path.name} (kept as {kept.name}: "
                                 "it held files not a run's)")
 
@@ -210,14 +219,18 @@ class Staging:
                             "beside the previous run's while they were swapped, and could not "
                             f"be moved into it: kept in {kept}")
 
-    def _clear(self, old: Path) -> Path | None:
-        """Delete ``old`` (a previous run's folder, or a killed run's staging folder): its
+    def _clear(self, old: Path, leftover: bool = False) -> Path | None:
+        """Delete ``old`` (a previous run's folder, or a ``leftover`` of a killed run): its
         run's outputs and the copies of files that are also in ``out``; anything else is
-        moved into ``out``, or ``old`` is kept under a name of its own, returned."""
+        moved into ``out``, or ``old`` is kept under a name of its own, returned. A
+        leftover's folders that hold only a run's outputs (a killed batch's job folders)
+        are deleted too: moved into ``out`` they would be folders not this run's, which
+        its commit refuses."""
         left = []
         for entry in os.scandir(old):
             path = Path(entry.path)
-            if self._own(entry) or _same_file(path, self.out / entry.name):
+            if (self._own(entry) or _same_file(path, self.out / entry.name)
+                    or (leftover and is_run_folder(path))):
                 if entry.is_dir(follow_symlinks=False):
                     shutil.rmtree(path)
                 else:
