@@ -26,7 +26,7 @@ from frictex.device.structures.beam import VALID_WAVELENGTH_IN_THICKNESSES, Mode
 from frictex.device.actuation.travelling import phase_shift_response, ring_wave
 from frictex.device.profile import DrivingForceParams
 from frictex.device.structures.ring import THIN_RING_H_OVER_R, RingResonator
-from frictex.textures.keys import MAX_MODE_ORDER
+from frictex.textures.keys import MAX_MODE_ORDER, MAX_UM
 
 #: crossings listed: L/R within this factor of the ring's own
 _RATIO_WINDOW = 2.0
@@ -64,9 +64,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--phase-step-deg", type=bounded(float, 0.5, 90.0, "degrees"),
                         metavar="DEG", help="with --phase-shift: step of the phase shift from "
                                             "-180 to 180 deg, dividing 180 (default 15)")
-    parser.add_argument("--amplitude-um", type=positive_float, metavar="W",
-                        help="with --phase-shift: amplitude of each mode, um zero-to-peak (default "
-                             "3, seed 004's largest)")
+    parser.add_argument("--amplitude-um", type=bounded(float, 0.01, MAX_UM, "um"), metavar="W",
+                        help="with --phase-shift: amplitude of each mode, um zero-to-peak, "
+                             f"0.01 to {MAX_UM:g} (default 3, seed 004's largest)")
     parser.add_argument("--normal-force-n", type=positive_float, nargs="+", metavar="N",
                         help="with --phase-shift: normal force(s) of the finger in N (default 1 "
                              "0.5, seed 004 Fig. 4c)")
@@ -173,7 +173,7 @@ def _print_phase(phase: dict) -> None:
                                           for f in phase["normal_force_n"]))
     for row in phase["rows"]:
         print(f"{row['phase_deg']:9.1f}  {row['ratio']:6.4f}"
-              + "".join(f"  {round(f, 4) + 0.0:13.4f}" for f in row["force_n"]))
+              + "".join(f"  {f:13.4g}" for f in row["force_n"]))
 
 
 def _check_band(ring: RingResonator, f_min_hz: float, f_max_hz: float) -> None:
