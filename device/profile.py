@@ -84,9 +84,10 @@ class BeamStructure:
     end); ``x0_mm`` the display x of the beam's end x = 0 (the beam runs along the
     display's x axis; display y is across the beam and does not enter its modes).
     ``channel_limit_um`` the largest amplitude each transducer is asked for (um
-    zero-to-peak): seed 000 reached eq 14's 0.41 um at 160 V peak-to-peak and seed 001's
-    amplifiers stop at 300 V peak-to-peak, about 0.75 um. ``method`` and ``rcond`` are
-    ``device.actuation.modal.solve``'s. ``modes``: a measured mode table
+    zero-to-peak): seed 001's amplifiers stop at 300 V peak-to-peak, about 0.75 um if
+    seed 000's 160 V peak-to-peak (Fig. 11) drove exactly eq 14's actuator A amplitude,
+    0.41 um (frictex's assumption: the paper gives the voltage, not that pairing).
+    ``method`` and ``rcond`` are ``device.actuation.modal.solve``'s. ``modes``: a measured mode table
     (``device.structures.measured_modes.MeasuredModes``, one column per mode) that replaces the
     modelled shapes, read from ``modes_path``.
     """
@@ -193,7 +194,10 @@ class ProfileSpec:
 DEFAULT_CARRIER_HZ = 30_000.0
 DEFAULT_UM_PER_VOLT = 0.02
 DEFAULT_VOLTAGE_LIMIT_V = 150.0
-#: seed 000, eq 14: 0.41 um under the fingers at 160 V peak-to-peak (80 V zero-to-peak)
+#: seed 000: eq 14's actuator A amplitude, 0.4093 um (eq 10 from eqs 12-13 for 0.4 um
+#: zero-to-peak under one finger and 0 under the other), over the 160 V peak-to-peak (80 V
+#: zero-to-peak) of Fig. 11; assumes that voltage produced exactly that amplitude, which
+#: the paper does not say
 SEED000_UM_PER_VOLT = 0.41 / 80.0
 #: seed 004, sections III.A and IV.B: its amplifiers at most +-80 V, its amplitude at most
 #: +-3 um (the default 0.02 um/V reached only 1.6 um there)

@@ -2,8 +2,9 @@
 
 Seed 000's beam (modes 16 and 17, actuators 60 mm from each end), wanted amplitudes
 uniform in 0..0.5 um under two fingers (seed 000 eq 14 asks 0.4 um under one finger and
-a node under the other), actuator limit 0.75 um zero-to-peak (seed 000: 160 V peak-to-peak
-gave eq 14's 0.41 um; seed 001's amplifiers stop at 300 V peak-to-peak). Finger pairs:
+a node under the other), actuator limit 0.75 um zero-to-peak (seed 001's amplifiers stop
+at 300 V peak-to-peak; taking seed 000's 160 V peak-to-peak of Fig. 11 to have driven
+exactly eq 14's actuator A amplitude, 0.41 um, which the paper does not say). Finger pairs:
 random over the beam, and near-singular (finger b within 0.5 mm of finger a). For each
 method: time per sample in blocks of 50 (one batched call), mean and worst error under
 the fingers, the share of samples that met a limit, and the largest command step when
