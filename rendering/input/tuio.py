@@ -169,8 +169,9 @@ class TuioDecoder:
     Samples are :class:`RawSample` with x, y normalised to 0..1 (TUIO's units) and no
     pressure. Counters: ``frames``, ``late`` (late frames dropped), ``stray`` (set
     messages for sessions not alive, ignored), ``over_limit`` (cursors beyond
-    ``MAX_CURSORS`` touching at once, and frames of sources beyond ``MAX_SOURCES``,
-    ignored: what the decoder keeps is bounded whatever a sender claims).
+    ``MAX_CURSORS`` touching at once or set in one frame, and frames and commands of
+    sources beyond ``MAX_SOURCES``, ignored: what the decoder keeps is bounded whatever a
+    sender claims, also when it never sends an ``fseq``).
     """
 
     def __init__(self) -> None:
@@ -179,6 +180,7 @@ class TuioDecoder:
         self._alive: dict[str, set[int]] = {}
         self._pending_alive: dict[str, set[int] | None] = {}
         self._pending_set: dict[str, dict[int, tuple[float, float]]] = {}
+        self._waiting_since: dict[str, float] = {}  # source: t of its oldest pending command
         self._pos: dict[tuple[str, int], tuple[float, float]] = {}  # emitted, touching
         self._fingers: dict[tuple[str, int], int] = {}
         self._heard: dict[str, tuple[float, str]] = {}  # source: (last frame's t, origin)
@@ -188,30 +190,52 @@ class TuioDecoder:
         "HOST:PORT", for :meth:`expire`'s report); a bad packet changes nothing."""
         out: list[RawSample] = []
         for command, source, value in _commands(parse_packet(packet)):
-            if command == "alive":
-                self._pending_alive[source] = value
-            elif command == "set":
-                self._pending_set.setdefault(source, {})[value[0]] = value[1:]
-            else:
+            if command == "fseq":
                 self._commit(source, value, t_s, origin, out)
+            elif not self._may_hold(source):
+                self.over_limit += 1
+            else:
+                self._waiting_since.setdefault(source, t_s)
+                if command == "alive":
+                    self._pending_alive[source] = value
+                else:
+                    self._hold_set(source, *value)
         return out
+
+    def _may_hold(self, source: str) -> bool:
+        """Whether a command of ``source`` may wait for its frame's ``fseq``: one of the
+        sources waiting already, or room for one more (at most ``MAX_SOURCES``)."""
+        return source in self._waiting_since or len(self._waiting_since) < MAX_SOURCES
+
+    def _hold_set(self, source: str, sid: int, x: float, y: float) -> None:
+        """Keep the ``set`` of cursor ``sid`` until its frame's ``fseq``: at most
+        ``MAX_CURSORS`` cursors a source (the others counted over the limit), however
+        many sets arrive before an ``fseq`` does, if one ever does."""
+        sets = self._pending_set.setdefault(source, {})
+        if sid in sets or len(sets) < MAX_CURSORS:
+            sets[sid] = (x, y)
+        else:
+            self.over_limit += 1
 
     def expire(self, t_s: float, silence_s: float = SILENCE_S
                ) -> tuple[list[RawSample], list[tuple[str, str, int]]]:
         """Forget every source whose last frame is ``silence_s`` s or more before ``t_s``:
         an UP sample at ``t_s`` for each of its cursors, its frame number and alive list
         dropped (a restarted sender starts afresh). Returns the samples and, for each
-        source that had cursors touching, (origin, source, how many were lifted)."""
+        source that had cursors touching, (origin, source, how many were lifted). Commands
+        that have waited ``silence_s`` s for an ``fseq`` are dropped too."""
         out: list[RawSample] = []
         gone: list[tuple[str, str, int]] = []
+        for source, since in list(self._waiting_since.items()):
+            if t_s - since >= silence_s:
+                self._take_pending(source)
         for source, (last, origin) in list(self._heard.items()):
             if t_s - last < silence_s:
                 continue
             del self._heard[source]
             self._fseq.pop(source, None)
             self._alive.pop(source, None)
-            self._pending_alive.pop(source, None)
-            self._pending_set.pop(source, None)
+            self._take_pending(source)
             before = len(out)
             self._lift_gone(source, set(), t_s, out)
             if len(out) > before:
@@ -220,8 +244,7 @@ class TuioDecoder:
 
     def _commit(self, source: str, fseq: int, t: float, origin: str,
                 out: list[RawSample]) -> None:
-        alive = self._pending_alive.pop(source, None)
-        sets = self._pending_set.pop(source, {})
+        alive, sets = self._take_pending(source)
         if not self._admit(source, fseq):
             return
         self.frames += 1
@@ -231,6 +254,12 @@ class TuioDecoder:
         self._alive[source] = alive
         self._lift_gone(source, alive, t, out)
         self._apply_sets(source, sets, alive, t, out)
+
+    def _take_pending(self, source: str) -> tuple[set[int] | None, dict]:
+        """The ``alive`` ids (None if none came) and the ``set`` positions by id that wait
+        for ``source``'s ``fseq``, no longer kept."""
+        self._waiting_since.pop(source, None)
+        return self._pending_alive.pop(source, None), self._pending_set.pop(source, {})
 
     def _admit(self, source: str, fseq: int) -> bool:
         """Whether frame ``fseq`` of ``source`` is taken (counting it as over the limit or
