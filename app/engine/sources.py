@@ -17,7 +17,8 @@ rows follow the fingers touching at once, however many ids a log has used;
 
 Gaps. A recorded trace may stop reporting for a long time (a log paused, a clock that
 jumped). A gap longer than ``max_gap_s`` between two samples is taken as a lift: every
-finger touching is lifted where the gap starts, and the output skips from
+finger touching is lifted one block after the gap starts (so that the sample there takes
+effect; at the gap's end where that comes first), and the output skips from
 :data:`GAP_KEEP_S` after the gap's start to :data:`GAP_KEEP_S` before its end
 (``source.resume_at(k)`` tells the driver; ``t_s`` jumps there). Counted in
 ``source.gaps``.
@@ -43,10 +44,12 @@ GAP_KEEP_S = 0.1
 
 
 class Gaps:
-    """Gaps between touch samples longer than ``limit_s``, taken as lifts and skipped."""
+    """Gaps between touch samples longer than ``limit_s``, taken as lifts and skipped, of
+    a trace whose ``stats`` (:class:`TraceStats`) say how often it samples."""
 
-    def __init__(self, limit_s: float):
+    def __init__(self, limit_s: float, stats: TraceStats):
         self.limit_s = limit_s
+        self.stats = stats
         self.count = 0
         self.skipped_s = 0.0
 
@@ -54,6 +57,18 @@ class Gaps:
         return {"limit_s": self.limit_s, "count": self.count, "skipped_s": self.skipped_s}
 
     def warnings(self) -> list[str]:
+        return self._below_sampling() + self._taken()
+
+    def _below_sampling(self) -> list[str]:
+        """A limit under the trace's median sample interval: most steps are lifts."""
+        step_s = self.stats.median_step_s()
+        if self.limit_s is None or step_s is None or self.limit_s >= step_s:
+            return []
+        return [f"the longest gap kept ({self.limit_s:g} s, --max-gap) is shorter than the "
+                f"trace's median sample interval ({step_s:.6g} s): most of its steps are taken "
+                "as lifts; give a --max-gap above it"]
+
+    def _taken(self) -> list[str]:
         if not self.count:
             return []
         return [f"{self.count} gaps of more than {self.limit_s:g} s between touch samples were "
@@ -72,7 +87,8 @@ class TraceSource:
     def __init__(self, chunks, until_s: float | None = None, max_gap_s: float | None = MAX_GAP_S):
         self.chunks = chunks
         self.until_s = until_s
-        self.gaps = Gaps(max_gap_s)
+        self.stats = TraceStats()
+        self.gaps = Gaps(max_gap_s, self.stats)
         self._down: set[int] = set()  # fingers touching after the last sample read
         self._last_t: float | None = None
         self._last_xy: dict[int, tuple] = {}  # finger -> (x_mm, y_mm, force_n) last read
@@ -84,7 +100,6 @@ class TraceSource:
         self.slots = FingerSlots()
         self.end_index: int | None = None
         self.next_index = 0
-        self.stats = TraceStats()
 
     def first_time(self) -> float:
         """Time (s) of the first sample: where the output clock starts."""
@@ -98,6 +113,8 @@ class TraceSource:
         """Begin handing out samples for a pipeline with this tracker configuration
         (after reading one chunk more: ``ended`` then says whether the whole trace is in)."""
         self.config = tracker_config
+        if self.pending is not None:  # read by first_time, before a block's length was known
+            self.pending = self._lift_at_gaps(self.pending)
         self.first_time()
         if not self.ended:
             self._read_more()
@@ -113,13 +130,16 @@ class TraceSource:
             self.ended = True
             return
         self.stats.add(chunk)
-        chunk = self._lift_at_gaps(chunk)
+        if self.config is not None:  # else start() does, knowing a block's length
+            chunk = self._lift_at_gaps(chunk)
         self.pending = chunk if self.pending is None else concat_traces([self.pending, chunk])
         if self.config is not None:
             self.applied = apply_index(self.pending.t_s, self.config)
 
     def _lift_at_gaps(self, chunk: Trace) -> Trace:
-        """``chunk`` with an up for every finger touching where a long gap starts."""
+        """``chunk`` with an up for every finger touching one block after a long gap starts
+        (or at its end, if sooner)."""
+        block_s = self.config.quantum / self.config.rate_hz
         limit = self.gaps.limit_s
         times = chunk.t_s if self._last_t is None else np.concatenate(([self._last_t], chunk.t_s))
         starts = np.flatnonzero(np.diff(times) > limit) if limit is not None else []
@@ -133,7 +153,8 @@ class TraceSource:
                 ids = np.array(sorted(down))
                 prev = chunk.slice(0, at + 1) if at >= 0 else None
                 pieces.append(chunk.slice(lo, at + 1))
-                pieces.append(_ups(ids, t_gap, prev, self._last_xy))
+                t_up = min(t_gap + block_s, float(times[g + 1]))
+                pieces.append(_ups(ids, t_up, prev, self._last_xy))
                 lo = at + 1
             self.gaps.count += 1
             self.gaps.skipped_s += max(0.0, float(times[g + 1]) - t_gap - 2 * GAP_KEEP_S)
@@ -275,13 +296,19 @@ class TraceStats:
                 "inverts for a finger that barely presses; give the trace its finger's force_n, "
                 "or leave the column out for 0.5 N"]
 
-    def report(self, path) -> dict:
+    def median_step_s(self) -> float | None:
+        """The median interval (s) between the trace's distinct sample times (over its
+        first ``MAX_STEPS``); None for a single time."""
         steps = np.concatenate(self.steps) if self.steps else np.zeros(0)
+        return float(np.median(steps)) if steps.size else None
+
+    def report(self, path) -> dict:
+        step_s = self.median_step_s()
         # a list bounded like the summary's fingers section (a new id per touch: 100,000)
         return {"path": str(path) if path else None, "samples": self.samples,
                 "fingers": sorted(self.fingers)[:MAX_LISTED], "finger_count": len(self.fingers),
                 "duration_s": self.last_t - self.first_t,
-                "touch_rate_hz": float(1.0 / np.median(steps)) if steps.size else None}
+                "touch_rate_hz": 1.0 / step_s if step_s is not None else None}
 
 
 class QueueSource:
