@@ -125,6 +125,16 @@ def warnings_of(pipeline, tracker, totals: Totals) -> list[str]:
     return warnings
 
 
+def _within_a_block(trace_report: dict) -> list[str]:
+    """The sentence for touches that began and lifted within one output block."""
+    n = trace_report.get("touches_within_a_block", 0)
+    if not n:
+        return []
+    return [f"{n} touches began and lifted within one output block, so no output sample is "
+            "in contact for them (none of their rows in the friction table); a smaller "
+            "--block keeps shorter touches"]
+
+
 def _clipped_warning(layer, n: int, touching: int) -> str:
     """The sentence for ``n`` finger samples (of ``touching``) that ``layer``'s own
     limits clipped: a clip's level sum past 1, a recorded texture's mu_min/mu_max, a
@@ -177,7 +187,7 @@ def summary(scene, trace_report: dict, pipeline, tracker, totals: Totals, fmt: s
                    "actuator_limited": totals.limited, "off_structure": totals.off_structure},
         "clamps": totals.clamps.as_dict(),
         "layer_clipped": dict(totals.layer_clipped),
-        "warnings": warnings_of(pipeline, tracker, totals),
+        "warnings": warnings_of(pipeline, tracker, totals) + _within_a_block(trace_report),
         "fingers": totals.errors.report(),
     }
     others = totals.errors.others()
