@@ -8,12 +8,13 @@ converts recordings of real touch screens to the trace CSV.
 from __future__ import annotations
 
 import argparse
+import os
 
 from frictex.app.commands.argtypes import positive_float
 from frictex.rendering.input.press_synth import press_trace
 from frictex.rendering.input.trace_synth import (HUMAN_AREA_MM, MOTIONS, START_MM, make_motion,
                                                 sample, truth)
-from frictex.app.engine.outfile import write_file
+from frictex.app.engine.outfile import check_writable, write_file
 from frictex.device.errors import InputError
 from frictex.rendering.input.trace_file import format_trace
 
@@ -116,6 +117,18 @@ def _check_limits(args: argparse.Namespace) -> None:
                              f"{rate * args.duration:,.0f} samples; at most {MAX_SAMPLES:,}")
 
 
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Refuse, before making the trace, an -o or --truth that cannot be written (naming
+    the option), and a --truth that is -o's own file (it would overwrite the trace)."""
+    check_writable("-o", args.out, 0)  # the room is checked with the text's size
+    if not args.truth:
+        return
+    check_writable("--truth", args.truth, 0)
+    if os.path.realpath(args.out) == os.path.realpath(args.truth):  # links followed
+        raise InputError(f"--truth {args.truth}: the same file as -o {args.out}; the true path "
+                         "would overwrite the trace: give it a file of its own")
+
+
 def _write(path: str, trace, comment: str | None = None) -> None:
     """The trace CSV at ``path``, room-checked and written whole or not at all
     (``app.engine.outfile``)."""
@@ -132,6 +145,7 @@ def run(args: argparse.Namespace) -> int:
         from frictex.rendering.input.trace_import import run_import
         return run_import(args, _write_text)
     _check_limits(args)
+    _check_outputs(args)
     if args.area is not None and args.motion not in ("human", "human-varied"):
         raise InputError(f"--area: only the human motions wander in an area; a {args.motion} "
                          "starts at --x0, --y0")
