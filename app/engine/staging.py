@@ -69,8 +69,9 @@ _STAGING, _OLD, _KEPT = "frictex-staging", "frictex-old", "frictex-kept"
 _RENAME_EXCHANGE = 2
 #: a longer output folder name is shortened in its staging folders' names
 _LONGEST_NAME = 150
-#: staging folders this process made and has not yet committed or aborted
-_OWNED: set[str] = set()
+#: staging folders this process made and has not yet committed or aborted: the output
+#: folder each stands in for
+_OWNED: dict[str, Path] = {}
 
 
 def is_run_output(entry: os.DirEntry | Path) -> bool:
@@ -91,6 +92,18 @@ def is_run_folder(path: str | Path) -> bool:
     path = Path(path)
     return (path.is_dir() and not path.is_symlink()
             and all(is_run_output(entry) for entry in os.scandir(path)))
+
+
+def shown_path(path: str | Path) -> Path:
+    """``path`` as an error names it: where it is inside a staging folder of this process,
+    the path it will have in the output folder that one stands in for (a batch's job's
+    staging folder inside the batch's: the job's folder in the batch's ``--out``)."""
+    path = Path(path)
+    while True:
+        folder = next((f for f in (path, *path.parents) if str(f) in _OWNED), None)
+        if folder is None:
+            return path
+        path = _OWNED[str(folder)] / path.relative_to(folder)
 
 
 def _short(name: str) -> str:
@@ -163,7 +176,7 @@ class Staging:
         try:
             self.out.parent.mkdir(parents=True, exist_ok=True)
             self.folder.mkdir()
-            _OWNED.add(str(self.folder))
+            _OWNED[str(self.folder)] = self.out
             if self.out.is_dir():
                 _same_access(self.out, self.folder)
         except OSError as exc:
@@ -194,7 +207,7 @@ class Staging:
         try:
             if not self.out.exists():
                 os.rename(self.folder, self.out)
-                _OWNED.discard(str(self.folder))
+                _OWNED.pop(str(self.folder), None)
                 return
             foreign = self._foreign()
             if foreign:
@@ -212,7 +225,7 @@ class Staging:
                 os.rename(self.folder, self.out)
         except OSError as exc:
             raise self._failed(exc, "replace it with the run's outputs") from None
-        _OWNED.discard(str(self.folder))
+        _OWNED.pop(str(self.folder), None)
         kept = self._clear(old)
         if kept is not None:
             raise RunFailed(f"{self.out}: holds the new run's outputs, but files appeared "
@@ -249,7 +262,7 @@ class Staging:
     def abort(self) -> None:
         """Delete the staging folder; ``out`` stays as it was."""
         shutil.rmtree(self.folder, ignore_errors=True)
-        _OWNED.discard(str(self.folder))
+        _OWNED.pop(str(self.folder), None)
 
     def _failed(self, exc: OSError, doing: str) -> OSError:
         """``exc`` (on the staging folder) as an error naming ``out``."""

@@ -52,6 +52,7 @@ from pathlib import Path
 import numpy as np
 
 from frictex.app.engine.csv_text import rows_text
+from frictex.app.engine.staging import shown_path
 from frictex.device.errors import InputError, OutputSpaceError
 
 FORMATS = ("csv", "npz", "parquet")
@@ -82,15 +83,17 @@ def check_room(out_dir: Path, need_bytes: float, what: str,
                hint: str = "write elsewhere, or use --format parquet, format=\"parquet\"") -> None:
     """Raise a one-line :class:`OutputSpaceError` (errno ENOSPC) unless ``out_dir``'s file
     system has room for ``need_bytes`` more and :data:`RESERVE_BYTES` to spare; the
-    message names ``what`` and ends with ``hint``. A file system of no size (proc, sysfs:
+    message names the folder (where it will be: ``staging.shown_path``) and ``what``, and
+    ends with ``hint``. A file system of no size (proc, sysfs:
     nothing can be written there) is bad input, said as such."""
     usage = shutil.disk_usage(out_dir)
+    shown = shown_path(out_dir)  # not a staging folder's name
     if usage.total == 0:
-        raise InputError(f"{out_dir}: a file system that holds no files (such as /proc or "
+        raise InputError(f"{shown}: a file system that holds no files (such as /proc or "
                          "/sys); write the outputs elsewhere")
     free = usage.free
     if need_bytes + RESERVE_BYTES > free:
-        full = OutputSpaceError(f"{out_dir}: {what} need about {_size(need_bytes)} and "
+        full = OutputSpaceError(f"{shown}: {what} need about {_size(need_bytes)} and "
                                 f"{_size(free)} is free (a margin of {_size(RESERVE_BYTES)} "
                                 f"kept); free some space, {hint}")
         full.errno = errno.ENOSPC
