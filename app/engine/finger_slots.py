@@ -41,6 +41,9 @@ class FingerSlots:
         self._seq = 0  # sample number of the first sample of the next assign call
         self._changes: list[tuple[int, int, int]] = []  # (output index, slot, id) to label
         self._id_of: dict[int, int] = {}  # slot -> finger id it carries (labelled so far)
+        #: touches of more than one sample that began and lifted at one output index: in
+        #: contact for no output sample
+        self.brief_touches = 0
 
     def assign(self, samples: Trace, applied: np.ndarray) -> Trace:
         """``samples`` (the next consecutive ones of the trace) with each finger id
@@ -63,6 +66,7 @@ class FingerSlots:
             slot = self._slot_of.pop(fid, None)
             if slot is None:
                 brief = lifts and first_at[s] == last_at[s]
+                self.brief_touches += int(brief and ends[s] - starts[s] > 1)
                 slot = self._free_slot(int(first_at[s]), self._seq + int(order[starts[s]]), brief)
                 self._changes.append((int(first_at[s]), slot, fid))
             if lifts:  # free from the block after the lift's

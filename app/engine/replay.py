@@ -320,7 +320,7 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
             raise
         raise _stopped(exc, link.handed / options.rate_hz, source) from exc
 
-    doc = summary(scene, source.stats.report(trace_path), pipeline, stage.state.tracker, totals,
+    doc = summary(scene, source.report(trace_path), pipeline, stage.state.tracker, totals,
                   options.fmt, tables.files, blocks)
     order = getattr(chunks, "order", None)
     if order is not None:

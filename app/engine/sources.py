@@ -201,7 +201,6 @@ class TraceSource:
         taken = None
         if hi:
             samples, applied = self.pending.slice(0, hi), np.maximum(self.applied[:hi], k * block)
-            self.stats.count_within_a_block(samples, applied)
             taken = self.slots.assign(samples, applied)
             self.pending = self.pending.slice(hi, len(self.pending))
             self.applied = self.applied[hi:]
@@ -218,6 +217,12 @@ class TraceSource:
     def label(self, out):
         """``out`` with the recording's finger ids (module docstring)."""
         return self.slots.label(out)
+
+    def report(self, path) -> dict:
+        """The summary's ``trace`` section: the trace's figures (:class:`TraceStats`) and
+        the touches that began and lifted within one output block (no output sample in
+        contact: ``FingerSlots.brief_touches``)."""
+        return {**self.stats.report(path), "touches_within_a_block": self.slots.brief_touches}
 
     @property
     def done(self) -> bool:
@@ -263,10 +268,6 @@ class TraceStats:
         self.touching = 0
         self.unpressed = 0
         self.least_force_n = np.inf
-        #: touches that began and ended at one block boundary (no output sample in contact)
-        #: and the fingers touching after the samples handed out so far
-        self.touches_within_a_block = 0
-        self._down: set[int] = set()
 
     def add(self, chunk: Trace) -> None:
         times = chunk.t_s if self.last_t is None else np.concatenate(([self.last_t], chunk.t_s))
@@ -283,25 +284,6 @@ class TraceStats:
         self.fingers.update(chunk.fingers)
         self.first_t = float(chunk.t_s[0]) if self.first_t is None else self.first_t
         self.last_t = float(chunk.t_s[-1])
-
-    def count_within_a_block(self, samples: Trace, applied: np.ndarray) -> None:
-        """Count the touches of ``samples`` (the next handed out, taking effect at output
-        indices ``applied``) that begin and lift at the same block boundary: no output
-        sample is in contact for them."""
-        order = np.argsort(samples.finger, kind="stable")
-        ids, up, at = samples.finger[order], samples.event[order] == UP, applied[order]
-        first = np.ones(ids.size, dtype=bool)  # each id's first sample here
-        first[1:] = ids[1:] != ids[:-1]
-        begins = first.copy()  # a touch: one id's consecutive samples up to its up
-        begins[1:] |= up[:-1]
-        start = np.maximum.accumulate(np.where(begins, np.arange(ids.size), 0))
-        ends = np.flatnonzero(up)
-        begun_here = ~(first & np.isin(ids, list(self._down)))[start[ends]]
-        self.touches_within_a_block += int(np.count_nonzero(
-            begun_here & (start[ends] < ends) & (at[start[ends]] == at[ends])))
-        last = np.append(first[1:], True)  # each id's last sample here
-        for fid, lifted in zip(ids[last].tolist(), up[last].tolist()):
-            (self._down.discard if lifted else self._down.add)(fid)
 
     #: the share of touch samples pressing under ``MIN_NORMAL_N`` that is warned about: a
     #: finger landing or lifting passes through a low force for a few samples (the bundled
@@ -332,8 +314,7 @@ class TraceStats:
         return {"path": str(path) if path else None, "samples": self.samples,
                 "fingers": sorted(self.fingers)[:MAX_LISTED], "finger_count": len(self.fingers),
                 "duration_s": self.last_t - self.first_t,
-                "touch_rate_hz": 1.0 / step_s if step_s is not None else None,
-                "touches_within_a_block": self.touches_within_a_block}
+                "touch_rate_hz": 1.0 / step_s if step_s is not None else None}
 
 
 class QueueSource:
