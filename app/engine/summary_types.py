@@ -122,6 +122,9 @@ class TraceInfo:
         Last sample time minus first (s).
     touch_rate_hz : float or None
         Median touch sample rate (Hz).
+    touches_within_a_block : int or None
+        Touches that began and lifted within one output block, so in contact for no
+        output sample (None in summaries before it).
     time_order : TimeOrderInfo or None
         Where time went back; None for a trace given as a Trace object
         (``frictex.read_trace`` sorted it as it read it, and keeps no count).
@@ -135,6 +138,7 @@ class TraceInfo:
     finger_count: int | None = field(default=None, metadata=_OPTIONAL)
     duration_s: float
     touch_rate_hz: float | None
+    touches_within_a_block: int | None = field(default=None, metadata=_OPTIONAL)
     time_order: TimeOrderInfo | None = field(default=None, metadata=_OPTIONAL)
     gaps: GapInfo
 
