@@ -187,11 +187,15 @@ class ProfileSpec:
                 object.__setattr__(self, name, default)
 
 
-#: Drive figures of a profile that gives none. Seed 003 names neither its resonance nor
-#: its drive voltage: 30 kHz sits in the 26-40 kHz band of seeds 000-004's plates, and
-#: 0.02 um/V puts the default 2.5 um limit at 125 V zero-to-peak, inside the 150 V of
-#: seed 001's amplifiers (300 V peak-to-peak). Measure a real plate and set its own.
+#: Drive figures of a profile that gives none (a plugin's). 30 kHz sits in the 26-40 kHz
+#: band of the plates of seeds 000, 001, 002 and 004. Seed 003 names its plate's resonance
+#: (:data:`SEED003_CARRIER_HZ`) but not its drive voltage: 0.02 um/V puts the default
+#: 2.5 um limit at 125 V zero-to-peak, inside the 150 V of seed 001's amplifiers (300 V
+#: peak-to-peak). Measure a real plate and set its own.
 DEFAULT_CARRIER_HZ = 30_000.0
+#: seed 003, section 4.2: "a glass plate 154 x 81 x 1.6 mm^3 resonating at 60750 Hz"; at
+#: the audio output's 0.4 share of the rate it needs a rate above 151.875 kHz (192 kHz)
+SEED003_CARRIER_HZ = 60_750.0
 DEFAULT_UM_PER_VOLT = 0.02
 DEFAULT_VOLTAGE_LIMIT_V = 150.0
 #: seed 000: eq 14's actuator A amplitude, 0.4093 um (eq 10 from eqs 12-13 for 0.4 um
@@ -213,7 +217,7 @@ PROFILES: Registry[ProfileSpec] = Registry("device profile", "frictex.profiles",
                                            expect=Expect.instance_of(ProfileSpec))
 PROFILES.register(DEFAULT_PROFILE, ProfileSpec(
     "single-mode glass plate of seed 003, one channel", "single-mode", friction_loop=True,
-    carrier_hz=DEFAULT_CARRIER_HZ, amplitude_is_drive=True))
+    carrier_hz=SEED003_CARRIER_HZ, amplitude_is_drive=True))
 PROFILES.register("beam-seed000", ProfileSpec(
     "free-free aluminium beam of seed 000, modes 16 and 17, two actuators", "modal",
     structure=BeamStructure, carrier_hz=28_000.0, um_per_volt=SEED000_UM_PER_VOLT,

@@ -13,6 +13,7 @@ from frictex.device.audio.options import AudioArgs, make_plan, parse_arg
 from frictex.device.audio.ring import FrameRing, Player
 from frictex.device.audio.synth import AudioSynth, carrier_cycles
 from frictex.device.errors import InputError
+from frictex.device.profile import DEFAULT_PROFILE, PROFILES
 
 RATE = 10_000.0
 FS = 192_000
@@ -61,7 +62,7 @@ def test_arg_parser_takes_any_text_or_says_why(text):
 
 
 def test_rate_must_fit_the_carrier():
-    assert make_plan(parse_arg("rate=96000"), 1, RATE).audio_rate == 96000  # 30 kHz < 38.4
+    assert make_plan(parse_arg("rate=96000,profile=beam-seed000"), 2, RATE).audio_rate == 96000
     with pytest.raises(InputError, match="below 0.4 of the rate"):
         make_plan(parse_arg("rate=96000,profile=ring-seed004"), 2, RATE)  # 39.5 kHz
     assert make_plan(parse_arg("rate=48000,envelope"), 1, RATE).envelope  # no carrier
@@ -186,8 +187,15 @@ def test_bad_blocks():
 R = 384
 
 
+def carrier_step(level: float) -> float:
+    """The largest change between two samples of the default profile's carrier at
+    ``level`` (full scale): ``2 level sin(pi f / fs)``."""
+    return 2 * level * np.sin(np.pi * PROFILES.get(DEFAULT_PROFILE).carrier_hz / FS)
+
+
 def ring_with(frames: int, level: float = 0.5):
-    """A ring holding ``frames`` of a 30 kHz carrier at ``level``, with its fade."""
+    """A ring holding ``frames`` of the default profile's carrier at ``level``, with its
+    fade."""
     p = plan(ramp_ms=R / FS * 1e3)
     s = AudioSynth(p)
     ring = FrameRing(8192, 1, p.ramp_frames)
@@ -214,7 +222,7 @@ def test_starving_callback_ramps_to_zero_and_counts():
     assert np.max(np.abs(out[tail + R:])) < 0.01  # below 1 % of full scale after the ramp
     assert np.max(np.abs(out[tail - 200:tail])) > 0.45  # it was playing at 0.5
     # the fade continues the carrier: no step bigger than the carrier's own slope
-    assert np.max(np.abs(np.diff(out[:tail + R]))) <= 0.5 * 2 * np.pi * 30_000 / FS * 1.01
+    assert np.max(np.abs(np.diff(out[:tail + R]))) <= carrier_step(0.5) * 1.01
     np.testing.assert_array_equal(player.tap[:6000, 0], out)
     assert player.marks[0] == tail
 
@@ -233,7 +241,7 @@ def test_late_frames_are_dropped_counted_and_the_stream_ramps_back_in():
     assert player.played + player.late == ring.tail  # every frame accounted for
     resumed = ring.tail - before - starved
     assert resumed > 0
-    assert np.max(np.abs(np.diff(out[:resumed]))) <= 0.5 * 2 * np.pi * 30_000 / FS * 1.01
+    assert np.max(np.abs(np.diff(out[:resumed]))) <= carrier_step(0.5) * 1.01
 
 
 def test_emergency_stop_ramps_and_drops_the_rest():
@@ -244,7 +252,7 @@ def test_emergency_stop_ramps_and_drops_the_rest():
     out = play(player, 2048)
     assert np.max(np.abs(out[R:])) == 0.0
     steps = np.abs(np.diff(np.concatenate([first, out])))
-    assert np.max(steps) <= 0.5 * 2 * np.pi * 30_000 / FS * 1.01
+    assert np.max(steps) <= carrier_step(0.5) * 1.01
     assert player.played + player.stopped == ring.tail
 
 

@@ -22,7 +22,9 @@ A PATH or NAME cannot contain a comma. The rate is a whole number of Hz from 8 k
 768 kHz, the rates sound cards offer (a WAV file would take more, but nothing would play
 it; RIFF's 32-bit byte rate ends at 4.29 GHz / 4 bytes / channels). The rate must keep the
 carrier below 0.4 of it (192 kHz: up to 76.8 kHz; 96 kHz: up to 38.4 kHz; 768 kHz: up to
-307.2 kHz, the highest carrier); envelope mode has no carrier.
+307.2 kHz, the highest carrier); envelope mode has no carrier. The default profile's plate
+(seed 003) resonates at 60.75 kHz, so it needs a rate above 151.875 kHz: 48 and 96 kHz are
+refused in one line naming the carrier, its profile and the least rate that carries it.
 
 The plate must be still within :data:`MAX_STOP_MS` (50 ms) of a stop, as a serial
 device's ``watchdog_ms + ramp_ms`` (PROTOCOL.md 5.3): an emergency stop or a starving
@@ -202,8 +204,9 @@ def make_plan(args: AudioArgs, channels: int, rate_hz: float, requested_profile=
                          f"{top_carrier:g} Hz, {MAX_CARRIER_SHARE:g} of the highest rate "
                          f"sound cards offer ({MAX_RATE_HZ} Hz)")
     if not args.envelope and carrier >= MAX_CARRIER_SHARE * audio_rate:
-        raise InputError(f"audio device: carrier {carrier:g} Hz at rate={audio_rate} Hz: the "
-                         f"carrier must stay below {MAX_CARRIER_SHARE:g} of the rate (use "
+        named = "" if args.carrier is not None else f" (profile {name})"
+        raise InputError(f"audio device: carrier {carrier:g} Hz{named} at rate={audio_rate} Hz:"
+                         f" the carrier must stay below {MAX_CARRIER_SHARE:g} of the rate (use "
                          f"rate={math.floor(carrier / MAX_CARRIER_SHARE) + 1} or more)")
     if audio_rate < rate_hz:
         raise InputError(f"audio device rate={audio_rate} Hz: below the pipeline's "
