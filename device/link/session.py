@@ -40,6 +40,8 @@ HELLO_FIRST_S = 0.1
 HELLO_MAX_S = 1.0
 #: a recovery or reconnect handshake unanswered this long: the port is taken as lost (s)
 RESYNC_TIMEOUT_S = 1.0
+#: the most ``watchdog_ms + ramp_ms`` of a device this host drives (ms, PROTOCOL.md 5.3)
+MAX_STOP_MS = 50
 #: a connected device that sends nothing valid, or takes no block while blocks wait, for
 #: this long is handshaken again (s)
 SILENCE_S = 0.5
@@ -107,6 +109,19 @@ class LinkStalled(LinkError):
     def __init__(self, message: str, progress: LinkProgress | None = None):
         super().__init__(message)
         self.progress = progress
+
+
+def _watchdog_problems(info: p.Info) -> list[str]:
+    """How ``info``'s watchdog breaks PROTOCOL.md 5.3: it must trip (``watchdog_ms`` at
+    least 1) and leave the plate still within :data:`MAX_STOP_MS` of the host falling
+    silent (``watchdog_ms + ramp_ms``); the host heartbeats every ``watchdog_ms / 5``."""
+    if info.watchdog_ms < 1:
+        return [f"watchdog_ms {info.watchdog_ms}: a watchdog that never trips"]
+    if info.watchdog_ms + info.ramp_ms > MAX_STOP_MS:
+        return [f"watchdog_ms {info.watchdog_ms} + ramp_ms {info.ramp_ms} over "
+                f"{MAX_STOP_MS} ms (PROTOCOL.md 5.3: the plate must be still within "
+                f"{MAX_STOP_MS} ms of the host falling silent)"]
+    return []
 
 
 class HostSession:
@@ -298,7 +313,12 @@ class HostSession:
                          f"({self._hellos} Hellos); is it a frictex device?")
 
     def _check(self, info: p.Info) -> LinkError | None:
-        problems = []
+        """Why the device that sent ``info`` cannot be driven by this host, or None."""
+        if info.protocol_version < 1:
+            return LinkError(f"{self.label} ({info.name or 'unnamed'}) says protocol version "
+                             f"{info.protocol_version}; this host speaks 1 to "
+                             f"{p.PROTOCOL_VERSION}")
+        problems = _watchdog_problems(info)
         if info.channels != self.channels:  # a Block carries exactly Info.channels (4.3)
             problems.append(f"{info.channels} channel(s), the pipeline sends {self.channels}")
         if self.phases and not info.has_phases:
