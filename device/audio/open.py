@@ -5,13 +5,18 @@
 from __future__ import annotations
 
 from frictex.device.audio.options import make_plan, parse_arg
+from frictex.device.errors import InputError
 
 
 def open_audio(arg: str, request):
     """Open the audio output ``arg`` describes for a ``device.link.devices.DeviceRequest``:
     a :class:`~device.audio.wav.WavOutput` for ``wav:PATH``, else a
     :class:`~device.audio.stream.StreamOutput`. The drive figures come from the
-    request's ``profile`` (the scene's device profile) when it carries one."""
+    request's ``profile`` (the scene's device profile) when it carries one. Refuses the
+    request's ``faults``: they are injected into a serial link, which audio has not."""
+    if getattr(request, "faults", None) is not None:
+        raise InputError(f"audio:{arg}: faults are injected into a serial link (sim or a "
+                         "port); audio has none")
     args = parse_arg(arg)
     plan = make_plan(args, request.channels, request.rate_hz, getattr(request, "profile", None))
     if args.wav_path is not None:

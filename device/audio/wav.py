@@ -11,7 +11,9 @@ All or nothing, as a replay's tables: the stream is written under ``PATH.partial
 renamed to PATH when it ends (:meth:`WavOutput.close`); a run that fails or is stopped
 (:meth:`WavOutput.abort`, a refused closed loop included) removes it and leaves an earlier
 PATH as it was. A PATH that is a character device or a FIFO (``/dev/null``, a pipe) is
-written directly.
+written directly; one that cannot be rewound (a pipe) keeps a header declaring the most a
+WAV file holds, as streamed WAV does. A write the file system refuses (a full disk,
+``/dev/full``) is a DeviceError naming the file: ``audio:wav:PATH: cannot write it: ...``.
 """
 
 from __future__ import annotations
@@ -56,22 +58,39 @@ class WavOutput(AudioOutput):
         except OSError as exc:
             raise InputError(f"audio device wav:{path}: cannot write it: "
                              f"{exc.strerror or exc}") from None
-        self._file.write(wav_header(plan.channels, plan.audio_rate, 0))
+        # a stream cannot be rewound to its header: it declares the most a file holds
+        declared = 0 if self._partial is not None else _MAX_DATA // (plan.channels * 4)
+        self._write(wav_header(plan.channels, plan.audio_rate, declared))
         self._frames = 0
+
+    def _write(self, data: bytes) -> None:
+        """Write ``data``; a write the file system refuses (a full disk) is a DeviceError
+        naming the file."""
+        try:
+            self._file.write(data)
+        except OSError as exc:
+            raise self._cannot_write(exc) from None
+
+    def _cannot_write(self, exc: OSError) -> DeviceError:
+        return DeviceError(f"{self.label}: cannot write it: {exc.strerror or exc}")
 
     def _emit(self, frames: np.ndarray) -> None:
         if (self._frames + frames.shape[0]) * self.channels * 4 > _MAX_DATA:
             raise DeviceError(f"{self.label}: the stream outgrows a WAV file's 4 GiB")
-        self._file.write(np.ascontiguousarray(frames, dtype="<f4").tobytes())
+        self._write(np.ascontiguousarray(frames, dtype="<f4").tobytes())
         self._frames += frames.shape[0]
         self.commanded_frames += frames.shape[0]
 
     def _end(self, tail: np.ndarray) -> None:
         try:
             self._emit(tail)
-            self._file.seek(0)
-            self._file.write(wav_header(self.channels, self.plan.audio_rate, self._frames))
+            if self._file.seekable():
+                self._file.seek(0)
+                self._write(wav_header(self.channels, self.plan.audio_rate, self._frames))
             self._file.close()
+        except OSError as exc:  # the buffered rest refused at close
+            self._discard()
+            raise self._cannot_write(exc) from None
         except BaseException:
             self._discard()
             raise
@@ -86,7 +105,10 @@ class WavOutput(AudioOutput):
             self._discard()
 
     def _discard(self) -> None:
-        self._file.close()
+        try:
+            self._file.close()
+        except OSError:  # its buffered rest refused (a full disk): nothing of it is kept
+            pass
         if self._partial is not None:
             self._partial.unlink(missing_ok=True)
 
