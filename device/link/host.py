@@ -217,12 +217,26 @@ class CommandSink:
                 raise s.failure
             if self._closed or s.close_requested:
                 raise LinkError(f"{self.label}: send after close")
+            too_small = self._buffer_problem(len(counts))
+            if too_small is not None:
+                raise LinkError(too_small)
             s.counts["clamped_samples"] += clamped
             s.ledger.command(len(counts))
         step = p.max_block_samples(self.channels, self.phases)
         for lo in range(0, len(counts), step):
             self._put((start_index + lo, counts[lo:lo + step],
                        None if wire_phases is None else wire_phases[lo:lo + step]))
+
+    def _buffer_problem(self, block: int) -> str | None:
+        """Why the device's buffer cannot take a stream of ``block``-sample blocks (it
+        must hold two: one playing while the next arrives), or None; the caller holds
+        the lock."""
+        info = self._session.info
+        if info is None or info.buffer_samples >= 2 * block:
+            return None
+        return (f"{self.label} ({info.name or 'unnamed'}) buffers {info.buffer_samples} "
+                f"samples, less than two of the pipeline's {block}-sample blocks: it would "
+                "overflow or run dry between them")
 
     def _has_room(self) -> bool:
         return self._session.connected and len(self._session.queue) < self._capacity
@@ -395,12 +409,15 @@ class CommandSink:
         with self._cond:
             return self._session.index_map.device_index(int(index))
 
-    def unplayed_share(self) -> float:
+    def unplayed_share(self) -> float | None:
         """Commanded samples known never to have played, as a share of all commanded (0
-        when nothing was commanded). Final once :meth:`close` has returned."""
+        when nothing was commanded; None when a version 1 device leaves causes unknown).
+        Final once :meth:`close` has returned."""
         with self._cond:
             ledger = self._session.ledger
-            return ledger.unplayed / ledger.commanded if ledger.commanded else 0.0
+            if not ledger.commanded:
+                return 0.0
+            return None if ledger.unplayed is None else ledger.unplayed / ledger.commanded
 
     def status(self) -> dict:
         """JSON-able counters: see PROTOCOL.md section 6 for their meaning."""
@@ -442,6 +459,7 @@ class CommandSink:
             "commanded_samples": commanded,
             "played_samples": played,
             "unplayed_samples": sum(v for v in breakdown.values() if v is not None),
+            "unplayed_known": all(v is not None for v in breakdown.values()),
             "unplayed_by_cause": breakdown,
             "device_errors": {k: v for k, v in dict(s.errors).items() if v},
             "latency_ms_p50": float(np.percentile(rtt, 50)) if rtt.size else None,
@@ -481,6 +499,34 @@ class CommandSink:
             s.close_requested = True
             self._end_stalls("the close")
         self._finish(interruptible=True)
+        for text in self._uncounted():
+            self._warn(text)
+
+    def _uncounted(self) -> list[str]:
+        """What the closed stream's counts leave out, one sentence each: watchdog trips of
+        a device that does not count what they dropped (protocol version 1), and
+        underruns of a paced stream (the plate fell silent, though every sample played
+        in the end); both counted from this host's first Status (the device counts
+        since it powered up)."""
+        s = self._session
+        with self._cond:
+            st, first, unplayed = s.status, s.first_status, s.ledger.unplayed
+        if st is None:
+            return []
+        trips, underruns = ((st.watchdog_trips - first.watchdog_trips) % 2**32,
+                            (st.underruns - first.underruns) % 2**32)
+        said = []
+        if trips and unplayed is None:
+            said.append(f"the device tripped its watchdog {trips} time(s) (the "
+                        f"plate stopped) and, speaking protocol version {s.version}, does not "
+                        "count the samples it dropped: unplayed_samples counts only the known "
+                        "causes and --max-unplayed cannot be checked")
+        if self.paced and underruns:
+            buffered = f", {s.info.buffer_samples} samples," if s.info else ""
+            said.append(f"the device's buffer{buffered} ran empty {underruns} time(s) "
+                        "during the paced replay (underruns): the plate fell silent until "
+                        "the next block came")
+        return said
 
     def abort(self) -> None:
         """Stop the plate now (an interrupted or failed run): drop what is queued

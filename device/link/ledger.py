@@ -251,6 +251,8 @@ class Ledger:
         return None if partial else device["played"]
 
     @property
-    def unplayed(self) -> int:
-        """Commanded samples known not to have played (the known causes summed)."""
-        return sum(v for v in self.breakdown().values() if v is not None)
+    def unplayed(self) -> int | None:
+        """Commanded samples that never played (every cause summed); None when a cause is
+        unknown (a version 1 device: ``flushed`` and ``lost``)."""
+        causes = self.breakdown().values()
+        return None if None in causes else sum(causes)

@@ -158,6 +158,9 @@ class HostSession:
         self.forces = ForceHistory()
         self.forces_lock = threading.Lock()
         self.status: p.Status | None = None
+        #: the first Status of this host: the baseline of the device's counters, which
+        #: count since it powered up (PROTOCOL.md 6.4)
+        self.first_status: p.Status | None = None
         self.snapshot: Snapshot | None = None
         self.info: p.Info | None = None
         self.version = 1
@@ -401,6 +404,8 @@ class HostSession:
         self._last_rx = now
         if isinstance(msg, p.Status):
             self.status = msg
+            if self.first_status is None:
+                self.first_status = msg
             if self.phase == "session" and self._last_status is not None:
                 self.longest_status_gap_s = max(self.longest_status_gap_s,
                                                 now - self._last_status)

@@ -1,0 +1,56 @@
+"""What a paced replay's counts leave out is said on stderr when the link closes: a
+protocol-1 device's watchdog trips (it does not count what they dropped: the run read
+0 unplayed and passed), and underruns (sim:buffer=200 ran dry 101 times, exit 0, no
+word). A device buffer under two of the pipeline's blocks is refused (sim:buffer=2 lost
+96 % as overflow; buffer=50 ran dry 400 times)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+SCENE, TRACE = "grating-5mm", "swipe-40mms-50hz"
+
+
+def replay(tmp_path, *device_args):
+    """(exit status, stderr, summary or None) of a replay to ``device_args``."""
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, "-m", "frictex", "replay", SCENE, TRACE, "--out",
+                           str(out), "--quiet", *device_args],
+                          capture_output=True, text=True, timeout=120)
+    summary = json.loads((out / "summary.json").read_text()) if out.exists() else None
+    return done.returncode, done.stderr, summary
+
+
+def test_watchdog_trips_of_a_version_1_device_are_said_uncountable(tmp_path):
+    code, err, summary = replay(tmp_path, "--device", "sim:protocol=1",
+                                "--faults", "trip@1")
+    assert summary["device"]["watchdog_trips"] == 1
+    assert summary["device"]["unplayed_known"] is False
+    assert ("the device tripped its watchdog 1 time(s) (the plate stopped) and, speaking "
+            "protocol version 1, does not count the samples it dropped: unplayed_samples "
+            "counts only the known causes and --max-unplayed cannot be checked") in err
+
+
+def test_a_version_1_device_without_trips_says_nothing(tmp_path):
+    code, err, summary = replay(tmp_path, "--device", "sim:protocol=1")
+    assert code == 0 and "watchdog" not in err and "warning" not in err
+
+
+def test_underruns_of_a_paced_replay_are_said(tmp_path):
+    code, err, summary = replay(tmp_path, "--device", "sim:buffer=200")
+    runs = summary["device"]["underruns"]
+    assert runs > 0
+    assert (f"the device's buffer, 200 samples, ran empty {runs} time(s) during the paced "
+            "replay (underruns)") in err
+
+
+@pytest.mark.parametrize("buffer", [2, 50, 99])
+def test_a_buffer_under_two_blocks_is_refused(tmp_path, capfd, buffer):
+    code, err, summary = replay(tmp_path, "--device", f"sim:buffer={buffer}")
+    assert code == 1 and summary is None
+    assert (f"sim:// (frictex sim-device) buffers {buffer} samples, less than two of the "
+            "pipeline's 50-sample blocks: it would overflow or run dry between them") in err
