@@ -1,4 +1,5 @@
-"""What a paced replay's counts leave out is said on stderr when the link closes: a
+"""What a paced replay's counts leave out is said in summary.json's warnings (printed on
+stderr with the others, except with --quiet): a
 protocol-1 device's watchdog trips (it does not count what they dropped: the run read
 0 unplayed and passed), and underruns (sim:buffer=200 ran dry 101 times, exit 0, no
 word). A device buffer under two of the pipeline's blocks is refused (sim:buffer=2 lost
@@ -28,24 +29,26 @@ def replay(tmp_path, *device_args):
 def test_watchdog_trips_of_a_version_1_device_are_said_uncountable(tmp_path):
     code, err, summary = replay(tmp_path, "--device", "sim:protocol=1",
                                 "--faults", "trip@1")
-    assert summary["device"]["watchdog_trips"] == 1
+    assert summary["device"]["watchdog_trips_in_run"] == 1
     assert summary["device"]["unplayed_known"] is False
-    assert ("the device tripped its watchdog 1 time(s) (the plate stopped) and, speaking "
+    said = ("the device tripped its watchdog 1 time(s) (the plate stopped) and, speaking "
             "protocol version 1, does not count the samples it dropped: unplayed_samples "
-            "counts only the known causes and --max-unplayed cannot be checked") in err
+            "counts only the known causes and --max-unplayed cannot be checked")
+    assert said in summary["warnings"]
 
 
 def test_a_version_1_device_without_trips_says_nothing(tmp_path):
     code, err, summary = replay(tmp_path, "--device", "sim:protocol=1")
-    assert code == 0 and "watchdog" not in err and "warning" not in err
+    assert code == 0 and not any("watchdog" in w for w in summary["warnings"])
 
 
 def test_underruns_of_a_paced_replay_are_said(tmp_path):
     code, err, summary = replay(tmp_path, "--device", "sim:buffer=200")
-    runs = summary["device"]["underruns"]
+    runs = summary["device"]["underruns_in_run"]
     assert runs > 0
-    assert (f"the device's buffer, 200 samples, ran empty {runs} time(s) during the paced "
-            "replay (underruns)") in err
+    said = (f"the device's buffer (200 samples) ran empty {runs} time(s) during the paced "
+            "replay (underruns): the plate fell silent until the next block came")
+    assert said in summary["warnings"]
 
 
 @pytest.mark.parametrize("buffer", [2, 50, 99])

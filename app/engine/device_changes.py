@@ -21,7 +21,7 @@ def device_warnings(device: dict, max_amplitude_um: float) -> list[str]:
     ``device`` section (``device.link.host.CommandSink.status``,
     ``device.audio.output.AudioOutput.status``); ``max_amplitude_um``: the largest command
     (um, ``counts.max_amplitude_um``)."""
-    warnings = _unplayed(device)
+    warnings = _unplayed(device) + _uncounted(device)
     audio = device.get("audio") or {}
     clamped = device.get("clamped_samples") or 0
     if clamped:
@@ -64,6 +64,27 @@ def _unplayed(status: dict) -> list[str]:
                        for cause, n in status.get("unplayed_by_cause", {}).items() if n)
     return [f"{unplayed} of {commanded} commanded samples ({unplayed / commanded:.2%}) were "
             f"never played by the device ({causes})"]
+
+
+def _uncounted(status: dict) -> list[str]:
+    """What a link's counts leave out (``device.link.host.CommandSink.status``), one
+    sentence each: watchdog trips of a device that does not count what they dropped
+    (protocol version 1), and underruns of a paced stream (the plate fell silent, though
+    every sample played in the end), both counted from the host's first Status."""
+    said = []
+    trips = status.get("watchdog_trips_in_run") or 0
+    if trips and status.get("unplayed_known") is False:
+        said.append(f"the device tripped its watchdog {trips} time(s) (the plate stopped) "
+                    f"and, speaking protocol version {status.get('protocol_version')}, does "
+                    "not count the samples it dropped: unplayed_samples counts only the "
+                    "known causes and --max-unplayed cannot be checked")
+    underruns = status.get("underruns_in_run") or 0
+    if status.get("paced") and underruns:
+        buffered = (status.get("device") or {}).get("buffer_samples")
+        said.append(f"the device's buffer{f' ({buffered} samples)' if buffered else ''} ran "
+                    f"empty {underruns} time(s) during the paced replay (underruns): the "
+                    "plate fell silent until the next block came")
+    return said
 
 
 def unplayed_problem(status: dict | None, max_unplayed: float, option: str) -> str | None:

@@ -481,6 +481,10 @@ class CommandSink:
                 "watchdog_trips": st.watchdog_trips, "device_clamped": st.clamped,
                 "measured_um": list(st.measured_um) if st.measured_um else None,
                 "force_n": st.force_n})
+            # the device counts since it powered up; these since this host's first Status
+            first = s.first_status
+            out["watchdog_trips_in_run"] = (st.watchdog_trips - first.watchdog_trips) % 2**32
+            out["underruns_in_run"] = (st.underruns - first.underruns) % 2**32
         else:
             out["underruns"] = None
         return out
@@ -499,34 +503,6 @@ class CommandSink:
             s.close_requested = True
             self._end_stalls("the close")
         self._finish(interruptible=True)
-        for text in self._uncounted():
-            self._warn(text)
-
-    def _uncounted(self) -> list[str]:
-        """What the closed stream's counts leave out, one sentence each: watchdog trips of
-        a device that does not count what they dropped (protocol version 1), and
-        underruns of a paced stream (the plate fell silent, though every sample played
-        in the end); both counted from this host's first Status (the device counts
-        since it powered up)."""
-        s = self._session
-        with self._cond:
-            st, first, unplayed = s.status, s.first_status, s.ledger.unplayed
-        if st is None:
-            return []
-        trips, underruns = ((st.watchdog_trips - first.watchdog_trips) % 2**32,
-                            (st.underruns - first.underruns) % 2**32)
-        said = []
-        if trips and unplayed is None:
-            said.append(f"the device tripped its watchdog {trips} time(s) (the "
-                        f"plate stopped) and, speaking protocol version {s.version}, does not "
-                        "count the samples it dropped: unplayed_samples counts only the known "
-                        "causes and --max-unplayed cannot be checked")
-        if self.paced and underruns:
-            buffered = f", {s.info.buffer_samples} samples," if s.info else ""
-            said.append(f"the device's buffer{buffered} ran empty {underruns} time(s) "
-                        "during the paced replay (underruns): the plate fell silent until "
-                        "the next block came")
-        return said
 
     def abort(self) -> None:
         """Stop the plate now (an interrupted or failed run): drop what is queued
