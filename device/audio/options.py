@@ -45,6 +45,7 @@ import math
 from dataclasses import dataclass
 
 from frictex.device.errors import InputError
+from frictex.device.link.protocol import MAX_STOP_MS  # one callback block plus the ramp
 from frictex.device.profile import DEFAULT_PROFILE, PROFILES
 
 DEFAULT_RATE_HZ = 192_000
@@ -59,9 +60,6 @@ MAX_BLOCKSIZE = 8192
 DEFAULT_BUFFER_MS = 100.0
 #: most frames queued ahead of the callback (ms): a stop with drain plays them out first
 MAX_BUFFER_MS = 1000.0
-#: the plate is still within this of a stop (ms): one callback block plus the ramp, as a
-#: serial device's watchdog_ms + ramp_ms (PROTOCOL.md 5.3)
-MAX_STOP_MS = 50.0
 #: start, stop, starvation and emergency-stop ramps (ms): within a friction step the
 #: finger feels (2.3-2.4 ms, Gueorguiev 2019), and 384 frames at 192 kHz
 DEFAULT_RAMP_MS = 2.0

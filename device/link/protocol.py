@@ -38,6 +38,9 @@ from frictex.device.errors import DeviceError
 
 #: the newest version this module speaks (it speaks every version from 1)
 PROTOCOL_VERSION = 4
+#: the longest a device may take to be still after the host falls silent (ms):
+#: its ``watchdog_ms + ramp_ms`` (section 5.3); an audio output's block and ramp too
+MAX_STOP_MS = 50
 #: sample numbers are u64 and wrap modulo this (PROTOCOL.md 4.3)
 INDEX_MODULUS = 2 ** 64
 #: one count of a wire amplitude (um, zero-to-peak)

@@ -40,8 +40,6 @@ HELLO_FIRST_S = 0.1
 HELLO_MAX_S = 1.0
 #: a recovery or reconnect handshake unanswered this long: the port is taken as lost (s)
 RESYNC_TIMEOUT_S = 1.0
-#: the most ``watchdog_ms + ramp_ms`` of a device this host drives (ms, PROTOCOL.md 5.3)
-MAX_STOP_MS = 50
 #: a connected device that sends nothing valid, or takes no block while blocks wait, for
 #: this long is handshaken again (s)
 SILENCE_S = 0.5
@@ -113,14 +111,14 @@ class LinkStalled(LinkError):
 
 def _watchdog_problems(info: p.Info) -> list[str]:
     """How ``info``'s watchdog breaks PROTOCOL.md 5.3: it must trip (``watchdog_ms`` at
-    least 1) and leave the plate still within :data:`MAX_STOP_MS` of the host falling
-    silent (``watchdog_ms + ramp_ms``); the host heartbeats every ``watchdog_ms / 5``."""
+    least 1) and leave the plate still within ``protocol.MAX_STOP_MS`` of the host
+    falling silent (``watchdog_ms + ramp_ms``); the host heartbeats every ``watchdog_ms / 5``."""
     if info.watchdog_ms < 1:
         return [f"watchdog_ms {info.watchdog_ms}: a watchdog that never trips"]
-    if info.watchdog_ms + info.ramp_ms > MAX_STOP_MS:
+    if info.watchdog_ms + info.ramp_ms > p.MAX_STOP_MS:
         return [f"watchdog_ms {info.watchdog_ms} + ramp_ms {info.ramp_ms} over "
-                f"{MAX_STOP_MS} ms (PROTOCOL.md 5.3: the plate must be still within "
-                f"{MAX_STOP_MS} ms of the host falling silent)"]
+                f"{p.MAX_STOP_MS} ms (PROTOCOL.md 5.3: the plate must be still within "
+                f"{p.MAX_STOP_MS} ms of the host falling silent)"]
     return []
 
 

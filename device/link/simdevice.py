@@ -110,10 +110,11 @@ class DeviceConfig:
                    f"at most {NAME_MAX} UTF-8 bytes (the firmware's FW_NAME_MAX)"),
                   (0 < self.bandwidth_hz < self.rate_hz / 2, "bandwidth_hz",
                    "positive and below half the sample rate"),
-                  (1 <= self.watchdog_ms <= 49, "watchdog_ms", "in [1, 49] ms"),
-                  (0 <= self.ramp_ms <= 50 - self.watchdog_ms, "ramp_ms",
-                   f"in [0, {50 - self.watchdog_ms}] ms: watchdog_ms + ramp_ms must not "
-                   "exceed 50 ms (PROTOCOL.md 5.3)"),
+                  (1 <= self.watchdog_ms <= p.MAX_STOP_MS - 1, "watchdog_ms",
+                   f"in [1, {p.MAX_STOP_MS - 1}] ms"),
+                  (0 <= self.ramp_ms <= p.MAX_STOP_MS - self.watchdog_ms, "ramp_ms",
+                   f"in [0, {p.MAX_STOP_MS - self.watchdog_ms}] ms: watchdog_ms + ramp_ms must "
+                   f"not exceed {p.MAX_STOP_MS} ms (PROTOCOL.md 5.3)"),
                   (self.force_n is None or 0 <= self.force_n <= 65.0, "force_n", "in [0, 65] N"),
                   (1 <= self.protocol_version <= p.PROTOCOL_VERSION, "protocol_version",
                    f"in [1, {p.PROTOCOL_VERSION}]"),
