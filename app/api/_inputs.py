@@ -78,6 +78,7 @@ def checked_scene(scene: Scene) -> Scene:
     """
     from frictex.device.profile import DeviceProfile, DrivingForceParams, FrictionParams
     from frictex.textures import keys
+    from frictex.textures.sections.layers import report_repeated_name
     from frictex.textures.model import Display, _LayerBase
     from frictex.textures.schema import Reader, Retired
 
@@ -105,7 +106,8 @@ def checked_scene(scene: Scene) -> Scene:
         r.label = f"scene {_named(scene.name)}, layer {_named(getattr(layer, 'name', '?'))}"
         path = (f"layers[{i}]",)
         if _fields(r, layer, path, rules, _LayerBase):
-            _unique_name(r, layer.name, i, names)
+            report_repeated_name(r, (f"layers[{i}]", "name"), layer.name, i, names,
+                                 lambda first: f"layers[{first}]")
             for part in ("region", "geometry", "visual"):
                 value = getattr(layer, part, None)
                 if dataclasses.is_dataclass(value):
@@ -142,16 +144,6 @@ def _held_as_written(spec, field: dataclasses.Field) -> bool:
     choices otherwise (a key click's ``first_push`` as +1 or -1), not checked again."""
     from frictex.textures.schema import Choice
     return not isinstance(spec, Choice) or field.type in ("str", str)
-
-
-def _unique_name(r, name: object, index: int, names: dict) -> None:
-    """Report to the reader ``r`` the name of layer ``index`` where an earlier layer has it
-    (``names``: name -> the first layer's index, this one added), as the loader says it."""
-    from frictex.textures.schema import show
-    first = names.setdefault(name, index)
-    if first != index:
-        r.report((f"layers[{index}]", "name"),
-                 f"{show(name)} is already the name of layers[{first}]")
 
 
 def _named(name: object) -> str:

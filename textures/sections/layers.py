@@ -33,6 +33,17 @@ def default_layer_name(layer_type: str, index: int) -> str:
     return f"{layer_type}-{index + 1}"
 
 
+def report_repeated_name(r: Reader, path: KeyPath, name, index: int, names: dict,
+                         shown: Callable[[int], str]) -> None:
+    """Report at ``path`` the ``name`` of layer ``index`` where an earlier layer has it
+    (``names``: name -> the index of the first layer of that name; this one is added);
+    ``shown(i)`` is layer i as the message names it (``layer[2]`` in a file, 1-based;
+    ``layers[1]`` in a Scene made in code)."""
+    first = names.setdefault(name, index)
+    if first != index:
+        r.report(path, f"{show(name)} is already the name of {shown(first)}")
+
+
 def parse_layer(r: Reader, raw, index: int, display, files: Files, names: dict):
     """One [[layer]] -> (layer, key of its lowest mu') or None (problems reported)."""
     path: KeyPath = ("layer", index)
@@ -52,9 +63,9 @@ def parse_layer(r: Reader, raw, index: int, display, files: Files, names: dict):
     if name is not BAD:
         if not name.strip():
             r.report(path + ("name",), 'is empty; give the layer a name or leave the key out')
-        elif name in names:
-            r.report(path + ("name",), f"{show(name)} is already the name of layer[{names[name] + 1}]")
-        names.setdefault(name, index)
+        else:
+            report_repeated_name(r, path + ("name",), name, index, names,
+                                 lambda first: f"layer[{first + 1}]")
     render = v["render"]
     if render not in (BAD, "auto", model.SHO) and layer_type not in PERIODIC_TYPES:
         render = r.report(path + ("render",), f'"{render}" needs a periodic layer (grating or '
