@@ -58,24 +58,27 @@ def all_played_unless_tripped(status: dict, played_index: np.ndarray | None,
     flushed (and counts it), never on the host's, and the stream goes on. ``trips``: the
     device's trips during this stream, when not the Status's count since power-up.
     (A device silent for half a second, so starved itself, is handshaken again, which
-    restarts its buffer: a recovery, counted like a trip.)"""
+    restarts its buffer: a recovery, counted like a trip; so is a port that a starved
+    device's pty made fail, 'returned no data', reconnected: what was in flight is lost,
+    counted.)"""
     accounted(status, played_index, commanded)
     trips = status["watchdog_trips"] if trips is None else trips
-    if trips == 0 and status["recoveries"] == 0:
+    restarted = status["recoveries"] + status["reconnects"]
+    if trips == 0 and restarted == 0:
         assert status["unplayed_samples"] == 0, status["unplayed_by_cause"]
     else:
         assert status["played_samples"] > 0, "nothing played"
-        if status["recoveries"] == 0:
+        if restarted == 0:
             by_cause = status["unplayed_by_cause"]
             assert by_cause["disconnected"] == by_cause["queue_full"] == by_cause["stalled"] == 0
 
 
 def clean_unless_starved(status: dict, blocks: int) -> bool:
-    """With no watchdog trip and no recovery (a device or host starved of CPU for half a
-    second is handshaken again, which drops what waited, counted), every one of
+    """With no watchdog trip, no recovery and no reconnect (a device or host starved of
+    CPU for half a second is handshaken again, which drops what waited, counted), every one of
     ``blocks`` went out once and nothing was damaged on the wire; returns whether the
     stream was so clean (for the caller's further checks of a clean stream)."""
-    if status["recoveries"] or status["watchdog_trips"]:
+    if status["recoveries"] or status["reconnects"] or status["watchdog_trips"]:
         return False
     assert status["blocks_sent"] == blocks and status["dropped_blocks"] == 0, status
     assert status["resyncs"] == 0 and status["device_crc_errors"] == 0, status
