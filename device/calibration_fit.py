@@ -35,6 +35,9 @@ TABLE_BINS = 12
 #: least distinct amplitudes above 0 a fit takes: two determine (b, k) at one normal
 #: force, a third checks that the model fits
 MIN_AMPLITUDES = 3
+#: least fall of the fitted mu' from 0 um to the largest amplitude that determines b:
+#: below it the curve is within a few times the model's tolerance of flat, so any b fits
+MIN_FALL = 2.5 * MODEL_TOLERANCE
 
 
 def model_jacobian(w_um, normal_n, b_per_um: float, k_per_n: float) -> np.ndarray:
@@ -63,7 +66,8 @@ def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> 
     ``MIN_AMPLITUDES`` distinct amplitudes above 0 um among them.
 
     Raises InputError (a ValueError) when the usable (finite) points have fewer distinct
-    amplitudes above 0: they cannot determine both b and k and check the fit.
+    amplitudes above 0 (they cannot determine both b and k and check the fit), or when
+    the fitted mu' falls by less than ``MIN_FALL`` (a flat curve: every b fits it).
     """
     w, f, m = (np.asarray(a, dtype=np.float64).ravel() for a in (w_um, normal_n, mu))
     good = np.isfinite(w) & np.isfinite(f) & np.isfinite(m) & (w >= 0) & (f > 0)
@@ -86,6 +90,15 @@ def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> 
                                                        [B_BOUNDS[1], K_BOUNDS[1]]))
     params = FrictionParams(b_per_um=float(sol.x[0]), asymptote_per_n=float(sol.x[1]))
     rms = float(np.sqrt(np.mean(sol.fun ** 2)))
+    force = np.array([np.median(f)])
+    fall = float((forward_mu(np.zeros(1), force, params)
+                  - forward_mu(np.array([w.max()]), force, params))[0])
+    if fall < MIN_FALL:
+        raise InputError(f"the fitted mu' falls by only {fall:.3f} from 0 to {w.max():.3g} um "
+                         f"({w.size} calibration points): the finger's friction did not "
+                         f"fall with vibration, so no b fits better than another; is the "
+                         f"plate vibrating and the finger pressing? (a fit needs a fall of "
+                         f"{MIN_FALL:.2f} or more)")
     table = None if rms <= MODEL_TOLERANCE else _table(w, f, m)
     return Fit(params=params, residual_rms=rms, n_points=int(w.size), calibration=table)
 

@@ -129,16 +129,22 @@ for status in json.loads(sys.argv[1]):
 '''
 
 
-def test_a_plugin_devices_status_that_breaks_the_contract_is_named_not_a_traceback(tmp_path):
-    """Missing counts, None, an object JSON cannot hold, NaN (once '-nan% never played'):
-    a PluginError naming the package, where the summary reads the status."""
-    dist = tmp_path / "frictex_counted-1.0.dist-info"
+def install_counted_device(folder):
+    """The package frictex-counted (DEVICE_MODULE, output device 'counted') in ``folder``,
+    found through PYTHONPATH=folder."""
+    dist = folder / "frictex_counted-1.0.dist-info"
     dist.mkdir()
     (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: frictex-counted\n"
                                    "Version: 1.0\n", encoding="utf-8")
     (dist / "entry_points.txt").write_text("[frictex.devices]\ncounted = frictex_counted:Dev\n",
                                            encoding="utf-8")
-    (tmp_path / "frictex_counted.py").write_text(DEVICE_MODULE, encoding="utf-8")
+    (folder / "frictex_counted.py").write_text(DEVICE_MODULE, encoding="utf-8")
+
+
+def test_a_plugin_devices_status_that_breaks_the_contract_is_named_not_a_traceback(tmp_path):
+    """Missing counts, None, an object JSON cannot hold, NaN (once '-nan% never played'):
+    a PluginError naming the package, where the summary reads the status."""
+    install_counted_device(tmp_path)
     good = "{'commanded_samples': n, 'unplayed_samples': 0, 'unplayed_by_cause': {}}"
     statuses = [good] + [status for status, _ in STATUSES]
     done = subprocess.run([sys.executable, "-c", RUN, json.dumps(statuses)], cwd=tmp_path,
@@ -151,3 +157,22 @@ def test_a_plugin_devices_status_that_breaks_the_contract_is_named_not_a_traceba
     assert done.stdout.splitlines() == [
         'ok {"commanded_samples": 3050, "unplayed_samples": 0, "unplayed_by_cause": {}}',
         *(f"{who} {said}; expected a {expected}" for _, said in STATUSES)]
+
+
+def test_faults_for_a_plugin_device_are_refused_not_ignored(tmp_path):
+    """frictex injects faults into its own serial links; another package's device got
+    them in its request and could drop them silently (a run 'with faults' and none)."""
+    install_counted_device(tmp_path)
+    (tmp_path / "trace.csv").write_text("t_s,finger,x_mm,y_mm,contact\n0,0,10,10,1\n"
+                                        "0.2,0,40,10,1\n", encoding="utf-8")
+    done = subprocess.run([sys.executable, "-m", "frictex", "replay", "grating-5mm",
+                           "trace.csv", "--device", "counted", "--faults", "corrupt=0.01",
+                           "--out", "out"], cwd=tmp_path,
+                          env={**os.environ, "PYTHONPATH": str(tmp_path), "STATUS": "{}"},
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines()[-1] == (
+        "frictex: error: device 'counted': faults are injected into frictex's serial links (sim or a "
+        "port), not into output device 'counted' of frictex-counted "
+        "(frictex_counted:Dev), another package's")
+    assert not (tmp_path / "out").exists()

@@ -42,6 +42,24 @@ def test_too_few_points_is_a_clear_error():
         fit_points([0.0, 0.0], [0.5, 0.5], [1.0, 1.0])
 
 
+def test_a_flat_curve_is_refused_not_fitted():
+    # a finger whose friction does not fall (mu' 1 at every amplitude): k F = 1 fits it
+    # exactly for every b, so there is nothing to fit; the same with noise 0.01
+    w = np.repeat(np.linspace(0.0, 2.5, 11), 4)
+    noise = np.random.default_rng(3).normal(0.0, 0.01, w.size)
+    for mu in (np.ones(w.size), np.clip(1.0 - 0.01 * w + noise, 0.0, 1.0)):
+        with pytest.raises(ValueError, match="did not fall with vibration"):
+            fit_points(w, np.full(w.size, 0.5), mu)
+
+
+def test_a_small_but_clear_fall_is_fitted():
+    w = np.repeat(np.linspace(0.0, 2.5, 11), 4)
+    mu = (1 - 0.9 * 0.5) * np.exp(-1.3 * w) + 0.9 * 0.5
+    mu = 1.0 - 0.1 * (1.0 - mu) / (1.0 - mu.min())  # a 0.1 fall, eq 2's shape
+    fit = fit_points(w, np.full(w.size, 0.5), mu)
+    assert fit.fits and math.isclose(fit.params.b_per_um, 1.3, rel_tol=1e-4)
+
+
 class ModelLink:
     """A paced link to a plate whose finger follows seed 003's eq 2 exactly (b, k), its
     friction at rest rising linearly with time, its reports coming one block late;

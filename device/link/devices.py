@@ -10,7 +10,9 @@ entry point::
 ``open_mydev(arg, request)`` gets ARG (the text after ``mydev:``, or after ``mydev://``;
 "" when none) and a :class:`DeviceRequest`, and returns an :class:`OutputDevice`. Raise
 ``frictex.device.errors.InputError`` for a bad ARG (exit 2) and ``DeviceError`` when the
-device cannot be reached (exit 1). Anything else another package's factory or device
+device cannot be reached (exit 1). A request with ``faults`` is refused for another
+package's device before its factory is called: frictex injects faults into its own
+serial links only (``sim``, ``port``). Anything else another package's factory or device
 raises (and a factory that is not callable, or returns no :class:`OutputDevice`) is a
 ``PluginError`` naming the package (exit 1), not frictex's internal error
 (:func:`open_device`, :class:`PluginDevice`).
@@ -40,8 +42,8 @@ from frictex.device.errors import InputError
 from frictex.device.link.port import URL_SCHEMES
 from frictex.device.link.session import PREFILL_S
 from frictex.device.link.status_contract import status_problem
-from frictex.device.registry import (Expect, PluginError, Registry, build_entry, guarded,
-                                     warn_once)
+from frictex.device.registry import (OWN_DISTRIBUTION, Expect, PluginError, Registry,
+                                     build_entry, guarded, warn_once)
 
 
 @dataclass(frozen=True)
@@ -165,8 +167,13 @@ def resolve(spec: str) -> tuple[DeviceFactory, str]:
 def open_device(spec: str, request: DeviceRequest) -> OutputDevice:
     """The output device of a ``--device`` spec, opened for ``request``: frictex's own as
     its factory returns it, another package's checked and wrapped in a
-    :class:`PluginDevice` (the module docstring)."""
+    :class:`PluginDevice` (the module docstring), or refused (InputError) where the
+    request has faults, which only frictex's serial links inject."""
     name, arg = _named(spec)
+    if request.faults is not None and DEVICES.origin(name) != OWN_DISTRIBUTION:
+        raise InputError(f"device {spec!r}: faults are injected into frictex's serial links "
+                         f"(sim or a port), not into output device {name!r} of "
+                         f"{DEVICES.origin(name)}, another package's")
     return build_entry(DEVICES, "output device", name, arg, request, doing="opening",
                        members=_MEMBERS, release="close",
                        contract="an OutputDevice (frictex.device.link.devices.OutputDevice)",
