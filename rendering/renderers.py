@@ -95,9 +95,11 @@ class PluginRenderer:
     """Another package's renderer, whose exceptions become :class:`PluginError` saying
     whose renderer failed on which layer, and what it raised; as do outputs that break
     :class:`LayerRenderer`'s contract where frictex would fail on them or write them:
-    mu' or covers not (fingers, samples), mu' outside (0, 1] where the layer covers; and a
-    renderer built without ``initial_state`` or ``render``. ``inner``: the plugin's
-    renderer."""
+    mu' or covers not (fingers, samples) or not numbers, mu' outside (0, 1] where the
+    layer covers; and a renderer built without ``initial_state`` or ``render``. The
+    plugin reads the block through read-only views (``FingerBlock.read_only``): a write
+    into it fails as the plugin's error instead of changing every later layer's input.
+    ``inner``: the plugin's renderer."""
 
     def __init__(self, factory: RendererFactory, who: str, layer: Any, rate_hz: float):
         self._who = who
@@ -123,7 +125,7 @@ class PluginRenderer:
         return self._guarded("starting", self.inner.initial_state)
 
     def render(self, block: FingerBlock, state: Any) -> tuple[np.ndarray, np.ndarray, Any]:
-        got = self._guarded("rendering", self.inner.render, block, state)
+        got = self._guarded("rendering", self.inner.render, block.read_only(), state)
         shape = (len(block.ids), block.n)
         if not (isinstance(got, tuple) and len(got) == 3):
             raise PluginError(f"{self._who} returned {type(got).__name__} on layer "
@@ -134,7 +136,13 @@ class PluginRenderer:
                 raise PluginError(f"{self._who} returned {what} of shape {np.shape(value)} on "
                                   f"layer {self._layer!r}; expected {shape} ({shape[0]} "
                                   f"finger(s) x {shape[1]} samples)")
-        mu, covers = np.asarray(mu, dtype=np.float64), np.asarray(covers, dtype=bool)
+        mu, covers = np.asarray(mu), np.asarray(covers)
+        for what, value, kinds, expected in (("mu'", mu, "biuf", "real numbers"),
+                                             ("covers", covers, "b", "booleans")):
+            if value.dtype.kind not in kinds:
+                raise PluginError(f"{self._who} returned {what} of dtype {value.dtype} on "
+                                  f"layer {self._layer!r}; expected {expected}")
+        mu, covers = mu.astype(np.float64, copy=False), covers.astype(bool, copy=False)
         bad = ~((mu > 0.0) & (mu <= 1.0)) & covers  # NaN fails both comparisons
         if bad.any():
             values = mu[bad]

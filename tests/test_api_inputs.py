@@ -144,11 +144,20 @@ def test_fields_of_unequal_length_are_refused(monkeypatch, scene, columns, data)
     ({"finger": [True, False]}, "^trace: finger holds bool values"),
     ({"event": [None, 1]}, "^trace: event holds object values"),
     ({"t_s": [], "finger": [], "x_mm": [], "y_mm": []}, "no samples"),
+    ({"t_s": None}, r"^trace: t_s is None: expected one number per sample, shape \(n,\)$"),
+    ({"y_mm": None}, "^trace: y_mm is None"),
 ])
 def test_what_is_not_a_column_of_numbers_is_refused(change, message):
     columns = {"t_s": [0.0, 0.02], "finger": [0, 0], "x_mm": [1.0, 2.0], "y_mm": [3.0, 4.0]}
     with pytest.raises(frictex.TraceError, match=message):
         frictex.make_trace(**{**columns, **change})
+
+
+def test_a_trace_that_is_not_there_is_a_trace_error(tmp_path):
+    with pytest.raises(frictex.TraceError, match="no such file$"):
+        frictex.read_trace(tmp_path / "missing.csv")
+    with pytest.raises(frictex.TraceError, match="did you mean swipe-40mms-50hz"):
+        frictex.read_trace("swipe-40mms")
 
 
 def test_the_event_codes_are_the_trace_file_s_words(tmp_path):

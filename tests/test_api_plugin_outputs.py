@@ -13,12 +13,14 @@ import pytest
 
 from frictex.device.registry import PluginError
 from frictex.rendering.renderers import PluginRenderer
+from frictex.rendering.tracking.tracks import BLOCK_FIELDS, FingerBlock
 
 WHO = "renderer 'flat' of frictex-flat (frictex_flat:Flat)"
 
 
-def flat_renderer(mu_value: float):
-    """A plugin renderer's factory whose every mu' is ``mu_value`` over the whole block."""
+def flat_renderer(mu_value, touch=None):
+    """A plugin renderer's factory whose every mu' is ``mu_value`` (any value numpy takes)
+    over the whole block, after calling ``touch(block)`` where given."""
     class Flat:
         def __init__(self, layer, rate_hz):
             pass
@@ -27,15 +29,26 @@ def flat_renderer(mu_value: float):
             return None
 
         def render(self, block, state):
+            if touch is not None:
+                touch(block)
             shape = (len(block.ids), block.n)
             return np.full(shape, mu_value), np.ones(shape, dtype=bool), state
     return Flat
 
 
-def rendered(mu_value: float):
-    renderer = PluginRenderer(flat_renderer(mu_value), WHO, SimpleNamespace(name="lines"), 1e4)
-    block = SimpleNamespace(ids=(0,), n=4)
-    return renderer.render(block, renderer.initial_state())
+def finger_block() -> FingerBlock:
+    """One finger touching for 4 samples at (10, 20) mm."""
+    arrays = {name: np.zeros((1, 4)) for name in BLOCK_FIELDS}
+    arrays.update(contact=np.ones((1, 4), dtype=bool), touch_id=np.zeros((1, 4), np.int64),
+                  x_held=np.full((1, 4), 10.0), y_held=np.full((1, 4), 20.0))
+    return FingerBlock(0, np.arange(4) * 1e-4, (0,), **arrays)
+
+
+def rendered(mu_value, touch=None, block=None):
+    renderer = PluginRenderer(flat_renderer(mu_value, touch), WHO,
+                              SimpleNamespace(name="lines"), 1e4)
+    return renderer.render(finger_block() if block is None else block,
+                           renderer.initial_state())
 
 
 @pytest.mark.parametrize("mu_value", [-1.0, 0.0, 5.0, 1.0 + 1e-9])
@@ -56,6 +69,28 @@ def test_a_plugin_renderers_nan_is_still_said_as_not_finite():
 def test_a_plugin_renderers_mu_in_0_1_passes(mu_value):
     mu, covers, _ = rendered(mu_value)
     assert mu.tolist() == [[mu_value] * 4] and covers.all()
+
+
+@pytest.mark.parametrize("mu_value, dtype", [("x", "<U1"), (0.5 + 2j, "complex128"),
+                                             (None, "object")])
+def test_a_plugin_renderers_mu_that_is_not_real_numbers_is_refused(mu_value, dtype):
+    # once a traceback and exit 70 ("could not convert string to float"), or, complex,
+    # the imaginary part dropped with numpy's ComplexWarning and the run going on
+    with pytest.raises(PluginError, match=rf"returned mu' of dtype {dtype} on layer 'lines'; "
+                                          "expected real numbers$"):
+        rendered(mu_value)
+
+
+def test_a_plugin_renderer_cannot_write_into_the_block_every_layer_reads():
+    # a renderer that wrote contact = False once emptied the run's contact for every
+    # later layer, the composition and the outputs, silently
+    def lift(block):
+        block.contact[...] = False
+    block = finger_block()
+    with pytest.raises(PluginError, match=r"failed rendering layer 'lines': ValueError: "
+                                          "assignment destination is read-only$"):
+        rendered(0.5, lift, block)
+    assert block.contact.all() and block.contact.flags.writeable
 
 
 #: another package's output device whose status() is what STATUS (a Python expression of

@@ -219,13 +219,17 @@ def read_trace(path: str | Path, *, strict: bool = False) -> Trace:
     Raises
     ------
     InputError
-        No such file or bundled trace, or a file that is not a valid trace (the message
-        names the file and the line).
+        A :class:`TraceError`: no such file or bundled trace, or a file that is not a
+        valid trace (the message names the file and the line).
     """
     from frictex.rendering.input.trace_file import read_trace as read
     from frictex.textures.library import resolve_trace
     path_like("path", path, "a trace CSV or a bundled trace's name")
-    return read(resolve_trace(path), strict=strict)
+    try:
+        found = resolve_trace(path)
+    except InputError as exc:  # the library's lookup says TextureError, for scenes too
+        raise TraceError(str(exc)) from None
+    return read(found, strict=strict)
 
 
 def make_trace(t_s: npt.ArrayLike, finger: npt.ArrayLike, x_mm: npt.ArrayLike,
@@ -263,6 +267,10 @@ def make_trace(t_s: npt.ArrayLike, finger: npt.ArrayLike, x_mm: npt.ArrayLike,
     """
     columns = {"t_s": t_s, "finger": finger, "x_mm": x_mm, "y_mm": y_mm, "force_n": force_n,
                "event": event}
+    for name in ("t_s", "finger", "x_mm", "y_mm"):
+        if columns[name] is None:
+            raise TraceError(f"{_WHERE}: {name} is None: expected one number per sample, "
+                             "shape (n,)")
     arrays = {name: None if values is None else _column(name, values)
               for name, values in columns.items()}
     code = arrays["event"]

@@ -181,6 +181,17 @@ class FingerBlock:
         arrays["force"] = force
         return FingerBlock(self.index0, self.t_s, self.ids, **arrays)
 
+    def read_only(self) -> "FingerBlock":
+        """The same tracks as views numpy refuses to write into, for code frictex does not
+        own (another package's renderer): a write into one would change what every later
+        layer, the composition and the outputs read."""
+        def view(array: np.ndarray) -> np.ndarray:
+            frozen = array.view()
+            frozen.flags.writeable = False
+            return frozen
+        arrays = {name: view(getattr(self, name)) for name in BLOCK_FIELDS}
+        return FingerBlock(self.index0, view(self.t_s), self.ids, **arrays)
+
 
 def apply_index(t_s: np.ndarray, config: TrackerConfig) -> np.ndarray:
     """Output index from which each sample is used: the next block boundary at or after it."""
