@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import math
+import reprlib
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -88,17 +89,37 @@ class ReportDelays:
     @classmethod
     def from_json(cls, doc: dict) -> ReportDelays:
         """The sequence of :meth:`to_json` (its summary figures are recomputed, not read;
-        a record written before ``source`` was kept reads as measured by its run)."""
-        return cls(tuple(int(d) for d in doc["blocks"]), doc["seconds"], doc["rate_hz"],
-                   doc["block"], doc["busy"], doc["load_start"], doc["load_end"],
+        a record written before ``source`` was kept reads as measured by its run; a load
+        of null reads as NaN). ``doc``'s fields are taken as they are: :func:`read`
+        checks a file's."""
+        return cls(tuple(doc["blocks"]), doc["seconds"], doc["rate_hz"], doc["block"],
+                   doc["busy"], _load_or_nan(doc["load_start"]), _load_or_nan(doc["load_end"]),
                    doc.get("source", ""))
+
+
+def _load_or_nan(value) -> float:
+    """A recorded load average, NaN where none was recorded (null)."""
+    return float("nan") if value is None else value
+
+
+#: the fields of :meth:`ReportDelays.to_json` that :func:`read` takes back
+FIELDS = ("blocks", "seconds", "rate_hz", "block", "busy", "load_start", "load_end")
+
+
+def wait_blocks(rate_hz: float, block: int) -> int:
+    """The loop's wait for a force report (``LoopConfig.max_wait_s``) in whole blocks of
+    ``block`` samples at ``rate_hz``: the latest delay a report the loop uses can have
+    (one later is folded as missed, and :func:`measure` records it as ``LOST``)."""
+    from frictex.rendering.control.loop import LoopConfig
+    return int(np.ceil(LoopConfig().max_wait_s * rate_hz / block))
 
 
 def read(path, rate_hz: float, block: int) -> ReportDelays:
     """The report delays recorded in ``path``: a report.json (its ``closed_loop``
     section's ``report_delays``) or that object alone, measured at ``rate_hz`` in blocks
     of ``block`` samples (a sequence of other blocks would mean other delays). Raises
-    InputError naming the file when it cannot be read or holds no such sequence."""
+    InputError naming the file (and the field) when it cannot be read, holds no such
+    sequence, has a field of the wrong type, or a delay later than the loop's wait."""
     path = Path(path)
     try:
         doc = json.loads(path.read_text(encoding="utf-8"))
@@ -106,23 +127,54 @@ def read(path, rate_hz: float, block: int) -> ReportDelays:
         raise InputError(f"{path}: cannot read report delays: {exc}") from None
     if isinstance(doc, dict) and isinstance(doc.get("closed_loop"), dict):
         doc = doc["closed_loop"].get("report_delays")
-    try:
-        delays = ReportDelays.from_json(doc)
-    except (KeyError, TypeError, ValueError, OverflowError):
+    if not isinstance(doc, dict) or any(field not in doc for field in FIELDS):
         raise InputError(f"{path}: no report delays (expected a report.json with a closed-loop "
-                         "section, or its report_delays object: blocks, seconds, rate_hz, "
-                         "block, busy, load_start, load_end)") from None
-    numbers = (delays.seconds, delays.rate_hz, delays.block, delays.busy)
-    if not delays.blocks or any(d < LOST for d in delays.blocks) or not all(
-            isinstance(x, (int, float)) and math.isfinite(x) and x >= 0 for x in numbers):
-        raise InputError(f"{path}: report delays: blocks must be a non-empty list of whole "
-                         f"blocks >= {LOST} ({LOST}: lost) and seconds, rate_hz, block, busy "
-                         "finite numbers >= 0")
+                         "section, or its report_delays object: " + ", ".join(FIELDS) + ")")
+    _check_fields(path, doc, wait_blocks(rate_hz, block))
+    delays = ReportDelays.from_json(doc)
     if delays.measured and (delays.rate_hz != rate_hz or delays.block != block):
         raise InputError(f"{path}: report delays measured at {delays.rate_hz:g} Hz in blocks "
                          f"of {delays.block}; the closed-loop runs use {rate_hz:g} Hz in blocks "
                          f"of {block}")
     return replace(delays, source=str(path))
+
+
+def _check_fields(path: Path, doc: dict, wait: int) -> None:
+    """Raise InputError naming ``path`` and the first field of ``doc`` (a report_delays
+    object) whose type or value is not what :meth:`ReportDelays.to_json` writes: blocks
+    a non-empty list of whole numbers from ``LOST`` to ``wait`` (blocks), seconds and
+    rate_hz, block, busy finite numbers >= 0, the loads numbers, null or NaN."""
+    def bad(field: str, value, expected: str) -> InputError:
+        return InputError(f"{path}: report delays: {field} is {reprlib.repr(value)}, "
+                          f"expected {expected}")
+
+    blocks = doc["blocks"]
+    if not isinstance(blocks, list) or not blocks:
+        raise bad("blocks", blocks, "a non-empty list of whole blocks")
+    for k, delay in enumerate(blocks):
+        if not _whole(delay) or delay < LOST:
+            raise bad(f"blocks[{k}]", delay, f"a whole number of blocks >= {LOST} "
+                      f"({LOST}: lost)")
+        if delay > wait:
+            raise bad(f"blocks[{k}]", delay, f"at most the loop's wait, {wait} blocks (a "
+                      f"report later than that is lost to the loop: {LOST})")
+    for field in ("seconds", "rate_hz", "block", "busy"):
+        if not (_number(doc[field]) and math.isfinite(doc[field]) and doc[field] >= 0):
+            raise bad(field, doc[field], "a finite number >= 0")
+    for field in ("load_start", "load_end"):
+        load_avg = doc[field]
+        if load_avg is not None and not (_number(load_avg) and not math.isinf(load_avg)):
+            raise bad(field, load_avg, "a number, null or NaN (not recorded)")
+
+
+def _number(value) -> bool:
+    """Whether ``value`` (read from JSON) is a number: an int or float, not a bool."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _whole(value) -> bool:
+    """Whether ``value`` (read from JSON) is a whole number written as one (2, not 2.0)."""
+    return isinstance(value, int) and not isinstance(value, bool)
 
 
 def measure(seconds: float, rate_hz: float, block: int, busy: int) -> ReportDelays:
@@ -131,9 +183,8 @@ def measure(seconds: float, rate_hz: float, block: int, busy: int) -> ReportDela
     delay (module docstring). The first tenth is left out (the device's prefill), and so
     are the last blocks, whose reports had not yet had the loop's wait to come."""
     from frictex.device.link.host import open_sink
-    from frictex.rendering.control.loop import LoopConfig
-    wait_blocks = int(np.ceil(LoopConfig().max_wait_s * rate_hz / block))
-    n_blocks = int(seconds * rate_hz / block) + wait_blocks
+    wait = wait_blocks(rate_hz, block)
+    n_blocks = int(seconds * rate_hz / block) + wait
     delays = np.full(n_blocks, LOST, dtype=np.int64)
     ones = np.ones((block, 1))
     load_start = load()
@@ -146,7 +197,7 @@ def measure(seconds: float, rate_hz: float, block: int, busy: int) -> ReportDela
                 while time.perf_counter() < t0 + b * block / rate_hz:
                     time.sleep(2e-4)
                 # a report later than the loop's wait is one the loop never uses: LOST
-                pending = [j for j in pending if b - j - 1 <= wait_blocks]
+                pending = [j for j in pending if b - j - 1 <= wait]
                 for j in [j for j in pending if sink.force_report(j * block, block) is not None]:
                     delays[j] = b - j - 1
                     pending.remove(j)
@@ -154,6 +205,6 @@ def measure(seconds: float, rate_hz: float, block: int, busy: int) -> ReportDela
                 pending.append(b)
         finally:
             sink.close()
-    kept = delays[n_blocks // 10:n_blocks - wait_blocks - 1]
+    kept = delays[n_blocks // 10:n_blocks - wait - 1]
     return ReportDelays(tuple(int(d) for d in kept), seconds, rate_hz, block, busy,
                         load_start, load())
