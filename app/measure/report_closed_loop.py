@@ -428,13 +428,12 @@ def claims(section: LoopSection) -> list[Claim]:
             out += _scene_claims(scene, row)
     rows, (_, steepest) = section.margins["rows"], section.slope_range
     least = min(r["gain_margin"] for r in rows)
-    out.append(Claim(
-        "closed loop: stability margin", "all", "human", "gain margin / steepest s",
+    out.append(_decided(
+        "closed loop: stability margin", "all", "gain margin / steepest s",
         f"the gain scheduled on the report's delay (0-{rows[-1]['delay_blocks']} blocks) "
         f"keeps a gain margin of at least {least:.2f} (by design: COVER_SLOPE), above the "
         f"population's steepest s {steepest:.2f} (computed from the fingers, "
-        f"population_slopes)", steepest - least, steepest - least, steepest - least, len(rows),
-        bool(steepest < least)))  # d = steepest - least < 0 is the claim, as for every claim
+        f"population_slopes)", steepest - least, len(rows), bool(steepest < least)))
     ad = section.adaptation
     if ad:
         mean, low, high, n = paired(ad.gaps, [ADAPT_TARGET] * len(ad.gaps))
@@ -447,6 +446,16 @@ def claims(section: LoopSection) -> list[Claim]:
     return out
 
 
+def _decided(group: str, scene: str, metric: str, text: str, d: float, n: int,
+             passed: bool) -> Claim:
+    """A claim decided by one number ``d`` over ``n`` runs or rows (the worst one's, as
+    every claim phrased so that d < 0 is the claim), not by an interval: it holds where
+    ``passed`` and does not hold otherwise, since more draws would not change the
+    number that decided it."""
+    return Claim(group, scene, "human", metric, text, d, d, d, n, passed,
+                 HOLDS if passed else REFUTED)
+
+
 def _scene_claims(scene: str, row: dict[str, ModeSummary]) -> list[Claim]:
     """A scene's claims: each loop mode's RMS cut and worst finger against open loop, the
     amplitude limit, no growing oscillation and the added noise."""
@@ -457,21 +466,21 @@ def _scene_claims(scene: str, row: dict[str, ModeSummary]) -> list[Claim]:
     limit = load(scene).device.amplitude_limit_um
     commands = [c for r in row.values() for c in r.per_finger.max_command_um]
     top = max(commands)
-    out.append(Claim(
-        "closed loop: amplitude limit", scene, "human", "max_command_um",
+    out.append(_decided(
+        "closed loop: amplitude limit", scene, "max_command_um",
         f"no run commands beyond the device's {limit:g} um: largest {top:.3f} um over "
-        f"{len(commands)} runs", top - limit, top - limit, top - limit, len(commands),
-        bool(top <= limit)))
+        f"{len(commands)} runs", top - limit, len(commands), bool(top <= limit)))
     steps = [a for m in ("closed", "adaptive") if m in row for a in row[m].per_finger.swings]
     if steps:
         mean, low, high, n = paired(steps, [0] * len(steps))
-        out.append(Claim(
-            "closed loop: no growing oscillation", scene, "human", "swings",
+        spread = (f"mean {mean:.2f}, 95 % interval [{low:.2f}, {high:.2f}]" if n > 1 else
+                  "one run, no interval")
+        out.append(_decided(
+            "closed loop: no growing oscillation", scene, "swings",
             f"no run's loop gain oscillates: longest run of swings over "
-            f"{SWING:.0%} {max(steps)} (mean {mean:.2f}, 95 % interval [{low:.2f}, "
-            f"{high:.2f}]) against {OSCILLATION_STEPS} for a growing oscillation, {n} runs",
-            *(float(max(steps) - OSCILLATION_STEPS),) * 3, n,
-            bool(max(steps) < OSCILLATION_STEPS)))  # d: the longest run's, decided by it
+            f"{SWING:.0%} {max(steps)} ({spread}) against {OSCILLATION_STEPS} or more for "
+            f"an oscillation, {n} runs", float(max(steps) - OSCILLATION_STEPS), n,
+            bool(max(steps) < OSCILLATION_STEPS)))
     noise = row["adaptive"].per_finger.noise_fraction if "adaptive" in row else None
     if noise:
         mean, low, high, n = paired(noise, [WEBER_FRACTION] * len(noise))
@@ -512,11 +521,11 @@ def _mode_claims(scene: str, mode: str, r: ModeSummary, opened: ModeSummary) -> 
               f"fingers; population RMS {opened.rms_reachable_pop:.4f} -> "
               f"{r.rms_reachable_pop:.4f} ({r.gain_vs_open:.2f}x)",
               mean, low, high, n, bool(high < 0.0)),
-        Claim("closed loop: worst finger", scene, "human", f"worst rms_reachable, {mode}",
-              f"the worst finger improves: open's worst {opened.worst:.4f} (finger "
-              f"{opened.worst_finger}) -> {mode}'s worst {r.worst:.4f} (finger "
-              f"{r.worst_finger}); {better} of {rms.size} fingers improve",
-              worst, worst, worst, int(rms.size), bool(worst < 0.0))]
+        _decided("closed loop: worst finger", scene, f"worst rms_reachable, {mode}",
+                 f"the worst finger improves: open's worst {opened.worst:.4f} (finger "
+                 f"{opened.worst_finger}) -> {mode}'s worst {r.worst:.4f} (finger "
+                 f"{r.worst_finger}); {better} of {rms.size} fingers improve",
+                 worst, int(rms.size), bool(worst < 0.0))]
 
 
 def markdown(section: LoopSection) -> list[str]:
@@ -587,8 +596,8 @@ def markdown(section: LoopSection) -> list[str]:
 def _delays_line(delays: dict) -> str:
     """How late the runs' force reports came, and where that came from."""
     if delays["seconds"] == 0:
-        return f"These runs had every report {delays['max']} blocks late (not measured)."
-    counts = ", ".join(f"{d}: {c}" for d, c in delays["counts"].items())
+        return _unmeasured_line(delays)
+    counts = _counts_text(delays)
     source = delays.get("source", "")
     where = (f"recorded in {source} (frictex report --loop-delays), measured there"
              if source else "this machine's live link to the simulated device, measured")
@@ -604,6 +613,25 @@ def _delays_line(delays: dict) -> str:
             "report.json replays it, for the same figures. Open loop reads the normal force "
             f"{REPORT_DELAY_BLOCKS} blocks late in every report, so its rows do not depend "
             "on it.")
+
+
+def _unmeasured_line(delays: dict) -> str:
+    """The force reports' delays of runs given a sequence nobody measured: one constant
+    (tests, ``frictex bench pipeline``) or a file's sequence, replayed."""
+    source = delays.get("source", "")
+    origin = f", recorded in {source} (frictex report --loop-delays)" if source else ""
+    blocks = delays["blocks"]
+    if len(set(blocks)) == 1 and not delays["lost"]:
+        return f"These runs had every report {blocks[0]} blocks late (not measured{origin})."
+    return (f"The loop modes replayed a sequence of {len(blocks)} report delays (not "
+            f"measured{origin}), each finger from its own block of it: largest "
+            f"{delays['max']} blocks ({_counts_text(delays)} blocks of that delay; "
+            f"{delays['lost']} of {len(blocks)} reports never came).")
+
+
+def _counts_text(delays: dict) -> str:
+    """"delay: count, ..." over the reports that came (blocks: reports)."""
+    return ", ".join(f"{d}: {c}" for d, c in delays["counts"].items())
 
 
 def _fixed(value: float | None, spec: str, suffix: str = "") -> str:
