@@ -39,7 +39,7 @@ import numpy as np
 
 from frictex.app.measure.bench_replay import SCENE, human_trace
 from frictex.app.measure.figure import Figure
-from frictex.app.measure.processes import alternated, frictex_argv, median
+from frictex.app.measure.processes import alternated, failed_note, frictex_argv, median
 from frictex.app.measure.ratio_claim import ratio_claim
 from frictex.rendering.input.trace_file import read_trace, write_trace
 
@@ -114,32 +114,53 @@ QUICK = "the targets are a 10-minute replay's (--quick runs 60 s, where start-up
 
 def paired_figures(label: str, bare: list, ours: list, target: float | None,
                    no_target: str = NO_FLOOR) -> list[Figure]:
-    """Figures of one format: median wall times, each round's ratio (frictex's run over
-    the bare run of the same round; a round where either failed is left out), their
-    geometric mean and its 95 % interval, the verdict on ``target`` (none where it is
-    None: ``no_target`` says why), and median CPU times."""
-    ratios = [o.wall_s / b.wall_s for b, o in zip(bare, ours) if b.code == 0 and o.code == 0]
+    """Figures of one format over the rounds whose two runs both succeeded (a round
+    where either failed, or took no measurable time, is left out on both sides, and the
+    labels say how many): median wall times, each kept round's ratio (frictex's run
+    over the bare run of the same round, labelled by its round), their geometric mean
+    and its 95 % interval, the verdict on ``target`` (none where it is None:
+    ``no_target`` says why), and median CPU times."""
     rounds = len(bare)
-    figures = [Figure("baseline", f"{label}, bare numpy/pyarrow (median of {rounds})",
-                      median(bare, "wall_s"), "s"),
-               Figure("baseline", f"{label}, frictex (median of {rounds}, alternated)",
-                      median(ours, "wall_s"), "s")]
-    figures += [Figure("baseline", f"{label}, frictex against bare, round {k + 1}", r, "x")
-                for k, r in enumerate(ratios)]
-    claim = ratio_claim(ratios, target or 1.0, at_most=True)
-    figures.append(Figure("baseline", f"{label}, frictex against bare, geometric mean of "
-                          f"{claim.rounds} rounds", claim.geomean,
-                          f"x (95 % interval {claim.low:.2f}-{claim.high:.2f}x)"))
-    figures.append(
-        Figure("baseline", f"{label}, target at most {target:g}x: the interval's upper end",
-               claim.high, f"x: {claim.verdict}")
-        if target is not None else
-        Figure("baseline", f"{label}, no verdict: {no_target}", len(ratios), "rounds"))
-    figures += [Figure("baseline", f"{label}, bare CPU user + system (median)",
-                       median(bare, "cpu_s"), "s"),
-                Figure("baseline", f"{label}, frictex CPU user + system (median)",
-                       median(ours, "cpu_s"), "s")]
+    kept = [(k, b, o) for k, (b, o) in enumerate(zip(bare, ours))
+            if b.code == 0 and o.code == 0 and b.wall_s > 0]
+    note = failed_note(rounds - len(kept), rounds)
+    kept_bare, kept_ours = [b for _, b, _ in kept], [o for _, _, o in kept]
+    of = f"median of {len(kept)} rounds{note}"
+    figures = [Figure("baseline", f"{label}, bare numpy/pyarrow ({of})",
+                      median(kept_bare, "wall_s"), "s"),
+               Figure("baseline", f"{label}, frictex ({of}, alternated)",
+                      median(kept_ours, "wall_s"), "s")]
+    figures += [Figure("baseline", f"{label}, frictex against bare, round {k + 1}",
+                       o.wall_s / b.wall_s, "x") for k, b, o in kept]
+    figures += _ratio_figures(label, [o.wall_s / b.wall_s for _, b, o in kept], target,
+                              no_target, note)
+    figures += [Figure("baseline", f"{label}, bare CPU user + system ({of})",
+                       median(kept_bare, "cpu_s"), "s"),
+                Figure("baseline", f"{label}, frictex CPU user + system ({of})",
+                       median(kept_ours, "cpu_s"), "s")]
     return figures
+
+
+def _ratio_figures(label: str, ratios: list[float], target: float | None, no_target: str,
+                   note: str) -> list[Figure]:
+    """The rounds' ``ratios``' geometric mean with its 95 % interval, and the verdict on
+    ``target`` (``paired_figures``); with no ratio, one figure saying why (``note``:
+    how many rounds failed)."""
+    if not ratios:
+        return [Figure("baseline", f"{label}, frictex against bare: no round had both runs "
+                       f"succeed{note}", 0, "rounds")]
+    claim = ratio_claim(ratios, target or 1.0, at_most=True)
+    interval = (f"95 % interval {claim.low:.2f}-{claim.high:.2f}x" if claim.rounds > 1
+                else "one round, no interval")
+    figures = [Figure("baseline", f"{label}, frictex against bare, geometric mean of "
+                      f"{claim.rounds} rounds{note}", claim.geomean, f"x ({interval})")]
+    if target is None:
+        return figures + [Figure("baseline", f"{label}, no verdict: {no_target}", len(ratios),
+                                 "rounds")]
+    judged, value = (("the interval's upper end", claim.high) if claim.rounds > 1 else
+                     ("one round gives no interval", claim.geomean))
+    return figures + [Figure("baseline", f"{label}, target at most {target:g}x: {judged}",
+                             value, f"x: {claim.verdict}")]
 
 
 def run(quick: bool) -> list[Figure]:

@@ -34,7 +34,7 @@ from pathlib import Path
 
 from frictex.app.measure.bench_replay import SCENE, human_trace
 from frictex.app.measure.figure import Figure
-from frictex.app.measure.processes import alternated, frictex_argv, median
+from frictex.app.measure.processes import alternated, failed_note, frictex_argv, median
 from frictex.rendering.input.trace_file import write_trace
 
 #: the row of the one-second Parquet replay without frictex's bytecode cache
@@ -87,8 +87,7 @@ def run(quick: bool) -> list[Figure]:
         runs = alternated(found, rounds)
     figures = []
     for label, got in runs.items():
-        failed = sum(r.code != 0 for r in got)
-        note = f", {failed} of {rounds} failed" if failed else ""
+        note = failed_note(sum(r.code != 0 for r in got), rounds)
         figures += [Figure("startup", f"{label}, wall (median of {rounds}, alternated{note})",
                            median(got, "wall_s"), "s"),
                     Figure("startup", f"{label}, CPU user + system (median of {rounds})",

@@ -90,6 +90,12 @@ def alternated(commands: dict[str, list[str]], rounds: int) -> dict[str, list[Ru
     return runs
 
 
+def failed_note(failed: int, total: int) -> str:
+    """", k of N failed" where ``failed`` of ``total`` runs (or rounds) failed and their
+    figures leave them out; "" where none did."""
+    return f", {failed} of {total} failed" if failed else ""
+
+
 def median(runs: list[Run], field: str) -> float:
     """The median of one field over the runs that succeeded (NaN if none did)."""
     values = [getattr(r, field) for r in runs if r.code == 0]
