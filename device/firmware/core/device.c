@@ -398,7 +398,8 @@ static void on_stop(fw_device *d, bool drain)
     if (drain && d->buf.level) {
         d->state = FW_DRAINING;
     } else {
-        count_flush(d);
+        if (!drain) /* 4.6: a drained Stop discards nothing, even on an empty buffer */
+            count_flush(d);
         silence(d);
         d->stopped = true;
     }
@@ -537,17 +538,34 @@ void fw_poll(fw_device *d)
 }
 
 /* ------------------------------------------------------------------ repair (4.10) */
+/* Where seq is in the missing list; n_missing if it is not there. */
+static uint8_t find_missing(const fw_device *d, uint16_t seq)
+{
+    uint8_t i = 0;
+    while (i < d->n_missing && d->missing_seq[i] != seq)
+        i++;
+    return i;
+}
+
 /* The `lost` host frames just before `seq` are missing since `now`; the newest
- * FW_MISSING_MAX are kept. Touched only from fw_receive (never from fw_tick). */
+ * FW_MISSING_MAX are kept. A number already listed keeps its place and only takes the
+ * new tick (as the reference device's dict does), so none is listed twice. Touched only
+ * from fw_receive (never from fw_tick). */
 static void note_missing(fw_device *d, uint16_t seq, uint16_t lost, uint32_t now)
 {
     for (uint16_t k = lost < FW_MISSING_MAX ? lost : FW_MISSING_MAX; k > 0; k--) {
+        uint16_t gone = (uint16_t)(seq - k);
+        uint8_t at = find_missing(d, gone);
+        if (at < d->n_missing) {
+            d->missing_tick[at] = now;
+            continue;
+        }
         if (d->n_missing == FW_MISSING_MAX) { /* forget the oldest */
             memmove(d->missing_seq, d->missing_seq + 1, (FW_MISSING_MAX - 1u) * 2u);
             memmove(d->missing_tick, d->missing_tick + 1, (FW_MISSING_MAX - 1u) * 4u);
             d->n_missing--;
         }
-        d->missing_seq[d->n_missing] = (uint16_t)(seq - k);
+        d->missing_seq[d->n_missing] = gone;
         d->missing_tick[d->n_missing++] = now;
     }
 }
@@ -555,15 +573,13 @@ static void note_missing(fw_device *d, uint16_t seq, uint16_t lost, uint32_t now
 /* Remove seq from the missing list; whether it was there. */
 static bool take_missing(fw_device *d, uint16_t seq)
 {
-    for (uint8_t i = 0; i < d->n_missing; i++)
-        if (d->missing_seq[i] == seq) {
-            d->n_missing--;
-            memmove(d->missing_seq + i, d->missing_seq + i + 1, (size_t)(d->n_missing - i) * 2u);
-            memmove(d->missing_tick + i, d->missing_tick + i + 1,
-                    (size_t)(d->n_missing - i) * 4u);
-            return true;
-        }
-    return false;
+    uint8_t i = find_missing(d, seq);
+    if (i == d->n_missing)
+        return false;
+    d->n_missing--;
+    memmove(d->missing_seq + i, d->missing_seq + i + 1, (size_t)(d->n_missing - i) * 2u);
+    memmove(d->missing_tick + i, d->missing_tick + i + 1, (size_t)(d->n_missing - i) * 4u);
+    return true;
 }
 
 /* Forget what has been missing longer than missing_ttl; send Missing for the rest. */
