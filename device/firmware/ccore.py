@@ -8,7 +8,9 @@ what that class offers (``receive``, ``advance_to``, ``status``, ``state``, ``le
 ``build/host/libfwsim.so`` (``host/sim_lib.c``): the same core and plate model as the pty
 host port. Its lateral force sensor reads, per tick, what the Python ``sensor`` reads
 (a constant for ``DeviceConfig.lateral_n``); the board has no simulated finger, so a
-sensor that reads the setpoints (``DeviceConfig.finger``) is refused.
+sensor that reads the setpoints (``DeviceConfig.finger``) is refused, and its ForceReports
+have a fixed shape (``host/params.c``, ``FW_FORCE_PAIRS``), so another
+``force_decimation`` or ``force_pairs`` is refused too.
 """
 
 from __future__ import annotations
@@ -32,6 +34,10 @@ _VALUES = ("state", "level", "play_index", "buffer_end", "tick", "stopped", "fin
 _DROPS = ("crc_errors", "cobs_errors", "short_frames", "oversize", "bad_version",
           "unknown_type", "bad_payload")
 _libs: dict[Path, tuple[ctypes.CDLL, type]] = {}
+#: ticks per ForceReport value on the host board (host/params.c)
+BOARD_FORCE_DECIMATION = 4
+#: values per ForceReport (FW_FORCE_PAIRS, core/fw_limits.h)
+BOARD_FORCE_PAIRS = 10
 
 
 def _load(path: Path):
@@ -87,6 +93,11 @@ class CDeviceCore:
         if config.finger is not None and sensor is None:
             raise ValueError("the C core's host board has no simulated finger; give it a "
                              "sensor that does not read the setpoints")
+        shape = (config.force_decimation, config.force_pairs)
+        if shape != (BOARD_FORCE_DECIMATION, BOARD_FORCE_PAIRS):
+            raise ValueError("the C core's host board reports forces with force_decimation "
+                             f"{BOARD_FORCE_DECIMATION} and force_pairs {BOARD_FORCE_PAIRS} "
+                             f"only (got {shape[0]} and {shape[1]})")
         # as DeviceCore: a sensor is read only if Info announces ForceReports
         self.sensor = None if not config.force_reports else \
             (config.force_sensor() if sensor is None else sensor)

@@ -330,7 +330,8 @@ class DeviceCore:
             if msg.drain and self.level:
                 self.state = S.DRAINING
             else:
-                self._count_flush()
+                if not msg.drain:  # 4.6: a drained Stop discards nothing, even when empty
+                    self._count_flush()
                 self._silence()
                 self.stopped = True
             return self.status(0)
