@@ -233,6 +233,16 @@ def test_bad_flags_are_an_error_naming_the_flag(binary, flags, message):
     assert proc.stderr.startswith("frictex-fw-host: error: ") and message in proc.stderr
 
 
+def test_a_ramp_of_0_ms_is_accepted_as_sim_device_accepts_it(binary):
+    """--ramp-ms takes 0 and above (a ramp of one tick, PROTOCOL.md 5.3), as sim-device does."""
+    proc, path = hostport.start(binary=binary, extra=("--ramp-ms", "0"))
+    sink = CommandSink(lambda: open_port(path), 1, RATE, paced=True, process=proc)
+    try:
+        assert sink.info.ramp_ms == 0
+    finally:
+        sink.close()
+
+
 def test_help_lists_the_sim_device_flags(binary):
     import subprocess
     out = subprocess.run([str(binary), "--help"], capture_output=True, text=True,

@@ -58,13 +58,14 @@ static int bad(const char *flag, const char *value, const char *expected)
     return 2;
 }
 
-static int positive_long(const char *flag, const char *s, unsigned long *out)
+/* An integer of at least `least` (0 or 1). */
+static int integer(const char *flag, const char *s, unsigned long *out, long least)
 {
     char *end;
     errno = 0;
     long v = strtol(s, &end, 10);
-    if (errno || *s == '\0' || *end != '\0' || v <= 0)
-        return bad(flag, s, "a positive integer");
+    if (errno || *s == '\0' || *end != '\0' || v < least)
+        return bad(flag, s, least > 0 ? "a positive integer" : "an integer >= 0");
     *out = (unsigned long)v;
     return 0;
 }
@@ -118,9 +119,9 @@ int host_cli_parse(int argc, char **argv, host_cli *out)
         } else if (!strcmp(flag, "--once")) {
             out->once = true;
         } else if (!strcmp(flag, "--protocol")) {
-            rc = positive_long(flag, value, &p->protocol_version);
+            rc = integer(flag, value, &p->protocol_version, 1);
         } else if (!strcmp(flag, "--channels")) {
-            rc = positive_long(flag, value, &p->channels);
+            rc = integer(flag, value, &p->channels, 1);
         } else if (!strcmp(flag, "--rate")) {
             rc = number(flag, value, &p->rate_hz, 1);
         } else if (!strcmp(flag, "--limit")) {
@@ -129,13 +130,13 @@ int host_cli_parse(int argc, char **argv, host_cli *out)
             rc = number(flag, value, &p->limits_um[limits++], 1);
             p->n_limits = (unsigned)limits;
         } else if (!strcmp(flag, "--buffer")) {
-            rc = positive_long(flag, value, &p->buffer_samples);
+            rc = integer(flag, value, &p->buffer_samples, 1);
         } else if (!strcmp(flag, "--bandwidth")) {
             rc = number(flag, value, &p->bandwidth_hz, 1);
         } else if (!strcmp(flag, "--watchdog-ms")) {
-            rc = positive_long(flag, value, &p->watchdog_ms);
+            rc = integer(flag, value, &p->watchdog_ms, 1);
         } else if (!strcmp(flag, "--ramp-ms")) {
-            rc = positive_long(flag, value, &p->ramp_ms);
+            rc = integer(flag, value, &p->ramp_ms, 0);
         } else if (!strcmp(flag, "--force")) {
             rc = number(flag, value, &p->force_n, 0);
             p->has_force = true;
@@ -149,7 +150,7 @@ int host_cli_parse(int argc, char **argv, host_cli *out)
         } else if (!strcmp(flag, "--rx-log")) {
             out->rx_log = value;
         } else if (!strcmp(flag, "--parent-pid")) {
-            rc = positive_long(flag, value, &pid);
+            rc = integer(flag, value, &pid, 1);
             out->parent_pid = (long)pid;
         }
         if (rc)

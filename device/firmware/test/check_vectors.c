@@ -64,7 +64,7 @@ static void render(const fw_msg *m)
         break;
     case FW_RESEND:
         out("resend orig=%u ", m->orig_seq);
-        /* fall through: the rest is the Block's */
+        /* fall through - the rest is the Block's */
     case FW_BLOCK: {
         const fw_block *b = &m->m.block;
         out("block start=%" PRIu64 " n=%u ch=%u amps=", b->start_index, b->n, b->channels);
