@@ -11,28 +11,15 @@ import pytest
 
 from frictex.app.commands.cli import main
 from frictex.app.measure import report_closed_loop as rcl
-from frictex.app.measure.link_report_delays import LOST, ReportDelays, read, wait_blocks
+from frictex.app.measure.link_report_delays import LOST, ReportDelays, read
 from frictex.app.measure.report_claims import HOLDS, REFUTED
 from frictex.app.measure.report_loop_records import LoopScore, RunScore
 from frictex.device.errors import InputError
 
-#: a sequence measured by ``frictex report --quick`` beside 2 busy processes at load 4.9-5.4
-#: (28 of 898 reports lost): a loaded link's, with its bursts of late reports. It was
-#: measured when a report one block past the loop's wait (11 blocks, 8 of them) was still
-#: kept, which the loop folds as missed and ``read`` refuses: ``loaded`` has them lost
+#: a sequence measured by ``frictex report --quick`` beside 2 busy processes at load 4.9-5.4:
+#: a loaded link's, with its bursts of late reports; 36 of 898 lost (8 of them reports one
+#: block past the loop's wait, kept when it was measured and lost as ``measure`` counts now)
 LOADED = Path(__file__).parent / "data" / "loop_delays_loaded.json"
-
-
-@pytest.fixture
-def loaded(tmp_path) -> Path:
-    """``LOADED`` as ``measure`` records it now: reports later than the loop's wait lost
-    (36 of 898)."""
-    doc = json.loads(LOADED.read_text())
-    wait = wait_blocks(rcl.RATE_HZ, rcl.BLOCK)
-    doc["blocks"] = [LOST if d > wait else d for d in doc["blocks"]]
-    path = tmp_path / "loop_delays_loaded.json"
-    path.write_text(json.dumps(doc))
-    return path
 
 
 def _section(delays: ReportDelays):
@@ -40,38 +27,38 @@ def _section(delays: ReportDelays):
                        noise_scenes=("grating-15mm",), delays=delays)
 
 
-def test_the_shipped_sequence_is_a_loaded_links(loaded):
-    delays = read(loaded, rcl.RATE_HZ, rcl.BLOCK)
+def test_the_shipped_sequence_is_a_loaded_links():
+    delays = read(LOADED, rcl.RATE_HZ, rcl.BLOCK)
     doc = delays.to_json()
     assert delays.measured and doc["lost"] == sum(d == LOST for d in delays.blocks) > 0
     assert doc["p99"] > doc["p50"] > rcl.REPORT_DELAY_BLOCKS
-    assert doc["source"] == str(loaded) and doc["load_start"] > 4
+    assert doc["source"] == str(LOADED) and doc["load_start"] > 4
 
 
-def test_a_report_json_and_its_delays_object_read_the_same(tmp_path, loaded):
-    alone = json.loads(loaded.read_text())
+def test_a_report_json_and_its_delays_object_read_the_same(tmp_path):
+    alone = json.loads(LOADED.read_text())
     report = tmp_path / "report.json"
     report.write_text(json.dumps({"closed_loop": {"report_delays": alone}}))
-    a, b = read(loaded, rcl.RATE_HZ, rcl.BLOCK), read(report, rcl.RATE_HZ, rcl.BLOCK)
+    a, b = read(LOADED, rcl.RATE_HZ, rcl.BLOCK), read(report, rcl.RATE_HZ, rcl.BLOCK)
     assert a.blocks == b.blocks and a.load_end == b.load_end and b.source == str(report)
 
 
-def test_two_runs_with_the_same_delays_file_give_identical_records(loaded):
-    first = _section(read(loaded, rcl.RATE_HZ, rcl.BLOCK)).to_json()
-    second = _section(read(loaded, rcl.RATE_HZ, rcl.BLOCK)).to_json()
+def test_two_runs_with_the_same_delays_file_give_identical_records():
+    first = _section(read(LOADED, rcl.RATE_HZ, rcl.BLOCK)).to_json()
+    second = _section(read(LOADED, rcl.RATE_HZ, rcl.BLOCK)).to_json()
     assert first == second
     assert first["scenes"]["grating-15mm"]["adaptive"]["noise_fraction_max"] is not None
 
 
-def test_open_loop_does_not_depend_on_the_delays_and_the_loop_does(loaded):
-    busy = _section(read(loaded, rcl.RATE_HZ, rcl.BLOCK)).scenes["grating-15mm"]
+def test_open_loop_does_not_depend_on_the_delays_and_the_loop_does():
+    busy = _section(read(LOADED, rcl.RATE_HZ, rcl.BLOCK)).scenes["grating-15mm"]
     idle = _section(ReportDelays.constant(1)).scenes["grating-15mm"]
     assert busy["open"] == idle["open"]
     assert busy["closed"].per_finger.rms_reachable != idle["closed"].per_finger.rms_reachable
 
 
-def test_the_section_replays_given_delays_without_measuring(monkeypatch, loaded):
-    given = read(loaded, rcl.RATE_HZ, rcl.BLOCK)
+def test_the_section_replays_given_delays_without_measuring(monkeypatch):
+    given = read(LOADED, rcl.RATE_HZ, rcl.BLOCK)
     seen = []
 
     def refuse(*args, **kwargs):
@@ -83,10 +70,10 @@ def test_the_section_replays_given_delays_without_measuring(monkeypatch, loaded)
     assert seen == [given]
 
 
-def test_the_section_says_where_its_delays_came_from_and_what_depends_on_them(loaded):
-    section = rcl.summarise({}, 2, 1.0, read(loaded, rcl.RATE_HZ, rcl.BLOCK))
+def test_the_section_says_where_its_delays_came_from_and_what_depends_on_them():
+    section = rcl.summarise({}, 2, 1.0, read(LOADED, rcl.RATE_HZ, rcl.BLOCK))
     text = " ".join(rcl.markdown(section))
-    assert f"recorded in {loaded}" in text and "load 4.9 to 5.4" in text
+    assert f"recorded in {LOADED}" in text and "load 4.9 to 5.4" in text
     assert "36 of 898 reports never came" in text
     assert "Every figure of the closed and adaptive rows" in text
     assert "its rows do not depend on it" in text

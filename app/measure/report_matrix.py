@@ -35,7 +35,7 @@ from frictex.app.engine.sources import TraceSource
 from frictex.rendering.input.trace_synth import make_motion, sample, truth
 from frictex.rendering.metrics import (CHATTER_PERIOD_MM, MetricError, accuracy, hold,
                                        reference, spectral_error, time_error)
-from frictex.rendering.pipeline import BLOCK_S, build_pipeline
+from frictex.rendering.pipeline import build_pipeline
 from frictex.rendering.renderers import RENDERERS, any_layer, sho_variant_of
 from frictex.rendering.input.trace_file import Trace
 from frictex.rendering.tracking.tracks import apply_index
