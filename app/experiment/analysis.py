@@ -36,9 +36,17 @@ Per study, by method:
   ratings near an end of the scale the t-interval is wide (n 3: the mean +- 2.5 sd).
 
 An interval the data cannot settle is flagged (``*_ci95_unsettled``: why, else None;
-printed after it): one that spans more than a factor of :data:`UNSETTLED_RATIO` or reaches
-0 (a threshold or slope), or a magnitude mean's from fewer than 2 distinct ratings (its
-zero width says nothing of the uncertainty).
+printed after it): one whose fit the data cannot settle (``fit_unsettled``, from
+``psychometric.Fit.unsettled``: a flat likelihood around it), one of zero width, one
+that spans more than a factor of :data:`UNSETTLED_RATIO` or reaches 0 (a threshold or
+slope), a d' interval at a raw rate of 0 or 1 (``d_prime_ci95_unsettled``), or a
+magnitude mean's from fewer than 2 distinct ratings (its zero width says nothing of the
+uncertainty). With every trial correct a fit gives no threshold, only that it lies below
+the lowest difference tested (``threshold_below``).
+
+Each session's end is recorded (``session_ends``: "complete", "stopped (...)" or
+"killed", and its main trials); one that did not run to its end is warned of. A session
+folder given twice is refused (it would count twice).
 
 Writes ``analysis.json`` (every number above) and ``analysis.png`` (one panel per study)
 into the output folder.
@@ -55,27 +63,37 @@ import numpy as np
 from scipy import stats
 
 from frictex.app.experiment import psychometric, same_different
-from frictex.app.experiment.protocol import Staircase
+from frictex.app.experiment.protocol import MIN_FIT_LEVELS, Staircase
 from frictex.app.experiment.scheduler import StaircaseState, staircase_step, staircase_threshold
 from frictex.app.experiment.session import read_info, read_rows
 from frictex.device.errors import InputError
 
 
 #: the fewest distinct differences a psychometric fit needs (one leaves the slope free)
-MIN_LEVELS = 2
+MIN_LEVELS = MIN_FIT_LEVELS
 #: the fewest reversals (in all the sessions fitted together) a staircase's fit needs
 MIN_REVERSALS = 4
 #: a threshold's or slope's interval wider than this factor (high / low) is flagged
 UNSETTLED_RATIO = 100.0
 
 
-def unsettled(ci) -> str | None:
+#: why an interval of zero width is flagged
+ZERO_WIDTH = ("unsettled: the interval has zero width (every resampling gave the same "
+              "value): the likelihood is flat there, not the estimate exact")
+
+
+def unsettled(ci, fit_problem: str | None = None) -> str | None:
     """Why the interval ``ci`` (low, high) of a positive quantity cannot be settled by
-    its data (it reaches 0 or below, or spans more than :data:`UNSETTLED_RATIO`), or
-    None (settled, or no interval)."""
+    its data (its fit's ``fit_problem``, ``psychometric.Fit.unsettled``; zero width; it
+    reaches 0 or below, or spans more than :data:`UNSETTLED_RATIO`), or None (settled,
+    or no interval)."""
     low, high = ci
     if low is None or high is None or not (math.isfinite(low) and math.isfinite(high)):
         return None
+    if fit_problem:
+        return f"unsettled: {fit_problem}"
+    if high == low:
+        return ZERO_WIDTH
     if low <= 0.0:
         return "unsettled: the interval reaches 0, the data cannot bound it from below"
     if high / low > UNSETTLED_RATIO:
@@ -107,6 +125,28 @@ def read_session(folder: str | Path) -> SessionData:
         raise InputError(f"{folder / 'session.json'}: has no design; not a session of this "
                          f"frictex")
     return SessionData(folder, info, read_rows(folder))
+
+
+def distinct_folders(folders: list[str | Path]) -> list[Path]:
+    """``folders`` as paths; InputError (one line) when two name the same folder, which
+    would count its session twice."""
+    seen: dict[Path, Path] = {}
+    for folder in map(Path, folders):
+        first = seen.setdefault(folder.resolve(), folder)
+        if first is not folder:
+            raise InputError(f"analyse: {folder} is given twice (also as {first}); each "
+                             f"session counts once")
+    return list(seen.values())
+
+
+def ended(info: dict) -> str | None:
+    """How a session (its session.json ``info``) ended: "complete", its last run's
+    ``ended`` ("stopped (...)"), "killed" (a run without an end), or None where no run
+    is recorded."""
+    if info.get("ended_utc") is not None:
+        return "complete"
+    parts = info.get("parts")
+    return (parts[-1].get("ended") or "killed") if parts else None
 
 
 def studies(sessions: list[SessionData]) -> dict[str, list[SessionData]]:
@@ -146,14 +186,17 @@ def _counts(rows: list[dict]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def _fit_dict(f: psychometric.Fit) -> dict:
     return {"function": f.function, "guess": f.guess, "lapse_max": f.lapse_max,
             "target": f.target, "alpha": f.alpha, "beta": f.beta, "lapse": f.lapse,
-            "threshold": f.threshold, "threshold_ci95": list(f.threshold_ci),
+            "threshold": f.threshold, "threshold_below": f.threshold_below,
+            "fit_unsettled": f.unsettled,
+            "threshold_ci95": list(f.threshold_ci),
             "threshold_ci_method": f.threshold_ci_method,
-            "threshold_ci95_unsettled": (unsettled(f.threshold_ci)
+            "threshold_ci95_unsettled": (unsettled(f.threshold_ci, f.unsettled)
                                          if f.threshold_ci_method else None),
             "threshold_in_tested_range": bool(f.x[0] <= f.threshold <= f.x[-1]),
             "slope": f.slope, "slope_definition": psychometric.SLOPE,
             "slope_ci95": list(f.slope_ci), "slope_ci_method": f.slope_ci_method,
-            "slope_ci95_unsettled": unsettled(f.slope_ci) if f.slope_ci_method else None,
+            "slope_ci95_unsettled": (unsettled(f.slope_ci, f.unsettled) if f.slope_ci_method
+                                     else None),
             "levels": [{"difference": float(x), "trials": int(n), "correct": int(k)}
                        for x, n, k in zip(f.x, f.n, f.k)]}
 
@@ -283,6 +326,8 @@ def _same_different(design: dict, sessions: list[SessionData]) -> dict:
         ci = same_different.d_prime_interval(c["hits"], c["different"], c["false_alarms"],
                                              c["same"], bootstrap)
         out.append({"value": value, **{k: int(v) for k, v in c.items()},
+                    "d_prime_ci95_unsettled": same_different.ceiling(
+                        c["hits"], c["different"], c["false_alarms"], c["same"]) if ci else None,
                     "hit_rate_raw": c["hits"] / c["different"] if c["different"] else None,
                     "false_alarm_rate_raw": (c["false_alarms"] / c["same"] if c["same"]
                                              else None),
@@ -340,7 +385,9 @@ def analyse_study(sessions: list[SessionData]) -> dict:
     first = sessions[0]
     design, method = first.design, first.info["method"]
     out = {"study": first.info["protocol"], "method": method, "sessions": len(sessions),
-           "vary": design["vary"], "reference": design["reference"]}
+           "vary": design["vary"], "reference": design["reference"],
+           "session_ends": [{"session": str(s.folder), "ended": ended(s.info),
+                             "main_trials": len(s.main())} for s in sessions]}
     if method in ("2afc", "staircase"):
         out.update(_forced_choice(design, sessions))
     elif method == "same-different":
@@ -364,7 +411,7 @@ def _finite(value):
 def analyse(folders: list[str | Path], out_dir: str | Path, plot: bool = True) -> list[dict]:
     """Analyse the sessions in ``folders``; write analysis.json (and analysis.png) into
     ``out_dir``; return the studies' summaries."""
-    sessions = [read_session(f) for f in folders]
+    sessions = [read_session(f) for f in distinct_folders(folders)]
     summaries = [analyse_study(group) for group in studies(sessions).values()]
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -394,6 +441,10 @@ def _forced_choice_lines(summary: dict, unit: str) -> list[str]:
     pooled = summary["pooled"]
     if pooled is None:
         lines = [f"  no threshold: {summary['no_fit']}"]
+    elif pooled["threshold_below"] is not None:
+        lines = [f"  threshold ({pooled['target']:.3g} correct, {pooled['function']}): below "
+                 f"{pooled['threshold_below']:.4g} {unit} difference (no threshold, slope or "
+                 f"interval): {pooled['fit_unsettled']}"]
     else:
         lo, hi = pooled["levels"][0]["difference"], pooled["levels"][-1]["difference"]
         where = ("" if pooled["threshold_in_tested_range"] else
@@ -407,6 +458,8 @@ def _forced_choice_lines(summary: dict, unit: str) -> list[str]:
         for name in ("threshold", "slope"):
             if pooled[f"{name}_ci_method"]:
                 lines.append(f"  {name} interval: {pooled[f'{name}_ci_method']}")
+        if pooled["fit_unsettled"] and pooled["threshold_ci_method"] is None:
+            lines.append(f"  fit unsettled: {pooled['fit_unsettled']}")
     if summary.get("staircase_threshold_mean") is not None:
         lines.append(f"  staircases: mean of the sessions' reversal means "
                      f"{summary['staircase_threshold_mean']:.4g} {unit}")
@@ -423,6 +476,9 @@ def report_lines(summary: dict) -> list[str]:
     head = (f"{summary['study']}: {summary['method']}, {summary['sessions']} session"
             f"{'s' * (summary['sessions'] != 1)}")
     lines = [head]
+    lines += [f"  warning: {end['session']} did not run to its end ({end['ended']}, "
+              f"{end['main_trials']} main trials): its planned trials are not all here"
+              for end in summary["session_ends"] if end["ended"] not in ("complete", None)]
     unit = summary["vary"] or ""
     if summary["method"] in ("2afc", "staircase"):
         lines += _forced_choice_lines(summary, unit)
@@ -440,6 +496,8 @@ def report_lines(summary: dict) -> list[str]:
                      f"{level['same']} (corrected rates {level['hit_rate']:.3f} and "
                      f"{level['false_alarm_rate']:.3f}), d' {level['d_prime']:.3f}"
                      + (f", 95 % [{ci[0]:.3f}, {ci[1]:.3f}]" if ci else "")
+                     + (f"; {level['d_prime_ci95_unsettled']}"
+                        if level["d_prime_ci95_unsettled"] else "")
                      + (f" ({note})" if note else ""))
     for st in summary.get("stimuli", []):
         low, high = (math.nan if v is None else v for v in st["ci95"])

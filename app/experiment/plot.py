@@ -26,7 +26,7 @@ def _forced_choice(ax, s: dict) -> None:
     x = np.array([lv["difference"] for lv in fit["levels"]])
     n = np.array([lv["trials"] for lv in fit["levels"]])
     k = np.array([lv["correct"] for lv in fit["levels"]])
-    ax.scatter(x, k / n, s=12 + 60 * n / n.max(), color="0.3", zorder=3, label="observed")
+    ax.scatter(x, k / n, s=12 + 60 * n / n.max(), color="0.3", zorder=3, label="observed (area ∝ trials)")
     grid = np.linspace(x.min() * 0.8, x.max() * 1.1, 300)
     grid = grid[grid > 0]
     ax.plot(grid, psi(fit["function"], grid, fit["alpha"], fit["beta"], fit["guess"],
@@ -36,6 +36,9 @@ def _forced_choice(ax, s: dict) -> None:
         ax.axvspan(lo, hi, color="C1", alpha=0.2, label="threshold 95 %")
     if fit["threshold"] is not None:
         ax.axvline(fit["threshold"], color="C1", lw=1)
+    if fit["threshold_below"] is not None:
+        ax.axvspan(0.0, fit["threshold_below"], color="C1", alpha=0.2,
+                   label="threshold below (every trial correct)")
     ax.axhline(fit["target"], color="0.6", lw=0.8, ls=":")
     ax.set_ylim(min(0.4, float((k / n).min()) - 0.05), 1.02)
     ax.set_xlabel(f"difference from the reference ({unit})")

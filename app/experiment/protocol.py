@@ -112,6 +112,8 @@ MAX_STIMULI = 100
 MAX_DIFFERENCE = 1e6
 #: the fewest bootstrap samples that give a 95 % interval (its 2.5 % tails hold 5 each)
 MIN_BOOTSTRAP = 200
+#: the fewest distinct differences a psychometric fit needs (one leaves the slope free)
+MIN_FIT_LEVELS = 2
 
 #: what the participant is asked when the file gives no ``question``
 QUESTIONS = {
@@ -374,6 +376,9 @@ def _levels_fit(c: _Check, method: str, levels: tuple[float, ...]) -> bool:
         c.report(("stimuli", "levels"), f"{len(levels)} levels; at most {MAX_LEVELS}")
     elif len(set(levels)) != len(levels):
         c.report(("stimuli", "levels"), "a level is given twice")
+    elif method in GUESS_RATES and len(levels) < MIN_FIT_LEVELS:
+        c.report(("stimuli", "levels"), f"{len(levels)} level; the psychometric fit needs at "
+                                        f"least {MIN_FIT_LEVELS} (one leaves the slope free)")
     else:
         return True
     return False
@@ -542,6 +547,17 @@ def _scale(c: _Check, doc: dict, method: str) -> tuple[int, int] | None:
     return None
 
 
+def _target_fits(c: _Check, analysis: dict | None) -> None:
+    """Report a threshold target the fit cannot reach: the fitted function tops out at
+    1 - lapse_max (the default targets, 0.75 and a rule's, lie below its least, 0.8)."""
+    if analysis is None or _BAD in analysis.values() or analysis["target"] is None:
+        return
+    top = 1.0 - analysis["lapse_max"]
+    if not analysis["target"] < top:
+        c.report(("analysis", "target"), f"{analysis['target']:g} is not below 1 - lapse_max "
+                                         f"({top:g}): the fitted function never reaches it")
+
+
 def _method_fits(c: _Check, method: str, presentation: dict | None, analysis: dict | None):
     """Report presentation and analysis settings the method cannot use."""
     if presentation is not None and presentation["mode"] == "side-by-side" and method == "magnitude":
@@ -549,6 +565,7 @@ def _method_fits(c: _Check, method: str, presentation: dict | None, analysis: di
                                            "estimation shows one")
     if analysis is not None and analysis["target"] not in (None, _BAD) and method not in GUESS_RATES:
         c.report(("analysis", "target"), f"method \"{method}\" fits no psychometric function")
+    _target_fits(c, analysis)
     if analysis is not None and analysis["bootstrap"] is not _BAD and (
             0 < analysis["bootstrap"] < MIN_BOOTSTRAP):
         c.report(("analysis", "bootstrap"), f"{analysis['bootstrap']} samples are too few for a "

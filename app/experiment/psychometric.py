@@ -38,6 +38,12 @@ covered the true threshold in 91 %, a BCa interval in 90 % (so the threshold kee
 percentile). For an adaptive procedure (:func:`fit_adaptive`) the threshold's is a
 Bayesian credible interval with the slope integrated out (:func:`credible_threshold`),
 which a short staircase needs.
+
+Some data cannot settle a fit (``Fit.unsettled`` says why): with every trial correct the
+likelihood is highest for any threshold below the lowest difference tested, so the fit
+gives that difference as an upper bound (``Fit.threshold_below``) and no threshold,
+slope or interval; where the likelihood is flat around the fit (a few trials, a step
+steeper than the levels resolve) the search stops at an arbitrary point of the ridge.
 """
 
 from __future__ import annotations
@@ -81,6 +87,10 @@ class Fit:
     ``threshold_ci_method`` and ``slope_ci_method`` say (None where none was computed).
     bootstrap : data sets drawn (0: none).
     x, n, k : the data (difference, trials, correct), sorted by x.
+    unsettled : why the data cannot settle the fit (:func:`_unsettled`), else None.
+    threshold_below : every trial correct: the lowest difference tested (units of x),
+        which bounds the threshold from above; threshold, slope and their intervals are
+        then NaN. None otherwise.
     """
 
     function: str
@@ -100,6 +110,8 @@ class Fit:
     k: np.ndarray
     threshold_ci_method: str | None
     slope_ci_method: str | None
+    unsettled: str | None = None
+    threshold_below: float | None = None
 
     def psi(self, x) -> np.ndarray:
         """The fitted proportion correct at ``x``."""
@@ -264,6 +276,38 @@ def threshold_and_slope(function: str, alpha, beta, guess: float, lapse, target:
     return np.where(reach, x, np.nan), np.where(reach, slope, np.nan)
 
 
+#: the least information (expected, per trial) about the location and spread that a
+#: settled fit has: a fit on a flat ridge of the likelihood (every answer at a level
+#: right, or a step too steep for the levels to resolve) has about 1e-10 or less; the
+#: fits of the bundled period-2afc design have about 0.03
+MIN_INFORMATION = 1e-6
+#: why a fit with every trial correct gives no threshold
+ALL_CORRECT = ("every trial was correct: the threshold lies below the lowest difference "
+               "tested, the data bound it only from above and leave the slope free")
+
+
+def _unsettled(function, x, n, k, params, guess) -> list[str | None]:
+    """Per fit (``params`` (S, 3) of counts ``k`` (S, J) of ``n`` (J,) at ``x``): why the
+    data cannot settle it, else None. Every trial correct (:data:`ALL_CORRECT`), or the
+    likelihood flat around the fit: the expected information about the normalised
+    location and log spread, its smaller eigenvalue per trial, below
+    :data:`MIN_INFORMATION`; the search then stops wherever the ridge leaves it (on its
+    start grid or a bound) and the fit's numbers are arbitrary."""
+    scale = float(np.max(x))
+    if function == "logistic":
+        theta = np.stack([params[:, 0] / scale, np.log(params[:, 1] / scale), params[:, 2]], 1)
+    else:
+        theta = np.stack([np.log(params[:, 0] / scale), np.log(params[:, 1]), params[:, 2]], 1)
+    N = np.broadcast_to(n, k.shape)
+    _, _, info = _terms(theta, function, x / scale, N, k, guess)
+    least = np.linalg.eigvalsh(info[:, :2, :2])[:, 0] / N.sum(axis=1)
+    flat = (f"the likelihood is flat around the fit (information per trial about the "
+            f"location and spread below {MIN_INFORMATION:g}): the fit stopped at an "
+            f"arbitrary point of a ridge, and its threshold and slope are arbitrary")
+    return [ALL_CORRECT if np.all(kk == N[i]) else flat if least[i] < MIN_INFORMATION
+            else None for i, kk in enumerate(k)]
+
+
 def _check(x, n, k, function, guess, lapse_max, target):
     if function not in FUNCTIONS:
         raise InputError(f"psychometric function {function!r}: expected one of {', '.join(FUNCTIONS)}")
@@ -371,10 +415,22 @@ def fit_sets(x, n, k, *, function: str = "weibull", guess: float = 0.5,
                             *_jackknife_slopes(function, x, n, k, guess, lapse_max, target))
     drawn = f", {bootstrap} data sets"
     t_method, s_method = (BOOTSTRAP + drawn, SLOPE_BCA + drawn) if bootstrap > 0 else (None, None)
-    return [Fit(function, guess, lapse_max, target, float(a), float(b), float(lam),
+    fits = [Fit(function, guess, lapse_max, target, float(a), float(b), float(lam),
                 float(thresholds[i]), float(slopes[i]), (float(t_ci[i, 0]), float(t_ci[i, 1])),
-                (float(s_ci[i, 0]), float(s_ci[i, 1])), bootstrap, x, n, k[i], t_method, s_method)
-            for i, (a, b, lam) in enumerate(params)]
+                (float(s_ci[i, 0]), float(s_ci[i, 1])), bootstrap, x, n, k[i], t_method, s_method,
+                why)
+            for i, ((a, b, lam), why) in enumerate(
+                zip(params, _unsettled(function, x, n, k, params, guess)))]
+    return [_bounded_above(f) if f.unsettled == ALL_CORRECT else f for f in fits]
+
+
+def _bounded_above(f: Fit) -> Fit:
+    """``f`` (every trial correct) as a one-sided bound: the threshold below the lowest
+    difference tested, no threshold, slope or intervals."""
+    none = (math.nan, math.nan)
+    return replace(f, threshold=math.nan, slope=math.nan, threshold_ci=none, slope_ci=none,
+                   threshold_ci_method=None, slope_ci_method=None,
+                   threshold_below=float(f.x[0]))
 
 
 #: the posterior's grids: thresholds per decade of x, log spread points, lapse rates
@@ -403,8 +459,8 @@ def credible_threshold(function: str, x, n, k, *, guess: float = 0.5,
 
     The posterior is the likelihood on a grid (Kuss et al. 2005, J Vis 5:478; Schuett
     et al. 2016, Vision Res 122:105): the threshold t log-spaced, ``_GRID_T`` points a
-    decade from a tenth of the smallest x to ten times the largest (linear over the
-    same span for the logistic), the log spread ``_GRID_B`` points over ``_PRIOR_B``
+    decade from a tenth of the smallest x to ten times the largest (for either
+    function: a threshold is a positive difference), the log spread ``_GRID_B`` points over ``_PRIOR_B``
     (a Weibull beta from 0.5 to 10), the lapse rate ``_GRID_L`` points over
     [0, lapse_max]; each prior uniform on its grid. The ends are the 2.5 % and 97.5 %
     points of t's marginal, interpolated in its cumulative sum.
@@ -439,7 +495,7 @@ def credible_threshold(function: str, x, n, k, *, guess: float = 0.5,
     u = x / scale
     lo, hi = float(u.min()) / 10.0, 10.0
     count = int(math.ceil(_GRID_T * math.log10(hi / lo))) + 1
-    t = np.geomspace(lo, hi, count) if function == "weibull" else np.linspace(-hi, hi, count)
+    t = np.geomspace(lo, hi, count)
     B, L = np.meshgrid(np.linspace(*_PRIOR_B[function], _GRID_B),
                        np.linspace(0.0, lapse_max, _GRID_L), indexing="ij")
     a = _a_at_threshold(function, t[:, None], B.ravel()[None, :], L.ravel()[None, :], guess,
@@ -483,6 +539,8 @@ def fit_adaptive(x, correct, simulate, *, function: str = "weibull", guess: floa
     n, k = np.bincount(inverse, minlength=xs.size), np.bincount(inverse, correct, xs.size)
     fitted = fit_sets(xs, n.astype(np.float64), k, function=function, guess=guess,
                       lapse_max=lapse_max, target=target, bootstrap=0)[0]
+    if fitted.threshold_below is not None:
+        return fitted
     fitted = replace(fitted, threshold_ci=credible_threshold(
         function, xs, n, k, guess=guess, lapse_max=lapse_max, target=target),
         threshold_ci_method=CREDIBLE)

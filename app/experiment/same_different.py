@@ -27,8 +27,8 @@ from frictex.app.experiment.psychometric import data_seed
 #: the model, as the analysis names it
 MODEL = "differencing model (Macmillan & Creelman 2005, ch. 9)"
 #: the interval, as the analysis names it
-INTERVAL = ("bootstrap over trials (the different and the same trials resampled apart), "
-            "95 % percentile interval")
+INTERVAL = ("bootstrap over trials (the different and the same trials resampled apart, "
+            "each at its corrected rate), 95 % percentile interval")
 #: how the hit and false-alarm rates are taken, as the analysis names it
 CORRECTION = ("log-linear correction, (count + 0.5) / (trials + 1) (Hautus 1995), which "
               "keeps rates of 0 and 1 finite")
@@ -82,7 +82,20 @@ def d_prime_interval(hits: int, different: int, false_alarms: int, same: int,
     if bootstrap == 0 or different == 0 or same == 0:
         return None
     rng = np.random.default_rng(data_seed([hits, different, false_alarms, same]))
-    h = rng.binomial(different, hits / different, bootstrap)
-    f = rng.binomial(same, false_alarms / same, bootstrap)
+    # drawn at the corrected rates: at a raw rate of 0 or 1 every draw would equal the
+    # data and the interval would have zero width
+    h = rng.binomial(different, rate(hits, different), bootstrap)
+    f = rng.binomial(same, rate(false_alarms, same), bootstrap)
     low, high = np.percentile(d_prime(rate(h, different), rate(f, same)), [2.5, 97.5])
     return float(low), float(high)
+
+
+def ceiling(hits: int, different: int, false_alarms: int, same: int) -> str | None:
+    """Why d' and its interval rest on the correction rather than the data (every
+    different pair called different or no same pair called different, with hits above
+    false alarms), else None."""
+    if hits / different <= false_alarms / same or (hits < different and false_alarms > 0):
+        return None
+    return ("unsettled: a raw rate of 0 or 1 (all hits or no false alarms); d' and its "
+            "interval are what the log-linear correction allows with these trials, and "
+            "the true d' may be higher (a lower bound)")
