@@ -1,7 +1,7 @@
 """Fits and intervals the data cannot settle, said so rather than given as numbers:
 every trial correct (a one-sided bound), a flat likelihood, zero-width intervals, d'
 at perfect performance; and the checks that keep a session analysable: a threshold
-target the fit can reach, two levels for a fit, a session counted once, a stopped
+target the fit can reach, a session counted once, a stopped
 session warned of. Each number is checked against a computation written out here."""
 
 import math
@@ -134,7 +134,6 @@ def write(tmp_path, levels, analysis):
 @pytest.mark.parametrize("levels, analysis, line, words", [
     ("[5.5, 6.5]", "target = 0.97\nlapse_max = 0.05", 9,
      "analysis.target: 0.97 is not below 1 - lapse_max (0.95)"),
-    ("[5.5]", "lapse_max = 0.05", 7, "stimuli.levels: 1 level; the psychometric fit needs"),
 ])
 def test_a_protocol_its_analysis_would_refuse_is_refused(tmp_path, levels, analysis, line,
                                                          words):

@@ -63,14 +63,14 @@ import numpy as np
 from scipy import stats
 
 from frictex.app.experiment import psychometric, same_different
-from frictex.app.experiment.protocol import MIN_FIT_LEVELS, Staircase
+from frictex.app.experiment.protocol import Staircase
 from frictex.app.experiment.scheduler import StaircaseState, staircase_step, staircase_threshold
 from frictex.app.experiment.session import read_info, read_rows
 from frictex.device.errors import InputError
 
 
 #: the fewest distinct differences a psychometric fit needs (one leaves the slope free)
-MIN_LEVELS = MIN_FIT_LEVELS
+MIN_LEVELS = 2
 #: the fewest reversals (in all the sessions fitted together) a staircase's fit needs
 MIN_REVERSALS = 4
 #: a threshold's or slope's interval wider than this factor (high / low) is flagged

@@ -112,8 +112,6 @@ MAX_STIMULI = 100
 MAX_DIFFERENCE = 1e6
 #: the fewest bootstrap samples that give a 95 % interval (its 2.5 % tails hold 5 each)
 MIN_BOOTSTRAP = 200
-#: the fewest distinct differences a psychometric fit needs (one leaves the slope free)
-MIN_FIT_LEVELS = 2
 
 #: what the participant is asked when the file gives no ``question``
 QUESTIONS = {
@@ -376,9 +374,6 @@ def _levels_fit(c: _Check, method: str, levels: tuple[float, ...]) -> bool:
         c.report(("stimuli", "levels"), f"{len(levels)} levels; at most {MAX_LEVELS}")
     elif len(set(levels)) != len(levels):
         c.report(("stimuli", "levels"), "a level is given twice")
-    elif method in GUESS_RATES and len(levels) < MIN_FIT_LEVELS:
-        c.report(("stimuli", "levels"), f"{len(levels)} level; the psychometric fit needs at "
-                                        f"least {MIN_FIT_LEVELS} (one leaves the slope free)")
     else:
         return True
     return False
