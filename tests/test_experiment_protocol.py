@@ -72,12 +72,13 @@ def test_the_bundled_protocols_load():
 
 
 def test_seed003_protocol_is_the_seeds_design():
-    """Seed 003 section 5: three periods, each with both strategies, rated 1 to 10."""
+    """Seed 003 section 5: three periods, each with both strategies, rated 1 to 10; its
+    SHO the position map at the last touch sample (held between samples)."""
     p = load_protocol(ROOT / "app" / "experiment" / "protocols" / "seed003-gratings.toml")
     periods = sorted({s.scene.stem for s in p.stimuli.listed})
     assert periods == ["grating-0.6mm", "grating-15mm", "grating-5mm"]
     assert {(s.scene.stem, s.renderer) for s in p.stimuli.listed} == {
-        (f"grating-{period}", r) for period in ("0.6mm", "5mm", "15mm") for r in ("sho", "sht")}
+        (f"grating-{period}", r) for period in ("0.6mm", "5mm", "15mm") for r in ("sho-held", "sht")}
     assert p.scale == (1, 10) and p.presentation.exploration == "free"
     assert p.presentation.show_scene  # the grating was on the screen as well
 
