@@ -28,6 +28,7 @@ from frictex.app.commands.argtypes import positive_int
 from frictex.app.engine.fanout import default_workers, fan_out
 from frictex.app.measure import report_matrix as rm
 from frictex.device.errors import InputError
+from frictex.rendering.pipeline import BLOCK_S
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -131,7 +132,7 @@ def _matrix(args: argparse.Namespace, jobs: int):
         bar.close()
     lut = LutFrictionModel(make_friction_model(rm.load(args.scenes[0]).device))
     return rows, Settings(reference_hz=rm.REFERENCE_HZ, touch_noise_mm=rm.TOUCH_NOISE_MM,
-                          block_s=rm.BLOCK_S, motions=rm.MOTIONS,
+                          block_s=BLOCK_S, motions=rm.MOTIONS,
                           lut_max_error_um=lut.max_error_um(), cpu_count=os.cpu_count(),
                           jobs=None if args.scheduler else jobs, scheduler=args.scheduler,
                           wall_s=time.perf_counter() - wall,
