@@ -15,6 +15,12 @@ def manifest(tmp_path, *names, trace="swipe-40mms-50hz"):
     return path
 
 
+def broken_trace(folder) -> None:
+    """``folder/broken-trace.csv``: a file a job's replay refuses (the manifest's reading
+    only checks that it is there)."""
+    (folder / "broken-trace.csv").write_text("not,a,trace\n")
+
+
 def batch(path, out, *extra) -> int:
     return main(["batch", str(path), "--out", str(out), "--jobs", "1", "--quiet", *extra])
 
@@ -46,9 +52,10 @@ def test_an_earlier_jobs_folder_goes_when_its_job_now_fails(tmp_path, capsys):
     they were this batch's."""
     out = tmp_path / "o"
     assert batch(manifest(tmp_path, "a", "b"), out) == 0
+    broken_trace(tmp_path)
     broken = tmp_path / "m-broken.csv"
     broken.write_text("scene,trace,name\ngrating-5mm,swipe-40mms-50hz,a\n"
-                      "grating-5mm,no-such-trace.csv,b\n")
+                      "grating-5mm,broken-trace.csv,b\n")
     assert batch(broken, out) == 1
     assert listing(out) == ["a", "batch.csv"]
     assert {r["name"]: r["status"] for r in results(out)} == {"a": "ok", "b": "failed"}
@@ -90,9 +97,10 @@ def test_each_column_counts_what_it_says(tmp_path):
     """x_realtime is output_s / wall_s of the same row; the replay's end-to-end factor,
     which leaves the start-up out, is at least as large; a failed job's numeric cells
     are empty."""
+    broken_trace(tmp_path)
     path = tmp_path / "m.csv"
     path.write_text("scene,trace,name\ngrating-5mm,swipe-40mms-50hz,ok1\n"
-                    "grating-5mm,no-such-trace.csv,bad\n")
+                    "grating-5mm,broken-trace.csv,bad\n")
     assert batch(path, tmp_path / "o") == 1
     rows = {row["name"]: row for row in results(tmp_path / "o")}
     assert list(rows["ok1"]) == list(RESULT_COLUMNS)

@@ -5,7 +5,8 @@ Manifest grammar (CSV with a header; ``#`` lines are comments)::
     scene,trace[,renderer][,rate_hz][,block][,format][,name]
 
 ``scene`` and ``trace`` as ``frictex replay`` takes them (a file, relative to the
-manifest's folder, or a bundled name), confined as the files a texture file names are
+manifest's folder, or a bundled name: one that is neither is a problem of its line, with
+the library's "did you mean" hint), confined as the files a texture file names are
 (``textures.outside``): in the manifest's folder or below, links followed, unless
 ``--allow-outside`` (``FRICTEX_ALLOW_OUTSIDE=1``) lifts it, so that a stranger's manifest
 cannot make a batch read any file of the machine; a '..' or a link leading out is
@@ -93,7 +94,9 @@ from frictex.app.engine.tables import FORMATS
 from frictex.device.errors import FrictexError, InputError
 from frictex.device.safe_text import escape, quoted
 from frictex.rendering.input.trace_file import MAX_LINE_BYTES, NUMBER, describe_header
-from frictex.textures.library import UnreadableText, read_utf8
+from frictex.textures.errors import TextureError
+from frictex.textures.library import (UnreadableText, read_utf8, resolve_scene,
+                                      resolve_trace)
 from frictex.textures.outside import HOW, allow_outside_from_env, leads_out
 
 COLUMNS = ("scene", "trace", "renderer", "rate_hz", "block", "format", "name")
@@ -323,11 +326,15 @@ def _stem(spec: str) -> str:
     return re.sub(r"[^A-Za-z0-9._-]", "_", name)[:28] or "job"
 
 
+#: how ``frictex replay`` finds a scene or a trace that is not a file: a bundled name
+RESOLVERS = {"scene": resolve_scene, "trace": resolve_trace}
+
+
 def _path(key: str, spec: str | None, base: Path, where: str) -> str:
     """The ``scene`` or ``trace`` field ``spec``: the file relative to the manifest's
-    folder ``base`` (its real path) where such a file exists, else as given (a bundled
-    name, or a path the replay will report as missing); a ManifestError if it is empty
-    or, unless allowed, leads outside ``base`` (module docstring)."""
+    folder ``base`` (its real path) where such a file exists, else a bundled name, as
+    given; a ManifestError if it is empty, is neither (with the library's "did you
+    mean" hint), or, unless allowed, leads outside ``base`` (module docstring)."""
     if not spec:
         raise ManifestError(f"{where}: {key} is empty")
     how = None if allow_outside_from_env() else _leads_out(base, spec)
@@ -336,9 +343,15 @@ def _path(key: str, spec: str | None, base: Path, where: str) -> str:
                             f"its own folder or below, or bundled scenes and traces ({HOW})")
     candidate = base / spec
     try:
-        return os.path.realpath(candidate) if candidate.exists() else spec
-    except OSError:  # a name too long for the file system: the replay reports it
-        return spec
+        if candidate.exists():
+            return os.path.realpath(candidate)
+        RESOLVERS[key](spec)
+    except TextureError as exc:
+        raise ManifestError(f"{where}: {key} {exc}") from None
+    except OSError as exc:  # a name too long for the file system
+        raise ManifestError(f"{where}: {key} {quoted(spec)}: "
+                            f"{exc.strerror or 'cannot be read'}") from None
+    return spec
 
 
 def _leads_out(base: Path, spec: str) -> str | None:
