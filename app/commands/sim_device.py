@@ -3,7 +3,9 @@
 Prints where a host reaches it as the first line on stdout (the pty's path, or
 ``socket://HOST:PORT`` with ``--tcp``), then speaks the device side of
 ``device/PROTOCOL.md`` to host after host until Ctrl-C (or, with ``--once``, until the
-first host's Stop has played out).
+first host's Stop has played out). Ctrl-C closes the port and the logs, prints what was
+played, then ends as every command does: ``frictex: interrupted``, exit 130 (SIGTERM
+ends it as a finished run, exit 0).
 
 One host at a time: over TCP, a connection made while a host is connected is refused
 (it gets an ErrorReport saying the device is busy and is closed, a line on stderr says
@@ -117,10 +119,23 @@ def run(args: argparse.Namespace) -> int:
                           phases=args.phases, sensor=args.sensor, force_n=args.force,
                           protocol_version=args.protocol, lateral_n=args.lateral,
                           finger=args.finger, finger_speed_mm_s=args.finger_speed)
-    logs = []
     core = DeviceCore(config)
     quit_event = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: quit_event.set())
+    try:
+        _serve_logged(core, args, quit_event)
+    except KeyboardInterrupt:  # port and logs closed: the counts, then the command line's
+        _print_counts(core)    # 'frictex: interrupted', exit 130
+        raise
+    _print_counts(core)
+    return 0
+
+
+def _serve_logged(core: DeviceCore, args: argparse.Namespace,
+                  quit_event: threading.Event) -> None:
+    """:func:`_serve`, with the ``--log`` and ``--plate-log`` files open (closed whatever
+    ends it)."""
+    config, logs = core.config, []
     try:
         if args.log:
             core.log, csv = played_log(args.log, config.channels, config.phases)
@@ -137,11 +152,14 @@ def run(args: argparse.Namespace) -> int:
     finally:
         for csv in logs:
             csv.close()
+
+
+def _print_counts(core: DeviceCore) -> None:
+    """What the device played and what went wrong, on stderr."""
     k = core.counters
     print(f"frictex sim-device: played {k.played_samples} samples; {k.underruns} underruns, "
           f"{core.decoder.counts.discarded} bad frames, {k.watchdog_trips} watchdog trips",
           file=sys.stderr)
-    return 0
 
 
 def _serve(core: DeviceCore, args: argparse.Namespace, quit_event: threading.Event) -> None:
@@ -167,13 +185,11 @@ def _serve(core: DeviceCore, args: argparse.Namespace, quit_event: threading.Eve
         def close():
             os.close(master)
             os.close(slave)
-    print(where, flush=True)
-    print(f"frictex sim-device: {core.config.channels} channel(s) at {core.config.rate_hz:g} Hz "
-          f"on {where}; Ctrl-C to quit", file=sys.stderr)
     try:
+        print(where, flush=True)
+        print(f"frictex sim-device: {core.config.channels} channel(s) at "
+              f"{core.config.rate_hz:g} Hz on {where}; Ctrl-C to quit", file=sys.stderr)
         serve(core, **target, **options)
-    except KeyboardInterrupt:
-        pass
     finally:
         close()
 
