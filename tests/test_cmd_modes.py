@@ -44,8 +44,8 @@ def test_timoshenko_is_lower_than_euler_bernoulli(capsys):
 def test_beam_table_and_plot(capsys, tmp_path):
     png = tmp_path / "beam.png"
     assert main(["modes", "beam", "--plot", str(png)]) == 0
-    out = capsys.readouterr().out
-    assert "euler-bernoulli" in out and "28526.3" in out and f"plot written to {png}" in out
+    out, err = capsys.readouterr()
+    assert "euler-bernoulli" in out and "28526.3" in out and err == f"plot written to {png}\n"
     assert png.stat().st_size > 10_000
 
 
@@ -154,8 +154,9 @@ def test_ring_split_never_prints_minus_zero(capsys, monkeypatch):
 
 def test_ring_plot_is_seed_004_fig_2c(capsys, tmp_path):
     png = tmp_path / "ring.png"
-    assert main(["modes", "ring", "--orders", "24", "--plot", str(png)]) == 0
-    assert f"plot written to {png}" in capsys.readouterr().out
+    assert main(["modes", "ring", "--orders", "24", "--plot", str(png), "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["modes"] and err == f"plot written to {png}\n"  # stdout all JSON
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
 
 

@@ -110,10 +110,10 @@ def print_modes(title: str, modes: list[dict], as_json: bool) -> None:
 
 def save_figure(fig, path: Path) -> None:
     """Write ``fig`` to ``path`` as a PNG, all or nothing (``app.engine.outfile``), and
-    say where."""
+    say where on stderr (stdout holds the table or the JSON)."""
     import matplotlib.pyplot as plt
     try:
         write_file(path, lambda to: fig.savefig(to, format="png", dpi=110), PLOT_BYTES)
     finally:
         plt.close(fig)
-    print(f"plot written to {path}")
+    print(f"plot written to {path}", file=sys.stderr)

@@ -26,7 +26,7 @@ from frictex.device.structures.beam import VALID_WAVELENGTH_IN_THICKNESSES, Mode
 from frictex.device.actuation.travelling import phase_shift_response, ring_wave
 from frictex.device.profile import DrivingForceParams
 from frictex.device.structures.ring import THIN_RING_H_OVER_R, RingResonator
-from frictex.textures.keys import MAX_MODE_ORDER, MAX_UM
+from frictex.textures.keys import MAX_FORCE_N, MAX_MODE_ORDER, MAX_UM
 
 #: crossings listed: L/R within this factor of the ring's own
 _RATIO_WINDOW = 2.0
@@ -35,6 +35,11 @@ _BEYOND = "shear makes the true frequency lower"
 #: --phase-shift's defaults, seed 004's Fig. 4 conditions: its largest amplitude (+-3 um,
 #: section IV.B) and the two normal forces of Fig. 4c; the step of the phase shift (deg)
 _PHASE_DEFAULTS = {"phase_step_deg": 15.0, "amplitude_um": 3.0, "normal_force_n": [1.0, 0.5]}
+#: the amplitude (um) above which the driving-force line (seed 004, Fig. 3c: k_p F_n
+#: (w - w_th)) would push a still finger harder than its friction at rest, mu0 F_n, can:
+#: the plate drives the finger through that friction, and seed 004 expects a plateau
+_DRIVE = DrivingForceParams()
+FRICTION_BOUND_UM = _DRIVE.threshold_um + _DRIVE.mu0 / _DRIVE.slope_per_um
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -66,10 +71,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                                             "-180 to 180 deg, dividing 180 (default 15)")
     parser.add_argument("--amplitude-um", type=bounded(float, 0.01, MAX_UM, "um"), metavar="W",
                         help="with --phase-shift: amplitude of each mode, um zero-to-peak, "
-                             f"0.01 to {MAX_UM:g} (default 3, seed 004's largest)")
-    parser.add_argument("--normal-force-n", type=positive_float, nargs="+", metavar="N",
-                        help="with --phase-shift: normal force(s) of the finger in N (default 1 "
-                             "0.5, seed 004 Fig. 4c)")
+                             f"0.01 to {FRICTION_BOUND_UM:.3g} (default 3, seed 004's largest; "
+                             "above, the force's line would pass the finger's friction)")
+    parser.add_argument("--normal-force-n", type=bounded(float, 0.01, MAX_FORCE_N, "N"),
+                        nargs="+", metavar="N",
+                        help="with --phase-shift: normal force(s) of the finger in N, 0.01 to "
+                             f"{MAX_FORCE_N:g} (default 1 0.5, seed 004 Fig. 4c)")
     add_plot_argument(parser, "also write each pair's frequency split against L/R (seed 004, "
                               "Fig. 2c), and with --phase-shift the ratio and force against the "
                               "phase shift (Fig. 4)")
@@ -136,6 +143,12 @@ def _check_phase_options(args: argparse.Namespace) -> None:
     if abs(steps - round(steps)) > 1e-9:
         raise ModesError(f"--phase-step-deg {args.phase_step_deg:g}: must divide 180 (e.g. 5, "
                          "10, 15, 30, 45)")
+    if args.amplitude_um > FRICTION_BOUND_UM:
+        raise ModesError(f"--amplitude-um {args.amplitude_um:g}: above {FRICTION_BOUND_UM:.3g} "
+                         f"um the driving-force line (seed 004, Fig. 3c: {_DRIVE.slope_per_um:g} "
+                         f"N/um per N above {_DRIVE.threshold_um:g} um) would push a still "
+                         f"finger harder than its friction at rest ({_DRIVE.mu0:g} F_n), "
+                         "through which the plate drives it")
     limit_um = _PHASE_DEFAULTS["amplitude_um"]
     if args.amplitude_um > limit_um:
         warn(f"--amplitude-um {args.amplitude_um:g}: above {limit_um:g} um, beyond seed 004's "
