@@ -172,6 +172,11 @@ def test_calibrate_recovers_the_simulated_finger_within_5_percent(tmp_path, caps
     seconds = float(printed.out.split(" s of sliding")[0].split()[-1])
     assert seconds < 30.0
     assert "calibrating: step 25/25" in printed.err
+    # the 25 steps the progress counts are 12 amplitude steps between 13 rest steps
+    assert "12 points from 25 steps in 12.5 s of sliding (one per amplitude step" in printed.out
+    assert "13 rest steps" in printed.out
+    assert f"wrote {out} (the [device] section" in printed.out
+    assert f"wrote {tmp_path / 'fit.png'} (the measured points" in printed.out
     # the finger's effective constants at the protocol's 60 mm/s, mid-run
     b_true = finger.b_per_um / (1 + 60.0 / finger.v_c_mm_s)
     k_true = finger.k_per_n * (1 + finger.k_drift * moisture(seconds / 2, finger))

@@ -95,18 +95,29 @@ def run(args: argparse.Namespace) -> int:
     finally:
         link.close()
     fit = fit_points(w, normal, mu)
-    print(f"{fit.n_points} points in {sweep.duration_s:g} s of sliding; seed 003 eq 2 fit: "
+    print(f"{_points_from_steps(fit.n_points, sweep)}; seed 003 eq 2 fit: "
           f"b = {fit.params.b_per_um:.4f} /um, k = {fit.params.asymptote_per_n:.4f} /N, "
           f"residual RMS {fit.residual_rms:.5f} (mu')"
           + ("" if fit.calibration is None else "; the model does not fit: its measured "
              f"table ({len(fit.calibration.amplitudes_um)} amplitudes) written"))
     text = device_toml(fit, limit_um, sweep.force_n, fitted=fitted).encode("utf-8")
     write_file(args.out, lambda to: to.write_bytes(text), len(text))
-    print(f"wrote {args.out}")
+    print(f"wrote {args.out} (the [device] section a texture file can use; --out)")
     if args.plot is not None:
         _plot(args.plot, w, normal, mu, fit)
-        print(f"wrote {args.plot}")
+        print(f"wrote {args.plot} (the measured points against the fitted curve; --plot)")
     return 0
+
+
+def _points_from_steps(n_points: int, sweep: Sweep) -> str:
+    """How the sweep's steps became the fit's points: each amplitude step is one point,
+    its friction over the mean of the rest steps either side of it (the friction at rest
+    mu0, ``device.calibration_run``)."""
+    n_steps = len(sweep.amplitudes())
+    n_rest = n_steps - len(sweep.levels)
+    return (f"{n_points} points from {n_steps} steps in {sweep.duration_s:g} s of sliding "
+            f"(one per amplitude step, its friction over that of the rest steps either side "
+            f"of it: {n_rest} rest steps, which give the friction at rest)")
 
 
 def _sim_args(device: str, finger: int | None, sweep: Sweep) -> tuple[str, ...]:
