@@ -65,6 +65,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_allow_outside(parser)
 
 
+def _written(tables: list[str], frames) -> list[str]:
+    """What a replay wrote in its folder, for its closing line: its ``tables``, the
+    summary and, with ``frames`` (a FrameWriter), the frames' folder and its PNG count."""
+    folders = [] if frames is None else [f"frames/ ({frames.count} PNGs)"]
+    return [*tables, "summary.json", *folders]
+
+
 def _listed(names: tuple[str, ...]) -> str:
     """Registered names for a help text (argparse formats it with %)."""
     return ", ".join(names).replace("%", "%%")
@@ -100,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
             clamps += f", {limited} samples at an actuator limit"
         print(f"replayed {summary['trace']['samples']} touch samples -> {out['samples']} output "
               f"samples ({out['duration_s']:.3f} s at {out['rate_hz']:g} Hz) in {args.out}: "
-              f"{', '.join(out['files'])}, summary.json; {clamps}; "
+              f"{', '.join(_written(out['files'], frames))}; {clamps}; "
               f"{timing['x_realtime_end_to_end']:.3g}x real time end to end (read, compute, "
               f"write; {timing['x_realtime_with_setup']:.3g}x with the {timing['setup_s']:.2f} s "
               f"start-up, {timing['x_realtime_compute']:.3g}x compute only)")
