@@ -226,6 +226,16 @@ def test_validate_perception_warns_and_never_fails(tmp_path, capsys):
     assert "(protocol, 1 perception warning)" in out and "5 and 5.65" in err
 
 
+def test_validate_perception_counts_rendering_notes_apart_from_perception_warnings(capsys):
+    """seed003-gratings's one finding is the 0.6 mm grating's touch-Nyquist note, which
+    concerns rendering: it is no perception warning."""
+    path = ROOT / "app" / "experiment" / "protocols" / "seed003-gratings.toml"
+    assert main(["validate", "--perception", str(path)]) == 0
+    out, err = capsys.readouterr()
+    assert "(protocol, 0 perception warnings, 1 rendering note)" in out
+    assert err.count(": rendering: ") == 1 and ": perception: " not in err
+
+
 def test_validate_perception_reports_a_bad_protocol(tmp_path, capsys):
     (tmp_path / "p.toml").write_text(PARAMETRIC.replace('method = "2afc"', 'method = "x"'))
     assert main(["validate", "--perception", str(tmp_path / "p.toml")]) == 2

@@ -5,7 +5,9 @@ A window session the participant stops (Escape, closing the window) is one line 
 where it stopped and how to resume, exit 130 (as Ctrl-C); SIGTERM or SIGHUP stop it the
 same way, ``frictex: terminated by SIGTERM at trial N ...``, exit 128 + the signal.
 
-The protocol format: ``app/experiment/PROTOCOL_FORMAT.md``; the session folder:
+PROTOCOL is a protocol file or, when no file of that name exists, a bundled protocol's
+name (``app.experiment.protocol.resolve_protocol``). The protocol format:
+``app/experiment/PROTOCOL_FORMAT.md``; the session folder:
 ``app/experiment/session.py``; the analysis: ``app/experiment/analysis.py``.
 """
 
@@ -39,8 +41,11 @@ def session_seed(text: str) -> int:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from frictex.app.experiment.protocol import protocol_names
     parser.add_argument("target", nargs="+", metavar="PROTOCOL | analyse SESSION",
-                        help="a protocol file (.toml) to run, or 'analyse' and session folders")
+                        help="a protocol file (.toml) to run, or the name of a bundled "
+                             f"protocol ({', '.join(protocol_names())}; a file of that name "
+                             "wins), or 'analyse' and session folders")
     parser.add_argument("--participant", metavar="NAME:OPTIONS", default=None,
                         help="who answers: 'window' is a person at the demo's window (on "
                              "--device, as frictex demo); 'simulated:weber=0.11,lapse=0.02"
@@ -133,9 +138,10 @@ def run(args: argparse.Namespace) -> int:
     if len(args.target) != 1:
         raise InputError(f"expected one protocol file, got {len(args.target)} arguments "
                          f"(to analyse sessions: frictex experiment analyse SESSION ...)")
-    from frictex.app.experiment.protocol import check_protocol, load_protocol
+    from frictex.app.experiment.protocol import check_protocol, load_protocol, resolve_protocol
+    path = resolve_protocol(args.target[0])
     if args.check:
-        protocol, problems = check_protocol(args.target[0])
+        protocol, problems = check_protocol(path)
         if protocol is None:  # every problem, one line each, as frictex validate lists them
             from frictex.app.commands.cli import printable
             for problem in problems:
@@ -149,7 +155,7 @@ def run(args: argparse.Namespace) -> int:
                  f"{protocol.staircase.max_trials} trials")
         print(f"{args.target[0]}: {protocol.name}, {protocol.method}: {count}")
         return 0
-    protocol = load_protocol(args.target[0])
+    protocol = load_protocol(path)
     if args.out is None:
         raise InputError("--out DIR is required: the session folder")
     from frictex.app.experiment.session import folder_of, participant_id

@@ -20,8 +20,10 @@ program's surroundings (device, link, output space).
 
 ``--perception`` adds what a finger can feel (``rendering.perception``, each threshold
 with its source): a scene's features below the published thresholds, and for an
-experiment protocol (a file with a top-level ``method``) its scenes and its stimuli
-compared pair by pair (``app.experiment.perception_check``). These are printed as
+experiment protocol (a file with a top-level ``method``, or a bundled protocol's name
+where no file and no bundled scene has that name) its scenes and its stimuli compared
+pair by pair (``app.experiment.perception_check``); a protocol's ok line counts its
+perception warnings and, apart from them, its rendering notes. These are printed as
 ``frictex: warning: FILE: perception: ...``, and a periodic layer finer than the touch
 samples can place (a limit of rendering, not of perception: what the layer's renderer
 makes of it) as ``frictex: warning: FILE: rendering: ...``. They never fail a file, not
@@ -33,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from frictex.app.commands.cli import printable
 from frictex.device.safe_text import escape_path
@@ -45,7 +48,10 @@ from frictex.textures.outside import add_allow_outside
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("files", nargs="+", metavar="FILE",
-                        help="texture file (.toml), or a bundled scene name (see frictex library)")
+                        help="texture file (.toml), or a bundled scene name (see frictex "
+                             "library); with --perception also an experiment protocol: a file "
+                             "with a top-level 'method', or a bundled protocol's name (a name "
+                             "is looked up among the scenes first, then the protocols)")
     parser.add_argument("--strict", action="store_true",
                         help="a file with warnings fails too (exit 2), e.g. a scene whose "
                              "layers together ask for a friction below the device's floor")
@@ -53,8 +59,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="also report features a finger cannot feel (published thresholds, "
                              "each with its source) and periods finer than the touch samples "
                              "can place (what the layer's renderer makes of them); FILE may be "
-                             "an experiment protocol, whose stimuli are compared pair by pair; "
-                             "warnings only")
+                             "an experiment protocol (file or bundled name), whose stimuli are "
+                             "compared pair by pair; warnings only, perception warnings counted "
+                             "apart from rendering notes")
     add_allow_outside(parser)
 
 
@@ -117,7 +124,6 @@ def force_reach_warnings(path, scene) -> list[str]:
 def _is_protocol(name: str) -> bool:
     """True for a readable TOML file with a top-level ``method`` (an experiment protocol)."""
     import tomllib
-    from pathlib import Path
 
     try:
         return "method" in tomllib.loads(Path(name).read_text(encoding="utf-8"))
@@ -125,44 +131,84 @@ def _is_protocol(name: str) -> bool:
         return False
 
 
-def _perception(label, findings) -> None:
-    """Print ``findings`` (``rendering.perception``): "perception:" for what a finger
-    will not feel, "rendering:" for how a layer renders (``RENDERING_KINDS``)."""
+def _about(finding) -> str:
+    """"rendering" for a note on how a layer renders (``RENDERING_KINDS``), else
+    "perception" (what a finger will not feel)."""
     from frictex.rendering.perception import RENDERING_KINDS
+    return "rendering" if finding.kind in RENDERING_KINDS else "perception"
+
+
+def _perception(label, findings) -> None:
+    """Print ``findings`` (``rendering.perception``), each as "perception:" or
+    "rendering:" (:func:`_about`)."""
     for finding in findings:
-        about = "rendering" if finding.kind in RENDERING_KINDS else "perception"
-        print(f"frictex: warning: {escape_path(label)}: {about}: {printable(finding.message)}",
-              file=sys.stderr)
+        print(f"frictex: warning: {escape_path(label)}: {_about(finding)}: "
+              f"{printable(finding.message)}", file=sys.stderr)
 
 
-def _protocol(name: str) -> bool:
-    """Check protocol ``name`` with --perception; True if it is good."""
+def _counted(count: int, what: str) -> str:
+    """``1 perception warning``, ``2 rendering notes``."""
+    return f"{count} {what}{'s' * (count != 1)}"
+
+
+def _protocol(path) -> bool:
+    """Check the protocol file ``path`` with --perception; True if it is good. Its ok line
+    counts the perception warnings, and apart from them any rendering notes."""
     from frictex.app.experiment.perception_check import protocol_findings
     from frictex.app.experiment.protocol import check_protocol
 
-    protocol, problems = check_protocol(name)
+    protocol, problems = check_protocol(path)
     for problem in problems:
         print(f"frictex: error: {printable(str(problem))}", file=sys.stderr)
     if protocol is None:
         return False
     findings = protocol_findings(protocol)
-    _perception(name, findings)
-    print(f"ok {escape_path(name)} (protocol, {len(findings)} perception warning"
-          f"{'s' * (len(findings) != 1)})")
+    _perception(path, findings)
+    rendering = sum(_about(finding) == "rendering" for finding in findings)
+    notes = f", {_counted(rendering, 'rendering note')}" if rendering else ""
+    print(f"ok {escape_path(path)} (protocol, "
+          f"{_counted(len(findings) - rendering, 'perception warning')}{notes})")
     return True
+
+
+def _find(name: str, perception: bool) -> tuple[str, Path]:
+    """What ``name`` is and its file: ``("protocol", path)`` with --perception for a file
+    with a top-level ``method`` or, when no file ``name`` exists and no bundled scene has
+    that name, a bundled protocol's name; else ``("scene", path)``. TextureError saying
+    which kinds of bundled name were searched when it is none of them."""
+    from frictex.app.experiment.protocol import (bundled_protocol, names_a_path,
+                                                 protocol_names, unknown_name)
+    from frictex.textures.library import list_scenes
+
+    if perception and _is_protocol(name):
+        return "protocol", Path(name)
+    try:
+        return "scene", resolve_scene(name)
+    except TextureError:
+        protocol = bundled_protocol(name)
+        if protocol is not None and perception:
+            return "protocol", protocol
+        if protocol is not None:
+            raise TextureError(f"{escape_path(name)}: no bundled scene of that name, but a "
+                               f"bundled protocol: frictex validate --perception checks "
+                               f"protocols") from None
+        if not perception or names_a_path(name):  # a missing path: no name was looked up
+            raise
+        raise TextureError(unknown_name(name, {"scene": [entry.name for entry in list_scenes()],
+                                               "protocol": protocol_names()})) from None
 
 
 def run(args: argparse.Namespace) -> int:
     bad = 0
     for name in args.files:
-        if args.perception and _is_protocol(name):
-            bad += not _protocol(name)
-            continue
         try:
-            path = resolve_scene(name)
+            kind, path = _find(name, args.perception)
         except TextureError as exc:
             print(f"frictex: error: {printable(str(exc))}", file=sys.stderr)
             bad += 1
+            continue
+        if kind == "protocol":
+            bad += not _protocol(path)
             continue
         scene, problems, warnings = check_scene(path)
         for problem in problems:

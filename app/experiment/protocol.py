@@ -81,6 +81,7 @@ so a protocol's numbers and strings are checked as a texture file's are.
 
 from __future__ import annotations
 
+import difflib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -293,6 +294,57 @@ class Protocol:
         if self.staircase is not None:
             return RULE_TARGETS[self.staircase.rule]
         return 0.75
+
+
+#: the bundled protocols, ``NAME.toml``: given by name where a protocol file is asked for
+PROTOCOLS_DIR = Path(__file__).resolve().parent / "protocols"
+
+
+def protocol_names() -> list[str]:
+    """The bundled protocols' names, sorted."""
+    return sorted(p.stem for p in PROTOCOLS_DIR.glob("*.toml"))
+
+
+def names_a_path(name: str) -> bool:
+    """Whether ``name`` is a file that exists (or a link, even a broken one) or holds a
+    path separator: a path, never looked up as a bundled name."""
+    path = Path(name)
+    return path.exists() or path.is_symlink() or path.name != name
+
+
+def bundled_protocol(name: str) -> Path | None:
+    """The bundled protocol ``name`` names (``period-2afc`` or ``period-2afc.toml``), or
+    None: when a file ``name`` exists (a path wins over a name, as for scenes), when it
+    holds a path separator (a path, not a name) or when no bundled protocol has it."""
+    if names_a_path(name):
+        return None
+    bundled = PROTOCOLS_DIR / (name if name.endswith(".toml") else f"{name}.toml")
+    return bundled if bundled.is_file() else None
+
+
+def unknown_name(name: str, names_by_kind: dict[str, list[str]]) -> str:
+    """The one-line error for ``name``, neither a file nor a bundled name of the kinds
+    searched (``names_by_kind``: "scene" or "protocol" -> its bundled names), with the
+    closest name of any of them when one is close."""
+    every = [n for names in names_by_kind.values() for n in names]
+    close = difflib.get_close_matches(Path(name).stem, every, n=1, cutoff=0.5)
+    hint = f"did you mean {close[0]}? " if close else ""
+    where = {"scene": "frictex library lists the scenes",
+             "protocol": f"the bundled protocols: {', '.join(protocol_names())}"}
+    return (f"{escape_path(name)}: no such file, and no bundled {' or '.join(names_by_kind)} "
+            f"of that name ({hint}{'; '.join(where[kind] for kind in names_by_kind)})")
+
+
+def resolve_protocol(name_or_path: str) -> Path:
+    """A protocol file: ``name_or_path`` if it exists or holds a path separator (a missing
+    path is reported by :func:`check_protocol`), else the bundled protocol of that name
+    (InputError when there is none)."""
+    if names_a_path(name_or_path):
+        return Path(name_or_path)
+    bundled = bundled_protocol(name_or_path)
+    if bundled is None:
+        raise InputError(unknown_name(name_or_path, {"protocol": protocol_names()}))
+    return bundled
 
 
 def _scene_path(raw: str, base_dir: Path) -> Path:

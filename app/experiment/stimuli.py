@@ -2,11 +2,13 @@
 
 A stimulus is a texture file's document (``tomllib``'s dict) with a change: the varied
 layer's period, depth or clip level set (:data:`PARAMETERS`), its periodic layers'
-``render`` set. The changed document is written as a texture file (``toml_text``) and
-loaded by the texture loader, so a stimulus is checked exactly as any scene and the file
-is what ``frictex replay`` reads to play it again. The files a base file names (maps,
-clip files, measured modes: relative to it, in its folder or below) are linked (or
-copied) beside every scene file written from it, under the same names.
+``render`` set, and its name and description say so (``grating-5mm-period_mm=6.6``:
+the base scene with that key changed). The changed document is written as a texture
+file (``toml_text``) and loaded by the texture loader, so a stimulus is checked exactly
+as any scene and the file is what ``frictex replay`` reads to play it again. The files a
+base file names (maps, clip files, measured modes: relative to it, in its folder or
+below) are linked (or copied) beside every scene file written from it, under the same
+names.
 
 Side by side: the two stimuli's layers in one scene, the first's confined to the left
 half of the display and the second's to the right half (each layer gets that half as
@@ -26,6 +28,7 @@ from pathlib import Path
 
 from frictex.app.experiment.toml_text import toml_text
 from frictex.device.errors import InputError
+from frictex.textures.keys import TOP
 from frictex.textures.loader import check_scene
 from frictex.textures.library import read_utf8
 from frictex.textures.model import Scene
@@ -42,6 +45,8 @@ PERIODIC = ("grating", "waveform")
 #: keys whose value is a file path relative to the texture file
 PATH_KEYS = ("image", "model", "file", "modes_file")
 MAX_SCENE_BYTES = 1 << 20
+#: the longest scene name (``textures.keys.TOP["name"]``), in characters
+NAME_LIMIT = TOP["name"].max_len
 _PLAIN = re.compile(r"^[A-Za-z0-9._=+-]{1,200}$")
 
 
@@ -157,7 +162,30 @@ def stimulus_doc(base: Base, vary: str | None, layer: int | None, value: float |
         for table in layers:
             if table.get("type") in PERIODIC:
                 table["render"] = renderer
+    _name_as_changed(doc, base, vary, layer, value, renderer)
     return doc
+
+
+def _name_as_changed(doc: dict, base: Base, vary: str | None, layer: int | None,
+                     value: float | None, renderer: str | None) -> None:
+    """Give ``doc`` (``base`` with ``vary`` set to ``value`` on layer ``layer`` and its
+    periodic layers rendered by ``renderer``) a name and description saying so: the base's
+    name and the stimulus name (:func:`name_of`, e.g. ``grating-5mm-period_mm=6.6``,
+    within a scene name's :data:`NAME_LIMIT` characters). Unchanged when nothing is set."""
+    changes = []
+    if vary is not None:
+        kind = _layers(doc)[layer].get("type")
+        sets = PARAMETERS[vary][kind]
+        how = "" if sets == vary else f" ({sets})"
+        changes.append(f'{vary} = {value:.10g} on layer "{base.scene.layers[layer].name}"{how}')
+    if renderer is not None:
+        changes.append(f"its periodic layers rendered {renderer}")
+    if not changes:
+        return
+    suffix = f"-{name_of(vary, value, renderer)}"
+    doc["name"] = base.scene.name[:NAME_LIMIT - len(suffix)] + suffix
+    doc["description"] = (f"An experiment stimulus: the scene {base.scene.name} with "
+                          f"{' and '.join(changes)}.")
 
 
 def side_by_side(left: dict, right: dict) -> dict:
@@ -169,7 +197,10 @@ def side_by_side(left: dict, right: dict) -> dict:
     doc = copy.deepcopy(left)
     width = float(left["display"]["width_mm"]) / 2
     height = float(left["display"]["height_mm"])
-    doc["name"] = f"{left.get('name', 'left')} | {right.get('name', 'right')}"
+    names = (left.get("name", "left"), right.get("name", "right"))
+    doc["name"] = " | ".join(names)[:NAME_LIMIT]
+    doc["description"] = f"Two stimuli side by side: {names[0]} on the left half of the " \
+                         f"display, {names[1]} on the right half."
     layers = []
     for side, source in (("left", left), ("right", right)):
         for index, layer in enumerate(_layers(source)):
