@@ -8,6 +8,7 @@ from numpy.testing import assert_allclose
 from PIL import Image
 
 from frictex.app.commands.cli import main
+from frictex.app.experiment import PROTOCOLS_DIR
 from frictex.textures import model
 from frictex.textures.errors import TextureError
 from frictex.textures.library import (LIBRARY_DIR, TRACES_DIR, list_scenes, list_traces, resolve_scene,
@@ -129,9 +130,18 @@ def test_unknown_names(call, name, pattern):
 def test_library_command(capsys):
     assert main(["library"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert len(lines) == len(list_scenes()) + len(list_traces())
+    protocols = list(PROTOCOLS_DIR.glob("*.toml"))
+    assert len(lines) == len(list_scenes()) + len(list_traces()) + len(protocols)
     first = lines[0].split()
     assert first[:2] == ["composed-fine-grating-in-disc", "scene"]
     assert any(line.split()[:2] == ["swipe-40mms-50hz", "trace"] for line in lines)
     assert main(["library", "--paths"]) == 0
     assert str(LIBRARY_DIR / "grating-5mm.toml") in capsys.readouterr().out
+
+
+def test_the_bundled_protocols_are_listed_with_their_description(capsys):
+    assert main(["library"]) == 0
+    listed = {line.split()[0]: line for line in capsys.readouterr().out.splitlines()
+              if line.split()[1] == "protocol"}
+    assert set(listed) == {p.stem for p in PROTOCOLS_DIR.glob("*.toml")} >= {"period-2afc"}
+    assert "two-interval forced choice" in listed["period-2afc"]

@@ -96,7 +96,8 @@ def test_every_bad_row_is_reported_in_one_run(study, capsys):
 
 def test_a_name_used_twice_and_a_bad_field_of_a_later_row_both_show(study):
     manifest = study / "m.csv"
-    manifest.write_text("scene,trace,name\na,b,x\nc,d,x\ne,f,../x\n")
+    manifest.write_text("scene,trace,name\ngrating-5mm,inside.csv,x\n"
+                        "grating-5mm,inside.csv,x\ngrating-5mm,inside.csv,../x\n")
     with pytest.raises(ManifestError) as caught:
         read_manifest(manifest, RENDERER_NAMES)
     assert len(caught.value.error_lines) == 2

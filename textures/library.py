@@ -26,8 +26,8 @@ from frictex.device.errors import InputError
 from frictex.device.safe_files import UnsafeFile, file_problem, read_bytes
 from frictex.device.safe_text import escape_path
 
-__all__ = ["Entry", "UnreadableText", "file_problem", "list_scenes", "list_traces", "read_utf8",
-           "resolve_scene", "resolve_trace"]
+__all__ = ["Entry", "UnreadableText", "file_problem", "list_scenes", "list_toml_files",
+           "list_traces", "read_utf8", "resolve_scene", "resolve_trace"]
 
 LIBRARY_DIR = Path(__file__).resolve().parent / "library"
 TRACES_DIR = LIBRARY_DIR / "traces"
@@ -35,7 +35,8 @@ TRACES_DIR = LIBRARY_DIR / "traces"
 
 @dataclass(frozen=True)
 class Entry:
-    """One bundled file: ``kind`` is "scene" or "trace"."""
+    """One listed file: ``kind`` is "scene", "saved" (a scene saved from the demo),
+    "trace" or "protocol" (an experiment's)."""
 
     name: str
     kind: str
@@ -97,8 +98,13 @@ def _trace_description(path: Path) -> str:
 
 def list_scenes() -> list[Entry]:
     """The bundled scenes, sorted by name."""
-    return [Entry(p.stem, "scene", p, _scene_description(p))
-            for p in sorted(LIBRARY_DIR.glob("*.toml"))]
+    return list_toml_files(LIBRARY_DIR, "scene")
+
+
+def list_toml_files(folder: Path, kind: str) -> list[Entry]:
+    """The TOML files of ``folder`` as entries of ``kind``, sorted by name, each described
+    by the first line of its ``description``."""
+    return [Entry(p.stem, kind, p, _scene_description(p)) for p in sorted(folder.glob("*.toml"))]
 
 
 def user_scenes_dir() -> Path:

@@ -20,3 +20,8 @@ One job per module:
 - ``psychometric``: maximum-likelihood psychometric functions and their bootstrap.
 - ``analysis``: ``frictex experiment analyse``: sessions of a study, fitted and plotted.
 """
+
+from pathlib import Path
+
+#: the bundled protocols, ``NAME.toml``: given by name where a protocol file is asked for
+PROTOCOLS_DIR = Path(__file__).resolve().parent / "protocols"

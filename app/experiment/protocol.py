@@ -85,6 +85,7 @@ import difflib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from frictex.app.experiment import PROTOCOLS_DIR
 from frictex.device.errors import InputError
 from frictex.device.safe_text import escape_path, quoted
 from frictex.textures.errors import KeyPath, Locator, Problem
@@ -296,8 +297,6 @@ class Protocol:
         return 0.75
 
 
-#: the bundled protocols, ``NAME.toml``: given by name where a protocol file is asked for
-PROTOCOLS_DIR = Path(__file__).resolve().parent / "protocols"
 
 
 def protocol_names() -> list[str]:
