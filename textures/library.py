@@ -26,7 +26,8 @@ from frictex.device.errors import InputError
 from frictex.device.safe_files import UnsafeFile, file_problem, read_bytes
 from frictex.device.safe_text import escape_path
 
-__all__ = ["Entry", "UnreadableText", "file_problem", "list_scenes", "list_toml_files",
+__all__ = ["Entry", "UnreadableText", "bundled_file", "file_problem", "list_scenes",
+           "list_toml_files",
            "list_traces", "read_utf8", "resolve_scene", "resolve_trace"]
 
 LIBRARY_DIR = Path(__file__).resolve().parent / "library"
@@ -135,8 +136,11 @@ def _resolve(name_or_path: str | Path, folder: Path, suffix: str, kind: str) -> 
     path = Path(name_or_path)
     if path.exists() or path.is_symlink():
         return path
-    name = str(name_or_path)
-    if path.name != name:
+    return _bundled(str(name_or_path), folder, suffix, kind)
+
+
+def _bundled(name: str, folder: Path, suffix: str, kind: str) -> Path:
+    if Path(name).name != name:
         raise TextureError(f"{escape_path(name)}: no such file")
     bundled = folder / (name if name.endswith(suffix) else name + suffix)
     if bundled.is_file():
@@ -146,6 +150,18 @@ def _resolve(name_or_path: str | Path, folder: Path, suffix: str, kind: str) -> 
     hint = f"did you mean {close[0]}? " if close else ""
     raise TextureError(f"{escape_path(name)}: no such file, and no bundled {kind} of that name "
                        f"({hint}frictex library lists them)")
+
+
+#: where the bundled files of each kind lie, and their suffix
+BUNDLED = {"scene": (LIBRARY_DIR, ".toml"), "trace": (TRACES_DIR, ".csv")}
+
+
+def bundled_file(name: str, kind: str) -> Path:
+    """The bundled ``kind`` ("scene" or "trace") of that ``name``, whatever files the
+    current folder holds (a TextureError, with the closest name, where there is none):
+    for a name read from someone else's file, which must not reach the user's files."""
+    folder, suffix = BUNDLED[kind]
+    return _bundled(name, folder, suffix, kind)
 
 
 def resolve_scene(name_or_path: str | Path) -> Path:

@@ -5,8 +5,9 @@ Manifest grammar (CSV with a header; ``#`` lines are comments)::
     scene,trace[,renderer][,rate_hz][,block][,format][,name]
 
 ``scene`` and ``trace`` as ``frictex replay`` takes them (a file, relative to the
-manifest's folder, or a bundled name: one that is neither is a problem of its line, with
-the library's "did you mean" hint), confined as the files a texture file names are
+manifest's folder, or a bundled name, never a file of that name in the current folder:
+one that is neither is a problem of its line, with the library's "did you mean" hint),
+confined as the files a texture file names are
 (``textures.outside``): in the manifest's folder or below, links followed, unless
 ``--allow-outside`` (``FRICTEX_ALLOW_OUTSIDE=1``) lifts it, so that a stranger's manifest
 cannot make a batch read any file of the machine; a '..' or a link leading out is
@@ -95,8 +96,7 @@ from frictex.device.errors import FrictexError, InputError
 from frictex.device.safe_text import escape, quoted
 from frictex.rendering.input.trace_file import MAX_LINE_BYTES, NUMBER, describe_header
 from frictex.textures.errors import TextureError
-from frictex.textures.library import (UnreadableText, read_utf8, resolve_scene,
-                                      resolve_trace)
+from frictex.textures.library import UnreadableText, bundled_file, read_utf8
 from frictex.textures.outside import HOW, allow_outside_from_env, leads_out
 
 COLUMNS = ("scene", "trace", "renderer", "rate_hz", "block", "format", "name")
@@ -326,15 +326,12 @@ def _stem(spec: str) -> str:
     return re.sub(r"[^A-Za-z0-9._-]", "_", name)[:28] or "job"
 
 
-#: how ``frictex replay`` finds a scene or a trace that is not a file: a bundled name
-RESOLVERS = {"scene": resolve_scene, "trace": resolve_trace}
-
-
 def _path(key: str, spec: str | None, base: Path, where: str) -> str:
     """The ``scene`` or ``trace`` field ``spec``: the file relative to the manifest's
-    folder ``base`` (its real path) where such a file exists, else a bundled name, as
-    given; a ManifestError if it is empty, is neither (with the library's "did you
-    mean" hint), or, unless allowed, leads outside ``base`` (module docstring)."""
+    folder ``base`` (its real path, absolute) where such a file exists, else a bundled
+    name, as given (:func:`run_job` finds it where the job runs, never a file of that
+    name in the current folder); a ManifestError if it is empty, is neither (with the library's "did you mean" hint),
+    or, unless allowed, leads outside ``base`` (module docstring)."""
     if not spec:
         raise ManifestError(f"{where}: {key} is empty")
     how = None if allow_outside_from_env() else _leads_out(base, spec)
@@ -345,7 +342,7 @@ def _path(key: str, spec: str | None, base: Path, where: str) -> str:
     try:
         if candidate.exists():
             return os.path.realpath(candidate)
-        RESOLVERS[key](spec)
+        bundled_file(spec, key)
     except TextureError as exc:
         raise ManifestError(f"{where}: {key} {exc}") from None
     except OSError as exc:  # a name too long for the file system
@@ -366,14 +363,18 @@ def _leads_out(base: Path, spec: str) -> str | None:
 
 
 def run_job(job: Job, out_dir: str) -> dict:
-    """Replay one job into ``out_dir/job.name``; never raises for the job's own errors:
+    """Replay one job into ``out_dir/job.name`` (a scene or trace that is no absolute path
+    is a bundled name: the bundled file, whatever the current folder holds); never raises
+    for the job's own errors:
     returns its result row (``status`` "ok", or "failed" with the error and empty
     measures). Run the jobs of a batch with
     ``app.engine.fanout.fan_out(functools.partial(run_job, out_dir=...), jobs)``."""
     from frictex.app.engine.replay import run_replay
     start = time.perf_counter()
     try:
-        doc = run_replay(job.scene, job.trace, Path(out_dir) / job.name, rate_hz=job.rate_hz,
+        scene, trace = (spec if os.path.isabs(spec) else str(bundled_file(spec, kind))
+                        for spec, kind in ((job.scene, "scene"), (job.trace, "trace")))
+        doc = run_replay(scene, trace, Path(out_dir) / job.name, rate_hz=job.rate_hz,
                          fmt=job.fmt, block_size=job.block, render_override=job.renderer,
                          progress=False)
     except (FrictexError, ValueError, OSError) as exc:
