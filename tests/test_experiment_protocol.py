@@ -294,3 +294,23 @@ def test_a_linear_staircase_that_can_step_to_zero_is_refused(tmp_path, table, pr
         load_protocol(path)
     _, problems = check_protocol(path)
     assert len(problems) == 1 and re.search(problem, str(problems[0]))
+
+
+def test_a_scene_name_missing_beside_the_protocol_never_reads_the_current_folders_file(
+        tmp_path, monkeypatch):
+    """A stranger's protocol naming secret.toml, which is not in its folder: a scene file
+    of that name where frictex runs is not read (it was, and the check passed)."""
+    study, here = tmp_path / "study", tmp_path / "here"
+    study.mkdir()
+    here.mkdir()
+    (here / "secret.toml").write_text((ROOT / "textures" / "library" / "grating-5mm.toml")
+                                      .read_text(encoding="utf-8"), encoding="utf-8")
+    protocol = study / "p.toml"
+    protocol.write_text('format = 1\nmethod = "2afc"\n[stimuli]\nscene = "secret.toml"\n'
+                        'vary = "period_mm"\nreference = 5.0\nlevels = [5.5, 6.5]\n',
+                        encoding="utf-8")
+    monkeypatch.chdir(here)
+    found, problems = check_protocol(protocol)
+    assert found is None and [str(p) for p in problems] == [
+        f"{protocol}:4: stimuli.scene: secret.toml: no such file, and no bundled scene of "
+        "that name (frictex library lists them)"]

@@ -348,13 +348,14 @@ def resolve_protocol(name_or_path: str) -> Path:
 
 def _scene_path(raw: str, base_dir: Path) -> Path:
     """A scene named in a protocol: a path relative to the protocol, else a bundled name
-    (``textures.library.resolve_scene``; a TextureError when neither exists). The path
+    (``textures.library.bundled_file``: never a file of that name in the current folder;
+    a TextureError when neither exists). The path
     follows the rule of the files a texture file names (``textures.outside``): in the
     protocol's folder or below (no absolute path, no '..', no link leading out) unless
     ``--allow-outside`` lifts it, so that a stranger's protocol cannot make frictex read
     (and report on) any file of the machine."""
     from frictex.textures.errors import TextureError
-    from frictex.textures.library import resolve_scene
+    from frictex.textures.library import bundled_file
     from frictex.textures.outside import HOW, allow_outside_from_env, leads_out
     local = base_dir / raw
     how = None if allow_outside_from_env() else leads_out(base_dir, raw)
@@ -365,7 +366,7 @@ def _scene_path(raw: str, base_dir: Path) -> Path:
         return local
     if Path(raw).name != raw:
         raise TextureError(f"{escape_path(local)}: no such file")
-    return resolve_scene(raw)
+    return bundled_file(raw, "scene")
 
 
 class _Check:
