@@ -161,8 +161,34 @@ def test_measured_mode_table_replaces_the_model(tmp_path):
     act = build_pipeline(scene).actuation
     model_act = build_pipeline(load_scene(resolve_scene("two-finger-beam-seed000"))).actuation
     x = np.array([[120.0], [250.0]])
-    # a 0.5 mm table of the model's own shapes: the spline matches the model closely
-    np.testing.assert_allclose(act.shapes(x, x * 0), model_act.shapes(x, x * 0), atol=2e-3)
+    # a 0.5 mm table of the model's own shapes (scaled to 1 at its largest, 2 at the free
+    # ends): the spline matches the model closely
+    np.testing.assert_allclose(2.0 * act.shapes(x, x * 0), model_act.shapes(x, x * 0), atol=2e-3)
+
+
+def test_a_table_of_1e_100_drives_the_beam_as_the_same_table_in_um(tmp_path):
+    """Its modal solve overflowed to NaN (80,000 of 80,050 command rows, exit 0, nothing
+    counted); the unit of a table cancels, so the commands are the same."""
+    import frictex
+    bundled = resolve_scene("two-finger-beam-seed000").read_text(encoding="utf-8")
+    trace = frictex.read_trace("back-and-forth-beam-60mms-60hz")
+    commands = []
+    for unit in (1.0, 1e-100):
+        folder = tmp_path / f"u{unit:g}"
+        folder.mkdir()
+        table = modes_csv().splitlines()
+        (folder / "modes.csv").write_text("\n".join(
+            [table[0]] + [",".join([row.split(",")[0]] + [repr(float(v) * unit) for v in
+                                                        row.split(",")[1:]]) for row in table[1:]])
+            + "\n")
+        text = re.sub(r"^orders = \[16, 17\]$", 'modes_file = "modes.csv"', bundled, count=1,
+                      flags=re.M)
+        assert "modes.csv" in text
+        (folder / "s.toml").write_text(text, encoding="utf-8")
+        run = frictex.replay(str(folder / "s.toml"), trace)
+        commands.append(np.column_stack([c.to_numpy() for c in run.commands.columns[1:]]))
+    assert np.isfinite(commands[1]).all()
+    np.testing.assert_allclose(commands[1], commands[0], rtol=1e-9, atol=1e-12)
 
 
 @pytest.mark.parametrize("structure, files, pattern", [

@@ -279,7 +279,8 @@ documented(STRUCTURE_KEYS[profiles.BeamStructure], {
     "orders": "the flexural mode orders driven (distinct, 1 to 100, at most 26)",
     "actuators_mm": "positions of the transducers along the beam (mm from its end), one per mode",
     "channel_limit_um": "largest command per transducer (um, zero-to-peak)",
-    "modes_file": ("a measured mode table (CSV, one column per mode, path relative to this "
+    "modes_file": ("a measured mode table (CSV, one column per mode, deflections in any "
+                   "one unit: the table is scaled to 1 at its largest; path relative to this "
                    "file) replacing `orders`",
                    "none: mode shapes computed from `theory` and `orders`"),
 })

@@ -5,13 +5,17 @@ mode sampled at positions along the structure. They are interpolated by not-a-kn
 splines (continuous slope and curvature, exact on cubics), so node positions and the
 modal matrix vary smoothly as a finger moves. Outside the scanned span the end values
 are held (never extrapolated); :meth:`MeasuredModes.outside` marks such positions so the
-caller can count them.
+caller can count them. The table is scaled to 1 at its largest deflection: the unit
+cancels (the commands at the actuators and the amplitudes under the fingers do not depend
+on it), and a scan in metres (1e-9) or one of 1e-100 keeps the modal solve within the
+range where its closed form is finite (below ~1e-77 its terms overflowed to NaN).
 
 File grammar (CSV)::
 
     file   := header NEWLINE { row NEWLINE }
     header := "x_mm" { "," mode_name }          # 1 to MAX_MODES (26) distinct mode names
-    row    := x { "," deflection }              # finite numbers, any consistent unit
+    row    := x { "," deflection }              # finite numbers, any consistent unit,
+                                                # not all 0
     number := ASCII decimal: [sign] digits [. digits] [e [sign] digits], spaces or tabs
               around (device/numbers.py, the grammar of every frictex text format)
     blank lines and lines starting with '#' are skipped; x strictly increasing;
@@ -43,7 +47,8 @@ MAX_CELL_SHOWN = 24
 
 @dataclass(frozen=True, eq=False)
 class MeasuredModes:
-    """Mode shapes sampled at ``positions_mm`` (k,), ``shapes`` (k, p), one column per mode."""
+    """Mode shapes sampled at ``positions_mm`` (k,), ``shapes`` (k, p), one column per mode,
+    scaled to 1 at the largest |deflection| (the module docstring)."""
 
     positions_mm: np.ndarray
     shapes: np.ndarray
@@ -61,10 +66,14 @@ class MeasuredModes:
                              f"(positions x modes), got {s.shape}")
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(s))):
             raise ModesError(f"{where}: positions and shapes must be finite numbers")
+        peak = float(np.max(np.abs(s))) if s.size else 0.0
+        if peak == 0.0:
+            raise ModesError(f"{where}: every deflection is 0: no mode moves the structure")
         bad = np.flatnonzero(np.diff(x) <= 0)
         if bad.size:
             raise ModesError(f"{where}: positions must increase strictly; "
                              f"x = {x[bad[0] + 1]:g} mm follows {x[bad[0]]:g} mm")
+        s = s / peak
         object.__setattr__(self, "positions_mm", x)
         object.__setattr__(self, "shapes", s)
         object.__setattr__(self, "_spline", CubicSpline(x, s, axis=0, bc_type="not-a-knot"))
