@@ -38,6 +38,20 @@ def test_a_failed_run_is_left_out_of_the_median():
     assert np.isnan(median([failed], "wall_s"))
 
 
+def test_a_childs_peak_memory_is_its_own_not_its_parents():
+    # on Linux a child forked from this process would start at this process's peak
+    held = np.ones(50 * 2**20)  # 400 MiB held here while the child runs
+    done = run_process([sys.executable, "-c", "pass"])
+    assert held[-1] == 1.0
+    assert done.code == 0
+    assert done.peak_mib < 50
+    assert 0 < done.floor_mib < 50
+
+
+def test_a_command_that_cannot_start_exits_127(tmp_path):
+    assert run_process([str(tmp_path / "no-such-program")]).code == 127
+
+
 def test_every_section_is_framed_by_the_load_and_its_whole_cost():
     inner = [Figure("demo", "something", 1.0, "s")]
     figures = _measured("demo", lambda quick: inner, True)

@@ -2,7 +2,12 @@
 
 ``frictex bench``'s sections time commands in fresh processes (interpreter start,
 imports, kernels, work and exit), the way ``/usr/bin/time -v`` does: wall time from
-fork to exit and the child's user + system CPU from ``wait4``. Several commands compared
+fork to exit and the child's user + system CPU and peak memory from ``wait4``. Each
+command starts from a small launcher process (``LAUNCHER``), not from this one: on Linux
+a child's peak resident memory (``ru_maxrss``) starts at its parent's (the parent's
+high-water mark is kept across fork and exec), so a command forked from a report holding 200 MiB
+would report at least 200 MiB. From the launcher, a peak counts from the launcher's few
+MiB at most (``Run.floor_mib``). Several commands compared
 with each other run alternated, one of each per round (``alternated``), so that a change
 in the machine's load during the measurement falls on all of them alike.
 """
@@ -12,7 +17,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,13 +24,16 @@ import numpy as np
 
 @dataclass(frozen=True)
 class Run:
-    """One finished process: wall time (s), user + system CPU (s), peak memory (MiB)
-    and its exit code."""
+    """One finished process: wall time (s), user + system CPU (s), peak memory (MiB),
+    its exit code and the most of that peak the command can have inherited (MiB): the
+    launcher's resident memory when it forked the command (NaN where the system does not
+    say)."""
 
     wall_s: float
     cpu_s: float
     peak_mib: float
     code: int
+    floor_mib: float = float("nan")
 
 
 def load() -> float:
@@ -60,17 +67,49 @@ class BusyProcesses:
             proc.wait(timeout=5.0)
 
 
+#: the program of the launcher that forks each measured command (``python -I -S``: no
+#: site packages, so it holds a few MiB) and prints, once the command has ended, the
+#: command's wall time (s) from fork to exit, user + system CPU (s) and peak resident
+#: memory (KiB) from ``wait4``, its exit code, and its own resident memory (KiB, "nan"
+#: where /proc does not say) when it forked
+LAUNCHER = """
+import os, sys, time
+def resident_kib():
+    try:
+        with open('/proc/self/status') as status:
+            return next(line.split()[1] for line in status if line.startswith('VmRSS:'))
+    except (OSError, StopIteration):
+        return 'nan'
+floor = resident_kib()
+start = time.perf_counter()
+pid = os.fork()
+if pid == 0:
+    try:
+        null = os.open(os.devnull, os.O_RDWR)
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+        os.execvp(sys.argv[1], sys.argv[1:])
+    finally:
+        os._exit(127)
+_, status, usage = os.wait4(pid, 0)
+wall = time.perf_counter() - start
+print(wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss,
+      os.waitstatus_to_exitcode(status), floor)
+"""
+
+
 def run_process(argv: list[str]) -> Run:
-    """Run ``argv`` to its end, its output discarded; earlier processes' unwritten file
-    data is written out first (``os.sync``, not timed), so that no run pays for the
-    write-back of the one before."""
+    """Run ``argv`` to its end from the launcher (``LAUNCHER``), its output discarded;
+    earlier processes' unwritten file data is written out first (``os.sync``, not timed),
+    so that no run pays for the write-back of the one before. 127 is the code of a
+    command that could not be started."""
     os.sync()
-    start = time.perf_counter()
-    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    _, status, usage = os.wait4(proc.pid, 0)
-    wall = time.perf_counter() - start
-    return Run(wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024,
-               os.waitstatus_to_exitcode(status))
+    done = subprocess.run([sys.executable, "-I", "-S", "-c", LAUNCHER, *argv],
+                          stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, check=True,
+                          text=True)
+    wall, cpu, peak_kib, code, floor_kib = done.stdout.split()
+    return Run(float(wall), float(cpu), float(peak_kib) / 1024, int(code),
+               float(floor_kib) / 1024)
 
 
 def frictex_argv(*args: str) -> list[str]:
