@@ -12,8 +12,8 @@ import numpy as np
 from frictex.app.measure.report_claims import (GRATINGS, METRICS, NOT_CLAIMED, OUTPUT_HZ,
                                                 TOUCH_HZ, count_line)
 from frictex.app.measure.report_doc import Report, grating_rows, mean_defined
-from frictex.app.measure.report_matrix import (MOTIONS, Row, aliasing_degenerate, link_buffer_s,
-                                                periods_per_sample)
+from frictex.app.measure.report_matrix import (MOTIONS, Row, aliased, aliasing_degenerate,
+                                                link_buffer_s, periods_per_sample)
 from frictex.rendering.metrics import ALIGNMENT_CAP_MM, PHASE_BLIND_HZ
 from frictex.rendering.pipeline import BLOCK_S
 
@@ -41,7 +41,8 @@ PLOT_CAPTIONS = {
         "Claims).", ""),
     "error_vs_period.png": (
         "", "Error against grating period: the matrix's one draw of each motion, commanded "
-        "mu', mean over the motions.", ""),
+        "mu', mean over the motions, leaving out sho-held's aliasing-degenerate rows (a "
+        "constant mu', marked 'aliased' in the tables).", ""),
 }
 #: which draw the matrix's tables show (the claims use the draws' section)
 ONE_DRAW_NOTE = (
@@ -175,8 +176,8 @@ def cell_notes(rows: list[Row]) -> list[str]:
         same = sorted(o.renderer for o in rows if o is not r and _cell(o) == _cell(r)
                       and _same_errors(o, r))
         parts = [f"same as {', '.join(same)}"] if same else []
-        per = periods_per_sample(MOTIONS.get(r.motion, {}), r.touch_hz, r.period_mm)
-        if r.renderer == "sho-held" and aliasing_degenerate(per):
+        if aliased(r):
+            per = periods_per_sample(MOTIONS[r.motion], r.touch_hz, r.period_mm)
             parts.append(f"aliased: {per:g} periods per touch sample")
         notes.append("; ".join(parts))
     return notes
@@ -317,11 +318,13 @@ def _end_to_end(e2e: dict | None) -> list[str]:
     failed = sorted(set(e2e["formats"]) - set(done))
     return ["", f"End to end ({e2e['scene']}, a {e2e['duration_s']:g} s human-like trace, "
             "each a fresh `frictex replay` process: reading the trace, computing, writing "
-            "every output): " + "; ".join(
+            "every output; peak: its peak resident memory, started from a small launcher "
+            "process whose resident memory it may include, at most the launcher's figure "
+            "given): " + "; ".join(
                 f"{fmt} {got['x_realtime_end_to_end']:.0f}x real time (compute only "
                 f"{got['x_realtime_compute']:.0f}x; whole process with start-up "
                 f"{e2e['duration_s'] / got['process_wall_s']:.0f}x, peak "
-                f"{got['peak_mib']:.0f} MiB)" for fmt, got in done.items())
+                f"{got['peak_mib']:.0f} MiB, launcher {got['launcher_mib']:.0f} MiB)" for fmt, got in done.items())
             + (f"; failed: {', '.join(failed)}" if failed else "") + "."]
 
 
@@ -361,14 +364,26 @@ def _physical_limits(doc: Report) -> list[str]:
         lines.append("")
     held = [r for r in _base(doc.rows) if r.scene == "grating-0.6mm" and r.renderer == "sho-held"]
     touch = sorted({r.touch_hz for r in held})
+    motions = motions_at_every(held, touch)
     lines += ["Touch rate against texture frequency: a grating of period P under a finger at v "
               "is a signal at v / P (0.6 mm at 40 mm/s: 67 Hz); position-map rendering (SHO) "
               "can only render up to half the touch rate (25 Hz at 50 Hz, seed 003 section "
               "4.4.1), above which it aliases. sho-held on the 0.6 mm grating, spectral error by "
-              "touch rate (mean over motions):", ""]
+              "touch rate, mean over the same motions at every rate: those run at every rate "
+              "and aliasing-degenerate at none (" + (", ".join(motions) or "none") + "):", ""]
+    held = [r for r in held if r.motion in motions]
     return lines + table(["touch rate", *(f"{t:g} Hz" for t in touch)],
                          [("spectral error", *_by(held, "touch_hz", touch, "spectral_error"))]
-                         if touch else [], "the 0.6 mm grating is not among the scenes chosen")
+                         if motions else [], "the 0.6 mm grating has no motion run at every "
+                         "touch rate among the scenes chosen")
+
+
+def motions_at_every(rows: list[Row], touch_hz: list[float]) -> list[str]:
+    """The motions with a row at each of ``touch_hz`` and no aliasing-degenerate row
+    (``report_matrix.aliased``), so that each rate's mean is over the same motions."""
+    run = [{r.motion for r in rows if r.touch_hz == t} for t in touch_hz]
+    degenerate = {r.motion for r in rows if aliased(r)}
+    return sorted(set.intersection(*run) - degenerate) if run else []
 
 
 def _inversion(doc: Report) -> list[str]:

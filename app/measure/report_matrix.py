@@ -69,6 +69,13 @@ def periods_per_sample(motion: dict, touch_hz: float, period_mm: float | None) -
 def aliasing_degenerate(per_sample: float | None) -> bool:
     """Whether :func:`periods_per_sample`'s figure is a whole number (to 1e-6)."""
     return per_sample is not None and abs(per_sample - round(per_sample)) < 1e-6
+
+
+def aliased(row: Row) -> bool:
+    """Whether ``row`` is sho-held on a swipe whose speed is aliasing-degenerate at its
+    touch rate: a constant mu', not a measure of the renderer."""
+    per = periods_per_sample(MOTIONS.get(row.motion, {}), row.touch_hz, row.period_mm)
+    return row.renderer == "sho-held" and aliasing_degenerate(per)
 OUTPUT_HZ = (2000.0, 5000.0, 10_000.0, 20_000.0)
 INVERSIONS = ("exact", "lut")
 #: the reference grid (Hz): at least the highest output rate

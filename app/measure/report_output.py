@@ -11,7 +11,7 @@ import numpy as np
 
 from frictex.app.measure.report_claims import GRATINGS, METRICS, OUTPUT_HZ
 from frictex.app.measure.report_doc import grating_rows, mean_defined
-from frictex.app.measure.report_matrix import Row
+from frictex.app.measure.report_matrix import Row, aliased
 
 LABELS = {"time_error": "time error (NRMS)", "spectral_error": "spectral error",
           "alignment_error_mm": "alignment error (mm)"}
@@ -153,9 +153,12 @@ def cost_figure(rows: list[Row]):
 
 
 def period_figure(rows: list[Row]):
-    """Each metric against grating period, one line per renderer (50 Hz, 10 kHz, exact)."""
+    """Each metric against grating period, one line per renderer (50 Hz, 10 kHz, exact),
+    the mean over the motions; aliasing-degenerate rows (``report_matrix.aliased``) are
+    left out, as the tables mark them: they measure no renderer."""
     plt = pyplot()
-    base = [r for r in grating_rows(rows) if r.output_hz == OUTPUT_HZ and r.inversion == "exact"]
+    base = [r for r in grating_rows(rows) if r.output_hz == OUTPUT_HZ and r.inversion == "exact"
+            and not aliased(r)]
     renderers = sorted({r.renderer for r in base})
     periods = sorted(set(GRATINGS.values()))
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.5), constrained_layout=True)
@@ -169,7 +172,7 @@ def period_figure(rows: list[Row]):
         _log_x(ax, periods)
         ax.set_yscale("log")
         ax.set_xlabel("grating period (mm)")
-        ax.set_ylabel(LABELS[metric] + ", mean over motions")
+        ax.set_ylabel(LABELS[metric] + ", mean over motions (aliased left out)")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
     fig.suptitle("Error against grating period, per renderer (50 Hz touch, 10 kHz output)")
