@@ -10,8 +10,10 @@ signature is checked first; Pillow decodes with its PNG plugin alone), read with
 - colour (``RGB``, palette ``P``): converted to luma with the Rec. 601 weights
   g = (0.299 R + 0.587 G + 0.114 B) / 255 on the stored (gamma-encoded) values, the
   same weights as Pillow's own ``convert("L")`` but kept in float64 without rounding;
-- with an alpha channel (``LA``, ``RGBA``, ``PA``): accepted only if every pixel is fully
-  opaque (transparency has no friction meaning); the alpha is then ignored.
+- with an alpha channel (``LA``, ``RGBA``, ``PA``), or a transparency chunk (``tRNS``: alpha
+  per palette entry, or one grey level or colour that is transparent): accepted only if every
+  pixel is fully opaque (transparency has no friction meaning); the alpha is then ignored;
+- a palette pixel must index an entry the palette has.
 
 Row 0 is the top of the image (screen y points down).
 """
@@ -219,11 +221,13 @@ def read_grey(path: str | Path, expected: str = ACCEPTED, budget: PixelBudget | 
             # Pillow's own bomb guard warns from 89 Mpx; the header check above refuses
             # anything over MAX_PIXELS first, with a sentence instead of a warning
             warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            # Pillow's advice on palette transparency: _to_grey checks transparency itself
+            warnings.simplefilter("ignore", UserWarning)
             with Image.open(io.BytesIO(data), formats=["PNG"]) as image:
                 if image.size != (width, height):  # should Pillow read another header
                     raise TextureError(f"{where}: image size {image.size} differs from its header's")
                 image.load()
-                return _to_grey(image, where, expected)
+                return _to_grey(image, where, expected, depth)
     except (TextureError, MemoryError):
         raise
     except Exception as exc:  # noqa: BLE001 - decoders raise anything on a corrupt file
@@ -233,14 +237,17 @@ def read_grey(path: str | Path, expected: str = ACCEPTED, budget: PixelBudget | 
                            f"{escape(said)}); expected {expected}") from None
 
 
-def _to_grey(image, where: str, expected: str) -> tuple[np.ndarray, str]:
+def _to_grey(image, where: str, expected: str, depth: int) -> tuple[np.ndarray, str]:
+    """Grey levels of a decoded image (``depth``: the PNG's bits per sample)."""
     mode = image.mode
+    if mode == "P":
+        _check_palette_indices(image, where)
+    alpha = _alpha(image, depth)
+    if alpha is not None and alpha.min() < 255:
+        raise TextureError(f"{where}: image mode {mode} has transparent pixels "
+                           f"(alpha down to {int(alpha.min())}); transparency has no "
+                           f"friction meaning: flatten the image onto a background")
     if mode in ("LA", "RGBA", "PA"):
-        alpha = np.asarray(image.getchannel("A"))
-        if alpha.min() < 255:
-            raise TextureError(f"{where}: image mode {mode} has transparent pixels "
-                               f"(alpha down to {int(alpha.min())}); transparency has no "
-                               f"friction meaning: flatten the image onto a background")
         image = image.convert("RGB" if mode != "LA" else "L")
         mode = image.mode
     if mode == "L":
@@ -260,3 +267,43 @@ def _to_grey(image, where: str, expected: str) -> tuple[np.ndarray, str]:
         rgb = np.asarray(image, dtype=np.float64)
         return rgb @ _REC601 / 255.0, "RGB as Rec. 601 luma"
     raise TextureError(f"{where}: image mode {mode} is not supported; expected {expected}")
+
+
+def _check_palette_indices(image, where: str) -> None:
+    """TextureError if a pixel of palette image ``image`` indexes past its palette's end
+    (a PNG decoder would read it as black)."""
+    entries = len(image.palette.palette) // 3
+    largest = int(np.asarray(image).max())
+    if largest >= entries:
+        raise TextureError(f"{where}: a pixel takes palette index {largest}, and the palette "
+                           f"has {entries} entries (0 to {entries - 1}); the file is corrupt")
+
+
+def _alpha(image, depth: int) -> np.ndarray | None:
+    """Alpha (0 transparent .. 255 opaque) of each pixel of ``image``, or None if it
+    carries none: its alpha channel, or what its PNG transparency chunk (Pillow's
+    ``info["transparency"]``) says."""
+    if image.mode in ("LA", "RGBA", "PA"):
+        return np.asarray(image.getchannel("A"))
+    key = image.info.get("transparency")
+    if key is None:
+        return None
+    pixels = np.asarray(image.convert("L") if image.mode == "1" else image)
+    if isinstance(key, bytes):  # one alpha per palette entry; entries past its end are opaque
+        alphas = np.full(256, 255, np.uint8)
+        alphas[:len(key)] = np.frombuffer(key[:256], np.uint8)
+        return alphas[pixels]
+    hidden = pixels == _decoded_key(key, image.mode, depth)
+    return np.where(hidden.all(axis=-1) if pixels.ndim == 3 else hidden, 0, 255)
+
+
+def _decoded_key(key, mode: str, depth: int):
+    """The transparent grey level or colour ``key`` (as the PNG stores it) on the scale
+    Pillow decodes ``mode`` pixels to: 1-, 2- and 4-bit grey are spread over 0..255 (Pillow
+    has already done so for 1-bit), and 16-bit colour keeps only its high bytes, so a
+    pixel whose high bytes match counts as transparent (a safe overestimate)."""
+    if mode == "L" and depth < 8:
+        return key * 255 // ((1 << depth) - 1)
+    if mode == "RGB" and depth == 16:
+        return tuple(part >> 8 for part in key)
+    return key
