@@ -171,6 +171,18 @@ def test_the_section_says_how_late_its_measured_reports_came():
     assert "These runs had every report 3 blocks late (not measured)." in plain
 
 
+def test_the_worst_finger_claim_compares_each_finger_with_itself():
+    # the largest RMS falls (0.06 -> 0.04), but finger 4 goes 0.02 -> 0.04: twice worse
+    closed = [0.004, 0.003, 0.01, 0.04, 0.004, 0.006]
+    section = _section(closed, closed)
+    found = {(c.group, c.metric): c for c in claims(section)}
+    worst = found[("closed loop: worst finger", "worst rms_reachable ratio, closed")]
+    assert not worst.passed and worst.mean == pytest.approx(1.0)
+    assert "largest ratio of closed's RMS to open loop's on the same finger is 2.00x " \
+           "(finger 4: 0.0200 -> 0.0400)" in worst.text
+    assert "| 2.00x (finger 4) |" in "\n".join(markdown(section))
+
+
 def test_section_tables_gains_and_claims():
     closed = [0.004, 0.003, 0.01, 0.002, 0.004, 0.006]
     section = _section(closed, [r / 2 for r in OPEN])
@@ -179,7 +191,8 @@ def test_section_tables_gains_and_claims():
     closed_pop = math.sqrt(np.mean(np.square(closed)))
     assert math.isclose(row["closed"].gain_vs_open, open_pop / closed_pop, rel_tol=1e-12)
     assert math.isclose(row["adaptive"].gain_vs_open, 2.0, rel_tol=1e-12)
-    assert row["closed"].worst == 0.01 and row["closed"].worst_improves
+    assert row["closed"].worst == 0.01
+    assert row["closed"].worst_ratio == pytest.approx(0.2) and row["closed"].worst_ratio_finger == 3
     # from mu0 on (block 50 of 100): open loop over the same samples, finger by finger
     assert_allclose(row["closed"].per_finger.open_rms_after_mu0, OPEN, rtol=1e-12)
     assert math.isclose(row["closed"].loop.gain_after_mu0, open_pop / closed_pop * 2,
@@ -197,7 +210,7 @@ def test_section_tables_gains_and_claims():
     assert rms.passed == (d.mean() + half < 0) and rms.n == 6
     # adaptive only halves the error: a 5x cut is not shown
     assert not found[("closed loop: RMS error", "rms_reachable, adaptive")].passed
-    assert found[("closed loop: worst finger", "worst rms_reachable, closed")].passed
+    assert found[("closed loop: worst finger", "worst rms_reachable ratio, closed")].passed
     assert found[("closed loop: amplitude limit", "max_command_um")].passed
     assert found[("closed loop: no growing oscillation", "swings")].passed
     assert found[("closed loop: added noise", "noise_fraction")].passed

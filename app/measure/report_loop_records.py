@@ -102,8 +102,10 @@ class ModeSummary:
     reachable RMS and its number (1-based), fallbacks, the largest amplitude commanded
     (um), ``per_finger``; ``loop``: the loop modes' figures; the adaptive mode's largest
     noise fraction (None without noise reruns) and adapted gap; against open loop (loop
-    modes beside an open one): the population RMS gain and whether the worst finger
-    improves."""
+    modes beside an open one): the population RMS gain, and the finger this mode treats
+    worst against open loop, finger by finger: the largest ratio of its RMS to open
+    loop's RMS on the same finger (``worst_ratio``; above 1: made worse) and that
+    finger's number (1-based)."""
 
     rms_reachable_pop: float
     worst: float
@@ -116,7 +118,8 @@ class ModeSummary:
     noise_fraction_max: float | None = None
     adapted_gap_max: float | None = None
     gain_vs_open: float | None = None
-    worst_improves: bool | None = None
+    worst_ratio: float | None = None
+    worst_ratio_finger: int | None = None
 
     def to_json(self) -> dict:
         """One flat object, as report.json holds it (the loop's figures beside the rest)."""
