@@ -8,6 +8,7 @@ converts recordings of real touch screens to the trace CSV.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 
 from frictex.app.commands.argtypes import positive_float
@@ -72,9 +73,15 @@ LIMITS = {"rate": (0.0, 1e5, "Hz"), "truth_rate": (0.0, 1e6, "Hz"), "duration": 
           "speed": (0.0, 1e4, "mm/s"), "x0": (-1e5, 1e5, "mm"), "y0": (-1e5, 1e5, "mm"),
           "angle": (-360.0, 360.0, "deg"), "length": (0.0, 1e5, "mm"), "radius": (0.0, 1e5, "mm"),
           "noise": (0.0, 1e3, "mm"), "jitter": (0.0, 1.0, "s"), "force": (0.0, 1e3, "N"),
-          "force_noise": (0.0, 100.0, "N"), "peaks": (0.0, 1e3, "N"), "area": (0.0, 1e5, "mm")}
+          "force_noise": (0.0, 100.0, "N"), "peaks": (0.0, 1e3, "N"), "area": (0.0, 1e5, "mm"),
+          "seed": (0, 1e18, "(a whole number)")}
 #: Most samples a synthetic trace (or its true path) may hold.
 MAX_SAMPLES = 10_000_000
+#: Most presses (--peaks) a press trace may hold: its first line, which repeats them twice,
+#: stays within the trace reader's line limit (``trace_file.MAX_LINE_BYTES``).
+MAX_PRESSES = 100
+#: Length of one press of ``press_trace`` (s): rise, hold and fall (2 x 0.6 + 0.1 s).
+PRESS_S = 2 * 0.6 + 0.1
 
 PATH_OPTIONS = ("rate", "speed", "duration", "x0", "y0", "area", "angle", "length", "radius",
                 "noise", "jitter", "force", "seed")
@@ -110,11 +117,25 @@ def _check_limits(args: argparse.Namespace) -> None:
             if not lo <= value <= hi:
                 raise InputError(f"--{name.replace('_', '-')} {value:g}: expected {lo:g} to "
                                  f"{hi:g} {unit}")
+    if args.motion == "press":
+        _check_presses(args.peaks, args.rate)
+        return
     rates = [("--rate", args.rate)] + ([("--truth-rate", args.truth_rate)] if args.truth else [])
     for option, rate in rates:
         if rate * args.duration > MAX_SAMPLES:
             raise InputError(f"{option} {rate:g} Hz over --duration {args.duration:g} s is "
                              f"{rate * args.duration:,.0f} samples; at most {MAX_SAMPLES:,}")
+
+
+def _check_presses(peaks: list[float], rate_hz: float) -> None:
+    """InputError for more than MAX_PRESSES ``peaks`` (N), or presses that would take more
+    than MAX_SAMPLES samples at ``rate_hz`` (a press ignores --duration)."""
+    if len(peaks) > MAX_PRESSES:
+        raise InputError(f"--peaks: {len(peaks)} presses; at most {MAX_PRESSES}")
+    samples = len(peaks) * (math.floor(PRESS_S * rate_hz) + 1)
+    if samples > MAX_SAMPLES:
+        raise InputError(f"--peaks: {len(peaks)} presses of {PRESS_S:g} s at --rate {rate_hz:g} Hz "
+                         f"are {samples:,} samples; at most {MAX_SAMPLES:,}")
 
 
 def _check_outputs(args: argparse.Namespace) -> None:

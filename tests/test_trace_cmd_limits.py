@@ -1,0 +1,41 @@
+"""``frictex trace synth press`` bounds: it ignores --duration, so its size comes from the
+number of --peaks and --rate, and both are checked before any sample is made."""
+
+import pytest
+
+from frictex.app.commands import trace as trace_cmd
+from frictex.app.commands.cli import main
+from frictex.rendering.input.trace_file import read_trace
+
+
+def synth_press(out, peaks, *options):
+    return main(["trace", "synth", "press", "--peaks", *map(str, peaks), *options, "-o", str(out)])
+
+
+def test_presses_beyond_the_sample_cap_are_refused_before_any_is_made(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(trace_cmd, "press_trace", lambda **kw: pytest.fail("made the presses"))
+    assert synth_press(tmp_path / "p.csv", [1.0] * 80, "--rate", "100000") == 2
+    assert "--peaks: 80 presses of 1.3 s at --rate 100000 Hz are 10,400,080 samples; " \
+           "at most 10,000,000" in capsys.readouterr().err
+    assert not (tmp_path / "p.csv").exists()
+
+
+def test_more_presses_than_the_limit_are_refused(tmp_path, capsys):
+    assert synth_press(tmp_path / "p.csv", [1.0] * (trace_cmd.MAX_PRESSES + 1)) == 2
+    assert f"--peaks: {trace_cmd.MAX_PRESSES + 1} presses; at most {trace_cmd.MAX_PRESSES}" \
+        in capsys.readouterr().err
+
+
+def test_the_most_presses_with_the_longest_numbers_read_back(tmp_path):
+    """The first line repeats every peak twice: at the limit it still fits a trace line."""
+    out = tmp_path / "p.csv"
+    longest = "0.000123457"
+    assert synth_press(out, [longest] * trace_cmd.MAX_PRESSES, "--x0", "-12345.6789", "--y0",
+                       "-12345.6789", "--force", longest, "--force-noise", longest,
+                       "--seed", "123456789012345678", "--rate", "100") == 0
+    assert len(read_trace(out)) == trace_cmd.MAX_PRESSES * 131
+
+
+def test_a_negative_seed_is_refused_in_one_line(tmp_path, capsys):
+    assert synth_press(tmp_path / "p.csv", [1.0], "--seed", "-1") == 2
+    assert "--seed -1: expected 0 to 1e+18" in capsys.readouterr().err
