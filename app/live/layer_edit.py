@@ -71,6 +71,7 @@ from tomlkit.exceptions import TOMLKitError
 from tomlkit.items import AoT, InlineTable, Table
 
 from frictex.device.errors import InputError
+from frictex.device.safe_files import UnsafeFile, read_bytes
 from frictex.rendering.visual.layer_panel import ControlView, PanelView
 from frictex.textures.errors import Locator, TextureError, field_name
 from frictex.textures.keys import COMMON, LAYER_KEYS, MAX_ANGLE_DEG, MAX_MM
@@ -78,6 +79,7 @@ from frictex.textures.library import LIBRARY_DIR, user_scenes_dir
 from frictex.textures.loader import check_scene, load_scene
 from frictex.textures.references import referenced_files
 from frictex.textures.schema import MAX_MAGNITUDE, Choice, Int, Num
+from frictex.textures.toml_safe import MAX_FILE_BYTES
 from frictex.textures.sections.layers import default_layer_name
 
 #: word keys that change which keys a layer takes: not offered as menus
@@ -106,14 +108,18 @@ class OnDisk:
 
 
 def on_disk(path: Path) -> OnDisk:
-    """``path``'s text and (mtime ns, size) now (one open file: the two agree), or
-    ``OnDisk(None, None)`` when it is not there."""
+    """``path``'s text and (mtime ns, size) now, or ``OnDisk(None, None)`` when it is not
+    there. Read as every texture file is (``device.safe_files.read_bytes``): a regular
+    file of at most ``toml_safe.MAX_FILE_BYTES``, else :class:`EditError`; a leading byte
+    order mark is kept in the text. The (mtime, size) is taken before the text, so a
+    change in between shows as a change at the next look, never hides one."""
     try:
-        with open(path, "rb") as f:
-            info = os.fstat(f.fileno())
-            data = f.read()
+        info = os.stat(path)
+        data = read_bytes(path, MAX_FILE_BYTES)
     except FileNotFoundError:
         return OnDisk(None, None)
+    except UnsafeFile as exc:
+        raise EditError(f"cannot read {Path(path).name}: it {exc}") from None
     except OSError as exc:
         raise EditError(f"cannot read {Path(path).name}: {exc.strerror or exc}") from None
     try:
