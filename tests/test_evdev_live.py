@@ -85,3 +85,17 @@ def test_missing_device_is_a_clear_os_error(tmp_path):
 def test_struct_layout_is_the_kernels():
     # struct timeval (two longs) + __u16 type + __u16 code + __s32 value
     assert INPUT_EVENT.size == 2 * struct.calcsize("l") + 8
+
+
+def test_a_large_file_is_taken_a_bounded_piece_per_poll(tmp_path):
+    """One poll reads at most _READS_PER_POLL x _READ_BYTES; the polls after it take the
+    rest, every sample once (/dev/zero, a file that never ends, gives each poll a piece)."""
+    from frictex.rendering.input import evdev_live
+    moves = 3 * evdev_live._READS_PER_POLL * evdev_live._READ_BYTES // (2 * INPUT_EVENT.size)
+    path = tmp_path / "events.bin"
+    path.write_bytes(STREAM[:INPUT_EVENT.size * 5] + packed(*(
+        e for k in range(moves) for e in ((11, k, EV_ABS, PX, k % 1000), (11, k, EV_SYN, SYN_REPORT, 0)))))
+    with EvdevReader(path, SPEC) as reader:
+        polls = [reader.poll() for _ in range(5)]
+    assert [len(samples) > 0 for samples in polls] == [True, True, True, True, False]
+    assert sum(map(len, polls)) == moves + 1  # the touch-down, then each move

@@ -30,6 +30,10 @@ from frictex.rendering.input.evdev_decode import (ABS_MT_POSITION_X, ABS_MT_POSI
 INPUT_EVENT = struct.Struct("llHHi")
 _ABSINFO = struct.Struct("6i")  # value, minimum, maximum, fuzz, flat, resolution
 _READ_BYTES = INPUT_EVENT.size * 512
+#: Most reads of _READ_BYTES one poll makes (32768 records, 786 kB on 64-bit Linux): far
+#: more than a touch screen writes between two frames, and a bound on what one call
+#: takes from a large file of events, or from something that never ends (/dev/zero).
+_READS_PER_POLL = 64
 
 
 def _ioc(direction: int, number: int, size: int) -> int:
@@ -104,9 +108,10 @@ class EvdevReader:
         return bool(select.select([self._fd], [], [], timeout_s)[0])
 
     def poll(self) -> list[TouchSample]:
-        """Samples of the frames completed since the last call; never blocks."""
+        """Samples of the frames completed since the last call; never blocks. Reads at
+        most _READS_PER_POLL x _READ_BYTES bytes: the rest waits for the next call."""
         chunks = []
-        while True:
+        for _ in range(_READS_PER_POLL):
             try:
                 data = os.read(self._fd, _READ_BYTES)
             except BlockingIOError:
