@@ -183,6 +183,20 @@ def test_the_worst_finger_claim_compares_each_finger_with_itself():
     assert "| 2.00x (finger 4) |" in "\n".join(markdown(section))
 
 
+def test_every_column_of_the_loop_table_is_defined_and_its_blanks_explained():
+    text = "\n".join(markdown(_section(OPEN, OPEN)))
+    header = next(line for line in text.splitlines() if line.startswith("| scene | mode |"))
+    columns = [c.strip() for c in header.strip("|").split("|")][2:]
+    defined = ("RMS", "gain", "From mu0 on", "mu0 found", "Gain swings", "Worst:",
+               "Worst against open", "Raw RMS", "Max um", "Fallbacks", "Noise / friction (max)",
+               "Adapted gap (max)")
+    assert all(name in text.split(header)[0] for name in defined) and len(columns) == 13
+    assert "measured on grating-15mm, grating-0.6mm only (of this table's scenes: " \
+           "grating-15mm), so it is blank elsewhere" in text
+    assert "after this table's 1 s runs; the adaptation claim judges the gap after the " \
+           "adaptation study's runs" in text
+
+
 def test_section_tables_gains_and_claims():
     closed = [0.004, 0.003, 0.01, 0.002, 0.004, 0.006]
     section = _section(closed, [r / 2 for r in OPEN])

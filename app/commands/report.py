@@ -35,8 +35,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", default="report", metavar="DIR",
                         help="folder for report.md, report.json and the plots (default: report)")
     parser.add_argument("--quick", action="store_true",
-                        help="the small matrix (50 Hz touch, three motions) and 4 s closed-loop "
-                             "runs: a few minutes on one core")
+                        help="the small matrix (three motions at 50 Hz touch, the human "
+                             "motion also at 120 and 240 Hz; on the gratings a 2-20 kHz "
+                             "output-rate sweep and LUT inversion runs), half the draws "
+                             "and 4 s closed-loop runs: a few minutes")
     parser.add_argument("--scenes", nargs="+", metavar="NAME", default=list(rm.SCENES),
                         help=f"bundled scenes to include (default: {' '.join(rm.SCENES)})")
     parser.add_argument("--jobs", type=positive_int, default=None, metavar="N",
