@@ -212,8 +212,10 @@ class Pipeline:
         the process on their first call, ~0.2 s in a fresh process: that belongs to
         loading the scene, not to the first live block or a timed replay.
         """
-        from frictex.rendering.input.trace_file import DOWN, MOVE, make_trace
-        t0 = self.tracker_config.t0_s
+        from frictex.rendering.input.trace_file import DOWN, MAX_TIME_S, MOVE, make_trace
+        # a trace may start at the latest time a trace may hold: the touch's second
+        # sample, 1 ms on, must be one too (the block it falls in does not matter here)
+        t0 = min(self.tracker_config.t0_s, MAX_TIME_S - 1e-3)
         cx, cy = self.scene.display.width_mm / 2, self.scene.display.height_mm / 2
         touch = make_trace([t0, t0 + 1e-3], [0, 0], [cx, cx + 0.01], [cy, cy], event=[DOWN, MOVE])
         self.process(0, touch, self.initial_state(), n_blocks=2)
