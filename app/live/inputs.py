@@ -171,10 +171,12 @@ class _Evdev:
                              "/dev/input/event5)")
         try:
             return EvdevReader(arg, ScreenSpec(width_mm=1.0, height_mm=1.0))
-        except ValueError as exc:  # no axis ranges: a file, a pipe, not a touch screen
+        except ValueError:  # no axis ranges: a file, a pipe, not a touch screen
+            # the reader's own words advise options of 'trace import', which the demo lacks
             raise InputError(f"evdev:{arg} is not a multi-touch device reporting its axis "
-                             f"ranges ({exc}); the demo takes them from the device (a recording "
-                             "can be converted with 'frictex trace import' and replayed)") from None
+                             "ranges (ABS_MT_POSITION_X and _Y); the demo takes them from the "
+                             "device (a getevent or evemu recording can be converted with "
+                             "'frictex trace import' and replayed)") from None
 
 
 INPUTS.register("mouse", _Mouse())
