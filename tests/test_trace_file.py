@@ -298,10 +298,12 @@ def test_fields_split_a_line_as_the_csv_module_does(text, end):
 
 def _reference_lines(data: bytes, where: str, limit: int):
     """Lines as a line-at-a-time reader gives them (the rule of ``_blocks``, written out):
-    (number, text without its break) until the first line that is too long (``limit``
+    (number, text without its break) until the first line that holds a bare CR (one
+    followed by more of the line) in its first ``limit`` bytes, is too long (``limit``
     bytes with its break), holds a NUL or is not UTF-8, which ends in its TraceError
     message; a UTF-8 BOM at the start is dropped, a UTF-16 one refused."""
     import codecs
+    import re
     out, fh = [], io.BytesIO(data)
     for number in range(1, 10**9):
         raw = fh.readline()
@@ -314,6 +316,8 @@ def _reference_lines(data: bytes, where: str, limit: int):
                 raw = raw[3:]
             if not raw:  # a file of a BOM alone has no lines
                 return out, None
+        if re.search(rb"\r[^\r\n]", raw[:limit]):
+            return out, f"{where}:{number}: a line ends in a bare CR"
         if len(raw) > limit:
             return out, f"{where}:{number}: line longer than {limit} bytes"
         if raw.find(0) >= 0:

@@ -94,7 +94,7 @@ from frictex.app.engine.limits import BLOCK_SIZES, OUTPUT_RATES_HZ
 from frictex.app.engine.tables import FORMATS
 from frictex.device.errors import FrictexError, InputError
 from frictex.device.safe_text import escape, quoted
-from frictex.rendering.input.trace_file import MAX_LINE_BYTES, NUMBER, describe_header
+from frictex.rendering.input.trace_file import CR_ONLY, MAX_LINE_BYTES, NUMBER, describe_header
 from frictex.textures.errors import TextureError
 from frictex.textures.library import UnreadableText, bundled_file, read_utf8
 from frictex.textures.outside import HOW, allow_outside_from_env, leads_out
@@ -260,6 +260,8 @@ def _row(line: str, where: str) -> list[str]:
     try:
         return next(csv.reader([line], strict=True))
     except csv.Error as exc:
+        if "\r" in line:  # a CRLF's CR is taken off before: this one ends a line alone
+            raise ManifestError(f"{where}: {CR_ONLY}") from None
         raise ManifestError(f"{where}: not a CSV row ({exc})") from None
 
 

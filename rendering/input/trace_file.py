@@ -80,6 +80,14 @@ REORDER_TOLERANCE_S = 0.005
 #: for a file whose rows crowd into one tolerance window; a 1 kHz screen puts 5 there).
 MAX_HELD_ROWS = 65_536
 
+#: What a carriage return that is not part of a CRLF means, and what to do (batch
+#: manifests say it too): Python's csv module would ask for "universal-newline mode".
+CR_ONLY = ("a line ends in a bare CR (a carriage return without a line feed, as old Mac "
+           "files end their lines); save the file with LF or CRLF line endings")
+#: a carriage return with more of its line after it (a run of them before a line feed, or
+#: at the end, only ends a line)
+_BARE_CR = re.compile(rb"\r(?=[^\r\n])")
+
 #: column -> (lowest, highest, unit) accepted
 RANGES = {"t_s": (-MAX_TIME_S, MAX_TIME_S, "s"), "x_mm": (-MAX_COORD_MM, MAX_COORD_MM, "mm"),
           "y_mm": (-MAX_COORD_MM, MAX_COORD_MM, "mm"), "force_n": (0.0, MAX_FORCE_N, "N"),
@@ -491,7 +499,7 @@ def _without_bom(head: bytes, where: str) -> bytes:
 def _first_bad_line(body: bytes, breaks: np.ndarray, ended: bool) -> int:
     """Index among the lines of ``body`` (joined by line breaks at offsets ``breaks``, the
     last one's break removed if it had one: ``ended``) of the first line too long, holding
-    a NUL byte or not UTF-8; the number of lines if none."""
+    a NUL byte, a bare CR or not UTF-8; the number of lines if none."""
     count = bad = breaks.size + 1
     if len(body) + ended >= MAX_LINE_BYTES:  # else no line can be too long
         lengths = np.diff(breaks, prepend=-1, append=len(body)) - 1
@@ -503,6 +511,9 @@ def _first_bad_line(body: bytes, breaks: np.ndarray, ended: bool) -> int:
     nul = body.find(0)
     if nul >= 0:
         bad = min(bad, body.count(b"\n", 0, nul))
+    cr = _bare_cr(body)
+    if cr >= 0:
+        bad = min(bad, body.count(b"\n", 0, cr))
     if body.isascii():  # UTF-8, and no 2 MB string to build and drop
         return bad
     try:
@@ -512,8 +523,21 @@ def _first_bad_line(body: bytes, breaks: np.ndarray, ended: bool) -> int:
     return bad
 
 
+def _bare_cr(data: bytes) -> int:
+    """Offset in ``data`` of the first carriage return with more of its line after it
+    (:data:`_BARE_CR`), or -1."""
+    if data.count(b"\r") == data.count(b"\r\n") + data.endswith(b"\r"):
+        return -1  # the usual case (none, or CRLF files), decided at C speed
+    found = _BARE_CR.search(data)
+    return found.start() if found else -1
+
+
 def _line_problem(raw: bytes, number: int, where: str, had_break: bool):
-    """Raise the error of a line known to be too long, binary or not UTF-8."""
+    """Raise the error of a line known to be too long, binary, not UTF-8 or holding a
+    bare CR in its first MAX_LINE_BYTES (lines that end in CR only make the file one long
+    line: that, not its length, is the problem to name)."""
+    if _bare_cr(raw[:MAX_LINE_BYTES]) >= 0:
+        raise TraceError(f"{where}:{number}: {CR_ONLY}")
     if len(raw) + had_break > MAX_LINE_BYTES:
         raise TraceError(f"{where}:{number}: line longer than {MAX_LINE_BYTES} bytes; "
                          f"expected CSV rows of a few numbers")
