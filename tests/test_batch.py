@@ -176,7 +176,8 @@ def test_a_job_error_is_an_escaped_cut_cell(monkeypatch, tmp_path, error):
         raise error("bad\x1b[2J\nline" + "x" * 1000)
 
     monkeypatch.setattr(replay, "run_replay", fail)
-    row = run_job(Job(0, "s", "t", None, 1e4, 50, "csv", "j"), str(tmp_path))
+    row = run_job(Job(0, "grating-5mm", "swipe-40mms-50hz", None, 1e4, 50, "csv", "j"),
+                  str(tmp_path))
     assert row["status"] == "failed" and row["error"].startswith("bad\\x1b[2J\\nlinexxx")
     assert len(row["error"]) == MAX_ERROR_SHOWN and row["error"].isprintable()
 

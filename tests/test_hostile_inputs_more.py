@@ -33,9 +33,10 @@ def test_crlf_and_a_run_of_crs_before_a_line_feed_still_read(tmp_path):
     assert read_trace(path).x_mm.tolist() == [1.0, 2.0]
 
 
-def test_a_manifest_whose_lines_end_in_cr_only_is_told_so(tmp_path):
+@pytest.mark.parametrize("rows", [1, 200])  # 200 rows: one line of 5 kB, once 'too long'
+def test_a_manifest_whose_lines_end_in_cr_only_is_told_so(tmp_path, rows):
     path = tmp_path / "jobs.csv"
-    path.write_bytes(b"scene,trace\rgrating-5mm,swipe-40mms-50hz\r")
+    path.write_bytes(b"scene,trace\r" + b"grating-5mm,swipe-40mms-50hz\r" * rows)
     with pytest.raises(ManifestError, match="jobs.csv" + CR_ONLY):
         read_manifest(path, ("sho",))
 

@@ -200,11 +200,14 @@ def _manifest_text(path: Path) -> str:
 
 def _content_lines(path: Path, text: str, problems: _Problems) -> list[tuple[int, str]]:
     """The (line number, line) pairs of ``text`` that are neither blank nor comments;
-    at least one. A line too long is a problem, and left out."""
+    at least one. A line too long, or holding a bare carriage return (a file of CR line
+    endings, whose lines all run into one), is a problem, and left out."""
     lines = []
     for n, line in enumerate(text.split("\n"), 1):
         line = line.removesuffix("\r")
-        if len(line.encode("utf-8")) >= MAX_LINE_BYTES:
+        if "\r" in line.rstrip("\r"):
+            problems.add(f"{path}:{n}: {CR_ONLY}")
+        elif len(line.encode("utf-8")) >= MAX_LINE_BYTES:
             problems.add(f"{path}:{n}: line longer than {MAX_LINE_BYTES} bytes; expected "
                          f"a CSV row of a few fields")
         elif line.strip() and not line.lstrip().startswith("#"):
@@ -260,8 +263,6 @@ def _row(line: str, where: str) -> list[str]:
     try:
         return next(csv.reader([line], strict=True))
     except csv.Error as exc:
-        if "\r" in line:  # a CRLF's CR is taken off before: this one ends a line alone
-            raise ManifestError(f"{where}: {CR_ONLY}") from None
         raise ManifestError(f"{where}: not a CSV row ({exc})") from None
 
 
