@@ -53,6 +53,17 @@ def gl(_egl_context):
 
 
 @pytest.fixture(scope="session")
+def firmware_sim_library():
+    """The C core built for the host (``device.firmware.build.sim_library``); a build
+    that fails fails the tests that use it, with the compiler's message."""
+    from frictex.device.firmware.build import FirmwareBuildError, sim_library
+    try:
+        return sim_library()
+    except FirmwareBuildError as exc:
+        pytest.fail(str(exc), pytrace=False)
+
+
+@pytest.fixture(scope="session")
 def xvfb_display():
     """A fresh Xvfb server on a free display number (Xvfb picks it: -displayfd)."""
     binary = shutil.which("Xvfb")

@@ -9,7 +9,6 @@ import dataclasses
 import numpy as np
 import pytest
 
-from frictex.device.firmware.build import FirmwareBuildError, sim_library
 from frictex.device.firmware.ccore import CDeviceCore
 from frictex.device.link import protocol as p
 from frictex.device.link.faults import Faults, inject
@@ -20,12 +19,7 @@ RATE = 10_000.0
 STEP = p.AMPLITUDE_STEP_UM
 
 
-@pytest.fixture(scope="module", autouse=True)
-def library():
-    try:
-        return sim_library()
-    except FirmwareBuildError as exc:
-        pytest.fail(str(exc), pytrace=False)
+pytestmark = pytest.mark.usefixtures("firmware_sim_library")
 
 
 def config(**kw):

@@ -5,7 +5,6 @@ of it does nothing; and the two devices count the same flushes on Stop (4.6)."""
 import numpy as np
 import pytest
 
-from frictex.device.firmware.build import FirmwareBuildError, sim_library
 from frictex.device.firmware.ccore import CDeviceCore
 from frictex.device.link import protocol as p
 from frictex.device.link.simdevice import DeviceConfig, DeviceCore
@@ -13,12 +12,7 @@ from frictex.device.link.simdevice import DeviceConfig, DeviceCore
 CORES = [DeviceCore, CDeviceCore]
 
 
-@pytest.fixture(scope="module", autouse=True)
-def library():
-    try:
-        return sim_library()
-    except FirmwareBuildError as exc:
-        pytest.fail(str(exc), pytrace=False)
+pytestmark = pytest.mark.usefixtures("firmware_sim_library")
 
 
 def _frames(reply: bytes) -> list:
