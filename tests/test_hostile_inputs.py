@@ -315,7 +315,7 @@ BAD_MANIFESTS = {
     "utf-16": (_manifest(JOB).encode("utf-16"), "UTF-16"),
     "latin-1": (_manifest(JOB + ",caf\xe9", header="scene,trace,name").encode("latin-1"), "not UTF-8 text"),
     "long line": (_manifest(JOB + "," + "x" * 5000, header="scene,trace,name"), "longer than 4096 bytes"),
-    "bare carriage return": (_manifest(JOB.replace(",", "\r,")), "not a CSV row"),
+    "bare carriage return": (_manifest(JOB.replace(",", "\r,")), "a line ends in a bare CR"),
     "escape format": (_manifest(JOB + f",{ESC}", header="scene,trace,format"), "format"),
     "escape renderer": (_manifest(JOB + f",{ESC}", header="scene,trace,renderer"), "renderer"),
 }
