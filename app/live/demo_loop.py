@@ -566,9 +566,9 @@ class DemoLoop:
         self.playlist[self.index] = path
         self.files = FileWatch()  # the file as saved is no change to reload
         self._watch(path)
-        self.panel_note = f"saved {path.name} in {path.parent}"
+        self.panel_note = f"saved {path.absolute()}"
         self.log("save", str(path))
-        print(f"saved: {path}")
+        print(f"saved: {path.absolute()}")
 
     def panel_view(self) -> PanelView:
         """What the panel shows now."""
