@@ -59,7 +59,7 @@ def test_every_section_is_framed_by_the_load_and_its_whole_cost():
     assert labels[1] == "something"
     assert labels[0].startswith("machine load at the start")
     assert labels[2].startswith("machine load at the end")
-    assert [f.unit for f in figures[3:]] == ["s", "s"]
+    assert [f.unit for f in figures[3:]] == ["s", "s", "s"]
     assert all(f.section == "demo" for f in figures)
 
 

@@ -3,8 +3,9 @@
 Each section is a module ``app.measure.bench_<name>`` with ``run(quick: bool) -> list[Figure]``.
 A section whose optional dependency is missing reports why instead of failing the rest.
 Every section's figures are printed between the machine's load (the 1-minute average)
-at its start and at its end, and followed by the section's whole wall time and CPU (its
-own and its processes'), so that a figure is read with the load it was measured under.
+at its start and at its end, and followed by the section's whole wall time and CPU, this
+process's apart from its child processes' (which include the busy processes some
+sections start as load), so that a figure is read with the load it was measured under.
 """
 
 from __future__ import annotations
@@ -19,6 +20,10 @@ from dataclasses import asdict
 
 from frictex.app.measure.figure import Figure
 from frictex.device.errors import InputError
+
+#: the sections that start busy processes as load (``processes.BusyProcesses``; link's
+#: through ``link_report_delays``): their child processes' CPU time includes them
+LOADED_SECTIONS = frozenset({"link", "visual", "latency"})
 
 #: section name -> module
 SECTIONS = {
@@ -40,24 +45,38 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
 
 
+def _cpu_s(who: int) -> float:
+    """User + system CPU seconds so far of ``who`` (``resource.RUSAGE_SELF`` or
+    ``RUSAGE_CHILDREN``: the waited-for child processes)."""
+    usage = resource.getrusage(who)
+    return usage.ru_utime + usage.ru_stime
+
+
+def _children_label(name: str) -> str:
+    """The label of section ``name``'s child processes' CPU: what those children are."""
+    which = ("the commands it ran and the busy processes it started as load"
+             if name in LOADED_SECTIONS else "the commands it ran")
+    return f"the whole section, CPU user + system of its child processes ({which})"
+
+
 def _measured(name: str, section, quick: bool) -> list[Figure]:
-    """A section's figures between the machine's load before and after it and the whole
-    section's wall time and CPU (this process and the processes it ran, user + system)."""
+    """A section's figures between the machine's load before and after it, the whole
+    section's wall time and CPU (user + system, s) of this process and, apart, of the
+    child processes it ran."""
     from frictex.app.measure.processes import load
 
-    def cpu() -> float:
-        own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(
-            resource.RUSAGE_CHILDREN)
-        return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
-
-    before, cpu0, wall0 = load(), cpu(), time.perf_counter()
+    own0, children0 = _cpu_s(resource.RUSAGE_SELF), _cpu_s(resource.RUSAGE_CHILDREN)
+    before, wall0 = load(), time.perf_counter()
     figures = section(quick)
-    wall, used = time.perf_counter() - wall0, cpu() - cpu0
+    wall = time.perf_counter() - wall0
+    own = _cpu_s(resource.RUSAGE_SELF) - own0
+    children = _cpu_s(resource.RUSAGE_CHILDREN) - children0
     return [Figure(name, "machine load at the start (1-minute average)", before, ""),
             *figures,
             Figure(name, "machine load at the end (1-minute average)", load(), ""),
             Figure(name, "the whole section, wall", wall, "s"),
-            Figure(name, "the whole section, CPU user + system (its processes too)", used, "s")]
+            Figure(name, "the whole section, CPU user + system of this process", own, "s"),
+            Figure(name, _children_label(name), children, "s")]
 
 
 def run(args: argparse.Namespace) -> int:

@@ -16,7 +16,9 @@ link (frames through the port thread) and the device's buffer lead (the link's p
 two blocks, less the block playing; after an underrun the link skips blocks until the
 device is back to it, ``device.link.catch_up``); not the touch hardware's own delay. A
 touch whose first sample was skipped is timed at the first sample played in its stead.
-The play time is the device's:
+A touch whose change never played (a flushed or late block) is lost: p50 and p99 are
+over the touches that played, and their labels say how many of how many, and how many
+lost touches they leave out. The play time is the device's:
 
 - *sim*: the simulated device in this process (``sim``), its played samples timed when
   its clock plays them (each at its own tick: the time its batch was played less the
@@ -251,13 +253,22 @@ def _latencies(downs: list[float], commands: np.ndarray, played: PlayedTimes,
     return np.array(out, dtype=np.float64)
 
 
-def _figures(label: str, latency_s: np.ndarray, events: int) -> list[Figure]:
-    if not latency_s.size:
+def _figures(label: str, latency_s: np.ndarray, events: int,
+             kind: str = "touches") -> list[Figure]:
+    """p50 and p99 (ms) of the ``latency_s`` of the events that played, of ``events``
+    ``kind``; each label counts them, and where some never played says that those lost
+    are not in it (a lost one has no latency to rank: counting it as slower than every
+    played one would make p99 a rank of the losses, not a time)."""
+    played = latency_s.size
+    if not played:
         return [Figure("latency", f"{label}: events played", 0, f"of {events}")]
+    lost = events - played
+    counted = f"of {played} played of {events} {kind}" + (
+        f" ({lost} lost, not in it)" if lost else "")
     p50, p99 = np.percentile(latency_s * 1e3, [50, 99])
-    return [Figure("latency", f"{label}: p50", p50, "ms"),
-            Figure("latency", f"{label}: p99", p99, "ms"),
-            Figure("latency", f"{label}: events played", latency_s.size, f"of {events}")]
+    return [Figure("latency", f"{label}: p50 {counted}", p50, "ms"),
+            Figure("latency", f"{label}: p99 {counted}", p99, "ms"),
+            Figure("latency", f"{label}: events played", played, f"of {events}")]
 
 
 def _link_figures(label: str, link: dict) -> list[Figure]:
@@ -314,7 +325,7 @@ def run(quick: bool) -> list[Figure]:
             audio_works = audio is not None
             if audio is not None:
                 figures += _figures(f"audio producer -> DAC (PortAudio), {where}", audio,
-                                    events)
+                                    events, "events")
         finally:
             if load is not None:
                 load.__exit__(None, None, None)

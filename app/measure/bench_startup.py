@@ -34,7 +34,7 @@ from pathlib import Path
 
 from frictex.app.measure.bench_replay import SCENE, human_trace
 from frictex.app.measure.figure import Figure
-from frictex.app.measure.processes import alternated, failed_note, frictex_argv, median
+from frictex.app.measure.processes import Run, alternated, failed_note, frictex_argv, median
 from frictex.rendering.input.trace_file import write_trace
 
 #: the row of the one-second Parquet replay without frictex's bytecode cache
@@ -85,16 +85,29 @@ def run(quick: bool) -> list[Figure]:
         found[NO_CACHE] = without_frictex_cache(found["frictex replay, one second, parquet"],
                                                 Path(name) / "pycache")
         runs = alternated(found, rounds)
+    return startup_figures(runs)
+
+
+def medians_of(runs: list[Run]) -> str:
+    """"median of K" over the runs that succeeded (those ``median`` keeps), with
+    ``failed_note`` where some failed."""
+    ok = sum(r.code == 0 for r in runs)
+    return f"median of {ok}{failed_note(len(runs) - ok, len(runs))}"
+
+
+def startup_figures(runs: dict[str, list[Run]]) -> list[Figure]:
+    """Per command its median wall and CPU time over its runs that succeeded, each label
+    counting them, and the bytecode cache's cost (the difference of two such medians)."""
     figures = []
     for label, got in runs.items():
-        note = failed_note(sum(r.code != 0 for r in got), rounds)
-        figures += [Figure("startup", f"{label}, wall (median of {rounds}, alternated{note})",
+        figures += [Figure("startup", f"{label}, wall ({medians_of(got)}, alternated)",
                            median(got, "wall_s"), "s"),
-                    Figure("startup", f"{label}, CPU user + system (median of {rounds})",
+                    Figure("startup", f"{label}, CPU user + system ({medians_of(got)})",
                            median(got, "cpu_s"), "s")]
-    cost = median(runs[NO_CACHE], "wall_s") - median(
-        runs["frictex replay, one second, parquet"], "wall_s")
+    cached = runs["frictex replay, one second, parquet"]
+    cost = median(runs[NO_CACHE], "wall_s") - median(cached, "wall_s")
     figures.append(Figure("startup", "frictex's bytecode cache, what a one-second Parquet "
-                          f"replay pays without it (difference of the medians of {rounds})",
+                          f"replay pays without it (difference of medians: "
+                          f"{medians_of(runs[NO_CACHE])} without it, {medians_of(cached)} with it)",
                           cost * 1e3, "ms"))
     return figures

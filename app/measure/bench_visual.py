@@ -8,12 +8,13 @@ the per-frame cost of the overlay on top of it (two
 fingers with trails, the scope with 3 s of history, the status line; each frame after
 1/60 s more of the stroke, as live), each frame
 finished on the GPU (``ctx.finish``), without and with reading the pixels back (what
-``--frames`` and screenshots pay), best of 100 (20 with ``--quick``) and the mean CPU time
-of all threads; beside them, measured in the same run just after the frames (not
-alternated with them), the floor of this renderer (clear, the scene's textured quad and
-the read-back, nothing else), the ratios (best against best, mean CPU against mean
-CPU), the frame's draw calls. The frame and the floor are measured again beside one
-busy process per core. Each
+``--frames`` and screenshots pay), best wall time of 100 (20 with ``--quick``) and the
+mean CPU time of all threads; beside them, alternated with the frames read back (one of
+each in turn, so that a change in the machine's load falls on both), the floor of this
+renderer (clear, the scene's textured quad and the read-back, nothing else), the ratios
+(best against best, mean CPU against mean CPU), the frame's draw calls. The frame and the
+floor are measured again beside one busy process per core. A static image's label names
+the pixels drawn (the scene's aspect, fitted into the window) and the window. Each
 label names the renderer EGL chose (llvmpipe is Mesa's software rasterizer; a GPU's
 driver names the GPU). The CPU is shared: quote the machine's load with the figures; the
 CPU ratio is the one that holds on a busy machine.
@@ -89,11 +90,22 @@ def scene_ms(comp: Compositor, scene: Scene, repeats: int) -> float:
     return best * 1e3
 
 
+def static_figure(comp: Compositor, scene: Scene, name: str, label: str,
+                  repeats: int) -> Figure:
+    """The static image of ``scene`` (``scene_ms``), labelled with ``name``, the pixels
+    drawn (``comp``'s viewport: the scene's aspect fitted into the window) and ``label``
+    (the window and renderer)."""
+    ms = scene_ms(comp, scene, repeats)
+    drawn = f"{comp.viewport.width_px}x{comp.viewport.height_px} px"
+    return Figure("visual", f"static {name}, {drawn} drawn in the window {label}", ms,
+                  static_unit(repeats))
+
+
 def bundled_scene_figures(comp: Compositor, label: str, repeats: int) -> list[Figure]:
     from frictex.textures.library import list_scenes
     from frictex.textures.loader import load_scene
-    return [Figure("visual", f"static image {entry.path.stem} {label}",
-                   scene_ms(comp, load_scene(entry.path), repeats), static_unit(repeats))
+    return [static_figure(comp, load_scene(entry.path), f"image {entry.path.stem}", label,
+                          repeats)
             for entry in list_scenes()]
 
 
@@ -103,26 +115,29 @@ def static_unit(repeats: int) -> str:
             "that loads its kernels)")
 
 
-def timed(step, frames: int, before=None) -> tuple[float, float]:
-    """``step()`` run ``frames`` times (after ``before()``, untimed, each time): its best
-    wall time and its mean CPU time of all this process's threads (the software
-    rasterizer's included), both ms. On a shared machine the CPU time is the steadier
-    figure: waiting for a core does not count."""
-    best, cpu = float("inf"), 0.0
+def timed_in_turn(steps: list[tuple], frames: int) -> list[tuple[float, float]]:
+    """Each ``(step, before)`` of ``steps`` run ``frames`` times, one of each in turn per
+    round (``before()``, untimed, just before its step; ``before`` may be None), so that
+    a change in the machine's load falls on every step alike: per step its best wall time
+    and its mean CPU time of all this process's threads (the software rasterizer's
+    included), both ms. On a shared machine the CPU time is the steadier figure: waiting
+    for a core does not count."""
+    best, cpu = [float("inf")] * len(steps), [0.0] * len(steps)
     for _ in range(frames):
-        if before is not None:
-            before()
-        cpu0, t0 = time.process_time(), time.perf_counter()
-        step()
-        best = min(best, time.perf_counter() - t0)
-        cpu += time.process_time() - cpu0
-    return best * 1e3, cpu / frames * 1e3
+        for k, (step, before) in enumerate(steps):
+            if before is not None:
+                before()
+            cpu0, t0 = time.process_time(), time.perf_counter()
+            step()
+            best[k] = min(best[k], time.perf_counter() - t0)
+            cpu[k] += time.process_time() - cpu0
+    return [(b * 1e3, c / frames * 1e3) for b, c in zip(best, cpu)]
 
 
-def floor_ms(backend: OffscreenBackend, texture_size: tuple[int, int],
-             frames: int) -> tuple[float, float]:
-    """The least a frame can cost on this renderer, (best wall, mean CPU) ms: clear, one
-    textured quad of ``texture_size`` px (the scene) and the pixels read back."""
+def floor_step(backend: OffscreenBackend, texture_size: tuple[int, int]):
+    """The least a frame can cost on this renderer: clear, one textured quad of
+    ``texture_size`` px (the scene) and the pixels read back. Returns (step, release):
+    ``step()`` draws one such frame, ``release()`` frees its GL objects."""
     ctx = backend.ctx
     program = ctx.program(vertex_shader=TEXTURED[0], fragment_shader=TEXTURED[1])
     texture = ctx.texture(texture_size, 3, bytes(3 * texture_size[0] * texture_size[1]),
@@ -143,19 +158,21 @@ def floor_ms(backend: OffscreenBackend, texture_size: tuple[int, int],
         backend.read_rgb()
         ctx.finish()
 
-    result = timed(step, frames)
-    for obj in (vao, buffer, texture, program):
-        obj.release()
-    return result
+    def release():
+        for obj in (vao, buffer, texture, program):
+            obj.release()
+
+    return step, release
 
 
-def frame_ms(backend: OffscreenBackend, comp: Compositor, view: FrameView, frames: int,
-             read_back: bool) -> tuple[float, float]:
-    """Frames of ``view`` finished on the GPU (``read_back``: with the pixels read
-    back), each after the next FRAME_S of the stroke was fed to its overlay (untimed),
-    (best wall, mean CPU) ms."""
+def frame_step(backend: OffscreenBackend, comp: Compositor, view: FrameView,
+               read_back: bool):
+    """(step, before): ``step()`` draws a frame of ``view`` finished on the GPU
+    (``read_back``: with the pixels read back), ``before()`` feeds its overlay the next
+    FRAME_S of the stroke (untimed). One frame is drawn here first, untimed (shaders,
+    text atlas)."""
     backend.use()
-    comp.draw(view)  # warm-up: shaders, text atlas
+    comp.draw(view)
     backend.ctx.finish()
 
     def step():
@@ -164,7 +181,7 @@ def frame_ms(backend: OffscreenBackend, comp: Compositor, view: FrameView, frame
             backend.read_rgb()
         backend.ctx.finish()
 
-    return timed(step, frames, lambda: next_frame(view.overlay))
+    return step, lambda: next_frame(view.overlay)
 
 
 def run(quick: bool) -> list[Figure]:
@@ -183,13 +200,13 @@ def run(quick: bool) -> list[Figure]:
         # the renderer EGL chose: llvmpipe (software) or a GPU's driver
         label = f"{size[0]}x{size[1]} on {backend.ctx.info['GL_RENDERER'].split(' (')[0]}"
         comp = Compositor(backend.ctx, scene, size)
-        figures.append(Figure("visual", f"static scene image {label}",
-                              scene_ms(comp, scene, repeats), static_unit(repeats)))
+        figures.append(static_figure(comp, scene, "scene image", label, repeats))
         if size == SIZES[-1]:
             figures.extend(bundled_scene_figures(comp, label, repeats))
             comp.set_scene(scene)
-        frame, _ = frame_ms(backend, comp, view, frames, read_back=False)
-        figures.append(Figure("visual", f"frame {label}", frame, f"ms (best of {frames})"))
+        [(frame, _)] = timed_in_turn([frame_step(backend, comp, view, read_back=False)],
+                                     frames)
+        figures.append(Figure("visual", f"frame {label}", frame, best_unit(frames)))
         figures += against_floor(backend, comp, view, frames, label)
         busy = cores()
         with BusyProcesses(busy, 120.0):
@@ -201,20 +218,31 @@ def run(quick: bool) -> list[Figure]:
     return figures
 
 
+def best_unit(frames: int) -> str:
+    """The unit of a frame's or floor's best time of ``frames``."""
+    return f"ms of wall time (best of {frames})"
+
+
 def against_floor(backend: OffscreenBackend, comp: Compositor, view: FrameView, frames: int,
                   label: str) -> list[Figure]:
-    """The frame with its pixels read back against the floor, ``frames`` of the one,
-    then ``frames`` of the other: best wall times, mean CPU times, and their ratios."""
-    read, read_cpu = frame_ms(backend, comp, view, frames, read_back=True)
-    floor, floor_cpu = floor_ms(backend, (comp.viewport.width_px, comp.viewport.height_px),
-                                frames)
-    best, mean = f"ms (best of {frames})", f"ms (mean of {frames}, all threads)"
+    """The frame with its pixels read back against the floor, ``frames`` of each,
+    alternated (a frame, then a floor, in each round): best wall times, mean CPU times,
+    and their ratios."""
+    read_back = frame_step(backend, comp, view, read_back=True)
+    floor_draw, release = floor_step(backend, (comp.viewport.width_px,
+                                               comp.viewport.height_px))
+    try:
+        (read, read_cpu), (floor, floor_cpu) = timed_in_turn([read_back, (floor_draw, None)],
+                                                             frames)
+    finally:
+        release()
+    best, mean = best_unit(frames), f"ms of CPU time (mean of {frames}, all threads)"
     return [Figure("visual", f"frame + read back {label}", read, best),
-            Figure("visual", f"floor {label} (clear, scene quad, read back; after the frames)",
-                   floor, best),
+            Figure("visual", f"floor {label} (clear, scene quad, read back; alternated with "
+                             "the frames)", floor, best),
             Figure("visual", f"frame + read back / floor {label}", read / floor,
                    "x (best against best)"),
             Figure("visual", f"frame + read back CPU {label}", read_cpu, mean),
             Figure("visual", f"floor CPU {label}", floor_cpu, mean),
-            Figure("visual", f"frame / floor CPU {label}", read_cpu / floor_cpu,
+            Figure("visual", f"frame + read back / floor CPU {label}", read_cpu / floor_cpu,
                    "x (mean against mean)")]
