@@ -17,7 +17,8 @@ from frictex.app.experiment.window_presenter import (SessionPaused, WindowPresen
                                                      response_keys, run_in_window)
 from frictex.app.live.haptic_setup import open_haptic
 from frictex.app.commands.cli import main as cli_main
-from frictex.rendering.input.trace_file import read_trace
+from frictex.app.experiment.session import contact_s
+from frictex.rendering.input.trace_file import DOWN, read_trace
 from frictex.rendering.visual.viewport import default_frame_size
 from frictex.rendering.visual.windows import open_backend
 from frictex.textures.loader import load_scene
@@ -196,7 +197,7 @@ class Frames:
 
 
 def run_headless(tmp_path, lose_at=None, escape_at=None, resume=False, presentation=FREE,
-                 frames=None, size=None):
+                 frames=None, size=None, hand_class=Hand):
     """The tiny protocol's session in the headless window with a :class:`Hand`:
     (session, hand, session folder); ``frames`` (a :class:`Frames`) keeps the frames;
     ``size``: the window's (px), default the display's own."""
@@ -211,7 +212,7 @@ def run_headless(tmp_path, lose_at=None, escape_at=None, resume=False, presentat
         pytest.skip(f"EGL unavailable: {exc}")
     out = tmp_path / "session"
     presenter = WindowPresenter()
-    hand = Hand(window, presenter, lose_at, escape_at, presentation["exploration"] == "free")
+    hand = hand_class(window, presenter, lose_at, escape_at, presentation["exploration"] == "free")
 
     if frames is not None:
         threading.Thread(target=lambda: setattr(frames, "loop", wait_for(
@@ -343,3 +344,88 @@ def test_escape_ends_the_session_keeping_the_answers_and_resume_goes_on(tmp_path
     assert [r["trial"] for r in rows] == ["1", "2", "3"]
     assert [r["response"] for r in rows] == ["1", *hand.answers]
     assert (out / "live-2" / "events.csv").exists()  # the resumed run's live output
+
+
+class HoldingHand(Hand):
+    """Presses once on a trial's first interval and holds the button, moving, until the
+    question: across the switch to the second interval, as a participant may."""
+
+    holding = False
+
+    def stroke(self, loop):
+        vp = loop.compositor.viewport
+        y = vp.y0 + vp.height_px / 2
+        shown = loop.screen
+        if not self.holding:
+            self.window.move(vp.x0 + 0.3 * vp.width_px, y)
+            self.window.press()
+            self.holding = True
+        deadline = time.monotonic() + 120.0
+        for k in range(10**9):
+            if loop.screen is not shown:
+                break
+            assert time.monotonic() < deadline, "the interval did not end"
+            self.window.move(vp.x0 + (0.3 + 0.4 * (k % 2)) * vp.width_px, y)
+            time.sleep(0.01)
+        if loop.screen.phase != "interval":  # the question (or shown again): lift
+            self.window.release()
+            self.holding = False
+
+
+def test_a_button_held_across_intervals_touches_the_second(tmp_path):
+    session, hand, out = run_headless(tmp_path, presentation=FIXED, hand_class=HoldingHand)
+    assert "Not touched" not in [t for t, _, _ in hand.layouts]
+    assert hand.intervals == 6
+    for trial in (1, 2, 3):
+        trace = read_trace(out / "trials" / f"{trial:04d}" / "2.csv")
+        assert trace.event[0] == DOWN and contact_s(trace) >= 1.0
+
+
+class LateHand(Hand):
+    """Touches each interval only once it has been shown for 0.6 s (haptic clock)."""
+
+    def stroke(self, loop):
+        shown = loop.haptic.now()  # the interval started before its screen was set
+        wait_for("0.6 s", lambda: loop.haptic.now() >= shown + 0.6)
+        vp = loop.compositor.viewport
+        y = vp.y0 + vp.height_px / 2
+        screen = loop.screen
+        self.window.move(vp.x0 + 0.3 * vp.width_px, y)
+        self.window.press()
+        deadline = time.monotonic() + 120.0
+        for k in range(10**9):
+            if loop.screen is not screen:
+                break
+            assert time.monotonic() < deadline, "the interval did not end"
+            self.window.move(vp.x0 + (0.3 + 0.4 * (k % 2)) * vp.width_px, y)
+            time.sleep(0.01)
+        self.window.release()
+
+
+def test_a_fixed_exploration_counts_from_the_first_touch(tmp_path):
+    """Touched 0.6 s after it was shown, a 1 s interval still gives 1 s of contact (each
+    trial's first interval: the second may be touched at once by the button still held
+    from the first)."""
+    session, hand, out = run_headless(tmp_path, presentation=FIXED, hand_class=LateHand)
+    assert "Not touched" not in [t for t, _, _ in hand.layouts]
+    for trial in (1, 2, 3):
+        trace = read_trace(out / "trials" / f"{trial:04d}" / "1.csv")
+        assert trace.t_s[0] >= 0.6 and contact_s(trace) >= 1.0 - 1e-6
+
+
+def test_results_give_each_interval_its_contact_time_and_old_tables_still_read(tmp_path):
+    from types import SimpleNamespace
+    from frictex.app.experiment import session as S
+    from frictex.rendering.input.trace_file import make_trace
+    touched = make_trace(np.array([0.6, 1.0, 1.6, 2.0, 2.5]), np.zeros(5, dtype=np.int64),
+                         np.zeros(5), np.zeros(5), np.ones(5), np.array([0, 1, 2, 0, 2], dtype=np.int8))
+    trial = SimpleNamespace(number=1, practice=False, stimuli=("a", "b"), value=1.0,
+                            difference=0.1, answer="1")
+    row = S.result_row(trial, "1", 0.5, (touched,))
+    assert (row["contact_1_s"], row["contact_2_s"]) == ("1.5000", "")
+    old = tmp_path / "old"
+    old.mkdir()
+    (old / "results.csv").write_text(",".join(S.COLUMNS_BEFORE_CONTACT) + "\n")
+    session = S.Session(old, {}, [], S.read_table(old)[0])
+    session.append(row)  # a resumed old table goes on in its own columns
+    assert S.read_rows(old)[0]["response"] == "1" and "contact_1_s" not in S.read_rows(old)[0]

@@ -12,7 +12,11 @@
                               end and trials; a part without an end was killed), and
                               the design the analysis needs
     DIR/protocol.toml         the protocol file as it was read
-    DIR/results.csv           one row per trial answered (RESULT_COLUMNS), in order
+    DIR/results.csv           one row per trial answered (RESULT_COLUMNS), in order;
+                              contact_1_s, contact_2_s: how long each interval was
+                              touched (s, finger down; empty for an interval the trial
+                              has not). A table from before those two columns is read,
+                              and resumed, in its own columns
     DIR/stimuli/NAME.toml     each stimulus's scene, as a texture file
     DIR/trials/NNNN/I.toml    the scene of interval I (1, 2) of trial NNNN ...
     DIR/trials/NNNN/I.csv     ... the touch trace over it (trace format) ...
@@ -47,11 +51,15 @@ from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
 
+import numpy as np
+
 from frictex.device.errors import InputError
 
 FORMAT = 1
 RESULT_COLUMNS = ("trial", "practice", "stimuli", "value", "difference", "answer", "response",
-                  "correct", "rt_s", "ended_utc")
+                  "correct", "rt_s", "ended_utc", "contact_1_s", "contact_2_s")
+#: the columns of a results table written before the contact times
+COLUMNS_BEFORE_CONTACT = RESULT_COLUMNS[:-2]
 #: the separator between the stimuli of a trial in the ``stimuli`` column
 SEPARATOR = "|"
 RECORDS = ("all", "traces", "results")
@@ -93,14 +101,29 @@ def _number(value) -> str:
     return f"{value:.12g}" if isinstance(value, float) else str(value)
 
 
-def result_row(trial, response: str, rt_s: float) -> dict:
-    """The results row of ``trial`` (a ``scheduler.Trial``) answered ``response``."""
+def contact_s(trace) -> float:
+    """How long ``trace`` (a ``trace_file.Trace``) had a finger down (s): per finger, the
+    time from each of its samples but an up to its next sample, summed over the fingers."""
+    from frictex.rendering.input.trace_file import UP
+    total = 0.0
+    for finger in np.unique(trace.finger):
+        mine = trace.finger == finger
+        total += float(np.diff(trace.t_s[mine])[trace.event[mine][:-1] != UP].sum())
+    return total
+
+
+def result_row(trial, response: str, rt_s: float, traces=()) -> dict:
+    """The results row of ``trial`` (a ``scheduler.Trial``) answered ``response``;
+    ``traces``: what each interval was touched with (``trace_file.Trace``), for the
+    contact times (none: empty)."""
     correct = "" if trial.answer is None else int(response == trial.answer)
+    contacts = [f"{contact_s(trace):.4f}" for trace in traces] + ["", ""]
     return {"trial": trial.number, "practice": int(trial.practice),
             "stimuli": SEPARATOR.join(trial.stimuli), "value": _number(trial.value),
             "difference": _number(trial.difference), "answer": trial.answer or "",
             "response": response, "correct": correct, "rt_s": f"{rt_s:.4f}",
-            "ended_utc": datetime.now(timezone.utc).isoformat(timespec="milliseconds")}
+            "ended_utc": datetime.now(timezone.utc).isoformat(timespec="milliseconds"),
+            "contact_1_s": contacts[0], "contact_2_s": contacts[1]}
 
 
 @dataclass
@@ -110,6 +133,7 @@ class Session:
     folder: Path
     info: dict
     rows: list[dict]
+    columns: tuple[str, ...] = RESULT_COLUMNS  # those of its results.csv
 
     @property
     def seed(self) -> int:
@@ -125,14 +149,14 @@ class Session:
     def append(self, row: dict) -> None:
         """Append ``row`` to the results table in one write and sync it to the disk."""
         buf = io.StringIO()
-        csv.DictWriter(buf, RESULT_COLUMNS, lineterminator="\n").writerow(row)
+        csv.DictWriter(buf, self.columns, lineterminator="\n", extrasaction="ignore").writerow(row)
         fd = os.open(self.results, os.O_WRONLY | os.O_APPEND)
         try:
             os.write(fd, buf.getvalue().encode("utf-8"))
             os.fsync(fd)
         finally:
             os.close(fd)
-        self.rows.append({k: str(v) for k, v in row.items()})
+        self.rows.append({k: str(row[k]) for k in self.columns})
 
     def write_interval(self, number: int, interval: int, scene_text: str, trace,
                        record: str) -> None:
@@ -273,8 +297,14 @@ def read_info(folder: Path) -> dict:
 
 
 def read_rows(folder: Path, repair: bool = False) -> list[dict]:
-    """The rows of ``folder``'s results table. A last line without a line end (a write
-    cut short) is not a row; ``repair`` also cuts it from the file."""
+    """The rows of ``folder``'s results table (:func:`read_table`)."""
+    return read_table(folder, repair)[1]
+
+
+def read_table(folder: Path, repair: bool = False) -> tuple[tuple[str, ...], list[dict]]:
+    """The columns and rows of ``folder``'s results table (:data:`RESULT_COLUMNS`, or
+    :data:`COLUMNS_BEFORE_CONTACT` for a table written before them). A last line without
+    a line end (a write cut short) is not a row; ``repair`` also cuts it from the file."""
     from frictex.device.safe_files import read_bytes
     path = Path(folder) / "results.csv"
     try:
@@ -291,12 +321,13 @@ def read_rows(folder: Path, repair: bool = False) -> list[dict]:
         rows = list(reader)
     except (UnicodeDecodeError, csv.Error) as exc:
         raise InputError(f"{path}: not a results table ({exc})") from None
-    if tuple(reader.fieldnames or ()) != RESULT_COLUMNS:
+    columns = tuple(reader.fieldnames or ())
+    if columns not in (RESULT_COLUMNS, COLUMNS_BEFORE_CONTACT):
         raise InputError(f"{path}: expected the columns {','.join(RESULT_COLUMNS)}")
     for i, row in enumerate(rows, start=1):
         if row.get("trial") != str(i) or None in row.values():
             raise InputError(f"{path}:{i + 1}: expected the row of trial {i} with "
-                             f"{len(RESULT_COLUMNS)} fields")
+                             f"{len(columns)} fields")
         rt = row["rt_s"]
         try:
             ok = math.isfinite(float(rt)) and float(rt) >= 0
@@ -304,7 +335,7 @@ def read_rows(folder: Path, repair: bool = False) -> list[dict]:
             ok = False
         if not ok:
             raise InputError(f"{path}:{i + 1}: rt_s {rt!r}: expected a time in s")
-    return rows
+    return columns, rows
 
 
 def folder_of(text: str, option: str = "--out") -> Path:
@@ -345,11 +376,11 @@ def resume(folder: Path, protocol, participant: str | None, seed: int | None = N
     if pid is not None and pid != info.get("participant_id"):
         raise InputError(f"--participant-id {pid}: {folder} was started with "
                          f"{info.get('participant_id')!r}")
-    rows = read_rows(folder, repair=True)
+    columns, rows = read_table(folder, repair=True)
     trials = folder / "trials"
     trials.mkdir(exist_ok=True)
     for leftover in trials.iterdir():
         if not (leftover.name.isdigit() and int(leftover.name) <= len(rows)):
             shutil.rmtree(leftover) if leftover.is_dir() else leftover.unlink()
     _fsync_dir(trials)
-    return Session(folder, info, rows)
+    return Session(folder, info, rows, columns)

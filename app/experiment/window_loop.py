@@ -13,7 +13,9 @@ changes:
   the buttons drawn (``buttons``, replaced whole each frame) are what a press hits,
   once they are the current screen's (a press before its first frame hits nothing);
 - the mouse touches only while an interval accepts touches (``accept_touch``); a press
-  on a button is an answer, never a touch; the touches sent during an interval are
+  on a button is an answer, never a touch; a button held from before (across the end of
+  the interval before) touches once touches are accepted, at the cursor, as the
+  instructions ask for no lift between intervals; the touches sent during an interval are
   recorded (:meth:`start_recording`, :meth:`stop_recording`) exactly as the haptic side
   received them (haptic clock);
 - the window's title stays as it was opened (:class:`_FixedTitle`), never a stimulus's
@@ -90,9 +92,11 @@ class ExperimentLoop(DemoLoop):
         self.answers: queue.SimpleQueue = queue.SimpleQueue()  # ("key" | "button", value, t_s)
         self.requests: queue.SimpleQueue = queue.SimpleQueue()  # (what, args, reply queue)
         self.accept_touch = False
+        self.held = False  # the left button is down, not on an answer's button (input thread)
         self.show_scene = False  # the protocol's [presentation] show_scene
         self.lost: str | None = None
         self._recording: list | None = None
+        self._touched_at: float | None = None  # the recording's first down (s, haptic clock)
         self._rec_lock = threading.Lock()
 
     # -- input thread -------------------------------------------------------------------
@@ -108,17 +112,23 @@ class ExperimentLoop(DemoLoop):
     def on_button(self, pressed: bool) -> None:
         if self.hover_px is None:
             self.hover_px = self.backend.cursor_px()
-        if not self.touching:
-            if pressed and self._buttons_of is self.screen:  # (not a screen's gone by)
-                button = hit(self.buttons, *self.hover_px)
-                if button is not None:
-                    self.answers.put(("button", button.value, self.haptic.now()))
-                    return
-            if not (pressed and self.accept_touch):
-                return  # a release after a button, or a press while nothing is explored
+        answered = (pressed and not self.touching and self._buttons_of is self.screen
+                    and self._answer(hit(self.buttons, *self.hover_px)))
+        self.held = pressed and not answered
+        if answered or not (self.touching or (pressed and self.accept_touch)):
+            return  # a release after a button, or a press while nothing is explored
         super().on_button(pressed)
 
+    def _answer(self, button) -> bool:
+        """Queue the click on ``button`` (None: the press hit no button) as an answer."""
+        if button is not None:
+            self.answers.put(("button", button.value, self.haptic.now()))
+        return button is not None
+
     def flush_mouse(self) -> None:
+        if self.held and self.accept_touch and not self.touching:
+            # pressed while nothing was explored: the press the demo's touch starts at
+            self._pending.insert(0, (True, self._pending[0][1] if self._pending else self.hover_px))
         super().flush_mouse()
         if self.touching and not self.accept_touch:  # the interval ended under the finger
             self._pending = []
@@ -133,15 +143,23 @@ class ExperimentLoop(DemoLoop):
                 # as the haptic queue takes them (touch_at): a stamp never goes back, though
                 # an event stamped before the last one recorded may reach here after it
                 last = self._recording[-1][0] if self._recording else 0.0
-                self._recording.append((max(min(t_s, self.haptic.now()), last), x, y,
-                                        self.force_n, EVENTS[event]))
+                stamp = max(min(t_s, self.haptic.now()), last)
+                self._recording.append((stamp, x, y, self.force_n, EVENTS[event]))
+                if event == "down" and self._touched_at is None:
+                    self._touched_at = stamp
 
     # -- session thread -----------------------------------------------------------------
 
     def start_recording(self) -> None:
         """Record the touches sent from now on."""
         with self._rec_lock:
-            self._recording = []
+            self._recording, self._touched_at = [], None
+
+    def touched_at(self) -> float | None:
+        """When the first touch since :meth:`start_recording` began (s, haptic clock), or
+        None: not touched yet."""
+        with self._rec_lock:
+            return self._touched_at
 
     def stop_recording(self) -> list[tuple]:
         """The touches sent since :meth:`start_recording`: (t_s haptic clock, x_mm, y_mm,

@@ -9,7 +9,10 @@ opens the demo's window on the live haptic pipeline (the same haptic side as
   such on the progress line (the frame's top line, with the trial's place in the
   session), a break screen where the protocol asks for one;
 - each interval plays its scene under the mouse (left button held = touching) for
-  the protocol's exploration time, the window showing a uniform field (or, with
+  the protocol's exploration time, counted from the interval's first touch (a button
+  held from the interval before touches at once); an interval not touched within
+  :data:`FIRST_TOUCH_WAIT_S` ends there, so no interval waits longer than that and its
+  exploration time together. The window shows a uniform field (or, with
   ``[presentation] show_scene = true``, the scene's picture: visuo-haptic stimuli); with ``exploration = "free"`` the
   participant moves on before that with Enter (or the right arrow) or the Next
   button. Side by side, the half not explored in this interval is dimmed. An interval
@@ -57,7 +60,9 @@ from frictex.rendering.visual.experiment_view import ExperimentView
 NEXT_KEYS = ("enter", "right")
 END_KEYS = ("escape",)
 WAIT_S = 0.05  # longest wait for an answer before looking at the window and the output
-SWITCH_TIMEOUT_S = 120.0  # a scene switch (the haptic child builds the pipeline)
+SWITCH_TIMEOUT_S = 120.0
+#: the longest an interval waits for its first touch (s): then it ends, not touched
+FIRST_TOUCH_WAIT_S = 30.0  # a scene switch (the haptic child builds the pipeline)
 CONTINUE = "continue"
 NEXT = "next"
 RECONNECT = "reconnect"
@@ -236,7 +241,7 @@ class WindowPresenter:
                 active_mm=None if whole else item.area))
             loop.log("interval-start", f"trial {trial.number} interval {i}: {item.name}", t_s=t0)
             try:
-                while (event := self._event(t0 + item.seconds)) is not None:
+                while (event := self._event(lambda: self._ends_at(item, t0))) is not None:
                     kind, value, _ = event
                     if item.free and ((kind == "button" and value == NEXT)
                                       or (kind == "key" and value in NEXT_KEYS)):
@@ -251,6 +256,12 @@ class WindowPresenter:
                 "The texture was not touched, so it is shown again. Hold the left button "
                 "down and move over it.",), ((CONTINUE, "Again (Enter)"),),
                 self._progress(trial, label))
+
+    def _ends_at(self, item: Shown, t0_s: float) -> float:
+        """When the interval shown at ``t0_s`` ends (s, haptic clock): ``item.seconds``
+        after its first touch, or :data:`FIRST_TOUCH_WAIT_S` after ``t0_s`` untouched."""
+        touched = self.loop.touched_at()  # stamped as early as the batch it came in: clamped
+        return t0_s + FIRST_TOUCH_WAIT_S if touched is None else max(touched, t0_s) + item.seconds
 
     # -- screens and events -------------------------------------------------------------
 
@@ -274,9 +285,10 @@ class WindowPresenter:
             if (kind == "button" and value == buttons[0][0]) or (kind == "key" and value in NEXT_KEYS):
                 return
 
-    def _event(self, until_s: float | None = None) -> tuple | None:
+    def _event(self, until: Callable[[], float] | None = None) -> tuple | None:
         """The participant's next key or click ("key" | "button", value, t_s), or None
-        once the haptic clock reaches ``until_s``. Escape or a closed window ends the
+        once the haptic clock reaches ``until()`` (s; asked again at every look: it may
+        move). Escape or a closed window ends the
         session (:class:`SessionPaused`); a lost output pauses it (:meth:`_lost`)."""
         while True:
             loop = self.loop
@@ -285,8 +297,8 @@ class WindowPresenter:
             if loop.lost is not None:
                 self._lost(loop.lost)
             wait = WAIT_S
-            if until_s is not None:
-                wait = min(wait, until_s - loop.haptic.now())
+            if until is not None:
+                wait = min(wait, until() - loop.haptic.now())
                 if wait <= 0.0:
                     return None
             try:
