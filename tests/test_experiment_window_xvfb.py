@@ -100,7 +100,9 @@ def test_seed003_gratings_in_the_window_under_xvfb(xvfb_display, xdotool, tmp_pa
         Image.open(path).save(Path(os.environ.get("FRICTEX_KEEP_SHOTS", tmp_path)) / path.name)
         rgb = np.asarray(Image.open(path).convert("RGB")).astype(int)
         assert np.all(np.abs(rgb - button) <= 2, axis=-1).sum() > 500, path.name
-    assert len(list(shots.glob("*.png"))) == 3
+    # named for the session, not the stimulus shown (a shared screenshot must not unblind)
+    assert sorted(p.name for p in shots.glob("*.png")) == [
+        f"frictex-experiment-{k:03d}.png" for k in range(3)]
     assert cli_main(["experiment", "analyse", str(out), "--out", str(tmp_path / "analysis")]) == 0
     assert (tmp_path / "analysis" / "analysis.json").exists()
 

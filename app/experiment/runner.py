@@ -147,7 +147,7 @@ def _run_trials(scheduler: Scheduler, state, stage: _Stage, presenter: Presenter
             for interval, (item, trace) in enumerate(zip(shown, result.traces), start=1):
                 session.write_interval(trial.number, interval, item.text, trace, record)
             session.sync_trial(trial.number)
-        row = S.result_row(trial, result.response, result.rt_s)
+        row = S.result_row(trial, result.response, result.rt_s, result.traces)
         session.append(row)
         state = scheduler.answer(state, trial, result.response)
         if progress is not None:

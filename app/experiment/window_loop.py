@@ -238,6 +238,12 @@ class ExperimentLoop(DemoLoop):
         self._serve()
         super().frame(now)
 
+    def screenshot_stem(self) -> str:
+        """The start of a screenshot's file name: the session's, never the stimulus's (a
+        shared screenshot must not say which stimulus a trial showed); they are
+        numbered in the order taken."""
+        return "frictex-experiment"
+
     def draw(self) -> None:
         self.compositor.resize(self.backend.size)
         self.backend.use()

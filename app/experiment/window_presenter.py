@@ -54,7 +54,7 @@ from frictex.app.experiment.presenter import Presentation, Shown
 from frictex.app.experiment.runner import PARTICIPANTS
 from frictex.app.experiment.scheduler import Scheduler, Trial
 from frictex.device.errors import DeviceError, InputError, RunFailed
-from frictex.rendering.input.trace_file import DOWN, UP, Trace, make_trace
+from frictex.rendering.input.trace_file import DOWN, Trace, make_trace
 from frictex.rendering.visual.experiment_view import ExperimentView
 
 NEXT_KEYS = ("enter", "right")

@@ -833,12 +833,16 @@ class DemoLoop:
             envelope_scale_um=self.envelope_scale_um,
             layer_panel=self.panel_view() if self.panel_open else None))
 
+    def screenshot_stem(self) -> str:
+        """The start of a screenshot's file name: the scene's."""
+        return f"frictex-{file_stem(self.scene.name)}"
+
     def screenshot(self) -> Path | None:
         """The frame drawn last, as a new PNG in the screenshot folder (never overwriting),
         said on stdout. A folder that cannot take it (a file of that name, no room, no
         permission) is said on stderr and on screen and logged; the demo carries on."""
         try:
-            path, f = next_screenshot(self.screenshot_dir, f"frictex-{file_stem(self.scene.name)}")
+            path, f = next_screenshot(self.screenshot_dir, self.screenshot_stem())
             with f:
                 Image.fromarray(self.backend.read_rgb()).save(f, format="PNG")
         except OSError as exc:
