@@ -250,19 +250,14 @@ def test_a_key_changed_in_the_file_too_keeps_the_files_value(tmp_path):
 def test_a_save_says_the_full_path_of_a_file_named_relative(tmp_path, monkeypatch, capfd):
     """A scene opened as ``lines.toml`` in the current folder: the panel and the terminal
     name the file saved by its full path, not 'lines.toml in .'."""
-    from test_layer_panel_demo import click, row_of, run_demo, wait_for
+    from test_layer_panel_demo import make_edge_smooth, run_demo, wait_for
     grating(tmp_path)
     monkeypatch.chdir(tmp_path)
     rec = tmp_path / "rec"
     rec.mkdir()
 
     def hand(window, loop, haptic):
-        window.key("l")
-        wait_for("the panel", lambda: any(r.key == "edge" for r in loop.compositor.panel_rows))
-        click(window, row_of(loop, "edge"))
-        wait_for("the menu", lambda: any(r.kind == "option" for r in loop.compositor.panel_rows))
-        click(window, next(r for r in loop.compositor.panel_rows if r.option == "smooth"))
-        wait_for("a smooth edge", lambda: loop.scene.layers[0].edge == "smooth")
+        make_edge_smooth(window, loop)
         window.key("ctrl+s")
         wait_for("the save", lambda: loop.panel_note.startswith("saved"))
         assert loop.panel_note == f"saved {tmp_path / 'lines.toml'}"

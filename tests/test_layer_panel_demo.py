@@ -105,6 +105,16 @@ def click(window, row):
     window.release()
 
 
+def make_edge_smooth(window, loop) -> None:
+    """Open the panel (L) and choose a smooth edge for the first layer from its menu."""
+    window.key("l")
+    wait_for("the panel", lambda: any(r.key == "edge" for r in loop.compositor.panel_rows))
+    click(window, row_of(loop, "edge"))
+    wait_for("the menu", lambda: any(r.kind == "option" for r in loop.compositor.panel_rows))
+    click(window, next(r for r in loop.compositor.panel_rows if r.option == "smooth"))
+    wait_for("a smooth edge", lambda: loop.scene.layers[0].edge == "smooth")
+
+
 def test_a_slider_drag_changes_the_next_block_and_frame(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
     scene_file = tmp_path / "lines.toml"

@@ -9,7 +9,7 @@ import stat
 import pytest
 
 from frictex.textures.library import resolve_scene
-from test_layer_panel_demo import click, row_of, run_demo, wait_for
+from test_layer_panel_demo import make_edge_smooth, run_demo, wait_for
 
 
 def test_the_panel_saves_only_onto_the_file_it_read(tmp_path, monkeypatch, capfd):
@@ -21,12 +21,7 @@ def test_the_panel_saves_only_onto_the_file_it_read(tmp_path, monkeypatch, capfd
     rec.mkdir()
 
     def hand(window, loop, haptic):
-        window.key("l")
-        wait_for("the panel", lambda: any(r.key == "edge" for r in loop.compositor.panel_rows))
-        click(window, row_of(loop, "edge"))
-        wait_for("the menu", lambda: any(r.kind == "option" for r in loop.compositor.panel_rows))
-        click(window, next(r for r in loop.compositor.panel_rows if r.option == "smooth"))
-        wait_for("a smooth edge", lambda: loop.scene.layers[0].edge == "smooth")
+        make_edge_smooth(window, loop)
         assert loop.scene.layers[0].edge_mm == pytest.approx(1.25)  # half the 2.5 mm band
         wait_for("the save button's news", lambda: any(r.text.startswith("unsaved changes")
                                                        for r in loop.compositor.panel_rows))
