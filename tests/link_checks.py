@@ -59,11 +59,11 @@ def all_played_unless_tripped(status: dict, played_index: np.ndarray | None,
     device's trips during this stream, when not the Status's count since power-up.
     (A device silent for half a second, so starved itself, is handshaken again, which
     restarts its buffer: a recovery, counted like a trip; so is a port that a starved
-    device's pty made fail, 'returned no data', reconnected: what was in flight is lost,
-    counted.)"""
+    device's pty made fail, 'returned no data', whether reconnected or lost while the
+    stream closed: what was in flight or queued is lost, counted.)"""
     accounted(status, played_index, commanded)
     trips = status["watchdog_trips"] if trips is None else trips
-    restarted = status["recoveries"] + status["reconnects"]
+    restarted = status["recoveries"] + status["reconnects"] + status["disconnects"]
     if trips == 0 and restarted == 0:
         assert status["unplayed_samples"] == 0, status["unplayed_by_cause"]
     else:
