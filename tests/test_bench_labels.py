@@ -13,7 +13,7 @@ import pytest
 from frictex.app.commands import bench
 from frictex.app.measure import bench_latency, bench_pipeline, bench_startup
 from frictex.app.measure.figure import Figure
-from frictex.app.measure.processes import Run
+from frictex.app.measure.processes import BusyProcesses, Run
 
 
 def _pipeline_fakes(monkeypatch):
@@ -156,7 +156,12 @@ def _fake_rusage(monkeypatch, used: dict[int, list[float]]):
 def test_a_sections_own_cpu_is_apart_from_its_child_processes(monkeypatch, name, children):
     _fake_rusage(monkeypatch, {resource.RUSAGE_SELF: [10.0, 12.5],
                                resource.RUSAGE_CHILDREN: [1.0, 25.0]})
-    figures = bench._measured(name, lambda quick: [], True)
+    def section(quick):
+        if name == "latency":  # it starts busy processes as load
+            with BusyProcesses(1, 5.0):
+                pass
+        return []
+    figures = bench._measured(name, section, True)
     assert [(f.label, f.value) for f in figures[-2:]] == [
         ("the whole section, CPU user + system of this process", 2.5),
         (f"the whole section, CPU user + system of its child processes ({children})", 24.0)]

@@ -156,6 +156,18 @@ class Hand:
             else:  # a message's first button: Start, Continue, Reconnect
                 self.click(drawn[0].box)
 
+    def move_until_it_ends(self, loop, screen, y: float) -> None:
+        """Move the mouse back and forth across the scene at height ``y`` (px) until
+        the loop shows another screen than ``screen`` (the interval ended)."""
+        vp = loop.compositor.viewport
+        deadline = time.monotonic() + 120.0
+        for k in range(10**9):
+            if loop.screen is not screen:
+                return
+            assert time.monotonic() < deadline, "the interval did not end"
+            self.window.move(vp.x0 + (0.3 + 0.4 * (k % 2)) * vp.width_px, y)
+            time.sleep(0.01)
+
     def stroke(self, loop):
         vp = loop.compositor.viewport
         xs = np.linspace(vp.x0 + 0.2 * vp.width_px, vp.x0 + 0.8 * vp.width_px, 15)
@@ -360,13 +372,7 @@ class HoldingHand(Hand):
             self.window.move(vp.x0 + 0.3 * vp.width_px, y)
             self.window.press()
             self.holding = True
-        deadline = time.monotonic() + 120.0
-        for k in range(10**9):
-            if loop.screen is not shown:
-                break
-            assert time.monotonic() < deadline, "the interval did not end"
-            self.window.move(vp.x0 + (0.3 + 0.4 * (k % 2)) * vp.width_px, y)
-            time.sleep(0.01)
+        self.move_until_it_ends(loop, shown, y)
         if loop.screen.phase != "interval":  # the question (or shown again): lift
             self.window.release()
             self.holding = False
@@ -392,13 +398,7 @@ class LateHand(Hand):
         screen = loop.screen
         self.window.move(vp.x0 + 0.3 * vp.width_px, y)
         self.window.press()
-        deadline = time.monotonic() + 120.0
-        for k in range(10**9):
-            if loop.screen is not screen:
-                break
-            assert time.monotonic() < deadline, "the interval did not end"
-            self.window.move(vp.x0 + (0.3 + 0.4 * (k % 2)) * vp.width_px, y)
-            time.sleep(0.01)
+        self.move_until_it_ends(loop, screen, y)
         self.window.release()
 
 

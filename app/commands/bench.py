@@ -21,10 +21,6 @@ from dataclasses import asdict
 from frictex.app.measure.figure import Figure
 from frictex.device.errors import InputError
 
-#: the sections that start busy processes as load (``processes.BusyProcesses``; link's
-#: through ``link_report_delays``): their child processes' CPU time includes them
-LOADED_SECTIONS = frozenset({"link", "visual", "latency"})
-
 #: section name -> module
 SECTIONS = {
     "pipeline": "frictex.app.measure.bench_pipeline",
@@ -52,10 +48,11 @@ def _cpu_s(who: int) -> float:
     return usage.ru_utime + usage.ru_stime
 
 
-def _children_label(name: str) -> str:
-    """The label of section ``name``'s child processes' CPU: what those children are."""
+def _children_label(loaded: bool) -> str:
+    """The label of a section's child processes' CPU: what those children are (``loaded``:
+    the section started busy processes as load, ``processes.BusyProcesses``)."""
     which = ("the commands it ran and the busy processes it started as load"
-             if name in LOADED_SECTIONS else "the commands it ran")
+             if loaded else "the commands it ran")
     return f"the whole section, CPU user + system of its child processes ({which})"
 
 
@@ -63,8 +60,9 @@ def _measured(name: str, section, quick: bool) -> list[Figure]:
     """A section's figures between the machine's load before and after it, the whole
     section's wall time and CPU (user + system, s) of this process and, apart, of the
     child processes it ran."""
-    from frictex.app.measure.processes import load
+    from frictex.app.measure.processes import BusyProcesses, load
 
+    busy0 = BusyProcesses.started
     own0, children0 = _cpu_s(resource.RUSAGE_SELF), _cpu_s(resource.RUSAGE_CHILDREN)
     before, wall0 = load(), time.perf_counter()
     figures = section(quick)
@@ -76,7 +74,7 @@ def _measured(name: str, section, quick: bool) -> list[Figure]:
             Figure(name, "machine load at the end (1-minute average)", load(), ""),
             Figure(name, "the whole section, wall", wall, "s"),
             Figure(name, "the whole section, CPU user + system of this process", own, "s"),
-            Figure(name, _children_label(name), children, "s")]
+            Figure(name, _children_label(BusyProcesses.started > busy0), children, "s")]
 
 
 def run(args: argparse.Namespace) -> int:

@@ -60,9 +60,9 @@ from frictex.rendering.visual.experiment_view import ExperimentView
 NEXT_KEYS = ("enter", "right")
 END_KEYS = ("escape",)
 WAIT_S = 0.05  # longest wait for an answer before looking at the window and the output
-SWITCH_TIMEOUT_S = 120.0
+SWITCH_TIMEOUT_S = 120.0  # a scene switch (the haptic child builds the pipeline)
 #: the longest an interval waits for its first touch (s): then it ends, not touched
-FIRST_TOUCH_WAIT_S = 30.0  # a scene switch (the haptic child builds the pipeline)
+FIRST_TOUCH_WAIT_S = 30.0
 CONTINUE = "continue"
 NEXT = "next"
 RECONNECT = "reconnect"

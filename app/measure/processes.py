@@ -52,9 +52,14 @@ def cores() -> int:
 
 class BusyProcesses:
     """``count`` processes that keep a core busy each, for at most ``seconds`` (each ends
-    itself, so none outlives a crashed parent by long), killed on leaving the ``with``."""
+    itself, so none outlives a crashed parent by long), killed on leaving the ``with``.
+    ``started`` counts every one this process has started (a bench section's child
+    processes include them)."""
+
+    started = 0
 
     def __init__(self, count: int, seconds: float):
+        BusyProcesses.started += count
         code = f"import time\nend = time.monotonic() + {seconds!r}\nwhile time.monotonic() < end: pass"
         self.procs = [subprocess.Popen([sys.executable, "-c", code]) for _ in range(count)]
 
