@@ -175,7 +175,14 @@ def test_a_stopped_rerun_keeps_every_earlier_folder_it_did_not_replace(tmp_path,
     from frictex.app.engine.fanout import Interrupted
     out = tmp_path / "o"
     assert batch(manifest(tmp_path, "a", "b", "old"), out) == 0
-    earlier = {row["name"]: row for row in results(out)}
+    earlier_rows = results(out)
+    # a's earlier wall time made one no run of it takes, so that this run's cannot equal it
+    earlier_rows[0]["wall_s"] = "1234.5"
+    with open(out / "batch.csv", "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=list(earlier_rows[0]), lineterminator="\n")
+        writer.writeheader()
+        writer.writerows(earlier_rows)
+    earlier = {row["name"]: row for row in earlier_rows}
     b_summary = (out / "b" / "summary.json").read_bytes()
     real = command.fan_out
 
@@ -189,7 +196,7 @@ def test_a_stopped_rerun_keeps_every_earlier_folder_it_did_not_replace(tmp_path,
     assert {name: (row["job"], row["status"]) for name, row in rows.items()} == {
         "a": ("0", "ok"), "b": ("1", "earlier"), "new": ("2", "interrupted"),
         "old": ("", "earlier")}
-    assert rows["a"]["wall_s"] != earlier["a"]["wall_s"]  # this run's
+    assert rows["a"]["wall_s"] != "1234.5"  # this run's
     for name in ("b", "old"):
         assert {k: rows[name][k] for k in MEASURES} == {k: earlier[name][k] for k in MEASURES}
     assert (out / "b" / "summary.json").read_bytes() == b_summary
