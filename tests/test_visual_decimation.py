@@ -5,8 +5,13 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from frictex.rendering.visual.overlay import thin_polyline
+from frictex.rendering.visual.overlay import BlockRecord, OverlayState
 from frictex.rendering.visual.scope_ring import bin_spans
+from frictex.rendering.visual.trail import TrailPath, joined_steps, thin_polyline
+from frictex.rendering.visual.viewport import fit_viewport
+from frictex.textures.model import Display
+
+DISPLAY = Display(108.0, 64.8, 800, 480)
 
 
 def dense_spans(t, v, bin_s, first, count):
@@ -58,3 +63,80 @@ def test_thinned_polyline_keeps_its_breaks_and_a_vertex_per_pixel():
     assert [(kept[k], kept[k + 1]) for k in gaps] == [(500, 501), (1200, 1201)]
     step = np.hypot(*np.diff(points[kept], axis=0).T)[kept_joined]
     assert step.max() < 1.5
+
+
+def wandering_stroke(seed, n=8000):
+    """A 2 kHz stroke (t s, contact, x and y mm): a random walk of ~0.03 mm steps, lifted
+    for 0.15 s and jumping 40 mm while touching."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / 2000.0
+    x = 50.0 + np.cumsum(rng.normal(0.0, 0.02, n))
+    y = 30.0 + np.cumsum(rng.normal(0.0, 0.02, n))
+    contact = np.ones(n)
+    contact[1000:1300] = 0.0
+    x[5000:] += 40.0
+    return t, contact, x, y
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_trail_taken_in_stretches_draws_each_joined_step_once_within_a_pixel(seed):
+    """The stroke taken in 150 stretches of random length, each from a history of the
+    last 3 s (as frames see it): the drawn segments cover every joined step of the
+    samples exactly once and no other, each within 1 px of the samples it stands for,
+    with about as few vertices as thinning the whole stroke at once."""
+    t, contact, x, y = wandering_stroke(seed)
+    vp = fit_viewport(DISPLAY, 800, 480)
+    path = TrailPath(vp)
+    ends = np.sort(np.random.default_rng(seed).choice(np.arange(1, t.size), 150, replace=False))
+    for end in [*ends.tolist(), t.size]:
+        kept = slice(max(0, end - 6000), end)
+        path.take(t[kept], contact[kept], x[kept], y[kept])
+    points, times, joined = path.since(-np.inf)
+    at = np.searchsorted(t, times)
+    assert_allclose(times, t[at], rtol=0, atol=0)
+    assert_allclose(points, np.column_stack(vp.to_px(x[at], y[at])), rtol=0, atol=1e-9)
+    drawn = np.zeros(t.size - 1, dtype=int)
+    sample_px = np.column_stack(vp.to_px(x, y))
+    for a, b in zip(at[:-1][joined], at[1:][joined]):
+        drawn[a:b] += 1
+        chord = sample_px[b] - sample_px[a]
+        offset = sample_px[a:b + 1] - sample_px[a]
+        distance = np.abs(chord[0] * offset[:, 1] - chord[1] * offset[:, 0]) / max(
+            np.hypot(*chord), 1e-12)
+        assert distance.max() < 1.0
+    assert (drawn == joined_steps(t, contact, x, y)).all()
+    whole = thin_polyline(sample_px, joined_steps(t, contact, x, y), 1.0)[0]
+    assert times.size <= whole.size + ends.size + 1
+
+
+def test_a_trail_forgets_vertices_before_the_one_that_starts_its_window():
+    t, contact, x, y = wandering_stroke(4)
+    path = TrailPath(fit_viewport(DISPLAY, 800, 480))
+    path.take(t, contact, x, y)
+    all_times = path.since(-np.inf)[1].copy()
+    points, times, joined = path.since(2.0)
+    first = np.searchsorted(all_times, 2.0) - 1
+    assert times[0] == all_times[first] < 2.0 <= times[1]
+    assert_allclose(times, all_times[first:], rtol=0, atol=0)
+    assert len(points) == len(times) == len(joined) + 1
+    assert path.since(-np.inf)[1][0] == times[0]
+
+
+def test_trails_drawn_in_a_new_viewport_equal_those_drawn_there_from_the_start():
+    """A window resized 2 s before a stroke ends: its last second of trail is drawn in
+    the new viewport's pixels, as by an overlay that drew each frame there."""
+    t, contact, x, y = wandering_stroke(5, n=6000)
+    small, large = fit_viewport(DISPLAY, 800, 480), fit_viewport(DISPLAY, 1920, 1080)
+    resized, fresh = OverlayState(), OverlayState()
+    one = lambda a: a[None, :]
+    for lo in range(0, t.size, 33):
+        part = slice(lo, lo + 33)
+        record = BlockRecord(t[part], (0,), one(contact[part] > 0), one(x[part]), one(y[part]),
+                             one(np.ones(t[part].size)), one(np.zeros(t[part].size)))
+        resized.add(record)
+        fresh.add(record)
+        resized.trail_triangles(small if lo < 2000 else large)
+        expected = fresh.trail_triangles(large)
+    tris = resized.trail_triangles(large)
+    assert len(tris) > 100
+    assert_allclose(tris, expected, rtol=0, atol=1e-9)

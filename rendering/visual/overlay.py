@@ -3,8 +3,9 @@ for the devices that push a finger (seeds 002, 004) the force on each finger as 
 
 :class:`OverlayState` keeps the recent history the haptic side produced (fed with
 :class:`BlockRecord` snapshots, decimated copies of ``rendering.pipeline.BlockOutput``)
-and turns it into vertex arrays in frame pixels for ``compositor``; it does no OpenGL,
-so its geometry is tested without a context.
+and turns it into vertex arrays in frame pixels for ``compositor`` (each finger's trail
+thinned once, as its samples arrive: ``trail``); it does no OpenGL, so its geometry is
+tested without a context.
 
 The scope shows, for the last ``scope_s`` seconds and per finger, the mu' target
 (upper plot, 0 to 1) and the vibration amplitude under the finger (lower plot,
@@ -21,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from frictex.rendering.layers.keyclick import IDLE
-from frictex.rendering.tracking.tracks import TrackerConfig
+from frictex.rendering.visual.trail import TrailPath
 from frictex.rendering.visual.viewport import Viewport
 
 #: cursor/trace colour per finger (sRGB, 0-1): finger k uses FINGER_RGB[k % len]
@@ -32,13 +33,8 @@ TRAIL_WIDTH_PX = 2.0
 #: a dark band this wide (px) each side of a trail, as the cursors' halo ring: a trail
 #: stays visible on a scene of its own colour (finger 0's blue on a blue grating)
 TRAIL_OUTLINE_PX, TRAIL_OUTLINE_ALPHA = 1.5, 0.7
-TRAIL_STEP_PX = 1.0  # a trail keeps a vertex per this much of its path (and its breaks)
 SCOPE_LINE_PX = 1.5
 SCOPE_PAD_PX = 4.0  # between a plot's edge and its full scale (or zero) line
-#: a trail step longer than this (mm) and faster than this (mm/s) is a lift and a touch
-#: elsewhere within one block, not a stroke: not joined (the tracker's jump rule,
-#: rendering.tracking.tracks; shorter steps are the prediction catching up with a new sample)
-TRAIL_BREAK_MM, TRAIL_BREAK_MM_S = TrackerConfig.jump_min_mm, TrackerConfig.jump_speed_mm_s
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,11 +86,21 @@ def record_from_output(out, stride: int = 10, lo: int = 0, hi: int | None = None
 
 
 class _History:
-    """One finger's samples within the kept window (arrays grow by concatenation)."""
+    """One finger's samples within the kept window (arrays grow by concatenation), and
+    its trail as drawn in the latest frame's viewport."""
 
     def __init__(self):
         self.t = np.empty(0)
         self.data = np.empty((5, 0))  # contact, x, y, mu, amplitude
+        self.trail: TrailPath | None = None
+
+    def trail_in(self, viewport: Viewport) -> TrailPath:
+        """The trail in ``viewport``'s pixels with every sample taken in (started again
+        from the kept samples in a viewport other than the last one's)."""
+        if self.trail is None or self.trail.viewport != viewport:
+            self.trail = TrailPath(viewport)
+        self.trail.take(self.t, *self.data[:3])
+        return self.trail
 
     def append(self, t, rows, keep_from_s: float):
         self.t = np.concatenate((self.t, t))
@@ -183,31 +189,28 @@ class OverlayState:
 
     def trail_triangles(self, viewport: Viewport) -> np.ndarray:
         """Triangles (k, 6) of x_px, y_px, r, g, b, a for the touching part of each trail,
-        fading out over ``trail_s``; broken where the finger lifted or jumped. Each trail
-        is a dark outline (``TRAIL_OUTLINE_PX`` each side) then its coloured line, in
-        drawing order."""
-        parts = []
+        fading out over ``trail_s``; broken where the finger lifted or jumped. The trails
+        are dark outlines (``TRAIL_OUTLINE_PX`` each side), then their coloured lines on
+        top, in drawing order."""
+        points, rgba, joined = [], [], []
         for fid, h in self.fingers.items():
-            keep = h.t >= self.now_s - self.trail_s
-            t, (contact, x, y) = h.t[keep], h.data[:3, keep]
+            finger_points, t, finger_joined = h.trail_in(viewport).since(self.now_s - self.trail_s)
             if t.size < 2:
                 continue
-            px, py = viewport.to_px(x, y)
-            age = np.clip((self.now_s - t) / self.trail_s, 0.0, 1.0)
-            rgba = np.empty((t.size, 4))
-            rgba[:, :3] = FINGER_RGB[fid % len(FINGER_RGB)]
-            rgba[:, 3] = 0.9 * (1.0 - age)
-            joined = (contact[:-1] > 0) & (contact[1:] > 0)
-            step = np.hypot(np.diff(x), np.diff(y))
-            joined &= (step <= TRAIL_BREAK_MM) | (step <= TRAIL_BREAK_MM_S * np.diff(t))
-            points = np.column_stack((px, py))
-            kept, joined = thin_polyline(points, joined, TRAIL_STEP_PX)
-            dark = np.zeros_like(rgba[kept])
-            dark[:, 3] = rgba[kept, 3] * (TRAIL_OUTLINE_ALPHA / 0.9)
-            parts.append(segment_triangles(points[kept], dark, TRAIL_WIDTH_PX
-                                           + 2 * TRAIL_OUTLINE_PX, joined))
-            parts.append(segment_triangles(points[kept], rgba[kept], TRAIL_WIDTH_PX, joined))
-        return np.concatenate(parts) if parts else np.empty((0, 6))
+            colour = np.empty((t.size, 4))
+            colour[:, :3] = FINGER_RGB[fid % len(FINGER_RGB)]
+            colour[:, 3] = 0.9 * (1.0 - np.clip((self.now_s - t) / self.trail_s, 0.0, 1.0))
+            points.append(finger_points)
+            rgba.append(colour)
+            joined.append(np.append(finger_joined, False))  # not into the next finger's trail
+        if not points:
+            return np.empty((0, 6))
+        points, rgba, joined = np.concatenate(points), np.concatenate(rgba), np.concatenate(joined)
+        dark = np.zeros_like(rgba)
+        dark[:, 3] = rgba[:, 3] * (TRAIL_OUTLINE_ALPHA / 0.9)
+        return np.concatenate((
+            segment_triangles(points, dark, TRAIL_WIDTH_PX + 2 * TRAIL_OUTLINE_PX, joined[:-1]),
+            segment_triangles(points, rgba, TRAIL_WIDTH_PX, joined[:-1])))
 
     def cursors(self, viewport: Viewport, hover_mm: tuple[float, float] | None = None) -> np.ndarray:
         """Cursor instances (k, 8): x_px, y_px, radius_px, r, g, b, a, filled. A touching
@@ -251,34 +254,6 @@ def plot_y(values, rect) -> np.ndarray:
     _, y, _, h = rect
     v = np.clip(np.asarray(values, dtype=np.float64), 0.0, 1.0)
     return y + SCOPE_PAD_PX + (h - 2.0 * SCOPE_PAD_PX) * (1.0 - v)
-
-
-def thin_polyline(points: np.ndarray, joined: np.ndarray,
-                  step_px: float) -> tuple[np.ndarray, np.ndarray]:
-    """The vertices of a polyline worth drawing: its first and last, each end of a break,
-    and one wherever the path has gone another ``step_px`` (a trail sampled every 0.5 ms
-    moves a fraction of a pixel between samples: its vertices are mostly invisible).
-
-    Parameters
-    ----------
-    points : (n,) x 2 px, n >= 2. joined : (n - 1,) bool, the segments drawn.
-    step_px : path length (px) between kept vertices.
-
-    Returns
-    -------
-    kept : (k,) indices of the kept vertices, increasing. joined : (k - 1,) bool, whether
-    every segment between two kept vertices was drawn.
-    """
-    length = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))))
-    marks = np.floor(length / step_px)
-    keep = np.zeros(len(points), dtype=bool)
-    keep[[0, -1]] = True
-    keep[1:] |= marks[1:] != marks[:-1]
-    keep[:-1] |= ~joined
-    keep[1:] |= ~joined
-    kept = np.flatnonzero(keep)
-    breaks = np.concatenate(([0], np.cumsum(~joined)))
-    return kept, breaks[kept[1:]] == breaks[kept[:-1]]
 
 
 def arrow_triangles(origin, vector_px, rgba, width_px: float) -> np.ndarray:

@@ -1,0 +1,107 @@
+"""A finger's trail as the vertices worth drawing, kept as its samples arrive.
+
+A trail sampled every 0.5 ms moves a fraction of a pixel between samples: ``thin_polyline``
+keeps a vertex per ``TRAIL_STEP_PX`` of path (and both ends of every break). A
+:class:`TrailPath` thins each new stretch of samples once, when it arrives, and keeps
+the vertices in frame pixels, so that a frame draws the few hundred vertices of the last
+second instead of thinning its thousands of samples again (the overlay's per-frame cost).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from frictex.rendering.tracking.tracks import TrackerConfig
+from frictex.rendering.visual.viewport import Viewport
+
+TRAIL_STEP_PX = 1.0  # a trail keeps a vertex per this much of its path (and its breaks)
+#: a trail step longer than this (mm) and faster than this (mm/s) is a lift and a touch
+#: elsewhere within one block, not a stroke: not joined (the tracker's jump rule,
+#: rendering.tracking.tracks; shorter steps are the prediction catching up with a new sample)
+TRAIL_BREAK_MM, TRAIL_BREAK_MM_S = TrackerConfig.jump_min_mm, TrackerConfig.jump_speed_mm_s
+
+
+def thin_polyline(points: np.ndarray, joined: np.ndarray,
+                  step_px: float) -> tuple[np.ndarray, np.ndarray]:
+    """The vertices of a polyline worth drawing: its first and last, each end of a break,
+    and one wherever the path has gone another ``step_px``.
+
+    Parameters
+    ----------
+    points : (n,) x 2 px, n >= 1. joined : (n - 1,) bool, the segments drawn.
+    step_px : path length (px) between kept vertices.
+
+    Returns
+    -------
+    kept : (k,) indices of the kept vertices, increasing. joined : (k - 1,) bool, whether
+    every segment between two kept vertices was drawn.
+    """
+    length = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))))
+    marks = np.floor(length / step_px)
+    keep = np.zeros(len(points), dtype=bool)
+    keep[[0, -1]] = True
+    keep[1:] |= marks[1:] != marks[:-1]
+    keep[:-1] |= ~joined
+    keep[1:] |= ~joined
+    kept = np.flatnonzero(keep)
+    breaks = np.concatenate(([0], np.cumsum(~joined)))
+    return kept, breaks[kept[1:]] == breaks[kept[:-1]]
+
+
+def joined_steps(t_s: np.ndarray, contact: np.ndarray, x_mm: np.ndarray,
+                 y_mm: np.ndarray) -> np.ndarray:
+    """(n - 1,) bool: whether each step between consecutive samples (t s, contact, x and
+    y mm) is drawn: both ends touching, and not a jump (``TRAIL_BREAK_MM`` and faster
+    than ``TRAIL_BREAK_MM_S``)."""
+    joined = (contact[:-1] > 0) & (contact[1:] > 0)
+    step = np.hypot(np.diff(x_mm), np.diff(y_mm))
+    return joined & ((step <= TRAIL_BREAK_MM) | (step <= TRAIL_BREAK_MM_S * np.diff(t_s)))
+
+
+class TrailPath:
+    """One finger's thinned trail in the frame pixels of ``viewport``, taken in as its
+    samples arrive.
+
+    Holds the touching vertices ``thin_polyline`` keeps (each stretch of new samples
+    thinned with the last sample before it, so each stretch's last sample is a vertex
+    too), their times (s) and whether the segment into each from the vertex before is
+    drawn.
+    """
+
+    def __init__(self, viewport: Viewport):
+        self.viewport = viewport
+        self.taken_s = -np.inf  # the time (s) of the latest sample taken in
+        self.last: np.ndarray | None = None  # that sample: t s, contact, x mm, y mm, x px, y px
+        self.points_px = np.empty((0, 2))
+        self.t_s = np.empty(0)
+        self.joined = np.empty(0, dtype=bool)
+
+    def take(self, t_s: np.ndarray, contact: np.ndarray, x_mm: np.ndarray,
+             y_mm: np.ndarray) -> None:
+        """Take in those of the samples (t s increasing, contact, x and y mm) later than
+        the ones taken before."""
+        first = int(np.searchsorted(t_s, self.taken_s, side="right"))
+        if first == t_s.size:
+            return
+        px, py = self.viewport.to_px(x_mm[first:], y_mm[first:])
+        new = np.stack((t_s[first:], contact[first:], x_mm[first:], y_mm[first:], px, py))
+        rows = new if self.last is None else np.column_stack((self.last, new))
+        kept, kept_joined = thin_polyline(rows[4:].T, joined_steps(*rows[:4]), TRAIL_STEP_PX)
+        if self.last is None:  # the first vertex has none before it
+            joined_into = np.concatenate(([False], kept_joined))
+        else:  # the sample before: a vertex already where it touches
+            kept, joined_into = kept[1:], kept_joined
+        touching = rows[1, kept] > 0  # only touching vertices end a drawn segment
+        kept, joined_into = kept[touching], joined_into[touching]
+        self.points_px = np.concatenate((self.points_px, rows[4:, kept].T))
+        self.t_s = np.concatenate((self.t_s, rows[0, kept]))
+        self.joined = np.concatenate((self.joined, joined_into))
+        self.last, self.taken_s = rows[:, -1], float(rows[0, -1])
+
+    def since(self, start_s: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The vertices from the latest one before ``start_s`` (s) on, forgetting older
+        ones: points (k, 2) px, times (k,) s, joined (k - 1,) bool (each segment drawn)."""
+        first = max(int(np.searchsorted(self.t_s, start_s)) - 1, 0)
+        self.points_px, self.t_s, self.joined = (self.points_px[first:], self.t_s[first:],
+                                                 self.joined[first:])
+        return self.points_px, self.t_s, self.joined[1:]
