@@ -189,7 +189,7 @@ y_mm = 15.0
 line = true
 line_angle_deg = 90.0     # pulled towards the vertical line x = 70 mm
 gain_n_per_mm = 0.002
-max_force_n = 0.05
+max_force_n = 0.02
 """,
     "keyclick": """format = 1
 name = "keyclick"
@@ -233,7 +233,7 @@ mu_min = 0.6
 type = "recorded"
 model = "wood.xml"        # a HaTT texture model
 mu_mean = 0.8
-gain = 0.03
+gain = 0.02
 """,
     "clip": _HEAD.format(name="clip") + """
 [[layer]]
