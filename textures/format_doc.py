@@ -34,7 +34,8 @@ slippery (seed 003, eq 1). A file asks for μ' targets, never for amplitudes.
 *required* means the key has no default. Ranges are inclusive unless written with `<`
 or `>`. `frictex validate FILE` checks a file and names the file, line and field of
 every problem; a field's `[n]` counts from 1, as `[[layer]]` tables are numbered:
-`layer[2].levels[3]` is the third value of the second layer's `levels`. What the loader
+`layer[2].levels[3]` is the third value of the second layer's `levels` (a place inside a
+JSON file a layer names, an AHAP clip's `Pattern[0]`, counts from 0, as JSON does). What the loader
 accepts at most is under "Limits".
 """
 

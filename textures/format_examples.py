@@ -233,7 +233,7 @@ mu_min = 0.6
 type = "recorded"
 model = "wood.xml"        # a HaTT texture model
 mu_mean = 0.8
-gain = 0.02
+gain = 0.015
 """,
     "clip": _HEAD.format(name="clip") + """
 [[layer]]
