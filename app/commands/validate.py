@@ -13,6 +13,12 @@ forces (``rendering.reach.force_reach``): the share of typical strokes (over the
 and each directional or guidance layer's region), and of a press on each key-click
 button, asking for a force out of the wave's reach.
 
+A layer's ``render`` may name another package's renderer (entry-point group
+``frictex.renderers``); the name is checked by the loader, and the renderer is imported
+here as a replay would import it, so that one that cannot be loaded (a module or object
+that is not there, an import that fails) is a problem of the file's layer, naming the
+entry point, not a replay's failure later.
+
 Exit 0 if every file is good (warnings allowed), 2 if any is bad. ``--strict`` counts a
 file with warnings as bad: exit 2, because a warning is about what the file asks for
 (bad input for a session that must render it as written); 1 stays for failures of the
@@ -40,9 +46,11 @@ from pathlib import Path
 from frictex.app.commands.cli import printable
 from frictex.device.safe_text import escape_path
 
-from frictex.textures.errors import TextureError
+from frictex.device.registry import PluginError
+from frictex.textures.errors import Locator, Problem, TextureError
 from frictex.textures.library import resolve_scene
 from frictex.textures.loader import check_scene
+from frictex.textures.model import RENDERERS, SHO
 from frictex.textures.outside import add_allow_outside
 
 
@@ -119,6 +127,23 @@ def force_reach_warnings(path, scene) -> list[str]:
               f"at its centre (to {PRESS_PEAK:g} times click_n) asks for a push out of the "
               f"wave's reach, {why}" for name, share in reach.presses if share]
     return found
+
+
+def renderer_problems(path, scene) -> list[Problem]:
+    """A problem for each layer of ``scene`` (read from ``path``) whose ``render`` names a
+    renderer that cannot be loaded (``textures.model.RENDERERS``: a plugin's entry point
+    whose module or object is missing, or whose import fails)."""
+    problems = []
+    for index, layer in enumerate(scene.layers):
+        if layer.render == SHO:
+            continue
+        try:
+            RENDERERS.get(layer.render)
+        except PluginError as exc:
+            line = Locator(Path(path).read_text(encoding="utf-8")).line(("layer", index, "render"))
+            problems.append(Problem(str(path), line, f"layer[{index + 1}].render",
+                                    f'"{layer.name}": {exc}'))
+    return problems
 
 
 def _is_protocol(name: str) -> bool:
@@ -211,6 +236,9 @@ def run(args: argparse.Namespace) -> int:
             bad += not _protocol(path)
             continue
         scene, problems, warnings = check_scene(path)
+        if scene is not None:
+            problems += renderer_problems(path, scene)
+            scene = None if problems else scene  # as check_scene gives none with a problem
         for problem in problems:
             print(f"frictex: error: {printable(str(problem))}", file=sys.stderr)
         notes = [str(w) for w in warnings]
