@@ -113,6 +113,7 @@ class TraceSource:
         """Begin handing out samples for a pipeline with this tracker configuration
         (after reading one chunk more: ``ended`` then says whether the whole trace is in)."""
         self.config = tracker_config
+        self.stats.set_area(tracker_config.area_mm)
         if self.pending is not None:  # read by first_time, before a block's length was known
             self.pending = self._lift_at_gaps(self.pending)
         self.first_time()
@@ -254,9 +255,29 @@ def _ups(ids: np.ndarray, t_s: float, before: Trace | None, last_xy: dict) -> Tr
 
 
 class TraceStats:
-    """What a summary says about a trace, gathered chunk by chunk."""
+    """What a summary says about a trace, gathered chunk by chunk.
+
+    Touch samples off the display. The tracker holds every finger within the display's
+    area (``TrackerConfig.area_mm``, from (0, 0) mm), so a touch sample outside it plays
+    as if at the edge. Such samples are counted in ``off_display`` (one on the edge is
+    inside). A touch screen reports slightly past its edge, and a mouse drag may run past
+    the window's, so only samples more than :data:`EDGE_SLACK_MM` outside (``far_off``)
+    are warned about, and only when they are more than :data:`OFF_SHARE` of the touch
+    samples: a trace recorded on another display, or in metres. A trace in metres may lie
+    on the display and still be wrong: every touch sample within :data:`METRES_BOX_MM` of
+    (0, 0) over more than :data:`METRES_SPAN_S` of touching is warned about too (a still
+    finger pressing stays within a tiny box, but not at the display's corner).
+    """
 
     MAX_STEPS = 100_000  # the touch rate is the median over the first steps
+    #: how far (mm) past the display's edge a touch sample is counted but not warned about
+    EDGE_SLACK_MM = 0.5
+    #: the share of touch samples beyond that slack that is warned about
+    OFF_SHARE = 0.1
+    #: a trace whose touch samples all lie within this (mm) of (0, 0) ...
+    METRES_BOX_MM = 1.0
+    #: ... over more than this span of touching (s) reads as metres taken for mm
+    METRES_SPAN_S = 0.5
 
     def __init__(self):
         self.samples = 0
@@ -268,6 +289,16 @@ class TraceStats:
         self.touching = 0
         self.unpressed = 0
         self.least_force_n = np.inf
+        #: the display's (width, height) (mm), once known (:meth:`set_area`)
+        self.area_mm: tuple[float, float] | None = None
+        #: touch samples outside it, and those more than ``EDGE_SLACK_MM`` outside
+        self.off_display = 0
+        self.far_off = 0
+        #: the touch samples' extent: (x_lo, y_lo, x_hi, y_hi) (mm), times of the first
+        #: and last (s)
+        self.touch_box = np.array([np.inf, np.inf, -np.inf, -np.inf])
+        self.touch_first_t = self.touch_last_t = None
+        self._unchecked: list[tuple[np.ndarray, np.ndarray]] = []  # read before the area
 
     def add(self, chunk: Trace) -> None:
         times = chunk.t_s if self.last_t is None else np.concatenate(([self.last_t], chunk.t_s))
@@ -277,13 +308,46 @@ class TraceStats:
             self.steps.append(steps)
             self.n_steps += steps.size
         self.samples += len(chunk)
-        touching = chunk.force_n[chunk.event != UP]
+        touch = chunk.event != UP
+        touching = chunk.force_n[touch]
         self.touching += touching.size
         self.unpressed += int(np.count_nonzero(touching < MIN_NORMAL_N))
         self.least_force_n = float(np.min(touching, initial=self.least_force_n))
+        self._add_positions(chunk.t_s[touch], chunk.x_mm[touch], chunk.y_mm[touch])
         self.fingers.update(chunk.fingers)
         self.first_t = float(chunk.t_s[0]) if self.first_t is None else self.first_t
         self.last_t = float(chunk.t_s[-1])
+
+    def set_area(self, area_mm: tuple[float, float] | None) -> None:
+        """The display's (width, height) (mm; None: unbounded) that touch samples are
+        held within; those read before it are counted now."""
+        self.area_mm = area_mm
+        for x, y in self._unchecked:
+            self._count_off(x, y)
+        self._unchecked = []
+
+    def _add_positions(self, t_s: np.ndarray, x: np.ndarray, y: np.ndarray) -> None:
+        if not t_s.size:
+            return
+        lo, hi = self.touch_box[:2], self.touch_box[2:]
+        self.touch_box = np.concatenate((np.minimum(lo, [x.min(), y.min()]),
+                                         np.maximum(hi, [x.max(), y.max()])))
+        if self.touch_first_t is None:
+            self.touch_first_t = float(t_s[0])
+        self.touch_last_t = float(t_s[-1])
+        if self.area_mm is None:
+            self._unchecked.append((x, y))
+        else:
+            self._count_off(x, y)
+
+    def _count_off(self, x: np.ndarray, y: np.ndarray) -> None:
+        """Count the touch samples at ``x``, ``y`` (mm) outside the display's area."""
+        if self.area_mm is None:
+            return
+        width, height = self.area_mm
+        past = np.maximum.reduce([-x, x - width, -y, y - height])  # mm outside; <= 0 inside
+        self.off_display += int(np.count_nonzero(past > 0))
+        self.far_off += int(np.count_nonzero(past > self.EDGE_SLACK_MM))
 
     #: the share of touch samples pressing under ``MIN_NORMAL_N`` that is warned about: a
     #: finger landing or lifting passes through a low force for a few samples (the bundled
@@ -291,6 +355,11 @@ class TraceStats:
     UNPRESSED_SHARE = 0.1
 
     def warnings(self) -> list[str]:
+        """What is wrong with the trace's touch samples, a line each: off the display, in
+        metres (class docstring), or not pressing."""
+        return self._off_display() + self._in_metres() + self._unpressed()
+
+    def _unpressed(self) -> list[str]:
         """A touch input that does not press, said in one line (none where at most
         ``UNPRESSED_SHARE`` of its touch samples press under ``MIN_NORMAL_N``): the friction
         model's inversion takes the normal force from it."""
@@ -301,6 +370,31 @@ class TraceStats:
                 "inversion takes the normal force from the trace (its asymptote k F_n), so it "
                 "inverts for a finger that barely presses; give the trace its finger's force_n, "
                 "or leave the column out for 0.5 N"]
+
+    def _off_display(self) -> list[str]:
+        if self.far_off <= self.OFF_SHARE * self.touching:
+            return []
+        (x_lo, y_lo, x_hi, y_hi), (width, height) = self.touch_box, self.area_mm
+        hint = "recorded on another display"
+        hint += ", or in metres?" if self._within_metres_box() else "?"
+        return [f"trace: {self.off_display} of {self.touching} touch samples lie off the "
+                f"{width:g} x {height:g} mm display (x {x_lo:.4g} to {x_hi:.4g} mm, y "
+                f"{y_lo:.4g} to {y_hi:.4g} mm) and are held at its edge: {hint}"]
+
+    def _in_metres(self) -> list[str]:
+        if self._off_display() or not self._within_metres_box():
+            return []
+        span_s = self.touch_last_t - self.touch_first_t
+        if span_s <= self.METRES_SPAN_S:
+            return []
+        x_lo, y_lo, x_hi, y_hi = self.touch_box
+        return [f"trace: all {self.touching} touch samples over {span_s:.3g} s lie within "
+                f"{self.METRES_BOX_MM:g} mm of (0, 0) (x {x_lo:.4g} to {x_hi:.4g} mm, y "
+                f"{y_lo:.4g} to {y_hi:.4g} mm): in metres? positions are in mm"]
+
+    def _within_metres_box(self) -> bool:
+        """Whether every touch sample lies within ``METRES_BOX_MM`` of (0, 0) (mm)."""
+        return self.touching > 0 and bool(np.all(np.abs(self.touch_box) < self.METRES_BOX_MM))
 
     def median_step_s(self) -> float | None:
         """The median interval (s) between the trace's distinct sample times (over its
