@@ -33,6 +33,7 @@ def test_a_trace_off_the_display_is_counted_and_warned(tmp_path):
     """The swipe from x = 514 mm on the 108 mm display: every touch sample held at x = 108."""
     doc = replay(tmp_path, swipe_csv(tmp_path, 514.0))
     touching = int(2 * RATE_HZ)  # the down and the moves
+    assert doc["trace"]["touch_samples_off_display"] == touching
     said = [w for w in doc["warnings"] if "off the 108 x 64.8 mm display" in w]
     assert len(said) == 1
     assert said[0].startswith(f"trace: {touching} of {touching} touch samples")
@@ -43,6 +44,7 @@ def test_a_trace_off_the_display_is_counted_and_warned(tmp_path):
 def test_a_trace_in_metres_is_said_to_be(tmp_path):
     """The same swipe from x = 14 mm written in metres lies on the display, near (0, 0)."""
     doc = replay(tmp_path, swipe_csv(tmp_path, 14.0, scale=1e-3))
+    assert doc["trace"]["touch_samples_off_display"] == 0
     assert [w for w in doc["warnings"] if "in metres?" in w] == [
         "trace: all 240 touch samples over 1.99 s lie within 1 mm of (0, 0) (x 0.014 to "
         "0.09367 mm, y 0.0324 to 0.0324 mm): in metres? positions are in mm"]
@@ -50,6 +52,7 @@ def test_a_trace_in_metres_is_said_to_be(tmp_path):
 
 def test_an_ordinary_swipe_is_not_warned_about(tmp_path):
     doc = replay(tmp_path, swipe_csv(tmp_path, 14.0))
+    assert doc["trace"]["touch_samples_off_display"] == 0
     assert not [w for w in doc["warnings"] if "display" in w or "metres" in w]
 
 
@@ -115,3 +118,11 @@ def test_bundled_traces_on_their_bundled_scenes_are_not_warned_about(scene):
     for name in sorted(traces_for(scene)):
         stats = stats_of(read_trace(resolve_trace(name)), (display.width_mm, display.height_mm))
         assert (name, stats.off_display, stats.warnings()) == (name, 0, [])
+
+
+def test_a_looped_replay_warns_of_a_trace_off_the_display_too(tmp_path):
+    """The friction loop leaves out the not-pressing line (it compares forces itself), not
+    the off-display one."""
+    doc = run_replay(load_scene(resolve_scene("grating-15mm")), swipe_csv(tmp_path, 514.0),
+                     tmp_path / "o", progress=False, control="adaptive", device="sim:finger=1")
+    assert [w for w in doc["warnings"] if "off the 108 x 64.8 mm display" in w]

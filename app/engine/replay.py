@@ -333,8 +333,8 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
         said = mismatch(scene.device.fitted, name,
                         simulated_finger(options.device, options.sim_args))
         doc["warnings"] += [said] if said else []
-    if not looped:  # the loop compares the force used with the device's, and says so
-        doc["warnings"] += source.stats.warnings()
+    # a looped run's control report compares the force used with the device's, and says so
+    doc["warnings"] += source.stats.warnings(pressing=not looped)
     if looped:
         doc["control"] = pipeline.control.report(stage.state.control)
         doc["warnings"] += doc["control"]["messages"]

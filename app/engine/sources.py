@@ -220,10 +220,11 @@ class TraceSource:
         return self.slots.label(out)
 
     def report(self, path) -> dict:
-        """The summary's ``trace`` section: the trace's figures (:class:`TraceStats`) and
-        the touches that began and lifted within one output block (no output sample in
-        contact: ``FingerSlots.brief_touches``)."""
-        return {**self.stats.report(path), "touches_within_a_block": self.slots.brief_touches}
+        """The summary's ``trace`` section: the trace's figures (:class:`TraceStats`), the
+        touches that began and lifted within one output block (no output sample in
+        contact: ``FingerSlots.brief_touches``) and the touch samples off the display."""
+        return {**self.stats.report(path), "touches_within_a_block": self.slots.brief_touches,
+                "touch_samples_off_display": self.stats.off_display}
 
     @property
     def done(self) -> bool:
@@ -354,10 +355,10 @@ class TraceStats:
     #: key-press traces: 1 of their touch samples at 0.04 N), not for a tenth of its touch
     UNPRESSED_SHARE = 0.1
 
-    def warnings(self) -> list[str]:
+    def warnings(self, pressing: bool = True) -> list[str]:
         """What is wrong with the trace's touch samples, a line each: off the display, in
-        metres (class docstring), or not pressing."""
-        return self._off_display() + self._in_metres() + self._unpressed()
+        metres (class docstring), or (``pressing``) not pressing."""
+        return self._off_display() + self._in_metres() + (self._unpressed() if pressing else [])
 
     def _unpressed(self) -> list[str]:
         """A touch input that does not press, said in one line (none where at most

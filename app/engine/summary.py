@@ -21,7 +21,7 @@ from frictex.app.engine.force_summary import ForceSummary
 from frictex.device.friction import ClampCounts
 from frictex.rendering.pipeline import STAGES
 
-SUMMARY_VERSION = 4
+SUMMARY_VERSION = 5
 
 
 class Totals:

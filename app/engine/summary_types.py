@@ -125,6 +125,9 @@ class TraceInfo:
     touches_within_a_block : int or None
         Touches that began and lifted within one output block, so in contact for no
         output sample (None in summaries before it).
+    touch_samples_off_display : int or None
+        Touch samples outside the display's area, held at its edge (None in summaries
+        before it).
     time_order : TimeOrderInfo or None
         Where time went back; None for a trace given as a Trace object
         (``frictex.read_trace`` sorted it as it read it, and keeps no count).
@@ -139,6 +142,7 @@ class TraceInfo:
     duration_s: float
     touch_rate_hz: float | None
     touches_within_a_block: int | None = field(default=None, metadata=_OPTIONAL)
+    touch_samples_off_display: int | None = field(default=None, metadata=_OPTIONAL)
     time_order: TimeOrderInfo | None = field(default=None, metadata=_OPTIONAL)
     gaps: GapInfo
 
