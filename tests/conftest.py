@@ -29,6 +29,14 @@ import pytest
 # inherit it.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
+from hypothesis import settings  # noqa: E402 (after the BLAS setting, in case it loads numpy)
+
+# property tests: no deadline per example (a loaded 2-core machine pauses any example now
+# and then: hypothesis would fail it as too slow or flaky) and the same examples every run
+# (a failure reproduces); a test's own @settings change only what they name
+settings.register_profile("frictex", deadline=None, derandomize=True)
+settings.load_profile("frictex")
+
 if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
 

@@ -207,7 +207,10 @@ def test_bad_model_files_are_one_line_errors(text, message):
     assert "\n" not in str(info.value)
 
 
-@given(st.lists(st.floats(-0.95, 0.95), min_size=1, max_size=24))
+# reflection coefficients this far inside the unit circle: poly_to_lsf refuses (ValueError,
+# its docstring) poles crowding the circle, which runs of 0.95 (8 or more) or of 0.9 (20
+# or more) make
+@given(st.lists(st.floats(-0.9, 0.9), min_size=1, max_size=16))
 @settings(derandomize=True, max_examples=100)
 def test_lsf_round_trip(reflections):
     a = np.ones(1)

@@ -38,13 +38,16 @@ def slsqp(m, w, limits):
         return residual(m, w, x[0::2] + 1j * x[1::2])
     cons = [{"type": "ineq", "fun": lambda x, j=j: limits[j] ** 2 - x[2 * j] ** 2 - x[2 * j + 1] ** 2}
             for j in range(2)]
-    best = None
+    best = np.inf
     for start in np.random.default_rng(0).uniform(-0.5, 0.5, (4, 4)) * limits.repeat(2):
         r = minimize(f, start, method="SLSQP", constraints=cons,
                      options=dict(ftol=1e-14, maxiter=500))
-        if best is None or r.fun < best.fun:
-            best = r
-    return best.fun
+        # SLSQP may stop slightly outside the limits: its point scaled back inside them is
+        # a residual any feasible solver can reach
+        c = r.x[0::2] + 1j * r.x[1::2]
+        c *= np.minimum(1.0, limits / np.maximum(np.abs(c), 1e-300))
+        best = min(best, residual(m, w, c))
+    return best
 
 
 @SETTINGS

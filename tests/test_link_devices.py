@@ -40,7 +40,7 @@ def test_sim_is_in_process_and_plays_every_sample(tmp_path):
     before = _children()
     log = tmp_path / "played.csv"
     with open_sink("sim", 1, RATE, paced=True, log_path=log) as sink:
-        assert _children() == before  # no process started
+        assert set(_children()) <= set(before)  # no process started
         assert sink.status()["state"] == "simulated"
         assert isinstance(sink, OutputDevice)
         for b in range(0, 3000, 50):

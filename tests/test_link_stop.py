@@ -174,7 +174,9 @@ def test_the_command_says_sigterm_and_stops_the_plate(tmp_path):
             replay.kill()
         sim.wait(timeout=30.0)
     assert replay.returncode == 128 + signal.SIGTERM, err
-    assert err.strip().splitlines() == ["frictex: terminated by SIGTERM"]
+    # a loaded machine may add the link's recoveries ('frictex: warning: ...') before it
+    said = [line for line in err.strip().splitlines() if not line.startswith("frictex: warning:")]
+    assert said == ["frictex: terminated by SIGTERM"], err
     data = _rows(plate)
     on = data[(data[:, 0] >= t_signal) & (data[:, 2] != 0.0)]
     after = float(on[-1, 0] - t_signal) if len(on) else 0.0
