@@ -25,7 +25,8 @@ recording were opened for (``app.live.demo_loop``).
 Without a display: ``frictex demo`` says so and exits 1 (a run that could not do what
 was asked); ``--headless`` (or ``--headless-fallback`` when no display is found) runs
 the same demo loop on a window without a display (``rendering.visual.headless``), a
-synthesized human-like stroke driving its mouse (``app.live.synthetic``), and writes its
+synthesized human-like stroke driving its mouse (``app.live.synthetic``) for ``--duration``
+(3 s by default), which then lifts the finger and quits, and writes its
 frames as PNG files (``frames/``, at most 30 a second) to ``--out``, and what a ``--record`` would
 (``commands.csv``, ``friction.csv``, ``touches.csv``, ``events.csv``, ``summary.json``)
 to ``--record``, or without it to ``--out`` too.
@@ -44,6 +45,7 @@ from pathlib import Path
 from frictex.app.engine.driver import deferred_interrupts
 from frictex.app.engine.staging import FRAMES, Staging
 from frictex.app.engine.summary import finite_json
+from frictex.app.live.synthetic import STROKE_S
 from frictex.app.live.touch_log import TOUCHES
 from frictex.app.commands.preview import MAX_PANEL_PX, frame_size
 from frictex.app.commands.argtypes import (add_link_arguments, output_rate, positive_float, positive_int,
@@ -124,11 +126,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--screenshots", metavar="DIR", default=".",
                         help="folder for screenshots taken with P (default: current folder)")
     parser.add_argument("--duration", type=positive_float, default=None, metavar="S",
-                        help="close the window after S seconds (default: run until closed)")
+                        help="close the window after S seconds (default: run until closed); "
+                             "--headless: the synthesized stroke lasts S seconds (default "
+                             f"{STROKE_S:g}), then lifts and quits")
     mode = parser.add_mutually_exclusive_group()
     mode.add_argument("--headless", action="store_true",
-                      help="no display: run the demo on a synthesized stroke of the mouse, writing "
-                           "its PNG frames (and without --record its outputs) to --out")
+                      help="no display: run the demo on a synthesized stroke of the mouse "
+                           "(--duration long), writing its PNG frames (and without --record "
+                           "its outputs) to --out")
     mode.add_argument("--headless-fallback", action="store_true",
                       help="open the window if a display exists, else behave as --headless")
     parser.add_argument("--out", metavar="DIR", default="frictex-demo-out",
@@ -347,10 +352,11 @@ def _live(args, paths, index, scene, size, record, frames_dir, touch_screen, che
             from frictex.app.live.synthetic import SyntheticStroke
             hand = SyntheticStroke(backend, loop.compositor.viewport.to_px,
                                    (scene.display.width_mm, scene.display.height_mm),
+                                   duration_s=args.duration or STROKE_S,
                                    lifted=lambda: not loop.fingers_down)
             hand.start()
-        try:
-            loop.run(args.duration, stop=lambda: bool(check.held))
+        try:  # headless: the stroke (--duration long) ends the run, lifted, with Q
+            loop.run(args.duration if hand is None else None, stop=lambda: bool(check.held))
         except Exception:
             if not check.held:  # the output stopped as a signal came (timeout signals
                 raise  # the process group): the signal ends the demo, as it asked
@@ -393,7 +399,7 @@ def _print_lines(args, summary: dict, ended: _Ended, out: Path | None,
         print(tuio_line(summary["input_counts"]))
     if frames is not None:
         from frictex.app.live.frame_files import FPS
-        print(f"demo: headless, {stroke_said(hand, args.duration, summary['ended_by'])} drove "
+        print(f"demo: headless, {stroke_said(hand, summary['ended_by'])} drove "
               f"the mouse: {frames.count} frames kept (at most {FPS:g} a second) in "
               f"{frames_out}; outputs in {out}")
     if summary["control"] is not None:
@@ -401,14 +407,13 @@ def _print_lines(args, summary: dict, ended: _Ended, out: Path | None,
         print(f"demo: {control_line(summary['control'])}")
 
 
-def stroke_said(hand, duration_s: float | None, ended_by: str) -> str:
+def stroke_said(hand, ended_by: str) -> str:
     """The synthesized stroke as the headless demo's last line says it: "a synthesized
     stroke of 3 s", or where the demo ended first, how far it went and what cut it
     ("... cut at 1.6 s of its 3 s by SIGTERM"; ``ended_by``: the summary's)."""
     if hand.stroked_s >= hand.duration_s:
         return f"a synthesized stroke of {hand.duration_s:g} s"
-    by = ended_by if ended_by != "window" else (
-        "--duration" if duration_s is not None else "the window closing")
+    by = ended_by if ended_by != "window" else "the window closing"
     return (f"a synthesized stroke cut at {hand.stroked_s:.1f} s of its {hand.duration_s:g} s "
             f"by {by}")
 
