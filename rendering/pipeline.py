@@ -43,7 +43,8 @@ class BlockOutput:
     """The pipeline's output for ``n`` samples; per-finger arrays are (F, n).
 
     t_s : (n,) output times (s). finger_ids : the F finger ids.
-    contact : bool. x_mm, y_mm : the (predicted) position used. mu_target : composed mu'.
+    contact : bool. x_mm, y_mm : the tracker's predicted position (mm), whatever the
+    renderers (SHO-held plays the last touch sample's position). mu_target : composed mu'.
     wanted_um : amplitude each finger's target asks for (um, zero-to-peak).
     amplitude_um : amplitude the actuation achieves under each finger (um, zero-to-peak).
     commands_um : (n, channels) channel commands (um). phases_rad : (n, channels) or None.
