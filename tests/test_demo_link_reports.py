@@ -1,9 +1,73 @@
-"""What the live demo says about what it did: a headless demo's synthesized stroke lasts
+"""What the live demo says about its device link: the clamps to the device's limit apart
+from the pipeline's (status line, last line) with a warning at connect when the
+device's limit is below the scene's; a headless demo's synthesized stroke lasts
 --duration."""
 
 import json
 
+import numpy as np
+import pytest
+
 from frictex.app.commands.cli import main
+from frictex.app.live.demo_loop import DemoLoop
+from frictex.app.live.haptic_thread import HapticThread, Snapshot
+from frictex.rendering.visual.overlay import BlockRecord
+from frictex.textures.library import resolve_scene
+from frictex.textures.loader import load_scene
+from test_live_demo_loop import ScriptedWindow
+
+GRATING = resolve_scene("grating-5mm")
+
+
+def record_at(t_s: float) -> BlockRecord:
+    """A block's record at output time ``t_s`` with no finger."""
+    empty = np.zeros((0, 1))
+    return BlockRecord(t_s=np.array([t_s]), finger_ids=(), contact=empty.astype(bool),
+                       x_mm=empty, y_mm=empty, mu_target=empty, amplitude_um=empty)
+
+
+def link_status(state="simulated", disconnects=0, reconnects=0, clamped=0, limit_um=4.0,
+                still_s=0.0):
+    return {"state": state, "disconnects": disconnects, "reconnects": reconnects,
+            "clamped_samples": clamped, "queued_blocks": 64 if still_s else 0,
+            "queue_still_s": still_s, "last_error": "SerialException: device unplugged",
+            "frames_sent": 10, "device": {"limits_um": [limit_um]}}
+
+
+@pytest.fixture
+def demo(gl, tmp_path):
+    scene = load_scene(GRATING)
+    window = ScriptedWindow(gl)
+    loop = DemoLoop(window, HapticThread(scene), [GRATING], 0, scene, load_scene, tmp_path,
+                    events_path=tmp_path / "events.csv", link_name="starting")
+    yield loop
+    loop.close()
+    window.close()
+
+
+def feed(loop, t_s: float, link: dict) -> None:
+    """The haptic side's snapshot of the block at ``t_s`` carrying ``link``, drawn."""
+    loop.haptic.snapshots.put(Snapshot(record_at(t_s), {"clamps": 0, "link": link}))
+    loop.drain()
+
+
+def test_clamps_to_the_device_limit_are_said_apart_with_a_warning_at_connect(demo, capsys):
+    scene_limit = demo.scene.device.amplitude_limit_um
+    feed(demo, 0.1, link_status(limit_um=scene_limit / 2))
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("frictex demo: warning: the device's ")
+    assert f"below grating-5mm's amplitude limit of {scene_limit:.4g} um" in err
+    assert demo.error is not None and "below" in demo.error  # on screen, in the banner
+    feed(demo, 0.2, link_status(limit_um=scene_limit / 2, clamped=1234))
+    assert capsys.readouterr().err == ""  # said once
+    assert ("clamps 0 by the friction inversion and 1234 by the device's limit | "
+            in demo.status_lines()[0])
+
+
+def test_a_device_limit_at_the_scene_limit_is_not_warned(demo, capsys):
+    feed(demo, 0.1, link_status(limit_um=demo.scene.device.amplitude_limit_um))
+    assert capsys.readouterr().err == "" and demo.error is None
+    assert "| clamps 0 | " in demo.status_lines()[0]
 
 
 def test_a_headless_demo_strokes_for_its_duration(tmp_path, monkeypatch, capsys):

@@ -45,6 +45,7 @@ from pathlib import Path
 from frictex.app.engine.driver import deferred_interrupts
 from frictex.app.engine.staging import FRAMES, Staging
 from frictex.app.engine.summary import finite_json
+from frictex.app.live.link_watch import device_clamps
 from frictex.app.live.synthetic import STROKE_S
 from frictex.app.live.touch_log import TOUCHES
 from frictex.app.commands.preview import MAX_PANEL_PX, frame_size
@@ -387,7 +388,7 @@ def _print_lines(args, summary: dict, ended: _Ended, out: Path | None,
               else f" (CPU steal by a VM host meanwhile: {summary['cpu_steal_pct']:.0f} %)")
     print(f"demo: {summary['blocks']} blocks ({summary['output_s']:.1f} s of output), "
           f"{summary['deadline_misses']} deadline misses{stolen if summary['deadline_misses'] else ''}, "
-          f"{summary['clamps_total']} clamped samples, "
+          f"{summary['clamps_total']} clamped samples{device_clamps(link)}, "
           f"{summary['frames']} frames drawn ({summary['frame_ms_mean']:.1f} ms mean), "
           f"link: {link['state']}")
     if "skipped_blocks" in link:  # a device link: what its lead cost

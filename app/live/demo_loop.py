@@ -84,6 +84,7 @@ from PIL import Image
 
 from frictex.app.live.haptic_thread import EVENTS, ChannelMismatch
 from frictex.app.live.layer_edit import EditError, LayerEdit, SaveConflict, panel_view
+from frictex.app.live.link_watch import device_clamps, limit_warning
 from frictex.app.live.watch import FileWatch
 from frictex.device.safe_text import escape
 from frictex.rendering.renderers import render_modes
@@ -245,6 +246,7 @@ class DemoLoop:
         self.render_error: BaseException | None = None
         self._applied_seen = 0  # output changes (stats.applied) already logged
         self._contact: dict[int, bool] = {}  # finger ids touching at the last snapshot: True
+        self._limit_checked = None  # the scene the device's limit was checked against
         self._events = open(events_path, "a", encoding="utf-8") if events_path else None
         if self._events is not None and self._events.tell() == 0:
             self._events.write("t_s,event,detail\n")
@@ -768,6 +770,16 @@ class DemoLoop:
             self.status = snap.status
             self._log_applied(*snap.status.get("applied", (0, ())))
             self._log_contacts(snap.record)
+            self._check_limit(snap.status.get("link", {}))
+
+    def _check_limit(self, link: dict) -> None:
+        """Once per scene: a device limit below the scene's said on stderr and on
+        screen."""
+        if self._limit_checked is not self.scene and link.get("device"):
+            self._limit_checked = self.scene
+            if (warning := limit_warning(link, self.scene)) is not None:
+                self.say(f"warning: {warning}")
+                self.error = self.error or warning
 
     def _log_applied(self, count: int, latest: tuple) -> None:
         """Stops, resumes, switches and the friction loop's messages not logged yet
@@ -810,7 +822,8 @@ class DemoLoop:
         first = (f"{self.scene.name} ({self.index + 1}/{len(self.playlist)}) | renderer: "
                  f"{self.renderer or 'file'} | force {self.force_n:.2f} N | link: {state}{frames}"
                  f"{starved(link)} | "
-                 f"clamps {st.get('clamps', 0)} | deadline misses {st.get('deadline_misses', 0)}")
+                 f"clamps {st.get('clamps', 0)}{device_clamps(link)} | "
+                 f"deadline misses {st.get('deadline_misses', 0)}")
         fingers = len(self.overlay.current())
         touch = ("drag: touch" if self.follow_mm is None
                  else f"drag: two fingers, the second {self.follow_mm:g} mm to the right")
