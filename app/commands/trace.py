@@ -75,6 +75,8 @@ LIMITS = {"rate": (0.0, 1e5, "Hz"), "truth_rate": (0.0, 1e6, "Hz"), "duration": 
           "noise": (0.0, 1e3, "mm"), "jitter": (0.0, 1.0, "s"), "force": (0.0, 1e3, "N"),
           "force_noise": (0.0, 100.0, "N"), "peaks": (0.0, 1e3, "N"), "area": (0.0, 1e5, "mm"),
           "seed": (0, 1e18, "(a whole number)")}
+#: the options whose lowest value is excluded (argparse takes them as positive numbers)
+ABOVE_LOWEST = {"rate", "truth_rate", "duration", "speed", "length", "radius", "area"}
 #: Most samples a synthetic trace (or its true path) may hold.
 MAX_SAMPLES = 10_000_000
 #: Most presses (--peaks) a press trace may hold: its first line, which repeats them twice,
@@ -115,7 +117,8 @@ def _check_limits(args: argparse.Namespace) -> None:
         values = getattr(args, name)
         for value in values if isinstance(values, list) else [] if values is None else [values]:
             if not lo <= value <= hi:
-                raise InputError(f"--{name.replace('_', '-')} {value:g}: expected {lo:g} to "
+                low = f"over {lo:g}, up" if name in ABOVE_LOWEST else f"{lo:g}"
+                raise InputError(f"--{name.replace('_', '-')} {value:g}: expected {low} to "
                                  f"{hi:g} {unit}")
     if args.motion == "press":
         _check_presses(args.peaks, args.rate)
