@@ -1,9 +1,11 @@
 """What the live demo says about its device link: the clamps to the device's limit apart
 from the pipeline's (status line, last line) with a warning at connect when the
-device's limit is below the scene's; a headless demo's synthesized stroke lasts
---duration."""
+device's limit is below the scene's; a link whose queued blocks stop moving is
+reported stalled by its status, shown in a red banner and said on stderr; a headless
+demo's synthesized stroke lasts --duration."""
 
 import json
+import time
 
 import numpy as np
 import pytest
@@ -11,6 +13,8 @@ import pytest
 from frictex.app.commands.cli import main
 from frictex.app.live.demo_loop import DemoLoop
 from frictex.app.live.haptic_thread import HapticThread, Snapshot
+from frictex.device.link.faults import parse_faults
+from frictex.device.link.host import open_sink
 from frictex.rendering.visual.overlay import BlockRecord
 from frictex.textures.library import resolve_scene
 from frictex.textures.loader import load_scene
@@ -68,6 +72,50 @@ def test_a_device_limit_at_the_scene_limit_is_not_warned(demo, capsys):
     feed(demo, 0.1, link_status(limit_um=demo.scene.device.amplitude_limit_um))
     assert capsys.readouterr().err == "" and demo.error is None
     assert "| clamps 0 | " in demo.status_lines()[0]
+
+
+def test_a_stall_and_a_loss_are_shown_and_a_stall_said_on_stderr(demo, capsys):
+    feed(demo, 1.0, link_status())
+    feed(demo, 6.55, link_status("stalled", still_s=0.55))
+    feed(demo, 6.60, link_status("stalled", still_s=0.60))
+    assert demo.link_watch.alarm.startswith("link stalled: no queued block went out for 0.6 s")
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("frictex demo: link stalled at 6.5 s")
+    feed(demo, 8.0, link_status())
+    assert demo.link_watch.alarm is None
+    assert capsys.readouterr().err == ("frictex demo: link moving again at 8.0 s of output, "
+                                       "after 1.5 s stalled\n")
+    feed(demo, 9.05, link_status("disconnected", disconnects=1))
+    assert demo.link_watch.alarm.startswith("link lost (SerialException: device unplugged)")
+
+
+def wait_for_state(sink, stalled: bool, send) -> dict:
+    """Call ``send`` (a block to the link) until the link's status says ``stalled``, or
+    (``stalled`` False) no longer says it; the deadline bounds a broken link, not a
+    timing."""
+    deadline = time.monotonic() + 60.0
+    while ((status := sink.status())["state"] == "stalled") != stalled:
+        assert time.monotonic() < deadline, f"state stayed {status['state']}"
+        send()
+        time.sleep(0.01)
+    return status
+
+
+def test_the_status_says_stalled_while_the_link_thread_is_stuck_and_not_after():
+    sink = open_sink("sim", 1, 10_000.0, faults=parse_faults("stall=3@0.3"))
+    index = [0]
+
+    def send():
+        sink.send(index[0], np.zeros((25, 1)))
+        index[0] += 25
+
+    try:
+        stuck = wait_for_state(sink, True, send)
+        assert stuck["queue_still_s"] > 0.5 and stuck["queued_blocks"] > 0
+        moving = wait_for_state(sink, False, lambda: None)
+        assert moving["state"] in ("simulated", "disconnected")
+    finally:
+        sink.abort()
 
 
 def test_a_headless_demo_strokes_for_its_duration(tmp_path, monkeypatch, capsys):

@@ -65,8 +65,10 @@ record folder is given: what the window did when it did it (keys: ``estop``,
 wheel or up/down; scene loads, screenshots and screenshots that failed), and what the
 output did when it did it, at the output time of the first block it shaped
 (``output-stop``, ``output-resume``, ``output-switch``, ``finger-down``, ``finger-up``;
-read from the haptic side's snapshots). Its rows are put in time order when the demo
-closes (:func:`sort_events`). The touches themselves go to ``touches.csv``
+read from the haptic side's snapshots). While the device link is lost or stalled (queued
+blocks have not moved for over 0.5 s: ``app.live.link_watch``) the window shows it in a
+red banner; a stall and its end are said on stderr.
+The rows of events.csv are put in time order when the demo closes (:func:`sort_events`). The touches themselves go to ``touches.csv``
 (``app.live.haptic_setup``).
 """
 
@@ -84,7 +86,7 @@ from PIL import Image
 
 from frictex.app.live.haptic_thread import EVENTS, ChannelMismatch
 from frictex.app.live.layer_edit import EditError, LayerEdit, SaveConflict, panel_view
-from frictex.app.live.link_watch import device_clamps, limit_warning
+from frictex.app.live.link_watch import LinkWatch, device_clamps, limit_warning
 from frictex.app.live.watch import FileWatch
 from frictex.device.safe_text import escape
 from frictex.rendering.renderers import render_modes
@@ -246,6 +248,8 @@ class DemoLoop:
         self.render_error: BaseException | None = None
         self._applied_seen = 0  # output changes (stats.applied) already logged
         self._contact: dict[int, bool] = {}  # finger ids touching at the last snapshot: True
+        self.link_watch = LinkWatch()
+        self._stalled_at: float | None = None  # output time the link stalled (s)
         self._limit_checked = None  # the scene the device's limit was checked against
         self._events = open(events_path, "a", encoding="utf-8") if events_path else None
         if self._events is not None and self._events.tell() == 0:
@@ -770,11 +774,21 @@ class DemoLoop:
             self.status = snap.status
             self._log_applied(*snap.status.get("applied", (0, ())))
             self._log_contacts(snap.record)
-            self._check_limit(snap.status.get("link", {}))
+            t = float(snap.record.t_s[-1]) if snap.record.t_s.size else self.haptic.now()
+            self._watch_link(snap.status.get("link", {}), t)
 
-    def _check_limit(self, link: dict) -> None:
-        """Once per scene: a device limit below the scene's said on stderr and on
-        screen."""
+    def _watch_link(self, link: dict, t_s: float) -> None:
+        """The link's stalls since the last status, at ``t_s`` (s, output clock), said
+        on stderr with their end. Once per scene: a device limit below the scene's said
+        on stderr and on screen."""
+        for event, detail in self.link_watch.update(link):
+            if event == "link-stalled":
+                self._stalled_at = t_s
+                self.say(f"link stalled at {t_s:.1f} s of output: {detail}; the plate gets "
+                         "nothing (said again when it moves)")
+            elif event == "link-moving" and self._stalled_at is not None:
+                self.say(f"link moving again at {t_s:.1f} s of output, after "
+                         f"{t_s - self._stalled_at:.1f} s stalled")
         if self._limit_checked is not self.scene and link.get("device"):
             self._limit_checked = self.scene
             if (warning := limit_warning(link, self.scene)) is not None:
@@ -837,7 +851,7 @@ class DemoLoop:
         if self.haptic.estop.is_set():
             banner, kind = "EMERGENCY STOP: output is 0 um. SPACE resumes.", "stop"
         else:
-            banner, kind = self.error, "error"
+            banner, kind = self.link_watch.alarm or self.error, "error"
         hover = self._mm(self.hover_px) if self.hover_px is not None and not self.touching else None
         self.compositor.draw(FrameView(
             overlay=self.overlay, hover_mm=hover, show_scope=self.show_scope,

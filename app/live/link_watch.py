@@ -1,6 +1,12 @@
 """What the demo says about its device link, read from the link's status
 (``device.link.host.CommandSink.status``) as the haptic side hands it over with its
-snapshots: the clamps it made to the device's limit, and a limit below the scene's.
+snapshots: the clamps it made to the device's limit, a limit below the scene's, and
+the link going down or stalling and moving again.
+
+:class:`LinkWatch` turns successive statuses into the stalls' start and end
+(``link-stalled``, ``link-moving``) and the alarm the window shows while the link is
+down or stalled. A stall is read from the link's ``state`` (``stalled``: queued blocks
+have not moved for over 0.5 s, PROTOCOL.md 6.4).
 """
 
 from __future__ import annotations
@@ -27,3 +33,39 @@ def limit_warning(link: dict, scene) -> str | None:
     return (f"the device's {said} is below {scene.name}'s amplitude limit of {wanted:.4g} um: "
             "the plate gets at most that where the scene commands more (counted as clamped "
             "by the device's limit)")
+
+
+class LinkWatch:
+    """The link's stalls from its successive statuses."""
+
+    def __init__(self):
+        self._stalled = False
+        #: what the window shows while the link is down or stalled, else None
+        self.alarm: str | None = None
+
+    def update(self, link: dict) -> list[tuple[str, str]]:
+        """The events since the last status (``link``): (event, detail) in order."""
+        events = []
+        stalled = link.get("state") == "stalled"
+        if stalled != self._stalled:
+            events.append(("link-stalled", stall_said(link)) if stalled else
+                          ("link-moving", "queued blocks go out again"))
+            self._stalled = stalled
+        self.alarm = self._alarm(link)
+        return events
+
+    @staticmethod
+    def _alarm(link: dict) -> str | None:
+        state = link.get("state")
+        if state == "disconnected":
+            return (f"link lost ({link.get('last_error') or 'port failed'}): the plate gets "
+                    "nothing; reconnecting")
+        if state == "stalled":
+            return f"link stalled: {stall_said(link)}; the plate gets nothing"
+        return None
+
+
+def stall_said(link: dict) -> str:
+    """Why a status says ``stalled``: "no queued block went out for 0.6 s (62 queued)"."""
+    return (f"no queued block went out for {link.get('queue_still_s', 0.0):.1f} s "
+            f"({link.get('queued_blocks', 0)} queued)")

@@ -54,8 +54,8 @@ from frictex.device.link.forces import ForceReport
 from frictex.device.link.port import open_port
 from frictex.device.link.portthread import PortThread
 from frictex.device.link.protocol import DeviceState, LinkError
-from frictex.device.link.session import (PREFILL_S, TARGET_S, HostSession, LinkProgress,
-                                         LinkStalled)
+from frictex.device.link.session import (PREFILL_S, SILENCE_S, TARGET_S, HostSession,
+                                         LinkProgress, LinkStalled)
 from frictex.device.link.stall import StallPolicy
 from frictex.device.link.waits import TURN_S, check_interrupt
 
@@ -419,6 +419,13 @@ class CommandSink:
                 return 0.0
             return None if ledger.unplayed is None else ledger.unplayed / ledger.commanded
 
+    def _queue_still_s(self, now: float) -> float:
+        """How long (s, up to ``now`` on the monotonic clock) the queued blocks have not
+        moved: 0 with none queued. Read from the time the link thread last took a block
+        (or found none), so that a thread that is itself stuck shows here (the caller
+        holds the lock)."""
+        return max(now - self._session._last_progress, 0.0) if self._session.queue else 0.0
+
     def status(self) -> dict:
         """JSON-able counters: see PROTOCOL.md section 6 for their meaning."""
         s = self._session
@@ -429,6 +436,7 @@ class CommandSink:
             commanded, played = s.ledger.commanded, s.ledger.played
             queued = len(s.queue)
             connected = s.connected
+            still_s = self._queue_still_s(time.monotonic())
         rtt = np.array(s.rtt_ms)
         if self._closed:
             state = "closed"
@@ -436,11 +444,14 @@ class CommandSink:
             state = "failed"
         elif not connected:
             state = "disconnected"
+        elif still_s > SILENCE_S:
+            state = "stalled"
         else:
             state = "simulated" if self._simulated else "connected"
         d = s.decoder.counts
         out = {
             "state": state,
+            "queue_still_s": still_s,
             "port": self.label,
             "paced": self.paced,
             "protocol_version": s.version,
