@@ -1,9 +1,11 @@
 """What the live demo says about its device link: the clamps to the device's limit apart
 from the pipeline's (status line, last line) with a warning at connect when the
 device's limit is below the scene's; a link whose queued blocks stop moving is
-reported stalled by its status, shown in a red banner and said on stderr; a headless
+reported stalled by its status, shown in a red banner and said on stderr, and its
+losses, returns and stalls are rows of events.csv at their output times; a headless
 demo's synthesized stroke lasts --duration."""
 
+import csv
 import json
 import time
 
@@ -55,6 +57,11 @@ def feed(loop, t_s: float, link: dict) -> None:
     loop.drain()
 
 
+def read_events(path):
+    with open(path, newline="") as f:
+        return [(float(r["t_s"]), r["event"], r["detail"]) for r in csv.DictReader(f)]
+
+
 def test_clamps_to_the_device_limit_are_said_apart_with_a_warning_at_connect(demo, capsys):
     scene_limit = demo.scene.device.amplitude_limit_um
     feed(demo, 0.1, link_status(limit_um=scene_limit / 2))
@@ -74,7 +81,8 @@ def test_a_device_limit_at_the_scene_limit_is_not_warned(demo, capsys):
     assert "| clamps 0 | " in demo.status_lines()[0]
 
 
-def test_a_stall_and_a_loss_are_shown_and_a_stall_said_on_stderr(demo, capsys):
+def test_a_stall_and_a_loss_are_shown_said_and_logged_at_their_output_times(demo, tmp_path,
+                                                                             capsys):
     feed(demo, 1.0, link_status())
     feed(demo, 6.55, link_status("stalled", still_s=0.55))
     feed(demo, 6.60, link_status("stalled", still_s=0.60))
@@ -87,6 +95,11 @@ def test_a_stall_and_a_loss_are_shown_and_a_stall_said_on_stderr(demo, capsys):
                                        "after 1.5 s stalled\n")
     feed(demo, 9.05, link_status("disconnected", disconnects=1))
     assert demo.link_watch.alarm.startswith("link lost (SerialException: device unplugged)")
+    feed(demo, 9.5, link_status(disconnects=2, reconnects=2))  # a second loss between two
+    demo.close()
+    assert [(t, e) for t, e, _ in read_events(tmp_path / "events.csv") if e.startswith("link")] == [
+        (6.55, "link-stalled"), (8.0, "link-moving"), (9.05, "link-lost"),
+        (9.5, "link-lost"), (9.5, "link-back"), (9.5, "link-back")]
 
 
 def wait_for_state(sink, stalled: bool, send) -> dict:

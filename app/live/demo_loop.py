@@ -65,11 +65,13 @@ record folder is given: what the window did when it did it (keys: ``estop``,
 wheel or up/down; scene loads, screenshots and screenshots that failed), and what the
 output did when it did it, at the output time of the first block it shaped
 (``output-stop``, ``output-resume``, ``output-switch``, ``finger-down``, ``finger-up``;
-read from the haptic side's snapshots). While the device link is lost or stalled (queued
-blocks have not moved for over 0.5 s: ``app.live.link_watch``) the window shows it in a
-red banner; a stall and its end are said on stderr.
-The rows of events.csv are put in time order when the demo closes (:func:`sort_events`). The touches themselves go to ``touches.csv``
-(``app.live.haptic_setup``).
+read from the haptic side's snapshots), and what the device link did, at the output time
+of the snapshot whose status first shows it (``link-lost`` with the port's error,
+``link-back``, ``link-stalled`` when queued blocks have not moved for over 0.5 s,
+``link-moving``: ``app.live.link_watch``); while the link is lost or stalled the window
+shows it in a red banner, and a stall and its end are said on stderr. The rows of
+events.csv are put in time order when the demo closes (:func:`sort_events`). The touches
+themselves go to ``touches.csv`` (``app.live.haptic_setup``).
 """
 
 from __future__ import annotations
@@ -778,10 +780,12 @@ class DemoLoop:
             self._watch_link(snap.status.get("link", {}), t)
 
     def _watch_link(self, link: dict, t_s: float) -> None:
-        """The link's stalls since the last status, at ``t_s`` (s, output clock), said
-        on stderr with their end. Once per scene: a device limit below the scene's said
-        on stderr and on screen."""
+        """The link's losses, returns and stalls since the last status, logged at
+        ``t_s`` (s, output clock); a stall and its end also said on stderr (a loss and a
+        return the link says itself). Once per scene: a device limit below the scene's
+        said on stderr and on screen."""
         for event, detail in self.link_watch.update(link):
+            self.log(event, detail, t_s)
             if event == "link-stalled":
                 self._stalled_at = t_s
                 self.say(f"link stalled at {t_s:.1f} s of output: {detail}; the plate gets "

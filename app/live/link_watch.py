@@ -1,11 +1,13 @@
 """What the demo says about its device link, read from the link's status
 (``device.link.host.CommandSink.status``) as the haptic side hands it over with its
 snapshots: the clamps it made to the device's limit, a limit below the scene's, and
-the link going down or stalling and moving again.
+the link going down or stalling and coming back.
 
-:class:`LinkWatch` turns successive statuses into the stalls' start and end
-(``link-stalled``, ``link-moving``) and the alarm the window shows while the link is
-down or stalled. A stall is read from the link's ``state`` (``stalled``: queued blocks
+:class:`LinkWatch` turns successive statuses into events for ``events.csv``
+(``link-lost``, ``link-back``, ``link-stalled``, ``link-moving``) and the alarm the
+window shows while the link is down or stalled. A loss and a return are read from the
+link's ``disconnects`` and ``reconnects`` counters, so that one shorter than the
+status's period is not missed; a stall from its ``state`` (``stalled``: queued blocks
 have not moved for over 0.5 s, PROTOCOL.md 6.4).
 """
 
@@ -36,9 +38,11 @@ def limit_warning(link: dict, scene) -> str | None:
 
 
 class LinkWatch:
-    """The link's stalls from its successive statuses."""
+    """The link's losses, returns and stalls from its successive statuses."""
 
     def __init__(self):
+        self._disconnects = 0
+        self._reconnects = 0
         self._stalled = False
         #: what the window shows while the link is down or stalled, else None
         self.alarm: str | None = None
@@ -46,6 +50,13 @@ class LinkWatch:
     def update(self, link: dict) -> list[tuple[str, str]]:
         """The events since the last status (``link``): (event, detail) in order."""
         events = []
+        if "disconnects" not in link:  # no device, or none answered yet
+            return events
+        for _ in range(link["disconnects"] - self._disconnects):
+            events.append(("link-lost", link.get("last_error") or "port failed"))
+        for _ in range(link["reconnects"] - self._reconnects):
+            events.append(("link-back", "the device answered again"))
+        self._disconnects, self._reconnects = link["disconnects"], link["reconnects"]
         stalled = link.get("state") == "stalled"
         if stalled != self._stalled:
             events.append(("link-stalled", stall_said(link)) if stalled else
