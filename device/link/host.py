@@ -28,7 +28,8 @@ clamped to the limit the device declared (counted).
 Every wait is bounded. Opening: the port opens at once or the link fails; the handshake
 resends Hello with back-off (``session.HELLO_FIRST_S`` doubling to ``HELLO_MAX_S``) for
 :data:`HANDSHAKE_TOTAL_S` in total before the link fails (a :class:`LinkError`, a
-DeviceError: exit 1). If the port fails later (USB unplugged) the link says so once on
+DeviceError: exit 1), or until the device has closed the link
+``session.HANDSHAKE_CLOSES`` times in a row with no valid frame between. If the port fails later (USB unplugged) the link says so once on
 stderr and reopens it until it returns (live: queued blocks are dropped and counted;
 paced: they wait and go out after). A caller's wait (``send`` paced, ``wait_for_room``)
 longer than ``stall_s`` is a *stall*: a warning on stderr, the block dropped (counted),
@@ -140,7 +141,7 @@ class CommandSink:
         try:
             with self._cond:
                 while (not s.connected and s.refused is None and s.failure is None
-                       and s.device_said is None):
+                       and s.device_said is None and not s.closes_every_time):
                     left = t0 + total_s - time.monotonic()
                     if left <= 0 or not self._thread.is_alive():
                         break

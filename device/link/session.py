@@ -43,6 +43,9 @@ RESYNC_TIMEOUT_S = 1.0
 #: a connected device that sends nothing valid, or takes no block while blocks wait, for
 #: this long is handshaken again (s)
 SILENCE_S = 0.5
+#: a device that closes the link this many times in a row during the first handshake,
+#: with no valid frame between, fails it at once (not after the handshake's whole wait)
+HANDSHAKE_CLOSES = 5
 #: a gap this long between two turns of the port thread means the host was starved (s)
 STARVED_S = 0.1
 #: beyond the drain itself, how long the closing Stop may take to play out (s)
@@ -191,6 +194,10 @@ class HostSession:
         self._next_hb = 0.0
         self._ever_connected = False
         self._reconnecting = False
+        # the first handshake: Hellos sent, links closed in all and in a row with no frame
+        self._first_hellos = 0
+        self._first_closes = 0
+        self._closes_in_a_row = 0
 
     # ------------------------------------------------------------------ port events
     def connection_made(self, now: float) -> None:
@@ -206,6 +213,7 @@ class HostSession:
         self.phase = "closed"
         self._reconnecting = True
         if not was:
+            self._count_handshake_close()
             return
         self.counts["disconnects"] += 1
         with self.cond:  # the session is settled by the next handshake, or by close
@@ -214,6 +222,23 @@ class HostSession:
                 self._drop_queued("disconnected")
             self.cond.notify_all()
         self._warn(f"link lost ({self.last_error}); output continues without it, reconnecting")
+
+    def _count_handshake_close(self) -> None:
+        """The link closed during the first handshake: counted, and the caller's wait
+        woken once the device has closed it every time (:data:`HANDSHAKE_CLOSES`)."""
+        if self._ever_connected:
+            return
+        self._first_closes += 1
+        self._closes_in_a_row += 1
+        if self.closes_every_time:
+            with self.cond:
+                self.cond.notify_all()
+
+    @property
+    def closes_every_time(self) -> bool:
+        """The device closed the link :data:`HANDSHAKE_CLOSES` times in a row during the
+        first handshake, with no valid frame between: waiting longer is pointless."""
+        return not self._ever_connected and self._closes_in_a_row >= HANDSHAKE_CLOSES
 
     def finish_without_port(self) -> None:
         """Closing with no port: what is queued is dropped, the session settled."""
@@ -226,6 +251,7 @@ class HostSession:
 
     def data_received(self, data: bytes, now: float) -> None:
         for frame in self.decoder.feed(data):
+            self._closes_in_a_row = 0
             msg = frame.message
             if self.phase == "handshake" and isinstance(msg, p.Info):
                 self._start_session(msg, now)
@@ -290,6 +316,7 @@ class HostSession:
         if self._hellos:
             self.counts["retries"] += 1
         self._hellos += 1
+        self._first_hellos += not self._ever_connected
         self._hello_at = now + self._hello_wait
         self._hello_wait = min(2.0 * self._hello_wait, HELLO_MAX_S)
         settle = b""
@@ -310,8 +337,12 @@ class HostSession:
         if self.device_said is not None:
             return LinkError(f"{self.label}: the device refused the handshake: "
                              f"{self.device_said!r}")
+        if self._first_closes:
+            return LinkError(f"{self.label}: the device closed the link {self._first_closes} "
+                             f"times during the handshake, in {waited_s:.3g} s (last: "
+                             f"{self.last_error}); is it a frictex device?")
         return LinkError(f"{self.label}: no answer to the handshake within {waited_s:.3g} s "
-                         f"({self._hellos} Hellos); is it a frictex device?")
+                         f"({self._first_hellos} Hellos); is it a frictex device?")
 
     def _check(self, info: p.Info) -> LinkError | None:
         """Why the device that sent ``info`` cannot be driven by this host, or None."""
