@@ -33,7 +33,8 @@ DeviceError: exit 1), or until the device has closed the link
 stderr and reopens it until it returns (live: queued blocks are dropped and counted;
 paced: they wait and go out after). A caller's wait (``send`` paced, ``wait_for_room``)
 longer than ``stall_s`` is a *stall*: a warning on stderr, the block dropped (counted),
-the stream going on. A paced link gives up (:class:`LinkStalled`, raised by that call
+the stream going on, and a second warning when it ends. Time this process was stopped
+(:data:`HOST_STOPPED_S`) is said as the host's and not counted in the wait. A paced link gives up (:class:`LinkStalled`, raised by that call
 and every later one) when its time without progress passes the bound of
 ``device.link.stall``: ``stall_s x max_stalls`` plus a quarter of the time played.
 """
@@ -69,6 +70,9 @@ HANDSHAKE_TOTAL_S = 10.0
 #: link may spend without progress before giving up (plus a share of the time played)
 STALL_S = 1.0
 MAX_STALLS = 5
+#: a caller's wait that comes back this much later than it asked: this process was not
+#: running (stopped, suspended, starved), and that time is not the device's (s)
+HOST_STOPPED_S = 0.25
 
 
 class CommandSink:
@@ -270,7 +274,8 @@ class CommandSink:
     def _wait_room(self, timeout_s: float) -> bool:
         """Wait (holding the lock) until a block can be queued; False after ``timeout_s``.
         The time waited goes to the stall policy; past its bound the link fails. Asks
-        every :data:`~device.link.waits.TURN_S` whether the caller is interrupted."""
+        every :data:`~device.link.waits.TURN_S` whether the caller is interrupted. Time
+        this process was stopped is added to the wait (:meth:`_host_stopped_s`)."""
         deadline = time.monotonic() + timeout_s
         self._account(waiting=False)
         while not self._has_room():
@@ -280,11 +285,23 @@ class CommandSink:
             if left <= 0 or not self._thread.is_alive():
                 self._account(waiting=True)
                 return False
-            self._cond.wait(min(left, TURN_S))
+            asked_s, began = min(left, TURN_S), time.monotonic()
+            self._cond.wait(asked_s)
+            deadline += self._host_stopped_s(time.monotonic() - began - asked_s)
             self._account(waiting=True)
             check_interrupt()
         self._account(waiting=True)
         return True
+
+    def _host_stopped_s(self, late_s: float) -> float:
+        """How long this process was stopped during a wait that came back ``late_s`` (s)
+        past what it asked: ``late_s`` from :data:`HOST_STOPPED_S` on (said), else 0. The
+        device was not waited on meanwhile, however its watchdog took the silence."""
+        if late_s < HOST_STOPPED_S:
+            return 0.0
+        self._warn(f"this host was stopped for {late_s:.1f} s (not the device); "
+                   "the wait for the device goes on")
+        return late_s
 
     def _account(self, waiting: bool) -> None:
         """Tell the stall policy what played since it last heard (the caller holds the
@@ -322,7 +339,7 @@ class CommandSink:
     def _stall(self, waited_s: float, dropped: int) -> None:
         """Count a stall of ``waited_s`` that dropped ``dropped`` samples (0: a wait for
         room that timed out); the caller holds the lock. The first of stalls in a row is
-        said at once, the rest once they end (:meth:`_end_stalls`), with how long the
+        said at once, the run again once it ends (:meth:`_end_stalls`), with how long the
         device was away in all."""
         s = self._session
         s.counts["stalls"] += 1
@@ -339,14 +356,15 @@ class CommandSink:
         self._stalls[2:] = [stalls + 1, samples + dropped]
 
     def _end_stalls(self, how: str) -> None:
-        """Stalls in a row ended (``how``: why): say how long and what they dropped, if
-        more than the first (already said); the caller holds the lock."""
+        """Stalls in a row ended (``how``: why): say how long they lasted and what they
+        dropped, as the first one's warning promised; the caller holds the lock."""
         run, self._stalls = self._stalls, None
-        if run is None or run[2] < 2:
+        if run is None:
             return
         causes, began, stalls, samples = run
         self._warn(f"{', then '.join(causes)} for {time.monotonic() - began:.1f} s in all, "
-                   f"until {how}: {stalls} stalls, {samples} samples dropped")
+                   f"until {how}: {stalls} stall{'s' * (stalls != 1)}, {samples} samples "
+                   "dropped")
 
     def _warn(self, text: str) -> None:
         print(f"frictex: warning: {self.label}: {text}", file=self._stderr)
