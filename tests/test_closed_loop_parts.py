@@ -456,6 +456,40 @@ def test_the_first_measurement_starts_the_gain_and_blocks_in_flight_are_not_fed_
     assert states[jump + delay + 1].updates == 2
 
 
+def test_the_first_step_waits_for_a_block_asking_enough_reduction():
+    """Blocks asking mu' 0.95 (a reduction of 0.05) on which the measured reduction is a
+    third of it (what a 1 % error in mu0's estimate makes of a small reduction): with the
+    wait (``first_reduction`` 0.1) the integrator takes them a step at a time and the
+    first step comes with the first block asking mu' 0.6; without it the first of them
+    moves log c all the way at once (by 0.83 here: the sensor chain's model of what was
+    asked is not the asked target's 0.05 exactly)."""
+    from frictex.device.link.forces import ForceHistory
+    from frictex.rendering.control.loop import LoopConfig
+
+    def run(first_reduction):
+        loop = ClosedLoop(DeviceProfile(), 5000.0, N_BLOCK, mode="closed",
+                          config=LoopConfig(first_reduction=first_reduction))
+        targets = [0.95] * 8 + [0.6] * 6
+        state, history, states = loop.initial_state(), ForceHistory(), []
+        for k, target in enumerate(targets):
+            if k >= 1:  # block k - 1's report: mu0 0.8 held still, then what it delivered
+                delivered = 0.05 / 3.0 if targets[k - 1] == 0.95 else 0.4
+                history.add(_report((k - 1) * N_BLOCK, 0.8 if k == 1 else 0.8 * (1 - delivered)))
+            block_target, fingers = _block(k * N_BLOCK, 1.0, target=target)
+            _, _, state = loop.invert(block_target, fingers, state, history.window)
+            states.append(state)
+        return loop, states
+
+    loop, waited = run(0.1)
+    _, at_once = run(0.0)
+    first = next(k for k, s in enumerate(at_once) if s.updates)
+    assert at_once[first].started and at_once[first].log_c > 0.6
+    assert waited[first].updates == 1 and not waited[first].started
+    assert 0.0 < waited[first].log_c <= loop.ki_by_delay[0] * math.log(4.0) + 1e-12
+    started = next(k for k, s in enumerate(waited) if s.started)
+    assert started > 8  # the first block asking mu' 0.6, once its report is in
+
+
 def test_a_report_that_never_comes_is_given_up_after_max_wait_and_the_rest_pair():
     """Block 4's report is lost: the loop waits ``max_wait_s`` for it (later blocks'
     reports wait behind it, in order), then folds it as missed, and pairs the rest; one
