@@ -59,9 +59,10 @@ from frictex.rendering.visual.device_panels import default_frame_size
 from frictex.rendering.visual.viewport import MIN_FRAME
 from frictex.textures.outside import add_allow_outside
 
-#: what a demo writes into ``--record`` (or ``--out``) besides a replay's tables and
-#: summary: the folder is replaced as a whole when the demo ends (``app.engine.staging``)
-DEMO_OUTPUTS = ("events.csv", TOUCHES, FRAMES)
+#: what a demo writes into ``--record`` (or ``--out``) besides a replay's tables, summary
+#: and frames: the folder is replaced as a whole when the demo ends (``app.engine.staging``;
+#: a ``frames`` folder holding anything but frames is refused, as for a replay)
+DEMO_OUTPUTS = ("events.csv", TOUCHES)
 
 def input_option(text: str) -> tuple[str, object]:
     """argparse type for ``--input``: (name, argument) as ``app.live.inputs.parse_input``

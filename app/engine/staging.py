@@ -17,7 +17,8 @@ them) and extended attributes (ACLs included).
 What a run owns in ``--out`` is exactly what it writes there: ``summary.json``,
 ``commands.<fmt>`` and ``friction.<fmt>`` (``fmt`` csv, npz or parquet; also the
 ``.partial`` and npz ``.<column>.raw`` files a table is written under), and a ``frames``
-folder that holds nothing but ``frame_<number>.png`` files (or their ``.partial``). Every
+folder that holds nothing but ``frame_<number>.png`` files (``frame-<number>.png``: the
+demo's; or their ``.partial``). Every
 other file or link in ``--out`` (``commands.notes.txt`` included) is the user's: it is
 hard-linked into the staging folder before the swap (no byte copied, none lost; copied
 where the file system has no hard links). Every other folder (a ``frames`` folder with a
@@ -63,7 +64,7 @@ from frictex.device.errors import InputError, OutputSpaceError, RunFailed
 #: the tables' stems, formats, and the other names a run writes into its output folder
 OUTPUT_STEMS = ("commands", "friction")
 _TABLE = re.compile(r"(?:commands|friction)\.(?:csv|npz|parquet)(?:\.partial|\.\w+\.raw)?")
-_FRAME = re.compile(r"frame_\d+\.png(?:\.partial)?")
+_FRAME = re.compile(r"frame[_-]\d+\.png(?:\.partial)?")  # replay's frame_N, the demo's frame-N
 SUMMARY, FRAMES = "summary.json", "frames"
 _STAGING, _OLD, _KEPT = "frictex-staging", "frictex-old", "frictex-kept"
 _RENAME_EXCHANGE = 2
