@@ -707,6 +707,12 @@ BUSY_TEXT = "busy: serving another host; one host at a time"
 #: a TCP host must say Hello within this long of connecting (s), else it is dropped: an
 #: idle connection would otherwise hold the device and every other host be refused busy
 HELLO_TIMEOUT_S = 2.0
+#: a TCP host that has said Hello is dropped after this long without a valid frame (s),
+#: so that a host gone quiet cannot hold the device either: a connected host heartbeats
+#: every watchdog_ms / 5 (10 ms at most) even with nothing to send, and a host that hears
+#: nothing says Hello again after 0.5 s and reconnects within 1 s (PROTOCOL.md 6.2); the
+#: watchdog has stopped the plate 25-50 ms into the silence
+SILENT_HOST_S = 5.0
 #: refusals are reported at most once per this long (s), with their count
 REFUSAL_REPORT_S = 1.0
 
@@ -723,10 +729,17 @@ def _refuse(sock: socket.socket) -> None:
         sock.close()
 
 
+def _say_silent(address, silent_s: float) -> None:
+    """The line on stderr for a host dropped ``silent_s`` seconds after its last valid frame."""
+    print(f"frictex sim-device: dropped host {address[0]}:{address[1]}: no valid frame for "
+          f"{silent_s:.1f} s after its Hello; the next host can connect", file=sys.stderr)
+
+
 def serve(core: DeviceCore, master: int | None = None, listener: socket.socket | None = None,
           *, poll_s: float = 0.001, exit_on_stop: bool = False, parent_pid: int | None = None,
           quit_event=None, clock=time.monotonic, on_refused=None, on_dropped=None,
-          hello_timeout_s: float = HELLO_TIMEOUT_S) -> int:
+          hello_timeout_s: float = HELLO_TIMEOUT_S, on_silent=_say_silent,
+          silent_host_s: float = SILENT_HOST_S) -> int:
     """Run ``core`` in real time on the pty ``master`` or on TCP connections to
     ``listener``, one host at a time, until ``quit_event`` is set, ``parent_pid`` is gone,
     or (``exit_on_stop``) a host's Stop has played out. Returns the number of TCP hosts
@@ -739,14 +752,19 @@ def serve(core: DeviceCore, master: int | None = None, listener: socket.socket |
     were refused since the last call; the rest when serving ends), so a flood of
     connections makes a line a second, not one each. A TCP host that has not said Hello
     within ``hello_timeout_s`` of connecting is dropped (closed; ``on_dropped(address)``
-    told): a connection that never speaks cannot hold the device. The next host is
+    told): a connection that never speaks cannot hold the device. A TCP host that said
+    Hello and then sent no valid frame for ``silent_host_s`` (:data:`SILENT_HOST_S`, 5 s)
+    is dropped too (``on_silent(address, seconds silent)`` told; by default one line on
+    stderr): a host that goes quiet cannot hold it either, while a connected host, idle or
+    not, heartbeats every ``watchdog_ms / 5``. The next host is
     served once the current one has hung up or been dropped (its socket closed: a host
     process that ends, however it ends, closes it). Received bytes are handled before
     the clock advances,
     so a sim process that was descheduled does not mistake its own sleep for host silence.
     """
     t0 = clock()
-    hosts = _Hosts(core, master, listener, on_refused, on_dropped, hello_timeout_s)
+    hosts = _Hosts(core, master, listener, on_refused, on_dropped, hello_timeout_s, on_silent,
+                   silent_host_s)
     try:
         while True:
             ready = hosts.wait(poll_s)
@@ -776,20 +794,25 @@ def _should_stop(core: DeviceCore, exit_on_stop: bool, quit_event, parent_pid: i
 
 class _Hosts:
     """:func:`serve`'s hosts: the one connected (the pty master, or a TCP socket from
-    ``listener``), when it connected and how many Hellos the core had then, how many TCP
-    hosts were served, and the refusals of second hosts not yet reported."""
+    ``listener``), when it connected and how many Hellos the core had then, when its last
+    valid frame came, how many TCP hosts were served, and the refusals of second hosts not
+    yet reported."""
 
     def __init__(self, core: DeviceCore, master: int | None, listener: socket.socket | None,
-                 on_refused, on_dropped, hello_timeout_s: float) -> None:
+                 on_refused, on_dropped, hello_timeout_s: float, on_silent,
+                 silent_host_s: float) -> None:
         self.core = core
         self.conn = master
         self.listener = listener
         self.on_refused = on_refused
         self.on_dropped = on_dropped
         self.hello_timeout_s = hello_timeout_s
+        self.on_silent = on_silent
+        self.silent_host_s = silent_host_s
         self.served = 0
         self.address = None  # the TCP host's, with the time it connected and core.hellos then
         self.connected_at = self.hellos_then = 0
+        self.heard_at = self.frames_then = 0  # time of its last valid frame, frames_ok then
         self.refused, self.refused_from, self.reported_at = 0, None, -math.inf
 
     def wait(self, poll_s: float) -> list:
@@ -813,6 +836,7 @@ class _Hosts:
         accepted.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.conn, self.served, self.address = accepted, self.served + 1, peer
         self.connected_at, self.hellos_then = now, self.core.hellos
+        self.heard_at, self.frames_then = now, self.core.decoder.counts.frames_ok
 
     def report_refusals(self, now: float) -> None:
         """Tell ``on_refused`` of the refusals since its last call, at most once per
@@ -835,13 +859,25 @@ class _Hosts:
 
     def drop_silent(self, now: float) -> None:
         """Close a TCP host that has not said Hello within ``hello_timeout_s`` of
-        connecting, telling ``on_dropped``."""
-        if (isinstance(self.conn, socket.socket) and self.core.hellos == self.hellos_then
-                and now - self.connected_at > self.hello_timeout_s):
-            self.conn.close()
-            self.conn = None
-            if self.on_dropped is not None:
-                self.on_dropped(self.address)
+        connecting (telling ``on_dropped``), or that said it and then sent no valid frame
+        for ``silent_host_s`` (telling ``on_silent``); ``now`` in s."""
+        if not isinstance(self.conn, socket.socket):
+            return
+        frames = self.core.decoder.counts.frames_ok
+        if frames != self.frames_then:
+            self.heard_at, self.frames_then = now, frames
+        if self.core.hellos == self.hellos_then:
+            if now - self.connected_at > self.hello_timeout_s:
+                self._hang_up(self.on_dropped, self.address)
+        elif now - self.heard_at > self.silent_host_s:
+            self._hang_up(self.on_silent, self.address, now - self.heard_at)
+
+    def _hang_up(self, tell, *what) -> None:
+        """Close the TCP host's connection and tell ``tell(*what)``, if given."""
+        self.conn.close()
+        self.conn = None
+        if tell is not None:
+            tell(*what)
 
     def send(self, out: bytes) -> None:
         """Write ``out`` to the connected host, if any."""
