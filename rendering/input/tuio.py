@@ -79,6 +79,17 @@ MAX_SOURCES = 8
 POSITION_RANGE = (-0.5, 1.5)
 #: a TUIO source silent this long (s) has gone: its cursors are lifted (module docstring)
 SILENCE_S = 1.5
+#: most ids of a 2Dcur ``alive`` read (MAX_CURSORS four times over): those after them,
+#: and any message's arguments after its first ``MAX_ALIVE_IDS + 1``, are refused unread
+#: (counted ``unread`` in a 2Dcur message), so that an 8,000-id list costs no more to
+#: decode than an 80-id one
+MAX_ALIVE_IDS = 4 * MAX_CURSORS
+#: most datagrams, and bytes of them (at least one datagram), one :meth:`TuioListener.poll`
+#: decodes; the rest stay queued for the next call. A 20-finger frame is about 1.3 kB, a
+#: 60 Hz sender's frames come one per poll: a flood cannot hold the polling thread (and
+#: the GIL) for seconds
+POLL_DATAGRAMS = 32
+POLL_BYTES = 16384
 
 
 class OscError(TraceError):
@@ -108,6 +119,13 @@ _EMPTY = {"T": True, "F": False, "N": None, "I": math.inf}
 
 def parse_message(data: bytes) -> tuple[str, list]:
     """One OSC message: ``(address, arguments)`` (see the module grammar)."""
+    address, tags, pos = _head(data)
+    return address, _arguments(data, address, tags, pos)
+
+
+def _head(data: bytes) -> tuple[str, str, int]:
+    """An OSC message's address, its type tags (without the ','), and the byte where its
+    arguments start."""
     address, pos = _string(data, 0)
     if not address.startswith("/"):
         raise OscError(f"OSC address {address[:40]!r} does not start with '/'")
@@ -116,8 +134,13 @@ def parse_message(data: bytes) -> tuple[str, list]:
     tags, pos = _string(data, pos)
     if not tags.startswith(","):
         raise OscError(f"OSC message {address}: type tags {tags[:20]!r} do not start with ','")
+    return address, tags[1:], pos
+
+
+def _arguments(data: bytes, address: str, tags: str, pos: int) -> list:
+    """The arguments of the message ``address`` typed ``tags``, from byte ``pos``."""
     args: list = []
-    for tag in tags[1:]:
+    for tag in tags:
         if tag in _FIXED:
             fmt = _FIXED[tag]
             size = struct.calcsize(fmt)
@@ -142,15 +165,20 @@ def parse_message(data: bytes) -> tuple[str, list]:
                            "(expected one of i f s S b h d t c r m T F N I)")
     if pos > len(data):
         raise OscError(f"OSC message {address}: arguments run past the end of the packet")
-    return address, args
+    return args
 
 
-def parse_packet(data: bytes, depth: int = 0) -> list[tuple[str, list]]:
+def parse_packet(data: bytes) -> list[tuple[str, list]]:
     """All messages of an OSC packet (bundles flattened, in order)."""
+    return [parse_message(message) for message in _messages(data)]
+
+
+def _messages(data: bytes, depth: int = 0) -> list[bytes]:
+    """The bytes of each message of an OSC packet (bundles flattened, in order)."""
     if depth > _MAX_DEPTH:
         raise OscError(f"OSC bundles nested more than {_MAX_DEPTH} deep")
     if not data.startswith(b"#bundle\0"):
-        return [parse_message(data)]
+        return [data]
     _take(data, 8, 8, "bundle time tag")
     pos, out = 16, []
     while pos < len(data):
@@ -158,7 +186,7 @@ def parse_packet(data: bytes, depth: int = 0) -> list[tuple[str, list]]:
         if size <= 0 or size % 4:
             raise OscError(f"OSC bundle element at byte {pos} has size {size} "
                            "(expected a positive multiple of 4)")
-        out.extend(parse_packet(_take(data, pos + 4, size, "bundle element"), depth + 1))
+        out.extend(_messages(_take(data, pos + 4, size, "bundle element"), depth + 1))
         pos += 4 + size
     return out
 
@@ -171,11 +199,13 @@ class TuioDecoder:
     messages for sessions not alive, ignored), ``over_limit`` (cursors beyond
     ``MAX_CURSORS`` touching at once or set in one frame, and frames and commands of
     sources beyond ``MAX_SOURCES``, ignored: what the decoder keeps is bounded whatever a
-    sender claims, also when it never sends an ``fseq``).
+    sender claims, also when it never sends an ``fseq``), ``unread`` (arguments of 2Dcur
+    messages after their first ``MAX_ALIVE_IDS + 1``, refused unread: an ``alive``'s ids
+    after its first :data:`MAX_ALIVE_IDS`; the work per message is bounded too).
     """
 
     def __init__(self) -> None:
-        self.frames = self.late = self.stray = self.over_limit = 0
+        self.frames = self.late = self.stray = self.over_limit = self.unread = 0
         self._fseq: dict[str, int] = {}
         self._alive: dict[str, set[int]] = {}
         self._pending_alive: dict[str, set[int] | None] = {}
@@ -189,9 +219,11 @@ class TuioDecoder:
         """Decode one UDP datagram received at ``t_s`` (s) from ``origin`` (the sender,
         "HOST:PORT", for :meth:`expire`'s report); a bad packet changes nothing."""
         out: list[RawSample] = []
-        for command, source, value in _commands(parse_packet(packet)):
+        for command, source, value in _commands(packet):
             if command == "fseq":
                 self._commit(source, value, t_s, origin, out)
+            elif command == "unread":
+                self.unread += value
             elif not self._may_hold(source):
                 self.over_limit += 1
             else:
@@ -305,15 +337,21 @@ class TuioDecoder:
         return next(i for i in range(len(used) + 1) if i not in used)
 
 
-def _commands(messages: list[tuple[str, list]]) -> list[tuple[str, str, object]]:
-    """The 2Dcur commands of a packet, checked: (``alive``, source, ids), (``set``, source,
-    (id, x, y)), (``fseq``, source, frame). Other addresses are other TUIO profiles or other
-    OSC traffic, and are skipped."""
+def _commands(packet: bytes) -> list[tuple[str, str, object]]:
+    """The 2Dcur commands of an OSC packet, checked: (``alive``, source, ids), (``set``,
+    source, (id, x, y)), (``fseq``, source, frame), and (``unread``, source, how many) for
+    the arguments of a 2Dcur message after its first ``MAX_ALIVE_IDS + 1``, refused
+    unread (an ``alive``'s ids after its first ``MAX_ALIVE_IDS``). Other addresses are
+    other TUIO profiles or other OSC traffic, and are skipped (read as far as that too)."""
     out: list[tuple[str, str, object]] = []
     source = ""
-    for address, args in messages:
+    for message in _messages(packet):
+        address, tags, pos = _head(message)
+        args = _arguments(message, address, tags[:MAX_ALIVE_IDS + 1], pos)
         if address != "/tuio/2Dcur" or not args:
             continue
+        if len(tags) > MAX_ALIVE_IDS + 1:
+            out.append(("unread", source, len(tags) - MAX_ALIVE_IDS - 1))
         command = args[0]
         if command == "source":
             source = _arg(args, 1, str, "source")
@@ -350,7 +388,7 @@ def is_tuio_frame(data: bytes) -> bool:
     if not data.startswith(b"#bundle\0"):
         return False
     try:
-        commands = {command for command, _, _ in _commands(parse_packet(data))}
+        commands = {command for command, _, _ in _commands(data)}
     except OscError:
         return False
     return {"alive", "fseq"} <= commands
@@ -454,7 +492,9 @@ class TuioListener:
 
     The thread only stamps datagrams as they arrive and queues them (bounded queue;
     overflow is counted in ``dropped``); decoding happens in :meth:`poll`, on the
-    caller's thread, which may block in :meth:`wait` until a datagram is there.
+    caller's thread, which may block in :meth:`wait` until a datagram is there. One
+    :meth:`poll` decodes at most :data:`POLL_DATAGRAMS` datagrams and
+    :data:`POLL_BYTES` bytes of them (at least one datagram); the rest wait for the next.
     Malformed packets are counted in ``bad_packets`` (last message in ``last_error``),
     never raised. Datagrams that :class:`SenderGate` refuses (another sender while the
     served one speaks; before one is served, or after it fell silent, those that are not
@@ -535,22 +575,35 @@ class TuioListener:
         return self._ready.wait(timeout_s)
 
     def poll(self) -> list[TouchSample]:
-        """Samples of the frames received since the last call (mm, N, s), in order."""
+        """Samples of the frames received since the last call (mm, N, s), in order, from
+        at most :data:`POLL_DATAGRAMS` datagrams and :data:`POLL_BYTES` bytes of them (at
+        least one): with more queued, :meth:`wait` returns at once for the rest."""
         self._ready.clear()  # before draining: a datagram queued meanwhile sets it again
         raw: list[RawSample] = []
-        while True:
+        datagrams, size = 0, 0
+        while datagrams < POLL_DATAGRAMS and size < POLL_BYTES:
             try:
                 t, data, origin = self._queue.get_nowait()
             except queue.Empty:
-                break
-            raw.extend(self._expire(t))
-            try:
-                raw.extend(self.decoder.feed(data, t, origin))
-            except OscError as exc:
-                self.bad_packets += 1
-                self.last_error = str(exc)
-        raw.extend(self._expire(self._clock()))
+                # silences are judged on the clock only once every datagram before it is read
+                raw.extend(self._expire(self._clock()))
+                return self.screen.touches(raw)
+            datagrams, size = datagrams + 1, size + len(data)
+            raw.extend(self._decode(t, data, origin))
+        if not self._queue.empty():
+            self._ready.set()
         return self.screen.touches(raw)
+
+    def _decode(self, t: float, data: bytes, origin: str) -> list[RawSample]:
+        """The samples of datagram ``data`` from ``origin`` received at ``t`` (s), after
+        those lifting the sources silent by then; a malformed one counted."""
+        raw = self._expire(t)
+        try:
+            raw.extend(self.decoder.feed(data, t, origin))
+        except OscError as exc:
+            self.bad_packets += 1
+            self.last_error = str(exc)
+        return raw
 
     def _expire(self, t: float) -> list[RawSample]:
         """UP samples for the cursors of sources silent at ``t`` (s), each said once."""
@@ -563,13 +616,14 @@ class TuioListener:
 
     def counters(self) -> dict:
         """What was received: ``datagrams`` accepted, ``refused`` (other senders),
-        ``dropped`` (queue full), ``bad_packets``, ``takeovers`` (senders served after
-        another fell silent), and the ``sender`` served last ("ADDR:PORT", or None
-        before the first datagram)."""
+        ``dropped`` (queue full), ``bad_packets``, the decoder's ``over_limit`` and
+        ``unread``, ``takeovers`` (senders served after another fell silent), and the
+        ``sender`` served last ("ADDR:PORT", or None before the first datagram)."""
         sender = None if self.gate.sender is None else _name(self.gate.sender)
         return {"listen": f"{self.host}:{self.port}", "sender": sender,
                 "datagrams": self.datagrams, "refused": self.refused, "dropped": self.dropped,
                 "bad_packets": self.bad_packets, "over_limit": self.decoder.over_limit,
+                "unread": self.decoder.unread,
                 "takeovers": self.gate.takeovers}
 
     def close(self) -> None:
