@@ -101,7 +101,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="listen on TCP instead of a pty (host default 127.0.0.1; port 0: "
                              "any free port); hosts open the printed socket:// URL, one at a "
                              "time: a second connection is refused while one is connected, "
-                             "and one that says no Hello within 2 s is dropped")
+                             "and one that says no Hello within 2 s, or sends nothing for 5 s after "
+                             "it, is dropped")
     parser.add_argument("--protocol", type=int, choices=(1, 2, 3, 4), default=4,
                         help="newest protocol version to speak (default 4, with repair of "
                              "lost frames; 1 to 3 act as firmware of that version)")
