@@ -1,16 +1,21 @@
-"""The TCP simulated device: a silent connection cannot hold it, refusals are rate-limited.
+"""The TCP simulated device: a silent connection cannot hold it (before its Hello or after
+it), an idle host is never dropped, refusals are rate-limited.
 
 serve() runs in a thread on a clock the test moves: no sleeps decide a result, every
-wait is bounded.
+wait is bounded; the last test connects the host's own link over loopback and lets it
+idle in real time.
 """
 
+import io
 import socket
 import threading
 import time
 
 from frictex.device.link import protocol as p
-from frictex.device.link.simdevice import (HELLO_TIMEOUT_S, REFUSAL_REPORT_S, DeviceConfig,
-                                           DeviceCore, open_listener, serve)
+from frictex.device.link.host import open_sink
+from frictex.device.link.simdevice import (HELLO_TIMEOUT_S, REFUSAL_REPORT_S, SILENT_HOST_S,
+                                           DeviceConfig, DeviceCore, open_listener, serve,
+                                           socket_url)
 
 
 class Clock:
@@ -28,16 +33,27 @@ def until(condition, what):
         time.sleep(0.002)
 
 
-def started(**kwargs):
+def started(clock=None, **kwargs):
+    """serve() in a thread on a fresh core, on ``clock`` (a Clock the test moves unless
+    given); what it reports in ``calls``: refused (counts), dropped before a Hello,
+    silent after one (s)."""
     listener = open_listener()
-    clock, quit_event, calls = Clock(), threading.Event(), {"refused": [], "dropped": []}
+    clock, quit_event = clock or Clock(), threading.Event()
+    calls = {"refused": [], "dropped": [], "silent": []}
     core = DeviceCore(DeviceConfig())
     thread = threading.Thread(target=serve, args=(core,), kwargs=dict(
         listener=listener, clock=clock, quit_event=quit_event,
         on_refused=lambda a, n: calls["refused"].append(n),
-        on_dropped=lambda a: calls["dropped"].append(a), **kwargs), daemon=True)
+        on_dropped=lambda a: calls["dropped"].append(a),
+        on_silent=lambda a, silent_s: calls["silent"].append(silent_s), **kwargs), daemon=True)
     thread.start()
     return listener, clock, quit_event, calls, thread, core
+
+
+def stopped(listener, quit_event, thread):
+    quit_event.set()
+    thread.join(30)
+    listener.close()
 
 
 def connect(listener):
@@ -77,9 +93,7 @@ def test_a_host_without_hello_is_dropped_and_the_next_is_served():
         host.close()
         silent.close()
     finally:
-        quit_event.set()
-        thread.join(30)
-        listener.close()
+        stopped(listener, quit_event, thread)
 
 
 def test_a_flood_of_refused_connections_is_reported_once_a_second_with_a_count():
@@ -101,8 +115,71 @@ def test_a_flood_of_refused_connections_is_reported_once_a_second_with_a_count()
             return sum(calls["refused"]) == 40 or not thread.is_alive()
         until(all_counted, "all counted")
     finally:
-        quit_event.set()
-        thread.join(30)
-        listener.close()
+        stopped(listener, quit_event, thread)
     assert sum(calls["refused"]) == 40 and len(calls["refused"]) <= 2
     host.close()
+
+
+def answers(sock) -> list:
+    """The messages in the device's next packet on ``sock``."""
+    sock.settimeout(30)
+    return [frame.message for frame in p.Decoder().feed(sock.recv(4096))]
+
+
+def test_a_host_silent_after_its_hello_is_dropped_and_the_next_is_served():
+    listener, clock, quit_event, calls, thread, core = started()
+    try:
+        quiet = connect(listener)
+        quiet.sendall(b"\x00" + p.encode(p.Hello(100), 0, 4))
+        until(lambda: core.hellos == 1, "the quiet host's Hello handled")
+        clock.now = SILENT_HOST_S - 0.5  # within the bound: kept
+        time.sleep(0.05)
+        assert not closed(quiet) and calls["silent"] == []
+        clock.now = SILENT_HOST_S + 0.1
+        until(lambda: calls["silent"], "the quiet host dropped")
+        until(lambda: closed(quiet), "its socket closed")
+        assert calls["silent"][0] > SILENT_HOST_S
+        host = connect(listener)
+        host.sendall(p.encode(p.Hello(prefill=10), 0, 4))
+        assert isinstance(answers(host)[0], p.Info)  # served, not refused busy
+        host.close()
+        quiet.close()
+    finally:
+        stopped(listener, quit_event, thread)
+    assert len(calls["silent"]) == 1 and calls["dropped"] == []
+
+
+def test_a_host_that_heartbeats_is_never_dropped():
+    """Heartbeats a second apart on the device's clock (a real host's are 5 ms apart)."""
+    listener, clock, quit_event, calls, thread, core = started()
+    try:
+        host = connect(listener)
+        host.sendall(p.encode(p.Hello(prefill=10), 0, 4))
+        until(lambda: core.hellos == 1, "the Hello handled")
+        for seq in range(1, 4 * int(SILENT_HOST_S) + 1):
+            clock.now += 1.0
+            frames = core.decoder.counts.frames_ok
+            host.sendall(p.encode(p.Heartbeat(seq), seq, 4))
+            until(lambda: core.decoder.counts.frames_ok > frames, "the Heartbeat handled")
+        assert calls["silent"] == [] and not closed(host)
+        host.close()
+    finally:
+        stopped(listener, quit_event, thread)
+
+
+def test_the_hosts_own_link_idling_on_tcp_is_not_dropped():
+    """A replay's link that has nothing to send still heartbeats: 3 s idle against a
+    2 s bound (the real bound is 5 s; the host heartbeats every watchdog_ms / 5)."""
+    listener, _, quit_event, calls, thread, core = started(time.monotonic, silent_host_s=2.0)
+    try:
+        sink = open_sink(socket_url(listener), 1, 10_000.0, paced=True, stderr=io.StringIO())
+        try:
+            frames = core.decoder.counts.frames_ok
+            time.sleep(3.0)
+            heard = core.decoder.counts.frames_ok - frames
+            assert calls["silent"] == [] and sink.status()["reconnects"] == 0
+        finally:
+            sink.close()
+    finally:
+        stopped(listener, quit_event, thread)
+    assert heard >= 3  # it did speak while idle, at least once a second
