@@ -69,6 +69,7 @@ def test_a_stopped_host_is_said_stopped_and_its_block_kept(monkeypatch):
     status = sink.status()
     assert status["stalls"] == 0
     assert status["dropped_blocks"] == 0
+    assert status["stalled_s"] < 0.5 * STOP_S  # the stop is not the device's lag either
 
 
 def test_a_single_stall_is_said_again_when_it_ends():
@@ -89,3 +90,13 @@ def test_a_single_stall_is_said_again_when_it_ends():
     assert sum("said again when it ends" in line for line in lines) == 1, lines
     ended = [line for line in lines if " in all, until it took blocks again: 1 stall, 0 " in line]
     assert len(ended) == 1, lines
+
+
+def test_the_stall_policy_leaves_a_stop_out_of_its_lag():
+    """2 s waited with nothing played, 1.5 s of it the host stopped: 0.5 s of lag."""
+    from frictex.device.link.stall import StallPolicy
+    policy = StallPolicy(RATE, give_up_s=5.0)
+    policy.account(10.0, 0, waiting=True)
+    policy.skip(STOP_S)
+    policy.account(12.0, 0, waiting=True)
+    assert abs(policy.lag_s - 0.5) < 1e-12

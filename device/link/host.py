@@ -275,7 +275,8 @@ class CommandSink:
         """Wait (holding the lock) until a block can be queued; False after ``timeout_s``.
         The time waited goes to the stall policy; past its bound the link fails. Asks
         every :data:`~device.link.waits.TURN_S` whether the caller is interrupted. Time
-        this process was stopped is added to the wait (:meth:`_host_stopped_s`)."""
+        this process was stopped is added to the wait (:meth:`_host_stopped_s`) and left
+        out of the stall policy's lag."""
         deadline = time.monotonic() + timeout_s
         self._account(waiting=False)
         while not self._has_room():
@@ -287,7 +288,9 @@ class CommandSink:
                 return False
             asked_s, began = min(left, TURN_S), time.monotonic()
             self._cond.wait(asked_s)
-            deadline += self._host_stopped_s(time.monotonic() - began - asked_s)
+            stopped_s = self._host_stopped_s(time.monotonic() - began - asked_s)
+            deadline += stopped_s
+            self._policy.skip(stopped_s)
             self._account(waiting=True)
             check_interrupt()
         self._account(waiting=True)

@@ -15,7 +15,8 @@ before it has played or the link has failed; with the defaults (``share`` 0.25,
 ``give_up_s`` 5 s from ``stall_s`` 1 s x 5), a 10 s trace at most 17.5 s. A link that
 comes back and loses again does not reset it (the old rule, five failed waits in a row,
 never fired then). A clean link keeps ``lag`` near the jitter buffer's prefill. Time the
-caller spends computing (no block waiting) never counts: a slow pipeline is not a stall.
+caller spends computing (no block waiting) never counts: a slow pipeline is not a stall;
+nor does time the caller's process was stopped (:meth:`StallPolicy.skip`).
 
 Pure: it is given times and counts (no clock).
 """
@@ -51,6 +52,12 @@ class StallPolicy:
         if waiting and self._t is not None:
             self.lag_s = max(self.lag_s + (now - self._t) - gained, 0.0)
         self._t = now
+
+    def skip(self, seconds: float) -> None:
+        """Leave ``seconds`` (s) of the interval since the last call out of the lag: time
+        this process was stopped, when no one waited on the device."""
+        if self._t is not None:
+            self._t += seconds
 
     @property
     def allowed_s(self) -> float:
