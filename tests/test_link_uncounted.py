@@ -38,8 +38,11 @@ def test_watchdog_trips_of_a_version_1_device_are_said_uncountable(tmp_path):
 
 
 def test_a_version_1_device_without_trips_says_nothing(tmp_path):
+    """No fault injected: nothing said unless the watchdog really tripped (a loaded
+    machine may starve the link that long: then it is said, as above)."""
     code, err, summary = replay(tmp_path, "--device", "sim:protocol=1")
-    assert code == 0 and not any("watchdog" in w for w in summary["warnings"])
+    said = any("watchdog" in w for w in summary["warnings"])
+    assert code == 0 and said == (summary["device"]["watchdog_trips_in_run"] > 0)
 
 
 def test_underruns_of_a_paced_replay_are_said(tmp_path):
