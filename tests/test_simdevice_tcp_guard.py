@@ -61,6 +61,15 @@ def connect(listener):
     return sock
 
 
+def hello(listener, core, version: int = 1):
+    """A host connected that has said Hello (protocol ``version``) and been heard."""
+    host = connect(listener)
+    heard = core.hellos
+    host.sendall(p.encode(p.Hello(prefill=10), 0, version))
+    until(lambda: core.hellos > heard, "the host's Hello handled")
+    return host
+
+
 def closed(sock) -> bool:
     """True once the device closed ``sock`` (EOF or reset)."""
     sock.setblocking(False)
@@ -84,9 +93,7 @@ def test_a_host_without_hello_is_dropped_and_the_next_is_served():
         clock.now = HELLO_TIMEOUT_S + 0.1
         until(lambda: calls["dropped"], "the silent host dropped")
         until(lambda: closed(silent), "its socket closed")
-        host = connect(listener)
-        host.sendall(p.encode(p.Hello(prefill=10), 0, 1))
-        until(lambda: core.hellos == 1, "the next host's Hello handled")
+        host = hello(listener, core)
         clock.now += 2 * HELLO_TIMEOUT_S  # said Hello: not dropped before SILENT_HOST_S
         time.sleep(0.05)
         assert len(calls["dropped"]) == 1 and calls["refused"] == [1]
@@ -99,9 +106,7 @@ def test_a_host_without_hello_is_dropped_and_the_next_is_served():
 def test_a_flood_of_refused_connections_is_reported_once_a_second_with_a_count():
     listener, clock, quit_event, calls, thread, core = started()
     try:
-        host = connect(listener)
-        host.sendall(p.encode(p.Hello(prefill=10), 0, 1))
-        until(lambda: core.hellos == 1, "the host served")
+        host = hello(listener, core)
         for _ in range(40):  # all within one second of the device's clock
             connect(listener).close()
         until(lambda: calls["refused"], "the first report")
@@ -153,9 +158,7 @@ def test_a_host_that_heartbeats_is_never_dropped():
     """Heartbeats a second apart on the device's clock (a real host's are 5 ms apart)."""
     listener, clock, quit_event, calls, thread, core = started()
     try:
-        host = connect(listener)
-        host.sendall(p.encode(p.Hello(prefill=10), 0, 4))
-        until(lambda: core.hellos == 1, "the Hello handled")
+        host = hello(listener, core, version=4)
         for seq in range(1, 4 * int(SILENT_HOST_S) + 1):
             clock.now += 1.0
             frames = core.decoder.counts.frames_ok
