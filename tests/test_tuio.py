@@ -1,6 +1,7 @@
 """TUIO 1.1 2Dcur: the OSC parser, the alive/set/fseq semantics and the UDP listener."""
 
 import math
+import queue
 import socket
 import struct
 import threading
@@ -276,6 +277,27 @@ def received(listener, accepted, refused):
         time.sleep(0.005)
     assert (listener.datagrams, listener.refused) == (accepted, refused)
     return samples + listener.poll()
+
+
+class LateQueue(queue.Queue):
+    """A queue whose writer is descheduled for 50 ms before each put, as a receive
+    thread on a loaded machine may be."""
+
+    def put_nowait(self, item):
+        time.sleep(0.05)
+        super().put_nowait(item)
+
+
+def test_a_counted_datagram_can_be_polled_however_late_its_thread_runs():
+    with TuioListener(0, width_mm=100.0, height_mm=100.0) as listener, \
+            sender("127.0.0.1") as tablet:
+        listener._queue = LateQueue(listener._queue.maxsize)
+        tablet.sendto(frame(1, [3], [(3, 0.25, 0.5)]), ("127.0.0.1", listener.port))
+        deadline = time.monotonic() + 60.0
+        while listener.datagrams < 1 and time.monotonic() < deadline:
+            time.sleep(0.001)
+        assert listener.wait(0.0)
+        assert [(s.x_mm, s.event) for s in listener.poll()] == [(25.0, DOWN)]
 
 
 def test_listener_binds_loopback_by_default():

@@ -562,12 +562,18 @@ class TuioListener:
             if verdict == "new" and before is not None:
                 self._warn(f"TUIO: taking frames from {address}:{port} ({_name(before)} was "
                            f"silent for {self.gate.silence_s:g} s or more)")
-            self.datagrams += 1
-            try:
-                self._queue.put_nowait((t, data, f"{address}:{port}"))
-            except queue.Full:
-                self.dropped += 1
-            self._ready.set()
+            self._enqueue(t, data, f"{address}:{port}")
+
+    def _enqueue(self, t: float, data: bytes, origin: str) -> None:
+        """Queue datagram ``data`` from ``origin`` received at ``t`` (s), or count it
+        dropped when the queue is full; counted in ``datagrams`` only then, so that a
+        reader who sees the count can :meth:`poll` the datagram."""
+        try:
+            self._queue.put_nowait((t, data, origin))
+        except queue.Full:
+            self.dropped += 1
+        self._ready.set()
+        self.datagrams += 1
 
     def wait(self, timeout_s: float) -> bool:
         """Block until a datagram arrived since the last :meth:`poll`, at most
