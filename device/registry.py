@@ -29,7 +29,9 @@ once per process); one that cannot be imported, or whose object is not what the 
 holds (its ``expect``: a device profile that is a dict), is a :class:`PluginError` when its
 name is used, and is left out with such a warning where every entry is needed at once
 (:meth:`Registry.loaded`). A built-in registered after a plugin took its name replaces it
-(the plugin is refused, with the warning).
+(the plugin is refused, with the warning). :meth:`Registry.register` called from code
+outside frictex's own modules (a notebook's ``RENDERERS.register("wobble", Wobble)``) is
+another package's entry too: the same checks when registered, the same wrapping when used.
 
 Every list of names a user sees (command-line choices, the demo's key cycle, the report's
 matrix, texture-file validation, the docs) is ``registry.names()``; an unknown name is an
@@ -249,10 +251,27 @@ class Registry(Generic[T]):
     def register(self, name, entry=None):
         """Register ``entry`` under ``name`` (or use as a decorator). A name frictex
         registers twice is an error; one a plugin took is frictex's (the plugin refused
-        with a warning): a plugin cannot replace a built-in."""
+        with a warning): a plugin cannot replace a built-in. Code outside frictex's own
+        modules (a notebook, another package) registers as a plugin would: a reserved
+        name or an entry that is not the registry's ``expect`` is a :class:`PluginError`,
+        and its entry is used as a plugin's (:func:`build_entry`), origin
+        ``"{module} ({entry's name})"``."""
+        # who registers is the calling module; taken here, as the decorator is called later
+        caller = sys._getframe(1).f_globals.get("__name__", "?")
         if entry is None:
-            return lambda obj: self.register(name, obj)
-        self._add(name, entry, OWN_DISTRIBUTION)
+            return lambda obj: self._register(name, obj, caller)
+        return self._register(name, entry, caller)
+
+    def _register(self, name: str, entry: T, caller: str) -> T:
+        """:meth:`register` ``entry``, called from module ``caller``."""
+        if caller == OWN_DISTRIBUTION or caller.startswith(OWN_DISTRIBUTION + "."):
+            self._add(name, entry, OWN_DISTRIBUTION)
+            return entry
+        origin = f"{caller} ({getattr(entry, '__name__', type(entry).__name__)})"
+        if self.expect is not None and not self.expect.test(entry):
+            raise PluginError(f"{self.kind} {name!r} from {origin} is {_a(entry)}; "
+                              f"expected {self.expect.what}")
+        self._add(name, entry, origin)
         return entry
 
     def _add(self, name: str, entry, origin: str) -> None:
@@ -377,4 +396,4 @@ class Registry(Generic[T]):
         return iter(self.names())
 
     def __repr__(self) -> str:
-        return f"Registry({self.kind!r}, {self.group!r}, {list(self._entries)})"
+        return f"Registry({self.kind!r}, {self.group!r}, {list(self.names())})"

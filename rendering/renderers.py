@@ -25,7 +25,9 @@ frictex's own are listed in its pyproject.toml: the renderer names are part of t
 texture format, which ``textures`` checks without importing this layer. Anything another
 package's renderer raises, building or rendering, is a :class:`PluginError` naming the
 package and the layer (exit 1), not an internal error of frictex's
-(:func:`build_renderer`).
+(:func:`build_renderer`). So is a renderer registered in-process from outside frictex's
+own modules (``RENDERERS.register("wobble", Wobble)`` in a notebook): it is checked and
+wrapped as a plugin's (``Registry.register``).
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from frictex.device.registry import OWN_DISTRIBUTION, PluginError, Registry
+from frictex.device.registry import OWN_DISTRIBUTION, Expect, PluginError, Registry
 from frictex.rendering.tracking.tracks import FingerBlock
 from frictex.textures.model import RENDERERS, render_modes
 
@@ -65,9 +67,14 @@ class RendererFactory(Protocol):
         """The renderer of ``layer`` (``textures.model``) at output rate ``rate_hz`` (Hz)."""
 
 
+#: what a renderer registry's entries must be (``Registry.expect``)
+RENDERER_FACTORY = Expect.factory("a renderer class or function (layer, rate_hz) -> "
+                                  "LayerRenderer (frictex.rendering.renderers)")
+
 #: renderers of the layers that render motion or events, by ``layer.renderer_kind``
 LAYER_RENDERERS: Registry[RendererFactory] = Registry("dynamic layer kind",
-                                                      "frictex.layer_renderers")
+                                                      "frictex.layer_renderers",
+                                                      expect=RENDERER_FACTORY)
 
 
 def any_layer(name: str) -> bool:

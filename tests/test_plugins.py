@@ -20,6 +20,7 @@ from dataclasses import replace
 from pathlib import Path
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from frictex.device.registry import Expect, PluginError, Registry, UnknownName
@@ -445,26 +446,120 @@ def test_an_unknown_dynamic_layer_kind_is_an_error_not_a_clip():
         build_pipeline(replace(scene, layers=(stranger,)))
 
 
+#: ``registry.register(*args)`` called from a module of frictex's own (its frame's
+#: module name is under ``frictex.``), as frictex's own registrations are
+register_as_frictex = eval("lambda registry, *args: registry.register(*args)",
+                           {"__name__": "frictex.tests_own"})
+
+
 def test_a_registry_refuses_a_second_entry_under_a_name_and_bad_names():
     registry: Registry = Registry("gadget", "frictex.test-gadgets-none")
+    register_as_frictex(registry, "one", len)
+
+    def two(x):
+        return x
+    register_as_frictex(registry, "two")(two)  # as a decorator
+
+    assert registry.names() == ("one", "two") and registry.get("two") is two
+    register_as_frictex(registry, "one", len)  # the same entry again: no clash
+    with pytest.raises(PluginError, match="gadget 'one' from frictex is already registered by "
+                                          "frictex"):
+        register_as_frictex(registry, "one", abs)
+    for bad in ("", " x", "a:b", 3):
+        with pytest.raises(PluginError, match="expected a non-empty name"):
+            register_as_frictex(registry, bad, abs)
+    with pytest.raises(UnknownName, match="unknown gadget 'three'; expected one of one, two"):
+        registry.get("three")
+    assert "one" in registry and "three" not in registry and 3 not in registry
+    assert registry.origin("two") == "frictex" and list(registry) == ["one", "two"]
+
+
+def test_code_outside_frictex_registers_as_a_plugin():
+    """``register`` from a notebook or another package was frictex's own: a reserved name
+    and an entry of the wrong type were taken."""
+    registry: Registry = Registry("gadget", "frictex.test-gadgets-none", reserved=("any",),
+                                  expect=Expect.factory("a gadget factory"))
     registry.register("one", len)
 
     @registry.register("two")
     def two(x):
         return x
 
-    assert registry.names() == ("one", "two") and registry.get("two") is two
-    registry.register("one", len)  # the same entry again: no clash
-    with pytest.raises(PluginError, match="gadget 'one' from frictex is already registered by "
-                                          "frictex"):
+    assert registry.origin("one") == "test_plugins (len)"
+    assert registry.origin("two") == "test_plugins (two)" and registry.get("two") is two
+    with pytest.raises(PluginError, match=r"^gadget 'any' from test_plugins \(abs\): the name "
+                                          "is reserved$"):
+        registry.register("any", abs)
+    with pytest.raises(PluginError, match=r"^gadget 'num' from test_plugins \(int\) is the int "
+                                          "42; expected a gadget factory$"):
+        registry.register("num", 42)
+    with pytest.raises(PluginError, match=r"already registered by test_plugins \(len\)"):
         registry.register("one", abs)
-    for bad in ("", " x", "a:b", 3):
-        with pytest.raises(PluginError, match="expected a non-empty name"):
-            registry.register(bad, abs)
-    with pytest.raises(UnknownName, match="unknown gadget 'three'; expected one of one, two"):
-        registry.get("three")
-    assert "one" in registry and "three" not in registry and 3 not in registry
-    assert registry.origin("two") == "frictex" and list(registry) == ["one", "two"]
+    assert registry.names() == ("one", "two")
+
+
+def test_a_registry_lists_its_entry_points_before_first_use():
+    """Its repr listed [] until a name was asked for."""
+    assert "'sht'" in repr(Registry("renderer", "frictex.renderers"))
+
+
+@pytest.fixture
+def in_process_renderers(monkeypatch):
+    """RENDERERS and LAYER_RENDERERS as they are, restored after the test (what it
+    registers in this process leaves with it)."""
+    for registry in (RENDERERS, LAYER_RENDERERS):
+        monkeypatch.setattr(registry, "_entries", dict(registry._entries))
+        monkeypatch.setattr(registry, "_origin", dict(registry._origin))
+
+
+class _Flat:
+    """A renderer of mu' = 0.5 everywhere, or what ``render`` of a subclass returns."""
+
+    def __init__(self, layer, rate_hz):
+        pass
+
+    def initial_state(self):
+        return None
+
+    def render(self, block, state):
+        shape = (len(block.ids), block.n)
+        return np.full(shape, 0.5), np.ones(shape, bool), state
+
+
+class _NotFinite(_Flat):
+    def render(self, block, state):
+        mu, covers, state = super().render(block, state)
+        return mu * np.nan, covers, state
+
+
+class _Flattened(_Flat):
+    def render(self, block, state):
+        return np.full(3, 0.5), np.ones(3, bool), state
+
+
+def test_a_renderer_registered_in_process_is_checked_as_a_plugins(in_process_renderers):
+    """``RENDERERS.register`` in a notebook skipped every check a plugin's renderer gets:
+    a NaN renderer wrote 5000 NaN mu_target rows, a wrong shape was a numpy traceback from
+    compose.py, ``sho`` was taken (render_modes() then listed it twice), and 42 was."""
+    import frictex
+    scene, trace = frictex.load_scene("grating-5mm"), frictex.synth_trace("swipe",
+                                                                          duration_s=0.2)
+    RENDERERS.register("test-flat", _Flat)
+    assert set(frictex.replay(scene, trace, renderer="test-flat").friction.column(
+        "mu_target").to_numpy()) <= {0.5}
+    RENDERERS.register("test-nan", _NotFinite)
+    with pytest.raises(PluginError, match=r"^renderer 'test-nan' of test_plugins \(_NotFinite\)"
+                                          r" returned \d+ mu' values that are not finite"):
+        frictex.replay(scene, trace, renderer="test-nan")
+    RENDERERS.register("test-flattened", _Flattened)
+    with pytest.raises(PluginError, match=r"returned mu' of shape \(3,\) on layer"):
+        frictex.replay(scene, trace, renderer="test-flattened")
+    modes = render_modes()
+    with pytest.raises(PluginError, match="'sho' from test_plugins .*: the name is reserved"):
+        RENDERERS.register("sho", _Flat)
+    assert render_modes() == modes and modes.count("sho") == 1
+    with pytest.raises(PluginError, match="is the int 42; expected a renderer class"):
+        LAYER_RENDERERS.register("num", 42)
 
 
 def test_a_broken_plugin_names_itself(tmp_path):
@@ -563,12 +658,12 @@ def test_a_missing_extra_before_the_command_runs_is_the_pip_hint(tmp_path):
 def test_a_registry_gives_a_builtin_its_name_back_and_refuses_reserved_names(capsys):
     registry: Registry = Registry("gadget", "frictex.test-gadgets-none", reserved=("any",))
     registry._add("late", abs, "frictex-test-x (m:abs)")  # a plugin, scanned first
-    registry.register("late", len)  # then frictex's own: its name
+    register_as_frictex(registry, "late", len)  # then frictex's own: its name
     assert registry.get("late") is len and registry.origin("late") == "frictex"
     assert "gadget 'late' from frictex-test-x (m:abs) is refused" in capsys.readouterr().err
     with pytest.raises(PluginError, match="the name is reserved"):
         registry._add("any", abs, "frictex-test-x (m:abs)")
-    registry.register("any", abs)  # frictex's own may
+    register_as_frictex(registry, "any", abs)  # frictex's own may
 
 
 def commanded(folder: Path) -> list[float]:
