@@ -276,10 +276,19 @@ def test_faults_on_the_wire_are_counted_and_never_played(device):
     assert status["resyncs"] > 0  # damage on the way back was caught by the host too
 
 
+class SlowTerminal(io.StringIO):
+    """A stderr that takes 100 ms to show each line, as a slow terminal or a loaded
+    machine's link thread may."""
+
+    def write(self, text):
+        time.sleep(0.1)
+        return super().write(text)
+
+
 def test_unplugging_drops_and_counts_then_reconnects(device):
     core, played, path = device
     plug = Plug(lambda: open_port(path))
-    err = io.StringIO()
+    err = SlowTerminal()  # the state says disconnected only once the warning is out
     sink = CommandSink(plug, 1, RATE, paced=True, stderr=err, stall_s=0.2)
     for b in range(0, 1000, 50):
         sink.send(b, np.full((50, 1), 2.0), None)

@@ -216,12 +216,13 @@ class HostSession:
             self._count_handshake_close()
             return
         self.counts["disconnects"] += 1
+        # said first: whoever sees the link disconnected can read why
+        self._warn(f"link lost ({self.last_error}); output continues without it, reconnecting")
         with self.cond:  # the session is settled by the next handshake, or by close
             self.connected = False
             if not self.paced or closing:  # live blocks go stale; paced go out on reconnecting
                 self._drop_queued("disconnected")
             self.cond.notify_all()
-        self._warn(f"link lost ({self.last_error}); output continues without it, reconnecting")
 
     def _count_handshake_close(self) -> None:
         """The link closed during the first handshake: counted, and the caller's wait
