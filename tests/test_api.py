@@ -114,6 +114,9 @@ def test_pandas_opens_the_tables():
     (lambda: frictex.read_trace("no-such-trace"), "no-such-trace"),
     (lambda: frictex.build_pipeline(frictex.load_scene(SCENE)).process(
         frictex.synth_trace("swipe").slice(0, 0)), "no samples"),
+    (lambda: frictex.replay(SCENE, TRACE, strict="no"), r"^strict='no': expected True or False$"),
+    (lambda: frictex.replay(SCENE, TRACE, progress=2), r"^progress=2: expected True or False$"),
+    (lambda: frictex.read_trace(TRACE, strict="yes"), r"^strict='yes': expected True or False"),
 ])
 def test_bad_input_is_an_input_error(tmp_path, monkeypatch, call, message):
     monkeypatch.chdir(tmp_path)

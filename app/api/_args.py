@@ -10,6 +10,8 @@ import numbers
 import os
 from collections.abc import Iterable
 
+import numpy as np
+
 from frictex.device.errors import InputError
 
 
@@ -46,6 +48,14 @@ def choice(name: str, value: object, choices: Iterable[str], *, none: bool = Fal
         return value
     raise InputError(f"{name}={_shown(value)}: expected one of {', '.join(choices)}"
                      f"{' or None' if none else ''}")
+
+
+def flag(name: str, value: object) -> bool:
+    """``value`` if it is True or False (a numpy bool too): ``strict="no"`` is an
+    InputError, not a true string."""
+    if not isinstance(value, bool | np.bool_):
+        raise InputError(f"{name}={_shown(value)}: expected True or False")
+    return bool(value)
 
 
 def path_like(name: str, value: object, what: str) -> None:

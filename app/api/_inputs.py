@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from frictex._args import path_like, real, whole
+from frictex._args import flag, path_like, real, whole
 from frictex.device.errors import InputError
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP, Trace, TraceError
 from frictex.rendering.input.trace_file import make_trace as checked_trace
@@ -229,7 +229,7 @@ def read_trace(path: str | Path, *, strict: bool = False) -> Trace:
         found = resolve_trace(path)
     except InputError as exc:  # the library's lookup says TextureError, for scenes too
         raise TraceError(str(exc)) from None
-    return read(found, strict=strict)
+    return read(found, strict=flag("strict", strict))
 
 
 def make_trace(t_s: npt.ArrayLike, finger: npt.ArrayLike, x_mm: npt.ArrayLike,

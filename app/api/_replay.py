@@ -9,7 +9,7 @@ from pathlib import Path
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from frictex._args import path_like, real
+from frictex._args import flag, path_like, real
 from frictex._inputs import checked, scene_of
 from frictex._pipeline import run_settings
 from frictex.app.engine.clocks import Clock
@@ -214,8 +214,9 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
         raise InputError(f"format {format!r}: expected one of {', '.join(FORMATS)}")
     options = ReplayOptions(rate_hz=rate_hz, fmt=fmt, block_size=block_size,
                             render_override=renderer, device=device, faults=faults,
-                            control=control, strict=strict, max_gap_s=max_gap_s,
-                            progress=progress, sinks=_sinks(sinks), clock=_clock(clock))
+                            control=control, strict=flag("strict", strict),
+                            max_gap_s=max_gap_s, progress=flag("progress", progress),
+                            sinks=_sinks(sinks), clock=_clock(clock))
     result = replay_with(scene, trace, out, options)
     doc = json.loads(json.dumps(finite_json(result.summary), allow_nan=False))
     done = Replay(Summary.from_dict(doc), out, result.tables, result.summary_id)
