@@ -94,6 +94,18 @@ def run_demo(scene_file, rec, hand, on_frame=None) -> None:
         raise failures[0]
 
 
+def edit_duty(detail: str) -> float:
+    """The duty an edit of events.csv set ("undo": back to the file's 0.5)."""
+    m = re.search(r"duty = ([0-9.]+)$", detail)
+    return float(m.group(1)) if m else 0.5
+
+
+def grating_mu(duty: float) -> float:
+    """The target friction under the finger, at phase 0.25 of the grating's period: low
+    (0.6) where the phase is below the duty."""
+    return 0.6 if 0.25 < duty else 1.0
+
+
 def wait_for_a_frame(window) -> None:
     """Wait for a frame drawn after what the caller waited for: the demo draws at its
     frame rate, so edits made faster than that share a frame."""
@@ -129,6 +141,7 @@ def test_a_slider_drag_changes_the_next_block_and_frame(tmp_path, monkeypatch):
     scene_file.write_text(text)
     rec = tmp_path / "rec"
     frames = Frames()
+    steps = []  # per drag and undo: (its final duty, the output switches made by its end)
 
     def hand(window, loop, haptic):
         """A finger held on the scene (a touch screen's, beside the mouse), L, a drag on
@@ -152,7 +165,18 @@ def test_a_slider_drag_changes_the_next_block_and_frame(tmp_path, monkeypatch):
                 window.move(tx + f * tw, ty + th / 2)
             window.release()
             wait_for("the edit", lambda: loop.scene.layers[0].duty == 0.201)
+            wait_for_the_haptic_side(0.201)
             wait_for_a_frame(window)
+
+        def wait_for_the_haptic_side(duty):
+            """Wait for the block that took ``duty`` on to have noted its switch (in
+            ``stats.applied``), then note how many switches the steps so far made: the
+            haptic side takes only the latest of the edits queued at a block, so a step's
+            edits may share a switch, and without this wait the next step's could too."""
+            wait_for("the haptic side's", lambda: haptic.pipeline.scene.layers[0].duty == duty)
+            n = haptic.stats.blocks
+            wait_for("its block done", lambda: haptic.stats.blocks > n)
+            steps.append((duty, sum(e[1] == "output-switch" for e in list(haptic.stats.applied))))
         holder = threading.Thread(target=hold)
         holder.start()
         try:
@@ -163,6 +187,7 @@ def test_a_slider_drag_changes_the_next_block_and_frame(tmp_path, monkeypatch):
             window.key("ctrl+z")
             wait_for("the undo", lambda: loop.scene.layers[0].duty == 0.5)
             wait_for("the slider back", lambda: row_of(loop, "duty").fraction == 0.5)
+            wait_for_the_haptic_side(0.5)
             wait_for_a_frame(window)
             drag_duty()
             window.key("ctrl+s")
@@ -184,26 +209,30 @@ def test_a_slider_drag_changes_the_next_block_and_frame(tmp_path, monkeypatch):
         "# the black line is the first half of each period\n")
     assert load_scene(scene_file).layers[0].duty == 0.201
 
-    # the output: at each edit's switch the finger's target becomes the edited scene's
+    # the output: at each step's switches the finger's target becomes that of one of the
+    # step's edits, at its last switch that of the step's final duty
     events = read_csv(rec / "events.csv")
-    edits = [e for e in events if e["event"] in ("edit", "output-switch")]
-    duties = [0.5]
-    for e in edits:
-        if e["event"] == "edit":
-            m = re.search(r"duty = ([0-9.]+)$", e["detail"])
-            duties.append(float(m.group(1)) if m else 0.5)  # "undo": back to 0.5
-    switches = [float(e["t_s"]) for e in edits if e["event"] == "output-switch"]
-    assert len(switches) == len(duties) - 1 >= 3 and duties[-1] == 0.201 and 0.5 in duties[1:]
+    switches = [float(e["t_s"]) for e in events if e["event"] == "output-switch"]
+    edits = [e["detail"] for e in events if e["event"] == "edit"]
+    undo = edits.index("undo")
+    steps_edits = [edits[:undo], edits[undo:undo + 1], edits[undo + 1:]]
+    assert [duty for duty, _ in steps] == [0.201, 0.5, 0.201] and all(steps_edits)
+    assert len(switches) == steps[-1][1] and edits[-1].endswith("duty = 0.201")
     rows = [r for r in read_csv(rec / "friction.csv") if r["finger"] == str(FINGER)]
     t = np.array([float(r["t_s"]) for r in rows])
     mu = np.array([float(r["mu_target"]) for r in rows])
     np.testing.assert_allclose(np.array([float(r["x_mm"]) for r in rows]), X_MM, atol=1e-4)
-    for k, t_switch in enumerate(switches):
-        before, after = np.flatnonzero(t < t_switch)[-1], np.flatnonzero(t >= t_switch)[0]
-        # the grating: low (0.6) where the phase 0.25 of the finger is below the duty
-        assert mu[before] == (0.6 if 0.25 < duties[k] else 1.0)
-        assert mu[after] == (0.6 if 0.25 < duties[k + 1] else 1.0)
-        assert t[after] - t_switch < 50 / 10_000.0 + 1e-9  # the switch's own block
+    mu_now, first = grating_mu(0.5), 0
+    for (duty, end), step_edits in zip(steps, steps_edits):
+        assert end > first  # the step switched the output at least once
+        step_mu = {grating_mu(edit_duty(e)) for e in step_edits}
+        for t_switch in switches[first:end]:
+            before, after = np.flatnonzero(t < t_switch)[-1], np.flatnonzero(t >= t_switch)[0]
+            assert mu[before] == mu_now and mu[after] in step_mu
+            assert t[after] - t_switch < 50 / 10_000.0 + 1e-9  # the switch's own block
+            mu_now = mu[after]
+        assert mu_now == grating_mu(duty)
+        first = end
     assert mu[-1] == 1.0 and (mu == 0.6).any()
 
     # the picture: the frame after each change of scene differs from the one before in
