@@ -138,7 +138,12 @@ def test_audio_device_by_name_through_the_registry(jack_device):
     assert status["state"] == "closed" and status["commanded_samples"] == 5000
     assert audio["commanded_frames"] == audio["played_frames"] + sum(
         audio["unplayed_frames"].values())
-    assert audio["played_frames"] > 0.9 * 0.5 * FS
+    # all of it played, but for frames that a producer descheduled past the ring's 100 ms
+    # (a loaded machine) handed over after their time: dropped, counted late, and only
+    # after the stream ran dry; with no underrun, that is played > 0.9 * 0.5 * FS
+    late = audio["unplayed_frames"]["late"]
+    assert audio["played_frames"] + late > 0.9 * 0.5 * FS
+    assert late <= audio["underrun_frames"]
 
 
 def test_an_unknown_audio_device_lists_the_output_devices_there_are(jack_device):
