@@ -2,12 +2,21 @@
 
 A point is (w, F_n, mu'): plate amplitude (um), normal force (N), measured relative
 friction. Seed 003, eq 2: ``mu'(w) = (1 - k F_n) exp(-b w) + k F_n``; the fit finds
-(b, k) by bounded least squares. If its residual RMS stays above ``MODEL_TOLERANCE``
-the model does not describe this plate and finger, and :func:`fit_points` also builds a
-calibration table (``device.profile.Calibration``) from the points: one column per
-measured amplitude (the protocol's levels, however few points each has), or bins of
-neighbouring amplitudes where there are more than ``TABLE_BINS`` of them; one row at the
-points' median force, made strictly decreasing.
+(b, k) by bounded least squares, with standard errors from its Jacobian. The model is
+said not to fit this plate and finger only when its residual RMS is above
+``MODEL_TOLERANCE`` *and* the residuals are not noise: their signs, in order of amplitude,
+form fewer runs than independent noise would (Wald-Wolfowitz runs test, p below
+``LACK_OF_FIT_P``). Noise alone (sd 0.03 on exact eq-2 points) raises the RMS above the
+tolerance in most sweeps, and a table then fits the noise worse than the model does. Where
+the model does not fit, :func:`fit_points` also builds a calibration table
+(``device.profile.Calibration``) from the points: one column per measured amplitude (the
+protocol's levels, however few points each has), or bins of neighbouring amplitudes where
+there are more than ``TABLE_BINS`` of them; one row at the points' median force, the
+decreasing (isotonic) regression of the columns' means, so no single noisy point pulls
+the columns after it down.
+
+A fit that stops on a bound of b or k (:attr:`Fit.bound_notes`) does not determine that
+constant: points of b = 30 /um give b = 20 /um, the upper bound, with a residual of 0.005.
 
 :func:`device_toml` writes the result as the ``[device]`` section of a texture file
 (the grammar of ``textures.loader``).
@@ -15,18 +24,22 @@ points' median force, made strictly decreasing.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.optimize import least_squares
+from scipy.optimize import isotonic_regression, least_squares
+from scipy.special import comb
 
 from frictex.device.errors import InputError
 from frictex.device.friction import forward_mu
 from frictex.device.calibration_identity import toml_lines
 from frictex.device.profile import DEFAULT_PROFILE, Calibration, FittedOn, FrictionParams
 
-#: residual RMS (mu') above which the closed-form model is said not to fit
+#: residual RMS (mu') at or below which the model fits, whatever its residuals' pattern
 MODEL_TOLERANCE = 0.02
+#: runs-test p-value below which residuals above the tolerance are taken for a misfit
+LACK_OF_FIT_P = 0.05
 #: bounds of the fit: b (1/um), k (1/N)
 B_BOUNDS = (0.05, 20.0)
 K_BOUNDS = (0.0, 5.0)
@@ -48,17 +61,37 @@ def model_jacobian(w_um, normal_n, b_per_um: float, k_per_n: float) -> np.ndarra
 
 @dataclass(frozen=True)
 class Fit:
-    """A fit's outcome: the constants, the residual RMS (mu') and the point count;
-    ``calibration`` is a table when the model does not fit (else None)."""
+    """A fit's outcome: the constants, their standard errors (``b_se`` 1/um, ``k_se``
+    1/N), the residual RMS (mu'), the point count, the runs test's p-value of the
+    residuals (:func:`few_runs_p`) and the bounds the fit stopped on (``at_bound``: e.g.
+    ``("b", "upper")``); ``calibration`` is a table when the model does not fit (else
+    None)."""
 
     params: FrictionParams
     residual_rms: float
     n_points: int
     calibration: Calibration | None = None
+    b_se: float = 0.0
+    k_se: float = 0.0
+    runs_p: float = 1.0
+    at_bound: tuple[tuple[str, str], ...] = ()
 
     @property
     def fits(self) -> bool:
-        return self.residual_rms <= MODEL_TOLERANCE
+        return self.residual_rms <= MODEL_TOLERANCE or self.runs_p >= LACK_OF_FIT_P
+
+    @property
+    def bound_notes(self) -> list[str]:
+        """One line per constant the fit stopped on a bound of: what the points say of it."""
+        limits = {"b": (B_BOUNDS, "/um"), "k": (K_BOUNDS, "/N")}
+        notes = []
+        for name, side in self.at_bound:
+            (low, high), unit = limits[name]
+            value = high if side == "upper" else low
+            notes.append(f"{name} stopped on its {side} bound {value:g} {unit}: the best fit "
+                         f"lies beyond it, so the points do not determine {name} (its value "
+                         f"and standard error are not estimates)")
+        return notes
 
 
 def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> Fit:
@@ -84,12 +117,25 @@ def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> 
     def jac(theta):
         return model_jacobian(w, f, theta[0], theta[1])
 
-    x0 = np.clip([start.b_per_um, start.asymptote_per_n],
-                 [B_BOUNDS[0], K_BOUNDS[0]], [B_BOUNDS[1], K_BOUNDS[1]])
-    sol = least_squares(residual, x0, jac=jac, bounds=([B_BOUNDS[0], K_BOUNDS[0]],
-                                                       [B_BOUNDS[1], K_BOUNDS[1]]))
+    lower, upper = [B_BOUNDS[0], K_BOUNDS[0]], [B_BOUNDS[1], K_BOUNDS[1]]
+    x0 = np.clip([start.b_per_um, start.asymptote_per_n], lower, upper)
+    sol = least_squares(residual, x0, jac=jac, bounds=(lower, upper))
     params = FrictionParams(b_per_um=float(sol.x[0]), asymptote_per_n=float(sol.x[1]))
     rms = float(np.sqrt(np.mean(sol.fun ** 2)))
+    _check_fall(w, f, params)
+    b_se, k_se = standard_errors(sol.jac, sol.fun)
+    at_bound = tuple((name, "lower" if side < 0 else "upper")
+                     for name, side in zip("bk", sol.active_mask) if side != 0)
+    fit = Fit(params=params, residual_rms=rms, n_points=int(w.size), b_se=b_se, k_se=k_se,
+              runs_p=few_runs_p(_residual_signs(w, sol.fun)), at_bound=at_bound)
+    if fit.fits:
+        return fit
+    return replace(fit, calibration=_table(w, f, m))
+
+
+def _check_fall(w: np.ndarray, f: np.ndarray, params: FrictionParams) -> None:
+    """Raise InputError when the fitted mu' falls by less than ``MIN_FALL`` from 0 um to
+    the largest amplitude, at the points' median force."""
     force = np.array([np.median(f)])
     fall = float((forward_mu(np.zeros(1), force, params)
                   - forward_mu(np.array([w.max()]), force, params))[0])
@@ -99,38 +145,87 @@ def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> 
                          f"fall with vibration, so no b fits better than another; is the "
                          f"plate vibrating and the finger pressing? (a fit needs a fall of "
                          f"{MIN_FALL:.2f} or more)")
-    table = None if rms <= MODEL_TOLERANCE else _table(w, f, m)
-    return Fit(params=params, residual_rms=rms, n_points=int(w.size), calibration=table)
+
+
+def standard_errors(jacobian: np.ndarray, residuals: np.ndarray) -> tuple[float, float]:
+    """Standard errors of (b, k) (1/um, 1/N): the square roots of the diagonal of
+    s^2 (J^T J)^-1, s^2 the residual variance over n - 2 degrees of freedom; inf where
+    J^T J is singular (a constant the points do not determine)."""
+    dof = max(residuals.size - 2, 1)
+    s2 = float(residuals @ residuals) / dof
+    try:
+        cov = s2 * np.linalg.inv(jacobian.T @ jacobian)
+    except np.linalg.LinAlgError:
+        return math.inf, math.inf
+    b_var, k_var = np.diag(cov)
+    return math.sqrt(max(b_var, 0.0)), math.sqrt(max(k_var, 0.0))
+
+
+def _residual_signs(w: np.ndarray, residuals: np.ndarray) -> np.ndarray:
+    """Signs (+1/-1) of the mean residual at each distinct amplitude, in order of
+    amplitude; amplitudes whose mean residual is 0 are left out."""
+    _, level_of = np.unique(w, return_inverse=True)
+    means = np.bincount(level_of, weights=residuals) / np.bincount(level_of)
+    signs = np.sign(means)
+    return signs[signs != 0]
+
+
+def few_runs_p(signs: np.ndarray) -> float:
+    """P(as few runs or fewer) of a sequence of signs whose order is random, given its
+    counts of + and - (the exact Wald-Wolfowitz distribution): small when the residuals
+    of a fit stay on one side of the curve for long stretches, as a misfit's do. With one
+    sign throughout, the chance of that many equal signs, 0.5^(n-1)."""
+    n_pos, n_neg = int(np.sum(signs > 0)), int(np.sum(signs < 0))
+    if n_pos == 0 or n_neg == 0:
+        return 1.0 if n_pos + n_neg < 2 else 0.5 ** (n_pos + n_neg - 1)
+    runs = 1 + int(np.count_nonzero(signs[1:] != signs[:-1]))
+    ways = 0.0
+    for r in range(2, runs + 1):
+        half = r // 2
+        if r % 2 == 0:
+            ways += 2 * comb(n_pos - 1, half - 1) * comb(n_neg - 1, half - 1)
+        else:
+            ways += (comb(n_pos - 1, half) * comb(n_neg - 1, half - 1)
+                     + comb(n_pos - 1, half - 1) * comb(n_neg - 1, half))
+    return float(ways / comb(n_pos + n_neg, n_pos))
 
 
 def _table(w: np.ndarray, f: np.ndarray, m: np.ndarray) -> Calibration:
-    """One-row table at the median force: mean mu' per amplitude column, strictly
-    decreasing; a column per distinct amplitude above 0 (um), or per run of neighbouring
-    amplitudes where there are more than ``TABLE_BINS`` of them."""
+    """One-row table at the median force: the decreasing (isotonic) regression of the mean
+    mu' per amplitude column, weighted by its point count, strictly decreasing; a column
+    per distinct amplitude above 0 (um), or per run of neighbouring amplitudes where there
+    are more than ``TABLE_BINS`` of them."""
     vibrating = w > 0
     levels, level_of = np.unique(w[vibrating], return_inverse=True)
-    centres, means = [0.0], [1.0]
+    centres, means, counts = [], [], []
     for run in np.array_split(np.arange(levels.size), min(TABLE_BINS, levels.size)):
         inside = np.isin(level_of, run)
         centres.append(float(w[vibrating][inside].mean()))
         means.append(float(m[vibrating][inside].mean()))
-    mu = np.minimum.accumulate(np.clip(means, 1e-3, 1.0))
+        counts.append(float(inside.sum()))
+    columns = isotonic_regression(means, weights=counts, increasing=False).x
+    mu = np.clip(np.concatenate([[1.0], columns]), 1e-3, 1.0)  # mu' at rest is 1 (eq 1)
     mu = mu - 1e-6 * np.arange(mu.size)  # strictly decreasing, as the table format asks
-    return Calibration(amplitudes_um=tuple(centres), forces_n=(float(np.median(f)),),
+    return Calibration(amplitudes_um=(0.0, *centres), forces_n=(float(np.median(f)),),
                        mu=(tuple(float(x) for x in mu),))
 
 
 def device_toml(fit: Fit, amplitude_limit_um: float, normal_force_n: float,
-                profile: str = DEFAULT_PROFILE, fitted: FittedOn | None = None) -> str:
+                profile: str = DEFAULT_PROFILE, fitted: FittedOn | None = None,
+                speed_mm_s: float | None = None) -> str:
     """The ``[device]`` section (text) a texture file can use for this calibration, with
-    what it was ``fitted`` on (``[device.fitted]``: ``device.calibration_identity``)."""
+    what it was ``fitted`` on (``[device.fitted]``: ``device.calibration_identity``) and
+    the finger's sliding speed during the sweep (mm/s; b falls as the speed rises)."""
     lines = ["[device]", f'profile = "{profile}"',
              f"amplitude_limit_um = {amplitude_limit_um:.6g}",
              f"normal_force_n = {normal_force_n:.6g}",
              f"[device.friction]        # seed 003 eq 2, fitted: residual RMS {fit.residual_rms:.4f} "
              f"over {fit.n_points} points",
-             f"b_per_um = {fit.params.b_per_um:.6g}",
-             f"asymptote_per_n = {fit.params.asymptote_per_n:.6g}"]
+             f"b_per_um = {fit.params.b_per_um:.6g}        # standard error {fit.b_se:.2g}"
+             + ("" if speed_mm_s is None else f"; applies at {speed_mm_s:g} mm/s sliding"),
+             f"asymptote_per_n = {fit.params.asymptote_per_n:.6g}        # standard error "
+             f"{fit.k_se:.2g}"]
+    lines += [f"# {note}" for note in fit.bound_notes]
     if fitted is not None:
         lines += toml_lines(fitted)
     if fit.calibration is not None:

@@ -3,7 +3,8 @@
 The user slides a finger while the plate steps through amplitudes
 (``device.calibration_run``, streamed over the device's link and read back from its
 force reports); frictex fits (b, k) of seed 003's eq 2 (``device.calibration_fit``),
-prints the fit and its residual, writes the ``[device]`` section a texture file can use
+prints the fit with its standard errors, its residual and the sliding speed b applies at
+(warning when b or k stopped on a bound of the fit), writes the ``[device]`` section a texture file can use
 and plots the measured points against the fitted curve.
 
 ``--device`` takes what ``replay --device`` takes: ``sim`` starts ``frictex sim-device``
@@ -95,16 +96,22 @@ def run(args: argparse.Namespace) -> int:
     finally:
         link.close()
     fit = fit_points(w, normal, mu)
-    print(f"{_points_from_steps(fit.n_points, sweep)}; seed 003 eq 2 fit: "
-          f"b = {fit.params.b_per_um:.4f} /um, k = {fit.params.asymptote_per_n:.4f} /N, "
+    print(f"{_points_from_steps(fit.n_points, sweep)}; seed 003 eq 2 fit at "
+          f"{sweep.speed_mm_s:g} mm/s sliding (b falls as the finger speeds up): "
+          f"b = {fit.params.b_per_um:.4f} ± {fit.b_se:.2g} /um, "
+          f"k = {fit.params.asymptote_per_n:.4f} ± {fit.k_se:.2g} /N (standard errors), "
           f"residual RMS {fit.residual_rms:.5f} (mu')"
-          + ("" if fit.calibration is None else "; the model does not fit: its measured "
-             f"table ({len(fit.calibration.amplitudes_um)} amplitudes) written"))
-    text = device_toml(fit, limit_um, sweep.force_n, fitted=fitted).encode("utf-8")
+          + ("" if fit.calibration is None else "; the model does not fit (its residuals "
+             f"run in long stretches on one side of the curve, runs test p {fit.runs_p:.3f}): "
+             f"its measured table ({len(fit.calibration.amplitudes_um)} amplitudes) written"))
+    for note in fit.bound_notes:
+        print(f"frictex: warning: {note}", file=sys.stderr)
+    text = device_toml(fit, limit_um, sweep.force_n, fitted=fitted,
+                       speed_mm_s=sweep.speed_mm_s).encode("utf-8")
     write_file(args.out, lambda to: to.write_bytes(text), len(text))
     print(f"wrote {args.out} (the [device] section a texture file can use; --out)")
     if args.plot is not None:
-        _plot(args.plot, w, normal, mu, fit)
+        _plot(args.plot, w, normal, mu, fit, sweep)
         print(f"wrote {args.plot} (the measured points against the fitted curve; --plot)")
     return 0
 
@@ -154,8 +161,9 @@ def _sweeps(link, sweep: Sweep):
             first = cut.next_index
 
 
-def _plot(path: Path, w, normal, mu, fit) -> None:
-    """The measured points against the fitted curve, a PNG written whole
+def _plot(path: Path, w, normal, mu, fit, sweep: Sweep) -> None:
+    """The measured points against the fitted curve, titled with the fit (b, k, residual
+    RMS) and the sweep's force and speed; a PNG written whole
     (``app.engine.outfile.write_file``)."""
     import matplotlib
     matplotlib.use("Agg")
@@ -167,6 +175,9 @@ def _plot(path: Path, w, normal, mu, fit) -> None:
     ax.plot(grid, forward_mu(grid, float(np.mean(normal)), fit.params), "-", label="seed 003 eq 2 fit")
     ax.set_xlabel("amplitude (um)")
     ax.set_ylabel("relative friction mu'")
+    ax.set_title(f"b {fit.params.b_per_um:.3f}±{fit.b_se:.2g} /um, k {fit.params.asymptote_per_n:.3f}"
+                 f"±{fit.k_se:.2g} /N, RMS {fit.residual_rms:.4f}\n"
+                 f"at {sweep.force_n:g} N, {sweep.speed_mm_s:g} mm/s sliding", fontsize=9)
     ax.legend()
     fig.tight_layout()
     try:
