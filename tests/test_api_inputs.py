@@ -137,7 +137,10 @@ def test_fields_of_unequal_length_are_refused(monkeypatch, scene, columns, data)
 
 
 @pytest.mark.parametrize("change, message", [
-    ({"t_s": 0.5}, r"^trace: t_s has shape \(\): expected one number per sample"),
+    ({"t_s": 0.5}, "^trace: t_s: expected an array or list of one number per sample, got "
+                   "float$"),
+    ({"x_mm": (x for x in (1.0, 2.0))}, "^trace: x_mm: expected an array or list of one number "
+                                        "per sample, got generator$"),
     ({"x_mm": [[1.0, 2.0]]}, r"^trace: x_mm has shape \(1, 2\)"),
     ({"y_mm": [[1.0], [2.0, 3.0]]}, "^trace: y_mm is not an array of numbers"),
     ({"force_n": ["0.5", "1"]}, "^trace: force_n holds <U3 values: expected numbers"),
@@ -151,6 +154,27 @@ def test_what_is_not_a_column_of_numbers_is_refused(change, message):
     columns = {"t_s": [0.0, 0.02], "finger": [0, 0], "x_mm": [1.0, 2.0], "y_mm": [3.0, 4.0]}
     with pytest.raises(frictex.TraceError, match=message):
         frictex.make_trace(**{**columns, **change})
+
+
+@pytest.mark.parametrize("kind, kwargs, message", [
+    ("swipe", {"duration_s": 100_000.0}, r"^a swipe with x0_mm=14, y0_mm=32.4, speed_mm_s=40, "
+     r"duration_s=100000, angle_deg=0 reaches x_mm = 4.00001e\+06; a trace's positions stay "
+     r"within \+-100000 mm$"),
+    ("swipe", {"angle_deg": -90.0, "speed_mm_s": 1e4, "duration_s": 11.0}, "reaches y_mm = -1"),
+    ("back-and-forth", {"x0_mm": 99_990.0}, "length_mm=80, angle_deg=0 reaches x_mm = 100070"),
+    ("circle", {"y0_mm": -99_990.0}, "radius_mm=20 reaches y_mm = -100010"),
+])
+def test_a_path_beyond_a_trace_s_positions_names_the_arguments(kind, kwargs, message):
+    """A swipe of 100000 s failed as 'trace: sample 2500: x_mm is 100014.0 ...', naming none."""
+    with pytest.raises(frictex.InputError, match=message):
+        frictex.synth_trace(kind, **kwargs)
+
+
+def test_a_path_within_a_trace_s_positions_is_made():
+    """The far end counts, not the start: a back-and-forth shorter than its duration
+    reaches only as far as it goes."""
+    near_edge = frictex.synth_trace("back-and-forth", x0_mm=99_950.0, duration_s=1.0)
+    assert near_edge.x_mm.max() == pytest.approx(99_990.0)
 
 
 def test_a_trace_that_is_not_there_is_a_trace_error(tmp_path):

@@ -302,6 +302,9 @@ def _column(name: str, values: npt.ArrayLike) -> np.ndarray:
     except (TypeError, ValueError):  # a ragged nesting
         raise TraceError(f"{_WHERE}: {name} is not an array of numbers: expected one "
                          "number per sample, shape (n,)") from None
+    if array.ndim == 0:  # numpy makes a generator, a set or a number a 0-d array
+        raise TraceError(f"{_WHERE}: {name}: expected an array or list of one number per "
+                         f"sample, got {type(values).__name__}")
     if array.ndim != 1:
         raise TraceError(f"{_WHERE}: {name} has shape {array.shape}: expected one number per "
                          "sample, shape (n,)")
@@ -369,7 +372,8 @@ def synth_trace(kind: str, *, rate_hz: float = 50.0, duration_s: float = 2.0,
     InputError
         An unknown kind, a negative seed, or a value that is not a number or is beyond
         what ``frictex trace synth`` accepts for its option (``LIMITS`` and
-        ``MAX_SAMPLES`` in ``app/commands/trace.py``); the message names the argument.
+        ``MAX_SAMPLES`` in ``app/commands/trace.py``), or a path that would leave the
+        +-1e5 mm a trace's positions stay within; the message names the arguments.
     """
     if kind not in SYNTH_KINDS:
         raise InputError(f"unknown trace kind {kind!r}; expected one of {', '.join(SYNTH_KINDS)}")

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from frictex.device.errors import InputError
-from frictex.rendering.input.trace_file import DOWN, MOVE, UP, Trace, make_trace
+from frictex.rendering.input.trace_file import DOWN, MAX_COORD_MM, MOVE, UP, Trace, make_trace
 
 MOTIONS = ("swipe", "back-and-forth", "circle", "human", "human-varied")
 #: segment kinds of ``human-varied`` and their draw probabilities
@@ -130,14 +130,50 @@ def make_motion(kind: str, *, speed_mm_s: float = 40.0, duration_s: float = 2.0,
     y0_mm = START_MM[1] if y0_mm is None else y0_mm
     a = np.radians(angle_deg)
     ux, uy = float(np.cos(a)), float(np.sin(a))
+    start = dict(x0_mm=x0_mm, y0_mm=y0_mm)
     if kind == "swipe":
-        return Motion(kind, duration_s, dict(x0=x0_mm, y0=y0_mm, vx=speed_mm_s * ux,
-                                             vy=speed_mm_s * uy))
+        return _within_reach(Motion(kind, duration_s, dict(x0=x0_mm, y0=y0_mm,
+                                                           vx=speed_mm_s * ux,
+                                                           vy=speed_mm_s * uy)),
+                             dict(start, speed_mm_s=speed_mm_s, duration_s=duration_s,
+                                  angle_deg=angle_deg))
     if kind == "back-and-forth":
-        return Motion(kind, duration_s, dict(x0=x0_mm, y0=y0_mm, ux=ux, uy=uy,
-                                             length=length_mm, speed=speed_mm_s))
-    return Motion(kind, duration_s, dict(cx=x0_mm + radius_mm, cy=y0_mm, radius=radius_mm,
-                                         speed=speed_mm_s, a0=np.pi))
+        return _within_reach(Motion(kind, duration_s, dict(x0=x0_mm, y0=y0_mm, ux=ux, uy=uy,
+                                                           length=length_mm,
+                                                           speed=speed_mm_s)),
+                             dict(start, length_mm=length_mm, angle_deg=angle_deg))
+    return _within_reach(Motion(kind, duration_s, dict(cx=x0_mm + radius_mm, cy=y0_mm,
+                                                       radius=radius_mm, speed=speed_mm_s,
+                                                       a0=np.pi)),
+                         dict(start, radius_mm=radius_mm))
+
+
+def _within_reach(motion: Motion, arguments: dict[str, float]) -> Motion:
+    """``motion`` (a swipe, back-and-forth or circle) if its path stays within
+    +-MAX_COORD_MM (mm) on both axes, as a trace's positions must; else an InputError
+    naming ``arguments``, those of :func:`make_motion` that set how far it reaches."""
+    extremes = np.array(_extremes(motion))  # (points, 2) mm
+    point, axis = np.unravel_index(np.argmax(np.abs(extremes)), extremes.shape)
+    if abs(extremes[point, axis]) <= MAX_COORD_MM:
+        return motion
+    given = ", ".join(f"{name}={value:g}" for name, value in arguments.items())
+    raise InputError(f"a {motion.kind} with {given} reaches {'xy'[axis]}_mm = "
+                     f"{extremes[point, axis]:g}; a trace's positions stay within "
+                     f"+-{MAX_COORD_MM:g} mm")
+
+
+def _extremes(motion: Motion) -> list[tuple[float, float]]:
+    """Points (mm) whose box holds the path of ``motion``: a swipe's ends, a
+    back-and-forth's start and far end (reached at length / speed, or not at all), the
+    box of a circle's whole circle."""
+    p = motion.params
+    if motion.kind == "circle":
+        return [(p["cx"] - p["radius"], p["cy"] - p["radius"]),
+                (p["cx"] + p["radius"], p["cy"] + p["radius"])]
+    farthest_s = (motion.duration_s if motion.kind == "swipe"
+                  else min(motion.duration_s, p["length"] / p["speed"]))
+    return [tuple(map(float, motion.position(0.0))),
+            tuple(map(float, motion.position(farthest_s)))]
 
 
 def _human_start(x0_mm: float | None, y0_mm: float | None, area_mm) -> tuple[float, float]:
