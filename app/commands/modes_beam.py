@@ -16,9 +16,10 @@ import json
 import numpy as np
 
 from frictex.app.commands.modes_output import (add_output_arguments, check_below, check_orders,
-                                               check_plot, check_wavelength, print_modes,
-                                               refuse_without, save_figure)
-from frictex.app.commands.argtypes import bounded, positive_float, share
+                                               check_plot, check_wavelength, density_kg_m3,
+                                               dimension_mm, print_modes, refuse_without,
+                                               save_figure, youngs_gpa)
+from frictex.app.commands.argtypes import bounded, share
 from frictex.device.actuation.travelling import TwoModeWave, beam_wave
 from frictex.device.structures.beam import (THEORIES, VALID_WAVELENGTH_IN_THICKNESSES,
                                             FreeFreeBeam, ModesError)
@@ -33,13 +34,13 @@ _TRAVELLING_DEFAULTS = {"points": 25, "threshold": [0.68, 0.9]}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--length-mm", type=positive_float, default=350.0, help="length L (default 350)")
-    parser.add_argument("--width-mm", type=positive_float, default=6.0, help="width b (default 6)")
-    parser.add_argument("--thickness-mm", type=positive_float, default=6.0,
+    parser.add_argument("--length-mm", type=dimension_mm, default=350.0, help="length L (default 350)")
+    parser.add_argument("--width-mm", type=dimension_mm, default=6.0, help="width b (default 6)")
+    parser.add_argument("--thickness-mm", type=dimension_mm, default=6.0,
                         help="thickness h, bending across it (default 6)")
-    parser.add_argument("--youngs-gpa", type=positive_float, default=57.0,
+    parser.add_argument("--youngs-gpa", type=youngs_gpa, default=57.0,
                         help="Young's modulus E in GPa (default 57)")
-    parser.add_argument("--density", type=positive_float, default=2561.0,
+    parser.add_argument("--density", type=density_kg_m3, default=2561.0,
                         help="density in kg/m^3 (default 2561)")
     parser.add_argument("--poisson", type=float, default=0.33,
                         help="Poisson's ratio, used by Timoshenko (default 0.33)")

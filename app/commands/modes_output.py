@@ -4,13 +4,25 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 
+from frictex.app.commands.argtypes import bounded
 from frictex.app.engine.outfile import check_writable, write_file
 from frictex.device.errors import require_extra
 from frictex.device.structures.beam import MIN_WAVELENGTH_IN_THICKNESSES, ModesError
 from frictex.textures.keys import MAX_MODE_ORDER
+
+#: physically generous ranges of a structure's dimensions (mm: 1 um to 100 m), Young's
+#: modulus (GPa: 1 MPa, a soft rubber, to 2000 GPa, above diamond's 1220) and density
+#: (kg/m^3: 1, about air's, to 30000, above osmium's 22590)
+DIMENSION_MM = (1e-3, 1e5)
+YOUNGS_GPA = (1e-3, 2000.0)
+DENSITY_KG_M3 = (1.0, 30_000.0)
+dimension_mm = bounded(float, *DIMENSION_MM, "mm")
+youngs_gpa = bounded(float, *YOUNGS_GPA, "GPa")
+density_kg_m3 = bounded(float, *DENSITY_KG_M3, "kg/m^3")
 
 #: a plot's PNG at most (bytes): 8 x 9 inches at 110 dpi, 4 bytes a pixel
 PLOT_BYTES = 880 * 990 * 4
@@ -93,8 +105,27 @@ def warn(message: str) -> None:
     print(f"frictex: warning: {message}", file=sys.stderr)
 
 
+def check_finite(modes: list[dict]) -> None:
+    """Refuse, in one line, modes whose frequency (Hz) or wavelength (mm) is not a finite
+    number above 0 (what a structure far outside the ranges above can give): printed,
+    they would be Infinity (invalid JSON) or 0.0 Hz."""
+    for m in modes:
+        for key in ("frequency_hz", "wavelength_mm") & m.keys():
+            if not (math.isfinite(m[key]) and m[key] > 0):
+                raise ModesError(f"order {m['order']}: {key} came out {m[key]:g}, not a finite "
+                                 "number above 0; check the dimensions and material")
+
+
+def _hz(frequency_hz: float) -> str:
+    """A frequency (Hz) in the table's 12 columns: to 0.1 Hz, or in 3 significant digits
+    where that would show 0.0."""
+    return f"{frequency_hz:12.1f}" if frequency_hz >= 0.05 else f"{frequency_hz:12.3g}"
+
+
 def print_modes(title: str, modes: list[dict], as_json: bool) -> None:
-    """Print ``modes`` (dicts with order, frequency_hz, wavelength_mm, nodes_mm) as JSON or a table."""
+    """Print ``modes`` (dicts with order, frequency_hz, wavelength_mm, nodes_mm) as JSON or a
+    table, after :func:`check_finite`."""
+    check_finite(modes)
     if as_json:
         print(json.dumps({"modes": modes}, indent=2))
         return
@@ -104,7 +135,7 @@ def print_modes(title: str, modes: list[dict], as_json: bool) -> None:
     for m in modes:
         nodes = " ".join(f"{x:.2f}" for x in m["nodes_mm"])
         print("".join(f"{str(m[k]):>6s} " for k in extra)
-              + f"{m['order']:5d}  {m['frequency_hz']:12.1f}  {m['wavelength_mm']:13.3f}  "
+              + f"{m['order']:5d}  {_hz(m['frequency_hz'])}  {m['wavelength_mm']:13.3f}  "
                 f"{len(m['nodes_mm']):5d}  {nodes}")
 
 

@@ -15,19 +15,19 @@ import argparse
 import numpy as np
 
 from frictex.app.commands.modes_output import (add_output_arguments, check_below, check_plot,
-                                               check_wavelength, print_modes, save_figure)
-from frictex.app.commands.argtypes import positive_float
+                                               check_wavelength, density_kg_m3, dimension_mm,
+                                               print_modes, save_figure, youngs_gpa)
 from frictex.device.structures.beam import VALID_WAVELENGTH_IN_THICKNESSES, ModesError
 from frictex.textures.keys import MAX_MODE_ORDER
 from frictex.device.structures.plate2d import AXES, Plate2D
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--width-mm", type=positive_float, default=140.0, help="side a along x (default 140)")
-    parser.add_argument("--height-mm", type=positive_float, default=140.0, help="side b along y (default 140)")
-    parser.add_argument("--thickness-mm", type=positive_float, default=4.0, help="thickness h (default 4)")
-    parser.add_argument("--youngs-gpa", type=positive_float, required=True, help="Young's modulus E in GPa")
-    parser.add_argument("--density", type=positive_float, required=True, help="density in kg/m^3")
+    parser.add_argument("--width-mm", type=dimension_mm, default=140.0, help="side a along x (default 140)")
+    parser.add_argument("--height-mm", type=dimension_mm, default=140.0, help="side b along y (default 140)")
+    parser.add_argument("--thickness-mm", type=dimension_mm, default=4.0, help="thickness h (default 4)")
+    parser.add_argument("--youngs-gpa", type=youngs_gpa, required=True, help="Young's modulus E in GPa")
+    parser.add_argument("--density", type=density_kg_m3, required=True, help="density in kg/m^3")
     parser.add_argument("--poisson", type=float, default=0.33, help="Poisson's ratio (default 0.33)")
     parser.add_argument("--order", type=int, default=8, metavar="K",
                         help=f"k of seed 001 eq 6, 1 to {MAX_MODE_ORDER} (default 8, the paper's "

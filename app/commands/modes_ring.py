@@ -19,9 +19,10 @@ import json
 import numpy as np
 
 from frictex.app.commands.argtypes import bounded, positive_float
-from frictex.app.commands.modes_output import (add_plot_argument, check_below, check_orders,
-                                               check_plot, check_wavelength, refuse_without,
-                                               save_figure, warn)
+from frictex.app.commands.modes_output import (add_plot_argument, check_below, check_finite,
+                                               check_orders, check_plot, check_wavelength,
+                                               density_kg_m3, dimension_mm, refuse_without,
+                                               save_figure, warn, youngs_gpa)
 from frictex.device.structures.beam import VALID_WAVELENGTH_IN_THICKNESSES, ModesError
 from frictex.device.actuation.travelling import phase_shift_response, ring_wave
 from frictex.device.profile import DrivingForceParams
@@ -43,16 +44,16 @@ FRICTION_BOUND_UM = _DRIVE.threshold_um + _DRIVE.mu0 / _DRIVE.slope_per_um
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--length-mm", type=positive_float, default=140.0,
+    parser.add_argument("--length-mm", type=dimension_mm, default=140.0,
                         help="length L of each straight part (default 140)")
-    parser.add_argument("--radius-mm", type=positive_float, default=50.0,
+    parser.add_argument("--radius-mm", type=dimension_mm, default=50.0,
                         help="radius R of the semicircles, to the neutral line (default 50)")
-    parser.add_argument("--thickness-mm", type=positive_float, default=2.75,
+    parser.add_argument("--thickness-mm", type=dimension_mm, default=2.75,
                         help="thickness h (default 2.75)")
-    parser.add_argument("--width-mm", type=positive_float, default=30.0, help="width w (default 30)")
-    parser.add_argument("--youngs-gpa", type=positive_float, default=69.0,
+    parser.add_argument("--width-mm", type=dimension_mm, default=30.0, help="width w (default 30)")
+    parser.add_argument("--youngs-gpa", type=youngs_gpa, default=69.0,
                         help="Young's modulus E in GPa (default 69)")
-    parser.add_argument("--density", type=positive_float, default=2680.0,
+    parser.add_argument("--density", type=density_kg_m3, default=2680.0,
                         help="density in kg/m^3 (default 2680)")
     parser.add_argument("--orders", type=int, nargs="+", default=[24], metavar="N",
                         help="mode orders, wavelengths around the ring, 2 to "
@@ -107,6 +108,7 @@ def run(args: argparse.Namespace) -> int:
         found = [ring.pair(n) for n in args.orders]
         modes = [m for pair in found for m in pair]
         pairs = [_pair_summary(ring, sym, asym) for sym, asym in found]
+    check_finite([{"order": m.order, "frequency_hz": m.frequency_hz} for m in modes])
     phase = _phase_shift(ring, args) if args.phase_shift else None
     if args.json:
         out = {"modes": [{"order": m.order, "kind": m.kind, "frequency_hz": m.frequency_hz}
