@@ -21,7 +21,7 @@ from frictex.app.engine.force_summary import ForceSummary
 from frictex.device.friction import ClampCounts
 from frictex.rendering.pipeline import STAGES
 
-SUMMARY_VERSION = 5
+SUMMARY_VERSION = 6
 
 
 class Totals:
@@ -35,6 +35,7 @@ class Totals:
         self.contact_samples = 0
         self.touching = 0  # finger samples touching: the friction table's rows
         self.limited = 0
+        self.modal_capped = 0
         self.off_structure = 0
         self.layer_clipped: dict[str, int] = {}
 
@@ -114,6 +115,12 @@ def warnings_of(pipeline, tracker, totals: Totals) -> list[str]:
     if totals.limited:
         warnings.append(f"{totals.limited} samples hit an actuator limit (achieved amplitude "
                         "differs from the wanted one; see fingers)")
+    if totals.modal_capped:
+        warnings.append(f"{totals.modal_capped} samples: the fingers could not be given "
+                        "independent amplitudes (seed 001 eq 8): on a singular locus (fingers "
+                        "a wavelength apart, coincident or on a shared node) the modal gain "
+                        "was capped, so fingers asking for different friction may feel the "
+                        "same (see fingers)")
     if totals.off_structure:
         warnings.append(f"{totals.off_structure} finger samples were off the vibrating "
                         "structure and were held at its edge")
@@ -184,7 +191,8 @@ def summary(scene, trace_report: dict, pipeline, tracker, totals: Totals, fmt: s
         "counts": {"blocks": blocks, "contact_samples": totals.contact_samples,
                    "jumps": tracker.jumps, "out_of_order": tracker.out_of_order,
                    "max_amplitude_um": totals.max_amplitude,
-                   "actuator_limited": totals.limited, "off_structure": totals.off_structure},
+                   "actuator_limited": totals.limited, "modal_capped": totals.modal_capped,
+                   "off_structure": totals.off_structure},
         "clamps": totals.clamps.as_dict(),
         "layer_clipped": dict(totals.layer_clipped),
         "warnings": warnings_of(pipeline, tracker, totals) + _within_a_block(trace_report),

@@ -196,6 +196,9 @@ class Counts:
         Largest channel command (um, zero-to-peak).
     actuator_limited : int
         Samples where an actuator limit changed the actuation's solution.
+    modal_capped : int
+        Samples whose modal solve served two or more fingers and was regularised: the
+        fingers could not be given independent amplitudes (seed 001, eq 8).
     off_structure : int
         Finger samples off the vibrating structure (held at its edge).
     """
@@ -206,6 +209,7 @@ class Counts:
     out_of_order: int
     max_amplitude_um: float | None
     actuator_limited: int
+    modal_capped: int
     off_structure: int
 
 

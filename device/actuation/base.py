@@ -32,6 +32,8 @@ class Actuated:
     """commands_um : (n, channels) amplitude per channel (um, zero-to-peak).
     phases_rad : (n, channels) or None. achieved_um : (F, n) amplitude under each finger.
     limited : number of samples where a channel limit changed the solution.
+    capped : samples where two or more fingers were served but could not be given
+    independent amplitudes (a singular locus, seed 001 eq 8; modal actuation only).
     off_structure : finger samples whose position lay off the vibrating structure and
     were held at its edge (modal actuation only).
     """
@@ -40,6 +42,7 @@ class Actuated:
     phases_rad: np.ndarray | None
     achieved_um: np.ndarray
     limited: int = 0
+    capped: int = 0
     off_structure: int = 0
 
 

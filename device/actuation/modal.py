@@ -239,36 +239,44 @@ def serve_two_modes(phi, where, served, wanted_um, actuators, limits_um, rcond: 
     tuple or None
         amplitude float64 (n, q) (um, |c| at most its limit); commands complex128 (n, q)
         (um; +0.0 for a zero part, so that a zero command has phase 0); achieved float64
-        (F, n) (um, 0 where not touching); how many samples met a limit. None where a
-        served shape or wanted amplitude is not finite (what :func:`solve` refuses).
+        (F, n) (um, 0 where not touching); how many samples met a limit; how many served
+        two fingers with a capped gain (their system's smaller singular value below the
+        threshold: the fingers could not be given independent amplitudes, seed 001 eq 8).
+        None where a served shape or wanted amplitude is not finite (what :func:`solve`
+        refuses).
     """
     n, q = served.shape[0], len(limits_um)
     modal = np.empty((n, 2), dtype=np.complex128)
     commands = np.empty((n, q), dtype=np.complex128)
     amplitude = np.empty((n, q))
     achieved = np.zeros(np.shape(where))
-    limited = _two_modes_kernel(phi, where, served, wanted_um, actuators.reshape((1,) + actuators.shape),
-                                limits_um, rcond, regularised, modal, commands, amplitude, achieved)
-    return None if limited < 0 else (amplitude, commands, achieved, limited)
+    limited, capped = _two_modes_kernel(phi, where, served, wanted_um,
+                                        actuators.reshape((1,) + actuators.shape), limits_um, rcond,
+                                        regularised, modal, commands, amplitude, achieved)
+    return None if limited < 0 else (amplitude, commands, achieved, limited, capped)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _two_modes_kernel(phi, where, served, wanted, actuators, limits, rcond, regularised,
                       modal, commands, amplitude, achieved):
-    """:func:`serve_two_modes` into its output arrays; returns the count of samples that
-    met a limit, or -1 at the first sample whose system is not finite.
+    """:func:`serve_two_modes` into its output arrays; returns the counts of samples that
+    met a limit (-1 at the first sample whose system is not finite) and of samples serving
+    two fingers whose gain was capped.
 
     Where every |c_j| is within its limit the scale is exactly 1 (|c_j| <= L_j gives
     |c_j| / L_j <= 1 after rounding) and is not applied: times 1 + 0j changes at most the
     signs of zeros (finite c_j, hence finite W_M), which neither |.| nor the + 0.0 that
     follows can see. That spares most samples two square roots and three divisions."""
-    limited = 0
+    limited, capped = 0, 0
     for i in range(served.shape[0]):
         a, b, w0, finite0 = _served_row(phi, where, served, wanted, i, 0)
         c, d, w1, finite1 = _served_row(phi, where, served, wanted, i, 1)
         if not (finite0 and finite1):
-            return -1
-        modal[i, 0], modal[i, 1], _, _, _ = _gains_2x2_one(a, b, c, d, w0, w1, rcond, regularised)
+            return -1, capped
+        modal[i, 0], modal[i, 1], full, _, _ = _gains_2x2_one(a, b, c, d, w0, w1, rcond, regularised)
+        # one finger's zero row caps the gain too, but leaves nothing to tell apart
+        if not full and served[i, 1] >= 0:
+            capped += 1
         _forward_row(actuators, 0, modal, i, commands)
         within = True
         for j in range(commands.shape[1]):
@@ -283,7 +291,7 @@ def _two_modes_kernel(phi, where, served, wanted, actuators, limits, rcond, regu
             z = commands[i, j]
             commands[i, j] = complex(z.real + 0.0, z.imag + 0.0)
         _achieved_at(phi, where, modal, i, achieved)
-    return limited
+    return limited, capped
 
 
 @njit(cache=True, nogil=True, inline="always")

@@ -126,8 +126,9 @@ class ModalActuation:
         -------
         Actuated
             commands_um, phases_rad (n, q); achieved_um (F, n); ``limited`` samples
-            whose commands met a channel limit; ``off_structure`` finger samples held
-            at the structure's edge.
+            whose commands met a channel limit; ``capped`` samples whose served
+            fingers could not be given independent amplitudes; ``off_structure`` finger
+            samples held at the structure's edge.
         """
         contact = np.ascontiguousarray(fingers.contact, dtype=np.bool_)
         x, y, clipped, where = self._on_structure(np.ascontiguousarray(fingers.x_pred, dtype=np.float64),
@@ -139,9 +140,9 @@ class ModalActuation:
         solved = (serve_two_modes(phi, where, served, wanted, self.actuators, self.limits_um,
                                   self.threshold, self.method == "regularised")
                   if self.closed_form else None)
-        amplitude, commands, achieved, limited = solved or self._solve(phi, where, served, wanted)
+        amplitude, commands, achieved, limited, capped = solved or self._solve(phi, where, served, wanted)
         return Actuated(commands_um=amplitude, phases_rad=np.angle(commands), achieved_um=achieved,
-                        limited=limited, off_structure=int(np.count_nonzero(clipped)))
+                        limited=limited, capped=capped, off_structure=int(np.count_nonzero(clipped)))
 
     def _solve(self, phi, where, served, wanted):
         """Steps 2-4 of the module docstring through ``device.actuation.modal.solve``: any
@@ -154,7 +155,22 @@ class ModalActuation:
         # + 0.0 turns -0.0 into 0.0: a zero command has phase 0, whatever the sign of
         # the zeros the solve happened to produce
         return (amplitude, sol.commands_um + 0.0, achieved_magnitude(phi, where, sol.modal_um),
-                int(np.count_nonzero(sol.limited)))
+                int(np.count_nonzero(sol.limited)), self._capped(phi_f, served))
+
+    def _capped(self, phi_f, served) -> int:
+        """Samples serving m >= 2 fingers whose m x p system has rank below m: its m-th
+        singular value under the method's threshold (``device.actuation.modal.solve``'s
+        ``capped``, less the zero singular values the padding rows add). There the fingers
+        cannot be given independent amplitudes (seed 001, eq 8)."""
+        fingers = np.count_nonzero(served >= 0, axis=1)
+        several = fingers >= 2
+        if not np.any(several):
+            return 0
+        s = np.linalg.svd(phi_f[several], compute_uv=False)  # descending, (k, p)
+        s_m = np.take_along_axis(s, (fingers[several] - 1)[:, None], axis=1)[:, 0]
+        floor = self.threshold * s[:, 0]
+        full = ((s_m >= floor) if self.method == "regularised" else (s_m > floor)) & (s_m > 0)
+        return int(np.count_nonzero(~full))
 
 
 # compiled kernels cached here call no compiled function of another module: numba's cache
