@@ -16,10 +16,14 @@ import numpy as np
 
 from frictex.app.commands.modes_output import (add_output_arguments, check_below, check_plot,
                                                check_wavelength, density_kg_m3, dimension_mm,
-                                               print_modes, save_figure, youngs_gpa)
+                                               print_modes, save_figure, warn, youngs_gpa)
 from frictex.device.structures.beam import VALID_WAVELENGTH_IN_THICKNESSES, ModesError
 from frictex.textures.keys import MAX_MODE_ORDER
 from frictex.device.structures.plate2d import AXES, Plate2D
+
+
+#: both shapes (unit peak) under this at finger 1: det Phi is 0 over the whole plate
+NODE_TOLERANCE = 1e-9
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -63,11 +67,22 @@ def run(args: argparse.Namespace) -> int:
              f"E {plate.youngs_gpa:g} GPa, rho {plate.density_kg_m3:g} kg/m^3, k = {plate.order}")
     print_modes(title, modes, args.json)
     if args.plot:
-        save_figure(_plot(plate, finger, title), args.plot)
+        on_nodes = _on_both_nodes(plate, finger)
+        if on_nodes:
+            warn(f"--finger {finger[0]:g} {finger[1]:g}: on a node of both modes, so det Phi "
+                 "(seed 001, eq 8) is 0 wherever the second finger is; the map is blank. "
+                 "Move --finger off the nodes")
+        save_figure(_plot(plate, finger, title, on_nodes), args.plot)
     return 0
 
 
-def _plot(plate: Plate2D, finger, title: str):
+def _on_both_nodes(plate: Plate2D, finger) -> bool:
+    """Whether (x, y) (mm) is on a node of both modes: det Phi with a finger there is
+    phi_X phi_Y' - phi_Y phi_X', 0 for every second finger."""
+    return bool(np.max(np.abs(plate.phi(*finger))) < NODE_TOLERANCE)
+
+
+def _plot(plate: Plate2D, finger, title: str, on_nodes: bool):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -76,7 +91,8 @@ def _plot(plate: Plate2D, finger, title: str):
     y = np.linspace(0, plate.height_mm, 281)
     xx, yy = np.meshgrid(x, y)
     phi = plate.phi(xx, yy)
-    det = plate.det(finger[0], finger[1], xx, yy)
+    # on the nodes only rounding (1e-16) is left of det Phi: shown as the 0 it is
+    det = np.zeros_like(xx) if on_nodes else plate.det(finger[0], finger[1], xx, yy)
     extent = (0, plate.width_mm, plate.height_mm, 0)  # y down, as on the screen
     fig, axes = plt.subplots(1, 3, figsize=(14, 4.6))
     panels = ((phi[..., 0], "mode X"), (phi[..., 1], "mode Y"),
@@ -88,6 +104,10 @@ def _plot(plate: Plate2D, finger, title: str):
         ax.set(xlabel="x (mm)", ylabel="y (mm)", title=name)
         fig.colorbar(im, ax=ax, shrink=0.8)
     axes[2].plot(*finger, "o", color="gold", markeredgecolor="k")
+    if on_nodes:
+        axes[2].text(0.5, 0.5, "det Phi = 0 everywhere:\nfinger 1 is on a node\nof both modes",
+                     transform=axes[2].transAxes, ha="center", va="center",
+                     bbox={"facecolor": "white", "edgecolor": "k"})
     fig.suptitle(title + " (black: zero lines)")
     fig.tight_layout()
     return fig
