@@ -44,7 +44,10 @@ class BlockOutput:
 
     t_s : (n,) output times (s). finger_ids : the F finger ids.
     contact : bool. x_mm, y_mm : the tracker's predicted position (mm), whatever the
-    renderers (SHO-held plays the last touch sample's position). mu_target : composed mu'.
+    renderers (SHO-held plays the last touch sample's position), where ``contact`` is
+    True; where it is False no finger touches and the entries mean nothing (a
+    placeholder, 0 or a position left over): select them with ``x_mm[contact]``.
+    mu_target : composed mu'.
     wanted_um : amplitude each finger's target asks for (um, zero-to-peak).
     amplitude_um : amplitude the actuation achieves under each finger (um, zero-to-peak).
     commands_um : (n, channels) channel commands (um). phases_rad : (n, channels) or None.
@@ -81,7 +84,7 @@ class BlockOutput:
     forces: object | None = None
     sample_ids: np.ndarray | None = None
 
-    def segments(self):
+    def segments(self) -> list[tuple[int, int, int, int]]:
         """``(row, finger id, lo, hi)``: samples ``lo .. hi - 1`` of ``row`` belong to
         that finger (one per row unless :attr:`sample_ids` says otherwise)."""
         n = self.t_s.size

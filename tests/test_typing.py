@@ -1,6 +1,7 @@
 """A user's script type-checks against frictex's typed API with ``mypy --strict``, and a
 misspelt name or a wrong argument type in it is an error (the API's names are explicit
-exports; nothing public is ``Any``).
+exports; nothing public is ``Any`` but the pyarrow tables, ``Replay.friction`` and
+``Replay.commands``: pyarrow ships no type information, so a checker takes them on trust).
 
 mypy reads the source tree, not the editable install (whose import hook it cannot
 follow): a temporary folder holds a package ``frictex`` laid out as the wheel installs it
@@ -38,6 +39,11 @@ def mean_mu(out: frictex.BlockOutput) -> float:
     return float(mu[out.contact].mean())
 
 
+def mu_per_finger(out: frictex.BlockOutput) -> dict[int, float]:
+    return {finger: float(out.mu_target[row, lo:hi].mean())
+            for row, finger, lo, hi in out.segments()}
+
+
 def main(folder: Path) -> None:
     scene: frictex.Scene = frictex.load_scene("grating-5mm")
     trace: frictex.Trace = frictex.read_trace("swipe-40mms-50hz")
@@ -59,7 +65,7 @@ def main(folder: Path) -> None:
         frictex.load_scene("no-such-scene")
     except frictex.InputError as error:
         print(error)
-    print(mean_mu(out), channels, contact, files, name, rows, columns, clamps.total, codes,
+    print(mean_mu(out), mu_per_finger(out), channels, contact, files, name, rows, columns, clamps.total, codes,
           version, s.to_dict())
 
 
