@@ -190,9 +190,12 @@ def _plot_travelling(ax, travelling: dict) -> None:
     x, ratio = travelling["grid"]
     ax.plot(x, ratio, label="travelling-wave ratio")
     for item in travelling["spans"]:
-        ax.axhline(item["threshold"], color="k", lw=0.5, ls="--")
-        for start, end in item["spans_mm"]:
-            ax.axvspan(start, end, alpha=0.1, color="g")
+        threshold = item["threshold"]
+        ax.axhline(threshold, color="k", lw=0.5, ls="--", label=f"threshold {threshold:g}")
+        for i, (start, end) in enumerate(item["spans_mm"]):
+            ax.axvspan(start, end, alpha=0.1, color="g",
+                       label=f"ratio >= {threshold:g} (shaded)" if i == 0 else None)
+    ax.legend(fontsize=7, loc="lower right")
     ax.set(xlabel="x (mm)", ylabel="ratio", ylim=(0, 1.05),
            title="modes {} and {} in quadrature: local min / max of the envelope".format(
                *travelling["orders"]))

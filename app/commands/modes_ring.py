@@ -240,7 +240,8 @@ def _plot(ring: RingResonator, orders: list[int], phase: dict | None = None):
     import matplotlib.pyplot as plt
 
     ratio = ring.length_mm / ring.radius_mm
-    ratios = np.linspace(ratio / 1.25, ratio * 1.25, 61)
+    # the table's window, so that every crossing it lists is on the plot
+    ratios = np.linspace(ratio / _RATIO_WINDOW, ratio * _RATIO_WINDOW, 61)
     if phase is None:
         fig, axes = plt.subplots(len(orders), 1, figsize=(7, 3 * len(orders)), squeeze=False)
         split_axes = axes[:, 0]
@@ -254,9 +255,9 @@ def _plot(ring: RingResonator, orders: list[int], phase: dict | None = None):
                           for r in ratios])
         ax.plot(ratios, freqs[:, 1] - freqs[:, 0], label="asymmetric - symmetric")
         ax.axhline(0.0, color="k", lw=0.5)
-        for c in ring.crossings(n):
-            if ratios[0] <= c <= ratios[-1]:
-                ax.axvline(c, color="k", lw=0.5)
+        shown = [c for c in ring.crossings(n) if ratios[0] <= c <= ratios[-1]]
+        for i, c in enumerate(shown):
+            ax.axvline(c, color="k", lw=0.5, label="degenerate (split 0)" if i == 0 else None)
         ax.axvline(ratio, color="r", lw=0.8, label=f"this ring, L/R {ratio:.3g}")
         ax.set(xlabel="L/R (R fixed)", ylabel="split (Hz)",
                title=f"order {n}: {ring.pair(n)[0].frequency_hz:.0f} Hz at L/R {ratio:.3g}")
