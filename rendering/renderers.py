@@ -36,9 +36,9 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-from frictex.device.registry import OWN_DISTRIBUTION, Expect, PluginError, Registry
+from frictex.device.registry import OWN_DISTRIBUTION, PluginError, Registry
 from frictex.rendering.tracking.tracks import FingerBlock
-from frictex.textures.model import RENDERERS, render_modes
+from frictex.textures.model import RENDERER_FACTORY, RENDERERS, render_modes
 
 __all__ = ["DEFAULT_SHO", "LAYER_RENDERERS", "RENDERERS", "LayerRenderer", "RendererFactory",
            "any_layer", "build_renderer", "render_modes", "sho_variant_of"]
@@ -66,10 +66,6 @@ class RendererFactory(Protocol):
     def __call__(self, layer: Any, rate_hz: float) -> LayerRenderer:
         """The renderer of ``layer`` (``textures.model``) at output rate ``rate_hz`` (Hz)."""
 
-
-#: what a renderer registry's entries must be (``Registry.expect``)
-RENDERER_FACTORY = Expect.factory("a renderer class or function (layer, rate_hz) -> "
-                                  "LayerRenderer (frictex.rendering.renderers)")
 
 #: renderers of the layers that render motion or events, by ``layer.renderer_kind``
 LAYER_RENDERERS: Registry[RendererFactory] = Registry("dynamic layer kind",

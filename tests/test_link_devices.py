@@ -91,7 +91,10 @@ def test_an_output_device_registered_by_name_is_opened_with_its_arg():
     got = {}
 
     class Null:
+        """A device with every member a sink has; each does nothing."""
         label, channels, rate_hz, paced, info = "null", 1, RATE, True, None
+        send = wait_for_room = status = unplayed_share = lambda *a, **k: None
+        device_force_n = force_report = forces_covered = lambda *a, **k: None
 
         def close(self):
             got["closed"] = True
@@ -101,7 +104,7 @@ def test_an_output_device_registered_by_name_is_opened_with_its_arg():
         return Null()
     DEVICES.register("test-null", open_null)
     sink = open_sink("test-null:/some/where", 2, RATE, paced=True, stall_s=0.5)
-    assert isinstance(sink, Null) and got["arg"] == "/some/where"
+    assert isinstance(sink.inner, Null) and got["arg"] == "/some/where"
     assert got["request"] == DeviceRequest(channels=2, rate_hz=RATE, paced=True,
                                            stderr=got["request"].stderr, stall_s=0.5)
 

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from frictex.device.profile import DeviceProfile
-from frictex.device.registry import Registry
+from frictex.device.registry import Expect, Registry
 
 #: The renderers a periodic layer may ask for, by name (the ``LayerRenderer`` protocol of
 #: ``rendering.renderers``). frictex's own register as entry points of group
@@ -37,7 +37,11 @@ from frictex.device.registry import Registry
 #: ``render = "sho"`` (and ``--renderer sho``): SHO, in the run's variant (``sho_variant``);
 #: reserved: no plugin may register a renderer under it
 SHO = "sho"
-RENDERERS: Registry = Registry("renderer", "frictex.renderers", reserved=(SHO,))
+#: what a renderer registry's entries must be (``Registry.expect``)
+RENDERER_FACTORY = Expect.factory("a renderer class or function (layer, rate_hz) -> "
+                                  "LayerRenderer (frictex.rendering.renderers)")
+RENDERERS: Registry = Registry("renderer", "frictex.renderers", reserved=(SHO,),
+                               expect=RENDERER_FACTORY)
 
 
 def render_modes() -> tuple[str, ...]:
