@@ -53,6 +53,8 @@ class BlockOutput:
     commands_um : (n, channels) channel commands (um). phases_rad : (n, channels) or None.
     clamps : counts of the friction inversion's guards in this block.
     limited : samples where an actuator limit changed the actuation's solution.
+    capped : samples where the modal actuation could not give the fingers independent
+        amplitudes (a singular locus, seed 001 eq 8).
     layer_clipped : per layer name, for the layers whose state counts ``clipped`` (a
         recorded texture's mu' limits, a clip's level sum past 1): the finger samples
         this block where the layer's own limits clipped the mu' it gave the target.
@@ -79,6 +81,7 @@ class BlockOutput:
     phases_rad: np.ndarray | None
     clamps: ClampCounts
     limited: int = 0
+    capped: int = 0
     off_structure: int = 0
     layer_clipped: dict = field(default_factory=dict)
     forces: object | None = None
@@ -301,7 +304,7 @@ class Pipeline:
                           contact=fingers.contact, x_mm=fingers.x_pred, y_mm=fingers.y_pred,
                           mu_target=mu_target, wanted_um=wanted, amplitude_um=act.achieved_um,
                           commands_um=act.commands_um, phases_rad=act.phases_rad,
-                          clamps=clamps, limited=act.limited,
+                          clamps=clamps, limited=act.limited, capped=act.capped,
                           off_structure=act.off_structure, layer_clipped=layer_clipped,
                           forces=forces)
         return out, PipelineState(tracker=tracker_state, layers=tuple(layer_states),

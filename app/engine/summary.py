@@ -47,6 +47,7 @@ class Totals:
         self.contact_samples += int(out.contact.any(axis=0).sum())
         self.touching += int(np.count_nonzero(out.contact))
         self.limited += out.limited
+        self.modal_capped += out.capped
         self.off_structure += out.off_structure
         for name, n in out.layer_clipped.items():
             self.layer_clipped[name] = self.layer_clipped.get(name, 0) + n
