@@ -4,6 +4,7 @@ The sanitizer build runs the same session (see test_firmware_hardening.py)."""
 
 import io
 import re
+import threading
 import time
 
 import numpy as np
@@ -136,29 +137,59 @@ def _last_setpoint(plate_log) -> float | None:
     return float(rows[-1].split(b",")[2]) if len(rows) > 1 else None
 
 
+class _Stream(threading.Thread):
+    """Sends ``amplitude_um`` to ``sink``, paced by the port, from sample 0 until ``plug``
+    is pulled: the plate plays it at the unplug however late the test thread pulls it
+    (a stream sent ahead would have played out its 0.4 s buffer and ramped to zero).
+    ``sent``: the samples commanded; a block sent as the plug went may be counted
+    unplayed."""
+
+    def __init__(self, sink, plug, amplitude_um: float):
+        super().__init__(name="test-stream", daemon=True)
+        self.sink, self.plug, self.amplitude_um = sink, plug, amplitude_um
+        self.sent = 0
+        self.error: BaseException | None = None
+
+    def run(self) -> None:
+        try:
+            while not self.plug.unplugged:
+                self.sink.send(self.sent, np.full((50, 1), self.amplitude_um), None)
+                self.sent += 50
+        except BaseException as exc:  # raised on the test thread by join()
+            self.error = exc
+
+    def join(self, timeout=None) -> None:
+        super().join(timeout)
+        if self.error is not None:
+            raise self.error
+
+
 def _watchdog_session(binary, tmp_path, silence_s):
     """Stream a constant 2 um, unplug the host while it plays for at least ``silence_s``
     and until the port's own log shows its output at zero (however late the scheduler
-    runs the port), plug it back, stream on.
-    Returns (rx log, plate log, played log, status)."""
+    runs the port), plug it back, stream 1 um from 1000 samples past the first stream.
+    Returns (rx log, plate log, played log, status, samples of the first stream)."""
     rx, plate, log = tmp_path / "rx.csv", tmp_path / "plate.csv", tmp_path / "played.csv"
     proc, path = hostport.start(binary=binary, extra=(
         "--rx-log", str(rx), "--plate-log", str(plate), "--log", str(log)))
     plug = Plug(lambda: open_port(path))
     sink = CommandSink(plug, 1, RATE, paced=True, stderr=io.StringIO(), process=proc)
-    for b in range(0, 4000, 50):  # 400 ms: still playing at the unplug however late it comes
-        sink.send(b, np.full((50, 1), 2.0), None)
-    until(lambda: sink.status().get("device_state") == "playing", "the port playing")
-    time.sleep(0.05)
-    plug.unplug()  # mid-stream: the port is playing 2 um
+    stream = _Stream(sink, plug, 2.0)
+    stream.start()
+    try:
+        until(lambda: sink.status().get("device_state") == "playing", "the port playing")
+        time.sleep(0.05)
+    finally:
+        plug.unplug()  # mid-stream: the port is playing 2 um
+    stream.join()
     time.sleep(silence_s)
     until(lambda: _last_setpoint(plate) == 0.0, "the port's output reaching zero unplugged")
     plug.plug()
     until(lambda: sink.status()["state"] == "simulated", "the link coming back")
-    for b in range(5000, 6000, 50):
+    for b in range(stream.sent + 1000, stream.sent + 2000, 50):
         sink.send(b, np.full((50, 1), 1.0), None)
     sink.close()
-    return _csv(rx), _csv(plate), _csv(log), sink.status()
+    return _csv(rx), _csv(plate), _csv(log), sink.status(), stream.sent
 
 
 def test_the_output_is_zero_within_50_ms_of_the_last_valid_frame(binary, tmp_path):
@@ -168,7 +199,7 @@ def test_the_output_is_zero_within_50_ms_of_the_last_valid_frame(binary, tmp_pat
     one such silence began while the plate played 2 um (the unplugged host). A silence
     ends where the core's clock was when the next frame reached it (``core_t_s``): a
     port the machine descheduled plays the ticks it missed after that read."""
-    rx, plate, played, status = _watchdog_session(binary, tmp_path, silence_s=0.3)
+    rx, plate, played, status, first = _watchdog_session(binary, tmp_path, silence_s=0.3)
     frame = np.flatnonzero(np.diff(rx[:, 1], prepend=0) > 0)  # reads that brought a frame
     last_rx, core_at_rx = rx[frame, 0], rx[frame, 3]
     t, setpoint = plate[:, 0], plate[:, 2]
@@ -186,9 +217,10 @@ def test_the_output_is_zero_within_50_ms_of_the_last_valid_frame(binary, tmp_pat
     assert status["watchdog_trips"] >= 1
     # after the host came back, its new stream played; every sample is accounted for
     index = played[:, 0].astype(np.int64)
-    in_order_within(index, np.concatenate([np.arange(4000), np.arange(5000, 6000)]))
-    assert np.any(index >= 5000) and np.all(played[index >= 5000, 1] == 1.0)
-    accounted(status, index, 5000)
+    second = np.arange(first + 1000, first + 2000)
+    in_order_within(index, np.concatenate([np.arange(first), second]))
+    assert np.any(index >= second[0]) and np.all(played[index >= second[0], 1] == 1.0)
+    accounted(status, index, first + 1000)
 
 
 def test_faults_on_the_wire_are_counted_and_never_played(binary, tmp_path):
