@@ -2,9 +2,10 @@
 
 The manifest's grammar, ``batch.csv``'s columns, what ``DIR`` may hold and what a
 signal does are in ``app.engine.batch``. Exit status: 0 every job finished, 1 some jobs
-failed (each is listed with its error, and in ``DIR/batch.csv``), 2 the manifest, an
-option or ``DIR`` is bad (nothing ran), 130 Ctrl-C (128 + the signal for SIGTERM,
-SIGHUP) stopped it (``DIR/batch.csv`` lists the jobs that finished).
+failed (each is listed with its error, and in ``DIR/batch.csv``) or a Dask cluster had
+no worker for ``fanout.NO_WORKER_S`` (the jobs left are ``interrupted``), 2 the
+manifest, an option or ``DIR`` is bad (nothing ran), 130 Ctrl-C (128 + the signal for
+SIGTERM, SIGHUP) stopped it (``DIR/batch.csv`` lists the jobs that finished).
 """
 
 from __future__ import annotations
@@ -19,7 +20,8 @@ from frictex.app.commands.argtypes import positive_int
 from frictex.app.engine.batch import RESULTS, not_ok, read_manifest, run_job
 from frictex.app.engine.batch_folder import EARLIER, BatchFolder
 from frictex.app.engine.driver import Terminated
-from frictex.app.engine.fanout import Interrupted, default_workers, fan_out
+from frictex.app.engine.fanout import (NO_WORKER_S, Interrupted, NoWorkers, default_workers,
+                                       fan_out)
 from frictex.rendering.renderers import render_modes
 from frictex.textures.outside import add_allow_outside
 
@@ -34,7 +36,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scheduler", metavar="ADDRESS", default=None,
                         help="run on a Dask cluster (e.g. tcp://10.0.0.5:8786) instead; needs "
                              "pip install 'frictex[cluster]' and the files at the same paths "
-                             "on every worker")
+                             "on every worker; a cluster with no worker for "
+                             f"{NO_WORKER_S:.0f} s gives up the jobs left (exit 1)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     add_allow_outside(parser)
 
@@ -59,10 +62,14 @@ def run(args: argparse.Namespace) -> int:
 def _report(args: argparse.Namespace, rows: list[dict], stop, table: Path) -> int:
     """The batch's last lines and exit status (module docstring); a stopped batch ends as
     an interrupted replay does (``KeyboardInterrupt``; or ``Terminated``, printed as
-    ``frictex: terminated by SIGTERM``, exit 128 + the signal)."""
-    if not args.quiet or stop is not None:
-        print(_totals(rows, table), file=sys.stderr if stop is not None else sys.stdout)
-    if stop is not None:
+    ``frictex: terminated by SIGTERM``, exit 128 + the signal); one given up for want of
+    Dask workers raises its :class:`NoWorkers` (one error line, exit 1)."""
+    signalled = isinstance(stop, Interrupted)
+    if not args.quiet or signalled:
+        print(_totals(rows, table), file=sys.stderr if signalled else sys.stdout)
+    if isinstance(stop, NoWorkers):
+        raise stop
+    if signalled:
         if stop.signum == signal.SIGINT:
             raise KeyboardInterrupt
         raise Terminated(stop.signum)  # the line and status a replay's SIGTERM gives
@@ -86,9 +93,9 @@ def _totals(rows: list[dict], table: Path) -> str:
 
 
 def _run_jobs(args: argparse.Namespace, jobs: list, out_dir: Path):
-    """The jobs' result rows, with a progress bar, and the :class:`Interrupted` that
-    stopped them (None if none did; the jobs it kept from finishing then have rows
-    ``interrupted``)."""
+    """The jobs' result rows, with a progress bar, and the :class:`Interrupted` or
+    :class:`NoWorkers` that stopped them (None if none did; the jobs it kept from
+    finishing then have rows ``interrupted``)."""
     from tqdm import tqdm
     bar = tqdm(total=len(jobs), desc="batch", unit="job", disable=True if args.quiet else None)
 
@@ -101,15 +108,18 @@ def _run_jobs(args: argparse.Namespace, jobs: list, out_dir: Path):
         return fan_out(partial(run_job, out_dir=str(out_dir.resolve())), jobs,
                        workers=args.jobs or default_workers(), scheduler=args.scheduler,
                        on_done=done), None
-    except Interrupted as stop:
+    except (Interrupted, NoWorkers) as stop:
         return [row if row is not None else _interrupted(job, stop)
                 for job, row in zip(jobs, stop.results)], stop
     finally:
         bar.close()
 
 
-def _interrupted(job, stop: Interrupted) -> dict:
+def _interrupted(job, stop: Interrupted | NoWorkers) -> dict:
     """The row of a job that ``stop`` kept from finishing."""
+    if isinstance(stop, NoWorkers):
+        return not_ok(job, "interrupted", f"not finished: the Dask cluster had no worker "
+                                          f"for {stop.waited_s:.0f} s")
     how = "stopped while it ran" if job.index in stop.stopped else "not started"
     return not_ok(job, "interrupted", f"{how}: the batch was stopped by "
                                       f"{signal.Signals(stop.signum).name}")

@@ -19,8 +19,14 @@ on again, and a replay then stops at once. In this process (one worker) the sign
 stops the item running the same way. A terminal's Ctrl-Z (SIGTSTP) stops the workers
 with this process, and ``fg`` or ``bg`` continues them. Should this process die (SIGKILL), each worker
 gets a SIGINT from the system (Linux) and stops its item likewise. On a Dask cluster
-Ctrl-C cancels the items not yet started; those already running go on to their end on
-their workers (Dask cannot stop a running task).
+the same stopper takes the signal (Ctrl-C, SIGTERM, SIGHUP) and the items not yet
+started are cancelled; those already running go on to their end on their workers (Dask
+cannot stop a running task).
+
+A Dask cluster without workers. Its workers are counted when the items are sent and then
+every :data:`WORKER_CHECK_S` while they run: with none, a warning says so once, and after
+:data:`NO_WORKER_S` in a row with none the items left are cancelled and :func:`fan_out`
+raises :class:`NoWorkers` with the results of the items that finished.
 """
 
 from __future__ import annotations
@@ -29,10 +35,11 @@ import os
 import signal
 import sys
 import threading
+import time
 from contextlib import contextmanager
 
 from frictex.app.engine.driver import HELD_SIGNALS
-from frictex.device.errors import MissingExtra
+from frictex.device.errors import FrictexError, MissingExtra
 
 #: prctl(2)'s option: the signal a process gets when its parent dies (Linux)
 _PR_SET_PDEATHSIG = 1
@@ -41,6 +48,10 @@ POLL_S = 0.1
 #: a worker's outcomes for one item: fn(item) returned; not started (the flag was set);
 #: stopped by a signal while it ran
 DONE, NOT_STARTED, STOPPED = "done", "not started", "stopped"
+#: how long (s) a Dask cluster may have no worker at all before the items left are given up
+NO_WORKER_S = 60.0
+#: how often (s) a Dask cluster's workers are counted while its items run
+WORKER_CHECK_S = 1.0
 
 
 class Interrupted(KeyboardInterrupt):
@@ -53,6 +64,19 @@ class Interrupted(KeyboardInterrupt):
         self.signum = signum
         self.results = results
         self.stopped = stopped
+
+
+class NoWorkers(FrictexError):
+    """A Dask cluster that had no worker for ``waited_s`` (s): ``results`` in the items'
+    order, None for an item that did not finish."""
+
+    def __init__(self, address: str, waited_s: float, results: list):
+        unfinished = sum(result is None for result in results)
+        super().__init__(f"the Dask cluster at {address} had no worker for {waited_s:.0f} s; "
+                         f"gave up {unfinished} of {len(results)} items unfinished")
+        self.address = address
+        self.waited_s = waited_s
+        self.results = results
 
 
 def default_workers() -> int:
@@ -298,25 +322,74 @@ def _pool_context():
 
 
 def _dask(fn, items: list, address: str, done) -> list:
+    """The items on the Dask cluster at ``address``, stopped by a signal (the stopper
+    :func:`_here` uses) or by the cluster having no worker (module docstring)."""
+    client = _dask_client(address)
+    stopper = _Stopper()
     try:
-        from distributed import Client, as_completed
+        with _handling(stopper):
+            futures = client.map(fn, items, pure=False)
+            try:
+                return _dask_results(futures, stopper, _WorkerWatch(client, address), done)
+            except BaseException:
+                client.cancel(futures)
+                raise
+    finally:
+        client.close()
+
+
+def _dask_client(address: str):
+    """A client of the Dask scheduler at ``address``; a one-line error where there is none."""
+    try:
+        from distributed import Client
     except ImportError:
         raise MissingExtra("cluster", "--scheduler", "dask.distributed") from None
     try:
-        client = Client(address, timeout=10)
+        return Client(address, timeout=10)
     except (OSError, TimeoutError) as exc:
         raise OSError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
-    results: list = [None] * len(items)
-    try:
-        futures = client.map(fn, items, pure=False)
-        index = {f.key: k for k, f in enumerate(futures)}
-        try:
-            for future in as_completed(futures):
-                results[index[future.key]] = future.result()
-                done(results[index[future.key]])
-        except KeyboardInterrupt:
-            client.cancel(futures)
-            raise Interrupted(signal.SIGINT, results, []) from None
-    finally:
-        client.close()
+
+
+def _dask_results(futures: list, stopper: _Stopper, watch: "_WorkerWatch", done) -> list:
+    """The results of ``futures`` in their order, taken as they finish (every
+    :data:`POLL_S`, so that a signal the stopper kept is seen); :class:`Interrupted` once
+    it keeps one, :class:`NoWorkers` when ``watch`` gives up."""
+    from distributed import as_completed
+    results: list = [None] * len(futures)
+    index = {future.key: k for k, future in enumerate(futures)}
+    finished = as_completed(futures)
+    while not finished.is_empty() and stopper.signum is None:
+        for future in finished.next_batch(block=False):
+            results[index[future.key]] = future.result()
+            done(results[index[future.key]])
+        watch.check(results)
+        time.sleep(POLL_S)
+    if stopper.signum is not None:
+        raise Interrupted(stopper.signum, results, [])
     return results
+
+
+class _WorkerWatch:
+    """Counts a Dask cluster's workers at most every :data:`WORKER_CHECK_S`: warns once
+    when it has none, raises :class:`NoWorkers` once it has had none for
+    :data:`NO_WORKER_S`."""
+
+    def __init__(self, client, address: str):
+        self.client = client
+        self.address = address
+        self.next_check_s = 0.0  # time.monotonic() of the next count
+        self.none_since_s: float | None = None  # since when it has had none
+
+    def check(self, results: list) -> None:
+        now_s = time.monotonic()
+        if now_s < self.next_check_s:
+            return
+        self.next_check_s = now_s + WORKER_CHECK_S
+        if self.client.nthreads():
+            self.none_since_s = None
+        elif self.none_since_s is None:
+            self.none_since_s = now_s
+            print(f"frictex: warning: the Dask cluster at {self.address} has no worker; "
+                  f"waiting up to {NO_WORKER_S:.0f} s for one", file=sys.stderr)
+        elif now_s - self.none_since_s >= NO_WORKER_S:
+            raise NoWorkers(self.address, now_s - self.none_since_s, results)

@@ -1,0 +1,162 @@
+"""A batch on a Dask cluster stops as a local one does: a SIGTERM or SIGHUP cancels its
+tasks and ends it as Ctrl-C does, and a cluster without any worker (none from the start,
+or its only worker killed) makes it give up after ``fanout.NO_WORKER_S`` instead of
+waiting for ever. The cluster's scheduler runs in this process on loopback; batches run
+in subprocesses, every wait bounded."""
+
+import csv
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+distributed = pytest.importorskip("distributed", reason="dask.distributed is not installed "
+                                  "(pip install 'frictex[cluster]')")
+
+FRICTEX = str(Path(sys.executable).with_name("frictex"))
+#: the longest any wait here may take (s): far beyond what a busy machine needs
+BOUND_S = 120
+MANIFEST = "scene,trace,name\ngrating-5mm,swipe-40mms-50hz,a\ngrating-5mm,swipe-40mms-50hz,b\n"
+
+#: ``frictex batch`` with the no-worker bound shortened to 2 s (checks every 0.2 s)
+BATCH_WITH_SHORT_BOUND = textwrap.dedent("""
+    import sys
+    from frictex.app.engine import fanout
+    from frictex.app.commands.cli import main
+    fanout.NO_WORKER_S, fanout.WORKER_CHECK_S = 2.0, 0.2
+    sys.exit(main(sys.argv[1:]))
+""")
+
+#: fan_out of three items on the cluster at argv[1], each writing <argv[2]>/<k>.start
+#: then sleeping BOUND_S; the no-worker bound shortened to 2 s; prints how it ended
+SLEEPING_ITEMS = textwrap.dedent("""
+    import sys, time
+    from functools import partial
+    from pathlib import Path
+    from frictex.app.engine import fanout
+
+    def item(folder, k):
+        (Path(folder) / f"{k}.start").write_text("")
+        time.sleep(%d)
+        return k
+
+    if __name__ == "__main__":
+        fanout.NO_WORKER_S, fanout.WORKER_CHECK_S = 2.0, 0.2
+        try:
+            fanout.fan_out(partial(item, sys.argv[2]), [0, 1, 2], scheduler=sys.argv[1])
+        except fanout.NoWorkers as exc:
+            print("no workers", exc.results)
+            sys.exit(1)
+""" % BOUND_S)
+
+
+def wait_for(predicate, what: str) -> None:
+    end = time.monotonic() + BOUND_S
+    while not predicate():
+        if time.monotonic() > end:
+            raise AssertionError(f"waited {BOUND_S} s for {what}")
+        time.sleep(0.05)
+
+
+def finish(proc: subprocess.Popen) -> tuple[int, str, str]:
+    """The process's status and output; it is killed, and the test fails, if it runs on
+    past BOUND_S."""
+    try:
+        out, err = proc.communicate(timeout=BOUND_S)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        raise AssertionError(f"still running after {BOUND_S} s")
+    return proc.returncode, out, err
+
+
+@pytest.fixture
+def cluster():
+    """A scheduler on loopback, in this process, with no worker."""
+    with distributed.LocalCluster(n_workers=0, processes=False, protocol="tcp://", host="127.0.0.1",
+                                  dashboard_address=None) as local:
+        yield local
+
+
+@pytest.fixture
+def spawn():
+    """``spawn(argv)``: a started process with pipes, killed if still running at the end."""
+    started = []
+
+    def start(argv):
+        started.append(subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                        text=True))
+        return started[-1]
+
+    yield start
+    for proc in started:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+
+
+def statuses(out: Path) -> dict:
+    with open(out / "batch.csv", newline="") as fh:
+        return {row["name"]: (row["status"], row["error"]) for row in csv.DictReader(fh)}
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP])
+def test_a_signal_stops_a_dask_batch_as_ctrl_c_does(tmp_path, cluster, spawn, sig):
+    (tmp_path / "m.csv").write_text(MANIFEST)
+    out = tmp_path / "out"
+    proc = spawn([FRICTEX, "batch", str(tmp_path / "m.csv"), "--out", str(out), "--quiet",
+                  "--scheduler", cluster.scheduler_address])
+    wait_for(lambda: len(cluster.scheduler.tasks) == 2, "the batch's two tasks")
+    os.kill(proc.pid, sig)
+    code, _, err = finish(proc)
+    name = signal.Signals(sig).name
+    assert code == 128 + sig, err
+    assert err.strip().splitlines()[-1] == f"frictex: terminated by {name}"
+    assert statuses(out) == dict.fromkeys(
+        "ab", ("interrupted", f"not started: the batch was stopped by {name}"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.csv", "out"]  # no staging left
+    wait_for(lambda: not cluster.scheduler.tasks, "the tasks to be cancelled")
+
+
+def test_a_cluster_without_workers_fails_the_batch_after_the_bound(tmp_path, cluster, spawn):
+    (tmp_path / "m.csv").write_text(MANIFEST)
+    script = tmp_path / "batch.py"
+    script.write_text(BATCH_WITH_SHORT_BOUND)
+    out = tmp_path / "out"
+    proc = spawn([sys.executable, str(script), "batch", str(tmp_path / "m.csv"), "--out",
+                  str(out), "--quiet", "--scheduler", cluster.scheduler_address])
+    code, _, err = finish(proc)
+    address = cluster.scheduler_address
+    assert code == 1, err
+    assert err.strip().splitlines() == [
+        f"frictex: warning: the Dask cluster at {address} has no worker; waiting up to 2 s "
+        "for one",
+        f"frictex: error: the Dask cluster at {address} had no worker for 2 s; gave up 2 of "
+        "2 items unfinished"]
+    assert statuses(out) == dict.fromkeys(
+        "ab", ("interrupted", "not finished: the Dask cluster had no worker for 2 s"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["batch.py", "m.csv", "out"]
+    wait_for(lambda: not cluster.scheduler.tasks, "the tasks to be cancelled")
+
+
+def test_a_batch_whose_only_worker_dies_gives_up_after_the_bound(tmp_path, cluster, spawn):
+    script = tmp_path / "items.py"
+    script.write_text(SLEEPING_ITEMS)
+    marks = tmp_path / "marks"
+    marks.mkdir()
+    worker = spawn([str(Path(sys.executable).with_name("dask")), "worker",
+                    cluster.scheduler_address, "--nthreads", "1", "--no-nanny",
+                    "--host", "127.0.0.1", "--no-dashboard"])
+    wait_for(lambda: cluster.scheduler.workers, "the worker to join")
+    proc = spawn([sys.executable, str(script), cluster.scheduler_address, str(marks)])
+    wait_for(lambda: list(marks.glob("*.start")), "an item to start")
+    worker.kill()
+    code, out, err = finish(proc)
+    assert code == 1, err
+    assert out.strip() == "no workers [None, None, None]"
+    assert "has no worker; waiting up to 2 s for one" in err
