@@ -18,7 +18,8 @@ absolute paths); ``renderer`` empty means the file's own;
 default csv) as the replay's options, within the same bounds as on the command line
 (``--rate`` 100 to 1e6 Hz, ``--block`` 1 to 100000 samples); ``name`` the job's output
 folder under the batch's ``--out`` (default: ``<row number>-<scene stem>-<trace stem>``,
-the stems' other characters as ``_``), unique::
+the stems' other characters as ``_``), unique whatever the case of its letters (``dup``
+and ``DUP`` are one name: one folder on macOS and Windows)::
 
     rate_hz := a number as trace files write it (ASCII decimal: 10000, 2.5e4)
     block   := DIGITS                                   # ASCII 0-9
@@ -237,8 +238,9 @@ def _header(row: list[str], where: str) -> list[str]:
 def _jobs(path: Path, header: list[str], rows: list[tuple[int, list[str] | None]],
           renderers: tuple[str, ...], problems: _Problems) -> list[Job]:
     """One job per data row (line number, fields; None for a row that is not CSV), names
-    unique; the problems of every row kept in ``problems``."""
-    jobs, names = [], set()
+    unique regardless of case (each is a folder, and macOS and Windows fold case); the
+    problems of every row kept in ``problems``."""
+    jobs, names = [], {}
     for index, (line_no, row) in enumerate(rows):
         where = f"{path}:{line_no}"
         if row is None:
@@ -251,9 +253,12 @@ def _jobs(path: Path, header: list[str], rows: list[tuple[int, list[str] | None]
         job = _job(index, cell, path.parent, renderers, where, problems)
         if job is None:
             continue
-        if job.name in names:
-            problems.add(f"{where}: name {quoted(job.name)} is used by an earlier job")
-        names.add(job.name)
+        earlier = names.get(job.name.casefold())
+        if earlier is not None:
+            problems.add(f"{where}: name {quoted(job.name)} is used by an earlier job"
+                         + ("" if earlier == job.name else
+                            f" as {quoted(earlier)} (names must differ in more than case)"))
+        names.setdefault(job.name.casefold(), job.name)
         jobs.append(job)
     return jobs
 
