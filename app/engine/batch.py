@@ -52,8 +52,11 @@ one row per job (:data:`RESULT_COLUMNS`):
   and the trace, loading the compiled kernels); ``x_realtime``: ``output_s / wall_s``;
   ``x_realtime_end_to_end``: the replay's own factor (``timings`` in its
   ``summary.json``), which leaves the start-up out, so it is the larger of the two;
-- ``clamps`` (the inversion's clamped samples, all guards) and ``warnings`` (how many;
-  the texts are in the job's ``summary.json``).
+- ``clamps`` (the inversion's clamped samples, all guards), ``actuator_limited``
+  (samples where an actuator limit changed the actuation's solution: the summary's
+  ``counts.actuator_limited``), ``modal_capped`` (samples where two fingers could not be
+  given independent amplitudes: ``counts.modal_capped``, 0 where the summary has none)
+  and ``warnings`` (how many; the texts are in the job's ``summary.json``).
 
 A job that is not ``ok`` has these numeric cells empty (an ``earlier`` one the earlier
 batch's figures). A failed job does not stop the others.
@@ -102,7 +105,8 @@ from frictex.textures.outside import HOW, allow_outside_from_env, leads_out
 
 COLUMNS = ("scene", "trace", "renderer", "rate_hz", "block", "format", "name")
 RESULT_COLUMNS = ("job", "name", "status", "error", "output_s", "wall_s", "x_realtime",
-                  "x_realtime_end_to_end", "clamps", "warnings")
+                  "x_realtime_end_to_end", "clamps", "actuator_limited", "modal_capped",
+                  "warnings")
 #: the numeric cells of ``batch.csv``, empty for a job that is not ``ok``
 MEASURES = RESULT_COLUMNS[4:]
 #: the files a batch writes in its ``--out`` beside the job folders: no job's name
@@ -393,7 +397,10 @@ def run_job(job: Job, out_dir: str) -> dict:
             "output_s": output_s, "wall_s": wall_s,
             "x_realtime": output_s / wall_s if wall_s > 0 else None,
             "x_realtime_end_to_end": doc["timings"]["x_realtime_end_to_end"],
-            "clamps": sum(doc["clamps"].values()), "warnings": len(doc["warnings"])}
+            "clamps": sum(doc["clamps"].values()),
+            "actuator_limited": doc["counts"]["actuator_limited"],
+            "modal_capped": doc["counts"].get("modal_capped", 0),  # summaries before version 6
+            "warnings": len(doc["warnings"])}
 
 
 def not_ok(job: Job, status: str, error: str) -> dict:

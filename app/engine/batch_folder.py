@@ -30,7 +30,7 @@ import re
 import shutil
 from pathlib import Path
 
-from frictex.app.engine.batch import MEASURES, RESERVED, RESULT_COLUMNS, RESULTS, write_results
+from frictex.app.engine.batch import MEASURES, RESERVED, RESULTS, write_results
 from frictex.app.engine.staging import SUMMARY, Staging, is_run_folder, is_run_output
 from frictex.device.errors import InputError
 from frictex.device.safe_text import escape, quoted
@@ -133,16 +133,16 @@ def _kept(job, name: str, before: dict) -> dict:
 
 def _earlier_rows(path: Path) -> dict[str, dict]:
     """The earlier ``batch.csv``'s figures of its ok (or kept) jobs by name, as it wrote
-    them (a cell that is not a number left empty); none where it is missing or unreadable
-    (its folders are then kept without them)."""
+    them (a cell that is not a number, or a column it did not have yet, left empty); none
+    where it is missing or unreadable (its folders are then kept without them)."""
     try:
         with open(path, encoding="utf-8", newline="") as fh:
             rows = list(csv.DictReader(fh))
     except (OSError, UnicodeDecodeError, csv.Error):
         return {}
-    return {row["name"]: {key: row[key] if _is_number(row[key]) else None for key in MEASURES}
-            for row in rows
-            if row.get("status") in ("ok", EARLIER) and set(RESULT_COLUMNS) <= set(row)}
+    return {row["name"]: {key: row.get(key) if _is_number(row.get(key)) else None
+                          for key in MEASURES}
+            for row in rows if row.get("status") in ("ok", EARLIER) and row.get("name")}
 
 
 def _is_number(text) -> bool:
