@@ -42,16 +42,18 @@ def test_an_interval_the_data_cannot_settle_is_flagged(ci, flagged):
 
 
 def test_a_fit_flags_its_unsettled_interval_in_text_and_json():
-    """Near-chance answers at every level: the slope's interval spans three decades."""
+    """Near-chance answers at every level: the slope's interval spans three decades, and
+    the threshold's profile likelihood stays flat out to ten times the highest level."""
     pairs = [(d, c) for d, k in zip([0.2, 0.4, 0.6, 0.8], [5, 4, 6, 5])
              for c in [True] * k + [False] * (10 - k)]
     pooled = analyse_study([session("2afc", forced(pairs))])
     fit = pooled["pooled"]
     lo, hi = fit["slope_ci95"]
-    assert hi / lo > 100 and "spans a factor" in fit["slope_ci95_unsettled"]
-    assert fit["threshold_ci95_unsettled"] == unsettled(fit["threshold_ci95"])
+    assert hi / lo > 100 and "flat along the threshold" in fit["fit_unsettled"]
+    for name in ("threshold", "slope"):
+        assert fit[f"{name}_ci95_unsettled"] == f"unsettled: {fit['fit_unsettled']}"
     slope_line = [line for line in report_lines(pooled) if line.startswith("  slope")][0]
-    assert "; unsettled: the interval spans a factor of" in slope_line
+    assert "; unsettled: the likelihood is flat along the threshold" in slope_line
     # a settled fit has no flag
     rng = np.random.default_rng(3)
     good = forced((d, rng.random() < p) for d, p in zip([0.2, 0.4, 0.6, 0.8],

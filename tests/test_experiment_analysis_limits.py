@@ -9,7 +9,7 @@ import pytest
 from scipy import stats
 
 from frictex.app.experiment import same_different as SD
-from frictex.app.experiment.analysis import SessionData, analyse_study, report_lines
+from frictex.app.experiment.analysis import NOT_MEASURED, SessionData, analyse_study, report_lines
 
 STAIRCASE = {"rule": "1-up-2-down", "start": 1.0, "steps": [2.0], "scale": "linear",
              "reversals": 12, "max_trials": 100, "threshold_reversals": 8, "min": None,
@@ -93,7 +93,7 @@ def test_a_staircase_names_each_intervals_method():
     pooled = analyse_study([session("staircase", forced(pairs), STAIRCASE, bootstrap=20,
                                     target=0.7071)])["pooled"]
     assert pooled["threshold_ci_method"].startswith("Bayesian 95 % credible interval")
-    assert pooled["slope_ci_method"].endswith("20 runs")
+    assert pooled["slope_ci_method"].endswith("20 runs; " + NOT_MEASURED)
     assert pooled["slope_definition"].startswith("d psi / dx at the threshold")
 
 

@@ -159,6 +159,8 @@ def test_a_stopped_session_is_warned_of():
     stopped.info.update(ended_utc=None, parts=[{"ended": "stopped (Terminated)"}])
     summary = analyse_study([stopped])
     assert summary["session_ends"] == [{"session": str(Path("s")),
-                                        "ended": "stopped (Terminated)", "main_trials": 6}]
+                                        "ended": "stopped (Terminated)", "main_trials": 6,
+                                        "rows": 6, "trials_recorded": None,
+                                        "torn_last_line": False}]
     assert "  warning: s did not run to its end (stopped (Terminated), 6 main trials)" \
         in "\n".join(report_lines(summary))

@@ -20,7 +20,7 @@ Per study, by method:
   the fit extrapolates there. A staircase is also summarised by its reversals (the same
   rules as the run, ``scheduler.staircase_step``, replayed from the answers): the mean
   of its last ``threshold_reversals`` reversal levels (geometric on the log scale), per
-  session and their mean over sessions; and by the steps its floor or ceiling held (a
+  session and their mean over sessions (geometric on the log scale too); and by the steps its floor or ceiling held (a
   down step that would cross the linear scale's floor or ``min``, an up step past
   ``max``: the level stays), which bias its reversal mean.
 - ``same-different``: per level, the counts of hits (saying "different" to AB and BA)
@@ -35,9 +35,17 @@ Per study, by method:
   clipping removes no value the t-interval covers and keeps its coverage; with few
   ratings near an end of the scale the t-interval is wide (n 3: the mean +- 2.5 sd).
 
+A slope interval's method quotes its measured coverage only for one complete session of
+the bundled protocol it was measured on (:func:`measured_coverage`), and says otherwise
+that it is not measured for the design. A fitted lapse rate on its bound ``lapse_max`` is
+flagged (``lapse_at_bound``).
+
 An interval the data cannot settle is flagged (``*_ci95_unsettled``: why, else None;
 printed after it): one whose fit the data cannot settle (``fit_unsettled``, from
-``psychometric.Fit.unsettled``: a flat likelihood around it), one of zero width, one
+``psychometric.Fit.unsettled``: every trial correct, or a threshold its profile
+likelihood does not bound), a slope only bounded below (``slope_unsettled``: a step fits
+as well), a staircase's slope interval (its measured coverage is far below 95 %,
+``psychometric.RERUN_SHORT``), one of zero width, one
 that spans more than a factor of :data:`UNSETTLED_RATIO` or reaches 0 (a threshold or
 slope), a d' interval at a raw rate of 0 or 1 (``d_prime_ci95_unsettled``), or a
 magnitude mean's from fewer than 2 distinct ratings (its zero width says nothing of the
@@ -45,7 +53,10 @@ uncertainty). With every trial correct a fit gives no threshold, only that it li
 the lowest difference tested (``threshold_below``).
 
 Each session's end is recorded (``session_ends``: "complete", "stopped (...)" or
-"killed", and its main trials); one that did not run to its end is warned of. A session
+"killed", its main trials, the rows read from results.csv, the trials session.json
+records and whether a torn last line was skipped); one that did not run to its end is
+warned of, and so is a results.csv with fewer rows than the trials recorded or a torn
+last line (a table cut short). A session
 folder given twice is refused (it would count twice).
 
 Writes ``analysis.json`` (every number above) and ``analysis.png`` (one panel per study)
@@ -54,6 +65,7 @@ into the output folder.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from dataclasses import dataclass
@@ -63,9 +75,9 @@ import numpy as np
 from scipy import stats
 
 from frictex.app.experiment import psychometric, same_different
-from frictex.app.experiment.protocol import Staircase
+from frictex.app.experiment.protocol import Staircase, bundled_protocol
 from frictex.app.experiment.scheduler import StaircaseState, staircase_step, staircase_threshold
-from frictex.app.experiment.session import read_info, read_rows
+from frictex.app.experiment.session import read_info, read_rows, torn_last_line
 from frictex.device.errors import InputError
 
 
@@ -104,9 +116,24 @@ def unsettled(ci, fit_problem: str | None = None) -> str | None:
 
 @dataclass(frozen=True)
 class SessionData:
+    """A session: its folder, session.json, results rows, and whether results.csv's
+    last line was torn (written without its line end, and skipped)."""
+
     folder: Path
     info: dict
     rows: list[dict]
+    torn: bool = False
+
+    @property
+    def recorded(self) -> int | None:
+        """The trials session.json records (its runs' ``trials``), None where none."""
+        counts = [p.get("trials") for p in self.info.get("parts") or []]
+        return sum(counts) if counts and all(isinstance(c, int) for c in counts) else None
+
+    @property
+    def short(self) -> bool:
+        """Whether results.csv holds fewer rows than session.json records trials."""
+        return self.recorded is not None and len(self.rows) < self.recorded
 
     @property
     def design(self) -> dict:
@@ -124,7 +151,7 @@ def read_session(folder: str | Path) -> SessionData:
     if not isinstance(info.get("design"), dict) or not isinstance(info.get("protocol"), str):
         raise InputError(f"{folder / 'session.json'}: has no design; not a session of this "
                          f"frictex")
-    return SessionData(folder, info, read_rows(folder))
+    return SessionData(folder, info, read_rows(folder), torn_last_line(folder))
 
 
 def distinct_folders(folders: list[str | Path]) -> list[Path]:
@@ -183,20 +210,57 @@ def _counts(rows: list[dict]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         inverse, c, xs.size)
 
 
-def _fit_dict(f: psychometric.Fit) -> dict:
+#: the bundled protocols each interval's coverage was measured on (name: its coverage
+#: sentence for the slope's interval), and with how many sessions per fit
+MEASURED_ON = {"period-2afc": psychometric.SLOPE_BCA_COVERAGE,
+               "depth-staircase": psychometric.RERUN_COVERAGE}
+#: what a slope interval's method says where its design is not one measured
+NOT_MEASURED = ("its coverage is not measured for this design (only for the bundled "
+                "period-2afc and depth-staircase, one session each)")
+
+
+def measured_coverage(sessions: list[SessionData]) -> str | None:
+    """The slope interval's measured coverage where ``sessions`` are one complete session
+    of a bundled protocol it was measured on, run unchanged (its protocol_sha256 that of
+    the bundled file), else None."""
+    if len(sessions) != 1 or ended(sessions[0].info) != "complete" or sessions[0].short:
+        return None
+    info = sessions[0].info
+    bundled = bundled_protocol(info["protocol"])
+    if info["protocol"] not in MEASURED_ON or bundled is None:
+        return None
+    if hashlib.sha256(bundled.read_bytes()).hexdigest() != info.get("protocol_sha256"):
+        return None
+    return MEASURED_ON[info["protocol"]]
+
+
+#: why a lapse rate on its upper bound is flagged
+LAPSE_AT_BOUND = ("on its bound lapse_max: the data ask for more lapses than allowed, which "
+                  "biases the threshold and slope (Wichmann & Hill 2001a)")
+
+
+def _fit_dict(f: psychometric.Fit, coverage: str | None, staircase: bool) -> dict:
+    """A fit as analysis.json records it; ``coverage``: its slope interval's measured
+    coverage (:func:`measured_coverage`), None where it is not measured; ``staircase``:
+    a staircase's fit, whose slope interval is flagged as falling short of 95 %."""
+    short = psychometric.RERUN_SHORT if staircase else None
+    slope_flag = unsettled(f.slope_ci, f.slope_unsettled) or short
     return {"function": f.function, "guess": f.guess, "lapse_max": f.lapse_max,
             "target": f.target, "alpha": f.alpha, "beta": f.beta, "lapse": f.lapse,
+            "lapse_at_bound": (LAPSE_AT_BOUND if f.lapse_max > 0.0
+                               and f.lapse >= f.lapse_max * (1.0 - 1e-6) else None),
             "threshold": f.threshold, "threshold_below": f.threshold_below,
-            "fit_unsettled": f.unsettled,
+            "fit_unsettled": f.unsettled, "slope_unsettled": f.slope_unsettled,
             "threshold_ci95": list(f.threshold_ci),
             "threshold_ci_method": f.threshold_ci_method,
             "threshold_ci95_unsettled": (unsettled(f.threshold_ci, f.unsettled)
                                          if f.threshold_ci_method else None),
             "threshold_in_tested_range": bool(f.x[0] <= f.threshold <= f.x[-1]),
             "slope": f.slope, "slope_definition": psychometric.SLOPE,
-            "slope_ci95": list(f.slope_ci), "slope_ci_method": f.slope_ci_method,
-            "slope_ci95_unsettled": (unsettled(f.slope_ci, f.unsettled) if f.slope_ci_method
-                                     else None),
+            "slope_ci95": list(f.slope_ci),
+            "slope_ci_method": (f"{f.slope_ci_method}; {coverage or NOT_MEASURED}"
+                                if f.slope_ci_method else None),
+            "slope_ci95_unsettled": slope_flag if f.slope_ci_method else None,
             "levels": [{"difference": float(x), "trials": int(n), "correct": int(k)}
                        for x, n, k in zip(f.x, f.n, f.k)]}
 
@@ -253,15 +317,16 @@ def _fit_staircase(design: dict, rows: list[dict], sessions: int) -> psychometri
         bootstrap=a["bootstrap"], seed=psychometric.data_seed(*_counts(rows)))
 
 
-def _fitted(design: dict, rows: list[dict], sessions: int, reversals: int | None) -> dict:
-    """``{"fit": ...}`` for ``rows`` (of ``sessions`` sessions), or ``fit`` None and
-    ``no_fit`` saying why."""
+def _fitted(design: dict, rows: list[dict], sessions: list[SessionData],
+            reversals: int | None) -> dict:
+    """``{"fit": ...}`` for ``rows`` (of ``sessions``), or ``fit`` None and ``no_fit``
+    saying why."""
     reason = _too_few(np.array([_float(r["difference"]) for r in rows]), reversals)
     if reason:
         return {"fit": None, "no_fit": reason}
-    found = (_fit_staircase(design, rows, sessions) if design["staircase"]
+    found = (_fit_staircase(design, rows, len(sessions)) if design["staircase"]
              else _fit(design, *_counts(rows)))
-    return {"fit": _fit_dict(found)}
+    return {"fit": _fit_dict(found, measured_coverage(sessions), bool(design["staircase"]))}
 
 
 def staircase_summary(design: dict, rows: list[dict]) -> dict:
@@ -291,14 +356,17 @@ def _forced_choice(design: dict, sessions: list[SessionData]) -> dict:
         if design["staircase"]:
             entry["staircase"] = staircase_summary(design, rows)
             reversals = len(entry["staircase"]["reversals"])
-        per.append({**entry, **_fitted(design, rows, 1, reversals)})
+        per.append({**entry, **_fitted(design, rows, [s], reversals)})
     reversals = (sum(len(e["staircase"]["reversals"]) for e in per) if design["staircase"]
                  else None)
-    pooled = _fitted(design, pooled_rows, len(sessions), reversals)
+    pooled = _fitted(design, pooled_rows, sessions, reversals)
     out = {"per_session": per, "pooled": pooled.pop("fit"), **pooled}
     if design["staircase"]:
         values = [e["staircase"]["threshold"] for e in per if e["staircase"]["threshold"] is not None]
-        out["staircase_threshold_mean"] = float(np.mean(values)) if values else None
+        # over sessions as within one: geometric on the log scale
+        out["staircase_threshold_mean"] = (staircase_threshold(
+            tuple(values), len(values), design["staircase"]["scale"]) if values else None)
+        out["staircase_scale"] = design["staircase"]["scale"]
         for end in ("held_at_floor", "held_at_ceiling"):
             out[end] = sum(e["staircase"][end] for e in per)
     return out
@@ -387,7 +455,9 @@ def analyse_study(sessions: list[SessionData]) -> dict:
     out = {"study": first.info["protocol"], "method": method, "sessions": len(sessions),
            "vary": design["vary"], "reference": design["reference"],
            "session_ends": [{"session": str(s.folder), "ended": ended(s.info),
-                             "main_trials": len(s.main())} for s in sessions]}
+                             "main_trials": len(s.main()), "rows": len(s.rows),
+                             "trials_recorded": s.recorded, "torn_last_line": s.torn}
+                            for s in sessions]}
     if method in ("2afc", "staircase"):
         out.update(_forced_choice(design, sessions))
     elif method == "same-different":
@@ -451,7 +521,8 @@ def _forced_choice_lines(summary: dict, unit: str) -> list[str]:
                  f" (outside the differences tested, {lo:.4g} to {hi:.4g}: extrapolated)")
         lines = [f"  threshold ({pooled['target']:.3g} correct, {pooled['function']}): "
                  f"{pooled['threshold']:.4g} {unit} difference{where}, "
-                 f"{_interval(*_ci(pooled, 'threshold'))}; lapse {pooled['lapse']:.3f}",
+                 f"{_interval(*_ci(pooled, 'threshold'))}; lapse {pooled['lapse']:.3f}"
+                 + (f" ({pooled['lapse_at_bound']})" if pooled["lapse_at_bound"] else ""),
                  f"  slope {pooled['slope']:.4g} per {unit} "
                  f"({_interval(*_ci(pooled, 'slope'))}): "
                  f"{psychometric.SLOPE}"]
@@ -461,7 +532,8 @@ def _forced_choice_lines(summary: dict, unit: str) -> list[str]:
         if pooled["fit_unsettled"] and pooled["threshold_ci_method"] is None:
             lines.append(f"  fit unsettled: {pooled['fit_unsettled']}")
     if summary.get("staircase_threshold_mean") is not None:
-        lines.append(f"  staircases: mean of the sessions' reversal means "
+        mean = "geometric mean" if summary["staircase_scale"] == "log" else "mean"
+        lines.append(f"  staircases: {mean} of the sessions' reversal {mean}s "
                      f"{summary['staircase_threshold_mean']:.4g} {unit}")
     for end, way in (("floor", "down"), ("ceiling", "up")):
         if summary.get(f"held_at_{end}"):
@@ -469,6 +541,18 @@ def _forced_choice_lines(summary: dict, unit: str) -> list[str]:
                          f"the {end} (the level stayed; reversals there bias the "
                          f"reversal mean)")
     return lines
+
+
+def _table_warning(end: dict) -> list[str]:
+    """The warning (one line, or none) for a session whose results.csv was cut short:
+    fewer rows than session.json records, or a torn last line."""
+    torn = "; its torn last line was skipped" if end["torn_last_line"] else ""
+    if end["trials_recorded"] is not None and end["rows"] < end["trials_recorded"]:
+        return [f"  warning: {end['session']}: results.csv holds {end['rows']} of the "
+                f"{end['trials_recorded']} trials session.json records{torn}: the table was "
+                f"cut short and the missing trials are not analysed"]
+    return [f"  warning: {end['session']}: results.csv's last line was torn (written "
+            f"without its line end) and skipped"] if torn else []
 
 
 def report_lines(summary: dict) -> list[str]:
@@ -479,6 +563,7 @@ def report_lines(summary: dict) -> list[str]:
     lines += [f"  warning: {end['session']} did not run to its end ({end['ended']}, "
               f"{end['main_trials']} main trials): its planned trials are not all here"
               for end in summary["session_ends"] if end["ended"] not in ("complete", None)]
+    lines += [line for end in summary["session_ends"] for line in _table_warning(end)]
     unit = summary["vary"] or ""
     if summary["method"] in ("2afc", "staircase"):
         lines += _forced_choice_lines(summary, unit)

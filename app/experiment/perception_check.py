@@ -9,7 +9,10 @@ Pairs compared:
   Constant stimuli measure a threshold, so levels under it are expected (answered
   correctly less often than at the threshold, the nearest near chance); only a design
   with none beyond it warns: its psychometric function stays below the threshold's point
-  and cannot place it. A staircase has no fixed levels: only its scene is checked.
+  and cannot place it. A staircase has no fixed levels: the reference is compared with
+  the largest comparison it can present (``protocol.reachable``: the reference plus its
+  ``max``, or as far as its steps go within ``max_trials``); below the threshold, the
+  staircase would sit at its ceiling and its threshold be extrapolated.
 - listed stimuli (``[[stimulus]]``, or renderers crossed): every pair of stimuli from
   different scene files, their layers matched one to one
   (``perception.compare_scenes``); two renderings of one scene differ by their
@@ -20,9 +23,30 @@ from __future__ import annotations
 
 from itertools import combinations
 
-from frictex.app.experiment.protocol import Protocol
+from frictex.app.experiment.protocol import Protocol, reachable
 from frictex.rendering.perception import Finding, compare_scenes, compare_values, scene_findings
 from frictex.textures.loader import load_scene
+
+
+def _farthest(protocol: Protocol) -> tuple[float, str] | None:
+    """The comparison farthest from the reference (units of ``vary``) a parametric design
+    can present, and what it means when even that is below the threshold; None for
+    listed stimuli."""
+    st, sc = protocol.stimuli, protocol.staircase
+    if st.vary is None:
+        return None
+    if sc is not None:
+        high = reachable(sc)[1]
+        bound = "its max" if sc.max == high else f"its steps within {sc.max_trials} trials"
+        return (st.reference + high,
+                f"the staircase's largest comparison ({bound}): below the threshold, it "
+                f"would sit at its ceiling and extrapolate its threshold")
+    if not st.levels:
+        return None
+    count = len(st.levels)
+    return (max(st.levels),  # every level is above the reference (protocol)
+            f"the farthest of {count} level{'s' * (count != 1)}: none reaches the threshold, "
+            f"and a design that measures it needs levels on both sides")
 
 
 def protocol_findings(protocol: Protocol) -> list[Finding]:
@@ -34,15 +58,13 @@ def protocol_findings(protocol: Protocol) -> list[Finding]:
     scenes = {path: load_scene(path) for path in paths}
     out = [Finding(f.kind, f.where, f.value, f"{path.name}: {f.message}")
            for path, scene in scenes.items() for f in scene_findings(scene)]
-    if st.vary is not None and st.levels:
-        farthest = max(st.levels)  # every level is above the reference (protocol)
-        found = compare_values(st.vary, st.reference, farthest,
-                               f"stimuli {st.reference:g} and {farthest:g}")
+    farthest = _farthest(protocol)
+    if farthest is not None:
+        value, why = farthest
+        found = compare_values(st.vary, st.reference, value,
+                               f"stimuli {st.reference:g} and {value:g}")
         if found is not None:
-            out.append(Finding(found.kind, found.where, found.value,
-                               f"{found.message}; the farthest of {len(st.levels)} level"
-                               f"{'s' * (len(st.levels) != 1)}: none reaches the threshold, "
-                               f"and a design that measures it needs levels on both sides"))
+            out.append(Finding(found.kind, found.where, found.value, f"{found.message}; {why}"))
     for a, b in combinations(st.listed, 2):
         if a.scene != b.scene:
             found = compare_scenes(scenes[a.scene], scenes[b.scene],

@@ -47,6 +47,7 @@ the tables below.
     reversals = 12              # stop after this many reversals ...
     max_trials = 100            # ... or this many trials
     threshold_reversals = 8     # the staircase's threshold: mean of the last N reversal levels
+                                #   (their geometric mean on the log scale)
     min = ..., max = ...        # bounds of the difference (default: none); every difference
                                 #   the steps can reach within max_trials (as if each trial
                                 #   moved by the largest step) must be a valid stimulus,
@@ -629,6 +630,26 @@ def _stimuli(c: _Check, doc: dict, method: str, base_dir: Path) -> Stimuli | Non
     if "stimuli" in doc:
         return _parametric(c, doc, method, base_dir)
     return _listed(c, doc, method, base_dir)
+
+
+def fewest_trials(sc: Staircase, reversals: int) -> int:
+    """The fewest main trials in which the staircase ``sc`` can reach ``reversals``
+    reversals: its moves alternating, each after the first a reversal, the first an up
+    step (one error) and every other move a down step (``down_after`` correct answers)."""
+    moves = reversals + 1
+    return (moves + 1) // 2 + (moves // 2) * sc.down_after
+
+
+def staircase_warnings(sc: Staircase) -> list[str]:
+    """What may keep the staircase ``sc`` from a threshold, one line each: ``max_trials``
+    fewer than :func:`fewest_trials` for its ``threshold_reversals`` (it stops before
+    the reversals its threshold averages, whatever the answers)."""
+    needed = fewest_trials(sc, sc.threshold_reversals)
+    if sc.max_trials >= needed:
+        return []
+    return [f"staircase.max_trials: {sc.max_trials} trials cannot reach the "
+            f"{sc.threshold_reversals} reversals its threshold averages ({sc.rule} needs at "
+            f"least {needed}); the session would end without a reversal threshold"]
 
 
 def reachable(sc: Staircase) -> tuple[float, float]:

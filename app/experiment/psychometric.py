@@ -42,8 +42,12 @@ which a short staircase needs.
 Some data cannot settle a fit (``Fit.unsettled`` says why): with every trial correct the
 likelihood is highest for any threshold below the lowest difference tested, so the fit
 gives that difference as an upper bound (``Fit.threshold_below``) and no threshold,
-slope or interval; where the likelihood is flat around the fit (a few trials, a step
-steeper than the levels resolve) the search stops at an arbitrary point of the ridge.
+slope or interval; where the threshold's profile likelihood does not fall by
+``PROFILE_DROP`` on both sides within a tenth of the lowest difference and ten times the
+highest (a few trials), the data do not bound the threshold and the fit is arbitrary.
+The slope is judged apart (``Fit.slope_unsettled``): where a step fits as well (a
+change steeper than the levels resolve) it is only bounded below, while the threshold
+between two levels is bounded all the same.
 """
 
 from __future__ import annotations
@@ -53,6 +57,7 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy import stats
 from scipy.special import ndtr, ndtri
 
 from frictex.device.errors import InputError
@@ -60,15 +65,21 @@ from frictex.device.errors import InputError
 FUNCTIONS = ("weibull", "logistic")
 #: how :func:`fit_sets` computes the threshold's interval, as the analysis names it
 BOOTSTRAP = "parametric bootstrap, 95 % percentile interval (Wichmann & Hill 2001b)"
-#: how :func:`fit_sets` computes the slope's interval, with its measured coverage
+#: how :func:`fit_sets` computes the slope's interval
 SLOPE_BCA = ("parametric bootstrap, 95 % bias-corrected and accelerated (BCa) interval "
-             "(Efron 1987; Wichmann & Hill 2001b); covered the true slope in 90 % of 600 "
-             "simulated sessions at the bundled period-2afc design (the percentile "
-             "interval: 77 %)")
-#: how :func:`fit_adaptive` computes the slope's interval, with its measured coverage
+             "(Efron 1987; Wichmann & Hill 2001b)")
+#: its coverage, measured at the bundled period-2afc design only
+SLOPE_BCA_COVERAGE = ("covered the true slope in 90 % of 600 simulated sessions at the "
+                      "bundled period-2afc design (the percentile interval: 77 %)")
+#: how :func:`fit_adaptive` computes the slope's interval
 RERUN = ("parametric bootstrap rerunning the procedure with the fitted function as the "
-         "observer, 95 % BCa interval; covered the true slope in 50 of 100 simulated "
-         "runs of the bundled depth-staircase (the percentile interval: 34)")
+         "observer, 95 % BCa interval")
+#: its coverage, measured at the bundled depth-staircase only
+RERUN_COVERAGE = ("covered the true slope in 50 of 100 simulated runs of the bundled "
+                  "depth-staircase (the percentile interval: 34)")
+#: why a staircase's slope interval is flagged: its measured coverage is far below 95 %
+RERUN_SHORT = ("a staircase's slope interval falls far short of 95 %: it "
+               + RERUN_COVERAGE + "; take it as a rough range")
 #: what the slope is, as the analysis prints it
 SLOPE = "d psi / dx at the threshold: proportion correct per unit of the difference"
 _EPS = 1e-12
@@ -87,7 +98,10 @@ class Fit:
     ``threshold_ci_method`` and ``slope_ci_method`` say (None where none was computed).
     bootstrap : data sets drawn (0: none).
     x, n, k : the data (difference, trials, correct), sorted by x.
-    unsettled : why the data cannot settle the fit (:func:`_unsettled`), else None.
+    unsettled : why the data cannot settle the fit, its threshold first
+        (:func:`_unsettled`), else None.
+    slope_unsettled : why they cannot settle the slope (``unsettled``, or a slope only
+        bounded below), else None.
     threshold_below : every trial correct: the lowest difference tested (units of x),
         which bounds the threshold from above; threshold, slope and their intervals are
         then NaN. None otherwise.
@@ -111,6 +125,7 @@ class Fit:
     threshold_ci_method: str | None
     slope_ci_method: str | None
     unsettled: str | None = None
+    slope_unsettled: str | None = None
     threshold_below: float | None = None
 
     def psi(self, x) -> np.ndarray:
@@ -276,36 +291,64 @@ def threshold_and_slope(function: str, alpha, beta, guess: float, lapse, target:
     return np.where(reach, x, np.nan), np.where(reach, slope, np.nan)
 
 
-#: the least information (expected, per trial) about the location and spread that a
-#: settled fit has: a fit on a flat ridge of the likelihood (every answer at a level
-#: right, or a step too steep for the levels to resolve) has about 1e-10 or less; the
-#: fits of the bundled period-2afc design have about 0.03
-MIN_INFORMATION = 1e-6
+#: how far (log likelihood) a profile falls from its top at the ends of a 95 %
+#: profile-likelihood interval: half the 95 % point of chi-square with 1 degree of
+#: freedom (Venzon & Moolgavkar 1988, Appl Stat 37:87)
+PROFILE_DROP = 0.5 * float(stats.chi2.ppf(0.95, 1))
+#: the log spreads (normalised) of the profile's grid: _B_BOUNDS, a Weibull beta from
+#: 0.0025 to 403 (the top one a step for any levels)
+_PROFILE_B = 61
 #: why a fit with every trial correct gives no threshold
 ALL_CORRECT = ("every trial was correct: the threshold lies below the lowest difference "
                "tested, the data bound it only from above and leave the slope free")
+#: why a fit whose threshold profile does not fall off on both sides is unsettled
+FLAT_THRESHOLD = ("the likelihood is flat along the threshold: its profile stays within "
+                  f"{PROFILE_DROP:.2f} of its top out to {{end}} (the profile-likelihood 95 % "
+                  "interval is open there), so the data do not bound the threshold and the "
+                  "fit's threshold and slope are arbitrary")
+#: why the slope of a fit that a step fits as well is only bounded below
+STEEP_SLOPE = ("the slope is only bounded below: a step fits the data as well as the fitted "
+               f"function (its profile log likelihood within {PROFILE_DROP:.2f} of the top), "
+               "so the interval's upper end is arbitrary")
 
 
-def _unsettled(function, x, n, k, params, guess) -> list[str | None]:
-    """Per fit (``params`` (S, 3) of counts ``k`` (S, J) of ``n`` (J,) at ``x``): why the
-    data cannot settle it, else None. Every trial correct (:data:`ALL_CORRECT`), or the
-    likelihood flat around the fit: the expected information about the normalised
-    location and log spread, its smaller eigenvalue per trial, below
-    :data:`MIN_INFORMATION`; the search then stops wherever the ridge leaves it (on its
-    start grid or a bound) and the fit's numbers are arbitrary."""
+def _profiles(function, u, n, k, guess, lapse_max, target):
+    """The profile log likelihoods of one data set (counts ``k`` of ``n`` at normalised
+    ``u``) on a grid: of the threshold (normalised, :func:`_threshold_grid`'s), the log
+    spread and lapse rate maximised out; and of the log spread over ``_B_BOUNDS``
+    (``_PROFILE_B`` points), the threshold and lapse rate maximised out. Returns
+    (thresholds (T,), their profile (T,), the spread's profile (``_PROFILE_B``,))."""
+    t, theta = _threshold_grid(function, u, guess, lapse_max, target,
+                               np.linspace(*_B_BOUNDS, _PROFILE_B))
+    log_like = -_nll_only(theta, function, u, n, k, guess).reshape(t.size, _PROFILE_B, -1)
+    return t, log_like.max(axis=(1, 2)), log_like.max(axis=(0, 2))
+
+
+def _unsettled(function, x, n, k, guess, lapse_max, target):
+    """Per data set (counts ``k`` (S, J) of ``n`` (J,) at ``x``): why the data cannot
+    settle its fit, else None; and why they cannot settle its slope, else None. The fit:
+    every trial correct (:data:`ALL_CORRECT`), or a threshold the profile likelihood does
+    not bound within its grid (:data:`FLAT_THRESHOLD`: a tenth of the lowest difference
+    to ten times the highest). The slope: the fit's reason, or a step (the grid's
+    steepest spread) within :data:`PROFILE_DROP` of the top (:data:`STEEP_SLOPE`): a
+    steep fit's local information about the spread goes to 0, though the threshold is
+    bounded all the same."""
     scale = float(np.max(x))
-    if function == "logistic":
-        theta = np.stack([params[:, 0] / scale, np.log(params[:, 1] / scale), params[:, 2]], 1)
-    else:
-        theta = np.stack([np.log(params[:, 0] / scale), np.log(params[:, 1]), params[:, 2]], 1)
-    N = np.broadcast_to(n, k.shape)
-    _, _, info = _terms(theta, function, x / scale, N, k, guess)
-    least = np.linalg.eigvalsh(info[:, :2, :2])[:, 0] / N.sum(axis=1)
-    flat = (f"the likelihood is flat around the fit (information per trial about the "
-            f"location and spread below {MIN_INFORMATION:g}): the fit stopped at an "
-            f"arbitrary point of a ridge, and its threshold and slope are arbitrary")
-    return [ALL_CORRECT if np.all(kk == N[i]) else flat if least[i] < MIN_INFORMATION
-            else None for i, kk in enumerate(k)]
+    fits, slopes = [], []
+    for counts in k:
+        if np.all(counts == n):
+            fits.append(ALL_CORRECT)
+            slopes.append(ALL_CORRECT)
+            continue
+        t, by_threshold, by_spread = _profiles(function, x / scale, n, counts, guess,
+                                               lapse_max, target)
+        floor = by_threshold.max() - PROFILE_DROP
+        open_end = [end for end, value in ((t[0], by_threshold[0]), (t[-1], by_threshold[-1]))
+                    if value >= floor]
+        why = FLAT_THRESHOLD.format(end=f"{open_end[0] * scale:.3g}") if open_end else None
+        fits.append(why)
+        slopes.append(why or (STEEP_SLOPE if by_spread[-1] >= floor else None))
+    return fits, slopes
 
 
 def _check(x, n, k, function, guess, lapse_max, target):
@@ -418,9 +461,9 @@ def fit_sets(x, n, k, *, function: str = "weibull", guess: float = 0.5,
     fits = [Fit(function, guess, lapse_max, target, float(a), float(b), float(lam),
                 float(thresholds[i]), float(slopes[i]), (float(t_ci[i, 0]), float(t_ci[i, 1])),
                 (float(s_ci[i, 0]), float(s_ci[i, 1])), bootstrap, x, n, k[i], t_method, s_method,
-                why)
-            for i, ((a, b, lam), why) in enumerate(
-                zip(params, _unsettled(function, x, n, k, params, guess)))]
+                why, why_slope)
+            for i, ((a, b, lam), why, why_slope) in enumerate(
+                zip(params, *_unsettled(function, x, n, k, guess, lapse_max, target)))]
     return [_bounded_above(f) if f.unsettled == ALL_CORRECT else f for f in fits]
 
 
@@ -450,6 +493,20 @@ def _a_at_threshold(function, t, b, lam, guess, target):
     if function == "logistic":
         return t - np.exp(b) * np.log(f / (1.0 - f))
     return np.log(t) - np.exp(-b) * np.log(-np.log1p(-f))
+
+
+def _threshold_grid(function, u, guess, lapse_max, target, spreads):
+    """A grid of normalised thresholds t (T,): ``_GRID_T`` a decade from a tenth of the
+    smallest normalised difference ``u`` to 10; and the parameters (T, B L, 3) that reach
+    ``target`` at each t with each log spread of ``spreads`` (B,) and each of ``_GRID_L``
+    lapse rates over [0, lapse_max] (spread-major)."""
+    lo, hi = float(u.min()) / 10.0, 10.0
+    t = np.geomspace(lo, hi, int(math.ceil(_GRID_T * math.log10(hi / lo))) + 1)
+    B, L = np.meshgrid(spreads, np.linspace(0.0, lapse_max, _GRID_L), indexing="ij")
+    a = _a_at_threshold(function, t[:, None], B.ravel()[None, :], L.ravel()[None, :], guess,
+                        target)
+    theta = np.stack(np.broadcast_arrays(a, B.ravel()[None, :], L.ravel()[None, :]), axis=-1)
+    return t, theta
 
 
 def credible_threshold(function: str, x, n, k, *, guess: float = 0.5,
@@ -493,14 +550,8 @@ def credible_threshold(function: str, x, n, k, *, guess: float = 0.5,
     _check(x, n, k[None, :], function, guess, lapse_max, target)
     scale = float(np.max(x))
     u = x / scale
-    lo, hi = float(u.min()) / 10.0, 10.0
-    count = int(math.ceil(_GRID_T * math.log10(hi / lo))) + 1
-    t = np.geomspace(lo, hi, count)
-    B, L = np.meshgrid(np.linspace(*_PRIOR_B[function], _GRID_B),
-                       np.linspace(0.0, lapse_max, _GRID_L), indexing="ij")
-    a = _a_at_threshold(function, t[:, None], B.ravel()[None, :], L.ravel()[None, :], guess,
-                        target)
-    theta = np.stack(np.broadcast_arrays(a, B.ravel()[None, :], L.ravel()[None, :]), axis=-1)
+    t, theta = _threshold_grid(function, u, guess, lapse_max, target,
+                               np.linspace(*_PRIOR_B[function], _GRID_B))
     log_like = -_nll_only(theta, function, u, n, k, guess)  # (T, G)
     top = log_like.max()
     marginal = np.exp(log_like - top).sum(axis=1)

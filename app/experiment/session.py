@@ -301,6 +301,17 @@ def read_rows(folder: Path, repair: bool = False) -> list[dict]:
     return read_table(folder, repair)[1]
 
 
+def torn_last_line(folder: Path) -> bool:
+    """Whether ``folder``'s results.csv ends in a line without its line end (a write cut
+    short), which :func:`read_table` does not count as a row."""
+    from frictex.device.safe_files import read_bytes
+    try:
+        data = read_bytes(Path(folder) / "results.csv", MAX_SESSION_FILE_BYTES)
+    except OSError:
+        return False  # read_table says why it cannot be read
+    return bool(data) and not data.endswith(b"\n")
+
+
 def read_table(folder: Path, repair: bool = False) -> tuple[tuple[str, ...], list[dict]]:
     """The columns and rows of ``folder``'s results table (:data:`RESULT_COLUMNS`, or
     :data:`COLUMNS_BEFORE_CONTACT` for a table written before them). A last line without
