@@ -211,3 +211,18 @@ def test_a_staircase_max_below_the_threshold_is_flagged(tmp_path, top, flagged):
     assert [f.where for f in found] == ([f"stimuli 0.3 and {0.3 + top:g}"] if flagged else [])
     if flagged:
         assert "the staircase's largest comparison (its max)" in found[0].message
+
+
+@pytest.mark.parametrize("max_trials, warned", [(10, True), (13, False)])
+def test_check_and_a_run_warn_of_a_staircase_too_short_for_its_threshold(
+        tmp_path, capsys, max_trials, warned):
+    """`experiment --check` and a session of a protocol whose max_trials cannot reach its
+    threshold reversals say so on stderr (the file stays valid: exit 0)."""
+    path = tmp_path / "short.toml"
+    path.write_text(STAIRCASE_PROTOCOL.format(max=0.1) + f"max_trials = {max_trials}\n")
+    assert main(["experiment", str(path), "--check"]) == 0
+    assert ("10 trials cannot reach the 8 reversals" in capsys.readouterr().err) == warned
+    if warned:
+        main(["experiment", str(path), "--participant", "simulated", "--out",
+              str(tmp_path / "session")])
+        assert "10 trials cannot reach the 8 reversals" in capsys.readouterr().err

@@ -132,6 +132,13 @@ def _in_window(args: argparse.Namespace, protocol, presenter, session):
                          "none" if args.device is None else "starting")
 
 
+def warn_staircase(protocol) -> None:
+    """Say on stderr what keeps ``protocol``'s staircase, if any, from a threshold."""
+    from frictex.app.experiment.protocol import staircase_warnings
+    for line in staircase_warnings(protocol.staircase) if protocol.staircase else []:
+        print(f"frictex: warning: {line}", file=sys.stderr)
+
+
 def run(args: argparse.Namespace) -> int:
     if args.target[0] == "analyse":
         return _analyse(args)
@@ -154,8 +161,10 @@ def run(args: argparse.Namespace) -> int:
                  f"{len(scheduler.practice)} practice trials, then a staircase of at most "
                  f"{protocol.staircase.max_trials} trials")
         print(f"{args.target[0]}: {protocol.name}, {protocol.method}: {count}")
+        warn_staircase(protocol)
         return 0
     protocol = load_protocol(path)
+    warn_staircase(protocol)
     if args.out is None:
         raise InputError("--out DIR is required: the session folder")
     from frictex.app.experiment.session import folder_of, participant_id
