@@ -20,6 +20,8 @@ def toml_lines(fitted: FittedOn) -> list[str]:
              f"device = {_quoted(fitted.device)}"]
     if fitted.finger is not None:
         lines.append(f"finger = {int(fitted.finger)}")
+    if fitted.speed_mm_s is not None:
+        lines.append(f"speed_mm_s = {float(fitted.speed_mm_s)!r}")
     return lines
 
 

@@ -274,10 +274,13 @@ def __getattr__(name: str):
 class FittedOn:
     """What a ``frictex calibrate`` fit was measured on (``[device.fitted]``): the
     device's name from its handshake (``device.link.protocol.Info.name``) and, for the
-    simulated device, the simulated finger (person number; None for a real finger)."""
+    simulated device, the simulated finger (person number; None for a real finger); the
+    finger's sliding speed during the sweep (mm/s; None: not recorded), at which the
+    fitted b holds (seed 003's b falls as the finger speeds up)."""
 
     device: str
     finger: int | None = None
+    speed_mm_s: float | None = None
 
 
 @dataclass(frozen=True)

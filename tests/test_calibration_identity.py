@@ -26,7 +26,8 @@ def _section(fitted):
 
 
 @pytest.mark.parametrize("fitted", [FittedOn("frictex sim \"plate\" \\ 1", 3),
-                                    FittedOn("Lab plate", None)])
+                                    FittedOn("Lab plate", None),
+                                    FittedOn("Lab plate", None, 60.0)])
 def test_the_section_written_reads_back_with_what_it_was_fitted_on(tmp_path, fitted):
     scene = tmp_path / "s.toml"
     scene.write_text(SCENE.format(device=_section(fitted)))
@@ -44,6 +45,7 @@ def test_a_file_from_before_the_table_loads_unchecked(tmp_path):
     ('[device.fitted]\nfinger = 3\n', "device.fitted.device"),
     ('[device.fitted]\ndevice = "x"\nfinger = -1\n', "device.fitted.finger"),
     ('[device.fitted]\ndevice = "x"\nwho = 1\n', "unknown key"),
+    ('[device.fitted]\ndevice = "x"\nspeed_mm_s = 0\n', "device.fitted.speed_mm_s"),
 ])
 def test_a_bad_fitted_table_is_named(tmp_path, table, said):
     scene = tmp_path / "s.toml"

@@ -67,7 +67,8 @@ FRICTION = {"b_per_um": Num("1/um", _FRICTION.b_per_um, gt=0.0),
             "asymptote_cap": Retired("the friction model holds up to an asymptote of 1 "
                                      "(seed 003, eq 2) and frictex warns where a force takes "
                                      "it there; delete the key")}
-FITTED = {"device": Text(), "finger": Int("person number", None, ge=0)}
+FITTED = {"device": Text(), "finger": Int("person number", None, ge=0),
+          "speed_mm_s": Num("mm/s", None, gt=0.0, le=10_000.0)}
 CALIBRATION = {"amplitudes_um": NumList(Num("um zero-to-peak", ge=0.0, le=MAX_UM), min_len=2),
                "forces_n": NumList(Num("N", ge=0.0, le=MAX_FORCE_N)),
                "mu": Rows(MU)}
@@ -252,6 +253,8 @@ documented(FITTED, {
     "finger": ("with the simulated device: the simulated finger (person number) it was "
                "fitted on; a replay with another --sim-finger warns",
                "none: fitted on a real finger"),
+    "speed_mm_s": ("the finger's sliding speed (mm/s) during the sweep; the b of "
+                   "[device.friction] holds at it", "none: not recorded"),
 })
 documented(CALIBRATION, {
     "amplitudes_um": "measured amplitudes (um, zero-to-peak), from 0, strictly increasing",

@@ -92,7 +92,8 @@ def run(args: argparse.Namespace) -> int:
               f"the touch)", file=sys.stderr)
         w, normal, mu = _sweeps(link, sweep)
         limit_um = link.info.limits_um[0]
-        fitted = FittedOn(link.info.name, simulated_finger(args.device, sim_args))
+        fitted = FittedOn(link.info.name, simulated_finger(args.device, sim_args),
+                          sweep.speed_mm_s)
     finally:
         link.close()
     fit = fit_points(w, normal, mu)
