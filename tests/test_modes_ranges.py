@@ -42,3 +42,26 @@ def test_a_mode_that_is_not_a_finite_positive_number_is_refused(capsys, value):
         print_modes("t", modes, True)
     assert capsys.readouterr().out == ""
     check_finite([{"order": 3, "frequency_hz": 1.0}])  # a ring's modes have no wavelength
+
+
+TINY_RING = ["ring", "--thickness-mm", "0.001", "--length-mm", "1e5", "--radius-mm", "1e5",
+             "--youngs-gpa", "0.001", "--density", "30000"]
+
+
+def test_a_ring_under_0_005_hz_prints_in_significant_digits(capsys):
+    """Both frequencies of the pair (4.19e-11 and 3.11e-11 Hz) and their split printed
+    0.00 0.00 0.00 though --json gave them."""
+    assert main(["modes", *TINY_RING, "--orders", "2"]) == 0
+    row = capsys.readouterr().out.splitlines()[-1].split()
+    assert [float(x) for x in row[1:4]] == pytest.approx([4.19e-11, 3.11e-11, -1.08e-11],
+                                                         rel=0.01)
+    assert main(["modes", *TINY_RING, "--band", "1e-11", "1e-10"]) == 0
+    rows = [line.split() for line in capsys.readouterr().out.splitlines()[-2:]]
+    assert [float(r[2]) for r in rows] == pytest.approx([3.11e-11, 4.19e-11], rel=0.01)
+
+
+def test_a_ring_on_its_crossing_prints_a_split_of_0_not_its_float_noise(capsys):
+    """At L/R 1.91775 order 3's pair differs by about 1e-13 Hz of rounding."""
+    assert main(["modes", "ring", "--orders", "3", "--length-mm", "95.88762973326832"]) == 0
+    row = capsys.readouterr().out.splitlines()[-1].split()
+    assert row[1] == row[2] and row[3] == "0.00"

@@ -116,10 +116,16 @@ def check_finite(modes: list[dict]) -> None:
                                  "number above 0; check the dimensions and material")
 
 
-def _hz(frequency_hz: float) -> str:
-    """A frequency (Hz) in the table's 12 columns: to 0.1 Hz, or in 3 significant digits
-    where that would show 0.0."""
-    return f"{frequency_hz:12.1f}" if frequency_hz >= 0.05 else f"{frequency_hz:12.3g}"
+def format_hz(value_hz: float, width: int = 12, decimals: int = 1,
+              scale_hz: float | None = None) -> str:
+    """A frequency or a difference of frequencies (Hz) in a table's ``width`` columns: to
+    ``decimals`` places, or in 3 significant digits where ``scale_hz`` (default the value
+    itself; for a split, the frequencies it separates) would show as 0 to those places.
+    Never -0."""
+    scale_hz = abs(value_hz) if scale_hz is None else scale_hz
+    if scale_hz >= 0.5 * 10.0 ** -decimals:
+        return f"{round(value_hz, decimals) + 0.0:{width}.{decimals}f}"
+    return f"{value_hz:{width}.3g}"
 
 
 def print_modes(title: str, modes: list[dict], as_json: bool) -> None:
@@ -135,7 +141,7 @@ def print_modes(title: str, modes: list[dict], as_json: bool) -> None:
     for m in modes:
         nodes = " ".join(f"{x:.2f}" for x in m["nodes_mm"])
         print("".join(f"{str(m[k]):>6s} " for k in extra)
-              + f"{m['order']:5d}  {_hz(m['frequency_hz'])}  {m['wavelength_mm']:13.3f}  "
+              + f"{m['order']:5d}  {format_hz(m['frequency_hz'])}  {m['wavelength_mm']:13.3f}  "
                 f"{len(m['nodes_mm']):5d}  {nodes}")
 
 

@@ -21,8 +21,8 @@ import numpy as np
 from frictex.app.commands.argtypes import bounded, positive_float
 from frictex.app.commands.modes_output import (add_plot_argument, check_below, check_finite,
                                                check_orders, check_plot, check_wavelength,
-                                               density_kg_m3, dimension_mm, refuse_without,
-                                               save_figure, warn, youngs_gpa)
+                                               density_kg_m3, dimension_mm, format_hz,
+                                               refuse_without, save_figure, warn, youngs_gpa)
 from frictex.device.structures.beam import VALID_WAVELENGTH_IN_THICKNESSES, ModesError
 from frictex.device.actuation.travelling import phase_shift_response, ring_wave
 from frictex.device.profile import DrivingForceParams
@@ -224,14 +224,17 @@ def _print_table(ring: RingResonator, modes, pairs: list[dict], band) -> None:
         print(f"every mode between {band[0]:g} and {band[1]:g} Hz:")
         print("order  kind        frequency_hz  wavelength_mm")
         for m in modes:
-            print(f"{m.order:5d}  {m.kind:10s}  {m.frequency_hz:12.2f}  {m.wavelength_mm:13.3f}")
+            print(f"{m.order:5d}  {m.kind:10s}  {format_hz(m.frequency_hz, 12, 2)}  "
+                  f"{m.wavelength_mm:13.3f}")
         return
     print("order  symmetric_hz  asymmetric_hz  split_hz  wavelength_mm  degenerate at L/R "
           f"(R fixed; within x{_RATIO_WINDOW:g} of {ratio:.4g})")
     for p in pairs:
         lr = " ".join(f"{c:.4f}" for c in p["degenerate_l_over_r"]) or "none"
-        print(f"{p['order']:5d}  {p['symmetric_hz']:12.2f}  {p['asymmetric_hz']:13.2f}  "
-              f"{round(p['split_hz'], 2) + 0.0:8.2f}  {p['wavelength_mm']:13.3f}  {lr}")
+        # the split to the frequencies' precision: 0.00 at a crossing, not its float noise
+        split = format_hz(p["split_hz"], 8, 2, scale_hz=min(p["symmetric_hz"], p["asymmetric_hz"]))
+        print(f"{p['order']:5d}  {format_hz(p['symmetric_hz'], 12, 2)}  "
+              f"{format_hz(p['asymmetric_hz'], 13, 2)}  {split}  {p['wavelength_mm']:13.3f}  {lr}")
 
 
 def _plot(ring: RingResonator, orders: list[int], phase: dict | None = None):
