@@ -7,7 +7,10 @@ said not to fit this plate and finger only when its residual RMS is above
 ``MODEL_TOLERANCE`` *and* the residuals are not noise: their signs, in order of amplitude,
 form fewer runs than independent noise would (Wald-Wolfowitz runs test, p below
 ``LACK_OF_FIT_P``). Noise alone (sd 0.03 on exact eq-2 points) raises the RMS above the
-tolerance in most sweeps, and a table then fits the noise worse than the model does. Where
+tolerance in most sweeps, and a table then fits the noise worse than the model does. With
+few amplitudes the runs test cannot reach ``LACK_OF_FIT_P`` whatever the residuals (its
+smallest p is 0.2 at 5 amplitudes, 0.057 at 7): there the RMS alone judges the fit
+(:attr:`Fit.judged_by`), so a clear misfit at 3 to 7 amplitudes still gets a table. Where
 the model does not fit, :func:`fit_points` also builds a calibration table
 (``device.profile.Calibration``) from the points: one column per measured amplitude (the
 protocol's levels, however few points each has), or bins of neighbouring amplitudes where
@@ -17,6 +20,8 @@ the columns after it down.
 
 A fit that stops on a bound of b or k (:attr:`Fit.bound_notes`) does not determine that
 constant: points of b = 30 /um give b = 20 /um, the upper bound, with a residual of 0.005.
+k = 0 is the exception: friction that does not depend on the normal force, a physical
+value the fit can reach, not a limit of the fit.
 
 :func:`device_toml` writes the result as the ``[device]`` section of a texture file
 (the grammar of ``textures.loader``).
@@ -29,7 +34,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import isotonic_regression, least_squares
-from scipy.special import comb
+from scipy.special import gammaln, logsumexp
 
 from frictex.device.errors import InputError
 from frictex.device.friction import forward_mu
@@ -46,7 +51,8 @@ K_BOUNDS = (0.0, 5.0)
 #: most amplitude columns of a calibration table, besides amplitude 0
 TABLE_BINS = 12
 #: least distinct amplitudes above 0 a fit takes: two determine (b, k) at one normal
-#: force, a third checks that the model fits
+#: force, a third checks that the model fits (by the residual RMS alone below 8
+#: amplitudes, where the runs test cannot reach ``LACK_OF_FIT_P``)
 MIN_AMPLITUDES = 3
 #: least fall of the fitted mu' from 0 um to the largest amplitude that determines b:
 #: below it the curve is within a few times the model's tolerance of flat, so any b fits
@@ -63,9 +69,10 @@ def model_jacobian(w_um, normal_n, b_per_um: float, k_per_n: float) -> np.ndarra
 class Fit:
     """A fit's outcome: the constants, their standard errors (``b_se`` 1/um, ``k_se``
     1/N), the residual RMS (mu'), the point count, the runs test's p-value of the
-    residuals (:func:`few_runs_p`) and the bounds the fit stopped on (``at_bound``: e.g.
-    ``("b", "upper")``); ``calibration`` is a table when the model does not fit (else
-    None)."""
+    residuals (:func:`few_runs_p`) and the smallest p-value it could have given with the
+    residuals' counts of signs (``runs_least_p``), and the bounds the fit stopped on
+    (``at_bound``: e.g. ``("b", "upper")``); ``calibration`` is a table when the model
+    does not fit (else None)."""
 
     params: FrictionParams
     residual_rms: float
@@ -74,11 +81,32 @@ class Fit:
     b_se: float = 0.0
     k_se: float = 0.0
     runs_p: float = 1.0
+    runs_least_p: float = 0.0
     at_bound: tuple[tuple[str, str], ...] = ()
 
     @property
+    def judged_by(self) -> str:
+        """The rule that judged the fit: ``"RMS"`` where the residual RMS is within
+        ``MODEL_TOLERANCE`` or the runs test could not reach ``LACK_OF_FIT_P`` (too few
+        amplitudes), else ``"runs test"``."""
+        runs_can_reject = self.runs_least_p < LACK_OF_FIT_P
+        return "runs test" if self.residual_rms > MODEL_TOLERANCE and runs_can_reject else "RMS"
+
+    @property
     def fits(self) -> bool:
-        return self.residual_rms <= MODEL_TOLERANCE or self.runs_p >= LACK_OF_FIT_P
+        if self.judged_by == "RMS":
+            return self.residual_rms <= MODEL_TOLERANCE
+        return self.runs_p >= LACK_OF_FIT_P
+
+    @property
+    def misfit_reason(self) -> str:
+        """Why the model does not fit, by the rule that judged it (one clause)."""
+        if self.judged_by == "runs test":
+            return (f"its residuals run in long stretches on one side of the curve, runs "
+                    f"test p {self.runs_p:.3f}")
+        return (f"residual RMS {self.residual_rms:.3f} above the tolerance "
+                f"{MODEL_TOLERANCE:g}; too few amplitudes for the runs test, whose smallest "
+                f"p here is {self.runs_least_p:.2g}")
 
     @property
     def bound_notes(self) -> list[str]:
@@ -88,6 +116,11 @@ class Fit:
         for name, side in self.at_bound:
             (low, high), unit = limits[name]
             value = high if side == "upper" else low
+            if (name, side) == ("k", "lower"):
+                notes.append(f"k is {value:g} /N, its physical limit: the finger's friction "
+                             f"does not depend on the normal force, to within k's standard "
+                             f"error {self.k_se:.2g} /N")
+                continue
             notes.append(f"{name} stopped on its {side} bound {value:g} {unit}: the best fit "
                          f"lies beyond it, so the points do not determine {name} (its value "
                          f"and standard error are not estimates)")
@@ -126,8 +159,10 @@ def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> 
     b_se, k_se = standard_errors(sol.jac, sol.fun)
     at_bound = tuple((name, "lower" if side < 0 else "upper")
                      for name, side in zip("bk", sol.active_mask) if side != 0)
+    signs = _residual_signs(w, sol.fun)
     fit = Fit(params=params, residual_rms=rms, n_points=int(w.size), b_se=b_se, k_se=k_se,
-              runs_p=few_runs_p(_residual_signs(w, sol.fun)), at_bound=at_bound)
+              runs_p=few_runs_p(signs), runs_least_p=few_runs_p(np.sort(signs)),
+              at_bound=at_bound)
     if fit.fits:
         return fit
     return replace(fit, calibration=_table(w, f, m))
@@ -150,8 +185,11 @@ def _check_fall(w: np.ndarray, f: np.ndarray, params: FrictionParams) -> None:
 def standard_errors(jacobian: np.ndarray, residuals: np.ndarray) -> tuple[float, float]:
     """Standard errors of (b, k) (1/um, 1/N): the square roots of the diagonal of
     s^2 (J^T J)^-1, s^2 the residual variance over n - 2 degrees of freedom; inf where
-    J^T J is singular (a constant the points do not determine)."""
-    dof = max(residuals.size - 2, 1)
+    J^T J is singular (a constant the points do not determine) or where there are 2
+    points or fewer (they fit exactly, leaving no residual to measure the noise by)."""
+    dof = residuals.size - 2
+    if dof < 1:
+        return math.inf, math.inf
     s2 = float(residuals @ residuals) / dof
     try:
         cov = s2 * np.linalg.inv(jacobian.T @ jacobian)
@@ -174,20 +212,29 @@ def few_runs_p(signs: np.ndarray) -> float:
     """P(as few runs or fewer) of a sequence of signs whose order is random, given its
     counts of + and - (the exact Wald-Wolfowitz distribution): small when the residuals
     of a fit stay on one side of the curve for long stretches, as a misfit's do. With one
-    sign throughout, the chance of that many equal signs, 0.5^(n-1)."""
+    sign throughout, the chance of that many equal signs, 0.5^(n-1). The counts of
+    arrangements are summed as logarithms: as numbers they overflow past about 1000
+    signs."""
     n_pos, n_neg = int(np.sum(signs > 0)), int(np.sum(signs < 0))
     if n_pos == 0 or n_neg == 0:
         return 1.0 if n_pos + n_neg < 2 else 0.5 ** (n_pos + n_neg - 1)
     runs = 1 + int(np.count_nonzero(signs[1:] != signs[:-1]))
-    ways = 0.0
-    for r in range(2, runs + 1):
-        half = r // 2
-        if r % 2 == 0:
-            ways += 2 * comb(n_pos - 1, half - 1) * comb(n_neg - 1, half - 1)
-        else:
-            ways += (comb(n_pos - 1, half) * comb(n_neg - 1, half - 1)
-                     + comb(n_pos - 1, half - 1) * comb(n_neg - 1, half))
-    return float(ways / comb(n_pos + n_neg, n_pos))
+    half = np.arange(2, runs + 1) // 2  # runs of each sign: r = 2 half or 2 half + 1
+    odd = np.arange(2, runs + 1) % 2 == 1
+    even_ways = np.log(2.0) + _log_comb(n_pos - 1, half - 1) + _log_comb(n_neg - 1, half - 1)
+    odd_ways = np.logaddexp(_log_comb(n_pos - 1, half) + _log_comb(n_neg - 1, half - 1),
+                            _log_comb(n_pos - 1, half - 1) + _log_comb(n_neg - 1, half))
+    log_ways = logsumexp(np.where(odd, odd_ways, even_ways))
+    return float(min(1.0, np.exp(log_ways - _log_comb(n_pos + n_neg, n_pos))))
+
+
+def _log_comb(n: int, k):
+    """log of n choose k, elementwise over k; -inf where k is outside 0..n."""
+    k = np.asarray(k, dtype=np.float64)
+    inside = (k >= 0) & (k <= n)
+    kept = np.where(inside, k, 0.0)
+    log_ways = gammaln(n + 1.0) - gammaln(kept + 1.0) - gammaln(n - kept + 1.0)
+    return np.where(inside, log_ways, -np.inf)
 
 
 def _table(w: np.ndarray, f: np.ndarray, m: np.ndarray) -> Calibration:
@@ -230,7 +277,8 @@ def device_toml(fit: Fit, amplitude_limit_um: float, normal_force_n: float,
         lines += toml_lines(fitted)
     if fit.calibration is not None:
         cal = fit.calibration
-        lines += ["[device.calibration]     # the model does not fit: measured table",
+        lines += [f"[device.calibration]     # the model does not fit ({fit.misfit_reason}): "
+                  "measured table",
                   "amplitudes_um = [" + ", ".join(f"{a:.6g}" for a in cal.amplitudes_um) + "]",
                   "forces_n = [" + ", ".join(f"{x:.6g}" for x in cal.forces_n) + "]",
                   "mu = [" + ", ".join("[" + ", ".join(f"{x:.8g}" for x in row) + "]"

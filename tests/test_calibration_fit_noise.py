@@ -1,7 +1,10 @@
 """The fit judged against the points' noise: noise alone keeps the model, a table follows
 its columns' trend rather than single noisy points, the constants come with standard
-errors, a fit stopped on a bound says so, and the sliding speed of the sweep is written."""
+errors, a fit stopped on a bound says so, and the sliding speed of the sweep is written;
+too few amplitudes for the runs test leave the RMS to judge, and 2000 amplitudes are
+tested as well as 12."""
 
+import math
 from types import SimpleNamespace
 
 import matplotlib.figure
@@ -11,7 +14,8 @@ import pytest
 import frictex.app.commands.calibrate as calibrate
 import frictex.device.link.host as host
 from frictex.app.commands.cli import main
-from frictex.device.calibration_fit import B_BOUNDS, device_toml, fit_points
+from frictex.device.calibration_fit import (B_BOUNDS, device_toml, few_runs_p, fit_points,
+                                           model_jacobian, standard_errors)
 from frictex.device.calibration_run import Sweep
 from frictex.device.friction import forward_mu
 from frictex.device.profile import FrictionParams
@@ -128,3 +132,52 @@ def test_the_plot_is_titled_with_the_fit_force_and_speed(monkeypatch, tmp_path):
     assert titles and "b 1.670" in titles[0] and "k 1.130" in titles[0]
     assert "RMS 0.0000" in titles[0] and "0.5 N, 60 mm/s sliding" in titles[0]
 
+
+
+def test_the_runs_test_of_2000_amplitudes_is_a_probability():
+    """Past about 1000 amplitudes the counts of arrangements overflowed: p was NaN and 2000
+    noisy eq-2 points (RMS 0.03) were given a table for noise alone."""
+    w = np.linspace(0.01, 2.4, 2000)
+    force = np.full(w.size, 0.5)
+    mu = forward_mu(w, force, FINGER) + np.random.default_rng(0).normal(0.0, 0.03, w.size)
+    fit = fit_points(w, force, mu)
+    assert fit.residual_rms > 0.02 and 0.05 < fit.runs_p <= 1.0 and fit.calibration is None
+    stretches = np.tile([1.0] * 4 + [-1.0] * 4, 250)  # 500 runs where 1001 are expected
+    assert 0.0 < few_runs_p(stretches) < 1e-100
+
+
+def test_a_clear_misfit_at_five_amplitudes_gets_a_table_by_its_rms():
+    """At 5 amplitudes the runs test's smallest p is 0.2: a linear fall (RMS 0.069, 3.4
+    times the tolerance) was kept as a fit; the RMS judges it, and the table says so."""
+    w = np.repeat([0.5, 1.0, 1.5, 2.0, 2.4], 3)
+    fit = fit_points(w, np.full(w.size, 0.5), 1.0 - 0.35 * w)
+    assert not fit.fits and fit.calibration is not None and fit.judged_by == "RMS"
+    assert fit.misfit_reason == ("residual RMS 0.069 above the tolerance 0.02; too few "
+                                 "amplitudes for the runs test, whose smallest p here is 0.2")
+    assert f"# the model does not fit ({fit.misfit_reason}): measured table" in \
+        device_toml(fit, 2.5, 0.5)
+    twelve = fit_points(LEVELS_UM, FORCE_N, 1.0 - 0.35 * LEVELS_UM)
+    assert not twelve.fits and twelve.judged_by == "runs test"
+    assert twelve.misfit_reason.startswith("its residuals run in long stretches")
+
+
+def test_two_points_have_no_standard_error():
+    """Two points fit (b, k) exactly: n - 2 = 0 degrees of freedom gave standard errors 0."""
+    w, force = np.array([0.5, 2.0]), np.full(2, 0.5)
+    jacobian = model_jacobian(w, force, FINGER.b_per_um, FINGER.asymptote_per_n)
+    assert standard_errors(jacobian, np.zeros(2)) == (math.inf, math.inf)
+
+
+def test_k_on_zero_is_its_physical_limit_not_an_undetermined_constant():
+    """A finger of k = 0 (friction not depending on force) stops on k's lower bound in
+    most sweeps at noise sd 0.01, with a standard error near 0.01 /N: the note says k is
+    at its physical limit, not that the points do not determine it."""
+    fits = [fit_points(LEVELS_UM, FORCE_N, mu)
+            for mu in noisy_sweeps(0.01, 20, FrictionParams(1.67, 0.0))]
+    on_zero = [fit for fit in fits if fit.at_bound == (("k", "lower"),)]
+    assert len(on_zero) >= 5
+    for fit in on_zero:
+        assert fit.bound_notes == [f"k is 0 /N, its physical limit: the finger's friction does "
+                                   f"not depend on the normal force, to within k's standard "
+                                   f"error {fit.k_se:.2g} /N"]
+        assert fit.k_se < 0.03
