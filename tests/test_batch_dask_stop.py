@@ -52,6 +52,9 @@ SLEEPING_ITEMS = textwrap.dedent("""
         except fanout.NoWorkers as exc:
             print("no workers", exc.results)
             sys.exit(1)
+        except fanout.Interrupted as exc:
+            print("stopped", exc.stopped)
+            sys.exit(2)
 """ % BOUND_S)
 
 
@@ -144,7 +147,9 @@ def test_a_cluster_without_workers_fails_the_batch_after_the_bound(tmp_path, clu
     wait_for(lambda: not cluster.scheduler.tasks, "the tasks to be cancelled")
 
 
-def test_a_batch_whose_only_worker_dies_gives_up_after_the_bound(tmp_path, cluster, spawn):
+def start_sleeping_items(tmp_path, cluster, spawn):
+    """SLEEPING_ITEMS on ``cluster`` with one worker of one thread, once an item has
+    started: (the items' process, the worker's, the marks' folder)."""
     script = tmp_path / "items.py"
     script.write_text(SLEEPING_ITEMS)
     marks = tmp_path / "marks"
@@ -155,6 +160,22 @@ def test_a_batch_whose_only_worker_dies_gives_up_after_the_bound(tmp_path, clust
     wait_for(lambda: cluster.scheduler.workers, "the worker to join")
     proc = spawn([sys.executable, str(script), cluster.scheduler_address, str(marks)])
     wait_for(lambda: list(marks.glob("*.start")), "an item to start")
+    return proc, worker, marks
+
+
+def test_a_signal_counts_the_items_running_on_workers_as_stopped(tmp_path, cluster, spawn):
+    """All three read 'not started' before. The worker holds a second item queued behind
+    its one thread (the scheduler lists it processing): it has not started."""
+    proc, _, marks = start_sleeping_items(tmp_path, cluster, spawn)
+    os.kill(proc.pid, signal.SIGTERM)
+    code, out, err = finish(proc)
+    assert code == 2, err
+    (started,) = [int(mark.stem) for mark in marks.glob("*.start")]
+    assert out.strip() == f"stopped [{started}]"
+
+
+def test_a_batch_whose_only_worker_dies_gives_up_after_the_bound(tmp_path, cluster, spawn):
+    proc, worker, _ = start_sleeping_items(tmp_path, cluster, spawn)
     worker.kill()
     code, out, err = finish(proc)
     assert code == 1, err

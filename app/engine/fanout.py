@@ -21,7 +21,8 @@ with this process, and ``fg`` or ``bg`` continues them. Should this process die 
 gets a SIGINT from the system (Linux) and stops its item likewise. On a Dask cluster
 the same stopper takes the signal (Ctrl-C, SIGTERM, SIGHUP) and the items not yet
 started are cancelled; those already running go on to their end on their workers (Dask
-cannot stop a running task).
+cannot stop a running task) and are counted stopped while they ran, as are those that
+finished after the last look for results.
 
 A Dask cluster without workers. Its workers are counted when the items are sent and then
 every :data:`WORKER_CHECK_S` while they run: with none, a warning says so once, and after
@@ -330,7 +331,8 @@ def _dask(fn, items: list, address: str, done) -> list:
         with _handling(stopper):
             futures = client.map(fn, items, pure=False)
             try:
-                return _dask_results(futures, stopper, _WorkerWatch(client, address), done)
+                return _dask_results(client, futures, stopper, _WorkerWatch(client, address),
+                                     done)
             except BaseException:
                 client.cancel(futures)
                 raise
@@ -350,7 +352,8 @@ def _dask_client(address: str):
         raise OSError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
 
 
-def _dask_results(futures: list, stopper: _Stopper, watch: "_WorkerWatch", done) -> list:
+def _dask_results(client, futures: list, stopper: _Stopper, watch: "_WorkerWatch",
+                  done) -> list:
     """The results of ``futures`` in their order, taken as they finish (every
     :data:`POLL_S`, so that a signal the stopper kept is seen); :class:`Interrupted` once
     it keeps one, :class:`NoWorkers` when ``watch`` gives up."""
@@ -365,8 +368,26 @@ def _dask_results(futures: list, stopper: _Stopper, watch: "_WorkerWatch", done)
         watch.check(results)
         time.sleep(POLL_S)
     if stopper.signum is not None:
-        raise Interrupted(stopper.signum, results, [])
+        raise Interrupted(stopper.signum, results, _started_on_dask(client, futures, results))
     return results
+
+
+def _started_on_dask(client, futures: list, results: list) -> list[int]:
+    """The indices of the unfinished ``futures`` (None in ``results``) that a worker's
+    thread is running now, or that finished since the results were last taken.
+
+    The scheduler's ``processing`` would also list the tasks a worker holds queued
+    behind its threads (a 1-thread worker holds 2), which have not started: the
+    workers' call stacks list only the tasks running in a thread. Running ones are
+    looked up before finished ones, so that one ending in between is in either.
+    """
+    unfinished = {future.key: k for k, future in enumerate(futures) if results[k] is None}
+    if not unfinished:
+        return []
+    running = {key for stacks in client.call_stack(keys=list(unfinished)).values()
+               for key in stacks}
+    finished = {key for key, k in unfinished.items() if futures[k].status == "finished"}
+    return sorted(unfinished[key] for key in running | finished)
 
 
 class _WorkerWatch:
