@@ -102,8 +102,7 @@ def run(args: argparse.Namespace) -> int:
           f"b = {fit.params.b_per_um:.4f} ± {fit.b_se:.2g} /um, "
           f"k = {fit.params.asymptote_per_n:.4f} ± {fit.k_se:.2g} /N (standard errors), "
           f"residual RMS {fit.residual_rms:.5f} (mu')"
-          + ("" if fit.calibration is None else "; the model does not fit (its residuals "
-             f"run in long stretches on one side of the curve, runs test p {fit.runs_p:.3f}): "
+          + ("" if fit.calibration is None else f"; the model does not fit ({fit.misfit_reason}): "
              f"its measured table ({len(fit.calibration.amplitudes_um)} amplitudes) written"))
     for note in fit.bound_notes:
         print(f"frictex: warning: {note}", file=sys.stderr)
