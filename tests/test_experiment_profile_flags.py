@@ -83,6 +83,27 @@ def test_a_step_leaves_the_slope_bounded_below_and_the_threshold_settled():
     assert pooled["slope_ci95_unsettled"] == f"unsettled: {P.STEEP_SLOPE}"
 
 
+STEP_LEVELS = np.array([0.1, 0.2, 0.3, 0.4, 0.5, 0.6])
+
+
+@pytest.mark.parametrize("function", P.FUNCTIONS)
+def test_a_step_is_the_steepest_spread_for_either_function(function):
+    """Half right up to 0.3, every answer right from 0.4. The logistic's spread beta
+    divides (x - alpha), so its steepest curve is its smallest beta, where the Weibull's
+    is its largest: the logistic fit (beta 0.0035, a step) was not flagged. Shallow data,
+    the logistic's flattest curve near as likely as its fit, are not flagged either."""
+    k = np.array([10.0, 10, 11, 20, 20, 20])
+    fit = P.fit(STEP_LEVELS, N, k, function=function, bootstrap=0)
+    step = -np.sum(stats.binom.logpmf(k, N, np.where(STEP_LEVELS < 0.35, 0.5, 1.0)))
+    fitted = -np.sum(stats.binom.logpmf(k, N, fit.psi(STEP_LEVELS)))
+    assert step - fitted < P.PROFILE_DROP
+    assert 0.3 < fit.threshold < 0.4
+    assert fit.unsettled is None and fit.slope_unsettled == P.STEEP_SLOPE
+    shallow = P.fit(STEP_LEVELS, N, np.array([11.0, 13, 14, 15, 16, 17]), function=function,
+                    bootstrap=0)
+    assert shallow.unsettled is None and shallow.slope_unsettled is None
+
+
 def test_coverage_is_quoted_only_for_the_design_it_was_measured_on(seed6, tmp_path):
     """The bundled period-2afc, one complete session: its measured coverage; the same
     session's table cut to 46 trials: not measured for this design."""

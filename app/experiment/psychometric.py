@@ -296,7 +296,8 @@ def threshold_and_slope(function: str, alpha, beta, guess: float, lapse, target:
 #: freedom (Venzon & Moolgavkar 1988, Appl Stat 37:87)
 PROFILE_DROP = 0.5 * float(stats.chi2.ppf(0.95, 1))
 #: the log spreads (normalised) of the profile's grid: _B_BOUNDS, a Weibull beta from
-#: 0.0025 to 403 (the top one a step for any levels)
+#: 0.0025 to 403 or a logistic beta from 0.0025 to 403 times the highest level; the
+#: steep end (:func:`_steep_end`) a step for levels 2 % of the highest or more apart
 _PROFILE_B = 61
 #: why a fit with every trial correct gives no threshold
 ALL_CORRECT = ("every trial was correct: the threshold lies below the lowest difference "
@@ -310,6 +311,14 @@ FLAT_THRESHOLD = ("the likelihood is flat along the threshold: its profile stays
 STEEP_SLOPE = ("the slope is only bounded below: a step fits the data as well as the fitted "
                f"function (its profile log likelihood within {PROFILE_DROP:.2f} of the top), "
                "so the interval's upper end is arbitrary")
+
+
+def _steep_end(function) -> int:
+    """The index in the profile's spread grid of its steepest function: the end of
+    ``_B_BOUNDS`` where z changes fastest with the threshold (|dz/da| of :func:`_core`,
+    e^b for the Weibull, e^-b for the logistic)."""
+    _, _, dz_da, _ = _core(function, 1.0, 0.0, np.array(_B_BOUNDS))
+    return int(np.argmax(np.abs(dz_da))) * (_PROFILE_B - 1)
 
 
 def _profiles(function, u, n, k, guess, lapse_max, target):
@@ -334,6 +343,7 @@ def _unsettled(function, x, n, k, guess, lapse_max, target):
     steep fit's local information about the spread goes to 0, though the threshold is
     bounded all the same."""
     scale = float(np.max(x))
+    steep = _steep_end(function)
     fits, slopes = [], []
     for counts in k:
         if np.all(counts == n):
@@ -347,7 +357,7 @@ def _unsettled(function, x, n, k, guess, lapse_max, target):
                     if value >= floor]
         why = FLAT_THRESHOLD.format(end=f"{open_end[0] * scale:.3g}") if open_end else None
         fits.append(why)
-        slopes.append(why or (STEEP_SLOPE if by_spread[-1] >= floor else None))
+        slopes.append(why or (STEEP_SLOPE if by_spread[steep] >= floor else None))
     return fits, slopes
 
 
