@@ -55,7 +55,8 @@ one row per job (:data:`RESULT_COLUMNS`):
 - ``clamps`` (the inversion's clamped samples, all guards), ``actuator_limited``
   (samples where an actuator limit changed the actuation's solution: the summary's
   ``counts.actuator_limited``), ``modal_capped`` (samples where two fingers could not be
-  given independent amplitudes: ``counts.modal_capped``, 0 where the summary has none)
+  given independent amplitudes: ``counts.modal_capped``, empty where the summary has
+  none, one from before version 6: not counted, which is not none capped)
   and ``warnings`` (how many; the texts are in the job's ``summary.json``).
 
 A job that is not ``ok`` has these numeric cells empty (an ``earlier`` one the earlier
@@ -399,7 +400,7 @@ def run_job(job: Job, out_dir: str) -> dict:
             "x_realtime_end_to_end": doc["timings"]["x_realtime_end_to_end"],
             "clamps": sum(doc["clamps"].values()),
             "actuator_limited": doc["counts"]["actuator_limited"],
-            "modal_capped": doc["counts"].get("modal_capped", 0),  # summaries before version 6
+            "modal_capped": doc["counts"].get("modal_capped"),  # before version 6: not counted
             "warnings": len(doc["warnings"])}
 
 

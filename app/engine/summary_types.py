@@ -178,7 +178,7 @@ class OutputInfo:
     files: tuple[str, ...]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Counts:
     """What happened, counted (``summary.json``'s ``counts``).
 
@@ -196,9 +196,10 @@ class Counts:
         Largest channel command (um, zero-to-peak).
     actuator_limited : int
         Samples where an actuator limit changed the actuation's solution.
-    modal_capped : int
+    modal_capped : int or None
         Samples whose modal solve served two or more fingers and was regularised: the
-        fingers could not be given independent amplitudes (seed 001, eq 8).
+        fingers could not be given independent amplitudes (seed 001, eq 8). None in
+        summaries before it (version 6): not counted, which is not none capped.
     off_structure : int
         Finger samples off the vibrating structure (held at its edge).
     """
@@ -209,7 +210,7 @@ class Counts:
     out_of_order: int
     max_amplitude_um: float | None
     actuator_limited: int
-    modal_capped: int
+    modal_capped: int | None = field(default=None, metadata=_OPTIONAL)
     off_structure: int
 
 
