@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from frictex.device.link import protocol as p
-from frictex.device.link.faults import TRIP_S, Event, Faults, Plug, Schedule
+from frictex.device.link.faults import TRIP_S, Event, Faults, Plug
 from frictex.device.link.host import CommandSink, LinkError, LinkStalled, open_port, open_sink
 from frictex.device.link.simdevice import DeviceConfig
 from link_checks import (CORES, accounted, all_played_unless_tripped, clean_unless_starved,
@@ -381,15 +381,40 @@ def test_a_starved_link_thread_trips_the_watchdog_and_the_stream_goes_on(device)
     np.testing.assert_allclose(values[:, 0], sig[index.astype(np.int64), 0], atol=STEP / 2)
 
 
+class TripsWhenSent:
+    """A schedule (``faults.Schedule``'s ``active``) that trips the device for ``TRIP_S``
+    once the host has sent each of ``marks`` samples: the write that crosses a mark
+    vanishes, so a block is in flight when the device falls silent, however late the
+    scheduler ran the handshake or the stream (a wall-clock trip could fall before it)."""
+
+    def __init__(self, marks):
+        self.sink = None   # set once the link is open
+        self._marks = list(marks)
+        self._until = -np.inf
+
+    def active(self, kind: str) -> Event | None:
+        if kind != "trip" or self.sink is None:
+            return None
+        now = time.monotonic()
+        if self._marks and self.sink.progress().sent >= self._marks[0]:
+            self._marks.pop(0)
+            self._until = now + TRIP_S
+        return Event("trip", now, TRIP_S) if now < self._until else None
+
+    def sleep_through(self, kind: str) -> None:
+        """No stalls in this schedule."""
+
+
 def test_blocks_lost_before_a_trip_are_not_waited_for(device):
     """The hang of issue 15: the last blocks before a silence never arrive, the device
     runs dry and trips, and the host believed it held 20 ms more than it did. The
     device's report (buffer_end, Flushed) re-bases the host; the lost samples count."""
     core, played, path = device
-    schedule = Schedule((Event("trip", 0.3, TRIP_S), Event("trip", 0.7, TRIP_S)))
+    schedule = TripsWhenSent((3000, 7000))
     plug = Plug(lambda: open_port(path), schedule=schedule)
     sig = _signal(12000, seed=7)
     sink = CommandSink(plug, 1, RATE, paced=True, stderr=io.StringIO())
+    schedule.sink = sink
     _within(60.0, _paced_stream, sink, sig)
     status = sink.status()
     index, _ = played.arrays()
