@@ -43,15 +43,22 @@ class StuckFrame(Exception):
 class StuckWindow(ScriptedWindow):
     """A window whose first frame never finishes (``use`` blocks until ``unstick``,
     then raises StuckFrame) while the test feeds it events from another thread:
-    ``wait_events`` delivers them as they come."""
+    ``wait_events`` holds them back until ``deliver`` (so the inbox never runs dry
+    mid-stroke, where a finger held still 10 ms would add a 'still' MOVE), then hands
+    them over one a call."""
 
     def __init__(self, ctx):
         super().__init__(ctx)
         self.inbox = queue.Queue()
         self.drawing, self._unstick = threading.Event(), threading.Event()
+        self._delivering = threading.Event()
         self.should_close = False
 
+    def deliver(self):
+        self._delivering.set()
+
     def wait_events(self, timeout_s):
+        self._delivering.wait()
         try:
             kind, *args = self.inbox.get(timeout=timeout_s)
         except queue.Empty:
@@ -110,10 +117,12 @@ def test_a_frame_that_never_ends_holds_up_neither_the_finger_nor_the_stop(gl, tm
             window.inbox.put(("cursor", x, 240.0))
         window.inbox.put(("button", False))
         window.inbox.put(("key", "space", False))
+        window.deliver()
         wait_for(haptic.estop.is_set, "the emergency stop waited for the frame")
         touches = [haptic.touches.get(timeout=120.0)[0] for _ in range(51)]  # one finger an item
         assert loop.frames == 0  # all that while, the first frame was not done
     finally:
+        window.deliver()
         window.unstick()
         runner.join()
         loop.close()
