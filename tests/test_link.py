@@ -13,6 +13,7 @@ import pytest
 from frictex.device.link import protocol as p
 from frictex.device.link.faults import TRIP_S, Event, Faults, Plug
 from frictex.device.link.host import CommandSink, LinkError, LinkStalled, open_port, open_sink
+from frictex.device.link.session import STARVED_S
 from frictex.device.link.simdevice import DeviceConfig
 from link_checks import (CORES, accounted, all_played_unless_tripped, clean_unless_starved,
                          core_class, in_order_within, serve_on_pty, until)
@@ -351,14 +352,29 @@ def test_a_long_stall_lets_the_watchdog_zero_the_output(device):
 def _paced_stream(sink, sig, starve_at=(), core=None):
     """Send ``sig`` in blocks of 50; at the given blocks hold the lock the link thread
     needs (nothing reaches the device) until ``core``'s watchdog has tripped: however
-    the scheduler runs the two threads, the device sees the host fall silent."""
+    the scheduler runs the two threads, the device sees the host fall silent. Returns
+    the longest the lock was held (s; 0 with no ``starve_at``)."""
+    held_s = 0.0
     for k, b in enumerate(range(0, len(sig), 50)):
         if k in starve_at:
             trips = core.counters.watchdog_trips
             with sink._cond:
+                began = time.monotonic()
                 until(lambda: core.counters.watchdog_trips != trips, "the device tripping")
+                held_s = max(held_s, time.monotonic() - began)
         sink.send(b, sig[b:b + 50], None)
     sink.close()
+    return held_s
+
+
+def _no_stall_unless_away(status: dict, held_s: float = 0.0) -> None:
+    """No stall (a send that found no room for stall_s, 1 s), unless the link's thread or
+    the device's was away (longest turn or Status gap) over ``STARVED_S`` beyond the
+    test's own hold of the lock (``held_s``, s): a stall is then the link's due answer
+    to a loaded machine (seen in CI on 2 busy cores: 1 stall); with neither away, the
+    stream resumes after each trip at once."""
+    away_ms = max(status["longest_turn_gap_ms"], status["longest_status_gap_ms"])
+    assert status["stalls"] == 0 or away_ms - 1e3 * held_s > 1e3 * STARVED_S, status
 
 
 def test_a_starved_link_thread_trips_the_watchdog_and_the_stream_goes_on(device):
@@ -369,14 +385,15 @@ def test_a_starved_link_thread_trips_the_watchdog_and_the_stream_goes_on(device)
     err = io.StringIO()
     sig = _signal(12000, seed=5)
     sink = CommandSink(lambda: open_port(path), 1, RATE, paced=True, stderr=err)
-    _within(60.0, _paced_stream, sink, sig, (80, 140, 200), core)
+    held_s = _within(60.0, _paced_stream, sink, sig, (80, 140, 200), core)
     status = sink.status()
     index, values = played.arrays()
     assert core.counters.watchdog_trips >= 3 and status["device_flushes"] >= 3
     assert status["unplayed_by_cause"]["flushed"] == core.session.flushed
     assert status["played_samples"] == core.session.played == len(index)
     accounted(status, index, 12000)
-    assert status["stalls"] == 0 and status["failure"] is None
+    assert status["failure"] is None
+    _no_stall_unless_away(status, held_s)
     assert np.all(np.diff(index.astype(np.int64)) > 0)
     np.testing.assert_allclose(values[:, 0], sig[index.astype(np.int64), 0], atol=STEP / 2)
 
@@ -421,7 +438,8 @@ def test_blocks_lost_before_a_trip_are_not_waited_for(device):
     assert status["unplayed_by_cause"]["lost"] > 0   # swallowed on the wire
     assert status["played_samples"] == len(index) == core.session.played
     accounted(status, index, 12000)
-    assert index.max() > 11000 and status["stalls"] == 0
+    assert index.max() > 11000
+    _no_stall_unless_away(status)
 
 
 def test_heavy_corruption_never_hangs_and_every_sample_is_counted(device):
