@@ -110,14 +110,21 @@ def test_an_output_device_registered_by_name_is_opened_with_its_arg():
 
 
 def test_faults_are_injected_over_sim():
+    """Trips every 0.5 s after the link opens are heard by the device as silence (its
+    watchdog, armed once it plays, trips). The stream goes on until a trip shows, at
+    most 5 s: on a loaded machine the link may open and play late, or its thread sleep
+    through one trip's window."""
     err = io.StringIO()
-    with open_sink("sim", 1, RATE, paced=True, faults=parse_faults("trip@0.05"),
+    sent = 0
+    trips = ",".join(f"trip@{0.5 * k:g}" for k in range(1, 10))
+    with open_sink("sim", 1, RATE, paced=True, faults=parse_faults(trips),
                    stderr=err) as sink:
-        for b in range(0, 4000, 50):
-            sink.send(b, np.ones((50, 1)))
+        while sent < 5 * RATE and not sink.status().get("watchdog_trips"):
+            sink.send(sent, np.ones((50, 1)))
+            sent += 50
     st = sink.status()
     assert st["watchdog_trips"] >= 1  # the trip was injected: the device heard nothing
-    assert st["played_samples"] + st["unplayed_samples"] == 4000
+    assert st["played_samples"] + st["unplayed_samples"] == sent
 
 
 class _LateDevice:
