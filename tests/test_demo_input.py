@@ -12,7 +12,7 @@ import pytest
 from frictex.app.commands.cli import main
 from frictex.app.commands.demo import input_option
 from test_demo import (drag, focus_window, grating_file, off_edges, quit_demo,  # noqa: F401
-                       read_csv, start_demo, wait_event, xdo, xdotool)  # (xdotool: a fixture)
+                       read_csv, start_demo, wait_event, xdotool)  # (xdotool: a fixture)
 from test_tuio import frame
 
 from frictex.app.live.inputs import TuioSpec
