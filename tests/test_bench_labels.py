@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from frictex.app.commands import bench
-from frictex.app.measure import bench_latency, bench_pipeline, bench_startup
+from frictex.app.measure import bench_latency, bench_pipeline, bench_startup, in_turn
 from frictex.app.measure.figure import Figure
 from frictex.app.measure.processes import BusyProcesses, Run
 
@@ -78,29 +78,11 @@ class _FakeClock:
         return self.now
 
 
-def test_frame_and_floor_alternate_and_each_keeps_its_own_times(monkeypatch):
-    from frictex.app.measure import bench_visual
-    clock, log = _FakeClock(), []
-    monkeypatch.setattr(bench_visual, "time", SimpleNamespace(perf_counter=clock,
-                                                              process_time=clock))
-
-    def step(name, seconds):
-        def run():
-            log.append(name)
-            clock.now += seconds
-        return run
-
-    got = bench_visual.timed_in_turn(
-        [(step("frame", 0.004), lambda: log.append("next")), (step("floor", 0.002), None)], 3)
-    assert log == ["next", "frame", "floor"] * 3
-    assert got == [pytest.approx((4.0, 4.0)), pytest.approx((2.0, 2.0))]
-
-
 def test_the_floor_is_timed_alternated_with_the_frames_read_back_and_labelled_so(monkeypatch):
     from frictex.app.measure import bench_visual
     clock, log, released = _FakeClock(), [], []
-    monkeypatch.setattr(bench_visual, "time", SimpleNamespace(perf_counter=clock,
-                                                              process_time=clock))
+    monkeypatch.setattr(in_turn, "time", SimpleNamespace(perf_counter=clock,
+                                                         process_time=clock))
 
     def frame_step(backend, comp, view, read_back):
         assert read_back
@@ -116,8 +98,9 @@ def test_the_floor_is_timed_alternated_with_the_frames_read_back_and_labelled_so
     monkeypatch.setattr(bench_visual, "floor_step", floor_step)
     comp = SimpleNamespace(viewport=SimpleNamespace(width_px=1920, height_px=19))
     figures = {f.label: f for f in bench_visual.against_floor(None, comp, None, 2, "W")}
-    assert log == ["next", "frame", "floor"] * 2 and released == [True]
-    assert figures["frame + read back / floor W"].value == pytest.approx(3.0)
+    assert log == ["next", "frame", "floor", "floor", "next", "frame"] and released == [True]
+    assert figures["frame + read back / floor W, wall time per round, target at most 2x "
+                   "(geometric mean of 2 rounds)"].value == pytest.approx(3.0)
     assert figures["frame + read back / floor CPU W"].value == pytest.approx(3.0)
     assert "floor W (clear, scene quad, read back; alternated with the frames)" in figures
     assert figures["frame + read back W"].unit == "ms of wall time (best of 2)"
@@ -138,9 +121,9 @@ def test_latency_percentiles_count_the_touches_played_and_say_lost_ones_are_left
     figures = bench_latency._figures("tuio", np.array([0.2821]), 20)
     assert [f.label for f in figures[:2]] == [
         "tuio: p50 of 1 played of 20 touches (19 lost, not in it)",
-        "tuio: p99 of 1 played of 20 touches (19 lost, not in it)"]
-    every = bench_latency._figures("audio", np.full(20, 0.01), 20, "events")
-    assert every[1].label == "audio: p99 of 20 played of 20 events"
+        "tuio: max of 1 played of 20 touches (19 lost, not in it)"]
+    every = bench_latency._figures("audio", np.full(200, 0.01), 200, "events")
+    assert every[1].label == "audio: p99 of 200 played of 200 events"
 
 
 def _fake_rusage(monkeypatch, used: dict[int, list[float]]):
@@ -177,6 +160,5 @@ def test_every_startup_label_counts_the_runs_its_median_is_over():
         "frictex replay, one second, parquet, wall (median of 3, 2 of 5 failed, alternated)",
         "frictex replay, one second, parquet, CPU user + system (median of 3, 2 of 5 failed)"]
     assert labels[3].endswith("CPU user + system (median of 5)")
-    assert labels[-1].endswith("(difference of medians: median of 5 without it, "
-                               "median of 3, 2 of 5 failed with it)")
+    assert labels[-1].endswith("(mean of 3 paired rounds' differences, 2 of 5 failed)")
     assert isinstance(got[-1], Figure) and got[-1].value == pytest.approx(0.0)

@@ -101,11 +101,11 @@ def test_the_baseline_prints_each_rounds_paired_ratio_and_no_verdict_without_a_f
     assert [figures[f"frictex against bare, round {k}"].value for k in (1, 2, 4)] == [
         pytest.approx(1.1), pytest.approx(0.5), pytest.approx(0.8)]
     assert "frictex against bare, round 3" not in figures
-    geomean = figures["frictex against bare, geometric mean of 3 rounds, 1 of 4 failed"]
-    assert geomean.value == pytest.approx((1.1 * 0.5 * 0.8) ** (1 / 3))
-    verdict = figures["target at most 1.2x: the interval's upper end"]
-    assert verdict.unit == "x: not shown"  # 0.5-1.1x in three rounds settles nothing
-    assert verdict.value > 1.2
+    verdict = figures["frictex against bare, target at most 1.2x (geometric mean of 3 "
+                      "rounds, 1 of 4 failed)"]
+    assert verdict.value == pytest.approx((1.1 * 0.5 * 0.8) ** (1 / 3))
+    assert verdict.unit.endswith("x): not shown")  # 0.5-1.1x in three rounds settles nothing
+    assert verdict.unit.startswith("x (95 % interval ")
     csv = [f.label for f in paired_figures("L", bare, ours, None)]
     assert any("no verdict: the bare program is no floor" in label for label in csv)
     assert not any("target" in label for label in csv)
@@ -128,8 +128,8 @@ def test_the_batch_figures_pair_each_run_on_one_core_with_one_on_all(tmp_path, m
     against = "batch throughput, 2 cores against one after another"
     ratios = [figures[f"{against}, pair {k}"].value for k in range(1, 5)]
     assert all(r > 0 for r in ratios)
-    geomean = figures[f"{against}, geometric mean of 4 pairs"]
-    assert geomean.value == pytest.approx(np.exp(np.mean(np.log(ratios))))
-    verdict = figures["batch throughput target at least 1.5x: the interval's lower end"]
-    assert verdict.unit in ("x: holds", "x: does not hold", "x: not shown")
+    verdict = figures[f"{against}, target at least 1.5x (geometric mean of 4 rounds)"]
+    assert verdict.value == pytest.approx(np.exp(np.mean(np.log(ratios))))
+    assert verdict.unit.startswith("x (95 % interval ")
+    assert verdict.unit.rsplit("): ", 1)[1] in ("holds", "does not hold", "not shown")
     assert not [p for p in tmp_path.iterdir() if p.is_dir()]  # each run's output removed

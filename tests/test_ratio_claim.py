@@ -40,9 +40,18 @@ def test_an_interval_across_the_target_shows_nothing_whatever_the_median():
     assert low < 1.5 < high
     claim = ratio_claim(ratios, 1.5, at_most=False)
     assert claim.verdict == "not shown"
-    assert claim.text(1.5, at_most=False) == (
-        f"at least 1.5x: {geomean:.2f}x, 95 % interval {low:.2f}-{high:.2f}x, 4 rounds: "
-        "not shown")
+    figure = claim.figure("replay", "batch", 1.5, at_most=False)
+    assert figure.label == "batch, target at least 1.5x (geometric mean of 4 rounds)"
+    assert figure.value == pytest.approx(geomean)
+    assert figure.unit == f"x (95 % interval {low:.2f}-{high:.2f}x): not shown"
+
+
+def test_a_verdict_prints_the_whole_interval_not_only_the_end_that_does_not_decide_it():
+    ratios = [0.7978, 0.9114, 0.9318, 0.8794]  # the batch's four pairs: 0.79-0.98x
+    figure = ratio_claim(ratios, 1.5, at_most=False).figure("replay", "batch", 1.5,
+                                                             at_most=False)
+    assert figure.unit == "x (95 % interval 0.79-0.98x): does not hold"
+    assert figure.value == pytest.approx(0.8786, abs=1e-4)
 
 
 @pytest.mark.parametrize("ratios", [[], [1.1]])
@@ -50,6 +59,7 @@ def test_fewer_than_two_rounds_give_no_interval_and_no_verdict(ratios):
     claim = ratio_claim(ratios, 1.2, at_most=True)
     assert claim.verdict == "not shown"
     assert math.isnan(claim.low) and math.isnan(claim.high)
+    assert "nan" not in claim.figure("s", "L", 1.2, at_most=True).unit
 
 
 @pytest.mark.parametrize("bad", [0.0, -1.0, math.nan, math.inf])

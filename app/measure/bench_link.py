@@ -8,7 +8,9 @@ at the seed 003 rate (10 kHz, blocks of 50) for host CPU per second of output an
 heartbeat round trip; and at 1 MHz (the device's clock no longer limits) for the sustained
 frame and block rates the link itself manages. A third run, live (the wall clock paces
 the blocks, as the demo's haptic thread does), to a device whose simulated finger sends
-force reports (the in-process ``sim`` device), idle and beside one busy process per core:
+force reports (the in-process ``sim`` device), with no busy processes added and beside one
+busy process per core, each with the machine's load at its end (another job's processes
+count in it too):
 how many blocks after a block ends its report is in the host's hands
 (``rendering.control.loop``'s delay D; ``app.measure.link_report_delays``, which the
 report's closed-loop section measures and replays).
@@ -22,7 +24,8 @@ import numpy as np
 
 from frictex.app.measure.figure import Figure
 from frictex.app.measure.link_report_delays import measure as measure_delays
-from frictex.app.measure.processes import cores
+from frictex.app.measure.processes import cores, load
+from frictex.app.measure.tail import tail
 from frictex.device.link.host import open_sink
 
 BLOCK = 50
@@ -57,20 +60,26 @@ def run(quick: bool) -> list[Figure]:
              Figure("link", "sustained samples/s (1 MHz device)",
                     fast["blocks_sent"] * BLOCK / wall, "1/s")]
     for busy in (0, cores()):
-        where = f"beside {busy} busy processes" if busy else "idle"
         delays = measure_delays(max(seconds, 2.0), 10_000.0, BLOCK, busy)
-        come = delays.come()
-        if come.size == 0:
-            figs.append(Figure("link", f"force reports: none came back (live, 5 ms blocks, "
-                                       f"{where})", float("nan"), ""))
-            continue
-        p50, p99 = np.percentile(come, [50, 99])
-        figs += [Figure("link", f"force report delay p50 (live, 5 ms blocks, {where})", p50,
-                        "blocks"),
-                 Figure("link", f"force report delay p99 (live, 5 ms blocks, {where})", p99,
-                        "blocks"),
-                 Figure("link", f"force report delay max (live, 5 ms blocks, {where})",
-                        float(come.max()), "blocks"),
-                 Figure("link", f"force reports lost (live, 5 ms blocks, {where})",
-                        float(len(delays.blocks) - come.size), f"of {len(delays.blocks)}")]
+        figs += delay_figures(delays.come(), len(delays.blocks), busy, load())
     return figs
+
+
+def delay_figures(come: np.ndarray, sent: int, busy: int, load_1min: float) -> list[Figure]:
+    """The force reports' delays (blocks) of a live run of ``sent`` blocks beside ``busy``
+    busy processes, ``come`` those of the reports that came back: p50, p99 (the max under
+    101 reports, ``app.measure.tail``) and max, each label counting the reports and
+    giving the machine's load measured at the run's end (``load_1min``, 1-minute
+    average), and how many were lost."""
+    added = f"beside {busy} busy processes" if busy else "no busy processes added"
+    where = f"live, 5 ms blocks, {added}, load {load_1min:.1f}"
+    if come.size == 0:
+        return [Figure("link", f"force reports: none came back of {sent} ({where})",
+                       float("nan"), "")]
+    high, value = tail(come)
+    # under 101 reports the tail is the max itself: one row, not two
+    rows = {"p50": float(np.median(come)), high: value, "max": float(come.max())}
+    return [Figure("link", f"force report delay {name} of {come.size} reports ({where})",
+                   got, "blocks") for name, got in rows.items()] + [
+        Figure("link", f"force reports lost ({where})", float(sent - come.size),
+               f"of {sent}")]

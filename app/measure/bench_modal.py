@@ -40,6 +40,17 @@ def mean_wall_unit(samples: int) -> str:
     return f"us (wall time, mean of {samples:,} samples)"
 
 
+def error_figures(label: str, err_um: np.ndarray, limited: np.ndarray) -> list[Figure]:
+    """Mean and worst error (um) under the fingers over the samples (``err_um``: one per
+    finger and sample) and the share of samples that met a limit (``limited``), each
+    label counting the samples."""
+    of = f"({limited.shape[0]:,} samples)"
+    return [Figure("modal", f"{label}: mean error {of}", float(np.mean(err_um)), "um"),
+            Figure("modal", f"{label}: worst error {of}", float(np.max(err_um)), "um"),
+            Figure("modal", f"{label}: samples at a limit {of}",
+                   100 * float(np.mean(limited)), "%")]
+
+
 def _phi(beam, xa, xb):
     return np.stack([beam.phi(ORDERS, xa), beam.phi(ORDERS, xb)], axis=-2)
 
@@ -67,20 +78,16 @@ def run(quick: bool) -> list[Figure]:
             per_sample = (time.perf_counter() - start) / n
             err = np.concatenate([s.error_um for s in sols])
             limited = np.concatenate([s.limited for s in sols])
-            figures += [
-                Figure("modal", f"{method} {case}: time per sample (blocks of {BLOCK})", per_sample * 1e6,
-                       mean_wall_unit(n)),
-                Figure("modal", f"{method} {case}: mean error", float(np.mean(err)), "um"),
-                Figure("modal", f"{method} {case}: worst error", float(np.max(err)), "um"),
-                Figure("modal", f"{method} {case}: samples at a limit", 100 * float(np.mean(limited)), "%"),
-            ]
+            figures.append(Figure("modal", f"{method} {case}: time per sample (blocks of {BLOCK})",
+                                  per_sample * 1e6, mean_wall_unit(n)))
+            figures += error_figures(f"{method} {case}", err, limited)
         steps = solve(sweep_phi, [0.4, 0.0], method, **kwargs).commands_um
         figures.append(Figure("modal", f"{method}: largest command step, finger b crossing a "
                                        f"in 1 um steps", float(np.max(np.abs(np.diff(steps, axis=0)))), "um"))
     for rcond in (0.03, DEFAULT_RCOND, 0.3):
         a, b = cases["random"]
         sol = solve(_phi(beam, a, b), wanted, "regularised", rcond=rcond, actuators=act, limits_um=LIMIT_UM)
-        figures.append(Figure("modal", f"regularised rcond={rcond:g} random: mean error",
+        figures.append(Figure("modal", f"regularised rcond={rcond:g} random: mean error ({n:,} samples)",
                               float(np.mean(sol.error_um)), "um"))
     return figures + [_actuation_time(4 if quick else 40)]
 

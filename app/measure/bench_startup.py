@@ -16,7 +16,9 @@ set it writes no cache, so after frictex's sources change (an edit, a checkout) 
 command compiles the changed modules again, each time. The section measures what that
 costs at most: the one-second Parquet replay once more in the same rounds, with the
 cache of every module but frictex's (``python -B -X pycache_prefix=DIR``, DIR filled by
-one untimed run, frictex's part then removed). It warns where the variable is set.
+one untimed run, frictex's part then removed): the mean of the rounds' differences
+(without the cache less with it, in the same round) and its 95 % interval. It warns
+where the variable is set.
 
 Targets (issue 31): ``frictex --version`` under 0.15 s; a one-second replay under 0.5 s
 of wall time on a quiet machine.
@@ -35,6 +37,7 @@ from pathlib import Path
 from frictex.app.measure.bench_replay import SCENE, human_trace
 from frictex.app.measure.figure import Figure
 from frictex.app.measure.processes import Run, alternated, failed_note, frictex_argv, median
+from frictex.app.measure.report_claims import paired
 from frictex.rendering.input.trace_file import write_trace
 
 #: the row of the one-second Parquet replay without frictex's bytecode cache
@@ -97,17 +100,27 @@ def medians_of(runs: list[Run]) -> str:
 
 def startup_figures(runs: dict[str, list[Run]]) -> list[Figure]:
     """Per command its median wall and CPU time over its runs that succeeded, each label
-    counting them, and the bytecode cache's cost (the difference of two such medians)."""
+    counting them, and the bytecode cache's cost (``cache_cost_figure``)."""
     figures = []
     for label, got in runs.items():
         figures += [Figure("startup", f"{label}, wall ({medians_of(got)}, alternated)",
                            median(got, "wall_s"), "s"),
                     Figure("startup", f"{label}, CPU user + system ({medians_of(got)})",
                            median(got, "cpu_s"), "s")]
-    cached = runs["frictex replay, one second, parquet"]
-    cost = median(runs[NO_CACHE], "wall_s") - median(cached, "wall_s")
-    figures.append(Figure("startup", "frictex's bytecode cache, what a one-second Parquet "
-                          f"replay pays without it (difference of medians: "
-                          f"{medians_of(runs[NO_CACHE])} without it, {medians_of(cached)} with it)",
-                          cost * 1e3, "ms"))
-    return figures
+    return figures + [cache_cost_figure(runs[NO_CACHE],
+                                        runs["frictex replay, one second, parquet"])]
+
+
+def cache_cost_figure(without: list[Run], cached: list[Run]) -> Figure:
+    """What a one-second Parquet replay pays without frictex's bytecode cache (ms): per
+    round the wall time without it less the one with it (the two ran in the same round),
+    over the rounds where both succeeded, the mean of those differences and its 95 %
+    interval (Student's t, ``report_claims.paired``)."""
+    both = [(w.wall_s, c.wall_s) for w, c in zip(without, cached) if w.code == 0 == c.code]
+    mean, low, high, n = paired([w for w, _ in both], [c for _, c in both])
+    note = failed_note(len(without) - n, len(without))
+    interval = (f"95 % interval {low * 1e3:.1f} to {high * 1e3:.1f} ms" if n > 1
+                else "no interval under two rounds")
+    return Figure("startup", "frictex's bytecode cache, what a one-second Parquet replay pays "
+                  f"without it (mean of {n} paired rounds' differences{note})", mean * 1e3,
+                  f"ms ({interval})")

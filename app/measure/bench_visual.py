@@ -10,9 +10,11 @@ fingers with trails, the scope with 3 s of history, the status line; each frame 
 finished on the GPU (``ctx.finish``), without and with reading the pixels back (what
 ``--frames`` and screenshots pay), best wall time of 100 (20 with ``--quick``) and the
 mean CPU time of all threads; beside them, alternated with the frames read back (one of
-each in turn, so that a change in the machine's load falls on both), the floor of this
-renderer (clear, the scene's textured quad and the read-back, nothing else), the ratios
-(best against best, mean CPU against mean CPU), the frame's draw calls. The frame and the
+each per round, the order reversed every other round, so that a change in the machine's
+load falls on both), the floor of this renderer (clear, the scene's textured quad and the
+read-back, nothing else), the verdict on "a frame read back at most 2x the floor" from
+each round's ratio of wall times (their geometric mean and its 95 % interval,
+``app.measure.ratio_claim``), the ratio of mean CPU times, the frame's draw calls. The frame and the
 floor are measured again beside one busy process per core. A static image's label names
 the pixels drawn (the scene's aspect, fitted into the window) and the window. Each
 label names the renderer EGL chose (llvmpipe is Mesa's software rasterizer; a GPU's
@@ -29,7 +31,9 @@ import moderngl
 import numpy as np
 
 from frictex.app.measure.figure import Figure
+from frictex.app.measure.in_turn import timed_in_turn
 from frictex.app.measure.processes import BusyProcesses, cores
+from frictex.app.measure.ratio_claim import ratio_claim
 from frictex.rendering.visual.compositor import TEXTURED, Compositor, FrameView
 from frictex.rendering.visual import scene_image
 from frictex.rendering.visual.context import OffscreenBackend, VisualError
@@ -115,25 +119,6 @@ def static_unit(repeats: int) -> str:
             "that loads its kernels)")
 
 
-def timed_in_turn(steps: list[tuple], frames: int) -> list[tuple[float, float]]:
-    """Each ``(step, before)`` of ``steps`` run ``frames`` times, one of each in turn per
-    round (``before()``, untimed, just before its step; ``before`` may be None), so that
-    a change in the machine's load falls on every step alike: per step its best wall time
-    and its mean CPU time of all this process's threads (the software rasterizer's
-    included), both ms. On a shared machine the CPU time is the steadier figure: waiting
-    for a core does not count."""
-    best, cpu = [float("inf")] * len(steps), [0.0] * len(steps)
-    for _ in range(frames):
-        for k, (step, before) in enumerate(steps):
-            if before is not None:
-                before()
-            cpu0, t0 = time.process_time(), time.perf_counter()
-            step()
-            best[k] = min(best[k], time.perf_counter() - t0)
-            cpu[k] += time.process_time() - cpu0
-    return [(b * 1e3, c / frames * 1e3) for b, c in zip(best, cpu)]
-
-
 def floor_step(backend: OffscreenBackend, texture_size: tuple[int, int]):
     """The least a frame can cost on this renderer: clear, one textured quad of
     ``texture_size`` px (the scene) and the pixels read back. Returns (step, release):
@@ -206,7 +191,8 @@ def run(quick: bool) -> list[Figure]:
             comp.set_scene(scene)
         [(frame, _)] = timed_in_turn([frame_step(backend, comp, view, read_back=False)],
                                      frames)
-        figures.append(Figure("visual", f"frame {label}", frame, best_unit(frames)))
+        figures.append(Figure("visual", f"frame {label}", frame.min() * 1e3,
+                              best_unit(frames)))
         figures += against_floor(backend, comp, view, frames, label)
         busy = cores()
         with BusyProcesses(busy, 120.0):
@@ -223,26 +209,40 @@ def best_unit(frames: int) -> str:
     return f"ms of wall time (best of {frames})"
 
 
+#: a frame with its pixels read back: at most this many times the floor's wall time
+FLOOR_TARGET = 2.0
+
+
 def against_floor(backend: OffscreenBackend, comp: Compositor, view: FrameView, frames: int,
                   label: str) -> list[Figure]:
-    """The frame with its pixels read back against the floor, ``frames`` of each,
-    alternated (a frame, then a floor, in each round): best wall times, mean CPU times,
-    and their ratios."""
+    """The frame with its pixels read back against the floor, ``frames`` of each in
+    alternated rounds (a frame and a floor each round, the order reversed every other
+    round; ``in_turn``): ``floor_figures``."""
     read_back = frame_step(backend, comp, view, read_back=True)
     floor_draw, release = floor_step(backend, (comp.viewport.width_px,
                                                comp.viewport.height_px))
     try:
-        (read, read_cpu), (floor, floor_cpu) = timed_in_turn([read_back, (floor_draw, None)],
-                                                             frames)
+        read, floor = timed_in_turn([read_back, (floor_draw, None)], frames)
     finally:
         release()
+    return floor_figures(read, floor, label)
+
+
+def floor_figures(read: tuple, floor: tuple, label: str) -> list[Figure]:
+    """From per-round (wall s, CPU s) of the frame read back (``read``) and of the floor
+    (same round at the same index): the best wall time of each, the verdict on
+    :data:`FLOOR_TARGET` from each round's ratio of wall times (``ratio_claim``), the
+    mean CPU time of each and their ratio."""
+    (read_wall, read_cpu), (floor_wall, floor_cpu) = read, floor
+    frames = len(read_wall)
     best, mean = best_unit(frames), f"ms of CPU time (mean of {frames}, all threads)"
-    return [Figure("visual", f"frame + read back {label}", read, best),
+    claim = ratio_claim(list(read_wall / floor_wall), FLOOR_TARGET, at_most=True)
+    return [Figure("visual", f"frame + read back {label}", read_wall.min() * 1e3, best),
             Figure("visual", f"floor {label} (clear, scene quad, read back; alternated with "
-                             "the frames)", floor, best),
-            Figure("visual", f"frame + read back / floor {label}", read / floor,
-                   "x (best against best)"),
-            Figure("visual", f"frame + read back CPU {label}", read_cpu, mean),
-            Figure("visual", f"floor CPU {label}", floor_cpu, mean),
-            Figure("visual", f"frame + read back / floor CPU {label}", read_cpu / floor_cpu,
-                   "x (mean against mean)")]
+                             "the frames)", floor_wall.min() * 1e3, best),
+            claim.figure("visual", f"frame + read back / floor {label}, wall time per round",
+                         FLOOR_TARGET, at_most=True),
+            Figure("visual", f"frame + read back CPU {label}", read_cpu.mean() * 1e3, mean),
+            Figure("visual", f"floor CPU {label}", floor_cpu.mean() * 1e3, mean),
+            Figure("visual", f"frame + read back / floor CPU {label}",
+                   read_cpu.mean() / floor_cpu.mean(), "x (mean against mean)")]

@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from frictex.app.measure.figure import Figure
 from frictex.app.measure.report_claims import paired, verdict
 
 
@@ -30,12 +31,21 @@ class RatioClaim:
     rounds: int
     verdict: str
 
-    def text(self, target: float, at_most: bool) -> str:
-        """The claim in words: ``at most 1.2x: 0.91x, 95 % interval 0.80-1.04x, 8
-        rounds: holds``."""
+    def interval_text(self) -> str:
+        """``95 % interval 0.80-1.04x``, or why there is none (under two rounds)."""
+        if self.rounds > 1:
+            return f"95 % interval {self.low:.2f}-{self.high:.2f}x"
+        return "one round, no interval" if self.rounds == 1 else "no round, no interval"
+
+    def figure(self, section: str, label: str, target: float, at_most: bool,
+               note: str = "") -> Figure:
+        """The verdict as one figure, the whole interval beside it: ``LABEL, target at most
+        1.2x (geometric mean of 8 rounds)  0.91 x (95 % interval 0.80-1.04x): holds``
+        (``note``: how many rounds failed, ``processes.failed_note``)."""
         side = "at most" if at_most else "at least"
-        return (f"{side} {target:g}x: {self.geomean:.2f}x, 95 % interval "
-                f"{self.low:.2f}-{self.high:.2f}x, {self.rounds} rounds: {self.verdict}")
+        return Figure(section, f"{label}, target {side} {target:g}x (geometric mean of "
+                      f"{self.rounds} rounds{note})", self.geomean,
+                      f"x ({self.interval_text()}): {self.verdict}")
 
 
 def ratio_claim(ratios: list[float], target: float, at_most: bool) -> RatioClaim:
