@@ -14,7 +14,7 @@ from scipy.stats import t as student_t
 
 from frictex.app.measure import bench_baseline, in_turn
 from frictex.app.measure.bench_latency import _figures as latency_figures
-from frictex.app.measure.bench_link import delay_figures
+from frictex.app.measure.bench_link import delay_figures, heartbeat_figures
 from frictex.app.measure.bench_modal import error_figures
 from frictex.app.measure.bench_startup import cache_cost_figure
 from frictex.app.measure.processes import Run
@@ -155,3 +155,15 @@ def test_modal_errors_count_their_samples():
     assert [f.label for f in figures] == ["pinv random: mean error (500 samples)",
                                           "pinv random: worst error (500 samples)",
                                           "pinv random: samples at a limit (500 samples)"]
+
+
+def test_the_heartbeat_round_trip_counts_its_samples_and_is_a_max_when_few():
+    """A link's status gives the round trips' count and max: 40 of them are labelled with
+    their count and their tail is the max; 500 get a p99."""
+    few = {"latency_samples": 40, "latency_ms_p50": 1.0, "latency_ms_p99": 2.9,
+           "latency_ms_max": 3.0}
+    assert [(f.label, f.value) for f in heartbeat_figures(few)] == [
+        ("heartbeat round trip p50 of 40", 1.0), ("heartbeat round trip max of 40", 3.0)]
+    many = {**few, "latency_samples": 500}
+    assert heartbeat_figures(many)[1].label == "heartbeat round trip p99 of 500"
+    assert heartbeat_figures(many)[1].value == 2.9

@@ -497,6 +497,8 @@ class CommandSink:
             "device_errors": {k: v for k, v in dict(s.errors).items() if v},
             "latency_ms_p50": float(np.percentile(rtt, 50)) if rtt.size else None,
             "latency_ms_p99": float(np.percentile(rtt, 99)) if rtt.size else None,
+            "latency_ms_max": float(rtt.max()) if rtt.size else None,
+            "latency_samples": int(rtt.size),
             "stalled_s": self._policy.lag_s if self.paced else None,
             "longest_turn_gap_ms": s.longest_turn_gap_s * 1e3,
             "longest_status_gap_ms": s.longest_status_gap_s * 1e3,
