@@ -7,7 +7,14 @@ freedom). Each claim gets one of three verdicts (``Claim.verdict``): it **holds*
 where the interval excludes a loss (its upper end below 0, or at most 0 for "at or
 below"); it **does not hold** where the interval lies wholly on the losing side (its
 lower end above 0); otherwise it is **not shown**: the interval straddles 0 and the draws
-do not settle it, whatever the mean says.
+do not settle it, whatever the mean says. Each interval is per claim (95 % each, not
+adjusted for how many claims the report makes): a claim with no true advantage still
+reads as holding up to 1 time in 40 (one side of a 95 % interval), so a few of many
+verdicts may be chance (:func:`family_note`).
+
+Some claims are decided by one number, not an interval (``Claim.decided_by``: the worst
+run's figure, a computed bound, or a figure that holds by construction); they carry no
+interval ends (``low`` and ``high`` None) and the count line counts them apart.
 
 Groups (``auto`` is what ``render = "auto"`` picks for a periodic layer: the hybrid):
 
@@ -61,6 +68,12 @@ REFUTED = "does not hold"
 NOT_SHOWN = "not shown"
 #: the verdicts in the order report.md and the count line give them
 VERDICTS = (HOLDS, REFUTED, NOT_SHOWN)
+#: how a claim is decided (``Claim.decided_by``): its 95 % interval over the draws or
+#: fingers; or one number: the worst run's figure, a computed bound, or a figure that
+#: cannot miss (the claim holds by construction)
+INTERVAL, WORST_RUN, BOUND, BY_CONSTRUCTION = ("95 % interval", "worst run", "bound",
+                                               "by construction")
+DECIDED_BY = (INTERVAL, WORST_RUN, BOUND, BY_CONSTRUCTION)
 
 
 def verdict(passed: bool, low: float) -> str:
@@ -78,7 +91,9 @@ class Claim:
     """One statement over ``n`` draws: d = A - c B per draw; ``mean`` of d and its 95 %
     interval [``low``, ``high``]; ``passed``: the interval excludes a loss; ``verdict``:
     ``HOLDS``, ``REFUTED`` or ``NOT_SHOWN`` (:func:`verdict`; derived from ``passed``
-    and ``low`` where not given, as for a report.json written before verdicts)."""
+    and ``low`` where not given, as for a report.json written before verdicts).
+    ``decided_by``: one of ``DECIDED_BY``; a claim decided by one number has ``mean``
+    that number, ``low`` and ``high`` None and ``n`` the runs or rows it was taken over."""
 
     group: str
     scene: str
@@ -86,13 +101,17 @@ class Claim:
     metric: str
     text: str
     mean: float
-    low: float
-    high: float
+    low: float | None
+    high: float | None
     n: int
     passed: bool
     verdict: str = ""
+    decided_by: str = INTERVAL
 
     def __post_init__(self):
+        if self.decided_by not in DECIDED_BY:
+            raise InputError(f"claim decided_by {self.decided_by!r}: expected one of "
+                             f"{DECIDED_BY}")
         if not self.verdict:
             object.__setattr__(self, "verdict", verdict(self.passed, self.low))
         elif self.verdict not in VERDICTS:
@@ -102,10 +121,36 @@ class Claim:
 
 
 def count_line(found: list[Claim]) -> str:
-    """"N of M claims hold, K do not, J not shown": the verdicts of ``found`` counted."""
+    """"N of M claims hold, K do not, J not shown": the verdicts of ``found`` counted;
+    where some are decided by one number, how many of each kind (statistical, by one
+    number, by construction) hold."""
     counts = {v: sum(c.verdict == v for c in found) for v in VERDICTS}
-    return (f"{counts[HOLDS]} of {len(found)} claims hold, {counts[REFUTED]} do not, "
+    line = (f"{counts[HOLDS]} of {len(found)} claims hold, {counts[REFUTED]} do not, "
             f"{counts[NOT_SHOWN]} not shown")
+    one_number = [c for c in found if c.decided_by != INTERVAL]
+    if not one_number:
+        return line
+    built = [c for c in one_number if c.decided_by == BY_CONSTRUCTION]
+    statistical = [c for c in found if c.decided_by == INTERVAL]
+
+    def held(cs):
+        return f"{sum(c.passed for c in cs)} of {len(cs)} hold"
+    return (f"{line} (by a 95 % interval: {held(statistical)}; decided by one number, "
+            f"no interval: {held(one_number)}, {len(built)} of them by construction)")
+
+
+def family_note(found: list[Claim]) -> str:
+    """What the claims' intervals mean together: how many are statistical and that each
+    interval is per claim, unadjusted (module docstring)."""
+    statistical = sum(c.decided_by == INTERVAL for c in found)
+    return (f"The report makes {len(found)} claims, {statistical} of them judged by a 95 % "
+            "interval: each interval is per claim, not adjusted for the others (no Holm or "
+            "Bonferroni correction), so a claim with no true advantage still reads as "
+            "holding up to 1 time in 40 (one side of a 95 % interval): were none of these "
+            f"{statistical} advantages real, about {statistical / 40:.1f} would still read as "
+            "holding. The others are "
+            "decided by one number (the worst run's figure, a computed bound, or a figure "
+            "that cannot miss: 'by construction') and have no interval.")
 
 
 def paired(a, b, scale: float = 1.0) -> tuple[float, float, float, int]:

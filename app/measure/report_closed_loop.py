@@ -56,7 +56,10 @@ Claims (:func:`claims`, in ``frictex report``'s list) follow the report's rule: 
 finger, paired, the mean and its 95 % interval (``app.measure.report_claims.paired``);
 "holds" only where the interval settles it. The RMS targets compare mean squared
 errors, MSE_loop - MSE_open / T^2, so that a claim that holds says the population's RMS
-(RMS over fingers of each finger's RMS) is cut at least T times.
+(RMS over fingers of each finger's RMS) is cut at least T times. The worst finger, no
+growing oscillation and the stability margin are decided by one number (the worst
+run's, or a computed bound: ``Claim.decided_by``), without an interval; the amplitude
+limit holds by construction (every command is clipped at the limit), and says so.
 """
 
 from __future__ import annotations
@@ -73,7 +76,8 @@ from frictex.app.measure import link_report_delays
 from frictex.app.measure.closed_loop_sim import FingerSink, LoopStage
 from frictex.app.measure.link_report_delays import ReportDelays
 from frictex.app.measure.processes import cores
-from frictex.app.measure.report_claims import HOLDS, NOT_SHOWN, REFUTED, Claim, paired
+from frictex.app.measure.report_claims import (BOUND, BY_CONSTRUCTION, HOLDS, NOT_SHOWN, REFUTED,
+                                               WORST_RUN, Claim, paired)
 from frictex.app.measure.report_loop_records import (Adaptation, LoopFigures, LoopScore,
                                                      LoopSection, ModeSummary, PerFinger,
                                                      RunScore)
@@ -436,7 +440,7 @@ def claims(section: LoopSection) -> list[Claim]:
         f"the gain scheduled on the report's delay (0-{rows[-1]['delay_blocks']} blocks) "
         f"keeps a gain margin of at least {least:.2f} (by design: COVER_SLOPE), above the "
         f"population's steepest s {steepest:.2f} (computed from the fingers, "
-        f"population_slopes)", steepest - least, len(rows), bool(steepest < least)))
+        f"population_slopes)", steepest - least, len(rows), bool(steepest < least), BOUND))
     ad = section.adaptation
     if ad:
         mean, low, high, n = paired(ad.gaps, [ADAPT_TARGET] * len(ad.gaps))
@@ -450,13 +454,14 @@ def claims(section: LoopSection) -> list[Claim]:
 
 
 def _decided(group: str, scene: str, metric: str, text: str, d: float, n: int,
-             passed: bool) -> Claim:
-    """A claim decided by one number ``d`` over ``n`` runs or rows (the worst one's, as
-    every claim phrased so that d < 0 is the claim), not by an interval: it holds where
-    ``passed`` and does not hold otherwise, since more draws would not change the
-    number that decided it."""
-    return Claim(group, scene, "human", metric, text, d, d, d, n, passed,
-                 HOLDS if passed else REFUTED)
+             passed: bool, decided_by: str) -> Claim:
+    """A claim decided by one number ``d`` over ``n`` runs or rows (the worst one's, a
+    bound's, or one that cannot miss: ``decided_by``, every claim phrased so that d < 0
+    is the claim), not by an interval, so it has no interval ends: it holds where
+    ``passed`` and does not hold otherwise, since more draws would not change the number
+    that decided it."""
+    return Claim(group, scene, "human", metric, text, d, None, None, n, passed,
+                 HOLDS if passed else REFUTED, decided_by)
 
 
 def _scene_claims(scene: str, row: dict[str, ModeSummary]) -> list[Claim]:
@@ -471,8 +476,10 @@ def _scene_claims(scene: str, row: dict[str, ModeSummary]) -> list[Claim]:
     top = max(commands)
     out.append(_decided(
         "closed loop: amplitude limit", scene, "max_command_um",
-        f"no run commands beyond the device's {limit:g} um: largest {top:.3f} um over "
-        f"{len(commands)} runs", top - limit, len(commands), bool(top <= limit)))
+        f"no run commands beyond the device's {limit:g} um, by construction (every "
+        f"command is clipped at the limit before it is sent): largest "
+        f"{top:.3f} um over {len(commands)} runs", top - limit, len(commands),
+        bool(top <= limit), BY_CONSTRUCTION))
     steps = [a for m in ("closed", "adaptive") if m in row for a in row[m].per_finger.swings]
     if steps:
         mean, low, high, n = paired(steps, [0] * len(steps))
@@ -483,7 +490,7 @@ def _scene_claims(scene: str, row: dict[str, ModeSummary]) -> list[Claim]:
             f"no run's loop gain oscillates: longest run of swings over "
             f"{SWING:.0%} {max(steps)} ({spread}) against {OSCILLATION_STEPS} or more for "
             f"an oscillation, {n} runs", float(max(steps) - OSCILLATION_STEPS), n,
-            bool(max(steps) < OSCILLATION_STEPS)))
+            bool(max(steps) < OSCILLATION_STEPS), WORST_RUN))
     noise = row["adaptive"].per_finger.noise_fraction if "adaptive" in row else None
     if noise:
         mean, low, high, n = paired(noise, [WEBER_FRACTION] * len(noise))
@@ -531,7 +538,7 @@ def _mode_claims(scene: str, mode: str, r: ModeSummary, opened: ModeSummary) -> 
                  f"{rms.size} fingers improve; the largest RMS over fingers: open "
                  f"{opened.worst:.4f} (finger {opened.worst_finger}), {mode} {r.worst:.4f} "
                  f"(finger {r.worst_finger})", r.worst_ratio - 1.0, int(rms.size),
-                 bool(r.worst_ratio < 1.0))]
+                 bool(r.worst_ratio < 1.0), WORST_RUN)]
 
 
 def markdown(section: LoopSection) -> list[str]:
