@@ -10,7 +10,7 @@ from numpy.testing import assert_allclose
 from frictex.app.commands.cli import main
 from frictex.app.measure.report_claims import claims, paired
 from frictex.app.measure.figure_check import text_flaws
-from frictex.app.measure.report_doc import Report, Settings, headline
+from frictex.app.measure.report_doc import SECTIONS, Report, Settings, Timing, headline
 from frictex.app.measure.report_markdown import write_markdown
 from frictex.app.measure.report_matrix import MOTIONS, Runner, matrix
 from frictex.app.measure.report_output import cost_figure, pareto, period_figure
@@ -78,7 +78,9 @@ def test_rows_have_the_documented_fields(grating_rows):
     for key in ("scene", "period_mm", "motion", "touch_hz", "renderer", "output_hz",
                 "time_error", "spectral_error", "alignment_error_mm", "cost_us_per_s"):
         assert key in row
-    assert set(row["throughput"]) == {"replay_x_realtime", "live_block_p99_us", "latency_ms"}
+    assert set(row["throughput"]) == {"replay_x_realtime", "live_block_p99_thread_cpu_us",
+                                      "live_block_p99_wall_us", "live_blocks", "latency_ms"}
+    assert row["throughput"]["live_blocks"] == 4  # live_s 0.02: four 5 ms blocks
     assert {"tracking", "layer:lines", "composition", "inversion", "actuation"} <= set(row["stages_us_per_s"])
     assert row["period_mm"] == 15.0
     # latency: at most one 5 ms block of waiting plus the link's jitter buffer
@@ -113,10 +115,19 @@ def test_report_writes_its_files(tmp_path, capsys):
     assert all({"mean", "low", "high", "n", "passed"} <= set(c) for c in doc["claims"])
     assert doc["real"] is None
     assert "claims hold" in capsys.readouterr().out
+    # each part's wall time and load, the whole report's too; the parts run in its time
+    timings = doc["timings"]
+    assert set(timings) == set(SECTIONS) - {"real recordings"}
+    assert all(len(t["load_1min"]) == 2 and t["wall_s"] > 0 for t in timings.values())
+    assert sum(t["wall_s"] for k, t in timings.items() if k != "whole report") <= (
+        timings["whole report"]["wall_s"])
+    assert "one run of each format, 1-minute load " in markdown
+    # claims decided by one number carry no interval
+    assert all((c["low"] is None) == (c["decided_by"] != "95 % interval") for c in doc["claims"])
     # issue 5: each modal inversion method's speed and error, measured
-    modal = {f["label"]: f["value"] for f in doc["modal_inversion"]}
+    modal = {f["label"].split(" (")[0]: f["value"] for f in doc["modal_inversion"]}
     for method in ("exact", "regularised", "bounded"):
-        assert modal[f"{method} random: time per sample (blocks of 50)"] > 0
+        assert modal[f"{method} random: time per sample"] > 0
         assert 0 <= modal[f"{method} near-singular: mean error"] < 0.5
     # the default stays continuous across a singular locus; the exact inverse jumps
     assert (modal["regularised: largest command step, finger b crossing a in 1 um steps"]
@@ -198,7 +209,7 @@ def _report(rows, few_draws) -> Report:
                   modal_replay={"scene": "s", "trace": "t", "output_hz": 10_000.0,
                                 "replay_x_realtime": 300.0, "stages_us_per_s": {"actuation": 2.0}},
                   draws=few_draws, real=None, modal_inversion=[], end_to_end=None,
-                  closed_loop=None)
+                  closed_loop=None, timings={"whole report": Timing(5.0, (1.0, 2.0))})
 
 
 def test_markdown_has_no_empty_table(grating_rows, few_draws, tmp_path):
@@ -221,12 +232,12 @@ def test_report_json_reads_back(grating_rows, few_draws, tmp_path):
     doc.write(tmp_path / "report.json")
     text = (tmp_path / "report.json").read_text()
     assert json.dumps(Report.read(tmp_path / "report.json").to_json(), indent=1) + "\n" == text
-    assert json.loads((tmp_path / "report.json").read_text())["report_version"] == 2
+    assert json.loads((tmp_path / "report.json").read_text())["report_version"] == 3
 
 
 def test_report_json_of_another_version_is_refused(tmp_path):
     (tmp_path / "report.json").write_text('{"report_version": 1}')
-    with pytest.raises(ValueError, match="report_version 1; this frictex reads version 2"):
+    with pytest.raises(ValueError, match="report_version 1; this frictex reads version 3"):
         Report.read(tmp_path / "report.json")
 
 

@@ -25,7 +25,8 @@ def row(motion="human", touch_hz=50.0, renderer="sho-held", scene="grating-0.6mm
                spectral_error=spectral, alignment_error_mm=alignment_mm, chatter=0,
                steps=Steps(ideal=1, rendered=1), cost_us_per_s=100.0,
                stages_us_per_s={"inversion": 10.0},
-               throughput=Throughput(replay_x_realtime=1e4, live_block_p99_us=100.0,
+               throughput=Throughput(replay_x_realtime=1e4, live_block_p99_thread_cpu_us=100.0,
+                                     live_block_p99_wall_us=150.0, live_blocks=100,
                                      latency_ms=40.0),
                clamps={})
     return replace(made, **changes)
@@ -63,7 +64,8 @@ def test_the_period_plot_leaves_the_aliased_row_out_of_its_mean():
 def test_the_end_to_end_peak_names_the_launcher_it_may_include():
     got = {"x_realtime_end_to_end": 900.0, "x_realtime_compute": 2000.0,
            "process_wall_s": 2.0, "peak_mib": 168.0, "launcher_mib": 8.5}
-    text = rmd._end_to_end({"scene": "s", "duration_s": 20.0, "formats": {"csv": got}})[1]
+    text = rmd._end_to_end({"scene": "s", "duration_s": 20.0, "formats": {"csv": got}},
+                           None)[1]
     assert "peak 168 MiB, launcher 8 MiB" in text
     assert "at most the launcher's figure" in text
 
@@ -113,7 +115,7 @@ def test_the_latency_bound_is_not_a_verdict_no_row_could_miss():
     assert "latency <= one block plus the link buffer (45 ms): not judged here" in verdicts
     assert verdicts.count("met in every row") == 2  # replay and p99 only
     table = "\n".join(rmd._throughput(SimpleNamespace(
-        headline=doc.headline, settings=SETTINGS, end_to_end=None,
+        headline=doc.headline, settings=SETTINGS, end_to_end=None, timings={},
         modal_replay={"scene": "s", "trace": "t", "output_hz": 1e4, "replay_x_realtime": 300.0,
                       "stages_us_per_s": {}})))
     assert "schedule latency ms (block wait + link buffer)" in table

@@ -64,18 +64,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
+    load_at_start = os.getloadavg()[0]
     out, real_dir = _checked(args)
     from frictex.app.measure.report_claims import count_line
-    from frictex.app.measure.report_doc import Report, headline
+    from frictex.app.measure.report_doc import Report, Timing, headline
     from frictex.app.measure.report_markdown import write_markdown
     jobs = args.jobs or default_workers()
-    rows, settings = _matrix(args, jobs)
-    draws, real, modal, modal_replay, end_to_end = _beside_the_matrix(args, jobs, real_dir)
-    closed_loop = _closed_loop(args, jobs)
+    timings = {}
+    rows, settings = _timed(timings, "matrix", lambda: _matrix(args, jobs))
+    draws, real, modal, modal_replay, end_to_end = _beside_the_matrix(args, jobs, real_dir,
+                                                                      timings)
+    closed_loop = _timed(timings, "closed loop", lambda: _closed_loop(args, jobs))
+    timings["whole report"] = Timing(time.perf_counter() - start,
+                                     (load_at_start, os.getloadavg()[0]))
     doc = Report(quick=args.quick, settings=settings, rows=rows,
                  claims=_claims(draws, closed_loop), headline=headline(rows),
                  modal_replay=modal_replay, draws=draws, real=real, modal_inversion=modal,
-                 end_to_end=end_to_end, closed_loop=closed_loop)
+                 end_to_end=end_to_end, closed_loop=closed_loop, timings=timings)
     doc.write(out / "report.json")
     plots = _plots(doc, out)
     write_markdown(doc, out / "report.md", plots)
@@ -90,6 +95,16 @@ def run(args: argparse.Namespace) -> int:
               + ("; ..." if len(failed) > 3 else ""), file=sys.stderr)
         return 1
     return 0
+
+
+def _timed(timings: dict, section: str, measure):
+    """``measure()``'s result; its wall time and the machine's 1-minute load before and
+    after it go into ``timings[section]`` (``report_doc.Timing``)."""
+    from frictex.app.measure.report_doc import Timing
+    load_before, wall = os.getloadavg()[0], time.perf_counter()
+    result = measure()
+    timings[section] = Timing(time.perf_counter() - wall, (load_before, os.getloadavg()[0]))
+    return result
 
 
 def _checked(args: argparse.Namespace) -> tuple[Path, Path | None]:
@@ -141,22 +156,28 @@ def _matrix(args: argparse.Namespace, jobs: int):
                           load_1min=(load_before, os.getloadavg()[0]))
 
 
-def _beside_the_matrix(args: argparse.Namespace, jobs: int, real_dir: Path | None):
+def _beside_the_matrix(args: argparse.Namespace, jobs: int, real_dir: Path | None,
+                       timings: dict):
     """The draws behind the claims, the real recordings' section (None without
     ``--real``), the modal inversion's figures, two fingers with modal actuation in
-    replay, and whole replays end to end."""
+    replay, and whole replays end to end; each section's wall time and load into
+    ``timings`` (``_timed``)."""
     from frictex.app.measure import bench_modal, report_seeds
     from frictex.app.measure.bench_pipeline import modal_throughput
     from frictex.app.measure.bench_replay import end_to_end
-    modal = [asdict(f) for f in bench_modal.run(args.quick)]
+    modal = _timed(timings, "modal inversion",
+                   lambda: [asdict(f) for f in bench_modal.run(args.quick)])
     gratings = [s for s in args.scenes if s in report_seeds.GRATINGS]
-    draws = report_seeds.draws(report_seeds.QUICK_DRAWS if args.quick else report_seeds.DRAWS,
-                               gratings, workers=jobs, scheduler=args.scheduler)
+    draws = _timed(timings, "draws", lambda: report_seeds.draws(
+        report_seeds.QUICK_DRAWS if args.quick else report_seeds.DRAWS, gratings,
+        workers=jobs, scheduler=args.scheduler))
     real = None
     if real_dir is not None:
         from frictex.app.measure.report_real import real_section
-        real = real_section(real_dir, gratings)
-    return draws, real, modal, modal_throughput(), end_to_end(20.0 if args.quick else 120.0)
+        real = _timed(timings, "real recordings", lambda: real_section(real_dir, gratings))
+    modal_replay = _timed(timings, "modal replay", modal_throughput)
+    whole = _timed(timings, "end to end", lambda: end_to_end(20.0 if args.quick else 120.0))
+    return draws, real, modal, modal_replay, whole
 
 
 def _claims(draws, closed_loop) -> list:

@@ -3,14 +3,21 @@ back.
 
 ``report.json``::
 
-    {"report_version": 2, "quick": bool, "settings": {...}, "rows": [row, ...],
+    {"report_version": 3, "quick": bool, "settings": {...}, "rows": [row, ...],
      "claims": [{"group", "scene", "motion", "metric", "text", "mean", "low", "high", "n",
-                 "passed", "verdict"}, ...],
+                 "passed", "verdict", "decided_by"}, ...],
      "headline": {...}, "modal_replay": {...}, "draws": {...}, "real": {...} or null,
-     "modal_inversion": [...], "end_to_end": {...} or null, "closed_loop": {...} or null}
+     "modal_inversion": [...], "end_to_end": {...} or null, "closed_loop": {...} or null,
+     "timings": {section: {"wall_s", "load_1min"}, ...}}
+
+``timings``: each section's wall time (s) and the machine's 1-minute load average as it
+started and ended (``Timing``), by the names of ``SECTIONS``; "whole report" runs from
+the command's start to writing its files.
 
 Claims are computed on ``draws`` (``app.measure.report_seeds``), paired by draw, with a
-95 % interval (``app.measure.report_claims``); ``passed`` is true only where the interval
+95 % interval (``app.measure.report_claims``; ``decided_by`` "95 % interval", or for a
+claim decided by one number "worst run", "bound" or "by construction", with ``low``
+and ``high`` null); ``passed`` is true only where the interval
 excludes a loss; ``verdict`` is "holds" (``passed``), "does not hold" (the whole interval
 on the losing side) or "not shown" (the interval straddles the claim's bound). A
 report.json written before ``verdict`` existed reads back with it derived. ``closed_loop`` (``app.measure.report_closed_loop``): open loop,
@@ -22,7 +29,8 @@ that are not one grating), ``motion``, ``touch_hz``, ``renderer``, ``output_hz``
 ``inversion``, ``time_error``, ``spectral_error``, ``alignment_error_mm``, ``chatter``
 (edges felt twice, ``rendering.metrics.chatter``; on the 15 and 5 mm gratings, else null),
 ``steps``, ``cost_us_per_s``, ``stages_us_per_s``, ``throughput`` (``replay_x_realtime``,
-``live_block_p99_us``, ``latency_ms``), ``clamps`` and ``through_plate`` (``time_error``
+``live_block_p99_thread_cpu_us``, ``live_block_p99_wall_us``, ``live_blocks``,
+``latency_ms``), ``clamps`` and ``through_plate`` (``time_error``
 and ``spectral_error`` of what the plate delivers through its 400 Hz loop; the other
 errors, and every claim, score the commanded mu'). ``settings.load_1min``: the machine's
 1-minute load average as the matrix started and ended.
@@ -42,7 +50,10 @@ from frictex.app.measure.report_matrix import Row
 from frictex.app.measure.report_seeds import Draws
 from frictex.device.errors import InputError
 
-REPORT_VERSION = 2
+REPORT_VERSION = 3
+#: the parts of the report ``Report.timings`` times, in the order they run
+SECTIONS = ("matrix", "modal inversion", "draws", "real recordings", "modal replay",
+            "end to end", "closed loop", "whole report")
 #: the scene of the headline's throughput and latency figures
 HEADLINE_SCENE = "composed-fine-grating-in-disc"
 
@@ -69,12 +80,28 @@ class Settings:
 
 
 @dataclass(frozen=True)
+class Timing:
+    """When a part of the report ran: its wall time (s) and the machine's 1-minute load
+    average as it started and ended."""
+
+    wall_s: float
+    load_1min: tuple[float, float]
+
+    def conditions(self) -> str:
+        """'1-minute load 2.8-3.3, 41 s' for report.md."""
+        low, high = sorted(self.load_1min)
+        return f"1-minute load {low:.1f}-{high:.1f}, {self.wall_s:.0f} s"
+
+
+@dataclass(frozen=True)
 class HeadlineEntry:
     """The throughput and latency of one renderer and motion on the composed scene (one
     finger, 10 kHz, exact inversion): the row's ``throughput`` and costs (us/s)."""
 
     replay_x_realtime: float
-    live_block_p99_us: float
+    live_block_p99_thread_cpu_us: float
+    live_block_p99_wall_us: float
+    live_blocks: int
     latency_ms: float
     cost_us_per_s: float
     stages_us_per_s: dict[str, float]
@@ -107,7 +134,7 @@ class Report:
     ``app.measure.bench_pipeline.modal_throughput``; ``real``:
     ``app.measure.report_real.real_section`` or None; ``modal_inversion``: the figures of
     ``app.measure.bench_modal.run``; ``end_to_end``: ``app.measure.bench_replay.end_to_end``
-    or None."""
+    or None; ``timings``: ``Timing`` by the names of ``SECTIONS`` (those run)."""
 
     quick: bool
     settings: Settings
@@ -120,6 +147,7 @@ class Report:
     modal_inversion: list[dict]
     end_to_end: dict | None
     closed_loop: LoopSection | None
+    timings: dict[str, Timing]
 
     def to_json(self) -> dict:
         """The document as report.json holds it."""
@@ -130,7 +158,8 @@ class Report:
                 "modal_replay": self.modal_replay, "draws": self.draws.to_json(),
                 "real": self.real, "modal_inversion": self.modal_inversion,
                 "end_to_end": self.end_to_end,
-                "closed_loop": None if self.closed_loop is None else self.closed_loop.to_json()}
+                "closed_loop": None if self.closed_loop is None else self.closed_loop.to_json(),
+                "timings": {k: asdict(v) for k, v in self.timings.items()}}
 
     @classmethod
     def from_json(cls, doc: dict) -> Report:
@@ -147,7 +176,9 @@ class Report:
                    modal_replay=doc["modal_replay"], draws=Draws.from_json(doc["draws"]),
                    real=doc["real"], modal_inversion=doc["modal_inversion"],
                    end_to_end=doc["end_to_end"],
-                   closed_loop=None if loop is None else LoopSection.from_json(loop))
+                   closed_loop=None if loop is None else LoopSection.from_json(loop),
+                   timings={k: Timing(v["wall_s"], tuple(v["load_1min"]))
+                            for k, v in doc["timings"].items()})
 
     def write(self, path: Path) -> None:
         """Write report.json."""
