@@ -92,3 +92,7 @@ def test_the_inversion_table_counts_its_single_runs_and_gives_the_tables_error()
     assert "| rows timed (one run each) | 2 | 2 |" in text
     assert "largest amplitude error is 0.001 um" in text
     assert "not alternated" in text
+
+
+def test_a_part_shorter_than_a_second_gives_its_time_not_zero():
+    assert Timing(0.198, (7.0, 7.0)).conditions() == "1-minute load 7.0-7.0, 0.198 s"

@@ -90,7 +90,7 @@ class Timing:
     def conditions(self) -> str:
         """'1-minute load 2.8-3.3, 41 s' for report.md."""
         low, high = sorted(self.load_1min)
-        return f"1-minute load {low:.1f}-{high:.1f}, {self.wall_s:.0f} s"
+        return f"1-minute load {low:.1f}-{high:.1f}, {self.wall_s:.3g} s"
 
 
 @dataclass(frozen=True)
