@@ -41,6 +41,15 @@ if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
+def signals_as_a_terminal_gives() -> None:
+    """In a child process (``preexec_fn``): SIGINT and SIGHUP at their defaults, as a
+    terminal gives them. A shell's background job inherits SIGINT ignored, ``nohup``
+    SIGHUP, and frictex keeps an ignored signal ignored by design, so a test that sends
+    one of them to a child it starts must not let the suite's own start decide."""
+    for sig in (signal.SIGINT, signal.SIGHUP):
+        signal.signal(sig, signal.SIG_DFL)
+
+
 @pytest.fixture(scope="session")
 def _egl_context():
     moderngl = pytest.importorskip("moderngl", reason="moderngl (Python package) not installed")

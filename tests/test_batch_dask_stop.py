@@ -15,6 +15,8 @@ from pathlib import Path
 
 import pytest
 
+from conftest import signals_as_a_terminal_gives
+
 distributed = pytest.importorskip("distributed", reason="dask.distributed is not installed "
                                   "(pip install 'frictex[cluster]')")
 
@@ -93,7 +95,7 @@ def spawn():
 
     def start(argv):
         started.append(subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                        text=True))
+                                        text=True, preexec_fn=signals_as_a_terminal_gives))
         return started[-1]
 
     yield start

@@ -16,17 +16,10 @@ import time
 
 import pytest
 
+from conftest import signals_as_a_terminal_gives
 from test_demo import wait_event
 
 pytest.importorskip("glfw", reason="glfw (Python package) not installed")
-
-
-def _signals_as_a_terminal_gives() -> None:
-    """In the child: SIGINT and SIGHUP at their defaults, as a terminal gives them (a
-    shell's background job inherits SIGINT ignored, nohup SIGHUP, and a run keeps an
-    ignored signal ignored by design)."""
-    for sig in (signal.SIGINT, signal.SIGHUP):
-        signal.signal(sig, signal.SIG_DFL)
 
 
 def start(display, rec, *args, group=False):
@@ -40,7 +33,7 @@ def start(display, rec, *args, group=False):
             [sys.executable, "-u", "-m", "frictex", "demo", "grating-5mm", "--record", str(rec),
              "--duration", "300", *args],
             env={**os.environ, "DISPLAY": display}, stdout=subprocess.PIPE, stderr=fh, text=True,
-            start_new_session=group, preexec_fn=_signals_as_a_terminal_gives)
+            start_new_session=group, preexec_fn=signals_as_a_terminal_gives)
     proc.stderr_path = err
     return proc
 
