@@ -1,36 +1,103 @@
-"""A periodic texture faster than the output can play: its mean instead of an alias.
+"""What a periodic layer's output sample plays: the texture's mean over the stretch the
+finger crosses while the sample is held, and the texture's mean beyond the Nyquist
+frequency.
 
-A renderer that synthesises a period from the finger's velocity (SHT, the hybrid) plays
-a texture of frequency |v . axis| / P (Hz). Above the output's Nyquist frequency (half
-the output rate) the samples of that texture are an alias: at 1 kHz output a 0.6 mm
-grating under a finger at 420 mm/s is a 700 Hz texture, and sampling it played 300 Hz
-(1000 - 700), a texture nobody touched. There the texture's mean mu' over one period is
-played instead, which is what the texture is to a plate that cannot play it, and those
-touching samples are counted (``summary.json``'s ``layer_clipped``, with a warning). At
-the default 10 kHz output it takes a finger beyond 3 m/s on a 0.6 mm grating.
+The box mean. The plate holds each output sample for 1 / rate_hz, and the finger crosses
+a stretch of the texture meanwhile, so each sample of a periodic layer (grating or
+waveform) plays the mean of the layer's profile over the phase interval from the previous
+sample's phase to its own (SHT and the hybrid: the phase they synthesise; SHO: the phase
+at the finger's position), not the profile at one point. Point sampling folded a square
+grating's harmonics above Nyquist back into the plate's band (seed 003: ~400 Hz
+amplitude-loop bandwidth): at 10 kHz a 0.6 mm, duty 0.4 grating under a 980 mm/s swipe
+(1633 Hz) played its 6th harmonic (9800 Hz) as a 200 Hz line at 0.168 of the fundamental;
+the box mean weights harmonic f by sinc(f / rate_hz), which took that line to 0.003. It
+also places an edge within a sample: a sample straddling one plays the two sides in
+proportion, where a point sample played either by chance. The mean over [phi0, phi1] is
+exact from the profile's running integral over one period, tabulated at ``MEAN_PHASES``
+phases (midpoint rule)::
 
-SHO reads a map at the finger's position and has no texture frequency of its own to
-limit: at a low output rate it aliases a fine grating as any sampling does.
+    C(phi) = floor(phi) * mean + table(frac(phi)),   mean = (C(phi1) - C(phi0)) / (phi1 - phi0)
+
+A sample that moves the phase by less than ``MIN_TRAVEL`` (a finger at rest, or slower
+than one table cell per sample) plays the point value at its own phase, exactly as
+before: below one cell the table cannot place an edge inside the interval any better. So
+does a touch's first sample (it has no previous phase); the first sample of a call starts
+at the previous call's last phase (``last``, carried in the renderer's state), so the
+output does not depend on how a run is split into calls.
+
+Beyond Nyquist. A renderer that synthesises a period from the finger's velocity (SHT, the
+hybrid) plays a texture of frequency |v . axis| / P (Hz). Above the output's Nyquist
+frequency (half the output rate) the texture's mean mu' over one period is played, which
+is what the texture is to a plate that cannot play it, and those touching samples are
+counted (``summary.json``'s ``layer_clipped``, with a warning). At the default 10 kHz
+output it takes a finger beyond 3 m/s on a 0.6 mm grating. The box mean over more than
+half a period tends to that mean anyway, but SHT and the hybrid take each sample's
+interval the short way round their wrapped phase, which is only right below Nyquist; the
+count also says when it happens. SHO reads unwrapped phases and needs no such limit.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-#: phases over one period the texture's mean mu' is taken at
-MEAN_PHASES = 4096
+#: phases over one period the profile's running integral (and its mean) is tabulated at:
+#: a cell is 9 nm of a 0.6 mm grating, so an edge's place within a sample is off by at
+#: most (mu_high - mu_low) * cell / (sample's phase travel)
+MEAN_PHASES = 65536
+
+#: phase travel (cycles) in one sample below which the sample plays the profile's point
+#: value: one table cell (a finger slower than 0.09 mm/s on a 0.6 mm grating at 10 kHz)
+MIN_TRAVEL = 1.0 / MEAN_PHASES
 
 
 class BandLimit:
-    """The band limit of one periodic layer (grating or waveform) at ``rate_hz`` output."""
+    """What one periodic layer (grating or waveform) plays at ``rate_hz`` output."""
 
     def __init__(self, layer, rate_hz: float):
+        self.layer = layer
         self.nyquist_hz = rate_hz / 2.0
         self.axis = np.array(layer.axis, dtype=np.float64)
         self.period_mm = float(layer.period_mm)
-        phases = np.arange(MEAN_PHASES)[None, :] / MEAN_PHASES
+        self._grid = np.arange(MEAN_PHASES + 1) / MEAN_PHASES
+        middles = (np.arange(MEAN_PHASES) + 0.5)[None, :] / MEAN_PHASES
+        values = layer.profile_where(middles, np.ones(middles.shape, bool))[0]
+        #: the running integral of mu' over one period (cycles x mu') at ``_grid``
+        self._table = np.concatenate(([0.0], np.cumsum(values) / MEAN_PHASES))
         #: mu' averaged over one period: what is played above the Nyquist frequency
-        self.mean_mu = float(layer.profile_where(phases, np.ones(phases.shape, bool)).mean())
+        self.mean_mu = float(self._table[-1])
+
+    def _integral(self, phase: np.ndarray) -> np.ndarray:
+        """C(phase): the integral of mu' from phase 0 (cycles, any real)."""
+        whole = np.floor(phase)
+        return whole * self.mean_mu + np.interp(phase - whole, self._grid, self._table)
+
+    def play(self, phase: np.ndarray, covers: np.ndarray, block, last: dict,
+             wrapped: bool = True) -> tuple[np.ndarray, dict]:
+        """mu' (F, n) each sample plays (1 where the layer does not cover): the profile's
+        mean from the previous sample's phase to ``phase`` (cycles, (F, n); ``wrapped``:
+        taken modulo 1, each interval then the short way round), and the (touch id, last
+        phase) of each finger of ``block`` to pass back as ``last`` next call."""
+        touch = block.touch_id
+        start = np.empty_like(phase)
+        start[:, 1:] = phase[:, :-1]
+        joined = np.empty(phase.shape, bool)
+        joined[:, 1:] = touch[:, 1:] == touch[:, :-1]
+        for row, fid in enumerate(block.ids):
+            before = last.get(fid)
+            joined[row, 0] = before is not None and before[0] == touch[row, 0]
+            start[row, 0] = before[1] if joined[row, 0] else phase[row, 0]
+        travel = phase - start
+        if wrapped:
+            travel -= np.round(travel)
+        moved = joined & covers & (np.abs(travel) >= MIN_TRAVEL)
+        mu = self.layer.profile_where(phase, covers & ~moved)
+        a = start[moved] - np.floor(start[moved])
+        d = travel[moved]
+        mu[moved] = (self._integral(a + d) - np.interp(a, self._grid, self._table)) / d
+        if phase.shape[1] == 0:
+            return mu, last
+        return mu, {fid: (int(touch[row, -1]), float(phase[row, -1]))
+                    for row, fid in enumerate(block.ids)}
 
     def apply(self, mu: np.ndarray, covers: np.ndarray, block) -> int:
         """Set ``mu`` (F, n) to the mean where a touching finger on the layer (``covers``)

@@ -128,8 +128,9 @@ draws its spectral error fell on every kind of motion (fast swipes 0.131 -> 0.12
 before this rule is reached: their figures did not change (``rendering/RENDERERS.md``).
 
 So the hybrid has SHT's bandwidth on fine textures and SHO's alignment on coarse ones.
-Above the output's Nyquist frequency it plays, as SHT does, the texture's mean instead
-of an alias (``rendering.layers.band_limit``), counted in ``clipped``.
+As SHT does, each sample plays the profile's mean over the phase interval from the
+previous sample's phase to its own, and above the output's Nyquist frequency the
+texture's mean instead of an alias, counted in ``clipped`` (``rendering.layers.band_limit``).
 
 The error is taken once per measurement and the offset ramps towards it at the bounded
 rate, computed in closed form per measurement. The whole per-finger recurrence
@@ -152,7 +153,7 @@ SHO's and SHT's, and it feels far fewer edges twice than SHO-predicted (0 agains
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -209,11 +210,13 @@ class _Finger:
 @dataclass(frozen=True)
 class HybridState:
     """Per finger id of the last block's tracks (``FingerBlock.ids``: the fingers
-    touching, and those that lifted in it): its :class:`_Finger` record; and the touching
+    touching, and those that lifted in it): its :class:`_Finger` record; the touch and
+    phase of its last sample played (``BandLimit.play``'s ``last``); and the touching
     samples played as the texture's mean so far (``rendering.layers.band_limit``)."""
 
     fingers: dict[int, _Finger]
     clipped: int = 0
+    last: dict[int, tuple[int, float]] = field(default_factory=dict)
 
 
 def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, snap: np.ndarray,
@@ -541,6 +544,7 @@ class HybridRenderer:
                                    measured=end[4:7], speed=end[7], held=end[8],
                                    filter=filtered)
         covers = self.layer.covers(block.x_pred, block.y_pred)
-        mu = self.layer.profile_where(phase, covers)
+        mu, last = self.band_limit.play(phase, covers, block, state.last)
         limited = self.band_limit.apply(mu, covers, block)
-        return mu, covers, HybridState(fingers=carried, clipped=state.clipped + limited)
+        return mu, covers, HybridState(fingers=carried, clipped=state.clipped + limited,
+                                       last=last)

@@ -5,32 +5,46 @@ Two variants: ``held`` uses the last measured position until the next touch samp
 arrives (the seed's plain scheme: at 50 Hz it can only render up to 25 Hz, section
 4.4.1); ``predicted`` extrapolates the position at the estimated velocity between
 samples (see ``rendering.tracking.tracks``).
+
+On a periodic layer each sample plays the profile's mean over the phase interval from
+the previous sample's position to its own (``rendering.layers.band_limit``): ``held``
+thus plays the point value between touch samples, as before, and at each touch sample
+the mean over the jump to the new one.
 """
 
 from __future__ import annotations
 
+from frictex.rendering.layers.band_limit import BandLimit
 from frictex.rendering.tracking.tracks import FingerBlock
 
 
 class ShoRenderer:
-    """Position-map rendering of one layer. Stateless: ``render`` returns state unchanged."""
+    """Position-map rendering of one layer. Its state: None for a layer without a period;
+    for a periodic one each finger's last touch and phase (``BandLimit.play``'s ``last``)."""
 
     #: reads any layer's map at a position, so it can be a run's SHO variant (the
     #: renderer of every layer without a period: ``rendering.renderers``)
     any_layer = True
 
-    def __init__(self, layer, predicted: bool):
+    def __init__(self, layer, predicted: bool, rate_hz: float | None = None):
         self.layer = layer
         self.predicted = predicted
+        periodic = rate_hz is not None and layer.is_periodic
+        self.band_limit = BandLimit(layer, rate_hz) if periodic else None
 
     def initial_state(self):
-        return None
+        return None if self.band_limit is None else {}
 
     def render(self, block: FingerBlock, state=None):
-        """mu' (F, n) and coverage (F, n) of the layer under each finger."""
+        """mu' (F, n) and coverage (F, n) of the layer under each finger, and the new state."""
         x, y = (block.x_pred, block.y_pred) if self.predicted else (block.x_held, block.y_held)
-        mu, covers = self.layer.mu_and_covers(x, y)
-        return mu, covers, state
+        if self.band_limit is None:
+            mu, covers = self.layer.mu_and_covers(x, y)
+            return mu, covers, state
+        covers = self.layer.covers(x, y)
+        mu, last = self.band_limit.play(self.layer.phase_at(x, y), covers, block, state,
+                                        wrapped=False)
+        return mu, covers, last
 
 
 class HeldSho(ShoRenderer):
@@ -43,7 +57,7 @@ class HeldSho(ShoRenderer):
                    "plays it from the finger's velocity")
 
     def __init__(self, layer, rate_hz: float):
-        super().__init__(layer, predicted=False)
+        super().__init__(layer, predicted=False, rate_hz=rate_hz)
 
 
 class PredictedSho(ShoRenderer):
@@ -56,4 +70,4 @@ class PredictedSho(ShoRenderer):
                    "\"hybrid\" plays it from the finger's velocity without those jumps")
 
     def __init__(self, layer, rate_hz: float):
-        super().__init__(layer, predicted=True)
+        super().__init__(layer, predicted=True, rate_hz=rate_hz)

@@ -10,13 +10,14 @@ tests/test_sht.py). A new touch (down, or a jump) restarts the phase at 0: plain
 does not know where the finger landed (the seed's stated drawback; the hybrid renderer
 fixes it). The layer's region gates the output at the predicted finger position.
 
-Above the output's Nyquist frequency the texture's mean is played instead of an alias
-(``rendering.layers.band_limit``), counted in ``clipped``.
+Each sample plays the profile's mean over the phase interval from the previous sample's
+phase to its own, and above the output's Nyquist frequency the texture's mean instead of
+an alias, counted in ``clipped`` (``rendering.layers.band_limit``).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -27,11 +28,14 @@ from frictex.rendering.tracking.tracks import FingerBlock
 
 @dataclass(frozen=True)
 class ShtState:
-    """Per finger: the touch the phase belongs to and the wrapped phase (cycles); and the
-    touching samples played as the texture's mean so far (``rendering.layers.band_limit``)."""
+    """Per finger: the touch the phase belongs to and the wrapped phase (cycles) to go on
+    from; the touch and phase of the last sample played (``BandLimit.play``'s ``last``);
+    and the touching samples played as the texture's mean so far
+    (``rendering.layers.band_limit``)."""
 
     phase: dict[int, tuple[int, float]]
     clipped: int = 0
+    last: dict[int, tuple[int, float]] = field(default_factory=dict)
 
 
 class ShtRenderer:
@@ -64,6 +68,6 @@ class ShtRenderer:
                                                 carried.get(fid))
             carried[fid] = (int(block.touch_id[row, -1]), carry)
         covers = self.layer.covers(block.x_pred, block.y_pred)
-        mu = self.layer.profile_where(phase, covers)
+        mu, last = self.band_limit.play(phase, covers, block, state.last)
         limited = self.band_limit.apply(mu, covers, block)
-        return mu, covers, ShtState(phase=carried, clipped=state.clipped + limited)
+        return mu, covers, ShtState(phase=carried, clipped=state.clipped + limited, last=last)
