@@ -13,6 +13,7 @@ from frictex.rendering.layers.sho import PredictedSho
 from frictex.rendering.layers.sht import ShtRenderer
 from frictex.rendering.tracking.tracks import FingerBlock
 from frictex.textures.model import Grating, VisualHints, Waveform
+from scenes import grating_box_mean
 
 RATE = 10_000.0
 GRATING = Grating(name="lines", render="sht", region=None, blend="multiply",
@@ -30,9 +31,7 @@ def _box_mean(layer, a, b):
     """The mean of ``layer``'s profile over phase [a, b] (cycles): exact for a square
     grating (the part of the interval inside low bands), scipy's quad otherwise."""
     if isinstance(layer, Grating):
-        low = lambda p: np.floor(p) * layer.duty + np.minimum(p - np.floor(p), layer.duty)
-        share = (low(b) - low(a)) / (b - a)
-        return layer.mu_high + (layer.mu_low - layer.mu_high) * share
+        return grating_box_mean(layer, a, b)
     return np.array([quad(lambda p: float(layer.profile(p)), lo, hi, limit=200)[0] / (hi - lo)
                      for lo, hi in zip(a, b)])
 

@@ -41,8 +41,12 @@ def xdotool():
 
 
 def off_edges(x_mm, half_period_mm=2.5):
-    """Positions friction.csv's 1e-4 mm cannot have rounded across an edge of the grating."""
-    return np.abs(x_mm / half_period_mm - np.round(x_mm / half_period_mm)) * half_period_mm > 1e-4
+    """Rows (one finger's, in order) at positions friction.csv's 1e-4 mm cannot have rounded
+    across an edge of the grating, on the band of the row before: a sample that moved
+    across an edge plays both sides in proportion (``rendering.layers.band_limit``)."""
+    clear = np.abs(x_mm / half_period_mm - np.round(x_mm / half_period_mm)) * half_period_mm > 1e-4
+    band = np.floor(x_mm / half_period_mm)
+    return clear & np.concatenate(([False], clear[:-1] & (band[1:] == band[:-1])))
 
 
 def grating_file(tmp_path):

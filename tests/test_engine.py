@@ -214,7 +214,14 @@ def test_a_long_gap_is_a_lift_and_its_silence_is_not_written(tmp_path):
     first = 0.38 + 0.1  # the first stroke (0.38 s) and the kept 0.1 s after it
     assert got.shape[0] == doc["output"]["samples"]
     assert got.shape[0] < (first + 0.1 + ref.shape[0] / 1e4 + 0.02) * 1e4
-    np.testing.assert_array_equal(got[-ref.shape[0]:, 1], ref[:, 1])
+    # bit for bit but on the samples straddling a grating line, which play its two sides in
+    # proportion (rendering.layers.band_limit): near 1e9 s time is resolved to 1.2e-7 s,
+    # 5 nm at 40 mm/s, up to 1e-6 of a period in a sample's 8e-5 (a 1 % shift of the split)
+    tail = got[-ref.shape[0]:, 1]
+    level = (np.diff(ref[:, 1], prepend=np.nan) == 0) | (np.diff(ref[:, 1], append=np.nan) == 0)
+    assert np.count_nonzero(~level) < 0.01 * level.size
+    np.testing.assert_array_equal(tail[level], ref[level, 1])
+    np.testing.assert_allclose(tail, ref[:, 1], rtol=0.01)
     assert np.all(np.diff(got[:, 0]) > 0)  # time runs forward, jumping once
 
 

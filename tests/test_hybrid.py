@@ -16,12 +16,13 @@ from numpy.testing import assert_allclose
 
 from frictex.rendering.input.trace_synth import make_motion, sample
 import frictex.rendering.layers.hybrid as hybrid_module
+from frictex.rendering.layers.band_limit import BandLimit
 from frictex.rendering.layers.hybrid import (BACK_MM, COARSE_MM, GATE_SIGMAS, LOCK_MM, RELOCK_MM_S,
                                      SLIP, HybridRenderer, slew_offset)
 from frictex.rendering.metrics import accuracy, reference
 from frictex.rendering.pipeline import build_pipeline
 from frictex.rendering.tracking.tracks import FingerBlock, apply_index
-from scenes import grating_scene
+from scenes import grating_box_mean, grating_scene
 
 RATE = 10_000.0
 
@@ -49,6 +50,22 @@ def _sawtooth(period_mm):
     return Waveform(name="saw", render="hybrid", region=None, blend="multiply",
                     visual=VisualHints(), period_mm=period_mm, shape="sawtooth", mu_min=0.0,
                     mu_max=1.0)
+
+
+@pytest.fixture
+def played(monkeypatch):
+    """The phases (cycles, (F, n) per call) the renderers hand to ``BandLimit.play``: the
+    phase the hybrid renders, which a sample plays the box mean from
+    (``rendering.layers.band_limit``), so mu' no longer reads it back point by point."""
+    calls = []
+    play = BandLimit.play
+
+    def recorded(self, phase, *args, **kwargs):
+        calls.append(np.array(phase))
+        return play(self, phase, *args, **kwargs)
+
+    monkeypatch.setattr(BandLimit, "play", recorded)
+    return calls
 
 
 def _wrapped(cycles):
@@ -173,7 +190,8 @@ def test_correction_never_exceeds_slip_times_the_finger_phase_rate(tracker_estim
 
 
 @pytest.mark.parametrize("gap_mm, sd_mm", [(0.15, 0.08), (0.28, 0.08), (0.15, 0.0)])
-def test_a_lost_lock_is_a_gap_beyond_the_filters_own_uncertainty(monkeypatch, gap_mm, sd_mm):
+def test_a_lost_lock_is_a_gap_beyond_the_filters_own_uncertainty(monkeypatch, played, gap_mm,
+                                                                 sd_mm):
     """A 120 mm/s finger on a 0.6 mm texture (200 Hz), rendered exactly where it is;
     then a measurement puts it ``gap_mm`` further on. With the filter's position
     correction of standard deviation 0.08 mm (a steady swipe's at 50 Hz), the gate is
@@ -189,8 +207,8 @@ def test_a_lost_lock_is_a_gap_beyond_the_filters_own_uncertainty(monkeypatch, ga
     t = np.arange(400) / RATE
     _, _, state = r.render(_block(10.0 + v * t[:200], np.full(200, v)), r.initial_state())
     x = 10.0 + v * t[200:] + gap_mm
-    mu, _, _ = r.render(_block(x, np.full(200, v), x_held=np.full(200, x[0]), index0=200), state)
-    rendered = 1.0 - mu[0]  # the sawtooth's phase mod 1
+    r.render(_block(x, np.full(200, v), x_held=np.full(200, x[0]), index0=200), state)
+    rendered = played[-1][0]
     left = -_wrapped(rendered - layer.phase_at(x, 30.0)) * layer.period_mm  # mm behind
     after = t[200:] - t[200]
     want = gap_mm if gap_mm <= gate else np.maximum(gap_mm - SLIP * v * after, gate)
@@ -250,18 +268,19 @@ def test_slew_offset_closed_form_against_a_sample_by_sample_loop():
     assert abs(((end - off) + 0.5) % 1.0 - 0.5) < 1e-3
 
 
-def test_a_noise_free_constant_speed_swipe_gets_no_correction():
+def test_a_noise_free_constant_speed_swipe_gets_no_correction(played):
     """The finger filter on a noise-free 120 mm/s swipe, 50 Hz, on a 0.6 mm texture: the
     filter is exact from the second touch sample on, so every gap is 0 and the rendered
     phase is the true position's at every output sample from then on."""
     layer = _sawtooth(0.6)
     motion = make_motion("swipe", speed_mm_s=120.0, duration_s=0.6, x0_mm=10.0)
     trace = sample(motion, 50.0)
-    mu = _run(replace(grating_scene(0.6), layers=(layer,)), trace, "hybrid")[0]
-    t = np.arange(mu.size) / RATE
+    _run(replace(grating_scene(0.6), layers=(layer,)), trace, "hybrid")
+    phase = played[-1][0]  # one call (the first is the pipeline's warm-up)
+    t = np.arange(phase.size) / RATE
     known = (t >= 0.025) & (t < 0.55)  # the second sample takes effect from the next block
     x_true, y_true = motion.position(t[known])
-    assert_allclose(_wrapped(1.0 - mu[known] - layer.phase_at(x_true, y_true)), 0.0,
+    assert_allclose(_wrapped(phase[known] - layer.phase_at(x_true, y_true)), 0.0,
                     rtol=0, atol=1e-9)
 
 
@@ -277,7 +296,12 @@ def test_a_swipe_starts_at_the_measured_phase_once_its_velocity_is_known(tracker
     x_held = np.where(known, 12.4, 10.0)
     x_pred = np.where(known, 12.4 + 120.0 * (t - 0.02), 10.0)
     mu, _, _ = r.render(_block(x_pred, np.where(known, 120.0, 0.0), x_held=x_held), r.initial_state())
-    assert_allclose(mu[0, known], layer.mu_at(x_pred[known], 30.0))
+    # each sample plays the box mean from the previous sample's phase; the first known
+    # one's interval is the jump to where the finger is (rendering.layers.band_limit)
+    phase = layer.phase_at(np.where(known, x_pred, 10.0), 30.0)
+    moving = np.flatnonzero(known)
+    assert_allclose(mu[0, moving], grating_box_mean(layer, phase[moving - 1], phase[moving]),
+                    atol=1e-4)
     assert_allclose(mu[0, ~known], layer.mu_at(10.0, 30.0))
 
 

@@ -32,10 +32,14 @@ def grating_mu(x_mm: np.ndarray, duty: float) -> np.ndarray:
 
 
 def off_edges(x_mm: np.ndarray, duty: float) -> np.ndarray:
-    """Positions 2e-4 mm or more from the grating's edges (friction.csv's x: 1e-4 mm)."""
+    """Rows at positions 2e-4 mm or more from the grating's edges (friction.csv's x: 1e-4
+    mm), on the band of the row before: a sample that moved across an edge plays both
+    sides in proportion (``rendering.layers.band_limit``)."""
     phase_mm = np.mod(x_mm, PERIOD_MM)
     edges = np.array([0.0, duty * PERIOD_MM, PERIOD_MM])
-    return np.min(np.abs(phase_mm[:, None] - edges[None, :]), axis=1) > 2e-4
+    clear = np.min(np.abs(phase_mm[:, None] - edges[None, :]), axis=1) > 2e-4
+    band = 2 * np.floor(x_mm / PERIOD_MM) + (phase_mm >= duty * PERIOD_MM)
+    return clear & np.concatenate(([False], clear[:-1] & (band[1:] == band[:-1])))
 
 
 def test_slider_drag_under_xvfb_changes_the_next_stroke_and_the_picture_and_saves(

@@ -16,7 +16,7 @@ from frictex.rendering.tracking.finger_select import HYSTERESIS_MM
 from frictex.rendering.pipeline import build_pipeline
 from frictex.rendering.input.trace_file import make_trace
 from frictex.rendering.tracking.tracks import apply_index
-from scenes import grating_scene
+from scenes import grating_box_mean, grating_scene
 from frictex.device.profile import BeamStructure, DeviceProfile, PlateStructure
 from frictex.textures.model import Display, RectRegion, Scene, Shape, VisualHints
 
@@ -226,6 +226,10 @@ def test_bundled_plate_scene_gives_the_left_finger_the_grating_as_fingers_cross(
     assert set(left[both]) == {0, 1}  # each finger is the left one for a while
     # the left-most role changes hands once the other finger is HYSTERESIS_MM beyond
     cols = np.flatnonzero(both & (np.abs(out.x_mm[0] - out.x_mm[1]) > HYSTERESIS_MM))
-    x_left, y_left = out.x_mm[left[cols], cols], out.y_mm[left[cols], cols]
-    assert_allclose(out.mu_target[left[cols], cols], grating.mu_at(x_left, y_left), rtol=1e-12)
+    # each sample plays the grating's mean from the finger's position at the sample before
+    # (rendering.layers.band_limit): the level, but for the samples straddling a line
+    phase = grating.phase_at(out.x_mm, out.y_mm)
+    rows = left[cols]
+    expected = grating_box_mean(grating, phase[rows, cols - 1], phase[rows, cols])
+    assert_allclose(out.mu_target[rows, cols], expected, rtol=1e-12)
     assert_allclose(out.mu_target[1 - left[cols], cols], slippery.mu, rtol=1e-12)

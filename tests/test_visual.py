@@ -45,7 +45,9 @@ def crossings(row_linear: np.ndarray, level: float = 0.5):
 
 def sho_steps_mm(scene, y_mm: float, x_from: float, x_to: float) -> np.ndarray:
     """x (mm) where the haptic pipeline's SHO output steps, for a finger sliding along y_mm
-    at 20 mm/s sampled at 100 Hz (the independent reference for the drawn edges)."""
+    at 20 mm/s sampled at 100 Hz (the independent reference for the drawn edges). A
+    sample straddling an edge plays both sides in proportion (``rendering.layers.band_limit``):
+    one step is then two changes on consecutive samples, the edge within the first's."""
     speed, rate = 20.0, 100.0
     t = np.arange(0.0, (x_to - x_from) / speed, 1.0 / rate)
     trace = make_trace(t, np.zeros(t.size, int), x_from + speed * t, np.full(t.size, y_mm))
@@ -55,6 +57,7 @@ def sho_steps_mm(scene, y_mm: float, x_from: float, x_to: float) -> np.ndarray:
     touching = out.contact[0]
     x, mu = out.x_mm[0][touching], out.mu_target[0][touching]
     k = np.flatnonzero(np.diff(mu) != 0)
+    k = k[np.diff(k, prepend=-2) > 1]
     return 0.5 * (x[k] + x[k + 1])
 
 

@@ -13,10 +13,11 @@ amplitude-loop bandwidth): at 10 kHz a 0.6 mm, duty 0.4 grating under a 980 mm/s
 the box mean weights harmonic f by sinc(f / rate_hz), which took that line to 0.003. It
 also places an edge within a sample: a sample straddling one plays the two sides in
 proportion, where a point sample played either by chance. The mean over [phi0, phi1] is
-exact from the profile's running integral over one period, tabulated at ``MEAN_PHASES``
-phases (midpoint rule)::
+exact from the profile's running integral C over one period, tabulated at ``MEAN_PHASES``
+phases (midpoint rule) less the mean's share, D (periodic, and small, so that differences
+of it round less)::
 
-    C(phi) = floor(phi) * mean + table(frac(phi)),   mean = (C(phi1) - C(phi0)) / (phi1 - phi0)
+    C(phi) = phi * mean + D(frac(phi)),   box mean = (C(phi1) - C(phi0)) / (phi1 - phi0)
 
 A sample that moves the phase by less than ``MIN_TRAVEL`` (a finger at rest, or slower
 than one table cell per sample) plays the point value at its own phase, exactly as
@@ -50,6 +51,11 @@ MEAN_PHASES = 65536
 MIN_TRAVEL = 1.0 / MEAN_PHASES
 
 
+#: a box mean this close to the sample's point value is the point value: rounding, not
+#: texture (see ``BandLimit.play``)
+SNAP = 1e-9
+
+
 class BandLimit:
     """What one periodic layer (grating or waveform) plays at ``rate_hz`` output."""
 
@@ -61,15 +67,21 @@ class BandLimit:
         self._grid = np.arange(MEAN_PHASES + 1) / MEAN_PHASES
         middles = (np.arange(MEAN_PHASES) + 0.5)[None, :] / MEAN_PHASES
         values = layer.profile_where(middles, np.ones(middles.shape, bool))[0]
-        #: the running integral of mu' over one period (cycles x mu') at ``_grid``
-        self._table = np.concatenate(([0.0], np.cumsum(values) / MEAN_PHASES))
+        # summed in extended precision, so that each entry is rounded once: a float64
+        # running sum drifts by up to 65536 roundings, 4e-12 of a 10 mm grating's box mean
+        running = np.cumsum(values.astype(np.longdouble))
+        mean = running[-1] / MEAN_PHASES
         #: mu' averaged over one period: what is played above the Nyquist frequency
-        self.mean_mu = float(self._table[-1])
+        self.mean_mu = float(mean)
+        #: D at ``_grid``: the running integral of mu' less mean x phase (cycles x mu'),
+        #: periodic (0 at both ends), and small, so a difference of it rounds less than C's
+        deviation = (running - mean * np.arange(1, MEAN_PHASES + 1)) / MEAN_PHASES
+        self._table = np.concatenate(([0.0], deviation[:-1].astype(np.float64), [0.0]))
 
-    def _integral(self, phase: np.ndarray) -> np.ndarray:
-        """C(phase): the integral of mu' from phase 0 (cycles, any real)."""
-        whole = np.floor(phase)
-        return whole * self.mean_mu + np.interp(phase - whole, self._grid, self._table)
+    def _deviation(self, phase: np.ndarray) -> np.ndarray:
+        """D(phase) = C(phase) - mean x phase, C the integral of mu' from phase 0 (cycles,
+        any real)."""
+        return np.interp(phase - np.floor(phase), self._grid, self._table)
 
     def play(self, phase: np.ndarray, covers: np.ndarray, block, last: dict,
              wrapped: bool = True) -> tuple[np.ndarray, dict]:
@@ -93,7 +105,11 @@ class BandLimit:
         mu = self.layer.profile_where(phase, covers & ~moved)
         a = start[moved] - np.floor(start[moved])
         d = travel[moved]
-        mu[moved] = (self._integral(a + d) - np.interp(a, self._grid, self._table)) / d
+        mean = self.mean_mu + (self._deviation(a + d) - np.interp(a, self._grid, self._table)) / d
+        # within one band (a grating's, or any flat stretch) the difference of integrals
+        # rounds to the band's level +- 1e-11 (|D| < 0.25 over |d| >= 1/65536): the level
+        point = mu[moved] = self.layer.profile(phase[moved])
+        mu[moved] = np.where(np.abs(mean - point) < SNAP, point, mean)
         if phase.shape[1] == 0:
             return mu, last
         return mu, {fid: (int(touch[row, -1]), float(phase[row, -1]))
