@@ -207,7 +207,8 @@ def test_demo_window_touch_estop_reload_and_broken_edit(xvfb_display, xdotool, t
     assert before.sum() > 1000
     np.testing.assert_array_equal(mu[before], np.where(low[before], 0.6, 1.0))
     after = t >= t_switch
-    assert after.sum() > 1000 and np.isin(np.round(mu[after], 6), [0.3, 1.0]).all()
+    clear = after & off_edges(x)
+    assert clear.sum() > 1000 and np.isin(np.round(mu[clear], 6), [0.3, 1.0]).all()
     assert (np.round(mu[t > t_of["reload-failed"]], 6) == 0.3).any()  # kept mu_low 0.3
 
     cmd = read_csv(rec / "commands.csv")
