@@ -39,7 +39,11 @@ count also says when it happens. SHO reads unwrapped phases and needs no such li
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+from frictex.device.jit import njit
 
 #: phases over one period the profile's running integral (and its mean) is tabulated at:
 #: a cell is 9 nm of a 0.6 mm grating, so an edge's place within a sample is off by at
@@ -64,7 +68,6 @@ class BandLimit:
         self.nyquist_hz = rate_hz / 2.0
         self.axis = np.array(layer.axis, dtype=np.float64)
         self.period_mm = float(layer.period_mm)
-        self._grid = np.arange(MEAN_PHASES + 1) / MEAN_PHASES
         middles = (np.arange(MEAN_PHASES) + 0.5)[None, :] / MEAN_PHASES
         values = layer.profile_where(middles, np.ones(middles.shape, bool))[0]
         # summed in extended precision, so that each entry is rounded once: a float64
@@ -73,15 +76,10 @@ class BandLimit:
         mean = running[-1] / MEAN_PHASES
         #: mu' averaged over one period: what is played above the Nyquist frequency
         self.mean_mu = float(mean)
-        #: D at ``_grid``: the running integral of mu' less mean x phase (cycles x mu'),
+        #: D at MEAN_PHASES + 1 even steps over one period: the running integral of mu' less mean x phase (cycles x mu'),
         #: periodic (0 at both ends), and small, so a difference of it rounds less than C's
         deviation = (running - mean * np.arange(1, MEAN_PHASES + 1)) / MEAN_PHASES
         self._table = np.concatenate(([0.0], deviation[:-1].astype(np.float64), [0.0]))
-
-    def _deviation(self, phase: np.ndarray) -> np.ndarray:
-        """D(phase) = C(phase) - mean x phase, C the integral of mu' from phase 0 (cycles,
-        any real)."""
-        return np.interp(phase - np.floor(phase), self._grid, self._table)
 
     def play(self, phase: np.ndarray, covers: np.ndarray, block, last: dict,
              wrapped: bool = True) -> tuple[np.ndarray, dict]:
@@ -89,27 +87,15 @@ class BandLimit:
         mean from the previous sample's phase to ``phase`` (cycles, (F, n); ``wrapped``:
         taken modulo 1, each interval then the short way round), and the (touch id, last
         phase) of each finger of ``block`` to pass back as ``last`` next call."""
-        touch = block.touch_id
-        start = np.empty_like(phase)
-        start[:, 1:] = phase[:, :-1]
-        joined = np.empty(phase.shape, bool)
-        joined[:, 1:] = touch[:, 1:] == touch[:, :-1]
+        touch = np.ascontiguousarray(block.touch_id, dtype=np.int64)
+        phase = np.ascontiguousarray(phase, dtype=np.float64)
+        point = self.layer.profile_where(phase, covers)
+        mu = np.empty_like(point)
         for row, fid in enumerate(block.ids):
             before = last.get(fid)
-            joined[row, 0] = before is not None and before[0] == touch[row, 0]
-            start[row, 0] = before[1] if joined[row, 0] else phase[row, 0]
-        travel = phase - start
-        if wrapped:
-            travel -= np.round(travel)
-        moved = joined & covers & (np.abs(travel) >= MIN_TRAVEL)
-        mu = self.layer.profile_where(phase, covers & ~moved)
-        a = start[moved] - np.floor(start[moved])
-        d = travel[moved]
-        mean = self.mean_mu + (self._deviation(a + d) - np.interp(a, self._grid, self._table)) / d
-        # within one band (a grating's, or any flat stretch) the difference of integrals
-        # rounds to the band's level +- 1e-11 (|D| < 0.25 over |d| >= 1/65536): the level
-        point = mu[moved] = self.layer.profile(phase[moved])
-        mu[moved] = np.where(np.abs(mean - point) < SNAP, point, mean)
+            _box_row(phase[row], touch[row], np.ascontiguousarray(covers[row]), point[row],
+                     before is not None, *(before or (0, 0.0)), wrapped, self._table,
+                     self.mean_mu, mu[row])
         if phase.shape[1] == 0:
             return mu, last
         return mu, {fid: (int(touch[row, -1]), float(phase[row, -1]))
@@ -124,3 +110,40 @@ class BandLimit:
         above = (texture_hz > self.nyquist_hz) & covers & block.contact
         mu[above] = self.mean_mu
         return int(np.count_nonzero(above))
+
+
+@njit(cache=True, nogil=True)
+def _deviation(phase, table):
+    """D(phase) (cycles, any real) from ``table`` (D at MEAN_PHASES + 1 even steps over one
+    period), linearly interpolated, as np.interp on that grid."""
+    cells = table.size - 1
+    at = (phase - math.floor(phase)) * cells
+    i = min(int(at), cells - 1)
+    w = at - i
+    return table[i] + (table[i + 1] - table[i]) * w
+
+
+@njit(cache=True, nogil=True)
+def _box_row(phase, touch, covers, point, has_before, before_touch, before_phase, wrapped,
+             table, mean_mu, mu):
+    """One finger's row of :meth:`BandLimit.play`, written to ``mu``: each covered sample
+    of the same touch as the one before, whose phase moved at least ``MIN_TRAVEL`` since,
+    the box mean from that phase; the others ``point``, the profile at their phase."""
+    for k in range(phase.size):
+        if k == 0:
+            joined = has_before and touch[0] == before_touch
+            start = before_phase
+        else:
+            joined = touch[k] == touch[k - 1]
+            start = phase[k - 1]
+        travel = phase[k] - start
+        if wrapped:
+            travel -= math.floor(travel + 0.5)
+        if not (joined and covers[k] and abs(travel) >= MIN_TRAVEL):
+            mu[k] = point[k]
+            continue
+        a = start - math.floor(start)
+        mean = mean_mu + (_deviation(a + travel, table) - _deviation(a, table)) / travel
+        # within one band (a grating's, or any flat stretch) the difference rounds to the
+        # band's level +- 1e-11 (|D| < 0.25 over |travel| >= 1/65536): play the level
+        mu[k] = point[k] if abs(mean - point[k]) < SNAP else mean
