@@ -54,7 +54,6 @@ MEAN_PHASES = 65536
 #: value: one table cell (a finger slower than 0.09 mm/s on a 0.6 mm grating at 10 kHz)
 MIN_TRAVEL = 1.0 / MEAN_PHASES
 
-
 #: a box mean this close to the sample's point value is the point value: rounding, not
 #: texture (see ``BandLimit.play``)
 SNAP = 1e-9
