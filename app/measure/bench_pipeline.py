@@ -30,14 +30,13 @@ live budget is 500 us at p99 (10 % of a block).
 
 from __future__ import annotations
 
-import gc
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 
 from frictex.app.measure.figure import Figure
+from frictex.app.measure.live_timing import time_blocks
 from frictex.app.measure.tail import tail
 from frictex.app.live.haptic_thread import BLOCK_SIZE
 from frictex.app.measure.report_matrix import load, run_blocks
@@ -119,37 +118,6 @@ def warmed_replay(build, trace, duration: float):
     return pipeline, seconds
 
 
-class _Timed:
-    """A stage that keeps the wall and thread CPU time (s) of each of its pipeline calls
-    (CPU time leaves out what other processes on a busy machine take meanwhile)."""
-
-    def __init__(self, stage):
-        self.stage = stage
-        self.seconds: list[float] = []
-        self.cpu_seconds: list[float] = []
-
-    def process(self, k, samples, n):
-        t, c = time.perf_counter(), time.thread_time()
-        result = self.stage.process(k, samples, n)
-        self.cpu_seconds.append(time.thread_time() - c)
-        self.seconds.append(time.perf_counter() - t)
-        return result
-
-
-def _live(stage, trace, duration: float, sinks=()) -> tuple[np.ndarray, np.ndarray]:
-    """Run ``trace`` through ``stage`` (a pipeline stage) one block per call, virtual
-    clock, for ``duration`` s; per-call (wall, thread CPU) seconds."""
-    from frictex.app.engine.clocks import VirtualClock
-    from frictex.app.engine.driver import drive
-    from frictex.app.engine.sources import TraceSource
-    timed = _Timed(stage)
-    source = TraceSource(iter([trace]), until_s=duration)
-    source.start(stage.pipeline.tracker_config)
-    gc.freeze()  # as the live haptic process does once its pipeline is built
-    drive(timed, source, list(sinks), VirtualClock(), chunk_blocks=1)
-    return np.array(timed.seconds), np.array(timed.cpu_seconds)
-
-
 def loop_blocks(mode: str, duration: float) -> tuple[np.ndarray, np.ndarray]:
     """Per-call (wall, thread CPU) seconds of :data:`LOOP_SCENE` live, one block per
     call, friction control ``mode``, a simulated finger answering each block, its report
@@ -163,7 +131,7 @@ def loop_blocks(mode: str, duration: float) -> tuple[np.ndarray, np.ndarray]:
     pipeline = build_pipeline(scene, rate_hz=RATE_HZ, block_size=BLOCK, control=mode)
     plant = FingerPlant(draw_finger(1), RATE_HZ, scene.device.amplitude_limit_um, seed=1)
     sink = FingerSink(plant, finger_speed(motion), finger_force(1))
-    return _live(LoopStage(pipeline, sink, (REPORT_DELAY_BLOCKS,)), trace, duration, [sink])
+    return time_blocks(LoopStage(pipeline, sink, (REPORT_DELAY_BLOCKS,)), trace, duration, [sink])
 
 
 #: a minimum-phase AR(4) polynomial per model of the bench's recorded texture: two
@@ -322,7 +290,7 @@ def new_layer_blocks(duration: float, block: int = BLOCK
     with tempfile.TemporaryDirectory() as folder:
         pipeline = build_pipeline(new_layer_scene(Path(folder)), rate_hz=RATE_HZ,
                                   block_size=block)
-        wall, cpu = _live(PipelineStage(pipeline), trace, duration)
+        wall, cpu = time_blocks(PipelineStage(pipeline), trace, duration)
     return wall, cpu, stage_costs(pipeline, duration)
 
 

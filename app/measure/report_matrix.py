@@ -284,9 +284,9 @@ def live_seconds(pipeline, trace: Trace, duration_s: float) -> tuple[np.ndarray,
     collector is unfrozen after, since this process goes on to other cases."""
     import gc
 
-    from frictex.app.measure.bench_pipeline import _live
+    from frictex.app.measure.live_timing import time_blocks
     try:
-        return _live(PipelineStage(pipeline), trace, duration_s)
+        return time_blocks(PipelineStage(pipeline), trace, duration_s)
     finally:
         gc.unfreeze()
 
