@@ -53,6 +53,13 @@ def test_steps_in_turn_reverse_their_order_every_other_round_and_keep_each_round
         [0.002] * 4)
     assert a_cpu.tolist() == pytest.approx([0.004] * 4)
 
+    log.clear()
+    clock.now = 0.0
+    got = in_turn.timed_in_turn([(step("a", 0.004), lambda: log.append("next")),
+                                 (step("b", 0.002), None)], 2, warmup=1)
+    assert log == ["next", "a", "b"] + ["next", "a", "b", "b", "next", "a"]  # untimed first
+    assert got[0][0].tolist() == pytest.approx([0.004] * 2)
+
 
 def test_trace_reading_alternates_the_readers_and_judges_2x_on_each_rounds_ratio(
         monkeypatch, tmp_path):
@@ -68,7 +75,7 @@ def test_trace_reading_alternates_the_readers_and_judges_2x_on_each_rounds_ratio
     path = tmp_path / "t.csv"
     path.write_text("# a comment\nt_s,x_mm,y_mm\n0,0,0\n")
     figures = bench_baseline._reading_figures(path, reads=4)
-    assert log == ["frictex", "pyarrow", "pyarrow", "frictex"] * 2
+    assert log == ["frictex", "pyarrow"] + ["frictex", "pyarrow", "pyarrow", "frictex"] * 2
     assert [f.label for f in figures] == [
         "reading the trace, frictex read_trace (median of 4, alternated)",
         "reading the trace, pyarrow.csv.read_csv (median of 4, alternated)",

@@ -10,14 +10,21 @@ import time
 import numpy as np
 
 
-def timed_in_turn(steps: list[tuple], rounds: int) -> list[tuple[np.ndarray, np.ndarray]]:
+def timed_in_turn(steps: list[tuple], rounds: int,
+                  warmup: int = 0) -> list[tuple[np.ndarray, np.ndarray]]:
     """Each ``(step, before)`` of ``steps`` run ``rounds`` times in alternated rounds
-    (``before()``, untimed, just before its step; ``before`` may be None): per step its
-    wall time and its CPU time of all this process's threads in each round, both s, in
-    round order."""
+    (``before()``, untimed, just before its step; ``before`` may be None), after
+    ``warmup`` untimed rounds (what a step does once, such as an import or a cache
+    filled, then falls outside the times): per step its wall time and its CPU time of
+    all this process's threads in each round, both s, in round order."""
     wall = np.zeros((len(steps), rounds))
     cpu = np.zeros((len(steps), rounds))
     order = list(range(len(steps)))
+    for _ in range(warmup):
+        for step, before in steps:
+            if before is not None:
+                before()
+            step()
     for r in range(rounds):
         for k in (order if r % 2 == 0 else order[::-1]):
             step, before = steps[k]

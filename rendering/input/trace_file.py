@@ -456,36 +456,44 @@ _READ_BYTES = 1 << 22
 
 def _blocks(fh, where: str):
     """The lines of a binary file in blocks: (number of the block's first line, the
-    block's lines joined by b"\\n" without their breaks, how many lines). UTF-8, a leading
-    BOM dropped, lines of at most MAX_LINE_BYTES (the line break included), no NUL bytes.
+    block's lines, each ended by its line break but the file's last line may have none,
+    how many lines). UTF-8, a leading BOM dropped, lines of at most MAX_LINE_BYTES (the
+    line break included), no NUL bytes.
 
     Each block is read and checked at once; the lines before a problem are handed out
-    before the problem's error.
+    before the problem's error. A file that ends with a line break and fits one read is
+    one block, the bytes read and never copied.
     """
-    number, rest = 0, _without_bom(fh.read(len(codecs.BOM_UTF8)), where)
+    number, rest = 0, b""
+    block = _without_bom(fh.read(max(_READ_BYTES, len(codecs.BOM_UTF8))), where) or fh.read(_READ_BYTES)
     while True:
-        block = fh.read(_READ_BYTES)
         data = rest + block if rest else block
         cut = data.rfind(b"\n") + 1 if block else len(data)
         if block and cut == 0 and len(data) <= MAX_LINE_BYTES:
-            rest = data  # a line longer than a block so far: read on
+            rest, block = data, fh.read(_READ_BYTES)  # a line longer than a block so far
             continue
         end, rest = (cut, data[cut:]) if cut else (len(data), b"")
         if not end:
             return
-        ended = data[end - 1] == 0x0A  # a line break
-        body = data[:end - ended]  # the block's lines, one copy
-        breaks = np.flatnonzero(np.frombuffer(body, dtype=np.uint8) == 0x0A)
-        count = breaks.size + 1
-        bad = _first_bad_line(body, breaks, ended)
+        body = data[:end]  # no copy when end is the whole of data
+        ended = body.endswith(b"\n")
+        count = _line_breaks(body) + (not ended)
+        bad = _first_bad_line(body, count)
         if bad == count:  # the whole block is good: handed out as it is, not split
             yield number + 1, body, count
         else:
             raws = body.split(b"\n", bad + 1)
             if bad:
-                yield number + 1, b"\n".join(raws[:bad]), bad
+                yield number + 1, b"\n".join(raws[:bad]) + b"\n", bad
             _line_problem(raws[bad], number + bad + 1, where, ended or bad < count - 1)
         number += count
+        block = fh.read(_READ_BYTES)
+
+
+def _line_breaks(body: bytes) -> int:
+    """How many line breaks ``body`` holds (numpy counts several times faster than
+    ``bytes.count``, which looks at a byte at a time)."""
+    return int(np.count_nonzero(np.frombuffer(body, dtype=np.uint8) == 0x0A))
 
 
 def _without_bom(head: bytes, where: str) -> bytes:
@@ -496,18 +504,14 @@ def _without_bom(head: bytes, where: str) -> bytes:
     return head[len(codecs.BOM_UTF8):] if head.startswith(codecs.BOM_UTF8) else head
 
 
-def _first_bad_line(body: bytes, breaks: np.ndarray, ended: bool) -> int:
-    """Index among the lines of ``body`` (joined by line breaks at offsets ``breaks``, the
-    last one's break removed if it had one: ``ended``) of the first line too long, holding
-    a NUL byte, a bare CR or not UTF-8; the number of lines if none."""
-    count = bad = breaks.size + 1
-    if len(body) + ended >= MAX_LINE_BYTES:  # else no line can be too long
-        lengths = np.diff(breaks, prepend=-1, append=len(body)) - 1
-        limits = np.full(count, MAX_LINE_BYTES)
-        limits[-1] = MAX_LINE_BYTES if ended else MAX_LINE_BYTES + 1  # its break counts
-        long = np.flatnonzero(lengths >= limits)
-        if long.size:
-            bad = int(long[0])
+def _first_bad_line(body: bytes, count: int) -> int:
+    """Index among the ``count`` lines of ``body`` (each ended by a line break, the last
+    one maybe not) of the first line too long, holding a NUL byte, a bare CR or not
+    UTF-8; ``count`` if none."""
+    bad = count
+    long = _first_long_line(body)
+    if long >= 0:
+        bad = body.count(b"\n", 0, long)
     nul = body.find(0)
     if nul >= 0:
         bad = min(bad, body.count(b"\n", 0, nul))
@@ -523,11 +527,25 @@ def _first_bad_line(body: bytes, breaks: np.ndarray, ended: bool) -> int:
     return bad
 
 
+def _first_long_line(body: bytes) -> int:
+    """Offset in ``body`` of the first line longer than MAX_LINE_BYTES, its break
+    included, or -1. Each step looks at the next MAX_LINE_BYTES bytes from a line's start
+    for the last line break among them: none means the line is too long. Two steps go at
+    least MAX_LINE_BYTES further, so no byte is looked at more than twice."""
+    start = 0
+    while len(body) - start > MAX_LINE_BYTES:
+        brk = body.rfind(b"\n", start, start + MAX_LINE_BYTES)
+        if brk < 0:
+            return start
+        start = brk + 1
+    return -1
+
+
 def _bare_cr(data: bytes) -> int:
     """Offset in ``data`` of the first carriage return with more of its line after it
     (:data:`_BARE_CR`), or -1."""
-    if data.count(b"\r") == data.count(b"\r\n") + data.endswith(b"\r"):
-        return -1  # the usual case (none, or CRLF files), decided at C speed
+    if b"\r" not in data or data.count(b"\r") == data.count(b"\r\n") + data.endswith(b"\r"):
+        return -1  # the usual cases (none, or CRLF files), decided at C speed
     found = _BARE_CR.search(data)
     return found.start() if found else -1
 
@@ -604,11 +622,14 @@ _PLAIN_MIN_LINES = 8192
 _ARROW_BLOCK = 1 << 16
 
 
-def _plain_columns(data: bytes, count: int, col: dict[str, int], width: int) -> tuple | None:
-    """(t, finger, x, y, force, event) of ``count`` lines of data rows (``data``, joined by
-    newlines), parsed at once by Arrow's CSV reader when the block is plain: no quotes,
-    comments, carriage returns or blank lines, every row of ``width`` fields (the
-    header's), every number a float Arrow parses and every event word known. None
+def _plain_columns(data: bytes, start: int, count: int, col: dict[str, int],
+                   width: int) -> tuple | None:
+    """(t, finger, x, y, force, event) of ``count`` lines of data rows (``data`` from
+    offset ``start``, each line ended by a line break but maybe the last), parsed at once
+    by Arrow's CSV reader when the block is plain: no quotes, comments or blank lines,
+    every row of ``width`` fields (the header's), every number a float Arrow parses and
+    every event word known. Lines end in LF or CRLF, as Arrow reads them: :func:`_blocks`
+    refused a bare CR. None
     otherwise: the caller then splits the rows line by line, which names any problem.
 
     Arrow accepts a subset of what ``float`` does and gives the same value (the correctly
@@ -617,21 +638,23 @@ def _plain_columns(data: bytes, count: int, col: dict[str, int], width: int) -> 
     """
     if count < _PLAIN_MIN_LINES and "pyarrow" not in sys.modules:
         return None
-    if any(mark in data for mark in (b'"', b"#", b"\r")):
+    if data.find(b'"', start) >= 0 or data.find(b"#", start) >= 0:
         return None
-    if data.split(b"\n", 1)[0].count(b",") + 1 != width:  # Arrow holds the rest to the first row's width
+    if data.count(b",", start, _line_end(data, start)) + 1 != width:  # Arrow holds the rest to the first row's width
         return None
     import pyarrow as pa
     from pyarrow import csv as pa_csv
+    # Arrow needs a line break to see a row's end; a block that has it is not copied
+    rows = pa.py_buffer(data)[start:] if data.endswith(b"\n") else pa.py_buffer(data[start:] + b"\n")
     names = list(REQUIRED) + [c for c in ("force_n", "event") if c in col]
     types = {f"f{col[name]}": pa.dictionary(pa.int32(), pa.string()) if name == "event"
              else pa.float64() for name in names}
     try:
         table = pa_csv.read_csv(
-            pa.py_buffer(data + b"\n"),  # Arrow needs a line break to see a row's end
+            rows,
             # a few blocks parsed on Arrow's threads (the cores); in order, as one
             read_options=pa_csv.ReadOptions(autogenerate_column_names=True, use_threads=True,
-                                            block_size=max(len(data) // 4 + 2, _ARROW_BLOCK)),
+                                            block_size=max(rows.size // 4 + 2, _ARROW_BLOCK)),
             parse_options=pa_csv.ParseOptions(quote_char=False, escape_char=False,
                                               ignore_empty_lines=False),
             convert_options=pa_csv.ConvertOptions(column_types=types, include_columns=list(types),
@@ -662,15 +685,15 @@ def _chunks(blocks, where: str, chunk_rows: int, order: TimeOrder, strict: bool)
     batch: list[_Rows] = []
     held = samples = 0
     for first, data, count in blocks:
+        start = 0  # offset of the block's first data row
         if parser is None:
             parser, skipped = _header(data, first, where, order, strict)
-            if parser is None:
+            if parser is None or skipped == count:
                 continue
-            data = data.split(b"\n", skipped)[-1] if skipped < count else b""
+            for _ in range(skipped):
+                start = data.index(b"\n", start) + 1
             first, count = first + skipped, count - skipped
-            if not count:
-                continue
-        piece = _block_rows(data, first, count, parser, where)
+        piece = _block_rows(data, start, first, count, parser, where)
         batch.append(piece)
         held += piece.lines.size
         while held >= chunk_rows:
@@ -711,6 +734,12 @@ def _header(data: bytes, first: int, where: str, order: TimeOrder, strict: bool)
 
 
 #: a header field shown in an error: a plain column name of at most 32 characters
+def _line_end(data: bytes, start: int) -> int:
+    """Offset of the end of the line of ``data`` that starts at ``start`` (its break)."""
+    end = data.find(b"\n", start)
+    return len(data) if end < 0 else end
+
+
 def _lines(data: bytes):
     """The lines of ``data`` (UTF-8, joined by b"\\n"), decoded one at a time: the header
     is near the start of a block of a megabyte."""
@@ -742,22 +771,23 @@ def describe_header(names: list[str]) -> str:
     return f"{count}: {', '.join(shown[:-1])} and {shown[-1]}" if len(shown) > 1 else f"{count}: {shown[0]}"
 
 
-def _block_rows(data: bytes, first: int, count: int, parser: "_RowParser", where: str) -> _Rows:
-    """The data rows of a block of ``count`` lines from line ``first``: parsed at once if
-    the block is plain (:func:`_plain_columns`), else split line by line skipping blank
-    and comment lines."""
+def _block_rows(data: bytes, start: int, first: int, count: int, parser: "_RowParser",
+                where: str) -> _Rows:
+    """The data rows of a block of ``count`` lines (``data`` from offset ``start``) from
+    line ``first``: parsed at once if the block is plain (:func:`_plain_columns`), else
+    split line by line skipping blank and comment lines."""
     def split_rows():  # (line number, fields) of the data rows
         return [(first + k, _fields(text, where, first + k))
-                for k, text in enumerate(data.decode("utf-8").split("\n"))
+                for k, text in enumerate(data[start:].decode("utf-8").split("\n"))
                 if text.strip() and not text.lstrip().startswith("#")]
 
-    columns = _plain_columns(data, count, parser.col, len(parser.names))
+    columns = _plain_columns(data, start, count, parser.col, len(parser.names))
     if columns is not None:  # every line a row: split only to name a row's problem
         lines = np.arange(first, first + count, dtype=np.int64)
         return _Rows(lines, columns, lambda: [row for _, row in split_rows()])
     numbered = split_rows()
     lines = np.fromiter((line for line, _ in numbered), dtype=np.int64, count=len(numbered))
-    plain_ascii = not data.translate(None, _PLAIN_ASCII_BYTES)
+    plain_ascii = not data[start:].translate(None, _PLAIN_ASCII_BYTES)
     return _Rows(lines, None, lambda: [row for _, row in numbered], plain_ascii)
 
 
