@@ -4,6 +4,7 @@ paired rounds, and the start-up row without frictex's bytecode cache (no timing
 asserted)."""
 
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +29,24 @@ def test_alternated_rounds_run_each_command_once_reversing_the_order(tmp_path):
     assert log.read_text() == "abc" "cba" "abc" "cba"
     assert {name: len(got) for name, got in runs.items()} == {"a": 4, "b": 4, "c": 4}
     assert all(r.code == 0 and r.wall_s > 0 and r.cpu_s >= 0 for got in runs.values() for r in got)
+
+
+def test_what_comes_before_each_run_comes_just_before_it_untimed(tmp_path):
+    """The baseline removes each command's last output this way: the hook runs before
+    every run of its command, in the alternated order, and its time is no run's."""
+    log = tmp_path / "log"
+    append = "import sys; open(sys.argv[1], 'a').write(sys.argv[2])"
+    commands = {name: [sys.executable, "-c", append, str(log), name] for name in "ab"}
+
+    def before(name):
+        with open(log, "a") as fh:
+            fh.write(name.upper())
+        if name == "a":
+            time.sleep(1.5)  # a run of python -c takes a small part of that, even on a busy machine
+
+    runs = alternated(commands, 2, before=before)
+    assert log.read_text() == "AaBb" "BbAa"
+    assert all(r.wall_s < 1.5 for r in runs["a"])
 
 
 def test_a_failed_run_is_left_out_of_the_median():

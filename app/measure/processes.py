@@ -122,14 +122,18 @@ def frictex_argv(*args: str) -> list[str]:
     return [sys.executable, "-m", "frictex", *args]
 
 
-def alternated(commands: dict[str, list[str]], rounds: int) -> dict[str, list[Run]]:
+def alternated(commands: dict[str, list[str]], rounds: int,
+               before=None) -> dict[str, list[Run]]:
     """Each command run ``rounds`` times, one of each per round, in turn; the order within
     a round is reversed every other round (A B, B A, ...) so that neither side always runs
-    after the other."""
+    after the other. ``before(name)``, untimed, just before each run of command ``name``
+    (None: nothing)."""
     runs: dict[str, list[Run]] = {name: [] for name in commands}
     names = list(commands)
     for k in range(rounds):
         for name in (names if k % 2 == 0 else names[::-1]):
+            if before is not None:
+                before(name)
             runs[name].append(run_process(commands[name]))
     return runs
 

@@ -640,12 +640,13 @@ def _plain_columns(data: bytes, start: int, count: int, col: dict[str, int],
         return None
     if data.find(b'"', start) >= 0 or data.find(b"#", start) >= 0:
         return None
-    if data.count(b",", start, _line_end(data, start)) + 1 != width:  # Arrow holds the rest to the first row's width
-        return None
+    if data.count(b",", start, _line_end(data, start)) + 1 != width:
+        return None  # Arrow holds every row to the first row's width
     import pyarrow as pa
     from pyarrow import csv as pa_csv
     # Arrow needs a line break to see a row's end; a block that has it is not copied
-    rows = pa.py_buffer(data)[start:] if data.endswith(b"\n") else pa.py_buffer(data[start:] + b"\n")
+    rows = (pa.py_buffer(data)[start:] if data.endswith(b"\n")
+            else pa.py_buffer(data[start:] + b"\n"))
     names = list(REQUIRED) + [c for c in ("force_n", "event") if c in col]
     types = {f"f{col[name]}": pa.dictionary(pa.int32(), pa.string()) if name == "event"
              else pa.float64() for name in names}
