@@ -12,6 +12,7 @@ from frictex.rendering.input.trace_file import DOWN, MOVE, UP, make_trace
 from frictex.rendering.layers.sho import PredictedSho
 from frictex.rendering.layers.sht import ShtRenderer
 from frictex.rendering.tracking.tracks import FingerBlock
+from frictex.textures.library import resolve_scene
 from frictex.textures.model import Grating, VisualHints, Waveform
 from scenes import grating_box_mean
 
@@ -98,25 +99,11 @@ def test_a_finger_at_rest_plays_the_point_value(mode):
     assert np.array_equal(mu[stop + 1:], GRATING.profile(phase[stop + 1:]))
 
 
-GRATING_TOML = """format = 1
-name = "g"
-[display]
-width_mm = 108.0
-height_mm = 64.8
-width_px = 800
-height_px = 480
-[[layer]]
-type = "grating"
-name = "lines"
-render = "auto"
-period_mm = 0.6
-duty = 0.4
-offset_mm = 1.3
-angle_deg = 0
-mu_low = 0.6
-mu_high = 1.0
-edge = "square"
-"""
+def _grating_toml() -> str:
+    """The bundled 0.6 mm grating (seed 003's) with :data:`GRATING`'s duty and offset."""
+    text = resolve_scene("grating-0.6mm").read_text()
+    assert "duty = 0.5 " in text and "offset_mm" not in text
+    return text.replace("duty = 0.5 ", "duty = 0.4\noffset_mm = 1.3\n", 1)
 
 
 @pytest.mark.parametrize("mode", ["sht", "hybrid", "sho-predicted"])
@@ -126,7 +113,7 @@ def test_a_square_gratings_harmonics_do_not_fold_into_the_plates_band(tmp_path, 
     0.168 of the fundamental; the box mean weights it by sinc(0.98), to about 0.003. Every
     line in 30-400 Hz (the plate's band, seed 003) stays under 0.01 of the fundamental."""
     path = tmp_path / "g.toml"
-    path.write_text(GRATING_TOML)
+    path.write_text(_grating_toml())
     v = 980.0
     t = np.arange(0, 90 / v, 0.001)
     ev = np.full(t.size, MOVE, np.int8)
