@@ -131,7 +131,7 @@ def test_chunked_reading_equals_whole_and_checks_across_chunks(tmp_path):
     assert chunked.event[7] == DOWN and chunked.event[8] == DOWN and chunked.event[9] == MOVE
     path.write_text("t_s,finger,x_mm,y_mm\n0,0,0,0\n0.02,0,0,0\n0.01,0,0,0\n")
     with pytest.raises(TraceError, match=r"t\.csv:4: t_s goes back from 0.02 to 0.01 s \(time "
-                                         r"must not decrease with --strict\)"):
+                                         r"must not decrease in a strict read: --strict, strict=True\)"):
         list(iter_trace(path, chunk_rows=2, strict=True))
 
 

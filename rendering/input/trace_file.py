@@ -430,7 +430,8 @@ class _RowParser:
         if back.any():
             i = int(np.argmax(back))
             raise TraceError(f"{self.where}:{lines[i]}: t_s goes back from {float(before[i])!r} "
-                             f"to {float(t[i])!r} s (time must not decrease with --strict)")
+                             f"to {float(t[i])!r} s (time must not decrease in a strict read: "
+                             "--strict, strict=True)")
 
     def _keep(self, t: np.ndarray, lines: np.ndarray) -> np.ndarray:
         """Which rows are kept: those at most the tolerance earlier than the latest time
