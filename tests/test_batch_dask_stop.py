@@ -183,3 +183,47 @@ def test_a_batch_whose_only_worker_dies_gives_up_after_the_bound(tmp_path, clust
     assert code == 1, err
     assert out.strip() == "no workers [None, None, None]"
     assert "has no worker; waiting up to 2 s for one" in err
+
+
+#: fan_out on the cluster at argv[1] of items where "die" kills its worker's process;
+#: prints the results as JSON, a lost item's as what on_lost made of it
+ITEMS_WITH_A_KILLER = textwrap.dedent("""
+    import json, os, signal, sys
+    from frictex.app.engine.fanout import fan_out
+
+    def item(name):
+        if name == "die":
+            os.kill(os.getpid(), signal.SIGKILL)
+        return name.upper()
+
+    if __name__ == "__main__":
+        print(json.dumps(fan_out(item, ["a", "die", "b"], scheduler=sys.argv[1],
+                                 on_lost=lambda name, why: f"lost {name}: {why}")))
+""")
+
+
+def test_an_item_whose_dask_workers_die_is_lost_and_the_others_finish(tmp_path, spawn):
+    """Dask's KilledWorker (the task's workers died as often as the cluster allows, here
+    once) was a traceback that ended the batch without batch.csv. The item is lost (what
+    on_lost makes of it), the others finish; one that Dask held on the dying worker may
+    be lost with it, as Dask counts it too."""
+    import json
+
+    import dask
+    script = tmp_path / "items.py"
+    script.write_text(ITEMS_WITH_A_KILLER)
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}), \
+            distributed.LocalCluster(n_workers=0, processes=False, protocol="tcp://",
+                                     host="127.0.0.1", dashboard_address=None) as cluster:
+        spawn([str(Path(sys.executable).with_name("dask")), "worker",
+               cluster.scheduler_address, "--nthreads", "1", "--host", "127.0.0.1",
+               "--no-dashboard"])  # with a nanny, which starts a new worker when one dies
+        wait_for(lambda: cluster.scheduler.workers, "the worker to join")
+        code, out, err = finish(spawn([sys.executable, str(script), cluster.scheduler_address]))
+    assert code == 0, err
+    lost = "the Dask workers running it died as often as the cluster allows (Dask's KilledWorker"
+    results = json.loads(out)
+    assert results[1].startswith(f"lost die: {lost}")
+    for name, result in zip("ab", (results[0], results[2])):
+        assert result == name.upper() or result.startswith(f"lost {name}: {lost}")
+    assert "Traceback" not in err

@@ -24,6 +24,15 @@ started are cancelled; those already running go on to their end on their workers
 cannot stop a running task) and are counted stopped while they ran, as are those that
 finished after the last look for results.
 
+A worker that dies. A worker process that ends abruptly while an item runs (SIGKILL from
+the system's out-of-memory killer, a crash) breaks the pool, and the pool ends every
+worker with it. The items running then are each run again alone, in a worker of their
+own; one that ends its worker again is lost: ``on_lost(item, why)`` is its result, and
+without ``on_lost`` :func:`fan_out` raises :class:`WorkerLost` once the other items are
+done. Items not started go on in a new pool. On a Dask cluster an item whose workers
+died as often as the cluster allows (its ``allowed-failures``, 3 by default: Dask's
+``KilledWorker``) is lost the same way.
+
 A Dask cluster without workers. Its workers are counted when the items are sent and then
 every :data:`WORKER_CHECK_S` while they run: with none, a warning says so once, and after
 :data:`NO_WORKER_S` in a row with none the items left are cancelled and :func:`fan_out`
@@ -53,6 +62,14 @@ DONE, NOT_STARTED, STOPPED = "done", "not started", "stopped"
 NO_WORKER_S = 60.0
 #: how often (s) a Dask cluster's workers are counted while its items run
 WORKER_CHECK_S = 1.0
+#: an item's state in the workers' shared array: taken by a worker and running, or ended
+#: (0: not started)
+_RUNNING, _ENDED = 1, 2
+#: why an item is lost (module docstring), over this machine's cores and on Dask
+LOST_HERE = ("its worker process ended abruptly while it ran, and again when it ran alone "
+             "(killed, as the system's out-of-memory killer does, or crashed)")
+LOST_ON_DASK = ("the Dask workers running it died as often as the cluster allows "
+                "(Dask's KilledWorker: out of memory, or crashed)")
 
 
 class Interrupted(KeyboardInterrupt):
@@ -65,6 +82,17 @@ class Interrupted(KeyboardInterrupt):
         self.signum = signum
         self.results = results
         self.stopped = stopped
+
+
+class WorkerLost(FrictexError):
+    """An item lost with its worker (module docstring) where :func:`fan_out` was given no
+    ``on_lost``: ``results`` in the items' order, None for a lost item."""
+
+    def __init__(self, lost: list[int], why: str, results: list):
+        super().__init__(f"{len(lost)} of {len(results)} items lost: {why} "
+                         f"(item {', '.join(str(k + 1) for k in lost)})")
+        self.lost = lost
+        self.results = results
 
 
 class NoWorkers(FrictexError):
@@ -89,19 +117,34 @@ def default_workers() -> int:
 
 
 def fan_out(fn, items: list, *, workers: int = 1, scheduler: str | None = None,
-            on_done=None) -> list:
+            on_done=None, on_lost=None) -> list:
     """``[fn(item) for item in items]``, computed by ``workers`` processes (1: here, in
     order) or, with ``scheduler`` (a Dask scheduler's address), by that cluster's workers,
     which need frictex installed and the items' files at the same paths.
     ``on_done(result)`` is called in this process as each finishes. A signal stops it
-    (module docstring): :class:`Interrupted`.
+    (module docstring): :class:`Interrupted`. ``on_lost(item, why)`` gives the result of
+    an item lost with its worker (module docstring); without it: :class:`WorkerLost`.
     """
     done = on_done or (lambda result: None)
+    lost: list[int] = []
+
+    def lose(k: int, why: str):  # item k lost with its worker: its result, if any
+        lost.append(k)
+        if on_lost is None:
+            return None
+        result = on_lost(items[k], why)
+        done(result)
+        return result
+
     if scheduler is not None:
-        return _dask(fn, items, scheduler, done)
-    if workers == 1 or len(items) <= 1:
+        results = _dask(fn, items, scheduler, done, lose)
+    elif workers == 1 or len(items) <= 1:
         return _here(fn, items, done)
-    return _pool(fn, items, min(workers, len(items)), done)
+    else:
+        results = _pool(fn, items, min(workers, len(items)), done, lose)
+    if lost and on_lost is None:
+        raise WorkerLost(sorted(lost), LOST_ON_DASK if scheduler else LOST_HERE, results)
+    return results
 
 
 class _Stopper:
@@ -109,14 +152,22 @@ class _Stopper:
     the first signal (``signum``); with workers (``flag``, their shared flag) sets the
     flag and passes SIGINT on to each, else raises ``KeyboardInterrupt`` in the item
     running here (``running``). With workers it also handles a terminal's Ctrl-Z
-    (:meth:`pause`)."""
+    (:meth:`pause`).
+
+    A worker is forked with these handlers and replaces them as it starts
+    (:func:`_start_worker`); a signal that reaches it before (the pool ends every worker
+    when one dies, a Ctrl-C passed on) is the worker's own (:func:`_before_start`): a
+    stopper run there would set the shared flag as if this process had been stopped."""
 
     def __init__(self, flag=None):
         self.signum: int | None = None
         self.flag = flag
         self.running = False
+        self.pid = os.getpid()
 
     def __call__(self, signum, frame) -> None:
+        if os.getpid() != self.pid:
+            return _before_start(signum)
         if self.signum is None:
             self.signum = signum
         if self.flag is None:
@@ -130,11 +181,23 @@ class _Stopper:
         """SIGTSTP (Ctrl-Z): stop the workers, which the terminal's signal to this
         process's group does not reach, then this process as the signal would; once
         continued (``fg``, ``bg``), continue them."""
+        if os.getpid() != self.pid:
+            return _before_start(signum)
         _to_workers(signal.SIGSTOP)
         signal.signal(signum, signal.SIG_DFL)
         os.kill(os.getpid(), signum)  # stops here until SIGCONT
         signal.signal(signum, self.pause)
         _to_workers(signal.SIGCONT)
+
+
+def _before_start(signum: int) -> None:
+    """Signal ``signum`` in a worker forked with its parent's handlers, before it replaced
+    them: SIGINT passes (the parent, which passed it on, holds the signal and has set the
+    flag), any other does what it does by default (SIGTERM, SIGHUP end the worker;
+    SIGTSTP stops it)."""
+    if signum != signal.SIGINT:
+        signal.signal(signum, signal.SIG_DFL)
+        os.kill(os.getpid(), signum)
 
 
 def _to_workers(sig: int) -> None:
@@ -212,6 +275,7 @@ class _Worker:
     the worker ends, as it does after an item once the parent is gone)."""
 
     flag = None
+    states = None
     parent = 0
     running = False
 
@@ -229,13 +293,14 @@ class _Worker:
             os._exit(128 + signal.SIGINT)
 
 
-def _start_worker(flag, parent: int) -> None:
-    """A worker's start: the parent's ``flag``, a process group of its own (signals to
+def _start_worker(flag, states, parent: int) -> None:
+    """A worker's start: the parent's ``flag`` and the items' ``states`` (where it marks
+    the item it runs), a process group of its own (signals to
     the parent's group reach only the parent, which passes them on), its SIGINT handler;
     writing to the terminal from that background group never stops it (SIGTTOU). On
     Linux a SIGINT also comes when the parent (pid ``parent``) dies, even by SIGKILL, so
     that the item running stops as it would on the parent's Ctrl-C."""
-    _Worker.flag, _Worker.parent = flag, parent
+    _Worker.flag, _Worker.states, _Worker.parent = flag, states, parent
     signal.signal(signal.SIGINT, _Worker.interrupt)
     for sig in (*HELD_SIGNALS[1:], getattr(signal, "SIGTSTP", None)):
         if sig is not None and signal.getsignal(sig) is not signal.SIG_IGN:  # nohup's stays
@@ -250,59 +315,113 @@ def _start_worker(flag, parent: int) -> None:
         _Worker.end_if_orphaned()  # it died before that
 
 
-def _run_item(fn, item) -> tuple[str, object]:
+def _run_item(fn, item, k: int) -> tuple[str, object]:
     """In a worker: ``(DONE, fn(item))``, or ``(NOT_STARTED, None)`` once the parent's
-    flag is set, or ``(STOPPED, None)`` when the parent's SIGINT stopped ``fn``."""
+    flag is set, or ``(STOPPED, None)`` when the parent's SIGINT stopped ``fn``; item
+    ``k``'s state marked running while ``fn`` runs, then ended."""
     _Worker.running = True  # before the flag is read: a signal after it stops the item
     try:
         if _Worker.flag.value:
             return NOT_STARTED, None
+        _Worker.states[k] = _RUNNING
         return DONE, fn(item)
     except (KeyboardInterrupt, SystemExit) as exc:
         if _signal_of(exc) is None:
             raise
         return STOPPED, None
     finally:
+        if _Worker.states[k] == _RUNNING:
+            _Worker.states[k] = _ENDED
         _Worker.running = False
         _Worker.end_if_orphaned()
 
 
-def _pool(fn, items: list, workers: int, done) -> list:
-    """The items over ``workers`` processes of this machine, stopped by a signal."""
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-    context = _pool_context()
-    stopper = _Stopper(context.RawValue("b", 0))
-    results: list = [None] * len(items)
-    stopped: list[int] = []
+class _PoolRun:
+    """The items over this machine's worker processes, in pools (module docstring):
+    ``results`` (None until an item finishes), ``stopped`` (items a signal stopped while
+    they ran), each item's state in ``states`` (shared with the workers)."""
 
-    def take(future) -> None:
-        outcome, result = future.result()
-        if outcome == DONE:
-            results[futures[future]] = result
-            done(result)
-        elif outcome == STOPPED:
-            stopped.append(futures[future])
-            if stopper.signum is None:  # a worker signalled on its own: stop all
-                stopper(signal.SIGINT, None)
+    def __init__(self, fn, items: list, done, lose):
+        self.fn, self.items, self.done, self.lose = fn, items, done, lose
+        self.context = _pool_context()
+        self.stopper = _Stopper(self.context.RawValue("b", 0))
+        self.states = self.context.RawArray("b", len(items))
+        self.results: list = [None] * len(items)
+        self.stopped: list[int] = []
 
-    with _handling(stopper):
-        pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_start_worker,
-                                   initargs=(stopper.flag, os.getpid()))
+    def run(self, workers: int) -> list:
+        queue = list(range(len(self.items)))
+        with _handling(self.stopper):
+            while queue and self.stopper.signum is None:
+                broken = self._round(queue, workers)
+                if broken is None:
+                    break
+                suspects, queue = broken
+                print(f"frictex: warning: a worker process ended abruptly (killed, as the "
+                      f"system's out-of-memory killer does, or crashed) while {len(suspects)} "
+                      f"{'item' if len(suspects) == 1 else 'items'} ran: each runs again alone",
+                      file=sys.stderr)
+                for k in suspects:  # each alone: the one that ends its worker again is lost
+                    if self.stopper.signum is None and self._round([k], 1) is not None:
+                        self.results[k] = self.lose(k, LOST_HERE)
+        if self.stopper.signum is not None:
+            raise Interrupted(self.stopper.signum, self.results, sorted(self.stopped))
+        return self.results
+
+    def _round(self, indices: list[int], workers: int):
+        """Items ``indices`` over a new pool of ``workers``; None, or where a worker ended
+        abruptly, the unfinished items running then and those not started."""
+        from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+        from concurrent.futures.process import BrokenProcessPool
+        for k in indices:
+            self.states[k] = 0
+        pool = ProcessPoolExecutor(workers, mp_context=self.context,
+                                   initializer=_start_worker,
+                                   initargs=(self.stopper.flag, self.states, os.getpid()))
+        broken, futures = False, {}
         try:
-            futures = {pool.submit(_run_item, fn, item): k for k, item in enumerate(items)}
+            try:
+                for k in indices:
+                    futures[pool.submit(_run_item, self.fn, self.items[k], k)] = k
+            except BrokenProcessPool:  # a worker died already: the rest are not started
+                broken = True
             pending = set(futures)
-            while pending and stopper.signum is None:
+            while pending and self.stopper.signum is None and not broken:
                 finished, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
                 for future in finished:
-                    take(future)
+                    broken |= not self._take(future, futures[future])
         finally:
             pool.shutdown(wait=True, cancel_futures=True)
         for future in pending:
             if not future.cancelled():
-                take(future)
-    if stopper.signum is not None:
-        raise Interrupted(stopper.signum, results, sorted(stopped))
-    return results
+                broken |= not self._take(future, futures[future])
+        if not broken:
+            return None
+        left = [k for k in indices if self.results[k] is None and k not in self.stopped]
+        return ([k for k in left if self.states[k] == _RUNNING],
+                [k for k in left if self.states[k] != _RUNNING])
+
+    def _take(self, future, k: int) -> bool:
+        """Item ``k``'s outcome from its ``future``; False where its pool broke."""
+        from concurrent.futures.process import BrokenProcessPool
+        try:
+            outcome, result = future.result()
+        except BrokenProcessPool:
+            return False
+        if outcome == DONE:
+            self.results[k] = result
+            self.done(result)
+        elif outcome == STOPPED:
+            self.stopped.append(k)
+            if self.stopper.signum is None:  # a worker signalled on its own: stop all
+                self.stopper(signal.SIGINT, None)
+        return True
+
+
+def _pool(fn, items: list, workers: int, done, lose) -> list:
+    """The items over ``workers`` processes of this machine (:class:`_PoolRun`), stopped
+    by a signal."""
+    return _PoolRun(fn, items, done, lose).run(workers)
 
 
 def _pool_context():
@@ -322,7 +441,7 @@ def _pool_context():
     return mp.get_context("fork" if sys.platform == "linux" else "spawn")
 
 
-def _dask(fn, items: list, address: str, done) -> list:
+def _dask(fn, items: list, address: str, done, lose) -> list:
     """The items on the Dask cluster at ``address``, stopped by a signal (the stopper
     :func:`_here` uses) or by the cluster having no worker (module docstring)."""
     client = _dask_client(address)
@@ -332,7 +451,7 @@ def _dask(fn, items: list, address: str, done) -> list:
             futures = client.map(fn, items, pure=False)
             try:
                 return _dask_results(client, futures, stopper, _WorkerWatch(client, address),
-                                     done)
+                                     done, lose)
             except BaseException:
                 client.cancel(futures)
                 raise
@@ -353,18 +472,24 @@ def _dask_client(address: str):
 
 
 def _dask_results(client, futures: list, stopper: _Stopper, watch: "_WorkerWatch",
-                  done) -> list:
+                  done, lose) -> list:
     """The results of ``futures`` in their order, taken as they finish (every
     :data:`POLL_S`, so that a signal the stopper kept is seen); :class:`Interrupted` once
-    it keeps one, :class:`NoWorkers` when ``watch`` gives up."""
-    from distributed import as_completed
+    it keeps one, :class:`NoWorkers` when ``watch`` gives up; ``lose(k, why)`` the result
+    of item ``k`` whose workers died (``KilledWorker``)."""
+    from distributed import KilledWorker, as_completed
     results: list = [None] * len(futures)
     index = {future.key: k for k, future in enumerate(futures)}
     finished = as_completed(futures)
     while not finished.is_empty() and stopper.signum is None:
         for future in finished.next_batch(block=False):
-            results[index[future.key]] = future.result()
-            done(results[index[future.key]])
+            k = index[future.key]
+            try:
+                results[k] = future.result()
+            except KilledWorker:
+                results[k] = lose(k, LOST_ON_DASK)
+                continue
+            done(results[k])
         watch.check(results)
         time.sleep(POLL_S)
     if stopper.signum is not None:
