@@ -297,3 +297,21 @@ def test_jumps_are_the_same_in_one_call_or_in_blocks(steps, dts, cut):
             np.testing.assert_array_equal(block.touch_id, whole.touch_id[:, lo:lo + size])
         i = j
     assert (state.jumps, state.touches) == (whole_state.jumps, whole_state.touches)
+
+
+@pytest.mark.parametrize("epoch_s", [1e5, 1e6, 1e9])
+def test_where_the_clock_starts_changes_no_block_a_sample_is_used_from(epoch_s):
+    """A 50 Hz log's samples fall on 5 ms block boundaries. With its clock reading 1e5 s
+    or more, the rounding of each time put some of them a block later (24 of 151 at
+    1e5 s, 72 at 1e9 s): the predicted finger moved by up to 2 mm and mu' by up to 0.4
+    against the same log starting at 0. Now only the rounding of the output's own times
+    is left: at 1e9 s (a Unix time) 1.2e-7 s, 60 mm/s of it 1e-5 mm."""
+    import frictex
+    base = frictex.synth_trace("back-and-forth", rate_hz=50, duration_s=3, speed_mm_s=60,
+                               x0_mm=60)
+    later = frictex.make_trace(base.t_s + epoch_s, base.finger, base.x_mm, base.y_mm,
+                               base.force_n, base.event)
+    at_zero, at_epoch = (frictex.build_pipeline("grating-5mm").process(trace)
+                         for trace in (base, later))
+    assert np.abs(at_zero.x_mm - at_epoch.x_mm).max() < 1e-4
+    assert np.abs(at_zero.mu_target - at_epoch.mu_target).max() < 1e-3

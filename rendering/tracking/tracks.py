@@ -194,9 +194,18 @@ class FingerBlock:
 
 
 def apply_index(t_s: np.ndarray, config: TrackerConfig) -> np.ndarray:
-    """Output index from which each sample is used: the next block boundary at or after it."""
-    pos = (np.asarray(t_s, dtype=np.float64) - config.t0_s) * config.rate_hz / config.quantum
-    return (np.ceil(pos - 1e-9).astype(np.int64)) * config.quantum
+    """Output index from which each sample is used: the next block boundary at or after it.
+
+    A sample meant to fall on a boundary is off it by the rounding of its time and of its
+    position in blocks, both of which grow with the clock's reading: a log whose clock
+    reads 1e9 s holds its times to 1.2e-7 s (2.4e-5 of a 5 ms block). Within four such
+    roundings of a boundary (and 1e-9 block) a sample is on it, so that where the clock
+    starts changes no block a sample is used from."""
+    t = np.asarray(t_s, dtype=np.float64)
+    per_s = config.rate_hz / config.quantum  # blocks per second
+    pos = (t - config.t0_s) * per_s
+    slack = 4.0 * (np.spacing(np.abs(t)) * per_s + np.spacing(np.abs(pos))) + 1e-9
+    return (np.ceil(pos - slack).astype(np.int64)) * config.quantum
 
 
 def _finger_steps(fs: FingerState, t, x, y, force, event, cfg: TrackerConfig, counters: dict):
