@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import example, given, settings, strategies as st
 from numpy.testing import assert_allclose
 
 from frictex.device.profile import DeviceProfile
@@ -238,3 +238,17 @@ def test_a_clip_from_an_earlier_block_plays_to_its_last_sample_and_no_further(en
         assert covers[0, 0] and not covers[0, 1:].any()
     else:
         assert mu is idle[0] and covers is idle[1]
+
+
+@settings(max_examples=300, deadline=None)
+@example(duration_s=1.8809, rate_hz=1e6 / 7)
+@given(duration_s=st.floats(1e-3, 5.0), rate_hz=st.floats(100.0, 1e6))
+def test_a_clips_last_sample_is_back_at_1_at_any_rate(duration_s, rate_hz):
+    """A 1.8809 s event at 1e6/7 Hz: duration x rate rounded down past an integer, so
+    the last sample fell 3e-16 s inside the event and played it at full depth (0.6)."""
+    clip = Clip((ClipEvent("continuous", 0.0, 1.0, 0.0, duration_s,
+                           ((0.0, 1.0), (duration_s, 1.0))),), 0.4)
+    mu, _ = clip.sample(rate_hz)
+    assert mu[-1] == 1.0
+    assert (mu.size - 1) / rate_hz >= duration_s > (mu.size - 3) / rate_hz
+

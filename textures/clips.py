@@ -97,6 +97,8 @@ class Clip:
         1. Each event is computed over its own samples only: the cost is the events' total
         length, not their number times the clip's."""
         n = int(math.ceil(self.duration_s * rate_hz)) + 1
+        if (n - 1) / rate_hz < self.duration_s:  # the product rounded down past an integer
+            n += 1
         t = np.arange(n) / rate_hz
         gain = _curve(self.intensity_curve, t, 1.0)
         shift = _curve(self.sharpness_curve, t, 0.0)
