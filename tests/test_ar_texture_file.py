@@ -273,3 +273,22 @@ def test_the_model_file_of_authoring_md_reads_as_it_says(tmp_path):
     assert_allclose(poly_to_lsf(np.array([1.0, -1.6, 0.8])), [0.451027, 0.795399], atol=5e-7)
     (tmp_path / "wood.xml").write_text(xml, encoding="utf-8")
     assert isinstance(load_scene(write(tmp_path, BODY)).layers[0], ArTextureLayer)
+
+
+def test_pipeline_process_plays_a_recorded_texture_as_replay_does(tmp_path):
+    """A recorded texture's noise is keyed by the pipeline row its finger takes. replay
+    maps a recording's fingers onto rows (slots) and Pipeline.process took the ids as
+    rows, so a stroke by finger 5 sounded different (mu' off by up to 0.067); process
+    maps them as replay does, and labels its rows with the recording's ids."""
+    import frictex
+    (tmp_path / "wood.xml").write_text(_xml(), encoding="utf-8")
+    scene = write(tmp_path, BODY)
+    swipe = frictex.synth_trace("swipe", rate_hz=50, duration_s=1.5, speed_mm_s=40)
+    by_five = frictex.make_trace(swipe.t_s, np.full(swipe.t_s.size, 5), swipe.x_mm,
+                                 swipe.y_mm, swipe.force_n, swipe.event)
+    processed = frictex.build_pipeline(scene).process(by_five)
+    replayed = frictex.replay(scene, by_five).friction
+    assert processed.finger_ids == (5,)
+    assert set(replayed.column("finger").to_pylist()) == {5}
+    touching = processed.mu_target[processed.contact]
+    assert_allclose(touching, replayed.column("mu_target").to_numpy(), atol=1e-12)

@@ -9,6 +9,7 @@ import numpy as np
 
 from frictex._args import choice, real, whole
 from frictex._inputs import checked, scene_of
+from frictex.app.engine.finger_slots import FingerSlots
 from frictex.app.engine.limits import BLOCK_SIZES, OUTPUT_RATES_HZ
 from frictex.app.engine.tables import check_memory
 from frictex.rendering.input.trace_file import Trace
@@ -100,11 +101,16 @@ class Pipeline:
         Returns
         -------
         BlockOutput
-            For n output samples and F fingers: ``t_s`` (n,) s; per finger (F, n):
+            For n output samples and F rows: ``t_s`` (n,) s; per row (F, n):
             ``contact``, ``x_mm``, ``y_mm`` (mm), ``mu_target`` (mu'), ``wanted_um`` and
             ``amplitude_um`` (um zero-to-peak); ``commands_um`` (n, channels) um;
             ``phases_rad`` (n, channels) rad or None; ``clamps``, the friction
-            inversion's guard counts.
+            inversion's guard counts. The rows are the trace's fingers as :func:`replay`
+            maps them (a row per finger touching at once, handed on from a lifted
+            finger to the next touch): ``finger_ids`` names each row's finger, and
+            ``sample_ids`` (F, n) each sample's where a row carries more than one
+            (``segments()`` lists them). So a finger's state, a recorded texture's
+            noise included, is what :func:`replay` gives it.
 
         Raises
         ------
@@ -121,12 +127,14 @@ class Pipeline:
         trace = checked(trace)
         stages = self._stages
         config = dataclasses.replace(stages.tracker_config, t0_s=float(trace.t_s[0]))
-        last = int(apply_index(trace.t_s[-1:], config)[0])
-        n_blocks = last // stages.block_size + 1
-        self._check_memory(trace, n_blocks * stages.block_size)
+        applied = apply_index(trace.t_s, config)
+        n_blocks = int(applied[-1]) // stages.block_size + 1
+        slots = FingerSlots()  # the pipeline's rows, as replay's: see app.engine.finger_slots
+        slotted = slots.assign(trace, applied)
+        self._check_memory(slotted, n_blocks * stages.block_size)
         stages.tracker_config = config
-        out, _ = stages.process(0, trace, stages.initial_state(), n_blocks=n_blocks)
-        return out
+        out, _ = stages.process(0, slotted, stages.initial_state(), n_blocks=n_blocks)
+        return slots.label(out)
 
     def _check_memory(self, trace: Trace, samples: int) -> None:
         """Refuse an output of ``samples`` samples (of every finger in ``trace``) whose
