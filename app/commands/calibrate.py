@@ -94,8 +94,10 @@ def run(args: argparse.Namespace) -> int:
         limit_um = link.info.limits_um[0]
         fitted = FittedOn(link.info.name, simulated_finger(args.device, sim_args),
                           sweep.speed_mm_s)
-    finally:
-        link.close()
+    except BaseException:  # stop the plate now and keep no output (a WAV's earlier file)
+        getattr(link, "abort", link.close)()
+        raise
+    link.close()
     fit = fit_points(w, normal, mu)
     print(f"{_points_from_steps(fit.n_points, sweep)}; seed 003 eq 2 fit at "
           f"{sweep.speed_mm_s:g} mm/s sliding (b falls as the finger speeds up): "
