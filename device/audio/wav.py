@@ -10,9 +10,10 @@ is a DeviceError. The header's sizes are written when the file is closed.
 All or nothing, as a replay's tables: the stream is written under ``PATH.partial`` and
 renamed to PATH when it ends (:meth:`WavOutput.close`); a run that fails or is stopped
 (:meth:`WavOutput.abort`, a refused closed loop included) removes it and leaves an earlier
-PATH as it was. A PATH that is a character device or a FIFO (``/dev/null``, a pipe) is
-written directly; one that cannot be rewound (a pipe) keeps a header declaring the most a
-WAV file holds, as streamed WAV does. A write the file system refuses (a full disk,
+PATH as it was, as does a rename the file system refuses. A PATH that is a folder is
+refused when the output opens, before anything runs. A PATH that is a character device or
+a FIFO (``/dev/null``, a pipe) is written directly; one that cannot be rewound (a pipe)
+keeps a header declaring the most a WAV file holds, as streamed WAV does. A write the file system refuses (a full disk,
 ``/dev/full``) is a DeviceError naming the file: ``audio:wav:PATH: cannot write it: ...``.
 """
 
@@ -51,13 +52,14 @@ class WavOutput(AudioOutput):
     def __init__(self, plan: AudioPlan, path: str, *, phases: bool, stderr=sys.stderr):
         super().__init__(plan, f"audio:wav:{path}", phases=phases, paced=False, stderr=stderr)
         self.path = Path(path)
+        if self.path.is_dir():
+            raise InputError(f"{self.label}: is a folder; give the path of a .wav file to write")
         self._partial = None if _is_stream(self.path) else self.path.with_name(
             self.path.name + ".partial")
         try:
             self._file = open(self._partial or self.path, "wb")  # noqa: SIM115 (closed by close())
         except OSError as exc:
-            raise InputError(f"audio device wav:{path}: cannot write it: "
-                             f"{exc.strerror or exc}") from None
+            raise InputError(f"{self.label}: cannot write it: {exc.strerror or exc}") from None
         # a stream cannot be rewound to its header: it declares the most a file holds
         declared = 0 if self._partial is not None else _MAX_DATA // (plan.channels * 4)
         self._write(wav_header(plan.channels, plan.audio_rate, declared))
@@ -95,7 +97,16 @@ class WavOutput(AudioOutput):
             self._discard()
             raise
         if self._partial is not None:
+            self._rename()
+
+    def _rename(self) -> None:
+        """Put the finished stream at its path; one the file system refuses (a folder made
+        there since the open) is removed and is a DeviceError naming the file."""
+        try:
             os.replace(self._partial, self.path)
+        except OSError as exc:
+            self._partial.unlink(missing_ok=True)
+            raise self._cannot_write(exc) from None
 
     def abort(self) -> None:
         """A failed or stopped run: close the file and remove what was written (an earlier
