@@ -14,7 +14,7 @@ import struct
 import numpy as np
 
 from frictex.app.commands.cli import main
-from frictex.app.engine.device_changes import device_warnings
+from frictex.app.engine.device_changes import device_clamped, device_warnings
 from frictex.textures.library import LIBRARY_DIR
 
 
@@ -52,7 +52,8 @@ def test_a_device_limit_below_the_commands_is_said(tmp_path, capsys):
     assert warning.endswith(f"up to {commands.max():.4g} um")
     assert warning in doc["warnings"]  # in summary.json, and printed with the others
     # the printed count no longer says 0 clamped
-    assert f"; 0 clamped by the friction inversion, {over} by the device's limit; " in printed
+    assert f"; 0 clamped by the friction inversion, {over} samples by the device's limit; " \
+        in printed
 
 
 def test_an_audio_outputs_voltage_limit_is_said(tmp_path, capsys):
@@ -71,8 +72,8 @@ def test_an_audio_outputs_voltage_limit_is_said(tmp_path, capsys):
     assert "the audio output's 150 V limit (3 um at 0.02 um/V)" in warning
     assert warning in doc["warnings"]
     inversion = sum(doc["clamps"].values())  # its own clamp to the scene's 100 um, too
-    assert f"; {inversion} clamped by the friction inversion, {over} by the device's limit; " \
-        in printed
+    assert (f"; {inversion} clamped by the friction inversion, {over} samples by the device's "
+            "limit; ") in printed
     frames = np.frombuffer(wav.read_bytes()[58:], dtype="<f4")  # after the header
     assert np.abs(frames).max() <= 1.0 + 1e-6  # full scale: 150 V, what the plate got
     assert struct.unpack("<I", wav.read_bytes()[24:28])[0] == 192_000
@@ -95,3 +96,13 @@ def test_several_channels_count_values_and_name_each_limit():
     (warning,) = device_warnings(status, 3.0)
     assert warning.startswith("5 of 20 commanded values (samples x 2 channels, 25.0%) were "
                               "clamped to the device's limits (1, 2 um by channel)")
+
+
+def test_a_device_clamp_counts_samples_on_one_channel_and_values_on_more():
+    """A two-channel device counts each channel's clamped value: 79,563 of them against
+    44,050 samples were printed as if samples (the warning already said values)."""
+    one = {"clamped_samples": 7, "device": {"limits_um": [1.0]}}
+    two = {"clamped_samples": 79_563, "device": {"limits_um": [0.1, 0.1]}}
+    assert device_clamped(one) == (7, "samples")
+    assert device_clamped(two) == (79_563, "values")
+    assert device_clamped({}) == (0, "samples")

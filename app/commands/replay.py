@@ -8,7 +8,7 @@ import sys
 from frictex.app.commands.argtypes import (add_link_arguments, block_size, bounded, output_rate, positive_float,
                                    share, sim_device_args)
 from frictex.app.engine.clocks import CLOCKS
-from frictex.app.engine.device_changes import unplayed_problem
+from frictex.app.engine.device_changes import device_clamped, unplayed_problem
 from frictex.app.engine.replay import MAX_UNPLAYED, ReplayOptions, replay_with
 from frictex.app.engine.sinks import SINKS
 from frictex.app.engine.sources import MAX_GAP_S
@@ -61,7 +61,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "wall (real time), device (the --device's room), or a package's "
                              f"(entry points 'frictex.clocks'; registered: "
                              f"{_listed(CLOCKS.names())})")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar, no summary line")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar, no summary line (warnings still print)")
     add_allow_outside(parser)
 
 
@@ -96,9 +96,9 @@ def run(args: argparse.Namespace) -> int:
         out = summary["output"]
         timing = summary["timings"]
         clamps = f"{sum(summary['clamps'].values())} clamped"
-        device_clamped = (summary.get("device") or {}).get("clamped_samples")
-        if device_clamped:  # the device's own clamp (its warning says to what)
-            clamps += f" by the friction inversion, {device_clamped} by the device's limit"
+        on_device, counted = device_clamped(summary.get("device") or {})
+        if on_device:  # the device's own clamp (its warning says to what)
+            clamps += f" by the friction inversion, {on_device} {counted} by the device's limit"
         clipped = sum((summary.get("layer_clipped") or {}).values())
         if clipped:  # a layer's own limits (its warning says which and where)
             clamps += f", {clipped} clipped by the layers' own limits"
@@ -113,8 +113,8 @@ def run(args: argparse.Namespace) -> int:
               f"start-up, {timing['x_realtime_compute']:.3g}x compute only)")
         if summary.get("control") is not None:
             print(control_line(summary["control"]))
-        for warning in summary["warnings"]:
-            print(f"frictex: warning: {warning}", file=sys.stderr)
+    for warning in summary["warnings"]:  # --quiet or not: clamps, unplayed samples, ...
+        print(f"frictex: warning: {warning}", file=sys.stderr)
     limit = MAX_UNPLAYED if args.max_unplayed is None else args.max_unplayed
     problem = unplayed_problem(summary.get("device"), limit, "--max-unplayed")
     if problem is not None:

@@ -14,6 +14,14 @@ with something else than its commands.
 from __future__ import annotations
 
 
+def device_clamped(device: dict) -> tuple[int, str]:
+    """How many values the device clamped to its amplitude limit (``device``: as in
+    :func:`device_warnings`) and what they count: samples on one channel, values
+    (samples x channels) on more."""
+    channels = len((device.get("device") or {}).get("limits_um") or [])
+    return device.get("clamped_samples") or 0, "samples" if channels <= 1 else "values"
+
+
 def device_warnings(device: dict, max_amplitude_um: float) -> list[str]:
     """One sentence per thing the output device did not play as commanded: samples never
     played (by cause), values clamped to its amplitude limit (a link's declared limit, an
@@ -23,13 +31,12 @@ def device_warnings(device: dict, max_amplitude_um: float) -> list[str]:
     (um, ``counts.max_amplitude_um``)."""
     warnings = _unplayed(device) + _uncounted(device)
     audio = device.get("audio") or {}
-    clamped = device.get("clamped_samples") or 0
+    clamped, counted = device_clamped(device)
     if clamped:
         limits = (device.get("device") or {}).get("limits_um") or []
         channels = max(1, len(limits))
         values = device.get("commanded_samples", 0) * channels
         share = [f"{clamped / values:.1%}"] if values else []
-        counted = "samples" if channels == 1 else "values"
         said = ", ".join(([] if channels == 1 else [f"samples x {channels} channels"]) + share)
         if "limit_v" in audio:  # one voltage limit for every channel
             what = (f"the audio output's {audio['limit_v']:g} V limit "
