@@ -13,10 +13,15 @@ climbs and lowers it while it descends:
 
 with v the tracker's velocity estimate (mm/s) and grad h taken at the predicted position
 (``textures.heights.slope_along_motion``), and mu' the layer's saturation of s (both in
-one pass: ``HeightLayer.mu_of_motion``). Along the finger's path s changes by at most
-|d2h/du2| |v| / rate per output sample, so a step in mu' is bounded by
-gain * max|d2h/du2| * |v| / rate_hz (plus what a change of the velocity estimate at a
-touch sample adds: gain * |grad h| * |dv| / max(|v|, v_fade)).
+one pass: ``HeightLayer.mu_of_motion``). Where the predicted position moves |v| / rate
+per output sample, s changes by at most |d2h/du2| |v| / rate, so a step in mu' is
+bounded by gain * max|d2h/du2| * |v| / rate_hz (plus what a change of the velocity
+estimate at a touch sample adds: gain * |grad h| * |dv| / max(|v|, v_fade)). That bound
+does not hold where the position jumps: at a touch sample the tracker corrects its
+prediction (by 29 mm in one sample for a 2.5 m/s swipe sampled at 120 Hz), and s is
+taken at each sample's point, so what lies between two samples' positions is not
+rendered: a step whose chamfer is narrower than a sample's travel (0.004 mm at 40 mm/s
+and 10 kHz) falls on one sample or none.
 
 Stateless: the slope depends on this sample's position and velocity only. Where s is 0
 (flat ground, a finger at rest, motion along a contour) mu' is mu_rest exactly
