@@ -570,9 +570,14 @@ class CsvLog:
     idle device included), not only once it exits: a daemon thread flushes every
     :data:`LOG_FLUSH_S` when there are rows it has not flushed. Writes, flushes and
     :meth:`close` hold one lock (the device writes from its thread, the flusher from its own).
+
+    A write the file system refuses (a full disk, ``/dev/full``) is said once on stderr,
+    naming the file, and ends the log: later rows are dropped and the device goes on (its
+    watchdog and clamps do not depend on the log).
     """
 
     def __init__(self, path, header: list[str]):
+        self._path = path
         try:
             self._fh = open(path, "w", encoding="ascii", newline="\n")
         except OSError as exc:
@@ -591,14 +596,22 @@ class CsvLog:
         one printf format per column of the table."""
         table = np.column_stack(columns)
         with self._lock:
-            np.savetxt(self._fh, table, fmt=formats, delimiter=",")
-            self._dirty = True
+            if self._fh.closed:
+                return
+            try:
+                np.savetxt(self._fh, table, fmt=formats, delimiter=",")
+                self._dirty = True
+            except OSError as exc:
+                self._lose(exc)
 
     def flush(self) -> None:
         """Write out the rows not yet on disk (none after :meth:`close`)."""
         with self._lock:
             if self._dirty and not self._fh.closed:
-                self._fh.flush()
+                try:
+                    self._fh.flush()
+                except OSError as exc:
+                    self._lose(exc)
                 self._dirty = False
 
     def _flush_every(self) -> None:
@@ -610,7 +623,21 @@ class CsvLog:
         self._closing.set()
         self._flusher.join(timeout=LOG_FLUSH_S + 1.0)
         with self._lock:
+            try:
+                self._fh.close()
+            except OSError as exc:  # the last rows refused
+                self._lose(exc)
+
+    def _lose(self, exc: OSError) -> None:
+        """End the log after a write the file system refused: say so, close the file (its
+        buffered rows are dropped; a closed log takes no more). Called holding the lock."""
+        print(f"frictex: warning: cannot write the log file {escape_path(self._path)}: "
+              f"{exc.strerror or exc}; logging stopped, the simulated device goes on",
+              file=sys.stderr, flush=True)
+        try:
             self._fh.close()
+        except OSError:  # the same refusal, for the rows still buffered
+            pass
 
 
 def played_log(path, channels: int, phases: bool):
