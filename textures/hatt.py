@@ -106,6 +106,9 @@ from frictex.textures.library import UnreadableText, read_utf8
 from frictex.textures.dynamic import DynamicLayer
 
 HATT_RATE_HZ = 10_000.0
+#: The output rate a scene's recorded layers are checked for when it is read (Hz): the
+#: default of ``frictex replay --rate`` and ``frictex demo --rate``.
+OUTPUT_RATE_HZ = 10_000.0
 RATE_RANGE_HZ = (100.0, 1e6)
 #: the unit elements a file may have: {element: {unit: factor to frictex's unit}}
 UNITS = {"SpeedUnits": {"mm/s": 1.0, "m/s": 1000.0}, "ForceUnits": {"N": 1.0},
@@ -298,6 +301,13 @@ class TextureModel:
         """AR polynomial [1, a_1 .. a_p] and variance blended at (speed, force)."""
         return blend_at(*self.arrays, float(speed_mm_s), float(force_n))
 
+    def check_rate(self, rate_hz: float) -> None:
+        """TextureError naming :attr:`source` where playing the model at ``rate_hz`` (Hz)
+        would refit more than :data:`MAX_FIT_VERTICES` vertices (:meth:`resampled`)."""
+        if rate_hz != self.rate_hz:
+            _refits_bounded(len(self.lsf), self.source, f"made at {self.rate_hz:g} Hz to play "
+                                                        f"at {rate_hz:g} Hz")
+
     def resampled(self, rate_hz: float) -> "TextureModel":
         """The same textures as AR models at ``rate_hz`` (Hz; see the module docstring).
 
@@ -305,8 +315,7 @@ class TextureModel:
         spectral frequencies (:func:`poly_to_lsf`)."""
         if rate_hz == self.rate_hz:
             return self
-        _refits_bounded(len(self.lsf), self.source, f"made at {self.rate_hz:g} Hz to play at "
-                                                    f"{rate_hz:g} Hz")
+        self.check_rate(rate_hz)
         order = min(math.ceil(4 * self.order * max(1.0, rate_hz / self.rate_hz)), MAX_ORDER)
         fits = []
         for k, w in enumerate(self.lsf):

@@ -361,12 +361,16 @@ class Reader:
         #: a [sub.table] header that belongs above it
         self._outer: dict[KeyPath, list[str]] = {}
 
+    def problem(self, path: KeyPath, message: str, warning: bool = False) -> Problem:
+        """The problem (or warning) ``message`` at ``path``, with its line, unrecorded."""
+        line = self.locator.line(path) if self.locator is not None else None
+        return Problem(self.label, line, field_name(path), message, warning)
+
     def report(self, path: KeyPath, message: str, warning: bool = False) -> object:
         """Record a problem (or a warning) at ``path``; returns :data:`BAD`."""
         found = self.warnings if warning else self.problems
         if len(found) < MAX_PROBLEMS:
-            line = self.locator.line(path) if self.locator is not None else None
-            found.append(Problem(self.label, line, field_name(path), message, warning))
+            found.append(self.problem(path, message, warning))
         elif len(found) == MAX_PROBLEMS:
             found.append(Problem(self.label, None, "", f"more than {MAX_PROBLEMS} "
                                                        f"{'warnings' if warning else 'problems'}; "

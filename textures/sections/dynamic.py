@@ -4,6 +4,8 @@ recorded textures (``textures.hatt``) and effect clips (``textures.clips``,
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from frictex.textures import model
 from frictex.textures.ahap import read_ahap
 from frictex.textures.clips import Clip, ClipEvent, ClipLayer
@@ -66,12 +68,20 @@ def build_recorded(r, path, v, given, ctx):
         r.report(path + ("mu_mean",), f"mu_min {v['mu_min']:g} < mu_mean {v['mu_mean']:g} < "
                                       f"mu_max {v['mu_max']:g} does not hold")
         return None
-    from frictex.textures.hatt import ArTextureLayer, read_hatt_xml  # numba: only for scenes that use it
+    from frictex.textures.hatt import (OUTPUT_RATE_HZ, ArTextureLayer,  # numba: only for
+                                       read_hatt_xml)  # scenes that use it
 
-    texture = file_read(r, path, "model", v["model"], ctx, read_hatt_xml)
+    def playable(file):
+        texture = read_hatt_xml(file)
+        texture.check_rate(OUTPUT_RATE_HZ)
+        return texture
+
+    texture = file_read(r, path, "model", v["model"], ctx, playable)
     if texture is None:
         return None
-    return ArTextureLayer(**ctx.common, **{**v, "model": texture}), "mu_min"
+    # errors met when the model is played at another rate name the key that names it
+    where = str(r.problem(path + ("model",), f"{show(v['model'])}: {texture.source}"))
+    return ArTextureLayer(**ctx.common, **{**v, "model": replace(texture, source=where)}), "mu_min"
 
 
 def _clip_shape(r, path, v, ctx) -> Clip | None:
