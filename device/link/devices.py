@@ -83,7 +83,8 @@ class DeviceRequest:
         """The keyword arguments of ``device.link.host.CommandSink`` this request sets."""
         return {"phases": self.phases, "paced": self.paced, "queue_blocks": self.queue_blocks,
                 "stderr": self.stderr, "stall_s": self.stall_s, "max_stalls": self.max_stalls,
-                "prefill_s": self.prefill_s, "catch_up": self.catch_up}
+                "prefill_s": self.prefill_s, "catch_up": self.catch_up,
+                "injected": None if self.faults is None else str(self.faults)}
 
 
 @runtime_checkable

@@ -80,6 +80,15 @@ class FaultPlan:
     events: tuple[Event, ...] = ()
     seed: int = 0
 
+    def __str__(self) -> str:
+        """The plan in the ``--faults`` grammar: its rates, its events in time order, its
+        seed where not 0."""
+        rates = [f"{name}={getattr(self.faults, field):g}" for name, field in _RATES.items()
+                 if getattr(self.faults, field)]
+        events = [f"trip@{e.at_s:g}" if e.kind == "trip"
+                  else f"{e.kind}={e.duration_s:g}@{e.at_s:g}" for e in self.events]
+        return ",".join(rates + events + ([f"seed={self.seed}"] if self.seed else []))
+
     def opener(self, open_port) -> Plug:
         """An opener for ``CommandSink`` that applies this plan to the ports
         ``open_port()`` returns; event times count from this call."""

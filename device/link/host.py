@@ -92,6 +92,8 @@ class CommandSink:
     prefill_s, catch_up : the jitter-buffer prefill asked of the device (s), and for a
         live link whether it catches up after the device fell behind (both: see
         :func:`open_sink`).
+    injected : the faults the opener injects (``--faults`` text), named where the first
+        handshake fails, or None.
     """
 
     def __init__(self, opener, channels: int, rate_hz: float, *, phases: bool = False,
@@ -99,7 +101,8 @@ class CommandSink:
                  process: subprocess.Popen | None = None, stderr=sys.stderr,
                  stall_s: float = STALL_S, max_stalls: int = MAX_STALLS, on_close=None,
                  simulated: bool = False, handshake_s: float = HANDSHAKE_TOTAL_S,
-                 prefill_s: float = PREFILL_S, catch_up: bool = False):
+                 prefill_s: float = PREFILL_S, catch_up: bool = False,
+                 injected: str | None = None):
         if channels < 1:
             raise InputError(f"channels = {channels!r}: expected at least 1")
         if not (rate_hz > 0 and np.isfinite(rate_hz)):
@@ -117,6 +120,7 @@ class CommandSink:
         self.stall_s = float(stall_s)
         self.max_stalls = int(max_stalls)
         self._process = process
+        self._injected = injected
         self._on_close = on_close
         self._simulated = simulated or process is not None
         self._stderr = stderr
@@ -157,7 +161,7 @@ class CommandSink:
             self._abandon()
             raise
         self._abandon()
-        raise s.failure or s.handshake_failure(time.monotonic() - t0)
+        raise s.failure or s.handshake_failure(time.monotonic() - t0, self._injected)
 
     def _abandon(self) -> None:
         """No session to close (a handshake that failed or was interrupted): stop the

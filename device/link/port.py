@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import errno
 import math
+import os
 import re
 import socket
 import struct
@@ -183,8 +184,20 @@ def open_port(url: str):
         if getattr(exc, "errno", None) in (errno.EAGAIN, errno.EWOULDBLOCK):  # the lock
             raise LinkError(f"cannot open device port {url!r}: another program holds it "
                             "(a port is opened for one host at a time)") from None
-        raise LinkError(f"cannot open device port {url!r}: {exc}") from None
+        raise LinkError(f"cannot open device port {url!r}: {_reason(exc)}") from None
     return port
+
+
+def _reason(exc: BaseException) -> str:
+    """Why a port did not open, said once: the text of the system error under pyserial's
+    (which repeats it: '[Errno 2] could not open port X: [Errno 2] No such file or
+    directory: X'), else pyserial's own."""
+    cause = exc
+    while cause is not None:
+        if isinstance(getattr(cause, "errno", None), int):
+            return os.strerror(cause.errno)
+        cause = cause.__cause__ or cause.__context__
+    return str(exc)
 
 
 def read_available(port) -> bytes:

@@ -327,8 +327,12 @@ class HostSession:
         # a leading delimiter ends whatever partial frame the device was holding
         return b"\x00" + settle + self._frame(p.Hello(int(self.prefill_s * self.rate_hz)), 1)
 
-    def handshake_failure(self, waited_s: float) -> LinkError:
-        """Why the first handshake failed after ``waited_s`` (s), for the caller."""
+    def handshake_failure(self, waited_s: float, injected: str | None = None) -> LinkError:
+        """Why the first handshake failed after ``waited_s`` (s), for the caller;
+        ``injected``: the faults injected on the link (``--faults`` text), named as what
+        may have kept a device from answering, or None."""
+        suspect = ("is it a frictex device?" if injected is None else
+                   f"the faults injected (--faults {injected}) may have kept it from answering")
         if self.refused is not None:
             return self.refused
         bad = self.decoder.counts.last_bad_version
@@ -341,9 +345,9 @@ class HostSession:
         if self._first_closes:
             return LinkError(f"{self.label}: the device closed the link {self._first_closes} "
                              f"times during the handshake, in {waited_s:.3g} s (last: "
-                             f"{self.last_error}); is it a frictex device?")
+                             f"{self.last_error}); {suspect}")
         return LinkError(f"{self.label}: no answer to the handshake within {waited_s:.3g} s "
-                         f"({self._first_hellos} Hellos); is it a frictex device?")
+                         f"({self._first_hellos} Hellos); {suspect}")
 
     def _check(self, info: p.Info) -> LinkError | None:
         """Why the device that sent ``info`` cannot be driven by this host, or None."""
