@@ -1,7 +1,9 @@
 #include "logs.h"
 
+#include <errno.h>
 #include <inttypes.h>
 #include <math.h>
+#include <string.h>
 
 #define STEP_UM (1.0 / 4096.0)
 #define PHASE_STEP_RAD (2.0 * M_PI / 65536.0)
@@ -21,7 +23,7 @@ bool host_logs_open(host_logs *l, unsigned channels, bool phases, const char *pl
 {
     bool ok = true;
     *l = (host_logs){open_csv(played, &ok), open_csv(plate, &ok), open_csv(rx, &ok),
-                     channels, phases};
+                     played, plate, rx, channels, phases, false};
     if (l->played) {
         fputs("index", l->played);
         for (unsigned c = 0; c < channels; c++)
@@ -71,18 +73,41 @@ void host_logs_rx(host_logs *l, double t_s, uint32_t frames_ok, uint32_t discard
                 core_t_s);
 }
 
-void host_logs_flush(host_logs *l)
+/* Says that the log written to path was lost (reason: an errno value, 0 if unknown). */
+static void lose(host_logs *l, const char *path, int reason)
 {
-    FILE *all[3] = {l->played, l->plate, l->rx};
-    for (int i = 0; i < 3; i++)
-        if (all[i])
-            fflush(all[i]);
+    fprintf(stderr,
+            "frictex-fw-host: cannot write the log file %s: %s; logging stopped, the device "
+            "goes on\n",
+            path, strerror(reason ? reason : EIO));
+    l->lost = true;
 }
 
-void host_logs_close(host_logs *l)
+/* Flushes the log at *f, and closes it when closing or when the flush was refused (its
+ * buffered rows are then dropped): a refusal loses it (lose()). */
+static void end_or_flush(host_logs *l, FILE **f, const char *path, bool closing)
 {
-    FILE *all[3] = {l->played, l->plate, l->rx};
-    for (int i = 0; i < 3; i++)
-        if (all[i])
-            fclose(all[i]);
+    if (!*f)
+        return;
+    errno = 0;
+    bool refused = fflush(*f) != 0 || ferror(*f); /* ferror: an earlier fprintf's refusal */
+    int reason = errno;
+    if (refused || closing) {
+        refused = fclose(*f) != 0 || refused;
+        reason = reason ? reason : errno;
+        *f = NULL;
+    }
+    if (refused)
+        lose(l, path, reason);
 }
+
+static void each_log(host_logs *l, bool closing)
+{
+    end_or_flush(l, &l->played, l->played_path, closing);
+    end_or_flush(l, &l->plate, l->plate_path, closing);
+    end_or_flush(l, &l->rx, l->rx_path, closing);
+}
+
+void host_logs_flush(host_logs *l) { each_log(l, false); }
+
+void host_logs_close(host_logs *l) { each_log(l, true); }

@@ -16,8 +16,10 @@
 
 typedef struct {
     FILE *played, *plate, *rx;
+    const char *played_path, *plate_path, *rx_path;
     unsigned channels;
     bool phases;
+    bool lost; /* a log was lost: a write, flush or close the file system refused */
 } host_logs;
 
 /* Opens the logs whose path is not NULL; false (errno set) if one cannot be opened. */
@@ -26,6 +28,9 @@ bool host_logs_open(host_logs *l, unsigned channels, bool phases, const char *pl
 void host_logs_tick(host_logs *l, double t_s, const fw_output *o, const double *plate_um);
 void host_logs_rx(host_logs *l, double t_s, uint32_t frames_ok, uint32_t discarded,
                   double core_t_s);
+/* Flush and close: a log whose writes the file system refused (a full disk, /dev/full) is
+ * said once on stderr, naming it, and closed (its rows from then on are dropped; the
+ * device goes on); l->lost says one was. */
 void host_logs_flush(host_logs *l);
 void host_logs_close(host_logs *l);
 

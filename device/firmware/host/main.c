@@ -143,5 +143,5 @@ int main(int argc, char **argv)
                  " bad frames, %" PRIu32 " watchdog trips\n",
             device.k.played_samples, device.k.underruns, fw_rx_discarded(&device.rx.counts),
             device.k.watchdog_trips);
-    return 0;
+    return logs.lost ? 1 : 0; /* said when it was lost */
 }
