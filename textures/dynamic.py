@@ -9,6 +9,10 @@ import numpy as np
 
 from frictex.textures.model import _LayerBase
 
+#: The output rate a scene's dynamic layers are checked for when it is read (Hz): the
+#: default of ``frictex replay --rate`` and ``frictex demo --rate``.
+OUTPUT_RATE_HZ = 10_000.0
+
 
 @dataclass(frozen=True)
 class DynamicLayer(_LayerBase):

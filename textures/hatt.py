@@ -103,12 +103,9 @@ from frictex.device.safe_text import escape, escape_path, quoted
 from frictex.textures.ar_synthesis import barycentric, blend_at, lsf_to_poly, twiddles
 from frictex.textures.errors import TextureError
 from frictex.textures.library import UnreadableText, read_utf8
-from frictex.textures.dynamic import DynamicLayer
+from frictex.textures.dynamic import OUTPUT_RATE_HZ, DynamicLayer
 
 HATT_RATE_HZ = 10_000.0
-#: The output rate a scene's recorded layers are checked for when it is read (Hz): the
-#: default of ``frictex replay --rate`` and ``frictex demo --rate``.
-OUTPUT_RATE_HZ = 10_000.0
 RATE_RANGE_HZ = (100.0, 1e6)
 #: the unit elements a file may have: {element: {unit: factor to frictex's unit}}
 UNITS = {"SpeedUnits": {"mm/s": 1.0, "m/s": 1000.0}, "ForceUnits": {"N": 1.0},

@@ -123,6 +123,12 @@ class _Planes:
     def gradient(self, x, y):
         return self._evaluate(x, y, False)
 
+    @property
+    def relief_mm(self) -> float:
+        """The span of the shape's heights (mm): 0 for a flat shape, whose slope is 0
+        everywhere (nothing of it is felt)."""
+        return abs(self.height_mm)
+
 
 @njit(cache=True, nogil=True)
 def _cosine_height(u, height_mm):
@@ -356,6 +362,11 @@ class HeightMap(_Planes):
                   else np.zeros_like(self.heights_mm)
                   for axis, (size, step) in enumerate(zip((rows, cols), spacing)))
         object.__setattr__(self, "_planes", np.stack((self.heights_mm, gx, gy)))
+
+    @property
+    def relief_mm(self) -> float:
+        """The span of the map's heights (mm); ``height_mm`` is the sprite's size here."""
+        return float(np.ptp(self.heights_mm))
 
     def _fill(self, x, y, out):
         placement = (self.x_mm, self.y_mm, self.width_mm, self.height_mm)

@@ -427,7 +427,8 @@ documented(LAYER_KEYS["height"], {
     "shape": "the height field: `bump` (gaussian), `ridge` (raised cosine across a line), "
              "`step` (a chamfered step), `button` (a plateau with a rounded rim), `map` (a "
              "16-bit PNG)",
-    "rise_mm": "height of the shape (mm); negative for a dip or a step down",
+    "rise_mm": "height of the shape (mm); negative for a dip or a step down; 0 is flat, "
+               "felt nowhere (validate warns, as for a map of one grey)",
     "cx_mm": ("x (mm) of the centre", _BY_SHAPE.format("`bump` or `button`")),
     "cy_mm": ("y (mm) of the centre", _BY_SHAPE.format("`bump` or `button`")),
     "x_mm": ("x (mm) of a point on the crest (ridge) or edge (step), or of the map's "
@@ -459,7 +460,8 @@ documented(LAYER_KEYS["height"], {
 documented(LAYER_KEYS["recorded"], {
     "model": "a HaTT texture model (XML), path relative to this file",
     "mu_mean": "mu' about which the recorded texture varies",
-    "gain": "mu' per m/s^2 of the model's synthesised acceleration",
+    "gain": "mu' per m/s^2 of the model's synthesised acceleration; validate warns where "
+            "gain times sqrt(var) of the model's loudest vertex passes the room about mu_mean",
     "mu_min": "lowest mu' (mu_min < mu_mean < mu_max)", "mu_max": "highest mu'",
     "v_rest_mm_s": "below this speed (mm/s) the texture is silent (mu_mean)",
     "seed": "seed of the model's noise: the same seed, the same texture"})
@@ -481,7 +483,9 @@ documented(LAYER_KEYS["clip"], {
     "depth": "drop in mu' at level 1: mu' = 1 - depth x level",
     "clip": "the clip: `tick` (a transient), `ramp` (level_from to level_to over "
             "duration_s), `envelope` (levels at times_s), `ahap` (an Apple AHAP file)",
-    "intensity": "peak level of a tick or scale of an envelope (`tick`, `envelope`)",
+    "intensity": "peak level of a tick or scale of an envelope (`tick`, `envelope`); a clip "
+                 "that never lowers mu' at 10 kHz (intensity or levels 0, or over within one "
+                 "sample) is felt nowhere: validate warns",
     "sharpness": ("a tick's pulse length (30 ms at 0 down to 5 ms at 1), or a ramp's or "
                   "envelope's carrier frequency (250 Hz x sharpness; 0: a smooth drop)",
                   "0.5 for `tick`, 0 for `ramp` and `envelope`"),

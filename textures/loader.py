@@ -167,7 +167,9 @@ reported (not only the first) as ``file:line: field: message``; ``frictex valida
 warns, without failing, where a layer asks for a mu' the device cannot reach at its
 nominal normal force (``device.friction.mu_floor``), where a layer is for one
 finger on a one-channel device (which serves only the finger touching longest), where a
-clip starts on a lift (felt only by other fingers still touching), where a
+clip starts on a lift (felt only by other fingers still touching), where nothing of a
+layer can be felt (a flat height: ``rise_mm = 0`` or a map of one grey; a clip that never
+lowers mu' at the 10 kHz output rate: level or intensity 0, or over within one sample), where a
 display's pixel pitch is no screen's (:data:`PIXEL_PITCH_MM`: a size in metres, most
 often), and where a layer's region never meets the area the layer acts on (the layer
 would cover nothing).
@@ -189,7 +191,7 @@ from frictex.textures.sections.device import device_warnings, force_device, pars
 from frictex.textures.outside import allow_outside_from_env
 from frictex.textures.sections.files import Files
 from frictex.textures.sections.layers import (lift_warnings, parse_layers, reach_warnings,
-                                              selector_warnings)
+                                              selector_warnings, unfelt_warnings)
 from frictex.textures.toml_safe import parse_toml, read_text
 
 #: The pixel pitch (mm per pixel) of a plausible touch screen: an 800-ppi phone has
@@ -283,6 +285,7 @@ def check_scene(path: str | Path, *, allow_outside: bool = False, text: str | No
     reach_warnings(r, device, built)
     selector_warnings(r, device, built)
     lift_warnings(r, built)
+    unfelt_warnings(r, built)
     _pixel_pitch_warnings(r, display)
     _covers_nothing_warnings(r, display, built)
     if top["control"] != "open" and (device.profile not in FRICTION_LOOP_PROFILES

@@ -4,7 +4,10 @@ recorded textures (``textures.hatt``) and effect clips (``textures.clips``,
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
+
+import numpy as np
 
 from frictex.textures import model
 from frictex.textures.ahap import read_ahap
@@ -81,7 +84,45 @@ def build_recorded(r, path, v, given, ctx):
         return None
     # errors met when the model is played at another rate name the key that names it
     where = str(r.problem(path + ("model",), f"{show(v['model'])}: {texture.source}"))
-    return ArTextureLayer(**ctx.common, **{**v, "model": replace(texture, source=where)}), "mu_min"
+    layer = ArTextureLayer(**ctx.common, **{**v, "model": replace(texture, source=where)})
+    _clipping_warning(r, path, layer)
+    return layer, "mu_min"
+
+
+def _gaussian_outside(std: float, below: float, above: float) -> float:
+    """The share of a zero-mean Gaussian of standard deviation ``std`` that lies below
+    -``below`` or above ``above``."""
+    tail = lambda room: 0.5 * math.erfc(room / (std * math.sqrt(2.0)))  # noqa: E731
+    return tail(below) + tail(above)
+
+
+def _percent(share: float) -> str:
+    """A share as a percentage for "at least": one above 99.9% (a Gaussian's never
+    reaches 100%, though its float may) is 99.9%."""
+    return "99.9%" if share > 0.999 else f"{share:.1%}"
+
+
+def _clipping_warning(r, path, layer) -> None:
+    """Warn where the recorded layer's ``gain`` times its loudest vertex's excitation
+    (standard deviation sqrt(var), m/s^2) passes the room mu' has about mu_mean: the
+    model's output, a filtered Gaussian of at least that deviation, would be clipped to
+    [mu_min, mu_max] on a large share of the samples played near that vertex."""
+    model = layer.model
+    loudest = int(np.argmax(model.variances))
+    std = layer.gain * math.sqrt(model.variances[loudest])  # mu'
+    below, above = layer.mu_mean - layer.mu_min, layer.mu_max - layer.mu_mean
+    if std <= min(below, above):
+        return
+    share = _gaussian_outside(std, below, above)
+    r.report(path + ("gain",),
+             f"layer {show(layer.name)}: gain {layer.gain:g} times the excitation of the model's "
+             f"loudest vertex (model {loudest + 1}, {model.speeds_mm_s[loudest]:g} mm/s and "
+             f"{model.forces_n[loudest]:g} N: standard deviation "
+             f"{math.sqrt(model.variances[loudest]):.3g} m/s^2) is {std:.3g} of mu', more than "
+             f"its room about mu_mean ({below:g} down to mu_min, {above:g} up to mu_max): at "
+             f"least {_percent(share)} of the samples played near that vertex will be clipped; lower "
+             f"gain to {min(below, above) / (3.0 * std) * layer.gain:.3g} or less (3 standard "
+             f"deviations of room), or check the model's <var>", warning=True)
 
 
 def _clip_shape(r, path, v, ctx) -> Clip | None:

@@ -9,6 +9,8 @@ from typing import Callable
 from frictex.device import profile as profiles
 from frictex.textures import model
 from frictex.textures.clips import ClipLayer
+from frictex.textures.dynamic import OUTPUT_RATE_HZ
+from frictex.textures.heights import HeightLayer, HeightMap
 from frictex.textures.errors import KeyPath
 from frictex.textures.keys import COMMON, LAYER_KEYS, LAYER_TABLES, LAYER_TYPES, MAX_LAYERS, PERIODIC_TYPES, VISUAL
 from frictex.textures.schema import BAD, Reader, kind, show
@@ -126,6 +128,45 @@ def lift_warnings(r: Reader, built) -> None:
                      f'"lift" on layer {show(layer.name)}: the clip starts as a touch ends, and '
                      f"friction is felt only by a finger on the plate, so it is felt only by other "
                      f"fingers still touching (with one finger, never)", warning=True)
+
+
+def unfelt_warnings(r: Reader, built) -> None:
+    """Warn at each layer nothing of which can be felt: a height layer whose shape is flat
+    (``rise_mm = 0``, or a map whose pixels all have one height: its slope is 0
+    everywhere), and a clip that never lowers mu' at the default output rate
+    (``textures.dynamic.OUTPUT_RATE_HZ``: a level or intensity of 0 throughout, or a
+    clip over before its second sample)."""
+    for index, (layer, _) in enumerate(built):
+        if isinstance(layer, HeightLayer) and layer.shape.relief_mm == 0.0:
+            _flat_height_warning(r, index, layer)
+        elif isinstance(layer, ClipLayer) and layer.clip.sample(OUTPUT_RATE_HZ)[0].min() >= 1.0:
+            _silent_clip_warning(r, index, layer)
+
+
+def _flat_height_warning(r: Reader, index: int, layer: HeightLayer) -> None:
+    """The warning for a height layer whose shape is flat (:func:`unfelt_warnings`)."""
+    if isinstance(layer.shape, HeightMap):
+        rows, cols = layer.shape.heights_mm.shape
+        key, why, fix = ("image", f"every pixel of the {cols} x {rows} map has one height",
+                         "give the map pixels of different greys")
+    else:
+        key, why, fix = "rise_mm", "rise_mm = 0 makes the shape flat", "give rise_mm a height"
+    r.report(("layer", index, key),
+             f"layer {show(layer.name)}: {why}, so its slope is 0 everywhere and nothing of "
+             f"it is felt (mu' stays mu_rest = {layer.mu_rest:g} where it covers); {fix}",
+             warning=True)
+
+
+def _silent_clip_warning(r: Reader, index: int, layer: ClipLayer) -> None:
+    """The warning for a clip that never lowers mu' (:func:`unfelt_warnings`)."""
+    sample_s = 1.0 / OUTPUT_RATE_HZ
+    duration = layer.clip.duration_s
+    why = (f"it lasts {duration:g} s, under one output sample of {sample_s:g} s at "
+           f"{OUTPUT_RATE_HZ:g} Hz, and is at level 0 on its first"
+           if duration < sample_s else "its levels times its intensity are 0 throughout")
+    r.report(("layer", index, "clip"),
+             f"layer {show(layer.name)}: the clip never lowers mu' ({why}), so nothing of it "
+             f"is felt; give it a level above 0 for at least one output sample", warning=True)
 
 
 def reach_warnings(r: Reader, device: profiles.DeviceProfile, built) -> None:
