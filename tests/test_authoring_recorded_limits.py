@@ -1,6 +1,7 @@
-"""A recorded layer's model that cannot be played is refused where the file names it:
-more vertices than are refitted (``textures.hatt.MAX_FIT_VERTICES``) at the 10 kHz output
-rate when the scene is read, and at another ``replay --rate`` when the renderer is built."""
+"""A recorded layer's model that cannot be played at a rate (more vertices than are
+refitted there: ``textures.hatt.MAX_FIT_VERTICES``) is said where the file names it: a
+warning when the scene is read, for the default 10 kHz output, and the error of a replay
+at a rate that would refit it."""
 
 import math
 
@@ -20,12 +21,25 @@ def _scene(tmp_path, rate_hz: float):
     return write(tmp_path, BODY)
 
 
-def test_a_model_made_at_1_khz_with_too_many_vertices_is_a_problem_at_its_key(tmp_path):
-    scene, problems, _ = check_scene(_scene(tmp_path, 1000.0))
-    assert scene is None and len(problems) == 1, problems
-    assert str(problems[0]).split(" \"wood")[0].endswith("scene.toml:9: layer[1].model:"), problems
-    assert (f"{SIDE * SIDE} vertices made at 1000 Hz to play at 10000 Hz" in str(problems[0])
-            and f"at most {hatt.MAX_FIT_VERTICES} are refitted" in str(problems[0])), problems
+def test_a_model_made_at_1_khz_with_too_many_vertices_is_a_warning_at_its_key(tmp_path, capsys):
+    """validate said ok, and every replay at the default 10 kHz refused it. It warns at
+    the model's key, a replay at 10 kHz fails naming that key, one at the model's own
+    1 kHz (nothing refitted) plays it."""
+    from frictex.app.commands.cli import main
+    path = _scene(tmp_path, 1000.0)
+    scene, problems, warnings = check_scene(path)
+    assert scene is not None and problems == [] and len(warnings) == 1, (problems, warnings)
+    said = str(warnings[0])
+    assert said.split(' "wood')[0].endswith("scene.toml:9: layer[1].model:"), said
+    assert ("cannot be played at 10000 Hz, the default output rate" in said
+            and f"{SIDE * SIDE} vertices made at 1000 Hz to play at 10000 Hz" in said
+            and said.endswith("it plays at --rate 1000")), said
+    assert main(["replay", str(path), "swipe-40mms-50hz", "--out", str(tmp_path / "r"),
+                 "--quiet"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert err[-1].startswith(f"frictex: error: {path}:9: layer[1].model: "), err
+    assert main(["replay", str(path), "swipe-40mms-50hz", "--out", str(tmp_path / "r"),
+                 "--quiet", "--rate", "1000"]) == 0
 
 
 def test_a_model_made_at_10_khz_replayed_at_20_khz_names_the_texture_files_key(tmp_path, capsys):

@@ -12,6 +12,7 @@ import numpy as np
 from frictex.textures import model
 from frictex.textures.ahap import read_ahap
 from frictex.textures.clips import Clip, ClipEvent, ClipLayer
+from frictex.textures.errors import TextureError
 from frictex.textures.heights import (ButtonRim, GaussianBump, HeightLayer, HeightMap, Ridge, Step,
                                       read_height_png)
 from frictex.textures.keys import CLIP_SHAPES, HEIGHT_SHAPES
@@ -74,17 +75,20 @@ def build_recorded(r, path, v, given, ctx):
     from frictex.textures.hatt import (OUTPUT_RATE_HZ, ArTextureLayer,  # numba: only for
                                        read_hatt_xml)  # scenes that use it
 
-    def playable(file):
-        texture = read_hatt_xml(file)
-        texture.check_rate(OUTPUT_RATE_HZ)
-        return texture
-
-    texture = file_read(r, path, "model", v["model"], ctx, playable)
+    texture = file_read(r, path, "model", v["model"], ctx, read_hatt_xml)
     if texture is None:
         return None
     # errors met when the model is played at another rate name the key that names it
     where = str(r.problem(path + ("model",), f"{show(v['model'])}: {texture.source}"))
-    layer = ArTextureLayer(**ctx.common, **{**v, "model": replace(texture, source=where)})
+    texture = replace(texture, source=where)
+    try:  # a warning, not a problem: it plays at its own rate (replay --rate)
+        texture.check_rate(OUTPUT_RATE_HZ)
+    except TextureError as exc:
+        r.report(path + ("model",), f"{show(v['model'])}: cannot be played at "
+                                    f"{OUTPUT_RATE_HZ:g} Hz, the default output rate "
+                                    f"({str(exc)[len(texture.source) + 2:]}); it plays at "
+                                    f"--rate {texture.rate_hz:g}", warning=True)
+    layer = ArTextureLayer(**ctx.common, **{**v, "model": texture})
     _clipping_warning(r, path, layer)
     return layer, "mu_min"
 
