@@ -244,8 +244,9 @@ def files_section() -> str:
         "model, when read; any model played at a sample rate other than its own): its size is "
         "bounded by the cost of the fits, checked before the first. A model made at a rate "
         f"other than {hatt.OUTPUT_RATE_HZ:g} Hz (replay's default output rate) with more "
-        "vertices is a problem of the layer's `model` key when the file is read; played at "
-        "another `--rate`, the replay's error names that key too.",
+        "vertices gets a warning at the layer's `model` key when the file is read (it plays "
+        "at its own rate, `--rate`); a replay at a rate that would refit it fails naming "
+        "that key.",
         "Messages never carry a file's contents: the values they show are escaped (a control "
         "character such as ESC is shown as the four characters `\\x1b`) and cut to "
         f"{schema.MAX_SHOWN} characters (keys and strings of the texture file) or {MAX_SHOWN} "
