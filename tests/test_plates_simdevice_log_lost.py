@@ -27,6 +27,7 @@ def test_a_log_that_cannot_be_written_is_said_once_and_dropped(capsys):
         log.flush()
     log.close()
     assert capsys.readouterr().err.splitlines() == [LOST]
+    assert log.lost
 
 
 def test_a_replay_on_a_simulated_device_outlives_its_lost_log(capsys):
@@ -37,3 +38,30 @@ def test_a_replay_on_a_simulated_device_outlives_its_lost_log(capsys):
     assert sink.status()["commanded_samples"] == 20_000
     err = capsys.readouterr().err
     assert err.splitlines() == [LOST] and "Traceback" not in err
+
+
+
+def test_sim_device_ends_with_exit_1_when_its_log_was_lost():
+    """As the C host port does: the device serves its host to the end, then says the log
+    ended early and exits 1 (a run whose output is incomplete says so)."""
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen([sys.executable, "-m", "frictex", "sim-device", "--once", "--tcp",
+                             "0", "--log", "/dev/full"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        url = proc.stdout.readline().strip()
+        assert url.startswith("socket://"), url
+        with open_sink(url, channels=1, rate_hz=10_000.0, paced=True) as sink:
+            for start in range(0, 20_000, 500):
+                sink.send(start, np.full((500, 1), 1.0))
+        _, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 1, err
+    assert LOST in err and "Traceback" not in err
+    assert err.strip().splitlines()[-1] == (
+        "frictex: error: --log: logging stopped early (said above)"), err

@@ -124,18 +124,22 @@ def run(args: argparse.Namespace) -> int:
     quit_event = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: quit_event.set())
     try:
-        _serve_logged(core, args, quit_event)
+        lost = _serve_logged(core, args, quit_event)
     except KeyboardInterrupt:  # port and logs closed: the counts, then the command line's
         _print_counts(core)    # 'frictex: interrupted', exit 130
         raise
     _print_counts(core)
+    if lost:  # its warning said which and why when it happened
+        print(f"frictex: error: {', '.join(lost)}: logging stopped early (said above)",
+              file=sys.stderr)
+        return 1
     return 0
 
 
 def _serve_logged(core: DeviceCore, args: argparse.Namespace,
-                  quit_event: threading.Event) -> None:
+                  quit_event: threading.Event) -> list[str]:
     """:func:`_serve`, with the ``--log`` and ``--plate-log`` files open (closed whatever
-    ends it)."""
+    ends it); the options whose log a write the file system refused ended early."""
     config, logs = core.config, []
     try:
         if args.log:
@@ -153,6 +157,7 @@ def _serve_logged(core: DeviceCore, args: argparse.Namespace,
     finally:
         for csv in logs:
             csv.close()
+    return [option for option, csv in zip(("--log", "--plate-log"), logs) if csv.lost]
 
 
 def _print_counts(core: DeviceCore) -> None:

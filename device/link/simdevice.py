@@ -584,6 +584,7 @@ class CsvLog:
             raise InputError(f"cannot write the log file {escape_path(path)}: "
                              f"{exc.strerror or exc}") from None
         self._fh.write(",".join(header) + "\n")
+        self.lost = False  #: a write was refused: the log ended there
         self._lock = threading.Lock()
         self._dirty = True  # the header
         self._closing = threading.Event()
@@ -634,6 +635,7 @@ class CsvLog:
         print(f"frictex: warning: cannot write the log file {escape_path(self._path)}: "
               f"{exc.strerror or exc}; logging stopped, the simulated device goes on",
               file=sys.stderr, flush=True)
+        self.lost = True
         try:
             self._fh.close()
         except OSError:  # the same refusal, for the rows still buffered
