@@ -52,3 +52,18 @@ def test_every_documented_key_is_written(summaries):
     written = set().union(*(keys(doc) for doc in summaries)) | {"device", "fingers_others",
                                                                 "control"}
     assert documented() - written == set()
+
+
+@pytest.mark.parametrize("scene", ["slider-clips", "height-bump", "objects-bump-edge-disc",
+                                   "raster-map", "guidance-beam"])
+def test_each_layers_type_is_the_one_its_texture_file_gives(scene):
+    """summary.json named layers by their classes: heightlayer, artexturelayer,
+    cliplayer, rastermap, and shape for both a rectangle and a disc."""
+    import tomllib
+
+    import frictex
+    from frictex.textures.library import resolve_scene
+    path = resolve_scene(scene)
+    written = [layer["type"] for layer in tomllib.loads(path.read_text())["layer"]]
+    run = frictex.replay(path, frictex.synth_trace("swipe", duration_s=0.2))
+    assert [layer["type"] for layer in run.summary.to_dict()["scene"]["layers"]] == written

@@ -137,6 +137,7 @@ class ClipLayer(DynamicLayer):
     """
 
     renderer_kind = "clip"
+    FILE_TYPE = "clip"
 
     clip: Clip = None  # type: ignore[assignment]
     trigger: str = "down"

@@ -103,7 +103,7 @@ from frictex.device.safe_text import escape, escape_path, quoted
 from frictex.textures.ar_synthesis import barycentric, blend_at, lsf_to_poly, twiddles
 from frictex.textures.errors import TextureError
 from frictex.textures.library import UnreadableText, read_utf8
-from frictex.textures.dynamic import OUTPUT_RATE_HZ, DynamicLayer
+from frictex.textures.dynamic import DynamicLayer
 
 HATT_RATE_HZ = 10_000.0
 RATE_RANGE_HZ = (100.0, 1e6)
@@ -560,6 +560,7 @@ class ArTextureLayer(DynamicLayer):
     makes the noise, and so every replay, reproducible."""
 
     renderer_kind = "ar"
+    FILE_TYPE = "recorded"
 
     model: TextureModel = None  # type: ignore[assignment]
     mu_mean: float = 0.8

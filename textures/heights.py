@@ -465,6 +465,7 @@ class HeightLayer(DynamicLayer):
     """
 
     renderer_kind = "height"
+    FILE_TYPE = "height"
 
     shape: HeightShape = None  # type: ignore[assignment]
     rendering: str = "slope"

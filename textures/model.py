@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
@@ -213,6 +214,14 @@ class _LayerBase:
     visual: VisualHints
     fingers: str = "any"
 
+    #: the ``type`` a texture file gives the layer, where it is not the class's name
+    FILE_TYPE: ClassVar[str] = ""
+
+    @property
+    def file_type(self) -> str:
+        """The ``type`` a texture file gives this layer (``summary.json`` names it so)."""
+        return self.FILE_TYPE or type(self).__name__.lower()
+
     def in_region(self, x, y) -> np.ndarray:
         if self.region is None:
             return np.ones(np.shape(x), dtype=bool)
@@ -393,6 +402,10 @@ class Shape(_Outlined):
     edge_mm: float = 0.0
 
     @property
+    def file_type(self) -> str:
+        return "disc" if isinstance(self.geometry, DiscRegion) else "rectangle"
+
+    @property
     def mu_range(self) -> tuple[float, float]:
         return self.mu, 1.0
 
@@ -490,6 +503,8 @@ class RasterMap(_LayerBase):
     ``one-to-one`` draws one image pixel per display pixel (the loader sets the size
     from the display's px/mm). Sampling is bilinear.
     """
+
+    FILE_TYPE = "raster"
 
     image: np.ndarray = None  # type: ignore[assignment]
     image_path: Path | None = None

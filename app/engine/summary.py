@@ -182,7 +182,7 @@ def summary(scene, trace_report: dict, pipeline, tracker, totals: Totals, fmt: s
         "scene": {"name": scene.name,
                   "path": _real_path(scene.source),
                   "device": scene.device.profile,
-                  "layers": [{"name": layer.name, "type": type(layer).__name__.lower(),
+                  "layers": [{"name": layer.name, "type": layer.file_type,
                               "renderer": mode}
                              for layer, mode in zip(scene.layers, pipeline.layer_modes)]},
         "trace": {**trace_report, "path": _real_path(trace_report.get("path"))},

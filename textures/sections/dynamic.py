@@ -72,8 +72,8 @@ def build_recorded(r, path, v, given, ctx):
         r.report(path + ("mu_mean",), f"mu_min {v['mu_min']:g} < mu_mean {v['mu_mean']:g} < "
                                       f"mu_max {v['mu_max']:g} does not hold")
         return None
-    from frictex.textures.hatt import (OUTPUT_RATE_HZ, ArTextureLayer,  # numba: only for
-                                       read_hatt_xml)  # scenes that use it
+    from frictex.textures.dynamic import OUTPUT_RATE_HZ
+    from frictex.textures.hatt import ArTextureLayer, read_hatt_xml  # numba: only for scenes that use it
 
     texture = file_read(r, path, "model", v["model"], ctx, read_hatt_xml)
     if texture is None:
