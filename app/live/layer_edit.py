@@ -573,13 +573,15 @@ class LayerEdit:
         copy of a bundled scene; the saved file must load (``textures.loader.load_scene``).
         Returns the path written.
 
-        Raises :class:`SaveConflict` when the file there is not the one the panel read
+        Raises :class:`EditError` when the file there has no owner-write bit, and
+        :class:`SaveConflict` when the file there is not the one the panel read
         (:attr:`disk`; for a first copy of a bundled scene: no file): changed on disk
         since, by content or by mtime and size. Saving again while the file is as that
         refusal found it overwrites it."""
         target = save_path(self.path)
         text = self.text()
         load_scene(self.path, text=text)  # refused before anything is written
+        _refuse_read_only(target)
         now = on_disk(target)
         expected = self.disk if target == self.path else OnDisk(None, None)
         if now != expected and now != self._overwrite:
@@ -659,6 +661,20 @@ def _header(item):
     """The item whose trivia holds a sub-table's header line: the table, or an array of
     tables' first."""
     return item[0] if isinstance(item, AoT) else item
+
+
+def _refuse_read_only(target: Path) -> None:
+    """Raise :class:`EditError` when the file ``target`` leads to has no owner-write
+    bit. The mode bits are checked, not ``os.access``: the save renames a new file over
+    the old one, which needs only the folder's write permission, and root may write
+    anything, so neither would stop a chmod 444 file from being replaced."""
+    try:
+        mode = os.stat(target).st_mode
+    except FileNotFoundError:
+        return
+    if not mode & statmod.S_IWUSR:
+        raise EditError(f"cannot save {target.name}: the file is read-only "
+                        f"(chmod u+w {target.name} to let the panel save it)")
 
 
 def _write_keeping_mode(target: Path, text: str) -> None:
