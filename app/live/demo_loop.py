@@ -113,6 +113,7 @@ RELOAD_POLL_S = 0.075
 GONE_S = 0.5
 ENVELOPE_S = 0.2  # a modal device's |W| is redrawn from the latest commands 5 times a second
 FRAME_S = 1.0 / 60.0
+NOTICE_S = 8.0  # a note (scenes N skipped) stays in the info banner this long
 INPUT_WAKE_S = 0.05  # longest the input thread waits for an event before looking at the time
 #: while the button is held, the pointer is reported at least this often (s), moved or
 #: not, as a touch screen re-reports a still finger: a mouse that stops sends no event,
@@ -157,7 +158,7 @@ def skip_note(skipped: list) -> str:
     for exc in skipped:
         groups.setdefault(exc.wants, []).append(exc.scene)
     which = "; ".join(f"{', '.join(names)} (channels {wants})" for wants, names in groups.items())
-    return (f"skipped {len(skipped)} scene{'s' * (len(skipped) != 1)} the link and recording, "
+    return (f"skipped {len(skipped)} scene{'s' * (len(skipped) != 1)} {skipped[0].held}, "
             f"opened for {skipped[0].opened}, cannot play: {which}; start the demo on one to "
             "play it")
 
@@ -220,6 +221,10 @@ class DemoLoop:
         self._sent: tuple | None = None  # (pointer px, force N) of the last mouse sample
         self.outlines = False
         self.error: str | None = None
+        #: a note shown in the info banner until ``_notice_until`` (s on the loop's clock;
+        #: None: from its first frame on, :meth:`show_notice`)
+        self.notice: str | None = None
+        self._notice_until: float | None = None
         self.status: dict = {}
         self.quit = False
         self.screenshot_pending = False
@@ -232,7 +237,7 @@ class DemoLoop:
         self._next_poll = 0.0
         self._missing_since: float | None = None  # when the texture file went missing (s)
         self._keys: queue.SimpleQueue = queue.SimpleQueue()  # for the render thread
-        #: the playlist's scenes the open link and recording cannot play (path: why)
+        #: the playlist's scenes the open link or recording cannot play (path: why)
         self.unplayable: dict[Path, ChannelMismatch] = {}
         #: the layer panel: its editor, the menu open, its note (render thread); the
         #: slider being dragged and the drags so far (input thread); panel events
@@ -614,8 +619,9 @@ class DemoLoop:
     def step_scene(self, step: int) -> None:
         """N (``step`` 1) or B (-1): the next scene of the playlist that the open link and
         recording can play. Those that drive other channels (``ChannelMismatch``) are
-        skipped, said once on stderr and on screen, and skipped silently from then on;
-        if no other scene fits, that is said instead."""
+        skipped, said once on stderr and in the info banner (for NOTICE_S: a note, not an
+        error), and skipped silently from then on; if no other scene fits, that is said
+        instead, in the error banner."""
         n, skipped = len(self.playlist), []
         for k in range(1, n):
             index = (self.index + step * k) % n
@@ -631,14 +637,28 @@ class DemoLoop:
             break
         else:
             if self.unplayable:
-                opened = next(iter(self.unplayable.values())).opened
-                self.error = (f"no other scene of the playlist plays on the link and recording "
-                              f"opened for {opened}: start the demo on another scene to play it")
+                refused = next(iter(self.unplayable.values()))
+                self.error = (f"no other scene of the playlist plays on {refused.held} opened "
+                              f"for {refused.opened}: start the demo on another scene to play it")
         if skipped:
             note = skip_note(skipped)
             self.say(note)
-            if self.error is None:
-                self.error = note
+            self.show_notice(note)
+
+    def show_notice(self, text: str) -> None:
+        """Show ``text``, a note and no error, in the grey info banner for NOTICE_S from
+        the first frame that draws it (a red error banner, while one is up, hides it)."""
+        self.notice, self._notice_until = text, None
+
+    def _age_notice(self, now: float) -> None:
+        """Start the notice's NOTICE_S at its first frame (``now``: s on the loop's
+        clock), and take it down once they are over."""
+        if self.notice is None:
+            return
+        if self._notice_until is None:
+            self._notice_until = now + NOTICE_S
+        elif now >= self._notice_until:
+            self.notice = None
 
     def select(self, index: int, passes: tuple = ()) -> None:
         """Switch to the playlist's scene ``index`` (``passes``: as :meth:`_apply`)."""
@@ -854,8 +874,10 @@ class DemoLoop:
         self.backend.use()
         if self.haptic.estop.is_set():
             banner, kind = "EMERGENCY STOP: output is 0 um. SPACE resumes.", "stop"
+        elif alarm := self.link_watch.alarm or self.error:
+            banner, kind = alarm, "error"
         else:
-            banner, kind = self.link_watch.alarm or self.error, "error"
+            banner, kind = self.notice, "info"
         hover = self._mm(self.hover_px) if self.hover_px is not None and not self.touching else None
         self.compositor.draw(FrameView(
             overlay=self.overlay, hover_mm=hover, show_scope=self.show_scope,
@@ -889,6 +911,7 @@ class DemoLoop:
     def frame(self, now: float) -> None:
         """Draw and show one frame (``now``: s on the loop's clock)."""
         self.check_reload(now)
+        self._age_notice(now)
         self.drain()
         self.update_envelope(now)
         self.draw()

@@ -122,17 +122,26 @@ class HapticStats:
 
 
 class ChannelMismatch(ValueError):
-    """A scene that drives other channels than the link and the recording were opened for
+    """A scene that drives other channels than the outputs open (``held``: "the link",
+    "the recording" or both, as :func:`held_outputs` says them) were opened for
     (``wants``, ``opened``: the channels with the device profile, as text): the demo
     cannot switch to it without reopening them."""
 
-    def __init__(self, scene: str, wants: str, opened: str):
-        super().__init__(f"{scene} drives channels {wants}; the link and recording were opened "
+    def __init__(self, scene: str, wants: str, opened: str, held: str):
+        verb = "were" if " and " in held else "was"
+        super().__init__(f"{scene} drives channels {wants}; {held} {verb} opened "
                          f"for {opened}: start the demo on that scene instead")
-        self.scene, self.wants, self.opened = scene, wants, opened
+        self.scene, self.wants, self.opened, self.held = scene, wants, opened, held
 
     def __reduce__(self):  # sent from the haptic process to the window's
-        return type(self), (self.scene, self.wants, self.opened)
+        return type(self), (self.scene, self.wants, self.opened, self.held)
+
+
+def held_outputs(link: bool, recording: bool) -> str:
+    """The outputs open for one set of channels, as a message names them: "the link",
+    "the recording", "the link and the recording" ("" for none)."""
+    return " and ".join(name for name, is_open in (("the link", link), ("the recording", recording))
+                        if is_open)
 
 
 class TouchInput:
@@ -371,10 +380,10 @@ class HapticThread(TouchInput, threading.Thread):
         pipeline = build_pipeline(scene or self.pipeline.scene, self.rate_hz, self.block_size,
                                   override, control=self.control)
         old = self.pipeline
-        if ((self.sink is not None or self.recorder is not None)
-                and (pipeline.channels, pipeline.actuation.has_phases)
-                != (old.channels, old.actuation.has_phases)):
-            raise ChannelMismatch(pipeline.scene.name, _layout(pipeline), _layout(old))
+        held = held_outputs(self.sink is not None, self.recorder is not None)
+        if held and ((pipeline.channels, pipeline.actuation.has_phases)
+                     != (old.channels, old.actuation.has_phases)):
+            raise ChannelMismatch(pipeline.scene.name, _layout(pipeline), _layout(old), held)
         self.stage.changes.put_nowait((pipeline, override))
         self.render_override = override
         return pipeline
