@@ -213,6 +213,7 @@ class DemoLoop:
         self.force_n = scene.device.normal_force_n
         self.renderer = haptic.render_override
         self.touching = False
+        self._held = False  # the mouse button is down, pressed where the panel did not take it
         self.hover_px: tuple[float, float] | None = None
         #: window events since the last flush: (None: a move, True: press, False: release,
         #: pointer px then)
@@ -371,9 +372,10 @@ class DemoLoop:
             self.log("force", f"{self.force_n:.2f} N")
 
     def flush_mouse(self) -> None:
-        """The mouse's touches since the last call, in order: a down or up at each
-        button change, a move at each pointer position while touching, a move when the
-        force changed. They are stamped evenly over the time since the last call (when
+        """The mouse's touches since the last call, in order: the button held on the
+        scene's drawn area touches (a down where it is pressed there or comes back onto
+        it held), a move at each pointer position while touching, an up where it is let
+        go or leaves the scene (at the last place on it), a move when the force changed. They are stamped evenly over the time since the last call (when
         they arrived, as far as this thread can tell), so a batch the window handles
         late keeps its path and its pace."""
         pending, self._pending = self._pending, []
@@ -386,18 +388,12 @@ class DemoLoop:
         inside = self.compositor.viewport.contains_px
         last_in = self._sent[0] if self._sent is not None else None  # last place touched
         for pressed, px in pending:
-            if pressed is None:
-                if touching and inside(*px):
-                    samples.append(("move", px))
-                    last_in = px
-                elif touching:  # dragged off the scene (the scope, a panel, the window's edge)
-                    touching = False
-                    samples.append(("up", last_in))
-            elif pressed and not touching and inside(*px):  # off the scene: no finger
-                touching = True
-                samples.append(("down", px))
-                last_in = px
-            elif not pressed and touching:
+            if pressed is not None:
+                self._held = pressed
+            if self._held and inside(*px):
+                samples.append(("move" if touching else "down", px))
+                touching, last_in = True, px
+            elif touching:  # let go, or dragged off the scene (the scope, a panel, the edge)
                 touching = False
                 samples.append(("up", px if inside(*px) else last_in))
         if touching:
