@@ -62,3 +62,25 @@ def test_a_press_on_the_scope_strip_touches_once_dragged_onto_the_scene(gl, tmp_
     finally:
         loop.close()
         window.close()
+
+
+def test_a_touch_ended_by_the_loop_itself_stays_ended_while_held(gl, tmp_path):
+    """A touch the loop ends under a held button (the experiment's interval ending:
+    ``touching`` set false, the up sent) is not started again by the next moves; only a
+    finger that left the scene comes back."""
+    scene = load_scene(resolve_scene("grating-5mm"))
+    window = ScriptedWindow(gl)
+    haptic = HapticThread(scene)
+    loop = DemoLoop(window, haptic, [resolve_scene("grating-5mm")], 0, scene, load_scene, tmp_path)
+    try:
+        loop.on_cursor(100.0, 240.0)
+        loop.on_button(True)
+        loop.flush_mouse()
+        assert touches_of(haptic) == [(100.0, DOWN)]
+        loop.touching = False  # ended under the finger
+        loop.on_cursor(120.0, 240.0)
+        loop.flush_mouse()
+        assert touches_of(haptic) == []
+    finally:
+        loop.close()
+        window.close()

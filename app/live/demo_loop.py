@@ -213,7 +213,9 @@ class DemoLoop:
         self.force_n = scene.device.normal_force_n
         self.renderer = haptic.render_override
         self.touching = False
-        self._held = False  # the mouse button is down, pressed where the panel did not take it
+        #: the mouse button is held off the scene's drawn area (pressed there, or dragged
+        #: off it; a press the layer panel took is none): back on the scene, it touches
+        self._held_off_scene = False
         self.hover_px: tuple[float, float] | None = None
         #: window events since the last flush: (None: a move, True: press, False: release,
         #: pointer px then)
@@ -388,14 +390,20 @@ class DemoLoop:
         inside = self.compositor.viewport.contains_px
         last_in = self._sent[0] if self._sent is not None else None  # last place touched
         for pressed, px in pending:
-            if pressed is not None:
-                self._held = pressed
-            if self._held and inside(*px):
+            on_scene = inside(*px)
+            if pressed is False:
+                self._held_off_scene = False
+                if touching:
+                    touching = False
+                    samples.append(("up", px if on_scene else last_in))
+            elif on_scene and (pressed or touching or self._held_off_scene):
                 samples.append(("move" if touching else "down", px))
-                touching, last_in = True, px
-            elif touching:  # let go, or dragged off the scene (the scope, a panel, the edge)
-                touching = False
-                samples.append(("up", px if inside(*px) else last_in))
+                touching, last_in, self._held_off_scene = True, px, False
+            elif pressed or touching:  # pressed off the scene (the scope, a panel, the
+                self._held_off_scene = True  # window's edge), or dragged off it
+                if touching:
+                    touching = False
+                    samples.append(("up", last_in))
         if touching:
             samples.append(("move", self.hover_px))  # the last position, at the force set now
         self.touching = touching
