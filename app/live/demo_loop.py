@@ -677,7 +677,7 @@ class DemoLoop:
             self.index = index
             self.files, self._missing_since = FileWatch(), None
             self._watch(path)
-            self._drop_editor()
+            self._drop_editor("another scene was chosen")
             self._open_editor()
 
     def _watch(self, path: Path) -> None:
@@ -758,13 +758,14 @@ class DemoLoop:
         self.panel_note = said[2:]
         return (editor.text() if kept else None), said
 
-    def _drop_editor(self) -> None:
-        """Another scene: the editor goes; its unsaved edits, if any, are said lost."""
+    def _drop_editor(self, why: str) -> None:
+        """The editor goes (``why``: another scene, the demo's end); its unsaved edits,
+        if any, are said lost."""
         editor, self.editor = self.editor, None
         if editor is not None and editor.dirty:
             n = editor.unsaved
             self.say(f"{editor.path.name}: {n} unsaved panel value{'s' * (n != 1)} dropped "
-                     "(another scene was chosen)")
+                     f"({why})")
 
     @staticmethod
     def say(message: str) -> None:
@@ -988,7 +989,9 @@ class DemoLoop:
             self.backend.release_context()
 
     def close(self) -> None:
-        """Release the GL objects; close the events file with its rows in time order."""
+        """Say the panel's unsaved edits lost, release the GL objects, close the events
+        file with its rows in time order."""
+        self._drop_editor("the demo ended")
         self.compositor.release()
         if self._events is not None:
             self._events.close()
