@@ -94,16 +94,17 @@ class DevicePanels:
     # -- forces and buttons -------------------------------------------------------------
 
     def _draw_forces(self, overlay: OverlayState) -> None:
-        """Force arrows on the fingers and their scale (bottom left, above the scope)."""
+        """Force arrows on the fingers and their scale (bottom left of the scene's area,
+        above the scope: right of the layer panel's column while it is open)."""
         comp, vp = self.comp, self.comp.viewport
         length = FORCE_ARROW_MM * min(vp.px_per_mm)
         comp.draw_triangles(overlay.force_arrows(vp, length / self.force_scale_n))
+        x = comp.layer_panel_rect()[2] + 12.0  # the column is 0 px wide while closed
         y = comp.scope_rect()[1] - comp.font_px * 2.2
-        comp.draw_triangles(arrow_triangles((12.0, y), (length, 0.0),
-                                                           (1.0, 1.0, 1.0, 0.9), 3.0))
+        comp.draw_triangles(arrow_triangles((x, y), (length, 0.0), (1.0, 1.0, 1.0, 0.9), 3.0))
         comp.draw_texture(comp.text((f"{self.force_scale_n:g} N (arrow: force on the finger, "
                                      "thin: wanted)",), comp.label_px, background=(0, 0, 0, 150)),
-                          16.0 + length, y - comp.font_px * 0.75)
+                          x + 4.0 + length, y - comp.font_px * 0.75)
 
     def _draw_buttons(self, state: int | None) -> None:
         """Each key-click button framed and labelled in the colour of its state."""
