@@ -36,7 +36,7 @@ def test_a_layer_that_cannot_be_felt_is_warned_about(tmp_path, body, heard, key,
     scene, problems, warnings = check_scene(write(tmp_path, body))
     assert scene is not None and problems == [] and len(warnings) == 1, warnings
     line = str(warnings[0])
-    assert f"scene.toml:" in line and f"layer[1].{key}: layer " in line and why in line, line
+    assert "scene.toml:" in line and f"layer[1].{key}: layer " in line and why in line, line
     assert "nothing of it is felt" in line, line
     scene, problems, warnings = check_scene(write(tmp_path, heard))
     assert scene is not None and problems == [] and warnings == [], warnings

@@ -1,9 +1,8 @@
 """The force arrows' legend ("0.25 N (arrow: force on the finger, thin: wanted)") sits
 at the bottom left of the scene's area: with the layer panel open (L) it moves right of
-the panel's column, as the scene does; it used to stay right of a scale arrow drawn from x = 12 px, under the panel,
-which left "r, thin: wanted)" showing (directional-ring at 1280 x 800)."""
-
-import pytest
+the panel's column, as the scene does; it used to stay right of a scale arrow drawn from
+x = 12 px, under the panel, which left "r, thin: wanted)" showing (directional-ring at
+1280 x 800)."""
 
 from frictex.app.live.layer_edit import LayerEdit, panel_view
 from frictex.rendering.visual.compositor import Compositor, FrameView
