@@ -81,6 +81,18 @@ def firmware_sim_library():
 
 
 @pytest.fixture(scope="session")
+def firmware_host_port():
+    """The C firmware's host port built (``device.firmware.build.host_port``: the path of
+    its binary); a build that fails fails the tests that use it, with the compiler's
+    message."""
+    from frictex.device.firmware.build import FirmwareBuildError, host_port
+    try:
+        return host_port()
+    except FirmwareBuildError as exc:
+        pytest.fail(str(exc), pytrace=False)
+
+
+@pytest.fixture(scope="session")
 def xvfb_display():
     """A fresh Xvfb server on a free display number (Xvfb picks it: -displayfd)."""
     binary = shutil.which("Xvfb")

@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 
 from frictex.device.firmware import hostport
-from frictex.device.firmware.build import FirmwareBuildError, host_port
 from frictex.device.link import protocol as p
 from frictex.device.link.faults import Faults, Plug
 from frictex.device.link.host import CommandSink, LinkError, open_port
@@ -23,11 +22,8 @@ RATE = 10_000.0
 
 
 @pytest.fixture(scope="module")
-def binary():
-    try:
-        return host_port()
-    except FirmwareBuildError as exc:
-        pytest.fail(str(exc), pytrace=False)
+def binary(firmware_host_port):
+    return firmware_host_port
 
 
 def _signal(n, seed=0):

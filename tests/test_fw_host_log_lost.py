@@ -11,18 +11,14 @@ import numpy as np
 import pytest
 
 from frictex.device.firmware import hostport
-from frictex.device.firmware.build import FirmwareBuildError, host_port
 from frictex.device.link.host import CommandSink, open_port
 
 RATE = 10_000.0
 
 
 @pytest.fixture(scope="module")
-def binary():
-    try:
-        return host_port()
-    except FirmwareBuildError as exc:
-        pytest.fail(str(exc), pytrace=False)
+def binary(firmware_host_port):
+    return firmware_host_port
 
 
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="no /dev/full")
