@@ -546,3 +546,27 @@ def test_any_header_or_row_is_read_or_one_escaped_line(text):
 def test_a_traces_fingers_are_its_distinct_ids_ascending(ids):
     text = "t_s,finger,x_mm,y_mm\n" + "".join(f"{k},{f},1,1\n" for k, f in enumerate(ids))
     assert parse_trace(text).fingers == tuple(sorted(set(ids)))
+
+
+def test_columns_it_does_not_read_are_warned_about_with_the_one_they_may_misspell(tmp_path):
+    """A header saying force_N took every row's 3 N as the 0.5 N default without a word.
+    Columns it ignores are named, a near miss with the column it may misspell; a field
+    that is not a column name (an escape sequence) is counted, not shown."""
+    from frictex.rendering.input.trace_file import ignored_columns, iter_trace
+    path = tmp_path / "t.csv"
+    path.write_text("t_s,finger,x_mm,y_mm,force_N,note,\x1b[2J\n0,0,10,10,3,a,b\n")
+    reader = iter_trace(path)
+    (chunk,) = list(reader)
+    assert chunk.force_n.tolist() == [0.5]
+    assert reader.warnings() == [
+        "trace: 3 columns frictex does not read, ignored: force_N (did you mean force_n?), note, "
+        "1 field that is not a column name (it reads t_s, finger, x_mm, y_mm, force_n, event)"]
+    assert ignored_columns(["t_s", "finger", "x_mm", "y_mm", "event"]) is None
+
+
+def test_a_replay_says_which_columns_it_ignored(tmp_path):
+    import frictex
+    path = tmp_path / "t.csv"
+    path.write_text("t_s,finger,x_mm,y_mm,force_N\n0,0,10,10,3\n0.02,0,11,10,3\n")
+    warnings = frictex.replay("grating-5mm", path).summary.warnings
+    assert any("force_N (did you mean force_n?)" in w for w in warnings), warnings

@@ -199,7 +199,7 @@ itself, edges included.
 def files_section() -> str:
     """What a texture file may name and how those files are read (from the readers' limits)."""
     from frictex.device.safe_text import MAX_SHOWN
-    from frictex.textures import ahap, hatt, heights, raster_io, schema, toml_safe
+    from frictex.textures import ahap, dynamic, hatt, heights, raster_io, schema, toml_safe
     from frictex.textures.outside import ALLOW_OUTSIDE_ENV
 
     mib = 1 << 20
@@ -243,7 +243,7 @@ def files_section() -> str:
         f"{hatt.MAX_FIT_VERTICES} where each vertex must be refitted as an AR model (an ARMA "
         "model, when read; any model played at a sample rate other than its own): its size is "
         "bounded by the cost of the fits, checked before the first. A model made at a rate "
-        f"other than {hatt.OUTPUT_RATE_HZ:g} Hz (replay's default output rate) with more "
+        f"other than {dynamic.OUTPUT_RATE_HZ:g} Hz (replay's default output rate) with more "
         "vertices gets a warning at the layer's `model` key when the file is read (it plays "
         "at its own rate, `--rate`); a replay at a rate that would refit it fails naming "
         "that key.",

@@ -325,7 +325,7 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     order = getattr(chunks, "order", None)
     if order is not None:
         doc["trace"]["time_order"] = order.as_dict()
-        doc["warnings"] += order.warnings()
+        doc["warnings"] += chunks.warnings()
     if sink is not None:  # friction constants calibrated on another device or finger
         from frictex.device.calibration_identity import mismatch, simulated_finger
         # a package's device may declare no Info, a caller's sink (sink=) no info at all

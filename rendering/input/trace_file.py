@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import codecs
 import csv
+import difflib
 import io
 import math
 import re
@@ -681,8 +682,10 @@ def _plain_columns(data: bytes, start: int, count: int, col: dict[str, int],
     return tuple(np.asarray(c, dtype=np.float64) for c in (t, fv, x, y, force)) + (event,)
 
 
-def _chunks(blocks, where: str, chunk_rows: int, order: TimeOrder, strict: bool):
-    """Traces of about ``chunk_rows`` samples from :func:`_blocks`' blocks of lines."""
+def _chunks(blocks, where: str, chunk_rows: int, order: TimeOrder, strict: bool,
+            header: list[str] | None = None):
+    """Traces of about ``chunk_rows`` samples from :func:`_blocks`' blocks of lines; the
+    header's column names added to ``header`` once read."""
     parser = None
     batch: list[_Rows] = []
     held = samples = 0
@@ -690,6 +693,8 @@ def _chunks(blocks, where: str, chunk_rows: int, order: TimeOrder, strict: bool)
         start = 0  # offset of the block's first data row
         if parser is None:
             parser, skipped = _header(data, first, where, order, strict)
+            if parser is not None and header is not None:
+                header.extend(parser.names)
             if parser is None or skipped == count:
                 continue
             for _ in range(skipped):
@@ -773,6 +778,32 @@ def describe_header(names: list[str]) -> str:
     return f"{count}: {', '.join(shown[:-1])} and {shown[-1]}" if len(shown) > 1 else f"{count}: {shown[0]}"
 
 
+def ignored_columns(names: list[str]) -> str | None:
+    """A warning naming a header's columns that frictex does not read (they are ignored),
+    each with the column it may misspell (``force_N``: did you mean force_n?); None if it
+    reads them all. As :func:`describe_header`, only plain column names are shown, the
+    other fields counted."""
+    extra = [name for name in names if name not in _COLUMNS]
+    if not extra:
+        return None
+    plain = [name for name in extra if _COLUMN_NAME.fullmatch(name)]
+    shown = [name + _misspelt(name) for name in plain[:_NAMES_SHOWN]]
+    if len(plain) > _NAMES_SHOWN:
+        shown.append(f"{len(plain) - _NAMES_SHOWN} more")
+    others = len(extra) - len(plain)
+    if others:
+        shown.append(f"{others} {'field that is' if others == 1 else 'fields that are'} not a "
+                     "column name")
+    return (f"trace: {len(extra)} {'column' if len(extra) == 1 else 'columns'} frictex does not "
+            f"read, ignored: {', '.join(shown)} (it reads {', '.join(_COLUMNS)})")
+
+
+def _misspelt(name: str) -> str:
+    """" (did you mean C?)" where ``name`` is close to a column C frictex reads, else ""."""
+    near = difflib.get_close_matches(name.lower(), _COLUMNS, n=1, cutoff=0.75)
+    return f" (did you mean {near[0]}?)" if near else ""
+
+
 def _block_rows(data: bytes, start: int, first: int, count: int, parser: "_RowParser",
                 where: str) -> _Rows:
     """The data rows of a block of ``count`` lines (``data`` from offset ``start``) from
@@ -816,12 +847,14 @@ class TraceReader:
 
     ``order`` (:class:`TimeOrder`) counts the samples sorted or dropped because time went
     back; it is final once the iterator is exhausted. ``strict`` refuses any step back.
+    ``columns``: the header's column names, once read.
     """
 
     def __init__(self, path: str | Path, chunk_rows: int = 65_536, strict: bool = False,
                  tolerance_s: float = REORDER_TOLERANCE_S):
         self.path = Path(path)
         self.order = TimeOrder(tolerance_s)
+        self.columns: list[str] = []
         self._chunks = self._read(chunk_rows, strict)
 
     def __iter__(self) -> "TraceReader":
@@ -830,6 +863,12 @@ class TraceReader:
     def __next__(self) -> Trace:
         return next(self._chunks)
 
+    def warnings(self) -> list[str]:
+        """What reading did about time going back (:meth:`TimeOrder.warnings`) and the
+        header's columns it ignored (:func:`ignored_columns`), one sentence each."""
+        ignored = ignored_columns(self.columns)
+        return self.order.warnings() + ([ignored] if ignored else [])
+
     def _read(self, chunk_rows: int, strict: bool):
         path = self.path
         problem = file_problem(path)
@@ -837,7 +876,8 @@ class TraceReader:
             raise TraceError(f"{path}: {problem}; expected a trace CSV file")
         try:
             with open(path, "rb") as fh:
-                yield from _chunks(_blocks(fh, str(path)), str(path), chunk_rows, self.order, strict)
+                yield from _chunks(_blocks(fh, str(path)), str(path), chunk_rows, self.order,
+                                   strict, self.columns)
         except OSError as exc:
             raise TraceError(f"{path}: cannot read trace ({exc.strerror or exc})") from None
 
