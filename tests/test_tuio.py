@@ -459,3 +459,20 @@ def test_listener_lifts_a_vanished_sender_and_serves_the_one_that_comes_back():
                      f"TUIO: taking frames from 127.0.0.1:{new_port} (127.0.0.1:{old_port} was "
                      f"silent for {SILENCE_S:g} s or more)"]
     assert counts["sender"] == f"127.0.0.1:{new_port}" and counts["takeovers"] == 1
+
+
+def test_a_silent_sources_name_is_said_escaped_and_cut():
+    """A sender's 60,000-character source name (an ESC first) went into the silence
+    warning whole: a 60,084-character line written from the haptic thread."""
+    from frictex.device.safe_text import MAX_SHOWN
+    now, lines = [0.0], []
+    with TuioListener(0, width_mm=100.0, height_mm=100.0, clock=lambda: now[0],
+                      warn=lines.append) as listener, sender("127.0.0.1") as tracker:
+        tracker.sendto(frame(1, [1], [(1, 0.1, 0.4)], source="\x1b" + "S" * 60_000),
+                       ("127.0.0.1", listener.port))
+        received(listener, 1, 0)
+        now[0] = SILENCE_S + 0.5
+        listener.poll()
+    (line,) = lines
+    assert "(source \"\\x1bSSS" in line and "\x1b" not in line
+    assert len(line) < 120 + MAX_SHOWN

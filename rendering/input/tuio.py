@@ -64,6 +64,7 @@ from typing import Callable
 
 from frictex.rendering.input.evdev_decode import AxisMap, RawSample, ScreenMap, TouchSample
 from frictex.device.errors import InputError
+from frictex.device.safe_text import quoted
 from frictex.rendering.input.trace_file import DEFAULT_FORCE_N, DOWN, MOVE, UP, TraceError
 
 TUIO_PORT = 3333
@@ -615,7 +616,7 @@ class TuioListener:
         """UP samples for the cursors of sources silent at ``t`` (s), each said once."""
         lifted, gone = self.decoder.expire(t, self.gate.silence_s)
         for origin, source, n in gone:
-            named = f" (source {source!r})" if source else ""
+            named = f" (source {quoted(source)})" if source else ""  # escaped and cut: a sender's
             self._warn(f"TUIO: no message from {origin}{named} for {self.gate.silence_s:g} s: "
                        f"lifted {n} finger{'s' if n != 1 else ''}")
         return lifted
