@@ -27,13 +27,18 @@ MAX_SHOWN = 60
 #: Longest escaped file path shown in a message (its end is kept: the file's name).
 MAX_PATH_SHOWN = 160
 
-_NAMED = {"\\": "\\\\", "\t": "\\t", "\n": "\\n", "\r": "\\r"}
+_LINE = {"\t": "\\t", "\n": "\\n", "\r": "\\r"}
 _ELLIPSIS = "..."
 
 
 def _escape_char(ch: str) -> str:
-    if ch in _NAMED:
-        return _NAMED[ch]
+    return "\\\\" if ch == "\\" else _control_char(ch)
+
+
+def _control_char(ch: str) -> str:
+    """``ch`` as it is where printable, else its ``\\xHH`` (tab, line breaks named)."""
+    if ch in _LINE:
+        return _LINE[ch]
     if ch.isprintable():
         return ch
     code = ord(ch)
@@ -62,10 +67,23 @@ def escape(value: object, limit: int | None = MAX_SHOWN) -> str:
     >>> escape("x" * 100, limit=10)
     'xxxxxxx...'
     """
+    return _shown(value, limit, _escape_char)
+
+
+def printable(message: object, limit: int | None = None) -> str:
+    """A message (``str()`` of it) on one line that cannot drive a terminal, as
+    :func:`escape` makes a value, cut likewise to ``limit`` characters (None: no cut),
+    but with the backslashes already in it kept: the values a reader escaped stay as
+    they were shown, not escaped twice."""
+    return _shown(message, limit, _control_char)
+
+
+def _shown(value: object, limit: int | None, escaped) -> str:
+    """``value``'s text with each character ``escaped(ch)``, cut to ``limit``."""
     text = value if isinstance(value, str) else str(value)
     if limit is not None and limit < len(_ELLIPSIS) + 1:
         raise ValueError(f"limit must be at least {len(_ELLIPSIS) + 1}, got {limit}")
-    pieces = [_escape_char(ch) for ch in (text if limit is None else text[:limit + 1])]
+    pieces = [escaped(ch) for ch in (text if limit is None else text[:limit + 1])]
     if limit is None or sum(map(len, pieces)) <= limit and len(text) <= limit:
         return "".join(pieces)
     out, length = [], 0

@@ -182,6 +182,21 @@ def test_a_job_error_is_an_escaped_cut_cell(monkeypatch, tmp_path, error):
     assert len(row["error"]) == MAX_ERROR_SHOWN and row["error"].isprintable()
 
 
+def test_a_value_the_reader_escaped_is_not_escaped_again(monkeypatch, tmp_path):
+    """A scene whose layer type held ESC: batch.csv showed "\\x1b[31mgrat", where
+    validate shows "\x1b[31mgrat" (the reader escaped it; the row escaped it again)."""
+    from frictex.app.engine import replay
+    from frictex.device.safe_text import quoted
+
+    def fail(*args, **kwargs):
+        raise TraceError(f"scene.toml:9: layer[1].type: {quoted(chr(27) + '[31mgrat')}")
+
+    monkeypatch.setattr(replay, "run_replay", fail)
+    row = run_job(Job(0, "grating-5mm", "swipe-40mms-50hz", None, 1e4, 50, "csv", "j"),
+                  str(tmp_path))
+    assert row["error"] == 'scene.toml:9: layer[1].type: "\\x1b[31mgrat"'
+
+
 @pytest.mark.parametrize("scene", ['=HYPERLINK("http://x","y")', "@SUM(A1:A2)", "+1+2",
                                    "-2+3"])
 def test_error_cells_never_start_a_formula(monkeypatch, tmp_path, scene):

@@ -36,12 +36,12 @@ import signal
 import sys
 import threading
 import traceback
-import unicodedata
 from typing import NoReturn
 
 from frictex.app.engine.driver import Terminated
 from frictex.app.engine.heap import keep_freed_memory
 from frictex.device.errors import FrictexError, MissingExtra
+from frictex.device.safe_text import printable
 
 #: errno values of an OSError on a path the user named that is bad input (exit 2)
 INPUT_ERRNOS = frozenset((errno.ENOENT, errno.ENOTDIR, errno.EISDIR, errno.EACCES,
@@ -230,21 +230,6 @@ def report_error(exc: BaseException) -> int:
     for line in getattr(exc, "error_lines", None) or (str(exc),):  # a manifest's: each
         print(f"frictex: error: {printable(line)}", file=sys.stderr)
     return code
-
-
-def printable(message: str) -> str:
-    """``message`` on one line that cannot drive a terminal: tab and line breaks shown as
-    ``\\t``, ``\\n``, ``\\r``, every other control or format character as ``\\xHH``
-    or ``\\uHHHH`` (ESC as the four characters ``\\x1b``). Backslashes already in it
-    (values a reader escaped) stay as they are."""
-    return "".join(_NAMED.get(ch) or (ch if ch.isprintable() and unicodedata.category(ch)
-                                      not in ("Cf", "Co", "Cn")
-                                      else f"\\x{ord(ch):02x}" if ord(ch) <= 0xFF
-                                      else f"\\u{ord(ch):04x}")
-                   for ch in message)
-
-
-_NAMED = {"\t": "\\t", "\n": "\\n", "\r": "\\r"}
 
 
 def entry() -> NoReturn:

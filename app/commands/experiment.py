@@ -150,7 +150,7 @@ def run(args: argparse.Namespace) -> int:
     if args.check:
         protocol, problems = check_protocol(path)
         if protocol is None:  # every problem, one line each, as frictex validate lists them
-            from frictex.app.commands.cli import printable
+            from frictex.device.safe_text import printable
             for problem in problems:
                 print(f"frictex: error: {printable(str(problem))}", file=sys.stderr)
             return 2

@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from frictex.app.commands.cli import printable
+from frictex.device.safe_text import printable
 from frictex.app.engine.outfile import write_file
 from frictex.device.errors import InputError
 from frictex.device.friction import mu_floor

@@ -43,7 +43,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from frictex.app.commands.cli import printable
+from frictex.device.safe_text import printable
 from frictex.device.safe_text import escape_path
 
 from frictex.device.registry import PluginError

@@ -98,7 +98,7 @@ from pathlib import Path
 from frictex.app.engine.limits import BLOCK_SIZES, OUTPUT_RATES_HZ
 from frictex.app.engine.tables import FORMATS
 from frictex.device.errors import FrictexError, InputError
-from frictex.device.safe_text import escape, quoted
+from frictex.device.safe_text import printable, quoted
 from frictex.rendering.input.trace_file import CR_ONLY, MAX_LINE_BYTES, NUMBER, describe_header
 from frictex.textures.errors import TextureError
 from frictex.textures.library import UnreadableText, bundled_file, read_utf8
@@ -390,8 +390,8 @@ def run_job(job: Job, out_dir: str) -> dict:
         doc = run_replay(scene, trace, Path(out_dir) / job.name, rate_hz=job.rate_hz,
                          fmt=job.fmt, block_size=job.block, render_override=job.renderer,
                          progress=False)
-    except (FrictexError, ValueError, OSError) as exc:
-        return not_ok(job, "failed", escape(exc, MAX_ERROR_SHOWN))
+    except (FrictexError, ValueError, OSError) as exc:  # its values already escaped
+        return not_ok(job, "failed", printable(exc, MAX_ERROR_SHOWN))
     wall_s = time.perf_counter() - start
     output_s = doc["output"]["duration_s"]
     return {"job": job.index, "name": job.name, "status": "ok", "error": "",
