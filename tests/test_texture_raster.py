@@ -103,6 +103,22 @@ def test_a_corrupt_header_is_said_without_pythons_words_for_a_file_in_memory(tmp
     assert "object at 0x" not in str(caught.value) and "BytesIO" not in str(caught.value)
 
 
+def test_a_png_whose_metadata_inflates_too_far_is_said_so_not_corrupt(tmp_path):
+    """A valid 10 x 10 PNG with a zTXt chunk inflating past 1 MiB was 'corrupt PNG,
+    decoding failed (ValueError: Decompressed data too large for PngImagePlugin.MAX_TEXT_C...'."""
+    from PIL.PngImagePlugin import PngInfo
+    info = PngInfo()
+    info.add_text("comment", "x" * (2 << 20), zip=True)  # deflates to about 2 kB
+    path = tmp_path / "meta.png"
+    Image.fromarray(np.zeros((10, 10), np.uint8)).save(path, pnginfo=info)
+    assert path.stat().st_size < 20_000
+    with pytest.raises(TextureError, match=r"meta\.png: a metadata chunk \(text or ICC profile\) "
+                                           r"inflates to over 1 MiB, more than is read; strip "
+                                           r"the PNG's metadata") as caught:
+        read_grey(path)
+    assert "corrupt" not in str(caught.value) and "MAX_TEXT" not in str(caught.value)
+
+
 def _png(width, height, depth, colour, raw, interlace=0):
     """A PNG written from the specification: IHDR, one IDAT of ``raw`` (filtered
     scanlines) deflated, IEND."""

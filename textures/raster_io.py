@@ -101,6 +101,8 @@ _ADAM7 = ((0, 0, 8, 8), (4, 0, 8, 8), (0, 4, 4, 8), (2, 0, 4, 4), (0, 2, 2, 4), 
 _INFLATE_STEP = 1 << 20  # bytes inflated at a time when counting the image data
 #: how Python shows an in-memory file object in a message (its type and address)
 _IN_MEMORY = re.compile(r"<_io\.BytesIO object at 0x[0-9a-f]+>")
+#: most a PNG's text or ICC chunk may inflate to (MiB): Pillow's ``MAX_TEXT_CHUNK``
+_METADATA_MIB = 1.0
 
 
 def header_kind(depth: int, colour: int) -> str:
@@ -231,6 +233,11 @@ def read_grey(path: str | Path, expected: str = ACCEPTED, budget: PixelBudget | 
     except (TextureError, MemoryError):
         raise
     except Exception as exc:  # noqa: BLE001 - decoders raise anything on a corrupt file
+        if "Decompressed data too large" in str(exc):  # Pillow's bound, not a broken file
+            raise TextureError(f"{where}: a metadata chunk (text or ICC profile) inflates to "
+                               f"over {_METADATA_MIB:g} MiB, more than is read; strip the "
+                               "PNG's metadata (e.g. optipng -strip all); expected "
+                               f"{expected}") from None
         # Pillow names its in-memory file by its repr (<_io.BytesIO object at 0x...>)
         said = _IN_MEMORY.sub("", str(exc)).strip()
         raise TextureError(f"{where}: corrupt PNG, decoding failed ({type(exc).__name__}: "
