@@ -231,3 +231,22 @@ def test_cells_starting_with_tab_or_cr_are_quoted_too(tmp_path):
     assert errors == ["'\t=1+1", "'@=1+1", "'==1+1", "ok=1+1"]
     from frictex.app.engine.batch import _cell
     assert _cell("\r=1") == "'\r=1" and _cell(-1.5) == "-1.5000" and _cell(3) == 3
+
+
+def test_a_trace_or_scene_that_is_no_regular_file_is_a_problem_of_the_manifest(tmp_path):
+    """A trace that was a FIFO or a folder passed the manifest's check: the other jobs ran
+    and that one failed. Every such cell is a problem of its line, and nothing runs."""
+    import os
+    os.mkfifo(tmp_path / "fifo.csv")
+    (tmp_path / "dir.csv").mkdir()
+    (tmp_path / "scene.toml").mkdir()
+    path = tmp_path / "m.csv"
+    path.write_text("scene,trace\ngrating-5mm,fifo.csv\ngrating-5mm,dir.csv\n"
+                    "scene.toml,swipe-40mms-50hz\ngrating-5mm,swipe-40mms-50hz\n")
+    with pytest.raises(ManifestError) as caught:
+        read_manifest(path, ("sho", *RENDERERS))
+    assert list(caught.value.error_lines) == [f"{path}:{line}" for line in (
+        '2: trace "fifo.csv": is a FIFO (named pipe), not a regular file (frictex reads '
+        'only regular files); expected a trace CSV file',
+        '3: trace "dir.csv": is a folder, not a file; expected a trace CSV file',
+        '4: scene "scene.toml": is a folder, not a file; expected a texture file')]

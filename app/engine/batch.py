@@ -101,7 +101,7 @@ from frictex.device.errors import FrictexError, InputError
 from frictex.device.safe_text import printable, quoted
 from frictex.rendering.input.trace_file import CR_ONLY, MAX_LINE_BYTES, NUMBER, describe_header
 from frictex.textures.errors import TextureError
-from frictex.textures.library import UnreadableText, bundled_file, read_utf8
+from frictex.textures.library import UnreadableText, bundled_file, file_problem, read_utf8
 from frictex.textures.outside import HOW, allow_outside_from_env, leads_out
 
 COLUMNS = ("scene", "trace", "renderer", "rate_hz", "block", "format", "name")
@@ -354,6 +354,10 @@ def _path(key: str, spec: str | None, base: Path, where: str) -> str:
     candidate = base / spec
     try:
         if candidate.exists():
+            problem = file_problem(candidate)  # a folder, a FIFO, a device
+            if problem is not None:
+                raise ManifestError(f"{where}: {key} {quoted(spec)}: {problem}; expected a "
+                                    f"{'texture' if key == 'scene' else 'trace CSV'} file")
             return os.path.realpath(candidate)
         bundled_file(spec, key)
     except TextureError as exc:
