@@ -61,7 +61,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "wall (real time), device (the --device's room), or a package's "
                              f"(entry points 'frictex.clocks'; registered: "
                              f"{_listed(CLOCKS.names())})")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar, no summary line (warnings still print)")
+    parser.add_argument("--quiet", action="store_true",
+                        help="no progress bar, no summary line (warnings still print)")
     add_allow_outside(parser)
 
 

@@ -377,9 +377,10 @@ class DemoLoop:
         """The mouse's touches since the last call, in order: the button held on the
         scene's drawn area touches (a down where it is pressed there or comes back onto
         it held), a move at each pointer position while touching, an up where it is let
-        go or leaves the scene (at the last place on it), a move when the force changed. They are stamped evenly over the time since the last call (when
-        they arrived, as far as this thread can tell), so a batch the window handles
-        late keeps its path and its pace."""
+        go or leaves the scene (at the last place on it), a move when the force changed.
+        They are stamped evenly over the time since the last call (when they arrived, as
+        far as this thread can tell), so a batch the window handles late keeps its path
+        and its pace."""
         pending, self._pending = self._pending, []
         now = self.haptic.now()
         since = now if self._flushed_at is None else self._flushed_at

@@ -13,8 +13,9 @@ renamed to PATH when it ends (:meth:`WavOutput.close`); a run that fails or is s
 PATH as it was, as does a rename the file system refuses. A PATH that is a folder is
 refused when the output opens, before anything runs. A PATH that is a character device or
 a FIFO (``/dev/null``, a pipe) is written directly; one that cannot be rewound (a pipe)
-keeps a header declaring the most a WAV file holds, as streamed WAV does. A write the file system refuses (a full disk,
-``/dev/full``) is a DeviceError naming the file: ``audio:wav:PATH: cannot write it: ...``.
+keeps a header declaring the most a WAV file holds, as streamed WAV does. A write the file
+system refuses (a full disk, ``/dev/full``) is a DeviceError naming the file:
+``audio:wav:PATH: cannot write it: ...``.
 """
 
 from __future__ import annotations
