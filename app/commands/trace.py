@@ -16,7 +16,7 @@ from frictex.rendering.input.press_synth import press_trace
 from frictex.rendering.input.trace_synth import (HUMAN_AREA_MM, MOTIONS, START_MM, make_motion,
                                                 sample, truth)
 from frictex.app.engine.outfile import check_writable, write_file
-from frictex.device.errors import InputError
+from frictex.device.errors import InputError, OutputSpaceError
 from frictex.rendering.input.trace_file import format_trace
 
 
@@ -159,14 +159,31 @@ def _write(path: str, trace, comment: str | None = None) -> None:
     _write_text(path, format_trace(trace, comment))
 
 
-def _write_text(path: str, text: str) -> None:
+def _write_text(path: str, text: str, option: str = "-o") -> None:
+    """Write ``text`` (UTF-8) to ``path``; an OS error (a full /dev/full, a stream that
+    refuses) becomes one line naming ``option`` and ``path``."""
     data = text.encode("utf-8")
-    write_file(path, lambda to: to.write_bytes(data), len(data))
+    try:
+        write_file(path, lambda to: to.write_bytes(data), len(data))
+    except OutputSpaceError:  # already names the path and says what to do
+        raise
+    except OSError as exc:
+        raise InputError(f"{option} {path}: cannot be written ({exc.strerror or exc})") from None
+
+
+def _check_import_output(args: argparse.Namespace) -> None:
+    """Refuse, before reading the recording, an -o that cannot be written or that is the
+    input itself (the CSV would overwrite the raw recording)."""
+    if os.path.realpath(args.out) == os.path.realpath(args.input):  # links followed
+        raise InputError(f"-o {args.out}: the same file as the input {args.input}; the trace "
+                         "would overwrite the recording: give it a file of its own")
+    check_writable("-o", args.out, 0)  # the room is checked with the text's size
 
 
 def run(args: argparse.Namespace) -> int:
     if args.trace_command == "import":
         from frictex.rendering.input.trace_import import run_import
+        _check_import_output(args)
         return run_import(args, _write_text)
     _check_limits(args)
     _check_outputs(args)
@@ -194,6 +211,6 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote {len(trace)} samples ({trace.duration_s:.3f} s at {args.rate:g} Hz) to {args.out}")
     if args.truth:
         true = truth(motion, args.truth_rate, force_n=args.force)
-        _write(args.truth, true)
+        _write_text(args.truth, format_trace(true), "--truth")
         print(f"wrote the true path ({len(true)} samples at {args.truth_rate:g} Hz) to {args.truth}")
     return 0
