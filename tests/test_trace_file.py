@@ -570,3 +570,13 @@ def test_a_replay_says_which_columns_it_ignored(tmp_path):
     path.write_text("t_s,finger,x_mm,y_mm,force_N\n0,0,10,10,3\n0.02,0,11,10,3\n")
     warnings = frictex.replay("grating-5mm", path).summary.warnings
     assert any("force_N (did you mean force_n?)" in w for w in warnings), warnings
+
+
+def test_the_columns_frictex_import_adds_are_not_warned_about(tmp_path):
+    """A trace imported from an Android log carries pressure and touch_major for the
+    record; replaying one warned that they are not read."""
+    from frictex.rendering.input.trace_file import ignored_columns
+    assert ignored_columns(["t_s", "finger", "x_mm", "y_mm", "event", "pressure",
+                            "touch_major"]) is None
+    assert ignored_columns(["t_s", "finger", "x_mm", "y_mm", "Pressure"]).startswith(
+        "trace: 1 column frictex does not read, ignored: Pressure")

@@ -778,12 +778,17 @@ def describe_header(names: list[str]) -> str:
     return f"{count}: {', '.join(shown[:-1])} and {shown[-1]}" if len(shown) > 1 else f"{count}: {shown[0]}"
 
 
+#: columns ``frictex trace import`` writes beside those read, for the record: the raw
+#: pressure and contact size of an Android log (``rendering.input.trace_import``)
+RECORDED_COLUMNS = ("pressure", "touch_major")
+
+
 def ignored_columns(names: list[str]) -> str | None:
     """A warning naming a header's columns that frictex does not read (they are ignored),
     each with the column it may misspell (``force_N``: did you mean force_n?); None if it
-    reads them all. As :func:`describe_header`, only plain column names are shown, the
-    other fields counted."""
-    extra = [name for name in names if name not in _COLUMNS]
+    reads them all, or ignores only :data:`RECORDED_COLUMNS`. As :func:`describe_header`,
+    only plain column names are shown, the other fields counted."""
+    extra = [name for name in names if name not in _COLUMNS + RECORDED_COLUMNS]
     if not extra:
         return None
     plain = [name for name in extra if _COLUMN_NAME.fullmatch(name)]
