@@ -72,8 +72,8 @@ class Gaps:
         if not self.count:
             return []
         return [f"{self.count} gaps of more than {self.limit_s:g} s between touch samples were "
-                f"taken as lifts; {self.skipped_s:.6g} s of output there were skipped (t_s "
-                f"jumps)"]
+                f"taken as lifts (of the fingers still touching then); {self.skipped_s:.6g} s "
+                "of output there were skipped (t_s jumps), after a lift the trace had too"]
 
 
 class TraceSource:
