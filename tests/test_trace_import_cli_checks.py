@@ -37,3 +37,20 @@ def test_import_refuses_to_overwrite_its_input(tmp_path, capsys):
                                        ("/dev/full", "-o /dev/full: cannot be written")])
 def test_import_names_an_output_it_cannot_write(out, said, capsys):
     assert said in _error(["trace", "import", str(DRAG), "-o", out, *PHONE], capsys)
+
+
+@needs_refdata
+def test_a_log_cut_mid_line_imports_what_came_before(tmp_path, capsys):
+    data = DRAG.read_bytes()
+    cut = tmp_path / "cut.txt"
+    cut.write_bytes(data[:len(data) // 2 + 10])  # cut 10 bytes into a 60-odd-byte line
+    assert data[len(data) // 2 + 10 - 1] != ord("\n")
+    assert main(["trace", "import", str(cut), "-o", str(tmp_path / "o.csv"), *PHONE]) == 0
+    assert "the last line is cut short" in capsys.readouterr().err
+
+
+def test_a_malformed_line_that_ends_in_a_line_break_is_still_refused(tmp_path, capsys):
+    log = tmp_path / "bad.txt"
+    log.write_text("[    1.000000] EV_SYN       SYN_REPORT           00000000\n[    1.0\n")
+    assert "bad.txt:2: not a getevent -lt line" in _error(
+        ["trace", "import", str(log), "-o", str(tmp_path / "o.csv"), *PHONE], capsys)

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import NamedTuple
 
 from frictex.rendering.input.evdev_decode import (ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_PRESSURE,
                                     ABS_MT_SLOT, ABS_MT_TOUCH_MAJOR, ABS_MT_TRACKING_ID,
@@ -59,7 +60,20 @@ def _number(token: str, names: dict[str, int], where: str, line: int, field: str
     return -1  # a code frictex does not use (ABS_MISC, KEY_VOLUMEUP, ...)
 
 
+class GeteventLog(NamedTuple):
+    """What a ``getevent`` log holds: its events (times in s, ``line`` 1-based) and the
+    warnings to show (a last line cut short, left out)."""
+
+    events: list[Event]
+    warnings: list[str]
+
+
 def parse_getevent(text: str, where: str = "<getevent>", device: str | None = None) -> list[Event]:
+    """Events of a ``getevent -lt`` log (:func:`read_log`'s events)."""
+    return read_log(text, where, device).events
+
+
+def read_log(text: str, where: str = "<getevent>", device: str | None = None) -> GeteventLog:
     """Events of a ``getevent -lt`` log (see the module docstring for the grammar).
 
     Parameters
@@ -69,17 +83,22 @@ def parse_getevent(text: str, where: str = "<getevent>", device: str | None = No
     device : keep only this device's lines (``/dev/input/event2``); required when the log
         holds events of several devices.
 
-    Returns
-    -------
-    list of :class:`~rendering.input.evdev_decode.Event`, times in s, ``line`` 1-based.
+    A last line without a line break that is not of the grammar (a recording stopped
+    mid-line with Ctrl-C) is left out with a warning.
     """
     events: list[Event] = []
     devices: dict[str, int] = {}
-    for number, raw in enumerate(text.splitlines(), start=1):
+    warnings: list[str] = []
+    lines = text.splitlines()
+    for number, raw in enumerate(lines, start=1):
         stripped = raw.strip()
         if not stripped or stripped.startswith(_HEADER):
             continue
         m = _LINE.match(raw)
+        if m is None and number == len(lines) and not text.endswith(("\n", "\r")):
+            warnings.append(f"{where}:{number}: the last line is cut short (no line break; "
+                            "the recording stopped mid-line): left out")
+            break
         if m is None:
             if _UNTIMED.match(raw):
                 raise TraceError(f"{where}:{number}: event without a timestamp: record with "
@@ -112,7 +131,7 @@ def parse_getevent(text: str, where: str = "<getevent>", device: str | None = No
     if device is None and len(devices) > 1:
         raise TraceError(f"{where}: events of {len(devices)} devices ({_names(named)}); "
                          "choose one with --device")
-    return events
+    return GeteventLog(events, warnings)
 
 
 def _names(devices: list[str], shown: int = 8) -> str:

@@ -21,7 +21,7 @@ import numpy as np
 from frictex.rendering.input.evdev_decode import (AbsInfo, Event, RawSample, ScreenSpec, decode_all, observed_ranges,
                                     read_text, screen_map)
 from frictex.rendering.input.import_evemu import parse_evemu
-from frictex.rendering.input.import_getevent import parse_getevent
+from frictex.rendering.input.import_getevent import read_log
 from frictex.rendering.input.trace_file import (DEFAULT_FORCE_N, TraceError, ascii_float, concat_traces,
                                                 format_trace, iter_trace, most_touching)
 from frictex.device.safe_text import quoted
@@ -151,14 +151,17 @@ def _copy_csv(path: Path, args: argparse.Namespace, write: Callable[[str, str], 
     return 0
 
 
-def _events(path: Path, text: str, fmt: str, device: str | None) -> tuple[list[Event], dict[int, AbsInfo]]:
-    """The evdev events of a getevent or evemu recording, and the axis ranges it states."""
+def _events(path: Path, text: str, fmt: str,
+            device: str | None) -> tuple[list[Event], dict[int, AbsInfo], list[str]]:
+    """The evdev events of a getevent or evemu recording, the axis ranges it states, and
+    the warnings its reading gave."""
     if fmt == "getevent":
-        return parse_getevent(text, str(path), device), {}
+        log = read_log(text, str(path), device)
+        return log.events, {}, log.warnings
     if device is not None:
         raise TraceError("--device applies to getevent logs; an evemu recording holds one device")
     recording = parse_evemu(text, str(path))
-    return recording.events, recording.absinfo
+    return recording.events, recording.absinfo, []
 
 
 def run_import(args: argparse.Namespace, write: Callable[[str, str], None]) -> int:
@@ -169,7 +172,7 @@ def run_import(args: argparse.Namespace, write: Callable[[str, str], None]) -> i
     fmt = detect_format(path, text) if args.format == "auto" else args.format
     if fmt == "csv":
         return _copy_csv(path, args, write)
-    events, absinfo = _events(path, text, fmt, args.device)
+    events, absinfo, read_warnings = _events(path, text, fmt, args.device)
     samples, decoder = decode_all(events, str(path))
     if not samples:
         raise TraceError(f"{path}: no touches found ({len(events)} events, {decoder.frames} frames; "
@@ -177,6 +180,7 @@ def run_import(args: argparse.Namespace, write: Callable[[str, str], None]) -> i
     spec = ScreenSpec(args.width_mm, args.height_mm, _pair(args.x_range), _pair(args.y_range),
                       args.swap_xy, args.flip_x, args.flip_y, args.pressure_scale, args.force)
     screen, warnings = screen_map(spec, absinfo, observed_ranges(samples), str(path))
+    warnings = read_warnings + warnings
     t0 = samples[0].t_s
     if not args.keep_time:
         # both formats stamp whole microseconds: rounding gives back the exact decimal difference
