@@ -54,3 +54,54 @@ def test_a_malformed_line_that_ends_in_a_line_break_is_still_refused(tmp_path, c
     log.write_text("[    1.000000] EV_SYN       SYN_REPORT           00000000\n[    1.0\n")
     assert "bad.txt:2: not a getevent -lt line" in _error(
         ["trace", "import", str(log), "-o", str(tmp_path / "o.csv"), *PHONE], capsys)
+
+
+def _section(x_max: int, resolution: int = 0) -> str:
+    """The start of a 'getevent -lpt' log: the -p section of one touch screen."""
+    axis = ", fuzz 0, flat 0, resolution {r}".format(r=resolution)
+    return ("add device 1: /dev/input/event2\n"
+            '  name:     "sec_touchscreen"\n'
+            "  events:\n"
+            f"    ABS (0003): ABS_MT_TOUCH_MAJOR    : value 0, min 0, max 255{axis}\n"
+            f"                ABS_MT_POSITION_X     : value 0, min 0, max {x_max}{axis}\n"
+            f"                ABS_MT_POSITION_Y     : value 0, min 0, max 2047{axis}\n"
+            "  input props:\n"
+            "    <none>\n")
+
+
+def _drag_lines() -> str:
+    """Two frames of one contact (protocol A) at x 100, 300 and y 1024."""
+    frames = []
+    for t, x in (("1.000000", 0x64), ("1.010000", 0x12c)):
+        frames += [f"[    {t}] EV_ABS       ABS_MT_POSITION_X    {x:08x}",
+                   f"[    {t}] EV_ABS       ABS_MT_POSITION_Y    00000400",
+                   f"[    {t}] EV_ABS       ABS_MT_TRACKING_ID   00000000",
+                   f"[    {t}] EV_SYN       SYN_MT_REPORT        00000000",
+                   f"[    {t}] EV_SYN       SYN_REPORT           00000000"]
+    return "\n".join(frames) + "\n"
+
+
+def _import_columns(tmp_path, text, *options):
+    """x_mm and y_mm of the trace imported from the log ``text``."""
+    from frictex.rendering.input.trace_file import read_trace
+    log = tmp_path / "log.txt"
+    log.write_text(text)
+    out = tmp_path / "o.csv"
+    assert main(["trace", "import", str(log), "-o", str(out), *options]) == 0
+    trace = read_trace(out)
+    return trace.x_mm, trace.y_mm
+
+
+def test_the_p_section_gives_the_ranges(tmp_path, capsys):
+    x, y = _import_columns(tmp_path, _section(4095) + _drag_lines(), "--width-mm", "100",
+                           "--height-mm", "50")
+    assert x.tolist() == pytest.approx([100 / 4095 * 100, 300 / 4095 * 100])
+    assert y.tolist() == pytest.approx([1024 / 2047 * 50] * 2)
+    assert "range unknown" not in capsys.readouterr().err
+
+
+def test_the_p_section_resolution_gives_the_size_and_an_option_wins(tmp_path):
+    x, y = _import_columns(tmp_path, _section(4000, resolution=40) + _drag_lines(),
+                           "--x-range", "0", "1000", "--width-mm", "100")
+    assert x.tolist() == pytest.approx([100 / 1000 * 100, 300 / 1000 * 100])  # the options'
+    assert y.tolist() == pytest.approx([1024 / 2047 * 2047 / 40] * 2)

@@ -7,10 +7,14 @@ Grammar (one event per line; ``-l`` prints names, without it the fields are hex)
     code    := ABS_MT_POSITION_X | SYN_REPORT | ... | 4 hex digits
     value   := 8 hex digits (a 32-bit field: ffffffff is -1) | DOWN | UP | REPEAT
     skipped := blank lines, "add device N: path", "  name: ...", "could not ..." lines
+    absinfo := [ "ABS (0003):" ] code ":" "value" v ", min" lo ", max" hi ", fuzz" f
+               ", flat" f [ ", resolution" r ]
 
 Codes frictex does not use (ABS_MISC, KEY_*) are kept with code -1, which the decoder
-ignores. A log holding several devices needs ``device`` to pick one. The log does not
-record the axis ranges (``getevent -p`` prints them): the importer must be told them.
+ignores. A log holding several devices needs ``device`` to pick one. A log recorded with
+``getevent -lpt`` starts with a ``-p`` section per device ("add device N: path" up to
+the first event): its ``absinfo`` lines give the axis ranges and resolutions (those of
+the device the events come from are kept); its other lines are skipped.
 
 Digits are ASCII (``re``'s ``\\d`` alone also takes Unicode digits); a time is at most
 MAX_TIME_S. A line that is not of the grammar is described, never printed; the device
@@ -26,7 +30,8 @@ from typing import NamedTuple
 from frictex.rendering.input.evdev_decode import (ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_PRESSURE,
                                     ABS_MT_SLOT, ABS_MT_TOUCH_MAJOR, ABS_MT_TRACKING_ID,
                                     BTN_TOUCH, EV_ABS, EV_KEY, EV_SYN, SYN_DROPPED,
-                                    SYN_MT_REPORT, SYN_REPORT, Event, read_text, signed32)
+                                    SYN_MT_REPORT, SYN_REPORT, AbsInfo, Event, read_text,
+                                    signed32)
 from frictex.rendering.input.trace_file import MAX_TIME_S, TraceError
 from frictex.device.safe_text import quoted
 
@@ -43,6 +48,10 @@ VALUES = {"UP": 0, "DOWN": 1, "REPEAT": 2}
 _LINE = re.compile(r"^\s*\[\s*(?P<t>\d{1,12}\.\d{1,9})\s*\]\s+(?:(?P<dev>/\S+):\s+)?"
                    r"(?P<type>\S+)\s+(?P<code>\S+)\s+(?P<value>\S+)\s*$", re.ASCII)
 _UNTIMED = re.compile(r"^\s*(?:/\S+:\s+)?(EV_[A-Z_]+|[0-9a-f]{4})\s+\S+\s+\S+\s*$", re.ASCII)
+_ABSINFO = re.compile(r"^\s*(?:ABS \(0003\):\s*)?(?P<code>\S+)\s*:\s*value -?\d+, min "
+                      r"(?P<min>-?\d{1,10}), max (?P<max>-?\d{1,10}), fuzz -?\d+, flat -?\d+"
+                      r"(?:, resolution (?P<res>-?\d{1,10}))?\s*$", re.ASCII)
+_ADD_DEVICE = re.compile(r"^add device \d+:\s*(?P<dev>\S+)", re.ASCII)
 _HEADER = ("add device", "name:", "could not", "version", "events:", "input props:",
            "location:", "id:", "bus ")
 _HEX4 = re.compile(r"^[0-9a-fA-F]{4}$")
@@ -61,11 +70,13 @@ def _number(token: str, names: dict[str, int], where: str, line: int, field: str
 
 
 class GeteventLog(NamedTuple):
-    """What a ``getevent`` log holds: its events (times in s, ``line`` 1-based) and the
-    warnings to show (a last line cut short, left out)."""
+    """What a ``getevent`` log holds: its events (times in s, ``line`` 1-based), the
+    warnings to show (a last line cut short, left out), and the axes its ``-p`` section
+    states for the device of the events (keyed by code; empty without one)."""
 
     events: list[Event]
     warnings: list[str]
+    absinfo: dict[int, AbsInfo]
 
 
 def parse_getevent(text: str, where: str = "<getevent>", device: str | None = None) -> list[Event]:
@@ -89,12 +100,22 @@ def read_log(text: str, where: str = "<getevent>", device: str | None = None) ->
     events: list[Event] = []
     devices: dict[str, int] = {}
     warnings: list[str] = []
+    axes: dict[str, dict[int, AbsInfo]] = {}  # -p section of each device: code -> axis
+    section: str | None = None  # the device whose -p section is being read
     lines = text.splitlines()
     for number, raw in enumerate(lines, start=1):
         stripped = raw.strip()
+        added = _ADD_DEVICE.match(stripped)
+        if added:
+            section = added["dev"]
+            axes.setdefault(section, {})
         if not stripped or stripped.startswith(_HEADER):
             continue
         m = _LINE.match(raw)
+        if m is None and section is not None and not _UNTIMED.match(raw):
+            _read_absinfo(stripped, axes[section])
+            continue
+        section = None if m else section
         if m is None and number == len(lines) and not text.endswith(("\n", "\r")):
             warnings.append(f"{where}:{number}: the last line is cut short (no line break; "
                             "the recording stopped mid-line): left out")
@@ -131,7 +152,27 @@ def read_log(text: str, where: str = "<getevent>", device: str | None = None) ->
     if device is None and len(devices) > 1:
         raise TraceError(f"{where}: events of {len(devices)} devices ({_names(named)}); "
                          "choose one with --device")
-    return GeteventLog(events, warnings)
+    return GeteventLog(events, warnings, _device_axes(axes, device or next(iter(devices), "")))
+
+
+def _read_absinfo(line: str, axes: dict[int, AbsInfo]) -> None:
+    """Add the axis of a ``-p`` section line to ``axes`` (code -> AbsInfo) when it states
+    one of the codes frictex uses; other section lines say nothing frictex needs."""
+    m = _ABSINFO.match(line)
+    if m is None:
+        return
+    code = CODES.get(m["code"], int(m["code"], 16) if _HEX4.match(m["code"]) else -1)
+    if code >= 0:
+        axes[code] = AbsInfo(int(m["min"]), int(m["max"]), int(m["res"] or 0))
+
+
+def _device_axes(axes: dict[str, dict[int, AbsInfo]], device: str) -> dict[int, AbsInfo]:
+    """The axes the ``-p`` section states for ``device`` (the events' device; "" when the
+    events name none: then the one section with a position axis, if there is one)."""
+    if device:
+        return axes.get(device, {})
+    touch = [a for a in axes.values() if ABS_MT_POSITION_X in a]
+    return touch[0] if len(touch) == 1 else {}
 
 
 def _names(devices: list[str], shown: int = 8) -> str:

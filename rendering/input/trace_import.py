@@ -3,8 +3,8 @@
 Inputs: Android ``getevent -lt`` logs, evemu recordings (both Linux evdev multi-touch,
 protocol A or B, decoded by ``rendering.input.evdev_decode``) and trace CSVs (validated and
 rewritten). Device counts become mm through the axis ranges (options, else the evemu
-``A:`` header, else the observed min..max with a warning) and the screen size (options,
-else the evemu resolution). The output adds ``pressure`` and ``touch_major`` columns
+``A:`` header or the getevent ``-p`` section, else the observed min..max with a warning)
+and the screen size (options, else the recording's resolution). The output adds ``pressure`` and ``touch_major`` columns
 (device units) when the recording has them; the trace reader ignores them.
 """
 
@@ -31,7 +31,8 @@ FORMATS = ("auto", "getevent", "evemu", "csv")
 EPILOG = """\
 ranges and sizes: --x-range and --y-range are in the device's counts along its own X and Y
 (before --swap-xy); --width-mm and --height-mm are the screen's size along its x (right) and
-y (down). getevent logs do not record the ranges ('getevent -p' on the device prints them).
+y (down). A getevent log records the ranges when made with 'getevent -lpt' (its -p section
+is read; an option given wins); 'getevent -lt' logs need the options.
 Example, the Samsung Galaxy S phone of the Android refdata (0..1023 digitizer, 4.0-inch
 480x800 screen, about 52 x 87 mm):
   frictex trace import phone-two-finger-drag.txt -o drag.csv \\
@@ -73,8 +74,9 @@ def add_import_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--format", choices=FORMATS, default="auto",
                         help="input format (default: recognised from the content)")
     parser.add_argument("--x-range", nargs=2, type=_finite, metavar=("MIN", "MAX"),
-                        help="device X counts that span the screen (default: evemu header, "
-                             "else the observed range, with a warning)")
+                        help="device X counts that span the screen (default: the evemu "
+                             "header or getevent -p section, else the observed range, with a "
+                             "warning)")
     parser.add_argument("--y-range", nargs=2, type=_finite, metavar=("MIN", "MAX"),
                         help="device Y counts that span the screen")
     parser.add_argument("--width-mm", type=_positive, metavar="W",
@@ -157,7 +159,7 @@ def _events(path: Path, text: str, fmt: str,
     the warnings its reading gave."""
     if fmt == "getevent":
         log = read_log(text, str(path), device)
-        return log.events, {}, log.warnings
+        return log.events, log.absinfo, log.warnings
     if device is not None:
         raise TraceError("--device applies to getevent logs; an evemu recording holds one device")
     recording = parse_evemu(text, str(path))
