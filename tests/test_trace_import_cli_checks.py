@@ -105,3 +105,26 @@ def test_the_p_section_resolution_gives_the_size_and_an_option_wins(tmp_path):
                            "--x-range", "0", "1000", "--width-mm", "100")
     assert x.tolist() == pytest.approx([100 / 1000 * 100, 300 / 1000 * 100])  # the options'
     assert y.tolist() == pytest.approx([1024 / 2047 * 2047 / 40] * 2)
+
+
+@needs_refdata
+def test_an_observed_range_warns_that_positions_and_speeds_are_wrong(tmp_path, capsys):
+    tablet = REFDATA / "Tablet" / "tablet-single-drag.txt"
+    assert main(["trace", "import", str(tablet), "-o", str(tmp_path / "o.csv"),
+                 "--width-mm", "217", "--height-mm", "136"]) == 0
+    err = capsys.readouterr().err
+    assert "positions and speeds are wrong unless the gesture covered the whole screen" in err
+    assert "'getevent -lpt' (its -p section gives the ranges)" in err
+
+
+@pytest.mark.parametrize("options, said", [
+    ([], "device x counts 100..2.14748e+09 (the observed range) over 100 mm are 2.15e+07 units/mm"),
+    (["--x-range", "0", "1e12"], "device x counts 0..1e+12 (--x-range) over 100 mm are 1e+10 units/mm"),
+])
+def test_a_scale_no_digitizer_has_is_refused(tmp_path, capsys, options, said):
+    text = _drag_lines().replace("0000012c", "7fffffff")
+    log = tmp_path / "glitch.txt"
+    log.write_text(text)
+    err = _error(["trace", "import", str(log), "-o", str(tmp_path / "o.csv"), "--width-mm", "100",
+                  "--height-mm", "50", "--y-range", "0", "2047", *options], capsys)
+    assert said in err

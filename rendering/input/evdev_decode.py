@@ -439,10 +439,24 @@ def _axis_map(axis: str, size_option: str, size_mm: float | None, flip: bool,
                              f"{absinfo.resolution} units/mm make a screen {size_mm:.3g} mm "
                              f"across; expected {SCREEN_MM[0]:g} to {SCREEN_MM[1]:g} mm (give "
                              f"{size_option})")
+    _check_scale(axis, lo, hi, size_mm, "the observed range" if guessed else
+                 f"--{axis}-range" if given is not None else "the device's range", where)
     try:
         return AxisMap(float(lo), float(hi), float(size_mm), flip), guessed
     except TraceError as exc:
         raise TraceError(f"{where}: {exc}") from None
+
+
+def _check_scale(axis: str, lo: float, hi: float, size_mm: float, source: str, where: str) -> None:
+    """TraceError when device ``axis`` counts ``lo..hi`` (from ``source``) over ``size_mm``
+    (mm) make more than MAX_RESOLUTION units/mm, a scale no digitizer has (a glitch count
+    such as 0x7fffffff in the observed range, or a typo)."""
+    per_mm = (hi - lo) / size_mm
+    if per_mm > MAX_RESOLUTION:
+        raise TraceError(f"{where}: device {axis} counts {lo:g}..{hi:g} ({source}) over "
+                         f"{size_mm:g} mm are {per_mm:.3g} units/mm; no digitizer gives more "
+                         f"than {MAX_RESOLUTION:,} (a glitch value or a typo?): give "
+                         f"--{axis}-range MIN MAX")
 
 
 @dataclass(frozen=True)
@@ -514,8 +528,11 @@ def _observed_at_scale(axis: str, observed: AxisMap, per_mm: float) -> tuple[Axi
                      observed.flip)
     return scaled, (f"device {axis} range unknown: using the observed "
                     f"{observed.lo:g}..{observed.hi:g} at {per_mm:.4g} units/mm, one scale "
-                    f"for both axes ({observed.lo:g}..{scaled.hi:.6g} across the screen; give "
-                    f"--{axis}-range MIN MAX)")
+                    f"for both axes ({observed.lo:g}..{scaled.hi:.6g} across the screen): "
+                    "positions and speeds are wrong unless the gesture covered the whole "
+                    "screen, too large by the screen's size over the gesture's (5x for a "
+                    "gesture over a fifth of it); record with 'getevent -lpt' (its -p section "
+                    f"gives the ranges) or give --{axis}-range MIN MAX")
 
 
 def observed_ranges(samples: list[RawSample]) -> dict[int, tuple[float, float]]:
