@@ -128,3 +128,12 @@ def test_a_scale_no_digitizer_has_is_refused(tmp_path, capsys, options, said):
     err = _error(["trace", "import", str(log), "-o", str(tmp_path / "o.csv"), "--width-mm", "100",
                   "--height-mm", "50", "--y-range", "0", "2047", *options], capsys)
     assert said in err
+
+
+@pytest.mark.parametrize("force", ["1", "0"])
+def test_force_is_refused_for_a_trace_csv(tmp_path, capsys, force):
+    csv = tmp_path / "nf.csv"
+    csv.write_text("t_s,finger,x_mm,y_mm,event\n0,0,1,1,down\n0.02,0,2,1,up\n")
+    err = _error(["trace", "import", str(csv), "-o", str(tmp_path / "o.csv"), "--force", force],
+                 capsys)
+    assert "--force does not apply to a trace CSV" in err

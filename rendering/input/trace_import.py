@@ -90,7 +90,7 @@ def add_import_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--pressure-scale", type=_positive, metavar="N_PER_UNIT",
                         help="normal force = ABS_MT_PRESSURE x this (N); default: every "
                              "sample gets --force")
-    parser.add_argument("--force", type=_non_negative, default=DEFAULT_FORCE_N, metavar="N",
+    parser.add_argument("--force", type=_non_negative, metavar="N",
                         help=f"normal force when pressure is not mapped (default {DEFAULT_FORCE_N} N)")
     parser.add_argument("--device", metavar="PATH",
                         help="getevent log with several devices: keep this one (/dev/input/eventN)")
@@ -138,11 +138,11 @@ def _pair(values: list[float] | None) -> tuple[float, float] | None:
 def _copy_csv(path: Path, args: argparse.Namespace, write: Callable[[str, str], None]) -> int:
     """A trace CSV in: validate it and write it back out."""
     mapping = [o for o in ("x_range", "y_range", "width_mm", "height_mm", "swap_xy", "flip_x",
-                           "flip_y", "pressure_scale", "device", "keep_time")
-               if getattr(args, o) not in (None, False)]
+                           "flip_y", "pressure_scale", "force", "device", "keep_time")
+               if getattr(args, o) is not None and getattr(args, o) is not False]  # 0 is given
     if mapping:
         raise TraceError(f"--{mapping[0].replace('_', '-')} does not apply to a trace CSV "
-                         "(it is already in mm and s)")
+                         "(it is already in mm, s and N)")
     reader = iter_trace(path)
     trace = concat_traces(reader)
     write(args.out, format_trace(trace, comment=f"imported from {path}"))
@@ -180,7 +180,8 @@ def run_import(args: argparse.Namespace, write: Callable[[str, str], None]) -> i
         raise TraceError(f"{path}: no touches found ({len(events)} events, {decoder.frames} frames; "
                          "expected ABS_MT_* contacts)")
     spec = ScreenSpec(args.width_mm, args.height_mm, _pair(args.x_range), _pair(args.y_range),
-                      args.swap_xy, args.flip_x, args.flip_y, args.pressure_scale, args.force)
+                      args.swap_xy, args.flip_x, args.flip_y, args.pressure_scale,
+                      DEFAULT_FORCE_N if args.force is None else args.force)
     screen, warnings = screen_map(spec, absinfo, observed_ranges(samples), str(path))
     warnings = read_warnings + warnings
     t0 = samples[0].t_s
