@@ -137,3 +137,12 @@ def test_force_is_refused_for_a_trace_csv(tmp_path, capsys, force):
     err = _error(["trace", "import", str(csv), "-o", str(tmp_path / "o.csv"), "--force", force],
                  capsys)
     assert "--force does not apply to a trace CSV" in err
+
+
+def test_a_sample_without_pressure_names_its_time_plainly():
+    from frictex.rendering.input.evdev_decode import AxisMap, RawSample, ScreenMap
+    from frictex.rendering.input.trace_file import TraceError
+    screen = ScreenMap(AxisMap(0, 100, 50), AxisMap(0, 100, 50), pressure_n=0.01)
+    sample = RawSample(0.25, 0, 10.0, 10.0, float("nan"), float("nan"), 1)
+    with pytest.raises(TraceError, match=r"sample 0 at 0\.25 s has no pressure"):
+        screen.arrays([sample])

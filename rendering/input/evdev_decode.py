@@ -391,7 +391,7 @@ class ScreenMap:
             force = a[:, 4] * self.pressure_n
             if np.isnan(force).any():
                 i = int(np.argmax(np.isnan(force)))
-                raise TraceError(f"{where}: sample {i} at {a[i, 0]!r} s has no pressure, but a "
+                raise TraceError(f"{where}: sample {i} at {a[i, 0]:g} s has no pressure, but a "
                                  "pressure scale was given (expected ABS_MT_PRESSURE on every contact)")
         return {"t_s": a[:, 0], "finger": a[:, 1].astype(np.int64), "x_mm": self.x.mm(dev_x),
                 "y_mm": self.y.mm(dev_y), "force_n": force,
