@@ -146,3 +146,11 @@ def test_a_sample_without_pressure_names_its_time_plainly():
     sample = RawSample(0.25, 0, 10.0, 10.0, float("nan"), float("nan"), 1)
     with pytest.raises(TraceError, match=r"sample 0 at 0\.25 s has no pressure"):
         screen.arrays([sample])
+
+
+def test_a_getevent_ltr_log_reads_as_without_its_rates():
+    from frictex.rendering.input.import_getevent import parse_getevent
+    plain = _drag_lines()
+    rated = plain.replace("SYN_REPORT           00000000", "SYN_REPORT           00000000    rate 67")
+    assert "rate 67" in rated
+    assert parse_getevent(rated) == parse_getevent(plain)

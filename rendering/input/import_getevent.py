@@ -2,7 +2,8 @@
 
 Grammar (one event per line; ``-l`` prints names, without it the fields are hex)::
 
-    line    := "[" SPACES seconds "." micros "]" [ device ":" ] type code value
+    line    := "[" SPACES seconds "." micros "]" [ device ":" ] type code value [ rate ]
+    rate    := "rate" digits (``getevent -ltr``: reports per second, after SYN_REPORT; ignored)
     type    := EV_ABS | EV_SYN | ... | 4 hex digits
     code    := ABS_MT_POSITION_X | SYN_REPORT | ... | 4 hex digits
     value   := 8 hex digits (a 32-bit field: ffffffff is -1) | DOWN | UP | REPEAT
@@ -46,7 +47,8 @@ CODES = {"SYN_REPORT": SYN_REPORT, "SYN_CONFIG": 0x01, "SYN_MT_REPORT": SYN_MT_R
 VALUES = {"UP": 0, "DOWN": 1, "REPEAT": 2}
 
 _LINE = re.compile(r"^\s*\[\s*(?P<t>\d{1,12}\.\d{1,9})\s*\]\s+(?:(?P<dev>/\S+):\s+)?"
-                   r"(?P<type>\S+)\s+(?P<code>\S+)\s+(?P<value>\S+)\s*$", re.ASCII)
+                   r"(?P<type>\S+)\s+(?P<code>\S+)\s+(?P<value>\S+)(?:\s+rate\s+\d{1,9})?\s*$",
+                   re.ASCII)
 _UNTIMED = re.compile(r"^\s*(?:/\S+:\s+)?(EV_[A-Z_]+|[0-9a-f]{4})\s+\S+\s+\S+\s*$", re.ASCII)
 _ABSINFO = re.compile(r"^\s*(?:ABS \(0003\):\s*)?(?P<code>\S+)\s*:\s*value -?\d+, min "
                       r"(?P<min>-?\d{1,10}), max (?P<max>-?\d{1,10}), fuzz -?\d+, flat -?\d+"
