@@ -293,6 +293,7 @@ def sample(motion: Motion, rate_hz: float, *, noise_mm: float = 0.0, jitter_s: f
         raise InputError(f"sampling rate {rate_hz} Hz must be > 0")
     if not 0.0 <= drop < 1.0:
         raise InputError(f"drop {drop!r}: expected a share of samples in [0, 1)")
+    _check_jitter(jitter_s, rate_hz)
     rng = np.random.default_rng(seed + 1)
     n = int(np.floor(motion.duration_s * rate_hz)) + 1
     t = np.arange(n) / rate_hz
@@ -311,6 +312,16 @@ def sample(motion: Motion, rate_hz: float, *, noise_mm: float = 0.0, jitter_s: f
     event[0] = DOWN
     event[-1] = UP
     return make_trace(t, np.full(n, finger), x, y, np.full(n, force_n), event)
+
+
+def _check_jitter(jitter_s: float, rate_hz: float) -> None:
+    """InputError for a timestamp jitter (s, standard deviation) of half the sample interval
+    at ``rate_hz`` (Hz) or more: kept monotonic, such timestamps repeat (45 of 100 at 50 Hz
+    and 0.05 s) and bunch before the end, shortening the trace."""
+    half_interval_s = 0.5 / rate_hz
+    if jitter_s >= half_interval_s:
+        raise InputError(f"jitter {jitter_s:g} s: expected less than half the sample interval, "
+                         f"{half_interval_s:g} s at {rate_hz:g} Hz (timestamps would repeat)")
 
 
 def truth(motion: Motion, rate_hz: float = 10_000.0, force_n: float = 0.5) -> Trace:
