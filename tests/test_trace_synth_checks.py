@@ -28,3 +28,13 @@ def test_a_small_jitter_keeps_every_timestamp_distinct():
 def test_the_cli_names_the_jitter(tmp_path, capsys):
     assert main(["trace", "synth", "swipe", "-o", str(tmp_path / "s.csv"), "--jitter", "0.05"]) == 2
     assert "jitter 0.05 s: expected less than half" in capsys.readouterr().err
+
+
+def test_synth_help_shows_every_default(capsys):
+    with pytest.raises(SystemExit):
+        main(["trace", "synth", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for said in ("(default 2 s)", "(default 0 deg)", "(default 80 mm)", "(default 20 mm)",
+                 "(default 0 mm: none)", "(default 0 s: none)", "default 0.5 N)", "default 0)",
+                 "(default 10000 Hz)"):
+        assert said in text

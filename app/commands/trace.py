@@ -32,7 +32,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="touch sampling rate (default 50 Hz, seed 003's screen)")
     synth.add_argument("--speed", type=positive_float, default=40.0, metavar="MM_S",
                        help="finger speed (human: typical peak speed), default 40 mm/s")
-    synth.add_argument("--duration", type=positive_float, default=2.0, metavar="S")
+    synth.add_argument("--duration", type=positive_float, default=2.0, metavar="S",
+                       help="length of the motion (default 2 s)")
     synth.add_argument("--x0", type=float, default=None, metavar="MM",
                        help="start x (default 14; human motions: 30 %% across --area)")
     synth.add_argument("--y0", type=float, default=None, metavar="MM",
@@ -42,24 +43,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="human, human-varied: the area (from 0, 0) the finger wanders in "
                             "(default 108 x 64.8, the demo's display)")
     synth.add_argument("--angle", type=float, default=0.0, metavar="DEG",
-                       help="direction of travel, from +x towards +y")
+                       help="direction of travel, from +x towards +y (default 0 deg)")
     synth.add_argument("--length", type=positive_float, default=80.0, metavar="MM",
-                       help="stroke length for back-and-forth")
+                       help="stroke length for back-and-forth (default 80 mm)")
     synth.add_argument("--radius", type=positive_float, default=20.0, metavar="MM",
-                       help="circle radius")
+                       help="circle radius (default 20 mm)")
     synth.add_argument("--noise", type=float, default=0.0, metavar="MM",
-                       help="position noise (standard deviation)")
+                       help="position noise, standard deviation (default 0 mm: none)")
     synth.add_argument("--jitter", type=float, default=0.0, metavar="S",
-                       help="timestamp jitter (standard deviation)")
+                       help="timestamp jitter, standard deviation, under half the sample "
+                            "interval (default 0 s: none)")
     synth.add_argument("--force", type=float, default=0.5, metavar="N",
-                       help="normal force (press: the force at touch-down)")
+                       help="normal force (press: the force at touch-down; default 0.5 N)")
     synth.add_argument("--peaks", type=float, nargs="+", default=[1.0, 0.95, 1.1], metavar="N",
                        help="press: peak normal force of each press (default 1.0 0.95 1.1)")
     synth.add_argument("--force-noise", type=float, default=0.03, metavar="N",
                        help="press: force sensor noise, standard deviation (default 0.03 N)")
-    synth.add_argument("--seed", type=int, default=0, help="random seed (human motion, noise)")
+    synth.add_argument("--seed", type=int, default=0, help="random seed (human motion, noise; default 0)")
     synth.add_argument("--truth", metavar="FILE", help="also write the true path here")
-    synth.add_argument("--truth-rate", type=positive_float, default=10_000.0, metavar="HZ")
+    synth.add_argument("--truth-rate", type=positive_float, default=10_000.0, metavar="HZ",
+                       help="sampling rate of the true path (default 10000 Hz)")
     imp = sub.add_parser("import", help="convert a touch recording to a trace CSV",
                          description="Convert a recording (Android getevent -lt, evemu, "
                                      "trace CSV) to a frictex trace CSV.")
