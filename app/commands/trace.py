@@ -59,7 +59,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="press: peak normal force of each press (default 1.0 0.95 1.1)")
     synth.add_argument("--force-noise", type=float, default=0.03, metavar="N",
                        help="press: force sensor noise, standard deviation (default 0.03 N)")
-    synth.add_argument("--seed", type=int, default=0, help="random seed (human motion, noise; default 0)")
+    synth.add_argument("--seed", type=int, default=0,
+                       help="random seed (human motion, noise; default 0)")
     synth.add_argument("--truth", metavar="FILE", help="also write the true path here")
     synth.add_argument("--truth-rate", type=positive_float, default=10_000.0, metavar="HZ",
                        help="sampling rate of the true path (default 10000 Hz)")
