@@ -4,8 +4,9 @@ Inputs: Android ``getevent -lt`` logs, evemu recordings (both Linux evdev multi-
 protocol A or B, decoded by ``rendering.input.evdev_decode``) and trace CSVs (validated and
 rewritten). Device counts become mm through the axis ranges (options, else the evemu
 ``A:`` header or the getevent ``-p`` section, else the observed min..max with a warning)
-and the screen size (options, else the recording's resolution). The output adds ``pressure`` and ``touch_major`` columns
-(device units) when the recording has them; the trace reader ignores them.
+and the screen size (options, else the recording's resolution). The output adds
+``pressure`` and ``touch_major`` columns (device units) when the recording has them; the
+trace reader ignores them (``trace_file.RECORDED_COLUMNS``: and says nothing of them).
 """
 
 from __future__ import annotations
