@@ -41,9 +41,9 @@ def accounted(status: dict, played_index: np.ndarray | None, commanded: int) -> 
     (``played_index``: the sample numbers it played, None when it kept no log) agrees:
     what the host says played did play, and nothing that did not play is missing from
     the unplayed count."""
-    assert status["commanded_samples"] == commanded
-    assert status["played_samples"] + status["unplayed_samples"] == commanded
-    assert sum(status["unplayed_by_cause"].values()) == status["unplayed_samples"]
+    assert status["commanded_samples"] == commanded, status
+    assert status["played_samples"] + status["unplayed_samples"] == commanded, status
+    assert sum(status["unplayed_by_cause"].values()) == status["unplayed_samples"], status
     if played_index is None:
         return
     lost = status["unplayed_by_cause"]["lost"]
