@@ -439,12 +439,13 @@ def _axis_map(axis: str, size_option: str, size_mm: float | None, flip: bool,
                              f"{absinfo.resolution} units/mm make a screen {size_mm:.3g} mm "
                              f"across; expected {SCREEN_MM[0]:g} to {SCREEN_MM[1]:g} mm (give "
                              f"{size_option})")
-    _check_scale(axis, lo, hi, size_mm, "the observed range" if guessed else
-                 f"--{axis}-range" if given is not None else "the device's range", where)
     try:
-        return AxisMap(float(lo), float(hi), float(size_mm), flip), guessed
+        axis_map = AxisMap(float(lo), float(hi), float(size_mm), flip)  # a size out of bounds
     except TraceError as exc:
         raise TraceError(f"{where}: {exc}") from None
+    _check_scale(axis, lo, hi, size_mm, "the observed range" if guessed else
+                 f"--{axis}-range" if given is not None else "the device's range", where)
+    return axis_map, guessed
 
 
 def _check_scale(axis: str, lo: float, hi: float, size_mm: float, source: str, where: str) -> None:
