@@ -2,17 +2,8 @@
 switch says them ("... unsaved panel values dropped"); they used to go without a word.
 The demo loop runs on the headless window (test_layer_panel_demo's run_demo)."""
 
-from pathlib import Path
-
-from frictex.textures.library import resolve_scene
-
-from test_layer_panel_demo import make_edge_smooth, run_demo, wait_for
-
-
-def grating(tmp_path) -> Path:
-    path = tmp_path / "lines.toml"
-    path.write_text(resolve_scene("grating-5mm").read_text())
-    return path
+from test_layer_edit_disk import grating
+from test_layer_panel_demo import make_edge_smooth, run_demo, save_an_edit, wait_for
 
 
 def test_quitting_with_unsaved_edits_says_they_are_dropped(tmp_path, capfd):
@@ -34,10 +25,5 @@ def test_quitting_after_a_save_says_nothing_of_edits(tmp_path, capfd):
     rec = tmp_path / "rec"
     rec.mkdir()
 
-    def hand(window, loop, haptic):
-        make_edge_smooth(window, loop)
-        window.key("ctrl+s")
-        wait_for("the save", lambda: loop.panel_note.startswith("saved"))
-
-    run_demo(path, rec, hand)
+    run_demo(path, rec, lambda window, loop, haptic: save_an_edit(window, loop))
     assert "dropped" not in capfd.readouterr().err

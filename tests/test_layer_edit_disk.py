@@ -250,16 +250,14 @@ def test_a_key_changed_in_the_file_too_keeps_the_files_value(tmp_path):
 def test_a_save_says_the_full_path_of_a_file_named_relative(tmp_path, monkeypatch, capfd):
     """A scene opened as ``lines.toml`` in the current folder: the panel and the terminal
     name the file saved by its full path, not 'lines.toml in .'."""
-    from test_layer_panel_demo import make_edge_smooth, run_demo, wait_for
+    from test_layer_panel_demo import run_demo, save_an_edit
     grating(tmp_path)
     monkeypatch.chdir(tmp_path)
     rec = tmp_path / "rec"
     rec.mkdir()
 
     def hand(window, loop, haptic):
-        make_edge_smooth(window, loop)
-        window.key("ctrl+s")
-        wait_for("the save", lambda: loop.panel_note.startswith("saved"))
+        save_an_edit(window, loop)
         assert loop.panel_note == f"saved {tmp_path / 'lines.toml'}"
 
     run_demo(Path("lines.toml"), rec, hand)

@@ -47,16 +47,14 @@ def test_a_read_only_file_made_writable_saves(tmp_path):
 
 
 def test_the_panel_shows_the_refusal(tmp_path, monkeypatch, capfd):
-    from test_layer_panel_demo import make_edge_smooth, run_demo, wait_for
+    from test_layer_panel_demo import run_demo, save_an_edit
     path = read_only_grating(tmp_path)
     before = path.read_text()
     rec = tmp_path / "rec"
     rec.mkdir()
 
     def hand(window, loop, haptic):
-        make_edge_smooth(window, loop)
-        window.key("ctrl+s")
-        wait_for("the refusal", lambda: loop.panel_note.startswith("not saved"))
+        save_an_edit(window, loop, said="not saved")
         assert "the file is read-only (chmod u+w g.toml" in loop.panel_note
 
     run_demo(path, rec, hand)

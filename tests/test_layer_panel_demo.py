@@ -134,6 +134,14 @@ def make_edge_smooth(window, loop) -> None:
     wait_for("a smooth edge", lambda: loop.scene.layers[0].edge == "smooth")
 
 
+def save_an_edit(window, loop, said: str = "saved") -> None:
+    """A hand for :func:`run_demo`: a smooth edge chosen (:func:`make_edge_smooth`), then
+    Ctrl+S, until the panel's note starts with ``said``."""
+    make_edge_smooth(window, loop)
+    window.key("ctrl+s")
+    wait_for(f"the panel to say {said!r}", lambda: loop.panel_note.startswith(said))
+
+
 def test_a_slider_drag_changes_the_next_block_and_frame(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
     scene_file = tmp_path / "lines.toml"
