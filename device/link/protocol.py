@@ -55,6 +55,8 @@ FORCE_STEP_N = 1.0 / 4096.0
 FORCE_PAIRS_MAX = 255
 #: sequence numbers in one Missing message, at most
 MISSING_MAX = 16
+#: message types from here up travel device -> host; below, host -> device (section 4)
+DEVICE_TYPES = 0x80
 #: largest body (version..crc) a receiver must accept, bytes
 MAX_BODY = 4096
 #: largest COBS-stuffed frame before its 0x00 delimiter, bytes (4113; 4114 with it)

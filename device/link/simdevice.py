@@ -270,6 +270,8 @@ class DeviceCore:
         """Handle bytes from the host arriving at ``t_s``; returns the reply bytes."""
         out = bytearray()
         for frame in self.decoder.feed(data):
+            if frame.message.TYPE >= p.DEVICE_TYPES:
+                continue  # 5.3: our own frames echoed back neither arm nor feed the watchdog
             tick = max(self.tick, int(t_s * self.config.rate_hz))
             self._last_rx_tick = tick
             self.host_version = frame.version
@@ -341,7 +343,7 @@ class DeviceCore:
             return self._block(frame.seq, msg)
         if isinstance(msg, p.Block):
             return self._block(frame.seq, msg)
-        return None  # device-to-host messages echoed back at us: ignore
+        return None
 
     def _block(self, seq: int, msg: p.Block):
         c = self.config

@@ -598,6 +598,8 @@ static void report_missing(fw_device *d, uint32_t now)
 
 static void on_frame(fw_device *d, const fw_msg *msg, uint32_t now_tick)
 {
+    if (msg->type >= FW_DEVICE_TYPES)
+        return; /* 5.3: our own frames echoed back neither arm nor feed the watchdog */
     fw_poll(d); /* a trip noted before this frame is reported before its answer */
     lock(d);
     d->last_rx = (int32_t)(now_tick - d->tick) > 0 ? now_tick : d->tick;
@@ -628,7 +630,7 @@ static void on_frame(fw_device *d, const fw_msg *msg, uint32_t now_tick)
         on_block(d, msg->seq, &msg->m.block);
         break;
     default:
-        break; /* device-to-host messages echoed back at us */
+        break;
     }
     if (msg->version >= 4 && (gap || msg->type == FW_HEARTBEAT))
         report_missing(d, now);

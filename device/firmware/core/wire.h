@@ -18,6 +18,9 @@ enum fw_type {
     FW_RESEND = 0x05, FW_MISSING = 0x86, /* version 4 */
 };
 
+/* Types from here up travel device -> host; below, host -> device (PROTOCOL.md 4). */
+#define FW_DEVICE_TYPES 0x80u
+
 enum fw_state { FW_IDLE, FW_BUFFERING, FW_PLAYING, FW_DRAINING, FW_SILENT };
 
 enum fw_error_code {
