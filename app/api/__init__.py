@@ -37,7 +37,8 @@ Everything else lives in the four layers below, in the order of DESIGN.md's data
 (tracking, renderers, composition, friction inversion, visual layer), which uses
 ``frictex.textures`` (the texture file format and its library), which uses
 ``frictex.device`` (structures, actuation, link, protocol). ``import frictex`` loads none
-of them (nor numpy, numba, scipy or pyarrow): each name here is imported on first use.
+of them (nor numpy, numba, scipy or pyarrow): each name here is imported on first use, and
+so is each layer (``frictex.textures.model.RENDERERS`` right after ``import frictex``).
 """
 
 from __future__ import annotations
@@ -83,6 +84,9 @@ _WHERE = {
     "DeviceRequest": "frictex.device.link.devices",
     "PluginError": "frictex.device.registry",
 }
+
+#: the four layers (module docstring), subpackages imported on first use as the names are
+_LAYERS = ("app", "rendering", "textures", "device")
 
 # written out, not computed, so that type checkers read it (tests/test_api.py: the keys of
 # _WHERE, sorted)
@@ -142,15 +146,17 @@ if TYPE_CHECKING:  # what a type checker sees; "X as X": re-exported (mypy --str
 else:  # at run time each name is imported on first use; a checker sees only those above
     def __getattr__(name: str) -> object:
         """Import a public name on first use (module docstring)."""
+        import importlib
         if name == "__version__":
             from frictex.app.commands.cli import version
             value = version()
+        elif name in _LAYERS:  # importing a subpackage sets it in globals() too
+            value = importlib.import_module(f"frictex.{name}")
         else:
             try:
                 module = _WHERE[name]
             except KeyError:
                 raise AttributeError(f"module 'frictex' has no attribute {name!r}") from None
-            import importlib
             value = getattr(importlib.import_module(module), name)
         globals()[name] = value
         return value
