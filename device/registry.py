@@ -240,6 +240,7 @@ class Registry(Generic[T]):
         self.expect = expect
         self._entries: dict[str, T | _Unloaded] = {}
         self._origin: dict[str, str] = {}
+        self._registered_by: dict[str, str] = {}  # name -> module outside frictex (register)
         self._readings = 0  # the reading of the installed metadata last scanned (none: 0)
 
     @overload
@@ -255,7 +256,9 @@ class Registry(Generic[T]):
         modules (a notebook, another package) registers as a plugin would: a reserved
         name or an entry that is not the registry's ``expect`` is a :class:`PluginError`,
         and its entry is used as a plugin's (:func:`build_entry`), origin
-        ``"{module} ({entry's name})"``."""
+        ``"{module} ({entry's name})"``. Such a module may register a name again to replace
+        its own entry (a notebook's renderer, edited and registered anew); a name that
+        frictex or another package or module registered stays a :class:`PluginError`."""
         # who registers is the calling module; taken here, as the decorator is called later
         caller = sys._getframe(1).f_globals.get("__name__", "?")
         if entry is None:
@@ -271,7 +274,11 @@ class Registry(Generic[T]):
         if self.expect is not None and not self.expect.test(entry):
             raise PluginError(f"{self.kind} {name!r} from {origin} is {_a(entry)}; "
                               f"expected {self.expect.what}")
+        if self._registered_by.get(name) == caller:  # its own entry, edited: replaced
+            self._entries[name], self._origin[name] = entry, origin
+            return entry
         self._add(name, entry, origin)
+        self._registered_by[name] = caller
         return entry
 
     def _add(self, name: str, entry, origin: str) -> None:
@@ -287,6 +294,7 @@ class Registry(Generic[T]):
                 warn_once(f"{self.kind} {name!r} from {self._origin[name]} is refused: the "
                           "name is frictex's own")
                 self._entries[name], self._origin[name] = entry, origin
+                self._registered_by.pop(name, None)
                 return
             raise PluginError(f"{self.kind} {name!r} from {origin} is already registered "
                               f"by {self._origin[name]}")
