@@ -206,7 +206,7 @@ def spectral_error(mu: np.ndarray, mu_ideal: np.ndarray, contact: np.ndarray, ra
     texture (v / P) of ``PHASE_BLIND_HZ`` and above a texture shifted in space by any
     fraction of its period costs at most 0.11 (0.105 at 25 Hz, 2.5 cycles a window;
     under 0.06 from 26 Hz on). Below it a window holds one or two edges and their place
-    in the window sets the band magnitudes: a shift of a quarter period costs 0.12-0.18
+    in the window sets the band magnitudes: a shift of a quarter period costs 0.09-0.18
     at 11-15 Hz, 0.30 at 10 Hz, 0.45 at 8 Hz, 0.87 at 6 Hz and 1.34 at 4 Hz (a 5 mm
     grating at 20 mm/s), more than a missing texture. Measured on a 0.6/1.0 square
     grating, 4 s at 60 mm/s on a 20 kHz grid, shifts of 1/16 to 8/16 of a period
@@ -432,7 +432,13 @@ def accuracy(ref: Reference, t_out: np.ndarray, mu_out: np.ndarray, out_rate_hz:
              layer=None) -> Accuracy:
     """All three metrics of a rendering ``mu_out`` (n,) output at ``t_out`` (n,) s, uniform
     at ``out_rate_hz``, against ``ref`` (see the module docstring); with ``layer`` (a
-    periodic layer: ``axis``, ``period_mm``) also its chatter along the true path."""
+    periodic layer: ``axis``, ``period_mm``) also its chatter along the true path.
+    Raises :class:`MetricError` where ``mu_out`` holds a NaN or an infinity (every metric
+    of it would be NaN)."""
+    bad = np.count_nonzero(~np.isfinite(mu_out))
+    if bad:
+        raise MetricError(f"rendered mu' has {bad} non-finite sample(s) of {np.size(mu_out)}: "
+                          "its accuracy is undefined; expected finite values")
     mu = hold(t_out, mu_out, ref.t_s, out_rate_hz)
     mu = np.where(ref.contact, mu, 1.0)
     align, n_ideal, n_rendered = alignment_error(mu, ref.mu, ref.s_mm, ref.contact)

@@ -166,6 +166,16 @@ def test_undefined_cases_raise_with_the_reason():
         spectral_error(ref.mu, ref.mu, ref.contact, 1000.0)
 
 
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_a_rendering_with_a_non_finite_sample_is_refused_not_scored_nan(bad):
+    scene = grating_scene(5.0)
+    ref = _swipe_ref(scene)
+    mu = ref.mu.copy()
+    mu[1234] = bad
+    with pytest.raises(MetricError, match="rendered mu' has 1 non-finite sample"):
+        accuracy(ref, ref.t_s, mu, RATE)
+
+
 def _grating_line(x, period=15.0, y=30.0):
     return grating_scene(period).layers[0].mu_at(x, np.full(x.size, y))
 
