@@ -505,7 +505,7 @@ class DeviceCore:
         self._ramp_pos = min(self._ramp_pos + len(sp), self._ramp_ticks)
 
     def _hold(self, sp: np.ndarray) -> None:
-        """``len(sp)`` BUFFERING ticks into ``sp``: the setpoint held for at most
+        """``len(sp)`` BUFFERING or gap ticks into ``sp``: the setpoint held for at most
         ``watchdog_ms`` since the last sample played, then ramped to zero (5.1)."""
         n = min(max(self._wd_ticks - self._held, 0), len(sp))
         sp[:n] = self.setpoint
@@ -515,6 +515,21 @@ class DeviceCore:
         if self._held == self._wd_ticks:
             self._begin_ramp()
         self._ramp(sp[n:])
+
+    def _play_or_hold(self, sp: np.ndarray, has: np.ndarray, values: np.ndarray) -> None:
+        """Setpoints into ``sp`` for ticks that advance the play index: a tick that
+        ``has`` its sample plays ``values`` (um); a gap tick holds under the bound of
+        5.1, so a gap as long as the watchdog begins the ramp to zero."""
+        if not len(has):
+            return
+        edges = np.flatnonzero(has[1:] != has[:-1]) + 1
+        for a, b in zip(np.r_[0, edges], np.r_[edges, len(has)]):
+            if has[a]:
+                sp[a:b] = values[a:b]
+                self._held = 0
+            else:
+                self._hold(sp[a:b])
+            self.setpoint = sp[b - 1].copy()
 
     def _play(self, sp: np.ndarray) -> int:
         """Play ticks into ``sp`` until it is full or the buffer runs dry (BUFFERING; a
@@ -531,17 +546,11 @@ class DeviceCore:
             used = n
         has[used:] = False
         played = np.flatnonzero(has)
-        # hold the previous value across gaps and after the last played sample
-        last = np.maximum.accumulate(np.where(has, np.arange(n), -1))
         values = p.amplitude_from_wire(self._amp[slots])
-        sp[:] = np.where((last >= 0)[:, None], values[np.maximum(last, 0)], self.setpoint)
+        self._play_or_hold(sp[:used], has[:used], values[:used])
         self.counters.gap_samples += used - len(played)
         self.counters.played_samples += len(played)
         self.session.played += len(played)
-        if len(played):
-            self._held = 0
-        if used:
-            self.setpoint = sp[used - 1].copy()
         if self.log is not None and len(played):
             phases = p.phase_from_wire(self._phase[slots[played]]) if self.config.phases else None
             self.log(idx[played], values[played], phases)

@@ -223,7 +223,7 @@ static void ramp(fw_device *d)
     }
 }
 
-/* 5.1: a BUFFERING tick holds the setpoint, at most wd_ticks since the last sample
+/* 5.1: a BUFFERING or gap tick holds the setpoint, at most wd_ticks since the last sample
  * played; the next begins a ramp to zero (one under way, from a trip or a Hello, goes on). */
 static void hold(fw_device *d)
 {
@@ -270,6 +270,7 @@ static bool play(fw_device *d)
         d->held = 0;
     } else {
         d->k.gap_samples++;
+        hold(d);
     }
     d->play_index++;
     d->play_slot = slot + 1 == b->cap ? 0 : slot + 1;
