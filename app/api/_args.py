@@ -27,7 +27,10 @@ def real(name: str, value: object, unit: str, bounds: tuple[float, float] | None
         number = math.inf if value > 0 else -math.inf
     low, high = bounds if bounds is not None else (0.0 if positive else -math.inf, math.inf)
     if not (math.isfinite(number) and low <= number <= high and (number > 0 or not positive)):
-        raise InputError(f"{name}={number!r}: expected {_span(low, high, unit, positive)}")
+        span = _span(low, high, unit, positive)
+        if number == math.inf and math.isinf(high) and not span.startswith("a finite"):
+            span = f"a finite number {span}"  # inf is "more than 0": say why it is refused
+        raise InputError(f"{name}={number!r}: expected {span}")
     return number
 
 
