@@ -758,6 +758,8 @@ class Decoder:
         except (ValueError, struct.error):
             c.bad_payload += 1
             return None
+        if mtype == Hello.TYPE:
+            self._next_seq = None  # a new host numbers from anywhere (section 2)
         skipped = (seq - self._next_seq) & 0xFFFF if self._next_seq is not None else 0
         if skipped >= 0x8000:  # a jump backwards is the sender restarting, not a loss
             skipped = 0

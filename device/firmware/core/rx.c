@@ -65,6 +65,8 @@ static bool check(fw_rx *rx, fw_msg *msg)
         return false;
     }
     msg->seq = fw_le16(rx->body + 2);
+    if (type == FW_HELLO)
+        rx->seq_known = false; /* a new host numbers from anywhere (PROTOCOL.md 2) */
     uint16_t skipped = (uint16_t)(msg->seq - rx->next_seq);
     if (!rx->seq_known || skipped >= 0x8000u) /* a jump backwards is a restart, not a loss */
         skipped = 0;
