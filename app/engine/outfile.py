@@ -21,7 +21,7 @@ import stat
 from collections.abc import Callable
 from pathlib import Path
 
-from frictex.app.engine.tables import check_room
+from frictex.app.engine.tables import WRITE_ELSEWHERE, check_room
 from frictex.device.errors import InputError, OutputSpaceError
 
 
@@ -50,7 +50,7 @@ def write_file(path: str | Path, write: Callable[[Path], object], need_bytes: fl
         write(path)
         return
     path = Path(os.path.realpath(path))  # a link: the file it points to
-    check_room(path.parent, need_bytes, path.name, "or write elsewhere")
+    check_room(path.parent, need_bytes, path.name, WRITE_ELSEWHERE)
     partial = path.with_name(path.name + ".partial")
     try:
         write(partial)
@@ -84,7 +84,7 @@ def check_writable(option: str, path: Path, need_bytes: float) -> None:
         if not os.access(folder, os.W_OK):
             raise InputError(f"the folder {folder} cannot be written (no permission, or a "
                              "read-only file system)")
-        check_room(folder, need_bytes, f"{option} {path}", "or write elsewhere")
+        check_room(folder, need_bytes, f"{option} {path}", WRITE_ELSEWHERE)
     except InputError as exc:
         message = str(exc).removeprefix(f"{path}: ")  # _kind's start with the path
         raise InputError(f"{option} {path}: {message}") from None
