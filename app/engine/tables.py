@@ -38,6 +38,7 @@ parquet and npz; CSV to its printed precision).
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import functools
 import io
@@ -206,7 +207,8 @@ class TableWriter:
     def _wait_written(self) -> None:
         writing, self._writing = self._writing, None
         if writing is not None:
-            writing.result()
+            with self._full_disk_said():
+                writing.result()
 
     def commit(self) -> Path:
         """Finish the file and move it into place; returns its path."""
@@ -215,9 +217,26 @@ class TableWriter:
             self._wait_written()
         finally:
             self._thread.shutdown()
-        self._out.close()
-        os.replace(self.partial, self.path)
+        with self._full_disk_said():
+            self._out.close()
+            os.replace(self.partial, self.path)
         return self.path
+
+    @contextlib.contextmanager
+    def _full_disk_said(self):
+        """A disk or quota filled while writing (ENOSPC, EDQUOT) raised as a one-line
+        :class:`OutputSpaceError` naming the output folder (``staging.shown_path``) and
+        the file, with what to do; other errors as they are."""
+        try:
+            yield
+        except OSError as exc:
+            if exc.errno not in (errno.ENOSPC, errno.EDQUOT) or isinstance(exc, OutputSpaceError):
+                raise
+            full = OutputSpaceError(f"{shown_path(self.path.parent)}: the disk filled while "
+                                    f"{self.path.name} was written ({exc.strerror}); free some "
+                                    f"space, {room_hint(self.fmt)}")
+            full.errno = exc.errno
+            raise full from None
 
     def abort(self) -> None:
         """Close and delete everything written so far."""

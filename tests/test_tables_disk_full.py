@@ -1,0 +1,51 @@
+"""A disk that fills while a table is written is said in one line naming the output
+folder (not its staging folder) and the file, with what to do; nothing is left behind."""
+
+import errno
+
+import numpy as np
+import pytest
+
+from frictex.app.engine import tables
+from frictex.app.engine.sinks import friction_columns
+from frictex.app.engine.staging import Staging
+from frictex.app.engine.tables import TableWriter
+from frictex.device.errors import OutputSpaceError
+
+
+def _disk_full(*args):
+    raise OSError(errno.ENOSPC, "No space left on device")
+
+
+def _rows(n):
+    return {name: np.zeros(n, dtype=dtype) for name, dtype, _ in friction_columns(False)}
+
+
+@pytest.mark.parametrize("fmt, hint", [
+    ("csv", "; free some space, write elsewhere, or use --format parquet, format=\"parquet\""),
+    ("parquet", "; free some space, or write elsewhere")])
+def test_a_full_disk_names_the_output_folder_and_file(tmp_path, monkeypatch, fmt, hint):
+    out = tmp_path / "o"
+    staging = Staging(out)
+    folder = staging.begin()
+    monkeypatch.setattr(tables._OPENERS[fmt], "write", _disk_full)
+    table = TableWriter(folder, "friction", friction_columns(False), fmt)
+    table.write(_rows(100))
+    with pytest.raises(OutputSpaceError) as raised:
+        table.commit()
+    table.abort()
+    staging.abort()
+    message = str(raised.value)
+    assert message.startswith(f"{out}: the disk filled while friction.{fmt} was written")
+    assert message.endswith(hint) and "\n" not in message and "staging" not in message
+    assert raised.value.errno == errno.ENOSPC
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_full_disk_at_the_npz_commit_is_said_too(tmp_path, monkeypatch):
+    """npz copies its columns into the zip at the commit: the disk can fill then."""
+    monkeypatch.setattr(tables, "_copy_file", _disk_full)
+    table = TableWriter(tmp_path, "friction", friction_columns(False), "npz")
+    table.write(_rows(100))
+    with pytest.raises(OutputSpaceError, match=r"friction\.npz was written .*--format parquet"):
+        table.commit()
