@@ -43,6 +43,9 @@ def load_scene(name_or_path: str | Path) -> Scene:
     InputError
         No such file or bundled scene, or a file that is not a valid texture file; the
         message names the file, the line and the field.
+    PluginError
+        A ``RuntimeError``, not an InputError: another package's device profile the file
+        names that cannot be loaded or is not a profile; the message names its package.
     """
     from frictex.textures.library import resolve_scene
     from frictex.textures.loader import load_scene as load

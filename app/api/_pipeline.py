@@ -110,7 +110,10 @@ class Pipeline:
             finger to the next touch): ``finger_ids`` names each row's finger, and
             ``sample_ids`` (F, n) each sample's where a row carries more than one
             (``segments()`` lists them). So a finger's state, a recorded texture's
-            noise included, is what :func:`replay` gives it.
+            noise included, is what :func:`replay` gives it, up to the first pause
+            longer than replay's ``max_gap_s``: this renders the pause (``max_gap_s``
+            does not apply here), where replay lifts every finger and skips it, so the
+            rows line up with replay's only for a trace without such a pause.
 
         Raises
         ------
@@ -123,6 +126,10 @@ class Pipeline:
             at most half the memory available (Linux's ``MemAvailable``): with one
             finger and one channel 192 bytes a sample, at 10 kHz 1.9 GB per 1,000 s of
             trace, pauses included.
+        PluginError
+            A ``RuntimeError``, not an InputError: another package's renderer (or one
+            registered from your code) that raises or returns what its contract does
+            not allow; the message names it and its package.
         """
         trace = checked(trace)
         stages = self._stages
@@ -188,6 +195,11 @@ def build_pipeline(scene: Scene | str | Path, *, rate_hz: float = 10_000.0,
         names the layer and field), or a rate, block size, renderer, control mode or
         inversion that is not one the command line accepts (the message names the
         argument).
+    PluginError
+        A ``RuntimeError``, not an InputError: another package's renderer or device
+        profile the scene names (or one registered from your code) that cannot be
+        loaded, fails when built, or is not what frictex expects; the message names it
+        and its package.
     """
     return Pipeline(scene, rate_hz=rate_hz, block_size=block_size, renderer=renderer,
                     control=control, inversion=inversion)

@@ -181,6 +181,11 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
         attribute is its :class:`Replay`.
     OutputSpaceError
         The outputs would not fit in ``out``'s file system (checked before writing).
+    PluginError
+        A ``RuntimeError``, not an InputError: another package's renderer, sink, clock,
+        device or device profile (or one registered from your code) that cannot be
+        loaded, raises, or returns what its contract does not allow; the message names
+        it and its package.
     """
     scene = scene_of(scene)
     if isinstance(trace, Trace):
