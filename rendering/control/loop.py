@@ -413,7 +413,7 @@ class ClosedLoop:
         log_c = state.log_c + state.log_c_slope * speed_mm_s / self.config.speed_ref_mm_s
         return min(max(log_c, -lim), lim)
 
-    def report(self, state: ControlState) -> dict:
+    def report(self, state: ControlState, late_hint: str = "") -> dict:
         """The loop's figures after a run, for a summary (JSON-able; module docstring, 2).
 
         ``mode``; ``report_delay_blocks``: the largest report delay seen (blocks);
@@ -432,7 +432,9 @@ class ClosedLoop:
         used, ``reports_missed``, the delay the good ones came with, p50 and p99 in
         blocks, and once mu0 is known, the RMS of the measured mu'_m = F_t / (F_n mu0)
         against the target mu' the block asked for, over ``samples`` sliding and pressed,
-        None with none); ``messages``: what the loop said."""
+        None with none); ``messages``: what the loop said, and what the reports' delays
+        say (``_late_messages``; ``late_hint``: what the caller can do about late reports,
+        appended to those)."""
         return {"mode": self.mode, "report_delay_blocks": state.delay_max_blocks,
                 "scheduled_delay_blocks": state.delay_blocks,
                 "ki": self.ki_by_delay[state.delay_blocks], "gain": math.exp(state.log_c),
@@ -452,7 +454,33 @@ class ClosedLoop:
                     "samples": state.measured_n,
                     "rms_mu_vs_target": (math.sqrt(state.measured_sq / state.measured_n)
                                          if state.measured_n else None)},
-                "messages": list(state.messages)}
+                "messages": list(state.messages) + self._late_messages(state, late_hint)}
+
+    def _late_messages(self, state: ControlState, hint: str) -> list[str]:
+        """One line each when the force reports came back too late for the loop: more
+        than ``MISSED_SHARE`` of them missed (not back within ``max_wait_s`` of their
+        block's end), and a median delay at that wait limit (the integrator then steps at
+        the smallest ki the scheduler has). None when no report came (the fallback has
+        said why) or the loop waits less than a block."""
+        if not state.reports:
+            return []
+        wait_ms = self.config.max_wait_s * 1e3
+        said = []
+        folded = state.reports + state.reports_missed
+        if state.reports_missed > MISSED_SHARE * folded:
+            said.append(f"closed loop: {state.reports_missed / folded:.0%} of the force "
+                        f"reports ({state.reports_missed} of {folded}) were missed (not back "
+                        f"within max_wait_s, {wait_ms:g} ms, of their block's end): the gain "
+                        f"learnt from the rest only{hint}")
+        limit = len(self.ki_by_delay) - 1
+        median = _quantile(state.delay_counts, 0.5)
+        if limit and median >= limit:
+            said.append(f"closed loop: the force reports' median delay ({median} blocks) is "
+                        f"the longest the loop waits (max_wait_s, {wait_ms:g} ms): its "
+                        f"integrator steps at ki {self.ki_by_delay[limit]:.3g} per block "
+                        f"against {self.ki_by_delay[1]:.3g} at 1 block, so the gain follows "
+                        f"the finger that much slower{hint}")
+        return said
 
     def _probing(self, state: ControlState, now: int) -> bool:
         """Whether the probe holds the plate still whatever the tracker's speed (module
@@ -653,6 +681,8 @@ class ClosedLoop:
 
 
 _FALLBACK = "closed loop: force signal"
+#: the share of force reports missed above which the loop's report says so
+MISSED_SHARE = 0.05
 
 
 def _said(messages: tuple[str, ...], message: str) -> tuple[str, ...]:
