@@ -9,6 +9,7 @@ import pytest
 
 from frictex.app.commands.cli import main
 
+import test_control_summary as loop_runs
 from test_control_summary import _run
 
 HINT = "; pace the host to the plate"
@@ -44,6 +45,26 @@ def test_the_callers_hint_ends_each_late_line():
     loop, state = _run(10, 60, tuple(range(20, 26)))
     messages = _late_messages(loop.report(state, late_hint=HINT))
     assert len(messages) == 2 and all(m.endswith(HINT) for m in messages)
+
+
+def test_a_nan_target_is_left_out_of_the_measured_rms(monkeypatch):
+    """A block whose texture gives nan for some samples (the inverse model clamps them,
+    ``clamps.nonfinite_target``): the RMS of measured against target is over the others."""
+    nan_samples = 5
+    reference = _run(0, 30)
+    block = loop_runs._block
+
+    def block_with_nans(index0, speed, force_n=0.5):
+        target, fingers = block(index0, speed, force_n)
+        target[0, :nan_samples] = float("nan")
+        return target, fingers
+
+    monkeypatch.setattr(loop_runs, "_block", block_with_nans)
+    loop, state = _run(0, 30)
+    measured = loop.report(state)["measured"]
+    kept = reference[0].report(reference[1])["measured"]["samples"]
+    assert measured["rms_mu_vs_target"] is not None and measured["rms_mu_vs_target"] < 1.0
+    assert measured["samples"] == kept - nan_samples * kept // loop_runs.N
 
 
 def test_a_replay_on_the_virtual_clock_says_to_pace_the_host(tmp_path):

@@ -571,7 +571,9 @@ class ClosedLoop:
             alpha = -math.expm1(-count / (self.rate_hz * cfg.mu0_tau_s))
             mu0 = out["mu0"] = mu0 + alpha * (m - mu0)
         if math.isfinite(mu0):  # what the host measured against the target (``report``)
-            keep = (sent.speed >= cfg.slide_mm_s) & (nor >= cfg.min_normal_n)
+            # a non-finite target (clamped by the inverse model) has nothing to compare with
+            keep = ((sent.speed >= cfg.slide_mm_s) & (nor >= cfg.min_normal_n)
+                    & np.isfinite(sent.target))
             err = ratio[keep] / mu0 - sent.target[keep]
             out["measured_sq"] = state.measured_sq + float(err @ err)
             out["measured_n"] = state.measured_n + int(np.count_nonzero(keep))
