@@ -4,9 +4,10 @@ frequency.
 
 The box mean. The plate holds each output sample for 1 / rate_hz, and the finger crosses
 a stretch of the texture meanwhile, so each sample of a periodic layer (grating or
-waveform) plays the mean of the layer's profile over the phase interval from the previous
-sample's phase to its own (SHT and the hybrid: the phase they synthesise; SHO: the phase
-at the finger's position), not the profile at one point. Point sampling folded a square
+waveform) plays the mean of the layer's profile over that stretch of phase, not the
+profile at one point: SHT and the hybrid from the sample's phase by its own step (the
+``travel`` they synthesise), SHO, which cannot know the next sample's phase, from the
+previous sample's phase to its own (at the finger's position). Point sampling folded a square
 grating's harmonics above Nyquist back into the plate's band (seed 003: ~400 Hz
 amplitude-loop bandwidth): at 10 kHz a 0.6 mm, duty 0.4 grating under a 980 mm/s swipe
 (1633 Hz) played its 6th harmonic (9800 Hz) as a 200 Hz line at 0.168 of the fundamental;
@@ -22,19 +23,18 @@ of it round less)::
 A sample that moves the phase by less than ``MIN_TRAVEL`` (a finger at rest, or slower
 than one table cell per sample) plays the point value at its own phase, exactly as
 before: below one cell the table cannot place an edge inside the interval any better. So
-does a touch's first sample (it has no previous phase); the first sample of a call starts
-at the previous call's last phase (``last``, carried in the renderer's state), so the
-output does not depend on how a run is split into calls.
+does SHO's first sample of a touch (it has no previous phase); SHO's first sample of a
+call starts at the previous call's last phase (``last``, carried in the renderer's
+state), and SHT's and the hybrid's stretch is each sample's own, so the output does not
+depend on how a run is split into calls.
 
 Beyond Nyquist. A renderer that synthesises a period from the finger's velocity (SHT, the
 hybrid) plays a texture of frequency |v . axis| / P (Hz). Above the output's Nyquist
 frequency (half the output rate) the texture's mean mu' over one period is played, which
 is what the texture is to a plate that cannot play it, and those touching samples are
 counted (``summary.json``'s ``layer_clipped``, with a warning). At the default 10 kHz
-output it takes a finger beyond 3 m/s on a 0.6 mm grating. The box mean over more than
-half a period tends to that mean anyway, but SHT and the hybrid take each sample's
-interval the short way round their wrapped phase, which is only right below Nyquist; the
-count also says when it happens. SHO reads unwrapped phases and needs no such limit.
+output it takes a finger beyond 3 m/s on a 0.6 mm grating. SHO reads unwrapped phases
+and needs no such limit.
 """
 
 from __future__ import annotations
@@ -81,19 +81,27 @@ class BandLimit:
         self._table = np.concatenate(([0.0], deviation[:-1].astype(np.float64), [0.0]))
 
     def play(self, phase: np.ndarray, covers: np.ndarray, block, last: dict,
-             wrapped: bool = True) -> tuple[np.ndarray, dict]:
-        """mu' (F, n) each sample plays (1 where the layer does not cover): the profile's
-        mean from the previous sample's phase to ``phase`` (cycles, (F, n); ``wrapped``:
-        taken modulo 1, each interval then the short way round), and the (touch id, last
-        phase) of each finger of ``block`` to pass back as ``last`` next call."""
+             travel: np.ndarray | None = None, wrapped: bool = False
+             ) -> tuple[np.ndarray, dict]:
+        """mu' (F, n) each sample plays (1 where the layer does not cover), and the
+        (touch id, last phase) of each finger of ``block`` to pass back as ``last`` next
+        call.
+
+        ``travel`` (cycles, (F, n)): each sample's own phase increment, the stretch the
+        finger crosses while the sample is held; the sample plays the profile's mean over
+        [phase, phase + travel] (SHT, the hybrid). None: the stretch from the previous
+        sample's phase to ``phase`` (cycles, unwrapped; SHO, which knows no sample's
+        phase before it comes). ``wrapped``: unused, those phases are unwrapped."""
         touch = np.ascontiguousarray(block.touch_id, dtype=np.int64)
         phase = np.ascontiguousarray(phase, dtype=np.float64)
         point = self.layer.profile_where(phase, covers)
         mu = np.empty_like(point)
         for row, fid in enumerate(block.ids):
-            before = last.get(fid)
-            _box_row(phase[row], touch[row], np.ascontiguousarray(covers[row]), point[row],
-                     before is not None, *(before or (0, 0.0)), wrapped, self._table,
+            if travel is None:
+                start, span = _since_previous(phase[row], touch[row], last.get(fid))
+            else:
+                start, span = phase[row], np.ascontiguousarray(travel[row], dtype=np.float64)
+            _box_row(start, span, np.ascontiguousarray(covers[row]), point[row], self._table,
                      self.mean_mu, mu[row])
         if phase.shape[1] == 0:
             return mu, last
@@ -111,6 +119,21 @@ class BandLimit:
         return int(np.count_nonzero(above))
 
 
+def _since_previous(phase: np.ndarray, touch: np.ndarray, before: tuple[int, float] | None
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Each sample's stretch (start, travel; cycles, (n,)) from the previous sample's
+    phase to its own (``before``: the previous call's last touch and phase); travel 0
+    where the sample starts a touch (it plays its point value)."""
+    start = np.empty_like(phase)
+    start[1:] = phase[:-1]
+    joined = np.empty(phase.size, dtype=bool)
+    joined[1:] = touch[1:] == touch[:-1]
+    if phase.size:
+        start[0] = before[1] if before is not None else phase[0]
+        joined[0] = before is not None and touch[0] == before[0]
+    return start, np.where(joined, phase - start, 0.0)
+
+
 @njit(cache=True, nogil=True)
 def _deviation(phase, table):
     """D(phase) (cycles, any real) from ``table`` (D at MEAN_PHASES + 1 even steps over one
@@ -123,26 +146,17 @@ def _deviation(phase, table):
 
 
 @njit(cache=True, nogil=True)
-def _box_row(phase, touch, covers, point, has_before, before_touch, before_phase, wrapped,
-             table, mean_mu, mu):
+def _box_row(start, travel, covers, point, table, mean_mu, mu):
     """One finger's row of :meth:`BandLimit.play`, written to ``mu``: each covered sample
-    of the same touch as the one before, whose phase moved at least ``MIN_TRAVEL`` since,
-    the box mean from that phase; the others ``point``, the profile at their phase."""
-    for k in range(phase.size):
-        if k == 0:
-            joined = has_before and touch[0] == before_touch
-            start = before_phase
-        else:
-            joined = touch[k] == touch[k - 1]
-            start = phase[k - 1]
-        travel = phase[k] - start
-        if wrapped:
-            travel -= math.floor(travel + 0.5)
-        if not (joined and covers[k] and abs(travel) >= MIN_TRAVEL):
+    whose stretch [start, start + travel] (cycles) is at least ``MIN_TRAVEL`` long, the
+    box mean over it; the others ``point``, the profile at ``start``."""
+    for k in range(start.size):
+        span = travel[k]
+        if not (covers[k] and abs(span) >= MIN_TRAVEL):  # NaN fails too
             mu[k] = point[k]
             continue
-        a = start - math.floor(start)
-        mean = mean_mu + (_deviation(a + travel, table) - _deviation(a, table)) / travel
+        a = start[k] - math.floor(start[k])
+        mean = mean_mu + (_deviation(a + span, table) - _deviation(a, table)) / span
         # within one band (a grating's, or any flat stretch) the difference rounds to the
         # band's level +- 1e-11 (|D| < 0.25 over |travel| >= 1/65536): play the level
         mu[k] = point[k] if abs(mean - point[k]) < SNAP else mean

@@ -272,15 +272,17 @@ def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, sna
                        np.zeros(len(bounds)) if hold is None
                        else np.ascontiguousarray(hold, dtype=np.float64),
                        np.zeros(fast.size) if travel is None
-                       else np.ascontiguousarray(travel, dtype=np.float64), False, offset)
+                       else np.ascontiguousarray(travel, dtype=np.float64), False, offset,
+                       np.empty(offset.size))
     return offset, end[0]
 
 
 @njit(cache=True, nogil=True)
 def _slew_kernel(bounds, target, restart, snap, fast, slow, start, lock, jump, back, hold,
-                 travel, held_before, offset):
-    """:func:`slew_offset` in one pass: writes ``offset`` (n,), returns the wrapped end
-    and whether the last segment is held.
+                 travel, held_before, offset, reach):
+    """:func:`slew_offset` in one pass: writes ``offset`` (n,) and ``reach`` (n,), where
+    each sample's correction takes the offset by the next sample (before anything decided
+    there), returns the wrapped end and whether the last segment is held.
 
     Per segment (bounds[k] to the next bound) the error ``gap`` to its target is taken at
     its first sample, less at once the part of one behind beyond ``hold`` (up to ``back``);
@@ -315,13 +317,22 @@ def _slew_kernel(bounds, target, restart, snap, fast, slow, start, lock, jump, b
         switch = min(np.searchsorted(fast, fast[b] + far), n)
         rest = abs(g) - far
         for i in range(b, bounds[k + 1] if k + 1 < k_n else n):
-            if held:
-                worked = min(travel[i] - travel[b], rest)
-            else:
-                worked = min(fast[i] - fast[b], far) + min(max(slow[i] - slow[switch], 0.0), rest)
-            offset[i] = base + math.copysign(worked, g)
+            offset[i] = base + math.copysign(
+                _segment_worked(fast, slow, travel, b, i, far, rest, switch, held), g)
+            reach[i] = base + math.copysign(
+                _segment_worked(fast, slow, travel, b, i + 1, far, rest, switch, held), g)
     wrapped = (base + math.copysign(_worked_off(fast, slow, travel, b, n, far, gap, held), gap)) % 1.0
     return wrapped, held
+
+
+@njit(cache=True, nogil=True)
+def _segment_worked(fast, slow, travel, b, i, far, rest, switch, held):
+    """Correction (cycles, >= 0) of the segment starting at ``b`` by allowance index ``i``:
+    a held one at the ``travel`` allowance up to ``rest``, otherwise ``far`` at the
+    ``fast`` one and then ``rest`` at the ``slow`` one from index ``switch`` on."""
+    if held:
+        return min(travel[i] - travel[b], rest)
+    return min(fast[i] - fast[b], far) + min(max(slow[i] - slow[switch], 0.0), rest)
 
 
 @njit(cache=True, nogil=True)
@@ -340,7 +351,8 @@ def _worked_off(fast, slow, travel, b, i, far, gap, held):
 # _hybrid_row, which compiles it in, because numba's cache sees changes to the cached
 # kernel's own file only (tests/test_numba_cache.py).
 def integrate_phase(rate_cycles: np.ndarray, dt_s: float, touch_id: np.ndarray,
-                    start: tuple[int, float] | None) -> tuple[np.ndarray, float]:
+                    start: tuple[int, float] | None, steps: np.ndarray | None = None
+                    ) -> tuple[np.ndarray, float]:
     """Phase (cycles, in [0, 1)) at each sample, and the carry.
 
     Parameters
@@ -349,6 +361,8 @@ def integrate_phase(rate_cycles: np.ndarray, dt_s: float, touch_id: np.ndarray,
     dt_s : output sample period (s).
     touch_id : (n,) touch identifier; the phase restarts at 0 where it changes.
     start : (touch_id, phase) carried from the previous call, or None.
+    steps : (n,) array to receive each sample's own phase increment (cycles, unwrapped:
+        the stretch the finger crosses while the sample is held), or None.
 
     Returns
     -------
@@ -359,13 +373,15 @@ def integrate_phase(rate_cycles: np.ndarray, dt_s: float, touch_id: np.ndarray,
     phase = np.empty(rate.size)
     prev_id, prev_phase = start if start is not None else (0, 0.0)
     carry = phase_kernel(rate, float(dt_s), np.ascontiguousarray(touch_id, dtype=np.int64),
-                         start is not None, int(prev_id), float(prev_phase), phase)
+                         start is not None, int(prev_id), float(prev_phase), phase,
+                         np.empty(rate.size) if steps is None else steps)
     return phase, carry
 
 
 @njit(cache=True, nogil=True)
-def phase_kernel(rate, dt_s, touch, has_start, prev_id, prev_phase, phase):
-    """:func:`integrate_phase`'s loop, writing ``phase`` (n,) and returning the carry.
+def phase_kernel(rate, dt_s, touch, has_start, prev_id, prev_phase, phase, steps):
+    """:func:`integrate_phase`'s loop, writing ``phase`` (n,) and each sample's phase
+    increment ``steps`` (n,, cycles), and returning the carry.
 
     The phase is a running sum of ``rate * dt_s`` from 0 at the touch's first sample (a
     touch carried in from the previous call, ``has_start`` and the same ``prev_id``,
@@ -382,7 +398,8 @@ def phase_kernel(rate, dt_s, touch, has_start, prev_id, prev_phase, phase):
         if k > 0 and touch[k] != touch[k - 1]:
             acc = 0.0
         phase[k] = acc
-        acc += rate[k] * dt_s
+        steps[k] = rate[k] * dt_s
+        acc += steps[k]
         acc -= math.floor(acc)
         if acc >= 1.0:  # a step just below 0 wraps to 1 - 1e-17, which rounds to 1.0
             acc = 0.0
@@ -391,8 +408,10 @@ def phase_kernel(rate, dt_s, touch, has_start, prev_id, prev_phase, phase):
 
 @njit(cache=True, nogil=True)
 def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, s_mm, v_mm_s, sd_mm,
-                has_before, before, axis, layer_phase, limits, phase):
-    """One finger's phase (cycles) for :meth:`HybridRenderer.render`, written to ``phase``.
+                has_before, before, axis, layer_phase, limits, phase, steps):
+    """One finger's phase (cycles) for :meth:`HybridRenderer.render`, written to ``phase``,
+    and each sample's own phase travel (cycles: synthesis and correction until the next
+    sample, not a jump there) to ``steps``.
 
     touch : (n,) int64; vx, vy, x_held, y_held, x_pred, y_pred : (n,) float64, the
     finger's tracks. s_mm, v_mm_s : (n,) its filtered position (mm) and velocity (mm/s)
@@ -420,7 +439,7 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, s_mm, v_mm_s, sd_
         restart[k] = touch[k] != (b_touch if k == 0 else touch[k - 1]) or (k == 0 and not has_before)
         measured[k] = (vx[k] * ax + vy[k] * ay) / period
         rate[k] = v_mm_s[k] / period
-    carry = phase_kernel(rate, dt_s, touch, has_before, int(b_touch), b_phase, phase)
+    carry = phase_kernel(rate, dt_s, touch, has_before, int(b_touch), b_phase, phase, steps)
     # a new measurement: a new touch, or the tracker's held sample or velocity changes;
     # synthesis starts where the finger is at touch-down and when it starts from rest
     bounds = np.empty(n + 1, dtype=np.int64)
@@ -475,11 +494,14 @@ def _hybrid_row(touch, vx, vy, x_held, y_held, x_pred, y_pred, s_mm, v_mm_s, sd_
         slow[k + 1] = acc_slow * scale
         travel[k + 1] = acc_travel * dt_s
     offset = np.empty(n)
+    reach = np.empty(n)
     end, held = _slew_kernel(bounds[:k_n], target[:k_n], flags[:k_n], starts[:k_n], fast, slow,
                              b_offset if has_before else 0.0, locks[:k_n], jump[:k_n], back,
-                             hold[:k_n], travel, not new0 and b_held != 0.0, offset)
+                             hold[:k_n], travel, not new0 and b_held != 0.0, offset, reach)
     for k in range(n):
         phase[k] += offset[k]
+        # a jump at the next measurement is where the finger is then, not crossed here
+        steps[k] += reach[k] - offset[k]
     return (touch[n - 1], carry, end, target[k_n - 1] % 1.0, x_held[n - 1], y_held[n - 1],
             measured[n - 1], speed_before, 1.0 if held else 0.0)
 
@@ -518,6 +540,7 @@ class HybridRenderer:
         """mu' (F, n) and coverage (F, n) under each finger (mu' 1 where the layer does
         not cover), and the new state."""
         phase = np.empty((len(block.ids), block.n))
+        steps = np.empty_like(phase)
         # only the block's fingers are carried on: one that lifted and left the tracks
         # is forgotten (its id, if it comes back, is a new touch that restarts it
         # anyway), so the state follows the fingers touching, not every id ever used
@@ -539,12 +562,12 @@ class HybridRenderer:
                 None if before is None else before.filter)
             end = _hybrid_row(touch[row], *(a[row] for a in rows), s_mm, v_mm_s, sd_mm,
                               before is not None, fields, self.axis, layer_phase, limits,
-                              phase[row])
+                              phase[row], steps[row])
             carried[fid] = _Finger(touch=int(end[0]), phase=end[1], offset=end[2], target=end[3],
                                    measured=end[4:7], speed=end[7], held=end[8],
                                    filter=filtered)
         covers = self.layer.covers(block.x_pred, block.y_pred)
-        mu, last = self.band_limit.play(phase, covers, block, state.last)
+        mu, last = self.band_limit.play(phase, covers, block, state.last, travel=steps)
         limited = self.band_limit.apply(mu, covers, block)
         return mu, covers, HybridState(fingers=carried, clipped=state.clipped + limited,
                                        last=last)

@@ -60,14 +60,15 @@ class ShtRenderer:
         """mu' (F, n) and coverage (F, n) under each finger (mu' 1 where the layer does
         not cover), and the new state."""
         phase = np.empty((len(block.ids), block.n))
+        steps = np.empty_like(phase)
         carried = {fid: state.phase[fid] for fid in block.ids if fid in state.phase}
         ax, ay = self.axis
         for row, fid in enumerate(block.ids):
             rate = (block.vx[row] * ax + block.vy[row] * ay) / self.layer.period_mm
             phase[row], carry = integrate_phase(rate, self.dt_s, block.touch_id[row],
-                                                carried.get(fid))
+                                                carried.get(fid), steps[row])
             carried[fid] = (int(block.touch_id[row, -1]), carry)
         covers = self.layer.covers(block.x_pred, block.y_pred)
-        mu, last = self.band_limit.play(phase, covers, block, state.last)
+        mu, last = self.band_limit.play(phase, covers, block, state.last, travel=steps)
         limited = self.band_limit.apply(mu, covers, block)
         return mu, covers, ShtState(phase=carried, clipped=state.clipped + limited, last=last)

@@ -1,0 +1,69 @@
+"""Each output sample of SHT and the hybrid plays the texture's mean over the stretch the
+finger crosses while the sample is held, [phase k, phase k + its own step], not the one
+before it (``rendering.layers.band_limit``)."""
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from frictex.rendering.layers.band_limit import BandLimit
+from frictex.rendering.layers.hybrid import integrate_phase
+from frictex.rendering.layers.sht import ShtRenderer
+from frictex.rendering.tracking.tracks import FingerBlock
+from frictex.textures.model import Grating, VisualHints
+
+RATE = 10_000.0
+#: 1 mm square grating, low band over the first half of each period
+GRATING = Grating(name="lines", render="sht", region=None, blend="multiply",
+                  visual=VisualHints(), period_mm=1.0, duty=0.5, mu_low=0.6, mu_high=1.0)
+
+
+def _square_mean(a, b):
+    """mu' of :data:`GRATING` averaged over phase [a, b] (cycles), b > a, computed here:
+    the share of the interval inside the low bands, exactly."""
+    low = lambda p: np.floor(p) * 0.5 + np.minimum(p - np.floor(p), 0.5)
+    share = (low(b) - low(a)) / (b - a)
+    return 1.0 + (0.6 - 1.0) * share
+
+
+def _block(vx, index0):
+    """One finger's FingerBlock moving along x at vx (mm/s) per sample, one touch."""
+    n = vx.size
+    row = lambda a: np.asarray(a, dtype=np.float64).reshape(1, n)
+    return FingerBlock(index0=index0, t_s=(index0 + np.arange(n)) / RATE, ids=(0,),
+                       contact=np.ones((1, n), bool), touch_id=np.ones((1, n), np.int64),
+                       x_held=row(np.full(n, 5.0)), y_held=row(np.full(n, 30.0)),
+                       x_pred=row(np.full(n, 5.0)), y_pred=row(np.full(n, 30.0)),
+                       vx=row(vx), vy=row(np.zeros(n)), force=row(np.full(n, 0.5)),
+                       touch_start=row(np.zeros(n)))
+
+
+def test_sht_sample_plays_the_stretch_it_is_held_over_across_a_split():
+    """SHT over a speed ramp, split into two calls: sample k plays the mean over [phi_k,
+    phi_k+1] (phi from 0 at touch-down), the block's last sample and the next block's
+    first joining without a seam."""
+    n, split = 400, 137
+    vx = np.linspace(100.0, 700.0, n)
+    renderer, parts = ShtRenderer(GRATING, RATE), []
+    state = renderer.initial_state()
+    for lo, hi in ((0, split), (split, n)):
+        mu, _, state = renderer.render(_block(vx[lo:hi], lo), state)
+        parts.append(mu[0])
+    mu = np.concatenate(parts)
+    phase = np.concatenate(([0.0], np.cumsum(vx / GRATING.period_mm / RATE)))
+    np.testing.assert_allclose(mu, _square_mean(phase[:-1], phase[1:]), rtol=0, atol=5e-4)
+
+
+def test_the_sample_at_an_edge_plays_the_band_it_enters():
+    """0.025 cycle per sample from phase 0.4: the sample at phase exactly 0.500 is held
+    over [0.500, 0.525], all high band, and plays 1.0 (it played 0.6, the stretch before)."""
+    n = 40
+    steps = np.empty(n)
+    phase, _ = integrate_phase(np.full(n, 250.0), 1.0 / RATE, np.zeros(n, np.int64), None,
+                               steps)
+    phase = phase + 0.4
+    block = SimpleNamespace(touch_id=np.zeros((1, n), np.int64), ids=(0,))
+    mu, _ = BandLimit(GRATING, RATE).play(phase[None], np.ones((1, n), bool), block, {},
+                                          travel=steps[None])
+    assert abs(phase[4] - 0.5) < 1e-12
+    assert mu[0, 4] == 1.0 and mu[0, 3] == 0.6
