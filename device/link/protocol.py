@@ -739,6 +739,9 @@ class Decoder:
         except ValueError:
             c.cobs_errors += 1
             return None
+        if len(body) > MAX_BODY:  # zeros stuff cheaply: 4113 bytes decode to up to 4112
+            c.oversize += 1
+            return None
         if len(body) < _MIN_BODY:
             c.short_frames += 1
             return None

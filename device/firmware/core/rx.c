@@ -43,6 +43,10 @@ static bool check(fw_rx *rx, fw_msg *msg)
         c->cobs_errors++; /* the last COBS block ends past the delimiter */
         return false;
     }
+    if (rx->len > FW_MAX_BODY) { /* zeros stuff cheaply: 4113 bytes decode to up to 4112 */
+        c->oversize++;
+        return false;
+    }
     if (rx->len < 8) {
         c->short_frames++;
         return false;
