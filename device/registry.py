@@ -28,10 +28,12 @@ already taken is left out with a one-line warning on stderr (``frictex: warning:
 once per process); one that cannot be imported, or whose object is not what the registry
 holds (its ``expect``: a device profile that is a dict), is a :class:`PluginError` when its
 name is used, and is left out with such a warning where every entry is needed at once
-(:meth:`Registry.loaded`). A built-in registered after a plugin took its name replaces it
-(the plugin is refused, with the warning). :meth:`Registry.register` called from code
-outside frictex's own modules (a notebook's ``RENDERERS.register("wobble", Wobble)``) is
-another package's entry too: the same checks when registered, the same wrapping when used.
+(:meth:`Registry.loaded`; :meth:`Registry.loadable_names` for a command's choices). A
+built-in registered after a plugin took its name replaces it (the plugin is refused, with
+the warning). :meth:`Registry.register` called from code outside frictex's own modules (a
+notebook's ``RENDERERS.register("wobble", Wobble)``) is another package's entry too: the
+same checks when registered, the same wrapping when used; that module may register the
+name again to replace its own entry.
 
 Every list of names a user sees (command-line choices, the demo's key cycle, the report's
 matrix, texture-file validation, the docs) is ``registry.names()``; an unknown name is an
@@ -373,13 +375,23 @@ class Registry(Generic[T]):
         """Every entry that loads, by name (importing every plugin's): one that cannot
         be loaded is left out with a warning (its :class:`PluginError` when its name is
         used)."""
-        found = {}
-        for name in self.names():
-            try:
-                found[name] = self._load(name)
-            except PluginError as exc:
-                warn_once(f"{exc}; left out")
-        return found
+        return {name: self._entries[name] for name in self.names() if self._loads(name)}
+
+    def loadable_names(self) -> tuple[str, ...]:
+        """:meth:`names` less another package's entries that cannot be loaded, each left
+        out with a warning (importing every plugin's, as :meth:`loaded`); frictex's own
+        are listed without being imported."""
+        return tuple(name for name in self.names()
+                     if self._origin[name] == OWN_DISTRIBUTION or self._loads(name))
+
+    def _loads(self, name: str) -> bool:
+        """Load entry ``name``: False, with a warning, where it cannot be loaded."""
+        try:
+            self._load(name)
+        except PluginError as exc:
+            warn_once(f"{exc}; left out")
+            return False
+        return True
 
     def names(self) -> tuple[str, ...]:
         """Every registered name: frictex's own first in registration order, then the

@@ -15,7 +15,7 @@ from frictex.app.engine.sources import MAX_GAP_S
 from frictex.app.engine.summary import control_line
 from frictex.app.engine.tables import FORMATS
 from frictex.device.errors import InputError
-from frictex.rendering.renderers import render_modes
+from frictex.textures.model import RENDERERS, SHO
 from frictex.textures.outside import add_allow_outside
 
 
@@ -34,7 +34,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="csv (default), npz (one array per column) or parquet (columnar, "
                              "compressed; pandas and polars open it): the two faster for "
                              "long replays")
-    parser.add_argument("--renderer", choices=render_modes(), default=None,
+    parser.add_argument("--renderer", choices=(SHO, *RENDERERS.loadable_names()),
+                        default=None,
                         help="render every periodic layer this way instead of as its file says "
                              "(sho: the run's SHO variant, sho-predicted unless sho-held is "
                              "chosen; rendering/RENDERERS.md)")
@@ -53,14 +54,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="also write PNG frames of the visual layer at FPS into DIR/frames")
     parser.add_argument("--sink", action="append", default=[], metavar="NAME[:ARG]",
                         help="also feed every block to this sink (repeatable; registered: "
-                             f"{_listed(SINKS.names())}; a package adds one under entry "
+                             f"{_listed(SINKS.loadable_names())}; a package adds one under entry "
                              "points 'frictex.sinks'); the run's own tables, link, frames and "
                              "progress bar are built already")
     parser.add_argument("--clock", default="virtual", metavar="NAME[:ARG]",
                         help="what paces the replay: virtual (default: as fast as it computes), "
                              "wall (real time), device (the --device's room), or a package's "
                              f"(entry points 'frictex.clocks'; registered: "
-                             f"{_listed(CLOCKS.names())})")
+                             f"{_listed(CLOCKS.loadable_names())})")
     parser.add_argument("--quiet", action="store_true",
                         help="no progress bar, no summary line (warnings still print)")
     add_allow_outside(parser)
