@@ -1,6 +1,7 @@
 """Each output sample of SHT and the hybrid plays the texture's mean over the stretch the
 finger crosses while the sample is held, [phase k, phase k + its own step], not the one
-before it (``rendering.layers.band_limit``)."""
+before it (``rendering.layers.band_limit``); the over-Nyquist count follows the phase
+travel actually played."""
 
 from types import SimpleNamespace
 
@@ -67,3 +68,15 @@ def test_the_sample_at_an_edge_plays_the_band_it_enters():
                                           travel=steps[None])
     assert abs(phase[4] - 0.5) < 1e-12
     assert mu[0, 4] == 1.0 and mu[0, 3] == 0.6
+
+
+def test_nyquist_counts_the_phase_travel_played_not_the_trackers_velocity():
+    """A sample whose phase moves 0.6 cycle (a correction on top of synthesis) while the
+    tracker says 0.3 cycle per sample plays the mean and is counted."""
+    band = BandLimit(GRATING, RATE)
+    block = SimpleNamespace(vx=np.full((1, 2), 3000.0), vy=np.zeros((1, 2)),
+                            contact=np.ones((1, 2), bool))
+    mu = np.array([[0.6, 0.6]])
+    counted = band.apply(mu, np.ones((1, 2), bool), block, np.array([[0.3, 0.6]]))
+    assert counted == 1
+    assert mu[0, 0] == 0.6 and mu[0, 1] == band.mean_mu

@@ -28,13 +28,14 @@ call starts at the previous call's last phase (``last``, carried in the renderer
 state), and SHT's and the hybrid's stretch is each sample's own, so the output does not
 depend on how a run is split into calls.
 
-Beyond Nyquist. A renderer that synthesises a period from the finger's velocity (SHT, the
-hybrid) plays a texture of frequency |v . axis| / P (Hz). Above the output's Nyquist
-frequency (half the output rate) the texture's mean mu' over one period is played, which
-is what the texture is to a plate that cannot play it, and those touching samples are
-counted (``summary.json``'s ``layer_clipped``, with a warning). At the default 10 kHz
-output it takes a finger beyond 3 m/s on a 0.6 mm grating. SHO reads unwrapped phases
-and needs no such limit.
+Beyond Nyquist. SHT and the hybrid play a texture whose phase moves by their ``travel``
+each sample. Where it moves by more than half a cycle (a texture beyond the output's
+Nyquist frequency, half the output rate; for the hybrid the synthesis at the filtered
+velocity plus its correction, which can exceed what the tracker's velocity says) the
+texture's mean mu' over one period is played, which is what the texture is to a plate
+that cannot play it, and those touching samples are counted (``summary.json``'s
+``layer_clipped``, with a warning). At the default 10 kHz output it takes a finger beyond
+3 m/s on a 0.6 mm grating. SHO reads unwrapped phases and needs no such limit.
 """
 
 from __future__ import annotations
@@ -108,13 +109,11 @@ class BandLimit:
         return mu, {fid: (int(touch[row, -1]), float(phase[row, -1]))
                     for row, fid in enumerate(block.ids)}
 
-    def apply(self, mu: np.ndarray, covers: np.ndarray, block) -> int:
+    def apply(self, mu: np.ndarray, covers: np.ndarray, block, travel: np.ndarray) -> int:
         """Set ``mu`` (F, n) to the mean where a touching finger on the layer (``covers``)
-        moves the texture past the Nyquist frequency (the tracker's velocity,
-        ``block.vx``, ``block.vy``); the number of such samples."""
-        ax, ay = self.axis
-        texture_hz = np.abs(block.vx * ax + block.vy * ay) / self.period_mm
-        above = (texture_hz > self.nyquist_hz) & covers & block.contact
+        moves the phase by more than half a cycle in one sample (``travel``, cycles,
+        (F, n): the texture beyond the Nyquist frequency); the number of such samples."""
+        above = (np.abs(travel) > 0.5) & covers & block.contact
         mu[above] = self.mean_mu
         return int(np.count_nonzero(above))
 

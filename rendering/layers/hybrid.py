@@ -568,6 +568,6 @@ class HybridRenderer:
                                    filter=filtered)
         covers = self.layer.covers(block.x_pred, block.y_pred)
         mu, last = self.band_limit.play(phase, covers, block, state.last, travel=steps)
-        limited = self.band_limit.apply(mu, covers, block)
+        limited = self.band_limit.apply(mu, covers, block, steps)
         return mu, covers, HybridState(fingers=carried, clipped=state.clipped + limited,
                                        last=last)

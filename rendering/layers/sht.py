@@ -70,5 +70,5 @@ class ShtRenderer:
             carried[fid] = (int(block.touch_id[row, -1]), carry)
         covers = self.layer.covers(block.x_pred, block.y_pred)
         mu, last = self.band_limit.play(phase, covers, block, state.last, travel=steps)
-        limited = self.band_limit.apply(mu, covers, block)
+        limited = self.band_limit.apply(mu, covers, block, steps)
         return mu, covers, ShtState(phase=carried, clipped=state.clipped + limited, last=last)
