@@ -43,7 +43,9 @@ good.
 Every job writes its replay outputs into its folder; the batch writes ``batch.csv``,
 one row per job (:data:`RESULT_COLUMNS`):
 
-- ``job`` (its row among the jobs, from 0), ``name``, ``status``: ``ok``, ``failed``
+- ``job`` (its row among the jobs, from 0), ``name``, ``scene`` and ``trace`` (as the
+  manifest's line names them, a file by its absolute path; an ``earlier`` row's are the
+  earlier batch's, what its folder holds), ``status``: ``ok``, ``failed``
   (``error`` says why), ``interrupted`` (the batch was stopped before the job finished:
   ``error`` says whether it had started) or ``earlier`` (a stopped batch kept an earlier
   batch's folder of that name: below);
@@ -105,11 +107,13 @@ from frictex.textures.library import UnreadableText, bundled_file, file_problem,
 from frictex.textures.outside import HOW, allow_outside_from_env, leads_out
 
 COLUMNS = ("scene", "trace", "renderer", "rate_hz", "block", "format", "name")
-RESULT_COLUMNS = ("job", "name", "status", "error", "output_s", "wall_s", "x_realtime",
-                  "x_realtime_end_to_end", "clamps", "actuator_limited", "modal_capped",
-                  "warnings")
+RESULT_COLUMNS = ("job", "name", "scene", "trace", "status", "error", "output_s", "wall_s",
+                  "x_realtime", "x_realtime_end_to_end", "clamps", "actuator_limited",
+                  "modal_capped", "warnings")
+#: the cells of ``batch.csv`` that say which replay a job folder holds
+INPUTS = ("scene", "trace")
 #: the numeric cells of ``batch.csv``, empty for a job that is not ``ok``
-MEASURES = RESULT_COLUMNS[4:]
+MEASURES = RESULT_COLUMNS[RESULT_COLUMNS.index("output_s"):]
 #: the files a batch writes in its ``--out`` beside the job folders: no job's name
 RESULTS, RESULTS_PARTIAL = "batch.csv", "batch.csv.partial"
 RESERVED = (RESULTS, RESULTS_PARTIAL)
@@ -398,7 +402,7 @@ def run_job(job: Job, out_dir: str) -> dict:
         return not_ok(job, "failed", printable(exc, MAX_ERROR_SHOWN))
     wall_s = time.perf_counter() - start
     output_s = doc["output"]["duration_s"]
-    return {"job": job.index, "name": job.name, "status": "ok", "error": "",
+    return {**_identity(job), "status": "ok", "error": "",
             "output_s": output_s, "wall_s": wall_s,
             "x_realtime": output_s / wall_s if wall_s > 0 else None,
             "x_realtime_end_to_end": doc["timings"]["x_realtime_end_to_end"],
@@ -411,8 +415,12 @@ def run_job(job: Job, out_dir: str) -> dict:
 def not_ok(job: Job, status: str, error: str) -> dict:
     """The result row of a job that did not finish: ``status`` ("failed" or
     "interrupted"), ``error``, every measure empty."""
-    return {"job": job.index, "name": job.name, "status": status, "error": error,
-            **dict.fromkeys(MEASURES)}
+    return {**_identity(job), "status": status, "error": error, **dict.fromkeys(MEASURES)}
+
+
+def _identity(job: Job) -> dict:
+    """The cells of a job's ``batch.csv`` row that say which job it is and what it replays."""
+    return {"job": job.index, "name": job.name, "scene": job.scene, "trace": job.trace}
 
 
 def write_results(out_dir: Path, rows: list[dict]) -> Path:

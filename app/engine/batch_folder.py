@@ -13,8 +13,9 @@ What the new ``--out`` holds:
   output (the user's) is kept as it was and named in a warning;
 - a batch stopped by a signal (Ctrl-C, SIGTERM, SIGHUP): the same, and every earlier job
   folder it did not replace, kept as it was and listed in ``batch.csv`` with status
-  ``earlier`` and the earlier ``batch.csv``'s figures for it: stopping a rerun deletes
-  nothing that was complete.
+  ``earlier`` and the earlier ``batch.csv``'s scene, trace and figures for it (what that
+  folder holds, which the new manifest's line of that name may not): stopping a rerun
+  deletes nothing that was complete.
 
 What is carried from the previous ``--out`` into the new one is hard-linked (no byte
 copied; copied where the file system has no hard links), never moved, so that the
@@ -30,7 +31,7 @@ import re
 import shutil
 from pathlib import Path
 
-from frictex.app.engine.batch import MEASURES, RESERVED, RESULTS, write_results
+from frictex.app.engine.batch import INPUTS, MEASURES, RESERVED, RESULTS, write_results
 from frictex.app.engine.staging import SUMMARY, Staging, is_run_folder, is_run_output
 from frictex.device.errors import InputError
 from frictex.device.safe_text import escape, quoted
@@ -124,24 +125,27 @@ class BatchFolder:
 
 def _kept(job, name: str, before: dict) -> dict:
     """The ``batch.csv`` row of an earlier job folder kept: status ``earlier``, the earlier
-    batch's figures for it (empty where its ``batch.csv`` has none)."""
-    figures = before.get(name, {})
-    return {"job": job, "name": name, "status": EARLIER,
+    batch's scene, trace and figures for it (empty where its ``batch.csv`` has none)."""
+    earlier = before.get(name, {})
+    return {"job": job, "name": name, **{key: earlier.get(key) for key in INPUTS},
+            "status": EARLIER,
             "error": "kept from an earlier batch: this one was stopped before it replaced it",
-            **{key: figures.get(key) for key in MEASURES}}
+            **{key: earlier.get(key) for key in MEASURES}}
 
 
 def _earlier_rows(path: Path) -> dict[str, dict]:
-    """The earlier ``batch.csv``'s figures of its ok (or kept) jobs by name, as it wrote
-    them (a cell that is not a number, or a column it did not have yet, left empty); none
-    where it is missing or unreadable (its folders are then kept without them)."""
+    """The earlier ``batch.csv``'s scene, trace and figures of its ok (or kept) jobs by
+    name, as it wrote them (a figure that is not a number, or a column it did not have
+    yet, left empty); none where it is missing or unreadable (its folders are then kept
+    without them)."""
     try:
         with open(path, encoding="utf-8", newline="") as fh:
             rows = list(csv.DictReader(fh))
     except (OSError, UnicodeDecodeError, csv.Error):
         return {}
-    return {row["name"]: {key: row.get(key) if _is_number(row.get(key)) else None
-                          for key in MEASURES}
+    return {row["name"]: {**{key: row.get(key) or None for key in INPUTS},
+                          **{key: row.get(key) if _is_number(row.get(key)) else None
+                             for key in MEASURES}}
             for row in rows if row.get("status") in ("ok", EARLIER) and row.get("name")}
 
 
