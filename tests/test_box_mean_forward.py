@@ -1,7 +1,7 @@
 """Each output sample of SHT and the hybrid plays the texture's mean over the stretch the
 finger crosses while the sample is held, [phase k, phase k + its own step], not the one
 before it (``rendering.layers.band_limit``); the over-Nyquist count follows the phase
-travel actually played."""
+travel actually played; a non-finite phase rate holds the phase instead of spoiling it."""
 
 from types import SimpleNamespace
 
@@ -80,3 +80,12 @@ def test_nyquist_counts_the_phase_travel_played_not_the_trackers_velocity():
     counted = band.apply(mu, np.ones((1, 2), bool), block, np.array([[0.3, 0.6]]))
     assert counted == 1
     assert mu[0, 0] == 0.6 and mu[0, 1] == band.mean_mu
+
+
+def test_a_non_finite_phase_rate_holds_the_phase():
+    """[10, nan, 10, 10] cycles/s at 1e-4 s: the NaN step is 0 and the touch goes on."""
+    steps = np.empty(4)
+    phase, carry = integrate_phase(np.array([10.0, np.nan, 10.0, 10.0]), 1e-4,
+                                   np.zeros(4, np.int64), None, steps)
+    np.testing.assert_allclose(phase, [0.0, 0.001, 0.001, 0.002], rtol=0, atol=1e-15)
+    assert np.isclose(carry, 0.003) and np.array_equal(steps, [0.001, 0.0, 0.001, 0.001])

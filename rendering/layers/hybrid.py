@@ -357,7 +357,8 @@ def integrate_phase(rate_cycles: np.ndarray, dt_s: float, touch_id: np.ndarray,
 
     Parameters
     ----------
-    rate_cycles : (n,) phase rate (cycles/s) in effect from each sample to the next.
+    rate_cycles : (n,) phase rate (cycles/s) in effect from each sample to the next; a
+        non-finite one is taken as 0 (the phase holds).
     dt_s : output sample period (s).
     touch_id : (n,) touch identifier; the phase restarts at 0 where it changes.
     start : (touch_id, phase) carried from the previous call, or None.
@@ -390,7 +391,8 @@ def phase_kernel(rate, dt_s, touch, has_start, prev_id, prev_phase, phase, steps
     replay's result does not depend on its chunk size (a sum restarted at each call and
     wrapped only at its end flipped 19 of 20,050 samples at a 5 mm grating's edges
     between one block per call and the default), and the sum never leaves [0, 1), where
-    a step's rounding is at most 5.6e-17 cycles however long the touch.
+    a step's rounding is at most 5.6e-17 cycles however long the touch. A non-finite
+    rate steps 0: one NaN must not spoil the rest of the touch through the carry.
     """
     n = rate.size
     acc = prev_phase if has_start and n > 0 and touch[0] == prev_id else 0.0
@@ -398,7 +400,7 @@ def phase_kernel(rate, dt_s, touch, has_start, prev_id, prev_phase, phase, steps
         if k > 0 and touch[k] != touch[k - 1]:
             acc = 0.0
         phase[k] = acc
-        steps[k] = rate[k] * dt_s
+        steps[k] = rate[k] * dt_s if math.isfinite(rate[k]) else 0.0
         acc += steps[k]
         acc -= math.floor(acc)
         if acc >= 1.0:  # a step just below 0 wraps to 1 - 1e-17, which rounds to 1.0
