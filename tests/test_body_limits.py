@@ -32,3 +32,12 @@ def test_a_body_over_4096_bytes_is_oversize(kind):
     assert (counts.oversize, counts.frames_ok, core.level) == (1, 1, 0)
     core.receive(raw_frame(1, p.Block.TYPE, 2, zero_block(0, 2038)), 0.0)
     assert (core.decoder.counts.frames_ok, core.level) == (2, 2038)
+
+
+@pytest.mark.parametrize("kind", CORES)
+def test_a_stop_with_drain_above_1_is_a_bad_payload(kind):
+    """Drain 7 used to be taken as a drained Stop; it is dropped and changes nothing."""
+    core = core_class(kind)(DeviceConfig())
+    core.receive(p.encode(p.Hello(1), 0), 0.0)
+    assert core.receive(raw_frame(1, p.Stop.TYPE, 1, b"\7"), 0.0) == b""
+    assert (core.decoder.counts.bad_payload, core.stopped) == (1, False)

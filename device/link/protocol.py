@@ -613,6 +613,8 @@ def _decode_heartbeat(p: bytes, version: int) -> Heartbeat:
 
 def _decode_stop(p: bytes, version: int) -> Stop:
     (drain,) = _STOP.unpack(p)
+    if drain > 1:
+        raise ValueError("Stop drain is neither 0 nor 1")
     return Stop(bool(drain))
 
 

@@ -153,8 +153,8 @@ bool fw_parse(uint8_t version, uint8_t type, const uint8_t *p, size_t n, fw_msg 
         out->m.token = n == 4 ? fw_le32(p) : 0;
         return n == 4;
     case FW_STOP:
-        out->m.drain = n == 1 && p[0] != 0;
-        return n == 1;
+        out->m.drain = n == 1 && p[0] == 1;
+        return n == 1 && p[0] <= 1; /* 4.5 defines 0 and 1 only */
     case FW_BLOCK:
         return parse_block(p, n, &out->m.block);
     case FW_RESEND:
