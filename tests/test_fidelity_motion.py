@@ -34,7 +34,7 @@ def test_a_constant_speed_swipe_at_50_hz_is_rendered_exactly(period):
     """40 mm/s from x = 10 mm, 50 Hz, no noise: from the second sample on (the first
     velocity) the prediction is the true position (within 1e-9 mm) and the hybrid gives
     at every output sample after that the grating's mean between the true positions at
-    the sample before and at it (``rendering.layers.band_limit``); 1e-6: 1e-9 mm of a
+    the sample and at the one after it (``rendering.layers.band_limit``); 1e-6: 1e-9 mm of a
     4 um step across a 0.4 edge, and the edges (phases 0 and 0.5) are table points."""
     motion = make_motion("swipe", speed_mm_s=40.0, duration_s=1.0, x0_mm=10.0)
     fingers = _tracks(sample(motion, 50.0), 1.0)
@@ -47,7 +47,7 @@ def test_a_constant_speed_swipe_at_50_hz_is_rendered_exactly(period):
     after = np.flatnonzero(known[1:] & known[:-1]) + 1
     phase = layer.phase_at(x_true, 30.0)
     expected = grating_box_mean(layer, phase[after - 1], phase[after])
-    np.testing.assert_allclose(mu[0, after], expected, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(mu[0, after - 1], expected, rtol=0, atol=1e-6)
 
 
 @pytest.mark.parametrize("seed", range(8))

@@ -296,11 +296,12 @@ def test_a_swipe_starts_at_the_measured_phase_once_its_velocity_is_known(tracker
     x_held = np.where(known, 12.4, 10.0)
     x_pred = np.where(known, 12.4 + 120.0 * (t - 0.02), 10.0)
     mu, _, _ = r.render(_block(x_pred, np.where(known, 120.0, 0.0), x_held=x_held), r.initial_state())
-    # each sample plays the box mean from the previous sample's phase; the first known
-    # one's interval is the jump to where the finger is (rendering.layers.band_limit)
+    # each sample plays the box mean over its own stretch, up to the next sample's phase;
+    # the jump to where the finger is is not crossed (rendering.layers.band_limit)
     phase = layer.phase_at(np.where(known, x_pred, 10.0), 30.0)
     moving = np.flatnonzero(known)
-    assert_allclose(mu[0, moving], grating_box_mean(layer, phase[moving - 1], phase[moving]),
+    step = 120.0 / layer.period_mm / RATE
+    assert_allclose(mu[0, moving], grating_box_mean(layer, phase[moving], phase[moving] + step),
                     atol=1e-4)
     assert_allclose(mu[0, ~known], layer.mu_at(10.0, 30.0))
 

@@ -82,8 +82,7 @@ class BandLimit:
         self._table = np.concatenate(([0.0], deviation[:-1].astype(np.float64), [0.0]))
 
     def play(self, phase: np.ndarray, covers: np.ndarray, block, last: dict,
-             travel: np.ndarray | None = None, wrapped: bool = False
-             ) -> tuple[np.ndarray, dict]:
+             travel: np.ndarray | None = None) -> tuple[np.ndarray, dict]:
         """mu' (F, n) each sample plays (1 where the layer does not cover), and the
         (touch id, last phase) of each finger of ``block`` to pass back as ``last`` next
         call.
@@ -92,7 +91,7 @@ class BandLimit:
         finger crosses while the sample is held; the sample plays the profile's mean over
         [phase, phase + travel] (SHT, the hybrid). None: the stretch from the previous
         sample's phase to ``phase`` (cycles, unwrapped; SHO, which knows no sample's
-        phase before it comes). ``wrapped``: unused, those phases are unwrapped."""
+        phase before it comes)."""
         touch = np.ascontiguousarray(block.touch_id, dtype=np.int64)
         phase = np.ascontiguousarray(phase, dtype=np.float64)
         point = self.layer.profile_where(phase, covers)

@@ -42,8 +42,7 @@ class ShoRenderer:
             mu, covers = self.layer.mu_and_covers(x, y)
             return mu, covers, state
         covers = self.layer.covers(x, y)
-        mu, last = self.band_limit.play(self.layer.phase_at(x, y), covers, block, state,
-                                        wrapped=False)
+        mu, last = self.band_limit.play(self.layer.phase_at(x, y), covers, block, state)
         return mu, covers, last
 
 
