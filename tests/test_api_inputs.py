@@ -227,7 +227,7 @@ def test_the_command_line_refuses_what_the_api_refuses(tmp_path, capsys):
 @pytest.mark.parametrize("kwargs, message", [
     ({"max_gap_s": -1}, r"^max_gap_s=-1.0: expected more than 0 \(s\)$"),
     ({"max_gap_s": 0.0}, r"^max_gap_s=0.0: expected more than 0 \(s\)$"),
-    ({"max_gap_s": math.inf}, r"^max_gap_s=inf: expected more than 0 \(s\)$"),
+    ({"max_gap_s": math.inf}, r"^max_gap_s=inf: expected a finite number more than 0 \(s\)$"),
     ({"max_unplayed": 1.5}, "^max_unplayed=1.5: expected 0 to 1$"),
     ({"max_unplayed": -0.1}, "^max_unplayed=-0.1: expected 0 to 1$"),
     ({"faults": "corrupt=0.001"}, "^faults are injected into a device's link: give device too$"),
