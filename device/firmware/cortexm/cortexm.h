@@ -31,7 +31,10 @@ void fault(void);
 
 /* One turn of a port's main loop for what the link brought: the bytes received so far
  * (``read``, the port's uart_read) handed to the core, after the watchdog trip the sample
- * interrupt may have noted. Returns how many bytes there were. */
+ * interrupt may have noted. Returns how many bytes there were. Frames are timestamped
+ * now, not when their bytes arrived: the watchdog trips up to one main-loop latency late
+ * (at most what the receive ring covers, 2.6 ms for 256 bytes at 1 Mbaud), a margin
+ * PROTOCOL.md 5.3 counts against its 50 ms. */
 static inline size_t cortexm_take_bytes(fw_device *d, size_t (*read)(uint8_t *, size_t))
 {
     uint8_t chunk[64];
