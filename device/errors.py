@@ -25,6 +25,8 @@ layer can raise them.
 
 from __future__ import annotations
 
+import errno
+
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # the API's layer sits above this one: its type, never an import
@@ -54,6 +56,17 @@ class DeviceError(FrictexError, OSError):
 
 class OutputSpaceError(FrictexError, OSError):
     """The outputs do not fit (disk room, a folder that cannot be written)."""
+
+
+def disk_full(exc: OSError, said: str) -> OutputSpaceError | None:
+    """``exc`` as a one-line :class:`OutputSpaceError` saying ``said`` (with ``exc``'s
+    errno) where it is a full disk or quota (ENOSPC, EDQUOT) not said so already; None
+    for any other error."""
+    if isinstance(exc, OutputSpaceError) or exc.errno not in (errno.ENOSPC, errno.EDQUOT):
+        return None
+    full = OutputSpaceError(said)
+    full.errno = exc.errno
+    return full
 
 
 class RunFailed(FrictexError, RuntimeError):

@@ -2,10 +2,13 @@
 folder (not its staging folder) and the file, with what to do; nothing is left behind."""
 
 import errno
+import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from frictex.app.commands.cli import main
 from frictex.app.engine import tables
 from frictex.app.engine.sinks import friction_columns
 from frictex.app.engine.staging import Staging
@@ -49,3 +52,38 @@ def test_a_full_disk_at_the_npz_commit_is_said_too(tmp_path, monkeypatch):
     table.write(_rows(100))
     with pytest.raises(OutputSpaceError, match=r"friction\.npz was written .*--format parquet"):
         table.commit()
+
+
+
+def test_a_full_disk_at_the_summary_names_the_output_folder(tmp_path, monkeypatch, capsys):
+    """summary.json is written into the staging folder last: a disk full then is said of
+    the output folder too (it was a bare '[Errno 28] No space left on device'), and the
+    previous outputs stay."""
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "summary.json").write_text("{}\n")
+    original = Path.write_text
+
+    def write_text(path, *args, **kwargs):
+        if path.name == "summary.json" and path.parent != out:
+            _disk_full()
+        return original(path, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "write_text", write_text)
+    assert main(["replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(out), "--format",
+                 "csv", "--quiet"]) == 1
+    assert capsys.readouterr().err == (f"frictex: error: {out}: the disk is full (No space left "
+                                       "on device); nothing was replaced\n")
+    assert (out / "summary.json").read_text() == "{}\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["o"]
+
+
+def test_a_parquet_replay_refused_for_room_is_not_told_to_write_parquet(tmp_path, monkeypatch,
+                                                                        capsys):
+    monkeypatch.setattr(shutil, "disk_usage", lambda path: shutil._ntuple_diskusage(
+        1 << 30, (1 << 30) - (1 << 20), 1 << 20))
+    for fmt in ("parquet", "csv"):
+        assert main(["replay", "grating-5mm", "swipe-40mms-50hz", "--out",
+                     str(tmp_path / fmt), "--format", fmt, "--quiet"]) == 1
+        err = capsys.readouterr().err
+        assert "need about" in err and ("--format parquet" in err) == (fmt != "parquet"), err

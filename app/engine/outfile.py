@@ -15,14 +15,13 @@ device, a socket) is refused, touching nothing.
 
 from __future__ import annotations
 
-import errno
 import os
 import stat
 from collections.abc import Callable
 from pathlib import Path
 
 from frictex.app.engine.tables import WRITE_ELSEWHERE, check_room
-from frictex.device.errors import InputError, OutputSpaceError
+from frictex.device.errors import InputError, OutputSpaceError, disk_full
 
 
 def write_file(path: str | Path, write: Callable[[Path], object], need_bytes: float) -> None:
@@ -57,10 +56,10 @@ def write_file(path: str | Path, write: Callable[[Path], object], need_bytes: fl
         os.replace(partial, path)
     except OSError as exc:
         partial.unlink(missing_ok=True)
-        if exc.errno in (errno.ENOSPC, errno.EDQUOT):
-            raise OutputSpaceError(f"{path}: the disk is full ({exc.strerror}); nothing "
-                                   "was written") from None
-        raise
+        full = disk_full(exc, f"{path}: the disk is full ({exc.strerror}); nothing was written")
+        if full is None:
+            raise
+        raise full from None
     except BaseException:
         partial.unlink(missing_ok=True)
         raise

@@ -45,7 +45,8 @@ from frictex.app.engine.sinks import (SinkRequest, build_sink, command_columns,
 from frictex.app.engine.sources import MAX_GAP_S, TraceSource
 from frictex.app.engine.staging import Staging
 from frictex.app.engine.summary import Totals, finite_json, summary, timings
-from frictex.app.engine.tables import MEMORY, check_memory, check_room, load_writer, row_bytes
+from frictex.app.engine.tables import (MEMORY, check_memory, check_room, load_writer,
+                                       room_hint, row_bytes)
 from frictex.device.errors import DeviceError, InputError
 from frictex.rendering.input.trace_file import Trace, iter_trace, most_touching
 from frictex.rendering.pipeline import build_pipeline
@@ -267,8 +268,7 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
                 doc["warnings"].append(f"removed the leftovers of killed runs beside "
                                        f"{staging.out.name}: " + ", ".join(staging.removed))
             text = json.dumps(finite_json(doc), indent=2, allow_nan=False) + "\n"
-            (staging.folder / "summary.json").write_text(text, encoding="utf-8")
-            summary_id = file_id(staging.folder / "summary.json")  # the swap keeps it
+            summary_id = file_id(staging.write_text("summary.json", text))  # the swap keeps it
             with check.committing():  # held through the swap: then the run is complete
                 staging.commit()
     except BaseException:
@@ -428,7 +428,7 @@ def _check_outputs_fit(out_dir: Path, source: TraceSource, pipeline, fmt: str, f
     if frames is not None:
         need += frames.frames_bytes(output_s)
         what += f", frames at {frames.fps:g} fps"
-    check_room(_existing(out_dir), need, what + ")")
+    check_room(_existing(out_dir), need, what + ")", room_hint(fmt))
 
 
 def _check_tables_fit_memory(source: TraceSource, pipeline) -> None:

@@ -59,7 +59,7 @@ import shutil
 import stat
 from pathlib import Path
 
-from frictex.device.errors import InputError, OutputSpaceError, RunFailed
+from frictex.device.errors import InputError, RunFailed, disk_full
 
 #: the tables' stems, formats, and the other names a run writes into its output folder
 OUTPUT_STEMS = ("commands", "friction")
@@ -201,6 +201,16 @@ class Staging:
             self.removed.append(path.name if kept is None else f"{path.name} (kept as {kept.name}: "
                                 "it held files not a run's)")
 
+    def write_text(self, name: str, text: str) -> Path:
+        """Write ``text`` (UTF-8) as the staging folder's file ``name``; its path. A full
+        disk is said of ``out`` (:class:`OutputSpaceError`), as the commit's is."""
+        path = self.folder / name
+        try:
+            path.write_text(text, encoding="utf-8")
+        except OSError as exc:
+            raise self._failed(exc, f"write {name}") from None
+        return path
+
     def commit(self) -> None:
         """Swap the staging folder in as ``out``; the previous run's outputs are deleted,
         the rest kept (module docstring). :class:`RunFailed` if a folder not a run's
@@ -267,10 +277,9 @@ class Staging:
 
     def _failed(self, exc: OSError, doing: str) -> OSError:
         """``exc`` (on the staging folder) as an error naming ``out``."""
-        if exc.errno in (errno.ENOSPC, errno.EDQUOT):
-            full = OutputSpaceError(f"{self.out}: the disk is full ({exc.strerror}); nothing "
-                                    "was replaced")
-            full.errno = exc.errno
+        full = disk_full(exc, f"{self.out}: the disk is full ({exc.strerror}); nothing was "
+                              "replaced")
+        if full is not None:
             return full
         if exc.errno == errno.EBUSY:
             return InputError(f"{self.out}: a mount point, which a run cannot replace; write "

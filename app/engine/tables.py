@@ -54,7 +54,7 @@ import numpy as np
 
 from frictex.app.engine.csv_text import rows_text
 from frictex.app.engine.staging import shown_path
-from frictex.device.errors import InputError, OutputSpaceError
+from frictex.device.errors import InputError, OutputSpaceError, disk_full
 
 FORMATS = ("csv", "npz", "parquet")
 #: the format of tables kept in memory (a pyarrow Table each; no file)
@@ -230,12 +230,11 @@ class TableWriter:
         try:
             yield
         except OSError as exc:
-            if exc.errno not in (errno.ENOSPC, errno.EDQUOT) or isinstance(exc, OutputSpaceError):
+            full = disk_full(exc, f"{shown_path(self.path.parent)}: the disk filled while "
+                                  f"{self.path.name} was written ({exc.strerror}); free some "
+                                  f"space, {room_hint(self.fmt)}")
+            if full is None:
                 raise
-            full = OutputSpaceError(f"{shown_path(self.path.parent)}: the disk filled while "
-                                    f"{self.path.name} was written ({exc.strerror}); free some "
-                                    f"space, {room_hint(self.fmt)}")
-            full.errno = exc.errno
             raise full from None
 
     def abort(self) -> None:
