@@ -70,6 +70,9 @@ class BandLimit:
         self.period_mm = float(layer.period_mm)
         middles = (np.arange(MEAN_PHASES) + 0.5)[None, :] / MEAN_PHASES
         values = layer.profile_where(middles, np.ones(middles.shape, bool))[0]
+        #: the profile's least and greatest mu' (at the table's phases): a box mean lies
+        #: between them
+        self._range = float(values.min()), float(values.max())
         # summed in extended precision, so that each entry is rounded once: a float64
         # running sum drifts by up to 65536 roundings, 4e-12 of a 10 mm grating's box mean
         running = np.cumsum(values.astype(np.longdouble))
@@ -102,7 +105,7 @@ class BandLimit:
             else:
                 start, span = phase[row], np.ascontiguousarray(travel[row], dtype=np.float64)
             _box_row(start, span, np.ascontiguousarray(covers[row]), point[row], self._table,
-                     self.mean_mu, mu[row])
+                     self.mean_mu, *self._range, mu[row])
         if phase.shape[1] == 0:
             return mu, last
         return mu, {fid: (int(touch[row, -1]), float(phase[row, -1]))
@@ -144,10 +147,11 @@ def _deviation(phase, table):
 
 
 @njit(cache=True, nogil=True)
-def _box_row(start, travel, covers, point, table, mean_mu, mu):
+def _box_row(start, travel, covers, point, table, mean_mu, lo, hi, mu):
     """One finger's row of :meth:`BandLimit.play`, written to ``mu``: each covered sample
     whose stretch [start, start + travel] (cycles) is at least ``MIN_TRAVEL`` long, the
-    box mean over it; the others ``point``, the profile at ``start``."""
+    box mean over it, within the profile's range [lo, hi]; the others ``point``, the
+    profile at ``start``."""
     for k in range(start.size):
         span = travel[k]
         if not (covers[k] and abs(span) >= MIN_TRAVEL):  # NaN fails too
@@ -157,4 +161,6 @@ def _box_row(start, travel, covers, point, table, mean_mu, mu):
         mean = mean_mu + (_deviation(a + span, table) - _deviation(a, table)) / span
         # within one band (a grating's, or any flat stretch) the difference rounds to the
         # band's level +- 1e-11 (|D| < 0.25 over |travel| >= 1/65536): play the level
-        mu[k] = point[k] if abs(mean - point[k]) < SNAP else mean
+        # a stretch starting on an edge has the lower band's point value and rounds to the
+        # upper band's level +- 1e-16, which past 1 the inversion would count as a clamp
+        mu[k] = point[k] if abs(mean - point[k]) < SNAP else min(max(mean, lo), hi)
