@@ -119,9 +119,9 @@ def warnings_of(pipeline, tracker, totals: Totals) -> list[str]:
     if totals.modal_capped:
         warnings.append(f"{totals.modal_capped} samples: the fingers could not be given "
                         "independent amplitudes (seed 001 eq 8): on a singular locus (fingers "
-                        "a wavelength apart, coincident or on a shared node) the modal gain "
-                        "was capped, so fingers asking for different friction may feel the "
-                        "same (see fingers)")
+                        "a multiple of half a wavelength apart, coincident or on a shared "
+                        "node) the modal gain was capped, so fingers asking for different "
+                        "friction may feel the same (see fingers)")
     if totals.off_structure:
         warnings.append(f"{totals.off_structure} finger samples were off the vibrating "
                         "structure and were held at its edge")
