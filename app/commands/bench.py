@@ -6,6 +6,14 @@ Every section's figures are printed between the machine's load (the 1-minute ave
 at its start and at its end, and followed by the section's whole wall time and CPU, this
 process's apart from its child processes' (which include the busy processes some
 sections start as load), so that a figure is read with the load it was measured under.
+
+Plain text is printed section by section as each ends, so that the figures of finished
+sections stay on the screen when a later section is interrupted (Ctrl-C) or crashes.
+``--json`` prints one JSON document, a list of every figure, once the sections end, or
+are interrupted or crash (the figures of the finished ones); a figure that is not a
+number (NaN: every run it is over failed) is ``null`` there. The exit status is 1 where
+a section's figures include failed runs (a NaN figure or a label saying how many runs
+failed), each such section named on one line of standard error.
 """
 
 from __future__ import annotations
@@ -13,11 +21,14 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import math
+import re
 import resource
 import sys
 import time
 from dataclasses import asdict
 
+from frictex.app.engine.summary import finite_json
 from frictex.app.measure.figure import Figure
 from frictex.device.errors import InputError
 
@@ -38,7 +49,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("sections", nargs="*", metavar="SECTION",
                         help=f"sections to run (default: all of {', '.join(SECTIONS)})")
     parser.add_argument("--quick", action="store_true", help="shorter runs (less precise figures)")
-    parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+    parser.add_argument("--json", action="store_true",
+                        help="print the figures as one JSON document once the sections end "
+                             "(NaN as null); plain text is printed as each section ends")
 
 
 def _cpu_s(who: int) -> float:
@@ -77,23 +90,49 @@ def _measured(name: str, section, quick: bool) -> list[Figure]:
             Figure(name, _children_label(BusyProcesses.started > busy0), children, "s")]
 
 
+def failed_figures(figures: list[Figure]) -> list[Figure]:
+    """The figures that include failed runs: not a number (NaN: every run failed) or
+    labelled with how many failed (``processes.failed_note``)."""
+    return [f for f in figures
+            if not math.isfinite(f.value) or re.search(r"\bfailed\b", f.label)]
+
+
+def print_text(figures: list[Figure]) -> None:
+    """One line per figure: section, label (padded to the longest), value, unit."""
+    width = max((len(f.label) for f in figures), default=10)
+    for f in figures:
+        print(f"{f.section:9s} {f.label:<{width}s} {f.value:14.4g} {f.unit}", flush=True)
+
+
+def json_text(figures: list[Figure]) -> str:
+    """The figures as one JSON list, each non-finite value written as null."""
+    return json.dumps(finite_json([asdict(f) for f in figures]), indent=2, allow_nan=False)
+
+
 def run(args: argparse.Namespace) -> int:
     unknown = [s for s in args.sections if s not in SECTIONS]
     if unknown:
         raise InputError(f"unknown bench section(s) {', '.join(unknown)}; "
                          f"expected some of {', '.join(SECTIONS)}")
     figures: list[Figure] = []
-    for name in args.sections or list(SECTIONS):
-        try:
-            module = importlib.import_module(SECTIONS[name])
-        except ModuleNotFoundError as exc:
-            print(f"frictex: bench {name}: not available ({exc})", file=sys.stderr)
-            continue
-        figures.extend(_measured(name, module.run, args.quick))
-    if args.json:
-        print(json.dumps([asdict(f) for f in figures], indent=2))
-    else:
-        width = max((len(f.label) for f in figures), default=10)
-        for f in figures:
-            print(f"{f.section:9s} {f.label:<{width}s} {f.value:14.4g} {f.unit}")
-    return 0
+    failed_sections = 0
+    try:
+        for name in args.sections or list(SECTIONS):
+            try:
+                module = importlib.import_module(SECTIONS[name])
+            except ModuleNotFoundError as exc:
+                print(f"frictex: bench {name}: not available ({exc})", file=sys.stderr)
+                continue
+            section = _measured(name, module.run, args.quick)
+            figures.extend(section)
+            if not args.json:
+                print_text(section)
+            failed = failed_figures(section)
+            if failed:
+                failed_sections += 1
+                print(f"frictex: bench {name}: {len(failed)} figure(s) include failed runs: "
+                      f"{'; '.join(f.label for f in failed)}", file=sys.stderr)
+    finally:
+        if args.json:
+            print(json_text(figures))
+    return 1 if failed_sections else 0
