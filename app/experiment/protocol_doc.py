@@ -27,6 +27,14 @@ field of every problem.
 *required* means the key has no default. Ranges are inclusive unless written with `<` or
 `>`. Scenes are texture files (`textures/FORMAT.md`): a bundled name or a path relative
 to the protocol file.
+
+A session folder (`--out DIR`) keeps a copy of the protocol (`DIR/protocol.toml`) and of
+the scenes it names by a path in its folder or below, under the same relative names
+(with the files they name), so `frictex experiment DIR/protocol.toml --out DIR --resume`
+goes on after the originals moved; a scene outside the protocol's folder
+(`--allow-outside`) or named like a file of the session (`protocol.toml`, `stimuli/`,
+`trials/` ...) is not copied. session.json keeps each scene's sha256 (`scene_sha256`),
+and `--resume` refuses a scene that changed since the session started, naming it.
 """
 
 

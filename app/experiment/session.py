@@ -10,8 +10,13 @@
                               started_utc, ended_utc (null until the last trial is
                               answered), parts (one per run of the session: its start,
                               end and trials; a part without an end was killed), and
-                              the design the analysis needs
+                              the design the analysis needs; scene_sha256: each
+                              scene file's sha256, by its name (``scene_files``),
+                              checked by ``--resume``
     DIR/protocol.toml         the protocol file as it was read
+    DIR/NAME.toml             the protocol's scenes in its folder or below, copied under
+                              the same relative names (``copy_scenes``), so that
+                              DIR/protocol.toml resumes the session from DIR alone
     DIR/results.csv           one row per trial answered (RESULT_COLUMNS), in order;
                               contact_1_s, contact_2_s: how long each interval was
                               touched (s, finger down; empty for an interval the trial
@@ -63,6 +68,54 @@ COLUMNS_BEFORE_CONTACT = RESULT_COLUMNS[:-2]
 #: the separator between the stimuli of a trial in the ``stimuli`` column
 SEPARATOR = "|"
 RECORDS = ("all", "traces", "results")
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def scene_files(protocol) -> dict[str, Path]:
+    """The scene files ``protocol``'s stimuli are made from, by the name session.json
+    keeps them under: a bundled scene by its file name, any other by its path relative
+    to the protocol's folder (``myg.toml``, ``scenes/a.toml``)."""
+    s = protocol.stimuli
+    paths = ([s.scene] if s.scene is not None else []) + [st.scene for st in s.listed]
+    return {Path(path).name if _bundled(path)
+            else Path(os.path.relpath(path, protocol.source.parent)).as_posix(): Path(path)
+            for path in paths}
+
+
+def _bundled(path: Path) -> bool:
+    """Whether the scene file ``path`` is one of frictex's library."""
+    from frictex.textures.library import LIBRARY_DIR
+    return Path(os.path.realpath(path)).is_relative_to(LIBRARY_DIR)
+
+
+def scene_hashes(protocol) -> dict[str, str]:
+    """sha256 of each of :func:`scene_files`, by its name."""
+    return {key: _sha256(path) for key, path in scene_files(protocol).items()}
+
+
+#: the names a session folder keeps for itself: a scene of one of these is not copied in
+SESSION_NAMES = ("protocol.toml", "session.json", "results.csv", "stimuli", "trials",
+                 "analysis")
+
+
+def copy_scenes(folder: Path, protocol) -> None:
+    """Copy the protocol's own scenes (those in its folder or below, with the files they
+    name) into the session folder under the same relative names, so that the session's
+    copy ``protocol.toml`` finds them: a session resumes from its own folder."""
+    from frictex.app.experiment.stimuli import place_files
+    for key, path in scene_files(protocol).items():
+        parts = Path(key).parts
+        if _bundled(path) or ".." in parts or Path(key).is_absolute() or parts[0] in SESSION_NAMES:
+            continue
+        target = folder / key
+        target.parent.mkdir(parents=True, exist_ok=True)
+        if os.path.realpath(path) != os.path.realpath(target):
+            shutil.copyfile(path, target)
+        place_files(tomllib.loads(target.read_text(encoding="utf-8")),
+                    Path(os.path.realpath(path)).parent, target.parent)
 
 
 def _fsync_dir(path: Path) -> None:
@@ -260,11 +313,13 @@ def create(folder: Path, protocol, seed: int, participant: str, pid: str | None 
         raise InputError(f"{folder}: cannot make the session folder ({exc.strerror})") from None
     info = {"format": FORMAT, "protocol": protocol.name, "method": protocol.method,
             "protocol_sha256": hashlib.sha256(protocol.text.encode("utf-8")).hexdigest(),
+            "scene_sha256": scene_hashes(protocol),
             "seed": int(seed), "participant": participant,
             "participant_seed": participant_seed, "participant_id": pid,
             **versions(), "started_utc": _now(), "ended_utc": None, "parts": [],
             "design": design(protocol)}
     _write_synced(folder / "protocol.toml", protocol.text)
+    copy_scenes(folder, protocol)
     _write_synced(folder / "results.csv", ",".join(RESULT_COLUMNS) + "\n")
     _write_synced(folder / "session.json", json.dumps(info, indent=2) + "\n")
     return Session(folder, info, [])
@@ -363,6 +418,21 @@ def folder_of(text: str, option: str = "--out") -> Path:
     return Path(text)
 
 
+def _same_scenes(folder: Path, info: dict, protocol) -> None:
+    """InputError naming the first of ``protocol``'s scene files that is not the one the
+    session in ``folder`` started with (its sha256 in session.json; a session from
+    before ``scene_sha256`` is not checked): a resumed session's later trials would
+    play another stimulus than its first ones under the same name."""
+    started = info.get("scene_sha256")
+    if not isinstance(started, dict):
+        return
+    for key, path in scene_files(protocol).items():
+        if started.get(key) != _sha256(path):
+            raise InputError(f"{path}: not the scene {folder} was started with (it changed "
+                             f"since, or is another file); restore it, or start a new "
+                             f"session")
+
+
 def resume(folder: Path, protocol, participant: str | None, seed: int | None = None,
            pid: str | None = None) -> Session:
     """The session in ``folder``, ready to go on: the trial files of a trial without its
@@ -381,6 +451,7 @@ def resume(folder: Path, protocol, participant: str | None, seed: int | None = N
     if started_with != protocol.text:
         raise InputError(f"{protocol.source}: not the protocol {folder} started with (its copy "
                          f"is {folder / 'protocol.toml'})")
+    _same_scenes(folder, info, protocol)
     if participant is not None and participant != info.get("participant"):
         raise InputError(f"--participant {participant}: {folder} was started with "
                          f"{info.get('participant')!r}")

@@ -253,6 +253,15 @@ def value_problem(base: Base, vary: str, layer: int, value: float) -> str | None
     return f"{vary} = {value:g} makes {first.field or 'the scene'} invalid: {first.message}"
 
 
+def _keep_played(path: Path, doc: dict) -> None:
+    """InputError when the stimulus file ``path`` (of a session's earlier trials) holds
+    another scene than ``doc``: it records what those trials played, so it is never
+    overwritten."""
+    if path.is_file() and path.read_text(encoding="utf-8") != toml_text(doc):
+        raise InputError(f"{path}: this session played another scene under the name "
+                         f"{path.stem}; it is kept, and the session does not go on")
+
+
 class StimulusBank:
     """The scenes of a protocol's stimuli, each written once into ``folder`` as
     ``NAME.toml`` with the files it names, and loaded from there (side-by-side pairs as
@@ -275,6 +284,7 @@ class StimulusBank:
         if name not in self._made:
             self.folder.mkdir(parents=True, exist_ok=True)
             path = self.folder / f"{name}.toml"
+            _keep_played(path, doc)
             scene = write_scene(doc, path, files_from)
             self._made[name] = (scene, path.read_text(encoding="utf-8"), doc)
         return self._made[name]
