@@ -433,6 +433,16 @@ def _same_scenes(folder: Path, info: dict, protocol) -> None:
                              f"session")
 
 
+def _close_killed_part(info: dict, answered: int) -> None:
+    """A last part without an end (its run was killed): its trials counted from the
+    ``answered`` rows of results.csv and its end said to be unknown (written with the
+    next part's start)."""
+    parts = info.get("parts") or []
+    if parts and isinstance(parts[-1], dict) and parts[-1].get("ended_utc") is None:
+        first = parts[-1].get("first_trial", 1)
+        parts[-1].update(trials=answered - (first - 1), ended="killed (no end recorded)")
+
+
 def resume(folder: Path, protocol, participant: str | None, seed: int | None = None,
            pid: str | None = None) -> Session:
     """The session in ``folder``, ready to go on: the trial files of a trial without its
@@ -456,9 +466,11 @@ def resume(folder: Path, protocol, participant: str | None, seed: int | None = N
         raise InputError(f"--participant {participant}: {folder} was started with "
                          f"{info.get('participant')!r}")
     if pid is not None and pid != info.get("participant_id"):
-        raise InputError(f"--participant-id {pid}: {folder} was started with "
-                         f"{info.get('participant_id')!r}")
+        started = info.get("participant_id")
+        raise InputError(f"--participant-id {pid}: {folder} was started "
+                         + (f"with {started!r}" if started else "without a participant id"))
     columns, rows = read_table(folder, repair=True)
+    _close_killed_part(info, len(rows))
     trials = folder / "trials"
     trials.mkdir(exist_ok=True)
     for leftover in trials.iterdir():
