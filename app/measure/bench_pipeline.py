@@ -20,7 +20,8 @@
   two-finger trace).
 
 A live figure is the compute of one pipeline call running one 5 ms block (50 samples),
-as the live haptic thread calls it, at the median (p50) and the 99th percentile (p99)
+as the live haptic thread calls it with the garbage collector frozen
+(``app.measure.live_timing``), at the median (p50) and the 99th percentile (p99)
 over the run's blocks: wall time, and for the loop and issue-18 lines also the
 thread's CPU time (what the call costs without the time other processes take on a busy
 machine), each label ending with which of the two it is; with the loop on, the call
@@ -35,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
+from frictex.app.engine.driver import PipelineStage
 from frictex.app.measure.figure import Figure
 from frictex.app.measure.live_timing import time_blocks
 from frictex.app.measure.tail import tail
@@ -71,7 +73,7 @@ def run(quick: bool) -> list[Figure]:
                               "x real time"))
         live = build_pipeline(load(SCENE), rate_hz=RATE_HZ, block_size=BLOCK,
                               render_override=renderer)
-        _, per_block = run_blocks(live, trace, 1, duration)
+        per_block, _ = time_blocks(PipelineStage(live), trace, duration)
         figures += live_figures(per_block, f"{SCENE}, {label}", WALL)
         figures += _stage_figures(stage_costs(replay, duration), label)
     for mode in ("open", "closed", "adaptive"):
@@ -281,7 +283,6 @@ def new_layer_blocks(duration: float, block: int = BLOCK
     """Per-call (wall, thread CPU) seconds of the issue-18 scene live, one block of
     ``block`` samples per call, and its cost per stage and layer (``stage_costs``); the
     human-like strokes' normal force swells from 0.5 to 1.5 N once (the force clip)."""
-    from frictex.app.engine.driver import PipelineStage
     from frictex.rendering.input.trace_file import make_trace
     trace = _trace(duration)
     swell = 0.5 + np.exp(-0.5 * np.square((trace.t_s - 0.5 * duration) / 0.1))

@@ -1,5 +1,6 @@
 """A pipeline stage timed block by block, as the live haptic process runs it: one block
-per call on a virtual clock, the garbage collector frozen once the pipeline is built;
+per call on a virtual clock, the garbage collector frozen once the pipeline is built
+(and unfrozen when the timing ends, since the timing process goes on to other work);
 each call's wall and thread CPU time (s). ``frictex bench pipeline`` and the report's
 matrix time their live blocks with it."""
 
@@ -30,7 +31,8 @@ class _Timed:
 
 def time_blocks(stage, trace, duration: float, sinks=()) -> tuple[np.ndarray, np.ndarray]:
     """Run ``trace`` through ``stage`` (a pipeline stage) one block per call, virtual
-    clock, for ``duration`` s; per-call (wall, thread CPU) seconds."""
+    clock, for ``duration`` s, the garbage collector frozen meanwhile; per-call (wall,
+    thread CPU) seconds."""
     from frictex.app.engine.clocks import VirtualClock
     from frictex.app.engine.driver import drive
     from frictex.app.engine.sources import TraceSource
@@ -38,5 +40,8 @@ def time_blocks(stage, trace, duration: float, sinks=()) -> tuple[np.ndarray, np
     source = TraceSource(iter([trace]), until_s=duration)
     source.start(stage.pipeline.tracker_config)
     gc.freeze()  # as the live haptic process does once its pipeline is built
-    drive(timed, source, list(sinks), VirtualClock(), chunk_blocks=1)
+    try:
+        drive(timed, source, list(sinks), VirtualClock(), chunk_blocks=1)
+    finally:
+        gc.unfreeze()
     return np.array(timed.seconds), np.array(timed.cpu_seconds)

@@ -280,15 +280,10 @@ def run_blocks(pipeline, trace: Trace, blocks_per_call: int, duration_s: float):
 def live_seconds(pipeline, trace: Trace, duration_s: float) -> tuple[np.ndarray, np.ndarray]:
     """Per-block (wall, thread CPU) seconds of ``trace`` through ``pipeline`` one 5 ms
     block per call for ``duration_s``, timed as ``frictex bench pipeline`` times its live
-    blocks (the garbage collector frozen, as the live haptic process has it); the
-    collector is unfrozen after, since this process goes on to other cases."""
-    import gc
-
+    blocks (``live_timing.time_blocks``: the garbage collector frozen meanwhile, as the
+    live haptic process has it)."""
     from frictex.app.measure.live_timing import time_blocks
-    try:
-        return time_blocks(PipelineStage(pipeline), trace, duration_s)
-    finally:
-        gc.unfreeze()
+    return time_blocks(PipelineStage(pipeline), trace, duration_s)
 
 
 def stack_fingers(outs, field: str, fill) -> tuple[list[int], np.ndarray]:
