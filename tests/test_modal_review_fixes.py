@@ -3,8 +3,12 @@
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from frictex.app.engine.summary import Totals, warnings_of
+from frictex.device.actuation.modal import NEAR_SINGULAR, solve
+from frictex.device.actuation.modal_actuation import beam_actuation, plate_actuation
+from frictex.device.profile import BeamStructure, PlateStructure
 from frictex.device.structures.beam import FreeFreeBeam
 
 #: seed 000's beam, modes 16 and 17 (the worked example)
@@ -32,3 +36,38 @@ def test_singular_loci_are_half_a_wavelength_apart_as_the_warning_says():
     assert len(zeros) == 3
     np.testing.assert_allclose(gaps, wavelength / 2, rtol=0.03)
     assert "a multiple of half a wavelength apart" in _capped_warning()
+
+
+def _block(positions, wanted):
+    """Every finger touching at (x, y) for one sample, finger 0 first down."""
+    pts = np.array(positions, dtype=float).reshape(len(positions), -1)
+    y = pts[:, 1:] if pts.shape[1] > 1 else np.zeros((len(pts), 1))
+    fingers = SimpleNamespace(contact=np.ones((len(pts), 1), bool), x_pred=pts[:, :1], y_pred=y,
+                              touch_start=np.arange(len(pts), dtype=float)[:, None])
+    return fingers, np.array(wanted, dtype=float)[:, None]
+
+
+def _beam(method):
+    return beam_actuation(BeamStructure(method=method), 1.0)
+
+
+def _plate(method):
+    return plate_actuation(PlateStructure(method=method), 1.0)
+
+
+@pytest.mark.parametrize("method", ["exact", "bounded", "regularised"])
+@pytest.mark.parametrize("make, positions, wanted", [
+    (_beam, [[120.0], [120.0001]], [0.4, 0.0]),
+    (_plate, [(35.0, 70.0), (35.001, 70.0)], [0.5, 0.2]),
+])
+def test_near_singular_fingers_are_capped_under_every_method(method, make, positions, wanted):
+    fingers, wanted_um = _block(positions, wanted)
+    assert make(method).command(wanted_um, fingers).capped == 1
+
+
+def test_solve_counts_near_singular_systems_as_capped():
+    phi = BEAM.phi(MODES, np.array([120.0, 120.0001]))
+    assert 0 < np.linalg.cond(phi) ** -1 < NEAR_SINGULAR
+    for method in ("exact", "bounded"):
+        assert solve(phi, [0.4, 0.0], method, actuators=np.eye(2), limits_um=0.75).capped
+    assert not solve(BEAM.phi(MODES, np.array([120.0, 250.0])), [0.4, 0.0], "exact").capped

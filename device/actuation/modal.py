@@ -30,8 +30,10 @@ With limits, ``exact`` and ``regularised`` commands that exceed a limit are scal
 together (keeping their ratio and phases) until the largest reaches its limit. Every
 sample reports what was achieved under each finger (forward model of the commands) and
 the error; ``limited`` marks samples whose commands met a limit, ``capped`` those where
-a singular value was below the method's threshold. Singular loci are normal operation,
-never an error.
+a singular value was below the method's threshold or below :data:`NEAR_SINGULAR` of the
+largest (near a singular locus ``exact`` and ``bounded`` keep their gains but spend the
+limits on a difference they cannot deliver). Singular loci are normal operation, never
+an error.
 """
 
 from __future__ import annotations
@@ -49,6 +51,11 @@ from frictex.device.profile import DEFAULT_METHOD, DEFAULT_RCOND, METHODS
 
 #: singular values below this fraction of the largest are treated as zero by "exact"
 _EXACT_RCOND = 1e-12
+#: a system whose smallest / largest singular value is below this counts as capped
+#: whatever the method: there a difference of 1 nm between the fingers' amplitudes
+#: costs over 1 um of command, beyond any channel's limit (about 1 um), so the
+#: fingers cannot be given independent amplitudes even where no gain was cut
+NEAR_SINGULAR = 1e-3
 _FISTA_MAX_ITER = 3000
 _FISTA_TOL = 1e-13
 
@@ -62,7 +69,8 @@ class ModalSolution:
     achieved_um : complex128 (..., m)  amplitudes under the fingers, Phi_f W_M (um).
     error_um : float64 (..., m)  |achieved - wanted| (um).
     limited : bool (...)  commands met an actuator limit (scaled or constrained).
-    capped : bool (...)  a singular value of Phi_f was below the method's threshold.
+    capped : bool (...)  a singular value of Phi_f was below the method's threshold or
+        below NEAR_SINGULAR of the largest.
     sigma_min_ratio : float64 (...)  smallest / largest singular value of Phi_f.
     """
 
@@ -241,7 +249,8 @@ def serve_two_modes(phi, where, served, wanted_um, actuators, limits_um, rcond: 
         (um; +0.0 for a zero part, so that a zero command has phase 0); achieved float64
         (F, n) (um, 0 where not touching); how many samples met a limit; how many served
         two fingers with a capped gain (their system's smaller singular value below the
-        threshold: the fingers could not be given independent amplitudes, seed 001 eq 8).
+        threshold or :data:`NEAR_SINGULAR` of the larger: the fingers could not be given
+        independent amplitudes, seed 001 eq 8).
         None where a served shape or wanted amplitude is not finite (what :func:`solve`
         refuses).
     """
@@ -273,9 +282,9 @@ def _two_modes_kernel(phi, where, served, wanted, actuators, limits, rcond, regu
         c, d, w1, finite1 = _served_row(phi, where, served, wanted, i, 1)
         if not (finite0 and finite1):
             return -1, capped
-        modal[i, 0], modal[i, 1], full, _, _ = _gains_2x2_one(a, b, c, d, w0, w1, rcond, regularised)
+        modal[i, 0], modal[i, 1], full, s1, s2 = _gains_2x2_one(a, b, c, d, w0, w1, rcond, regularised)
         # one finger's zero row caps the gain too, but leaves nothing to tell apart
-        if not full and served[i, 1] >= 0:
+        if (not full or s2 < NEAR_SINGULAR * s1) and served[i, 1] >= 0:
             capped += 1
         _forward_row(actuators, 0, modal, i, commands)
         within = True
@@ -342,6 +351,7 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
     closed = phi.shape[-2:] == (2, 2) and not np.iscomplexobj(phi) and method != "bounded"
     modal, capped, ratio = (_gains_2x2 if closed else _gains_svd)(
         phi, wanted, threshold, regularised=method == "regularised")
+    capped = capped | (ratio < NEAR_SINGULAR)
     if method != "bounded" and not np.iscomplexobj(phi) and not np.iscomplexobj(a):
         commands, modal, achieved, error, limited = _finish(phi, wanted, modal, a, limits)
         return ModalSolution(modal, commands, achieved, error, limited, capped, ratio)
