@@ -138,7 +138,7 @@ def paired_figures(label: str, bare: list, ours: list, target: float | None,
     ``no_target`` says why), and median CPU times."""
     rounds = len(bare)
     kept = [(k, b, o) for k, (b, o) in enumerate(zip(bare, ours))
-            if b.code == 0 and o.code == 0 and b.wall_s > 0]
+            if b.code == 0 and o.code == 0 and b.wall_s > 0 and o.wall_s > 0]
     note = failed_note(rounds - len(kept), rounds)
     kept_bare, kept_ours = [b for _, b, _ in kept], [o for _, _, o in kept]
     of = f"median of {len(kept)} rounds{note}"

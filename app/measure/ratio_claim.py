@@ -9,6 +9,9 @@ the ratio is taken; their mean and its 95 % interval (Student's t over the round
 and its interval. The target **holds** where the whole interval lies on its side, **does
 not hold** where the whole interval lies on the other side, and is **not shown**
 otherwise (and below two rounds, which give no interval): ``report_claims.verdict``.
+Rounds that all give the same ratio give no interval either: a spread of zero comes from
+a clock too coarse to tell the rounds apart, not from rounds that agree, so it is no
+evidence and the target is not shown.
 """
 
 from __future__ import annotations
@@ -17,13 +20,14 @@ import math
 from dataclasses import dataclass
 
 from frictex.app.measure.figure import Figure
-from frictex.app.measure.report_claims import paired, verdict
+from frictex.app.measure.report_claims import NOT_SHOWN, paired, verdict
 
 
 @dataclass(frozen=True)
 class RatioClaim:
     """``geomean`` of ``rounds`` ratios and its 95 % interval [``low``, ``high``] (NaN
-    below two rounds); ``verdict``: ``holds``, ``does not hold`` or ``not shown``."""
+    below two rounds; ``low == high`` where every round gave the same ratio, which is
+    no interval); ``verdict``: ``holds``, ``does not hold`` or ``not shown``."""
 
     geomean: float
     low: float
@@ -32,7 +36,10 @@ class RatioClaim:
     verdict: str
 
     def interval_text(self) -> str:
-        """``95 % interval 0.80-1.04x``, or why there is none (under two rounds)."""
+        """``95 % interval 0.80-1.04x``, or why there is none (under two rounds, or no
+        spread between the rounds)."""
+        if self.rounds > 1 and self.low == self.high:
+            return "every round the same ratio: no spread, no interval (clock too coarse)"
         if self.rounds > 1:
             return f"95 % interval {self.low:.2f}-{self.high:.2f}x"
         return "one round, no interval" if self.rounds == 1 else "no round, no interval"
@@ -57,6 +64,7 @@ def ratio_claim(ratios: list[float], target: float, at_most: bool) -> RatioClaim
     d = [sign * (math.log(r) - math.log(target)) for r in ratios]
     mean, low, high, n = paired(d, [0.0] * len(d))
     holds = bool(high < 0.0)  # NaN (under two rounds): not shown
+    spread = n < 2 or min(d) != max(d)  # none: no evidence (module docstring)
     ends = sorted(math.log(target) + sign * end for end in (low, high))
     return RatioClaim(math.exp(math.log(target) + sign * mean), math.exp(ends[0]),
-                      math.exp(ends[1]), n, verdict(holds, low))
+                      math.exp(ends[1]), n, verdict(holds, low) if spread else NOT_SHOWN)
