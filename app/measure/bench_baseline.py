@@ -91,9 +91,10 @@ for name, cols in tables.items():
 READ_TARGET = 2.0
 
 
-def _reading_figures(path: Path, reads: int = 25) -> list[Figure]:
+def _reading_figures(path: Path, reads: int = 25, what: str = "the trace") -> list[Figure]:
     """``read_trace`` and ``pyarrow.csv.read_csv`` on ``path``, ``reads`` of each in
-    alternated rounds (``in_turn``) after one untimed read of each: ``reading_figures``.
+    alternated rounds (``in_turn``) after one untimed read of each: ``reading_figures``
+    (``what``: the trace read, as the labels name it).
     A read of the 10-minute trace takes milliseconds, where the machine's jitter is a
     good part of a round's ratio: 25 rounds cost a fraction of a second."""
     import pyarrow.csv as pcsv
@@ -104,21 +105,28 @@ def _reading_figures(path: Path, reads: int = 25) -> list[Figure]:
     [(ours, _), (theirs, _)] = timed_in_turn(
         [(lambda: read_trace(path), None),
          (lambda: pcsv.read_csv(path, read_options=options), None)], reads, warmup=1)
-    return reading_figures(ours, theirs)
+    return reading_figures(ours, theirs, what)
 
 
-def reading_figures(ours: np.ndarray, theirs: np.ndarray) -> list[Figure]:
+def reading_figures(ours: np.ndarray, theirs: np.ndarray, what: str = "the trace"
+                    ) -> list[Figure]:
     """The median seconds of each reader over the rounds (``ours``: ``read_trace``,
     ``theirs``: pyarrow's, same round at the same index), and the verdict on
-    :data:`READ_TARGET` from each round's ratio of the two (``ratio_claim``)."""
+    :data:`READ_TARGET` from each round's ratio of the two (``ratio_claim``); ``what``:
+    the trace read (``trace_name``)."""
     of = f"median of {len(ours)}, alternated"
     claim = ratio_claim(list(np.asarray(ours) / np.asarray(theirs)), READ_TARGET, at_most=True)
-    return [Figure("baseline", f"reading the trace, frictex read_trace ({of})",
+    return [Figure("baseline", f"reading {what}, frictex read_trace ({of})",
                    float(np.median(ours)), "s"),
-            Figure("baseline", f"reading the trace, pyarrow.csv.read_csv ({of})",
+            Figure("baseline", f"reading {what}, pyarrow.csv.read_csv ({of})",
                    float(np.median(theirs)), "s"),
-            claim.figure("baseline", "reading the trace, frictex against pyarrow",
+            claim.figure("baseline", f"reading {what}, frictex against pyarrow",
                          READ_TARGET, at_most=True)]
+
+
+def trace_name(trace) -> str:
+    """``the 60 s trace (3,600 rows)``: a trace's duration (s) and rows, as labels name it."""
+    return f"the {trace.duration_s:g} s trace ({trace.t_s.size:,} rows)"
 
 
 #: output format -> target ratio to the bare program (None: the bare program is no floor)
@@ -183,8 +191,9 @@ def run(quick: bool) -> list[Figure]:
     with tempfile.TemporaryDirectory(prefix="frictex-baseline-") as name:
         tmp = Path(name)
         trace = tmp / f"human-{duration:g}.csv"
-        write_trace(trace, human_trace(duration))
-        figures += _reading_figures(trace)
+        strokes = human_trace(duration)
+        write_trace(trace, strokes)
+        figures += _reading_figures(trace, what=trace_name(strokes))
         commands, outputs = {}, {}
         for fmt in TARGETS:
             outputs[f"bare {fmt}"] = tmp / f"bare-{fmt}"
