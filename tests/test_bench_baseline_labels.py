@@ -32,3 +32,8 @@ def test_the_trace_reading_labels_give_the_traces_duration_and_rows(monkeypatch,
                       f"reading {name}, pyarrow.csv.read_csv (median of 2, alternated)",
                       f"reading {name}, frictex against pyarrow, target at most 2x "
                       "(geometric mean of 2 rounds)"]
+
+
+def test_the_module_says_how_many_lines_the_bare_program_has():
+    lines = len(bench_baseline.BARE.strip().splitlines())
+    assert f"The bare program has {lines} lines" in bench_baseline.__doc__

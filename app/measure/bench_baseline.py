@@ -1,6 +1,6 @@
 """``frictex bench baseline``: frictex against the bare-numpy floor, as whole processes.
 
-The bare program has some twenty lines using numpy and pyarrow only (``BARE``): it
+The bare program has 32 lines using numpy and pyarrow only (``BARE``): it
 reads a trace with pyarrow's CSV reader, interpolates the finger to the 10 kHz output
 rate, computes a grating's friction and amplitude, and writes the same two tables as a
 replay (``friction``: six columns at 10 kHz; ``commands``: two) with pyarrow's Parquet
