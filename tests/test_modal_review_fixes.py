@@ -71,3 +71,17 @@ def test_solve_counts_near_singular_systems_as_capped():
     for method in ("exact", "bounded"):
         assert solve(phi, [0.4, 0.0], method, actuators=np.eye(2), limits_um=0.75).capped
     assert not solve(BEAM.phi(MODES, np.array([120.0, 250.0])), [0.4, 0.0], "exact").capped
+
+
+@pytest.mark.parametrize("make, positions, wanted", [
+    (_beam, [[120.0], [120.0001]], [0.4, 0.0]),
+    (_plate, [(35.0, 70.0), (35.001, 70.0)], [0.5, 0.2]),
+])
+def test_bounded_spends_no_limit_on_a_near_singular_direction(make, positions, wanted):
+    fingers, wanted_um = _block(positions, wanted)
+    bounded = make("bounded").command(wanted_um, fingers)
+    regularised = make("regularised").command(wanted_um, fingers)
+    # the same amplitudes under the fingers as the regularised method, every channel
+    # well within its limit (before: beam [0.197, 0.75] um, plate V_BD at 1.0)
+    np.testing.assert_allclose(bounded.achieved_um, regularised.achieved_um, atol=1e-3)
+    assert np.all(bounded.commands_um < 0.5 * make("bounded").limits_um)
