@@ -85,3 +85,13 @@ def test_bounded_spends_no_limit_on_a_near_singular_direction(make, positions, w
     # well within its limit (before: beam [0.197, 0.75] um, plate V_BD at 1.0)
     np.testing.assert_allclose(bounded.achieved_um, regularised.achieved_um, atol=1e-3)
     assert np.all(bounded.commands_um < 0.5 * make("bounded").limits_um)
+
+
+def test_bounded_counts_limited_only_where_a_command_reaches_its_limit():
+    node = BEAM.nodes_mm(16)[3]  # 68.939 mm, a node of mode 16
+    fingers, wanted_um = _block([[node], [node + 1e-9]], [0.4, 0.1])
+    at_node = _beam("bounded").command(wanted_um, fingers)
+    assert np.all(at_node.commands_um < _beam("bounded").limits_um)  # [0.3047, 0.3047] < 0.75
+    assert at_node.limited == 0
+    fingers, wanted_um = _block([[120.0], [250.0]], [5.0, 0.0])
+    assert _beam("bounded").command(wanted_um, fingers).limited == 1

@@ -366,6 +366,7 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
             commands[limited] = (bounded_two(m_cmd, wanted[limited], limits) if a.shape[0] == 2
                                  else _bounded_commands(m_cmd, wanted[limited], commands[limited], limits))
             modal[limited] = commands[limited] @ a_inv.T
+            limited = _at_limit(commands, limits)
     achieved = forward(phi, modal)
     return ModalSolution(modal, commands, achieved, magnitude(achieved - wanted),
                          limited, capped, ratio)
@@ -380,6 +381,12 @@ def _without_weak_directions(phi) -> np.ndarray:
     u, s, vh = np.linalg.svd(phi, full_matrices=False)
     s = np.where(s >= NEAR_SINGULAR * s[..., :1], s, 0.0)
     return np.einsum("...ij,...j,...jk->...ik", u, s, vh)
+
+
+def _at_limit(commands, limits) -> np.ndarray:
+    """Where some |c_j| (um) reached its limit (um), up to a relative 1e-12: what
+    ``limited`` counts once "bounded" has solved (a solution can stay within limits)."""
+    return np.any(magnitude(commands) >= limits * (1 - 1e-12), axis=-1)
 
 
 def check_settings(method: str, actuators, limits_um, rcond: float, p: int):
