@@ -22,7 +22,9 @@ Per study, by method:
   of its last ``threshold_reversals`` reversal levels (geometric on the log scale), per
   session and their mean over sessions (geometric on the log scale too); and by the steps its floor or ceiling held (a
   down step that would cross the linear scale's floor or ``min``, an up step past
-  ``max``: the level stays), which bias its reversal mean.
+  ``max``: the level stays), which bias its reversal mean. Each session's share of
+  answers per interval (``response_shares``) is printed, and one interval answered in
+  more than :data:`BIAS_SHARE` of its main trials is warned of (``response_bias``).
 - ``same-different``: per level, the counts of hits (saying "different" to AB and BA)
   and false alarms (to AA and BB), their raw rates and the rates d' is computed from,
   log-linear corrected ((k + 0.5) / (n + 1), ``rate_correction``), and d' under the
@@ -76,7 +78,8 @@ from scipy import stats
 
 from frictex.app.experiment import psychometric, same_different
 from frictex.app.experiment.protocol import Staircase, bundled_protocol
-from frictex.app.experiment.scheduler import StaircaseState, staircase_step, staircase_threshold
+from frictex.app.experiment.scheduler import (INTERVALS, StaircaseState, staircase_step,
+                                              staircase_threshold)
 from frictex.app.experiment.session import read_info, read_rows, torn_last_line
 from frictex.device.errors import InputError
 
@@ -87,6 +90,18 @@ MIN_LEVELS = 2
 MIN_REVERSALS = 4
 #: a threshold's or slope's interval wider than this factor (high / low) is flagged
 UNSETTLED_RATIO = 100.0
+
+
+#: a forced-choice session answering one interval in more than this share of its main
+#: trials is warned of (``response_bias``): the comparison is in each interval in half
+#: the trials (the scheduler balances the orders), so an observer answering from the
+#: stimuli splits about evenly at any level, and a fit to answers that follow the
+#: interval gives a threshold that says nothing
+BIAS_SHARE = 0.8
+#: the fewest main trials for that warning: an unbiased observer at chance answers one
+#: interval in more than 80 % of 20 trials with probability 0.0013 (binomial), of 10
+#: with 0.011
+BIAS_MIN_TRIALS = 20
 
 
 #: why an interval of zero width is flagged
@@ -345,13 +360,36 @@ def staircase_summary(design: dict, rows: list[dict]) -> dict:
             "held_at_floor": held[-1], "held_at_ceiling": held[+1]}
 
 
+def response_shares(rows: list[dict]) -> dict[str, float | None]:
+    """The share of ``rows`` (main trials of a forced choice) answering each interval
+    (None where no row records an answer)."""
+    answered = [row.get("response") for row in rows]
+    return {interval: answered.count(interval) / len(answered) if any(answered) else None
+            for interval in INTERVALS}
+
+
+def response_bias(shares: dict[str, float | None], trials: int) -> str | None:
+    """Why a session's answers follow the interval rather than the stimulus
+    (:data:`BIAS_SHARE` of :data:`BIAS_MIN_TRIALS` or more), or None."""
+    if trials < BIAS_MIN_TRIALS or None in shares.values():
+        return None
+    for interval, share in shares.items():
+        if share > BIAS_SHARE:
+            return (f"answered interval {interval} in {share:.0%} of {trials} main trials "
+                    f"(an observer answering from the stimuli splits about evenly): its "
+                    f"threshold reflects the bias, not the stimuli")
+    return None
+
+
 def _forced_choice(design: dict, sessions: list[SessionData]) -> dict:
     per = []
     pooled_rows = []
     for s in sessions:
         rows = s.main()
         pooled_rows += rows
-        entry = {"session": str(s.folder), "trials": len(rows)}
+        shares = response_shares(rows)
+        entry = {"session": str(s.folder), "trials": len(rows), "response_shares": shares,
+                 "response_bias": response_bias(shares, len(rows))}
         reversals = None
         if design["staircase"]:
             entry["staircase"] = staircase_summary(design, rows)
@@ -508,18 +546,20 @@ def _ci(fit: dict, name: str) -> tuple:
 
 def _forced_choice_lines(summary: dict, unit: str) -> list[str]:
     """The pooled fit's lines (or why there is none) and the staircases'."""
+    lines = [_shares_line(entry) for entry in summary["per_session"]
+             if None not in entry["response_shares"].values()]
     pooled = summary["pooled"]
     if pooled is None:
-        lines = [f"  no threshold: {summary['no_fit']}"]
+        lines.append(f"  no threshold: {summary['no_fit']}")
     elif pooled["threshold_below"] is not None:
-        lines = [f"  threshold ({pooled['target']:.3g} correct, {pooled['function']}): below "
-                 f"{pooled['threshold_below']:.4g} {unit} difference (no threshold, slope or "
-                 f"interval): {pooled['fit_unsettled']}"]
+        lines.append(f"  threshold ({pooled['target']:.3g} correct, {pooled['function']}): "
+                     f"below {pooled['threshold_below']:.4g} {unit} difference (no threshold, "
+                     f"slope or interval): {pooled['fit_unsettled']}")
     else:
         lo, hi = pooled["levels"][0]["difference"], pooled["levels"][-1]["difference"]
         where = ("" if pooled["threshold_in_tested_range"] else
                  f" (outside the differences tested, {lo:.4g} to {hi:.4g}: extrapolated)")
-        lines = [f"  threshold ({pooled['target']:.3g} correct, {pooled['function']}): "
+        lines += [f"  threshold ({pooled['target']:.3g} correct, {pooled['function']}): "
                  f"{pooled['threshold']:.4g} {unit} difference{where}, "
                  f"{_interval(*_ci(pooled, 'threshold'))}; lapse {pooled['lapse']:.3f}"
                  + (f" ({pooled['lapse_at_bound']})" if pooled["lapse_at_bound"] else ""),
@@ -541,6 +581,15 @@ def _forced_choice_lines(summary: dict, unit: str) -> list[str]:
                          f"the {end} (the level stayed; reversals there bias the "
                          f"reversal mean)")
     return lines
+
+
+def _shares_line(entry: dict) -> str:
+    """A session's answers per interval, and the warning of a bias."""
+    shares = ", ".join(f"interval {interval} {share:.0%}"
+                       for interval, share in entry["response_shares"].items())
+    bias = entry["response_bias"]
+    return (f"  {'warning: ' if bias else ''}{entry['session']}: answers {shares}"
+            + (f"; {bias}" if bias else ""))
 
 
 def _table_warning(end: dict) -> list[str]:
