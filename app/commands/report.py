@@ -27,8 +27,13 @@ from pathlib import Path
 from frictex.app.commands.argtypes import positive_int
 from frictex.app.engine.fanout import default_workers, fan_out
 from frictex.app.measure import report_matrix as rm
+from frictex.app.measure.tail import P99_SAMPLES
 from frictex.device.errors import InputError
 from frictex.rendering.pipeline import BLOCK_S
+
+#: seconds of live 5 ms blocks timed per case (``--quick``: the fewest blocks whose
+#: 99th percentile is not simply their largest, ``app.measure.tail``; 0.5 s gave 100)
+LIVE_S, QUICK_LIVE_S = 2.0, P99_SAMPLES * BLOCK_S
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -143,7 +148,7 @@ def _matrix(args: argparse.Namespace, jobs: int):
     load_before = os.getloadavg()[0]
     bar = tqdm(total=len(cases), desc="report", unit="case", disable=args.no_progress or None)
     try:
-        rows = fan_out(partial(rm.run_case, live_s=0.5 if args.quick else 2.0), cases,
+        rows = fan_out(partial(rm.run_case, live_s=QUICK_LIVE_S if args.quick else LIVE_S), cases,
                        workers=jobs, scheduler=args.scheduler, on_done=lambda row: bar.update(1))
     finally:
         bar.close()

@@ -16,7 +16,8 @@ scene of one coarse grating (15, 5 mm) a row also counts the edges felt twice
 Costs are compute time per second of output, per stage (tracking, each layer,
 composition, inversion, actuation, link encode); ``replay_x_realtime`` counts the
 pipeline stages only (a headless replay sends nothing); ``live_block_p99_thread_cpu_us``
-is the 99th percentile of one 5 ms block's compute in the thread's CPU time when the
+is the 99th percentile (the largest under 101 blocks, ``app.measure.tail``; ``frictex
+report --quick`` times 101) of one 5 ms block's compute in the thread's CPU time when the
 same trace is fed block by block with the garbage collector frozen, as the live haptic
 thread runs and as ``frictex bench pipeline`` times it (its wall time beside it, and the
 count of blocks: a row's live run is short, so its p99 is over far fewer blocks than
@@ -35,6 +36,7 @@ from frictex.app.engine.clocks import VirtualClock
 from frictex.app.engine.driver import PipelineStage, drive
 from frictex.app.engine.sinks import MemorySink
 from frictex.app.engine.sources import TraceSource
+from frictex.app.measure.tail import tail
 from frictex.rendering.input.trace_synth import make_motion, sample, truth
 from frictex.rendering.metrics import (CHATTER_PERIOD_MM, MetricError, accuracy, hold,
                                        reference, spectral_error, time_error)
@@ -112,7 +114,8 @@ class Steps:
 class Throughput:
     """Speed figures of a row: ``replay_x_realtime`` (seconds of output per second of
     pipeline compute), ``live_block_p99_thread_cpu_us`` and ``live_block_p99_wall_us``
-    (99th percentile of one 5 ms block's compute, us, in the thread's CPU time with the
+    (99th percentile of one 5 ms block's compute, us, the largest under 101 blocks:
+    ``app.measure.tail``; in the thread's CPU time with the
     garbage collector frozen and in wall time) over ``live_blocks`` blocks, ``latency_ms``
     (longest wait of a touch sample for its block plus the link's jitter buffer, ms)."""
 
@@ -406,8 +409,8 @@ class Runner:
             stages_us_per_s={k: v / output_s * 1e6 for k, v in stages.items()},
             throughput=Throughput(
                 replay_x_realtime=output_s / compute,
-                live_block_p99_thread_cpu_us=float(np.percentile(cpu, 99) * 1e6),
-                live_block_p99_wall_us=float(np.percentile(wall, 99) * 1e6),
+                live_block_p99_thread_cpu_us=tail(cpu)[1] * 1e6,
+                live_block_p99_wall_us=tail(wall)[1] * 1e6,
                 live_blocks=int(wall.size),
                 latency_ms=(wait_s + link_buffer_s()) * 1e3),
             clamps=clamps.as_dict(), through_plate=plate)
