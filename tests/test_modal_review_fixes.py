@@ -1,5 +1,6 @@
 """Singular loci, near-singular conditioning and the modal solver's edge cases."""
 
+import re
 from types import SimpleNamespace
 
 import numpy as np
@@ -9,7 +10,7 @@ from frictex.app.engine.summary import Totals, warnings_of
 from frictex.device.actuation.modal import NEAR_SINGULAR, solve
 from frictex.device.actuation.modal_actuation import beam_actuation, plate_actuation
 from frictex.device.profile import BeamStructure, PlateStructure
-from frictex.device.structures.beam import FreeFreeBeam
+from frictex.device.structures.beam import FreeFreeBeam, ModesError
 
 #: seed 000's beam, modes 16 and 17 (the worked example)
 BEAM = FreeFreeBeam(350, 6, 6, 57, 2561)
@@ -95,3 +96,14 @@ def test_bounded_counts_limited_only_where_a_command_reaches_its_limit():
     assert at_node.limited == 0
     fingers, wanted_um = _block([[120.0], [250.0]], [5.0, 0.0])
     assert _beam("bounded").command(wanted_um, fingers).limited == 1
+
+
+def test_timoshenko_refusal_compares_a_frequency_with_the_cutoff_frequency():
+    beam = FreeFreeBeam(350, 6, 6, 57, 2561, theory="timoshenko")
+    with pytest.raises(ModesError) as refused:
+        beam.frequency_hz(80)
+    # before: "beta = 664.222 1/m is above the Timoshenko cutoff 245187 Hz"
+    found = re.fullmatch(r"a flexural frequency of ([0-9.e+]+) Hz \(wavenumber [0-9.e+]+ 1/m\) "
+                         r"is above the Timoshenko cutoff ([0-9.e+]+) Hz of this beam .*",
+                         str(refused.value))
+    assert found and float(found[1]) > float(found[2]) == pytest.approx(beam.cutoff_hz, rel=1e-5)

@@ -238,9 +238,10 @@ class FreeFreeBeam:
         below_cutoff = 1 - rho * r2 * w2 / kg
         if below_cutoff <= 0:
             raise ModesError(
-                f"beta = {beta:.6g} 1/m is above the Timoshenko cutoff "
-                f"{self.cutoff_hz:.6g} Hz of this beam (second spectrum not modelled); "
-                f"use a lower order or --theory euler-bernoulli")
+                f"a flexural frequency of {math.sqrt(w2) / (2 * math.pi):.6g} Hz (wavenumber "
+                f"{beta:.6g} 1/m) is above the Timoshenko cutoff {self.cutoff_hz:.6g} Hz of "
+                f"this beam (second spectrum not modelled); use a lower order or --theory "
+                f"euler-bernoulli")
         alpha = math.sqrt(rho * w2 * below_cutoff / (e * r2)) / beta
         return math.sqrt(w2), alpha, rho * w2 / kg
 
