@@ -104,14 +104,16 @@ def _period(layer) -> float | None:
     return layer.period_mm if layer.is_periodic else None
 
 
-def _under_touch(layer, where: str, period: float) -> Finding:
+def _under_touch(layer, where: str, period: float, renderer: str | None = None) -> Finding:
     """The ``touch`` finding of ``layer`` (``where``) of period ``period`` (mm): the limit
-    and what the layer's renderer makes of it (its class's ``fine_period``; ``sho``: the
-    default SHO variant's)."""
+    and what its renderer makes of it (its class's ``fine_period``; ``sho``: the default
+    SHO variant's). ``renderer``: the one that plays it (an experiment stimulus's), else
+    the layer's own ``render``."""
     from frictex.rendering.renderers import DEFAULT_SHO, RENDERERS
     from frictex.textures.model import SHO
     t = THRESHOLDS["touch"]
-    render = DEFAULT_SHO if layer.render == SHO else layer.render
+    render = renderer or layer.render
+    render = DEFAULT_SHO if render == SHO else render
     effect = getattr(RENDERERS.get(render), "fine_period", None) or (
         f"renderer {render} may alias it where it reads the map at the touch samples; "
         f"render = \"hybrid\" plays it from the finger's velocity")
@@ -120,9 +122,10 @@ def _under_touch(layer, where: str, period: float) -> Finding:
                    f"({t.source}): {effect}")
 
 
-def scene_findings(scene) -> list[Finding]:
+def scene_findings(scene, renderer: str | None = None) -> list[Finding]:
     """The features of ``scene`` below a threshold of :data:`THRESHOLDS` (module
-    docstring), in layer order."""
+    docstring), in layer order; ``renderer``: the one its periodic layers are played by
+    (an experiment stimulus's), else each layer's own ``render``."""
     out = []
     for layer in scene.layers:
         where = f'layer "{layer.name}"'
@@ -133,7 +136,7 @@ def scene_findings(scene) -> list[Finding]:
         period = _period(layer)
         if period is not None:
             if period < THRESHOLDS["touch"].value:
-                out.append(_under_touch(layer, where, period))
+                out.append(_under_touch(layer, where, period, renderer))
             hz = SPEED_MM_S / period
             if hz > THRESHOLDS["temporal"].value:
                 out.append(_below("temporal", where, hz,

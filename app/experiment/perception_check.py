@@ -13,6 +13,9 @@ Pairs compared:
   the largest comparison it can present (``protocol.reachable``: the reference plus its
   ``max``, or as far as its steps go within ``max_trials``); below the threshold, the
   staircase would sit at its ceiling and its threshold be extrapolated.
+- each scene under each renderer its stimuli play it with (a stimulus's ``renderer``
+  rules its periodic layers: a 0.6 mm grating is played by SHT but aliased by SHO-held),
+  naming the stimuli a note applies to.
 - listed stimuli (``[[stimulus]]``, or renderers crossed): every pair of stimuli from
   different scene files, their layers matched one to one
   (``perception.compare_scenes``); two renderings of one scene differ by their
@@ -49,6 +52,32 @@ def _farthest(protocol: Protocol) -> tuple[float, str] | None:
             f"and a design that measures it needs levels on both sides")
 
 
+def _scene_notes(protocol: Protocol, scenes: dict) -> list[Finding]:
+    """Each scene's findings (``scene_findings``) under each renderer its stimuli play
+    it with, a finding alike under several renderers once, naming the listed stimuli it
+    applies to: ``grating-0.6mm.toml (stimulus "0.6mm-sho"): ...``."""
+    st = protocol.stimuli
+    uses: dict[tuple, list[str]] = {}  # (scene file, renderer) -> the stimuli's names
+    for stimulus in st.listed:
+        uses.setdefault((stimulus.scene, stimulus.renderer), []).append(stimulus.name)
+    if not st.listed:
+        uses[(st.scene, None)] = []
+    applies: dict[tuple, list[str]] = {}  # (scene file, finding) -> the stimuli's names
+    for (path, renderer), names in uses.items():
+        for found in scene_findings(scenes[path], renderer):
+            applies.setdefault((path, found), []).extend(names)
+    return [Finding(f.kind, f.where, f.value, f"{path.name}{_naming(names)}: {f.message}")
+            for (path, f), names in applies.items()]
+
+
+def _naming(names: list[str]) -> str:
+    """`` (stimuli "a", "b")`` for the stimuli a finding applies to; "" for none."""
+    if not names:
+        return ""
+    quoted = ", ".join(f'"{name}"' for name in names)
+    return f" (stimul{'i' if len(names) > 1 else 'us'} {quoted})"
+
+
 def protocol_findings(protocol: Protocol) -> list[Finding]:
     """The scenes' features and the pairs of stimuli below a threshold (module
     docstring), scenes first, in the protocol's order."""
@@ -56,8 +85,7 @@ def protocol_findings(protocol: Protocol) -> list[Finding]:
     paths = list(dict.fromkeys([st.scene] if st.scene is not None and not st.listed
                                else [s.scene for s in st.listed]))
     scenes = {path: load_scene(path) for path in paths}
-    out = [Finding(f.kind, f.where, f.value, f"{path.name}: {f.message}")
-           for path, scene in scenes.items() for f in scene_findings(scene)]
+    out = _scene_notes(protocol, scenes)
     farthest = _farthest(protocol)
     if farthest is not None:
         value, why = farthest
