@@ -107,3 +107,21 @@ def test_timoshenko_refusal_compares_a_frequency_with_the_cutoff_frequency():
                          r"is above the Timoshenko cutoff ([0-9.e+]+) Hz of this beam .*",
                          str(refused.value))
     assert found and float(found[1]) > float(found[2]) == pytest.approx(beam.cutoff_hz, rel=1e-5)
+
+
+@pytest.mark.parametrize("make", [_beam, _plate])
+def test_a_negative_wanted_amplitude_is_refused(make):
+    # before: -0.4 um was served as +0.4 um (commands of the opposite sign)
+    positions = [[120.0], [250.0]] if make is _beam else [(35.0, 70.0), (105.0, 70.0)]
+    fingers, wanted_um = _block(positions, [-0.4, 0.0])
+    with pytest.raises(ModesError, match=r"^wanted amplitude -0.4 um of finger 0 at sample 0 is "
+                                         r"negative; amplitudes are zero-to-peak, 0 or more$"):
+        make("bounded").command(wanted_um, fingers)
+
+
+@pytest.mark.parametrize("method", ["exact", "bounded"])
+def test_a_finger_at_a_nan_position_is_named(method):
+    fingers, wanted_um = _block([[120.0], [np.nan]], [0.4, 0.0])
+    with pytest.raises(ModesError, match=r"^finger 1 at sample 0 is touching at a position that "
+                                         r"is not finite \(x, y = nan, "):
+        _beam(method).command(wanted_um, fingers)

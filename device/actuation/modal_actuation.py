@@ -134,6 +134,7 @@ class ModalActuation:
         x, y, clipped, where = self._on_structure(np.ascontiguousarray(fingers.x_pred, dtype=np.float64),
                                                   np.ascontiguousarray(fingers.y_pred, dtype=np.float64),
                                                   contact)
+        _check_block(wanted_um, x, y, where)
         phi = np.ascontiguousarray(self.shapes(x, y), dtype=np.float64)  # (k, p) where touching
         served = _served_fingers(touch_rank(contact, fingers.touch_start), self.n_modes)
         wanted = np.ascontiguousarray(wanted_um, dtype=np.float64)
@@ -173,6 +174,22 @@ class ModalActuation:
         full = (((s_m >= floor) if self.method == "regularised" else (s_m > floor)) & (s_m > 0)
                 & (s_m >= NEAR_SINGULAR * s[:, 0]))
         return int(np.count_nonzero(~full))
+
+
+def _check_block(wanted_um, x_mm, y_mm, where) -> None:
+    """Refuse a negative wanted amplitude (um zero-to-peak, phase 0: a sign has no
+    meaning) and a touching finger's position that is not finite, naming the finger
+    (row) and sample (column) of the block."""
+    negative = np.argwhere(np.asarray(wanted_um) < 0)
+    if len(negative):
+        f, i = negative[0].tolist()
+        raise ModesError(f"wanted amplitude {float(wanted_um[f, i]):g} um of finger {f} at sample "
+                         f"{i} is negative; amplitudes are zero-to-peak, 0 or more")
+    bad = np.flatnonzero(~(np.isfinite(x_mm) & np.isfinite(y_mm)))
+    if len(bad):
+        f, i = np.argwhere(where == bad[0])[0].tolist()
+        raise ModesError(f"finger {f} at sample {i} is touching at a position that is not "
+                         f"finite (x, y = {x_mm[bad[0]]:g}, {y_mm[bad[0]]:g} mm on the structure)")
 
 
 # compiled kernels cached here call no compiled function of another module: numba's cache
