@@ -1,5 +1,5 @@
 """modes ring --phase-shift: --amplitude-um stops where the driving-force line would push
-a still finger harder than its friction at rest (mu0 F_n; 4.85 um with seed 004's 0.13
+a still finger harder than its friction at rest (mu0 F_n; 4.846 um with seed 004's 0.13
 N/um per N above 1 um and mu0 0.5), --normal-force-n at 100 N as texture files' forces;
 the forces print in 4 significant digits, and the force on a still finger is 0 at 0 and
 +-180 degrees on seed 004's ring (the envelope's least amplitude, 0.0040 W there, stays
@@ -36,10 +36,11 @@ def test_an_amplitude_past_what_argparse_takes_is_one_line_exit_2(capsys):
 
 
 @pytest.mark.parametrize("amplitude, said", [
-    ("4.9", "--amplitude-um 4.9: above 4.85 um the driving-force line (seed 004, Fig. 3c: "
+    ("4.9", "--amplitude-um 4.9: above 4.846 um the driving-force line (seed 004, Fig. 3c: "
             "0.13 N/um per N above 1 um) would push a still finger harder than its friction "
             "at rest (0.5 F_n)"),
-    ("100", "--amplitude-um 100: above 4.85 um")])
+    ("100", "--amplitude-um 100: above 4.846 um"),
+    ("4.85", "--amplitude-um 4.85: above 4.846 um")])  # it said 'above 4.85 um' of 4.85
 def test_an_amplitude_past_the_friction_bound_is_one_line_exit_2(capsys, amplitude, said):
     # 100 um printed 12.86 N on a finger pressing with 1 N
     assert main(["modes", "ring", "--phase-shift", "--amplitude-um", amplitude]) == 2

@@ -12,4 +12,4 @@ def test_ring_md_gives_the_amplitude_bound_the_command_refuses_above():
     # it said 'stops at 100 um' while 50 um was refused above 4.85 um
     text = " ".join(RING_MD.read_text(encoding="utf-8").split())
     stated = re.findall(r"`--amplitude-um` stops at ([0-9.]+) um", text)
-    assert stated == [f"{FRICTION_BOUND_UM:.3g}"]
+    assert stated == [f"{FRICTION_BOUND_UM:.4g}"]

@@ -72,7 +72,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                                             "-180 to 180 deg, dividing 180 (default 15)")
     parser.add_argument("--amplitude-um", type=bounded(float, 0.01, MAX_UM, "um"), metavar="W",
                         help="with --phase-shift: amplitude of each mode, um zero-to-peak, "
-                             f"0.01 to {FRICTION_BOUND_UM:.3g} (default 3, seed 004's largest; "
+                             f"0.01 to {FRICTION_BOUND_UM:.4g} (default 3, seed 004's largest; "
                              "above, the force's line would pass the finger's friction)")
     parser.add_argument("--normal-force-n", type=bounded(float, 0.01, MAX_FORCE_N, "N"),
                         nargs="+", metavar="N",
@@ -146,7 +146,7 @@ def _check_phase_options(args: argparse.Namespace) -> None:
         raise ModesError(f"--phase-step-deg {args.phase_step_deg:g}: must divide 180 (e.g. 5, "
                          "10, 15, 30, 45)")
     if args.amplitude_um > FRICTION_BOUND_UM:
-        raise ModesError(f"--amplitude-um {args.amplitude_um:g}: above {FRICTION_BOUND_UM:.3g} "
+        raise ModesError(f"--amplitude-um {args.amplitude_um:g}: above {FRICTION_BOUND_UM:.4g} "
                          f"um the driving-force line (seed 004, Fig. 3c: {_DRIVE.slope_per_um:g} "
                          f"N/um per N above {_DRIVE.threshold_um:g} um) would push a still "
                          f"finger harder than its friction at rest ({_DRIVE.mu0:g} F_n), "
