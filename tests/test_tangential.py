@@ -90,6 +90,16 @@ def test_no_force_and_no_travelling_wave_stay_finite():
     assert_array_equal(cmd.unreachable, [False, True, False])
 
 
+def test_without_normal_force_the_plate_rests_and_says_the_goal_unreachable():
+    """With F_n = 0 every force is 0 whatever the amplitude: a negative goal commanded the
+    amplitude limit for 0 N achieved."""
+    cmd, _ = invert_tangential(np.array([-0.1, 0.0, 0.1]), np.full(3, 20.0), 0.0, 1.0,
+                               LIMIT, FRICTION, PARAMS)
+    assert_array_equal(cmd.amplitude_um, [0.0, 0.0, 0.0])
+    assert_array_equal(cmd.unreachable, [True, False, True])
+    assert_array_equal(cmd.achieved_n, [0.0, 0.0, 0.0])
+
+
 def test_direction_has_hysteresis_at_rest_and_flips_once_at_a_reversal():
     n = 400
     jitter = np.where(np.arange(n) % 2, 1.5, -1.5)           # a finger at rest, noisy velocity
@@ -123,3 +133,20 @@ def test_blocks_with_carried_state_equal_one_call(cuts):
         parts.append(part)
     for name in ("amplitude_um", "direction", "motion", "achieved_n", "unreachable"):
         assert_array_equal(np.concatenate([getattr(p, name) for p in parts]), getattr(whole, name))
+
+
+def test_a_still_push_without_normal_force_or_wave_rests():
+    """A still finger asked to be pushed: with F_n = 0 or no travelling wave (tau = 0) no
+    amplitude pushes, so the plate rests (it drove the limit) and the push is counted
+    unreachable; with both, the drive the push needs."""
+    from frictex.rendering.pipeline import build_pipeline
+    from frictex.textures.library import resolve_scene
+    from frictex.textures.loader import load_scene
+
+    stage = build_pipeline(load_scene(resolve_scene("directional-beam"))).forces
+    fn, tau = np.array([0.0, 0.5, 0.5]), np.array([1.0, 0.0, 1.0])
+    w, _, unreachable, _, _ = stage._invert(np.zeros(3), np.full(3, 0.05), np.zeros(3, bool),
+                                           np.zeros(3), fn, tau, None)
+    assert_array_equal(w[:2], [0.0, 0.0])
+    assert 0.0 < w[2] < stage.device.amplitude_limit_um
+    assert_array_equal(unreachable, [True, True, False])

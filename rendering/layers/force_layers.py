@@ -207,7 +207,8 @@ class ForceStage:
             w_push = (np.abs(push) / k + self.params.threshold_um) / tau
         w_push = np.where(push == 0.0, 0.0, w_push)
         over = ~(w_push <= limit)  # also NaN/inf: tau = 0 or F_n = 0 with a push asked
-        w_still = np.where(over, limit, w_push)
+        # with no travelling wave (tau = 0) or no normal force no drive can push: rest
+        w_still = np.where(over, np.where((fn > 0.0) & (tau > 0.0), limit, 0.0), w_push)
         d_still = np.where(push > 0, -1, np.where(push < 0, 1, cmd.direction))
         w = np.where(moving, cmd.amplitude_um, w_still)
         d = np.where(moving, cmd.direction, d_still).astype(np.int8)

@@ -169,7 +169,9 @@ def invert_tangential(target_n, velocity_mm_s, normal_force_n, twr, limit_um: fl
     w = np.where(resist, w_resist, w)
     w = np.where(below, limit_um, w)
     w = np.where(above, np.where(high_drive > f0, limit_um, 0.0), w)
-    w = np.where(nonfinite | (fn == 0.0) & (goal == 0.0), 0.0, np.clip(w, 0.0, limit_um))
+    # no normal force, no force of any kind (each is F_n times something): rest, and a
+    # goal other than 0 stays counted unreachable
+    w = np.where(nonfinite | (fn == 0.0), 0.0, np.clip(w, 0.0, limit_um))
     s = np.where(resist | above & (w > 0), 1, -1)
 
     driving = tau * w > params.threshold_um
