@@ -135,7 +135,8 @@ def _in_window(args: argparse.Namespace, protocol, presenter, session):
 def warn_staircase(protocol) -> None:
     """Say on stderr what keeps ``protocol``'s staircase, if any, from a threshold."""
     from frictex.app.experiment.protocol import staircase_warnings
-    for line in staircase_warnings(protocol.staircase) if protocol.staircase else []:
+    staircase = protocol.staircase
+    for line in staircase_warnings(staircase, protocol.stimuli) if staircase else []:
         print(f"frictex: warning: {line}", file=sys.stderr)
 
 

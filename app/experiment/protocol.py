@@ -640,16 +640,34 @@ def fewest_trials(sc: Staircase, reversals: int) -> int:
     return (moves + 1) // 2 + (moves // 2) * sc.down_after
 
 
-def staircase_warnings(sc: Staircase) -> list[str]:
+def staircase_warnings(sc: Staircase, stimuli: Stimuli | None = None) -> list[str]:
     """What may keep the staircase ``sc`` from a threshold, one line each: ``max_trials``
     fewer than :func:`fewest_trials` for its ``threshold_reversals`` (it stops before
-    the reversals its threshold averages, whatever the answers)."""
+    the reversals its threshold averages, whatever the answers), and, given the
+    protocol's ``stimuli``, a floor its stimuli cannot show (:func:`unresolved_floor`)."""
+    lines = [] if stimuli is None else [line for line in [unresolved_floor(sc, stimuli)] if line]
     needed = fewest_trials(sc, sc.threshold_reversals)
     if sc.max_trials >= needed:
-        return []
+        return lines
     return [f"staircase.max_trials: {sc.max_trials} trials cannot reach the "
             f"{sc.threshold_reversals} reversals its threshold averages ({sc.rule} needs at "
-            f"least {needed}); the session would end without a reversal threshold"]
+            f"least {needed}); the session would end without a reversal threshold"] + lines
+
+
+def unresolved_floor(sc: Staircase, stimuli: Stimuli) -> str | None:
+    """Why the staircase ``sc`` can present a comparison its stimulus name does not tell
+    from the reference (a log staircase without ``min`` answered correctly halves its
+    difference on and on: depth-staircase reaches 1.9e-13 by trial 121, both stimuli
+    named depth=0.3), or None."""
+    from frictex.app.experiment.stimuli import name_of
+    low = reachable(sc)[0]
+    reference = name_of(stimuli.vary, stimuli.reference, None)
+    if sc.min is not None or name_of(stimuli.vary, stimuli.reference + low, None) != reference:
+        return None
+    return (f"staircase.min: none, and within {sc.max_trials} trials the difference can fall "
+            f"to {low:.3g}, where the comparison is named as the reference ({reference}) and "
+            f"no device plays them apart; give [staircase] min (the smallest difference "
+            f"worth presenting)")
 
 
 def reachable(sc: Staircase) -> tuple[float, float]:
