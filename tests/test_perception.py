@@ -227,13 +227,14 @@ def test_validate_perception_warns_and_never_fails(tmp_path, capsys):
 
 
 def test_validate_perception_counts_rendering_notes_apart_from_perception_warnings(capsys):
-    """seed003-gratings's one finding is the 0.6 mm grating's touch-Nyquist note, which
-    concerns rendering: it is no perception warning."""
+    """seed003-gratings's two findings are the 0.6 mm grating's touch-Nyquist notes, one per
+    renderer its stimuli play it with (SHO-held aliases it, SHT plays it), which concern
+    rendering: they are no perception warnings."""
     path = ROOT / "app" / "experiment" / "protocols" / "seed003-gratings.toml"
     assert main(["validate", "--perception", str(path)]) == 0
     out, err = capsys.readouterr()
-    assert "(protocol, 0 perception warnings, 1 rendering note)" in out
-    assert err.count(": rendering: ") == 1 and ": perception: " not in err
+    assert "(protocol, 0 perception warnings, 2 rendering notes)" in out
+    assert err.count(": rendering: ") == 2 and ": perception: " not in err
 
 
 def test_validate_perception_reports_a_bad_protocol(tmp_path, capsys):
