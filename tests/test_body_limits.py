@@ -3,7 +3,6 @@ in both the C core and the Python device: they are dropped, counted, and change 
 
 import zlib
 
-import numpy as np
 import pytest
 
 from frictex.device.link import protocol as p
