@@ -36,7 +36,7 @@ from pathlib import Path
 from frictex.app.measure.bench_pipeline import new_layer_scene
 from frictex.app.measure.figure import Figure
 from frictex.app.measure.processes import Run as ProcessRun
-from frictex.app.measure.processes import (cores, failed_note, frictex_argv, median,
+from frictex.app.measure.processes import (cores, failed_note, frictex_argv, median, medians_of,
                                            run_process)
 from frictex.app.measure.ratio_claim import ratio_claim
 from frictex.rendering.input.trace_file import Trace, concat_traces, read_trace, write_trace
@@ -147,7 +147,6 @@ def _batch_pair_figures(jobs: int, one: list[ProcessRun], many: list[ProcessRun]
     """``_batch_figures``' figures from the runs one after another (``one``) and ``n`` at
     once (``many``), pair k at index k: a pair where either run failed is left out of
     the ratios, the others keep their numbers, and the labels say how many failed."""
-    from frictex.app.measure.bench_startup import medians_of  # it imports this module
     pairs = [(k, a, b) for k, (a, b) in enumerate(zip(one, many))
              if a.code == 0 and b.code == 0]
     ratios = {k: a.wall_s / b.wall_s for k, a, b in pairs}

@@ -36,7 +36,8 @@ from pathlib import Path
 
 from frictex.app.measure.bench_replay import SCENE, human_trace
 from frictex.app.measure.figure import Figure
-from frictex.app.measure.processes import Run, alternated, failed_note, frictex_argv, median
+from frictex.app.measure.processes import (Run, alternated, failed_note, frictex_argv, median,
+                                           medians_of)
 from frictex.app.measure.report_claims import paired
 from frictex.rendering.input.trace_file import write_trace
 
@@ -89,13 +90,6 @@ def run(quick: bool) -> list[Figure]:
                                                 Path(name) / "pycache")
         runs = alternated(found, rounds)
     return startup_figures(runs)
-
-
-def medians_of(runs: list[Run]) -> str:
-    """"median of K" over the runs that succeeded (those ``median`` keeps), with
-    ``failed_note`` where some failed."""
-    ok = sum(r.code == 0 for r in runs)
-    return f"median of {ok}{failed_note(len(runs) - ok, len(runs))}"
 
 
 def startup_figures(runs: dict[str, list[Run]]) -> list[Figure]:

@@ -144,6 +144,13 @@ def failed_note(failed: int, total: int) -> str:
     return f", {failed} of {total} failed" if failed else ""
 
 
+def medians_of(runs: list[Run]) -> str:
+    """"median of K" over the runs that succeeded (those ``median`` keeps), with
+    ``failed_note`` where some failed."""
+    ok = sum(r.code == 0 for r in runs)
+    return f"median of {ok}{failed_note(len(runs) - ok, len(runs))}"
+
+
 def median(runs: list[Run], field: str) -> float:
     """The median of one field over the runs that succeeded (NaN if none did)."""
     values = [getattr(r, field) for r in runs if r.code == 0]
