@@ -22,6 +22,18 @@ def test_a_missing_port_gives_the_reason_once(tmp_path):
                                   "No such file or directory")
 
 
+@pytest.mark.parametrize("kind", ["regular file", "folder"])
+def test_a_path_that_is_no_serial_port_is_said_so(tmp_path, kind):
+    """pyserial said "Could not configure port: (25, 'Inappropriate ioctl for device')"
+    of --device /etc/passwd."""
+    path = tmp_path / "port"
+    path.mkdir() if kind == "folder" else path.write_text("not a port\n")
+    with pytest.raises(LinkError) as refused:
+        open_port(str(path))
+    assert str(refused.value) == (f"cannot open device port {str(path)!r}: not a serial port "
+                                  f"(a {kind}); expected a serial device such as /dev/ttyACM0")
+
+
 def test_a_refused_socket_gives_the_reason_once():
     with socket.socket() as closed:  # a port no one listens on
         closed.bind(("127.0.0.1", 0))

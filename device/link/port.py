@@ -25,6 +25,7 @@ from __future__ import annotations
 import errno
 import math
 import os
+import stat
 import re
 import socket
 import struct
@@ -171,6 +172,8 @@ def open_port(url: str):
     :class:`LinkError` naming it when it cannot be opened."""
     check_url(url)
     options = {"baudrate": BAUD, "timeout": READ_WAIT_S, "write_timeout": WRITE_WAIT_S}
+    if "://" not in url:
+        _check_character_device(url)
     try:
         if url.startswith("socket://"):
             port = TcpPort(None, **options)
@@ -186,6 +189,20 @@ def open_port(url: str):
                             "(a port is opened for one host at a time)") from None
         raise LinkError(f"cannot open device port {url!r}: {_reason(exc)}") from None
     return port
+
+
+def _check_character_device(path: str) -> None:
+    """:class:`LinkError` where ``path`` names a file that is no character device (a
+    serial port, a pty): pyserial would say 'Could not configure port: (25, ...)'. A
+    name that is no file (a Windows COM port) is left to pyserial."""
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return
+    if not stat.S_ISCHR(mode):
+        kind = "folder" if stat.S_ISDIR(mode) else "regular file" if stat.S_ISREG(mode) else "file"
+        raise LinkError(f"cannot open device port {path!r}: not a serial port (a {kind}); "
+                        "expected a serial device such as /dev/ttyACM0")
 
 
 def _reason(exc: BaseException) -> str:
