@@ -3,6 +3,7 @@ and a round where frictex's own run took no measurable time."""
 
 from __future__ import annotations
 
+from frictex.app.commands.bench import failed_figures
 from frictex.app.measure.bench_baseline import paired_figures
 from frictex.app.measure.processes import Run
 from frictex.app.measure.ratio_claim import ratio_claim
@@ -33,4 +34,6 @@ def test_a_round_where_frictex_took_no_measurable_time_is_left_out_not_a_crash()
         "X, frictex against bare, round 1", "X, frictex against bare, round 3",
         "X, frictex against bare, round 4"]
     assert ("X, frictex against bare, target at most 1.2x (geometric mean of 3 rounds, 1 of 4 "
-            "failed)") in labels
+            "not measured (0 s))") in labels
+    # no run failed: the bench's exit status must not say one did
+    assert failed_figures(paired_figures("X", bare, ours, 1.2)) == []

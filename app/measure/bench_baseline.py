@@ -145,9 +145,11 @@ def paired_figures(label: str, bare: list, ours: list, target: float | None,
     and its 95 % interval, the verdict on ``target`` (none where it is None:
     ``no_target`` says why), and median CPU times."""
     rounds = len(bare)
-    kept = [(k, b, o) for k, (b, o) in enumerate(zip(bare, ours))
-            if b.code == 0 and o.code == 0 and b.wall_s > 0 and o.wall_s > 0]
-    note = failed_note(rounds - len(kept), rounds)
+    ran = [(k, b, o) for k, (b, o) in enumerate(zip(bare, ours)) if b.code == 0 and o.code == 0]
+    kept = [(k, b, o) for k, b, o in ran if b.wall_s > 0 and o.wall_s > 0]
+    note = failed_note(rounds - len(ran), rounds) + (
+        f", {len(ran) - len(kept)} of {rounds} not measured (0 s)" if len(kept) < len(ran)
+        else "")
     kept_bare, kept_ours = [b for _, b, _ in kept], [o for _, _, o in kept]
     of = f"median of {len(kept)} rounds{note}"
     figures = [Figure("baseline", f"{label}, bare numpy/pyarrow ({of})",
