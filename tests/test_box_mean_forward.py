@@ -63,9 +63,7 @@ def test_the_sample_at_an_edge_plays_the_band_it_enters():
     phase, _ = integrate_phase(np.full(n, 250.0), 1.0 / RATE, np.zeros(n, np.int64), None,
                                steps)
     phase = phase + 0.4
-    block = SimpleNamespace(touch_id=np.zeros((1, n), np.int64), ids=(0,))
-    mu, _ = BandLimit(GRATING, RATE).play(phase[None], np.ones((1, n), bool), block, {},
-                                          travel=steps[None])
+    mu = BandLimit(GRATING).play_forward(phase[None], np.ones((1, n), bool), steps[None])
     assert abs(phase[4] - 0.5) < 1e-12
     assert mu[0, 4] == 1.0 and mu[0, 3] == 0.6
 
@@ -73,7 +71,7 @@ def test_the_sample_at_an_edge_plays_the_band_it_enters():
 def test_nyquist_counts_the_phase_travel_played_not_the_trackers_velocity():
     """A sample whose phase moves 0.6 cycle (a correction on top of synthesis) while the
     tracker says 0.3 cycle per sample plays the mean and is counted."""
-    band = BandLimit(GRATING, RATE)
+    band = BandLimit(GRATING)
     block = SimpleNamespace(vx=np.full((1, 2), 3000.0), vy=np.zeros((1, 2)),
                             contact=np.ones((1, 2), bool))
     mu = np.array([[0.6, 0.6]])
@@ -100,9 +98,7 @@ def test_a_mean_never_leaves_the_profiles_range():
     n = 20_000
     start = np.where(rng.random(n) < 0.5, 0.5, 1.0) + rng.integers(0, 50, n)
     travel = rng.uniform(1.0 / 65536, 3.0, n) * rng.choice([-1.0, 1.0], n)
-    block = SimpleNamespace(touch_id=np.arange(n)[None], ids=(0,))
-    mu, _ = BandLimit(GRATING, RATE).play(start[None], np.ones((1, n), bool), block, {},
-                                          travel=travel[None])
+    mu = BandLimit(GRATING).play_forward(start[None], np.ones((1, n), bool), travel[None])
     assert mu.max() <= 1.0 and mu.min() >= 0.6
     inside = (np.mod(start, 1.0) == 0.5) & (travel > 0) & (travel <= 0.5)
     assert np.count_nonzero(inside) > 500

@@ -54,17 +54,18 @@ def _sawtooth(period_mm):
 
 @pytest.fixture
 def played(monkeypatch):
-    """The phases (cycles, (F, n) per call) the renderers hand to ``BandLimit.play``: the
-    phase the hybrid renders, which a sample plays the box mean from
-    (``rendering.layers.band_limit``), so mu' no longer reads it back point by point."""
+    """The phases (cycles, (F, n) per call) the renderers hand to
+    ``BandLimit.play_forward``: the phase the hybrid renders, which a sample plays the box
+    mean from (``rendering.layers.band_limit``), so mu' no longer reads it back point by
+    point."""
     calls = []
-    play = BandLimit.play
+    play = BandLimit.play_forward
 
     def recorded(self, phase, *args, **kwargs):
         calls.append(np.array(phase))
         return play(self, phase, *args, **kwargs)
 
-    monkeypatch.setattr(BandLimit, "play", recorded)
+    monkeypatch.setattr(BandLimit, "play_forward", recorded)
     return calls
 
 

@@ -460,7 +460,7 @@ class ClosedLoop:
         """One line each when the force reports came back too late for the loop: more
         than ``MISSED_SHARE`` of them missed (not back within ``max_wait_s`` of their
         block's end), and a median delay at that wait limit (the integrator then steps at
-        the smallest ki the scheduler has). None when no report came (the fallback has
+        the smallest ki the scheduler has). None (an empty list) when no report came (the fallback has
         said why) or the loop waits less than a block."""
         if not state.reports:
             return []

@@ -56,17 +56,16 @@ MEAN_PHASES = 65536
 MIN_TRAVEL = 1.0 / MEAN_PHASES
 
 #: a box mean this close to the sample's point value is the point value: rounding, not
-#: texture (see ``BandLimit.play``)
+#: texture (see ``_box_row``)
 SNAP = 1e-9
 
 
 class BandLimit:
-    """What one periodic layer (grating or waveform) plays at ``rate_hz`` output."""
+    """What one periodic layer (grating or waveform) plays, sample by sample (the box
+    mean does not depend on the output rate: each sample brings its stretch)."""
 
-    def __init__(self, layer, rate_hz: float):
+    def __init__(self, layer):
         self.layer = layer
-        self.nyquist_hz = rate_hz / 2.0
-        self.axis = np.array(layer.axis, dtype=np.float64)
         self.period_mm = float(layer.period_mm)
         middles = (np.arange(MEAN_PHASES) + 0.5)[None, :] / MEAN_PHASES
         values = layer.profile_where(middles, np.ones(middles.shape, bool))[0]
@@ -84,32 +83,43 @@ class BandLimit:
         deviation = (running - mean * np.arange(1, MEAN_PHASES + 1)) / MEAN_PHASES
         self._table = np.concatenate(([0.0], deviation[:-1].astype(np.float64), [0.0]))
 
-    def play(self, phase: np.ndarray, covers: np.ndarray, block, last: dict,
-             travel: np.ndarray | None = None) -> tuple[np.ndarray, dict]:
-        """mu' (F, n) each sample plays (1 where the layer does not cover), and the
-        (touch id, last phase) of each finger of ``block`` to pass back as ``last`` next
-        call.
-
-        ``travel`` (cycles, (F, n)): each sample's own phase increment, the stretch the
-        finger crosses while the sample is held; the sample plays the profile's mean over
-        [phase, phase + travel] (SHT, the hybrid). None: the stretch from the previous
-        sample's phase to ``phase`` (cycles, unwrapped; SHO, which knows no sample's
-        phase before it comes)."""
+    def play_since(self, phase: np.ndarray, covers: np.ndarray, block, last: dict
+                   ) -> tuple[np.ndarray, dict]:
+        """mu' (F, n) each sample plays (1 where the layer does not cover): the profile's
+        mean over the stretch from the previous sample's phase to its own ``phase``
+        (cycles, unwrapped; SHO, which knows no sample's phase before it comes; ``last``:
+        the previous call's), and the (touch id, last phase) of each finger of ``block``
+        to pass back as ``last`` next call."""
         touch = np.ascontiguousarray(block.touch_id, dtype=np.int64)
         phase = np.ascontiguousarray(phase, dtype=np.float64)
         point = self.layer.profile_where(phase, covers)
         mu = np.empty_like(point)
         for row, fid in enumerate(block.ids):
-            if travel is None:
-                start, span = _since_previous(phase[row], touch[row], last.get(fid))
-            else:
-                start, span = phase[row], np.ascontiguousarray(travel[row], dtype=np.float64)
-            _box_row(start, span, np.ascontiguousarray(covers[row]), point[row], self._table,
-                     self.mean_mu, *self._range, mu[row])
+            start, span = _since_previous(phase[row], touch[row], last.get(fid))
+            self._box(start, span, covers[row], point[row], mu[row])
         if phase.shape[1] == 0:
             return mu, last
         return mu, {fid: (int(touch[row, -1]), float(phase[row, -1]))
                     for row, fid in enumerate(block.ids)}
+
+    def play_forward(self, phase: np.ndarray, covers: np.ndarray, travel: np.ndarray
+                     ) -> np.ndarray:
+        """mu' (F, n) each sample plays (1 where the layer does not cover): the profile's
+        mean over [phase, phase + travel] (cycles; ``travel`` (F, n): each sample's own
+        phase increment, the stretch the finger crosses while the sample is held; SHT,
+        the hybrid)."""
+        phase = np.ascontiguousarray(phase, dtype=np.float64)
+        point = self.layer.profile_where(phase, covers)
+        mu = np.empty_like(point)
+        for row in range(phase.shape[0]):
+            self._box(phase[row], np.ascontiguousarray(travel[row], dtype=np.float64),
+                      covers[row], point[row], mu[row])
+        return mu
+
+    def _box(self, start, span, covers, point, out) -> None:
+        """One finger's row (``_box_row``) into ``out``."""
+        _box_row(start, span, np.ascontiguousarray(covers), point, self._table, self.mean_mu,
+                 *self._range, out)
 
     def apply(self, mu: np.ndarray, covers: np.ndarray, block, travel: np.ndarray) -> int:
         """Set ``mu`` (F, n) to the mean where a touching finger on the layer (``covers``)
@@ -148,10 +158,11 @@ def _deviation(phase, table):
 
 @njit(cache=True, nogil=True)
 def _box_row(start, travel, covers, point, table, mean_mu, lo, hi, mu):
-    """One finger's row of :meth:`BandLimit.play`, written to ``mu``: each covered sample
-    whose stretch [start, start + travel] (cycles) is at least ``MIN_TRAVEL`` long, the
+    """One finger's row of :meth:`BandLimit.play_since` and
+    :meth:`BandLimit.play_forward`, written to ``mu``: each covered sample whose stretch
+    [start, start + travel] (cycles) is at least ``MIN_TRAVEL`` long, the
     box mean over it, within the profile's range [lo, hi]; the others ``point``, the
-    profile at ``start``."""
+    profile at the sample's own phase."""
     for k in range(start.size):
         span = travel[k]
         if not (covers[k] and abs(span) >= MIN_TRAVEL):  # NaN fails too

@@ -153,7 +153,7 @@ SHO's and SHT's, and it feels far fewer edges twice than SHO-predicted (0 agains
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -210,13 +210,11 @@ class _Finger:
 @dataclass(frozen=True)
 class HybridState:
     """Per finger id of the last block's tracks (``FingerBlock.ids``: the fingers
-    touching, and those that lifted in it): its :class:`_Finger` record; the touch and
-    phase of its last sample played (``BandLimit.play``'s ``last``); and the touching
+    touching, and those that lifted in it): its :class:`_Finger` record; and the touching
     samples played as the texture's mean so far (``rendering.layers.band_limit``)."""
 
     fingers: dict[int, _Finger]
     clipped: int = 0
-    last: dict[int, tuple[int, float]] = field(default_factory=dict)
 
 
 def slew_offset(bounds: np.ndarray, target: np.ndarray, restart: np.ndarray, snap: np.ndarray,
@@ -533,7 +531,7 @@ class HybridRenderer:
         self.lock = lock_mm / layer.period_mm
         self.locked = layer.period_mm >= COARSE_MM
         self.event_hz = float(event_hz)
-        self.band_limit = BandLimit(layer, rate_hz)
+        self.band_limit = BandLimit(layer)
 
     def initial_state(self) -> HybridState:
         return HybridState(fingers={})
@@ -569,7 +567,6 @@ class HybridRenderer:
                                    measured=end[4:7], speed=end[7], held=end[8],
                                    filter=filtered)
         covers = self.layer.covers(block.x_pred, block.y_pred)
-        mu, last = self.band_limit.play(phase, covers, block, state.last, travel=steps)
+        mu = self.band_limit.play_forward(phase, covers, steps)
         limited = self.band_limit.apply(mu, covers, block, steps)
-        return mu, covers, HybridState(fingers=carried, clipped=state.clipped + limited,
-                                       last=last)
+        return mu, covers, HybridState(fingers=carried, clipped=state.clipped + limited)

@@ -20,7 +20,8 @@ from frictex.rendering.tracking.tracks import FingerBlock
 
 class ShoRenderer:
     """Position-map rendering of one layer. Its state: None for a layer without a period;
-    for a periodic one each finger's last touch and phase (``BandLimit.play``'s ``last``)."""
+    for a periodic one each finger's last touch and phase (``BandLimit.play_since``'s
+    ``last``)."""
 
     #: reads any layer's map at a position, so it can be a run's SHO variant (the
     #: renderer of every layer without a period: ``rendering.renderers``)
@@ -30,7 +31,7 @@ class ShoRenderer:
         self.layer = layer
         self.predicted = predicted
         periodic = rate_hz is not None and layer.is_periodic
-        self.band_limit = BandLimit(layer, rate_hz) if periodic else None
+        self.band_limit = BandLimit(layer) if periodic else None
 
     def initial_state(self):
         return None if self.band_limit is None else {}
@@ -42,7 +43,7 @@ class ShoRenderer:
             mu, covers = self.layer.mu_and_covers(x, y)
             return mu, covers, state
         covers = self.layer.covers(x, y)
-        mu, last = self.band_limit.play(self.layer.phase_at(x, y), covers, block, state)
+        mu, last = self.band_limit.play_since(self.layer.phase_at(x, y), covers, block, state)
         return mu, covers, last
 
 

@@ -17,7 +17,7 @@ an alias, counted in ``clipped`` (``rendering.layers.band_limit``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -29,13 +29,11 @@ from frictex.rendering.tracking.tracks import FingerBlock
 @dataclass(frozen=True)
 class ShtState:
     """Per finger: the touch the phase belongs to and the wrapped phase (cycles) to go on
-    from; the touch and phase of the last sample played (``BandLimit.play``'s ``last``);
-    and the touching samples played as the texture's mean so far
+    from; and the touching samples played as the texture's mean so far
     (``rendering.layers.band_limit``)."""
 
     phase: dict[int, tuple[int, float]]
     clipped: int = 0
-    last: dict[int, tuple[int, float]] = field(default_factory=dict)
 
 
 class ShtRenderer:
@@ -51,7 +49,7 @@ class ShtRenderer:
         self.layer = layer
         self.dt_s = 1.0 / rate_hz
         self.axis = np.array(layer.axis)
-        self.band_limit = BandLimit(layer, rate_hz)
+        self.band_limit = BandLimit(layer)
 
     def initial_state(self) -> ShtState:
         return ShtState(phase={})
@@ -69,6 +67,6 @@ class ShtRenderer:
                                                 carried.get(fid), steps[row])
             carried[fid] = (int(block.touch_id[row, -1]), carry)
         covers = self.layer.covers(block.x_pred, block.y_pred)
-        mu, last = self.band_limit.play(phase, covers, block, state.last, travel=steps)
+        mu = self.band_limit.play_forward(phase, covers, steps)
         limited = self.band_limit.apply(mu, covers, block, steps)
-        return mu, covers, ShtState(phase=carried, clipped=state.clipped + limited, last=last)
+        return mu, covers, ShtState(phase=carried, clipped=state.clipped + limited)
