@@ -29,3 +29,43 @@ def test_echoed_device_frames_do_not_keep_the_output_up(kind):
     last_on = int(np.flatnonzero(setpoint[:, 0] > 0)[-1])
     assert last_on < 450, f"output on until tick {last_on}"
     assert core.counters.watchdog_trips == 1
+
+
+def _block(start: int) -> p.Block:
+    return p.Block(start, np.full((50, 1), 100, dtype=np.uint16))
+
+
+@pytest.mark.parametrize("kind", CORES)
+def test_an_echoed_device_frame_does_not_hide_a_lost_block(kind):
+    """A version-4 host sends Block seq 1, its device's Status seq 40 comes back as an
+    echo, then Block seq 3: seq 2 is lost, counted once and asked for again by Missing
+    (PROTOCOL.md 4.10), as without the echo. Counting the echo's seq made that 38 lost
+    and no Missing."""
+    core = core_class(kind)(DeviceConfig())
+    out = core.receive(p.encode(p.Hello(1), 0, 4), 0.0)
+    out += core.receive(p.encode(_block(0), 1, 4), 0.001)
+    out += core.receive(p.encode(ECHOED_STATUS, 40, 4), 0.0015)
+    out += core.receive(p.encode(_block(100), 3, 4), 0.002)
+    out += core.receive(p.encode(p.Heartbeat(5), 4, 4), 0.003)
+    replies = [f.message for f in p.Decoder().feed(out)]
+    assert [m.seqs for m in replies if isinstance(m, p.Missing)][:1] == [(2,)]
+    assert core.decoder.counts.lost_frames == 1
+    assert core.decoder.counts.frames_ok == 5  # the echo too (PROTOCOL.md 5.3)
+
+
+@pytest.mark.parametrize("kind", CORES)
+def test_an_echo_far_ahead_adds_no_lost_frames(kind):
+    """An echo numbered 5000 between host frames 1 and 2 used to add 4998 lost frames."""
+    core = core_class(kind)(DeviceConfig())
+    core.receive(p.encode(p.Hello(1), 0), 0.0)
+    core.receive(p.encode(p.Heartbeat(1), 1), 0.001)
+    core.receive(p.encode(ECHOED_STATUS, 5000), 0.002)
+    core.receive(p.encode(p.Heartbeat(2), 2), 0.003)
+    assert core.decoder.counts.lost_frames == 0
+
+
+def test_the_host_side_still_counts_the_device_frames_it_misses():
+    """The host's receiver is numbered by the device: a Status gap is a loss there."""
+    host = p.Decoder()
+    host.feed(p.encode(ECHOED_STATUS, 1, 4) + p.encode(ECHOED_STATUS, 40, 4))
+    assert host.counts.lost_frames == 38

@@ -703,10 +703,15 @@ class Decoder:
     next 0x00 starts a fresh frame, so the decoder resynchronises within one frame.
     Sequence numbers that skip forward count as ``lost_frames`` (and as the next frame's
     :attr:`Frame.lost`). Frames of versions 1 to
-    ``max_version`` are accepted.
+    ``max_version`` are accepted. ``on_device``: this is the device's receiver (as the C
+    firmware's ``rx.c`` always is), so only host -> device frames are numbered by its
+    peer; a frame of a device -> host type is its own echoed back (section 5.3), is
+    delivered with ``lost`` 0 and leaves the sequence bookkeeping alone. The host's
+    receiver (the default) counts every frame.
     """
 
     max_version: int = PROTOCOL_VERSION
+    on_device: bool = False
     counts: DecoderCounts = field(default_factory=DecoderCounts)
     _pending: bytearray = field(default_factory=bytearray)
     _overflowed: bool = False
@@ -763,12 +768,19 @@ class Decoder:
         except (ValueError, struct.error):
             c.bad_payload += 1
             return None
+        echoed = self.on_device and mtype >= DEVICE_TYPES
+        skipped = 0 if echoed else self._count_seq(mtype, seq)
+        c.frames_ok += 1
+        return Frame(seq, msg, version, skipped)
+
+    def _count_seq(self, mtype: int, seq: int) -> int:
+        """Follow the peer's sequence numbers through a frame of type ``mtype`` numbered
+        ``seq``; returns how many frames were skipped just before it."""
         if mtype == Hello.TYPE:
             self._next_seq = None  # a new host numbers from anywhere (section 2)
         skipped = (seq - self._next_seq) & 0xFFFF if self._next_seq is not None else 0
         if skipped >= 0x8000:  # a jump backwards is the sender restarting, not a loss
             skipped = 0
-        c.lost_frames += skipped
+        self.counts.lost_frames += skipped
         self._next_seq = (seq + 1) & 0xFFFF
-        c.frames_ok += 1
-        return Frame(seq, msg, version, skipped)
+        return skipped

@@ -220,7 +220,7 @@ class DeviceCore:
 
     def __post_init__(self):
         c = self.config
-        self.decoder = p.Decoder(max_version=c.protocol_version)
+        self.decoder = p.Decoder(max_version=c.protocol_version, on_device=True)
         self.counters = Counters()
         self.session = SessionCounters()
         self.state = S.IDLE

@@ -30,6 +30,23 @@ static void put(fw_rx *rx, uint8_t b)
         rx->crc = fw_crc32_byte(rx->crc, rx->body[rx->len - 5]);
 }
 
+/* Follow the host's sequence numbers through a host -> device frame of type `type` and
+ * number `seq`; returns how many frames were skipped just before it. Only host frames
+ * count: a device -> host frame reaching this receiver is the device's own echoed back
+ * (PROTOCOL.md 5.3), numbered by the device, and would fake or hide a loss. */
+static uint16_t count_seq(fw_rx *rx, uint8_t type, uint16_t seq)
+{
+    if (type == FW_HELLO)
+        rx->seq_known = false; /* a new host numbers from anywhere (PROTOCOL.md 2) */
+    uint16_t skipped = (uint16_t)(seq - rx->next_seq);
+    if (!rx->seq_known || skipped >= 0x8000u) /* a jump backwards is a restart, not a loss */
+        skipped = 0;
+    rx->counts.lost_frames += skipped;
+    rx->next_seq = (uint16_t)(seq + 1u);
+    rx->seq_known = true;
+    return skipped;
+}
+
 static bool check(fw_rx *rx, fw_msg *msg)
 {
     fw_rx_counts *c = &rx->counts;
@@ -69,15 +86,7 @@ static bool check(fw_rx *rx, fw_msg *msg)
         return false;
     }
     msg->seq = fw_le16(rx->body + 2);
-    if (type == FW_HELLO)
-        rx->seq_known = false; /* a new host numbers from anywhere (PROTOCOL.md 2) */
-    uint16_t skipped = (uint16_t)(msg->seq - rx->next_seq);
-    if (!rx->seq_known || skipped >= 0x8000u) /* a jump backwards is a restart, not a loss */
-        skipped = 0;
-    c->lost_frames += skipped;
-    msg->lost = skipped;
-    rx->next_seq = (uint16_t)(msg->seq + 1u);
-    rx->seq_known = true;
+    msg->lost = type < FW_DEVICE_TYPES ? count_seq(rx, type, msg->seq) : 0;
     c->frames_ok++;
     return true;
 }

@@ -2,7 +2,11 @@
  *
  * COBS is undone as bytes arrive and the CRC is accumulated on the fly, so a frame
  * costs no burst of work at its delimiter. A frame is delivered only if it passed every
- * check; anything else is counted by reason and has no other effect. */
+ * check; anything else is counted by reason and has no other effect.
+ *
+ * This is the device's receiver: lost_frames and fw_msg.lost follow the host's sequence
+ * numbers only. A frame of a device -> host type (the device's own, echoed back) is
+ * delivered and counted in frames_ok, with lost 0, and leaves that bookkeeping alone. */
 #ifndef FW_RX_H
 #define FW_RX_H
 

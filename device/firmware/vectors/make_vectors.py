@@ -37,8 +37,8 @@ _DROPS = {"cobs_errors": "cobs", "short_frames": "short", "crc_errors": "crc",
 
 
 def decoder() -> p.Decoder:
-    """A receiver of the versions the firmware speaks."""
-    return p.Decoder(max_version=NEWEST)
+    """The firmware's receiver: the versions it speaks, on the device's side."""
+    return p.Decoder(max_version=NEWEST, on_device=True)
 
 
 def _u16s(values) -> str:
@@ -292,6 +292,10 @@ def damaged_streams(rng):
         p.Heartbeat(0), 3)
     yield "seq wraps", enc(p.Heartbeat(0), 65534) + enc(p.Heartbeat(0), 65535) + enc(
         p.Heartbeat(0), 1)
+    # PROTOCOL.md 5.3: the device's own frames echoed back are not numbered by the host
+    echo = p.Status(0, 2, 0, 0, buffer_end=0, played_samples=0, flushed_samples=0, flushes=0)
+    yield "echoed device frame keeps seq", enc(_block(0, [1]), 1, 4) + enc(echo, 40, 4) + enc(
+        _block(1, [1]), 3, 4)
     yield "dropped frame keeps seq", enc(p.Heartbeat(0), 0) + raw_frame(
         _body(p.Heartbeat.TYPE, b"\1\0\0\0", seq=7), crc_ok=False) + enc(p.Heartbeat(0), 1)
 
