@@ -41,3 +41,15 @@ def test_replay_help_leaves_out_entries_that_cannot_be_loaded(tmp_path):
         assert sum(re.match(rf"frictex: warning: \w+( \w+)? '{name}' of frictex-wobble-missing "
                             r"\(.*\) cannot be loaded: ModuleNotFoundError: .*; left out$", w)
                    is not None for w in warnings) == 1, warnings
+
+
+def test_demo_help_leaves_out_a_renderer_that_cannot_be_loaded(tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(broken_distribution(tmp_path / "site"))}
+    done = subprocess.run([str(FRICTEX), "demo", "--help"], capture_output=True, text=True,
+                          timeout=300, cwd=tmp_path, env=env)
+    assert done.returncode == 0, done.stderr
+    helped = " ".join(done.stdout.split())
+    assert "sho-held" in helped and "ghost" not in helped
+    assert re.fullmatch(r"frictex: warning: \w+( \w+)? 'ghost' of frictex-wobble-missing "
+                        r"\(.*\) cannot be loaded: ModuleNotFoundError: .*; left out",
+                        done.stderr.strip()), done.stderr

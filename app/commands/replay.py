@@ -15,7 +15,7 @@ from frictex.app.engine.sources import MAX_GAP_S
 from frictex.app.engine.summary import control_line
 from frictex.app.engine.tables import FORMATS
 from frictex.device.errors import InputError
-from frictex.textures.model import RENDERERS, SHO
+from frictex.rendering.renderers import offered_render_modes
 from frictex.textures.outside import add_allow_outside
 
 
@@ -34,8 +34,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="csv (default), npz (one array per column) or parquet (columnar, "
                              "compressed; pandas and polars open it): the two faster for "
                              "long replays")
-    parser.add_argument("--renderer", choices=(SHO, *RENDERERS.loadable_names()),
-                        default=None,
+    parser.add_argument("--renderer", choices=offered_render_modes(), default=None,
                         help="render every periodic layer this way instead of as its file says "
                              "(sho: the run's SHO variant, sho-predicted unless sho-held is "
                              "chosen; rendering/RENDERERS.md)")
