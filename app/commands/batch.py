@@ -107,7 +107,8 @@ def _run_jobs(args: argparse.Namespace, jobs: list, out_dir: Path):
     try:
         return fan_out(partial(run_job, out_dir=str(out_dir.resolve())), jobs,
                        workers=args.jobs or default_workers(), scheduler=args.scheduler,
-                       on_done=done, on_lost=lambda job, why: not_ok(job, "failed", why)), None
+                       on_done=done, on_lost=lambda job, why: not_ok(job, "failed", why),
+                       noun="jobs"), None
     except (Interrupted, NoWorkers) as stop:
         return [row if row is not None else _interrupted(job, stop)
                 for job, row in zip(jobs, stop.results)], stop

@@ -97,12 +97,12 @@ class WorkerLost(FrictexError):
 
 class NoWorkers(FrictexError):
     """A Dask cluster that had no worker for ``waited_s`` (s): ``results`` in the items'
-    order, None for an item that did not finish."""
+    order, None for an item that did not finish; ``noun`` what the items are (plural)."""
 
-    def __init__(self, address: str, waited_s: float, results: list):
+    def __init__(self, address: str, waited_s: float, results: list, noun: str = "items"):
         unfinished = sum(result is None for result in results)
         super().__init__(f"the Dask cluster at {address} had no worker for {waited_s:.0f} s; "
-                         f"gave up {unfinished} of {len(results)} items unfinished")
+                         f"gave up {unfinished} of {len(results)} {noun} unfinished")
         self.address = address
         self.waited_s = waited_s
         self.results = results
@@ -117,13 +117,14 @@ def default_workers() -> int:
 
 
 def fan_out(fn, items: list, *, workers: int = 1, scheduler: str | None = None,
-            on_done=None, on_lost=None) -> list:
+            on_done=None, on_lost=None, noun: str = "items") -> list:
     """``[fn(item) for item in items]``, computed by ``workers`` processes (1: here, in
     order) or, with ``scheduler`` (a Dask scheduler's address), by that cluster's workers,
     which need frictex installed and the items' files at the same paths.
     ``on_done(result)`` is called in this process as each finishes. A signal stops it
     (module docstring): :class:`Interrupted`. ``on_lost(item, why)`` gives the result of
     an item lost with its worker (module docstring); without it: :class:`WorkerLost`.
+    ``noun`` names the items (plural) in :class:`NoWorkers`' message: "jobs" for a batch's.
     """
     done = on_done or (lambda result: None)
     lost: list[int] = []
@@ -137,7 +138,7 @@ def fan_out(fn, items: list, *, workers: int = 1, scheduler: str | None = None,
         return result
 
     if scheduler is not None:
-        results = _dask(fn, items, scheduler, done, lose)
+        results = _dask(fn, items, scheduler, done, lose, noun)
     elif workers == 1 or len(items) <= 1:
         return _here(fn, items, done)
     else:
@@ -441,7 +442,7 @@ def _pool_context():
     return mp.get_context("fork" if sys.platform == "linux" else "spawn")
 
 
-def _dask(fn, items: list, address: str, done, lose) -> list:
+def _dask(fn, items: list, address: str, done, lose, noun: str) -> list:
     """The items on the Dask cluster at ``address``, stopped by a signal (the stopper
     :func:`_here` uses) or by the cluster having no worker (module docstring)."""
     client = _dask_client(address)
@@ -450,7 +451,7 @@ def _dask(fn, items: list, address: str, done, lose) -> list:
         with _handling(stopper):
             futures = client.map(fn, items, pure=False)
             try:
-                return _dask_results(client, futures, stopper, _WorkerWatch(client, address),
+                return _dask_results(client, futures, stopper, _WorkerWatch(client, address, noun),
                                      done, lose)
             except BaseException:
                 client.cancel(futures)
@@ -518,11 +519,12 @@ def _started_on_dask(client, futures: list, results: list) -> list[int]:
 class _WorkerWatch:
     """Counts a Dask cluster's workers at most every :data:`WORKER_CHECK_S`: warns once
     when it has none, raises :class:`NoWorkers` once it has had none for
-    :data:`NO_WORKER_S`."""
+    :data:`NO_WORKER_S` (of the items, ``noun``)."""
 
-    def __init__(self, client, address: str):
+    def __init__(self, client, address: str, noun: str):
         self.client = client
         self.address = address
+        self.noun = noun
         self.next_check_s = 0.0  # time.monotonic() of the next count
         self.none_since_s: float | None = None  # since when it has had none
 
@@ -538,4 +540,4 @@ class _WorkerWatch:
             print(f"frictex: warning: the Dask cluster at {self.address} has no worker; "
                   f"waiting up to {NO_WORKER_S:.0f} s for one", file=sys.stderr)
         elif now_s - self.none_since_s >= NO_WORKER_S:
-            raise NoWorkers(self.address, now_s - self.none_since_s, results)
+            raise NoWorkers(self.address, now_s - self.none_since_s, results, self.noun)
