@@ -58,7 +58,7 @@ INTERNAL = ("frictex: internal error: please report it with the traceback above 
 #: subcommand -> (module in app/, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
     "validate": ("frictex.app.commands.validate", "check texture files; report every problem with file, line and field"),
-    "library": ("frictex.app.commands.library", "list the bundled scenes and traces"),
+    "library": ("frictex.app.commands.library", "list the bundled scenes, traces and protocols"),
     "replay": ("frictex.app.commands.replay", "run the haptic pipeline on a recorded trace, headless"),
     "batch": ("frictex.app.commands.batch", "replay many (scene, trace, renderer) jobs over the cores or a Dask cluster"),
     "trace": ("frictex.app.commands.trace", "synthesise or import touch traces"),
