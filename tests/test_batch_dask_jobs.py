@@ -32,3 +32,17 @@ def test_a_cluster_without_workers_gives_up_jobs_not_items(tmp_path, cluster, ca
     assert code == 1
     assert capsys.readouterr().err.strip().splitlines()[-1].endswith(
         "gave up 2 of 2 jobs unfinished")
+
+
+def test_batch_csv_names_a_scene_and_a_trace_as_the_manifest_writes_them(tmp_path):
+    """They were the files' resolved paths (/tmp/.../bad.toml for bad.toml)."""
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "bad.toml").write_text("not a scene\n")
+    (tmp_path / "m.csv").write_text("scene,trace,name\n./sub/bad.toml,swipe-40mms-50hz,a\n")
+    out = tmp_path / "out"
+    assert main(["batch", str(tmp_path / "m.csv"), "--out", str(out), "--quiet",
+                 "--jobs", "1"]) == 1
+    with open(out / "batch.csv", newline="") as fh:
+        (row,) = csv.DictReader(fh)
+    assert (row["status"], row["scene"], row["trace"]) == (
+        "failed", "./sub/bad.toml", "swipe-40mms-50hz")

@@ -43,8 +43,8 @@ good.
 Every job writes its replay outputs into its folder; the batch writes ``batch.csv``,
 one row per job (:data:`RESULT_COLUMNS`):
 
-- ``job`` (its row among the jobs, from 0), ``name``, ``scene`` and ``trace`` (as the
-  manifest's line names them, a file by its absolute path; an ``earlier`` row's are the
+- ``job`` (its row among the jobs, from 0), ``name``, ``scene`` and ``trace`` (the
+  manifest's line's text, a file as it names it; an ``earlier`` row's are the
   earlier batch's, what its folder holds), ``status``: ``ok``, ``failed``
   (``error`` says why), ``interrupted`` (the batch was stopped before the job finished:
   ``error`` says whether it had started) or ``earlier`` (a stopped batch kept an earlier
@@ -130,7 +130,9 @@ MAX_PROBLEMS_SHOWN = 50
 
 @dataclass(frozen=True)
 class Job:
-    """One replay of a batch (units as ``frictex replay``'s options)."""
+    """One replay of a batch (units as ``frictex replay``'s options): ``scene`` and
+    ``trace`` a file's absolute path or a bundled name; ``written`` the two as the
+    manifest's line writes them (None: as ``scene`` and ``trace``), for ``batch.csv``."""
 
     index: int
     scene: str
@@ -140,6 +142,7 @@ class Job:
     block: int | None
     fmt: str
     name: str
+    written: tuple[str, str] | None = None
 
 
 class ManifestError(InputError):
@@ -317,7 +320,8 @@ def _job(index: int, cell: dict, base: Path, renderers, where: str,
     name = problems.check(_name, cell, index, where)
     if len(problems.lines) > before:
         return None
-    return Job(index, paths["scene"], paths["trace"], renderer, rate_hz, block, fmt, name)
+    return Job(index, paths["scene"], paths["trace"], renderer, rate_hz, block, fmt, name,
+               written=(cell["scene"], cell["trace"]))
 
 
 def _name(cell: dict, index: int, where: str) -> str:
@@ -420,7 +424,8 @@ def not_ok(job: Job, status: str, error: str) -> dict:
 
 def _identity(job: Job) -> dict:
     """The cells of a job's ``batch.csv`` row that say which job it is and what it replays."""
-    return {"job": job.index, "name": job.name, "scene": job.scene, "trace": job.trace}
+    scene, trace = job.written or (job.scene, job.trace)
+    return {"job": job.index, "name": job.name, "scene": scene, "trace": trace}
 
 
 def write_results(out_dir: Path, rows: list[dict]) -> Path:
