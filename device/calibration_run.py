@@ -42,6 +42,9 @@ MIN_COVERED = 0.8
 LATE_SAMPLES = 200
 #: how long (s) the sweep waits for a finger to press on the plate before it starts
 TOUCH_WAIT_S = 30.0
+#: least friction coefficient |F_t / F_n| of a rest step: a fingertip sliding on glass has
+#: 0.3 to 1.5 (``device.finger``), so below a tenth of that the sensor reads no friction
+MIN_REST_FRICTION = 0.03
 
 
 class StepCut(LinkStalled):
@@ -120,7 +123,10 @@ def run_sweep(link, sweep: Sweep, on_step=None, first_index: int = 0):
         if not normal >= MIN_NORMAL_N:
             raise DeviceError(f"{link.label}: normal force {normal:.3g} N during step {k + 1}: "
                              f"the finger lifted (slide it through the whole sweep)")
-        ratios.append(float(np.median(lateral / normal_n)))
+        ratio = float(np.median(lateral / normal_n))
+        if steps[k] == 0.0:
+            _check_rest_friction(link, k, ratio, float(np.median(lateral)))
+        ratios.append(ratio)
         normals.append(normal)
         if on_step is not None:
             on_step(k + 1, len(steps))
@@ -162,6 +168,19 @@ def run_sweep(link, sweep: Sweep, on_step=None, first_index: int = 0):
     ratios, normals = np.array(ratios), np.array(normals)
     rest = 0.5 * (ratios[0:-1:2] + ratios[2::2])
     return np.array(sweep.levels), normals[1::2], ratios[1::2] / rest
+
+
+def _check_rest_friction(link, k: int, ratio: float, lateral_n: float) -> None:
+    """Raise DeviceError when rest step ``k``'s friction coefficient ``ratio`` (median
+    F_t / F_n) is below ``MIN_REST_FRICTION`` in size: mu0, which every mu' is divided by
+    (seed 003, eq 1), is nil. ``lateral_n``: the step's median lateral force (N). Either
+    sign is friction (a sensor may count the slide's direction negative)."""
+    if abs(ratio) >= MIN_REST_FRICTION:
+        return
+    raise DeviceError(f"{link.label}: the device reported no friction at rest: lateral force "
+                      f"{lateral_n:.3g} N with the plate still (step {k + 1}), {abs(ratio):.2g} "
+                      f"of the normal force where a sliding fingertip gives 0.3 to 1.5; is "
+                      f"the lateral force sensor connected and the finger sliding?")
 
 
 def _step_forces(link, index0: int, n: int, k: int):
