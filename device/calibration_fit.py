@@ -153,7 +153,10 @@ def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> 
     lower, upper = [B_BOUNDS[0], K_BOUNDS[0]], [B_BOUNDS[1], K_BOUNDS[1]]
     x0 = np.clip([start.b_per_um, start.asymptote_per_n], lower, upper)
     sol = least_squares(residual, x0, jac=jac, bounds=(lower, upper))
-    params = FrictionParams(b_per_um=float(sol.x[0]), asymptote_per_n=float(sol.x[1]))
+    # the solver stays strictly inside its bounds (k 6.8e-10 for k = 0): one it stopped
+    # on is the bound itself
+    theta = np.where(sol.active_mask < 0, lower, np.where(sol.active_mask > 0, upper, sol.x))
+    params = FrictionParams(b_per_um=float(theta[0]), asymptote_per_n=float(theta[1]))
     rms = float(np.sqrt(np.mean(sol.fun ** 2)))
     _check_fall(w, f, params)
     b_se, k_se = standard_errors(sol.jac, sol.fun)

@@ -62,7 +62,8 @@ DEVICE = {"profile": Choice(tuple(profiles.DEVICE_PROFILES), _DEVICE.profile),
           "amplitude_limit_um": replace(UM, default=_DEVICE.amplitude_limit_um),
           "normal_force_n": replace(FORCE, default=_DEVICE.normal_force_n)}
 FRICTION = {"b_per_um": Num("1/um", _FRICTION.b_per_um, gt=0.0),
-            "asymptote_per_n": Num("1/N", _FRICTION.asymptote_per_n, gt=0.0),
+            # k = 0: friction independent of the normal force, A = 0 (eqs 2-3 hold)
+            "asymptote_per_n": Num("1/N", _FRICTION.asymptote_per_n, ge=0.0),
             # was a cap on seed 003's asymptote (relative friction, default 0.95)
             "asymptote_cap": Retired("the friction model holds up to an asymptote of 1 "
                                      "(seed 003, eq 2) and frictex warns where a force takes "
@@ -245,7 +246,8 @@ documented(DEVICE, {
 documented(FRICTION, {
     "b_per_um": "b of seed 003 eq 2, mu'(w) = (1 - A) exp(-b w) + A (1/um)",
     "asymptote_per_n": "k of seed 003 eq 2, the asymptote A = k F_n (1/N): the lowest mu' "
-                       "any amplitude gives at normal force F_n",
+                       "any amplitude gives at normal force F_n; 0 is friction that does not "
+                       "depend on the force (mu' = exp(-b w))",
 })
 documented(FITTED, {
     "device": "the device `frictex calibrate` fitted [device.friction] on: its name from the "
