@@ -38,16 +38,13 @@ from scipy.special import gammaln, logsumexp
 
 from frictex.device.errors import InputError
 from frictex.device.friction import forward_mu
-from frictex.device.calibration_identity import toml_lines
+from frictex.device.calibration_identity import B_BOUNDS, K_BOUNDS, toml_lines
 from frictex.device.profile import DEFAULT_PROFILE, Calibration, FittedOn, FrictionParams
 
 #: residual RMS (mu') at or below which the model fits, whatever its residuals' pattern
 MODEL_TOLERANCE = 0.02
 #: runs-test p-value below which residuals above the tolerance are taken for a misfit
 LACK_OF_FIT_P = 0.05
-#: bounds of the fit: b (1/um), k (1/N)
-B_BOUNDS = (0.05, 20.0)
-K_BOUNDS = (0.0, 5.0)
 #: most amplitude columns of a calibration table, besides amplitude 0
 TABLE_BINS = 12
 #: least distinct amplitudes above 0 a fit takes: two determine (b, k) at one normal

@@ -7,11 +7,39 @@ several-fold from one finger to the next (``device.finger``), so constants fitte
 finger or plate misdescribe another; a replay to a device checks the scene's record
 against the device it streams to (:func:`mismatch`). A file written before the table
 existed has none, and is used as before, unchecked.
+
+The fit's bounds (``B_BOUNDS``, ``K_BOUNDS``) are here, beside what a calibration was
+fitted on, so a texture file's loader can say where its constants lie beyond anything
+the fit gives (:func:`outside_fit`) without importing the fit (and scipy).
 """
 
 from __future__ import annotations
 
-from frictex.device.profile import FittedOn
+from frictex.device.profile import FittedOn, FrictionParams
+
+#: bounds of the fit (``device.calibration_fit``): b (1/um), k (1/N)
+B_BOUNDS = (0.05, 20.0)
+K_BOUNDS = (0.0, 5.0)
+#: seed 003's measured constants (eq 2)
+_SEED = FrictionParams()
+
+
+def outside_fit(params: FrictionParams) -> list[tuple[str, str]]:
+    """(key, one-line warning) for each constant of seed 003's eq 2 beyond what the fit
+    allows: b outside ``B_BOUNDS`` (1/um), k above ``K_BOUNDS`` (1/N; below 0 the loader
+    refuses it)."""
+    found = []
+    low, high = B_BOUNDS
+    if not low <= params.b_per_um <= high:
+        found.append(("b_per_um", f"{params.b_per_um:g} /um is outside the {low:g} to {high:g} "
+                                  f"/um frictex calibrate's fit allows (seed 003 measured "
+                                  f"{_SEED.b_per_um:g} /um): a typo or a wrong unit?"))
+    if params.asymptote_per_n > K_BOUNDS[1]:
+        found.append(("asymptote_per_n", f"{params.asymptote_per_n:g} /N is above the "
+                                         f"{K_BOUNDS[1]:g} /N frictex calibrate's fit allows "
+                                         f"(seed 003 measured {_SEED.asymptote_per_n:g} /N): "
+                                         f"a typo or a wrong unit?"))
+    return found
 
 
 def toml_lines(fitted: FittedOn) -> list[str]:

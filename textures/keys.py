@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from frictex.device import profile as profiles
+from frictex.device.calibration_identity import B_BOUNDS, K_BOUNDS
 from frictex.device.profile import METHODS, THEORIES
 from frictex.textures import model
 from frictex.textures.clips import CLIP_TRIGGERS, MAX_CLIP_S
@@ -244,10 +245,13 @@ documented(DEVICE, {
                       "column and for the floor `validate` and `preview` check against",
 })
 documented(FRICTION, {
-    "b_per_um": "b of seed 003 eq 2, mu'(w) = (1 - A) exp(-b w) + A (1/um)",
+    "b_per_um": "b of seed 003 eq 2, mu'(w) = (1 - A) exp(-b w) + A (1/um); `validate` warns "
+                f"outside the {B_BOUNDS[0]:g} to {B_BOUNDS[1]:g} /um `frictex calibrate`'s fit "
+                "allows",
     "asymptote_per_n": "k of seed 003 eq 2, the asymptote A = k F_n (1/N): the lowest mu' "
                        "any amplitude gives at normal force F_n; 0 is friction that does not "
-                       "depend on the force (mu' = exp(-b w))",
+                       "depend on the force (mu' = exp(-b w)); `validate` warns above the "
+                       f"{K_BOUNDS[1]:g} /N the fit allows",
 })
 documented(FITTED, {
     "device": "the device `frictex calibrate` fitted [device.friction] on: its name from the "

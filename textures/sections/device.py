@@ -8,6 +8,7 @@ from dataclasses import replace
 import numpy as np
 
 from frictex.device import profile as profiles
+from frictex.device.calibration_identity import outside_fit
 from frictex.device.friction import ASYMPTOTE_MARGIN
 from frictex.device.structures.beam import MAX_MODES, ModesError
 from frictex.textures import model
@@ -210,6 +211,8 @@ def device_warnings(r: Reader, device: profiles.DeviceProfile) -> None:
                  f"{device.normal_force_n:g} N puts seed 003's asymptote (eq 2) at {a:.3g}: the "
                  f"model does not hold there (it needs A < 1) and friction cannot be modulated",
                  warning=True)
+    for key, message in outside_fit(device.friction):
+        r.report(("device", "friction", key), message, warning=True)
 
 
 def force_device(r: Reader, doc: dict, device, display, built):
