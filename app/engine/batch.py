@@ -79,9 +79,10 @@ jobs that finished (``ok``, or ``failed``), every earlier job folder it did not 
 kept and listed with status ``earlier`` (the earlier ``batch.csv``'s figures; ``job``
 empty for a name the new manifest does not have), and the rest ``interrupted``; the
 command then exits as an interrupted replay does (130 for Ctrl-C, 128 + the signal
-otherwise). Stopping a rerun deletes nothing that was complete. On a Dask cluster jobs
-already running finish on their workers (Dask cannot stop them) though ``batch.csv``
-lists them ``interrupted``. A text cell that would start with ``=``, ``+``, ``-``, ``@``, a tab or a
+otherwise). Stopping a rerun deletes nothing that was complete. On a Dask cluster the jobs
+running are given a few seconds (``fanout.DASK_STOP_S``) to finish; one still running
+then is listed ``interrupted`` and runs on to its end on its worker (Dask cannot stop
+it), a warning says so, and what it writes never reaches ``--out``. A text cell that would start with ``=``, ``+``, ``-``, ``@``, a tab or a
 carriage return (an error that starts with a scene named ``=HYPERLINK(...)``) is written
 behind a single quote, so that a spreadsheet shows it as text, never runs it (OWASP's
 rule for CSV injection).

@@ -105,6 +105,8 @@ class BatchFolder:
                 users.append(name)
         if stopped:
             rows = self._kept_rows(rows, ok, before)
+        _drop_unlisted(staged, {*users, *(row["name"] for row in rows
+                                          if row["status"] in ("ok", EARLIER))})
         write_results(staged, rows)
         self.staging.commit()
         return rows, users
@@ -121,6 +123,28 @@ class BatchFolder:
     def abort(self) -> None:
         """Delete the staging folder; ``--out`` stays as it was."""
         self.staging.abort()
+
+
+def _drop_unlisted(staged: Path, listed: set[str]) -> None:
+    """Delete from ``staged`` every entry but the job folders ``listed``: what a job left
+    that did not finish (a Dask task that runs on after a stopped batch's end writes on
+    into its own staging folder, which, deleted here, never reaches ``--out``)."""
+    for entry in os.scandir(staged):
+        if entry.name in listed:
+            continue
+        if entry.is_dir(follow_symlinks=False):
+            _delete_tree(Path(entry.path))
+        else:
+            os.unlink(entry.path)
+
+
+def _delete_tree(path: Path) -> None:
+    """Delete folder ``path``, which a job still running may be adding files to."""
+    for _ in range(10):
+        shutil.rmtree(path, ignore_errors=True)
+        if not os.path.lexists(path):
+            return
+    shutil.rmtree(path)  # the error, where it still cannot be deleted
 
 
 def _kept(job, name: str, before: dict) -> dict:

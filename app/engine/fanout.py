@@ -20,9 +20,11 @@ stops the item running the same way. A terminal's Ctrl-Z (SIGTSTP) stops the wor
 with this process, and ``fg`` or ``bg`` continues them. Should this process die (SIGKILL), each worker
 gets a SIGINT from the system (Linux) and stops its item likewise. On a Dask cluster
 the same stopper takes the signal (Ctrl-C, SIGTERM, SIGHUP) and the items not yet
-started are cancelled; those already running go on to their end on their workers (Dask
-cannot stop a running task) and are counted stopped while they ran, as are those that
-finished after the last look for results.
+started are cancelled; those running are given :data:`DASK_STOP_S` to finish (their
+results taken, as are those of the items that finished since the last look for
+results). One still running then is cancelled and counted stopped while it ran, and a
+warning says so: it goes on to its end on its worker (Dask cannot stop a running task),
+its result dropped.
 
 A worker that dies. A worker process that ends abruptly while an item runs (SIGKILL from
 the system's out-of-memory killer, a crash) breaks the pool, and the pool ends every
@@ -62,6 +64,8 @@ DONE, NOT_STARTED, STOPPED = "done", "not started", "stopped"
 NO_WORKER_S = 60.0
 #: how often (s) a Dask cluster's workers are counted while its items run
 WORKER_CHECK_S = 1.0
+#: how long (s) the items running on a Dask cluster may take to finish after a signal
+DASK_STOP_S = 3.0
 #: an item's state in the workers' shared array: taken by a worker and running, or ended
 #: (0: not started)
 _RUNNING, _ENDED = 1, 2
@@ -476,44 +480,76 @@ def _dask_results(client, futures: list, stopper: _Stopper, watch: "_WorkerWatch
                   done, lose) -> list:
     """The results of ``futures`` in their order, taken as they finish (every
     :data:`POLL_S`, so that a signal the stopper kept is seen); :class:`Interrupted` once
-    it keeps one, :class:`NoWorkers` when ``watch`` gives up; ``lose(k, why)`` the result
-    of item ``k`` whose workers died (``KilledWorker``)."""
-    from distributed import KilledWorker, as_completed
+    it keeps one (:func:`_stop_on_dask`), :class:`NoWorkers` when ``watch`` gives up;
+    ``lose(k, why)`` the result of item ``k`` whose workers died (``KilledWorker``)."""
+    from distributed import as_completed
     results: list = [None] * len(futures)
     index = {future.key: k for k, future in enumerate(futures)}
     finished = as_completed(futures)
     while not finished.is_empty() and stopper.signum is None:
         for future in finished.next_batch(block=False):
-            k = index[future.key]
-            try:
-                results[k] = future.result()
-            except KilledWorker:
-                results[k] = lose(k, LOST_ON_DASK)
-                continue
-            done(results[k])
+            _take_from_dask(future, index[future.key], results, done, lose)
         watch.check(results)
         time.sleep(POLL_S)
     if stopper.signum is not None:
-        raise Interrupted(stopper.signum, results, _started_on_dask(client, futures, results))
+        raise Interrupted(stopper.signum, results,
+                          _stop_on_dask(client, futures, results, done, lose))
     return results
 
 
-def _started_on_dask(client, futures: list, results: list) -> list[int]:
-    """The indices of the unfinished ``futures`` (None in ``results``) that a worker's
-    thread is running now, or that finished since the results were last taken.
+def _take_from_dask(future, k: int, results: list, done, lose) -> None:
+    """Item ``k``'s result from its finished ``future`` into ``results``: its value
+    (``done`` called), or ``lose``'s where its workers died."""
+    from distributed import KilledWorker
+    try:
+        results[k] = future.result()
+    except KilledWorker:
+        results[k] = lose(k, LOST_ON_DASK)
+        return
+    done(results[k])
+
+
+def _stop_on_dask(client, futures: list, results: list, done, lose) -> list[int]:
+    """After a signal: cancel the items not started, give those running on a worker up
+    to :data:`DASK_STOP_S` to finish (their results, and those of the items that
+    finished since the last look, taken into ``results``), then cancel them too and
+    warn if any still runs. Returns the indices of the items that started and did not
+    finish: one still running goes on to its end on its worker (Dask cannot stop a
+    running task), its result dropped."""
+    unfinished = [k for k in range(len(futures)) if results[k] is None]
+    running = _running_on_dask(client, futures, unfinished)
+    client.cancel([futures[k] for k in unfinished if k not in running])
+    deadline_s = time.monotonic() + DASK_STOP_S
+    while True:
+        for k in unfinished:
+            if results[k] is None and futures[k].status in ("finished", "error"):
+                _take_from_dask(futures[k], k, results, done, lose)
+        running = _running_on_dask(client, futures, [k for k in running if results[k] is None])
+        if not running or time.monotonic() >= deadline_s:
+            break
+        time.sleep(POLL_S)
+    stopped = [k for k in unfinished if results[k] is None and futures[k].status != "cancelled"]
+    client.cancel([futures[k] for k in stopped])
+    if running:
+        print(f"frictex: warning: {len(running)} stopped "
+              f"{'item runs' if len(running) == 1 else 'items run'} on after {DASK_STOP_S:.0f} s "
+              f"on the Dask workers (Dask cannot stop a running task); "
+              f"{'its' if len(running) == 1 else 'their'} results are dropped", file=sys.stderr)
+    return stopped
+
+
+def _running_on_dask(client, futures: list, indices: list[int]) -> set[int]:
+    """Those of ``indices`` whose future a worker's thread is running now.
 
     The scheduler's ``processing`` would also list the tasks a worker holds queued
     behind its threads (a 1-thread worker holds 2), which have not started: the
-    workers' call stacks list only the tasks running in a thread. Running ones are
-    looked up before finished ones, so that one ending in between is in either.
+    workers' call stacks list only the tasks running in a thread.
     """
-    unfinished = {future.key: k for k, future in enumerate(futures) if results[k] is None}
-    if not unfinished:
-        return []
-    running = {key for stacks in client.call_stack(keys=list(unfinished)).values()
-               for key in stacks}
-    finished = {key for key, k in unfinished.items() if futures[k].status == "finished"}
-    return sorted(unfinished[key] for key in running | finished)
+    keys = {futures[k].key: k for k in indices}
+    if not keys:
+        return set()
+    return {keys[key] for stacks in client.call_stack(keys=list(keys)).values()
+            for key in stacks if key in keys}
 
 
 class _WorkerWatch:
