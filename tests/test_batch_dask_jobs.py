@@ -93,8 +93,8 @@ def test_a_signal_takes_the_items_that_finish_and_warns_of_those_running_on(
     assert (stop.value.results, stop.value.stopped) == (["quick", None, None], [1])
     assert not (tmp_path / "queued.start").exists()
     assert capsys.readouterr().err.strip() == (
-        "frictex: warning: 1 stopped item runs on after 1 s on the Dask workers (Dask "
-        "cannot stop a running task); its results are dropped")
+        "frictex: warning: 1 of the items stopped still running on their Dask workers after "
+        "1 s (Dask cannot stop a running task): results dropped")
 
 
 def test_a_stopped_batch_leaves_in_out_only_the_folders_batch_csv_lists(tmp_path):

@@ -456,7 +456,7 @@ def _dask(fn, items: list, address: str, done, lose, noun: str) -> list:
             futures = client.map(fn, items, pure=False)
             try:
                 return _dask_results(client, futures, stopper, _WorkerWatch(client, address, noun),
-                                     done, lose)
+                                     done, lose, noun)
             except BaseException:
                 client.cancel(futures)
                 raise
@@ -477,7 +477,7 @@ def _dask_client(address: str):
 
 
 def _dask_results(client, futures: list, stopper: _Stopper, watch: "_WorkerWatch",
-                  done, lose) -> list:
+                  done, lose, noun: str) -> list:
     """The results of ``futures`` in their order, taken as they finish (every
     :data:`POLL_S`, so that a signal the stopper kept is seen); :class:`Interrupted` once
     it keeps one (:func:`_stop_on_dask`), :class:`NoWorkers` when ``watch`` gives up;
@@ -493,7 +493,7 @@ def _dask_results(client, futures: list, stopper: _Stopper, watch: "_WorkerWatch
         time.sleep(POLL_S)
     if stopper.signum is not None:
         raise Interrupted(stopper.signum, results,
-                          _stop_on_dask(client, futures, results, done, lose))
+                          _stop_on_dask(client, futures, results, done, lose, noun))
     return results
 
 
@@ -509,11 +509,11 @@ def _take_from_dask(future, k: int, results: list, done, lose) -> None:
     done(results[k])
 
 
-def _stop_on_dask(client, futures: list, results: list, done, lose) -> list[int]:
+def _stop_on_dask(client, futures: list, results: list, done, lose, noun: str) -> list[int]:
     """After a signal: cancel the items not started, give those running on a worker up
     to :data:`DASK_STOP_S` to finish (their results, and those of the items that
     finished since the last look, taken into ``results``), then cancel them too and
-    warn if any still runs. Returns the indices of the items that started and did not
+    warn if any still runs (the items named ``noun``). Returns the indices of the items that started and did not
     finish: one still running goes on to its end on its worker (Dask cannot stop a
     running task), its result dropped."""
     unfinished = [k for k in range(len(futures)) if results[k] is None]
@@ -531,10 +531,9 @@ def _stop_on_dask(client, futures: list, results: list, done, lose) -> list[int]
     stopped = [k for k in unfinished if results[k] is None and futures[k].status != "cancelled"]
     client.cancel([futures[k] for k in stopped])
     if running:
-        print(f"frictex: warning: {len(running)} stopped "
-              f"{'item runs' if len(running) == 1 else 'items run'} on after {DASK_STOP_S:.0f} s "
-              f"on the Dask workers (Dask cannot stop a running task); "
-              f"{'its' if len(running) == 1 else 'their'} results are dropped", file=sys.stderr)
+        print(f"frictex: warning: {len(running)} of the {noun} stopped still running on their "
+              f"Dask workers after {DASK_STOP_S:.0f} s (Dask cannot stop a running task): "
+              f"results dropped", file=sys.stderr)
     return stopped
 
 
