@@ -142,7 +142,7 @@ def test_a_cluster_without_workers_fails_the_batch_after_the_bound(tmp_path, clu
         f"frictex: warning: the Dask cluster at {address} has no worker; waiting up to 2 s "
         "for one",
         f"frictex: error: the Dask cluster at {address} had no worker for 2 s; gave up 2 of "
-        "2 items unfinished"]
+        "2 jobs unfinished"]
     assert statuses(out) == dict.fromkeys(
         "ab", ("interrupted", "not finished: the Dask cluster had no worker for 2 s"))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["batch.py", "m.csv", "out"]

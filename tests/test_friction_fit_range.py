@@ -61,3 +61,16 @@ def test_validate_prints_the_warning(tmp_path, capsys):
     assert main(["validate", str(tmp_path / "range.toml")]) == 0
     err = capsys.readouterr().err
     assert err.count("device.friction.b_per_um: 1e+06 /um is outside the 0.05 to 20 /um") == 1
+
+
+def test_replay_says_the_scene_files_warnings(tmp_path, capsys):
+    """A replay loads the file as validate does and says its warnings (on stderr and in
+    summary.json's warnings, first): it replayed b_per_um = 1e6 without a word."""
+    import json
+    (tmp_path / "range.toml").write_text(SCENE.format(b=1e6, k=1.13))
+    out = tmp_path / "out"
+    assert main(["replay", str(tmp_path / "range.toml"), "swipe-40mms-50hz", "--out", str(out),
+                 "--quiet"]) == 0
+    said = "device.friction.b_per_um: 1e+06 /um is outside the 0.05 to 20 /um"
+    assert capsys.readouterr().err.count(said) == 1
+    assert said in json.loads((out / "summary.json").read_text())["warnings"][0]

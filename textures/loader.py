@@ -23,7 +23,8 @@ default shown. Layers are drawn and composed in file order (later on top).
     normal_force_n = 0.5              # > 0, <= 100; nominal force for warnings and force-less traces
     [device.friction]                 # optional: seed 003 eq 2 constants
     b_per_um = 1.67                   # > 0
-    asymptote_per_n = 1.13            # > 0 (asymptote A = asymptote_per_n * F_n)
+    asymptote_per_n = 1.13            # >= 0 (asymptote A = asymptote_per_n * F_n;
+                                      # 0: friction not depending on F_n)
     [device.calibration]              # optional measured table, replaces the model
     amplitudes_um = [0, ...]          # >= 2 values, starting at 0, strictly increasing
     forces_n = [...]                  # >= 1 value, >= 0, strictly increasing
@@ -300,14 +301,23 @@ def check_scene(path: str | Path, *, allow_outside: bool = False, text: str | No
     return scene, r.problems, r.warnings
 
 
-def load_scene(path: str | Path, *, allow_outside: bool = False,
-               text: str | None = None) -> model.Scene:
-    """The scene in a texture file; raises :class:`TextureError` listing every problem.
-    ``allow_outside``, ``text``: as :func:`check_scene`'s."""
-    scene, problems, _ = check_scene(path, allow_outside=allow_outside, text=text)
+def read_scene(path: str | Path, *, allow_outside: bool = False, text: str | None = None,
+               ) -> tuple[model.Scene, list[Problem]]:
+    """The scene in a texture file and the warnings its check gave (values frictex can
+    play that look wrong: ``frictex validate`` prints the same); raises
+    :class:`TextureError` listing every problem. ``allow_outside``, ``text``: as
+    :func:`check_scene`'s."""
+    scene, problems, warnings = check_scene(path, allow_outside=allow_outside, text=text)
     if scene is None:
         raise TextureError(problems)
-    return scene
+    return scene, warnings
 
 
-__all__ = ["FORMAT_VERSION", "LAYER_KEYS", "LAYER_TYPES", "TextureError", "check_scene", "load_scene"]
+def load_scene(path: str | Path, *, allow_outside: bool = False,
+               text: str | None = None) -> model.Scene:
+    """The scene in a texture file (:func:`read_scene` without its warnings)."""
+    return read_scene(path, allow_outside=allow_outside, text=text)[0]
+
+
+__all__ = ["FORMAT_VERSION", "LAYER_KEYS", "LAYER_TYPES", "TextureError", "check_scene", "load_scene",
+           "read_scene"]

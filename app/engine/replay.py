@@ -151,21 +151,25 @@ class ReplayResult:
 
 
 def load_inputs(scene, trace, strict: bool = False):
-    """(Scene, iterator of trace chunks, trace path or None) from objects, paths or names.
+    """(Scene, iterator of trace chunks, trace path or None, the scene file's warnings)
+    from objects, paths or names.
 
     A trace file's iterator (``rendering.input.trace_file.TraceReader``) counts, in its
     ``order``, the samples it sorted or dropped where time went back; ``strict`` refuses
-    such a trace instead.
+    such a trace instead. The warnings (strings) are those ``frictex validate`` gives the
+    scene's file (none for a Scene object).
     """
+    warnings = []
     if not isinstance(scene, Scene):
         from frictex.textures.library import resolve_scene
-        from frictex.textures.loader import load_scene
-        scene = load_scene(resolve_scene(scene))
+        from frictex.textures.loader import read_scene
+        scene, warned = read_scene(resolve_scene(scene))
+        warnings = [str(w) for w in warned]
     if isinstance(trace, Trace):
-        return scene, iter([trace]), None
+        return scene, iter([trace]), None, warnings
     from frictex.textures.library import resolve_trace
     trace_path = resolve_trace(trace)
-    return scene, iter_trace(trace_path, strict=strict), trace_path
+    return scene, iter_trace(trace_path, strict=strict), trace_path, warnings
 
 
 def run_replay(scene, trace, out_dir, *, sink=None, frames=None, **options) -> dict[str, Any]:
@@ -203,7 +207,7 @@ def replay_with(scene, trace, out_dir: str | Path | None, options: ReplayOptions
 def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) -> ReplayResult:
     wall0 = time.perf_counter()
     timer = RunTimer()
-    scene, chunks, trace_path = load_inputs(scene, trace, options.strict)
+    scene, chunks, trace_path, scene_warnings = load_inputs(scene, trace, options.strict)
     inputs_s = time.perf_counter() - wall0
     write0 = time.perf_counter()
     load_writer(options.fmt)  # the format's library: part of writing, not of start-up
@@ -260,6 +264,7 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
             frames.into(folder)
         doc, tables = _run(pipeline, source, chunks, trace_path, scene, folder, options, sink,
                            frames, timer, check)
+        doc["warnings"][:0] = scene_warnings
         output_s = doc["output"]["duration_s"]
         doc["timings"] = timings(pipeline, output_s, timer.seconds,
                                  time.perf_counter() - wall0, setup_s)
