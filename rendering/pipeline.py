@@ -243,8 +243,9 @@ class Pipeline:
         """Run ``n_blocks`` blocks starting at ``block_index`` (output index
         ``block_index * block_size``) with the touch samples that take effect in them.
         Every block asked for is rendered, one in a long pause between touch samples
-        too: taking a pause longer than ``max_gap_s`` as a lift and skipping its silence
-        is the replay engine's (``app.engine.sources``), not this method's.
+        too (the finger touching, held where the tracker extrapolated it): taking a pause
+        longer than ``max_gap_s`` as a lift and skipping it is the replay engine's
+        (``app.engine.sources``), not this method's.
 
         ``normal_force_n``: the normal force (N) the device's force sensors measure now
         (seed 003's plate has four under its corners), used instead of the samples' force

@@ -112,7 +112,8 @@ class Pipeline:
             (``segments()`` lists them). So a finger's state, a recorded texture's
             noise included, is what :func:`replay` gives it, up to the first pause
             longer than replay's ``max_gap_s``: this renders the pause (``max_gap_s``
-            does not apply here), where replay lifts every finger and skips it, so the
+            does not apply here: the finger stays touching, held where it was
+            extrapolated to), where replay lifts every finger and skips it, so the
             rows line up with replay's only for a trace without such a pause.
 
         Raises
