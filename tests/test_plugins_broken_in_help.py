@@ -28,28 +28,34 @@ def broken_distribution(folder: Path) -> Path:
     return folder
 
 
-def test_replay_help_leaves_out_entries_that_cannot_be_loaded(tmp_path):
+def help_with_broken_plugins(tmp_path, command: str) -> tuple[str, list[str]]:
+    """``frictex COMMAND --help`` beside :func:`broken_distribution`: its help (whitespace
+    folded) and its warning lines, once it exits 0 offering frictex's own renderers."""
     env = {**os.environ, "PYTHONPATH": str(broken_distribution(tmp_path / "site"))}
-    done = subprocess.run([str(FRICTEX), "replay", "--help"], capture_output=True, text=True,
+    done = subprocess.run([str(FRICTEX), command, "--help"], capture_output=True, text=True,
                           timeout=300, cwd=tmp_path, env=env)
     assert done.returncode == 0, done.stderr
     helped = " ".join(done.stdout.split())
-    assert "sho-held" in helped and "ghost" not in helped
-    warnings = done.stderr.strip().splitlines()
+    assert "sho-held" in helped
+    return helped, done.stderr.strip().splitlines()
+
+
+def cannot_be_loaded(name: str, line: str) -> bool:
+    """Whether ``line`` is the warning that entry ``name`` is left out."""
+    return re.fullmatch(rf"frictex: warning: \w+( \w+)? '{name}' of frictex-wobble-missing "
+                        r"\(.*\) cannot be loaded: ModuleNotFoundError: .*; left out",
+                        line) is not None
+
+
+def test_replay_help_leaves_out_entries_that_cannot_be_loaded(tmp_path):
+    helped, warnings = help_with_broken_plugins(tmp_path, "replay")
+    assert "ghost" not in helped
     assert len(warnings) == 3 and len(set(warnings)) == 3
     for name in ("ghost", "ghost-sink", "ghost-clock"):
-        assert sum(re.match(rf"frictex: warning: \w+( \w+)? '{name}' of frictex-wobble-missing "
-                            r"\(.*\) cannot be loaded: ModuleNotFoundError: .*; left out$", w)
-                   is not None for w in warnings) == 1, warnings
+        assert sum(cannot_be_loaded(name, w) for w in warnings) == 1, warnings
 
 
 def test_demo_help_leaves_out_a_renderer_that_cannot_be_loaded(tmp_path):
-    env = {**os.environ, "PYTHONPATH": str(broken_distribution(tmp_path / "site"))}
-    done = subprocess.run([str(FRICTEX), "demo", "--help"], capture_output=True, text=True,
-                          timeout=300, cwd=tmp_path, env=env)
-    assert done.returncode == 0, done.stderr
-    helped = " ".join(done.stdout.split())
-    assert "sho-held" in helped and "ghost" not in helped
-    assert re.fullmatch(r"frictex: warning: \w+( \w+)? 'ghost' of frictex-wobble-missing "
-                        r"\(.*\) cannot be loaded: ModuleNotFoundError: .*; left out",
-                        done.stderr.strip()), done.stderr
+    helped, warnings = help_with_broken_plugins(tmp_path, "demo")
+    assert "ghost" not in helped
+    assert len(warnings) == 1 and cannot_be_loaded("ghost", warnings[0]), warnings
