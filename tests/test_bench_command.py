@@ -71,3 +71,19 @@ def test_json_prints_the_finished_sections_as_one_document_when_a_later_one_is_i
         bench.run(_args(True))
     rows = json.loads(capsys.readouterr().out)
     assert "one-second replay, whole process (median of 5)" in [r["label"] for r in rows]
+
+
+def test_the_exit_status_follows_the_runs_that_failed_not_the_labels_words(monkeypatch, capsys):
+    """A figure over runs some of which failed exits 1 whatever its label says; a label
+    that only mentions the word (a 'failed' column of a report) does not."""
+    def some_failed(quick):
+        return [Figure("some", "batch of 16 jobs (median of 3)", 6.4, "jobs/s", failed=1)]
+
+    def worded(quick):
+        return [Figure("worded", "runs a manifest's failed jobs again", 2.0, "s")]
+
+    _sections(monkeypatch, some=some_failed)
+    assert bench.run(_args(False)) == 1
+    assert "frictex: bench some: 1 figure(s) include failed runs" in capsys.readouterr().err
+    _sections(monkeypatch, worded=worded)
+    assert bench.run(_args(False)) == 0

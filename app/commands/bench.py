@@ -22,7 +22,6 @@ import argparse
 import importlib
 import json
 import math
-import re
 import resource
 import sys
 import time
@@ -91,10 +90,9 @@ def _measured(name: str, section, quick: bool) -> list[Figure]:
 
 
 def failed_figures(figures: list[Figure]) -> list[Figure]:
-    """The figures that include failed runs: not a number (NaN: every run failed) or
-    labelled with how many failed (``processes.failed_note``)."""
-    return [f for f in figures
-            if not math.isfinite(f.value) or re.search(r"\bfailed\b", f.label)]
+    """The figures that include failed runs (``Figure.failed``) or are not a number (NaN:
+    nothing was measured)."""
+    return [f for f in figures if f.failed or not math.isfinite(f.value)]
 
 
 def print_text(figures: list[Figure]) -> None:

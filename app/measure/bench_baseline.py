@@ -147,7 +147,8 @@ def paired_figures(label: str, bare: list, ours: list, target: float | None,
     rounds = len(bare)
     ran = [(k, b, o) for k, (b, o) in enumerate(zip(bare, ours)) if b.code == 0 and o.code == 0]
     kept = [(k, b, o) for k, b, o in ran if b.wall_s > 0 and o.wall_s > 0]
-    note = failed_note(rounds - len(ran), rounds) + (
+    failed = rounds - len(ran)
+    note = failed_note(failed, rounds) + (
         f", {len(ran) - len(kept)} of {rounds} not measured (0 s)" if len(kept) < len(ran)
         else "")
     kept_bare, kept_ours = [b for _, b, _ in kept], [o for _, _, o in kept]
@@ -164,7 +165,7 @@ def paired_figures(label: str, bare: list, ours: list, target: float | None,
                        median(kept_bare, "cpu_s"), "s"),
                 Figure("baseline", f"{label}, frictex CPU user + system ({of})",
                        median(kept_ours, "cpu_s"), "s")]
-    return figures
+    return [f.of_failed(failed) for f in figures]
 
 
 def _ratio_figures(label: str, ratios: list[float], target: float | None, no_target: str,

@@ -160,13 +160,14 @@ def _batch_pair_figures(jobs: int, one: list[ProcessRun], many: list[ProcessRun]
                       f"({medians_of(many)})", rates[n], "jobs/s")]
     against = f"batch throughput, {n} cores against one after another"
     figures += [Figure("replay", f"{against}, pair {k + 1}", r, "x") for k, r in ratios.items()]
-    note = failed_note(len(one) - len(pairs), len(one))
+    failed = len(one) - len(pairs)
+    note = failed_note(failed, len(one))
     figures += [claim.figure("replay", against, BATCH_TARGET, at_most=False, note=note),
                 Figure("replay", "batch one after another: cores kept busy (CPU / wall)",
                        busy[1], "cores"),
                 Figure("replay", f"batch {n} at once: cores kept busy (CPU / wall)", busy[n],
                        f"of {n}")]
-    return figures
+    return [f.of_failed(failed) for f in figures]
 
 
 def _batch_run(tmp: Path, manifest: Path, workers: int) -> ProcessRun:
@@ -185,9 +186,9 @@ def _one_second_figure(tmp: Path, trace_path: Path, runs: int = 5) -> Figure:
     after another, over those that succeeded (the label says how many failed)."""
     done = [run_process(frictex_argv("replay", SCENE, str(trace_path), "--out",
                                      str(tmp / "one"), "--quiet")) for _ in range(runs)]
-    note = failed_note(sum(r.code != 0 for r in done), runs)
-    return Figure("replay", f"one-second replay, whole process (median of {runs}{note})",
-                  median(done, "wall_s"), "s")
+    failed = sum(r.code != 0 for r in done)
+    return Figure("replay", f"one-second replay, whole process (median of "
+                  f"{runs}{failed_note(failed, runs)})", median(done, "wall_s"), "s", failed)
 
 
 def run(quick: bool) -> list[Figure]:

@@ -97,10 +97,11 @@ def startup_figures(runs: dict[str, list[Run]]) -> list[Figure]:
     counting them, and the bytecode cache's cost (``cache_cost_figure``)."""
     figures = []
     for label, got in runs.items():
+        failed = sum(r.code != 0 for r in got)
         figures += [Figure("startup", f"{label}, wall ({medians_of(got)}, alternated)",
-                           median(got, "wall_s"), "s"),
+                           median(got, "wall_s"), "s", failed),
                     Figure("startup", f"{label}, CPU user + system ({medians_of(got)})",
-                           median(got, "cpu_s"), "s")]
+                           median(got, "cpu_s"), "s", failed)]
     return figures + [cache_cost_figure(runs[NO_CACHE],
                                         runs["frictex replay, one second, parquet"])]
 
@@ -117,4 +118,4 @@ def cache_cost_figure(without: list[Run], cached: list[Run]) -> Figure:
                 else "no interval under two rounds")
     return Figure("startup", "frictex's bytecode cache, what a one-second Parquet replay pays "
                   f"without it (mean of {n} paired rounds' differences{note})", mean * 1e3,
-                  f"ms ({interval})")
+                  f"ms ({interval})", len(without) - n)
