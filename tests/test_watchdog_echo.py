@@ -69,3 +69,19 @@ def test_the_host_side_still_counts_the_device_frames_it_misses():
     host = p.Decoder()
     host.feed(p.encode(ECHOED_STATUS, 1, 4) + p.encode(ECHOED_STATUS, 40, 4))
     assert host.counts.lost_frames == 38
+
+
+def test_the_host_side_does_not_count_its_own_frames_echoed_back():
+    """The host's receiver (``on_device=False``) is numbered by the device only: its own
+    Heartbeat echoed between two Statuses (seq 7 and 8) adds no lost frames, where a
+    decoder counting every frame counts 42 (seq 8 to 49, skipped before the echo's 50)."""
+    host = p.Decoder(on_device=False)
+    frames = host.feed(p.encode(ECHOED_STATUS, 7, 4) + p.encode(p.Heartbeat(3), 50, 4)
+                       + p.encode(ECHOED_STATUS, 8, 4))
+    assert [f.lost for f in frames] == [0, 0, 0]
+    assert host.counts.lost_frames == 0
+    assert host.counts.frames_ok == 3
+    every = p.Decoder()
+    every.feed(p.encode(ECHOED_STATUS, 7, 4) + p.encode(p.Heartbeat(3), 50, 4)
+               + p.encode(ECHOED_STATUS, 8, 4))
+    assert every.counts.lost_frames == 42

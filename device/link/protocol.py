@@ -703,15 +703,16 @@ class Decoder:
     next 0x00 starts a fresh frame, so the decoder resynchronises within one frame.
     Sequence numbers that skip forward count as ``lost_frames`` (and as the next frame's
     :attr:`Frame.lost`). Frames of versions 1 to
-    ``max_version`` are accepted. ``on_device``: this is the device's receiver (as the C
-    firmware's ``rx.c`` always is), so only host -> device frames are numbered by its
-    peer; a frame of a device -> host type is its own echoed back (section 5.3), is
-    delivered with ``lost`` 0 and leaves the sequence bookkeeping alone. The host's
-    receiver (the default) counts every frame.
+    ``max_version`` are accepted. ``on_device``: True for the device's receiver (as the
+    C firmware's ``rx.c`` always is), False for the host's: only frames of the other
+    side's types are numbered by the peer; a frame of the receiver's own side's types is
+    its own echoed back (a half-duplex adapter, a loopback fault: section 5.3), is
+    delivered with ``lost`` 0 and leaves the sequence bookkeeping alone. None (the
+    default: a decoder reading a recorded stream) counts every frame.
     """
 
     max_version: int = PROTOCOL_VERSION
-    on_device: bool = False
+    on_device: bool | None = None
     counts: DecoderCounts = field(default_factory=DecoderCounts)
     _pending: bytearray = field(default_factory=bytearray)
     _overflowed: bool = False
@@ -768,7 +769,7 @@ class Decoder:
         except (ValueError, struct.error):
             c.bad_payload += 1
             return None
-        echoed = self.on_device and mtype >= DEVICE_TYPES
+        echoed = self.on_device is not None and (mtype >= DEVICE_TYPES) == self.on_device
         skipped = 0 if echoed else self._count_seq(mtype, seq)
         c.frames_ok += 1
         return Frame(seq, msg, version, skipped)

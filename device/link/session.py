@@ -155,7 +155,7 @@ class HostSession:
         self.errors = collections.Counter(dict.fromkeys([*p.ErrorCode.NAMES.values(), "other"], 0))
         self.ledger = Ledger()
         self.rtt_ms: collections.deque = collections.deque(maxlen=4096)
-        self.decoder = p.Decoder()
+        self.decoder = p.Decoder(on_device=False)
         self.forces = ForceHistory()
         self.forces_lock = threading.Lock()
         self.status: p.Status | None = None
