@@ -11,7 +11,8 @@ simulated device (``frictex sim-device --finger N``) and a plate that announces 
 force sensor. A device drops the report it was building when it underruns, and a host
 must not count on every report arriving: a step whose reports cover at least
 ``MIN_COVERED`` of its kept samples is taken over those, once the reports have gone
-``LATE_SAMPLES`` past it. A step's ratio is the median of F_t / F_n over its samples. The
+``LATE_SAMPLES`` past it. A step's ratio is the median of F_t / F_n over its samples pressed with at least
+``MIN_NORMAL_N`` (a sample at 0 N has no ratio). The
 friction at rest mu0 is the mean ratio of the rest steps on each side of an amplitude
 step, so the slow moisture drift cancels; mu' = F_t / (F_n mu0) (seed 003, eq 1).
 
@@ -123,7 +124,8 @@ def run_sweep(link, sweep: Sweep, on_step=None, first_index: int = 0):
         if not normal >= MIN_NORMAL_N:
             raise DeviceError(f"{link.label}: normal force {normal:.3g} N during step {k + 1}: "
                              f"the finger lifted (slide it through the whole sweep)")
-        ratio = float(np.median(lateral / normal_n))
+        pressed = normal_n >= MIN_NORMAL_N  # a sample of a lifting finger has no ratio
+        ratio = float(np.median(lateral[pressed] / normal_n[pressed]))
         if steps[k] == 0.0:
             _check_rest_friction(link, k, ratio, float(np.median(lateral)))
         ratios.append(ratio)
