@@ -82,3 +82,11 @@ def test_a_silent_device_still_gets_the_whole_wait_and_is_said_silent():
                                  handshake_s=1.0)
     assert took_s >= 1.0
     assert "no answer to the handshake within" in said and "Hellos)" in said
+
+
+def test_a_device_that_closed_the_link_once_is_said_to_have_closed_it_once():
+    """A port that fails once, then stays silent: 'closed the link once' (it said '1 times')."""
+    ports = iter([ClosingPort()])
+    said, _ = _open_failing(lambda: next(ports, None) or serial.serial_for_url("loop://", timeout=0.005),
+                            handshake_s=1.0)
+    assert "the device closed the link once during the handshake, in " in said, said

@@ -343,8 +343,9 @@ class HostSession:
             return LinkError(f"{self.label}: the device refused the handshake: "
                              f"{self.device_said!r}")
         if self._first_closes:
-            return LinkError(f"{self.label}: the device closed the link {self._first_closes} "
-                             f"times during the handshake, in {waited_s:.3g} s (last: "
+            times = "once" if self._first_closes == 1 else f"{self._first_closes} times"
+            return LinkError(f"{self.label}: the device closed the link {times} "
+                             f"during the handshake, in {waited_s:.3g} s (last: "
                              f"{self.last_error}); {suspect}")
         return LinkError(f"{self.label}: no answer to the handshake within {waited_s:.3g} s "
                          f"({self._first_hellos} Hellos); {suspect}")
