@@ -79,6 +79,22 @@ def lsf_to_poly(lsf, twiddle=None) -> np.ndarray:
     return a
 
 
+def output_power_gain(poly) -> float:
+    """The output variance of the all-pole filter 1 / A(z) per unit variance of its white
+    excitation, sum h^2 over its impulse response h, exactly: 1 / prod(1 - k_i^2) over the
+    reflection coefficients k_i of A(z) = ``poly`` ([a_0, a_1 .. a_p]), found by the
+    step-down (backward Levinson) recursion; inf where a |k_i| >= 1 (an unstable filter)."""
+    a = np.asarray(poly, dtype=np.float64) / poly[0]
+    gain = 1.0
+    for m in range(a.size - 1, 0, -1):
+        k = a[m]
+        if not abs(k) < 1.0:
+            return math.inf
+        gain /= 1.0 - k * k
+        a = (a[:m] - k * a[m:0:-1]) / (1.0 - k * k)  # A of order m - 1
+    return gain
+
+
 @njit(cache=True)
 def barycentric(s0, f0, inv, corners, scale, speed, force):
     """(triangle, weights (3,)) of (speed, force); see ``TextureModel.weights``. ``s0``,

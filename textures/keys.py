@@ -467,7 +467,8 @@ documented(LAYER_KEYS["recorded"], {
     "model": "a HaTT texture model (XML), path relative to this file",
     "mu_mean": "mu' about which the recorded texture varies",
     "gain": "mu' per m/s^2 of the model's synthesised acceleration; validate warns where "
-            "gain times sqrt(var) of the model's loudest vertex passes the room about mu_mean",
+            "gain times the output standard deviation of the model's loudest vertex (its "
+            "filtered noise, not sqrt(var)) passes the room about mu_mean",
     "mu_min": "lowest mu' (mu_min < mu_mean < mu_max)", "mu_max": "highest mu'",
     "v_rest_mm_s": "below this speed (mm/s) the texture is silent (mu_mean)",
     "seed": "seed of the model's noise: the same seed, the same texture"})

@@ -106,26 +106,37 @@ def _percent(share: float) -> str:
     return "99.9%" if share > 0.999 else f"{share:.1%}"
 
 
+def _output_variances(model) -> np.ndarray:
+    """(M,) the variance ((m/s^2)^2) of each vertex model's output: its excitation's
+    variance times the power gain of 1 / A(z) (81 to 685 for HaTT's resonant models)."""
+    from frictex.textures.ar_synthesis import lsf_to_poly, output_power_gain  # numba, as above
+
+    return np.array([var * output_power_gain(lsf_to_poly(lsf))
+                     for lsf, var in zip(model.lsf, model.variances)])
+
+
 def _clipping_warning(r, path, layer) -> None:
-    """Warn where the recorded layer's ``gain`` times its loudest vertex's excitation
-    (standard deviation sqrt(var), m/s^2) passes the room mu' has about mu_mean: the
-    model's output, a filtered Gaussian of at least that deviation, would be clipped to
-    [mu_min, mu_max] on a large share of the samples played near that vertex."""
+    """Warn where the recorded layer's ``gain`` times the output standard deviation
+    (m/s^2) of its loudest vertex passes the room mu' has about mu_mean: the model's
+    output there, a Gaussian of that deviation, would be clipped to [mu_min, mu_max] on
+    a large share of the samples played near that vertex."""
     model = layer.model
-    loudest = int(np.argmax(model.variances))
-    std = layer.gain * math.sqrt(model.variances[loudest])  # mu'
+    variances = _output_variances(model)
+    loudest = int(np.argmax(variances))
+    output_std = math.sqrt(variances[loudest])  # m/s^2
+    std = layer.gain * output_std  # mu'
     below, above = layer.mu_mean - layer.mu_min, layer.mu_max - layer.mu_mean
     if std <= min(below, above):
         return
     share = _gaussian_outside(std, below, above)
     r.report(path + ("gain",),
-             f"layer {show(layer.name)}: gain {layer.gain:g} times the excitation of the model's "
+             f"layer {show(layer.name)}: gain {layer.gain:g} times the output of the model's "
              f"loudest vertex (model {loudest + 1}, {model.speeds_mm_s[loudest]:g} mm/s and "
-             f"{model.forces_n[loudest]:g} N: standard deviation "
-             f"{math.sqrt(model.variances[loudest]):.3g} m/s^2) is {std:.3g} of mu', more than "
-             f"its room about mu_mean ({below:g} down to mu_min, {above:g} up to mu_max): at "
-             f"least {_percent(share)} of the samples played near that vertex will be clipped; lower "
-             f"gain to {min(below, above) / (3.0 * std) * layer.gain:.3g} or less (3 standard "
+             f"{model.forces_n[loudest]:g} N: standard deviation {output_std:.3g} m/s^2) is "
+             f"{std:.3g} of mu', more than its room about mu_mean ({below:g} down to mu_min, "
+             f"{above:g} up to mu_max): at least {_percent(share)} of the samples played near "
+             f"that vertex will be clipped; lower gain to "
+             f"{min(below, above) / (3.0 * std) * layer.gain:.3g} or less (3 output standard "
              f"deviations of room), or check the model's <var>", warning=True)
 
 
