@@ -12,6 +12,11 @@ otherwise (and below two rounds, which give no interval): ``report_claims.verdic
 Rounds that all give the same ratio give no interval either: a spread of zero comes from
 a clock too coarse to tell the rounds apart, not from rounds that agree, so it is no
 evidence and the target is not shown.
+
+Each printed end of an interval has as many decimals as it takes to put it on the side
+of the target that decided the verdict (:func:`end_text`): two where they do, more where
+two would round the end onto the target (an upper end of 1.996 against "at most 2x"
+prints 1.996, not 2.00).
 """
 
 from __future__ import annotations
@@ -27,13 +32,15 @@ from frictex.app.measure.report_claims import NOT_SHOWN, paired, verdict
 class RatioClaim:
     """``geomean`` of ``rounds`` ratios and its 95 % interval [``low``, ``high``] (NaN
     below two rounds; ``low == high`` where every round gave the same ratio, which is
-    no interval); ``verdict``: ``holds``, ``does not hold`` or ``not shown``."""
+    no interval); ``verdict`` on ``target``: ``holds``, ``does not hold`` or ``not
+    shown``."""
 
     geomean: float
     low: float
     high: float
     rounds: int
     verdict: str
+    target: float
 
     def interval_text(self) -> str:
         """``95 % interval 0.80-1.04x``, or why there is none (under two rounds, or no
@@ -41,7 +48,8 @@ class RatioClaim:
         if self.rounds > 1 and self.low == self.high:
             return "every round the same ratio: no spread, no interval (clock too coarse)"
         if self.rounds > 1:
-            return f"95 % interval {self.low:.2f}-{self.high:.2f}x"
+            return (f"95 % interval {end_text(self.low, self.target)}-"
+                    f"{end_text(self.high, self.target)}x")
         return "one round, no interval" if self.rounds == 1 else "no round, no interval"
 
     def figure(self, section: str, label: str, target: float, at_most: bool,
@@ -53,6 +61,17 @@ class RatioClaim:
         return Figure(section, f"{label}, target {side} {target:g}x (geometric mean of "
                       f"{self.rounds} rounds{note})", self.geomean,
                       f"x ({self.interval_text()}): {self.verdict}")
+
+
+def end_text(end: float, target: float) -> str:
+    """``end`` with the fewest decimals, two at least, that keep it on its side of
+    ``target`` once printed (1.996 against 2: "1.996"; 1.93: "1.93"); ``repr`` where
+    nine do not."""
+    for decimals in range(2, 10):
+        text = f"{end:.{decimals}f}"
+        if (float(text) > target) == (end > target) and (float(text) < target) == (end < target):
+            return text
+    return repr(end)
 
 
 def ratio_claim(ratios: list[float], target: float, at_most: bool) -> RatioClaim:
@@ -67,4 +86,5 @@ def ratio_claim(ratios: list[float], target: float, at_most: bool) -> RatioClaim
     spread = n < 2 or min(d) != max(d)  # none: no evidence (module docstring)
     ends = sorted(math.log(target) + sign * end for end in (low, high))
     return RatioClaim(math.exp(math.log(target) + sign * mean), math.exp(ends[0]),
-                      math.exp(ends[1]), n, verdict(holds, low) if spread else NOT_SHOWN)
+                      math.exp(ends[1]), n, verdict(holds, low) if spread else NOT_SHOWN,
+                      target)
