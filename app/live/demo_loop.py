@@ -250,6 +250,7 @@ class DemoLoop:
         self.panel_open = False
         self.open_menu: str | None = None
         self.panel_note = ""
+        self._save_refused: str | None = None  # the banner of the last refused save
         self._drag = None
         self._drags = 0
         self._panel: queue.SimpleQueue = queue.SimpleQueue()
@@ -573,21 +574,28 @@ class DemoLoop:
         try:
             path = self.editor.save()
         except SaveConflict as exc:
-            self.panel_note = "not saved: the file changed on disk; Ctrl+S again overwrites"
-            self.error = str(exc)
-            self.log("save-failed", str(exc))
-            self.say(str(exc))
+            self._refuse_save("not saved: the file changed on disk; Ctrl+S again overwrites",
+                              str(exc))
             return
         except (EditError, ValueError, OSError) as exc:
-            self.panel_note = f"not saved: {exc}"
-            self.log("save-failed", str(exc))
+            self._refuse_save(f"not saved: {exc}", f"not saved: {exc}")
             return
+        if self.error == self._save_refused:  # that banner is out of date now
+            self.error = None
         self.playlist[self.index] = path
         self.files = FileWatch()  # the file as saved is no change to reload
         self._watch(path)
         self.panel_note = f"saved {path.absolute()}"
         self.log("save", str(path))
         print(f"saved: {path.absolute()}")
+
+    def _refuse_save(self, note: str, why: str) -> None:
+        """A refused Ctrl+S: ``note`` in the panel, ``why`` in the error banner, the
+        events log and as one line on stderr (a save prints its path on stdout)."""
+        self.panel_note = note
+        self.error = self._save_refused = why
+        self.log("save-failed", why)
+        self.say(why)
 
     def panel_view(self) -> PanelView:
         """What the panel shows now."""

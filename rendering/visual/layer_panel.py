@@ -7,7 +7,8 @@ What the panel shows arrives as plain data (:class:`PanelView`, made by
 (:class:`PanelRow`: what a row is and its box in frame pixels), which both the drawing
 (:func:`draw_layer_panel`) and the pointer (:func:`hit`) use, so a click lands on what
 is drawn under it. Rows that do not fit the column are left out (not drawn, not hit):
-the last controls first, so that undo, save and the line of news stay in view.
+the last controls first, so that undo, save and the news stay in view. The news is
+wrapped over as many rows as it needs (a refused save ends with what to do about it).
 """
 
 from __future__ import annotations
@@ -77,9 +78,10 @@ class PanelRow:
 
 
 def panel_layout(view: PanelView, rect: tuple[float, float, float, float],
-                 row_px: float) -> tuple[PanelRow, ...]:
+                 row_px: float, label_px: int | None = None) -> tuple[PanelRow, ...]:
     """The rows of ``view`` in the column ``rect`` (x, y, w, h px), ``row_px`` high each,
-    top down: the title and the layers, the controls, then undo, save and the news. Where
+    top down: the title and the layers, the controls, then undo, save and the news,
+    wrapped to the rows' width in text ``label_px`` px high (None: on one row). Where
     they do not all fit, the last controls are left out first, then the rows below the
     column's bottom."""
     x, y, w, h = rect
@@ -98,7 +100,8 @@ def panel_layout(view: PanelView, rect: tuple[float, float, float, float],
     specs.append(dict(kind="save", text="unsaved changes: Ctrl+S saves" if view.dirty
                       else "save  (Ctrl+S): no changes"))
     if view.note:
-        specs.append(dict(kind="note", text=view.note))
+        lines = [view.note] if label_px is None else _wrap(view.note, label_px, w - 2 * PAD_PX)
+        specs += [dict(kind="note", text=line) for line in lines]
     room = int(max(h - PAD_PX, 0.0) // row_px)
     specs = head + controls[:max(room - len(head) - len(specs), 0)] + specs
     rows, top = [], y + PAD_PX
@@ -139,8 +142,8 @@ def draw_layer_panel(compositor, view: PanelView, rect: tuple[float, float, floa
     rows drawn (for :func:`hit`)."""
     x, y, w, h = rect
     compositor.draw_rect(x, y, w, h, PANEL_BG)
-    rows = panel_layout(view, rect, compositor.label_row_px)
     label_px = compositor.label_px
+    rows = panel_layout(view, rect, compositor.label_row_px, label_px)
     for row in rows:
         bx, by, bw, bh = row.box
         if row.kind == "layer" and row.index == view.selected:
@@ -169,3 +172,33 @@ def _fit(text: str, size_px: int, width_px: float) -> str:
     while len(text) > 1 and f.getlength(text + "…") > room:
         text = text[:-1]
     return text + "…"
+
+
+def _wrap(text: str, size_px: int, width_px: float) -> list[str]:
+    """``text`` in lines that fit ``width_px`` (the text's pads included), broken at
+    spaces; a word longer than a line (a path) is broken where the line is full."""
+    f = font(size_px)
+    room = width_px - 8.0  # text_rgba's pads
+    lines: list[str] = []
+    line = ""
+    for word in text.split():
+        joined = f"{line} {word}" if line else word
+        if f.getlength(joined) <= room:
+            line = joined
+            continue
+        if line:
+            lines.append(line)
+        line = word
+        while f.getlength(line) > room and len(line) > 1:
+            cut = _longest_fitting(line, f, room)
+            lines.append(line[:cut])
+            line = line[cut:]
+    return lines + [line] if line else lines
+
+
+def _longest_fitting(text: str, f, room: float) -> int:
+    """How many leading characters of ``text`` fit ``room`` px in font ``f`` (at least 1)."""
+    cut = len(text)
+    while cut > 1 and f.getlength(text[:cut]) > room:
+        cut -= 1
+    return cut
