@@ -21,6 +21,9 @@ signal); a second signal ends it at once.
 N / B skip the playlist's scenes that drive other channels than the link and the
 recording were opened for (``app.live.demo_loop``).
 ``--faults SPEC`` injects link faults on ``--device`` (as ``frictex replay --faults``).
+A demo on ``--device`` exits 1, with one line saying why, when the link was lost and
+not back by the end, or when more than ``--max-unplayed`` of the commanded samples never
+played on the device (``app.engine.device_changes.unplayed_problem``, as a replay's).
 
 Without a display: ``frictex demo`` says so and exits 1 (a run that could not do what
 was asked); ``--headless`` (or ``--headless-fallback`` when no display is found) runs
@@ -42,6 +45,7 @@ import threading
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from frictex.app.engine.device_changes import unplayed_problem
 from frictex.app.engine.driver import deferred_interrupts
 from frictex.app.engine.staging import FRAMES, Staging
 from frictex.app.engine.summary import finite_json
@@ -50,7 +54,7 @@ from frictex.app.live.synthetic import STROKE_S
 from frictex.app.live.touch_log import TOUCHES
 from frictex.app.commands.preview import MAX_PANEL_PX, frame_size
 from frictex.app.commands.argtypes import (add_link_arguments, output_rate, positive_float, positive_int,
-                                   sim_device_args)
+                                   share, sim_device_args)
 from frictex.device.errors import InputError
 from frictex.rendering.renderers import offered_render_modes
 from frictex.rendering.visual.context import NoDisplayError
@@ -63,6 +67,11 @@ from frictex.textures.outside import add_allow_outside
 #: and frames: the folder is replaced as a whole when the demo ends (``app.engine.staging``;
 #: a ``frames`` folder holding anything but frames is refused, as for a replay)
 DEMO_OUTPUTS = ("events.csv", TOUCHES)
+
+#: share of the commanded samples a device may leave unplayed before the demo exits 1
+#: (``--max-unplayed``): looser than a replay's 0.01, as a live demo's link skips blocks
+#: to catch up after the machine stalls it (2 % of a 3 s run on a loaded 2-core machine)
+MAX_UNPLAYED = 0.1
 
 def input_option(text: str) -> tuple[str, object]:
     """argparse type for ``--input``: (name, argument) as ``app.live.inputs.parse_input``
@@ -96,6 +105,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--renderer", choices=offered_render_modes(), default=None,
                         help="start with every periodic layer rendered this way (R cycles it live)")
     add_link_arguments(parser)
+    parser.add_argument("--max-unplayed", type=share, default=None, metavar="SHARE",
+                        help="with --device: exit 1 when more than this share of the "
+                             "commanded samples never played on the device (default "
+                             f"{MAX_UNPLAYED:g}); a link lost and not back by the end exits 1 "
+                             "as well")
     parser.add_argument("--rate", type=output_rate, default=10_000.0, metavar="HZ",
                         help="output sample rate (default 10000 Hz)")
     parser.add_argument("--block", type=positive_int, default=None, metavar="N",
@@ -220,6 +234,9 @@ def run(args: argparse.Namespace) -> int:
             print(f"frictex demo: {warning}", file=sys.stderr, flush=True)
     if args.faults is not None and args.device is None:
         raise InputError("--faults needs --device: the faults are injected on the link to it")
+    if args.max_unplayed is not None and args.device is None:
+        raise InputError(f"--max-unplayed {args.max_unplayed:g}: needs --device (the share "
+                         "of samples a device never played); no --device was given")
     try:
         return _run(args, headless=args.headless)
     except NoDisplayError as exc:
@@ -311,7 +328,24 @@ def _run_demo(args, headless: bool, paths, index: int, scene, stagings, check) -
                  (frames_staging or staging).out / FRAMES if headless else None)
     if previous:
         print(f"demo: replaced the previous recording in {staging.out}")
+    limit = MAX_UNPLAYED if args.max_unplayed is None else args.max_unplayed
+    problem = device_problem(result.link, limit)
+    if problem is not None:
+        where = "" if staging is None else f"; outputs in {staging.out}"
+        print(f"frictex demo: error: {problem}{where}", file=sys.stderr)
+        return 1
     return 0
+
+
+def device_problem(link: dict, max_unplayed: float) -> str | None:
+    """Why a demo on a device failed (exit 1): its link lost and not back by the end
+    (``link``: the link's last status), or more than ``max_unplayed`` of the commanded
+    samples never played; None for a run without a device or one that played enough."""
+    lost = link.get("disconnects", 0) - link.get("reconnects", 0)
+    if lost > 0 or link.get("state") in ("disconnected", "failed"):
+        why = link.get("last_error") or "port failed"
+        return f"the device link was lost ({why}) and not back by the end"
+    return unplayed_problem(link, max_unplayed, "--max-unplayed")
 
 
 @dataclass
