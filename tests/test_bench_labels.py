@@ -63,7 +63,9 @@ def test_live_labels_say_wall_or_thread_cpu_time_and_stage_rows_wall_time():
         "live 5 ms block p50 of 400 blocks, every issue-18 layer, wall time",
         "live 5 ms block p99 of 400 blocks, every issue-18 layer, wall time",
         "live 2.5 ms block p50 of 800 blocks, every issue-18 layer, thread CPU time",
-        "live 2.5 ms block p99 of 800 blocks, every issue-18 layer, thread CPU time"]
+        "live 2.5 ms block p99 of 800 blocks, every issue-18 layer, thread CPU time",
+        "live 2.5 ms block, every issue-18 layer, thread CPU time, target p99 under 250 us "
+        "(95 % interval from the order statistics of 800 blocks)"]
     [stage] = bench_pipeline._stage_figures({"tracking": 125.0}, "hybrid")
     assert stage.unit == "us/s (wall time per second of output)"
 
@@ -109,10 +111,10 @@ def test_the_floor_is_timed_alternated_with_the_frames_read_back_and_labelled_so
 
 def test_a_static_image_names_the_pixels_drawn_not_only_the_window(monkeypatch):
     from frictex.app.measure import bench_visual
-    monkeypatch.setattr(bench_visual, "scene_ms", lambda comp, scene, repeats: 1.26)
     comp = SimpleNamespace(viewport=SimpleNamespace(width_px=1920, height_px=19))
-    figure = bench_visual.static_figure(comp, None, "image keyclick-beam",
-                                        "1920x1080 on llvmpipe", 1)
+    figure = bench_visual.static_figure(comp, "image keyclick-beam", "1920x1080 on llvmpipe",
+                                        [1.3, 1.26])
+    assert figure.value == 1.26
     assert figure.label == ("static image keyclick-beam, 1920x19 px drawn in the window "
                             "1920x1080 on llvmpipe")
 
@@ -159,6 +161,9 @@ def test_every_startup_label_counts_the_runs_its_median_is_over():
     assert labels[:2] == [
         "frictex replay, one second, parquet, wall (median of 3, 2 of 5 failed, alternated)",
         "frictex replay, one second, parquet, CPU user + system (median of 3, 2 of 5 failed)"]
-    assert labels[3].endswith("CPU user + system (median of 5)")
+    assert labels[2] == ("frictex replay, one second, parquet, wall time per run (alternated), "
+                         "target at most 0.5 s (geometric mean of 3 runs, 2 of 5 failed)")
+    assert got[2].failed == 2
+    assert labels[4].endswith("CPU user + system (median of 5)")
     assert labels[-1].endswith("(mean of 3 paired rounds' differences, 2 of 5 failed)")
     assert isinstance(got[-1], Figure) and got[-1].value == pytest.approx(0.0)

@@ -13,6 +13,11 @@ Rounds that all give the same ratio give no interval either: a spread of zero co
 a clock too coarse to tell the rounds apart, not from rounds that agree, so it is no
 evidence and the target is not shown.
 
+A fixed target on a time ("``--version`` under 0.15 s") is judged the same way from the
+runs' times themselves (:func:`time_claim`): their geometric mean and its 95 % interval
+against the bound, so that a median a little under the bound on a loaded machine is no
+"holds".
+
 Each printed end of an interval has as many decimals as it takes to put it on the side
 of the target that decided the verdict (:func:`end_text`): two where they do, more where
 two would round the end onto the target (an upper end of 1.996 against "at most 2x"
@@ -42,25 +47,27 @@ class RatioClaim:
     verdict: str
     target: float
 
-    def interval_text(self) -> str:
-        """``95 % interval 0.80-1.04x``, or why there is none (under two rounds, or no
-        spread between the rounds)."""
+    def interval_text(self, unit: str = "x") -> str:
+        """``95 % interval 0.80-1.04x`` (``unit`` after each number: "x", or " s" for
+        times), or why there is none (under two rounds, or no spread between them)."""
         if self.rounds > 1 and self.low == self.high:
             return "every round the same ratio: no spread, no interval (clock too coarse)"
         if self.rounds > 1:
             return (f"95 % interval {end_text(self.low, self.target)}-"
-                    f"{end_text(self.high, self.target)}x")
+                    f"{end_text(self.high, self.target)}{unit}")
         return "one round, no interval" if self.rounds == 1 else "no round, no interval"
 
     def figure(self, section: str, label: str, target: float, at_most: bool,
-               note: str = "") -> Figure:
+               note: str = "", unit: str = "x", of: str = "rounds") -> Figure:
         """The verdict as one figure, the whole interval beside it: ``LABEL, target at most
         1.2x (geometric mean of 8 rounds)  0.91 x (95 % interval 0.80-1.04x): holds``
-        (``note``: how many rounds failed, ``processes.failed_note``)."""
+        (``note``: how many rounds failed, ``processes.failed_note``; ``unit``: "x", or
+        " s" for a time against a bound, see :func:`time_claim`; ``of``: what was
+        averaged, "rounds" or "runs")."""
         side = "at most" if at_most else "at least"
-        return Figure(section, f"{label}, target {side} {target:g}x (geometric mean of "
-                      f"{self.rounds} rounds{note})", self.geomean,
-                      f"x ({self.interval_text()}): {self.verdict}")
+        return Figure(section, f"{label}, target {side} {target:g}{unit} (geometric mean of "
+                      f"{self.rounds} {of}{note})", self.geomean,
+                      f"{unit.strip()} ({self.interval_text(unit)}): {self.verdict}")
 
 
 def end_text(end: float, target: float) -> str:
@@ -88,3 +95,10 @@ def ratio_claim(ratios: list[float], target: float, at_most: bool) -> RatioClaim
     return RatioClaim(math.exp(math.log(target) + sign * mean), math.exp(ends[0]),
                       math.exp(ends[1]), n, verdict(holds, low) if spread else NOT_SHOWN,
                       target)
+
+
+def time_claim(seconds: list[float], bound_s: float) -> RatioClaim:
+    """What runs taking ``seconds`` each (> 0) show about "each run at most ``bound_s``":
+    their geometric mean and its 95 % interval against the bound, as :func:`ratio_claim`
+    judges a ratio against its target (its figure: ``figure(..., unit=" s", of="runs")``)."""
+    return ratio_claim(seconds, bound_s, at_most=True)
