@@ -37,7 +37,9 @@ Each is measured with no busy processes added (whatever else runs on the machine
 on) and beside two busy processes this section starts and ends (the "two-process
 load"); the machine's load (1-minute average) is printed before each. Targets (issue
 text): p99 at most 10 ms through the link, 15 ms through audio at 192 kHz with 256
-frames, under the load.
+frames, under the load. A run in which no event played, and an audio output that could
+not be opened, each give one failed figure (NaN, saying which; ``frictex bench`` exits 1),
+not a figure of 0.
 """
 
 from __future__ import annotations
@@ -261,10 +263,12 @@ def _figures(label: str, latency_s: np.ndarray, events: int,
     ``latency_s`` of the events that played, of ``events``
     ``kind``; each label counts them, and where some never played says that those lost
     are not in it (a lost one has no latency to rank: counting it as slower than every
-    played one would make p99 a rank of the losses, not a time)."""
+    played one would make p99 a rank of the losses, not a time). Where none played, one
+    failed figure (NaN, every event failed) says so."""
     played = latency_s.size
-    if not played:
-        return [Figure("latency", f"{label}: events played", 0, f"of {events}")]
+    if not played:  # no time to give: a failed figure, not a latency of 0
+        return [Figure("latency", f"{label}: none played of {events} {kind}", float("nan"),
+                       "ms", events)]
     lost = events - played
     counted = f"of {played} played of {events} {kind}" + (
         f" ({lost} lost, not in it)" if lost else "")
@@ -287,16 +291,25 @@ def _link_figures(label: str, link: dict) -> list[Figure]:
                    link["dropped_blocks"], f"of {blocks}; {link['disconnects']} disconnects")]
 
 
-def _audio(events: int) -> np.ndarray | None:
+def _audio(events: int) -> np.ndarray | str:
+    """The latencies (s) of ``events`` through the audio output, or why it could not be
+    opened (one line)."""
     try:
         from frictex.device.audio.latency import audio_latency
         return audio_latency(os.environ.get("FRICTEX_BENCH_AUDIO", ""), events=events,
                              block_size=BLOCK, lead_blocks=LEAD_BLOCKS,
                              timeout_s=60.0)["latency_s"]
     except Exception as exc:  # no PortAudio, no JACK server, no audio device: say so
-        print(f"frictex: bench latency: audio not measured ({type(exc).__name__}: "
-              f"{str(exc)[:160]})", file=sys.stderr)
-        return None
+        return f"{type(exc).__name__}: {str(exc)[:160]}"
+
+
+def _audio_figures(label: str, audio: np.ndarray | str, events: int) -> list[Figure]:
+    """``_figures`` of the audio output's latencies, or, where it could not be opened
+    (``audio`` says why), one failed figure (NaN) saying so."""
+    if isinstance(audio, str):
+        return [Figure("latency", f"{label}: not measured, the audio output could not be "
+                       f"opened ({audio})", float("nan"), "ms", 1)]
+    return _figures(label, audio, events, "events")
 
 
 def run(quick: bool) -> list[Figure]:
@@ -312,7 +325,7 @@ def run(quick: bool) -> list[Figure]:
         print(f"frictex: bench latency: firmware in QEMU not measured ({exc})", file=sys.stderr)
     figures: list[Figure] = []
     per_run_s = events * (HOLD_S + GAP_S[1]) + SETTLE_S + 30.0
-    audio_works = True  # an audio output that failed once is not tried again
+    audio: np.ndarray | str = np.empty(0)  # why it failed, once it has: not tried again
     for loaded in (False, True):
         where = "two-process load" if loaded else "no busy processes added"
         figures.append(Figure("latency", f"machine load before the runs with {where} "
@@ -325,11 +338,9 @@ def run(quick: bool) -> list[Figure]:
                 latency, link = _events(output, touch, events, seed)
                 label = f"{touch} touch -> {output} device played, {where}"
                 figures += _figures(label, latency, events) + _link_figures(label, link)
-            audio = _audio(events) if audio_works else None
-            audio_works = audio is not None
-            if audio is not None:
-                figures += _figures(f"audio producer -> DAC (PortAudio), {where}", audio,
-                                    events, "events")
+            audio = audio if isinstance(audio, str) else _audio(events)
+            figures += _audio_figures(f"audio producer -> DAC (PortAudio), {where}", audio,
+                                      events)
         finally:
             if load is not None:
                 load.__exit__(None, None, None)
