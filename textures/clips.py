@@ -129,7 +129,7 @@ class ClipLayer(DynamicLayer):
 
     ``trigger``: ``down`` / ``lift`` (a touch begins / ends inside the layer's region),
     ``edge`` (a touching finger crosses the line through (x_mm, y_mm) whose normal is at
-    ``angle_deg`` from +x, either way, inside the region), ``force`` (a touching
+    ``angle_deg`` from +x, either way, inside the region; only reaching it is no crossing), ``force`` (a touching
     finger's normal force rises through ``force_n``, inside the region). The clip starts
     on the output sample after the event; a new event restarts it. A one-channel plate
     vibrates under every finger at once, so the clip is felt by all fingers touching.
@@ -155,8 +155,9 @@ class ClipLayer(DynamicLayer):
         return 1.0
 
     def side(self, x, y) -> np.ndarray:
-        """True on the side of the edge line the normal points to (``edge`` trigger), at
-        positions x, y (mm, broadcast together)."""
+        """int8, the side of the edge line (``edge`` trigger) at positions x, y (mm,
+        broadcast together): +1 on the side the normal points to, -1 on the other, 0
+        exactly on the line (a finger there has crossed nothing yet)."""
         a = math.radians(self.angle_deg)
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
         if x.shape != y.shape:
@@ -167,10 +168,11 @@ class ClipLayer(DynamicLayer):
 
 @njit(cache=True, nogil=True)
 def _side(x, y, line):
-    """(m,) bool: nx (x - x0) + ny (y - y0) >= 0 at positions (x, y) (mm, (m,)) for the
-    line through (x0, y0) with unit normal (nx, ny), ``line``; one pass."""
+    """(m,) int8: the sign (+1, 0, -1) of nx (x - x0) + ny (y - y0) at positions (x, y)
+    (mm, (m,)) for the line through (x0, y0) with unit normal (nx, ny), ``line``; one pass."""
     x0, y0, nx, ny = line
-    out = np.empty(x.size, dtype=np.bool_)
+    out = np.empty(x.size, dtype=np.int8)
     for i in range(x.size):
-        out[i] = nx * (x[i] - x0) + ny * (y[i] - y0) >= 0.0
+        d = nx * (x[i] - x0) + ny * (y[i] - y0)
+        out[i] = 1 if d > 0.0 else (-1 if d < 0.0 else 0)
     return out

@@ -484,7 +484,7 @@ documented(LAYER_KEYS["clip"], {
     "y_mm": ("y (mm) of a point on the trigger line", "required with trigger = \"edge\"; "
                                                       "not allowed with other triggers"),
     "angle_deg": "the trigger line's normal, from +x towards +y (0: a vertical line); only "
-                 "with trigger = \"edge\"; crossing either way triggers",
+                 "with trigger = \"edge\"; crossing either way triggers (only reaching the line does not)",
     "force_n": ("the normal force (N) whose rising crossing triggers",
                 "required with trigger = \"force\"; not allowed with other triggers"),
     "depth": "drop in mu' at level 1: mu' = 1 - depth x level",

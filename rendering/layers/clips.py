@@ -5,7 +5,9 @@ finger row at a time against its previous sample (carried between blocks in the 
 
 - down: touching now, and not before or under another touch id;
 - lift: touching before, and not now or under another touch id (position: before);
-- edge: the same touch on the other side of the edge line than before;
+- edge: the same touch strictly on the other side of the edge line than its last sample
+  off the line (a sample exactly on the line keeps the side it came from, so reaching the
+  line and going back fires nothing, from either side);
 - force: the same touch, normal force at or above the threshold now and below before.
 
 Each must happen inside the layer's region (``down``, ``edge`` and ``force`` at the
@@ -33,8 +35,9 @@ TRIGGER_CODES = {"down": 0, "lift": 1, "edge": 2, "force": 3}
 
 class FingerPrev(NamedTuple):
     """One finger's last output sample: touching, touch id, inside the region, and the
-    trigger's flag (edge: on the normal's side; force: at or above the threshold); the
-    three truths as 0 or 1, so that the fingers' rows make one int64 array."""
+    trigger's flag (edge: the side of the line of the touch's last sample off it, +1 the
+    normal's, -1 the other, 0 none yet; force: 1 at or above the threshold); the truths
+    as 0 or 1, so that the fingers' rows make one int64 array."""
 
     contact: int = 0
     touch_id: int = -1
@@ -62,18 +65,20 @@ def _fired(trigger, contact, touch_id, inside, flag, prev):
     fired = np.zeros(n, dtype=np.bool_)
     last = np.empty((fingers, 4), dtype=np.int64)
     for i in range(fingers):
-        c0, t0, in0, f0 = prev[i, 0] != 0, prev[i, 1], prev[i, 2] != 0, prev[i, 3] != 0
+        c0, t0, in0, f0 = prev[i, 0] != 0, prev[i, 1], prev[i, 2] != 0, prev[i, 3]
         for j in range(n):
-            c, t, inn, f = contact[i, j], touch_id[i, j], inside[i, j], flag[i, j]
+            c, t, inn, f = contact[i, j], touch_id[i, j], inside[i, j], np.int64(flag[i, j])
             same = c and c0 and t == t0
             if trigger == 0:
                 event = c and not same and inn
             elif trigger == 1:
                 event = c0 and not same and in0
             elif trigger == 2:
-                event = same and f != f0 and inn
+                event = same and f != 0 and f0 != 0 and f != f0 and inn
+                if same and f == 0:
+                    f = f0  # on the line: the side it came from
             else:
-                event = same and f and not f0 and inn
+                event = same and f != 0 and f0 == 0 and inn
             fired[j] |= event
             c0, t0, in0, f0 = c, t, inn, f
         last[i, 0], last[i, 1], last[i, 2], last[i, 3] = c0, t0, in0, f0
