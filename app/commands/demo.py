@@ -48,7 +48,7 @@ from pathlib import Path
 from frictex.app.engine.device_changes import unplayed_problem
 from frictex.app.engine.driver import deferred_interrupts
 from frictex.app.engine.staging import FRAMES, Staging
-from frictex.app.engine.summary import finite_json
+from frictex.app.engine.summary import counted, finite_json, were
 from frictex.app.live.link_watch import device_clamps
 from frictex.app.live.synthetic import STROKE_S
 from frictex.app.live.touch_log import TOUCHES
@@ -421,14 +421,17 @@ def _print_lines(args, summary: dict, ended: _Ended, out: Path | None,
     link, frames, hand = ended.link, ended.frames, ended.hand
     stolen = ("" if summary["cpu_steal_pct"] is None
               else f" (CPU steal by a VM host meanwhile: {summary['cpu_steal_pct']:.0f} %)")
-    print(f"demo: {summary['blocks']} blocks ({summary['output_s']:.1f} s of output), "
-          f"{summary['deadline_misses']} deadline misses{stolen if summary['deadline_misses'] else ''}, "
-          f"{summary['clamps_total']} clamped samples{device_clamps(link)}, "
-          f"{summary['frames']} frames drawn ({summary['frame_ms_mean']:.1f} ms mean), "
+    misses = summary["deadline_misses"]
+    print(f"demo: {counted(summary['blocks'], 'block')} ({summary['output_s']:.1f} s of "
+          f"output), {counted(misses, 'deadline miss', 'deadline misses')}"
+          f"{stolen if misses else ''}, "
+          f"{counted(summary['clamps_total'], 'clamped sample')}{device_clamps(link)}, "
+          f"{counted(summary['frames'], 'frame')} drawn ({summary['frame_ms_mean']:.1f} ms mean), "
           f"link: {link['state']}")
     if "skipped_blocks" in link:  # a device link: what its lead cost
-        print(f"demo: link: the device ran dry {link['underruns'] or 0} times and "
-              f"{link['skipped_blocks']} blocks were skipped to catch up; "
+        skipped = link["skipped_blocks"]
+        print(f"demo: link: the device ran dry {counted(link['underruns'] or 0, 'time')} and "
+              f"{counted(skipped, 'block')} {were(skipped)} skipped to catch up; "
               f"{link['unplayed_samples']} of {link['commanded_samples']} samples unplayed"
               + "".join(f", {k} {v}" for k, v in link["unplayed_by_cause"].items() if v))
     if "datagrams" in summary["input_counts"]:  # TUIO: what came from whom
@@ -436,7 +439,7 @@ def _print_lines(args, summary: dict, ended: _Ended, out: Path | None,
     if frames is not None:
         from frictex.app.live.frame_files import FPS
         print(f"demo: headless, {stroke_said(hand, summary['ended_by'])} drove "
-              f"the mouse: {frames.count} frames kept (at most {FPS:g} a second) in "
+              f"the mouse: {counted(frames.count, 'frame')} kept (at most {FPS:g} a second) in "
               f"{frames_out}; outputs in {out}")
     if summary["control"] is not None:
         from frictex.app.engine.summary import control_line

@@ -100,33 +100,39 @@ def warnings_of(pipeline, tracker, totals: Totals) -> list[str]:
     clamps = totals.clamps.as_dict()
     warnings = []
     if clamps["unreachable"] and pipeline.forces is not None:
-        warnings.append(f"{clamps['unreachable']} samples asked for a tangential force out "
-                        "of the wave's reach and were clamped to the nearest reachable force")
+        n = clamps["unreachable"]
+        warnings.append(f"{counted(n, 'sample')} asked for a tangential force out of the "
+                        f"wave's reach and {were(n)} clamped to the nearest reachable force")
     elif clamps["unreachable"]:
-        warnings.append(f"{clamps['unreachable']} target samples were below the lowest "
-                        "reachable mu' and were clamped to the amplitude limit")
+        n = clamps["unreachable"]
+        warnings.append(f"{counted(n, 'target sample')} {were(n)} below the lowest reachable "
+                        f"mu' and {were(n)} clamped to the amplitude limit")
     if clamps["nonfinite_target"]:
-        warnings.append(f"{clamps['nonfinite_target']} target samples were not finite (NaN or "
-                        "inf) and were commanded 0 um")
+        n = clamps["nonfinite_target"]
+        warnings.append(f"{counted(n, 'target sample')} {were(n)} not finite (NaN or inf) "
+                        f"and {were(n)} commanded 0 um")
     if clamps["force_beyond_model"]:
-        warnings.append(f"{clamps['force_beyond_model']} samples had a normal force "
+        warnings.append(f"{counted(clamps['force_beyond_model'], 'sample')} had a normal force "
                         + pipeline.friction.beyond_model())
     if tracker.jumps:
-        warnings.append(f"{tracker.jumps} finger jumps were treated as lift and touch")
+        warnings.append(f"{counted(tracker.jumps, 'finger jump')} {were(tracker.jumps)} "
+                        "treated as lift and touch")
     if tracker.out_of_order:
-        warnings.append(f"{tracker.out_of_order} out-of-order touch samples were dropped")
+        warnings.append(f"{counted(tracker.out_of_order, 'out-of-order touch sample')} "
+                        f"{were(tracker.out_of_order)} dropped")
     if totals.limited:
-        warnings.append(f"{totals.limited} samples hit an actuator limit (achieved amplitude "
-                        "differs from the wanted one; see fingers)")
+        warnings.append(f"{counted(totals.limited, 'sample')} hit an actuator limit "
+                        "(achieved amplitude differs from the wanted one; see fingers)")
     if totals.modal_capped:
-        warnings.append(f"{totals.modal_capped} samples: the fingers could not be given "
-                        "independent amplitudes (seed 001 eq 8): on a singular locus (fingers "
-                        "a multiple of half a wavelength apart, coincident or on a shared "
-                        "node) the modal gain was capped, so fingers asking for different "
+        warnings.append(f"{counted(totals.modal_capped, 'sample')}: the fingers could not be "
+                        "given independent amplitudes (seed 001 eq 8): on a singular locus "
+                        "(fingers a multiple of half a wavelength apart, coincident or on a "
+                        "shared node) the modal gain was capped, so fingers asking for different "
                         "friction may feel the same (see fingers)")
     if totals.off_structure:
-        warnings.append(f"{totals.off_structure} finger samples were off the vibrating "
-                        "structure and were held at its edge")
+        n = totals.off_structure
+        warnings.append(f"{counted(n, 'finger sample')} {were(n)} off the vibrating "
+                        f"structure and {were(n)} held at its edge")
     clipped = {name: n for name, n in totals.layer_clipped.items() if n}
     if clipped:
         layers = {layer.name: layer for layer in pipeline.scene.layers}
@@ -140,9 +146,10 @@ def _within_a_block(trace_report: dict) -> list[str]:
     n = trace_report.get("touches_within_a_block", 0)
     if not n:
         return []
-    return [f"{n} touches began and lifted within one output block, so no output sample is "
-            "in contact for them (none of their rows in the friction table); a smaller "
-            "--block keeps shorter touches"]
+    them, their = ("it", "its") if n == 1 else ("them", "their")
+    return [f"{counted(n, 'touch', 'touches')} began and lifted within one output block, so "
+            f"no output sample is in contact for {them} (none of {their} rows in the friction "
+            "table); a smaller --block keeps shorter touches"]
 
 
 def _clipped_warning(layer, n: int, touching: int) -> str:
@@ -154,18 +161,31 @@ def _clipped_warning(layer, n: int, touching: int) -> str:
     kind = getattr(layer, "renderer_kind", None)
     if getattr(layer, "is_periodic", False):
         return (f"layer {layer.name!r}: {share} moved its texture past the output's Nyquist "
-                "frequency (|v . axis| / period above half the output rate) and were played "
-                "as its mean mu', not an alias; raise --rate to play them")
+                f"frequency (|v . axis| / period above half the output rate) and {were(n)} played "
+                f"as its mean mu', not an alias; raise --rate to play "
+                f"{'it' if n == 1 else 'them'}")
     if kind == "clip":
         return (f"layer {layer.name!r} (clip): {share} played where its events' levels added "
-                f"past 1 and were held at mu' = 1 - depth = {1.0 - layer.clip.depth:.4g}; "
+                f"past 1 and {were(n)} held at mu' = 1 - depth = {1.0 - layer.clip.depth:.4g}; "
                 "lower the events' intensities to keep their shape")
     lo, hi = layer.mu_range
-    said = f"layer {layer.name!r}: {share} were clipped to its mu' limits [{lo:.4g}, {hi:.4g}]"
+    said = (f"layer {layer.name!r}: {share} {were(n)} clipped to its mu' limits "
+            f"[{lo:.4g}, {hi:.4g}]")
     if kind == "ar":
         said += ("; lower its gain or widen mu_min/mu_max to keep the recorded texture's "
                  "spectrum")
     return said
+
+
+def counted(n: int, noun: str, nouns: str | None = None) -> str:
+    """``n`` and ``noun``, in the plural (``nouns``; default ``noun`` + "s") unless ``n``
+    is 1: "1 finger jump", "3 finger jumps"."""
+    return f"{n} {noun if n == 1 else nouns or noun + 's'}"
+
+
+def were(n: int) -> str:
+    """The verb for ``n`` things: "was" for 1, else "were"."""
+    return "was" if n == 1 else "were"
 
 
 def _real_path(path) -> str | None:
