@@ -58,4 +58,6 @@ def test_the_one_second_replay_leaves_failed_runs_out_of_its_median(monkeypatch,
     monkeypatch.setattr(bench_replay, "run_process", lambda argv: next(runs))
     figure = bench_replay._one_second_figure(tmp_path, tmp_path / "one.csv")
     assert figure.value == 0.6
-    assert figure.label == "one-second replay, whole process (median of 5, 2 of 5 failed)"
+    assert figure.label == ("one-second replay to CSV, whole process, one run after another, "
+                            "its output folder removed before each (median of 5, 2 of 5 "
+                            "failed)")

@@ -18,7 +18,8 @@ costs at most: the one-second Parquet replay once more in the same rounds, with 
 cache of every module but frictex's (``python -B -X pycache_prefix=DIR``, DIR filled by
 one untimed run, frictex's part then removed): the mean of the rounds' differences
 (without the cache less with it, in the same round) and its 95 % interval. It warns
-where the variable is set.
+where the variable is set. Each replay writes into an output folder of its own, removed
+before each of its runs (untimed), so that no run writes over another's files.
 
 Targets (issue 31): ``frictex --version`` under 0.15 s; a one-second replay under 0.5 s
 of wall time on a quiet machine. Each gets a verdict from its own runs' wall times
@@ -52,8 +53,9 @@ TARGETS_S = {"frictex --version": 0.15, **{f"frictex replay, one second, {fmt}":
                                           for fmt in ("parquet", "npz", "csv")}}
 
 
-def commands(tmp: Path) -> dict[str, list[str]]:
-    """name -> argv of every command timed, the floors first."""
+def commands(tmp: Path) -> tuple[dict[str, list[str]], dict[str, Path]]:
+    """(name -> argv of every command timed, the floors first; name -> the output folder
+    of each replay, its own, to be removed before each of its runs: :func:`emptied`)."""
     trace = tmp / "one-second.csv"
     write_trace(trace, human_trace(1.0))
     found = {"python -c pass (floor)": [sys.executable, "-c", "pass"],
@@ -61,11 +63,30 @@ def commands(tmp: Path) -> dict[str, list[str]]:
              "frictex --version": frictex_argv("--version"),
              "frictex library": frictex_argv("library"),
              "frictex validate grating-5mm": frictex_argv("validate", "grating-5mm")}
+    outputs = {}
     for fmt in ("parquet", "npz", "csv"):
-        found[f"frictex replay, one second, {fmt}"] = frictex_argv(
-            "replay", SCENE, str(trace), "--out", str(tmp / f"out-{fmt}"), "--format", fmt,
-            "--quiet")
-    return found
+        name = f"frictex replay, one second, {fmt}"
+        outputs[name] = tmp / f"out-{fmt}"
+        found[name] = replay_argv(trace, outputs[name], fmt)
+    outputs[NO_CACHE] = tmp / "out-parquet-no-cache"
+    found[NO_CACHE] = without_frictex_cache(replay_argv(trace, outputs[NO_CACHE], "parquet"),
+                                            tmp / "pycache")
+    return found, outputs
+
+
+def replay_argv(trace: Path, out: Path, fmt: str) -> list[str]:
+    """``frictex replay`` of the bench scene and ``trace`` into ``out`` in format ``fmt``."""
+    return frictex_argv("replay", SCENE, str(trace), "--out", str(out), "--format", fmt,
+                        "--quiet")
+
+
+def emptied(outputs: dict[str, Path]):
+    """A ``before(name)`` for ``alternated``: removes command ``name``'s output folder,
+    where it has one, so that no run writes over an earlier one's files."""
+    def before(name: str) -> None:
+        if name in outputs:
+            shutil.rmtree(outputs[name], ignore_errors=True)
+    return before
 
 
 def without_frictex_cache(argv: list[str], prefix: Path) -> list[str]:
@@ -92,10 +113,8 @@ def run(quick: bool) -> list[Figure]:
               "cache' figure below); unset it for the start-up a user gets", file=sys.stderr)
     rounds = 5 if quick else 15
     with tempfile.TemporaryDirectory(prefix="frictex-startup-") as name:
-        found = commands(Path(name))
-        found[NO_CACHE] = without_frictex_cache(found["frictex replay, one second, parquet"],
-                                                Path(name) / "pycache")
-        runs = alternated(found, rounds)
+        found, outputs = commands(Path(name))
+        runs = alternated(found, rounds, before=emptied(outputs))
     return startup_figures(runs)
 
 
