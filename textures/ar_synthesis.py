@@ -102,7 +102,10 @@ def barycentric(s0, f0, inv, corners, scale, speed, force):
     matrix; ``corners`` (T, 3, 2): its vertices in units scaled by ``scale`` (2,) (per mm/s,
     per N). Inside: the triangle holding the point (its smallest weight the largest) and
     the point's weights. Outside: the point of the triangulation nearest to it, in the
-    scaled units, and that point's weights."""
+    scaled units, and that point's weights. A non-finite speed or force is refused
+    (ValueError): it has no nearest point."""
+    if not (math.isfinite(speed) and math.isfinite(force)):
+        raise ValueError("a texture model is blended only at a finite speed and force")
     best, best_t = -np.inf, 0
     w = np.zeros(3)
     for t in range(s0.size):
@@ -113,8 +116,9 @@ def barycentric(s0, f0, inv, corners, scale, speed, force):
         if lowest > best:
             best, best_t = lowest, t
             w[0], w[1], w[2] = 1.0 - u - v, u, v
-    if not best >= 0.0:  # outside every triangle (NaN too: no nearest point then)
-        px, py = speed * scale[0], force * scale[1]
+    if not best >= 0.0:  # outside every triangle
+        px = _held_near(speed * scale[0], corners[:, :, 0])
+        py = _held_near(force * scale[1], corners[:, :, 1])
         nearest, on_edge = np.inf, np.zeros(3)
         for t in range(s0.size):
             d2 = _nearest_on_edges(px, py, corners[t], on_edge)
@@ -123,6 +127,24 @@ def barycentric(s0, f0, inv, corners, scale, speed, force):
                 w[:] = on_edge
     w = np.maximum(w, 0.0)
     return best_t, w / w.sum()
+
+
+#: how many spans of the vertices' range a point outside is held within before its
+#: nearest point is sought (:func:`_held_near`)
+_FAR_SPANS = 1e3
+
+
+@njit(cache=True)
+def _held_near(value, coordinates):
+    """``value`` held within ``_FAR_SPANS`` spans of the range of ``coordinates`` (one
+    axis of the triangles' corners). Further out, the squared distances to the edges
+    (1e18 at 1e9 spans) round away the differences that tell the nearest point (a
+    (50 mm/s, 1e9 N) point took a vertex 50 mm/s from the edge point straight below
+    it); within, they are below 1e6, their rounding 1e-10, and the nearest point is
+    already the one in that direction from the range (to 1e-3 rad)."""
+    low, high = coordinates.min(), coordinates.max()
+    margin = _FAR_SPANS * (high - low)
+    return min(max(value, low - margin), high + margin)
 
 
 @njit(cache=True)
@@ -287,17 +309,19 @@ def render_finger(contact, touch_id, vx, vy, force, v_rest, seed, finger, index0
                    touch, history, y):
     """Model output y (n,) of one finger row; see the module docstring. ``touch`` and
     ``history`` (most recent first) come from the previous block; returns the touch id
-    after the block (``history`` is updated in place)."""
+    after the block (``history`` is updated in place). A sample of non-finite speed or
+    force (no such sample leaves a trace's checks) is not moving: its output is 0."""
     s0, f0, inv, corners, scale, triangles, lsf, variances, twiddle = model
     n = y.size
     a = 0
     while a < n:
-        speed = np.sqrt(vx[a] ** 2 + vy[a] ** 2)
+        speed = math.hypot(vx[a], vy[a])  # vx^2 overflows from 1.3e154 mm/s
         b = a + 1  # the run of samples with this touch, speed and force
         while (b < n and touch_id[b] == touch_id[a] and contact[b] == contact[a]
                and vx[b] == vx[a] and vy[b] == vy[a] and force[b] == force[a]):
             b += 1
-        moving = contact[a] and speed >= v_rest
+        moving = (contact[a] and speed >= v_rest and math.isfinite(speed)
+                  and math.isfinite(force[a]))
         if touch_id[a] != touch or not moving:
             touch = touch_id[a]
             history[:] = 0.0
