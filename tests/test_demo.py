@@ -128,8 +128,8 @@ def quit_demo(display, proc) -> str:
     return finish(proc)
 
 
-def finish(proc) -> str:
-    """Wait for the demo to end; it must exit 0. Its stdout. One that hangs is stopped
+def finish(proc, expected: int = 0) -> str:
+    """Wait for the demo to end; it must exit ``expected``. Its stdout. One that hangs is stopped
     with SIGABRT, which makes it print every thread's stack (faulthandler) for the
     failure message."""
     try:
@@ -146,7 +146,7 @@ def finish(proc) -> str:
         pytest.fail(f"the demo did not exit within 120 s after Q; its threads:\n{err[-8000:]}")
     out = proc.stdout.read()
     proc.stdout.close()
-    assert proc.returncode == 0, proc.stderr_path.read_text()
+    assert proc.returncode == expected, proc.stderr_path.read_text()
     return out
 
 
@@ -243,7 +243,7 @@ def test_window_keeps_running_while_the_device_is_unplugged(xvfb_display, xdotoo
     """--faults on the demo: the simulated device is unplugged from 0.3 s after the link
     opens until long after the test ends. The window keeps taking touches and keys
     (each confirmed by the demo), quits at once on Q, and the summary counts what the
-    device never got."""
+    device never got; it exits 1, the link lost and not back by the end."""
     scene_file, _ = grating_file(tmp_path)
     rec, shots = tmp_path / "rec", tmp_path / "shots"
     proc = start_demo(xvfb_display, tmp_path, scene_file, rec, "--screenshots", str(shots),
@@ -257,7 +257,9 @@ def test_window_keeps_running_while_the_device_is_unplugged(xvfb_display, xdotoo
             xdo(xvfb_display, "key", "p")
             wait_event(proc, rec, "screenshot", k + 1)
     finally:
-        quit_demo(xvfb_display, proc)
+        xdo(xvfb_display, "key", "q")
+        finish(proc, expected=1)
+    assert "frictex demo: error: the device link was lost (" in proc.stderr_path.read_text()
     link = json.loads((rec / "summary.json").read_text())["link"]
     assert link["disconnects"] >= 1 and link["dropped_blocks"] > 0
     assert link["unplayed_samples"] > 0
@@ -269,7 +271,8 @@ def test_faults_without_a_device_is_one_line_exit_2(capsys):
     from frictex.app.commands.cli import main
     assert main(["demo", "grating-5mm", "--faults", "trip@1"]) == 2
     err = capsys.readouterr().err
-    assert err == "frictex: error: --faults needs --device: the faults are injected on the link to it\n"
+    assert err == ("frictex: error: --faults: needs --device (the faults are injected on the link "
+                   "to a device); no --device was given\n")
 
 
 def test_bad_faults_spec_is_one_line_exit_2(capsys):

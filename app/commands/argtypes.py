@@ -95,7 +95,20 @@ def sim_device_args(args: argparse.Namespace) -> tuple[str, ...]:
     if args.device is None and args.faults is not None:
         raise InputError("--faults: needs --device (the faults are injected on the link to a "
                          "device); no --device was given")
+    unplayed = getattr(args, "max_unplayed", None)
+    if args.device is None and unplayed is not None:
+        raise InputError(f"--max-unplayed {unplayed:g}: needs --device (the share of samples a "
+                         "device never played); no --device was given")
     return sim_finger_args("--sim-finger", args.sim_finger, args.device)
+
+
+def add_max_unplayed(parser: argparse.ArgumentParser, default: float, more: str = "") -> None:
+    """``--max-unplayed`` (replay, demo), refused without ``--device`` by
+    :func:`sim_device_args`; ``more`` ends its help."""
+    parser.add_argument("--max-unplayed", type=share, default=None, metavar="SHARE",
+                        help="with --device: exit 1 when more than this share of the "
+                             f"commanded samples never played on the device (default "
+                             f"{default:g}){more}")
 
 
 def sim_options(device: str | None) -> list[tuple[str, str]] | None:

@@ -53,8 +53,8 @@ from frictex.app.live.link_watch import device_clamps
 from frictex.app.live.synthetic import STROKE_S
 from frictex.app.live.touch_log import TOUCHES
 from frictex.app.commands.preview import MAX_PANEL_PX, frame_size
-from frictex.app.commands.argtypes import (add_link_arguments, output_rate, positive_float, positive_int,
-                                   share, sim_device_args)
+from frictex.app.commands.argtypes import (add_link_arguments, add_max_unplayed, output_rate,
+                                   positive_float, positive_int, sim_device_args)
 from frictex.device.errors import InputError
 from frictex.rendering.renderers import offered_render_modes
 from frictex.rendering.visual.context import NoDisplayError
@@ -105,11 +105,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--renderer", choices=offered_render_modes(), default=None,
                         help="start with every periodic layer rendered this way (R cycles it live)")
     add_link_arguments(parser)
-    parser.add_argument("--max-unplayed", type=share, default=None, metavar="SHARE",
-                        help="with --device: exit 1 when more than this share of the "
-                             "commanded samples never played on the device (default "
-                             f"{MAX_UNPLAYED:g}); a link lost and not back by the end exits 1 "
-                             "as well")
+    add_max_unplayed(parser, MAX_UNPLAYED, "; a link lost and not back by the end exits 1 "
+                                           "as well")
     parser.add_argument("--rate", type=output_rate, default=10_000.0, metavar="HZ",
                         help="output sample rate (default 10000 Hz)")
     parser.add_argument("--block", type=positive_int, default=None, metavar="N",
@@ -232,11 +229,7 @@ def run(args: argparse.Namespace) -> int:
         warning = exposure_warning(arg.host, args.tuio_from)
         if warning is not None:
             print(f"frictex demo: {warning}", file=sys.stderr, flush=True)
-    if args.faults is not None and args.device is None:
-        raise InputError("--faults needs --device: the faults are injected on the link to it")
-    if args.max_unplayed is not None and args.device is None:
-        raise InputError(f"--max-unplayed {args.max_unplayed:g}: needs --device (the share "
-                         "of samples a device never played); no --device was given")
+    sim_device_args(args)  # options needing a device refused before the window opens
     try:
         return _run(args, headless=args.headless)
     except NoDisplayError as exc:

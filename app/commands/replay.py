@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from frictex.app.commands.argtypes import (add_link_arguments, block_size, bounded, output_rate, positive_float,
-                                   share, sim_device_args)
+from frictex.app.commands.argtypes import (add_link_arguments, add_max_unplayed, block_size, bounded,
+                                   output_rate, positive_float, sim_device_args)
 from frictex.app.engine.clocks import CLOCKS
 from frictex.app.engine.device_changes import device_clamped, unplayed_problem
 from frictex.app.engine.replay import MAX_UNPLAYED, ReplayOptions, replay_with
@@ -14,7 +14,6 @@ from frictex.app.engine.sinks import SINKS
 from frictex.app.engine.sources import MAX_GAP_S
 from frictex.app.engine.summary import control_line
 from frictex.app.engine.tables import FORMATS
-from frictex.device.errors import InputError
 from frictex.rendering.renderers import offered_render_modes
 from frictex.textures.outside import add_allow_outside
 
@@ -39,9 +38,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "(sho: the run's SHO variant, sho-predicted unless sho-held is "
                              "chosen; rendering/RENDERERS.md)")
     add_link_arguments(parser)
-    parser.add_argument("--max-unplayed", type=share, default=None, metavar="SHARE",
-                        help="with --device: exit 1 when more than this share of the "
-                             f"commanded samples never played on the device (default {MAX_UNPLAYED:g})")
+    add_max_unplayed(parser, MAX_UNPLAYED)
     parser.add_argument("--max-gap", type=positive_float, default=MAX_GAP_S, metavar="S",
                         help=f"a gap between touch samples longer than this is a lift; its "
                              f"silence is not written (default {MAX_GAP_S:g} s)")
@@ -79,9 +76,7 @@ def _listed(names: tuple[str, ...]) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.max_unplayed is not None and args.device is None:
-        raise InputError(f"--max-unplayed {args.max_unplayed:g}: needs --device (the share "
-                         "of samples a device never played); no --device was given")
+    sim_args = sim_device_args(args)  # options needing a device refused before any output
     frames = None
     if args.frames is not None:
         from frictex.app.engine.frames import FrameWriter
@@ -90,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
                             block_size=args.block, render_override=args.renderer,
                             progress=not args.quiet, strict=args.strict, faults=args.faults,
                             max_gap_s=args.max_gap, control=args.control,
-                            sim_args=sim_device_args(args), sinks=tuple(args.sink),
+                            sim_args=sim_args, sinks=tuple(args.sink),
                             clock=args.clock)
     summary = replay_with(args.scene, args.trace, args.out, options, frames=frames).summary
     if not args.quiet:
