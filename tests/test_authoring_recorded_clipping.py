@@ -1,14 +1,15 @@
-"""A recorded layer whose gain times its model's loudest excitation passes the room mu'
-has about mu_mean is warned about when the file is read, with the share of Gaussian
+"""A recorded layer whose gain times its model's loudest output (noise through 1/A(z))
+passes the room mu' has about mu_mean is warned about when the file is read, with the share of Gaussian
 samples of that deviation beyond the limits and a gain that leaves 3 deviations."""
 
 import math
 
+from frictex.textures.ar_synthesis import output_power_gain
 from frictex.textures.loader import check_scene
-from test_ar_texture import VARIANCES, _xml
+from test_ar_texture import COEFFS, VARIANCES, _xml
 from test_texture_loader import write
 
-LOUDEST = math.sqrt(max(VARIANCES))  # m/s^2: model 2 (200 mm/s, 0.2 N)
+LOUDEST = max(math.sqrt(v * output_power_gain(a)) for a, v in zip(COEFFS, VARIANCES))  # m/s^2
 
 
 def _warnings(tmp_path, gain: float, xml: str | None = None):
@@ -23,7 +24,7 @@ def test_a_gain_twice_the_room_warns_with_the_gaussian_share_clipped(tmp_path):
     gain = 0.4 / LOUDEST  # 2 deviations of 0.2 each side: 2 Q(0.5) = 61.7 % outside
     (warning,) = _warnings(tmp_path, gain)
     assert "scene.toml:10: layer[1].gain: " in warning, warning
-    assert "model 2, 200 mm/s and 0.2 N" in warning and "is 0.4 of mu'" in warning, warning
+    assert "model 1, 20 mm/s and 0.2 N" in warning and "is 0.4 of mu'" in warning, warning
     assert "at least 61.7% of the samples" in warning, warning
     assert f"lower gain to {0.2 / 1.2 * gain:.3g} or less" in warning, warning
 

@@ -168,13 +168,14 @@ def _one_sample_at_a_time(trigger, contact, touch_id, inside, flag, prev, index0
     for j in range(n):
         fired = False
         for i in range(fingers):
-            c0, t0, in0, f0 = (bool(last[i][0]), last[i][1], bool(last[i][2]), bool(last[i][3]))
+            c0, t0, in0, f0 = (bool(last[i][0]), last[i][1], bool(last[i][2]), last[i][3])
             c, t, inn, f = (bool(contact[i, j]), int(touch_id[i, j]), bool(inside[i, j]),
-                            bool(flag[i, j]))
+                            int(flag[i, j]))
             same = c and c0 and t == t0
-            fired |= (c and not same and inn, c0 and not same and in0, same and f != f0 and inn,
-                      same and f and not f0 and inn)[trigger]
-            last[i] = (int(c), t, int(inn), int(f))
+            fired |= (c and not same and inn, c0 and not same and in0,
+                      same and 0 != f != f0 != 0 and inn, same and f and not f0 and inn)[trigger]
+            on_the_line = trigger == 2 and same and f == 0  # keeps the side it came from
+            last[i] = (int(c), t, int(inn), f0 if on_the_line else f)
         if start >= 0 and index0 + j - start < samples.size:
             mu[:, j], covers[:, j] = samples[index0 + j - start], contact[:, j]
             played_clipped += int(contact[:, j].sum()) * bool(clipped[index0 + j - start])
@@ -195,14 +196,17 @@ def test_a_block_is_the_clip_played_sample_by_sample(seed):
     contact = np.cumsum(change(), axis=1) % 2 == 0
     touch_id = np.cumsum(change(), axis=1) + 10 * np.arange(fingers)[:, None]
     inside, flag = np.cumsum(change(), axis=1) % 2 == 0, np.cumsum(change(), axis=1) % 2 == 1
+    side = (np.cumsum(change(), axis=1) % 3 - 1).astype(np.int8)  # edge: -1, 0 (on the line), 1
     prev = np.column_stack([rng.integers(0, 2, fingers), rng.integers(-1, 2, fingers),
-                            rng.integers(0, 2, fingers), rng.integers(0, 2, fingers)])
+                            rng.integers(0, 2, fingers), rng.integers(-1, 2, fingers)])
     samples = rng.uniform(0.5, 1.0, int(rng.integers(1, 400)))
     clipped = rng.random(samples.size) < 0.3
     index0 = int(rng.integers(0, 1000))
     start = int(rng.choice([-1, index0, index0 - rng.integers(0, 500)]))
     for trigger in range(4):
-        args = (trigger, contact, touch_id, inside, flag, prev.astype(np.int64), index0, start,
+        flags, last_flag = (side, prev[:, 3]) if trigger == 2 else (flag, prev[:, 3] != 0)
+        args = (trigger, contact, touch_id, inside, flags,
+                np.column_stack([prev[:, :3], last_flag]).astype(np.int64), index0, start,
                 samples, clipped)
         idle = (np.ones(contact.shape), np.zeros(contact.shape, bool))
         got, want = render_block(*args, idle), _one_sample_at_a_time(*args)
@@ -216,8 +220,8 @@ def test_the_edge_side_is_the_sign_of_the_distance_to_the_line():
     x, y = rng.uniform(0.0, 100.0, (3, 400)), rng.uniform(0.0, 60.0, 400)
     a = math.radians(120.0)
     distance = math.cos(a) * (x - 50.0) + math.sin(a) * (y - 30.0)
-    assert (layer.side(x, y) == (distance >= 0.0)).all() and layer.side(x, y).shape == (3, 400)
-    assert layer.side(50.0, 30.0).shape == () and layer.side(50.0, 30.0)  # on the line
+    assert (layer.side(x, y) == np.sign(distance)).all() and layer.side(x, y).shape == (3, 400)
+    assert layer.side(50.0, 30.0).shape == () and layer.side(50.0, 30.0) == 0  # on the line
 
 
 @pytest.mark.parametrize("ends_in_block", [True, False])
