@@ -242,6 +242,23 @@ def test_evemu_errors_name_file_and_line(line, message):
         parse_evemu("N: x\n" + line + "\n", "rec")
 
 
+def test_an_evemu_recording_cut_mid_line_imports_what_came_before(tmp_path, capsys):
+    """evemu-record stopped with Ctrl-C can end mid-line, as a getevent log can: the cut
+    line is left out with a warning (it was refused: 'an 'E:' line that is not an evemu
+    event'), and a malformed line that ends in a line break is still refused."""
+    cut = EVEMU[:EVEMU.rindex("E: 0.015000 0000")] + "E: 0.015000 00"
+    rec = parse_evemu(cut, "rec.evemu")
+    assert len(rec.events) == 9
+    assert rec.warnings == ["rec.evemu:25: the last line is cut short (no line break; the "
+                            "recording stopped mid-line): left out"]
+    src = tmp_path / "cut.evemu"
+    src.write_text(cut)
+    assert _import([str(src), "-o", str(tmp_path / "out.csv")]) == 0
+    assert "cut.evemu:25: the last line is cut short" in capsys.readouterr().err
+    with pytest.raises(TraceError, match=r"rec:25: an 'E:' line that is not an evemu event"):
+        parse_evemu(cut + "\n", "rec")
+
+
 # -- the command ----------------------------------------------------------------------------
 @needs_refdata
 def test_import_writes_mm_and_keeps_pressure(tmp_path, capsys):

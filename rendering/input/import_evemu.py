@@ -48,11 +48,13 @@ def _s32(text: str, what: str, where: str) -> int:
 
 @dataclass(frozen=True)
 class EvemuRecording:
-    """events : in file order, times in s. absinfo : axis code -> range. name : device name."""
+    """events : in file order, times in s. absinfo : axis code -> range. name : device name.
+    warnings : what to show (a last line cut short, left out)."""
 
     events: list[Event]
     absinfo: dict[int, AbsInfo] = field(default_factory=dict)
     name: str = ""
+    warnings: list[str] = field(default_factory=list)
 
 
 def parse_evemu(text: str, where: str = "<evemu>") -> EvemuRecording:
@@ -60,13 +62,19 @@ def parse_evemu(text: str, where: str = "<evemu>") -> EvemuRecording:
     events: list[Event] = []
     absinfo: dict[int, AbsInfo] = {}
     name = ""
-    for number, raw in enumerate(text.splitlines(), start=1):
+    warnings: list[str] = []
+    lines = text.splitlines()
+    for number, raw in enumerate(lines, start=1):
         line = raw.strip()
         if not line or line.startswith("#"):
             continue
         at = f"{where}:{number}"
         if line.startswith("E:"):
             m = _EVENT.match(line)
+            if m is None and number == len(lines) and not text.endswith(("\n", "\r")):
+                warnings.append(f"{at}: the last line is cut short (no line break; the "
+                                "recording stopped mid-line): left out")
+                break
             if m is None:
                 raise TraceError(f"{at}: an 'E:' line that is not an evemu event (expected "
                                  "'E: seconds.micros TYPE CODE VALUE': ASCII digits, type and "
@@ -94,4 +102,4 @@ def parse_evemu(text: str, where: str = "<evemu>") -> EvemuRecording:
         elif not line.startswith(_HEADER_TAGS):
             raise TraceError(f"{at}: not an evemu line (expected '# comment', 'N:', 'I:', 'P:', "
                              "'B:', 'A:', 'L:', 'S:' or 'E:' at its start)")
-    return EvemuRecording(events, absinfo, name)
+    return EvemuRecording(events, absinfo, name, warnings)

@@ -164,7 +164,7 @@ def _events(path: Path, text: str, fmt: str,
     if device is not None:
         raise TraceError("--device applies to getevent logs; an evemu recording holds one device")
     recording = parse_evemu(text, str(path))
-    return recording.events, recording.absinfo, []
+    return recording.events, recording.absinfo, recording.warnings
 
 
 def run_import(args: argparse.Namespace, write: Callable[[str, str], None]) -> int:
