@@ -36,3 +36,8 @@ def test_an_end_away_from_the_target_keeps_two_decimals():
 
 def test_an_end_on_the_target_prints_as_the_target():
     assert end_text(2.0, 2.0) == "2.00"
+
+
+def test_a_small_time_keeps_two_significant_digits():
+    assert end_text(0.04731, 0.15) == "0.047"
+    assert end_text(0.3412, 0.5) == "0.34"

@@ -19,9 +19,9 @@ against the bound, so that a median a little under the bound on a loaded machine
 "holds".
 
 Each printed end of an interval has as many decimals as it takes to put it on the side
-of the target that decided the verdict (:func:`end_text`): two where they do, more where
-two would round the end onto the target (an upper end of 1.996 against "at most 2x"
-prints 1.996, not 2.00).
+of the target that decided the verdict (:func:`end_text`): two where they do (or two
+significant digits, for a time of 0.047 s), more where that would round the end onto the
+target (an upper end of 1.996 against "at most 2x" prints 1.996, not 2.00).
 """
 
 from __future__ import annotations
@@ -71,10 +71,11 @@ class RatioClaim:
 
 
 def end_text(end: float, target: float) -> str:
-    """``end`` with the fewest decimals, two at least, that keep it on its side of
-    ``target`` once printed (1.996 against 2: "1.996"; 1.93: "1.93"); ``repr`` where
-    nine do not."""
-    for decimals in range(2, 10):
+    """``end`` with the fewest decimals that keep it on its side of ``target`` once
+    printed (1.996 against 2: "1.996"; 1.93: "1.93"), and at least two decimals and two
+    significant digits (0.0473 s: "0.047", not "0.05"); ``repr`` where nine do not."""
+    digits = 1 - math.floor(math.log10(abs(end))) if end != 0.0 and math.isfinite(end) else 2
+    for decimals in range(max(2, digits), 10):
         text = f"{end:.{decimals}f}"
         if (float(text) > target) == (end > target) and (float(text) < target) == (end < target):
             return text
