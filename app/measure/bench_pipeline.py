@@ -106,15 +106,16 @@ def live_figures(per_block: np.ndarray, label: str, clock: str,
                  block: int = BLOCK) -> list[Figure]:
     """p50 and p99 (us; the max under 101 blocks, ``app.measure.tail``) of per-call
     seconds, one block of ``block`` samples per call; ``clock`` (:data:`WALL` or
-    :data:`THREAD_CPU`) ends the label; thread CPU also gets the verdict on its p99
-    under :data:`BUDGET_SHARE` of the block (``quantile_claim``)."""
+    :data:`THREAD_CPU`) ends the label; thread CPU of the 5 ms block (:data:`BLOCK`, the
+    target's; the demo's 2.5 ms block has none) also gets the verdict on its p99 under
+    :data:`BUDGET_SHARE` of the block (``quantile_claim``)."""
     us = np.asarray(per_block) * 1e6
     ms = block / RATE_HZ * 1e3
     high, value = tail(us)
     figures = [Figure("pipeline",
                       f"live {ms:g} ms block {name} of {us.size:,} blocks, {label}, {clock}",
                       got, "us") for name, got in (("p50", float(np.median(us))), (high, value))]
-    if clock == THREAD_CPU:
+    if clock == THREAD_CPU and block == BLOCK:
         claim = quantile_claim(us, 0.99, BUDGET_SHARE * ms * 1e3)
         figures.append(claim.figure("pipeline", f"live {ms:g} ms block, {label}, {clock}",
                                     "us", of="blocks"))
