@@ -466,8 +466,10 @@ def test_a_silent_sources_name_is_said_escaped_and_cut():
     warning whole: a 60,084-character line written from the haptic thread."""
     from frictex.device.safe_text import MAX_SHOWN
     now, lines = [0.0], []
+    # named: a frame this long claims nothing from an unnamed sender (MAX_CLAIM_BYTES)
     with TuioListener(0, width_mm=100.0, height_mm=100.0, clock=lambda: now[0],
-                      warn=lines.append) as listener, sender("127.0.0.1") as tracker:
+                      accept_from=("127.0.0.1", None), warn=lines.append) as listener, \
+            sender("127.0.0.1") as tracker:
         tracker.sendto(frame(1, [1], [(1, 0.1, 0.4)], source="\x1b" + "S" * 60_000),
                        ("127.0.0.1", listener.port))
         received(listener, 1, 0)

@@ -88,7 +88,9 @@ def polls(listener, sizes) -> tuple[list, list]:
 
 
 def test_one_poll_decodes_one_flood_bundle_and_the_rest_waits():
-    with TuioListener(0, width_mm=100.0, height_mm=100.0, warn=lambda line: None) as listener:
+    # named: a bundle this large claims nothing from an unnamed sender (MAX_CLAIM_BYTES)
+    with TuioListener(0, width_mm=100.0, height_mm=100.0, accept_from=("127.0.0.1", None),
+                      warn=lambda line: None) as listener:
         sizes = counting(listener)
         delivered(listener, [flood_bundle(k + 1) for k in range(8)], chunk=1)
         touches, per_poll = polls(listener, sizes)

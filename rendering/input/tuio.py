@@ -31,7 +31,10 @@ sender only: the address (and port, if given) it is told to accept, or else the 
 sender of a well-formed TUIO frame (a bundle that parses and holds ``/tuio/2Dcur alive``
 and ``fseq``: :func:`is_tuio_frame`), its address and port, so that another process on
 the same host cannot join in. Until a sender is accepted, datagrams that are not such a
-frame claim nothing: stray traffic cannot lock the tablet out. Datagrams from anyone
+frame claim nothing: stray traffic cannot lock the tablet out. Deciding costs little
+whatever a stranger sends: a datagram over :data:`MAX_CLAIM_BYTES`, or not starting as a
+2Dcur bundle, is refused from its first bytes, and each address has one datagram parsed
+at most every :data:`CLAIM_INTERVAL_S`. Datagrams from anyone
 else, and those unclaiming ones, are dropped and counted (``refused``). Listening beyond
 loopback with no sender named, :func:`exposure_warning` gives the line a command prints.
 
@@ -91,6 +94,18 @@ MAX_ALIVE_IDS = 4 * MAX_CURSORS
 #: the GIL) for seconds
 POLL_DATAGRAMS = 32
 POLL_BYTES = 16384
+#: largest datagram (bytes) that may claim the input for its sender: a 20-finger frame
+#: with its source is about 1.4 kB. A stranger's larger one is refused unparsed, so that
+#: refusing a 64 kB bundle of 5,400 messages (10 ms of parsing) costs the haptic process
+#: no more than refusing a frame
+MAX_CLAIM_BYTES = 4096
+#: one claim parse per sender address at most this often (s); the datagrams of that
+#: address in between are refused unparsed (a 60 Hz tablet's first frame claims at once)
+CLAIM_INTERVAL_S = 0.05
+#: most addresses whose last claim parse is remembered; beyond, the memory starts afresh
+_CLAIM_ADDRESSES = 1024
+_CUR_ADDRESS = b"/tuio/2Dcur\0"
+_FIRST_ADDRESS = 20  # "#bundle\0", an 8-byte time tag, the first element's 4-byte size
 
 
 class OscError(TraceError):
@@ -383,10 +398,20 @@ def _arg(args: list, i: int, kind: type, what: str):
     return kind(value)
 
 
+def may_be_tuio_frame(data: bytes) -> bool:
+    """Whether ``data`` is worth :func:`is_tuio_frame`'s parse, judged from its size and
+    first bytes alone: at most :data:`MAX_CLAIM_BYTES`, a bundle whose first element is a
+    ``/tuio/2Dcur`` message (as every TUIO 1.1 sender writes its frames)."""
+    return (len(data) <= MAX_CLAIM_BYTES and data.startswith(b"#bundle\0")
+            and data[_FIRST_ADDRESS:_FIRST_ADDRESS + len(_CUR_ADDRESS)] == _CUR_ADDRESS)
+
+
 def is_tuio_frame(data: bytes) -> bool:
-    """True if ``data`` is an OSC bundle that parses and holds a well-formed
-    ``/tuio/2Dcur alive`` and ``fseq``: a datagram that may claim the first-sender slot."""
-    if not data.startswith(b"#bundle\0"):
+    """True if ``data`` is an OSC bundle of at most :data:`MAX_CLAIM_BYTES` that starts
+    with a ``/tuio/2Dcur`` message, parses and holds a well-formed ``/tuio/2Dcur alive``
+    and ``fseq``: a datagram that may claim the first-sender slot. What it costs is
+    bounded by the size: a larger datagram is refused unparsed."""
+    if not may_be_tuio_frame(data):
         return False
     try:
         commands = {command for command, _, _ in _commands(data)}
@@ -468,6 +493,20 @@ class SenderGate:
         self.sender: tuple[str, int] | None = None
         self.takeovers = 0
         self._last_t = -math.inf
+        self._claim_t: dict[str, float] = {}  # address: when its last claim was parsed (s)
+
+    def _claims(self, address: str, t_s: float, data: bytes) -> bool:
+        """Whether ``data`` from ``address`` at ``t_s`` (s) claims the input: a TUIO frame
+        (:func:`is_tuio_frame`), parsed at most once per :data:`CLAIM_INTERVAL_S` for
+        each address; any other datagram, and one in between, is refused unparsed."""
+        if not may_be_tuio_frame(data):
+            return False
+        if t_s - self._claim_t.get(address, -math.inf) < CLAIM_INTERVAL_S:
+            return False
+        if len(self._claim_t) >= _CLAIM_ADDRESSES:
+            self._claim_t.clear()
+        self._claim_t[address] = t_s
+        return is_tuio_frame(data)
 
     def admit(self, address: str, port: int, t_s: float, data: bytes) -> str | None:
         """Whether the datagram ``data`` from ``address:port`` received at ``t_s`` (s) is
@@ -480,7 +519,7 @@ class SenderGate:
             self._last_t = t_s
             return "same"
         silent = t_s - self._last_t >= self.silence_s
-        if named is None and not (silent and is_tuio_frame(data)):
+        if named is None and not (silent and self._claims(address, t_s, data)):
             return None
         verdict = "new" if self.sender is None or silent else "same"
         self.takeovers += self.sender is not None and verdict == "new"
