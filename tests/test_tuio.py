@@ -52,6 +52,11 @@ def frame(fseq, alive, sets=(), source=None):
     return osc_bundle(*msgs)
 
 
+#: a clock standing still: nothing queued goes stale, no source falls silent, however
+#: late the test's thread runs
+STILL = lambda: 0.0  # noqa: E731
+
+
 def test_message_with_every_common_type():
     data = (osc_string("/a/b") + osc_string(",ifsbhdTFN") + struct.pack(">i", -7)
             + struct.pack(">f", 0.25) + osc_string("hey") + struct.pack(">i", 3) + b"xyz\0"
@@ -214,7 +219,8 @@ def test_listener_receives_udp_on_localhost():
 
 
 def test_listener_queue_is_bounded():
-    with TuioListener(0, width_mm=1.0, height_mm=1.0, host="127.0.0.1", max_packets=2) as listener:
+    with TuioListener(0, width_mm=1.0, height_mm=1.0, host="127.0.0.1", max_packets=2,
+                      clock=STILL) as listener:
         with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as tx:
             for k in range(6):
                 tx.sendto(frame(k + 1, [1], [(1, 0.5, 0.5)]), ("127.0.0.1", listener.port))

@@ -11,7 +11,7 @@ import time
 from frictex.rendering.input.trace_file import DOWN, MOVE
 from frictex.rendering.input.tuio import (MAX_ALIVE_IDS, MAX_CURSORS, POLL_BYTES,
                                          POLL_DATAGRAMS, TuioDecoder, TuioListener)
-from test_tuio import frame, osc_bundle, osc_message, osc_string
+from test_tuio import STILL, frame, osc_bundle, osc_message, osc_string
 
 #: the flood's shape: an alive of 8,000 ids and 300 sets in each 56,876-byte bundle
 FLOOD_IDS, FLOOD_SETS = 8000, 300
@@ -90,7 +90,7 @@ def polls(listener, sizes) -> tuple[list, list]:
 def test_one_poll_decodes_one_flood_bundle_and_the_rest_waits():
     # named: a bundle this large claims nothing from an unnamed sender (MAX_CLAIM_BYTES)
     with TuioListener(0, width_mm=100.0, height_mm=100.0, accept_from=("127.0.0.1", None),
-                      warn=lambda line: None) as listener:
+                      clock=STILL, warn=lambda line: None) as listener:
         sizes = counting(listener)
         delivered(listener, [flood_bundle(k + 1) for k in range(8)], chunk=1)
         touches, per_poll = polls(listener, sizes)
@@ -102,7 +102,8 @@ def test_an_ordinary_stream_is_decoded_whole_in_bounded_polls():
     """300 frames of one finger queued at once: every touch comes out, in order, no poll
     decoding more than POLL_DATAGRAMS datagrams or POLL_BYTES bytes and one datagram."""
     xs = [0.1 + 0.8 * k / 300 for k in range(300)]
-    with TuioListener(0, width_mm=100.0, height_mm=100.0, warn=lambda line: None) as listener:
+    with TuioListener(0, width_mm=100.0, height_mm=100.0, clock=STILL,
+                      warn=lambda line: None) as listener:
         sizes = counting(listener)
         delivered(listener, [frame(k + 1, [5], [(5, x, 0.5)]) for k, x in enumerate(xs)],
                   chunk=50)

@@ -94,6 +94,10 @@ MAX_ALIVE_IDS = 4 * MAX_CURSORS
 #: the GIL) for seconds
 POLL_DATAGRAMS = 32
 POLL_BYTES = 16384
+#: a queued datagram that has waited this long (s) is dropped unread (counted ``stale``)
+#: when a newer one waits behind it: a TUIO frame carries the whole state, the newer one
+#: says what the old one did, and a backlog drains at once
+MAX_QUEUED_S = 0.1
 #: largest datagram (bytes) that may claim the input for its sender: a 20-finger frame
 #: with its source is about 1.4 kB. A stranger's larger one is refused unparsed, so that
 #: refusing a 64 kB bundle of 5,400 messages (10 ms of parsing) costs the haptic process
@@ -535,11 +539,13 @@ class TuioListener:
     caller's thread, which may block in :meth:`wait` until a datagram is there. One
     :meth:`poll` decodes at most :data:`POLL_DATAGRAMS` datagrams and
     :data:`POLL_BYTES` bytes of them (at least one datagram); the rest wait for the next.
-    Malformed packets are counted in ``bad_packets`` (last message in ``last_error``),
+    A datagram queued :data:`MAX_QUEUED_S` or longer with a newer one behind it is
+    dropped unread (``stale``). Malformed packets are counted in ``bad_packets`` (last message in ``last_error``),
     never raised. Datagrams that :class:`SenderGate` refuses (another sender while the
     served one speaks; before one is served, or after it fell silent, those that are not
-    a TUIO frame) are counted in ``refused``. A source silent for ``silence_s`` s has its
-    cursors lifted when :meth:`poll` sees it, said once through ``warn``.
+    a TUIO frame) are counted in ``refused``. A source silent for ``silence_s`` s by the
+    clock has its cursors lifted at the next :meth:`poll`, said once through ``warn``,
+    however many datagrams are queued.
 
     Parameters
     ----------
@@ -563,13 +569,14 @@ class TuioListener:
         self.screen = ScreenMap(AxisMap(0.0, 1.0, width_mm), AxisMap(0.0, 1.0, height_mm),
                                 force_n=force_n)
         self.decoder = TuioDecoder()
-        self.dropped = self.bad_packets = self.refused = self.datagrams = 0
+        self.dropped = self.bad_packets = self.refused = self.datagrams = self.stale = 0
         self.host = host
         self.gate = SenderGate(accept_from, silence_s)
         self.last_error: str | None = None
         self._clock = clock
         self._warn = warn if warn is not None else _to_stderr
-        self._queue: queue.Queue[tuple[float, bytes, str]] = queue.Queue(max_packets)
+        # (arrival t, queued t, datagram, origin)
+        self._queue: queue.Queue[tuple[float, float, bytes, str]] = queue.Queue(max_packets)
         self._ready = threading.Event()
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
@@ -593,7 +600,8 @@ class TuioListener:
                 continue
             except OSError:
                 return
-            t = self._clock() - _age_s(ancillary)
+            now = self._clock()
+            t = now - _age_s(ancillary)
             before = self.gate.sender
             verdict = self.gate.admit(address, port, t, data)
             if verdict is None:
@@ -602,14 +610,14 @@ class TuioListener:
             if verdict == "new" and before is not None:
                 self._warn(f"TUIO: taking frames from {address}:{port} ({_name(before)} was "
                            f"silent for {self.gate.silence_s:g} s or more)")
-            self._enqueue(t, data, f"{address}:{port}")
+            self._enqueue(t, now, data, f"{address}:{port}")
 
-    def _enqueue(self, t: float, data: bytes, origin: str) -> None:
-        """Queue datagram ``data`` from ``origin`` received at ``t`` (s), or count it
-        dropped when the queue is full; counted in ``datagrams`` only then, so that a
-        reader who sees the count can :meth:`poll` the datagram."""
+    def _enqueue(self, t: float, now: float, data: bytes, origin: str) -> None:
+        """Queue datagram ``data`` from ``origin`` received at ``t`` (s) at ``now`` (s), or
+        count it dropped when the queue is full; counted in ``datagrams`` only then, so
+        that a reader who sees the count can :meth:`poll` the datagram."""
         try:
-            self._queue.put_nowait((t, data, origin))
+            self._queue.put_nowait((t, now, data, origin))
         except queue.Full:
             self.dropped += 1
         self._ready.set()
@@ -623,19 +631,22 @@ class TuioListener:
     def poll(self) -> list[TouchSample]:
         """Samples of the frames received since the last call (mm, N, s), in order, from
         at most :data:`POLL_DATAGRAMS` datagrams and :data:`POLL_BYTES` bytes of them (at
-        least one): with more queued, :meth:`wait` returns at once for the rest."""
+        least one): with more queued, :meth:`wait` returns at once for the rest. Stale
+        datagrams are dropped unread; sources silent by the clock are lifted last."""
         self._ready.clear()  # before draining: a datagram queued meanwhile sets it again
         raw: list[RawSample] = []
-        datagrams, size = 0, 0
+        datagrams, size, now = 0, 0, self._clock()
         while datagrams < POLL_DATAGRAMS and size < POLL_BYTES:
             try:
-                t, data, origin = self._queue.get_nowait()
+                t, queued_t, data, origin = self._queue.get_nowait()
             except queue.Empty:
-                # silences are judged on the clock only once every datagram before it is read
-                raw.extend(self._expire(self._clock()))
-                return self.screen.touches(raw)
+                break
+            if now - queued_t >= MAX_QUEUED_S and not self._queue.empty():
+                self.stale += 1
+                continue
             datagrams, size = datagrams + 1, size + len(data)
             raw.extend(self._decode(t, data, origin))
+        raw.extend(self._expire(self._clock()))
         if not self._queue.empty():
             self._ready.set()
         return self.screen.touches(raw)
@@ -662,12 +673,13 @@ class TuioListener:
 
     def counters(self) -> dict:
         """What was received: ``datagrams`` accepted, ``refused`` (other senders),
-        ``dropped`` (queue full), ``bad_packets``, the decoder's ``over_limit`` and
+        ``dropped`` (queue full), ``stale`` (dropped, waited too long), ``bad_packets``, the decoder's ``over_limit`` and
         ``unread``, ``takeovers`` (senders served after another fell silent), and the
         ``sender`` served last ("ADDR:PORT", or None before the first datagram)."""
         sender = None if self.gate.sender is None else _name(self.gate.sender)
         return {"listen": f"{self.host}:{self.port}", "sender": sender,
                 "datagrams": self.datagrams, "refused": self.refused, "dropped": self.dropped,
+                "stale": self.stale,
                 "bad_packets": self.bad_packets, "over_limit": self.decoder.over_limit,
                 "unread": self.decoder.unread,
                 "takeovers": self.gate.takeovers}

@@ -1,0 +1,42 @@
+"""A served sender that stops is lifted SILENCE_S after its last frame by the clock,
+however many of its datagrams wait in the queue; a backlog is dropped, counted."""
+
+import time
+
+from frictex.rendering.input.trace_file import DOWN, UP
+from frictex.rendering.input.tuio import MAX_QUEUED_S, SILENCE_S, TuioListener
+from test_tuio import frame, osc_bundle, osc_message, received, sender
+
+JUNK = 50  # well-formed OSC, not TUIO: read, but no frame
+
+
+def until_counted(listener, accepted):
+    """Wait (bounded) until the listener's thread has queued ``accepted`` datagrams,
+    polling none of them."""
+    deadline = time.monotonic() + 60.0
+    while listener.datagrams < accepted and time.monotonic() < deadline:
+        time.sleep(0.002)
+    assert listener.datagrams == accepted
+
+
+def test_a_sender_that_stops_is_lifted_by_the_clock_not_by_its_backlog():
+    """Issue: silence was judged from each queued datagram's arrival and from the clock
+    only once the queue was empty; a sender that queued 1,024 non-TUIO datagrams (7 ms
+    each to decode, one a poll) and stopped stayed pressed 7 s, not 1.5 s."""
+    now, lines = [0.0], []
+    junk = osc_bundle(*[osc_message("/a")] * 40)
+    with TuioListener(0, width_mm=100.0, height_mm=100.0, clock=lambda: now[0],
+                      warn=lines.append) as listener, sender("127.0.0.1") as tablet:
+        to = ("127.0.0.1", listener.port)
+        tablet.sendto(frame(1, [3], [(3, 0.25, 0.5)]), to)
+        samples = received(listener, 1, 0)
+        for _ in range(JUNK):
+            tablet.sendto(junk, to)
+        until_counted(listener, 1 + JUNK)
+        now[0] = SILENCE_S + MAX_QUEUED_S  # the clock: the tablet is silent, its junk stale
+        samples += listener.poll()  # one poll
+        counts = listener.counters()
+    assert [(s.x_mm, s.event) for s in samples] == [(25.0, DOWN), (25.0, UP)]
+    assert samples[-1].t_s == SILENCE_S + MAX_QUEUED_S and len(lines) == 1
+    # all but the newest dropped unread; the newest decoded
+    assert counts["stale"] == JUNK - 1 and listener.wait(0.0) is False
