@@ -329,17 +329,18 @@ def test_only_the_first_sender_moves_fingers_and_the_others_are_counted():
     assert (counts["datagrams"], counts["refused"], counts["dropped"]) == (2, 2, 0)
 
 
-def test_accept_from_an_address_takes_any_of_its_ports_and_nothing_else():
+def test_accept_from_an_address_takes_its_first_port_and_nothing_else():
     with TuioListener(0, width_mm=100.0, height_mm=100.0, host="0.0.0.0",
                       accept_from=("127.0.0.2", None)) as listener, \
             sender("127.0.0.1") as local, sender("127.0.0.2") as a, sender("127.0.0.2") as b:
         to = ("127.0.0.1", listener.port)
         local.sendto(frame(1, [1], [(1, 0.1, 0.1)]), to)  # first, but not the one accepted
         a.sendto(frame(1, [3], [(3, 0.25, 0.5)]), to)
-        b.sendto(frame(2, [3], [(3, 0.5, 0.5)]), to)
-        samples = received(listener, 2, 1)
-        # the port served last
-        assert listener.counters()["sender"] == f"127.0.0.2:{b.getsockname()[1]}"
+        samples = received(listener, 1, 1)
+        b.sendto(frame(2, [3], [(3, 0.5, 0.5)]), to)  # another port while a speaks
+        a.sendto(frame(2, [3], [(3, 0.5, 0.5)]), to)
+        samples += received(listener, 2, 2)
+        assert listener.counters()["sender"] == f"127.0.0.2:{a.getsockname()[1]}"
     assert [(s.x_mm, s.event) for s in samples] == [(25.0, DOWN), (50.0, MOVE)]
 
 
@@ -433,12 +434,17 @@ def test_the_gate_serves_one_sender_and_the_newest_after_silence():
     assert gate.admit(*a, t + SILENCE_S + 0.01, tick) is None and gate.takeovers == 1
 
 
-def test_a_named_address_is_served_on_any_port_and_a_new_port_after_silence_starts_afresh():
+def test_a_named_address_is_served_on_its_first_port_and_a_new_port_after_silence():
+    """Issue: with no port named, every port of the address was served at once, each
+    taking the slot from the other: two trackers moved one finger between them."""
     gate, tick = SenderGate(("127.0.0.2", None)), frame(1, [])
     assert gate.admit("127.0.0.1", 4000, 0.0, tick) is None
     assert gate.admit("127.0.0.2", 4000, 0.0, b"any") == "new"
-    assert gate.admit("127.0.0.2", 4001, 0.1, tick) == "same"
-    assert gate.admit("127.0.0.2", 4002, 0.1 + SILENCE_S, tick) == "new"
+    for k in range(1, 100):  # 4001 speaks as often as 4000: refused while 4000 speaks
+        assert gate.admit("127.0.0.2", 4001, 0.01 * k, tick) is None
+        assert gate.admit("127.0.0.2", 4000, 0.01 * k, b"any") == "same"
+    assert gate.admit("127.0.0.2", 4002, 0.99 + SILENCE_S, b"any") == "new"
+    assert gate.sender == ("127.0.0.2", 4002) and gate.takeovers == 1
 
 
 def test_listener_lifts_a_vanished_sender_and_serves_the_one_that_comes_back():

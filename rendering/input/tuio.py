@@ -481,9 +481,11 @@ class SenderGate:
     Parameters
     ----------
     accept_from : :func:`parse_sender`'s (address, port or None) to serve only that
-        address (any of its ports when port is None); None: whoever sends a TUIO frame
-        first (:func:`is_tuio_frame`), and after that sender has been silent for
-        ``silence_s``, whoever sends one next.
+        address (with port None: the first of its ports heard, and after that port has
+        been silent for ``silence_s``, the next; one port at a time, so that two
+        trackers on one host do not move each other's fingers); None: whoever sends a
+        TUIO frame first (:func:`is_tuio_frame`), and after that sender has been silent
+        for ``silence_s``, whoever sends one next.
     silence_s : how long (s) the served sender must be silent before another may take over.
 
     ``sender`` is the one served now, (address, port), or None before the first;
@@ -514,21 +516,21 @@ class SenderGate:
 
     def admit(self, address: str, port: int, t_s: float, data: bytes) -> str | None:
         """Whether the datagram ``data`` from ``address:port`` received at ``t_s`` (s) is
-        taken: None (refused), ``"same"`` (the served sender), ``"new"`` (the first, or
-        one taking over from a sender silent for ``silence_s`` or more)."""
+        taken: None (refused), ``"same"`` (the served sender, address and port), ``"new"``
+        (the first, or one taking over from a sender silent for ``silence_s`` or more)."""
         named = self.accept_from
         if named is not None and (address != named[0] or named[1] not in (None, port)):
             return None
         if self.sender == (address, port):
             self._last_t = t_s
             return "same"
-        silent = t_s - self._last_t >= self.silence_s
-        if named is None and not (silent and self._claims(address, t_s, data)):
+        if t_s - self._last_t < self.silence_s:
+            return None  # another port or sender while the served one speaks
+        if named is None and not self._claims(address, t_s, data):
             return None
-        verdict = "new" if self.sender is None or silent else "same"
-        self.takeovers += self.sender is not None and verdict == "new"
+        self.takeovers += self.sender is not None
         self.sender, self._last_t = (address, port), t_s
-        return verdict
+        return "new"
 
 
 class TuioListener:
@@ -552,8 +554,9 @@ class TuioListener:
     port : UDP port (TUIO's default 3333; 0 picks a free one, see ``.port``).
     width_mm, height_mm : display size the normalised TUIO coordinates span (mm).
     host : address to bind (default loopback; "0.0.0.0": every interface).
-    accept_from : the sender to accept, (IPv4 address, port or None for any port), as
-        :func:`parse_sender` gives; None: the first sender heard from (address and port).
+    accept_from : the sender to accept, (IPv4 address, port or None: its first port heard,
+        one at a time), as :func:`parse_sender` gives; None: the first sender of a TUIO
+        frame (address and port).
     force_n : normal force given to every sample (N); TUIO 1.1 cursors carry none.
     max_packets : queue bound.
     clock : time source for arrival stamps and silences (s).
