@@ -206,12 +206,37 @@ def input_name(kind: str, arg) -> str:
     return INPUTS.get(kind).label(arg)
 
 
+#: what a TUIO input did not play, as its closing line says it: ``counters()`` key, the
+#: thing counted (singular, plural) and why it was not played
+_TUIO_DROPS = (("refused", "datagram", "datagrams",
+                "refused (other senders, or before one was served)"),
+               ("dropped", "datagram", "datagrams", "dropped (queue full)"),
+               ("stale", "datagram", "datagrams", "dropped unread (stale, a newer one queued)"),
+               ("bad_packets", "malformed datagram", "malformed datagrams", "dropped"),
+               ("late", "late frame", "late frames", "dropped (out of order)"),
+               ("stray", "stray set", "stray sets", "ignored (cursor not alive)"),
+               ("over_limit", "cursor or source command", "cursor or source commands",
+                "ignored (over the limit)"),
+               ("unread", "argument", "arguments", "unread (over the limit of one message)"))
+
+
 def tuio_line(counts: dict) -> str:
-    """The demo's last line about a TUIO input: its ``counters()`` (what came from whom)."""
-    sender = "no sender (nothing came)" if counts["sender"] is None else counts["sender"]
-    return (f"demo: TUIO on {counts['listen']} from {sender}: {counts['datagrams']} "
-            f"datagrams, {counts['refused']} refused from other senders, {counts['dropped']} "
-            f"dropped (queue full), {counts['bad_packets']} malformed")
+    """The demo's last line about a TUIO input: from its ``counters()``, what came from
+    whom, every nonzero count of what was not played and why, and the takeovers."""
+    if counts["sender"] is not None:
+        sender = counts["sender"]
+    elif counts["refused"]:
+        sender = "no sender (none was served)"
+    else:
+        sender = "no sender (nothing came)"
+    drops = [f"{counted(counts[key], noun, nouns)} {why}"
+             for key, noun, nouns, why in _TUIO_DROPS if counts[key]]
+    if counts["sender"] is None and counts["refused"]:
+        drops[0] = f"{counted(counts['refused'], 'datagram')} refused (none claimed the input)"
+    if counts["takeovers"]:
+        drops.append(f"{counted(counts['takeovers'], 'takeover')} after a silence")
+    return (f"demo: TUIO on {counts['listen']} from {sender}: "
+            f"{counted(counts['datagrams'], 'datagram')}; {', '.join(drops) or 'nothing dropped'}")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -281,7 +306,9 @@ def _stagings(args, headless: bool) -> tuple[Staging | None, Staging | None]:
     if record is None or out is None or record.resolve() == out.resolve():
         tables = record or out
         return (None if tables is None else Staging(tables, owned=DEMO_OUTPUTS)), None
-    return Staging(record, owned=DEMO_OUTPUTS), Staging(out, owned=DEMO_OUTPUTS)
+    # the frames' own folder has no summary.json of its own (the recording's has it)
+    return (Staging(record, owned=DEMO_OUTPUTS),
+            Staging(out, owned=DEMO_OUTPUTS, claimed_by_summary=False))
 
 
 def _run_demo(args, headless: bool, paths, index: int, scene, stagings, check) -> int:

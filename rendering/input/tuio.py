@@ -542,10 +542,10 @@ class TuioListener:
     :meth:`poll` decodes at most :data:`POLL_DATAGRAMS` datagrams and
     :data:`POLL_BYTES` bytes of them (at least one datagram); the rest wait for the next.
     A datagram queued :data:`MAX_QUEUED_S` or longer with a newer one behind it is
-    dropped unread (``stale``). Malformed packets are counted in ``bad_packets`` (last message in ``last_error``),
-    never raised. Datagrams that :class:`SenderGate` refuses (another sender while the
-    served one speaks; before one is served, or after it fell silent, those that are not
-    a TUIO frame) are counted in ``refused``. A source silent for ``silence_s`` s by the
+    dropped unread (``stale``). Malformed packets are counted in ``bad_packets`` (last
+    message in ``last_error``), never raised. Datagrams that :class:`SenderGate` refuses
+    (another sender while the served one speaks; before one is served, or after it fell
+    silent, those that are not a TUIO frame) are counted in ``refused``. A source silent for ``silence_s`` s by the
     clock has its cursors lifted at the next :meth:`poll`, said once through ``warn``,
     however many datagrams are queued.
 
@@ -675,15 +675,17 @@ class TuioListener:
         return lifted
 
     def counters(self) -> dict:
-        """What was received: ``datagrams`` accepted, ``refused`` (other senders),
-        ``dropped`` (queue full), ``stale`` (dropped, waited too long), ``bad_packets``, the decoder's ``over_limit`` and
-        ``unread``, ``takeovers`` (senders served after another fell silent), and the
-        ``sender`` served last ("ADDR:PORT", or None before the first datagram)."""
+        """What was received: ``datagrams`` accepted, ``refused`` (other senders, or
+        before one was served), ``dropped`` (queue full), ``stale`` (dropped unread, a
+        newer one queued), ``bad_packets``, the decoder's ``late``, ``stray``,
+        ``over_limit`` and ``unread``, ``takeovers`` (senders served after another fell
+        silent), and the ``sender`` served last ("ADDR:PORT", or None before the first)."""
         sender = None if self.gate.sender is None else _name(self.gate.sender)
         return {"listen": f"{self.host}:{self.port}", "sender": sender,
                 "datagrams": self.datagrams, "refused": self.refused, "dropped": self.dropped,
                 "stale": self.stale,
-                "bad_packets": self.bad_packets, "over_limit": self.decoder.over_limit,
+                "bad_packets": self.bad_packets, "late": self.decoder.late,
+                "stray": self.decoder.stray, "over_limit": self.decoder.over_limit,
                 "unread": self.decoder.unread,
                 "takeovers": self.gate.takeovers}
 
