@@ -4,7 +4,8 @@ per datagram: no full parse of a large bundle, one parse per address per interva
 import pytest
 
 import frictex.rendering.input.tuio as tuio
-from frictex.rendering.input.tuio import CLAIM_INTERVAL_S, MAX_CLAIM_BYTES, SenderGate, is_tuio_frame
+from frictex.rendering.input.tuio import (CLAIM_INTERVAL_S, MAX_CLAIM_BYTES, SenderGate,
+                                         is_tuio_frame)
 from test_tuio import frame, osc_bundle, osc_message
 
 STRANGER, TABLET = ("10.0.0.9", 5000), ("10.0.0.7", 6000)
