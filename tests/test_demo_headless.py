@@ -123,6 +123,7 @@ def test_headless_demo_runs_the_demo_loop_on_a_synthesized_stroke(no_display, tm
     out = tmp_path / "out"
     (out / "frames").mkdir(parents=True)
     (out / "frames" / "frame-99999.png").write_bytes(b"a frame of an earlier run")
+    (out / "summary.json").write_text("{}")  # which wrote its summary beside it
     assert main(["demo", "grating-5mm", "--headless", "--haptic", "thread",
                  "--out", str(out)]) == 0
     text = capsys.readouterr().out

@@ -23,7 +23,9 @@ def test_an_earlier_demos_frames_are_its_own(tmp_path):
     (tmp_path / "frames").mkdir()
     for k in range(3):
         (tmp_path / "frames" / f"frame-{k:05d}.png").write_bytes(b"")
-    Staging(tmp_path, owned=DEMO_OUTPUTS).check()
+    Staging(tmp_path, owned=DEMO_OUTPUTS, claimed_by_summary=False).check()  # frames' own --out
+    with pytest.raises(InputError, match="holds 'frames' but no summary.json"):
+        Staging(tmp_path, owned=DEMO_OUTPUTS).check()  # a recording's folder has its summary
 
 
 def test_a_headless_demo_into_a_folder_of_the_users_deletes_nothing(tmp_path):

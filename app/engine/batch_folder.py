@@ -79,7 +79,7 @@ class BatchFolder:
         self.names = list(names)
         self.staging = Staging(self.out, owned=tuple(sorted({*self.names, *self.earlier,
                                                              *RESERVED})),
-                               owned_pattern=_LEFTOVER)
+                               owned_pattern=_LEFTOVER, claimed_by_summary=False)
 
     def begin(self) -> Path:
         """The folder the jobs write their folders into (the staging folder)."""

@@ -218,7 +218,7 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
     timer.seconds["read"] += time.perf_counter() - read0
     staging = None if out_dir is None else Staging(out_dir)
     if staging is not None:
-        staging.check()
+        staging.check(inputs=(trace_path, scene.source))
     build0 = time.perf_counter()
     pipeline = build_pipeline(scene, rate_hz=options.rate_hz, block_size=options.block_size,
                               render_override=options.render_override, t0_s=t0,

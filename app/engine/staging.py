@@ -14,7 +14,8 @@ shortened in the staging name to its first 100 characters and a hash of the whol
 new folder gets the old one's permissions, owner and group (where the process may set
 them) and extended attributes (ACLs included).
 
-What a run owns in ``--out`` is exactly what it writes there: ``summary.json``,
+What a run owns in ``--out`` is exactly what it writes there, in a folder that holds a
+run's outputs (its ``summary.json``, which every run writes): ``summary.json``,
 ``commands.<fmt>`` and ``friction.<fmt>`` (``fmt`` csv, npz or parquet; also the
 ``.partial`` and npz ``.<column>.raw`` files a table is written under), and a ``frames``
 folder that holds nothing but ``frame_<number>.png`` files (``frame-<number>.png``: the
@@ -33,7 +34,10 @@ it did not write. Also refused before anything is written: ``--out`` the root fo
 ``--out`` that holds the current folder (the process would be left in the deleted one)
 and a mount point, bind mounts included (its staging folder would be on another file
 system, or the swap would fail with EBUSY). Errors name ``--out``, not the staging
-folder.
+folder. An ``--out`` without a ``summary.json`` that holds a file of those names
+(a trace saved as ``commands.csv``) holds no run's outputs: it is refused before anything
+is written, as is an input of the run (a trace, a scene) that is a run's output by its
+name in ``--out``, which the commit would replace.
 
 Leftovers: a staging or set-aside folder whose process is gone is recognised by its
 name and cleared by the next run into the same ``--out`` (:meth:`Staging.begin`), as
@@ -118,13 +122,16 @@ class Staging:
     """The staging folder of one run into ``out`` (see the module docstring)."""
 
     def __init__(self, out: str | Path, owned: tuple[str, ...] = (),
-                 owned_pattern: re.Pattern | None = None):
+                 owned_pattern: re.Pattern | None = None, claimed_by_summary: bool = True):
         self.out = Path(os.path.realpath(out))  # a link to a folder: that folder
         #: more names (files or folders) in ``out`` that are this kind of run's own
         #: outputs, besides a replay's (``frictex demo --record``: ``events.csv``), and a
         #: pattern of such names (a batch: its jobs' replays' staging leftovers)
         self.owned = frozenset(owned)
         self.owned_pattern = owned_pattern
+        #: whether ``out`` holds a run's outputs only beside its ``summary.json`` (a batch
+        #: checks its own ``--out``: ``app.engine.batch_folder.earlier_jobs``)
+        self.claimed_by_summary = claimed_by_summary
         if self.out.parent == self.out:
             raise InputError(f"{self.out}: the root folder cannot be an output folder (a run "
                              "replaces its output folder as a whole): name a folder of its own")
@@ -135,8 +142,9 @@ class Staging:
     def _name(self, kind: str) -> Path:
         return self.out.with_name(f".{_short(self.out.name)}.{kind}.{os.getpid()}.{self.token}")
 
-    def check(self) -> None:
-        """Refuse, touching nothing, an ``out`` this run could not replace whole."""
+    def check(self, inputs: tuple[str | Path | None, ...] = ()) -> None:
+        """Refuse, touching nothing, an ``out`` this run could not replace whole, or one
+        whose replacing would delete one of the run's ``inputs`` (paths; None: none)."""
         if self.out.exists() and not self.out.is_dir():
             raise InputError(f"{self.out}: exists and is not a folder")
         above = next(folder for folder in self.out.parents if folder.exists())
@@ -156,6 +164,32 @@ class Staging:
                 raise InputError(f"{self.out}: holds the folder {foreign[0]!r}, not a run's "
                                  "output; a run replaces its output folder as a whole: write "
                                  "into a folder of its own")
+            unclaimed = self._unclaimed()
+            if unclaimed:
+                raise InputError(f"{self.out}: holds {unclaimed[0]!r} but no {SUMMARY}, so "
+                                 "not a run's output, which a run would replace with its own: "
+                                 "move it or write into another folder")
+            for path in inputs:
+                if path is not None and self._replaces(Path(path)):
+                    raise InputError(f"{path}: an input of the run, in --out {self.out}, "
+                                     "where the run replaces it with its own output: move it "
+                                     "or write into another folder")
+
+    def _unclaimed(self) -> list[str]:
+        """The names in ``out`` a run would replace as its own (:meth:`_own`) where no
+        ``summary.json`` says a run wrote them (none when not ``claimed_by_summary``); an
+        empty folder holds nothing to lose."""
+        if not self.claimed_by_summary or (self.out / SUMMARY).exists():
+            return []
+        return sorted(e.name for e in os.scandir(self.out) if self._own(e) and not (
+            e.is_dir(follow_symlinks=False) and not any(os.scandir(e.path))))
+
+    def _replaces(self, path: Path) -> bool:
+        """Whether the commit would replace the file ``path`` (a run's output in ``out``)."""
+        real = Path(os.path.realpath(path))
+        if real.parent != self.out:
+            return False
+        return any(e.name == real.name and self._own(e) for e in os.scandir(self.out))
 
     def _foreign(self) -> list[str]:
         """The folders in ``out`` that are not a run's."""
