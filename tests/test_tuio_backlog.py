@@ -40,3 +40,23 @@ def test_a_sender_that_stops_is_lifted_by_the_clock_not_by_its_backlog():
     assert samples[-1].t_s == SILENCE_S + MAX_QUEUED_S and len(lines) == 1
     # all but the newest dropped unread; the newest decoded
     assert counts["stale"] == JUNK - 1 and listener.wait(0.0) is False
+
+
+def test_a_stale_frame_is_still_decoded():
+    """A frame that waited past MAX_QUEUED_S behind a newer one may carry a touch's only
+    `set` (a sender may send one only as the cursor moves): it is decoded, not dropped;
+    only the junk between is."""
+    now = [0.0]
+    junk = osc_bundle(*[osc_message("/a")] * 40)
+    with TuioListener(0, width_mm=100.0, height_mm=100.0, clock=lambda: now[0],
+                      warn=lambda line: None) as listener, sender("127.0.0.1") as tablet:
+        to = ("127.0.0.1", listener.port)
+        tablet.sendto(frame(1, [3], [(3, 0.25, 0.5)]), to)
+        tablet.sendto(junk, to)
+        tablet.sendto(frame(2, [3], []), to)  # the cursor alive, not moved: no set
+        until_counted(listener, 3)
+        now[0] = MAX_QUEUED_S  # all three queued this long
+        samples = listener.poll()
+        counts = listener.counters()
+    assert [(s.x_mm, s.event) for s in samples] == [(25.0, DOWN)]
+    assert counts["stale"] == 1

@@ -94,9 +94,9 @@ MAX_ALIVE_IDS = 4 * MAX_CURSORS
 #: the GIL) for seconds
 POLL_DATAGRAMS = 32
 POLL_BYTES = 16384
-#: a queued datagram that has waited this long (s) is dropped unread (counted ``stale``)
-#: when a newer one waits behind it: a TUIO frame carries the whole state, the newer one
-#: says what the old one did, and a backlog drains at once
+#: a queued datagram that is not a TUIO frame and has waited this long (s) is dropped
+#: unread (counted ``stale``) when a newer one waits behind it, so a backlog of junk
+#: drains at once; frames are kept (a sender may send a cursor's set only as it moves)
 MAX_QUEUED_S = 0.1
 #: largest datagram (bytes) that may claim the input for its sender: a 20-finger frame
 #: with its source is about 1.4 kB. A stranger's larger one is refused unparsed, so that
@@ -541,8 +541,10 @@ class TuioListener:
     caller's thread, which may block in :meth:`wait` until a datagram is there. One
     :meth:`poll` decodes at most :data:`POLL_DATAGRAMS` datagrams and
     :data:`POLL_BYTES` bytes of them (at least one datagram); the rest wait for the next.
-    A datagram queued :data:`MAX_QUEUED_S` or longer with a newer one behind it is
-    dropped unread (``stale``). Malformed packets are counted in ``bad_packets`` (last
+    A datagram that is not a TUIO frame (:func:`may_be_tuio_frame`), queued
+    :data:`MAX_QUEUED_S` or longer with a newer one behind it, is dropped unread
+    (``stale``); frames are all decoded, as a sender may send a cursor's ``set`` only when
+    it moves. Malformed packets are counted in ``bad_packets`` (last
     message in ``last_error``), never raised. Datagrams that :class:`SenderGate` refuses
     (another sender while the served one speaks; before one is served, or after it fell
     silent, those that are not a TUIO frame) are counted in ``refused``. A source silent for ``silence_s`` s by the
@@ -644,7 +646,8 @@ class TuioListener:
                 t, queued_t, data, origin = self._queue.get_nowait()
             except queue.Empty:
                 break
-            if now - queued_t >= MAX_QUEUED_S and not self._queue.empty():
+            if (now - queued_t >= MAX_QUEUED_S and not self._queue.empty()
+                    and not may_be_tuio_frame(data)):  # a frame may hold a touch's only set
                 self.stale += 1
                 continue
             datagrams, size = datagrams + 1, size + len(data)
