@@ -117,7 +117,7 @@ class HapticStats:
     #: took effect
     applied: list = field(default_factory=list)
     #: a touch screen's counts when it stopped (``TouchPump.counters``: samples forwarded;
-    #: TUIO's datagrams accepted, refused from other senders, dropped), else empty
+    #: TUIO's counters, ``TuioListener.counters``), else empty
     input: dict = field(default_factory=dict)
 
 
