@@ -19,7 +19,8 @@ new touch id and fresh per-touch state, as a new finger id gets.
 
 The outputs carry the recording's ids again: :meth:`FingerSlots.label` gives each
 output row its finger id, and where a row passes from one finger to the next within a
-call, the id of every sample (``BlockOutput.sample_ids``).
+call, the id of every sample (``BlockOutput.sample_ids``). A row whose slot's first
+touch has not yet taken effect carries :data:`UNNAMED`: no id of the trace.
 """
 
 from __future__ import annotations
@@ -29,6 +30,10 @@ from dataclasses import replace
 import numpy as np
 
 from frictex.rendering.input.trace_file import UP, Trace
+
+#: the id of a row before its slot's first touch takes effect: not in contact, and no id
+#: of the trace (those are >= 0), so that no summary lists it
+UNNAMED = -1
 
 
 class FingerSlots:
@@ -102,7 +107,7 @@ class FingerSlots:
         for _, slot, fid in (c for c in due if c[0] <= index0):
             self._id_of[slot] = fid
         inside = [c for c in due if c[0] > index0]  # a row changes finger within the call
-        labelled = replace(out, finger_ids=tuple(self._id_of.get(s, s) for s in out.finger_ids))
+        labelled = replace(out, finger_ids=tuple(self._id_of.get(s, UNNAMED) for s in out.finger_ids))
         if not inside:
             return labelled
         sample_ids = labelled.ids_per_sample()  # a new (F, n) array

@@ -37,7 +37,11 @@ class FingerTable:
         self.others = [0] * len(kinds)
 
     def row(self, fid: int) -> list:
-        """The row of ``fid`` (created at zero), to add into in place."""
+        """The row of ``fid`` (created at zero), to add into in place; for an id below 0
+        (a row no finger has taken yet, ``app.engine.finger_slots.UNNAMED``) a row kept
+        nowhere, so that no id the trace never named is listed."""
+        if fid < 0:
+            return [0] * len(self.kinds)
         row = self.rows.get(fid)
         if row is None:
             row = self.rows[fid] = [0] * len(self.kinds)
