@@ -2,7 +2,9 @@
 one ``ReplayOptions.clock`` names: ``wall`` paces it in real time).
 
 The output clock starts at the trace's first sample (t_s of output sample k is
-t0 + k / rate) and runs until the block after the last sample. The trace is read and
+t0 + k / rate) and runs until the block after the last sample. t_s is float64: a run
+whose largest output time has a spacing of half a step or more (1e10 s at 1 MHz) is
+refused, one past 1 % of a step (a Unix-time start at 1 MHz: 24 %) warned. The trace is read and
 the outputs written in chunks, so memory stays bounded however long the trace (an hour
 at 10 kHz is 36 million command rows). Each pipeline call runs ``chunk_blocks`` blocks
 (by default about :data:`CHUNK_SAMPLES` finger-samples: fewer calls, arrays that still fit
@@ -35,6 +37,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from frictex.app.engine.clocks import ClockRequest, DeadlineStats, build_clock, clock_name
 from frictex.app.engine.device_changes import device_warnings
@@ -233,6 +237,7 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
     read0 = time.perf_counter()
     source.start(pipeline.tracker_config)
     timer.seconds["read"] += time.perf_counter() - read0
+    _check_time_resolution(_largest_time_known(source, pipeline), options.rate_hz, t0)
     if staging is not None and source.ended:  # the outputs' size is known before writing
         _check_outputs_fit(staging.out, source, pipeline, options.fmt, frames)
     if options.fmt == MEMORY and source.ended:
@@ -325,8 +330,11 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
             raise
         raise _stopped(exc, link.handed / options.rate_hz, source) from exc
 
+    # a streamed trace's last time was not known before the run
+    _check_time_resolution(totals.largest_time_s, options.rate_hz, source.stats.first_t)
     doc = summary(scene, source.report(trace_path), pipeline, stage.state.tracker, totals,
                   options.fmt, tables.files, blocks)
+    doc["warnings"] += _time_resolution_warnings(totals.largest_time_s, options.rate_hz)
     order = getattr(chunks, "order", None)
     if order is not None:
         doc["trace"]["time_order"] = order.as_dict()
@@ -423,6 +431,41 @@ def _stopped(exc, done_s: float, source: TraceSource):
         said += (f" of the {total_s:.2f} s trace (the last {max(total_s - done_s, 0.0):.2f} s "
                  "never commanded)")
     return type(exc)(said, exc.progress)
+
+
+def _largest_time_known(source: TraceSource, pipeline) -> float:
+    """The largest |t_s| (s) of the output known before the run: from the trace's first
+    sample to two blocks past the last one read (all of it unless streamed)."""
+    t = source.pending.t_s
+    return max(abs(float(t[0])), abs(float(t[-1])) + 2 * pipeline.block_size / pipeline.rate_hz)
+
+
+def _time_spacing(largest_s: float) -> float:
+    """float64's spacing (s) at output time ``largest_s``: each t_s is rounded to within
+    half of it, so a step between two rows may be off by up to all of it."""
+    return float(np.spacing(largest_s))
+
+
+def _check_time_resolution(largest_s: float, rate_hz: float, t0_s: float) -> None:
+    """Refuse output times whose float64 spacing reaches half the output step: t_s would
+    repeat and step back."""
+    spacing = _time_spacing(largest_s)
+    if spacing >= 0.5 / rate_hz:
+        raise InputError(f"t_s could not increase: output times near {largest_s:.10g} s are "
+                         f"held to {spacing:.3g} s, at least half the output step "
+                         f"{1 / rate_hz:.3g} s at {rate_hz:g} Hz; shift the trace's times "
+                         f"(subtract its start, {t0_s:.10g} s) or lower --rate")
+
+
+def _time_resolution_warnings(largest_s: float, rate_hz: float) -> list[str]:
+    """The sentence for output times whose float64 spacing passes 1 % of the step."""
+    spacing = _time_spacing(largest_s)
+    if spacing <= 0.01 / rate_hz:
+        return []
+    return [f"output times near {largest_s:.10g} s are held to {spacing:.3g} s, "
+            f"{100 * spacing * rate_hz:.1f} % of the output step {1 / rate_hz:.3g} s: a step "
+            "of t_s may be off by up to that; shift the trace's times (subtract its start) "
+            "to keep them exact"]
 
 
 def _check_outputs_fit(out_dir: Path, source: TraceSource, pipeline, fmt: str, frames) -> None:

@@ -40,6 +40,7 @@ class Totals:
         self.modal_capped = 0
         self.off_structure = 0
         self.layer_clipped: dict[str, int] = {}
+        self.largest_time_s = 0.0  # the largest |t_s| of an output sample (s)
 
     def write(self, out, commands_um) -> None:
         self.clamps.add(out.clamps)
@@ -51,6 +52,8 @@ class Totals:
         self.limited += out.limited
         self.modal_capped += out.capped
         self.off_structure += out.off_structure
+        self.largest_time_s = max(self.largest_time_s, abs(float(out.t_s[0])),
+                                  abs(float(out.t_s[-1])))
         for name, n in out.layer_clipped.items():
             self.layer_clipped[name] = self.layer_clipped.get(name, 0) + n
 
