@@ -33,6 +33,7 @@ import numpy as np
 
 from frictex.app.engine.finger_slots import FingerSlots
 from frictex.app.engine.finger_table import MAX_LISTED
+from frictex.app.engine.summary import counted, were
 from frictex.device.friction import MIN_NORMAL_N
 from frictex.rendering.input.trace_file import UP, Trace, concat_traces, make_trace
 from frictex.rendering.tracking.tracks import apply_index
@@ -255,6 +256,22 @@ def _ups(ids: np.ndarray, t_s: float, before: Trace | None, last_xy: dict) -> Tr
                  np.full(ids.size, UP, dtype=np.int8))
 
 
+def _lone_ups(finger: np.ndarray, up: np.ndarray, down: set[int]) -> int:
+    """How many of the samples (in time order; ``up``: their up events) lift a finger
+    that is not touching. ``down``: the fingers touching before them, updated in place."""
+    order = np.argsort(finger, kind="stable")  # each finger's samples in time order
+    f, u = finger[order], up[order]
+    first = np.ones(f.size, dtype=bool)
+    first[1:] = f[1:] != f[:-1]
+    touching_before = np.empty(f.size, dtype=bool)
+    touching_before[1:] = ~u[:-1]
+    touching_before[first] = np.isin(f[first], np.fromiter(down, dtype=np.int64, count=len(down)))
+    last = np.append(first[1:], True)
+    for fid, lifts in zip(f[last].tolist(), u[last].tolist()):
+        (down.discard if lifts else down.add)(fid)
+    return int(np.count_nonzero(u & ~touching_before))
+
+
 class TraceStats:
     """What a summary says about a trace, gathered chunk by chunk.
 
@@ -300,6 +317,10 @@ class TraceStats:
         self.touch_box = np.array([np.inf, np.inf, -np.inf, -np.inf])
         self.touch_first_t = self.touch_last_t = None
         self._unchecked: list[tuple[np.ndarray, np.ndarray]] = []  # read before the area
+        #: up events of a finger not touching (nothing to lift); the fingers touching
+        #: after the samples read so far
+        self.lone_ups = 0
+        self._down: set[int] = set()
 
     def add(self, chunk: Trace) -> None:
         times = chunk.t_s if self.last_t is None else np.concatenate(([self.last_t], chunk.t_s))
@@ -315,6 +336,7 @@ class TraceStats:
         self.unpressed += int(np.count_nonzero(touching < MIN_NORMAL_N))
         self.least_force_n = float(np.min(touching, initial=self.least_force_n))
         self._add_positions(chunk.t_s[touch], chunk.x_mm[touch], chunk.y_mm[touch])
+        self.lone_ups += _lone_ups(chunk.finger, chunk.event == UP, self._down)
         self.fingers.update(chunk.fingers)
         self.first_t = float(chunk.t_s[0]) if self.first_t is None else self.first_t
         self.last_t = float(chunk.t_s[-1])
@@ -358,7 +380,15 @@ class TraceStats:
     def warnings(self, pressing: bool = True) -> list[str]:
         """What is wrong with the trace's touch samples, a line each: off the display, in
         metres (class docstring), or (``pressing``) not pressing."""
-        return self._off_display() + self._in_metres() + (self._unpressed() if pressing else [])
+        return (self._off_display() + self._in_metres() + self._lifting_nothing()
+                + (self._unpressed() if pressing else []))
+
+    def _lifting_nothing(self) -> list[str]:
+        if not self.lone_ups:
+            return []
+        n = self.lone_ups
+        return [f"trace: {counted(n, 'up event')} with no touch to lift (a finger with no "
+                f"down or move since its last up) {were(n)} ignored"]
 
     def _unpressed(self) -> list[str]:
         """A touch input that does not press, said in one line (none where at most

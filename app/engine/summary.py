@@ -83,8 +83,9 @@ class AmplitudeErrors:
 
     @staticmethod
     def _entry(n, sq, mx) -> dict:
-        return {"contact_samples": n, "amplitude_error_rms_um": (sq / n) ** 0.5 if n else 0.0,
-                "amplitude_error_max_um": float(mx)}
+        """A finger's entry; its errors None (null) with no contact sample to measure."""
+        return {"contact_samples": n, "amplitude_error_rms_um": (sq / n) ** 0.5 if n else None,
+                "amplitude_error_max_um": float(mx) if n else None}
 
     def report(self) -> dict:
         """{finger: {contact_samples, amplitude_error_rms_um, amplitude_error_max_um}} for
