@@ -50,7 +50,8 @@ def test_outputs_that_do_not_fit_name_the_format_argument_too(trace, tmp_path, m
 
     from frictex.app.engine import tables
     usage = namedtuple("usage", "total used free")
-    monkeypatch.setattr(tables.shutil, "disk_usage", lambda path: usage(10**9, 10**9, 1000))
+    monkeypatch.setattr(tables.shutil, "disk_usage", lambda path: usage(10**12, 0,
+                                                                     tables.RESERVE_BYTES + 100_000))
     with pytest.raises(frictex.OutputSpaceError, match=r"free some space, write elsewhere, or "
                                                        r"use --format parquet, "
                                                        r'format="parquet"$'):

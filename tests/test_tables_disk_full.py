@@ -80,9 +80,11 @@ def test_a_full_disk_at_the_summary_names_the_output_folder(tmp_path, monkeypatc
 
 def test_a_parquet_replay_refused_for_room_is_not_told_to_write_parquet(tmp_path, monkeypatch,
                                                                         capsys):
-    monkeypatch.setattr(shutil, "disk_usage", lambda path: shutil._ntuple_diskusage(
-        1 << 30, (1 << 30) - (1 << 20), 1 << 20))
-    for fmt in ("parquet", "csv"):
+    from frictex.app.engine import tables
+    for fmt, free in (("parquet", 1 << 20), ("csv", tables.RESERVE_BYTES + (1 << 20))):
+        # csv needs about 1.85 MB and is told of Parquet, which fits (643 kB); Parquet is not
+        monkeypatch.setattr(shutil, "disk_usage", lambda path, free=free: shutil._ntuple_diskusage(
+            1 << 40, 0, free))
         assert main(["replay", "grating-5mm", "swipe-40mms-50hz", "--out",
                      str(tmp_path / fmt), "--format", fmt, "--quiet"]) == 1
         err = capsys.readouterr().err

@@ -40,8 +40,8 @@ class ForceSummary:
 
     @staticmethod
     def _entry(n, sq, mx, unreachable, clicks, wmax) -> dict:
-        return {"contact_samples": n, "force_error_rms_n": (sq / n) ** 0.5 if n else 0.0,
-                "force_error_max_n": mx, "wanted_max_n": wmax,
+        return {"contact_samples": n, "force_error_rms_n": (sq / n) ** 0.5 if n else None,
+                "force_error_max_n": mx if n else None, "wanted_max_n": wmax if n else None,
                 "unreachable_samples": unreachable, "clicks": clicks}
 
     def report(self) -> dict | None:
