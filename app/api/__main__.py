@@ -1,5 +1,5 @@
 """``python -m frictex``: the ``frictex`` command."""
 
-from frictex.app.commands.cli import entry
+from frictex.app.commands.entry import entry
 
 entry()

@@ -15,9 +15,9 @@ What escapes a command decides its exit status (``frictex.device.errors``):
 - an ``OSError`` the system raised (a file, a port, the disk) is one line too: exit 1,
   or 2 where it names a file the user gave that does not exist or cannot be read;
 - an optional part of frictex that is not installed names the pip command (exit 1);
-- Ctrl-C is one line, ``frictex: interrupted``, exit 130, at any moment of the start-up
-  too (:class:`_StartupInterrupts`); a run's SIGTERM or SIGHUP
-  ``frictex: terminated by SIGTERM``, exit 128 + the signal;
+- Ctrl-C is one line, ``frictex: interrupted``, exit 130; SIGTERM or SIGHUP
+  ``frictex: terminated by SIGTERM``, exit 128 + the signal; at any moment of the
+  start-up too (``app.commands.entry``);
 - anything else is a bug in frictex: its traceback, then ``frictex: internal error:
   please report``, exit 70 (EX_SOFTWARE), never dressed as the user's mistake.
 
@@ -28,16 +28,14 @@ that came from a file cannot drive the terminal.
 from __future__ import annotations
 
 import argparse
-import atexit
 import errno
 import importlib
 import os
-import signal
 import sys
-import threading
 import traceback
-from typing import NoReturn
 
+from frictex.app.commands.entry import StartupSignals, report_signal
+from frictex.app.commands.entry import entry  # noqa: F401 - the console script (pyproject.toml)
 from frictex.app.engine.driver import Terminated
 from frictex.app.engine.heap import keep_freed_memory
 from frictex.device.errors import FrictexError, MissingExtra
@@ -118,63 +116,23 @@ def build_parser() -> tuple[argparse.ArgumentParser, dict[str, argparse.Argument
     return parser, subparsers
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run ``frictex`` with ``argv`` (default: sys.argv[1:]); return the exit code."""
-    with _StartupInterrupts() as interrupts:
-        keep_freed_memory()  # a replay's blocks would fault their pages in again every call
-        argv = sys.argv[1:] if argv is None else argv
-        parser, subparsers = build_parser()
-        name = next((a for a in argv if not a.startswith("-")), None)
-        environment = dict(os.environ)  # options such as --allow-outside set it for one run
-        try:
-            return _run(lambda: _command(parser, subparsers, name, argv), interrupts)
-        finally:
-            os.environ.clear()
-            os.environ.update(environment)
-
-
-class _StartupInterrupts:
-    """Ctrl-C at any moment of a command's start-up ends as ``frictex: interrupted``
-    (exit 130), never as an internal error.
-
-    A SIGINT raises KeyboardInterrupt in whatever Python code runs; inside a C
-    extension's import of numpy (``import_array``: pyarrow, numpy.linalg, numpy.random)
-    that code prints the KeyboardInterrupt's traceback (``PyErr_Print``, through
-    ``sys.excepthook``) and replaces it with ``ImportError: numpy._core.multiarray failed
-    to import``. While :func:`main` runs, SIGINT is recorded (``seen``) before it is
-    raised, ``sys.excepthook`` prints nothing for a KeyboardInterrupt (the one line comes
-    after), and :func:`_run` takes what a recorded SIGINT caused for the interrupt.
-    Commands that handle signals themselves (a run's ``deferred_interrupts``) put their
-    own handler in place for the run and this one back after it. In the main thread
-    only (signal handlers can be set nowhere else)."""
-
-    def __init__(self):
-        self.seen = False
-        self._handler = self._hook = None
-
-    def __enter__(self) -> "_StartupInterrupts":
-        if threading.current_thread() is threading.main_thread():
-            self._hook = sys.excepthook
-            sys.excepthook = self._quiet_interrupt
-            self._handler = signal.signal(signal.SIGINT, self._on_sigint)
-        return self
-
-    def __exit__(self, *exc) -> None:
-        if self._handler is not None:
-            signal.signal(signal.SIGINT, self._handler)
-            sys.excepthook = self._hook
-
-    def _on_sigint(self, signum, frame) -> None:
-        self.seen = True
-        raise KeyboardInterrupt
-
-    def _quiet_interrupt(self, kind, value, tb) -> None:
-        if not issubclass(kind, KeyboardInterrupt):
-            self._hook(kind, value, tb)
-
-    def caused(self, exc: BaseException) -> bool:
-        """Whether ``exc``, which would be an internal error, came of a recorded SIGINT."""
-        return self.seen and not isinstance(exc, (FrictexError, OSError, SystemExit))
+def main(argv: list[str] | None = None, startup: StartupSignals | None = None) -> int:
+    """Run ``frictex`` with ``argv`` (default: sys.argv[1:]); return the exit code.
+    ``startup``: the signal handling already in place (``entry``'s); None: main puts its
+    own in place for the call."""
+    if startup is None:
+        with StartupSignals() as startup:
+            return main(argv, startup)
+    keep_freed_memory()  # a replay's blocks would fault their pages in again every call
+    argv = sys.argv[1:] if argv is None else argv
+    parser, subparsers = build_parser()
+    name = next((a for a in argv if not a.startswith("-")), None)
+    environment = dict(os.environ)  # options such as --allow-outside set it for one run
+    try:
+        return _run(lambda: _command(parser, subparsers, name, argv), startup)
+    finally:
+        os.environ.clear()
+        os.environ.update(environment)
 
 
 def _command(parser, subparsers, name: str | None, argv: list[str]) -> int:
@@ -190,22 +148,20 @@ def _command(parser, subparsers, name: str | None, argv: list[str]) -> int:
     return module.run(args)
 
 
-def _run(command, interrupts: _StartupInterrupts | None = None) -> int:
+def _run(command, startup: StartupSignals) -> int:
     """``command()`` (a subcommand's import, parsing and run), with what escapes it
-    sorted as the module docstring says (what a SIGINT that ``interrupts`` recorded
-    caused, as Ctrl-C)."""
+    sorted as the module docstring says (what a signal that ``startup`` saw caused, as
+    that signal)."""
     try:
         return int(command() or 0)
     except BrokenPipeError:  # output piped into e.g. head, which stopped reading
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except KeyboardInterrupt:
-        print("frictex: interrupted", file=sys.stderr)
-        return 130
+        return report_signal(startup.signum)
     except BaseException as exc:  # noqa: BLE001 - sorted into the kinds below
-        if interrupts is not None and interrupts.caused(exc):
-            print("frictex: interrupted", file=sys.stderr)
-            return 130
+        if startup.caused(exc):
+            return report_signal(startup.signum)
         return report_error(exc)
 
 
@@ -230,29 +186,6 @@ def report_error(exc: BaseException) -> int:
     for line in getattr(exc, "error_lines", None) or (str(exc),):  # a manifest's: each
         print(f"frictex: error: {printable(line)}", file=sys.stderr)
     return code
-
-
-def entry() -> NoReturn:
-    """The ``frictex`` console script: :func:`main`, then the process ends.
-
-    Once the command has returned (its outputs committed and closed), the atexit handlers
-    run and the standard streams are flushed, but the interpreter's teardown is skipped:
-    unloading numba's and scipy's modules object by object took 0.24 s of CPU after a
-    one-second replay (alternated pairs of whole processes under ``/usr/bin/time``), a
-    quarter of what the user waits for.
-    A thread still running gets the ordinary exit, which waits for it.
-    """
-    try:
-        code = main()
-    except KeyboardInterrupt:  # in the command's imports, before main's own handler
-        print("frictex: interrupted", file=sys.stderr)
-        code = 130
-    if threading.active_count() > 1:
-        sys.exit(code)
-    atexit._run_exitfuncs()
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(code)
 
 
 if __name__ == "__main__":
