@@ -211,12 +211,12 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
                              f"{type(faults).__name__}")
         from frictex.device.link.faults import parse_faults
         faults = parse_faults(faults)
+    if format is not None and format not in FORMATS:  # a bad name first, out or not
+        raise InputError(f"format {format!r}: expected one of {', '.join(FORMATS)}")
     if out is None and format is not None:
         raise InputError(f"format {format!r}: the tables are kept in memory unless out names "
                          "a folder to write them into")
     fmt = MEMORY if out is None else format or "csv"
-    if fmt not in (MEMORY, *FORMATS):
-        raise InputError(f"format {format!r}: expected one of {', '.join(FORMATS)}")
     options = ReplayOptions(rate_hz=rate_hz, fmt=fmt, block_size=block_size,
                             render_override=renderer, device=device, faults=faults,
                             control=control, strict=flag("strict", strict),
