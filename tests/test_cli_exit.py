@@ -1,4 +1,4 @@
-"""The console script's exit (``app.commands.cli.entry``): the exit code of ``main``,
+"""The console script's exit (``app.commands.entry.entry``): the exit code of ``main``,
 atexit handlers run, output flushed, and a thread still running waited for; only the
 interpreter's teardown is skipped."""
 
@@ -17,11 +17,11 @@ def _python(code: str, *args: str) -> subprocess.CompletedProcess:
 def test_entry_runs_atexit_handlers_and_flushes_what_was_printed():
     done = _python("""
         import atexit, sys
-        from frictex.app.commands import cli
+        from frictex.app.commands import entry
         atexit.register(lambda: print("handler ran"))
         sys.argv = ["frictex", "library"]
         print("before", end="")  # unflushed: no newline, stdout a pipe
-        cli.entry()
+        entry.entry()
         """)
     assert done.returncode == 0, done.stderr
     assert done.stdout.startswith("before") and "grating-5mm" in done.stdout
@@ -43,14 +43,14 @@ def test_entry_waits_for_a_thread_still_running(tmp_path):
     done = _python("""
         import sys, threading, time
         from pathlib import Path
-        from frictex.app.commands import cli
+        from frictex.app.commands import entry
         mark = Path(sys.argv[1])
         def late():
             time.sleep(0.3)
             mark.write_text("done")
         threading.Thread(target=late).start()
         sys.argv = ["frictex", "library"]
-        cli.entry()
+        entry.entry()
         """, str(mark))
     assert done.returncode == 0, done.stderr
     assert mark.read_text() == "done"
@@ -60,13 +60,13 @@ def _run_raising(exc_source: str) -> subprocess.CompletedProcess:
     """``frictex library`` whose run raises what ``exc_source`` builds."""
     return _python(f"""
         import sys
-        from frictex.app.commands import cli, library
+        from frictex.app.commands import entry, library
         from frictex.device import errors
         def run(args):
             raise {exc_source}
         library.run = run
         sys.argv = ["frictex", "library"]
-        cli.entry()
+        entry.entry()
         """)
 
 
@@ -114,9 +114,9 @@ def test_an_option_that_sets_the_environment_sets_it_for_its_run_only(tmp_path, 
 def test_version_prints_the_installed_version_on_stdout_and_exits_0():
     done = _python("""
         import sys
-        from frictex.app.commands import cli
+        from frictex.app.commands import entry
         sys.argv = ["frictex", "--version"]
-        cli.entry()
+        entry.entry()
         """)
     from importlib.metadata import version
     assert (done.returncode, done.stdout, done.stderr) == (0, f"frictex {version('frictex')}\n", "")

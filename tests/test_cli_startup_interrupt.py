@@ -38,7 +38,7 @@ CHILD = textwrap.dedent("""
                 raise ImportError("numpy._core.multiarray failed to import")
 
     sys.meta_path.insert(0, SigintDuringImport())
-    from frictex.app.commands.cli import entry
+    from frictex.app.commands.entry import entry
     entry()
 """)
 

@@ -34,8 +34,7 @@ import os
 import sys
 import traceback
 
-from frictex.app.commands.entry import StartupSignals, report_signal
-from frictex.app.commands.entry import entry  # noqa: F401 - the console script (pyproject.toml)
+from frictex.app.commands.startup_signals import StartupSignals, report_signal
 from frictex.app.engine.driver import Terminated
 from frictex.app.engine.heap import keep_freed_memory
 from frictex.device.errors import FrictexError, MissingExtra
@@ -186,7 +185,3 @@ def report_error(exc: BaseException) -> int:
     for line in getattr(exc, "error_lines", None) or (str(exc),):  # a manifest's: each
         print(f"frictex: error: {printable(line)}", file=sys.stderr)
     return code
-
-
-if __name__ == "__main__":
-    entry()

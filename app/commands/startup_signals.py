@@ -1,0 +1,75 @@
+"""Signals during a command's start-up (see ``app.commands.entry``, which puts
+:class:`StartupSignals` in place before the command line is imported, and ``cli.main``,
+which reports them)."""
+
+from __future__ import annotations
+
+import signal
+import sys
+import threading
+
+from frictex.app.engine.driver import HELD_SIGNALS, Terminated
+from frictex.device.errors import FrictexError
+
+
+def report_signal(signum: int | None) -> int:
+    """Print the one line for a signal that ended the command (None: a Ctrl-C that came
+    as a KeyboardInterrupt); return its exit status."""
+    if signum in (None, signal.SIGINT):
+        print("frictex: interrupted", file=sys.stderr)
+        return 130
+    ended = Terminated(signum)
+    print(f"frictex: {ended.reason}", file=sys.stderr)
+    return ended.code
+
+
+class StartupSignals:
+    """Within: SIGINT, SIGTERM and SIGHUP (``driver.HELD_SIGNALS``) during a command's
+    start-up raise KeyboardInterrupt, the first one's number kept in ``signum``; the
+    caller ends with :func:`report_signal`. A signal the process ignores (``nohup``)
+    stays ignored.
+
+    Each raises KeyboardInterrupt, SIGTERM's too: inside a C extension's import of numpy
+    (``import_array``: pyarrow, numpy.linalg, numpy.random) the exception is printed
+    (``PyErr_Print``, through ``sys.excepthook``) and replaced with ``ImportError:
+    numpy._core.multiarray failed to import``, and a SystemExit printed there ends the
+    process on the spot, without the line. Within, ``sys.excepthook`` prints nothing for
+    a KeyboardInterrupt (the one line comes after) and :meth:`caused` tells what a signal
+    caused. Commands that handle signals themselves (a run's ``deferred_interrupts``) put
+    their own handlers in place for the run and these back after it. In the main thread
+    only (signal handlers can be set nowhere else)."""
+
+    def __init__(self):
+        self.signum: int | None = None
+        self._handlers: dict[int, object] = {}
+        self._hook = None
+
+    def __enter__(self) -> "StartupSignals":
+        if threading.current_thread() is threading.main_thread():
+            self._hook = sys.excepthook
+            sys.excepthook = self._quiet_interrupt
+            for sig in HELD_SIGNALS:
+                handler = signal.getsignal(sig)
+                if handler is not signal.SIG_IGN:
+                    self._handlers[sig] = signal.signal(sig, self._on_signal)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        for sig, handler in self._handlers.items():
+            signal.signal(sig, handler)
+        if self._hook is not None:
+            sys.excepthook = self._hook
+
+    def _on_signal(self, signum, frame) -> None:
+        if self.signum is None:
+            self.signum = signum
+        raise KeyboardInterrupt
+
+    def _quiet_interrupt(self, kind, value, tb) -> None:
+        if not issubclass(kind, KeyboardInterrupt):
+            self._hook(kind, value, tb)
+
+    def caused(self, exc: BaseException) -> bool:
+        """Whether ``exc``, which would be an internal error, came of a signal seen."""
+        return self.signum is not None and not isinstance(
+            exc, (FrictexError, OSError, SystemExit))
