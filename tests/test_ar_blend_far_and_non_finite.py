@@ -5,7 +5,6 @@ huge squared distances picked ((50 mm/s, 1e9 N) took the vertex at 0 mm/s)."""
 
 import numpy as np
 import pytest
-from numpy.testing import assert_allclose
 
 from frictex.rendering.layers.ar_texture import ArTextureRenderer
 from frictex.textures.hatt import model_from_coefficients

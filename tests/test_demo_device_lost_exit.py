@@ -5,8 +5,6 @@ back by the end, or when more than --max-unplayed of the commanded samples never
 
 import json
 
-import pytest
-
 from frictex.app.commands.cli import main
 from frictex.app.commands.demo import device_problem
 
