@@ -11,10 +11,11 @@ from frictex.app.commands.demo import device_problem
 LOST = "SerialException: device unplugged"
 
 
-def link(unplayed=0, disconnects=0, reconnects=0, state="closed"):
+def link(unplayed=0, disconnects=0, reconnects=0, state="closed", skipped=0):
     return {"state": state, "disconnects": disconnects, "reconnects": reconnects,
             "last_error": LOST if disconnects else None, "commanded_samples": 1000,
-            "unplayed_samples": unplayed}
+            "unplayed_samples": unplayed,
+            "unplayed_by_cause": {"skipped": skipped, "disconnected": unplayed - skipped}}
 
 
 def test_a_link_lost_and_not_back_is_a_problem():
@@ -26,7 +27,16 @@ def test_a_link_lost_and_back_is_judged_by_what_it_played():
     assert device_problem(link(unplayed=50, disconnects=2, reconnects=2), 0.1) is None
     assert device_problem(link(unplayed=150, disconnects=2, reconnects=2), 0.1) == (
         "15.00% of the commanded samples never played on the device (limit 10.00%, "
-        "--max-unplayed)")
+        "--max-unplayed; skipped not counted)")
+
+
+def test_the_blocks_a_live_link_skipped_to_catch_up_are_not_counted():
+    """A loaded machine's haptic thread falls behind and the link skips blocks to catch up
+    (20 % of a 2 s run here): the demo did what a live demo does, and exits 0."""
+    assert device_problem(link(unplayed=250, skipped=200), 0.1) is None
+    assert device_problem(link(unplayed=250, skipped=100), 0.1) == (
+        "15.00% of the commanded samples never played on the device (limit 10.00%, "
+        "--max-unplayed; skipped not counted)")
 
 
 def test_no_device_is_no_problem():

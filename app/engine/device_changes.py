@@ -94,15 +94,20 @@ def _uncounted(status: dict) -> list[str]:
     return said
 
 
-def unplayed_problem(status: dict | None, max_unplayed: float, option: str) -> str | None:
+def unplayed_problem(status: dict | None, max_unplayed: float, option: str,
+                     excused: tuple[str, ...] = ()) -> str | None:
     """Why a run streaming to a device failed, if the device (``status``, the summary's
-    ``device``) never played more than ``max_unplayed`` of the commanded samples; None if
-    it played enough or there was no device. ``option`` names the limit in the message."""
+    ``device``) never played more than ``max_unplayed`` of the commanded samples, those of
+    the ``excused`` causes (``unplayed_by_cause``) not counted; None if it played enough or
+    there was no device. ``option`` names the limit in the message."""
     if status is None or not status.get("commanded_samples"):
         return None
-    lost = status["unplayed_samples"] / status["commanded_samples"]
+    causes = status.get("unplayed_by_cause", {})
+    unplayed = status["unplayed_samples"] - sum(causes.get(cause, 0) for cause in excused)
+    lost = unplayed / status["commanded_samples"]
     if lost <= max_unplayed:
         return None
+    left_out = f"; {', '.join(excused)} not counted" if excused else ""
     return (f"{lost:.2%} of the commanded samples never played on the device (limit "
-            f"{max_unplayed:.2%}, {option})")
+            f"{max_unplayed:.2%}, {option}{left_out})")
 
