@@ -108,8 +108,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--renderer", choices=offered_render_modes(), default=None,
                         help="start with every periodic layer rendered this way (R cycles it live)")
     add_link_arguments(parser)
-    add_max_unplayed(parser, MAX_UNPLAYED, "; a link lost and not back by the end exits 1 "
-                                           "as well")
+    add_max_unplayed(parser, MAX_UNPLAYED, "; the blocks a live link skips to catch up not "
+                                           "counted; a link lost and not back by the end "
+                                           "exits 1 as well")
     parser.add_argument("--rate", type=output_rate, default=10_000.0, metavar="HZ",
                         help="output sample rate (default 10000 Hz)")
     parser.add_argument("--block", type=positive_int, default=None, metavar="N",
