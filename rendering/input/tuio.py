@@ -33,8 +33,9 @@ and ``fseq``: :func:`is_tuio_frame`), its address and port, so that another proc
 the same host cannot join in. Until a sender is accepted, datagrams that are not such a
 frame claim nothing: stray traffic cannot lock the tablet out. Deciding costs little
 whatever a stranger sends: a datagram over :data:`MAX_CLAIM_BYTES`, or not starting as a
-2Dcur bundle, is refused from its first bytes, and each address has one datagram parsed
-at most every :data:`CLAIM_INTERVAL_S`. Datagrams from anyone
+2Dcur bundle, is refused from its first bytes, and each sender (address and port) has one
+datagram parsed at most every :data:`CLAIM_INTERVAL_S`, so that one process's junk does
+not delay another's claim. Datagrams from anyone
 else, and those unclaiming ones, are dropped and counted (``refused``). Listening beyond
 loopback with no sender named, :func:`exposure_warning` gives the line a command prints.
 
@@ -103,10 +104,10 @@ MAX_QUEUED_S = 0.1
 #: refusing a 64 kB bundle of 5,400 messages (10 ms of parsing) costs the haptic process
 #: no more than refusing a frame
 MAX_CLAIM_BYTES = 4096
-#: one claim parse per sender address at most this often (s); the datagrams of that
-#: address in between are refused unparsed (a 60 Hz tablet's first frame claims at once)
+#: one claim parse per sender (address and port) at most this often (s); the datagrams of
+#: that sender in between are refused unparsed (a 60 Hz tablet's first frame claims at once)
 CLAIM_INTERVAL_S = 0.05
-#: most addresses whose last claim parse is remembered; beyond, the memory starts afresh
+#: most senders whose last claim parse is remembered; beyond, the memory starts afresh
 _CLAIM_ADDRESSES = 1024
 _CUR_ADDRESS = b"/tuio/2Dcur\0"
 _FIRST_ADDRESS = 20  # "#bundle\0", an 8-byte time tag, the first element's 4-byte size
@@ -499,19 +500,22 @@ class SenderGate:
         self.sender: tuple[str, int] | None = None
         self.takeovers = 0
         self._last_t = -math.inf
-        self._claim_t: dict[str, float] = {}  # address: when its last claim was parsed (s)
+        # (address, port): when its last claim was parsed (s)
+        self._claim_t: dict[tuple[str, int], float] = {}
 
-    def _claims(self, address: str, t_s: float, data: bytes) -> bool:
-        """Whether ``data`` from ``address`` at ``t_s`` (s) claims the input: a TUIO frame
-        (:func:`is_tuio_frame`), parsed at most once per :data:`CLAIM_INTERVAL_S` for
-        each address; any other datagram, and one in between, is refused unparsed."""
+    def _claims(self, sender: tuple[str, int], t_s: float, data: bytes) -> bool:
+        """Whether ``data`` from ``sender`` (address, port) at ``t_s`` (s) claims the
+        input: a TUIO frame (:func:`is_tuio_frame`), parsed at most once per
+        :data:`CLAIM_INTERVAL_S` for each address and port, so that one process's junk
+        never delays another's claim (on loopback every process is 127.0.0.1); any other
+        datagram, and one in between, is refused unparsed."""
         if not may_be_tuio_frame(data):
             return False
-        if t_s - self._claim_t.get(address, -math.inf) < CLAIM_INTERVAL_S:
+        if t_s - self._claim_t.get(sender, -math.inf) < CLAIM_INTERVAL_S:
             return False
         if len(self._claim_t) >= _CLAIM_ADDRESSES:
             self._claim_t.clear()
-        self._claim_t[address] = t_s
+        self._claim_t[sender] = t_s
         return is_tuio_frame(data)
 
     def admit(self, address: str, port: int, t_s: float, data: bytes) -> str | None:
@@ -526,7 +530,7 @@ class SenderGate:
             return "same"
         if t_s - self._last_t < self.silence_s:
             return None  # another port or sender while the served one speaks
-        if named is None and not self._claims(address, t_s, data):
+        if named is None and not self._claims((address, port), t_s, data):
             return None
         self.takeovers += self.sender is not None
         self.sender, self._last_t = (address, port), t_s
