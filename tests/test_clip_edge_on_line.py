@@ -52,3 +52,23 @@ def test_a_crossing_through_the_line_fires_once_on_the_far_side(xs):
 @pytest.mark.parametrize("xs", [[89.0, 91.0], [91.0, 89.0]], ids=["up", "down"])
 def test_a_crossing_over_the_line_fires_on_the_first_sample_past_it(xs):
     assert _fired_at(xs) == [1]
+
+
+@pytest.mark.parametrize("angle_deg", [0.0, 90.0, 180.0, 270.0, 30.0, 135.0])
+def test_the_line_is_the_line_at_every_angle(angle_deg):
+    """At 90 and 180 degrees cos and sin round to 6e-17 and 1.2e-16, not 0: a finger on
+    the line was on the normal's side and fired twice reaching it and going back."""
+    layer = _layer(TICK, "edge", x_mm=LINE_X, y_mm=30.0, angle_deg=angle_deg)
+    a = np.radians(angle_deg)
+    normal, along = np.array([np.cos(a), np.sin(a)]), np.array([-np.sin(a), np.cos(a)])
+    # off the line by -1, -0.5, 0, -0.5, -1 mm, sliding along it
+    offsets = np.array([-1.0, -0.5, 0.0, -0.5, -1.0])
+    points = (np.array([LINE_X, 30.0]) + offsets[:, None] * normal
+              + np.arange(5)[:, None] * 0.3 * along)
+    sides = layer.side(points[:, 0], points[:, 1]).tolist()
+    assert sides == [-1, -1, 0, -1, -1], sides
+    x, y = points[None, :, 0], points[None, :, 1]
+    ones = np.ones_like(x, dtype=bool)
+    got, _ = _fired(TRIGGER_CODES["edge"], ones, np.zeros_like(x, np.int64), ones,
+                    layer.side(x, y), np.array([FingerPrev(1, 0, 1, 0)], dtype=np.int64))
+    assert not got.any()

@@ -156,8 +156,9 @@ class ClipLayer(DynamicLayer):
 
     def side(self, x, y) -> np.ndarray:
         """int8, the side of the edge line (``edge`` trigger) at positions x, y (mm,
-        broadcast together): +1 on the side the normal points to, -1 on the other, 0
-        exactly on the line (a finger there has crossed nothing yet)."""
+        broadcast together): +1 on the side the normal points to, -1 on the other, 0 on
+        the line, within :data:`ON_LINE_MM` of it (a finger there has crossed nothing
+        yet; the tolerance takes up the rounding of the normal, cos 90 deg being 6e-17)."""
         a = math.radians(self.angle_deg)
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
         if x.shape != y.shape:
@@ -166,13 +167,19 @@ class ClipLayer(DynamicLayer):
         return _side(x.ravel(), y.ravel(), line).reshape(x.shape)
 
 
+#: distance (mm) from an edge line within which a position is on it: a picometre, far
+#: under any touch screen's resolution and far over the rounding of a position's distance
+ON_LINE_MM = 1e-9
+
+
 @njit(cache=True, nogil=True)
 def _side(x, y, line):
     """(m,) int8: the sign (+1, 0, -1) of nx (x - x0) + ny (y - y0) at positions (x, y)
-    (mm, (m,)) for the line through (x0, y0) with unit normal (nx, ny), ``line``; one pass."""
+    (mm, (m,)) for the line through (x0, y0) with unit normal (nx, ny), ``line``, 0 within
+    :data:`ON_LINE_MM`; one pass."""
     x0, y0, nx, ny = line
     out = np.empty(x.size, dtype=np.int8)
     for i in range(x.size):
         d = nx * (x[i] - x0) + ny * (y[i] - y0)
-        out[i] = 1 if d > 0.0 else (-1 if d < 0.0 else 0)
+        out[i] = 1 if d > ON_LINE_MM else (-1 if d < -ON_LINE_MM else 0)
     return out

@@ -6,7 +6,7 @@ finger row at a time against its previous sample (carried between blocks in the 
 - down: touching now, and not before or under another touch id;
 - lift: touching before, and not now or under another touch id (position: before);
 - edge: the same touch strictly on the other side of the edge line than its last sample
-  off the line (a sample exactly on the line keeps the side it came from, so reaching the
+  off the line (a sample on the line (within a picometre) keeps the side it came from, so reaching the
   line and going back fires nothing, from either side);
 - force: the same touch, normal force at or above the threshold now and below before.
 
