@@ -26,7 +26,7 @@ def _replay(tmp_path, t0, out):
 
 def test_times_that_cannot_step_by_one_sample_are_refused_before_writing(tmp_path, capsys):
     t0 = 9999999000.0
-    assert np.spacing(t0) >= 0.5 / RATE  # independent: a step of t_s would repeat
+    assert np.spacing(t0) > 1 / RATE  # independent: a step of t_s would repeat
     out = tmp_path / "out"
     assert _replay(tmp_path, t0, out) == 2
     err = capsys.readouterr().err.strip().splitlines()
@@ -56,3 +56,14 @@ def test_times_near_zero_are_not_warned(tmp_path):
     assert _replay(tmp_path, 0.0, out) == 0
     doc = json.loads((out / "summary.json").read_text())
     assert not [w for w in doc["warnings"] if "output step" in w]
+
+
+def test_times_held_to_under_a_step_still_increase_and_are_warned(tmp_path, capsys):
+    """Spacing 0.95 of a step (t near 5e9 s at 1 MHz): every t_s still passes the one
+    before (steps of 0.95 or 1.9 us), so the run is warned of, not refused."""
+    out = tmp_path / "out"
+    assert _replay(tmp_path, 5e9, out) == 0
+    t_s = np.load(out / "commands.npz")["t_s"]
+    assert 0.5 / RATE < np.spacing(t_s.max()) < 1 / RATE
+    assert (np.diff(t_s) > 0).all()
+    assert "of the output step" in capsys.readouterr().err

@@ -3,8 +3,8 @@ one ``ReplayOptions.clock`` names: ``wall`` paces it in real time).
 
 The output clock starts at the trace's first sample (t_s of output sample k is
 t0 + k / rate) and runs until the block after the last sample. t_s is float64: a run
-whose largest output time has a spacing of half a step or more (1e10 s at 1 MHz) is
-refused, one past 1 % of a step (a Unix-time start at 1 MHz: 24 %) warned. The trace is read and
+whose largest output time has a spacing over a step (1e10 s at 1 MHz), where t_s would
+repeat, is refused, one past 1 % of a step (a Unix-time start at 1 MHz: 24 %) warned. The trace is read and
 the outputs written in chunks, so memory stays bounded however long the trace (an hour
 at 10 kHz is 36 million command rows). Each pipeline call runs ``chunk_blocks`` blocks
 (by default about :data:`CHUNK_SAMPLES` finger-samples: fewer calls, arrays that still fit
@@ -449,12 +449,12 @@ def _time_spacing(largest_s: float) -> float:
 
 
 def _check_time_resolution(largest_s: float, rate_hz: float, t0_s: float) -> None:
-    """Refuse output times whose float64 spacing reaches half the output step: t_s would
-    repeat and step back."""
+    """Refuse output times whose float64 spacing passes the output step: t_s would repeat
+    (up to a step, each rounded t0 + k / rate still passes the one before)."""
     spacing = _time_spacing(largest_s)
-    if spacing >= 0.5 / rate_hz:
+    if spacing > 1.0 / rate_hz:
         raise InputError(f"t_s could not increase: output times near {largest_s:.10g} s are "
-                         f"held to {spacing:.3g} s, at least half the output step "
+                         f"held to {spacing:.3g} s, more than the output step "
                          f"{1 / rate_hz:.3g} s at {rate_hz:g} Hz; shift the trace's times "
                          f"(subtract its start, {t0_s:.10g} s) or lower --rate")
 
