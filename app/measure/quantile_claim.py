@@ -9,7 +9,7 @@ ranks are l, the smallest k with F(k) >= 2.5 %, and u, one more than the smalles
 F(k) >= 97.5 %: at least 95 % coverage (the interval from order statistics, e.g. Conover,
 Practical Nonparametric Statistics, 3rd ed., section 3.2). Of 2,000 blocks the p99's
 interval runs from the 1,971st to the 1,989th smallest. Where u > n (too few samples:
-under 367 for the p99, where q^n, all n below the quantile, is over 2.5 %) the interval
+367 or fewer for the p99, where q^n, all n below the quantile, is over 2.5 %) the interval
 has no upper end.
 
 The verdict is worded as a ratio target's (``app.measure.ratio_claim``): **holds** where
@@ -75,12 +75,16 @@ class QuantileClaim:
                       self.value, f"{unit} ({self.interval_text(unit)}): {self.verdict}")
 
     def interval_text(self, unit: str) -> str:
-        """The interval's ends and the ranks they are, or which end there is none of."""
-        l, u = self.ranks
-        ends = [end_text(end, self.bound) if math.isfinite(end) else "none"
-                for end in (self.low, self.high)]
-        return (f"95 % interval {ends[0]} to {ends[1]} {unit}, order statistics {l:,} and "
-                f"{u:,} of {self.n:,}")
+        """The interval's ends and the ranks they are; an end there are too few samples
+        for is said so, without a rank."""
+        (low, high), (l, u) = (self.low, self.high), self.ranks
+        if math.isfinite(low) and math.isfinite(high):
+            return (f"95 % interval {end_text(low, self.bound)} to {end_text(high, self.bound)} "
+                    f"{unit}, order statistics {l:,} and {u:,} of {self.n:,}")
+        if math.isfinite(low):
+            return (f"95 % interval from {end_text(low, self.bound)} {unit}, order statistic "
+                    f"{l:,} of {self.n:,}; too few samples for an upper end")
+        return f"no 95 % interval: too few samples ({self.n:,})"
 
 
 def quantile_claim(samples, q: float, bound: float) -> QuantileClaim:

@@ -99,7 +99,8 @@ def ratio_claim(ratios: list[float], target: float, at_most: bool) -> RatioClaim
 
 
 def time_claim(seconds: list[float], bound_s: float) -> RatioClaim:
-    """What runs taking ``seconds`` each (> 0) show about "each run at most ``bound_s``":
-    their geometric mean and its 95 % interval against the bound, as :func:`ratio_claim`
+    """What runs taking ``seconds`` each (> 0) show about "a run takes at most
+    ``bound_s``", judged on their geometric mean (not on each run: one slow run of many
+    can pass): its 95 % interval against the bound, as :func:`ratio_claim`
     judges a ratio against its target (its figure: ``figure(..., unit=" s", of="runs")``)."""
     return ratio_claim(seconds, bound_s, at_most=True)
