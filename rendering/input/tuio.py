@@ -47,10 +47,13 @@ TuioServer, when nothing moves, still resends its state every ``update_interval`
 reference server's idle resend with half a second to spare, 45 to 90 frames of a
 sender that keeps its frame rate) has gone: its cursors are lifted (UP at the time the
 silence was seen) and its frame numbers forgotten, and the listener says so once on
-stderr (``TUIO: no message from HOST:PORT for 1.5 s: lifted N fingers``). One sender is
-served at a time (:class:`SenderGate`): the first, and after it has been silent for
-:data:`SILENCE_S`, the first sender of a TUIO frame after that (a restarted tracker on a
-new port, another tablet); while it speaks, every other sender is refused, however much
+stderr (``TUIO: no message from HOST:PORT for 1.5 s: lifted N fingers``). Silence is
+judged by the clock, but a sender with a TUIO frame (:func:`may_be_tuio_frame`) still
+queued is not silent, however late the polling thread is: a backlog of frames never lifts
+a finger only to press it again; one of other datagrams does not keep it pressed. One
+sender is served at a time (:class:`SenderGate`): the first, and after it has been silent
+for :data:`SILENCE_S`, the first sender of a TUIO frame after that (a restarted tracker on
+a new port, another tablet); while it speaks, every other sender is refused, however much
 it sends. Within the served sender, each ``source`` name falls silent on its own.
 """
 
@@ -64,7 +67,7 @@ import struct
 import sys
 import threading
 import time
-from typing import Callable
+from typing import Callable, Container
 
 from frictex.rendering.input.evdev_decode import AxisMap, RawSample, ScreenMap, TouchSample
 from frictex.device.errors import InputError
@@ -270,10 +273,12 @@ class TuioDecoder:
         else:
             self.over_limit += 1
 
-    def expire(self, t_s: float, silence_s: float = SILENCE_S
+    def expire(self, t_s: float, silence_s: float = SILENCE_S,
+               speaking: Container[str] = ()
                ) -> tuple[list[RawSample], list[tuple[str, str, int]]]:
-        """Forget every source whose last frame is ``silence_s`` s or more before ``t_s``:
-        an UP sample at ``t_s`` for each of its cursors, its frame number and alive list
+        """Forget every source whose last frame is ``silence_s`` s or more before ``t_s``
+        and whose origin is not ``speaking`` (a frame of its is yet to be fed): an UP
+        sample at ``t_s`` for each of its cursors, its frame number and alive list
         dropped (a restarted sender starts afresh). Returns the samples and, for each
         source that had cursors touching, (origin, source, how many were lifted). Commands
         that have waited ``silence_s`` s for an ``fseq`` are dropped too."""
@@ -283,7 +288,7 @@ class TuioDecoder:
             if t_s - since >= silence_s:
                 self._take_pending(source)
         for source, (last, origin) in list(self._heard.items()):
-            if t_s - last < silence_s:
+            if t_s - last < silence_s or origin in speaking:
                 continue
             del self._heard[source]
             self._fseq.pop(source, None)
@@ -551,9 +556,10 @@ class TuioListener:
     it moves. Malformed packets are counted in ``bad_packets`` (last
     message in ``last_error``), never raised. Datagrams that :class:`SenderGate` refuses
     (another sender while the served one speaks; before one is served, or after it fell
-    silent, those that are not a TUIO frame) are counted in ``refused``. A source silent for ``silence_s`` s by the
-    clock has its cursors lifted at the next :meth:`poll`, said once through ``warn``,
-    however many datagrams are queued.
+    silent, those that are not a TUIO frame) are counted in ``refused``. A source silent
+    for ``silence_s`` s by the clock, with no datagram of its sender that may be a TUIO
+    frame (:func:`may_be_tuio_frame`) still queued, has its cursors lifted at the next
+    :meth:`poll`, said once through ``warn``, however many other datagrams are queued.
 
     Parameters
     ----------
@@ -584,8 +590,12 @@ class TuioListener:
         self.last_error: str | None = None
         self._clock = clock
         self._warn = warn if warn is not None else _to_stderr
-        # (arrival t, queued t, datagram, origin)
-        self._queue: queue.Queue[tuple[float, float, bytes, str]] = queue.Queue(max_packets)
+        # (arrival t, queued t, datagram, origin, whether it may be a TUIO frame)
+        self._queue: queue.Queue[tuple[float, float, bytes, str, bool]] = queue.Queue(max_packets)
+        # origin: how many of its datagrams that may be a TUIO frame are queued (never
+        # fewer than there are: counted before they are queued, uncounted once taken)
+        self._queued_frames: dict[str, int] = {}
+        self._queued_frames_lock = threading.Lock()
         self._ready = threading.Event()
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
@@ -625,12 +635,42 @@ class TuioListener:
         """Queue datagram ``data`` from ``origin`` received at ``t`` (s) at ``now`` (s), or
         count it dropped when the queue is full; counted in ``datagrams`` only then, so
         that a reader who sees the count can :meth:`poll` the datagram."""
+        frame = may_be_tuio_frame(data)
+        self._count_queued_frame(origin, frame)
         try:
-            self._queue.put_nowait((t, now, data, origin))
+            self._queue.put_nowait((t, now, data, origin, frame))
         except queue.Full:
+            self._count_queued_frame(origin, -frame)
             self.dropped += 1
         self._ready.set()
         self.datagrams += 1
+
+    def _take(self) -> tuple[float, float, bytes, str, bool] | None:
+        """The oldest queued datagram (as queued), no longer counted queued; None if none."""
+        try:
+            item = self._queue.get_nowait()
+        except queue.Empty:
+            return None
+        self._count_queued_frame(item[3], -item[4])
+        return item
+
+    def _count_queued_frame(self, origin: str, change: int) -> None:
+        """Add ``change`` to how many datagrams of ``origin`` that may be a TUIO frame are
+        queued (between the receiving thread and the polling one)."""
+        if not change:
+            return
+        with self._queued_frames_lock:
+            count = self._queued_frames.get(origin, 0) + change
+            if count:
+                self._queued_frames[origin] = count
+            else:
+                del self._queued_frames[origin]
+
+    def _speaking(self) -> set[str]:
+        """The origins with a datagram that may be a TUIO frame still queued: not silent,
+        whatever the clock says, as that frame may keep their cursors touching."""
+        with self._queued_frames_lock:
+            return set(self._queued_frames)
 
     def wait(self, timeout_s: float) -> bool:
         """Block until a datagram arrived since the last :meth:`poll`, at most
@@ -641,22 +681,22 @@ class TuioListener:
         """Samples of the frames received since the last call (mm, N, s), in order, from
         at most :data:`POLL_DATAGRAMS` datagrams and :data:`POLL_BYTES` bytes of them (at
         least one): with more queued, :meth:`wait` returns at once for the rest. Stale
-        datagrams are dropped unread; sources silent by the clock are lifted last."""
+        datagrams are dropped unread; sources silent by the clock, with no frame of their
+        sender still queued, are lifted last."""
         self._ready.clear()  # before draining: a datagram queued meanwhile sets it again
         raw: list[RawSample] = []
         datagrams, size, now = 0, 0, self._clock()
         while datagrams < POLL_DATAGRAMS and size < POLL_BYTES:
-            try:
-                t, queued_t, data, origin = self._queue.get_nowait()
-            except queue.Empty:
+            item = self._take()
+            if item is None:
                 break
-            if (now - queued_t >= MAX_QUEUED_S and not self._queue.empty()
-                    and not may_be_tuio_frame(data)):  # a frame may hold a touch's only set
-                self.stale += 1
+            t, queued_t, data, origin, frame = item
+            if now - queued_t >= MAX_QUEUED_S and not self._queue.empty() and not frame:
+                self.stale += 1  # kept if a frame: it may hold a touch's only set
                 continue
             datagrams, size = datagrams + 1, size + len(data)
             raw.extend(self._decode(t, data, origin))
-        raw.extend(self._expire(self._clock()))
+        raw.extend(self._expire(self._clock(), self._speaking()))
         if not self._queue.empty():
             self._ready.set()
         return self.screen.touches(raw)
@@ -672,9 +712,10 @@ class TuioListener:
             self.last_error = str(exc)
         return raw
 
-    def _expire(self, t: float) -> list[RawSample]:
-        """UP samples for the cursors of sources silent at ``t`` (s), each said once."""
-        lifted, gone = self.decoder.expire(t, self.gate.silence_s)
+    def _expire(self, t: float, speaking: Container[str] = ()) -> list[RawSample]:
+        """UP samples for the cursors of sources silent at ``t`` (s), but those of the
+        origins ``speaking``, each said once."""
+        lifted, gone = self.decoder.expire(t, self.gate.silence_s, speaking)
         for origin, source, n in gone:
             named = f" (source {quoted(source)})" if source else ""  # escaped and cut: a sender's
             self._warn(f"TUIO: no message from {origin}{named} for {self.gate.silence_s:g} s: "
