@@ -459,7 +459,9 @@ def _age_s(ancillary) -> float:
 
 def parse_sender(text: str) -> tuple[str, int | None]:
     """``ADDR`` or ``ADDR:PORT`` (an IPv4 address, a UDP port 1-65535) as (address,
-    port or None: any). Raises InputError naming what was expected."""
+    port), port None for ``ADDR`` alone: then one port of that address is served at a
+    time, the first heard, and another takes over only after it has been silent for
+    :data:`SILENCE_S` (:class:`SenderGate`). Raises InputError naming what was expected."""
     addr, colon, port_text = text.partition(":")
     try:
         address = str(ipaddress.IPv4Address(addr))
