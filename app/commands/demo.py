@@ -128,10 +128,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              + ". With a touch screen the mouse only hovers and every finger "
                              "gets the force set with the wheel")
     parser.add_argument("--tuio-from", type=sender_option, default=None, metavar="ADDR[:PORT]",
-                        help="with --input tuio: accept datagrams from this IPv4 address (and "
-                             "port) only; default: from the first sender of a TUIO frame "
-                             "(listening beyond loopback, the demo then warns at start). "
-                             "Datagrams from others are dropped and counted in the summary")
+                        help="with --input tuio: accept datagrams from this IPv4 address only, "
+                             "and with a port from that port only; with no port, one port of "
+                             "the address is served at a time (the first heard; another takes "
+                             "over after 1.5 s of silence). Default: the first sender of a "
+                             "TUIO frame (listening beyond loopback, the demo then warns at "
+                             "start). Datagrams from others are dropped and counted in the "
+                             "summary")
     parser.add_argument("--haptic", choices=("process", "thread"), default="process",
                         help="where the haptic pipeline runs: its own process (default: the "
                              "window's GL calls cannot delay it) or a thread of the window's "
