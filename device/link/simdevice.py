@@ -115,6 +115,13 @@ class DeviceConfig:
                   (0 <= self.ramp_ms <= p.MAX_STOP_MS - self.watchdog_ms, "ramp_ms",
                    f"in [0, {p.MAX_STOP_MS - self.watchdog_ms}] ms: watchdog_ms + ramp_ms must "
                    f"not exceed {p.MAX_STOP_MS} ms (PROTOCOL.md 5.3)"),
+                  (self.ramp_ms == 0 or self.ticks(self.ramp_ms) >= 2, "ramp_ms",
+                   f"0 or at least 2 ticks at {self.rate_hz:g} Hz: a shorter ramp is a step "
+                   "to zero (PROTOCOL.md 5.3)"),
+                  (self.stop_fits_in_ticks(), "watchdog_ms",
+                   f"ticks(watchdog_ms) + ticks(ramp_ms = {self.ramp_ms}) within "
+                   f"{p.MAX_STOP_MS} ms at {self.rate_hz:g} Hz (PROTOCOL.md 5.3): raise the "
+                   "rate or shorten them"),
                   (self.force_n is None or 0 <= self.force_n <= 65.0, "force_n", "in [0, 65] N"),
                   (1 <= self.protocol_version <= p.PROTOCOL_VERSION, "protocol_version",
                    f"in [1, {p.PROTOCOL_VERSION}]"),
@@ -155,6 +162,14 @@ class DeviceConfig:
         integers on the declared rate (PROTOCOL.md 5.3), as the firmware counts."""
         rate_mhz = int(round(self.rate_hz * 1000.0))
         return max(1, -(-ms * rate_mhz // 1_000_000))
+
+    def stop_fits_in_ticks(self) -> bool:
+        """Whether the hold and the ramp, in the whole ticks the device counts, end within
+        :data:`MAX_STOP_MS`: (ticks(watchdog_ms) + ticks(ramp_ms)) / rate <= 50 ms
+        (PROTOCOL.md 5.3); the ms sum alone is too weak at low rates."""
+        rate_mhz = int(round(self.rate_hz * 1000.0))
+        ticks = self.ticks(self.watchdog_ms) + self.ticks(self.ramp_ms)
+        return ticks * 1_000_000 <= p.MAX_STOP_MS * rate_mhz
 
     def force_sensor(self):
         """The simulated sensor behind the force reports, or None (``simsensor``)."""

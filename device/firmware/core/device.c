@@ -22,6 +22,16 @@ static uint32_t ms_to_ticks(uint16_t ms, uint32_t rate_mhz)
     return t ? (uint32_t)t : 1u;
 }
 
+/* Whether the hold and the ramp, in the whole ticks the device counts, end within the
+ * 50 ms stop bound: (ticks(watchdog_ms) + ticks(ramp_ms)) / rate <= 50 ms (PROTOCOL.md
+ * 5.3). Rounding up to ticks makes the ms sum alone too weak at low rates. */
+static int stop_fits_in_ticks(const fw_config *c)
+{
+    uint64_t ticks = (uint64_t)ms_to_ticks(c->watchdog_ms, c->rate_mhz) +
+                     ms_to_ticks(c->ramp_ms, c->rate_mhz);
+    return ticks * 1000000u <= (uint64_t)FW_MAX_STOP_MS * c->rate_mhz;
+}
+
 const char *fw_config_check(const fw_config *c)
 {
     if (c->channels < 1 || c->channels > FW_MAX_CHANNELS)
@@ -38,8 +48,14 @@ const char *fw_config_check(const fw_config *c)
         return "phases: this build stores no phases (FW_PHASES 0)";
     if (c->watchdog_ms < 1 || c->watchdog_ms > 49)
         return "watchdog_ms: expected 1 to 49";
-    if (c->ramp_ms > 50 - c->watchdog_ms)
+    if (c->ramp_ms > FW_MAX_STOP_MS - c->watchdog_ms)
         return "ramp_ms: watchdog_ms + ramp_ms must not exceed 50 ms (PROTOCOL.md 5.3)";
+    if (c->ramp_ms > 0 && ms_to_ticks(c->ramp_ms, c->rate_mhz) < 2)
+        return "ramp_ms: a ramp shorter than 2 ticks at this rate is a step to zero "
+               "(PROTOCOL.md 5.3): raise the rate or set ramp_ms 0";
+    if (!stop_fits_in_ticks(c))
+        return "watchdog_ms, ramp_ms: at this rate their whole ticks exceed 50 ms "
+               "(PROTOCOL.md 5.3): raise the rate or shorten them";
     if (c->name && strlen(c->name) > FW_NAME_MAX)
         return "name: longer than FW_NAME_MAX";
     if (c->protocol_version < 1 || c->protocol_version > FW_NEWEST_VERSION)

@@ -52,6 +52,8 @@ typedef struct {
 #define FW_BIGGER(a, b) ((a) > (b) ? (a) : (b))
 /* how long a missing host frame is asked for (ms, PROTOCOL.md 4.10) */
 #define FW_MISSING_TTL_MS 100u
+/* the plate is still within this many ms of the host falling silent (PROTOCOL.md 5.3) */
+#define FW_MAX_STOP_MS 50u
 #define FW_TX_PAYLOAD_MAX                                                                     \
     FW_BIGGER(FW_BIGGER(7u + FW_ERROR_TEXT_MAX, 11u + 4u * FW_FORCE_PAIRS),                   \
               FW_BIGGER(80u + 2u * FW_MAX_CHANNELS, 16u + 2u * FW_MAX_CHANNELS + FW_NAME_MAX))
