@@ -2,6 +2,9 @@
 and 8 KiB of RAM; and the per-sample work of the sample interrupt, counted."""
 
 import re
+import shutil
+import subprocess
+from pathlib import Path
 
 import pytest
 
@@ -24,6 +27,23 @@ def test_the_stm32g0_build_fits_32_kib_of_flash_and_8_kib_of_ram():
     assert flash <= 32 * 1024 and ram <= 8 * 1024
     assert sections["stack"] >= 768  # room for the worst call chain plus both interrupts
     assert f"flash {flash} of 32768 bytes, RAM {ram} of 8192 bytes" in out
+
+
+def test_the_readme_states_the_stm32g0_sizes_of_its_compiler():
+    """device/firmware/README.md's measured flash and RAM are this build's, with the
+    compiler version it names (another version gives other sizes: skipped)."""
+    readme = (Path(__file__).parents[1] / "device/firmware/README.md").read_text()
+    stated = re.search(r"Measured \(`make stm32g0`, arm-none-eabi-gcc ([\d.]+) `-Os`\): "
+                       r"flash (\d+) bytes of 32 KiB;\s+RAM (\d+) bytes", readme)
+    assert stated, "README: the STM32G0 sizes sentence is missing"
+    version = subprocess.run(["arm-none-eabi-gcc", "-dumpfullversion"], capture_output=True,
+                             text=True).stdout.strip() if shutil.which("arm-none-eabi-gcc") else ""
+    if not (version + ".").startswith(stated.group(1) + "."):  # "12.2" names 12.2.1 too
+        pytest.skip(f"arm-none-eabi-gcc {version or 'absent'}; the README measured "
+                    f"{stated.group(1)}")
+    out = _make("stm32g0")
+    assert (f"flash {stated.group(2)} of 32768 bytes, RAM {stated.group(3)} of 8192 bytes"
+            in out)
 
 
 def test_the_per_sample_work_is_a_small_fraction_of_a_10_khz_tick_at_48_mhz():
