@@ -12,8 +12,9 @@ import numpy as np
 from frictex.app.measure.report_claims import (GRATINGS, METRICS, NOT_CLAIMED, OUTPUT_HZ,
                                                 TOUCH_HZ, count_line, family_note)
 from frictex.app.measure.report_doc import Report, grating_rows, mean_defined
-from frictex.app.measure.report_matrix import (MOTIONS, Row, aliased, aliasing_degenerate,
-                                                link_buffer_s, periods_per_sample)
+from frictex.app.measure.report_matrix import (MOTIONS, WARM_UP_S, Row, aliased,
+                                                aliasing_degenerate, link_buffer_s,
+                                                periods_per_sample)
 from frictex.rendering.metrics import ALIGNMENT_CAP_MM, PHASE_BLIND_HZ
 from frictex.rendering.pipeline import BLOCK_S
 
@@ -32,6 +33,11 @@ COMMANDED_NOTE = (
     "the plate starts each touch at rest, so its rise at touch-down is a step no edge "
     "matches (scored at the cap), and the loop's lag (0.4 ms, 0.05 mm at 120 mm/s) is "
     "below what that error resolves.")
+#: how each cost figure is timed and what a median over them does with a stall
+WARM_TIMING = (
+    f"each timed after an untimed {WARM_UP_S:g} s run of the same configuration; no timing "
+    "is dropped, so a stalled one stays in the median, which it moves at most to the next "
+    "timing")
 def plot_captions(settings) -> dict[str, tuple[str, ...]]:
     """report.md's captions under the plots, by file name (``settings``: the run's, for
     the conditions its timings were taken in)."""
@@ -40,9 +46,8 @@ def plot_captions(settings) -> dict[str, tuple[str, ...]]:
             "", "Error against compute cost: the matrix's one human-like draw, 50 Hz touch, "
             "each configuration's mean over the gratings of the errors of the commanded mu'; "
             "the time panel leaves the 0.6 mm grating out (its time error is not claimed: "
-            "section Claims). Cost: the median over the gratings of one timing each (a "
-            "timing the machine stalled counts in no median), taken with "
-            f"{_conditions(settings)}.", ""),
+            "section Claims). Cost: the median over the gratings of one timing each "
+            f"({WARM_TIMING}), taken with {_conditions(settings)}.", ""),
         "error_vs_period.png": (
             "", "Error against grating period: the matrix's one draw of each motion, "
             "commanded mu', mean over the motions, leaving out sho-held's "
@@ -464,8 +469,8 @@ def _inversion(doc: Report) -> list[str]:
              f"{doc.settings.lut_max_error_um:.2g} um (settings.lut_max_error_um). Errors: "
              "mean over the gratings and over every renderer, human motion, 50 Hz, 10 kHz. "
              "Costs: the median over the same rows ('rows timed') of one run each, exact "
-             "and table timed in separate cases, not alternated (a timing the machine "
-             f"stalled counts in no median), taken with {_conditions(doc.settings)}; a "
+             f"and table timed in separate cases, not alternated ({WARM_TIMING}), taken "
+             f"with {_conditions(doc.settings)}; a "
              "difference between them within the machine's spread is no difference:", ""]
     cost = [(label, *[f"{np.median([us(r) for r in inv if r.inversion == n]):.0f}"
                       for n in names])

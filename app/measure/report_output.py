@@ -52,8 +52,8 @@ LEFT_OUT = {"time_error": ("grating-0.6mm",)}
 
 def _config_points(rows: list[Row]) -> dict[str, dict[str, float]]:
     """Per configuration seen on the gratings at 50 Hz for every motion it ran:
-    the median cost over the gratings (one timing each: a timing the machine stalled
-    counts in no median) and the mean of each metric over the motions the sweep shares
+    the median cost over the gratings (one warm timing each, none dropped:
+    ``report_markdown.WARM_TIMING``) and the mean of each metric over the motions the sweep shares
     (human) and the gratings (those of ``LEFT_OUT`` left out of that metric's mean)."""
     configs: dict[str, list[Row]] = {}
     for r in grating_rows(rows):

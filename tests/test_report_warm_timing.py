@@ -1,0 +1,31 @@
+"""A matrix row's costs are timed warm: after an untimed run of the same configuration,
+and the captions say so (no stalled timing is dropped)."""
+
+from frictex.app.measure import report_markdown as rmd
+from frictex.app.measure import report_matrix as rm
+
+from test_report_tables import SETTINGS
+
+
+def test_each_case_is_timed_after_an_untimed_run_of_its_configuration(monkeypatch):
+    calls = []
+
+    def recording(pipeline, trace, blocks_per_call, duration_s):
+        calls.append((pipeline, duration_s))
+        return run_blocks(pipeline, trace, blocks_per_call, duration_s)
+
+    run_blocks = rm.run_blocks
+    monkeypatch.setattr(rm, "run_blocks", recording)
+    rm.Runner(live_s=0.005, plate=False).run(rm.Case("grating-5mm", "fast", 50.0, "sht",
+                                                     10_000.0))
+    (warm, warm_s), (timed, timed_s) = calls
+    assert warm_s == rm.WARM_UP_S < timed_s
+    assert warm is not timed  # the timed pipeline starts from t = 0 like any other
+    assert timed.timer.seconds["tracking"] > 0 and warm.timer.seconds["tracking"] > 0
+
+
+def test_cost_captions_say_how_timings_are_taken_and_drop_none():
+    caption = rmd.plot_captions(SETTINGS)["error_vs_cost.png"][1]
+    assert f"untimed {rm.WARM_UP_S:g} s run of the same configuration" in caption
+    assert "counts in no median" not in caption
+    assert "no timing is dropped" in caption
