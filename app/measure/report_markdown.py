@@ -426,8 +426,7 @@ def _physical_limits(doc: Report) -> list[str]:
                   "plate (what a finger gets), the alignment row that of the commanded mu'. "
                   "Hybrid, gratings, human motion, mean over gratings. Each column is one "
                   "draw, so its alignment error moves with a single step: one spurious step "
-                  "pair rendered at some rates and not at others doubles it (in an earlier "
-                  "report, not this run: 0.088 mm at 2 kHz against 0.18 mm at 5-20 kHz), so a "
+                  "pair rendered at some rates and not at others doubles it, so a "
                   "difference in that row is not the rate's doing unless it holds across "
                   "draws:", ""]
         lines += table(["metric", *(f"{h / 1000:g} kHz" for h in rates)],
