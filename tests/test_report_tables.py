@@ -40,9 +40,15 @@ TOUCH_ROWS = [row("slow", spectral=0.864), row("fast", spectral=1.0, alignment_m
 
 
 def test_the_touch_rate_table_averages_the_same_motions_at_every_rate():
-    text = "\n".join(rmd._physical_limits(SimpleNamespace(rows=TOUCH_ROWS)))
+    text = "\n".join(rmd._physical_limits(SimpleNamespace(rows=TOUCH_ROWS, settings=SETTINGS)))
     assert "| spectral error | 1.042 | 0.926 | 0.789 |" in text
     assert "aliasing-degenerate at none (human)" in text
+    assert "v / P (0.6 mm at human's 60 mm/s: 100 Hz)" in text  # the table's motion
+
+
+def test_the_unclaimed_time_error_gives_its_offset_as_a_share_of_the_period():
+    from frictex.app.measure.report_claims import NOT_CLAIMED
+    assert "0.1-0.3 mm off, a sixth to a half of the 0.6 mm period" in NOT_CLAIMED
 
 
 def test_a_motion_aliased_at_one_rate_is_left_out_at_every_rate():
@@ -74,7 +80,7 @@ def test_the_output_rate_table_scores_what_the_plate_delivers():
     plate = PlateErrors(time_error=0.7, spectral_error=0.9)
     rows = [row(renderer="hybrid", scene="grating-5mm", output_hz=hz, through_plate=plate,
                 time_error=0.1, spectral=0.2) for hz in (2000.0, 10_000.0)]
-    text = "\n".join(rmd._physical_limits(SimpleNamespace(rows=rows)))
+    text = "\n".join(rmd._physical_limits(SimpleNamespace(rows=rows, settings=SETTINGS)))
     assert "| time_error, plate | 0.700 | 0.700 |" in text
     assert "| spectral_error, plate | 0.900 | 0.900 |" in text
     assert "-3 dB at 400 Hz" in text and "passes 37% of a 1 kHz component" in text

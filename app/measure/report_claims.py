@@ -59,8 +59,8 @@ CONFIDENCE = 0.95
 NOT_CLAIMED = (
     "Time error on the 0.6 mm grating is not claimed: it measures a spatial phase no finger "
     "feels (seed 003 section 6) and no renderer gets right while the finger moves (50 Hz "
-    "samples, 0.05 mm noise and up to 20 ms of extrapolation put it 0.1-0.3 mm off, a third "
-    "of a period).")
+    "samples, 0.05 mm noise and up to 20 ms of extrapolation put it 0.1-0.3 mm off, a sixth "
+    "to a half of the 0.6 mm period).")
 
 
 HOLDS = "holds"

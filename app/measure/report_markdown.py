@@ -439,7 +439,8 @@ def _physical_limits(doc: Report) -> list[str]:
     touch = sorted({r.touch_hz for r in held})
     motions = motions_at_every(held, touch)
     lines += ["Touch rate against texture frequency: a grating of period P under a finger at v "
-              "is a signal at v / P (0.6 mm at 40 mm/s: 67 Hz); position-map rendering (SHO) "
+              "is a signal at v / P" + _texture_frequencies(motions, doc.settings.motions, 0.6)
+              + "; position-map rendering (SHO) "
               "can only render up to half the touch rate (25 Hz at 50 Hz, seed 003 section "
               "4.4.1), above which it aliases. sho-held on the 0.6 mm grating, spectral error by "
               "touch rate, mean over the same motions at every rate: those run at every rate "
@@ -449,6 +450,16 @@ def _physical_limits(doc: Report) -> list[str]:
                          [("spectral error", *_by(held, "touch_hz", touch, "spectral_error"))]
                          if motions else [], "the 0.6 mm grating has no motion run at every "
                          "touch rate among the scenes chosen")
+
+
+def _texture_frequencies(motions: list[str], motion_args: dict, period_mm: float) -> str:
+    """' (0.6 mm at human's 60 mm/s: 100 Hz, ...)': v / P for each of ``motions`` at its
+    speed (``motion_args``: name -> ``make_motion`` arguments, mm/s), or '' for none."""
+    if not motions:
+        return ""
+    each = [f"{name}'s {motion_args[name]['speed_mm_s']:g} mm/s: "
+            f"{motion_args[name]['speed_mm_s'] / period_mm:.0f} Hz" for name in motions]
+    return f" ({period_mm:g} mm at " + ", ".join(each) + ")"
 
 
 def motions_at_every(rows: list[Row], touch_hz: list[float]) -> list[str]:
