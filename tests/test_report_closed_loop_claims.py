@@ -11,3 +11,19 @@ def test_the_oscillation_claim_gives_each_modes_longest_run_and_no_interval():
     text = found["closed loop: no growing oscillation"].text
     assert "closed 3, adaptive 2, against" in text
     assert "interval" not in text and f"{2 * len(OPEN)} runs" in text
+
+
+def test_the_adaptation_gap_is_stated_over_the_scenes_amplitude_limit(monkeypatch):
+    from dataclasses import replace
+    from types import SimpleNamespace
+
+    from frictex.app.measure import report_closed_loop as rcl
+    from frictex.app.measure.report_loop_records import Adaptation
+    section = replace(_section(OPEN, OPEN), adaptation=Adaptation(
+        scene="objects-bump-edge-disc", duration_s=20.0, fingers=2, gap_max=0.05,
+        gap_median=0.04, gaps=[0.03, 0.05]))
+    device = SimpleNamespace(amplitude_limit_um=3.5)
+    monkeypatch.setattr(rcl, "load", lambda scene: SimpleNamespace(device=device))
+    text = "\n".join(rcl.markdown(section))
+    assert "finger over 0-3.5 um (the device's amplitude limit)" in text
+    assert "2.5 um" not in text

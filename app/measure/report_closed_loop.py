@@ -575,7 +575,9 @@ def markdown(section: LoopSection) -> list[str]:
         ad = section.adaptation
         lines += ["", f"Adaptation ({ad.fingers} fingers): after {ad.duration_s:g} s on "
                       f"{ad.scene}, seed 003's eq 2 with the adapted (b, k) against each true "
-                      f"finger over 0-2.5 um: relative RMS gap median {ad.gap_median:.3f}, "
+                      f"finger over 0-{load(ad.scene).device.amplitude_limit_um:g} um "
+                      f"(the device's amplitude limit): relative RMS gap median "
+                      f"{ad.gap_median:.3f}, "
                       f"worst {ad.gap_max:.3f}."]
     rows = m["rows"]
     delays = section.report_delays
