@@ -4,8 +4,8 @@
 optional log writers): it decodes the host's frames, keeps received samples in a jitter
 buffer indexed by sample number, plays one sample per tick at its sample rate, models
 the plate's closed amplitude loop as a first-order low pass (seed 003, Fig. 3b: 400 Hz
-bandwidth; bilinear transform prewarped at the bandwidth; run where it is seen: a
-``sensor`` reporting it, or a ``plate_log``), enforces the watchdog (no valid
+bandwidth; the exact discretisation of the loop held over each tick, PROTOCOL.md 5.4;
+run where it is seen: a ``sensor`` reporting it, or a ``plate_log``), enforces the watchdog (no valid
 frame for ``watchdog_ms`` and the output ramps to zero within ``ramp_ms`` and the buffer is
 flushed) and the bounded hold (a BUFFERING device holds its setpoint at most
 ``watchdog_ms`` after the last sample it played, a Hello not at all, then ramps it to zero
@@ -266,10 +266,11 @@ class DeviceCore:
         # BUFFERING ticks held since the last sample played; _wd_ticks + 1: a ramp to zero
         # has begun since (PROTOCOL.md 5.1)
         self._held = 0
-        # bilinear transform prewarped at the bandwidth: -3 dB and -45 deg exactly at f_c
-        w = math.tan(math.pi * c.bandwidth_hz / c.rate_hz)
-        self._b = np.array([w, w]) / (1.0 + w)
-        self._a = np.array([1.0, (w - 1.0) / (1.0 + w)])
+        # PROTOCOL.md 5.4: the first-order loop held over each tick, discretised exactly:
+        # y[k] = a y[k-1] + (1 - a) u[k], a = exp(-2 pi f_c / f_s) in (0, 1), no overshoot
+        pole = math.exp(-2.0 * math.pi * c.bandwidth_hz / c.rate_hz)
+        self._b = np.array([1.0 - pole])
+        self._a = np.array([1.0, -pole])
         self._zi = np.zeros((c.channels, 1))
         self.plate_um = np.zeros(c.channels)
         self.stopped = False                   # a Stop finished: output is zero

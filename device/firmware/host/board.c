@@ -43,10 +43,8 @@ static int16_t force_counts(double n)
 const fw_hal *host_board_init(host_board *b, const host_params *p)
 {
     memset(b, 0, sizeof *b);
-    /* 5.4: bilinear transform prewarped at the bandwidth */
-    double w = tan(M_PI * p->bandwidth_hz / p->rate_hz);
-    b->b0 = b->b1 = w / (1.0 + w);
-    b->a1 = (w - 1.0) / (1.0 + w);
+    /* PROTOCOL.md 5.4: the first-order loop held over each tick, discretised exactly */
+    b->pole = exp(-2.0 * M_PI * p->bandwidth_hz / p->rate_hz);
     b->channels = (unsigned)p->channels;
     b->force_mn = p->has_force ? (uint16_t)nearbyint(p->force_n * 1000.0) : 0;
     b->forces[0] = force_counts(p->lateral_n);
@@ -61,8 +59,6 @@ void host_board_step(host_board *b, const uint16_t *setpoint)
 {
     for (unsigned ch = 0; ch < b->channels; ch++) {
         double u = setpoint[ch] * STEP_UM;
-        double y = b->b0 * u + b->z[ch];
-        b->z[ch] = b->b1 * u - b->a1 * y;
-        b->plate_um[ch] = y;
+        b->plate_um[ch] = b->pole * b->plate_um[ch] + (1.0 - b->pole) * u;
     }
 }

@@ -12,8 +12,7 @@
 #include "params.h"
 
 typedef struct {
-    double b0, b1, a1;            /* y = b0 u + z; z' = b1 u - a1 y (transposed form) */
-    double z[FW_MAX_CHANNELS];
+    double pole;                  /* exp(-2 pi f_c / f_s): y = pole y + (1 - pole) u */
     double plate_um[FW_MAX_CHANNELS];
     unsigned channels;
     uint16_t force_mn;
