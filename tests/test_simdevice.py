@@ -99,8 +99,8 @@ def test_plate_model_is_first_order_with_the_configured_bandwidth():
     lag = np.angle(np.sum(y * np.exp(-2j * np.pi * 400 * np.arange(1000) / RATE))
                    / np.sum(u * np.exp(-2j * np.pi * 400 * np.arange(1000) / RATE)))
     w, a = 2 * np.pi * 400.0 / RATE, np.exp(-2 * np.pi * 400.0 / RATE)
-    assert np.degrees(lag) == pytest.approx(np.degrees(np.angle((1 - a) / (1 - a * np.exp(-1j * w)))),
-                                            abs=0.5)
+    model = np.angle((1 - a) / (1 - a * np.exp(-1j * w)))
+    assert np.degrees(lag) == pytest.approx(np.degrees(model), abs=0.5)
     assert np.degrees(lag) == pytest.approx(-45.0 + np.degrees(w) / 2, abs=0.5)
 
 
