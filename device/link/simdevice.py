@@ -7,8 +7,8 @@ the plate's closed amplitude loop as a first-order low pass (seed 003, Fig. 3b: 
 bandwidth; the exact discretisation of the loop held over each tick, PROTOCOL.md 5.4;
 run where it is seen: a ``sensor`` reporting it, or a ``plate_log``), enforces the
 watchdog (no valid frame for ``watchdog_ms`` and the output ramps to zero within
-``ramp_ms`` and the buffer is flushed) and the bounded hold (a BUFFERING device holds its setpoint at most
-``watchdog_ms`` after the last sample it played, a Hello not at all, then ramps it to zero
+``ramp_ms`` and the buffer is flushed) and the bounded hold (a BUFFERING device holds
+its setpoint at most ``watchdog_ms`` after the last sample it played, a Hello not at all, then ramps it to zero
 keeping its buffer: PROTOCOL.md 5.1), asks for host frames it found missing (version 4: Missing, answered by Resend)
 and, with a force sensor (``device.link.simsensor``), reports the lateral and
 normal force in ForceReport messages to a version 3 or later host.
