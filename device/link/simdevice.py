@@ -4,14 +4,14 @@
 optional log writers): it decodes the host's frames, keeps received samples in a jitter
 buffer indexed by sample number, plays one sample per tick at its sample rate, models
 the plate's closed amplitude loop as a first-order low pass (seed 003, Fig. 3b: 400 Hz
-bandwidth; the exact discretisation of the loop held over each tick, PROTOCOL.md 5.4;
-run where it is seen: a ``sensor`` reporting it, or a ``plate_log``), enforces the
-watchdog (no valid frame for ``watchdog_ms`` and the output ramps to zero within
-``ramp_ms`` and the buffer is flushed) and the bounded hold (a BUFFERING device holds
-its setpoint at most ``watchdog_ms`` after the last sample it played, a Hello not at all, then ramps it to zero
-keeping its buffer: PROTOCOL.md 5.1), asks for host frames it found missing (version 4: Missing, answered by Resend)
-and, with a force sensor (``device.link.simsensor``), reports the lateral and
-normal force in ForceReport messages to a version 3 or later host.
+bandwidth; the exact discretisation of the loop held over each tick, PROTOCOL.md 5.4; run
+where it is seen: a ``sensor`` reporting it, or a ``plate_log``), enforces the watchdog
+(no valid frame for ``watchdog_ms`` and the output ramps to zero within ``ramp_ms`` and
+the buffer is flushed) and the bounded hold (a BUFFERING device holds its setpoint at most
+``watchdog_ms`` after the last sample it played, a Hello not at all, then ramps it to zero
+keeping its buffer: PROTOCOL.md 5.1), asks for host frames it found missing (version 4:
+Missing, answered by Resend) and, with a force sensor (``device.link.simsensor``), reports
+the lateral and normal force in ForceReport messages to a version 3 or later host.
 
 :func:`serve` binds a core to the wall clock and to a pseudo-terminal or a TCP listener
 (one host at a time); ``frictex sim-device`` runs it for external tools. The host's
