@@ -27,3 +27,27 @@ def test_the_adaptation_gap_is_stated_over_the_scenes_amplitude_limit(monkeypatc
     text = "\n".join(rcl.markdown(section))
     assert "finger over 0-3.5 um (the device's amplitude limit)" in text
     assert "2.5 um" not in text
+
+
+def test_the_closed_loop_plot_has_a_caption_naming_its_points_and_lines():
+    from frictex.app.measure.report_markdown import plot_captions
+    from test_report_tables import SETTINGS
+    caption = plot_captions(SETTINGS)["closed_loop.png"][1]
+    assert "each point is one finger" in caption and "against its RMS in open loop" in caption
+    assert "the dashed line the scene's target" in caption
+
+
+def test_a_count_with_no_interval_claims_leaves_the_interval_count_out():
+    from frictex.app.measure.report_claims import INTERVAL, count_line
+    found = [c for c in claims(_section(OPEN, OPEN)) if c.decided_by != INTERVAL]
+    line = count_line(found)
+    assert "95 % interval" not in line
+    assert "(decided by one number, no interval: " in line
+
+
+def test_the_throughput_heading_names_the_touch_rate_its_rows_have():
+    from test_report_timings import COMPOSED, _throughput
+    from test_report_tables import row
+    heading = next(line for line in _throughput([row(scene=COMPOSED)]).splitlines()
+                   if line.startswith("## Throughput"))
+    assert heading == "## Throughput and latency (composed scene, one finger, 50 Hz touch, 10 kHz)"

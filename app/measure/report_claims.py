@@ -135,7 +135,8 @@ def count_line(found: list[Claim]) -> str:
 
     def held(cs):
         return f"{sum(c.passed for c in cs)} of {len(cs)} hold"
-    return (f"{line} (by a 95 % interval: {held(statistical)}; decided by one number, "
+    by_interval = f"by a 95 % interval: {held(statistical)}; " if statistical else ""
+    return (f"{line} ({by_interval}decided by one number, "
             f"no interval: {held(one_number)}, {len(built)} of them by construction)")
 
 

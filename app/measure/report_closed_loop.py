@@ -704,6 +704,15 @@ def _table_line(scene: str, mode: str, r: ModeSummary) -> str:
 PLOT_FLOOR = 1e-4
 
 
+#: report.md's caption under :func:`figure`
+FIGURE_CAPTION = (
+    "Closed-loop friction, one panel per scene: each point is one finger, its RMS of "
+    "delivered against reachable mu' in closed loop or adaptive (y) against its RMS in "
+    "open loop (x); the solid line is no change, the dashed line the scene's target (open "
+    "loop's RMS over the target factor; a point under it meets the target); a triangle "
+    f"pointing down is a loop RMS under {PLOT_FLOOR:g}, drawn at it.")
+
+
 def figure(section: LoopSection):
     """Each finger's RMS, closed and adaptive against open loop, one panel per scene,
     with the target's line (RMS open / T); a loop RMS under ``PLOT_FLOOR`` is drawn at

@@ -109,7 +109,7 @@ class HeadlineEntry:
 
 def headline(rows: list[Row]) -> dict[str, HeadlineEntry]:
     """The throughput and latency figures of issue 4 by ``renderer/motion``: composed
-    scene, one finger, 10 kHz."""
+    scene, one finger, 50 Hz touch, 10 kHz, exact inversion."""
     return {f"{r.renderer}/{r.motion}": HeadlineEntry(
                 **asdict(r.throughput), cost_us_per_s=r.cost_us_per_s,
                 stages_us_per_s=r.stages_us_per_s)

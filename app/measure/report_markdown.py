@@ -41,6 +41,7 @@ WARM_TIMING = (
 def plot_captions(settings) -> dict[str, tuple[str, ...]]:
     """report.md's captions under the plots, by file name (``settings``: the run's, for
     the conditions its timings were taken in)."""
+    from frictex.app.measure.report_closed_loop import FIGURE_CAPTION as loop_caption
     return {
         "error_vs_cost.png": (
             "", "Error against compute cost: the matrix's one human-like draw, 50 Hz touch, "
@@ -48,6 +49,7 @@ def plot_captions(settings) -> dict[str, tuple[str, ...]]:
             "the time panel leaves the 0.6 mm grating out (its time error is not claimed: "
             "section Claims). Cost: the median over the gratings of one timing each "
             f"({WARM_TIMING}), taken with {_conditions(settings)}.", ""),
+        "closed_loop.png": ("", loop_caption, ""),
         "error_vs_period.png": (
             "", "Error against grating period: the matrix's one draw of each motion, "
             "commanded mu', mean over the motions, leaving out sho-held's "
@@ -326,7 +328,8 @@ def _throughput_verdicts(head: dict, settings) -> str:
 
 def _throughput(doc: Report) -> list[str]:
     head = doc.headline
-    lines = ["", "## Throughput and latency (composed scene, one finger, 10 kHz)", "",
+    lines = ["", "## Throughput and latency (composed scene, one finger, "
+             f"{TOUCH_HZ:g} Hz touch, {OUTPUT_HZ / 1000:g} kHz)", "",
              f"Measured with {_conditions(doc.settings)}: each case's timings compete with "
              "the others run at once and with whatever else the machine runs. Live: one "
              "pipeline call per 5 ms block, timed as `frictex bench pipeline` times it (the "
