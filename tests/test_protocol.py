@@ -171,6 +171,13 @@ def test_a_version_1_receiver_drops_version_2_frames_and_flushed_needs_version_2
     assert decoder.feed(frame) == [] and decoder.counts.unknown_type == 1
 
 
+def test_a_message_of_every_version_is_refused_in_version_0_by_name():
+    """Heartbeat exists since version 1: version 0 was a KeyError, not a ProtocolError."""
+    with pytest.raises(p.ProtocolError, match="^Heartbeat does not exist in protocol version 0; "
+                                              "it needs version 1$"):
+        p.encode(p.Heartbeat(1), 0, 0)
+
+
 @SETTINGS
 @given(st.binary(max_size=3000), st.lists(st.integers(1, 500), max_size=10))
 def test_any_bytes_give_valid_frames_or_counted_errors(data, cuts):

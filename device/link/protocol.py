@@ -553,9 +553,10 @@ def encode(msg, seq: int = 0, version: int = PROTOCOL_VERSION) -> bytes:
     if not isinstance(msg, MESSAGES):
         raise ProtocolError(f"cannot encode {type(msg).__name__}; expected one of "
                             f"{', '.join(m.__name__ for m in MESSAGES)}")
-    if version < _SINCE.get(type(msg), 1):
+    since = _SINCE.get(type(msg), 1)
+    if version < since:
         raise ProtocolError(f"{type(msg).__name__} does not exist in protocol version "
-                            f"{version}; it needs version {_SINCE[type(msg)]}")
+                            f"{version}; it needs version {since}")
     try:
         body = _HEADER.pack(version, msg.TYPE, seq & 0xFFFF) + _payload(msg, version)
     except struct.error as exc:
