@@ -89,14 +89,17 @@ class BlockOutput:
 
     def segments(self) -> list[tuple[int, int, int, int]]:
         """``(row, finger id, lo, hi)``: samples ``lo .. hi - 1`` of ``row`` belong to
-        that finger (one per row unless :attr:`sample_ids` says otherwise)."""
+        that finger (one per row unless :attr:`sample_ids` says otherwise); a stretch of a
+        row no touch has taken yet (id -1, a replay's ``app.engine.finger_slots.UNNAMED``)
+        belongs to no finger and is left out."""
         n = self.t_s.size
         if self.sample_ids is None:
-            return [(row, fid, 0, n) for row, fid in enumerate(self.finger_ids)]
+            return [(row, fid, 0, n) for row, fid in enumerate(self.finger_ids) if fid >= 0]
         found = []
         for row, ids in enumerate(self.sample_ids):
             cuts = [0, *(np.flatnonzero(ids[1:] != ids[:-1]) + 1).tolist(), n]
-            found += [(row, int(ids[lo]), lo, hi) for lo, hi in zip(cuts[:-1], cuts[1:])]
+            found += [(row, int(ids[lo]), lo, hi) for lo, hi in zip(cuts[:-1], cuts[1:])
+                      if ids[lo] >= 0]
         return found
 
     def ids_per_sample(self) -> np.ndarray:
