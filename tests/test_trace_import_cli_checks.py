@@ -49,6 +49,25 @@ def test_a_log_cut_mid_line_imports_what_came_before(tmp_path, capsys):
     assert "the last line is cut short" in capsys.readouterr().err
 
 
+@needs_refdata
+@pytest.mark.parametrize("tail", ["/dev/input/event2: EV_ABS       ABS_MT_POSI",
+                                  "EV_ABS       ABS_MT_POSITION_X    0000027"])
+def test_a_log_cut_within_its_last_token_imports_what_came_before(tmp_path, capsys, tail):
+    """A last line cut within its code or value has the line grammar's shape: it was
+    refused ('event type "/dev/input/event2:" is not known') or read as another value
+    (0x27 for 0x273), where a cut earlier in the line was left out."""
+    lines = DRAG.read_text().splitlines(keepends=True)
+    whole = tmp_path / "whole.txt"
+    whole.write_text("".join(lines))
+    assert main(["trace", "import", str(whole), "-o", str(tmp_path / "whole.csv"), *PHONE]) == 0
+    stamp = lines[-1].split("]")[0] + "]"
+    cut = tmp_path / "cut.txt"
+    cut.write_text("".join(lines) + f"{stamp} {tail}")
+    assert main(["trace", "import", str(cut), "-o", str(tmp_path / "o.csv"), *PHONE]) == 0
+    assert "the last line is cut short" in capsys.readouterr().err
+    assert (tmp_path / "o.csv").read_text() == (tmp_path / "whole.csv").read_text()
+
+
 def test_a_malformed_line_that_ends_in_a_line_break_is_still_refused(tmp_path, capsys):
     log = tmp_path / "bad.txt"
     log.write_text("[    1.000000] EV_SYN       SYN_REPORT           00000000\n[    1.0\n")

@@ -96,8 +96,9 @@ def read_log(text: str, where: str = "<getevent>", device: str | None = None) ->
     device : keep only this device's lines (``/dev/input/event2``); required when the log
         holds events of several devices.
 
-    A last line without a line break that is not of the grammar (a recording stopped
-    mid-line with Ctrl-C) is left out with a warning.
+    A last line without a line break (a recording stopped mid-line with Ctrl-C) is left
+    out with a warning, whatever it holds: cut within its value it could still read as
+    one ('00000273' cut to '0000027').
     """
     events: list[Event] = []
     devices: dict[str, int] = {}
@@ -118,7 +119,9 @@ def read_log(text: str, where: str = "<getevent>", device: str | None = None) ->
             _read_absinfo(stripped, axes[section])
             continue
         section = None if m else section
-        if m is None and number == len(lines) and not text.endswith(("\n", "\r")):
+        # a last line without its line break may be cut anywhere, even within a value of
+        # the grammar's shape ('00000273' cut to '0000027' reads 0x27): never an event
+        if number == len(lines) and not text.endswith(("\n", "\r")):
             warnings.append(f"{where}:{number}: the last line is cut short (no line break; "
                             "the recording stopped mid-line): left out")
             break
@@ -132,21 +135,7 @@ def read_log(text: str, where: str = "<getevent>", device: str | None = None) ->
         devices.setdefault(dev, number)
         if device is not None and dev != device:
             continue
-        etype = _number(m["type"], TYPES, where, number, "type")
-        code = _number(m["code"], CODES, where, number, "code")
-        token = m["value"]
-        if token in VALUES:
-            value = VALUES[token]
-        elif _HEX8.match(token):
-            value = signed32(int(token, 16))
-        else:
-            raise TraceError(f"{where}:{number}: value {quoted(token)} is not 8 hex digits "
-                             "(or DOWN / UP / REPEAT)")
-        t = float(m["t"])
-        if t > MAX_TIME_S:
-            raise TraceError(f"{where}:{number}: event time {t:g} s is more than {MAX_TIME_S:g} s "
-                             "(evdev clocks count from boot or from 1970)")
-        events.append(Event(t, etype, code, value, number))
+        events.append(_event(m, where, number))
     named = sorted(d for d in devices if d)
     if device is not None and device not in devices:
         raise TraceError(f"{where}: no events of device {quoted(device)} "
@@ -155,6 +144,26 @@ def read_log(text: str, where: str = "<getevent>", device: str | None = None) ->
         raise TraceError(f"{where}: events of {len(devices)} devices ({_names(named)}); "
                          "choose one with --device")
     return GeteventLog(events, warnings, _device_axes(axes, device or next(iter(devices), "")))
+
+
+def _event(m: re.Match, where: str, number: int) -> Event:
+    """The event of log line ``number`` (``m``: its match of the line grammar); a
+    TraceError for a type, code, value or time that is not one."""
+    etype = _number(m["type"], TYPES, where, number, "type")
+    code = _number(m["code"], CODES, where, number, "code")
+    token = m["value"]
+    if token in VALUES:
+        value = VALUES[token]
+    elif _HEX8.match(token):
+        value = signed32(int(token, 16))
+    else:
+        raise TraceError(f"{where}:{number}: value {quoted(token)} is not 8 hex digits "
+                         "(or DOWN / UP / REPEAT)")
+    t = float(m["t"])
+    if t > MAX_TIME_S:
+        raise TraceError(f"{where}:{number}: event time {t:g} s is more than {MAX_TIME_S:g} s "
+                         "(evdev clocks count from boot or from 1970)")
+    return Event(t, etype, code, value, number)
 
 
 def _read_absinfo(line: str, axes: dict[int, AbsInfo]) -> None:
