@@ -71,7 +71,8 @@ def parse_evemu(text: str, where: str = "<evemu>") -> EvemuRecording:
         at = f"{where}:{number}"
         if line.startswith("E:"):
             m = _EVENT.match(line)
-            if m is None and number == len(lines) and not text.endswith(("\n", "\r")):
+            # an event cut anywhere, even within its value ('0108' cut to '010'), is none
+            if number == len(lines) and not text.endswith(("\n", "\r")):
                 warnings.append(f"{at}: the last line is cut short (no line break; the "
                                 "recording stopped mid-line): left out")
                 break
