@@ -29,3 +29,15 @@ def test_cost_captions_say_how_timings_are_taken_and_drop_none():
     assert f"untimed {rm.WARM_UP_S:g} s run of the same configuration" in caption
     assert "counts in no median" not in caption
     assert "no timing is dropped" in caption
+
+
+def test_a_missed_throughput_target_says_its_timings_were_warm():
+    from dataclasses import replace
+
+    from frictex.app.measure.report_doc import headline
+    from test_report_tables import row
+    slow = replace(row(scene="composed-fine-grating-in-disc"), throughput=replace(
+        row().throughput, replay_x_realtime=10.0))
+    verdicts = rmd._throughput_verdicts(headline([slow]), SETTINGS)
+    assert (f"1 of 1 rows miss it, one timing each after an untimed {rm.WARM_UP_S:g} s run "
+            "of the same configuration") in verdicts

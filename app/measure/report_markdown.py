@@ -314,7 +314,8 @@ def _throughput_verdicts(head: dict, settings) -> str:
     def timed(miss):
         return ("met in every row" if not miss else
                 f"not shown here: {len(miss)} of {len(head)} rows miss it, one timing each "
-                f"with {_conditions(settings)}; `frictex bench pipeline` times it alone")
+                f"after an untimed {WARM_UP_S:g} s run of the same configuration, with "
+                f"{_conditions(settings)}; `frictex bench pipeline` times it alone")
     return (f"Targets (issue 4) against these rows: replay >= {REPLAY_TARGET_X:g}x real time, "
             f"judged here on compute only (end to end: section below): {timed(replay_miss)}; "
             f"live p99 <= {LIVE_P99_TARGET_US:g} us of the thread's CPU time (10 % of a 5 ms "
