@@ -73,8 +73,9 @@ class Gaps:
         if not self.count:
             return []
         return [f"{self.count} gaps of more than {self.limit_s:g} s between touch samples were "
-                f"taken as lifts (of the fingers still touching then); {self.skipped_s:.6g} s "
-                "of output there were skipped (t_s jumps), after a lift the trace had too"]
+                "taken as lifts (of the fingers still touching then, if any); of their "
+                f"silence, {self.skipped_s:.6g} s of output was not written (t_s jumps there; "
+                f"{GAP_KEEP_S:g} s is kept on each side of a gap)"]
 
 
 class TraceSource:
