@@ -73,12 +73,17 @@ def test_a_signal_at_each_import_of_the_start_up_is_its_one_line(tmp_path, signu
     assert not (tmp_path / "run").exists()
 
 
-@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP])
-def test_a_termination_inside_numpys_c_import_is_its_one_line(tmp_path, signum):
-    done = subprocess.run([sys.executable, "-c", CHILD, str(signum), "numpy", "1",
+@pytest.mark.parametrize("signum", list(SIGNALS))
+@pytest.mark.parametrize("target", ["numpy", "numpy._core._multiarray_umath", "numpy.linalg"])
+def test_a_signal_inside_numpys_c_import_is_its_one_line(tmp_path, signum, target):
+    """What a C extension's import_array does with the exception (numpy's
+    __multiarray_api.h: PyErr_Print(), then ImportError: numpy._core.multiarray failed to
+    import): the path that ended as an internal error (exit 70)."""
+    done = subprocess.run([sys.executable, "-c", CHILD, str(signum), target, "1",
                            *_replay_argv(tmp_path / "run")],
                           capture_output=True, text=True, timeout=120)
     assert (done.returncode, done.stderr) == SIGNALS[signum], done.stderr
+    assert done.stdout == ""
 
 
 def _catches_all(pid: int) -> bool:
