@@ -149,7 +149,7 @@ def test_killed_at_a_random_trial_and_resumed(tmp_path, protocol_file):
     expected = rows(whole)
     at = int(np.random.default_rng(29).integers(2, len(expected) - 2))
     out = tmp_path / "killed"
-    command = [sys.executable, "-m", "frictex.app.commands.cli", "experiment", str(protocol_file),
+    command = [sys.executable, "-m", "frictex", "experiment", str(protocol_file),
                "--participant", PARTICIPANT, "--seed", str(SEED), "--out", str(out), "--quiet"]
     proc = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     try:
