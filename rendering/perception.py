@@ -24,7 +24,8 @@ table, :data:`THRESHOLDS`, and each finding names the one it is below:
 - ``event``: a clip event playing for less than 2.3 ms (Gueorguiev et al. 2019).
 - ``period`` and ``weber`` for pairs (:func:`compare_values`, :func:`compare_scenes`):
   two stimuli whose every difference is below its discrimination threshold, periods
-  within 14 % of each other and friction contrasts (or clip levels) within 11 %. A
+  within 14 % of each other and friction contrasts, or the friction levels two depths
+  or clip levels play (mu' = 1 - depth on a grating), within 11 %. A
   design of levels measures that threshold and needs levels below it: it is compared
   by its level farthest from the reference (``app.experiment.perception_check``).
 """
@@ -162,8 +163,8 @@ def relative_difference(a: float, b: float) -> float:
 def _relative(kind: str, d: float, of: str) -> str:
     """A relative difference ``d`` of two values of ``of`` as a percentage and as a
     fraction named for what it is: ``2 % (dp/p 0.02)`` for periods (the fraction the
-    period threshold is given in), ``6.67 % (d(depth)/depth 0.0667)`` for a quantity set
-    against the Weber fraction dmu'/mu', which is another quantity."""
+    period threshold is given in), ``6.67 % (d(contrast)/contrast 0.0667)`` for friction
+    contrasts set against the Weber fraction dmu'/mu'."""
     symbol = "dp/p" if kind == "period" else f"d({of})/{of}"
     return f"{d * 100:.3g} % ({symbol} {d:.3g})"
 
@@ -172,16 +173,41 @@ def _relative(kind: str, d: float, of: str) -> str:
 VARY_THRESHOLD = {"period_mm": "period", "depth": "weber", "level": "weber"}
 
 
-def compare_values(vary: str, a: float, b: float, where: str) -> Finding | None:
+def friction_level(vary: str, value: float, mu_high: float = 1.0,
+                   clip_depth: float = 1.0) -> float:
+    """The mu' a finger feels at a stimulus's ``depth`` or clip ``level`` ``value``: a
+    grating's or shape's low level mu_high - depth (``app.experiment.stimuli``'s
+    PARAMETERS; ``mu_high`` 1 where the layer has none), a clip's drop
+    1 - clip_depth * level (``textures.clips``)."""
+    if vary == "level":
+        return 1.0 - clip_depth * value
+    return mu_high - value
+
+
+def compare_values(vary: str, a: float, b: float, where: str, mu_high: float = 1.0,
+                   clip_depth: float = 1.0) -> Finding | None:
     """Two stimuli that differ only in ``vary`` (``period_mm``, ``depth`` or a clip's
     ``level``), by less than its threshold; None if they differ by more, or not at all,
-    or ``vary`` has no published threshold (a renderer)."""
+    or ``vary`` has no published threshold (a renderer). Periods are compared as they
+    are (dp/p); depths and levels by the friction levels they play (:func:`friction_level`),
+    as the Weber fraction dmu'/mu' is about friction, not about depths: a level of mu' 0 or
+    below is a step no fraction of friction bounds (None)."""
     kind = VARY_THRESHOLD.get(vary)
-    d = relative_difference(a, b)
-    if kind is None or d == 0.0 or d >= THRESHOLDS[kind].value:
+    if kind is None or a == b:
         return None
-    return _below(kind, where, d, f"{vary} {a:g} and {b:g} differ by "
-                                  f"{_relative(kind, d, vary)}")
+    if kind == "period":
+        d = relative_difference(a, b)
+        text = f"{vary} {a:g} and {b:g} differ by {_relative(kind, d, vary)}"
+    else:
+        mu_a, mu_b = (friction_level(vary, v, mu_high, clip_depth) for v in (a, b))
+        if min(mu_a, mu_b) <= 0.0:
+            return None
+        d = relative_difference(mu_a, mu_b)
+        text = (f"{vary} {a:g} and {b:g} play friction levels mu' {mu_a:.4g} and {mu_b:.4g}, "
+                f"which differ by {d * 100:.3g} % (dmu'/mu' {d:.3g})")
+    if d >= THRESHOLDS[kind].value:
+        return None
+    return _below(kind, where, d, text)
 
 
 def compare_scenes(a, b, where: str) -> Finding | None:

@@ -100,8 +100,8 @@ def test_a_layer_well_inside_every_threshold_is_not_flagged(tmp_path):
 
 @pytest.mark.parametrize("vary, a, beyond, inside", [
     ("period_mm", 5.0, 5.65, 5.75),  # 13 % and 15 %
-    ("depth", 0.3, 0.33, 0.34),  # 10 % and 13.3 %
-    ("level", 0.5, 0.54, 0.56),  # 8 % and 12 %
+    ("depth", 0.3, 0.36, 0.38),  # mu' 0.7 and 0.64 (9.4 %), 0.62 (12.9 %)
+    ("level", 0.5, 0.54, 0.56),  # mu' 0.5 and 0.46 (8.7 %), 0.44 (13.6 %)
 ])
 def test_pairs_of_values(vary, a, beyond, inside):
     assert compare_values(vary, a, beyond, "pair") is not None
@@ -118,10 +118,39 @@ def test_a_relative_difference_reads_as_a_percentage_and_the_thresholds_fraction
     assert "period_mm 5 and 5.1 differ by 2 % (dp/p 0.02), below " in message
     assert "dp/p 0.14" in message
     depth = compare_values("depth", 0.3, 0.32, "pair").message
-    # the depths' relative difference, set against the Weber fraction dmu'/mu' (another
-    # quantity), is named for what it is
-    assert "differ by 6.67 % (d(depth)/depth 0.0667), below the Weber fraction" in depth
-    assert "dmu'/mu' 0.0667" not in depth
+    # depths are compared by the friction levels they play, mu' 0.7 and 0.68
+    assert "depth 0.3 and 0.32 play friction levels mu' 0.7 and 0.68, which differ by 2.94 % " \
+           "(dmu'/mu' 0.0294), below the Weber fraction" in depth
+
+
+DEPTH_PROTOCOL = """format = 1
+name = "depth-2afc"
+method = "2afc"
+repetitions = 10
+
+[stimuli]
+scene = "grating-5mm"
+vary = "depth"
+reference = 0.3
+levels = [{level}]
+"""
+
+
+@pytest.mark.parametrize("level", [0.33, 0.34])
+def test_depths_are_compared_by_the_friction_levels_they_play(tmp_path, level):
+    """Depths 0.30 and 0.33 warned ("differ by 10 %": the depths' own difference over the
+    smaller) while 0.30 and 0.34 did not (13.3 %), though the friction levels the finger
+    feels, mu' 0.70 and 0.66, differ by 6 %, under the Weber fraction 0.11: both warn."""
+    (tmp_path / "p.toml").write_text(DEPTH_PROTOCOL.format(level=level))
+    [found] = protocol_findings(load_protocol(tmp_path / "p.toml"))
+    mu_reference, mu_level = 1.0 - 0.3, 1.0 - level  # grating-5mm: mu_high 1
+    fraction = (mu_reference - mu_level) / mu_level
+    assert found.kind == "weber" and found.value == pytest.approx(fraction)
+    assert f"which differ by {fraction * 100:.3g} % (dmu'/mu' {fraction:.3g})" in found.message
+
+
+def test_a_depth_that_leaves_no_friction_is_not_compared_by_a_weber_fraction():
+    assert compare_values("depth", 0.95, 1.0, "pair") is None
 
 
 def test_the_scene_checks_contrast_says_what_it_is(tmp_path):
