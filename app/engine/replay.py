@@ -45,7 +45,7 @@ from frictex.app.engine.clocks import ClockRequest, DeadlineStats, build_clock, 
 from frictex.app.engine.device_changes import device_warnings
 from frictex.app.engine.driver import (PipelineStage, RunTimer, deferred_interrupts, drive,
                                        force_reports_of)
-from frictex.app.engine.sinks import (SinkRequest, build_sink, command_columns,
+from frictex.app.engine.sinks import (SinkRequest, ThreadedSink, build_sink, command_columns,
                                       friction_columns, names_built)
 from frictex.app.engine.sources import MAX_GAP_S, TraceSource
 from frictex.app.engine.staging import Staging
@@ -354,6 +354,7 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
         doc["control"] = pipeline.control.report(stage.state.control,
                                                  late_hint=_late_reports_hint(options.clock))
         doc["warnings"] += doc["control"]["messages"]
+    doc["warnings"] += _dropped_warnings(sinks)
     doc["trace"]["gaps"] = source.gaps.as_dict()
     doc["warnings"] += source.gaps.warnings()
     late = getattr(clock, "stats", None)
@@ -368,6 +369,13 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     if options.fmt == MEMORY:
         in_memory = {"commands": tables.commands.table, "friction": tables.friction.table}
     return doc, in_memory
+
+
+def _dropped_warnings(sinks: list) -> list[str]:
+    """A sentence per threaded sink that dropped calls: one a caller attached built not to
+    wait (``ThreadedSink(inner, n)``, the live loop's kind); the run's ``threaded:`` wait."""
+    said = [sink.dropped_warning() for sink in sinks if isinstance(sink, ThreadedSink)]
+    return [sentence for sentence in said if sentence]
 
 
 def _late_reports_hint(clock: str) -> str:

@@ -139,7 +139,7 @@ class SinkRequest:
     frames : FrameWriter or None
         The run's PNG frame writer (the ``frames`` sink's), or None.
     queue_blocks : int
-        Calls of ``write`` the ``threaded`` sink queues before it drops one.
+        Calls of ``write`` the ``threaded`` sink queues before its ``write`` waits for room.
     forces : bool
         ``out.forces`` comes with every output (a travelling-wave scene's force stage).
     """
@@ -356,22 +356,40 @@ class ProgressSink:
 
 
 class ThreadedSink:
-    """Another sink, run on its own thread so that ``write`` never blocks the caller (the
-    live haptic loop): a full queue drops the block, counted in ``dropped``."""
+    """Another sink, run on its own thread. ``wait`` False (the live haptic loop, which must
+    never block): ``write`` never blocks the caller, a full queue drops the block, counted
+    in ``dropped``. ``wait`` True (a replay, whose sinks get every call): ``write`` waits
+    for room in the queue."""
 
-    def __init__(self, inner, queue_blocks: int, name: str = "frictex-sink"):
+    def __init__(self, inner, queue_blocks: int, name: str = "frictex-sink",
+                 wait: bool = False):
         self.inner = inner
-        self.dropped = 0
+        self.wait = wait
+        self.queue_blocks = queue_blocks
+        #: calls of ``write`` and, of those, calls dropped (queue full, ``wait`` False)
+        self.calls = self.dropped = 0
         self.error: BaseException | None = None
         self._queue: queue.Queue = queue.Queue(queue_blocks)
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
         self._thread.start()
 
     def write(self, out, commands_um) -> None:
+        self.calls += 1
+        if self.wait:
+            self._queue.put((out, commands_um))
+            return
         try:
             self._queue.put_nowait((out, commands_um))
         except queue.Full:
             self.dropped += 1
+
+    def dropped_warning(self) -> str | None:
+        """The summary's sentence for the calls this sink dropped, or None when none."""
+        if not self.dropped:
+            return None
+        return (f"sink threaded:{type(self.inner).__name__} dropped {self.dropped} of "
+                f"{self.calls} pipeline calls (its queue of {self.queue_blocks} calls was "
+                f"full): its output misses them")
 
     def _run(self) -> None:
         while (item := self._queue.get()) is not None:
@@ -399,11 +417,12 @@ class ThreadedSink:
     @classmethod
     def open(cls, arg: str, request: SinkRequest) -> ThreadedSink:
         """The sink ARG names (``threaded:NAME[:ARG]``) on its own thread, queueing
-        ``request.queue_blocks`` calls (its factory)."""
+        ``request.queue_blocks`` calls and waiting for room beyond them, so that it gets
+        every call (its factory; a replay builds it)."""
         if not arg:
             raise InputError("sink 'threaded' runs another sink on its own thread: name it, "
                              "threaded:NAME[:ARG]")
-        return cls(build_sink(arg, request), request.queue_blocks)
+        return cls(build_sink(arg, request), request.queue_blocks, wait=True)
 
 
 SINKS.register("tables", TableSink.open)
