@@ -56,10 +56,12 @@ THRESHOLDS: dict[str, Threshold] = {
     "weber": Threshold(0.11, "", "Weber fraction of a friction change, dmu'/mu'",
                        "Gueorguiev et al. 2017, J R Soc Interface 14:20170641"),
     # the paper's abstract: "a relative difference of 14% in spatial period was required to
-    # discriminate two periodic gratings"; its authors, year and venue are not verified here
+    # discriminate two periodic gratings"; neither the code nor the seed papers name its
+    # authors, year or venue
     "period": Threshold(0.14, "", "discrimination of grating periods, dp/p",
-                        '"Tactile perception of virtual edges and gratings displayed by '
-                        'friction modulation via ultrasonic actuation"'),
+                        'the paper "Tactile perception of virtual edges and gratings displayed '
+                        'by friction modulation via ultrasonic actuation" (its abstract; '
+                        'authors, year and venue not given here)'),
     "event": Threshold(0.0023, "s", "shortest friction drop felt apart",
                        "Gueorguiev et al. 2019, IEEE Trans Haptics (short ultrasonic square "
                        "reductions of friction)"),

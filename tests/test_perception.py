@@ -83,6 +83,10 @@ def test_the_table_states_each_source_and_the_touch_formula():
         "period"].source
 
 
+def test_the_period_source_says_it_is_a_title_without_authors():
+    assert "authors, year and venue not given" in THRESHOLDS["period"].source
+
+
 @pytest.mark.parametrize("kind", sorted(NEAR))
 def test_just_beyond_is_flagged_and_just_inside_is_not(tmp_path, kind):
     beyond, inside = NEAR[kind]
