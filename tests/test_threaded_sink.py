@@ -1,7 +1,9 @@
 """The ``threaded`` sink: in a replay it waits for room in its queue, so that the sink it
 runs gets every pipeline call (it dropped 312 of 401 calls of a slow sink, silently); one
-built not to wait (the live loop's) drops, and a replay says how many in its summary."""
+built not to wait (the live loop's) drops, and a replay says how many in its summary; the
+sink it runs gets one abort when its write failed (it got two)."""
 
+import threading
 import time
 
 import numpy as np
@@ -9,6 +11,7 @@ import pytest
 
 import frictex
 from frictex.app.engine.sinks import SINKS, ThreadedSink
+from frictex.device.registry import PluginError
 
 
 class NoWait:
@@ -40,6 +43,13 @@ class Slow:
 
     def abort(self):
         self.ends.append("abort")
+
+
+class Failing(Slow):
+    """A sink whose every write raises."""
+
+    def write(self, out, commands_um):
+        raise RuntimeError("disk full")
 
 
 @pytest.fixture
@@ -75,3 +85,11 @@ def test_a_threaded_sink_that_drops_is_a_warning_in_the_summary():
         f"sink threaded:Slow dropped {threaded.dropped} of {threaded.calls} pipeline calls "
         "(its queue of 4 calls was full): its output misses them"]
 
+
+def test_a_sink_whose_write_failed_is_aborted_once(in_process_sinks):
+    failing = Failing()
+    SINKS.register("failing-sink", lambda arg, request: failing)
+    with pytest.raises(PluginError, match="disk full"):
+        replay_into("threaded:failing-sink")
+    assert failing.ends == ["abort"]
+    assert not any(t.name == "frictex-sink" for t in threading.enumerate())

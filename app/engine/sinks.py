@@ -359,7 +359,8 @@ class ThreadedSink:
     """Another sink, run on its own thread. ``wait`` False (the live haptic loop, which must
     never block): ``write`` never blocks the caller, a full queue drops the block, counted
     in ``dropped``. ``wait`` True (a replay, whose sinks get every call): ``write`` waits
-    for room in the queue."""
+    for room in the queue. ``inner`` gets exactly one of ``commit`` or ``abort``, but an
+    ``abort`` after its ``commit`` raised (as the driver does for any sink)."""
 
     def __init__(self, inner, queue_blocks: int, name: str = "frictex-sink",
                  wait: bool = False):
@@ -369,6 +370,7 @@ class ThreadedSink:
         #: calls of ``write`` and, of those, calls dropped (queue full, ``wait`` False)
         self.calls = self.dropped = 0
         self.error: BaseException | None = None
+        self._inner_aborted = False
         self._queue: queue.Queue = queue.Queue(queue_blocks)
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
         self._thread.start()
@@ -400,19 +402,25 @@ class ThreadedSink:
                     self.error = exc
 
     def _finish(self) -> None:
-        self._queue.put(None)
-        self._thread.join()
+        if self._thread.is_alive():
+            self._queue.put(None)
+            self._thread.join()
 
     def commit(self) -> None:
         self._finish()
         if self.error is not None:
-            self.inner.abort()
+            self._abort_inner()
             raise self.error
         self.inner.commit()
 
     def abort(self) -> None:
         self._finish()
-        self.inner.abort()
+        self._abort_inner()
+
+    def _abort_inner(self) -> None:
+        if not self._inner_aborted:
+            self._inner_aborted = True
+            self.inner.abort()
 
     @classmethod
     def open(cls, arg: str, request: SinkRequest) -> ThreadedSink:
