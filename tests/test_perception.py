@@ -87,6 +87,14 @@ def test_the_period_source_says_it_is_a_title_without_authors():
     assert "authors, year and venue not given" in THRESHOLDS["period"].source
 
 
+def test_the_800_hz_limit_is_not_attributed_to_a_paper_that_stops_at_500_hz():
+    """Bolanowski et al. 1988 measured vibrotactile thresholds up to 500 Hz; 800 Hz is
+    frictex's own choice and the source says so."""
+    source = THRESHOLDS["temporal"].source
+    assert "frictex's own limit" in source and "500 Hz" in source
+    assert "above 800 Hz: Bolanowski" not in source
+
+
 @pytest.mark.parametrize("kind", sorted(NEAR))
 def test_just_beyond_is_flagged_and_just_inside_is_not(tmp_path, kind):
     beyond, inside = NEAR[kind]
