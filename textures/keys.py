@@ -6,6 +6,7 @@ at the top of ``textures.loader``.
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Sequence
 from dataclasses import replace
 
 from frictex.device import profile as profiles
@@ -23,7 +24,35 @@ LAYER_TYPES = ("grating", "waveform", "rectangle", "disc", "edge", "bump", "line
                "directional", "guidance", "keyclick", "height", "recorded", "clip")
 FORCE_TYPES = ("directional", "guidance", "keyclick")
 PERIODIC_TYPES = ("grating", "waveform")
-RENDER_CHOICES = ("auto",) + model.RENDER_MODES
+
+
+class RenderChoices(Sequence[str]):
+    """What a layer's ``render`` may name, read each time it is asked (a check, an error
+    listing them): ``auto`` and :func:`model.loadable_render_modes`, so that a renderer
+    registered or installed after frictex was imported is taken, and one that cannot be
+    loaded is neither taken nor offered."""
+
+    def now(self) -> tuple[str, ...]:
+        """The names as they are now."""
+        return ("auto", *model.loadable_render_modes())
+
+    def __getitem__(self, index):
+        return self.now()[index]
+
+    def __len__(self) -> int:
+        return len(self.now())
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.now())
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.now()
+
+    def __repr__(self) -> str:
+        return f"RenderChoices({self.now()})"
+
+
+RENDER_CHOICES = RenderChoices()
 
 _DEVICE = profiles.DeviceProfile()
 _FRICTION = profiles.FrictionParams()

@@ -51,8 +51,11 @@ def render_modes() -> tuple[str, ...]:
     return (SHO, *RENDERERS.names())
 
 
-#: :func:`render_modes` of the packages installed when frictex was imported
-RENDER_MODES = render_modes()
+def loadable_render_modes() -> tuple[str, ...]:
+    """:func:`render_modes` less another package's renderers that cannot be loaded (each
+    left out with one warning), as they are now: one registered or installed since
+    frictex was imported included."""
+    return (SHO, *RENDERERS.loadable_names())
 
 #: ``fingers`` selectors of a layer besides "any" and finger numbers "1", "2", ...
 #: (1-based, in order of touch-down among the fingers touching at that sample).
