@@ -8,13 +8,12 @@ converts recordings of real touch screens to the trace CSV.
 from __future__ import annotations
 
 import argparse
-import math
 import os
 
 from frictex.app.commands.argtypes import positive_float
 from frictex.rendering.input.press_synth import press_trace
 from frictex.rendering.input.trace_synth import (HUMAN_AREA_MM, MOTIONS, START_MM, make_motion,
-                                                sample, truth)
+                                                sample, sample_count, truth)
 from frictex.app.engine.outfile import check_writable, write_file
 from frictex.device.errors import InputError, OutputSpaceError
 from frictex.rendering.input.trace_file import format_trace
@@ -139,7 +138,7 @@ def _check_presses(peaks: list[float], rate_hz: float) -> None:
     than MAX_SAMPLES samples at ``rate_hz`` (a press ignores --duration)."""
     if len(peaks) > MAX_PRESSES:
         raise InputError(f"--peaks: {len(peaks)} presses; at most {MAX_PRESSES}")
-    samples = len(peaks) * (math.floor(PRESS_S * rate_hz) + 1)
+    samples = len(peaks) * sample_count(PRESS_S, rate_hz)
     if samples > MAX_SAMPLES:
         raise InputError(f"--peaks: {len(peaks)} presses of {PRESS_S:g} s at --rate {rate_hz:g} Hz "
                          f"are {samples:,} samples; at most {MAX_SAMPLES:,}")

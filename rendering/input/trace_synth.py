@@ -295,7 +295,7 @@ def sample(motion: Motion, rate_hz: float, *, noise_mm: float = 0.0, jitter_s: f
         raise InputError(f"drop {drop!r}: expected a share of samples in [0, 1)")
     _check_jitter(jitter_s, rate_hz)
     rng = np.random.default_rng(seed + 1)
-    n = int(np.floor(motion.duration_s * rate_hz)) + 1
+    n = sample_count(motion.duration_s, rate_hz)
     t = np.arange(n) / rate_hz
     if jitter_s > 0:
         t = np.maximum.accumulate(np.clip(t + rng.normal(0, jitter_s, n), 0, motion.duration_s))
@@ -312,6 +312,19 @@ def sample(motion: Motion, rate_hz: float, *, noise_mm: float = 0.0, jitter_s: f
     event[0] = DOWN
     event[-1] = UP
     return make_trace(t, np.full(n, finger), x, y, np.full(n, force_n), event)
+
+
+#: how close two samples' times are rounded together as a whole number of intervals
+COUNT_TOLERANCE = 1e-9
+
+
+def sample_count(duration_s: float, rate_hz: float) -> int:
+    """Samples in [0, ``duration_s``] (s) at ``rate_hz`` (Hz), the last at the end when the
+    duration is a whole number of intervals to within COUNT_TOLERANCE (0.57 s at 100 Hz
+    is 56.999... intervals in floating point, and 58 samples, not 57)."""
+    intervals = duration_s * rate_hz
+    whole = round(intervals)
+    return int(whole if abs(intervals - whole) < COUNT_TOLERANCE else np.floor(intervals)) + 1
 
 
 def _check_jitter(jitter_s: float, rate_hz: float) -> None:

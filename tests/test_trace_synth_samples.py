@@ -1,0 +1,19 @@
+"""trace synth: how many samples a motion gives."""
+
+import numpy as np
+import pytest
+
+from frictex.rendering.input.trace_synth import make_motion, sample, sample_count
+
+
+def test_a_duration_of_whole_intervals_ends_on_its_last_sample():
+    """0.57 s at 100 Hz is 56.999... intervals in floating point: the trace ended at
+    0.56 s; 69 of 1000 durations from 0.01 to 10 s at 100 Hz lost their last sample."""
+    trace = sample(make_motion("swipe", duration_s=0.57), 100.0)
+    assert len(trace) == 58 and trace.t_s[-1] == pytest.approx(0.57)
+    durations = np.round(np.arange(1, 1001) * 0.01, 2)
+    assert all(sample_count(d, 100.0) == round(d * 100) + 1 for d in durations)
+
+
+def test_a_duration_between_samples_still_ends_at_the_last_whole_one():
+    assert sample_count(0.575, 100.0) == 58
