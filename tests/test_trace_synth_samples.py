@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from frictex.app.commands.cli import main
 from frictex.rendering.input.trace_synth import make_motion, sample, sample_count
 
 
@@ -17,3 +18,15 @@ def test_a_duration_of_whole_intervals_ends_on_its_last_sample():
 
 def test_a_duration_between_samples_still_ends_at_the_last_whole_one():
     assert sample_count(0.575, 100.0) == 58
+
+
+@pytest.mark.parametrize("options", [["swipe", "--duration", "0.001"],
+                                     ["human", "--duration", "1e-6"],
+                                     ["swipe", "--rate", "0.001"]])
+def test_a_motion_of_fewer_than_two_samples_is_refused(tmp_path, capsys, options):
+    """Such a trace was one row whose event was a lift, with no touch (exit 0)."""
+    out = tmp_path / "t.csv"
+    assert main(["trace", "synth", *options, "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "gives 1 sample; a trace needs at least 2 (a touch and a lift)" in err
+    assert "\n" not in err and not out.exists()

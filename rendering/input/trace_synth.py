@@ -287,15 +287,16 @@ def sample(motion: Motion, rate_hz: float, *, noise_mm: float = 0.0, jitter_s: f
 
     ``noise_mm``: standard deviation of position noise; ``jitter_s``: standard deviation
     of timestamp jitter (kept monotonic); ``drop``: share of samples in [0, 1) the screen
-    never reports (drawn independently; the first and the last are always kept).
+    never reports (drawn independently; the first and the last are always kept). Fewer
+    than 2 samples (a touch and a lift) is an InputError.
     """
     if rate_hz <= 0:
         raise InputError(f"sampling rate {rate_hz} Hz must be > 0")
     if not 0.0 <= drop < 1.0:
         raise InputError(f"drop {drop!r}: expected a share of samples in [0, 1)")
     _check_jitter(jitter_s, rate_hz)
+    n = _sample_count(motion.duration_s, rate_hz)
     rng = np.random.default_rng(seed + 1)
-    n = sample_count(motion.duration_s, rate_hz)
     t = np.arange(n) / rate_hz
     if jitter_s > 0:
         t = np.maximum.accumulate(np.clip(t + rng.normal(0, jitter_s, n), 0, motion.duration_s))
@@ -325,6 +326,16 @@ def sample_count(duration_s: float, rate_hz: float) -> int:
     intervals = duration_s * rate_hz
     whole = round(intervals)
     return int(whole if abs(intervals - whole) < COUNT_TOLERANCE else np.floor(intervals)) + 1
+
+
+def _sample_count(duration_s: float, rate_hz: float) -> int:
+    """:func:`sample_count`, or an InputError for fewer than 2: a touch needs its down and
+    its lift."""
+    n = sample_count(duration_s, rate_hz)
+    if n < 2:
+        raise InputError(f"duration {duration_s:g} s at {rate_hz:g} Hz gives {n} sample; a trace "
+                         f"needs at least 2 (a touch and a lift), {1 / rate_hz:g} s or more")
+    return n
 
 
 def _check_jitter(jitter_s: float, rate_hz: float) -> None:
