@@ -149,11 +149,19 @@ def test_fields_of_unequal_length_are_refused(monkeypatch, scene, columns, data)
     ({"t_s": [], "finger": [], "x_mm": [], "y_mm": []}, "no samples"),
     ({"t_s": None}, r"^trace: t_s is None: expected one number per sample, shape \(n,\)$"),
     ({"y_mm": None}, "^trace: y_mm is None"),
+    ({"x_mm": np.ma.masked_array([1.0, 99.0], mask=[False, True])},
+     r"^trace: x_mm: sample 1 is masked: expected a number at every sample \(fill it, or "
+     r"leave the sample out\)$"),
 ])
 def test_what_is_not_a_column_of_numbers_is_refused(change, message):
     columns = {"t_s": [0.0, 0.02], "finger": [0, 0], "x_mm": [1.0, 2.0], "y_mm": [3.0, 4.0]}
     with pytest.raises(frictex.TraceError, match=message):
         frictex.make_trace(**{**columns, **change})
+
+
+def test_a_masked_array_with_nothing_masked_is_its_values():
+    trace = frictex.make_trace([0.0, 0.02], [0, 0], np.ma.masked_array([1.0, 2.0]), [3.0, 4.0])
+    assert trace.x_mm.tolist() == [1.0, 2.0]
 
 
 @pytest.mark.parametrize("kind, kwargs, message", [

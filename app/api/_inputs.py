@@ -313,7 +313,20 @@ def _column(name: str, values: npt.ArrayLike) -> np.ndarray:
                          "sample, shape (n,)")
     if array.dtype.kind not in "iuf" and array.size:
         raise TraceError(f"{_WHERE}: {name} holds {array.dtype} values: expected numbers")
+    _refuse_masked(name, values)
     return array
+
+
+def _refuse_masked(name: str, values: npt.ArrayLike) -> None:
+    """Refuse a numpy masked array with a masked value: ``np.asarray`` takes the value
+    under the mask, which is not a sample."""
+    if not isinstance(values, np.ma.MaskedArray):
+        return
+    masked = np.ma.getmaskarray(values)
+    if masked.any():
+        i = int(np.argmax(masked))
+        raise TraceError(f"{_WHERE}: {name}: sample {i} is masked: expected a number at "
+                         f"every sample (fill it, or leave the sample out)")
 
 
 def synth_trace(kind: str, *, rate_hz: float = 50.0, duration_s: float = 2.0,
