@@ -1,4 +1,5 @@
-"""trace synth: how many samples a motion gives, and their timestamps under jitter."""
+"""trace synth: how many samples a motion gives, their timestamps under jitter, and the
+speed of human-varied arcs."""
 
 import numpy as np
 import pytest
@@ -39,3 +40,14 @@ def test_jittered_timestamps_stay_strictly_increasing():
     t = sample(make_motion("swipe", speed_mm_s=1.0, duration_s=20.0), 100.0,
                jitter_s=0.004).t_s
     assert t.size == 2001 and np.diff(t).min() >= 0.1 / 100 * (1 - 1e-9)
+
+
+def test_a_slow_speed_gives_slow_arcs():
+    """human-varied's arcs were played at 40 mm/s peak or faster whatever --speed said:
+    at --speed 5 every arc ran at 40 mm/s and more."""
+    motion = make_motion("human-varied", speed_mm_s=5.0, duration_s=200.0, seed=3)
+    arcs = [(t1 - t0, q[2] * abs(q[4] - q[3]))  # (s, mm): radius x sweep
+            for t0, t1, kind, q in motion.params["segments"] if kind == "arc"]
+    assert arcs
+    peaks = [1.875 * length / seconds for seconds, length in arcs if seconds > 0.1]
+    assert peaks and max(peaks) <= 5.0 * 1.8 + 1e-9

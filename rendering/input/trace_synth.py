@@ -271,7 +271,7 @@ def _varied_motion(speed_mm_s: float, duration_s: float, area_mm, start, seed: i
             sx, sy = cx + radius * np.cos(a0), cy + radius * np.sin(a0)
             if np.hypot(sx - x, sy - y) > 1e-9:
                 line(float(np.hypot(sx - x, sy - y)), peak, float(np.arctan2(sy - y, sx - x)))
-            move_s = max(1.875 * radius * abs(sweep) / max(peak, 40.0), 0.1)
+            move_s = max(1.875 * radius * abs(sweep) / peak, 0.1)
             segments.append((t, t + move_s, "arc", (cx, cy, radius, a0, a0 + sweep)))
             x, y, t = cx + radius * np.cos(a0 + sweep), cy + radius * np.sin(a0 + sweep), t + move_s
         else:  # pause, finger resting
