@@ -11,12 +11,30 @@ import argparse
 import os
 
 from frictex.app.commands.argtypes import positive_float
-from frictex.rendering.input.press_synth import press_trace
+from frictex.rendering.input.press_synth import PRESS_MM, PRESS_RATE_HZ, TOUCH_N, press_trace
 from frictex.rendering.input.trace_synth import (HUMAN_AREA_MM, MOTIONS, START_MM, make_motion,
                                                 sample, sample_count, truth)
 from frictex.app.engine.outfile import check_writable, write_file
 from frictex.device.errors import InputError, OutputSpaceError
 from frictex.rendering.input.trace_file import format_trace
+
+
+#: a path motion's touch rate (Hz) and normal force (N) unless told
+PATH_RATE_HZ = 50.0
+PATH_FORCE_N = 0.5
+#: the defaults of the options some motions do not use (:data:`UNUSED`)
+UNUSED_DEFAULTS = {"speed": 40.0, "duration": 2.0, "angle": 0.0, "length": 80.0, "radius": 20.0,
+                   "noise": 0.0, "jitter": 0.0, "peaks": [1.0, 0.95, 1.1], "force_noise": 0.03,
+                   "truth_rate": 10_000.0}
+_HUMAN_UNUSED = ("angle", "length", "radius", "peaks", "force_noise")
+#: the options each motion does not use: refused at any value but their default (which a
+#: trace's first line may repeat); --area and --truth have their own messages
+UNUSED = {"swipe": ("length", "radius", "peaks", "force_noise"),
+          "back-and-forth": ("radius", "peaks", "force_noise"),
+          "circle": ("angle", "length", "peaks", "force_noise"),
+          "human": _HUMAN_UNUSED, "human-varied": _HUMAN_UNUSED,
+          "press": ("speed", "duration", "angle", "length", "radius", "noise", "jitter",
+                    "truth_rate")}
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -27,41 +45,51 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                        help="a finger path, or 'press': a still finger pressing (normal force "
                             "rising to --peaks and back, for key-click scenes)")
     synth.add_argument("-o", "--out", required=True, metavar="FILE", help="trace CSV to write")
-    synth.add_argument("--rate", type=positive_float, default=50.0, metavar="HZ",
-                       help="touch sampling rate (default 50 Hz, seed 003's screen)")
-    synth.add_argument("--speed", type=positive_float, default=40.0, metavar="MM_S",
+    synth.add_argument("--rate", type=positive_float, default=None, metavar="HZ",
+                       help=f"touch sampling rate (default {PATH_RATE_HZ:g} Hz, seed 003's "
+                            f"screen; press: {PRESS_RATE_HZ:g} Hz)")
+    synth.add_argument("--speed", type=positive_float, default=UNUSED_DEFAULTS["speed"],
+                       metavar="MM_S",
                        help="finger speed (human: typical peak speed), default 40 mm/s")
-    synth.add_argument("--duration", type=positive_float, default=2.0, metavar="S",
-                       help="length of the motion (default 2 s)")
+    synth.add_argument("--duration", type=positive_float, default=UNUSED_DEFAULTS["duration"],
+                       metavar="S", help="length of the motion (default 2 s)")
     synth.add_argument("--x0", type=float, default=None, metavar="MM",
-                       help="start x (default 14; human motions: 30 %% across --area)")
+                       help=f"start x (default {START_MM[0]:g}; human motions: 30 %% across "
+                            f"--area; press: {PRESS_MM[0]:g})")
     synth.add_argument("--y0", type=float, default=None, metavar="MM",
-                       help="start y (default 32.4; human motions: half way up --area)")
+                       help=f"start y (default {START_MM[1]:g}; human motions: half way up "
+                            f"--area; press: {PRESS_MM[1]:g})")
     synth.add_argument("--area", type=positive_float, nargs=2, default=None,
                        metavar=("W_MM", "H_MM"),
                        help="human, human-varied: the area (from 0, 0) the finger wanders in "
                             "(default 108 x 64.8, the demo's display)")
-    synth.add_argument("--angle", type=float, default=0.0, metavar="DEG",
+    synth.add_argument("--angle", type=float, default=UNUSED_DEFAULTS["angle"], metavar="DEG",
                        help="direction of travel, from +x towards +y (default 0 deg)")
-    synth.add_argument("--length", type=positive_float, default=80.0, metavar="MM",
+    synth.add_argument("--length", type=positive_float, default=UNUSED_DEFAULTS["length"],
+                       metavar="MM",
                        help="stroke length for back-and-forth (default 80 mm)")
-    synth.add_argument("--radius", type=positive_float, default=20.0, metavar="MM",
+    synth.add_argument("--radius", type=positive_float, default=UNUSED_DEFAULTS["radius"],
+                       metavar="MM",
                        help="circle radius (default 20 mm)")
-    synth.add_argument("--noise", type=float, default=0.0, metavar="MM",
+    synth.add_argument("--noise", type=float, default=UNUSED_DEFAULTS["noise"], metavar="MM",
                        help="position noise, standard deviation (default 0 mm: none)")
-    synth.add_argument("--jitter", type=float, default=0.0, metavar="S",
+    synth.add_argument("--jitter", type=float, default=UNUSED_DEFAULTS["jitter"], metavar="S",
                        help="timestamp jitter, standard deviation, under half the sample "
                             "interval (default 0 s: none)")
-    synth.add_argument("--force", type=float, default=0.5, metavar="N",
-                       help="normal force (press: the force at touch-down; default 0.5 N)")
-    synth.add_argument("--peaks", type=float, nargs="+", default=[1.0, 0.95, 1.1], metavar="N",
+    synth.add_argument("--force", type=float, default=None, metavar="N",
+                       help=f"normal force (press: the force at touch-down, default "
+                            f"{TOUCH_N:g} N; otherwise default {PATH_FORCE_N:g} N)")
+    synth.add_argument("--peaks", type=float, nargs="+", default=UNUSED_DEFAULTS["peaks"],
+                       metavar="N",
                        help="press: peak normal force of each press (default 1.0 0.95 1.1)")
-    synth.add_argument("--force-noise", type=float, default=0.03, metavar="N",
+    synth.add_argument("--force-noise", type=float, default=UNUSED_DEFAULTS["force_noise"],
+                       metavar="N",
                        help="press: force sensor noise, standard deviation (default 0.03 N)")
     synth.add_argument("--seed", type=int, default=0,
                        help="random seed (human motion, noise; default 0)")
     synth.add_argument("--truth", metavar="FILE", help="also write the true path here")
-    synth.add_argument("--truth-rate", type=positive_float, default=10_000.0, metavar="HZ",
+    synth.add_argument("--truth-rate", type=positive_float, default=UNUSED_DEFAULTS["truth_rate"],
+                       metavar="HZ",
                        help="sampling rate of the true path (default 10000 Hz)")
     imp = sub.add_parser("import", help="convert a touch recording to a trace CSV",
                          description="Convert a recording (Android getevent -lt, evemu, "
@@ -144,6 +172,31 @@ def _check_presses(peaks: list[float], rate_hz: float) -> None:
                          f"are {samples:,} samples; at most {MAX_SAMPLES:,}")
 
 
+def _set_motion_defaults(args: argparse.Namespace) -> None:
+    """Fill in the options whose default depends on the motion: a press's are
+    ``press_synth``'s own (the bundled keyclick-press-100hz), a path's START_MM, 50 Hz
+    and 0.5 N."""
+    press = args.motion == "press"
+    if args.rate is None:
+        args.rate = PRESS_RATE_HZ if press else PATH_RATE_HZ
+    if args.force is None:
+        args.force = TOUCH_N if press else PATH_FORCE_N
+    if press:
+        args.x0 = PRESS_MM[0] if args.x0 is None else args.x0
+        args.y0 = PRESS_MM[1] if args.y0 is None else args.y0
+
+
+def _check_used(args: argparse.Namespace) -> None:
+    """InputError for an option the motion does not use, given a value other than its
+    default: it would be ignored."""
+    for name in UNUSED[args.motion]:
+        value = getattr(args, name)
+        if value != UNUSED_DEFAULTS[name]:
+            shown = " ".join(f"{v:g}" for v in value) if isinstance(value, list) else f"{value:g}"
+            raise InputError(f"--{name.replace('_', '-')} {shown}: a {args.motion} does not use "
+                             "it; leave it out")
+
+
 def _check_outputs(args: argparse.Namespace) -> None:
     """Refuse, before making the trace, an -o or --truth that cannot be written (naming
     the option), and a --truth that is -o's own file (it would overwrite the trace)."""
@@ -188,14 +241,14 @@ def run(args: argparse.Namespace) -> int:
         from frictex.rendering.input.trace_import import run_import
         _check_import_output(args)
         return run_import(args, _write_text)
+    _set_motion_defaults(args)
     _check_limits(args)
+    _check_used(args)
     _check_outputs(args)
     if args.area is not None and args.motion not in ("human", "human-varied"):
         raise InputError(f"--area: only the human motions wander in an area; a {args.motion} "
                          "starts at --x0, --y0")
     if args.motion == "press":
-        args.x0 = START_MM[0] if args.x0 is None else args.x0
-        args.y0 = START_MM[1] if args.y0 is None else args.y0
         if args.truth:
             raise InputError("--truth: a press does not move; its trace is its true path")
         trace = press_trace(peaks_n=args.peaks, x_mm=args.x0, y_mm=args.y0, rate_hz=args.rate,

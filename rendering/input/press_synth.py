@@ -20,8 +20,16 @@ from frictex.rendering.input.trace_file import DOWN, MOVE, UP, Trace, make_trace
 from frictex.rendering.input.trace_synth import sample_count
 
 
-def press_trace(peaks_n=(1.0, 0.95, 1.1), x_mm: float = 70.0, y_mm: float = 15.0,
-                rate_hz: float = 100.0, touch_n: float = 0.1, rise_s: float = 0.6,
+#: where the finger presses (mm): on keyclick-ring's button (50-90 x 5-25 mm)
+PRESS_MM = (70.0, 15.0)
+#: the force sensor's report rate (Hz)
+PRESS_RATE_HZ = 100.0
+#: normal force at touch-down (N)
+TOUCH_N = 0.1
+
+
+def press_trace(peaks_n=(1.0, 0.95, 1.1), x_mm: float = PRESS_MM[0], y_mm: float = PRESS_MM[1],
+                rate_hz: float = PRESS_RATE_HZ, touch_n: float = TOUCH_N, rise_s: float = 0.6,
                 hold_s: float = 0.1, pause_s: float = 0.3, noise_n: float = 0.03,
                 seed: int = 0) -> Trace:
     """Presses of a still finger at (x_mm, y_mm), one per peak force (N).
