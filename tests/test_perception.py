@@ -161,6 +161,24 @@ def test_depths_are_compared_by_the_friction_levels_they_play(tmp_path, level):
     assert f"which differ by {fraction * 100:.3g} % (dmu'/mu' {fraction:.3g})" in found.message
 
 
+@pytest.mark.parametrize("mu_high, warns", [(1.0, True), (0.5, False)])
+def test_a_protocols_depths_are_taken_from_its_layers_own_friction(tmp_path, mu_high, warns):
+    """Depths 0.10 and 0.15 on a grating of mu_high 0.5 play mu' 0.40 and 0.35 (13 %
+    apart, over the Weber fraction 0.11); the check took every grating's mu_high as 1
+    (0.90 and 0.85, 6 %) and warned."""
+    base = GRATING.format(render="sht", period=5.0, low=round(mu_high - 0.1, 3)).replace(
+        "mu_high = 1.0", f"mu_high = {mu_high}")
+    (tmp_path / "base.toml").write_text(HEAD + base)
+    (tmp_path / "p.toml").write_text(DEPTH_PROTOCOL.format(level=0.15).replace(
+        'scene = "grating-5mm"', 'scene = "base.toml"\nlayer = "lines"').replace(
+        "reference = 0.3", "reference = 0.1"))
+    found = [f for f in protocol_findings(load_protocol(tmp_path / "p.toml"))
+             if f.kind == "weber" and f.where.startswith("stimuli")]
+    assert bool(found) == warns, found
+    if warns:
+        assert "play friction levels mu' 0.9 and 0.85" in found[0].message
+
+
 def test_a_depth_that_leaves_no_friction_is_not_compared_by_a_weber_fraction():
     assert compare_values("depth", 0.95, 1.0, "pair") is None
 

@@ -5,7 +5,8 @@ Pairs compared:
 
 - parametric stimuli (``[stimuli]`` with ``vary`` and ``levels``): the reference against
   its farthest level (the largest: levels are above the reference), by ``vary``'s
-  threshold (``perception.compare_values``: periods 14 %, depths and clip levels 11 %).
+  threshold (``perception.compare_values``: periods 14 %, the friction levels of
+  depths and clip levels 11 %, from the varied layer's own mu' and clip depth).
   Constant stimuli measure a threshold, so levels under it are expected (answered
   correctly less often than at the threshold, the nearest near chance); only a design
   with none beyond it warns: its psychometric function stays below the threshold's point
@@ -78,6 +79,16 @@ def _naming(names: list[str]) -> str:
     return f" (stimul{'i' if len(names) > 1 else 'us'} {quoted})"
 
 
+def _varied_levels(scene, layer: int | None) -> dict[str, float]:
+    """``compare_values``'s ``mu_high`` and ``clip_depth`` of the varied layer (index
+    ``layer`` of the base ``scene``): the friction its depth is taken from (a grating's
+    mu_high, a waveform's mu_max, 1 for a shape) and a clip's depth (its levels scale it)."""
+    varied = None if scene is None or layer is None else scene.layers[layer]
+    clip = getattr(varied, "clip", None)
+    return {"mu_high": getattr(varied, "mu_high", getattr(varied, "mu_max", 1.0)),
+            "clip_depth": 1.0 if clip is None else clip.depth}
+
+
 def protocol_findings(protocol: Protocol) -> list[Finding]:
     """The scenes' features and the pairs of stimuli below a threshold (module
     docstring), scenes first, in the protocol's order."""
@@ -90,7 +101,8 @@ def protocol_findings(protocol: Protocol) -> list[Finding]:
     if farthest is not None:
         value, why = farthest
         found = compare_values(st.vary, st.reference, value,
-                               f"stimuli {st.reference:g} and {value:g}")
+                               f"stimuli {st.reference:g} and {value:g}",
+                               **_varied_levels(scenes.get(st.scene), st.layer))
         if found is not None:
             out.append(Finding(found.kind, found.where, found.value, f"{found.message}; {why}"))
     for a, b in combinations(st.listed, 2):
