@@ -19,6 +19,8 @@ from pathlib import Path
 
 import pytest
 
+import frictex
+
 pytest.importorskip("mypy", reason="mypy is not installed (pip install 'frictex[test]')")
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -153,3 +155,33 @@ def test_the_user_script_runs(tmp_path):
     error, printed = done.stdout.splitlines()
     assert error.startswith("no-such-scene: no such file")
     assert "('commands.npz', 'friction.npz') grating-5mm" in printed
+
+
+LAYERS_SCRIPT = '''\
+from __future__ import annotations
+
+import dataclasses
+
+import frictex
+from frictex.textures.heights import HeightLayer
+
+
+def periods_mm(scene: frictex.Scene) -> list[float]:
+    return [layer.period_mm for layer in scene.layers if layer.is_periodic]
+
+
+def with_height(scene: frictex.Scene, height: HeightLayer) -> frictex.Scene:
+    return dataclasses.replace(scene, layers=scene.layers + (height,))
+'''
+
+
+def test_a_scenes_layers_are_told_apart_by_is_periodic(tmp_path, checker):
+    """README's ``if layer.is_periodic: layer.period_mm`` failed (no period_mm on 8 of the
+    union's classes), and a height, clip or AR texture layer was no ``Scene.layers`` item."""
+    script = tmp_path / "layers.py"
+    script.write_text(LAYERS_SCRIPT, encoding="utf-8")
+    done = checker(script)
+    assert (done.returncode, done.stdout, done.stderr) == (0, "", "")
+    namespace: dict = {}
+    exec(LAYERS_SCRIPT, namespace)
+    assert namespace["periods_mm"](frictex.load_scene("grating-5mm")) == [5.0]

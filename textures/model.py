@@ -24,9 +24,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import ClassVar
+from typing import ClassVar, Literal, Protocol
 
 import numpy as np
+import numpy.typing as npt
 
 from frictex.device.profile import DeviceProfile
 from frictex.device.registry import Expect, Registry
@@ -239,7 +240,8 @@ class _LayerBase:
         return self.mu_at(x, y), self.covers(x, y)
 
     @property
-    def is_periodic(self) -> bool:
+    def is_periodic(self) -> Literal[False]:
+        """False: a layer without a period (:class:`_PeriodicBase`'s is True)."""
         return False
 
     @property
@@ -261,8 +263,9 @@ class _PeriodicBase(_LayerBase):
     angle_deg: float = 0.0
     offset_mm: float = 0.0
 
+    # True where the base's is False: what tells a PeriodicLayer from a PlainLayer
     @property
-    def is_periodic(self) -> bool:
+    def is_periodic(self) -> Literal[True]:  # type: ignore[override]
         return True
 
     @property
@@ -659,7 +662,63 @@ class KeyClick(_ForceBase):
 
 FORCE_LAYERS = (Directional, Guidance, KeyClick)
 
-Layer = Grating | Waveform | Shape | Edge | Bump | Line | RasterMap | Directional | Guidance | KeyClick
+
+class _LayerAnswers(Protocol):
+    """What every layer answers, as a renderer or a user's code reads it: its ``name``,
+    ``render`` (a renderer's name), ``blend``, ``fingers``, and at arrays of positions
+    ``x, y`` (mm) its mu' (``mu_at``), where it applies (``covers``) and both at once
+    (``mu_and_covers``). Protocols, not this module's classes: the layers of
+    textures/heights.py, clips.py and hatt.py are layers too, and they import this module."""
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def render(self) -> str: ...
+
+    @property
+    def blend(self) -> str: ...
+
+    @property
+    def fingers(self) -> str: ...
+
+    def mu_at(self, x: npt.ArrayLike, y: npt.ArrayLike) -> np.ndarray: ...
+
+    def covers(self, x: npt.ArrayLike, y: npt.ArrayLike) -> np.ndarray: ...
+
+    def mu_and_covers(self, x: npt.ArrayLike,
+                      y: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]: ...
+
+
+class PlainLayer(_LayerAnswers, Protocol):
+    """A layer without a period (``is_periodic`` False)."""
+
+    @property
+    def is_periodic(self) -> Literal[False]: ...
+
+
+class PeriodicLayer(_LayerAnswers, Protocol):
+    """A grating or a waveform (``is_periodic`` True) and its single period (seed 003
+    section 4.4.2): ``axis`` (unit vector across the lines), ``period_mm`` (mm),
+    ``phase_at(x, y)`` (cycles) and ``profile(phase)`` (mu')."""
+
+    @property
+    def is_periodic(self) -> Literal[True]: ...
+
+    @property
+    def axis(self) -> tuple[float, float]: ...
+
+    @property
+    def period_mm(self) -> float: ...
+
+    def phase_at(self, x: npt.ArrayLike, y: npt.ArrayLike) -> np.ndarray: ...
+
+    def profile(self, phase: npt.ArrayLike) -> np.ndarray: ...
+
+
+#: a scene's layer, whatever its class: ``if layer.is_periodic:`` tells a type checker
+#: that it is a :class:`PeriodicLayer` (its ``is_periodic`` is Literal[True])
+Layer = PeriodicLayer | PlainLayer
 
 
 @dataclass(frozen=True)
