@@ -38,21 +38,15 @@ import numpy as np
 
 from frictex.device.registry import OWN_DISTRIBUTION, PluginError, Registry
 from frictex.rendering.tracking.tracks import FingerBlock
-from frictex.textures.model import RENDERER_FACTORY, RENDERERS, SHO, render_modes
+from frictex.textures.model import (RENDERER_FACTORY, RENDERERS, loadable_render_modes,
+                                    render_modes)
 
 __all__ = ["DEFAULT_SHO", "LAYER_RENDERERS", "RENDERERS", "LayerRenderer", "RendererFactory",
-           "any_layer", "build_renderer", "offered_render_modes", "render_modes",
+           "any_layer", "build_renderer", "loadable_render_modes", "render_modes",
            "sho_variant_of"]
 
 #: what a layer's ``render = "sho"`` means unless the run says otherwise
 DEFAULT_SHO = "sho-predicted"
-
-
-def offered_render_modes() -> tuple[str, ...]:
-    """:func:`render_modes` less another package's renderers that cannot be loaded (each
-    left out with one warning): what a command's ``--renderer`` and the demo's R key
-    offer."""
-    return (SHO, *RENDERERS.loadable_names())
 
 
 @runtime_checkable

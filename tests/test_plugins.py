@@ -511,6 +511,7 @@ def in_process_renderers(monkeypatch):
     for registry in (RENDERERS, LAYER_RENDERERS):
         monkeypatch.setattr(registry, "_entries", dict(registry._entries))
         monkeypatch.setattr(registry, "_origin", dict(registry._origin))
+        monkeypatch.setattr(registry, "_readings", registry._readings)  # its lookups too
 
 
 class _Flat:

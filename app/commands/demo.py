@@ -56,7 +56,7 @@ from frictex.app.commands.preview import MAX_PANEL_PX, frame_size
 from frictex.app.commands.argtypes import (add_link_arguments, add_max_unplayed, output_rate,
                                    positive_float, positive_int, sim_device_args)
 from frictex.device.errors import InputError
-from frictex.rendering.renderers import offered_render_modes
+from frictex.rendering.renderers import loadable_render_modes
 from frictex.rendering.visual.context import NoDisplayError
 from frictex.rendering.visual.windows import open_backend
 from frictex.rendering.visual.device_panels import default_frame_size
@@ -105,7 +105,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "scene's display size with the scope's strip, at least "
                              f"{MIN_FRAME[0]}x{MIN_FRAME[1]}); a window is then cut to the "
                              "screen's work area")
-    parser.add_argument("--renderer", choices=offered_render_modes(), default=None,
+    parser.add_argument("--renderer", choices=loadable_render_modes(), default=None,
                         help="start with every periodic layer rendered this way (R cycles it live)")
     add_link_arguments(parser)
     add_max_unplayed(parser, MAX_UNPLAYED, "; the blocks a live link skips to catch up not "

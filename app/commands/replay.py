@@ -14,7 +14,7 @@ from frictex.app.engine.sinks import SINKS
 from frictex.app.engine.sources import MAX_GAP_S
 from frictex.app.engine.summary import control_line
 from frictex.app.engine.tables import FORMATS
-from frictex.rendering.renderers import offered_render_modes
+from frictex.rendering.renderers import loadable_render_modes
 from frictex.textures.outside import add_allow_outside
 
 
@@ -33,7 +33,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="csv (default), npz (one array per column) or parquet (columnar, "
                              "compressed; pandas and polars open it): the two faster for "
                              "long replays")
-    parser.add_argument("--renderer", choices=offered_render_modes(), default=None,
+    parser.add_argument("--renderer", choices=loadable_render_modes(), default=None,
                         help="render every periodic layer this way instead of as its file says "
                              "(sho: the run's SHO variant, sho-predicted unless sho-held is "
                              "chosen; rendering/RENDERERS.md)")

@@ -31,7 +31,7 @@ the mouse then only hovers, and a touch screen that fails is shown and the mouse
 takes over. The wheel or up/down set the normal force of every finger. Keys: N / B
 next / previous scene (with a link or a recording open, those driving other channels
 are skipped: said once on stderr and on screen, :meth:`DemoLoop.step_scene`), R cycles the renderer (as the file says, then each of
-``offered_render_modes()``), S
+``loadable_render_modes()``), S
 scope, O outlines, P screenshot (numbered after those already in the folder, never
 overwriting one), SPACE emergency stop (latched; SPACE again resumes, ramped), Q /
 Escape quit.
@@ -92,7 +92,7 @@ from frictex.app.live.layer_edit import EditError, LayerEdit, SaveConflict, pane
 from frictex.app.live.link_watch import LinkWatch, device_clamps, limit_warning
 from frictex.app.live.watch import FileWatch
 from frictex.device.safe_text import escape
-from frictex.rendering.renderers import offered_render_modes
+from frictex.rendering.renderers import loadable_render_modes
 from frictex.rendering.visual.compositor import Compositor, FrameView
 from frictex.rendering.visual.layer_panel import PanelView, hit, track_fraction
 from frictex.rendering.visual.modal_view import modal_envelope
@@ -102,7 +102,7 @@ from frictex.textures.errors import TextureError
 from frictex.textures.loader import load_scene
 from frictex.textures.references import referenced_files
 
-RENDERER_CYCLE = (None, *offered_render_modes())
+RENDERER_CYCLE = (None, *loadable_render_modes())
 FORCE_STEP_N = 0.05
 FORCE_RANGE_N = (0.05, 2.0)
 #: an edit is applied once it has held still for a poll: 0.075-0.15 s after saving, so that
