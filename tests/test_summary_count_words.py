@@ -46,7 +46,7 @@ def test_the_demos_closing_lines_say_one_in_the_singular(capsys):
     from frictex.app.commands.demo import _Ended, _print_lines
     summary = {"cpu_steal_pct": None, "blocks": 1, "output_s": 0.0, "deadline_misses": 1,
                "clamps_total": 1, "frames": 1, "frame_ms_mean": 1.0, "input_counts": {},
-               "control": None, "ended_by": "window"}
+               "control": None, "ended_by": "window", "dropped_record_blocks": 0}
     link = {"state": "closed", "skipped_blocks": 1, "underruns": 1, "unplayed_samples": 0,
             "commanded_samples": 5, "unplayed_by_cause": {}}
     _print_lines(None, summary, _Ended(summary, link, None, None), None, None)
@@ -55,3 +55,15 @@ def test_the_demos_closing_lines_say_one_in_the_singular(capsys):
         "(1.0 ms mean), link: closed",
         "demo: link: the device ran dry 1 time and 1 block was skipped to catch up; 0 of 5 "
         "samples unplayed"]
+
+
+def test_blocks_left_out_of_a_recording_are_warned_of(capsys):
+    """The recorder's queue full: the count was only a number in summary.json."""
+    from frictex.app.commands.demo import _Ended, _print_lines
+    summary = {"cpu_steal_pct": None, "blocks": 9, "output_s": 0.0, "deadline_misses": 0,
+               "clamps_total": 0, "frames": 0, "frame_ms_mean": 0.0, "input_counts": {},
+               "control": None, "ended_by": "window", "dropped_record_blocks": 3}
+    _print_lines(None, summary, _Ended(summary, {"state": "none"}, None, None), None, None)
+    assert capsys.readouterr().err == ("frictex demo: warning: 3 blocks were left out of the "
+                                       "recording (its writer's queue was full): its tables "
+                                       "miss them\n")

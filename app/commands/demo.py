@@ -461,6 +461,10 @@ def _print_lines(args, summary: dict, ended: _Ended, out: Path | None,
               f"{counted(skipped, 'block')} {were(skipped)} skipped to catch up; "
               f"{link['unplayed_samples']} of {link['commanded_samples']} samples unplayed"
               + "".join(f", {k} {v}" for k, v in link["unplayed_by_cause"].items() if v))
+    if summary["dropped_record_blocks"]:  # the recorder fell behind: the tables miss them
+        print(f"frictex demo: warning: {counted(summary['dropped_record_blocks'], 'block')} "
+              f"{were(summary['dropped_record_blocks'])} left out of the recording (its "
+              "writer's queue was full): its tables miss them", file=sys.stderr)
     if "datagrams" in summary["input_counts"]:  # TUIO: what came from whom
         print(tuio_line(summary["input_counts"]))
     if frames is not None:
