@@ -40,7 +40,7 @@ def test_a_file_named_as_a_table_in_a_folder_without_a_summary_is_kept(tmp_path,
 def test_an_input_that_the_commit_would_replace_is_refused(tmp_path, capsys):
     out = tmp_path / "run"
     assert main(["replay", "grating-5mm", TRACE, "--out", str(out), "--quiet"]) == 0
-    trace = out / "commands.npz"  # a run's output by its name, beside a run's summary.json
+    trace = out / "commands.csv"  # the run's own output, overwritten with a trace
     shutil.copyfile(resolve_trace(TRACE), trace)
     err = _refused(["replay", "grating-5mm", str(trace), "--out", str(out), "--quiet"], capsys)
     assert f"{trace}: an input of the run, in --out {out}, where the run replaces it" in err
@@ -56,3 +56,19 @@ def test_a_previous_runs_folder_is_still_replaced(tmp_path):
     assert sorted(p.name for p in out.iterdir()) == ["commands.npz", "friction.npz",
                                                      "notes.txt", "summary.json"]
 
+
+
+def test_a_table_file_the_previous_runs_summary_does_not_list_is_kept(tmp_path, capsys):
+    """A Parquet run's folder, and the user's commands.csv dropped into it: its summary.json
+    lists commands.parquet and friction.parquet only, so commands.csv is not that run's."""
+    out = tmp_path / "run"
+    assert main(["replay", "grating-5mm", TRACE, "--out", str(out), "--quiet",
+                 "--format", "parquet"]) == 0
+    (out / "commands.csv").write_text("mine\n")
+    err = _refused(["replay", "grating-5mm", TRACE, "--out", str(out), "--quiet"], capsys)
+    assert "holds 'commands.csv' but its summary.json does not list it" in err, err
+    assert (out / "commands.csv").read_text() == "mine\n"
+    (out / "commands.csv").unlink()
+    assert main(["replay", "grating-5mm", TRACE, "--out", str(out), "--quiet"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["commands.csv", "friction.csv",
+                                                     "summary.json"]

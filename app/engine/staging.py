@@ -35,9 +35,10 @@ it did not write. Also refused before anything is written: ``--out`` the root fo
 and a mount point, bind mounts included (its staging folder would be on another file
 system, or the swap would fail with EBUSY). Errors name ``--out``, not the staging
 folder. An ``--out`` without a ``summary.json`` that holds a file of those names
-(a trace saved as ``commands.csv``) holds no run's outputs: it is refused before anything
-is written, as is an input of the run (a trace, a scene) that is a run's output by its
-name in ``--out``, which the commit would replace.
+(a trace saved as ``commands.csv``) holds no run's outputs, and a table file that a
+replay's ``summary.json`` does not list (``output.files``) is not that run's: either is
+refused before anything is written, as is an input of the run (a trace, a scene) that is
+a run's output by its name in ``--out``, which the commit would replace.
 
 Leftovers: a staging or set-aside folder whose process is gone is recognised by its
 name and cleared by the next run into the same ``--out`` (:meth:`Staging.begin`), as
@@ -56,6 +57,7 @@ import errno
 import filecmp
 import glob
 import hashlib
+import json
 import os
 import re
 import secrets
@@ -166,9 +168,11 @@ class Staging:
                                  "into a folder of its own")
             unclaimed = self._unclaimed()
             if unclaimed:
-                raise InputError(f"{self.out}: holds {unclaimed[0]!r} but no {SUMMARY}, so "
-                                 "not a run's output, which a run would replace with its own: "
-                                 "move it or write into another folder")
+                why = (f"its {SUMMARY} does not list it" if (self.out / SUMMARY).exists()
+                       else f"no {SUMMARY}")
+                raise InputError(f"{self.out}: holds {unclaimed[0]!r} but {why}, so not a "
+                                 "run's output, which a run would replace with its own: move "
+                                 "it or write into another folder")
             for path in inputs:
                 if path is not None and self._replaces(Path(path)):
                     raise InputError(f"{path}: an input of the run, in --out {self.out}, "
@@ -177,12 +181,20 @@ class Staging:
 
     def _unclaimed(self) -> list[str]:
         """The names in ``out`` a run would replace as its own (:meth:`_own`) where no
-        ``summary.json`` says a run wrote them (none when not ``claimed_by_summary``); an
-        empty folder holds nothing to lose."""
-        if not self.claimed_by_summary or (self.out / SUMMARY).exists():
+        ``summary.json`` says a run wrote them (none when not ``claimed_by_summary``): with
+        no summary, every such name (an empty folder holds nothing to lose); with a
+        replay's, the tables its ``output.files`` does not list (a summary without that
+        list, the demo's, claims them by name)."""
+        if not self.claimed_by_summary:
             return []
-        return sorted(e.name for e in os.scandir(self.out) if self._own(e) and not (
-            e.is_dir(follow_symlinks=False) and not any(os.scandir(e.path))))
+        if not (self.out / SUMMARY).exists():
+            return sorted(e.name for e in os.scandir(self.out) if self._own(e) and not (
+                e.is_dir(follow_symlinks=False) and not any(os.scandir(e.path))))
+        listed = _listed_tables(self.out / SUMMARY)
+        if listed is None:
+            return []
+        return sorted(e.name for e in os.scandir(self.out)
+                      if _TABLE.fullmatch(e.name) and e.name not in listed)
 
     def _replaces(self, path: Path) -> bool:
         """Whether the commit would replace the file ``path`` (a run's output in ``out``)."""
@@ -321,6 +333,25 @@ class Staging:
         if exc.errno is None:
             return exc
         return OSError(exc.errno, f"{self.out}: cannot {doing} ({exc.strerror})")
+
+
+#: the largest summary.json read for the tables it lists (a replay's is a few kB)
+_SUMMARY_BYTES = 1 << 20
+
+
+def _listed_tables(summary: Path) -> set[str] | None:
+    """The table files a replay's ``summary`` lists (``output.files``); None for a summary
+    that lists none (the demo's layout, an unreadable or oversized file)."""
+    try:
+        with open(summary, "rb") as fh:
+            doc = json.loads(fh.read(_SUMMARY_BYTES + 1)[:_SUMMARY_BYTES])
+    except (OSError, ValueError):
+        return None
+    output = doc.get("output") if isinstance(doc, dict) else None
+    files = output.get("files") if isinstance(output, dict) else None
+    if not isinstance(files, list) or not all(isinstance(f, str) for f in files):
+        return None
+    return set(files)
 
 
 def _is_mount(path: Path) -> bool:
