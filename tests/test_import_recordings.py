@@ -257,6 +257,10 @@ def test_an_evemu_recording_cut_mid_line_imports_what_came_before(tmp_path, caps
     assert "cut.evemu:25: the last line is cut short" in capsys.readouterr().err
     with pytest.raises(TraceError, match=r"rec:25: an 'E:' line that is not an evemu event"):
         parse_evemu(cut + "\n", "rec")
+    # saved whole but without its last line break: its last event (the comment after the
+    # value shows it whole) is kept, with no warning
+    whole = parse_evemu(EVEMU.rstrip("\n"), "rec")
+    assert whole.events == parse_evemu(EVEMU, "rec").events and whole.warnings == []
     # cut within its value, the line still reads as an event (1548 as 15): left out too
     within = EVEMU[:EVEMU.index("E: 0.007450 0003 0035 1548")] + "E: 0.007450 0003 0035 15"
     assert len(parse_evemu(within, "rec").events) == 5

@@ -71,8 +71,11 @@ def parse_evemu(text: str, where: str = "<evemu>") -> EvemuRecording:
         at = f"{where}:{number}"
         if line.startswith("E:"):
             m = _EVENT.match(line)
-            # an event cut anywhere, even within its value ('0108' cut to '010'), is none
-            if number == len(lines) and not text.endswith(("\n", "\r")):
+            # an event cut within its value ('1548' cut to '15') still reads as one: a last
+            # line without its line break is an event only where evemu-record's comment
+            # after the value shows the value whole
+            if (number == len(lines) and not text.endswith(("\n", "\r"))
+                    and (m is None or "#" not in line[m.end("value"):])):
                 warnings.append(f"{at}: the last line is cut short (no line break; the "
                                 "recording stopped mid-line): left out")
                 break

@@ -97,8 +97,9 @@ def read_log(text: str, where: str = "<getevent>", device: str | None = None) ->
         holds events of several devices.
 
     A last line without a line break (a recording stopped mid-line with Ctrl-C) is left
-    out with a warning, whatever it holds: cut within its value it could still read as
-    one ('00000273' cut to '0000027').
+    out with a warning unless its value is whole (8 hex digits, or a name): cut within its
+    value it could still read as one ('00000273' cut to '0000027'); a file merely saved
+    without its last line break keeps its last event.
     """
     events: list[Event] = []
     devices: dict[str, int] = {}
@@ -120,8 +121,10 @@ def read_log(text: str, where: str = "<getevent>", device: str | None = None) ->
             continue
         section = None if m else section
         # a last line without its line break may be cut anywhere, even within a value of
-        # the grammar's shape ('00000273' cut to '0000027' reads 0x27): never an event
-        if number == len(lines) and not text.endswith(("\n", "\r")):
+        # the grammar's shape ('00000273' cut to '0000027' reads 0x27): an event only with
+        # its whole value (getevent's 8 hex digits, or DOWN / UP / REPEAT)
+        if (number == len(lines) and not text.endswith(("\n", "\r"))
+                and (m is None or not _whole_value(m["value"]))):
             warnings.append(f"{where}:{number}: the last line is cut short (no line break; "
                             "the recording stopped mid-line): left out")
             break
@@ -144,6 +147,11 @@ def read_log(text: str, where: str = "<getevent>", device: str | None = None) ->
         raise TraceError(f"{where}: events of {len(devices)} devices ({_names(named)}); "
                          "choose one with --device")
     return GeteventLog(events, warnings, _device_axes(axes, device or next(iter(devices), "")))
+
+
+def _whole_value(token: str) -> bool:
+    """Whether an event's value token is as getevent writes it whole."""
+    return token in VALUES or (len(token) == 8 and _HEX8.match(token) is not None)
 
 
 def _event(m: re.Match, where: str, number: int) -> Event:
