@@ -30,6 +30,14 @@ def test_a_link_lost_and_back_is_judged_by_what_it_played():
         "--max-unplayed; skipped not counted)")
 
 
+def test_a_link_that_skipped_most_samples_never_kept_up():
+    """Catch-up skips are excused up to half the samples: a device that played 1 % of
+    them because the link skipped the rest exited 0."""
+    assert device_problem(link(unplayed=990, skipped=990), 0.1) == (
+        "the link skipped 99.00% of the commanded samples to catch up (limit 50%): this "
+        "machine did not keep up with the device")
+
+
 def test_the_blocks_a_live_link_skipped_to_catch_up_are_not_counted():
     """A loaded machine's haptic thread falls behind and the link skips blocks to catch up
     (20 % of a 2 s run here): the demo did what a live demo does, and exits 0."""

@@ -75,6 +75,9 @@ DEMO_OUTPUTS = ("events.csv", TOUCHES)
 MAX_UNPLAYED = 0.1
 #: unplayed samples the demo's limit leaves out: a live link's deliberate catch-up skips
 CATCH_UP = ("skipped",)
+#: share of the commanded samples the link may skip to catch up before the demo exits 1:
+#: a machine that skips more than half never kept up with the device
+MAX_CATCH_UP = 0.5
 
 def input_option(text: str) -> tuple[str, object]:
     """argparse type for ``--input``: (name, argument) as ``app.live.inputs.parse_input``
@@ -109,8 +112,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="start with every periodic layer rendered this way (R cycles it live)")
     add_link_arguments(parser)
     add_max_unplayed(parser, MAX_UNPLAYED, "; the blocks a live link skips to catch up not "
-                                           "counted; a link lost and not back by the end "
-                                           "exits 1 as well")
+                                           "counted, up to half the samples; a link lost "
+                                           "and not back by the end exits 1 as well")
     parser.add_argument("--rate", type=output_rate, default=10_000.0, metavar="HZ",
                         help="output sample rate (default 10000 Hz)")
     parser.add_argument("--block", type=positive_int, default=None, metavar="N",
@@ -367,11 +370,17 @@ def _run_demo(args, headless: bool, paths, index: int, scene, stagings, check) -
 def device_problem(link: dict, max_unplayed: float) -> str | None:
     """Why a demo on a device failed (exit 1): its link lost and not back by the end
     (``link``: the link's last status), or more than ``max_unplayed`` of the commanded
-    samples never played; None for a run without a device or one that played enough."""
+    samples never played (catch-up skips not counted), or more than :data:`MAX_CATCH_UP`
+    of them were skipped; None for a run without a device or one that played enough."""
     lost = link.get("disconnects", 0) - link.get("reconnects", 0)
     if lost > 0 or link.get("state") in ("disconnected", "failed"):
         why = link.get("last_error") or "port failed"
         return f"the device link was lost ({why}) and not back by the end"
+    commanded = link.get("commanded_samples") or 0
+    skipped = sum(link.get("unplayed_by_cause", {}).get(cause, 0) for cause in CATCH_UP)
+    if commanded and skipped / commanded > MAX_CATCH_UP:
+        return (f"the link skipped {skipped / commanded:.2%} of the commanded samples to catch "
+                f"up (limit {MAX_CATCH_UP:.0%}): this machine did not keep up with the device")
     return unplayed_problem(link, max_unplayed, "--max-unplayed", excused=CATCH_UP)
 
 
