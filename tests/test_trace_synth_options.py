@@ -44,3 +44,14 @@ def test_an_unused_option_at_its_default_is_accepted(tmp_path):
     defaults: the command must still run."""
     assert main(["trace", "synth", "circle", "--angle", "0", "--length", "80",
                  "-o", str(tmp_path / "c.csv")]) == 0
+
+
+def test_a_truth_rate_without_truth_is_refused(tmp_path, capsys):
+    """--truth-rate sets the rate of --truth's true path: alone it was ignored (exit 0)."""
+    out = tmp_path / "s.csv"
+    assert main(["trace", "synth", "swipe", "--truth-rate", "100", "-o", str(out)]) == 2
+    assert "--truth-rate 100: the rate of --truth's true path, and no --truth was given" in (
+        capsys.readouterr().err)
+    assert not out.exists()
+    assert main(["trace", "synth", "swipe", "--truth-rate", "100", "-o", str(out),
+                 "--truth", str(tmp_path / "t.csv")]) == 0

@@ -188,7 +188,10 @@ def _set_motion_defaults(args: argparse.Namespace) -> None:
 
 def _check_used(args: argparse.Namespace) -> None:
     """InputError for an option the motion does not use, given a value other than its
-    default: it would be ignored."""
+    default: it would be ignored (so is --truth-rate without --truth)."""
+    if not args.truth and args.truth_rate != UNUSED_DEFAULTS["truth_rate"]:
+        raise InputError(f"--truth-rate {args.truth_rate:g}: the rate of --truth's true path, "
+                         "and no --truth was given")
     for name in UNUSED[args.motion]:
         value = getattr(args, name)
         if value != UNUSED_DEFAULTS[name]:
