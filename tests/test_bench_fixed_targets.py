@@ -106,3 +106,11 @@ def test_a_bundled_scenes_static_image_is_judged_from_every_draw(runs_ms, verdic
                             "(geometric mean of 3 draws)")
     assert figure.value == pytest.approx(_t_interval(np.array(runs_ms) / 1e3)[0])
     assert figure.unit.endswith(f": {verdict}")
+
+
+def test_a_low_quantile_of_few_samples_has_an_upper_end_and_no_lower_one():
+    """The p1 of 100 samples: no rank for its lower end, its upper end the 4th smallest."""
+    claim = quantile_claim(np.arange(1, 101.0), 0.01, 50.0)
+    assert claim.low == -math.inf and claim.high == 4.0
+    assert claim.interval_text("us") == ("95 % interval up to 4.00 us, order statistic 4 of "
+                                         "100; too few samples for a lower end")

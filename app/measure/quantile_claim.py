@@ -84,6 +84,9 @@ class QuantileClaim:
         if math.isfinite(low):
             return (f"95 % interval from {end_text(low, self.bound)} {unit}, order statistic "
                     f"{l:,} of {self.n:,}; too few samples for an upper end")
+        if math.isfinite(high):
+            return (f"95 % interval up to {end_text(high, self.bound)} {unit}, order statistic "
+                    f"{u:,} of {self.n:,}; too few samples for a lower end")
         return f"no 95 % interval: too few samples ({self.n:,})"
 
 
