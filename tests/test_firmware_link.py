@@ -247,7 +247,7 @@ def test_faults_on_the_wire_are_counted_and_never_played(binary, tmp_path):
     (("--channels", "0"), "argument --channels: invalid value '0'"),
     (("--watchdog-ms", "40"), "ramp_ms: expected in [0, 10] ms: watchdog_ms + ramp_ms"),
     (("--limit", "1", "--limit", "2", "--channels", "3"), "limits_um: expected 1 or 3 values"),
-    (("--bandwidth", "6000"), "bandwidth_hz: expected positive and below half"),
+    (("--bandwidth", "inf"), "bandwidth_hz: expected positive and finite"),
     (("--force", "70"), "force_n: expected in [0, 65] N"),
     (("--log", "/nonexistent/dir/played.csv"), "cannot open a log file"),
     (("--frobnicate",), "unrecognized argument: --frobnicate"),
@@ -268,6 +268,18 @@ def test_a_ramp_of_0_ms_is_accepted_as_sim_device_accepts_it(binary):
     sink = CommandSink(lambda: open_port(path), 1, RATE, paced=True, process=proc)
     try:
         assert sink.info.ramp_ms == 0
+    finally:
+        sink.close()
+
+
+def test_a_rate_of_100_hz_takes_the_default_bandwidth_as_sim_device_does(binary):
+    """--rate 100 with the default 400 Hz --bandwidth was refused ("bandwidth_hz: expected
+    positive and below half the sample rate"); the loop is exact at any rate (PROTOCOL.md
+    5.4)."""
+    proc, path = hostport.start(rate_hz=100.0, binary=binary)
+    sink = CommandSink(lambda: open_port(path), 1, 100.0, paced=True, process=proc)
+    try:
+        assert sink.info.sample_rate_hz == 100.0
     finally:
         sink.close()
 

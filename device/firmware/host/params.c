@@ -44,8 +44,9 @@ const char *host_params_to_config(const host_params *p, fw_config *cfg)
                  (unsigned long)FW_STORE_WORDS / p->channels, p->channels);
         return fail("buffer_samples", range);
     }
-    if (!(p->bandwidth_hz > 0 && p->bandwidth_hz < p->rate_hz / 2))
-        return fail("bandwidth_hz", "positive and below half the sample rate");
+    /* any rate: the board's pole exp(-2 pi f_c / f_s) is in [0, 1) (PROTOCOL.md 5.4) */
+    if (!(p->bandwidth_hz > 0 && isfinite(p->bandwidth_hz)))
+        return fail("bandwidth_hz", "positive and finite");
     if (p->watchdog_ms < 1 || p->watchdog_ms > 49)
         return fail("watchdog_ms", "in [1, 49] ms");
     if (p->ramp_ms > 50 - p->watchdog_ms) {
