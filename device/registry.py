@@ -381,8 +381,15 @@ class Registry(Generic[T]):
         """:meth:`names` less another package's entries that cannot be loaded, each left
         out with a warning (importing every plugin's, as :meth:`loaded`); frictex's own
         are listed without being imported."""
-        return tuple(name for name in self.names()
-                     if self._origin[name] == OWN_DISTRIBUTION or self._loads(name))
+        return tuple(name for name in self.names() if self.loads(name))
+
+    def loads(self, name: str) -> bool:
+        """Whether ``name`` is registered (a package installed since included) and can be
+        loaded: frictex's own without being imported, another package's by importing that
+        one entry now (a warning where it cannot be)."""
+        if name not in self:
+            return False
+        return self._origin[name] == OWN_DISTRIBUTION or self._loads(name)
 
     def _loads(self, name: str) -> bool:
         """Load entry ``name``: False, with a warning, where it cannot be loaded."""

@@ -30,7 +30,7 @@ class RenderChoices(Sequence[str]):
     """What a layer's ``render`` may name, read each time it is asked (a check, an error
     listing them): ``auto`` and :func:`model.loadable_render_modes`, so that a renderer
     registered or installed after frictex was imported is taken, and one that cannot be
-    loaded is neither taken nor offered."""
+    loaded is neither taken nor offered; checking a name loads that renderer alone."""
 
     def now(self) -> tuple[str, ...]:
         """The names as they are now."""
@@ -46,7 +46,10 @@ class RenderChoices(Sequence[str]):
         return iter(self.now())
 
     def __contains__(self, name: object) -> bool:
-        return name in self.now()
+        """A check imports no plugin but the one named (listing them all, :meth:`now`,
+        imports each)."""
+        return name in ("auto", model.SHO) or (isinstance(name, str)
+                                               and model.RENDERERS.loads(name))
 
     def __repr__(self) -> str:
         return f"RenderChoices({self.now()})"
