@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
+from frictex.device.errors import InputError
 from frictex.device.link import protocol as p
 from frictex.device.link.faults import Faults, inject
 from frictex.device.link.protocol import DeviceState as S
@@ -636,3 +637,11 @@ def test_a_version_3_host_gets_no_missing_reports():
     frames = p.Decoder().feed(core.receive(p.encode(p.Heartbeat(7), host.seq, 3), 0.0))
     assert [type(f.message) for f in frames] == [p.Status]
     assert frames[0].message.lost_frames == 3
+
+
+@pytest.mark.parametrize("rate_hz", [float("nan"), float("inf")])
+def test_a_rate_that_is_not_a_number_is_refused_naming_it(rate_hz):
+    """A NaN or infinite rate was a ValueError from counting ticks ("cannot convert float
+    NaN to integer") before the checks could name it."""
+    with pytest.raises(InputError, match=r"^sim-device rate_hz = (nan|inf): expected in "):
+        DeviceConfig(rate_hz=rate_hz, watchdog_ms=1, ramp_ms=0)

@@ -96,9 +96,10 @@ class DeviceConfig:
 
     def __post_init__(self):
         channels_ok = 1 <= self.channels <= MAX_CHANNELS
+        rate_ok = 0.001 <= self.rate_hz < 4e6  # else (NaN, inf) there are no ticks to count
         checks = [(channels_ok, "channels", f"1 to {MAX_CHANNELS} (the firmware's "
                    "FW_MAX_CHANNELS)"),
-                  (0.001 <= self.rate_hz < 4e6, "rate_hz",
+                  (rate_ok, "rate_hz",
                    "in [0.001, 4e6) Hz (the wire carries a u32 of mHz)"),
                   (len(self.limits_um) in (1, self.channels), "limits_um",
                    f"one value for all channels or one per channel ({self.channels})"),
@@ -118,10 +119,10 @@ class DeviceConfig:
                   (0 <= self.ramp_ms <= p.MAX_STOP_MS - self.watchdog_ms, "ramp_ms",
                    f"in [0, {p.MAX_STOP_MS - self.watchdog_ms}] ms: watchdog_ms + ramp_ms must "
                    f"not exceed {p.MAX_STOP_MS} ms (PROTOCOL.md 5.3)"),
-                  (self.ramp_ms == 0 or self.ticks(self.ramp_ms) >= 2, "ramp_ms",
+                  (not rate_ok or self.ramp_ms == 0 or self.ticks(self.ramp_ms) >= 2, "ramp_ms",
                    f"0 or at least 2 ticks at {self.rate_hz:g} Hz: a shorter ramp is a step "
                    "to zero (PROTOCOL.md 5.3)"),
-                  (self.stop_fits_in_ticks(), "watchdog_ms",
+                  (not rate_ok or self.stop_fits_in_ticks(), "watchdog_ms",
                    f"ticks(watchdog_ms) + ticks(ramp_ms = {self.ramp_ms}) within "
                    f"{p.MAX_STOP_MS} ms at {self.rate_hz:g} Hz (PROTOCOL.md 5.3): raise the "
                    "rate or shorten them"),
