@@ -180,18 +180,19 @@ VARY_THRESHOLD = {"period_mm": "period", "depth": "weber", "level": "weber"}
 
 
 def friction_level(vary: str, value: float, mu_high: float = 1.0,
-                   clip_depth: float = 1.0) -> float:
+                   clip_depth: float = 1.0, clip_level: float = 1.0) -> float:
     """The mu' a finger feels at a stimulus's ``depth`` or clip ``level`` ``value``: a
     grating's or shape's low level mu_high - depth (``app.experiment.stimuli``'s
     PARAMETERS; ``mu_high`` 1 where the layer has none), a clip's drop
-    1 - clip_depth * level (``textures.clips``)."""
+    1 - clip_depth * level (``textures.clips``); a clip's ``depth`` drops mu' by
+    depth * ``clip_level``, its weakest event's level (1 for a layer not a clip)."""
     if vary == "level":
         return 1.0 - clip_depth * value
-    return mu_high - value
+    return mu_high - clip_level * value
 
 
 def compare_values(vary: str, a: float, b: float, where: str, mu_high: float = 1.0,
-                   clip_depth: float = 1.0) -> Finding | None:
+                   clip_depth: float = 1.0, clip_level: float = 1.0) -> Finding | None:
     """Two stimuli that differ only in ``vary`` (``period_mm``, ``depth`` or a clip's
     ``level``), by less than its threshold; None if they differ by more, or not at all,
     or ``vary`` has no published threshold (a renderer). Periods are compared as they
@@ -205,7 +206,8 @@ def compare_values(vary: str, a: float, b: float, where: str, mu_high: float = 1
         d = relative_difference(a, b)
         text = f"{vary} {a:g} and {b:g} differ by {_relative(kind, d, vary)}"
     else:
-        mu_a, mu_b = (friction_level(vary, v, mu_high, clip_depth) for v in (a, b))
+        mu_a, mu_b = (friction_level(vary, v, mu_high, clip_depth, clip_level)
+                      for v in (a, b))
         if min(mu_a, mu_b) <= 0.0:
             return None
         d = relative_difference(mu_a, mu_b)

@@ -334,3 +334,15 @@ def test_a_period_under_the_touch_nyquist_says_what_its_renderer_makes_of_it(tmp
     found = scene_findings(scene(tmp_path, GRATING.format(render=render, period=1.5, low=0.6)))
     assert [f.kind for f in found] == ["touch"]
     assert says in found[0].message and "3.333 mm" in found[0].message
+
+
+def test_a_clips_depths_are_compared_at_its_weakest_events_level():
+    """slider-clips' layer 1 (depth 0.4, events at intensity 1.0 and 0.6): depths 0.5 and
+    0.6 drop mu' to 0.70 and 0.64 at its 0.6 event (9.4 % apart, under 0.11), which the
+    check missed, comparing 0.5 and 0.4 (25 %) as if every event were at 1."""
+    from frictex import load_scene
+    from frictex.app.experiment.perception_check import _varied_levels
+    levels = _varied_levels(load_scene("slider-clips"), 1)
+    assert levels["clip_level"] == 0.6
+    found = compare_values("depth", 0.5, 0.6, "pair", **levels)
+    assert found is not None and found.value == pytest.approx((0.7 - 0.64) / 0.64)

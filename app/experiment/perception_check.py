@@ -80,13 +80,17 @@ def _naming(names: list[str]) -> str:
 
 
 def _varied_levels(scene, layer: int | None) -> dict[str, float]:
-    """``compare_values``'s ``mu_high`` and ``clip_depth`` of the varied layer (index
-    ``layer`` of the base ``scene``): the friction its depth is taken from (a grating's
-    mu_high, a waveform's mu_max, 1 for a shape) and a clip's depth (its levels scale it)."""
+    """``compare_values``'s ``mu_high``, ``clip_depth`` and ``clip_level`` of the varied
+    layer (index ``layer`` of the base ``scene``): the friction its depth is taken from (a
+    grating's mu_high, a waveform's mu_max, 1 for a shape), a clip's depth (its levels
+    scale it) and its weakest event's intensity (which scales its depth: the smallest
+    step a depth makes)."""
     varied = None if scene is None or layer is None else scene.layers[layer]
     clip = getattr(varied, "clip", None)
     return {"mu_high": getattr(varied, "mu_high", getattr(varied, "mu_max", 1.0)),
-            "clip_depth": 1.0 if clip is None else clip.depth}
+            "clip_depth": 1.0 if clip is None else clip.depth,
+            "clip_level": 1.0 if clip is None else min(
+                (min(e.intensity, 1.0) for e in clip.events), default=1.0)}
 
 
 def protocol_findings(protocol: Protocol) -> list[Finding]:
