@@ -72,7 +72,6 @@ def test_a_config_the_device_accepts_is_one_its_info_can_say(channels, rate, lim
     try:
         config = DeviceConfig(channels=channels, rate_hz=rate, limits_um=(limit,),
                               buffer_samples=buffer, watchdog_ms=watchdog, ramp_ms=ramp,
-                              bandwidth_hz=min(400.0, rate / 4) if rate > 0 else 400.0,
                               name=name)
     except InputError as exc:
         assert str(exc).startswith("sim-device ") and ": expected " in str(exc)

@@ -60,8 +60,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"jitter-buffer capacity in samples, 2 to {STORE_WORDS} / channels "
                              "as the firmware (default 4096)")
     parser.add_argument("--bandwidth", type=positive_float, default=400.0, metavar="HZ",
-                        help="-3 dB bandwidth of the modelled amplitude loop (default 400 Hz, "
-                             "seed 003 Fig. 3b)")
+                        help="corner frequency of the modelled amplitude loop, a first-order "
+                             "low pass (default 400 Hz, seed 003 Fig. 3b); -3 dB there only "
+                             "where it is well under --rate (PROTOCOL.md 5.4)")
     parser.add_argument("--watchdog-ms", type=bounded(int, 1, 49, "ms"), default=25, metavar="MS",
                         help="host silence that trips the watchdog (default 25 ms; with the ramp "
                              "at most 50 ms)")
