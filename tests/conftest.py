@@ -139,3 +139,14 @@ def _no_link_outlives_its_test(monkeypatch):
         sink.close()
         thread.join(timeout=30.0)
         assert not thread.is_alive(), f"{sink.label}: link thread still running after close"
+
+
+@pytest.fixture
+def in_process_renderers(monkeypatch):
+    """RENDERERS and LAYER_RENDERERS as they are, restored after the test (what it
+    registers in this process, and the lookups it makes, leave with it)."""
+    from frictex.rendering.renderers import LAYER_RENDERERS, RENDERERS
+    for registry in (RENDERERS, LAYER_RENDERERS):
+        for field in ("_entries", "_origin", "_registered_by"):
+            monkeypatch.setattr(registry, field, dict(getattr(registry, field)))
+        monkeypatch.setattr(registry, "_readings", registry._readings)

@@ -28,6 +28,7 @@ from frictex.rendering.pipeline import build_pipeline
 from frictex.rendering.renderers import LAYER_RENDERERS, RENDERERS, LayerRenderer, render_modes
 from frictex.textures.library import resolve_scene
 from frictex.textures.loader import load_scene
+from flat_renderer import FlatRenderer
 
 #: the plugin's renderer: mu' = WOBBLE_MU under every finger, wherever the layer is
 WOBBLE_MU = 0.625
@@ -504,37 +505,13 @@ def test_a_registry_lists_its_entry_points_before_first_use():
     assert "'sht'" in repr(Registry("renderer", "frictex.renderers"))
 
 
-@pytest.fixture
-def in_process_renderers(monkeypatch):
-    """RENDERERS and LAYER_RENDERERS as they are, restored after the test (what it
-    registers in this process leaves with it)."""
-    for registry in (RENDERERS, LAYER_RENDERERS):
-        monkeypatch.setattr(registry, "_entries", dict(registry._entries))
-        monkeypatch.setattr(registry, "_origin", dict(registry._origin))
-        monkeypatch.setattr(registry, "_readings", registry._readings)  # its lookups too
-
-
-class _Flat:
-    """A renderer of mu' = 0.5 everywhere, or what ``render`` of a subclass returns."""
-
-    def __init__(self, layer, rate_hz):
-        pass
-
-    def initial_state(self):
-        return None
-
-    def render(self, block, state):
-        shape = (len(block.ids), block.n)
-        return np.full(shape, 0.5), np.ones(shape, bool), state
-
-
-class _NotFinite(_Flat):
+class _NotFinite(FlatRenderer):
     def render(self, block, state):
         mu, covers, state = super().render(block, state)
         return mu * np.nan, covers, state
 
 
-class _Flattened(_Flat):
+class _Flattened(FlatRenderer):
     def render(self, block, state):
         return np.full(3, 0.5), np.ones(3, bool), state
 
@@ -546,7 +523,7 @@ def test_a_renderer_registered_in_process_is_checked_as_a_plugins(in_process_ren
     import frictex
     scene, trace = frictex.load_scene("grating-5mm"), frictex.synth_trace("swipe",
                                                                           duration_s=0.2)
-    RENDERERS.register("test-flat", _Flat)
+    RENDERERS.register("test-flat", FlatRenderer)
     assert set(frictex.replay(scene, trace, renderer="test-flat").friction.column(
         "mu_target").to_numpy()) <= {0.5}
     RENDERERS.register("test-nan", _NotFinite)
@@ -558,7 +535,7 @@ def test_a_renderer_registered_in_process_is_checked_as_a_plugins(in_process_ren
         frictex.replay(scene, trace, renderer="test-flattened")
     modes = render_modes()
     with pytest.raises(PluginError, match="'sho' from test_plugins .*: the name is reserved"):
-        RENDERERS.register("sho", _Flat)
+        RENDERERS.register("sho", FlatRenderer)
     assert render_modes() == modes and modes.count("sho") == 1
     with pytest.raises(PluginError, match="is the int 42; expected a renderer class"):
         LAYER_RENDERERS.register("num", 42)

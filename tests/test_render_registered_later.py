@@ -12,23 +12,16 @@ import frictex
 from frictex.app.experiment.protocol import ProtocolError, load_protocol
 from frictex.device.registry import _Unloaded
 from frictex.textures.model import RENDERERS
+from flat_renderer import FlatRenderer
 
 ROOT = Path(__file__).resolve().parents[1]
 GRATING = (ROOT / "textures" / "library" / "grating-5mm.toml").read_text(encoding="utf-8")
 
 
-class Wob:
+class Wob(FlatRenderer):
     """A renderer of mu' = 0.7 wherever the layer is."""
 
-    def __init__(self, layer, rate_hz):
-        pass
-
-    def initial_state(self):
-        return None
-
-    def render(self, block, state):
-        shape = (len(block.ids), block.n)
-        return np.full(shape, 0.7), np.ones(shape, dtype=bool), state
+    MU = 0.7
 
 
 class Unloadable:
@@ -38,14 +31,6 @@ class Unloadable:
 
     def load(self):
         raise ImportError("No module named 'broken_pkg'")
-
-
-@pytest.fixture
-def in_process_renderers(monkeypatch):
-    """RENDERERS as it is, restored after the test (what it registers leaves with it)."""
-    for field in ("_entries", "_origin", "_registered_by"):
-        monkeypatch.setattr(RENDERERS, field, dict(getattr(RENDERERS, field)))
-    monkeypatch.setattr(RENDERERS, "_readings", RENDERERS._readings)  # scanned with them
 
 
 def write(folder: Path, name: str, text: str) -> Path:

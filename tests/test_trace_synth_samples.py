@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 
 from frictex.app.commands.cli import main
-from frictex.device.errors import InputError
 from frictex.rendering.input.trace_synth import make_motion, sample, sample_count
 
 
