@@ -20,6 +20,8 @@ from pathlib import Path
 
 import pytest
 
+from conftest import signals_as_a_terminal_gives
+
 SIGNALS = {signal.SIGINT: (130, "frictex: interrupted\n"),
            signal.SIGTERM: (143, "frictex: terminated by SIGTERM\n"),
            signal.SIGHUP: (129, "frictex: terminated by SIGHUP\n")}
@@ -68,7 +70,8 @@ def _replay_argv(out: Path) -> list[str]:
 def test_a_signal_at_each_import_of_the_start_up_is_its_one_line(tmp_path, signum, target):
     done = subprocess.run([sys.executable, "-c", CHILD, str(signum), target, "0",
                            *_replay_argv(tmp_path / "run")],
-                          capture_output=True, text=True, timeout=120)
+                          capture_output=True, text=True, timeout=120,
+                          preexec_fn=signals_as_a_terminal_gives)
     assert (done.returncode, done.stderr) == SIGNALS[signum], done.stderr
     assert not (tmp_path / "run").exists()
 
@@ -81,7 +84,8 @@ def test_a_signal_inside_numpys_c_import_is_its_one_line(tmp_path, signum, targe
     import): the path that ended as an internal error (exit 70)."""
     done = subprocess.run([sys.executable, "-c", CHILD, str(signum), target, "1",
                            *_replay_argv(tmp_path / "run")],
-                          capture_output=True, text=True, timeout=120)
+                          capture_output=True, text=True, timeout=120,
+                          preexec_fn=signals_as_a_terminal_gives)
     assert (done.returncode, done.stderr) == SIGNALS[signum], done.stderr
     assert done.stdout == ""
 
@@ -102,7 +106,8 @@ def _catches_all(pid: int) -> bool:
 @pytest.mark.parametrize("delay_s", [0, 0.005, 0.02, 0.05, 0.1])
 def test_a_signal_at_any_delay_after_start_is_its_one_line(tmp_path, signum, delay_s):
     child = subprocess.Popen([sys.executable, "-m", "frictex", *_replay_argv(tmp_path / "run")],
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             preexec_fn=signals_as_a_terminal_gives)
     end = time.monotonic() + 60
     while child.poll() is None and not _catches_all(child.pid) and time.monotonic() < end:
         time.sleep(0.0005)
