@@ -30,7 +30,7 @@ class RenderChoices(Sequence[str]):
     """What a layer's ``render`` may name, read each time it is asked (a check, an error
     listing them): ``auto`` and :func:`model.loadable_render_modes`, so that a renderer
     registered or installed after frictex was imported is taken, and one that cannot be
-    loaded is neither taken nor offered; checking a name loads that renderer alone."""
+    loaded is not offered; checking a name imports nothing."""
 
     def now(self) -> tuple[str, ...]:
         """The names as they are now."""
@@ -46,10 +46,10 @@ class RenderChoices(Sequence[str]):
         return iter(self.now())
 
     def __contains__(self, name: object) -> bool:
-        """A check imports no plugin but the one named (listing them all, :meth:`now`,
-        imports each)."""
-        return name in ("auto", model.SHO) or (isinstance(name, str)
-                                               and model.RENDERERS.loads(name))
+        """A check imports no plugin (listing them all, :meth:`now`, imports each): a
+        registered name is taken, and one that cannot be loaded is refused where the
+        scene's renderers are built, with why."""
+        return name in ("auto", model.SHO) or name in model.RENDERERS
 
     def __repr__(self) -> str:
         return f"RenderChoices({self.now()})"
