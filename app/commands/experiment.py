@@ -112,6 +112,7 @@ def _in_window(args: argparse.Namespace, protocol, presenter, session):
     from frictex.app.commands.argtypes import sim_device_args
     from frictex.app.commands.demo import _start_haptic
     from frictex.app.experiment.window_presenter import run_in_window
+    from frictex.rendering.visual.context import NoDisplayError
     from frictex.rendering.visual.device_panels import default_frame_size
     from frictex.rendering.visual.windows import open_backend
     from frictex.textures.loader import load_scene
@@ -124,8 +125,14 @@ def _in_window(args: argparse.Namespace, protocol, presenter, session):
     first = s.listed[0].scene if s.listed else s.scene
     scene = load_scene(first)
     out = Path(args.out)
-    backend = open_backend("glfw", args.size or default_frame_size(scene),
-                           title=f"frictex experiment: {protocol.name}", vsync=False)
+    try:
+        backend = open_backend("glfw", args.size or default_frame_size(scene),
+                               title=f"frictex experiment: {protocol.name}", vsync=False)
+    except NoDisplayError as exc:
+        raise NoDisplayError(f"{exc}: a window participant needs one (run the session on the "
+                             "machine with the display, or under xvfb-run to try it); "
+                             "'--participant simulated:weber=0.11,lapse=0.02' runs the "
+                             "protocol headless") from None
     return run_in_window(presenter, session, backend,
                          lambda sc, record: _start_haptic(demo, sc, Path(sc.source), record),
                          scene, out / "live", Path(args.screenshots or out / "screenshots"),
