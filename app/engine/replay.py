@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -50,8 +49,8 @@ from frictex.app.engine.sinks import (SinkRequest, ThreadedSink, build_sink, com
 from frictex.app.engine.sources import MAX_GAP_S, TraceSource
 from frictex.app.engine.staging import Staging
 from frictex.app.engine.summary import Totals, finite_json, summary, timings
-from frictex.app.engine.tables import (MEMORY, RESERVE_BYTES, SMALLER_FORMAT, WRITE_ELSEWHERE,
-                                       check_memory, check_room, load_writer, room_hint,
+from frictex.app.engine.tables import (MEMORY, SMALLER_FORMAT, WRITE_ELSEWHERE, check_memory,
+                                       check_room, has_room, load_writer, room_hint,
                                        row_bytes)
 from frictex.device.errors import DeviceError, InputError
 from frictex.rendering.input.trace_file import Trace, iter_trace, most_touching
@@ -489,16 +488,10 @@ def _check_outputs_fit(out_dir: Path, source: TraceSource, pipeline, fmt: str, f
         what += f", frames at {frames.fps:g} fps"
     folder = _existing(out_dir)
     hint = room_hint(fmt)
-    if hint == SMALLER_FORMAT and not _fits(folder, need + frames_need):
+    if hint == SMALLER_FORMAT and not has_room(folder, need + frames_need):
         parquet_need = _tables_size(source, pipeline, "parquet")[1] + frames_need
-        hint = hint if _fits(folder, parquet_need) else WRITE_ELSEWHERE
+        hint = hint if has_room(folder, parquet_need) else WRITE_ELSEWHERE
     check_room(folder, need + frames_need, what + ")", hint)
-
-
-def _fits(folder: Path, need_bytes: float) -> bool:
-    """Whether ``need_bytes`` fit ``folder``'s file system with ``RESERVE_BYTES`` to spare
-    (``tables.check_room``'s test)."""
-    return need_bytes + RESERVE_BYTES <= shutil.disk_usage(folder).free
 
 
 def _check_tables_fit_memory(source: TraceSource, pipeline) -> None:

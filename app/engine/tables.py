@@ -98,6 +98,12 @@ def room_hint(fmt: str) -> str:
     return WRITE_ELSEWHERE if fmt == "parquet" else SMALLER_FORMAT
 
 
+def has_room(out_dir: Path, need_bytes: float) -> bool:
+    """Whether ``out_dir``'s file system has room for ``need_bytes`` more and
+    :data:`RESERVE_BYTES` to spare (what :func:`check_room` demands)."""
+    return need_bytes + RESERVE_BYTES <= shutil.disk_usage(out_dir).free
+
+
 def check_room(out_dir: Path, need_bytes: float, what: str,
                hint: str = SMALLER_FORMAT) -> None:
     """Raise a one-line :class:`OutputSpaceError` (errno ENOSPC) unless ``out_dir``'s file
@@ -110,8 +116,8 @@ def check_room(out_dir: Path, need_bytes: float, what: str,
     if usage.total == 0:
         raise InputError(f"{shown}: a file system that holds no files (such as /proc or "
                          "/sys); write the outputs elsewhere")
-    free = usage.free
-    if need_bytes + RESERVE_BYTES > free:
+    if not has_room(out_dir, need_bytes):
+        free = shutil.disk_usage(out_dir).free
         full = OutputSpaceError(f"{shown}: {what} need about {_size(need_bytes)} and "
                                 f"{_size(free)} is free (a margin of {_size(RESERVE_BYTES)} "
                                 f"kept); free some space, {hint}")
