@@ -452,6 +452,39 @@ def test_a_ctrl_c_during_the_commit_reports_the_complete_run(tmp_path, monkeypat
     assert json.loads((out / "summary.json").read_text())["output"]["samples"] > 0
 
 
+def test_signals_during_a_stopped_runs_cleanup_do_not_cut_it_short(tmp_path):
+    """A run stopped by Ctrl-C aborts every sink and removes its staging folder even when
+    more signals come meanwhile (a batch worker whose parent dies gets one for each of
+    the parent's threads): the first attached sink gets two more in its abort, and the
+    second is still aborted, nothing is left beside --out."""
+    from frictex.app.engine.replay import run_replay
+
+    class Sink:
+        def __init__(self, signals_in_abort: int):
+            self.blocks, self.signals, self.aborted = 0, signals_in_abort, False
+
+        def write(self, out, commands):
+            self.blocks += 1
+            if self.blocks == 3 and self.signals:
+                os.kill(os.getpid(), signal.SIGINT)
+
+        def commit(self):
+            pass
+
+        def abort(self):
+            for _ in range(self.signals):
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.02)
+            self.aborted = True
+
+    signalled, quiet = Sink(2), Sink(0)
+    out = tmp_path / "out"
+    with pytest.raises(KeyboardInterrupt):
+        run_replay(SCENE, TRACES[0], out, chunk_blocks=1, sinks=[signalled, quiet])
+    assert signalled.aborted and quiet.aborted
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
 def test_a_link_is_written_through_and_stays_a_link(tmp_path):
     (tmp_path / "real.csv").write_text("earlier")
     (tmp_path / "link.csv").symlink_to("real.csv")

@@ -115,6 +115,41 @@ def test_a_signal_starts_no_item_and_stops_the_running_ones(tmp_path, spawn, wor
     assert "Traceback" not in err
 
 
+#: as FAKE_JOBS, but a stopped item cleans up for a while, getting two more SIGINTs
+#: meanwhile (a dying parent sends one for each of its threads as they end), and
+#: writes <dir>/<k>.cleaned when its cleanup is done
+CLEANING_JOBS = FAKE_JOBS.replace("""    while time.monotonic() < end:
+        time.sleep(0.02)
+""", """    try:
+        while time.monotonic() < end:
+            time.sleep(0.02)
+    except KeyboardInterrupt:
+        import os, signal
+        for _ in range(2):
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)
+        (Path(folder) / f"{k}.cleaned").write_text("")
+        raise
+""")
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL])
+def test_more_signals_while_an_item_stops_do_not_cut_its_cleanup_short(tmp_path, spawn, sig):
+    """A worker's item gets one KeyboardInterrupt: further SIGINTs while it stops pass,
+    whether the parent passed a Ctrl-C on or died (SIGKILL)."""
+    assert CLEANING_JOBS != FAKE_JOBS
+    script = tmp_path / "cleaning_jobs.py"
+    script.write_text(CLEANING_JOBS)
+    marks = tmp_path / "marks"
+    marks.mkdir()
+    proc = spawn([sys.executable, str(script), str(marks), "2"], start_new_session=True)
+    wait_for(lambda: len(list(marks.glob("*.start"))) == 2, "2 items to start")
+    os.kill(proc.pid, sig)
+    wait_for(lambda: len(list(marks.glob("*.cleaned"))) == 2, "both items to clean up",
+             lambda: f"marks {sorted(p.name for p in marks.iterdir())}")
+    assert not list(marks.glob("*.end"))
+
+
 @pytest.fixture(scope="module")
 def long_trace(tmp_path_factory):
     """A 600 s trace: a job of it at 100 kHz runs for many seconds on any machine."""

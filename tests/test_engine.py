@@ -483,6 +483,37 @@ def test_signals_during_the_commit_are_held_and_dropped_once_it_succeeds():
     assert done == [2]
 
 
+def test_once_the_run_is_ending_further_signals_are_held():
+    """Once a held signal has been raised (or an error ends the run: ``check.end()``),
+    more signals are held, not raised, so that the cleanup runs to its end (a batch
+    worker whose parent dies can get several SIGINTs); the first is raised as the run
+    ends."""
+    from frictex.app.engine.driver import deferred_interrupts
+    cleaned = []
+    with pytest.raises(KeyboardInterrupt):
+        with deferred_interrupts() as check:
+            os.kill(os.getpid(), signal.SIGINT)
+            try:
+                check()
+            except KeyboardInterrupt:
+                os.kill(os.getpid(), signal.SIGINT)
+                os.kill(os.getpid(), signal.SIGINT)
+                time.sleep(0.05)  # the handler has run twice: held
+                cleaned.append(len(check.held))
+    assert cleaned == [3]
+    with pytest.raises(SystemExit) as caught:  # an error ends the run: signals held
+        with deferred_interrupts() as check:
+            try:
+                raise ValueError("the run failed")
+            except ValueError:
+                check.end()
+                os.kill(os.getpid(), signal.SIGTERM)
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(0.05)
+                cleaned.append(len(check.held))
+    assert cleaned == [3, 2] and caught.value.code == 128 + signal.SIGTERM
+
+
 def test_brief_taps_within_a_block_share_a_row_with_the_same_results():
     """Taps that touch and lift within one 5 ms block (10 us each, a new id each, 200
     of them between two strokes) show at no output sample: they share rows, so no call

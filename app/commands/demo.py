@@ -350,6 +350,7 @@ def _run_demo(args, headless: bool, paths, index: int, scene, stagings, check) -
         if frames_staging is not None:
             frames_staging.commit()
     except BaseException:
+        check.end()
         for folder in (staging, frames_staging):
             if folder is not None:
                 folder.abort()

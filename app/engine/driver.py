@@ -19,6 +19,11 @@ kernel return a value with an exception set, which Python reports as a 30-line
 first Ctrl-C (and SIGTERM, SIGHUP) as a flag that the loop turns into an exception between
 steps (``check``), where nothing compiled runs; a second one raises at once. Through a
 run's commit (``check.committing()``) both are held, then dropped: the run is complete.
+Once the run is ending (a signal raised, or ``check.end()`` where an error ends it), every
+further signal is held: the cleanup (sinks aborted, staged files removed) is never cut
+short. A worker of ``frictex batch`` whose parent dies gets a SIGINT from the system for
+each of the parent's threads that ends (``app.engine.fanout``): a second one inside the
+cleanup left a job's staging folder behind.
 A signal the process ignores (``nohup``) stays ignored. A wait on a device link (a paced
 send, the handshake, a close) asks the same ``check`` between its turns
 (``device.link.waits``), so a held signal ends it within tens of ms; the link's sink is
@@ -93,19 +98,27 @@ class HeldSignals:
     def __init__(self):
         self.held: list[int] = []
         self._committing = False
+        self._ending = False
 
     def __call__(self) -> None:
-        """Raise the first signal held, if any (see :func:`deferred_interrupts`)."""
+        """Raise the first signal held, if any (see :func:`deferred_interrupts`); the run
+        is ending from then on (:meth:`end`)."""
         if self.held:
+            self._ending = True
             if self.held[0] == signal.SIGINT:
                 raise KeyboardInterrupt
             raise Terminated(self.held[0])
 
+    def end(self) -> None:
+        """The run is ending (an error or a signal raised): from now on every signal is
+        held, none raised, so that its cleanup runs to the end."""
+        self._ending = True
+
     def hold(self, signum, frame) -> None:
         """The signal handler: hold ``signum``; a second one raises at once, except
-        while committing."""
+        while committing and once the run is ending."""
         self.held.append(signum)
-        if len(self.held) > 1 and not self._committing:
+        if len(self.held) > 1 and not self._committing and not self._ending:
             self()
 
     @contextmanager
@@ -132,7 +145,7 @@ def deferred_interrupts():
     docstring): Ctrl-C as ``KeyboardInterrupt``, the others as :class:`Terminated` (a
     ``SystemExit(128 + signal)``, their default exit status), so that the run is aborted
     cleanly (its sinks and staged files removed). A second signal raises at once, except within
-    ``check.committing()``. A signal whose handler is ``SIG_IGN`` (``nohup``, a shell's
+    ``check.committing()`` and once the run is ending (``check.end()``). A signal whose handler is ``SIG_IGN`` (``nohup``, a shell's
     background job) stays ignored. Outside the main thread (where Python runs no signal
     handler) ``check`` does nothing. Within, the waits on device links ask ``check``
     too (``device.link.waits.interruptible``)."""
@@ -155,7 +168,7 @@ def deferred_interrupts():
 
 
 def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,
-          timer: RunTimer | None = None, check=None) -> int:
+          timer: RunTimer | None = None, check: HeldSignals | None = None) -> int:
     """Run until ``source.done`` (or ``stop()`` is true); returns the number of blocks run
     (skipped gaps not counted). ``check()``, if given, is called before each step and may
     raise to end the run (a held Ctrl-C: :func:`deferred_interrupts`).
@@ -197,6 +210,8 @@ def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,
             pending.pop(0)
         seconds["commit"] += time.perf_counter() - t3
     except BaseException:
+        if check is not None:
+            check.end()
         for sink in pending:
             sink.abort()
         raise

@@ -283,6 +283,7 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
             with check.committing():  # held through the swap: then the run is complete
                 staging.commit()
     except BaseException:
+        check.end()
         if staging is not None:
             staging.abort()
         raise
