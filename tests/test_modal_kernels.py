@@ -67,6 +67,9 @@ def test_beam_shapes_at_nodes_ends_and_many_positions():
 # --- the 2 x 2 gains ---------------------------------------------------------------------
 
 def numpy_gains_2x2(phi, wanted, rcond, regularised):
+    # scaled by the power of two nearest the largest entry, unscaled at the end
+    exponent = np.frexp(np.abs(phi).max(axis=(1, 2)))[1]
+    phi = np.ldexp(phi, -exponent[:, None, None])
     a, b, c, d = phi[:, 0, 0], phi[:, 0, 1], phi[:, 1, 0], phi[:, 1, 1]
     q = np.sqrt(((a + d) / 2) ** 2 + ((c - b) / 2) ** 2)
     r = np.sqrt(((a - d) / 2) ** 2 + ((c + b) / 2) ** 2)
@@ -88,6 +91,7 @@ def numpy_gains_2x2(phi, wanted, rcond, regularised):
             g[i][1] = np.where(rest, alpha * x1 + beta * (x0 * b01 + x1 * b11), g[i][1])
     w0, w1 = wanted[:, 0], wanted[:, 1]
     modal = np.stack((g[0][0] * w0 + g[0][1] * w1, g[1][0] * w0 + g[1][1] * w1), axis=-1)
+    modal.real, modal.imag = np.ldexp(modal.real, -exponent[:, None]), np.ldexp(modal.imag, -exponent[:, None])
     return modal, ~full, ratio
 
 

@@ -565,7 +565,15 @@ def _gains_2x2_one(a, b, c, d, w0, w1, rcond, regularised):
     """W_M = G W_f of one real system [[a, b], [c, d]] and complex wanted (w0, w1) (um);
     the numpy operations :func:`_gains_2x2` replaced, in their order (complex products,
     G + 0j). Returns (W_M0, W_M1, full, s1, s2): full where every gain is 1/s, and the
-    singular values s1 >= s2."""
+    singular values s1 >= s2.
+
+    The system is first scaled by the power of two nearest its largest entry (exact, so
+    the result is unchanged wherever nothing overflows): unscaled, E^2 + H^2 and the
+    determinant overflow or underflow past about 1e154 (a [[1e200, 0], [0, 1e-200]]
+    system gave NaN)."""
+    exponent = _exponent(max(abs(a), abs(b), abs(c), abs(d)))
+    a, b, c, d = math.ldexp(a, -exponent), math.ldexp(b, -exponent), \
+        math.ldexp(c, -exponent), math.ldexp(d, -exponent)
     e, h = (a + d) / 2, (c - b) / 2
     f, g = (a - d) / 2, (c + b) / 2
     q = np.sqrt(e * e + h * h)
@@ -585,8 +593,22 @@ def _gains_2x2_one(a, b, c, d, w0, w1, rcond, regularised):
         g01 = alpha * c + beta * (a * b01 + c * b11)
         g10 = alpha * b + beta * (b * b00 + d * b01)
         g11 = alpha * d + beta * (b * b01 + d * b11)
-    return (_times_real(w0, g00) + _times_real(w1, g01), _times_real(w0, g10) + _times_real(w1, g11),
-            full, s1, s2)
+    # the unscaled system's gains are G / 2^exponent, its singular values s 2^exponent
+    return (_ldexp_complex(_times_real(w0, g00) + _times_real(w1, g01), -exponent),
+            _ldexp_complex(_times_real(w0, g10) + _times_real(w1, g11), -exponent),
+            full, math.ldexp(s1, exponent), math.ldexp(s2, exponent))
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _exponent(x):
+    """The binary exponent e of a float x >= 0 (x = m 2^e, 0.5 <= m < 1); 0 for 0, inf or NaN."""
+    return math.frexp(x)[1] if (x > 0 and math.isfinite(x)) else 0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _ldexp_complex(z, exponent):
+    """z 2^exponent, exactly (real and imaginary parts apart: no inf times 0)."""
+    return complex(math.ldexp(z.real, exponent), math.ldexp(z.imag, exponent))
 
 
 def _bounded_commands(m_cmd, wanted, start, limits) -> np.ndarray:
