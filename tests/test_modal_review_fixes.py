@@ -39,6 +39,14 @@ def test_singular_loci_are_half_a_wavelength_apart_as_the_warning_says():
     assert "a multiple of half a wavelength apart" in _capped_warning()
 
 
+def test_the_warning_names_the_singular_matrix_and_half_wavelengths_only_on_a_beam():
+    # on seed 001's plate the loci are sin(lambda x2/a) = sin(lambda x1/a) (eq 8), not
+    # half a wavelength apart: the warning says what they are on any structure
+    warning = _capped_warning()
+    assert "mode-shape matrix is singular (det ~ 0" in warning
+    assert "on a beam e.g. fingers a multiple of half a wavelength apart" in warning
+
+
 def _block(positions, wanted):
     """Every finger touching at (x, y) for one sample, finger 0 first down."""
     pts = np.array(positions, dtype=float).reshape(len(positions), -1)

@@ -129,10 +129,11 @@ def warnings_of(pipeline, tracker, totals: Totals) -> list[str]:
                         "(achieved amplitude differs from the wanted one; see fingers)")
     if totals.modal_capped:
         warnings.append(f"{counted(totals.modal_capped, 'sample')}: the fingers could not be "
-                        "given independent amplitudes (seed 001 eq 8): on a singular locus "
-                        "(fingers a multiple of half a wavelength apart, coincident or on a "
-                        "shared node) the modal gain was capped, so fingers asking for different "
-                        "friction may feel the same (see fingers)")
+                        "given independent amplitudes (seed 001 eq 8): where their mode-shape "
+                        "matrix is singular (det ~ 0; on a beam e.g. fingers a multiple of half "
+                        "a wavelength apart, coincident or on a shared node) the modal gain was "
+                        "capped, so fingers asking for different friction may feel the same "
+                        "(see fingers)")
     if totals.off_structure:
         n = totals.off_structure
         warnings.append(f"{counted(n, 'finger sample')} {were(n)} off the vibrating "
