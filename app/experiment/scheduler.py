@@ -21,8 +21,11 @@ comparison from the answers (Levitt 1971's transformed up-down rules: down a ste
 the difference answered correctly 70.7 % of the time, p^2 = 1/2, a 1-up-3-down on 79.4 %).
 A reversal is a change of direction; its level is the difference of the trial before
 the change. Steps shrink with the reversals (``steps[i]`` after ``i`` reversals) and on
-the log scale are factors 10^step. The staircase stops after ``reversals`` reversals or
-``max_trials`` main trials.
+the log scale are factors 10^step. Each level is computed from an integer index on a
+grid (the largest unit every step is a whole number of): start * 10^(index * unit), or
+start + index * unit, so a level is the same float however it was reached. A step past
+``min`` or ``max`` stops at that bound, and the next step back lands on the grid. The
+staircase stops after ``reversals`` reversals or ``max_trials`` main trials.
 
 Practice trials come first (the easiest comparison, or random stimuli for magnitude
 estimation), answered but neither adapting a staircase nor analysed.
@@ -30,7 +33,10 @@ estimation), answered but neither adapting a staircase nor analysed.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
+from fractions import Fraction
+from functools import lru_cache
 from typing import Iterable
 
 import numpy as np
@@ -76,12 +82,15 @@ class StaircaseState:
     """difference : the next comparison's difference from the reference.
     run : correct answers in a row since the last step.
     direction : +1 after a step up, -1 after a step down, 0 before any step.
-    reversals : the difference at each reversal so far."""
+    reversals : the difference at each reversal so far.
+    index : the difference's place on the staircase's grid, in grid units from the start
+    (:func:`staircase_level`); 0 for a state made at the start."""
 
     difference: float
     run: int = 0
     direction: int = 0
     reversals: tuple[float, ...] = ()
+    index: int = 0
 
 
 @dataclass(frozen=True)
@@ -248,6 +257,51 @@ class Scheduler:
         return state
 
 
+def _exact(step: float) -> Fraction:
+    """A step as the decimal it was written as (0.1 is 1/10, not the float's binary)."""
+    return Fraction(repr(float(step)))
+
+
+@lru_cache(maxsize=64)
+def _grid_unit(steps: tuple[float, ...]) -> Fraction:
+    """The largest exact unit every step is a whole number of (0.05 for [0.2, 0.1, 0.05])."""
+    exact = [_exact(step) for step in steps]
+    denominator = math.lcm(*(f.denominator for f in exact))
+    return Fraction(math.gcd(*(int(f * denominator) for f in exact)), denominator)
+
+
+def staircase_level(sc: Staircase, index: int) -> float:
+    """The difference (units of ``vary``) ``index`` grid units from the start, within
+    ``min`` and ``max``: start * 10^(index * unit) on the log scale, start + index * unit
+    on the linear one. Computed from the index alone, so a level reached by different
+    paths is the same float (a resumed session finds the scene file it played)."""
+    offset = float(index * _grid_unit(tuple(sc.steps)))
+    level = sc.start * 10.0 ** offset if sc.scale == "log" else sc.start + offset
+    if sc.min is not None:
+        level = max(level, sc.min)
+    if sc.max is not None:
+        level = min(level, sc.max)
+    return level
+
+
+def _grid_level(sc: Staircase, index: int) -> float:
+    """``staircase_level`` before the ``min``/``max`` clamp."""
+    return staircase_level(replace(sc, min=None, max=None), index)
+
+
+def _bounded_index(sc: Staircase, before: int, after: int) -> int:
+    """The index a step from ``before`` to ``after`` ends on: held where the linear scale
+    would reach 0 or below, and no further than the first index at or past ``max``
+    (``min``), so a step back from a bound lands on the grid."""
+    if sc.scale == "linear" and _grid_level(sc, after) <= 0.0:
+        return before  # the linear scale's floor: never the reference itself
+    while after > before and sc.max is not None and _grid_level(sc, after - 1) >= sc.max:
+        after -= 1
+    while after < before and sc.min is not None and _grid_level(sc, after + 1) <= sc.min:
+        after += 1
+    return after
+
+
 def staircase_step(sc: Staircase, st: StaircaseState, correct: bool) -> StaircaseState:
     """The staircase ``sc``'s state after a main trial answered ``correct`` (or not) in
     state ``st`` (the module docstring's rules)."""
@@ -259,17 +313,9 @@ def staircase_step(sc: Staircase, st: StaircaseState, correct: bool) -> Staircas
     if st.direction and direction != st.direction:
         reversals = reversals + (st.difference,)
     step = sc.steps[min(len(reversals), len(sc.steps) - 1)]
-    if sc.scale == "log":
-        new = st.difference * 10.0 ** (direction * step)
-    else:
-        new = st.difference + direction * step
-        if new <= 0.0:  # the linear scale's floor: never the reference itself
-            new = st.difference
-    if sc.min is not None:
-        new = max(new, sc.min)
-    if sc.max is not None:
-        new = min(new, sc.max)
-    return StaircaseState(new, 0, direction, reversals)
+    units = int(_exact(step) / _grid_unit(tuple(sc.steps)))
+    index = _bounded_index(sc, st.index, st.index + direction * units)
+    return StaircaseState(staircase_level(sc, index), 0, direction, reversals, index)
 
 
 def staircase_threshold(reversals: tuple[float, ...], last: int, scale: str) -> float | None:

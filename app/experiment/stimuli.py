@@ -18,6 +18,7 @@ its ``[layer.region]``; a layer with a region of its own cannot be confined).
 from __future__ import annotations
 
 import copy
+import math
 import os
 import re
 import shutil
@@ -230,8 +231,14 @@ def write_scene(doc: dict, path: Path, files_from: Path) -> Scene:
     """Write ``doc`` as the texture file ``path``, the files it names placed beside it
     from folder ``files_from``, and load it back (``TextureError`` if the stimulus is not
     a valid scene)."""
-    from frictex.textures.errors import TextureError
     path.write_text(toml_text(doc), encoding="utf-8")
+    return load_written(doc, path, files_from)
+
+
+def load_written(doc: dict, path: Path, files_from: Path) -> Scene:
+    """The scene of the texture file ``path`` (written from ``doc``), the files ``doc``
+    names placed beside it from folder ``files_from`` (``TextureError`` if invalid)."""
+    from frictex.textures.errors import TextureError
     place_files(doc, files_from, path.parent)
     scene, problems, _ = check_scene(path)
     if scene is None:
@@ -253,13 +260,38 @@ def value_problem(base: Base, vary: str, layer: int, value: float) -> str | None
     return f"{vary} = {value:g} makes {first.field or 'the scene'} invalid: {first.message}"
 
 
-def _keep_played(path: Path, doc: dict) -> None:
-    """InputError when the stimulus file ``path`` (of a session's earlier trials) holds
-    another scene than ``doc``: it records what those trials played, so it is never
-    overwritten."""
-    if path.is_file() and path.read_text(encoding="utf-8") != toml_text(doc):
+#: the relative difference below which a played scene file's number is the same as the
+#: stimulus's (a session written before levels were computed from a grid index reached
+#: one level by different float paths, e.g. mu_low 0.669857362821885 and ...851)
+SAME_NUMBER_REL = 1e-9
+
+
+def _same_values(played, wanted) -> bool:
+    """Whether two parsed scene documents are equal, numbers within SAME_NUMBER_REL."""
+    if isinstance(played, dict) and isinstance(wanted, dict):
+        return played.keys() == wanted.keys() and all(
+            _same_values(played[key], wanted[key]) for key in played)
+    if isinstance(played, list) and isinstance(wanted, list):
+        return len(played) == len(wanted) and all(map(_same_values, played, wanted))
+    numbers = (int, float)
+    if isinstance(played, numbers) and isinstance(wanted, numbers) and not isinstance(
+            played, bool) and not isinstance(wanted, bool):
+        return math.isclose(played, wanted, rel_tol=SAME_NUMBER_REL)
+    return played == wanted
+
+
+def _keep_played(path: Path, doc: dict) -> bool:
+    """Whether the stimulus file ``path`` (of a session's earlier trials) holds the scene
+    ``doc`` (numbers within SAME_NUMBER_REL): it is then played again as it is. False when
+    there is no such file; InputError when it holds another scene: it records what those
+    trials played, so it is never overwritten."""
+    if not path.is_file():
+        return False
+    text = path.read_text(encoding="utf-8")
+    if text != toml_text(doc) and not _same_values(tomllib.loads(text), doc):
         raise InputError(f"{path}: this session played another scene under the name "
                          f"{path.stem}; it is kept, and the session does not go on")
+    return True
 
 
 class StimulusBank:
@@ -284,8 +316,8 @@ class StimulusBank:
         if name not in self._made:
             self.folder.mkdir(parents=True, exist_ok=True)
             path = self.folder / f"{name}.toml"
-            _keep_played(path, doc)
-            scene = write_scene(doc, path, files_from)
+            scene = (load_written(doc, path, files_from) if _keep_played(path, doc)
+                     else write_scene(doc, path, files_from))
             self._made[name] = (scene, path.read_text(encoding="utf-8"), doc)
         return self._made[name]
 
