@@ -261,9 +261,10 @@ PRESS_PEAK = 1.25
 def force_reach(scene) -> ForceReach | None:
     """On a travelling-wave scene (one with a force stage), what of its forces the wave
     cannot give (:class:`ForceReach`): out of reach forces are clamped to the nearest
-    reachable one and counted as ``unreachable`` when the scene plays (the amplifier's
-    limit; on a finite beam also the travelling-wave ratio, which falls away from
-    mid-span). None on any other scene."""
+    reachable one and counted as ``unreachable`` when the scene plays (the envelope the
+    channels give within the amplifier's limit, ``PushActuation.envelope_limit_at``, which
+    the pipeline's force stage plans with; on a finite beam also the travelling-wave ratio,
+    which falls away from mid-span). None on any other scene."""
     from frictex.device.profile import FORCE_PROFILES
     from frictex.rendering.input.press_synth import press_trace
     from frictex.textures.model import KeyClick

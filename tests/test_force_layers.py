@@ -126,3 +126,35 @@ def test_any_split_into_calls_gives_the_same_commands_and_forces():
         assert_array_equal(np.concatenate([getattr(o, name) for o in parts]), getattr(whole[0], name))
     assert_array_equal(np.concatenate([o.forces.achieved_n for o in parts], axis=1),
                        whole[0].forces.achieved_n)
+
+
+def test_a_push_beyond_what_the_beam_actuators_give_is_counted_unreachable():
+    # seed 002's actuator references peak at 1.164 W: at x = 300 mm (g = 1) the channels
+    # give at most 3 / 1.164 = 2.58 um of envelope, a push of k_p F_n (2.58 - w_th) =
+    # 0.10 N at 0.5 N; 0.12 N was planned at 2.85 um, capped, and not counted
+    sc = scene("travelling-beam-seed002", BEAM_DISPLAY,
+               layer(Guidance, x_mm=590.0, y_mm=3.0, gain_n_per_mm=1.0, max_force_n=0.12))
+    n = 101
+    trace = make_trace(np.linspace(0.0, 1.0, n), np.zeros(n), np.full(n, 300.0),
+                       np.full(n, 3.0), np.full(n, 0.5))
+    p, (out,) = run(sc, trace)
+    f, inside = out.forces, out.contact[0]
+    assert inside.sum() > 5000
+    reachable = KP * 0.5 * (p.actuation.ratio_at(300.0) * 3.0 / 1.16405249 - TH)
+    assert_allclose(f.achieved_n[0, inside, 0], reachable, rtol=1e-6)
+    assert f.unreachable[0, inside].all() and out.clamps.unreachable == inside.sum()
+    assert out.limited == 0
+    assert_allclose(out.commands_um[inside].max(), 3.0, rtol=1e-9)
+
+
+def test_every_force_missed_by_more_than_a_millinewton_is_counted_unreachable():
+    # 0.025 N at 0.5 N needs 2.8 um of envelope mid-span: more than the channels give
+    sc = scene("travelling-beam-seed002", BEAM_DISPLAY,
+               layer(Directional, target="force", forward=0.025, backward=0.3))
+    trace = sample(make_motion("back-and-forth", speed_mm_s=60, duration_s=3.0, x0_mm=150,
+                               y0_mm=3.0, length_mm=300), 60.0)
+    _, (out,) = run(sc, trace)
+    f = out.forces
+    missed = np.abs(f.achieved_n[..., 0] - f.wanted_n[..., 0]) > 1e-3
+    assert missed.sum() > 1000
+    assert not (missed & ~f.unreachable).any()

@@ -84,3 +84,16 @@ def test_channel_commands_never_pass_the_limit_and_keep_the_wave_shape():
     unit = np.abs(beam.unit_refs[2])
     np.testing.assert_allclose(act.commands_um[1:] / wave[1:, None], np.broadcast_to(unit, (100, 2)),
                                rtol=1e-12)  # scaled together: the same travelling wave
+
+
+def test_the_envelope_limit_is_what_the_channels_give_under_the_finger():
+    beam = travelling_beam(3.0)
+    x = np.array([300.0, 100.0, 20.0])
+    limit = beam.envelope_limit_at(x)
+    assert_allclose(limit[0], 3.0 / 1.16405249, rtol=1e-6)   # g = 1 mid-span
+    # a wave planned there, divided back by g, is within every channel: not limited
+    for d in (-1, 1):
+        wave, limited = beam.within_limit(limit / beam.gain_at(x), np.full(3, d))
+        assert limited == 0
+        assert_allclose(np.abs(beam.unit_refs[d + 1]).max() * wave, 3.0, rtol=1e-12)
+    assert_allclose(travelling_ring(3.0).envelope_limit_at(70.0), 3.0, rtol=1e-3)

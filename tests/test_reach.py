@@ -88,3 +88,12 @@ def test_the_typical_stroke_stays_on_the_display_whatever_its_size(tmp_path, siz
     assert (trace.x_mm >= 0).all() and (trace.x_mm <= size[0]).all()
     assert (trace.y_mm >= 0).all() and (trace.y_mm <= size[1]).all()
     assert np.ptp(trace.x_mm) > 0.2 * size[0] or np.ptp(trace.y_mm) > 0.2 * size[1]
+
+
+def test_a_key_push_beyond_what_the_beam_actuators_give_is_out_of_reach():
+    # keyclick-beam's 0.1 N push: from release_n 0.4 N the channels' 3 um, 2.58 um of
+    # envelope mid-span (the actuator references peak at 1.164 W), push 0.07-0.08 N
+    from frictex.textures.library import resolve_scene
+    found = R.force_reach(load_scene(resolve_scene("keyclick-beam")))
+    (name, share), = found.presses
+    assert name == "button" and share > 0.02

@@ -19,7 +19,10 @@ the friction inversion and the amplitude-only actuation. Per finger and output s
    a fixed finger): |P| = k_p F_n (tau w - w_th), the wave travelling against P (the drive
    pushes against the wave's travel), w = 0 for P = 0. Both work on the local envelope w
    under the finger; the wave amplitude is W = w / g(x) (``device.actuation.push_actuation``).
-   Out of reach (beyond the amplifier limit, tau = 0 near a beam end, F_n = 0): clamped
+   w is planned within what the channels give there (``PushActuation.envelope_limit_at``:
+   on seed 002's beam the actuators' references peak at 1.164 W, so at most 2.58 um
+   where g = 1, not the amplifier's 3 um), and within ``amplitude_limit_um``.
+   Out of reach (beyond that limit, tau = 0 near a beam end, F_n = 0): clamped
    to the nearest reachable force and counted as ``unreachable``, never silently.
 5. One wave serves every finger: the finger touching longest decides W and d
    (``device.actuation.base.primary_finger``); the force every finger gets is computed from
@@ -114,6 +117,7 @@ class ForceStage:
         x = fingers.x_pred
         tau = np.where(contact, self.actuation.ratio_at(x), 0.0)
         gain = np.where(contact, self.actuation.gain_at(x), 1.0)
+        limit = np.minimum(self.device.amplitude_limit_um, self.actuation.envelope_limit_at(x))
 
         present = set(fingers.ids)  # a finger that lifted and left the tracks is forgotten
         tangential = {fid: s for fid, s in state.tangential.items() if fid in present}
@@ -135,7 +139,7 @@ class ForceStage:
                 row, fid, fingers, fn[row], mu_target[row], motion[row], buttons, button, clicks)
             wanted_um[row], direction[row], unreachable_row, nonfinite, tangential[fid] = self._invert(
                 target_t[row] - motion[row] * push_x[row], push_x[row], moving[row],
-                fingers.vx[row], fn[row], tau[row], t_state)
+                fingers.vx[row], fn[row], tau[row], limit[row], t_state)
             clamps.nonfinite_target += int((nonfinite & contact[row]).sum())
             moving[row] &= contact[row]
             wanted_um[row] = np.where(contact[row], wanted_um[row], 0.0)
@@ -196,10 +200,10 @@ class ForceStage:
         f_t = np.where(np.isnan(override), self.params.mu0 * fn * relative, override)
         return f_t, push_x, push_y
 
-    def _invert(self, target_t, push, moving, vx, fn, tau, t_state):
+    def _invert(self, target_t, push, moving, vx, fn, tau, limit, t_state):
         """(w, d, unreachable, nonfinite, new state) for one finger: moving samples by
-        ``invert_tangential``, still samples by inverting the drive alone."""
-        limit = self.device.amplitude_limit_um
+        ``invert_tangential``, still samples by inverting the drive alone, each w within
+        ``limit`` (n,) um."""
         cmd, new_state = invert_tangential(target_t, vx, fn, tau, limit, self.device.friction,
                                            self.params, t_state)
         k = self.params.slope_per_um * fn

@@ -114,7 +114,7 @@ def _lambert_amplitude(c1, b, c2, c3, resist: bool):
         return np.real(lambertw((b * c1 / c2) * np.exp(b * shift))) / b - shift
 
 
-def invert_tangential(target_n, velocity_mm_s, normal_force_n, twr, limit_um: float,
+def invert_tangential(target_n, velocity_mm_s, normal_force_n, twr, limit_um,
                       friction: FrictionParams, params: DrivingForceParams,
                       state: TangentialState | None = None
                       ) -> tuple[TangentialCommand, TangentialState]:
@@ -127,7 +127,7 @@ def invert_tangential(target_n, velocity_mm_s, normal_force_n, twr, limit_um: fl
         last direction like a slow sample.
     normal_force_n : (n,) or scalar, normal force (N), finite and >= 0.
     twr : (n,) or scalar, local travelling-wave ratio in [0, 1] at the finger.
-    limit_um : amplifier limit on w (um zero-to-peak).
+    limit_um : scalar or (n,), the largest w reachable at each sample (um zero-to-peak).
     state : from the previous block (default: motion +1, direction +1).
 
     Returns
