@@ -158,3 +158,17 @@ def test_every_force_missed_by_more_than_a_millinewton_is_counted_unreachable():
     missed = np.abs(f.achieved_n[..., 0] - f.wanted_n[..., 0]) > 1e-3
     assert missed.sum() > 1000
     assert not (missed & ~f.unreachable).any()
+
+
+def test_a_press_beyond_the_friction_model_is_counted_as_the_friction_inversion_counts_it():
+    # 1.0 N: seed 003's asymptote 1.13 F_n passes 1; grating scenes count such samples as
+    # force_beyond_model (not also unreachable), a travelling-wave scene counted none
+    sc = scene("travelling-beam-seed002", BEAM_DISPLAY,
+               layer(Directional, target="mu", forward=0.5, backward=0.9))
+    trace = sample(make_motion("back-and-forth", speed_mm_s=60, duration_s=2.0, x0_mm=220,
+                               y0_mm=3.0, length_mm=160), 60.0, force_n=1.0)
+    _, (out,) = run(sc, trace)
+    given = out.contact[0] & (out.amplitude_um[0] > 0)
+    assert given.sum() > 5000
+    assert out.clamps.force_beyond_model > 0.9 * given.sum()
+    assert out.clamps.unreachable == out.forces.unreachable.sum() == 0

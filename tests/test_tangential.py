@@ -145,7 +145,7 @@ def test_a_still_push_without_normal_force_or_wave_rests():
 
     stage = build_pipeline(load_scene(resolve_scene("directional-beam"))).forces
     fn, tau = np.array([0.0, 0.5, 0.5]), np.array([1.0, 0.0, 1.0])
-    w, _, unreachable, _, _ = stage._invert(np.zeros(3), np.full(3, 0.05), np.zeros(3, bool),
+    w, _, unreachable, _, _, _ = stage._invert(np.zeros(3), np.full(3, 0.05), np.zeros(3, bool),
                                            np.zeros(3), fn, tau, np.full(3, 2.5), None)
     assert_array_equal(w[:2], [0.0, 0.0])
     assert 0.0 < w[2] < stage.device.amplitude_limit_um

@@ -23,7 +23,10 @@ the friction inversion and the amplitude-only actuation. Per finger and output s
    on seed 002's beam the actuators' references peak at 1.164 W, so at most 2.58 um
    where g = 1, not the amplifier's 3 um), and within ``amplitude_limit_um``.
    Out of reach (beyond that limit, tau = 0 near a beam end, F_n = 0): clamped
-   to the nearest reachable force and counted as ``unreachable``, never silently.
+   to the nearest reachable force and counted as ``unreachable``, never silently. A
+   moving finger given an amplitude at a normal force beyond seed 003's friction model
+   (F_n >= 0.885 N: ``device.friction.asymptote``) is counted as ``force_beyond_model``
+   instead, as the friction inversion counts it.
 5. One wave serves every finger: the finger touching longest decides W and d
    (``device.actuation.base.primary_finger``); the force every finger gets is computed from
    that wave by the same model (the forward model), which is what summary.json compares
@@ -52,7 +55,9 @@ class ForceBlock:
     """The force stage's output for a block; per-finger arrays are (F, n).
 
     wanted_n, achieved_n : (F, n, 2) force on each finger (N, x and y of the display).
-    unreachable : bool, wanted forces out of the wave's reach there (clamped, counted).
+    unreachable : bool, wanted forces out of the wave's reach there (clamped, counted);
+        not where the normal force is beyond the friction model (counted as
+        ``force_beyond_model`` instead, as the friction inversion counts them).
     button : int8 key-click state (0 idle, 1 on, 2 clicked; the highest over the
         buttons), or None if the scene has no key-click.
     clicks : int (F, n), phase flips (a key-click's idle/on -> clicked) at each sample.
@@ -137,13 +142,14 @@ class ForceStage:
                                                      t_state.motion)
             target_t[row], push_x[row], push_y[row] = self._targets(
                 row, fid, fingers, fn[row], mu_target[row], motion[row], buttons, button, clicks)
-            wanted_um[row], direction[row], unreachable_row, nonfinite, tangential[fid] = self._invert(
-                target_t[row] - motion[row] * push_x[row], push_x[row], moving[row],
-                fingers.vx[row], fn[row], tau[row], limit[row], t_state)
+            wanted_um[row], direction[row], unreachable_row, nonfinite, beyond, tangential[fid] = \
+                self._invert(target_t[row] - motion[row] * push_x[row], push_x[row], moving[row],
+                             fingers.vx[row], fn[row], tau[row], limit[row], t_state)
             clamps.nonfinite_target += int((nonfinite & contact[row]).sum())
+            clamps.force_beyond_model += int((beyond & contact[row]).sum())
             moving[row] &= contact[row]
             wanted_um[row] = np.where(contact[row], wanted_um[row], 0.0)
-            unreachable[row] = unreachable_row & contact[row]
+            unreachable[row] = unreachable_row & ~beyond & contact[row]
 
         primary = primary_finger(contact, fingers.touch_start)
         served = primary >= 0
@@ -201,9 +207,9 @@ class ForceStage:
         return f_t, push_x, push_y
 
     def _invert(self, target_t, push, moving, vx, fn, tau, limit, t_state):
-        """(w, d, unreachable, nonfinite, new state) for one finger: moving samples by
-        ``invert_tangential``, still samples by inverting the drive alone, each w within
-        ``limit`` (n,) um."""
+        """(w, d, unreachable, nonfinite, beyond model, new state) for one finger: moving
+        samples by ``invert_tangential``, still samples by inverting the drive alone (no
+        friction model there), each w within ``limit`` (n,) um."""
         cmd, new_state = invert_tangential(target_t, vx, fn, tau, limit, self.device.friction,
                                            self.params, t_state)
         k = self.params.slope_per_um * fn
@@ -218,4 +224,4 @@ class ForceStage:
         d = np.where(moving, cmd.direction, d_still).astype(np.int8)
         unreachable = np.where(moving, cmd.unreachable, over)
         new_state = TangentialState(new_state.motion, int(d[-1])) if d.size else new_state
-        return w, d, unreachable, cmd.nonfinite & moving, new_state
+        return w, d, unreachable, cmd.nonfinite & moving, cmd.beyond_model & moving, new_state

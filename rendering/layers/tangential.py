@@ -64,6 +64,9 @@ class TangentialCommand:
     achieved_n : float64 (n,) F_t of the commands (forward model), N.
     unreachable : bool (n,) targets outside the reachable range, clamped to its nearest end.
     nonfinite : bool (n,) targets that were NaN/inf (w = 0 there).
+    beyond_model : bool (n,) samples given an amplitude (w > 0) at a normal force beyond
+        seed 003's friction model (``device.friction.asymptote``), where F_f was taken at
+        the model's edge; counted as ``force_beyond_model`` like the friction inversion's.
     """
 
     amplitude_um: np.ndarray
@@ -72,6 +75,7 @@ class TangentialCommand:
     achieved_n: np.ndarray
     unreachable: np.ndarray
     nonfinite: np.ndarray
+    beyond_model: np.ndarray
 
 
 def _forces(w_um, normal_force_n, twr, friction: FrictionParams, params: DrivingForceParams):
@@ -143,7 +147,7 @@ def invert_tangential(target_n, velocity_mm_s, normal_force_n, twr, limit_um,
 
     nonfinite = ~np.isfinite(target)
     goal = np.where(nonfinite, params.mu0 * fn, target)
-    a, _ = asymptote(fn, friction)
+    a, beyond = asymptote(fn, friction)
     b = friction.b_per_um
     f0 = params.mu0 * fn
     c1, ca = f0 * (1.0 - a), f0 * a           # F_f = c1 exp(-b w) + ca
@@ -178,7 +182,7 @@ def invert_tangential(target_n, velocity_mm_s, normal_force_n, twr, limit_um,
     direction = _hold(np.where(driving, s * motion, 0), state.direction)
     achieved = tangential_force(w, direction, motion, fn, tau, friction, params)
     command = TangentialCommand(w, direction.astype(np.int8), motion.astype(np.int8), achieved,
-                                (below | above) & ~nonfinite, nonfinite)
+                                (below | above) & ~nonfinite, nonfinite, beyond & (w > 0.0))
     new_state = TangentialState(int(motion[-1]), int(direction[-1])) if n else state
     return command, new_state
 
