@@ -150,3 +150,15 @@ def test_a_still_push_without_normal_force_or_wave_rests():
     assert_array_equal(w[:2], [0.0, 0.0])
     assert 0.0 < w[2] < stage.device.amplitude_limit_um
     assert_array_equal(unreachable, [True, True, False])
+
+
+@pytest.mark.parametrize("limit, light", [(3.0, 0.457), (3.0 / 1.16405249, 0.356)])
+def test_zero_net_force_is_reachable_only_at_the_light_presses_the_docstring_states(limit, light):
+    # the module docstring: with the default constants, F_t <= 0 needs F_n <= 0.457 N at
+    # 3 um (0.356 N at the beam's 2.58 um); at 0.5 N the floor is +0.012 N at 3 um
+    for fn, reachable in ((light - 0.001, True), (light + 0.001, False), (0.5, False)):
+        cmd, _ = invert_tangential(np.zeros(1), np.full(1, 25.0), fn, 1.0, limit, FRICTION, PARAMS)
+        assert cmd.unreachable[0] != reachable
+    floor = tangential_force(3.0, 1, -1, 0.5, 1.0, FRICTION, PARAMS)
+    assert floor == pytest.approx(0.012, abs=5e-4)
+    assert tangential_force(1.6, 1, -1, 0.5, 1.0, FRICTION, PARAMS) == pytest.approx(0.11, abs=5e-3)

@@ -20,12 +20,23 @@ eq 8, F_f + F_p; s = -1 is eq 7, F_f - F_p.
 
 Inversion: for a wanted F_t on a finger moving at v (mm/s), the amplitude w in
 [0, limit] and the direction d. The branch s = -1 is strictly decreasing in w, from
-F0 = mu0 F_n at w = 0 to its floor at the limit, so every target in [floor, F0] --
-including zero and negative net force -- has one solution, found in closed form
-(seed 003, eq 3 below the drive threshold, Lambert W above it). Targets above F0 need
-s = +1, whose force is convex past the threshold and is reachable up to its value at
-the limit (Lambert W, the branch where the force rises). Targets outside are clamped to
-the nearest reachable force and marked ``unreachable`` (never silently).
+F0 = mu0 F_n at w = 0 to its floor at the limit, so every target in [floor, F0] has
+one solution, found in closed form (seed 003, eq 3 below the drive threshold, Lambert W
+above it).
+
+Zero and negative net force (seed 002, sec 4.1) lie in that range only at light
+presses. The floor at w = limit, tau = 1 is
+F_n [mu0 ((1 - k F_n) e^{-b w} + k F_n) - k_p (w - w_th)], at most 0 only for
+F_n <= (k_p (w - w_th) / mu0 - e^{-b w}) / (k (1 - e^{-b w})): with the default
+constants (mu0 0.5, k 1.13 /N, b 1.67 /um, k_p 0.13 /um, w_th 1 um) F_n <= 0.457 N at
+3 um (the ring), 0.356 N at the 2.58 um seed 002's beam gives mid-span. At the paper's
+0.5 N the floor is +0.012 N at 3 um (+0.11 N at 1.6 um); zero would need 3.18 um.
+Lower targets get the floor (w at the limit) and are counted ``unreachable``.
+
+Targets above F0 need s = +1, whose force is convex past the threshold and is reachable
+up to its value at the limit (Lambert W, the branch where the force rises). Targets
+outside are clamped to the nearest reachable force and marked ``unreachable`` (never
+silently).
 
 Direction hysteresis (no chatter): m follows sign(v) only once |v| >= ``v_hold_mm_s``;
 below it (and at a finger at rest) the last direction holds. d is changed only on a
