@@ -33,6 +33,10 @@ more after the window died) and arms a hard exit ``PARENT_GONE_EXIT_S`` later; i
 between, the bridge loop sees the parent gone and shuts down as when asked (the link
 closed, the recording committed). The child ignores SIGINT and SIGHUP, which a
 terminal sends the whole process group: the window's process ends the demo on them.
+So does ``multiprocessing``'s resource tracker, another process of the group that
+cleans up the queues' semaphores: it ignores SIGINT and SIGTERM itself, and is started
+with SIGHUP ignored (:func:`start_resource_tracker`); a SIGHUP to the group killed it,
+and the window's process printed a warning and 17 tracebacks of its replacement.
 
 Both processes stamp with ``time.perf_counter`` (on Linux CLOCK_MONOTONIC, one clock for
 the whole machine), so the window's ``now()`` is the child's output clock.
@@ -104,6 +108,22 @@ class PipelineInfo:
     actuation: object
 
 
+def start_resource_tracker() -> None:
+    """Start ``multiprocessing``'s resource tracker (if it does not run yet) with SIGHUP
+    ignored, which it keeps: a terminal's SIGHUP to the process group then leaves it to
+    clean up the queues' semaphores (module docstring). In the main thread only (signal
+    handlers can be set nowhere else); elsewhere it starts as it would."""
+    from multiprocessing import resource_tracker
+    if threading.current_thread() is not threading.main_thread():
+        resource_tracker.ensure_running()
+        return
+    previous = signal.signal(signal.SIGHUP, signal.SIG_IGN)
+    try:
+        resource_tracker.ensure_running()
+    finally:
+        signal.signal(signal.SIGHUP, previous)
+
+
 class HapticProcess(TouchInput):
     """The demo's haptic side in a child process, with :class:`HapticThread`'s interface
     as the window uses it: ``now``, ``touch``, ``touch_at``, ``switch``, ``estop``,
@@ -116,6 +136,7 @@ class HapticProcess(TouchInput):
     """
 
     def __init__(self, scene, config: HapticConfig, clock=time.perf_counter):
+        start_resource_tracker()
         ctx = mp.get_context("spawn")  # not fork: the window's process has GL and threads
         self.clock = clock
         self.block_s = config.block_size / config.rate_hz
