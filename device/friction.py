@@ -128,11 +128,14 @@ class SeedFrictionModel:
         """Lowest mu' reachable at that force within the amplitude limit."""
         return self.forward(self.limit_um, normal_force_n)
 
-    def beyond_model(self) -> str:
-        """What a sample counted ``force_beyond_model`` met, for a warning."""
+    def beyond_model(self, forces: bool = False) -> str:
+        """What a sample counted ``force_beyond_model`` met, for a warning; ``forces``:
+        the samples of a travelling-wave scene, whose force inversion takes the friction
+        at the model's edge (a friction target gets full amplitude instead)."""
+        done = ("its force inversion took the friction at the model's edge" if forces
+                else "full amplitude was commanded")
         return (f"beyond seed 003's friction model, whose asymptote "
-                f"{self.params.asymptote_per_n:g} F_n reaches 1 there (full amplitude was "
-                "commanded)")
+                f"{self.params.asymptote_per_n:g} F_n reaches 1 there ({done})")
 
     def _amplitude(self, mu, force, counts: ClampCounts) -> np.ndarray:
         a, beyond = asymptote(force, self.params)  # force may be one value for all of mu
@@ -210,8 +213,9 @@ class CalibratedFrictionModel:
             w = np.where(out & ~(w <= self.limit_um), self.limit_um, w)
         return w
 
-    def beyond_model(self) -> str:
-        """What a sample counted ``force_beyond_model`` met, for a warning."""
+    def beyond_model(self, forces: bool = False) -> str:
+        """What a sample counted ``force_beyond_model`` met, for a warning (the same for
+        a travelling-wave scene's ``forces``)."""
         return (f"outside the calibration's measured forces ({self.forces[0]:g} to "
                 f"{self.forces[-1]:g} N): the nearest measured force's row was used")
 

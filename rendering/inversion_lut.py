@@ -66,8 +66,8 @@ class LutFrictionModel:
     def floor(self, normal_force_n) -> np.ndarray:
         return self.exact.floor(normal_force_n)
 
-    def beyond_model(self) -> str:
-        return self.exact.beyond_model()
+    def beyond_model(self, forces: bool = False) -> str:
+        return self.exact.beyond_model(forces)
 
     def invert(self, mu_target, normal_force_n) -> tuple[np.ndarray, ClampCounts]:
         """Amplitude (um, in [0, limit]) for ``mu_target`` at ``normal_force_n``; see

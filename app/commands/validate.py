@@ -114,9 +114,9 @@ def force_reach_warnings(path, scene) -> list[str]:
     reach = force_reach(scene)
     if reach is None:
         return []
-    why = ("beyond the amplifier's limit or, on a finite beam, where the travelling-wave "
-           "ratio falls away from mid-span; those forces will be clamped to the nearest "
-           "reachable (summary.json: clamps.unreachable)")
+    why = ("beyond what the actuators give within the amplifier's limit or, on a finite "
+           "beam, where the travelling-wave ratio falls away from mid-span; those forces will "
+           "be clamped to the nearest reachable (summary.json: clamps.unreachable)")
     found = []
     if reach.stroke_share:
         found.append(f"{escape_path(path)}: forces: {_share(reach.stroke_share)} of typical "

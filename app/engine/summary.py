@@ -117,7 +117,7 @@ def warnings_of(pipeline, tracker, totals: Totals) -> list[str]:
                         f"and {were(n)} commanded 0 um")
     if clamps["force_beyond_model"]:
         warnings.append(f"{counted(clamps['force_beyond_model'], 'sample')} had a normal force "
-                        + pipeline.friction.beyond_model())
+                        + pipeline.friction.beyond_model(forces=pipeline.forces is not None))
     if tracker.jumps:
         warnings.append(f"{counted(tracker.jumps, 'finger jump')} {were(tracker.jumps)} "
                         "treated as lift and touch")
