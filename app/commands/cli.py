@@ -34,7 +34,8 @@ import os
 import sys
 import traceback
 
-from frictex.app.commands.startup_signals import StartupSignals, report_signal
+from frictex.app.commands.startup_signals import (StartupSignals, ignore_held_signals,
+                                                   report_signal)
 from frictex.app.engine.driver import Terminated
 from frictex.app.engine.heap import keep_freed_memory
 from frictex.device.errors import FrictexError, MissingExtra
@@ -156,12 +157,27 @@ def _run(command, startup: StartupSignals) -> int:
     except BrokenPipeError:  # output piped into e.g. head, which stopped reading
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
-    except KeyboardInterrupt:
-        return report_signal(startup.signum)
     except BaseException as exc:  # noqa: BLE001 - sorted into the kinds below
-        if startup.caused(exc):
-            return report_signal(startup.signum)
+        first = _first_signal(exc)
+        if isinstance(first, Terminated):
+            return report_error(first)
+        if first is not None or startup.caused(exc):
+            return report_signal(getattr(first, "signum", None) or startup.signum)
         return report_error(exc)
+
+
+def _first_signal(exc: BaseException) -> BaseException | None:
+    """The exception of the signal that ended the command, where ``exc`` or one it was
+    raised while handling stands for a signal (a KeyboardInterrupt, a run's
+    ``Terminated``): the earliest of them (a SIGTERM that ended a run, not a SIGHUP
+    during its cleanup). A fan-out's ``Interrupted`` carries its signal (``signum``), as
+    ``Terminated`` does; None: no signal."""
+    first = None
+    while exc is not None:
+        if isinstance(exc, (KeyboardInterrupt, Terminated)):
+            first = exc
+        exc = exc.__context__
+    return first
 
 
 def report_error(exc: BaseException) -> int:
@@ -169,6 +185,7 @@ def report_error(exc: BaseException) -> int:
     SystemExit passes through (a run's SIGTERM or SIGHUP says so first)."""
     if isinstance(exc, SystemExit):
         if isinstance(exc, Terminated):
+            ignore_held_signals()
             print(f"frictex: {exc.reason}", file=sys.stderr)
         raise exc
     if isinstance(exc, ModuleNotFoundError) and (exc.name or "").split(".")[0] in EXTRAS:

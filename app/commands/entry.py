@@ -31,7 +31,9 @@ def entry() -> NoReturn:
     unloading numba's and scipy's modules object by object took 0.24 s of CPU after a
     one-second replay (alternated pairs of whole processes under ``/usr/bin/time``), a
     quarter of what the user waits for.
-    A thread still running gets the ordinary exit, which waits for it.
+    A thread still running gets the ordinary exit, which waits for it. Signals are
+    ignored from the moment the command has returned (its run is complete), in either
+    exit.
     """
     with StartupSignals() as startup:
         try:
@@ -39,6 +41,8 @@ def entry() -> NoReturn:
             code = main(startup=startup)
         except KeyboardInterrupt:  # before main's own handling, or after it
             code = report_signal(startup.signum)
+        finally:
+            startup.ignore_from_now()
     if threading.active_count() > 1:
         sys.exit(code)
     atexit._run_exitfuncs()

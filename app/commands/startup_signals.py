@@ -12,9 +12,21 @@ from frictex.app.engine.driver import HELD_SIGNALS, Terminated
 from frictex.device.errors import FrictexError
 
 
+def ignore_held_signals() -> None:
+    """From now on SIGINT, SIGTERM and SIGHUP are ignored (the command is over: its exit
+    line is being written, or its code returned); in the main thread only (signal
+    handlers can be set nowhere else). A signal already caught and not yet handled is
+    dropped too."""
+    if threading.current_thread() is threading.main_thread():
+        for sig in HELD_SIGNALS:
+            signal.signal(sig, signal.SIG_IGN)
+
+
 def report_signal(signum: int | None) -> int:
     """Print the one line for a signal that ended the command (None: a Ctrl-C that came
-    as a KeyboardInterrupt); return its exit status."""
+    as a KeyboardInterrupt), further signals ignored meanwhile (one more Ctrl-C printed
+    the line twice); return its exit status."""
+    ignore_held_signals()
     if signum in (None, signal.SIGINT):
         print("frictex: interrupted", file=sys.stderr)
         return 130
@@ -26,7 +38,10 @@ def report_signal(signum: int | None) -> int:
 class StartupSignals:
     """Within: SIGINT, SIGTERM and SIGHUP (``driver.HELD_SIGNALS``) during a command's
     start-up raise KeyboardInterrupt, the first one's number kept in ``signum``; the
-    caller ends with :func:`report_signal`. A signal the process ignores (``nohup``)
+    caller ends with :func:`report_signal`. Only the first raises: the ones after it
+    (or after the signal that ended a run, :meth:`ended_by`) come while the command
+    cleans up, and are ignored, so that its cleanup runs to the end and the signal that
+    ended the command is the one reported. A signal the process ignores (``nohup``)
     stays ignored.
 
     Each raises KeyboardInterrupt, SIGTERM's too: inside a C extension's import of numpy
@@ -60,10 +75,23 @@ class StartupSignals:
         if self._hook is not None:
             sys.excepthook = self._hook
 
+    def ended_by(self, signum: int) -> None:
+        """A run within (``driver.deferred_interrupts``) was ended by ``signum``: the
+        command's first signal, unless one came before."""
+        if self.signum is None:
+            self.signum = signum
+
+    def ignore_from_now(self) -> None:
+        """The command has returned its code: the process only ends now, with every
+        signal ignored (kept so on leaving: a Ctrl-C during the interpreter's exit
+        killed the process without a line)."""
+        ignore_held_signals()
+        self._handlers.clear()
+
     def _on_signal(self, signum, frame) -> None:
         if self.signum is None:
             self.signum = signum
-        raise KeyboardInterrupt
+            raise KeyboardInterrupt
 
     def _quiet_interrupt(self, kind, value, tb) -> None:
         if not issubclass(kind, KeyboardInterrupt):

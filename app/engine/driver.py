@@ -18,7 +18,9 @@ kernel return a value with an exception set, which Python reports as a 30-line
 ``SystemError`` (3 of 15 Ctrl-Cs of a replay did). :func:`deferred_interrupts` holds the
 first Ctrl-C (and SIGTERM, SIGHUP) as a flag that the loop turns into an exception between
 steps (``check``), where nothing compiled runs; a second one raises at once. Through a
-run's commit (``check.committing()``) both are held, then dropped: the run is complete.
+run's commit (``check.committing()``) both are held, then dropped: the run is complete;
+the first is raised again to the handler the run restores where that is a loop's
+(``frictex batch --jobs 1``: it stops after this run), not the command's (``_pass_on``).
 Once the run is ending (a signal raised, or ``check.end()`` where an error ends it), every
 further signal is held: the cleanup (sinks aborted, staged files removed) is never cut
 short. A worker of ``frictex batch`` whose parent dies gets a SIGINT from the system for
@@ -88,6 +90,7 @@ class Terminated(SystemExit):
 
     def __init__(self, signum: int):
         super().__init__(128 + signum)
+        self.signum = signum
         self.reason = f"terminated by {signal.Signals(signum).name}"
 
 
@@ -97,6 +100,7 @@ class HeldSignals:
 
     def __init__(self):
         self.held: list[int] = []
+        self.dropped: list[int] = []
         self._committing = False
         self._ending = False
 
@@ -125,8 +129,9 @@ class HeldSignals:
     def committing(self):
         """Within: the run's commit (the swap of its outputs into place). Every signal is
         held through it, a second one too; once it has succeeded the run is complete and
-        the signals held are dropped: the run reports success, as its outputs are all in
-        place (a run that could still stop raised at the ``check()`` before)."""
+        the signals held are dropped (kept in ``dropped``): the run reports success, as its
+        outputs are all in place (a run that could still stop raised at the ``check()``
+        before)."""
         self()
         self._committing = True
         try:
@@ -134,7 +139,7 @@ class HeldSignals:
         except BaseException:
             self._committing = False
             raise
-        self.held.clear()
+        self.dropped, self.held = self.held, []
         self._committing = False
 
 
@@ -164,7 +169,26 @@ def deferred_interrupts():
         for sig, handler in previous.items():
             if handler is not signal.SIG_IGN:
                 signal.signal(sig, handler)
+        _pass_on(check, previous)
     check()
+
+
+def _pass_on(check: HeldSignals, previous: dict) -> None:
+    """Tell the handlers :func:`deferred_interrupts` restored (``previous``) of the signal
+    its run saw. One that ended the run goes to a handler that keeps a command's first
+    signal (``ended_by(signum)``: ``StartupSignals``), so that the signals after it,
+    which come during the caller's cleanup, do not cut it short. One dropped after a
+    complete commit is raised again to a Python handler that has no ``ended_by``: a loop
+    of runs (``fanout``'s items run here) then stops after this run; a command's own
+    run (the ``ended_by`` handler) reports its complete run."""
+    if check.held:
+        owner = getattr(previous[check.held[0]], "__self__", None)
+        if hasattr(owner, "ended_by"):
+            owner.ended_by(check.held[0])
+    elif check.dropped:
+        handler = previous[check.dropped[0]]
+        if callable(handler) and not hasattr(getattr(handler, "__self__", None), "ended_by"):
+            signal.raise_signal(check.dropped[0])
 
 
 def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,

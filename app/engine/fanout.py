@@ -300,6 +300,14 @@ class _Worker:
         cls.end_if_orphaned()
 
     @classmethod
+    def ended_by(cls, signum: int) -> None:
+        """The item's run (``driver.deferred_interrupts``) was ended by ``signum``: the
+        item is stopping, so that further SIGINTs pass. Having this method, the worker
+        is not passed the SIGINT a complete run's commit held: its item keeps its result,
+        and the parent's flag starts no other."""
+        cls.stopping = True
+
+    @classmethod
     def end_if_orphaned(cls) -> None:
         """End this worker if its parent is gone: nothing would take its results, and
         every worker holds the item queue open, so that it would wait for ever."""

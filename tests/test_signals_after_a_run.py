@@ -1,0 +1,166 @@
+"""Signals that come as a run ends: a Ctrl-C during a replay's commit reaches the loop
+that runs replays one after another (``frictex batch --jobs 1``), which stops after
+that replay, and a further signal during a command's cleanup does not cut it short or
+change the signal reported. Signals are sent by the process to itself at a set point
+(a patched commit), so nothing depends on timing."""
+
+import os
+import signal
+
+import pytest
+
+SCENE = "grating-5mm"
+TRACE = "swipe-40mms-50hz"
+
+
+def ctrl_c_in_commit(monkeypatch, at: int) -> list:
+    """Patch the staging commit so that commit number ``at`` (1-based) gets a Ctrl-C;
+    the list counts the commits."""
+    from frictex.app.engine import staging
+    commit = staging.Staging.commit
+    commits = []
+
+    def commit_under_ctrl_c(self):
+        commits.append(self)
+        if len(commits) == at:
+            os.kill(os.getpid(), signal.SIGINT)
+        return commit(self)
+
+    monkeypatch.setattr(staging.Staging, "commit", commit_under_ctrl_c)
+    return commits
+
+
+def test_a_ctrl_c_during_a_commit_stops_a_loop_of_replays_after_it(tmp_path, monkeypatch):
+    from frictex.app.engine.fanout import Interrupted, fan_out
+    from frictex.app.engine.replay import run_replay
+    commits = ctrl_c_in_commit(monkeypatch, at=2)
+    with pytest.raises(Interrupted) as stop:
+        fan_out(lambda k: run_replay(SCENE, TRACE, tmp_path / f"o{k}", progress=False),
+                list(range(4)), workers=1)
+    assert stop.value.signum == signal.SIGINT
+    assert len(commits) == 2  # jobs 3 and 4 never started
+    assert (tmp_path / "o1" / "summary.json").exists()  # the second run is complete
+
+
+def test_a_ctrl_c_during_the_commit_of_a_run_alone_reaches_the_handler_restored():
+    from frictex.app.engine.driver import deferred_interrupts
+    seen = []
+    before = signal.signal(signal.SIGINT, lambda signum, frame: seen.append(signum))
+    try:
+        with deferred_interrupts() as check:
+            with check.committing():
+                os.kill(os.getpid(), signal.SIGINT)
+            assert seen == []  # held, not raised, through the commit
+    finally:
+        signal.signal(signal.SIGINT, before)
+    assert seen == [signal.SIGINT]
+
+
+def run_ended_by(first: int, then: list[int], cleaned: list):
+    """A command whose run is ended by signal ``first``; the signals ``then`` come
+    during its cleanup, which notes in ``cleaned`` that it ran to its end."""
+    from frictex.app.engine.driver import deferred_interrupts
+
+    def command():
+        try:
+            with deferred_interrupts() as check:
+                os.kill(os.getpid(), first)
+                check()
+        finally:
+            for sig in then:
+                os.kill(os.getpid(), sig)
+            cleaned.append("all")
+    return command
+
+
+@pytest.mark.parametrize("first, then, line, code", [
+    (signal.SIGTERM, [signal.SIGHUP], "frictex: terminated by SIGTERM", 143),
+    (signal.SIGINT, [signal.SIGINT, signal.SIGINT], "frictex: interrupted", 130)])
+def test_signals_during_the_cleanup_after_a_run_neither_cut_it_short_nor_are_reported(
+        capsys, first, then, line, code):
+    from frictex.app.commands.cli import _run
+    from frictex.app.commands.startup_signals import StartupSignals
+    cleaned = []
+    with StartupSignals() as startup:
+        try:
+            ended = _run(run_ended_by(first, then, cleaned), startup)
+        except SystemExit as exc:
+            ended = exc.code
+    assert (ended, cleaned) == (code, ["all"])
+    assert capsys.readouterr().err.strip().splitlines() == [line]
+
+
+def test_a_ctrl_c_while_the_exit_line_is_written_does_not_write_it_twice(monkeypatch):
+    import io
+    import sys
+    from frictex.app.commands.startup_signals import StartupSignals, report_signal
+
+    class CtrlCOnWrite(io.StringIO):
+        def write(self, text):
+            os.kill(os.getpid(), signal.SIGINT)
+            return super().write(text)
+
+    monkeypatch.setattr(sys, "stderr", CtrlCOnWrite())
+    with StartupSignals():
+        assert report_signal(None) == 130
+    assert sys.stderr.getvalue() == "frictex: interrupted\n"
+
+
+#: ``entry`` over a command that returns 0 with a thread still running (the exit then
+#: waits for it); that thread sends a Ctrl-C once the command has returned, then ends
+AFTER_THE_COMMAND = """
+import os, signal, sys, threading, time
+from frictex.app.commands import cli, entry
+
+def command(startup=None):
+    threading.Thread(target=ctrl_c_once_returned).start()
+    return 0
+
+def ctrl_c_once_returned():
+    main = threading.main_thread().ident
+    deadline = time.monotonic() + 60
+    while in_command(sys._current_frames()[main]) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    os.kill(os.getpid(), signal.SIGINT)
+
+def in_command(frame):
+    while frame is not None:
+        if frame.f_code is command.__code__:
+            return True
+        frame = frame.f_back
+    return False
+
+cli.main = command
+entry.entry()
+"""
+
+
+def test_a_ctrl_c_after_the_command_returned_leaves_its_exit_alone():
+    import subprocess
+    import sys
+    from conftest import signals_as_a_terminal_gives
+    done = subprocess.run([sys.executable, "-c", AFTER_THE_COMMAND], capture_output=True,
+                          text=True, timeout=120, preexec_fn=signals_as_a_terminal_gives)
+    assert (done.returncode, done.stderr) == (0, "")
+
+
+def test_a_worker_keeps_the_result_of_a_run_complete_when_its_ctrl_c_came(monkeypatch):
+    """In a batch worker the parent's flag stops the items after it: the item whose
+    commit held the Ctrl-C keeps its result, and a later Ctrl-C in its cleanup passes."""
+    from frictex.app.engine.driver import deferred_interrupts
+    from frictex.app.engine.fanout import _Worker
+    monkeypatch.setattr(_Worker, "running", True)
+    monkeypatch.setattr(_Worker, "stopping", False)
+    before = signal.signal(signal.SIGINT, _Worker.interrupt)
+    try:
+        with deferred_interrupts() as check:
+            with check.committing():
+                os.kill(os.getpid(), signal.SIGINT)
+        with pytest.raises(KeyboardInterrupt):  # a run ended by one: the next passes
+            with deferred_interrupts() as check:
+                os.kill(os.getpid(), signal.SIGINT)
+                check()
+        os.kill(os.getpid(), signal.SIGINT)
+    finally:
+        signal.signal(signal.SIGINT, before)
+    assert _Worker.stopping
