@@ -68,6 +68,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Write the report into ``--out``; a run stopped (a signal, an error) before it wrote
+    anything there removes the folder if it made it (a SIGTERM left it empty)."""
+    out = Path(args.out)
+    made = not out.exists()
+    try:
+        return _write_report(args)
+    except BaseException:
+        if made and out.is_dir() and not any(out.iterdir()):
+            out.rmdir()
+        raise
+
+
+def _write_report(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     load_at_start = os.getloadavg()[0]
     out, real_dir = _checked(args)
