@@ -237,8 +237,26 @@ def _scoring_step(theta, low, high, function, u, n, k, guess):
     return np.where(better[:, None], trial[best, np.arange(theta.shape[0])], theta)
 
 
-def _start(function, u, n, k, guess, lapse_max):
-    """The best (a, b) of a grid for each data set, the lapse rate at half its bound."""
+#: the grid points each fit descends from: the best of each of this many bands of the
+#: start grid's log spread, so that a steeper or shallower basin is tried too
+STARTS = 5
+
+
+def _band_bests(ll, shape):
+    """The best point of each of ``STARTS`` bands of the grid's second axis (log spread):
+    flat indices (S, STARTS) into ``ll`` (S, G), G the grid ``shape`` raveled."""
+    grid = ll.reshape(-1, *shape)
+    bests = []
+    for band in np.array_split(np.arange(shape[1]), STARTS):
+        within = grid[:, :, band].reshape(grid.shape[0], -1)
+        a_index, b_index = np.divmod(np.argmax(within, axis=1), band.size)
+        bests.append(a_index * shape[1] + band[b_index])
+    return np.stack(bests, axis=1)
+
+
+def _starts(function, u, n, k, guess, lapse_max):
+    """The ``STARTS`` start points (a, b, lapse) of each data set (S, STARTS, 3): the
+    best (a, b) of each band of an (a, b) grid's b, the lapse rate at half its bound."""
     lo, hi = (float(u.min()), float(u.max()))
     if function == "logistic":
         grid_a = np.linspace(lo - (hi - lo), hi + (hi - lo), 41)
@@ -251,8 +269,33 @@ def _start(function, u, n, k, guess, lapse_max):
     F, *_ = _core(function, u[None, :], A[:, None], B[:, None])  # (G, J)
     p = np.clip(guess + (1.0 - guess - lam) * F, _EPS, 1.0 - _EPS)
     ll = k @ np.log(p).T + (n - k) @ np.log1p(-p).T  # (S, G)
-    best = np.argmax(ll, axis=1)
-    return np.stack([A[best], B[best], np.full(best.size, lam)], axis=1)
+    best = _band_bests(ll, (grid_a.size, grid_b.size))
+    return np.stack([A[best], B[best], np.full(best.shape, lam)], axis=2)
+
+
+#: scoring steps each start takes before only the best of each set descends on: 10 left
+#: 5 of 20000 simulated sets 0.008 or less above their optimum's NLL, at 0.6 of the
+#: time of descending from every start to convergence
+SCOUT_STEPS = 10
+
+
+def _fit_normalised(function, u, n, k, guess, lapse_max):
+    """The maximum-likelihood (a, b, lapse) of each set (S, 3) at normalised levels
+    ``u``: each of its :func:`_starts` descends ``SCOUT_STEPS`` steps, and the one with
+    the lowest negative log likelihood then descends to convergence. One descent from
+    the best grid point stopped at a local optimum in 746 of 20000 simulated sets (k =
+    15, 20, 27, 33, 37, 31 of 40: NLL 137.83 where 137.34 is reached; no choice of starts
+    by the grid's likelihood at a fixed lapse rate found them all)."""
+    low = np.array([_A_BOUNDS[function][0], _B_BOUNDS[0], 0.0])
+    high = np.array([_A_BOUNDS[function][1], _B_BOUNDS[1], lapse_max])
+    starts = _starts(function, u, n, k, guess, lapse_max)
+    sets, tries = starts.shape[:2]
+    n_each, k_each = np.repeat(n, tries, axis=0), np.repeat(k, tries, axis=0)
+    scouted = _minimise(starts.reshape(-1, 3), low, high, function, u, n_each, k_each, guess,
+                        iterations=SCOUT_STEPS)
+    nll = _nll_only(scouted, function, u, n_each, k_each, guess).reshape(sets, tries)
+    best = scouted.reshape(sets, tries, 3)[np.arange(sets), np.argmin(nll, axis=1)]
+    return _minimise(best, low, high, function, u, n, k, guess)
 
 
 def fit_many(function: str, x, n, k, guess: float, lapse_max: float) -> np.ndarray:
@@ -263,10 +306,7 @@ def fit_many(function: str, x, n, k, guess: float, lapse_max: float) -> np.ndarr
     n = np.broadcast_to(np.asarray(n, dtype=np.float64), k.shape)
     scale = float(np.max(np.abs(x)))
     u = x / scale
-    low = np.array([_A_BOUNDS[function][0], _B_BOUNDS[0], 0.0])
-    high = np.array([_A_BOUNDS[function][1], _B_BOUNDS[1], lapse_max])
-    theta = _minimise(_start(function, u, n, k, guess, lapse_max), low, high, function, u, n,
-                      k, guess)
+    theta = _fit_normalised(function, u, n, k, guess, lapse_max)
     a, b, lam = theta[:, 0], theta[:, 1], theta[:, 2]
     if function == "logistic":
         alpha, beta = a * scale, np.exp(b) * scale
