@@ -100,6 +100,9 @@ FORMAT_VERSION = 1
 METHODS = ("2afc", "staircase", "same-different", "magnitude")
 #: what a stimulus may vary (``stimuli.PARAMETERS`` says how each sets a layer)
 VARIES = ("period_mm", "depth", "level")
+#: the unit of each varied parameter, and so of results.csv's value and difference
+VARY_UNITS = {"period_mm": "mm", "depth": "unitless (friction coefficient)",
+              "level": "unitless (clip level, 0 to 1)"}
 PRESENTATIONS = ("sequential", "side-by-side")
 EXPLORATIONS = ("fixed", "free")
 RULES = {"1-up-2-down": 2, "1-up-3-down": 3}

@@ -38,6 +38,42 @@ and `--resume` refuses a scene that changed since the session started, naming it
 """
 
 
+#: results.csv's columns (``session.RESULT_COLUMNS``): what each holds, and its unit
+RESULT_COLUMNS = {
+    "trial": "the trial's 1-based position in the session, practice included",
+    "practice": "1 for a practice trial (neither adapting a staircase nor analysed), else 0",
+    "stimuli": "the stimulus names in presentation order (first or left interval first), "
+               "separated by `\\|`",
+    "value": "the comparison's value of `vary` (magnitude estimation: the stimulus's; "
+             "same-different: level B's, in AA and BB pairs too), in `vary`'s unit; blank "
+             "where nothing is varied (a list of scenes)",
+    "difference": "`value` minus `reference`, in `vary`'s unit; 0 for a same-different AA "
+                  "or BB pair; blank for magnitude estimation",
+    "answer": "the correct response: the interval holding the comparison (`1` or `2`) for "
+              "2afc and staircase, `same` or `different` for same-different; blank for "
+              "magnitude estimation",
+    "response": "the participant's response: `1` or `2`, `same` or `different`, or the "
+                "rating (an integer of [scale])",
+    "correct": "1 when `response` is `answer`, else 0; blank where no answer is correct "
+               "(magnitude estimation)",
+    "rt_s": "the response time: from the end of the trial's last interval to the answer (s)",
+    "ended_utc": "when the trial was answered (ISO 8601, UTC, to the millisecond)",
+    "contact_1_s": "how long interval 1 was touched, a finger down (s); blank for an "
+                   "interval the trial has not",
+    "contact_2_s": "how long interval 2 was touched, a finger down (s); blank for an "
+                   "interval the trial has not (a magnitude trial has one)",
+}
+
+
+def _columns() -> list[str]:
+    """The results.csv section: a table of its columns and the units of `vary`."""
+    units = ", ".join(f"`{vary}`: {unit}" for vary, unit in P.VARY_UNITS.items())
+    lines = ["## results.csv: one row per trial answered", "",
+             f"The unit of `vary` (so of `value` and `difference`): {units}; session.json "
+             f"keeps it as `design.vary_unit`.", "", "| column | holds |", "|---|---|"]
+    return lines + [f"| `{name}` | {text} |" for name, text in RESULT_COLUMNS.items()] + [""]
+
+
 def _number(value) -> str:
     return str(value) if isinstance(value, int) else f"{value:g}"
 
@@ -106,6 +142,7 @@ def render() -> str:
             kind, span, default = _describe(spec)
             lines.append(f"| `{key}` | {kind} | {span} | {default} |")
         lines.append("")
+    lines += _columns()
     return "\n".join(lines).rstrip() + "\n"
 
 

@@ -10,14 +10,16 @@
                               started_utc, ended_utc (null until the last trial is
                               answered), parts (one per run of the session: its start,
                               end and trials; a part without an end was killed), and
-                              the design the analysis needs; scene_sha256: each
+                              the design the analysis needs (its vary_unit: the
+                              unit of vary, value and difference); scene_sha256: each
                               scene file's sha256, by its name (``scene_files``),
                               checked by ``--resume``
     DIR/protocol.toml         the protocol file as it was read
     DIR/NAME.toml             the protocol's scenes in its folder or below, copied under
                               the same relative names (``copy_scenes``), so that
                               DIR/protocol.toml resumes the session from DIR alone
-    DIR/results.csv           one row per trial answered (RESULT_COLUMNS), in order;
+    DIR/results.csv           one row per trial answered (RESULT_COLUMNS, each described
+                              in PROTOCOL_FORMAT.md), in order;
                               contact_1_s, contact_2_s: how long each interval was
                               touched (s, finger down; empty for an interval the trial
                               has not). A table from before those two columns is read,
@@ -238,8 +240,10 @@ class Session:
 def design(protocol) -> dict:
     """What ``frictex experiment analyse`` needs of a protocol (kept in session.json, so
     that a session folder is analysed without its scenes)."""
+    from frictex.app.experiment.protocol import VARY_UNITS
     s = protocol.stimuli
-    return {"vary": s.vary, "reference": s.reference, "question": protocol.question,
+    return {"vary": s.vary, "vary_unit": VARY_UNITS.get(s.vary), "reference": s.reference,
+            "question": protocol.question,
             "guess": protocol.guess_rate,
             "target": protocol.target if protocol.guess_rate is not None else None,
             "analysis": asdict(protocol.analysis),
