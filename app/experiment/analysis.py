@@ -58,7 +58,10 @@ Each session's end is recorded (``session_ends``: "complete", "stopped (...)" or
 "killed", its main trials, the rows read from results.csv, the trials session.json
 records and whether a torn last line was skipped); one that did not run to its end is
 warned of, and so is a results.csv with fewer rows than the trials recorded or a torn
-last line (a table cut short). A session
+last line (a table cut short). A row whose response is not one of its trial's responses,
+or whose ``correct`` is not whether the response is the answer (a table edited by hand),
+is warned of by its file and line (``row_problems``): the analysis counts ``correct`` as
+written. A session
 folder given twice is refused (it would count twice).
 
 Writes ``analysis.json`` (every number above) and ``analysis.png`` (one panel per study)
@@ -78,8 +81,8 @@ from scipy import stats
 
 from frictex.app.experiment import psychometric, same_different
 from frictex.app.experiment.protocol import Staircase, bundled_protocol
-from frictex.app.experiment.scheduler import (INTERVALS, StaircaseState, staircase_step,
-                                              staircase_threshold)
+from frictex.app.experiment.scheduler import (INTERVALS, SAME_DIFFERENT, StaircaseState,
+                                              staircase_step, staircase_threshold)
 from frictex.app.experiment.session import read_info, read_rows, torn_last_line
 from frictex.device.errors import InputError
 
@@ -167,6 +170,32 @@ def read_session(folder: str | Path) -> SessionData:
         raise InputError(f"{folder / 'session.json'}: has no design; not a session of this "
                          f"frictex")
     return SessionData(folder, info, read_rows(folder), torn_last_line(folder))
+
+
+def _responses(info: dict) -> tuple[str, ...]:
+    """The responses a trial of the session (its session.json ``info``) may be given."""
+    if info["method"] == "magnitude":
+        low, high = info["design"]["scale"]
+        return tuple(str(i) for i in range(low, high + 1))
+    return SAME_DIFFERENT if info["method"] == "same-different" else INTERVALS
+
+
+def row_problems(session: SessionData) -> list[str]:
+    """``FILE:LINE: why`` for each row of the session's results.csv whose response is not
+    one its trials may be given, or whose ``correct`` is not whether the response is the
+    answer (blank where the trial has none)."""
+    options, table = _responses(session.info), session.folder / "results.csv"
+    out = []
+    for line, row in enumerate(session.rows, start=2):  # line 1 is the header
+        expected = "" if not row["answer"] else str(int(row["response"] == row["answer"]))
+        if row["response"] not in options:
+            out.append(f"{table}:{line}: response {row['response']!r} is not one of "
+                       f"{', '.join(options)}")
+        elif row["correct"] != expected:
+            out.append(f"{table}:{line}: correct is {row['correct']!r}, but response "
+                       f"{row['response']!r} against answer {row['answer']!r} makes it "
+                       f"{expected!r}")
+    return out
 
 
 def distinct_folders(folders: list[str | Path]) -> list[Path]:
@@ -494,7 +523,8 @@ def analyse_study(sessions: list[SessionData]) -> dict:
            "vary": design["vary"], "reference": design["reference"],
            "session_ends": [{"session": str(s.folder), "ended": ended(s.info),
                              "main_trials": len(s.main()), "rows": len(s.rows),
-                             "trials_recorded": s.recorded, "torn_last_line": s.torn}
+                             "trials_recorded": s.recorded, "torn_last_line": s.torn,
+                             "row_problems": row_problems(s)}
                             for s in sessions]}
     if method in ("2afc", "staircase"):
         out.update(_forced_choice(design, sessions))
@@ -613,6 +643,8 @@ def report_lines(summary: dict) -> list[str]:
               f"{end['main_trials']} main trials): its planned trials are not all here"
               for end in summary["session_ends"] if end["ended"] not in ("complete", None)]
     lines += [line for end in summary["session_ends"] for line in _table_warning(end)]
+    lines += [f"  warning: {problem}; counted as written" for end in summary["session_ends"]
+              for problem in end["row_problems"]]
     unit = summary["vary"] or ""
     if summary["method"] in ("2afc", "staircase"):
         lines += _forced_choice_lines(summary, unit)
