@@ -39,7 +39,8 @@ def test_a_ctrl_c_during_a_commit_stops_a_loop_of_replays_after_it(tmp_path, mon
                 list(range(4)), workers=1)
     assert stop.value.signum == signal.SIGINT
     assert len(commits) == 2  # jobs 3 and 4 never started
-    assert (tmp_path / "o1" / "summary.json").exists()  # the second run is complete
+    assert (tmp_path / "o1" / "summary.json").exists()  # the second run is complete,
+    assert stop.value.results[1] is not None and stop.value.stopped == []  # and kept
 
 
 def test_a_ctrl_c_during_the_commit_of_a_run_alone_reaches_the_handler_restored():

@@ -39,7 +39,7 @@ class StartupSignals:
     """Within: SIGINT, SIGTERM and SIGHUP (``driver.HELD_SIGNALS``) during a command's
     start-up raise KeyboardInterrupt, the first one's number kept in ``signum``; the
     caller ends with :func:`report_signal`. Only the first raises: the ones after it
-    (or after the signal that ended a run, :meth:`ended_by`) come while the command
+    (or after the signal a run saw, :meth:`run_saw`) come while the command
     cleans up, and are ignored, so that its cleanup runs to the end and the signal that
     ended the command is the one reported. A signal the process ignores (``nohup``)
     stays ignored.
@@ -75,9 +75,10 @@ class StartupSignals:
         if self._hook is not None:
             sys.excepthook = self._hook
 
-    def ended_by(self, signum: int) -> None:
-        """A run within (``driver.deferred_interrupts``) was ended by ``signum``: the
-        command's first signal, unless one came before."""
+    def run_saw(self, signum: int, ended: bool) -> None:
+        """A run within (``driver.deferred_interrupts``) saw ``signum``: it ended the run
+        (``ended``), or came during its commit and was dropped (the run is complete, and
+        so is the command's work): the command's first signal, unless one came before."""
         if self.signum is None:
             self.signum = signum
 

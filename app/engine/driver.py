@@ -19,8 +19,8 @@ kernel return a value with an exception set, which Python reports as a 30-line
 first Ctrl-C (and SIGTERM, SIGHUP) as a flag that the loop turns into an exception between
 steps (``check``), where nothing compiled runs; a second one raises at once. Through a
 run's commit (``check.committing()``) both are held, then dropped: the run is complete;
-the first is raised again to the handler the run restores where that is a loop's
-(``frictex batch --jobs 1``: it stops after this run), not the command's (``_pass_on``).
+the handler the run restores is told of it (``_pass_on``: ``frictex batch --jobs 1``
+stops after this run, a lone replay reports its complete run).
 Once the run is ending (a signal raised, or ``check.end()`` where an error ends it), every
 further signal is held: the cleanup (sinks aborted, staged files removed) is never cut
 short. A worker of ``frictex batch`` whose parent dies gets a SIGINT from the system for
@@ -174,21 +174,22 @@ def deferred_interrupts():
 
 
 def _pass_on(check: HeldSignals, previous: dict) -> None:
-    """Tell the handlers :func:`deferred_interrupts` restored (``previous``) of the signal
-    its run saw. One that ended the run goes to a handler that keeps a command's first
-    signal (``ended_by(signum)``: ``StartupSignals``), so that the signals after it,
-    which come during the caller's cleanup, do not cut it short. One dropped after a
-    complete commit is raised again to a Python handler that has no ``ended_by``: a loop
-    of runs (``fanout``'s items run here) then stops after this run; a command's own
-    run (the ``ended_by`` handler) reports its complete run."""
-    if check.held:
-        owner = getattr(previous[check.held[0]], "__self__", None)
-        if hasattr(owner, "ended_by"):
-            owner.ended_by(check.held[0])
-    elif check.dropped:
-        handler = previous[check.dropped[0]]
-        if callable(handler) and not hasattr(getattr(handler, "__self__", None), "ended_by"):
-            signal.raise_signal(check.dropped[0])
+    """Tell the handler :func:`deferred_interrupts` restored (``previous``) of the first
+    signal its run saw: one that ended the run, or one dropped after its complete commit.
+    A handler that is, or is bound to, an object with ``run_saw(signum, ended)`` (a loop
+    of runs: ``fanout``; a command: ``StartupSignals``) is told so and decides (a loop
+    stops before its next run; a command keeps it as its first signal, so that the
+    signals after it, during its cleanup, do not cut it short); any other Python handler
+    gets a dropped one raised again (a script's loop of runs stops)."""
+    seen = check.held or check.dropped
+    if not seen:
+        return
+    handler = previous[seen[0]]
+    owner = handler if hasattr(handler, "run_saw") else getattr(handler, "__self__", None)
+    if hasattr(owner, "run_saw"):
+        owner.run_saw(seen[0], ended=bool(check.held))
+    elif check.dropped and callable(handler):
+        signal.raise_signal(seen[0])
 
 
 def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,

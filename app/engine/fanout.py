@@ -182,6 +182,13 @@ class _Stopper:
         self.flag.value = 1
         _to_workers(signal.SIGINT)
 
+    def run_saw(self, signum: int, ended: bool) -> None:
+        """A run of the item running here (``driver.deferred_interrupts``) saw
+        ``signum``: it ended the item (which raises), or came during its commit (the item
+        is complete and keeps its result): no item starts after it."""
+        if self.signum is None:
+            self.signum = signum
+
     def pause(self, signum, frame) -> None:
         """SIGTSTP (Ctrl-Z): stop the workers, which the terminal's signal to this
         process's group does not reach, then this process as the signal would; once
@@ -300,11 +307,10 @@ class _Worker:
         cls.end_if_orphaned()
 
     @classmethod
-    def ended_by(cls, signum: int) -> None:
-        """The item's run (``driver.deferred_interrupts``) was ended by ``signum``: the
-        item is stopping, so that further SIGINTs pass. Having this method, the worker
-        is not passed the SIGINT a complete run's commit held: its item keeps its result,
-        and the parent's flag starts no other."""
+    def run_saw(cls, signum: int, ended: bool) -> None:
+        """The item's run (``driver.deferred_interrupts``) saw the parent's SIGINT: it
+        ended the run, or came during its commit (the item keeps its result; the
+        parent's flag starts no other): further SIGINTs during this item pass."""
         cls.stopping = True
 
     @classmethod
