@@ -161,6 +161,6 @@ def test_a_stopped_session_is_warned_of():
     assert summary["session_ends"] == [{"session": str(Path("s")),
                                         "ended": "stopped (Terminated)", "main_trials": 6,
                                         "rows": 6, "trials_recorded": None,
-                                        "torn_last_line": False}]
+                                        "torn_last_line": False, "row_problems": []}]
     assert "  warning: s did not run to its end (stopped (Terminated), 6 main trials)" \
         in "\n".join(report_lines(summary))

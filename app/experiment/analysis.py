@@ -172,23 +172,26 @@ def read_session(folder: str | Path) -> SessionData:
     return SessionData(folder, info, read_rows(folder), torn_last_line(folder))
 
 
-def _responses(info: dict) -> tuple[str, ...]:
-    """The responses a trial of the session (its session.json ``info``) may be given."""
-    if info["method"] == "magnitude":
-        low, high = info["design"]["scale"]
-        return tuple(str(i) for i in range(low, high + 1))
-    return SAME_DIFFERENT if info["method"] == "same-different" else INTERVALS
+def _responses(info: dict) -> tuple[str, ...] | None:
+    """The responses a trial of the session (its session.json ``info``) may be given;
+    None where the design does not say (a rating scale not recorded)."""
+    if info["method"] != "magnitude":
+        return SAME_DIFFERENT if info["method"] == "same-different" else INTERVALS
+    scale = info["design"].get("scale")
+    return tuple(str(i) for i in range(scale[0], scale[1] + 1)) if scale else None
 
 
 def row_problems(session: SessionData) -> list[str]:
     """``FILE:LINE: why`` for each row of the session's results.csv whose response is not
     one its trials may be given, or whose ``correct`` is not whether the response is the
-    answer (blank where the trial has none)."""
+    answer (blank where the trial has none). Rows without those columns are not checked."""
     options, table = _responses(session.info), session.folder / "results.csv"
     out = []
     for line, row in enumerate(session.rows, start=2):  # line 1 is the header
+        if not {"response", "answer", "correct"} <= row.keys():
+            continue
         expected = "" if not row["answer"] else str(int(row["response"] == row["answer"]))
-        if row["response"] not in options:
+        if options is not None and row["response"] not in options:
             out.append(f"{table}:{line}: response {row['response']!r} is not one of "
                        f"{', '.join(options)}")
         elif row["correct"] != expected:
