@@ -56,3 +56,16 @@ def test_a_participant_id_for_a_session_without_one(killed):
     path, out = killed
     with pytest.raises(InputError, match="was started without a participant id$"):
         run(path, out, resume=True, participant_id="P07")
+
+
+def test_resuming_a_complete_session_says_so_and_leaves_session_json_alone(tmp_path):
+    """Each --resume of a finished session added an empty part (first_trial 9, trials 0)."""
+    path = tmp_path / "p.toml"
+    path.write_text(PROTOCOL, encoding="utf-8")
+    out = tmp_path / "s"
+    run(path, out)
+    before = (out / "session.json").read_bytes()
+    for _ in range(2):
+        resumed = run(path, out, resume=True)
+        assert resumed.complete_before and len(resumed.rows) == 8
+    assert (out / "session.json").read_bytes() == before

@@ -100,6 +100,8 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
     session's). ``record``: ``all`` (per trial: scene, trace and their replay), ``traces`` (scene and trace) or
     ``results`` (the results table only). ``progress(trial, row)`` is called after each
     trial is recorded. Returns the session (its ``rows``: every trial answered).
+    With ``resume`` on a complete session, nothing runs and session.json is left as it
+    is (the session's ``complete_before`` says so).
     """
     if record not in S.RECORDS:
         raise InputError(f"record {record!r}: expected one of {', '.join(S.RECORDS)}")
@@ -118,6 +120,9 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
                            None if settle is None else settle(seed))
     state = scheduler.replay((row["stimuli"].split(S.SEPARATOR), row["response"])
                              for row in session.rows)
+    if resume and scheduler.finished(state):  # no run, so no empty part in session.json
+        session.complete_before = True
+        return session
     stage = _Stage(protocol, StimulusBank(out_dir / "stimuli"))
     first = len(session.rows) + 1
     S.begin_part(session, first)

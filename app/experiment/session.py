@@ -189,6 +189,8 @@ class Session:
     info: dict
     rows: list[dict]
     columns: tuple[str, ...] = RESULT_COLUMNS  # those of its results.csv
+    #: a --resume found every trial answered: nothing ran, session.json is as it was
+    complete_before: bool = False
 
     @property
     def seed(self) -> int:
