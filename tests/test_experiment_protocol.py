@@ -122,6 +122,16 @@ def test_bad_values_are_one_line_with_file_line_and_field(tmp_path, change, line
     assert words in message
 
 
+def test_a_default_threshold_reversals_is_named_as_the_default(tmp_path):
+    """The file has no threshold_reversals: the message must not read as if it had 8."""
+    text = GOOD.replace('method = "2afc"', 'method = "staircase"').replace(
+        "levels = [5.5, 6.0]\n", "") + "\n[staircase]\nstart = 1.0\nreversals = 6\n"
+    with pytest.raises(ProtocolError, match=r"staircase.threshold_reversals: not in the file "
+                                            r"\(default 8\), and more than the 6 reversals "
+                                            r"the staircase stops after; set it to 6 or fewer$"):
+        load_protocol(write(tmp_path, text))
+
+
 def test_staircase_checks_its_table(tmp_path):
     text = GOOD.replace('method = "2afc"', 'method = "staircase"').replace(
         "levels = [5.5, 6.0]\n", "") + "\n[staircase]\nstart = 1.0\nreversals = 4\nthreshold_reversals = 6\n"

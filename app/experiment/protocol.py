@@ -539,9 +539,11 @@ def _staircase(c: _Check, doc: dict, method: str) -> Staircase | None | object:
     if v is None or _BAD in v.values():
         return _BAD
     if v["threshold_reversals"] > v["reversals"]:
+        value = (f"{v['threshold_reversals']} is" if "threshold_reversals" in doc["staircase"]
+                 else f"not in the file (default {v['threshold_reversals']}), and")
         return c.report(("staircase", "threshold_reversals"),
-                        f"{v['threshold_reversals']} is more than the {v['reversals']} "
-                        f"reversals the staircase stops after")
+                        f"{value} more than the {v['reversals']} reversals the staircase "
+                        f"stops after; set it to {v['reversals']} or fewer")
     low, high = v["min"], v["max"]
     if low is not None and high is not None and not low < high:
         return c.report(("staircase", "min"), f"{low:g} is not below max {high:g}")
