@@ -88,7 +88,7 @@ def test_analyse_pools_each_study(sessions, capsys):
     levels = studies["depth-same-different"]["levels"]
     assert [(lv["different"], lv["same"]) for lv in levels] == [(6, 6), (6, 6)]
     assert levels[1]["d_prime"] > levels[0]["d_prime"]  # the larger difference is easier
-    assert "depth-2afc: 2afc, 2 sessions" in printed and "threshold (0.75 correct" in printed
+    assert "depth-2afc: 2afc, 2 sessions" in printed and "threshold of 2 sessions' trials pooled" in printed
     png = (out / "analysis.png").read_bytes()
     assert png.startswith(b"\x89PNG") and len(png) > 10_000
 
@@ -173,3 +173,27 @@ def test_staircase_analysis_names_its_interval_method(sessions, capsys):
                          lambda p, rng: ([0.02, 0.03], [True, True]), bootstrap=5)
     assert fit.threshold_ci_method == P.CREDIBLE
     assert fit.threshold_ci[0] < fit.threshold < fit.threshold_ci[1]
+
+
+def test_a_fit_pooled_over_sessions_says_so_and_gives_each_sessions_threshold(sessions,
+                                                                                capsys):
+    """Two sessions fitted as one observer were printed as a plain threshold and interval."""
+    out = sessions / "pooled"
+    assert main(["experiment", "analyse", str(sessions / "a1"), str(sessions / "a2"),
+                 "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    study = json.loads((out / "analysis.json").read_text())["studies"][0]
+    each = [e["fit"]["threshold"] for e in study["per_session"]]
+    summary = study["session_thresholds"]
+    assert summary["thresholds"] == each and summary["sessions"] == 2
+    assert summary["mean"] == pytest.approx(np.mean(each))
+    assert summary["se"] == pytest.approx(abs(each[0] - each[1]) / 2)
+    assert ("  threshold of 2 sessions' trials pooled (one fit, as one observer; its interval "
+            "is not a between-participant interval) (0.75 correct") in printed
+    assert (f"  per session: thresholds {each[0]:.4g}, {each[1]:.4g} depth; mean "
+            f"{summary['mean']:.4g} ± {summary['se']:.2g} depth (SE across 2 sessions)"
+            in printed)
+    assert main(["experiment", "analyse", str(sessions / "a1"), "--out",
+                 str(sessions / "alone")]) == 0
+    alone = capsys.readouterr().out
+    assert "pooled" not in alone and "per session:" not in alone

@@ -14,6 +14,10 @@ Per study, by method:
   integrated out (``psychometric.fit_adaptive``). Each fit names its intervals' methods
   (``threshold_ci_method``, ``slope_ci_method``, also printed; None and "no interval"
   for ``bootstrap = 0``, except a staircase's threshold, whose interval draws nothing).
+  The pooled fit treats the sessions' trials as one observer's (its interval is not a
+  between-participant one) and says so; with 2 or more sessions, the sessions' own
+  thresholds and their mean and standard error across sessions are given too
+  (``session_thresholds``).
   No fit (``fit``/``pooled`` None, ``no_fit`` says why) below :data:`MIN_LEVELS`
   distinct differences or, for a staircase, :data:`MIN_REVERSALS` reversals. A
   threshold outside the differences tested is flagged (``threshold_in_tested_range``):
@@ -413,6 +417,19 @@ def response_bias(shares: dict[str, float | None], trials: int) -> str | None:
     return None
 
 
+def session_thresholds(per_session: list[dict]) -> dict | None:
+    """The sessions' own fitted thresholds (units of ``vary``) and their mean and standard
+    error across sessions (the spread between participants, which the pooled fit's
+    interval is not); None for fewer than 2 sessions with a threshold."""
+    values = [e["fit"]["threshold"] for e in per_session
+              if e["fit"] is not None and e["fit"]["threshold"] is not None]
+    if len(values) < 2:
+        return None
+    return {"thresholds": values, "sessions": len(values), "of_sessions": len(per_session),
+            "mean": float(np.mean(values)),
+            "se": float(np.std(values, ddof=1) / math.sqrt(len(values)))}
+
+
 def _forced_choice(design: dict, sessions: list[SessionData]) -> dict:
     per = []
     pooled_rows = []
@@ -430,7 +447,8 @@ def _forced_choice(design: dict, sessions: list[SessionData]) -> dict:
     reversals = (sum(len(e["staircase"]["reversals"]) for e in per) if design["staircase"]
                  else None)
     pooled = _fitted(design, pooled_rows, sessions, reversals)
-    out = {"per_session": per, "pooled": pooled.pop("fit"), **pooled}
+    out = {"per_session": per, "pooled": pooled.pop("fit"), **pooled,
+           "session_thresholds": session_thresholds(per)}
     if design["staircase"]:
         values = [e["staircase"]["threshold"] for e in per if e["staircase"]["threshold"] is not None]
         # over sessions as within one: geometric on the log scale
@@ -577,6 +595,24 @@ def _ci(fit: dict, name: str) -> tuple:
     return fit[f"{name}_ci95"], fit[f"{name}_ci_method"], fit[f"{name}_ci95_unsettled"]
 
 
+def _pooled_over(summary: dict) -> str:
+    """What the threshold line's fit is, where it pools sessions: " of N sessions'
+    trials pooled (...)"; empty for one session."""
+    if summary["sessions"] < 2:
+        return ""
+    return (f" of {summary['sessions']} sessions' trials pooled (one fit, as one observer; "
+            f"its interval is not a between-participant interval)")
+
+
+def _session_thresholds_line(each: dict, unit: str) -> str:
+    """The sessions' own thresholds and their mean +- SE across sessions."""
+    values = ", ".join(f"{v:.4g}" for v in each["thresholds"])
+    missing = each["of_sessions"] - each["sessions"]
+    return (f"  per session: thresholds {values} {unit}; mean {each['mean']:.4g} ± "
+            f"{each['se']:.2g} {unit} (SE across {each['sessions']} sessions"
+            + (f"; {missing} without a threshold" if missing else "") + ")")
+
+
 def _forced_choice_lines(summary: dict, unit: str) -> list[str]:
     """The pooled fit's lines (or why there is none) and the staircases'."""
     lines = [_shares_line(entry) for entry in summary["per_session"]
@@ -592,8 +628,8 @@ def _forced_choice_lines(summary: dict, unit: str) -> list[str]:
         lo, hi = pooled["levels"][0]["difference"], pooled["levels"][-1]["difference"]
         where = ("" if pooled["threshold_in_tested_range"] else
                  f" (outside the differences tested, {lo:.4g} to {hi:.4g}: extrapolated)")
-        lines += [f"  threshold ({pooled['target']:.3g} correct, {pooled['function']}): "
-                 f"{pooled['threshold']:.4g} {unit} difference{where}, "
+        lines += [f"  threshold{_pooled_over(summary)} ({pooled['target']:.3g} correct, "
+                  f"{pooled['function']}): {pooled['threshold']:.4g} {unit} difference{where}, "
                  f"{_interval(*_ci(pooled, 'threshold'))}; lapse {pooled['lapse']:.3f}"
                  + (f" ({pooled['lapse_at_bound']})" if pooled["lapse_at_bound"] else ""),
                  f"  slope {pooled['slope']:.4g} per {unit} "
@@ -604,6 +640,8 @@ def _forced_choice_lines(summary: dict, unit: str) -> list[str]:
                 lines.append(f"  {name} interval: {pooled[f'{name}_ci_method']}")
         if pooled["fit_unsettled"] and pooled["threshold_ci_method"] is None:
             lines.append(f"  fit unsettled: {pooled['fit_unsettled']}")
+    if summary.get("session_thresholds"):
+        lines.append(_session_thresholds_line(summary["session_thresholds"], unit))
     if summary.get("staircase_threshold_mean") is not None:
         mean = "geometric mean" if summary["staircase_scale"] == "log" else "mean"
         lines.append(f"  staircases: {mean} of the sessions' reversal {mean}s "

@@ -1,7 +1,7 @@
 """The analysis figure: one panel per study (``analysis.analyse``'s summaries).
 
 Forced choice: proportion correct per difference (marker area by trials), the pooled
-fit, its threshold and 95 % interval. Same-different: hit and false-alarm rates per level.
+fit (labelled as pooled where it pools sessions), its threshold and 95 % interval. Same-different: hit and false-alarm rates per level.
 Magnitude: mean rating per stimulus with its 95 % interval. Drawn with matplotlib's Agg
 backend (no display needed); the layout keeps every label within the canvas.
 """
@@ -30,7 +30,8 @@ def _forced_choice(ax, s: dict) -> None:
     grid = np.linspace(x.min() * 0.8, x.max() * 1.1, 300)
     grid = grid[grid > 0]
     ax.plot(grid, psi(fit["function"], grid, fit["alpha"], fit["beta"], fit["guess"],
-                      fit["lapse"]), color="C0", label=f"{fit['function']} fit")
+                      fit["lapse"]), color="C0", label=f"{fit['function']} fit"
+            + (f", {s['sessions']} sessions pooled" if s["sessions"] > 1 else ""))
     lo, hi = fit["threshold_ci95"]
     if lo is not None and hi is not None:
         ax.axvspan(lo, hi, color="C1", alpha=0.2, label="threshold 95 %")
