@@ -69,3 +69,18 @@ def test_resuming_a_complete_session_says_so_and_leaves_session_json_alone(tmp_p
         resumed = run(path, out, resume=True)
         assert resumed.complete_before and len(resumed.rows) == 8
     assert (out / "session.json").read_bytes() == before
+
+
+def test_the_command_says_a_resumed_session_was_already_complete(tmp_path, capsys):
+    from frictex.app.commands.cli import main
+    path = tmp_path / "p.toml"
+    path.write_text(PROTOCOL, encoding="utf-8")
+    out = tmp_path / "s"
+    argv = ["experiment", str(path), "--participant", PARTICIPANT, "--out", str(out),
+            "--quiet"]
+    assert main(argv) == 0
+    capsys.readouterr()
+    assert main(argv + ["--resume"]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith(f"{out}: the session is already complete (8 trials); nothing ran")
+    assert err.count("\n") == 1

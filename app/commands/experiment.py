@@ -211,6 +211,11 @@ def run(args: argparse.Namespace) -> int:
             return PAUSED_EXIT
     else:
         session = session()
+    if session.complete_before:
+        print(f"{out}: the session is already complete ({len(session.rows)} trials); nothing "
+              f"ran and session.json is left as it is; analyse with: frictex experiment "
+              f"analyse {out}", file=sys.stderr)
+        return 0
     print(f"{len(session.rows)} trials in {out / 'results.csv'} (seed {session.seed}); "
           f"analyse with: frictex experiment analyse {out}", file=sys.stderr)
     return 0
