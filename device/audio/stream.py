@@ -16,7 +16,11 @@ Letting the device go: ``Pa_StopStream`` then ``Pa_CloseStream``. They and
 ``Pa_StartStream`` are each bounded by :data:`PA_CALL_LIMIT_S` (``device.audio.bounded``:
 with its server gone, PortAudio's JACK host API blocks in them for 10 minutes, signals
 unanswered). One that does not return is abandoned with the stream (the callback, should
-it ever run again, ramps to 0), and that is a DeviceError too.
+it ever run again, ramps to 0), and that is a DeviceError too. A started stream that
+PortAudio reports no longer active (its JACK server gone) is abandoned without either
+call: a close there unregisters the stream's ports from the server that has gone, and
+Debian's PortAudio asserts that this succeeds (``CleanUpStream``), aborting the process
+(a CI run: exit -6 instead of the one line).
 
 :meth:`StreamOutput.close` writes the stream's own ramp to 0, waits (bounded) for the
 ring to play out, then stops the stream after PortAudio's reported output latency (the
@@ -167,7 +171,7 @@ class StreamOutput(AudioOutput):
                     "active)" if gone else f": the audio device took no frames for "
                     f"{self.wait_s:g} s (it stopped or went away)")
                 self.player.estop = True
-                self._release(problem)
+                self._release(problem)  # raises for a stream gone or abandoned
                 raise DeviceError(problem + "; the stream was stopped and closed")
             check_interrupt()
             time.sleep(POLL_S)
@@ -275,6 +279,10 @@ class StreamOutput(AudioOutput):
         ``context``, for an abandoned stream."""
         if self._released:
             return
+        if self._started and not self._active():  # its server went away (module docstring)
+            self._abandon()
+            raise DeviceError(f"{context}; PortAudio reports the stream no longer active, so "
+                              "it was abandoned without a stop or close")
         self._released = True
         calls = (("stop", self.stream.stop), ("close", self.stream.close))
         for what, call in calls if self._started else calls[1:]:
