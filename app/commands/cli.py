@@ -158,12 +158,12 @@ def _run(command, startup: StartupSignals) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except BaseException as exc:  # noqa: BLE001 - sorted into the kinds below
+        if not isinstance(exc, (KeyboardInterrupt, Terminated)) and not startup.caused(exc):
+            return report_error(exc)  # an error, one met while a signal ended the run too
         first = _first_signal(exc)
         if isinstance(first, Terminated):
             return report_error(first)
-        if first is not None or startup.caused(exc):
-            return report_signal(getattr(first, "signum", None) or startup.signum)
-        return report_error(exc)
+        return report_signal(getattr(first, "signum", None) or startup.signum)
 
 
 def _first_signal(exc: BaseException) -> BaseException | None:
