@@ -389,7 +389,11 @@ def test_a_starved_link_thread_trips_the_watchdog_and_the_stream_goes_on(device)
     status = sink.status()
     index, values = played.arrays()
     assert core.counters.watchdog_trips >= 3 and status["device_flushes"] >= 3
-    assert status["unplayed_by_cause"]["flushed"] == core.session.flushed
+    # the device's flushes the host heard of by the close's last Status; one after it
+    # (a close that reached its bound before the device answered, on a starved machine)
+    # counts as lost: held when the session ended
+    causes = status["unplayed_by_cause"]
+    assert causes["flushed"] <= core.session.flushed <= causes["flushed"] + causes["lost"]
     assert status["played_samples"] == core.session.played == len(index)
     accounted(status, index, 12000)
     assert status["failure"] is None
