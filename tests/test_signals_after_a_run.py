@@ -43,7 +43,9 @@ def test_a_ctrl_c_during_a_commit_stops_a_loop_of_replays_after_it(tmp_path, mon
     assert stop.value.results[1] is not None and stop.value.stopped == []  # and kept
 
 
-def test_a_ctrl_c_during_the_commit_of_a_run_alone_reaches_the_handler_restored():
+def test_a_run_alone_whose_commit_dropped_a_ctrl_c_completes_and_returns():
+    """A handler that is no loop of runs (a script's, Python's default) is told nothing:
+    the run's outputs are complete and it returns (``replay_with``'s docstring)."""
     from frictex.app.engine.driver import deferred_interrupts
     seen = []
     before = signal.signal(signal.SIGINT, lambda signum, frame: seen.append(signum))
@@ -51,10 +53,28 @@ def test_a_ctrl_c_during_the_commit_of_a_run_alone_reaches_the_handler_restored(
         with deferred_interrupts() as check:
             with check.committing():
                 os.kill(os.getpid(), signal.SIGINT)
-            assert seen == []  # held, not raised, through the commit
+        returned = True
     finally:
         signal.signal(signal.SIGINT, before)
-    assert seen == [signal.SIGINT]
+    assert returned and seen == []
+
+
+def test_a_ctrl_c_dropped_by_a_commit_leaves_a_later_one_stopping_the_command():
+    """A command that runs more than one replay (an experiment's intervals, frictex
+    warm): a Ctrl-C its first run's commit dropped neither silences the signals after it
+    nor makes a later error a signal's."""
+    from frictex.app.commands.startup_signals import StartupSignals
+    from frictex.app.engine.driver import deferred_interrupts
+    with StartupSignals() as startup:
+        with deferred_interrupts() as check:
+            with check.committing():
+                os.kill(os.getpid(), signal.SIGINT)
+        assert startup.signum is None and not startup.caused(TypeError("a bug"))
+        with pytest.raises(KeyboardInterrupt):
+            os.kill(os.getpid(), signal.SIGTERM)
+            for _ in range(100):  # the handler runs at the next bytecodes
+                pass
+    assert startup.signum == signal.SIGTERM
 
 
 def run_ended_by(first: int, then: list[int], cleaned: list):
@@ -107,10 +127,11 @@ def test_a_ctrl_c_while_the_exit_line_is_written_does_not_write_it_twice(monkeyp
     assert sys.stderr.getvalue() == "frictex: interrupted\n"
 
 
-#: ``entry`` over a command that returns 0 with a thread still running (the exit then
-#: waits for it); that thread sends a Ctrl-C once the command has returned, then ends
+#: ``entry`` over a command that returns 0 with a thread still running for 600 s (the
+#: exit then waits for it); that thread sends a Ctrl-C once the command has returned
+#: (its exit's handler is in place), then goes on
 AFTER_THE_COMMAND = """
-import os, signal, sys, threading, time
+import signal, os, threading, time
 from frictex.app.commands import cli, entry
 
 def command(startup=None):
@@ -118,25 +139,23 @@ def command(startup=None):
     return 0
 
 def ctrl_c_once_returned():
-    main = threading.main_thread().ident
     deadline = time.monotonic() + 60
-    while in_command(sys._current_frames()[main]) and time.monotonic() < deadline:
+    while "end_with" not in getattr(signal.getsignal(signal.SIGINT), "__qualname__", ""):
+        if time.monotonic() > deadline:
+            os._exit(3)
         time.sleep(0.01)
     os.kill(os.getpid(), signal.SIGINT)
-
-def in_command(frame):
-    while frame is not None:
-        if frame.f_code is command.__code__:
-            return True
-        frame = frame.f_back
-    return False
+    time.sleep(600)
 
 cli.main = command
 entry.entry()
 """
 
 
-def test_a_ctrl_c_after_the_command_returned_leaves_its_exit_alone():
+def test_a_ctrl_c_after_the_command_returned_ends_the_wait_with_its_status():
+    """Once the command has returned, a signal neither prints a line nor changes the exit
+    status, and a wait for a thread left running stays stoppable (ignored signals kept
+    the process waiting for the thread, stoppable only by SIGKILL)."""
     import subprocess
     import sys
     from conftest import signals_as_a_terminal_gives

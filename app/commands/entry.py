@@ -31,18 +31,22 @@ def entry() -> NoReturn:
     unloading numba's and scipy's modules object by object took 0.24 s of CPU after a
     one-second replay (alternated pairs of whole processes under ``/usr/bin/time``), a
     quarter of what the user waits for.
-    A thread still running gets the ordinary exit, which waits for it. Signals are
-    ignored from the moment the command has returned (its run is complete), in either
-    exit.
+    A thread still running gets the ordinary exit, which waits for it. From the moment
+    the command has returned (its run is complete) a signal ends the process at once
+    with the command's status (``StartupSignals.end_with``), in either exit.
     """
+    code = 1  # what a signal ends the process with if main escapes any other way
     with StartupSignals() as startup:
         try:
             from frictex.app.commands.cli import main
             code = main(startup=startup)
         except KeyboardInterrupt:  # before main's own handling, or after it
             code = report_signal(startup.signum)
+        except SystemExit as exc:  # a run's SIGTERM or SIGHUP, its line printed
+            code = exc.code if isinstance(exc.code, int) else 1
+            raise
         finally:
-            startup.ignore_from_now()
+            startup.end_with(code)
     if threading.active_count() > 1:
         sys.exit(code)
     atexit._run_exitfuncs()

@@ -69,14 +69,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Write the report into ``--out``; a run stopped (a signal, an error) before it wrote
-    anything there removes the folder if it made it (a SIGTERM left it empty)."""
-    out = Path(args.out)
-    made = not out.exists()
+    anything there removes the folders it made for it (a SIGTERM left them empty)."""
+    out = Path(args.out).absolute()
+    made = [folder for folder in (out, *out.parents) if not folder.exists()]
     try:
         return _write_report(args)
     except BaseException:
-        if made and out.is_dir() and not any(out.iterdir()):
-            out.rmdir()
+        for folder in made:  # the folders it made, deepest first, while they are empty
+            if not folder.is_dir() or any(folder.iterdir()):
+                break
+            folder.rmdir()
         raise
 
 

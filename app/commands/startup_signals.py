@@ -4,6 +4,7 @@ which reports them)."""
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
 import threading
@@ -76,17 +77,34 @@ class StartupSignals:
             sys.excepthook = self._hook
 
     def run_saw(self, signum: int, ended: bool) -> None:
-        """A run within (``driver.deferred_interrupts``) saw ``signum``: it ended the run
-        (``ended``), or came during its commit and was dropped (the run is complete, and
-        so is the command's work): the command's first signal, unless one came before."""
-        if self.signum is None:
+        """A run within (``driver.deferred_interrupts``) saw ``signum``: one that ended the
+        run is the command's first signal, unless one came before (the ones after it
+        come during the command's cleanup, and are ignored). One that came during the
+        run's commit and was dropped (the run is complete) changes nothing: a later
+        signal still stops the command."""
+        if ended and self.signum is None:
             self.signum = signum
 
-    def ignore_from_now(self) -> None:
-        """The command has returned its code: the process only ends now, with every
-        signal ignored (kept so on leaving: a Ctrl-C during the interpreter's exit
-        killed the process without a line)."""
-        ignore_held_signals()
+    def end_with(self, code: int) -> None:
+        """The command is over with exit status ``code``: from now on SIGINT, SIGTERM and
+        SIGHUP end the process at once with that status, without a line (its outputs are
+        complete). Kept so on leaving: a Ctrl-C during the interpreter's exit killed the
+        process by SIGINT without a line, and a wait for a thread left running stays
+        stoppable. In the main thread only."""
+        if threading.current_thread() is not threading.main_thread():
+            return
+
+        def end(signum, frame) -> None:
+            for stream in (sys.stdout, sys.stderr):
+                try:
+                    stream.flush()
+                except (OSError, ValueError):  # a closed or broken stream: nothing to keep
+                    pass
+            os._exit(code)
+
+        for sig in HELD_SIGNALS:
+            if signal.getsignal(sig) is not signal.SIG_IGN:
+                signal.signal(sig, end)
         self._handlers.clear()
 
     def _on_signal(self, signum, frame) -> None:

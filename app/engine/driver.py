@@ -175,12 +175,13 @@ def deferred_interrupts():
 
 def _pass_on(check: HeldSignals, previous: dict) -> None:
     """Tell the handler :func:`deferred_interrupts` restored (``previous``) of the first
-    signal its run saw: one that ended the run, or one dropped after its complete commit.
-    A handler that is, or is bound to, an object with ``run_saw(signum, ended)`` (a loop
-    of runs: ``fanout``; a command: ``StartupSignals``) is told so and decides (a loop
-    stops before its next run; a command keeps it as its first signal, so that the
-    signals after it, during its cleanup, do not cut it short); any other Python handler
-    gets a dropped one raised again (a script's loop of runs stops)."""
+    signal its run saw, where that handler is, or is bound to, an object with
+    ``run_saw(signum, ended)`` (a loop of runs: ``fanout``; a command:
+    ``StartupSignals``): one that ended the run, or one dropped after its complete
+    commit. It decides (a loop stops before its next run; a command keeps the one that
+    ended a run as its first signal, so that the signals after it, during its cleanup,
+    do not cut it short). Any other handler is told nothing: a run whose commit dropped a
+    signal completes and returns (``replay_with``)."""
     seen = check.held or check.dropped
     if not seen:
         return
@@ -188,8 +189,6 @@ def _pass_on(check: HeldSignals, previous: dict) -> None:
     owner = handler if hasattr(handler, "run_saw") else getattr(handler, "__self__", None)
     if hasattr(owner, "run_saw"):
         owner.run_saw(seen[0], ended=bool(check.held))
-    elif check.dropped and callable(handler):
-        signal.raise_signal(seen[0])
 
 
 def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,

@@ -106,6 +106,7 @@ class StreamOutput(AudioOutput):
         # ring position - synth frame, from a synth frame on (it moves at a dropped block)
         self._offsets = [(0, 0)]
         self._started = False
+        self._running = False  # PortAudio's start returned: the stream ran
         self._released = False  # stop and close done (or abandoned): the stream is gone
         target = int(device) if device and device.isdigit() else (device or None)
         try:
@@ -215,6 +216,7 @@ class StreamOutput(AudioOutput):
             raise DeviceError(f"{self.label}: PortAudio's start did not return within "
                               f"{PA_CALL_LIMIT_S:g} s (the audio device stopped responding), "
                               "so the stream was abandoned")
+        self._running = True
 
     # ----------------------------------------------------------------- ending
     def emergency_stop(self) -> None:
@@ -279,7 +281,7 @@ class StreamOutput(AudioOutput):
         ``context``, for an abandoned stream."""
         if self._released:
             return
-        if self._started and not self._active():  # its server went away (module docstring)
+        if self._running and not self._active():  # its server went away (module docstring)
             self._abandon()
             raise DeviceError(f"{context}; PortAudio reports the stream no longer active, so "
                               "it was abandoned without a stop or close")
