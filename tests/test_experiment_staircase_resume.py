@@ -14,7 +14,7 @@ import pytest
 from frictex.app import experiment
 from frictex.app.experiment.protocol import Staircase, load_protocol
 from frictex.app.experiment.runner import make_presenter, run_session
-from frictex.app.experiment.scheduler import StaircaseState, staircase_level, staircase_step
+from frictex.app.experiment.scheduler import StaircaseState, staircase_step
 from frictex.app.experiment.stimuli import SAME_NUMBER_REL
 from frictex.device.errors import InputError
 
@@ -90,22 +90,27 @@ def test_a_played_file_with_another_value_is_still_refused(unbroken, tmp_path):
         _run(tmp_path / "other", resume=True)
 
 
+def _walk(sc, answers):
+    state = StaircaseState(sc.start)
+    for correct in answers:
+        state = staircase_step(sc, state, correct)
+    return state
+
+
 @pytest.mark.parametrize("scale, steps", [("log", (0.2, 0.1)), ("linear", (0.02, 0.01))])
 def test_a_level_reached_by_two_paths_is_bit_identical(scale, steps):
-    """Down a first step, then up and down the second: back on the first level."""
+    """Two steps of 0.2 down, or 0.2 down, 0.1 up and three of 0.1 down: the same level,
+    to the bit. Multiplying step by step gave 0.047772860466419674 and
+    0.04777286046641968 on the log scale (a resumed session then refused its own
+    stimulus file)."""
     sc = Staircase("1-up-2-down", 0.12, steps, scale, 14, 200, 8, None, None)
-    state = StaircaseState(sc.start)
-    states = []
-    for correct in (True, True, False, True, True, False, True, True, False, True, True):
-        state = staircase_step(sc, state, correct)
-        states.append(state)
-    by_index = {}
-    for st in states:
-        by_index.setdefault(st.index, set()).add(st.difference)
-    revisited = [i for i in by_index if sum(s.index == i for s in states if s.run == 0) > 1]
-    assert revisited
-    assert all(len(by_index[i]) == 1 for i in by_index)
-    assert staircase_level(sc, -2) == states[1].difference
+    straight = _walk(sc, [True] * 4)
+    around = _walk(sc, [True, True, False] + [True] * 6)
+    assert straight.index == around.index == -4
+    assert straight.difference == around.difference
+    big, small = steps
+    expected = (0.12 * 10.0 ** -(2 * big) if scale == "log" else 0.12 - 2 * big)
+    assert straight.difference == pytest.approx(expected, rel=1e-12)
 
 
 def test_a_step_past_a_bound_stops_there_and_steps_back_onto_the_grid():
@@ -116,3 +121,23 @@ def test_a_step_past_a_bound_stops_there_and_steps_back_onto_the_grid():
     assert (held.difference, held.index) == (0.15, 1)
     down = staircase_step(sc, staircase_step(sc, held, True), True)
     assert (down.difference, down.index) == (0.12, 0)
+
+
+def test_a_fine_grid_steps_onto_its_bound_by_the_closed_form():
+    """Steps of 0.30103 and 0.1 make a grid of 1e-5: the step up to max lands on the
+    first grid index at or past it (walking one unit at a time took 20 ms a step, and
+    minutes at 1e-10)."""
+    sc = Staircase("1-up-2-down", 0.1, (0.30103, 0.1), "log", 14, 200, 8, None, 0.15)
+    up = staircase_step(sc, StaircaseState(sc.start), False)
+    assert up.difference == 0.15
+    assert up.index == math.ceil(math.log10(0.15 / 0.1) / 1e-5)  # 17610
+    assert 0.1 * 10 ** ((up.index - 1) * 1e-5) < 0.15 <= 0.1 * 10 ** (up.index * 1e-5)
+
+
+def test_the_linear_scale_stops_at_its_min_before_zero():
+    """Start 0.5, steps of 0.4, min 0.05: down to 0.1, then to min (it was held at 0.1,
+    the step to -0.3 taken as the floor at 0 though min lies above it)."""
+    sc = Staircase("1-up-2-down", 0.5, (0.4,), "linear", 14, 200, 8, 0.05, None)
+    once = _walk(sc, [True, True])
+    assert once.difference == pytest.approx(0.1)
+    assert _walk(sc, [True] * 4).difference == 0.05

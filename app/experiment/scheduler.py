@@ -24,7 +24,8 @@ the change. Steps shrink with the reversals (``steps[i]`` after ``i`` reversals)
 the log scale are factors 10^step. Each level is computed from an integer index on a
 grid (the largest unit every step is a whole number of): start * 10^(index * unit), or
 start + index * unit, so a level is the same float however it was reached. A step past
-``min`` or ``max`` stops at that bound, and the next step back lands on the grid. The
+``min`` or ``max`` stops at that bound, and the next step back lands on the grid; on the
+linear scale without ``min``, a step that would reach 0 or below is held. The
 staircase stops after ``reversals`` reversals or ``max_trials`` main trials.
 
 Practice trials come first (the easiest comparison, or random stimuli for magnitude
@@ -289,16 +290,39 @@ def _grid_level(sc: Staircase, index: int) -> float:
     return staircase_level(replace(sc, min=None, max=None), index)
 
 
+def _first_index_reaching(sc: Staircase, bound: float, upward: bool) -> int:
+    """The first grid index whose unclamped level is at or past ``bound`` going up
+    (``upward``: level >= bound) or down (level <= bound), from its closed form,
+    corrected for the float's rounding (a walk of one unit at a time took minutes at a
+    unit of 1e-10)."""
+    unit = float(_grid_unit(tuple(sc.steps)))
+    span = math.log10(bound / sc.start) if sc.scale == "log" else bound - sc.start
+    if upward:
+        index = math.ceil(span / unit)
+        while _grid_level(sc, index - 1) >= bound:
+            index -= 1
+        while _grid_level(sc, index) < bound:
+            index += 1
+    else:
+        index = math.floor(span / unit)
+        while _grid_level(sc, index + 1) <= bound:
+            index += 1
+        while _grid_level(sc, index) > bound:
+            index -= 1
+    return index
+
+
 def _bounded_index(sc: Staircase, before: int, after: int) -> int:
-    """The index a step from ``before`` to ``after`` ends on: held where the linear scale
-    would reach 0 or below, and no further than the first index at or past ``max``
-    (``min``), so a step back from a bound lands on the grid."""
-    if sc.scale == "linear" and _grid_level(sc, after) <= 0.0:
-        return before  # the linear scale's floor: never the reference itself
-    while after > before and sc.max is not None and _grid_level(sc, after - 1) >= sc.max:
-        after -= 1
-    while after < before and sc.min is not None and _grid_level(sc, after + 1) <= sc.min:
-        after += 1
+    """The index a step from ``before`` to ``after`` ends on: no further than the first
+    index at or past ``max`` (``min``), so that a step back from a bound lands on the
+    grid; on the linear scale without ``min``, held where the step would reach 0 or
+    below (never the reference itself)."""
+    if after > before and sc.max is not None:
+        return max(before, min(after, _first_index_reaching(sc, sc.max, upward=True)))
+    if after < before and sc.min is not None:
+        return min(before, max(after, _first_index_reaching(sc, sc.min, upward=False)))
+    if sc.scale == "linear" and sc.min is None and _grid_level(sc, after) <= 0.0:
+        return before
     return after
 
 
