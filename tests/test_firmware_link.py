@@ -315,8 +315,13 @@ def test_the_host_link_reads_the_firmwares_force_reports(binary):
     assert set(latest.lateral_n) == {1229 / 4096} and set(latest.normal_n) == {0.5}
     window = sink.force_report(latest.index0 + 5, 30)
     assert window.index0 == latest.index0 + 5 and window.lateral_n.size == 30
-    assert 1 <= status["force_reports"] <= status["played_samples"] // 40
-    if status["underruns"] == 0 and status["watchdog_trips"] == 0:
+    # a link lost and found again on a starved machine (a pty's 'readiness to read but
+    # returned no data', seen in a CI run beside two busy processes) leaves the samples
+    # played but unconfirmed when it went counted lost: their reports still came
+    played = status["played_samples"] + status["unplayed_by_cause"]["lost"]
+    assert 1 <= status["force_reports"] <= played // 40
+    if (status["underruns"] == 0 and status["watchdog_trips"] == 0
+            and status["disconnects"] == 0 and status["recoveries"] == 0):
         assert latest.index0 % 40 == 0 and status["force_reports"] >= 3000 // 40 - 3
         window = sink.force_report(1000, 100)
         assert window.index0 == 1000 and window.lateral_n.size == 100
