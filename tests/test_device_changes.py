@@ -14,6 +14,7 @@ import struct
 import numpy as np
 
 from frictex.app.commands.cli import main
+from frictex.app.commands.replay import inversion_clamps
 from frictex.app.engine.device_changes import device_clamped, device_warnings
 from frictex.textures.library import LIBRARY_DIR
 
@@ -72,8 +73,9 @@ def test_an_audio_outputs_voltage_limit_is_said(tmp_path, capsys):
     assert "the audio output's 150 V limit (3 um at 0.02 um/V)" in warning
     assert warning in doc["warnings"]
     inversion = sum(doc["clamps"].values())  # its own clamp to the scene's 100 um, too
-    assert (f"; {inversion} clamped by the friction inversion, {over} samples by the device's "
-            "limit; ") in printed
+    assert doc["clamps"]["unreachable"] == inversion > 0  # the only guard it took
+    assert (f"; {inversion} clamped by the friction inversion (unreachable {inversion}), "
+            f"{over} samples by the device's limit; ") in printed
     frames = np.frombuffer(wav.read_bytes()[58:], dtype="<f4")  # after the header
     assert np.abs(frames).max() <= 1.0 + 1e-6  # full scale: 150 V, what the plate got
     assert struct.unpack("<I", wav.read_bytes()[24:28])[0] == 192_000
@@ -106,3 +108,13 @@ def test_a_device_clamp_counts_samples_on_one_channel_and_values_on_more():
     assert device_clamped(one) == (7, "samples")
     assert device_clamped(two) == (79_563, "values")
     assert device_clamped({}) == (0, "samples")
+
+
+def test_the_replay_line_names_each_guard_that_clamped():
+    """Each guard's count is said (a sample can be in two: a bad force and then an
+    unreachable target), not only their sum."""
+    clamps = {"above_one": 0, "unreachable": 10, "force_beyond_model": 0, "bad_force": 2,
+              "nonfinite_target": 0}
+    assert inversion_clamps(clamps) == ("12 clamped by the friction inversion "
+                                        "(unreachable 10, bad force 2)")
+    assert inversion_clamps(dict.fromkeys(clamps, 0)) == "0 clamped by the friction inversion"

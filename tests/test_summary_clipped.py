@@ -25,7 +25,7 @@ def _replay(tmp_path, capsys, body):
     mu = np.load(out / "friction.npz")["mu_target"]  # one row per touching finger sample
     printed = capsys.readouterr()
     clipped = sum(doc["layer_clipped"].values())
-    assert (f"0 clamped, {clipped} clipped by the layers' own limits;" in printed.out) == (
+    assert (f"0 clamped by the friction inversion, {clipped} clipped by the layers' own limits;" in printed.out) == (
         clipped > 0)
     return doc, mu, printed.err
 

@@ -86,7 +86,7 @@ def test_the_last_line_counts_the_samples_at_an_actuator_limit(tmp_path, capsys)
     assert main(["replay", SCENE, TRACE, "--out", str(tmp_path)]) == 0
     limited = json.loads((tmp_path / "summary.json").read_text())["counts"]["actuator_limited"]
     assert limited > 0  # the crossing passes the singular loci
-    assert f"; 0 clamped, {limited} samples at an actuator limit; " in capsys.readouterr().out
+    assert f"; 0 clamped by the friction inversion, {limited} samples at an actuator limit; " in capsys.readouterr().out
 
 
 def test_replay_is_deterministic(replayed, tmp_path):

@@ -75,6 +75,15 @@ def _listed(names: tuple[str, ...]) -> str:
     return ", ".join(names).replace("%", "%%")
 
 
+def inversion_clamps(clamps: dict[str, int]) -> str:
+    """What the friction inversion's guards changed (``summary.json``'s ``clamps``), for
+    the replay's line: the total, then each guard's count where one changed anything (a
+    sample a bad force and an unreachable target both changed is in both counts)."""
+    total = sum(clamps.values())
+    each = ", ".join(f"{name.replace('_', ' ')} {n}" for name, n in clamps.items() if n)
+    return f"{total} clamped by the friction inversion" + (f" ({each})" if each else "")
+
+
 def run(args: argparse.Namespace) -> int:
     sim_args = sim_device_args(args)  # options needing a device refused before any output
     frames = None
@@ -91,10 +100,10 @@ def run(args: argparse.Namespace) -> int:
     if not args.quiet:
         out = summary["output"]
         timing = summary["timings"]
-        clamps = f"{sum(summary['clamps'].values())} clamped"
+        clamps = inversion_clamps(summary["clamps"])
         on_device, counted = device_clamped(summary.get("device") or {})
         if on_device:  # the device's own clamp (its warning says to what)
-            clamps += f" by the friction inversion, {on_device} {counted} by the device's limit"
+            clamps += f", {on_device} {counted} by the device's limit"
         clipped = sum((summary.get("layer_clipped") or {}).values())
         if clipped:  # a layer's own limits (its warning says which and where)
             clamps += f", {clipped} clipped by the layers' own limits"
