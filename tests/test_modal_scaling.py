@@ -30,3 +30,55 @@ def test_scaling_leaves_ordinary_systems_bit_for_bit():
     plain = modal.solve(phi, wanted, "exact").modal_um
     scaled = modal.solve(phi * 2.0 ** 40, wanted, "exact").modal_um * 2.0 ** 40
     assert np.array_equal(plain, scaled)
+
+
+@pytest.mark.parametrize("method", ["exact", "regularised", "bounded"])
+@pytest.mark.parametrize("phi", [
+    [[1e-310, 2e-310], [3e-310, 1e-311]],           # the closed form's gains overflowed
+    [[1e-310, 2e-310, 0.0], [3e-310, 1e-311, 1e-312]],  # the SVD's: inf, then NaN
+    [[3e-308, 0.0], [0.0, 3e-308]],                 # 10 um / 3e-308 is past the largest float
+])
+def test_shapes_too_small_to_reach_the_fingers_give_no_command(phi, method):
+    """Mode shapes below about 1e-308 under every finger need amplitudes no float holds:
+    the sample gets none (the plate at rest), counted as capped, never inf or NaN."""
+    wanted = np.array([10.0, 0.5])
+    with np.errstate(over="raise", divide="raise", invalid="raise"):  # none left to warnings
+        got = modal.solve(phi, wanted, method, limits_um=3.0, actuators=np.eye(len(phi[0])))
+    assert np.array_equal(got.commands_um, np.zeros(len(phi[0])))
+    assert got.capped and not got.limited
+    np.testing.assert_array_equal(got.error_um, np.abs(wanted))
+
+
+@pytest.mark.parametrize("modes", [2, 3])
+def test_bounded_commands_do_not_depend_on_the_shapes_scale(modes):
+    """min ||M c - w|| within |c_j| <= L has the same c for (M s, w s): shapes of 5e-91
+    (the determinant of their M^H M underflowed to 0: the two-actuator solver took the
+    system for rank 1, the other divided by zero) give the commands of the same system
+    at unit scale (s a power of two)."""
+    rng = np.random.default_rng(modes)
+    phi = rng.normal(size=(50, 2, modes))
+    wanted = rng.normal(size=(50, 2)) * 4 + 0j  # most beyond the 1 um limits
+    scale = 2.0 ** -300  # 4.9e-91: within reach (1 um of command gives the fingers 1e-90 um)
+    plain = modal.solve(phi, wanted, "bounded", limits_um=1.0, actuators=np.eye(modes))
+    tiny = modal.solve(phi * scale, wanted * scale, "bounded", limits_um=1.0,
+                       actuators=np.eye(modes))
+    assert plain.limited.sum() > 25
+    np.testing.assert_array_equal(plain.limited, tiny.limited)
+    np.testing.assert_allclose(plain.commands_um, tiny.commands_um, rtol=0, atol=1e-9)
+
+
+def test_no_scale_of_the_shapes_gives_inf_nan_or_a_command_past_its_limit():
+    """Shapes from 1e-325 to 1 (entries spread over 20 decades within a system, as near
+    nodes), every method: finite results, commands within the limits."""
+    rng = np.random.default_rng(2)
+    for _ in range(600):
+        modes = int(rng.integers(2, 4))
+        fingers = int(rng.integers(1, modes + 1))
+        phi = (rng.standard_normal((fingers, modes)) * 10.0 ** rng.uniform(-20, 0, (fingers, modes))
+               * 10.0 ** rng.uniform(-325, 0))
+        wanted = rng.standard_normal(fingers) * 10.0 ** rng.uniform(-3, 1)
+        for method in ("exact", "regularised", "bounded"):
+            got = modal.solve(phi, wanted, method, limits_um=3.0, actuators=np.eye(modes))
+            for values in (got.modal_um, got.commands_um, got.achieved_um, got.error_um):
+                assert np.all(np.isfinite(values)), (phi, wanted, method)
+            assert np.all(np.abs(got.commands_um) <= 3.0 * (1 + 1e-12))

@@ -32,8 +32,9 @@ sample reports what was achieved under each finger (forward model of the command
 the error; ``limited`` marks samples whose commands met a limit, ``capped`` those where
 a singular value was below the method's threshold or below :data:`NEAR_SINGULAR` of the
 largest (near a singular locus ``exact`` and ``bounded`` keep their gains but spend the
-limits on a difference they cannot deliver). Singular loci are normal operation, never
-an error.
+limits on a difference they cannot deliver), and those whose modal amplitudes would
+overflow a float (mode shapes below about 1e-308 under every finger), which get none.
+Singular loci are normal operation, never an error.
 """
 
 from __future__ import annotations
@@ -56,6 +57,9 @@ _EXACT_RCOND = 1e-12
 #: costs over 1 um of command, beyond any channel's limit (about 1 um), so the
 #: fingers cannot be given independent amplitudes even where no gain was cut
 NEAR_SINGULAR = 1e-3
+#: "bounded" gives no command where every command within the limits reaches the fingers
+#: with less than this (um): nothing a plate could show
+_LEAST_REACH_UM = 1e-100
 _FISTA_MAX_ITER = 3000
 _FISTA_TOL = 1e-13
 
@@ -351,7 +355,8 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
     closed = phi.shape[-2:] == (2, 2) and not np.iscomplexobj(phi) and method != "bounded"
     modal, capped, ratio = (_gains_2x2 if closed else _gains_svd)(
         phi, wanted, threshold, regularised=method == "regularised")
-    capped = capped | (ratio < NEAR_SINGULAR)
+    modal, overflowed = _without_overflow(modal)
+    capped = capped | (ratio < NEAR_SINGULAR) | overflowed
     if method != "bounded" and not np.iscomplexobj(phi) and not np.iscomplexobj(a):
         commands, modal, achieved, error, limited = _finish(phi, wanted, modal, a, limits)
         return ModalSolution(modal, commands, achieved, error, limited, capped, ratio)
@@ -362,14 +367,45 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
         commands, modal, limited = _scale_to_limits(commands, modal, limits)
         if method == "bounded" and np.any(limited):
             a_inv = np.linalg.inv(a)
-            m_cmd = _without_weak_directions(phi[limited]) @ a_inv
-            commands[limited] = (bounded_two(m_cmd, wanted[limited], limits) if a.shape[0] == 2
-                                 else _bounded_commands(m_cmd, wanted[limited], commands[limited], limits))
+            commands[limited] = _bounded(_without_weak_directions(phi[limited]) @ a_inv,
+                                         wanted[limited], commands[limited], limits)
             modal[limited] = commands[limited] @ a_inv.T
             limited = _at_limit(commands, limits)
     achieved = forward(phi, modal)
     return ModalSolution(modal, commands, achieved, magnitude(achieved - wanted),
                          limited, capped, ratio)
+
+
+def _bounded(m_cmd, wanted, start, limits) -> np.ndarray:
+    """The "bounded" commands (k, q) of k problems (:func:`_bounded_commands`, or
+    ``bounded_two`` for two actuators); 0 where every command within the limits moves the
+    fingers by less than :data:`_LEAST_REACH_UM`.
+
+    Each problem's ``m_cmd`` and ``wanted`` are first scaled by the power of two that
+    brings its largest entry to [0.5, 1): the same commands (exactly), but the solvers'
+    squares of M (M^H M) neither underflow nor overflow (mode shapes of 1e-200 gave a
+    division by zero)."""
+    commands = np.zeros_like(start)
+    largest = np.abs(m_cmd).max(axis=(-2, -1))
+    reach = largest * np.max(limits) >= _LEAST_REACH_UM
+    scale = np.ldexp(1.0, -np.frexp(largest[reach])[1])  # within range: reach's bound
+    m_cmd, wanted = m_cmd[reach] * scale[:, None, None], wanted[reach] * scale[:, None]
+    if m_cmd.shape[-1] == 2:
+        commands[reach] = bounded_two(m_cmd, wanted, limits)
+    else:
+        commands[reach] = _bounded_commands(m_cmd, wanted, start[reach], limits)
+    return commands
+
+
+def _without_overflow(modal) -> tuple[np.ndarray, np.ndarray]:
+    """``modal`` (..., p) with every sample whose amplitudes are not finite set to 0, and
+    where that was. Mode shapes whose every singular value is below about 1e-308 (the
+    fingers on the modes' nodes) need amplitudes past the largest float; no finite
+    command reaches the fingers, and the plate's rest (mu' = 1) is the safe answer."""
+    overflowed = ~np.isfinite(modal).all(axis=-1)
+    if overflowed.any():
+        modal = np.where(overflowed[..., None], 0, modal)
+    return modal, overflowed
 
 
 def _without_weak_directions(phi) -> np.ndarray:
@@ -511,13 +547,14 @@ def _gains_svd(phi, wanted, rcond: float, regularised: bool):
     ratio = np.divide(s[..., -1], s_max[..., 0], out=np.zeros(s.shape[:-1]), where=s_max[..., 0] > 0)
     threshold = rcond * s_max
     above = ((s >= threshold) if regularised else (s > threshold)) & (s > 0)
-    inverse = np.divide(1.0, s, out=np.zeros_like(s), where=above)
-    if regularised:
-        inverse += np.divide(s, threshold ** 2, out=np.zeros_like(s),
-                             where=~above & (threshold > 0))
     capped = ~np.all(above, axis=-1)
-    coeff = inverse * np.einsum("...ji,...j->...i", u.conj(), wanted)
-    modal = np.einsum("...ji,...j->...i", vh.conj(), coeff)
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):  # solve's _without_overflow
+        inverse = np.divide(1.0, s, out=np.zeros_like(s), where=above)
+        if regularised:
+            inverse += np.divide(s, threshold ** 2, out=np.zeros_like(s),
+                                 where=~above & (threshold > 0))
+        coeff = inverse * np.einsum("...ji,...j->...i", u.conj(), wanted)
+        modal = np.einsum("...ji,...j->...i", vh.conj(), coeff)
     return modal, capped, ratio
 
 
