@@ -11,8 +11,10 @@ kept too. A layer's controls come from the loader's key tables
 
 - a number key (``Num``, ``Int``) is a :class:`Slider` over the range the format
   allows, a side the format leaves open (or bounds only by its catch-all, such as
-  ``MAX_MM``) narrowed to what can be dragged (see :func:`slider_span`); a value set is
-  clamped into it and rounded to the slider's step (a short decimal in the file);
+  ``MAX_MM``, 100 N for a force) narrowed to what can be dragged (see
+  :func:`slider_span`); a value set is clamped into it and rounded to the slider's step
+  (a short decimal in the file), except the slider's own value (the knob grabbed and not
+  moved), which is kept as the file gives it;
 - a word key (``Choice``: ``blend``, ``render``, a grating's ``edge``, ...) is a
   :class:`Menu` of its options. The keys that decide which other keys a layer takes
   (``type``, a height's ``shape``, a clip's ``clip`` and ``trigger``, a waveform's
@@ -74,7 +76,8 @@ from frictex.device.errors import InputError
 from frictex.device.safe_files import UnsafeFile, read_bytes
 from frictex.rendering.visual.layer_panel import ControlView, PanelView
 from frictex.textures.errors import Locator, TextureError, field_name
-from frictex.textures.keys import COMMON, LAYER_KEYS, MAX_ANGLE_DEG, MAX_MM
+from frictex.textures.clips import MAX_CLIP_S
+from frictex.textures.keys import COMMON, LAYER_KEYS, MAX_ANGLE_DEG, MAX_FORCE_N, MAX_MM
 from frictex.textures.library import LIBRARY_DIR, user_scenes_dir
 from frictex.textures.loader import check_scene, load_scene
 from frictex.textures.references import referenced_files
@@ -87,6 +90,9 @@ STRUCTURAL = ("type", "shape", "clip", "trigger")
 #: slider steps per span at least (the step is a power of ten)
 MIN_STEPS = 500
 MAX_UNDO = 200
+#: a value within this many steps of the slider's is its value (float rounding of the
+#: knob's position, not a move)
+UNMOVED = 1e-6
 
 
 class EditError(InputError):
@@ -172,8 +178,27 @@ def _step(span: float) -> float:
     return 10.0 ** math.floor(math.log10(span / MIN_STEPS))
 
 
-#: the bounds the format gives every key of a unit as a catch-all (not a limit of the key)
-CATCH_ALL = {"mm": MAX_MM, "deg": MAX_ANGLE_DEG}
+#: a slider narrowed around its value spans NARROW x |value| each way the key goes
+NARROW = 4.0
+#: the narrowed half-span (the unit's) for a value of 0
+ZERO_SPAN = 1.0
+#: the bounds the format gives every key of a unit as a catch-all (not a limit of the key),
+#: by the unit's first word: lengths, angles, forces (a fingertip presses with 0.1 to 5 N),
+#: times (a clip lasts well under a second)
+CATCH_ALL = {"mm": MAX_MM, "deg": MAX_ANGLE_DEG, "N": MAX_FORCE_N, "s": MAX_CLIP_S}
+
+
+def _narrowed(unit: str, value: float, signed: bool, extent_mm: float) -> tuple[float, float]:
+    """The (lo, hi) a drag can use for a key of ``unit`` holding ``value`` whose format
+    bounds are open or catch-alls: lengths and positions [0, ``extent_mm``] (mm), angles
+    [-180, 180] deg, other units up to NARROW x |value| (``ZERO_SPAN`` for 0), and as far
+    below 0 where the key takes negative values (``signed``), else from 0."""
+    if unit == "mm":
+        return 0.0, extent_mm
+    if unit == "deg":
+        return -180.0, 180.0
+    reach = NARROW * abs(value) if value else ZERO_SPAN
+    return (-reach if signed else 0.0), reach
 
 
 def slider_span(spec: Num | Int, value: float, extent_mm: float) -> tuple[float, float, float]:
@@ -181,23 +206,19 @@ def slider_span(spec: Num | Int, value: float, extent_mm: float) -> tuple[float,
 
     The range the format allows (``spec``'s bounds), where a side is open or at the
     format's catch-all bound for the unit (``CATCH_ALL``: lengths and positions at
-    +-``MAX_MM``, angles at +-``MAX_ANGLE_DEG``) narrowed to what a drag can use:
-    lengths and positions to [0, ``extent_mm``] (the display's larger side), angles to
-    [-180, 180] deg, other units to 0 below and 4 x max(|value|, 0.25) above; a side the
-    format bounds more tightly (a height's ``rise_mm``, -100 to 100 mm) is the slider's
-    end. Always wide enough to hold ``value``. An open bound (``gt``/``lt``) is kept out
-    by one step.
+    +-``MAX_MM``, angles at +-``MAX_ANGLE_DEG``, forces at ``MAX_FORCE_N``, times at
+    ``MAX_CLIP_S``) narrowed to what a drag can use (:func:`_narrowed`); a side the
+    format bounds more tightly (a height's ``rise_mm``, -100 to 100 mm; a mu' at 1) is
+    the slider's end. Always wide enough to hold ``value``. The step gives at least
+    MIN_STEPS over the span and over the span narrowed around ``value`` (so at most
+    |value| / 125: a small value keeps its digits). An open bound (``gt``/``lt``) is kept
+    out by one step.
     """
     lower = spec.ge if isinstance(spec, Int) else (spec.gt if spec.gt is not None else spec.ge)
     upper = spec.le if isinstance(spec, Int) else (spec.lt if spec.lt is not None else spec.le)
-    unit = spec.unit
-    if unit == "mm":
-        lo, hi = 0.0, extent_mm
-    elif unit == "deg":
-        lo, hi = -180.0, 180.0
-    else:
-        lo, hi = 0.0, 4.0 * max(abs(value), 0.25)
+    unit = spec.unit.split(",")[0]  # "N, positive resisting the finger": N
     catch_all = CATCH_ALL.get(unit, MAX_MAGNITUDE)
+    lo, hi = _narrowed(unit, value, lower is None or lower < 0, extent_mm)
     if lower is not None:
         lo = max(lo, lower) if lower <= -catch_all else lower
     if upper is not None:
@@ -205,13 +226,19 @@ def slider_span(spec: Num | Int, value: float, extent_mm: float) -> tuple[float,
     lo, hi = min(lo, value), max(hi, value)
     if not hi > lo:
         hi = lo + 1.0
-    step = 1.0 if isinstance(spec, Int) else _step(hi - lo)
+    step = 1.0 if isinstance(spec, Int) else _value_step(hi - lo, value)
     if isinstance(spec, Num):
         if spec.gt is not None and lo <= spec.gt:
             lo = spec.gt + step
         if spec.lt is not None and hi >= spec.lt:
             hi = spec.lt - step
     return float(lo), float(hi), float(step)
+
+
+def _value_step(span: float, value: float) -> float:
+    """The step of a slider over ``span`` holding ``value``: the finer of the span's and
+    that of the span narrowed around ``value`` (NARROW x |value|)."""
+    return min(_step(span), _step(NARROW * abs(value))) if value else _step(span)
 
 
 def allowed_range(spec: Num | Int, step: float) -> tuple[float, float]:
@@ -229,10 +256,13 @@ def allowed_range(spec: Num | Int, step: float) -> tuple[float, float]:
 def clamp(slider: Slider, value: float) -> float:
     """``value`` for ``slider``'s key: not finite refused, clamped to the key's allowed
     range, rounded to the slider's step (a whole number for an integer key; a short
-    decimal for a real one)."""
+    decimal for a real one). The slider's own value (give or take float rounding: the
+    knob grabbed and not moved) is kept as it is, on a step or not."""
     v = float(value)
     if not math.isfinite(v):
         raise EditError(f"{slider.key} = {value!r}: expected a finite number ({slider.unit})")
+    if abs(v - slider.value) <= UNMOVED * slider.step:
+        return slider.value
     v = min(max(v, slider.allowed_lo), slider.allowed_hi)
     if slider.integer:
         return float(round(v))
