@@ -62,6 +62,24 @@ _EVENT_PARAMS = {  # id: (lowest, highest)
 _CONTROLS = {"HapticIntensityControl": (0.0, 1.0), "HapticSharpnessControl": (-1.0, 1.0)}
 
 
+#: a key the JSON object does not have (``obj.get(key, MISSING)``), told from null
+MISSING = object()
+
+
+def _json_kind(v) -> str:
+    """What parsed JSON value ``v`` is, in JSON's words: "an object", "an array", "a
+    string", "a number", "true", "false" or "null"."""
+    if isinstance(v, bool):
+        return json.dumps(v)
+    kinds = ((dict, "an object"), (list, "an array"), (str, "a string"), ((int, float), "a number"))
+    return next((word for kind, word in kinds if isinstance(v, kind)), "null")
+
+
+def _expected(wanted: str, v) -> str:
+    """The problem with ``v`` where ``wanted`` (an object, an array) belongs."""
+    return "missing" if v is MISSING else f"expected {wanted}, got {_json_kind(v)}"
+
+
 class _Reader:
     """Typed access to parsed JSON with the path of each value for messages."""
 
@@ -92,13 +110,16 @@ class _Reader:
         return v
 
     def table(self, v, path: str) -> dict:
+        """``v`` if it is a JSON object; ``MISSING`` or anything else fails."""
         if not isinstance(v, dict):
-            self.fail(path, f"expected an object, got {type(v).__name__}")
+            self.fail(path, _expected("an object", v))
         return v
 
     def array(self, v, path: str) -> list:
+        """``v`` if it is a JSON array of at most MAX_ITEMS; ``MISSING`` or anything
+        else fails."""
         if not isinstance(v, list):
-            self.fail(path, f"expected an array, got {type(v).__name__}")
+            self.fail(path, _expected("an array", v))
         if len(v) > MAX_ITEMS:
             self.fail(path, f"{len(v)} entries, at most {MAX_ITEMS} are read")
         return v
@@ -172,7 +193,7 @@ def _control_points(r: _Reader, entry: dict, key: str, path: str, notes: list):
         return pid, (t0, [(t0, r.number(entry, "ParameterValue", path, lo, hi))])
     points = []
     cpath = f"{path}.ParameterCurveControlPoints"
-    for k, p in enumerate(r.array(entry.get("ParameterCurveControlPoints"), cpath)):
+    for k, p in enumerate(r.array(entry.get("ParameterCurveControlPoints", MISSING), cpath)):
         ppath = f"{cpath}[{k}]"
         p = r.table(p, ppath)
         t = t0 + r.number(p, "Time", ppath, 0.0, MAX_CLIP_S)
@@ -242,7 +263,7 @@ def parse_ahap(text: str, depth: float, where: str = "AHAP") -> tuple[Clip, list
         raise TextureError(f"{where}: not JSON that can be read ({str(exc).split(';')[0]})") from None
     doc = r.table(doc, "top level")
     events, curves, notes = [], {"HapticIntensityControl": [], "HapticSharpnessControl": []}, []
-    for k, item in enumerate(r.array(doc.get("Pattern"), "Pattern")):
+    for k, item in enumerate(r.array(doc.get("Pattern", MISSING), "Pattern")):
         path = f"Pattern[{k}]"
         item = r.table(item, path)
         if "Event" in item:
