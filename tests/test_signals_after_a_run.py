@@ -77,6 +77,39 @@ def test_a_ctrl_c_dropped_by_a_commit_leaves_a_later_one_stopping_the_command():
     assert startup.signum == signal.SIGTERM
 
 
+EXPERIMENT = """format = 1
+method = "2afc"
+repetitions = 2
+[stimuli]
+scene = "grating-5mm"
+vary = "depth"
+reference = 0.3
+levels = [0.32, 0.42]
+[presentation]
+exploration_s = 0.3
+"""
+
+
+def test_a_ctrl_c_during_an_intervals_commit_stops_the_experiment_after_its_trial(
+        tmp_path, monkeypatch, capsys):
+    """frictex experiment replays each interval as it records it (--record all); a Ctrl-C
+    during the third interval's commit (trial 2's first) was dropped and all 8 trials
+    ran: the session stops once trial 2 is recorded, exit 130, and --resume goes on."""
+    from frictex.app.commands.cli import main
+    path = tmp_path / "p.toml"
+    path.write_text(EXPERIMENT, encoding="utf-8")
+    out = tmp_path / "s"
+    argv = ["experiment", str(path), "--participant", "simulated:weber=0.11,seed=3",
+            "--seed", "4", "--out", str(out), "--quiet"]
+    commits = ctrl_c_in_commit(monkeypatch, at=3)
+    assert main(argv) == 130
+    assert len(commits) == 4  # trial 2's second interval ran, no trial after it
+    assert len((out / "results.csv").read_text().splitlines()) == 1 + 2
+    assert capsys.readouterr().err.strip().splitlines()[-1] == "frictex: interrupted"
+    assert main([*argv[:4], "--out", str(out), "--resume", "--quiet"]) == 0
+    assert len((out / "results.csv").read_text().splitlines()) == 1 + 8
+
+
 def run_ended_by(first: int, then: list[int], cleaned: list):
     """A command whose run is ended by signal ``first``; the signals ``then`` come
     during its cleanup, which notes in ``cleaned`` that it ran to its end."""

@@ -184,10 +184,12 @@ def run(args: argparse.Namespace) -> int:
     from frictex.app.experiment import window_presenter  # noqa: F401 (registers "window")
     from frictex.app.experiment.runner import make_presenter, run_session
     from frictex.app.experiment.session import read_info
+    from frictex.app.engine.driver import between_runs
     spec = args.participant if args.participant is not None else read_info(out)["participant"]
     presenter = make_presenter(spec)
 
     def progress(trial, row):
+        runs.check()  # a Ctrl-C an interval's commit dropped stops here, the trial kept
         if not args.quiet:
             kind = "practice" if trial.practice else "trial"
             print(f"{kind} {trial.number}: {' vs '.join(trial.stimuli)} -> {row['response']}"
@@ -199,18 +201,19 @@ def run(args: argparse.Namespace) -> int:
                            participant_id=pid, resume=args.resume, record=args.record,
                            progress=progress)
 
-    if spec.partition(":")[0] == "window":
-        from frictex.app.experiment.window_presenter import SessionPaused, stop_on_signals
-        try:
-            with stop_on_signals(presenter):
-                session = _in_window(args, protocol, presenter, session)
-        except SessionPaused as exc:  # a planned stop: one line, exit 130 as for Ctrl-C
-            print(f"frictex: session stopped at trial {exc.trial} ({exc.why}); resume with: "
-                  f"frictex experiment {shlex.quote(args.target[0])} --out "
-                  f"{shlex.quote(str(out))} --resume", file=sys.stderr)
-            return PAUSED_EXIT
-    else:
-        session = session()
+    with between_runs() as runs:
+        if spec.partition(":")[0] == "window":
+            from frictex.app.experiment.window_presenter import SessionPaused, stop_on_signals
+            try:
+                with stop_on_signals(presenter):
+                    session = _in_window(args, protocol, presenter, session)
+            except SessionPaused as exc:  # a planned stop: one line, exit 130 as for Ctrl-C
+                print(f"frictex: session stopped at trial {exc.trial} ({exc.why}); resume "
+                      f"with: frictex experiment {shlex.quote(args.target[0])} --out "
+                      f"{shlex.quote(str(out))} --resume", file=sys.stderr)
+                return PAUSED_EXIT
+        else:
+            session = session()
     if session.complete_before:
         print(f"{out}: the session is already complete ({len(session.rows)} trials); nothing "
               f"ran and session.json is left as it is; analyse with: frictex experiment "

@@ -20,7 +20,8 @@ first Ctrl-C (and SIGTERM, SIGHUP) as a flag that the loop turns into an excepti
 steps (``check``), where nothing compiled runs; a second one raises at once. Through a
 run's commit (``check.committing()``) both are held, then dropped: the run is complete;
 the handler the run restores is told of it (``_pass_on``: ``frictex batch --jobs 1``
-stops after this run, a lone replay reports its complete run).
+stops after this run, ``frictex experiment`` after this trial (:func:`between_runs`), a
+lone replay reports its complete run).
 Once the run is ending (a signal raised, or ``check.end()`` where an error ends it), every
 further signal is held: the cleanup (sinks aborted, staged files removed) is never cut
 short. A worker of ``frictex batch`` whose parent dies gets a SIGINT from the system for
@@ -183,12 +184,60 @@ def _pass_on(check: HeldSignals, previous: dict) -> None:
     do not cut it short). Any other handler is told nothing: a run whose commit dropped a
     signal completes and returns (``replay_with``)."""
     seen = check.held or check.dropped
-    if not seen:
-        return
-    handler = previous[seen[0]]
+    if seen:
+        tell_run_saw(previous[seen[0]], seen[0], ended=bool(check.held))
+
+
+def tell_run_saw(handler, signum: int, ended: bool) -> None:
+    """Tell a signal ``handler`` that is, or is bound to, an object with ``run_saw`` that
+    a run saw ``signum`` (:func:`_pass_on`); any other handler is told nothing."""
     owner = handler if hasattr(handler, "run_saw") else getattr(handler, "__self__", None)
     if hasattr(owner, "run_saw"):
-        owner.run_saw(seen[0], ended=bool(check.held))
+        owner.run_saw(signum, ended=ended)
+
+
+class BetweenRuns:
+    """The signal handlers of a command that runs replays one after another (an
+    experiment's intervals) while :func:`between_runs` is in place: a signal outside a run
+    goes to the handler before it (the command's, which raises), and one a run's commit
+    dropped (the run is complete, :meth:`HeldSignals.committing`) goes there at the
+    command's next :meth:`check`, as if it came then, where the command went on before."""
+
+    def __init__(self):
+        self.previous: dict[int, object] = {}
+        self.dropped: int | None = None
+
+    def __call__(self, signum, frame) -> None:
+        self.previous[signum](signum, frame)
+
+    def run_saw(self, signum: int, ended: bool) -> None:
+        tell_run_saw(self.previous[signum], signum, ended)
+        if not ended and self.dropped is None:
+            self.dropped = signum
+
+    def check(self) -> None:
+        """A point where the command may stop (its work so far complete): the signal a
+        run's commit dropped, if any, goes to the handler before (which raises)."""
+        if self.dropped is not None:
+            signum, self.dropped = self.dropped, None
+            self.previous[signum](signum, None)
+
+
+@contextmanager
+def between_runs():
+    """Within: :class:`BetweenRuns` handles SIGINT, SIGTERM and SIGHUP where a Python
+    handler did (in the main thread; elsewhere its ``check`` does nothing)."""
+    runs = BetweenRuns()
+    if threading.current_thread() is threading.main_thread():
+        for sig in HELD_SIGNALS:
+            handler = signal.getsignal(sig)
+            if callable(handler):
+                runs.previous[sig] = signal.signal(sig, runs)
+    try:
+        yield runs
+    finally:
+        for sig, handler in runs.previous.items():
+            signal.signal(sig, handler)
 
 
 def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,
