@@ -616,10 +616,7 @@ class LayerEdit:
         expected = self.disk if target == self.path else OnDisk(None, None)
         if now != expected and now != self._overwrite:
             self._overwrite = now
-            what = "changed on disk since the panel read it" if target == self.path else "is there already"
-            raise SaveConflict(f"{target.name} {what}: not saved. Ctrl+S again overwrites it "
-                               "with the panel's version; or leave it, and a good edit of the "
-                               "file reloads (keeping the panel's unsaved edits)")
+            raise SaveConflict(_conflict(target, copy=target != self.path))
         try:
             target.parent.mkdir(parents=True, exist_ok=True)
             if target != self.path:
@@ -641,6 +638,19 @@ class LayerEdit:
             if ref.is_relative_to(home) and not (folder / ref.relative_to(home)).exists():
                 (folder / ref.relative_to(home)).parent.mkdir(parents=True, exist_ok=True)
                 shutil.copy2(ref, folder / ref.relative_to(home))
+
+
+def _conflict(target: Path, copy: bool) -> str:
+    """Why a save to ``target`` was refused, and what Ctrl+S again does: the file the
+    panel holds changed on disk (an edit of it reloads), or, saving a bundled scene's
+    ``copy``, a copy saved before is there (the panel holds the bundled file: editing
+    that copy reloads nothing)."""
+    if copy:
+        return (f"{target} is there already (a copy saved before): not saved. Ctrl+S again "
+                "replaces its earlier edits with these")
+    return (f"{target.name} changed on disk since the panel read it: not saved. Ctrl+S again "
+            "overwrites it with the panel's version; or leave it, and a good edit of the file "
+            "reloads (keeping the panel's unsaved edits)")
 
 
 def _set(table, key: str, value) -> None:
