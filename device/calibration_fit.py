@@ -2,8 +2,12 @@
 
 A point is (w, F_n, mu'): plate amplitude (um), normal force (N), measured relative
 friction. Seed 003, eq 2: ``mu'(w) = (1 - k F_n) exp(-b w) + k F_n``; the fit finds
-(b, k) by bounded least squares, with standard errors from its Jacobian. The model is
-said not to fit this plate and finger only when its residual RMS is above
+(b, k) by bounded least squares, with standard errors from its Jacobian (the points'
+scatter only: they leave out the sweep's systematic errors, so two simulated sweeps land 4
+to 5 of them from the true b). Points that are not finite are left out and counted
+(:attr:`Fit.n_dropped`). The model is not accepted where the solver did not converge or
+its residual RMS is above ``MODEL_CEILING``, whatever the residuals' pattern; otherwise it
+is said not to fit this plate and finger only when its residual RMS is above
 ``MODEL_TOLERANCE`` *and* the residuals are not noise: their signs, in order of amplitude,
 form fewer runs than independent noise would (Wald-Wolfowitz runs test, p below
 ``LACK_OF_FIT_P``). Noise alone (sd 0.03 on exact eq-2 points) raises the RMS above the
@@ -11,17 +15,21 @@ tolerance in most sweeps, and a table then fits the noise worse than the model d
 few amplitudes the runs test cannot reach ``LACK_OF_FIT_P`` whatever the residuals (its
 smallest p is 0.2 at 5 amplitudes, 0.057 at 7): there the RMS alone judges the fit
 (:attr:`Fit.judged_by`), so a clear misfit at 3 to 7 amplitudes still gets a table. Where
-the model does not fit, :func:`fit_points` also builds a calibration table
+the model is not accepted, :func:`fit_points` also builds a calibration table
 (``device.profile.Calibration``) from the points: one column per measured amplitude (the
 protocol's levels, however few points each has), or bins of neighbouring amplitudes where
 there are more than ``TABLE_BINS`` of them; one row at the points' median force, the
 decreasing (isotonic) regression of the columns' means, so no single noisy point pulls
 the columns after it down.
 
-A fit that stops on a bound of b or k (:attr:`Fit.bound_notes`) does not determine that
-constant: points of b = 30 /um give b = 20 /um, the upper bound, with a residual of 0.005.
-k = 0 is the exception: friction that does not depend on the normal force, a physical
-value the fit can reach, not a limit of the fit.
+A fit that stops on a bound of b or k, or whose standard error of a constant exceeds the
+constant (:attr:`Fit.notes`), does not determine that constant: points of b = 30 /um give
+b = 20 /um, the upper bound, with a residual of 0.005; amplitudes given in nm leave b at
+its start with a standard error of 1e142. k = 0 is the exception: friction that does not
+depend on the normal force, a physical value the fit can reach, not a limit of the fit.
+
+A fitted curve that does not fall is a failed run (exit 1), not bad input: the plate did
+not vibrate, or the finger pressed so hard that k F_n reached 1, where eq 2 is flat.
 
 :func:`device_toml` writes the result as the ``[device]`` section of a texture file
 (the grammar of ``textures.loader``).
@@ -36,13 +44,17 @@ import numpy as np
 from scipy.optimize import isotonic_regression, least_squares
 from scipy.special import gammaln, logsumexp
 
-from frictex.device.errors import InputError
+from frictex.device.errors import InputError, RunFailed
 from frictex.device.friction import forward_mu
 from frictex.device.calibration_identity import B_BOUNDS, K_BOUNDS, toml_lines
 from frictex.device.profile import DEFAULT_PROFILE, Calibration, FittedOn, FrictionParams
 
 #: residual RMS (mu') at or below which the model fits, whatever its residuals' pattern
 MODEL_TOLERANCE = 0.02
+#: residual RMS (mu') above which the model is not accepted, whatever its residuals'
+#: pattern: above the RMS that a sensor's noise of sd 0.03 leaves on 12 amplitudes (0.026
+#: median, 0.048 the most in 500 sweeps); points shuffled out of their fall give 0.093
+MODEL_CEILING = 0.06
 #: runs-test p-value below which residuals above the tolerance are taken for a misfit
 LACK_OF_FIT_P = 0.05
 #: most amplitude columns of a calibration table, besides amplitude 0
@@ -54,6 +66,9 @@ MIN_AMPLITUDES = 3
 #: least fall of the fitted mu' from 0 um to the largest amplitude that determines b:
 #: below it the curve is within a few times the model's tolerance of flat, so any b fits
 MIN_FALL = 2.5 * MODEL_TOLERANCE
+#: median normal force (N) above which a flat curve is put down to a press too hard: at
+#: seed 003's k (1.13 /N) k F_n is 0.9 at 0.8 N, leaving eq 2 a fall of 0.1 at most
+HARD_PRESS_N = 0.8
 
 
 def model_jacobian(w_um, normal_n, b_per_um: float, k_per_n: float) -> np.ndarray:
@@ -65,7 +80,9 @@ def model_jacobian(w_um, normal_n, b_per_um: float, k_per_n: float) -> np.ndarra
 @dataclass(frozen=True)
 class Fit:
     """A fit's outcome: the constants, their standard errors (``b_se`` 1/um, ``k_se``
-    1/N), the residual RMS (mu'), the point count, the runs test's p-value of the
+    1/N), the residual RMS (mu'), the point count and the count of points left out as not
+    finite (``n_dropped``), the solver's status and message (``least_squares``: above 0
+    where it converged), the runs test's p-value of the
     residuals (:func:`few_runs_p`) and the smallest p-value it could have given with the
     residuals' counts of signs (``runs_least_p``), and the bounds the fit stopped on
     (``at_bound``: e.g. ``("b", "upper")``); ``calibration`` is a table when the model
@@ -80,24 +97,40 @@ class Fit:
     runs_p: float = 1.0
     runs_least_p: float = 0.0
     at_bound: tuple[tuple[str, str], ...] = ()
+    n_dropped: int = 0
+    solver_status: int = 1
+    solver_message: str = ""
 
     @property
     def judged_by(self) -> str:
-        """The rule that judged the fit: ``"RMS"`` where the residual RMS is within
-        ``MODEL_TOLERANCE`` or the runs test could not reach ``LACK_OF_FIT_P`` (too few
-        amplitudes), else ``"runs test"``."""
+        """The rule that judged the fit: ``"solver"`` where it did not converge, ``"RMS
+        ceiling"`` where the residual RMS is above ``MODEL_CEILING``, ``"RMS"`` where it is
+        within ``MODEL_TOLERANCE`` or the runs test could not reach ``LACK_OF_FIT_P`` (too
+        few amplitudes), else ``"runs test"``."""
+        if self.solver_status <= 0:
+            return "solver"
+        if not self.residual_rms <= MODEL_CEILING:
+            return "RMS ceiling"
         runs_can_reject = self.runs_least_p < LACK_OF_FIT_P
         return "runs test" if self.residual_rms > MODEL_TOLERANCE and runs_can_reject else "RMS"
 
     @property
     def fits(self) -> bool:
-        if self.judged_by == "RMS":
+        judge = self.judged_by
+        if judge == "RMS":
             return self.residual_rms <= MODEL_TOLERANCE
-        return self.runs_p >= LACK_OF_FIT_P
+        if judge == "runs test":
+            return self.runs_p >= LACK_OF_FIT_P
+        return False
 
     @property
     def misfit_reason(self) -> str:
         """Why the model does not fit, by the rule that judged it (one clause)."""
+        if self.judged_by == "solver":
+            return f"the fit did not converge: {self.solver_message}"
+        if self.judged_by == "RMS ceiling":
+            return (f"residual RMS {self.residual_rms:.3f} above the ceiling "
+                    f"{MODEL_CEILING:g}, beyond noise whatever its pattern")
         if self.judged_by == "runs test":
             return (f"its residuals run in long stretches on one side of the curve, runs "
                     f"test p {self.runs_p:.3f}")
@@ -123,17 +156,33 @@ class Fit:
                          f"and standard error are not estimates)")
         return notes
 
+    @property
+    def notes(self) -> list[str]:
+        """:attr:`bound_notes`, then one line per other constant whose standard error
+        exceeds its value: the points do not determine it."""
+        on_bound = {name for name, _ in self.at_bound}
+        constants = {"b": (self.params.b_per_um, self.b_se, "/um"),
+                     "k": (self.params.asymptote_per_n, self.k_se, "/N")}
+        undetermined = [f"{name} = {value:.4g} {unit} with a standard error of {se:.2g} "
+                        f"{unit}, more than its value: the points do not determine {name} "
+                        f"(are the amplitudes in um and the forces in N?)"
+                        for name, (value, se, unit) in constants.items()
+                        if name not in on_bound and not se <= abs(value)]
+        return self.bound_notes + undetermined
+
 
 def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> Fit:
     """Least-squares (b, k) of seed 003, eq 2 on the points; arrays (n,), at least
     ``MIN_AMPLITUDES`` distinct amplitudes above 0 um among them.
 
-    Raises InputError (a ValueError) when the usable (finite) points have fewer distinct
-    amplitudes above 0 (they cannot determine both b and k and check the fit), or when
-    the fitted mu' falls by less than ``MIN_FALL`` (a flat curve: every b fits it).
+    Points that are not finite are left out, counted in :attr:`Fit.n_dropped`. Raises
+    InputError (a ValueError) when the usable points have fewer distinct amplitudes above
+    0 (they cannot determine both b and k and check the fit), and RunFailed when the
+    fitted mu' falls by less than ``MIN_FALL`` (a flat curve: every b fits it).
     """
     w, f, m = (np.asarray(a, dtype=np.float64).ravel() for a in (w_um, normal_n, mu))
-    good = np.isfinite(w) & np.isfinite(f) & np.isfinite(m) & (w >= 0) & (f > 0)
+    finite = np.isfinite(w) & np.isfinite(f) & np.isfinite(m)
+    good = finite & (w >= 0) & (f > 0)
     w, f, m = w[good], f[good], m[good]
     amplitudes = np.unique(w[w > 0]).size
     if amplitudes < MIN_AMPLITUDES:
@@ -162,24 +211,35 @@ def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> 
     signs = _residual_signs(w, sol.fun)
     fit = Fit(params=params, residual_rms=rms, n_points=int(w.size), b_se=b_se, k_se=k_se,
               runs_p=few_runs_p(signs), runs_least_p=few_runs_p(np.sort(signs)),
-              at_bound=at_bound)
+              at_bound=at_bound, n_dropped=int(np.count_nonzero(~finite)),
+              solver_status=int(sol.status), solver_message=str(sol.message))
     if fit.fits:
         return fit
     return replace(fit, calibration=_table(w, f, m))
 
 
 def _check_fall(w: np.ndarray, f: np.ndarray, params: FrictionParams) -> None:
-    """Raise InputError when the fitted mu' falls by less than ``MIN_FALL`` from 0 um to
+    """Raise RunFailed when the fitted mu' falls by less than ``MIN_FALL`` from 0 um to
     the largest amplitude, at the points' median force."""
     force = np.array([np.median(f)])
     fall = float((forward_mu(np.zeros(1), force, params)
                   - forward_mu(np.array([w.max()]), force, params))[0])
     if fall < MIN_FALL:
-        raise InputError(f"the fitted mu' falls by only {fall:.3f} from 0 to {w.max():.3g} um "
-                         f"({w.size} calibration points): the finger's friction did not "
-                         f"fall with vibration, so no b fits better than another; is the "
-                         f"plate vibrating and the finger pressing? (a fit needs a fall of "
-                         f"{MIN_FALL:.2f} or more)")
+        raise RunFailed(f"the fitted mu' falls by only {fall:.3f} from 0 to {w.max():.3g} um "
+                        f"({w.size} calibration points): the finger's friction did not fall "
+                        f"with vibration, so no b fits better than another; "
+                        f"{_flat_hint(float(force[0]))} (a fit needs a fall of "
+                        f"{MIN_FALL:.2f} or more)")
+
+
+def _flat_hint(force_n: float) -> str:
+    """What to try when the fitted curve is flat at median normal force ``force_n`` (N)."""
+    if force_n > HARD_PRESS_N:
+        k = FrictionParams().asymptote_per_n
+        return (f"the finger pressed {force_n:.2g} N, too hard: k F_n reaches 1 near "
+                f"{1 / k:.2g} N at seed 003's k {k:g} /N, where eq 2 is flat; press lighter, "
+                f"about 0.5 N")
+    return "is the plate vibrating and the finger pressing?"
 
 
 def standard_errors(jacobian: np.ndarray, residuals: np.ndarray) -> tuple[float, float]:
@@ -268,11 +328,12 @@ def device_toml(fit: Fit, amplitude_limit_um: float, normal_force_n: float,
              f"normal_force_n = {normal_force_n:.6g}",
              f"[device.friction]        # seed 003 eq 2, fitted: residual RMS {fit.residual_rms:.4f} "
              f"over {fit.n_points} points",
-             f"b_per_um = {fit.params.b_per_um:.6g}        # standard error {fit.b_se:.2g}"
+             f"b_per_um = {fit.params.b_per_um:.6g}        # standard error {fit.b_se:.2g} "
+             "(the points' scatter only)"
              + ("" if speed_mm_s is None else f"; applies at {speed_mm_s:g} mm/s sliding"),
              f"asymptote_per_n = {fit.params.asymptote_per_n:.6g}        # standard error "
              f"{fit.k_se:.2g}"]
-    lines += [f"# {note}" for note in fit.bound_notes]
+    lines += [f"# {note}" for note in fit.notes]
     if fitted is not None:
         lines += toml_lines(fitted)
     if fit.calibration is not None:

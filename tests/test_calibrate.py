@@ -10,7 +10,7 @@ import pytest
 from frictex.app.commands.cli import main
 from frictex.device.calibration_fit import fit_points
 from frictex.device.calibration_run import Sweep, run_sweep
-from frictex.device.errors import DeviceError
+from frictex.device.errors import DeviceError, RunFailed
 from frictex.device.finger import draw_finger, moisture
 from frictex.device.link.forces import ForceReport
 from frictex.device.link.host import LinkStalled
@@ -48,7 +48,7 @@ def test_a_flat_curve_is_refused_not_fitted():
     w = np.repeat(np.linspace(0.0, 2.5, 11), 4)
     noise = np.random.default_rng(3).normal(0.0, 0.01, w.size)
     for mu in (np.ones(w.size), np.clip(1.0 - 0.01 * w + noise, 0.0, 1.0)):
-        with pytest.raises(ValueError, match="did not fall with vibration"):
+        with pytest.raises(RunFailed, match="did not fall with vibration"):
             fit_points(w, np.full(w.size, 0.5), mu)
 
 

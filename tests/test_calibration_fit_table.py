@@ -59,15 +59,15 @@ def test_calibrate_writes_the_table_it_says_it_wrote(monkeypatch, tmp_path, caps
         LEVELS_UM, np.full(LEVELS_UM.size, FORCE_N), step_finger(LEVELS_UM)))
     out = tmp_path / "device.toml"
     assert main(["calibrate", "--device", "sim", "--out", str(out)]) == 0
-    assert re.search(r"; the model does not fit \(its residuals run in long stretches on one "
-                     r"side of the curve, runs test p 0\.0\d\d\): its measured table \(13 "
+    assert re.search(r"; the model does not fit \(residual RMS 0\.119 above the ceiling 0\.06, "
+                     r"beyond noise whatever its pattern\): its measured table \(13 "
                      r"amplitudes\) written", capsys.readouterr().out)
     scene = tmp_path / "scene.toml"
     scene.write_text('format = 1\nname = "c"\n[display]\nwidth_mm = 100.0\nheight_mm = 60.0\n'
                      'width_px = 100\nheight_px = 60\n' + out.read_text() +
                      '[[layer]]\ntype = "disc"\nname = "d"\ncx_mm = 50.0\ncy_mm = 30.0\n'
                      'radius_mm = 10.0\nmu = 0.8\n')
-    assert "# the model does not fit (its residuals run in long stretches" in out.read_text()
+    assert "# the model does not fit (residual RMS 0.119 above the ceiling" in out.read_text()
     table = load_scene(scene).device.calibration
     assert table is not None and table.amplitudes_um[1:] == tuple(LEVELS_UM)
 

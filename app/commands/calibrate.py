@@ -3,9 +3,13 @@
 The user slides a finger while the plate steps through amplitudes
 (``device.calibration_run``, streamed over the device's link and read back from its
 force reports); frictex fits (b, k) of seed 003's eq 2 (``device.calibration_fit``),
-prints the fit with its standard errors, its residual and the sliding speed b applies at
-(warning when b or k stopped on a bound of the fit), writes the ``[device]`` section a texture file can use
-and plots the measured points against the fitted curve.
+prints the fit with its standard errors (of the points' scatter only), its residual and
+the sliding speed b applies at (warning when b or k stopped on a bound of the fit or is
+not determined, and when points were left out as not finite), writes the ``[device]``
+section a texture file can use and plots the measured points against the fitted curve
+(a PNG: ``--plot`` names a ``.png`` file). Where the model is not accepted the section
+carries a measured table instead, which ``replay --control closed`` refuses (the loop
+inverts eq 2): said when it is written.
 
 ``--device`` takes what ``replay --device`` takes: ``sim`` starts ``frictex sim-device``
 with a simulated finger (``--finger N``: person N of ``device.finger``'s population,
@@ -61,7 +65,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=Path, default=Path("calibration.toml"),
                         help="where to write the [device] section (default calibration.toml)")
     parser.add_argument("--plot", type=Path, default=None,
-                        help="PNG of the measured points against the fitted curve")
+                        help="PNG of the measured points against the fitted curve (a name ending "
+                             "in .png)")
 
 
 def _progress(done: int, total: int) -> None:
@@ -83,6 +88,8 @@ def run(args: argparse.Namespace) -> int:
         if os.path.realpath(args.plot) == os.path.realpath(args.out):
             raise InputError(f"--plot {args.plot}: the same file as --out {args.out}; give "
                              "the plot a name of its own")
+        if args.plot.suffix.lower() != ".png":
+            raise InputError(f"--plot {args.plot}: the plot is a PNG; give a name ending in .png")
         require_extra("report", "matplotlib", "--plot")
     link = open_sink(args.device, channels=1, rate_hz=RATE_HZ, paced=True, sim_args=sim_args)
     try:
@@ -102,11 +109,13 @@ def run(args: argparse.Namespace) -> int:
     print(f"{_points_from_steps(fit.n_points, sweep)}; seed 003 eq 2 fit at "
           f"{sweep.speed_mm_s:g} mm/s sliding (b falls as the finger speeds up): "
           f"b = {fit.params.b_per_um:.4f} ± {fit.b_se:.2g} /um, "
-          f"k = {fit.params.asymptote_per_n:.4f} ± {fit.k_se:.2g} /N (standard errors), "
+          f"k = {fit.params.asymptote_per_n:.4f} ± {fit.k_se:.2g} /N (standard errors of the "
+          f"points' scatter only: the sweep's systematic errors come on top, 4 to 5 of them "
+          f"on b in simulated sweeps), "
           f"residual RMS {fit.residual_rms:.5f} (mu')"
           + ("" if fit.calibration is None else f"; the model does not fit ({fit.misfit_reason}): "
              f"its measured table ({len(fit.calibration.amplitudes_um)} amplitudes) written"))
-    for note in fit.bound_notes:
+    for note in _warnings(fit):
         print(f"frictex: warning: {note}", file=sys.stderr)
     text = device_toml(fit, limit_um, sweep.force_n, fitted=fitted,
                        speed_mm_s=sweep.speed_mm_s).encode("utf-8")
@@ -116,6 +125,20 @@ def run(args: argparse.Namespace) -> int:
         _plot(args.plot, w, normal, mu, fit, sweep)
         print(f"wrote {args.plot} (the measured points against the fitted curve; --plot)")
     return 0
+
+
+def _warnings(fit) -> list[str]:
+    """What the user should know of ``fit`` beyond its figures: points left out, constants
+    not determined, and a measured table that closed-loop replays refuse."""
+    said = []
+    if fit.n_dropped:
+        said.append(f"{fit.n_dropped} points left out of the fit: not finite")
+    said += fit.notes
+    if fit.calibration is not None:
+        said.append("the written [device.calibration] table replaces seed 003's eq 2: "
+                    "'replay --control closed' refuses it (the loop inverts eq 2); a scene "
+                    "with it plays open loop")
+    return said
 
 
 def _points_from_steps(n_points: int, sweep: Sweep) -> str:
