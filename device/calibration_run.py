@@ -11,8 +11,13 @@ simulated device (``frictex sim-device --finger N``) and a plate that announces 
 force sensor. A device drops the report it was building when it underruns, and a host
 must not count on every report arriving: a step whose reports cover at least
 ``MIN_COVERED`` of its kept samples is taken over those, once the reports have gone
-``LATE_SAMPLES`` past it. A step's ratio is the median of F_t / F_n over its samples pressed with at least
-``MIN_NORMAL_N`` (a sample at 0 N has no ratio). The
+``LATE_SAMPLES`` past it. A step's ratio is the median of |F_t| / F_n over its samples
+pressed with at least ``MIN_NORMAL_N`` (a sample at 0 N has no ratio). The size, because
+the lateral force is signed (PROTOCOL.md 4.9: positive when the finger drags the plate
+towards +x) and friction opposes the slide: a finger sliding back and forth (60 mm/s for
+12.5 s on a 108 mm screen reverses several times) turns its sign at each reversal, within
+a step, while seed 003's mu = F_t / F_n is the friction coefficient, the same size either
+way. A signed median of such a step is about 0, or of either sign. The
 friction at rest mu0 is the mean ratio of the rest steps on each side of an amplitude
 step, so the slow moisture drift cancels; mu' = F_t / (F_n mu0) (seed 003, eq 1).
 
@@ -125,9 +130,9 @@ def run_sweep(link, sweep: Sweep, on_step=None, first_index: int = 0):
             raise DeviceError(f"{link.label}: normal force {normal:.3g} N during step {k + 1}: "
                              f"the finger lifted (slide it through the whole sweep)")
         pressed = normal_n >= MIN_NORMAL_N  # a sample of a lifting finger has no ratio
-        ratio = float(np.median(lateral[pressed] / normal_n[pressed]))
+        ratio = float(np.median(np.abs(lateral[pressed]) / normal_n[pressed]))
         if steps[k] == 0.0:
-            _check_rest_friction(link, k, ratio, float(np.median(lateral)))
+            _check_rest_friction(link, k, ratio, float(np.median(np.abs(lateral))))
         ratios.append(ratio)
         normals.append(normal)
         if on_step is not None:
@@ -174,13 +179,12 @@ def run_sweep(link, sweep: Sweep, on_step=None, first_index: int = 0):
 
 def _check_rest_friction(link, k: int, ratio: float, lateral_n: float) -> None:
     """Raise DeviceError when rest step ``k``'s friction coefficient ``ratio`` (median
-    F_t / F_n) is below ``MIN_REST_FRICTION`` in size: mu0, which every mu' is divided by
-    (seed 003, eq 1), is nil. ``lateral_n``: the step's median lateral force (N). Either
-    sign is friction (a sensor may count the slide's direction negative)."""
-    if abs(ratio) >= MIN_REST_FRICTION:
+    |F_t| / F_n) is below ``MIN_REST_FRICTION``: mu0, which every mu' is divided by
+    (seed 003, eq 1), is nil. ``lateral_n``: the step's median lateral force in size (N)."""
+    if ratio >= MIN_REST_FRICTION:
         return
     raise DeviceError(f"{link.label}: the device reported no friction at rest: lateral force "
-                      f"{lateral_n:.3g} N with the plate still (step {k + 1}), {abs(ratio):.2g} "
+                      f"{lateral_n:.3g} N with the plate still (step {k + 1}), {ratio:.2g} "
                       f"of the normal force where a sliding fingertip gives 0.3 to 1.5; is "
                       f"the lateral force sensor connected and the finger sliding?")
 
