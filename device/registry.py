@@ -43,8 +43,10 @@ ones. This module is in the lowest layer so that every layer can register into i
 
 from __future__ import annotations
 
+import functools
 import os
 import sys
+import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar, overload
@@ -125,6 +127,21 @@ def warn_once(message: str) -> None:
     print(f"frictex: warning: {text}", file=sys.stderr, flush=True)
 
 
+#: held while the installed metadata is read and while a registry's entries are read or
+#: changed: the threads of one process (a Dask worker runs a job on each of its threads)
+#: saw another's scan half done, its names not yet added ("unknown renderer 'sht'")
+_LOCK = threading.RLock()
+
+
+def _locked(method):
+    """``method`` run holding :data:`_LOCK`."""
+    @functools.wraps(method)
+    def run(*args, **kwargs):
+        with _LOCK:
+            return method(*args, **kwargs)
+    return run
+
+
 _INSTALLED = None  # importlib.metadata's entry points of every installed distribution
 _GROUPS: dict[str, list] = {}  # those of each group asked for, from _INSTALLED
 _STAMP: tuple = ()  # sys.path and its folders' modification times when _INSTALLED was read
@@ -144,6 +161,7 @@ def _path_stamp() -> tuple:
     return tuple(stamp)
 
 
+@_locked
 def _read_installed(fresh: bool = False) -> int:
     """Read every installed distribution's entry points (about 20 ms) the first time, when
     ``fresh`` (a name not found) and when :func:`_path_stamp` has changed since the last
@@ -162,6 +180,7 @@ def _read_installed(fresh: bool = False) -> int:
     return _READINGS
 
 
+@_locked
 def _entry_points(group: str, fresh: bool) -> list:
     """The installed entry points of ``group``, from the one reading of the installed
     metadata every registry shares (:func:`_read_installed`)."""
@@ -267,6 +286,7 @@ class Registry(Generic[T]):
             return lambda obj: self._register(name, obj, caller)
         return self._register(name, entry, caller)
 
+    @_locked
     def _register(self, name: str, entry: T, caller: str) -> T:
         """:meth:`register` ``entry``, called from module ``caller``."""
         if caller == OWN_DISTRIBUTION or caller.startswith(OWN_DISTRIBUTION + "."):
@@ -303,15 +323,15 @@ class Registry(Generic[T]):
         self._entries.setdefault(name, entry)
         self._origin.setdefault(name, origin)
 
+    @_locked
     def scan(self, fresh: bool = False) -> None:
         """Read the group's entry points (without importing them): frictex's own first,
         then the other distributions' by name; ``fresh``: read the installed metadata
         again. A name already known from the same entry point is kept; another package's
         entry point under a known, reserved or malformed name is refused with a warning
         (module docstring)."""
-        points = _entry_points(self.group, fresh)
-        self._readings = _READINGS
-        points = sorted(points,
+        readings = _read_installed(fresh)
+        points = sorted(_entry_points(self.group, False),
                         key=lambda p: (_distribution(p) != OWN_DISTRIBUTION, _distribution(p)))
         for point in points:
             dist = _distribution(point)
@@ -324,7 +344,9 @@ class Registry(Generic[T]):
                 if dist == OWN_DISTRIBUTION:
                     raise  # frictex's own metadata: a bug, not a plugin's
                 warn_once(f"{exc}; left out")
+        self._readings = readings  # only now: every entry read is in place
 
+    @_locked
     def _load(self, name: str) -> T:
         entry = self._entries[name]
         if not isinstance(entry, _Unloaded):
@@ -340,12 +362,14 @@ class Registry(Generic[T]):
         self._entries[name] = loaded
         return loaded
 
+    @_locked
     def _current(self) -> None:
         """Scan again if the installed metadata was read again since the last scan, or
         needs to be (a package installed since: :func:`_read_installed`)."""
         if _read_installed() != self._readings:
             self.scan()
 
+    @_locked
     def get(self, name: str) -> T:
         """The entry registered under ``name``; :class:`UnknownName` lists the known."""
         self._current()
@@ -400,17 +424,20 @@ class Registry(Generic[T]):
             return False
         return True
 
+    @_locked
     def names(self) -> tuple[str, ...]:
         """Every registered name: frictex's own first in registration order, then the
         other packages' by distribution."""
         self._current()
         return tuple(self._entries)
 
+    @_locked
     def origin(self, name: str) -> str:
         """Who registered ``name``: ``frictex`` or the plugin's distribution and object."""
         self.get(name)
         return self._origin[name]
 
+    @_locked
     def __contains__(self, name: object) -> bool:
         if not isinstance(name, str):
             return False
