@@ -26,5 +26,8 @@ def test_a_second_copy_names_the_first_and_says_it_replaces_its_edits(tmp_path, 
     said = str(refused.value)
     assert said == (f"{first} is there already (a copy saved before): not saved. Ctrl+S again "
                     "replaces its earlier edits with these")
+    # the window's banner says the same, not that the file changed on disk
+    assert refused.value.banner == ("not saved: a copy saved before is there; Ctrl+S again "
+                                    "replaces it")
     assert first.read_text() == earlier
     assert ed.save() == first and "mu = 0.75" in first.read_text()

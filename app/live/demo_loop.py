@@ -574,8 +574,7 @@ class DemoLoop:
         try:
             path = self.editor.save()
         except SaveConflict as exc:
-            self._refuse_save("not saved: the file changed on disk; Ctrl+S again overwrites",
-                              str(exc))
+            self._refuse_save(exc.banner, str(exc))
             return
         except (EditError, ValueError, OSError) as exc:
             self._refuse_save(f"not saved: {exc}", f"not saved: {exc}")

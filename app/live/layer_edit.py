@@ -101,7 +101,12 @@ class EditError(InputError):
 
 class SaveConflict(EditError):
     """The file to save changed on disk since the panel read it (or, for a copy of a
-    bundled scene, is there already): not overwritten unless saved again."""
+    bundled scene, is there already): not overwritten unless saved again. ``banner``:
+    the window's short line for it."""
+
+    def __init__(self, message: str, banner: str):
+        super().__init__(message)
+        self.banner = banner
 
 
 @dataclass(frozen=True)
@@ -616,7 +621,11 @@ class LayerEdit:
         expected = self.disk if target == self.path else OnDisk(None, None)
         if now != expected and now != self._overwrite:
             self._overwrite = now
-            raise SaveConflict(_conflict(target, copy=target != self.path))
+            copy = target != self.path
+            raise SaveConflict(_conflict(target, copy),
+                               "not saved: a copy saved before is there; Ctrl+S again replaces it"
+                               if copy else
+                               "not saved: the file changed on disk; Ctrl+S again overwrites")
         try:
             target.parent.mkdir(parents=True, exist_ok=True)
             if target != self.path:
