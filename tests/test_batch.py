@@ -101,6 +101,19 @@ def test_an_unreachable_scheduler_is_one_line(tmp_path, capsys):
     assert len(err) == 1 and err[0].startswith("frictex: error: cannot reach the Dask scheduler")
 
 
+@pytest.mark.parametrize("address", ["nonsense", "tcp://127.0.0.1"])  # the port forgotten
+def test_a_malformed_scheduler_address_is_one_line_and_bad_input(tmp_path, capsys, address):
+    """distributed's ValueError ('missing port number') was an internal error, exit 70."""
+    pytest.importorskip("distributed", reason="dask.distributed is not installed")
+    manifest = write_manifest(tmp_path)
+    assert main(["batch", str(manifest), "--out", str(tmp_path / "o"),
+                 "--scheduler", address]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"frictex: error: --scheduler {address}: not a "
+                                               "scheduler's address (")
+    assert err[0].endswith("expected tcp://HOST:PORT")
+
+
 @pytest.mark.parametrize("text, message", [
     ("", "no header and no jobs"),
     ("scene,trace\n", "a header but no jobs"),

@@ -51,7 +51,7 @@ import time
 from contextlib import contextmanager
 
 from frictex.app.engine.driver import HELD_SIGNALS
-from frictex.device.errors import FrictexError, MissingExtra
+from frictex.device.errors import FrictexError, InputError, MissingExtra
 
 #: prctl(2)'s option: the signal a process gets when its parent dies (Linux)
 _PR_SET_PDEATHSIG = 1
@@ -497,6 +497,9 @@ def _dask_client(address: str):
         return Client(address, timeout=10)
     except (OSError, TimeoutError) as exc:
         raise OSError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
+    except (ValueError, TypeError) as exc:  # not an address ("missing port number")
+        raise InputError(f"--scheduler {address}: not a scheduler's address ({exc}); "
+                         "expected tcp://HOST:PORT") from None
 
 
 def _dask_results(client, futures: list, stopper: _Stopper, watch: "_WorkerWatch",
