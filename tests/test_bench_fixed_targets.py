@@ -60,7 +60,7 @@ def test_the_pipeline_gives_each_thread_cpu_series_a_p99_verdict_on_10_percent_o
                                               "every issue-18 layer", bench_pipeline.THREAD_CPU)
     assert claim.label == ("live 5 ms block, every issue-18 layer, thread CPU time, target p99 "
                            "under 500 us (95 % interval from the order statistics of 2,000 "
-                           "of one run's blocks, taken as independent: the claim is this "
+                           "blocks of one run, taken as independent: the claim is this "
                            "run's, at its load)")
     assert claim.unit == ("us (95 % interval 480.00 to 520.00 us, order statistics 1,971 and "
                           "1,989 of 2,000): not shown")

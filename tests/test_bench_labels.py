@@ -67,7 +67,7 @@ def test_live_labels_say_wall_or_thread_cpu_time_and_stage_rows_wall_time():
         "live 5 ms block p50 of 800 blocks, every issue-18 layer, thread CPU time",
         "live 5 ms block p99 of 800 blocks, every issue-18 layer, thread CPU time",
         "live 5 ms block, every issue-18 layer, thread CPU time, target p99 under 500 us "
-        "(95 % interval from the order statistics of 800 of one run's blocks, taken as "
+        "(95 % interval from the order statistics of 800 blocks of one run, taken as "
         "independent: the claim is this run's, at its load)",
         # the demo's 2.5 ms block is no target (README): no verdict
         "live 2.5 ms block p50 of 800 blocks, every issue-18 layer, thread CPU time",

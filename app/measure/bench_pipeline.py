@@ -118,7 +118,7 @@ def live_figures(per_block: np.ndarray, label: str, clock: str,
     if clock == THREAD_CPU and block == BLOCK:
         claim = quantile_claim(us, 0.99, BUDGET_SHARE * ms * 1e3)
         figures.append(claim.figure("pipeline", f"live {ms:g} ms block, {label}, {clock}",
-                                    "us", of="one run's blocks, taken as independent: "
+                                    "us", of="blocks of one run, taken as independent: "
                                     "the claim is this run's, at its load"))
     return figures
 
