@@ -137,6 +137,14 @@ class ChannelMismatch(ValueError):
         return type(self), (self.scene, self.wants, self.opened, self.held)
 
 
+def say_at_end(messages) -> None:
+    """What the friction loop says only once it has run (``ClosedLoop.report``: reports
+    missed or late, a loop that never closed) on stderr, as the window says its messages
+    while it runs (those were said then)."""
+    for message in messages:
+        print(f"frictex: {message}", file=sys.stderr, flush=True)
+
+
 def held_outputs(link: bool, recording: bool) -> str:
     """The outputs open for one set of channels, as a message names them: "the link",
     "the recording", "the link and the recording" ("" for none)."""
@@ -426,5 +434,7 @@ class HapticThread(TouchInput, threading.Thread):
         finally:
             loop, state = self.stage.pipeline.control, self.stage.state.control
             self.stats.control = None if loop is None else loop.report(state)
+            if loop is not None:
+                say_at_end(self.stats.control["messages"][len(state.messages):])
             self.stats.deadline_misses = self.wall.stats.misses
             self.stats.worst_lateness_s = self.wall.stats.worst_lateness_s
