@@ -27,9 +27,24 @@ from frictex.device.finger import FingerPlant, lowpass, rest_mu, true_amplitude,
 from frictex.device.link.forces import ForceHistory, ForceReport
 
 
+def x_direction(vx_mm_s: np.ndarray) -> np.ndarray:
+    """The way a finger slides along x, +1 or -1 per sample, from its x velocity (mm/s,
+    (n,)): the sign of ``vx_mm_s``; where it is 0 (the finger still, or moving only in y)
+    the last way it moved along x, +x before any (the plate's x sensor then reads the
+    friction as the last x motion signed it)."""
+    sign = np.concatenate([[1.0], np.sign(np.asarray(vx_mm_s, dtype=np.float64))])
+    last_moved = np.maximum.accumulate(np.where(sign != 0, np.arange(sign.size), 0))
+    return sign[last_moved][1:]
+
+
 class FingerSink:
     """The plate under one finger. ``speed_of(t_s)``, ``force_of(t_s)``: the finger's true
-    sliding speed (mm/s) and normal force (N) at output times (arrays (n,)).
+    sliding speed (mm/s) and normal force (N) at output times (arrays (n,));
+    ``direction_of(t_s)``: the way it slides along x there, +1 or -1 (:func:`x_direction`;
+    None: always +x), which signs its lateral force as a device reports it (PROTOCOL.md
+    4.9: positive where the finger drags the plate towards +x). The sign is put on the
+    sensor's reading: at a reversal the finger slows below sliding first, so the friction
+    it reads has fallen towards 0 when the sign turns.
 
     Keeps per touching sample: target mu', delivered mu', ``best``: what a controller
     knowing this finger exactly would deliver through the plate's amplitude loop (the
@@ -37,8 +52,10 @@ class FingerSink:
     low-pass), true speed and normal force, mu0 (the finger's friction at rest), time (s).
     """
 
-    def __init__(self, plant: FingerPlant, speed_of, force_of, sensor_dead_after_s=None):
+    def __init__(self, plant: FingerPlant, speed_of, force_of, sensor_dead_after_s=None,
+                 direction_of=None):
         self.plant = plant
+        self.direction_of = direction_of
         self.state = plant.initial_state()
         self.speed_of = speed_of
         self.force_of = force_of
@@ -58,7 +75,9 @@ class FingerSink:
         block, self.state = self.plant.step(out.index0, commands_um[:, 0], speed, force,
                                             self.state)
         dead = self.dead_after_s is not None and t.size and t[0] >= self.dead_after_s
-        self.report = None if dead else ForceReport(out.index0, block.lateral_n, block.normal_n)
+        lateral = block.lateral_n if self.direction_of is None else (
+            block.lateral_n * self.direction_of(t))
+        self.report = None if dead else ForceReport(out.index0, lateral, block.normal_n)
         finger = self.plant.finger
         row = int(np.argmax(out.contact.any(axis=1))) if touching.any() else 0
         target = out.mu_target[row] if touching.any() else np.ones(t.size)

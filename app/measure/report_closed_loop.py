@@ -73,7 +73,7 @@ from frictex.app.engine.clocks import VirtualClock
 from frictex.app.engine.driver import drive
 from frictex.app.engine.sources import TraceSource
 from frictex.app.measure import link_report_delays
-from frictex.app.measure.closed_loop_sim import FingerSink, LoopStage
+from frictex.app.measure.closed_loop_sim import FingerSink, LoopStage, x_direction
 from frictex.app.measure.link_report_delays import ReportDelays
 from frictex.app.measure.processes import cores
 from frictex.app.measure.report_claims import (BOUND, BY_CONSTRUCTION, HOLDS, NOT_SHOWN, REFUTED,
@@ -160,6 +160,15 @@ def finger_speed(motion):
     return lambda t: np.interp(t, path.t_s, speed)
 
 
+def finger_direction(motion):
+    """The way the motion's finger slides along x (+1 or -1, ``closed_loop_sim.x_direction``)
+    as a function of time (s): the sign its simulated lateral force reports have."""
+    path = truth(motion, 2000.0)
+    direction = x_direction(np.gradient(path.x_mm, path.t_s))
+    last = direction.size - 1
+    return lambda t: direction[np.minimum(np.searchsorted(path.t_s, t), last)]
+
+
 def simulate(run: Run, loop_config=None):
     """Run one (scene, finger, mode); returns (FingerSink, LoopStage after the run).
 
@@ -174,7 +183,8 @@ def simulate(run: Run, loop_config=None):
     plant = FingerPlant(draw_finger(run.finger), RATE_HZ, scene.device.amplitude_limit_um,
                         sensor=sensor, seed=run.finger)
     sink = FingerSink(plant, finger_speed(motion), finger_force(run.finger),
-                      sensor_dead_after_s=run.sensor_dead_after_s)
+                      sensor_dead_after_s=run.sensor_dead_after_s,
+                      direction_of=finger_direction(motion))
     stage = LoopStage(pipeline, sink, run.report_delays.blocks,
                       run.report_delays.start_for(run.finger))
     source = TraceSource(iter([trace]), until_s=run.duration_s)

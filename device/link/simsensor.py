@@ -34,7 +34,9 @@ class ConstantSensor:
 
 
 class FingerSensor:
-    """One finger of ``device.finger``'s population sliding at ``speed_mm_s`` (mm/s) and
+    """One finger of ``device.finger``'s population sliding at ``speed_mm_s`` (mm/s; its
+    sign the way along x: negative slides towards -x, and its lateral force reads
+    negative, PROTOCOL.md 4.9) and
     pressing with ``normal_n`` (N) on channel 0's amplitude, as the plate's sensors see
     it: friction from seed 003's model with this person's constants, moisture drift and
     speed dependence, through the fingertip's compliance and the sensor's bandwidth,
@@ -52,7 +54,8 @@ class FingerSensor:
         seed = finger if isinstance(finger, int) else 0
         self.plant = FingerPlant(params, rate_hz, limit_um, sensor, seed=seed)
         self.state = self.plant.initial_state()
-        self.speed_mm_s = float(speed_mm_s)
+        self.speed_mm_s = abs(float(speed_mm_s))
+        self.direction = -1.0 if speed_mm_s < 0 else 1.0
         self.normal_n = float(normal_n)
 
     def read(self, tick0: int, setpoint_um) -> tuple[np.ndarray, np.ndarray]:
@@ -60,7 +63,7 @@ class FingerSensor:
         n = len(sp)
         block, self.state = self.plant.step(tick0, sp[:, 0], np.full(n, self.speed_mm_s),
                                             np.full(n, self.normal_n), self.state)
-        return block.lateral_n, block.normal_n
+        return self.direction * block.lateral_n, block.normal_n
 
 
 class ForceWindows:

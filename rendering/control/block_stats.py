@@ -136,16 +136,22 @@ def rest_stats(lateral_n, normal_n, speed, plate_seen, min_normal_n, creep_mm_s,
 
 
 @njit(cache=True, nogil=True)
-def feedback_stats(ratio, mu0, normal_n, speed, seen, cut, min_normal_n, creep_mm_s,
+def feedback_stats(ratio, mu0, normal_n, speed, seen, min_normal_n, creep_mm_s,
                    slide_mm_s, min_mu, min_reduction, min_count, decimate):
     """The feedback's and the adaptation's points (``rendering.control.loop``,
     docstring 2, 3) from a report's ``ratio`` and the friction at rest ``mu0``: the
     measured mu'_m = ratio / mu0 gripping (>= ``min_mu``) where the finger is pressed.
 
+    ``seen``'s last row is the reduction asked where the amplitude limit cut the command
+    (0 elsewhere) through the same chain as the whole reduction asked (``seen[0]``), so
+    that a cut lines up with the reduction it cut.
+
     Returns (asked, g, cut, jac, resid): ``asked`` the count of samples moving with a
     reduction asked (``seen[0]`` >= ``min_reduction``), ``g`` the median of their
     delivered / asked reduction (nan unless ``asked`` >= ``min_count``), ``cut`` the
-    count of ``cut``; with the model's rows in ``seen`` (5 rows, adaptive), every
+    count of those asked samples whose reduction the limit mostly cut (the last row at
+    least half of ``seen[0]``); with
+    the model's rows in ``seen`` (6 rows, adaptive), every
     ``decimate``-th sample sliding: ``jac`` (m, 2) (``seen[3:]`` there; C-ordered, the
     layout numpy's ``seen[3:, pick].T`` has) and ``resid`` (m,) = mu'_m - ``seen[2]``
     there; else both of size 0."""
@@ -162,10 +168,11 @@ def feedback_stats(ratio, mu0, normal_n, speed, seen, cut, min_normal_n, creep_m
             picked[m] = i
             m += 1
     count = np.count_nonzero(asked)
+    cut = np.count_nonzero(seen[seen.shape[0] - 1][asked] >= 0.5 * seen[0][asked])
     g = np.nan
     if count >= min_count:
         g = median((1.0 - measured[asked]) / seen[0][asked])
-    rows = seen.shape[0] == 5
+    rows = seen.shape[0] == 6
     pick = picked[:m:decimate] if rows else picked[:0]
     jac = np.empty((pick.size, 2))
     resid = np.empty(pick.size)
@@ -173,4 +180,4 @@ def feedback_stats(ratio, mu0, normal_n, speed, seen, cut, min_normal_n, creep_m
         i = pick[j]
         jac[j, 0], jac[j, 1] = seen[3, i], seen[4, i]
         resid[j] = measured[i] - seen[2, i]
-    return count, g, np.count_nonzero(cut), jac, resid
+    return count, g, cut, jac, resid

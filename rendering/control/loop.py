@@ -20,8 +20,13 @@ with several fingers down the loop holds its state and the block is fed forward 
    collector) does not slow the loop for the rest of the session, while a link that is
    late every few seconds keeps its gain scheduled on that delay.
 1. **Measure.** The device's force report for a block sent gives the ratio
-   F_t / F_n. The friction at rest mu0 is its level where the plate has been still long
-   enough for the sensor to see it (``Chain`` of the commanded amplitude below
+   F_t / F_n, of the friction's magnitude |F_t|: the report's F_t is signed by the
+   direction the finger slides along x (PROTOCOL.md 4.9), and friction opposes sliding
+   whichever way. Not F_t times the sign of the tracker's x velocity: the tracker lags a
+   reversal by tens of ms (a 50 Hz touch trace), so that product would read every
+   reversal as negative friction, and a sensor wired backwards reads the same magnitude.
+   The friction at rest mu0 is its level where the plate has been still long enough for
+   the sensor to see it (``Chain`` of the commanded amplitude below
    ``still_um``) while the finger slides (median over the block of the samples at a
    speed of at least ``slide_mm_s`` reading a ratio of at least ``min_rest_mu``: the
    tracker sees a stop late, and a stuck finger reads no friction); the measured
@@ -103,7 +108,11 @@ with several fingers down the loop holds its state and the block is fed forward 
    object scene with it; closed 3.86x -> 4.26x and 3.60x -> 3.48x).
    Where the probe held the plate still there is nothing asked to compare with: those
    samples are no reduction asked.
-   Anti-windup: c does not grow in a block where the amplitude limit cut the command,
+   Anti-windup: c does not grow in a block where the amplitude limit cut the reduction
+   the feedback compares with on more than a tenth of its samples (the reduction asked
+   where the limit cut it passes through the same chain as the whole reduction asked, so
+   a sample whose lagged reduction came mostly from cut samples counts as cut: the block
+   after a cut band carries its lag), and that time counts as the gain at its limit;
    nor move at all while the finger rests (no sliding, no friction to measure); it
    stays within ``[1/4, 4]`` at any speed (``log_c``, ``log_c_slope`` and their sum
    each within ``log_c_max``).
@@ -115,8 +124,8 @@ with several fingers down the loop holds its state and the block is fed forward 
 4. **Fallback.** Reports missed for more than ``stale_s`` of blocks in a row (stale;
    without force reports at all, ``forces`` None, every block is missed at once:
    absent), a report that reaches the sensor's full scale (saturated), or one that is
-   not a finger (non-finite, F_n below ``min_normal_n`` while touching, F_t / F_n
-   outside [-``max_ratio`` / 10, ``max_ratio``]) drops the loop to open loop with the
+   not a finger (non-finite, F_n below ``min_normal_n`` while touching, |F_t| / F_n
+   above ``max_ratio``) drops the loop to open loop with the
    latest model and c = 1; said once (``messages``) and counted (``fallbacks``,
    ``fallback_samples``). The loop resumes after ``recover_s`` of good reports. A dead
    sensor is open loop after at most ``max_wait_s`` + ``stale_s`` plus one block.
@@ -256,6 +265,8 @@ class ControlState:
     measured_sq: float = 0.0
     measured_n: int = 0
     input_force_blocks: int = 0
+    touch_blocks: int = 0
+    reports_rejected: tuple[tuple[str, int], ...] = ()
 
 
 class ClosedLoop:
@@ -299,18 +310,19 @@ class ClosedLoop:
         the loop, not to the first block whose report comes back (the pipeline's warm-up
         block has no report). The arguments have the types the loop passes."""
         cfg, z = self.config, np.zeros(self.block_size)
-        seen = np.zeros((5 if self.mode == "adaptive" else 2, self.block_size))
+        seen = np.zeros((6 if self.mode == "adaptive" else 3, self.block_size))
         report_peak(z, z)
         ratio, *_ = rest_stats(z, z, z, seen[1], cfg.min_normal_n, cfg.creep_mm_s,
                                cfg.slide_mm_s, cfg.still_seen, cfg.min_rest_mu,
                                cfg.min_still // 2, True)
-        feedback_stats(ratio, 1.0, z, z, seen, z > 0.0, cfg.min_normal_n, cfg.creep_mm_s,
+        feedback_stats(ratio, 1.0, z, z, seen, cfg.min_normal_n, cfg.creep_mm_s,
                        cfg.slide_mm_s, cfg.min_mu, cfg.min_reduction, cfg.min_still,
                        cfg.decimate)
 
     def initial_state(self) -> ControlState:
-        # chain rows: reduction asked, plate moving, and (adaptive) the model's mu', d/db, d/dk
-        rows = [0.0, 0.0] + ([1.0, 0.0, 0.0] if self.mode == "adaptive" else [])
+        # chain rows: reduction asked, plate moving, (adaptive) the model's mu', d/db, d/dk,
+        # and the reduction asked where the limit cut the command
+        rows = [0.0, 0.0] + ([1.0, 0.0, 0.0] if self.mode == "adaptive" else []) + [0.0]
         return ControlState(log_c=0.0, rls=self.config.rls.initial_state(self.device.friction),
                             chain=self.chain.initial_state(rows))
 
@@ -425,16 +437,20 @@ class ClosedLoop:
         ``updates``: steps of c; ``fallbacks``, ``fallback_samples``: falls to open loop and
         the samples fed forward open loop meanwhile; ``gain_oscillations``,
         ``gain_swings_max``, ``gain_at_limit_s``: oscillations of c seen, the longest run of
-        its swings (``rendering.control.swings``) and the time (s) log c spent at its limit;
+        its swings (``rendering.control.swings``) and the time (s) log c spent at its limit
+        or held by the amplitude limit's (anti-windup: a step up not taken);
         ``input_force_implausible_blocks``: blocks inverted with a touch input's force
         below ``min_normal_n`` under a finger the device measured (``_input_force``);
+        ``reports_rejected``: per reason ("saturated", "not finite", "implausible"), force
+        reports that came but read no finger (any drops the loop to open loop);
         ``measured``: what the host measured from the device's force reports (``reports``
         used, ``reports_missed``, the delay the good ones came with, p50 and p99 in
         blocks, and once mu0 is known, the RMS of the measured mu'_m = F_t / (F_n mu0)
         against the target mu' the block asked for, over ``samples`` sliding and pressed,
         None with none); ``messages``: what the loop said, and what the reports' delays
         say (``_late_messages``; ``late_hint``: what the caller can do about late reports,
-        appended to those)."""
+        appended to those) and, where a finger touched but mu0 was never measured, that
+        the loop stayed open (``_open_message``)."""
         return {"mode": self.mode, "report_delay_blocks": state.delay_max_blocks,
                 "scheduled_delay_blocks": state.delay_blocks,
                 "ki": self.ki_by_delay[state.delay_blocks], "gain": math.exp(state.log_c),
@@ -447,6 +463,7 @@ class ClosedLoop:
                 "gain_swings_max": state.swings.longest_with_current(),
                 "gain_at_limit_s": state.limit_s,
                 "input_force_implausible_blocks": state.input_force_blocks,
+                "reports_rejected": dict(state.reports_rejected),
                 "measured": {
                     "reports": state.reports, "reports_missed": state.reports_missed,
                     "report_delay_p50_blocks": _quantile(state.delay_counts, 0.5),
@@ -454,7 +471,21 @@ class ClosedLoop:
                     "samples": state.measured_n,
                     "rms_mu_vs_target": (math.sqrt(state.measured_sq / state.measured_n)
                                          if state.measured_n else None)},
-                "messages": list(state.messages) + self._late_messages(state, late_hint)}
+                "messages": (list(state.messages) + self._late_messages(state, late_hint)
+                             + self._open_message(state))}
+
+    def _open_message(self, state: ControlState) -> list[str]:
+        """One line when a finger touched (alone) but the loop never measured mu0, the
+        friction at rest it compares with: it stayed open loop all along, whatever its
+        figures say (a finger that never slid, or no usable report); else none."""
+        if math.isfinite(state.mu0) or not state.touch_blocks:
+            return []
+        rejected = sum(count for _, count in state.reports_rejected)
+        return [f"closed loop: never measured the friction at rest mu0 ({state.touch_blocks} "
+                f"blocks with one finger touching; {state.reports} usable reports, {rejected} "
+                f"rejected, {state.reports_missed} missed): it stayed open loop (the finger "
+                f"must slide at {self.config.slide_mm_s:g} mm/s or faster on the still "
+                "plate, under a sensor that reports it)"]
 
     def _late_messages(self, state: ControlState, hint: str) -> list[str]:
         """One line each when the force reports came back too late for the loop: more
@@ -498,20 +529,27 @@ class ClosedLoop:
         ``delay`` blocks late, into the state (module docstring, 1, 2, 4); ``now``: the
         output index of the next block to be sent."""
         n = sent.w_um.size
+        touched = state.touch_blocks + sent.single
         fresh = report is not None and report.index0 == sent.index0 and report.lateral_n.size == n
         seen, chain = self.chain.run(self._chain_rows(state, sent, report if fresh else None),
                                      state.chain)
         if not fresh:
-            return self._bad(replace(state, chain=chain, reports_missed=state.reports_missed + 1),
+            return self._bad(replace(state, chain=chain, touch_blocks=touched,
+                                     reports_missed=state.reports_missed + 1),
                              missed, stale=True)
-        lat = np.asarray(report.lateral_n, dtype=np.float64)
+        # friction opposes sliding: its magnitude, whichever way the finger slides (the
+        # report's sign is the direction, PROTOCOL.md 4.9)
+        lat = np.abs(np.asarray(report.lateral_n, dtype=np.float64))
         nor = np.asarray(report.normal_n, dtype=np.float64)
         problem = _problem(lat, nor, sent.single and bool(n), self.config)
         if problem:
-            return self._bad(replace(state, chain=chain), problem, stale=False)
+            return self._bad(replace(state, chain=chain, touch_blocks=touched,
+                                     reports_rejected=_counted(state.reports_rejected,
+                                                               problem.split(" (")[0])),
+                             problem, stale=False)
         good_s = state.good_s + self.block_s
         counts = state.delay_counts or (0,) * len(self.ki_by_delay)
-        changes = dict(chain=chain, since_report_s=0.0, good_s=good_s,
+        changes = dict(chain=chain, since_report_s=0.0, good_s=good_s, touch_blocks=touched,
                        fallback=state.fallback and good_s < self.config.recover_s,
                        reports=state.reports + 1,
                        delay_counts=counts[:delay] + (counts[delay] + 1,) + counts[delay + 1:],
@@ -541,15 +579,19 @@ class ClosedLoop:
     def _chain_rows(self, state: ControlState, sent: Sent, report: ForceReport | None):
         """The block statistics' input rows for ``sent``: in adaptive mode the model's mu'
         and Jacobian as the sensor sees them (at the report's normal force; the device's
-        without a report)."""
+        without a report); last, the reduction asked where the amplitude limit cut the
+        command (0 elsewhere)."""
         cfg = self.config
         if self.mode != "adaptive":
-            return chain_input(sent.target, sent.w_um, cfg.still_um, _NONE, _NONE, 0.0, 1.0)
-        normal = (np.asarray(report.normal_n, dtype=np.float64) if report is not None
-                  else np.full(sent.w_um.size, self.device.normal_force_n))
-        b, k = state.rls.theta
-        return chain_input(sent.target, sent.w_um, cfg.still_um, normal,
-                           np.exp(-b * sent.w_um), k, 1.0 - ASYMPTOTE_MARGIN)
+            rows = chain_input(sent.target, sent.w_um, cfg.still_um, _NONE, _NONE, 0.0, 1.0)
+        else:
+            normal = (np.asarray(report.normal_n, dtype=np.float64) if report is not None
+                      else np.full(sent.w_um.size, self.device.normal_force_n))
+            b, k = state.rls.theta
+            rows = chain_input(sent.target, sent.w_um, cfg.still_um, normal,
+                               np.exp(-b * sent.w_um), k, 1.0 - ASYMPTOTE_MARGIN)
+        # the reduction the limit cut lags as the whole reduction asked (row 0) does
+        return np.vstack((rows, np.where(sent.cut, rows[0], 0.0)))
 
     def _learn_finger(self, state: ControlState, sent: Sent, lat: np.ndarray,
                       nor: np.ndarray, seen, changes: dict, now: int) -> dict:
@@ -582,10 +624,10 @@ class ClosedLoop:
         # feedback from the tracker's first sight of motion: at a stroke's start it lags
         # the finger by tens of ms; a finger that stuck reads friction near 0 (min_mu)
         asked, g, cut, jac, resid = feedback_stats(
-            ratio, mu0, nor, sent.speed, seen, sent.cut, cfg.min_normal_n, cfg.creep_mm_s,
+            ratio, mu0, nor, sent.speed, seen, cfg.min_normal_n, cfg.creep_mm_s,
             cfg.slide_mm_s, cfg.min_mu, cfg.min_reduction, cfg.min_still, cfg.decimate)
         if asked >= cfg.min_still and sent.index0 >= state.fed_from:
-            out.update(self._gain_step(state, sent, g, cut,
+            out.update(self._gain_step(state, sent, g, cut > 0.1 * sent.w_um.size,
                                        changes.get("delay_blocks", state.delay_blocks), now))
         if self.mode == "adaptive":  # one RLS step (module docstring, 3)
             out["rls"] = cfg.rls.update(state.rls, jac, resid)
@@ -625,11 +667,12 @@ class ClosedLoop:
         asked = asked[asked >= self.config.min_reduction]
         return float(np.sqrt(np.mean(asked * asked))) if asked.size else 0.0
 
-    def _gain_step(self, state: ControlState, sent: Sent, g: float, cut: int, delay: int,
+    def _gain_step(self, state: ControlState, sent: Sent, g: float, cut: bool, delay: int,
                    now: int) -> dict:
         """One step of the loop's log gain (module docstring, 2) from ``g``, the median of
-        per-sample delivered / asked (robust to the few samples of a stop); ``cut``:
-        samples the amplitude limit cut; ``delay``: the report delay (blocks) the gain is
+        per-sample delivered / asked (robust to the few samples of a stop); ``cut``: the
+        amplitude limit cut the reduction ``g`` compares with (as the chain lags it) on
+        more than a tenth of the block's samples; ``delay``: the report delay (blocks) the gain is
         scheduled on."""
         cfg = self.config
         error = math.log(min(max(g, 0.25), 4.0))
@@ -639,7 +682,8 @@ class ClosedLoop:
         speed = float(np.mean(sent.speed))
         step = (self.first_step * (sent.log_c - error - self._log_gain(state, speed))
                 if first else -self.ki_by_delay[delay] * error)
-        if step > 0 and cut > 0.1 * sent.w_um.size:
+        held = step > 0 and cut
+        if held:
             step = 0.0  # anti-windup: the limit already cuts what is asked
         p = 0.0 if first else speed / cfg.speed_ref_mm_s  # the first step: log_c alone
         lim = cfg.log_c_max
@@ -650,15 +694,16 @@ class ClosedLoop:
             out["started"] = True
             if step:
                 out["fed_from"] = now  # blocks on their way were asked with the old gain
-        out.update(self._watch_gain(state, out["log_c"]))
+        out.update(self._watch_gain(state, out["log_c"], held))
         return out
 
-    def _watch_gain(self, state: ControlState, log_c: float) -> dict:
+    def _watch_gain(self, state: ControlState, log_c: float, held: bool) -> dict:
         """The gain's swings after a step to ``log_c`` (``rendering.control.swings``: an
-        oscillation is said once and counted) and the time it has spent at its limit."""
+        oscillation is said once and counted) and the time it has spent at its limit,
+        its own or (``held``) the amplitude limit's holding it (anti-windup)."""
         swings = state.swings.step(log_c - state.log_c)
         out = {"swings": swings}
-        if abs(log_c) >= self.config.log_c_max:
+        if held or abs(log_c) >= self.config.log_c_max:
             out["limit_s"] = state.limit_s + self.block_s
         if swings.oscillations > state.swings.oscillations:
             ki = self.ki_by_delay[state.delay_blocks]
@@ -694,6 +739,13 @@ def _said(messages: tuple[str, ...], message: str) -> tuple[str, ...]:
     return messages if any(m.startswith(kind) for m in messages) else messages + (message,)
 
 
+def _counted(counts: tuple[tuple[str, int], ...], key: str) -> tuple[tuple[str, int], ...]:
+    """``counts`` (key, count) pairs with ``key``'s count one higher (added at 1)."""
+    table = dict(counts)
+    table[key] = table.get(key, 0) + 1
+    return tuple(table.items())
+
+
 def _quantile(counts: tuple[int, ...], q: float) -> int | None:
     """The smallest delay (blocks) with at least ``q`` of the reports at it or earlier
     (``counts``: reports per delay 0, 1, ...); None without reports."""
@@ -714,8 +766,8 @@ def _problem(lat: np.ndarray, nor: np.ndarray, touching: bool, cfg: LoopConfig) 
         mean_nor = float(nor.sum()) / nor.size  # as ndarray.mean, without its overhead
         if mean_nor < cfg.min_normal_n:
             return "implausible (no normal force under a finger)"
-        ratio = float(lat.sum()) / lat.size / mean_nor  # a finger at rest reads noise around 0
-        if not -cfg.max_ratio / 10 <= ratio <= cfg.max_ratio:
+        ratio = float(lat.sum()) / lat.size / mean_nor  # of |F_t|: a finger at rest reads noise
+        if ratio > cfg.max_ratio:
             return f"implausible (F_t / F_n = {ratio:.3g})"
     return ""
 
