@@ -39,3 +39,29 @@ def test_the_most_presses_with_the_longest_numbers_read_back(tmp_path):
 def test_a_negative_seed_is_refused_in_one_line(tmp_path, capsys):
     assert synth_press(tmp_path / "p.csv", [1.0], "--seed", "-1") == 2
     assert "--seed -1: expected 0 to 1e+18" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("motion, options, said", [
+    ("swipe", [], "a swipe without --noise or --jitter"),
+    ("circle", ["--noise", "0"], "a circle without --noise or --jitter"),
+    ("press", ["--force-noise", "0"], "a press without --force-noise")])
+def test_a_seed_with_nothing_random_to_seed_is_refused(tmp_path, capsys, motion, options, said):
+    """--seed 5 on a noiseless swipe was taken and changed nothing: the same trace as
+    --seed 0, which a user comparing seeds would not expect."""
+    out = tmp_path / "t.csv"
+    assert main(["trace", "synth", motion, *options, "--seed", "5", "-o", str(out)]) == 2
+    assert capsys.readouterr().err.strip() == (f"frictex: error: --seed 5: {said} has nothing "
+                                               "random to seed; leave it out")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("motion, options", [
+    ("swipe", ["--noise", "0.1"]), ("back-and-forth", ["--jitter", "0.001"]), ("human", []),
+    ("press", [])])  # a press's force noise is on by default
+def test_a_seed_with_something_random_is_taken(tmp_path, motion, options):
+    made = []
+    for seed in ("5", "6"):
+        out = tmp_path / f"{seed}.csv"
+        assert main(["trace", "synth", motion, *options, "--seed", seed, "-o", str(out)]) == 0
+        made.append(out.read_text().splitlines()[1:])  # past the first line, which names it
+    assert made[0] != made[1]

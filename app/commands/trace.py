@@ -198,6 +198,12 @@ def _check_used(args: argparse.Namespace) -> None:
             shown = " ".join(f"{v:g}" for v in value) if isinstance(value, list) else f"{value:g}"
             raise InputError(f"--{name.replace('_', '-')} {shown}: a {args.motion} does not use "
                              "it; leave it out")
+    random = ("force_noise",) if args.motion == "press" else ("noise", "jitter")
+    if (args.seed != 0 and args.motion not in ("human", "human-varied")
+            and not any(getattr(args, name) for name in random)):
+        shown = " or ".join(f"--{name.replace('_', '-')}" for name in random)
+        raise InputError(f"--seed {args.seed}: a {args.motion} without {shown} has nothing "
+                         "random to seed; leave it out")
 
 
 def _check_outputs(args: argparse.Namespace) -> None:
