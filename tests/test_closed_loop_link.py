@@ -80,6 +80,21 @@ def test_the_summary_line_names_each_gain():
     assert line.count("gain") == 1  # the word alone, unnamed, nowhere
 
 
+def test_the_summary_line_says_when_no_report_was_usable(tmp_path, capsys):
+    """A saturated sensor (the simulated finger pressing 4.99 N): 390 reports came and
+    none was usable; the line said 'force reports up to 0 blocks late'."""
+    out = tmp_path / "out"
+    assert main(["replay", "grating-15mm", "swipe-40mms-50hz", "--out", str(out), "--device",
+                 "sim:finger=3,force=4.99", "--control", "adaptive", "--quiet"]) == 0
+    control = json.loads((out / "summary.json").read_text())["control"]
+    assert control["measured"]["reports"] == 0 and control["reports_rejected"]["saturated"] > 0
+    from frictex.app.engine.summary import control_line
+    rejected = sum(control["reports_rejected"].values())
+    assert control_line(control).startswith(
+        f"adaptive loop: no usable force report ({rejected} rejected, "
+        f"{control['measured']['reports_missed']} missed); depth gain c 1.000")
+
+
 def test_the_live_thread_reads_the_links_force_reports():
     """The live haptic thread on the wall clock, streaming to the simulated device with a
     finger: a swipe fed as the window would feed it; the loop measures the reports'

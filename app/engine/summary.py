@@ -269,8 +269,14 @@ def control_line(control: dict) -> str:
     named: the depth gain c (the reduction of friction asked is c times the texture's;
     the integrator moves it) and the integrator's step ki (how far one block's
     measurement moves log c, scheduled on the force reports' delay)."""
-    return (f"{control['mode']} loop: force reports up to {control['report_delay_blocks']} "
-            f"blocks late; depth gain c {control['gain']:.3f} at the end (reduction asked = "
+    measured = control.get("measured") or {}
+    if measured.get("reports", 1):
+        reports = f"force reports up to {control['report_delay_blocks']} blocks late"
+    else:  # no report the loop could use: no delay to give
+        rejected = sum((control.get("reports_rejected") or {}).values())
+        reports = (f"no usable force report ({rejected} rejected, "
+                   f"{measured.get('reports_missed', 0)} missed)")
+    return (f"{control['mode']} loop: {reports}; depth gain c {control['gain']:.3f} at the end (reduction asked = "
             f"c x the texture's; {control['updates']} updates), integrator step ki "
             f"{control['ki']:.3g} per block at the end (scheduled for reports "
             f"{control['scheduled_delay_blocks']} blocks late); {control['fallbacks']} "
