@@ -55,3 +55,15 @@ def test_the_loop_needs_seed_003s_model(tmp_path):
     with pytest.raises(TextureError, match="control.*plate-seed003"):
         _scene(tmp_path, 'control = "closed"', table)
     assert _scene(tmp_path, "", table).control == "open"
+
+
+def test_a_closed_loop_asked_of_a_calibrated_scene_says_what_to_do(tmp_path):
+    """--control closed on a scene whose [device] has the table frictex calibrate writes
+    where the model does not fit: the refusal said 'needs profile plate-seed003 ... got
+    plate-seed003 with a calibration table'."""
+    from frictex.device.errors import InputError
+    table = ('[device]\n[device.calibration]\namplitudes_um = [0.0, 1.0, 2.0]\n'
+             'forces_n = [0.5]\nmu = [[1.0, 0.8, 0.7]]\n')
+    with pytest.raises(InputError, match=r"has a measured \[device.calibration\] table .*: "
+                                         r"play it with --control open, or remove the table"):
+        build_pipeline(_scene(tmp_path, "", table), control="closed")

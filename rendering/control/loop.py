@@ -277,11 +277,16 @@ class ClosedLoop:
         if mode not in CONTROL_MODES[1:]:
             raise InputError(f"control mode {mode!r}: expected one of {', '.join(CONTROL_MODES)} "
                              f"(open loop builds no loop)")
-        if device.calibration is not None or device.profile not in FRICTION_LOOP_PROFILES:
+        if device.calibration is not None:
+            raise InputError("closed-loop control inverts seed 003's eq 2, and this scene's "
+                             "[device] has a measured [device.calibration] table (frictex "
+                             "calibrate writes one where the model does not fit): play it "
+                             "with --control open, or remove the table to use "
+                             "[device.friction]")
+        if device.profile not in FRICTION_LOOP_PROFILES:
             raise InputError(f"closed-loop control needs profile "
                              f"{' or '.join(FRICTION_LOOP_PROFILES)} with seed 003's "
-                             f"model; got {device.profile!r}"
-                             f"{' with a calibration table' if device.calibration else ''}")
+                             f"model; got {device.profile!r}")
         self.device = device
         self.mode = mode
         self.rate_hz = float(rate_hz)
