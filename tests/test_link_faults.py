@@ -135,3 +135,27 @@ def test_a_stall_event_holds_the_calling_thread_until_it_ends(monkeypatch):
     port.write(b"x")   # 0.05 s into the stall: waits the remaining 0.20 s
     port.write(b"y")   # over: no second wait
     assert slept == [pytest.approx(0.20)]
+
+
+def test_events_past_the_links_end_are_said_never_to_have_come(tmp_path, capsys):
+    """trip@30 on a 2 s replay was accepted and never played, and nothing said so: a
+    user testing the device's watchdog took the run for one that survived a trip."""
+    import json
+    from frictex.app.commands.cli import main
+    out = tmp_path / "out"
+    main(["replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(out), "--device", "sim",
+          "--faults", "stall=0.05@0.5,trip@30,unplug=1@40", "--max-unplayed", "1", "--quiet"])
+    device = json.loads((out / "summary.json").read_text())["device"]
+    assert device["fault_events_not_reached"] == ["trip@30", "unplug=1@40"]
+    assert ("frictex: warning: --faults trip@30, unplug=1@40: never came, the link ended "
+            "before (event times count from when the link opened)") in capsys.readouterr().err
+
+
+def test_a_link_without_faults_has_none_not_reached(tmp_path):
+    import json
+    from frictex.app.commands.cli import main
+    out = tmp_path / "out"
+    assert main(["replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(out), "--device",
+                 "sim", "--max-unplayed", "1", "--quiet"]) == 0
+    assert json.loads((out / "summary.json").read_text())["device"][
+        "fault_events_not_reached"] == []

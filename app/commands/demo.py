@@ -45,7 +45,7 @@ import threading
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from frictex.app.engine.device_changes import unplayed_problem
+from frictex.app.engine.device_changes import faults_not_reached, unplayed_problem
 from frictex.app.engine.driver import deferred_interrupts
 from frictex.app.engine.staging import FRAMES, Staging
 from frictex.app.engine.summary import counted, finite_json, were
@@ -471,6 +471,8 @@ def _print_lines(args, summary: dict, ended: _Ended, out: Path | None,
               f"{counted(skipped, 'block')} {were(skipped)} skipped to catch up; "
               f"{link['unplayed_samples']} of {link['commanded_samples']} samples unplayed"
               + "".join(f", {k} {v}" for k, v in link["unplayed_by_cause"].items() if v))
+    for warning in faults_not_reached(link):
+        print(f"frictex demo: warning: {warning}", file=sys.stderr)
     if summary["dropped_record_blocks"]:  # the recorder fell behind: the tables miss them
         print(f"frictex demo: warning: {counted(summary['dropped_record_blocks'], 'block')} "
               f"{were(summary['dropped_record_blocks'])} left out of the recording (its "

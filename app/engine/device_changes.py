@@ -25,10 +25,10 @@ def device_clamped(device: dict) -> tuple[int, str]:
 def device_warnings(device: dict, max_amplitude_um: float) -> list[str]:
     """One sentence per thing the output device did not play as commanded: samples never
     played (by cause), values clamped to its amplitude limit (a link's declared limit, an
-    audio output's voltage limit) and audio output underflows. ``device``: the summary's
-    ``device`` section (``device.link.host.CommandSink.status``,
-    ``device.audio.output.AudioOutput.status``); ``max_amplitude_um``: the largest command
-    (um, ``counts.max_amplitude_um``)."""
+    audio output's voltage limit), audio output underflows, and ``--faults`` events that
+    never came (the link ended first). ``device``: the summary's ``device`` section
+    (``device.link.host.CommandSink.status``, ``device.audio.output.AudioOutput.status``);
+    ``max_amplitude_um``: the largest command (um, ``counts.max_amplitude_um``)."""
     warnings = _unplayed(device) + _uncounted(device)
     audio = device.get("audio") or {}
     clamped, counted = device_clamped(device)
@@ -59,7 +59,17 @@ def device_warnings(device: dict, max_amplitude_um: float) -> list[str]:
                         f"{audio['blocksize'] / audio['rate_hz'] * 1e3:.3g} ms, into the "
                         "plate's drive); unplayed_samples and underruns count only frictex's "
                         "own buffer running dry, not these")
-    return warnings
+    return warnings + faults_not_reached(device)
+
+
+def faults_not_reached(link: dict) -> list[str]:
+    """One sentence where ``--faults`` events never came (a link's ``status``: the link
+    ended before their time), else none."""
+    not_reached = link.get("fault_events_not_reached") or []
+    if not not_reached:
+        return []
+    return [f"--faults {', '.join(not_reached)}: never came, the link ended before (event "
+            "times count from when the link opened)"]
 
 
 def _unplayed(status: dict) -> list[str]:

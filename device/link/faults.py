@@ -71,6 +71,12 @@ class Event:
     def end_s(self) -> float:
         return self.at_s + self.duration_s
 
+    @property
+    def text(self) -> str:
+        """The event in the ``--faults`` grammar (``trip@3``, ``stall=0.2@1.5``)."""
+        return f"trip@{self.at_s:g}" if self.kind == "trip" else \
+            f"{self.kind}={self.duration_s:g}@{self.at_s:g}"
+
 
 @dataclass(frozen=True)
 class FaultPlan:
@@ -85,8 +91,7 @@ class FaultPlan:
         seed where not 0."""
         rates = [f"{name}={getattr(self.faults, field):g}" for name, field in _RATES.items()
                  if getattr(self.faults, field)]
-        events = [f"trip@{e.at_s:g}" if e.kind == "trip"
-                  else f"{e.kind}={e.duration_s:g}@{e.at_s:g}" for e in self.events]
+        events = [e.text for e in self.events]
         return ",".join(rates + events + ([f"seed={self.seed}"] if self.seed else []))
 
     def opener(self, open_port) -> Plug:
@@ -203,6 +208,10 @@ class Schedule:
         return next((e for e in self.events if e.kind == kind and e.at_s <= now < e.end_s),
                     None)
 
+    def not_reached(self, at: float) -> list[Event]:
+        """The events not yet begun at time ``at`` (on ``clock``)."""
+        return [e for e in self.events if e.at_s > at - self.t0]
+
     def sleep_through(self, kind: str) -> None:
         """If an event of ``kind`` is under way, wait until it ends (a stalled thread)."""
         event = self.active(kind)
@@ -278,6 +287,11 @@ class Plug:
         self._seed += 1
         self.port = FaultyPort(self._open_port(), self.faults, self._seed, self._schedule)
         return self.port
+
+    def events_not_reached(self, at: float) -> list[str]:
+        """The scheduled events (``--faults`` text) not begun by time ``at`` (s, on the
+        schedule's clock, ``time.monotonic``: when the link closed)."""
+        return [e.text for e in self._schedule.not_reached(at)]
 
     def unplug(self) -> None:
         self.unplugged = True

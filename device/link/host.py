@@ -126,6 +126,8 @@ class CommandSink:
         self._stderr = stderr
         self._capacity = int(queue_blocks)
         self._closed = False
+        self._closed_at: float | None = None  # time.monotonic() when the link ended
+        self._opener = opener
         self._session = s = HostSession(self.channels, self.rate_hz, phases=self.phases,
                                         paced=self.paced, label=label, stderr=stderr,
                                         prefill_s=prefill_s, catch_up=catch_up)
@@ -168,7 +170,7 @@ class CommandSink:
         thread, close the port, end what serves the device."""
         with self._cond:
             self._session.close_requested = True
-        self._closed = True
+        self._closed, self._closed_at = True, time.monotonic()
         self._thread.stop_event.set()
         self._thread.join(timeout=5.0)
         self._end_resources()
@@ -452,6 +454,14 @@ class CommandSink:
         holds the lock)."""
         return max(now - self._session._last_progress, 0.0) if self._session.queue else 0.0
 
+    def _fault_events_not_reached(self) -> list[str]:
+        """The ``--faults`` events (their text) that had not begun when the link ended (or
+        by now, while it runs): none without injected faults."""
+        not_reached = getattr(self._opener, "events_not_reached", None)
+        if not_reached is None:
+            return []
+        return not_reached(self._closed_at if self._closed_at is not None else time.monotonic())
+
     def status(self) -> dict:
         """JSON-able counters: see PROTOCOL.md section 6 for their meaning."""
         s = self._session
@@ -509,6 +519,7 @@ class CommandSink:
             "last_error": s.last_error,
             "failure": str(s.failure) if s.failure is not None else None,
             "device": asdict(s.info) if s.info else None,
+            "fault_events_not_reached": self._fault_events_not_reached(),
         }
         if st is not None:
             out.update({
@@ -575,7 +586,7 @@ class CommandSink:
             self._thread.join(timeout=2.0)
         with self._cond:
             s.connected = False
-        self._closed = True
+        self._closed, self._closed_at = True, time.monotonic()
         self._end_resources()
 
     def _end_resources(self) -> None:
