@@ -23,6 +23,14 @@ a pointer held still while touching is reported still every ``STILL_REPORT_S``. 
 the scene's drawn area touches: a press on the scope strip, a panel column or the
 letterbox makes no finger, and a drag that leaves the area lifts where it last was on it.
 
+On the glass (``viewport.on_glass``: fullscreen at the scene's display pixels, or
+fullscreen under a touch screen) the scene fills the screen, mm -> px per axis, so that
+what is drawn lies where it is felt; the scope starts hidden and S draws it over the
+bottom of the scene without moving the scene (whose part under it still touches, as
+a touch screen's fingers do there), and the status lines are hidden. A touch screen off
+the glass is said once on stderr: its touches are mapped onto the whole panel, the
+drawing is not.
+
 Touch input (``--input``): ``mouse``, the mouse is finger 0 (left button held =
 touching); ``follow``, the mouse is finger 0 and finger 1 follows it at a fixed offset
 along x (seed 001's way of testing two-finger control with one hand); a touch screen
@@ -207,8 +215,11 @@ class DemoLoop:
         self.follow_mm = follow_mm
         self.touch_screen = touch_screen
         self.input_name = input_name
-        self.compositor = Compositor(backend.ctx, scene, backend.size)
+        self.compositor = Compositor(backend.ctx, scene, backend.size,
+                                     fullscreen=getattr(backend, "fullscreen", False),
+                                     touch_screen=touch_screen)
         self.show_scope = self._scope_first(scene)
+        self._say_touch_off_glass()
         backend.set_title(window_title(scene))
         self.overlay = OverlayState()
         self.force_n = scene.device.normal_force_n
@@ -272,11 +283,19 @@ class DemoLoop:
         backend.on_key = self.on_key
 
     def _scope_first(self, scene) -> bool:
-        """Whether the scope strip is shown at first: yes, unless the window was cut to
-        the screen's work area (``backend.requested``: the size asked for) and holds the
-        scene at its display's pixels only without the strip (a grating's lines then keep
-        their size); a cut window says on stderr what it shows."""
+        """Whether the scope strip is shown at first: not on the glass (the scene fills
+        the screen where it is felt: said once on stderr; S draws the strip over the
+        scene, never moving it), nor where the window was cut to the screen's work area
+        (``backend.requested``: the size asked for) and holds the scene at its display's
+        pixels only without the strip (a grating's lines then keep their size); a cut
+        window says on stderr what it shows."""
         d, size = scene.display, tuple(self.backend.size)
+        if self.compositor.glass:
+            sx, sy = self.compositor.viewport.px_per_mm
+            self.say(f"the scene fills the {size[0]} x {size[1]} px screen ({sx:.3g} x {sy:.3g} "
+                     "px/mm) as it lies on the glass; the status lines are hidden, S draws "
+                     "the scope over the bottom of the scene")
+            return False
         asked = tuple(getattr(self.backend, "requested", size))
         if asked[0] <= size[0] and asked[1] <= size[1]:
             return True
@@ -299,6 +318,18 @@ class DemoLoop:
                      f"({v.px_per_mm[0]:.3g} px/mm), not its display's {d.width_px} x "
                      f"{d.height_px} px ({d.width_px / d.width_mm:.3g} px/mm)")
         return True
+
+    def _say_touch_off_glass(self) -> None:
+        """A touch screen maps its touches onto the whole panel (``rendering.input``):
+        off the glass (a window, or a fullscreen frame the scene is fitted into) say once
+        on stderr that the drawing and the touches do not coincide."""
+        if not self.touch_screen or self.compositor.glass:
+            return
+        v, size = self.compositor.viewport, tuple(self.backend.size)
+        self.say(f"--input {self.input_name} maps touches onto the whole panel, but the scene "
+                 f"is drawn in {v.width_px} x {v.height_px} px at ({v.x0}, {v.y0}) of a "
+                 f"{size[0]} x {size[1]} px window: the drawing and the touches do not "
+                 "coincide (run the demo --fullscreen on the touch screen's monitor)")
 
     # -- input --------------------------------------------------------------------------
 

@@ -5,7 +5,10 @@ The scope, when shown, has a strip of its own at the bottom of the frame and the
 is fitted above it (``viewport.frame_layout``): the scope never covers the scene, and
 its labels sit in title rows of their own, never under a trace. A device panel that
 needs a place of its own (a plate's |W| heat map) has a column at the right of the
-frame (``DevicePanels.column_px``), and the scene is fitted beside it.
+frame (``DevicePanels.column_px``), and the scene is fitted beside it. On the glass
+(``viewport.on_glass``: fullscreen at the display's own pixels, or under a touch screen)
+the scene fills the frame at its own pixels instead, so that it lies where it is felt:
+the strip and the columns are drawn over it, and the status lines are not drawn.
 
 The scene is rendered once per scene (``scene_image``) into a texture drawn 1:1 on
 the viewport's pixels; each frame only the overlay is rebuilt, the scope's frame only
@@ -34,7 +37,7 @@ from frictex.rendering.visual.scene_image import scene_rgb, to_srgb8
 from frictex.rendering.visual.scope_ring import ScopeRing
 from frictex.rendering.visual.text import text_rgba, wrap
 from frictex.rendering.visual.text_atlas import AtlasEntry, TextAtlas
-from frictex.rendering.visual.viewport import Viewport, frame_layout
+from frictex.rendering.visual.viewport import Viewport, frame_layout, on_glass
 from frictex.textures.model import Scene
 
 _VERT_PX = """
@@ -128,11 +131,17 @@ class Compositor:
 
     ``scope``: lay the frame out for the scope strip at first (a frame drawn with or
     without it lays the frame out again, re-rendering the scene if it moved).
+    ``fullscreen``, ``touch_screen``: the frame is a whole screen, a touch screen drives
+    the fingers; with the scene's display they say whether the frame is the glass
+    (``glass``, ``viewport.on_glass``).
     """
 
     def __init__(self, ctx: moderngl.Context, scene: Scene, size: tuple[int, int],
-                 outlines: bool = False, supersample: int = 4, scope: bool = True):
+                 outlines: bool = False, supersample: int = 4, scope: bool = True,
+                 fullscreen: bool = False, touch_screen: bool = False):
         self.ctx = ctx
+        self.fullscreen, self.touch_screen = fullscreen, touch_screen
+        self.glass = False  # the scene fills the frame as it lies on the glass
         self.outlines = outlines
         self.scope = scope
         self.supersample = supersample
@@ -185,9 +194,10 @@ class Compositor:
         self.scene = scene
         if outlines is not None:
             self.outlines = outlines
+        self.glass = on_glass(scene.display, self.size, self.fullscreen, self.touch_screen)
         self.viewport, self._scope_rect, self._column_rect = frame_layout(
             scene.display, *self.size, self.scope, self.panels.column_px(scene, self.size),
-            left_px=self.left_px)
+            left_px=self.left_px, glass=self.glass)
         rgb = to_srgb8(scene_rgb(scene, self.viewport, self.supersample, self.outlines))
         if self.scene_texture is not None:
             self.scene_texture.release()
@@ -263,7 +273,7 @@ class Compositor:
         viewport = self.viewport
         self.viewport, self._scope_rect, self._column_rect = frame_layout(
             self.scene.display, *self.size, scope, self.panels.column_px(self.scene, self.size),
-            left_px=self.left_px)
+            left_px=self.left_px, glass=self.glass)
         if self.viewport != viewport:
             self.set_scene(self.scene)
 
@@ -276,9 +286,10 @@ class Compositor:
 
     def layer_panel_rect(self) -> tuple[float, float, float, float]:
         """The layer panel's column (x, y, w, h) px: at the left, from below the status
-        lines to the scope strip."""
+        lines to the scope strip (on the glass, over the scene)."""
         top = self.status_bottom + 4.0
-        return 0.0, top, float(min(self.left_px, self.viewport.x0)), max(self.scope_rect()[1] - top, 0.0)
+        width = self.left_px if self.glass else min(self.left_px, self.viewport.x0)
+        return 0.0, top, float(width), max(self.scope_rect()[1] - top, 0.0)
 
     def column_rect(self) -> tuple[float, float, float, float]:
         """The device panel column (x, y, w, h) px at the right of the frame, above the
@@ -328,7 +339,7 @@ class Compositor:
             self.draw_rect(vp.x0, vp.y0, vp.width_px, vp.height_px, view.field_rgba)
         font_px = self.font_px
         status = None
-        if view.status:
+        if view.status and not self.glass:  # on the glass no room is off the scene
             status = self.text(status_rows(view.status, font_px, w, vp.height_px), font_px)
         self.status_bottom = 4.0 + (status.size[1] if status is not None else 0.0)
         banner = self._banner(view) if view.banner else None

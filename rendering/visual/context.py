@@ -199,6 +199,8 @@ class GlfwBackend:
             target = monitors[monitor]
             mode = glfw.get_video_mode(target)
             size = (mode.size.width, mode.size.height)
+        #: the window covers a whole monitor at its video mode's size
+        self.fullscreen = target is not None
         #: the size asked for (px); a window is opened within the screen's work area
         self.requested = (int(size[0]), int(size[1]))
         self.work_area: tuple[int, int] | None = None

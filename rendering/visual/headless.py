@@ -56,8 +56,10 @@ class HeadlessWindow(OffscreenBackend):
     on_frame : called with each frame ``swap`` shows ((height, width, 3) uint8, row 0
         at the top), on the thread that swaps; None: frames are not kept.
     ctx : an EGL context to draw with (current on this thread), or None to make one.
-    title, fullscreen, monitor, vsync : the glfw backend's options, taken and ignored
-        (there is no screen), so that callers open either the same way.
+    title, monitor, vsync : the glfw backend's options, taken and ignored (there is no
+        screen), so that callers open either the same way.
+    fullscreen : kept as ``fullscreen``: the frame stands for a whole screen of ``size``
+        (the demo then lays it out as on the glass, ``viewport.on_glass``).
     """
 
     name = "headless"
@@ -67,6 +69,7 @@ class HeadlessWindow(OffscreenBackend):
                  fullscreen: bool = False, monitor: int = 0, vsync: bool = False):
         super().__init__(size, ctx=ctx)
         self.title = title
+        self.fullscreen = fullscreen
         self.on_frame = on_frame
         self.on_cursor = self.on_button = self.on_scroll = self.on_key = None
         self.should_close = False

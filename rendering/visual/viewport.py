@@ -1,7 +1,12 @@
 """Where the scene's active area sits in a frame of pixels, and mm <-> pixel transforms.
 
-The active area (``Display.width_mm`` x ``height_mm``) is fitted inside the frame
-keeping its aspect ratio, centred, on whole pixels. Pixel coordinates are continuous:
+In a window (a mouse on a desktop monitor) the active area (``Display.width_mm`` x
+``height_mm``) is fitted inside the frame keeping its aspect ratio, centred, on whole
+pixels (:func:`fit_viewport`). On the glass (:func:`on_glass`: a fullscreen frame at the
+display's own pixels, or one a touch screen drives) it fills the whole frame, mm -> px
+per axis (``width_px / width_mm``, ``height_px / height_mm``: a panel's pixels need not
+be square), so that every drawn mm is the mm felt there (:func:`glass_viewport`). The
+mouse maps back through the same :class:`Viewport`. Pixel coordinates are continuous:
 pixel column i spans [i, i + 1), so its centre is at i + 0.5. Nothing here truncates
 positions to integers.
 """
@@ -67,6 +72,23 @@ def fit_viewport(display: Display, frame_w: int, frame_h: int) -> Viewport:
                     display.width_mm, display.height_mm)
 
 
+def glass_viewport(display: Display, frame_w: int, frame_h: int) -> Viewport:
+    """The active area over the whole frame, scaled per axis (px/mm: ``frame_w /
+    width_mm`` along x, ``frame_h / height_mm`` along y): the frame is the glass."""
+    if frame_w < 1 or frame_h < 1:
+        raise ValueError(f"frame size {frame_w}x{frame_h} px: expected at least 1x1")
+    return Viewport(frame_w, frame_h, 0, 0, frame_w, frame_h, display.width_mm, display.height_mm)
+
+
+def on_glass(display: Display, frame_size: tuple[int, int], fullscreen: bool,
+             touch_screen: bool) -> bool:
+    """Whether the frame must coincide with the glass: it is fullscreen and either at the
+    display's own ``width_px`` x ``height_px`` or driven by a touch screen (whose touches
+    are mapped to the whole panel, ``rendering.input``)."""
+    own = tuple(int(v) for v in frame_size) == (display.width_px, display.height_px)
+    return bool(fullscreen) and (own or bool(touch_screen))
+
+
 #: smallest default frame (px): room for the status lines, the scope and a device panel
 MIN_FRAME = (640, 480)
 #: the scope strip's height: this share of the frame's height, within SCOPE_PX
@@ -79,9 +101,13 @@ def scope_height(frame_h: int) -> int:
 
 
 def frame_layout(display: Display, frame_w: int, frame_h: int, scope: bool, side_px: int = 0,
-                 left_px: int = 0) -> tuple[Viewport, tuple[float, float, float, float] | None,
+                 left_px: int = 0, glass: bool = False
+                 ) -> tuple[Viewport, tuple[float, float, float, float] | None,
                             tuple[float, float, float, float]]:
     """Where the active area, the scope strip and the panel column go in a frame.
+
+    ``glass``: the active area fills the frame (:func:`glass_viewport`) and the strip and
+    the columns, placed as below, lie over it: they never move the scene.
 
     With ``scope`` the strip (x, y, w, h px) takes the bottom ``scope_height`` px and the
     active area is fitted above it, never under it (in a frame too low for both, each
@@ -99,9 +125,11 @@ def frame_layout(display: Display, frame_w: int, frame_h: int, scope: bool, side
     strip = min(scope_height(frame_h), frame_h // 2) if scope else 0
     side = min(max(int(side_px), 0), frame_w // 2)
     left = min(max(int(left_px), 0), (frame_w - side) // 2)
-    area = fit_viewport(display, max(frame_w - side - left, 1), max(frame_h - strip, 1))
     rect = (0.0, float(frame_h - strip), float(frame_w), float(strip)) if scope else None
     column = (float(frame_w - side), 0.0, float(side), float(frame_h - strip))
+    if glass:
+        return glass_viewport(display, frame_w, frame_h), rect, column
+    area = fit_viewport(display, max(frame_w - side - left, 1), max(frame_h - strip, 1))
     return replace(area, x0=area.x0 + left, frame_w=frame_w, frame_h=frame_h), rect, column
 
 
