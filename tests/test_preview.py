@@ -15,7 +15,7 @@ def test_preview_writes_scene_beside_its_friction_map(tmp_path, capsys):
     out = tmp_path / "p.png"
     assert main(["preview", "grating-5mm", "-o", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert "mu' 0.600 to 1.000" in printed and "800 x 480 px" in printed
+    assert "mu' of a finger touching alone 0.600 to 1.000" in printed and "800 x 480 px" in printed
     img = np.asarray(Image.open(out).convert("RGB"))
     assert img.shape[1] > 1000  # two panels side by side
 

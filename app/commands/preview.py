@@ -2,18 +2,23 @@
 a figure of the scene beside its friction map (mu' as an image with a colour bar).
 
 The scene image (``--scene-out``, by default ``<out>-scene.png`` beside ``out.png``) is
-the visual layer's static image (``rendering.visual.scene_image``) at the display's
-``width_px`` x ``height_px``, pixel for pixel what the demo's frame draws there: a
-grating's period measures period_mm x px/mm in it. ``--size WxH`` draws it at another
-size (the display fitted in WxH, its aspect kept).
+the visual layer's static image (``rendering.visual.scene_image``): the display's mm
+area fitted in its ``width_px`` x ``height_px`` keeping the mm aspect, pixel for pixel
+what the demo's frame draws there (all of them where the pixels are square; 800 x 480 px
+on 120 x 64.8 mm gives 800 x 432), at most MAX_PANEL_PX a side: a grating's period
+measures period_mm x px/mm in it. ``--size WxH`` draws it at another size (the display
+fitted in WxH, its aspect kept).
 
 The figure's left panel is that image scaled to fit the figure (its pixels are not the
-display's: its title says so); the right panel is mu' composed from the layers
-(``rendering.compose.ideal_mu``: what a perfect renderer gives a finger there),
-averaged over each pixel. The colour bar marks the lowest mu' the device reaches at
-the scene's nominal normal force (``device.friction.mu_floor``); where a finger touching
-alone would ask for less, the map is hatched and outlined in red: targets there will be
-clamped (``frictex validate`` gives the share of a typical stroke, ``rendering.reach``).
+display's: its title says so); the right panel is mu' composed from the layers that
+apply to a finger touching alone (``rendering.reach.applies_alone``: ``fingers`` any,
+1 or a positional selector) by ``rendering.compose.ideal_mu``, what a perfect renderer
+gives a lone finger there, averaged over each pixel. Layers felt only with two or more
+fingers down (``fingers = "2"``, ...) are left out of it, and named in its title and
+printed. The colour bar marks the lowest mu' the device reaches at the scene's nominal
+normal force (``device.friction.mu_floor``); where the map asks for less, it is hatched
+and outlined in red: targets there will be clamped (``frictex validate`` gives the
+share of a typical stroke, ``rendering.reach``).
 
 Layers whose mu' depends on motion or time are shown as follows (and said so in the
 title): a height layer as a finger sliding towards +x feels it (climbing flanks above
@@ -168,7 +173,8 @@ def scene_image(scene, size: tuple[int, int], outlines: bool = False) -> np.ndar
 def preview_figure(scene, size: tuple[int, int] | None = None, outlines: bool = False,
                    image: np.ndarray | None = None):
     """The preview of ``scene`` as a matplotlib Figure, and what it shows (mu' range, floor,
-    share of the display below the floor, panel size).
+    share of the display below the floor, panel size, the layers left out of the map and
+    ``map``: the friction map, mu' (height_px, width_px)).
 
     The panels are computed at ``size`` (w, h px; default the display's pixels up to
     DEFAULT_MAX_PANEL_PX a side) and scaled to fit the figure; ``image``: the scene image
@@ -180,11 +186,11 @@ def preview_figure(scene, size: tuple[int, int] | None = None, outlines: bool = 
     viewport = fit_viewport(d, *(size or default_size(d)))
     if image is None or image.shape[:2] != (viewport.height_px, viewport.width_px):
         image = to_srgb8(scene_rgb(scene, viewport, outlines=outlines))
-    previewed = as_previewed(scene)
-    mu = mu_map(previewed, viewport)
+    alone, left_out = split_by_fingers(as_previewed(scene).layers)
+    mu = mu_map(replace(scene, layers=alone), viewport)
     force = scene.device.normal_force_n
     floor = mu_floor(scene.device, force)
-    below = _below_floor(previewed, mu, viewport, floor)
+    below = mu < floor - 1e-12
     extent = (0.0, d.width_mm, d.height_mm, 0.0)
     flat = d.height_mm / d.width_mm < FLAT_ASPECT
     fig, left, right, stretch = _panels(d, flat)
@@ -195,7 +201,7 @@ def preview_figure(scene, size: tuple[int, int] | None = None, outlines: bool = 
     vmin = min(float(mu.min()), floor) - 0.02
     shown = right.imshow(mu, extent=extent, cmap="viridis", vmin=vmin, vmax=1.0,
                          interpolation="antialiased", aspect=stretch)
-    _hatch_below(right, below, d, viewport)
+    _hatch_below(right, below, d, viewport, left_out)
     for ax in (left, right):
         ax.set_xlabel("x (mm)")
         ax.set_ylabel("y (mm)")
@@ -203,17 +209,25 @@ def preview_figure(scene, size: tuple[int, int] | None = None, outlines: bool = 
     felt, rendering = _captions(fig, scene)
     info = {"mu_min": float(mu.min()), "mu_max": float(mu.max()), "floor": floor,
             "below": float(below.mean()), "size": (viewport.width_px, viewport.height_px),
-            "perception": felt, "rendering": rendering}
+            "left_out": left_out_note(left_out), "perception": felt, "rendering": rendering,
+            "map": mu}
     return fig, info
 
 
-def _below_floor(previewed, mu: np.ndarray, viewport, floor: float) -> np.ndarray:
-    """Where (height_px, width_px, bool) mu' for a finger touching alone lies below
-    ``floor``; layers for a 2nd finger are left out (``mu`` is the map of all layers)."""
-    alone = tuple(layer for layer in previewed.layers if applies_alone(layer))
-    alone_mu = mu if len(alone) == len(previewed.layers) else mu_map(replace(previewed,
-                                                                             layers=alone), viewport)
-    return alone_mu < floor - 1e-12
+def split_by_fingers(layers) -> tuple[tuple, tuple]:
+    """``layers`` split into those a finger touching alone feels (the map's) and those
+    felt only with two or more fingers down (``fingers = "2"``, ``"3"``, ...)."""
+    return (tuple(layer for layer in layers if applies_alone(layer)),
+            tuple(layer for layer in layers if not applies_alone(layer)))
+
+
+def left_out_note(left_out) -> str:
+    """What the map leaves out, in words: '' where it leaves out no layer."""
+    if not left_out:
+        return ""
+    names = ", ".join(f'{layer.name} (fingers = "{layer.fingers}": only with {layer.fingers} or '
+                      "more fingers down)" for layer in left_out)
+    return f"left out of the map: {names}"
 
 
 def _panels(d, flat: bool):
@@ -235,9 +249,9 @@ def _panels(d, flat: bool):
     return fig, left, right, stretch
 
 
-def _hatch_below(ax, below: np.ndarray, d, viewport) -> None:
+def _hatch_below(ax, below: np.ndarray, d, viewport, left_out) -> None:
     """Hatch and outline in red the pixels ``below`` the floor on the friction map ``ax``,
-    and title it with their share."""
+    and title it with their share and the layers ``left_out`` of it."""
     if below.any():
         xs = (np.arange(viewport.width_px) + 0.5) * d.width_mm / viewport.width_px
         ys = (np.arange(viewport.height_px) + 0.5) * d.height_mm / viewport.height_px
@@ -245,8 +259,10 @@ def _hatch_below(ax, below: np.ndarray, d, viewport) -> None:
                     hatches=["////"])
         ax.contour(xs, ys, below.astype(np.float64), levels=[0.5], colors="red",
                    linewidths=0.8)
-    ax.set_title("target mu' (1 = plate at rest)"
-                 + (f"; hatched: below the floor ({below.mean():.0%})" if below.any() else ""),
+    note = left_out_note(left_out)
+    ax.set_title("target mu' of a finger touching alone (1 = plate at rest)"
+                 + (f"; hatched: below the floor ({below.mean():.0%})" if below.any() else "")
+                 + ("\n" + "\n".join(textwrap.wrap(escape(note, limit=None), 90)) if note else ""),
                  fontsize=10)
 
 
@@ -310,6 +326,23 @@ def write_scene_image(image: np.ndarray, out: Path) -> None:
     write_file(out, lambda to: Image.fromarray(image).save(to, format="PNG"), image.size * 4 / 3 * 4)
 
 
+def why_this_size(d, drawn: tuple[int, int], asked: tuple[int, int] | None) -> str:
+    """Why the scene image of display ``d`` is ``drawn`` (w, h px) big, ``asked``: --size
+    (None: the display's pixels, scaled down to MAX_PANEL_PX a side)."""
+    if drawn == (d.width_px, d.height_px):
+        return "the display's pixels"
+    fitted_in = asked or default_size(d, MAX_PANEL_PX)
+    reasons = [f"the display has {d.width_px} x {d.height_px} px"]
+    if asked:
+        reasons.append(f"fitted in --size {asked[0]}x{asked[1]} keeping the mm aspect")
+    elif fitted_in != (d.width_px, d.height_px):
+        reasons.append(f"scaled down to at most {MAX_PANEL_PX} px a side")
+    if not asked and drawn != fitted_in:
+        reasons.append(f"fitted keeping the mm aspect ({d.width_mm:g} x {d.height_mm:g} mm): "
+                       "its pixels are not square")
+    return "; ".join(reasons)
+
+
 def scene_out_path(out: Path) -> Path:
     """The scene image's default name: ``out``'s with ``-scene`` before the suffix."""
     return out.with_name(f"{out.stem}-scene{out.suffix}")
@@ -339,16 +372,15 @@ def run(args: argparse.Namespace) -> int:
     write_scene_image(image, scene_out)
     print(f"wrote {escape_path(out)}: {escape(scene.name, limit=None)} beside its friction map, "
           f"a {info['figure'][0]} x {info['figure'][1]} px figure (the scene scaled to fit), "
-          f"mu' {info['mu_min']:.3f} to {info['mu_max']:.3f} (device floor {info['floor']:.3f} "
+          f"mu' of a finger touching alone {info['mu_min']:.3f} to {info['mu_max']:.3f} "
+          f"(device floor {info['floor']:.3f} "
           f"at {scene.device.normal_force_n:g} N"
-          + (f"; {info['below']:.1%} of the display below it, hatched)" if info["below"] else ")"))
+          + (f"; {info['below']:.1%} of the display below it, hatched)" if info["below"] else ")")
+          + (f"; {printable(info['left_out'])}" if info["left_out"] else ""))
     h, w = image.shape[:2]
-    own = (w, h) == (d.width_px, d.height_px)
     print(f"wrote {escape_path(scene_out)}: the scene as the demo's frame draws it, {w} x {h} px, "
           f"{w / d.width_mm:.4g} px/mm along x, {h / d.height_mm:.4g} along y ("
-          + ("the display's pixels)" if own else
-             f"the display has {d.width_px} x {d.height_px} px"
-             + ("" if args.size else f"; drawn at most {MAX_PANEL_PX} px a side") + ")"))
+          + why_this_size(d, (w, h), args.size) + ")")
     for message in info["perception"]:
         print(f"perception: {printable(message)}")
     for message in info["rendering"]:
