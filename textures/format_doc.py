@@ -130,12 +130,17 @@ starts there (a grating's `mu_low` band, a waveform's shape from phase 0).
 
 `width_mm` x `height_mm` is the active area; every position is in mm on it. `width_px`
 x `height_px` is the screen's pixel count: the demo draws the scene at it (its window
-adds the scope's strip below, cut to the screen's work area; README "Using it") and
-`preview` writes the scene image at it, and the pixel density along each axis, width_px / width_mm and height_px /
-height_mm (px/mm), sizes what is counted in pixels: a raster with `mode = "one-to-one"`
-(one image pixel per display pixel) and the default tile of `mode = "tile"`. The
-scene is always drawn with its millimetre proportions: the area is fitted into a window
-or image of another shape at one scale, centred, with bars on two sides. Where the pixel
+adds the scope's strip below, cut to the screen's work area; fullscreen at those pixels
+it fills the screen, the scope hidden; README "Using it") and `preview` writes the scene
+image fitted in it keeping the mm aspect (all of it where the pixels are square; 800 x
+480 px on 120 x 64.8 mm gives 800 x 432, and it prints why), and the pixel density along
+each axis, width_px / width_mm and height_px / height_mm (px/mm), sizes what is counted
+in pixels: a raster with `mode = "one-to-one"` (one image pixel per display pixel) and
+the default tile of `mode = "tile"`. In a window or an image of another shape the scene
+keeps its millimetre proportions: the area is fitted at one scale, centred, with bars on
+two sides. `frictex demo --fullscreen` on a screen of `width_px` x `height_px` (or
+fullscreen with a touch screen) draws it over the whole screen at the two densities, so
+that every drawn mm is the felt mm even where a pixel is not square. Where the pixel
 aspect (width_px / height_px) differs from the millimetre aspect, the two densities
 differ and a pixel is not square: a one-to-one image is stretched along the axis of
 lower density (nothing else changes, and nothing warns). A pixel pitch (mm per pixel:
@@ -149,7 +154,12 @@ metres (`width_mm = 0.108` over 800 px: "in metres? 0.108 m = 108 mm").
 `color_low` and `color_high` of `[layer.visual]` are sRGB colours written `"#rrggbb"` or
 `"#rgb"` (hexadecimal, as in CSS: `"#fa0"` is `"#ffaa00"`); nothing else is accepted.
 The visual layer draws a layer's lowest μ' in `color_low`, its highest in `color_high`,
-and blends between them.
+and blends between them in linear light: both colours decoded from sRGB, mixed as
+color_low + u (color_high - color_low) with u = (μ' - lowest) / (highest - lowest) of the
+layer's μ', layers multiplied, then encoded to sRGB again. With black and white, u =
+0.25, 0.5, 0.75 are sRGB greys 137, 188, 225 (μ' 0.7, 0.8, 0.9 in a layer from 0.6 to
+1.0): equal steps of μ' look larger towards color_low. A height layer is drawn as a
+shaded relief in its colours, not by the μ' felt (see AUTHORING.md).
 
 ### Composition
 
