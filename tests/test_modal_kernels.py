@@ -3,12 +3,12 @@ replaced, written out here: bit for bit, signed zeros included (the replay outpu
 stay byte-identical), on random, near-singular and degenerate inputs."""
 
 import numpy as np
-from hypothesis import given, settings, strategies as st
+from hypothesis import example, given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
 from frictex.device.actuation.base import touch_rank
 from frictex.device.actuation.modal import _gains_2x2, _gains_svd, _scale_to_limits, forward, magnitude, solve
-from frictex.device.actuation.modal import achieved_magnitude
+from frictex.device.actuation.modal import NEAR_SINGULAR, achieved_magnitude
 from frictex.device.actuation.modal_actuation import _serve_rows, _served_fingers
 from frictex.device.structures.beam import FreeFreeBeam, _mode
 
@@ -271,11 +271,15 @@ def test_solve_on_seed000_fingers_crossing_keeps_its_answers():
 @given(system=systems(), method=st.sampled_from(["exact", "regularised"]),
        actuators=arrays(np.float64, (2, 2), elements=st.floats(-2, 2)).filter(lambda a: np.linalg.cond(a) < 1e6),
        limits=st.none() | arrays(np.float64, 2, elements=st.floats(1e-3, 10)))
+@example(system=(np.array([[[0.0, 0.0], [0.0, 0.0]], [[-2.0 ** -24, 0.0], [0.0, -1.0]]]),
+                 np.zeros((2, 2), complex)),  # exact, smallest / largest 6e-8: capped
+         method="exact", actuators=np.array([[0.0, 1.0], [1.0, 1.0]]), limits=None)
 def test_solve_is_the_numpy_chain_bit_for_bit(system, method, actuators, limits):
     """solve's compiled end (commands, scaling, achieved, error) against the numpy steps."""
     phi, wanted = system
     regularised = method == "regularised"
     modal, capped, ratio = numpy_gains_2x2(phi, wanted, 0.1 if regularised else 1e-12, regularised)
+    capped |= ratio < NEAR_SINGULAR  # solve's rule: near a singular locus whatever the method
     commands = numpy_forward(actuators, modal)
     limited = np.zeros(len(phi), bool)
     if limits is not None:
