@@ -8,6 +8,7 @@ import os
 import signal
 
 import pytest
+from test_experiment_resume_parts import PROTOCOL
 
 SCENE = "grating-5mm"
 TRACE = "swipe-40mms-50hz"
@@ -77,17 +78,6 @@ def test_a_ctrl_c_dropped_by_a_commit_leaves_a_later_one_stopping_the_command():
     assert startup.signum == signal.SIGTERM
 
 
-EXPERIMENT = """format = 1
-method = "2afc"
-repetitions = 2
-[stimuli]
-scene = "grating-5mm"
-vary = "depth"
-reference = 0.3
-levels = [0.32, 0.42]
-[presentation]
-exploration_s = 0.3
-"""
 
 
 def test_a_ctrl_c_during_an_intervals_commit_stops_the_experiment_after_its_trial(
@@ -97,7 +87,7 @@ def test_a_ctrl_c_during_an_intervals_commit_stops_the_experiment_after_its_tria
     ran: the session stops once trial 2 is recorded, exit 130, and --resume goes on."""
     from frictex.app.commands.cli import main
     path = tmp_path / "p.toml"
-    path.write_text(EXPERIMENT, encoding="utf-8")
+    path.write_text(PROTOCOL, encoding="utf-8")  # 8 trials of 2 intervals
     out = tmp_path / "s"
     argv = ["experiment", str(path), "--participant", "simulated:weber=0.11,seed=3",
             "--seed", "4", "--out", str(out), "--quiet"]
