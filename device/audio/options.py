@@ -34,9 +34,13 @@ plays the queue out first, and the ring holds that many frames. An option out of
 range is refused in one line naming the option, what was typed and the range.
 
 The drive figures (``carrier_hz``, ``um_per_volt``, ``voltage_limit_v``) come from the
-device profile (``device.profile.PROFILES``): the one the pipeline's scene names when the
-request carries it (``DeviceRequest.profile``), else ``profile=``, else
-``device.profile.DEFAULT_PROFILE``.
+device profile (``device.profile.PROFILES``): ``profile=`` where given (the plate wired to
+the output, when it is not the one the scene was written for), else the one the
+pipeline's scene names (``DeviceRequest.profile``), else
+``device.profile.DEFAULT_PROFILE``. The drive never passes the scene's profile's voltage
+limit either: with ``profile=`` naming another profile, the limit is the lower of the two
+(and full scale stays the typed profile's, so the samples peak below 1.0), and
+:func:`profile_warning` says so in one line.
 """
 
 from __future__ import annotations
@@ -73,8 +77,8 @@ class AudioPlan:
     second (an integer, Hz). channels : actuator channels, one audio channel each.
     carrier_hz : carrier frequency (Hz). envelope : play the envelope, no carrier.
     um_per_volt : um zero-to-peak per volt zero-to-peak. limit_v : the largest drive
-    played (V zero-to-peak): the profile's voltage limit or full scale, whichever is
-    lower. full_scale_v : volts at digital full scale (1.0). ramp_frames : ramp length
+    played (V zero-to-peak): the lowest of the profile's voltage limit, the scene's
+    profile's and full scale. full_scale_v : volts at digital full scale (1.0). ramp_frames : ramp length
     (audio frames). profile : the profile whose figures these are.
     """
 
@@ -177,11 +181,13 @@ def profile_name(requested) -> str | None:
 
 def make_plan(args: AudioArgs, channels: int, rate_hz: float, requested_profile=None) -> AudioPlan:
     """The :class:`AudioPlan` of parsed ARG for a pipeline of ``channels`` at ``rate_hz``
-    (Hz). The profile: ``profile=`` if given, else ``requested_profile``, else the default.
-    Raises InputError for a carrier the rate does not fit, or a block and ramp that
+    (Hz). The profile: ``profile=`` if given, else ``requested_profile``, else the default;
+    ``limit_v`` is at most the voltage limit of each of ``profile=``, ``requested_profile``
+    and full scale. Raises InputError for a carrier the rate does not fit, or a block and ramp that
     together exceed :data:`MAX_STOP_MS` at the rate (``parse_arg`` checks each option's
     own range)."""
-    name = args.profile or profile_name(requested_profile) or DEFAULT_PROFILE
+    scene = profile_name(requested_profile)
+    name = args.profile or scene or DEFAULT_PROFILE
     spec = PROFILES.get(name)
     audio_rate = int(args.rate if args.rate is not None else DEFAULT_RATE_HZ)
     block_ms = args.blocksize * 1e3 / audio_rate
@@ -213,5 +219,25 @@ def make_plan(args: AudioArgs, channels: int, rate_hz: float, requested_profile=
     ramp = max(1, round(args.ramp_ms * 1e-3 * audio_rate))
     return AudioPlan(rate_hz=float(rate_hz), audio_rate=audio_rate, channels=int(channels),
                      carrier_hz=carrier, envelope=args.envelope, um_per_volt=spec.um_per_volt,
-                     limit_v=min(spec.voltage_limit_v, full_scale), full_scale_v=full_scale,
+                     limit_v=min(_voltage_limit_v(name, scene), full_scale), full_scale_v=full_scale,
                      ramp_frames=ramp, profile=name)
+
+
+def _voltage_limit_v(name: str, scene: str | None) -> float:
+    """The lower voltage limit (V zero-to-peak) of profile ``name`` and of the scene's
+    profile ``scene`` (None: the scene names none)."""
+    return min(PROFILES.get(p).voltage_limit_v for p in {name, scene or name})
+
+
+def profile_warning(args: AudioArgs, requested_profile=None) -> str | None:
+    """One line where ``profile=`` names another profile than the scene's
+    (``requested_profile``), naming both and their voltage limits (V zero-to-peak) and the
+    limit the output keeps to; None where they agree or either is not given."""
+    scene = profile_name(requested_profile)
+    if args.profile is None or scene is None or args.profile == scene:
+        return None
+    typed, written = PROFILES.get(args.profile), PROFILES.get(scene)
+    return (f"audio device profile={args.profile} ({typed.voltage_limit_v:g} V limit, "
+            f"{typed.um_per_volt:g} um/V) is not the scene's profile {scene} "
+            f"({written.voltage_limit_v:g} V limit): the drive figures are {args.profile}'s "
+            f"and the drive stops at {_voltage_limit_v(args.profile, scene):g} V")
