@@ -202,6 +202,19 @@ display (every layer is evaluated per position). One wholly off the display is r
 A point that places a line or a target (an `edge`'s, a height `ridge`'s or `step`'s
 `x_mm`, `y_mm`, a clip's trigger line, a `guidance` target) must lie on the display
 itself, edges included.
+
+### What the drive reaches
+
+A device profile (device/profile.py) gives its drive's um per volt and voltage limit: one
+channel's drive reaches their product (plate-seed003 and travelling-beam-seed002: 0.02
+um/V x 150 V = 3 um; ring-seed004: 0.0375 um/V x 80 V = 3 um; beam-seed000 and
+plate-seed001: 0.005125 um/V x 150 V = 0.769 um). `frictex validate` warns where a scene
+asks one channel for more: `amplitude_limit_um` on a one-channel or travelling-wave
+profile, `[device.structure] channel_limit_um` on a modal one (seed 001's plate without
+one is not compared). What the plate then gets depends on the output: the audio output
+clamps each channel at the voltage limit (and counts the clamps); a link device (`--device
+sim`, a serial device) clamps only at the limit it declares (the simulated device's 4 um
+by default), so the plate may be asked for more than the profile's figures allow.
 """.replace("<FAST>", f"{FAST_FINGER_MM_S:g}").replace(
     "<PITCH_LO>", f"{PIXEL_PITCH_MM[0]:g}").replace("<PITCH_HI>", f"{PIXEL_PITCH_MM[1]:g}")
 

@@ -199,12 +199,13 @@ def _calibration(r: Reader, raw, path: KeyPath):
 def device_warnings(r: Reader, device: profiles.DeviceProfile) -> None:
     spec = profiles.PROFILES.get(device.profile)
     reach = spec.drive_reach_um
-    if spec.amplitude_is_drive and device.amplitude_limit_um > reach * (1.0 + 1e-9):
-        r.report(("device", "amplitude_limit_um"),
-                 f"{device.amplitude_limit_um:g} um is above the {reach:.3g} um the drive of "
-                 f"profile {show(device.profile)} reaches ({spec.um_per_volt:g} um/V at its "
-                 f"{spec.voltage_limit_v:g} V limit; the drive clamps there)",
-                 warning=True)
+    path, limit_um = _channel_limit(device, spec)
+    if path is not None and limit_um > reach * (1.0 + 1e-9):
+        r.report(path, f"{limit_um:g} um is above the {reach:.3g} um the drive of profile "
+                       f"{show(device.profile)} reaches ({spec.um_per_volt:g} um/V at its "
+                       f"{spec.voltage_limit_v:g} V limit): the audio output clamps each "
+                       "channel there; a link device (sim, serial) only at its own declared "
+                       "limit", warning=True)
     a = device.friction.asymptote_per_n * device.normal_force_n
     if device.calibration is None and a >= 1.0 - ASYMPTOTE_MARGIN:
         r.report(("device", "normal_force_n"),
@@ -213,6 +214,21 @@ def device_warnings(r: Reader, device: profiles.DeviceProfile) -> None:
                  warning=True)
     for key, message in outside_fit(device.friction):
         r.report(("device", "friction", key), message, warning=True)
+
+
+def _channel_limit(device: profiles.DeviceProfile, spec) -> tuple[KeyPath | None, float]:
+    """The key and value (um zero-to-peak) of the limit on every channel's command, the
+    amplitude one channel's drive must reach: ``[device.structure] channel_limit_um`` of a
+    modal profile, ``amplitude_limit_um`` of a one-channel or travelling-wave profile;
+    (None, 0) for the others (seed 001's plate without a ``channel_limit_um``, a plugin's)."""
+    structure = device.structure
+    if structure is not None:
+        limit_um = structure.channel_limit_um
+        return (None, 0.0) if limit_um is None else (
+            ("device", "structure", "channel_limit_um"), limit_um)
+    if spec.amplitude_is_drive or spec.surface_length_mm is not None:
+        return ("device", "amplitude_limit_um"), device.amplitude_limit_um
+    return None, 0.0
 
 
 def force_device(r: Reader, doc: dict, device, display, built):
