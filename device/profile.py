@@ -159,7 +159,9 @@ class ProfileSpec:
     amplitude_is_drive : the amplitude under a finger is one channel's drive (one mode,
         all actuators together), so :attr:`drive_reach_um` bounds it (``frictex
         validate`` warns on a scene's ``amplitude_limit_um`` above); False where the
-        amplitude under a finger combines channels (modal, travelling-wave profiles).
+        amplitude under a finger combines channels (modal, travelling-wave profiles),
+        whose ``channel_limit_um`` (modal) and ``amplitude_limit_um`` (travelling wave:
+        each mode is driven up to the wave's amplitude) ``validate`` compares with it.
     """
 
     summary: str

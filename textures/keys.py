@@ -271,8 +271,9 @@ documented(DEVICE, {
                "is one plate, one channel; the others are modal or travelling-wave devices",
     "amplitude_limit_um": "largest vibration amplitude asked under a finger (um, zero-to-peak); "
                           "with the normal force it sets the lowest reachable mu' (the floor); "
-                          "`validate` warns where it is above what the drive of a one-channel "
-                          "profile reaches (um_per_volt at voltage_limit_v, device/profile.py)",
+                          "`validate` warns where it is above what one channel's drive of a "
+                          "one-channel or travelling-wave profile reaches (um_per_volt at "
+                          "voltage_limit_v, device/profile.py; see What the drive reaches)",
     "normal_force_n": "the finger's nominal normal force (N): used for traces without a force "
                       "column and for the floor `validate` and `preview` check against",
 })
@@ -319,7 +320,9 @@ documented(STRUCTURE_KEYS[profiles.BeamStructure], {
     "theory": "beam theory of the mode shapes and frequencies",
     "orders": "the flexural mode orders driven (distinct, 1 to 100, at most 26)",
     "actuators_mm": "positions of the transducers along the beam (mm from its end), one per mode",
-    "channel_limit_um": "largest command per transducer (um, zero-to-peak)",
+    "channel_limit_um": ("largest command per transducer (um, zero-to-peak); `validate` "
+                         "warns above what one channel's drive reaches (see What the drive "
+                         "reaches)"),
     "modes_file": ("a measured mode table (CSV, one column per mode, deflections in any "
                    "one unit: the table is scaled to 1 at its largest; path relative to this "
                    "file) replacing `orders`",
@@ -331,7 +334,8 @@ documented(STRUCTURE_KEYS[profiles.PlateStructure], {
     "height_mm": "height of the plate (mm), along display y",
     "order": "k of seed 001 eq 6: the X and Y modes driven",
     "y0_mm": "display y (mm) of the plate's corner",
-    "channel_limit_um": ("largest command per channel (um, zero-to-peak)",
+    "channel_limit_um": ("largest command per channel (um, zero-to-peak); `validate` warns "
+                         "above what one channel's drive reaches (see What the drive reaches)",
                          "amplitude_limit_um of [device]"),
 })
 documented(DRIVING, {
