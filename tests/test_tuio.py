@@ -179,22 +179,36 @@ def test_what_the_decoder_keeps_is_bounded_whatever_a_sender_claims():
     assert len(up) == MAX_CURSORS and not dec._pos and not dec._fingers
 
 
-def test_bad_tuio_messages_change_nothing():
-    dec = TuioDecoder()
-    dec.feed(frame(1, [1], [(1, 0.1, 0.1)]), 0.0)
-    bad = osc_bundle(osc_message("/tuio/2Dcur", "alive"), osc_message("/tuio/2Dcur", "set", 1, "x", 0.5),
+def test_bad_sets_are_skipped_and_said():
+    """A set that cannot be played is skipped alone (bad_sets), with its reason; the
+    cursor, still alive, keeps its last good position."""
+    skipped = []
+    dec = TuioDecoder(on_bad_set=lambda error, origin: skipped.append(str(error)))
+    dec.feed(frame(1, [1], [(1, 0.25, 0.25)]), 0.0)
+    bad = osc_bundle(osc_message("/tuio/2Dcur", "alive", 1), osc_message("/tuio/2Dcur", "set", 1, "x", 0.5),
                      osc_message("/tuio/2Dcur", "fseq", 2))
-    with pytest.raises(OscError, match=r"set: position is 'x', expected float"):
-        dec.feed(bad, 0.01)
-    with pytest.raises(OscError, match="position .* is not finite"):
-        dec.feed(frame(3, [1], [(1, math.nan, 0.5)]), 0.02)
-    # one frame far off the screen ended the live demo (its x in mm out of the trace's
-    # range): now a bad packet like the others
+    assert dec.feed(bad, 0.01) == []
+    assert dec.feed(frame(3, [1], [(1, math.nan, 0.5)]), 0.02) == []
+    # one frame far off the screen ended the live demo (its x in mm out of the trace's range)
     for x, y in ((1000.0, 0.5), (0.5, -0.6), (1.51, 0.5)):
-        with pytest.raises(OscError, match=r"position .* is off the screen, expected -0.5 to 1.5"):
-            dec.feed(frame(3, [1], [(1, x, y)]), 0.02)
+        assert dec.feed(frame(3, [1], [(1, x, y)]), 0.02) == []
+    assert dec.bad_sets == 5 and dec._pos == {("", 1): (0.25, 0.25)}
+    assert "set: position is 'x', expected float" in skipped[0]
+    assert "position (nan, 0.5) is not finite" in skipped[1]
+    assert all("is off the screen, expected -0.5 to 1.5" in line for line in skipped[2:])
     assert dec.feed(frame(4, [1], []), 0.03) == []  # finger 1 still alive, nothing lifted
     assert dec.feed(osc_message("/tuio/2Dobj", "alive"), 0.04) == []  # other profiles skipped
+
+
+def test_a_frame_whose_alive_or_fseq_cannot_be_read_changes_nothing():
+    dec = TuioDecoder()
+    dec.feed(frame(1, [1], [(1, 0.25, 0.25)]), 0.0)
+    for bad in (osc_bundle(osc_message("/tuio/2Dcur", "alive", "one"), osc_message("/tuio/2Dcur", "fseq", 2)),
+                osc_bundle(osc_message("/tuio/2Dcur", "alive"), osc_message("/tuio/2Dcur", "fseq", 0.5))):
+        with pytest.raises(OscError, match="expected int") as caught:
+            dec.feed(bad, 0.01)
+        assert caught.value.kind == "2Dcur arguments wrong"
+    assert dec._pos == {("", 1): (0.25, 0.25)}
 
 
 # -- over real UDP --------------------------------------------------------------------------

@@ -223,6 +223,7 @@ _TUIO_DROPS = (("refused", "datagram", "datagrams",
                ("dropped", "datagram", "datagrams", "dropped (queue full)"),
                ("stale", "datagram", "datagrams", "dropped unread (stale, a newer one queued)"),
                ("bad_packets", "malformed datagram", "malformed datagrams", "dropped"),
+               ("bad_sets", "cursor set", "cursor sets", "skipped (cannot be played)"),
                ("late", "late frame", "late frames", "dropped (out of order)"),
                ("stray", "stray set", "stray sets", "ignored (cursor not alive)"),
                ("over_limit", "cursor or source command", "cursor or source commands",
@@ -232,7 +233,8 @@ _TUIO_DROPS = (("refused", "datagram", "datagrams",
 
 def tuio_line(counts: dict) -> str:
     """The demo's last line about a TUIO input: from its ``counters()``, what came from
-    whom, every nonzero count of what was not played and why, and the takeovers."""
+    whom, every nonzero count of what was not played and why, the kinds of malformed
+    datagrams and cursor sets with their counts, and the takeovers."""
     if counts["sender"] is not None:
         sender = counts["sender"]
     elif counts["refused"]:
@@ -243,6 +245,9 @@ def tuio_line(counts: dict) -> str:
              for key, noun, nouns, why in _TUIO_DROPS if counts[key]]
     if counts["sender"] is None and counts["refused"]:
         drops[0] = f"{counted(counts['refused'], 'datagram')} refused (none claimed the input)"
+    if counts["malformed"]:
+        kinds = ", ".join(f"{n} {kind}" for kind, n in counts["malformed"].items())
+        drops.append(f"malformed: {kinds}")
     if counts["takeovers"]:
         drops.append(f"{counted(counts['takeovers'], 'takeover')} after a silence")
     return (f"demo: TUIO on {counts['listen']} from {sender}: "

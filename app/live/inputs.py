@@ -102,11 +102,19 @@ class _Follow(_Mouse):
 class TuioSpec:
     """Where ``--input tuio`` listens (IPv4 ``host``, UDP ``port``) and whom it accepts
     (``accept_from``: ``rendering.input.tuio.parse_sender``'s (address, port or None),
-    or None: the first sender)."""
+    or None: the first sender). Raises InputError for a sender the listener could never
+    hear (``rendering.input.tuio.unreachable_sender``): an error rather than a warning, as
+    the demo would run with no finger ever moving and nothing said."""
 
     host: str
     port: int
     accept_from: tuple[str, int | None] | None = None
+
+    def __post_init__(self) -> None:
+        from frictex.rendering.input.tuio import unreachable_sender
+        problem = unreachable_sender(self.host, self.accept_from)
+        if problem is not None:
+            raise InputError(problem)
 
 
 class _Tuio:

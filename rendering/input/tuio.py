@@ -37,7 +37,14 @@ whatever a stranger sends: a datagram over :data:`MAX_CLAIM_BYTES`, or not start
 datagram parsed at most every :data:`CLAIM_INTERVAL_S`, so that one process's junk does
 not delay another's claim. Datagrams from anyone
 else, and those unclaiming ones, are dropped and counted (``refused``). Listening beyond
-loopback with no sender named, :func:`exposure_warning` gives the line a command prints.
+loopback with no sender named, :func:`exposure_warning` gives the line a command prints;
+a sender named beyond loopback for a listener on loopback, which can never hear it,
+:func:`unreachable_sender` gives the error.
+
+Malformed datagrams. One whose OSC cannot be read, or whose ``source``, ``alive`` or
+``fseq`` cannot, is dropped whole; a ``set`` that cannot be played (a position not
+finite or off the screen, arguments of the wrong type) is skipped alone, and its frame
+played: the cursor, still in ``alive``, keeps its last good position.
 
 Silence. UDP has no goodbye: a tracker that crashes, or a sender that exits without an
 empty ``alive``, leaves its cursors touching. TUIO 1.1 senders repeat ``alive`` and
@@ -47,7 +54,9 @@ TuioServer, when nothing moves, still resends its state every ``update_interval`
 reference server's idle resend with half a second to spare, 45 to 90 frames of a
 sender that keeps its frame rate) has gone: its cursors are lifted (UP at the time the
 silence was seen) and its frame numbers forgotten, and the listener says so once on
-stderr (``TUIO: no message from HOST:PORT for 1.5 s: lifted N fingers``). Silence is
+stderr (``TUIO: no message from HOST:PORT for 1.5 s: lifted N fingers``, or ``no valid
+frame from HOST:PORT for 1.5 s (N datagrams, M malformed)`` when datagrams came but
+none played a frame). Silence is
 judged by the clock, but a sender with a TUIO frame (:func:`may_be_tuio_frame`) still
 queued is not silent, however late the polling thread is: a backlog of frames never lifts
 a finger only to press it again; one of other datagrams does not keep it pressed. One
@@ -98,6 +107,10 @@ MAX_ALIVE_IDS = 4 * MAX_CURSORS
 #: the GIL) for seconds
 POLL_DATAGRAMS = 32
 POLL_BYTES = 16384
+#: most bytes of datagrams queued for :meth:`TuioListener.poll` (beside its count bound):
+#: sixteen 64 kB datagrams, or 700 frames of 20 fingers; a flood of large datagrams from
+#: the served sender is dropped (counted) rather than held in memory
+MAX_QUEUED_BYTES = 1 << 20
 #: a queued datagram that is not a TUIO frame and has waited this long (s) is dropped
 #: unread (counted ``stale``) when a newer one waits behind it, so a backlog of junk
 #: drains at once; frames are kept (a sender may send a cursor's set only as it moves)
@@ -117,7 +130,13 @@ _FIRST_ADDRESS = 20  # "#bundle\0", an 8-byte time tag, the first element's 4-by
 
 
 class OscError(TraceError):
-    """A malformed OSC packet or TUIO message; the message says where in the packet."""
+    """A malformed OSC packet or TUIO message; the message says where in the packet, and
+    ``kind`` names the problem in a few words (a key of :meth:`TuioListener.counters`'
+    ``malformed``)."""
+
+    def __init__(self, message: str, kind: str = "not OSC") -> None:
+        super().__init__(message)
+        self.kind = kind
 
 
 def _string(data: bytes, pos: int) -> tuple[str, int]:
@@ -225,11 +244,16 @@ class TuioDecoder:
     sources beyond ``MAX_SOURCES``, ignored: what the decoder keeps is bounded whatever a
     sender claims, also when it never sends an ``fseq``), ``unread`` (arguments of 2Dcur
     messages after their first ``MAX_ALIVE_IDS + 1``, refused unread: an ``alive``'s ids
-    after its first :data:`MAX_ALIVE_IDS`; the work per message is bounded too).
+    after its first :data:`MAX_ALIVE_IDS`; the work per message is bounded too),
+    ``bad_sets`` (``set`` messages that cannot be played, skipped: the rest of their frame
+    is played, and a cursor still alive keeps its last good position, as TUIO 1.1's
+    ``alive`` says who touches and ``set`` only where; each is given to ``on_bad_set``
+    with its sender, "HOST:PORT").
     """
 
-    def __init__(self) -> None:
-        self.frames = self.late = self.stray = self.over_limit = self.unread = 0
+    def __init__(self, on_bad_set: Callable[[OscError, str], None] | None = None) -> None:
+        self.frames = self.late = self.stray = self.over_limit = self.unread = self.bad_sets = 0
+        self._on_bad_set = on_bad_set
         self._fseq: dict[str, int] = {}
         self._alive: dict[str, set[int]] = {}
         self._pending_alive: dict[str, set[int] | None] = {}
@@ -241,13 +265,16 @@ class TuioDecoder:
 
     def feed(self, packet: bytes, t_s: float, origin: str = "") -> list[RawSample]:
         """Decode one UDP datagram received at ``t_s`` (s) from ``origin`` (the sender,
-        "HOST:PORT", for :meth:`expire`'s report); a bad packet changes nothing."""
+        "HOST:PORT", for :meth:`expire`'s report); a malformed packet (an OscError) changes
+        nothing, a bad ``set`` in it is skipped (``bad_sets``)."""
         out: list[RawSample] = []
         for command, source, value in _commands(packet):
             if command == "fseq":
                 self._commit(source, value, t_s, origin, out)
             elif command == "unread":
                 self.unread += value
+            elif command == "bad_set":
+                self._skip_set(value, origin)
             elif not self._may_hold(source):
                 self.over_limit += 1
             else:
@@ -257,6 +284,12 @@ class TuioDecoder:
                 else:
                     self._hold_set(source, *value)
         return out
+
+    def _skip_set(self, error: OscError, origin: str) -> None:
+        """Count a ``set`` that cannot be played and hand its ``error`` on."""
+        self.bad_sets += 1
+        if self._on_bad_set is not None:
+            self._on_bad_set(error, origin)
 
     def _may_hold(self, source: str) -> bool:
         """Whether a command of ``source`` may wait for its frame's ``fseq``: one of the
@@ -365,10 +398,13 @@ class TuioDecoder:
 
 def _commands(packet: bytes) -> list[tuple[str, str, object]]:
     """The 2Dcur commands of an OSC packet, checked: (``alive``, source, ids), (``set``,
-    source, (id, x, y)), (``fseq``, source, frame), and (``unread``, source, how many) for
-    the arguments of a 2Dcur message after its first ``MAX_ALIVE_IDS + 1``, refused
-    unread (an ``alive``'s ids after its first ``MAX_ALIVE_IDS``). Other addresses are
-    other TUIO profiles or other OSC traffic, and are skipped (read as far as that too)."""
+    source, (id, x, y)), (``fseq``, source, frame), (``bad_set``, source, OscError) for a
+    ``set`` that cannot be played (one cursor; the frame stays good), and (``unread``,
+    source, how many) for the arguments of a 2Dcur message after its first
+    ``MAX_ALIVE_IDS + 1``, refused unread (an ``alive``'s ids after its first
+    ``MAX_ALIVE_IDS``). Other addresses are other TUIO profiles or other OSC traffic, and
+    are skipped (read as far as that too). Raises OscError for a packet that is not OSC
+    or a ``source``, ``alive`` or ``fseq`` that cannot be read: no frame can be trusted."""
     out: list[tuple[str, str, object]] = []
     source = ""
     for message in _messages(packet):
@@ -384,27 +420,39 @@ def _commands(packet: bytes) -> list[tuple[str, str, object]]:
         elif command == "alive":
             out.append(("alive", source, {_arg(args, i, int, "session id") for i in range(1, len(args))}))
         elif command == "set":
-            sid = _arg(args, 1, int, "session id")
-            x, y = (_arg(args, i, float, "position") for i in (2, 3))
-            if not (math.isfinite(x) and math.isfinite(y)):
-                raise OscError(f"/tuio/2Dcur set {sid}: position ({x!r}, {y!r}) is not finite")
-            lo, hi = POSITION_RANGE
-            if not (lo <= x <= hi and lo <= y <= hi):
-                raise OscError(f"/tuio/2Dcur set {sid}: position ({x:g}, {y:g}) is off the "
-                               f"screen, expected {lo:g} to {hi:g} (normalised)")
-            out.append(("set", source, (sid, x, y)))
+            try:
+                out.append(("set", source, _cursor(args)))
+            except OscError as exc:
+                out.append(("bad_set", source, exc))
         elif command == "fseq":
             out.append(("fseq", source, _arg(args, 1, int, "frame number")))
     return out
 
 
-def _arg(args: list, i: int, kind: type, what: str):
-    """Argument i of a 2Dcur message, as ``kind`` (an OSC int is accepted as a float)."""
+def _cursor(args: list) -> tuple[int, float, float]:
+    """A 2Dcur ``set``'s session id and normalised position, checked."""
+    sid = _arg(args, 1, int, "session id", "cursor arguments wrong")
+    x, y = (_arg(args, i, float, "position", "cursor arguments wrong") for i in (2, 3))
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise OscError(f"/tuio/2Dcur set {sid}: position ({x!r}, {y!r}) is not finite",
+                       "cursor position not finite")
+    lo, hi = POSITION_RANGE
+    if not (lo <= x <= hi and lo <= y <= hi):
+        raise OscError(f"/tuio/2Dcur set {sid}: position ({x:g}, {y:g}) is off the "
+                       f"screen, expected {lo:g} to {hi:g} (normalised)",
+                       "cursor position off the screen")
+    return sid, x, y
+
+
+def _arg(args: list, i: int, kind: type, what: str, problem: str = "2Dcur arguments wrong"):
+    """Argument i of a 2Dcur message, as ``kind`` (an OSC int is accepted as a float);
+    an OscError of kind ``problem`` if it is missing or of another type."""
     if i >= len(args):
-        raise OscError(f"/tuio/2Dcur {args[0]}: missing {what} (argument {i})")
+        raise OscError(f"/tuio/2Dcur {args[0]}: missing {what} (argument {i})", problem)
     value = args[i]
     if isinstance(value, bool) or not isinstance(value, (int, float) if kind is float else kind):
-        raise OscError(f"/tuio/2Dcur {args[0]}: {what} is {value!r}, expected {kind.__name__}")
+        raise OscError(f"/tuio/2Dcur {args[0]}: {what} is {repr(value)[:40]}, expected "
+                       f"{kind.__name__}", problem)
     return kind(value)
 
 
@@ -471,7 +519,35 @@ def parse_sender(text: str) -> tuple[str, int | None]:
     if not address or (port is not None and not 1 <= port <= 65535):
         raise InputError(f"TUIO sender {text[:60]!r}: expected ADDR or ADDR:PORT, an IPv4 "
                          "address (e.g. 192.168.1.20) and a UDP port 1 to 65535")
+    if not _may_send(address):
+        raise InputError(f"TUIO sender {address}: no sender has that address (it is "
+                         "'any', broadcast or multicast); give the tablet's own address, "
+                         "e.g. 192.168.1.20")
     return address, port
+
+
+_BROADCAST = ipaddress.IPv4Address("255.255.255.255")
+
+
+def _may_send(address: str) -> bool:
+    """Whether a datagram can come from the IPv4 ``address``: not 0.0.0.0 ('any'),
+    255.255.255.255 (broadcast) or a multicast group."""
+    ip = ipaddress.IPv4Address(address)
+    return not (ip.is_unspecified or ip.is_multicast or ip == _BROADCAST)
+
+
+def unreachable_sender(host: str, accept_from: tuple[str, int | None] | None) -> str | None:
+    """Why a listener on ``host`` can never hear the sender ``accept_from`` (a one-line
+    message), or None: a socket on loopback only gets datagrams from loopback, so a
+    tablet named by its network address could never move a finger."""
+    if accept_from is None or not ipaddress.ip_address(host).is_loopback:
+        return None
+    if ipaddress.ip_address(accept_from[0]).is_loopback:
+        return None
+    port = "" if accept_from[1] is None else f":{accept_from[1]}"
+    return (f"TUIO from {accept_from[0]}{port}: the listener is on loopback ({host}), which "
+            f"only hears this machine; listen on the network with --input tuio:0.0.0.0:PORT "
+            f"(or tuio:ADDR:PORT, an address of this machine)")
 
 
 def _name(sender: tuple[str, int]) -> str:
@@ -547,8 +623,9 @@ class SenderGate:
 class TuioListener:
     """Receives TUIO on a UDP port in a thread; :meth:`poll` returns the new touch samples.
 
-    The thread only stamps datagrams as they arrive and queues them (bounded queue;
-    overflow is counted in ``dropped``); decoding happens in :meth:`poll`, on the
+    The thread only stamps datagrams as they arrive and queues them (at most
+    ``max_packets`` datagrams and ``max_bytes`` bytes; overflow is counted in ``dropped``
+    and said once through ``warn``); decoding happens in :meth:`poll`, on the
     caller's thread, which may block in :meth:`wait` until a datagram is there. One
     :meth:`poll` decodes at most :data:`POLL_DATAGRAMS` datagrams and
     :data:`POLL_BYTES` bytes of them (at least one datagram); the rest wait for the next.
@@ -556,12 +633,17 @@ class TuioListener:
     :data:`MAX_QUEUED_S` or longer with a newer one behind it, is dropped unread
     (``stale``); frames are all decoded, as a sender may send a cursor's ``set`` only when
     it moves. Malformed packets are counted in ``bad_packets`` (last
-    message in ``last_error``), never raised. Datagrams that :class:`SenderGate` refuses
+    message in ``last_error``), never raised; a ``set`` that cannot be played is skipped
+    (the decoder's ``bad_sets``) and the rest of its frame played. Each kind of problem
+    (:class:`OscError`'s ``kind``) is counted in ``malformed`` and said once through
+    ``warn``, with its reason, the first time it comes. Datagrams that :class:`SenderGate` refuses
     (another sender while the served one speaks; before one is served, or after it fell
     silent, those that are not a TUIO frame) are counted in ``refused``. A source silent
     for ``silence_s`` s by the clock, with no datagram of its sender that may be a TUIO
     frame (:func:`may_be_tuio_frame`) still queued, has its cursors lifted at the next
-    :meth:`poll`, said once through ``warn``, however many other datagrams are queued.
+    :meth:`poll`, said once through ``warn`` (with how many datagrams came from its
+    sender meanwhile, if any did, and how many of them were malformed), however many
+    other datagrams are queued.
 
     Parameters
     ----------
@@ -572,32 +654,41 @@ class TuioListener:
         one at a time), as :func:`parse_sender` gives; None: the first sender of a TUIO
         frame (address and port).
     force_n : normal force given to every sample (N); TUIO 1.1 cursors carry none.
-    max_packets : queue bound.
+    max_packets, max_bytes : queue bounds (datagrams, bytes; :data:`MAX_QUEUED_BYTES`,
+        at least 65536: one datagram of any size).
     clock : time source for arrival stamps and silences (s).
     silence_s : a source silent this long (s) has gone (:data:`SILENCE_S`).
-    warn : takes each one-line notice (a silence, a takeover); default: stderr.
+    warn : takes each one-line notice (a silence, a takeover, a kind of malformed datagram
+        the first time, the first queue overflow); default: stderr.
     """
 
     def __init__(self, port: int = TUIO_PORT, *, width_mm: float, height_mm: float,
                  host: str = TUIO_HOST, accept_from: tuple[str, int | None] | None = None,
                  force_n: float = DEFAULT_FORCE_N, max_packets: int = 1024,
+                 max_bytes: int = MAX_QUEUED_BYTES,
                  clock: Callable[[], float] = time.monotonic, silence_s: float = SILENCE_S,
                  warn: Callable[[str], None] | None = None) -> None:
         self.screen = ScreenMap(AxisMap(0.0, 1.0, width_mm), AxisMap(0.0, 1.0, height_mm),
                                 force_n=force_n)
-        self.decoder = TuioDecoder()
+        self.decoder = TuioDecoder(on_bad_set=self._bad_set)
         self.dropped = self.bad_packets = self.refused = self.datagrams = self.stale = 0
         self.host = host
         self.gate = SenderGate(accept_from, silence_s)
         self.last_error: str | None = None
+        self.malformed: dict[str, int] = {}  # OscError kind: how many
+        # origin: (datagrams, malformed ones) decoded since its last frame played
+        self._since_frame: dict[str, tuple[int, int]] = {}
         self._clock = clock
         self._warn = warn if warn is not None else _to_stderr
         # (arrival t, queued t, datagram, origin, whether it may be a TUIO frame)
         self._queue: queue.Queue[tuple[float, float, bytes, str, bool]] = queue.Queue(max_packets)
-        # origin: how many of its datagrams that may be a TUIO frame are queued (never
-        # fewer than there are: counted before they are queued, uncounted once taken)
+        # origin: how many of its datagrams that may be a TUIO frame are queued, and the
+        # bytes queued (never fewer than there are: counted before they are queued,
+        # uncounted once taken)
         self._queued_frames: dict[str, int] = {}
-        self._queued_frames_lock = threading.Lock()
+        self._queued_bytes = 0
+        self._max_bytes = max_bytes
+        self._queued_lock = threading.Lock()
         self._ready = threading.Event()
         self._sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
@@ -635,17 +726,29 @@ class TuioListener:
 
     def _enqueue(self, t: float, now: float, data: bytes, origin: str) -> None:
         """Queue datagram ``data`` from ``origin`` received at ``t`` (s) at ``now`` (s), or
-        count it dropped when the queue is full; counted in ``datagrams`` only then, so
-        that a reader who sees the count can :meth:`poll` the datagram."""
+        count it dropped when the queue is full (datagrams or bytes; said the first time);
+        counted in ``datagrams`` only then, so that a reader who sees the count can
+        :meth:`poll` the datagram."""
         frame = may_be_tuio_frame(data)
-        self._count_queued_frame(origin, frame)
+        queued = self._count_queued(origin, frame, len(data), +1)
         try:
+            if not queued:
+                raise queue.Full
             self._queue.put_nowait((t, now, data, origin, frame))
         except queue.Full:
-            self._count_queued_frame(origin, -frame)
-            self.dropped += 1
+            if queued:
+                self._count_queued(origin, frame, len(data), -1)
+            self._drop(origin)
         self._ready.set()
         self.datagrams += 1
+
+    def _drop(self, origin: str) -> None:
+        """Count a datagram of ``origin`` dropped, the queue being full; said the first time."""
+        if not self.dropped:
+            self._warn(f"TUIO: datagrams from {origin} come faster than they are decoded "
+                       f"({self._queue.maxsize} datagrams or {self._max_bytes // 1024} kB "
+                       "queued): dropping; further ones counted")
+        self.dropped += 1
 
     def _take(self) -> tuple[float, float, bytes, str, bool] | None:
         """The oldest queued datagram (as queued), no longer counted queued; None if none."""
@@ -653,25 +756,29 @@ class TuioListener:
             item = self._queue.get_nowait()
         except queue.Empty:
             return None
-        self._count_queued_frame(item[3], -item[4])
+        self._count_queued(item[3], item[4], len(item[2]), -1)
         return item
 
-    def _count_queued_frame(self, origin: str, change: int) -> None:
-        """Add ``change`` to how many datagrams of ``origin`` that may be a TUIO frame are
-        queued (between the receiving thread and the polling one)."""
-        if not change:
-            return
-        with self._queued_frames_lock:
-            count = self._queued_frames.get(origin, 0) + change
+    def _count_queued(self, origin: str, frame: bool, size: int, sign: int) -> bool:
+        """Count a datagram of ``size`` bytes from ``origin`` (``frame``: one that may be a
+        TUIO frame) as queued (``sign`` +1) or taken (-1), between the receiving thread
+        and the polling one; False, counting nothing, if queuing it would pass the
+        byte bound."""
+        with self._queued_lock:
+            if sign > 0 and self._queued_bytes + size > self._max_bytes:
+                return False
+            self._queued_bytes += sign * size
+            count = self._queued_frames.get(origin, 0) + sign * frame
             if count:
                 self._queued_frames[origin] = count
             else:
-                del self._queued_frames[origin]
+                self._queued_frames.pop(origin, None)
+        return True
 
     def _speaking(self) -> set[str]:
         """The origins with a datagram that may be a TUIO frame still queued: not silent,
         whatever the clock says, as that frame may keep their cursors touching."""
-        with self._queued_frames_lock:
+        with self._queued_lock:
             return set(self._queued_frames)
 
     def wait(self, timeout_s: float) -> bool:
@@ -707,12 +814,37 @@ class TuioListener:
         """The samples of datagram ``data`` from ``origin`` received at ``t`` (s), after
         those lifting the sources silent by then; a malformed one counted."""
         raw = self._expire(t)
+        frames, malformed = self.decoder.frames, False
         try:
             raw.extend(self.decoder.feed(data, t, origin))
         except OscError as exc:
-            self.bad_packets += 1
-            self.last_error = str(exc)
+            self.bad_packets, malformed = self.bad_packets + 1, True
+            self._note(exc, f"TUIO: malformed datagram from {origin}: {exc}; further ones counted")
+        self._count_since_frame(origin, self.decoder.frames > frames, malformed)
         return raw
+
+    def _bad_set(self, error: OscError, origin: str) -> None:
+        """A ``set`` from ``origin`` skipped by the decoder: counted, said the first time."""
+        self._note(error, f"TUIO: cursor skipped in a frame from {origin}: {error} (the "
+                          "frame's other cursors played, this one kept where it was); "
+                          "further ones counted")
+
+    def _note(self, error: OscError, line: str) -> None:
+        """Count ``error`` under its kind in ``malformed``, keep it in ``last_error``, and
+        say ``line`` the first time its kind comes."""
+        if error.kind not in self.malformed:
+            self._warn(line)
+        self.malformed[error.kind] = self.malformed.get(error.kind, 0) + 1
+        self.last_error = str(error)
+
+    def _count_since_frame(self, origin: str, played: bool, malformed: bool) -> None:
+        """Count a datagram of ``origin`` decoded (``malformed`` or not) since its last
+        frame played, or forget the count when this one ``played`` a frame."""
+        if played:
+            self._since_frame.pop(origin, None)
+            return
+        datagrams, bad = self._since_frame.get(origin, (0, 0))
+        self._since_frame[origin] = (datagrams + 1, bad + malformed)
 
     def _expire(self, t: float, speaking: Container[str] = ()) -> list[RawSample]:
         """UP samples for the cursors of sources silent at ``t`` (s), but those of the
@@ -720,21 +852,35 @@ class TuioListener:
         lifted, gone = self.decoder.expire(t, self.gate.silence_s, speaking)
         for origin, source, n in gone:
             named = f" (source {quoted(source)})" if source else ""  # escaped and cut: a sender's
-            self._warn(f"TUIO: no message from {origin}{named} for {self.gate.silence_s:g} s: "
-                       f"lifted {n} finger{'s' if n != 1 else ''}")
+            missing, came = self._silence(origin)
+            self._warn(f"TUIO: no {missing} from {origin}{named} for {self.gate.silence_s:g} s"
+                       f"{came}: lifted {n} finger{'s' if n != 1 else ''}")
         return lifted
+
+    def _silence(self, origin: str) -> tuple[str, str]:
+        """For the silence line of ``origin``, what did not come ("message", or "valid
+        frame" when datagrams came but none played a frame) and what did since its last
+        frame (" (N datagrams, M malformed)", or ""); that count is then forgotten."""
+        datagrams, malformed = self._since_frame.pop(origin, (0, 0))
+        if not datagrams:
+            return "message", ""
+        return "valid frame", (f" ({datagrams} datagram{'s' if datagrams != 1 else ''}, "
+                               f"{malformed} malformed)")
 
     def counters(self) -> dict:
         """What was received: ``datagrams`` accepted, ``refused`` (other senders, or
         before one was served), ``dropped`` (queue full), ``stale`` (dropped unread, a
-        newer one queued), ``bad_packets``, the decoder's ``late``, ``stray``,
+        newer one queued), ``bad_packets`` (malformed datagrams), the decoder's
+        ``bad_sets`` (cursors skipped), ``malformed`` (how many of each kind of problem
+        of those two, by :class:`OscError` kind), the decoder's ``late``, ``stray``,
         ``over_limit`` and ``unread``, ``takeovers`` (senders served after another fell
         silent), and the ``sender`` served last ("ADDR:PORT", or None before the first)."""
         sender = None if self.gate.sender is None else _name(self.gate.sender)
         return {"listen": f"{self.host}:{self.port}", "sender": sender,
                 "datagrams": self.datagrams, "refused": self.refused, "dropped": self.dropped,
                 "stale": self.stale,
-                "bad_packets": self.bad_packets, "late": self.decoder.late,
+                "bad_packets": self.bad_packets, "bad_sets": self.decoder.bad_sets,
+                "malformed": dict(self.malformed), "late": self.decoder.late,
                 "stray": self.decoder.stray, "over_limit": self.decoder.over_limit,
                 "unread": self.decoder.unread,
                 "takeovers": self.gate.takeovers}
