@@ -137,7 +137,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "over after 1.5 s of silence). Default: the first sender of a "
                              "TUIO frame (listening beyond loopback, the demo then warns at "
                              "start). Datagrams from others are dropped and counted in the "
-                             "summary")
+                             "summary. Not 0.0.0.0, broadcast or multicast; an address on the "
+                             "network needs the listener there, --input tuio:0.0.0.0:PORT")
     parser.add_argument("--haptic", choices=("process", "thread"), default="process",
                         help="where the haptic pipeline runs: its own process (default: the "
                              "window's GL calls cannot delay it) or a thread of the window's "
