@@ -164,17 +164,18 @@ def test_sources_scope_session_ids_and_stray_sets_are_counted():
 
 
 def test_what_the_decoder_keeps_is_bounded_whatever_a_sender_claims():
-    """A frame claiming 1,000 cursors alive gives MAX_CURSORS fingers; frames of a 9th
-    source and on are ignored; both counted."""
+    """A frame claiming 1,000 cursors alive, 200 of them set (16 kB, under the frame
+    size decoded), gives MAX_CURSORS fingers; frames of a 9th source and on are ignored;
+    both counted."""
     dec = TuioDecoder()
     ids = list(range(1_000))
-    down = dec.feed(frame(1, ids, [(i, 0.5, 0.5) for i in ids]), 0.0)
-    assert len(down) == MAX_CURSORS and dec.over_limit == 1_000 - MAX_CURSORS
+    down = dec.feed(frame(1, ids, [(i, 0.5, 0.5) for i in ids[:200]]), 0.0)
+    assert len(down) == MAX_CURSORS and dec.over_limit == 200 - MAX_CURSORS
     assert sorted(s.finger for s in down) == list(range(MAX_CURSORS))
     for k in range(1, 20):
         dec.feed(frame(1, [], source=f"table{k}"), 0.0)
     assert len(dec._alive) == MAX_SOURCES
-    assert dec.over_limit == 1_000 - MAX_CURSORS + 19 - (MAX_SOURCES - 1)
+    assert dec.over_limit == 200 - MAX_CURSORS + 19 - (MAX_SOURCES - 1)
     up = dec.feed(frame(2, []), 0.1)  # all lift: the fingers are free again
     assert len(up) == MAX_CURSORS and not dec._pos and not dec._fingers
 
@@ -489,14 +490,15 @@ def test_listener_lifts_a_vanished_sender_and_serves_the_one_that_comes_back():
 
 def test_a_silent_sources_name_is_said_escaped_and_cut():
     """A sender's 60,000-character source name (an ESC first) went into the silence
-    warning whole: a 60,084-character line written from the haptic thread."""
+    warning whole: a 60,084-character line written from the haptic thread (15,000
+    characters here, within the frame size decoded)."""
     from frictex.device.safe_text import MAX_SHOWN
     now, lines = [0.0], []
     # named: a frame this long claims nothing from an unnamed sender (MAX_CLAIM_BYTES)
     with TuioListener(0, width_mm=100.0, height_mm=100.0, clock=lambda: now[0],
                       accept_from=("127.0.0.1", None), warn=lines.append) as listener, \
             sender("127.0.0.1") as tracker:
-        tracker.sendto(frame(1, [1], [(1, 0.1, 0.4)], source="\x1b" + "S" * 60_000),
+        tracker.sendto(frame(1, [1], [(1, 0.1, 0.4)], source="\x1b" + "S" * 15_000),
                        ("127.0.0.1", listener.port))
         received(listener, 1, 0)
         now[0] = SILENCE_S + 0.5

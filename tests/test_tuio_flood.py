@@ -9,12 +9,14 @@ import struct
 import time
 
 from frictex.rendering.input.trace_file import DOWN, MOVE
-from frictex.rendering.input.tuio import (MAX_ALIVE_IDS, MAX_CURSORS, POLL_BYTES,
-                                         POLL_DATAGRAMS, TuioDecoder, TuioListener)
+from frictex.rendering.input.tuio import (MAX_ALIVE_IDS, MAX_CURSORS, MAX_FRAME_BYTES,
+                                         POLL_BYTES, POLL_DATAGRAMS, TuioDecoder,
+                                         TuioListener)
 from test_tuio import STILL, frame, osc_bundle, osc_message, osc_string
 
-#: the flood's shape: an alive of 8,000 ids and 300 sets in each 56,876-byte bundle
-FLOOD_IDS, FLOOD_SETS = 8000, 300
+#: the flood's shape: an alive of 1,000 ids and 180 sets in each 14,880-byte bundle, the
+#: largest a served sender has decoded being MAX_FRAME_BYTES (16 kB)
+FLOOD_IDS, FLOOD_SETS = 1000, 180
 
 
 def flood_bundle(fseq: int) -> bytes:
@@ -22,6 +24,10 @@ def flood_bundle(fseq: int) -> bytes:
             for i in range(FLOOD_SETS)]
     return osc_bundle(osc_message("/tuio/2Dcur", "alive", *range(FLOOD_IDS)), *sets,
                       osc_message("/tuio/2Dcur", "fseq", fseq))
+
+
+FLOOD_BYTES = len(flood_bundle(1))
+assert POLL_BYTES / 2 < FLOOD_BYTES <= MAX_FRAME_BYTES
 
 
 def test_an_alive_is_read_no_further_than_max_alive_ids():
@@ -40,7 +46,7 @@ def test_an_alive_is_read_no_further_than_max_alive_ids():
 def test_a_flood_bundle_gives_max_cursors_fingers_and_counts_what_it_refused():
     decoder = TuioDecoder()
     down = decoder.feed(flood_bundle(1), 0.0)
-    assert len(flood_bundle(1)) == 56_876
+    assert len(flood_bundle(1)) == FLOOD_BYTES
     assert len(down) == MAX_CURSORS and decoder.unread == FLOOD_IDS - MAX_ALIVE_IDS
     assert decoder.over_limit == FLOOD_SETS - MAX_CURSORS
 
@@ -94,7 +100,8 @@ def test_one_poll_decodes_one_flood_bundle_and_the_rest_waits():
         sizes = counting(listener)
         delivered(listener, [flood_bundle(k + 1) for k in range(8)], chunk=1)
         touches, per_poll = polls(listener, sizes)
-    assert per_poll == [[56_876]] * 8  # each bundle is over POLL_BYTES: one a poll
+    # a poll stops once POLL_BYTES are decoded: two bundles, the rest waits
+    assert per_poll == [[FLOOD_BYTES] * 2] * 4
     assert [t.event for t in touches] == [DOWN] * MAX_CURSORS + [MOVE] * MAX_CURSORS * 7
 
 

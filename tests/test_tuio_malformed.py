@@ -150,3 +150,30 @@ def test_the_queue_is_bounded_in_bytes_and_the_drop_said_once():
     assert counts["dropped"] == 4  # the frame and one 2000-byte datagram fit in 4096
     assert lines == [f"TUIO: datagrams from {counts['sender']} come faster than they are "
                      "decoded (1024 datagrams or 4 kB queued): dropping; further ones counted"]
+
+
+def test_a_served_senders_oversized_datagram_is_counted_unparsed():
+    """A flood of 64 kB bundles from the sender served was parsed whole, 10 ms each, in the
+    haptic process (439 deadline misses in 12 s against 9): a datagram over
+    MAX_FRAME_BYTES is counted 'too large' and not decoded; the frames around it play."""
+    from frictex.rendering.input.tuio import MAX_FRAME_BYTES, TuioDecoder, OscError
+    sets = [(k, 0.5, 0.5) for k in range(1, 600)]  # 31 kB
+    huge = frame(2, [1], sets)
+    assert len(huge) > MAX_FRAME_BYTES
+    with pytest.raises(OscError, match=r"bytes, over the 16,384 a TUIO frame needs") as said:
+        TuioDecoder().feed(huge, 0.0)
+    assert said.value.kind == "too large"
+    lines = []
+    with TuioListener(0, width_mm=100.0, height_mm=100.0, clock=STILL,
+                      warn=lines.append) as listener, sender("127.0.0.1") as tablet:
+        to = ("127.0.0.1", listener.port)
+        tablet.sendto(frame(1, [1], [(1, 0.5, 0.5)]), to)
+        tablet.sendto(huge, to)
+        tablet.sendto(frame(3, [1], [(1, 0.6, 0.5)]), to)
+        samples = received(listener, 3, 0)
+        while listener.wait(0.0):  # a poll stops after the big one: the rest waits
+            samples += listener.poll()
+        counts = listener.counters()
+    assert [s.event for s in samples] == [DOWN, MOVE]
+    assert counts["malformed"] == {"too large": 1}
+    assert len(lines) == 1 and "over the 16,384 a TUIO frame needs (not decoded)" in lines[0]

@@ -120,6 +120,12 @@ MAX_QUEUED_S = 0.1
 #: refusing a 64 kB bundle of 5,400 messages (10 ms of parsing) costs the haptic process
 #: no more than refusing a frame
 MAX_CLAIM_BYTES = 4096
+#: largest datagram (bytes) decoded from the sender served: a frame of MAX_CURSORS fingers
+#: with its source is about 1.4 kB, and a bundle that also carries a tracker's other
+#: profiles (2Dobj, 2Dblb) a few kB; a larger one is counted ("too large") unparsed, so
+#: that a served sender's flood of 64 kB bundles (10 ms of parsing each) cannot take the
+#: haptic process's time
+MAX_FRAME_BYTES = 16384
 #: one claim parse per sender (address and port) at most this often (s); the datagrams of
 #: that sender in between are refused unparsed (a 60 Hz tablet's first frame claims at once)
 CLAIM_INTERVAL_S = 0.05
@@ -267,6 +273,9 @@ class TuioDecoder:
         """Decode one UDP datagram received at ``t_s`` (s) from ``origin`` (the sender,
         "HOST:PORT", for :meth:`expire`'s report); a malformed packet (an OscError) changes
         nothing, a bad ``set`` in it is skipped (``bad_sets``)."""
+        if len(packet) > MAX_FRAME_BYTES:
+            raise OscError(f"{len(packet):,} bytes, over the {MAX_FRAME_BYTES:,} a TUIO frame "
+                           f"needs (not decoded)", kind="too large")
         out: list[RawSample] = []
         for command, source, value in _commands(packet):
             if command == "fseq":
