@@ -4,7 +4,6 @@ it is felt; the scope starts hidden and S draws it over the scene without moving
 status lines are hidden. In a window the scene keeps its aspect-preserving fit, and a
 touch screen there is said not to coincide with the drawing."""
 
-import numpy as np
 import pytest
 
 from frictex.app.live.demo_loop import DemoLoop
