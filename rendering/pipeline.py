@@ -18,6 +18,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+import numpy.typing as npt
 
 from frictex.device.actuation.factory import make_actuation
 from frictex.device.errors import InputError
@@ -25,7 +26,7 @@ from frictex.device.registry import UnknownName
 from frictex.rendering.compose import compose
 from frictex.rendering.tracking.finger_select import SelectionState, select_fingers
 from frictex.device.friction import ClampCounts, make_friction_model
-from frictex.rendering.input.trace_file import Trace
+from frictex.rendering.input.trace_file import Trace, read_only_view
 from frictex.rendering.renderers import (DEFAULT_SHO, LAYER_RENDERERS, RENDERERS, any_layer,
                                          build_renderer, render_modes)
 from frictex.rendering.tracking.tracks import TrackerConfig, TrackerState, track
@@ -66,26 +67,39 @@ class BlockOutput:
         finger to another within the call (a trace source reuses the rows of lifted
         fingers: ``app.engine.finger_slots``); else None, and row r is ``finger_ids[r]``
         throughout. Read per finger with :meth:`segments`.
+
+    Every array is held as a read-only view (O(1)): an output handed on is not changed
+    by whoever reads it; take ``.copy()`` to work on one.
     """
 
     index0: int
-    t_s: np.ndarray
+    t_s: npt.NDArray[np.float64]
     finger_ids: tuple[int, ...]
-    contact: np.ndarray
-    x_mm: np.ndarray
-    y_mm: np.ndarray
-    mu_target: np.ndarray
-    wanted_um: np.ndarray
-    amplitude_um: np.ndarray
-    commands_um: np.ndarray
-    phases_rad: np.ndarray | None
+    contact: npt.NDArray[np.bool_]
+    x_mm: npt.NDArray[np.float64]
+    y_mm: npt.NDArray[np.float64]
+    mu_target: npt.NDArray[np.float64]
+    wanted_um: npt.NDArray[np.float64]
+    amplitude_um: npt.NDArray[np.float64]
+    commands_um: npt.NDArray[np.float64]
+    phases_rad: npt.NDArray[np.float64] | None
     clamps: ClampCounts
     limited: int = 0
     capped: int = 0
     off_structure: int = 0
-    layer_clipped: dict = field(default_factory=dict)
+    layer_clipped: dict[str, int] = field(default_factory=dict)
     forces: object | None = None
-    sample_ids: np.ndarray | None = None
+    sample_ids: npt.NDArray[np.int64] | None = None
+
+    #: the array fields, held read-only (not a dataclass field: no annotation)
+    _ARRAY_FIELDS = ("t_s", "contact", "x_mm", "y_mm", "mu_target", "wanted_um",
+                     "amplitude_um", "commands_um", "phases_rad", "sample_ids")
+
+    def __post_init__(self) -> None:
+        for name in self._ARRAY_FIELDS:
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, read_only_view(value))
 
     def segments(self) -> list[tuple[int, int, int, int]]:
         """``(row, finger id, lo, hi)``: samples ``lo .. hi - 1`` of ``row`` belong to
@@ -102,7 +116,7 @@ class BlockOutput:
                       if ids[lo] >= 0]
         return found
 
-    def ids_per_sample(self) -> np.ndarray:
+    def ids_per_sample(self) -> npt.NDArray[np.int64]:
         """(F, n) int64 finger id of every sample."""
         if self.sample_ids is not None:
             return self.sample_ids

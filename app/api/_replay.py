@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 import json
 import os
 from pathlib import Path
@@ -39,7 +38,8 @@ class Replay:
     size and modification time); after a later run into the same folder (or the folder's
     removal) reading a table is a :class:`~frictex.device.errors.RunFailed` instead of
     another run's rows. A table once read is kept. The folder is held as an absolute path
-    (a later ``os.chdir`` changes nothing).
+    (a later ``os.chdir`` changes nothing). Every attribute is read-only (assigning one
+    is an ``AttributeError``).
 
     Attributes
     ----------
@@ -52,27 +52,43 @@ class Replay:
 
     def __init__(self, summary: Summary, out: Path | None, tables: dict[str, Any] | None,
                  summary_id: tuple[int, ...] | None = None):
-        self.summary = summary
-        self.out = None if out is None else Path(os.path.realpath(out))
-        self._tables = tables or {}  # in memory (out is None)
+        self._summary = summary
+        self._out = None if out is None else Path(os.path.realpath(out))
+        self._tables = dict(tables or {})  # in memory (out is None), or read from out
         self._summary_id = summary_id
 
+    @property
+    def summary(self) -> Summary:
+        """What ``summary.json`` holds, typed; ``summary.to_dict()`` is that document."""
+        return self._summary
+
+    @property
+    def out(self) -> Path | None:
+        """The output folder (absolute, links resolved), or None when the tables are in
+        memory."""
+        return self._out
+
     def _table(self, stem: str) -> pyarrow.Table:
-        if self.out is None:
-            return self._tables[stem]
-        path = self.out / f"{stem}.{self.summary.output.format}"
+        """The table ``stem``: kept in memory, or read from the output folder once."""
+        if stem not in self._tables and self.out is not None:
+            self._tables[stem] = self._read_table(self.out, stem)
+        return self._tables[stem]
+
+    def _read_table(self, folder: Path, stem: str) -> pyarrow.Table:
+        """The table ``stem`` read from ``folder``, while the folder holds this run."""
+        path = folder / f"{stem}.{self.summary.output.format}"
         try:  # checked after reading: a run swapped in meanwhile is caught too
             table = read_table(path)
-            same = self._summary_id is None or file_id(self.out / "summary.json") == self._summary_id
+            same = self._summary_id is None or file_id(folder / "summary.json") == self._summary_id
         except FileNotFoundError:
             same = False
         if not same:
-            raise RunFailed(f"{self.out}: no longer holds this run (its summary.json was "
+            raise RunFailed(f"{folder}: no longer holds this run (its summary.json was "
                             f"replaced or removed since): {path.name} would not be its table; "
                             "read the tables before the next run into the folder")
         return table
 
-    @functools.cached_property
+    @property
     def friction(self) -> pyarrow.Table:
         """One row per touching finger and output sample.
 
@@ -84,7 +100,7 @@ class Replay:
         """
         return self._table("friction")
 
-    @functools.cached_property
+    @property
     def commands(self) -> pyarrow.Table:
         """One row per output sample: ``t_s`` (s), ``<channel>_um`` per actuator channel
         (um zero-to-peak) and ``<channel>_phase_rad`` (rad) where the actuation has phases.

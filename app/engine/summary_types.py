@@ -4,7 +4,10 @@
 page, its fields the object's keys in the order ``summary.json`` writes them, so that
 ``Summary.from_dict(doc).to_dict() == doc`` and ``json.dumps`` of either gives the same
 text. Sections whose keys are data or documented elsewhere (``forces``, ``device``,
-``control``, the per-stage and per-layer seconds) stay mappings. An optional section
+``control``, the per-stage and per-layer seconds) stay mappings: dicts that cannot be
+changed (:class:`ReadOnlyDict`, nested ones too, lists as tuples), so that a summary is
+not changed after it is made; they are still dicts (``json.dumps`` takes them), and
+:meth:`Summary.to_dict` gives plain copies. An optional section
 (``trace.time_order``, ``forces``, ``control``, ``device``) is None when the run has none,
 and is left out of :meth:`Summary.to_dict`, as out of ``summary.json``.
 
@@ -299,6 +302,9 @@ class Timings:
     stages_s: Mapping[str, float]
     layers_s: Mapping[str, float]
 
+    def __post_init__(self) -> None:
+        _freeze_mappings(self)
+
 
 @dataclass(frozen=True, kw_only=True)
 class Summary:
@@ -350,6 +356,9 @@ class Summary:
     device: Mapping[str, Any] | None = field(default=None, metadata=_OPTIONAL)
     timings: Timings
 
+    def __post_init__(self) -> None:
+        _freeze_mappings(self)
+
     @classmethod
     def from_dict(cls, doc: Mapping[str, Any]) -> Summary:
         """The summary of a ``summary.json`` document (as ``json.load`` gives it).
@@ -364,6 +373,42 @@ class Summary:
     def to_dict(self) -> dict[str, Any]:
         """The ``summary.json`` document: plain dicts, lists, str, int, float and None."""
         return _plain(self)
+
+
+class ReadOnlyDict(dict):
+    """A dict whose items cannot be set, deleted or updated (a ``TypeError``); a
+    summary's mappings. Still a dict: ``json.dumps`` and ``isinstance(d, dict)`` take it;
+    ``dict(d)`` is a copy to change."""
+
+    def _refuse(self, *args, **kwargs):
+        raise TypeError("a summary's mappings are read-only: change a copy, dict(...) or "
+                        "summary.to_dict()")
+
+    __setitem__ = __delitem__ = __ior__ = _refuse
+    clear = pop = popitem = setdefault = update = _refuse
+
+    def __reduce__(self):  # pickle and copy rebuild it whole, not item by item
+        return ReadOnlyDict, (dict(self),)
+
+
+def _freeze_mappings(obj) -> None:
+    """Replace each mapping field of the frozen dataclass ``obj`` by a read-only copy
+    (:func:`_frozen`), so that neither the object nor its :meth:`Summary.to_dict` can be
+    changed through it."""
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        if isinstance(value, Mapping):
+            object.__setattr__(obj, f.name, _frozen(value))
+
+
+def _frozen(value):
+    """``value`` with every mapping inside it a :class:`ReadOnlyDict` copy and every list
+    a tuple."""
+    if isinstance(value, Mapping):
+        return ReadOnlyDict({k: _frozen(v) for k, v in value.items()})
+    if isinstance(value, (list, tuple)):
+        return tuple(_frozen(v) for v in value)
+    return value
 
 
 def _plain(value):

@@ -56,6 +56,7 @@ from pathlib import Path
 from typing import Callable, NoReturn
 
 import numpy as np
+import numpy.typing as npt
 
 from frictex.textures.library import file_problem
 from frictex.device.errors import InputError
@@ -108,14 +109,22 @@ class Trace:
     x_mm, y_mm : float64 (n,) position (mm, screen origin top-left, y down).
     force_n : float64 (n,) normal force (N).
     event : int8 (n,) DOWN, MOVE or UP.
+
+    Each field is held as a read-only array (a view of what was given, lists made
+    arrays): a Trace is not changed through it. :func:`make_trace` copies its inputs
+    too, so that changing them afterwards changes no trace.
     """
 
-    t_s: np.ndarray
-    finger: np.ndarray
-    x_mm: np.ndarray
-    y_mm: np.ndarray
-    force_n: np.ndarray
-    event: np.ndarray
+    t_s: npt.NDArray[np.float64]
+    finger: npt.NDArray[np.int64]
+    x_mm: npt.NDArray[np.float64]
+    y_mm: npt.NDArray[np.float64]
+    force_n: npt.NDArray[np.float64]
+    event: npt.NDArray[np.int8]
+
+    def __post_init__(self) -> None:
+        for name in _COLUMNS:
+            object.__setattr__(self, name, _read_only(name, getattr(self, name)))
 
     def __len__(self) -> int:
         return int(self.t_s.size)
@@ -137,6 +146,24 @@ class Trace:
 _COLUMNS = ("t_s", "finger", "x_mm", "y_mm", "force_n", "event")
 
 
+def read_only_view(array: np.ndarray) -> np.ndarray:
+    """A read-only view of ``array`` (O(1)): no copy, and the array's own flags are left
+    as they are (its owner may still write into it)."""
+    view = array.view()
+    view.setflags(write=False)
+    return view
+
+
+def _read_only(name: str, values) -> np.ndarray:
+    """Field ``name`` of a :class:`Trace` as a read-only array (lists made arrays)."""
+    try:
+        array = np.asarray(values)
+    except (TypeError, ValueError):  # a ragged nesting
+        raise TraceError(f"trace: {name} is not an array of numbers: expected one number "
+                         "per sample, shape (n,)") from None
+    return read_only_view(array)
+
+
 def make_trace(t_s, finger, x_mm, y_mm, force_n=None, event=None, where: str = "trace",
                normalise: bool = True) -> Trace:
     """Validate arrays and build a :class:`Trace` (the module docstring's rules; time
@@ -147,13 +174,14 @@ def make_trace(t_s, finger, x_mm, y_mm, force_n=None, event=None, where: str = "
     ones passes ``normalise=False`` so that a finger's first sample in the batch is not
     taken for a new touch.
     """
-    t = np.asarray(t_s, dtype=np.float64)
+    # copies (np.array), so that the caller changing its arrays later changes no trace
+    t = np.array(t_s, dtype=np.float64)
     n = t.size
-    fing = np.asarray(finger)
-    x = np.asarray(x_mm, dtype=np.float64)
-    y = np.asarray(y_mm, dtype=np.float64)
-    f = np.full(n, DEFAULT_FORCE_N) if force_n is None else np.asarray(force_n, dtype=np.float64)
-    ev = np.full(n, MOVE, dtype=np.int8) if event is None else np.asarray(event, dtype=np.int8)
+    fing = np.asarray(finger)  # copied by the cast to int64 below
+    x = np.array(x_mm, dtype=np.float64)
+    y = np.array(y_mm, dtype=np.float64)
+    f = np.full(n, DEFAULT_FORCE_N) if force_n is None else np.array(force_n, dtype=np.float64)
+    ev = np.full(n, MOVE, dtype=np.int8) if event is None else np.array(event, dtype=np.int8)
     for name, arr in (("finger", fing), ("x_mm", x), ("y_mm", y), ("force_n", f), ("event", ev)):
         if arr.shape != (n,):
             raise TraceError(f"{where}: column {name} has shape {arr.shape}, expected ({n},)")
