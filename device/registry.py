@@ -346,21 +346,27 @@ class Registry(Generic[T]):
                 warn_once(f"{exc}; left out")
         self._readings = readings  # only now: every entry read is in place
 
-    @_locked
     def _load(self, name: str) -> T:
-        entry = self._entries[name]
+        """The object of entry ``name``, imported the first time. The import runs without
+        :data:`_LOCK`: a module registers into a registry as it is imported, so a thread
+        importing it while another held the lock across its import waited for each other
+        for ever; the first object stored is the one every thread gets."""
+        with _LOCK:
+            entry, origin = self._entries[name], self._origin[name]
         if not isinstance(entry, _Unloaded):
             return entry
         try:
             loaded = entry.point.load()
         except Exception as exc:  # a broken plugin names itself, not frictex
-            raise PluginError(f"{self.kind} {name!r} of {self._origin[name]} cannot be "
+            raise PluginError(f"{self.kind} {name!r} of {origin} cannot be "
                               f"loaded: {type(exc).__name__}: {exc}") from exc
         if self.expect is not None and not self.expect.test(loaded):
-            raise PluginError(f"{self.kind} {name!r} of {self._origin[name]} is "
+            raise PluginError(f"{self.kind} {name!r} of {origin} is "
                               f"{_a(loaded)}; expected {self.expect.what}")
-        self._entries[name] = loaded
-        return loaded
+        with _LOCK:
+            if self._entries.get(name) is entry:
+                self._entries[name] = loaded
+            return self._entries[name]
 
     @_locked
     def _current(self) -> None:
@@ -369,16 +375,20 @@ class Registry(Generic[T]):
         if _read_installed() != self._readings:
             self.scan()
 
-    @_locked
     def get(self, name: str) -> T:
         """The entry registered under ``name``; :class:`UnknownName` lists the known."""
+        self._find(name)
+        return self._load(name)
+
+    @_locked
+    def _find(self, name: str) -> None:
+        """Scan as needed until ``name`` is registered; :class:`UnknownName` if it is not."""
         self._current()
         if not isinstance(name, str) or name not in self._entries:
             self.scan(fresh=True)
-        if isinstance(name, str) and name in self._entries:
-            return self._load(name)
-        raise UnknownName(f"unknown {self.kind} {name!r}; expected one of "
-                          f"{', '.join(self.names())}")
+        if not (isinstance(name, str) and name in self._entries):
+            raise UnknownName(f"unknown {self.kind} {name!r}; expected one of "
+                              f"{', '.join(self.names())}")
 
     def named(self, spec: str, expected: str = "NAME[:ARG]") -> tuple[str, str]:
         """NAME and ARG of a ``NAME[:ARG]`` spec whose NAME is registered here (else
@@ -431,11 +441,11 @@ class Registry(Generic[T]):
         self._current()
         return tuple(self._entries)
 
-    @_locked
     def origin(self, name: str) -> str:
         """Who registered ``name``: ``frictex`` or the plugin's distribution and object."""
         self.get(name)
-        return self._origin[name]
+        with _LOCK:
+            return self._origin[name]
 
     @_locked
     def __contains__(self, name: object) -> bool:

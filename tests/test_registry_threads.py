@@ -51,3 +51,37 @@ def test_the_lock_is_reentrant_for_a_scan_within_a_lookup():
     renderers = Registry("renderer", "frictex.renderers")
     with registry_module._LOCK:
         assert "sht" in renderers.names() and "nosuch" not in renderers
+
+
+def test_a_thread_importing_a_module_that_registers_while_another_loads_it(tmp_path,
+                                                                          monkeypatch):
+    """Thread B imports a module that registers into a registry as it is imported (as
+    frictex's modules do); thread A loads an entry point to that module through the same
+    registry. Holding the lock across the import, A waited for B's import and B for the
+    lock: both hung."""
+    import importlib.metadata
+    (tmp_path / "gadget_registry.py").write_text(
+        "from frictex.device.registry import Registry\n"
+        "GADGETS = Registry('gadget', 'frictex.test-gadgets-none')\n")
+    (tmp_path / "slow_gadget.py").write_text(
+        "import time\n"
+        "time.sleep(0.3)  # an import that takes a while (numba, a compiled library)\n"
+        "from gadget_registry import GADGETS\n"
+        "GADGETS.register('registered-on-import', len)\n"
+        "X = abs\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    from gadget_registry import GADGETS
+    point = importlib.metadata.EntryPoint(name="slow", value="slow_gadget:X",
+                                          group="frictex.test-gadgets-none")
+    with registry_module._LOCK:
+        GADGETS._entries["slow"] = registry_module._Unloaded(point)
+        GADGETS._origin["slow"] = "a test's entry point"
+    got = []
+    importer = threading.Thread(target=lambda: __import__("slow_gadget"), daemon=True)
+    loader = threading.Thread(target=lambda: got.append(GADGETS.get("slow")), daemon=True)
+    importer.start()
+    loader.start()
+    importer.join(30)
+    loader.join(30)
+    assert not importer.is_alive() and not loader.is_alive()
+    assert got == [abs] and GADGETS.get("registered-on-import") is len
