@@ -56,7 +56,13 @@ def test_nested_sections_are_read_only_dicts_json_and_pickle_take():
     assert isinstance(device, dict)
     with pytest.raises(TypeError, match="read-only"):
         device["unplayed_by_cause"]["stall"] = 0
-    assert device["lost"] == (1, 2)
+    assert device["lost"] == [1, 2]  # a list still, equal to summary.json's (was a tuple)
+    with pytest.raises(TypeError, match="read-only"):
+        device["lost"].append(3)
+    top = dict(device)  # one level copied: what is inside stays read-only, and says so
+    top["commanded_samples"] = 0
+    with pytest.raises(TypeError, match=r"to_dict\(\) \(dict\(...\) and list\(...\) copy one level"):
+        top["unplayed_by_cause"]["stall"] = 0
     assert json.loads(json.dumps(device)) == doc["device"]
     assert summary.to_dict() == doc
     again = pickle.loads(pickle.dumps(summary))

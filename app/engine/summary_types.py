@@ -375,20 +375,32 @@ class Summary:
         return _plain(self)
 
 
+def _refuse(self, *args, **kwargs):
+    raise TypeError("a summary's data is read-only: change a copy, summary.to_dict() (dict(...) "
+                    "and list(...) copy one level only)")
+
+
 class ReadOnlyDict(dict):
     """A dict whose items cannot be set, deleted or updated (a ``TypeError``); a
     summary's mappings. Still a dict: ``json.dumps`` and ``isinstance(d, dict)`` take it;
-    ``dict(d)`` is a copy to change."""
-
-    def _refuse(self, *args, **kwargs):
-        raise TypeError("a summary's mappings are read-only: change a copy, dict(...) or "
-                        "summary.to_dict()")
+    ``dict(d)`` is a copy of its top level to change."""
 
     __setitem__ = __delitem__ = __ior__ = _refuse
     clear = pop = popitem = setdefault = update = _refuse
 
     def __reduce__(self):  # pickle and copy rebuild it whole, not item by item
         return ReadOnlyDict, (dict(self),)
+
+
+class ReadOnlyList(list):
+    """A list that cannot be changed (a ``TypeError``); the lists in a summary's mappings
+    (a loop's ``messages``). Still a list: it equals the list ``summary.json`` holds."""
+
+    __setitem__ = __delitem__ = __iadd__ = __imul__ = _refuse
+    append = extend = insert = pop = remove = reverse = sort = clear = _refuse
+
+    def __reduce__(self):
+        return ReadOnlyList, (list(self),)
 
 
 def _freeze_mappings(obj) -> None:
@@ -403,10 +415,12 @@ def _freeze_mappings(obj) -> None:
 
 def _frozen(value):
     """``value`` with every mapping inside it a :class:`ReadOnlyDict` copy and every list
-    a tuple."""
+    a :class:`ReadOnlyList` one."""
     if isinstance(value, Mapping):
         return ReadOnlyDict({k: _frozen(v) for k, v in value.items()})
-    if isinstance(value, (list, tuple)):
+    if isinstance(value, list):
+        return ReadOnlyList(_frozen(v) for v in value)
+    if isinstance(value, tuple):
         return tuple(_frozen(v) for v in value)
     return value
 
