@@ -210,8 +210,11 @@ channel's drive reaches their product (plate-seed003 and travelling-beam-seed002
 um/V x 150 V = 3 um; ring-seed004: 0.0375 um/V x 80 V = 3 um; beam-seed000 and
 plate-seed001: 0.005125 um/V x 150 V = 0.769 um). `frictex validate` warns where a scene
 asks one channel for more: `amplitude_limit_um` on a one-channel or travelling-wave
-profile, `[device.structure] channel_limit_um` on a modal one (seed 001's plate without
-one is not compared). What the plate then gets depends on the output: the audio output
+profile, `[device.structure] channel_limit_um` on a modal one. Seed 001's plate without
+one is not compared, though its channels then take `amplitude_limit_um`: seed 001 gives no
+um per volt for its plate, which borrows the beam's (0.769 um at 150 V), and the bundled
+two-finger-plate-seed001 asks the 1 um seed 001's experiments used; the warning would
+rest on a borrowed figure. What the plate then gets depends on the output: the audio output
 clamps each channel at the voltage limit (and counts the clamps); a link device (`--device
 sim`, a serial device) clamps only at the limit it declares (the simulated device's 4 um
 by default), so the plate may be asked for more than the profile's figures allow.
