@@ -100,6 +100,26 @@ def test_a_ctrl_c_during_an_intervals_commit_stops_the_experiment_after_its_tria
     assert len((out / "results.csv").read_text().splitlines()) == 1 + 8
 
 
+def test_a_ctrl_c_during_the_last_intervals_commit_leaves_the_session_complete(
+        tmp_path, monkeypatch, capsys):
+    """The Ctrl-C comes as the last trial's last interval commits: the session is
+    complete, so it ends as one (exit 0, every trial's line printed), where it said
+    'interrupted', exit 130, and left trial 8's line out."""
+    from frictex.app.commands.cli import main
+    path = tmp_path / "p.toml"
+    path.write_text(PROTOCOL, encoding="utf-8")  # 8 trials of 2 intervals
+    out = tmp_path / "s"
+    commits = ctrl_c_in_commit(monkeypatch, at=16)
+    assert main(["experiment", str(path), "--participant", "simulated:weber=0.11,seed=3",
+                 "--seed", "4", "--out", str(out)]) == 0
+    assert len(commits) == 16
+    printed = capsys.readouterr()
+    assert [line.split(":")[0] for line in printed.out.splitlines()] == [
+        f"trial {k}" for k in range(1, 9)]
+    assert "interrupted" not in printed.err
+    assert len((out / "results.csv").read_text().splitlines()) == 1 + 8
+
+
 def run_ended_by(first: int, then: list[int], cleaned: list):
     """A command whose run is ended by signal ``first``; the signals ``then`` come
     during its cleanup, which notes in ``cleaned`` that it ran to its end."""

@@ -189,7 +189,6 @@ def run(args: argparse.Namespace) -> int:
     presenter = make_presenter(spec)
 
     def progress(trial, row):
-        runs.check()  # a Ctrl-C an interval's commit dropped stops here, the trial kept
         if not args.quiet:
             kind = "practice" if trial.practice else "trial"
             print(f"{kind} {trial.number}: {' vs '.join(trial.stimuli)} -> {row['response']}"
@@ -199,7 +198,7 @@ def run(args: argparse.Namespace) -> int:
     def session():
         return run_session(protocol, presenter, out, seed=args.seed, participant=spec,
                            participant_id=pid, resume=args.resume, record=args.record,
-                           progress=progress)
+                           progress=progress, between_trials=runs.check)
 
     with between_runs() as runs:
         if spec.partition(":")[0] == "window":

@@ -86,8 +86,8 @@ class _Stage:
 def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str | Path, *,
                 seed: int | None = None, participant: str = "", participant_id: str | None = None,
                 resume: bool = False,
-                record: str = "all", progress: Callable[[Trial, dict], None] | None = None
-                ) -> S.Session:
+                record: str = "all", progress: Callable[[Trial, dict], None] | None = None,
+                between_trials: Callable[[], None] | None = None) -> S.Session:
     """Run (or with ``resume`` go on with) the session of ``protocol`` in ``out_dir``.
 
     ``seed``: the trial order's seed (default: the protocol's, else drawn now; recorded
@@ -99,7 +99,9 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
     code (``session.participant_id``), recorded (with ``resume``, refused unless the
     session's). ``record``: ``all`` (per trial: scene, trace and their replay), ``traces`` (scene and trace) or
     ``results`` (the results table only). ``progress(trial, row)`` is called after each
-    trial is recorded. Returns the session (its ``rows``: every trial answered).
+    trial is recorded; ``between_trials()`` before each trial after the first of this run
+    (where a command stops the session: the trials before are recorded, none is begun).
+    Returns the session (its ``rows``: every trial answered).
     With ``resume`` on a complete session, nothing runs and session.json is left as it
     is (the session's ``complete_before`` says so).
     """
@@ -128,7 +130,8 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
     S.begin_part(session, first)
     try:
         presenter.begin(protocol)
-        _run_trials(scheduler, state, stage, presenter, session, record, progress)
+        _run_trials(scheduler, state, stage, presenter, session, record, progress,
+                    between_trials)
     except BaseException as exc:
         S.end_part(session, first, False, getattr(exc, "why", None) or type(exc).__name__)
         raise
@@ -138,9 +141,14 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
 
 def _run_trials(scheduler: Scheduler, state, stage: _Stage, presenter: Presenter,
                 session: S.Session, record: str,
-                progress: Callable[[Trial, dict], None] | None) -> None:
+                progress: Callable[[Trial, dict], None] | None,
+                between_trials: Callable[[], None] | None) -> None:
     """The trials from ``state`` to the session's end, each recorded as it is answered."""
+    first = True
     while (trial := scheduler.next_trial(state)) is not None:
+        if not first and between_trials is not None:
+            between_trials()
+        first = False
         if trial.break_before:
             presenter.rest(trial)
         shown = stage.shown(trial)
