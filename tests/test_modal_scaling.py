@@ -82,3 +82,17 @@ def test_no_scale_of_the_shapes_gives_inf_nan_or_a_command_past_its_limit():
             for values in (got.modal_um, got.commands_um, got.achieved_um, got.error_um):
                 assert np.all(np.isfinite(values)), (phi, wanted, method)
             assert np.all(np.abs(got.commands_um) <= 3.0 * (1 + 1e-12))
+
+
+@pytest.mark.parametrize("modes", [2, 3])
+def test_bounded_commands_too_weak_to_reach_the_fingers_are_counted_capped(modes):
+    """Shapes of 1e-200: every command within the limits moves the fingers by under
+    1e-100 um; 'bounded' gives none, and counts the sample as capped (it was neither
+    capped nor limited, unlike an overflow)."""
+    rng = np.random.default_rng(modes)
+    phi = rng.normal(size=(2, modes)) * 1e-200
+    got = modal.solve(phi, [0.5, 0.3], "bounded", limits_um=1.0, actuators=np.eye(modes))
+    assert np.array_equal(got.commands_um, np.zeros(modes)) and got.capped
+    batch = modal.solve(np.stack([phi, phi * 1e200]), [[0.5, 0.3]] * 2, "bounded",
+                        limits_um=1.0, actuators=np.eye(modes))
+    assert batch.capped[0] and np.any(batch.commands_um[1] != 0)

@@ -95,7 +95,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--out", required=True, metavar="PNG",
                         help="the figure: the scene (scaled to fit) beside its friction map (.png)")
     parser.add_argument("--scene-out", default=None, metavar="PNG",
-                        help="the scene alone at its pixels, as the demo's frame draws it "
+                        help="the scene alone at its pixels, as the demo's window draws it "
                              "(default: OUT's name with -scene, beside it)")
     parser.add_argument("--size", type=frame_size, default=None, metavar="WxH",
                         help="pixel size of the scene image (--scene-out): the display fitted "
@@ -165,8 +165,9 @@ def mu_map(scene, viewport, supersample: int = 3) -> np.ndarray:
 
 
 def scene_image(scene, size: tuple[int, int], outlines: bool = False) -> np.ndarray:
-    """The scene as the demo's frame draws it, the display fitted in ``size`` (w, h px)
-    keeping its aspect: sRGB uint8 (height_px, width_px, 3)."""
+    """The scene as the demo's window draws it, the display fitted in ``size`` (w, h px)
+    keeping its aspect (fullscreen on the glass the demo stretches each axis instead,
+    ``rendering.visual.viewport.on_glass``): sRGB uint8 (height_px, width_px, 3)."""
     return to_srgb8(scene_rgb(scene, fit_viewport(scene.display, *size), outlines=outlines))
 
 
@@ -378,7 +379,7 @@ def run(args: argparse.Namespace) -> int:
           + (f"; {info['below']:.1%} of the display below it, hatched)" if info["below"] else ")")
           + (f"; {printable(info['left_out'])}" if info["left_out"] else ""))
     h, w = image.shape[:2]
-    print(f"wrote {escape_path(scene_out)}: the scene as the demo's frame draws it, {w} x {h} px, "
+    print(f"wrote {escape_path(scene_out)}: the scene as the demo's window draws it, {w} x {h} px, "
           f"{w / d.width_mm:.4g} px/mm along x, {h / d.height_mm:.4g} along y ("
           + why_this_size(d, (w, h), args.size) + ")")
     for message in info["perception"]:

@@ -367,8 +367,12 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
         commands, modal, limited = _scale_to_limits(commands, modal, limits)
         if method == "bounded" and np.any(limited):
             a_inv = np.linalg.inv(a)
-            commands[limited] = _bounded(_without_weak_directions(phi[limited]) @ a_inv,
-                                         wanted[limited], commands[limited], limits)
+            commands[limited], unreached = _bounded(
+                _without_weak_directions(phi[limited]) @ a_inv, wanted[limited],
+                commands[limited], limits)
+            reached_none = np.zeros(limited.shape, dtype=bool)
+            reached_none[limited] = unreached
+            capped = capped | reached_none
             modal[limited] = commands[limited] @ a_inv.T
             limited = _at_limit(commands, limits)
     achieved = forward(phi, modal)
@@ -376,10 +380,11 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
                          limited, capped, ratio)
 
 
-def _bounded(m_cmd, wanted, start, limits) -> np.ndarray:
+def _bounded(m_cmd, wanted, start, limits) -> tuple[np.ndarray, np.ndarray]:
     """The "bounded" commands (k, q) of k problems (:func:`_bounded_commands`, or
-    ``bounded_two`` for two actuators); 0 where every command within the limits moves the
-    fingers by less than :data:`_LEAST_REACH_UM`.
+    ``bounded_two`` for two actuators), and where they are 0 because every command within
+    the limits moves the fingers by less than :data:`_LEAST_REACH_UM` (k,) (counted
+    capped, as an overflow is).
 
     Each problem's ``m_cmd`` and ``wanted`` are first scaled by the power of two that
     brings its largest entry to [0.5, 1): the same commands (exactly), but the solvers'
@@ -394,7 +399,7 @@ def _bounded(m_cmd, wanted, start, limits) -> np.ndarray:
         commands[reach] = bounded_two(m_cmd, wanted, limits)
     else:
         commands[reach] = _bounded_commands(m_cmd, wanted, start[reach], limits)
-    return commands
+    return commands, ~reach
 
 
 def _without_overflow(modal) -> tuple[np.ndarray, np.ndarray]:

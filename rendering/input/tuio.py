@@ -663,8 +663,9 @@ class TuioListener:
         one at a time), as :func:`parse_sender` gives; None: the first sender of a TUIO
         frame (address and port).
     force_n : normal force given to every sample (N); TUIO 1.1 cursors carry none.
-    max_packets, max_bytes : queue bounds (datagrams, bytes; :data:`MAX_QUEUED_BYTES`,
-        at least 65536: one datagram of any size).
+    max_packets, max_bytes : queue bounds (datagrams, bytes; :data:`MAX_QUEUED_BYTES`);
+        give max_bytes at least 65536 (one datagram of any size), or larger datagrams are
+        all dropped as found no room.
     clock : time source for arrival stamps and silences (s).
     silence_s : a source silent this long (s) has gone (:data:`SILENCE_S`).
     warn : takes each one-line notice (a silence, a takeover, a kind of malformed datagram
