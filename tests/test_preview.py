@@ -31,7 +31,7 @@ def test_the_scene_image_is_at_the_display_pixels_and_a_gratings_period_measures
     image = Image.open(tmp_path / "g-scene.png")
     w, h = round(120 * px_per_mm), round(80 * px_per_mm)
     assert image.size == (w, h)
-    assert drawn.startswith(f"wrote {tmp_path / 'g-scene.png'}: the scene as the demo's frame "
+    assert drawn.startswith(f"wrote {tmp_path / 'g-scene.png'}: the scene as the demo's window "
                             f"draws it, {w} x {h} px, {px_per_mm:g} px/mm along x")
     assert ("the display's pixels" in drawn) == (size is None)
     grey = np.asarray(image.convert("L"), dtype=np.float64)
