@@ -86,7 +86,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "person's constants and drift, seen by a 1 kHz sensor with 2 mN "
                              "lateral and 5 mN normal noise (device/finger.py)")
     parser.add_argument("--finger-speed", type=float, default=100.0, metavar="MM_S",
-                        help="sliding speed of the --finger (default 100 mm/s)")
+                        help="sliding speed of the --finger (default 100 mm/s; negative: "
+                             "towards -x, its lateral force negative, PROTOCOL.md 4.9)")
     parser.add_argument("--log", metavar="CSV", default=None,
                         help="write every played sample: index,ch0_um,... (fixed-point values)")
     rows, mb_hour = plate_log_growth(1, 10_000.0)

@@ -71,7 +71,8 @@ class DeviceConfig:
     force_n : normal force reported by a simulated force sensor (N), None for no sensor.
     lateral_n : a constant lateral force (N) in force reports (normal: ``force_n`` or 0).
     finger : force reports from a simulated finger, person ``finger`` of
-        ``device.finger.draw_finger``, sliding at ``finger_speed_mm_s`` and pressing with
+        ``device.finger.draw_finger``, sliding at ``finger_speed_mm_s`` (negative: towards
+        -x, its lateral force negative) and pressing with
         ``force_n`` (default 0.5 N) (``device.link.simsensor.FingerSensor``).
     force_decimation, force_pairs : ticks averaged per reported value, values per report.
     """
@@ -134,7 +135,8 @@ class DeviceConfig:
                   (self.finger is None or self.finger >= 0, "finger", "a seed >= 0"),
                   (self.lateral_n is None or self.finger is None, "lateral_n",
                    "None with a simulated finger (it makes the lateral force)"),
-                  (0 <= self.finger_speed_mm_s <= 1e4, "finger_speed_mm_s", "in [0, 1e4] mm/s"),
+                  (abs(self.finger_speed_mm_s) <= 1e4, "finger_speed_mm_s",
+                   "in [-1e4, 1e4] mm/s (negative: sliding towards -x)"),
                   (1 <= self.force_decimation <= 65535, "force_decimation", "in [1, 65535]"),
                   (1 <= self.force_pairs <= p.FORCE_PAIRS_MAX, "force_pairs",
                    f"in [1, {p.FORCE_PAIRS_MAX}]"),
