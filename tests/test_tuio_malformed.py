@@ -48,8 +48,8 @@ def test_one_cursor_off_the_screen_leaves_the_other_playing():
                      "set 2: position (1.6, 0.5) is off the screen, expected -0.5 to 1.5 "
                      "(normalised) (the frame's other cursors played, this one kept where it "
                      "was); further ones counted"]
-    assert "148 cursor sets skipped (cannot be played), malformed: 148 cursor position off " \
-           "the screen" in tuio_line(counts)
+    assert "148 cursor sets skipped (cannot be played), by kind (datagrams and cursor sets " \
+           "together): 148 cursor position off the screen" in tuio_line(counts)
 
 
 def test_each_kind_of_malformed_datagram_is_said_once_and_counted():
@@ -74,7 +74,8 @@ def test_each_kind_of_malformed_datagram_is_said_once_and_counted():
     assert counts["malformed"] == {"not OSC": 3, "cursor position not finite": 2}
     assert tuio_line(counts).endswith(
         "3 malformed datagrams dropped, 2 cursor sets skipped (cannot be played), "
-        "malformed: 3 not OSC, 2 cursor position not finite")
+        "by kind (datagrams and cursor sets together): 3 not OSC, 2 cursor position not "
+        "finite")
 
 
 def test_a_silence_of_malformed_datagrams_says_they_came():

@@ -248,7 +248,7 @@ def tuio_line(counts: dict) -> str:
         drops[0] = f"{counted(counts['refused'], 'datagram')} refused (none claimed the input)"
     if counts["malformed"]:
         kinds = ", ".join(f"{n} {kind}" for kind, n in counts["malformed"].items())
-        drops.append(f"malformed: {kinds}")
+        drops.append(f"by kind (datagrams and cursor sets together): {kinds}")
     if counts["takeovers"]:
         drops.append(f"{counted(counts['takeovers'], 'takeover')} after a silence")
     return (f"demo: TUIO on {counts['listen']} from {sender}: "
