@@ -2,11 +2,15 @@
 
 Every recording under DIR (recursively) is replayed: trace CSVs as they are, Android
 ``getevent -lt`` logs and evemu recordings through ``frictex trace import``. A log does
-not record its screen's size, so its observed range is mapped onto the scene's display
-at one scale for both axes (``rendering.input.evdev_decode.screen_map``: a drag keeps its
-shape; the touches are replayed on the scene, at the scene's scale). Each recording runs on
-each seed 003 grating of the report with every renderer (50 Hz is the recordings' own
-rate here: 67-105 Hz), 10 kHz output, exact inversion.
+not record its screen's size, so it is imported onto the scene's display: its observed
+range at one scale for both axes (``rendering.input.evdev_decode.screen_map``: a drag
+keeps its shape), or a ``-lpt`` log's axis ranges each mapped to its side of the display
+(a shape then stretched by the two sides' ratios). Positions and speeds are display
+millimetres, each recording at its own scale (the phone drag of refdata: 19.9 mm on the
+52 mm phone, 108 mm here, 5.4x): the rows compare how the tracker and the renderers
+handle each gesture, not the gestures' real speeds. Each recording runs on each seed
+003 grating of the report with every renderer, at its own touch rate (67-105 Hz for
+refdata's logs), 10 kHz output, exact inversion.
 
 No true path exists for a recording, so what is scored is what can be:
 
