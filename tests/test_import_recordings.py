@@ -514,3 +514,20 @@ def test_an_unknown_range_keeps_a_strokes_shape():
     trace = screen.trace(samples, "drag")
     assert np.ptp(trace.x_mm) == pytest.approx(160.0)
     assert np.ptp(trace.y_mm) == pytest.approx(11 * 160.0 / 392)
+
+
+@needs_refdata
+@pytest.mark.parametrize("name, still", [("Phone/galaxy-paint-new.txt", "finger 0 still down"),
+                                         ("Phone/phone-two-finger-drag.txt", None)])
+def test_a_log_cut_mid_touch_says_which_fingers_are_still_down(tmp_path, capsys, name, still):
+    """galaxy-paint-new ends mid-stroke (tracking id 143 never lifted): its last row was a
+    move and nothing said so; a log whose fingers all lift says nothing."""
+    out = tmp_path / "t.csv"
+    assert _import([str(REFDATA / name), "-o", str(out)] + PHONE) == 0
+    said = [line for line in capsys.readouterr().err.splitlines() if "still down" in line]
+    if still is None:
+        assert said == []
+    else:
+        assert said == [f"frictex: warning: {still} at the end of the recording (cut "
+                        "mid-touch?): no lift follows its last sample"]
+        assert read_trace(out).event[-1] != UP

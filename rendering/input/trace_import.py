@@ -24,7 +24,7 @@ from frictex.rendering.input.evdev_decode import (AbsInfo, Event, RawSample, Scr
 from frictex.rendering.input.import_evemu import parse_evemu
 from frictex.rendering.input.import_getevent import read_log
 from frictex.rendering.input.trace_file import (DEFAULT_FORCE_N, TraceError, ascii_float, concat_traces,
-                                                format_trace, iter_trace, most_touching)
+                                                UP, format_trace, iter_trace, most_touching)
 from frictex.device.safe_text import quoted
 
 FORMATS = ("auto", "getevent", "evemu", "csv")
@@ -167,6 +167,14 @@ def _events(path: Path, text: str, fmt: str,
     return recording.events, recording.absinfo, recording.warnings
 
 
+def still_down(trace) -> list[int]:
+    """The finger ids (ascending) whose last sample in ``trace`` is not a lift."""
+    last = {}
+    for finger, event in zip(trace.finger.tolist(), trace.event.tolist()):
+        last[finger] = event
+    return sorted(finger for finger, event in last.items() if event != UP)
+
+
 def run_import(args: argparse.Namespace, write: Callable[[str, str], None]) -> int:
     """Convert ``args.input`` to the trace CSV ``args.out``, written by ``write(path,
     text)`` (the command's room-checked, all-or-nothing writer); print a summary; return 0."""
@@ -202,6 +210,11 @@ def run_import(args: argparse.Namespace, write: Callable[[str, str], None]) -> i
     if decoder.pending:
         warnings.append(f"{decoder.pending} events after the last SYN_REPORT (an unfinished "
                         "frame) were left out")
+    still = still_down(trace)
+    if still:
+        warnings.append(f"finger{'s' if len(still) > 1 else ''} {', '.join(map(str, still))} "
+                        f"still down at the end of the recording (cut mid-touch?): no lift "
+                        f"follows {'their' if len(still) > 1 else 'its'} last sample")
     comment = (f"imported from {path} ({fmt}, multitouch protocol {decoder.protocol}); "
                f"recording clock at the first sample: {t0!r} s"
                f"{'' if args.keep_time else ' (shifted to t = 0)'}; x {screen.x.lo:g}..{screen.x.hi:g} "
