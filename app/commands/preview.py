@@ -4,7 +4,7 @@ a figure of the scene beside its friction map (mu' as an image with a colour bar
 The scene image (``--scene-out``, by default ``<out>-scene.png`` beside ``out.png``) is
 the visual layer's static image (``rendering.visual.scene_image``): the display's mm
 area fitted in its ``width_px`` x ``height_px`` keeping the mm aspect, pixel for pixel
-what the demo's frame draws there (all of them where the pixels are square; 800 x 480 px
+what the demo's window draws there (all of them where the pixels are square; 800 x 480 px
 on 120 x 64.8 mm gives 800 x 432), at most MAX_PANEL_PX a side: a grating's period
 measures period_mm x px/mm in it. ``--size WxH`` draws it at another size (the display
 fitted in WxH, its aspect kept).

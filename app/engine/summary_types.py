@@ -5,7 +5,7 @@ page, its fields the object's keys in the order ``summary.json`` writes them, so
 ``Summary.from_dict(doc).to_dict() == doc`` and ``json.dumps`` of either gives the same
 text. Sections whose keys are data or documented elsewhere (``forces``, ``device``,
 ``control``, the per-stage and per-layer seconds) stay mappings: dicts that cannot be
-changed (:class:`ReadOnlyDict`, nested ones too, lists as tuples), so that a summary is
+changed (:class:`ReadOnlyDict`, nested ones too, their lists :class:`ReadOnlyList`), so that a summary is
 not changed after it is made; they are still dicts (``json.dumps`` takes them), and
 :meth:`Summary.to_dict` gives plain copies. An optional section
 (``trace.time_order``, ``forces``, ``control``, ``device``) is None when the run has none,

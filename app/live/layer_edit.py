@@ -621,11 +621,7 @@ class LayerEdit:
         expected = self.disk if target == self.path else OnDisk(None, None)
         if now != expected and now != self._overwrite:
             self._overwrite = now
-            copy = target != self.path
-            raise SaveConflict(_conflict(target, copy),
-                               "not saved: a copy saved before is there; Ctrl+S again replaces it"
-                               if copy else
-                               "not saved: the file changed on disk; Ctrl+S again overwrites")
+            raise _conflict(target, copy=target != self.path)
         try:
             target.parent.mkdir(parents=True, exist_ok=True)
             if target != self.path:
@@ -649,17 +645,19 @@ class LayerEdit:
                 shutil.copy2(ref, folder / ref.relative_to(home))
 
 
-def _conflict(target: Path, copy: bool) -> str:
-    """Why a save to ``target`` was refused, and what Ctrl+S again does: the file the
-    panel holds changed on disk (an edit of it reloads), or, saving a bundled scene's
-    ``copy``, a copy saved before is there (the panel holds the bundled file: editing
-    that copy reloads nothing)."""
+def _conflict(target: Path, copy: bool) -> SaveConflict:
+    """Why a save to ``target`` was refused, and what Ctrl+S again does, with the window's
+    banner: the file the panel holds changed on disk (an edit of it reloads), or, saving
+    a bundled scene's ``copy``, a copy saved before is there (the panel holds the bundled
+    file: editing that copy reloads nothing)."""
     if copy:
-        return (f"{target} is there already (a copy saved before): not saved. Ctrl+S again "
-                "replaces its earlier edits with these")
-    return (f"{target.name} changed on disk since the panel read it: not saved. Ctrl+S again "
-            "overwrites it with the panel's version; or leave it, and a good edit of the file "
-            "reloads (keeping the panel's unsaved edits)")
+        return SaveConflict(f"{target} is there already (a copy saved before): not saved. "
+                            "Ctrl+S again replaces its earlier edits with these",
+                            "not saved: a copy saved before is there; Ctrl+S again replaces it")
+    return SaveConflict(f"{target.name} changed on disk since the panel read it: not saved. "
+                        "Ctrl+S again overwrites it with the panel's version; or leave it, and "
+                        "a good edit of the file reloads (keeping the panel's unsaved edits)",
+                        "not saved: the file changed on disk; Ctrl+S again overwrites")
 
 
 def _set(table, key: str, value) -> None:

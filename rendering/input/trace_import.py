@@ -169,10 +169,8 @@ def _events(path: Path, text: str, fmt: str,
 
 def still_down(trace) -> list[int]:
     """The finger ids (ascending) whose last sample in ``trace`` is not a lift."""
-    last = {}
-    for finger, event in zip(trace.finger.tolist(), trace.event.tolist()):
-        last[finger] = event
-    return sorted(finger for finger, event in last.items() if event != UP)
+    fingers, last = np.unique(trace.finger[::-1], return_index=True)  # each one's last row
+    return fingers[trace.event[::-1][last] != UP].tolist()
 
 
 def run_import(args: argparse.Namespace, write: Callable[[str, str], None]) -> int:
