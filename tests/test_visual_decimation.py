@@ -3,11 +3,13 @@ pixel column each), trails thinned to a vertex per pixel of path."""
 
 import numpy as np
 import pytest
+from hypothesis import given, strategies as st
 from numpy.testing import assert_allclose
 
-from frictex.rendering.visual.overlay import BlockRecord, OverlayState
+from frictex.rendering.visual.overlay import BlockRecord, OverlayState, segment_triangles
 from frictex.rendering.visual.scope_ring import bin_spans
-from frictex.rendering.visual.trail import TrailPath, joined_steps, thin_polyline
+from frictex.rendering.visual.trail import (TRAIL_BREAK_MM, TRAIL_BREAK_MM_S, TrailPath,
+                                            thin_polyline)
 from frictex.rendering.visual.viewport import fit_viewport
 from frictex.textures.model import Display
 
@@ -65,6 +67,52 @@ def test_thinned_polyline_keeps_its_breaks_and_a_vertex_per_pixel():
     assert step.max() < 1.5
 
 
+polylines = st.integers(1, 60).flatmap(lambda n: st.tuples(
+    st.lists(st.tuples(st.sampled_from([0.0, 0.3, 1.0, 2.5]), st.sampled_from([0.0, -0.7, 1.0])),
+             min_size=n, max_size=n),
+    st.lists(st.booleans(), min_size=n - 1, max_size=n - 1)))
+
+
+@given(polylines)
+def test_thinning_equals_its_definition_written_with_arrays(polyline):
+    """Steps of 0 to 2.7 px (repeated points included) with random breaks: the kept
+    vertices and the joins between them are what the definition gives computed over
+    whole arrays (path length marks, both ends of each break, the break count)."""
+    steps, joined = polyline
+    points = np.cumsum(np.array(steps, dtype=np.float64), axis=0)
+    joined = np.array(joined, dtype=bool)
+    length = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))))
+    keep = np.zeros(len(points), dtype=bool)
+    keep[[0, -1]] = True
+    keep[1:] |= np.diff(np.floor(length / 1.0)) != 0
+    keep[:-1] |= ~joined
+    keep[1:] |= ~joined
+    breaks = np.concatenate(([0], np.cumsum(~joined)))
+    kept, kept_joined = thin_polyline(points, joined, 1.0)
+    assert kept.tolist() == np.flatnonzero(keep).tolist()
+    assert kept_joined.tolist() == (breaks[kept[1:]] == breaks[kept[:-1]]).tolist()
+
+
+@given(polylines, st.sampled_from([1.0, 3.0, 5.5]))
+def test_segment_quads_are_each_drawn_segments_width_around_it(polyline, width):
+    """Each kept segment longer than zero becomes two triangles whose corners lie
+    width/2 either side of its ends, perpendicular to it, in its ends' colours."""
+    steps, keep = polyline
+    points = np.cumsum(np.array(steps, dtype=np.float64), axis=0)
+    keep = np.array(keep, dtype=bool)
+    rgba = np.random.default_rng(len(points)).uniform(size=(len(points), 4))
+    tris = segment_triangles(points, rgba, width, keep).reshape(-1, 6, 6)
+    drawn = np.flatnonzero(keep & (np.hypot(*np.diff(points, axis=0).T) > 1e-9))
+    assert len(tris) == drawn.size
+    for quad, i in zip(tris, drawn):
+        d = points[i + 1] - points[i]
+        normal = np.array([-d[1], d[0]]) / np.hypot(*d) * width / 2
+        ends = points[[i, i, i + 1, i + 1, i, i + 1]]
+        sides = np.array([1, -1, 1, 1, -1, -1])[:, None]
+        assert_allclose(quad[:, :2], ends + sides * normal, rtol=0, atol=1e-12)
+        assert_allclose(quad[:, 2:], rgba[[i, i, i + 1, i + 1, i, i + 1]], rtol=0, atol=0)
+
+
 def wandering_stroke(seed, n=8000):
     """A 2 kHz stroke (t s, contact, x and y mm): a random walk of ~0.03 mm steps, lifted
     for 0.15 s and jumping 40 mm while touching."""
@@ -104,8 +152,11 @@ def test_a_trail_taken_in_stretches_draws_each_joined_step_once_within_a_pixel(s
         distance = np.abs(chord[0] * offset[:, 1] - chord[1] * offset[:, 0]) / max(
             np.hypot(*chord), 1e-12)
         assert distance.max() < 1.0
-    assert (drawn == joined_steps(t, contact, x, y)).all()
-    whole = thin_polyline(sample_px, joined_steps(t, contact, x, y), 1.0)[0]
+    step_mm = np.hypot(np.diff(x), np.diff(y))  # a step is drawn touching at both ends, not a jump
+    expected = ((contact[:-1] > 0) & (contact[1:] > 0)
+                & ((step_mm <= TRAIL_BREAK_MM) | (step_mm <= TRAIL_BREAK_MM_S * np.diff(t))))
+    assert expected.sum() < t.size - 300 and (drawn == expected).all()
+    whole = thin_polyline(sample_px, expected, 1.0)[0]
     assert times.size <= whole.size + ends.size + 1
 
 

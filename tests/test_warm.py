@@ -1,5 +1,6 @@
 """After setup (``frictex warm``) no run compiles a kernel: every numba kernel a replay
-calls is loaded from the cache (numba's own hit and miss counters, in a fresh process)."""
+calls, and those of a demo frame's overlay (trails, scope columns, force arrows), is
+loaded from the cache (numba's own hit and miss counters, in a fresh process)."""
 
 import json
 import subprocess
@@ -21,6 +22,15 @@ for scene in (height_shapes_scene(), recorded_texture_scene()):
     run_replay(scene, "circle-30mms-60hz", sys.argv[1], progress=False)
 run_replay("grating-15mm", "circle-30mms-60hz", sys.argv[1], control="adaptive", device="sim",
            sim_args=("--finger", "3"), progress=False)
+from frictex.app.measure.bench_visual import bench_scene, busy_overlay
+from frictex.rendering.visual.overlay import arrow_triangles
+from frictex.rendering.visual.scope_ring import scope_columns
+from frictex.rendering.visual.viewport import fit_viewport
+overlay = busy_overlay()
+overlay.trail_triangles(fit_viewport(bench_scene().display, 1920, 1080))
+scope_columns(overlay, ((0.0, 830.5, 1920.0, 90.0), (0.0, 950.5, 1920.0, 90.0)), 3.0,
+              3.0 / 1920, 1500, 40, 830.5, 210)
+arrow_triangles((10.0, 10.0), (5.0, 3.0), (1.0, 1.0, 1.0, 1.0), 2.0)
 ours = [d for d in gc.get_objects() if isinstance(d, CPUDispatcher)
         and d.py_func.__module__.startswith("frictex.")]
 print(json.dumps({"hits": sum(sum(d.stats.cache_hits.values()) for d in ours),

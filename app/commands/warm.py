@@ -6,7 +6,8 @@ numba on first use and cached beside their sources; setup runs this so that no r
 demo or test pays the compilation. It replays a short synthetic stroke on one bundled
 scene of each kind of device into a temporary folder, in every output format, on a
 scene with a height layer of every shape, on a scene with a recorded texture and with
-the friction loop on.
+the friction loop on. The visual overlay's kernels (trails, scope columns) are compiled
+on a short two-finger stroke, without OpenGL.
 """
 
 from __future__ import annotations
@@ -68,6 +69,26 @@ def height_shapes_scene():
     return replace(scene, layers=(*scene.layers, *layers))
 
 
+def overlay_geometry() -> None:
+    """The demo's overlay kernels: two fingers' trails and their scope columns, drawn
+    from a short stroke (no OpenGL: the geometry and the columns are numpy)."""
+    import numpy as np
+
+    from frictex.rendering.visual.overlay import BlockRecord, OverlayState
+    from frictex.rendering.visual.scope_ring import scope_columns
+    from frictex.rendering.visual.viewport import fit_viewport
+    from frictex.textures.model import Display
+
+    t = np.arange(200) / 2000.0
+    x = np.stack((50.0 + 100.0 * t, 20.0 + 50.0 * t))
+    overlay = OverlayState()
+    overlay.add(BlockRecord(t, (0, 1), np.ones((2, t.size), bool), x, x / 2, np.ones((2, t.size)),
+                            np.ones((2, t.size))))
+    overlay.trail_triangles(fit_viewport(Display(108.0, 64.8, 800, 480), 800, 480))
+    plots = ((0.0, 400.0, 800.0, 30.0), (0.0, 440.0, 800.0, 30.0))
+    scope_columns(overlay, plots, 2.0, 0.01, 0, 10, 400.0, 70)
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quiet", action="store_true", help="print nothing")
 
@@ -92,6 +113,7 @@ def run(args: argparse.Namespace) -> int:
         run_replay("grating-15mm", sample(motion, 60.0, noise_mm=0.05, seed=2), tmp,
                    control="adaptive", device="sim", sim_args=("--finger", "3"),
                    progress=False)
+    overlay_geometry()
     if not args.quiet:
         print(f"frictex: kernels compiled and cached ({time.perf_counter() - start:.1f} s)")
     return 0

@@ -17,10 +17,12 @@ at mu' = 1 or at the limit is never drawn on the plot's edge.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from frictex.device.jit import njit
 from frictex.rendering.layers.keyclick import IDLE
 from frictex.rendering.visual.trail import TrailPath
 from frictex.rendering.visual.viewport import Viewport
@@ -285,16 +287,31 @@ def segment_triangles(points: np.ndarray, rgba: np.ndarray, width_px: float,
 
     Returns
     -------
-    (6 * kept segments, 6) array of x, y, r, g, b, a.
+    (6 * kept segments, 6) array of x, y, r, g, b, a (segments of zero length left out).
     """
-    p0, p1 = points[:-1], points[1:]
-    c0, c1 = rgba[:-1], rgba[1:]
-    d = p1 - p0
-    length = np.hypot(d[:, 0], d[:, 1])
-    ok = length > 1e-9 if keep is None else (length > 1e-9) & keep
-    p0, p1, c0, c1, d, length = p0[ok], p1[ok], c0[ok], c1[ok], d[ok], length[ok]
-    n = np.column_stack((-d[:, 1], d[:, 0])) / length[:, None] * (width_px / 2)
-    a, b, c, e = p0 + n, p0 - n, p1 + n, p1 - n
-    verts = np.stack((a, b, c, c, b, e), axis=1)  # (k, 6, 2)
-    cols = np.stack((c0, c0, c1, c1, c0, c1), axis=1)  # (k, 6, 4)
-    return np.concatenate((verts, cols), axis=2).reshape(-1, 6)
+    if keep is None:
+        keep = np.ones(max(len(points) - 1, 0), dtype=bool)
+    return _segment_triangles(np.asarray(points, dtype=np.float64),
+                              np.asarray(rgba, dtype=np.float64), float(width_px), keep)
+
+
+@njit(cache=True, nogil=True)
+def _segment_triangles(points, rgba, width_px, keep):
+    drawn = np.zeros(keep.size, dtype=np.bool_)
+    for i in range(keep.size):
+        drawn[i] = keep[i] and math.hypot(points[i + 1, 0] - points[i, 0],
+                                          points[i + 1, 1] - points[i, 1]) > 1e-9
+    tris = np.empty((6 * np.count_nonzero(drawn), 2 + rgba.shape[1]))
+    row = 0
+    for i in np.flatnonzero(drawn):
+        dx, dy = points[i + 1, 0] - points[i, 0], points[i + 1, 1] - points[i, 1]
+        length = math.hypot(dx, dy)
+        nx, ny = -dy / length * (width_px / 2), dx / length * (width_px / 2)
+        # corners p0+n, p0-n, p1+n, p1+n, p0-n, p1-n, each in its end's colour
+        for end, side in ((0, 1.0), (0, -1.0), (1, 1.0), (1, 1.0), (0, -1.0), (1, -1.0)):
+            tris[row, 0] = points[i + end, 0] + side * nx
+            tris[row, 1] = points[i + end, 1] + side * ny
+            for c in range(rgba.shape[1]):
+                tris[row, 2 + c] = rgba[i + end, c]
+            row += 1
+    return tris

@@ -18,9 +18,11 @@ import math
 import moderngl
 import numpy as np
 
+from frictex.device.jit import njit
 from frictex.rendering.visual.overlay import FINGER_RGB, SCOPE_LINE_PX, OverlayState, plot_y
 
 
+@njit(cache=True, nogil=True)
 def bin_spans(t: np.ndarray, values: np.ndarray, bin_s: float, first: int,
               count: int) -> tuple[np.ndarray, np.ndarray]:
     """Least and greatest value (``count``,) of the polyline (t, values) in each of the
@@ -34,19 +36,57 @@ def bin_spans(t: np.ndarray, values: np.ndarray, bin_s: float, first: int,
     """
     edges = (first + np.arange(count + 1)) * bin_s
     at_edges = np.interp(edges, t, values)
-    at_edges[(edges < t[0]) | (edges > t[-1])] = np.nan
-    with np.errstate(invalid="ignore"):
-        lo = np.fmin(at_edges[:-1], at_edges[1:])
-        hi = np.fmax(at_edges[:-1], at_edges[1:])
-    b = np.floor(t / bin_s).astype(np.int64) - first
-    inside = (b >= 0) & (b < count)
-    if inside.any():
-        b, v = b[inside], values[inside]
-        starts = np.flatnonzero(np.concatenate(([True], b[1:] != b[:-1])))
-        which = b[starts]
-        lo[which] = np.fmin(lo[which], np.minimum.reduceat(v, starts))
-        hi[which] = np.fmax(hi[which], np.maximum.reduceat(v, starts))
+    lo, hi = np.full(count, np.nan), np.full(count, np.nan)
+    for j in range(count + 1):
+        if t[0] <= edges[j] <= t[-1]:
+            for k in (j - 1, j):  # the bins this edge closes and opens
+                if 0 <= k < count:
+                    lo[k] = np.fmin(lo[k], at_edges[j])
+                    hi[k] = np.fmax(hi[k], at_edges[j])
+    for i in range(t.size):
+        k = int(math.floor(t[i] / bin_s)) - first
+        if 0 <= k < count:
+            lo[k] = np.fmin(lo[k], values[i])
+            hi[k] = np.fmax(hi[k], values[i])
     return lo, hi
+
+
+@njit(cache=True, nogil=True)
+def paint_spans(image: np.ndarray, lo: np.ndarray, hi: np.ndarray, top_px: float,
+                half_px: float, rgba: np.ndarray) -> None:
+    """Paint ``rgba`` into column j of ``image`` (height, count, 4) wherever a pixel's
+    centre (row + 0.5 + ``top_px``) lies within [lo[j] - half_px, hi[j] + half_px] px
+    (none where lo[j] is NaN)."""
+    for j in range(lo.size):
+        if np.isnan(lo[j]):
+            continue
+        for row in range(image.shape[0]):
+            centre = row + 0.5 + top_px
+            if lo[j] - half_px <= centre <= hi[j] + half_px:
+                image[row, j] = rgba
+
+
+def scope_columns(overlay: OverlayState, plots, amplitude_max_um: float, bin_s: float,
+                  first: int, count: int, top: float, height: int) -> np.ndarray:
+    """RGBA uint8 (``height``, ``count``) of the bins ``first`` .. ``first + count - 1``
+    (``bin_s`` s each) of ``overlay``'s traces in ``plots`` (mu' plot, amplitude plot,
+    each (x, y, w, h) px; amplitude full scale ``amplitude_max_um``), row 0 at ``top``
+    px: each trace covers the pixels whose centres lie within its span, widened by
+    ``SCOPE_LINE_PX``, in its finger's colour (the later finger on top)."""
+    image = np.zeros((height, count, 4), dtype=np.uint8)
+    for fid, hist in sorted(overlay.fingers.items()):
+        # the samples in the bins and one either side (for the values at their edges)
+        i0 = max(int(np.searchsorted(hist.t, first * bin_s)) - 1, 0)
+        i1 = int(np.searchsorted(hist.t, (first + count) * bin_s)) + 1
+        t, data = hist.t[i0:i1], hist.data[:, i0:i1]
+        if t.size == 0:
+            continue
+        rgba = np.array([*(round(255 * c) for c in FINGER_RGB[fid % len(FINGER_RGB)]), 255],
+                        dtype=np.uint8)
+        for values, rect in ((data[3], plots[0]), (data[4] / amplitude_max_um, plots[1])):
+            lo, hi = bin_spans(t, plot_y(values, rect), bin_s, first, count)
+            paint_spans(image, lo, hi, float(top), SCOPE_LINE_PX / 2, rgba)
+    return image
 
 
 class ScopeRing:
@@ -81,35 +121,11 @@ class ScopeRing:
             self._next_bin = now_bin - ring + 1
         first, count = self._next_bin, now_bin - self._next_bin + 1
         if count > 0:
-            self._write(first, self._columns(overlay, plots, amplitude_max_um, bin_s, first,
+            self._write(first, scope_columns(overlay, plots, amplitude_max_um, bin_s, first,
                                              count, top, height))
             self._next_bin = now_bin  # the bin still filling is written again next frame
         position = overlay.now_s / bin_s
         return self.texture, (position - columns) / ring, position / ring
-
-    def _columns(self, overlay, plots, amplitude_max_um, bin_s, first, count, top,
-                 height) -> np.ndarray:
-        """RGBA uint8 (height, count) of the bins ``first`` .. ``first + count - 1``:
-        each trace covers the pixels whose centres lie within its span, widened by
-        ``SCOPE_LINE_PX``, in its finger's colour (the later finger on top)."""
-        image = np.zeros((height, count, 4), dtype=np.uint8)
-        centres = np.arange(height, dtype=np.float64)[:, None] + 0.5 + top
-        for fid, hist in sorted(overlay.fingers.items()):
-            # the samples in the bins and one either side (for the values at their edges)
-            i0 = max(int(np.searchsorted(hist.t, first * bin_s)) - 1, 0)
-            i1 = int(np.searchsorted(hist.t, (first + count) * bin_s)) + 1
-            t, data = hist.t[i0:i1], hist.data[:, i0:i1]
-            if t.size == 0:
-                continue
-            rgba = np.array([*(round(255 * c) for c in FINGER_RGB[fid % len(FINGER_RGB)]), 255],
-                            dtype=np.uint8)
-            for values, rect in ((data[3], plots[0]), (data[4] / amplitude_max_um, plots[1])):
-                lo, hi = bin_spans(t, plot_y(values, rect), bin_s, first, count)
-                with np.errstate(invalid="ignore"):  # NaN: a bin without the trace
-                    covered = ((centres >= lo - SCOPE_LINE_PX / 2)
-                               & (centres <= hi + SCOPE_LINE_PX / 2))
-                image[covered] = rgba
-        return image
 
     def _write(self, first: int, image: np.ndarray) -> None:
         """Write the columns of the bins from ``first`` into the ring, wrapping."""

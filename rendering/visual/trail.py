@@ -9,8 +9,11 @@ second instead of thinning its thousands of samples again (the overlay's per-fra
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from frictex.device.jit import njit
 from frictex.rendering.tracking.tracks import TrackerConfig
 from frictex.rendering.visual.viewport import Viewport
 
@@ -21,6 +24,7 @@ TRAIL_STEP_PX = 1.0  # a trail keeps a vertex per this much of its path (and its
 TRAIL_BREAK_MM, TRAIL_BREAK_MM_S = TrackerConfig.jump_min_mm, TrackerConfig.jump_speed_mm_s
 
 
+@njit(cache=True, nogil=True)
 def thin_polyline(points: np.ndarray, joined: np.ndarray,
                   step_px: float) -> tuple[np.ndarray, np.ndarray]:
     """The vertices of a polyline worth drawing: its first and last, each end of a break,
@@ -36,26 +40,39 @@ def thin_polyline(points: np.ndarray, joined: np.ndarray,
     kept : (k,) indices of the kept vertices, increasing. joined : (k - 1,) bool, whether
     every segment between two kept vertices was drawn.
     """
-    length = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))))
-    marks = np.floor(length / step_px)
-    keep = np.zeros(len(points), dtype=bool)
-    keep[[0, -1]] = True
-    keep[1:] |= marks[1:] != marks[:-1]
-    keep[:-1] |= ~joined
-    keep[1:] |= ~joined
+    n = points.shape[0]
+    keep = np.zeros(n, dtype=np.bool_)
+    keep[0] = keep[n - 1] = True
+    length, mark = 0.0, 0.0  # the path's length (px) to vertex i, and floor(length / step)
+    for i in range(1, n):
+        length += math.hypot(points[i, 0] - points[i - 1, 0], points[i, 1] - points[i - 1, 1])
+        step_mark = math.floor(length / step_px)
+        if step_mark != mark or not joined[i - 1]:
+            keep[i] = True
+        if not joined[i - 1]:
+            keep[i - 1] = True
+        mark = step_mark
     kept = np.flatnonzero(keep)
-    breaks = np.concatenate(([0], np.cumsum(~joined)))
-    return kept, breaks[kept[1:]] == breaks[kept[:-1]]
+    kept_joined = np.ones(max(kept.size - 1, 0), dtype=np.bool_)
+    for k in range(kept.size - 1):
+        for i in range(kept[k], kept[k + 1]):
+            if not joined[i]:
+                kept_joined[k] = False
+    return kept, kept_joined
 
 
-def joined_steps(t_s: np.ndarray, contact: np.ndarray, x_mm: np.ndarray,
-                 y_mm: np.ndarray) -> np.ndarray:
+@njit(cache=True, nogil=True)
+def joined_steps(t_s: np.ndarray, contact: np.ndarray, x_mm: np.ndarray, y_mm: np.ndarray,
+                 break_mm: float, break_mm_s: float) -> np.ndarray:
     """(n - 1,) bool: whether each step between consecutive samples (t s, contact, x and
-    y mm) is drawn: both ends touching, and not a jump (``TRAIL_BREAK_MM`` and faster
-    than ``TRAIL_BREAK_MM_S``)."""
-    joined = (contact[:-1] > 0) & (contact[1:] > 0)
-    step = np.hypot(np.diff(x_mm), np.diff(y_mm))
-    return joined & ((step <= TRAIL_BREAK_MM) | (step <= TRAIL_BREAK_MM_S * np.diff(t_s)))
+    y mm) is drawn: both ends touching, and not a jump (longer than ``break_mm`` and
+    faster than ``break_mm_s`` mm/s)."""
+    joined = np.empty(max(t_s.size - 1, 0), dtype=np.bool_)
+    for i in range(joined.size):
+        step = math.hypot(x_mm[i + 1] - x_mm[i], y_mm[i + 1] - y_mm[i])
+        joined[i] = (contact[i] > 0 and contact[i + 1] > 0
+                     and (step <= break_mm or step <= break_mm_s * (t_s[i + 1] - t_s[i])))
+    return joined
 
 
 class TrailPath:
@@ -86,7 +103,8 @@ class TrailPath:
         px, py = self.viewport.to_px(x_mm[first:], y_mm[first:])
         new = np.stack((t_s[first:], contact[first:], x_mm[first:], y_mm[first:], px, py))
         rows = new if self.last is None else np.column_stack((self.last, new))
-        kept, kept_joined = thin_polyline(rows[4:].T, joined_steps(*rows[:4]), TRAIL_STEP_PX)
+        joined = joined_steps(*rows[:4], TRAIL_BREAK_MM, TRAIL_BREAK_MM_S)
+        kept, kept_joined = thin_polyline(rows[4:].T, joined, TRAIL_STEP_PX)
         if self.last is None:  # the first vertex has none before it
             joined_into = np.concatenate(([False], kept_joined))
         else:  # the sample before: a vertex already where it touches
