@@ -68,16 +68,17 @@ def test_thinned_polyline_keeps_its_breaks_and_a_vertex_per_pixel():
 
 
 polylines = st.integers(1, 60).flatmap(lambda n: st.tuples(
-    st.lists(st.tuples(st.sampled_from([0.0, 0.3, 1.0, 2.5]), st.sampled_from([0.0, -0.7, 1.0])),
+    st.lists(st.tuples(st.sampled_from([0.0, 0.3, 1.0, 2.5, np.nan]), st.sampled_from([0.0, -0.7, 1.0])),
              min_size=n, max_size=n),
     st.lists(st.booleans(), min_size=n - 1, max_size=n - 1)))
 
 
 @given(polylines)
 def test_thinning_equals_its_definition_written_with_arrays(polyline):
-    """Steps of 0 to 2.7 px (repeated points included) with random breaks: the kept
-    vertices and the joins between them are what the definition gives computed over
-    whole arrays (path length marks, both ends of each break, the break count)."""
+    """Steps of 0 to 2.7 px (repeated points included, and NaN: every vertex after it
+    kept) with random breaks: the kept vertices and the joins between them are what the
+    definition gives computed over whole arrays (path length marks, both ends of each
+    break, the break count)."""
     steps, joined = polyline
     points = np.cumsum(np.array(steps, dtype=np.float64), axis=0)
     joined = np.array(joined, dtype=bool)
@@ -95,8 +96,8 @@ def test_thinning_equals_its_definition_written_with_arrays(polyline):
 
 @given(polylines, st.sampled_from([1.0, 3.0, 5.5]))
 def test_segment_quads_are_each_drawn_segments_width_around_it(polyline, width):
-    """Each kept segment longer than zero becomes two triangles whose corners lie
-    width/2 either side of its ends, perpendicular to it, in its ends' colours."""
+    """Each kept segment longer than zero (not NaN) becomes two triangles whose corners
+    lie width/2 either side of its ends, perpendicular to it, in its ends' colours."""
     steps, keep = polyline
     points = np.cumsum(np.array(steps, dtype=np.float64), axis=0)
     keep = np.array(keep, dtype=bool)

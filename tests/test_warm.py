@@ -23,11 +23,15 @@ for scene in (height_shapes_scene(), recorded_texture_scene()):
 run_replay("grating-15mm", "circle-30mms-60hz", sys.argv[1], control="adaptive", device="sim",
            sim_args=("--finger", "3"), progress=False)
 from frictex.app.measure.bench_visual import bench_scene, busy_overlay
-from frictex.rendering.visual.overlay import arrow_triangles
+import numpy as np
+from frictex.rendering.visual.overlay import BlockRecord, arrow_triangles
 from frictex.rendering.visual.scope_ring import scope_columns
 from frictex.rendering.visual.viewport import fit_viewport
 overlay = busy_overlay()
 overlay.trail_triangles(fit_viewport(bench_scene().display, 1920, 1080))
+one = np.ones((1, 1))
+overlay.add(BlockRecord(np.array([overlay.now_s + 0.01]), (7,), one > 0, 50 * one, 30 * one, one, one))
+overlay.trail_triangles(fit_viewport(bench_scene().display, 1920, 1080))  # a one-sample finger
 scope_columns(overlay, ((0.0, 830.5, 1920.0, 90.0), (0.0, 950.5, 1920.0, 90.0)), 3.0,
               3.0 / 1920, 1500, 40, 830.5, 210)
 arrow_triangles((10.0, 10.0), (5.0, 3.0), (1.0, 1.0, 1.0, 1.0), 2.0)

@@ -84,7 +84,11 @@ def overlay_geometry() -> None:
     overlay = OverlayState()
     overlay.add(BlockRecord(t, (0, 1), np.ones((2, t.size), bool), x, x / 2, np.ones((2, t.size)),
                             np.ones((2, t.size))))
-    overlay.trail_triangles(fit_viewport(Display(108.0, 64.8, 800, 480), 800, 480))
+    viewport = fit_viewport(Display(108.0, 64.8, 800, 480), 800, 480)
+    overlay.trail_triangles(viewport)
+    overlay.add(BlockRecord(t[-1:] + 0.1, (2,), np.ones((1, 1), bool), x[:1, :1], x[:1, :1],
+                            np.ones((1, 1)), np.ones((1, 1))))  # a finger's first record of one sample
+    overlay.trail_triangles(viewport)
     plots = ((0.0, 400.0, 800.0, 30.0), (0.0, 440.0, 800.0, 30.0))
     scope_columns(overlay, plots, 2.0, 0.01, 0, 10, 400.0, 70)
 

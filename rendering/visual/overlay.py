@@ -289,8 +289,11 @@ def segment_triangles(points: np.ndarray, rgba: np.ndarray, width_px: float,
     -------
     (6 * kept segments, 6) array of x, y, r, g, b, a (segments of zero length left out).
     """
+    segments = max(len(points) - 1, 0)
     if keep is None:
-        keep = np.ones(max(len(points) - 1, 0), dtype=bool)
+        keep = np.ones(segments, dtype=bool)
+    elif np.shape(keep) != (segments,):
+        raise ValueError(f"keep: {np.shape(keep)} for {segments} segments")
     return _segment_triangles(np.asarray(points, dtype=np.float64),
                               np.asarray(rgba, dtype=np.float64), float(width_px), keep)
 

@@ -28,7 +28,8 @@ def bin_spans(t: np.ndarray, values: np.ndarray, bin_s: float, first: int,
     """Least and greatest value (``count``,) of the polyline (t, values) in each of the
     time bins ``first`` .. ``first + count - 1`` ([b bin_s, (b + 1) bin_s)): its samples
     in the bin and its values, interpolated, at the bin's edges within [t[0], t[-1]];
-    NaN for a bin the polyline does not reach.
+    NaN for a bin the polyline does not reach. A NaN value is left out of its bin (an
+    edge interpolated from it is NaN, and left out too).
 
     Parameters
     ----------

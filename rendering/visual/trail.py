@@ -46,7 +46,7 @@ def thin_polyline(points: np.ndarray, joined: np.ndarray,
     length, mark = 0.0, 0.0  # the path's length (px) to vertex i, and floor(length / step)
     for i in range(1, n):
         length += math.hypot(points[i, 0] - points[i - 1, 0], points[i, 1] - points[i - 1, 1])
-        step_mark = math.floor(length / step_px)
+        step_mark = np.floor(length / step_px)  # NaN after a NaN point: every vertex kept
         if step_mark != mark or not joined[i - 1]:
             keep[i] = True
         if not joined[i - 1]:
@@ -104,7 +104,8 @@ class TrailPath:
         new = np.stack((t_s[first:], contact[first:], x_mm[first:], y_mm[first:], px, py))
         rows = new if self.last is None else np.column_stack((self.last, new))
         joined = joined_steps(*rows[:4], TRAIL_BREAK_MM, TRAIL_BREAK_MM_S)
-        kept, kept_joined = thin_polyline(rows[4:].T, joined, TRAIL_STEP_PX)
+        # C order whatever the count (a single sample's (1, 2) is both orders to numba)
+        kept, kept_joined = thin_polyline(np.ascontiguousarray(rows[4:].T), joined, TRAIL_STEP_PX)
         if self.last is None:  # the first vertex has none before it
             joined_into = np.concatenate(([False], kept_joined))
         else:  # the sample before: a vertex already where it touches
