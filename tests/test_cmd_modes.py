@@ -65,8 +65,8 @@ def test_plate_json_and_plot(capsys, tmp_path):
     (["modes", "beam", "--poisson", "0.6"], "poisson must be in (-1, 0.5), got 0.6"),
     (["modes", "beam", "--theory", "timoshenko", "--orders", "95"],
      "--orders 95: a flexural frequency of "),
-    (["modes", "plate", "--youngs-gpa", "69", "--density", "2700", "--finger", "200", "5"],
-     "--finger 200 5 is outside the 140 x 140 mm plate"),
+    (["modes", "plate", "--youngs-gpa", "69", "--density", "2700", "--finger", "10", "10"],
+     "--finger 10 10: needs --plot"),
     (["modes", "beam", "--plot", "/nonexistent-dir/x.png"],
      "--plot /nonexistent-dir/x.png: the folder /nonexistent-dir does not exist"),
     (["modes", "ring", "--plot", "/nonexistent-dir/x.png"], "the folder /nonexistent-dir"),
@@ -75,6 +75,15 @@ def test_bad_input_is_one_line_exit_2(capsys, argv, message):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("frictex: error: ") and message in err and err.count("\n") == 1
+
+
+def test_plate_finger_off_the_plate_is_refused_before_the_plot(capsys, tmp_path):
+    png = tmp_path / "p.png"
+    assert main(["modes", "plate", "--youngs-gpa", "69", "--density", "2700", "--finger", "200",
+                 "5", "--plot", str(png)]) == 2
+    err = capsys.readouterr().err
+    assert err == "frictex: error: --finger 200 5 is outside the 140 x 140 mm plate\n"
+    assert not png.exists()
 
 
 @pytest.mark.parametrize("argv, message", [

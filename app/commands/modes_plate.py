@@ -16,7 +16,8 @@ import numpy as np
 
 from frictex.app.commands.modes_output import (add_output_arguments, check_below, check_plot,
                                                check_wavelength, density_kg_m3, dimension_mm,
-                                               print_modes, save_figure, warn, youngs_gpa)
+                                               print_modes, refuse_without, save_figure, warn,
+                                               youngs_gpa)
 from frictex.device.structures.beam import VALID_WAVELENGTH_IN_THICKNESSES, ModesError
 from frictex.textures.keys import MAX_MODE_ORDER
 from frictex.device.structures.plate2d import AXES, Plate2D
@@ -43,6 +44,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     check_plot(args.plot)
+    if args.finger is not None and not args.plot:
+        refuse_without("--finger", args.finger, "--plot")
     if not 1 <= args.order <= MAX_MODE_ORDER:
         raise ModesError(f"--order {args.order}: expected 1 to {MAX_MODE_ORDER} (k of seed 001, "
                          "eq 6; the highest mode order frictex computes)")
