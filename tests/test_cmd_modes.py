@@ -358,3 +358,10 @@ def test_bad_travelling_values_are_refused_by_the_parser_in_one_line(capsys, arg
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert err.startswith("frictex: error: ") and message in err and err.count("\n") == 1
+
+
+def test_ring_phase_shift_on_a_straight_shorter_than_a_quarter_wavelength(capsys):
+    assert main(["modes", "ring", "--length-mm", "1", "--phase-shift", "--json"]) == 0
+    rows = {r["phase_deg"]: r for r in json.loads(capsys.readouterr().out)["phase_shift"]["rows"]}
+    assert rows[90.0]["ratio"] == pytest.approx(1.0, abs=1e-3)
+    assert rows[90.0]["force_n"][0] == pytest.approx(-rows[-90.0]["force_n"][0], abs=1e-15)

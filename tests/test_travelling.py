@@ -126,3 +126,15 @@ def test_phase_shift_sets_ratio_and_force_direction_on_the_ring():
 def test_actuator_off_the_beam_raises():
     with pytest.raises(ModesError, match="actuator position 700.0 mm is off the beam"):
         BeamActuation(WAVE, (19.0, 700.0))
+
+
+@pytest.mark.parametrize("length_mm", [1.0, 2.0, 140.0])
+def test_direction_holds_on_a_straight_shorter_than_a_wavelength(length_mm):
+    # a 1 mm straight holds under a tenth of the 11 mm wavelength: no sample an eighth of a
+    # wavelength past its middle, yet W_A = +j s W_B still travels towards +x there
+    wave = ring_wave(RingResonator(length_mm, 50, 2.75, 30, 69, 2680), 24)
+    assert wave.x_mm[-1] - wave.x_mm[0] == pytest.approx(length_mm)
+    for direction in (1, -1):
+        field = wave.field(wave.modal(1.0, direction))
+        slope = np.diff(np.unwrap(np.angle(field))) / np.diff(wave.x_mm)
+        assert np.all(np.sign(slope) == -direction)

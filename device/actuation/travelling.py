@@ -113,8 +113,9 @@ class TwoModeWave:
     @classmethod
     def from_shapes(cls, shapes_at: Callable[[np.ndarray], np.ndarray], x_mm: np.ndarray,
                     wavelengths_mm: tuple[float, float]) -> "TwoModeWave":
-        """Sample ``shapes_at`` and its slope on ``x_mm``; the direction sign is read from
-        the phase slope mid-grid."""
+        """Sample ``shapes_at`` and its slope on ``x_mm``; the direction sign is read at
+        the grid's middle point from the parts of W_A = j W_B travelling each way, so a
+        grid shorter than a wavelength has it too."""
         wavelength = 0.5 * (wavelengths_mm[0] + wavelengths_mm[1])
         h = _SLOPE_STEP * wavelength
         slopes = (8 * (shapes_at(x_mm + h) - shapes_at(x_mm - h))
@@ -122,11 +123,9 @@ class TwoModeWave:
         k = (2 * math.pi / wavelengths_mm[0], 2 * math.pi / wavelengths_mm[1])
         wave = cls(shapes_at, x_mm, shapes_at(x_mm), slopes, wavelength, k, 1)
         mid = x_mm.size // 2
-        eighth = int(round(wavelength / 8 / (x_mm[1] - x_mm[0])))
-        field = wave.field(wave.modal(1.0, 1))
-        # e^{-jkx} (towards +x) has a phase falling with x
-        turn = np.angle(field[mid + eighth] / field[mid])
-        return cls(shapes_at, x_mm, wave.shapes, slopes, wavelength, k, 1 if turn < 0 else -1)
+        forward, backward = wave.travelling_parts(wave.modal(1.0, 1))
+        sign = 1 if abs(forward[mid]) >= abs(backward[mid]) else -1
+        return cls(shapes_at, x_mm, wave.shapes, slopes, wavelength, k, sign)
 
     def modal(self, amplitude_um, direction) -> np.ndarray:
         """Modal amplitudes (..., 2) complex (um) for amplitude W and direction (-1, 0, +1).
