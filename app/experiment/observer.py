@@ -364,13 +364,16 @@ class SimulatedParticipant:
 
 def parse_spec(text: str) -> SimulatedParticipant:
     """``weber=0.11,lapse=0.02[,seed=N][,stroke_s=S]`` -> a participant (InputError naming
-    the bad part)."""
+    the bad part, or a key given twice)."""
     values: dict[str, float] = {}
     for part in filter(None, (p.strip() for p in text.split(","))):
         key, sep, raw = part.partition("=")
         if not sep or key not in SPEC_KEYS:
             raise InputError(f"simulated participant: {part!r}: expected key=value with a key "
                              f"of {', '.join(SPEC_KEYS)}")
+        if key in values:
+            raise InputError(f"simulated participant: {key} is given twice; give each key "
+                             f"once")
         low, high = SPEC_KEYS[key]
         try:
             value = int(raw) if key == "seed" else float(raw)
