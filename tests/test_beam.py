@@ -140,6 +140,56 @@ def test_order_above_timoshenko_cutoff_is_refused():
         TIMO.frequency_hz(90)
 
 
+def _timoshenko_free_free_det(beam: FreeFreeBeam, frequency_hz: float) -> float:
+    """Determinant of the free ends' conditions (E I psi' = 0, kappa G A (w' - psi) = 0 at
+    0 and L) written from the equations of motion at ``frequency_hz``, below the cutoff:
+    w = e^{s x}, psi = P e^{s x} with rho w_tt = kG (w'' - psi') giving P = (kG s^2 +
+    rho w^2) / (kG s), and s^2 a root of (kG s^2 + rho w^2)(E r2 s^2 - kG + rho r2 w^2)
+    + kG^2 s^2 = 0."""
+    nu, e, rho, length = beam.poisson, beam.youngs_gpa * 1e9, beam.density_kg_m3, beam.length_mm * 1e-3
+    kg = 10 * (1 + nu) / (12 + 11 * nu) * e / (2 * (1 + nu))
+    r2 = (beam.thickness_mm * 1e-3) ** 2 / 12
+    w2 = (2 * math.pi * frequency_hz) ** 2
+    squares = np.roots([kg * e * r2, kg * rho * r2 * w2 + rho * w2 * e * r2,
+                        rho * w2 * (rho * r2 * w2 - kg)])
+    alpha, beta = math.sqrt(max(squares.real)), math.sqrt(-min(squares.real))
+    columns = []
+    # e^{-alpha x}, e^{alpha (x - L)} (each at most 1 on the beam), e^{j beta x} (re, im)
+    for s, shift in ((-alpha, 0.0), (alpha, length), (1j * beta, 0.0)):
+        p = (kg * s * s + rho * w2) / (kg * s)
+        ends = [np.exp(s * (x - shift)) for x in (0.0, length)]
+        column = np.array([s * p * ends[0] / beta ** 2, (s - p) * ends[0] / beta,
+                           s * p * ends[1] / beta ** 2, (s - p) * ends[1] / beta])
+        columns += [column.real, column.imag] if s.imag else [column.real]
+    return float(np.linalg.det(np.array(columns).T))
+
+
+@pytest.mark.parametrize("length_mm, order", [(350, 73), (60, 12)])
+def test_timoshenko_order_below_the_cutoff_in_an_interval_reaching_past_it_is_found(
+        length_mm, order):
+    # before: refused, quoting the end of the root search (beta L = 74 pi, 245605 Hz)
+    beam = FreeFreeBeam(**dict(TABLE_I, length_mm=length_mm), theory="timoshenko")
+    f = beam.frequency_hz(order)
+    assert f < beam.cutoff_hz
+    from scipy.optimize import brentq
+    below = beam.frequency_hz(order - 1)
+    grid = np.linspace(below + 1.0, beam.cutoff_hz * (1 - 1e-9), 400)
+    dets = [_timoshenko_free_free_det(beam, g) for g in grid]
+    change = np.flatnonzero(np.signbit(dets[:-1]) != np.signbit(dets[1:]))
+    assert change.size == 1  # one mode between order - 1 and the cutoff
+    root = brentq(lambda g: _timoshenko_free_free_det(beam, g), grid[change[0]],
+                  grid[change[0] + 1], xtol=1e-9)
+    assert_allclose(f, root, rtol=1e-9)
+
+
+@pytest.mark.parametrize("length_mm, order", [(350, 74), (60, 13)])
+def test_timoshenko_order_with_no_root_below_the_cutoff_is_refused(length_mm, order):
+    beam = FreeFreeBeam(**dict(TABLE_I, length_mm=length_mm), theory="timoshenko")
+    with pytest.raises(ModesError, match=rf"^mode order {order} is above the Timoshenko cutoff "
+                                         r"245187 Hz of this beam: it has no flexural mode"):
+        beam.frequency_hz(order)
+
+
 @pytest.mark.parametrize("kwargs, match", [
     (dict(TABLE_I, length_mm=0), "length_mm must be a finite number > 0, got 0"),
     (dict(TABLE_I, youngs_gpa=float("nan")), "youngs_gpa"),

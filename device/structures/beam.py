@@ -35,8 +35,10 @@ the free ends). Timoshenko modes are orthogonal only under the inner product
 rho A W W + rho I Psi Psi, so their plain overlap is small but not zero.
 
 Above the Timoshenko cutoff omega_c = sqrt(kappa G A / (rho I)) a second wave
-propagates (the second spectrum); it is not modelled and such orders raise
-:class:`ModesError`.
+propagates (the second spectrum); it is not modelled. The root search of an order stops
+at the cutoff's wavenumber, so an order whose root lies below the cutoff is found even
+when its interval [n pi, (n + 1) pi] reaches past it; an order with no root below the
+cutoff raises :class:`ModesError`.
 """
 
 from __future__ import annotations
@@ -222,8 +224,19 @@ class FreeFreeBeam:
             kg = kappa * e / (2 * (1 + nu))
         return e, kg, self.density_kg_m3, h * h / 12
 
+    def _cutoff_beta(self) -> float:
+        """Propagating wavenumber (1/m) at which the flexural branch reaches the cutoff
+        omega_c; inf for Euler-Bernoulli.
+
+        omega_c^2 = kappa G / (rho r^2) is the lower root of the dispersion quadratic
+        (:meth:`_dispersion`) where beta^2 = (1 + kappa G / E) / r^2.
+        """
+        e, kg, _, r2 = self._constants()
+        return math.sqrt((1 + kg / e) / r2)
+
     def _dispersion(self, beta: float) -> tuple[float, float, float]:
-        """(omega, alpha, q) of the flexural branch with propagating wavenumber ``beta``.
+        """(omega, alpha, q) of the flexural branch with propagating wavenumber ``beta``
+        (1/m, below :meth:`_cutoff_beta`).
 
         q = rho omega^2 / (kappa G) (0 for Euler-Bernoulli) enters the end conditions.
         """
@@ -236,12 +249,6 @@ class FreeFreeBeam:
         a2 = rho * rho / (e * kg)
         w2 = 2 * beta ** 4 / (a1 + math.sqrt(a1 * a1 - 4 * a2 * beta ** 4))
         below_cutoff = 1 - rho * r2 * w2 / kg
-        if below_cutoff <= 0:
-            raise ModesError(
-                f"a flexural frequency of {math.sqrt(w2) / (2 * math.pi):.6g} Hz (wavenumber "
-                f"{beta:.6g} 1/m) is above the Timoshenko cutoff {self.cutoff_hz:.6g} Hz of "
-                f"this beam (second spectrum not modelled); use a lower order or --theory "
-                f"euler-bernoulli")
         alpha = math.sqrt(rho * w2 * below_cutoff / (e * r2)) / beta
         return math.sqrt(w2), alpha, rho * w2 / kg
 
@@ -322,6 +329,14 @@ def _mode(beam: FreeFreeBeam, order: int) -> _Mode:
     def det(beta_l: float) -> float:
         return float(np.linalg.det(beam._end_matrix(beta_l / length)))
 
+    cutoff_l = beam._cutoff_beta() * length * (1 - 1e-12)
+    if cutoff_l < hi:  # the branch ends inside the interval: search below the cutoff only
+        hi = cutoff_l
+        if not (lo < hi and np.signbit(det(lo)) != np.signbit(det(hi))):
+            raise ModesError(f"mode order {order} is above the Timoshenko cutoff "
+                             f"{beam.cutoff_hz:.6g} Hz of this beam: it has no flexural mode "
+                             "of that order below it (second spectrum not modelled); use a "
+                             "lower order or --theory euler-bernoulli")
     from scipy.optimize import brentq  # beam scenes only: scipy's import is 0.3-0.6 s
     beta_l = brentq(det, lo, hi, xtol=1e-14, rtol=4 * np.finfo(float).eps)
     beta = beta_l / length
