@@ -160,3 +160,20 @@ def test_command_errors_are_one_line(capsys):
     err = capsys.readouterr().err
     assert err.startswith("frictex: error: --orders 1: a mode order is at least 2")
     assert err.count("\n") == 1
+
+
+@pytest.mark.parametrize("order", [2, 3])
+def test_an_order_whose_frequency_is_zero_at_the_geometry_is_refused_naming_it(capsys, order):
+    # L 100 m, R 2 um: k_c of orders 2 and 3 lies within rounding of 1, where eq 7 gives 0 Hz;
+    # before: "frequency band must satisfy 0 < min < max (Hz), got 0.0 .. 0.0", no --band given
+    ring = RingResonator(1e5, 0.002, 0.001, 30, 69, 2680)
+    with pytest.raises(ModesError, match=rf"^ring order {order}: its frequency is 0 Hz"):
+        ring.pair(order)
+    assert main(["modes", "ring", "--length-mm", "1e5", "--radius-mm", "0.002",
+                 "--thickness-mm", "0.001", "--orders", str(order), "--phase-shift"]) == 2
+    captured = capsys.readouterr()
+    error = captured.err.splitlines()[-1]
+    assert captured.out == ""
+    assert error == (f"frictex: error: --orders {order}: ring order {order}: its frequency is 0 "
+                     "Hz to double precision at this geometry (L 100000 mm, R 0.002 mm, h 0.001 "
+                     "mm); use a higher order, shorter straights or a larger radius")

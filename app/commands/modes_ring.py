@@ -105,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
         for n in args.orders:  # the perimeter over n first: a cheap bound on the wavelength
             check_wavelength(f"--orders {n}", perimeter_mm / n, ring.thickness_mm,
                              VALID_WAVELENGTH_IN_THICKNESSES["euler-bernoulli"], _BEYOND)
-        found = [ring.pair(n) for n in args.orders]
+        found = [_pair(ring, n) for n in args.orders]
         modes = [m for pair in found for m in pair]
         pairs = [_pair_summary(ring, sym, asym) for sym, asym in found]
     check_finite([{"order": m.order, "frequency_hz": m.frequency_hz} for m in modes])
@@ -124,6 +124,14 @@ def run(args: argparse.Namespace) -> int:
         save_figure(_plot(ring, [p["order"] for p in pairs] or sorted({m.order for m in modes}),
                           phase), args.plot)
     return 0
+
+
+def _pair(ring: RingResonator, order: int):
+    """``ring.pair(order)``, its refusal naming --orders."""
+    try:
+        return ring.pair(order)
+    except ModesError as exc:
+        raise ModesError(f"--orders {order}: {exc}") from None
 
 
 def _check_phase_options(args: argparse.Namespace) -> None:

@@ -257,6 +257,12 @@ class RingResonator:
         lo = self._k_c_at_phase((order - 0.5) * math.pi)
         hi = self._k_c_at_phase((order + 0.5) * math.pi)
         f_lo, f_hi = (float(self.omega(k)) / (2 * math.pi) for k in (lo, hi))
+        if not 0 < f_lo < f_hi:  # k_c within rounding of 1, where omega is 0
+            raise ModesError(
+                f"ring order {order}: its frequency is 0 Hz to double precision at this "
+                f"geometry (L {self.length_mm:g} mm, R {self.radius_mm:g} mm, h "
+                f"{self.thickness_mm:g} mm); use a higher order, shorter straights or a "
+                f"larger radius")
         found = {m.kind: m for m in self.modes_in_band(f_lo, f_hi) if m.order == order}
         missing = [k for k in KINDS if k not in found]
         if missing:
