@@ -8,6 +8,7 @@ from numpy.testing import assert_allclose
 
 from frictex.app.commands import modes as cmd_modes
 from frictex.app.commands.cli import main
+from frictex.app.commands.modes_output import PLOT_BYTES
 from frictex.device.structures.beam import FreeFreeBeam
 
 SEED000 = ["--length-mm", "350", "--width-mm", "6", "--thickness-mm", "6",
@@ -168,6 +169,23 @@ def test_ring_plot_is_seed_004_fig_2c(capsys, tmp_path):
     out, err = capsys.readouterr()
     assert json.loads(out)["modes"] and err == f"plot written to {png}\n"  # stdout all JSON
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("argv, plotted", [
+    (["--band", "1", "3000"], "5 orders; the plot shows the first 3 (2 3 4)"),
+    (["--orders", "22", "24", "26", "--phase-shift"], "3 orders; the plot shows the first 2 (22 24)"),
+])
+def test_ring_plot_of_many_orders_stays_within_the_room_checked_for_it(capsys, tmp_path, argv,
+                                                                        plotted):
+    # before: --band 1 548000 stacked 99 panels, a 770 x 32670 px PNG of 4.5 MB, above the
+    # 3.48 MB (8 x 9 inches at 110 dpi, 4 bytes a pixel) check_plot had checked room for
+    png = tmp_path / "ring.png"
+    assert main(["modes", "ring", *argv, "--plot", str(png)]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert f"frictex: warning: --plot: {plotted}, as many as fit its 9 inches of height " \
+           "(the table lists every order)" in err
+    width, height = (int.from_bytes(png.read_bytes()[i:i + 4], "big") for i in (16, 20))
+    assert width * height * 4 <= PLOT_BYTES and png.stat().st_size <= PLOT_BYTES
 
 
 @pytest.mark.parametrize("structure", [["beam"], ["ring"],

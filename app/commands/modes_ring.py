@@ -41,6 +41,9 @@ _PHASE_DEFAULTS = {"phase_step_deg": 15.0, "amplitude_um": 3.0, "normal_force_n"
 #: the plate drives the finger through that friction, and seed 004 expects a plateau
 _DRIVE = DrivingForceParams()
 FRICTION_BOUND_UM = _DRIVE.threshold_um + _DRIVE.mu0 / _DRIVE.slope_per_um
+#: the plot's rows at most (3 inches each, the phase shift's included): 7 x 9 inches at
+#: 110 dpi stays within modes_output.PLOT_BYTES, the room --plot is checked for
+PLOT_ROWS = 3
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -79,8 +82,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="with --phase-shift: normal force(s) of the finger in N, 0.01 to "
                              f"{MAX_FORCE_N:g} (default 1 0.5, seed 004 Fig. 4c)")
     add_plot_argument(parser, "also write each pair's frequency split against L/R (seed 004, "
-                              "Fig. 2c), and with --phase-shift the ratio and force against the "
-                              "phase shift (Fig. 4)")
+                              f"Fig. 2c; the first {PLOT_ROWS} orders), and with --phase-shift "
+                              "the ratio and force against the phase shift (Fig. 4; then the "
+                              f"first {PLOT_ROWS - 1} orders)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -121,9 +125,21 @@ def run(args: argparse.Namespace) -> int:
         if phase is not None:
             _print_phase(phase)
     if args.plot:
-        save_figure(_plot(ring, [p["order"] for p in pairs] or sorted({m.order for m in modes}),
-                          phase), args.plot)
+        orders = [p["order"] for p in pairs] or sorted({m.order for m in modes})
+        save_figure(_plot(ring, _plotted(orders, phase is not None), phase), args.plot)
     return 0
+
+
+def _plotted(orders: list[int], with_phase: bool) -> list[int]:
+    """The first of ``orders`` whose panels fit the plot beside the phase shift's row, if
+    any; a warning names them when some are left out."""
+    rows = PLOT_ROWS - with_phase
+    if len(orders) <= rows:
+        return orders
+    warn(f"--plot: {len(orders)} orders; the plot shows the first {rows} "
+         f"({' '.join(map(str, orders[:rows]))}), as many as fit its "
+         f"{PLOT_ROWS * 3} inches of height (the table lists every order)")
+    return orders[:rows]
 
 
 def _pair(ring: RingResonator, order: int):
