@@ -65,8 +65,11 @@ warned of, and so is a results.csv with fewer rows than the trials recorded or a
 last line (a table cut short). A row whose response is not one of its trial's responses,
 or whose ``correct`` is not whether the response is the answer (a table edited by hand),
 is warned of by its file and line (``row_problems``): the analysis counts ``correct`` as
-written. A session
-folder given twice is refused (it would count twice).
+written. A ``correct`` other than 0 or 1 where the trial has an answer, or a cell the
+analysis reads as a number (``difference``, a same-different ``value``, a rating) that
+is not a finite number, is refused by its file and line (``check_cells``). A session
+folder given twice is refused (it would count twice), and so is one session in two
+folders (a copy: the same start, seeds and trials, ``distinct_sessions``).
 
 Writes ``analysis.json`` (every number above) and ``analysis.png`` (one panel per study)
 into the output folder.
@@ -89,6 +92,7 @@ from frictex.app.experiment.scheduler import (INTERVALS, SAME_DIFFERENT, Stairca
                                               staircase_step, staircase_threshold)
 from frictex.app.experiment.session import read_info, read_rows, torn_last_line
 from frictex.device.errors import InputError
+from frictex.device.numbers import ascii_float
 
 
 #: the fewest distinct differences a psychometric fit needs (one leaves the slope free)
@@ -166,14 +170,44 @@ class SessionData:
         return [row for row in self.rows if row["practice"] == "0"]
 
 
+#: the results column each method's analysis reads as a number
+NUMBER_COLUMN = {"2afc": "difference", "staircase": "difference", "same-different": "value",
+                 "magnitude": "response"}
+
+
 def read_session(folder: str | Path) -> SessionData:
-    """A session folder's session.json and results (InputError when it is none)."""
+    """A session folder's session.json and results (InputError when it is none, or when
+    a cell the analysis counts is malformed: :func:`check_cells`)."""
     folder = Path(folder)
     info = read_info(folder)
     if not isinstance(info.get("design"), dict) or not isinstance(info.get("protocol"), str):
         raise InputError(f"{folder / 'session.json'}: has no design; not a session of this "
                          f"frictex")
-    return SessionData(folder, info, read_rows(folder), torn_last_line(folder))
+    if info.get("method") not in NUMBER_COLUMN:
+        raise InputError(f"{folder / 'session.json'}: method {info.get('method')!r} is not "
+                         f"one of {', '.join(NUMBER_COLUMN)}")
+    rows = read_rows(folder)
+    check_cells(folder / "results.csv", info["method"], rows)
+    return SessionData(folder, info, rows, torn_last_line(folder))
+
+
+def check_cells(table: Path, method: str, rows: list[dict]) -> None:
+    """InputError (one line, ``FILE:LINE``) for the first of ``rows`` (of the results
+    table ``table``, a session of ``method``) whose cell the analysis reads as a number
+    (:data:`NUMBER_COLUMN`) is not a finite number, or whose ``correct`` is neither 0 nor
+    1 where its trial has an answer: the analysis could not count it as written."""
+    column = NUMBER_COLUMN[method]
+    for line, row in enumerate(rows, start=2):  # line 1 is the header
+        try:
+            finite = math.isfinite(ascii_float(row[column]))
+        except ValueError:
+            finite = False
+        if not finite:
+            raise InputError(f"{table}:{line}: {column} {row[column]!r}: expected a finite "
+                             f"number")
+        if row["answer"] and row["correct"] not in ("0", "1"):
+            raise InputError(f"{table}:{line}: correct {row['correct']!r}: expected 0 or 1 "
+                             f"(whether response is answer)")
 
 
 def _responses(info: dict) -> tuple[str, ...] | None:
@@ -217,6 +251,24 @@ def distinct_folders(folders: list[str | Path]) -> list[Path]:
     return list(seen.values())
 
 
+def distinct_sessions(sessions: list[SessionData]) -> list[SessionData]:
+    """``sessions``; InputError (one line) when two are one session in two folders (a
+    copy, or a copy taken before the session was resumed): the same start, seed and
+    participant seed, and the rows of one the first rows of the other. It would count
+    twice."""
+    runs: dict[tuple, list[SessionData]] = {}
+    for s in sessions:
+        key = tuple(s.info.get(k) for k in ("started_utc", "seed", "participant_seed"))
+        for other in runs.setdefault(key, []):
+            shared = min(len(other.rows), len(s.rows))
+            if other.rows[:shared] == s.rows[:shared]:
+                raise InputError(f"analyse: {s.folder} holds the same session as "
+                                 f"{other.folder} (started {key[0]}, seed {key[1]}, its "
+                                 f"first {shared} trials alike); each session counts once")
+        runs[key].append(s)
+    return sessions
+
+
 def ended(info: dict) -> str | None:
     """How a session (its session.json ``info``) ended: "complete", its last run's
     ``ended`` ("stopped (...)"), "killed" (a run without an end), or None where no run
@@ -240,21 +292,11 @@ def studies(sessions: list[SessionData]) -> dict[str, list[SessionData]]:
     return out
 
 
-def _float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise InputError(f"results: {text!r} is not a number") from None
-    if not math.isfinite(value):
-        raise InputError(f"results: {text!r} is not a finite number")
-    return value
-
-
 def _counts(rows: list[dict]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(difference, trials, correct) per distinct difference of two-interval trials."""
     if not rows:
         return np.empty(0), np.empty(0), np.empty(0)
-    x = np.array([_float(r["difference"]) for r in rows])
+    x = np.array([float(r["difference"]) for r in rows])
     c = np.array([r["correct"] == "1" for r in rows], dtype=np.float64)
     xs, inverse = np.unique(x, return_inverse=True)
     return xs, np.bincount(inverse, minlength=xs.size).astype(np.float64), np.bincount(
@@ -360,7 +402,7 @@ def _staircase_plays(sc: Staircase, sessions: int):
 
 def _fit_staircase(design: dict, rows: list[dict], sessions: int) -> psychometric.Fit:
     a = design["analysis"]
-    x = np.array([_float(r["difference"]) for r in rows])
+    x = np.array([float(r["difference"]) for r in rows])
     correct = np.array([r["correct"] == "1" for r in rows])
     return psychometric.fit_adaptive(x, correct, _staircase_plays(
         Staircase(**design["staircase"]), sessions), function=a["function"],
@@ -372,7 +414,7 @@ def _fitted(design: dict, rows: list[dict], sessions: list[SessionData],
             reversals: int | None) -> dict:
     """``{"fit": ...}`` for ``rows`` (of ``sessions``), or ``fit`` None and ``no_fit``
     saying why."""
-    reason = _too_few(np.array([_float(r["difference"]) for r in rows]), reversals)
+    reason = _too_few(np.array([float(r["difference"]) for r in rows]), reversals)
     if reason:
         return {"fit": None, "no_fit": reason}
     found = (_fit_staircase(design, rows, len(sessions)) if design["staircase"]
@@ -464,7 +506,7 @@ def _same_different(design: dict, sessions: list[SessionData]) -> dict:
     levels: dict[float, dict[str, float]] = {}
     for s in sessions:
         for row in s.main():
-            level = levels.setdefault(_float(row["value"]), {"hits": 0, "different": 0,
+            level = levels.setdefault(float(row["value"]), {"hits": 0, "different": 0,
                                                              "false_alarms": 0, "same": 0})
             said = row["response"] == "different"
             if row["answer"] == "different":
@@ -520,7 +562,7 @@ def _magnitude(design: dict, sessions: list[SessionData]) -> dict:
     ratings: dict[str, list[float]] = {}
     for s in sessions:
         for row in s.main():
-            ratings.setdefault(row["stimuli"], []).append(_float(row["response"]))
+            ratings.setdefault(row["stimuli"], []).append(float(row["response"]))
     scale = design.get("scale")
     out = []
     for name in sorted(ratings):
@@ -570,7 +612,7 @@ def _finite(value):
 def analyse(folders: list[str | Path], out_dir: str | Path, plot: bool = True) -> list[dict]:
     """Analyse the sessions in ``folders``; write analysis.json (and analysis.png) into
     ``out_dir``; return the studies' summaries."""
-    sessions = [read_session(f) for f in distinct_folders(folders)]
+    sessions = distinct_sessions([read_session(f) for f in distinct_folders(folders)])
     summaries = [analyse_study(group) for group in studies(sessions).values()]
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

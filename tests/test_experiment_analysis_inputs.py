@@ -1,0 +1,112 @@
+"""What ``frictex experiment analyse`` refuses in its input: one session in two folders
+(a copy), a ``correct`` other than 0 or 1, and a number that is not finite; each in one
+line naming where."""
+
+import re
+import shutil
+
+import pytest
+
+from frictex.app.commands.cli import main
+
+PARTICIPANT = "simulated:weber=0.11,seed=3"
+TWO_AFC = """format = 1
+name = "depth-2afc"
+method = "2afc"
+repetitions = 2
+[stimuli]
+scene = "grating-5mm"
+vary = "depth"
+reference = 0.3
+levels = [0.32, 0.36, 0.42]
+[presentation]
+exploration_s = 0.3
+[analysis]
+bootstrap = 0
+"""
+
+
+@pytest.fixture(scope="module")
+def sessions(tmp_path_factory):
+    """Two sessions of one protocol, seeds 4 and 5."""
+    root = tmp_path_factory.mktemp("afc")
+    (root / "afc.toml").write_text(TWO_AFC)
+    for seed in (4, 5):
+        assert main(["experiment", str(root / "afc.toml"), "--participant", PARTICIPANT,
+                     "--out", str(root / f"s{seed}"), "--seed", str(seed), "--record",
+                     "results", "--quiet"]) == 0
+    return root / "s4", root / "s5"
+
+
+def _analyse(tmp_path, capsys, *folders):
+    """The exit status of analysing ``folders`` and what it wrote to stderr."""
+    capsys.readouterr()
+    code = main(["experiment", "analyse", *map(str, folders), "--out", str(tmp_path / "a"),
+                 "--no-plot"])
+    return code, capsys.readouterr().err
+
+
+def _copy(folder, to, keep=None, line=None, **cells):
+    """A copy of session ``folder`` at ``to``: its results.csv cut to the first ``keep``
+    rows, and ``cells`` set on ``line`` (1: the header)."""
+    shutil.copytree(folder, to)
+    table = to / "results.csv"
+    lines = table.read_text().splitlines(keepends=True)
+    if keep is not None:
+        lines = lines[:1 + keep]
+    if cells:
+        header = lines[0].rstrip("\n").split(",")
+        row = lines[line - 1].rstrip("\n").split(",")
+        for name, value in cells.items():
+            row[header.index(name)] = value
+        lines[line - 1] = ",".join(row) + "\n"
+    table.write_text("".join(lines))
+    return to
+
+
+def test_two_sessions_of_different_seeds_pool(sessions, tmp_path, capsys):
+    assert _analyse(tmp_path, capsys, *sessions) == (0, "")
+
+
+def test_a_copied_session_is_refused_naming_both_folders(sessions, tmp_path, capsys):
+    """Before, the copy pooled as a second session: the same trials twice, and a pooled
+    interval narrower than the session's own."""
+    copy = _copy(sessions[0], tmp_path / "copy")
+    code, err = _analyse(tmp_path, capsys, sessions[0], sessions[1], copy)
+    rows = len((copy / "results.csv").read_text().splitlines()) - 1
+    assert code == 2 and len(err.splitlines()) == 1
+    assert re.search(rf"analyse: {re.escape(str(copy))} holds the same session as "
+                     rf"{re.escape(str(sessions[0]))} \(started .*, seed 4, its first "
+                     rf"{rows} trials alike\); each session counts once$", err.strip())
+
+
+def test_a_copy_taken_before_the_session_went_on_is_refused(sessions, tmp_path, capsys):
+    """A copy of a session stopped after 3 trials, its original resumed to its end."""
+    early = _copy(sessions[0], tmp_path / "early", keep=3)
+    code, err = _analyse(tmp_path, capsys, early, sessions[0])
+    assert code == 2 and f"{sessions[0]} holds the same session as {early}" in err
+    assert "its first 3 trials alike" in err
+
+
+def test_one_start_and_seed_with_other_trials_pools(sessions, tmp_path, capsys):
+    """Two stations started in the same second with the same seeds: their trials (times
+    at least) differ, so they are two sessions."""
+    other = _copy(sessions[0], tmp_path / "other", line=3, ended_utc="2000-01-01T00:00:00Z")
+    assert _analyse(tmp_path, capsys, sessions[0], other) == (0, "")
+
+
+@pytest.mark.parametrize("column, cell, words", [
+    ("correct", "1x", "correct '1x': expected 0 or 1 (whether response is answer)"),
+    ("correct", "", "correct '': expected 0 or 1 (whether response is answer)"),
+    ("difference", "nan", "difference 'nan': expected a finite number"),
+    ("difference", "inf", "difference 'inf': expected a finite number"),
+    ("difference", "1e999", "difference '1e999': expected a finite number"),
+    ("difference", "x", "difference 'x': expected a finite number"),
+])
+def test_a_malformed_cell_is_refused_by_file_and_line(sessions, tmp_path, capsys, column,
+                                                      cell, words):
+    """Before, a correct of '1x' was warned of as "counted as written" and counted as 0,
+    and a difference of nan was refused without its file and line."""
+    edited = _copy(sessions[0], tmp_path / "e", line=9, **{column: cell})
+    code, err = _analyse(tmp_path, capsys, edited)
+    assert (code, err) == (2, f"frictex: error: {edited / 'results.csv'}:9: {words}\n")
