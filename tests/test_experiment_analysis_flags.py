@@ -65,8 +65,8 @@ def test_a_fit_flags_its_unsettled_interval_in_text_and_json():
 
 
 def test_identical_ratings_give_a_flagged_interval():
-    rows = [{"stimuli": "a", "response": "6"}] * 2 + [{"stimuli": "b", "response": r}
-                                                      for r in ("5", "7")]
+    rows = [{"stimuli": "a", "value": "", "response": "6"}] * 2 + [
+        {"stimuli": "b", "value": "", "response": r} for r in ("5", "7")]
     summary = analyse_study([session("magnitude", rows)])
     a, b = summary["stimuli"]
     assert a["ci95"] == [6.0, 6.0] and "from 1 distinct rating" in a["ci95_unsettled"]
@@ -74,6 +74,17 @@ def test_identical_ratings_give_a_flagged_interval():
     printed = report_lines(summary)
     assert any(line.startswith("  a: mean 6 (n 2, 95 % [6, 6]; unsettled: from 1 distinct")
                for line in printed)
+
+
+def test_magnitude_stimuli_are_listed_by_their_value():
+    """Before, by name: period_mm=10, period_mm=2, period_mm=5; a stimulus without a value
+    (a list of scenes) comes after, by name."""
+    rows = [{"stimuli": f"period_mm={v}", "value": v, "response": "3"}
+            for v in ("10", "2", "5", "0.6")] + [{"stimuli": n, "value": "", "response": "3"}
+                                                 for n in ("b", "a")]
+    summary = analyse_study([session("magnitude", rows)])
+    assert [st["stimulus"] for st in summary["stimuli"]] == [
+        "period_mm=0.6", "period_mm=2", "period_mm=5", "period_mm=10", "a", "b"]
 
 
 def test_pooling_sessions_without_out_is_refused(tmp_path, capsys):

@@ -35,11 +35,12 @@ Per study, by method:
   differencing model with its bootstrap interval (``same_different``); a level whose
   hits are not above its false alarms says that its d' 0 means no discrimination shown
   (``d_prime_note``).
-- ``magnitude``: per stimulus, the ratings' mean, standard deviation, count and the 95 %
-  interval of the mean: Student's t (2 ratings or more; none below), clipped to the
-  rating scale and marked so (``ci95_clipped``). The mean cannot leave the scale, so
-  clipping removes no value the t-interval covers and keeps its coverage; with few
-  ratings near an end of the scale the t-interval is wide (n 3: the mean +- 2.5 sd).
+- ``magnitude``: per stimulus (by its value of ``vary``, then by name), the ratings'
+  mean, standard deviation, count and the 95 % interval of the mean: Student's t (2
+  ratings or more; none below), clipped to the rating scale and marked so
+  (``ci95_clipped``). The mean cannot leave the scale, so clipping removes no value the
+  t-interval covers and keeps its coverage; with few ratings near an end of the scale
+  the t-interval is wide (n 3: the mean +- 2.5 sd).
 
 A slope interval's method quotes its measured coverage only for one complete session of
 the bundled protocol it was measured on (:func:`measured_coverage`), and says otherwise
@@ -558,14 +559,26 @@ def mean_interval(ratings: np.ndarray, scale: tuple[float, float] | None):
     return clipped, clipped != (low, high)
 
 
+def _stimulus_order(name: str, value: str) -> tuple:
+    """Sort key of a magnitude stimulus: by its ``value`` of ``vary`` where that is a
+    number (period_mm=2 before period_mm=10), then by ``name``; a stimulus without one
+    (a list of scenes) by name, after those with one."""
+    try:
+        return (0, ascii_float(value), name)
+    except ValueError:
+        return (1, 0.0, name)
+
+
 def _magnitude(design: dict, sessions: list[SessionData]) -> dict:
     ratings: dict[str, list[float]] = {}
+    order: dict[str, tuple] = {}
     for s in sessions:
         for row in s.main():
             ratings.setdefault(row["stimuli"], []).append(float(row["response"]))
+            order.setdefault(row["stimuli"], _stimulus_order(row["stimuli"], row["value"]))
     scale = design.get("scale")
     out = []
-    for name in sorted(ratings):
+    for name in sorted(ratings, key=order.__getitem__):
         r = np.asarray(ratings[name])
         sd = float(r.std(ddof=1)) if r.size > 1 else math.nan
         ci, clipped = mean_interval(r, scale)
