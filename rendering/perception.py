@@ -6,7 +6,8 @@ table, :data:`THRESHOLDS`, and each finding names the one it is below:
 
 - ``weber``: a layer's friction contrast, (mu'_high - mu'_low) / mu'_high over what it
   asks for (``layer.mu_range``), under 0.11 is not detected as a change of friction
-  (a Weber fraction: Gueorguiev et al. 2017). Layers with no contrast (force layers,
+  (a Weber fraction: Gueorguiev et al. 2017, the change relative to the level before
+  it, so a drop relative to the higher level). Layers with no contrast (force layers,
   mu' 1 everywhere) are not features of friction and are left out.
 - ``touch`` (a limit of rendering, not of perception: :data:`RENDERING_KINDS`): a
   periodic layer (grating, waveform) of period p below the spatial Nyquist period of
@@ -21,18 +22,23 @@ table, :data:`THRESHOLDS`, and each finding names the one it is below:
 - ``temporal``: a periodic layer whose fundamental at the typical speed, f = v / p (Hz),
   is above 800 Hz (p < 0.125 mm at 100 mm/s): frictex's own limit, a margin above the
   500 Hz up to which Bolanowski et al. 1988 measured the skin's vibration channels.
-- ``event``: a clip event playing for less than 2.3 ms (Gueorguiev et al. 2019).
-- ``period`` and ``weber`` for pairs (:func:`compare_values`, :func:`compare_scenes`):
-  two stimuli whose every difference is below its discrimination threshold, periods
-  within 14 % of each other and friction contrasts, or the friction levels two depths
-  or clip levels play (mu' = 1 - depth on a grating), within 11 %. A
+- ``period``, ``weber`` and ``event`` for pairs (:func:`compare_values`,
+  :func:`compare_scenes`): two stimuli whose every difference is below its
+  discrimination threshold, periods within 14 % of the smaller, friction contrasts, or
+  the friction levels two depths or clip levels play (mu' = 1 - depth on a grating),
+  within 11 % of the larger, and clip events' lengths within 2.3 ms of each other (the
+  difference in duration or transition time of short friction drops told apart:
+  Gueorguiev et al. 2019; it bounds no single event, which the check leaves alone). A
   design of levels measures that threshold and needs levels below it: it is compared
   by its level farthest from the reference (``app.experiment.perception_check``).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+
+from frictex.device.errors import InputError
 
 #: a finger speed typical of exploring a texture (mm/s)
 SPEED_MM_S = 100.0
@@ -62,9 +68,13 @@ THRESHOLDS: dict[str, Threshold] = {
                         'the paper "Tactile perception of virtual edges and gratings displayed '
                         'by friction modulation via ultrasonic actuation" (its abstract; '
                         'authors, year and venue not given here)'),
-    "event": Threshold(0.0023, "s", "shortest friction drop felt apart",
-                       "Gueorguiev et al. 2019, IEEE Trans Haptics (short ultrasonic square "
-                       "reductions of friction)"),
+    # a difference threshold between two stimuli, not the shortest drop felt: the abstract
+    # reports 2.3-2.4 ms for the transition time and for the duration of short square
+    # reductions; applied to events of any length, taking longer ones to need no smaller
+    # a difference
+    "event": Threshold(0.0023, "s", "difference in length of two friction drops told apart",
+                       "Gueorguiev et al. 2019, IEEE Trans Haptics 12(2):179-188 (transition "
+                       "time and duration of short ultrasonic square reductions of friction)"),
     # Bolanowski et al. measured vibrotactile thresholds up to 500 Hz ("over 500 Hz" for
     # the P channel); 800 Hz is not in the paper: it is frictex's own margin above that
     # range, so that a warning means a frequency well past every measured channel
@@ -149,21 +159,25 @@ def scene_findings(scene, renderer: str | None = None) -> list[Finding]:
                 out.append(_below("temporal", where, hz,
                                   f"period {period:g} mm plays at {hz:.4g} Hz at "
                                   f"{SPEED_MM_S:g} mm/s (f = v / p)", side="above"))
-        clip = getattr(layer, "clip", None)
-        if clip is not None:
-            for i, event in enumerate(clip.events):
-                length = clip.event_length_s(event)
-                if length < THRESHOLDS["event"].value:
-                    out.append(_below("event", f"{where} event {i + 1}", length,
-                                      f"{event.kind} event of {length * 1e3:.3g} ms"))
     return out
 
 
-def relative_difference(a: float, b: float) -> float:
-    """|a - b| / min(|a|, |b|): the step from the smaller to the larger (0 for equal)."""
+#: what the threshold of each relative difference divides by: the Weber fraction is a
+#: change of friction relative to the level before it (a drop: the higher level, as
+#: :func:`contrast`); a period's dp/p is relative to the reference, the smaller period
+#: of a design whose levels lie above it (the period source's abstract gives "a relative
+#: difference of 14 %" without naming the denominator; dp/p of the reference is the
+#: usual form of a discrimination threshold)
+_RELATIVE_TO = {"weber": max, "period": min}
+
+
+def relative_difference(kind: str, a: float, b: float) -> float:
+    """|a - b| over the value the threshold ``kind`` (``weber`` or ``period``) is
+    relative to: the larger of ``a`` and ``b`` for ``weber``, the smaller for ``period``
+    (0 for equal values)."""
     if a == b:
         return 0.0
-    return abs(a - b) / min(abs(a), abs(b))
+    return abs(a - b) / _RELATIVE_TO[kind](abs(a), abs(b))
 
 
 def _relative(kind: str, d: float, of: str) -> str:
@@ -198,19 +212,25 @@ def compare_values(vary: str, a: float, b: float, where: str, mu_high: float = 1
     or ``vary`` has no published threshold (a renderer). Periods are compared as they
     are (dp/p); depths and levels by the friction levels they play (:func:`friction_level`),
     as the Weber fraction dmu'/mu' is about friction, not about depths: a level of mu' 0 or
-    below is a step no fraction of friction bounds (None)."""
+    below is a step no fraction of friction bounds (None). A value not finite, or below 0
+    (a period: not above 0), is an :class:`InputError`."""
+    period = vary == "period_mm"
+    for value in (a, b):
+        if not (math.isfinite(value) and (value > 0.0 if period else value >= 0.0)):
+            raise InputError(f"{where}: {vary} {value!r}: expected a finite "
+                             f"{'period above 0' if period else 'value of at least 0'}")
     kind = VARY_THRESHOLD.get(vary)
     if kind is None or a == b:
         return None
     if kind == "period":
-        d = relative_difference(a, b)
+        d = relative_difference(kind, a, b)
         text = f"{vary} {a:g} and {b:g} differ by {_relative(kind, d, vary)}"
     else:
         mu_a, mu_b = (friction_level(vary, v, mu_high, clip_depth, clip_level)
                       for v in (a, b))
         if min(mu_a, mu_b) <= 0.0:
             return None
-        d = relative_difference(mu_a, mu_b)
+        d = relative_difference(kind, mu_a, mu_b)
         text = (f"{vary} {a:g} and {b:g} play friction levels mu' {mu_a:.4g} and {mu_b:.4g}, "
                 f"which differ by {d * 100:.3g} % (dmu'/mu' {d:.3g})")
     if d >= THRESHOLDS[kind].value:
@@ -218,28 +238,52 @@ def compare_values(vary: str, a: float, b: float, where: str, mu_high: float = 1
     return _below(kind, where, d, text)
 
 
+def _differences(x, y) -> list[tuple[str, float, str]] | None:
+    """The differences a threshold bounds between layers ``x`` and ``y`` of one type, as
+    (its key, the difference in its unit, the sentence): periods and friction contrasts
+    relative (:func:`relative_difference`), clip events' lengths in s, event by event.
+    None where they differ in a way no threshold bounds: a contrast or period of 0
+    against one above it, clips whose events differ in number or kind."""
+    px, py = _period(x), _period(y)
+    pairs = ([("period", "period", px, py)] if px is not None and py is not None else []) + [
+        ("weber", "contrast", contrast(x), contrast(y))]
+    out = []
+    for kind, of, u, v in pairs:
+        if not (u > 0.0 and v > 0.0 or u == v):
+            return None
+        d = relative_difference(kind, u, v)
+        out.append((kind, d, f'layer "{x.name}" {of} {u:.4g} and {v:.4g} differ by '
+                             f'{_relative(kind, d, of)}'))
+    cx, cy = getattr(x, "clip", None), getattr(y, "clip", None)
+    if cx is None or cy is None:
+        return out
+    if [e.kind for e in cx.events] != [e.kind for e in cy.events]:
+        return None
+    for i, (ex, ey) in enumerate(zip(cx.events, cy.events)):
+        lx, ly = cx.event_length_s(ex), cy.event_length_s(ey)
+        out.append(("event", abs(lx - ly), f'layer "{x.name}" event {i + 1} lengths '
+                                           f'{lx * 1e3:.4g} and {ly * 1e3:.4g} ms differ by '
+                                           f'{abs(lx - ly) * 1e3:.3g} ms'))
+    return out
+
+
 def compare_scenes(a, b, where: str) -> Finding | None:
     """Two scenes whose layers match one to one (same count and types) and whose every
-    difference of period and friction contrast is below its threshold, some above 0:
-    the finding for the largest of them (relative to its threshold). None if the
-    scenes differ otherwise (layer types, count) or by more."""
+    difference of period, friction contrast and clip event length is below its
+    threshold, some above 0: the finding for the largest of them (relative to its
+    threshold). None if the scenes differ otherwise (layer types, count, clip events'
+    number or kinds) or by more."""
     if len(a.layers) != len(b.layers) or any(type(x) is not type(y)
                                              for x, y in zip(a.layers, b.layers)):
         return None
     steps = []
     for x, y in zip(a.layers, b.layers):
-        px, py = _period(x), _period(y)
-        if px is not None and py is not None:
-            steps.append(("period", f'layer "{x.name}" period', px, py, "period"))
-        steps.append(("weber", f'layer "{x.name}" contrast', contrast(x), contrast(y),
-                      "contrast"))
-    ratios = [(relative_difference(u, v) / THRESHOLDS[kind].value, kind, what, u, v, of)
-              for kind, what, u, v, of in steps if u > 0.0 and v > 0.0 or u == v]
-    if len(ratios) != len(steps) or max(r[0] for r in ratios) >= 1.0 or all(
-            r[0] == 0.0 for r in ratios):
+        found = _differences(x, y)
+        if found is None:
+            return None
+        steps += found
+    ratios = [d / THRESHOLDS[kind].value for kind, d, _ in steps]
+    if not ratios or not 0.0 < max(ratios) < 1.0:
         return None
-    ratio, kind, what, u, v, of = max(ratios)
-    return _below(kind, where, ratio * THRESHOLDS[kind].value,
-                  f"{what} {u:.4g} and {v:.4g} differ by "
-                  f"{_relative(kind, ratio * THRESHOLDS[kind].value, of)}"
-                  f" (the largest difference between them)")
+    kind, d, text = steps[ratios.index(max(ratios))]
+    return _below(kind, where, d, f"{text} (the largest difference between them)")

@@ -5,8 +5,9 @@ Pairs compared:
 
 - parametric stimuli (``[stimuli]`` with ``vary`` and ``levels``): the reference against
   its farthest level (the largest: levels are above the reference), by ``vary``'s
-  threshold (``perception.compare_values``: periods 14 %, the friction levels of
-  depths and clip levels 11 %, from the varied layer's own mu' and clip depth).
+  threshold (``perception.compare_values``: periods 14 % of the smaller, the friction
+  levels of depths and clip levels 11 % of the higher, from the varied layer's own mu'
+  and clip depth).
   Constant stimuli measure a threshold, so levels under it are expected (answered
   correctly less often than at the threshold, the nearest near chance); only a design
   with none beyond it warns: its psychometric function stays below the threshold's point
@@ -18,9 +19,10 @@ Pairs compared:
   rules its periodic layers: a 0.6 mm grating is played by SHT but aliased by SHO-held),
   naming the stimuli a note applies to.
 - listed stimuli (``[[stimulus]]``, or renderers crossed): every pair of stimuli from
-  different scene files, their layers matched one to one
-  (``perception.compare_scenes``); two renderings of one scene differ by their
-  renderer, for which no threshold is published, and are not compared.
+  different scene files, their layers matched one to one, by their periods, friction
+  contrasts and clip events' lengths (``perception.compare_scenes``); two renderings
+  of one scene differ by their renderer, for which no threshold is published, and are
+  not compared.
 """
 
 from __future__ import annotations

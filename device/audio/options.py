@@ -64,8 +64,9 @@ MAX_BLOCKSIZE = 8192
 DEFAULT_BUFFER_MS = 100.0
 #: most frames queued ahead of the callback (ms): a stop with drain plays them out first
 MAX_BUFFER_MS = 1000.0
-#: start, stop, starvation and emergency-stop ramps (ms): within a friction step the
-#: finger feels (2.3-2.4 ms, Gueorguiev 2019), and 384 frames at 192 kHz
+#: start, stop, starvation and emergency-stop ramps (ms): 384 frames at 192 kHz; a ramp
+#: lengthens a friction step's transition by less than the 2.3-2.4 ms difference in
+#: transition time participants told apart (Gueorguiev 2019)
 DEFAULT_RAMP_MS = 2.0
 
 
