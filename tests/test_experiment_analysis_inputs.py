@@ -8,22 +8,10 @@ import shutil
 import pytest
 
 from frictex.app.commands.cli import main
+from tests import test_experiment_result_columns as result_columns
 
-PARTICIPANT = "simulated:weber=0.11,seed=3"
-TWO_AFC = """format = 1
-name = "depth-2afc"
-method = "2afc"
-repetitions = 2
-[stimuli]
-scene = "grating-5mm"
-vary = "depth"
-reference = 0.3
-levels = [0.32, 0.36, 0.42]
-[presentation]
-exploration_s = 0.3
-[analysis]
-bootstrap = 0
-"""
+PARTICIPANT = result_columns.PARTICIPANT
+TWO_AFC = result_columns.TWO_AFC.replace("bootstrap = 200", "bootstrap = 0")  # no interval needed
 
 
 @pytest.fixture(scope="module")
