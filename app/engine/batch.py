@@ -67,9 +67,11 @@ batch's figures). A failed job does not stop the others.
 The output folder. ``--out`` is new, empty, or an earlier batch's: nothing in it but
 ``batch.csv`` (and ``batch.csv.partial``), job folders (a folder with a replay's
 ``summary.json``) and the staging leftovers of killed replays (``.<name>.frictex-*``);
-anything else is refused before a job runs. The batch replaces it as a whole when it
+anything else is refused before a job runs, as is an ``--out`` on a file system that
+holds no files (/proc), in a replay's words. The batch replaces it as a whole when it
 ends (``app.engine.batch_folder``): until then it holds the earlier batch untouched,
-whatever stops the batch (SIGKILL included); then ``batch.csv`` and exactly the folders
+whatever stops the batch (SIGKILL included; a full disk, which names ``--out``); then
+``batch.csv`` and exactly the folders
 of the jobs it lists ``ok`` (or ``earlier``, below). An earlier job folder that holds a
 file not a run's output (the user's) is kept as it is and named in a warning.
 
@@ -427,6 +429,11 @@ def _identity(job: Job) -> dict:
     """The cells of a job's ``batch.csv`` row that say which job it is and what it replays."""
     scene, trace = job.written or (job.scene, job.trace)
     return {"job": job.index, "name": job.name, "scene": scene, "trace": trace}
+
+
+#: bytes a ``batch.csv`` row takes at most, for the room check: its error (up to
+#: MAX_ERROR_SHOWN characters, 4 bytes each at most in UTF-8) and its other cells
+ROW_BYTES = 4 * MAX_ERROR_SHOWN + 1024
 
 
 def write_results(out_dir: Path, rows: list[dict]) -> Path:

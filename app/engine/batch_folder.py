@@ -31,9 +31,11 @@ import re
 import shutil
 from pathlib import Path
 
-from frictex.app.engine.batch import INPUTS, MEASURES, RESERVED, RESULTS, write_results
+from frictex.app.engine.batch import (INPUTS, MEASURES, RESERVED, RESULTS, ROW_BYTES,
+                                      write_results)
 from frictex.app.engine.staging import SUMMARY, Staging, is_run_folder, is_run_output
-from frictex.device.errors import InputError
+from frictex.app.engine.tables import WRITE_ELSEWHERE, check_room
+from frictex.device.errors import InputError, OutputSpaceError
 from frictex.device.safe_text import escape, quoted
 
 #: a killed replay's staging leftover in an earlier batch's ``--out`` (``app.engine.staging``)
@@ -82,7 +84,12 @@ class BatchFolder:
                                owned_pattern=_LEFTOVER, claimed_by_summary=False)
 
     def begin(self) -> Path:
-        """The folder the jobs write their folders into (the staging folder)."""
+        """The folder the jobs write their folders into (the staging folder). Refused
+        first, as a replay's output folder is (``tables.check_room``): one on a file
+        system that holds no files (/proc), or without room for ``batch.csv``."""
+        self.staging.check()
+        check_room(self.staging.above(), len(self.names) * ROW_BYTES,
+                   f"the rows of {RESULTS}", WRITE_ELSEWHERE)
         return self.staging.begin()
 
     def commit(self, rows: list[dict], stopped: bool) -> tuple[list[dict], list[str]]:
@@ -107,9 +114,20 @@ class BatchFolder:
             rows = self._kept_rows(rows, ok, before)
         _drop_unlisted(staged, {*users, *(row["name"] for row in rows
                                           if row["status"] in ("ok", EARLIER))})
-        write_results(staged, rows)
-        self.staging.commit()
+        try:
+            self._write_and_swap(rows)
+        except OutputSpaceError as exc:
+            raise _not_kept(exc, len(ok)) from None
         return rows, users
+
+    def _write_and_swap(self, rows: list[dict]) -> None:
+        """Write ``batch.csv`` into the staging folder (its errors naming ``--out``, as
+        the swap's do) and swap the staging folder in."""
+        try:
+            write_results(self.staging.folder, rows)
+        except OSError as exc:
+            raise self.staging.failed(exc, f"write {RESULTS}") from None
+        self.staging.commit()
 
     def _kept_rows(self, rows: list[dict], ok: set[str], before: dict) -> list[dict]:
         """``rows`` with each earlier folder a stopped batch keeps listed as ``earlier``:
@@ -123,6 +141,17 @@ class BatchFolder:
     def abort(self) -> None:
         """Delete the staging folder; ``--out`` stays as it was."""
         self.staging.abort()
+
+
+def _not_kept(exc: OutputSpaceError, finished: int) -> OutputSpaceError:
+    """``exc`` (a full disk or a folder that cannot be written, naming ``--out``) also
+    saying that the outputs of the ``finished`` jobs were not kept."""
+    if not finished:
+        return exc
+    said = OutputSpaceError(f"{exc}; the outputs of the jobs that finished ({finished}) were "
+                            "not kept either (a batch replaces its --out all or nothing)")
+    said.errno = exc.errno
+    return said
 
 
 def _drop_unlisted(staged: Path, listed: set[str]) -> None:

@@ -24,18 +24,20 @@ other file or link in ``--out`` (``commands.notes.txt`` included) is the user's:
 hard-linked into the staging folder before the swap (no byte copied, none lost; copied
 where the file system has no hard links). Every other folder (a ``frames`` folder with a
 file of the user's in it included) is refused before anything is written, and again at
-the commit (a folder created in ``--out`` while the run went on): the run then fails
-(:class:`~frictex.device.errors.RunFailed`), its outputs are deleted and ``--out`` is left
-as it was. After the swap only the previous run's own outputs and the files carried over
-are deleted from the old folder; anything that appeared in it in between is moved into
-the new ``--out`` (or, where a name is taken, the old folder is kept as
+the commit (a folder created in ``--out`` while the run went on; one holding a
+``summary.json`` is said to be another run's, committed there meanwhile): the run then
+fails (:class:`~frictex.device.errors.RunFailed`), its outputs are deleted and ``--out``
+is left as it was. After the swap only the previous run's own outputs and the files
+carried over are deleted from the old folder; anything that appeared in it in between is
+moved into the new ``--out`` (or, where a name is taken, the old folder is kept as
 ``.<name>.frictex-kept.<random>`` and the run fails naming it): a run never deletes a file
 it did not write. Also refused before anything is written: ``--out`` the root folder, an
 ``--out`` that holds the current folder (the process would be left in the deleted one)
 and a mount point, bind mounts included (its staging folder would be on another file
 system, or the swap would fail with EBUSY). Errors name ``--out``, not the staging
-folder. An ``--out`` without a ``summary.json`` that holds a file of those names
-(a trace saved as ``commands.csv``) holds no run's outputs, and a table file that a
+folder, in one line that starts with it (the system's errno kept on the exception). An
+``--out`` without a ``summary.json`` that holds a file of those names (a trace saved as
+``commands.csv``) holds no run's outputs, and a table file that a
 replay's ``summary.json`` does not list (``output.files``) is not that run's: either is
 refused before anything is written, as is an input of the run (a trace, a scene) that is
 a run's output by its name in ``--out``, which the commit would replace.
@@ -65,7 +67,7 @@ import shutil
 import stat
 from pathlib import Path
 
-from frictex.device.errors import InputError, RunFailed, disk_full
+from frictex.device.errors import InputError, OutputSpaceError, RunFailed, disk_full
 
 #: the tables' stems, formats, and the other names a run writes into its output folder
 OUTPUT_STEMS = ("commands", "friction")
@@ -144,12 +146,17 @@ class Staging:
     def _name(self, kind: str) -> Path:
         return self.out.with_name(f".{_short(self.out.name)}.{kind}.{os.getpid()}.{self.token}")
 
+    def above(self) -> Path:
+        """The nearest existing folder above ``out``: where its staging folder goes (the
+        folders between made first), on its file system."""
+        return next(folder for folder in self.out.parents if folder.exists())
+
     def check(self, inputs: tuple[str | Path | None, ...] = ()) -> None:
         """Refuse, touching nothing, an ``out`` this run could not replace whole, or one
         whose replacing would delete one of the run's ``inputs`` (paths; None: none)."""
         if self.out.exists() and not self.out.is_dir():
             raise InputError(f"{self.out}: exists and is not a folder")
-        above = next(folder for folder in self.out.parents if folder.exists())
+        above = self.above()
         if not above.is_dir():
             raise InputError(f"{self.out}: {above} is not a folder, so no folder can be made "
                              "in it")
@@ -228,7 +235,7 @@ class Staging:
                 _same_access(self.out, self.folder)
         except OSError as exc:
             self.abort()
-            raise self._failed(exc, "create its staging folder beside it") from None
+            raise self.failed(exc, "create its staging folder beside it") from None
         return self.folder
 
     def _recover(self) -> None:
@@ -254,7 +261,7 @@ class Staging:
         try:
             path.write_text(text, encoding="utf-8")
         except OSError as exc:
-            raise self._failed(exc, f"write {name}") from None
+            raise self.failed(exc, f"write {name}") from None
         return path
 
     def commit(self) -> None:
@@ -268,9 +275,7 @@ class Staging:
                 return
             foreign = self._foreign()
             if foreign:
-                raise RunFailed(f"{self.out}: the folder {foreign[0]!r}, not a run's output, "
-                                "appeared in it during the run; nothing was replaced (a run "
-                                "replaces its output folder as a whole): move it and run again")
+                raise RunFailed(self._appeared(foreign[0]))
             for entry in os.scandir(self.out):
                 if not entry.is_dir(follow_symlinks=False) and not self._own(entry):
                     _carry(Path(entry.path), self.folder / entry.name)
@@ -281,13 +286,25 @@ class Staging:
                 os.rename(self.out, old)
                 os.rename(self.folder, self.out)
         except OSError as exc:
-            raise self._failed(exc, "replace it with the run's outputs") from None
+            raise self.failed(exc, "replace it with the run's outputs") from None
         _OWNED.pop(str(self.folder), None)
         kept = self._clear(old)
         if kept is not None:
             raise RunFailed(f"{self.out}: holds the new run's outputs, but files appeared "
                             "beside the previous run's while they were swapped, and could not "
                             f"be moved into it: kept in {kept}")
+
+    def _appeared(self, name: str) -> str:
+        """Why the commit refuses the folder ``name`` that appeared in ``out`` during the
+        run: another run's output (it holds a ``summary.json``: a batch's job folder,
+        committed by a batch into the same ``out`` meanwhile), or a folder not a run's."""
+        if (self.out / name / SUMMARY).is_file():
+            return (f"{self.out}: another run committed its outputs into it during this run "
+                    f"(the folder {name!r}, with a {SUMMARY}); nothing was replaced: run "
+                    "again once it has finished, or write into another folder")
+        return (f"{self.out}: the folder {name!r}, not a run's output, appeared in it during "
+                "the run; nothing was replaced (a run replaces its output folder as a "
+                "whole): move it and run again")
 
     def _clear(self, old: Path, leftover: bool = False) -> Path | None:
         """Delete ``old`` (a previous run's folder, or a ``leftover`` of a killed run): its
@@ -321,8 +338,10 @@ class Staging:
         shutil.rmtree(self.folder, ignore_errors=True)
         _OWNED.pop(str(self.folder), None)
 
-    def _failed(self, exc: OSError, doing: str) -> OSError:
-        """``exc`` (on the staging folder) as an error naming ``out``."""
+    def failed(self, exc: OSError, doing: str) -> OSError:
+        """``exc`` (on the staging folder, while the run did ``doing``) as a one-line error
+        naming ``out``, with ``exc``'s errno: a full disk, a folder that cannot be written
+        (:class:`OutputSpaceError`) or a mount point (:class:`InputError`)."""
         full = disk_full(exc, f"{self.out}: the disk is full ({exc.strerror}); nothing was "
                               "replaced")
         if full is not None:
@@ -332,7 +351,9 @@ class Staging:
                               "into a folder inside it")
         if exc.errno is None:
             return exc
-        return OSError(exc.errno, f"{self.out}: cannot {doing} ({exc.strerror})")
+        failed = OutputSpaceError(f"{self.out}: cannot {doing} ({exc.strerror})")
+        failed.errno = exc.errno  # with a strerror too, str() would start '[Errno N]'
+        return failed
 
 
 #: the largest summary.json read for the tables it lists (a replay's is a few kB)
