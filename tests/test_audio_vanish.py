@@ -100,3 +100,15 @@ def test_sigterm_ends_a_run_whose_audio_device_froze(tmp_path):
     assert code == 1, err
     assert err.count("\n") == 1 and err.startswith("frictex: error: audio: the audio device ")
     assert err.rstrip().endswith("so the stream was abandoned")
+
+
+def test_a_replay_opening_a_frozen_audio_server_ends_with_one_line(tmp_path):
+    """The server stopped (SIGSTOP) before the replay starts: PortAudio's initialisation
+    waits for its answer without a bound (it hung with no output before)."""
+    with private_jackd(tmp_path, f"frictex-vanish-{os.getpid()}") as (server, env):
+        server.send_signal(signal.SIGSTOP)
+        code, _, err = finish(start_replay(tmp_path, env))
+    assert code == 1, err
+    assert err.count("\n") == 1 and err.startswith(
+        "frictex: error: audio: the audio server is not answering: PortAudio's initialisation")
+    assert not (tmp_path / "out").exists()
