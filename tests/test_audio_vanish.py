@@ -1,5 +1,6 @@
-"""An audio device that goes away or freezes mid-replay ends the run, within a bound, with
-exit 1 and one line (``device.audio.stream``, ``device.audio.bounded``).
+"""An audio device that goes away or freezes mid-replay, or is frozen when the replay
+opens it, ends the run, within a bound, with exit 1 and one line (``device.audio.stream``,
+``device.audio.bounded``).
 
 The device is JACK's dummy backend in a private jackd (Debian's jackd2, installed by
 .ci/setup-firmware), which the test ends with SIGTERM (the server gone: PortAudio's stop

@@ -12,6 +12,11 @@ producer (replay) waits for room, at most ``stall_s * max_stalls`` seconds (less
 PortAudio says the stream is no longer active: a JACK server that went away), then lets
 the device go and fails with one DeviceError: the audio device stopped taking frames.
 
+Opening it: PortAudio's initialisation (``import sounddevice``) and ``Pa_OpenStream``
+wait for a JACK server's answer without a bound (a stopped jackd: forever, signals
+unanswered); each is bounded by :data:`PA_CALL_LIMIT_S` too, and one that does not return
+is abandoned, a DeviceError: the audio server is not answering.
+
 Letting the device go: ``Pa_StopStream`` then ``Pa_CloseStream``. They and
 ``Pa_StartStream`` are each bounded by :data:`PA_CALL_LIMIT_S` (``device.audio.bounded``:
 with its server gone, PortAudio's JACK host API blocks in them for 10 minutes, signals
@@ -32,6 +37,7 @@ Every wait here asks whether a held signal ends it (``device.link.waits``).
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 
@@ -53,15 +59,43 @@ DRAIN_MARGIN_S = 2.0
 PA_CALL_LIMIT_S = 3.0
 
 
-def import_sounddevice():
-    """python-sounddevice, or MissingExtra / DeviceError saying what to install."""
-    try:
+def import_sounddevice(label: str = "audio"):
+    """python-sounddevice, PortAudio initialised (its import does that), or MissingExtra /
+    DeviceError saying what to install. PortAudio's initialisation asks each host API for
+    its devices, a JACK server too, and waits for an answer without a bound: one that has not
+    returned within :data:`PA_CALL_LIMIT_S` is abandoned (``device.audio.bounded``), a
+    DeviceError starting with ``label``."""
+    loaded = []
+
+    def load() -> None:
         import sounddevice
+        loaded.append(sounddevice)
+
+    stderr = os.dup(2)  # sounddevice points fd 2 at /dev/null while PortAudio initialises
+    try:
+        returned = call_bounded(load, PA_CALL_LIMIT_S)
     except ModuleNotFoundError:
         raise MissingExtra("audio", "--device audio", "sounddevice") from None
     except OSError as exc:  # the module is there, the PortAudio library is not
         raise DeviceError(f"audio device: {exc} (Debian: apt-get install libportaudio2)") from None
-    return sounddevice
+    except BaseException:  # a signal during the wait (the import perhaps left running)
+        abandon_portaudio(sys.modules.get("sounddevice"))
+        raise
+    finally:  # the line that says why must not go to /dev/null
+        os.dup2(stderr, 2)
+        os.close(stderr)
+    if not returned:  # half imported: its exit handler (PortAudio's end) is registered
+        abandon_portaudio(sys.modules.get("sounddevice"))
+        raise _not_answering(label, "initialisation")
+    return loaded[0]
+
+
+def _not_answering(label: str, call: str) -> DeviceError:
+    """The error for a PortAudio ``call`` (initialisation, open) left running after
+    :data:`PA_CALL_LIMIT_S`."""
+    return DeviceError(f"{label}: the audio server is not answering: PortAudio's {call} "
+                       f"(which connects to the JACK server) did not return within "
+                       f"{PA_CALL_LIMIT_S:g} s; is jackd stopped or frozen?")
 
 
 def _outputs(sd) -> str:
@@ -92,9 +126,9 @@ class StreamOutput(AudioOutput):
     def __init__(self, plan: AudioPlan, device: str | None, *, blocksize: int,
                  buffer_frames: int, phases: bool, paced: bool, wait_s: float,
                  stderr=sys.stderr, tap_frames: int = 0):
-        sd = self._sd = import_sounddevice()
         super().__init__(plan, f"audio:{device}" if device else "audio", phases=phases,
                          paced=paced, stderr=stderr)
+        sd = self._sd = import_sounddevice(self.label)
         capacity = max(int(buffer_frames), 4 * blocksize) + plan.ramp_frames
         self.ring = FrameRing(capacity, plan.channels, plan.ramp_frames)
         self.player = Player(self.ring, plan.ramp_frames, tap_frames)
@@ -109,16 +143,28 @@ class StreamOutput(AudioOutput):
         self._running = False  # PortAudio's start returned: the stream ran
         self._released = False  # stop and close done (or abandoned): the stream is gone
         target = int(device) if device and device.isdigit() else (device or None)
-        try:
-            self.stream = sd.OutputStream(
+        opened = []
+
+        def open_stream() -> None:
+            opened.append(sd.OutputStream(
                 samplerate=plan.audio_rate, blocksize=blocksize, device=target,
                 channels=plan.channels, dtype="float32", latency="low",
-                callback=self._callback)
+                callback=self._callback))
+
+        try:
+            returned = call_bounded(open_stream, PA_CALL_LIMIT_S)
         except ValueError as exc:  # no such device
             raise InputError(f"audio device {device!r}: {exc}; {_outputs(sd)}") from None
         except sd.PortAudioError as exc:
             raise DeviceError(f"{self.label}: cannot open a {plan.channels}-channel output "
                               f"at {plan.audio_rate} Hz: {exc}; {_outputs(sd)}") from None
+        except BaseException:  # a signal during the wait (the open perhaps left running)
+            abandon_portaudio(sd)
+            raise
+        if not returned:
+            abandon_portaudio(sd)
+            raise _not_answering(self.label, "open of the stream")
+        self.stream = opened[0]
         #: PortAudio's reported output latency (s): from a callback's buffer to the DAC
         self.output_latency_s = float(self.stream.latency)
 

@@ -1,0 +1,107 @@
+"""``device.audio.stream`` without a sound card: PortAudio's initialisation and open,
+bounded where the audio server does not answer. python-sounddevice is stood in for
+(``fake_sd``), and a hanging import by a module of that name in a process of its own."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import threading
+import types
+
+import pytest
+
+from frictex.device.audio import stream
+from frictex.device.audio.options import AudioArgs, make_plan
+from frictex.device.audio.stream import StreamOutput
+from frictex.device.errors import DeviceError
+
+RATE = 10_000.0
+#: PortAudio's devices in the stand-in: an input only, then an output
+DEVICES = [{"index": 0, "name": "mic", "max_output_channels": 0},
+           {"index": 1, "name": "card", "max_output_channels": 2}]
+#: bound on the command whose PortAudio does not answer (s): 3 s, on a busy machine
+END_S = 60.0
+
+
+class FakeStream:
+    """A PortAudio output stream that opens and never calls back."""
+    latency = 0.005
+    active = True
+
+    def __init__(self, **kwargs):
+        self.kwargs = kwargs
+        self.blocksize = kwargs["blocksize"]
+
+    def start(self):
+        pass
+
+    def stop(self):
+        pass
+
+    def close(self):
+        pass
+
+
+@pytest.fixture
+def fake_sd(monkeypatch):
+    """python-sounddevice stood in for in ``device.audio.stream``."""
+    sd = types.SimpleNamespace(PortAudioError=type("PortAudioError", (Exception,), {}),
+                               OutputStream=FakeStream, query_devices=lambda: DEVICES)
+    monkeypatch.setattr(stream, "import_sounddevice", lambda label="audio": sd)
+    return sd
+
+
+def open_output(device: str | None, *, paced: bool = True) -> StreamOutput:
+    return StreamOutput(make_plan(AudioArgs(), 1, RATE), device, blocksize=256,
+                        buffer_frames=0, phases=False, paced=paced, wait_s=5.0)
+
+
+# ----------------------------------------------------------------- a server that does not answer
+HANGING_IMPORT = """
+import atexit, os, threading
+def _exit_handler():  # sounddevice's: PortAudio's end, which would wait for the server too
+    print("exit handler ran")
+atexit.register(_exit_handler)
+os.dup2(os.open(os.devnull, os.O_WRONLY), 2)  # as sounddevice does while PortAudio initialises
+threading.Event().wait()  # Pa_Initialize waiting for a stopped jackd
+"""
+
+
+def test_an_initialisation_that_does_not_return_ends_the_run_with_one_line(tmp_path):
+    (tmp_path / "sounddevice.py").write_text(HANGING_IMPORT)
+    replay = subprocess.Popen(
+        [sys.executable, "-m", "frictex", "replay", "grating-15mm",
+         "back-and-forth-60mms-50hz", "--device", "audio", "--quiet",
+         "--out", str(tmp_path / "out")],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        env={**os.environ, "PYTHONPATH": str(tmp_path)})
+    try:
+        out, err = replay.communicate(timeout=END_S)
+    except subprocess.TimeoutExpired:
+        replay.kill()
+        replay.communicate(timeout=10)
+        pytest.fail(f"the replay was still running after {END_S:g} s")
+    assert replay.returncode == 1, err
+    assert err.count("\n") == 1
+    assert err.startswith("frictex: error: audio: the audio server is not answering: "
+                          "PortAudio's initialisation (which connects to the JACK server) "
+                          "did not return within 3 s")
+    assert "exit handler ran" not in out  # unregistered: the process could end
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_open_that_does_not_return_is_abandoned(fake_sd, monkeypatch):
+    release = threading.Event()
+    abandoned = []
+    fake_sd.OutputStream = lambda **kwargs: release.wait(END_S)  # bounded too
+    monkeypatch.setattr(stream, "PA_CALL_LIMIT_S", 0.2)
+    monkeypatch.setattr(stream, "abandon_portaudio", abandoned.append)
+    try:
+        with pytest.raises(DeviceError, match=r"^audio:1: the audio server is not answering: "
+                           r"PortAudio's open of the stream .* within 0\.2 s"):
+            open_output("1")
+    finally:
+        release.set()  # let the abandoned thread end
+    assert abandoned == [fake_sd]  # its exit handler would wait for the server again
