@@ -1,6 +1,7 @@
 """``device.audio.stream`` without a sound card: PortAudio's initialisation and open,
-bounded where the audio server does not answer. python-sounddevice is stood in for
-(``fake_sd``), and a hanging import by a module of that name in a process of its own."""
+bounded where the audio server does not answer; the device a number names.
+python-sounddevice is stood in for (``fake_sd``), and a hanging import by a module of
+that name in a process of its own."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ import pytest
 from frictex.device.audio import stream
 from frictex.device.audio.options import AudioArgs, make_plan
 from frictex.device.audio.stream import StreamOutput
-from frictex.device.errors import DeviceError
+from frictex.device.errors import DeviceError, InputError
 
 RATE = 10_000.0
 #: PortAudio's devices in the stand-in: an input only, then an output
@@ -105,3 +106,15 @@ def test_an_open_that_does_not_return_is_abandoned(fake_sd, monkeypatch):
     finally:
         release.set()  # let the abandoned thread end
     assert abandoned == [fake_sd]  # its exit handler would wait for the server again
+
+
+# ----------------------------------------------------------------- the device a number names
+@pytest.mark.parametrize("device", ["0", "7"])
+def test_a_number_that_is_no_output_device_is_bad_input(fake_sd, device):
+    with pytest.raises(InputError, match=rf"^audio device '{device}': No output device "
+                       rf"number {device}; output devices: 1: card \(2 ch\)$"):
+        open_output(device)
+
+
+def test_a_number_that_is_an_output_device_opens_it(fake_sd):
+    assert open_output("1").stream.kwargs["device"] == 1

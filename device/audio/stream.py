@@ -111,6 +111,24 @@ def _outputs(sd) -> str:
         f"{d['index']}: {d['name']} ({d['max_output_channels']} ch)" for d in devices)
 
 
+def _target(sd, device: str | None):
+    """PortAudio's output device for ``audio:NAME``: None (the default), a name (or part
+    of one; sounddevice raises ValueError for no match) or a number, which must be one of
+    the output devices PortAudio lists (InputError)."""
+    if not device or not device.isdigit():
+        return device or None
+    index = int(device)
+    try:
+        listed = any(d["index"] == index and d["max_output_channels"] > 0
+                     for d in sd.query_devices())
+    except sd.PortAudioError:  # opening it says what is wrong
+        return index
+    if not listed:
+        raise InputError(f"audio device {device!r}: No output device number {index}; "
+                         f"{_outputs(sd)}")
+    return index
+
+
 class StreamOutput(AudioOutput):
     """Plays the stream on a PortAudio output device (module docstring).
 
@@ -142,8 +160,7 @@ class StreamOutput(AudioOutput):
         self._started = False
         self._running = False  # PortAudio's start returned: the stream ran
         self._released = False  # stop and close done (or abandoned): the stream is gone
-        target = int(device) if device and device.isdigit() else (device or None)
-        opened = []
+        target, opened = _target(sd, device), []
 
         def open_stream() -> None:
             opened.append(sd.OutputStream(
