@@ -1,16 +1,18 @@
 """``device.audio.stream`` without a sound card: PortAudio's initialisation and open,
-bounded where the audio server does not answer; the device a number names.
-python-sounddevice is stood in for (``fake_sd``), and a hanging import by a module of
-that name in a process of its own."""
+bounded where the audio server does not answer; the device a number names; the ramp
+written in place of a dropped block. python-sounddevice is stood in for (``fake_sd``),
+and a hanging import by a module of that name in a process of its own."""
 
 from __future__ import annotations
 
+import math
 import os
 import subprocess
 import sys
 import threading
 import types
 
+import numpy as np
 import pytest
 
 from frictex.device.audio import stream
@@ -118,3 +120,30 @@ def test_a_number_that_is_no_output_device_is_bad_input(fake_sd, device):
 
 def test_a_number_that_is_an_output_device_opens_it(fake_sd):
     assert open_output("1").stream.kwargs["device"] == 1
+
+
+# ----------------------------------------------------------------- a dropped block
+def test_the_ramp_after_a_dropped_block_continues_the_last_frame_written(fake_sd):
+    """A live stream whose device takes no frames: blocks of 25 commands at 2 um fill the
+    ring, and the first that does not fit is dropped and the ramp to 0 written instead.
+    The ramp's frames are the carrier going on from the last frame written, frame by
+    frame, at its level times (1 - k/ramp), k = 1, 2, ..."""
+    out = open_output(None, paced=False)
+    plan, ring = out.plan, out.ring
+    start = 0
+    while out.ring_full == 0:
+        written = ring.tail
+        out.send(start, np.full((25, 1), 2.0))
+        start += 25
+    assert out.ring_full == 480  # the dropped block's frames
+    assert ring.tail == written + plan.ramp_frames
+
+    def carrier(n: int) -> float:  # frame n, at 2 um on the default profile's full scale
+        level = 2.0 / plan.um_per_volt / plan.full_scale_v
+        return level * math.cos(2 * math.pi * math.fmod(n * plan.carrier_hz / plan.audio_rate, 1.0))
+
+    # no frame has played: ring position n is frame n
+    assert float(ring.frames[written - 1, 0]) == pytest.approx(carrier(written - 1), abs=1e-6)
+    ramp = ring.frames[written:written + 8, 0].astype(np.float64)
+    expected = [carrier(written + k) * (1 - (k + 1) / plan.ramp_frames) for k in range(8)]
+    np.testing.assert_allclose(ramp, expected, rtol=0, atol=1e-6)

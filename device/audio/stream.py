@@ -204,8 +204,12 @@ class StreamOutput(AudioOutput):
             self.ring_full += frames.shape[0]
             self.commanded_frames += frames.shape[0]
             offset = self._offsets[-1][1] - frames.shape[0]
-            if self._ramp_in >= ramp:  # the stream so far ends in a ramp, not a step
-                self._write(self.synth.fade_tail())
+            # the stream so far ends in a ramp, not a step: the one published with the last
+            # frames written, which follows them (carrier and level; the synthesis has
+            # moved on by the dropped block)
+            fade = ring.published[1]
+            if self._ramp_in >= ramp and fade >= 0:
+                self._write(ring.fades[fade])
                 offset += ramp
             self._offsets.append((self.synth.frames, offset))
             self._ramp_in = 0
