@@ -118,6 +118,12 @@ def test_a_number_that_is_no_output_device_is_bad_input(fake_sd, device):
         open_output(device)
 
 
+def test_a_digit_int_cannot_read_is_a_name(fake_sd):
+    """'²' is a digit to str.isdigit, not to int(): handed to PortAudio as a name (one
+    line if none matches), not read as a number (a traceback)."""
+    assert open_output("²").stream.kwargs["device"] == "²"
+
+
 def test_a_number_that_is_an_output_device_opens_it(fake_sd):
     assert open_output("1").stream.kwargs["device"] == 1
 

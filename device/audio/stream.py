@@ -115,7 +115,8 @@ def _target(sd, device: str | None):
     """PortAudio's output device for ``audio:NAME``: None (the default), a name (or part
     of one; sounddevice raises ValueError for no match) or a number, which must be one of
     the output devices PortAudio lists (InputError)."""
-    if not device or not device.isdigit():
+    # a number in ASCII digits: '²' is a digit to str.isdigit but not to int()
+    if not device or not (device.isascii() and device.isdecimal()):
         return device or None
     index = int(device)
     try:
