@@ -4,8 +4,8 @@ A point is (w, F_n, mu'): plate amplitude (um), normal force (N), measured relat
 friction. Seed 003, eq 2: ``mu'(w) = (1 - k F_n) exp(-b w) + k F_n``; the fit finds
 (b, k) by bounded least squares, with standard errors from its Jacobian (the points'
 scatter only: they leave out the sweep's systematic errors, so five simulated sweeps landed
-3.6 to 7.8 of them from the true b). Points that are not finite are left out and counted
-(:attr:`Fit.n_dropped`). The model is not accepted where the solver did not converge or
+3.6 to 7.8 of them from the true b). Points that are not finite, at a negative amplitude
+or without a normal force (F_n <= 0) are left out and counted (:attr:`Fit.n_dropped`). The model is not accepted where the solver did not converge or
 its residual RMS is above ``MODEL_CEILING``, whatever the residuals' pattern; otherwise it
 is said not to fit this plate and finger only when its residual RMS is above
 ``MODEL_TOLERANCE`` *and* the residuals are not noise: their signs, in order of amplitude,
@@ -80,8 +80,8 @@ def model_jacobian(w_um, normal_n, b_per_um: float, k_per_n: float) -> np.ndarra
 @dataclass(frozen=True)
 class Fit:
     """A fit's outcome: the constants, their standard errors (``b_se`` 1/um, ``k_se``
-    1/N), the residual RMS (mu'), the point count and the count of points left out as not
-    finite (``n_dropped``), the solver's status and message (``least_squares``: above 0
+    1/N), the residual RMS (mu'), the point count and the count of points left out (not
+    finite, a negative amplitude or no normal force: ``n_dropped``), the solver's status and message (``least_squares``: above 0
     where it converged), the runs test's p-value of the
     residuals (:func:`few_runs_p`) and the smallest p-value it could have given with the
     residuals' counts of signs (``runs_least_p``), and the bounds the fit stopped on
@@ -175,7 +175,8 @@ def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> 
     """Least-squares (b, k) of seed 003, eq 2 on the points; arrays (n,), at least
     ``MIN_AMPLITUDES`` distinct amplitudes above 0 um among them.
 
-    Points that are not finite are left out, counted in :attr:`Fit.n_dropped`. Raises
+    Points that are not finite, at an amplitude below 0 or a normal force of 0 or less
+    are left out, counted in :attr:`Fit.n_dropped`. Raises
     InputError (a ValueError) when the usable points have fewer distinct amplitudes above
     0 (they cannot determine both b and k and check the fit), and RunFailed when the
     fitted mu' falls by less than ``MIN_FALL`` (a flat curve: every b fits it).
@@ -211,7 +212,7 @@ def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> 
     signs = _residual_signs(w, sol.fun)
     fit = Fit(params=params, residual_rms=rms, n_points=int(w.size), b_se=b_se, k_se=k_se,
               runs_p=few_runs_p(signs), runs_least_p=few_runs_p(np.sort(signs)),
-              at_bound=at_bound, n_dropped=int(np.count_nonzero(~finite)),
+              at_bound=at_bound, n_dropped=int(np.count_nonzero(~good)),
               solver_status=int(sol.status), solver_message=str(sol.message))
     if fit.fits:
         return fit

@@ -34,3 +34,11 @@ def test_points_that_are_not_finite_are_counted_not_dropped_silently():
     mu[[3, 7]] = [np.inf, np.nan]
     fit = fit_points(w, np.full(12, 0.5), mu)
     assert (fit.n_points, fit.n_dropped) == (10, 2)
+
+
+def test_points_at_a_negative_amplitude_or_without_a_normal_force_are_counted_too():
+    w = np.round(np.linspace(0.2, 2.4, 12), 3)
+    mu = 0.6 * np.exp(-1.4 * w) + 0.4
+    fit = fit_points(np.append(w, [-1.0, -1.0, 0.5]), np.append(np.full(12, 0.5), [0.5, 0.5, 0.0]),
+                     np.append(mu, [0.9, 0.9, 0.7]))
+    assert (fit.n_points, fit.n_dropped) == (12, 3)

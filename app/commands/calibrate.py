@@ -132,7 +132,8 @@ def _warnings(fit) -> list[str]:
     not determined, and a measured table that closed-loop replays refuse."""
     said = []
     if fit.n_dropped:
-        said.append(f"{fit.n_dropped} points left out of the fit: not finite")
+        said.append(f"{fit.n_dropped} points left out of the fit: not finite, a negative "
+                    "amplitude or no normal force")
     said += fit.notes
     if fit.calibration is not None:
         said.append("the written [device.calibration] table replaces seed 003's eq 2: "
