@@ -10,6 +10,9 @@ evdev by the kernel), ``close()``, and optionally ``counters() -> dict`` (what i
 received and refused, for the demo's summary). The pump maps the positions to mm of the scene
 shown now and moves the stamps to the haptic output clock; the haptic side runs a
 sample from the first block boundary after it is queued (``app.live.haptic_thread``).
+A sender may send faster than blocks are played (a flood of frames): the pump forwards at
+most once a block, every DOWN and UP in order but of a finger's MOVEs since the last
+forward only the latest, so a flood cannot make the haptic side play touches late.
 In the demo's default process mode the pump runs in the haptic child process, which
 the window's GL calls cannot hold up; in thread mode, beside the haptic thread.
 """
@@ -18,6 +21,8 @@ from __future__ import annotations
 
 import threading
 import time
+
+from frictex.rendering.input.trace_file import MOVE
 
 WAIT_S = 0.05  # longest wait for the source before looking whether to stop (s)
 
@@ -45,6 +50,9 @@ class TouchPump(threading.Thread):
         self.force_n = force_n
         self.clock = clock
         self.samples = 0
+        self.coalesced = 0  # MOVEs not forwarded: a later MOVE of their finger replaced them
+        self._held: list = []  # the samples since the last forward (None: replaced)
+        self._moving: dict = {}  # finger -> index in _held of its MOVE that a MOVE replaces
         self.error: str | None = None
         self._reported = False
         self._quit = threading.Event()
@@ -62,20 +70,48 @@ class TouchPump(threading.Thread):
         self.samples += len(samples)
         return len(samples)
 
+    def hold(self, samples) -> None:
+        """Keep ``samples`` for the next forward: every DOWN and UP, and of a finger's MOVEs
+        since its last DOWN or UP only the latest (the ones it replaces are counted in
+        ``coalesced``); the order of the samples kept is kept."""
+        for s in samples:
+            at = self._moving.pop(s.finger, None)
+            if s.event == MOVE:
+                if at is not None:
+                    self._held[at] = None
+                    self.coalesced += 1
+                self._moving[s.finger] = len(self._held)
+            self._held.append(s)
+
+    def release(self) -> int:
+        """Forward the samples held (:meth:`hold`); returns how many."""
+        held = [s for s in self._held if s is not None]
+        self._held.clear()
+        self._moving.clear()
+        return self.forward(held)
+
     def run(self) -> None:
+        every_s = self.haptic.block_s  # at most one forward a block (s)
+        due = float("-inf")  # the source clock's time the next forward may come (s)
         try:
             while not self._quit.is_set():
-                self.source.wait(WAIT_S)
-                self.forward(self.source.poll())
+                self.source.wait(max(due - self.clock(), 0.0) if self._held else WAIT_S)
+                self.hold(self.source.poll())
+                now = self.clock()
+                if self._held and now >= due:
+                    self.release()
+                    due = now + every_s
+            self.release()
         except (OSError, ValueError) as exc:
             self.error = str(exc)
         finally:
             self.source.close()
 
     def counters(self) -> dict:
-        """The samples forwarded, and the source's own ``counters()`` if it has them."""
+        """The samples forwarded and coalesced (MOVEs replaced by a later one before a
+        forward), and the source's own ``counters()`` if it has them."""
         counts = getattr(self.source, "counters", None)
-        return {"samples": self.samples, **(counts() if counts is not None else {})}
+        return {"samples": self.samples, "coalesced": self.coalesced, **(counts() if counts is not None else {})}
 
     def take_error(self) -> str | None:
         """Why the source stopped, the first time it is asked; else None."""
