@@ -45,13 +45,14 @@ def test_counted():
 def test_the_demos_closing_lines_say_one_in_the_singular(capsys):
     from frictex.app.commands.demo import _Ended, _print_lines
     summary = {"cpu_steal_pct": None, "blocks": 1, "output_s": 0.0, "deadline_misses": 1,
-               "clamps_total": 1, "frames": 1, "frame_ms_mean": 1.0, "input_counts": {},
+               "worst_lateness_ms": 0.5, "clamps_total": 1, "frames": 1, "frame_ms_mean": 1.0, "input_counts": {},
                "control": None, "ended_by": "window", "dropped_record_blocks": 0}
     link = {"state": "closed", "skipped_blocks": 1, "underruns": 1, "unplayed_samples": 0,
             "commanded_samples": 5, "unplayed_by_cause": {}}
     _print_lines(None, summary, _Ended(summary, link, None, None), None, None)
     assert capsys.readouterr().out.splitlines() == [
-        "demo: 1 block (0.0 s of output), 1 deadline miss, 1 clamped sample, 1 frame drawn "
+        "demo: 1 block (0.0 s of output), 1 deadline miss (worst 0.5 ms late), 1 clamped "
+        "sample, 1 frame drawn "
         "(1.0 ms mean), link: closed",
         "demo: link: the device ran dry 1 time and 1 block was skipped to catch up; 0 of 5 "
         "samples unplayed"]

@@ -462,12 +462,14 @@ def _print_lines(args, summary: dict, ended: _Ended, out: Path | None,
     """The demo's last lines on stdout: blocks, link, input, frames (headless: kept in
     ``frames_out``), control."""
     link, frames, hand = ended.link, ended.frames, ended.hand
-    stolen = ("" if summary["cpu_steal_pct"] is None
-              else f" (CPU steal by a VM host meanwhile: {summary['cpu_steal_pct']:.0f} %)")
     misses = summary["deadline_misses"]
+    notes = [f"worst {summary['worst_lateness_ms']:.1f} ms late"] if misses else []
+    if misses and summary["cpu_steal_pct"] is not None:
+        notes.append(f"CPU steal by a VM host meanwhile: {summary['cpu_steal_pct']:.0f} %")
+    late = f" ({'; '.join(notes)})" if notes else ""
     print(f"demo: {counted(summary['blocks'], 'block')} ({summary['output_s']:.1f} s of "
           f"output), {counted(misses, 'deadline miss', 'deadline misses')}"
-          f"{stolen if misses else ''}, "
+          f"{late}, "
           f"{counted(summary['clamps_total'], 'clamped sample')}{device_clamps(link)}, "
           f"{counted(summary['frames'], 'frame')} drawn ({summary['frame_ms_mean']:.1f} ms mean), "
           f"link: {link['state']}")
