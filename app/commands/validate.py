@@ -147,13 +147,16 @@ def renderer_problems(path, scene) -> list[Problem]:
 
 
 def _is_protocol(name: str) -> bool:
-    """True for a readable TOML file with a top-level ``method`` (an experiment protocol)."""
-    import tomllib
+    """True for a readable TOML file with a top-level ``method`` (an experiment protocol).
+    A file the safe reader refuses (too large, deep, not a regular file) is not one: the
+    texture loader then reports it."""
+    from frictex.textures.schema import Reader
+    from frictex.textures.toml_safe import parse_toml, read_text
 
-    try:
-        return "method" in tomllib.loads(Path(name).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
-        return False
+    r = Reader(name, None)
+    text = read_text(Path(name), r)
+    doc = parse_toml(text, r) if text is not None else None
+    return doc is not None and "method" in doc
 
 
 def _about(finding) -> str:

@@ -93,6 +93,7 @@ from frictex.app.experiment.scheduler import (INTERVALS, SAME_DIFFERENT, Stairca
                                               staircase_step, staircase_threshold)
 from frictex.app.experiment.session import read_info, read_rows, torn_last_line
 from frictex.device.errors import InputError
+from frictex.device.safe_files import file_problem
 from frictex.device.numbers import ascii_float
 
 
@@ -245,7 +246,11 @@ def distinct_folders(folders: list[str | Path]) -> list[Path]:
     would count its session twice."""
     seen: dict[Path, Path] = {}
     for folder in map(Path, folders):
-        first = seen.setdefault(folder.resolve(), folder)
+        try:
+            real = folder.resolve()
+        except (OSError, RuntimeError) as exc:  # RuntimeError: a link loop, before Python 3.13
+            raise InputError(f"{folder}: {file_problem(folder) or exc}") from None
+        first = seen.setdefault(real, folder)
         if first is not folder:
             raise InputError(f"analyse: {folder} is given twice (also as {first}); each "
                              f"session counts once")
@@ -622,13 +627,24 @@ def _finite(value):
     return value
 
 
+def _made_folder(out_dir: Path) -> Path:
+    """``out_dir``, made where missing; InputError (one line) where it cannot be."""
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InputError(f"{out_dir}: exists and is not a folder")
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"{out_dir}: cannot be made as the output folder "
+                         f"({exc.strerror or exc})") from None
+    return out_dir
+
+
 def analyse(folders: list[str | Path], out_dir: str | Path, plot: bool = True) -> list[dict]:
     """Analyse the sessions in ``folders``; write analysis.json (and analysis.png) into
     ``out_dir``; return the studies' summaries."""
     sessions = distinct_sessions([read_session(f) for f in distinct_folders(folders)])
+    out_dir = _made_folder(Path(out_dir))  # before the bootstrap: a bad --out fails at once
     summaries = [analyse_study(group) for group in studies(sessions).values()]
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     text = json.dumps(_finite({"studies": summaries}), indent=2, allow_nan=False) + "\n"
     (out_dir / "analysis.json").write_text(text, encoding="utf-8")
     if plot:

@@ -459,11 +459,12 @@ def resume(folder: Path, protocol, participant: str | None, seed: int | None = N
     if seed is not None and seed != info["seed"]:
         raise InputError(f"--seed {seed}: {folder} was started with seed {info['seed']}, and "
                          f"a resumed session keeps its trial order; leave --seed out")
+    from frictex.textures.library import read_utf8
     try:
-        started_with = (folder / "protocol.toml").read_text(encoding="utf-8")
-    except OSError as exc:
+        started_with = read_utf8(folder / "protocol.toml", MAX_SESSION_FILE_BYTES)
+    except InputError as exc:  # not a regular file, too large, not UTF-8 text
         raise InputError(f"{folder}: the session's protocol.toml cannot be read "
-                         f"({exc.strerror})") from None
+                         f"({exc})") from None
     if started_with != protocol.text:
         raise InputError(f"{protocol.source}: not the protocol {folder} started with (its copy "
                          f"is {folder / 'protocol.toml'})")

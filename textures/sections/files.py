@@ -83,8 +83,11 @@ class Files:
         try:
             held = os.open(file_path, _OPEN_FLAGS)  # a descriptor, or why there is none
         except OSError as exc:  # the reader says so in its words, opening nothing
-            held = ("became a symbolic link after it was checked" if exc.errno == errno.ELOOP
-                  else file_problem(file_path) or f"cannot be read ({exc.strerror or exc})")
+            # ELOOP is a link loop (file_problem says so) or, where the path leads to a
+            # file, a link swapped in after realpath
+            held = file_problem(file_path) or (
+                "became a symbolic link after it was checked" if exc.errno == errno.ELOOP
+                else f"cannot be read ({exc.strerror or exc})")
         if isinstance(held, int) and not stat.S_ISREG(os.fstat(held).st_mode):
             # a folder or a FIFO opens (read only, non-blocking) but is no file to read:
             # the reader says so in safe_files' words, as for the texture file itself
