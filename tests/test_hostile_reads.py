@@ -19,24 +19,15 @@ from pathlib import Path
 import pytest
 
 from frictex.app.commands.cli import main
+from tests import test_experiment_resume_parts as resume_parts
 
 ROOT = Path(__file__).resolve().parents[1]
 ADDRESS_SPACE = 1 << 30
 TIMEOUT_S = 60.0
 RUN = "import sys; from frictex.app.commands.cli import main; sys.exit(main(sys.argv[1:]))"
 LOOP = "is a symbolic link loop"
-PROTOCOL = """format = 1
-method = "2afc"
-repetitions = 1
-[stimuli]
-scene = "grating-5mm"
-vary = "depth"
-reference = 0.3
-levels = [0.32, 0.42]
-[presentation]
-exploration_s = 0.3
-"""
-PARTICIPANT = "simulated:weber=0.11,seed=3"
+PROTOCOL = resume_parts.PROTOCOL.replace("repetitions = 2", "repetitions = 1")
+PARTICIPANT = resume_parts.PARTICIPANT
 
 
 def _limit_memory() -> None:
