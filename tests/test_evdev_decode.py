@@ -127,6 +127,30 @@ def test_syn_dropped_discards_until_the_next_report():
     assert dec.dropped == 1 and [s.x for s in samples] == [1, 2]
 
 
+def test_syn_dropped_keeps_the_slot_an_abs_mt_slot_names_in_the_dropped_span():
+    # slot 1 holds id 0x65, slot 0 (the current slot) 0x66; after the drop, slot 1 moves,
+    # then frames without ABS_MT_SLOT lift slot 1, and slot 0 lifts last
+    ev = [abs_(0, SLOT, 1), abs_(0, TID, 0x65), abs_(0, PX, 0x200), abs_(0, PY, 0x200),
+          abs_(0, SLOT, 0), abs_(0, TID, 0x66), abs_(0, PX, 0x100), abs_(0, PY, 0x100), syn(0),
+          syn(0.05, SYN_DROPPED),
+          abs_(0.07, SLOT, 1), abs_(0.07, PY, 0x300), syn(0.07),
+          abs_(0.08, TID, -1), syn(0.08),
+          abs_(0.09, SLOT, 0), abs_(0.09, TID, -1), syn(0.09)]
+    samples, dec = decode_all(ev, "<b>")
+    assert dec.dropped == 1
+    assert summary(samples) == [
+        (0, 0, 0x100, 0x100, DOWN), (0, 1, 0x200, 0x200, DOWN), (0.07, 1, 0x200, 0x300, MOVE),
+        (0.08, 1, 0x200, 0x300, UP), (0.09, 0, 0x100, 0x100, UP)]
+
+
+def test_syn_dropped_discards_events_of_an_unknown_slot():
+    # before the span's ABS_MT_SLOT the lost events may have chosen any slot: x 999 is not kept
+    ev = [abs_(0, TID, 7), abs_(0, PX, 1), abs_(0, PY, 1), syn(0), syn(0.01, SYN_DROPPED),
+          abs_(0.01, PX, 999), abs_(0.01, SLOT, 0), abs_(0.01, PY, 2), syn(0.01)]
+    samples, dec = decode_all(ev, "<b>")
+    assert dec.dropped == 1 and summary(samples) == [(0, 0, 1, 1, DOWN), (0.01, 0, 1, 2, MOVE)]
+
+
 def test_unfinished_frame_is_pending():
     ev = frame_a(0.0, [(1, 1)]) + [abs_(0.01, PX, 3)]
     samples, dec = decode_all(ev, "<a>")

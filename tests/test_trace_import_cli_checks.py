@@ -189,3 +189,35 @@ def test_a_getevent_ltr_log_reads_as_without_its_rates():
     rated = plain.replace("SYN_REPORT           00000000", "SYN_REPORT           00000000    rate 67")
     assert "rate 67" in rated
     assert parse_getevent(rated) == parse_getevent(plain)
+
+
+def test_a_getevent_log_with_syn_dropped_lifts_each_finger_from_its_own_slot(tmp_path, capsys):
+    from frictex.rendering.input.trace_file import UP, read_trace
+    axis = ", fuzz 0, flat 0, resolution 10"
+    header = ("add device 1: /dev/input/event2\n  name:     \"sec_touchscreen\"\n  events:\n"
+              f"    ABS (0003): ABS_MT_SLOT           : value 0, min 0, max 9{axis}\n"
+              f"                ABS_MT_POSITION_X     : value 0, min 0, max 1023{axis}\n"
+              f"                ABS_MT_POSITION_Y     : value 0, min 0, max 1023{axis}\n"
+              f"                ABS_MT_TRACKING_ID    : value 0, min 0, max 65535{axis}\n"
+              "  input props:\n    <none>\n")
+    events = [("100.000000", "EV_ABS", "ABS_MT_SLOT", 1), ("100.000000", "EV_ABS", "ABS_MT_TRACKING_ID", 0x65),
+              ("100.000000", "EV_ABS", "ABS_MT_POSITION_X", 0x200), ("100.000000", "EV_ABS", "ABS_MT_POSITION_Y", 0x200),
+              ("100.000000", "EV_ABS", "ABS_MT_SLOT", 0), ("100.000000", "EV_ABS", "ABS_MT_TRACKING_ID", 0x66),
+              ("100.000000", "EV_ABS", "ABS_MT_POSITION_X", 0x100), ("100.000000", "EV_ABS", "ABS_MT_POSITION_Y", 0x100),
+              ("100.000000", "EV_SYN", "SYN_REPORT", 0), ("100.050000", "EV_SYN", "SYN_DROPPED", 0),
+              ("100.070000", "EV_ABS", "ABS_MT_SLOT", 1), ("100.070000", "EV_ABS", "ABS_MT_POSITION_Y", 0x300),
+              ("100.070000", "EV_SYN", "SYN_REPORT", 0),
+              ("100.080000", "EV_ABS", "ABS_MT_TRACKING_ID", 0xFFFFFFFF), ("100.080000", "EV_SYN", "SYN_REPORT", 0),
+              ("100.090000", "EV_ABS", "ABS_MT_SLOT", 0), ("100.090000", "EV_ABS", "ABS_MT_TRACKING_ID", 0xFFFFFFFF),
+              ("100.090000", "EV_SYN", "SYN_REPORT", 0)]
+    log = tmp_path / "b1.txt"
+    log.write_text(header + "".join(f"[  {t}] {ty:<12} {code:<20} {v:08x}\n" for t, ty, code, v in events))
+    out = tmp_path / "b1.csv"
+    assert main(["trace", "import", str(log), "-o", str(out)]) == 0
+    trace = read_trace(out)
+    lifts = trace.event == UP
+    assert trace.finger[lifts].tolist() == [1, 0]  # slot 1 first
+    assert trace.t_s[lifts].tolist() == pytest.approx([0.08, 0.09])
+    assert trace.y_mm[lifts].tolist() == pytest.approx([0x300 / 10, 0x100 / 10])
+    err = capsys.readouterr().err
+    assert "1 SYN_DROPPED" in err and "still down" not in err

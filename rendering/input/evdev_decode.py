@@ -25,8 +25,13 @@ Samples are never invented or merged: every contact reported in a protocol A fra
 sample, including a finger re-reported unmoved 0.6 ms after another one moved (refdata
 phone-two-finger-drag); smoothing that is the tracker's job (``rendering/tracking/tracks.py``).
 A protocol B slot gives a sample in each frame where one of its values changed.
-SYN_DROPPED (the kernel's buffer overran) discards events up to the next SYN_REPORT and is
-counted; contacts without a known position are not emitted and are counted.
+SYN_DROPPED (the kernel's buffer overran) is counted and discards events up to the next
+SYN_REPORT, but for protocol B only until an ABS_MT_SLOT: the lost events may have moved to
+another slot, and the kernel sends ABS_MT_SLOT only when the slot changes, so events before it
+are of an unknown slot; from it on they are that slot's changes and are kept (libevdev
+re-reads every slot after a drop; a recording cannot, and changes lost with the dropped events
+stay lost). Without an ABS_MT_SLOT after the drop the decoder keeps the slot it had.
+Contacts without a known position are not emitted and are counted.
 """
 
 from __future__ import annotations
@@ -189,6 +194,9 @@ class EvdevDecoder:
                 if not self._skipping:
                     self._end_frame(ev, out)
                 self._frame.clear()
+                self._skipping = False
+            elif self._skipping and ev.type == EV_ABS and ev.code == ABS_MT_SLOT:
+                self._frame.append(ev)  # the slot is known again (module docstring)
                 self._skipping = False
             elif not self._skipping and ev.type in (EV_SYN, EV_KEY, EV_ABS):
                 self._frame.append(ev)
