@@ -86,6 +86,8 @@ def test_one_start_and_seed_with_other_trials_pools(sessions, tmp_path, capsys):
 @pytest.mark.parametrize("column, cell, words", [
     ("correct", "1x", "correct '1x': expected 0 or 1 (whether response is answer)"),
     ("correct", "", "correct '': expected 0 or 1 (whether response is answer)"),
+    ("practice", "yes", "practice 'yes': expected 0 or 1 (whether the trial is a practice one)"),
+    ("practice", "", "practice '': expected 0 or 1 (whether the trial is a practice one)"),
     ("difference", "nan", "difference 'nan': expected a finite number"),
     ("difference", "inf", "difference 'inf': expected a finite number"),
     ("difference", "1e999", "difference '1e999': expected a finite number"),
@@ -94,7 +96,8 @@ def test_one_start_and_seed_with_other_trials_pools(sessions, tmp_path, capsys):
 def test_a_malformed_cell_is_refused_by_file_and_line(sessions, tmp_path, capsys, column,
                                                       cell, words):
     """Before, a correct of '1x' was warned of as "counted as written" and counted as 0,
-    and a difference of nan was refused without its file and line."""
+    a practice of 'yes' counted the row as a practice one, and a difference of nan was
+    refused without its file and line."""
     edited = _copy(sessions[0], tmp_path / "e", line=9, **{column: cell})
     code, err = _analyse(tmp_path, capsys, edited)
     assert (code, err) == (2, f"frictex: error: {edited / 'results.csv'}:9: {words}\n")

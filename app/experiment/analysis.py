@@ -66,11 +66,12 @@ warned of, and so is a results.csv with fewer rows than the trials recorded or a
 last line (a table cut short). A row whose response is not one of its trial's responses,
 or whose ``correct`` is not whether the response is the answer (a table edited by hand),
 is warned of by its file and line (``row_problems``): the analysis counts ``correct`` as
-written. A ``correct`` other than 0 or 1 where the trial has an answer, or a cell the
-analysis reads as a number (``difference``, a same-different ``value``, a rating) that
-is not a finite number, is refused by its file and line (``check_cells``). A session
-folder given twice is refused (it would count twice), and so is one session in two
-folders (a copy: the same start, seeds and trials, ``distinct_sessions``).
+written. A ``practice`` other than 0 or 1, a ``correct`` other than 0 or 1 where the
+trial has an answer, or a cell the analysis reads as a number (``difference``, a
+same-different ``value``, a rating) that is not a finite number, is refused by its file
+and line (``check_cells``). A session folder given twice is refused (it would count
+twice), and so is one session in two folders (a copy: the same start, seeds and trials,
+``distinct_sessions``).
 
 Writes ``analysis.json`` (every number above) and ``analysis.png`` (one panel per study)
 into the output folder.
@@ -196,10 +197,14 @@ def read_session(folder: str | Path) -> SessionData:
 def check_cells(table: Path, method: str, rows: list[dict]) -> None:
     """InputError (one line, ``FILE:LINE``) for the first of ``rows`` (of the results
     table ``table``, a session of ``method``) whose cell the analysis reads as a number
-    (:data:`NUMBER_COLUMN`) is not a finite number, or whose ``correct`` is neither 0 nor
-    1 where its trial has an answer: the analysis could not count it as written."""
+    (:data:`NUMBER_COLUMN`) is not a finite number, whose ``practice`` is neither 0 nor
+    1, or whose ``correct`` is neither 0 nor 1 where its trial has an answer: the analysis
+    could not count it as written."""
     column = NUMBER_COLUMN[method]
     for line, row in enumerate(rows, start=2):  # line 1 is the header
+        if row["practice"] not in ("0", "1"):
+            raise InputError(f"{table}:{line}: practice {row['practice']!r}: expected 0 or 1 "
+                             f"(whether the trial is a practice one)")
         try:
             finite = math.isfinite(ascii_float(row[column]))
         except ValueError:
