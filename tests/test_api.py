@@ -48,7 +48,7 @@ def test_all_is_the_lazy_table_and_dir_the_public_names():
     ``__getattr__`` imports. ``dir`` lists those, not the module's helpers."""
     assert frictex.__all__ == sorted(frictex._WHERE)
     public = [name for name in dir(frictex) if not name.startswith("__")]
-    assert public == frictex.__all__
+    assert public == sorted({*frictex.__all__, *frictex._LAYERS})  # the layers: tab completion
     assert "__version__" in dir(frictex)
 
 

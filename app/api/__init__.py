@@ -38,7 +38,9 @@ Everything else lives in the four layers below, in the order of DESIGN.md's data
 ``frictex.textures`` (the texture file format and its library), which uses
 ``frictex.device`` (structures, actuation, link, protocol). ``import frictex`` loads none
 of them (nor numpy, numba, scipy or pyarrow): each name here is imported on first use, and
-so is each layer (``frictex.textures.model.RENDERERS`` right after ``import frictex``).
+so is each layer (``frictex.textures`` right after ``import frictex``); a module inside a
+layer is imported as any submodule is (``import frictex.textures.model``, then
+``frictex.textures.model.RENDERERS``).
 """
 
 from __future__ import annotations
@@ -163,6 +165,7 @@ else:  # at run time each name is imported on first use; a checker sees only tho
 
 
 def __dir__() -> list[str]:
-    """The public names and the module's own dunder attributes (not its helpers)."""
-    return sorted({*__all__, "__version__",
+    """The public names, the four layers and the module's own dunder attributes (not its
+    helpers)."""
+    return sorted({*__all__, *_LAYERS, "__version__",
                    *(name for name in globals() if name.startswith("__") and name.endswith("__"))})
