@@ -147,6 +147,28 @@ def test_a_replay_never_reads_a_later_runs_tables(tmp_path, monkeypatch):
         second.commands  # same format, same name: another run's table
 
 
+@pytest.mark.parametrize("fmt, damage, reason", [
+    ("csv", lambda path: path.unlink(), "is missing"),
+    ("csv", lambda path: path.write_text('garbage\n"'),
+     "cannot be read back: Casting field 'garbage'"),
+    ("csv", lambda path: (path.unlink(), path.mkdir()), "cannot be read back: Is a directory"),
+    ("npz", lambda path: path.write_bytes(path.read_bytes()[:100]), "cannot be read back: "),
+    ("parquet", lambda path: path.write_bytes(b"garbage"), "cannot be read back: "),
+])
+def test_a_table_file_removed_or_damaged_since_is_named(tmp_path, fmt, damage, reason):
+    """With summary.json untouched, a table file gone or damaged is a RunFailed in one line
+    naming the file and what is wrong, not 'no longer holds this run' or a pyarrow error."""
+    r = frictex.replay(SCENE, TRACE, out=tmp_path / "o", format=fmt)
+    damage(tmp_path / "o" / f"friction.{fmt}")
+    with pytest.raises(frictex.RunFailed) as caught:
+        r.friction  # noqa: B018
+    message = str(caught.value)
+    assert message.startswith(f"{tmp_path / 'o' / f'friction.{fmt}'}: this run's friction "
+                              f"table {reason}")
+    assert "\n" not in message
+    assert r.commands.num_rows > 0  # the other table still reads
+
+
 def test_tables_read_back_from_a_folder_equal_the_tables_in_memory(tmp_path):
     in_memory = frictex.replay(SCENE, TRACE)
     for fmt in ("parquet", "npz", "csv"):

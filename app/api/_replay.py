@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import zipfile
 from pathlib import Path
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -37,7 +38,8 @@ class Replay:
     reading, its ``summary.json`` must be the file this run wrote (the same device, inode,
     size and modification time); after a later run into the same folder (or the folder's
     removal) reading a table is a :class:`~frictex.device.errors.RunFailed` instead of
-    another run's rows. A table once read is kept. The folder is held as an absolute path
+    another run's rows; so is a table file removed or damaged since (the message names
+    the file and what is wrong). A table once read is kept. The folder is held as an absolute path
     (a later ``os.chdir`` changes nothing). Every attribute is read-only (assigning one
     is an ``AttributeError``).
 
@@ -75,18 +77,29 @@ class Replay:
         return self._tables[stem]
 
     def _read_table(self, folder: Path, stem: str) -> pyarrow.Table:
-        """The table ``stem`` read from ``folder``, while the folder holds this run."""
+        """The table ``stem`` read from ``folder``, while the folder holds this run; a
+        table file gone or unreadable is a RunFailed naming it and why."""
         path = folder / f"{stem}.{self.summary.output.format}"
         try:  # checked after reading: a run swapped in meanwhile is caught too
-            table = read_table(path)
-            same = self._summary_id is None or file_id(folder / "summary.json") == self._summary_id
+            table, problem = read_table(path), None
         except FileNotFoundError:
-            same = False
-        if not same:
+            table, problem = None, "is missing (removed since this run wrote it)"
+        except _READ_ERRORS as exc:
+            table, problem = None, f"cannot be read back: {_first_line(exc)}"
+        if not self._holds_run(folder):
             raise RunFailed(f"{folder}: no longer holds this run (its summary.json was "
                             f"replaced or removed since): {path.name} would not be its table; "
                             "read the tables before the next run into the folder")
+        if problem is not None:
+            raise RunFailed(f"{path}: this run's {stem} table {problem}")
         return table
+
+    def _holds_run(self, folder: Path) -> bool:
+        """Whether ``folder/summary.json`` is still the file this run wrote."""
+        try:
+            return self._summary_id is None or file_id(folder / "summary.json") == self._summary_id
+        except FileNotFoundError:
+            return False
 
     @property
     def friction(self) -> pyarrow.Table:
@@ -247,6 +260,20 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
         error.replay = done
         raise error
     return done
+
+
+#: what reading a table file that is damaged (truncated, overwritten) or unreadable raises:
+#: pyarrow's parse errors are ValueErrors, a broken npz a BadZipFile or EOFError
+_READ_ERRORS = (OSError, ValueError, EOFError, zipfile.BadZipFile)
+
+
+def _first_line(exc: BaseException) -> str:
+    """An error reading a file, in one line: an OSError's reason (its path is named
+    already), else the first line of its message."""
+    if isinstance(exc, OSError) and exc.strerror:
+        return exc.strerror
+    lines = str(exc).strip().splitlines()
+    return lines[0] if lines else type(exc).__name__
 
 
 def _sinks(sinks: Sequence[str | Sink]) -> tuple[str | Sink, ...]:
