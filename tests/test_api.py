@@ -117,6 +117,12 @@ def test_pandas_opens_the_tables():
     (lambda: frictex.replay(SCENE, TRACE, strict="no"), r"^strict='no': expected True or False$"),
     (lambda: frictex.replay(SCENE, TRACE, progress=2), r"^progress=2: expected True or False$"),
     (lambda: frictex.read_trace(TRACE, strict="yes"), r"^strict='yes': expected True or False"),
+    # Path("") is ".": an empty name was once refused as "a folder, not a file"
+    (lambda: frictex.load_scene(""), r"^name_or_path='': the name is empty; expected a texture"),
+    (lambda: frictex.read_trace(""), r"^path='': the name is empty; expected a trace CSV"),
+    (lambda: frictex.replay("", TRACE), r"^scene='': the name is empty"),
+    (lambda: frictex.replay(SCENE, ""), r"^trace='': the name is empty"),
+    (lambda: frictex.replay(SCENE, TRACE, out=""), r"^out='': the name is empty"),
 ])
 def test_bad_input_is_an_input_error(tmp_path, monkeypatch, call, message):
     monkeypatch.chdir(tmp_path)

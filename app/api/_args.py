@@ -62,9 +62,13 @@ def flag(name: str, value: object) -> bool:
 
 
 def path_like(name: str, value: object, what: str) -> None:
-    """An InputError unless ``value`` is a str or a path (``what`` says what it names)."""
+    """An InputError unless ``value`` is a str or a path (``what`` says what it names),
+    and not an empty one: ``Path("")`` would be the current folder, named ``.`` in the
+    error that followed."""
     if not isinstance(value, str | os.PathLike):
         raise InputError(f"{name}={_shown(value)}: expected {what}")
+    if not os.fspath(value):
+        raise InputError(f"{name}='': the name is empty; expected {what}")
 
 
 def _span(low: float, high: float, unit: str, positive: bool) -> str:
