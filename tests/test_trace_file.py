@@ -8,7 +8,7 @@ import pytest
 from hypothesis import assume, example, given, settings, strategies as st
 
 from frictex.app.commands.cli import main
-from frictex.rendering.input.trace_file import (DOWN, MOVE, NUMBER, UP, TraceError, ascii_float,
+from frictex.rendering.input.trace_file import (DOWN, MAX_LINE_BYTES, MOVE, NUMBER, UP, TraceError, ascii_float,
                                                 concat_traces, format_trace, parse_trace, read_trace)
 
 
@@ -296,12 +296,26 @@ def test_fields_split_a_line_as_the_csv_module_does(text, end):
     assert got == want
 
 
+@pytest.mark.parametrize("data, said", [
+    # an ELF executable's start: a bare CR comes before its first line feed
+    (b"\x7fELF\x02\x01\x01\x00" + b"\x00" * 8 + b"\x03\x00>\x00\x01\x00\x00\x00\xd0\r\x01\n",
+     r"/bin\.csv:1: binary content \(a NUL byte at column 8\); expected CSV text$"),
+    (b"\x8b\r\xff\r\x1f\n", r"/bin\.csv:1: not UTF-8 text \(byte 0x8b at column 1\)"),
+    # a line longer than MAX_LINE_BYTES with binary bytes in its first MAX_LINE_BYTES
+    (b"\xe9" + b"x" * MAX_LINE_BYTES + b"\n", r"/bin\.csv:1: not UTF-8 text \(byte 0xe9 at column 1\)"),
+])
+def test_binary_content_is_named_before_a_bare_cr_or_the_line_length(tmp_path, data, said):
+    (tmp_path / "bin.csv").write_bytes(data)
+    with pytest.raises(TraceError, match=said):
+        read_trace(tmp_path / "bin.csv")
+
+
 def _reference_lines(data: bytes, where: str, limit: int):
     """Lines as a line-at-a-time reader gives them (the rule of ``_blocks``, written out):
-    (number, text without its break) until the first line that holds a bare CR (one
-    followed by more of the line) in its first ``limit`` bytes, is too long (``limit``
-    bytes with its break), holds a NUL or is not UTF-8, which ends in its TraceError
-    message; a UTF-8 BOM at the start is dropped, a UTF-16 one refused."""
+    (number, text without its break) until the first line that, in its first ``limit``
+    bytes, holds a NUL, is not UTF-8 or holds a bare CR (one followed by more of the
+    line), or else is too long (``limit`` bytes with its break), which ends in its
+    TraceError message; a UTF-8 BOM at the start is dropped, a UTF-16 one refused."""
     import codecs
     import re
     out, fh = [], io.BytesIO(data)
@@ -316,16 +330,18 @@ def _reference_lines(data: bytes, where: str, limit: int):
                 raw = raw[3:]
             if not raw:  # a file of a BOM alone has no lines
                 return out, None
-        if re.search(rb"\r[^\r\n]", raw[:limit]):
+        head = raw[:limit]
+        if head.find(0) >= 0:
+            return out, f"{where}:{number}: binary content (a NUL byte at column {head.find(0) + 1})"
+        try:  # a long line's head may end within a character
+            codecs.getincrementaldecoder("utf-8")().decode(head, final=len(raw) <= limit)
+        except UnicodeDecodeError as exc:
+            return out, f"{where}:{number}: not UTF-8 text (byte {head[exc.start]:#04x} at column {exc.start + 1})"
+        if re.search(rb"\r[^\r\n]", head):
             return out, f"{where}:{number}: a line ends in a bare CR"
         if len(raw) > limit:
             return out, f"{where}:{number}: line longer than {limit} bytes"
-        if raw.find(0) >= 0:
-            return out, f"{where}:{number}: binary content (a NUL byte at column {raw.find(0) + 1})"
-        try:
-            text = raw.decode("utf-8")
-        except UnicodeDecodeError as exc:
-            return out, f"{where}:{number}: not UTF-8 text (byte {raw[exc.start]:#04x} at column {exc.start + 1})"
+        text = raw.decode("utf-8")
         out.append((number, text[:-1] if text.endswith("\n") else text))
 
 

@@ -582,22 +582,25 @@ def _bare_cr(data: bytes) -> int:
 
 def _line_problem(raw: bytes, number: int, where: str, had_break: bool):
     """Raise the error of a line known to be too long, binary, not UTF-8 or holding a
-    bare CR in its first MAX_LINE_BYTES (lines that end in CR only make the file one long
-    line: that, not its length, is the problem to name)."""
-    if _bare_cr(raw[:MAX_LINE_BYTES]) >= 0:
+    bare CR. Of a line too long only its first MAX_LINE_BYTES are looked at. Binary
+    content is named first (a binary file's bytes hold carriage returns and few line
+    feeds), then a bare CR (lines that end in CR only make the file one long line: that,
+    not its length, is the problem to name)."""
+    head = raw[:MAX_LINE_BYTES]
+    nul = head.find(0)
+    if nul >= 0:
+        raise TraceError(f"{where}:{number}: binary content (a NUL byte at column "
+                         f"{nul + 1}); expected CSV text")
+    try:  # a character cut at the end of a long line's head is not an error
+        codecs.getincrementaldecoder("utf-8")().decode(head, final=len(raw) <= MAX_LINE_BYTES)
+    except UnicodeDecodeError as exc:
+        raise TraceError(f"{where}:{number}: not UTF-8 text (byte {head[exc.start]:#04x} at "
+                         f"column {exc.start + 1}); trace files are UTF-8 CSV") from None
+    if _bare_cr(head) >= 0:
         raise TraceError(f"{where}:{number}: {CR_ONLY}")
     if len(raw) + had_break > MAX_LINE_BYTES:
         raise TraceError(f"{where}:{number}: line longer than {MAX_LINE_BYTES} bytes; "
                          f"expected CSV rows of a few numbers")
-    nul = raw.find(0)
-    if nul >= 0:
-        raise TraceError(f"{where}:{number}: binary content (a NUL byte at column "
-                         f"{nul + 1}); expected CSV text")
-    try:
-        raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise TraceError(f"{where}:{number}: not UTF-8 text (byte {raw[exc.start]:#04x} at "
-                         f"column {exc.start + 1}); trace files are UTF-8 CSV") from None
     raise AssertionError(f"line {number} has no problem")
 
 
