@@ -251,7 +251,10 @@ def _steps_kernel(fs, history, t, x, y, force, event, cfg, cap,
 
     Velocity: a least-squares line through each sample's window (the touch's samples of
     the last ``velocity_window_s``, at least the previous sample of the touch if it is
-    recent enough), summed relative to the sample's own time so nothing large cancels.
+    recent enough), summed relative to the sample's own time and position so nothing
+    large cancels: a finger at rest has all position terms exactly 0, so its velocity is
+    exactly 0 and its fitted position exactly its own (uncentred sums of x = 50 mm left
+    +-7.4e-13 mm/s, and SHT's phase stepped back across a grating edge).
     The sums are those of a padded (rows, J) table summed along its rows by numpy
     (:func:`_pairwise`; J the longest window among the history and the samples, at most
     ``cap``): the work is about 12 J per sample, linear in the samples.
@@ -335,8 +338,9 @@ def _steps_kernel(fs, history, t, x, y, force, event, cfg, cap,
         for j in range(span + 1):
             dt = win[g - j, 0] - win[g, 0]
             pad[0, j], pad[1, j] = dt, dt * dt
-            pad[2, j], pad[3, j] = win[g - j, 1], win[g - j, 2]
-            pad[4, j], pad[5, j] = dt * win[g - j, 1], dt * win[g - j, 2]
+            dx, dy = win[g - j, 1] - win[g, 1], win[g - j, 2] - win[g, 2]
+            pad[2, j], pad[3, j] = dx, dy
+            pad[4, j], pad[5, j] = dt * dx, dt * dy
         n = float(span + 1)
         st, stt = _pairwise(pad[0], 0, width), _pairwise(pad[1], 0, width)
         sx, sy = _pairwise(pad[2], 0, width), _pairwise(pad[3], 0, width)
@@ -345,8 +349,8 @@ def _steps_kernel(fs, history, t, x, y, force, event, cfg, cap,
         ok = denom > 1e-18 and win[g, 0] - win[first[k], 0] >= min_span
         vx = (n * stx - st * sx) / denom if ok else 0.0
         vy = (n * sty - st * sy) / denom if ok else 0.0
-        xf = (sx - vx * st) / n if ok else win[g, 1]
-        yf = (sy - vy * st) / n if ok else win[g, 2]
+        xf = win[g, 1] + (sx - vx * st) / n if ok else win[g, 1]
+        yf = win[g, 2] + (sy - vy * st) / n if ok else win[g, 2]
         # no fit (or one too short to tell motion from noise): keep the touch's last
         # velocity (0 from its first sample on)
         if ok:
