@@ -547,3 +547,27 @@ def test_a_folder_or_socket_as_an_output_file_is_one_line(tmp_path, capsys):
     finally:
         sock.close()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sock"]
+
+
+def test_an_out_another_run_creates_just_before_the_commit_is_replaced(tmp_path, monkeypatch):
+    """Two batches into one new --out: the other committed between this commit's look
+    for --out and its rename. Before, the rename onto the other's folder failed with
+    'Directory not empty'; now that folder is replaced as any previous run's."""
+    from frictex.app.engine import staging
+    out = tmp_path / "out"
+    first, second = staging.Staging(out), staging.Staging(out)
+    (first.begin() / "summary.json").write_text("first")
+    (second.begin() / "summary.json").write_text("second")
+    exists = Path.exists
+
+    def the_other_commits_meanwhile(path):
+        found = exists(path)
+        if path == out and not found:
+            monkeypatch.setattr(Path, "exists", exists)
+            first.commit()
+        return found
+
+    monkeypatch.setattr(Path, "exists", the_other_commits_meanwhile)
+    second.commit()
+    assert {p.name: p.read_text() for p in out.iterdir()} == {"summary.json": "second"}
+    assert beside(out) == []

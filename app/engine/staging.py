@@ -269,9 +269,7 @@ class Staging:
         the rest kept (module docstring). :class:`RunFailed` if a folder not a run's
         appeared in ``out`` during the run (``out`` left as it was)."""
         try:
-            if not self.out.exists():
-                os.rename(self.folder, self.out)
-                _OWNED.pop(str(self.folder), None)
+            if not self.out.exists() and self._rename_into_place():
                 return
             foreign = self._foreign()
             if foreign:
@@ -293,6 +291,19 @@ class Staging:
             raise RunFailed(f"{self.out}: holds the new run's outputs, but files appeared "
                             "beside the previous run's while they were swapped, and could not "
                             f"be moved into it: kept in {kept}")
+
+    def _rename_into_place(self) -> bool:
+        """Rename the staging folder to ``out``, which did not exist: True; False if
+        another run's commit created ``out`` (with files) since it was looked for, which
+        the commit then replaces as any existing ``out``."""
+        try:
+            os.rename(self.folder, self.out)
+        except OSError as exc:
+            if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
+                raise
+            return False
+        _OWNED.pop(str(self.folder), None)
+        return True
 
     def _appeared(self, name: str) -> str:
         """Why the commit refuses the folder ``name`` that appeared in ``out`` during the
