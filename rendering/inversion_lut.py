@@ -1,26 +1,33 @@
 """A table-driven friction inversion: seed 003's eq 3 read from a table built at scene load.
 
 Not a faster one: the exact inversion (``device.friction``, compiled) is quicker at every
-block size. Measured per call on a 2-core machine under load (best of 3 runs of
-interleaved 0.6 / 1.0 targets at 0.5 N): 50 samples (one 5 ms block at 10 kHz) 2.7 us
-exact against 18 us here, 1,000 samples 4.7 against 20 us, 100,000 samples 0.36 against
-0.78 ms; ``frictex report``'s Inversion table shows the same (33 against 92 us per second
-of output in one report). What it is for: it is how a controller without a fast
-logarithm would invert eq 3, and ``--inversion lut`` and the report show what such a
-table costs in accuracy (2e-5 um of amplitude, nothing the friction errors show).
+block size. Measured per call on a 2-core machine under load (best of 5 runs of
+interleaved 0.6 / 1.0 targets at 0.5 N): 50 samples (one 5 ms block at 10 kHz) 3.6 us
+exact against 31 us here, 1,000 samples 8.6 against 39 us, 100,000 samples 0.52 against
+2.4 ms (the table uniform in r this one replaced, below: 23 us, 29 us, 1.7 ms);
+``frictex report``'s Inversion table compares the two per second of output. What it is
+for: it is how a controller without a fast logarithm would invert eq 3, and
+``--inversion lut`` and the report show what such a table costs in accuracy (at most
+5e-9 um of amplitude at any allowed limit, nothing the friction errors show).
 
-Eq 3, ``w = -(1/b) ln(1 - r)`` with ``r = (1 - mu') / (1 - A)``, depends on the target
-and the force only through r, and the amplifier limit is the fixed point
-``r_max = 1 - exp(-b w_limit)`` whatever the force. So one uniform table of w over
-r in [0, r_max] serves every force; a block is inverted with a multiply, a truncation
-and one linear interpolation instead of a ``log1p`` (in numpy: several array passes,
-which cost more than the exact path's one compiled loop).
+Eq 3, ``w = -(1/b) ln(q)`` with ``q = 1 - r``, ``r = (1 - mu') / (1 - A)``, depends on
+the target and the force only through q. q in (0, 1] is split into a mantissa and an
+octave, ``q = m 2^e`` with m in [0.5, 1) (``frexp``: a controller reads them off the
+float's bits), so ``w = -ln(m) / b - e ln(2) / b``: one table of ``-ln(m) / b`` uniform
+in m over one octave serves every force and every amplitude limit, and a block is
+inverted with a ``frexp``, a truncation and one linear interpolation instead of a
+``log1p`` (in numpy: several array passes, which cost more than the exact path's one
+compiled loop). A table uniform in r, as this one was, cannot: w(r) steepens as
+1/(1 - r) toward the limit, and its last of 4096 cells spanned about 5 um at an 8 um
+limit (1.47 um off at mu' = 0.565, 12.5 um at 20 um; 100 um, allowed, is r = 1 to
+the last bit).
 
-Error (linear interpolation, step h = r_max / (N - 1)): at most
-``h^2 / 8 * max w''(r) = h^2 / (8 b (1 - r_max)^2)``; for seed 003's device (b = 1.67/um,
-2.5 um limit) and N = 4096 that is 2e-5 um, 1e-5 of the amplitude range.
-:meth:`LutFrictionModel.max_error_um` measures it against the exact inversion on a
-dense grid; ``frictex report`` reports the resulting friction error beside the exact one.
+Error (linear interpolation, step h = 0.5 / (N - 1)): at most
+``h^2 / 8 * max |d^2/dm^2 ln(m)| / b = h^2 / (2 b)`` whatever the limit or the force;
+for seed 003's device (b = 1.67/um) and N = 4096 that is 4.5e-9 um, plus the rounding of
+e ln(2) / b (below 1e-14 um). :meth:`LutFrictionModel.max_error_um` measures it
+against the exact inversion on a dense grid; ``frictex report`` reports the resulting
+friction error beside the exact one.
 
 Same guards and counts as ``device.friction`` (targets above 1, unreachable targets);
 a block with a non-finite target, a bad force or a force beyond the model takes the
@@ -34,7 +41,7 @@ import numpy as np
 from frictex.device.errors import InputError
 from frictex.device.friction import ClampCounts, SeedFrictionModel, asymptote
 
-#: table size: 4096 points keep the interpolation error near 1e-5 of the range
+#: table size: 4096 points over one octave keep the interpolation error below 5e-9 um
 TABLE_SIZE = 4096
 
 
@@ -51,13 +58,16 @@ class LutFrictionModel:
         self.limit_um = exact.limit_um
         self.nominal_force_n = exact.nominal_force_n
         b = self.params.b_per_um
-        self.r_max = -np.expm1(-b * self.limit_um)
-        r = np.linspace(0.0, self.r_max, size)
-        w = -np.log1p(-r) / b
-        w[-1] = self.limit_um  # exact at the limit, not a rounding off
-        self._scale = (size - 1) / self.r_max
-        self._w = w
-        self._slope = np.append(np.diff(w), 0.0)
+        # r at the limit; above it a target is unreachable: beyond the limit (a rounding
+        # off it is not), or r = 1 (q = 0), the largest double below 1 being 1 - 2^-53
+        r_max = -np.expm1(-b * self.limit_um)
+        self._r_top = min(r_max * (1.0 + 1e-12), 1.0 - 2.0 ** -53)
+        m = np.linspace(0.5, 1.0, size)
+        self._w = -np.log(m) / b  # w of the mantissa m (um)
+        self._w[0] = np.log(2.0) / b  # so that q = 1 (m = 0.5, e = 1) is w = 0 exactly
+        self._scale = (size - 1) / 0.5  # table steps per unit of m
+        self._slope = np.append(np.diff(self._w), 0.0)
+        self._octave_um = self._w[0]  # w of a factor 2 in q
 
     def forward(self, w_um, normal_force_n) -> np.ndarray:
         """mu' at amplitude ``w_um`` (um) and force ``normal_force_n`` (N): the exact model."""
@@ -83,14 +93,25 @@ class LutFrictionModel:
         if np.any(beyond):  # a heavy press: the exact path decides and counts
             return self.exact.invert(mu, force)
         counts = ClampCounts()
-        x = (1.0 - mu) * (self._scale / (1.0 - a))  # r in table steps
-        top = self._w.size - 1
-        counts.above_one = int(np.count_nonzero(x < 0.0))
-        counts.unreachable = int(np.count_nonzero(x > top * (1.0 + 1e-12)))
-        np.clip(x, 0.0, top, out=x)
+        # r as the exact path computes it, so both see one q; flat, so that a single
+        # target (0-d) is an array to write into too
+        r = ((1.0 - mu) / (1.0 - a)).reshape(-1)
+        counts.above_one = int(np.count_nonzero(r < 0.0))
+        over = r > self._r_top
+        counts.unreachable = int(np.count_nonzero(over))
+        np.clip(r, 0.0, self._r_top, out=r)
+        x, e = np.frexp(np.subtract(1.0, r, out=r))  # q = x 2^e, x in [0.5, 1), e <= 1
+        x *= self._scale
+        x -= self._scale / 2  # x in table steps from m = 0.5
         k = x.astype(np.intp)
         x -= k
-        return self._w[k] + x * self._slope[k], counts
+        w = self._slope[k]
+        w *= x
+        w += self._w[k]
+        w -= e * self._octave_um  # seed 003, eq 3: w = -(ln(m) + e ln(2)) / b
+        if counts.unreachable:
+            w[over] = self.limit_um
+        return np.clip(w, 0.0, self.limit_um, out=w).reshape(mu.shape), counts
 
     def max_error_um(self, points: int = 200_001, normal_force_n: float | None = None) -> float:
         """Largest |w_lut - w_exact| (um) over ``points`` targets spanning the reachable
