@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from frictex.app.live import layer_edit
 from frictex.app.live.layer_edit import LayerEdit, SaveConflict, Slider, panel_view
 from frictex.textures.keys import LAYER_KEYS
 from frictex.textures.library import resolve_scene
@@ -210,7 +211,9 @@ def test_switching_a_grating_to_smooth_sets_a_usable_edge_width_and_back(tmp_pat
     assert ed.undo() and "edge_mm" in ed.text() and ed.undo() and not ed.dirty
 
 
-def test_a_refused_change_leaves_no_undo_entry(tmp_path):
+def test_a_refused_change_leaves_no_undo_entry(tmp_path, monkeypatch):
+    # the sliders over the format's ranges alone, so that one's end is refused
+    monkeypatch.setattr(layer_edit, "loader_spans", lambda path, doc, index, controls: controls)
     ed = LayerEdit(grating(tmp_path))
     ed.select(0)
     ed.set("edge", "smooth")
@@ -262,3 +265,15 @@ def test_a_save_says_the_full_path_of_a_file_named_relative(tmp_path, monkeypatc
 
     run_demo(Path("lines.toml"), rec, hand)
     assert f"saved: {tmp_path / 'lines.toml'}\n" in capfd.readouterr().out
+
+
+def test_a_save_over_a_deleted_file_says_so_and_writes_it_anew_when_saved_again(tmp_path):
+    ed = edited(tmp_path)
+    ed.path.unlink()
+    with pytest.raises(SaveConflict, match="was deleted \\(or moved\\) since the panel read it: "
+                                           "not saved. Ctrl\\+S again writes it anew") as refused:
+        ed.save()
+    assert "deleted or moved" in refused.value.banner and "changed on disk" not in str(refused.value)
+    assert not ed.path.exists()
+    ed.save()
+    assert "mu_low = 0.5" in ed.path.read_text() and not ed.dirty

@@ -12,7 +12,9 @@ kept too. A layer's controls come from the loader's key tables
 - a number key (``Num``, ``Int``) is a :class:`Slider` over the range the format
   allows, a side the format leaves open (or bounds only by its catch-all, such as
   ``MAX_MM``, 100 N for a force) narrowed to what can be dragged (see
-  :func:`slider_span`); a value set is clamped into it and rounded to the slider's step
+  :func:`slider_span`), then cut to what the loader takes for the layer as it is (a
+  rectangle's ``edge_mm`` at most its shorter side; the loader asked,
+  :func:`loader_spans`); a value set is clamped into it and rounded to the slider's step
   (a short decimal in the file), except the slider's own value (the knob grabbed and not
   moved), which is kept as the file gives it;
 - a word key (``Choice``: ``blend``, ``render``, a grating's ``edge``, ...) is a
@@ -42,11 +44,11 @@ taken back whole (:meth:`LayerEdit.revert`), leaving no undo entry.
 
 The file is the author's as much as the panel's: :meth:`LayerEdit.save` writes only
 onto the text the panel read (its content, mtime and size, :attr:`LayerEdit.disk`). If
-the file changed since (an editor saved it), the save is refused with
-:class:`SaveConflict`; saving again with the file as it was then found overwrites it
-deliberately. A save writes the file a symbolic link leads to, beside it (the link stays
-a link), and keeps the file's permission bits (a new copy gets the mode a file
-created under the umask gets). :meth:`LayerEdit.reread` takes the file again after it
+the file changed since (an editor saved it) or is gone (deleted or moved), the save
+is refused with :class:`SaveConflict`; saving again with the file as it was then found
+overwrites it (or writes it anew) deliberately. A save writes the file a symbolic link
+leads to, beside it (the link stays a link), and keeps the file's permission bits (a new
+copy gets the mode a file created under the umask gets). :meth:`LayerEdit.reread` takes the file again after it
 changed and reloaded, keeping the panel's unsaved edits (each a layer's key set, the
 undo stack's too) on top of it where the layer is still there, of the same type and
 name, the file did not change that key too (then the file's value, the later, wins),
@@ -160,6 +162,8 @@ class Slider:
     @property
     def fraction(self) -> float:
         """Where ``value`` sits on the slider, 0 (``lo``) to 1 (``hi``)."""
+        if not self.hi > self.lo:  # the loader takes the value alone (loader_spans)
+            return 0.0
         return float(min(max((self.value - self.lo) / (self.hi - self.lo), 0.0), 1.0))
 
     def value_at(self, fraction: float) -> float:
@@ -290,9 +294,86 @@ def refused_keys(path: Path, doc, index: int) -> frozenset[str]:
              and isinstance(spec.default, (int, float, str))}
     probe = tomlkit.parse(tomlkit.dumps(doc))
     probe["layer"][index].update(tried)
-    _, problems, _ = check_scene(path, text=tomlkit.dumps(probe))
-    fields = {p.field for p in problems}
+    fields = _problem_fields(path, tomlkit.dumps(probe))
     return frozenset(key for key in tried if field_name(("layer", index, key)) in fields)
+
+
+def _problem_fields(path: Path, text: str) -> frozenset[str]:
+    """The fields (``layer[2].duty``) of the problems the loader finds in ``text`` (the
+    file at ``path`` as edited)."""
+    _, problems, _ = check_scene(path, text=text)
+    return frozenset(p.field for p in problems)
+
+
+def loader_spans(path: Path, doc, index: int, controls) -> tuple[Slider | Menu, ...]:
+    """``controls`` of ``doc``'s layer ``index`` (:func:`layer_controls`), each slider
+    cut to what the loader takes for that layer as it is (:func:`_loader_slider`): a
+    key's limit set by its layer's other keys (a rectangle's ``edge_mm``, at most the
+    shorter side) is found by asking the loader, not by a copy of its rules. A value is
+    taken when setting it adds no problem to those of the document as it is."""
+    text = tomlkit.dumps(doc)
+    known = _problem_fields(path, text)
+    probe = tomlkit.parse(text)
+    table = probe["layer"][index]
+    out = []
+    for c in controls:
+        if isinstance(c, Slider):
+            def accepts(value: float, c=c) -> bool:
+                _put(table, c.key, int(value) if c.integer else value)
+                return _problem_fields(path, tomlkit.dumps(probe)) <= known
+            given = table.get(c.key)
+            c = _loader_slider(c, accepts)
+            if given is None:
+                table.pop(c.key, None)
+            else:
+                table[c.key] = given
+        out.append(c)
+    return tuple(out)
+
+
+def _loader_slider(slider: Slider, accepts) -> Slider:
+    """``slider`` with each end the loader refuses (``accepts(value)`` False) moved in to
+    the farthest value from the slider's that it takes (:func:`_reach`), the key's
+    allowed range cut there too; the step made finer where the span left needs it
+    (``MIN_STEPS``, :func:`_value_step`). The values taken are assumed to be one interval
+    around the slider's value, as every limit of the format makes them."""
+    refused = [end for end in (slider.lo, slider.hi) if not accepts(end)]
+    if not refused:
+        return slider
+    ends = {end: _reach(accepts, slider.value, end, slider.step) for end in refused}
+    lo, hi = ends.get(slider.lo, slider.lo), ends.get(slider.hi, slider.hi)
+    step = slider.step
+    if hi > lo and not slider.integer:
+        step = min(step, _value_step(hi - lo, slider.value))
+        if step < slider.step:  # look again between the end found and the step past it
+            ends = {end: _reach(accepts, found, found + math.copysign(slider.step, end - found), step)
+                    for end, found in ends.items()}
+            lo, hi = ends.get(slider.lo, slider.lo), ends.get(slider.hi, slider.hi)
+    return replace(slider, lo=lo, hi=hi, step=step,
+                   allowed_lo=lo if slider.lo in ends else slider.allowed_lo,
+                   allowed_hi=hi if slider.hi in ends else slider.allowed_hi)
+
+
+def _reach(accepts, good: float, bad: float, step: float) -> float:
+    """The multiple of ``step`` farthest from ``good`` (taken) towards ``bad`` (refused)
+    that ``accepts`` takes, found by bisection (about log2(|bad - good| / step) tries),
+    or ``good`` when none between them is taken. A short decimal: rounded to the step's
+    digits."""
+    sign = 1 if bad > good else -1
+    digits = max(0, -int(math.floor(math.log10(step))))
+    first = math.floor(good / step) if sign > 0 else math.ceil(good / step)
+
+    def point(t: int) -> float:
+        return round((first + sign * t) * step, digits)
+
+    taken, past = 0, max(1, math.ceil(abs(bad - first * step) / step))
+    while past - taken > 1:
+        mid = (taken + past) // 2
+        if accepts(point(mid)):
+            taken = mid
+        else:
+            past = mid
+    return point(taken) if taken and sign * (point(taken) - good) > 0 else good
 
 
 def _layout(table) -> tuple:
@@ -439,6 +520,7 @@ class LayerEdit:
         self._last: tuple | None = None  # the last set(): (text before, group before, pushed)
         self._overwrite: OnDisk | None = None  # the changed file a save was refused on
         self._refused: tuple = (None, None, frozenset())  # (layer, _layout, refused_keys)
+        self._spans: tuple = (None, None, ())  # (layer, text, its controls: loader_spans)
 
     # -- reading -----------------------------------------------------------------------
 
@@ -477,7 +559,11 @@ class LayerEdit:
         if self._refused[:2] != (self.layer, _layout(table)):
             self._refused = (self.layer, _layout(table),
                              refused_keys(self.path, self.doc, self.layer))
-        return layer_controls(table, self.extent_mm, self._refused[2])
+        text = self.text()
+        if self._spans[:2] != (self.layer, text):
+            controls = layer_controls(table, self.extent_mm, self._refused[2])
+            self._spans = (self.layer, text, loader_spans(self.path, self.doc, self.layer, controls))
+        return self._spans[2]
 
     def control(self, key: str) -> Slider | Menu:
         for c in self.controls():
@@ -621,7 +707,7 @@ class LayerEdit:
         expected = self.disk if target == self.path else OnDisk(None, None)
         if now != expected and now != self._overwrite:
             self._overwrite = now
-            raise _conflict(target, copy=target != self.path)
+            raise _conflict(target, copy=target != self.path, gone=now.text is None)
         try:
             target.parent.mkdir(parents=True, exist_ok=True)
             if target != self.path:
@@ -645,11 +731,16 @@ class LayerEdit:
                 shutil.copy2(ref, folder / ref.relative_to(home))
 
 
-def _conflict(target: Path, copy: bool) -> SaveConflict:
+def _conflict(target: Path, copy: bool, gone: bool) -> SaveConflict:
     """Why a save to ``target`` was refused, and what Ctrl+S again does, with the window's
-    banner: the file the panel holds changed on disk (an edit of it reloads), or, saving
-    a bundled scene's ``copy``, a copy saved before is there (the panel holds the bundled
-    file: editing that copy reloads nothing)."""
+    banner: the file the panel holds changed on disk (an edit of it reloads) or is
+    ``gone`` (deleted or moved: Ctrl+S again writes it anew), or, saving a bundled
+    scene's ``copy``, a copy saved before is there (the panel holds the bundled file:
+    editing that copy reloads nothing)."""
+    if gone:
+        return SaveConflict(f"{target.name} was deleted (or moved) since the panel read it: not "
+                            "saved. Ctrl+S again writes it anew with the panel's version",
+                            "not saved: the file was deleted or moved; Ctrl+S again writes it anew")
     if copy:
         return SaveConflict(f"{target} is there already (a copy saved before): not saved. "
                             "Ctrl+S again replaces its earlier edits with these",
