@@ -12,6 +12,20 @@ from frictex.rendering.input.trace_file import (DOWN, MAX_LINE_BYTES, MOVE, NUMB
                                                 concat_traces, format_trace, parse_trace, read_trace)
 
 
+@pytest.mark.parametrize("field, value, message", [
+    ("force_n", None, r"^trace: force_n is None: expected one number per sample, shape \(n,\)$"),
+    ("event", 1, "^trace: event: expected an array or list of one number per sample, got int$"),
+    ("x_mm", (x for x in (1.0, 2.0)), "^trace: x_mm: expected an array or list of one number "
+                                      "per sample, got generator$"),
+])
+def test_a_trace_built_by_hand_refuses_a_field_that_is_not_an_array(field, value, message):
+    from frictex.rendering.input.trace_file import Trace
+    fields = {"t_s": [0.0, 0.1], "finger": [0, 0], "x_mm": [1.0, 2.0], "y_mm": [3.0, 4.0],
+              "force_n": [0.5, 0.5], "event": [DOWN, UP]}
+    with pytest.raises(TraceError, match=message):
+        Trace(**{**fields, field: value})
+
+
 def test_minimal_trace_defaults():
     tr = parse_trace("t_s,finger,x_mm,y_mm\n0,0,1,2\n0.02,0,2,2\n")
     assert len(tr) == 2 and tr.force_n.tolist() == [0.5, 0.5]

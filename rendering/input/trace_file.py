@@ -112,7 +112,9 @@ class Trace:
 
     Each field is held as a read-only array (a view of what was given, lists made
     arrays): a Trace is not changed through it. :func:`make_trace` copies its inputs
-    too, so that changing them afterwards changes no trace.
+    too, so that changing them afterwards changes no trace. A field that is None or a
+    single value is refused here; the rules on the values are checked where a trace
+    built by hand is used.
     """
 
     t_s: npt.NDArray[np.float64]
@@ -155,12 +157,18 @@ def read_only_view(array: np.ndarray) -> np.ndarray:
 
 
 def _read_only(name: str, values) -> np.ndarray:
-    """Field ``name`` of a :class:`Trace` as a read-only array (lists made arrays)."""
+    """Field ``name`` of a :class:`Trace` as a read-only array (lists made arrays); None
+    or a single value is refused (the rest is checked where the trace is used)."""
+    if values is None:
+        raise TraceError(f"trace: {name} is None: expected one number per sample, shape (n,)")
     try:
         array = np.asarray(values)
     except (TypeError, ValueError):  # a ragged nesting
         raise TraceError(f"trace: {name} is not an array of numbers: expected one number "
                          "per sample, shape (n,)") from None
+    if array.ndim == 0:  # numpy makes a number, a generator or a set a 0-d array
+        raise TraceError(f"trace: {name}: expected an array or list of one number per "
+                         f"sample, got {type(values).__name__}")
     return read_only_view(array)
 
 
