@@ -53,6 +53,6 @@ def test_outputs_that_do_not_fit_name_the_format_argument_too(trace, tmp_path, m
     monkeypatch.setattr(tables.shutil, "disk_usage", lambda path: usage(10**12, 0,
                                                                      tables.RESERVE_BYTES + 100_000))
     with pytest.raises(frictex.OutputSpaceError, match=r"free some space, write elsewhere, or "
-                                                       r"use --format parquet, "
-                                                       r'format="parquet"$'):
+                                                       r"use --format parquet "
+                                                       r'\(format="parquet" from Python\)$'):
         frictex.replay("grating-5mm", trace, out=tmp_path / "out")

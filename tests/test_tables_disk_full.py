@@ -25,7 +25,8 @@ def _rows(n):
 
 
 @pytest.mark.parametrize("fmt, hint", [
-    ("csv", "; free some space, write elsewhere, or use --format parquet, format=\"parquet\""),
+    ("csv", "; free some space, write elsewhere, or use --format parquet (format=\"parquet\" "
+             "from Python)"),
     ("parquet", "; free some space, or write elsewhere")])
 def test_a_full_disk_names_the_output_folder_and_file(tmp_path, monkeypatch, fmt, hint):
     out = tmp_path / "o"

@@ -71,7 +71,7 @@ RESERVE_BYTES = 64 << 20
 PARQUET_VALUE_BYTES = 4
 #: what to do where the outputs do not fit, besides freeing some space
 WRITE_ELSEWHERE = "or write elsewhere"
-SMALLER_FORMAT = "write elsewhere, or use --format parquet, format=\"parquet\""
+SMALLER_FORMAT = "write elsewhere, or use --format parquet (format=\"parquet\" from Python)"
 
 
 def load_writer(fmt: str) -> None:
