@@ -55,9 +55,9 @@ from frictex.device.link.devices import DEVICES, DeviceRequest, open_device, sim
 from frictex.device.link.forces import ForceReport
 from frictex.device.link.port import open_port
 from frictex.device.link.portthread import PortThread
-from frictex.device.link.protocol import DeviceState, LinkError
+from frictex.device.link.protocol import LinkError
 from frictex.device.link.session import (PREFILL_S, SILENCE_S, TARGET_S, HostSession,
-                                         LinkProgress, LinkStalled)
+                                         LinkProgress, LinkStalled, state_name)
 from frictex.device.link.stall import StallPolicy
 from frictex.device.link.waits import TURN_S, check_interrupt
 
@@ -498,7 +498,7 @@ class CommandSink:
             "stalls": c["stalls"], "device_flushes": c["device_flushes"],
             "force_reports": c["force_reports"],
             "resent_frames": c["resent_frames"], "resends_too_late": c["resends_too_late"],
-            "stop_resends": c["stop_resends"],
+            "stop_resends": c["stop_resends"], "stop_confirmed": s.stop_confirmed,
             "resyncs": d.discarded, "crc_errors": d.crc_errors,
             "lost_frames_from_device": d.lost_frames,
             "clamped_samples": c["clamped_samples"], "dropped_blocks": c["dropped_blocks"],
@@ -523,7 +523,7 @@ class CommandSink:
         }
         if st is not None:
             out.update({
-                "device_state": DeviceState.NAMES[st.state] if st.state < 5 else st.state,
+                "device_state": state_name(st.state),
                 "device_level": st.level, "target_level": s.target,
                 "underruns": st.underruns, "device_crc_errors": st.crc_errors,
                 "device_lost_frames": st.lost_frames, "gap_samples": st.gap_samples,

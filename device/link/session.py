@@ -52,8 +52,9 @@ STARVED_S = 0.1
 STOP_MARGIN_S = 0.5
 #: times a Stop is sent again when a Status after it shows a device that is not stopping
 STOP_RESENDS = 3
-#: a close waits at most this many times the longest drain (a full buffer, the ramp and
-#: the margin), however often its Stop is resent or however slowly the device plays on
+#: a close waits at most this many times the longest drain (the host's target level, the
+#: ramp and the margin), however often its Stop is resent or however slowly the device
+#: plays on
 CLOSE_STRETCH = 2
 #: most bytes of blocks written in one turn
 _TURN_BYTES = 4096
@@ -110,6 +111,11 @@ class LinkStalled(LinkError):
     def __init__(self, message: str, progress: LinkProgress | None = None):
         super().__init__(message)
         self.progress = progress
+
+
+def state_name(state: int) -> str | int:
+    """A Status's ``state`` by its name in PROTOCOL.md 4.6, or the number it does not name."""
+    return DeviceState.NAMES[state] if state < len(DeviceState.NAMES) else state
 
 
 def _watchdog_problems(info: p.Info) -> list[str]:
@@ -176,6 +182,9 @@ class HostSession:
         #: flushes what it holds and ramps to zero (PROTOCOL.md 4.5)
         self.abort_requested = False
         self._stopping_drained = False
+        #: after a close: True if the device reported SILENT after its Stop, False if the
+        #: close ended on its bound without (its watchdog stops the plate); None before
+        self.stop_confirmed: bool | None = None
         self._marks: dict[int, tuple[float, int, int]] = {}  # token -> (t, sent_end, mark)
         self._token = 0
         self._seq = 0
@@ -595,9 +604,12 @@ class HostSession:
         return bytes(out)
 
     def close_limit_s(self) -> float:
-        """The longest a close may take once begun (s): :data:`CLOSE_STRETCH` times a full
-        buffer's drain (aborting: times the ramp and the margin, nothing is drained)."""
-        held = 0 if self.abort_requested else self.info.buffer_samples
+        """The longest a close may take once begun (s): :data:`CLOSE_STRETCH` times the
+        drain of the most the host keeps sent ahead of the device, its target level
+        (aborting: times the ramp and the margin, nothing is drained). The buffer the
+        device declares does not lengthen it: a device that declares a vast one and
+        creeps on after the Stop would otherwise hold the close for days."""
+        held = 0 if self.abort_requested else self.target
         return CLOSE_STRETCH * self._play_out_s(held)
 
     def _stop(self, now: float) -> bytes:
@@ -621,12 +633,9 @@ class HostSession:
             # its drain is waited for while it lasts, up to the close's limit
             self._close_seen = st.play_index
             self._close_by = max(self._close_by, now + STOP_MARGIN_S)
-        if ((answered and st.state == DeviceState.SILENT)
-                or now >= min(self._close_by, self._close_limit)):
-            with self.cond:
-                self.ledger.end_session()
-                self.phase = "done"
-                self.cond.notify_all()
+        silent = answered and st.state == DeviceState.SILENT
+        if silent or now >= min(self._close_by, self._close_limit):
+            self._end_close(silent)
             return b""
         out = self._resends(now) if self._due else b""
         if (answered and st.state != DeviceState.DRAINING
@@ -640,10 +649,26 @@ class HostSession:
         self._next_hb = now + self._heartbeat_s
         return out + self._heartbeat(now)
 
+    def _end_close(self, silent: bool) -> None:
+        """The close is over: ``silent``, the device confirmed its Stop; otherwise its
+        bound ran out, and the plate is left to the device's watchdog (said)."""
+        if not silent:
+            st = self.status
+            last = "no Status" if st is None else f"last state {state_name(st.state)}"
+            self._warn(f"the device did not confirm it stopped ({last}); relying on its "
+                       f"watchdog ({self.info.watchdog_ms} ms)")
+        with self.cond:
+            self.stop_confirmed = silent
+            self.ledger.end_session()
+            self.phase = "done"
+            self.cond.notify_all()
+
     def _drain_s(self) -> float:
-        """Time for a drained Stop to play out: what may be buffered, the ramp, a margin."""
+        """Time for a drained Stop to play out: what the host has outstanding (sent, not
+        reported played; at most its target level, whatever the device reports), the
+        ramp, a margin."""
         buffered = self.sent_end - (self.snapshot.play_index if self.snapshot else 0)
-        return self._play_out_s(min(max(buffered, 0), self.info.buffer_samples))
+        return self._play_out_s(min(max(buffered, 0), self.target))
 
     def _play_out_s(self, samples: int) -> float:
         """Time for ``samples`` buffered to play, the ramp to run and a margin (s)."""
