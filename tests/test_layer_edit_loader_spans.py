@@ -87,3 +87,26 @@ def test_both_ends_of_every_slider_load(tmp_path, scene):
                 ed.set(c.key, c.value_at(fraction))
                 load_scene(path, text=ed.text())  # raises on a refused end
                 ed.undo()
+
+
+def test_a_drag_keeps_its_sliders_ends_and_asks_the_loader_again_when_it_ends(tmp_path,
+                                                                               monkeypatch):
+    """The ends take a few hundred loader checks; a drag sets a value every frame, so
+    its sliders keep the ends they had as it began, each knob at its value of now, and
+    the ends are worked out once the drag ends (edge_mm's upper end: the shorter side
+    the drag left)."""
+    import frictex.app.live.layer_edit as layer_edit
+    ed = LayerEdit(objects(tmp_path))
+    ed.select(0)
+    assert ed.control("edge_mm").hi == pytest.approx(20.0)
+    asked = []
+    spans = layer_edit.loader_spans
+    monkeypatch.setattr(layer_edit, "loader_spans", lambda *a: asked.append(1) or spans(*a))
+    drag = object()
+    for height in (19.0, 17.0, 12.0):
+        ed.set("height_mm", height, group=drag)
+        assert ed.control("height_mm").value == height
+        assert ed.control("edge_mm").hi == pytest.approx(20.0)  # as the drag began
+    assert asked == []
+    ed.end_group()
+    assert ed.control("edge_mm").hi == pytest.approx(12.0) and asked == [1]

@@ -267,6 +267,21 @@ def check_scene(path: str | Path, *, allow_outside: bool = False, text: str | No
     if doc is None:
         return None, r.problems, r.warnings
     r.locator = Locator(text)
+    return _check_document(path, doc, r, allow_outside)
+
+
+def check_document(path: str | Path, doc: dict, *, allow_outside: bool = False,
+                   ) -> tuple[model.Scene | None, list[Problem], list[Problem]]:
+    """:func:`check_scene` of a file's text already parsed: ``doc`` as ``tomllib``
+    gives it (an editor's trial values), ``path`` the file it stands for. Its problems
+    name no line (there is no text)."""
+    return _check_document(Path(path), doc, Reader(str(path), None), allow_outside)
+
+
+def _check_document(path: Path, doc: dict, r: Reader, allow_outside: bool,
+                    ) -> tuple[model.Scene | None, list[Problem], list[Problem]]:
+    """The scene ``doc`` (parsed TOML of the file ``path``) gives, with the problems and
+    warnings reported through ``r``."""
     top = r.table(doc, (), TOP, tables=("display", "device", "layer"))
     fmt = top["format"]
     if fmt is not BAD and fmt != FORMAT_VERSION:
@@ -319,5 +334,5 @@ def load_scene(path: str | Path, *, allow_outside: bool = False,
     return read_scene(path, allow_outside=allow_outside, text=text)[0]
 
 
-__all__ = ["FORMAT_VERSION", "LAYER_KEYS", "LAYER_TYPES", "TextureError", "check_scene", "load_scene",
-           "read_scene"]
+__all__ = ["FORMAT_VERSION", "LAYER_KEYS", "LAYER_TYPES", "TextureError", "check_document",
+           "check_scene", "load_scene", "read_scene"]

@@ -67,6 +67,7 @@ import re
 import secrets
 import shutil
 import stat as statmod
+import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -81,7 +82,7 @@ from frictex.textures.errors import Locator, TextureError, field_name
 from frictex.textures.clips import MAX_CLIP_S
 from frictex.textures.keys import COMMON, LAYER_KEYS, MAX_ANGLE_DEG, MAX_FORCE_N, MAX_MM
 from frictex.textures.library import LIBRARY_DIR, user_scenes_dir
-from frictex.textures.loader import check_scene, load_scene
+from frictex.textures.loader import check_document, load_scene
 from frictex.textures.references import referenced_files
 from frictex.textures.schema import MAX_MAGNITUDE, Choice, Int, Num
 from frictex.textures.toml_safe import MAX_FILE_BYTES
@@ -283,7 +284,7 @@ def clamp(slider: Slider, value: float) -> float:
 def refused_keys(path: Path, doc, index: int) -> frozenset[str]:
     """The keys of ``doc``'s layer ``index`` (0-based) the file does not give and the
     loader refuses given: they are written at their defaults (the only change: the keys
-    are given) and the document checked once (``check_scene`` as read from ``path``); a
+    are given) and the document checked once (``check_document``, for the file at ``path``); a
     problem at a key ("not used with shape = ...") refuses it. Keys whose default is
     derived ("none") are not tried: the panel does not offer them unwritten."""
     table = doc["layer"][index]
@@ -292,16 +293,21 @@ def refused_keys(path: Path, doc, index: int) -> frozenset[str]:
     tried = {key: spec.default for key, spec in specs.items()
              if key not in table and key not in STRUCTURAL and not isinstance(spec.default, bool)
              and isinstance(spec.default, (int, float, str))}
-    probe = tomlkit.parse(tomlkit.dumps(doc))
+    probe = _plain(doc)
     probe["layer"][index].update(tried)
-    fields = _problem_fields(path, tomlkit.dumps(probe))
+    fields = _problem_fields(path, probe)
     return frozenset(key for key in tried if field_name(("layer", index, key)) in fields)
 
 
-def _problem_fields(path: Path, text: str) -> frozenset[str]:
-    """The fields (``layer[2].duty``) of the problems the loader finds in ``text`` (the
-    file at ``path`` as edited)."""
-    _, problems, _ = check_scene(path, text=text)
+def _plain(doc) -> dict:
+    """``doc`` (tomlkit's) as ``tomllib`` reads its text: plain values to try keys on."""
+    return tomllib.loads(tomlkit.dumps(doc))
+
+
+def _problem_fields(path: Path, doc: dict) -> frozenset[str]:
+    """The fields (``layer[2].duty``) of the problems the loader finds in ``doc`` (the
+    file at ``path`` as edited, parsed: :func:`_plain`)."""
+    _, problems, _ = check_document(path, doc)
     return frozenset(p.field for p in problems)
 
 
@@ -311,22 +317,36 @@ def loader_spans(path: Path, doc, index: int, controls) -> tuple[Slider | Menu, 
     key's limit set by its layer's other keys (a rectangle's ``edge_mm``, at most the
     shorter side) is found by asking the loader, not by a copy of its rules. A value is
     taken when setting it adds no problem to those of the document as it is."""
-    text = tomlkit.dumps(doc)
-    known = _problem_fields(path, text)
-    probe = tomlkit.parse(text)
+    probe = _plain(doc)
+    known = _problem_fields(path, probe)
     table = probe["layer"][index]
     out = []
     for c in controls:
         if isinstance(c, Slider):
             def accepts(value: float, c=c) -> bool:
-                _put(table, c.key, int(value) if c.integer else value)
-                return _problem_fields(path, tomlkit.dumps(probe)) <= known
+                table[c.key] = int(value) if c.integer else value
+                return _problem_fields(path, probe) <= known
             given = table.get(c.key)
             c = _loader_slider(c, accepts)
             if given is None:
                 table.pop(c.key, None)
             else:
                 table[c.key] = given
+        out.append(c)
+    return tuple(out)
+
+
+def _held_spans(controls, before) -> tuple[Slider | Menu, ...]:
+    """``controls`` (:func:`layer_controls`, the values of now) with each slider's ends,
+    step and allowed range as in ``before`` (the same layer's, :func:`loader_spans`),
+    widened to hold its value: a drag's sliders as the drag began."""
+    held = {c.key: c for c in before if isinstance(c, Slider)}
+    out = []
+    for c in controls:
+        old = held.get(c.key) if isinstance(c, Slider) else None
+        if old is not None:
+            c = replace(c, lo=min(old.lo, c.value), hi=max(old.hi, c.value), step=old.step,
+                        allowed_lo=old.allowed_lo, allowed_hi=old.allowed_hi)
         out.append(c)
     return tuple(out)
 
@@ -552,7 +572,10 @@ class LayerEdit:
     def controls(self) -> tuple[Slider | Menu, ...]:
         """The selected layer's controls (none when no layer is selected); the keys the
         loader refuses given (:func:`refused_keys`) are worked out again only when the
-        layer's keys or words change (:func:`_layout`)."""
+        layer's keys or words change (:func:`_layout`), the sliders' ends
+        (:func:`loader_spans`: some hundred loader checks) when a value changes, but not
+        during a drag (a ``group`` of changes), whose sliders keep the ends they had as
+        it began (:func:`_held_spans`) until :meth:`end_group`."""
         if self.layer is None:
             return ()
         table = self.doc["layer"][self.layer]
@@ -562,7 +585,11 @@ class LayerEdit:
         text = self.text()
         if self._spans[:2] != (self.layer, text):
             controls = layer_controls(table, self.extent_mm, self._refused[2])
-            self._spans = (self.layer, text, loader_spans(self.path, self.doc, self.layer, controls))
+            if self._group is not None and self._spans[0] == self.layer:
+                controls = _held_spans(controls, self._spans[2])
+            else:
+                controls = loader_spans(self.path, self.doc, self.layer, controls)
+            self._spans = (self.layer, text, controls)
         return self._spans[2]
 
     def control(self, key: str) -> Slider | Menu:
@@ -683,8 +710,10 @@ class LayerEdit:
         return kept, len(wanted) - kept
 
     def end_group(self) -> None:
-        """The drag ended: the next change starts a new undo entry."""
+        """The drag ended: the next change starts a new undo entry, and the sliders' ends
+        are worked out again for the values it left."""
         self._group = None
+        self._spans = (None, None, ())
 
     # -- saving ------------------------------------------------------------------------
 
