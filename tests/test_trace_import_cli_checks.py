@@ -191,8 +191,9 @@ def test_a_getevent_ltr_log_reads_as_without_its_rates():
     assert parse_getevent(rated) == parse_getevent(plain)
 
 
-def test_a_getevent_log_with_syn_dropped_lifts_each_finger_from_its_own_slot(tmp_path, capsys):
-    from frictex.rendering.input.trace_file import UP, read_trace
+def _syn_dropped_log(tmp_path, keep=None):
+    """A getevent -lpt log of two fingers (slot 1 id 0x65, slot 0 id 0x66), a
+    SYN_DROPPED, slot 1 moved and lifted, then slot 0 lifted; its first ``keep`` events."""
     axis = ", fuzz 0, flat 0, resolution 10"
     header = ("add device 1: /dev/input/event2\n  name:     \"sec_touchscreen\"\n  events:\n"
               f"    ABS (0003): ABS_MT_SLOT           : value 0, min 0, max 9{axis}\n"
@@ -211,9 +212,15 @@ def test_a_getevent_log_with_syn_dropped_lifts_each_finger_from_its_own_slot(tmp
               ("100.090000", "EV_ABS", "ABS_MT_SLOT", 0), ("100.090000", "EV_ABS", "ABS_MT_TRACKING_ID", 0xFFFFFFFF),
               ("100.090000", "EV_SYN", "SYN_REPORT", 0)]
     log = tmp_path / "b1.txt"
-    log.write_text(header + "".join(f"[  {t}] {ty:<12} {code:<20} {v:08x}\n" for t, ty, code, v in events))
+    log.write_text(header + "".join(f"[  {t}] {ty:<12} {code:<20} {v:08x}\n"
+                                    for t, ty, code, v in events[:keep]))
+    return log
+
+
+def test_a_getevent_log_with_syn_dropped_lifts_each_finger_from_its_own_slot(tmp_path, capsys):
+    from frictex.rendering.input.trace_file import UP, read_trace
     out = tmp_path / "b1.csv"
-    assert main(["trace", "import", str(log), "-o", str(out)]) == 0
+    assert main(["trace", "import", str(_syn_dropped_log(tmp_path)), "-o", str(out)]) == 0
     trace = read_trace(out)
     lifts = trace.event == UP
     assert trace.finger[lifts].tolist() == [1, 0]  # slot 1 first
@@ -221,3 +228,12 @@ def test_a_getevent_log_with_syn_dropped_lifts_each_finger_from_its_own_slot(tmp
     assert trace.y_mm[lifts].tolist() == pytest.approx([0x300 / 10, 0x100 / 10])
     err = capsys.readouterr().err
     assert "1 SYN_DROPPED" in err and "still down" not in err
+
+
+def test_a_finger_left_down_after_a_syn_dropped_may_have_lost_its_lift(tmp_path, capsys):
+    """Slot 0's lift cut off: the warning names the drop as a cause beside a cut log."""
+    out = tmp_path / "b1.csv"
+    assert main(["trace", "import", str(_syn_dropped_log(tmp_path, keep=-3)), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert ("finger 0 still down at the end of the recording (cut mid-touch? or a lift lost "
+            "to SYN_DROPPED?)") in err

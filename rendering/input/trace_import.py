@@ -211,8 +211,9 @@ def run_import(args: argparse.Namespace, write: Callable[[str, str], None]) -> i
     still = still_down(trace)
     if still:
         warnings.append(f"finger{'s' if len(still) > 1 else ''} {', '.join(map(str, still))} "
-                        f"still down at the end of the recording (cut mid-touch?): no lift "
-                        f"follows {'their' if len(still) > 1 else 'its'} last sample")
+                        f"still down at the end of the recording (cut mid-touch?"
+                        f"{' or a lift lost to SYN_DROPPED?' if decoder.dropped else ''}): no "
+                        f"lift follows {'their' if len(still) > 1 else 'its'} last sample")
     comment = (f"imported from {path} ({fmt}, multitouch protocol {decoder.protocol}); "
                f"recording clock at the first sample: {t0!r} s"
                f"{'' if args.keep_time else ' (shifted to t = 0)'}; x {screen.x.lo:g}..{screen.x.hi:g} "
