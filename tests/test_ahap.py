@@ -56,6 +56,24 @@ def test_a_not_sustained_event_decays_after_its_attack():
     assert_allclose(clip.events[0].envelope, ((0.0, 0.0), (0.1, 1.0), (0.3, 0.0), (1.0, 0.0)))
 
 
+def test_a_not_sustained_event_releases_over_its_last_release_time():
+    """Decaying from 1 towards 0 over 2 s, the 1 s event is at 0.65 where its 0.3 s
+    release begins and ramps to 0 over it (it used to drop from 0.5 to 0 at the end)."""
+    clip, _ = parse_ahap(_doc(_event("HapticContinuous", 0.0, 1.0, HapticSharpness=0.0,
+                                     Sustained=0, AttackTime=0.0, DecayTime=2.0,
+                                     ReleaseTime=0.3)), depth=0.5)
+    assert_allclose(clip.events[0].envelope, ((0.0, 1.0), (0.0, 1.0), (0.7, 0.65), (1.0, 0.0)))
+    t = np.array([0.0, 0.5, 0.7, 0.8, 0.9, 0.99])
+    assert_allclose(_level(clip, t), [1.0, 0.75, 0.65, 0.65 * 2 / 3, 0.65 / 3, 0.65 * 0.01 / 0.3],
+                    atol=1e-9)
+
+
+def test_a_decay_over_before_the_release_stays_at_0():
+    clip, _ = parse_ahap(_doc(_event("HapticContinuous", 0.0, 1.0, AttackTime=0.1,
+                                     DecayTime=0.2, ReleaseTime=0.3, Sustained=False)), depth=0.5)
+    assert_allclose(clip.events[0].envelope, ((0.0, 0.0), (0.1, 1.0), (0.3, 0.0), (1.0, 0.0)))
+
+
 def _level(clip, t_s):
     """The clip's level sum at times t_s (s), from its mu'."""
     mu, _ = clip.sample(RATE)

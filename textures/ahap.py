@@ -22,7 +22,7 @@ Mapping onto a friction display (``textures.clips`` says how a clip plays):
   a continuous event's carrier rises from none (a smooth drop) to 250 Hz;
 - a continuous event's envelope: a linear attack over AttackTime from 0 to full, then
   full to the end (Sustained, the default) or a linear decay to 0 over DecayTime (not
-  Sustained), and a linear release to 0 over the last ReleaseTime;
+  Sustained), and in either case a linear release to 0 over the last ReleaseTime;
 - HapticIntensityControl (0-1) multiplies every event's intensity, HapticSharpnessControl
   (-1 to 1) is added to every event's sharpness (Apple's dynamic parameters: a product for
   intensity, a sum otherwise). Each ParameterCurve or Parameter of a control takes effect
@@ -133,12 +133,15 @@ def _finite(v: int | float) -> bool:
 
 
 def _envelope(params: dict, duration: float) -> tuple[tuple[float, float], ...]:
+    """(t s from the event's start, level 0-1) breakpoints of a continuous event of
+    ``duration`` s: the attack, then held or decaying, then the release (module docstring)."""
     attack = min(params.get("AttackTime", 0.0), duration)
     release = min(params.get("ReleaseTime", 0.0), duration - attack)
     points = [(0.0, 0.0 if attack > 0 else 1.0), (attack, 1.0)]
     if params.get("Sustained", 1.0) < 0.5:
         decay = params.get("DecayTime", 0.0)
-        end = min(attack + decay, duration)
+        # the decay stops where the release begins; the line to (duration, 0) is the release
+        end = min(attack + decay, duration - release)
         points.append((end, max(0.0, 1.0 - (end - attack) / decay) if decay > 0 else 0.0))
         points.append((duration, 0.0))
     else:
