@@ -189,6 +189,11 @@ def test_read_ahap_from_a_file(tmp_path):
     assert clip.events[0].intensity == 1.0 and clip.depth == 0.3
 
 
+def test_a_transient_that_ends_by_60_s_is_taken():
+    clip, _ = parse_ahap(_doc(_event("HapticTransient", 59.99, HapticSharpness=1.0)), 0.5)
+    assert clip.duration_s == pytest.approx(59.995, abs=1e-9)
+
+
 @pytest.mark.parametrize("text, message", [
     ('{"Pattern": [\n  {"Event": }\n]}', r"AHAP:2: not JSON"),
     (_doc(_event("HapticTransient", 0.0, HapticIntensity=1.5)),
@@ -215,6 +220,13 @@ def test_read_ahap_from_a_file(tmp_path):
     (_doc(_event("HapticTransient", 0.0), _control("HapticSharpnessControl", 0.0, points=[])),
      r"ParameterCurveControlPoints: no control points"),
     (_doc(*[_event("HapticContinuous", 0.0, 59.0)] * 11), r"Pattern: the events play for 649 s"),
+    (_doc(_event("HapticTransient", 0.0), _event("HapticContinuous", 59.5, 0.6)),
+     r"^AHAP: Pattern\[1\]\.Event: ends at 60\.1 s; clips last at most 60 s$"),
+    (_doc(_event("HapticTransient", 60.0)),  # a 17.5 ms tick at sharpness 0.5
+     r"^AHAP: Pattern\[0\]\.Event: ends at 60\.0175 s; clips last at most 60 s$"),
+    (_doc(_event("HapticTransient", 59.99, HapticSharpness=1.0),  # 5 ms, widened by the curve
+          _control("HapticSharpnessControl", 0.0, -1.0)),
+     r"^AHAP: Pattern\[0\]\.Event: ends at 60\.02 s; clips last at most 60 s$"),
     ('{"Pattern": [], "Pattern": [' + json.dumps(_event("HapticTransient", 0.5)) + ']}',
      r'AHAP: key "Pattern" appears twice in one object; expected distinct keys'),
     ('{"Pattern": [{"Event": {"Time": 0.0, "Time": 0.5, "EventType": "HapticTransient"}}]}',

@@ -23,6 +23,7 @@ Mapping onto a friction display (``textures.clips`` says how a clip plays):
 - a continuous event's envelope: a linear attack over AttackTime from 0 to full, then
   full to the end (Sustained, the default) or a linear decay to 0 over DecayTime (not
   Sustained), and in either case a linear release to 0 over the last ReleaseTime;
+- every event ends by MAX_CLIP_S (60 s), a transient's end being its start plus its pulse;
 - HapticIntensityControl (0-1) multiplies every event's intensity, HapticSharpnessControl
   (-1 to 1) is added to every event's sharpness (Apple's dynamic parameters: a product for
   intensity, a sum otherwise). Each ParameterCurve or Parameter of a control takes effect
@@ -177,8 +178,6 @@ def _event(r: _Reader, ev: dict, path: str, notes: list) -> ClipEvent | None:
     if kind == "HapticTransient":
         return ClipEvent("transient", time_s, intensity, sharpness)
     duration = r.number(ev, "EventDuration", path, 1e-6, MAX_CLIP_S)
-    if time_s + duration > MAX_CLIP_S:
-        r.fail(path, f"ends at {time_s + duration:g} s; clips last at most {MAX_CLIP_S:g} s")
     return ClipEvent("continuous", time_s, intensity, sharpness, duration,
                      _envelope(params, duration))
 
@@ -265,7 +264,8 @@ def parse_ahap(text: str, depth: float, where: str = "AHAP") -> tuple[Clip, list
     except ValueError as exc:  # an integer of more digits than Python converts
         raise TextureError(f"{where}: not JSON that can be read ({str(exc).split(';')[0]})") from None
     doc = r.table(doc, "top level")
-    events, curves, notes = [], {"HapticIntensityControl": [], "HapticSharpnessControl": []}, []
+    events, paths = [], []
+    curves, notes = {"HapticIntensityControl": [], "HapticSharpnessControl": []}, []
     for k, item in enumerate(r.array(doc.get("Pattern", MISSING), "Pattern")):
         path = f"Pattern[{k}]"
         item = r.table(item, path)
@@ -273,6 +273,7 @@ def parse_ahap(text: str, depth: float, where: str = "AHAP") -> tuple[Clip, list
             ev = _event(r, r.table(item["Event"], f"{path}.Event"), f"{path}.Event", notes)
             if ev is not None:
                 events.append(ev)
+                paths.append(f"{path}.Event")
             continue
         key = next((k2 for k2 in ("ParameterCurve", "Parameter") if k2 in item), None)
         if key is None:
@@ -284,6 +285,11 @@ def parse_ahap(text: str, depth: float, where: str = "AHAP") -> tuple[Clip, list
         r.fail("Pattern", "no haptic events")
     clip = Clip(tuple(events), depth, _control_curve(curves["HapticIntensityControl"]),
                 _control_curve(curves["HapticSharpnessControl"]))
+    # a transient's length depends on the sharpness curve, known only once all is read
+    for ev, path in zip(events, paths):
+        end = ev.time_s + clip.event_length_s(ev)
+        if end > MAX_CLIP_S:
+            r.fail(path, f"ends at {end:g} s; clips last at most {MAX_CLIP_S:g} s")
     playing = sum(clip.event_length_s(e) for e in events)
     if playing > MAX_EVENTS_S:
         r.fail("Pattern", f"the events play for {playing:g} s in total; a clip's play for at "
