@@ -50,7 +50,7 @@ def test_the_live_p99_is_held_to_its_target_in_thread_cpu_time_with_its_block_co
     assert ("live p99 <= 500 us of the thread's CPU time (10 % of a 5 ms block), over 100 "
             "blocks a row: every row's figure is under it, which is no verdict: a p99 of 100 "
             "blocks has no upper end to its 95 % interval") in verdicts
-    assert verdicts.count("met in every row") == 1
+    assert "met in every row" not in verdicts
 
 
 def test_live_blocks_are_timed_in_thread_cpu_time_and_the_collector_is_left_unfrozen():
