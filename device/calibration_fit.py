@@ -25,8 +25,12 @@ the columns after it down.
 A fit that stops on a bound of b or k, or whose standard error of a constant exceeds the
 constant (:attr:`Fit.notes`), does not determine that constant: points of b = 30 /um give
 b = 20 /um, the upper bound, with a residual of 0.005; amplitudes given in nm leave b at
-its start with a standard error of 1e142. k = 0 is the exception: friction that does not
-depend on the normal force, a physical value the fit can reach, not a limit of the fit.
+its start with a standard error of 1e133 or more (infinite where J^T J is singular to
+rounding). k = 0 is the exception: friction that does not depend on the normal force, a
+physical value the fit can reach, not a limit of the fit. A b the points do not determine
+(off its bounds) is not accepted as the model (:attr:`Fit.judged_by` ``"b undetermined"``):
+noisy points jittered a few nm about one amplitude get a table, not an exponent fitted to
+the jitter. Amplitudes within ``AMPLITUDE_RESOLUTION_UM`` (1 nm) of each other count as one.
 
 A fitted curve that does not fall is a failed run (exit 1), not bad input: the plate did
 not vibrate, or the finger pressed so hard that k F_n reached 1, where eq 2 is flat.
@@ -63,6 +67,10 @@ TABLE_BINS = 12
 #: force, a third checks that the model fits (by the residual RMS alone below 8
 #: amplitudes, where the runs test cannot reach ``LACK_OF_FIT_P``)
 MIN_AMPLITUDES = 3
+#: amplitudes (um) closer than this count as one: eq 2's slope |d mu'/dw| is at most b, and
+#: b at most ``B_BOUNDS``' 20 /um, so across 1 nm mu' changes by less than
+#: ``MODEL_TOLERANCE`` whatever b; four counts of the wire's amplitude (``AMPLITUDE_STEP_UM``)
+AMPLITUDE_RESOLUTION_UM = MODEL_TOLERANCE / B_BOUNDS[1]
 #: least fall of the fitted mu' from 0 um to the largest amplitude that determines b:
 #: below it the curve is within a few times the model's tolerance of flat, so any b fits
 MIN_FALL = 2.5 * MODEL_TOLERANCE
@@ -104,13 +112,16 @@ class Fit:
     @property
     def judged_by(self) -> str:
         """The rule that judged the fit: ``"solver"`` where it did not converge, ``"RMS
-        ceiling"`` where the residual RMS is above ``MODEL_CEILING``, ``"RMS"`` where it is
+        ceiling"`` where the residual RMS is above ``MODEL_CEILING``, ``"b undetermined"``
+        where the points do not determine b (:attr:`undetermined`), ``"RMS"`` where it is
         within ``MODEL_TOLERANCE`` or the runs test could not reach ``LACK_OF_FIT_P`` (too
         few amplitudes), else ``"runs test"``."""
         if self.solver_status <= 0:
             return "solver"
         if not self.residual_rms <= MODEL_CEILING:
             return "RMS ceiling"
+        if "b" in self.undetermined:
+            return "b undetermined"
         runs_can_reject = self.runs_least_p < LACK_OF_FIT_P
         return "runs test" if self.residual_rms > MODEL_TOLERANCE and runs_can_reject else "RMS"
 
@@ -128,6 +139,9 @@ class Fit:
         """Why the model does not fit, by the rule that judged it (one clause)."""
         if self.judged_by == "solver":
             return f"the fit did not converge: {self.solver_message}"
+        if self.judged_by == "b undetermined":
+            return (f"the points do not determine b: b = {self.params.b_per_um:.4g} /um with "
+                    f"a standard error of {self.b_se:.2g} /um")
         if self.judged_by == "RMS ceiling":
             return (f"residual RMS {self.residual_rms:.3f} above the ceiling "
                     f"{MODEL_CEILING:g}, beyond noise whatever its pattern")
@@ -157,18 +171,28 @@ class Fit:
         return notes
 
     @property
-    def notes(self) -> list[str]:
-        """:attr:`bound_notes`, then one line per other constant whose standard error
-        exceeds its value: the points do not determine it."""
+    def undetermined(self) -> tuple[str, ...]:
+        """The constants, of those the fit did not stop on a bound of, whose standard error
+        exceeds their value: the points do not determine them."""
         on_bound = {name for name, _ in self.at_bound}
-        constants = {"b": (self.params.b_per_um, self.b_se, "/um"),
-                     "k": (self.params.asymptote_per_n, self.k_se, "/N")}
-        undetermined = [f"{name} = {value:.4g} {unit} with a standard error of {se:.2g} "
-                        f"{unit}, more than its value: the points do not determine {name} "
-                        f"(are the amplitudes in um and the forces in N?)"
-                        for name, (value, se, unit) in constants.items()
-                        if name not in on_bound and not se <= abs(value)]
-        return self.bound_notes + undetermined
+        return tuple(name for name, (value, se, _) in self._estimates.items()
+                     if name not in on_bound and not se <= abs(value))
+
+    @property
+    def _estimates(self) -> dict[str, tuple[float, float, str]]:
+        """Each constant's value, standard error and unit."""
+        return {"b": (self.params.b_per_um, self.b_se, "/um"),
+                "k": (self.params.asymptote_per_n, self.k_se, "/N")}
+
+    @property
+    def notes(self) -> list[str]:
+        """:attr:`bound_notes`, then one line per constant in :attr:`undetermined`."""
+        estimates = self._estimates
+        return self.bound_notes + [
+            f"{name} = {value:.4g} {unit} with a standard error of {se:.2g} {unit}, more than "
+            f"its value: the points do not determine {name} (are the amplitudes in um and "
+            f"the forces in N?)"
+            for name in self.undetermined for value, se, unit in [estimates[name]]]
 
 
 def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> Fit:
@@ -177,19 +201,25 @@ def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> 
 
     Points that are not finite, at an amplitude below 0 or a normal force of 0 or less
     are left out, counted in :attr:`Fit.n_dropped`. Raises
-    InputError (a ValueError) when the usable points have fewer distinct amplitudes above
-    0 (they cannot determine both b and k and check the fit), and RunFailed when the
+    InputError (a ValueError) when the arrays' lengths differ, or when the usable points
+    have fewer distinct amplitudes above 0, amplitudes within ``AMPLITUDE_RESOLUTION_UM``
+    counting as one (they cannot determine both b and k and check the fit), and RunFailed
+    when the
     fitted mu' falls by less than ``MIN_FALL`` (a flat curve: every b fits it).
     """
     w, f, m = (np.asarray(a, dtype=np.float64).ravel() for a in (w_um, normal_n, mu))
+    if not w.size == f.size == m.size:
+        raise InputError(f"calibration points: {w.size} amplitudes, {f.size} normal forces "
+                         f"and {m.size} values of mu': expected one of each per point")
     finite = np.isfinite(w) & np.isfinite(f) & np.isfinite(m)
     good = finite & (w >= 0) & (f > 0)
     w, f, m = w[good], f[good], m[good]
-    amplitudes = np.unique(w[w > 0]).size
+    amplitudes = np.unique(_levels(w[w > 0])).size
     if amplitudes < MIN_AMPLITUDES:
         raise InputError(f"{w.size} usable calibration points at {amplitudes} distinct "
-                         f"amplitudes above 0 um: expected at least {MIN_AMPLITUDES} (two "
-                         f"determine b and k, a third checks the fit)")
+                         f"amplitudes above 0 um (within {AMPLITUDE_RESOLUTION_UM * 1e3:g} nm "
+                         f"count as one): expected at least {MIN_AMPLITUDES} (two determine "
+                         f"b and k, a third checks the fit)")
 
     def residual(theta):
         return forward_mu(w, f, FrictionParams(theta[0], theta[1])) - m
@@ -247,23 +277,37 @@ def standard_errors(jacobian: np.ndarray, residuals: np.ndarray) -> tuple[float,
     """Standard errors of (b, k) (1/um, 1/N): the square roots of the diagonal of
     s^2 (J^T J)^-1, s^2 the residual variance over n - 2 degrees of freedom; inf where
     J^T J is singular (a constant the points do not determine) or where there are 2
-    points or fewer (they fit exactly, leaving no residual to measure the noise by)."""
+    points or fewer (they fit exactly, leaving no residual to measure the noise by). A
+    J^T J singular to rounding may invert to infinite, not-a-number or negative entries
+    instead of raising: those variances give inf too."""
     dof = residuals.size - 2
     if dof < 1:
         return math.inf, math.inf
-    s2 = float(residuals @ residuals) / dof
+    # mu' (about 1) is known to within its rounding: exact points leave that, not 0, so a
+    # constant they do not determine keeps its huge variance instead of 0 times it
+    s2 = max(float(residuals @ residuals) / dof, np.finfo(np.float64).eps ** 2)
     try:
-        cov = s2 * np.linalg.inv(jacobian.T @ jacobian)
+        inverse = np.linalg.inv(jacobian.T @ jacobian)
     except np.linalg.LinAlgError:
         return math.inf, math.inf
-    b_var, k_var = np.diag(cov)
-    return math.sqrt(max(b_var, 0.0)), math.sqrt(max(k_var, 0.0))
+    b_var, k_var = s2 * np.diag(inverse)
+    return tuple(math.sqrt(var) if 0.0 < var < math.inf else math.inf for var in (b_var, k_var))
+
+
+def _levels(w: np.ndarray) -> np.ndarray:
+    """Each amplitude's level, 0, 1, ... in order of amplitude: one within
+    ``AMPLITUDE_RESOLUTION_UM`` of the next smaller amplitude shares its level."""
+    order = np.argsort(w, kind="stable")
+    level_of = np.empty(w.size, dtype=np.intp)
+    level_of[order] = np.cumsum(np.diff(w[order], prepend=w[order][:1])
+                                >= AMPLITUDE_RESOLUTION_UM)
+    return level_of
 
 
 def _residual_signs(w: np.ndarray, residuals: np.ndarray) -> np.ndarray:
-    """Signs (+1/-1) of the mean residual at each distinct amplitude, in order of
-    amplitude; amplitudes whose mean residual is 0 are left out."""
-    _, level_of = np.unique(w, return_inverse=True)
+    """Signs (+1/-1) of the mean residual at each distinct amplitude (:func:`_levels`), in
+    order of amplitude; amplitudes whose mean residual is 0 are left out."""
+    level_of = _levels(w)
     means = np.bincount(level_of, weights=residuals) / np.bincount(level_of)
     signs = np.sign(means)
     return signs[signs != 0]
@@ -301,12 +345,13 @@ def _log_comb(n: int, k):
 def _table(w: np.ndarray, f: np.ndarray, m: np.ndarray) -> Calibration:
     """One-row table at the median force: the decreasing (isotonic) regression of the mean
     mu' per amplitude column, weighted by its point count, strictly decreasing; a column
-    per distinct amplitude above 0 (um), or per run of neighbouring amplitudes where there
+    per distinct amplitude above 0 (um; :func:`_levels`), or per run of neighbouring amplitudes where there
     are more than ``TABLE_BINS`` of them."""
     vibrating = w > 0
-    levels, level_of = np.unique(w[vibrating], return_inverse=True)
+    level_of = _levels(w[vibrating])
+    levels = int(level_of.max()) + 1
     centres, means, counts = [], [], []
-    for run in np.array_split(np.arange(levels.size), min(TABLE_BINS, levels.size)):
+    for run in np.array_split(np.arange(levels), min(TABLE_BINS, levels)):
         inside = np.isin(level_of, run)
         centres.append(float(w[vibrating][inside].mean()))
         means.append(float(m[vibrating][inside].mean()))

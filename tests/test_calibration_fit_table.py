@@ -79,6 +79,7 @@ def test_points_at_fewer_than_three_amplitudes_are_refused(w_um):
     whatever the finger."""
     normal = np.full(w_um.size, FORCE_N)
     mu = forward_mu(w_um, normal, FrictionParams(2.4, 0.8))
-    with pytest.raises(InputError, match=r"at \d distinct amplitudes above 0 um: expected at "
-                                         r"least 3 \(two determine b and k"):
+    with pytest.raises(InputError, match=r"at \d distinct amplitudes above 0 um \(within 1 nm "
+                                         r"count as one\): expected at least 3 \(two "
+                                         r"determine b and k"):
         fit_points(w_um, normal, mu)
