@@ -69,7 +69,8 @@ def test_a_nan_target_is_left_out_of_the_measured_rms(monkeypatch):
 
 def test_a_replay_on_the_virtual_clock_says_to_pace_the_host(tmp_path):
     """The default virtual clock lets the host run as far ahead of the simulated plate as
-    its buffer allows: a third of the reports missed, the rest 5 blocks late (50 ms)."""
+    its buffer allows: the reports come 6 blocks (60 ms) late, after the loop's wait of
+    50 ms, and are all missed."""
     out = tmp_path / "out"
     assert main(["replay", "grating-15mm", "swipe-40mms-50hz", "--out", str(out), "--device",
                  "sim", "--sim-finger", "3", "--control", "closed", "--block", "100",
@@ -78,3 +79,17 @@ def test_a_replay_on_the_virtual_clock_says_to_pace_the_host(tmp_path):
     said = [w for w in warnings if "force reports" in w]
     assert said and all(w.endswith("--clock wall paces it to the plate (or give the device "
                                    "a smaller buffer)") for w in said)
+
+
+def test_a_report_later_than_the_wait_is_missed_not_used_at_the_longest_delay():
+    """Reports 11 blocks (55 ms) late, the loop waiting 10 (50 ms): each was used as 10
+    blocks late, its integrator stepping at the gain scheduled for 10 blocks (a gain
+    margin of 7.33 at its real 11). Each is missed, as one that never came."""
+    loop, state = _run(11, 40)
+    measured = loop.report(state)["measured"]
+    folded = 40 - len(state.pending)
+    assert folded > 20
+    assert measured["reports"] == 0 and measured["reports_missed"] == folded
+    assert state.reports_late == folded
+    assert state.delay_counts == () and state.delay_blocks == 0
+    assert any("were missed" in m for m in _late_messages(loop.report(state)))

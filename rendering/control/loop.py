@@ -261,6 +261,7 @@ class ControlState:
     limit_s: float = 0.0
     reports: int = 0
     reports_missed: int = 0
+    reports_late: int = 0  # of those missed, reports that came after ``max_wait_s``
     delay_counts: tuple[int, ...] = ()
     measured_sq: float = 0.0
     measured_n: int = 0
@@ -402,6 +403,10 @@ class ClosedLoop:
             report = None if forces is None else forces(sent.index0, n)
             if report is None and forces is not None and late <= self.wait_samples:
                 break  # still on its way
+            if report is not None and late > self.wait_samples:
+                # missed, as one that never came: used, its delay would be past the gains
+                # scheduled (``ki_by_delay``)
+                report, state = None, replace(state, reports_late=state.reports_late + 1)
             delay = (state.delay_blocks if behind_missed else
                      min(max(late, 0) // self.block_size, len(self.ki_by_delay) - 1))
             behind_missed = behind_missed or report is None
@@ -496,9 +501,9 @@ class ClosedLoop:
         """One line each when the force reports came back too late for the loop: more
         than ``MISSED_SHARE`` of them missed (not back within ``max_wait_s`` of their
         block's end), and a median delay at that wait limit (the integrator then steps at
-        the smallest ki the scheduler has). None (an empty list) when no report came (the fallback has
-        said why) or the loop waits less than a block."""
-        if not state.reports:
+        the smallest ki the scheduler has). None (an empty list) when no report came, not even
+        late (the fallback has said why), or the loop waits less than a block."""
+        if not state.reports and not state.reports_late:
             return []
         wait_ms = self.config.max_wait_s * 1e3
         said = []
@@ -510,7 +515,7 @@ class ClosedLoop:
                         f"learnt from the rest only{hint}")
         limit = len(self.ki_by_delay) - 1
         median = _quantile(state.delay_counts, 0.5)
-        if limit and median >= limit:
+        if limit and median is not None and median >= limit:
             said.append(f"closed loop: the force reports' median delay ({median} blocks) is "
                         f"the longest the loop waits (max_wait_s, {wait_ms:g} ms): its "
                         f"integrator steps at ki {self.ki_by_delay[limit]:.3g} per block "
