@@ -377,7 +377,7 @@ def test_synthesis_is_the_direct_form_recursion_bit_for_bit(order):
     past, expected, got, index = list(history), [], [], 11
     for n in (0, 1, 2, 57, 1, 57):
         out = np.empty(n)
-        _synthesise(poly, 0.01, np.uint64(77), index, history, out)
+        _synthesise(poly, 0.01, np.uint64(77), index, history, out, np.ones(n, bool))
         got.append(out)
         for j in range(index, index + n):
             acc = 0.01 * _normal(np.uint64(77), j)

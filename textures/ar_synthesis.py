@@ -79,20 +79,59 @@ def lsf_to_poly(lsf, twiddle=None) -> np.ndarray:
     return a
 
 
+def pole_radius(poly) -> float:
+    """The largest |z| of the poles of 1 / A(z), A(z) = ``poly`` ([a_0, a_1 .. a_p]): the
+    roots of the float64 coefficients the synthesis runs (the companion matrix's
+    eigenvalues, exact for coefficients within rounding of these); 0 for p = 0."""
+    a = np.asarray(poly, dtype=np.float64)
+    return float(np.abs(np.roots(a)).max()) if a.size > 1 else 0.0
+
+
+#: :func:`output_power_gain` stops once a further IMPULSE_CHUNK samples of the impulse
+#: response add less than IMPULSE_TAIL of its energy so far
+IMPULSE_CHUNK = 1 << 12
+IMPULSE_TAIL = 1e-17
+
+
 def output_power_gain(poly) -> float:
     """The output variance of the all-pole filter 1 / A(z) per unit variance of its white
-    excitation, sum h^2 over its impulse response h, exactly: 1 / prod(1 - k_i^2) over the
-    reflection coefficients k_i of A(z) = ``poly`` ([a_0, a_1 .. a_p]), found by the
-    step-down (backward Levinson) recursion; inf where a |k_i| >= 1 (an unstable filter)."""
+    excitation: sum h^2 over its impulse response h, run by the direct-form recursion the
+    synthesis runs, until a further IMPULSE_CHUNK samples add less than IMPULSE_TAIL of the
+    sum. inf where a pole of A(z) = ``poly`` ([a_0, a_1 .. a_p]) is on or outside the unit
+    circle (:func:`pole_radius`) or the recursion overflows. Its cost grows as
+    1 / (1 - radius): 2e5 samples for a pole at 0.9999. (The step-down recursion, 1 /
+    prod(1 - k_i^2), loses every digit near the circle: LSFs 0.001 rad apart from 1.0 rad,
+    order 10, gave a |k| >= 1 for poles within 0.99984.)"""
     a = np.asarray(poly, dtype=np.float64) / poly[0]
-    gain = 1.0
-    for m in range(a.size - 1, 0, -1):
-        k = a[m]
-        if not abs(k) < 1.0:
+    if not pole_radius(a) < 1.0:
+        return math.inf
+    return _impulse_energy(a, IMPULSE_CHUNK, IMPULSE_TAIL)
+
+
+@njit(cache=True)
+def _impulse_energy(a, chunk, tail):
+    """sum h^2 of 1 / A(z), ``a`` = [1, a_1 .. a_p], in chunks of ``chunk`` samples until
+    one adds less than ``tail`` of the sum; inf where it overflows."""
+    p = a.size - 1
+    h = np.zeros(p + chunk)  # h[:p]: the p samples before the chunk
+    h[p] = 1.0
+    total, start = 0.0, 1
+    while True:
+        added = 0.0
+        for j in range(p + start, p + chunk):
+            acc = 0.0
+            for k in range(1, p + 1):
+                acc -= a[k] * h[j - k]
+            h[j] = acc
+        for j in range(p, p + chunk):
+            added += h[j] * h[j]
+        total += added
+        if not math.isfinite(total):
             return math.inf
-        gain /= 1.0 - k * k
-        a = (a[:m] - k * a[m:0:-1]) / (1.0 - k * k)  # A of order m - 1
-    return gain
+        if added <= tail * total:
+            return total
+        h[:p] = h[chunk:]
+        start = 0
 
 
 @njit(cache=True)
@@ -267,19 +306,28 @@ def _normal_edge(state, bits):
 
 
 @njit(cache=True)
-def _synthesise(poly, scale, key, index0, history, out):
+def _synthesise(poly, scale, key, index0, history, out, counted):
     """out[j] = scale * noise(index0 + j) - sum_k poly[k] out[j - k] (poly[0] = 1), the
     earlier outputs taken from ``history`` (most recent first, updated in place). The
     newest output, which each sample's sum waits for first, stays in a register: through
-    ``history`` it waited for its store too (a quarter more time per sample)."""
+    ``history`` it waited for its store too (a quarter more time per sample).
+
+    An output that is not finite (a blend of stable vertices whose float64 A(z) is not)
+    is 0 and the filter restarts from rest; returns how many restarts fell on samples
+    where ``counted`` (bool, as ``out``)."""
     p = poly.size - 1
     newest = history[0] if p > 0 else 0.0
+    restarts = 0
     for j in range(out.size):
         acc = scale * _normal(key, index0 + j)
         if p > 0:
             acc -= poly[1] * newest
         for k in range(1, p):
             acc -= poly[k + 1] * history[k]
+        if not math.isfinite(acc):
+            acc = newest = 0.0
+            history[:] = 0.0
+            restarts += counted[j]
         for k in range(p - 1, 1, -1):
             history[k] = history[k - 1]
         if p > 1:
@@ -288,6 +336,7 @@ def _synthesise(poly, scale, key, index0, history, out):
         out[j] = acc
     if p > 0:
         history[0] = newest
+    return restarts
 
 
 @njit(cache=True)
@@ -300,20 +349,23 @@ def gaussian_noise(seed: int, finger: int, touch: int, index0: int, n: int) -> n
     """The standard normal samples of output indices index0 .. index0 + n - 1."""
     out = np.empty(n)
     key = np.uint64(noise_key(seed, finger, touch))  # a Python int: 2^63 and up fail as int64
-    _synthesise(np.ones(1), 1.0, key, index0, np.zeros(0), out)
+    _synthesise(np.ones(1), 1.0, key, index0, np.zeros(0), out, np.zeros(n, dtype=np.bool_))
     return out
 
 
 @njit(cache=True)
 def render_finger(contact, touch_id, vx, vy, force, v_rest, seed, finger, index0, model,
-                   touch, history, y):
+                   touch, history, y, counted):
     """Model output y (n,) of one finger row; see the module docstring. ``touch`` and
     ``history`` (most recent first) come from the previous block; returns the touch id
-    after the block (``history`` is updated in place). A sample of non-finite speed or
-    force (no such sample leaves a trace's checks) is not moving: its output is 0."""
+    after the block (``history`` is updated in place) and how many samples where
+    ``counted`` (bool (n,)) the filter restarted from rest after an output that was not
+    finite (:func:`_synthesise`). A sample of non-finite speed or force (no such sample
+    leaves a trace's checks) is not moving: its output is 0."""
     s0, f0, inv, corners, scale, triangles, lsf, variances, twiddle = model
     n = y.size
     a = 0
+    restarts = 0
     while a < n:
         speed = math.hypot(vx[a], vy[a])  # vx^2 overflows from 1.3e154 mm/s
         b = a + 1  # the run of samples with this touch, speed and force
@@ -328,9 +380,10 @@ def render_finger(contact, touch_id, vx, vy, force, v_rest, seed, finger, index0
         if moving:
             poly, variance = blend_at(s0, f0, inv, corners, scale, triangles, lsf, variances,
                                       twiddle, speed, force[a])
-            _synthesise(poly / poly[0], np.sqrt(variance), noise_key(seed, finger, touch),
-                        index0 + a, history, y[a:b])
+            restarts += _synthesise(poly / poly[0], np.sqrt(variance),
+                                    noise_key(seed, finger, touch), index0 + a, history, y[a:b],
+                                    counted[a:b])
         else:
             y[a:b] = 0.0
         a = b
-    return touch
+    return touch, restarts

@@ -51,7 +51,12 @@ frictex reads ``SampleRate`` (10 kHz, the rate of the recordings, when a file ha
 none), checks the unit elements a file has (speeds in mm/s or m/s, forces in N,
 acceleration in m/s^2: the layer's gain is per m/s^2) and, where a model has
 ``ARcoeff``, that it is the A(z) of its ``ARlsf`` (within 1e-3 of its largest
-coefficient: a file written with the other sign convention differs by about 2 |a_1|).
+coefficient: a file written with the other sign convention differs by about 2 |a_1|),
+and that each vertex's A(z), rebuilt from its ARlsf in float64 as the synthesis rebuilds
+it, has its poles within radius exp(-1 / (MAX_RING_S rate)) and a finite output
+variance: increasing LSFs in (0, pi) make a stable A(z) only in exact arithmetic (order
+20, LSFs 0.02 rad apart from 0.30 rad: a float64 pole at 1.064, the output NaN from
+sample 12,887).
 ARMA models (``numMACoeff`` q > 0; the toolkit's models resampled for its 1 kHz
 renderer are ARMA, p = 19 and q = 17): the renderer runs
 ``output = sum_i -a_i y[n-i] + gain (e[n] + sum_i b_i e[n-i])``, so
@@ -100,7 +105,8 @@ import numpy as np
 
 from frictex.device.numbers import ascii_float
 from frictex.device.safe_text import escape, escape_path, quoted
-from frictex.textures.ar_synthesis import barycentric, blend_at, lsf_to_poly, twiddles
+from frictex.textures.ar_synthesis import (barycentric, blend_at, lsf_to_poly, output_power_gain,
+                                          pole_radius, twiddles)
 from frictex.textures.errors import TextureError
 from frictex.textures.library import UnreadableText, read_utf8
 from frictex.textures.dynamic import DynamicLayer
@@ -115,7 +121,8 @@ FIT_FLOOR = 1e-9  # fit_ar adds this share of the peak: nulls and empty bands st
 MAX_HATT_BYTES = 8 << 20
 MAX_ORDER = 100
 #: Most vertices (``<model>`` elements) read from an AR file: reading one costs about
-#: 0.1 ms (its LSFs checked), 2,000 about 0.2 s.
+#: 0.1 ms, and checking its filter (``_check_filters``, once per distinct vertex) 0.3 ms
+#: at order 10 to 13 ms at order 100: 2,000 distinct order-100 vertices about 26 s.
 MAX_MODELS = 2_000
 #: Most vertices refitted, which costs FIT_COST_MS each (``fit_ar``: 11 ms measured on the
 #: test machine, 27 ms on a slower one, where 1,800 ARMA vertices took 48 s to validate):
@@ -126,6 +133,13 @@ FIT_COST_MS = 30
 #: largest excitation variance read ((m/s^2)^2, after an ARMA model's gain): far above any
 #: recording, and low enough that the synthesis's sums stay finite
 MAX_VARIANCE = 1e100
+#: longest time constant (s) of a vertex filter's poles: its radius at most
+#: exp(-1 / (MAX_RING_S * rate)), 0.9999 at 10 kHz. A recorded texture's resonances die
+#: out in milliseconds (poles at 0.9 to 0.96 at 10 kHz: 1 to 2.5 ms); LSFs packed close
+#: together put A(z)'s float64 poles near or past the circle (order 10, 0.001 rad apart
+#: from 0.3 rad: 1.0026, the synthesis inf from sample 486,329), and a vertex that rings
+#: for a second is none that was recorded
+MAX_RING_S = 1.0
 
 
 # ---------------------------------------------------------------------------
@@ -309,7 +323,8 @@ class TextureModel:
         """The same textures as AR models at ``rate_hz`` (Hz; see the module docstring).
 
         Raises TextureError naming :attr:`source` and the model where a fit has no line
-        spectral frequencies (:func:`poly_to_lsf`)."""
+        spectral frequencies (:func:`poly_to_lsf`) or its filter fails
+        :func:`_check_filters`."""
         if rate_hz == self.rate_hz:
             return self
         self.check_rate(rate_hz)
@@ -328,9 +343,11 @@ class TextureModel:
             k = int(np.flatnonzero(~np.isfinite(variances))[0])
             raise TextureError(f"{self.source}: model {k + 1}: its variance at {rate_hz:g} Hz "
                                f"is not finite ({self.variances[k]:g} at {self.rate_hz:g} Hz)")
-        return TextureModel(self.speeds_mm_s, self.forces_n, self.triangles,
-                            np.array([lsf for lsf, _ in fits]), variances, float(rate_hz),
-                            self.source)
+        lsf = np.array([lsf for lsf, _ in fits])
+        fit = f"its AR({order}) fit at {rate_hz:g} Hz"
+        _check_filters(lsf, variances, rate_hz, lambda k: f"{self.source}: model {k + 1}: {fit}")
+        return TextureModel(self.speeds_mm_s, self.forces_n, self.triangles, lsf, variances,
+                            float(rate_hz), self.source)
 
 
 def fit_ar(psd, from_rate_hz: float, rate_hz: float, order: int, grid: int = 1 << 14,
@@ -501,6 +518,33 @@ def _triangles(root, where: str, m: int) -> np.ndarray:
     return tri.astype(np.intp) - 1
 
 
+def _check_filters(lsf: np.ndarray, variances: np.ndarray, rate: float, name) -> None:
+    """TextureError where a vertex's filter 1 / A(z), A(z) rebuilt from its LSFs (rows of
+    ``lsf``) as the synthesis rebuilds it, has a pole beyond radius exp(-1 / (MAX_RING_S
+    * rate)) (``rate`` in Hz), or an output variance (its ``variances`` entry times the
+    filter's power gain) that is not finite. ``name(k)`` names vertex k in the message.
+    A blend of vertices that pass keeps its LSFs interlaced (a convex combination of
+    increasing rows is increasing); one whose float64 A(z) is still unstable is caught
+    by the synthesis (``ar_synthesis._synthesise``)."""
+    limit = math.exp(-1.0 / (MAX_RING_S * rate))
+    _, first = np.unique(lsf, axis=0, return_index=True)  # a vertex repeated: checked once
+    for k in np.sort(first):
+        a = lsf_to_poly(lsf[k])
+        radius = pole_radius(a)
+        if not radius <= limit:
+            raise TextureError(f"{name(k)} gives A(z) a pole at radius {radius:.6g}, expected at "
+                               f"most {limit:.6g} (a resonance ringing at most {MAX_RING_S:g} s "
+                               f"at {rate:g} Hz): its line spectral frequencies are packed so "
+                               f"close together that the filter is unstable or nearly so")
+        gain = output_power_gain(a)
+        with np.errstate(over="ignore"):
+            output = variances[k] * gain
+        if not (math.isfinite(gain) and math.isfinite(output)):
+            raise TextureError(f"{name(k)} gives an output variance that is not finite (var "
+                               f"{variances[k]:g} through 1 / A(z)); expected a filter whose "
+                               f"output stays finite")
+
+
 def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
     """A :class:`TextureModel` from the text of a toolkit XML file (module docstring).
     Its cost is bounded before any fit: an ARMA file has at most :data:`MAX_FIT_VERTICES`
@@ -529,8 +573,10 @@ def parse_hatt_xml(text: str, where: str = "HaTT model") -> TextureModel:
                                f"speedList/forceList entry ({speeds[k]:g}, {forces[k]:g})")
         lsf.append(w)
         var.append(v)
-    model = TextureModel(speeds, forces, _triangles(root, where, m), np.array(lsf), np.array(var),
-                         rate, where)
+    lsf, var = np.array(lsf), np.array(var)
+    made = f"AR({MAX_ORDER}) fit" if ma_order else "ARlsf"
+    _check_filters(lsf, var, rate, lambda k: f"{where}: model {k + 1}: its {made}")
+    model = TextureModel(speeds, forces, _triangles(root, where, m), lsf, var, rate, where)
     if not np.isfinite(model._tri[2]).all():
         raise TextureError(f"{where}: a <tri> triangle is degenerate (its vertices are in a line)")
     return model

@@ -14,7 +14,8 @@ live and replay, and any split into blocks, give the same texture; the kernels a
 
 mu' = clip(mu_mean + gain * y, mu_min, mu_max); the samples the limits clipped where a
 finger touches inside the layer's region (those that reach the friction target) are
-counted in the state (``clipped``).
+counted in the state (``clipped``), and so are those where the filter's output was not
+finite and it restarted from rest (output 0: mu_mean).
 The model is resampled once to the output rate when the renderer is built.
 """
 
@@ -31,7 +32,8 @@ from frictex.textures.ar_synthesis import render_finger
 @dataclass(frozen=True)
 class ArState:
     """Per finger id: (touch id, last p outputs, most recent first); and how many
-    finger samples so far, touching inside the region, the mu' limits clipped."""
+    finger samples so far, touching inside the region, the mu' limits clipped or the filter
+    restarted after an output that was not finite."""
 
     fingers: dict = field(default_factory=dict)
     clipped: int = 0
@@ -59,12 +61,13 @@ class ArTextureRenderer:
         for i, fid in enumerate(block.ids):
             touch, history = state.fingers.get(fid, (-1, np.zeros(self.order)))
             history = history.copy()  # the state passed in stays as it was
-            touch = render_finger(block.contact[i], block.touch_id[i], block.vx[i], block.vy[i],
-                                   block.force[i], layer.v_rest_mm_s, layer.seed, fid,
-                                   block.index0, self.arrays, touch, history, mu[i])
+            touch, restarts = render_finger(
+                block.contact[i], block.touch_id[i], block.vx[i], block.vy[i], block.force[i],
+                layer.v_rest_mm_s, layer.seed, fid, block.index0, self.arrays, touch, history,
+                mu[i], counted[i])
             fingers[fid] = (int(touch), history)
-            clipped += _limit(mu[i], layer.mu_mean, layer.gain, layer.mu_min, layer.mu_max,
-                              counted[i])
+            clipped += restarts + _limit(mu[i], layer.mu_mean, layer.gain, layer.mu_min,
+                                         layer.mu_max, counted[i])
         return mu, covers, ArState(fingers, clipped)
 
 
