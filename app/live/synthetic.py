@@ -5,11 +5,14 @@ HeadlessWindow``: ``move``, ``press``, ``release``, ``key``) along a human-like 
 (``rendering.input.trace_synth.make_motion("human")``: minimum-jerk strokes with
 pauses) at its own pace on the wall clock, the left button held throughout, then
 presses Q. The demo loop takes these events exactly as it takes a real mouse's, so
-``frictex demo --headless`` runs the demo loop itself, on synthetic input.
+``frictex demo --headless`` runs the demo loop itself, on synthetic input. The stroke
+is made :data:`PIECE_S` at a time, each piece from where the last one ended, so that a
+long ``--duration`` costs no more to start, or in memory, than a short one.
 """
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 
@@ -19,6 +22,9 @@ STROKE_S = 3.0  # how long the hand strokes (s)
 SPEED_MM_S = 60.0  # its typical peak speed (mm/s)
 EVENTS_HZ = 120.0  # pointer positions per second, as a mouse reports them
 LIFT_WAIT_S = 30.0  # longest wait for the lift to reach the output before quitting (s)
+#: the stroke is made this long at a time (s): a few ms to make (a whole 1e6 s stroke
+#: took 21 s and 188 MB before its first position)
+PIECE_S = 60.0
 
 
 class SyntheticStroke(threading.Thread):
@@ -44,9 +50,10 @@ class SyntheticStroke(threading.Thread):
         super().__init__(name="frictex-synthetic-hand", daemon=True)
         self.window = window
         self.to_px = to_px
-        self.motion = make_motion("human", speed_mm_s=speed_mm_s, duration_s=duration_s,
-                                  area_mm=area_mm, seed=seed)
+        self.area_mm, self.speed_mm_s, self.seed = area_mm, speed_mm_s, seed
         self.duration_s = float(duration_s)
+        self.piece = 0  # which PIECE_S of the stroke ``motion`` is
+        self.motion = self._made(0, None)
         self.clock = clock
         self.sleep = sleep
         self.lifted = lifted
@@ -54,8 +61,25 @@ class SyntheticStroke(threading.Thread):
         self.stroked_s = 0.0  # how far along the stroke the last position sent was (s)
         self._quit = threading.Event()
 
+    def _made(self, piece: int, start: tuple[float, float] | None):
+        """Piece ``piece`` of the stroke (its own seed), from ``start`` (x, y mm; None: the
+        motion's own start), :data:`PIECE_S` long or what is left of ``duration_s``."""
+        x0, y0 = (None, None) if start is None else start
+        return make_motion("human", speed_mm_s=self.speed_mm_s,
+                           duration_s=min(PIECE_S, self.duration_s - piece * PIECE_S),
+                           x0_mm=x0, y0_mm=y0, area_mm=self.area_mm, seed=self.seed + piece)
+
+    def _position(self, t: float) -> tuple[float, float]:
+        """Where the stroke is at ``t`` (s from its start; mm), made piece by piece."""
+        piece = min(int(t // PIECE_S), math.ceil(self.duration_s / PIECE_S) - 1)
+        while self.piece < piece:
+            end = self.motion.position(self.motion.duration_s)
+            self.piece += 1
+            self.motion = self._made(self.piece, (float(end[0]), float(end[1])))
+        return self.motion.position(t - self.piece * PIECE_S)
+
     def _move(self, t: float) -> None:
-        x, y = self.motion.position(t)
+        x, y = self._position(t)
         self.window.move(*self.to_px(float(x), float(y)))
         self.positions += 1
         self.stroked_s = t
