@@ -373,3 +373,17 @@ def test_a_texture_file_moved_away_is_said_gone_and_the_scene_kept(demo, tmp_pat
     poll()
     assert loop.error is None and loop.scene is not first
     assert capsys.readouterr().err == f"frictex demo: reloaded {loop.scene.name} (scene.toml changed)\n"
+
+
+def test_a_texture_file_turned_into_a_link_loop_is_said_so(demo, tmp_path, capsys):
+    """Before, a link to itself was said 'gone (moved or deleted)'."""
+    loop, files, poll = demo
+    first = loop.scene
+    path = tmp_path / "scene.toml"
+    path.unlink()
+    path.symlink_to("scene.toml")
+    poll()
+    poll(GONE_S, looks=2)
+    assert loop.error.startswith("scene.toml is a symbolic link that leads to no file (a loop, "
+                                 "or its target gone), keeping the last good scene")
+    assert loop.scene is first

@@ -736,7 +736,8 @@ class DemoLoop:
         the scene again; a good load is applied, a bad one keeps the last good scene and
         shows why. A texture file that is not there (an editor between deleting and
         writing it) is waited for; missing GONE_S on, it is said to be gone (moved or
-        deleted), the last good scene kept, and reloaded once it is back. Each failure,
+        deleted; a symbolic link: leading to no file), the last good scene kept, and
+        reloaded once it is back. Each failure,
         and each reload, is also one line on stderr (:meth:`say`)."""
         if now < self._next_poll:
             return
@@ -748,8 +749,10 @@ class DemoLoop:
                 self._missing_since = now
             if self._missing_since is not None and now - self._missing_since >= GONE_S:
                 self._missing_since = None
-                self.error = (f"{path.name} is gone (moved or deleted), keeping the last good "
-                              f"scene; it reloads when {path.name} is back")
+                gone = ("is a symbolic link that leads to no file (a loop, or its target "
+                        "gone)" if path.is_symlink() else "is gone (moved or deleted)")
+                self.error = (f"{path.name} {gone}, keeping the last good scene; it reloads "
+                              f"when {path.name} is back")
                 self.log("reload-failed", f"{path} is gone")
                 self.say(self.error)
             return
