@@ -152,8 +152,12 @@ def _layer_renderer(layer, mode: str, rate_hz: float):
 
 
 def _layer_mode(layer, render_override: str | None, sho_variant: str) -> str:
-    """The renderer a layer gets: objects are always SHO; periodic layers follow the
+    """The renderer a layer gets: a layer that renders motion or events its kind's
+    (``renderer_kind``: "height", "ar", "clip"); other objects SHO; periodic layers the
     override if any, else their file's choice."""
+    kind = getattr(layer, "renderer_kind", None)
+    if kind is not None:
+        return kind
     if not layer.is_periodic:
         return sho_variant
     mode = render_override or layer.render

@@ -90,3 +90,29 @@ def test_a_colour_height_map_is_refused_from_its_header_before_decoding(tmp_path
     with pytest.raises(TextureError, match="its header says 8-bit RGB pixels; expected 16-bit"):
         heights.read_height_png(tmp_path / "rgb.png", 1.0, budget)
     assert budget.spent == 0
+
+
+def test_the_magnitude_rendering_is_not_warned_of_mu_it_never_asks_for(tmp_path):
+    """The magnitude rendering never goes below mu_rest (0.8): a mu_min of 0.3 under the
+    device's floor (0.5717) was warned of as 'lower values will be clamped', though a
+    replay asked for 0.8 to 0.99 and clamped nothing; the slope rendering still is."""
+    from frictex.textures.format_examples import EXAMPLES
+    text = EXAMPLES["height"].replace("mu_min = 0.6", "mu_min = 0.3")
+    magnitude = write(tmp_path, text.replace('rendering = "slope"', 'rendering = "magnitude"'),
+                      head="")
+    _, problems, warnings = check_scene(magnitude)
+    assert problems == [] and not any("clamped" in w.message for w in warnings)
+    assert load_scene(magnitude).layers[0].mu_range == (0.8, 1.0)
+    _, _, warnings = check_scene(write(tmp_path, text, head=""))
+    assert any("lower values will be clamped" in w.message for w in warnings)
+
+
+def test_a_height_layer_is_said_to_run_its_own_renderer(tmp_path):
+    """summary.json's layers named SHO's variant for a height layer, which the slope
+    renderer plays."""
+    import json
+    from frictex.app.commands.cli import main
+    out = tmp_path / "o"
+    assert main(["replay", "height-bump", "swipe-40mms-50hz", "--out", str(out), "--quiet"]) == 0
+    layers = json.loads((out / "summary.json").read_text())["scene"]["layers"]
+    assert [(layer["type"], layer["renderer"]) for layer in layers] == [("height", "height")]

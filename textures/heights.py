@@ -477,7 +477,8 @@ class HeightLayer(DynamicLayer):
 
     @property
     def mu_range(self) -> tuple[float, float]:
-        return self.mu_min, self.mu_max
+        """The mu' it may ask for: the magnitude rendering never goes below mu_rest."""
+        return (self.mu_rest if self.rendering == "magnitude" else self.mu_min), self.mu_max
 
     @property
     def rest_mu(self) -> float:
