@@ -102,3 +102,18 @@ def test_bundled_trace_is_what_its_script_makes():
     x = {f: trace.x_mm[trace.finger == f] for f in (0, 1)}
     assert x[0][0] < x[1][0] and x[0][-1] > x[1][-1]  # the fingers swap sides: they cross
     assert_allclose(trace.t_s[trace.finger == 1][0], 0.2)
+
+
+def test_the_trace_script_takes_help_and_an_output(tmp_path, capsys):
+    """Before, any argument (--help included) rewrote the bundled trace inside the
+    installed package."""
+    from frictex.rendering.input.two_finger_trace import main as write_main
+    from frictex.textures.library import LIBRARY_DIR
+    bundled = (LIBRARY_DIR / "traces" / "two-fingers-crossing-50hz.csv").stat().st_mtime_ns
+    with pytest.raises(SystemExit) as done:
+        write_main(["--help"])
+    assert done.value.code == 0 and "--out" in capsys.readouterr().out
+    write_main(["-o", str(tmp_path / "t.csv")])
+    assert_same_trace_text(format_trace(two_finger_trace(), description()),
+                           (tmp_path / "t.csv").read_text())
+    assert (LIBRARY_DIR / "traces" / "two-fingers-crossing-50hz.csv").stat().st_mtime_ns == bundled

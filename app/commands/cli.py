@@ -46,7 +46,7 @@ INPUT_ERRNOS = frozenset((errno.ENOENT, errno.ENOTDIR, errno.EISDIR, errno.EACCE
                           errno.ENAMETOOLONG, errno.ELOOP))
 #: module of an optional extra -> (extra, what needs it)
 EXTRAS = {"moderngl": ("gui", "OpenGL drawing"), "glfw": ("gui", "the demo window"),
-          "matplotlib": ("report", "plots"), "dask": ("cluster", "a Dask cluster"),
+          "matplotlib": ("report", "plots and previews"), "dask": ("cluster", "a Dask cluster"),
           "distributed": ("cluster", "a Dask cluster"),
           "sounddevice": ("audio", "the audio output")}
 #: report this, with the traceback above it, for anything frictex did not mean to raise

@@ -42,7 +42,19 @@ def description() -> str:
             "(python -m frictex.rendering.input.two_finger_trace)")
 
 
-if __name__ == "__main__":
-    out = LIBRARY_DIR / "traces" / "two-fingers-crossing-50hz.csv"
+def main(argv: list[str] | None = None) -> None:
+    """Write the trace to ``-o`` (default: the bundled file)."""
+    import argparse
+    bundled = LIBRARY_DIR / "traces" / "two-fingers-crossing-50hz.csv"
+    parser = argparse.ArgumentParser(prog="python -m frictex.rendering.input.two_finger_trace",
+                                     description="write the two-finger replay trace "
+                                                 "(deterministic)")
+    parser.add_argument("-o", "--out", default=str(bundled),
+                        help="the file to write (default: the bundled %(default)s)")
+    out = parser.parse_args(argv).out
     write_trace(out, two_finger_trace(), comment=description())
     print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
