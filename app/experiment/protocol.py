@@ -22,8 +22,10 @@ the tables below.
     layer = "lines"             # the layer varied; default: the first that has the parameter
     reference = 5.0             # required with `vary`: the standard stimulus (units of `vary`;
                                 #   magnitude rates it as one of the stimuli)
-    levels = [5.3, 5.6, 6.2]    # comparisons (2afc, same-different, magnitude); above the
-                                #   reference for 2afc
+    levels = [5.3, 5.6, 6.2]    # comparisons (2afc, same-different, magnitude), distinct,
+                                #   none the reference; above it for 2afc (which asks for
+                                #   the larger), either side for same-different; each
+                                #   named apart from the others to 10 significant digits
     renderers = ["sho", "sht"]  # render the varied layer each of these ways: magnitude only,
                                 #   crossed with the levels (seed 003's grating comparison)
 
@@ -435,18 +437,56 @@ def _levels_fit(c: _Check, method: str, levels: tuple[float, ...]) -> bool:
     return False
 
 
+#: why a level may not be the reference, by method (2afc's levels are above it)
+LEVEL_IS_REFERENCE = {
+    "same-different": "the reference itself: its 'different' pairs would be the same",
+    "magnitude": "the reference, which is rated as one of the stimuli: a level given twice",
+}
+
+
+def _level_problem(method: str, level: float, reference: float) -> str | None:
+    """Why ``level`` cannot be compared with ``reference`` by ``method``, or None: 2afc
+    asks which of two is larger, so its levels lie above the reference; same-different
+    (its d' per level is symmetric, ``same_different``) and magnitude take either side."""
+    if method == "2afc" and not level > reference:
+        return (f"{level:g} is not above the reference {reference:g}: 2afc asks which of the "
+                f"two is larger")
+    if level == reference and method in LEVEL_IS_REFERENCE:
+        return f"{level:g} is {LEVEL_IS_REFERENCE[method]}"
+    return None
+
+
+def _names_fit(c: _Check, vary: str, reference: float, levels: tuple[float, ...]) -> bool:
+    """Whether the reference and every level have stimulus names of their own
+    (``stimuli.name_of`` keeps 10 significant digits: 0.3 and 0.3000000000001 would be
+    one stimulus, played the same)."""
+    from frictex.app.experiment.stimuli import name_of
+    seen = {name_of(vary, reference, None): "the reference"}
+    ok = True
+    for i, level in enumerate(levels):
+        name = name_of(vary, level, None)
+        if level != reference and name in seen:  # the reference itself: _level_problem
+            c.report(("stimuli", "levels", i), f"{level!r} is named {name}, as {seen[name]} "
+                                               f"is: stimulus names keep 10 significant "
+                                               f"digits; give values apart in those")
+            ok = False
+        seen.setdefault(name, f"level {level!r}")
+    return ok
+
+
 def _values_fit(c: _Check, base, vary: str, layer: int, method: str, reference: float,
                 levels: tuple[float, ...]) -> bool:
-    """Whether every level is above the reference where the method needs it, and the
-    reference and every level can be set on the varied layer (all problems reported)."""
+    """Whether every level suits the method (:func:`_level_problem`) and has a name of
+    its own (:func:`_names_fit`), and the reference and every level can be set on the
+    varied layer (all problems reported)."""
     from frictex.app.experiment import stimuli as S
     ok = True
     for i, level in enumerate(levels):
-        if method in ("2afc", "same-different") and not level > reference:
-            c.report(("stimuli", "levels", i),
-                     f"{level:g} is not above the reference {reference:g}: "
-                     f"{'2afc asks which of the two is larger' if method == '2afc' else 'each level is compared with the reference'}")
+        problem = _level_problem(method, level, reference)
+        if problem is not None:
+            c.report(("stimuli", "levels", i), problem)
             ok = False
+    ok = _names_fit(c, vary, reference, levels) and ok
     for i, value in [(None, reference), *enumerate(levels)]:
         problem = S.value_problem(base, vary, layer, value)
         if problem:
@@ -724,6 +764,23 @@ def _staircase_fits(c: _Check, stimuli: Stimuli, staircase: Staircase) -> bool:
         else:
             c.report(("staircase", key), f"a difference of {difference:g}: {problem}")
         return False
+    return _differences_named(c, stimuli, sc)
+
+
+def _differences_named(c: _Check, stimuli: Stimuli, sc: Staircase) -> bool:
+    """Whether the staircase's ``start`` and ``min`` give comparisons named apart from
+    the reference (``stimuli.name_of`` keeps 10 significant digits); without ``min``,
+    :func:`unresolved_floor` warns of the floor the steps reach."""
+    from frictex.app.experiment.stimuli import name_of
+    reference = name_of(stimuli.vary, stimuli.reference, None)
+    for key, difference in (("start", sc.start), ("min", sc.min)):
+        if difference is not None and name_of(stimuli.vary, stimuli.reference + difference,
+                                              None) == reference:
+            c.report(("staircase", key), f"a difference of {difference:g}: the comparison is "
+                                         f"named {reference}, as the reference is (stimulus "
+                                         f"names keep 10 significant digits); give a larger "
+                                         f"{key}")
+            return False
     return True
 
 

@@ -28,6 +28,14 @@ field of every problem.
 `>`. Scenes are texture files (`textures/FORMAT.md`): a bundled name or a path relative
 to the protocol file.
 
+`levels` are distinct and none is the reference (magnitude rates the reference as a
+stimulus of its own; a same-different pair of the two would be "same"). 2afc asks which
+of two is larger, so its levels lie above the reference; same-different's may lie on
+either side (d' per level does not depend on the sign of the difference). Stimuli are
+named by their value to 10 significant digits (`depth=0.3`), so levels (and a
+staircase's `start` and `min` added to the reference) must differ from the reference
+and each other within those digits.
+
 A session folder (`--out DIR`) keeps a copy of the protocol (`DIR/protocol.toml`) and of
 the scenes it names by a path in its folder or below, under the same relative names
 (with the files they name), so `frictex experiment DIR/protocol.toml --out DIR --resume`
