@@ -25,7 +25,8 @@ from frictex.device.errors import InputError
 PAUSED_EXIT = 130
 RECORD_HELP = ("per trial, 'all': the scene, the touch trace and their replay (what was "
                "sent to the device); 'traces': scene and trace; 'results': the results "
-               "table only (default all)")
+               "table only (default all; kept in session.json: --resume goes on with the "
+               "session's own)")
 
 
 def session_seed(text: str) -> int:
@@ -67,7 +68,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="the session's seed, 0 to 2^63 - 1: the trial order and a "
                              "simulated participant's own seed (default: the protocol's, "
                              "else drawn; recorded)")
-    parser.add_argument("--record", choices=("all", "traces", "results"), default="all",
+    parser.add_argument("--record", choices=("all", "traces", "results"), default=None,
                         help=RECORD_HELP)
     parser.add_argument("--check", action="store_true",
                         help="only check the protocol file and list its trials' count")

@@ -86,7 +86,7 @@ class _Stage:
 def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str | Path, *,
                 seed: int | None = None, participant: str = "", participant_id: str | None = None,
                 resume: bool = False,
-                record: str = "all", progress: Callable[[Trial, dict], None] | None = None,
+                record: str | None = None, progress: Callable[[Trial, dict], None] | None = None,
                 between_trials: Callable[[], None] | None = None) -> S.Session:
     """Run (or with ``resume`` go on with) the session of ``protocol`` in ``out_dir``.
 
@@ -98,19 +98,21 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
     ``participant``: the participant spec, recorded; ``participant_id``: the person's
     code (``session.participant_id``), recorded (with ``resume``, refused unless the
     session's). ``record``: ``all`` (per trial: scene, trace and their replay), ``traces`` (scene and trace) or
-    ``results`` (the results table only). ``progress(trial, row)`` is called after each
+    ``results`` (the results table only); recorded in session.json; None: ``all`` for a
+    new session, the session's own with ``resume`` (a different one is refused). ``progress(trial, row)`` is called after each
     trial is recorded; ``between_trials()`` before each trial after the first of this run
     (where a command stops the session: the trials before are recorded, none is begun).
     Returns the session (its ``rows``: every trial answered).
     With ``resume`` on a complete session, nothing runs and session.json is left as it
     is (the session's ``complete_before`` says so).
     """
-    if record not in S.RECORDS:
+    if record is not None and record not in S.RECORDS:
         raise InputError(f"record {record!r}: expected one of {', '.join(S.RECORDS)}")
     out_dir = Path(out_dir)
     settle = getattr(presenter, "settle_seed", None)
     if resume:
-        session = S.resume(out_dir, protocol, participant or None, seed, participant_id)
+        session = S.resume(out_dir, protocol, participant or None, seed, participant_id,
+                           record)
         scheduler = Scheduler(protocol, session.seed)
         if settle is not None:  # a session.json from before participant_seed: 0, as then
             settle(session.seed, session.info.get("participant_seed", LEGACY_PARTICIPANT_SEED))
@@ -119,7 +121,8 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
             seed = protocol.seed if protocol.seed is not None else secrets.randbits(63)
         scheduler = Scheduler(protocol, seed)  # a bad seed refused before anything is written
         session = S.create(out_dir, protocol, seed, participant, participant_id,
-                           None if settle is None else settle(seed))
+                           None if settle is None else settle(seed),
+                           record or S.DEFAULT_RECORD)
     state = scheduler.replay((row["stimuli"].split(S.SEPARATOR), row["response"])
                              for row in session.rows)
     if resume and scheduler.finished(state):  # no run, so no empty part in session.json
@@ -130,7 +133,7 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
     S.begin_part(session, first)
     try:
         presenter.begin(protocol)
-        _run_trials(scheduler, state, stage, presenter, session, record, progress,
+        _run_trials(scheduler, state, stage, presenter, session, session.record, progress,
                     between_trials)
     except BaseException as exc:
         S.end_part(session, first, False, getattr(exc, "why", None) or type(exc).__name__)

@@ -7,7 +7,9 @@
                               (the seed a simulated participant answered with, else
                               null), participant_id (the person's code, or null),
                               versions (frictex, python, numpy, scipy, platform),
-                              started_utc, ended_utc (null until the last trial is
+                              record (what is kept per trial: all, traces or
+                              results; ``--resume`` goes on with it), started_utc,
+                              ended_utc (null until the last trial is
                               answered), parts (one per run of the session: its start,
                               end and trials; a part without an end was killed), and
                               the design the analysis needs (its vary_unit: the
@@ -70,6 +72,9 @@ COLUMNS_BEFORE_CONTACT = RESULT_COLUMNS[:-2]
 #: the separator between the stimuli of a trial in the ``stimuli`` column
 SEPARATOR = "|"
 RECORDS = ("all", "traces", "results")
+#: what a session keeps per trial unless told (and what one whose session.json does not
+#: record it, written before ``record`` was, kept)
+DEFAULT_RECORD = "all"
 
 
 def _sha256(path: Path) -> str:
@@ -197,6 +202,11 @@ class Session:
         return int(self.info["seed"])
 
     @property
+    def record(self) -> str:
+        """What is kept per trial (one of :data:`RECORDS`)."""
+        return self.info.get("record", DEFAULT_RECORD)
+
+    @property
     def results(self) -> Path:
         return self.folder / "results.csv"
 
@@ -304,10 +314,11 @@ def end_part(session: Session, first_trial: int, complete: bool, why: str | None
 
 
 def create(folder: Path, protocol, seed: int, participant: str, pid: str | None = None,
-           participant_seed: int | None = None) -> Session:
+           participant_seed: int | None = None, record: str = DEFAULT_RECORD) -> Session:
     """A new session in ``folder`` (made if needed; refused if it holds a session);
     ``pid``: the participant's code (:func:`participant_id`), or None;
-    ``participant_seed``: the seed a simulated participant answers with, or None."""
+    ``participant_seed``: the seed a simulated participant answers with, or None;
+    ``record``: what is kept per trial (one of :data:`RECORDS`)."""
     folder = Path(folder)
     if (folder / "results.csv").exists() or (folder / "session.json").exists():
         raise InputError(f"{folder} already holds a session; continue it with --resume, or "
@@ -321,7 +332,7 @@ def create(folder: Path, protocol, seed: int, participant: str, pid: str | None 
             "protocol_sha256": hashlib.sha256(protocol.text.encode("utf-8")).hexdigest(),
             "scene_sha256": scene_hashes(protocol),
             "seed": int(seed), "participant": participant,
-            "participant_seed": participant_seed, "participant_id": pid,
+            "participant_seed": participant_seed, "participant_id": pid, "record": record,
             **versions(), "started_utc": _now(), "ended_utc": None, "parts": [],
             "design": design(protocol)}
     _write_synced(folder / "protocol.toml", protocol.text)
@@ -450,10 +461,12 @@ def _close_killed_part(info: dict, answered: int) -> None:
 
 
 def resume(folder: Path, protocol, participant: str | None, seed: int | None = None,
-           pid: str | None = None) -> Session:
+           pid: str | None = None, record: str | None = None) -> Session:
     """The session in ``folder``, ready to go on: the trial files of a trial without its
     row removed, a cut-short row dropped. InputError if ``protocol`` is not the one the
-    session started with, or ``participant``, ``seed`` or ``pid`` (if given) not its own."""
+    session started with, or ``participant``, ``seed``, ``pid`` or ``record`` (if given)
+    not its own (a session keeps what it records per trial, so that its trial files do
+    not stop or start midway)."""
     folder = Path(folder)
     info = read_info(folder)
     if seed is not None and seed != info["seed"]:
@@ -476,6 +489,11 @@ def resume(folder: Path, protocol, participant: str | None, seed: int | None = N
         started = info.get("participant_id")
         raise InputError(f"--participant-id {pid}: {folder} was started "
                          + (f"with {started!r}" if started else "without a participant id"))
+    if record is not None and "record" in info and record != info["record"]:
+        raise InputError(f"--record {record}: {folder} was started with --record "
+                         f"{info['record']}, and a resumed session keeps it; leave --record "
+                         f"out")
+    info.setdefault("record", record or DEFAULT_RECORD)
     columns, rows = read_table(folder, repair=True)
     _close_killed_part(info, len(rows))
     trials = folder / "trials"
