@@ -264,7 +264,8 @@ def test_weber_fraction_is_the_75_percent_ratio():
 @pytest.mark.parametrize("spec, words", [
     ("weber=0", r"weber=0 is outside \[0.001, 10\]$"), ("weber=x", "not a number"),
     ("lapse=1", r"lapse=1 is outside \[0, 1\)$"), ("lapse=-0.1", r"is outside \[0, 1\)$"),
-    ("speed=3", "key of"), ("weber=nan", "outside"),
+    ("speed=3", "key of"), ("weber=nan", r"weber='nan' is not a number$"),
+    ("lapse=NaN", r"lapse='NaN' is not a number$"),
     ("weber=0.1,weber=5,seed=3", "weber is given twice; give each key once$")])
 def test_bad_participant_specs(spec, words):
     with pytest.raises(InputError, match=words):

@@ -377,6 +377,8 @@ def parse_spec(text: str) -> SimulatedParticipant:
         low, high = SPEC_KEYS[key]
         try:
             value = int(raw) if key == "seed" else float(raw)
+            if math.isnan(value):  # float() reads "nan", which no range check refuses
+                raise ValueError(raw)
         except ValueError:
             raise InputError(f"simulated participant: {key}={raw!r} is not a number") from None
         open_above = key in OPEN_ABOVE
