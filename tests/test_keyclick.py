@@ -93,3 +93,25 @@ def test_any_split_gives_the_same_states(cuts):
         flips.append(c)
     assert_array_equal(np.concatenate(parts), whole)
     assert_array_equal(np.concatenate(flips), clicks)
+
+
+def _press_clicks(over: int) -> int:
+    """Clicks of a 100 Hz press on the bundled ring's button (0.6 N) with ``over`` touch
+    samples at 0.85 N, past its 0.8 N click, in the middle."""
+    import frictex
+    force = np.array([0.1] * 5 + [0.6] * 20 + [0.85] * over + [0.6] * (20 - over + 1)
+                     + [0.1] * 5)
+    n = force.size
+    event = np.full(n, frictex.MOVE)
+    event[0], event[-1] = frictex.DOWN, frictex.UP
+    trace = frictex.make_trace(np.arange(n) / 100.0, np.zeros(n, int), np.full(n, 70.0),
+                               np.full(n, 15.0), force, event)
+    return frictex.replay("keyclick-ring", trace).summary.forces["0"]["clicks"]
+
+
+def test_one_noisy_touch_sample_does_not_click_the_bundled_button():
+    """A touch sample's force holds until the next (10 ms at 100 Hz), which met the
+    bundled scenes' dwell of 10 ms: one 0.85 N sample clicked (the push reversed) with the
+    press going on at 0.6 N. Their dwell is now 15 ms: a second sample confirms."""
+    assert _press_clicks(1) == 0
+    assert _press_clicks(2) == 1
