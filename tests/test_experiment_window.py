@@ -13,8 +13,9 @@ import pytest
 
 from frictex.app.experiment.protocol import load_protocol
 from frictex.app.experiment.runner import run_session
-from frictex.app.experiment.window_presenter import (SessionPaused, WindowPresenter, how_to_answer,
-                                                     response_keys, run_in_window)
+from frictex.app.experiment.window_presenter import (SessionPaused, WindowPresenter, edit_rating,
+                                                     how_to_answer, rating_problem,
+                                                     response_keys, run_in_window, typed_scale)
 from frictex.app.live.haptic_setup import open_haptic
 from frictex.app.commands.cli import main as cli_main
 from frictex.app.experiment.session import contact_s
@@ -142,19 +143,23 @@ class Hand:
             drawn = loop.buttons  # as drawn now (two screens may have the same buttons)
             self.layouts.append((screen.title, list(loop.compositor.text_boxes),
                                  loop.compositor.size))
-            values = [v for v, _ in screen.buttons]
-            if values == ["1", "2"]:
-                self.questions += 1
-                if self.questions == self.escape_at:
-                    self.window.key("escape")
-                elif not self.answers:  # the first answer by key, the others by button
-                    self.answers.append("1")
-                    self.window.key("1")
-                else:
-                    self.answers.append("2")
-                    self.click(drawn[1].box)
-            else:  # a message's first button: Start, Continue, Reconnect
-                self.click(drawn[0].box)
+            self.answer(screen, drawn)
+
+    def answer(self, screen, drawn):
+        """Answer a message screen (drawn, its buttons ``drawn``)."""
+        values = [v for v, _ in screen.buttons]
+        if values == ["1", "2"]:
+            self.questions += 1
+            if self.questions == self.escape_at:
+                self.window.key("escape")
+            elif not self.answers:  # the first answer by key, the others by button
+                self.answers.append("1")
+                self.window.key("1")
+            else:
+                self.answers.append("2")
+                self.click(drawn[1].box)
+        else:  # a message's first button: Start, Continue, Reconnect
+            self.click(drawn[0].box)
 
     def move_until_it_ends(self, loop, screen, y: float) -> None:
         """Move the mouse back and forth across the scene at height ``y`` (px) until
@@ -209,12 +214,12 @@ class Frames:
 
 
 def run_headless(tmp_path, lose_at=None, escape_at=None, resume=False, presentation=FREE,
-                 frames=None, size=None, hand_class=Hand):
+                 frames=None, size=None, hand_class=Hand, protocol_text=PROTOCOL):
     """The tiny protocol's session in the headless window with a :class:`Hand`:
     (session, hand, session folder); ``frames`` (a :class:`Frames`) keeps the frames;
     ``size``: the window's (px), default the display's own."""
     protocol_file = tmp_path / "tiny.toml"
-    protocol_file.write_text(PROTOCOL.format(**presentation))
+    protocol_file.write_text(protocol_text.format(**presentation))
     protocol = load_protocol(protocol_file)
     scene = load_scene(resolve_scene("grating-5mm"))
     try:
@@ -429,3 +434,87 @@ def test_results_give_each_interval_its_contact_time_and_old_tables_still_read(t
     session = S.Session(old, {}, [], S.read_table(old)[0])
     session.append(row)  # a resumed old table goes on in its own columns
     assert S.read_rows(old)[0]["response"] == "1" and "contact_1_s" not in S.read_rows(old)[0]
+
+
+MAGNITUDE = """format = 1
+name = "wide-scale"
+method = "magnitude"
+repetitions = 1
+
+[stimuli]
+scene = "grating-5mm"
+vary = "period_mm"
+reference = 5.0
+levels = [6.6]
+
+[scale]
+min = 0
+max = 100
+
+[presentation]
+exploration = "{exploration}"
+exploration_s = {seconds}
+{show_scene}"""
+
+
+def test_which_scales_are_typed_and_how_a_rating_is_edited():
+    assert typed_scale(("1", "2")) is None and typed_scale(("same", "different")) is None
+    assert typed_scale(tuple(str(i) for i in range(1, 11))) is None  # a key per value
+    assert typed_scale(tuple(str(i) for i in range(0, 101))) == (0, 100)
+    assert typed_scale(tuple(str(i) for i in range(-5, 5))) == (-5, 4)
+    text = ""
+    for key in ("5", "6", "7", "7", "backspace", "left", "minus", "x", "9"):
+        text = edit_rating(text, key, (0, 100))
+    assert text == "59"  # three digits at most, no sign on a scale from 0
+    assert edit_rating("12", "minus", (-1000, 1000)) == "-12"
+    assert edit_rating("-12", "minus", (-1000, 1000)) == "12"
+    assert rating_problem("777", (0, 100)) == ("777 is not on the scale: type a number from "
+                                                "0 to 100.")
+    assert rating_problem("", (0, 100)).startswith("Type a number")
+    assert rating_problem("-", (-5, 4)).startswith("Type a number")
+    assert rating_problem("100", (0, 100)) is None and rating_problem("-5", (-5, 4)) is None
+
+
+class TypingHand(Hand):
+    """Types each rating: the first as two digits confirmed with the Confirm button once
+    the screen shows it, the second in one burst of keys (a value off the scale, Enter,
+    corrected, Enter) that the presenter must take whole."""
+
+    typed = ()
+
+    def answer(self, screen, drawn):
+        if screen.buttons[0][0] != "confirm":
+            return super().answer(screen, drawn)
+        if screen.progress in self.typed:  # the same question, updated as typed
+            return
+        self.typed += (screen.progress,)
+        loop = self.presenter.loop
+        if len(self.typed) == 1:
+            self.window.key("5")
+            self.window.key("6")
+            shown = wait_for("the rating on the screen", lambda: loop.screen if (
+                "Your rating: 56" in loop.screen.lines and loop._buttons_of is loop.screen
+                and loop.buttons) else None)
+            self.layouts.append(("typed", list(loop.compositor.text_boxes), loop.compositor.size))
+            self.answers.append("56")
+            self.click(next(b for b in loop.buttons if b.value == "confirm").box)
+            assert shown.buttons[0] == ("confirm", "Confirm (Enter)")
+        else:
+            for key in ("7", "7", "7", "7", "enter", "backspace", "backspace", "backspace",
+                        "1", "0", "0", "enter"):
+                self.window.key(key)
+            self.answers.append("100")
+
+
+def test_a_wide_scale_is_answered_by_typing_the_rating(tmp_path):
+    """0-100 (101 values: their buttons did not fit the window, and the keys 0-9 gave 5 for
+    "5" then "6"): the rating is typed, shown as typed and confirmed; every value is
+    reachable, and one off the scale is not taken."""
+    session, hand, out = run_headless(tmp_path, hand_class=TypingHand, protocol_text=MAGNITUDE)
+    rows = read_csv(out / "results.csv")
+    assert [r["response"] for r in rows] == hand.answers == ["56", "100"]
+    instructions = hand.layouts[0]
+    assert instructions[0] == "wide-scale"
+    for title, boxes, (w, h) in hand.layouts:
+        assert not overlapping(boxes), title
+        assert all(y + bh <= h + 1 for _, y, _, bh in boxes), title

@@ -55,7 +55,9 @@ the tables below.
                                 #   moved by the largest step) must be a valid stimulus,
                                 #   above 0 (a linear scale needs min to stop short of 0)
 
-    [scale]                     # method = "magnitude" only: the rating scale (integers)
+    [scale]                     # method = "magnitude" only: the rating scale (integers;
+                                #   at the window typed, then Enter, unless each value
+                                #   has a key of its own, as 1-10 has)
     min = 1
     max = 10
 

@@ -18,10 +18,14 @@ opens the demo's window on the live haptic pipeline (the same haptic side as
   button. Side by side, the half not explored in this interval is dimmed. An interval
   nobody touched is shown again (a trial records what was felt);
 - then the question, answered by a key or a click on a button: 1 / 2 for two
-  intervals, S / D for same-different, the digits for a scale (0 for 10 on a 1-10
-  scale; values without a key by their button only). The response time ``rt_s`` is
-  measured from the end of the last interval to the answer (s, the haptic clock),
-  not from the start of the trial;
+  intervals, S / D for same-different, the digits for a scale of one key per value
+  (0 for 10 on a 1-10 scale). A wider scale (0-10, 0-100, one below 0: a value
+  without a key of its own, as magnitude estimation uses) is answered by typing the
+  rating (:func:`typed_scale`): the digits, Backspace or the left arrow (or the
+  Delete button) to correct, minus (or the sign button) below 0, shown on the screen
+  as typed, Enter (or Confirm) to answer; a value off the scale is said so and not
+  taken. The response time ``rt_s`` is measured from the end of the last interval to
+  the answer (s, the haptic clock), not from the start of the trial;
 - per interval the touches the window sent to the haptic side (its trace, times from
   the interval's start), handed back as ``Presentation.traces`` for the session to
   write and replay (``session.write_interval``); the live output itself (what was
@@ -67,6 +71,12 @@ CONTINUE = "continue"
 NEXT = "next"
 RECONNECT = "reconnect"
 END = "end"
+CONFIRM = "confirm"
+DELETE = "delete"
+SIGN = "sign"
+#: keys that edit a typed rating: the last digit removed, the sign changed
+DELETE_KEYS = ("backspace", "left")
+SIGN_KEYS = ("minus",)
 
 
 class SessionPaused(RunFailed):
@@ -117,6 +127,53 @@ def how_to_answer(responses: Sequence[str], keys: dict[str, str]) -> str:
     return f"Answer with a key ({listed}){rest} or by clicking a button."
 
 
+def typed_scale(responses: Sequence[str]) -> tuple[int, int] | None:
+    """(min, max) of a rating scale answered by typing: one whose values (``responses``,
+    integers in order) are not each a key of their own (:func:`response_keys`), so that
+    a key per value or a button per value cannot reach them all (0-100 has 101); None
+    for other responses."""
+    try:
+        values = [int(r) for r in responses]
+    except ValueError:
+        return None
+    if len(response_keys(responses)) == len(responses):
+        return None
+    return values[0], values[-1]
+
+
+def how_to_type(scale: tuple[int, int]) -> str:
+    """One sentence telling the participant how to type a rating on ``scale``."""
+    low, high = scale
+    sign = " (minus, or the sign button, for a value below 0)" if low < 0 else ""
+    return (f"Type your rating, a whole number from {low} to {high}, with the number keys"
+            f"{sign}; Backspace or the left arrow removes the last digit; Enter (or Confirm) "
+            f"answers.")
+
+
+def edit_rating(text: str, key: str, scale: tuple[int, int]) -> str:
+    """The typed rating ``text`` after ``key`` (a digit, one of :data:`DELETE_KEYS` or
+    :data:`SIGN_KEYS`; others leave it): digits beyond the scale's widest value are
+    not taken, a sign only on a scale that goes below 0."""
+    digits = text.lstrip("-")
+    if key in DELETE_KEYS:
+        return text[:-1]
+    if key in SIGN_KEYS:
+        return text if scale[0] >= 0 else (digits if text.startswith("-") else "-" + digits)
+    if len(key) == 1 and key.isdigit() and len(digits) < max(len(str(abs(v))) for v in scale):
+        return text + key
+    return text
+
+
+def rating_problem(text: str, scale: tuple[int, int]) -> str | None:
+    """Why the typed ``text`` is no rating on ``scale``, or None."""
+    low, high = scale
+    if not text.lstrip("-"):
+        return f"Type a number from {low} to {high} first."
+    if not low <= int(text) <= high:
+        return f"{int(text)} is not on the scale: type a number from {low} to {high}."
+    return None
+
+
 def trace_of(samples: list[tuple], t0_s: float) -> Trace:
     """The touches ``samples`` ((t_s, x_mm, y_mm, force_n, event) on the haptic clock,
     finger 0) as a trace with times from ``t0_s`` (s)."""
@@ -142,6 +199,7 @@ class WindowPresenter:
         self.main_total: int | None = None
         self.keys: dict[str, str] = {}
         self.responses: tuple[str, ...] = ()
+        self.typed: tuple[int, int] | None = None  # the scale typed in (typed_scale)
         self.trial: Trial | None = None
 
     def attach(self, loop) -> None:
@@ -158,6 +216,7 @@ class WindowPresenter:
         self.main_total = len(scheduler.plan) if scheduler.plan is not None else None
         self.responses = tuple(scheduler.responses)
         self.keys = response_keys(self.responses)
+        self.typed = typed_scale(self.responses)
         free = protocol.presentation.exploration == "free"
         explore = (f"Explore each texture for up to {protocol.presentation.exploration_s:g} s "
                    "with the left button held (your finger), then press Enter or click Next."
@@ -168,7 +227,7 @@ class WindowPresenter:
         practice = (f"The first {first} practice (marked PRACTICE), not analysed."
                     if self.practice else "")
         lines = tuple(p for p in (protocol.description, protocol.question, explore,
-                                  how_to_answer(self.responses, self.keys), practice,
+                                  self._how_to_answer(), practice,
                                   "Escape ends the session; it can be continued later.") if p)
         self._message(protocol.name, lines, ((CONTINUE, "Start (Enter)"),), "instructions")
 
@@ -201,20 +260,46 @@ class WindowPresenter:
         for i, item in enumerate(shown, start=1):
             traces.append(self._interval(trial, i, len(shown), item))
         ended = self.loop.haptic.now()
-        question = self.protocol.question
+        value, t = self._typed(trial) if self.typed else self._chosen(trial)
+        self.loop.log("response", f"trial {trial.number}: {value}")
+        return Presentation(value, max(t - ended, 0.0), tuple(traces))
+
+    def _how_to_answer(self) -> str:
+        return how_to_type(self.typed) if self.typed else how_to_answer(self.responses, self.keys)
+
+    def _chosen(self, trial: Trial) -> tuple[str, float]:
+        """The response chosen by its key or button, and when (s, haptic clock)."""
         buttons = tuple((r, button_label(r, self.keys)) for r in self.responses)
         self._show(ExperimentView("message", self._progress(trial), (
-            question, how_to_answer(self.responses, self.keys)), buttons,
+            self.protocol.question, self._how_to_answer()), buttons,
             self._progress(trial, "answer")))
         while True:
             kind, value, t = self._event()
             if kind == "button" and value in self.responses:
-                break
+                return value, t
             if kind == "key" and value in self.keys:
-                value = self.keys[value]
-                break
-        self.loop.log("response", f"trial {trial.number}: {value}")
-        return Presentation(value, max(t - ended, 0.0), tuple(traces))
+                return self.keys[value], t
+
+    def _typed(self, trial: Trial) -> tuple[str, float]:
+        """The rating typed (:func:`edit_rating`) and confirmed with Enter or Confirm,
+        and when (s, haptic clock); the screen shows it as typed."""
+        buttons = ((CONFIRM, "Confirm (Enter)"), (DELETE, "Delete (Backspace)"))
+        buttons += ((SIGN, "- / +"),) if self.typed[0] < 0 else ()
+        by_button = {DELETE: DELETE_KEYS[0], SIGN: SIGN_KEYS[0]}
+        text, note, show = "", "", self._show  # later screens keep the keys typed meanwhile
+        while True:
+            show(ExperimentView("message", self._progress(trial), tuple(p for p in (
+                self.protocol.question, self._how_to_answer(), f"Your rating: {text or '_'}",
+                note) if p), buttons, self._progress(trial, "answer")))
+            show = self._replace
+            kind, value, t = self._event()
+            if (kind == "button" and value == CONFIRM) or (kind == "key" and value in NEXT_KEYS):
+                note = rating_problem(text, self.typed) or ""
+                if not note:
+                    return str(int(text)), t
+                continue
+            key = by_button.get(value, "") if kind == "button" else value
+            text, note = edit_rating(text, key, self.typed), ""
 
     def _interval(self, trial: Trial, i: int, n: int, item: Shown) -> Trace:
         """Show ``item`` and record the touches until its time is up or (free
@@ -276,6 +361,11 @@ class WindowPresenter:
         self.loop.screen = view
         if view.phase == "message":  # what the participant is asked to do, logged
             self.loop.log("screen", view.title)
+
+    def _replace(self, view: ExperimentView) -> None:
+        """Show ``view`` in place of a screen it updates, keeping the keys and clicks
+        that came since (typing on: the next digit may be queued already)."""
+        self.loop.screen = view
 
     def _message(self, title: str, lines: tuple[str, ...], buttons, progress: str) -> None:
         """A screen of text; returns when its button is clicked or Enter pressed."""
