@@ -323,6 +323,8 @@ def limits() -> list[tuple[str, str, object, str]]:
         (hatt, "MAX_FIT_VERTICES", "a HaTT model: at most {} vertices refitted"),
         (hatt, "MAX_ORDER", "a HaTT model's AR or MA order: at most {}"),
         (hatt, "MAX_VARIANCE", "a HaTT model's excitation variance: at most {} (m/s^2)^2"),
+        (hatt, "MAX_RING_S", "a HaTT model vertex's filter: poles within radius exp(-1 / ({} s "
+                             "x rate)), 0.9999 at 10 kHz (a resonance ringing at most that long)"),
         (schema, "MAX_PROBLEMS", "`frictex validate` lists at most {} problems and as many "
                                  "warnings of a file, then says the rest are not listed"),
         (schema, "MAX_SHOWN", "a value shown in a message: cut to {} characters"),

@@ -464,7 +464,9 @@ documented(LAYER_KEYS["keyclick"], {
     "press_n": "normal force (N) at which the first push starts",
     "click_n": "normal force (N) at which the push reverses (the click)",
     "release_n": "normal force (N) below which the button resets; release_n < press_n < click_n",
-    "dwell_s": "how long (s) each condition must hold before it changes the state",
+    "dwell_s": ("how long (s) each condition must hold before it changes the state; a touch "
+                "sample holds until the next, so over one sample period (10 ms at 100 Hz) "
+                "for a lone sample not to count"),
     "force_n": "the push's tangential force (N)",
     "first_push": "direction of the first push, along display x"})
 _BY_SHAPE = "required with shape = {}; not allowed with other shapes"
