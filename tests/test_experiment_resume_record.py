@@ -79,3 +79,15 @@ def test_a_new_session_records_all_by_default(tmp_path):
                           participant=PARTICIPANT)
     assert session.info["record"] == "all"
     assert (out / "trials" / "0001" / "1" / "commands.csv").exists()
+
+
+def test_resuming_from_the_sessions_protocol_keeps_the_studys_name(half_done, monkeypatch):
+    """DIR/protocol.toml of a protocol without ``name`` would be named "protocol"."""
+    path, out = half_done
+    named = []
+    presenter = make_presenter(PARTICIPANT)
+    begin = presenter.begin
+    monkeypatch.setattr(presenter, "begin", lambda protocol: (named.append(protocol.name),
+                                                              begin(protocol)))
+    run_session(load_protocol(out / "protocol.toml"), presenter, out, resume=True)
+    assert named == ["p"]

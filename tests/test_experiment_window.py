@@ -100,6 +100,7 @@ class Hand:
         self.answers = []  # the responses given, in order
         self.strokes = []  # (x_mm range) of each interval's stroke
         self.layouts = []  # text boxes of each message screen as drawn
+        self.screens = []  # each message screen answered
         self.done = threading.Event()
         self.failure = None
 
@@ -143,6 +144,7 @@ class Hand:
             drawn = loop.buttons  # as drawn now (two screens may have the same buttons)
             self.layouts.append((screen.title, list(loop.compositor.text_boxes),
                                  loop.compositor.size))
+            self.screens.append(screen)
             self.answer(screen, drawn)
 
     def answer(self, screen, drawn):
@@ -357,6 +359,8 @@ def test_escape_ends_the_session_keeping_the_answers_and_resume_goes_on(tmp_path
     assert [r["response"] for r in read_csv(out / "results.csv")] == ["1"]
     assert not (out / "trials" / "0002").exists()  # the trial left is not recorded
     session, hand, _ = run_headless(tmp_path, resume=True)
+    # the practice trial was answered before: the instructions no longer announce it
+    assert not any("practice" in line for line in hand.screens[0].lines)
     rows = read_csv(out / "results.csv")
     assert [r["trial"] for r in rows] == ["1", "2", "3"]
     assert [r["response"] for r in rows] == ["1", *hand.answers]

@@ -13,6 +13,7 @@ observer model, headless); the demo window registers its own.
 from __future__ import annotations
 
 import secrets
+from dataclasses import replace
 from pathlib import Path
 from typing import Callable
 
@@ -102,6 +103,9 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
     new session, the session's own with ``resume`` (a different one is refused). ``progress(trial, row)`` is called after each
     trial is recorded; ``between_trials()`` before each trial after the first of this run
     (where a command stops the session: the trials before are recorded, none is begun).
+    A presenter with a ``starts_at(first_trial)`` method (the window) is told the trial
+    this run starts at before ``begin``; with ``resume`` the protocol keeps the name the
+    session started with (DIR/protocol.toml would name it "protocol").
     Returns the session (its ``rows``: every trial answered).
     With ``resume`` on a complete session, nothing runs and session.json is left as it
     is (the session's ``complete_before`` says so).
@@ -113,6 +117,8 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
     if resume:
         session = S.resume(out_dir, protocol, participant or None, seed, participant_id,
                            record)
+        if isinstance(session.info.get("protocol"), str):  # DIR/protocol.toml without a name
+            protocol = replace(protocol, name=session.info["protocol"])  # would be "protocol"
         scheduler = Scheduler(protocol, session.seed)
         if settle is not None:  # a session.json from before participant_seed: 0, as then
             settle(session.seed, session.info.get("participant_seed", LEGACY_PARTICIPANT_SEED))
@@ -132,6 +138,9 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
     first = len(session.rows) + 1
     S.begin_part(session, first)
     try:
+        starts_at = getattr(presenter, "starts_at", None)
+        if starts_at is not None:
+            starts_at(first)
         presenter.begin(protocol)
         _run_trials(scheduler, state, stage, presenter, session, session.record, progress,
                     between_trials)

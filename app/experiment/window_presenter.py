@@ -200,6 +200,7 @@ class WindowPresenter:
         self.keys: dict[str, str] = {}
         self.responses: tuple[str, ...] = ()
         self.typed: tuple[int, int] | None = None  # the scale typed in (typed_scale)
+        self.first = 1  # the trial this run starts at (starts_at)
         self.trial: Trial | None = None
 
     def attach(self, loop) -> None:
@@ -207,6 +208,11 @@ class WindowPresenter:
         self.loop = loop
 
     # -- the Presenter protocol -----------------------------------------------------------
+
+    def starts_at(self, first_trial: int) -> None:
+        """This run starts at ``first_trial`` (a resumed session): the instructions say
+        only the practice trials still to come."""
+        self.first = first_trial
 
     def begin(self, protocol) -> None:
         scheduler = Scheduler(protocol, protocol.seed or 0)
@@ -223,9 +229,10 @@ class WindowPresenter:
                    if free else
                    f"Explore each texture for {protocol.presentation.exploration_s:g} s with "
                    "the left button held (your finger).")
-        first = "trial is" if self.practice == 1 else f"{self.practice} trials are"
-        practice = (f"The first {first} practice (marked PRACTICE), not analysed."
-                    if self.practice else "")
+        left = max(self.practice - (self.first - 1), 0)
+        first = "trial is" if left == 1 else f"{left} trials are"
+        practice = (f"The {'next' if self.first > 1 else 'first'} {first} practice (marked "
+                    f"PRACTICE), not analysed." if left else "")
         lines = tuple(p for p in (protocol.description, protocol.question, explore,
                                   self._how_to_answer(), practice,
                                   "Escape ends the session; it can be continued later.") if p)
