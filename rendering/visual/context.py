@@ -149,7 +149,8 @@ def _key_names(glfw) -> dict[int, str]:
                   glfw.KEY_DOWN: "down", glfw.KEY_LEFT: "left", glfw.KEY_RIGHT: "right",
                   glfw.KEY_TAB: "tab", glfw.KEY_F12: "f12", glfw.KEY_PAGE_UP: "page_up",
                   glfw.KEY_PAGE_DOWN: "page_down", glfw.KEY_ENTER: "enter",
-                  glfw.KEY_KP_ENTER: "enter"})
+                  glfw.KEY_KP_ENTER: "enter", glfw.KEY_BACKSPACE: "backspace",
+                  glfw.KEY_MINUS: "minus", glfw.KEY_KP_SUBTRACT: "minus"})
     names.update({getattr(glfw, f"KEY_KP_{d}"): str(d) for d in range(10)})
     return names
 
