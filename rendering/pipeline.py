@@ -60,6 +60,8 @@ class BlockOutput:
         recorded texture's mu' limits, a clip's level sum past 1): the finger samples
         this block where the layer's own limits clipped the mu' it gave the target.
     off_structure : finger samples outside the vibrating structure (held at its edge).
+    unserved : finger samples touching but not served by the modal actuation (beyond the
+        p longest-touching fingers its p modes serve): they get the served ones' vibration.
     forces : travelling-wave profiles only (else None): per finger the wanted and
         achieved force vectors (N) and key-click button state per sample
         (``rendering.layers.force_layers.ForceBlock``).
@@ -87,6 +89,7 @@ class BlockOutput:
     limited: int = 0
     capped: int = 0
     off_structure: int = 0
+    unserved: int = 0
     layer_clipped: dict[str, int] = field(default_factory=dict)
     forces: object | None = None
     sample_ids: npt.NDArray[np.int64] | None = None
@@ -330,7 +333,8 @@ class Pipeline:
                           mu_target=mu_target, wanted_um=wanted, amplitude_um=act.achieved_um,
                           commands_um=act.commands_um, phases_rad=act.phases_rad,
                           clamps=clamps, limited=act.limited, capped=act.capped,
-                          off_structure=act.off_structure, layer_clipped=layer_clipped,
+                          off_structure=act.off_structure, unserved=act.unserved,
+                          layer_clipped=layer_clipped,
                           forces=forces)
         return out, PipelineState(tracker=tracker_state, layers=tuple(layer_states),
                                   forces=force_state, control=control_state, selection=selection)

@@ -1,5 +1,6 @@
-"""batch.csv counts the samples an actuator limit changed and those the modal solve could
-not give independent amplitudes, beside the inversion's clamps."""
+"""batch.csv counts the samples an actuator limit changed, those the modal solve could
+not give independent amplitudes and the finger samples it did not serve, beside the
+inversion's clamps."""
 
 import csv
 
@@ -19,20 +20,22 @@ def summary(**counts) -> dict:
 
 
 @pytest.mark.parametrize("counts, expected", [
-    ({"actuator_limited": 11933, "modal_capped": 27}, (11933, 27)),
+    ({"actuator_limited": 11933, "modal_capped": 27, "modal_unserved": 9950}, (11933, 27, 9950)),
+    # a summary from before modal_unserved (version 6): not counted, an empty cell, not 0
+    ({"actuator_limited": 11933, "modal_capped": 27}, (11933, 27, None)),
     # a summary from before modal_capped (version 5): not counted, an empty cell, not 0
-    ({"actuator_limited": 11933}, (11933, None)),
+    ({"actuator_limited": 11933}, (11933, None, None)),
 ])
-def test_a_jobs_row_counts_actuator_limited_and_modal_capped_samples(
+def test_a_jobs_row_counts_actuator_limited_modal_capped_and_unserved_samples(
         tmp_path, monkeypatch, counts, expected):
     monkeypatch.setattr(replay, "run_replay", lambda *args, **kwargs: summary(**counts))
     row = run_job(JOB, str(tmp_path))
     assert (row["status"], row["clamps"]) == ("ok", 0)
-    assert (row["actuator_limited"], row["modal_capped"]) == expected
+    assert (row["actuator_limited"], row["modal_capped"], row["modal_unserved"]) == expected
     write_results(tmp_path, [row])
     with open(tmp_path / "batch.csv", newline="") as fh:
         written = next(csv.DictReader(fh))
-    assert (written["actuator_limited"], written["modal_capped"]) == tuple(
+    assert (written["actuator_limited"], written["modal_capped"], written["modal_unserved"]) == tuple(
         "" if count is None else str(count) for count in expected)
 
 

@@ -113,6 +113,7 @@ def test_a_stopped_batch_leaves_in_out_only_the_folders_batch_csv_lists(tmp_path
              "error": "stopped while it ran"}]
     folder.commit([{**dict.fromkeys(("output_s", "wall_s", "x_realtime",
                                      "x_realtime_end_to_end", "clamps", "actuator_limited",
-                                     "modal_capped", "warnings")), **row} for row in rows],
+                                     "modal_capped", "modal_unserved", "warnings")), **row}
+                   for row in rows],
                   stopped=True)
     assert sorted(p.name for p in out.iterdir()) == ["L5", "batch.csv"]

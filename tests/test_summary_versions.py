@@ -22,6 +22,8 @@ def as_version(doc: dict, version: int) -> dict:
     after it."""
     older = copy.deepcopy(doc)
     older["summary_version"] = version
+    if version < 7:
+        del older["counts"]["modal_unserved"]
     if version < 6:
         del older["counts"]["modal_capped"]
     if version < 5:
@@ -31,12 +33,13 @@ def as_version(doc: dict, version: int) -> dict:
     return older
 
 
-@pytest.mark.parametrize("version", [4, 5])
+@pytest.mark.parametrize("version", [4, 5, 6])
 def test_a_summary_from_before_modal_capped_reads_it_as_not_counted(current, version):
     """A version 5 summary.json raised a bare KeyError 'modal_capped'."""
     older = as_version(current, version)
     summary = Summary.from_dict(older)
-    assert summary.counts.modal_capped is None
+    assert summary.counts.modal_capped is (None if version < 6 else older["counts"]["modal_capped"])
+    assert summary.counts.modal_unserved is None
     assert summary.counts.off_structure == older["counts"]["off_structure"]
     assert summary.to_dict() == older
 
@@ -44,6 +47,7 @@ def test_a_summary_from_before_modal_capped_reads_it_as_not_counted(current, ver
 def test_the_current_summary_round_trips_with_its_modal_capped(current):
     summary = Summary.from_dict(current)
     assert summary.counts.modal_capped == current["counts"]["modal_capped"] == 0
+    assert summary.counts.modal_unserved == current["counts"]["modal_unserved"] == 0
     assert summary.to_dict() == current
 
 

@@ -58,7 +58,9 @@ one row per job (:data:`RESULT_COLUMNS`):
   (samples where an actuator limit changed the actuation's solution: the summary's
   ``counts.actuator_limited``), ``modal_capped`` (samples where two fingers could not be
   given independent amplitudes: ``counts.modal_capped``, empty where the summary has
-  none, one from before version 6: not counted, which is not none capped)
+  none, one from before version 6: not counted, which is not none capped),
+  ``modal_unserved`` (finger samples touching beyond the fingers a modal scene's modes
+  serve: ``counts.modal_unserved``, empty likewise for a summary from before version 7)
   and ``warnings`` (how many; the texts are in the job's ``summary.json``).
 
 A job that is not ``ok`` has these numeric cells empty (an ``earlier`` one the earlier
@@ -112,7 +114,7 @@ from frictex.textures.outside import HOW, allow_outside_from_env, leads_out
 COLUMNS = ("scene", "trace", "renderer", "rate_hz", "block", "format", "name")
 RESULT_COLUMNS = ("job", "name", "scene", "trace", "status", "error", "output_s", "wall_s",
                   "x_realtime", "x_realtime_end_to_end", "clamps", "actuator_limited",
-                  "modal_capped", "warnings")
+                  "modal_capped", "modal_unserved", "warnings")
 #: the cells of ``batch.csv`` that say which replay a job folder holds
 INPUTS = ("scene", "trace")
 #: the numeric cells of ``batch.csv``, empty for a job that is not ``ok``
@@ -416,6 +418,7 @@ def run_job(job: Job, out_dir: str) -> dict:
             "clamps": sum(doc["clamps"].values()),
             "actuator_limited": doc["counts"]["actuator_limited"],
             "modal_capped": doc["counts"].get("modal_capped"),  # before version 6: not counted
+            "modal_unserved": doc["counts"].get("modal_unserved"),  # before version 7: not counted
             "warnings": len(doc["warnings"])}
 
 

@@ -23,7 +23,7 @@ from frictex.app.engine.force_summary import ForceSummary
 from frictex.device.friction import ClampCounts
 from frictex.rendering.pipeline import STAGES
 
-SUMMARY_VERSION = 6
+SUMMARY_VERSION = 7
 
 
 class Totals:
@@ -39,6 +39,7 @@ class Totals:
         self.limited = 0
         self.modal_capped = 0
         self.off_structure = 0
+        self.modal_unserved = 0
         self.layer_clipped: dict[str, int] = {}
         self.largest_time_s = 0.0  # the largest |t_s| of an output sample (s)
 
@@ -52,6 +53,7 @@ class Totals:
         self.limited += out.limited
         self.modal_capped += out.capped
         self.off_structure += out.off_structure
+        self.modal_unserved += out.unserved
         self.largest_time_s = max(self.largest_time_s, abs(float(out.t_s[0])),
                                   abs(float(out.t_s[-1])))
         for name, n in out.layer_clipped.items():
@@ -138,12 +140,23 @@ def warnings_of(pipeline, tracker, totals: Totals) -> list[str]:
         n = totals.off_structure
         warnings.append(f"{counted(n, 'finger sample')} {were(n)} off the vibrating "
                         f"structure and {were(n)} held at its edge")
+    if totals.modal_unserved:
+        warnings.append(_unserved_warning(totals.modal_unserved, pipeline.actuation.n_modes))
     clipped = {name: n for name, n in totals.layer_clipped.items() if n}
     if clipped:
         layers = {layer.name: layer for layer in pipeline.scene.layers}
         warnings += [_clipped_warning(layers[name], n, totals.touching)
                      for name, n in clipped.items()]
     return warnings
+
+
+def _unserved_warning(n: int, modes: int) -> str:
+    """The sentence for ``n`` finger samples touching beyond the ``modes`` fingers a
+    modal scene serves at a time."""
+    return (f"{counted(n, 'finger sample')} {were(n)} not served: the scene's "
+            f"{counted(modes, 'mode')} serve only {counted(modes, 'finger')} at a time (those "
+            "touching longest), so a further finger gets no control of its own and feels the vibration the served ones get "
+            "(|Phi(x) W_M|, its achieved amplitude in fingers) whatever its target")
 
 
 def _within_a_block(trace_report: dict) -> list[str]:
@@ -220,7 +233,8 @@ def summary(scene, trace_report: dict, pipeline, tracker, totals: Totals, fmt: s
                    "jumps": tracker.jumps, "out_of_order": tracker.out_of_order,
                    "max_amplitude_um": totals.max_amplitude,
                    "actuator_limited": totals.limited, "modal_capped": totals.modal_capped,
-                   "off_structure": totals.off_structure},
+                   "off_structure": totals.off_structure,
+                   "modal_unserved": totals.modal_unserved},
         "clamps": totals.clamps.as_dict(),
         "layer_clipped": dict(totals.layer_clipped),
         "warnings": warnings_of(pipeline, tracker, totals) + _within_a_block(trace_report),

@@ -205,6 +205,10 @@ class Counts:
         summaries before it (version 6): not counted, which is not none capped.
     off_structure : int
         Finger samples off the vibrating structure (held at its edge).
+    modal_unserved : int or None
+        Finger samples touching but not served: beyond the p longest-touching fingers
+        that a scene's p modes serve, they feel the served ones' vibration. None in
+        summaries before it (version 7): not counted, which is not none unserved.
     """
 
     blocks: int
@@ -215,6 +219,7 @@ class Counts:
     actuator_limited: int
     modal_capped: int | None = field(default=None, metadata=_OPTIONAL)
     off_structure: int
+    modal_unserved: int | None = field(default=None, metadata=_OPTIONAL)
 
 
 @dataclass(frozen=True)

@@ -36,6 +36,9 @@ class Actuated:
     independent amplitudes (a singular locus, seed 001 eq 8; modal actuation only).
     off_structure : finger samples whose position lay off the vibrating structure and
     were held at its edge (modal actuation only).
+    unserved : finger samples touching but not served, beyond the p longest-touching
+    fingers that p modes can serve; they feel the vibration the served ones get (modal
+    actuation only).
     """
 
     commands_um: np.ndarray
@@ -44,6 +47,7 @@ class Actuated:
     limited: int = 0
     capped: int = 0
     off_structure: int = 0
+    unserved: int = 0
 
 
 def touch_rank(contact: np.ndarray, touch_start: np.ndarray) -> np.ndarray:

@@ -20,7 +20,9 @@ serve_two_modes``); otherwise one batched ``device.actuation.modal.solve``:
    of Phi_f, in that order, fill a p x p system whose remaining rows are zero. A zero row
    adds a zero singular value, which every method of ``device.actuation.modal`` ignores (gain 0),
    so the padded system has exactly the solution of the m x p one (m <= p): one batched
-   solve covers every count of fingers, including none (all commands 0).
+   solve covers every count of fingers, including none (all commands 0). The finger
+   samples touching beyond the p served are counted (``unserved``): nothing controls
+   what they feel.
 3. Commands ``c = A W_M`` are complex: channel amplitude |c| (um zero-to-peak) and
    phase arg(c) (rad; 0 for a zero command). Channels meeting their limit are scaled as ``device.actuation.modal``
    documents and counted (``limited``).
@@ -128,7 +130,8 @@ class ModalActuation:
             commands_um, phases_rad (n, q); achieved_um (F, n); ``limited`` samples
             whose commands met a channel limit; ``capped`` samples whose served
             fingers could not be given independent amplitudes; ``off_structure`` finger
-            samples held at the structure's edge.
+            samples held at the structure's edge; ``unserved`` finger samples touching
+            but not among the p served.
         """
         contact = np.ascontiguousarray(fingers.contact, dtype=np.bool_)
         x, y, clipped, where = self._on_structure(np.ascontiguousarray(fingers.x_pred, dtype=np.float64),
@@ -143,7 +146,8 @@ class ModalActuation:
                   if self.closed_form else None)
         amplitude, commands, achieved, limited, capped = solved or self._solve(phi, where, served, wanted)
         return Actuated(commands_um=amplitude, phases_rad=np.angle(commands), achieved_um=achieved,
-                        limited=limited, capped=capped, off_structure=int(np.count_nonzero(clipped)))
+                        limited=limited, capped=capped, off_structure=int(np.count_nonzero(clipped)),
+                        unserved=x.size - int(np.count_nonzero(served >= 0)))
 
     def _solve(self, phi, where, served, wanted):
         """Steps 2-4 of the module docstring through ``device.actuation.modal.solve``: any
