@@ -363,6 +363,10 @@ def test_layout_and_hit_test_agree():
     tx, ty, tw, th = s.track
     assert hit(rows, tx + 0.25 * tw, ty + 1)[1] == pytest.approx(0.25)
     assert track_fraction(s, tx - 50) == 0.0 and track_fraction(s, tx + tw + 50) == 1.0
+    # the track's last pixel is the row's last: a press on it (or one short of it) sets
+    # the end's value, which it could not before (0.99 of the way at most)
+    assert hit(rows, tx + tw - 1, ty + 1)[1] == 1.0 == track_fraction(s, tx + tw - 2)
+    assert hit(rows, tx + 1, ty + 1)[1] == 0.0
     assert hit(rows, 1.0, 41.0) is None  # the column's padding
     short = panel_layout(view, (0.0, 40.0, 300.0, 100.0), 24.0)
     assert [r.kind for r in short] == kinds[:3] and short[-1].box[1] + 24.0 <= 140.0

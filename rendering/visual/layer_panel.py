@@ -26,6 +26,8 @@ TRACK_RGBA = (1.0, 1.0, 1.0, 0.35)
 KNOB_RGBA = (0.95, 0.75, 0.2, 1.0)
 BUTTON_BG = (0.22, 0.22, 0.25, 1.0)
 PAD_PX = 6.0
+#: a press this close to a slider track's end (px) sets the end's value
+END_SNAP_PX = 2.0
 
 
 def panel_width(frame_w: int) -> int:
@@ -129,11 +131,15 @@ def hit(rows: tuple[PanelRow, ...], x_px: float, y_px: float) -> tuple[PanelRow,
 
 
 def track_fraction(row: PanelRow, x_px: float) -> float:
-    """Where ``x_px`` falls along ``row``'s slider track, clipped to 0 to 1."""
+    """Where ``x_px`` falls along ``row``'s slider track, clipped to 0 to 1; within
+    :data:`END_SNAP_PX` of an end, that end (the track's last pixel is the row's last, so
+    a click could otherwise never reach 1)."""
     if row.track is None:
         return 0.0
     tx, _, tw, _ = row.track
-    return float(np.clip((x_px - tx) / tw, 0.0, 1.0))
+    if x_px >= tx + tw - END_SNAP_PX:
+        return 1.0
+    return float(np.clip((x_px - tx) / tw, 0.0, 1.0)) if x_px > tx + END_SNAP_PX else 0.0
 
 
 def draw_layer_panel(compositor, view: PanelView, rect: tuple[float, float, float, float]
