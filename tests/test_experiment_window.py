@@ -467,9 +467,13 @@ def test_which_scales_are_typed_and_how_a_rating_is_edited():
     assert typed_scale(tuple(str(i) for i in range(0, 101))) == (0, 100)
     assert typed_scale(tuple(str(i) for i in range(-5, 5))) == (-5, 4)
     text = ""
-    for key in ("5", "6", "7", "7", "backspace", "left", "minus", "x", "9"):
+    for key in ("5", "6", "7", "7", "backspace", "left", "x", "9"):
         text = edit_rating(text, key, (0, 100))
-    assert text == "59"  # three digits at most, no sign on a scale from 0
+    assert text == "59"  # three digits at most
+    # a minus on a scale from 0 was dropped, so '-5' was taken as 5; it is kept and refused
+    assert edit_rating("5", "minus", (0, 100)) == "-5"
+    assert rating_problem("-5", (0, 100)) == ("-5 is not on the scale: type a number from "
+                                               "0 to 100.")
     assert edit_rating("12", "minus", (-1000, 1000)) == "-12"
     assert edit_rating("-12", "minus", (-1000, 1000)) == "12"
     assert rating_problem("777", (0, 100)) == ("777 is not on the scale: type a number from "

@@ -153,12 +153,13 @@ def how_to_type(scale: tuple[int, int]) -> str:
 def edit_rating(text: str, key: str, scale: tuple[int, int]) -> str:
     """The typed rating ``text`` after ``key`` (a digit, one of :data:`DELETE_KEYS` or
     :data:`SIGN_KEYS`; others leave it): digits beyond the scale's widest value are
-    not taken, a sign only on a scale that goes below 0."""
+    not taken; a sign is, on any scale, so that a negative rating on a scale from 0 is
+    shown and refused (:func:`rating_problem`), not taken as its magnitude."""
     digits = text.lstrip("-")
     if key in DELETE_KEYS:
         return text[:-1]
     if key in SIGN_KEYS:
-        return text if scale[0] >= 0 else (digits if text.startswith("-") else "-" + digits)
+        return digits if text.startswith("-") else "-" + digits
     if len(key) == 1 and key.isdigit() and len(digits) < max(len(str(abs(v))) for v in scale):
         return text + key
     return text
