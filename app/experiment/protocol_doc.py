@@ -39,7 +39,8 @@ and each other within those digits.
 At the window (`--participant window`) a `[scale]` of one key per value (1 to 10, 0 for
 10; 0 to 9) is answered by a key or a button; any wider one (0 to 10, 0 to 100, one
 below 0) by typing the rating, shown as typed (Backspace or the left arrow corrects,
-minus changes the sign), and Enter: no scale has values out of reach.
+minus changes the sign; a rating off the scale is refused on screen), and Enter: no
+scale has values out of reach. A scale spans at most 1000 steps (max - min <= 1000).
 
 A session folder (`--out DIR`) keeps a copy of the protocol (`DIR/protocol.toml`) and of
 the scenes it names by a path in its folder or below, under the same relative names
