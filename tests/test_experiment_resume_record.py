@@ -11,18 +11,7 @@ from frictex.app.experiment.protocol import load_protocol
 from frictex.app.experiment.runner import make_presenter, run_session
 from frictex.device.errors import InputError
 
-PROTOCOL = """format = 1
-method = "2afc"
-repetitions = 2
-[stimuli]
-scene = "grating-5mm"
-vary = "depth"
-reference = 0.3
-levels = [0.32, 0.42]
-[presentation]
-exploration_s = 0.3
-"""
-PARTICIPANT = "simulated:weber=0.11,seed=3"
+from test_experiment_resume_parts import PARTICIPANT, PROTOCOL
 
 
 class Stop(Exception):
