@@ -12,14 +12,9 @@ from frictex.app.live.layer_edit import LayerEdit, Slider
 from frictex.textures.library import resolve_scene
 from frictex.textures.loader import load_scene
 
-OBJECTS = """format = 1
+from test_texture_loader import HEAD
 
-[display]
-width_mm = 108.0
-height_mm = 64.8
-width_px = 800
-height_px = 480
-
+OBJECTS = HEAD + """
 [[layer]]
 type = "rectangle"
 x_mm = 10
