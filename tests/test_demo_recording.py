@@ -5,6 +5,7 @@ count only the samples played; headless frames go to --out and the tables to --r
 
 import csv
 import json
+import re
 from dataclasses import replace
 
 import pytest
@@ -164,5 +165,8 @@ def test_headless_frames_go_to_out_and_the_tables_to_record(no_display, tmp_path
     assert [p.name for p in out.iterdir()] == ["frames"] and frames
     summary = json.loads((record / "summary.json").read_text())
     assert f"{summary['frames']} frames drawn (" in text
-    assert f"{len(frames)} frames kept (at most 30 a second) in {out / 'frames'}" in text
+    kept = re.search(rf"{len(frames)} frames kept \(at most 30 a second; ([0-9.]+) ms each to "
+                     rf"save as PNG, within the frames' mean\) in {re.escape(str(out / 'frames'))}",
+                     text)
+    assert kept and 0 < float(kept[1]) <= summary["frame_ms_mean"] * summary["frames"] / len(frames)
     assert f"outputs in {record}" in text

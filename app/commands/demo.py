@@ -490,8 +490,9 @@ def _print_lines(args, summary: dict, ended: _Ended, out: Path | None,
     if frames is not None:
         from frictex.app.live.frame_files import FPS
         print(f"demo: headless, {stroke_said(hand, summary['ended_by'])} drove "
-              f"the mouse: {counted(frames.count, 'frame')} kept (at most {FPS:g} a second) in "
-              f"{frames_out}; outputs in {out}")
+              f"the mouse: {counted(frames.count, 'frame')} kept (at most {FPS:g} a second; "
+              f"{frames.save_s / max(frames.count, 1) * 1e3:.1f} ms each to save as PNG, within "
+              f"the frames' mean) in {frames_out}; outputs in {out}")
     if summary["control"] is not None:
         from frictex.app.engine.summary import control_line
         print(f"demo: {control_line(summary['control'])}")

@@ -15,7 +15,8 @@ FPS = 30.0  # at most this many frames a second are kept
 class FrameFiles:
     """Writes frames to ``folder/frame-NNNNN.png``, at most ``fps`` a second of ``clock``
     (s); the folder's earlier ``frame-*.png`` are removed first, so that it holds this
-    run's frames only. ``count``: frames written."""
+    run's frames only. ``count``: frames written; ``save_s``: wall time spent encoding
+    and writing them (s, on ``clock``), which the frames' drawing time includes."""
 
     def __init__(self, folder: Path, fps: float = FPS, clock=time.perf_counter):
         self.folder = Path(folder)
@@ -25,6 +26,7 @@ class FrameFiles:
         self.step_s = 1.0 / fps
         self.clock = clock
         self.count = 0
+        self.save_s = 0.0
         self._next = -np.inf
 
     def write(self, rgb: np.ndarray) -> None:
@@ -35,3 +37,4 @@ class FrameFiles:
         self._next = max(self._next + self.step_s, now)
         Image.fromarray(rgb).save(self.folder / f"frame-{self.count:05d}.png")
         self.count += 1
+        self.save_s += self.clock() - now
