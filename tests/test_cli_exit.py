@@ -120,3 +120,18 @@ def test_version_prints_the_installed_version_on_stdout_and_exits_0():
         """)
     from importlib.metadata import version
     assert (done.returncode, done.stdout, done.stderr) == (0, f"frictex {version('frictex')}\n", "")
+
+
+def test_an_argument_no_command_takes_is_said_by_the_command_it_was_given_to(capsys):
+    """argparse's top parser said extra arguments without the command's name, as no other
+    error of a command's line is said ('frictex: error: unrecognized arguments: extra')."""
+    import pytest
+    from frictex.app.commands.cli import main
+    for argv, said in [(["library", "extra"], "library: unrecognized arguments: extra"),
+                       (["validate", "grating-5mm", "--bogus", "x"],
+                        "validate: unrecognized arguments: --bogus x"),
+                       (["--bogus"], "unrecognized arguments: --bogus")]:
+        with pytest.raises(SystemExit) as ended:
+            main(argv)
+        assert ended.value.code == 2
+        assert capsys.readouterr().err == f"frictex: error: {said}\n"

@@ -141,7 +141,10 @@ def _command(parser, subparsers, name: str | None, argv: list[str]) -> int:
     if name in COMMANDS:
         module = importlib.import_module(COMMANDS[name][0])
         module.add_arguments(subparsers[name])
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:  # said by the command's parser, so that the line names the command
+        (subparsers[name] if module is not None else parser).error(
+            f"unrecognized arguments: {' '.join(extra)}")
     if module is None:
         parser.print_help()
         return 2 if argv else 0
