@@ -121,6 +121,9 @@ def test_resolve_names_and_paths(tmp_path, monkeypatch):
     (resolve_scene, "zzz", r"^zzz: no such file, and no bundled scene of that name \(frictex library lists them\)$"),
     (resolve_scene, "sub/grating-5mm.toml", r"^sub/grating-5mm\.toml: no such file$"),
     (resolve_trace, "swipe-40mms", r"no bundled trace of that name \(did you mean swipe-40mms-50hz\?"),
+    # Path("") is the current folder: it was said as ".: is a folder, not a file"
+    (resolve_scene, "", r"^the name is empty; expected a texture file \(\.toml\) or a bundled scene's name$"),
+    (resolve_trace, "", r"^the name is empty; expected a trace CSV file or a bundled trace's name$"),
 ])
 def test_unknown_names(call, name, pattern):
     with pytest.raises(TextureError, match=pattern):

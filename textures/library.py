@@ -133,6 +133,9 @@ def list_traces() -> list[Entry]:
 
 
 def _resolve(name_or_path: str | Path, folder: Path, suffix: str, kind: str) -> Path:
+    if not str(name_or_path):  # Path("") is the current folder, named "." in what follows
+        raise TextureError(f"the name is empty; expected a {SUFFIX_SAID[suffix]} or a bundled "
+                           f"{kind}'s name")
     path = Path(name_or_path)
     if path.exists() or path.is_symlink():
         return path
@@ -151,6 +154,9 @@ def _bundled(name: str, folder: Path, suffix: str, kind: str) -> Path:
     raise TextureError(f"{escape_path(name)}: no such file, and no bundled {kind} of that name "
                        f"({hint}frictex library lists them)")
 
+
+#: a file of each suffix as an empty name's message says it
+SUFFIX_SAID = {".toml": "texture file (.toml)", ".csv": "trace CSV file"}
 
 #: where the bundled files of each kind lie, and their suffix
 BUNDLED = {"scene": (LIBRARY_DIR, ".toml"), "trace": (TRACES_DIR, ".csv")}
