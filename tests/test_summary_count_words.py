@@ -55,7 +55,26 @@ def test_the_demos_closing_lines_say_one_in_the_singular(capsys):
         "sample, 1 frame drawn "
         "(1.0 ms mean), link: closed",
         "demo: link: the device ran dry 1 time and 1 block was skipped to catch up; 0 of 5 "
-        "samples unplayed"]
+        "samples unplayed; 0.00% held to --max-unplayed 10.00%, the skipped 0.00% to 50%"]
+
+
+def test_the_demos_closing_line_says_which_unplayed_share_each_limit_holds(capsys):
+    """The line split the unplayed samples by cause without saying that --max-unplayed
+    holds only those not skipped to catch up (the skipped to half)."""
+    from types import SimpleNamespace
+    from frictex.app.commands.demo import _Ended, _print_lines
+    summary = {"cpu_steal_pct": None, "blocks": 2524, "output_s": 6.3, "deadline_misses": 0,
+               "worst_lateness_ms": 0.0, "clamps_total": 0, "frames": 1, "frame_ms_mean": 1.0,
+               "input_counts": {}, "control": None, "ended_by": "window",
+               "dropped_record_blocks": 0}
+    link = {"state": "closed", "skipped_blocks": 96, "underruns": 2, "unplayed_samples": 2500,
+            "commanded_samples": 63100, "unplayed_by_cause": {"skipped": 2400, "lost": 100}}
+    _print_lines(SimpleNamespace(max_unplayed=0.001), summary,
+                 _Ended(summary, link, None, None), None, None)
+    assert capsys.readouterr().out.splitlines()[1] == (
+        "demo: link: the device ran dry 2 times and 96 blocks were skipped to catch up; 2500 "
+        "of 63100 samples unplayed, skipped 2400, lost 100; 0.16% held to --max-unplayed "
+        "0.10%, the skipped 3.80% to 50%")
 
 
 def test_blocks_left_out_of_a_recording_are_warned_of(capsys):

@@ -365,13 +365,32 @@ def _run_demo(args, headless: bool, paths, index: int, scene, stagings, check) -
                  (frames_staging or staging).out / FRAMES if headless else None)
     if previous:
         print(f"demo: replaced the previous recording in {staging.out}")
-    limit = MAX_UNPLAYED if args.max_unplayed is None else args.max_unplayed
-    problem = device_problem(result.link, limit)
+    problem = device_problem(result.link, unplayed_limit(args))
     if problem is not None:
         where = "" if staging is None else f"; outputs in {staging.out}"
         print(f"frictex demo: error: {problem}{where}", file=sys.stderr)
         return 1
     return 0
+
+
+def unplayed_limit(args) -> float:
+    """The share of the commanded samples a device may leave unplayed (``--max-unplayed``,
+    catch-up skips not counted)."""
+    given = getattr(args, "max_unplayed", None)
+    return MAX_UNPLAYED if given is None else given
+
+
+def held_to_limits(link: dict, max_unplayed: float) -> str:
+    """The closing line's words on which unplayed share each limit holds: those not
+    skipped to catch up to ``max_unplayed``, the skipped to :data:`MAX_CATCH_UP`."""
+    commanded = link.get("commanded_samples") or 0
+    if not commanded:
+        return ""
+    causes = link.get("unplayed_by_cause", {})
+    skipped = sum(causes.get(cause, 0) for cause in CATCH_UP)
+    held = link["unplayed_samples"] - skipped
+    return (f"; {held / commanded:.2%} held to --max-unplayed {max_unplayed:.2%}, "
+            f"the skipped {skipped / commanded:.2%} to {MAX_CATCH_UP:.0%}")
 
 
 def device_problem(link: dict, max_unplayed: float) -> str | None:
@@ -478,7 +497,8 @@ def _print_lines(args, summary: dict, ended: _Ended, out: Path | None,
         print(f"demo: link: the device ran dry {counted(link['underruns'] or 0, 'time')} and "
               f"{counted(skipped, 'block')} {were(skipped)} skipped to catch up; "
               f"{link['unplayed_samples']} of {link['commanded_samples']} samples unplayed"
-              + "".join(f", {k} {v}" for k, v in link["unplayed_by_cause"].items() if v))
+              + "".join(f", {k} {v}" for k, v in link["unplayed_by_cause"].items() if v)
+              + held_to_limits(link, unplayed_limit(args)))
     for warning in faults_not_reached(link):
         print(f"frictex demo: warning: {warning}", file=sys.stderr)
     if summary["dropped_record_blocks"]:  # the recorder fell behind: the tables miss them
