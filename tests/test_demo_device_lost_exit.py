@@ -69,8 +69,11 @@ def test_a_demo_whose_device_is_unplugged_for_good_exits_1(tmp_path, monkeypatch
 
 
 def test_a_demo_whose_link_closes_at_its_end_exits_0(tmp_path, monkeypatch, capsys):
-    """The link closed by --duration's end is no loss (--max-unplayed 1: the samples a
-    loaded test machine skips to catch up are no part of this test)."""
+    """The link closed by --duration's end is no loss (--max-unplayed 1 and no limit on
+    catch-up skips: what a loaded test machine skips to catch up, 56 % of a run beside
+    other work, is no part of this test)."""
+    from frictex.app.commands import demo
+    monkeypatch.setattr(demo, "MAX_CATCH_UP", 1.0)
     assert headless_demo(tmp_path, monkeypatch, "--duration", "2", "--max-unplayed", "1") == 0
     assert "error" not in capsys.readouterr().err
 
