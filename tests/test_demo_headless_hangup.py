@@ -48,4 +48,8 @@ def test_a_hangup_to_the_headless_demos_group_is_its_one_line(tmp_path):
     while subprocess.run(["pgrep", "-g", str(proc.pid)], capture_output=True).returncode == 0:
         assert time.monotonic() < deadline, "the process group did not end"
         time.sleep(0.05)
-    assert err.read_text().strip().splitlines() == ["frictex: terminated by SIGHUP"]
+    # the device's verdict may come first on a loaded machine (more than half the samples
+    # skipped to catch up, say): its own line, no part of this test
+    said = [line for line in err.read_text().strip().splitlines()
+            if not line.startswith("frictex demo: error: ")]
+    assert said == ["frictex: terminated by SIGHUP"]
