@@ -172,14 +172,14 @@ class _Evdev:
         return f"evdev {arg}"
 
     def open(self, arg, **options):
-        from frictex.rendering.input.evdev_decode import ScreenSpec
+        from frictex.rendering.input.evdev_decode import RangeUnknown, ScreenSpec
         from frictex.rendering.input.evdev_live import EvdevReader
         if not os.path.exists(arg):
             raise InputError(f"evdev:{arg}: no such device (expected a path such as "
                              "/dev/input/event5)")
         try:
-            return EvdevReader(arg, ScreenSpec(width_mm=1.0, height_mm=1.0))
-        except ValueError:  # no axis ranges: a file, a pipe, not a touch screen
+            return EvdevReader(arg, ScreenSpec(normalised=True))
+        except RangeUnknown:  # no axis ranges: a file, a pipe, not a touch screen
             # the reader's own words advise options of 'trace import', which the demo lacks
             raise InputError(f"evdev:{arg} is not a multi-touch device reporting its axis "
                              "ranges (ABS_MT_POSITION_X and _Y); the demo takes them from the "

@@ -419,11 +419,17 @@ class ScreenMap:
                                                  cols["force_n"].tolist(), cols["event"].tolist())]
 
 
+class RangeUnknown(TraceError):
+    """A device axis range that is neither given, nor read from the device, nor observed."""
+
+
 def _axis_map(axis: str, size_option: str, size_mm: float | None, flip: bool,
               given: tuple[float, float] | None, absinfo: AbsInfo | None,
-              observed: tuple[float, float] | None, where: str) -> tuple[AxisMap, bool]:
+              observed: tuple[float, float] | None, where: str,
+              check_scale: bool = True) -> tuple[AxisMap, bool]:
     """The map of device axis ``axis`` (see :func:`screen_map`), and whether its range is
-    the observed one."""
+    the observed one; ``check_scale`` False: ``size_mm`` is no real size (a normalised
+    map), so its units per mm are not checked."""
     guessed = False
     if given is not None:
         lo, hi = given
@@ -436,7 +442,7 @@ def _axis_map(axis: str, size_option: str, size_mm: float | None, flip: bool,
         (lo, hi), guessed = observed, True
     else:
         seen = f" (the recording only shows {axis} = {observed[0]:g})" if observed else ""
-        raise TraceError(f"{where}: device {axis} range unknown{seen}: give --{axis}-range MIN MAX")
+        raise RangeUnknown(f"{where}: device {axis} range unknown{seen}: give --{axis}-range MIN MAX")
     if size_mm is None:
         if absinfo is None or absinfo.resolution <= 0:
             raise TraceError(f"{where}: screen size along device {axis} unknown (the device "
@@ -451,8 +457,9 @@ def _axis_map(axis: str, size_option: str, size_mm: float | None, flip: bool,
         axis_map = AxisMap(float(lo), float(hi), float(size_mm), flip)  # a size out of bounds
     except TraceError as exc:
         raise TraceError(f"{where}: {exc}") from None
-    _check_scale(axis, lo, hi, size_mm, "the observed range" if guessed else
-                 f"--{axis}-range" if given is not None else "the device's range", where)
+    if check_scale:
+        _check_scale(axis, lo, hi, size_mm, "the observed range" if guessed else
+                     f"--{axis}-range" if given is not None else "the device's range", where)
     return axis_map, guessed
 
 
@@ -477,6 +484,9 @@ class ScreenSpec:
         device's own axes, before ``swap_xy``); None: from the device, else observed.
     swap_xy : device X runs along screen y. flip_x, flip_y : screen axes run against the device.
     pressure_n : N per pressure unit (None: constant ``force_n``, N).
+    normalised : positions as fractions 0..1 of each axis range (``width_mm`` and
+        ``height_mm`` are ignored, taken as 1), for a live source whose consumer maps
+        them to its own screen; no units-per-mm plausibility check, which needs a real size.
     """
 
     width_mm: float | None = None
@@ -488,6 +498,7 @@ class ScreenSpec:
     flip_y: bool = False
     pressure_n: float | None = None
     force_n: float = DEFAULT_FORCE_N
+    normalised: bool = False
 
 
 def screen_map(spec: ScreenSpec, absinfo: dict[int, AbsInfo],
@@ -497,8 +508,10 @@ def screen_map(spec: ScreenSpec, absinfo: dict[int, AbsInfo],
 
     Each device axis range is the user's (``spec``), else the device's (``absinfo``, keyed
     by ABS_MT_POSITION_X / _Y), else the ``observed`` min..max of the recording with a
-    warning; each size is the user's, else the range over the device resolution (units/mm),
-    and must lie within SCREEN_MM. ``where`` (a file, a device) starts every error.
+    warning; each size is the user's (1 for a ``normalised`` spec), else the range over the
+    device resolution (units/mm), and must lie within SCREEN_MM. ``where`` (a file, a
+    device) starts every error: :class:`RangeUnknown` for an axis with no range, else
+    TraceError.
 
     An observed range is taken at one scale for both axes (device units per mm: the
     largest of the two axes'), from its smallest value: a stroke keeps its shape and its
@@ -509,14 +522,15 @@ def screen_map(spec: ScreenSpec, absinfo: dict[int, AbsInfo],
     """
     observed = observed or {}
     sw = spec.swap_xy
+    width_mm, height_mm = (1.0, 1.0) if spec.normalised else (spec.width_mm, spec.height_mm)
     dev_x, guessed_x = _axis_map("x", "--height-mm" if sw else "--width-mm",
-                          spec.height_mm if sw else spec.width_mm, spec.flip_y if sw else spec.flip_x,
+                          height_mm if sw else width_mm, spec.flip_y if sw else spec.flip_x,
                           spec.x_range, absinfo.get(ABS_MT_POSITION_X), observed.get(ABS_MT_POSITION_X),
-                          where)
+                          where, not spec.normalised)
     dev_y, guessed_y = _axis_map("y", "--width-mm" if sw else "--height-mm",
-                          spec.width_mm if sw else spec.height_mm, spec.flip_x if sw else spec.flip_y,
+                          width_mm if sw else height_mm, spec.flip_x if sw else spec.flip_y,
                           spec.y_range, absinfo.get(ABS_MT_POSITION_Y), observed.get(ABS_MT_POSITION_Y),
-                          where)
+                          where, not spec.normalised)
     warnings = []
     if guessed_x or guessed_y:
         per_mm = max((m.hi - m.lo) / m.size_mm for m in (dev_x, dev_y))

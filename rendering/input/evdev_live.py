@@ -91,7 +91,7 @@ class EvdevReader:
                 pass  # not an evdev device, or an old kernel: keep the device's clock
             absinfo = {code: info for code in (ABS_MT_POSITION_X, ABS_MT_POSITION_Y)
                        if (info := read_absinfo(self._fd, code)) is not None}
-            self.screen, _ = screen_map(spec, absinfo)
+            self.screen, _ = screen_map(spec, absinfo, where=self.path)
         except Exception:
             os.close(self._fd)
             raise
