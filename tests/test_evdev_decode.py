@@ -120,6 +120,21 @@ def test_protocol_b_contact_without_position_waits_and_is_counted():
     assert summary(samples) == [(0.01, 0, 5, 7, DOWN)] and dec.unplaced == 1
 
 
+def test_protocol_b_positions_without_a_tracking_id_are_counted_and_named():
+    """Issue: a recording whose only frame set a slot's X and Y with no ABS_MT_TRACKING_ID
+    was refused as 'no touches found (3 events, 1 frames; expected ABS_MT_* contacts)',
+    although it holds ABS_MT_* events; the reason is now said."""
+    with pytest.raises(TraceError, match=r"^rec.evemu: no touches found: positions in 2 frames "
+                                         r"came with no ABS_MT_TRACKING_ID \(protocol B "
+                                         r"contacts start with one\)$"):
+        decode_all([abs_(1, PX, 5), abs_(1, PY, 5), syn(1), abs_(2, PX, 9), syn(2)], "rec.evemu")
+    ev = [abs_(0, PX, 5), abs_(0, PY, 5), syn(0), abs_(0.01, TID, 7), syn(0.01),
+          abs_(0.02, PX, 6), syn(0.02)]
+    samples, dec = decode_all(ev, "<b>")  # with touches: counted, no error
+    assert summary(samples) == [(0.01, 0, 5, 5, DOWN), (0.02, 0, 6, 5, MOVE)]
+    assert dec.untracked == 1
+
+
 def test_syn_dropped_discards_until_the_next_report():
     ev = frame_a(0.0, [(1, 1)]) + [abs_(0.01, PX, 999), syn(0.01, SYN_DROPPED), abs_(0.01, PY, 5),
                                    syn(0.01)] + frame_a(0.02, [(2, 2)])

@@ -149,7 +149,9 @@ class EvdevDecoder:
 
     Feeding a stream in any number of pieces gives the same samples as feeding it whole.
     Counters (read them after feeding): ``frames``, ``dropped`` (SYN_DROPPED), ``unplaced``
-    (contacts without X and Y, not emitted). ``protocol`` is ``"A"``, ``"B"`` or None.
+    (contacts without X and Y, not emitted), ``untracked`` (protocol B frames with
+    positions in a slot holding no ABS_MT_TRACKING_ID, not emitted). ``protocol`` is
+    ``"A"``, ``"B"`` or None.
 
     Parameters
     ----------
@@ -163,6 +165,7 @@ class EvdevDecoder:
         self.frames = 0
         self.dropped = 0
         self.unplaced = 0
+        self.untracked = 0
         self._frame: list[Event] = []
         self._skipping = False
         self._t_last = -math.inf
@@ -309,6 +312,7 @@ class EvdevDecoder:
 
     # -- protocol B ---------------------------------------------------------------------------
     def _frame_b(self, t: float, out: list[RawSample]) -> None:
+        positioned = set()  # slots given a position in this frame
         for ev in self._frame:
             if ev.type != EV_ABS:
                 continue
@@ -328,6 +332,9 @@ class EvdevDecoder:
                     slot.tracking_id, slot.new, slot.changed = ev.value, True, True
             else:
                 slot.set_axis(ev.code, ev.value)
+                if ev.code in (ABS_MT_POSITION_X, ABS_MT_POSITION_Y):
+                    positioned.add(self._slot)
+        self.untracked += any(self._slots[n].tracking_id < 0 for n in positioned)
         for number, slot in sorted(self._slots.items()):
             if slot.tracking_id < 0 or not slot.changed:
                 continue
@@ -346,9 +353,16 @@ class EvdevDecoder:
 
 
 def decode_all(events: Iterable[Event], where: str) -> tuple[list[RawSample], EvdevDecoder]:
-    """Decode a whole recording; events after the last SYN_REPORT are left in ``pending``."""
+    """Decode a whole recording; events after the last SYN_REPORT are left in ``pending``.
+    A recording with no touch whose positions all came in slots with no tracking id raises
+    TraceError saying so (a caller could only say it found no touches)."""
     decoder = EvdevDecoder(where)
-    return decoder.feed(events), decoder
+    samples = decoder.feed(events)
+    if not samples and decoder.untracked:
+        raise TraceError(f"{where}: no touches found: positions in {decoder.untracked} "
+                         f"frame{'s' if decoder.untracked != 1 else ''} came with no "
+                         "ABS_MT_TRACKING_ID (protocol B contacts start with one)")
+    return samples, decoder
 
 
 @dataclass(frozen=True)
