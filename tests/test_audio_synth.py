@@ -43,6 +43,16 @@ def test_arg_grammar():
     assert parse_arg("Scarlett 2i2,blocksize=128,ramp_ms=1").blocksize == 128
 
 
+def test_a_path_or_name_may_hold_an_equals_sign():
+    """Only an option's name before '=' makes the first part an option."""
+    assert parse_arg("wav:/tmp/a=b.wav") == AudioArgs(wav_path="/tmp/a=b.wav")
+    assert parse_arg("wav:/tmp/a=b.wav,rate=96000").rate == 96000.0
+    assert parse_arg("card=2,envelope") == AudioArgs(target="card=2", envelope=True)
+    assert parse_arg("rate").target == "rate"  # a name with no '='
+    assert parse_arg("rate=96000,envelope") == AudioArgs(rate=96000.0, envelope=True)
+    assert parse_arg(" profile = beam-seed000").profile == "beam-seed000"
+
+
 @pytest.mark.parametrize("arg, match", [
     ("x,loud", "option 'loud'"), ("rate=fast", "rate='fast'"), ("blocksize=1.5", "whole"),
     ("ramp_ms=-1", "> 0"), ("carrier=nan", "> 0"), ("wav:", "wav:PATH"),

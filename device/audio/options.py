@@ -18,7 +18,8 @@ Grammar of ARG (the text after ``audio:`` in ``--device audio:ARG``)::
              | "ramp_ms=" MS      start, stop, starvation and emergency-stop ramps (default
                                   2 ms; more than 0, at most 50 ms less one block)
 
-A PATH or NAME cannot contain a comma. The rate is a whole number of Hz from 8 kHz to
+A PATH or NAME cannot contain a comma, and a NAME that starts with an option's name and
+"=" (``rate=1``) is that option. The rate is a whole number of Hz from 8 kHz to
 768 kHz, the rates sound cards offer (a WAV file would take more, but nothing would play
 it; RIFF's 32-bit byte rate ends at 4.29 GHz / 4 bytes / channels). The rate must keep the
 carrier below 0.4 of it (192 kHz: up to 76.8 kHz; 96 kHz: up to 38.4 kHz; 768 kHz: up to
@@ -114,6 +115,8 @@ class AudioArgs:
 
 _NUMBERS = {"rate": float, "carrier": float, "full_scale": float, "blocksize": int,
             "buffer_ms": float, "ramp_ms": float}
+#: the names an OPTION takes before its '='
+_OPTION_NAMES = {"profile", *_NUMBERS}
 #: (lowest, highest, what the range is) of the options that size a buffer or a time;
 #: a lowest of 0 is excluded (``_number`` takes only numbers > 0)
 _RANGES = {
@@ -129,7 +132,8 @@ def parse_arg(arg: str) -> AudioArgs:
     """Read ARG (module docstring). Raises InputError naming the bad part."""
     parts = [p.strip() for p in arg.split(",")] if arg.strip() else [""]
     target, options = parts[0], parts[1:]
-    if target == "envelope" or "=" in target:
+    name, eq, _ = target.partition("=")  # an option by its name: wav:/tmp/a=b.wav is a PATH
+    if target == "envelope" or eq and name.strip() in _OPTION_NAMES:
         target, options = "", parts
     values: dict = {}
     if target.startswith("wav:"):
