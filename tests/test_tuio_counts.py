@@ -31,7 +31,7 @@ def test_every_drop_is_counted_and_said():
 
 def counts(**nonzero):
     base = {"listen": "0.0.0.0:3333", "sender": "10.0.0.7:5000", "datagrams": 1, "refused": 0,
-            "dropped": 0, "stale": 0, "bad_packets": 0, "bad_sets": 0, "malformed": {},
+            "kernel_dropped": 0, "dropped": 0, "stale": 0, "bad_packets": 0, "bad_sets": 0, "malformed": {},
             "late": 0, "stray": 0,
             "over_limit": 0, "unread": 0, "takeovers": 0}
     return base | nonzero

@@ -221,6 +221,8 @@ def input_name(kind: str, arg) -> str:
 #: thing counted (singular, plural) and why it was not played
 _TUIO_DROPS = (("refused", "datagram", "datagrams",
                 "refused (other senders, or before one was served)"),
+               ("kernel_dropped", "datagram", "datagrams",
+                "dropped by the kernel (socket receive buffer full)"),
                ("dropped", "datagram", "datagrams", "dropped (queue full)"),
                ("stale", "datagram", "datagrams", "dropped unread (stale, a newer one queued)"),
                ("bad_packets", "malformed datagram", "malformed datagrams", "dropped"),

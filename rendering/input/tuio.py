@@ -500,7 +500,12 @@ def exposure_warning(host: str, accept_from: tuple[str, int | None] | None) -> s
 #: kernel's receive time of each datagram, a struct timespec of two native longs
 _SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35 if sys.platform.startswith("linux") else None)
 _TIMESPEC = struct.Struct("@ll")
-_STAMP_SPACE = socket.CMSG_SPACE(_TIMESPEC.size)
+#: Linux's SO_RXQ_OVFL (asm-generic/socket.h; Python's socket module lacks it): a datagram
+#: carries the socket's running count of datagrams the kernel dropped, its receive buffer
+#: full, as a native uint32, once that count is not 0
+_SO_RXQ_OVFL = getattr(socket, "SO_RXQ_OVFL", 40 if sys.platform.startswith("linux") else None)
+_DROP_COUNT = struct.Struct("@I")
+_ANCILLARY_SPACE = socket.CMSG_SPACE(_TIMESPEC.size) + socket.CMSG_SPACE(_DROP_COUNT.size)
 
 
 def _age_s(ancillary) -> float:
@@ -512,6 +517,27 @@ def _age_s(ancillary) -> float:
             sec, nsec = _TIMESPEC.unpack(data[:_TIMESPEC.size])
             return max(time.time_ns() - (sec * 1_000_000_000 + nsec), 0) * 1e-9
     return 0.0
+
+
+def _kernel_drops(ancillary) -> int | None:
+    """The socket's count of datagrams the kernel dropped before this one was queued, from
+    its ``SO_RXQ_OVFL`` message; None without one (none dropped yet, or not asked)."""
+    for level, kind, data in ancillary:
+        if level == socket.SOL_SOCKET and kind == _SO_RXQ_OVFL and len(data) >= _DROP_COUNT.size:
+            return _DROP_COUNT.unpack(data[:_DROP_COUNT.size])[0]
+    return None
+
+
+def _count_kernel_drops(sock: socket.socket) -> bool:
+    """Ask the kernel to tell each datagram's drop count (``SO_RXQ_OVFL``); False where
+    the system cannot."""
+    if _SO_RXQ_OVFL is None:
+        return False
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, _SO_RXQ_OVFL, 1)
+    except OSError:
+        return False
+    return True
 
 
 def parse_sender(text: str) -> tuple[str, int | None]:
@@ -634,7 +660,9 @@ class TuioListener:
 
     The thread only stamps datagrams as they arrive and queues them (at most
     ``max_packets`` datagrams and ``max_bytes`` bytes; overflow is counted in ``dropped``
-    and said once through ``warn``); decoding happens in :meth:`poll`, on the
+    and said once through ``warn``; those the kernel dropped before the thread read them,
+    the socket's receive buffer full, in ``kernel_dropped`` where the system says, on
+    Linux); decoding happens in :meth:`poll`, on the
     caller's thread, which may block in :meth:`wait` until a datagram is there. One
     :meth:`poll` decodes at most :data:`POLL_DATAGRAMS` datagrams and
     :data:`POLL_BYTES` bytes of them (at least one datagram); the rest wait for the next.
@@ -709,6 +737,8 @@ class TuioListener:
         self._sock.settimeout(0.05)
         if _SO_TIMESTAMPNS is not None:
             self._sock.setsockopt(socket.SOL_SOCKET, _SO_TIMESTAMPNS, 1)
+        # datagrams the kernel dropped (receive buffer full); None: the system does not say
+        self.kernel_dropped: int | None = 0 if _count_kernel_drops(self._sock) else None
         self.port = self._sock.getsockname()[1]
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._receive, name=f"tuio-{self.port}", daemon=True)
@@ -717,11 +747,14 @@ class TuioListener:
     def _receive(self) -> None:
         while not self._stop.is_set():
             try:
-                data, ancillary, _, (address, port) = self._sock.recvmsg(65536, _STAMP_SPACE)
+                data, ancillary, _, (address, port) = self._sock.recvmsg(65536, _ANCILLARY_SPACE)
             except socket.timeout:
                 continue
             except OSError:
                 return
+            drops = _kernel_drops(ancillary)
+            if drops is not None:
+                self.kernel_dropped = drops
             now = self._clock()
             t = now - _age_s(ancillary)
             before = self.gate.sender
@@ -879,7 +912,9 @@ class TuioListener:
 
     def counters(self) -> dict:
         """What was received: ``datagrams`` accepted, ``refused`` (other senders, or
-        before one was served), ``dropped`` (queue full), ``stale`` (dropped unread, a
+        before one was served), ``kernel_dropped`` (by the kernel, the socket's receive
+        buffer full, as the last datagram received said; None where the system does not
+        say), ``dropped`` (queue full), ``stale`` (dropped unread, a
         newer one queued), ``bad_packets`` (malformed datagrams), the decoder's
         ``bad_sets`` (cursors skipped), ``malformed`` (how many of each kind of problem
         of those two, by :class:`OscError` kind), the decoder's ``late``, ``stray``,
@@ -887,7 +922,8 @@ class TuioListener:
         silent), and the ``sender`` served last ("ADDR:PORT", or None before the first)."""
         sender = None if self.gate.sender is None else _name(self.gate.sender)
         return {"listen": f"{self.host}:{self.port}", "sender": sender,
-                "datagrams": self.datagrams, "refused": self.refused, "dropped": self.dropped,
+                "datagrams": self.datagrams, "refused": self.refused,
+                "kernel_dropped": self.kernel_dropped, "dropped": self.dropped,
                 "stale": self.stale,
                 "bad_packets": self.bad_packets, "bad_sets": self.decoder.bad_sets,
                 "malformed": dict(self.malformed), "late": self.decoder.late,
