@@ -1,7 +1,8 @@
 """``device.audio.stream`` without a sound card: PortAudio's initialisation and open,
 bounded where the audio server does not answer; the device a number names; the ramp
-written in place of a dropped block. python-sounddevice is stood in for (``fake_sd``),
-and a hanging import by a module of that name in a process of its own."""
+written in place of a dropped block; the fade published with each part of a block longer
+than the ring. python-sounddevice is stood in for (``fake_sd``), and a hanging import by a
+module of that name in a process of its own."""
 
 from __future__ import annotations
 
@@ -56,9 +57,10 @@ def fake_sd(monkeypatch):
     return sd
 
 
-def open_output(device: str | None, *, paced: bool = True) -> StreamOutput:
-    return StreamOutput(make_plan(AudioArgs(), 1, RATE), device, blocksize=256,
-                        buffer_frames=0, phases=False, paced=paced, wait_s=5.0)
+def open_output(device: str | None, *, paced: bool = True, blocksize: int = 256,
+                buffer_frames: int = 0) -> StreamOutput:
+    return StreamOutput(make_plan(AudioArgs(), 1, RATE), device, blocksize=blocksize,
+                        buffer_frames=buffer_frames, phases=False, paced=paced, wait_s=5.0)
 
 
 # ----------------------------------------------------------------- a server that does not answer
@@ -153,3 +155,45 @@ def test_the_ramp_after_a_dropped_block_continues_the_last_frame_written(fake_sd
     ramp = ring.frames[written:written + 8, 0].astype(np.float64)
     expected = [carrier(written + k) * (1 - (k + 1) / plan.ramp_frames) for k in range(8)]
     np.testing.assert_allclose(ramp, expected, rtol=0, atol=1e-6)
+
+
+# ----------------------------------------------------------------- a block longer than the ring
+class RanDry(Exception):
+    """Ends a ``send`` once the callback has played the ring out."""
+
+
+@pytest.mark.parametrize("blocksize, buffer_frames, amplitudes_um", [
+    (256, 0, np.linspace(0.0, 3.0, 3000)),  # parts of 1024 frames, a ramp up to 3 um
+    (1, 192, np.full(100, 2.0)),  # parts of 192 frames, within the stream's start ramp
+])
+def test_the_fade_after_each_part_of_a_long_block_starts_from_that_part(
+        fake_sd, monkeypatch, blocksize, buffer_frames, amplitudes_um):
+    """Paced, a block longer than the ring goes in parts. The producer waits for room after
+    the first part, and the callback plays the ring out meanwhile and runs dry: the fade
+    it plays continues the part's last frames (level and carrier), no step. (The fade
+    after the whole block, 3 um or full scale, followed 0.02 full scale: a step of 1.6 full
+    scale, 150 V.)"""
+    out = open_output(None, blocksize=blocksize, buffer_frames=buffer_frames)
+    plan, played = out.plan, []
+
+    def callback_runs_dry() -> None:
+        queued = out.ring.tail - out.ring.head
+        buffer = np.zeros((queued + plan.ramp_frames + 16, 1), dtype=np.float32)
+        out.player.fill(buffer)
+        played.append((queued, buffer[:, 0].astype(np.float64)))
+        raise RanDry
+
+    monkeypatch.setattr(stream, "check_interrupt", callback_runs_dry)
+    with pytest.raises(RanDry):
+        out.send(0, amplitudes_um[:, None])
+    [(part, frames)] = played
+    assert part == out.ring.capacity - plan.ramp_frames
+    assert out.player.underruns == 1
+    # the part's last carrier peaks (the samples' peak: within 5 % of the level's)
+    level = float(np.max(np.abs(frames[part - 40:part])))
+    carrier_step = 2 * level * math.sin(math.pi * plan.carrier_hz / plan.audio_rate)
+    assert 0 < level < 0.6
+    steps = np.abs(np.diff(frames[part - 40:]))  # into the fade, through it, then zeros
+    assert np.max(steps) <= 1.05 * carrier_step + level / plan.ramp_frames
+    assert np.all(frames[part + plan.ramp_frames:] == 0.0)
+

@@ -216,10 +216,12 @@ class StreamOutput(AudioOutput):
             self._ramp_in = 0
             return
         step = ring.capacity - ramp
+        first = self.synth.frames - frames.shape[0]  # the synthesis's frame of frames[0]
         for lo in range(0, frames.shape[0], step):
             chunk = frames[lo:lo + step]
             self._wait_room(chunk.shape[0] + ramp)
-            self._write(chunk, self.synth.fade_tail())
+            # the fade after this part: the callback may run dry before the next
+            self._write(chunk, self.synth.fade_tail(first + lo + chunk.shape[0]))
 
     def _write(self, frames: np.ndarray, fade: np.ndarray | None = None) -> None:
         self.ring.write(frames.astype(np.float32), None if fade is None else fade.astype(np.float32))

@@ -68,6 +68,9 @@ class AudioSynth:
         self.clamped = 0
         self.finished = False
         self._last = np.zeros(plan.channels, dtype=np.complex128)  # command k - 1, full scale
+        # the last block's commands (its command k0 - 1 first) and k0: a fade may start at
+        # any of its frames (``fade_tail``)
+        self._block = (np.zeros((1, plan.channels), dtype=np.complex128), 0)
 
     def frames_until(self, commands: int) -> int:
         """Frames the stream has once ``commands`` command samples are in (exact)."""
@@ -105,25 +108,27 @@ class AudioSynth:
 
         n0, k0 = self.frames, self.commands
         n1 = self.frames_until(k0 + a.shape[0])
-        q0, r0 = divmod(n0 * self._rn, self._period)
-        t = r0 + np.arange(n1 - n0, dtype=np.int64) * self._rn
-        i = (q0 - k0) + t // self._period  # command index - k0, frame by frame
-        frac = ((t % self._period) / self._period)[:, None]
-        amp = commands[i] * (1.0 - frac) + commands[i + 1] * frac
-        out = self._carry(amp, n0)
-        if n0 < plan.ramp_frames:
-            out *= np.minimum(1.0, (np.arange(n0, n1) + 1.0) / plan.ramp_frames)[:, None]
+        out = self._carry(self._levels(commands, k0, n0, n1), n0)
         self.frames, self.commands = n1, k0 + a.shape[0]
         self._last = commands[-1].copy()
+        self._block = (commands, k0)
         return out
 
-    def fade_tail(self) -> np.ndarray:
-        """The ``ramp_frames`` frames that would follow if no command came: the last
-        command ramped linearly to 0, the carrier going on. (ramp_frames, channels)
-        float64; the state is unchanged (the ring keeps it for a starving callback)."""
+    def fade_tail(self, end: int | None = None) -> np.ndarray:
+        """The ``ramp_frames`` frames that would follow frame ``end - 1`` if no command
+        came after it: the level of frame ``end`` ramped linearly to 0, the carrier going
+        on. ``end``: a frame of the last block rendered (where the ring's part of it
+        ends), or None: the stream's end (``frames``), whose level is the last command's.
+        (ramp_frames, channels) float64; the state is unchanged (the ring keeps it for a
+        starving callback)."""
+        end = self.frames if end is None else int(end)
+        if end < self.frames:
+            level = self._levels(*self._block, end, end + 1)[0]
+        else:  # the next command is not known: the last one held
+            level = self._last * self._start_ramp(end, end + 1)[0]
         r = self.plan.ramp_frames
         gain = 1.0 - np.arange(1, r + 1, dtype=np.float64)[:, None] / r
-        return self._carry(self._last[None, :] * gain, self.frames)
+        return self._carry(level[None, :] * gain, end)
 
     def finish(self) -> np.ndarray:
         """The stream's last frames (:meth:`fade_tail`), taken: the stream ends at 0."""
@@ -132,6 +137,24 @@ class AudioSynth:
         self._last[:] = 0.0
         self.finished = True
         return tail
+
+    def _levels(self, commands: np.ndarray, k0: int, n0: int, n1: int) -> np.ndarray:
+        """Complex amplitudes (n1 - n0, channels), full scale, of frames ``n0 .. n1 - 1``:
+        ``commands`` (command ``k0 - 1`` first) interpolated (module docstring), on the
+        stream's ramp up from 0."""
+        q0, r0 = divmod(n0 * self._rn, self._period)
+        t = r0 + np.arange(n1 - n0, dtype=np.int64) * self._rn
+        i = (q0 - k0) + t // self._period  # command index - k0, frame by frame
+        frac = ((t % self._period) / self._period)[:, None]
+        amp = commands[i] * (1.0 - frac) + commands[i + 1] * frac
+        if n0 < self.plan.ramp_frames:
+            amp *= self._start_ramp(n0, n1)
+        return amp
+
+    def _start_ramp(self, n0: int, n1: int) -> np.ndarray:
+        """The gains (n1 - n0, 1) of frames ``n0 .. n1 - 1`` on the stream's first
+        ``ramp_frames`` frames' ramp up from 0 (1 after it)."""
+        return np.minimum(1.0, (np.arange(n0, n1) + 1.0) / self.plan.ramp_frames)[:, None]
 
     def _carry(self, amp: np.ndarray, n0: int) -> np.ndarray:
         """Complex amplitudes (m, channels) on the carrier from frame ``n0``, or their
