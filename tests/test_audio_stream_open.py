@@ -1,8 +1,9 @@
 """``device.audio.stream`` without a sound card: PortAudio's initialisation and open,
 bounded where the audio server does not answer; the device a number names; the ramp
 written in place of a dropped block; the fade published with each part of a block longer
-than the ring. python-sounddevice is stood in for (``fake_sd``), and a hanging import by a
-module of that name in a process of its own."""
+than the ring; a live ring that takes the blocks whatever ``buffer_ms``.
+python-sounddevice is stood in for (``fake_sd``), and a hanging import by a module of that
+name in a process of its own."""
 
 from __future__ import annotations
 
@@ -197,3 +198,15 @@ def test_the_fade_after_each_part_of_a_long_block_starts_from_that_part(
     assert np.max(steps) <= 1.05 * carrier_step + level / plan.ramp_frames
     assert np.all(frames[part + plan.ramp_frames:] == 0.0)
 
+
+# ----------------------------------------------------------------- a live ring
+def test_a_live_ring_takes_two_blocks_whatever_the_buffer(fake_sd):
+    """buffer_ms=1 and blocksize=1 (192 frames and 1 at 192 kHz; 192 usable beside the
+    384-frame ramp) against the live demo's 2.5 ms blocks, 480 frames: the ring takes two
+    of them, though the callback has played none (it dropped every block, silent)."""
+    out = open_output(None, paced=False, blocksize=1, buffer_frames=192)
+    for start in (0, 25):
+        out.send(start, np.full((25, 1), 2.0))
+    assert out.ring_full == 0
+    assert out.ring.tail == 2 * 480
+    assert out.ring.capacity == 2 * 480 + out.plan.ramp_frames

@@ -31,8 +31,10 @@ The plate must be still within :data:`MAX_STOP_MS` (50 ms) of a stop, as a seria
 device's ``watchdog_ms + ramp_ms`` (PROTOCOL.md 5.3): an emergency stop or a starving
 stream begins its ramp at the next callback, so one block (``blocksize`` frames at the
 rate) plus ``ramp_ms`` must not exceed it. ``buffer_ms`` is at most 1 s: a stop with drain
-plays the queue out first, and the ring holds that many frames. An option out of its
-range is refused in one line naming the option, what was typed and the range.
+plays the queue out first, and the ring holds that many frames (at least 4 ``blocksize``;
+live, two of the pipeline's blocks too: a block the ring cannot take is dropped).
+An option out of its range is refused in one line naming the option, what was typed and
+the range.
 
 The drive figures (``carrier_hz``, ``um_per_volt``, ``voltage_limit_v``) come from the
 device profile (``device.profile.PROFILES``): ``profile=`` where given (the plate wired to

@@ -5,7 +5,9 @@ The producer (the pipeline's thread) renders frames and writes them into a
 :class:`~device.audio.ring.FrameRing`; PortAudio's callback runs
 :meth:`~device.audio.ring.Player.fill` and nothing else (it never blocks, logs or
 allocates arrays). A paced stream starts once half the ring is queued (or at close), so the
-first callback finds frames; a live one with its first frames. The ring always keeps ``ramp_frames`` of room in reserve:
+first callback finds frames; a live one with its first frames, and its ring holds
+:data:`LIVE_BLOCKS` of the first block at least, whatever ``buffer_frames`` (less would
+drop every block). The ring always keeps ``ramp_frames`` of room in reserve:
 a live producer (``paced=False``) that finds no room for a block drops it (counted,
 ``ring_full``) and writes the ramp to 0 instead, and the next block ramps in. A paced
 producer (replay) waits for room, at most ``stall_s * max_stalls`` seconds (less once
@@ -57,6 +59,9 @@ DRAIN_MARGIN_S = 2.0
 #: bound on one PortAudio start, stop or close (s); a healthy device returns within a few
 #: periods
 PA_CALL_LIMIT_S = 3.0
+#: live blocks the ring holds at least (the first block's size): one playing, the next
+#: handed over
+LIVE_BLOCKS = 2
 
 
 def import_sounddevice(label: str = "audio"):
@@ -137,9 +142,10 @@ class StreamOutput(AudioOutput):
     ----------
     plan : synthesis figures. device : PortAudio output device (name or index; "" or
     None: the default). blocksize : frames per callback. buffer_frames : ring capacity
-    (frames). phases, paced, stderr : as ``AudioOutput``. wait_s : how long a paced
-    ``send`` may wait for room (s). tap_frames : record the callback's first
-    ``tap_frames`` output frames (``player.tap``; tests).
+    (frames; at least 4 blocksize, and live :data:`LIVE_BLOCKS` of the first block).
+    phases, paced, stderr : as ``AudioOutput``. wait_s : how long a paced ``send`` may
+    wait for room (s). tap_frames : record the callback's first ``tap_frames`` output
+    frames (``player.tap``; tests).
     """
 
     def __init__(self, plan: AudioPlan, device: str | None, *, blocksize: int,
@@ -148,9 +154,8 @@ class StreamOutput(AudioOutput):
         super().__init__(plan, f"audio:{device}" if device else "audio", phases=phases,
                          paced=paced, stderr=stderr)
         sd = self._sd = import_sounddevice(self.label)
-        capacity = max(int(buffer_frames), 4 * blocksize) + plan.ramp_frames
-        self.ring = FrameRing(capacity, plan.channels, plan.ramp_frames)
-        self.player = Player(self.ring, plan.ramp_frames, tap_frames)
+        self._tap_frames = tap_frames
+        self._make_ring(max(int(buffer_frames), 4 * blocksize))
         self.wait_s = float(wait_s)
         self.ring_full = 0
         self.not_drained = 0
@@ -186,6 +191,13 @@ class StreamOutput(AudioOutput):
         #: PortAudio's reported output latency (s): from a callback's buffer to the DAC
         self.output_latency_s = float(self.stream.latency)
 
+    def _make_ring(self, frames: int) -> None:
+        """The ring, ``frames`` ahead of the callback and the ramp's reserve besides, and
+        its player."""
+        ramp = self.plan.ramp_frames
+        self.ring = FrameRing(frames + ramp, self.plan.channels, ramp)
+        self.player = Player(self.ring, ramp, self._tap_frames)
+
     def _callback(self, outdata, frames, time_info, status) -> None:
         if status.output_underflow:
             self.xruns += 1
@@ -196,7 +208,10 @@ class StreamOutput(AudioOutput):
 
     # ----------------------------------------------------------------- producer
     def _emit(self, frames: np.ndarray) -> None:
-        ring, ramp = self.ring, self.plan.ramp_frames
+        ramp, need = self.plan.ramp_frames, LIVE_BLOCKS * frames.shape[0]
+        if not (self.paced or self._started) and self.ring.capacity - ramp < need:
+            self._make_ring(need)  # the first live block: no callback has the ring yet
+        ring = self.ring
         if self._ramp_in < ramp:  # after a dropped block: ramp in from 0
             g = min(frames.shape[0], ramp - self._ramp_in)
             frames[:g] *= (np.arange(self._ramp_in + 1, self._ramp_in + g + 1) / ramp)[:, None]
