@@ -237,3 +237,20 @@ def test_a_finger_left_down_after_a_syn_dropped_may_have_lost_its_lift(tmp_path,
     err = capsys.readouterr().err
     assert ("finger 0 still down at the end of the recording (cut mid-touch? or a lift lost "
             "to SYN_DROPPED?)") in err
+
+
+def test_positions_with_no_tracking_id_beside_touches_are_said_left_out(tmp_path, capsys):
+    """A protocol B slot that got X and Y but never a tracking id is no contact: left out,
+    and said (it was left out without a word)."""
+    rec = tmp_path / "rec.evemu"
+    rec.write_text("N: x\nA: 2f 0 9 0 0 0\nA: 35 0 1000 0 0 0\nA: 36 0 1000 0 0 0\n"
+                   "A: 39 0 65535 0 0 0\n"
+                   "E: 1.00 0003 002f 0\nE: 1.00 0003 0039 7\nE: 1.00 0003 0035 100\n"
+                   "E: 1.00 0003 0036 100\nE: 1.00 0000 0000 0\n"
+                   "E: 1.01 0003 002f 1\nE: 1.01 0003 0035 500\nE: 1.01 0003 0036 500\n"
+                   "E: 1.01 0000 0000 0\n"
+                   "E: 1.02 0003 002f 0\nE: 1.02 0003 0039 -1\nE: 1.02 0000 0000 0\n")
+    assert main(["trace", "import", str(rec), "-o", str(tmp_path / "o.csv"), "--width-mm", "50",
+                 "--height-mm", "50"]) == 0
+    assert ("positions in 1 frame came with no ABS_MT_TRACKING_ID (protocol B contacts start "
+            "with one) and were left out") in capsys.readouterr().err

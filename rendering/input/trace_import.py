@@ -205,6 +205,10 @@ def run_import(args: argparse.Namespace, write: Callable[[str, str], None]) -> i
         warnings.append(f"{decoder.dropped} SYN_DROPPED: the kernel lost events there")
     if decoder.unplaced:
         warnings.append(f"{decoder.unplaced} contact reports without a position were left out")
+    if decoder.untracked:
+        warnings.append(f"positions in {decoder.untracked} frame"
+                        f"{'s' if decoder.untracked != 1 else ''} came with no "
+                        "ABS_MT_TRACKING_ID (protocol B contacts start with one) and were left out")
     if decoder.pending:
         warnings.append(f"{decoder.pending} events after the last SYN_REPORT (an unfinished "
                         "frame) were left out")
