@@ -219,7 +219,9 @@ def test_a_transient_that_ends_by_60_s_is_taken():
      r"Pattern\[1\]\.Parameter: ParameterID is \{\"a\": 1\}, expected a string"),
     (_doc(_event("HapticTransient", 0.0), _control("HapticSharpnessControl", 0.0, points=[])),
      r"ParameterCurveControlPoints: no control points"),
-    (_doc(*[_event("HapticContinuous", 0.0, 59.0)] * 11), r"Pattern: the events play for 649 s"),
+    (_doc(*[_event("HapticContinuous", 0.0, 59.0)] * 11),
+     r"^AHAP: Pattern: the events play for 649 s in total; a clip's events play for at most "
+     r"600 s$"),
     (_doc(_event("HapticTransient", 0.0), _event("HapticContinuous", 59.5, 0.6)),
      r"^AHAP: Pattern\[1\]\.Event: ends at 60\.1 s; clips last at most 60 s$"),
     (_doc(_event("HapticTransient", 60.0)),  # a 17.5 ms tick at sharpness 0.5

@@ -292,8 +292,8 @@ def parse_ahap(text: str, depth: float, where: str = "AHAP") -> tuple[Clip, list
             r.fail(path, f"ends at {end:g} s; clips last at most {MAX_CLIP_S:g} s")
     playing = sum(clip.event_length_s(e) for e in events)
     if playing > MAX_EVENTS_S:
-        r.fail("Pattern", f"the events play for {playing:g} s in total; a clip's play for at "
-                          f"most {MAX_EVENTS_S:g} s")
+        r.fail("Pattern", f"the events play for {playing:g} s in total; a clip's events "
+                          f"play for at most {MAX_EVENTS_S:g} s")
     return clip, notes
 
 
