@@ -32,6 +32,7 @@ room, an output folder it cannot replace) touches nothing.
 from __future__ import annotations
 
 import json
+import math
 import os
 import time
 from dataclasses import dataclass
@@ -53,7 +54,7 @@ from frictex.app.engine.tables import (MEMORY, SMALLER_FORMAT, WRITE_ELSEWHERE, 
                                        check_room, has_room, load_writer, room_hint,
                                        row_bytes)
 from frictex.device.errors import DeviceError, InputError
-from frictex.rendering.input.trace_file import Trace, iter_trace, most_touching
+from frictex.rendering.input.trace_file import MOVE, UP, Trace, iter_trace, most_touching
 from frictex.rendering.pipeline import build_pipeline
 from frictex.textures.model import Scene
 
@@ -218,7 +219,8 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
     load_writer(options.fmt)  # the format's library: part of writing, not of start-up
     timer.seconds["write"] += time.perf_counter() - write0
     read0 = time.perf_counter()
-    source = TraceSource(chunks, max_gap_s=options.max_gap_s)
+    slides = SlideSteps()
+    source = TraceSource(slides.watch(chunks), max_gap_s=options.max_gap_s)
     t0 = source.first_time()
     timer.seconds["read"] += time.perf_counter() - read0
     staging = None if out_dir is None else Staging(out_dir)
@@ -270,6 +272,7 @@ def _replay(scene, trace, out_dir, options: ReplayOptions, sink, frames, check) 
             frames.into(folder)
         doc, tables = _run(pipeline, source, chunks, trace_path, scene, folder, options, sink,
                            frames, timer, check)
+        doc["warnings"] += sparse_touch_warnings(slides.median_s(), pipeline)
         doc["warnings"][:0] = scene_warnings
         output_s = doc["output"]["duration_s"]
         doc["timings"] = timings(pipeline, output_s, timer.seconds,
@@ -369,6 +372,81 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     if options.fmt == MEMORY:
         in_memory = {"commands": tables.commands.table, "friction": tables.friction.table}
     return doc, in_memory
+
+
+#: the renderers that synthesise a texture from the tracker's velocity between touch samples
+VELOCITY_RENDERERS = ("sht", "hybrid")
+
+
+class SlideSteps:
+    """The intervals (s) between a finger's touch samples while it slides (a move to
+    another position than its sample before, in the same touch), over the first
+    ``MAX_STEPS`` of them, gathered from the trace's chunks as the run reads them."""
+
+    MAX_STEPS = 100_000  # as TraceStats: the median over the first steps
+
+    def __init__(self):
+        self.steps: list[np.ndarray] = []
+        self.n_steps = 0
+        self._last: dict[int, tuple[float, float, float]] = {}  # touching finger -> (t, x, y)
+
+    def watch(self, chunks):
+        """``chunks`` (iterator of Trace) unchanged, each one added as it is read."""
+        for chunk in chunks:
+            self.add(chunk)
+            yield chunk
+
+    def add(self, chunk: Trace) -> None:
+        ids = np.array(list(self._last), dtype=np.int64)
+        held = np.array(list(self._last.values()), dtype=np.float64).reshape(-1, 3)
+        finger = np.concatenate((ids, chunk.finger))
+        order = np.argsort(finger, kind="stable")  # each finger's samples, the held one first
+        finger = finger[order]
+        t, x, y = (np.concatenate((held[:, k], column))[order]
+                   for k, column in enumerate((chunk.t_s, chunk.x_mm, chunk.y_mm)))
+        event = np.concatenate((np.full(ids.size, MOVE, dtype=np.int8), chunk.event))[order]
+        slide = ((finger[1:] == finger[:-1]) & (event[:-1] != UP) & (event[1:] == MOVE)
+                 & ((x[1:] != x[:-1]) | (y[1:] != y[:-1])))
+        steps = np.diff(t)[slide]
+        steps = steps[steps > 0][: max(self.MAX_STEPS - self.n_steps, 0)]
+        self.steps.append(steps)
+        self.n_steps += steps.size
+        for i in np.flatnonzero(np.append(finger[1:] != finger[:-1], True)).tolist():
+            if event[i] == UP:
+                self._last.pop(int(finger[i]), None)
+            else:
+                self._last[int(finger[i])] = (float(t[i]), float(x[i]), float(y[i]))
+
+    def median_s(self) -> float | None:
+        """The median interval (s), None where no finger slid."""
+        return float(np.median(np.concatenate(self.steps))) if self.n_steps else None
+
+
+def sparse_touch_warnings(step_s: float | None, pipeline) -> list[str]:
+    """The sentence for a sliding finger sampled (median interval ``step_s``, s) more
+    sparsely than the tracker's prediction horizon, on a scene with layers that
+    :data:`VELOCITY_RENDERERS` render: past the horizon the tracker takes the finger as
+    resting (velocity 0) until its next sample, and samples more than ``max_gap_s`` apart
+    give it no velocity at all (``rendering.tracking.tracks``), so those layers play no
+    texture there, where SHO plays the texture under each sample."""
+    config = pipeline.tracker_config
+    horizon, gap = config.predict_horizon_s, config.max_gap_s
+    layers = [f"{layer.name!r} ({mode})" for layer, mode in
+              zip(pipeline.scene.layers, pipeline.layer_modes) if mode in VELOCITY_RENDERERS]
+    if not layers or step_s is None or step_s <= horizon:
+        return []
+    plays = "plays" if len(layers) == 1 else "play"
+    if step_s > gap:
+        none = f"no texture at all: samples more than {gap:g} s apart give a finger no velocity"
+    else:
+        none = (f"no texture from {horizon:g} s after each sample until the next (the finger "
+                "is then taken as resting)")
+    return [f"the touch samples of a sliding finger are {step_s:.3g} s apart (median), more "
+            f"than the tracker's {horizon:g} s prediction horizon (its velocity window "
+            f"{config.velocity_window_s:g} s): layer{'s' if len(layers) > 1 else ''} "
+            f"{', '.join(layers)} {plays} {none}; replay with --renderer sho "
+            f"(render_override=\"sho\"), or record at least {math.ceil(1 / horizon)} touch "
+            "samples a second"]
 
 
 def _dropped_warnings(sinks: list) -> list[str]:
