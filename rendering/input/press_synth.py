@@ -17,7 +17,7 @@ import numpy as np
 
 from frictex.device.errors import InputError
 from frictex.rendering.input.trace_file import DOWN, MOVE, UP, Trace, make_trace
-from frictex.rendering.input.trace_synth import sample_count
+from frictex.rendering.input.trace_synth import sample_times
 
 
 #: where the finger presses (mm): on keyclick-ring's button (50-90 x 5-25 mm)
@@ -44,7 +44,7 @@ def press_trace(peaks_n=(1.0, 0.95, 1.1), x_mm: float = PRESS_MM[0], y_mm: float
     start = 0.0
     for peak in peaks_n:
         duration = 2 * rise_s + hold_s
-        t = np.arange(sample_count(duration, rate_hz)) / rate_hz
+        t = sample_times(duration, rate_hz)
         up = np.clip(t / rise_s, 0.0, 1.0)
         down = np.clip((duration - t) / rise_s, 0.0, 1.0)
         s = np.minimum(_min_jerk(up), _min_jerk(down))

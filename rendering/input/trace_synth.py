@@ -288,16 +288,16 @@ def sample(motion: Motion, rate_hz: float, *, noise_mm: float = 0.0, jitter_s: f
     ``noise_mm``: standard deviation of position noise; ``jitter_s``: standard deviation
     of timestamp jitter (kept strictly increasing, :func:`_jittered`); ``drop``: share of
     samples in [0, 1) the screen never reports (drawn independently; the first and the
-    last are always kept). Fewer than 2 samples (a touch and a lift) is an InputError.
+    last are always kept). The lift lies at the motion's end (:func:`sample_times`).
     """
     if rate_hz <= 0:
         raise InputError(f"sampling rate {rate_hz} Hz must be > 0")
     if not 0.0 <= drop < 1.0:
         raise InputError(f"drop {drop!r}: expected a share of samples in [0, 1)")
     _check_jitter(jitter_s, rate_hz)
-    n = _sample_count(motion.duration_s, rate_hz)
+    t = sample_times(motion.duration_s, rate_hz)
+    n = t.size
     rng = np.random.default_rng(seed + 1)
-    t = np.arange(n) / rate_hz
     if jitter_s > 0:
         t = _jittered(t, rng.normal(0, jitter_s, n), motion.duration_s, rate_hz)
     if drop > 0:
@@ -322,22 +322,31 @@ MIN_GAP_INTERVALS = 0.1
 
 
 def sample_count(duration_s: float, rate_hz: float) -> int:
-    """Samples in [0, ``duration_s``] (s) at ``rate_hz`` (Hz), the last at the end when the
-    duration is a whole number of intervals to within COUNT_TOLERANCE (0.57 s at 100 Hz
-    is 56.999... intervals in floating point, and 58 samples, not 57)."""
+    """Samples in [0, ``duration_s``] (s) at ``rate_hz`` (Hz) (:func:`sample_times`): one
+    every interval from 0, and one at the end itself unless the duration is a whole number
+    of intervals, its last sample already there."""
+    whole = _whole_intervals(duration_s, rate_hz)
+    return whole + 1 if whole is not None else int(np.floor(duration_s * rate_hz)) + 2
+
+
+def sample_times(duration_s: float, rate_hz: float) -> np.ndarray:
+    """Sample times (s): k / ``rate_hz`` from 0, and ``duration_s`` itself last when the
+    duration is not a whole number of intervals, so that a stroke or press lasts what was
+    asked (1.01 s at 3 Hz ended at 1.0 s; a 1.3 s press at 3 Hz lifted at 1.0 s, at 0.55 N
+    instead of its touch force)."""
+    t = np.arange(sample_count(duration_s, rate_hz)) / rate_hz
+    if _whole_intervals(duration_s, rate_hz) is None:
+        t[-1] = duration_s
+    return t
+
+
+def _whole_intervals(duration_s: float, rate_hz: float) -> int | None:
+    """The sample intervals in ``duration_s`` (s) at ``rate_hz`` (Hz) when they are a whole
+    number to within COUNT_TOLERANCE (0.57 s at 100 Hz is 56.999... intervals in floating
+    point: 57), else None."""
     intervals = duration_s * rate_hz
     whole = round(intervals)
-    return int(whole if abs(intervals - whole) < COUNT_TOLERANCE else np.floor(intervals)) + 1
-
-
-def _sample_count(duration_s: float, rate_hz: float) -> int:
-    """:func:`sample_count`, or an InputError for fewer than 2: a touch needs its down and
-    its lift."""
-    n = sample_count(duration_s, rate_hz)
-    if n < 2:
-        raise InputError(f"duration {duration_s:g} s at {rate_hz:g} Hz gives {n} sample; a trace "
-                         f"needs at least 2 (a touch and a lift), {1 / rate_hz:g} s or more")
-    return n
+    return int(whole) if abs(intervals - whole) < COUNT_TOLERANCE else None
 
 
 def _jittered(t: np.ndarray, jitter: np.ndarray, duration_s: float, rate_hz: float) -> np.ndarray:
