@@ -56,6 +56,9 @@ def test_a_path_or_name_may_hold_an_equals_sign():
 @pytest.mark.parametrize("arg, match", [
     ("x,loud", "option 'loud'"), ("rate=fast", "rate='fast'"), ("blocksize=1.5", "whole"),
     ("ramp_ms=-1", "> 0"), ("carrier=nan", "> 0"), ("wav:", "wav:PATH"),
+    # a misspelt first option was taken for a device NAME holding '='
+    ("rat=1000", r"no option 'rat' \(did you mean rate=\?\)"),
+    ("bufer_ms=3,envelope", "did you mean buffer_ms="),
 ])
 def test_arg_errors(arg, match):
     with pytest.raises(InputError, match=match):

@@ -48,6 +48,8 @@ limit either: with ``profile=`` naming another profile, the limit is the lower o
 
 from __future__ import annotations
 
+import difflib
+
 import math
 from dataclasses import dataclass
 
@@ -137,6 +139,10 @@ def parse_arg(arg: str) -> AudioArgs:
     name, eq, _ = target.partition("=")  # an option by its name: wav:/tmp/a=b.wav is a PATH
     if target == "envelope" or eq and name.strip() in _OPTION_NAMES:
         target, options = "", parts
+    elif eq and not target.startswith("wav:") and (
+            close := difflib.get_close_matches(name.strip(), sorted(_OPTION_NAMES), n=1)):
+        raise InputError(f"audio device option {target!r}: no option {name.strip()!r} (did you "
+                         f"mean {close[0]}=?)")
     values: dict = {}
     if target.startswith("wav:"):
         path = target[4:]
