@@ -197,7 +197,13 @@ class Locator:
         return path
 
     def line(self, path: KeyPath) -> int | None:
-        """The line defining ``path``, or its nearest ancestor's; None if none is in the file."""
+        """The line defining ``path``; for a table only implied by its sub-tables' headers
+        (``[layer.visual]`` makes ``layer`` a table), the first of those; else its nearest
+        ancestor's; None if none is in the file."""
+        if path and path not in self._lines:
+            inside = [n for p, n in self._lines.items() if p[:len(path)] == path]
+            if inside:
+                return min(inside)
         while path:
             if path in self._lines:
                 return self._lines[path]

@@ -98,8 +98,9 @@ def parse_layers(r: Reader, doc: dict, display, files: Files):
                              f"start each layer with [[layer]]")
         return None
     if len(raw) > MAX_LAYERS:
-        r.report(("layer",), f"{len(raw)} [[layer]] tables; a scene holds at most {MAX_LAYERS} "
-                             f"(every layer is evaluated for every finger at every output sample)")
+        r.report(("layer", MAX_LAYERS), f"{len(raw)} [[layer]] tables; a scene holds at most "
+                                        f"{MAX_LAYERS} (every layer is evaluated for every "
+                                        f"finger at every output sample)")
         return None
     names: dict[str, int] = {}
     built = [parse_layer(r, item, i, display, files, names) for i, item in enumerate(raw)]
