@@ -299,7 +299,8 @@ documented(CALIBRATION, {
     "amplitudes_um": "measured amplitudes (um, zero-to-peak), from 0, strictly increasing",
     "forces_n": "normal forces (N) of the rows of `mu`, strictly increasing",
     "mu": "one row per force, one mu' per amplitude; each row starts at 1 and strictly "
-          "decreases. Replaces the model of [device.friction]",
+          "decreases. Replaces the model of [device.friction] (`validate` warns at its keys "
+          "given beside the table, which change nothing unless a force layer uses them)",
 })
 _STRUCTURE_COMMON = {
     "thickness_mm": "thickness of the structure (mm)",

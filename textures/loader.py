@@ -26,6 +26,7 @@ default shown. Layers are drawn and composed in file order (later on top).
     asymptote_per_n = 1.13            # >= 0 (asymptote A = asymptote_per_n * F_n;
                                       # 0: friction not depending on F_n)
     [device.calibration]              # optional measured table, replaces the model
+                                      #   (validate warns at [device.friction] keys beside it)
     amplitudes_um = [0, ...]          # >= 2 values, starting at 0, strictly increasing
     forces_n = [...]                  # >= 1 value, >= 0, strictly increasing
     mu = [[1, ...], ...]              # one row per force, one value per amplitude: each row
@@ -188,7 +189,8 @@ from frictex.textures.extent import lowering
 from frictex.textures.errors import Locator, Problem, TextureError
 from frictex.textures.keys import FORMAT_VERSION, LAYER_KEYS, LAYER_TYPES, TOP
 from frictex.textures.schema import BAD, Reader
-from frictex.textures.sections.device import device_warnings, force_device, parse_device, parse_display
+from frictex.textures.sections.device import (device_warnings, force_device, parse_device,
+                                              parse_display, unused_friction_warnings)
 from frictex.textures.outside import allow_outside_from_env
 from frictex.textures.sections.files import Files
 from frictex.textures.sections.layers import (lift_warnings, parse_layers, reach_warnings,
@@ -298,6 +300,7 @@ def _check_document(path: Path, doc: dict, r: Reader, allow_outside: bool,
     if r.problems or display is None or device is None or built is None:
         return None, r.problems, r.warnings
     device_warnings(r, device)
+    unused_friction_warnings(r, doc, device, built)
     reach_warnings(r, device, built)
     selector_warnings(r, device, built)
     lift_warnings(r, built)

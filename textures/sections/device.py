@@ -16,7 +16,7 @@ from frictex.device.safe_text import escape, escape_path
 from frictex.textures.errors import KeyPath, TextureError
 from frictex.textures.keys import (CALIBRATION, DEVICE, DISPLAY, DRIVING, FITTED, FRICTION,
                                    STRUCTURES)
-from frictex.textures.schema import BAD, Reader, show
+from frictex.textures.schema import BAD, Reader, Retired, show
 from frictex.textures.sections.common import strictly_increasing
 from frictex.textures.sections.files import Files
 from frictex.textures.toml_safe import MAX_FILE_BYTES
@@ -214,6 +214,21 @@ def device_warnings(r: Reader, device: profiles.DeviceProfile) -> None:
                  warning=True)
     for key, message in outside_fit(device.friction):
         r.report(("device", "friction", key), message, warning=True)
+
+
+def unused_friction_warnings(r: Reader, doc: dict, device: profiles.DeviceProfile, built) -> None:
+    """Warn at each ``[device.friction]`` key given beside ``[device.calibration]``: the
+    table replaces seed 003's eq 2, so the key changes nothing unless a force layer's
+    tangential force uses it. Not refused: ``frictex calibrate`` writes both where the
+    model does not fit, the constants kept for when the table is removed."""
+    if device.calibration is None or any(isinstance(layer, model.FORCE_LAYERS)
+                                          for layer, _ in built):
+        return
+    for key in doc["device"].get("friction", {}):
+        if key in FRICTION and not isinstance(FRICTION[key], Retired):
+            r.report(("device", "friction", key),
+                     "has no effect: the [device.calibration] table replaces seed 003's eq 2 "
+                     "(remove the table to use this value, or remove the key)", warning=True)
 
 
 def _channel_limit(device: profiles.DeviceProfile, spec) -> tuple[KeyPath | None, float]:
