@@ -260,11 +260,12 @@ def _hatch_below(ax, below: np.ndarray, d, viewport, left_out) -> None:
                     hatches=["////"])
         ax.contour(xs, ys, below.astype(np.float64), levels=[0.5], colors="red",
                    linewidths=0.8)
-    note = left_out_note(left_out)
-    ax.set_title("target mu' of a finger touching alone (1 = plate at rest)"
-                 + (f"; hatched: below the floor ({below.mean():.0%})" if below.any() else "")
-                 + ("\n" + "\n".join(textwrap.wrap(escape(note, limit=None), 90)) if note else ""),
-                 fontsize=10)
+    # one short line each: a long one ran under the colour bar beside the panel
+    lines = ["target mu' of a finger touching alone (1 = plate at rest)"]
+    if below.any():
+        lines.append(f"hatched: below the floor ({below.mean():.1%} of the display)")
+    lines += textwrap.wrap(escape(left_out_note(left_out), limit=None), len(lines[0]))
+    ax.set_title("\n".join(lines), fontsize=10)
 
 
 def _floor_bar(fig, shown, ax, flat: bool, floor: float, force: float, vmin: float) -> None:
