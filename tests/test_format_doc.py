@@ -270,6 +270,18 @@ def test_the_walkthroughs_warning_is_what_validate_prints(tmp_path, capsys):
     assert " ".join(err.split()) in page
 
 
+def test_the_walkthroughs_shares_below_the_floor_are_the_preview_and_validate_ones(tmp_path):
+    """The page gives preview's share (mu' averaged over each pixel) beside validate's
+    (mu' at points), and why they differ; both take the knot sliding towards +x."""
+    from frictex.app.commands.preview import preview_figure
+    from frictex.rendering.reach import scene_reach
+    scene = L.load_scene(write_examples(tmp_path)["plank-first"])
+    below = preview_figure(scene)[1]["below"]
+    page = " ".join(PAGE.read_text(encoding="utf-8").split())
+    assert (f"hatches the places below the floor: {below:.1%} of the display, not "
+            f"{scene_reach(scene).area_share:.1%}, as it averages mu' over each pixel") in page
+
+
 def test_the_corrected_plank_plays_without_a_clamp_and_its_knot_is_felt(tmp_path):
     """The walk-through's plank, replayed with a vertical swipe at 40 mm/s through the
     knot: no target below the device's floor (the first plank: hundreds), and friction

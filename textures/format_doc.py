@@ -77,9 +77,12 @@ file.
    overlap are never multiplied. The region
    adds a step too: a height layer covers its region at `mu_rest` (0.8), so the knot's
    disc is a step of 0.8 against 1 outside it (see Regions). `frictex preview plank.toml -o
-   plank.png` hatches the places below the floor. The fix: shallower grain and rings,
-   and the knot without a region (a bump's slope vanishes beyond about 3 sigma, so it is
-   confined already; its rest level then covers the whole display evenly, no step):
+   plank.png` hatches the places below the floor: 13.2% of the display, not 13.8%, as
+   it averages mu' over each pixel (a pixel across the edge of a band below the floor
+   can average above it) where `validate` reads mu' at points. The fix: shallower grain
+   and rings, and the knot without a region (a bump's slope vanishes beyond about 3
+   sigma, so it is confined already; its rest level then covers the whole display
+   evenly, no step):
 
 <!-- example: plank -->
 ```toml
