@@ -28,7 +28,7 @@ from frictex.app.commands.argtypes import positive_int
 from frictex.app.engine.fanout import default_workers, fan_out
 from frictex.app.measure import report_matrix as rm
 from frictex.app.measure.tail import P99_SAMPLES
-from frictex.device.errors import InputError
+from frictex.device.errors import InputError, disk_full
 from frictex.rendering.pipeline import BLOCK_S
 
 #: seconds of live 5 ms blocks timed per case (``--quick``: the fewest blocks whose
@@ -45,7 +45,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "output-rate sweep and LUT inversion runs), half the draws "
                              "and 4 s closed-loop runs: a few minutes")
     parser.add_argument("--scenes", nargs="+", metavar="NAME", default=list(rm.SCENES),
-                        help=f"bundled scenes to include (default: {' '.join(rm.SCENES)})")
+                        help=f"the matrix's scenes to include, some of {' '.join(rm.SCENES)}, "
+                             "each once (default: all of them)")
     parser.add_argument("--jobs", type=positive_int, default=None, metavar="N",
                         help="cases at once over this machine's cores (default: all of them; "
                              "report.json records it: timing figures measured N at a time)")
@@ -130,10 +131,7 @@ def _timed(timings: dict, section: str, measure):
 def _checked(args: argparse.Namespace) -> tuple[Path, Path | None]:
     """The output folder, made (fail now, not after the matrix has run), and the folder
     of real recordings (None without ``--real``; one without recordings fails now)."""
-    unknown = [s for s in args.scenes if s not in rm.SCENES]
-    if unknown:
-        raise InputError(f"--scenes: unknown scene(s) {', '.join(unknown)}; expected some of "
-                         f"{', '.join(rm.SCENES)}")
+    _check_scenes(args.scenes)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {out}: exists and is not a folder")
@@ -146,8 +144,24 @@ def _checked(args: argparse.Namespace) -> tuple[Path, Path | None]:
         from frictex.app.measure import report_closed_loop as rcl
         from frictex.app.measure.link_report_delays import read
         read(args.loop_delays, rcl.RATE_HZ, rcl.BLOCK)
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        said = f"--out {out}: cannot make the report folder ({exc.strerror})"
+        raise disk_full(exc, said) or InputError(said) from None
     return out, real_dir
+
+
+def _check_scenes(scenes: list[str]) -> None:
+    """Refuse a scene outside the matrix's, and one named twice (its draws would count
+    twice in every claim's interval)."""
+    outside = [s for s in scenes if s not in rm.SCENES]
+    if outside:
+        raise InputError(f"--scenes: {', '.join(outside)} {'is' if len(outside) == 1 else 'are'} "
+                         f"not among the report's scenes; give some of {', '.join(rm.SCENES)}")
+    repeated = next((s for i, s in enumerate(scenes) if s in scenes[:i]), None)
+    if repeated is not None:
+        raise InputError(f"--scenes: {repeated} given twice; give each scene once")
 
 
 def _matrix(args: argparse.Namespace, jobs: int):
