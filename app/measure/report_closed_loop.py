@@ -456,12 +456,14 @@ def claims(section: LoopSection) -> list[Claim]:
     ad = section.adaptation
     if ad:
         mean, low, high, n = paired(ad.gaps, [ADAPT_TARGET] * len(ad.gaps))
+        above = sum(gap > ADAPT_TARGET for gap in ad.gaps)
         out.append(Claim(
             "closed loop: adaptation", ad.scene, "human", "adapted_gap",
             f"after {ad.duration_s:g} s of sliding (the target: 60 s), feed-forward with "
-            f"the adapted model is within {ADAPT_TARGET:.0%} RMS of the true finger: gap - "
-            f"{ADAPT_TARGET:g} = {mean:+.3f}, 95 % interval [{low:+.3f}, {high:+.3f}], {n} "
-            f"fingers, largest gap {ad.gap_max:.3f}", mean, low, high, n, bool(high < 0.0)))
+            f"the adapted model is within {ADAPT_TARGET:.0%} RMS of the true finger in the "
+            f"mean over the fingers: mean gap - {ADAPT_TARGET:g} = {mean:+.3f}, 95 % interval "
+            f"[{low:+.3f}, {high:+.3f}], {n} fingers; largest gap {ad.gap_max:.3f} ({above} "
+            f"of {n} fingers above {ADAPT_TARGET:g})", mean, low, high, n, bool(high < 0.0)))
     return out
 
 
