@@ -25,7 +25,9 @@ title): a height layer as a finger sliding towards +x feels it (climbing flanks 
 its rest level, descending ones below); a recorded texture at its mean; a clip at rest
 (mu' 1) in the map, with its trigger, length and deepest mu' in the title (the lowest
 of its samples at the default 10 kHz output rate, which is 1 - depth only where its
-events reach full level).
+events reach full level). Force layers (directional, guidance, keyclick) are mu' 1 in the
+map: the title and a printed line give what each does (mu' or force per direction of
+travel, the pull, the push and its thresholds) and where.
 
 Under the panels, and printed, as ``frictex validate --perception`` reports them
 (``rendering.perception``): the scene's features a finger will not feel (below a
@@ -131,8 +133,11 @@ def layer_kind(layer) -> str:
     return type(layer).__name__.lower()
 
 
-def _layer_note(layer) -> str:
-    """How the title describes a layer."""
+def _layer_note(layer, display) -> str:
+    """How the title describes a layer of a scene on ``display``."""
+    from frictex.textures.model import FORCE_LAYERS
+    if isinstance(layer, FORCE_LAYERS):
+        return f"{layer.name} ({layer_kind(layer)}: {force_effect(layer, display)}; not in the map)"
     kind = getattr(layer, "renderer_kind", None)
     if kind == "height":
         return f"{layer.name} ({layer_kind(layer)}, felt moving +x)"
@@ -144,6 +149,68 @@ def _layer_note(layer) -> str:
                 f"deepest mu' {deepest:.3f}; not in the map)")
     return (f"{layer.name} ({layer_kind(layer)}, {layer.render}"
             + (f", {layer.period_mm:g} mm" if layer.is_periodic else "") + ")")
+
+
+def force_effect(layer, display) -> str:
+    """What a force layer (``textures.model.FORCE_LAYERS``: mu' 1 in the friction map) does
+    to a finger, in words, and where on ``display`` (mm)."""
+    from frictex.textures.model import Directional, Guidance
+    if isinstance(layer, Directional):
+        ahead, back = ("+x", "-x") if layer.axis_sign > 0 else ("-x", "+x")
+        if layer.target == "mu":
+            what = f"mu' {layer.forward:g} moving {ahead}, {layer.backward:g} moving {back}"
+        else:
+            what = (f"a net tangential force of {layer.forward:g} N moving {ahead}, "
+                    f"{layer.backward:g} N moving {back} (positive resists the finger)")
+    elif isinstance(layer, Guidance):
+        what = (f"a pull towards {_guidance_target(layer)}, {layer.gain_n_per_mm:g} N/mm "
+                f"up to {layer.max_force_n:g} N")
+    else:  # KeyClick
+        what = (f"a push of {layer.force_n:g} N towards {'+x' if layer.first_push > 0 else '-x'} "
+                f"from a press of {layer.press_n:g} N, reversed at {layer.click_n:g} N, "
+                f"released below {layer.release_n:g} N")
+    return f"{what}, {_within(_force_box(layer, display), display)}"
+
+
+def _guidance_target(layer) -> str:
+    """A guidance layer's target point or line, in words (mm)."""
+    if not layer.line:
+        return f"({layer.x_mm:g}, {layer.y_mm:g}) mm"
+    angle = layer.line_angle_deg % 180.0
+    if angle == 90.0:
+        return f"the line x = {layer.x_mm:g} mm"
+    if angle == 0.0:
+        return f"the line y = {layer.y_mm:g} mm"
+    return f"the line through ({layer.x_mm:g}, {layer.y_mm:g}) mm at {layer.line_angle_deg:g} deg"
+
+
+def _force_box(layer, display):
+    """The box (mm) holding where a force layer acts on ``display``: its region and, for a
+    button, its rectangle; None where they share no area."""
+    from frictex.textures.extent import display_box, intersect, region_box
+    box = display_box(display)
+    for region in (layer.region, getattr(layer, "geometry", None)):
+        if region is not None:
+            box = intersect(box, region_box(region))
+    return box
+
+
+def _within(box, display) -> str:
+    """Where ``box`` (mm) lies on ``display``, in words: only the axes it does not span."""
+    if box is None:
+        return "nowhere on the display"
+    x0, y0, x1, y1 = box
+    parts = ([] if x0 <= 0.0 and x1 >= display.width_mm else [f"x {x0:g}-{x1:g}"]) \
+        + ([] if y0 <= 0.0 and y1 >= display.height_mm else [f"y {y0:g}-{y1:g}"])
+    return f"within {', '.join(parts)} mm" if parts else "over the whole display"
+
+
+def force_notes(scene) -> list[str]:
+    """Each force layer of ``scene`` (not in the friction map) and what it does, in words."""
+    from frictex.textures.model import FORCE_LAYERS
+    return [f"{layer.name} ({layer_kind(layer)}, not in the friction map): "
+            f"{force_effect(layer, scene.display)}"
+            for layer in scene.layers if isinstance(layer, FORCE_LAYERS)]
 
 
 def mu_map(scene, viewport, supersample: int = 3) -> np.ndarray:
@@ -210,8 +277,8 @@ def preview_figure(scene, size: tuple[int, int] | None = None, outlines: bool = 
     felt, rendering = _captions(fig, scene)
     info = {"mu_min": float(mu.min()), "mu_max": float(mu.max()), "floor": floor,
             "below": float(below.mean()), "size": (viewport.width_px, viewport.height_px),
-            "left_out": left_out_note(left_out), "perception": felt, "rendering": rendering,
-            "map": mu}
+            "left_out": left_out_note(left_out), "forces": force_notes(scene),
+            "perception": felt, "rendering": rendering, "map": mu}
     return fig, info
 
 
@@ -290,7 +357,7 @@ def _captions(fig, scene) -> tuple[list[str], list[str]]:
     """Title ``fig`` with the scene's layers and caption it with what a finger will not
     feel and how layers render (``rendering.perception``); return those two lists of
     messages."""
-    layers = "; ".join(_layer_note(layer) for layer in scene.layers)
+    layers = "; ".join(_layer_note(layer, scene.display) for layer in scene.layers)
     fig.suptitle("\n".join(textwrap.wrap(f"layers: {layers}", 150)), fontsize=9)
     findings = scene_findings(scene)
     felt = [f.message for f in findings if f.kind not in RENDERING_KINDS]
@@ -355,7 +422,8 @@ def _png_path(out: Path, option: str) -> Path:
     if out.suffix.lower() != ".png":
         raise InputError(f"{option} {str(out)!r}: expected a .png file name")
     if not out.parent.is_dir():
-        raise InputError(f"output folder {str(out.parent)!r} does not exist")
+        state = "exists but is not a folder" if out.parent.exists() else "does not exist"
+        raise InputError(f"output folder {str(out.parent)!r} {state}")
     return out
 
 
@@ -383,6 +451,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote {escape_path(scene_out)}: the scene as the demo's window draws it, {w} x {h} px, "
           f"{w / d.width_mm:.4g} px/mm along x, {h / d.height_mm:.4g} along y ("
           + why_this_size(d, (w, h), args.size) + ")")
+    for message in info["forces"]:
+        print(f"force layer {printable(message)}")
     for message in info["perception"]:
         print(f"perception: {printable(message)}")
     for message in info["rendering"]:
