@@ -8,7 +8,7 @@ from hypothesis.extra.numpy import arrays
 
 from frictex.device.actuation.base import touch_rank
 from frictex.device.actuation.modal import _gains_2x2, _gains_svd, _scale_to_limits, forward, magnitude, solve
-from frictex.device.actuation.modal import NEAR_SINGULAR, achieved_magnitude
+from frictex.device.actuation.modal import NEAR_SINGULAR, NODE_FLOOR, achieved_magnitude
 from frictex.device.actuation.modal_actuation import _serve_rows, _served_fingers
 from frictex.device.structures.beam import FreeFreeBeam, _mode
 
@@ -272,6 +272,12 @@ def test_solve_on_seed000_fingers_crossing_keeps_its_answers():
     assert_same_bits(sol.achieved_um, numpy_forward(phi, modal))
 
 
+def on_nodes_at_rest(phi, modal, capped):
+    """solve's rule: no modal amplitude, counted capped, where every shape is below NODE_FLOOR."""
+    rest = np.abs(phi).max(axis=(-2, -1)) < NODE_FLOOR
+    return np.where(rest[:, None], 0j, modal), capped | rest
+
+
 @SETTINGS
 @given(system=systems(), method=st.sampled_from(["exact", "regularised"]),
        actuators=arrays(np.float64, (2, 2), elements=st.floats(-2, 2)).filter(lambda a: np.linalg.cond(a) < 1e6),
@@ -289,6 +295,7 @@ def test_solve_is_the_numpy_chain_bit_for_bit(system, method, actuators, limits)
     regularised = method == "regularised"
     modal, capped, ratio = numpy_gains_2x2(phi, wanted, 0.1 if regularised else 1e-12, regularised)
     capped |= ratio < NEAR_SINGULAR  # solve's rule: near a singular locus whatever the method
+    modal, capped = on_nodes_at_rest(phi, modal, capped)
     commands = numpy_forward(actuators, modal)
     limited = np.zeros(len(phi), bool)
     if limits is not None:
@@ -322,6 +329,7 @@ def test_achieved_amplitudes_are_the_numpy_formula(fing, p, scale):
 def test_solve_with_more_modes_than_fingers_is_the_numpy_chain(phi, wanted, actuators, limits):
     """Three modes under two fingers (the SVD path), four channels: the same compiled end."""
     modal, capped, ratio = _gains_svd(phi, wanted.astype(complex), 0.1, True)
+    modal, capped = on_nodes_at_rest(phi, modal, capped)
     commands = numpy_forward(actuators, modal)
     limited = np.zeros(len(phi), bool)
     if limits is not None:

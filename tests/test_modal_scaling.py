@@ -6,21 +6,20 @@ import pytest
 from frictex.device.actuation import modal
 
 
-@pytest.mark.parametrize("method", ["exact", "regularised"])
+@pytest.mark.parametrize("regularised", [False, True])
 @pytest.mark.parametrize("phi", [
     [[1e200, 0.0], [0.0, 1e-200]],      # e*e overflowed: NaN modal amplitudes
-    [[1e-200, 0.0], [0.0, 1e-200]],     # the determinant underflowed to 0
+    [[1e-200, 0.0], [0.0, 1e-200]],     # the determinant underflowed to 0 (solve: at rest)
     [[1e300, 1e300], [1e300, -1e300]],
 ])
-def test_extreme_scales_match_the_svd_and_stay_finite(phi, method):
-    wanted = [0.4, 0.1]
-    closed = modal.solve(phi, wanted, method)
+def test_extreme_scales_match_the_svd_and_stay_finite(phi, regularised):
+    phi, wanted = np.array(phi)[None], np.array([0.4, 0.1], complex)[None]
+    threshold = modal.gain_threshold("regularised" if regularised else "exact", modal.DEFAULT_RCOND)
+    closed, _, _ = modal._gains_2x2(phi, wanted, threshold, regularised)
     with np.errstate(over="ignore", invalid="ignore"):
-        svd, _, _ = modal._gains_svd(np.array(phi)[None], np.array(wanted, complex)[None],
-                                     modal.gain_threshold(method, modal.DEFAULT_RCOND),
-                                     regularised=method == "regularised")
-    assert np.all(np.isfinite(closed.modal_um)) and np.all(np.isfinite(closed.achieved_um))
-    np.testing.assert_allclose(closed.modal_um, svd[0], rtol=1e-12)
+        svd, _, _ = modal._gains_svd(phi, wanted, threshold, regularised)
+    assert np.all(np.isfinite(closed))
+    np.testing.assert_allclose(closed, svd, rtol=1e-12)
 
 
 def test_scaling_leaves_ordinary_systems_bit_for_bit():
@@ -54,17 +53,18 @@ def test_bounded_commands_do_not_depend_on_the_shapes_scale(modes):
     """min ||M c - w|| within |c_j| <= L has the same c for (M s, w s): shapes of 5e-91
     (the determinant of their M^H M underflowed to 0: the two-actuator solver took the
     system for rank 1, the other divided by zero) give the commands of the same system
-    at unit scale (s a power of two)."""
+    at unit scale (s a power of two). solve itself gives shapes that small no command
+    (NODE_FLOOR), so the bounded solver is asked directly."""
     rng = np.random.default_rng(modes)
     phi = rng.normal(size=(50, 2, modes))
     wanted = rng.normal(size=(50, 2)) * 4 + 0j  # most beyond the 1 um limits
+    limits = np.ones(modes)
+    start = modal.solve(phi, wanted, "exact", actuators=np.eye(modes)).commands_um
     scale = 2.0 ** -300  # 4.9e-91: within reach (1 um of command gives the fingers 1e-90 um)
-    plain = modal.solve(phi, wanted, "bounded", limits_um=1.0, actuators=np.eye(modes))
-    tiny = modal.solve(phi * scale, wanted * scale, "bounded", limits_um=1.0,
-                       actuators=np.eye(modes))
-    assert plain.limited.sum() > 25
-    np.testing.assert_array_equal(plain.limited, tiny.limited)
-    np.testing.assert_allclose(plain.commands_um, tiny.commands_um, rtol=0, atol=1e-9)
+    plain, _ = modal._bounded(phi, wanted, start, limits)
+    tiny, unreached = modal._bounded(phi * scale, wanted * scale, start, limits)
+    assert np.count_nonzero(np.abs(plain).max(axis=-1) >= 1 - 1e-12) > 25 and not unreached.any()
+    np.testing.assert_allclose(plain, tiny, rtol=0, atol=1e-9)
 
 
 def test_no_scale_of_the_shapes_gives_inf_nan_or_a_command_past_its_limit():
@@ -86,13 +86,13 @@ def test_no_scale_of_the_shapes_gives_inf_nan_or_a_command_past_its_limit():
 
 @pytest.mark.parametrize("modes", [2, 3])
 def test_bounded_commands_too_weak_to_reach_the_fingers_are_counted_capped(modes):
-    """Shapes of 1e-200: every command within the limits moves the fingers by under
+    """Limits of 1e-105 um: every command within them moves the fingers by under
     1e-100 um; 'bounded' gives none, and counts the sample as capped (it was neither
     capped nor limited, unlike an overflow)."""
     rng = np.random.default_rng(modes)
-    phi = rng.normal(size=(2, modes)) * 1e-200
-    got = modal.solve(phi, [0.5, 0.3], "bounded", limits_um=1.0, actuators=np.eye(modes))
+    phi = rng.normal(size=(2, modes))
+    got = modal.solve(phi, [0.5, 0.3], "bounded", limits_um=1e-105, actuators=np.eye(modes))
     assert np.array_equal(got.commands_um, np.zeros(modes)) and got.capped
-    batch = modal.solve(np.stack([phi, phi * 1e200]), [[0.5, 0.3]] * 2, "bounded",
-                        limits_um=1.0, actuators=np.eye(modes))
+    batch = modal.solve(np.stack([phi, phi * 1e10]), [[0.5, 0.3]] * 2, "bounded",
+                        limits_um=1e-105, actuators=np.eye(modes))
     assert batch.capped[0] and np.any(batch.commands_um[1] != 0)

@@ -32,8 +32,10 @@ sample reports what was achieved under each finger (forward model of the command
 the error; ``limited`` marks samples whose commands met a limit, ``capped`` those where
 a singular value was below the method's threshold or below :data:`NEAR_SINGULAR` of the
 largest (near a singular locus ``exact`` and ``bounded`` keep their gains but spend the
-limits on a difference they cannot deliver), and those whose modal amplitudes would
-overflow a float (mode shapes below about 1e-308 under every finger), which get none.
+limits on a difference they cannot deliver), and those where every finger is on a node of
+every mode (no mode shape under any finger above :data:`NODE_FLOOR`) or whose modal
+amplitudes would overflow a float: these get none, whatever the method (the plate at rest).
+Mode shapes are taken as normalised to a peak of about 1, as every structure gives them.
 Singular loci are normal operation, never an error.
 """
 
@@ -57,6 +59,14 @@ _EXACT_RCOND = 1e-12
 #: costs over 1 um of command, beyond any channel's limit (about 1 um), so the
 #: fingers cannot be given independent amplitudes even where no gain was cut
 NEAR_SINGULAR = 1e-3
+#: every finger is on a node of every mode where no mode shape under a finger exceeds
+#: this (shapes of peak about 1: the plate's and measured tables' peak 1, the beam's RMS
+#: 1). There 1 um of command, about a channel's limit, moves the fingers by a few
+#: picometres at most, nothing a finger feels; the system left is rounding noise (a
+#: computed node is 1e-16, a node written to 10 decimals 1e-11), whose inverse would
+#: drive the channels to their limits in a direction set by that noise. 1e-6 is 5 nm
+#: from a node of the seed 001 plate's mode (slope 0.19 / mm): only fingers placed on it.
+NODE_FLOOR = 1e-6
 #: "bounded" gives no command where every command within the limits reaches the fingers
 #: with less than this (um): nothing a plate could show
 _LEAST_REACH_UM = 1e-100
@@ -254,7 +264,8 @@ def serve_two_modes(phi, where, served, wanted_um, actuators, limits_um, rcond: 
         (F, n) (um, 0 where not touching); how many samples met a limit; how many served
         two fingers with a capped gain (their system's smaller singular value below the
         threshold or :data:`NEAR_SINGULAR` of the larger: the fingers could not be given
-        independent amplitudes, seed 001 eq 8).
+        independent amplitudes, seed 001 eq 8; or both on nodes of both modes, every
+        shape below :data:`NODE_FLOOR`: no command).
         None where a served shape or wanted amplitude is not finite (what :func:`solve`
         refuses).
     """
@@ -287,8 +298,11 @@ def _two_modes_kernel(phi, where, served, wanted, actuators, limits, rcond, regu
         if not (finite0 and finite1):
             return -1, capped
         modal[i, 0], modal[i, 1], full, s1, s2 = _gains_2x2_one(a, b, c, d, w0, w1, rcond, regularised)
+        rest = max(abs(a), abs(b), abs(c), abs(d)) < NODE_FLOOR  # solve's _at_rest
+        if rest:
+            modal[i, 0], modal[i, 1] = 0j, 0j
         # one finger's zero row caps the gain too, but leaves nothing to tell apart
-        if (not full or s2 < NEAR_SINGULAR * s1) and served[i, 1] >= 0:
+        if (rest or not full or s2 < NEAR_SINGULAR * s1) and served[i, 1] >= 0:
             capped += 1
         _forward_row(actuators, 0, modal, i, commands)
         within = True
@@ -355,8 +369,8 @@ def solve(phi_fingers, wanted_um, method: str = DEFAULT_METHOD, *, actuators=Non
     closed = phi.shape[-2:] == (2, 2) and not np.iscomplexobj(phi) and method != "bounded"
     modal, capped, ratio = (_gains_2x2 if closed else _gains_svd)(
         phi, wanted, threshold, regularised=method == "regularised")
-    modal, overflowed = _without_overflow(modal)
-    capped = capped | (ratio < NEAR_SINGULAR) | overflowed
+    modal, at_rest = _at_rest(modal, phi)
+    capped = capped | (ratio < NEAR_SINGULAR) | at_rest
     if method != "bounded" and not np.iscomplexobj(phi) and not np.iscomplexobj(a):
         commands, modal, achieved, error, limited = _finish(phi, wanted, modal, a, limits)
         return ModalSolution(modal, commands, achieved, error, limited, capped, ratio)
@@ -402,15 +416,15 @@ def _bounded(m_cmd, wanted, start, limits) -> tuple[np.ndarray, np.ndarray]:
     return commands, ~reach
 
 
-def _without_overflow(modal) -> tuple[np.ndarray, np.ndarray]:
-    """``modal`` (..., p) with every sample whose amplitudes are not finite set to 0, and
-    where that was. Mode shapes whose every singular value is below about 1e-308 (the
-    fingers on the modes' nodes) need amplitudes past the largest float; no finite
-    command reaches the fingers, and the plate's rest (mu' = 1) is the safe answer."""
-    overflowed = ~np.isfinite(modal).all(axis=-1)
-    if overflowed.any():
-        modal = np.where(overflowed[..., None], 0, modal)
-    return modal, overflowed
+def _at_rest(modal, phi) -> tuple[np.ndarray, np.ndarray]:
+    """``modal`` (..., p) set to 0 where every finger is on a node of every mode (each
+    |Phi_f| entry below :data:`NODE_FLOOR`) or the amplitudes are not finite (shapes below
+    about 1e-308 need amplitudes past the largest float), and where that was. No command
+    reaches the fingers there; the plate's rest (mu' = 1) is the safe answer."""
+    rest = ~np.isfinite(modal).all(axis=-1) | (np.abs(phi).max(axis=(-2, -1)) < NODE_FLOOR)
+    if rest.any():
+        modal = np.where(rest[..., None], 0, modal)
+    return modal, rest
 
 
 def _without_weak_directions(phi) -> np.ndarray:
@@ -553,7 +567,7 @@ def _gains_svd(phi, wanted, rcond: float, regularised: bool):
     threshold = rcond * s_max
     above = ((s >= threshold) if regularised else (s > threshold)) & (s > 0)
     capped = ~np.all(above, axis=-1)
-    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):  # solve's _without_overflow
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):  # solve's _at_rest
         inverse = np.divide(1.0, s, out=np.zeros_like(s), where=above)
         if regularised:
             inverse += np.divide(s, threshold ** 2, out=np.zeros_like(s),
