@@ -46,7 +46,7 @@ from frictex.device.jit import njit
 from frictex.device.safe_text import escape
 from frictex.device.profile import BeamStructure
 from frictex.device.structures.beam import FreeFreeBeam, ModesError
-from frictex.device.actuation.modal import (NEAR_SINGULAR, achieved_magnitude, check_settings, gain_threshold,
+from frictex.device.actuation.modal import (NEAR_SINGULAR, NODE_FLOOR, achieved_magnitude, check_settings, gain_threshold,
                                     magnitude, serve_two_modes, solve)
 from frictex.device.structures.plate2d import ACTUATOR_NAMES, ACTUATORS, Plate2D
 
@@ -166,7 +166,7 @@ class ModalActuation:
         """Samples serving m >= 2 fingers whose m x p system has rank below m: its m-th
         singular value under the method's threshold or ``NEAR_SINGULAR`` of the largest
         (``device.actuation.modal.solve``'s ``capped``, less the zero singular values the
-        padding rows add). There the fingers
+        padding rows add), or on nodes of every mode (``NODE_FLOOR``: the plate at rest). There the fingers
         cannot be given independent amplitudes (seed 001, eq 8)."""
         fingers = np.count_nonzero(served >= 0, axis=1)
         several = fingers >= 2
@@ -176,7 +176,8 @@ class ModalActuation:
         s_m = np.take_along_axis(s, (fingers[several] - 1)[:, None], axis=1)[:, 0]
         floor = self.threshold * s[:, 0]
         full = (((s_m >= floor) if self.method == "regularised" else (s_m > floor)) & (s_m > 0)
-                & (s_m >= NEAR_SINGULAR * s[:, 0]))
+                & (s_m >= NEAR_SINGULAR * s[:, 0])
+                & (np.abs(phi_f[several]).max(axis=(-2, -1)) >= NODE_FLOOR))  # on nodes: rest
         return int(np.count_nonzero(~full))
 
 
