@@ -189,3 +189,24 @@ def test_the_hosts_own_link_idling_on_tcp_is_not_dropped():
     finally:
         stopped(listener, quit_event, thread)
     assert heard >= 3  # it did speak while idle, at least once a second
+
+
+def test_a_new_host_does_not_inherit_the_bytes_the_last_one_left_half_sent():
+    """PROTOCOL.md 2: a first frame MAY come without a leading 0x00; what the host before
+    left unterminated is not the start of it."""
+    listener, clock, quit_event, calls, thread, core = started()
+    try:
+        first = connect(listener)
+        first.sendall(b"\x01\x02\x00" + b"\x01" * 10)  # a short frame, then 10 bytes unended
+        until(lambda: core.decoder.counts.discarded == 1, "the short frame read")
+        clock.now = HELLO_TIMEOUT_S + 0.1
+        until(lambda: calls["dropped"], "the first host dropped")
+        host = connect(listener)
+        host.sendall(p.encode(p.Hello(prefill=10), 0, 4))
+        until(lambda: core.hellos or core.decoder.counts.discarded > 1, "the Hello read")
+        assert core.hellos == 1 and isinstance(answers(host)[0], p.Info)
+        assert core.decoder.counts.discarded == 1  # the count goes on
+        host.close()
+        first.close()
+    finally:
+        stopped(listener, quit_event, thread)

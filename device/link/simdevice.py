@@ -288,6 +288,13 @@ class DeviceCore:
         self._windows = ForceWindows(c.force_decimation, c.force_pairs)
 
     # ------------------------------------------------------------------ host -> device
+    def new_connection(self) -> None:
+        """Start the receiver afresh for a host that has just connected: bytes the one
+        before left half-sent are dropped, not taken as the start of the new host's first
+        frame (which PROTOCOL.md 2 lets begin without a 0x00). The counts go on."""
+        self.decoder = p.Decoder(max_version=self.config.protocol_version, on_device=True,
+                                 counts=self.decoder.counts)
+
     def receive(self, data: bytes, t_s: float) -> bytes:
         """Handle bytes from the host arriving at ``t_s``; returns the reply bytes."""
         out = bytearray()
@@ -896,6 +903,7 @@ class _Hosts:
             return
         accepted.setblocking(False)
         accepted.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.core.new_connection()
         self.conn, self.served, self.address = accepted, self.served + 1, peer
         self.connected_at, self.hellos_then = now, self.core.hellos
         self.heard_at, self.frames_then = now, self.core.decoder.counts.frames_ok
