@@ -211,6 +211,23 @@ def test_the_sim_device_plays_its_silence_when_nobody_calls():
     assert core.counters.watchdog_trips == 1 and core.level == 0
 
 
+def test_the_sim_device_plays_its_silence_before_a_write_after_it():
+    """The host's first call after 300 ms of silence is a write (PROTOCOL.md 5.3): the
+    silence trips the watchdog before the frame re-arms it."""
+    clock = [0.0]
+    device = SimDevice(DeviceConfig(), clock=lambda: clock[0])
+    port = device.open()
+    port.write(p.encode(p.Hello(100), 0, 4))
+    port.write(p.encode(p.Block(0, np.full((400, 1), 4096, dtype=np.uint16)), 1, 4))
+    assert [type(f.message) for f in p.Decoder().feed(port.read(4096))] == [p.Info]
+    clock[0] = 0.3
+    port.write(p.encode(p.Heartbeat(7), 2, 4))
+    replies = [f.message for f in p.Decoder().feed(port.read(4096))]
+    assert [type(m) for m in replies] == [p.Flushed, p.Status]
+    assert replies[-1].watchdog_trips == 1 and replies[-1].state != p.DeviceState.PLAYING
+    assert device.core.counters.watchdog_trips == 1 and device.core.level == 0
+
+
 @pytest.mark.parametrize("device, code, message", [
     ("/dev/nonexistent-frictex", 1, "frictex: error: cannot open device port "
                                     "'/dev/nonexistent-frictex'"),

@@ -5,8 +5,10 @@ clock; :meth:`SimDevice.open` gives a :class:`SimPort` onto it, which the host's
 thread reads and writes like a serial port. The device has no thread of its own: every
 call on its port first plays the ticks up to now, so it runs exactly as far as the wall
 clock, and while nobody calls (the host's thread stopped) its clock still counts: the
-next call plays the silence, and its watchdog trips as a real device's would. Bytes a
-write hands over are taken before the clock advances (as ``simdevice.serve`` does).
+next call plays the silence, and its watchdog trips as a real device's would: a write
+plays the ticks up to now before its bytes are taken (they arrive now, so the silence
+before them is played first; ``simdevice.serve`` takes bytes first because they may have
+waited in the socket while its process was not scheduled).
 No process is started and nothing waits for one.
 
 URL form (pyserial's style, ``sim://?name=value&...``), each option a
@@ -138,8 +140,9 @@ class SimPort:
 
     def write(self, data: bytes) -> int:
         self._check()
+        self._advance()  # the silence before these bytes trips the watchdog (PROTOCOL.md 5.3)
         self._out += self._device.core.receive(bytes(data), self._device.now())
-        return len(data)  # the clock plays on at the next read
+        return len(data)
 
     def close(self) -> None:
         self.is_open = False
