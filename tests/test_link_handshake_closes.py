@@ -90,3 +90,28 @@ def test_a_device_that_closed_the_link_once_is_said_to_have_closed_it_once():
     said, _ = _open_failing(lambda: next(ports, None) or serial.serial_for_url("loop://", timeout=0.005),
                             handshake_s=1.0)
     assert "the device closed the link once during the handshake, in " in said, said
+
+
+class AnsweringPort(ClosingPort):
+    """A port that hands over the device's Info, then stays quiet."""
+
+    def read(self, n: int = 1) -> bytes:
+        data, self.pending = self.pending[:n], self.pending[n:]
+        return data
+
+
+def test_a_link_lost_during_the_first_handshake_and_then_answered_is_counted_and_said():
+    """An unplug during the first handshake left only last_error: no count, no warning
+    (disconnects counts sessions lost, and there was none yet)."""
+    ports = iter([ClosingPort(), AnsweringPort(INFO)])
+    said = io.StringIO()
+    sink = CommandSink(lambda: next(ports), 1, RATE, paced=True, stderr=said,
+                       label="socket://127.0.0.1:9", handshake_s=30.0)
+    try:
+        status = sink.status()
+        assert (status["handshake_closes"], status["disconnects"], status["reconnects"]) == (1, 0, 0)
+        assert ("frictex: warning: socket://127.0.0.1:9: the link closed 1 time(s) during the "
+                "first handshake (last: ConnectionResetError: [Errno 104] Connection reset by "
+                "peer) before the device answered\n") in said.getvalue()
+    finally:
+        sink.abort()

@@ -60,6 +60,7 @@ CLOSE_STRETCH = 2
 _TURN_BYTES = 4096
 
 _COUNTS = ("frames_sent", "blocks_sent", "heartbeats", "retries", "reconnects", "disconnects",
+           "handshake_closes",
            "recoveries", "stalls", "device_flushes", "clamped_samples", "dropped_blocks",
            "force_reports", "resent_frames", "resends_too_late", "stop_resends",
            "skipped_blocks")
@@ -239,6 +240,7 @@ class HostSession:
         if self._ever_connected:
             return
         self._first_closes += 1
+        self.counts["handshake_closes"] += 1
         self._closes_in_a_row += 1
         if self.closes_every_time:
             with self.cond:
@@ -403,6 +405,9 @@ class HostSession:
         if self._reconnecting and self._ever_connected:
             self.counts["reconnects"] += 1
             print(f"frictex: {self.label} link back", file=self._stderr)
+        elif self._first_closes:
+            self._warn(f"the link closed {self._first_closes} time(s) during the first "
+                       f"handshake (last: {self.last_error}) before the device answered")
         self._reconnecting = False
         self._ever_connected = True
         self.phase = "session"
