@@ -42,7 +42,7 @@ from frictex.textures.model import (RENDERER_FACTORY, RENDERERS, loadable_render
                                     render_modes)
 
 __all__ = ["DEFAULT_SHO", "LAYER_RENDERERS", "RENDERERS", "LayerRenderer", "RendererFactory",
-           "any_layer", "build_renderer", "loadable_render_modes", "render_modes",
+           "any_layer", "build_renderer", "from_velocity", "loadable_render_modes", "render_modes",
            "sho_variant_of"]
 
 #: what a layer's ``render = "sho"`` means unless the run says otherwise
@@ -78,6 +78,13 @@ LAYER_RENDERERS: Registry[RendererFactory] = Registry("dynamic layer kind",
 def any_layer(name: str) -> bool:
     """Whether renderer ``name`` renders any layer (can be a run's SHO variant)."""
     return bool(getattr(RENDERERS.get(name), "any_layer", False))
+
+
+def from_velocity(name: str) -> bool:
+    """Whether renderer ``name`` plays its texture from the tracker's velocity between
+    touch samples (its class says ``from_velocity = True``), so that it plays none where
+    the tracker takes the finger as resting."""
+    return bool(getattr(RENDERERS.get(name), "from_velocity", False))
 
 
 def sho_variant_of(name: str) -> str:

@@ -56,6 +56,7 @@ from frictex.app.engine.tables import (MEMORY, SMALLER_FORMAT, WRITE_ELSEWHERE, 
 from frictex.device.errors import DeviceError, InputError
 from frictex.rendering.input.trace_file import MOVE, UP, Trace, iter_trace, most_touching
 from frictex.rendering.pipeline import build_pipeline
+from frictex.rendering.renderers import from_velocity
 from frictex.textures.model import Scene
 
 #: finger-samples per pipeline call by default (blocks x block size x fingers touching):
@@ -374,10 +375,6 @@ def _run(pipeline, source, chunks, trace_path, scene, folder, options: ReplayOpt
     return doc, in_memory
 
 
-#: the renderers that synthesise a texture from the tracker's velocity between touch samples
-VELOCITY_RENDERERS = ("sht", "hybrid")
-
-
 class SlideSteps:
     """The intervals (s) between a finger's touch samples while it slides (a move to
     another position than its sample before, in the same touch), over the first
@@ -425,14 +422,14 @@ class SlideSteps:
 def sparse_touch_warnings(step_s: float | None, pipeline) -> list[str]:
     """The sentence for a sliding finger sampled (median interval ``step_s``, s) more
     sparsely than the tracker's prediction horizon, on a scene with layers that
-    :data:`VELOCITY_RENDERERS` render: past the horizon the tracker takes the finger as
+    renderers playing from velocity render (``rendering.renderers.from_velocity``): past the horizon the tracker takes the finger as
     resting (velocity 0) until its next sample, and samples more than ``max_gap_s`` apart
     give it no velocity at all (``rendering.tracking.tracks``), so those layers play no
     texture there, where SHO plays the texture under each sample."""
     config = pipeline.tracker_config
     horizon, gap = config.predict_horizon_s, config.max_gap_s
     layers = [f"{layer.name!r} ({mode})" for layer, mode in
-              zip(pipeline.scene.layers, pipeline.layer_modes) if mode in VELOCITY_RENDERERS]
+              zip(pipeline.scene.layers, pipeline.layer_modes) if from_velocity(mode)]
     if not layers or step_s is None or step_s <= horizon:
         return []
     plays = "plays" if len(layers) == 1 else "play"

@@ -518,6 +518,9 @@ class HybridRenderer:
     fine_period = ("SHO alone (the map read at the touch samples) would alias it; the hybrid "
                    "renderer plays it from the finger's velocity, so it is felt, registered "
                    "with the drawing only as closely as the touch samples allow")
+    #: plays its texture from the tracker's velocity between touch samples
+    #: (``rendering.renderers.from_velocity``)
+    from_velocity = True
 
     def __init__(self, layer, rate_hz: float, slip: float = SLIP, lock_mm: float = LOCK_MM,
                  event_hz: float = EVENT_HZ):

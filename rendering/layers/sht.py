@@ -44,6 +44,9 @@ class ShtRenderer:
     fine_period = ("SHO alone (the map read at the touch samples) would alias it; SHT plays "
                    "it from the finger's velocity, so it is felt, but its phase is not kept "
                    "with the drawing")
+    #: plays its texture from the tracker's velocity between touch samples
+    #: (``rendering.renderers.from_velocity``)
+    from_velocity = True
 
     def __init__(self, layer, rate_hz: float):
         self.layer = layer
