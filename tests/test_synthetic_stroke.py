@@ -57,3 +57,19 @@ def test_the_hand_strokes_to_its_end_across_pieces_then_quits():
     hand.run()
     assert len(window.moves) == 130 * EVENTS_HZ + 1 and hand.stroked_s == 130.0
     assert hand.piece == 2 and window.keys == ["q"] and not window.pressed
+
+
+def test_on_a_display_too_thin_for_a_human_stroke_the_hand_goes_back_and_forth_along_it():
+    """A beam's display (350 x 6 mm): the human stroke keeps 8 mm from the edges, so the
+    headless demo of every bundled beam scene refused to start ('area 350 x 6 mm: a human
+    motion keeps 8 mm from the area's edges')."""
+    for area, along in (((350.0, 6.0), 0), ((6.0, 120.0), 1), ((10.0, 3.0), 0)):
+        hand = SyntheticStroke(Window(), lambda x, y: (x, y), area, duration_s=1e9)
+        t = np.arange(0.0, 30.0, 1.0 / EVENTS_HZ)
+        path = np.array([hand._position(float(s)) for s in t])
+        assert ((path >= 0.0) & (path <= area)).all()
+        np.testing.assert_allclose(path[:, 1 - along], area[1 - along] / 2)  # its middle
+        margin = min(8.0, area[along] / 4)  # from its ends
+        assert np.isclose(np.ptp(path[:, along]), area[along] - 2 * margin)
+        steps_mm = np.hypot(*np.diff(path, axis=0).T)
+        assert steps_mm.max() <= SPEED_MM_S / EVENTS_HZ * (1 + 1e-9)

@@ -3,8 +3,9 @@
 :class:`SyntheticStroke` moves a window's pointer (``rendering.visual.headless.
 HeadlessWindow``: ``move``, ``press``, ``release``, ``key``) along a human-like stroke
 (``rendering.input.trace_synth.make_motion("human")``: minimum-jerk strokes with
-pauses) at its own pace on the wall clock, the left button held throughout, then
-presses Q. The demo loop takes these events exactly as it takes a real mouse's, so
+pauses; on a display too thin for one, :data:`HUMAN_MARGIN_MM` twice or less across,
+as a beam's: back and forth along its length through its middle) at its own pace on
+the wall clock, the left button held throughout, then presses Q. The demo loop takes these events exactly as it takes a real mouse's, so
 ``frictex demo --headless`` runs the demo loop itself, on synthetic input. The stroke
 is made :data:`PIECE_S` at a time, each piece from where the last one ended, so that a
 long ``--duration`` costs no more to start, or in memory, than a short one.
@@ -16,7 +17,7 @@ import math
 import threading
 import time
 
-from frictex.rendering.input.trace_synth import make_motion
+from frictex.rendering.input.trace_synth import HUMAN_MARGIN_MM, make_motion
 
 STROKE_S = 3.0  # how long the hand strokes (s)
 SPEED_MM_S = 60.0  # its typical peak speed (mm/s)
@@ -53,7 +54,9 @@ class SyntheticStroke(threading.Thread):
         self.area_mm, self.speed_mm_s, self.seed = area_mm, speed_mm_s, seed
         self.duration_s = float(duration_s)
         self.piece = 0  # which PIECE_S of the stroke ``motion`` is
-        self.motion = self._made(0, None)
+        # a back-and-forth costs nothing to make, however long: made once, whole
+        self.thin = min(area_mm) <= 2 * HUMAN_MARGIN_MM
+        self.motion = self._along_length() if self.thin else self._made(0, None)
         self.clock = clock
         self.sleep = sleep
         self.lifted = lifted
@@ -69,8 +72,23 @@ class SyntheticStroke(threading.Thread):
                            duration_s=min(PIECE_S, self.duration_s - piece * PIECE_S),
                            x0_mm=x0, y0_mm=y0, area_mm=self.area_mm, seed=self.seed + piece)
 
+    def _along_length(self):
+        """The whole stroke on a thin display: back and forth along its longer side through
+        the middle of the other, :data:`HUMAN_MARGIN_MM` (at most a quarter of the side)
+        from its ends."""
+        width, height = self.area_mm
+        along_x = width >= height
+        side = width if along_x else height
+        margin = min(HUMAN_MARGIN_MM, side / 4)
+        x0, y0 = (margin, height / 2) if along_x else (width / 2, margin)
+        return make_motion("back-and-forth", speed_mm_s=self.speed_mm_s,
+                           duration_s=self.duration_s, x0_mm=x0, y0_mm=y0,
+                           angle_deg=0.0 if along_x else 90.0, length_mm=side - 2 * margin)
+
     def _position(self, t: float) -> tuple[float, float]:
         """Where the stroke is at ``t`` (s from its start; mm), made piece by piece."""
+        if self.thin:
+            return self.motion.position(t)
         piece = min(int(t // PIECE_S), math.ceil(self.duration_s / PIECE_S) - 1)
         while self.piece < piece:
             end = self.motion.position(self.motion.duration_s)
