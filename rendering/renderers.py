@@ -83,8 +83,10 @@ def any_layer(name: str) -> bool:
 def from_velocity(name: str) -> bool:
     """Whether renderer ``name`` plays its texture from the tracker's velocity between
     touch samples (its class says ``from_velocity = True``), so that it plays none where
-    the tracker takes the finger as resting."""
-    return bool(getattr(RENDERERS.get(name), "from_velocity", False))
+    the tracker takes the finger as resting; False for a layer renderer's kind (``height``,
+    ``ar``, ``clip``: :data:`LAYER_RENDERERS`)."""
+    return (name in RENDERERS.names()  # (``in RENDERERS`` looks for a new package: 20 ms)
+            and bool(getattr(RENDERERS.get(name), "from_velocity", False)))
 
 
 def sho_variant_of(name: str) -> str:

@@ -41,6 +41,15 @@ def test_between_horizon_and_gap_no_texture_after_the_horizon(tmp_path):
     assert "no texture from 0.06 s after each sample until the next" in said
 
 
+@pytest.mark.parametrize("scene", ["height-bump", "slider-clips"])
+def test_a_sparse_trace_over_layers_of_their_own_renderers_is_not_warned(tmp_path, scene):
+    """A height or clip layer's mode names its layer renderer's kind, no renderer: asking
+    whether it plays from velocity refused the whole replay ('unknown renderer')."""
+    from frictex.app.api import load_scene
+    summary = run_replay(load_scene(scene), _swipe(5.0), tmp_path, progress=False)
+    assert _sparse(summary) == []
+
+
 @pytest.mark.parametrize("rate_hz, render", [(20.0, "hybrid"), (5.0, "sho")])
 def test_dense_trace_or_sho_not_warned(tmp_path, rate_hz, render):
     summary = run_replay(grating_scene(5.0, render=render), _swipe(rate_hz), tmp_path,

@@ -428,9 +428,11 @@ def sparse_touch_warnings(step_s: float | None, pipeline) -> list[str]:
     texture there, where SHO plays the texture under each sample."""
     config = pipeline.tracker_config
     horizon, gap = config.predict_horizon_s, config.max_gap_s
+    if step_s is None or step_s <= horizon:
+        return []
     layers = [f"{layer.name!r} ({mode})" for layer, mode in
               zip(pipeline.scene.layers, pipeline.layer_modes) if from_velocity(mode)]
-    if not layers or step_s is None or step_s <= horizon:
+    if not layers:
         return []
     plays = "plays" if len(layers) == 1 else "play"
     if step_s > gap:
