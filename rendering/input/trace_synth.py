@@ -28,7 +28,7 @@ and dropped samples (``drop``, the share of samples the screen never reports).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -374,5 +374,12 @@ def _check_jitter(jitter_s: float, rate_hz: float) -> None:
 
 
 def truth(motion: Motion, rate_hz: float = 10_000.0, force_n: float = 0.5) -> Trace:
-    """The motion's true path at a high rate, no noise (for accuracy checks)."""
+    """The motion's true path at a high rate, no noise, on a uniform grid (for accuracy
+    checks, whose reference needs one: ``rendering.metrics.reference``): up to its last
+    whole interval, less than 1 / ``rate_hz`` s before its end, whose own sample
+    (:func:`sample_times`) would break the grid."""
+    whole = _whole_intervals(motion.duration_s, rate_hz)
+    if whole is None:
+        whole = int(np.floor(motion.duration_s * rate_hz))
+        motion = replace(motion, duration_s=whole / rate_hz)
     return sample(motion, rate_hz, force_n=force_n)
