@@ -8,8 +8,11 @@ and its inversion, eq 3::
 
     w = -(1/b) ln((mu' - A) / (1 - A))
 
-computed here as ``-log1p(-(1 - mu') / (1 - A)) / b``, which keeps full relative
-precision for the small reductions textures mostly ask for.
+computed here from r = (1 - mu') / (1 - A) as ``-log1p(-r) / b`` where r <= 1/2 (full
+relative precision for the small reductions textures mostly ask for), and from
+q = (mu' - A) / (1 - A) = 1 - r as ``-log(q) / b`` above that: near the floor q is tiny and
+1 - mu' rounded would leave it few correct digits (4.8e-4 um off at mu' = 1e-14, 0 N),
+while mu' - A, with A's own rounding of k F_n taken back out, keeps them all.
 
 Where the model stops being usable, frictex decides as follows (each case counted in
 :class:`ClampCounts`, never silent):
@@ -98,6 +101,50 @@ def asymptote(normal_force_n, params: FrictionParams) -> tuple[np.ndarray, np.nd
     return np.minimum(a, edge), beyond
 
 
+def _split(x):
+    """x as hi + lo, each of at most 26 significant bits (Veltkamp's split; |x| < 1e300)."""
+    c = 134217729.0 * x  # 2^27 + 1
+    hi = c - (c - x)
+    return hi, x - hi
+
+
+def asymptote_rounding(k_per_n, normal_force_n):
+    """k F_n less its rounded product: A's rounding (seed 003, eq 2), exactly (Dekker's
+    product), for eq 3 near the asymptote, where mu' - A is a few of A's roundings.
+
+    Plain arithmetic, for floats or arrays (NaN where k or F_n is beyond 1e300).
+    """
+    a = k_per_n * normal_force_n
+    k_hi, k_lo = _split(k_per_n)
+    f_hi, f_lo = _split(normal_force_n)
+    return ((k_hi * f_hi - a) + k_hi * f_lo + k_lo * f_hi) + k_lo * f_lo
+
+
+def eq3_arguments(mu, a, low):
+    """Eq 3's arguments at targets ``mu`` with asymptote ``a`` (``low``: its
+    :func:`asymptote_rounding`, 0 at the model's edge), as ``(x, q, tail)``: where
+    r = (1 - mu') / (1 - A) <= 1/2, x = -r for ``log1p`` (and q = 1); above (``tail``),
+    q = (mu' - A) / (1 - A) for ``log``, NaN where q <= 0 (unreachable: at or below the
+    asymptote), and x = 0."""
+    span = 1.0 - a
+    with np.errstate(invalid="ignore"):
+        r = (1.0 - mu) / span
+        tail = r > 0.5
+        gap = (mu - a) - low
+        q = np.where(tail, np.where(gap > 0.0, gap / span, np.nan), 1.0)
+    return np.where(tail, 0.0, -r), q, tail
+
+
+def eq3_logs(x, q, tails: int) -> None:
+    """log1p over ``x`` and log over ``q``, in place (:func:`eq3_arguments`; ``tails``: how
+    many targets take q). Whole arrays, not masked ones: numpy's masked logarithms cost
+    10x as much over mixed targets."""
+    if tails < x.size:
+        np.log1p(x, out=x)
+    if tails:
+        np.log(q, out=q)
+
+
 def forward_mu(w_um, normal_force_n, params: FrictionParams) -> np.ndarray:
     """mu'(w) of seed 003, eq 2 (beyond the model's force range, at its edge: see above).
 
@@ -139,18 +186,18 @@ class SeedFrictionModel:
 
     def _amplitude(self, mu, force, counts: ClampCounts) -> np.ndarray:
         a, beyond = asymptote(force, self.params)  # force may be one value for all of mu
-        reduction = (1.0 - mu) / (1.0 - a)  # in [0, 1) where reachable
-        # unreachable targets get eq 3's log1p(-1) = -inf without numpy's log1p, which takes
-        # 10x as long over -1 as over a finite result
-        unreachable = reduction >= 1.0
-        with np.errstate(divide="ignore", invalid="ignore"):
-            log = np.where(unreachable, -np.inf, np.log1p(-np.where(unreachable, 0.0, reduction)))
-            w = -log / self.params.b_per_um
+        with np.errstate(over="ignore", invalid="ignore"):
+            low = np.where(beyond, 0.0, asymptote_rounding(self.params.asymptote_per_n, force))
+        # unreachable targets get NaN, not eq 3's log(0) = -inf: numpy's logarithms take
+        # 10x as long over 0 as over a finite result
+        x, q, tail = eq3_arguments(mu, a, low)
+        eq3_logs(x, q, int(np.count_nonzero(tail)))
+        w = -np.where(tail, q, x) / self.params.b_per_um
         if beyond.any():  # asks for a reduction where the model does not hold
             out = beyond & (mu < 1.0)
             counts.force_beyond_model += int(np.count_nonzero(out))
             w = np.where(out, self.limit_um, w)
-        return w  # may be inf exactly at the asymptote; the caller clamps
+        return w  # NaN where unreachable, maybe beyond the limit; the caller clamps
 
     def invert(self, mu_target, normal_force_n) -> tuple[np.ndarray, ClampCounts]:
         """Amplitude (um, in [0, limit]) giving mu' = ``mu_target`` at ``normal_force_n``.
@@ -289,63 +336,73 @@ def _guarded_invert(model: FrictionModel, mu_target, normal_force_n) -> tuple[np
 
 def _seed_invert(model: SeedFrictionModel, mu, force, counts: ClampCounts):
     """:func:`_guarded_invert` of seed 003's model for the usual block, in two compiled
-    passes about numpy's log1p (so every result is the same to the bit as the general
+    passes about numpy's log1p and log (so every result is the same to the bit as the general
     path's, which :func:`_guarded_invert` takes for the rest): finite targets and one
     force for all, within the model's range. None (``counts`` untouched) for any other
     block."""
     mu_flat, force_flat = mu.ravel(), force.ravel()
     params = model.params
     edge = 1.0 - ASYMPTOTE_MARGIN
-    arg, above_one = _seed_reductions(mu_flat, force_flat, params.asymptote_per_n, edge)
+    low = asymptote_rounding(params.asymptote_per_n, float(force_flat[0]))  # floats: no warnings
+    x, q, tail, above_one, tails = _seed_reductions(mu_flat, force_flat, params.asymptote_per_n,
+                                                    low, edge)
     if above_one < 0:
         return None
-    np.log1p(arg, out=arg)
-    a = params.asymptote_per_n * force_flat[0]
+    eq3_logs(x, q, tails)
     counts.above_one = above_one
-    counts.unreachable = _seed_amplitudes(arg, mu_flat, 1.0 - a, params.b_per_um,
-                                          model.limit_um, model.limit_um * (1.0 + 1e-12))
-    return arg.reshape(mu.shape)
+    counts.unreachable = _seed_amplitudes(x, q, tail, params.b_per_um, model.limit_um,
+                                          model.limit_um * (1.0 + 1e-12))
+    return x.reshape(mu.shape)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _seed_reductions(mu, force, k_per_n, edge):
-    """log1p's argument -(1 - min(mu', 1)) / (1 - A) (m,) of eq 3 at targets ``mu``
-    (m,), with A = k F_n, 0 where the target is unreachable ((1 - mu') / (1 - A) >= 1),
-    and how many targets are above 1; that count is -1 (nothing else computed) unless
-    every target is finite and every force is the same, finite, >= 0, with
-    A < ``edge``."""
-    arg = np.empty(mu.size)
+def _seed_reductions(mu, force, k_per_n, low, edge):
+    """:func:`eq3_arguments` at targets ``mu`` (m,) clipped to 1, with A = k F_n (``low``:
+    its :func:`asymptote_rounding`), as ``(x, q, tail, above, tails)``: ``above`` counts
+    the targets above 1, ``tails`` the ``tail`` marks. ``above`` is -1 (nothing else
+    computed) unless every target is finite and every force is the same, finite, >= 0,
+    with A < ``edge``."""
+    x = np.zeros(mu.size)
+    q = np.ones(mu.size)
+    tail = np.zeros(mu.size, dtype=np.bool_)
     f = force[0]
     a = k_per_n * f
     if not (0.0 <= f < np.inf and a < edge):
-        return arg, -1
+        return x, q, tail, -1, 0
     span = 1.0 - a
     above = 0
+    tails = 0
     for i in range(mu.size):
         m = mu[i]
         if force[i] != f or not abs(m) < np.inf:
-            return arg, -1
+            return x, q, tail, -1, 0
         if m > 1.0:
             above += 1
             m = 1.0
         r = (1.0 - m) / span
-        arg[i] = 0.0 if r >= 1.0 else -r
-    return arg, above
+        if r > 0.5:
+            tail[i] = True
+            tails += 1
+            gap = (m - a) - low
+            q[i] = gap / span if gap > 0.0 else np.nan
+        else:
+            x[i] = -r
+    return x, q, tail, above, tails
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _seed_amplitudes(log, mu, span, b, limit, top):
-    """Eq 3's w = -log / b in place over ``log`` (m,), log1p of :func:`_seed_reductions`'s
-    arguments, at the limit where the target ``mu`` is unreachable or w is beyond ``top``
-    (returns how many), else clipped to [0, limit]."""
+def _seed_amplitudes(log1p, log, tail, b, limit, top):
+    """Eq 3's w = -log1p / b, or -log / b where ``tail`` (:func:`eq3_logs` of
+    :func:`_seed_reductions`'s arguments, (m,) each), in place over ``log1p``, at the limit
+    where the target is unreachable (NaN) or w is beyond ``top`` (returns how many), else
+    clipped to [0, limit]."""
     over = 0
-    for i in range(mu.size):
-        m = mu[i] if mu[i] <= 1.0 else 1.0
-        w = -log[i] / b
-        if (1.0 - m) / span >= 1.0 or not w <= top:
+    for i in range(log1p.size):
+        w = -(log[i] if tail[i] else log1p[i]) / b
+        if not w <= top:
             over += 1
             w = limit
-        log[i] = limit if w > limit else (0.0 if w < 0.0 else w)
+        log1p[i] = limit if w > limit else (0.0 if w < 0.0 else w)
     return over
 
 

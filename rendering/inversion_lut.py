@@ -2,16 +2,20 @@
 
 Not a faster one: the exact inversion (``device.friction``, compiled) is quicker at every
 block size. Measured per call on a 2-core machine under load (best of 5 runs of
-interleaved 0.6 / 1.0 targets at 0.5 N): 50 samples (one 5 ms block at 10 kHz) 3.6 us
-exact against 31 us here, 1,000 samples 8.6 against 39 us, 100,000 samples 0.52 against
-2.4 ms (the table uniform in r this one replaced, below: 23 us, 29 us, 1.7 ms);
+interleaved 0.6 / 1.0 targets at 0.5 N): 50 samples (one 5 ms block at 10 kHz) 6.3 us
+exact against 45 us here, 1,000 samples 15 against 61 us, 100,000 samples 1.3 against
+3.7 ms (the table uniform in r this one replaced, below: 23 us, 29 us, 1.7 ms, measured
+when the exact path took 3.6 us, 8.6 us and 0.52 ms, before it took eq 3's log near the floor);
 ``frictex report``'s Inversion table compares the two per second of output. What it is
 for: it is how a controller without a fast logarithm would invert eq 3, and
-``--inversion lut`` and the report show what such a table costs in accuracy (at most
-5e-9 um of amplitude at any allowed limit, nothing the friction errors show).
+``frictex report`` and the Python API's ``inversion="lut"`` (``build_pipeline``) show
+what such a table costs in accuracy (at most 5e-9 um of amplitude at any allowed limit,
+nothing the friction errors show).
 
-Eq 3, ``w = -(1/b) ln(q)`` with ``q = 1 - r``, ``r = (1 - mu') / (1 - A)``, depends on
-the target and the force only through q. q in (0, 1] is split into a mantissa and an
+Eq 3, ``w = -(1/b) ln(q)`` with ``q = (mu' - A) / (1 - A) = 1 - r``,
+``r = (1 - mu') / (1 - A)``, depends on the target and the force only through q, taken
+as the exact inversion takes it (``device.friction.eq3_arguments``: 1 - r near 1, the
+first form near the floor, where 1 - r would keep few of its digits). q in (0, 1] is split into a mantissa and an
 octave, ``q = m 2^e`` with m in [0.5, 1) (``frexp``: a controller reads them off the
 float's bits), so ``w = -ln(m) / b - e ln(2) / b``: one table of ``-ln(m) / b`` uniform
 in m over one octave serves every force and every amplitude limit, and a block is
@@ -39,7 +43,8 @@ from __future__ import annotations
 import numpy as np
 
 from frictex.device.errors import InputError
-from frictex.device.friction import ClampCounts, SeedFrictionModel, asymptote
+from frictex.device.friction import (ClampCounts, SeedFrictionModel, asymptote,
+                                     asymptote_rounding, eq3_arguments)
 
 #: table size: 4096 points over one octave keep the interpolation error below 5e-9 um
 TABLE_SIZE = 4096
@@ -58,10 +63,9 @@ class LutFrictionModel:
         self.limit_um = exact.limit_um
         self.nominal_force_n = exact.nominal_force_n
         b = self.params.b_per_um
-        # r at the limit; above it a target is unreachable: beyond the limit (a rounding
-        # off it is not), or r = 1 (q = 0), the largest double below 1 being 1 - 2^-53
-        r_max = -np.expm1(-b * self.limit_um)
-        self._r_top = min(r_max * (1.0 + 1e-12), 1.0 - 2.0 ** -53)
+        # q at the limit; below it a target is unreachable: beyond the limit (a rounding
+        # off it, as the exact inversion allows, is not)
+        self._q_low = np.exp(-b * self.limit_um * (1.0 + 1e-12))
         m = np.linspace(0.5, 1.0, size)
         self._w = -np.log(m) / b  # w of the mantissa m (um)
         self._w[0] = np.log(2.0) / b  # so that q = 1 (m = 0.5, e = 1) is w = 0 exactly
@@ -93,14 +97,17 @@ class LutFrictionModel:
         if np.any(beyond):  # a heavy press: the exact path decides and counts
             return self.exact.invert(mu, force)
         counts = ClampCounts()
-        # r as the exact path computes it, so both see one q; flat, so that a single
-        # target (0-d) is an array to write into too
-        r = ((1.0 - mu) / (1.0 - a)).reshape(-1)
-        counts.above_one = int(np.count_nonzero(r < 0.0))
-        over = r > self._r_top
+        # q as the exact path computes it (1 - r or q itself, NaN where unreachable);
+        # flat, so that a single target (0-d) is an array to write into too
+        low = asymptote_rounding(self.params.asymptote_per_n, f_lo if f_lo == f_hi else force)
+        x, q, tail = eq3_arguments(mu, a, low)
+        x = x.reshape(-1)
+        counts.above_one = int(np.count_nonzero(x > 0.0))  # r < 0: mu' > 1
+        q = np.where(tail, q, 1.0 + x).reshape(-1)
+        over = ~(q >= self._q_low)
         counts.unreachable = int(np.count_nonzero(over))
-        np.clip(r, 0.0, self._r_top, out=r)
-        x, e = np.frexp(np.subtract(1.0, r, out=r))  # q = x 2^e, x in [0.5, 1), e <= 1
+        q[over] = 1.0  # w = limit below
+        x, e = np.frexp(np.minimum(q, 1.0, out=q))  # q = x 2^e, x in [0.5, 1), e <= 1
         x *= self._scale
         x -= self._scale / 2  # x in table steps from m = 0.5
         k = x.astype(np.intp)

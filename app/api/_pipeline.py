@@ -193,9 +193,9 @@ def build_pipeline(scene: Scene | str | Path, *, rate_hz: float = 10_000.0,
     ------
     InputError
         A bad scene (a value of a :class:`Scene` breaking its key's rule: the message
-        names the layer and field), or a rate, block size, renderer, control mode or
-        inversion that is not one the command line accepts (the message names the
-        argument).
+        names the layer and field), or a rate, block size, renderer or control mode that
+        is not one the command line accepts, or an inversion other than ``exact`` and
+        ``lut`` (the message names the argument).
     PluginError
         A ``RuntimeError``, not an InputError: another package's renderer or device
         profile the scene names (or one registered from your code) that cannot be
