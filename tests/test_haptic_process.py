@@ -178,3 +178,25 @@ def test_child_exits_when_the_window_process_dies(snapshots):
         if parent.poll() is None:
             parent.kill()
             parent.wait()
+
+
+def test_a_signal_raised_while_stopping_still_ends_the_child():
+    """A second SIGTERM raised in stop()'s wait for the child's report skipped the
+    terminate and kill: the child, blocked writing snapshots nobody read, stayed, and the
+    interpreter's exit waited on it for ever (a demo that only SIGKILL ended)."""
+    from frictex.app.engine.driver import Terminated
+    from frictex.app.live.haptic_thread import SNAPSHOT_QUEUE
+    path = resolve_scene("grating-5mm")
+    haptic = HapticProcess(load_scene(path), HapticConfig(path, 10_000.0, 50, None, None, None))
+    deadline = time.monotonic() + WAIT_S
+    while haptic.snapshots.qsize() < SNAPSHOT_QUEUE:  # nothing read: the child blocks
+        assert time.monotonic() < deadline, "the child published no snapshots"
+        time.sleep(0.01)
+
+    def interrupted(*args, **kwargs):
+        raise Terminated(15)
+
+    haptic._wait = interrupted
+    with pytest.raises(Terminated):
+        haptic.stop()
+    assert not haptic._proc.is_alive()

@@ -212,14 +212,29 @@ class HapticProcess(TouchInput):
     def stop(self) -> None:
         """Stop the child and collect its final ``stats``, ``link`` status and
         ``dropped_records`` (the child's dropped touches add to the window's); raises
-        HapticProcessError (an OSError) if it ended without reporting them."""
-        if self._proc.is_alive() and not self._done:
-            try:
-                self._requests.put(("stop",), timeout=1.0)
-                self._wait("done", STOP_TIMEOUT_S, past_errors=True)
-            except (HapticProcessError, queue.Full):
-                pass  # it hung or died: terminated below, and said so
-        self._proc.join(timeout=2.0)
+        HapticProcessError (an OSError) if it ended without reporting them. Whatever
+        interrupts the wait (a second signal raised in it) still ends the child, at once:
+        left running, it blocked on a queue nobody read, and the interpreter's exit waited
+        on it for ever."""
+        waited = False
+        try:
+            if self._proc.is_alive() and not self._done:
+                try:
+                    self._requests.put(("stop",), timeout=1.0)
+                    self._wait("done", STOP_TIMEOUT_S, past_errors=True)
+                except (HapticProcessError, queue.Full):
+                    pass  # it hung or died: terminated below, and said so
+            waited = True
+        finally:
+            self._end_child(grace_s=2.0 if waited else 0.0)
+        if not self._done:
+            raise HapticProcessError(f"haptic process ended (exit code {self._proc.exitcode}) "
+                                     "without reporting its stats and link status")
+
+    def _end_child(self, grace_s: float) -> None:
+        """The child ended: waited for ``grace_s`` (s), then terminated, then killed, each
+        wait bounded; the queues closed without waiting on what they hold."""
+        self._proc.join(timeout=grace_s)
         if self._proc.is_alive():
             self._proc.terminate()
             self._proc.join(timeout=2.0)
@@ -229,9 +244,6 @@ class HapticProcess(TouchInput):
         for q in (self.touches, self.snapshots, self._requests, self._replies):
             q.cancel_join_thread()  # a full queue must not hold the window at exit
             q.close()
-        if not self._done:
-            raise HapticProcessError(f"haptic process ended (exit code {self._proc.exitcode}) "
-                                     "without reporting its stats and link status")
 
     def _wait(self, kind: str, timeout_s: float, past_errors: bool = False) -> tuple:
         """The child's next reply of ``kind`` (or its failure; ``past_errors``: wait on
