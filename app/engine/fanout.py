@@ -64,6 +64,8 @@ DONE, NOT_STARTED, STOPPED = "done", "not started", "stopped"
 NO_WORKER_S = 60.0
 #: how often (s) a Dask cluster's workers are counted while its items run
 WORKER_CHECK_S = 1.0
+#: how long (s) connecting to a Dask scheduler may take, its handshake included
+CONNECT_S = 10.0
 #: how long (s) the items running on a Dask cluster may take to finish after a signal
 DASK_STOP_S = 3.0
 #: an item's state in the workers' shared array: taken by a worker and running, or ended
@@ -493,13 +495,49 @@ def _dask_client(address: str):
         from distributed import Client
     except ImportError:
         raise MissingExtra("cluster", "--scheduler", "dask.distributed") from None
+    from distributed.comm import resolve_address
     try:
-        return Client(address, timeout=10)
-    except (OSError, TimeoutError) as exc:
-        raise OSError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
+        resolve_address(address)
     except (ValueError, TypeError) as exc:  # not an address ("missing port number")
         raise InputError(f"--scheduler {address}: not a scheduler's address ({exc}); "
                          "expected tcp://HOST:PORT") from None
+    try:
+        _shake_hands(address)
+        return Client(address, timeout=CONNECT_S)
+    except TimeoutError:
+        raise OSError(f"cannot reach the Dask scheduler at {address}: no answer within "
+                      f"{CONNECT_S:.0f} s") from None
+    except OSError as exc:
+        raise OSError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
+
+
+def _shake_hands(address: str) -> None:
+    """Connect to ``address`` as a Dask client does, exchange the handshake and part,
+    all within :data:`CONNECT_S` (else ``TimeoutError``); ``OSError`` where what answers
+    is not a Dask scheduler.
+
+    distributed's own connect waits on the handshake without limit: a server that accepts
+    and stays silent held ``frictex batch`` for ever, and one that answers in another
+    protocol (HTTP's 'HTTP/1.1 400') had its first bytes read as a frame's length, an
+    allocation of exabytes (``MemoryError``). Once a Dask scheduler has answered here,
+    the client's connect is bounded by its own timeouts.
+    """
+    import asyncio
+    from distributed import Security
+    from distributed.comm import connect
+
+    async def handshake():
+        comm = await connect(address, timeout=CONNECT_S,
+                             **Security().get_connection_args("client"))
+        await comm.close()
+
+    try:
+        asyncio.run(asyncio.wait_for(handshake(), CONNECT_S))
+    except OSError:
+        raise
+    except Exception as exc:  # whatever the reader made of a stranger's bytes
+        raise OSError(f"what answers there is not a Dask scheduler ({type(exc).__name__} "
+                      "in the handshake)") from None
 
 
 def _dask_results(client, futures: list, stopper: _Stopper, watch: "_WorkerWatch",
