@@ -98,7 +98,9 @@ import csv
 import math
 import os
 import re
+import threading
 import time
+from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -109,7 +111,7 @@ from frictex.device.safe_text import printable, quoted
 from frictex.rendering.input.trace_file import CR_ONLY, MAX_LINE_BYTES, NUMBER, describe_header
 from frictex.textures.errors import TextureError
 from frictex.textures.library import UnreadableText, bundled_file, file_problem, read_utf8
-from frictex.textures.outside import HOW, allow_outside_from_env, leads_out
+from frictex.textures.outside import ALLOW_OUTSIDE_ENV, HOW, allow_outside_from_env, leads_out
 
 COLUMNS = ("scene", "trace", "renderer", "rate_hz", "block", "format", "name")
 RESULT_COLUMNS = ("job", "name", "scene", "trace", "status", "error", "output_s", "wall_s",
@@ -137,7 +139,10 @@ MAX_PROBLEMS_SHOWN = 50
 class Job:
     """One replay of a batch (units as ``frictex replay``'s options): ``scene`` and
     ``trace`` a file's absolute path or a bundled name; ``written`` the two as the
-    manifest's line writes them (None: as ``scene`` and ``trace``), for ``batch.csv``."""
+    manifest's line writes them (None: as ``scene`` and ``trace``), for ``batch.csv``;
+    ``allow_outside`` whether its texture files may name files outside their folder
+    (``--allow-outside`` where the manifest was read: :func:`run_job` carries it to the
+    worker, whose environment on a Dask cluster is not this process's)."""
 
     index: int
     scene: str
@@ -148,6 +153,7 @@ class Job:
     fmt: str
     name: str
     written: tuple[str, str] | None = None
+    allow_outside: bool = False
 
 
 class ManifestError(InputError):
@@ -326,7 +332,7 @@ def _job(index: int, cell: dict, base: Path, renderers, where: str,
     if len(problems.lines) > before:
         return None
     return Job(index, paths["scene"], paths["trace"], renderer, rate_hz, block, fmt, name,
-               written=(cell["scene"], cell["trace"]))
+               written=(cell["scene"], cell["trace"]), allow_outside=allow_outside_from_env())
 
 
 def _name(cell: dict, index: int, where: str) -> str:
@@ -404,9 +410,10 @@ def run_job(job: Job, out_dir: str) -> dict:
     try:
         scene, trace = (spec if os.path.isabs(spec) else str(bundled_file(spec, kind))
                         for spec, kind in ((job.scene, "scene"), (job.trace, "trace")))
-        doc = run_replay(scene, trace, Path(out_dir) / job.name, rate_hz=job.rate_hz,
-                         fmt=job.fmt, block_size=job.block, render_override=job.renderer,
-                         progress=False)
+        with _ALLOWING_OUTSIDE if job.allow_outside else nullcontext():
+            doc = run_replay(scene, trace, Path(out_dir) / job.name, rate_hz=job.rate_hz,
+                             fmt=job.fmt, block_size=job.block, render_override=job.renderer,
+                             progress=False)
     except (FrictexError, ValueError, OSError) as exc:  # its values already escaped
         return not_ok(job, "failed", printable(exc, MAX_ERROR_SHOWN))
     wall_s = time.perf_counter() - start
@@ -420,6 +427,38 @@ def run_job(job: Job, out_dir: str) -> dict:
             "modal_capped": doc["counts"].get("modal_capped"),  # before version 6: not counted
             "modal_unserved": doc["counts"].get("modal_unserved"),  # before version 7: not counted
             "warnings": len(doc["warnings"])}
+
+
+class _AllowingOutside:
+    """``FRICTEX_ALLOW_OUTSIDE=1`` in this process while the jobs that allow it run (a Dask
+    worker runs jobs in threads, and its environment is not the client's); its value
+    before the first of them back once the last ends. A job that does not allow it,
+    running in another thread meanwhile, sees it too: the loader reads the variable."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.jobs = 0
+        self.before: str | None = None
+
+    def __enter__(self):
+        with self.lock:
+            if not self.jobs:
+                self.before = os.environ.get(ALLOW_OUTSIDE_ENV)
+                os.environ[ALLOW_OUTSIDE_ENV] = "1"
+            self.jobs += 1
+
+    def __exit__(self, *exc):
+        with self.lock:
+            self.jobs -= 1
+            if self.jobs:
+                return
+            if self.before is None:
+                os.environ.pop(ALLOW_OUTSIDE_ENV, None)
+            else:
+                os.environ[ALLOW_OUTSIDE_ENV] = self.before
+
+
+_ALLOWING_OUTSIDE = _AllowingOutside()
 
 
 def not_ok(job: Job, status: str, error: str) -> dict:
