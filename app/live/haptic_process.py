@@ -233,17 +233,22 @@ class HapticProcess(TouchInput):
 
     def _end_child(self, grace_s: float) -> None:
         """The child ended: waited for ``grace_s`` (s), then terminated, then killed, each
-        wait bounded; the queues closed without waiting on what they hold."""
-        self._proc.join(timeout=grace_s)
-        if self._proc.is_alive():
-            self._proc.terminate()
-            self._proc.join(timeout=2.0)
-        if self._proc.is_alive():  # its SIGTERM is a stop request, which it did not take
-            self._proc.kill()
-            self._proc.join()
-        for q in (self.touches, self.snapshots, self._requests, self._replies):
-            q.cancel_join_thread()  # a full queue must not hold the window at exit
-            q.close()
+        wait bounded; the queues closed without waiting on what they hold. A signal raised
+        in a wait (the run's second: later ones are held) skips only that wait."""
+        try:
+            self._proc.join(timeout=grace_s)
+        finally:
+            try:
+                if self._proc.is_alive():
+                    self._proc.terminate()
+                    self._proc.join(timeout=2.0)
+            finally:
+                if self._proc.is_alive():  # its SIGTERM is a stop request it did not take
+                    self._proc.kill()
+                    self._proc.join()
+                for q in (self.touches, self.snapshots, self._requests, self._replies):
+                    q.cancel_join_thread()  # a full queue must not hold the window at exit
+                    q.close()
 
     def _wait(self, kind: str, timeout_s: float, past_errors: bool = False) -> tuple:
         """The child's next reply of ``kind`` (or its failure; ``past_errors``: wait on
