@@ -209,6 +209,15 @@ def _a(value: object) -> str:
     return f"a {type(value).__name__}"
 
 
+def _from_a_signal(exc: BaseException) -> bool:
+    """Whether ``exc``, raised in a plugin's import, came from a signal (Ctrl-C's
+    ``KeyboardInterrupt``; a subclass of ``SystemExit``, as ``app.engine.driver.Terminated``
+    for SIGTERM and SIGHUP) rather than from the plugin: a plain ``SystemExit`` is a
+    script's ``sys.exit()`` or ``argparse`` at module level, a broken plugin."""
+    return isinstance(exc, KeyboardInterrupt) or (isinstance(exc, SystemExit)
+                                                  and type(exc) is not SystemExit)
+
+
 @dataclass(frozen=True)
 class _Unloaded:
     """An entry point not imported yet (``importlib.metadata``'s, or the backport's where
@@ -357,7 +366,9 @@ class Registry(Generic[T]):
             return entry
         try:
             loaded = entry.point.load()
-        except Exception as exc:  # a broken plugin names itself, not frictex
+        except BaseException as exc:  # a broken plugin names itself, not frictex
+            if _from_a_signal(exc):
+                raise
             raise PluginError(f"{self.kind} {name!r} of {origin} cannot be "
                               f"loaded: {type(exc).__name__}: {exc}") from exc
         if self.expect is not None and not self.expect.test(loaded):
