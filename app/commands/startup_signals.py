@@ -48,10 +48,12 @@ class StartupSignals:
     Each raises KeyboardInterrupt, SIGTERM's too: inside a C extension's import of numpy
     (``import_array``: pyarrow, numpy.linalg, numpy.random) the exception is printed
     (``PyErr_Print``, through ``sys.excepthook``) and replaced with ``ImportError:
-    numpy._core.multiarray failed to import``, and a SystemExit printed there ends the
-    process on the spot, without the line. Within, ``sys.excepthook`` prints nothing for
-    a KeyboardInterrupt (the one line comes after) and :meth:`caused` tells what a signal
-    caused. Commands that handle signals themselves (a run's ``deferred_interrupts``) put
+    numpy._core.multiarray failed to import``; ``import_umath`` (numba's and scipy's ufunc
+    modules) replaces it before printing (``ImportError: _multiarray_umath failed to
+    import``); a SystemExit printed there ends the process on the spot, without the line.
+    Within, ``sys.excepthook`` prints nothing for a KeyboardInterrupt nor for what
+    :meth:`caused` says a signal caused (the one line comes after), and a KeyboardInterrupt
+    dropped where no exception can pass is raised again (:meth:`_raise_again`). Commands that handle signals themselves (a run's ``deferred_interrupts``) put
     their own handlers in place for the run and these back after it. In the main thread
     only (signal handlers can be set nowhere else)."""
 
@@ -59,11 +61,14 @@ class StartupSignals:
         self.signum: int | None = None
         self._handlers: dict[int, object] = {}
         self._hook = None
+        self._unraisable_hook = None
 
     def __enter__(self) -> "StartupSignals":
         if threading.current_thread() is threading.main_thread():
             self._hook = sys.excepthook
             sys.excepthook = self._quiet_interrupt
+            self._unraisable_hook = sys.unraisablehook
+            sys.unraisablehook = self._raise_again
             for sig in HELD_SIGNALS:
                 handler = signal.getsignal(sig)
                 if handler is not signal.SIG_IGN:
@@ -75,6 +80,7 @@ class StartupSignals:
             signal.signal(sig, handler)
         if self._hook is not None:
             sys.excepthook = self._hook
+            sys.unraisablehook = self._unraisable_hook
 
     def run_saw(self, signum: int, ended: bool) -> None:
         """A run within (``driver.deferred_interrupts``) saw ``signum``: one that ended the
@@ -112,8 +118,26 @@ class StartupSignals:
             self.signum = signum
             raise KeyboardInterrupt
 
+    def _raise_again(self, unraisable) -> None:
+        """``sys.unraisablehook``: the first signal's KeyboardInterrupt, raised where Python
+        cannot pass an exception on (importlib's module-lock weakref callback), was printed
+        as "Exception ignored in ... cb" and dropped, and the command ran to the end, exit
+        0. It is raised again, quietly, as the main thread next enters a function (a
+        one-shot trace function: a signal raised from within this hook would be dropped
+        too); any other unraisable exception is printed as before."""
+        if self.signum is None or not isinstance(unraisable.exc_value, KeyboardInterrupt):
+            self._unraisable_hook(unraisable)
+            return
+        previous = sys.gettrace()
+
+        def raise_on_entry(frame, event, arg):
+            sys.settrace(previous)
+            raise KeyboardInterrupt
+
+        sys.settrace(raise_on_entry)
+
     def _quiet_interrupt(self, kind, value, tb) -> None:
-        if not issubclass(kind, KeyboardInterrupt):
+        if not (issubclass(kind, KeyboardInterrupt) or self.caused(value)):
             self._hook(kind, value, tb)
 
     def caused(self, exc: BaseException) -> bool:
