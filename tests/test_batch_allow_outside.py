@@ -5,6 +5,8 @@ failed there ('leads out of the folder through '..'') though --jobs ran it."""
 import csv
 import os
 import shutil
+import threading
+from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
@@ -51,3 +53,38 @@ def test_allow_outside_on_a_dask_worker_process(study):
     with open(study / "out" / "batch.csv", newline="") as fh:
         (row,) = csv.DictReader(fh)
     assert (code, row["status"], row["error"]) == (0, "ok", "")
+
+
+def test_a_job_allowed_outside_allows_no_other_job_running_beside_it(study, monkeypatch):
+    """A Dask worker runs jobs in threads of one process: while a job with allow_outside
+    replays, a job of another batch without it, in another thread, is still refused (it was
+    allowed too when the permission was FRICTEX_ALLOW_OUTSIDE, which every thread reads)."""
+    from frictex.app.engine import replay
+    real, inside, refused = replay.run_replay, threading.Event(), threading.Event()
+
+    def allowed_waits_for_the_other(scene, trace, out, **options):
+        if out.name == "allowed":
+            inside.set()
+            assert refused.wait(60), "the job not allowed never ended"
+        return real(scene, trace, out, **options)
+
+    monkeypatch.setattr(replay, "run_replay", allowed_waits_for_the_other)
+
+    def job(name, allow_outside):
+        return Job(0, str(study / "rm.toml"), "swipe-40mms-50hz", None, 1e4, 50, "csv", name,
+                   allow_outside=allow_outside)
+
+    def not_allowed():
+        assert inside.wait(60), "the allowed job never started its replay"
+        try:
+            return run_job(job("not-allowed", False), str(study / "out"))
+        finally:
+            refused.set()
+
+    with ThreadPoolExecutor(2) as pool:
+        allowed = pool.submit(run_job, job("allowed", True), str(study / "out"))
+        other = pool.submit(not_allowed).result()
+        allowed = allowed.result()
+    assert (allowed["status"], allowed["error"]) == ("ok", "")
+    assert other["status"] == "failed" and "--allow-outside" in other["error"]
+    assert ALLOW_OUTSIDE_ENV not in os.environ

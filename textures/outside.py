@@ -1,5 +1,7 @@
 """Whether texture files may name files outside their own folder: ``--allow-outside`` on
-the commands that load scenes, or ``FRICTEX_ALLOW_OUTSIDE=1`` in the environment.
+the commands that load scenes, or ``FRICTEX_ALLOW_OUTSIDE=1`` in the environment (for a
+whole process), or a batch job's own permission (:func:`allowing_outside`, for the thread
+that runs the job).
 
 By default a texture file names files (images, height maps, HaTT models, AHAP clips,
 mode tables) in its own folder or below it (``textures.sections.files``). This module is
@@ -10,6 +12,8 @@ from __future__ import annotations
 
 import argparse
 import os
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 
 from frictex.device.safe_text import escape_path
@@ -19,9 +23,27 @@ ALLOW_OUTSIDE_ENV = "FRICTEX_ALLOW_OUTSIDE"
 HOW = f"pass --allow-outside or set {ALLOW_OUTSIDE_ENV}=1 to read it anyway"
 
 
+#: a job's own permission, in the context (thread) running it: a Dask worker runs jobs of
+#: several batches in threads of one process, which share one environment
+_JOB_ALLOWS = ContextVar("frictex_job_allows_outside", default=False)
+
+
 def allow_outside_from_env() -> bool:
-    """Whether ``FRICTEX_ALLOW_OUTSIDE=1`` is set."""
-    return os.environ.get(ALLOW_OUTSIDE_ENV, "").strip() == "1"
+    """Whether files outside may be read here: the job running in this context allows it
+    (:func:`allowing_outside`), or ``FRICTEX_ALLOW_OUTSIDE=1`` is set for the process."""
+    return _JOB_ALLOWS.get() or os.environ.get(ALLOW_OUTSIDE_ENV, "").strip() == "1"
+
+
+@contextmanager
+def allowing_outside(allowed: bool):
+    """Within it, in this context only, files outside may be read if ``allowed`` (a job's
+    ``--allow-outside``); ``FRICTEX_ALLOW_OUTSIDE=1`` allows them whatever ``allowed``
+    says. Other threads, which start with a context of their own, are not affected."""
+    token = _JOB_ALLOWS.set(allowed)
+    try:
+        yield
+    finally:
+        _JOB_ALLOWS.reset(token)
 
 
 class _AllowOutside(argparse.Action):

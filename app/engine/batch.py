@@ -98,9 +98,7 @@ import csv
 import math
 import os
 import re
-import threading
 import time
-from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -111,7 +109,7 @@ from frictex.device.safe_text import printable, quoted
 from frictex.rendering.input.trace_file import CR_ONLY, MAX_LINE_BYTES, NUMBER, describe_header
 from frictex.textures.errors import TextureError
 from frictex.textures.library import UnreadableText, bundled_file, file_problem, read_utf8
-from frictex.textures.outside import ALLOW_OUTSIDE_ENV, HOW, allow_outside_from_env, leads_out
+from frictex.textures.outside import HOW, allow_outside_from_env, allowing_outside, leads_out
 
 COLUMNS = ("scene", "trace", "renderer", "rate_hz", "block", "format", "name")
 RESULT_COLUMNS = ("job", "name", "scene", "trace", "status", "error", "output_s", "wall_s",
@@ -410,7 +408,7 @@ def run_job(job: Job, out_dir: str) -> dict:
     try:
         scene, trace = (spec if os.path.isabs(spec) else str(bundled_file(spec, kind))
                         for spec, kind in ((job.scene, "scene"), (job.trace, "trace")))
-        with _ALLOWING_OUTSIDE if job.allow_outside else nullcontext():
+        with allowing_outside(job.allow_outside):
             doc = run_replay(scene, trace, Path(out_dir) / job.name, rate_hz=job.rate_hz,
                              fmt=job.fmt, block_size=job.block, render_override=job.renderer,
                              progress=False)
@@ -427,38 +425,6 @@ def run_job(job: Job, out_dir: str) -> dict:
             "modal_capped": doc["counts"].get("modal_capped"),  # before version 6: not counted
             "modal_unserved": doc["counts"].get("modal_unserved"),  # before version 7: not counted
             "warnings": len(doc["warnings"])}
-
-
-class _AllowingOutside:
-    """``FRICTEX_ALLOW_OUTSIDE=1`` in this process while the jobs that allow it run (a Dask
-    worker runs jobs in threads, and its environment is not the client's); its value
-    before the first of them back once the last ends. A job that does not allow it,
-    running in another thread meanwhile, sees it too: the loader reads the variable."""
-
-    def __init__(self):
-        self.lock = threading.Lock()
-        self.jobs = 0
-        self.before: str | None = None
-
-    def __enter__(self):
-        with self.lock:
-            if not self.jobs:
-                self.before = os.environ.get(ALLOW_OUTSIDE_ENV)
-                os.environ[ALLOW_OUTSIDE_ENV] = "1"
-            self.jobs += 1
-
-    def __exit__(self, *exc):
-        with self.lock:
-            self.jobs -= 1
-            if self.jobs:
-                return
-            if self.before is None:
-                os.environ.pop(ALLOW_OUTSIDE_ENV, None)
-            else:
-                os.environ[ALLOW_OUTSIDE_ENV] = self.before
-
-
-_ALLOWING_OUTSIDE = _AllowingOutside()
 
 
 def not_ok(job: Job, status: str, error: str) -> dict:
