@@ -4,8 +4,11 @@ through the shared link checks, as the Python simulated device and the host buil
 What it plays comes back through semihosting, a record per played sample."""
 
 import io
+import os
+import select
 import shutil
 import time
+import tty
 
 import numpy as np
 import pytest
@@ -160,3 +163,47 @@ def test_the_firmware_in_qemu_trips_its_watchdog_when_the_host_goes_quiet(elf, t
         assert causes["stalled"] + causes["lost"] + causes["flushed"] >= 1000 - np.count_nonzero(second)
     assert np.all(amp[index < 4000, 0] * STEP == 2.0)
     accounted(status, index, 5000)
+
+
+def _answer_after(path, burst, first, timeout_s=30.0):
+    """Write ``burst`` to the pty ``path`` as fast as it takes it, reading what comes back
+    meanwhile; then a Heartbeat (tokens and sequence numbers from ``first`` on) every
+    0.5 s until one is answered. Returns that Status; fails naming how far it got if the
+    burst was not taken, or nothing answered, within ``timeout_s``."""
+    fd = os.open(path, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
+    try:
+        tty.setraw(fd)
+        decoder, pending, written, token, beat_at = p.Decoder(), burst, 0, first, 0.0
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            if not pending and time.monotonic() >= beat_at:
+                pending, beat_at = p.encode(p.Heartbeat(token), token, 1), time.monotonic() + 0.5
+                token += 1
+            readable, writable, _ = select.select([fd], [fd] if pending else [], [], 0.1)
+            if writable:
+                n = os.write(fd, pending)
+                pending, written = pending[n:], written + n
+            for frame in decoder.feed(os.read(fd, 1 << 16)) if readable else ():
+                if isinstance(frame.message, p.Status) and frame.message.echo >= first:
+                    return frame.message
+        pytest.fail(f"the device took {min(written, len(burst))} of the burst's {len(burst)} "
+                    f"bytes and answered no Heartbeat after it within {timeout_s:g} s")
+    finally:
+        os.close(fd)
+
+
+def test_the_firmware_in_qemu_keeps_answering_through_a_burst_far_larger_than_its_ring(elf):
+    """64 KiB of Heartbeats in one go, far more than the 1 KiB receive ring, arriving
+    faster than the main loop answers them: the ring fills and the bytes wait in the UART,
+    none lost. (The receive interrupt, asserted while the full FIFO waited, was entered
+    over and over and the main loop never ran again: the device took 17 KiB of the burst
+    and answered nothing more.)"""
+    n = 4800
+    frames = [p.Hello(1)] + [p.Heartbeat(k) for k in range(1, n)]
+    burst = b"\x00" + b"".join(p.encode(m, k, 1) for k, m in enumerate(frames))
+    assert len(burst) > 64 * 1024
+    with qemuport.QemuDevice(elf=elf) as dev:
+        status = _answer_after(dev.path, burst, n)
+    assert status.echo >= n  # after every frame of the burst, in order
+    assert status.crc_errors == 0 and status.lost_frames == 0
+    assert status.frames_ok == status.echo + 1  # every frame, the Hello too: none lost
