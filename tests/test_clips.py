@@ -54,6 +54,20 @@ def test_a_held_event_of_a_whole_number_of_samples_ends_back_at_1():
     assert mu.size == 5001 and (mu[:5000] == 0.5).all() and mu[-1] == 1.0
 
 
+@pytest.mark.parametrize("rate_hz", [RATE, 44_100.0, 8_000.0])
+def test_events_end_to_end_share_no_sample(rate_hz):
+    """0.1 + 0.2 is 3000.0000000000005 samples at 10 kHz: the first event played one sample
+    into the second, whose levels added to 2 there and were counted as clipped."""
+    starts_and_lengths = ((0.1, 0.2), (0.3, 0.1), (0.4, 0.3))  # as an author writes them
+    clip = Clip(tuple(ClipEvent("continuous", a, 1.0, 0.0, n) for a, n in starts_and_lengths),
+                depth=0.4)
+    mu, clipped = clip.sample(rate_hz)
+    t = np.arange(mu.size) / rate_hz
+    played = (t >= 0.1 - 1e-12) & (t < 0.7 - 1e-12)  # independent: the union of [start, end)
+    assert not clipped.any()
+    assert_allclose(mu, np.where(played, 0.6, 1.0), atol=1e-12)
+
+
 def test_sharpness_sets_the_carrier_and_levels_that_add_past_1_are_counted():
     buzz = Clip((ClipEvent("continuous", 0.0, 1.0, 1.0, 1.0),), depth=0.3)
     mu, _ = buzz.sample(RATE)

@@ -37,6 +37,10 @@ TRANSIENT_S = (0.030, 0.005)  # pulse length at sharpness 0 and at sharpness 1
 CARRIER_MAX_HZ = 250.0
 #: longest clip (s): its samples are computed once, at the pipeline's output rate
 MAX_CLIP_S = 60.0
+#: how near a sample (in samples) an event's start or end counts as on it: times written
+#: in decimal land there only within rounding (0.1 + 0.2 is 3000.0000000000005 samples
+#: at 10 kHz), and an event ending where the next starts must not share its sample
+ON_SAMPLE = 1e-6
 
 Points = tuple[tuple[float, float], ...]
 
@@ -68,6 +72,12 @@ def _curve(points: Points, t: np.ndarray, default: float) -> np.ndarray:
     return np.interp(t, ts, vs, left=default)
 
 
+def _first_sample_from(time_s: float, rate_hz: float) -> int:
+    """The index of the first sample at or after ``time_s`` (>= 0), one within
+    :data:`ON_SAMPLE` of a sample counting as on it."""
+    return max(0, math.ceil(time_s * rate_hz - ON_SAMPLE))
+
+
 @dataclass(frozen=True)
 class Clip:
     """A clip of mu' against time; see the module docstring. ``depth``: the drop in mu'
@@ -93,9 +103,10 @@ class Clip:
     def sample(self, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
         """mu' at t = k / rate_hz, k = 0 .. ceil(duration * rate), and the samples where the
         level sum passed 1 and was clipped there (bool, the same shape). An event plays on
-        the samples with time_s <= t < time_s + its length, so the last sample is back at
-        1. Each event is computed over its own samples only: the cost is the events' total
-        length, not their number times the clip's."""
+        the samples with time_s <= t < time_s + its length (within :data:`ON_SAMPLE`), so
+        the last sample is back at 1 and an event ending where the next begins shares no
+        sample with it. Each event is computed over its own samples only: the cost is the
+        events' total length, not their number times the clip's."""
         n = int(math.ceil(self.duration_s * rate_hz)) + 1
         if (n - 1) / rate_hz < self.duration_s:  # the product rounded down past an integer
             n += 1
@@ -105,20 +116,16 @@ class Clip:
         total = np.zeros(n)
         for e in self.events:
             length = self.event_length_s(e)
-            # its samples found by search (one more at the end for rounding), then tested
-            lo = int(np.searchsorted(t, e.time_s, "left"))
-            hi = min(n, int(np.searchsorted(t, e.time_s + length, "right")) + 1)
-            rel = t[lo:hi] - e.time_s
-            on = (rel >= 0.0) & (rel < length)
+            lo = _first_sample_from(e.time_s, rate_hz)
+            hi = min(n, _first_sample_from(e.time_s + length, rate_hz))
+            rel = np.clip(t[lo:hi] - e.time_s, 0.0, length)
             if e.kind == "transient":
-                level = np.where(on, np.sin(np.pi * np.clip(rel, 0.0, length) / length) ** 2, 0.0)
+                level = np.sin(np.pi * rel / length) ** 2
             else:
                 env = e.envelope or ((0.0, 1.0), (e.duration_s, 1.0))
-                freq = CARRIER_MAX_HZ * np.clip(e.sharpness + shift[lo:hi], 0.0, 1.0)
-                step = np.where(on, freq, 0.0) / rate_hz
+                step = CARRIER_MAX_HZ * np.clip(e.sharpness + shift[lo:hi], 0.0, 1.0) / rate_hz
                 phase = np.cumsum(step) - step  # cycles before each sample: 0 on the first
-                carrier = 0.5 + 0.5 * np.cos(2.0 * np.pi * phase)
-                level = np.where(on, _curve(env, rel, 0.0) * carrier, 0.0)
+                level = _curve(env, rel, 0.0) * (0.5 + 0.5 * np.cos(2.0 * np.pi * phase))
             total[lo:hi] += e.intensity * gain[lo:hi] * level
         return 1.0 - self.depth * np.minimum(total, 1.0), total > 1.0
 
