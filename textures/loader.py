@@ -191,7 +191,7 @@ from frictex.textures.keys import FORMAT_VERSION, LAYER_KEYS, LAYER_TYPES, TOP
 from frictex.textures.schema import BAD, Reader
 from frictex.textures.sections.device import (device_warnings, force_device, parse_device,
                                               parse_display, unused_friction_warnings)
-from frictex.textures.outside import allow_outside_from_env
+from frictex.textures.outside import outside_allowed
 from frictex.textures.sections.files import Files
 from frictex.textures.sections.layers import (lift_warnings, parse_layers, reach_warnings,
                                               selector_warnings, unfelt_warnings)
@@ -292,7 +292,7 @@ def _check_document(path: Path, doc: dict, r: Reader, allow_outside: bool,
         return None, r.problems, r.warnings
     name = top["name"] if top["name"] is not None else path.stem
     display = parse_display(r, doc)
-    files = Files(path.parent, allow_outside or allow_outside_from_env())
+    files = Files(path.parent, allow_outside or outside_allowed())
     device = parse_device(r, doc, display, files)
     built = parse_layers(r, doc, display, files)
     device = force_device(r, doc, device, display, built)

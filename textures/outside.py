@@ -28,7 +28,7 @@ HOW = f"pass --allow-outside or set {ALLOW_OUTSIDE_ENV}=1 to read it anyway"
 _JOB_ALLOWS = ContextVar("frictex_job_allows_outside", default=False)
 
 
-def allow_outside_from_env() -> bool:
+def outside_allowed() -> bool:
     """Whether files outside may be read here: the job running in this context allows it
     (:func:`allowing_outside`), or ``FRICTEX_ALLOW_OUTSIDE=1`` is set for the process."""
     return _JOB_ALLOWS.get() or os.environ.get(ALLOW_OUTSIDE_ENV, "").strip() == "1"

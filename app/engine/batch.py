@@ -109,7 +109,7 @@ from frictex.device.safe_text import printable, quoted
 from frictex.rendering.input.trace_file import CR_ONLY, MAX_LINE_BYTES, NUMBER, describe_header
 from frictex.textures.errors import TextureError
 from frictex.textures.library import UnreadableText, bundled_file, file_problem, read_utf8
-from frictex.textures.outside import HOW, allow_outside_from_env, allowing_outside, leads_out
+from frictex.textures.outside import HOW, outside_allowed, allowing_outside, leads_out
 
 COLUMNS = ("scene", "trace", "renderer", "rate_hz", "block", "format", "name")
 RESULT_COLUMNS = ("job", "name", "scene", "trace", "status", "error", "output_s", "wall_s",
@@ -330,7 +330,7 @@ def _job(index: int, cell: dict, base: Path, renderers, where: str,
     if len(problems.lines) > before:
         return None
     return Job(index, paths["scene"], paths["trace"], renderer, rate_hz, block, fmt, name,
-               written=(cell["scene"], cell["trace"]), allow_outside=allow_outside_from_env())
+               written=(cell["scene"], cell["trace"]), allow_outside=outside_allowed())
 
 
 def _name(cell: dict, index: int, where: str) -> str:
@@ -364,7 +364,7 @@ def _path(key: str, spec: str | None, base: Path, where: str) -> str:
     or, unless allowed, leads outside ``base`` (module docstring)."""
     if not spec:
         raise ManifestError(f"{where}: {key} is empty")
-    how = None if allow_outside_from_env() else _leads_out(base, spec)
+    how = None if outside_allowed() else _leads_out(base, spec)
     if how is not None:
         raise ManifestError(f"{where}: {key} {quoted(spec)} {how}: a manifest names files in "
                             f"its own folder or below, or bundled scenes and traces ({HOW})")

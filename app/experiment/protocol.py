@@ -364,9 +364,9 @@ def _scene_path(raw: str, base_dir: Path) -> Path:
     (and report on) any file of the machine."""
     from frictex.textures.errors import TextureError
     from frictex.textures.library import bundled_file
-    from frictex.textures.outside import HOW, allow_outside_from_env, leads_out
+    from frictex.textures.outside import HOW, outside_allowed, leads_out
     local = base_dir / raw
-    how = None if allow_outside_from_env() else leads_out(base_dir, raw)
+    how = None if outside_allowed() else leads_out(base_dir, raw)
     if how is not None:
         raise TextureError(f"{quoted(raw)} {how}: a protocol names scenes in its own folder "
                            f"or below, or bundled ones ({HOW})")
