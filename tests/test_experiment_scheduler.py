@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from frictex.app.experiment.protocol import load_protocol
+from frictex.app.experiment.protocol import Staircase, load_protocol
 from frictex.app.experiment.scheduler import (Scheduler, StaircaseState, staircase_step,
                                               staircase_threshold)
 from frictex.device.errors import InputError
@@ -117,6 +117,44 @@ def test_one_up_three_down_and_linear_steps(tmp_path):
     for _ in range(9):
         state = staircase_step(sc, state, True)
     assert state.difference == pytest.approx(0.05)  # held at min
+
+
+def test_a_step_of_a_million_decades_goes_to_min_and_max():
+    """10^(1e6 x the index) overflowed (OverflowError: an internal error on the third
+    trial) though min and max bound what is presented."""
+    sc = Staircase("1-up-2-down", 0.12, (1e6,), "log", 14, 120, 10, 0.003, 0.6)
+    up = staircase_step(sc, StaircaseState(0.12), False)
+    assert up.difference == 0.6
+    state = up
+    for expected in (0.12, 0.003):  # a step down from max lands on the grid: the start
+        state = staircase_step(sc, staircase_step(sc, state, True), True)
+        assert state.difference == expected
+    assert staircase_step(sc, state, False).difference == 0.12
+
+
+def test_a_grid_unit_below_the_floats_resolution_finds_the_bound():
+    """Steps of 2.2345678901234567e-16 and 1.2345678901234567e-16 decades (17 digits
+    each) each move 0.12, but their grid unit is 1e-32 decades, far below float64's
+    resolution there: the walk of one unit at a time that corrected the bound's
+    closed-form index never ended."""
+    step = 2.2345678901234567e-16
+    sc = Staircase("1-up-2-down", 0.12, (step, 1.2345678901234567e-16), "log", 14, 120, 10,
+                   0.119999999999999, 0.120000000000001)
+    up = staircase_step(sc, StaircaseState(0.12), False)
+    assert up.difference == 0.12 * 10 ** step  # one step up: below max
+    state = StaircaseState(0.12)
+    for _ in range(200):  # down past min (some 16 steps): held there
+        state = staircase_step(sc, state, True)
+    assert state.difference == 0.119999999999999
+    assert 0.119999999999999 < staircase_step(sc, state, False).difference < 0.12
+
+
+@pytest.mark.parametrize("steps, scale", [("[1e-300]", "log"), ("[0.2, 1e-17]", "log"),
+                                          ("[1e-18]", "linear")])
+def test_steps_that_leave_the_start_where_it_is_are_refused(tmp_path, steps, scale):
+    with pytest.raises(InputError, match="leaves the start .* where it is in float64"):
+        protocol(tmp_path, method="staircase", extra=f"[staircase]\nstart = 0.2\nsteps = "
+                 f"{steps}\nscale = \"{scale}\"\nmin = 0.05\nmax = 0.6\n")
 
 
 def test_staircase_stops_after_its_reversals_and_counterbalances(tmp_path):

@@ -100,6 +100,10 @@ from frictex.textures.schema import BAD as _BAD
 from frictex.textures.schema import Choice, Flag, Int, Num, NumList, Reader, Text
 from frictex.textures.toml_safe import parse_toml
 
+#: the farthest a log staircase's level goes from its start (decades): within float64's
+#: range whatever the steps and trials (its min and max clamp what is presented)
+MAX_DECADES = 300.0
+
 FORMAT_VERSION = 1
 METHODS = ("2afc", "staircase", "same-different", "magnitude")
 #: what a stimulus may vary (``stimuli.PARAMETERS`` says how each sets a layer)
@@ -591,6 +595,13 @@ def _staircase(c: _Check, doc: dict, method: str) -> Staircase | None | object:
         return c.report(("staircase", "min"), f"{low:g} is not below max {high:g}")
     if (low is not None and v["start"] < low) or (high is not None and v["start"] > high):
         return c.report(("staircase", "start"), f"{v['start']:g} is outside [min, max]")
+    for step in v["steps"]:
+        log = v["scale"] == "log"
+        if (v["start"] * 10.0 ** step if log else v["start"] + step) == v["start"]:
+            return c.report(("staircase", "steps"),
+                            f"a step of {step:g}{' log10 units' if log else ''} leaves the "
+                            f"start ({v['start']:g}) where it is in float64: the staircase "
+                            f"would never move; give larger steps")
     return Staircase(v["rule"], v["start"], tuple(v["steps"]), v["scale"], v["reversals"],
                      v["max_trials"], v["threshold_reversals"], low, high)
 
@@ -725,8 +736,8 @@ def reachable(sc: Staircase) -> tuple[float, float]:
     without ``min`` the smallest can be 0 or below (no valid difference)."""
     step, ups, downs = max(sc.steps), sc.max_trials, sc.max_trials // sc.down_after
     if sc.scale == "log":
-        high = sc.start * 10.0 ** min(step * ups, 300.0)
-        low = sc.start * 10.0 ** -min(step * downs, 300.0)
+        high = sc.start * 10.0 ** min(step * ups, MAX_DECADES)
+        low = sc.start * 10.0 ** -min(step * downs, MAX_DECADES)
     else:
         high = sc.start + step * ups
         low = sc.start - step * downs  # 0 or below without min: refused by _staircase_fits

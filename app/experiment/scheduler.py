@@ -42,7 +42,7 @@ from typing import Iterable
 
 import numpy as np
 
-from frictex.app.experiment.protocol import Protocol, Staircase, Stimulus
+from frictex.app.experiment.protocol import MAX_DECADES, Protocol, Staircase, Stimulus
 from frictex.app.experiment.stimuli import name_of
 from frictex.device.errors import InputError
 
@@ -277,7 +277,10 @@ def staircase_level(sc: Staircase, index: int) -> float:
     on the linear one. Computed from the index alone, so a level reached by different
     paths is the same float (a resumed session finds the scene file it played)."""
     offset = float(index * _grid_unit(tuple(sc.steps)))
-    level = sc.start * 10.0 ** offset if sc.scale == "log" else sc.start + offset
+    if sc.scale == "log":  # within float64's range however far the index (min/max clamp)
+        level = sc.start * 10.0 ** min(max(offset, -MAX_DECADES), MAX_DECADES)
+    else:
+        level = sc.start + offset
     if sc.min is not None:
         level = max(level, sc.min)
     if sc.max is not None:
@@ -292,24 +295,32 @@ def _grid_level(sc: Staircase, index: int) -> float:
 
 def _first_index_reaching(sc: Staircase, bound: float, upward: bool) -> int:
     """The first grid index whose unclamped level is at or past ``bound`` going up
-    (``upward``: level >= bound) or down (level <= bound), from its closed form,
-    corrected for the float's rounding (a walk of one unit at a time took minutes at a
-    unit of 1e-10)."""
+    (``upward``: level >= bound) or down (level <= bound): from its closed form,
+    corrected for the float's rounding by a search that doubles its stride, then halves
+    it (a walk of one unit at a time took minutes at a unit of 1e-10, and never ended
+    where one unit moves the level by less than the float's resolution)."""
     unit = float(_grid_unit(tuple(sc.steps)))
     span = math.log10(bound / sc.start) if sc.scale == "log" else bound - sc.start
-    if upward:
-        index = math.ceil(span / unit)
-        while _grid_level(sc, index - 1) >= bound:
-            index -= 1
-        while _grid_level(sc, index) < bound:
-            index += 1
+    sign = 1 if upward else -1  # levels rise with the index: going down, search mirrored
+
+    def past(k: int) -> bool:  # the level at index sign * k is at or past the bound
+        level = _grid_level(sc, sign * k)
+        return level >= bound if upward else level <= bound
+
+    guess = math.ceil(sign * span / unit)
+    stride = 1
+    if past(guess):
+        inside, reached = guess - 1, guess
+        while past(inside):
+            reached, inside, stride = inside, guess - 2 * stride, 2 * stride
     else:
-        index = math.floor(span / unit)
-        while _grid_level(sc, index + 1) <= bound:
-            index += 1
-        while _grid_level(sc, index) > bound:
-            index -= 1
-    return index
+        inside, reached = guess, guess + 1
+        while not past(reached):
+            inside, reached, stride = reached, guess + 2 * stride, 2 * stride
+    while reached - inside > 1:  # not past at inside, past at reached
+        middle = (inside + reached) // 2
+        inside, reached = (inside, middle) if past(middle) else (middle, reached)
+    return sign * reached
 
 
 def _bounded_index(sc: Staircase, before: int, after: int) -> int:
