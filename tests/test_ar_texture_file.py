@@ -139,6 +139,8 @@ def test_the_sample_rate_and_speed_unit_a_file_states_are_used(tmp_path):
 
 @pytest.mark.parametrize("text, message", [
     (published_xml(sign=-1.0), r"model 1: ARcoeff is not the A\(z\) = 1 \+ sum a_k z\^-k of its ARlsf"),
+    (published_xml().replace("<ARcoeff><value>1.00000000000000000000</value>", "<ARcoeff>", 1),
+     r"model 1: ARcoeff has 4 values; expected 5: \[1, a_1 \.\. a_4\]$"),
     (published_xml().replace("<SpeedUnits>mm/s", "<SpeedUnits>in/s"), r'<SpeedUnits> is "in/s", expected one of mm/s, m/s'),
     (published_xml().replace("<ForceUnits>N", "<ForceUnits>lbf"), r'<ForceUnits> is "lbf"'),
     (published_xml(rate=10.0), r"<SampleRate> is 10 Hz, expected 100 to 1e\+06"),

@@ -438,15 +438,16 @@ def _polynomial(node, here: str, part: str, order: int) -> np.ndarray:
     coeff = _one(node, f"{part}coeff", here)
     if coeff is not None:
         written = _values(coeff, here, f"{part}coeff")
+        name, c = ("A", "a") if part == "AR" else ("B", "b")
+        expected = f"expected {order + 1}: [1, {c}_1 .. {c}_{order}]"
+        if written.size != order + 1:
+            raise TextureError(f"{here}: {part}coeff has {written.size} values; {expected}")
         rebuilt = lsf_to_poly(w)
-        gap = (np.abs(written - rebuilt).max() / max(1.0, np.abs(rebuilt).max())
-               if written.size == order + 1 else math.inf)
+        gap = np.abs(written - rebuilt).max() / max(1.0, np.abs(rebuilt).max())
         if not gap <= ARCOEFF_TOLERANCE:
-            name, c = ("A", "a") if part == "AR" else ("B", "b")
             raise TextureError(f"{here}: {part}coeff is not the {name}(z) = 1 + sum {c}_k z^-k "
-                               f"of its {part}lsf ({written.size} values, largest difference "
-                               f"{gap:.3g} of the largest coefficient); expected "
-                               f"[1, {c}_1 .. {c}_{order}]")
+                               f"of its {part}lsf (largest difference {gap:.3g} of the largest "
+                               f"coefficient); {expected}")
     return w
 
 
