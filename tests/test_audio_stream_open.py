@@ -158,6 +158,33 @@ def test_the_ramp_after_a_dropped_block_continues_the_last_frame_written(fake_sd
     np.testing.assert_allclose(ramp, expected, rtol=0, atol=1e-6)
 
 
+def test_the_fade_after_a_block_within_the_ramp_in_starts_from_its_ramped_level(fake_sd):
+    """After a dropped block the next block ramps in from 0 over ramp_frames (384); one of
+    5 commands (96 frames) ends a quarter of the way up. The fade published with it, which
+    a callback running dry plays next, started from the synthesis's full level: a step up
+    from 0.25 to 1 of the level, then the fall. It starts where the ramp in was going."""
+    out = open_output(None, paced=False)
+    plan, ring = out.plan, out.ring
+    start = 0
+    while out.ring_full == 0:
+        out.send(start, np.full((25, 1), 2.0))
+        start += 25
+    drained = np.zeros((ring.tail - ring.head, 1), dtype=np.float32)
+    out.player.fill(drained)  # the device plays all it was given, the ramp to 0 last
+    assert drained[-1, 0] == pytest.approx(0.0, abs=1e-3)
+    out.send(start, np.full((5, 1), 2.0))
+    assert out.ring_full == 480 and ring.tail - ring.head == 96
+    played = np.zeros((96 + plan.ramp_frames + 16, 1), dtype=np.float32)
+    out.player.fill(played)  # the callback runs dry after the short block
+    frames = played[:, 0].astype(np.float64)
+    level = 2.0 / plan.um_per_volt / plan.full_scale_v
+    carrier_step = 2 * level * math.sin(math.pi * plan.carrier_hz / plan.audio_rate)
+    steps = np.abs(np.diff(frames[:96 + plan.ramp_frames + 1]))
+    assert np.max(np.abs(frames[96:106])) < 0.3 * level  # the ramped level: 97/384 of it
+    assert np.max(steps) <= 1.05 * carrier_step + level / plan.ramp_frames
+    assert np.all(frames[96 + plan.ramp_frames:] == 0.0)
+
+
 # ----------------------------------------------------------------- a block longer than the ring
 class RanDry(Exception):
     """Ends a ``send`` once the callback has played the ring out."""

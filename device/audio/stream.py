@@ -212,6 +212,7 @@ class StreamOutput(AudioOutput):
         if not (self.paced or self._started) and self.ring.capacity - ramp < need:
             self._make_ring(need)  # the first live block: no callback has the ring yet
         ring = self.ring
+        ramped = self._ramp_in  # frames of the ramp in after a dropped block before these
         if self._ramp_in < ramp:  # after a dropped block: ramp in from 0
             g = min(frames.shape[0], ramp - self._ramp_in)
             frames[:g] *= (np.arange(self._ramp_in + 1, self._ramp_in + g + 1) / ramp)[:, None]
@@ -235,8 +236,11 @@ class StreamOutput(AudioOutput):
         for lo in range(0, frames.shape[0], step):
             chunk = frames[lo:lo + step]
             self._wait_room(chunk.shape[0] + ramp)
-            # the fade after this part: the callback may run dry before the next
-            self._write(chunk, self.synth.fade_tail(first + lo + chunk.shape[0]))
+            # the fade after this part: the callback may run dry before the next; from
+            # the level the ramp in would give the next frame, where one is under way
+            end = lo + chunk.shape[0]
+            self._write(chunk, self.synth.fade_tail(first + end)
+                        * min(1.0, (ramped + end + 1) / ramp))
 
     def _write(self, frames: np.ndarray, fade: np.ndarray | None = None) -> None:
         self.ring.write(frames.astype(np.float32), None if fade is None else fade.astype(np.float32))
