@@ -385,6 +385,19 @@ def test_the_panel_column_is_kept_left_of_the_scene(size, left):
     assert (vp.width_px, vp.height_px, vp.x0 - kept) == (alone.width_px, alone.height_px, alone.x0)
 
 
+@pytest.mark.parametrize("table, period", [
+    ({"type": "grating", "period_mm": 0.6}, 0.6),
+    ({"type": "waveform", "shape": "sine", "period_mm": 0.8, "offset_mm": 0.3}, 0.8),
+    ({"type": "grating", "period_mm": 5.0, "offset_mm": 7.5}, 7.5)])  # a value past a period
+def test_a_periodic_layers_offset_spans_one_period(table, period):
+    """The offset spanned the display (0-108 mm, step 0.1): a pixel of drag moved a 0.6 mm
+    grating by 1.75 periods, and 0.123456 was written 0.1."""
+    offset = next(c for c in layer_controls(table, 108.0) if c.key == "offset_mm")
+    assert (offset.lo, offset.hi) == (0.0, period)
+    assert offset.step <= period / 500
+    assert clamp(offset, 0.123456) == pytest.approx(0.123456, abs=offset.step)
+
+
 def test_an_integer_key_is_a_slider_of_whole_numbers():
     table = {"type": "recorded", "model": "model.json", "seed": 3}
     seed = next(c for c in layer_controls(table, 100.0) if c.key == "seed")

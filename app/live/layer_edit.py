@@ -245,6 +245,22 @@ def slider_span(spec: Num | Int, value: float, extent_mm: float) -> tuple[float,
     return float(lo), float(hi), float(step)
 
 
+#: a periodic layer's shift along its normal (mm): one period holds every shift it makes
+SHIFT_KEY = "offset_mm"
+
+
+def _shift_span(table, specs: dict, value: float) -> tuple[float, float, float] | None:
+    """(lo, hi, step) of a periodic layer's ``offset_mm`` slider: one period, [0,
+    ``period_mm``] (wide enough to hold ``value``), so that a drag sets the phase finely
+    (over the display's 108 mm one pixel moved a 0.6 mm grating by 1.75 periods); None
+    where the layer has no usable period (the slider then spans as any length's)."""
+    period = table.get("period_mm", getattr(specs.get("period_mm"), "default", None))
+    if isinstance(period, bool) or not isinstance(period, (int, float)) or not period > 0:
+        return None
+    lo, hi = min(0.0, value), max(float(period), value)
+    return lo, hi, _value_step(hi - lo, value)
+
+
 def _value_step(span: float, value: float) -> float:
     """The step of a slider over ``span`` holding ``value``: the finer of the span's and
     that of the span narrowed around ``value`` (NARROW x |value|)."""
@@ -425,7 +441,8 @@ def layer_controls(table, extent_mm: float, refused=frozenset()) -> tuple[Slider
             value = table[key] if written else spec.default
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 continue  # derived default ("none"), or a bad value the loader reports
-            lo, hi, step = slider_span(spec, float(value), extent_mm)
+            lo, hi, step = (_shift_span(table, specs, float(value)) if key == SHIFT_KEY
+                            else None) or slider_span(spec, float(value), extent_mm)
             out.append(Slider(key, spec.unit, lo, hi, step, float(value), written,
                               *allowed_range(spec, step), isinstance(spec, Int)))
     return tuple(out)
