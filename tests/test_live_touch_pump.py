@@ -92,6 +92,32 @@ def test_a_failing_source_is_closed_and_reported_once():
     assert source.closed == 1
 
 
+def test_fingers_down_when_the_source_fails_are_lifted_where_they_were():
+    """An evdev screen that sent ABS_MT_SLOT 99 (or was unplugged) after two contacts went
+    down: the pump stopped with the error and never lifted them, and the haptic side
+    rendered both where they were until the demo ended."""
+    scene = load_scene(resolve_scene("grating-5mm"))  # 108 x 64.8 mm
+    haptic = HapticThread(scene)
+    t0 = time.monotonic()
+    source = ScriptedSource([[TouchSample(t0, 0, 0.5, 0.5, 0.5, DOWN),
+                              TouchSample(t0, 1, 0.2, 0.25, 0.5, DOWN),
+                              TouchSample(t0, 2, 0.9, 0.9, 0.5, DOWN)],
+                             [TouchSample(t0 + 0.01, 1, 0.25, 0.25, 0.5, MOVE),
+                              TouchSample(t0 + 0.01, 2, 0.9, 0.9, 0.5, UP)],
+                             ValueError("ABS_MT_SLOT 99 is out of range (expected 0..63)")])
+    haptic.pump = TouchPump(source, haptic, lambda: scene.display, lambda: 0.5)
+    haptic.pump.start()
+    haptic.pump.join(WAIT_S)
+    assert not haptic.pump.is_alive() and source.closed == 1
+    queued = []
+    while not haptic.touches.empty():
+        queued.append(haptic.touches.get_nowait()[0][1:])
+    lifted = {q[0]: q[1:3] for q in queued if q[4] == UP}
+    assert lifted == {2: (97.2, 58.32), 0: (54.0, 32.4), 1: (27.0, 16.2)}
+    assert queued[-2:] == [(0, 54.0, 32.4, 0.5, UP), (1, 27.0, 16.2, 0.5, UP)]
+    assert haptic.input_error() == "ABS_MT_SLOT 99 is out of range (expected 0..63)"
+
+
 def test_a_pump_never_started_closes_its_source_when_stopped():
     source = ScriptedSource([])
     TouchPump(source, None, None, None).stop()

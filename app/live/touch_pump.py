@@ -22,7 +22,7 @@ from __future__ import annotations
 import threading
 import time
 
-from frictex.rendering.input.trace_file import MOVE
+from frictex.rendering.input.trace_file import MOVE, UP
 
 WAIT_S = 0.05  # longest wait for the source before looking whether to stop (s)
 
@@ -39,7 +39,9 @@ class TouchPump(threading.Thread):
     clock : the sources' clock (s), ``time.monotonic``.
 
     A source that fails (unplugged, speaking nonsense) is closed and the reason kept
-    for :meth:`take_error`; the pump ends.
+    for :meth:`take_error`; the samples it gave before are forwarded, then every finger
+    still down is lifted where it was last (a finger the source can no longer report
+    would otherwise stay pressed, rendered, until the demo ends); the pump ends.
     """
 
     def __init__(self, source, haptic, display, force_n, clock=time.monotonic):
@@ -53,6 +55,7 @@ class TouchPump(threading.Thread):
         self.coalesced = 0  # MOVEs not forwarded: a later MOVE of their finger replaced them
         self._held: list = []  # the samples since the last forward (None: replaced)
         self._moving: dict = {}  # finger -> index in _held of its MOVE that a MOVE replaces
+        self._down: dict = {}  # finger -> its last sample forwarded, while down
         self.error: str | None = None
         self._reported = False
         self._quit = threading.Event()
@@ -67,6 +70,10 @@ class TouchPump(threading.Thread):
         for s in samples:
             self.haptic.touch_at(s.t_s + shift, s.finger, s.x_mm * d.width_mm,
                                  s.y_mm * d.height_mm, force, s.event)
+            if s.event == UP:
+                self._down.pop(s.finger, None)
+            else:
+                self._down[s.finger] = s
         self.samples += len(samples)
         return len(samples)
 
@@ -104,6 +111,9 @@ class TouchPump(threading.Thread):
             self.release()
         except (OSError, ValueError) as exc:
             self.error = str(exc)
+            self.release()
+            now = self.clock()
+            self.forward([s._replace(t_s=max(now, s.t_s), event=UP) for s in self._down.values()])
         finally:
             self.source.close()
 
