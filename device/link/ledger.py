@@ -83,8 +83,13 @@ class Snapshot:
     def flushed(cls, play_index: int, t_s: float, sent_end: int, sent_count: int) -> Snapshot:
         """After a Flushed message: empty at ``play_index``; what was sent before it
         arrived is taken as flushed (an underestimate of the level at worst, which
-        the next Status corrects)."""
-        play = unwrap(play_index, sent_end)
+        the next Status corrects).
+
+        A device plays nothing it was not sent: a ``play_index`` past ``sent_end`` is
+        where its last session ended (a watchdog trip before this session's first
+        block set its origin), and it is taken as empty at ``sent_end``, as
+        :meth:`from_status` takes a device with no origin."""
+        play = min(unwrap(play_index, sent_end), sent_end)
         return cls(t_s, play, play, 0, False, sent_end, sent_count)
 
     def level(self, now_s: float, rate_hz: float, sent_end: int,
