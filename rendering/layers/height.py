@@ -24,8 +24,11 @@ rendered: a step whose chamfer is narrower than a sample's travel (0.004 mm at 4
 and 10 kHz) falls on one sample or none.
 
 Stateless: the slope depends on this sample's position and velocity only. Where s is 0
-(flat ground, a finger at rest, motion along a contour) mu' is mu_rest exactly
-(mu_rest + span tanh(+-0)). A shape with a ``slope_band`` (a ridge, a step, a button's
+(flat ground, a finger at rest, motion along a straight contour: a ridge's crest) mu' is
+mu_rest exactly (mu_rest + span tanh(+-0)). Along a curved contour the tracker predicts
+straight on between touch samples, off the curve, so s is not 0 there: a circle round
+height-bump's centre at r = sigma (8 mm, 40 mm/s, 50 Hz touch samples) drifts out to
+8.13 mm between samples and reads as a descent, mu' 0.7705 to 0.7849 for mu_rest 0.8. A shape with a ``slope_band`` (a ridge, a step, a button's
 rim) has a gradient of exactly 0 outside it, so there mu' is mu_rest without evaluating
 the shape (unless the velocity is not finite: 0 times it is NaN).
 """
