@@ -2,7 +2,7 @@
 
 ``rendering.control.loop`` computes each block it sends through these kernels (the mu'
 asked of the inverse, :func:`feed_forward`, and what it keeps of the block,
-:func:`sent_rows`) and reads each block's force report through them: its peak
+:func:`sent_rows` and :func:`touch_downs`) and reads each block's force report through them: its peak
 (:func:`report_peak`), the references it passes through the sensor chain
 (:func:`chain_input`), the friction at rest (:func:`rest_stats`) and the feedback's and
 the adaptation's points (:func:`feedback_stats`). They compute what numpy computed
@@ -65,6 +65,28 @@ def sent_rows(wanted, contact, asked, mu_target, row, cut_um):
             target[i] = 1.0 if asked[row, i] >= 1.0 else mu_target[row, i]
             cut[i] = out[row, i] >= cut_um and target[i] < 1.0
     return out, target, cut
+
+
+@njit(cache=True, nogil=True)
+def touch_downs(contact, down_at, index0, row):
+    """The output index finger ``row`` (-1: none) touched down at, for each sample
+    (n,) int64 (-1 where lifted, or none), and each finger's at the block's last sample
+    (F,); ``contact`` (F, n), ``down_at`` (F,): the same at the block before's last
+    sample, ``index0``: the block's first output index."""
+    fingers, n = contact.shape
+    down = np.full(n, -1, dtype=np.int64)
+    after = np.empty(fingers, dtype=np.int64)
+    for f in range(fingers):
+        d = down_at[f]
+        for i in range(n):
+            if not contact[f, i]:
+                d = -1
+            elif d < 0:
+                d = index0 + i
+            if f == row:
+                down[i] = d
+        after[f] = d
+    return down, after
 
 
 @njit(cache=True, nogil=True)

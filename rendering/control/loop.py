@@ -61,6 +61,18 @@ with several fingers down the loop holds its state and the block is fed forward 
    saves: on the report's population (10 s runs, reports 3 blocks late) such holds were
    46 % of the closed loop's squared error on grating-15mm (closed 4.26x -> 4.75x without them,
    grating-5mm 4.20x -> 4.64x, the object scene 3.48x either way).
+   A finger that touches down already sliding (a stroke that starts in the air) reads the
+   same rise: its lateral force climbs from 0 through the fingertip's compliance (3.84 ms
+   rise time, ``device.finger``) while its normal force is there at once, which reads as
+   friction reduced far more than asked. So a finger's samples less than ``probe_s`` (the
+   time the probe gives the ratio to settle once the finger slides) after its touch-down
+   (the tracker's contact, per finger) count as not sliding yet for the gain and the
+   model, and a block holding any does not move mu0 (what the host measured,
+   ``report``, still counts them); not those of the touch-down the first estimate came
+   from, whose rise that estimate waited out (``mu0_from``). Learnt from, the
+   touch-down block's report (nominal finger at 100 mm/s on a 0.7 band, reports one
+   block late) cut the closed gain by 8 % and made the adaptive model ask the amplitude
+   limit, 2.5 um, for two blocks (mu' 0.57 against 0.70), then undershoot for 15 blocks.
 2. **Feedback** on the depth of modulation: the reduction asked, 1 - mu'_target, passed
    through the same chain, against the reduction measured, 1 - mu'_m, gives the block's
    delivered/asked ratio g (the median over the samples asking for at least
@@ -145,7 +157,7 @@ from frictex.device.friction import ASYMPTOTE_MARGIN, MIN_NORMAL_N, SeedFriction
 from frictex.device.profile import FRICTION_LOOP_PROFILES, DeviceProfile
 from frictex.rendering.control.adapt import Rls, RlsState
 from frictex.rendering.control.block_stats import (chain_input, feed_forward, feedback_stats,
-                                           report_peak, rest_stats, sent_rows)
+                                           report_peak, rest_stats, sent_rows, touch_downs)
 from frictex.rendering.control.chain import Chain, ChainState
 from frictex.rendering.control.margins import COVER_SLOPE, scheduled_ki
 from frictex.rendering.control.swings import OSCILLATION_STEPS, SWING, Swings
@@ -220,8 +232,9 @@ class Sent:
     """What the loop asked for in a block sent (the report that comes back pairs with
     it sample by sample): output index, the log gain it was asked with, amplitude (um),
     target mu' (1 where the probe held the plate still), speed (mm/s), whether the limit
-    cut it, whether it was a one-finger block, and the normal force (N, mean over the
-    block) the inverse model was given for its finger (0 with none touching)."""
+    cut it, the output index its finger touched down at, per sample (-1: none; module
+    docstring, 1), whether it was a one-finger block, and the normal force (N, mean over
+    the block) the inverse model was given for its finger (0 with none touching)."""
 
     index0: int
     log_c: float
@@ -229,6 +242,7 @@ class Sent:
     target: np.ndarray
     speed: np.ndarray
     cut: np.ndarray
+    down: np.ndarray
     single: bool
     force_n: float = 0.0
 
@@ -241,6 +255,7 @@ class ControlState:
     rls: RlsState
     log_c_slope: float = 0.0
     mu0: float = math.nan
+    mu0_from: int = -1  # index0 of the block the first estimate of mu0 came from
     chain: ChainState | None = None
     pending: tuple[Sent, ...] = ()
     delay_blocks: int = 0
@@ -251,6 +266,7 @@ class ControlState:
     good_s: float = 0.0
     probe_from: int | None = None
     probe_released: bool = False
+    down_at: np.ndarray | None = None  # per finger, its touch-down's output index (-1: lifted)
     fallback: bool = False
     fallbacks: int = 0
     fallback_samples: int = 0
@@ -298,6 +314,7 @@ class ClosedLoop:
         self.first_step = config.first_step if mode == "closed" else 0.0  # docstring, 2
         self.wait_samples = config.max_wait_s * self.rate_hz
         self.hold_samples = config.delay_hold_s * self.rate_hz
+        self.rise_samples = config.probe_s * self.rate_hz  # module docstring, 1
         #: the integrator's gain for reports 0, 1, ... blocks late (module docstring, 0)
         self.ki_by_delay = tuple(
             config.ki if config.ki is not None else
@@ -318,6 +335,7 @@ class ClosedLoop:
         cfg, z = self.config, np.zeros(self.block_size)
         seen = np.zeros((6 if self.mode == "adaptive" else 3, self.block_size))
         report_peak(z, z)
+        touch_downs(np.ones((1, self.block_size), dtype=np.bool_), np.full(1, -1), 0, 0)
         ratio, *_ = rest_stats(z, z, z, seen[1], cfg.min_normal_n, cfg.creep_mm_s,
                                cfg.slide_mm_s, cfg.still_seen, cfg.min_rest_mu,
                                cfg.min_still // 2, True)
@@ -380,12 +398,17 @@ class ClosedLoop:
         # probe held it still (a report that comes late would otherwise read the
         # probe as a finger that gets no reduction, and wind the gain up)
         wanted, target, cut = sent_rows(wanted, contact, asked, mu_target, row, self._cut_um)
+        down_at = state.down_at
+        if down_at is None or down_at.size != contact.shape[0]:
+            down_at = np.full(contact.shape[0], -1, dtype=np.int64)
+        down, down_at = touch_downs(contact, down_at, int(fingers.index0), row)
         w = wanted[row] if count else np.zeros(n)
         force = float(np.mean(fingers.force[row])) if count else 0.0
         sent = Sent(index0=int(fingers.index0), log_c=math.log(c), w_um=w, target=target,
-                    speed=speed, cut=cut, single=single, force_n=force)
+                    speed=speed, cut=cut, down=down, single=single, force_n=force)
         held = state.fallback_samples + (n if state.fallback else 0)
-        return wanted, clamps, replace(state, pending=pending + (sent,), fallback_samples=held)
+        return wanted, clamps, replace(state, pending=pending + (sent,), fallback_samples=held,
+                                       down_at=down_at)
 
     def _pair(self, state: ControlState, now: int,
               forces) -> tuple[ControlState, tuple[Sent, ...]]:
@@ -619,7 +642,9 @@ class ClosedLoop:
             return {}  # at rest: nothing to learn
         out = {}
         mu0 = state.mu0
-        if count >= cfg.min_still:  # m: a median, robust to a stop the tracker sees late
+        rise = self._rising(state, sent)
+        rising = bool(rise.any())
+        if count >= cfg.min_still and not rising:  # m: a median, robust to a late-seen stop
             alpha = -math.expm1(-count / (self.rate_hz * cfg.mu0_tau_s))
             mu0 = out["mu0"] = mu0 + alpha * (m - mu0)
         if math.isfinite(mu0):  # what the host measured against the target (``report``)
@@ -632,9 +657,11 @@ class ClosedLoop:
         if not math.isfinite(mu0) or changes["fallback"]:
             return out
         # feedback from the tracker's first sight of motion: at a stroke's start it lags
-        # the finger by tens of ms; a finger that stuck reads friction near 0 (min_mu)
+        # the finger by tens of ms; a finger that stuck reads friction near 0 (min_mu);
+        # in the fingertip's rise after a touch-down it is not sliding yet (docstring, 1)
+        speed = np.where(rise, 0.0, sent.speed) if rising else sent.speed
         asked, g, cut, jac, resid = feedback_stats(
-            ratio, mu0, nor, sent.speed, seen, cfg.min_normal_n, cfg.creep_mm_s,
+            ratio, mu0, nor, speed, seen, cfg.min_normal_n, cfg.creep_mm_s,
             cfg.slide_mm_s, cfg.min_mu, cfg.min_reduction, cfg.min_still, cfg.decimate)
         if asked >= cfg.min_still and sent.index0 >= state.fed_from:
             out.update(self._gain_step(state, sent, g, cut > 0.1 * sent.w_um.size,
@@ -642,6 +669,13 @@ class ClosedLoop:
         if self.mode == "adaptive":  # one RLS step (module docstring, 3)
             out["rls"] = cfg.rls.update(state.rls, jac, resid)
         return out
+
+    def _rising(self, state: ControlState, sent: Sent) -> np.ndarray:
+        """The samples of ``sent`` (n,) bool less than ``probe_s`` after their finger's
+        touch-down, where it touched down after the block the first estimate of mu0 came
+        from: that touch-down's rise the first estimate waited out (module docstring, 1)."""
+        since = sent.index0 + np.arange(sent.down.size) - sent.down
+        return (sent.down > state.mu0_from) & (since < self.rise_samples)
 
     def _first_mu0(self, state: ControlState, sent: Sent, early: float, late: float,
                    quiet_late: int) -> dict:
@@ -652,7 +686,7 @@ class ClosedLoop:
         cfg = self.config
         out = {}
         if math.isfinite(late) and abs(late - early) <= cfg.settled * late:
-            out["mu0"] = late
+            out["mu0"], out["mu0_from"] = late, sent.index0
         rising = quiet_late >= cfg.min_still // 2
         first = sent.index0 if state.probe_from is None else state.probe_from
         out["probe_from"] = first if rising else None
