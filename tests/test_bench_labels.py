@@ -173,3 +173,25 @@ def test_every_startup_label_counts_the_runs_its_median_is_over():
     assert labels[4].endswith("CPU user + system (median of 5)")
     assert labels[-1].endswith("(mean of 3 paired rounds' differences, 2 of 5 failed)")
     assert isinstance(got[-1], Figure) and got[-1].value == pytest.approx(0.0)
+
+
+def test_every_stage_row_says_whether_it_was_run_live_or_as_a_replay(monkeypatch):
+    """Stage costs from a replay (200 blocks a call) are far below a live run's (one block a
+    call): a row that did not say which would be compared with the wrong one."""
+    per_block = np.full(400, 1e-4)
+    for name, fake in [("warmed_replay", lambda build, trace, duration: (None, np.ones(1))),
+                       ("stage_costs", lambda pipeline, duration: {"tracking": 1.0}),
+                       ("build_pipeline", lambda *a, **k: None), ("load", lambda scene: None),
+                       ("PipelineStage", lambda pipeline: None),
+                       ("time_blocks", lambda *a: (per_block, per_block)),
+                       ("loop_blocks", lambda mode, duration: (per_block, per_block)),
+                       ("new_layer_blocks",
+                        lambda duration, block=50: (per_block, per_block, {"tracking": 2.0})),
+                       ("modal_throughput", lambda: {"replay_x_realtime": 5.0,
+                                                     "stages_us_per_s": {"tracking": 3.0}})]:
+        monkeypatch.setattr(bench_pipeline, name, fake)
+    stages = [f.label for f in bench_pipeline.run(quick=True) if f.unit.startswith("us/s")]
+    assert stages == ["  tracking, file's renderers, replay (200 blocks a call)",
+                      "  tracking, hybrid, replay (200 blocks a call)",
+                      "  tracking, issue-18 layers, live",
+                      "  tracking, modal, replay (200 blocks a call)"]

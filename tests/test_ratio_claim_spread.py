@@ -6,7 +6,7 @@ from __future__ import annotations
 from frictex.app.commands.bench import failed_figures
 from frictex.app.measure.bench_baseline import paired_figures
 from frictex.app.measure.processes import Run
-from frictex.app.measure.ratio_claim import ratio_claim
+from frictex.app.measure.ratio_claim import ratio_claim, time_claim
 
 
 def test_rounds_all_giving_the_same_ratio_show_nothing_and_say_why():
@@ -37,3 +37,19 @@ def test_a_round_where_frictex_took_no_measurable_time_is_left_out_not_a_crash()
             "not measured (0 s))") in labels
     # no run failed: the bench's exit status must not say one did
     assert failed_figures(paired_figures("X", bare, ours, 1.2)) == []
+
+
+def test_identical_rounds_say_no_interval_even_where_rounding_parts_its_ends():
+    # the mean and deviation of 15 equal logs round to an interval an ulp wide
+    claim = ratio_claim([0.47527085752291953] * 15, 1.2, at_most=True)
+    assert claim.verdict == "not shown"
+    assert claim.low == claim.high == claim.geomean
+    assert claim.interval_text().startswith("every round the same ratio: no spread")
+
+
+def test_identical_runs_against_a_time_bound_are_called_runs_and_times():
+    claim = time_claim([0.1] * 5, 0.15)
+    figure = claim.figure("startup", "--version", 0.15, at_most=True, unit=" s", of="runs")
+    assert figure.unit == ("s (every run the same time: no spread, no interval (clock too "
+                           "coarse)): not shown")
+    assert time_claim([0.1], 0.15).interval_text(" s", "runs") == "one run, no interval"

@@ -47,15 +47,18 @@ class RatioClaim:
     verdict: str
     target: float
 
-    def interval_text(self, unit: str = "x") -> str:
+    def interval_text(self, unit: str = "x", of: str = "rounds") -> str:
         """``95 % interval 0.80-1.04x`` (``unit`` after each number: "x", or " s" for
-        times), or why there is none (under two rounds, or no spread between them)."""
+        times), or why there is none (under two rounds, or no spread between them; ``of``:
+        what was averaged, "rounds" or "runs")."""
         if self.rounds > 1 and self.low == self.high:
-            return "every round the same ratio: no spread, no interval (clock too coarse)"
+            same = "ratio" if of == "rounds" else "time"
+            return (f"every {of[:-1]} the same {same}: no spread, no interval (clock too "
+                    "coarse)")
         if self.rounds > 1:
             return (f"95 % interval {end_text(self.low, self.target)}-"
                     f"{end_text(self.high, self.target)}{unit}")
-        return "one round, no interval" if self.rounds == 1 else "no round, no interval"
+        return f"one {of[:-1]}, no interval" if self.rounds == 1 else f"no {of[:-1]}, no interval"
 
     def figure(self, section: str, label: str, target: float, at_most: bool,
                note: str = "", unit: str = "x", of: str = "rounds") -> Figure:
@@ -67,7 +70,7 @@ class RatioClaim:
         side = "at most" if at_most else "at least"
         return Figure(section, f"{label}, target {side} {target:g}{unit} (geometric mean of "
                       f"{self.rounds} {of}{note})", self.geomean,
-                      f"{unit.strip()} ({self.interval_text(unit)}): {self.verdict}")
+                      f"{unit.strip()} ({self.interval_text(unit, of)}): {self.verdict}")
 
 
 def end_text(end: float, target: float) -> str:
@@ -92,9 +95,11 @@ def ratio_claim(ratios: list[float], target: float, at_most: bool) -> RatioClaim
     mean, low, high, n = paired(d, [0.0] * len(d))
     holds = bool(high < 0.0)  # NaN (under two rounds): not shown
     spread = n < 2 or min(d) != max(d)  # none: no evidence (module docstring)
+    geomean = math.exp(math.log(target) + sign * mean)
+    if not spread:  # ends equal, as the dataclass says; rounding could part them by an ulp
+        return RatioClaim(geomean, geomean, geomean, n, NOT_SHOWN, target)
     ends = sorted(math.log(target) + sign * end for end in (low, high))
-    return RatioClaim(math.exp(math.log(target) + sign * mean), math.exp(ends[0]),
-                      math.exp(ends[1]), n, verdict(holds, low) if spread else NOT_SHOWN,
+    return RatioClaim(geomean, math.exp(ends[0]), math.exp(ends[1]), n, verdict(holds, low),
                       target)
 
 
