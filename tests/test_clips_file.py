@@ -73,3 +73,21 @@ def test_a_bad_trigger_and_a_bad_shape_are_both_reported(tmp_path):
     body = CLIP + 'trigger = "force"\nclip = "envelope"\ntimes_s = [0.1, 0.2]\nlevels = [1, 0]\n'
     _, problems, _ = check_scene(write(tmp_path, body))
     assert [(p.line, p.field) for p in problems] == [(7, "layer[1].force_n"), (11, "layer[1].times_s")]
+
+
+def test_a_clip_asks_for_its_deepest_sample_not_1_minus_depth(tmp_path):
+    """A tick of intensity 0.8 at depth 0.4 plays mu' = 1 - 0.4 x 0.8 = 0.68 at its peak, so
+    what the scene checks multiply (``lowest_overlap``) is 0.68, not 1 - depth = 0.6."""
+    from frictex.textures.overlap import lowest_overlap
+    body = (CLIP + 'trigger = "down"\nclip = "tick"\nintensity = 0.8\ndepth = 0.4\n'
+            + CLIP + 'trigger = "lift"\nclip = "tick"\ndepth = 0.4\n')
+    scene = load_scene(write(tmp_path, body))
+    soft, full = scene.layers
+    mu, _ = soft.clip.sample(RATE)
+    assert soft.mu_range == (float(mu.min()), 1.0)
+    # the 17.5 ms pulse peaks half way between two samples at 10 kHz: 2.6e-5 above its peak
+    assert soft.mu_range[0] == pytest.approx(1.0 - 0.4 * 0.8, abs=1e-4)
+    assert full.mu_range[0] == pytest.approx(0.6, abs=1e-4)
+    assert lowest_overlap(scene.display, scene.layers).lowest == pytest.approx(
+        soft.mu_range[0] * full.mu_range[0], rel=1e-12)
+    assert soft.mu_range[0] * full.mu_range[0] > 0.4  # 0.36 from 1 - depth

@@ -69,8 +69,6 @@ DEFAULT_MAX_PANEL_PX = 2048
 FLAT_ASPECT = 0.35
 #: Rows of the friction map computed at once (bounds memory for any panel size).
 ROWS_PER_PASS = 256
-#: The output rate (Hz) a clip's deepest mu' is found at: a replay's default
-CLIP_RATE_HZ = 10_000.0
 
 
 def frame_size(text: str) -> tuple[int, int]:
@@ -144,9 +142,8 @@ def _layer_note(layer, display) -> str:
     if kind == "ar":
         return f"{layer.name} (recorded texture, shown at its mean {layer.mu_mean:g})"
     if kind == "clip":
-        deepest = float(layer.clip.sample(CLIP_RATE_HZ)[0].min())
         return (f"{layer.name} (clip on {layer.trigger}: {layer.clip.duration_s * 1e3:.0f} ms, "
-                f"deepest mu' {deepest:.3f}; not in the map)")
+                f"deepest mu' {layer.clip.deepest_mu:.3f}; not in the map)")
     return (f"{layer.name} ({layer_kind(layer)}, {layer.render}"
             + (f", {layer.period_mm:g} mm" if layer.is_periodic else "") + ")")
 
