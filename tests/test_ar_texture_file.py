@@ -138,7 +138,11 @@ def test_the_sample_rate_and_speed_unit_a_file_states_are_used(tmp_path):
 
 
 @pytest.mark.parametrize("text, message", [
-    (published_xml(sign=-1.0), r"model 1: ARcoeff is not the A\(z\) = 1 \+ sum a_k z\^-k of its ARlsf"),
+    (published_xml(sign=-1.0), r"model 1: ARcoeff is not the A\(z\) = 1 \+ sum a_k z\^-k of its ARlsf "
+     r"\(its a_1 \.\. a_4 have the other sign: .*; negate them\)$"),
+    (published_xml(sign=0.5),  # neither sign: no advice about one
+     r"model 1: ARcoeff is not the A\(z\) = 1 \+ sum a_k z\^-k of its ARlsf \(largest "
+     r"difference [0-9.]+ of the largest coefficient\)$"),
     (published_xml().replace("<ARcoeff><value>1.00000000000000000000</value>", "<ARcoeff>", 1),
      r"model 1: ARcoeff has 4 values; expected 5: \[1, a_1 \.\. a_4\]$"),
     (published_xml().replace("<SpeedUnits>mm/s", "<SpeedUnits>in/s"), r'<SpeedUnits> is "in/s", expected one of mm/s, m/s'),

@@ -443,12 +443,23 @@ def _polynomial(node, here: str, part: str, order: int) -> np.ndarray:
         if written.size != order + 1:
             raise TextureError(f"{here}: {part}coeff has {written.size} values; {expected}")
         rebuilt = lsf_to_poly(w)
-        gap = np.abs(written - rebuilt).max() / max(1.0, np.abs(rebuilt).max())
+        gap = _gap(written, rebuilt)
         if not gap <= ARCOEFF_TOLERANCE:
+            flipped = np.concatenate(([written[0]], -written[1:]))
+            why = (f"its {c}_1 .. {c}_{order} have the other sign: the file is written for "
+                   f"y[n] = sum {c}_k y[n-k] + e[n], where the toolkit and frictex run "
+                   f"y[n] = -sum {c}_k y[n-k] + e[n]; negate them"
+                   if _gap(flipped, rebuilt) <= ARCOEFF_TOLERANCE else
+                   f"largest difference {gap:.3g} of the largest coefficient")
             raise TextureError(f"{here}: {part}coeff is not the {name}(z) = 1 + sum {c}_k z^-k "
-                               f"of its {part}lsf (largest difference {gap:.3g} of the largest "
-                               f"coefficient); {expected}")
+                               f"of its {part}lsf ({why})")
     return w
+
+
+def _gap(written: np.ndarray, rebuilt: np.ndarray) -> float:
+    """How far a file's coefficients are from those rebuilt from its LSFs: the largest
+    difference over the largest rebuilt coefficient (at least 1)."""
+    return float(np.abs(written - rebuilt).max() / max(1.0, np.abs(rebuilt).max()))
 
 
 def _refits_bounded(m: int, where: str, why: str) -> None:
