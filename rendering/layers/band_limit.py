@@ -35,7 +35,13 @@ velocity plus its correction, which can exceed what the tracker's velocity says)
 texture's mean mu' over one period is played, which is what the texture is to a plate
 that cannot play it, and those touching samples are counted (``summary.json``'s
 ``layer_clipped``, with a warning). At the default 10 kHz output it takes a finger beyond
-3 m/s on a 0.6 mm grating. SHO reads unwrapped phases and needs no such limit.
+3 m/s on a 0.6 mm grating. SHO does the same where its stretch from the previous
+sample's phase moves by more than half a cycle while the tracker's velocity also moves
+the phase by more than half a cycle a sample: its box mean weakens a fundamental above
+Nyquist only by sinc(f / rate_hz) and played it folded into the band (0.6 mm, 560 mm/s,
+933 Hz at 1 kHz output: a 67 Hz square wave 0.786-0.814, uncounted). A longer stretch
+under a slower finger is the jump to a new touch sample (SHO-held's at each one), a step
+and not a texture beyond Nyquist: it keeps its mean over the jump, uncounted.
 """
 
 from __future__ import annotations
@@ -83,24 +89,30 @@ class BandLimit:
         deviation = (running - mean * np.arange(1, MEAN_PHASES + 1)) / MEAN_PHASES
         self._table = np.concatenate(([0.0], deviation[:-1].astype(np.float64), [0.0]))
 
-    def play_since(self, phase: np.ndarray, covers: np.ndarray, block, last: dict
-                   ) -> tuple[np.ndarray, dict]:
+    def play_since(self, phase: np.ndarray, covers: np.ndarray, block, last: dict,
+                   step: np.ndarray) -> tuple[np.ndarray, int, dict]:
         """mu' (F, n) each sample plays (1 where the layer does not cover): the profile's
         mean over the stretch from the previous sample's phase to its own ``phase``
         (cycles, unwrapped; SHO, which knows no sample's phase before it comes; ``last``:
-        the previous call's), and the (touch id, last phase) of each finger of ``block``
-        to pass back as ``last`` next call."""
+        the previous call's), or the texture's mean where both that stretch and ``step``
+        (F, n; cycles the finger's velocity moves the phase in one sample) exceed half a
+        cycle (:meth:`apply`); the number of such touching samples; and the (touch id,
+        last phase) of each finger of ``block`` to pass back as ``last`` next call."""
         touch = np.ascontiguousarray(block.touch_id, dtype=np.int64)
         phase = np.ascontiguousarray(phase, dtype=np.float64)
         point = self.layer.profile_where(phase, covers)
         mu = np.empty_like(point)
+        travel = np.empty_like(phase)
         for row, fid in enumerate(block.ids):
-            start, span = _since_previous(phase[row], touch[row], last.get(fid))
-            self._box(start, span, covers[row], point[row], mu[row])
+            start, travel[row] = _since_previous(phase[row], touch[row], last.get(fid))
+            self._box(start, travel[row], covers[row], point[row], mu[row])
+        # a stretch past half a cycle under a finger slower than that is a jump to a new
+        # touch sample, not a texture beyond Nyquist: it keeps its mean over the jump
+        limited = self.apply(mu, covers, block, np.where(np.abs(step) > 0.5, travel, 0.0))
         if phase.shape[1] == 0:
-            return mu, last
-        return mu, {fid: (int(touch[row, -1]), float(phase[row, -1]))
-                    for row, fid in enumerate(block.ids)}
+            return mu, limited, last
+        return mu, limited, {fid: (int(touch[row, -1]), float(phase[row, -1]))
+                             for row, fid in enumerate(block.ids)}
 
     def play_forward(self, phase: np.ndarray, covers: np.ndarray, travel: np.ndarray
                      ) -> np.ndarray:

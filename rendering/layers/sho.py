@@ -9,19 +9,34 @@ samples (see ``rendering.tracking.tracks``).
 On a periodic layer each sample plays the profile's mean over the phase interval from
 the previous sample's position to its own (``rendering.layers.band_limit``): ``held``
 thus plays the point value between touch samples, as before, and at each touch sample
-the mean over the jump to the new one.
+the mean over the jump to the new one. A texture past the output's Nyquist frequency (a
+stretch over half a cycle, the finger's velocity moving the phase that far too) plays
+its mean, counted in ``clipped``.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
 
 from frictex.rendering.layers.band_limit import BandLimit
 from frictex.rendering.tracking.tracks import FingerBlock
 
 
+@dataclass(frozen=True)
+class ShoState:
+    """Per finger: the touch and the phase (cycles, unwrapped) of its last sample
+    (``BandLimit.play_since``'s ``last``); and the touching samples played as the
+    texture's mean so far (``rendering.layers.band_limit``)."""
+
+    last: dict[int, tuple[int, float]]
+    clipped: int = 0
+
+
 class ShoRenderer:
     """Position-map rendering of one layer. Its state: None for a layer without a period;
-    for a periodic one each finger's last touch and phase (``BandLimit.play_since``'s
-    ``last``)."""
+    a :class:`ShoState` for a periodic one."""
 
     #: reads any layer's map at a position, so it can be a run's SHO variant (the
     #: renderer of every layer without a period: ``rendering.renderers``)
@@ -32,9 +47,12 @@ class ShoRenderer:
         self.predicted = predicted
         periodic = rate_hz is not None and layer.is_periodic
         self.band_limit = BandLimit(layer) if periodic else None
+        if periodic:
+            #: cycles of phase per sample per mm/s along x and y
+            self.per_sample = np.array(layer.axis) / (layer.period_mm * rate_hz)
 
     def initial_state(self):
-        return None if self.band_limit is None else {}
+        return None if self.band_limit is None else ShoState(last={})
 
     def render(self, block: FingerBlock, state=None):
         """mu' (F, n) and coverage (F, n) of the layer under each finger, and the new state."""
@@ -43,8 +61,10 @@ class ShoRenderer:
             mu, covers = self.layer.mu_and_covers(x, y)
             return mu, covers, state
         covers = self.layer.covers(x, y)
-        mu, last = self.band_limit.play_since(self.layer.phase_at(x, y), covers, block, state)
-        return mu, covers, last
+        ax, ay = self.per_sample
+        mu, limited, last = self.band_limit.play_since(self.layer.phase_at(x, y), covers, block,
+                                                        state.last, block.vx * ax + block.vy * ay)
+        return mu, covers, ShoState(last=last, clipped=state.clipped + limited)
 
 
 class HeldSho(ShoRenderer):
