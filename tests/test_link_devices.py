@@ -241,3 +241,33 @@ def test_a_device_that_cannot_be_reached_is_exit_1_a_bad_name_exit_2(tmp_path, c
                  "--device", device]) == code
     err = capsys.readouterr().err
     assert err.startswith(message) and err.count("\n") == 1
+
+
+class _GarbageDevice:
+    """A port whose device answers every read with bytes that are no frame (a device at
+    the wrong baud rate, or other firmware), zero bytes among them."""
+
+    timeout = 0.01
+    in_waiting = 0
+
+    def __init__(self):
+        self.rng = np.random.default_rng(5)
+
+    def read(self, size=1):
+        time.sleep(0.005)
+        return self.rng.integers(0, 256, 64, dtype=np.uint8).tobytes()
+
+    def write(self, data):
+        return len(data)
+
+    def close(self):
+        pass
+
+
+def test_a_device_that_answers_only_garbage_is_told_apart_from_a_silent_one():
+    with pytest.raises(LinkError, match=r"no answer to the handshake within [0-9.]+ s "
+                                        r"\([34] Hellos\): [0-9]+ bytes came back, none of "
+                                        r"them a valid frame \([0-9]+ malformed frames thrown "
+                                        r"away\); is the baud rate right, and is it a frictex "
+                                        r"device\?$"):
+        CommandSink(lambda: _GarbageDevice(), 1, RATE, paced=False, handshake_s=1.0)

@@ -163,6 +163,8 @@ class HostSession:
         self.ledger = Ledger()
         self.rtt_ms: collections.deque = collections.deque(maxlen=4096)
         self.decoder = p.Decoder(on_device=False)
+        #: bytes received from the device (what a failed handshake heard, if anything)
+        self.bytes_heard = 0
         self.forces = ForceHistory()
         self.forces_lock = threading.Lock()
         self.status: p.Status | None = None
@@ -262,6 +264,7 @@ class HostSession:
             self.cond.notify_all()
 
     def data_received(self, data: bytes, now: float) -> None:
+        self.bytes_heard += len(data)
         for frame in self.decoder.feed(data):
             self._closes_in_a_row = 0
             msg = frame.message
@@ -358,6 +361,14 @@ class HostSession:
             return LinkError(f"{self.label}: the device closed the link {times} "
                              f"during the handshake, in {waited_s:.3g} s (last: "
                              f"{self.last_error}); {suspect}")
+        if self.bytes_heard and not self.decoder.counts.frames_ok:
+            thrown = self.decoder.counts.discarded
+            return LinkError(f"{self.label}: no answer to the handshake within {waited_s:.3g} "
+                             f"s ({self._first_hellos} Hellos): {self.bytes_heard} bytes came "
+                             f"back, none of them a valid frame ({thrown} malformed "
+                             f"frame{'s' * (thrown != 1)} thrown away); "
+                             + (suspect if injected is not None else
+                                "is the baud rate right, and is it a frictex device?"))
         return LinkError(f"{self.label}: no answer to the handshake within {waited_s:.3g} s "
                          f"({self._first_hellos} Hellos); {suspect}")
 
