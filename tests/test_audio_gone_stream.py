@@ -45,3 +45,22 @@ def test_a_stream_whose_server_went_away_is_abandoned_without_a_stop_or_close(ja
         real.stop()
         real.close()
     assert calls == [] and out.player.estop  # should its callback run again: a ramp to 0
+
+
+def test_a_stream_gone_while_sending_says_why_once(jack_device):
+    plan = make_plan(AudioArgs(), 1, RATE)
+    out = StreamOutput(plan, str(jack_device), blocksize=256, buffer_frames=FS // 10,
+                       phases=False, paced=True, wait_s=10.0)
+    start = send_for(out, 0.5, 0)  # past half the ring: started
+    real, calls = out.stream, []
+    out.stream = GoneStream(calls)
+    try:
+        with pytest.raises(DeviceError) as gone:
+            send_for(out, 1.0, start)  # more than the ring holds: it waits for room
+    finally:
+        real.stop()
+        real.close()
+    said = str(gone.value)
+    assert said.endswith(": the audio device went away; PortAudio reports the stream no "
+                         "longer active, so it was abandoned without a stop or close"), said
+    assert said.count("no longer active") == 1 and calls == []

@@ -175,6 +175,17 @@ def test_clamp_at_the_voltage_limit_is_counted():
     assert np.max(np.abs(out)) > 0.9
 
 
+@pytest.mark.parametrize("phases", [False, True])
+def test_a_negative_amplitude_plays_zero_and_is_counted_as_the_link_plays_it(phases):
+    """-3 um is no amplitude: played as its magnitude it drove the plate at the full
+    voltage limit, carrier inverted, uncounted."""
+    s = AudioSynth(plan())
+    a = np.concatenate([np.zeros((50, 1)), np.full((100, 1), -3.0), np.zeros((50, 1))])
+    out = s.render(a, np.full_like(a, 0.7) if phases else None)
+    assert s.clamped == 100
+    assert np.max(np.abs(out)) == 0.0
+
+
 def test_finish_ramps_to_zero():
     p = plan()
     s = AudioSynth(p)

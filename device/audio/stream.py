@@ -257,8 +257,7 @@ class StreamOutput(AudioOutput):
             gone = not self._active()
             if gone or time.monotonic() > deadline:
                 problem = self.label + (
-                    ": the audio device went away (PortAudio reports its stream no longer "
-                    "active)" if gone else f": the audio device took no frames for "
+                    ": the audio device went away" if gone else f": the audio device took no frames for "
                     f"{self.wait_s:g} s (it stopped or went away)")
                 self.player.estop = True
                 self._release(problem)  # raises for a stream gone or abandoned

@@ -12,9 +12,12 @@ exact integer arithmetic every 1024 frames (the carrier f is a float64, an exact
 fraction) and advanced in float64 only in between: the phase never drifts,
 after hours as after a second (``tests/test_audio_synth.py``: 10 h within 1e-9 rad).
 
-Amplitude. um / ``um_per_volt`` gives volts zero-to-peak; a channel's phase (rad) makes it
-complex; its magnitude is clamped to ``limit_v`` (counted per command sample and channel)
-and scaled by ``1 / full_scale_v``. A frame is ``Re(A(t) exp(i theta_n))``, one audio
+Amplitude. um / ``um_per_volt`` gives volts zero-to-peak; a channel's phase (rad) makes
+it complex; its magnitude is clamped to ``limit_v`` and scaled by ``1 / full_scale_v``.
+A negative amplitude plays 0, as the serial link's device plays it
+(``device.link.protocol``): a zero-to-peak amplitude is never below 0, and its magnitude
+would otherwise drive the plate, its carrier inverted. Both are counted per command
+sample and channel. A frame is ``Re(A(t) exp(i theta_n))``, one audio
 channel per actuator, all on one carrier (phase-locked); envelope mode plays ``|A(t)|``.
 The first ``ramp_frames`` frames ramp up from 0; :meth:`AudioSynth.finish` ramps down.
 """
@@ -55,7 +58,8 @@ class AudioSynth:
     commands after another, :meth:`finish` at the end.
 
     Attributes: ``frames`` (the next frame's index n), ``commands`` (command samples
-    taken), ``clamped`` (command samples x channels clamped to ``plan.limit_v``).
+    taken), ``clamped`` (command samples x channels clamped to ``plan.limit_v``, or
+    negative and played 0).
     """
 
     def __init__(self, plan: AudioPlan):
@@ -90,7 +94,8 @@ class AudioSynth:
         a = np.asarray(amplitudes_um, dtype=np.float64)
         if a.ndim != 2 or a.shape[1] != plan.channels:
             raise InputError(f"amplitudes shape {a.shape}: expected (n, {plan.channels})")
-        volts = a / plan.um_per_volt
+        negative = a < 0.0
+        volts = np.where(negative, 0.0, a) / plan.um_per_volt
         if phases_rad is not None:
             p = np.asarray(phases_rad, dtype=np.float64)
             if p.shape != a.shape:
@@ -100,7 +105,7 @@ class AudioSynth:
             raise InputError("audio stream: amplitudes and phases must be finite")
         magnitude = np.abs(volts)
         over = magnitude > plan.limit_v
-        self.clamped += int(np.count_nonzero(over))
+        self.clamped += int(np.count_nonzero(over) + np.count_nonzero(negative))
         scale = np.where(over, plan.limit_v / np.where(over, magnitude, 1.0), 1.0)
         commands = np.empty((a.shape[0] + 1, plan.channels), dtype=np.complex128)
         commands[0] = self._last
