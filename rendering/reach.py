@@ -40,7 +40,7 @@ import numpy as np
 
 from frictex.device.friction import mu_floor
 from frictex.rendering.compose import compose
-from frictex.textures.overlap import Overlap, lowest_overlap
+from frictex.textures.overlap import Overlap, applies_alone, lowest_overlap
 
 #: Grid cells along the display's longer side for the area share.
 GRID_CELLS = 240
@@ -108,12 +108,6 @@ def as_previewed(scene):
     return replace(scene, layers=tuple(
         _MovingRight(layer) if getattr(layer, "renderer_kind", None) == "height" else layer
         for layer in scene.layers))
-
-
-def applies_alone(layer) -> bool:
-    """True if the layer applies to a finger touching alone (the stroke's and the map's):
-    selectors ``any``, ``1`` and the positional ones, not ``2``, ``3``, ..."""
-    return not layer.fingers.isdigit() or layer.fingers == "1"
 
 
 def grid(display, cells: int = GRID_CELLS) -> tuple[np.ndarray, np.ndarray]:

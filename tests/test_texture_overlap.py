@@ -129,3 +129,37 @@ def test_a_height_layer_lowers_its_region_at_rest_and_its_slope_to_mu_min(tmp_pa
     overlap = lowest_overlap(scene.display, scene.layers)
     assert overlap.names == ("sine", "knob")
     assert overlap.lowest == 0.584 * 0.9
+
+
+CLIP_OVER = ('[[layer]]\ntype = "clip"\nname = "stop"\nregion = {{ x_mm = 10.0, y_mm = 10.0, '
+             'width_mm = 40.0, height_mm = 20.0 }}\ntrigger = "edge"\nx_mm = 30.0\ny_mm = 20.0\n'
+             'clip = "ramp"\nduration_s = 0.1\nlevel_from = 1.0\nlevel_to = 0.0\n'
+             'depth = {depth}\nfingers = "{fingers}"\n')
+TRACK = RECT.format(name="track", x=10, y=10, w=40, h=20, mu=0.9)
+
+
+def _floor_warnings(tmp_path, body):
+    from frictex.textures.loader import check_scene
+    path = tmp_path / "scene.toml"
+    path.write_text(HEAD + body, encoding="utf-8")
+    scene, problems, warnings = check_scene(path)
+    assert scene is not None and not problems
+    return [w.message for w in warnings if "the device reaches only" in w.message]
+
+
+def test_a_clip_playing_over_a_fixed_layer_below_the_floor_is_warned_of(tmp_path):
+    """A typical stroke seldom fires an edge clip, so the scene's reach showed nothing; yet
+    each crossing plays its deepest, 0.6, over the track's 0.9: 0.54, under the 0.5717 the
+    default plate reaches at 0.5 N."""
+    [said] = _floor_warnings(tmp_path, TRACK + CLIP_OVER.format(depth=0.4, fingers="any"))
+    assert said.startswith('playing over layer "track" it may ask for mu\' down to 0.54 '
+                           "(its deepest, 0.6, times theirs), but the device reaches only "
+                           "0.5717 at the nominal 0.5 N"), said
+
+
+def test_a_clip_that_stays_within_reach_or_is_not_felt_alone_is_not_warned_of(tmp_path):
+    assert _floor_warnings(tmp_path, TRACK + CLIP_OVER.format(depth=0.35, fingers="any")) == []
+    assert _floor_warnings(tmp_path, TRACK + CLIP_OVER.format(depth=0.4, fingers="2")) == []
+    bump = ('[[layer]]\ntype = "height"\nshape = "bump"\nname = "bump"\ncx_mm = 30.0\n'
+            'cy_mm = 20.0\nsigma_mm = 8.0\nrise_mm = 1.0\nmu_rest = 0.9\nmu_min = 0.6\n')
+    assert _floor_warnings(tmp_path, bump + CLIP_OVER.format(depth=0.4, fingers="any")) == []

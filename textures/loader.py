@@ -301,7 +301,7 @@ def _check_document(path: Path, doc: dict, r: Reader, allow_outside: bool,
         return None, r.problems, r.warnings
     device_warnings(r, device)
     unused_friction_warnings(r, doc, device, built)
-    reach_warnings(r, device, built)
+    reach_warnings(r, device, display, built)
     selector_warnings(r, device, built)
     lift_warnings(r, built)
     unfelt_warnings(r, built)

@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from frictex.textures.clips import ClipLayer
+from frictex.textures.dynamic import DynamicLayer
 from frictex.textures.extent import lowering
 
 
@@ -53,3 +55,22 @@ def lowest_overlap(display, layers) -> Overlap:
     row, col = np.unravel_index(int(np.argmin(product)), product.shape)
     names = tuple(layer.name for layer, factor in zip(layers, factors) if factor[row, col] < 1.0)
     return Overlap(float(product[row, col]), names, (float(mx[col]), float(my[row])))
+
+
+def applies_alone(layer) -> bool:
+    """True if the layer applies to a finger touching alone: selectors ``any``, ``1`` and
+    the positional ones, not ``2``, ``3``, ..."""
+    return not layer.fingers.isdigit() or layer.fingers == "1"
+
+
+def under_clips(display, layers) -> list[tuple[int, Overlap]]:
+    """For each clip layer a lone finger feels (its index in ``layers``), the
+    :class:`Overlap` of it and the layers fixed in place that a lone finger feels: the
+    lowest its deepest mu' times theirs, where they overlap. Height layers and recorded
+    textures (whose mu' moves with the finger: their lowest is seldom met) and other clips
+    (which play at their own times) are left out."""
+    fixed = [layer for layer in layers
+             if applies_alone(layer) and not isinstance(layer, DynamicLayer)]
+    return [(index, lowest_overlap(display, [layer, *fixed]))
+            for index, layer in enumerate(layers)
+            if isinstance(layer, ClipLayer) and applies_alone(layer)]

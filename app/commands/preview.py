@@ -11,7 +11,7 @@ fitted in WxH, its aspect kept).
 
 The figure's left panel is that image scaled to fit the figure (its pixels are not the
 display's: its title says so); the right panel is mu' composed from the layers that
-apply to a finger touching alone (``rendering.reach.applies_alone``: ``fingers`` any,
+apply to a finger touching alone (``textures.overlap.applies_alone``: ``fingers`` any,
 1 or a positional selector) by ``rendering.compose.ideal_mu``, what a perfect renderer
 gives a lone finger there, averaged over each pixel. Layers felt only with two or more
 fingers down (``fingers = "2"``, ...) are left out of it, and named in its title and
@@ -52,10 +52,11 @@ from frictex.device.friction import mu_floor
 from frictex.device.safe_text import escape, escape_path
 from frictex.rendering.compose import ideal_mu
 from frictex.rendering.perception import RENDERING_KINDS, scene_findings
-from frictex.rendering.reach import applies_alone, as_previewed
+from frictex.rendering.reach import as_previewed
 from frictex.rendering.visual.scene_image import scene_rgb, to_srgb8
 from frictex.rendering.visual.viewport import fit_viewport
 from frictex.textures.outside import add_allow_outside
+from frictex.textures.overlap import applies_alone
 
 
 #: Largest scene image (px per side): ``--size`` up to this; by default the display's own

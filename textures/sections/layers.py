@@ -170,18 +170,34 @@ def _silent_clip_warning(r: Reader, index: int, layer: ClipLayer) -> None:
              f"is felt; give it a level above 0 for at least one output sample", warning=True)
 
 
-def reach_warnings(r: Reader, device: profiles.DeviceProfile, built) -> None:
+def reach_warnings(r: Reader, device: profiles.DeviceProfile, display: model.Display,
+                   built) -> None:
+    """A warning for each layer whose own lowest mu' is below the device's floor at the
+    nominal force, and for each clip that goes below it where it plays over layers fixed
+    in place (``textures.overlap.under_clips``): a clip plays its deepest at every trigger,
+    so a typical stroke, which seldom fires it, does not show it (``rendering.reach``)."""
     from frictex.device.friction import mu_floor
+    from frictex.textures.overlap import under_clips
 
     force = device.normal_force_n
     floor = mu_floor(device, force)
-    source = ("the calibration table" if device.calibration is not None
-              else f"seed 003 eq 2, amplitude_limit_um {device.amplitude_limit_um:g}")
+    reaches = (f"the device reaches only {floor:.4g} at the nominal {force:g} N ("
+               + ("the calibration table" if device.calibration is not None
+                  else f"seed 003 eq 2, amplitude_limit_um {device.amplitude_limit_um:g}")
+               + "); lower values will be clamped")
+    layers = [layer for layer, _ in built]
     for index, (layer, low_key) in enumerate(built):
         low = layer.mu_range[0]
         if low < floor - 1e-12:
-            r.report(("layer", index, low_key),
-                     f"asks for mu' down to {low:.4g}, but the device reaches only {floor:.4g} at "
-                     f"the nominal {force:g} N ({source}); lower values will be clamped",
+            r.report(("layer", index, low_key), f"asks for mu' down to {low:.4g}, but {reaches}",
+                     warning=True)
+    for index, overlap in under_clips(display, layers):
+        clip = layers[index]
+        under = [name for name in overlap.names if name != clip.name]
+        if under and clip.mu_range[0] >= floor - 1e-12 and overlap.lowest < floor - 1e-12:
+            named = ", ".join(f"layer {show(name)}" for name in under)
+            r.report(("layer", index, built[index][1]),
+                     f"playing over {named} it may ask for mu' down to {overlap.lowest:.4g} (its "
+                     f"deepest, {clip.mu_range[0]:.4g}, times theirs), but {reaches}",
                      warning=True)
 
