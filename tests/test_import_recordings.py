@@ -331,7 +331,7 @@ def test_import_warns_of_samples_off_screen_and_unfinished_frames(tmp_path, caps
 @pytest.mark.parametrize("content, argv, message", [
     ("hello\n", [], "format not recognised"),
     ("[ 1.0] EV_SYN SYN_REPORT 00000000\n", [], "no touches found"),
-    ("[ 1.0] EV_ABS ABS_MT_POSITION_X 0000000a\n[ 0.5] EV_SYN SYN_REPORT 00000000\nbad\n", [],
+    ("[ 1.0] EV_ABS ABS_MT_POSITION_X 0000000a\n[ 1.5] EV_SYN SYN_REPORT 00000000\nbad\n", [],
      r"rec.txt:3: not a getevent -lt line"),
     ("[ 1.0] EV_ABS ABS_MT_POSITION_X 0000000a\n[ 1.0] EV_ABS ABS_MT_POSITION_Y 0000000a\n"
      "[ 1.0] EV_SYN SYN_MT_REPORT 00000000\n[ 1.0] EV_SYN SYN_REPORT 00000000\n", [],

@@ -14,18 +14,21 @@ mm) of each axis; the importer uses them unless the user overrides them.
 Numbers are ASCII (``0-9``, ``a-f``): Python's ``int`` and ``re``'s ``\\d`` also take
 Unicode digits. Each quantity is held to what a device can report: values, ranges and
 resolutions are the kernel's ``__s32`` (-2^31 to 2^31 - 1, never wrapped), a resolution
-is 0 (unknown) to MAX_RESOLUTION units per mm, a time at most MAX_TIME_S. The screen
+is 0 (unknown) to MAX_RESOLUTION units per mm, a time at most MAX_TIME_S and not before
+the previous event's (the kernel stamps a device's events in order). The screen
 size the resolution implies is checked where it is used (``evdev_decode.screen_map``).
 A line that is not of the grammar is described, never printed.
 """
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass, field
 
 from frictex.rendering.input.evdev_decode import MAX_RESOLUTION, AbsInfo, Event
-from frictex.rendering.input.trace_file import MAX_TIME_S, TraceError
+from frictex.rendering.input.import_getevent import event_time
+from frictex.rendering.input.trace_file import TraceError
 
 # values are the kernel's __s32 (at most 10 digits); times whole seconds and microseconds
 _EVENT = re.compile(r"^E:\s+(?P<t>\d{1,12}\.\d{1,9})\s+(?P<type>[0-9a-fA-F]{1,4})\s+"
@@ -83,10 +86,7 @@ def parse_evemu(text: str, where: str = "<evemu>") -> EvemuRecording:
                 raise TraceError(f"{at}: an 'E:' line that is not an evemu event (expected "
                                  "'E: seconds.micros TYPE CODE VALUE': ASCII digits, type and "
                                  "code in hex, a decimal value)")
-            t = float(m["t"])
-            if t > MAX_TIME_S:
-                raise TraceError(f"{at}: event time {t:g} s is more than {MAX_TIME_S:g} s "
-                                 "(evdev clocks count from boot or from 1970)")
+            t = event_time(m["t"], events[-1].t_s if events else -math.inf, at)
             events.append(Event(t, int(m["type"], 16), int(m["code"], 16),
                                 _s32(m["value"], "value", at), number))
         elif line.startswith("A:"):

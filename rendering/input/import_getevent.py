@@ -12,10 +12,13 @@ Grammar (one event per line; ``-l`` prints names, without it the fields are hex)
                ", flat" f [ ", resolution" r ]
 
 Codes frictex does not use (ABS_MISC, KEY_*) are kept with code -1, which the decoder
-ignores. A log holding several devices needs ``device`` to pick one. A log recorded with
-``getevent -lpt`` starts with a ``-p`` section per device ("add device N: path" up to
-the first event): its ``absinfo`` lines give the axis ranges and resolutions (those of
-the device the events come from are kept); its other lines are skipped.
+ignores; an unknown name starting ``ABS_MT_`` (a typo of a code frictex reads?) is also
+warned of, once per name, at its first line. A device's events are in time order (the
+kernel stamps them so), checked on every line. A log holding several devices needs
+``device`` to pick one. A log recorded with ``getevent -lpt`` starts with a ``-p``
+section per device ("add device N: path" up to the first event): its ``absinfo`` lines
+give the axis ranges and resolutions (those of the device the events come from are
+kept); its other lines are skipped.
 
 Digits are ASCII (``re``'s ``\\d`` alone also takes Unicode digits); a time is at most
 MAX_TIME_S. A line that is not of the grammar is described, never printed; the device
@@ -24,6 +27,7 @@ names and tokens an error shows are escaped and cut (``device.safe_text``).
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 from typing import NamedTuple
@@ -43,7 +47,12 @@ CODES = {"SYN_REPORT": SYN_REPORT, "SYN_CONFIG": 0x01, "SYN_MT_REPORT": SYN_MT_R
          "SYN_DROPPED": SYN_DROPPED, "BTN_TOUCH": BTN_TOUCH, "ABS_MT_SLOT": ABS_MT_SLOT,
          "ABS_MT_TOUCH_MAJOR": ABS_MT_TOUCH_MAJOR, "ABS_MT_POSITION_X": ABS_MT_POSITION_X,
          "ABS_MT_POSITION_Y": ABS_MT_POSITION_Y, "ABS_MT_TRACKING_ID": ABS_MT_TRACKING_ID,
-         "ABS_MT_PRESSURE": ABS_MT_PRESSURE}
+         "ABS_MT_PRESSURE": ABS_MT_PRESSURE,
+         # the other multi-touch codes (Linux input-event-codes.h), which frictex does not read:
+         # named, they are no typo of the ones it does (warned of; see read_log)
+         "ABS_MT_TOUCH_MINOR": 0x31, "ABS_MT_WIDTH_MAJOR": 0x32, "ABS_MT_WIDTH_MINOR": 0x33,
+         "ABS_MT_ORIENTATION": 0x34, "ABS_MT_TOOL_TYPE": 0x37, "ABS_MT_BLOB_ID": 0x38,
+         "ABS_MT_DISTANCE": 0x3B, "ABS_MT_TOOL_X": 0x3C, "ABS_MT_TOOL_Y": 0x3D}
 VALUES = {"UP": 0, "DOWN": 1, "REPEAT": 2}
 
 _LINE = re.compile(r"^\s*\[\s*(?P<t>\d{1,12}\.\d{1,9})\s*\]\s+(?:(?P<dev>/\S+):\s+)?"
@@ -104,6 +113,8 @@ def read_log(text: str, where: str = "<getevent>", device: str | None = None) ->
     events: list[Event] = []
     devices: dict[str, int] = {}
     warnings: list[str] = []
+    last: dict[str, float] = {}  # device -> time of its last event (s)
+    unknown_mt: dict[str, int] = {}  # unknown ABS_MT_* name -> its first line
     axes: dict[str, dict[int, AbsInfo]] = {}  # -p section of each device: code -> axis
     section: str | None = None  # the device whose -p section is being read
     lines = text.splitlines()
@@ -138,7 +149,12 @@ def read_log(text: str, where: str = "<getevent>", device: str | None = None) ->
         devices.setdefault(dev, number)
         if device is not None and dev != device:
             continue
-        events.append(_event(m, where, number))
+        events.append(_event(m, where, number, last.get(dev, -math.inf)))
+        last[dev] = events[-1].t_s
+        if m["code"].startswith("ABS_MT_") and m["code"] not in CODES:
+            unknown_mt.setdefault(m["code"], number)
+    warnings += [f"{where}:{first}: {quoted(name)} is no multi-touch code Linux names (a "
+                 "typo?): its events are left out" for name, first in unknown_mt.items()]
     named = sorted(d for d in devices if d)
     if device is not None and device not in devices:
         raise TraceError(f"{where}: no events of device {quoted(device)} "
@@ -154,9 +170,10 @@ def _whole_value(token: str) -> bool:
     return token in VALUES or (len(token) == 8 and _HEX8.match(token) is not None)
 
 
-def _event(m: re.Match, where: str, number: int) -> Event:
-    """The event of log line ``number`` (``m``: its match of the line grammar); a
-    TraceError for a type, code, value or time that is not one."""
+def _event(m: re.Match, where: str, number: int, last: float) -> Event:
+    """The event of log line ``number`` (``m``: its match of the line grammar; ``last``:
+    the time of its device's previous event, s); a TraceError for a type, code, value or
+    time that is not one."""
     etype = _number(m["type"], TYPES, where, number, "type")
     code = _number(m["code"], CODES, where, number, "code")
     token = m["value"]
@@ -167,11 +184,21 @@ def _event(m: re.Match, where: str, number: int) -> Event:
     else:
         raise TraceError(f"{where}:{number}: value {quoted(token)} is not 8 hex digits "
                          "(or DOWN / UP / REPEAT)")
-    t = float(m["t"])
+    return Event(event_time(m["t"], last, f"{where}:{number}"), etype, code, value, number)
+
+
+def event_time(token: str, last: float, at: str) -> float:
+    """The time (s) of the event at ``at`` (file:line) from its ``seconds.micros`` token;
+    TraceError past MAX_TIME_S or before ``last`` (s; the time of the device's previous
+    event: the kernel stamps a device's events in the order it sends them)."""
+    t = float(token)
     if t > MAX_TIME_S:
-        raise TraceError(f"{where}:{number}: event time {t:g} s is more than {MAX_TIME_S:g} s "
+        raise TraceError(f"{at}: event time {t:g} s is more than {MAX_TIME_S:g} s "
                          "(evdev clocks count from boot or from 1970)")
-    return Event(t, etype, code, value, number)
+    if t < last:
+        raise TraceError(f"{at}: time goes back from {last!r} to {t!r} s (events must be in "
+                         "the order the kernel sent them)")
+    return t
 
 
 def _read_absinfo(line: str, axes: dict[int, AbsInfo]) -> None:
