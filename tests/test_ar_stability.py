@@ -103,3 +103,32 @@ def test_an_unstable_model_never_puts_nan_into_mu():
     mu, state = _render(ArTextureRenderer(layer, 10_000.0), SPEEDS[0], FORCES[0], 5.0)
     assert np.isfinite(mu).all()
     assert state.clipped >= 1  # gain 0: nothing else clips
+
+
+def test_a_pole_pair_rounded_to_just_inside_the_circle_gives_inf_not_a_hang():
+    """np.poly of a pair on the circle puts its poles at 0.9999999999999999: the impulse
+    response never decays, and the energy sum ran on without end (10 minutes of CPU)."""
+    a = np.real(np.poly([np.exp(0.3j), np.exp(-0.3j)]))
+    assert pole_radius(a) < 1.0
+    assert output_power_gain(a) == math.inf
+    pair = np.real(np.poly([0.99 * np.exp(0.3j), 0.99 * np.exp(-0.3j)]))
+    assert math.isfinite(output_power_gain(pair))  # a stable pair still settles
+
+
+def test_coefficients_outside_the_circle_are_said_to_be_possibly_unstable_not_only_crowded():
+    """(np.roots cannot tell: 13 pole pairs at 0.75 come back at up to 1.21.)"""
+    from frictex.textures.hatt import poly_to_lsf
+    outside = np.real(np.poly([1.01 * np.exp(0.3j), 1.01 * np.exp(-0.3j)]))
+    with pytest.raises(ValueError, match=r"its roots are outside the unit circle \(1 / A\(z\) "
+                                         r"unstable\), or crowd so close"):
+        poly_to_lsf(outside)
+
+
+def test_a_model_from_coefficients_is_checked_as_a_files_models_are():
+    from frictex.textures.hatt import model_from_coefficients
+    near = np.real(np.poly([0.99995 * np.exp(0.3j), 0.99995 * np.exp(-0.3j)]))
+    with pytest.raises(TextureError, match=r"^coefficients\[1\] gives A\(z\) a pole at radius "
+                                           r"0\.99995, expected at most 0\.9999"):
+        model_from_coefficients([0, 100, 0], [0, 0, 1], [[0, 1, 2]],
+                                [np.array([1.0, -0.5, 0.2]), near, np.array([1.0, -0.5, 0.2])],
+                                [1.0] * 3, rate_hz=10_000.0)

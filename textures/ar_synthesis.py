@@ -88,9 +88,13 @@ def pole_radius(poly) -> float:
 
 
 #: :func:`output_power_gain` stops once a further IMPULSE_CHUNK samples of the impulse
-#: response add less than IMPULSE_TAIL of its energy so far
+#: response add less than IMPULSE_TAIL of its energy so far, and gives inf past
+#: IMPULSE_MAX_CHUNKS chunks (16.8 million samples; a pole at 0.9999 takes 2e5): a pole
+#: that rounds to just inside the circle (np.poly of a pair on it: 0.9999999999999999)
+#: would never meet the tail test
 IMPULSE_CHUNK = 1 << 12
 IMPULSE_TAIL = 1e-17
+IMPULSE_MAX_CHUNKS = 1 << 12
 
 
 def output_power_gain(poly) -> float:
@@ -98,25 +102,27 @@ def output_power_gain(poly) -> float:
     excitation: sum h^2 over its impulse response h, run by the direct-form recursion the
     synthesis runs, until a further IMPULSE_CHUNK samples add less than IMPULSE_TAIL of the
     sum. inf where a pole of A(z) = ``poly`` ([a_0, a_1 .. a_p]) is on or outside the unit
-    circle (:func:`pole_radius`) or the recursion overflows. Its cost grows as
+    circle (:func:`pole_radius`), the recursion overflows, or the sum has not settled
+    within IMPULSE_MAX_CHUNKS chunks (a pole within about 1e-6 of the circle). Its cost grows as
     1 / (1 - radius): 2e5 samples for a pole at 0.9999. (The step-down recursion, 1 /
     prod(1 - k_i^2), loses every digit near the circle: LSFs 0.001 rad apart from 1.0 rad,
     order 10, gave a |k| >= 1 for poles within 0.99984.)"""
     a = np.asarray(poly, dtype=np.float64) / poly[0]
     if not pole_radius(a) < 1.0:
         return math.inf
-    return _impulse_energy(a, IMPULSE_CHUNK, IMPULSE_TAIL)
+    return _impulse_energy(a, IMPULSE_CHUNK, IMPULSE_TAIL, IMPULSE_MAX_CHUNKS)
 
 
 @njit(cache=True)
-def _impulse_energy(a, chunk, tail):
+def _impulse_energy(a, chunk, tail, max_chunks):
     """sum h^2 of 1 / A(z), ``a`` = [1, a_1 .. a_p], in chunks of ``chunk`` samples until
-    one adds less than ``tail`` of the sum; inf where it overflows."""
+    one adds less than ``tail`` of the sum; inf where it overflows or ``max_chunks`` pass
+    first."""
     p = a.size - 1
     h = np.zeros(p + chunk)  # h[:p]: the p samples before the chunk
     h[p] = 1.0
     total, start = 0.0, 1
-    while True:
+    for _ in range(max_chunks):
         added = 0.0
         for j in range(p + start, p + chunk):
             acc = 0.0
@@ -132,6 +138,7 @@ def _impulse_energy(a, chunk, tail):
             return total
         h[:p] = h[chunk:]
         start = 0
+    return math.inf
 
 
 @njit(cache=True)

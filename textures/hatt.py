@@ -223,8 +223,8 @@ def poly_to_lsf(a) -> np.ndarray:
     if not worst <= LSF_ROUND_TRIP_DB:
         raise ValueError(f"the {p} line spectral frequencies found bring A(z) back within "
                          f"{worst:.3g} dB only (at most {LSF_ROUND_TRIP_DB} dB asked): its "
-                         f"roots crowd so close to the unit circle and to each other that "
-                         f"rounding moves them")
+                         f"roots are outside the unit circle (1 / A(z) unstable), or crowd so "
+                         f"close to it and to each other that rounding moves them")
     return lsf
 
 
@@ -367,11 +367,14 @@ def fit_ar(psd, from_rate_hz: float, rate_hz: float, order: int, grid: int = 1 <
 
 def model_from_coefficients(speeds_mm_s, forces_n, triangles, coefficients, variances,
                             rate_hz: float = HATT_RATE_HZ) -> TextureModel:
-    """A model from AR polynomials (rows [1, a_1 .. a_p]) instead of LSFs."""
+    """A model from AR polynomials (rows [1, a_1 .. a_p]) instead of LSFs, each vertex's
+    filter checked as a file's are (``_check_filters``: TextureError for an unstable or
+    nearly unstable one)."""
+    lsf = np.array([poly_to_lsf(a) for a in coefficients])
+    variances = np.asarray(variances, dtype=np.float64)
+    _check_filters(lsf, variances, rate_hz, lambda k: f"coefficients[{k}]")
     return TextureModel(np.asarray(speeds_mm_s, dtype=np.float64), np.asarray(forces_n, dtype=np.float64),
-                        np.asarray(triangles, dtype=np.intp),
-                        np.array([poly_to_lsf(a) for a in coefficients]),
-                        np.asarray(variances, dtype=np.float64), rate_hz)
+                        np.asarray(triangles, dtype=np.intp), lsf, variances, rate_hz)
 
 
 # ---------------------------------------------------------------------------
