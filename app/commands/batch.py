@@ -96,7 +96,9 @@ def _run_jobs(args: argparse.Namespace, jobs: list, out_dir: Path):
     """The jobs' result rows, with a progress bar, and the :class:`Interrupted` or
     :class:`NoWorkers` that stopped them (None if none did; the jobs it kept from
     finishing then have rows ``interrupted``)."""
-    bar = _progress_bar(len(jobs), args.quiet)
+    from frictex.app.engine.progress import progress_bar
+    bar = progress_bar(total=len(jobs), desc="batch", unit="job",
+                       disable=True if args.quiet else None)
 
     def done(row: dict) -> None:
         bar.update(1)
@@ -113,20 +115,6 @@ def _run_jobs(args: argparse.Namespace, jobs: list, out_dir: Path):
                 for job, row in zip(jobs, stop.results)], stop
     finally:
         bar.close()
-
-
-def _progress_bar(total: int, quiet: bool):
-    """The jobs' progress bar on stderr (none with ``quiet``), without tqdm's monitor
-    thread: tqdm starts it with its first bar, disabled or not, and it outlives the bar.
-    A thread left running sends the command's exit through the interpreter's teardown,
-    which puts SIGTERM back to its default first: a SIGTERM in those 50 ms after a batch
-    killed the process (status -15, no line) where it ends with the batch's status."""
-    from tqdm import tqdm
-
-    class Bar(tqdm):
-        monitor_interval = 0  # tqdm's switch for that thread
-
-    return Bar(total=total, desc="batch", unit="job", disable=True if quiet else None)
 
 
 def _interrupted(job, stop: Interrupted | NoWorkers) -> dict:

@@ -166,7 +166,7 @@ def _check_scenes(scenes: list[str]) -> None:
 
 def _matrix(args: argparse.Namespace, jobs: int):
     """The matrix's rows, fanned out, and the report's settings."""
-    from tqdm import tqdm
+    from frictex.app.engine.progress import progress_bar
 
     from frictex.app.measure.report_doc import Settings
     from frictex.device.friction import make_friction_model
@@ -175,7 +175,8 @@ def _matrix(args: argparse.Namespace, jobs: int):
     cases = rm.matrix(args.quick, tuple(args.scenes))
     wall = time.perf_counter()
     load_before = os.getloadavg()[0]
-    bar = tqdm(total=len(cases), desc="report", unit="case", disable=args.no_progress or None)
+    bar = progress_bar(total=len(cases), desc="report", unit="case",
+                       disable=args.no_progress or None)
     try:
         rows = fan_out(partial(rm.run_case, live_s=QUICK_LIVE_S if args.quick else LIVE_S), cases,
                        workers=jobs, scheduler=args.scheduler, on_done=lambda row: bar.update(1))
@@ -240,7 +241,7 @@ def _plots(doc, out: Path) -> list[str]:
 def _closed_loop(args: argparse.Namespace, jobs: int):
     """The closed-loop section (``report_loop_records.LoopSection``) on the chosen scenes
     it covers (None if it covers none), fanned out like the matrix."""
-    from tqdm import tqdm
+    from frictex.app.engine.progress import progress_bar
 
     from frictex.app.measure import report_closed_loop as rcl
     if not any(s in rcl.SCENES for s in args.scenes):
@@ -249,8 +250,8 @@ def _closed_loop(args: argparse.Namespace, jobs: int):
     if args.loop_delays is not None:
         from frictex.app.measure.link_report_delays import read
         delays = read(args.loop_delays, rcl.RATE_HZ, rcl.BLOCK)
-    bar = tqdm(total=rcl.runs_in(args.quick, args.scenes), desc="closed loop", unit="run",
-               disable=args.no_progress or None)
+    bar = progress_bar(total=rcl.runs_in(args.quick, args.scenes), desc="closed loop",
+                       unit="run", disable=args.no_progress or None)
     try:
         return rcl.section(args.quick, workers=jobs, scenes=args.scenes,
                            scheduler=args.scheduler, on_done=lambda result: bar.update(1),

@@ -335,10 +335,10 @@ class ProgressSink:
     """A progress bar on stderr counting seconds of output (tqdm)."""
 
     def __init__(self, rate_hz: float):
-        from tqdm import tqdm
+        from frictex.app.engine.progress import progress_bar
         self.rate_hz = rate_hz
-        self.bar = tqdm(unit="s", desc="replay", disable=None,
-                        bar_format="{desc}: {n:.0f} s of output [{elapsed}, {rate_fmt}]")
+        self.bar = progress_bar(unit="s", desc="replay", disable=None,
+                                bar_format="{desc}: {n:.0f} s of output [{elapsed}, {rate_fmt}]")
 
     def write(self, out, commands_um) -> None:
         self.bar.update(out.t_s.size / self.rate_hz)
