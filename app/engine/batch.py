@@ -77,7 +77,7 @@ whatever stops the batch (SIGKILL included; a full disk, which names ``--out``);
 of the jobs it lists ``ok`` (or ``earlier``, below). An earlier job folder that holds a
 file not a run's output (the user's) is kept as it is and named in a warning.
 
-Ctrl-C (or SIGTERM, SIGHUP) stops a batch within about a second: no job starts after
+Ctrl-C (or SIGTERM, SIGHUP) stops a batch within one to two seconds: no job starts after
 it, each running one ends as an interrupted replay ends, and the new ``--out`` holds the
 jobs that finished (``ok``, or ``failed``), every earlier job folder it did not replace,
 kept and listed with status ``earlier`` (the earlier ``batch.csv``'s figures; ``job``
