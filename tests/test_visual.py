@@ -288,3 +288,26 @@ def test_scope_labels_sit_in_title_rows_no_trace_crosses(gl):
     white = (lin[..., 0] > 0.6) & (lin[..., 1] > 0.6) & (lin[..., 2] > 0.6)
     for title_top in (top + 1, mu_plot[0] + mu_plot[1] + 1):  # the labels are there
         assert white[int(title_top):int(title_top + row - 1), :200].sum() > 50
+
+
+class _FirstSizeScreen:
+    """A window's default framebuffer as moderngl gives it: its size is the window's when
+    the context was made, and a read without a viewport reads that much."""
+
+    def __init__(self, fbo, first_size):
+        self.fbo, self.first_size = fbo, first_size
+
+    def read(self, viewport=None, **options):
+        return self.fbo.read(viewport=viewport or (0, 0, *self.first_size), **options)
+
+
+def test_pixels_are_read_over_the_size_asked_whatever_size_the_framebuffer_was_made_at(gl):
+    """After the window grew from 80 x 60 to 120 x 90, P read the old size's pixels and
+    the demo ended on a reshape error (a recorded session's record lost)."""
+    from frictex.rendering.visual.context import _read
+    fbo = gl.simple_framebuffer((120, 90), components=4)
+    fbo.use()
+    fbo.clear(0.0, 0.0, 1.0, 1.0)
+    rgb = _read(_FirstSizeScreen(fbo, (80, 60)), (120, 90))
+    fbo.release()
+    assert rgb.shape == (90, 120, 3) and (rgb == [0, 0, 255]).all()

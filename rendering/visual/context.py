@@ -95,8 +95,12 @@ class NoDisplayError(VisualError):
 
 
 def _read(fbo, size) -> np.ndarray:
+    """The (h, w, 3) uint8 pixels of ``fbo``'s lower-left ``size`` = (w, h), top row first.
+    The area is given: a window's default framebuffer keeps the viewport it was made with
+    (moderngl), so after a resize it read the old size's pixels."""
     w, h = size
-    data = np.frombuffer(fbo.read(components=3, alignment=1), dtype=np.uint8)
+    data = np.frombuffer(fbo.read(viewport=(0, 0, w, h), components=3, alignment=1),
+                         dtype=np.uint8)
     return data.reshape(h, w, 3)[::-1].copy()
 
 
