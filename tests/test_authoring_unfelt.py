@@ -16,6 +16,9 @@ MAP = ('[[layer]]\ntype = "height"\nshape = "map"\nimage = "{}"\nx_mm = 10.0\ny_
 ENVELOPE = ('[[layer]]\ntype = "clip"\ntrigger = "down"\nclip = "envelope"\n'
             'times_s = [0.0, 0.1]\nlevels = [1.0, 0.0]\nintensity = {}\n')
 RAMP = '[[layer]]\ntype = "clip"\ntrigger = "down"\nclip = "ramp"\nduration_s = {}\n'
+GRATING = '[[layer]]\ntype = "grating"\nperiod_mm = 5.0\nmu_low = {}\n'
+RECT = ('[[layer]]\ntype = "rectangle"\nx_mm = 10.0\ny_mm = 10.0\nwidth_mm = 20.0\n'
+        'height_mm = 20.0\nmu = {}\n')
 
 
 def _maps(tmp_path):
@@ -30,6 +33,11 @@ def _maps(tmp_path):
     (MAP.format("even.png"), MAP.format("ramp.png"), "image", "the 5 x 4 map has one height"),
     (ENVELOPE.format(0.0), ENVELOPE.format(0.1), "clip", "its intensity are 0 throughout"),
     (RAMP.format(1e-9), RAMP.format(1e-3), "clip", "it lasts 1e-09 s, under one output sample"),
+    (GRATING.format(1.0), GRATING.format(0.8), "mu_low", "asks for mu' 1 everywhere"),
+    (RECT.format(1.0), RECT.format(0.8), "mu", "asks for mu' 1 everywhere"),
+    # a replace layer at 1 takes away what the layers before it lower: felt
+    (RECT.format(1.0), GRATING.format(0.8) + RECT.format(1.0) + 'blend = "replace"\n', "mu",
+     "asks for mu' 1 everywhere"),
 ])
 def test_a_layer_that_cannot_be_felt_is_warned_about(tmp_path, body, heard, key, why):
     _maps(tmp_path)

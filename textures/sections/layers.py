@@ -9,7 +9,7 @@ from typing import Callable
 from frictex.device import profile as profiles
 from frictex.textures import model
 from frictex.textures.clips import ClipLayer
-from frictex.textures.dynamic import OUTPUT_RATE_HZ
+from frictex.textures.dynamic import OUTPUT_RATE_HZ, DynamicLayer
 from frictex.textures.heights import HeightLayer, HeightMap
 from frictex.textures.errors import KeyPath
 from frictex.textures.keys import COMMON, LAYER_KEYS, LAYER_TABLES, LAYER_TYPES, MAX_LAYERS, PERIODIC_TYPES, VISUAL
@@ -136,12 +136,21 @@ def unfelt_warnings(r: Reader, built) -> None:
     (``rise_mm = 0``, or a map whose pixels all have one height: its slope is 0
     everywhere), and a clip that never lowers mu' at the default output rate
     (``textures.dynamic.OUTPUT_RATE_HZ``: a level or intensity of 0 throughout, or a
-    clip over before its second sample)."""
-    for index, (layer, _) in enumerate(built):
+    clip over before its second sample), and a multiplying layer of fixed friction that
+    asks for mu' 1 everywhere (a grating with mu_low = 1: no lower friction anywhere). A
+    ``replace`` layer at 1 is felt (it takes away what the layers before it lower), and so
+    are force layers (their mu' is 1: they push the finger)."""
+    for index, (layer, low_key) in enumerate(built):
         if isinstance(layer, HeightLayer) and layer.shape.relief_mm == 0.0:
             _flat_height_warning(r, index, layer)
         elif isinstance(layer, ClipLayer) and layer.clip.sample(OUTPUT_RATE_HZ)[0].min() >= 1.0:
             _silent_clip_warning(r, index, layer)
+        elif (not isinstance(layer, (DynamicLayer, *model.FORCE_LAYERS))
+              and layer.blend == "multiply" and layer.mu_range[0] >= 1.0):
+            r.report(("layer", index, low_key),
+                     f"layer {show(layer.name)}: asks for mu' 1 everywhere (friction as the "
+                     "plate has it, never lower), so nothing of it is felt; give it a mu' "
+                     "below 1", warning=True)
 
 
 def _flat_height_warning(r: Reader, index: int, layer: HeightLayer) -> None:
