@@ -87,10 +87,12 @@ def test_every_bad_row_is_reported_in_one_run(study, capsys):
     assert main(["batch", str(manifest), "--out", str(study / "out")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert [line.split(": ", 3)[2] for line in err] == [
-        f"{manifest}:3", f"{manifest}:4", f"{manifest}:4", f"{manifest}:5", f"{manifest}:6"]
+        f"{manifest}:3", f"{manifest}:4", f"{manifest}:4", f"{manifest}:5", f"{manifest}:6",
+        f"{manifest}:6"]
     assert "trace \"../outside.csv\" leads out" in err[0]
     assert 'renderer "fastest"' in err[1] and 'rate_hz "-3"' in err[2]
     assert "2 fields, expected 5" in err[3] and "scene is empty" in err[4]
+    assert 'name "good" is used by an earlier job' in err[5]  # a bad row's name counts too
     assert not (study / "out").exists()
 
 

@@ -271,16 +271,18 @@ def _jobs(path: Path, header: list[str], rows: list[tuple[int, list[str] | None]
                          f"({','.join(header)})")
             continue
         cell = dict(zip(header, (c.strip() for c in row)))
-        job = _job(index, cell, path.parent, renderers, where, problems)
-        if job is None:
+        job, name = _job(index, cell, path.parent, renderers, where, problems)
+        if name is None:
             continue
-        earlier = names.get(job.name.casefold())
+        # a row with other problems still holds its name, so that a clash is said at once
+        earlier = names.get(name.casefold())
         if earlier is not None:
-            problems.add(f"{where}: name {quoted(job.name)} is used by an earlier job"
-                         + ("" if earlier == job.name else
+            problems.add(f"{where}: name {quoted(name)} is used by an earlier job"
+                         + ("" if earlier == name else
                             f" as {quoted(earlier)} (names must differ in more than case)"))
-        names.setdefault(job.name.casefold(), job.name)
-        jobs.append(job)
+        names.setdefault(name.casefold(), name)
+        if job is not None:
+            jobs.append(job)
     return jobs
 
 
@@ -312,8 +314,9 @@ def _number(cell: dict, key: str, default, bounds: tuple, unit: str, where: str)
 
 
 def _job(index: int, cell: dict, base: Path, renderers, where: str,
-         problems: _Problems) -> Job | None:
-    """The job of one row, or None with each of its problems kept in ``problems``."""
+         problems: _Problems) -> tuple[Job | None, str | None]:
+    """The job of one row, or None with each of its problems kept in ``problems``; and its
+    name (None where the name is the problem)."""
     before = len(problems.lines)
     paths = {key: problems.check(_path, key, cell.get(key), base, where)
              for key in ("scene", "trace")}
@@ -328,9 +331,9 @@ def _job(index: int, cell: dict, base: Path, renderers, where: str,
     block = problems.check(_number, cell, "block", None, BLOCK_SIZES, "samples", where)
     name = problems.check(_name, cell, index, where)
     if len(problems.lines) > before:
-        return None
+        return None, name
     return Job(index, paths["scene"], paths["trace"], renderer, rate_hz, block, fmt, name,
-               written=(cell["scene"], cell["trace"]), allow_outside=outside_allowed())
+               written=(cell["scene"], cell["trace"]), allow_outside=outside_allowed()), name
 
 
 def _name(cell: dict, index: int, where: str) -> str:
