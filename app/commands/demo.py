@@ -49,7 +49,7 @@ from frictex.app.engine.device_changes import faults_not_reached, unplayed_probl
 from frictex.app.engine.driver import deferred_interrupts
 from frictex.app.engine.staging import FRAMES, Staging
 from frictex.app.engine.summary import counted, finite_json, were
-from frictex.app.live.link_watch import device_clamps
+from frictex.app.live.link_watch import device_clamps, run_underruns
 from frictex.app.live.synthetic import STROKE_S
 from frictex.app.live.touch_log import TOUCHES
 from frictex.app.commands.preview import MAX_PANEL_PX, frame_size
@@ -496,7 +496,7 @@ def _print_lines(args, summary: dict, ended: _Ended, out: Path | None,
           f"link: {link['state']}")
     if "skipped_blocks" in link:  # a device link: what its lead cost
         skipped = link["skipped_blocks"]
-        print(f"demo: link: the device ran dry {counted(link['underruns'] or 0, 'time')} and "
+        print(f"demo: link: the device ran dry {counted(run_underruns(link), 'time')} and "
               f"{counted(skipped, 'block')} {were(skipped)} skipped to catch up; "
               f"{link['unplayed_samples']} of {link['commanded_samples']} samples unplayed"
               + "".join(f", {k} {v}" for k, v in link["unplayed_by_cause"].items() if v)

@@ -97,7 +97,7 @@ from PIL import Image
 
 from frictex.app.live.haptic_thread import EVENTS, ChannelMismatch
 from frictex.app.live.layer_edit import EditError, LayerEdit, SaveConflict, panel_view
-from frictex.app.live.link_watch import LinkWatch, device_clamps, limit_warning
+from frictex.app.live.link_watch import LinkWatch, device_clamps, limit_warning, run_underruns
 from frictex.app.live.watch import FileWatch
 from frictex.device.safe_text import escape
 from frictex.rendering.renderers import loadable_render_modes
@@ -178,7 +178,7 @@ def starved(link: dict) -> str:
     non-zero; "" without a device."""
     commanded, unplayed = link.get("commanded_samples") or 0, link.get("unplayed_samples") or 0
     said = f", {100.0 * unplayed / commanded:.1f} % unplayed" if commanded and unplayed else ""
-    if underruns := link.get("underruns") or 0:
+    if underruns := run_underruns(link):
         said += f", {underruns} underrun{'s' * (underruns != 1)}"
     return said
 

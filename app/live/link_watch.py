@@ -1,7 +1,7 @@
 """What the demo says about its device link, read from the link's status
 (``device.link.host.CommandSink.status``) as the haptic side hands it over with its
-snapshots: the clamps it made to the device's limit, a limit below the scene's, and
-the link going down or stalling and coming back.
+snapshots: the clamps it made to the device's limit, the times the device ran dry, a limit
+below the scene's, and the link going down or stalling and coming back.
 
 :class:`LinkWatch` turns successive statuses into events for ``events.csv``
 (``link-lost``, ``link-back``, ``link-stalled``, ``link-moving``) and the alarm the
@@ -20,6 +20,14 @@ def device_clamps(link: dict) -> str:
     inversion and 1234 by the device's limit", or "" when it clamped none."""
     clamped = link.get("clamped_samples") or 0
     return f" by the friction inversion and {clamped} by the device's limit" if clamped else ""
+
+
+def run_underruns(link: dict) -> int:
+    """The times the output device ran dry during the run, from its status: a device
+    link's ``underruns_in_run`` (summed over the device's power-ups: a device restarted
+    mid-run counts from 0 again, PROTOCOL.md 6.4), another output's ``underruns``; 0
+    when neither says."""
+    return link.get("underruns_in_run", link.get("underruns")) or 0
 
 
 def limit_warning(link: dict, scene) -> str | None:

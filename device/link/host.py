@@ -467,6 +467,7 @@ class CommandSink:
         s = self._session
         with self._cond:
             st = s.status
+            runs = dict(s.run_counts.totals)
             c = collections.Counter(s.counts)
             breakdown = s.ledger.breakdown()
             commanded, played = s.ledger.commanded, s.ledger.played
@@ -532,10 +533,7 @@ class CommandSink:
                 "watchdog_trips": st.watchdog_trips, "device_clamped": st.clamped,
                 "measured_um": list(st.measured_um) if st.measured_um else None,
                 "force_n": st.force_n})
-            # the device counts since it powered up; these since this host's first Status
-            first = s.first_status
-            out["watchdog_trips_in_run"] = (st.watchdog_trips - first.watchdog_trips) % 2**32
-            out["underruns_in_run"] = (st.underruns - first.underruns) % 2**32
+            out.update({f"{name}_in_run": n for name, n in runs.items()})
         else:
             out["underruns"] = None
         return out

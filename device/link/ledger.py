@@ -124,8 +124,40 @@ class Snapshot:
 def _delta(new: int, old: int) -> int:
     """Increase of a device counter that wraps at 2**32. A counter that went back (a
     "wrap" of 2**31 or more, which no device plays between two Statuses) restarted."""
-    step = (new - old) % _COUNTER_WRAP
-    return new if step >= _COUNTER_WRAP // 2 else step
+    return new if _went_back(new, old) else (new - old) % _COUNTER_WRAP
+
+
+def _went_back(new: int, old: int) -> bool:
+    """Whether a device counter that wraps at 2**32 went from ``old`` back to ``new``."""
+    return (new - old) % _COUNTER_WRAP >= _COUNTER_WRAP // 2
+
+
+class RunCounts:
+    """The device's since-power-up counters ``names`` (Status fields, PROTOCOL.md 6.4)
+    summed over one host's run: their increases from this host's first Status on, over
+    every power-up of the device the host met.
+
+    A device that comes back on a reconnect (the same power-up) goes on counting, so its
+    increase is read against the last Status. One that restarted (powered up again: a new
+    ``frictex sim-device`` process, a reset board) counts from 0 again: every count it
+    reports is new. The host tells it by ``frames_ok``, which counts since power-up and
+    which every session raises (its Hello and Heartbeats): it went back. A single counter
+    that went back on its own is read as restarted too (:func:`_delta`).
+    """
+
+    def __init__(self, names: tuple[str, ...]):
+        self.totals = dict.fromkeys(names, 0)
+        self._prev = None
+
+    def status(self, st) -> None:
+        """A Status ``st`` arrived (the first one is the baseline)."""
+        prev, self._prev = self._prev, st
+        if prev is None:
+            return
+        restarted = _went_back(st.frames_ok, prev.frames_ok)
+        for name in self.totals:
+            new = getattr(st, name)
+            self.totals[name] += new if restarted else _delta(new, getattr(prev, name))
 
 
 class _Session:

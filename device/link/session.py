@@ -29,7 +29,7 @@ import numpy as np
 from frictex.device.link import protocol as p
 from frictex.device.link.catch_up import IndexMap, behind
 from frictex.device.link.forces import ForceHistory, ForceReport, per_sample
-from frictex.device.link.ledger import Ledger, Pacing, Snapshot
+from frictex.device.link.ledger import Ledger, Pacing, RunCounts, Snapshot
 from frictex.device.link.protocol import DeviceState, LinkError
 
 #: jitter-buffer prefill asked of the device, and the level paced sending keeps (s)
@@ -168,9 +168,9 @@ class HostSession:
         self.forces = ForceHistory()
         self.forces_lock = threading.Lock()
         self.status: p.Status | None = None
-        #: the first Status of this host: the baseline of the device's counters, which
-        #: count since it powered up (PROTOCOL.md 6.4)
-        self.first_status: p.Status | None = None
+        #: the device's counters, which count since it powered up, summed over this
+        #: host's run from its first Status on (PROTOCOL.md 6.4)
+        self.run_counts = RunCounts(("watchdog_trips", "underruns"))
         self.snapshot: Snapshot | None = None
         self.info: p.Info | None = None
         self.version = 1
@@ -464,8 +464,7 @@ class HostSession:
         self._last_rx = now
         if isinstance(msg, p.Status):
             self.status = msg
-            if self.first_status is None:
-                self.first_status = msg
+            self.run_counts.status(msg)
             if self.phase == "session" and self._last_status is not None:
                 self.longest_status_gap_s = max(self.longest_status_gap_s,
                                                 now - self._last_status)
