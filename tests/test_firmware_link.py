@@ -254,6 +254,10 @@ def test_faults_on_the_wire_are_counted_and_never_played(binary, tmp_path):
     (("--protocol", "5"), "protocol_version: expected in [1, 4]"),
     (("--lateral", "9"), "lateral_n: expected in [-8, 8] N"),
     (("--lateral", "1", "--protocol", "2"), "protocol_version: expected 3 for force reports"),
+    (("--buffer", "300000"), "buffer_samples: expected 2 to 262144 samples for 1 channel"),
+    # 8 x (2^61 + 100) is 800 modulo 2^64: the product wrapped and a 100-sample buffer ran
+    (("--buffer", str(2**61 + 100), "--channels", "8"),
+     "buffer_samples: expected 2 to 32768 samples for 8 channel"),
 ])
 def test_bad_flags_are_an_error_naming_the_flag(binary, flags, message):
     import subprocess

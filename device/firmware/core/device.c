@@ -446,33 +446,35 @@ static int64_t offset(uint64_t index, uint64_t from)
     return behind ? -(int64_t)magnitude : (int64_t)magnitude;
 }
 
-static bool refuse_block(fw_device *d, uint16_t seq, const fw_block *b)
+/* Whether a block has the device's channels and phases (the configuration never changes). */
+static bool block_fits(const fw_device *d, const fw_block *b)
+{
+    return b->channels == d->cfg.channels && (b->phases != NULL) == d->cfg.phases;
+}
+
+/* Answer a block that is not taken: before a Hello or after a completed Stop (not
+ * ready), else one of another shape. */
+static void refuse_block(fw_device *d, uint16_t seq, const fw_block *b, bool ready)
 {
     text t = error_text(d);
-    if (!d->hello_seen || d->stopped) {
+    if (!ready) {
         add(&t, "block before Hello");
         send_error(d, FW_NOT_READY, seq, 0, &t);
-        return true;
+        return;
     }
     bool phases = b->phases != NULL;
-    if (b->channels == d->cfg.channels && phases == d->cfg.phases)
-        return false;
     add(&t, "block has ");
     add_u32(&t, b->channels);
     add(&t, phases ? " channels, phases=True; device has " : " channels, phases=False; device has ");
     add_u32(&t, d->cfg.channels);
     add(&t, d->cfg.phases ? ", phases=True" : ", phases=False");
     send_error(d, FW_BAD_BLOCK, seq, b->channels, &t);
-    return true;
 }
 
-/* 4.3, steps 1-6. */
-static void on_block(fw_device *d, uint16_t seq, const fw_block *b)
+/* A block taken (called locked): SILENT after a watchdog trip buffers again, the first
+ * block sets the play position, and an empty buffer skips the gap up to the block. */
+static void open_block(fw_device *d, const fw_block *b)
 {
-    if (refuse_block(d, seq, b))
-        return;
-    unsigned ch = d->cfg.channels;
-    lock(d);
     if (d->state == FW_SILENT)
         d->state = FW_BUFFERING;
     if (!d->origin_set)
@@ -483,7 +485,24 @@ static void on_block(fw_device *d, uint16_t seq, const fw_block *b)
         move_play_position(d, b->start_index);
     }
     d->origin_set = true;
+}
+
+/* 4.3, steps 1-6. */
+static void on_block(fw_device *d, uint16_t seq, const fw_block *b)
+{
+    unsigned ch = d->cfg.channels;
+    bool fits = block_fits(d, b);
+    /* Readiness is read in the same locked section that leaves SILENT: a drain running dry
+     * in the sample interrupt sets stopped, and no block may restart the plate after it. */
+    lock(d);
+    bool ready = d->hello_seen && !d->stopped;
+    if (ready && fits)
+        open_block(d, b);
     unlock(d);
+    if (!ready || !fits) {
+        refuse_block(d, seq, b, ready);
+        return;
+    }
 
     uint32_t late = 0, beyond = 0, clamped = 0;
     for (uint32_t i = 0; i < b->n; i++) {

@@ -39,7 +39,7 @@ const char *host_params_to_config(const host_params *p, fw_config *cfg)
     for (unsigned i = 0; i < p->n_limits; i++)
         if (!(p->limits_um[i] >= STEP_UM && p->limits_um[i] <= AMPLITUDE_MAX_UM))
             return fail("limits_um", "in [1/4096, 15.9998] um (one count to the wire's top)");
-    if (p->buffer_samples < 2 || p->buffer_samples * p->channels > FW_STORE_WORDS) {
+    if (p->buffer_samples < 2 || p->buffer_samples > FW_STORE_WORDS / p->channels) {
         snprintf(range, sizeof range, "2 to %lu samples for %lu channel(s) (this build)",
                  (unsigned long)FW_STORE_WORDS / p->channels, p->channels);
         return fail("buffer_samples", range);
