@@ -41,3 +41,25 @@ def test_a_missed_throughput_target_says_its_timings_were_warm():
     verdicts = rmd._throughput_verdicts(headline([slow]), SETTINGS)
     assert (f"1 of 1 rows miss it, one timing each after an untimed {rm.WARM_UP_S:g} s run "
             "of the same configuration") in verdicts
+
+
+def test_a_process_keeps_one_runner_per_motions_contents_not_their_names(monkeypatch):
+    """Motions of one name but other contents (an API user's, or a long-lived worker's
+    second call) got the first call's runner, and its rows."""
+    made = []
+
+    class Recording:
+        def __init__(self, live_s, motions, plate):
+            made.append(motions)
+            self.motions = motions
+
+        def run(self, case):
+            return self.motions
+
+    monkeypatch.setattr(rm, "Runner", Recording)
+    monkeypatch.setattr(rm, "_RUNNERS", {})
+    case = rm.Case("grating-5mm", "m", 50.0, "sht", 10_000.0)
+    slow, fast = {"m": rm.MOTIONS["slow"]}, {"m": rm.MOTIONS["fast"]}
+    assert rm.run_case(case, motions=slow) == slow
+    assert rm.run_case(case, motions=fast) == fast
+    assert rm.run_case(case, motions=dict(slow)) == slow and made == [slow, fast]

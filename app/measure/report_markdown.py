@@ -33,7 +33,11 @@ COMMANDED_NOTE = (
     "rounded off), whatever the renderer. There is no alignment error through the plate: "
     "the plate starts each touch at rest, so its rise at touch-down is a step no edge "
     "matches (scored at the cap), and the loop's lag (0.4 ms, 0.05 mm at 120 mm/s) is "
-    "below what that error resolves.")
+    "below what that error resolves. Every error is scored with each output sample "
+    "played at the time it was computed for: no touch-to-plate delay. A live link's delay "
+    "comes on top (the schedule latency below; `frictex bench latency` times it): "
+    "delaying the output by 5 ms took the hybrid's alignment error on grating-5mm's "
+    "human-like path from 0.18 to 0.46 mm and sho-held's from 0.58 to 0.95 mm.")
 #: how each cost figure is timed and what a median over them does with a stall
 WARM_TIMING = (
     f"each timed after an untimed {WARM_UP_S:g} s run of the same configuration; no timing "

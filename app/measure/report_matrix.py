@@ -430,7 +430,7 @@ def run_case(case: Case, live_s: float = 1.0, motions: dict | None = None,
     """``Runner(live_s, motions, plate).run(case)`` with one runner per process and
     settings, so that cases fanned out over processes (``app.engine.fanout``) share its
     caches."""
-    key = (live_s, None if motions is None else tuple(sorted(motions)), plate)
+    key = (live_s, None if motions is None else repr(sorted(motions.items())), plate)
     if key not in _RUNNERS:
         _RUNNERS[key] = Runner(live_s=live_s, motions=motions, plate=plate)
     return _RUNNERS[key].run(case)

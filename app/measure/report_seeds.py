@@ -7,7 +7,8 @@ Three kinds of motion, each drawn ``n`` times (16; 8 with ``--quick``), sampled 
 - ``human``: human-like strokes (``rendering.input.trace_synth``): draw k uses the
   minimum-jerk strokes and pauses of ``human`` for odd k and the ``human-varied`` mix
   (speed rippling within strokes, creeping, flicks, reversals, arcs, pauses) for even k,
-  motion seed k; the touch trace has 2 ms timestamp jitter (standard deviation) and
+  motion seed k; the touch trace is sampled 2 ms (standard deviation) off the 50 Hz
+  grid, each sample stamped with the time it was taken (irregular but true stamps), and
   drops 5 % of the samples, as real controllers do;
 - ``slow`` and ``fast``: the matrix's constant-speed swipes (20 and 120 mm/s), draw k
   with its own touch noise.

@@ -22,8 +22,11 @@ where; the others start where told (14, 32.4 mm by default).
   reversals (a stroke straight back, no pause), circular arcs, and pauses. Each part
   starts and ends at rest, as minimum-jerk movements do.
 
-``sample`` can add what real controllers do to the timing: jitter of the timestamps
-and dropped samples (``drop``, the share of samples the screen never reports).
+``sample`` can add what real controllers do to the timing: samples taken off the
+regular grid (``jitter_s``; each position is the finger's at its own timestamp, so the
+stamps are irregular but true: a controller whose stamps differ from the times it
+scanned is not modelled) and dropped samples (``drop``, the share of samples the screen
+never reports).
 """
 
 from __future__ import annotations
@@ -286,7 +289,8 @@ def sample(motion: Motion, rate_hz: float, *, noise_mm: float = 0.0, jitter_s: f
     """The motion as a touch screen at ``rate_hz`` reports it (down first, up last).
 
     ``noise_mm``: standard deviation of position noise; ``jitter_s``: standard deviation
-    of timestamp jitter (kept strictly increasing, :func:`_jittered`); ``drop``: share of
+    of the sample times about the regular grid (kept strictly increasing,
+    :func:`_jittered`; each position is taken at its sample's time); ``drop``: share of
     samples in [0, 1) the screen never reports (drawn independently; the first and the
     last are always kept). The lift lies at the motion's end (:func:`sample_times`).
     """
