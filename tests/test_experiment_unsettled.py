@@ -36,14 +36,29 @@ def test_every_trial_correct_gives_a_bound_not_a_threshold():
     # any threshold far enough below the lowest level fits the data as well: flat
     assert weibull_nll(0.01, 5.0, 0.0, LEVELS, n, n) == pytest.approx(
         weibull_nll(0.001, 5.0, 0.0, LEVELS, n, n), abs=1e-9)
-    assert fit.threshold_below == 0.1 and math.isnan(fit.threshold)
+    # the bound: the first threshold of the grid (60 a decade) at which every trial correct
+    # has a probability under 5 % however the slope and lapse rate are set: 20 trials at
+    # 0.1, a Weibull at its 75 % point there, already give 0.75^20 = 0.003
+    assert 0.1 < fit.threshold_below < 0.1 * 10 ** (2 / 60) and math.isnan(fit.threshold)
     assert math.isnan(fit.slope) and all(map(math.isnan, fit.threshold_ci + fit.slope_ci))
     assert fit.unsettled == P.ALL_CORRECT
     rows = forced((d, True) for d in TESTED for _ in range(20))
     summary = analyse_study([session("2afc", rows)])
-    assert summary["pooled"]["threshold_below"] == 0.1
-    assert "below 0.1 period_mm difference (no threshold, slope or interval): every trial" \
+    assert summary["pooled"]["threshold_below"] == pytest.approx(fit.threshold_below)
+    assert "below 0.103 period_mm difference (no threshold, slope or interval): every trial" \
         in "\n".join(report_lines(summary))
+
+
+def test_a_few_trials_all_correct_bound_nothing_and_say_so():
+    """Seven trials, all correct (2 at 0.1, 2 at 0.5, 2 at 0.75, 1 at 1.6): an observer
+    whose 75 % point is 0.56 answers so one time in ten, yet the fit said the threshold
+    lay below 0.1. A near-flat function at 0.75 makes them all correct with 0.75^7 = 0.13
+    at any threshold: nothing is bounded."""
+    x, n = np.array([0.1, 0.5, 0.75, 1.6]), np.array([2.0, 2, 2, 1])
+    assert weibull_nll(16.0, 0.01, 0.0, x, n, n) < -math.log(P.ALL_CORRECT_P)
+    fit = P.fit(x, n, n, bootstrap=0)
+    assert fit.unsettled == P.ALL_CORRECT + P.TOO_FEW_TO_BOUND
+    assert fit.threshold_below == pytest.approx(16.0) and math.isnan(fit.threshold)
 
 
 def test_a_flat_likelihood_flags_both_intervals():

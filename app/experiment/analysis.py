@@ -56,8 +56,9 @@ as well), a staircase's slope interval (its measured coverage is far below 95 %,
 that spans more than a factor of :data:`UNSETTLED_RATIO` or reaches 0 (a threshold or
 slope), a d' interval at a raw rate of 0 or 1 (``d_prime_ci95_unsettled``), or a
 magnitude mean's from fewer than 2 distinct ratings (its zero width says nothing of the
-uncertainty). With every trial correct a fit gives no threshold, only that it lies below
-the lowest difference tested (``threshold_below``).
+uncertainty). With every trial correct a fit gives no threshold, only its one-sided 95 %
+upper bound (``threshold_below``; ``psychometric.ALL_CORRECT_P``), or that the trials are
+too few to bound it.
 
 Each session's end is recorded (``session_ends``: "complete", "stopped (...)" or
 "killed", its main trials, the rows read from results.csv, the trials session.json

@@ -41,8 +41,10 @@ which a short staircase needs.
 
 Some data cannot settle a fit (``Fit.unsettled`` says why): with every trial correct the
 likelihood is highest for any threshold below the lowest difference tested, so the fit
-gives that difference as an upper bound (``Fit.threshold_below``) and no threshold,
-slope or interval; where the threshold's profile likelihood does not fall by
+gives an upper bound (``Fit.threshold_below``: the largest threshold at which every trial
+correct has a probability of at least 5 %, at the slope and lapse rate that make it
+likeliest; a few trials do not bound it, a near-flat function making them all correct
+often enough at any threshold) and no threshold, slope or interval; where the threshold's profile likelihood does not fall by
 ``PROFILE_DROP`` on both sides within a tenth of the lowest difference and ten times the
 highest (a few trials), the data do not bound the threshold and the fit is arbitrary.
 The slope is judged apart (``Fit.slope_unsettled``): where a step fits as well (a
@@ -103,9 +105,10 @@ class Fit:
         (:func:`_unsettled`), else None.
     slope_unsettled : why they cannot settle the slope (``unsettled``, or a slope only
         bounded below), else None.
-    threshold_below : every trial correct: the lowest difference tested (units of x),
-        which bounds the threshold from above; threshold, slope and their intervals are
-        then NaN. None otherwise.
+    threshold_below : every trial correct: the threshold's one-sided 95 % upper bound
+        (units of x; ten times the highest difference where the trials are too few to
+        bound it, said in ``unsettled``); threshold, slope and their intervals are then
+        NaN. None otherwise.
     """
 
     function: str
@@ -340,9 +343,18 @@ PROFILE_DROP = 0.5 * float(stats.chi2.ppf(0.95, 1))
 #: 0.0025 to 403 or a logistic beta from 0.0025 to 403 times the highest level; the
 #: steep end (:func:`_steep_end`) a step for levels 2 % of the highest or more apart
 _PROFILE_B = 61
+#: with every trial correct, the threshold's upper bound is the largest threshold at which
+#: that outcome has at least this probability (at the slope and lapse rate that make it
+#: likeliest): an exact one-sided 95 % bound, every trial correct being the most extreme
+#: outcome there is
+ALL_CORRECT_P = 0.05
 #: why a fit with every trial correct gives no threshold
-ALL_CORRECT = ("every trial was correct: the threshold lies below the lowest difference "
-               "tested, the data bound it only from above and leave the slope free")
+ALL_CORRECT = ("every trial was correct: the data bound the threshold only from above (its "
+               "one-sided 95 % bound: above it, every trial correct has a probability under "
+               f"{ALL_CORRECT_P:g}) and leave the slope free")
+#: what :data:`ALL_CORRECT` adds where its trials are too few to bound it within the grid
+TOO_FEW_TO_BOUND = ("; too few trials to bound it: that probability stays above "
+                    f"{ALL_CORRECT_P:g} out to ten times the highest difference")
 #: why a fit whose threshold profile does not fall off on both sides is unsettled
 FLAT_THRESHOLD = ("the likelihood is flat along the threshold: its profile stays within "
                   f"{PROFILE_DROP:.2f} of its top out to {{end}} (the profile-likelihood 95 % "
@@ -376,30 +388,40 @@ def _profiles(function, u, n, k, guess, lapse_max, target):
 
 def _unsettled(function, x, n, k, guess, lapse_max, target):
     """Per data set (counts ``k`` (S, J) of ``n`` (J,) at ``x``): why the data cannot
-    settle its fit, else None; and why they cannot settle its slope, else None. The fit:
-    every trial correct (:data:`ALL_CORRECT`), or a threshold the profile likelihood does
-    not bound within its grid (:data:`FLAT_THRESHOLD`: a tenth of the lowest difference
-    to ten times the highest). The slope: the fit's reason, or a step (the grid's
-    steepest spread) within :data:`PROFILE_DROP` of the top (:data:`STEEP_SLOPE`): a
-    steep fit's local information about the spread goes to 0, though the threshold is
-    bounded all the same."""
+    settle its fit, else None; why they cannot settle its slope, else None; and with
+    every trial correct the threshold's upper bound (units of x), else None. The fit:
+    every trial correct (:data:`ALL_CORRECT`: the likelihood is highest for any threshold
+    below the lowest difference, and the bound is the first threshold of the profile's
+    grid, going up, where the profile, the log probability of every trial correct, falls
+    below log :data:`ALL_CORRECT_P`; the grid's top where it never does,
+    :data:`TOO_FEW_TO_BOUND`), or a threshold the profile
+    likelihood does not bound within its grid (:data:`FLAT_THRESHOLD`: a tenth of the
+    lowest difference to ten times the highest). The slope: the fit's reason, or a step
+    (the grid's steepest spread) within :data:`PROFILE_DROP` of the top
+    (:data:`STEEP_SLOPE`): a steep fit's local information about the spread goes to 0,
+    though the threshold is bounded all the same."""
     scale = float(np.max(x))
     steep = _steep_end(function)
-    fits, slopes = [], []
+    fits, slopes, below = [], [], []
     for counts in k:
-        if np.all(counts == n):
-            fits.append(ALL_CORRECT)
-            slopes.append(ALL_CORRECT)
-            continue
         t, by_threshold, by_spread = _profiles(function, x / scale, n, counts, guess,
                                                lapse_max, target)
         floor = by_threshold.max() - PROFILE_DROP
+        if np.all(counts == n):
+            top = int(np.argmax(by_threshold))
+            fallen = np.flatnonzero(by_threshold[top:] < math.log(ALL_CORRECT_P))
+            why = ALL_CORRECT + ("" if fallen.size else TOO_FEW_TO_BOUND)
+            fits.append(why)
+            slopes.append(why)
+            below.append(float(t[top + fallen[0]] if fallen.size else t[-1]) * scale)
+            continue
+        below.append(None)
         open_end = [end for end, value in ((t[0], by_threshold[0]), (t[-1], by_threshold[-1]))
                     if value >= floor]
         why = FLAT_THRESHOLD.format(end=f"{open_end[0] * scale:.3g}") if open_end else None
         fits.append(why)
         slopes.append(why or (STEEP_SLOPE if by_spread[steep] >= floor else None))
-    return fits, slopes
+    return fits, slopes, below
 
 
 def _check(x, n, k, function, guess, lapse_max, target):
@@ -509,22 +531,22 @@ def fit_sets(x, n, k, *, function: str = "weibull", guess: float = 0.5,
                             *_jackknife_slopes(function, x, n, k, guess, lapse_max, target))
     drawn = f", {bootstrap} data sets"
     t_method, s_method = (BOOTSTRAP + drawn, SLOPE_BCA + drawn) if bootstrap > 0 else (None, None)
+    reasons, slope_reasons, bounds = _unsettled(function, x, n, k, guess, lapse_max, target)
     fits = [Fit(function, guess, lapse_max, target, float(a), float(b), float(lam),
                 float(thresholds[i]), float(slopes[i]), (float(t_ci[i, 0]), float(t_ci[i, 1])),
                 (float(s_ci[i, 0]), float(s_ci[i, 1])), bootstrap, x, n, k[i], t_method, s_method,
                 why, why_slope)
-            for i, ((a, b, lam), why, why_slope) in enumerate(
-                zip(params, *_unsettled(function, x, n, k, guess, lapse_max, target)))]
-    return [_bounded_above(f) if f.unsettled == ALL_CORRECT else f for f in fits]
+            for i, ((a, b, lam), why, why_slope) in enumerate(zip(params, reasons,
+                                                                   slope_reasons))]
+    return [f if bound is None else _bounded_above(f, bound) for f, bound in zip(fits, bounds)]
 
 
-def _bounded_above(f: Fit) -> Fit:
-    """``f`` (every trial correct) as a one-sided bound: the threshold below the lowest
-    difference tested, no threshold, slope or intervals."""
+def _bounded_above(f: Fit, bound: float) -> Fit:
+    """``f`` (every trial correct) as a one-sided bound: the threshold below ``bound``
+    (units of x), no threshold, slope or intervals."""
     none = (math.nan, math.nan)
     return replace(f, threshold=math.nan, slope=math.nan, threshold_ci=none, slope_ci=none,
-                   threshold_ci_method=None, slope_ci_method=None,
-                   threshold_below=float(f.x[0]))
+                   threshold_ci_method=None, slope_ci_method=None, threshold_below=bound)
 
 
 #: the posterior's grids: thresholds per decade of x, log spread points, lapse rates
