@@ -305,9 +305,9 @@ def test_pixels_are_read_over_the_size_asked_whatever_size_the_framebuffer_was_m
     """After the window grew from 80 x 60 to 120 x 90, P read the old size's pixels and
     the demo ended on a reshape error (a recorded session's record lost)."""
     from frictex.rendering.visual.context import _read
-    fbo = gl.simple_framebuffer((120, 90), components=4)
-    fbo.use()
-    fbo.clear(0.0, 0.0, 1.0, 1.0)
-    rgb = _read(_FirstSizeScreen(fbo, (80, 60)), (120, 90))
-    fbo.release()
+    backend = OffscreenBackend((120, 90), ctx=gl)
+    backend.use()
+    backend.fbo.clear(0.0, 0.0, 1.0, 1.0)
+    rgb = _read(_FirstSizeScreen(backend.fbo, (80, 60)), (120, 90))
+    backend.close()
     assert rgb.shape == (90, 120, 3) and (rgb == [0, 0, 255]).all()
