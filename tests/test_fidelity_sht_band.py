@@ -11,20 +11,22 @@ from frictex.textures.library import resolve_scene
 from scenes import grating_edges, straddling_samples
 
 
-def _run(speed_mm_s: float, rate_hz: float, renderer: str = "sht"):
-    """mu' of ``renderer`` on the 0.6 mm grating (0.6 / 1.0) under a finger swiping at
-    ``speed_mm_s`` sampled at 50 Hz, at output rate ``rate_hz``, once the first fit gives a
-    velocity; and the samples the layer counted as played as its mean."""
+def _run(speed_mm_s: float, rate_hz: float, renderer: str = "sht", x0_mm: float = 10.0,
+         duration_s: float = 0.26):
+    """mu' of ``renderer`` on the 0.6 mm grating (0.6 / 1.0) under a finger swiping from
+    ``x0_mm`` at ``speed_mm_s`` sampled at 50 Hz for ``duration_s``, at output rate
+    ``rate_hz``, once the first fit gives a velocity; and the samples the layer counted
+    as played as its mean."""
     scene = load_scene(resolve_scene("grating-0.6mm"))
-    t = np.arange(0, 0.26, 0.02)
+    t = np.arange(0, duration_s, 0.02)
     ev = np.full(t.size, MOVE, np.int8)
     ev[0], ev[-1] = DOWN, UP
-    trace = make_trace(t, np.zeros(t.size, int), 10 + speed_mm_s * t, np.full(t.size, 30.0),
-                       np.full(t.size, 0.5), ev)
+    trace = make_trace(t, np.zeros(t.size, int), x0_mm + speed_mm_s * t,
+                       np.full(t.size, 30.0), np.full(t.size, 0.5), ev)
     pipeline = build_pipeline(scene, rate_hz=rate_hz, render_override=renderer,
                               sho_variant="sho-predicted")
     out, state = pipeline.process(0, trace, pipeline.initial_state(),
-                                  n_blocks=int(0.24 * rate_hz) // pipeline.block_size)
+                                  n_blocks=int((duration_s - 0.02) * rate_hz) // pipeline.block_size)
     moving = out.contact[0] & (out.t_s >= 0.03)
     (layer_state,) = state.layers
     return out.mu_target[0][moving], layer_state.clipped

@@ -5,36 +5,20 @@ it, and at a jump to a new touch sample under a slower finger, it plays as befor
 import numpy as np
 import pytest
 
-from frictex.rendering.input.trace_file import DOWN, MOVE, UP, make_trace
 from frictex.rendering.layers.sho import HeldSho, PredictedSho
-from frictex.rendering.pipeline import build_pipeline
-from frictex.rendering.tracking.tracks import FingerBlock
-from frictex.textures.library import resolve_scene
-from frictex.textures.loader import load_scene
 from scenes import grating_box_mean, grating_scene
+from test_box_mean import _block
+from test_fidelity_sht_band import _run as _swipe_run
 
 RATE = 10_000.0
 #: 20 um square grating: 150 mm/s is 7.5 kHz, past 10 kHz output's 5 kHz Nyquist
 (FINE,) = grating_scene(0.02).layers
 
 
-def _run(renderer: str, speed_mm_s: float = 560.0, rate_hz: float = 1000.0):
-    """mu' of ``renderer`` on the bundled 0.6 mm grating (0.6 / 1.0, mean 0.8) under a
-    swipe at ``speed_mm_s`` sampled at 50 Hz, at ``rate_hz`` output, from the first
-    fitted velocity (30 ms); and the samples the layer counted as played as its mean."""
-    scene = load_scene(resolve_scene("grating-0.6mm"))
-    t = np.arange(0, 0.16, 0.02)
-    ev = np.full(t.size, MOVE, np.int8)
-    ev[0], ev[-1] = DOWN, UP
-    trace = make_trace(t, np.zeros(t.size, int), 5 + speed_mm_s * t, np.full(t.size, 32.4),
-                       np.full(t.size, 0.5), ev)
-    pipeline = build_pipeline(scene, rate_hz=rate_hz, render_override=renderer,
-                              sho_variant="sho-predicted")
-    out, state = pipeline.process(0, trace, pipeline.initial_state(),
-                                  n_blocks=int(0.14 * rate_hz) // pipeline.block_size)
-    (layer_state,) = state.layers
-    moving = out.contact[0] & (out.t_s >= 0.03)
-    return out.mu_target[0][moving], layer_state.clipped
+def _run(renderer: str):
+    """``test_fidelity_sht_band._run`` of ``renderer`` at 560 mm/s from x = 5 mm for
+    0.16 s (on the display throughout) at 1 kHz output."""
+    return _swipe_run(560.0, 1000.0, renderer, x0_mm=5.0, duration_s=0.16)
 
 
 def test_sho_predicted_plays_the_mean_of_a_texture_above_nyquist_and_counts_it():
@@ -45,18 +29,6 @@ def test_sho_predicted_plays_the_mean_of_a_texture_above_nyquist_and_counts_it()
     np.testing.assert_allclose(mu, 0.8, rtol=0, atol=1e-9)
     assert counted >= mu.size
     assert counted == _run("hybrid")[1]
-
-
-def _block(x, vx, index0=0):
-    """One finger's FingerBlock along x (mm) at velocity vx (mm/s), y 30 mm, one touch;
-    held and predicted positions both ``x``."""
-    n = x.size
-    row = lambda a: np.asarray(a, dtype=np.float64).reshape(1, n)
-    return FingerBlock(index0=index0, t_s=(index0 + np.arange(n)) / RATE, ids=(0,),
-                       contact=np.ones((1, n), bool), touch_id=np.ones((1, n), np.int64),
-                       x_held=row(x), y_held=row(np.full(n, 30.0)), x_pred=row(x),
-                       y_pred=row(np.full(n, 30.0)), vx=row(vx), vy=row(np.zeros(n)),
-                       force=row(np.full(n, 0.5)), touch_start=row(np.zeros(n)))
 
 
 def _render(renderer, x, vx, bounds):
