@@ -163,3 +163,16 @@ def test_a_clip_that_stays_within_reach_or_is_not_felt_alone_is_not_warned_of(tm
     bump = ('[[layer]]\ntype = "height"\nshape = "bump"\nname = "bump"\ncx_mm = 30.0\n'
             'cy_mm = 20.0\nsigma_mm = 8.0\nrise_mm = 1.0\nmu_rest = 0.9\nmu_min = 0.6\n')
     assert _floor_warnings(tmp_path, bump + CLIP_OVER.format(depth=0.4, fingers="any")) == []
+
+
+def test_a_clip_is_not_blamed_for_layers_overlapping_away_from_it(tmp_path):
+    """Two rectangles at 0.7 overlap each other (0.49, the scene's own warning) far from
+    a clip's region (20 ms: felt at most 20 mm beyond it, FAST_FINGER_MM_S): the clip was
+    warned of as playing over them."""
+    far = CLIP_OVER.format(depth=0.1, fingers="any").replace("x_mm = 10.0, y_mm = 10.0",
+                                                             "x_mm = 70.0, y_mm = 10.0")
+    far = far.replace("x_mm = 30.0\n", "x_mm = 80.0\n").replace("duration_s = 0.1",
+                                                                  "duration_s = 0.02")
+    body = (RECT.format(name="a", x=0, y=10, w=30, h=20, mu=0.7)
+            + RECT.format(name="b", x=10, y=10, w=30, h=20, mu=0.7) + far)
+    assert _floor_warnings(tmp_path, body) == []

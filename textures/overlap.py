@@ -36,9 +36,11 @@ class Overlap:
     at_mm: tuple[float, float]
 
 
-def lowest_overlap(display, layers) -> Overlap:
+def lowest_overlap(display, layers, under: int | None = None) -> Overlap:
     """:class:`Overlap` of ``layers`` (a sequence of scene layers) on ``display``
-    (see the module docstring); O(n^3) for n boxes, a few ms for 32 layers."""
+    (see the module docstring); with ``under``, only where ``layers[under]`` lowers mu'
+    (1.0 and no names where it lowers it nowhere). O(n^3) for n boxes, a few ms for 32
+    layers."""
     pieces = [lowering(layer, display) for layer in layers]
     boxes = [box for layer_pieces in pieces for box, _ in layer_pieces]
     if not boxes:
@@ -52,6 +54,10 @@ def lowest_overlap(display, layers) -> Overlap:
             inside = ((my > y0) & (my < y1))[:, None] & ((mx > x0) & (mx < x1))[None, :]
             np.minimum(factor, np.where(inside, mu, 1.0), out=factor)
     product = factors.prod(axis=0)
+    if under is not None:
+        if not (factors[under] < 1.0).any():
+            return Overlap(1.0, (), (display.width_mm / 2, display.height_mm / 2))
+        product = np.where(factors[under] < 1.0, product, np.inf)
     row, col = np.unravel_index(int(np.argmin(product)), product.shape)
     names = tuple(layer.name for layer, factor in zip(layers, factors) if factor[row, col] < 1.0)
     return Overlap(float(product[row, col]), names, (float(mx[col]), float(my[row])))
@@ -65,12 +71,12 @@ def applies_alone(layer) -> bool:
 
 def under_clips(display, layers) -> list[tuple[int, Overlap]]:
     """For each clip layer a lone finger feels (its index in ``layers``), the
-    :class:`Overlap` of it and the layers fixed in place that a lone finger feels: the
-    lowest its deepest mu' times theirs, where they overlap. Height layers and recorded
+    :class:`Overlap` of it and the layers fixed in place that a lone finger feels, where
+    the clip plays: the lowest its deepest mu' times theirs. Height layers and recorded
     textures (whose mu' moves with the finger: their lowest is seldom met) and other clips
     (which play at their own times) are left out."""
     fixed = [layer for layer in layers
              if applies_alone(layer) and not isinstance(layer, DynamicLayer)]
-    return [(index, lowest_overlap(display, [layer, *fixed]))
+    return [(index, lowest_overlap(display, [layer, *fixed], under=0))
             for index, layer in enumerate(layers)
             if isinstance(layer, ClipLayer) and applies_alone(layer)]
