@@ -76,6 +76,17 @@ def test_an_evemu_glitch_count_is_named_by_its_line(tmp_path):
         _import([str(src), "-o", str(tmp_path / "out.csv")])
 
 
+def test_a_glitch_count_in_events_a_syn_dropped_threw_away_is_no_error(tmp_path, capsys):
+    """The decoder drops what follows a SYN_DROPPED up to the next SYN_REPORT: a glitch
+    there reaches no sample, and the recording imports as it did (with its warning)."""
+    src = tmp_path / "rec.evemu"
+    src.write_text(EVEMU.replace("E: 0.007450 0003 0035 1548",
+                                 "E: 0.005000 0000 0003 0\nE: 0.005000 0003 0035 2147483647\n"
+                                 "E: 0.005000 0000 0000 0\nE: 0.007450 0003 0035 1548"))
+    assert _import([str(src), "-o", str(tmp_path / "out.csv")]) == 0
+    assert "1 SYN_DROPPED" in capsys.readouterr().err
+
+
 # -- time going back -------------------------------------------------------------------------
 @needs_refdata
 def test_getevent_time_going_back_on_any_event_line_is_refused(tmp_path):

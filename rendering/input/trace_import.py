@@ -169,25 +169,29 @@ def _events(path: Path, text: str, fmt: str,
     return recording.events, recording.absinfo, recording.warnings
 
 
-def _check_positions(events: list[Event], screen: ScreenMap, where: str) -> None:
-    """TraceError naming the line of the first position event that ``screen`` puts more
-    than MAX_COORD_MM from the screen's origin (a glitch count such as 0x7fffffff, or a
-    range that is not the device's), with its count, its mm and the axis's map: the
-    trace's own check comes later and can only name a sample."""
-    maps = {ABS_MT_POSITION_X: screen.y if screen.swap_xy else screen.x,
-            ABS_MT_POSITION_Y: screen.x if screen.swap_xy else screen.y}
-    found = [e for e in events if e.type == EV_ABS and e.code in maps]
-    is_x = np.array([e.code == ABS_MT_POSITION_X for e in found], dtype=bool)
-    counts = np.array([e.value for e in found], dtype=np.float64)
-    mm = np.where(is_x, maps[ABS_MT_POSITION_X].mm(counts), maps[ABS_MT_POSITION_Y].mm(counts))
-    far = np.flatnonzero(np.abs(mm) > MAX_COORD_MM)
-    if far.size:
-        ev, axis = found[far[0]], "x" if is_x[far[0]] else "y"
-        m = maps[ev.code]
-        raise TraceError(f"{where}:{ev.line}: device {axis} count {ev.value} is {mm[far[0]]:.6g} mm "
-                         f"on the screen (device {axis} range {m.lo:g}..{m.hi:g} over "
-                         f"{m.size_mm:g} mm); expected -{MAX_COORD_MM:g} to {MAX_COORD_MM:g} mm "
-                         f"(a glitch value? else check --{axis}-range)")
+def _check_positions(samples: list[RawSample], events: list[Event], screen: ScreenMap,
+                     where: str) -> None:
+    """TraceError naming the line of the event behind the first sample's position that
+    ``screen`` puts more than MAX_COORD_MM from the screen's origin (a glitch count such as
+    0x7fffffff, or a range that is not the device's), with its count, its mm and the
+    axis's map: the trace's own check comes later and can only name a sample. Only the
+    samples count: a glitch in events the decoder threw away (after a SYN_DROPPED) is no
+    error; the line is that of the first position event of that axis with that count."""
+    for code, axis in ((ABS_MT_POSITION_X, "x"), (ABS_MT_POSITION_Y, "y")):
+        m = (screen.y if screen.swap_xy else screen.x) if axis == "x" else (
+            screen.x if screen.swap_xy else screen.y)
+        counts = np.array([getattr(sample, axis) for sample in samples], dtype=np.float64)
+        with np.errstate(invalid="ignore"):  # nan: a position the device did not say
+            far = np.flatnonzero(np.abs(m.mm(counts)) > MAX_COORD_MM)
+        if far.size:
+            count = counts[far[0]]
+            line = next((e.line for e in events
+                         if e.type == EV_ABS and e.code == code and e.value == count), None)
+            at = f"{where}:{line}" if line else where
+            raise TraceError(f"{at}: device {axis} count {count:.0f} is {m.mm(count):.6g} mm "
+                             f"on the screen (device {axis} range {m.lo:g}..{m.hi:g} over "
+                             f"{m.size_mm:g} mm); expected -{MAX_COORD_MM:g} to {MAX_COORD_MM:g} "
+                             f"mm (a glitch value? else check --{axis}-range)")
 
 
 def still_down(trace) -> list[int]:
@@ -218,7 +222,7 @@ def run_import(args: argparse.Namespace, write: Callable[[str, str], None]) -> i
     if not args.keep_time:
         # both formats stamp whole microseconds: rounding gives back the exact decimal difference
         samples = [s._replace(t_s=round(s.t_s - t0, 6)) for s in samples]
-    _check_positions(events, screen, str(path))
+    _check_positions(samples, events, screen, str(path))
     trace = screen.trace(samples, str(path))
     outside = int(np.count_nonzero((trace.x_mm < 0) | (trace.x_mm > screen.x.size_mm)
                                    | (trace.y_mm < 0) | (trace.y_mm > screen.y.size_mm)))
