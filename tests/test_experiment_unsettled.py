@@ -58,7 +58,11 @@ def test_a_few_trials_all_correct_bound_nothing_and_say_so():
     assert weibull_nll(16.0, 0.01, 0.0, x, n, n) < -math.log(P.ALL_CORRECT_P)
     fit = P.fit(x, n, n, bootstrap=0)
     assert fit.unsettled == P.ALL_CORRECT + P.TOO_FEW_TO_BOUND
-    assert fit.threshold_below == pytest.approx(16.0) and math.isnan(fit.threshold)
+    assert fit.threshold_below == math.inf and math.isnan(fit.threshold)
+    rows = forced((float(d), True) for d, k in zip(x, n) for _ in range(int(k)))
+    summary = analyse_study([session("2afc", rows)])
+    assert "threshold (0.75 correct, weibull): not bounded (no threshold, slope or interval)" \
+        in "\n".join(report_lines(summary))
 
 
 def test_a_flat_likelihood_flags_both_intervals():

@@ -698,9 +698,11 @@ def _forced_choice_lines(summary: dict, unit: str) -> list[str]:
     if pooled is None:
         lines.append(f"  no threshold: {summary['no_fit']}")
     elif pooled["threshold_below"] is not None:
+        bound = pooled["threshold_below"]
         lines.append(f"  threshold ({pooled['target']:.3g} correct, {pooled['function']}): "
-                     f"below {pooled['threshold_below']:.4g} {unit} difference (no threshold, "
-                     f"slope or interval): {pooled['fit_unsettled']}")
+                     + (f"below {bound:.4g} {unit} difference" if math.isfinite(bound)
+                        else "not bounded")
+                     + f" (no threshold, slope or interval): {pooled['fit_unsettled']}")
     else:
         lo, hi = pooled["levels"][0]["difference"], pooled["levels"][-1]["difference"]
         where = ("" if pooled["threshold_in_tested_range"] else

@@ -8,6 +8,7 @@ backend (no display needed); the layout keeps every label within the canvas.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -37,7 +38,7 @@ def _forced_choice(ax, s: dict) -> None:
         ax.axvspan(lo, hi, color="C1", alpha=0.2, label="threshold 95 %")
     if fit["threshold"] is not None:
         ax.axvline(fit["threshold"], color="C1", lw=1)
-    if fit["threshold_below"] is not None:
+    if fit["threshold_below"] is not None and math.isfinite(fit["threshold_below"]):
         ax.axvspan(0.0, fit["threshold_below"], color="C1", alpha=0.2,
                    label="threshold below (every trial correct)")
     ax.axhline(fit["target"], color="0.6", lw=0.8, ls=":")

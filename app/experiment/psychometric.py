@@ -106,9 +106,9 @@ class Fit:
     slope_unsettled : why they cannot settle the slope (``unsettled``, or a slope only
         bounded below), else None.
     threshold_below : every trial correct: the threshold's one-sided 95 % upper bound
-        (units of x; ten times the highest difference where the trials are too few to
-        bound it, said in ``unsettled``); threshold, slope and their intervals are then
-        NaN. None otherwise.
+        (units of x; inf where the trials are too few to bound it, said in
+        ``unsettled``); threshold, slope and their intervals are then NaN. None
+        otherwise.
     """
 
     function: str
@@ -393,8 +393,8 @@ def _unsettled(function, x, n, k, guess, lapse_max, target):
     every trial correct (:data:`ALL_CORRECT`: the likelihood is highest for any threshold
     below the lowest difference, and the bound is the first threshold of the profile's
     grid, going up, where the profile, the log probability of every trial correct, falls
-    below log :data:`ALL_CORRECT_P`; the grid's top where it never does,
-    :data:`TOO_FEW_TO_BOUND`), or a threshold the profile
+    below log :data:`ALL_CORRECT_P`; inf where it never does, :data:`TOO_FEW_TO_BOUND`),
+    or a threshold the profile
     likelihood does not bound within its grid (:data:`FLAT_THRESHOLD`: a tenth of the
     lowest difference to ten times the highest). The slope: the fit's reason, or a step
     (the grid's steepest spread) within :data:`PROFILE_DROP` of the top
@@ -413,7 +413,7 @@ def _unsettled(function, x, n, k, guess, lapse_max, target):
             why = ALL_CORRECT + ("" if fallen.size else TOO_FEW_TO_BOUND)
             fits.append(why)
             slopes.append(why)
-            below.append(float(t[top + fallen[0]] if fallen.size else t[-1]) * scale)
+            below.append(float(t[top + fallen[0]]) * scale if fallen.size else math.inf)
             continue
         below.append(None)
         open_end = [end for end, value in ((t[0], by_threshold[0]), (t[-1], by_threshold[-1]))
