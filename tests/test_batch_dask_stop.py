@@ -144,7 +144,8 @@ def test_a_cluster_without_workers_fails_the_batch_after_the_bound(tmp_path, clu
         f"frictex: error: the Dask cluster at {address} had no worker for 2 s; gave up 2 of "
         "2 jobs unfinished"]
     assert statuses(out) == dict.fromkeys(
-        "ab", ("interrupted", "not finished: the Dask cluster had no worker for 2 s"))
+        "ab", ("interrupted", f"not finished: the Dask cluster at {address} had no worker "
+                              "for 2 s"))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["batch.py", "m.csv", "out"]
     wait_for(lambda: not cluster.scheduler.tasks, "the tasks to be cancelled")
 
@@ -226,4 +227,66 @@ def test_an_item_whose_dask_workers_die_is_lost_and_the_others_finish(tmp_path, 
     assert results[1].startswith(f"lost die: {lost}")
     for name, result in zip("ab", (results[0], results[2])):
         assert result == name.upper() or result.startswith(f"lost {name}: {lost}")
+    assert "Traceback" not in err
+
+
+#: fan_out on the cluster at argv[1] of items 0 (at once) and 1, 2 (each writing
+#: <argv[2]>/<k>.start, then sleeping BOUND_S); prints how it ended
+ITEMS_OUTLIVING_THEIR_SCHEDULER = textwrap.dedent("""
+    import sys, time
+    from functools import partial
+    from pathlib import Path
+    from frictex.app.engine import fanout
+
+    def item(folder, k):
+        if k:
+            (Path(folder) / f"{k}.start").write_text("")
+            time.sleep(%d)
+        return k
+
+    if __name__ == "__main__":
+        try:
+            fanout.fan_out(partial(item, sys.argv[2]), [0, 1, 2], scheduler=sys.argv[1],
+                           on_done=lambda k: (Path(sys.argv[2]) / f"{k}.done").write_text(""))
+        except fanout.SchedulerLost as exc:
+            print("scheduler lost", exc.results)
+            print(exc, file=sys.stderr)
+            sys.exit(1)
+""" % BOUND_S)
+
+
+def test_a_scheduler_lost_mid_run_ends_it_with_one_line_keeping_what_finished(tmp_path, spawn):
+    """The scheduler's process killed while items ran: a traceback (FutureCancelledError,
+    'scheduler-connection-lost') and an internal error, the finished items' results lost."""
+    import socket
+    with socket.socket() as probe:  # a free port for the scheduler
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    dask = str(Path(sys.executable).with_name("dask"))
+    scheduler = spawn([dask, "scheduler", "--host", "127.0.0.1", "--port", str(port),
+                       "--no-dashboard"])
+    script = tmp_path / "items.py"
+    script.write_text(ITEMS_OUTLIVING_THEIR_SCHEDULER)
+    marks = tmp_path / "marks"
+    marks.mkdir()
+    worker = None
+    end = time.monotonic() + BOUND_S
+    while worker is None:  # the scheduler takes a moment to listen
+        with socket.socket() as probe:
+            if probe.connect_ex(("127.0.0.1", port)) == 0:
+                worker = spawn([dask, "worker", address, "--nthreads", "1", "--no-nanny",
+                                "--host", "127.0.0.1", "--no-dashboard"])
+        if time.monotonic() > end:
+            raise AssertionError(f"the scheduler did not listen within {BOUND_S} s")
+        time.sleep(0.1)
+    proc = spawn([sys.executable, str(script), address, str(marks)])
+    wait_for(lambda: (marks / "0.done").exists() and list(marks.glob("*.start")),
+             "item 0 to finish and another to start")
+    scheduler.kill()
+    code, out, err = finish(proc)
+    assert code == 1, err
+    assert out.strip() == "scheduler lost [0, None, None]"
+    assert err.strip().splitlines()[-1].startswith(f"lost the Dask scheduler at {address} ("), err
+    assert err.strip().endswith("; gave up 2 of 3 items unfinished"), err
     assert "Traceback" not in err

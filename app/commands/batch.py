@@ -3,7 +3,8 @@
 The manifest's grammar, ``batch.csv``'s columns, what ``DIR`` may hold and what a
 signal does are in ``app.engine.batch``. Exit status: 0 every job finished, 1 some jobs
 failed (each is listed with its error, and in ``DIR/batch.csv``) or a Dask cluster had
-no worker for ``fanout.NO_WORKER_S`` (the jobs left are ``interrupted``), 2 the
+no worker for ``fanout.NO_WORKER_S`` or lost its scheduler (the jobs left are
+``interrupted``, the finished ones kept), 2 the
 manifest, an option or ``DIR`` is bad (nothing ran), 130 Ctrl-C (128 + the signal for
 SIGTERM, SIGHUP) stopped it (``DIR/batch.csv`` lists the jobs that finished).
 """
@@ -20,7 +21,7 @@ from frictex.app.commands.argtypes import positive_int
 from frictex.app.engine.batch import RESULTS, not_ok, read_manifest, run_job
 from frictex.app.engine.batch_folder import EARLIER, BatchFolder
 from frictex.app.engine.driver import Terminated
-from frictex.app.engine.fanout import (NO_WORKER_S, Interrupted, NoWorkers, default_workers,
+from frictex.app.engine.fanout import (NO_WORKER_S, ClusterGone, Interrupted, default_workers,
                                        fan_out)
 from frictex.rendering.renderers import render_modes
 from frictex.textures.outside import add_allow_outside
@@ -37,7 +38,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="run on a Dask cluster (e.g. tcp://10.0.0.5:8786) instead; needs "
                              "pip install 'frictex[cluster]' and the files at the same paths "
                              "on every worker; a cluster with no worker for "
-                             f"{NO_WORKER_S:.0f} s gives up the jobs left (exit 1)")
+                             f"{NO_WORKER_S:.0f} s, or whose scheduler is lost, gives up "
+                             "the jobs left (exit 1)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     add_allow_outside(parser)
 
@@ -63,11 +65,11 @@ def _report(args: argparse.Namespace, rows: list[dict], stop, table: Path) -> in
     """The batch's last lines and exit status (module docstring); a stopped batch ends as
     an interrupted replay does (``KeyboardInterrupt``; or ``Terminated``, printed as
     ``frictex: terminated by SIGTERM``, exit 128 + the signal); one given up for want of
-    Dask workers raises its :class:`NoWorkers` (one error line, exit 1)."""
+    Dask workers or its scheduler raises its :class:`ClusterGone` (one error line, exit 1)."""
     signalled = isinstance(stop, Interrupted)
     if not args.quiet or signalled:
         print(_totals(rows, table), file=sys.stderr if signalled else sys.stdout)
-    if isinstance(stop, NoWorkers):
+    if isinstance(stop, ClusterGone):
         raise stop
     if signalled:
         if stop.signum == signal.SIGINT:
@@ -94,7 +96,7 @@ def _totals(rows: list[dict], table: Path) -> str:
 
 def _run_jobs(args: argparse.Namespace, jobs: list, out_dir: Path):
     """The jobs' result rows, with a progress bar, and the :class:`Interrupted` or
-    :class:`NoWorkers` that stopped them (None if none did; the jobs it kept from
+    :class:`ClusterGone` that stopped them (None if none did; the jobs it kept from
     finishing then have rows ``interrupted``)."""
     from frictex.app.engine.progress import progress_bar
     bar = progress_bar(total=len(jobs), desc="batch", unit="job",
@@ -110,18 +112,17 @@ def _run_jobs(args: argparse.Namespace, jobs: list, out_dir: Path):
                        workers=args.jobs or default_workers(), scheduler=args.scheduler,
                        on_done=done, on_lost=lambda job, why: not_ok(job, "failed", why),
                        noun="jobs"), None
-    except (Interrupted, NoWorkers) as stop:
+    except (Interrupted, ClusterGone) as stop:
         return [row if row is not None else _interrupted(job, stop)
                 for job, row in zip(jobs, stop.results)], stop
     finally:
         bar.close()
 
 
-def _interrupted(job, stop: Interrupted | NoWorkers) -> dict:
+def _interrupted(job, stop: Interrupted | ClusterGone) -> dict:
     """The row of a job that ``stop`` kept from finishing."""
-    if isinstance(stop, NoWorkers):
-        return not_ok(job, "interrupted", f"not finished: the Dask cluster had no worker "
-                                          f"for {stop.waited_s:.0f} s")
+    if isinstance(stop, ClusterGone):
+        return not_ok(job, "interrupted", f"not finished: {stop.why}")
     how = "stopped while it ran" if job.index in stop.stopped else "not started"
     return not_ok(job, "interrupted", f"{how}: the batch was stopped by "
                                       f"{signal.Signals(stop.signum).name}")

@@ -101,17 +101,35 @@ class WorkerLost(FrictexError):
         self.results = results
 
 
-class NoWorkers(FrictexError):
-    """A Dask cluster that had no worker for ``waited_s`` (s): ``results`` in the items'
-    order, None for an item that did not finish; ``noun`` what the items are (plural)."""
+class ClusterGone(FrictexError):
+    """A Dask cluster that stopped serving the items: ``results`` in the items' order, None
+    for an item that did not finish; ``why`` what happened, a phrase ("the Dask cluster
+    had no worker for 60 s"); ``noun`` what the items are (plural)."""
+
+    def __init__(self, why: str, results: list, noun: str):
+        unfinished = sum(result is None for result in results)
+        super().__init__(f"{why}; gave up {unfinished} of {len(results)} {noun} unfinished")
+        self.why = why
+        self.results = results
+
+
+class NoWorkers(ClusterGone):
+    """A Dask cluster at ``address`` that had no worker for ``waited_s`` (s)."""
 
     def __init__(self, address: str, waited_s: float, results: list, noun: str = "items"):
-        unfinished = sum(result is None for result in results)
-        super().__init__(f"the Dask cluster at {address} had no worker for {waited_s:.0f} s; "
-                         f"gave up {unfinished} of {len(results)} {noun} unfinished")
+        super().__init__(f"the Dask cluster at {address} had no worker for {waited_s:.0f} s",
+                         results, noun)
         self.address = address
         self.waited_s = waited_s
-        self.results = results
+
+
+class SchedulerLost(ClusterGone):
+    """The Dask scheduler at ``address`` gone mid-run (its process ended, or the
+    connection to it closed): ``detail`` what the client said."""
+
+    def __init__(self, address: str, detail: str, results: list, noun: str = "items"):
+        super().__init__(f"lost the Dask scheduler at {address} ({detail})", results, noun)
+        self.address = address
 
 
 def default_workers() -> int:
@@ -476,17 +494,37 @@ def _dask(fn, items: list, address: str, done, lose, noun: str) -> list:
     :func:`_here` uses) or by the cluster having no worker (module docstring)."""
     client = _dask_client(address)
     stopper = _Stopper()
+    lost = False
     try:
         with _handling(stopper):
             futures = client.map(fn, items, pure=False)
             try:
                 return _dask_results(client, futures, stopper, _WorkerWatch(client, address, noun),
                                      done, lose, noun)
+            except SchedulerLost:
+                lost = True  # nothing to cancel on a scheduler that has gone
+                raise
             except BaseException:
                 client.cancel(futures)
                 raise
     finally:
-        client.close()
+        if lost:  # closing cancels the client's attempts to reconnect, each logged with
+            with _silent("distributed.client"):  # a traceback: the loss is said once
+                client.close()
+        else:
+            client.close()
+
+
+@contextmanager
+def _silent(logger: str):
+    """The log records of ``logger`` dropped meanwhile."""
+    import logging
+    log = logging.getLogger(logger)
+    was, log.disabled = log.disabled, True
+    try:
+        yield
+    finally:
+        log.disabled = was
 
 
 def _dask_client(address: str):
@@ -501,6 +539,8 @@ def _dask_client(address: str):
     except (ValueError, TypeError) as exc:  # not an address ("missing port number")
         raise InputError(f"--scheduler {address}: not a scheduler's address ({exc}); "
                          "expected tcp://HOST:PORT") from None
+    except OSError as exc:  # a host name that does not resolve
+        raise OSError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
     try:
         _shake_hands(address)
         return Client(address, timeout=CONNECT_S)
@@ -545,15 +585,23 @@ def _dask_results(client, futures: list, stopper: _Stopper, watch: "_WorkerWatch
     """The results of ``futures`` in their order, taken as they finish (every
     :data:`POLL_S`, so that a signal the stopper kept is seen); :class:`Interrupted` once
     it keeps one (:func:`_stop_on_dask`), :class:`NoWorkers` when ``watch`` gives up;
-    ``lose(k, why)`` the result of item ``k`` whose workers died (``KilledWorker``)."""
+    ``lose(k, why)`` the result of item ``k`` whose workers died (``KilledWorker``);
+    :class:`SchedulerLost` when the scheduler goes (a future cancelled for want of its
+    connection, or the connection closed), with the results taken so far."""
+    from concurrent.futures import CancelledError
+
     from distributed import as_completed
     results: list = [None] * len(futures)
     index = {future.key: k for k, future in enumerate(futures)}
     finished = as_completed(futures)
     while not finished.is_empty() and stopper.signum is None:
-        for future in finished.next_batch(block=False):
-            _take_from_dask(future, index[future.key], results, done, lose)
-        watch.check(results)
+        try:
+            for future in finished.next_batch(block=False):
+                _take_from_dask(future, index[future.key], results, done, lose)
+            watch.check(results)
+        except (CancelledError, OSError) as exc:  # only the scheduler's loss cancels here
+            detail = getattr(exc, "reason", None) or f"{type(exc).__name__}: {exc}"
+            raise SchedulerLost(watch.address, detail, results, noun) from None
         time.sleep(POLL_S)
     if stopper.signum is not None:
         raise Interrupted(stopper.signum, results,
