@@ -629,17 +629,19 @@ def _stop_on_dask(client, futures: list, results: list, done, lose, noun: str) -
     finish: one still running goes on to its end on its worker (Dask cannot stop a
     running task), its result dropped."""
     unfinished = [k for k in range(len(futures)) if results[k] is None]
-    running = _running_on_dask(client, futures, unfinished)
-    client.cancel([futures[k] for k in unfinished if k not in running])
+    started = _running_on_dask(client, futures, unfinished)
+    client.cancel([futures[k] for k in unfinished if k not in started])
     deadline_s = time.monotonic() + DASK_STOP_S
     while True:
         for k in unfinished:
             if results[k] is None and futures[k].status in ("finished", "error"):
                 _take_from_dask(futures[k], k, results, done, lose)
-        running = _running_on_dask(client, futures, [k for k in running if results[k] is None])
-        if not running or time.monotonic() >= deadline_s:
+        # the futures, not the workers' threads, say when an item is done: one that has
+        # left its thread may not have reached the client as finished yet
+        if all(results[k] is not None for k in started) or time.monotonic() >= deadline_s:
             break
         time.sleep(POLL_S)
+    running = _running_on_dask(client, futures, [k for k in started if results[k] is None])
     stopped = [k for k in unfinished if results[k] is None and futures[k].status != "cancelled"]
     client.cancel([futures[k] for k in stopped])
     if running:
