@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from frictex.device.jit import njit
-from frictex.textures.dynamic import DynamicLayer
+from frictex.textures.dynamic import OUTPUT_RATE_HZ, DynamicLayer
 
 CLIP_TRIGGERS = ("down", "lift", "edge", "force")
 EVENT_KINDS = ("transient", "continuous")
@@ -42,9 +42,6 @@ MAX_CLIP_S = 60.0
 #: in decimal land there only within rounding (0.1 + 0.2 is 3000.0000000000005 samples
 #: at 10 kHz), and an event ending where the next starts must not share its sample
 ON_SAMPLE = 1e-6
-#: the output rate (Hz) a clip's deepest mu' is found at (:attr:`Clip.deepest_mu`): a
-#: replay's default
-DEEPEST_AT_HZ = 10_000.0
 
 Points = tuple[tuple[float, float], ...]
 
@@ -106,10 +103,10 @@ class Clip:
 
     @functools.cached_property
     def deepest_mu(self) -> float:
-        """The lowest mu' the clip plays at :data:`DEEPEST_AT_HZ`: 1 - depth where its
-        levels reach 1, higher where they never do (a tick of intensity 0.64 at depth 0.5:
-        0.68)."""
-        return float(self.sample(DEEPEST_AT_HZ)[0].min())
+        """The lowest mu' the clip plays at a replay's default output rate
+        (``textures.dynamic.OUTPUT_RATE_HZ``): 1 - depth where its levels reach 1, higher
+        where they never do (a tick of intensity 0.64 at depth 0.5: 0.68)."""
+        return float(self.sample(OUTPUT_RATE_HZ)[0].min())
 
     def sample(self, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
         """mu' at t = k / rate_hz, k = 0 .. ceil(duration * rate), and the samples where the

@@ -143,7 +143,7 @@ def unfelt_warnings(r: Reader, built) -> None:
     for index, (layer, low_key) in enumerate(built):
         if isinstance(layer, HeightLayer) and layer.shape.relief_mm == 0.0:
             _flat_height_warning(r, index, layer)
-        elif isinstance(layer, ClipLayer) and layer.clip.sample(OUTPUT_RATE_HZ)[0].min() >= 1.0:
+        elif isinstance(layer, ClipLayer) and layer.clip.deepest_mu >= 1.0:
             _silent_clip_warning(r, index, layer)
         elif (not isinstance(layer, (DynamicLayer, *model.FORCE_LAYERS))
               and layer.blend == "multiply" and layer.mu_range[0] >= 1.0):
