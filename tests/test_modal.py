@@ -149,6 +149,10 @@ def test_all_zero_shapes_give_zero_not_nan():
     (dict(phi_fingers=np.ones((3, 2)), wanted_um=np.ones(3)), r"p >= m >= 1.*got \(3, 2\)"),
     (dict(phi_fingers=np.eye(2), wanted_um=np.ones(3)), r"m = 2 fingers, got \(3,\)"),
     (dict(phi_fingers=[[np.nan, 0], [0, 1]], wanted_um=[1, 1]), r"non-finite.*\[0, 0\]"),
+    # past about 1e155 um the solvers' squares overflowed: commands over the limits
+    (dict(phi_fingers=np.eye(2), wanted_um=[[1, 1], [1e160, 0]], method="bounded",
+          limits_um=0.75), r"wanted_um has 1e\+160 um at index \[1, 0\]: expected at most 1e\+06 um"),
+    (dict(phi_fingers=np.eye(2), wanted_um=[0, 2e6j]), r"2e\+06 um at index \[1\]"),
     (dict(phi_fingers=np.eye(2), wanted_um=[1, 1], method="lstsq"), "method must be one of"),
     (dict(phi_fingers=np.eye(2), wanted_um=[1, 1], method="bounded"), "needs limits_um"),
     (dict(phi_fingers=np.eye(2), wanted_um=[1, 1], limits_um=[1, -1]), r"limits_um .*\[1, -1\]"),

@@ -70,6 +70,10 @@ NODE_FLOOR = 1e-6
 #: "bounded" gives no command where every command within the limits reaches the fingers
 #: with less than this (um): nothing a plate could show
 _LEAST_REACH_UM = 1e-100
+#: the largest wanted amplitude accepted (um): a plate vibrates a few um, and past about
+#: 1e155 um the solvers' squares overflow, which broke the limits ("bounded" gave |c| 0.98
+#: under a 0.75 um limit) and left inf in the error
+MAX_WANTED_UM = 1e6
 _FISTA_MAX_ITER = 3000
 _FISTA_TOL = 1e-13
 
@@ -733,6 +737,12 @@ def _check_inputs(phi_fingers, wanted_um) -> tuple[np.ndarray, np.ndarray]:
         if not np.all(np.isfinite(arr)):
             raise ModesError(f"{name} has non-finite values (first at index "
                              f"{np.argwhere(~np.isfinite(arr))[0].tolist()}); expected finite numbers")
+    too_large = np.abs(wanted) > MAX_WANTED_UM
+    if np.any(too_large):
+        first = np.argwhere(too_large)[0]
+        raise ModesError(f"wanted_um has {abs(wanted[tuple(first)]):.3g} um at index "
+                         f"{first.tolist()}: expected at most {MAX_WANTED_UM:g} um (a plate "
+                         "vibrates a few um; amplitudes are um zero-to-peak)")
     return phi, wanted
 
 
