@@ -457,7 +457,7 @@ class Compositor:
     @property
     def font_px(self) -> int:
         """Text size (px) of the status lines and banners, from the frame's height."""
-        return int(np.clip(self.size[1] / 45, 11, 22))
+        return int(min(max(self.size[1] / 45, 11), 22))  # (read several times a frame)
 
     @property
     def label_px(self) -> int:

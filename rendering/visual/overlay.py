@@ -194,25 +194,16 @@ class OverlayState:
         fading out over ``trail_s``; broken where the finger lifted or jumped. The trails
         are dark outlines (``TRAIL_OUTLINE_PX`` each side), then their coloured lines on
         top, in drawing order."""
-        points, rgba, joined = [], [], []
+        outlines, lines = [], []
         for fid, h in self.fingers.items():
-            finger_points, t, finger_joined = h.trail_in(viewport).since(self.now_s - self.trail_s)
+            points, t, joined = h.trail_in(viewport).since(self.now_s - self.trail_s)
             if t.size < 2:
                 continue
-            colour = np.empty((t.size, 4))
-            colour[:, :3] = FINGER_RGB[fid % len(FINGER_RGB)]
-            colour[:, 3] = 0.9 * (1.0 - np.clip((self.now_s - t) / self.trail_s, 0.0, 1.0))
-            points.append(finger_points)
-            rgba.append(colour)
-            joined.append(np.append(finger_joined, False))  # not into the next finger's trail
-        if not points:
-            return np.empty((0, 6))
-        points, rgba, joined = np.concatenate(points), np.concatenate(rgba), np.concatenate(joined)
-        dark = np.zeros_like(rgba)
-        dark[:, 3] = rgba[:, 3] * (TRAIL_OUTLINE_ALPHA / 0.9)
-        return np.concatenate((
-            segment_triangles(points, dark, TRAIL_WIDTH_PX + 2 * TRAIL_OUTLINE_PX, joined[:-1]),
-            segment_triangles(points, rgba, TRAIL_WIDTH_PX, joined[:-1])))
+            outline, line = _fading_trail(points, t, joined, self.now_s, self.trail_s,
+                                          np.array(FINGER_RGB[fid % len(FINGER_RGB)]))
+            outlines.append(outline)
+            lines.append(line)
+        return np.concatenate(outlines + lines) if outlines else np.empty((0, 6))
 
     def cursors(self, viewport: Viewport, hover_mm: tuple[float, float] | None = None) -> np.ndarray:
         """Cursor instances (k, 8): x_px, y_px, radius_px, r, g, b, a, filled. A touching
@@ -318,3 +309,18 @@ def _segment_triangles(points, rgba, width_px, keep):
                 tris[row, 2 + c] = rgba[i + end, c]
             row += 1
     return tris
+
+
+@njit(cache=True, nogil=True)
+def _fading_trail(points, t_s, keep, now_s, trail_s, rgb):
+    """One finger's trail (``OverlayState.trail_triangles``): its outline's triangles and
+    its line's, each vertex's opacity falling from 0.9 to 0 over ``trail_s`` (s) of age."""
+    rgba = np.empty((t_s.size, 4))
+    dark = np.zeros((t_s.size, 4))
+    for i in range(t_s.size):
+        alpha = 0.9 * (1.0 - min(max((now_s - t_s[i]) / trail_s, 0.0), 1.0))
+        rgba[i, :3] = rgb
+        rgba[i, 3] = alpha
+        dark[i, 3] = alpha * (TRAIL_OUTLINE_ALPHA / 0.9)
+    return (_segment_triangles(points, dark, TRAIL_WIDTH_PX + 2 * TRAIL_OUTLINE_PX, keep),
+            _segment_triangles(points, rgba, TRAIL_WIDTH_PX, keep))
