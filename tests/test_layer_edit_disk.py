@@ -277,3 +277,21 @@ def test_a_save_over_a_deleted_file_says_so_and_writes_it_anew_when_saved_again(
     assert not ed.path.exists()
     ed.save()
     assert "mu_low = 0.5" in ed.path.read_text() and not ed.dirty
+
+
+def test_a_save_is_on_disk_before_it_replaces_the_file(tmp_path, monkeypatch):
+    """The new text is synced before the rename: a power cut after the save leaves the
+    old file or the new one, never an empty one."""
+    events = []
+    real_fsync, real_replace = os.fsync, os.replace
+    monkeypatch.setattr(layer_edit.os, "fsync", lambda fd: (events.append(
+        ("fsync", os.readlink(f"/proc/self/fd/{fd}"))), real_fsync(fd)))
+    monkeypatch.setattr(layer_edit.os, "replace", lambda a, b: (events.append(
+        ("replace", str(a))), real_replace(a, b)))
+    ed = edited(tmp_path)
+    ed.save()
+    synced = [path for kind, path in events if kind == "fsync"]
+    replaced = [path for kind, path in events if kind == "replace"]
+    assert len(replaced) == 1 and replaced[0] in synced
+    assert events.index(("fsync", replaced[0])) < events.index(("replace", replaced[0]))
+    assert "mu_low = 0.5" in (tmp_path / "lines.toml").read_text()

@@ -878,6 +878,8 @@ def _write_keeping_mode(target: Path, text: str) -> None:
             if mode is not None:
                 os.fchmod(f.fileno(), mode)
             f.write(text)
+            f.flush()
+            os.fsync(f.fileno())  # on disk before it replaces the file: a power cut keeps one
         os.replace(tmp, target)
     except BaseException:
         tmp.unlink(missing_ok=True)
