@@ -296,12 +296,35 @@ def test_synth_trace_arguments_keep_the_command_s_limits(kwargs, message):
     ({"peaks_n": ()}, r"^peaks_n: no peaks; expected one or more peak forces \(N\)$"),
     ({"peaks_n": 1.0}, r"^peaks_n: expected a sequence of peak forces \(N\), got float$"),
     ({"peaks_n": (1.0, -2.0)}, r"^peaks_n\[1\]=-2.0: expected 0 to 1000 N$"),
-    ({"peaks_n": (1.0,) * 300_000}, "^peaks_n: 300000 presses at rate_hz=50 would exceed"),
+    ({"peaks_n": (1.0,) * 300_000}, "^peaks_n: 300000 presses at rate_hz=100 would exceed"),
     ({"force_noise_n": math.inf}, "^force_noise_n=inf: expected 0 to 100 N$"),
 ])
 def test_press_arguments_are_checked(kwargs, message):
     with pytest.raises(frictex.InputError, match=message):
         frictex.synth_trace("press", **kwargs)
+
+
+@pytest.mark.parametrize("motion, kwargs", [("press", {}), ("swipe", {"speed_mm_s": 60.0}),
+                                            ("press", {"rate_hz": 200.0, "force_n": 0.3})])
+def test_a_synthetic_trace_is_the_command_s_with_the_same_options(tmp_path, motion, kwargs):
+    """synth_trace takes frictex trace synth's defaults for each motion: a press at
+    100 Hz and 0.1 N on keyclick-ring's button (it took a path's 50 Hz, 0.5 N and start,
+    off the button: no click played), a path at 50 Hz and 0.5 N."""
+    flags = {"speed_mm_s": "--speed", "rate_hz": "--rate", "force_n": "--force"}
+    path = tmp_path / "t.csv"
+    args = [str(a) for key, value in kwargs.items() for a in (flags[key], value)]
+    assert main(["trace", "synth", motion, *args, "-o", str(path)]) == 0
+    made, read = frictex.synth_trace(motion, **kwargs), frictex.read_trace(path)
+    for name in FLOATS:  # the file's fixed decimals
+        np.testing.assert_allclose(getattr(made, name), getattr(read, name), atol=1e-6,
+                                   err_msg=name)
+    for name in ("finger", "event"):
+        np.testing.assert_array_equal(getattr(made, name), getattr(read, name), err_msg=name)
+
+
+def test_the_api_s_press_plays_keyclick_ring_s_click():
+    result = frictex.replay("keyclick-ring", frictex.synth_trace("press"))
+    assert result.friction["amplitude_um"].to_numpy().max() > 0.0
 
 
 def test_a_press_takes_its_peaks_from_any_sequence():

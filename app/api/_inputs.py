@@ -329,11 +329,11 @@ def _refuse_masked(name: str, values: npt.ArrayLike) -> None:
                          f"every sample (fill it, or leave the sample out)")
 
 
-def synth_trace(kind: str, *, rate_hz: float = 50.0, duration_s: float = 2.0,
+def synth_trace(kind: str, *, rate_hz: float | None = None, duration_s: float = 2.0,
                 speed_mm_s: float = 40.0, x0_mm: float | None = None,
                 y0_mm: float | None = None, area_mm: tuple[float, float] | None = None,
                 angle_deg: float = 0.0, length_mm: float = 80.0, radius_mm: float = 20.0,
-                noise_mm: float = 0.0, jitter_s: float = 0.0, force_n: float = 0.5,
+                noise_mm: float = 0.0, jitter_s: float = 0.0, force_n: float | None = None,
                 peaks_n: Sequence[float] = (1.0, 0.95, 1.1), force_noise_n: float = 0.03,
                 seed: int = 0) -> Trace:
     """A synthetic touch trace, sampled as a touch screen reports it (``frictex trace synth``).
@@ -346,15 +346,16 @@ def synth_trace(kind: str, *, rate_hz: float = 50.0, duration_s: float = 2.0,
         ``human-varied``, or ``press`` (a still finger whose normal force rises to each of
         ``peaks_n`` and back, for key-click scenes).
     rate_hz : float, optional
-        Touch sampling rate (Hz).
+        Touch sampling rate (Hz); default 50 (seed 003's screen), for ``press`` 100 (the
+        force sensor's rate, as ``frictex trace synth press``).
     duration_s : float, optional
         Length of a finger path (s); a press lasts as long as its peaks take.
     speed_mm_s : float, optional
         Finger speed (mm/s); for ``human``, the typical peak speed.
     x0_mm, y0_mm : float, optional
         Start position (mm); for ``press``, where the finger presses. Default (14, 32.4);
-        for ``human`` and ``human-varied`` 30 % and 50 % across ``area_mm``, which the
-        start must lie in.
+        for ``press`` (70, 15), on keyclick-ring's button; for ``human`` and
+        ``human-varied`` 30 % and 50 % across ``area_mm``, which the start must lie in.
     area_mm : (float, float), optional
         ``human`` and ``human-varied`` only: the area (width, height in mm, from 0, 0) the
         finger wanders in, more than 16 mm each way; default 108 x 64.8 (the demo's
@@ -370,7 +371,7 @@ def synth_trace(kind: str, *, rate_hz: float = 50.0, duration_s: float = 2.0,
     jitter_s : float, optional
         Timestamp jitter, standard deviation (s).
     force_n : float, optional
-        Normal force (N); for ``press``, the force at touch-down.
+        Normal force (N), default 0.5; for ``press``, the force at touch-down, default 0.1.
     peaks_n : sequence of float, optional
         ``press`` only: the peak normal force of each press (N).
     force_noise_n : float, optional
@@ -393,20 +394,24 @@ def synth_trace(kind: str, *, rate_hz: float = 50.0, duration_s: float = 2.0,
     """
     if kind not in SYNTH_KINDS:
         raise InputError(f"unknown trace kind {kind!r}; expected one of {', '.join(SYNTH_KINDS)}")
-    from frictex.app.commands.trace import LIMITS, MAX_SAMPLES  # ``frictex trace synth``'s
+    # ``frictex trace synth``'s limits and defaults
+    from frictex.app.commands.trace import LIMITS, MAX_SAMPLES, motion_defaults
 
     def option(name: str, value: float, key: str, positive: bool = False) -> float:
         low, high, unit = LIMITS[key]
         return real(name, value, unit, (low, high), positive=positive)
 
-    rate_hz = option("rate_hz", rate_hz, "rate", positive=True)
+    default_rate_hz, default_force_n, start_mm = motion_defaults(kind)
+    rate_hz = option("rate_hz", default_rate_hz if rate_hz is None else rate_hz, "rate",
+                     positive=True)
     from frictex.rendering.input.trace_synth import HUMAN_AREA_MM, START_MM
     if area_mm is not None and kind not in ("human", "human-varied"):
         raise InputError(f"area_mm: only the human motions wander in an area; a {kind} starts "
                          "at x0_mm, y0_mm")
     if kind not in ("human", "human-varied"):
-        x0_mm = START_MM[0] if x0_mm is None else x0_mm
-        y0_mm = START_MM[1] if y0_mm is None else y0_mm
+        start_mm = start_mm or START_MM
+        x0_mm = start_mm[0] if x0_mm is None else x0_mm
+        y0_mm = start_mm[1] if y0_mm is None else y0_mm
     x0_mm = None if x0_mm is None else option("x0_mm", x0_mm, "x0")
     y0_mm = None if y0_mm is None else option("y0_mm", y0_mm, "y0")
     if area_mm is None:
@@ -416,7 +421,7 @@ def synth_trace(kind: str, *, rate_hz: float = 50.0, duration_s: float = 2.0,
         raise InputError(f"area_mm: expected (width, height) in mm, got {area_mm!r}")
     area_mm = tuple(option(f"area_mm[{i}]", size, "area", positive=True)
                     for i, size in enumerate(area_mm))
-    force_n = option("force_n", force_n, "force")
+    force_n = option("force_n", default_force_n if force_n is None else force_n, "force")
     seed = whole("seed", seed, "", (0, math.inf))
     if kind == "press":
         force_noise_n = option("force_noise_n", force_noise_n, "force_noise")

@@ -172,18 +172,23 @@ def _check_presses(peaks: list[float], rate_hz: float) -> None:
                          f"are {samples:,} samples; at most {MAX_SAMPLES:,}")
 
 
+def motion_defaults(motion: str) -> tuple[float, float, tuple[float, float] | None]:
+    """What a motion takes unless told: its touch rate (Hz), normal force (N) and where
+    it starts (mm; None: the motion's own start). A press's are ``press_synth``'s (the
+    bundled keyclick-press-100hz, on keyclick-ring's button); a path's 50 Hz and 0.5 N."""
+    if motion == "press":
+        return PRESS_RATE_HZ, TOUCH_N, PRESS_MM
+    return PATH_RATE_HZ, PATH_FORCE_N, None
+
+
 def _set_motion_defaults(args: argparse.Namespace) -> None:
-    """Fill in the options whose default depends on the motion: a press's are
-    ``press_synth``'s own (the bundled keyclick-press-100hz), a path's START_MM, 50 Hz
-    and 0.5 N."""
-    press = args.motion == "press"
-    if args.rate is None:
-        args.rate = PRESS_RATE_HZ if press else PATH_RATE_HZ
-    if args.force is None:
-        args.force = TOUCH_N if press else PATH_FORCE_N
-    if press:
-        args.x0 = PRESS_MM[0] if args.x0 is None else args.x0
-        args.y0 = PRESS_MM[1] if args.y0 is None else args.y0
+    """Fill in the options whose default depends on the motion (:func:`motion_defaults`)."""
+    rate_hz, force_n, start_mm = motion_defaults(args.motion)
+    args.rate = rate_hz if args.rate is None else args.rate
+    args.force = force_n if args.force is None else args.force
+    if start_mm is not None:
+        args.x0 = start_mm[0] if args.x0 is None else args.x0
+        args.y0 = start_mm[1] if args.y0 is None else args.y0
 
 
 def _check_used(args: argparse.Namespace) -> None:
