@@ -901,3 +901,29 @@ def test_validating_a_scene_imports_no_plugin_it_does_not_name(tmp_path):
         'render = "', 'render = "slow"  # was "', 1), encoding="utf-8")
     named = run([str(FRICTEX), "validate", str(scene)], site, tmp_path)
     assert named.returncode == 2 and "frictex_test_slow_renderer" in named.stderr
+
+
+@pytest.mark.parametrize("name, entry, says", [
+    ("gone-plate", "frictex_no_such_module_z:PLATE", r"cannot be loaded: ModuleNotFoundError"),
+    ("dict-plate", "frictex_test_not_a_profile:PLATE", r"is a dict; expected"),
+])
+def test_a_file_naming_a_broken_plugin_profile_is_told_the_plugin_s_error(tmp_path, name, entry,
+                                                                          says):
+    """A texture file naming another package's profile that is installed but cannot be
+    loaded, or is no profile, gets that package's PluginError (load_scene's docstring),
+    not "is not one of" with the reason only in a warning printed once a process."""
+    site = fake_distribution(tmp_path / "site", "frictex-test-profile",
+                             f"[frictex.profiles]\n{name} = {entry}\n")
+    (site / "frictex_test_not_a_profile.py").write_text("PLATE = {'plate': 1}\n", encoding="utf-8")
+    scene = tmp_path / "bad.toml"
+    text = resolve_scene("grating-5mm").read_text(encoding="utf-8")
+    assert 'profile = "plate-seed003"' in text
+    scene.write_text(text.replace('profile = "plate-seed003"', f'profile = "{name}"'),
+                     encoding="utf-8")
+    sys.path.insert(0, str(site))
+    try:
+        with pytest.raises(PluginError, match=rf"^device profile '{name}' of "
+                                              rf"frictex-test-profile \({re.escape(entry)}\) {says}"):
+            load_scene(scene)
+    finally:
+        sys.path.remove(str(site))

@@ -34,6 +34,8 @@ def parse_display(r: Reader, doc: dict) -> model.Display | None:
 
 def parse_device(r: Reader, doc: dict, display, files: Files) -> profiles.DeviceProfile | None:
     raw = doc.get("device", {})
+    if isinstance(raw, dict):
+        _refuse_broken_plugin(raw.get("profile"))
     v = r.table(raw, ("device",), DEVICE,
                 tables=("friction", "fitted", "calibration", "structure", "driving"))
     if v is None:
@@ -62,6 +64,15 @@ def parse_device(r: Reader, doc: dict, display, files: Files) -> profiles.Device
     if structure is not None and not _actuation_builds(r, device):
         return None
     return device
+
+
+def _refuse_broken_plugin(name) -> None:
+    """Raise the :class:`~frictex.device.registry.PluginError` (naming its package) of
+    another package's device profile ``name`` that is installed but cannot be loaded or
+    is no profile: the profiles a file may name leave it out (with a warning, once a
+    process), and "is not one of" would hide why."""
+    if isinstance(name, str) and name not in DEVICE["profile"].options and name in profiles.PROFILES:
+        profiles.PROFILES.get(name)
 
 
 def _structure(r: Reader, profile: str, raw, display, files: Files):
