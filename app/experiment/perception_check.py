@@ -4,7 +4,8 @@
 Pairs compared:
 
 - parametric stimuli (``[stimuli]`` with ``vary`` and ``levels``): the reference against
-  its farthest level (the largest: levels are above the reference), by ``vary``'s
+  its farthest level (by the relative difference the threshold bounds: a same-different
+  or magnitude design's levels may lie on either side of the reference), by ``vary``'s
   threshold (``perception.compare_values``: periods 14 % of the smaller, the friction
   levels of depths and clip levels 11 % of the higher, from the varied layer's own mu'
   and clip depth).
@@ -27,17 +28,32 @@ Pairs compared:
 
 from __future__ import annotations
 
+import math
 from itertools import combinations
 
 from frictex.app.experiment.protocol import Protocol, reachable
-from frictex.rendering.perception import Finding, compare_scenes, compare_values, scene_findings
+from frictex.rendering.perception import (VARY_THRESHOLD, Finding, compare_scenes,
+                                          compare_values, friction_level, relative_difference,
+                                          scene_findings)
 from frictex.textures.loader import load_scene
 
 
-def _farthest(protocol: Protocol) -> tuple[float, str] | None:
-    """The comparison farthest from the reference (units of ``vary``) a parametric design
-    can present, and what it means when even that is below the threshold; None for
-    listed stimuli."""
+def _distance(vary: str, reference: float, value: float, levels: dict[str, float]) -> float:
+    """How far ``value`` lies from ``reference`` (units of ``vary``) by the measure
+    ``compare_values`` sets against ``vary``'s threshold: periods by dp/p, depths and clip
+    levels by dmu'/mu' of the friction levels they play (``levels``: :func:`_varied_levels`);
+    inf where one plays mu' 0 or below, a step beyond any fraction of friction."""
+    kind = VARY_THRESHOLD[vary]
+    if kind == "period":
+        return relative_difference(kind, reference, value)
+    mu = [friction_level(vary, v, **levels) for v in (reference, value)]
+    return math.inf if min(mu) <= 0.0 else relative_difference(kind, *mu)
+
+
+def _farthest(protocol: Protocol, levels: dict[str, float]) -> tuple[float, str] | None:
+    """The comparison farthest from the reference (units of ``vary``; :func:`_distance`,
+    ``levels`` the varied layer's) a parametric design can present, and what it means
+    when even that is below the threshold; None for listed stimuli."""
     st, sc = protocol.stimuli, protocol.staircase
     if st.vary is None:
         return None
@@ -50,7 +66,7 @@ def _farthest(protocol: Protocol) -> tuple[float, str] | None:
     if not st.levels:
         return None
     count = len(st.levels)
-    return (max(st.levels),  # every level is above the reference (protocol)
+    return (max(st.levels, key=lambda v: _distance(st.vary, st.reference, v, levels)),
             f"the farthest of {count} level{'s' * (count != 1)}: none reaches the threshold, "
             f"and a design that measures it needs levels on both sides")
 
@@ -103,12 +119,12 @@ def protocol_findings(protocol: Protocol) -> list[Finding]:
                                else [s.scene for s in st.listed]))
     scenes = {path: load_scene(path) for path in paths}
     out = _scene_notes(protocol, scenes)
-    farthest = _farthest(protocol)
+    levels = _varied_levels(scenes.get(st.scene), st.layer)
+    farthest = _farthest(protocol, levels)
     if farthest is not None:
         value, why = farthest
         found = compare_values(st.vary, st.reference, value,
-                               f"stimuli {st.reference:g} and {value:g}",
-                               **_varied_levels(scenes.get(st.scene), st.layer))
+                               f"stimuli {st.reference:g} and {value:g}", **levels)
         if found is not None:
             out.append(Finding(found.kind, found.where, found.value, f"{found.message}; {why}"))
     for a, b in combinations(st.listed, 2):
