@@ -34,7 +34,10 @@ noisy points jittered a few nm about one amplitude get a table, not an exponent 
 the jitter. Amplitudes within ``AMPLITUDE_RESOLUTION_UM`` (1 nm) of each other count as one.
 
 A fitted curve that does not fall is a failed run (exit 1), not bad input: the plate did
-not vibrate, or the finger pressed so hard that k F_n reached 1, where eq 2 is flat.
+not vibrate, or the finger pressed so hard that k F_n reached 1, where eq 2 is flat. The
+fit starts from seed 003's k, or from a smaller k where that puts k F_n above
+``START_ASYMPTOTE`` at the points' largest force: a start where eq 2 is flat left the
+solver where it began, so a firm press (1.15 N or more) whose friction fell was refused.
 
 :func:`device_toml` writes the result as the ``[device]`` section of a texture file
 (the grammar of ``textures.loader``).
@@ -75,6 +78,11 @@ AMPLITUDE_RESOLUTION_UM = MODEL_TOLERANCE / B_BOUNDS[1]
 #: least fall of the fitted mu' from 0 um to the largest amplitude that determines b:
 #: below it the curve is within a few times the model's tolerance of flat, so any b fits
 MIN_FALL = 2.5 * MODEL_TOLERANCE
+#: largest k F_n the fit starts from: a start k whose k F_n reaches 1 at some point puts eq 2
+#: at its edge there, flat in b and k, and the solver does not move (seed 003's k 1.13 /N
+#: does so from 0.885 N); the fit starts from k = this / the points' largest force where
+#: the given start's k F_n is above it
+START_ASYMPTOTE = 0.9
 #: median normal force (N) above which a flat curve is put down to a press too hard: at
 #: seed 003's k (1.13 /N) k F_n is 0.9 at 0.8 N, leaving eq 2 a fall of 0.1 at most
 HARD_PRESS_N = 0.8
@@ -207,6 +215,8 @@ def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> 
     counting as one (they cannot determine both b and k and check the fit), and RunFailed
     when the
     fitted mu' falls by less than ``MIN_FALL`` (a flat curve: every b fits it).
+    ``start`` is the solver's first (b, k), its k lowered to ``START_ASYMPTOTE`` over the
+    points' largest force (N) where it is above that.
     """
     w, f, m = (np.asarray(a, dtype=np.float64).ravel() for a in (w_um, normal_n, mu))
     if not w.size == f.size == m.size:
@@ -229,7 +239,8 @@ def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> 
         return model_jacobian(w, f, theta[0], theta[1])
 
     lower, upper = [B_BOUNDS[0], K_BOUNDS[0]], [B_BOUNDS[1], K_BOUNDS[1]]
-    x0 = np.clip([start.b_per_um, start.asymptote_per_n], lower, upper)
+    start_k = min(start.asymptote_per_n, START_ASYMPTOTE / f.max())
+    x0 = np.clip([start.b_per_um, start_k], lower, upper)
     sol = least_squares(residual, x0, jac=jac, bounds=(lower, upper))
     # the solver stays strictly inside its bounds (k 6.8e-10 for k = 0): one it stopped
     # on is the bound itself
