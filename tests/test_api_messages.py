@@ -42,7 +42,9 @@ def test_max_unplayed_without_a_device_is_refused_as_the_command_refuses_it(trac
         frictex.replay("grating-5mm", trace, max_unplayed=0.5)
     assert frictex.replay("grating-5mm", trace).summary.device is None
     run = frictex.replay("grating-5mm", trace, device="sim", max_unplayed=0.5)
-    assert run.summary.device["unplayed_samples"] == 0
+    device = run.summary.device  # paced in real time: a busy machine may leave some unplayed
+    assert device["unplayed_known"] and device["commanded_samples"] > 0
+    assert device["unplayed_samples"] <= 0.5 * device["commanded_samples"]
 
 
 def test_outputs_that_do_not_fit_name_the_format_argument_too(trace, tmp_path, monkeypatch):

@@ -22,6 +22,9 @@ def with_layer(scene_name: str, **changes):
     ("grating-5mm", "edge", "zigzag", '"zigzag" is not one of square, smooth'),
     ("grating-5mm", "edge", 1, "expected one of square, smooth, got the number 1"),
     ("raster-map", "mode", "stretched", '"stretched" is not one of'),
+    ("grating-5mm", "render", "nope", '"nope" is not one of auto, sho, hybrid'),
+    ("objects-bump-edge-disc", "render", "sht",
+     '"sht" needs a periodic layer \\(grating or waveform\\); a Bump layer renders with "sho"'),
 ])
 def test_a_choice_the_loader_refuses_is_refused_naming_layer_and_field(scene_name, field,
                                                                         value, message):
@@ -48,3 +51,16 @@ def test_a_choice_kept_in_another_form_and_every_bundled_scene_pass():
     for entry in list_scenes():
         scene = frictex.load_scene(entry.name)
         assert checked_scene(scene) is scene
+
+
+@pytest.mark.parametrize("scene_name, resolved", [("grating-5mm", "hybrid"),
+                                                  ("objects-bump-edge-disc", "sho")])
+def test_render_auto_is_the_renderer_the_loader_picks(scene_name, resolved):
+    """``render = "auto"``, the key's default, was kept as the word and refused by the
+    pipeline ("unknown renderer 'auto'"); it renders as the loader resolves it."""
+    auto = with_layer(scene_name, render="auto")
+    assert checked_scene(auto).layers[0].render == resolved
+    trace = frictex.synth_trace("swipe", duration_s=0.5)
+    got = frictex.replay(auto, trace).friction["mu_target"].to_numpy()
+    loaded = frictex.replay(with_layer(scene_name, render=resolved), trace)
+    assert (got == loaded.friction["mu_target"].to_numpy()).all()

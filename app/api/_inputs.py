@@ -74,8 +74,9 @@ def checked_scene(scene: Scene) -> Scene:
     a layer's ``region``, ``geometry`` and ``visual``) is checked by that key's own type
     (``textures.keys``, ``textures.schema``): a number, finite, within the key's bounds;
     a word, one of the key's choices (``edge``, ``blend``, ``mode``); a value equal to
-    the key's default is taken as the loader takes it. Layer names are unique, as in a
-    file. Fields the file writes another way (colours, a raster's image, a clip's events,
+    the key's default is taken as the loader takes it (``render = "auto"`` becomes the
+    renderer the loader picks: the returned scene holds it; a renderer of periods on a
+    layer without one is refused). Layer names are unique, as in a file. Fields the file writes another way (colours, a raster's image, a clip's events,
     a height shape, a key click's ``first_push``) and the other rules between keys
     (mu_low under mu_high, objects on the display) are not checked again.
     """
@@ -115,6 +116,7 @@ def checked_scene(scene: Scene) -> Scene:
                 value = getattr(layer, part, None)
                 if dataclasses.is_dataclass(value):
                     _fields(r, value, path + (part,), rules)
+            _check_render(r, layer, path + ("render",))
     if r.problems:
         from frictex.textures.errors import TextureError
         more = len(r.problems) - 1
@@ -122,7 +124,30 @@ def checked_scene(scene: Scene) -> Scene:
                              + (f" (and {more} more problem{'s' * (more > 1)})" if more else ""))
         error.problems = r.problems
         raise error
-    return scene
+    return _auto_resolved(scene)
+
+
+def _check_render(r, layer, path: tuple) -> None:
+    """Report a layer's ``render`` that is no renderer's name (``auto`` and ``sho``
+    included), or that names a renderer of periods on a layer without one."""
+    from frictex.textures import keys, model
+    render = getattr(layer, "render", None)
+    if keys.COMMON["render"].check(r, render, path) is not render or render in ("auto", model.SHO):
+        return
+    if getattr(layer, "period_mm", None) is None:
+        r.report(path, f'"{render}" needs a periodic layer (grating or waveform); a '
+                       f'{type(layer).__name__} layer renders with "sho" (or "auto")')
+
+
+def _auto_resolved(scene: Scene) -> Scene:
+    """``scene`` with each layer's ``render = "auto"`` replaced by the renderer the loader
+    picks for it (``textures.model.auto_render_mode``)."""
+    from frictex.textures.model import auto_render_mode
+    if all(layer.render != "auto" for layer in scene.layers):
+        return scene
+    return dataclasses.replace(scene, layers=tuple(
+        dataclasses.replace(layer, render=auto_render_mode(getattr(layer, "period_mm", None)))
+        if layer.render == "auto" else layer for layer in scene.layers))
 
 
 def _fields(r, obj: object, path: tuple, rules: dict, kind: type | None = None) -> bool:
