@@ -51,6 +51,10 @@ def main(folder: Path) -> None:
     trace: frictex.Trace = frictex.read_trace("swipe-40mms-50hz")
     synth: frictex.Trace = frictex.synth_trace("human", rate_hz=120.0, duration_s=1.0, seed=3)
     pipe: frictex.Pipeline = frictex.build_pipeline(scene, rate_hz=10_000.0)
+    # numpy integers are taken where a whole number is (as numpy floats are where a float is)
+    pipe = frictex.build_pipeline(scene, rate_hz=np.float64(1e4), block_size=np.int64(100))
+    synth = frictex.synth_trace("swipe", seed=np.int64(3))
+    frictex.replay(scene, synth, block_size=np.int32(50))
     out: frictex.BlockOutput = pipe.process(synth)
     channels: tuple[str, ...] = pipe.channels
     r: frictex.Replay = frictex.replay(scene, trace, out=folder, format="npz", renderer="sht")

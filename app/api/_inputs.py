@@ -360,7 +360,7 @@ def synth_trace(kind: str, *, rate_hz: float | None = None, duration_s: float = 
                 angle_deg: float = 0.0, length_mm: float = 80.0, radius_mm: float = 20.0,
                 noise_mm: float = 0.0, jitter_s: float = 0.0, force_n: float | None = None,
                 peaks_n: Sequence[float] = (1.0, 0.95, 1.1), force_noise_n: float = 0.03,
-                seed: int = 0) -> Trace:
+                seed: int | np.integer = 0) -> Trace:
     """A synthetic touch trace, sampled as a touch screen reports it (``frictex trace synth``).
 
     Parameters

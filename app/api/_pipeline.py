@@ -19,7 +19,7 @@ from frictex.rendering.tracking.tracks import apply_index
 from frictex.textures.model import CONTROL_MODES, Scene, render_modes
 
 
-def run_settings(rate_hz: float, block_size: int | None, renderer: str | None,
+def run_settings(rate_hz: float, block_size: int | np.integer | None, renderer: str | None,
                  control: str | None) -> tuple[float, int | None]:
     """The output rate (Hz) and block size (samples; None: 5 ms of samples) checked
     against the command line's bounds (``app.engine.limits``), the renderer and control
@@ -50,7 +50,7 @@ class Pipeline:
     """
 
     def __init__(self, scene: Scene | str | Path, *, rate_hz: float = 10_000.0,
-                 block_size: int | None = None, renderer: str | None = None,
+                 block_size: int | np.integer | None = None, renderer: str | None = None,
                  control: str | None = None,
                  inversion: str = "exact"):
         scene = scene_of(scene)
@@ -158,7 +158,7 @@ class Pipeline:
 
 
 def build_pipeline(scene: Scene | str | Path, *, rate_hz: float = 10_000.0,
-                   block_size: int | None = None,
+                   block_size: int | np.integer | None = None,
                    renderer: str | None = None, control: str | None = None,
                    inversion: str = "exact") -> Pipeline:
     """Build the haptic pipeline of a scene.

@@ -25,6 +25,7 @@ from frictex.rendering.input.trace_file import Trace
 from frictex.textures.model import Scene
 
 if TYPE_CHECKING:
+    import numpy as np
     import pyarrow
 
 __all__ = ["Replay", "replay"]
@@ -131,7 +132,7 @@ def replay(scene: Scene | str | Path, trace: Trace | str | Path, *,
            out: str | Path | None = None, format: str | None = None,
            renderer: str | None = None, device: str | None = None, faults: str | None = None,
            max_unplayed: float = MAX_UNPLAYED, rate_hz: float = 10_000.0,
-           block_size: int | None = None, control: str | None = None, strict: bool = False,
+           block_size: int | np.integer | None = None, control: str | None = None, strict: bool = False,
            max_gap_s: float = MAX_GAP_S, progress: bool = False,
            sinks: Sequence[str | Sink] = (), clock: str | Clock = "virtual") -> Replay:
     """Replay a touch trace on a scene, headless, on a virtual clock (``frictex replay``).
