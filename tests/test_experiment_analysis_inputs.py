@@ -101,3 +101,31 @@ def test_a_malformed_cell_is_refused_by_file_and_line(sessions, tmp_path, capsys
     edited = _copy(sessions[0], tmp_path / "e", line=9, **{column: cell})
     code, err = _analyse(tmp_path, capsys, edited)
     assert (code, err) == (2, f"frictex: error: {edited / 'results.csv'}:9: {words}\n")
+
+
+@pytest.mark.parametrize("cells, words", [
+    ({"difference": "-0.1"},
+     "difference '-0.1': expected a number above 0 (a comparison above the reference)"),
+    ({"difference": "0"},
+     "difference '0': expected a number above 0 (a comparison above the reference)"),
+    ({"value": "0.42", "difference": "0.1234"},
+     "difference '0.1234' is not value '0.42' minus the reference 0.3 (0.12)"),
+    ({"value": "", "difference": "0.12"}, "value '': expected a finite number"),
+])
+def test_a_difference_that_is_no_comparison_is_refused_by_file_and_line(
+        sessions, tmp_path, capsys, cells, words):
+    """Before, a difference of -0.1 was refused as "a psychometric fit needs differences
+    > 0 ..." naming no file or line, and a difference of 0.1234 beside a value of 0.42
+    (0.12 above the reference 0.3) was fitted as a level of its own with one trial."""
+    edited = _copy(sessions[0], tmp_path / "e", line=9, **cells)
+    code, err = _analyse(tmp_path, capsys, edited)
+    assert (code, err) == (2, f"frictex: error: {edited / 'results.csv'}:9: {words}\n")
+
+
+def test_a_difference_within_the_written_digits_of_its_value_is_counted(sessions, tmp_path,
+                                                                       capsys):
+    """0.42 - 0.3 written as 0.120000000001 (12 significant digits, the last off by one):
+    the same comparison."""
+    edited = _copy(sessions[0], tmp_path / "e", line=9, value="0.42",
+                   difference="0.120000000001")
+    assert _analyse(tmp_path, capsys, edited) == (0, "")

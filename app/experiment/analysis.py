@@ -68,9 +68,10 @@ last line (a table cut short). A row whose response is not one of its trial's re
 or whose ``correct`` is not whether the response is the answer (a table edited by hand),
 is warned of by its file and line (``row_problems``): the analysis counts ``correct`` as
 written. A ``practice`` other than 0 or 1, a ``correct`` other than 0 or 1 where the
-trial has an answer, or a cell the analysis reads as a number (``difference``, a
-same-different ``value``, a rating) that is not a finite number, is refused by its file
-and line (``check_cells``). A session folder given twice is refused (it would count
+trial has an answer, a cell the analysis reads as a number (``difference``, a
+same-different ``value``, a rating) that is not a finite number, or a forced choice's
+``difference`` not above 0 or not its ``value`` minus the reference, is refused by its
+file and line (``check_cells``). A session folder given twice is refused (it would count
 twice), and so is one session in two folders (a copy: the same start, seeds and trials,
 ``distinct_sessions``).
 
@@ -191,28 +192,60 @@ def read_session(folder: str | Path) -> SessionData:
         raise InputError(f"{folder / 'session.json'}: method {info.get('method')!r} is not "
                          f"one of {', '.join(NUMBER_COLUMN)}")
     rows = read_rows(folder)
-    check_cells(folder / "results.csv", info["method"], rows)
+    check_cells(folder / "results.csv", info["method"], rows, info["design"].get("reference"))
     return SessionData(folder, info, rows, torn_last_line(folder))
 
 
-def check_cells(table: Path, method: str, rows: list[dict]) -> None:
+def _cell_number(cell: str) -> float | None:
+    """The number a results cell holds; None where it holds no finite number."""
+    try:
+        value = ascii_float(cell)
+    except ValueError:
+        return None
+    return value if math.isfinite(value) else None
+
+
+def _difference_problem(row: dict, reference: float | None) -> str | None:
+    """Why a forced choice's row (its ``difference`` a finite number) cannot be counted:
+    a ``difference`` not above 0 (its comparisons lie above the reference), or not its
+    ``value`` minus ``reference`` (a fit would count it as a level of its own); None where
+    it can, or where session.json keeps no reference. Both cells are written to 12
+    significant digits (``session``), so they may disagree by a few units of the 12th."""
+    difference = ascii_float(row["difference"])
+    if difference <= 0.0:
+        return (f"difference {row['difference']!r}: expected a number above 0 (a comparison "
+                f"above the reference)")
+    if reference is None:
+        return None
+    value = _cell_number(row["value"])
+    if value is None:
+        return f"value {row['value']!r}: expected a finite number"
+    if abs(difference - (value - reference)) > 1e-10 * max(abs(value), abs(reference)):
+        return (f"difference {row['difference']!r} is not value {row['value']!r} minus the "
+                f"reference {reference:.12g} ({value - reference:.12g})")
+    return None
+
+
+def check_cells(table: Path, method: str, rows: list[dict],
+                reference: float | None = None) -> None:
     """InputError (one line, ``FILE:LINE``) for the first of ``rows`` (of the results
-    table ``table``, a session of ``method``) whose cell the analysis reads as a number
-    (:data:`NUMBER_COLUMN`) is not a finite number, whose ``practice`` is neither 0 nor
-    1, or whose ``correct`` is neither 0 nor 1 where its trial has an answer: the analysis
-    could not count it as written."""
+    table ``table``, a session of ``method`` whose design's reference is ``reference``,
+    units of ``vary``) whose cell the analysis reads as a number (:data:`NUMBER_COLUMN`)
+    is not a finite number, whose ``difference`` a forced choice fits is not above 0 or
+    not its ``value`` minus ``reference`` (:func:`_difference_problem`), whose
+    ``practice`` is neither 0 nor 1, or whose ``correct`` is neither 0 nor 1 where its
+    trial has an answer: the analysis could not count it as written."""
     column = NUMBER_COLUMN[method]
     for line, row in enumerate(rows, start=2):  # line 1 is the header
         if row["practice"] not in ("0", "1"):
             raise InputError(f"{table}:{line}: practice {row['practice']!r}: expected 0 or 1 "
                              f"(whether the trial is a practice one)")
-        try:
-            finite = math.isfinite(ascii_float(row[column]))
-        except ValueError:
-            finite = False
-        if not finite:
+        if _cell_number(row[column]) is None:
             raise InputError(f"{table}:{line}: {column} {row[column]!r}: expected a finite "
                              f"number")
+        problem = _difference_problem(row, reference) if column == "difference" else None
+        if problem is not None:
+            raise InputError(f"{table}:{line}: {problem}")
         if row["answer"] and row["correct"] not in ("0", "1"):
             raise InputError(f"{table}:{line}: correct {row['correct']!r}: expected 0 or 1 "
                              f"(whether response is answer)")
