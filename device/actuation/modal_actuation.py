@@ -30,7 +30,12 @@ serve_two_modes``); otherwise one batched ``device.actuation.modal.solve``:
    forward model, seed 001 eq 5); 0 for fingers not touching.
 
 Wanted amplitudes are taken with phase 0 under every finger, as in seed 000's worked
-example (eqs 12-14).
+example (eqs 12-14). Friction depends only on |W|, so another sign under one finger
+can need smaller commands (two-finger-beam-seed000, fingers at 113 and 260 mm wanting
+0.369 um: commands of 3.5 and 4.5 um in phase, which the 0.75 um limits scale to 0.062
+um under each finger; 0.21 and 0.97 um in antiphase, 0.285 um), but switching the sign
+as the fingers move would swing that finger's amplitude through 0 over the plate's
+settling time, a click at every switch.
 """
 
 from __future__ import annotations
