@@ -8,7 +8,9 @@ Pairs compared:
   or magnitude design's levels may lie on either side of the reference), by ``vary``'s
   threshold (``perception.compare_values``: periods 14 % of the smaller, the friction
   levels of depths and clip levels 11 % of the higher, from the varied layer's own mu'
-  and clip depth).
+  and clip depth: the Weber fraction's source measured a change of friction relative to
+  its level; the simulated participant, ``observer``, judges a depth's contrast instead,
+  and ``PROTOCOL_FORMAT.md`` says how the two differ).
   Constant stimuli measure a threshold, so levels under it are expected (answered
   correctly less often than at the threshold, the nearest near chance); only a design
   with none beyond it warns: its psychometric function stays below the threshold's point

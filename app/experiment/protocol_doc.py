@@ -36,6 +36,19 @@ named by their value to 10 significant digits (`depth=0.3`), so levels (and a
 staircase's `start` and `min` added to the reference) must differ from the reference
 and each other within those digits.
 
+`frictex validate --perception` and the simulated participant
+(`--participant simulated:weber=K`) do not measure a `depth` or a clip `level` alike.
+The check compares the friction levels the two stimuli play (mu' = mu_high - depth on a
+grating), dmu'/mu' of the higher, with the Weber fraction 0.11 of Gueorguiev et al. 2017,
+which is a change of friction relative to its level: on grating-5mm, depths 0.3 and 0.35
+play mu' 0.7 and 0.65, 7.14 % apart, and are warned of. The simulated participant judges
+the contrast felt (max - min of mu', the depth itself) and tells apart 75 % of the time
+contrasts in the ratio 1 + K: 0.35 / 0.3 = 1.17 is beyond 1.11, so with
+`simulated:weber=0.11` it answers that pair correctly more often than 75 %. The check
+follows the threshold's source; the simulated participant's answers for `depth` and
+`level` overstate what a finger tells apart wherever mu' stays well above 0. Periods are
+compared alike by both (dp/p of the smaller).
+
 At the window (`--participant window`) a `[scale]` of one key per value (1 to 10, 0 for
 10; 0 to 9) is answered by a key or a button; any wider one (0 to 10, 0 to 100, one
 below 0) by typing the rating, shown as typed (Backspace or the left arrow corrects,
