@@ -135,3 +135,23 @@ def test_an_argument_no_command_takes_is_said_by_the_command_it_was_given_to(cap
             main(argv)
         assert ended.value.code == 2
         assert capsys.readouterr().err == f"frictex: error: {said}\n"
+
+
+def test_a_closed_stdout_or_stderr_leaves_the_command_s_status(tmp_path):
+    """Started with stdout or stderr closed (``>&-`` in a script or a cron job), a run
+    that succeeded exits 0 and one refused exits 2: the end's flush of a stream that is
+    None took the exit to 1 with a traceback."""
+    def run(args, closed):
+        return subprocess.run(
+            ["sh", "-c", f'"$0" -m frictex "$@" {closed}', sys.executable, *args],
+            capture_output=True, text=True, timeout=120)
+    out = tmp_path / "out"
+    for closed in (">&-", "2>&-", ">&- 2>&-"):
+        done = run(["replay", "grating-5mm", "swipe-40mms-50hz", "--out", str(out), "--quiet"],
+                   closed)
+        assert done.returncode == 0 and "Traceback" not in done.stderr, (closed, done.stderr)
+        assert (out / "summary.json").is_file()
+        done = run(["library"], closed)
+        assert done.returncode == 0 and "Traceback" not in done.stderr, (closed, done.stderr)
+        assert run(["replay", "grating-5mm", "no-such-trace", "--out", str(tmp_path / "no")],
+                   closed).returncode == 2

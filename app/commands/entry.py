@@ -50,6 +50,18 @@ def entry() -> NoReturn:
     if threading.active_count() > 1:
         sys.exit(code)
     atexit._run_exitfuncs()
-    sys.stdout.flush()
-    sys.stderr.flush()
+    for stream in (sys.stdout, sys.stderr):
+        _flush(stream)
     os._exit(code)
+
+
+def _flush(stream) -> None:
+    """Flush ``stream``, which may be None (started with it closed, ``>&-``) or gone (a
+    reader that left): the run's status stands either way, as the text could not go
+    anywhere."""
+    if stream is None:
+        return
+    try:
+        stream.flush()
+    except (OSError, ValueError):
+        pass
