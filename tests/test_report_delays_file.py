@@ -1,21 +1,27 @@
 """A ``--loop-delays`` file is read as it was written or refused in one line naming the
 file and the field: delays the loop can never see (later than its wait), and fields of
 the wrong type (a string of digits for blocks, fractions, booleans, a load that is no
-number); and report.md says what a sequence nobody measured was."""
+number); a FIFO, a device or a file over the size cap without reading it; and
+report.md says what a sequence nobody measured was."""
 
 import json
+import os
+import subprocess
+import sys
 
 import pytest
 
 from frictex.app.commands.cli import main
 from frictex.app.measure import report_closed_loop as rcl
-from frictex.app.measure.link_report_delays import LOST, read, wait_blocks
+from frictex.app.measure.link_report_delays import LOST, MAX_FILE_BYTES, read, wait_blocks
 from frictex.device.errors import InputError
 
 #: a report_delays object as ``ReportDelays.to_json`` writes it (measured, 5 s)
 GOOD = {"blocks": [2, 3, LOST, 5], "seconds": 5, "rate_hz": rcl.RATE_HZ, "block": rcl.BLOCK,
         "busy": 2, "load_start": 1.5, "load_end": 2.0}
 WAIT = wait_blocks(rcl.RATE_HZ, rcl.BLOCK)
+#: longest a command is waited for (s): a hang, not a busy machine
+HANG_S = 120.0
 
 
 def _write(tmp_path, **fields):
@@ -83,3 +89,26 @@ def test_an_unmeasured_constant_is_said_to_be_one(tmp_path):
                            f"recorded in {tmp_path / 'delays.json'}")
     assert rcl._delays_line(rcl.UNMEASURED.to_json()) == (
         f"These runs had every report {rcl.REPORT_DELAY_BLOCKS} blocks late (not measured).")
+
+
+def test_a_fifo_is_refused_at_argument_checking_without_waiting_for_a_writer(tmp_path):
+    """In a process of its own: read as a file, a FIFO with no writer blocks forever."""
+    fifo = tmp_path / "delays.fifo"
+    os.mkfifo(fifo)
+    done = subprocess.run([sys.executable, "-m", "frictex", "report", "--quick",
+                           "--loop-delays", str(fifo), "--out", str(tmp_path / "o")],
+                          capture_output=True, text=True, stdin=subprocess.DEVNULL,
+                          timeout=HANG_S)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        f"frictex: error: {fifo}: is a FIFO (named pipe), not a regular file (frictex reads "
+        "only regular files); expected a report.json or its report_delays object"]
+    assert not (tmp_path / "o").exists()  # refused before the report's runs
+
+
+def test_a_file_over_the_cap_is_refused_from_its_size(tmp_path):
+    path = tmp_path / "huge.json"
+    with open(path, "wb") as fh:
+        fh.truncate(MAX_FILE_BYTES + 1)  # sparse: nothing is written
+    with pytest.raises(InputError, match=f"more than the {MAX_FILE_BYTES:,} bytes"):
+        read(path, rcl.RATE_HZ, rcl.BLOCK)

@@ -29,6 +29,12 @@ import numpy as np
 
 from frictex.app.measure.processes import BusyProcesses, load
 from frictex.device.errors import InputError
+from frictex.device.safe_files import read_bytes
+
+#: the most bytes :func:`read` takes: a full report's report.json is about 1 MB (a quick
+#: one 0.3 MB, the delays of a 20 s measurement 12 kB of it); 16 MiB leaves room for
+#: --real's records and longer measurements, and refuses a device or a stray file at once
+MAX_FILE_BYTES = 16 << 20
 
 #: the delay of a block whose report never came within the loop's wait (``max_wait_s``)
 LOST = -1
@@ -119,11 +125,18 @@ def read(path, rate_hz: float, block: int) -> ReportDelays:
     section's ``report_delays``) or that object alone, measured at ``rate_hz`` in blocks
     of ``block`` samples (a sequence of other blocks would mean other delays). Raises
     InputError naming the file (and the field) when it cannot be read, holds no such
-    sequence, has a field of the wrong type, or a delay later than the loop's wait."""
+    sequence, has a field of the wrong type, or a delay later than the loop's wait; a
+    FIFO, a device or a file over ``MAX_FILE_BYTES`` is refused without reading it
+    (``device.safe_files.read_bytes``)."""
     path = Path(path)
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        data = read_bytes(path, MAX_FILE_BYTES)
+    except OSError as exc:
+        raise InputError(f"{path}: {exc}; expected a report.json or its report_delays "
+                         "object") from None
+    try:
+        doc = json.loads(data.decode("utf-8"))
+    except (UnicodeDecodeError, ValueError) as exc:
         raise InputError(f"{path}: cannot read report delays: {exc}") from None
     if isinstance(doc, dict) and isinstance(doc.get("closed_loop"), dict):
         doc = doc["closed_loop"].get("report_delays")
