@@ -65,3 +65,17 @@ def test_a_seed_with_something_random_is_taken(tmp_path, motion, options):
         assert main(["trace", "synth", motion, *options, "--seed", seed, "-o", str(out)]) == 0
         made.append(out.read_text().splitlines()[1:])  # past the first line, which names it
     assert made[0] != made[1]
+
+
+@pytest.mark.parametrize("option, value, said", [
+    ("--duration", "1e-320", "--duration 9.99989e-321: expected 1e-06 to 100000 s"),
+    ("--rate", "1e-320", "--rate 9.99989e-321: expected 0.001 to 100000 Hz")])
+def test_a_path_under_a_billionth_of_a_sample_interval_is_refused(tmp_path, capsys, option,
+                                                                  value, said):
+    """A duration or rate whose product rounded to no interval made a trace of one row, a
+    lift with no touch-down (exit 0, 'wrote 1 samples')."""
+    out = tmp_path / "s.csv"
+    assert main(["trace", "synth", "swipe", f"{option}={value}", "-o", str(out)]) == 2
+    assert said in capsys.readouterr().err and not out.exists()
+    assert main(["trace", "synth", "swipe", "--duration", "1e-6", "-o", str(out)]) == 0
+    assert [int(e) for e in read_trace(out).event] == [0, 2]

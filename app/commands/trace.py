@@ -99,15 +99,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 #: Accepted ranges of the synth options (lowest, highest, unit): a value beyond them is a
-#: typo, and would overflow or exhaust memory further on.
-LIMITS = {"rate": (0.0, 1e5, "Hz"), "truth_rate": (0.0, 1e6, "Hz"), "duration": (0.0, 1e5, "s"),
+#: typo, and would overflow or exhaust memory further on (or, for a duration and rate
+#: whose product is under a billionth of a sample interval, a trace of one lift only).
+LIMITS = {"rate": (1e-3, 1e5, "Hz"), "truth_rate": (1e-3, 1e6, "Hz"), "duration": (1e-6, 1e5, "s"),
           "speed": (0.0, 1e4, "mm/s"), "x0": (-1e5, 1e5, "mm"), "y0": (-1e5, 1e5, "mm"),
           "angle": (-360.0, 360.0, "deg"), "length": (0.0, 1e5, "mm"), "radius": (0.0, 1e5, "mm"),
           "noise": (0.0, 1e3, "mm"), "jitter": (0.0, 1.0, "s"), "force": (0.0, 1e3, "N"),
           "force_noise": (0.0, 100.0, "N"), "peaks": (0.0, 1e3, "N"), "area": (0.0, 1e5, "mm"),
           "seed": (0, 1e18, "(a whole number)")}
 #: the options whose lowest value is excluded (argparse takes them as positive numbers)
-ABOVE_LOWEST = {"rate", "truth_rate", "duration", "speed", "length", "radius", "area"}
+ABOVE_LOWEST = {"speed", "length", "radius", "area"}
 #: Most samples a synthetic trace (or its true path) may hold.
 MAX_SAMPLES = 10_000_000
 #: Most presses (--peaks) a press trace may hold: its first line, which repeats them twice,
