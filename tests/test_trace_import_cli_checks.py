@@ -183,6 +183,18 @@ def test_a_sample_without_pressure_names_its_time_plainly():
         screen.arrays([sample])
 
 
+def test_a_pressure_scale_that_overflows_is_the_force_s_one_line_and_no_numpy_warning():
+    import warnings
+    from frictex.rendering.input.evdev_decode import AxisMap, RawSample, ScreenMap
+    from frictex.rendering.input.trace_file import TraceError
+    screen = ScreenMap(AxisMap(0, 100, 50), AxisMap(0, 100, 50), pressure_n=1e308)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # numpy's overflow warning printed a source line
+        with pytest.raises(TraceError, match=r"sample 0: force_n is inf, expected a number "
+                                             r"from 0 to 1000 N"):
+            screen.trace([RawSample(0.25, 0, 10.0, 10.0, 40.0, 40.0, 1)])
+
+
 def test_a_getevent_ltr_log_reads_as_without_its_rates():
     from frictex.rendering.input.import_getevent import parse_getevent
     plain = _drag_lines()

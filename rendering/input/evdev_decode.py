@@ -410,7 +410,8 @@ class ScreenMap:
         if self.pressure_n is None:
             force = np.full(len(samples), self.force_n)
         else:
-            force = a[:, 4] * self.pressure_n
+            with np.errstate(over="ignore"):  # an inf force is refused by name below
+                force = a[:, 4] * self.pressure_n
             if np.isnan(force).any():
                 i = int(np.argmax(np.isnan(force)))
                 raise TraceError(f"{where}: sample {i} at {a[i, 0]:g} s has no pressure, but a "
