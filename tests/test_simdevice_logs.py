@@ -4,6 +4,8 @@ A reader of ``sim-device --log`` saw 19,713 of 20,050 rows until the device exit
 30 rows stayed missing for 10 s after a replay: rows were flushed only when a later row
 came. Now a flusher writes them out at most ``LOG_FLUSH_S`` after they are written, the
 device idle or not. Every wait here is bounded polling (30 s), never a timing assertion.
+A log FIFO with no reader, or an empty log path, is refused in one line; one with a
+reader is written as a stream.
 """
 
 import os
@@ -14,7 +16,9 @@ import sys
 import time
 
 import numpy as np
+import pytest
 
+from frictex.app.commands.sim_device import HANG_S
 from frictex.device.link import protocol as p
 from frictex.device.link.simdevice import (CsvLog, DeviceConfig, DeviceCore, plate_log,
                                            plate_log_growth, played_log)
@@ -112,3 +116,48 @@ def test_the_plate_log_help_gives_its_growth():
     text = " ".join(done.stdout.split())
     mb_hour = plate_log_growth(1, 10_000.0)[1]
     assert f"10,000 rows a second, about {mb_hour:,.0f} MB an hour" in text
+
+
+def _sim_device(*args: str) -> subprocess.CompletedProcess:
+    """``frictex sim-device --once ARGS`` in a process of its own, waited for at most
+    ``HANG_S``: a refusal must come before it serves anything."""
+    return subprocess.run([sys.executable, "-m", "frictex", "sim-device", "--once", *args],
+                          capture_output=True, text=True, stdin=subprocess.DEVNULL,
+                          timeout=HANG_S)
+
+
+@pytest.mark.parametrize("option", ["--log", "--plate-log"])
+def test_a_log_fifo_with_no_reader_is_refused_not_waited_for(tmp_path, option):
+    fifo = tmp_path / "log.fifo"
+    os.mkfifo(fifo)
+    done = _sim_device(option, str(fifo))
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        f"frictex: error: cannot write the log file {fifo}: a FIFO with no reader; start "
+        "its reader first"]
+
+
+@pytest.mark.parametrize("option", ["--log", "--plate-log"])
+def test_an_empty_log_path_is_refused(option):
+    done = _sim_device(option, "")
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        f"frictex: error: sim-device: argument {option}: an empty path; give a file to "
+        "write, or leave the option out for no log"]
+
+
+def test_a_log_fifo_with_a_reader_is_written_blocking(tmp_path):
+    fifo = tmp_path / "log.fifo"
+    os.mkfifo(fifo)
+    reader = os.open(fifo, os.O_RDONLY | os.O_NONBLOCK)
+    try:
+        csv = CsvLog(fifo, ["index", "ch0_um"])
+        try:
+            assert os.get_blocking(csv._fh.fileno())  # writes wait for a slow reader
+            csv.flush()
+            assert select.select([reader], [], [], BOUND_S)[0]
+            assert os.read(reader, 100) == b"index,ch0_um\n"
+        finally:
+            csv.close()
+    finally:
+        os.close(reader)

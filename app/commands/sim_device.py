@@ -47,6 +47,14 @@ def _tcp_address(text: str) -> tuple[str, int]:
     return host or "127.0.0.1", number
 
 
+def _log_path(text: str) -> str:
+    """A log file's path; an empty one is refused (it would mean no log, silently)."""
+    if not text:
+        raise argparse.ArgumentTypeError("an empty path; give a file to write, or leave the "
+                                         "option out for no log")
+    return text
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--channels", type=bounded(int, 1, MAX_CHANNELS, "channels"), default=1,
                         metavar="N", help=f"actuator channels, 1 to {MAX_CHANNELS} as the "
@@ -88,10 +96,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--finger-speed", type=float, default=100.0, metavar="MM_S",
                         help="sliding speed of the --finger (default 100 mm/s; negative: "
                              "towards -x, its lateral force negative, PROTOCOL.md 4.9)")
-    parser.add_argument("--log", metavar="CSV", default=None,
+    parser.add_argument("--log", type=_log_path, metavar="CSV", default=None,
                         help="write every played sample: index,ch0_um,... (fixed-point values)")
     rows, mb_hour = plate_log_growth(1, 10_000.0)
-    parser.add_argument("--plate-log", metavar="CSV", default=None,
+    parser.add_argument("--plate-log", type=_log_path, metavar="CSV", default=None,
                         help="write every tick: t_s,state,ch<k>_setpoint_um,ch<k>_plate_um; "
                              "it grows while the device runs, with or without a host: one "
                              f"row per tick, {rows:,.0f} rows a second, about "
@@ -144,10 +152,10 @@ def _serve_logged(core: DeviceCore, args: argparse.Namespace,
     ends it); the options whose log a write the file system refused ended early."""
     config, logs = core.config, []
     try:
-        if args.log:
+        if args.log is not None:
             core.log, csv = played_log(args.log, config.channels, config.phases)
             logs.append(csv)
-        if args.plate_log:
+        if args.plate_log is not None:
             core.plate_log, csv = plate_log(args.plate_log, config.channels)
             logs.append(csv)
             rows, mb_hour = plate_log_growth(config.channels, config.rate_hz)

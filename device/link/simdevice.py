@@ -31,6 +31,7 @@ import math
 import os
 import select
 import socket
+import stat
 import sys
 import threading
 import time
@@ -618,11 +619,7 @@ class CsvLog:
 
     def __init__(self, path, header: list[str]):
         self._path = path
-        try:
-            self._fh = open(path, "w", encoding="ascii", newline="\n")
-        except OSError as exc:
-            raise InputError(f"cannot write the log file {escape_path(path)}: "
-                             f"{exc.strerror or exc}") from None
+        self._fh = _open_log(path)
         self._fh.write(",".join(header) + "\n")
         self.lost = False  #: a write was refused: the log ended there
         self._lock = threading.Lock()
@@ -680,6 +677,30 @@ class CsvLog:
             self._fh.close()
         except OSError:  # the same refusal, for the rows still buffered
             pass
+
+
+def _open_log(path):
+    """``path`` made or emptied and opened for writing text; InputError naming it if it
+    cannot be. A FIFO or a terminal (``/dev/stdout``) is written as a stream, a FIFO only
+    once it has a reader: it is opened non-blocking, as a plain open would wait for a
+    reader forever (SIGTERM or not), then made blocking so that writes wait for a slow
+    reader as a file's would."""
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_NONBLOCK, 0o666)
+    except OSError as exc:
+        reason = exc.strerror or exc
+        if exc.errno == errno.ENXIO and _is_fifo(path):
+            reason = "a FIFO with no reader; start its reader first"
+        raise InputError(f"cannot write the log file {escape_path(path)}: {reason}") from None
+    os.set_blocking(fd, True)
+    return os.fdopen(fd, "w", encoding="ascii", newline="\n")
+
+
+def _is_fifo(path) -> bool:
+    try:
+        return stat.S_ISFIFO(os.stat(path).st_mode)
+    except OSError:
+        return False
 
 
 def played_log(path, channels: int, phases: bool):
