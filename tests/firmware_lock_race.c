@@ -6,10 +6,12 @@
  * stdin: two lines of hex bytes, the setup (fed at once) and the racing frame. Before the
  * racing frame the device plays until its buffer is empty (a drain then runs dry on the
  * next tick). One line per k on stdout:
- *   k <k> played_after_stop <n> restarted <n> replies <hex>
+ *   k <k> played_after_stop <n> restarted <n> held_after_stop <n> flushed <n> replies <hex>
  * played_after_stop: samples played on ticks that began with the Stop completed;
  * restarted: checks (after the frame, after each tick) that found stopped set outside
- * SILENT. The ticks after the frame: TICKS_AFTER, each fed no frame. */
+ * SILENT; held_after_stop: the buffer's level once the Stop completed and the ticks ran;
+ * flushed: the session's flushed samples. The ticks after the frame: TICKS_AFTER, each
+ * fed no frame. */
 #include <stdio.h>
 #include <string.h>
 
@@ -105,8 +107,9 @@ int main(void)
         check_stopped();
         for (unsigned t = 0; t < TICKS_AFTER; t++)
             tick();
-        printf("k %ld played_after_stop %u restarted %u replies ", k, played_after_stop,
-               restarted);
+        printf("k %ld played_after_stop %u restarted %u held_after_stop %u flushed %u replies ",
+               k, played_after_stop, restarted, dev.stopped ? (unsigned)dev.buf.level : 0u,
+               (unsigned)dev.session.flushed);
         for (size_t i = 0; i < n_replies; i++)
             printf("%02x", replies[i]);
         printf("\n");

@@ -52,11 +52,16 @@ def test_a_block_racing_a_drain_that_runs_dry_never_restarts_the_plate(lock_race
     assert proc.returncode == 0, proc.stderr
     runs = [line.split() for line in proc.stdout.splitlines()]
     assert len(runs) > 400, "the Block took fewer locks than it has samples"
-    refused = 0
-    for _, k, _, played_after_stop, _, restarted, _, *reply in runs:
+    refused = flushed_runs = 0
+    for _, k, _, played_after_stop, _, restarted, _, held, _, flushed, _, *reply in runs:
         assert (played_after_stop, restarted) == ("0", "0"), f"interrupt at lock {k}"
+        # a drain that ran dry while the Block was stored: the samples stored after it
+        # were kept while SILENT (Status level 400, nothing to play); now flushed, counted
+        assert held == "0", f"interrupt at lock {k}"
+        flushed_runs += flushed != "0"
         codes = [f.message.code for f in p.Decoder().feed(bytes.fromhex("".join(reply)))
                  if isinstance(f.message, p.ErrorReport)]
         refused += codes == [p.ErrorCode.NOT_READY]
     # preempted at any lock up to the one that reads readiness (three in this core): refused
     assert refused >= 3
+    assert flushed_runs >= 1  # preempted after the Block was taken, before its first sample

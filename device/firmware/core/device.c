@@ -538,6 +538,11 @@ static void on_block(fw_device *d, uint16_t seq, const fw_block *b)
     d->k.overflow_samples += beyond;
     if (d->state == FW_BUFFERING && d->buf.level >= d->prefill)
         d->state = FW_PLAYING;
+    if (d->stopped && d->buf.level) { /* a drain ran dry between two samples: the Stop is */
+        count_flush(d);               /* complete, and what was stored after it is flushed */
+        fw_jitter_flush(&d->buf);
+        d->end = 0;
+    }
     unlock(d);
 
     text t = error_text(d);
