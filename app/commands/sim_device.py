@@ -29,13 +29,15 @@ import time
 from frictex.app.commands.argtypes import bounded, positive_float, positive_int
 from frictex.device.errors import DeviceError
 from frictex.device.link.simdevice import (HELLO_TIMEOUT_S, MAX_CHANNELS, STORE_WORDS, DeviceConfig,
-                                           DeviceCore, open_listener, open_pty, played_log,
-                                           plate_log, plate_log_growth, serve, socket_url)
+                                           DeviceCore, host_port, open_listener, open_pty,
+                                           played_log, plate_log, plate_log_growth, serve,
+                                           socket_url)
 from frictex.device.safe_text import escape_path
 
 
 def _tcp_address(text: str) -> tuple[str, int]:
-    """``PORT`` or ``HOST:PORT`` (port 0: any free port)."""
+    """``PORT`` or ``HOST:PORT`` (port 0: any free port), an IPv6 host in brackets
+    (``[::1]:PORT``); the host is returned without them."""
     host, _, port = text.rpartition(":")
     try:
         number = int(port)
@@ -44,6 +46,11 @@ def _tcp_address(text: str) -> tuple[str, int]:
     if not 0 <= number <= 65535:
         raise argparse.ArgumentTypeError(f"{text!r}: expected PORT or HOST:PORT, port in "
                                          "0..65535 (0: any free port)")
+    if host.startswith("[") and host.endswith("]"):
+        host = host[1:-1]
+    elif ":" in host or "[" in host or "]" in host:
+        raise argparse.ArgumentTypeError(f"{text!r}: an IPv6 address is written in "
+                                         "brackets, [ADDRESS]:PORT")
     return host or "127.0.0.1", number
 
 
@@ -182,11 +189,11 @@ def _serve(core: DeviceCore, args: argparse.Namespace, quit_event: threading.Eve
     """Open the pty or the TCP listener, say where, and serve until told to stop."""
     def refused(address, count):
         more = f" and {count - 1} more in the last second" if count > 1 else ""
-        print(f"frictex sim-device: refused a second host {address[0]}:{address[1]}{more} "
+        print(f"frictex sim-device: refused a second host {host_port(*address[:2])}{more} "
               "(one host at a time)", file=sys.stderr)
 
     def dropped(address):
-        print(f"frictex sim-device: dropped host {address[0]}:{address[1]}: no Hello within "
+        print(f"frictex sim-device: dropped host {host_port(*address[:2])}: no Hello within "
               f"{HELLO_TIMEOUT_S:g} s of connecting", file=sys.stderr)
     options = {"exit_on_stop": args.once, "parent_pid": args.parent_pid,
                "quit_event": quit_event, "on_refused": refused, "on_dropped": dropped}

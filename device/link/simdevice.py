@@ -745,12 +745,14 @@ def open_pty() -> tuple[int, int, str]:
 
 
 def open_listener(host: str = "127.0.0.1", port: int = 0) -> socket.socket:
-    """A listening TCP socket (``port`` 0: any free port); its URL is :func:`socket_url`.
-    Raises InputError for a host that is no address of this machine, DeviceError when
-    the address cannot be taken (in use, not allowed)."""
-    where = f"{host}:{port}"
+    """A listening TCP socket (``port`` 0: any free port) on ``host``, a name or an IPv4
+    or IPv6 address (``::1``, without brackets); its URL is :func:`socket_url`. Raises
+    InputError for a host that is no address of this machine, DeviceError when the
+    address cannot be taken (in use, not allowed)."""
+    where = host_port(host, port)
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
     try:
-        listener = socket.create_server((host, port))
+        listener = socket.create_server((host, port), family=family)
     except OSError as exc:  # create_server re-raises getaddrinfo's errors (errno < 0) too
         why = str(exc.strerror or exc).split(" (while attempting")[0]
         if exc.errno is not None and (exc.errno < 0 or exc.errno == errno.EADDRNOTAVAIL):
@@ -761,10 +763,14 @@ def open_listener(host: str = "127.0.0.1", port: int = 0) -> socket.socket:
     return listener
 
 
+def host_port(host: str, port: int) -> str:
+    """``HOST:PORT``, an IPv6 address in brackets (``[::1]:5000``) as URLs write it."""
+    return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
+
+
 def socket_url(listener: socket.socket) -> str:
     """The pyserial URL a host opens to reach ``listener``."""
-    host, port = listener.getsockname()[:2]
-    return f"socket://{host}:{port}"
+    return "socket://" + host_port(*listener.getsockname()[:2])
 
 
 def _read(conn) -> bytes | None:
