@@ -115,8 +115,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "channel (measured: 4.2 MB in its first 12 s, 35 bytes a row, "
                              "38 once t_s passes 1000 s); a line on stderr gives the rate")
     parser.add_argument("--tcp", type=_tcp_address, default=None, metavar="[HOST:]PORT",
-                        help="listen on TCP instead of a pty (host default 127.0.0.1; port 0: "
-                             "any free port); hosts open the printed socket:// URL, one at a "
+                        help="listen on TCP instead of a pty (host default 127.0.0.1, an IPv6 "
+                             "address in brackets: [::1]:0; port 0: any free port); hosts open the printed socket:// URL, one at a "
                              "time: a second connection is refused while one is connected, "
                              "and one that says no Hello within 2 s, or sends nothing for 5 s after "
                              "it, is dropped")
