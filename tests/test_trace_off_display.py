@@ -126,3 +126,21 @@ def test_a_looped_replay_warns_of_a_trace_off_the_display_too(tmp_path):
     doc = run_replay(load_scene(resolve_scene("grating-15mm")), swipe_csv(tmp_path, 514.0),
                      tmp_path / "o", progress=False, control="adaptive", device="sim:finger=1")
     assert [w for w in doc["warnings"] if "off the 108 x 64.8 mm display" in w]
+
+
+@pytest.mark.parametrize("renderer", ["sho-held", "sht", "hybrid", "sho-predicted"])
+def test_a_finger_past_the_edge_plays_the_texture_at_the_edge(tmp_path, renderer):
+    """A swipe at 40 mm/s from x = 60 mm runs past the 108 mm display's right edge at
+    1.2 s and on to 140 mm: once the velocity fit has slowed to the finger held there,
+    every renderer plays one mu', the grating's at x = 108 mm. Only the prediction was
+    held at the edge: SHO-held read the raw sample and SHT integrated the raw velocity,
+    playing a grating edge every 5 mm of the finger's travel beyond the display."""
+    import pyarrow.csv as pcsv
+    doc = run_replay(load_scene(resolve_scene("grating-5mm")), swipe_csv(tmp_path, 60.0),
+                     tmp_path / "o", progress=False, render_override=renderer)
+    assert doc["trace"]["touch_samples_off_display"] > 0
+    table = pcsv.read_csv(tmp_path / "o" / "friction.csv")
+    t, x, mu = (table[c].to_numpy() for c in ("t_s", "x_mm", "mu_target"))
+    beyond = (t > 1.2 + 0.1) & (t < 1.99)  # past the edge by more than the fit's window
+    assert np.all(x[beyond] == 108.0)
+    assert np.unique(mu[beyond]).size == 1, np.unique(mu[beyond])

@@ -50,8 +50,13 @@ A swipe at any steady speed is no jump; a long gap's bound (0.5 s: 2.7 m) is no 
 any display. After
 ``predict_horizon_s`` without a new sample the finger is taken as resting (prediction
 stops, velocity 0), so a screen that stops reporting a still finger does not leave SHT
-synthesising forever. A prediction stays on the display (``area_mm``): a finger touching
-the screen is on it, and a fit running on past where a finger stopped at the edge (a
+synthesising forever. A touch sample past the display's edge (``area_mm``) is taken at
+the edge as it comes in, so every renderer plays it there: with only the prediction held
+there, SHO-held and SHT went on playing a grating from the raw position and velocity (a
+tablet's two-finger drag on grating-5mm, 108 mm wide: mu' changed 156 and 170 times at
+x = 108 mm; now 4 and 10, as the velocity fit slows to the still finger at the edge, as
+anywhere a finger stops). A prediction stays on the display too: a
+finger touching the screen is on it, and a fit running on past where a finger stopped at the edge (a
 phone's two-finger drag to the edge, silent for 86 ms before the lift: 12.7 mm past the
 140 mm plate) would render, and count as off the structure, a place nobody touched.
 """
@@ -90,7 +95,8 @@ class TrackerConfig:
     accel_max_mm_s2: float = ACCEL_MAX_MM_S2
     min_fit_span_s: float = MIN_FIT_SPAN_S
     fit_samples: int = 256
-    #: the display's (width, height) (mm): predictions stay within it; None: unbounded
+    #: the display's (width, height) (mm): touch samples and predictions stay within it;
+    #: None: unbounded
     area_mm: tuple[float, float] | None = None
 
 
@@ -458,6 +464,7 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
     sampled = sorted(set(samples.finger.tolist())) if samples is not None else []
     if sampled:
         applied = np.minimum(np.maximum(apply_index(samples.t_s, config), index0), index0 + n - 1)
+        x_mm, y_mm = _on_display(samples.x_mm, samples.y_mm, config.area_mm)
         # each finger's samples in file order, found by one sort (a mask per finger would
         # cost fingers x samples: a block of 50,000 short touches)
         order = np.argsort(samples.finger, kind="stable")
@@ -465,8 +472,8 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
         for k, fid in enumerate(sampled):
             sel = slice(None) if len(sampled) == 1 else order[bounds[k]:bounds[k + 1]]
             steps, keep, fingers[fid] = _finger_steps(
-                fingers.get(fid, FingerState(touch_id=state.touches)), samples.t_s[sel], samples.x_mm[sel],
-                samples.y_mm[sel], samples.force_n[sel], samples.event[sel], config, counters)
+                fingers.get(fid, FingerState(touch_id=state.touches)), samples.t_s[sel], x_mm[sel],
+                y_mm[sel], samples.force_n[sel], samples.event[sel], config, counters)
             if steps is not None:
                 updates[fid] = (applied[sel][keep], steps)
     # the fingers touching when the block starts and those sampled in it; a finger that
@@ -482,6 +489,16 @@ def track(index0: int, n: int, samples: Trace | None, state: TrackerState,
     touching = {fid: s for fid, s in fingers.items() if s.contact}
     touches = max([state.touches, *(s.touch_id for s in fingers.values())])
     return block, TrackerState(fingers=touching, touches=touches, **counters)
+
+
+def _on_display(x_mm: np.ndarray, y_mm: np.ndarray, area_mm) -> tuple[np.ndarray, np.ndarray]:
+    """Touch positions (mm) held within the display's ``area_mm`` (width, height from
+    (0, 0); None: as they are): a sample past the edge is taken at the edge, so the held
+    position, the fit and its velocity (what SHO-held and SHT play from) agree with the
+    prediction, which stays within it too."""
+    if area_mm is None:
+        return x_mm, y_mm
+    return np.clip(x_mm, 0.0, area_mm[0]), np.clip(y_mm, 0.0, area_mm[1])
 
 
 def _step_table(ids, state: TrackerState, updates: dict, index0: int, n: int):
