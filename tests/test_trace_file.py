@@ -78,6 +78,18 @@ def test_bad_traces_get_one_line_errors(text, message):
         parse_trace(text, "<t>")
 
 
+@pytest.mark.parametrize("text, said", [
+    ("t_s,finger,x_mm,y_mm\n0,\ud800,1,2\n", r"<trace>:2: not UTF-8 text \(byte 0xed at column 3\)"),
+    # a byte that was not UTF-8, kept by errors="surrogateescape": told as that byte
+    ("t_s,finger,x_mm,y_mm\n0,0,1,2\n0.1,0,\udcff,2\n", r"<trace>:3: not UTF-8 text \(byte 0xff at column 7\)"),
+])
+def test_text_with_a_lone_surrogate_is_refused_by_its_line(text, said):
+    """parse_trace took text with a lone surrogate to its UTF-8 encoding, which raised
+    UnicodeEncodeError."""
+    with pytest.raises(TraceError, match=said):
+        parse_trace(text)
+
+
 def test_missing_and_binary_files(tmp_path):
     with pytest.raises(TraceError, match=r"nope\.csv: No such file or directory; expected a trace CSV"):
         read_trace(tmp_path / "nope.csv")

@@ -944,8 +944,18 @@ def read_trace(path: str | Path, strict: bool = False) -> Trace:
 
 def parse_trace(text: str, where: str = "<trace>", strict: bool = False) -> Trace:
     """Parse trace CSV text; ``where`` names the source in error messages."""
-    blocks = _blocks(io.BytesIO(text.encode("utf-8")), where)
+    blocks = _blocks(io.BytesIO(_utf8(text)), where)
     return concat_traces(_chunks(blocks, where, 65_536, TimeOrder(), strict))
+
+
+def _utf8(text: str) -> bytes:
+    """``text`` as UTF-8, a lone surrogate kept as bytes for the reader to refuse by its
+    line as not UTF-8: the byte it stands for (text read with ``errors="surrogateescape"``),
+    else its own encoding."""
+    try:
+        return text.encode("utf-8", errors="surrogateescape")
+    except UnicodeEncodeError:
+        return text.encode("utf-8", errors="surrogatepass")
 
 
 def format_trace(trace: Trace, comment: str | None = None) -> str:
