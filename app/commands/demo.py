@@ -17,7 +17,8 @@ SIGINT (Ctrl-C), SIGTERM and SIGHUP end the demo as Q does (held as a flag the w
 loop looks at, never raised inside a window callback: ``app.engine.driver.
 deferred_interrupts``): the plate stopped, the recording committed, the usual last lines,
 then ``frictex: interrupted`` (exit 130) or ``frictex: terminated by SIGTERM`` (128 + the
-signal); a second signal ends it at once.
+signal); with ``--record`` it says on stderr that it is writing the recording, and a
+second signal then ends it at once, saying the recording was not written.
 N / B skip the playlist's scenes that drive other channels than the link and the
 recording were opened for (``app.live.demo_loop``).
 ``--faults SPEC`` injects link faults on ``--device`` (as ``frictex replay --faults``).
@@ -362,6 +363,10 @@ def _run_demo(args, headless: bool, paths, index: int, scene, stagings, check) -
         for folder in (staging, frames_staging):
             if folder is not None:
                 folder.abort()
+        if staging is not None and len(check.held) > 1:
+            kept = "the previous recording is kept" if previous else "nothing was written"
+            print(f"frictex demo: a second signal: the recording in {staging.out} was not "
+                  f"written ({kept})", file=sys.stderr, flush=True)
         raise
     _print_lines(args, summary, result, None if staging is None else staging.out,
                  (frames_staging or staging).out / FRAMES if headless else None)
@@ -463,6 +468,9 @@ def _live(args, paths, index, scene, size, record, frames_dir, touch_screen, che
     finally:
         if hand is not None:
             hand.stop()
+        if check.held and record is not None:  # the link's drain can take seconds
+            print("frictex demo: stopping the plate and writing the recording (another "
+                  "signal ends the demo at once, without it)", file=sys.stderr, flush=True)
         try:
             link, dropped_records = finish()
         finally:
