@@ -94,7 +94,7 @@ def test_pooling_sessions_without_out_is_refused(tmp_path, capsys):
         folder = tmp_path / name
         folder.mkdir()
         info = {"format": 1, "protocol": "p", "method": "2afc", "seed": seed,
-                "design": session("2afc", []).info["design"]}
+                "participant": "simulated", "design": session("2afc", []).info["design"]}
         (folder / "session.json").write_text(json.dumps(info))
         (folder / "results.csv").write_text(
             "trial,practice,stimuli,value,difference,answer,response,correct,rt_s,ended_utc\n")

@@ -181,16 +181,11 @@ NUMBER_COLUMN = {"2afc": "difference", "staircase": "difference", "same-differen
 
 
 def read_session(folder: str | Path) -> SessionData:
-    """A session folder's session.json and results (InputError when it is none, or when
-    a cell the analysis counts is malformed: :func:`check_cells`)."""
+    """A session folder's session.json (checked by ``session.read_info``) and results
+    (InputError when it is none, when a key of session.json is malformed, or when a cell
+    the analysis counts is: :func:`check_cells`)."""
     folder = Path(folder)
     info = read_info(folder)
-    if not isinstance(info.get("design"), dict) or not isinstance(info.get("protocol"), str):
-        raise InputError(f"{folder / 'session.json'}: has no design; not a session of this "
-                         f"frictex")
-    if info.get("method") not in NUMBER_COLUMN:
-        raise InputError(f"{folder / 'session.json'}: method {info.get('method')!r} is not "
-                         f"one of {', '.join(NUMBER_COLUMN)}")
     rows = read_rows(folder)
     check_cells(folder / "results.csv", info["method"], rows, info["design"].get("reference"))
     return SessionData(folder, info, rows, torn_last_line(folder))

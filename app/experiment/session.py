@@ -15,7 +15,8 @@
                               the design the analysis needs (its vary_unit: the
                               unit of vary, value and difference); scene_sha256: each
                               scene file's sha256, by its name (``scene_files``),
-                              checked by ``--resume``
+                              checked by ``--resume``; every key a reader uses is
+                              checked where the file is read (``session_schema``)
     DIR/protocol.toml         the protocol file as it was read
     DIR/NAME.toml             the protocol's scenes in its folder or below, copied under
                               the same relative names (``copy_scenes``), so that
@@ -348,9 +349,12 @@ MAX_SESSION_FILE_BYTES = 64 << 20
 
 
 def read_info(folder: Path) -> dict:
-    """``session.json`` of ``folder`` (InputError when it is not a session folder). Read
-    as a stranger's file: a regular UTF-8 file of at most :data:`MAX_SESSION_FILE_BYTES`,
-    JSON of any nesting a one-line error."""
+    """``session.json`` of ``folder``, checked (``session_schema.check_info``: every key
+    a reader uses, with the protocol's bounds; the design's ``analysis`` and ``staircase``
+    with their defaults filled in); InputError when it is not a session folder. Read as a
+    stranger's file: a regular UTF-8 file of at most :data:`MAX_SESSION_FILE_BYTES`, JSON
+    of any nesting, and any key's value, a one-line error."""
+    from frictex.app.experiment.session_schema import check_info
     from frictex.textures.library import read_utf8
     path = Path(folder) / "session.json"
     if not path.exists() and not path.is_symlink():
@@ -362,10 +366,10 @@ def read_info(folder: Path) -> dict:
     except (ValueError, RecursionError) as exc:
         what = "nested too deep" if isinstance(exc, RecursionError) else exc
         raise InputError(f"{path}: cannot be read as a session (JSON {what})") from None
-    if not isinstance(info, dict) or info.get("format") != FORMAT or not isinstance(
-            info.get("seed"), int):
+    if not isinstance(info, dict) or type(info.get("format")) is not int or (
+            info["format"] != FORMAT):
         raise InputError(f"{path}: not a format {FORMAT} session file")
-    return info
+    return check_info(info, str(path))
 
 
 def read_rows(folder: Path, repair: bool = False) -> list[dict]:
