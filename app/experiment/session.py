@@ -63,6 +63,7 @@ from pathlib import Path
 
 import numpy as np
 
+from frictex.app.experiment.session_schema import RECORDS, check_info
 from frictex.device.errors import InputError
 
 FORMAT = 1
@@ -72,7 +73,6 @@ RESULT_COLUMNS = ("trial", "practice", "stimuli", "value", "difference", "answer
 COLUMNS_BEFORE_CONTACT = RESULT_COLUMNS[:-2]
 #: the separator between the stimuli of a trial in the ``stimuli`` column
 SEPARATOR = "|"
-RECORDS = ("all", "traces", "results")
 #: what a session keeps per trial unless told (and what one whose session.json does not
 #: record it, written before ``record`` was, kept)
 DEFAULT_RECORD = "all"
@@ -354,7 +354,6 @@ def read_info(folder: Path) -> dict:
     with their defaults filled in); InputError when it is not a session folder. Read as a
     stranger's file: a regular UTF-8 file of at most :data:`MAX_SESSION_FILE_BYTES`, JSON
     of any nesting, and any key's value, a one-line error."""
-    from frictex.app.experiment.session_schema import check_info
     from frictex.textures.library import read_utf8
     path = Path(folder) / "session.json"
     if not path.exists() and not path.is_symlink():

@@ -38,11 +38,13 @@ from typing import Any
 
 from frictex.app.experiment.protocol import (ANALYSIS, GUESS_RATES, STAIRCASE, STIMULI, TOP,
                                              _method_fits, _scale, _staircase)
-from frictex.app.experiment.session import RECORDS
 from frictex.app.engine.batch import NAME
 from frictex.device.errors import InputError
 from frictex.textures.schema import BAD, Choice, Int, Reader, Text, kind
 
+#: what a session keeps per trial (``--record``): every stimulus's files, the touch traces,
+#: or the results only
+RECORDS = ("all", "traces", "results")
 #: a sha256 as session.json records it (``hashlib``'s hexdigest)
 SHA256 = re.compile(r"[0-9a-f]{64}")
 
