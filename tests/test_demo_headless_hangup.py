@@ -52,4 +52,6 @@ def test_a_hangup_to_the_headless_demos_group_is_its_one_line(tmp_path):
     # skipped to catch up, say): its own line, no part of this test
     said = [line for line in err.read_text().strip().splitlines()
             if not line.startswith("frictex demo: error: ")]
-    assert said == ["frictex: terminated by SIGHUP"]
+    # the headless demo's tables are its recording (--out): said being written, then the signal
+    assert said == ["frictex demo: stopping the plate and writing the recording (another "
+                    "signal ends the demo at once, without it)", "frictex: terminated by SIGHUP"]

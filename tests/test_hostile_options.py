@@ -7,7 +7,7 @@ from frictex.app.commands.cli import main
 
 
 @pytest.mark.parametrize("options, message", [
-    (["--duration", "1e9"], "--duration 1e+09: expected over 0, up to 100000 s"),
+    (["--duration", "1e9"], "--duration 1e+09: expected 1e-06 to 100000 s"),
     (["--speed", "1e308"], "--speed 1e+308: expected over 0, up to 10000 mm/s"),
     (["--x0", "nan"], "--x0 nan: expected -100000 to 100000 mm"),
     (["--noise", "-1"], "--noise -1: expected 0 to 1000 mm"),
@@ -39,7 +39,7 @@ def test_the_range_messages_lowest_values_are_those_the_options_take(tmp_path, c
     from frictex.app.commands.trace import ABOVE_LOWEST, LIMITS
     for name, (lowest, _, _) in LIMITS.items():
         option = f"--{name.replace('_', '-')}"
-        extra = ["--truth"] if name == "truth_rate" else []
+        extra = ["--truth", str(tmp_path / "truth.csv")] if name == "truth_rate" else []
         motion = "human" if name == "area" else "press" if name in ("peaks", "force_noise") else "swipe"
         values = [f"{lowest:g}"] * (2 if name == "area" else 1)
         try:
