@@ -8,7 +8,7 @@ import shutil
 import pytest
 
 from frictex.app.commands.cli import main
-from tests import test_experiment_result_columns as result_columns
+import test_experiment_result_columns as result_columns
 
 PARTICIPANT = result_columns.PARTICIPANT
 TWO_AFC = result_columns.TWO_AFC.replace("bootstrap = 200", "bootstrap = 0")  # no interval needed

@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 
 from frictex.app.commands.cli import main
-from tests import test_experiment_resume_parts as resume_parts
+import test_experiment_resume_parts as resume_parts
 
 ROOT = Path(__file__).resolve().parents[1]
 ADDRESS_SPACE = 1 << 30

@@ -574,7 +574,7 @@ def _listed(c: _Check, doc: dict, method: str, base_dir: Path) -> Stimuli | None
     return Stimuli(None, listed=tuple(out))
 
 
-def _staircase(c: _Check, doc: dict, method: str) -> Staircase | None | object:
+def check_staircase(c: _Check, doc: dict, method: str) -> Staircase | None | object:
     if method != "staircase":
         if "staircase" in doc:
             c.report(("staircase",), f"only for method \"staircase\" (this is {method})")
@@ -634,7 +634,7 @@ def _format_fits(c: _Check, fmt) -> bool:
     return True
 
 
-def _scale(c: _Check, doc: dict, method: str) -> tuple[int, int] | None:
+def check_scale(c: _Check, doc: dict, method: str) -> tuple[int, int] | None:
     """``[scale]``: (min, max) of a magnitude estimation's ratings; None for other methods
     or when it has a problem."""
     if method != "magnitude":
@@ -664,7 +664,7 @@ def _target_fits(c: _Check, analysis: dict | None) -> None:
                                          f"({top:g}): the fitted function never reaches it")
 
 
-def _method_fits(c: _Check, method: str, presentation: dict | None, analysis: dict | None):
+def check_method_fits(c: _Check, method: str, presentation: dict | None, analysis: dict | None):
     """Report presentation and analysis settings the method cannot use."""
     if presentation is not None and presentation["mode"] == "side-by-side" and method == "magnitude":
         c.report(("presentation", "mode"), "side-by-side needs two stimuli a trial; magnitude "
@@ -818,9 +818,9 @@ def check_protocol(path: str | Path) -> tuple[Protocol | None, list[Problem]]:
         return None, _by_line(r.problems)
     presentation = r.table(doc.get("presentation", {}), ("presentation",), PRESENTATION)
     analysis = r.table(doc.get("analysis", {}), ("analysis",), ANALYSIS)
-    staircase = _staircase(c, doc, method)
-    scale = _scale(c, doc, method)
-    _method_fits(c, method, presentation, analysis)
+    staircase = check_staircase(c, doc, method)
+    scale = check_scale(c, doc, method)
+    check_method_fits(c, method, presentation, analysis)
     stimuli = _stimuli(c, doc, method, path.parent)
     problems = _by_line(r.problems)
     if (problems or stimuli is None or presentation is None or analysis is None

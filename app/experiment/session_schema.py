@@ -37,7 +37,7 @@ from datetime import datetime
 from typing import Any
 
 from frictex.app.experiment.protocol import (ANALYSIS, GUESS_RATES, STAIRCASE, STIMULI, TOP,
-                                             _method_fits, _scale, _staircase)
+                                             check_method_fits, check_scale, check_staircase)
 from frictex.app.engine.batch import NAME
 from frictex.device.errors import InputError
 from frictex.textures.schema import BAD, Choice, Int, Reader, Text, kind
@@ -210,7 +210,7 @@ def _rating_scale(d: _Under, value, method: str):
     if not isinstance(value, list) or len(value) != 2:
         return d.report(("scale",), f"expected [min, max] (the rating scale), got "
                                     f"{kind(value)}")
-    scale = _scale(d, {"scale": dict(zip(("min", "max"), value))}, method)
+    scale = check_scale(d, {"scale": dict(zip(("min", "max"), value))}, method)
     return BAD if scale is None else list(scale)
 
 
@@ -227,11 +227,11 @@ def _design(label: str, value, method: str) -> tuple[dict | object, list]:
         d.report(("guess",), f"expected {'null' if guess is None else guess} (method "
                              f"{method}'s guess rate), got {kind(design['guess'])}")
     analysis = d.table(_nulls_unset(design["analysis"], ANALYSIS), ("analysis",), ANALYSIS)
-    _method_fits(d, method, None, analysis)
+    check_method_fits(d, method, None, analysis)
     design["analysis"] = analysis
     design["target"] = _target(d, design["target"], method, analysis)
     given = design["staircase"]
-    staircase = _staircase(d, {} if given is None else
+    staircase = check_staircase(d, {} if given is None else
                            {"staircase": _nulls_unset(given, STAIRCASE)}, method)
     design["staircase"] = asdict(staircase) if staircase not in (None, BAD) else staircase
     design["scale"] = _rating_scale(d, design.get("scale"), method)
