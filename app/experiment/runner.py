@@ -22,6 +22,7 @@ from frictex.app.experiment.presenter import Presenter, Shown
 from frictex.app.experiment.protocol import Protocol as ExperimentProtocol
 from frictex.app.experiment.protocol import Stimulus
 from frictex.app.experiment.scheduler import Scheduler, Trial
+from frictex.app.experiment.session_schema import RECORDS
 from frictex.app.experiment.stimuli import StimulusBank, name_of
 from frictex.device.errors import InputError
 from frictex.device.registry import Registry
@@ -110,8 +111,8 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
     With ``resume`` on a complete session, nothing runs and session.json is left as it
     is (the session's ``complete_before`` says so).
     """
-    if record is not None and record not in S.RECORDS:
-        raise InputError(f"record {record!r}: expected one of {', '.join(S.RECORDS)}")
+    if record is not None and record not in RECORDS:
+        raise InputError(f"record {record!r}: expected one of {', '.join(RECORDS)}")
     out_dir = Path(out_dir)
     settle = getattr(presenter, "settle_seed", None)
     if resume:

@@ -63,7 +63,7 @@ from pathlib import Path
 
 import numpy as np
 
-from frictex.app.experiment.session_schema import RECORDS, check_info
+from frictex.app.experiment.session_schema import check_info
 from frictex.device.errors import InputError
 
 FORMAT = 1
@@ -204,7 +204,7 @@ class Session:
 
     @property
     def record(self) -> str:
-        """What is kept per trial (one of :data:`RECORDS`)."""
+        """What is kept per trial (one of ``session_schema.RECORDS``)."""
         return self.info.get("record", DEFAULT_RECORD)
 
     @property
@@ -319,7 +319,7 @@ def create(folder: Path, protocol, seed: int, participant: str, pid: str | None 
     """A new session in ``folder`` (made if needed; refused if it holds a session);
     ``pid``: the participant's code (:func:`participant_id`), or None;
     ``participant_seed``: the seed a simulated participant answers with, or None;
-    ``record``: what is kept per trial (one of :data:`RECORDS`)."""
+    ``record``: what is kept per trial (one of ``session_schema.RECORDS``)."""
     folder = Path(folder)
     if (folder / "results.csv").exists() or (folder / "session.json").exists():
         raise InputError(f"{folder} already holds a session; continue it with --resume, or "
