@@ -131,12 +131,12 @@ def _check_render(r, layer, path: tuple) -> None:
     """Report a layer's ``render`` that is no renderer's name (``auto`` and ``sho``
     included), or that names a renderer of periods on a layer without one."""
     from frictex.textures import keys, model
+    from frictex.textures.sections.layers import needs_a_period
     render = getattr(layer, "render", None)
     if keys.COMMON["render"].check(r, render, path) is not render or render in ("auto", model.SHO):
         return
     if getattr(layer, "period_mm", None) is None:
-        r.report(path, f'"{render}" needs a periodic layer (grating or waveform); a '
-                       f'{type(layer).__name__} layer renders with "sho" (or "auto")')
+        r.report(path, needs_a_period(render, f"{type(layer).__name__} layer"))
 
 
 def _auto_resolved(scene: Scene) -> Scene:

@@ -70,8 +70,7 @@ def parse_layer(r: Reader, raw, index: int, display, files: Files, names: dict):
                                  lambda first: f"layer[{first + 1}]")
     render = v["render"]
     if render not in (BAD, "auto", model.SHO) and layer_type not in PERIODIC_TYPES:
-        render = r.report(path + ("render",), f'"{render}" needs a periodic layer (grating or '
-                                               f'waveform); a {layer_type} renders with "sho" (or "auto")')
+        render = r.report(path + ("render",), needs_a_period(render, layer_type))
     values = {k: v[k] for k in LAYER_KEYS[layer_type]}
     if BAD in values.values():
         return None
@@ -86,6 +85,13 @@ def parse_layer(r: Reader, raw, index: int, display, files: Files, names: dict):
                   fingers=v["fingers"])
     built = BUILDERS[layer_type](r, path, values, set(raw), Context(display, files, common))
     return built if common_ok else None
+
+
+def needs_a_period(render: str, kind: str) -> str:
+    """Why a renderer of periods, ``render``, cannot render a layer of ``kind`` (a word
+    saying which layer), which has no period."""
+    return (f'"{render}" needs a periodic layer (grating or waveform); a {kind} renders with '
+            '"sho" (or "auto")')
 
 
 def parse_layers(r: Reader, doc: dict, display, files: Files):
