@@ -7,7 +7,9 @@ import csv
 import json
 import re
 from dataclasses import replace
+from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from frictex.app.commands.cli import main
@@ -87,6 +89,23 @@ def test_force_scope_and_outlines_are_logged_and_the_rows_are_in_time_order(gl, 
         ("outlines", "on"), ("finger-down", "finger 0")]
     t = [float(e["t_s"]) for e in events]
     assert t == sorted(t)
+
+
+def test_a_finger_touching_when_the_demo_ends_is_lifted_in_events(gl, tmp_path):
+    """A demo ended (Q, a signal) with a finger down: its finger-down gets a finger-up at
+    the last output drawn, so that downs and ups pair in events.csv."""
+    loop, window = demo_loop(gl, tmp_path, tmp_path)
+    t_s = np.array([1.0, 1.0025, 1.005])
+    touching = SimpleNamespace(t_s=t_s, finger_ids=(3,), contact=np.array([[False, True, True]]),
+                               x_mm=np.full((1, 3), 12.0), y_mm=np.full((1, 3), 8.0))
+    try:
+        loop._log_contacts(touching)
+    finally:
+        loop.close()
+        window.close()
+    events = [(float(e["t_s"]), e["event"], e["detail"]) for e in read_events(tmp_path / "events.csv")]
+    assert events == [(1.0025, "finger-down", "finger 3 at 12.00, 8.00 mm"),
+                      (1.005, "finger-up", "finger 3: touching when the demo ended")]
 
 
 def run_recorded(scene, folder, touches, end_s, estop=None):

@@ -74,7 +74,8 @@ record folder is given: what the window did when it did it (keys: ``estop``,
 wheel or up/down; scene loads, screenshots and screenshots that failed), and what the
 output did when it did it, at the output time of the first block it shaped
 (``output-stop``, ``output-resume``, ``output-switch``, ``finger-down``, ``finger-up``;
-read from the haptic side's snapshots), and what the device link did, at the output time
+read from the haptic side's snapshots; a finger touching when the demo ends gets its
+``finger-up`` at the last output drawn), and what the device link did, at the output time
 of the snapshot whose status first shows it (``link-lost`` with the port's error,
 ``link-back``, ``link-stalled`` when queued blocks have not moved for over 0.5 s,
 ``link-moving``: ``app.live.link_watch``); while the link is lost or stalled the window
@@ -271,6 +272,7 @@ class DemoLoop:
         self.render_error: BaseException | None = None
         self._applied_seen = 0  # output changes (stats.applied) already logged
         self._contact: dict[int, bool] = {}  # finger ids touching at the last snapshot: True
+        self._contact_t_s = 0.0  # output time (s) of the last snapshot's last sample
         self.link_watch = LinkWatch()
         self._stalled_at: float | None = None  # output time the link stalled (s)
         self._limit_checked = None  # the scene the device's limit was checked against
@@ -894,6 +896,7 @@ class DemoLoop:
         for fid in [f for f in self._contact if f not in record.finger_ids]:
             self.log("finger-up", f"finger {fid}", float(record.t_s[0]))
             del self._contact[fid]
+        self._contact_t_s = float(record.t_s[-1])
 
     @property
     def fingers_down(self) -> tuple[int, ...]:
@@ -1033,9 +1036,13 @@ class DemoLoop:
 
     def close(self) -> None:
         """Say the panel's unsaved edits lost, release the GL objects, close the events
-        file with its rows in time order."""
+        file with its rows in time order, every finger-down in it followed by a finger-up
+        (a finger still touching when the demo ends is lifted at the last output drawn)."""
         self._drop_editor("the demo ended")
         self.compositor.release()
+        for fid in self._contact:
+            self.log("finger-up", f"finger {fid}: touching when the demo ended", self._contact_t_s)
+        self._contact.clear()
         if self._events is not None:
             self._events.close()
             sort_events(Path(self._events.name))
