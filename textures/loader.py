@@ -280,15 +280,22 @@ def check_document(path: str | Path, doc: dict, *, allow_outside: bool = False,
     return _check_document(Path(path), doc, Reader(str(path), None), allow_outside)
 
 
+def format_refusal(fmt: int) -> str | None:
+    """Why a texture file's ``format`` (an integer) cannot be read, or None where it can."""
+    if fmt == FORMAT_VERSION:
+        return None
+    newer = "is newer than this frictex reads" if fmt > FORMAT_VERSION else "is not a format"
+    return f"{fmt} {newer}; this frictex reads format = {FORMAT_VERSION}"
+
+
 def _check_document(path: Path, doc: dict, r: Reader, allow_outside: bool,
                     ) -> tuple[model.Scene | None, list[Problem], list[Problem]]:
     """The scene ``doc`` (parsed TOML of the file ``path``) gives, with the problems and
     warnings reported through ``r``."""
     top = r.table(doc, (), TOP, tables=("display", "device", "layer"))
     fmt = top["format"]
-    if fmt is not BAD and fmt != FORMAT_VERSION:
-        newer = "is newer than this frictex reads" if fmt > FORMAT_VERSION else "is not a format"
-        r.report(("format",), f"{fmt} {newer}; this frictex reads format = {FORMAT_VERSION}")
+    if fmt is not BAD and (refusal := format_refusal(fmt)):
+        r.report(("format",), refusal)
         return None, r.problems, r.warnings
     name = top["name"] if top["name"] is not None else path.stem
     display = parse_display(r, doc)
