@@ -10,6 +10,7 @@ import frictex
 from frictex._inputs import checked_scene
 from frictex.textures.errors import TextureError
 from frictex.textures.library import list_scenes
+from frictex.textures.model import DiscRegion
 
 
 def with_layer(scene_name: str, **changes):
@@ -64,3 +65,32 @@ def test_render_auto_is_the_renderer_the_loader_picks(scene_name, resolved):
     got = frictex.replay(auto, trace).friction["mu_target"].to_numpy()
     loaded = frictex.replay(with_layer(scene_name, render=resolved), trace)
     assert (got == loaded.friction["mu_target"].to_numpy()).all()
+
+
+@pytest.mark.parametrize("scene_name, field, value, message", [
+    ("grating-5mm", "region", "x", "expected a RectRegion, a DiscRegion or None, got str"),
+    ("grating-5mm", "visual", None, "expected a VisualHints, got NoneType"),
+    ("keyclick-ring", "geometry", DiscRegion(10.0, 10.0, 5.0),
+     "expected a RectRegion, got DiscRegion"),
+    ("objects-bump-edge-disc", "geometry", None,
+     "expected a RectRegion or a DiscRegion, got NoneType"),
+    ("grating-5mm", "name", " ", "is empty; give the layer a name or leave the key out"),
+])
+def test_a_region_or_name_the_loader_cannot_give_is_refused(scene_name, field, value, message):
+    """A region, outline or visual hints of another type failed deep in the first block
+    ("'str' object has no attribute 'contains'"), and a blank name was taken; each is one
+    line as the loader's."""
+    scene = frictex.load_scene(scene_name)
+    index = next(i for i, layer in enumerate(scene.layers) if hasattr(layer, field))
+    layers = list(scene.layers)
+    layers[index] = dataclasses.replace(layers[index], **{field: value})
+    with pytest.raises(TextureError, match=rf"layers\[{index}\]\.{field}: {message}$"):
+        frictex.replay(dataclasses.replace(scene, layers=tuple(layers)),
+                       frictex.synth_trace("swipe", duration_s=0.1))
+
+
+def test_a_format_this_frictex_does_not_read_is_refused_as_in_a_file():
+    scene = dataclasses.replace(frictex.load_scene("grating-5mm"), format=2)
+    with pytest.raises(TextureError, match=r"^scene 'grating-5mm': format: 2 is newer than "
+                                           r"this frictex reads; this frictex reads format = 1$"):
+        frictex.build_pipeline(scene)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import typing
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 
@@ -76,18 +77,21 @@ def checked_scene(scene: Scene) -> Scene:
     a word, one of the key's choices (``edge``, ``blend``, ``mode``); a value equal to
     the key's default is taken as the loader takes it (``render = "auto"`` becomes the
     renderer the loader picks: the returned scene holds it; a renderer of periods on a
-    layer without one is refused). Layer names are unique, as in a file. Fields the file writes another way (colours, a raster's image, a clip's events,
+    layer without one is refused). A ``region``, ``geometry`` or ``visual`` is of a class
+    its field's annotation names. Layer names are unique and not blank, and ``format`` is
+    one this frictex reads, as in a file. Fields the file writes another way (colours, a raster's image, a clip's events,
     a height shape, a key click's ``first_push``) and the other rules between keys
     (mu_low under mu_high, objects on the display) are not checked again.
     """
     from frictex.device.profile import DeviceProfile, DrivingForceParams, FrictionParams
     from frictex.textures import keys
-    from frictex.textures.sections.layers import report_repeated_name
+    from frictex.textures.loader import format_refusal
+    from frictex.textures.sections.layers import report_bad_name
     from frictex.textures.model import Display, _LayerBase
     from frictex.textures.schema import Reader, Retired
 
     r = Reader(f"scene {_named(scene.name)}", None)
-    top = {name: keys.TOP[name] for name in ("name", "description", "control")}
+    top = {name: keys.TOP[name] for name in ("format", "name", "description", "control")}
     device = getattr(scene, "device", None)
     for obj, path, table, kind in (
             (scene, (), top, Scene), (scene.display, ("display",), keys.DISPLAY, Display),
@@ -98,6 +102,8 @@ def checked_scene(scene: Scene) -> Scene:
              DrivingForceParams)):
         _fields(r, obj, path, {name: (spec, [spec.default]) for name, spec in table.items()
                                if not isinstance(spec, Retired)}, kind)
+    if isinstance(scene.format, int) and (refusal := format_refusal(scene.format)):
+        r.report(("format",), refusal)
     layers = scene.layers
     if not isinstance(layers, tuple | list) or not 1 <= len(layers) <= keys.MAX_LAYERS:
         count = (f"{len(layers)} layers" if isinstance(layers, tuple | list)
@@ -110,11 +116,15 @@ def checked_scene(scene: Scene) -> Scene:
         r.label = f"scene {_named(scene.name)}, layer {_named(getattr(layer, 'name', '?'))}"
         path = (f"layers[{i}]",)
         if _fields(r, layer, path, rules, _LayerBase):
-            report_repeated_name(r, (f"layers[{i}]", "name"), layer.name, i, names,
-                                 lambda first: f"layers[{first}]")
-            for part in ("region", "geometry", "visual"):
-                value = getattr(layer, part, None)
-                if dataclasses.is_dataclass(value):
+            if isinstance(layer.name, str):
+                report_bad_name(r, path + ("name",), layer.name, i, names,
+                                lambda first: f"layers[{first}]")
+            for part, kinds in _parts(type(layer)):
+                value = getattr(layer, part)
+                if not isinstance(value, kinds):
+                    r.report(path + (part,), f"expected {_either(kinds)}, got "
+                                             f"{type(value).__name__}")
+                elif value is not None:
                     _fields(r, value, path + (part,), rules)
             _check_render(r, layer, path + ("render",))
     if r.problems:
@@ -125,6 +135,21 @@ def checked_scene(scene: Scene) -> Scene:
         error.problems = r.problems
         raise error
     return _auto_resolved(scene)
+
+
+@functools.cache
+def _parts(layer_type: type) -> tuple[tuple[str, tuple[type, ...]], ...]:
+    """A layer class's fields that hold a region or visual hints (``region``,
+    ``geometry``, ``visual``), each with the classes its annotation allows."""
+    hints = typing.get_type_hints(layer_type)
+    return tuple((part, typing.get_args(hints[part]) or (hints[part],))
+                 for part in ("region", "geometry", "visual") if part in hints)
+
+
+def _either(kinds: tuple[type, ...]) -> str:
+    """``kinds`` in a message: "a RectRegion, a DiscRegion or None"."""
+    names = ["None" if kind is type(None) else f"a {kind.__name__}" for kind in kinds]
+    return " or ".join(filter(None, (", ".join(names[:-1]), names[-1])))
 
 
 def _check_render(r, layer, path: tuple) -> None:

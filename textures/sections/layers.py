@@ -35,12 +35,15 @@ def default_layer_name(layer_type: str, index: int) -> str:
     return f"{layer_type}-{index + 1}"
 
 
-def report_repeated_name(r: Reader, path: KeyPath, name, index: int, names: dict,
-                         shown: Callable[[int], str]) -> None:
-    """Report at ``path`` the ``name`` of layer ``index`` where an earlier layer has it
-    (``names``: name -> the index of the first layer of that name; this one is added);
-    ``shown(i)`` is layer i as the message names it (``layer[2]`` in a file, 1-based;
-    ``layers[1]`` in a Scene made in code)."""
+def report_bad_name(r: Reader, path: KeyPath, name: str, index: int, names: dict,
+                    shown: Callable[[int], str]) -> None:
+    """Report at ``path`` the ``name`` of layer ``index`` where it is blank or an earlier
+    layer has it (``names``: name -> the index of the first layer of that name; this one
+    is added); ``shown(i)`` is layer i as the message names it (``layer[2]`` in a file,
+    1-based; ``layers[1]`` in a Scene made in code)."""
+    if not name.strip():
+        r.report(path, 'is empty; give the layer a name or leave the key out')
+        return
     first = names.setdefault(name, index)
     if first != index:
         r.report(path, f"{show(name)} is already the name of {shown(first)}")
@@ -63,11 +66,8 @@ def parse_layer(r: Reader, raw, index: int, display, files: Files, names: dict):
     visual = r.table(raw.get("visual", {}), path + ("visual",), VISUAL)
     name = v["name"] if v["name"] is not None else default_layer_name(layer_type, index)
     if name is not BAD:
-        if not name.strip():
-            r.report(path + ("name",), 'is empty; give the layer a name or leave the key out')
-        else:
-            report_repeated_name(r, path + ("name",), name, index, names,
-                                 lambda first: f"layer[{first + 1}]")
+        report_bad_name(r, path + ("name",), name, index, names,
+                        lambda first: f"layer[{first + 1}]")
     render = v["render"]
     if render not in (BAD, "auto", model.SHO) and layer_type not in PERIODIC_TYPES:
         render = r.report(path + ("render",), needs_a_period(render, layer_type))
