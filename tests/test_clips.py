@@ -145,6 +145,24 @@ def test_crossing_an_edge_and_pressing_through_a_threshold():
     assert_allclose(mu[k + 1: k + 1 + clip_mu.size], clip_mu)
 
 
+def test_noise_about_the_force_threshold_fires_once_until_the_force_falls_below_rearm():
+    """A press released through 0.7 N with 0.03 N of noise (0.75, 0.69, 0.72) fired a
+    second tick; the trigger re-arms only below FORCE_REARM x force_n (0.56 N)."""
+    press = _layer(TICK, "force", force_n=0.7)
+    force = [0.3, 0.75, 0.69, 0.72, 0.60, 0.71, 0.55, 0.74, 0.2, 0.9, 0.9]
+    t = 0.0013 + 0.1 * np.arange(len(force))
+    ev = [DOWN] + [MOVE] * (len(force) - 2) + [UP]
+    trace = make_trace(t, [0] * t.size, [30.0] * t.size, [30.0] * t.size, force, ev)
+    mu = _replay(_scene(press), trace)[0]
+    clip_mu, _ = TICK.sample(RATE)
+    expected = np.ones_like(mu)
+    for i in (1, 7, 9):  # risen through 0.7 N from below 0.56 N (or from the touch's start)
+        k = _first_use(t[i])
+        expected[k + 1: k + 1 + clip_mu.size] = clip_mu
+    assert_allclose(mu, expected, rtol=0, atol=0)
+    assert list(press.force_level([0.55, 0.56, 0.6999, 0.7, np.nan])) == [-1, 0, 0, 1, 0]
+
+
 def test_a_lift_inside_plays_under_the_finger_still_touching():
     layer = _layer(TICK, "lift", region=RectRegion(0.0, 0.0, 40.0, 64.8))
     t = [0.001, 0.002, 0.05, 0.0871, 0.2]
@@ -187,9 +205,11 @@ def _one_sample_at_a_time(trigger, contact, touch_id, inside, flag, prev, index0
                             int(flag[i, j]))
             same = c and c0 and t == t0
             fired |= (c and not same and inn, c0 and not same and in0,
-                      same and 0 != f != f0 != 0 and inn, same and f and not f0 and inn)[trigger]
-            on_the_line = trigger == 2 and same and f == 0  # keeps the side it came from
-            last[i] = (int(c), t, int(inn), f0 if on_the_line else f)
+                      same and 0 != f != f0 != 0 and inn, same and f == 1 and f0 != 1 and inn
+                      )[trigger]
+            # on the edge line, or between the force's re-arm level and threshold
+            as_it_came = trigger in (2, 3) and same and f == 0
+            last[i] = (int(c), t, int(inn), f0 if as_it_came else f)
         if start >= 0 and index0 + j - start < samples.size:
             mu[:, j], covers[:, j] = samples[index0 + j - start], contact[:, j]
             played_clipped += int(contact[:, j].sum()) * bool(clipped[index0 + j - start])
@@ -218,7 +238,8 @@ def test_a_block_is_the_clip_played_sample_by_sample(seed):
     index0 = int(rng.integers(0, 1000))
     start = int(rng.choice([-1, index0, index0 - rng.integers(0, 500)]))
     for trigger in range(4):
-        flags, last_flag = (side, prev[:, 3]) if trigger == 2 else (flag, prev[:, 3] != 0)
+        # edge and force: -1, 0 (on the line; between re-arm and threshold), 1
+        flags, last_flag = (side, prev[:, 3]) if trigger in (2, 3) else (flag, prev[:, 3] != 0)
         args = (trigger, contact, touch_id, inside, flags,
                 np.column_stack([prev[:, :3], last_flag]).astype(np.int64), index0, start,
                 samples, clipped)

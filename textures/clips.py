@@ -145,7 +145,8 @@ class ClipLayer(DynamicLayer):
     ``trigger``: ``down`` / ``lift`` (a touch begins / ends inside the layer's region),
     ``edge`` (a touching finger crosses the line through (x_mm, y_mm) whose normal is at
     ``angle_deg`` from +x, either way, inside the region; only reaching it is no crossing), ``force`` (a touching
-    finger's normal force rises through ``force_n``, inside the region). The clip starts
+    finger's normal force rises through ``force_n``, inside the region, having fallen
+    below :data:`FORCE_REARM` x ``force_n`` since it last did). The clip starts
     on the output sample after the event; a new event restarts it. A one-channel plate
     vibrates under every finger at once, so the clip is felt by all fingers touching.
     Statically (drawn, or for a finger with nothing playing) the layer is mu' = 1.
@@ -180,6 +181,22 @@ class ClipLayer(DynamicLayer):
             x, y = np.broadcast_arrays(x, y)
         line = (self.x_mm, self.y_mm, math.cos(a), math.sin(a))
         return _side(x.ravel(), y.ravel(), line).reshape(x.shape)
+
+    def force_level(self, force_n) -> np.ndarray:
+        """int8, where a normal force (N) stands for the ``force`` trigger: +1 at or above
+        ``force_n``, -1 below :data:`FORCE_REARM` x ``force_n`` (re-armed), 0 between
+        (and NaN): as the finger's last sample stood, so that a force's noise about
+        ``force_n`` fires once (a press held at the threshold with 0.03 N of noise fired
+        again on each crossing)."""
+        force = np.asarray(force_n, dtype=np.float64)
+        with np.errstate(invalid="ignore"):
+            return ((force >= self.force_n).astype(np.int8)
+                    - (force < FORCE_REARM * self.force_n).astype(np.int8))
+
+
+#: the fraction of a clip's ``force_n`` the force must fall below before it can trigger
+#: again: 20 % of hysteresis, as force-sensing buttons release below their press level
+FORCE_REARM = 0.8
 
 
 #: distance (mm) from an edge line within which a position is on it: a picometre, far

@@ -8,7 +8,10 @@ finger row at a time against its previous sample (carried between blocks in the 
 - edge: the same touch strictly on the other side of the edge line than its last sample
   off the line (a sample on the line (within a picometre) keeps the side it came from, so reaching the
   line and going back fires nothing, from either side);
-- force: the same touch, normal force at or above the threshold now and below before.
+- force: the same touch, normal force at or above the threshold now and not before,
+  having fallen below the re-arm level (``textures.clips.FORCE_REARM`` of the threshold)
+  since it last rose through it; between the two levels it stands as it came (as
+  on an edge line), so that noise about the threshold fires once.
 
 Each must happen inside the layer's region (``down``, ``edge`` and ``force`` at the
 current position, ``lift`` at the last one). An event at output sample k starts the
@@ -36,7 +39,8 @@ TRIGGER_CODES = {"down": 0, "lift": 1, "edge": 2, "force": 3}
 class FingerPrev(NamedTuple):
     """One finger's last output sample: touching, touch id, inside the region, and the
     trigger's flag (edge: the side of the line of the touch's last sample off it, +1 the
-    normal's, -1 the other, 0 none yet; force: 1 at or above the threshold); the truths
+    normal's, -1 the other, 0 none yet; force: +1 risen through the threshold, -1 fallen
+    below the re-arm level, 0 neither yet); the truths
     as 0 or 1, so that the fingers' rows make one int64 array."""
 
     contact: int = 0
@@ -78,7 +82,9 @@ def _fired(trigger, contact, touch_id, inside, flag, prev):
                 if same and f == 0:
                     f = f0  # on the line: the side it came from
             else:
-                event = same and f != 0 and f0 == 0 and inn
+                if same and f == 0:
+                    f = f0  # between the re-arm level and the threshold: as it came
+                event = same and f == 1 and f0 != 1 and inn
             fired[j] |= event
             c0, t0, in0, f0 = c, t, inn, f
         last[i, 0], last[i, 1], last[i, 2], last[i, 3] = c0, t0, in0, f0
@@ -150,8 +156,7 @@ class ClipRenderer:
         if layer.trigger == "edge":
             return layer.side(block.x_pred, block.y_pred)
         if layer.trigger == "force":
-            with np.errstate(invalid="ignore"):
-                return block.force >= layer.force_n
+            return layer.force_level(block.force)
         return np.zeros(block.contact.shape, dtype=bool)
 
     def render(self, block: FingerBlock, state: ClipState):
