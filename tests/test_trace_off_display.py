@@ -144,3 +144,26 @@ def test_a_finger_past_the_edge_plays_the_texture_at_the_edge(tmp_path, renderer
     beyond = (t > 1.2 + 0.1) & (t < 1.99)  # past the edge by more than the fit's window
     assert np.all(x[beyond] == 108.0)
     assert np.unique(mu[beyond]).size == 1, np.unique(mu[beyond])
+
+
+@pytest.mark.parametrize("renderer", ["sht", "hybrid", "sho-predicted"])
+def test_a_prediction_held_at_the_edge_rests_there(tmp_path, renderer):
+    """A 200 mm/s swipe whose samples end at x = 104 mm, silent for 55 ms before its lift:
+    the prediction reaches the 108 mm edge 20 ms on and is held there, and the finger
+    plays one mu' there. SHT and the hybrid integrated the fit's velocity on while the
+    prediction stood at the edge, playing two more grating edges in 25 ms."""
+    import pyarrow.csv as pcsv
+    t = np.arange(22) * 0.02  # 50 Hz, x = 20 .. 104 mm
+    x = 20.0 + 200.0 * t
+    rows = [f"{ti!r},0,{xi!r},32.4,0.5,{'down' if i == 0 else 'move'}\n"
+            for i, (ti, xi) in enumerate(zip(t.tolist(), x.tolist()))]
+    rows.append(f"{float(t[-1]) + 0.055!r},0,104.0,32.4,0.5,up\n")
+    path = tmp_path / "edge.csv"
+    path.write_text("t_s,finger,x_mm,y_mm,force_n,event\n" + "".join(rows))
+    run_replay(load_scene(resolve_scene("grating-5mm")), str(path), tmp_path / "o",
+               progress=False, render_override=renderer)
+    table = pcsv.read_csv(tmp_path / "o" / "friction.csv")
+    x_out, mu = (table[c].to_numpy() for c in ("x_mm", "mu_target"))
+    at_edge = x_out == 108.0
+    assert at_edge.sum() > 100  # 20 to 55 ms after the last sample, at 10 kHz
+    assert np.unique(mu[at_edge]).size == 1, np.unique(mu[at_edge])

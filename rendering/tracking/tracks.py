@@ -538,7 +538,8 @@ def _expand(table, runs, steps, t_out, horizon, area):
     horizon : ``predict_horizon_s``. Velocity and prediction: a finger sampled within
     the horizon moves at its fitted velocity from its fitted position; past it, it rests
     where it was predicted at the horizon (velocity 0). area : (x_lo, x_hi, y_lo, y_hi)
-    (mm; infinite: unbounded): a prediction is held within it.
+    (mm; infinite: unbounded): a prediction is held within it, its velocity 0 on an axis
+    where it is held (SHT's periods would go on past the edge otherwise).
     """
     f_n, n = steps.size, t_out.size
     contact = np.empty((f_n, n), dtype=np.bool_)
@@ -561,10 +562,12 @@ def _expand(table, runs, steps, t_out, horizon, area):
                 contact[f, k] = touching
                 touch_id[f, k] = touch
                 x_held[f, k], y_held[f, k] = x, y
-                x_pred[f, k] = min(max(xf + vxs * ahead, area[0]), area[1]) if touching else x
-                y_pred[f, k] = min(max(yf + vys * ahead, area[2]), area[3]) if touching else y
-                vx[f, k] = vxs if moving else 0.0
-                vy[f, k] = vys if moving else 0.0
+                px, py = xf + vxs * ahead, yf + vys * ahead
+                x_pred[f, k] = min(max(px, area[0]), area[1]) if touching else x
+                y_pred[f, k] = min(max(py, area[2]), area[3]) if touching else y
+                # held at the area's edge, the prediction rests there on that axis
+                vx[f, k] = vxs if moving and area[0] <= px <= area[1] else 0.0
+                vy[f, k] = vys if moving and area[2] <= py <= area[3] else 0.0
                 force[f, k], touch_start[f, k] = table[9, s], table[10, s]
             start += runs[s]
             s += 1
