@@ -127,7 +127,9 @@ def test_a_prediction_stays_on_the_display(speed):
     assert 0.0 <= held.x_pred[0, touching].min() and held.x_pred[0, touching].max() <= 140.0
     inside = (free.x_pred[0] >= 0.0) & (free.x_pred[0] <= 140.0)
     assert_allclose(held.x_pred[0, inside], free.x_pred[0, inside], rtol=0, atol=0)
-    assert_allclose(held.vx[0], free.vx[0], rtol=0, atol=0)  # velocity is the fit's
+    # velocity is the fit's while the prediction is on the display, 0 where it is held
+    assert_allclose(held.vx[0, inside], free.vx[0, inside], rtol=0, atol=0)
+    assert (~inside & touching).any() and (held.vx[0, ~inside] == 0.0).all()
 
 
 def test_down_and_up():
