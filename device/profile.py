@@ -8,11 +8,14 @@ file format. ``device.friction`` evaluates the friction model with these constan
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TypeVar
 
 from frictex.device.registry import Expect, Registry
 
+V = TypeVar("V")
 
 #: How the modal profiles turn wanted amplitudes into actuator commands
 #: (``device.actuation.modal.solve``).
@@ -236,40 +239,53 @@ PROFILES.register("ring-seed004", ProfileSpec(
     "travelling-ring", surface_length_mm=140.0, carrier_hz=39_500.0,
     um_per_volt=SEED004_UM_PER_VOLT, voltage_limit_v=80.0))  # seed 004: 39.5 kHz, +-80 V
 
-#: The tables derived from :data:`PROFILES`, made on first use (module ``__getattr__``),
-#: so that importing this module imports no plugin; a plugin's profile that cannot be
-#: loaded is left out of them with a warning (an error where a scene names it).
-#: ``DEVICE_PROFILES``: every profile with its one line. ``FORCE_PROFILES``: the
-#: travelling-wave profiles (seed 002, seed 004), the only ones that can push a finger, so
-#: the only ones that accept force layers and ``[device.driving]``. ``SURFACE_LENGTH_MM``:
-#: the touch-surface length along x (mm) of each of them. ``MODAL_PROFILES``: the profiles
-#: driven by modal control (seed 000 eq 10, seed 001 eqs 4-5), each with a
-#: ``[device.structure]`` table (:class:`BeamStructure` or :class:`PlateStructure`).
-#: ``FRICTION_LOOP_PROFILES``: the profiles seed 003's friction loop runs on
-#: (``rendering.control.loop``).
-_DERIVED = {
-    "DEVICE_PROFILES": lambda specs: {name: spec.summary for name, spec in specs.items()},
-    "FORCE_PROFILES": lambda specs: tuple(name for name, spec in specs.items()
-                                          if spec.surface_length_mm is not None),
-    "SURFACE_LENGTH_MM": lambda specs: {name: spec.surface_length_mm
-                                        for name, spec in specs.items()
-                                        if spec.surface_length_mm is not None},
-    "MODAL_PROFILES": lambda specs: tuple(name for name, spec in specs.items()
-                                          if spec.structure is not None),
-    "FRICTION_LOOP_PROFILES": lambda specs: tuple(name for name, spec in specs.items()
-                                                  if spec.friction_loop),
-}
+
+class ProfileTable(Mapping[str, V]):
+    """A table derived from :data:`PROFILES`: ``value(spec)`` of each profile that loads,
+    by name, where that is not None. It is read from the registry each time it is used
+    (``in``, a lookup, a listing: load-time checks and messages), so that a profile
+    registered after frictex was imported, or after a scene was read, is in it, also
+    where the table was imported by name; importing this module imports no plugin. A
+    plugin's profile that cannot be loaded is left out with a warning (an error where a
+    scene names it)."""
+
+    def __init__(self, value: Callable[[ProfileSpec], V | None]):
+        self._value = value
+
+    def now(self) -> dict[str, V]:
+        """The table as it is now."""
+        table = {name: self._value(spec) for name, spec in PROFILES.loaded().items()}
+        return {name: value for name, value in table.items() if value is not None}
+
+    def __getitem__(self, name: str) -> V:
+        return self.now()[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.now())
+
+    def __len__(self) -> int:
+        return len(self.now())
+
+    def __repr__(self) -> str:
+        return f"ProfileTable({self.now()})"
 
 
-def __getattr__(name: str):
-    """The tables of :data:`_DERIVED`, made from the profiles that load on first use."""
-    try:
-        make = _DERIVED[name]
-    except KeyError:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
-    value = make(PROFILES.loaded())
-    globals()[name] = value
-    return value
+#: every profile, with its one line
+DEVICE_PROFILES: ProfileTable[str] = ProfileTable(lambda spec: spec.summary)
+#: the travelling-wave profiles (seed 002, seed 004), the only ones that can push a finger,
+#: so the only ones that accept force layers and ``[device.driving]``, with the
+#: touch-surface length along x (mm) of each
+FORCE_PROFILES: ProfileTable[float] = ProfileTable(lambda spec: spec.surface_length_mm)
+#: the same table, read for each one's touch-surface length along x (mm)
+SURFACE_LENGTH_MM = FORCE_PROFILES
+#: the profiles driven by modal control (seed 000 eq 10, seed 001 eqs 4-5), with the class
+#: of the ``[device.structure]`` table of each (:class:`BeamStructure` or
+#: :class:`PlateStructure`)
+MODAL_PROFILES: ProfileTable[type] = ProfileTable(lambda spec: spec.structure)
+#: the profiles seed 003's friction loop runs on (``rendering.control.loop``), with their
+#: one line
+FRICTION_LOOP_PROFILES: ProfileTable[str] = ProfileTable(
+    lambda spec: spec.summary if spec.friction_loop else None)
 
 
 @dataclass(frozen=True)

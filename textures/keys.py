@@ -91,7 +91,7 @@ TOP = {"format": Int("format version"), "name": Text(None),
        "control": Choice(model.CONTROL_MODES, "open")}
 DISPLAY = {"width_mm": SIZE, "height_mm": SIZE,
            "width_px": Int("px", ge=1, le=MAX_PX), "height_px": Int("px", ge=1, le=MAX_PX)}
-DEVICE = {"profile": Choice(tuple(profiles.DEVICE_PROFILES), _DEVICE.profile),
+DEVICE = {"profile": Choice(profiles.DEVICE_PROFILES, _DEVICE.profile),
           "amplitude_limit_um": replace(UM, default=_DEVICE.amplitude_limit_um),
           "normal_force_n": replace(FORCE, default=_DEVICE.normal_force_n)}
 FRICTION = {"b_per_um": Num("1/um", _FRICTION.b_per_um, gt=0.0),
@@ -134,9 +134,9 @@ STRUCTURE_KEYS: dict[type, dict[str, Spec]] = {
                               "y0_mm": replace(POS, default=_PLATE.y0_mm),
                               "channel_limit_um": replace(UM, default=None), **SOLVER},
 }
-#: the keys of ``[device.structure]`` by modal profile
-STRUCTURES = {name: STRUCTURE_KEYS[profiles.PROFILES.get(name).structure]
-              for name in profiles.MODAL_PROFILES}
+#: the keys of ``[device.structure]`` by modal profile, read from the profiles each time
+#: (a profile registered late is in it)
+STRUCTURES = profiles.ProfileTable(lambda spec: STRUCTURE_KEYS.get(spec.structure))
 COMMON = {"type": Choice(LAYER_TYPES), "name": Text(None),
           "render": Choice(RENDER_CHOICES, "auto"), "blend": Choice(model.BLEND_MODES, "multiply"),
           "fingers": Selector("any")}
