@@ -6,7 +6,8 @@ given (no clock, no I/O), so tests drive it directly.
 Both halves rest on one fact of the byte stream: frames arrive in the order they were
 written. A Heartbeat written after block B reaches the device after B, so the Status
 answering it describes a buffer that already holds B (or lost it). The host remembers,
-per heartbeat, how far it had sent (its *mark*); a Status is read against its mark.
+per heartbeat, how far it had sent (its *mark*); a Status is read against its mark. A
+Status that arrives out of order (a faulty device) never reaches it: the session ignores it.
 
 Sample numbers are the host's (unbounded integers from the caller); the device's are
 modulo 2**64 and are mapped back with :func:`unwrap`.
@@ -124,10 +125,10 @@ class Snapshot:
 def _delta(new: int, old: int) -> int:
     """Increase of a device counter that wraps at 2**32. A counter that went back (a
     "wrap" of 2**31 or more, which no device plays between two Statuses) restarted."""
-    return new if _went_back(new, old) else (new - old) % _COUNTER_WRAP
+    return new if went_back(new, old) else (new - old) % _COUNTER_WRAP
 
 
-def _went_back(new: int, old: int) -> bool:
+def went_back(new: int, old: int) -> bool:
     """Whether a device counter that wraps at 2**32 went from ``old`` back to ``new``."""
     return (new - old) % _COUNTER_WRAP >= _COUNTER_WRAP // 2
 
@@ -154,7 +155,7 @@ class RunCounts:
         prev, self._prev = self._prev, st
         if prev is None:
             return
-        restarted = _went_back(st.frames_ok, prev.frames_ok)
+        restarted = went_back(st.frames_ok, prev.frames_ok)
         for name in self.totals:
             new = getattr(st, name)
             self.totals[name] += new if restarted else _delta(new, getattr(prev, name))
@@ -182,6 +183,9 @@ class _Session:
             self.accounted = False
         for key, name in fields.items():
             self.totals[key] += _delta(getattr(st, name), getattr(self.prev, name) or 0)
+        # the Status answers a heartbeat written after the samples of its mark, and no
+        # others: a device that says it played more is not believed
+        self.totals["played"] = min(self.totals["played"], sent_at_mark)
         self.prev = st
         self.level = st.level
         self.sent_at_mark = sent_at_mark

@@ -29,7 +29,7 @@ import numpy as np
 from frictex.device.link import protocol as p
 from frictex.device.link.catch_up import IndexMap, behind
 from frictex.device.link.forces import ForceHistory, ForceReport, per_sample
-from frictex.device.link.ledger import Ledger, Pacing, RunCounts, Snapshot
+from frictex.device.link.ledger import Ledger, Pacing, RunCounts, Snapshot, went_back
 from frictex.device.link.protocol import DeviceState, LinkError
 
 #: jitter-buffer prefill asked of the device, and the level paced sending keeps (s)
@@ -63,11 +63,13 @@ _COUNTS = ("frames_sent", "blocks_sent", "heartbeats", "retries", "reconnects", 
            "handshake_closes",
            "recoveries", "stalls", "device_flushes", "clamped_samples", "dropped_blocks",
            "force_reports", "resent_frames", "resends_too_late", "stop_resends",
-           "skipped_blocks")
+           "skipped_blocks", "stale_statuses")
 #: Blocks kept for resending, by sequence number (PROTOCOL.md 4.10)
 RESEND_KEEP = 512
 #: a Block is resent at most once in this long, however often it is asked for (s)
 RESEND_HOLDOFF_S = 0.001
+#: Heartbeat tokens run 1 .. this and start again (0 is a Stop's Status's echo)
+_TOKENS = 0xFFFFFFFF
 
 
 @dataclass(frozen=True)
@@ -190,6 +192,8 @@ class HostSession:
         self.stop_confirmed: bool | None = None
         self._marks: dict[int, tuple[float, int, int]] = {}  # token -> (t, sent_end, mark)
         self._token = 0
+        self._answered = 0           # the token of the newest heartbeat answered
+        self._newest: p.Status | None = None    # the newest Status of this session
         self._seq = 0
         self.sent_end = 0            # the device's sample number after the last one sent
         # version 4 repair: seq -> [start, counts, phases, last sent at]; resend seq -> seq
@@ -409,6 +413,7 @@ class HostSession:
         self._due.clear()
         self._last_rx = self._last_progress = now
         self._last_status = None
+        self._newest = None  # frames_ok goes back on a device that restarted
         self._next_hb = now
         if not info.has_force_reports:
             with self.forces_lock:
@@ -442,7 +447,7 @@ class HostSession:
 
     def _heartbeat(self, now: float) -> bytes:
         """A Heartbeat frame, its token remembered with how far the host had sent."""
-        self._token = self._token % 0xFFFFFFFF + 1   # never 0: a Stop's Status echoes 0
+        self._token = self._token % _TOKENS + 1   # never 0: a Stop's Status echoes 0
         self.counts["heartbeats"] += 1
         self._marks[self._token] = (now, self.sent_end, self.ledger.mark())
         if len(self._marks) > 64:
@@ -463,7 +468,9 @@ class HostSession:
     def _handle(self, msg, now: float) -> None:
         self._last_rx = now
         if isinstance(msg, p.Status):
-            self.status = msg
+            if self._stale(msg):
+                return
+            self._newest = self.status = msg
             self.run_counts.status(msg)
             if self.phase == "session" and self._last_status is not None:
                 self.longest_status_gap_s = max(self.longest_status_gap_s,
@@ -471,6 +478,7 @@ class HostSession:
             self._last_status = now
             mark = self._marks.pop(msg.echo, None)
             if mark is not None:
+                self._answered = msg.echo
                 sent_t, sent_end, ledger_mark = mark
                 self.rtt_ms.append((now - sent_t) * 1e3)
                 with self.cond:
@@ -498,6 +506,25 @@ class HostSession:
                 orig = self._alias.get(seq, seq)
                 if orig in self._kept:
                     self._due[orig] = None
+
+    def _stale(self, st: p.Status) -> bool:
+        """Whether Status ``st`` is older than one already handled (counted, said once):
+        it answers a heartbeat sent before the newest one answered, or its ``frames_ok``
+        (every frame the device accepts raises it) went back in this session. The byte
+        stream keeps order (PROTOCOL.md 6.1), so only a faulty device sends one; read, it
+        would take the device's buffer and counters back, and its counters' fall would
+        read as a wrap of 2**32 (the whole count added again)."""
+        if st.echo and 0 < (self._answered - st.echo) % _TOKENS < _TOKENS // 2:
+            why = f"it answers heartbeat {st.echo} after {self._answered} was answered"
+        elif self._newest is not None and went_back(st.frames_ok, self._newest.frames_ok):
+            why = f"its frames_ok went back from {self._newest.frames_ok} to {st.frames_ok}"
+        else:
+            return False
+        self.counts["stale_statuses"] += 1
+        if self.counts["stale_statuses"] == 1:
+            self._warn(f"a Status from the device arrived out of order ({why}); Statuses "
+                       "older than one already read are ignored (stale_statuses)")
+        return True
 
     # ------------------------------------------------------------------ streaming
     def _poll_session(self, now: float) -> bytes:
