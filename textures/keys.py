@@ -13,7 +13,7 @@ from frictex.device import profile as profiles
 from frictex.device.calibration_identity import B_BOUNDS, K_BOUNDS
 from frictex.device.profile import METHODS, THEORIES
 from frictex.textures import model
-from frictex.textures.clips import CLIP_TRIGGERS, MAX_CLIP_S
+from frictex.textures.clips import CLIP_TRIGGERS, FORCE_REARM, MAX_CLIP_S
 from frictex.textures.heights import HEIGHT_RENDERINGS
 from frictex.textures.schema import (Choice, Colour, Flag, Int, Num, NumList, Retired, Rows,
                                      Selector, Spec, Text)
@@ -299,7 +299,11 @@ documented(CALIBRATION, {
     "amplitudes_um": "measured amplitudes (um, zero-to-peak), from 0, strictly increasing",
     "forces_n": "normal forces (N) of the rows of `mu`, strictly increasing",
     "mu": "one row per force, one mu' per amplitude; each row starts at 1 and strictly "
-          "decreases. Replaces the model of [device.friction] (`validate` warns at its keys "
+          "decreases. Each row is inverted by monotone cubic (PCHIP) interpolation, not "
+          "linearly (mu' 0.7 on the row 1, 0.8, 0.65, 0.55 at 0, 1, 2, 3 um: 1.624 um, not "
+          "1.667); between two forces the amplitudes for one mu' are interpolated linearly "
+          "in force, and outside them the nearest row is used. Replaces the model of "
+          "[device.friction] (`validate` warns at its keys "
           "given beside the table, which change nothing unless a force layer uses them)",
 })
 _STRUCTURE_COMMON = {
@@ -519,7 +523,9 @@ documented(LAYER_KEYS["clip"], {
     "trigger": "what starts the clip: `down` (a touch begins), `lift` (a touch ends: felt "
                "only by other fingers still touching, since friction is felt only by a finger "
                "on the plate; with one finger, never; validate warns), `edge` (a finger "
-               "crosses a line), `force` (a finger's normal force rises through force_n); "
+               "crosses a line), `force` (a finger's normal force rises through force_n, "
+               f"having fallen below {FORCE_REARM:g} x force_n since it last did, so that a force's "
+               "noise about force_n triggers once); "
                "always inside the layer's region",
     "x_mm": ("x (mm) of a point on the trigger line", "required with trigger = \"edge\"; "
                                                       "not allowed with other triggers"),
