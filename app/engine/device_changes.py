@@ -25,8 +25,8 @@ def device_clamped(device: dict) -> tuple[int, str]:
 def device_warnings(device: dict, max_amplitude_um: float) -> list[str]:
     """One sentence per thing the output device did not play as commanded: samples never
     played (by cause), values clamped to its amplitude limit (a link's declared limit, an
-    audio output's voltage limit), audio output underflows, and ``--faults`` events that
-    never came (the link ended first). ``device``: the summary's ``device`` section
+    audio output's voltage limit), audio output underflows, Statuses out of order, and
+    ``--faults`` events that never came (the link ended first). ``device``: the summary's ``device`` section
     (``device.link.host.CommandSink.status``, ``device.audio.output.AudioOutput.status``);
     ``max_amplitude_um``: the largest command (um, ``counts.max_amplitude_um``)."""
     warnings = _unplayed(device) + _uncounted(device)
@@ -59,6 +59,11 @@ def device_warnings(device: dict, max_amplitude_um: float) -> list[str]:
                         f"{audio['blocksize'] / audio['rate_hz'] * 1e3:.3g} ms, into the "
                         "plate's drive); unplayed_samples and underruns count only frictex's "
                         "own buffer running dry, not these")
+    stale = device.get("stale_statuses") or 0
+    if stale:
+        warnings.append(f"the device sent {stale} Statuses out of order (answering a heartbeat "
+                        "older than one already answered), which were ignored: a faulty "
+                        "device or firmware (PROTOCOL.md 6.1)")
     return warnings + faults_not_reached(device)
 
 

@@ -501,6 +501,7 @@ class CommandSink:
             "force_reports": c["force_reports"],
             "resent_frames": c["resent_frames"], "resends_too_late": c["resends_too_late"],
             "stop_resends": c["stop_resends"], "stop_confirmed": s.stop_confirmed,
+            "stale_statuses": c["stale_statuses"],
             "resyncs": d.discarded, "crc_errors": d.crc_errors,
             "lost_frames_from_device": d.lost_frames,
             "clamped_samples": c["clamped_samples"], "dropped_blocks": c["dropped_blocks"],

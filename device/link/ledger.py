@@ -125,10 +125,10 @@ class Snapshot:
 def _delta(new: int, old: int) -> int:
     """Increase of a device counter that wraps at 2**32. A counter that went back (a
     "wrap" of 2**31 or more, which no device plays between two Statuses) restarted."""
-    return new if went_back(new, old) else (new - old) % _COUNTER_WRAP
+    return new if _went_back(new, old) else (new - old) % _COUNTER_WRAP
 
 
-def went_back(new: int, old: int) -> bool:
+def _went_back(new: int, old: int) -> bool:
     """Whether a device counter that wraps at 2**32 went from ``old`` back to ``new``."""
     return (new - old) % _COUNTER_WRAP >= _COUNTER_WRAP // 2
 
@@ -155,7 +155,7 @@ class RunCounts:
         prev, self._prev = self._prev, st
         if prev is None:
             return
-        restarted = went_back(st.frames_ok, prev.frames_ok)
+        restarted = _went_back(st.frames_ok, prev.frames_ok)
         for name in self.totals:
             new = getattr(st, name)
             self.totals[name] += new if restarted else _delta(new, getattr(prev, name))

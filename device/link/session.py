@@ -29,7 +29,7 @@ import numpy as np
 from frictex.device.link import protocol as p
 from frictex.device.link.catch_up import IndexMap, behind
 from frictex.device.link.forces import ForceHistory, ForceReport, per_sample
-from frictex.device.link.ledger import Ledger, Pacing, RunCounts, Snapshot, went_back
+from frictex.device.link.ledger import Ledger, Pacing, RunCounts, Snapshot
 from frictex.device.link.protocol import DeviceState, LinkError
 
 #: jitter-buffer prefill asked of the device, and the level paced sending keeps (s)
@@ -193,7 +193,6 @@ class HostSession:
         self._marks: dict[int, tuple[float, int, int]] = {}  # token -> (t, sent_end, mark)
         self._token = 0
         self._answered = 0           # the token of the newest heartbeat answered
-        self._newest: p.Status | None = None    # the newest Status of this session
         self._seq = 0
         self.sent_end = 0            # the device's sample number after the last one sent
         # version 4 repair: seq -> [start, counts, phases, last sent at]; resend seq -> seq
@@ -413,7 +412,6 @@ class HostSession:
         self._due.clear()
         self._last_rx = self._last_progress = now
         self._last_status = None
-        self._newest = None  # frames_ok goes back on a device that restarted
         self._next_hb = now
         if not info.has_force_reports:
             with self.forces_lock:
@@ -470,7 +468,7 @@ class HostSession:
         if isinstance(msg, p.Status):
             if self._stale(msg):
                 return
-            self._newest = self.status = msg
+            self.status = msg
             self.run_counts.status(msg)
             if self.phase == "session" and self._last_status is not None:
                 self.longest_status_gap_s = max(self.longest_status_gap_s,
@@ -508,22 +506,19 @@ class HostSession:
                     self._due[orig] = None
 
     def _stale(self, st: p.Status) -> bool:
-        """Whether Status ``st`` is older than one already handled (counted, said once):
-        it answers a heartbeat sent before the newest one answered, or its ``frames_ok``
-        (every frame the device accepts raises it) went back in this session. The byte
-        stream keeps order (PROTOCOL.md 6.1), so only a faulty device sends one; read, it
-        would take the device's buffer and counters back, and its counters' fall would
-        read as a wrap of 2**32 (the whole count added again)."""
-        if st.echo and 0 < (self._answered - st.echo) % _TOKENS < _TOKENS // 2:
-            why = f"it answers heartbeat {st.echo} after {self._answered} was answered"
-        elif self._newest is not None and went_back(st.frames_ok, self._newest.frames_ok):
-            why = f"its frames_ok went back from {self._newest.frames_ok} to {st.frames_ok}"
-        else:
+        """Whether Status ``st`` answers a heartbeat sent before the newest one answered
+        (counted, said once). The byte stream keeps order (PROTOCOL.md 6.1), so only a
+        faulty device sends one; read, it would take the device's buffer and counters
+        back, and their fall would read as a wrap of 2**32 (the whole count added again).
+        Counters that go back under an echo in order are a device that reset them (6.3),
+        as one that restarted without closing the port does."""
+        if not (st.echo and 0 < (self._answered - st.echo) % _TOKENS < _TOKENS // 2):
             return False
         self.counts["stale_statuses"] += 1
         if self.counts["stale_statuses"] == 1:
-            self._warn(f"a Status from the device arrived out of order ({why}); Statuses "
-                       "older than one already read are ignored (stale_statuses)")
+            self._warn(f"a Status from the device arrived out of order (it answers heartbeat "
+                       f"{st.echo} after {self._answered} was answered); Statuses older than "
+                       "one already read are ignored (stale_statuses)")
         return True
 
     # ------------------------------------------------------------------ streaming
