@@ -157,8 +157,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     mode = parser.add_mutually_exclusive_group()
     mode.add_argument("--headless", action="store_true",
                       help="no display: run the demo on a synthesized stroke of the mouse "
-                           "(--duration long), writing its PNG frames (and without --record "
-                           "its outputs) to --out")
+                           "(--duration long), writing its PNG frames to --out's frames/ "
+                           "(and without --record its outputs to --out)")
     mode.add_argument("--headless-fallback", action="store_true",
                       help="open the window if a display exists, else behave as --headless")
     parser.add_argument("--out", metavar="DIR", default="frictex-demo-out",
