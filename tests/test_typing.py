@@ -176,12 +176,21 @@ def periods_mm(scene: frictex.Scene) -> list[float]:
 
 def with_height(scene: frictex.Scene, height: HeightLayer) -> frictex.Scene:
     return dataclasses.replace(scene, layers=scene.layers + (height,))
+
+
+def finer(scene: frictex.Scene) -> frictex.Scene:
+    layers = tuple(dataclasses.replace(layer, period_mm=layer.period_mm / 2)
+                   if layer.is_periodic else dataclasses.replace(layer, blend="replace")
+                   for layer in scene.layers)
+    return dataclasses.replace(scene, layers=layers)
 '''
 
 
 def test_a_scenes_layers_are_told_apart_by_is_periodic(tmp_path, checker):
     """README's ``if layer.is_periodic: layer.period_mm`` failed (no period_mm on 8 of the
-    union's classes), and a height, clip or AR texture layer was no ``Scene.layers`` item."""
+    union's classes), and a height, clip or AR texture layer was no ``Scene.layers`` item;
+    ``dataclasses.replace`` of a layer was refused ("Value of type variable
+    "_DataclassT" of "replace" cannot be "PeriodicLayer"")."""
     script = tmp_path / "layers.py"
     script.write_text(LAYERS_SCRIPT, encoding="utf-8")
     done = checker(script)
@@ -189,3 +198,4 @@ def test_a_scenes_layers_are_told_apart_by_is_periodic(tmp_path, checker):
     namespace: dict = {}
     exec(LAYERS_SCRIPT, namespace)
     assert namespace["periods_mm"](frictex.load_scene("grating-5mm")) == [5.0]
+    assert namespace["periods_mm"](namespace["finer"](frictex.load_scene("grating-5mm"))) == [2.5]

@@ -22,9 +22,9 @@ synthesis (seed 003 section 4.4.2): ``axis`` (unit vector across the lines),
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import Field, dataclass
 from pathlib import Path
-from typing import ClassVar, Literal, Protocol
+from typing import Any, ClassVar, Literal, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -668,7 +668,10 @@ class _LayerAnswers(Protocol):
     ``render`` (a renderer's name), ``blend``, ``fingers``, and at arrays of positions
     ``x, y`` (mm) its mu' (``mu_at``), where it applies (``covers``) and both at once
     (``mu_and_covers``). Protocols, not this module's classes: the layers of
-    textures/heights.py, clips.py and hatt.py are layers too, and they import this module."""
+    textures/heights.py, clips.py and hatt.py are layers too, and they import this module.
+    Every layer is a frozen dataclass, changed with ``dataclasses.replace``."""
+
+    __dataclass_fields__: ClassVar[dict[str, Field[Any]]]
 
     @property
     def name(self) -> str: ...
