@@ -141,9 +141,10 @@ def test_a_results_table_cut_short_is_warned_of(seed6, tmp_path):
 
 
 def test_a_staircase_slope_interval_is_flagged_and_its_means_are_geometric():
-    """A staircase's slope interval covered the true slope in 50 of 100 runs: flagged,
-    not a plain 95 %. Two sessions' reversal thresholds average geometrically, as each
-    session's reversals do on the log scale."""
+    """A staircase's slope interval covered the true slope in 50 of 100 runs of the
+    bundled depth-staircase: flagged, not a plain 95 %, without that figure here (a
+    protocol of its own, two sessions). Two sessions' reversal thresholds average
+    geometrically, as each session's reversals do on the log scale."""
     log = {**STAIRCASE, "scale": "log", "steps": [0.1], "reversals": 40, "max_trials": 400,
            "threshold_reversals": 4}
     rng = np.random.default_rng(1)
@@ -158,7 +159,7 @@ def test_a_staircase_slope_interval_is_flagged_and_its_means_are_geometric():
         s = session("staircase", forced(pairs), log, bootstrap=20, target=0.7071)
         sessions.append(type(s)(Path(name), s.info, s.rows))
     summary = analyse_study(sessions)
-    assert summary["pooled"]["slope_ci95_unsettled"] == P.RERUN_SHORT
+    assert summary["pooled"]["slope_ci95_unsettled"] == P.RERUN_LOOSE
     each = [e["staircase"]["threshold"] for e in summary["per_session"]]
     assert each[0] != each[1]
     geometric = math.sqrt(each[0] * each[1])

@@ -52,13 +52,14 @@ printed after it): one whose fit the data cannot settle (``fit_unsettled``, from
 ``psychometric.Fit.unsettled``: every trial correct, or a threshold its profile
 likelihood does not bound), a slope only bounded below (``slope_unsettled``: a step fits
 as well), a staircase's slope interval (its measured coverage is far below 95 %,
-``psychometric.RERUN_SHORT``), one of zero width, one
-that spans more than a factor of :data:`UNSETTLED_RATIO` or reaches 0 (a threshold or
-slope), a d' interval at a raw rate of 0 or 1 (``d_prime_ci95_unsettled``), or a
-magnitude mean's from fewer than 2 distinct ratings (its zero width says nothing of the
-uncertainty). With every trial correct a fit gives no threshold, only its one-sided 95 %
-upper bound (``threshold_below``; ``psychometric.ALL_CORRECT_P``), or that the trials are
-too few to bound it.
+``psychometric.RERUN_SHORT``, where :func:`measured_coverage` quotes it; elsewhere
+``RERUN_LOOSE``, without the figure), one of zero width, one that spans more than a
+factor of :data:`UNSETTLED_RATIO` or reaches 0 (a threshold or slope), a d' interval
+at a raw rate of 0 or 1 (``d_prime_ci95_unsettled``), or a magnitude mean's from fewer
+than 2 distinct ratings (its zero width says nothing of the uncertainty). With every
+trial correct a fit gives no threshold, only its one-sided 95 % upper bound
+(``threshold_below``; ``psychometric.ALL_CORRECT_P``), or that the trials are too few to
+bound it.
 
 Each session's end is recorded (``session_ends``: "complete", "stopped (...)" or
 "killed", its main trials, the rows read from results.csv, the trials session.json
@@ -375,8 +376,11 @@ LAPSE_AT_BOUND = ("on its bound lapse_max: the data ask for more lapses than all
 def _fit_dict(f: psychometric.Fit, coverage: str | None, staircase: bool) -> dict:
     """A fit as analysis.json records it; ``coverage``: its slope interval's measured
     coverage (:func:`measured_coverage`), None where it is not measured; ``staircase``:
-    a staircase's fit, whose slope interval is flagged as falling short of 95 %."""
-    short = psychometric.RERUN_SHORT if staircase else None
+    a staircase's fit, whose slope interval is flagged as falling short of 95 % (with the
+    coverage measured where ``coverage`` is quoted)."""
+    short = None
+    if staircase:
+        short = psychometric.RERUN_SHORT if coverage else psychometric.RERUN_LOOSE
     slope_flag = unsettled(f.slope_ci, f.slope_unsettled) or short
     return {"function": f.function, "guess": f.guess, "lapse_max": f.lapse_max,
             "target": f.target, "alpha": f.alpha, "beta": f.beta, "lapse": f.lapse,

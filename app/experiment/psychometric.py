@@ -80,9 +80,13 @@ RERUN = ("parametric bootstrap rerunning the procedure with the fitted function 
 RERUN_COVERAGE = ("covered the true slope in 50 of 100 simulated runs of the bundled "
                   "depth-staircase (the percentile interval: 34; measured before its "
                   "min = 0.003 was added, 11x below its simulated observer's threshold)")
-#: why a staircase's slope interval is flagged: its measured coverage is far below 95 %
+#: why a staircase's slope interval is flagged where :data:`RERUN_COVERAGE` applies (one
+#: complete session of the bundled depth-staircase): its measured coverage is far below 95 %
 RERUN_SHORT = ("a staircase's slope interval falls far short of 95 %: it "
                + RERUN_COVERAGE + "; take it as a rough range")
+#: why it is flagged elsewhere: the few trials near the threshold leave the slope loose
+RERUN_LOOSE = ("a staircase's slope interval may fall far short of 95 %: its trials sit "
+               "near the threshold and leave the slope loose; take it as a rough range")
 #: what the slope is, as the analysis prints it
 SLOPE = "d psi / dx at the threshold: proportion correct per unit of the difference"
 _EPS = 1e-12
