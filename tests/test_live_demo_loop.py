@@ -164,6 +164,32 @@ def test_a_late_batch_is_spread_over_the_time_it_covers(gl, tmp_path):
     np.testing.assert_allclose([q[0] for q in got[::2]], [0.04, 0.08, 0.12, 0.16, 0.2])
 
 
+def test_the_follower_lifts_off_the_display_and_comes_back_down_on_it(gl, tmp_path):
+    """Follow mode's finger 1, 30 mm right of the mouse's, past the 108 mm display's edge:
+    it lifts at its last place on the display and touches again where it comes back,
+    finger 0 touching throughout. It was held at the edge, feeling the edge's texture
+    16.5 mm from where the spacing puts it."""
+    scene = load_scene(resolve_scene("grating-5mm"))
+    window = ScriptedWindow(gl)
+    haptic = HapticThread(scene)
+    loop = DemoLoop(window, haptic, [resolve_scene("grating-5mm")], 0, scene, load_scene,
+                    tmp_path, follow_mm=30.0)
+    try:
+        loop.on_cursor(500.0, 240.0)  # finger 0 at 67.5 mm, finger 1 at 97.5 mm
+        loop.on_button(True)
+        for x in (700.0, 720.0, 550.0):  # 94.5 and 97.2 mm: finger 1 off; 74.25: back
+            loop.on_cursor(x, 240.0)
+        loop.on_button(False)
+        loop.flush_mouse()
+        got = [sample for _ in range(haptic.touches.qsize()) for sample in haptic.touches.get_nowait()]
+    finally:
+        loop.close()
+        window.close()
+    by_finger = {f: [(round(q[2], 6), q[5]) for q in got if q[1] == f] for f in (0, 1)}
+    assert by_finger[0] == [(67.5, DOWN), (94.5, MOVE), (97.2, MOVE), (74.25, MOVE), (74.25, UP)]
+    assert by_finger[1] == [(97.5, DOWN), (97.5, UP), (104.25, DOWN), (104.25, UP)]
+
+
 def test_a_press_off_the_scene_touches_nothing_and_a_drag_off_it_lifts(gl, tmp_path):
     """The scope strip, a panel column or beyond the window is no place to touch: a press
     there makes no finger, and a drag that leaves the scene lifts where it last was on it

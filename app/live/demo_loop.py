@@ -214,6 +214,7 @@ class DemoLoop:
         self.screenshot_dir = screenshot_dir
         self.link_name = link_name
         self.follow_mm = follow_mm
+        self._follower_at: tuple[float, float] | None = None  # follow mode's finger 1 (mm)
         self.touch_screen = touch_screen
         self.input_name = input_name
         self.compositor = Compositor(backend.ctx, scene, backend.size,
@@ -350,14 +351,30 @@ class DemoLoop:
 
     def _mouse_touch(self, event: str, px: tuple[float, float], t_s: float) -> None:
         """The mouse's finger 0 at ``px`` at ``t_s`` (haptic clock; in follow mode with
-        finger 1, ``follow_mm`` to its right, at the same instant)."""
+        finger 1, ``follow_mm`` to its right, at the same instant: :meth:`_follower`)."""
         x, y = self._mm(px)
-        code = EVENTS[event]
-        fingers = [(0, x, y, self.force_n, code)]
-        if self.follow_mm is not None:
-            fingers.append((1, x + self.follow_mm, y, self.force_n, code))
+        fingers = [(0, x, y, self.force_n, EVENTS[event])]
+        if self.follow_mm is not None and (follower := self._follower(event, x, y)):
+            fingers.append(follower)
         self.haptic.touches_at(t_s, fingers)
         self._sent = (px, self.force_n)
+
+    def _follower(self, event: str, x: float, y: float) -> tuple | None:
+        """Follow mode's finger 1 for finger 0's ``event`` at (x, y) mm: ``follow_mm`` to
+        its right while that point is on the display (a second finger of the same hand,
+        seed 001), lifted at its last place there when it leaves it or finger 0 lifts,
+        and down again where it comes back onto it; None where it has nothing to say.
+        Held at the display's edge, it would feel the edge's texture at a spacing the
+        scene does not have."""
+        fx = x + self.follow_mm
+        if event != "up" and 0.0 <= fx <= self.scene.display.width_mm:
+            code = EVENTS["down" if self._follower_at is None else "move"]
+            self._follower_at = (fx, y)
+            return (1, fx, y, self.force_n, code)
+        if self._follower_at is None:
+            return None
+        (last_x, last_y), self._follower_at = self._follower_at, None
+        return (1, last_x, last_y, self.force_n, EVENTS["up"])
 
     # The callbacks only note what happened, in order; flush_mouse(), after each batch of
     # window events, turns it into samples (see the module docstring).

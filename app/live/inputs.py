@@ -83,7 +83,8 @@ class _Mouse:
 class _Follow(_Mouse):
     usage = "follow[:MM]"
     help = (f"the mouse is finger 0 and finger 1 follows it MM mm to the right along x "
-            f"(default {FOLLOW_OFFSET_MM:g}; seed 001's two-finger test)")
+            f"(default {FOLLOW_OFFSET_MM:g}; seed 001's two-finger test), touching while "
+            "that point is on the display")
 
     def parse(self, arg):
         try:
