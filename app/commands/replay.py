@@ -115,7 +115,8 @@ def run(args: argparse.Namespace) -> int:
               f"{', '.join(_written(out['files'], frames))}; {clamps}; "
               f"{timing['x_realtime_end_to_end']:.3g}x real time end to end (read, compute, "
               f"write; {timing['x_realtime_with_setup']:.3g}x with the {timing['setup_s']:.2f} s "
-              f"start-up, {timing['x_realtime_compute']:.3g}x compute only)")
+              f"of loading the scene and its kernels, {timing['x_realtime_compute']:.3g}x "
+              "compute only; the interpreter's start and imports in none)")
         if summary.get("control") is not None:
             print(control_line(summary["control"]))
     for warning in summary["warnings"]:  # --quiet or not: clamps, unplayed samples, ...

@@ -4,8 +4,8 @@
   ``--quick``), in each output format, one run each, one format after another (not
   alternated: ``frictex bench baseline`` compares the formats in alternated rounds):
   the run's own real-time factor end to end
-  (reading the trace, computing, writing and committing every output, from
-  ``summary.json``), the same with start-up (loading the scene and the kernels), the
+  (reading the trace, computing, writing every output table, from ``summary.json``;
+  not the summary's own writing nor the swap of the folder into place), the same with start-up (loading the scene and the kernels), the
   compute-only factor beside them, the whole process's wall time
   (interpreter start and imports too) and its peak memory. The same at a tenth of the
   length shows whether memory depends on the trace's length.
