@@ -94,3 +94,19 @@ def test_a_format_this_frictex_does_not_read_is_refused_as_in_a_file():
     with pytest.raises(TextureError, match=r"^scene 'grating-5mm': format: 2 is newer than "
                                            r"this frictex reads; this frictex reads format = 1$"):
         frictex.build_pipeline(scene)
+
+
+def test_a_layer_class_whose_annotations_do_not_resolve_is_checked_without_its_parts():
+    """Another package's layer may annotate a field with a name its module does not
+    import: typing.get_type_hints raises NameError, which was no reason to refuse it."""
+    namespace: dict = {}
+    exec("from __future__ import annotations\n"
+         "import dataclasses\n"
+         "from frictex.textures.model import Grating\n"
+         "@dataclasses.dataclass(frozen=True)\n"
+         "class Odd(Grating):\n"
+         "    extra: NotImportedHere = None\n", namespace)
+    scene = frictex.load_scene("grating-5mm")
+    odd = namespace["Odd"](**{f.name: getattr(scene.layers[0], f.name)
+                              for f in dataclasses.fields(scene.layers[0])})
+    checked_scene(dataclasses.replace(scene, layers=(odd,)))

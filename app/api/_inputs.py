@@ -140,8 +140,13 @@ def checked_scene(scene: Scene) -> Scene:
 @functools.cache
 def _parts(layer_type: type) -> tuple[tuple[str, tuple[type, ...]], ...]:
     """A layer class's fields that hold a region or visual hints (``region``,
-    ``geometry``, ``visual``), each with the classes its annotation allows."""
-    hints = typing.get_type_hints(layer_type)
+    ``geometry``, ``visual``), each with the classes its annotation allows; none where
+    its annotations do not resolve (another package's layer naming what its module does
+    not import: its own renderer checks what it takes)."""
+    try:
+        hints = typing.get_type_hints(layer_type)
+    except (NameError, TypeError, AttributeError):
+        return ()
     return tuple((part, typing.get_args(hints[part]) or (hints[part],))
                  for part in ("region", "geometry", "visual") if part in hints)
 
