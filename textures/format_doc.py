@@ -161,7 +161,9 @@ and blends between them in linear light: both colours decoded from sRGB, mixed a
 color_low + u (color_high - color_low) with u = (μ' - lowest) / (highest - lowest) of the
 layer's μ', layers multiplied, then encoded to sRGB again. With black and white, u =
 0.25, 0.5, 0.75 are sRGB greys 137, 188, 225 (μ' 0.7, 0.8, 0.9 in a layer from 0.6 to
-1.0): equal steps of μ' look larger towards color_low. A height layer is drawn as a
+1.0): equal steps of μ' look larger towards color_low. A raster is drawn the same way,
+by the μ' its greys give, not as its file's greys: on the bundled raster-map (μ' 0.651
+to 1.0) a pixel of grey 38 (μ' 0.702) is drawn as grey 107. A height layer is drawn as a
 shaded relief in its colours, not by the μ' felt (see AUTHORING.md).
 
 ### Composition
