@@ -13,10 +13,14 @@ observer model, headless); the demo window registers its own.
 from __future__ import annotations
 
 import secrets
+import signal
+import threading
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 from typing import Callable
 
+from frictex.app.engine.driver import HELD_SIGNALS, tell_run_saw
 from frictex.app.experiment import session as S
 from frictex.app.experiment.presenter import Presenter, Shown
 from frictex.app.experiment.protocol import Protocol as ExperimentProtocol
@@ -138,18 +142,77 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
     stage = _Stage(protocol, StimulusBank(out_dir / "stimuli"))
     first = len(session.rows) + 1
     S.begin_part(session, first)
-    try:
-        starts_at = getattr(presenter, "starts_at", None)
-        if starts_at is not None:
-            starts_at(first)
-        presenter.begin(protocol)
-        _run_trials(scheduler, state, stage, presenter, session, session.record, progress,
-                    between_trials)
-    except BaseException as exc:
-        S.end_part(session, first, False, getattr(exc, "why", None) or type(exc).__name__)
-        raise
+    with _signals_seen() as seen:
+        try:
+            starts_at = getattr(presenter, "starts_at", None)
+            if starts_at is not None:
+                starts_at(first)
+            presenter.begin(protocol)
+            _run_trials(scheduler, state, stage, presenter, session, session.record,
+                        progress, between_trials)
+        except BaseException as exc:
+            S.end_part(session, first, False, stopped_by(exc, seen.signum))
+            raise
     S.end_part(session, first, True, None)
     return session
+
+
+def stopped_by(exc: BaseException, signum: int | None) -> str:
+    """Why a run ended by ``exc`` stopped, as session.json's part says ("stopped (WHY)"):
+    the window's reason (``why``: "Escape"), the signal's name where ``exc`` carries a
+    SIGTERM or SIGHUP (a replay's ``Terminated``) or is the KeyboardInterrupt the
+    command raises for the run's first signal ``signum`` (None: none came), as the
+    command's last line names it; else the exception's type (Ctrl-C: KeyboardInterrupt)."""
+    why = getattr(exc, "why", None)
+    if why:
+        return why
+    carried = getattr(exc, "signum", None)
+    if carried is None and isinstance(exc, KeyboardInterrupt):
+        carried = signum
+    if carried is not None and carried != signal.SIGINT:
+        return signal.Signals(carried).name
+    return type(exc).__name__
+
+
+class _SignalsSeen:
+    """The first SIGINT, SIGTERM or SIGHUP a run got (``signum``; None while none), each
+    passed on to the handler it replaced, as is a replay's word of one (``run_saw``,
+    ``driver.tell_run_saw``): that handler decides what the signal does."""
+
+    def __init__(self):
+        self.signum: int | None = None
+        self.previous: dict[int, object] = {}
+
+    def __call__(self, signum, frame) -> None:
+        self._saw(signum)
+        self.previous[signum](signum, frame)
+
+    def run_saw(self, signum: int, ended: bool) -> None:
+        self._saw(signum)
+        tell_run_saw(self.previous[signum], signum, ended)
+
+    def _saw(self, signum: int) -> None:
+        if self.signum is None:
+            self.signum = signum
+
+
+@contextmanager
+def _signals_seen():
+    """Within: :class:`_SignalsSeen` in front of each Python handler of ``HELD_SIGNALS``
+    (in the main thread only, where handlers can be set; one the process ignores stays
+    ignored). The command's handler raises a KeyboardInterrupt for SIGTERM too
+    (``StartupSignals``): the signal is known here, not from the exception."""
+    seen = _SignalsSeen()
+    if threading.current_thread() is threading.main_thread():
+        for sig in HELD_SIGNALS:
+            handler = signal.getsignal(sig)
+            if callable(handler):
+                seen.previous[sig] = signal.signal(sig, seen)
+    try:
+        yield seen
+    finally:
+        for sig, handler in seen.previous.items():
+            signal.signal(sig, handler)
 
 
 def _run_trials(scheduler: Scheduler, state, stage: _Stage, presenter: Presenter,

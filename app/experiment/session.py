@@ -305,7 +305,9 @@ def begin_part(session: Session, first_trial: int) -> None:
 
 def end_part(session: Session, first_trial: int, complete: bool, why: str | None) -> None:
     """Record the end of the run begun by :func:`begin_part`: its trials, how it ended
-    (``complete``, or stopped, ``why``) and, when ``complete``, the session's end."""
+    (``complete``, or stopped, ``why``: "SIGTERM", "Escape", "KeyboardInterrupt" for a
+    Ctrl-C, an error's type; ``runner.stopped_by``) and, when ``complete``, the
+    session's end."""
     part = session.info["parts"][-1]
     part.update(ended_utc=_now(), trials=len(session.rows) - (first_trial - 1),
                 ended="complete" if complete else f"stopped ({why})")
