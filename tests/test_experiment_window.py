@@ -4,7 +4,11 @@ hand injecting mouse strokes, clicks and key presses. Checks the results table, 
 per-trial files (the traces replay with ``frictex replay`` to the commands the session
 wrote) and that the screens' texts do not overlap. Every wait is bounded."""
 
+import contextlib
 import csv
+import json
+import os
+import signal
 import threading
 import time
 
@@ -15,7 +19,8 @@ from frictex.app.experiment.protocol import load_protocol
 from frictex.app.experiment.runner import run_session
 from frictex.app.experiment.window_presenter import (SessionPaused, WindowPresenter, edit_rating,
                                                      how_to_answer, rating_problem,
-                                                     response_keys, run_in_window, typed_scale)
+                                                     response_keys, run_in_window,
+                                                     stop_on_signals, typed_scale)
 from frictex.app.live.haptic_setup import open_haptic
 from frictex.app.commands.cli import main as cli_main
 from frictex.app.experiment.session import contact_s
@@ -216,10 +221,12 @@ class Frames:
 
 
 def run_headless(tmp_path, lose_at=None, escape_at=None, resume=False, presentation=FREE,
-                 frames=None, size=None, hand_class=Hand, protocol_text=PROTOCOL):
+                 frames=None, size=None, hand_class=Hand, protocol_text=PROTOCOL,
+                 signals=False):
     """The tiny protocol's session in the headless window with a :class:`Hand`:
     (session, hand, session folder); ``frames`` (a :class:`Frames`) keeps the frames;
-    ``size``: the window's (px), default the display's own."""
+    ``size``: the window's (px), default the display's own; ``signals``: within the
+    command's ``stop_on_signals``."""
     protocol_file = tmp_path / "tiny.toml"
     protocol_file.write_text(protocol_text.format(**presentation))
     protocol = load_protocol(protocol_file)
@@ -245,10 +252,11 @@ def run_headless(tmp_path, lose_at=None, escape_at=None, resume=False, presentat
     thread = threading.Thread(target=hand.run, name="test-hand", daemon=True)
     thread.start()
     try:
-        session = run_in_window(
-            presenter, lambda: run_session(protocol, presenter, out, seed=7, participant="window",
-                                           resume=resume),
-            window, start, scene, out / "live", tmp_path / "shots")
+        with stop_on_signals(presenter) if signals else contextlib.nullcontext():
+            session = run_in_window(
+                presenter, lambda: run_session(protocol, presenter, out, seed=7,
+                                               participant="window", resume=resume),
+                window, start, scene, out / "live", tmp_path / "shots")
     finally:
         hand.done.set()
         thread.join(timeout=30)
@@ -365,6 +373,30 @@ def test_escape_ends_the_session_keeping_the_answers_and_resume_goes_on(tmp_path
     assert [r["trial"] for r in rows] == ["1", "2", "3"]
     assert [r["response"] for r in rows] == ["1", *hand.answers]
     assert (out / "live-2" / "events.csv").exists()  # the resumed run's live output
+
+
+class SignallingHand(Hand):
+    """Sends its own process SIGTERM where :class:`Hand` would press Escape."""
+
+    def answer(self, screen, drawn):
+        if [v for v, _ in screen.buttons] == ["1", "2"] and self.questions + 1 == self.escape_at:
+            self.questions += 1
+            os.kill(os.getpid(), signal.SIGTERM)
+            return
+        super().answer(screen, drawn)
+
+
+def test_sigterm_ends_the_window_session_recorded_as_sigterm(tmp_path):
+    """A SIGTERM ends the session as Escape does, and session.json says SIGTERM stopped
+    it, as the command's last line does; it said the window was closed."""
+    from frictex.app.engine.driver import Terminated
+    with pytest.raises(Terminated) as ended:
+        run_headless(tmp_path, escape_at=2, hand_class=SignallingHand, signals=True)
+    assert ended.value.code == 143
+    assert ended.value.reason.startswith("terminated by SIGTERM at trial 2: ")
+    info = json.loads((tmp_path / "session" / "session.json").read_text())
+    assert info["parts"][-1]["ended"] == "stopped (SIGTERM)"
+    assert [r["response"] for r in read_csv(tmp_path / "session" / "results.csv")] == ["1"]
 
 
 class HoldingHand(Hand):

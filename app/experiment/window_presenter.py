@@ -195,6 +195,7 @@ class WindowPresenter:
                              "size and the device are options of the command)")
         self.loop = None
         self.closed = threading.Event()
+        self.closed_why = "the window was closed"  # what set ``closed``: a signal's name
         self.protocol = None
         self.practice = 0
         self.main_total: int | None = None
@@ -315,7 +316,7 @@ class WindowPresenter:
         error = self.loop.ask("switch", item.scene, item.text, cancel=self.closed,
                               timeout_s=SWITCH_TIMEOUT_S)
         if self.closed.is_set():
-            raise self._paused("the window was closed")
+            raise self._paused(self.closed_why)
         if error is not None:
             raise DeviceError(f"trial {trial.number}: cannot show {item.name}: {error}")
         display = item.scene.display
@@ -391,7 +392,7 @@ class WindowPresenter:
         while True:
             loop = self.loop
             if self.closed.is_set():
-                raise self._paused("the window was closed")
+                raise self._paused(self.closed_why)
             if loop.lost is not None:
                 self._lost(loop.lost)
             wait = WAIT_S
@@ -458,6 +459,7 @@ def stop_on_signals(presenter: WindowPresenter):
 
     def stop(signum, frame):
         got.append(signum)
+        presenter.closed_why = signal.Signals(signum).name  # session.json: "stopped (SIGTERM)"
         presenter.closed.set()
 
     held = (signal.SIGTERM, signal.SIGHUP)
