@@ -201,15 +201,20 @@ def test_scenes_that_name_files_carry_them(tmp_path):
 def test_a_strangers_session_folder_is_one_line_each(tmp_path, protocol_file, monkeypatch, capsys):
     """analyse reads session.json and results.csv as a stranger's files: JSON nested
     100,000 deep was a RecursionError (exit 70), a link to /dev/zero took 3.5 GB, a FIFO
-    hung; a results table larger than any protocol's was read whole (2.3 GB for 173 MB)."""
+    hung; a results table larger than any protocol's was read whole (2.3 GB for 173 MB);
+    a link to /etc/passwd was read (and refused for its columns): links are not followed
+    out of the folder."""
     import frictex.app.experiment.session as session_module
     good = tmp_path / "good"
     session(protocol_file, good, record="results")
     cases = {"session.json": [("deep", lambda p: p.write_text("[" * 100_000 + "]" * 100_000),
                                "JSON nested too deep"),
-                              ("zero", lambda p: p.symlink_to("/dev/zero"), "character device"),
+                              ("zero", lambda p: p.symlink_to("/dev/zero"),
+                               "symbolic link to /dev/zero, outside the folder"),
                               ("fifo", os.mkfifo, "FIFO")],
              "results.csv": [("rfifo", os.mkfifo, "FIFO"),
+                             ("passwd", lambda p: p.symlink_to("/etc/passwd"),
+                              "symbolic link to /etc/passwd, outside the folder"),
                              ("rbig", lambda p: p.write_bytes(b"x" * 400_000),
                               "more than the 300,000")]}
     monkeypatch.setattr(session_module, "MAX_SESSION_FILE_BYTES", 300_000)

@@ -350,6 +350,18 @@ def create(folder: Path, protocol, seed: int, participant: str, pid: str | None 
 MAX_SESSION_FILE_BYTES = 64 << 20
 
 
+def session_file(folder: Path, name: str) -> Path:
+    """``folder``/``name``, one of a session's own files: InputError where a symbolic
+    link takes it out of the folder (a stranger's session folder makes analyse read
+    nothing else, as a texture file's names are held to its folder)."""
+    from frictex.textures.outside import leads_out
+    how = leads_out(folder, name)
+    if how is not None:
+        raise InputError(f"{Path(folder) / name} {how}: a session's files are read from "
+                         "its folder only")
+    return Path(folder) / name
+
+
 def read_info(folder: Path) -> dict:
     """``session.json`` of ``folder``, checked (``session_schema.check_info``: every key
     a reader uses, with the protocol's bounds; the design's ``analysis`` and ``staircase``
@@ -360,6 +372,7 @@ def read_info(folder: Path) -> dict:
     path = Path(folder) / "session.json"
     if not path.exists() and not path.is_symlink():
         raise InputError(f"{folder}: not a session folder (no session.json)")
+    session_file(folder, "session.json")
     try:
         info = json.loads(read_utf8(path, MAX_SESSION_FILE_BYTES))
     except InputError as exc:  # not a regular file, too large, not UTF-8 text
@@ -383,8 +396,8 @@ def torn_last_line(folder: Path) -> bool:
     short), which :func:`read_table` does not count as a row."""
     from frictex.device.safe_files import read_bytes
     try:
-        data = read_bytes(Path(folder) / "results.csv", MAX_SESSION_FILE_BYTES)
-    except OSError:
+        data = read_bytes(session_file(folder, "results.csv"), MAX_SESSION_FILE_BYTES)
+    except (OSError, InputError):
         return False  # read_table says why it cannot be read
     return bool(data) and not data.endswith(b"\n")
 
@@ -394,7 +407,7 @@ def read_table(folder: Path, repair: bool = False) -> tuple[tuple[str, ...], lis
     :data:`COLUMNS_BEFORE_CONTACT` for a table written before them). A last line without
     a line end (a write cut short) is not a row; ``repair`` also cuts it from the file."""
     from frictex.device.safe_files import read_bytes
-    path = Path(folder) / "results.csv"
+    path = session_file(folder, "results.csv")
     try:
         data = read_bytes(path, MAX_SESSION_FILE_BYTES)  # a regular file, of bounded size
     except OSError as exc:
