@@ -64,7 +64,10 @@ one row per job (:data:`RESULT_COLUMNS`):
   and ``warnings`` (how many; the texts are in the job's ``summary.json``).
 
 A job that is not ``ok`` has these numeric cells empty (an ``earlier`` one the earlier
-batch's figures). A failed job does not stop the others.
+batch's figures). A failed job does not stop the others, whatever it raised: an
+unexpected exception (a bug in frictex or in a plugin renderer) is its ``failed`` row,
+``internal error (...)`` and the exception's type and message, its traceback on stderr
+(a Dask worker's log on a cluster).
 
 The output folder. ``--out`` is new, empty, or an earlier batch's: nothing in it but
 ``batch.csv`` (and ``batch.csv.partial``), job folders (a folder with a replay's
@@ -81,7 +84,8 @@ Ctrl-C (or SIGTERM, SIGHUP) stops a batch within one to two seconds: no job star
 it, each running one ends as an interrupted replay ends, and the new ``--out`` holds the
 jobs that finished (``ok``, or ``failed``), every earlier job folder it did not replace,
 kept and listed with status ``earlier`` (the earlier ``batch.csv``'s figures; ``job``
-empty for a name the new manifest does not have), and the rest ``interrupted``; the
+empty for a name the new manifest does not have; a failed job's row stays ``failed``,
+its error saying the earlier folder was kept), and the rest ``interrupted``; the
 command then exits as an interrupted replay does (130 for Ctrl-C, 128 + the signal
 otherwise). Stopping a rerun deletes nothing that was complete. On a Dask cluster the jobs
 running are given a few seconds (``fanout.DASK_STOP_S``) to finish; one still running
@@ -98,7 +102,9 @@ import csv
 import math
 import os
 import re
+import sys
 import time
+import traceback
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -402,21 +408,34 @@ def _leads_out(base: Path, spec: str) -> str | None:
 def run_job(job: Job, out_dir: str) -> dict:
     """Replay one job into ``out_dir/job.name`` (a scene or trace that is no absolute path
     is a bundled name: the bundled file, whatever the current folder holds); never raises
-    for the job's own errors:
-    returns its result row (``status`` "ok", or "failed" with the error and empty
-    measures). Run the jobs of a batch with
+    for the job's own errors, whatever they are (a signal's ``KeyboardInterrupt`` or
+    ``SystemExit`` passes): returns its result row (``status`` "ok", or "failed" with the
+    error and empty measures; a job's unexpected exception, a bug, as :func:`_bug` says
+    it), plain values that any worker can send back. Run the jobs of a batch with
     ``app.engine.fanout.fan_out(functools.partial(run_job, out_dir=...), jobs)``."""
-    from frictex.app.engine.replay import run_replay
     start = time.perf_counter()
     try:
-        scene, trace = (spec if os.path.isabs(spec) else str(bundled_file(spec, kind))
-                        for spec, kind in ((job.scene, "scene"), (job.trace, "trace")))
-        with allowing_outside(job.allow_outside):
-            doc = run_replay(scene, trace, Path(out_dir) / job.name, rate_hz=job.rate_hz,
-                             fmt=job.fmt, block_size=job.block, render_override=job.renderer,
-                             progress=False)
+        return _ok(job, _replay(job, out_dir), start)
     except (FrictexError, ValueError, OSError) as exc:  # its values already escaped
         return not_ok(job, "failed", printable(exc, MAX_ERROR_SHOWN))
+    except Exception as exc:  # noqa: BLE001 - a bug of this job's (frictex's or a plugin's)
+        return not_ok(job, "failed", _bug(job, exc))
+
+
+def _replay(job: Job, out_dir: str) -> dict:
+    """The job's replay (``app.engine.replay.run_replay``): its summary."""
+    from frictex.app.engine.replay import run_replay
+    scene, trace = (spec if os.path.isabs(spec) else str(bundled_file(spec, kind))
+                    for spec, kind in ((job.scene, "scene"), (job.trace, "trace")))
+    with allowing_outside(job.allow_outside):
+        return run_replay(scene, trace, Path(out_dir) / job.name, rate_hz=job.rate_hz,
+                          fmt=job.fmt, block_size=job.block, render_override=job.renderer,
+                          progress=False)
+
+
+def _ok(job: Job, doc: dict, start: float) -> dict:
+    """The result row of a job whose replay wrote summary ``doc``, begun at
+    ``time.perf_counter()`` ``start`` (s)."""
     wall_s = time.perf_counter() - start
     output_s = doc["output"]["duration_s"]
     return {**_identity(job), "status": "ok", "error": "",
@@ -428,6 +447,19 @@ def run_job(job: Job, out_dir: str) -> dict:
             "modal_capped": doc["counts"].get("modal_capped"),  # before version 6: not counted
             "modal_unserved": doc["counts"].get("modal_unserved"),  # before version 7: not counted
             "warnings": len(doc["warnings"])}
+
+
+def _bug(job: Job, exc: Exception) -> str:
+    """A job's unexpected exception ``exc`` as the command line reports an internal error:
+    its traceback on stderr (where the job ran: a Dask worker's log), then a line asking
+    for a report; returns the job's error, the exception's type and message (text only:
+    an exception may not survive the way back from a worker process)."""
+    traceback.print_exception(exc, file=sys.stderr)
+    print(f"frictex: internal error in job {job.name}: please report it with the traceback "
+          f"above and the job's manifest line", file=sys.stderr)
+    what = "".join(traceback.format_exception_only(exc)).strip()
+    return printable(f"internal error (a bug in frictex or a plugin; traceback on stderr): "
+                     f"{what}", MAX_ERROR_SHOWN)
 
 
 def not_ok(job: Job, status: str, error: str) -> dict:

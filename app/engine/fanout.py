@@ -44,10 +44,12 @@ raises :class:`NoWorkers` with the results of the items that finished.
 from __future__ import annotations
 
 import os
+import pickle
 import signal
 import sys
 import threading
 import time
+import traceback
 from contextlib import contextmanager
 
 from frictex.app.engine.driver import HELD_SIGNALS
@@ -366,7 +368,9 @@ def _start_worker(flag, states, parent: int) -> None:
 def _run_item(fn, item, k: int) -> tuple[str, object]:
     """In a worker: ``(DONE, fn(item))``, or ``(NOT_STARTED, None)`` once the parent's
     flag is set, or ``(STOPPED, None)`` when the parent's SIGINT stopped ``fn``; item
-    ``k``'s state marked running while ``fn`` runs, then ended."""
+    ``k``'s state marked running while ``fn`` runs, then ended. What else ``fn`` raises
+    is raised; one that could not reach the parent as it is, as a ``RuntimeError`` of its
+    traceback's text."""
     _Worker.running, _Worker.stopping = True, False  # before the flag is read: a signal
     try:  # after it stops the item
         if _Worker.flag.value:
@@ -377,11 +381,28 @@ def _run_item(fn, item, k: int) -> tuple[str, object]:
         if _signal_of(exc) is None:
             raise
         return STOPPED, None
+    except Exception as exc:  # noqa: BLE001 - raised again, as the parent can take it
+        if _sendable(exc):
+            raise
+        raise RuntimeError("".join(traceback.format_exception(exc)).rstrip()
+                           + "\n(raised in a worker process, which could not send it back "
+                           "as it was)") from None
     finally:
         if _Worker.states[k] == _RUNNING:
             _Worker.states[k] = _ENDED
         _Worker.running = False
         _Worker.end_if_orphaned()
+
+
+def _sendable(exc: Exception) -> bool:
+    """Whether ``exc`` survives the way back from a worker process (pickled there, read
+    back here): one holding a lock, or whose class is local to a function, does not, and
+    the parent would see the pickling's error (or a broken pool) instead of it."""
+    try:
+        pickle.loads(pickle.dumps(exc))
+    except Exception:  # noqa: BLE001 - whatever pickling raises
+        return False
+    return True
 
 
 class _PoolRun:
