@@ -14,8 +14,9 @@ What the new ``--out`` holds:
 - a batch stopped by a signal (Ctrl-C, SIGTERM, SIGHUP): the same, and every earlier job
   folder it did not replace, kept as it was and listed in ``batch.csv`` with status
   ``earlier`` and the earlier ``batch.csv``'s scene, trace and figures for it (what that
-  folder holds, which the new manifest's line of that name may not): stopping a rerun
-  deletes nothing that was complete.
+  folder holds, which the new manifest's line of that name may not), unless its job
+  ran and failed: that job's row stays ``failed``, its error saying the earlier
+  output was kept. Stopping a rerun deletes nothing that was complete.
 
 What is carried from the previous ``--out`` into the new one is hard-linked (no byte
 copied; copied where the file system has no hard links), never moved, so that the
@@ -95,25 +96,25 @@ class BatchFolder:
     def commit(self, rows: list[dict], stopped: bool) -> tuple[list[dict], list[str]]:
         """Swap the new ``--out`` in: the jobs' ``rows`` (``batch.csv``'s, in the jobs'
         order), whether a signal ``stopped`` the batch. Returns the rows written (a
-        stopped batch's: an ``earlier`` row for each earlier folder kept) and the names
+        stopped batch's: each earlier folder kept listed, :meth:`_kept_rows`) and the names
         of the earlier folders kept because they hold the user's files."""
         staged = self.staging.folder
         ok = {row["name"] for row in rows if row["status"] == "ok"}
         before = _earlier_rows(self.out / RESULTS)
         rows = list(rows)
-        users = []
+        users, kept = [], []
         for name in self.earlier:
             if name in ok:
                 _carry_users_files(self.out / name, staged / name)
             elif stopped:
                 _link_tree(self.out / name, staged / name)
+                kept.append(name)
             elif not is_run_folder(self.out / name):
                 _link_tree(self.out / name, staged / name)
                 users.append(name)
         if stopped:
-            rows = self._kept_rows(rows, ok, before)
-        _drop_unlisted(staged, {*users, *(row["name"] for row in rows
-                                          if row["status"] in ("ok", EARLIER))})
+            rows = self._kept_rows(rows, kept, before)
+        _drop_unlisted(staged, {*ok, *kept, *users})
         try:
             self._write_and_swap(rows)
         except OutputSpaceError as exc:
@@ -129,14 +130,16 @@ class BatchFolder:
             raise self.staging.failed(exc, f"write {RESULTS}") from None
         self.staging.commit()
 
-    def _kept_rows(self, rows: list[dict], ok: set[str], before: dict) -> list[dict]:
-        """``rows`` with each earlier folder a stopped batch keeps listed as ``earlier``:
-        its job's row replaced, or a row of its own (no job number) after them."""
-        kept = [name for name in self.earlier if name not in ok]
-        out = [_kept(row["job"], row["name"], before) if row["name"] in kept else row
-               for row in rows]
+    @staticmethod
+    def _kept_rows(rows: list[dict], kept: list[str], before: dict) -> list[dict]:
+        """``rows`` with each earlier folder ``kept`` by a stopped batch listed: the row
+        of its job that did not finish replaced by an ``earlier`` one, that of its job
+        that failed saying the folder was kept, or a row of its own (no job number) after
+        them."""
+        out = [_kept(row, before) if row["name"] in kept else row for row in rows]
         listed = {row["name"] for row in rows}
-        return out + [_kept(None, name, before) for name in kept if name not in listed]
+        return out + [_kept({"job": None, "name": name}, before)
+                      for name in kept if name not in listed]
 
     def abort(self) -> None:
         """Delete the staging folder; ``--out`` stays as it was."""
@@ -176,11 +179,16 @@ def _delete_tree(path: Path) -> None:
     shutil.rmtree(path)  # the error, where it still cannot be deleted
 
 
-def _kept(job, name: str, before: dict) -> dict:
-    """The ``batch.csv`` row of an earlier job folder kept: status ``earlier``, the earlier
-    batch's scene, trace and figures for it (empty where its ``batch.csv`` has none)."""
-    earlier = before.get(name, {})
-    return {"job": job, "name": name, **{key: earlier.get(key) for key in INPUTS},
+def _kept(row: dict, before: dict) -> dict:
+    """The ``batch.csv`` row of an earlier job folder kept, ``row`` that of its job (only
+    ``job`` and ``name`` where the new batch has none): the failed job's row, saying so;
+    else status ``earlier``, the earlier batch's scene, trace and figures for it (empty
+    where its ``batch.csv`` has none)."""
+    if row.get("status") == "failed":
+        return {**row, "error": f"{row['error']}; the earlier batch's output of this job was "
+                                "kept (this one was stopped)"}
+    earlier = before.get(row["name"], {})
+    return {"job": row["job"], "name": row["name"], **{key: earlier.get(key) for key in INPUTS},
             "status": EARLIER,
             "error": "kept from an earlier batch: this one was stopped before it replaced it",
             **{key: earlier.get(key) for key in MEASURES}}
