@@ -11,10 +11,11 @@ from frictex.textures.library import resolve_scene
 from scenes import grating_edges, straddling_samples
 
 
-def _run(speed_mm_s: float, rate_hz: float, renderer: str = "sht", x0_mm: float = 10.0,
+def _run(speed_mm_s: float, rate_hz: float, renderer: str = "sht", x0_mm: float = 2.0,
          duration_s: float = 0.26):
     """mu' of ``renderer`` on the 0.6 mm grating (0.6 / 1.0) under a finger swiping from
-    ``x0_mm`` at ``speed_mm_s`` sampled at 50 Hz for ``duration_s``, at output rate
+    ``x0_mm`` at ``speed_mm_s`` sampled at 50 Hz for ``duration_s`` (at 420 mm/s to 103 mm
+    of the 108 mm display: a prediction held at its edge rests), at output rate
     ``rate_hz``, once the first fit gives a velocity; and the samples the layer counted
     as played as its mean."""
     scene = load_scene(resolve_scene("grating-0.6mm"))
