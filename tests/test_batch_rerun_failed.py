@@ -42,6 +42,7 @@ def test_a_job_that_failed_before_the_stop_is_listed_failed(tmp_path, capsys, mo
     assert stop.value.code == 128 + signal.SIGTERM
     err = capsys.readouterr().err
     assert "job j0 failed" in err
+    assert ", 3 earlier job folders kept; " in err  # j0's too, though its row is failed
     listed = rows(out)
     assert {name: row["status"] for name, row in listed.items()} == {
         "j0": "failed", "j1": "earlier", "j2": "earlier"}

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from frictex.app.commands.argtypes import positive_int
 from frictex.app.engine.batch import RESULTS, not_ok, read_manifest, run_job
-from frictex.app.engine.batch_folder import EARLIER, BatchFolder
+from frictex.app.engine.batch_folder import BatchFolder, kept_folder
 from frictex.app.engine.driver import Terminated
 from frictex.app.engine.fanout import (NO_WORKER_S, ClusterGone, Interrupted, default_workers,
                                        fan_out)
@@ -88,7 +88,7 @@ def _totals(rows: list[dict], table: Path) -> str:
     earlier job folders a stopped batch kept."""
     ok = [row for row in rows if row["status"] == "ok"]
     jobs = [row for row in rows if row["job"] is not None]
-    kept = sum(row["status"] == EARLIER for row in rows)
+    kept = sum(map(kept_folder, rows))
     return (f"{len(ok)} of {len(jobs)} jobs finished ({sum(r['output_s'] for r in ok):.1f} s "
             f"of output, {sum(r['wall_s'] for r in ok):.1f} s of job time)"
             + (f", {kept} earlier job folders kept" if kept else "") + f"; results in {table}")

@@ -179,14 +179,23 @@ def _delete_tree(path: Path) -> None:
     shutil.rmtree(path)  # the error, where it still cannot be deleted
 
 
+#: how a failed job's error in a stopped batch ends where its earlier folder was kept
+FAILED_KEPT = "; the earlier batch's output of this job was kept (this one was stopped)"
+
+
+def kept_folder(row: dict) -> bool:
+    """Whether ``batch.csv``'s ``row`` lists an earlier job folder a stopped batch kept."""
+    return row["status"] == EARLIER or (row["status"] == "failed"
+                                        and row["error"].endswith(FAILED_KEPT))
+
+
 def _kept(row: dict, before: dict) -> dict:
     """The ``batch.csv`` row of an earlier job folder kept, ``row`` that of its job (only
     ``job`` and ``name`` where the new batch has none): the failed job's row, saying so;
     else status ``earlier``, the earlier batch's scene, trace and figures for it (empty
     where its ``batch.csv`` has none)."""
     if row.get("status") == "failed":
-        return {**row, "error": f"{row['error']}; the earlier batch's output of this job was "
-                                "kept (this one was stopped)"}
+        return {**row, "error": f"{row['error']}{FAILED_KEPT}"}
     earlier = before.get(row["name"], {})
     return {"job": row["job"], "name": row["name"], **{key: earlier.get(key) for key in INPUTS},
             "status": EARLIER,
