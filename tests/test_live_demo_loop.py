@@ -134,25 +134,37 @@ def test_a_frame_that_never_ends_holds_up_neither_the_finger_nor_the_stop(gl, tm
     assert t == sorted(t)
 
 
+def follow_loop(gl, tmp_path, **haptic_options):
+    """A demo loop on grating-5mm in follow mode (30 mm): (loop, window, haptic thread)."""
+    scene = load_scene(resolve_scene("grating-5mm"))
+    window = ScriptedWindow(gl)
+    haptic = HapticThread(scene, **haptic_options)
+    loop = DemoLoop(window, haptic, [resolve_scene("grating-5mm")], 0, scene, load_scene,
+                    tmp_path, follow_mm=30.0)
+    return loop, window, haptic
+
+
+def stroke(loop, haptic, xs_px, y_px: float = 240.0) -> list:
+    """A press at ``xs_px[0]``, a drag through the others, a release, handled as one
+    batch: the touch samples sent to the haptic side, in order."""
+    loop.on_cursor(xs_px[0], y_px)
+    loop.on_button(True)
+    for x in xs_px[1:]:
+        loop.on_cursor(x, y_px)
+    loop.on_button(False)
+    loop.flush_mouse()
+    return [sample for _ in range(haptic.touches.qsize()) for sample in haptic.touches.get_nowait()]
+
+
 def test_a_late_batch_is_spread_over_the_time_it_covers(gl, tmp_path):
     """Events handled together (the window was drawing) keep their order and path and
     are stamped evenly over the time since the previous batch, not all at one instant."""
-    scene = load_scene(resolve_scene("grating-5mm"))
     clock = [1.0]
-    window = ScriptedWindow(gl)
-    haptic = HapticThread(scene, clock=lambda: clock[0])
-    loop = DemoLoop(window, haptic, [resolve_scene("grating-5mm")], 0, scene, load_scene,
-                    tmp_path, follow_mm=30.0)
+    loop, window, haptic = follow_loop(gl, tmp_path, clock=lambda: clock[0])
     try:
         loop.flush_mouse()  # the previous batch, at haptic time 0
         clock[0] += 0.2
-        loop.on_cursor(100.0, 240.0)
-        loop.on_button(True)
-        for x in (120.0, 140.0, 160.0):
-            loop.on_cursor(x, 240.0)
-        loop.on_button(False)
-        loop.flush_mouse()
-        got = [sample for _ in range(haptic.touches.qsize()) for sample in haptic.touches.get_nowait()]
+        got = stroke(loop, haptic, (100.0, 120.0, 140.0, 160.0))
     finally:
         loop.close()
         window.close()
@@ -169,19 +181,10 @@ def test_the_follower_lifts_off_the_display_and_comes_back_down_on_it(gl, tmp_pa
     it lifts at its last place on the display and touches again where it comes back,
     finger 0 touching throughout. It was held at the edge, feeling the edge's texture
     16.5 mm from where the spacing puts it."""
-    scene = load_scene(resolve_scene("grating-5mm"))
-    window = ScriptedWindow(gl)
-    haptic = HapticThread(scene)
-    loop = DemoLoop(window, haptic, [resolve_scene("grating-5mm")], 0, scene, load_scene,
-                    tmp_path, follow_mm=30.0)
+    loop, window, haptic = follow_loop(gl, tmp_path)
     try:
-        loop.on_cursor(500.0, 240.0)  # finger 0 at 67.5 mm, finger 1 at 97.5 mm
-        loop.on_button(True)
-        for x in (700.0, 720.0, 550.0):  # 94.5 and 97.2 mm: finger 1 off; 74.25: back
-            loop.on_cursor(x, 240.0)
-        loop.on_button(False)
-        loop.flush_mouse()
-        got = [sample for _ in range(haptic.touches.qsize()) for sample in haptic.touches.get_nowait()]
+        # finger 0 at 67.5 mm, finger 1 at 97.5; at 94.5 and 97.2 finger 1 is off; 74.25: back
+        got = stroke(loop, haptic, (500.0, 700.0, 720.0, 550.0))
     finally:
         loop.close()
         window.close()

@@ -223,21 +223,27 @@ class BetweenRuns:
             self.previous[signum](signum, None)
 
 
-@contextmanager
 def between_runs():
     """Within: :class:`BetweenRuns` handles SIGINT, SIGTERM and SIGHUP where a Python
     handler did (in the main thread; elsewhere its ``check`` does nothing)."""
-    runs = BetweenRuns()
+    return in_front(BetweenRuns())
+
+
+@contextmanager
+def in_front(handler):
+    """Within: ``handler`` (called as a signal handler; a ``previous`` dict) takes each of
+    ``HELD_SIGNALS`` where a Python handler did, the one it replaced kept in ``previous``
+    (to pass the signal on) and put back after; in the main thread only, where handlers
+    can be set (one the process ignores stays ignored). Yields ``handler``."""
     if threading.current_thread() is threading.main_thread():
         for sig in HELD_SIGNALS:
-            handler = signal.getsignal(sig)
-            if callable(handler):
-                runs.previous[sig] = signal.signal(sig, runs)
+            if callable(signal.getsignal(sig)):
+                handler.previous[sig] = signal.signal(sig, handler)
     try:
-        yield runs
+        yield handler
     finally:
-        for sig, handler in runs.previous.items():
-            signal.signal(sig, handler)
+        for sig, previous in handler.previous.items():
+            signal.signal(sig, previous)
 
 
 def drive(stage, source, sinks, clock, *, chunk_blocks: int = 1, stop=None,

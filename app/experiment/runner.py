@@ -14,13 +14,11 @@ from __future__ import annotations
 
 import secrets
 import signal
-import threading
-from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 from typing import Callable
 
-from frictex.app.engine.driver import HELD_SIGNALS, tell_run_saw
+from frictex.app.engine.driver import in_front, tell_run_saw
 from frictex.app.experiment import session as S
 from frictex.app.experiment.presenter import Presenter, Shown
 from frictex.app.experiment.protocol import Protocol as ExperimentProtocol
@@ -142,7 +140,9 @@ def run_session(protocol: ExperimentProtocol, presenter: Presenter, out_dir: str
     stage = _Stage(protocol, StimulusBank(out_dir / "stimuli"))
     first = len(session.rows) + 1
     S.begin_part(session, first)
-    with _signals_seen() as seen:
+    # the command's handler raises a KeyboardInterrupt for SIGTERM too (StartupSignals):
+    # the signal is known here, not from the exception
+    with in_front(_SignalsSeen()) as seen:
         try:
             starts_at = getattr(presenter, "starts_at", None)
             if starts_at is not None:
@@ -194,25 +194,6 @@ class _SignalsSeen:
     def _saw(self, signum: int) -> None:
         if self.signum is None:
             self.signum = signum
-
-
-@contextmanager
-def _signals_seen():
-    """Within: :class:`_SignalsSeen` in front of each Python handler of ``HELD_SIGNALS``
-    (in the main thread only, where handlers can be set; one the process ignores stays
-    ignored). The command's handler raises a KeyboardInterrupt for SIGTERM too
-    (``StartupSignals``): the signal is known here, not from the exception."""
-    seen = _SignalsSeen()
-    if threading.current_thread() is threading.main_thread():
-        for sig in HELD_SIGNALS:
-            handler = signal.getsignal(sig)
-            if callable(handler):
-                seen.previous[sig] = signal.signal(sig, seen)
-    try:
-        yield seen
-    finally:
-        for sig, handler in seen.previous.items():
-            signal.signal(sig, handler)
 
 
 def _run_trials(scheduler: Scheduler, state, stage: _Stage, presenter: Presenter,
