@@ -36,3 +36,31 @@ def test_ups_are_counted_against_the_touches_across_chunks():
     # next chunk: 4 moves and lifts (its down was in the chunk before), 3 lifts nothing
     assert _lone_ups(np.array([4, 4, 3]), np.array([MOVE, UP, UP]) == UP, down) == 1
     assert down == set()
+
+
+def _replayed_warnings(tmp_path, rows: str) -> list[str]:
+    trace = tmp_path / "t.csv"
+    trace.write_text("t_s,finger,x_mm,y_mm,event\n" + rows)
+    out = tmp_path / "out"
+    assert main(["replay", "grating-5mm", str(trace), "--out", str(out), "--quiet"]) == 0
+    return json.loads((out / "summary.json").read_text())["warnings"]
+
+
+def test_a_finger_a_trace_that_lifts_fingers_leaves_touching_is_said(tmp_path):
+    """A recording cut short (a phone's paint log: 14 downs, 13 ups) held its last touch
+    down to the end of the output, unsaid; finger 1 lifted by a long gap is not said, nor
+    is a trace with no up events (every sample touches: no event column)."""
+    said = _replayed_warnings(tmp_path, "0,0,10,10,down\n0.01,1,20,10,down\n0.02,0,11,10,move\n"
+                                        "0.03,1,21,10,up\n0.04,2,30,10,down\n6,0,12,10,move\n"
+                                        "6.01,0,13,10,move\n")
+    assert [w for w in said if w.startswith("trace: finger")] == [
+        "trace: finger 0 still touching at its end (6.01 s), with no up event: held down to "
+        "the end of the output (a recording cut short, or its last lift lost?)"]
+    no_events = tmp_path / "plain"
+    no_events.mkdir()
+    plain = (no_events / "t.csv")
+    plain.write_text("t_s,finger,x_mm,y_mm\n0,0,10,10\n0.01,0,11,10\n0.02,0,12,10\n")
+    assert main(["replay", "grating-5mm", str(plain), "--out", str(no_events / "o"),
+                 "--quiet"]) == 0
+    doc = json.loads((no_events / "o" / "summary.json").read_text())
+    assert not [w for w in doc["warnings"] if w.startswith("trace: finger")]

@@ -165,7 +165,7 @@ class TraceSource:
         if pieces:
             pieces.append(chunk.slice(lo, len(chunk)))
             chunk = concat_traces(pieces)
-        self._down = _down_after(self._down, chunk)
+        self._down = self.stats.still_down = _down_after(self._down, chunk)
         self._last_t = float(chunk.t_s[-1])
         ids, from_end = np.unique(chunk.finger[::-1], return_index=True)
         last = len(chunk) - 1 - from_end  # each finger's last sample
@@ -322,6 +322,11 @@ class TraceStats:
         #: after the samples read so far
         self.lone_ups = 0
         self._down: set[int] = set()
+        #: up events read (a trace with none lifts nothing anywhere: no event column), and
+        #: the fingers touching after the samples handed on, long gaps' lifts included
+        #: (kept by :class:`TraceSource`)
+        self.ups = 0
+        self.still_down: set[int] = set()
 
     def add(self, chunk: Trace) -> None:
         times = chunk.t_s if self.last_t is None else np.concatenate(([self.last_t], chunk.t_s))
@@ -338,6 +343,7 @@ class TraceStats:
         self.least_force_n = float(np.min(touching, initial=self.least_force_n))
         self._add_positions(chunk.t_s[touch], chunk.x_mm[touch], chunk.y_mm[touch])
         self.lone_ups += _lone_ups(chunk.finger, chunk.event == UP, self._down)
+        self.ups += int(np.count_nonzero(chunk.event == UP))
         self.fingers.update(chunk.fingers)
         self.first_t = float(chunk.t_s[0]) if self.first_t is None else self.first_t
         self.last_t = float(chunk.t_s[-1])
@@ -382,7 +388,20 @@ class TraceStats:
         """What is wrong with the trace's touch samples, a line each: off the display, in
         metres (class docstring), or (``pressing``) not pressing."""
         return (self._off_display() + self._in_metres() + self._lifting_nothing()
-                + (self._unpressed() if pressing else []))
+                + self._left_down() + (self._unpressed() if pressing else []))
+
+    def _left_down(self) -> list[str]:
+        """The fingers a trace that lifts fingers (it has up events) leaves touching at
+        its end: held down to the end of the output, as a recording cut short or whose
+        last lift was lost leaves them. A trace without up events (no event column: every
+        sample touches) is not said to."""
+        if not (self.ups and self.still_down):
+            return []
+        fingers = sorted(self.still_down)
+        named = ", ".join(map(str, fingers[:MAX_LISTED]))
+        return [f"trace: finger{'s' * (len(fingers) > 1)} {named} still touching at its "
+                f"end ({self.last_t:.6g} s), with no up event: held down to the end of the "
+                "output (a recording cut short, or its last lift lost?)"]
 
     def _lifting_nothing(self) -> list[str]:
         if not self.lone_ups:
