@@ -105,6 +105,20 @@ def test_scenes_saved_from_the_demo_are_listed_with_their_paths(tmp_path, monkey
     assert resolve_scene("grating-5mm") == LIBRARY_DIR / "grating-5mm.toml"
 
 
+@pytest.mark.parametrize("xdg", ["rel", "", None])
+def test_a_relative_or_empty_xdg_data_home_is_ignored(tmp_path, monkeypatch, xdg):
+    """The XDG base directory specification: a relative path is ignored. It was taken
+    from the current folder, so a copy saved from one folder was not found from another."""
+    from frictex.textures.library import user_scenes_dir
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    if xdg is None:
+        monkeypatch.delenv("XDG_DATA_HOME", raising=False)
+    else:
+        monkeypatch.setenv("XDG_DATA_HOME", xdg)
+    assert user_scenes_dir() == tmp_path / "home" / ".local" / "share" / "frictex" / "scenes"
+
+
 def test_resolve_names_and_paths(tmp_path, monkeypatch):
     assert resolve_scene("grating-5mm") == LIBRARY_DIR / "grating-5mm.toml"
     assert resolve_scene("grating-5mm.toml") == LIBRARY_DIR / "grating-5mm.toml"

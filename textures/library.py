@@ -110,9 +110,13 @@ def list_toml_files(folder: Path, kind: str) -> list[Entry]:
 
 def user_scenes_dir() -> Path:
     """Where the demo's layer panel saves a bundled scene the user edited (the bundled
-    files are never written to): ``$XDG_DATA_HOME/frictex/scenes``, by default
+    files are never written to): ``$XDG_DATA_HOME/frictex/scenes``, by default (and
+    where it is not an absolute path, which the XDG base directory specification says to
+    ignore: a copy saved from one folder would be lost from another)
     ``~/.local/share/frictex/scenes``."""
-    base = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
+    base = os.environ.get("XDG_DATA_HOME", "")
+    if not os.path.isabs(base):
+        base = str(Path.home() / ".local" / "share")
     return Path(base) / "frictex" / "scenes"
 
 
