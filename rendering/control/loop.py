@@ -491,10 +491,12 @@ class ClosedLoop:
         ``reports_rejected``: per reason ("saturated", "not finite", "implausible"), force
         reports that came but read no finger (any drops the loop to open loop);
         ``measured``: what the host measured from the device's force reports (``reports``
-        used, ``reports_missed``, the delay the good ones came with, p50 and p99 in
-        blocks, and once mu0 is known, the RMS of the measured mu'_m = F_t / (F_n mu0)
-        against the target mu' the block asked for, over ``samples`` sliding and pressed,
-        None with none); ``messages``: what the loop said, and what the reports' delays
+        used, ``reports_missed``, ``reports_pending_at_end``: the blocks sent whose
+        reports were still due when the run ended (not yet back, nor ``max_wait_s``
+        late), so that with ``reports_rejected`` every block the loop sent is counted
+        once; the delay the good ones came with, p50 and p99 in blocks, and once mu0 is
+        known, the RMS of the measured mu'_m = F_t / (F_n mu0) against the target mu' the
+        block asked for, over ``samples`` sliding and pressed, None with none); ``messages``: what the loop said, and what the reports' delays
         say (``_late_messages``; ``late_hint``: what the caller can do about late reports,
         appended to those) and, where a finger touched but mu0 was never measured, that
         the loop stayed open (``_open_message``)."""
@@ -513,6 +515,7 @@ class ClosedLoop:
                 "reports_rejected": dict(state.reports_rejected),
                 "measured": {
                     "reports": state.reports, "reports_missed": state.reports_missed,
+                    "reports_pending_at_end": len(state.pending),
                     "report_delay_p50_blocks": _quantile(state.delay_counts, 0.5),
                     "report_delay_p99_blocks": _quantile(state.delay_counts, 0.99),
                     "samples": state.measured_n,
