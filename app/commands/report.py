@@ -107,7 +107,8 @@ def _write_report(args: argparse.Namespace) -> int:
     write_markdown(doc, out / "report.md", plots)
     failed = [c for c in doc.claims if not c.passed]
     print(f"frictex report: {len(rows)} rows of the matrix in {settings.wall_s:.1f} s, the "
-          f"whole report in {time.perf_counter() - start:.0f} s; {count_line(doc.claims)}; "
+          f"whole report in {time.perf_counter() - start:.0f} s (its files written); "
+          f"{count_line(doc.claims)}; "
           f"wrote {out / 'report.md'}, {out / 'report.json'}, {', '.join(plots)}")
     if failed and args.strict:
         print(f"frictex: error: {len(failed)} claims do not hold or are not shown (--strict): "

@@ -12,7 +12,8 @@ back.
 
 ``timings``: each section's wall time (s) and the machine's 1-minute load average as it
 started and ended (``Timing``), by the names of ``SECTIONS``; "whole report" runs from
-the command's start to writing its files.
+the command's start to the end of its sections, before its files (this one among them)
+are written: the command's last line gives the time with them written.
 
 Claims are computed on ``draws`` (``app.measure.report_seeds``), paired by draw, with a
 95 % interval (``app.measure.report_claims``; ``decided_by`` "95 % interval", or for a

@@ -41,8 +41,10 @@ COMMANDED_NOTE = (
 #: how each cost figure is timed and what a median over them does with a stall
 WARM_TIMING = (
     f"each timed after an untimed {WARM_UP_S:g} s run of the same configuration; no timing "
-    "is dropped, so a stalled one stays in the median, which it moves at most to the next "
-    "timing")
+    "is dropped: one stalled timing of the three moves the median at most to the next "
+    "timing, two stalled ones are the median (on a machine shared with other work a "
+    "configuration can then cost several times its neighbours': the stage table shows "
+    "which stage stalled), so read a cost against its neighbours, not alone")
 def plot_captions(settings) -> dict[str, tuple[str, ...]]:
     """report.md's captions under the plots, by file name (``settings``: the run's, for
     the conditions its timings were taken in)."""
