@@ -496,8 +496,9 @@ class ClosedLoop:
         late), so that with ``reports_rejected`` every block the loop sent is counted
         once; the delay the good ones came with, p50 and p99 in blocks, and once mu0 is
         known, the RMS of the measured mu'_m = F_t / (F_n mu0) against the target mu' the
-        block asked for, over ``samples`` sliding and pressed, None with none); ``messages``: what the loop said, and what the reports' delays
-        say (``_late_messages``; ``late_hint``: what the caller can do about late reports,
+        block asked for, over ``samples`` sliding and pressed, None with none);
+        ``messages``: what the loop said, and what the reports' delays say
+        (``_late_messages``; ``late_hint``: what the caller can do about late reports,
         appended to those) and, where a finger touched but mu0 was never measured, that
         the loop stayed open (``_open_message``)."""
         return {"mode": self.mode, "report_delay_blocks": state.delay_max_blocks,
