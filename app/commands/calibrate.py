@@ -6,10 +6,11 @@ force reports); frictex fits (b, k) of seed 003's eq 2 (``device.calibration_fit
 prints the fit with its standard errors (of the points' scatter only), its residual and
 the sliding speed b applies at (warning when b or k stopped on a bound of the fit or is
 not determined, and when points were left out as not finite), writes the ``[device]``
-section a texture file can use and plots the measured points against the fitted curve
-(a PNG: ``--plot`` names a ``.png`` file). Where the model is not accepted the section
-carries a measured table instead, which ``replay --control closed`` refuses (the loop
-inverts eq 2): said when it is written.
+section a texture file can use and the measured points, a CSV to re-fit or audit the
+calibration from (``--points``; by default beside ``--out``, see :data:`POINTS_COLUMNS`),
+and plots them against the fitted curve (a PNG: ``--plot`` names a ``.png`` file).
+Where the model is not accepted the section carries a measured table instead, which
+``replay --control closed`` refuses (the loop inverts eq 2): said when it is written.
 
 ``--device`` takes what ``replay --device`` takes: ``sim`` starts ``frictex sim-device``
 with a simulated finger (``--finger N``: person N of ``device.finger``'s population,
@@ -19,8 +20,8 @@ serial port or pyserial URL is a plate, which must announce force reports (PROTO
 
 Everything the person's sweep does not decide is checked before the device is opened, so
 a mistake never throws a sweep away: ``--finger`` (only with a simulated device), each
-output path (``--out``, ``--plot``: what it names, its folder, the room for it, as
-``app.engine.outfile`` writes it) and the plot's library. The outputs are written whole
+output path (``--out``, ``--points``, ``--plot``: what it names, its folder, the room for
+it, as ``app.engine.outfile`` writes it) and the plot's library. The outputs are written whole
 or not at all (``app.engine.outfile.write_file``).
 """
 
@@ -52,6 +53,14 @@ DEFAULT_FINGER = 1
 #: the plot's 500 x 350 px at 4 bytes a pixel
 TOML_BYTES = 64 << 10
 PLOT_BYTES = 500 * 350 * 4
+#: the points file's header, one line per point under it: the amplitude (um), the normal
+#: force (N) and the relative friction mu' each to the last bit (Python's repr: ``nan``,
+#: ``inf`` as they came), and 1 where the fit used the point, 0 where it left it out (not
+#: finite, a negative amplitude or no normal force: ``device.calibration_fit.fit_points``)
+POINTS_COLUMNS = ("amplitude_um", "normal_force_n", "mu", "used_in_fit")
+#: bytes a point's line takes at most: three floats' reprs (24 characters each) and commas,
+#: its flag and the line's end
+POINTS_ROW_BYTES = 3 * 25 + 2
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -64,6 +73,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "refused with any other device")
     parser.add_argument("--out", type=Path, default=Path("calibration.toml"),
                         help="where to write the [device] section (default calibration.toml)")
+    parser.add_argument("--points", type=Path, default=None, metavar="CSV",
+                        help="where to write the measured points, to re-fit or audit the "
+                             f"calibration from (columns {', '.join(POINTS_COLUMNS)}; default: "
+                             "beside --out, named after it: calibration-points.csv for "
+                             "calibration.toml; none when --out is a stream, /dev/stdout)")
     parser.add_argument("--plot", type=Path, default=None,
                         help="PNG of the measured points against the fitted curve (a name ending "
                              "in .png)")
@@ -83,11 +97,15 @@ def run(args: argparse.Namespace) -> int:
     sweep = Sweep()
     sim_args = _sim_args(args.device, args.finger, sweep)
     check_writable("--out", args.out, TOML_BYTES)
+    points = args.points if args.points is not None else _beside(args.out)
+    if points is not None:
+        _check_own("--points", points, ("--out", args.out))
+        # a point per step at most (the rest steps give none)
+        check_writable("--points", points, len(",".join(POINTS_COLUMNS)) + 1
+                       + POINTS_ROW_BYTES * len(sweep.amplitudes()))
     if args.plot is not None:
         check_writable("--plot", args.plot, PLOT_BYTES)
-        if os.path.realpath(args.plot) == os.path.realpath(args.out):
-            raise InputError(f"--plot {args.plot}: the same file as --out {args.out}; give "
-                             "the plot a name of its own")
+        _check_own("--plot", args.plot, ("--out", args.out), ("--points", points))
         if args.plot.suffix.lower() != ".png":
             raise InputError(f"--plot {args.plot}: the plot is a PNG; give a name ending in .png")
         require_extra("report", "matplotlib", "--plot")
@@ -121,10 +139,43 @@ def run(args: argparse.Namespace) -> int:
                        speed_mm_s=sweep.speed_mm_s).encode("utf-8")
     write_file(args.out, lambda to: to.write_bytes(text), len(text))
     print(f"wrote {args.out} (the [device] section a texture file can use; --out)")
+    if points is not None:
+        _write_points(points, w, normal, mu)
+        print(f"wrote {points} (the {np.size(w)} measured points, {fit.n_points} of them "
+              f"used in the fit: {', '.join(POINTS_COLUMNS)}; --points)")
     if args.plot is not None:
         _plot(args.plot, w, normal, mu, fit, sweep)
         print(f"wrote {args.plot} (the measured points against the fitted curve; --plot)")
     return 0
+
+
+def _beside(out: Path) -> Path | None:
+    """The points file's default: ``<out stem>-points.csv`` in ``out``'s folder; None
+    where ``out`` is a stream (a character device or a FIFO, which has no folder of its
+    own: ``check_writable`` has refused anything else that is not a file)."""
+    real = Path(os.path.realpath(out))
+    if real.exists() and not real.is_file():
+        return None
+    return out.with_name(f"{out.stem}-points.csv")
+
+
+def _check_own(option: str, path: Path, *others: tuple[str, Path | None]) -> None:
+    """Refuse an output ``path`` that is the file another option writes."""
+    for other, taken in others:
+        if taken is not None and os.path.realpath(path) == os.path.realpath(taken):
+            raise InputError(f"{option} {path}: the same file as {other} {taken}; give it "
+                             "a name of its own")
+
+
+def _write_points(path: Path, w, normal, mu) -> None:
+    """The sweep's points as :data:`POINTS_COLUMNS`, written whole
+    (``app.engine.outfile.write_file``)."""
+    w, normal, mu = (np.asarray(a, dtype=np.float64).ravel() for a in (w, normal, mu))
+    used = np.isfinite(w) & np.isfinite(normal) & np.isfinite(mu) & (w >= 0) & (normal > 0)
+    lines = [",".join(POINTS_COLUMNS)] + [f"{a!r},{f!r},{m!r},{int(u)}" for a, f, m, u in
+                                          zip(w.tolist(), normal.tolist(), mu.tolist(), used)]
+    text = "\n".join(lines + [""]).encode("utf-8")
+    write_file(path, lambda to: to.write_bytes(text), len(text))
 
 
 def _warnings(fit) -> list[str]:
