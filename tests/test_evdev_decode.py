@@ -142,6 +142,26 @@ def test_syn_dropped_discards_until_the_next_report():
     assert dec.dropped == 1 and [s.x for s in samples] == [1, 2]
 
 
+def test_a_protocol_a_lift_lost_in_a_drop_is_inferred_after_a_silence():
+    """A Samsung screen reuses tracking id 0 for every tap: with the lifting frame lost
+    in a drop, the next tap 2 s on carried on the first as one touch (a 54 mm jump across
+    2 s without a sample). Past LIFT_LOST_S of silence after a drop, the contacts are
+    lifted where last seen; a drop within a touch still moving lifts nothing."""
+    from frictex.rendering.input.evdev_decode import LIFT_LOST_S
+    ev = (frame_a(10.0, [(10, 20, 0)]) + frame_a(10.015, [(11, 20, 0)])
+          + [syn(10.02, SYN_DROPPED), syn(10.02, SYN_MT_REPORT), syn(10.02)]
+          + frame_a(12.0, [(400, 600, 0)]) + frame_a(12.05, []))
+    samples, dec = decode_all(ev, "<a>")
+    assert summary(samples) == [(10.0, 0, 10, 20, DOWN), (10.015, 0, 11, 20, MOVE),
+                                (10.015, 0, 11, 20, UP), (12.0, 0, 400, 600, DOWN),
+                                (12.05, 0, 400, 600, UP)]
+    assert dec.dropped == 1 and dec.lifts_lost == 1
+    moving = (frame_a(0.0, [(10, 20, 0)]) + [syn(0.005, SYN_DROPPED), syn(0.005)]
+              + frame_a(0.01 + LIFT_LOST_S / 2, [(12, 20, 0)]))
+    samples, dec = decode_all(moving, "<a>")
+    assert [s.event for s in samples] == [DOWN, MOVE] and dec.lifts_lost == 0
+
+
 def test_syn_dropped_keeps_the_slot_an_abs_mt_slot_names_in_the_dropped_span():
     # slot 1 holds id 0x65, slot 0 (the current slot) 0x66; after the drop, slot 1 moves,
     # then frames without ABS_MT_SLOT lift slot 1, and slot 0 lifts last

@@ -32,6 +32,11 @@ are of an unknown slot; from it on they are that slot's changes and are kept (li
 re-reads every slot after a drop; a recording cannot, and changes lost with the dropped events
 stay lost). Without an ABS_MT_SLOT after the drop the decoder keeps the slot it had.
 Contacts without a known position are not emitted and are counted.
+A protocol A frame that lifts everything may be among the events a drop lost, and a
+screen that reuses one tracking id for every tap (Samsung's 0) would then carry the next
+tap on as the same touch: the first frame after a drop that comes more than
+:data:`LIFT_LOST_S` after the last frame with contacts lifts those contacts where they
+were last seen (the one place a sample is inferred; counted in ``lifts_lost``).
 """
 
 from __future__ import annotations
@@ -61,6 +66,9 @@ MT_AXES = (ABS_MT_TOUCH_MAJOR, ABS_MT_POSITION_X, ABS_MT_POSITION_Y, ABS_MT_TRAC
            ABS_MT_PRESSURE)
 #: more simultaneous contacts (protocol B slots) than any touch screen reports
 MAX_CONTACTS = 64
+#: protocol A: silence (s) after a SYN_DROPPED past which the contacts of the last frame
+#: are taken as lifted (a finger on the screen is reported at tens of Hz)
+LIFT_LOST_S = 0.25
 #: finest axis resolution believed (units per mm; 0.1 um a count): digitizers give 10 to 200
 MAX_RESOLUTION = 10_000
 #: screen sizes believed along an axis (mm): a watch's 20 mm to a 10 m interactive wall
@@ -148,7 +156,8 @@ class EvdevDecoder:
     """Incremental decoder: ``feed(events)`` returns the samples of the frames completed.
 
     Feeding a stream in any number of pieces gives the same samples as feeding it whole.
-    Counters (read them after feeding): ``frames``, ``dropped`` (SYN_DROPPED), ``unplaced``
+    Counters (read them after feeding): ``frames``, ``dropped`` (SYN_DROPPED),
+    ``lifts_lost`` (protocol A contacts lifted across a drop: module docstring), ``unplaced``
     (contacts without X and Y, not emitted), ``untracked`` (protocol B frames with
     positions in a slot holding no ABS_MT_TRACKING_ID, not emitted). ``protocol`` is
     ``"A"``, ``"B"`` or None.
@@ -173,6 +182,9 @@ class EvdevDecoder:
         self._slot = 0
         self._fingers: dict[object, int] = {}  # contact key -> finger id
         self._last: dict[object, _Contact] = {}  # protocol A: contacts of the previous frame
+        self._last_t = -math.inf  # protocol A: time (s) of the previous frame with contacts
+        self._dropped_since = False  # protocol A: a SYN_DROPPED since that frame
+        self.lifts_lost = 0
         self._next_key = 0
 
     @property
@@ -191,6 +203,7 @@ class EvdevDecoder:
             ev = Event(*ev)
             if ev.type == EV_SYN and ev.code == SYN_DROPPED:
                 self.dropped += 1
+                self._dropped_since = True
                 self._frame.clear()
                 self._skipping = True
             elif ev.type == EV_SYN and ev.code == SYN_REPORT:
@@ -275,6 +288,12 @@ class EvdevDecoder:
         if len(placed) > MAX_CONTACTS:
             raise self._error(syn, f"frame at {t!r} s reports {len(placed)} contacts "
                                    f"(at most {MAX_CONTACTS} expected)")
+        if self._dropped_since and t - self._last_t > LIFT_LOST_S:  # a lift lost (docstring)
+            self.lifts_lost += len(self._last)
+            for key, c in self._last.items():
+                self._emit(out, self._last_t, key, c, UP)
+            self._last = {}
+        self._dropped_since = False
         current = self._match_a(syn, placed)
         for key, c in self._last.items():
             if key not in current:
@@ -282,6 +301,7 @@ class EvdevDecoder:
         for key, c in current.items():
             self._emit(out, t, key, c, MOVE if key in self._last else DOWN)
         self._last = current
+        self._last_t = t
 
     def _match_a(self, syn: Event, reports: list[_Contact]) -> dict[object, _Contact]:
         """Key every contact of this frame: by tracking id, or by least distance to the last frame."""

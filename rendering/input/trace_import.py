@@ -19,8 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from frictex.rendering.input.evdev_decode import (ABS_MT_POSITION_X, ABS_MT_POSITION_Y, EV_ABS, AbsInfo,
-                                                  Event, RawSample, ScreenMap, ScreenSpec, decode_all,
+from frictex.rendering.input.evdev_decode import (ABS_MT_POSITION_X, ABS_MT_POSITION_Y, EV_ABS,
+                                                  LIFT_LOST_S, AbsInfo, Event, RawSample,
+                                                  ScreenMap, ScreenSpec, decode_all,
                                                   observed_ranges, read_text, screen_map)
 from frictex.rendering.input.import_evemu import parse_evemu
 from frictex.rendering.input.import_getevent import read_log
@@ -230,7 +231,10 @@ def run_import(args: argparse.Namespace, write: Callable[[str, str], None]) -> i
         warnings.append(f"{outside} of {len(trace)} samples fall outside the "
                         f"{screen.x.size_mm:g} x {screen.y.size_mm:g} mm screen (check the ranges)")
     if decoder.dropped:
-        warnings.append(f"{decoder.dropped} SYN_DROPPED: the kernel lost events there")
+        lifted = (f"; {decoder.lifts_lost} touch{'es' * (decoder.lifts_lost > 1)} silent for "
+                  f"over {LIFT_LOST_S:g} s after one taken as lifted where last seen (the "
+                  f"lift lost with the events)" if decoder.lifts_lost else "")
+        warnings.append(f"{decoder.dropped} SYN_DROPPED: the kernel lost events there{lifted}")
     if decoder.unplaced:
         warnings.append(f"{decoder.unplaced} contact reports without a position were left out")
     if decoder.untracked:
