@@ -73,9 +73,9 @@ def test_without_reports_nothing_is_measured():
         _, _, state = loop.invert(*_block(k * N, 10.0), state, None)
     measured = loop.report(state)["measured"]
     assert len(state.pending) == 1  # the block just sent: the others folded as missed
-    assert measured == {"reports": 0, "reports_missed": 4, "report_delay_p50_blocks": None,
-                        "report_delay_p99_blocks": None, "samples": 0,
-                        "rms_mu_vs_target": None}
+    assert measured == {"reports": 0, "reports_missed": 4, "reports_pending_at_end": 1,
+                        "report_delay_p50_blocks": None, "report_delay_p99_blocks": None,
+                        "samples": 0, "rms_mu_vs_target": None}
 
 
 def test_a_touch_input_without_normal_force_is_said_once_and_counted():
