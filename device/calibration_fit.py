@@ -204,6 +204,13 @@ class Fit:
             for name in self.undetermined for value, se, unit in [estimates[name]]]
 
 
+def usable_points(w_um: np.ndarray, normal_n: np.ndarray, mu: np.ndarray) -> np.ndarray:
+    """bool, the calibration points :func:`fit_points` fits (the others it leaves out):
+    every value finite, an amplitude (um) of at least 0 and a normal force (N) above 0."""
+    finite = np.isfinite(w_um) & np.isfinite(normal_n) & np.isfinite(mu)
+    return finite & (w_um >= 0) & (normal_n > 0)
+
+
 def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> Fit:
     """Least-squares (b, k) of seed 003, eq 2 on the points; arrays (n,), at least
     ``MIN_AMPLITUDES`` distinct amplitudes above 0 um among them.
@@ -222,8 +229,7 @@ def fit_points(w_um, normal_n, mu, start: FrictionParams = FrictionParams()) -> 
     if not w.size == f.size == m.size:
         raise InputError(f"calibration points: {w.size} amplitudes, {f.size} normal forces "
                          f"and {m.size} values of mu': expected one of each per point")
-    finite = np.isfinite(w) & np.isfinite(f) & np.isfinite(m)
-    good = finite & (w >= 0) & (f > 0)
+    good = usable_points(w, f, m)
     w, f, m = w[good], f[good], m[good]
     amplitudes = np.unique(_levels(w[w > 0])).size
     if amplitudes < MIN_AMPLITUDES:

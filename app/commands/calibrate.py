@@ -36,7 +36,7 @@ import numpy as np
 
 from frictex.app.commands.argtypes import sim_finger_args, sim_options
 from frictex.app.engine.outfile import check_writable, write_file
-from frictex.device.calibration_fit import device_toml, fit_points
+from frictex.device.calibration_fit import device_toml, fit_points, usable_points
 from frictex.device.calibration_identity import simulated_finger
 from frictex.device.calibration_run import StepCut, Sweep, check_calibratable, run_sweep
 from frictex.device.errors import InputError, require_extra
@@ -56,7 +56,7 @@ PLOT_BYTES = 500 * 350 * 4
 #: the points file's header, one line per point under it: the amplitude (um), the normal
 #: force (N) and the relative friction mu' each to the last bit (Python's repr: ``nan``,
 #: ``inf`` as they came), and 1 where the fit used the point, 0 where it left it out (not
-#: finite, a negative amplitude or no normal force: ``device.calibration_fit.fit_points``)
+#: finite, a negative amplitude or no normal force: ``device.calibration_fit.usable_points``)
 POINTS_COLUMNS = ("amplitude_um", "normal_force_n", "mu", "used_in_fit")
 #: bytes a point's line takes at most: three floats' reprs (24 characters each) and commas,
 #: its flag and the line's end
@@ -171,7 +171,7 @@ def _write_points(path: Path, w, normal, mu) -> None:
     """The sweep's points as :data:`POINTS_COLUMNS`, written whole
     (``app.engine.outfile.write_file``)."""
     w, normal, mu = (np.asarray(a, dtype=np.float64).ravel() for a in (w, normal, mu))
-    used = np.isfinite(w) & np.isfinite(normal) & np.isfinite(mu) & (w >= 0) & (normal > 0)
+    used = usable_points(w, normal, mu)
     lines = [",".join(POINTS_COLUMNS)] + [f"{a!r},{f!r},{m!r},{int(u)}" for a, f, m, u in
                                           zip(w.tolist(), normal.tolist(), mu.tolist(), used)]
     text = "\n".join(lines + [""]).encode("utf-8")
