@@ -16,11 +16,14 @@ kept too. A layer's controls come from the loader's key tables
   rectangle's ``edge_mm`` at most its shorter side; the loader asked,
   :func:`loader_spans`); a value set is clamped into it and rounded to the slider's step
   (a short decimal in the file), except the slider's own value (the knob grabbed and not
-  moved), which is kept as the file gives it;
+  moved), which is kept as the file gives it. Where the loader refuses values between
+  the slider's ends (a directional layer's ``angle_deg``: 0 or 180 only) the slider
+  stops only at the values it takes (:func:`_stops`);
 - a word key (``Choice``: ``blend``, ``render``, a grating's ``edge``, ...) is a
-  :class:`Menu` of its options. The keys that decide which other keys a layer takes
-  (``type``, a height's ``shape``, a clip's ``clip`` and ``trigger``, a waveform's
-  ``shape``) are not offered.
+  :class:`Menu` of the options the loader takes for the layer as it is (no "sht" on a
+  rectangle: it needs a periodic layer). The keys that decide which other keys a
+  layer takes (``type``, a height's ``shape``, a clip's ``clip`` and ``trigger``, a
+  waveform's ``shape``) are not offered.
 
 A key is offered when the file gives it, or when its default is a value (a key whose
 default is derived by the loader, "none" in the tables, is offered only once written)
@@ -37,6 +40,10 @@ A grating's ``edge`` menu carries its ``edge_mm`` along: "smooth" needs edge_mm 
 (at most the narrower band), so switching to it writes edge_mm at half the narrower
 band (min(duty, 1 - duty) x period_mm / 2, the middle of what the format allows) unless
 the file gives a usable one; "square" refuses an edge_mm, so switching back removes it.
+A raster's ``mode`` set to "one-to-one" (the size comes from the image) removes the
+sizes it refuses (``width_mm``, ``height_mm``, ``tile_width_mm``, ``tile_height_mm``);
+a one-to-one raster is not offered "stretch" or "tile", which need a size the file
+does not give.
 
 Every change pushes the document's text before it on the undo stack; changes made with
 the same ``group`` (one slider drag) share one entry; a change the loader refuses is
@@ -73,7 +80,7 @@ from pathlib import Path
 
 import tomlkit
 from tomlkit.exceptions import TOMLKitError
-from tomlkit.items import AoT, InlineTable, Table
+from tomlkit.items import AoT, Table
 
 from frictex.device.errors import InputError
 from frictex.device.safe_files import UnsafeFile, read_bytes
@@ -147,7 +154,9 @@ def on_disk(path: Path) -> OnDisk:
 class Slider:
     """A number key: ``value`` (``unit``) dragged over [``lo``, ``hi``] in ``step``s,
     allowed in [``allowed_lo``, ``allowed_hi``] (the key's range; an open bound kept out
-    by a step). ``written``: the file gives the key (else ``value`` is its default)."""
+    by a step). ``written``: the file gives the key (else ``value`` is its default).
+    ``stops``: where not empty, the only values the loader takes between the ends (a
+    drag goes to the nearest, a value set to the next that way: :func:`clamp`)."""
 
     key: str
     unit: str
@@ -159,6 +168,7 @@ class Slider:
     allowed_lo: float
     allowed_hi: float
     integer: bool = False
+    stops: tuple[float, ...] = ()
 
     @property
     def fraction(self) -> float:
@@ -168,9 +178,15 @@ class Slider:
         return float(min(max((self.value - self.lo) / (self.hi - self.lo), 0.0), 1.0))
 
     def value_at(self, fraction: float) -> float:
-        """The value at ``fraction`` (0 to 1, clipped) of the slider."""
+        """The value at ``fraction`` (0 to 1, clipped) of the slider (its nearest stop,
+        where it has ``stops``)."""
         f = min(max(float(fraction), 0.0), 1.0)
-        return self.lo + f * (self.hi - self.lo)
+        return _nearest(self.stops, self.lo + f * (self.hi - self.lo))
+
+
+def _nearest(stops: tuple[float, ...], value: float) -> float:
+    """The one of ``stops`` nearest ``value``; ``value`` itself when there are none."""
+    return min(stops, key=lambda s: abs(s - value)) if stops else value
 
 
 @dataclass(frozen=True)
@@ -282,19 +298,29 @@ def allowed_range(spec: Num | Int, step: float) -> tuple[float, float]:
 def clamp(slider: Slider, value: float) -> float:
     """``value`` for ``slider``'s key: not finite refused, clamped to the key's allowed
     range, rounded to the slider's step (a whole number for an integer key; a short
-    decimal for a real one). The slider's own value (give or take float rounding: the
-    knob grabbed and not moved) is kept as it is, on a step or not."""
+    decimal for a real one), or for a slider with ``stops`` the stop nearest it of
+    those past the slider's value the way it moved (the value kept where none is: a
+    move goes to the next value the key takes, never back). The slider's own value
+    (give or take float rounding: the knob grabbed and not moved) is kept as it is, on a
+    step or not."""
     v = float(value)
     if not math.isfinite(v):
         raise EditError(f"{slider.key} = {value!r}: expected a finite number ({slider.unit})")
     if abs(v - slider.value) <= UNMOVED * slider.step:
         return slider.value
+    if slider.stops:
+        past = tuple(s for s in slider.stops if (s - slider.value) * (v - slider.value) > 0)
+        return _nearest(past, v) if past else slider.value
     v = min(max(v, slider.allowed_lo), slider.allowed_hi)
     if slider.integer:
         return float(round(v))
-    digits = max(0, -int(math.floor(math.log10(slider.step))))
-    v = round(round(v / slider.step) * slider.step, digits)
-    return min(max(v, slider.allowed_lo), slider.allowed_hi)
+    return min(max(_on_step(v, slider.step), slider.allowed_lo), slider.allowed_hi)
+
+
+def _on_step(value: float, step: float) -> float:
+    """``value`` rounded to a multiple of ``step`` (a power of ten), as a short decimal."""
+    digits = max(0, -int(math.floor(math.log10(step))))
+    return round(round(value / step) * step, digits)
 
 
 def refused_keys(path: Path, doc, index: int) -> frozenset[str]:
@@ -328,41 +354,53 @@ def _problem_fields(path: Path, doc: dict) -> frozenset[str]:
 
 
 def loader_spans(path: Path, doc, index: int, controls) -> tuple[Slider | Menu, ...]:
-    """``controls`` of ``doc``'s layer ``index`` (:func:`layer_controls`), each slider
-    cut to what the loader takes for that layer as it is (:func:`_loader_slider`): a
-    key's limit set by its layer's other keys (a rectangle's ``edge_mm``, at most the
-    shorter side) is found by asking the loader, not by a copy of its rules. A value is
-    taken when setting it adds no problem to those of the document as it is."""
+    """``controls`` of ``doc``'s layer ``index`` (:func:`layer_controls`) cut to what the
+    loader takes for that layer as it is: each slider's ends (:func:`_loader_slider`)
+    and stops (:func:`_stops`), each menu's options. A key's limit set by its layer's
+    other keys (a rectangle's ``edge_mm``, at most the shorter side; "sht" only on a
+    periodic layer) is found by asking the loader, not by a copy of its rules. A value
+    is taken when setting it (with what it carries along, :func:`_set`) adds no problem
+    to those of the document as it is."""
     probe = _plain(doc)
     known = _problem_fields(path, probe)
-    table = probe["layer"][index]
+    layers = probe["layer"]
+    table = layers[index]
+
+    def accepts(key: str, value) -> bool:
+        layers[index] = dict(table)  # _set changes only the layer's own keys
+        _set(layers[index], key, value)
+        try:
+            return _problem_fields(path, probe) <= known
+        finally:
+            layers[index] = table
+
     out = []
     for c in controls:
         if isinstance(c, Slider):
-            def accepts(value: float, c=c) -> bool:
-                table[c.key] = int(value) if c.integer else value
-                return _problem_fields(path, probe) <= known
-            given = table.get(c.key)
-            c = _loader_slider(c, accepts)
-            if given is None:
-                table.pop(c.key, None)
-            else:
-                table[c.key] = given
+            def takes(value: float, c=c) -> bool:
+                return accepts(c.key, int(value) if c.integer else value)
+            c = _stops(_loader_slider(c, takes), takes)
+        else:
+            c = replace(c, options=tuple(o for o in c.options
+                                         if o == c.value or accepts(c.key, o)))
         out.append(c)
     return tuple(out)
 
 
 def _held_spans(controls, before) -> tuple[Slider | Menu, ...]:
     """``controls`` (:func:`layer_controls`, the values of now) with each slider's ends,
-    step and allowed range as in ``before`` (the same layer's, :func:`loader_spans`),
-    widened to hold its value: a drag's sliders as the drag began."""
-    held = {c.key: c for c in before if isinstance(c, Slider)}
+    step, allowed range and stops as in ``before`` (the same layer's,
+    :func:`loader_spans`), widened to hold its value, and each menu's options as there:
+    a drag's controls as the drag began."""
+    held = {c.key: c for c in before}
     out = []
     for c in controls:
-        old = held.get(c.key) if isinstance(c, Slider) else None
-        if old is not None:
+        old = held.get(c.key)
+        if isinstance(c, Slider) and isinstance(old, Slider):
             c = replace(c, lo=min(old.lo, c.value), hi=max(old.hi, c.value), step=old.step,
-                        allowed_lo=old.allowed_lo, allowed_hi=old.allowed_hi)
+                        allowed_lo=old.allowed_lo, allowed_hi=old.allowed_hi, stops=old.stops)
+        elif isinstance(c, Menu) and isinstance(old, Menu) and c.value in old.options:
+            c = replace(c, options=old.options)
         out.append(c)
     return tuple(out)
 
@@ -388,6 +426,26 @@ def _loader_slider(slider: Slider, accepts) -> Slider:
     return replace(slider, lo=lo, hi=hi, step=step,
                    allowed_lo=lo if slider.lo in ends else slider.allowed_lo,
                    allowed_hi=hi if slider.hi in ends else slider.allowed_hi)
+
+
+#: a slider is probed at PROBES - 1 points evenly between its ends (:func:`_stops`)
+PROBES = 4
+
+
+def _stops(slider: Slider, accepts) -> Slider:
+    """``slider`` as it is where the loader takes (``accepts``) each of PROBES - 1 points
+    evenly between its ends (on its step), as it does every value of a key whose limits
+    are bounds. Where it refuses one, the key takes only some values (a directional
+    layer's ``angle_deg``: the waves push along x, so 0 or 180): the slider gets as
+    ``stops`` its ends, its value and the points the loader takes (-180, 0, 180 deg)."""
+    if not slider.hi > slider.lo:
+        return slider
+    points = [slider.lo + k * (slider.hi - slider.lo) / PROBES for k in range(1, PROBES)]
+    points = [float(round(p)) if slider.integer else _on_step(p, slider.step) for p in points]
+    taken = [p for p in points if accepts(p)]
+    if len(taken) == len(points):
+        return slider
+    return replace(slider, stops=tuple(sorted({slider.lo, slider.hi, slider.value, *taken})))
 
 
 def _reach(accepts, good: float, bad: float, step: float) -> float:
@@ -798,11 +856,27 @@ def _conflict(target: Path, copy: bool, gone: bool) -> SaveConflict:
 
 
 def _set(table, key: str, value) -> None:
-    """Set ``key`` of a layer ``table`` to ``value``, with what a grating's ``edge``
-    carries along (:func:`_edge_width`)."""
+    """Set ``key`` of a layer ``table`` (tomlkit's, or a plain dict) to ``value``, with
+    what a grating's ``edge`` (:func:`_edge_width`) and a raster's ``mode``
+    (:func:`_raster_size`) carry along."""
     _put(table, key, value)
     if key == "edge" and table.get("type") == "grating":
         _edge_width(table, value)
+    elif key == "mode" and table.get("type") == "raster":
+        _raster_size(table, value)
+
+
+#: a raster's sizes, which mode = "one-to-one" refuses (the size comes from the image)
+RASTER_SIZES = ("width_mm", "height_mm", "tile_width_mm", "tile_height_mm")
+
+
+def _raster_size(table, mode: str) -> None:
+    """A raster's ``mode`` set to ``mode``: "one-to-one" refuses the sizes
+    (``RASTER_SIZES``), so they are removed. The other modes need width_mm and
+    height_mm: a one-to-one raster is not offered them (:func:`loader_spans`)."""
+    if mode == "one-to-one":
+        for key in RASTER_SIZES:
+            table.pop(key, None)
 
 
 def _edge_width(table, edge: str) -> None:
@@ -824,8 +898,9 @@ def _edge_width(table, edge: str) -> None:
 def _put(table, key: str, value) -> None:
     """Set ``key`` of ``table`` to ``value``, every other line as it was: a new key of a
     ``[table]`` gets the line ending and indent of the table's keys, and the sub-tables
-    after it keep their indent (tomlkit puts a blank line before the first)."""
-    if key in table or isinstance(table, InlineTable):
+    after it keep their indent (tomlkit puts a blank line before the first); a plain
+    dict's key is just set."""
+    if key in table or not isinstance(table, Table):
         table[key] = value
         return
     body = table.value.body
