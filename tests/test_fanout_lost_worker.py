@@ -82,3 +82,56 @@ def test_a_signal_a_worker_gets_before_its_start_is_its_own_not_its_parents():
         else:
             assert os.WIFSIGNALED(status) and os.WTERMSIG(status) == ends_by
         assert flag.value == 0 and stopper.signum is None
+
+
+#: fan_out of a function raising an exception that holds a lock, after ``distributed`` is
+#: imported (its tblib pickles an exception with the one it was raised while handling);
+#: or, with "dead", over workers that end as they start
+CANNOT_SEND = textwrap.dedent("""
+    import os, sys, threading
+    from frictex.app.engine import fanout
+
+    class Unpicklable(RuntimeError):
+        def __init__(self, message):
+            super().__init__(message)
+            self.lock = threading.Lock()
+
+    def job(k):
+        if k == 1:
+            raise Unpicklable("plugin bug")
+        return k
+
+    if __name__ == "__main__":
+        if sys.argv[1] == "dead":
+            fanout._start_worker = lambda *args: os._exit(3)
+        else:
+            import distributed  # noqa: F401
+        try:
+            fanout.fan_out(job, [0, 1, 2], workers=2)
+        except Exception as exc:
+            print(type(exc).__name__, str(exc).splitlines()[-1] if str(exc) else "")
+""")
+
+
+def test_an_unsendable_exception_reaches_the_caller_with_dask_imported():
+    """With Dask imported the RuntimeError made of the unsendable exception was pickled
+    with it (as the exception it was raised while handling): the worker died on its
+    result, and the pool was made again for ever (a batch hung in CI)."""
+    import pytest
+    pytest.importorskip("distributed", reason="dask.distributed is not installed "
+                        "(pip install 'frictex[cluster]')")
+    done = subprocess.run([sys.executable, "-c", CANNOT_SEND, "dask"], capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == ("RuntimeError (raised in a worker process, which could not send "
+                           "it back as it was)\n")
+
+
+def test_workers_that_end_as_they_start_lose_the_items_not_loop():
+    """Workers that die before taking an item broke pool after pool, made again for
+    ever; after MAX_IDLE_POOLS the items left are lost, said so."""
+    done = subprocess.run([sys.executable, "-c", CANNOT_SEND, "dead"], capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("WorkerLost 3 of 3 items lost: the worker processes ended "
+                                  "before taking it, in pool after pool")

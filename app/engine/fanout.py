@@ -76,6 +76,13 @@ _RUNNING, _ENDED = 1, 2
 #: why an item is lost (module docstring), over this machine's cores and on Dask
 LOST_HERE = ("its worker process ended abruptly while it ran, and again when it ran alone "
              "(killed, as the system's out-of-memory killer does, or crashed)")
+#: why items are lost whose pools' workers ended before taking any, MAX_IDLE_POOLS times
+NEVER_RAN = ("the worker processes ended before taking it, in pool after pool (they "
+             "cannot start here: killed, or crashed as they started)")
+#: pools in a row whose workers ended before any item finished or ran, after which the
+#: items left are lost (without a limit a machine whose workers cannot start would try
+#: pool after pool for ever)
+MAX_IDLE_POOLS = 3
 LOST_ON_DASK = ("the Dask workers running it died as often as the cluster allows "
                 "(Dask's KilledWorker: out of memory, or crashed)")
 
@@ -153,10 +160,10 @@ def fan_out(fn, items: list, *, workers: int = 1, scheduler: str | None = None,
     ``noun`` names the items (plural) in :class:`NoWorkers`' message: "jobs" for a batch's.
     """
     done = on_done or (lambda result: None)
-    lost: list[int] = []
+    lost: dict[int, str] = {}  # item -> why it was lost
 
     def lose(k: int, why: str):  # item k lost with its worker: its result, if any
-        lost.append(k)
+        lost[k] = why
         if on_lost is None:
             return None
         result = on_lost(items[k], why)
@@ -170,7 +177,7 @@ def fan_out(fn, items: list, *, workers: int = 1, scheduler: str | None = None,
     else:
         results = _pool(fn, items, min(workers, len(items)), done, lose)
     if lost and on_lost is None:
-        raise WorkerLost(sorted(lost), LOST_ON_DASK if scheduler else LOST_HERE, results)
+        raise WorkerLost(sorted(lost), "; ".join(sorted(set(lost.values()))), results)
     return results
 
 
@@ -370,7 +377,9 @@ def _run_item(fn, item, k: int) -> tuple[str, object]:
     flag is set, or ``(STOPPED, None)`` when the parent's SIGINT stopped ``fn``; item
     ``k``'s state marked running while ``fn`` runs, then ended. What else ``fn`` raises
     is raised; one that could not reach the parent as it is, as a ``RuntimeError`` of its
-    traceback's text."""
+    traceback's text, raised outside the handler: with Dask imported (tblib's pickling)
+    an exception is pickled with the one it was raised while handling, and the worker
+    died on its result (the pool made again for ever)."""
     _Worker.running, _Worker.stopping = True, False  # before the flag is read: a signal
     try:  # after it stops the item
         if _Worker.flag.value:
@@ -384,14 +393,15 @@ def _run_item(fn, item, k: int) -> tuple[str, object]:
     except Exception as exc:  # noqa: BLE001 - raised again, as the parent can take it
         if _sendable(exc):
             raise
-        raise RuntimeError("".join(traceback.format_exception(exc)).rstrip()
-                           + "\n(raised in a worker process, which could not send it back "
-                           "as it was)") from None
+        unsent = RuntimeError("".join(traceback.format_exception(exc)).rstrip()
+                              + "\n(raised in a worker process, which could not send it "
+                              "back as it was)")
     finally:
         if _Worker.states[k] == _RUNNING:
             _Worker.states[k] = _ENDED
         _Worker.running = False
         _Worker.end_if_orphaned()
+    raise unsent
 
 
 def _sendable(exc: Exception) -> bool:
@@ -420,12 +430,21 @@ class _PoolRun:
 
     def run(self, workers: int) -> list:
         queue = list(range(len(self.items)))
+        idle = 0  # pools in a row that broke with no item finished or running
         with _handling(self.stopper):
             while queue and self.stopper.signum is None:
                 broken = self._round(queue, workers)
                 if broken is None:
                     break
-                suspects, queue = broken
+                suspects, left = broken
+                idle = 0 if suspects or len(left) < len(queue) else idle + 1
+                queue = left
+                if idle == MAX_IDLE_POOLS:  # workers that end before taking an item
+                    for k in queue:
+                        self.results[k] = self.lose(k, NEVER_RAN)
+                    break
+                if not suspects:
+                    continue
                 print(f"frictex: warning: a worker process ended abruptly (killed, as the "
                       f"system's out-of-memory killer does, or crashed) while {len(suspects)} "
                       f"{'item' if len(suspects) == 1 else 'items'} ran: each runs again alone",
